@@ -1,0 +1,35 @@
+"""Exception types of adaptive_dd.
+
+Every error subclasses a built-in so callers may catch ``ValueError``; each
+message names the offending parameter, key, file or line and the value.
+"""
+
+from __future__ import annotations
+
+__all__ = [
+    "DataError",
+    "DivergenceError",
+    "ParameterError",
+    "ScenarioError",
+    "SignalError",
+]
+
+
+class ParameterError(ValueError):
+    """A physical or base parameter, or a configuration value, is invalid."""
+
+
+class SignalError(ValueError):
+    """A state, torque or signal array has the wrong shape or non-finite values."""
+
+
+class DataError(ValueError):
+    """A user's recorded experiment (CSV) cannot be read; names file, line and column."""
+
+
+class ScenarioError(ValueError):
+    """A benchmark scenario (TOML) is invalid; names file, key and reason."""
+
+
+class DivergenceError(RuntimeError):
+    """A simulation produced a non-finite or runaway state."""

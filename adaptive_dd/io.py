@@ -1,0 +1,111 @@
+"""Reading and writing recorded experiments (CSV: t, q1, q2, qd1, qd2, tau1, tau2)."""
+
+from __future__ import annotations
+
+import csv
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+from numpy.typing import NDArray
+
+from adaptive_dd.errors import DataError
+
+__all__ = ["Recording", "read_recording", "write_recording"]
+
+REQUIRED = ("t", "q1", "q2", "tau1", "tau2")
+OPTIONAL = ("qd1", "qd2")
+
+
+@dataclass(frozen=True)
+class Recording:
+    """One measured experiment; arrays of shape (n_samples,) or (n_samples, 2)."""
+
+    t: NDArray[np.float64]
+    q: NDArray[np.float64]
+    tau: NDArray[np.float64]
+    qd: NDArray[np.float64] | None
+    sample_period: float
+    source: str = "<memory>"
+
+
+def write_recording(path: str | Path, t, q, qd, tau) -> Path:
+    """Write a recording as CSV with the header ``t,q1,q2,qd1,qd2,tau1,tau2``."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    data = np.column_stack((t, q, qd, tau))
+    np.savetxt(path, data, delimiter=",", header="t,q1,q2,qd1,qd2,tau1,tau2", comments="", fmt="%.10g")
+    return path
+
+
+def read_recording(path: str | Path, rtol_dt: float = 1e-3) -> Recording:
+    """Read a CSV recording; every problem names the file, line and column.
+
+    Raises
+    ------
+    DataError
+        Missing file or columns, unknown columns, non-numeric or non-finite cells,
+        too few rows, or non-uniform or non-increasing sampling (``|dt - T| > rtol_dt T``).
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise DataError(f"{path}: no such file")
+    with path.open(newline="") as fh:
+        reader = csv.reader(fh)
+        try:
+            header = [h.strip() for h in next(reader)]
+        except StopIteration:
+            raise DataError(f"{path}: empty file, expected a header t,q1,q2,qd1,qd2,tau1,tau2") from None
+        unknown = [h for h in header if h not in REQUIRED + OPTIONAL]
+        if unknown:
+            raise DataError(f"{path}: line 1: unknown column(s) {unknown}; expected {REQUIRED + OPTIONAL}")
+        missing = [h for h in REQUIRED if h not in header]
+        if missing:
+            raise DataError(f"{path}: line 1: missing column(s) {missing}")
+        if ("qd1" in header) != ("qd2" in header):
+            raise DataError(f"{path}: line 1: give both qd1 and qd2 or neither")
+        if len(set(header)) != len(header):
+            raise DataError(f"{path}: line 1: duplicate column names in {header}")
+        rows = []
+        for lineno, row in enumerate(reader, start=2):
+            if not row or all(not c.strip() for c in row):
+                continue
+            if len(row) != len(header):
+                raise DataError(f"{path}: line {lineno}: {len(row)} cells, header has {len(header)}")
+            vals = []
+            for col, cell in zip(header, row, strict=True):
+                try:
+                    v = float(cell)
+                except ValueError:
+                    raise DataError(
+                        f"{path}: line {lineno}, column '{col}': not a number: {cell!r}"
+                    ) from None
+                if not np.isfinite(v):
+                    raise DataError(f"{path}: line {lineno}, column '{col}': non-finite value {cell!r}")
+                vals.append(v)
+            rows.append(vals)
+    if len(rows) < 10:
+        raise DataError(f"{path}: {len(rows)} data rows; need at least 10")
+    a = np.array(rows)
+    col = {h: a[:, i] for i, h in enumerate(header)}
+    t = col["t"]
+    dt = np.diff(t)
+    T = float(np.median(dt))
+    if T <= 0:
+        raise DataError(f"{path}: column 't' is not increasing")
+    bad = np.flatnonzero(np.abs(dt - T) > rtol_dt * T)
+    if bad.size:
+        i = int(bad[0])
+        raise DataError(
+            f"{path}: line {i + 3}, column 't': non-uniform sampling, step {dt[i]:.6g} s "
+            f"where the median step is {T:.6g} s"
+        )
+    qd = np.column_stack((col["qd1"], col["qd2"])) if "qd1" in col else None
+    return Recording(
+        t=t,
+        q=np.column_stack((col["q1"], col["q2"])),
+        tau=np.column_stack((col["tau1"], col["tau2"])),
+        qd=qd,
+        sample_period=T,
+        source=str(path),
+    )

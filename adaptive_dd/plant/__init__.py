@@ -1,0 +1,59 @@
+"""The SICE two-link direct-drive arm: parameters, dynamics, simulator, Pinocchio check."""
+
+from adaptive_dd.plant.dynamics import (
+    coriolis_matrix,
+    forward_dynamics,
+    friction,
+    inverse_dynamics,
+    mass_matrix,
+    regressor,
+    regressor_reference,
+)
+from adaptive_dd.plant.parameters import (
+    L1,
+    L2,
+    SIGMA_NAMES,
+    TABLE1_PHYSICAL,
+    TABLE1_SIGMA,
+    TORQUE_LIMITS,
+    Payload,
+    PhysicalParameters,
+    payload_sigma_delta,
+    validate_sigma,
+)
+from adaptive_dd.plant.simulator import (
+    ActuatorConfig,
+    ArmSimulator,
+    PayloadSchedule,
+    SensorConfig,
+    SimulationResult,
+    plant_step,
+    simulate_open_loop,
+)
+
+__all__ = [
+    "L1",
+    "L2",
+    "SIGMA_NAMES",
+    "TABLE1_PHYSICAL",
+    "TABLE1_SIGMA",
+    "TORQUE_LIMITS",
+    "ActuatorConfig",
+    "ArmSimulator",
+    "Payload",
+    "PayloadSchedule",
+    "PhysicalParameters",
+    "SensorConfig",
+    "SimulationResult",
+    "coriolis_matrix",
+    "forward_dynamics",
+    "friction",
+    "inverse_dynamics",
+    "mass_matrix",
+    "payload_sigma_delta",
+    "plant_step",
+    "regressor",
+    "regressor_reference",
+    "simulate_open_loop",
+    "validate_sigma",
+]

@@ -1,0 +1,97 @@
+"""Figures. Plotting is kept apart from computing: every function takes results."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt
+import numpy as np
+
+from adaptive_dd.plant.parameters import SIGMA_NAMES
+
+__all__ = ["plot_estimates", "plot_model_response", "plot_trajectory"]
+
+UNITS = ("kg m²", "kg m²", "kg m²", "N m s", "N m s", "N m", "N m")
+
+
+def _save(fig, path: str | Path) -> Path:
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=120, bbox_inches="tight")
+    plt.close(fig)
+    return path
+
+
+def plot_trajectory(result, path: str | Path, trial: int = 0) -> Path:
+    """q, qd (true and measured) and torque of one trial of a SimulationResult."""
+    t = result.t
+    fig, ax = plt.subplots(3, 1, figsize=(9, 7), sharex=True)
+    for j, c in enumerate(("C0", "C1")):
+        ax[0].plot(t, result.q[trial, :, j], c, label=f"q{j + 1}")
+        ax[1].plot(t, result.qd_meas[trial, :, j], c, alpha=0.3, lw=0.5)
+        ax[1].plot(t, result.qd[trial, :, j], c, label=f"qd{j + 1}")
+        ax[2].plot(t, result.tau[trial, :, j], c, label=f"tau{j + 1}")
+    ax[0].set_ylabel("q [rad]")
+    ax[1].set_ylabel("qd [rad/s]\n(light: measured)")
+    ax[2].set_ylabel("torque [N m]")
+    ax[2].set_xlabel("t [s]")
+    for a in ax:
+        a.legend(loc="upper right", fontsize=8)
+        a.grid(alpha=0.3)
+    _mark_swaps(ax, result.t, result.mass[trial])
+    return _save(fig, path)
+
+
+def _mark_swaps(axes, t, mass) -> None:
+    idx = np.flatnonzero(np.diff(mass) != 0) + 1
+    for a in np.atleast_1d(axes):
+        for i in idx:
+            a.axvline(t[i], color="k", ls=":", lw=1)
+
+
+def plot_estimates(t, theta, sigma_true, path: str | Path, title: str = "", names=SIGMA_NAMES) -> Path:
+    """Estimates over time (mean over trials, band of +-1 std), true values dashed (Fig. 5).
+
+    ``theta`` has shape (n_trials, n_samples, 7); ``sigma_true`` (7,) or (n_samples, 7).
+    """
+    theta = np.asarray(theta)
+    st = np.broadcast_to(np.asarray(sigma_true), (theta.shape[1], 7))
+    fig, axes = plt.subplots(4, 2, figsize=(10, 9), sharex=True)
+    for k, ax in enumerate(axes.flat[:7]):
+        m, s = theta[..., k].mean(0), theta[..., k].std(0)
+        ax.plot(t, m, "C0", lw=1)
+        ax.fill_between(t, m - s, m + s, color="C0", alpha=0.25, lw=0)
+        ax.plot(t, st[:, k], "k--", lw=1)
+        lo, hi = np.nanmin(st[:, k]), np.nanmax(st[:, k])
+        pad = 0.6 * max(hi - lo, abs(hi), 1e-3)
+        ax.set_ylim(lo - pad, hi + pad)
+        ax.set_ylabel(f"{names[k]} [{UNITS[k]}]")
+        ax.grid(alpha=0.3)
+    axes.flat[7].axis("off")
+    axes.flat[7].text(
+        0.05,
+        0.5,
+        "solid: estimate (mean ± std over seeds)\ndashed: true value",
+        transform=axes.flat[7].transAxes,
+    )
+    for ax in axes[-1]:
+        ax.set_xlabel("t [s]")
+    fig.suptitle(title)
+    return _save(fig, path)
+
+
+def plot_model_response(t, q_arm, q_model, path: str | Path, title: str = "") -> Path:
+    """Arm and identified model driven by the same torque (Fig. 7)."""
+    fig, ax = plt.subplots(2, 1, figsize=(9, 5), sharex=True)
+    for j in range(2):
+        ax[j].plot(t, q_arm[:, j], "k", lw=1.5, label="arm")
+        ax[j].plot(t, q_model[:, j], "C3--", lw=1.2, label="identified model")
+        ax[j].set_ylabel(f"q{j + 1} [rad]")
+        ax[j].grid(alpha=0.3)
+        ax[j].legend(loc="upper right", fontsize=8)
+    ax[-1].set_xlabel("t [s]")
+    fig.suptitle(title)
+    return _save(fig, path)
