@@ -79,6 +79,153 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_reproduce(args: argparse.Namespace) -> int:
+    from adaptive_dd.experiments import table2_torque
+    from adaptive_dd.identification.reproduce import (
+        TAU_F_GRID,
+        format_summary,
+        format_table,
+        run_reproduce,
+    )
+    from adaptive_dd.plant.parameters import TABLE1_SIGMA
+    from adaptive_dd.plant.simulator import ActuatorConfig, SensorConfig, simulate_open_loop
+    from adaptive_dd.plotting import plot_estimates, plot_model_response
+
+    tau_f = tuple(args.tau_f) if args.tau_f else TAU_F_GRID
+    fig5 = ("M2", "15", "paper")
+    ours = ("M2", "full", "exact")
+    res = run_reproduce(
+        seeds=args.seeds,
+        seed=args.seed,
+        tau_f=tau_f,
+        estimators=tuple(args.estimators),
+        progress=not args.no_progress,
+        keep_theta=(fig5, ours),
+    )
+    print(
+        f"\nEstimation error [%] after 10 000 samples, mean±std over {args.seeds} seeds "
+        "(paper's value in parentheses)\n"
+    )
+    for method, table in (("M1", "Table 3"), ("M2", "Table 5")):
+        if (method, "15", "paper") in res.errors:
+            print(f"{table} ({method}, estimator 'paper', split (15)):")
+            print(format_table(res, method, "15", "paper", with_paper=True) + "\n")
+    for method in ("M1", "M2"):
+        if (method, "full", "exact") in res.errors:
+            print(
+                f"Ours ({method}, estimator 'exact': exact filtered regressor, aligned torque, "
+                "data selection, full RLS):"
+            )
+            print(format_table(res, method, "full", "exact", with_paper=False) + "\n")
+    print("Worst mean error over the seven parameters [%], every configuration:")
+    print(format_summary(res) + "\n")
+    out = Path(args.out)
+    written = []
+    t = res.sim.t
+    i5 = tau_f.index(0.006) if 0.006 in tau_f else 0
+    if fig5 in res.theta:
+        written.append(
+            plot_estimates(
+                t,
+                res.theta[fig5][i5],
+                TABLE1_SIGMA,
+                out / "fig5_paper_M2.png",
+                f"Estimates, paper's M2 estimator, split (15), tau_f = {tau_f[i5]}",
+            )
+        )
+    i_best = tau_f.index(0.02) if 0.02 in tau_f else len(tau_f) - 1
+    if ours in res.theta:
+        written.append(
+            plot_estimates(
+                t,
+                res.theta[ours][i_best],
+                TABLE1_SIGMA,
+                out / "fig5_exact_M2.png",
+                f"Estimates, estimator 'exact' (M2), tau_f = {tau_f[i_best]}",
+            )
+        )
+    models = {}
+    for key, i, label in ((fig5, i5, "paper M2"), (ours, i_best, "exact M2")):
+        if key in res.theta:
+            models[f"{label}, tau_f = {tau_f[i]}"] = res.theta[key][i][:, -1].mean(axis=0)
+    if models:
+        clean = SensorConfig(quantize=False, position_variance=(0, 0), velocity_variance=(0, 0))
+        tau = table2_torque(1, res.sim.t.size)
+        arm = simulate_open_loop(tau, np.random.default_rng(0), sensor=clean, actuator=ActuatorConfig())
+        qs = {
+            k: simulate_open_loop(
+                tau, np.random.default_rng(0), sigma0=np.clip(v, 1e-6, None), sensor=clean
+            ).q[0]
+            for k, v in models.items()
+        }
+        written.append(
+            plot_model_response(
+                t,
+                arm.q[0],
+                qs,
+                out / "fig7_model_response.png",
+                "Arm and identified models, same torque (Table 2)",
+            )
+        )
+        for k, q in qs.items():
+            rms = np.sqrt(((q - arm.q[0]) ** 2).mean(axis=0))
+            print(f"Fig. 7: rms difference arm - model ({k}): {rms.round(4)} rad")
+    if args.json:
+        written.append(res.write_json(args.json))
+    print("wrote " + ", ".join(str(w) for w in written))
+    return 0
+
+
+def _cmd_identify(args: argparse.Namespace) -> int:
+    from adaptive_dd.identification.estimators import estimate
+    from adaptive_dd.io import read_recording
+    from adaptive_dd.plant.parameters import SIGMA_NAMES
+    from adaptive_dd.plotting import plot_estimates
+
+    rec = read_recording(args.data)
+    if args.method == "M2" and rec.qd is None:
+        print(
+            f"adaptive-dd identify: {args.data}: method M2 needs columns qd1, qd2 "
+            "(use --method M1 for position only)",
+            file=sys.stderr,
+        )
+        return 2
+    res = estimate(
+        rec.q,
+        rec.tau,
+        rec.qd,
+        estimator=args.estimator,
+        method=args.method,
+        split=args.split,
+        tau_f=args.tau_f,
+        sample_period=rec.sample_period,
+    )
+    print(
+        f"{rec.source}: {rec.t.size} samples at T = {rec.sample_period:.6g} s; estimator "
+        f"{args.estimator}, method {args.method}, split {res.split}, tau_f = {args.tau_f}"
+    )
+    print(f"equations used: {int(res.n_used)} of {2 * rec.t.size}")
+    print(f"{'param':>6} {'estimate':>12} {'std':>10}")
+    for k, name in enumerate(SIGMA_NAMES):
+        print(f"{name:>6} {res.final[k]:12.5g} {res.std[k]:10.2g}")
+    if not np.all(np.isfinite(res.final)):
+        print(
+            "warning: the estimate is not finite: the record does not excite the arm enough", file=sys.stderr
+        )
+        return 1
+    out = Path(args.out)
+    ref = np.full(7, np.nan) if args.true is None else np.asarray(args.true, float)
+    path = plot_estimates(
+        rec.t,
+        res.theta[None],
+        np.where(np.isfinite(ref), ref, res.final),
+        out / "convergence.png",
+        f"{Path(args.data).name}: {args.estimator} ({args.method})",
+    )
+    print(f"wrote {path}")
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="adaptive-dd", description=__doc__)
     sub = p.add_subparsers(dest="command", required=True)
@@ -103,6 +250,35 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--no-saturate", action="store_true", help="no torque saturation")
     s.add_argument("--out", default="results/simulate", help="output folder")
     s.set_defaults(func=_cmd_simulate)
+
+    from adaptive_dd.identification.estimators import ESTIMATORS
+    from adaptive_dd.identification.reproduce import DEFAULT_ESTIMATORS
+
+    r = sub.add_parser("reproduce", help="reproduce Tables 3 and 5 of the paper (and ours beside)")
+    r.add_argument("--seeds", type=int, default=10, help="Monte-Carlo seeds (default 10)")
+    r.add_argument("--seed", type=int, default=0, help="base seed")
+    r.add_argument("--tau-f", type=float, nargs="+", help="filter time constants (default: the paper's)")
+    r.add_argument(
+        "--estimators",
+        nargs="+",
+        default=list(DEFAULT_ESTIMATORS),
+        choices=ESTIMATORS,
+        help="estimators to run (kalman equals batch_ls here and costs ~1 min more)",
+    )
+    r.add_argument("--out", default="results/reproduce", help="folder for figures")
+    r.add_argument("--json", metavar="PATH", help="write tidy rows as JSON")
+    r.add_argument("--no-progress", action="store_true")
+    r.set_defaults(func=_cmd_reproduce)
+
+    i = sub.add_parser("identify", help="estimate sigma from a recorded experiment (CSV)")
+    i.add_argument("data", help="CSV with header t,q1,q2,qd1,qd2,tau1,tau2 (qd optional for M1)")
+    i.add_argument("--estimator", default="exact", choices=ESTIMATORS)
+    i.add_argument("--method", default="M2", choices=("M1", "M2"))
+    i.add_argument("--split", default="15", choices=("15", "16", "full"), help="split of 'paper'")
+    i.add_argument("--tau-f", type=float, default=0.02, help="filter time constant [s]")
+    i.add_argument("--true", type=float, nargs=7, metavar="S", help="true sigma, to mark on the plot")
+    i.add_argument("--out", default="results/identify")
+    i.set_defaults(func=_cmd_identify)
     return p
 
 

@@ -83,12 +83,13 @@ def plot_estimates(t, theta, sigma_true, path: str | Path, title: str = "", name
     return _save(fig, path)
 
 
-def plot_model_response(t, q_arm, q_model, path: str | Path, title: str = "") -> Path:
-    """Arm and identified model driven by the same torque (Fig. 7)."""
+def plot_model_response(t, q_arm, models: dict, path: str | Path, title: str = "") -> Path:
+    """Arm and identified model(s) driven by the same torque (Fig. 7); ``models`` maps label -> q."""
     fig, ax = plt.subplots(2, 1, figsize=(9, 5), sharex=True)
     for j in range(2):
-        ax[j].plot(t, q_arm[:, j], "k", lw=1.5, label="arm")
-        ax[j].plot(t, q_model[:, j], "C3--", lw=1.2, label="identified model")
+        ax[j].plot(t, q_arm[:, j], "k", lw=2.0, label="arm")
+        for i, (label, q) in enumerate(models.items()):
+            ax[j].plot(t, q[:, j], f"C{i + 1}--", lw=1.2, label=label)
         ax[j].set_ylabel(f"q{j + 1} [rad]")
         ax[j].grid(alpha=0.3)
         ax[j].legend(loc="upper right", fontsize=8)

@@ -1,0 +1,199 @@
+"""From measured signals to the filtered linear regression ``y = Phi sigma``.
+
+Two constructions, each for method M1 (position only) and M2 (position and velocity):
+
+``"paper"`` (eqs. 17 and 19)
+    Filter the signals, then evaluate the regressor of eq. (8) on them:
+    ``Phi(G0 q, G0 qd, G1 qd)`` with Coulomb columns ``G0 sgn(qd)`` (M2), or
+    ``Phi(G0 q, G1 q, G2 q)`` with ``G0 sgn((q(t) - q(t-1))/T)`` (M1); ``y = G0 tau``.
+    Because Phi is nonlinear in q and qd, ``G0 tau != Phi(filtered) sigma``:
+    a modelling error that no amount of data removes.
+
+``"exact"`` (this package)
+    Apply G0 to the whole equation ``tau = Phi sigma``. Since ``q1`` is cyclic in
+    the horizontal arm, every column is a linear filter of functions of (q, qd):
+
+    * ``phi13 = d/dt [cos q2 (2 qd1 + qd2)]``
+    * ``phi23 = d/dt [cos q2 qd1] + sin q2 qd1 (qd1 + qd2)``
+
+    so ``G0 phi13 = G1[cos q2 (2 qd1 + qd2)]`` and so on, and ``G0 tau = (G0 Phi) sigma``
+    holds exactly for the true (noise-free) signals. For M1 the velocity is the
+    backward difference of the measured position.
+
+Both work on whole records (offline) and sample by sample (online, through
+:class:`OnlineRegressor`); the same channel and assembly functions serve both.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from adaptive_dd.errors import ParameterError, SignalError
+from adaptive_dd.identification.filters import FilterBank, StreamingFilter, design_filter_bank, filter_record
+from adaptive_dd.plant.dynamics import _regressor
+
+__all__ = [
+    "CONSTRUCTIONS",
+    "FilteredRegression",
+    "OnlineRegressor",
+    "filtered_regression",
+]
+
+Array = NDArray[np.float64]
+CONSTRUCTIONS = ("paper", "exact")
+
+
+@dataclass(frozen=True)
+class FilteredRegression:
+    """Filtered regression data ``y[k] = phi[k] @ sigma`` (+ error).
+
+    Attributes
+    ----------
+    phi : ndarray, shape (..., n_samples, 2, 7)
+    y : ndarray, shape (..., n_samples, 2)
+        Filtered torque ``G0 tau`` [N m].
+    construction, method : str
+    tau_f : float
+    """
+
+    phi: Array
+    y: Array
+    construction: str
+    method: str
+    tau_f: float
+
+
+def _check(construction: str, method: str) -> None:
+    if construction not in CONSTRUCTIONS:
+        raise ParameterError(f"construction must be one of {CONSTRUCTIONS}, got {construction!r}")
+    if method not in ("M1", "M2"):
+        raise ParameterError(f"method must be 'M1' or 'M2', got {method!r}")
+
+
+def _channels(construction: str, method: str, q: Array, qd: Array, tau: Array) -> Array:
+    """Raw (unfiltered) channels, shape (..., n_ch). For M1, ``qd`` is the backward difference."""
+    if construction == "paper":
+        first = q if method == "M1" else np.concatenate((q, qd), axis=-1)
+        return np.concatenate((first, np.sign(qd), tau), axis=-1)
+    c2, s2 = np.cos(q[..., 1]), np.sin(q[..., 1])
+    qd1, qd2 = qd[..., 0], qd[..., 1]
+    extra = np.stack((c2 * (2.0 * qd1 + qd2), c2 * qd1, s2 * qd1 * (qd1 + qd2)), axis=-1)
+    return np.concatenate((qd, extra, np.sign(qd), tau), axis=-1)
+
+
+def _assemble(construction: str, method: str, f: Array) -> tuple[Array, Array]:
+    """Build (phi, y) from filtered channels ``f (..., n_ch, n_outputs)``."""
+    if construction == "paper":
+        if method == "M1":
+            q_a, qd_a, qdd_a, rest = f[..., 0:2, 0], f[..., 0:2, 1], f[..., 0:2, 2], f[..., 2:, 0]
+        else:
+            q_a, qd_a, qdd_a, rest = f[..., 0:2, 0], f[..., 2:4, 0], f[..., 2:4, 1], f[..., 4:, 0]
+        return _regressor(q_a, qd_a, qdd_a, rest[..., 0:2]), rest[..., 2:4]
+    g0, g1 = f[..., 0], f[..., 1]
+    shape = f.shape[:-2]
+    phi = np.zeros((*shape, 2, 7))
+    phi[..., 0, 0] = g1[..., 0]
+    phi[..., :, 1] = (g1[..., 0] + g1[..., 1])[..., None]
+    phi[..., 0, 2] = g1[..., 2]
+    phi[..., 1, 2] = g1[..., 3] + g0[..., 4]
+    phi[..., 0, 3] = g0[..., 0]
+    phi[..., 1, 4] = g0[..., 1]
+    phi[..., 0, 5] = g0[..., 5]
+    phi[..., 1, 6] = g0[..., 6]
+    return phi, g0[..., 7:9]
+
+
+def _backward_difference(q: Array, T: float, axis: int = -2) -> Array:
+    """``(q(t) - q(t-1)) / T`` along the time axis, 0 at the first sample."""
+    d = np.diff(q, axis=axis) / T
+    first = np.zeros_like(np.take(q, [0], axis=axis))
+    return np.concatenate((first, d), axis=axis)
+
+
+def filtered_regression(
+    q: ArrayLike,
+    tau: ArrayLike,
+    qd: ArrayLike | None = None,
+    *,
+    method: str = "M2",
+    construction: str = "paper",
+    tau_f: float = 0.006,
+    sample_period: float = 1e-3,
+    bank: FilterBank | None = None,
+) -> FilteredRegression:
+    """Filtered regression of a whole record (offline path).
+
+    Parameters
+    ----------
+    q, tau : array_like, shape (..., n_samples, 2)
+        Measured joint angles [rad] and torques [N m].
+    qd : array_like, shape (..., n_samples, 2), optional
+        Measured velocities [rad/s]; required for M2, ignored by M1.
+    method : {"M1", "M2"}
+    construction : {"paper", "exact"}
+    tau_f, sample_period : float
+        Filter time constant and T [s] (or pass a designed ``bank``).
+
+    The filters start in the steady state of the first sample.
+    """
+    _check(construction, method)
+    q = np.asarray(q, dtype=float)
+    tau = np.asarray(tau, dtype=float)
+    if q.ndim < 2 or q.shape[-1] != 2 or tau.shape != q.shape:
+        raise SignalError(f"q and tau must have equal shapes (..., n_samples, 2), got {q.shape}, {tau.shape}")
+    bank = bank or design_filter_bank(method, tau_f, sample_period)
+    if method == "M2":
+        if qd is None:
+            raise SignalError("method M2 needs the measured velocity qd")
+        qd = np.asarray(qd, dtype=float)
+        if qd.shape != q.shape:
+            raise SignalError(f"qd must have the shape of q {q.shape}, got {qd.shape}")
+    else:
+        qd = _backward_difference(q, bank.sample_period)
+    u = _channels(construction, method, q, qd, tau)  # (..., N, n_ch)
+    f = filter_record(bank, u, axis=-2, initial=u[..., 0, :])  # (..., N, n_ch, n_out)
+    phi, y = _assemble(construction, method, f)
+    return FilteredRegression(phi, y, construction, method, bank.tau_f)
+
+
+class OnlineRegressor:
+    """The same construction sample by sample (online path, for adaptive control).
+
+    Parameters
+    ----------
+    batch_shape : tuple
+        Leading shape of each sample, e.g. ``(n_trials,)``.
+    method, construction, tau_f, sample_period
+        As in :func:`filtered_regression`.
+    """
+
+    def __init__(
+        self,
+        batch_shape: tuple = (),
+        *,
+        method: str = "M2",
+        construction: str = "exact",
+        tau_f: float = 0.006,
+        sample_period: float = 1e-3,
+    ) -> None:
+        _check(construction, method)
+        self.method, self.construction = method, construction
+        self.bank = design_filter_bank(method, tau_f, sample_period)
+        self.batch_shape = tuple(batch_shape)
+        self._filter: StreamingFilter | None = None
+        self._q_prev: Array | None = None
+
+    def __call__(self, q: Array, tau: Array, qd: Array | None = None) -> tuple[Array, Array]:
+        """Feed one sample; return ``phi (batch..., 2, 7)`` and ``y (batch..., 2)``."""
+        if self.method == "M1":
+            qd = np.zeros_like(q) if self._q_prev is None else (q - self._q_prev) / self.bank.sample_period
+            self._q_prev = q
+        elif qd is None:
+            raise SignalError("method M2 needs the measured velocity qd")
+        u = _channels(self.construction, self.method, q, qd, tau)
+        if self._filter is None:
+            self._filter = StreamingFilter(self.bank, u.shape, initial=u)
+        return _assemble(self.construction, self.method, self._filter(u))

@@ -1,0 +1,119 @@
+"""Derivative filter banks (eqs. 17-21) and the filtered regressions."""
+
+import numpy as np
+import pytest
+
+from adaptive_dd.errors import ParameterError, SignalError
+from adaptive_dd.experiments import table2_torque
+from adaptive_dd.identification.estimators import align_torque
+from adaptive_dd.identification.filters import (
+    StreamingFilter,
+    design_filter_bank,
+    filter_record,
+)
+from adaptive_dd.identification.regressors import OnlineRegressor, filtered_regression
+from adaptive_dd.plant import TABLE1_SIGMA, ActuatorConfig, SensorConfig, simulate_open_loop
+
+CLEAN = SensorConfig(quantize=False, position_variance=(0, 0), velocity_variance=(0, 0))
+
+
+@pytest.mark.parametrize("method", ["M1", "M2"])
+@pytest.mark.parametrize("tau_f", [0.002, 0.006, 0.02])
+def test_streaming_equals_whole_record(method, tau_f, rng):
+    bank = design_filter_bank(method, tau_f)
+    u = rng.normal(size=(3, 1500)).cumsum(axis=-1) * 0.01 + 0.3
+    y_rec = filter_record(bank, u, axis=-1, initial=u[:, 0])
+    sf = StreamingFilter(bank, (3,), initial=u[:, 0])
+    y_str = np.stack([sf(u[:, k]) for k in range(u.shape[1])], axis=1)
+    np.testing.assert_allclose(y_str, y_rec, rtol=1e-9, atol=1e-9 * np.abs(y_rec).max())
+
+
+@pytest.mark.parametrize("method", ["M1", "M2"])
+def test_filters_are_derivative_filters(method):
+    bank = design_filter_bank(method, 0.01)
+    t = np.arange(4000) * 1e-3
+    # a ramp: G0 passes it with a delay of n*tau_f, G1 gives its slope, G2 gives 0
+    y = filter_record(bank, 2.0 * t)
+    n = bank.order
+    np.testing.assert_allclose(y[-1, 0], 2.0 * (t[-1] - n * 0.01), rtol=1e-6)
+    np.testing.assert_allclose(y[-1, 1], 2.0, rtol=1e-6)
+    if method == "M1":
+        assert abs(y[-1, 2]) < 1e-6
+    # the magnitude at 1 Hz matches |G_k(j w)| of eq. (18) / (20)
+    w = 2 * np.pi
+    y = filter_record(bank, np.sin(w * t))
+    g0 = abs(1 / (1 + 1j * w * 0.01) ** n)
+    np.testing.assert_allclose(np.abs(y[-1000:, 0]).max(), g0, rtol=1e-3)
+    np.testing.assert_allclose(np.abs(y[-1000:, 1]).max(), w * g0, rtol=1e-3)
+
+
+def test_bad_filter_parameters():
+    with pytest.raises(ParameterError, match="tau_f must be > 0"):
+        design_filter_bank("M2", 0.0)
+    with pytest.raises(ParameterError, match="method"):
+        design_filter_bank("M3", 0.01)
+    with pytest.raises(ParameterError, match="sample_period"):
+        design_filter_bank("M2", 0.01, -1e-3)
+    with pytest.raises(SignalError, match="shape"):
+        StreamingFilter(design_filter_bank("M2", 0.01), (2,))(np.zeros(3))
+
+
+@pytest.fixture(scope="module")
+def smooth_record():
+    """Noise-free, no Coulomb friction: the equation of motion holds at every sample."""
+    sigma = TABLE1_SIGMA.copy()
+    sigma[5:] = 0.0
+    res = simulate_open_loop(
+        table2_torque(1, 4000),
+        np.random.default_rng(0),
+        sigma0=sigma,
+        sensor=CLEAN,
+        actuator=ActuatorConfig(quantize=False),
+        substeps=4,
+    )
+    return res, sigma
+
+
+def test_exact_construction_removes_the_nonlinear_filtering_error(smooth_record):
+    res, sigma = smooth_record
+    tau = align_torque(res.tau)
+    out = {}
+    for c in ("paper", "exact"):
+        fr = filtered_regression(res.q_meas, tau, res.qd_meas, construction=c, tau_f=0.006)
+        r = fr.y - fr.phi @ sigma
+        out[c] = np.sqrt((r[0, 200:] ** 2).mean(axis=0))
+    scale = np.sqrt((res.tau**2).mean(axis=(0, 1)))
+    assert np.all(out["exact"] < 1e-4 * scale)  # exact up to discretisation
+    assert np.all(out["paper"] > 10 * out["exact"])  # the paper's construction is not
+
+
+def test_unaligned_torque_leaves_a_half_sample_error(smooth_record):
+    res, sigma = smooth_record
+    fr = filtered_regression(res.q_meas, res.tau, res.qd_meas, construction="exact", tau_f=0.006)
+    r = np.sqrt(((fr.y - fr.phi @ sigma)[0, 200:] ** 2).mean(axis=0))
+    assert np.all(r > 1e-3 * np.sqrt((res.tau**2).mean(axis=(0, 1))))
+
+
+@pytest.mark.parametrize("construction", ["paper", "exact"])
+@pytest.mark.parametrize("method", ["M1", "M2"])
+def test_online_regressor_equals_record(construction, method):
+    res = simulate_open_loop(table2_torque(2, 600), np.random.default_rng(1))
+    fr = filtered_regression(
+        res.q_meas, res.tau, res.qd_meas, method=method, construction=construction, tau_f=0.006
+    )
+    online = OnlineRegressor((2,), method=method, construction=construction, tau_f=0.006)
+    phis, ys = zip(
+        *(online(res.q_meas[:, k], res.tau[:, k], res.qd_meas[:, k]) for k in range(600)), strict=True
+    )
+    np.testing.assert_allclose(np.stack(phis, 1), fr.phi, rtol=1e-8, atol=1e-8)
+    np.testing.assert_allclose(np.stack(ys, 1), fr.y, rtol=1e-8, atol=1e-8)
+
+
+def test_regression_input_errors():
+    q = np.zeros((100, 2))
+    with pytest.raises(SignalError, match="M2 needs the measured velocity"):
+        filtered_regression(q, q, None, method="M2")
+    with pytest.raises(SignalError, match="equal shapes"):
+        filtered_regression(q, q[:50], q)
+    with pytest.raises(ParameterError, match="construction"):
+        filtered_regression(q, q, q, construction="magic")

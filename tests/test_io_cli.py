@@ -1,0 +1,90 @@
+"""Recorded-data reader and the command line."""
+
+import numpy as np
+import pytest
+
+from adaptive_dd.cli import main
+from adaptive_dd.errors import DataError
+from adaptive_dd.io import read_recording, write_recording
+
+
+def write(tmp_path, text, name="rec.csv"):
+    p = tmp_path / name
+    p.write_text(text)
+    return p
+
+
+def good_csv(n=20, T=1e-3):
+    rows = ["t,q1,q2,qd1,qd2,tau1,tau2"] + [f"{k * T},{k},0,1,0,0.5,0.1" for k in range(n)]
+    return "\n".join(rows) + "\n"
+
+
+def test_round_trip(tmp_path):
+    t = np.arange(50) * 1e-3
+    q = np.random.default_rng(0).normal(size=(50, 2))
+    p = write_recording(tmp_path / "x.csv", t, q, q * 2, q * 3)
+    rec = read_recording(p)
+    np.testing.assert_allclose(rec.q, q, rtol=1e-9)
+    np.testing.assert_allclose(rec.tau, q * 3, rtol=1e-9)
+    assert rec.sample_period == pytest.approx(1e-3)
+
+
+@pytest.mark.parametrize(
+    "text, match",
+    [
+        ("t,q1,q2,tau1\n1,2,3,4\n", "missing column\\(s\\) \\['tau2'\\]"),
+        ("t,q1,q2,tau1,tau2,foo\n", "unknown column"),
+        ("t,q1,q2,qd1,tau1,tau2\n", "both qd1 and qd2"),
+        (good_csv().replace("0.5,0.1\n0.002", "0.5,abc\n0.002", 1), "line 3, column 'tau2': not a number"),
+        (good_csv().replace("0.005,5,0", "0.0057,5,0"), "line 7, column 't': non-uniform sampling"),
+        (good_csv().replace("0.004,4,0", "0.004,nan,0"), "line 6, column 'q1': non-finite"),
+        ("t,q1,q2,tau1,tau2\n0,0,0,0,0\n", "need at least 10"),
+        ("", "empty file"),
+    ],
+)
+def test_bad_recordings_name_file_line_and_column(tmp_path, text, match):
+    p = write(tmp_path, text)
+    with pytest.raises(DataError, match=match) as e:
+        read_recording(p)
+    assert str(p) in str(e.value)
+
+
+def test_missing_file(tmp_path):
+    with pytest.raises(DataError, match="no such file"):
+        read_recording(tmp_path / "nope.csv")
+
+
+def test_cli_check_passes_and_reports(capsys):
+    assert main(["check", "--states", "20"]) == 0
+    out = capsys.readouterr().out
+    assert "9 passed, 0 failed" in out and "pin.crba" in out
+
+
+def test_cli_check_fails_on_a_wrong_model(monkeypatch, capsys):
+    import adaptive_dd.plant.pinocchio_model as pm
+    from adaptive_dd.plant.parameters import TABLE1_PHYSICAL, PhysicalParameters
+
+    wrong = PhysicalParameters(**{**TABLE1_PHYSICAL.__dict__, "a2": 0.09})
+    real = pm.build_model
+    monkeypatch.setattr(pm, "build_model", lambda params, payload=None: real(wrong, payload))
+    assert main(["check", "--states", "10"]) == 1
+    assert "FAIL" in capsys.readouterr().out
+
+
+def test_cli_simulate_then_identify(tmp_path, capsys):
+    out = tmp_path / "sim"
+    assert main(["simulate", "--duration", "4", "--out", str(out)]) == 0
+    for f in ("trajectory.npz", "trajectory.csv", "trajectory.png"):
+        assert (out / f).is_file()
+    assert main(["identify", str(out / "trajectory.csv"), "--out", str(tmp_path / "id")]) == 0
+    text = capsys.readouterr().out
+    j1 = float(next(line.split()[1] for line in text.splitlines() if line.strip().startswith("J1")))
+    assert abs(j1 / 0.429 - 1) < 0.05
+    assert (tmp_path / "id" / "convergence.png").is_file()
+
+
+def test_cli_identify_reports_bad_data(tmp_path, capsys):
+    p = write(tmp_path, "t,q1,q2,tau1,tau2\n" + "\n".join(f"{k},0,0,0,0" for k in range(20)))
+    assert main(["identify", str(p)]) == 2  # M2 without qd columns
+    assert "qd1, qd2" in capsys.readouterr().err
+    assert main(["identify", str(tmp_path / "missing.csv")]) == 2
