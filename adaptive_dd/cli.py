@@ -226,6 +226,35 @@ def _cmd_identify(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_benchmark(args: argparse.Namespace) -> int:
+    import dataclasses
+
+    from adaptive_dd.benchmark.metrics import compute_metrics
+    from adaptive_dd.benchmark.report import format_report, write_csv, write_json
+    from adaptive_dd.benchmark.runner import run_benchmark
+    from adaptive_dd.benchmark.scenario import load_scenario
+    from adaptive_dd.plotting import plot_benchmark_estimates, plot_tracking_errors
+
+    sc = load_scenario(args.scenario)
+    if args.seeds is not None:
+        if args.seeds < 1:
+            raise ValueError(f"--seeds must be >= 1, got {args.seeds}")
+        sc = dataclasses.replace(sc, seeds=args.seeds)
+    res = run_benchmark(sc, progress=not args.no_progress)
+    metrics = compute_metrics(res)
+    print(format_report(metrics, res))
+    out = Path(args.out)
+    written = [
+        write_csv(metrics, out / "metrics.csv"),
+        write_json(metrics, args.json or out / "metrics.json"),
+        plot_tracking_errors(res, out / "tracking_error.png"),
+    ]
+    if any(r.sigma_hat is not None for r in res.runs.values()):
+        written.append(plot_benchmark_estimates(res, out / "estimates.png"))
+    print("wrote " + ", ".join(str(w) for w in written))
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="adaptive-dd", description=__doc__)
     sub = p.add_subparsers(dest="command", required=True)
@@ -279,6 +308,14 @@ def build_parser() -> argparse.ArgumentParser:
     i.add_argument("--true", type=float, nargs=7, metavar="S", help="true sigma, to mark on the plot")
     i.add_argument("--out", default="results/identify")
     i.set_defaults(func=_cmd_identify)
+
+    b = sub.add_parser("benchmark", help="payload-swap tracking benchmark (the main job)")
+    b.add_argument("scenario", nargs="?", help="scenario TOML (default: the shipped payload_swap)")
+    b.add_argument("--out", default="results/benchmark", help="folder for CSV, JSON and figures")
+    b.add_argument("--json", metavar="PATH", help="where to write the JSON (default OUT/metrics.json)")
+    b.add_argument("--seeds", type=int, help="override the scenario's number of seeds")
+    b.add_argument("--no-progress", action="store_true")
+    b.set_defaults(func=_cmd_benchmark)
     return p
 
 

@@ -12,7 +12,13 @@ import numpy as np
 
 from adaptive_dd.plant.parameters import SIGMA_NAMES
 
-__all__ = ["plot_estimates", "plot_model_response", "plot_trajectory"]
+__all__ = [
+    "plot_benchmark_estimates",
+    "plot_estimates",
+    "plot_model_response",
+    "plot_tracking_errors",
+    "plot_trajectory",
+]
 
 UNITS = ("kg m²", "kg m²", "kg m²", "N m s", "N m s", "N m", "N m")
 
@@ -95,4 +101,56 @@ def plot_model_response(t, q_arm, models: dict, path: str | Path, title: str = "
         ax[j].legend(loc="upper right", fontsize=8)
     ax[-1].set_xlabel("t [s]")
     fig.suptitle(title)
+    return _save(fig, path)
+
+
+def plot_tracking_errors(res, path: str | Path, window: float = 0.05) -> Path:
+    """50 ms moving RMS of |e| (mean over seeds) for every controller, swaps marked, log scale."""
+    from adaptive_dd.benchmark.metrics import moving_rms
+
+    T = res.scenario.sample_period
+    fig, ax = plt.subplots(figsize=(10, 5))
+    for i, (name, run) in enumerate(res.runs.items()):
+        ok = ~run.failed
+        if not ok.any():
+            continue
+        e = np.sqrt(((res.q_d[None] - run.q[ok]) ** 2).sum(axis=-1))
+        m = moving_rms(e, max(1, int(round(window / T)))).mean(axis=0)
+        ax.semilogy(res.t, np.maximum(m * 1e3, 1e-4), color=f"C{i}", lw=1.0, label=name)
+    _mark_swaps(ax, res.t, res.mass)
+    for a, b, m in res.scenario.segments():
+        ax.text(0.5 * (a + b), 1.0, f"{m:g} kg", transform=ax.get_xaxis_transform(), ha="center", va="bottom")
+    ax.set_xlabel("t [s]")
+    ax.set_ylabel(f"tracking error |q_d - q|, {window * 1e3:.0f} ms RMS [mrad]")
+    ax.grid(alpha=0.3, which="both")
+    ax.legend(fontsize=8, ncol=3)
+    return _save(fig, path)
+
+
+def plot_benchmark_estimates(res, path: str | Path) -> Path:
+    """J1, J2, r and the payload mass estimated by the adaptive controllers, against the truth."""
+    from adaptive_dd.plant.parameters import TABLE1_SIGMA, payload_mass_from_sigma
+
+    fig, axes = plt.subplots(2, 2, figsize=(11, 7), sharex=True)
+    panels = [(0, "J1 [kg m²]"), (1, "J2 [kg m²]"), (2, "r [kg m²]")]
+    for ax, (k, label) in zip(axes.flat[:3], panels, strict=True):
+        ax.plot(res.t, res.sigma_true[:, k], "k--", lw=1.5, label="true")
+        ax.set_ylabel(label)
+    axes.flat[3].plot(res.t, res.mass, "k--", lw=1.5, label="true")
+    axes.flat[3].set_ylabel("payload mass [kg]")
+    for i, (name, run) in enumerate(res.runs.items()):
+        if run.sigma_hat is None or not (~run.failed).any():
+            continue
+        sh = run.sigma_hat[~run.failed].mean(axis=0)
+        for ax, (k, _) in zip(axes.flat[:3], panels, strict=True):
+            ax.plot(res.t, sh[:, k], color=f"C{i}", lw=1.0, label=name)
+        axes.flat[3].plot(res.t, payload_mass_from_sigma(sh, TABLE1_SIGMA), color=f"C{i}", lw=1.0, label=name)
+    for ax in axes.flat:
+        ax.grid(alpha=0.3)
+        _mark_swaps(ax, res.t, res.mass)
+    axes.flat[3].set_ylim(-1, 5)
+    axes.flat[0].legend(fontsize=8)
+    for ax in axes[-1]:
+        ax.set_xlabel("t [s]")
+    fig.suptitle("Estimates of the adaptive controllers (mean over seeds)")
     return _save(fig, path)

@@ -1,0 +1,51 @@
+"""Controllers with one interface: PD, computed torque (nominal, oracle), adaptive
+computed torque (paper's estimator, payload-swap estimator), Slotine-Li."""
+
+from adaptive_dd.controllers.adaptive import (
+    ADAPTIVE_RLS,
+    AdaptiveCT,
+    ChangeDetector,
+    OnlineEstimator,
+    adaptive_ct,
+    adaptive_ct_paper,
+)
+from adaptive_dd.controllers.base import Controller, Gains
+from adaptive_dd.controllers.feedback import PD, ComputedTorque, computed_torque_law
+from adaptive_dd.controllers.slotine_li import SlotineLi
+
+CONTROLLERS = ("pd", "ct_nominal", "ct_oracle", "adaptive_ct_paper", "adaptive_ct", "slotine_li")
+"""Names a scenario may list."""
+
+
+def make_controller(name: str, gains: Gains | None = None) -> Controller:
+    """A controller by name (see :data:`CONTROLLERS`) with the given gains."""
+    g = gains or Gains()
+    factories = {
+        "pd": lambda: PD(g),
+        "ct_nominal": lambda: ComputedTorque(g),
+        "ct_oracle": lambda: ComputedTorque(g, oracle=True),
+        "adaptive_ct_paper": lambda: adaptive_ct_paper(g),
+        "adaptive_ct": lambda: adaptive_ct(g),
+        "slotine_li": lambda: SlotineLi(g),
+    }
+    if name not in factories:
+        raise ValueError(f"unknown controller {name!r}; choose from {CONTROLLERS}")
+    return factories[name]()
+
+
+__all__ = [
+    "ADAPTIVE_RLS",
+    "CONTROLLERS",
+    "PD",
+    "AdaptiveCT",
+    "ChangeDetector",
+    "ComputedTorque",
+    "Controller",
+    "Gains",
+    "OnlineEstimator",
+    "SlotineLi",
+    "adaptive_ct",
+    "adaptive_ct_paper",
+    "computed_torque_law",
+    "make_controller",
+]

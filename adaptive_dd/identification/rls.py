@@ -127,30 +127,32 @@ def rls_step(
         ``eps`` (prior error), ``gain`` (K), ``skipped`` (non-finite sample).
     """
     theta, P, lam_prev, n_skipped = state
-    bad = ~(np.isfinite(y) & np.all(np.isfinite(phi), axis=-1))
-    phi0 = np.where(bad[..., None], 0.0, phi)
-    y0 = np.where(bad, 0.0, y)
+    finite = np.isfinite(y) & np.isfinite(phi).all(axis=-1)
+    clean = bool(finite.all())
+    if not clean:
+        phi = np.where(finite[..., None], phi, 0.0)
+        y = np.where(finite, y, 0.0)
     lam = (1.0 - cfg.mu) * lam_prev + cfg.mu if forget else lam_prev
     lam_eff = lam if forget else np.ones_like(lam_prev)
-    pphi = np.einsum("...ij,...j->...i", P, phi0)
-    den = lam_eff + np.einsum("...i,...i->...", phi0, pphi)
-    eps = y0 - np.einsum("...i,...i->...", phi0, theta)
+    pphi = (P @ phi[..., None])[..., 0]
+    den = lam_eff + (phi * pphi).sum(axis=-1)
+    eps = y - (phi * theta).sum(axis=-1)
     gain = pphi / den[..., None]
     th_new = theta + gain * eps[..., None]
     p_new = (P - gain[..., :, None] * pphi[..., None, :]) / lam_eff[..., None, None]
     p_new = 0.5 * (p_new + np.swapaxes(p_new, -1, -2))
     cap = cfg.max_trace if cfg.max_trace is not None else cfg.p0 * theta.shape[-1]
     tr = np.trace(p_new, axis1=-2, axis2=-1)
-    p_new = p_new * np.minimum(1.0, cap / np.maximum(tr, 1e-300))[..., None, None]
-    bad = bad | ~np.isfinite(den) | (den <= 0)
+    if np.any(tr > cap):
+        p_new = p_new * np.minimum(1.0, cap / np.maximum(tr, 1e-300))[..., None, None]
+    bad = ~finite | ~(den > 0)  # den is NaN or inf only if P went bad: skip too
     keep = bad if active is None else bad | ~active
-    out = RLSState(
-        np.where(keep[..., None], theta, th_new),
-        np.where(keep[..., None, None], P, p_new),
-        np.where(keep, lam_prev, lam),
-        n_skipped + bad,
-    )
-    return out, {"eps": np.where(bad, np.nan, eps), "gain": gain, "skipped": bad}
+    if keep.any():
+        th_new = np.where(keep[..., None], theta, th_new)
+        p_new = np.where(keep[..., None, None], P, p_new)
+        lam = np.where(keep, lam_prev, lam)
+    out = RLSState(th_new, p_new, lam, n_skipped + bad if not clean or bad.any() else n_skipped)
+    return out, {"eps": np.where(bad, np.nan, eps) if not clean else eps, "gain": gain, "skipped": bad}
 
 
 class RecursiveLeastSquares:

@@ -18,7 +18,9 @@ from adaptive_dd.plant.parameters import (
     TORQUE_LIMITS,
     Payload,
     PhysicalParameters,
+    payload_mass_from_sigma,
     payload_sigma_delta,
+    project_sigma,
     validate_sigma,
 )
 from adaptive_dd.plant.simulator import (
@@ -50,8 +52,10 @@ __all__ = [
     "friction",
     "inverse_dynamics",
     "mass_matrix",
+    "payload_mass_from_sigma",
     "payload_sigma_delta",
     "plant_step",
+    "project_sigma",
     "regressor",
     "regressor_reference",
     "simulate_open_loop",

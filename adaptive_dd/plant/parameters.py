@@ -24,7 +24,9 @@ __all__ = [
     "TORQUE_LIMITS",
     "Payload",
     "PhysicalParameters",
+    "payload_mass_from_sigma",
     "payload_sigma_delta",
+    "project_sigma",
     "validate_sigma",
 ]
 
@@ -214,3 +216,32 @@ TABLE1_PHYSICAL = PhysicalParameters(
 The paper gives only base parameters; this is one consistent choice, used for the
 Pinocchio model. ``TABLE1_PHYSICAL.to_sigma()`` equals ``TABLE1_SIGMA`` to rounding.
 """
+
+
+def project_sigma(sigma: ArrayLike, j_min: float = 1e-3, margin: float = 0.05) -> NDArray[np.float64]:
+    """Nearest physically consistent base parameters (cheap projection), ``(..., 7)``.
+
+    ``J1, J2 >= j_min``, ``r >= 0``, friction ``>= 0``, and ``r^2 <= (1 - margin) J1 J2``
+    so that M(q) stays positive definite for every q2. Non-finite entries are
+    left for the caller to catch.
+    """
+    s = np.array(sigma, dtype=float, copy=True)
+    s[..., 0:2] = np.maximum(s[..., 0:2], j_min)
+    s[..., 3:7] = np.maximum(s[..., 3:7], 0.0)
+    r_max = np.sqrt((1.0 - margin) * s[..., 0] * s[..., 1])
+    s[..., 2] = np.clip(s[..., 2], 0.0, r_max)
+    return s
+
+
+def payload_mass_from_sigma(
+    sigma_hat: ArrayLike, sigma0: ArrayLike = TABLE1_SIGMA, l1: float = L1, l2: float = L2
+) -> NDArray[np.float64]:
+    """Tip mass [kg] implied by estimated base parameters, ``(...)``.
+
+    Least squares on the changes of J1 (``m l1^2``) and r (``m l1 l2``) from the
+    unloaded arm ``sigma0``; J2 is left out because it also holds the disk's own
+    inertia, whose radius is unknown.
+    """
+    d = np.asarray(sigma_hat, dtype=float) - np.asarray(sigma0, dtype=float)
+    a1, a2 = l1**2, l1 * l2
+    return (a1 * d[..., 0] + a2 * d[..., 2]) / (a1**2 + a2**2)

@@ -193,7 +193,7 @@ class PayloadSchedule:
 
     def mass_at(self, t: float) -> Array:
         """Payload mass [kg] at time t (scalar or per-trial array)."""
-        k = int(np.searchsorted(np.asarray(self.times, dtype=float), t, side="right"))
+        k = int(np.searchsorted(np.asarray(self.times, dtype=float), t + 1e-9, side="right"))
         m = self.initial_mass if k == 0 else self.masses[k - 1]
         return np.asarray(m, dtype=float)
 
@@ -496,6 +496,8 @@ class ArmSimulator:
         self.failed_at = np.full(self.n_trials, -1)
         self.k = 0
         self._noise = _noise_for(rng, self.n_trials, self.n_samples)
+        # a swap at time `at` takes effect at the first sample k with k T >= at
+        self._swap_samples = {int(np.ceil(at / self.T - 1e-9)) for at in self.payload.times}
         self._update_sigma()
 
     @property
@@ -551,7 +553,7 @@ class ArmSimulator:
                 True,
             )
         self.k += 1
-        if self.payload.times:
+        if self.k in self._swap_samples:
             self._update_sigma()
         return tau, sat
 

@@ -1,0 +1,118 @@
+"""Metrics of a benchmark run, per controller and per payload segment.
+
+Errors are on the *true* joint angles: ``e = q_d - q``, ``|e|`` its Euclidean norm
+over both joints [rad]. Per trial, then averaged over the seeds that did not fail:
+
+rms_error
+    ``sqrt(mean |e|^2)`` over the segment (``rms_error_joint``: per joint).
+max_error
+    ``max |e|`` over the segment.
+recovery_time
+    After a swap at ``t_s``: the time until the 50 ms moving RMS of ``|e|`` enters
+    a band and stays inside it for ``RECOVERY_DWELL`` (0.5 s). The band is ``RECOVERY_BAND`` times
+    the peak of that moving RMS over the second before the swap or over the last
+    second of the segment, whichever is larger (the settled level can differ with
+    the payload; friction at reversals makes the steady error spiky, so the band
+    is set by its peaks), with a floor ``RECOVERY_FLOOR``. ``None`` for the first segment, and for a trial
+    that never does so within the segment.
+rms_torque
+    ``sqrt(mean |tau|^2)`` of the applied torque [N m].
+saturation_fraction
+    Fraction of samples with a joint's command beyond its limit.
+mass_estimate
+    Payload mass implied by the estimates at the end of the segment
+    (:func:`~adaptive_dd.plant.payload_mass_from_sigma`); None for fixed models.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from adaptive_dd.benchmark.runner import BenchmarkResult
+from adaptive_dd.plant.parameters import TABLE1_SIGMA, payload_mass_from_sigma
+
+__all__ = ["RECOVERY_BAND", "RECOVERY_DWELL", "RECOVERY_FLOOR", "compute_metrics", "moving_rms"]
+
+RECOVERY_BAND = 1.5
+RECOVERY_FLOOR = 5e-5  # rad
+RECOVERY_DWELL = 0.5  # s
+WINDOW = 0.05  # s
+
+
+def moving_rms(x: np.ndarray, n: int, axis: int = -1) -> np.ndarray:
+    """Causal moving RMS over n samples along an axis."""
+    x2 = np.moveaxis(np.asarray(x, float) ** 2, axis, -1)
+    c = np.cumsum(x2, axis=-1)
+    c = np.concatenate((np.zeros((*c.shape[:-1], 1)), c), axis=-1)
+    k = np.arange(x2.shape[-1])
+    lo = np.maximum(k + 1 - n, 0)
+    out = np.sqrt((c[..., k + 1] - c[..., lo]) / (k + 1 - lo))
+    return np.moveaxis(out, -1, axis)
+
+
+def _settling_time(above: np.ndarray, dwell: int) -> np.ndarray:
+    """Per row: first index i with ``above[i : i + dwell]`` all False (NaN if none)."""
+    n = above.shape[-1]
+    idx = np.arange(n)
+    # index of the next True at or after i (n if none)
+    nxt = np.where(above, idx, n)
+    nxt = np.minimum.accumulate(nxt[..., ::-1], axis=-1)[..., ::-1]
+    good = (nxt - idx >= dwell) & (idx + dwell <= n)
+    first = np.argmax(good, axis=-1)
+    return np.where(good.any(axis=-1), first, np.nan).astype(float)
+
+
+def _mean(x: np.ndarray, ok: np.ndarray):
+    v = x[ok]
+    v = v[np.isfinite(v)] if v.dtype.kind == "f" else v
+    return float(np.mean(v)) if v.size else None
+
+
+def compute_metrics(res: BenchmarkResult) -> dict:
+    """Metrics in the JSON layout of the README (``{"controllers": {NAME: {...}}}``)."""
+    sc = res.scenario
+    T = sc.sample_period
+    out = {}
+    for name, run in res.runs.items():
+        ok = ~run.failed
+        e = res.q_d[None] - run.q  # (S, N, 2)
+        en = np.sqrt((e**2).sum(axis=-1))  # (S, N)
+        smooth = moving_rms(en, max(1, int(round(WINDOW / T))))
+        segs = []
+        for start, end, m in sc.segments():
+            a, b = int(round(start / T)), int(round(end / T))
+            es = en[:, a:b]
+            rec = None
+            if a > 0:
+                n1 = int(round(1.0 / T))
+                pre = smooth[:, max(0, a - n1) : a].max(axis=1)
+                post = smooth[:, max(a, b - n1) : b].max(axis=1)
+                band = np.maximum(RECOVERY_BAND * np.maximum(pre, post), RECOVERY_FLOOR)
+                rt = _settling_time(smooth[:, a:b] > band[:, None], int(round(RECOVERY_DWELL / T))) * T
+                rec = _mean(rt, ok)
+            mass_est = None
+            if run.sigma_hat is not None:
+                mass_est = _mean(payload_mass_from_sigma(run.sigma_hat[:, b - 1], TABLE1_SIGMA), ok)
+            segs.append(
+                {
+                    "start": start,
+                    "end": end,
+                    "mass": m,
+                    "rms_error": _mean(np.sqrt((es**2).mean(axis=1)), ok),
+                    "rms_error_joint": [
+                        _mean(np.sqrt((e[:, a:b, j] ** 2).mean(axis=1)), ok) for j in range(2)
+                    ],
+                    "max_error": _mean(es.max(axis=1), ok),
+                    "recovery_time": rec,
+                    "rms_torque": _mean(np.sqrt((run.tau[:, a:b] ** 2).sum(axis=-1).mean(axis=1)), ok),
+                    "saturation_fraction": _mean(run.saturated[:, a:b].any(axis=-1).mean(axis=1), ok),
+                    "mass_estimate": mass_est,
+                }
+            )
+        out[name] = {
+            "rms_error": _mean(np.sqrt((en**2).mean(axis=1)), ok),
+            "failed_trials": int(run.failed.sum()),
+            "error": run.error or None,
+            "segments": segs,
+        }
+    return {"scenario": sc.source, "seeds": sc.seeds, "wall_time_s": res.wall_time, "controllers": out}

@@ -1,0 +1,160 @@
+"""Benchmark output: the printed table and targets, CSV, JSON and figures."""
+
+from __future__ import annotations
+
+import csv
+import json
+from pathlib import Path
+
+from adaptive_dd.benchmark.runner import BenchmarkResult
+
+__all__ = ["format_report", "write_csv", "write_json"]
+
+TARGET_RATIO_ORACLE = 1.2
+TARGET_RATIO_NOMINAL = 5.0
+TARGET_MASS_PCT = 5.0
+TARGET_MASS_ABS = 0.05  # kg, for the segments without payload
+TARGET_WALL_S = 60.0
+
+
+def _f(x, scale=1.0, fmt="{:8.3f}") -> str:
+    return fmt.format(x * scale) if x is not None else f"{'—':>8}"
+
+
+def format_report(metrics: dict, res: BenchmarkResult) -> str:
+    """Tables per metric (rows: controllers; columns: payload segments) and the targets."""
+    ctrls = metrics["controllers"]
+    segs = res.scenario.segments()
+    head = f"{'controller':18s}" + "".join(f"{f'{a:g}-{b:g}s {m:g}kg':>16s}" for a, b, m in segs)
+    lines = [
+        f"Scenario {res.scenario.source}: {res.scenario.seeds} seeds, {res.scenario.duration} s at "
+        f"T = {res.scenario.sample_period} s, bandwidth {res.scenario.bandwidth} rad/s; "
+        f"means over seeds (failed trials left out)",
+        "",
+    ]
+    tables = [
+        ("RMS tracking error |e| [mrad] (true q)", "rms_error", 1e3, "{:16.3f}"),
+        ("max tracking error |e| [mrad]", "max_error", 1e3, "{:16.2f}"),
+        ("recovery time after the swap [s]", "recovery_time", 1.0, "{:16.3f}"),
+        ("RMS torque [N m]", "rms_torque", 1.0, "{:16.2f}"),
+        ("saturated fraction [%]", "saturation_fraction", 100.0, "{:16.2f}"),
+        ("payload mass estimated at the end of the segment [kg]", "mass_estimate", 1.0, "{:16.3f}"),
+    ]
+    for title, key, scale, fmt in tables:
+        lines += [title, head]
+        for name, c in ctrls.items():
+            cells = "".join(
+                fmt.format(s[key] * scale) if s[key] is not None else f"{'—':>16}" for s in c["segments"]
+            )
+            lines.append(f"{name:18s}{cells}")
+        lines.append("")
+    fails = [
+        f"{n}: {c['failed_trials']}" + (f" ({c['error']})" if c["error"] else "")
+        for n, c in ctrls.items()
+        if c["failed_trials"]
+    ]
+    lines.append("failed trials: " + (", ".join(fails) if fails else "none"))
+    lines += ["", "Targets (measured, not asserted):"]
+    lines += _targets(metrics, res)
+    return "\n".join(lines)
+
+
+def _targets(metrics: dict, res: BenchmarkResult) -> list[str]:
+    c = metrics["controllers"]
+    out = []
+    if "adaptive_ct" in c and "ct_oracle" in c:
+        for sa, so in zip(c["adaptive_ct"]["segments"], c["ct_oracle"]["segments"], strict=True):
+            if sa["rms_error"] is None or so["rms_error"] is None:
+                continue
+            r = sa["rms_error"] / so["rms_error"]
+            ok = "met" if r <= TARGET_RATIO_ORACLE else "NOT met"
+            out.append(
+                f"  adaptive_ct / ct_oracle RMS error, {sa['start']:g}-{sa['end']:g} s ({sa['mass']:g} kg): "
+                f"{r:5.2f}  (target <= {TARGET_RATIO_ORACLE}: {ok})"
+            )
+    if "adaptive_ct" in c and "ct_nominal" in c:
+        for sa, sn in zip(c["adaptive_ct"]["segments"], c["ct_nominal"]["segments"], strict=True):
+            if sa["mass"] == max(s["mass"] for s in c["adaptive_ct"]["segments"]) and sa["mass"] > 0:
+                if sa["rms_error"] and sn["rms_error"]:
+                    r = sn["rms_error"] / sa["rms_error"]
+                    ok = "met" if r >= TARGET_RATIO_NOMINAL else "NOT met"
+                    out.append(
+                        f"  ct_nominal / adaptive_ct RMS error in the {sa['mass']:g} kg segment: {r:5.1f}x "
+                        f"(target >= {TARGET_RATIO_NOMINAL}x: {ok})"
+                    )
+                break
+    for name in ("adaptive_ct", "adaptive_ct_paper", "slotine_li"):
+        if name not in c:
+            continue
+        parts = []
+        for s in c[name]["segments"]:
+            m, est = s["mass"], s["mass_estimate"]
+            if est is None:
+                continue
+            ok = abs(est - m) <= (TARGET_MASS_PCT / 100 * m if m > 0 else TARGET_MASS_ABS)
+            parts.append(f"{m:g} kg -> {est:.3f} ({'ok' if ok else 'off'})")
+        out.append(
+            f"  payload mass by {name} (target within {TARGET_MASS_PCT:g} %, or "
+            f"{TARGET_MASS_ABS} kg at 0 kg): " + ", ".join(parts)
+        )
+    if "ct_oracle" in c:
+        sat = max((s["saturation_fraction"] or 0.0) for s in c["ct_oracle"]["segments"])
+        out.append(f"  ct_oracle saturated fraction (max over segments): {100 * sat:.3f} % (target < 1 %)")
+    w = metrics["wall_time_s"]
+    out.append(
+        f"  wall time: {w:.1f} s for {len(c)} controllers x {res.scenario.seeds} seeds "
+        f"(target < {TARGET_WALL_S:g} s for the default scenario)"
+    )
+    return out
+
+
+def write_json(metrics: dict, path: str | Path) -> Path:
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(json.dumps(metrics, indent=1))
+    return path
+
+
+def write_csv(metrics: dict, path: str | Path) -> Path:
+    """One row per controller and segment."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    cols = [
+        "controller",
+        "start",
+        "end",
+        "mass",
+        "rms_error",
+        "rms_error_joint1",
+        "rms_error_joint2",
+        "max_error",
+        "recovery_time",
+        "rms_torque",
+        "saturation_fraction",
+        "mass_estimate",
+        "failed_trials",
+    ]
+    with path.open("w", newline="") as fh:
+        w = csv.writer(fh)
+        w.writerow(cols)
+        for name, c in metrics["controllers"].items():
+            for s in c["segments"]:
+                j = s["rms_error_joint"]
+                w.writerow(
+                    [
+                        name,
+                        s["start"],
+                        s["end"],
+                        s["mass"],
+                        s["rms_error"],
+                        j[0],
+                        j[1],
+                        s["max_error"],
+                        s["recovery_time"],
+                        s["rms_torque"],
+                        s["saturation_fraction"],
+                        s["mass_estimate"],
+                        c["failed_trials"],
+                    ]
+                )
+    return path

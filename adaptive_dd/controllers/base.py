@@ -1,0 +1,99 @@
+"""The interface shared by all controllers, and the gains.
+
+At each sample k a controller gets the measured ``q, qd`` (noisy, quantized) and
+the reference ``q_d, qd_d, qdd_d`` and returns the torque command
+(:meth:`Controller.command`); after the plant step it is told the torque that was
+actually applied (:meth:`Controller.observe`), which is when estimators update.
+Controllers run at the sample rate; nothing is called inside integrator substeps.
+All arrays carry the trial axis first: ``q.shape == (n_trials, 2)``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from adaptive_dd.errors import ParameterError
+from adaptive_dd.plant.dynamics import _mass_entries
+from adaptive_dd.plant.parameters import TABLE1_SIGMA
+
+__all__ = ["Controller", "Gains"]
+
+Array = NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class Gains:
+    """Closed-loop bandwidth shared by all controllers.
+
+    Computed torque uses ``Kp = omega^2``, ``Kd = 2 zeta omega`` on the error
+    dynamics (a double pole at ``-omega`` for ``zeta = 1``). PD scales these by the
+    nominal inertia ``diag M(q = 0)``; Slotine-Li uses ``Lambda = omega`` and
+    ``K_D = 2 zeta omega diag M``, which gives the same poles with a perfect model.
+
+    Attributes
+    ----------
+    bandwidth : float
+        omega [rad/s].
+    damping : float
+        zeta.
+    """
+
+    bandwidth: float = 40.0
+    damping: float = 1.0
+
+    def __post_init__(self) -> None:
+        if not (np.isfinite(self.bandwidth) and self.bandwidth > 0):
+            raise ParameterError(f"bandwidth must be > 0 rad/s, got {self.bandwidth}")
+        if not (np.isfinite(self.damping) and self.damping > 0):
+            raise ParameterError(f"damping must be > 0, got {self.damping}")
+
+    @property
+    def kp(self) -> float:
+        return self.bandwidth**2
+
+    @property
+    def kd(self) -> float:
+        return 2.0 * self.damping * self.bandwidth
+
+    def nominal_inertia(self, sigma: Array = TABLE1_SIGMA) -> Array:
+        """``diag M(q = 0)`` of the nominal model, (2,) [kg m^2]."""
+        m11, _, m22 = _mass_entries(np.zeros(()), np.asarray(sigma, float))
+        return np.array([float(m11), float(m22)])
+
+
+class Controller:
+    """Base class. Subclasses set ``name`` and implement :meth:`command`.
+
+    Attributes
+    ----------
+    name : str
+    adaptive : bool
+        Has an estimate of sigma (``sigma_hat``).
+    """
+
+    name = "controller"
+    adaptive = False
+
+    def reset(self, n_trials: int, sample_period: float) -> None:
+        """Start a run of ``n_trials`` trials at sample period T."""
+        self.n_trials, self.T = int(n_trials), float(sample_period)
+
+    def command(
+        self, q: Array, qd: Array, q_d: Array, qd_d: Array, qdd_d: Array, sigma_true: Array | None = None
+    ) -> Array:
+        """Torque command ``(n_trials, 2)`` [N m] at this sample.
+
+        ``sigma_true (n_trials, 7)`` is the true model; only the oracle may use it.
+        """
+        raise NotImplementedError
+
+    def observe(self, q: Array, qd: Array, tau: Array) -> None:
+        """The measured state and the torque applied over this sample (after saturation)."""
+
+    @property
+    def sigma_hat(self) -> Array | None:
+        """Current estimate of sigma ``(n_trials, 7)``, or None for fixed-model controllers."""
+        return None
