@@ -115,7 +115,7 @@ def plot_tracking_errors(res, path: str | Path, window: float = 0.05) -> Path:
         if not ok.any():
             continue
         e = np.sqrt(((res.q_d[None] - run.q[ok]) ** 2).sum(axis=-1))
-        m = moving_rms(e, max(1, int(round(window / T)))).mean(axis=0)
+        m = moving_rms(e, max(1, round(window / T))).mean(axis=0)
         ax.semilogy(res.t, np.maximum(m * 1e3, 1e-4), color=f"C{i}", lw=1.0, label=name)
     _mark_swaps(ax, res.t, res.mass)
     for a, b, m in res.scenario.segments():

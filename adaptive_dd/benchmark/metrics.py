@@ -77,18 +77,18 @@ def compute_metrics(res: BenchmarkResult) -> dict:
         ok = ~run.failed
         e = res.q_d[None] - run.q  # (S, N, 2)
         en = np.sqrt((e**2).sum(axis=-1))  # (S, N)
-        smooth = moving_rms(en, max(1, int(round(WINDOW / T))))
+        smooth = moving_rms(en, max(1, round(WINDOW / T)))
         segs = []
         for start, end, m in sc.segments():
-            a, b = int(round(start / T)), int(round(end / T))
+            a, b = round(start / T), round(end / T)
             es = en[:, a:b]
             rec = None
             if a > 0:
-                n1 = int(round(1.0 / T))
+                n1 = round(1.0 / T)
                 pre = smooth[:, max(0, a - n1) : a].max(axis=1)
                 post = smooth[:, max(a, b - n1) : b].max(axis=1)
                 band = np.maximum(RECOVERY_BAND * np.maximum(pre, post), RECOVERY_FLOOR)
-                rt = _settling_time(smooth[:, a:b] > band[:, None], int(round(RECOVERY_DWELL / T))) * T
+                rt = _settling_time(smooth[:, a:b] > band[:, None], round(RECOVERY_DWELL / T)) * T
                 rec = _mean(rt, ok)
             mass_est = None
             if run.sigma_hat is not None:

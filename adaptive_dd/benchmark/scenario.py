@@ -119,7 +119,7 @@ class Scenario:
 
     @property
     def n_samples(self) -> int:
-        return int(round(self.duration / self.sample_period))
+        return round(self.duration / self.sample_period)
 
     def segments(self) -> list[tuple[float, float, float]]:
         """``(start, end, mass)`` of each constant-payload segment."""

@@ -9,7 +9,7 @@ from adaptive_dd.controllers.adaptive import (
     adaptive_ct,
     adaptive_ct_paper,
 )
-from adaptive_dd.controllers.base import Controller, Gains
+from adaptive_dd.controllers.base import DEFAULT_GAINS, Controller, Gains
 from adaptive_dd.controllers.feedback import PD, ComputedTorque, computed_torque_law
 from adaptive_dd.controllers.slotine_li import SlotineLi
 

@@ -22,7 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from adaptive_dd.controllers.base import Controller, Gains
+from adaptive_dd.controllers.base import DEFAULT_GAINS, Controller, Gains
 from adaptive_dd.controllers.feedback import computed_torque_law
 from adaptive_dd.errors import ParameterError
 from adaptive_dd.identification.estimators import PAPER_RLS, SplitRLS
@@ -245,7 +245,7 @@ class AdaptiveCT(Controller):
         return self.estimator.theta
 
 
-def adaptive_ct_paper(gains: Gains = Gains(), tau_f: float = 0.006) -> AdaptiveCT:  # noqa: B008
+def adaptive_ct_paper(gains: Gains = DEFAULT_GAINS, tau_f: float = 0.006) -> AdaptiveCT:
     """Computed torque on the paper's online M2 estimator, as the paper has it."""
 
     def factory(n, T):
@@ -260,7 +260,7 @@ fast work), started at the nominal model with a small covariance."""
 
 
 def adaptive_ct(
-    gains: Gains = Gains(),  # noqa: B008
+    gains: Gains = DEFAULT_GAINS,
     tau_f: float = 0.01,
     detector: ChangeDetector = ChangeDetector(),
     rls: RLSConfig = ADAPTIVE_RLS,

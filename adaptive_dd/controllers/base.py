@@ -19,7 +19,7 @@ from adaptive_dd.errors import ParameterError
 from adaptive_dd.plant.dynamics import _mass_entries
 from adaptive_dd.plant.parameters import TABLE1_SIGMA
 
-__all__ = ["Controller", "Gains"]
+__all__ = ["DEFAULT_GAINS", "Controller", "Gains"]
 
 Array = NDArray[np.float64]
 
@@ -62,6 +62,10 @@ class Gains:
         """``diag M(q = 0)`` of the nominal model, (2,) [kg m^2]."""
         m11, _, m22 = _mass_entries(np.zeros(()), np.asarray(sigma, float))
         return np.array([float(m11), float(m22)])
+
+
+DEFAULT_GAINS = Gains()
+"""40 rad/s, critically damped."""
 
 
 class Controller:

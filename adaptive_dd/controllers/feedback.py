@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from adaptive_dd.controllers.base import Controller, Gains
+from adaptive_dd.controllers.base import DEFAULT_GAINS, Controller, Gains
 from adaptive_dd.plant.dynamics import _coriolis_vector, _mass_entries
 from adaptive_dd.plant.parameters import TABLE1_SIGMA, validate_sigma
 
@@ -33,7 +33,7 @@ class PD(Controller):
 
     name = "pd"
 
-    def __init__(self, gains: Gains = Gains(), sigma_nominal: ArrayLike = TABLE1_SIGMA) -> None:  # noqa: B008
+    def __init__(self, gains: Gains = DEFAULT_GAINS, sigma_nominal: ArrayLike = TABLE1_SIGMA) -> None:
         self.gains = gains
         m0 = gains.nominal_inertia(validate_sigma(sigma_nominal))
         self.kp, self.kd = m0 * gains.kp, m0 * gains.kd
@@ -56,7 +56,7 @@ class ComputedTorque(Controller):
 
     def __init__(
         self,
-        gains: Gains = Gains(),
+        gains: Gains = DEFAULT_GAINS,
         sigma: ArrayLike = TABLE1_SIGMA,
         oracle: bool = False,
     ) -> None:

@@ -28,7 +28,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike
 
-from adaptive_dd.controllers.base import Controller, Gains
+from adaptive_dd.controllers.base import DEFAULT_GAINS, Controller, Gains
 from adaptive_dd.errors import ParameterError
 from adaptive_dd.plant.dynamics import _mass_entries, _regressor_reference
 from adaptive_dd.plant.parameters import TABLE1_SIGMA, payload_sigma_delta, project_sigma, validate_sigma
@@ -62,7 +62,7 @@ class SlotineLi(Controller):
 
     def __init__(
         self,
-        gains: Gains = Gains(),  # noqa: B008
+        gains: Gains = DEFAULT_GAINS,
         gamma: ArrayLike = DEFAULT_GAMMA,
         theta0: ArrayLike = TABLE1_SIGMA,
         bounds: tuple = DEFAULT_BOUNDS,
