@@ -19,7 +19,7 @@ CONTROLLERS = ("pd", "ct_nominal", "ct_oracle", "adaptive_ct_paper", "adaptive_c
 
 def make_controller(name: str, gains: Gains | None = None) -> Controller:
     """A controller by name (see :data:`CONTROLLERS`) with the given gains."""
-    g = gains or Gains()
+    g = gains or DEFAULT_GAINS
     factories = {
         "pd": lambda: PD(g),
         "ct_nominal": lambda: ComputedTorque(g),
@@ -36,6 +36,7 @@ def make_controller(name: str, gains: Gains | None = None) -> Controller:
 __all__ = [
     "ADAPTIVE_RLS",
     "CONTROLLERS",
+    "DEFAULT_GAINS",
     "PD",
     "AdaptiveCT",
     "ChangeDetector",
