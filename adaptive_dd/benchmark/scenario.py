@@ -14,7 +14,8 @@
     bandwidth = 40.0           # rad/s, shared by all controllers
     damping = 1.0
 
-    [reference]                # q_d(t) = offset + w(t) sum_k a_k sin(2 pi f_k t + phase_k)
+    [reference]                # q_d(t) = offset + w(t) sum_k a_k sin(2 pi f_k t + phase_k);
+                               # a file without [reference] uses the default scenario's
     ramp = 1.0                 # optional: w rises smoothly from 0 to 1 over this many s
     joint1 = { offset = 0.0, amplitude = [0.5, 0.2], frequency = [0.4, 1.1], phase = [0.0, 0.0] }
     joint2 = { offset = 0.0, amplitude = [0.6, 0.2], frequency = [0.5, 1.3], phase = [0.0, 0.0] }
@@ -215,7 +216,12 @@ def parse_scenario(data: dict, src: str = "<memory>", name: str = "scenario") ->
     control = data.get("control", {})
     bw = float(_num(src, "control.bandwidth", control.get("bandwidth", 40.0), positive=True))
     zeta = float(_num(src, "control.damping", control.get("damping", 1.0), positive=True))
-    reference = _parse_reference(src, data.get("reference", {}))
+    if "reference" in data:
+        reference = _parse_reference(src, data["reference"])
+    elif src == str(default_scenario_path()):
+        raise ScenarioError(f"{src}: the default scenario must define [reference]")
+    else:
+        reference = load_scenario().reference
     times, masses, radius = [], [], None
     for i, p in enumerate(data.get("payload", [])):
         where = f"payload[{i}]"

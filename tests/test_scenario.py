@@ -1,0 +1,93 @@
+"""Scenario files: the shipped default, the reference, and every error naming file and key."""
+
+import numpy as np
+import pytest
+
+from adaptive_dd.benchmark.scenario import default_scenario_path, load_scenario
+from adaptive_dd.errors import ScenarioError
+
+GOOD = """
+[run]
+duration = 4.0
+sample_period = 0.001
+seeds = 2
+controllers = ["ct_oracle", "adaptive_ct"]
+
+[reference]
+joint1 = { offset = 0.1, amplitude = [0.3], frequency = [0.5], phase = [0.0] }
+joint2 = { offset = 0.0, amplitude = [0.3], frequency = [0.7], phase = [0.5] }
+
+[[payload]]
+at = 2.0
+mass = 1.0
+"""
+
+
+def write(tmp_path, text):
+    p = tmp_path / "s.toml"
+    p.write_text(text)
+    return p
+
+
+def test_default_scenario_is_the_issue_s():
+    sc = load_scenario()
+    assert default_scenario_path().is_file()
+    assert sc.duration == 20.0 and sc.sample_period == 0.001 and sc.seeds == 10
+    assert sc.segments() == [(0.0, 5.0, 0.0), (5.0, 10.0, 3.0), (10.0, 15.0, 1.0), (15.0, 20.0, 0.0)]
+    assert len(sc.controllers) == 6
+
+
+def test_reference_derivatives_and_ramp():
+    sc = load_scenario()
+    t = np.arange(0, 6, 1e-3)
+    q, qd, qdd = sc.reference.sample(t)
+    np.testing.assert_allclose(
+        np.gradient(q, 1e-3, axis=0)[5:-5], qd[5:-5], atol=5e-5
+    )  # O(h^2) error of np.gradient
+    # the quintic ramp is C^2: its third derivative jumps at t = 1 s, where the numerical
+    # derivative of qd is off by O(h jump); leave those few samples out
+    keep = np.ones(t.size, bool)
+    keep[:5], keep[-5:], keep[990:1010] = False, False, False
+    np.testing.assert_allclose(np.gradient(qd, 1e-3, axis=0)[keep], qdd[keep], atol=1e-3)
+    np.testing.assert_allclose(q[0], 0.0)
+    np.testing.assert_allclose(qd[0], 0.0)  # starts at rest: the ramp
+
+
+def test_good_file(tmp_path):
+    sc = load_scenario(write(tmp_path, GOOD))
+    assert sc.controllers == ("ct_oracle", "adaptive_ct")
+    assert sc.segments() == [(0.0, 2.0, 0.0), (2.0, 4.0, 1.0)]
+    assert sc.reference.sample(np.zeros(1))[0][0, 0] == pytest.approx(0.1)
+
+
+@pytest.mark.parametrize(
+    "edit, match",
+    [
+        (("seeds = 2", "seeds = 2\nspeed = 3"), "unknown key 'run.speed'"),
+        (("[run]", "[runs]\n[run]"), "unknown table \\[runs\\]"),
+        (('"adaptive_ct"]', '"adaptive_cta"]'), "unknown controller 'adaptive_cta'"),
+        (("mass = 1.0", "mass = -1.0"), "payload\\[0\\].mass' must be >= 0"),
+        (("at = 2.0", "at = 5.0"), "not before the end of the run"),
+        (
+            ("at = 2.0\nmass = 1.0", "at = 2.0\nmass = 1.0\n[[payload]]\nat = 1.0\nmass = 3.0"),
+            "must increase",
+        ),
+        (
+            ("amplitude = [0.3], frequency = [0.5]", "amplitude = [0.3, 0.1], frequency = [0.5]"),
+            "equal lengths",
+        ),
+        (("duration = 4.0", "duration = -4.0"), "run.duration' must be > 0"),
+        (("seeds = 2", "seeds = 2.5"), "run.seeds' must be an integer"),
+        (("duration = 4.0", "duration = 4.0 ="), "not valid TOML"),
+    ],
+)
+def test_scenario_errors_name_file_and_key(tmp_path, edit, match):
+    p = write(tmp_path, GOOD.replace(*edit))
+    with pytest.raises(ScenarioError, match=match) as e:
+        load_scenario(p)
+    assert str(p) in str(e.value)
+
+
+def test_missing_scenario_file(tmp_path):
+    with pytest.raises(ScenarioError, match="no such scenario file"):
+        load_scenario(tmp_path / "none.toml")
