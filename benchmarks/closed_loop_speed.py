@@ -31,8 +31,9 @@ from adaptive_dd.plant.pinocchio_model import build_model
 def ours(n_trials: int, duration: float, controller) -> float:
     import dataclasses
 
-    sc = dataclasses.replace(load_scenario(), seeds=n_trials, duration=duration, swap_times=(duration / 2,),
-                             swap_masses=(3.0,))
+    sc = dataclasses.replace(
+        load_scenario(), seeds=n_trials, duration=duration, swap_times=(duration / 2,), swap_masses=(3.0,)
+    )
     t0 = time.perf_counter()
     run_benchmark(sc, progress=False, controllers={"c": controller})
     return n_trials * duration / (time.perf_counter() - t0)

@@ -69,6 +69,10 @@ class ChangeDetector:
         After an alarm, no update for this many filter time constants: the
         filtered equation ``G0 tau = (G0 Phi) sigma`` holds only once the filter's
         memory no longer spans the change.
+    reopen_again : bool
+        Instead of freezing: keep updating through the change, and re-open the
+        covariance a second time when the freeze time has passed, so the samples
+        that straddled the change lose their weight.
     """
 
     short_window: float = 0.01
@@ -78,7 +82,8 @@ class ChangeDetector:
     holdoff: float = 1.0
     p_mass: float = 25.0
     p_j2: float = 1e-3
-    freeze: float = 2.0
+    freeze: float = 3.0
+    reopen_again: bool = True
 
     def __post_init__(self) -> None:
         if not (0 < self.short_window < self.long_window):
@@ -145,6 +150,7 @@ class OnlineEstimator:
         self.alarm_times: list[list[float]] = [[] for _ in range(n_trials)]
         self.frozen_until = np.zeros(n_trials, dtype=int)
         self.freeze_samples = 0 if detector is None else int(np.ceil(detector.freeze * tau_f / self.T))
+        self.reopen_at = np.full(n_trials, -1)
 
     @property
     def theta(self) -> Array:
@@ -162,12 +168,16 @@ class OnlineEstimator:
             slow = np.abs(qd) <= self.selection[0]
             self.since_slow = np.where(slow, 0, self.since_slow + 1)
             active = self.since_slow > self.memory
-        if self.detector is not None:
+        det_active = active
+        if self.detector is not None and not self.detector.reopen_again:
             thawed = (self.k >= self.frozen_until)[:, None]
             active = thawed if active is None else active & thawed
         theta = self.rls.step(phi, y, active)
         if self.detector is not None:
-            self._detect(active)
+            again = self.reopen_at == self.k
+            if again.any():
+                self._reopen(again)
+            self._detect(det_active)
         if self.project:
             self._set_theta(project_sigma(self.rls.theta))
         self.k += 1
@@ -176,6 +186,20 @@ class OnlineEstimator:
     def _set_theta(self, theta: Array) -> None:
         s = self.rls.states[0]
         self.rls.states[0] = s._replace(theta=theta)
+
+    def _reopen(self, which: NDArray[np.bool_]) -> None:
+        """Clear the inertial covariance and open it along the payload direction."""
+        det = self.detector
+        s = self.rls.states[0]
+        p = s.P.copy()
+        d = payload_sigma_delta(1.0, 0.0)
+        reopen = det.p_mass * np.outer(d, d)
+        reopen[1, 1] += det.p_j2
+        for b in np.flatnonzero(which):
+            p[b, :3, :] = 0.0
+            p[b, :, :3] = 0.0
+            p[b] += reopen
+        self.rls.states[0] = s._replace(P=p)
 
     def _detect(self, active: NDArray[np.bool_] | None) -> None:
         det = self.detector
@@ -194,18 +218,12 @@ class OnlineEstimator:
         alarm = quiet & np.any(self.short > det.threshold**2 * self.long + 1e-12, axis=-1)
         if not alarm.any():
             return
-        s = self.rls.states[0]
-        p = s.P.copy()
-        d = payload_sigma_delta(1.0, 0.0)
-        reopen = det.p_mass * np.outer(d, d)
-        reopen[1, 1] += det.p_j2
+        self._reopen(alarm)
         for b in np.flatnonzero(alarm):
-            p[b, :3, :] = 0.0
-            p[b, :, :3] = 0.0
-            p[b] += reopen
             self.alarm_times[b].append(t)
-        self.rls.states[0] = s._replace(P=p)
         self.alarms += alarm
+        if det.reopen_again:
+            self.reopen_at = np.where(alarm, self.k + self.freeze_samples, self.reopen_at)
         self.frozen_until = np.where(alarm, self.k + self.freeze_samples, self.frozen_until)
         self.since_alarm = np.where(alarm, 0, self.since_alarm)
         self.short = np.where(alarm[:, None], self.long, self.short)
