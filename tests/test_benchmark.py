@@ -52,6 +52,10 @@ def test_metrics_layout_and_content(small_run):
     assert seg[2]["mass_estimate"] == pytest.approx(3.0, rel=0.1)
     assert c["ct_oracle"]["segments"][0]["recovery_time"] is None
     assert seg[2]["recovery_time"] < 1.0
+    # the change detector of adaptive_ct fires within 0.2 s of the swap; fixed models have none
+    assert 0.0 < seg[2]["detection_delay"] < 0.2 and seg[1]["detection_delay"] is None
+    # once the transient is over, adaptive_ct tracks about like the oracle
+    assert seg[2]["rms_error_settled"] < 2 * seg[1]["rms_error_settled"]
     json.dumps(m)  # serialisable
 
 

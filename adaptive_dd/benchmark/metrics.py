@@ -5,8 +5,15 @@ over both joints [rad]. Per trial, then averaged over the seeds that did not fai
 
 rms_error
     ``sqrt(mean |e|^2)`` over the segment (``rms_error_joint``: per joint).
+rms_error_settled
+    ``sqrt(mean |e|^2)`` over the segment less its first ``SETTLE`` (0.5 s): the
+    tracking once a swap's transient is over.
 max_error
     ``max |e|`` over the segment.
+detection_delay
+    Controllers with a change detector: time from the segment start to the first
+    alarm in the segment (mean over the seeds that raised one), None otherwise or
+    for the first segment.
 recovery_time
     After a swap at ``t_s``: the time until the 50 ms moving RMS of ``|e|`` enters
     a band and stays inside it for ``RECOVERY_DWELL`` (0.5 s). The band is ``RECOVERY_BAND`` times
@@ -36,6 +43,7 @@ __all__ = ["RECOVERY_BAND", "RECOVERY_DWELL", "RECOVERY_FLOOR", "compute_metrics
 RECOVERY_BAND = 1.5
 RECOVERY_FLOOR = 5e-5  # rad
 RECOVERY_DWELL = 0.5  # s
+SETTLE = 0.5  # s
 WINDOW = 0.05  # s
 
 
@@ -93,12 +101,19 @@ def compute_metrics(res: BenchmarkResult) -> dict:
             mass_est = None
             if run.sigma_hat is not None:
                 mass_est = _mean(payload_mass_from_sigma(run.sigma_hat[:, b - 1], TABLE1_SIGMA), ok)
+            a2 = min(b - 1, a + round(SETTLE / T))
+            delay = None
+            if run.alarm_times is not None and a > 0:
+                first = [min((x for x in tr if start <= x < end), default=np.nan) for tr in run.alarm_times]
+                delay = _mean(np.asarray(first) - start, ok)
             segs.append(
                 {
                     "start": start,
                     "end": end,
                     "mass": m,
                     "rms_error": _mean(np.sqrt((es**2).mean(axis=1)), ok),
+                    "rms_error_settled": _mean(np.sqrt((en[:, a2:b] ** 2).mean(axis=1)), ok),
+                    "detection_delay": delay,
                     "rms_error_joint": [
                         _mean(np.sqrt((e[:, a:b, j] ** 2).mean(axis=1)), ok) for j in range(2)
                     ],

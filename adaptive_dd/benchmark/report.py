@@ -34,8 +34,20 @@ def format_report(metrics: dict, res: BenchmarkResult) -> str:
     ]
     tables = [
         ("RMS tracking error |e| [mrad] (true q)", "rms_error", 1e3, "{:16.3f}"),
+        (
+            "RMS tracking error after the first 0.5 s of the segment [mrad]",
+            "rms_error_settled",
+            1e3,
+            "{:16.3f}",
+        ),
         ("max tracking error |e| [mrad]", "max_error", 1e3, "{:16.2f}"),
         ("recovery time after the swap [s]", "recovery_time", 1.0, "{:16.3f}"),
+        (
+            "change detected after the swap [ms] (controllers with a detector)",
+            "detection_delay",
+            1e3,
+            "{:16.1f}",
+        ),
         ("RMS torque [N m]", "rms_torque", 1.0, "{:16.2f}"),
         ("saturated fraction [%]", "saturation_fraction", 100.0, "{:16.2f}"),
         ("payload mass estimated at the end of the segment [kg]", "mass_estimate", 1.0, "{:16.3f}"),
@@ -119,42 +131,23 @@ def write_csv(metrics: dict, path: str | Path) -> Path:
     """One row per controller and segment."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    cols = [
-        "controller",
+    keys = [
         "start",
         "end",
         "mass",
         "rms_error",
-        "rms_error_joint1",
-        "rms_error_joint2",
+        "rms_error_settled",
         "max_error",
         "recovery_time",
+        "detection_delay",
         "rms_torque",
         "saturation_fraction",
         "mass_estimate",
-        "failed_trials",
     ]
     with path.open("w", newline="") as fh:
         w = csv.writer(fh)
-        w.writerow(cols)
+        w.writerow(["controller", *keys, "rms_error_joint1", "rms_error_joint2", "failed_trials"])
         for name, c in metrics["controllers"].items():
             for s in c["segments"]:
-                j = s["rms_error_joint"]
-                w.writerow(
-                    [
-                        name,
-                        s["start"],
-                        s["end"],
-                        s["mass"],
-                        s["rms_error"],
-                        j[0],
-                        j[1],
-                        s["max_error"],
-                        s["recovery_time"],
-                        s["rms_torque"],
-                        s["saturation_fraction"],
-                        s["mass_estimate"],
-                        c["failed_trials"],
-                    ]
-                )
+                w.writerow([name, *(s[k] for k in keys), *s["rms_error_joint"], c["failed_trials"]])
     return path

@@ -41,6 +41,7 @@ class ControllerRun:
     sigma_hat : estimates (adaptive controllers) or None
     failed : bool (n_seeds,); failed_at : sample index or -1
     error : message if the controller raised, else ""
+    alarm_times : per trial, the times [s] a change detector fired (or None)
     """
 
     name: str
@@ -51,6 +52,7 @@ class ControllerRun:
     failed: NDArray[np.bool_]
     failed_at: NDArray[np.int_]
     error: str = ""
+    alarm_times: list | None = None
 
 
 @dataclass
@@ -158,6 +160,8 @@ def run_benchmark(
     res = BenchmarkResult(scenario, t, q_d, sigma_true, mass)
     for n in names:
         sl = slices[n]
+        est = getattr(ctrls[n], "estimator", None)
+        alarms = est.alarm_times if getattr(est, "detector", None) is not None else None
         res.runs[n] = ControllerRun(
             n,
             q_rec[sl],
@@ -167,6 +171,7 @@ def run_benchmark(
             sim.failed[sl].copy(),
             sim.failed_at[sl].copy(),
             errors[n],
+            alarms,
         )
     res.wall_time = time.perf_counter() - t0
     return res
