@@ -82,3 +82,32 @@ def test_estimator_errors():
         estimate(q, q, q, estimator="paper", split="17")
     with pytest.raises(ParameterError, match="split"):
         SplitRLS("17")
+
+
+def test_reproduce_rows_and_noise_switch(tmp_path):
+    import json
+
+    from adaptive_dd.identification.reproduce import format_table, run_reproduce
+
+    kw = dict(
+        seeds=2,
+        tau_f=(0.006, 0.02),
+        methods=("M2",),
+        estimators=("paper", "exact"),
+        splits=("15",),
+        n_samples=3000,
+        progress=False,
+    )
+    noisy = run_reproduce(**kw)
+    clean = run_reproduce(**kw, noise=False)
+    rows = json.loads(noisy.write_json(tmp_path / "rows.json").read_text())
+    assert len(rows) == 2 * 2 * 7  # (paper 15, exact full) x tau_f x params
+    keys = {"method", "split", "estimator", "tau_f", "param", "mean_pct", "std_pct", "paper_pct"}
+    assert all(set(r) == keys for r in rows)
+    paper = [r for r in rows if r["estimator"] == "paper" and r["tau_f"] == 0.006 and r["param"] == "J1"]
+    assert paper[0]["paper_pct"] == 9.3  # Table 5
+    assert all(r["paper_pct"] is None for r in rows if r["estimator"] == "exact")
+    # noise-free, the exact construction has (almost) no error left; with noise it has
+    assert clean.errors[("M2", "full", "exact")].max() < 0.5
+    assert noisy.errors[("M2", "full", "exact")].max() > clean.errors[("M2", "full", "exact")].max()
+    assert "(9.3)" in format_table(noisy, "M2", "15", "paper", with_paper=True)
