@@ -110,4 +110,4 @@ def test_reproduce_rows_and_noise_switch(tmp_path):
     # noise-free, the exact construction has (almost) no error left; with noise it has
     assert clean.errors[("M2", "full", "exact")].max() < 0.5
     assert noisy.errors[("M2", "full", "exact")].max() > clean.errors[("M2", "full", "exact")].max()
-    assert "(9.3)" in format_table(noisy, "M2", "15", "paper", with_paper=True)
+    assert "( 9.3)" in format_table(noisy, "M2", "15", "paper", with_paper=True)
