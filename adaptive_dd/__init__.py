@@ -15,7 +15,6 @@ benchmark
 
 from adaptive_dd.errors import (
     DataError,
-    DivergenceError,
     ParameterError,
     ScenarioError,
     SignalError,
@@ -25,7 +24,6 @@ __version__ = "0.1.0"
 
 __all__ = [
     "DataError",
-    "DivergenceError",
     "ParameterError",
     "ScenarioError",
     "SignalError",

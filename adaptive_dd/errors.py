@@ -8,7 +8,6 @@ from __future__ import annotations
 
 __all__ = [
     "DataError",
-    "DivergenceError",
     "ParameterError",
     "ScenarioError",
     "SignalError",
@@ -29,7 +28,3 @@ class DataError(ValueError):
 
 class ScenarioError(ValueError):
     """A benchmark scenario (TOML) is invalid; names file, key and reason."""
-
-
-class DivergenceError(RuntimeError):
-    """A simulation produced a non-finite or runaway state."""

@@ -65,8 +65,6 @@ SPLITS = {
 
 ESTIMATORS = ("paper", "batch_ls", "kalman", "exact", "exact_batch_ls")
 
-DEFAULT_THETA0 = np.zeros(7)
-
 
 class SplitRLS:
     """Recursive estimation of sigma (7) on a split, batched (eq. 14 per scalar equation).

@@ -158,6 +158,9 @@ def rls_step(
 class RecursiveLeastSquares:
     """Stateful wrapper of :func:`rls_step` (eq. 14), batched.
 
+    ``state`` holds the current :class:`RLSState`; ``last_info`` the ``info`` dict of
+    the last update (prior error ``eps``, ``gain``, ``skipped``).
+
     Examples
     --------
     >>> est = RecursiveLeastSquares(3)
