@@ -175,7 +175,8 @@ def _cmd_reproduce(args: argparse.Namespace) -> int:
             print(f"Fig. 7: rms difference arm - model ({k}): {rms.round(4)} rad")
     if args.json:
         written.append(res.write_json(args.json))
-    print("wrote " + ", ".join(str(w) for w in written))
+    if written:
+        print("wrote " + ", ".join(str(w) for w in written))
     return 0
 
 
