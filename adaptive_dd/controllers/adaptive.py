@@ -75,7 +75,7 @@ class ChangeDetector:
         that straddled the change lose their weight.
     """
 
-    short_window: float = 0.01
+    short_window: float = 0.005
     long_window: float = 1.0
     threshold: float = 4.0
     warmup: float = 0.5
