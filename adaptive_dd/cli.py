@@ -80,15 +80,14 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
 
 
 def _cmd_reproduce(args: argparse.Namespace) -> int:
-    from adaptive_dd.experiments import table2_torque
     from adaptive_dd.identification.reproduce import (
         TAU_F_GRID,
         format_summary,
         format_table,
+        model_responses,
         run_reproduce,
     )
     from adaptive_dd.plant.parameters import TABLE1_SIGMA
-    from adaptive_dd.plant.simulator import ActuatorConfig, SensorConfig, simulate_open_loop
     from adaptive_dd.plotting import plot_estimates, plot_model_response
 
     tau_f = tuple(args.tau_f) if args.tau_f else TAU_F_GRID
@@ -152,26 +151,18 @@ def _cmd_reproduce(args: argparse.Namespace) -> int:
         if key in res.theta:
             models[f"{label}, tau_f = {tau_f[i]}"] = res.theta[key][i][:, -1].mean(axis=0)
     if models:
-        clean = SensorConfig(quantize=False, position_variance=(0, 0), velocity_variance=(0, 0))
-        tau = table2_torque(1, res.sim.t.size)
-        arm = simulate_open_loop(tau, np.random.default_rng(0), sensor=clean, actuator=ActuatorConfig())
-        qs = {
-            k: simulate_open_loop(
-                tau, np.random.default_rng(0), sigma0=np.clip(v, 1e-6, None), sensor=clean
-            ).q[0]
-            for k, v in models.items()
-        }
+        arm_q, qs = model_responses(models, res.sim.t.size)
         written.append(
             plot_model_response(
                 t,
-                arm.q[0],
+                arm_q,
                 qs,
                 out / "fig7_model_response.png",
                 "Arm and identified models, same torque (Table 2)",
             )
         )
         for k, q in qs.items():
-            rms = np.sqrt(((q - arm.q[0]) ** 2).mean(axis=0))
+            rms = np.sqrt(((q - arm_q) ** 2).mean(axis=0))
             print(f"Fig. 7: rms difference arm - model ({k}): {rms.round(4)} rad")
     if args.json:
         written.append(res.write_json(args.json))

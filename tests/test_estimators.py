@@ -111,3 +111,13 @@ def test_reproduce_rows_and_noise_switch(tmp_path):
     assert clean.errors[("M2", "full", "exact")].max() < 0.5
     assert noisy.errors[("M2", "full", "exact")].max() > clean.errors[("M2", "full", "exact")].max()
     assert "( 9.3)" in format_table(noisy, "M2", "15", "paper", with_paper=True)
+
+
+def test_model_responses_reproduce_the_arm_only_with_the_true_sigma():
+    from adaptive_dd.identification.reproduce import model_responses
+
+    wrong = TABLE1_SIGMA * np.array([1.2, 1, 1, 1, 1, 1, 1])
+    arm, qs = model_responses({"true": TABLE1_SIGMA, "wrong": wrong, "bad": -TABLE1_SIGMA}, n_samples=2000)
+    np.testing.assert_array_equal(qs["true"], arm)
+    assert np.abs(qs["wrong"] - arm).max() > 1e-3
+    assert np.all(np.isfinite(qs["bad"]))  # projected onto a consistent model, not an error

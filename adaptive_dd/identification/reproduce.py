@@ -17,8 +17,8 @@ import numpy as np
 from adaptive_dd.errors import ParameterError
 from adaptive_dd.experiments import TABLE2, table2_torque, trial_rngs
 from adaptive_dd.identification.estimators import ESTIMATORS, prepare_regression, solve_regression
-from adaptive_dd.plant.parameters import SIGMA_NAMES, TABLE1_SIGMA
-from adaptive_dd.plant.simulator import SensorConfig, simulate_open_loop
+from adaptive_dd.plant.parameters import SIGMA_NAMES, TABLE1_SIGMA, project_sigma
+from adaptive_dd.plant.simulator import ActuatorConfig, SensorConfig, simulate_open_loop
 
 __all__ = [
     "PAPER_TABLES",
@@ -26,6 +26,7 @@ __all__ = [
     "ReproduceResult",
     "format_summary",
     "format_table",
+    "model_responses",
     "run_reproduce",
 ]
 
@@ -195,3 +196,31 @@ def format_summary(res: ReproduceResult) -> str:
         worst = err.mean(axis=1).max(axis=1)
         lines.append(f"{method:6} {est:15} {split:5} " + " ".join(f"{w:7.2f}" for w in worst))
     return "\n".join(lines)
+
+
+def model_responses(models: dict, n_samples: int = TABLE2["n_samples"]) -> tuple[np.ndarray, dict]:
+    """The arm and identified models driven by the same Table 2 torque (Fig. 7).
+
+    Parameters
+    ----------
+    models : dict
+        Label -> estimated sigma (7,); projected onto physically consistent values.
+    n_samples : int
+
+    Returns
+    -------
+    q_arm : ndarray (n_samples, 2)
+        The true arm, noise-free sensors.
+    q_models : dict
+        Label -> ndarray (n_samples, 2).
+    """
+    clean = SensorConfig(quantize=False, position_variance=(0, 0), velocity_variance=(0, 0))
+    tau = table2_torque(1, n_samples)
+    arm = simulate_open_loop(tau, np.random.default_rng(0), sensor=clean, actuator=ActuatorConfig())
+    q_models = {
+        label: simulate_open_loop(tau, np.random.default_rng(0), sigma0=project_sigma(sigma), sensor=clean).q[
+            0
+        ]
+        for label, sigma in models.items()
+    }
+    return arm.q[0], q_models
