@@ -27,6 +27,7 @@ from adaptive_dd.plant import (
     payload_sigma_delta,
     project_sigma,
     simulate_open_loop,
+    validate_sigma,
 )
 
 CLEAN = {"position_variance": (0.0, 0.0), "velocity_variance": (0.0, 0.0)}
@@ -146,6 +147,7 @@ def test_projection_gives_positive_definite_models(rng):
     p = project_sigma(bad)
     assert np.all(p[:, :2] > 0) and np.all(p[:, 3:] >= 0) and np.all(p[:, 2] >= 0)
     assert np.all(p[:, 0] * p[:, 1] - p[:, 2] ** 2 > 0)
+    validate_sigma(p)  # a projected model is always accepted
     np.testing.assert_array_equal(project_sigma(p), p)
     np.testing.assert_array_equal(project_sigma(TABLE1_SIGMA), TABLE1_SIGMA)
 

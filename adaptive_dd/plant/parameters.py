@@ -218,10 +218,14 @@ Pinocchio model. ``TABLE1_PHYSICAL.to_sigma()`` equals ``TABLE1_SIGMA`` to round
 """
 
 
+R_MIN = 1e-9
+"""Smallest r [kg m^2] that :func:`project_sigma` returns."""
+
+
 def project_sigma(sigma: ArrayLike, j_min: float = 1e-3, margin: float = 0.05) -> NDArray[np.float64]:
     """Nearest physically consistent base parameters (cheap projection), ``(..., 7)``.
 
-    ``J1, J2 >= j_min``, ``r >= 0``, friction ``>= 0``, and ``r^2 <= (1 - margin) J1 J2``
+    ``J1, J2 >= j_min``, ``r >= R_MIN`` (validate_sigma needs r > 0), friction ``>= 0``, and ``r^2 <= (1 - margin) J1 J2``
     so that M(q) stays positive definite for every q2. Non-finite entries are
     left for the caller to catch.
     """
@@ -229,7 +233,7 @@ def project_sigma(sigma: ArrayLike, j_min: float = 1e-3, margin: float = 0.05) -
     s[..., 0:2] = np.maximum(s[..., 0:2], j_min)
     s[..., 3:7] = np.maximum(s[..., 3:7], 0.0)
     r_max = np.sqrt((1.0 - margin) * s[..., 0] * s[..., 1])
-    s[..., 2] = np.clip(s[..., 2], 0.0, r_max)
+    s[..., 2] = np.clip(s[..., 2], R_MIN, r_max)
     return s
 
 
