@@ -226,8 +226,8 @@ def project_sigma(sigma: ArrayLike, j_min: float = 1e-3, margin: float = 0.05) -
     """Nearest physically consistent base parameters (cheap projection), ``(..., 7)``.
 
     ``J1, J2 >= j_min``, ``r >= R_MIN`` (validate_sigma needs r > 0), friction ``>= 0``,
-    and ``r^2 <= (1 - margin) J1 J2`` so that M(q) stays positive definite for every q2. Non-finite entries are
-    left for the caller to catch.
+    and ``r^2 <= (1 - margin) J1 J2`` so that M(q) stays positive definite for every q2.
+    Non-finite entries are left for the caller to catch.
     """
     s = np.array(sigma, dtype=float, copy=True)
     s[..., 0:2] = np.maximum(s[..., 0:2], j_min)
