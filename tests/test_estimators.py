@@ -121,3 +121,31 @@ def test_model_responses_reproduce_the_arm_only_with_the_true_sigma():
     np.testing.assert_array_equal(qs["true"], arm)
     assert np.abs(qs["wrong"] - arm).max() > 1e-3
     assert np.all(np.isfinite(qs["bad"]))  # projected onto a consistent model, not an error
+
+
+def test_a_nan_sample_is_skipped_not_spread(table2_noisy):
+    """A NaN in the measurements must not run through the IIR filters to the end."""
+    from adaptive_dd.controllers import OnlineEstimator
+    from adaptive_dd.identification.estimators import EXACT_RLS
+
+    r = table2_noisy
+    q = r.q_meas[:1].copy()
+    qd = r.qd_meas[:1].copy()
+    q[0, 3000, 1] = np.nan
+    qd[0, 6000, 0] = np.inf
+    e = estimate(q, r.tau[:1], qd, estimator="exact", tau_f=0.02)
+    clean = estimate(r.q_meas[:1], r.tau[:1], r.qd_meas[:1], estimator="exact", tau_f=0.02)
+    assert np.all(np.isfinite(e.final)) and np.all(np.isfinite(e.std))
+    np.testing.assert_allclose(e.final, clean.final, rtol=0.02)
+    assert np.all(np.isfinite(e.theta[0, 3000:]))  # the estimate keeps going
+    assert e.n_used[0] < clean.n_used[0]  # the tainted equations were left out
+    b = estimate(q, r.tau[:1], qd, estimator="exact_batch_ls", tau_f=0.02)
+    assert np.all(np.isfinite(b.final)) and np.all(np.isfinite(b.std))
+    # the same online, sample by sample
+    est = OnlineEstimator(
+        1, 1e-3, construction="exact", rls=EXACT_RLS, tau_f=0.02, align=True, selection=(0.05, 6.0)
+    )
+    for k in range(10_000):
+        est.update(q[:, k], qd[:, k], r.tau[:1, k])
+    assert np.all(np.isfinite(est.theta)) and est.rls.n_skipped[0] > 0
+    np.testing.assert_allclose(est.theta[0], clean.final[0], rtol=0.02)

@@ -295,10 +295,12 @@ def solve_regression(
     batch, n = phi.shape[:-3], phi.shape[-3]
     if estimator in ("batch_ls", "exact_batch_ls"):
         a = phi.reshape(*batch, -1, 7)
-        act = active.reshape(*batch, -1)
-        final = batch_least_squares(a, y.reshape(*batch, -1), act)
+        b = y.reshape(*batch, -1)
+        act = active.reshape(*batch, -1) & np.isfinite(b) & np.isfinite(a).all(axis=-1)
+        final = batch_least_squares(a, b, act)
         theta = np.broadcast_to(final[..., None, :], (*batch, n, 7))
-        pmat = np.linalg.inv(np.einsum("...ki,...kj->...ij", a * act[..., None], a))
+        a0 = np.where(act[..., None], a, 0.0)
+        pmat = np.linalg.inv(np.einsum("...ki,...kj->...ij", a0, a0))
     elif estimator == "kalman":
         flat_phi, flat_y = phi.reshape(-1, n, 2, 7), y.reshape(-1, n, 2)
         runs, ps = [], []
@@ -314,8 +316,11 @@ def solve_regression(
         est = SplitRLS(split, rls, batch, theta0)
         theta = est.run(phi, y, active)
         final, pmat = theta[..., -1, :], est.P
-    resid = np.where(active, y - np.einsum("...nij,...j->...ni", phi, final), 0.0)
-    n_used = active.sum(axis=(-2, -1))
+    used = active & np.isfinite(y) & np.isfinite(phi).all(axis=-1)  # skipped samples do not count
+    resid = np.where(
+        used, y - np.einsum("...nij,...j->...ni", np.where(used[..., None], phi, 0.0), final), 0.0
+    )
+    n_used = used.sum(axis=(-2, -1))
     s2 = (resid**2).sum(axis=(-2, -1)) / np.maximum(n_used - 7, 1)
     s2 = s2 * _autocorrelation_inflation(resid, max_lag)
     std = np.sqrt(np.abs(np.diagonal(pmat, axis1=-2, axis2=-1)) * s2[..., None])
@@ -397,6 +402,5 @@ def estimate(
         max_lag=int(np.ceil(10 * tau_f / sample_period)),
     )
     split = split if estimator == "paper" else "full"
-    return EstimationResult(
-        theta, theta[..., -1, :], std, active.sum(axis=(-2, -1)), estimator, split, method, float(tau_f)
-    )
+    n_used = (active & np.isfinite(y) & np.isfinite(phi).all(axis=-1)).sum(axis=(-2, -1))
+    return EstimationResult(theta, theta[..., -1, :], std, n_used, estimator, split, method, float(tau_f))

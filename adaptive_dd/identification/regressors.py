@@ -154,9 +154,39 @@ def filtered_regression(
     else:
         qd = _backward_difference(q, bank.sample_period)
     u = _channels(construction, method, q, qd, tau)  # (..., N, n_ch)
+    u, tainted = _hold_nonfinite(u, _memory(bank))
     f = filter_record(bank, u, axis=-2, initial=u[..., 0, :])  # (..., N, n_ch, n_out)
     phi, y = _assemble(construction, method, f)
+    phi[tainted] = np.nan
+    y[tainted] = np.nan
     return FilteredRegression(phi, y, construction, method, bank.tau_f)
+
+
+def _memory(bank: FilterBank) -> int:
+    """Samples after which the filters have forgotten an input (10 tau_f)."""
+    return int(np.ceil(10.0 * bank.tau_f / bank.sample_period))
+
+
+def _hold_nonfinite(u: Array, memory: int) -> tuple[Array, NDArray[np.bool_]]:
+    """Replace non-finite samples of ``u (..., N, n_ch)`` by the last finite one.
+
+    Returns the held channels and a mask ``(..., N)`` of the samples whose filtered
+    output is tainted (a non-finite input within the last ``memory`` samples); the
+    caller marks those outputs non-finite so that estimators skip and count them,
+    instead of the NaN running through the IIR filters to the end of the record.
+    """
+    bad = ~np.isfinite(u).all(axis=-1)
+    if not bad.any():
+        return u, bad
+    n = u.shape[-2]
+    k = np.arange(n)
+    good_idx = np.maximum.accumulate(np.where(~bad, k, -1), axis=-1)
+    first_good = np.argmax(~bad, axis=-1)[..., None]  # before any good sample: the first good one
+    src = np.where(good_idx >= 0, good_idx, first_good)
+    held = np.take_along_axis(u, src[..., None], axis=-2)
+    held = np.where(np.isfinite(held), held, 0.0)
+    last_bad = np.maximum.accumulate(np.where(bad, k, -(10**9)), axis=-1)
+    return held, (k - last_bad) <= memory
 
 
 class OnlineRegressor:
@@ -185,6 +215,8 @@ class OnlineRegressor:
         self.batch_shape = tuple(batch_shape)
         self._filter: StreamingFilter | None = None
         self._q_prev: Array | None = None
+        self._u_last: Array | None = None
+        self._since_bad: NDArray[np.int_] | None = None
 
     def __call__(self, q: Array, tau: Array, qd: Array | None = None) -> tuple[Array, Array]:
         """Feed one sample; return ``phi (batch..., 2, 7)`` and ``y (batch..., 2)``."""
@@ -194,6 +226,17 @@ class OnlineRegressor:
         elif qd is None:
             raise SignalError("method M2 needs the measured velocity qd")
         u = _channels(self.construction, self.method, q, qd, tau)
+        bad = ~np.isfinite(u).all(axis=-1)
         if self._filter is None:
-            self._filter = StreamingFilter(self.bank, u.shape, initial=u)
-        return _assemble(self.construction, self.method, self._filter(u))
+            self._u_last = np.where(np.isfinite(u), u, 0.0)
+            self._since_bad = np.full(bad.shape, 10**9)
+            self._filter = StreamingFilter(self.bank, u.shape, initial=self._u_last)
+        u = np.where(bad[..., None], self._u_last, u)  # hold the last finite sample
+        self._u_last = u
+        self._since_bad = np.where(bad, 0, self._since_bad + 1)
+        phi, y = _assemble(self.construction, self.method, self._filter(u))
+        tainted = self._since_bad <= _memory(self.bank)
+        if tainted.any():
+            phi = np.where(tainted[..., None, None], np.nan, phi)
+            y = np.where(tainted[..., None], np.nan, y)
+        return phi, y
