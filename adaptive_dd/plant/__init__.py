@@ -9,6 +9,7 @@ from adaptive_dd.plant.dynamics import (
     regressor,
     regressor_reference,
 )
+from adaptive_dd.plant.integrator import plant_step
 from adaptive_dd.plant.parameters import (
     L1,
     L2,
@@ -29,7 +30,6 @@ from adaptive_dd.plant.simulator import (
     PayloadSchedule,
     SensorConfig,
     SimulationResult,
-    plant_step,
     simulate_open_loop,
 )
 

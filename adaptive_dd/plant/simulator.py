@@ -1,24 +1,10 @@
-"""Sampled-data simulator of the arm: ZOH torque, RK4 substeps, sticking friction.
+"""Sampled-data simulator of the arm: actuators, sensors, payload swaps, batches.
 
-Friction model
---------------
-Viscous plus Coulomb friction of eqs. (5)-(6), with *sticking*. A joint at rest
-(velocity exactly 0) either sticks, which is consistent while the torque needed
-to hold it, ``|tau_i - (C qd)_i - (M qdd)_i|`` with the other joint's motion taken
-into account, is at most ``d_i``; or it slides from rest in a direction s, which
-is consistent if its acceleration has the sign of s. The modes of the joints at
-rest are chosen jointly (the coupled 2x2 problem: at most 9 combinations, sticking
-first) at the start of every integration substep; within a substep the modes are
-fixed and moving joints see ``d_i sgn(qd_i)``. When a moving joint's velocity
-reaches zero within a substep, the substep is split there, the modes are decided
-anew and the rest of the substep is integrated. This hybrid model has no
-chattering at zero velocity, unlike integrating ``sgn(qd)`` directly.
-
-Sampling
---------
-Each call of :meth:`ArmSimulator.step` holds the torque constant for one sample
-period ``T`` (zero-order hold) and integrates with ``substeps`` classical RK4 steps.
-Nothing stateful (controller, estimator, sensor) runs inside the substeps.
+:class:`ArmSimulator` steps a batch of arms at the sample rate: the command goes
+through the actuator model (saturation, D/A), is held for one sample while
+:func:`~adaptive_dd.plant.integrator.plant_step` integrates (RK4 substeps, sticking
+Coulomb friction), and the sensors measure the new state (encoder quantization,
+noise). Nothing stateful runs inside the substeps.
 """
 
 from __future__ import annotations
@@ -28,11 +14,11 @@ from dataclasses import dataclass, field
 from functools import cached_property
 
 import numpy as np
-from numba import njit
 from numpy.typing import ArrayLike, NDArray
 
 from adaptive_dd.errors import ParameterError, SignalError
 from adaptive_dd.plant.dynamics import as_joint_array
+from adaptive_dd.plant.integrator import _plant_step_kernel
 from adaptive_dd.plant.parameters import (
     TABLE1_SIGMA,
     TORQUE_LIMITS,
@@ -46,7 +32,6 @@ __all__ = [
     "PayloadSchedule",
     "SensorConfig",
     "SimulationResult",
-    "plant_step",
     "simulate_open_loop",
 ]
 
@@ -200,179 +185,6 @@ class PayloadSchedule:
     def sigma_at(self, t: float, sigma0: Array) -> Array:
         """Base parameters at time t: ``sigma0`` plus the disk (``(..., 7)``)."""
         return sigma0 + payload_sigma_delta(self.mass_at(t), self.radius)
-
-
-# ------------------------------------------------------------------ pure step
-@njit(cache=True, fastmath=False)
-def _accel_hold(q2, v1, v2, t1, t2, sg, st1, st2, sl1, sl2):  # pragma: no cover - compiled
-    """Accelerations with stuck joints held, and the torque friction must supply (one arm)."""
-    j1, j2, r, b1, b2, d1, d2 = sg[0], sg[1], sg[2], sg[3], sg[4], sg[5], sg[6]
-    c2, s2 = np.cos(q2), np.sin(q2)
-    m11 = j1 + j2 + 2.0 * r * c2
-    m12 = j2 + r * c2
-    m22 = j2
-    cor1 = -r * s2 * v2 * (2.0 * v1 + v2)
-    cor2 = r * s2 * v1 * v1
-    sgn1 = np.sign(v1) if v1 != 0.0 else sl1
-    sgn2 = np.sign(v2) if v2 != 0.0 else sl2
-    r1 = t1 - cor1 - b1 * v1 - d1 * sgn1
-    r2 = t2 - cor2 - b2 * v2 - d2 * sgn2
-    if st1 and st2:
-        a1, a2 = 0.0, 0.0
-    elif st1:
-        a1, a2 = 0.0, r2 / m22
-    elif st2:
-        a1, a2 = r1 / m11, 0.0
-    else:
-        det = m11 * m22 - m12 * m12
-        a1 = (m22 * r1 - m12 * r2) / det
-        a2 = (m11 * r2 - m12 * r1) / det
-    h1 = t1 - cor1 - m11 * a1 - m12 * a2
-    h2 = t2 - cor2 - m12 * a1 - m22 * a2
-    return a1, a2, h1, h2
-
-
-@njit(cache=True, fastmath=False)
-def _rk4(p1, p2, v1, v2, dt, t1, t2, sg, st1, st2, sl1, sl2):  # pragma: no cover - compiled
-    """One classical RK4 step of length dt with the stuck set fixed."""
-    a11, a12, _, _ = _accel_hold(p2, v1, v2, t1, t2, sg, st1, st2, sl1, sl2)
-    w1, w2 = v1 + 0.5 * dt * a11, v2 + 0.5 * dt * a12
-    a21, a22, _, _ = _accel_hold(p2 + 0.5 * dt * v2, w1, w2, t1, t2, sg, st1, st2, sl1, sl2)
-    x1, x2 = v1 + 0.5 * dt * a21, v2 + 0.5 * dt * a22
-    a31, a32, _, _ = _accel_hold(p2 + 0.5 * dt * w2, x1, x2, t1, t2, sg, st1, st2, sl1, sl2)
-    y1, y2 = v1 + dt * a31, v2 + dt * a32
-    a41, a42, _, _ = _accel_hold(p2 + dt * x2, y1, y2, t1, t2, sg, st1, st2, sl1, sl2)
-    n1 = p1 + (dt / 6.0) * (v1 + 2.0 * w1 + 2.0 * x1 + y1)
-    n2 = p2 + (dt / 6.0) * (v2 + 2.0 * w2 + 2.0 * x2 + y2)
-    u1 = 0.0 if st1 else v1 + (dt / 6.0) * (a11 + 2.0 * a21 + 2.0 * a31 + a41)
-    u2 = 0.0 if st2 else v2 + (dt / 6.0) * (a12 + 2.0 * a22 + 2.0 * a32 + a42)
-    # a velocity that changes sign in any stage has met the Coulomb discontinuity:
-    # the step is then not to be trusted (the caller splits it at the crossing)
-    s1 = np.sign(v1) if v1 != 0.0 else sl1
-    s2 = np.sign(v2) if v2 != 0.0 else sl2
-    c1 = (not st1) and min(w1 * s1, x1 * s1, y1 * s1, u1 * s1) <= 0.0
-    c2 = (not st2) and min(w2 * s2, x2 * s2, y2 * s2, u2 * s2) <= 0.0
-    return n1, n2, u1, u2, c1, c2, a11, a12
-
-
-@njit(cache=True, fastmath=False)
-def _resolve(p2, v1, v2, t1, t2, sg, r1, r2, sl1, sl2):  # pragma: no cover - compiled
-    """Friction mode of the joints at rest (``r_i``: qd_i == 0), decided jointly.
-
-    Each joint at rest either sticks (consistent if its holding torque is at most
-    d_i) or slides from rest in direction s (consistent if its acceleration has
-    the sign of s). The combinations are tried, sticking first, and the first
-    consistent one is taken; the 2x2 case has at most 9.
-    """
-    for m1 in range(3 if r1 else 1):
-        for m2 in range(3 if r2 else 1):
-            st1 = r1 and m1 == 0
-            st2 = r2 and m2 == 0
-            s1 = 1.0 if (r1 and m1 == 1) else (-1.0 if (r1 and m1 == 2) else sl1)
-            s2 = 1.0 if (r2 and m2 == 1) else (-1.0 if (r2 and m2 == 2) else sl2)
-            a1, a2, h1, h2 = _accel_hold(p2, v1, v2, t1, t2, sg, st1, st2, s1, s2)
-            ok = True
-            if r1:
-                ok = ok and (abs(h1) <= sg[5] if st1 else a1 * s1 > 0.0)
-            if r2:
-                ok = ok and (abs(h2) <= sg[6] if st2 else a2 * s2 > 0.0)
-            if ok:
-                return st1, st2, s1, s2
-    return r1, r2, sl1, sl2  # numerically borderline: hold them this substep
-
-
-@njit(cache=True, fastmath=False)
-def _plant_step_kernel(q, qd, stuck, slip, tau, sigma, T, substeps):  # pragma: no cover
-    n = q.shape[0]
-    h = T / substeps
-    for i in range(n):
-        sg = sigma[i]
-        p1, p2, v1, v2 = q[i, 0], q[i, 1], qd[i, 0], qd[i, 1]
-        st1, st2, sl1, sl2 = stuck[i, 0], stuck[i, 1], slip[i, 0], slip[i, 1]
-        t1, t2 = tau[i, 0], tau[i, 1]
-        cz1, cz2 = sg[5] > 0.0, sg[6] > 0.0  # joints with Coulomb friction
-        for _ in range(substeps):
-            r1, r2 = v1 == 0.0 and cz1, v2 == 0.0 and cz2
-            st1, st2 = False, False
-            if r1 or r2:
-                st1, st2, sl1, sl2 = _resolve(p2, v1, v2, t1, t2, sg, r1, r2, sl1, sl2)
-            n1, n2, u1, u2, c1, c2, a1, a2 = _rk4(p1, p2, v1, v2, h, t1, t2, sg, st1, st2, sl1, sl2)
-            c1 = c1 and cz1
-            c2 = c2 and cz2
-            if c1 or c2:
-                # a velocity reaches zero: step to the first crossing (located from the
-                # initial acceleration), decide the friction modes there, finish the substep
-                f1 = min(1.0, abs(v1) / (h * abs(a1))) if c1 and v1 * a1 < 0.0 else (0.0 if c1 else 1.0)
-                f2 = min(1.0, abs(v2) / (h * abs(a2))) if c2 and v2 * a2 < 0.0 else (0.0 if c2 else 1.0)
-                f = min(f1, f2)
-                if f > 0.0:
-                    p1, p2, v1, v2, _, _, _, _ = _rk4(p1, p2, v1, v2, f * h, t1, t2, sg, st1, st2, sl1, sl2)
-                if c1 and f1 <= f:
-                    v1 = 0.0
-                if c2 and f2 <= f:
-                    v2 = 0.0
-                st1, st2, sl1, sl2 = _resolve(
-                    p2, v1, v2, t1, t2, sg, v1 == 0.0 and cz1, v2 == 0.0 and cz2, sl1, sl2
-                )
-                n1, n2, u1, u2, z1, z2, _, _ = _rk4(
-                    p1, p2, v1, v2, (1.0 - f) * h, t1, t2, sg, st1, st2, sl1, sl2
-                )
-                # another crossing within the same substep: rest there (decided next substep)
-                if z1 and cz1 and f < 1.0:
-                    u1 = 0.0
-                if z2 and cz2 and f < 1.0:
-                    u2 = 0.0
-            p1, p2, v1, v2 = n1, n2, u1, u2
-        q[i, 0], q[i, 1], qd[i, 0], qd[i, 1] = p1, p2, v1, v2
-        stuck[i, 0], stuck[i, 1] = st1 and v1 == 0.0, st2 and v2 == 0.0
-        slip[i, 0], slip[i, 1] = sl1, sl2
-
-
-def plant_step(
-    q: Array,
-    qd: Array,
-    stuck: NDArray[np.bool_],
-    slip: Array,
-    tau: Array,
-    sigma: Array,
-    T: float,
-    substeps: int = 2,
-) -> tuple[Array, Array, NDArray[np.bool_], Array]:
-    """Advance the arm by one sample with torque ``tau`` held constant (pure function).
-
-    Compiled with numba: one loop over the batch, scalar 2x2 algebra inside.
-
-    Parameters
-    ----------
-    q, qd : ndarray, shape (..., 2)
-        State at the start of the sample.
-    stuck : ndarray of bool, shape (..., 2)
-        Joints currently stuck by Coulomb friction.
-    slip : ndarray, shape (..., 2)
-        Direction (+-1) a joint last broke away in; used as sgn(qd) while qd == 0.
-    tau : ndarray, shape (..., 2)
-        Applied torque [N m], held over the sample.
-    sigma : ndarray, shape (..., 7)
-        True base parameters.
-    T : float
-        Sample period [s].
-    substeps : int
-        RK4 steps per sample.
-
-    Returns
-    -------
-    q, qd, stuck, slip : the state after ``T`` (new arrays; inputs are not changed).
-    """
-    shape = np.broadcast_shapes(q.shape, qd.shape, tau.shape, (*sigma.shape[:-1], 2))
-    flat = (-1, 2)
-    q_ = np.ascontiguousarray(np.broadcast_to(q, shape), dtype=float).reshape(flat).copy()
-    qd_ = np.ascontiguousarray(np.broadcast_to(qd, shape), dtype=float).reshape(flat).copy()
-    st_ = np.ascontiguousarray(np.broadcast_to(stuck, shape), dtype=np.bool_).reshape(flat).copy()
-    sl_ = np.ascontiguousarray(np.broadcast_to(slip, shape), dtype=float).reshape(flat).copy()
-    tau_ = np.ascontiguousarray(np.broadcast_to(tau, shape), dtype=float).reshape(flat)
-    sig_ = np.ascontiguousarray(np.broadcast_to(sigma, (*shape[:-1], 7)), dtype=float).reshape(-1, 7)
-    _plant_step_kernel(q_, qd_, st_, sl_, tau_, sig_, float(T), int(substeps))
-    return q_.reshape(shape), qd_.reshape(shape), st_.reshape(shape), sl_.reshape(shape)
 
 
 # ------------------------------------------------------------- stateful wrapper
