@@ -125,27 +125,15 @@ def _cmd_reproduce(args: argparse.Namespace) -> int:
     written = []
     t = res.sim.t
     i5 = tau_f.index(0.006) if 0.006 in tau_f else 0
-    if fig5 in res.theta:
-        written.append(
-            plot_estimates(
-                t,
-                res.theta[fig5][i5],
-                TABLE1_SIGMA,
-                out / "fig5_paper_M2.png",
-                f"Estimates, paper's M2 estimator, split (15), tau_f = {tau_f[i5]}",
-            )
-        )
     i_best = tau_f.index(0.02) if 0.02 in tau_f else len(tau_f) - 1
-    if ours in res.theta:
-        written.append(
-            plot_estimates(
-                t,
-                res.theta[ours][i_best],
-                TABLE1_SIGMA,
-                out / "fig5_exact_M2.png",
-                f"Estimates, estimator 'exact' (M2), tau_f = {tau_f[i_best]}",
-            )
-        )
+    figures = (
+        (fig5, i5, "fig5_paper_M2.png", "paper's M2 estimator, split (15)"),
+        (ours, i_best, "fig5_exact_M2.png", "estimator 'exact' (M2)"),
+    )
+    for key, i, name, label in figures:
+        if key in res.theta:
+            title = f"Estimates, {label}, tau_f = {tau_f[i]}"
+            written.append(plot_estimates(t, res.theta[key][i], TABLE1_SIGMA, out / name, title))
     models = {}
     for key, i, label in ((fig5, i5, "paper M2"), (ours, i_best, "exact M2")):
         if key in res.theta:
