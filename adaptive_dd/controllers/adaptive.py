@@ -252,7 +252,9 @@ class AdaptiveCT(Controller):
 
     def command(self, q, qd, q_d, qd_d, qdd_d, sigma_true=None):
         self._q, self._qd = q, qd
-        sigma = project_sigma(self.estimator.theta)  # a usable model even mid-transient
+        est = self.estimator
+        # a usable model even mid-transient; an estimator that projects already did it
+        sigma = est.theta if est.project else project_sigma(est.theta)
         return computed_torque_law(q, qd, q_d, qd_d, qdd_d, sigma, self.gains.kp, self.gains.kd)
 
     def observe(self, q, qd, tau):
