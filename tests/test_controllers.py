@@ -8,25 +8,19 @@ import pytest
 from adaptive_dd.benchmark.runner import run_benchmark
 from adaptive_dd.benchmark.scenario import load_scenario
 from adaptive_dd.controllers import (
-    ADAPTIVE_RLS,
-    ChangeDetector,
     ComputedTorque,
     Gains,
-    OnlineEstimator,
     SlotineLi,
+    adaptive_ct,
     computed_torque_law,
 )
 from adaptive_dd.errors import ParameterError
-from adaptive_dd.experiments import table2_torque, trial_rngs
-from adaptive_dd.identification.estimators import estimate
 from adaptive_dd.plant import (
     TABLE1_SIGMA,
-    PayloadSchedule,
     inverse_dynamics,
     payload_mass_from_sigma,
     payload_sigma_delta,
     project_sigma,
-    simulate_open_loop,
     validate_sigma,
 )
 
@@ -86,60 +80,58 @@ def test_slotine_li_adaptation_reduces_the_error_of_a_wrong_model():
     assert m < 1.5  # moved from the wrong 2 kg towards 0
 
 
-def test_online_estimator_equals_the_offline_exact_pipeline():
-    r = simulate_open_loop(table2_torque(2, 3000), trial_rngs(3, 2))
-    cfg = dataclasses.replace(ADAPTIVE_RLS, max_trace=1e9)
-    online = OnlineEstimator(
-        2,
-        1e-3,
-        construction="exact",
-        split="full",
-        rls=cfg,
-        tau_f=0.01,
-        theta0=TABLE1_SIGMA,
-        align=True,
-        selection=(0.05, 6.0),
-    )
-    hist = np.stack([online.update(r.q_meas[:, k], r.qd_meas[:, k], r.tau[:, k]) for k in range(3000)], 1)
-    off = estimate(
-        r.q_meas,
-        r.tau,
-        r.qd_meas,
-        estimator="exact",
-        tau_f=0.01,
-        rls=cfg,
-        theta0=TABLE1_SIGMA,
-        threshold=0.05,
-        memory_factor=6.0,
-    )
-    np.testing.assert_allclose(hist, off.theta, rtol=1e-8, atol=1e-10)
+def test_reference_velocity_ct_with_the_true_model_is_slotine_li_without_adaptation(rng):
+    """With lam, the CT law's velocity terms are Y(q, qd, qd_r, .) sigma: Slotine-Li's law."""
+    from adaptive_dd.plant.dynamics import regressor_reference
+
+    q, qd, q_d, qd_d, qdd_d = rng.normal(size=(5, 30, 2))
+    lam, kp, kd = 40.0, 1600.0, 80.0
+    tau = computed_torque_law(q, qd, q_d, qd_d, qdd_d, np.broadcast_to(TABLE1_SIGMA, (30, 7)), kp, kd, lam)
+    e, ed = q_d - q, qd_d - qd
+    y = regressor_reference(q, qd, qd_d + lam * e, qdd_d + lam * ed)
+    # Y sigma holds M qdd_r = M (qdd_d + lam e_dot); CT has M (qdd_d + kd e_dot + kp e)
+    from adaptive_dd.plant import mass_matrix
+
+    extra = np.einsum("nij,nj->ni", mass_matrix(q, TABLE1_SIGMA), (kd - lam) * ed + kp * e)
+    np.testing.assert_allclose(tau, y @ TABLE1_SIGMA + extra, atol=1e-10)
 
 
-def test_change_detector_fires_after_a_swap_and_the_estimate_follows():
-    n = 8000
-    sched = PayloadSchedule(times=(4.0,), masses=(3.0,))
-    r = simulate_open_loop(table2_torque(2, n), trial_rngs(5, 2), payload=sched)
-    est = OnlineEstimator(
-        2,
-        1e-3,
-        construction="exact",
-        split="full",
-        rls=ADAPTIVE_RLS,
-        tau_f=0.01,
-        align=True,
-        selection=(0.05, 6.0),
-        detector=ChangeDetector(),
-        project=True,
+def test_floors_the_reference_velocity_law_tracks_better_than_the_textbook_law():
+    sc = short_scenario(seeds=1, duration=3.0, swap_times=(), swap_masses=(), **CLEAN)
+    res = run_benchmark(
+        sc,
+        progress=False,
+        controllers={
+            "ref": ComputedTorque(oracle=True),
+            "textbook": ComputedTorque(oracle=True, reference_velocity=False),
+            "sl": SlotineLi(oracle=True),
+        },
     )
-    for k in range(n):
-        est.update(r.q_meas[:, k], r.qd_meas[:, k], r.tau[:, k])
-        if k == 3999:
-            before = payload_mass_from_sigma(est.theta)
-    for times in est.alarm_times:
-        assert len(times) >= 1 and all(4.0 < t < 4.2 for t in times[:1])
-        assert not any(t < 4.0 for t in times)
-    np.testing.assert_allclose(before, 0.0, atol=0.1)
-    np.testing.assert_allclose(payload_mass_from_sigma(est.theta), 3.0, rtol=0.05)
+    late = slice(1000, 3000)
+    err = {n: np.sqrt(((res.q_d[late] - r.q[:, late]) ** 2).sum(-1).mean()) for n, r in res.runs.items()}
+    assert err["ref"] < 0.5 * err["textbook"]
+    assert err["ref"] == pytest.approx(err["sl"], rel=0.2)  # same law up to K_D
+
+
+def test_adaptive_ct_learns_a_swap_and_boosts_only_after_an_alarm():
+    sc = short_scenario(seeds=2, duration=4.0, swap_times=(2.0,), swap_masses=(3.0,))
+    ctrl = adaptive_ct()
+    res = run_benchmark(sc, progress=False, controllers={"a": ctrl, "o": ComputedTorque(oracle=True)})
+    run = res.runs["a"]
+    for times in run.alarm_times:
+        assert len(times) == 1 and 2.0 < times[0] < 2.1
+    np.testing.assert_allclose(payload_mass_from_sigma(run.sigma_hat[:, -1]), 3.0, rtol=0.05)
+    assert run.floor == "ct_oracle"
+    seg = slice(2000, 4000)
+    err = {n: np.sqrt(((res.q_d[seg] - r.q[:, seg]) ** 2).sum(-1).mean()) for n, r in res.runs.items()}
+    assert err["a"] < 1.5 * err["o"]
+    # the boost term is zero unless an alarm is recent
+    q = np.zeros((2, 2))
+    assert np.all(ctrl.estimator.state.since_alarm * 1e-3 > ctrl.boost_duration)
+    t0 = ctrl.command(q, q, q + 0.01, q, q)
+    ctrl.estimator.state.cnt[:, 7] = 0  # pretend an alarm just happened
+    t1 = ctrl.command(q, q, q + 0.01, q, q)
+    assert np.all(np.abs(t1) > np.abs(t0))
 
 
 def test_projection_gives_positive_definite_models(rng):
@@ -162,5 +154,5 @@ def test_bad_gains_and_detector():
         Gains(bandwidth=0.0)
     with pytest.raises(ParameterError, match="damping"):
         Gains(damping=-1.0)
-    with pytest.raises(ParameterError, match="short_window"):
-        ChangeDetector(short_window=2.0, long_window=1.0)
+    with pytest.raises(ParameterError, match="boost_bandwidth"):
+        adaptive_ct(boost_bandwidth=-1.0)

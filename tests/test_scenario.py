@@ -34,7 +34,7 @@ def test_default_scenario_is_the_issue_s():
     assert default_scenario_path().is_file()
     assert sc.duration == 20.0 and sc.sample_period == 0.001 and sc.seeds == 10
     assert sc.segments() == [(0.0, 5.0, 0.0), (5.0, 10.0, 3.0), (10.0, 15.0, 1.0), (15.0, 20.0, 0.0)]
-    assert len(sc.controllers) == 6
+    assert len(sc.controllers) == 7 and "slotine_li_oracle" in sc.controllers
 
 
 def test_reference_derivatives_and_ramp():

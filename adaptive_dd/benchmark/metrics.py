@@ -29,6 +29,22 @@ saturation_fraction
 mass_estimate
     Payload mass implied by the estimates at the end of the segment
     (:func:`~adaptive_dd.plant.payload_mass_from_sigma`); None for fixed models.
+
+Per seed (trial i uses the noise of seed ``(scenario.seed, i)`` for every controller,
+so ratios are taken seed by seed: common random numbers):
+
+rms_error_per_seed
+    The segment's RMS error of each trial (None for a failed trial).
+ratio_to_floor
+    Statistics of ``rms_error / rms_error of the floor`` per seed, where the floor is the
+    same law with the true model (``Controller.floor``; e.g. ``ct_oracle`` for
+    ``adaptive_ct``): ``mean``, ``median``, ``p90``, ``max``, ``ci95`` (t-interval of the
+    mean), ``worst_seed``, ``n``. None when the floor is not in the run.
+detection_delay_per_seed
+    Segments after a swap: the first alarm within ``FALSE_ALARM_WINDOW`` after the swap,
+    per seed (None: missed or failed).
+false_alarms_per_seed
+    Per controller with a detector: alarms that follow no swap by ``FALSE_ALARM_WINDOW``.
 """
 
 from __future__ import annotations
@@ -45,6 +61,7 @@ RECOVERY_FLOOR = 5e-5  # rad
 RECOVERY_DWELL = 0.5  # s
 SETTLE = 0.5  # s
 WINDOW = 0.05  # s
+FALSE_ALARM_WINDOW = 0.3  # s: an alarm later than this after every swap is a false alarm
 
 
 def moving_rms(x: np.ndarray, n: int, axis: int = -1) -> np.ndarray:
@@ -130,4 +147,75 @@ def compute_metrics(res: BenchmarkResult) -> dict:
             "error": run.error or None,
             "segments": segs,
         }
+    _add_seed_statistics(res, out)
     return {"scenario": sc.source, "seeds": sc.seeds, "wall_time_s": res.wall_time, "controllers": out}
+
+
+def _seed_list(x: np.ndarray, ok: np.ndarray) -> list:
+    return [float(v) if (good and np.isfinite(v)) else None for v, good in zip(x, ok, strict=True)]
+
+
+def ratio_statistics(ratio: np.ndarray) -> dict | None:
+    """Mean, median, p90, max, 95 % t-interval of the mean and worst seed of per-seed ratios.
+
+    NaN entries (failed trials) are left out."""
+    from scipy import stats
+
+    idx = np.flatnonzero(np.isfinite(ratio))
+    if idx.size == 0:
+        return None
+    r = ratio[idx]
+    mean = float(r.mean())
+    half = float(stats.t.ppf(0.975, r.size - 1) * r.std(ddof=1) / np.sqrt(r.size)) if r.size > 1 else np.nan
+    return {
+        "mean": mean,
+        "median": float(np.median(r)),
+        "p90": float(np.percentile(r, 90)),
+        "max": float(r.max()),
+        "ci95": [mean - half, mean + half] if np.isfinite(half) else None,
+        "worst_seed": int(idx[np.argmax(r)]),
+        "n": int(r.size),
+    }
+
+
+def _add_seed_statistics(res: BenchmarkResult, out: dict) -> None:
+    """Per-seed lists, ratios to each controller's floor, false alarms and detection delays."""
+    sc = res.scenario
+    T = sc.sample_period
+    per_seed = {}
+    for name, run in res.runs.items():
+        e2 = ((res.q_d[None] - run.q) ** 2).sum(axis=-1)
+        rms = np.array(
+            [np.sqrt(e2[:, round(a / T) : round(b / T)].mean(axis=1)) for a, b, _ in sc.segments()]
+        )
+        rms[:, run.failed] = np.nan
+        per_seed[name] = rms  # (n_segments, n_seeds)
+        for seg, r in zip(out[name]["segments"], rms, strict=True):
+            seg["rms_error_per_seed"] = _seed_list(r, ~run.failed)
+    for name, run in res.runs.items():
+        floor = run.floor if run.floor in per_seed else None
+        out[name]["floor"] = floor
+        for i, seg in enumerate(out[name]["segments"]):
+            seg["ratio_to_floor"] = None
+            if floor is not None:
+                with np.errstate(divide="ignore", invalid="ignore"):
+                    ratio = per_seed[name][i] / per_seed[floor][i]
+                seg["ratio_to_floor"] = ratio_statistics(np.where(np.isfinite(ratio), ratio, np.nan))
+        if run.alarm_times is None:
+            continue
+        swaps = sc.swap_times
+        false = [
+            sum(1 for x in tr if not any(0 <= x - s < FALSE_ALARM_WINDOW for s in swaps))
+            for tr in run.alarm_times
+        ]
+        out[name]["false_alarms_per_seed"] = [
+            None if f else n for n, f in zip(false, run.failed, strict=True)
+        ]
+        ok = ~run.failed
+        out[name]["trials_with_false_alarms"] = int(sum(1 for n, g in zip(false, ok, strict=True) if g and n))
+        for seg, s in zip(out[name]["segments"][1:], swaps, strict=True):
+            first = [
+                min((x - s for x in tr if 0 <= x - s < FALSE_ALARM_WINDOW), default=None)
+                for tr in run.alarm_times
+            ]
+            seg["detection_delay_per_seed"] = [d if g else None for d, g in zip(first, ok, strict=True)]

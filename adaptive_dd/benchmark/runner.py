@@ -18,6 +18,7 @@ from numpy.typing import NDArray
 
 from adaptive_dd.benchmark.scenario import Scenario
 from adaptive_dd.controllers import Controller, Gains, make_controller
+from adaptive_dd.errors import SignalError
 from adaptive_dd.experiments import trial_rngs
 from adaptive_dd.plant.parameters import TABLE1_SIGMA
 from adaptive_dd.plant.simulator import ArmSimulator, PayloadSchedule, SensorConfig
@@ -42,6 +43,7 @@ class ControllerRun:
     failed : bool (n_seeds,); failed_at : sample index or -1
     error : message if the controller raised, else ""
     alarm_times : per trial, the times [s] a change detector fired (or None)
+    floor : name of the controller this one is measured against (or None)
     """
 
     name: str
@@ -53,6 +55,7 @@ class ControllerRun:
     failed_at: NDArray[np.int_]
     error: str = ""
     alarm_times: list | None = None
+    floor: str | None = None
 
 
 @dataclass
@@ -110,15 +113,18 @@ def run_benchmark(
         qd0=qd_d[0],
     )
     slices = {n: slice(i * S, (i + 1) * S) for i, n in enumerate(names)}
-    for c in ctrls.values():
-        c.reset(S, T)
+    errors = dict.fromkeys(names, "")
+    for n, c in ctrls.items():
+        try:
+            c.reset(S, T)
+        except Exception as exc:
+            errors[n] = f"{type(exc).__name__} in reset: {exc}"
     q_rec = np.zeros((B, N, 2))
     tau_rec = np.zeros((B, N, 2))
     sat_rec = np.zeros((B, N, 2), dtype=bool)
-    sig_rec = {n: np.full((S, N, 7), np.nan) for n in names if ctrls[n].adaptive}
+    sig_rec = {n: np.full((S, N, 7), np.nan) for n in names if not errors[n] and ctrls[n].adaptive}
     sigma_true = np.zeros((N, 7))
     mass = np.zeros(N)
-    errors = dict.fromkeys(names, "")
     tau = np.zeros((B, 2))
     for k in tqdm(
         range(N),
@@ -136,12 +142,15 @@ def run_benchmark(
             if errors[n]:
                 tau[sl] = np.nan  # stopped: the simulator marks the trials failed
                 continue
+            c = ctrls[n]
+            truth = {"sigma_true": sim.sigma[sl]} if c.needs_true_model else {}
             try:
-                tau[sl] = ctrls[n].command(
-                    qm[sl], qdm[sl], q_d[k], qd_d[k], qdd_d[k], sigma_true=sim.sigma[sl]
-                )
-            except (ValueError, ArithmeticError, np.linalg.LinAlgError) as exc:
-                errors[n] = f"{type(exc).__name__} at t = {t[k]:.3f} s: {exc}"
+                cmd = np.asarray(c.command(qm[sl], qdm[sl], q_d[k], qd_d[k], qdd_d[k], **truth), dtype=float)
+                if cmd.shape != (S, 2):
+                    raise SignalError(f"command returned shape {cmd.shape}, expected ({S}, 2)")
+                tau[sl] = cmd
+            except Exception as exc:  # contain any controller failure to its own trials
+                errors[n] = f"{type(exc).__name__} in command at t = {t[k]:.3f} s: {exc}"
                 tau[sl] = np.nan
         runaway = np.abs(sim.q - q_d[k]).max(axis=-1) > MAX_ERROR
         tau[runaway] = np.nan
@@ -153,15 +162,14 @@ def run_benchmark(
             sl = slices[n]
             try:
                 ctrls[n].observe(qm[sl], qdm[sl], applied[sl])
-            except (ValueError, ArithmeticError, np.linalg.LinAlgError) as exc:
-                errors[n] = f"{type(exc).__name__} at t = {t[k]:.3f} s: {exc}"
-            if n in sig_rec:
-                sig_rec[n][:, k] = ctrls[n].sigma_hat
+                if n in sig_rec:
+                    sig_rec[n][:, k] = ctrls[n].sigma_hat
+            except Exception as exc:
+                errors[n] = f"{type(exc).__name__} in observe at t = {t[k]:.3f} s: {exc}"
     res = BenchmarkResult(scenario, t, q_d, sigma_true, mass)
     for n in names:
         sl = slices[n]
-        est = getattr(ctrls[n], "estimator", None)
-        alarms = est.alarm_times if getattr(est, "detector", None) is not None else None
+        alarms = None if errors[n] else ctrls[n].alarm_times
         res.runs[n] = ControllerRun(
             n,
             q_rec[sl],
@@ -172,6 +180,7 @@ def run_benchmark(
             sim.failed_at[sl].copy(),
             errors[n],
             alarms,
+            getattr(ctrls[n], "floor", "ct_oracle"),
         )
     res.wall_time = time.perf_counter() - t0
     return res

@@ -8,7 +8,8 @@
     seeds = 10                 # Monte-Carlo trials per controller
     seed = 0                   # base seed (optional)
     substeps = 2               # RK4 steps per sample (optional)
-    controllers = ["pd", "ct_nominal", "ct_oracle", "adaptive_ct_paper", "adaptive_ct", "slotine_li"]
+    controllers = ["pd", "ct_nominal", "ct_oracle", "adaptive_ct_paper", "adaptive_ct",
+                   "slotine_li", "slotine_li_oracle"]
 
     [control]                  # optional
     bandwidth = 40.0           # rad/s, shared by all controllers

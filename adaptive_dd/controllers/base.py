@@ -58,6 +58,13 @@ class Gains:
     def kd(self) -> float:
         return 2.0 * self.damping * self.bandwidth
 
+    @property
+    def lam(self) -> float:
+        """``lambda`` of ``s = e_dot + lambda e`` and ``qd_r = qd_d + lambda e``: the smaller root of
+        ``x^2 - 2 zeta omega x + omega^2`` (``omega`` for ``zeta <= 1``)."""
+        w, z = self.bandwidth, max(self.damping, 1.0)
+        return w * z - w * np.sqrt(z * z - 1.0)
+
     def nominal_inertia(self, sigma: Array = TABLE1_SIGMA) -> Array:
         """``diag M(q = 0)`` of the nominal model, (2,) [kg m^2]."""
         m11, _, m22 = _mass_entries(np.zeros(()), np.asarray(sigma, float))
@@ -74,12 +81,17 @@ class Controller:
     Attributes
     ----------
     name : str
-    adaptive : bool
-        Has an estimate of sigma (``sigma_hat``).
+    needs_true_model : bool
+        Receives ``sigma_true`` in :meth:`command` (oracles only).
     """
 
     name = "controller"
-    adaptive = False
+    floor: str | None = "ct_oracle"
+    """Name of the controller this one is measured against (the same law with the true model);
+    None for oracles. The benchmark reports per-seed ratios to it when it is in the run."""
+    needs_true_model = False
+    """Oracles set this: the runner then passes the true sigma to :meth:`command`; no other
+    controller ever sees it."""
 
     def reset(self, n_trials: int, sample_period: float) -> None:
         """Start a run of ``n_trials`` trials at sample period T."""
@@ -101,3 +113,13 @@ class Controller:
     def sigma_hat(self) -> Array | None:
         """Current estimate of sigma ``(n_trials, 7)``, or None for fixed-model controllers."""
         return None
+
+    @property
+    def alarm_times(self) -> list[list[float]] | None:
+        """Per trial, the times [s] a change detector raised an alarm; None without a detector."""
+        return None
+
+    @property
+    def adaptive(self) -> bool:
+        """True for controllers that expose an estimate (:attr:`sigma_hat`)."""
+        return self.sigma_hat is not None

@@ -55,10 +55,12 @@ class SlotineLi(Controller):
         Initial estimate (default Table 1); also the model M0 of K_D.
     bounds : (array_like, array_like)
         Lower and upper bounds of the estimates.
+    oracle : bool
+        The same law with the true model at every sample and no adaptation
+        (``slotine_li_oracle``): the floor Slotine-Li is measured against.
     """
 
     name = "slotine_li"
-    adaptive = True
 
     def __init__(
         self,
@@ -66,8 +68,12 @@ class SlotineLi(Controller):
         gamma: ArrayLike = DEFAULT_GAMMA,
         theta0: ArrayLike = TABLE1_SIGMA,
         bounds: tuple = DEFAULT_BOUNDS,
+        oracle: bool = False,
     ) -> None:
-        self.gains = gains
+        self.gains, self.oracle = gains, oracle
+        self.needs_true_model = oracle
+        self.name = "slotine_li_oracle" if oracle else "slotine_li"
+        self.floor = None if oracle else "slotine_li_oracle"
         self.lo, self.hi = (np.asarray(b, dtype=float) for b in bounds)
         self.gamma = np.asarray(gamma, dtype=float)
         if self.gamma.shape != (7,) or np.any(~(self.gamma > 0)):
@@ -88,6 +94,10 @@ class SlotineLi(Controller):
         y = _regressor_reference(q, qd, qd_d + lam * e, qdd_d + lam * e_dot)
         m11, m12, m22 = _mass_entries(q[..., 1], self.theta0)
         kds = self.kd * np.stack((m11 * s[..., 0] + m12 * s[..., 1], m12 * s[..., 0] + m22 * s[..., 1]), -1)
+        if self.oracle:
+            if sigma_true is None:
+                raise ValueError("slotine_li_oracle needs the true sigma at every sample")
+            return np.einsum("...ij,...j->...i", y, sigma_true) + kds
         tau = np.einsum("...ij,...j->...i", y, self.theta) + kds
         upd = self.T * self.gamma * np.einsum("...ij,...i->...j", y, s)
         theta = np.clip(self.theta + np.where(np.isfinite(upd), upd, 0.0), self.lo, self.hi)
@@ -96,4 +106,4 @@ class SlotineLi(Controller):
 
     @property
     def sigma_hat(self):
-        return self.theta
+        return None if self.oracle else self.theta

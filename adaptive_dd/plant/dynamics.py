@@ -45,6 +45,10 @@ def _mass_entries(q2: Array, sigma: Array) -> tuple[Array, Array, Array]:
     return sigma[..., 0] + j2 + 2.0 * rc, j2 + rc, j2 + 0.0 * rc
 
 
+mass_matrix_entries = _mass_entries
+"""``(M11, M12, M22)`` of eq. (3) from ``q2 (...)`` and ``sigma (..., 7)``, without checks (a kernel)."""
+
+
 def _coriolis_vector(q: Array, qd: Array, sigma: Array) -> Array:
     """C(q, qd) qd of eq. (4)."""
     rs = sigma[..., 2] * np.sin(q[..., 1])

@@ -1,0 +1,417 @@
+"""Compiled per-trial kernel of the online estimator (see :mod:`adaptive_dd.identification.online`).
+
+One call of :func:`online_step_trial` advances trial ``i`` of a batch of estimator
+states by one sample, in place: the M2 derivative filter bank (eq. 19/20, Tustin),
+the filtered regression (the paper's construction or the exact one), data
+selection, recursive least squares (eq. 14) on the chosen split, the change
+detector, covariance re-opening along the payload direction and projection of the
+model used for control. The Python path (:func:`~adaptive_dd.identification.online.online_step`)
+and the compiled closed loop call this same function; nothing here is duplicated.
+
+Configuration travels as two flat arrays (``cf`` floats, ``ci`` integers) whose
+slots are the module constants below, plus the filter matrices, the payload
+direction and the parameter groups of the split. This keeps the kernel a plain
+numba function of arrays (cacheable, callable from other compiled code).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+# integer slots of ci
+I_CONSTRUCTION = 0  # 0 paper, 1 exact
+I_SPLIT = 1  # 0 full, 1 "15", 2 "16"
+I_ALIGN = 2
+I_SELECT = 3  # data selection on/off
+I_SEL_MEMORY = 4  # samples
+I_TAINT = 5  # samples a non-finite input taints the filtered equations
+I_DETECT = 6
+I_WARMUP = 7  # samples
+I_MIN_LEARNED = 8
+I_HOLDOFF = 9
+I_RESUME = 10
+I_FREEZE = 11
+I_REOPEN_AGAIN = 12
+I_PROJECT = 13  # 0 none, 1 the control model only, 2 the estimator state too
+N_CI = 14
+
+# float slots of cf
+F_LAM0 = 0
+F_MU = 1
+F_CAP0 = 2  # trace cap of the covariance block of group 0 (F_CAP1: group 1); <= 0: none
+F_SEL_THRESHOLD = 3
+F_ALPHA_SHORT = 4
+F_ALPHA_LONG = 5
+F_THRESHOLD2 = 6
+F_P_MASS = 7
+F_P_J2 = 8
+F_J_MIN = 9
+F_MARGIN = 10
+F_R_MIN = 11
+F_CAP1 = 12
+F_SLOW_FACTOR = 13  # threshold2 multiplier while the other joint is slow
+N_CF = 14
+
+# columns of the per-trial integer state `cnt`
+C_STARTED = 0
+C_SINCE_BAD = 1
+C_SINCE_SLOW1 = 2
+C_SINCE_SLOW2 = 3
+C_SKIPPED = 4
+C_LEARNED1 = 5
+C_LEARNED2 = 6
+C_SINCE_ALARM = 7
+C_REOPEN_AT = 8
+C_ALARMS = 9
+C_K = 10
+N_CNT = 11
+
+BIG = 1 << 40
+
+
+@njit(cache=True)
+def _channels(cons, q, qd, tau, u):  # pragma: no cover - compiled
+    """Raw channels of one sample into ``u``; returns their number."""
+    if cons == 1:
+        c2, s2 = np.cos(q[1]), np.sin(q[1])
+        u[0], u[1] = qd[0], qd[1]
+        u[2] = c2 * (2.0 * qd[0] + qd[1])
+        u[3] = c2 * qd[0]
+        u[4] = s2 * qd[0] * (qd[0] + qd[1])
+        u[5], u[6] = np.sign(qd[0]), np.sign(qd[1])
+        u[7], u[8] = tau[0], tau[1]
+        return 9
+    u[0], u[1], u[2], u[3] = q[0], q[1], qd[0], qd[1]
+    u[4], u[5] = np.sign(qd[0]), np.sign(qd[1])
+    u[6], u[7] = tau[0], tau[1]
+    return 8
+
+
+@njit(cache=True)
+def _assemble(cons, f, phi, y):  # pragma: no cover - compiled
+    """Regression ``y = phi sigma`` (2 x 7) from filtered channels ``f (n_ch, 2)`` = [G0, G1]."""
+    for r in range(2):
+        for j in range(7):
+            phi[r, j] = 0.0
+    if cons == 1:
+        phi[0, 0] = f[0, 1]
+        phi[0, 1] = f[0, 1] + f[1, 1]
+        phi[1, 1] = phi[0, 1]
+        phi[0, 2] = f[2, 1]
+        phi[1, 2] = f[3, 1] + f[4, 0]
+        phi[0, 3] = f[0, 0]
+        phi[1, 4] = f[1, 0]
+        phi[0, 5] = f[5, 0]
+        phi[1, 6] = f[6, 0]
+        y[0], y[1] = f[7, 0], f[8, 0]
+        return
+    q2 = f[1, 0]
+    v1, v2 = f[2, 0], f[3, 0]
+    a1, a2 = f[2, 1], f[3, 1]
+    c2, s2 = np.cos(q2), np.sin(q2)
+    phi[0, 0] = a1
+    phi[0, 1] = a1 + a2
+    phi[1, 1] = a1 + a2
+    phi[0, 2] = c2 * (2.0 * a1 + a2) - s2 * (2.0 * v1 * v2 + v2 * v2)
+    phi[1, 2] = c2 * a1 + s2 * v1 * v1
+    phi[0, 3] = v1
+    phi[1, 4] = v2
+    phi[0, 5] = f[4, 0]
+    phi[1, 6] = f[5, 0]
+    y[0], y[1] = f[6, 0], f[7, 0]
+
+
+@njit(cache=True)
+def _filter(xf, u, n_ch, A, B, C, D, f):  # pragma: no cover - compiled
+    """One sample of the filter bank on n_ch channels; outputs into f (n_ch, n_out)."""
+    order = A.shape[0]
+    n_out = C.shape[0]
+    tmp = np.empty(order)
+    for c in range(n_ch):
+        for o in range(n_out):
+            acc = D[o] * u[c]
+            for m in range(order):
+                acc += C[o, m] * xf[c, m]
+            f[c, o] = acc
+        for m in range(order):
+            acc = B[m] * u[c]
+            for n in range(order):
+                acc += A[m, n] * xf[c, n]
+            tmp[m] = acc
+        for m in range(order):
+            xf[c, m] = tmp[m]
+
+
+@njit(cache=True)
+def _rls_update(theta, P, lam, stage, phi, y, group, g, cf, forget):  # pragma: no cover
+    """Eq. (14) for one scalar equation on parameter group g; returns the prior error.
+
+    The same arithmetic as :func:`~adaptive_dd.identification.rls.rls_step`; P is kept
+    block diagonal over the groups, so the update touches group g's block only.
+    A non-finite equation or a non-positive denominator leaves everything unchanged
+    and returns NaN.
+    """
+    n = theta.shape[0]
+    lam_prev = lam[stage]
+    lam_new = (1.0 - cf[F_MU]) * lam_prev + cf[F_MU] if forget else lam_prev
+    lam_eff = lam_new if forget else 1.0
+    pphi = np.zeros(n)
+    eps = y
+    for i in range(n):
+        if group[i] != g:
+            continue
+        eps -= phi[i] * theta[i]
+        acc = 0.0
+        for j in range(n):
+            if group[j] == g:
+                acc += P[i, j] * phi[j]
+        pphi[i] = acc
+    den = lam_eff
+    for i in range(n):
+        den += phi[i] * pphi[i] if group[i] == g else 0.0
+    if not (np.isfinite(eps) and np.isfinite(den) and den > 0.0):
+        return np.nan
+    tr = 0.0
+    for i in range(n):
+        if group[i] != g:
+            continue
+        gain = pphi[i] / den
+        theta[i] += gain * eps
+        for j in range(n):
+            if group[j] == g:
+                P[i, j] = (P[i, j] - gain * pphi[j]) / lam_eff
+        tr += P[i, i]
+    for i in range(n):  # keep P symmetric
+        for j in range(i + 1, n):
+            if group[i] == g and group[j] == g:
+                s = 0.5 * (P[i, j] + P[j, i])
+                P[i, j] = s
+                P[j, i] = s
+    cap = cf[F_CAP1] if g == 1 else cf[F_CAP0]
+    if cap > 0.0 and tr > cap:
+        scale = cap / tr
+        for i in range(n):
+            for j in range(n):
+                if group[i] == g and group[j] == g:
+                    P[i, j] *= scale
+    lam[stage] = lam_new
+    return eps
+
+
+@njit(cache=True)
+def _reopen(P, group, d, cf):  # pragma: no cover - compiled
+    """Clear the inertial covariance (J1, J2, r) and open it along the payload direction d.
+
+    Per parameter group, so a split's covariance stays block diagonal.
+    """
+    n = P.shape[0]
+    for i in range(3):
+        for j in range(n):
+            P[i, j] = 0.0
+            P[j, i] = 0.0
+    for i in range(3):
+        for j in range(3):
+            if group[i] == group[j]:
+                P[i, j] += cf[F_P_MASS] * d[i] * d[j]
+    P[1, 1] += cf[F_P_J2]
+
+
+@njit(cache=True)
+def _project(src, dst, cf):  # pragma: no cover - compiled
+    """Nearest physically consistent sigma (as :func:`adaptive_dd.plant.project_sigma`)."""
+    for j in range(7):
+        dst[j] = src[j]
+    dst[0] = max(dst[0], cf[F_J_MIN])
+    dst[1] = max(dst[1], cf[F_J_MIN])
+    for j in range(3, 7):
+        dst[j] = max(dst[j], 0.0)
+    r_max = np.sqrt((1.0 - cf[F_MARGIN]) * dst[0] * dst[1])
+    dst[2] = min(max(dst[2], cf[F_R_MIN]), r_max)
+
+
+@njit(cache=True)
+def _regress(i, xf, u_last, cnt, tau_prev, q, qd, tau, ci, A, B, C, D, phi, y):  # pragma: no cover
+    """Filtered regression of trial i's sample into (phi, y); NaN while a bad input taints it."""
+    cons = ci[I_CONSTRUCTION]
+    u = np.empty(9)
+    t_used = np.empty(2)
+    for j in range(2):
+        if ci[I_ALIGN] == 1:
+            prev = tau[j] if cnt[i, C_STARTED] == 0 else tau_prev[i, j]
+            t_used[j] = 0.5 * (tau[j] + prev)
+            tau_prev[i, j] = tau[j]
+        else:
+            t_used[j] = tau[j]
+    n_ch = _channels(cons, q, qd, t_used, u)
+    bad = False
+    for c in range(n_ch):
+        if not np.isfinite(u[c]):
+            bad = True
+    if cnt[i, C_STARTED] == 0:  # filters start in the steady state of the first sample
+        xs0 = np.linalg.solve(np.eye(A.shape[0]) - A, B)
+        for c in range(n_ch):
+            u_last[i, c] = u[c] if np.isfinite(u[c]) else 0.0
+            for m in range(A.shape[0]):
+                xf[i, c, m] = u_last[i, c] * xs0[m]
+        cnt[i, C_SINCE_BAD] = BIG
+        cnt[i, C_STARTED] = 1
+    if bad:  # hold the last finite sample
+        for c in range(n_ch):
+            u[c] = u_last[i, c]
+        cnt[i, C_SINCE_BAD] = 0
+    else:
+        for c in range(n_ch):
+            u_last[i, c] = u[c]
+        cnt[i, C_SINCE_BAD] = min(cnt[i, C_SINCE_BAD] + 1, BIG)
+    f = np.empty((n_ch, C.shape[0]))
+    _filter(xf[i], u, n_ch, A, B, C, D, f)
+    _assemble(cons, f, phi, y)
+    if cnt[i, C_SINCE_BAD] <= ci[I_TAINT]:
+        phi[:, :] = np.nan
+        y[:] = np.nan
+
+
+@njit(cache=True)
+def _detect(i, eps, act, short, long, cnt, ci, cf):  # pragma: no cover - compiled
+    """Update the detector statistics of trial i; return True on an alarm.
+
+    The short average follows every usable prior error; the long-run level learns
+    only while both joints move, from ``resume`` samples after the last alarm on, starts anew (bias-corrected,
+    as an average of what it has seen) after each alarm, and an alarm needs
+    ``min_learned`` learned samples of that equation: an alarm cannot re-arm itself
+    on the transient it caused.
+    """
+    a_s, a_l = cf[F_ALPHA_SHORT], cf[F_ALPHA_LONG]
+    learn = cnt[i, C_SINCE_ALARM] >= ci[I_RESUME]
+    for j in range(2):
+        e = eps[j]
+        if not (act[j] and np.isfinite(e)):
+            continue
+        e2 = e * e
+        short[i, j] += a_s * (e2 - short[i, j])
+        if learn and act[1 - j]:
+            long[i, j] += a_l * (e2 - long[i, j])
+            cnt[i, C_LEARNED1 + j] += 1
+    if cnt[i, C_K] < ci[I_WARMUP] or cnt[i, C_SINCE_ALARM] <= ci[I_HOLDOFF]:
+        return False
+    alarm = False
+    for j in range(2):
+        n_l = cnt[i, C_LEARNED1 + j]
+        if n_l < ci[I_MIN_LEARNED]:
+            continue
+        level = long[i, j] / (1.0 - (1.0 - a_l) ** n_l)
+        # a joint that stops or reverses (stick-slip) disturbs the other joint's equation
+        # through the coupling for about the filters' memory: ask more of the evidence then
+        thr = cf[F_THRESHOLD2] if act[1 - j] else cf[F_THRESHOLD2] * cf[F_SLOW_FACTOR]
+        if short[i, j] > thr * level + 1e-300:
+            alarm = True
+    return alarm
+
+
+@njit(cache=True)
+def online_step_trial(
+    i, xf, u_last, cnt, tau_prev, theta, P, lam, short, long, sigma_model,
+    q, qd, tau, ci, cf, A, B, C, D, d, group, split_rows, eps_out,
+):  # pragma: no cover - compiled  # fmt: skip
+    """Advance trial i by one sample in place; return 1 on a change alarm, else 0.
+
+    ``q, qd (2,)`` measured at this sample, ``tau (2,)`` the torque applied over it.
+    ``split_rows (2,)``: the regressor row of the first and second stage (full: 0, 1).
+    The prior errors of the two equations go to ``eps_out (2,)`` (NaN when unused).
+    """
+    phi = np.empty((2, 7))
+    y = np.empty(2)
+    _regress(i, xf, u_last, cnt, tau_prev, q, qd, tau, ci, A, B, C, D, phi, y)
+    act = np.ones(2, dtype=np.bool_)
+    if ci[I_SELECT] == 1:
+        for j in range(2):
+            if abs(qd[j]) <= cf[F_SEL_THRESHOLD]:
+                cnt[i, C_SINCE_SLOW1 + j] = 0
+            else:
+                cnt[i, C_SINCE_SLOW1 + j] = min(cnt[i, C_SINCE_SLOW1 + j] + 1, BIG)
+            act[j] = cnt[i, C_SINCE_SLOW1 + j] > ci[I_SEL_MEMORY]
+    det_act = act.copy()
+    if ci[I_DETECT] == 1 and ci[I_REOPEN_AGAIN] == 0 and cnt[i, C_SINCE_ALARM] < ci[I_FREEZE]:
+        act[:] = False  # frozen after an alarm
+    th, Pi, li = theta[i], P[i], lam[i]
+    eps_out[:] = np.nan
+    skipped = False
+    split = ci[I_SPLIT]
+    for stage in range(2):
+        r = split_rows[stage]
+        g = 0 if split == 0 else stage
+        yr = y[r]
+        if split != 0 and stage == 1:  # cascade: remove the first stage's part
+            for j in range(7):
+                if group[j] != g:
+                    yr -= phi[r, j] * th[j]
+        if not act[r]:
+            continue
+        ph = np.zeros(7)
+        for j in range(7):
+            if group[j] == g:
+                ph[j] = phi[r, j]
+        forget = split != 0 or stage == 0
+        e = _rls_update(th, Pi, li, stage if split != 0 else 0, ph, yr, group, g, cf, forget)
+        eps_out[r] = e
+        if not np.isfinite(e):
+            skipped = True
+    if skipped:
+        cnt[i, C_SKIPPED] += 1
+    alarm = 0
+    if ci[I_DETECT] == 1:
+        if cnt[i, C_REOPEN_AT] == cnt[i, C_K]:
+            _reopen(Pi, group, d, cf)
+        if _detect(i, eps_out, det_act, short, long, cnt, ci, cf):
+            alarm = 1
+            _reopen(Pi, group, d, cf)
+            cnt[i, C_ALARMS] += 1
+            cnt[i, C_SINCE_ALARM] = 0
+            cnt[i, C_LEARNED1] = 0
+            cnt[i, C_LEARNED2] = 0
+            long[i, 0] = 0.0
+            long[i, 1] = 0.0
+            if ci[I_REOPEN_AGAIN] == 1:
+                cnt[i, C_REOPEN_AT] = cnt[i, C_K] + ci[I_FREEZE]
+        else:
+            cnt[i, C_SINCE_ALARM] = min(cnt[i, C_SINCE_ALARM] + 1, BIG)
+    if ci[I_PROJECT] == 2:
+        _project(th, th, cf)
+    if ci[I_PROJECT] >= 1:
+        _project(th, sigma_model[i], cf)
+    else:
+        for j in range(7):
+            sigma_model[i, j] = th[j]
+    cnt[i, C_K] += 1
+    return alarm
+
+
+@njit(cache=True)
+def online_step_batch(
+    xf, u_last, cnt, tau_prev, theta, P, lam, short, long, sigma_model,
+    q, qd, tau, ci, cf, A, B, C, D, d, group, split_rows, eps, alarm,
+):  # pragma: no cover - compiled  # fmt: skip
+    """:func:`online_step_trial` over every trial of the batch (``q, qd, tau (n, 2)``)."""
+    for i in range(q.shape[0]):
+        alarm[i] = online_step_trial(
+            i, xf, u_last, cnt, tau_prev, theta, P, lam, short, long, sigma_model,
+            q[i], qd[i], tau[i], ci, cf, A, B, C, D, d, group, split_rows, eps[i],
+        )  # fmt: skip
+
+
+@njit(cache=True)
+def online_run_trial(
+    i, xf, u_last, cnt, tau_prev, theta, P, lam, short, long, sigma_model,
+    q, qd, tau, ci, cf, A, B, C, D, d, group, split_rows,
+    theta_rec, model_rec, eps_rec, alarm_rec, lam_rec,
+):  # pragma: no cover - compiled  # fmt: skip
+    """Step trial i through a record ``q, qd, tau (N, 2)``, recording after every sample."""
+    for k in range(q.shape[0]):
+        alarm_rec[k] = online_step_trial(
+            i, xf, u_last, cnt, tau_prev, theta, P, lam, short, long, sigma_model,
+            q[k], qd[k], tau[k], ci, cf, A, B, C, D, d, group, split_rows, eps_rec[k],
+        )  # fmt: skip
+        theta_rec[k] = theta[i]
+        model_rec[k] = sigma_model[i]
+        lam_rec[k] = lam[i, 0]
