@@ -298,7 +298,7 @@ def _detect(i, eps, act, short, long, cnt, ci, cf):  # pragma: no cover - compil
     alarm = False
     for j in range(2):
         n_l = cnt[i, C_LEARNED1 + j]
-        if n_l < ci[I_MIN_LEARNED]:
+        if n_l < ci[I_MIN_LEARNED] or not act[j]:  # only an equation in use may alarm
             continue
         level = long[i, j] / (1.0 - (1.0 - a_l) ** n_l)
         # a joint that stops or reverses (stick-slip) disturbs the other joint's equation
@@ -331,6 +331,12 @@ def online_step_trial(
             else:
                 cnt[i, C_SINCE_SLOW1 + j] = min(cnt[i, C_SINCE_SLOW1 + j] + 1, BIG)
             act[j] = cnt[i, C_SINCE_SLOW1 + j] > ci[I_SEL_MEMORY]
+            if cnt[i, C_SINCE_SLOW1 + j] == ci[I_SEL_MEMORY] + 1:
+                # back in use after a slow phase: the short average must not carry the
+                # errors of the approach to it (it restarts at the long-run level)
+                n_l = cnt[i, C_LEARNED1 + j]
+                a_l = cf[F_ALPHA_LONG]
+                short[i, j] = long[i, j] / (1.0 - (1.0 - a_l) ** n_l) if n_l > 0 else 0.0
     det_act = act.copy()
     if ci[I_DETECT] == 1 and ci[I_REOPEN_AGAIN] == 0 and cnt[i, C_SINCE_ALARM] < ci[I_FREEZE]:
         act[:] = False  # frozen after an alarm
