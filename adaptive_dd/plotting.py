@@ -114,7 +114,7 @@ def plot_tracking_errors(res, path: str | Path, window: float = 0.05) -> Path:
         ok = ~run.failed
         if not ok.any():
             continue
-        e = np.sqrt(((res.q_d[None] - run.q[ok]) ** 2).sum(axis=-1))
+        e = run.e_norm[ok].astype(float)
         m = moving_rms(e, max(1, round(window / T))).mean(axis=0)
         ax.semilogy(res.t, np.maximum(m * 1e3, 1e-4), color=f"C{i}", lw=1.0, label=name)
     _mark_swaps(ax, res.t, res.mass)
@@ -139,9 +139,10 @@ def plot_benchmark_estimates(res, path: str | Path) -> Path:
     axes.flat[3].plot(res.t, res.mass, "k--", lw=1.5, label="true")
     axes.flat[3].set_ylabel("payload mass [kg]")
     for i, (name, run) in enumerate(res.runs.items()):
-        if run.sigma_hat is None or not (~run.failed).any():
+        kept = ~run.failed[: 0 if run.sigma_hat is None else run.sigma_hat.shape[0]]
+        if run.sigma_hat is None or not kept.any():
             continue
-        sh = run.sigma_hat[~run.failed].mean(axis=0)
+        sh = run.sigma_hat[kept].mean(axis=0)
         for ax, (k, _) in zip(axes.flat[:3], panels, strict=True):
             ax.plot(res.t, sh[:, k], color=f"C{i}", lw=1.0, label=name)
         axes.flat[3].plot(res.t, payload_mass_from_sigma(sh, TABLE1_SIGMA), color=f"C{i}", lw=1.0, label=name)

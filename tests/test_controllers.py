@@ -127,6 +127,7 @@ def test_adaptive_ct_learns_a_swap_and_boosts_only_after_an_alarm():
     assert err["a"] < 1.5 * err["o"]
     # the boost term is zero unless an alarm is recent
     q = np.zeros((2, 2))
+    ctrl.reset(2, 1e-3)
     assert np.all(ctrl.estimator.state.since_alarm * 1e-3 > ctrl.boost_duration)
     t0 = ctrl.command(q, q, q + 0.01, q, q)
     ctrl.estimator.state.cnt[:, 7] = 0  # pretend an alarm just happened

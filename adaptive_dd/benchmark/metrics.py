@@ -51,7 +51,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from adaptive_dd.benchmark.runner import BenchmarkResult
+from adaptive_dd.benchmark.runner import SETTLE, BenchmarkResult
+from adaptive_dd.benchmark.streaming import segment_bounds
 from adaptive_dd.plant.parameters import TABLE1_SIGMA, payload_mass_from_sigma
 
 __all__ = ["RECOVERY_BAND", "RECOVERY_DWELL", "RECOVERY_FLOOR", "compute_metrics", "moving_rms"]
@@ -59,7 +60,6 @@ __all__ = ["RECOVERY_BAND", "RECOVERY_DWELL", "RECOVERY_FLOOR", "compute_metrics
 RECOVERY_BAND = 1.5
 RECOVERY_FLOOR = 5e-5  # rad
 RECOVERY_DWELL = 0.5  # s
-SETTLE = 0.5  # s
 WINDOW = 0.05  # s
 FALSE_ALARM_WINDOW = 0.3  # s: an alarm later than this after every swap is a false alarm
 
@@ -93,58 +93,80 @@ def _mean(x: np.ndarray, ok: np.ndarray):
     return float(np.mean(v)) if v.size else None
 
 
+def per_seed_segment_metrics(res: BenchmarkResult, run) -> dict[str, np.ndarray]:
+    """Per seed and segment, ``(n_seeds, n_segments)`` arrays from the streamed sums (NaN: failed)."""
+    sc = res.scenario
+    T = sc.sample_period
+    start, end, settled = segment_bounds(sc.segments(), T, SETTLE)
+    n, n_set = (end - start).astype(float), (end - settled).astype(float)
+    acc = run.acc
+    out = {
+        "rms_error": np.sqrt(acc[..., 0] / n),
+        "rms_error_joint1": np.sqrt(acc[..., 1] / n),
+        "rms_error_joint2": np.sqrt(acc[..., 2] / n),
+        "max_error": acc[..., 3].copy(),
+        "rms_torque": np.sqrt(acc[..., 4] / n),
+        "saturation_fraction": acc[..., 5] / n,
+        "rms_error_settled": np.sqrt(acc[..., 6] / n_set),
+        "recovery_time": _recovery_times(run.e_norm, start, end, T),
+    }
+    if run.sigma_end is not None:
+        out["mass_estimate"] = payload_mass_from_sigma(run.sigma_end, TABLE1_SIGMA)
+    for v in out.values():
+        v[run.failed] = np.nan
+    return out
+
+
+def _recovery_times(e_norm: np.ndarray, start, end, T: float) -> np.ndarray:
+    """Recovery time after each swap (see the module docstring), ``(n_seeds, n_segments)``; NaN if none."""
+    smooth = moving_rms(e_norm.astype(float), max(1, round(WINDOW / T)))
+    out = np.full((e_norm.shape[0], len(start)), np.nan)
+    n1 = round(1.0 / T)
+    for s, (a, b) in enumerate(zip(start, end, strict=True)):
+        if a == 0:
+            continue
+        pre = smooth[:, max(0, a - n1) : a].max(axis=1)
+        post = smooth[:, max(a, b - n1) : b].max(axis=1)
+        band = np.maximum(RECOVERY_BAND * np.maximum(pre, post), RECOVERY_FLOOR)
+        out[:, s] = _settling_time(smooth[:, a:b] > band[:, None], round(RECOVERY_DWELL / T)) * T
+    return out
+
+
 def compute_metrics(res: BenchmarkResult) -> dict:
     """Metrics in the JSON layout of the README (``{"controllers": {NAME: {...}}}``)."""
     sc = res.scenario
-    T = sc.sample_period
     out = {}
     for name, run in res.runs.items():
         ok = ~run.failed
-        e = res.q_d[None] - run.q  # (S, N, 2)
-        en = np.sqrt((e**2).sum(axis=-1))  # (S, N)
-        smooth = moving_rms(en, max(1, round(WINDOW / T)))
+        m = per_seed_segment_metrics(res, run)
         segs = []
-        for start, end, m in sc.segments():
-            a, b = round(start / T), round(end / T)
-            es = en[:, a:b]
-            rec = None
-            if a > 0:
-                n1 = round(1.0 / T)
-                pre = smooth[:, max(0, a - n1) : a].max(axis=1)
-                post = smooth[:, max(a, b - n1) : b].max(axis=1)
-                band = np.maximum(RECOVERY_BAND * np.maximum(pre, post), RECOVERY_FLOOR)
-                rt = _settling_time(smooth[:, a:b] > band[:, None], round(RECOVERY_DWELL / T)) * T
-                rec = _mean(rt, ok)
-            mass_est = None
-            if run.sigma_hat is not None:
-                mass_est = _mean(payload_mass_from_sigma(run.sigma_hat[:, b - 1], TABLE1_SIGMA), ok)
-            a2 = min(b - 1, a + round(SETTLE / T))
+        for i, (start, end, mass) in enumerate(sc.segments()):
             delay = None
-            if run.alarm_times is not None and a > 0:
+            if run.alarm_times is not None and i > 0:
                 first = [min((x for x in tr if start <= x < end), default=np.nan) for tr in run.alarm_times]
                 delay = _mean(np.asarray(first) - start, ok)
             segs.append(
                 {
                     "start": start,
                     "end": end,
-                    "mass": m,
-                    "rms_error": _mean(np.sqrt((es**2).mean(axis=1)), ok),
-                    "rms_error_settled": _mean(np.sqrt((en[:, a2:b] ** 2).mean(axis=1)), ok),
+                    "mass": mass,
+                    "rms_error": _mean(m["rms_error"][:, i], ok),
+                    "rms_error_settled": _mean(m["rms_error_settled"][:, i], ok),
                     "detection_delay": delay,
-                    "rms_error_joint": [
-                        _mean(np.sqrt((e[:, a:b, j] ** 2).mean(axis=1)), ok) for j in range(2)
-                    ],
-                    "max_error": _mean(es.max(axis=1), ok),
-                    "recovery_time": rec,
-                    "rms_torque": _mean(np.sqrt((run.tau[:, a:b] ** 2).sum(axis=-1).mean(axis=1)), ok),
-                    "saturation_fraction": _mean(run.saturated[:, a:b].any(axis=-1).mean(axis=1), ok),
-                    "mass_estimate": mass_est,
+                    "rms_error_joint": [_mean(m[f"rms_error_joint{j}"][:, i], ok) for j in (1, 2)],
+                    "max_error": _mean(m["max_error"][:, i], ok),
+                    "recovery_time": _mean(m["recovery_time"][:, i], ok) if i > 0 else None,
+                    "rms_torque": _mean(m["rms_torque"][:, i], ok),
+                    "saturation_fraction": _mean(m["saturation_fraction"][:, i], ok),
+                    "mass_estimate": _mean(m["mass_estimate"][:, i], ok) if "mass_estimate" in m else None,
                 }
             )
+        total = np.sqrt(run.acc[..., 0].sum(axis=1) / sc.n_samples)
         out[name] = {
-            "rms_error": _mean(np.sqrt((en**2).mean(axis=1)), ok),
+            "rms_error": _mean(total, ok),
             "failed_trials": int(run.failed.sum()),
             "error": run.error or None,
+            "engine": run.engine,
             "segments": segs,
         }
     _add_seed_statistics(res, out)
@@ -181,15 +203,10 @@ def ratio_statistics(ratio: np.ndarray) -> dict | None:
 def _add_seed_statistics(res: BenchmarkResult, out: dict) -> None:
     """Per-seed lists, ratios to each controller's floor, false alarms and detection delays."""
     sc = res.scenario
-    T = sc.sample_period
     per_seed = {}
     for name, run in res.runs.items():
-        e2 = ((res.q_d[None] - run.q) ** 2).sum(axis=-1)
-        rms = np.array(
-            [np.sqrt(e2[:, round(a / T) : round(b / T)].mean(axis=1)) for a, b, _ in sc.segments()]
-        )
-        rms[:, run.failed] = np.nan
-        per_seed[name] = rms  # (n_segments, n_seeds)
+        rms = per_seed_segment_metrics(res, run)["rms_error"].T  # (n_segments, n_seeds)
+        per_seed[name] = rms
         for seg, r in zip(out[name]["segments"], rms, strict=True):
             seg["rms_error_per_seed"] = _seed_list(r, ~run.failed)
     for name, run in res.runs.items():

@@ -1,61 +1,87 @@
-"""The closed loop: every controller over every seed, as one vectorised batch.
+"""The closed loop: every controller over every seed, with metrics accumulated as the run streams.
 
-All ``n_controllers x n_seeds`` trials share one :class:`~adaptive_dd.plant.ArmSimulator`
-(the integrator is one compiled loop over the batch); trial ``(c, i)`` uses the
-noise of seed ``(seed, i)`` for every controller c (common random numbers), so
-controllers are compared on identical noise. A trial that diverges (non-finite,
-runaway speed or tracking error > ``MAX_ERROR``), or whose controller raises, is
-stopped and counted; the rest of the benchmark goes on.
+Trial ``(c, i)`` uses the noise of seed ``(scenario.seed, seed_indices[i])`` for every
+controller c (common random numbers), so controllers are compared on identical noise.
+Built-in controllers run on the compiled path (:mod:`adaptive_dd.benchmark.compiled`: the
+whole loop of a trial in one numba call, trials in parallel); any other controller runs on
+the Python path (one vectorised batch per controller, a Python call per sample). Both
+paths call the same compiled pieces and agree to rounding (a test holds them to 1e-12).
+
+Memory does not grow with seeds x samples beyond the error norm (float32, for recovery
+times): metrics are accumulated per trial and segment as the run goes
+(:mod:`~adaptive_dd.benchmark.streaming`), sensor noise is drawn in blocks, and full
+trajectories are kept for the first ``keep_trajectories`` seeds only (for the figures).
+
+A trial that diverges (non-finite, runaway speed or tracking error > ``MAX_ERROR``) is
+stopped and counted; a controller that raises (at reset, command or observe) or returns
+a torque of the wrong shape fails its own trials with the message recorded, and the rest
+of the benchmark goes on.
 """
 
 from __future__ import annotations
 
 import time
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import NDArray
 
 from adaptive_dd.benchmark.scenario import Scenario
+from adaptive_dd.benchmark.streaming import N_ACC, accumulate_batch, segment_bounds
 from adaptive_dd.controllers import Controller, Gains, make_controller
-from adaptive_dd.errors import SignalError
-from adaptive_dd.experiments import trial_rngs
-from adaptive_dd.plant.parameters import TABLE1_SIGMA
+from adaptive_dd.errors import ParameterError, SignalError
+from adaptive_dd.plant.parameters import TABLE1_SIGMA, payload_sigma_delta
 from adaptive_dd.plant.simulator import ArmSimulator, PayloadSchedule, SensorConfig
 
-__all__ = ["MAX_ERROR", "BenchmarkResult", "ControllerRun", "run_benchmark"]
+__all__ = ["ENGINES", "MAX_ERROR", "SETTLE", "BenchmarkResult", "ControllerRun", "run_benchmark"]
 
 Array = NDArray[np.float64]
 MAX_ERROR = 3.0
 """Tracking error [rad] beyond which a trial counts as diverged."""
+SETTLE = 0.5
+"""[s] left out at the start of each segment for ``rms_error_settled``."""
+ENGINES = ("auto", "python", "compiled")
+CHUNK = 1024
+"""Samples per block of drawn noise (and per call of the compiled loop)."""
 
 
 @dataclass
 class ControllerRun:
-    """One controller's trials; arrays are ``(n_seeds, n_samples, ...)``.
+    """One controller's trials.
 
     Attributes
     ----------
-    q : true joint angles [rad]
-    tau : applied torque [N m]
-    saturated : bool, a joint's command beyond its limit
-    sigma_hat : estimates (adaptive controllers) or None
+    name : str
+    acc : ndarray (n_seeds, n_segments, 7)
+        Streamed sums per trial and segment (:data:`~adaptive_dd.benchmark.streaming.ACC_FIELDS`).
+    e_norm : ndarray of float32 (n_seeds, n_samples)
+        Tracking error norm ``|q_d - q|`` of the true q [rad].
+    sigma_end : ndarray (n_seeds, n_segments, 7) or None
+        Estimate at the last sample of each segment (controllers with an estimate).
     failed : bool (n_seeds,); failed_at : sample index or -1
     error : message if the controller raised, else ""
     alarm_times : per trial, the times [s] a change detector fired (or None)
     floor : name of the controller this one is measured against (or None)
+    q, tau, saturated, sigma_hat : trajectories ``(n_kept, n_samples, ...)`` of the first
+        seeds (true q [rad], applied torque [N m], saturation, estimate), or None
+    engine : "python" or "compiled"
     """
 
     name: str
-    q: Array
-    tau: Array
-    saturated: NDArray[np.bool_]
-    sigma_hat: Array | None
+    acc: Array
+    e_norm: NDArray[np.float32]
+    sigma_end: Array | None
     failed: NDArray[np.bool_]
     failed_at: NDArray[np.int_]
     error: str = ""
     alarm_times: list | None = None
     floor: str | None = None
+    q: Array | None = None
+    tau: Array | None = None
+    saturated: NDArray[np.bool_] | None = None
+    sigma_hat: Array | None = None
+    engine: str = "python"
 
 
 @dataclass
@@ -69,12 +95,36 @@ class BenchmarkResult:
     mass: Array  # (n_samples,)
     runs: dict = field(default_factory=dict)
     wall_time: float = 0.0
+    seed_indices: tuple = ()
+
+
+def _trial_rngs(seed: int, indices: Sequence[int]) -> list[np.random.Generator]:
+    return [np.random.default_rng([int(seed), int(i)]) for i in indices]
+
+
+def _payload(scenario: Scenario) -> PayloadSchedule:
+    return PayloadSchedule(scenario.swap_times, scenario.swap_masses, radius=scenario.payload_radius)
+
+
+def _true_sigma(scenario: Scenario, t: Array) -> tuple[Array, Array]:
+    """True sigma and payload mass at every sample, as the simulator applies them."""
+    pay = _payload(scenario)
+    T = scenario.sample_period
+    k_sw = [int(np.ceil(at / T - 1e-9)) for at in scenario.swap_times]
+    masses = np.array([0.0, *scenario.swap_masses])
+    w = np.searchsorted(np.array(k_sw, dtype=np.int64), np.arange(t.size), side="right")
+    mass = masses[w]
+    return TABLE1_SIGMA + payload_sigma_delta(mass, pay.radius), mass
 
 
 def run_benchmark(
     scenario: Scenario,
     progress: bool = True,
     controllers: dict[str, Controller] | None = None,
+    *,
+    engine: str = "auto",
+    keep_trajectories: int = 3,
+    seed_indices: Sequence[int] | None = None,
 ) -> BenchmarkResult:
     """Run every controller of the scenario over all seeds.
 
@@ -84,26 +134,90 @@ def run_benchmark(
     progress : bool
         Show a progress bar.
     controllers : dict, optional
-        Controller objects by name, in place of ``make_controller(name)`` (for
-        custom gains or your own controller classes).
+        Controller objects by name, in place of ``make_controller(name)`` (for custom
+        gains or your own controller classes).
+    engine : {"auto", "python", "compiled"}
+        ``auto``: built-in controllers compiled, others in Python; ``python``: all in
+        Python; ``compiled``: an error if a controller cannot be compiled.
+    keep_trajectories : int
+        Seeds (the first ones) whose full trajectories are kept.
+    seed_indices : sequence of int, optional
+        Seed indices of the trials (default ``range(scenario.seeds)``): a block of seeds
+        run alone gives the same numbers as inside a full run.
     """
-    from tqdm.auto import tqdm
-
+    if engine not in ENGINES:
+        raise ParameterError(f"engine must be one of {ENGINES}, got {engine!r}")
     t0 = time.perf_counter()
     gains = Gains(scenario.bandwidth, scenario.damping)
     ctrls = controllers or {name: make_controller(name, gains) for name in scenario.controllers}
-    names = list(ctrls)
-    S, N, T = scenario.seeds, scenario.n_samples, scenario.sample_period
-    B = len(names) * S
+    idx = tuple(range(scenario.seeds)) if seed_indices is None else tuple(int(i) for i in seed_indices)
+    if not idx or min(idx) < 0:
+        raise ParameterError(f"seed_indices must be a non-empty list of indices >= 0, got {seed_indices}")
+    N, T = scenario.n_samples, scenario.sample_period
     t = np.arange(N) * T
     q_d, qd_d, qdd_d = scenario.reference.sample(t)
-    rngs = [g for _ in names for g in trial_rngs(scenario.seed, S)]
+    sigma_true, mass = _true_sigma(scenario, t)
+    res = BenchmarkResult(scenario, t, q_d, sigma_true, mass, seed_indices=idx)
+    from adaptive_dd.benchmark.compiled import compiled_spec
+
+    specs = {n: (compiled_spec(c, T) if engine != "python" else None) for n, c in ctrls.items()}
+    if engine == "compiled" and any(s is None for s in specs.values()):
+        names = [n for n, s in specs.items() if s is None]
+        raise ParameterError(f"engine='compiled': no compiled path for {names}; use engine='auto'")
+    ref = np.ascontiguousarray(np.concatenate((q_d, qd_d, qdd_d), axis=1))
+    bar = _progress(progress, len(ctrls) * N, scenario.name)
+    for name, ctrl in ctrls.items():
+        if specs[name] is not None:
+            from adaptive_dd.benchmark.compiled_runner import run_compiled
+
+            run = run_compiled(name, ctrl, specs[name], scenario, idx, ref, keep_trajectories, bar)
+        else:
+            run = _run_python(name, ctrl, scenario, idx, (q_d, qd_d, qdd_d), keep_trajectories, bar)
+        res.runs[name] = run
+    if bar is not None:
+        bar.close()
+    res.wall_time = time.perf_counter() - t0
+    return res
+
+
+def _progress(show: bool, total: int, name: str):
+    if not show:
+        return None
+    from tqdm.auto import tqdm
+
+    return tqdm(total=total, desc=f"benchmark {name}", unit="sample", mininterval=0.5, unit_scale=True)
+
+
+def _new_run(
+    name: str, ctrl, S: int, n_seg: int, N: int, keep: int, adaptive: bool, engine: str
+) -> ControllerRun:
+    K = min(keep, S)
+    return ControllerRun(
+        name=name,
+        acc=np.zeros((S, n_seg, N_ACC)),
+        e_norm=np.zeros((S, N), dtype=np.float32),
+        sigma_end=np.full((S, n_seg, 7), np.nan) if adaptive else None,
+        failed=np.zeros(S, dtype=bool),
+        failed_at=np.full(S, -1),
+        floor=getattr(ctrl, "floor", "ct_oracle"),
+        q=np.zeros((K, N, 2)),
+        tau=np.zeros((K, N, 2)),
+        saturated=np.zeros((K, N, 2), dtype=bool),
+        sigma_hat=np.full((K, N, 7), np.nan) if adaptive else None,
+        engine=engine,
+    )
+
+
+def _run_python(name, ctrl, scenario, idx, reference, keep, bar) -> ControllerRun:
+    """One controller's trials on the Python path (a vectorised batch, one call per sample)."""
+    S, N, T = len(idx), scenario.n_samples, scenario.sample_period
+    q_d, qd_d, qdd_d = reference
     sim = ArmSimulator(
-        B,
+        S,
         N,
-        rngs,
+        _trial_rngs(scenario.seed, idx),
         sigma0=TABLE1_SIGMA,
-        payload=PayloadSchedule(scenario.swap_times, scenario.swap_masses, radius=scenario.payload_radius),
+        payload=_payload(scenario),
         sample_period=T,
         substeps=scenario.substeps,
         sensor=SensorConfig(
@@ -112,75 +226,55 @@ def run_benchmark(
         q0=q_d[0],
         qd0=qd_d[0],
     )
-    slices = {n: slice(i * S, (i + 1) * S) for i, n in enumerate(names)}
-    errors = dict.fromkeys(names, "")
-    for n, c in ctrls.items():
-        try:
-            c.reset(S, T)
-        except Exception as exc:
-            errors[n] = f"{type(exc).__name__} in reset: {exc}"
-    q_rec = np.zeros((B, N, 2))
-    tau_rec = np.zeros((B, N, 2))
-    sat_rec = np.zeros((B, N, 2), dtype=bool)
-    sig_rec = {n: np.full((S, N, 7), np.nan) for n in names if not errors[n] and ctrls[n].adaptive}
-    sigma_true = np.zeros((N, 7))
-    mass = np.zeros(N)
-    tau = np.zeros((B, 2))
-    for k in tqdm(
-        range(N),
-        desc=f"benchmark {scenario.name}",
-        unit="sample",
-        disable=not progress,
-        mininterval=0.5,
-        unit_scale=True,
-    ):
+    error = ""
+    try:
+        ctrl.reset(S, T)
+        adaptive = ctrl.adaptive
+    except Exception as exc:  # contain any controller failure to its own trials
+        error, adaptive = f"{type(exc).__name__} in reset: {exc}", False
+    seg_start, seg_end, seg_settled = segment_bounds(scenario.segments(), T, SETTLE)
+    run = _new_run(name, ctrl, S, len(seg_start), N, keep, adaptive, "python")
+    K = run.q.shape[0]
+    seg = 0
+    for k in range(N):
         qm, qdm = sim.measure()
-        q_rec[:, k] = sim.q
-        sigma_true[k], mass[k] = sim.sigma[0], sim.mass[0]
-        for n in names:
-            sl = slices[n]
-            if errors[n]:
-                tau[sl] = np.nan  # stopped: the simulator marks the trials failed
-                continue
-            c = ctrls[n]
-            truth = {"sigma_true": sim.sigma[sl]} if c.needs_true_model else {}
+        err = q_d[k] - sim.q
+        if K:
+            run.q[:, k] = sim.q[:K]
+        tau = np.full((S, 2), np.nan)
+        if not error:
             try:
-                cmd = np.asarray(c.command(qm[sl], qdm[sl], q_d[k], qd_d[k], qdd_d[k], **truth), dtype=float)
+                truth = {"sigma_true": sim.sigma} if ctrl.needs_true_model else {}
+                cmd = np.asarray(ctrl.command(qm, qdm, q_d[k], qd_d[k], qdd_d[k], **truth), dtype=float)
                 if cmd.shape != (S, 2):
                     raise SignalError(f"command returned shape {cmd.shape}, expected ({S}, 2)")
-                tau[sl] = cmd
-            except Exception as exc:  # contain any controller failure to its own trials
-                errors[n] = f"{type(exc).__name__} in command at t = {t[k]:.3f} s: {exc}"
-                tau[sl] = np.nan
-        runaway = np.abs(sim.q - q_d[k]).max(axis=-1) > MAX_ERROR
-        tau[runaway] = np.nan
-        applied, sat = sim.step(tau)
-        tau_rec[:, k], sat_rec[:, k] = applied, sat
-        for n in names:
-            if errors[n]:
-                continue
-            sl = slices[n]
-            try:
-                ctrls[n].observe(qm[sl], qdm[sl], applied[sl])
-                if n in sig_rec:
-                    sig_rec[n][:, k] = ctrls[n].sigma_hat
+                tau = cmd
             except Exception as exc:
-                errors[n] = f"{type(exc).__name__} in observe at t = {t[k]:.3f} s: {exc}"
-    res = BenchmarkResult(scenario, t, q_d, sigma_true, mass)
-    for n in names:
-        sl = slices[n]
-        alarms = None if errors[n] else ctrls[n].alarm_times
-        res.runs[n] = ControllerRun(
-            n,
-            q_rec[sl],
-            tau_rec[sl],
-            sat_rec[sl],
-            sig_rec.get(n),
-            sim.failed[sl].copy(),
-            sim.failed_at[sl].copy(),
-            errors[n],
-            alarms,
-            getattr(ctrls[n], "floor", "ct_oracle"),
-        )
-    res.wall_time = time.perf_counter() - t0
-    return res
+                error = f"{type(exc).__name__} in command at t = {k * T:.3f} s: {exc}"
+        tau = np.where((np.abs(err).max(axis=-1) > MAX_ERROR)[:, None], np.nan, tau)
+        applied, sat = sim.step(tau)
+        accumulate_batch(run.acc, run.e_norm, k, seg_start, seg_settled, err, applied, sat)
+        if K:
+            run.tau[:, k], run.saturated[:, k] = applied[:K], sat[:K]
+        if not error:
+            try:
+                ctrl.observe(qm, qdm, applied)
+                if adaptive:
+                    est = np.asarray(ctrl.sigma_hat)
+                    if K:
+                        run.sigma_hat[:, k] = est[:K]
+                    while seg + 1 < len(seg_end) and k >= seg_end[seg]:
+                        seg += 1
+                    if k == seg_end[seg] - 1:
+                        run.sigma_end[:, seg] = est
+            except Exception as exc:
+                error = f"{type(exc).__name__} in observe at t = {k * T:.3f} s: {exc}"
+        if bar is not None and k % 1000 == 999:
+            bar.update(1000)
+    if bar is not None:
+        bar.update(N % 1000)
+    run.failed, run.failed_at, run.error = sim.failed.copy(), sim.failed_at.copy(), error
+    if error:
+        run.failed[:] = True
+    run.alarm_times = None if error else ctrl.alarm_times
+    return run

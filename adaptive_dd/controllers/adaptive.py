@@ -27,10 +27,10 @@ from numpy.typing import ArrayLike, NDArray
 
 from adaptive_dd.controllers.base import DEFAULT_GAINS, Controller, Gains
 from adaptive_dd.controllers.feedback import computed_torque_law
+from adaptive_dd.controllers.laws import boost_batch
 from adaptive_dd.errors import ParameterError
 from adaptive_dd.identification.estimators import PAPER_RLS
 from adaptive_dd.identification.online import OnlineConfig, OnlineEstimator
-from adaptive_dd.plant.dynamics import mass_matrix_entries
 from adaptive_dd.plant.parameters import TABLE1_SIGMA, validate_sigma
 
 __all__ = ["ADAPTIVE_ONLINE", "PAPER_ONLINE", "AdaptiveCT", "adaptive_ct", "adaptive_ct_paper"]
@@ -110,15 +110,15 @@ class AdaptiveCT(Controller):
         if self.boost_bandwidth is not None and self.boost_duration > 0:
             boosted = self.estimator.state.since_alarm * self.T < self.boost_duration
             if boosted.any():
-                tau = tau + boosted[:, None] * self._boost(q, qd, q_d, qd_d)
+                dkp, dkd = self.boost_gains
+                tau = boost_batch(tau, q, qd, q_d, qd_d, self.sigma_nominal, dkp, dkd, boosted)
         return tau
 
-    def _boost(self, q: Array, qd: Array, q_d: Array, qd_d: Array) -> Array:
-        """``M0(q) [(wb^2 - w^2) e + 2 zeta (wb - w) e_dot]``: the feedback raised to wb."""
+    @property
+    def boost_gains(self) -> tuple[float, float]:
+        """``(wb^2 - w^2, 2 zeta (wb - w))``: the feedback added during a boost, through M0(q)."""
         w, wb, z = self.gains.bandwidth, self.boost_bandwidth, self.gains.damping
-        v = (wb**2 - w**2) * (q_d - q) + 2.0 * z * (wb - w) * (qd_d - qd)
-        m11, m12, m22 = mass_matrix_entries(q[..., 1], self.sigma_nominal)
-        return np.stack((m11 * v[..., 0] + m12 * v[..., 1], m12 * v[..., 0] + m22 * v[..., 1]), axis=-1)
+        return wb**2 - w**2, 2.0 * z * (wb - w)
 
     def observe(self, q, qd, tau):
         self.estimator.update(q, qd, tau)

@@ -6,7 +6,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from adaptive_dd.controllers.base import DEFAULT_GAINS, Controller, Gains
-from adaptive_dd.plant.dynamics import _coriolis_vector, mass_matrix_entries
+from adaptive_dd.controllers.laws import ct_batch, pd_batch
 from adaptive_dd.plant.parameters import TABLE1_SIGMA, validate_sigma
 
 __all__ = ["PD", "ComputedTorque", "computed_torque_law"]
@@ -41,21 +41,7 @@ def computed_torque_law(
     "What the ratios mean"). With ``lam`` this law is Slotine-Li's with the true model,
     up to its ``K_D`` (``M(q) Kd`` here).
     """
-    e = q_d - q
-    v = qdd_d + kd * (qd_d - qd) + kp * e
-    m11, m12, m22 = mass_matrix_entries(q[..., 1], sigma)
-    mv = np.stack((m11 * v[..., 0] + m12 * v[..., 1], m12 * v[..., 0] + m22 * v[..., 1]), axis=-1)
-    if lam is None:
-        return mv + _coriolis_vector(q, qd, sigma) + sigma[..., 3:5] * qd + sigma[..., 5:7] * np.sign(qd_d)
-    w = qd_d + lam * e
-    return mv + coriolis_times(q, qd, w, sigma) + sigma[..., 3:5] * w + sigma[..., 5:7] * np.sign(w)
-
-
-def coriolis_times(q: Array, qd: Array, w: Array, sigma: Array) -> Array:
-    """``C(q, qd) w`` with C of eq. (4), shape ``(..., 2)``."""
-    rs = sigma[..., 2] * np.sin(q[..., 1])
-    qd1, qd2 = qd[..., 0], qd[..., 1]
-    return np.stack((-rs * (qd2 * w[..., 0] + (qd1 + qd2) * w[..., 1]), rs * qd1 * w[..., 0]), axis=-1)
+    return ct_batch(q, qd, q_d, qd_d, qdd_d, sigma, kp, kd, lam)
 
 
 class PD(Controller):
@@ -69,7 +55,7 @@ class PD(Controller):
         self.kp, self.kd = m0 * gains.kp, m0 * gains.kd
 
     def command(self, q, qd, q_d, qd_d, qdd_d, sigma_true=None):
-        return self.kp * (q_d - q) + self.kd * (qd_d - qd)
+        return pd_batch(q, qd, q_d, qd_d, self.kp, self.kd)
 
 
 class ComputedTorque(Controller):

@@ -25,6 +25,7 @@ from adaptive_dd.plant.parameters import (
     payload_sigma_delta,
     validate_sigma,
 )
+from adaptive_dd.plant.sampling import actuate_batch, measure_batch
 
 __all__ = [
     "ActuatorConfig",
@@ -79,15 +80,12 @@ class ActuatorConfig:
         return 2.0 * self._lim / 2**self.dac_bits
 
     def apply(self, tau_cmd: Array) -> tuple[Array, NDArray[np.bool_]]:
-        """Return the applied torque and a per-joint flag of saturation."""
-        lim = self._lim
-        sat = np.abs(tau_cmd) > lim
-        tau = np.clip(tau_cmd, -lim, lim) if self.saturate else tau_cmd
-        if self.quantize:
-            tau = np.round(tau / self._lsb) * self._lsb
-            if self.saturate:  # the top code of a two's-complement D/A is lim - lsb
-                tau = np.minimum(tau, lim - self._lsb)
-        return tau, sat
+        """Return the applied torque and a per-joint flag of saturation (``tau_cmd (n, 2)``)."""
+        cmd = np.ascontiguousarray(tau_cmd, dtype=float).reshape(-1, 2)
+        tau = np.empty_like(cmd)
+        sat = np.empty(cmd.shape, dtype=np.bool_)
+        actuate_batch(cmd, self._lim, self._lsb, self.saturate, self.quantize, tau, sat)
+        return tau.reshape(np.shape(tau_cmd)), sat.reshape(np.shape(tau_cmd))
 
 
 # --------------------------------------------------------------------- sensors
@@ -136,10 +134,19 @@ class SensorConfig:
         return np.sqrt(np.concatenate((self.position_variance, self.velocity_variance)))
 
     def measure(self, q: Array, qd: Array, noise: Array) -> tuple[Array, Array]:
-        """Measured ``(q, qd)`` from true values and standard normal ``noise (..., 4)``."""
-        qm = np.round(q / self.resolution) * self.resolution if self.quantize else q
-        e = noise * self.noise_std
-        return qm + e[..., :2], qd + e[..., 2:]
+        """Measured ``(q, qd)`` from true values ``(n, 2)`` and standard normal ``noise (n, 4)``."""
+        qm, qdm = np.empty_like(q), np.empty_like(qd)
+        measure_batch(
+            np.ascontiguousarray(q),
+            np.ascontiguousarray(qd),
+            np.ascontiguousarray(noise),
+            self.resolution,
+            self.noise_std,
+            self.quantize,
+            qm,
+            qdm,
+        )
+        return qm, qdm
 
 
 # -------------------------------------------------------------------- payloads

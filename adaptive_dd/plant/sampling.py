@@ -1,0 +1,57 @@
+"""Compiled actuator and sensor models of one sample (the D/A and encoder side of the plant).
+
+The only implementations: :class:`~adaptive_dd.plant.simulator.ActuatorConfig` and
+:class:`~adaptive_dd.plant.simulator.SensorConfig` call the batched wrappers, the compiled
+closed loop the per-trial functions.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+__all__ = ["actuate_trial", "measure_trial"]
+
+
+@njit(cache=True)
+def actuate_trial(tau_cmd, lim, lsb, saturate, quantize, out):  # pragma: no cover - compiled
+    """Applied torque ``out (2,)`` from the command; returns a bit mask of saturated joints.
+
+    Saturation at ``+-lim``; a D/A of step ``lsb`` whose top code is ``lim - lsb``.
+    """
+    mask = 0
+    for j in range(2):
+        t = tau_cmd[j]
+        if abs(t) > lim[j]:
+            mask |= 1 << j
+        if saturate:
+            t = min(max(t, -lim[j]), lim[j])
+        if quantize:
+            t = np.round(t / lsb[j]) * lsb[j]
+            if saturate:
+                t = min(t, lim[j] - lsb[j])
+        out[j] = t
+    return mask
+
+
+@njit(cache=True)
+def measure_trial(q, qd, noise, res, std, quantize, qm, qdm):  # pragma: no cover - compiled
+    """Measured ``qm, qdm (2,)``: encoder quantization of q, then additive noise ``noise (4,) * std``."""
+    for j in range(2):
+        p = np.round(q[j] / res[j]) * res[j] if quantize else q[j]
+        qm[j] = p + noise[j] * std[j]
+        qdm[j] = qd[j] + noise[2 + j] * std[2 + j]
+
+
+@njit(cache=True)
+def actuate_batch(tau_cmd, lim, lsb, saturate, quantize, out, sat):  # pragma: no cover - compiled
+    for i in range(tau_cmd.shape[0]):
+        m = actuate_trial(tau_cmd[i], lim, lsb, saturate, quantize, out[i])
+        sat[i, 0] = (m & 1) != 0
+        sat[i, 1] = (m & 2) != 0
+
+
+@njit(cache=True)
+def measure_batch(q, qd, noise, res, std, quantize, qm, qdm):  # pragma: no cover - compiled
+    for i in range(q.shape[0]):
+        measure_trial(q[i], qd[i], noise[i], res, std, quantize, qm[i], qdm[i])

@@ -1,0 +1,117 @@
+"""The closed-loop runner: compiled and Python paths agree, blocks of seeds, containment of
+controller failures, bounded trajectories."""
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from adaptive_dd.benchmark.metrics import compute_metrics
+from adaptive_dd.benchmark.runner import run_benchmark
+from adaptive_dd.benchmark.scenario import load_scenario
+from adaptive_dd.controllers import ComputedTorque, Controller
+from adaptive_dd.errors import ParameterError
+
+BUILTIN = ("pd", "ct_nominal", "ct_oracle", "ct_oracle_textbook", "adaptive_ct", "adaptive_ct_paper")
+
+
+@pytest.fixture(scope="module")
+def swap_scenario():
+    return dataclasses.replace(
+        load_scenario(),
+        seeds=2,
+        duration=5.0,
+        swap_times=(2.5, 4.0),
+        swap_masses=(3.0, 1.0),
+        controllers=BUILTIN,
+    )
+
+
+@pytest.fixture(scope="module")
+def both_paths(swap_scenario):
+    return (
+        run_benchmark(swap_scenario, progress=False, engine="compiled"),
+        run_benchmark(swap_scenario, progress=False, engine="python"),
+    )
+
+
+def test_compiled_and_python_paths_agree_alarms_included(both_paths):
+    rc, rp = both_paths
+    for name in BUILTIN:
+        a, b = rc.runs[name], rp.runs[name]
+        assert (a.engine, b.engine) == ("compiled", "python")
+        np.testing.assert_allclose(a.acc, b.acc, rtol=1e-12, atol=1e-12)
+        np.testing.assert_allclose(a.q, b.q, rtol=0, atol=1e-12)
+        np.testing.assert_allclose(a.tau, b.tau, rtol=0, atol=1e-12)
+        np.testing.assert_array_equal(a.failed, b.failed)
+        if a.sigma_hat is not None:
+            np.testing.assert_allclose(a.sigma_hat, b.sigma_hat, rtol=1e-12, atol=1e-12)
+            np.testing.assert_allclose(a.sigma_end, b.sigma_end, rtol=1e-12, atol=1e-12)
+        assert a.alarm_times == b.alarm_times
+    alarms = rc.runs["adaptive_ct"].alarm_times
+    assert all(len(tr) == 2 for tr in alarms)  # both swaps detected, on both paths
+    mc, mp = compute_metrics(rc), compute_metrics(rp)
+    for name in BUILTIN:
+        for sa, sb in zip(
+            mc["controllers"][name]["segments"], mp["controllers"][name]["segments"], strict=True
+        ):
+            assert sa["rms_error"] == pytest.approx(sb["rms_error"], rel=1e-12)
+
+
+def test_a_block_of_seeds_equals_the_same_seeds_in_a_full_run(swap_scenario, both_paths):
+    rc, _ = both_paths
+    sc = dataclasses.replace(swap_scenario, controllers=("adaptive_ct",))
+    block = run_benchmark(sc, progress=False, seed_indices=[1])
+    np.testing.assert_array_equal(block.runs["adaptive_ct"].acc[0], rc.runs["adaptive_ct"].acc[1])
+
+
+def test_only_the_first_seeds_keep_trajectories(swap_scenario):
+    sc = dataclasses.replace(swap_scenario, seeds=3, controllers=("ct_oracle",))
+    run = run_benchmark(sc, progress=False, keep_trajectories=1).runs["ct_oracle"]
+    assert run.q.shape == (1, sc.n_samples, 2) and run.acc.shape[0] == 3
+    assert run.e_norm.dtype == np.float32 and run.e_norm.shape == (3, sc.n_samples)
+
+
+class Raises(Controller):
+    def __init__(self, where, exc=RuntimeError):
+        self.where, self.exc, self.name = where, exc, f"raises_{where}"
+
+    def reset(self, n, T):
+        super().reset(n, T)
+        if self.where == "reset":
+            raise self.exc("boom in reset")
+
+    def command(self, q, qd, q_d, qd_d, qdd_d, sigma_true=None):
+        if self.where == "command" and self.k > 100:
+            raise self.exc("boom in command")
+        if self.where == "shape":
+            return np.zeros(3)
+        self.k = getattr(self, "k", 0) + 1
+        return np.zeros_like(q)
+
+    def observe(self, q, qd, tau):
+        if self.where == "observe":
+            raise self.exc("boom in observe")
+
+
+@pytest.mark.parametrize("where", ["reset", "command", "observe", "shape"])
+def test_a_failing_controller_fails_only_its_own_trials(swap_scenario, where):
+    sc = dataclasses.replace(swap_scenario, duration=0.5, swap_times=(), swap_masses=())
+    ctrls = {"bad": Raises(where, AttributeError), "ct_oracle": ComputedTorque(oracle=True)}
+    res = run_benchmark(sc, progress=False, controllers=ctrls)
+    bad = res.runs["bad"]
+    assert bad.failed.all() and bad.error
+    assert (
+        ("shape" in bad.error) if where == "shape" else (where in bad.error and "AttributeError" in bad.error)
+    )
+    assert not res.runs["ct_oracle"].failed.any()
+    m = compute_metrics(res)["controllers"]
+    assert m["bad"]["failed_trials"] == sc.seeds and m["bad"]["error"]
+    assert m["ct_oracle"]["segments"][0]["rms_error"] < 1e-3
+
+
+def test_engine_choice_is_checked(swap_scenario):
+    with pytest.raises(ParameterError, match="engine"):
+        run_benchmark(swap_scenario, progress=False, engine="gpu")
+    with pytest.raises(ParameterError, match="no compiled path"):
+        run_benchmark(swap_scenario, progress=False, engine="compiled", controllers={"x": Raises("none")})
