@@ -12,7 +12,16 @@ from adaptive_dd.benchmark.scenario import load_scenario
 from adaptive_dd.controllers import ComputedTorque, Controller
 from adaptive_dd.errors import ParameterError
 
-BUILTIN = ("pd", "ct_nominal", "ct_oracle", "ct_oracle_textbook", "adaptive_ct", "adaptive_ct_paper")
+BUILTIN = (
+    "pd",
+    "ct_nominal",
+    "ct_oracle",
+    "ct_oracle_textbook",
+    "adaptive_ct",
+    "adaptive_ct_paper",
+    "slotine_li",
+    "slotine_li_oracle",
+)
 
 
 @pytest.fixture(scope="module")

@@ -1,8 +1,8 @@
 """The compiled closed loop: plant, sensors, estimator and control law of a trial in one numba call.
 
 For the built-in controllers (``pd``, ``ct_nominal``, ``ct_oracle``, ``ct_oracle_textbook``,
-``adaptive_ct``, ``adaptive_ct_paper``) :func:`run_trials_compiled` runs a block of samples
-of every trial, trials in parallel across cores (``numba.prange``), calling the same
+``adaptive_ct``, ``adaptive_ct_paper``, ``slotine_li``, ``slotine_li_oracle``)
+:func:`closed_loop_block` runs a block of samples of every trial, trials in parallel across cores (``numba.prange``), calling the same
 compiled pieces as the Python path: the actuator and sensor models
 (:mod:`adaptive_dd.plant.sampling`), the plant integrator, the control laws
 (:mod:`adaptive_dd.controllers.laws`), the online estimator
@@ -20,14 +20,14 @@ import numpy as np
 from numba import njit, prange
 
 from adaptive_dd.benchmark.streaming import accumulate_trial
-from adaptive_dd.controllers.laws import boost_trial, ct_trial, pd_trial
+from adaptive_dd.controllers.laws import boost_trial, ct_trial, pd_trial, slotine_li_trial
 from adaptive_dd.identification.online_kernel import C_SINCE_ALARM, online_step_trial
 from adaptive_dd.plant.integrator import _plant_step_kernel
 from adaptive_dd.plant.sampling import actuate_trial, measure_trial
 
 __all__ = ["LAW_ADAPTIVE", "LAW_CT", "LAW_CT_ORACLE", "LAW_PD", "CompiledSpec", "compiled_spec"]
 
-LAW_PD, LAW_CT, LAW_CT_ORACLE, LAW_ADAPTIVE = 0, 1, 2, 3
+LAW_PD, LAW_CT, LAW_CT_ORACLE, LAW_ADAPTIVE, LAW_SLOTINE, LAW_SLOTINE_ORACLE = 0, 1, 2, 3, 4, 5
 
 # slots of CompiledSpec.gains
 G_KP, G_KD, G_LAM, G_PD_KP1, G_PD_KP2, G_PD_KD1, G_PD_KD2, G_DKP, G_DKD, G_BOOST_N = range(10)
@@ -40,6 +40,7 @@ class CompiledSpec(NamedTuple):
     gains: np.ndarray  # (10,) see G_*
     sigma: np.ndarray  # (7,) fixed model (CT) or nominal model (adaptive: start and boost)
     online: object  # OnlineConfig or None
+    extra: np.ndarray = np.zeros(24)  # Slotine-Li: gamma (7), lo (7), hi (7), projection (3)
 
 
 def compiled_spec(ctrl, sample_period: float) -> CompiledSpec | None:
@@ -48,6 +49,7 @@ def compiled_spec(ctrl, sample_period: float) -> CompiledSpec | None:
 
     from adaptive_dd.controllers.adaptive import AdaptiveCT
     from adaptive_dd.controllers.feedback import PD, ComputedTorque
+    from adaptive_dd.controllers.slotine_li import PROJECTION, SlotineLi
 
     g = np.zeros(10)
     kind = type(ctrl)
@@ -58,6 +60,11 @@ def compiled_spec(ctrl, sample_period: float) -> CompiledSpec | None:
         gn = ctrl.gains
         g[G_KP], g[G_KD], g[G_LAM] = gn.kp, gn.kd, gn.lam if ctrl.reference else -1.0
         return CompiledSpec(LAW_CT_ORACLE if ctrl.oracle else LAW_CT, g, np.asarray(ctrl.sigma, float), None)
+    if kind is SlotineLi:
+        g[G_KP], g[G_KD], g[G_LAM] = 0.0, ctrl.kd, ctrl.lam
+        extra = np.concatenate((ctrl.gamma, ctrl.lo, ctrl.hi, PROJECTION))
+        law = LAW_SLOTINE_ORACLE if ctrl.oracle else LAW_SLOTINE
+        return CompiledSpec(law, g, np.asarray(ctrl.theta0, float), None, extra)
     if kind is AdaptiveCT:
         gn = ctrl.gains
         g[G_KP], g[G_KD], g[G_LAM] = gn.kp, gn.kd, gn.lam
@@ -73,9 +80,20 @@ def compiled_spec(ctrl, sample_period: float) -> CompiledSpec | None:
 
 @njit(cache=True)
 def _command(
-    law, g, sg_fixed, sg_true, sg_model, since_alarm, q, qd, q_d, qd_d, qdd_d, out
+    law, g, sg_fixed, sg_true, sg_model, since_alarm, q, qd, q_d, qd_d, qdd_d, out, extra, T
 ):  # pragma: no cover
-    if law == LAW_PD:
+    if law == LAW_SLOTINE:
+        slotine_li_trial(
+            q, qd, q_d, qd_d, qdd_d, sg_model, sg_fixed, g[G_LAM], g[G_KD], T,
+            extra[0:7], extra[7:14], extra[14:21], extra[21:24], out,
+        )  # fmt: skip
+    elif law == LAW_SLOTINE_ORACLE:
+        th = sg_true.copy()
+        slotine_li_trial(
+            q, qd, q_d, qd_d, qdd_d, th, sg_fixed, g[G_LAM], g[G_KD], T,
+            extra[0:0], extra[7:14], extra[14:21], extra[21:24], out,
+        )  # fmt: skip
+    elif law == LAW_PD:
         pd_trial(q, qd, q_d, qd_d, g[G_PD_KP1 : G_PD_KP2 + 1], g[G_PD_KD1 : G_PD_KD2 + 1], out)
     elif law == LAW_CT:
         ct_trial(q, qd, q_d, qd_d, qdd_d, sg_fixed, g[G_KP], g[G_KD], g[G_LAM], out)
@@ -90,7 +108,7 @@ def _command(
 @njit(cache=True, parallel=True)
 def closed_loop_block(
     k0, k1, noise, ref, sig_seg, swap_k, plant_f, plant_i, law, g, sg_fixed,
-    q, qd, stuck, slip, failed, failed_at,
+    extra, q, qd, stuck, slip, failed, failed_at,
     xf, u_last, cnt, tau_prev, theta, P, lam, short, long, sigma_model,
     ci, cf, A, B, C, D, d, group, rows,
     seg_start, seg_settled, acc, e_norm, sigma_end, seg_end, alarm_t, n_alarms,
@@ -107,6 +125,7 @@ def closed_loop_block(
     T, max_speed, max_error = plant_f[0], plant_f[1], plant_f[2]
     lim, lsb, res, std = plant_f[3:5], plant_f[5:7], plant_f[7:9], plant_f[9:13]
     adaptive = law == LAW_ADAPTIVE
+    estimates = adaptive or law == LAW_SLOTINE
     for i in prange(n):
         qm = np.empty(2)
         qdm = np.empty(2)
@@ -121,8 +140,8 @@ def closed_loop_block(
             measure_trial(q[i], qd[i], noise[i, k - k0], res, std, plant_i[3] == 1, qm, qdm)
             e1, e2 = ref[k, 0] - q[i, 0], ref[k, 1] - q[i, 1]
             _command(
-                law, g, sg_fixed, sg_true, sigma_model[i], cnt[i, C_SINCE_ALARM],
-                qm, qdm, ref[k, 0:2], ref[k, 2:4], ref[k, 4:6], cmd,
+                law, g, sg_fixed, sg_true, theta[i] if law == LAW_SLOTINE else sigma_model[i],
+                cnt[i, C_SINCE_ALARM], qm, qdm, ref[k, 0:2], ref[k, 2:4], ref[k, 4:6], cmd, extra, T,
             )  # fmt: skip
             bad = not (np.isfinite(cmd[0]) and np.isfinite(cmd[1]))
             if max(abs(e1), abs(e2)) > max_error:
@@ -156,12 +175,12 @@ def closed_loop_block(
                 if alarm == 1 and n_alarms[i] < alarm_t.shape[1]:
                     alarm_t[i, n_alarms[i]] = k * T
                     n_alarms[i] += 1
-                if k == seg_end[s] - 1:
-                    sigma_end[i, s] = theta[i]
+            if estimates and k == seg_end[s] - 1:
+                sigma_end[i, s] = theta[i]
             if i < rec_n:
                 q_rec[i, k, 0], q_rec[i, k, 1] = ref[k, 0] - e1, ref[k, 1] - e2
                 tau_rec[i, k, 0], tau_rec[i, k, 1] = tau[0], tau[1]
                 sat_rec[i, k, 0], sat_rec[i, k, 1] = (mask & 1) != 0, (mask & 2) != 0
-                if adaptive:
+                if estimates:
                     for j in range(7):
                         sig_rec[i, k, j] = theta[i, j]

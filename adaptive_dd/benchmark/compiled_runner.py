@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from adaptive_dd.benchmark.compiled import LAW_ADAPTIVE, CompiledSpec, closed_loop_block
+from adaptive_dd.benchmark.compiled import LAW_ADAPTIVE, LAW_SLOTINE, CompiledSpec, closed_loop_block
 from adaptive_dd.benchmark.runner import (
     CHUNK,
     MAX_ERROR,
@@ -29,8 +29,9 @@ def run_compiled(name, ctrl, spec: CompiledSpec, scenario, idx, ref, keep: int, 
     S, N, T = len(idx), scenario.n_samples, scenario.sample_period
     rngs = _trial_rngs(scenario.seed, idx)
     adaptive = spec.law == LAW_ADAPTIVE
+    estimates = adaptive or spec.law == LAW_SLOTINE
     seg_start, seg_end, seg_settled = segment_bounds(scenario.segments(), T, SETTLE)
-    run = _new_run(name, ctrl, S, len(seg_start), N, keep, adaptive, "compiled")
+    run = _new_run(name, ctrl, S, len(seg_start), N, keep, estimates, "compiled")
     K = run.q.shape[0]
     act, sens = (
         ActuatorConfig(),
@@ -50,14 +51,14 @@ def run_compiled(name, ctrl, spec: CompiledSpec, scenario, idx, ref, keep: int, 
     state = online_init(cfg, S, spec.sigma)
     alarm_t = np.zeros((S, MAX_ALARMS))
     n_alarms = np.zeros(S, dtype=np.int64)
-    sig_rec = run.sigma_hat if adaptive else np.zeros((0, N, 7))
-    sigma_end = run.sigma_end if adaptive else np.zeros((S, len(seg_start), 7))
+    sig_rec = run.sigma_hat if estimates else np.zeros((0, N, 7))
+    sigma_end = run.sigma_end if estimates else np.zeros((S, len(seg_start), 7))
     for k0 in range(0, N, CHUNK):
         k1 = min(N, k0 + CHUNK)
         noise = np.ascontiguousarray(np.stack([g.standard_normal((k1 - k0, 4)) for g in rngs]))
         closed_loop_block(
             k0, k1, noise, ref, sig_seg, swap_k, plant_f, plant_i, spec.law, spec.gains, spec.sigma,
-            q, qd, stuck, slip, run.failed, run.failed_at, *state, *cfg.packed,
+            spec.extra, q, qd, stuck, slip, run.failed, run.failed_at, *state, *cfg.packed,
             seg_start, seg_settled, run.acc, run.e_norm, sigma_end, seg_end, alarm_t, n_alarms,
             K, run.q, run.tau, run.saturated, sig_rec,
         )  # fmt: skip

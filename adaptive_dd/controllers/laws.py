@@ -11,7 +11,18 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-__all__ = ["boost_batch", "boost_trial", "ct_batch", "ct_trial", "pd_batch", "pd_trial"]
+from adaptive_dd.plant.sampling import project_trial
+
+__all__ = [
+    "boost_batch",
+    "boost_trial",
+    "ct_batch",
+    "ct_trial",
+    "pd_batch",
+    "pd_trial",
+    "slotine_li_batch",
+    "slotine_li_trial",
+]
 
 
 @njit(cache=True)
@@ -58,6 +69,68 @@ def boost_trial(q, qd, q_d, qd_d, sg0, dkp, dkd, out):  # pragma: no cover - com
     m11, m12, m22 = sg0[0] + sg0[1] + 2.0 * rc, sg0[1] + rc, sg0[1]
     out[0] += m11 * v1 + m12 * v2
     out[1] += m12 * v1 + m22 * v2
+
+
+@njit(cache=True)
+def slotine_li_trial(
+    q, qd, q_d, qd_d, qdd_d, theta, sg0, lam, kd, T, gamma, lo, hi, pj, out
+):  # pragma: no cover
+    """Slotine-Li (see :mod:`~adaptive_dd.controllers.slotine_li`) for one trial.
+
+    ``tau = Y(q, qd, qd_r, qdd_r) theta + kd M0(q) s`` into ``out``; then, if ``gamma`` is not
+    empty, ``theta += T Gamma Y^T s`` (a non-finite step is dropped), clipped to ``[lo, hi]``
+    and projected (``pj = (j_min, margin, r_min)``), in place.
+    """
+    e1, e2 = q_d[0] - q[0], q_d[1] - q[1]
+    ed1, ed2 = qd_d[0] - qd[0], qd_d[1] - qd[1]
+    s1, s2 = ed1 + lam * e1, ed2 + lam * e2
+    v1, v2 = qd_d[0] + lam * e1, qd_d[1] + lam * e2
+    a1, a2 = qdd_d[0] + lam * ed1, qdd_d[1] + lam * ed2
+    c2, sn2 = np.cos(q[1]), np.sin(q[1])
+    y = np.zeros((2, 7))
+    y[0, 0] = a1
+    y[0, 1] = a1 + a2
+    y[1, 1] = a1 + a2
+    y[0, 2] = c2 * (2.0 * a1 + a2) - sn2 * (qd[1] * v1 + (qd[0] + qd[1]) * v2)
+    y[1, 2] = c2 * a1 + sn2 * qd[0] * v1
+    y[0, 3] = v1
+    y[1, 4] = v2
+    y[0, 5] = np.sign(v1)
+    y[1, 6] = np.sign(v2)
+    rc = sg0[2] * c2
+    m11, m12, m22 = sg0[0] + sg0[1] + 2.0 * rc, sg0[1] + rc, sg0[1]
+    for r in range(2):
+        acc = 0.0
+        for j in range(7):
+            acc += y[r, j] * theta[j]
+        out[r] = acc
+    out[0] += kd * (m11 * s1 + m12 * s2)
+    out[1] += kd * (m12 * s1 + m22 * s2)
+    if gamma.shape[0] == 0:
+        return
+    for j in range(7):
+        upd = T * gamma[j] * (y[0, j] * s1 + y[1, j] * s2)
+        th = theta[j] + (upd if np.isfinite(upd) else 0.0)
+        theta[j] = min(max(th, lo[j]), hi[j])
+    project_trial(theta, theta, pj[0], pj[1], pj[2])
+
+
+@njit(cache=True)
+def _slotine_loop(
+    q, qd, q_d, qd_d, qdd_d, theta, sg0, lam, kd, T, gamma, lo, hi, pj, out
+):  # pragma: no cover
+    for i in range(q.shape[0]):
+        slotine_li_trial(
+            q[i], qd[i], q_d[i], qd_d[i], qdd_d[i], theta[i], sg0, lam, kd, T, gamma, lo, hi, pj, out[i]
+        )
+
+
+def slotine_li_batch(q, qd, q_d, qd_d, qdd_d, theta, sg0, lam, kd, T, gamma, lo, hi, pj):
+    """:func:`slotine_li_trial` over a batch ``(n, 2)``; ``theta (n, 7)`` updated in place."""
+    shape, (a, b, c, d, e) = _flat(q, qd, q_d, qd_d, qdd_d)
+    out = np.empty((a.shape[0], 2))
+    _slotine_loop(a, b, c, d, e, theta, sg0, float(lam), float(kd), float(T), gamma, lo, hi, pj, out)
+    return out.reshape(*shape, 2)
 
 
 @njit(cache=True)

@@ -29,11 +29,15 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from adaptive_dd.controllers.base import DEFAULT_GAINS, Controller, Gains
+from adaptive_dd.controllers.laws import slotine_li_batch
 from adaptive_dd.errors import ParameterError
-from adaptive_dd.plant.dynamics import _mass_entries, _regressor_reference
-from adaptive_dd.plant.parameters import TABLE1_SIGMA, payload_sigma_delta, project_sigma, validate_sigma
+from adaptive_dd.plant.parameters import R_MIN, TABLE1_SIGMA, payload_sigma_delta, validate_sigma
 
 __all__ = ["SlotineLi"]
+
+NO_ADAPTATION = np.zeros(0)
+PROJECTION = np.array([1e-3, 0.05, R_MIN])
+"""``(j_min, margin, r_min)`` of :func:`adaptive_dd.plant.project_sigma`, for the compiled law."""
 
 DEFAULT_GAMMA = np.array([0.05, 0.05, 0.05, 0.5, 0.1, 0.5, 0.1])
 """Adaptation gains Gamma (diagonal), per parameter."""
@@ -88,21 +92,16 @@ class SlotineLi(Controller):
         self.theta = np.broadcast_to(self.theta0, (n_trials, 7)).copy()
 
     def command(self, q, qd, q_d, qd_d, qdd_d, sigma_true=None):
-        lam = self.lam
-        e, e_dot = q_d - q, qd_d - qd
-        s = e_dot + lam * e
-        y = _regressor_reference(q, qd, qd_d + lam * e, qdd_d + lam * e_dot)
-        m11, m12, m22 = _mass_entries(q[..., 1], self.theta0)
-        kds = self.kd * np.stack((m11 * s[..., 0] + m12 * s[..., 1], m12 * s[..., 0] + m22 * s[..., 1]), -1)
         if self.oracle:
             if sigma_true is None:
                 raise ValueError("slotine_li_oracle needs the true sigma at every sample")
-            return np.einsum("...ij,...j->...i", y, sigma_true) + kds
-        tau = np.einsum("...ij,...j->...i", y, self.theta) + kds
-        upd = self.T * self.gamma * np.einsum("...ij,...i->...j", y, s)
-        theta = np.clip(self.theta + np.where(np.isfinite(upd), upd, 0.0), self.lo, self.hi)
-        self.theta = project_sigma(theta)
-        return tau
+            theta, gamma = np.array(sigma_true, dtype=float), NO_ADAPTATION
+        else:
+            theta, gamma = self.theta, self.gamma
+        return slotine_li_batch(
+            q, qd, q_d, qd_d, qdd_d, theta, self.theta0, self.lam, self.kd, self.T, gamma, self.lo, self.hi,
+            PROJECTION,
+        )  # fmt: skip
 
     @property
     def sigma_hat(self):

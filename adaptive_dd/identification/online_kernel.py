@@ -19,6 +19,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from adaptive_dd.plant.sampling import project_trial
+
 # integer slots of ci
 I_CONSTRUCTION = 0  # 0 paper, 1 exact
 I_SPLIT = 1  # 0 full, 1 "15", 2 "16"
@@ -220,14 +222,7 @@ def _reopen(P, group, d, cf):  # pragma: no cover - compiled
 @njit(cache=True)
 def _project(src, dst, cf):  # pragma: no cover - compiled
     """Nearest physically consistent sigma (as :func:`adaptive_dd.plant.project_sigma`)."""
-    for j in range(7):
-        dst[j] = src[j]
-    dst[0] = max(dst[0], cf[F_J_MIN])
-    dst[1] = max(dst[1], cf[F_J_MIN])
-    for j in range(3, 7):
-        dst[j] = max(dst[j], 0.0)
-    r_max = np.sqrt((1.0 - cf[F_MARGIN]) * dst[0] * dst[1])
-    dst[2] = min(max(dst[2], cf[F_R_MIN]), r_max)
+    project_trial(src, dst, cf[F_J_MIN], cf[F_MARGIN], cf[F_R_MIN])
 
 
 @njit(cache=True)

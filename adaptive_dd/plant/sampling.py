@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-__all__ = ["actuate_trial", "measure_trial"]
+__all__ = ["actuate_trial", "measure_trial", "project_trial"]
 
 
 @njit(cache=True)
@@ -55,3 +55,16 @@ def actuate_batch(tau_cmd, lim, lsb, saturate, quantize, out, sat):  # pragma: n
 def measure_batch(q, qd, noise, res, std, quantize, qm, qdm):  # pragma: no cover - compiled
     for i in range(q.shape[0]):
         measure_trial(q[i], qd[i], noise[i], res, std, quantize, qm[i], qdm[i])
+
+
+@njit(cache=True)
+def project_trial(src, dst, j_min, margin, r_min):  # pragma: no cover - compiled
+    """Nearest physically consistent sigma (as :func:`adaptive_dd.plant.project_sigma`) into ``dst``."""
+    for j in range(7):
+        dst[j] = src[j]
+    dst[0] = max(dst[0], j_min)
+    dst[1] = max(dst[1], j_min)
+    for j in range(3, 7):
+        dst[j] = max(dst[j], 0.0)
+    r_max = np.sqrt((1.0 - margin) * dst[0] * dst[1])
+    dst[2] = min(max(dst[2], r_min), r_max)
