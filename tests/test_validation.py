@@ -130,11 +130,11 @@ def scenario_dicts(draw):
         data.setdefault(table, {})[key] = draw(ANY)
     if draw(st.booleans()):
         n = draw(st.integers(0, 4))
-        times = draw(st.lists(st.floats(-1, 3, allow_nan=True), min_size=n, max_size=n))
+        times = draw(st.lists(st.one_of(st.floats(-1, 3), st.just(math.nan)), min_size=n, max_size=n))
         masses = draw(st.lists(st.floats(-1, 60), min_size=n, max_size=n))
         data["payload"] = [{"at": t, "mass": m} for t, m in zip(times, masses, strict=True)]
     if draw(st.booleans()):
-        data["reference"]["joint1"]["frequency"] = [draw(st.floats(-10, 2000, allow_nan=True))]
+        data["reference"]["joint1"]["frequency"] = [draw(st.one_of(st.floats(-10, 2000), st.just(math.nan)))]
     return data
 
 
