@@ -21,7 +21,7 @@ Every key is optional; the value after ``=`` below is the default that is used
 
     [reference]                # q_d(t) = offset + w(t) sum_k a_k sin(2 pi f_k t + phase_k);
                                # default: the shipped payload_swap scenario's reference
-    ramp = 0.0                 # s, w rises smoothly from 0 to 1 over this time, 0 <= ramp <= duration
+    ramp = 0.0                 # s, w rises smoothly from 0 to 1 over this time, 0 <= ramp <= 1e6
     joint1 = { offset = 0.0, amplitude = [0.5, 0.2], frequency = [0.4, 1.1], phase = [0.0, 0.0] }
     joint2 = { offset = 0.0, amplitude = [0.6, 0.2], frequency = [0.5, 1.3], phase = [0.0, 0.0] }
                                # rad, Hz, rad; |offset| + sum |a_k| <= 10 rad; 0 < f_k <= 0.1 / T;
@@ -297,23 +297,13 @@ def default_scenario_path() -> Path:
 
 def read_toml(path: Path) -> dict:
     """Parse a TOML file read as UTF-8 (a BOM is allowed); errors name the file and position."""
-    src = str(path)
-    try:
-        raw = path.read_bytes()
-    except OSError as exc:
-        raise ScenarioError(f"{src}: cannot read: {exc.strerror or exc}") from None
-    bom = 3 if raw.startswith(b"\xef\xbb\xbf") else 0
-    try:
-        text = raw[bom:].decode("utf-8")
-    except UnicodeDecodeError as exc:
-        raise ScenarioError(
-            f"{src}: not UTF-8 text: byte {raw[bom + exc.start]:#04x} at offset {bom + exc.start}; "
-            "save the file as UTF-8"
-        ) from None
+    from adaptive_dd.io import read_text
+
+    text = read_text(path, ScenarioError)
     try:
         return tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
-        raise ScenarioError(f"{src}: not valid TOML: {exc}") from None
+        raise ScenarioError(f"{path}: not valid TOML: {exc}") from None
 
 
 def load_scenario(path: str | Path | None = None) -> Scenario:
