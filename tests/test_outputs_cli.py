@@ -232,3 +232,26 @@ def test_identify_refuses_long_filters_and_too_few_equations(tmp_path, monkeypat
     assert main(["identify", str(p), "--out", str(tmp_path / "id")]) == 2
     err = capsys.readouterr().err
     assert "only 12 usable equations" in err and "at least 70" in err
+
+
+def test_plain_value_error_from_our_code_is_a_user_error(monkeypatch, capsys):
+    import adaptive_dd.cli as cli
+    from adaptive_dd.controllers import make_controller
+
+    monkeypatch.setattr(cli, "_cmd_validate", lambda args: make_controller("nope"))
+    assert main(["validate"]) == 2
+    assert "error: unknown controller 'nope'" in capsys.readouterr().err
+
+
+def test_large_run_prints_its_estimate_first(tiny, tmp_path, monkeypatch, capsys):
+    import adaptive_dd.benchmark.runner as runner
+    from adaptive_dd.benchmark.scenario import LIMITS
+
+    def interrupt(*a, **k):
+        raise KeyboardInterrupt
+
+    monkeypatch.setitem(LIMITS, "large_seconds", 0.0)
+    monkeypatch.setattr(runner, "run_benchmark", interrupt)
+    assert main(["benchmark", str(tiny), "--out", str(tmp_path / "o")]) == EXIT_INTERRUPTED
+    assert "estimate: 300 samples x 1 trials: about" in capsys.readouterr().err
+    assert list((tmp_path / "o").iterdir()) == []  # the staging folder is gone
