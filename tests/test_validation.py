@@ -192,3 +192,9 @@ def test_property_csv_valid_or_precise_error(tmp_path, header, rows, uniform):
         return
     assert rec.t.size >= 10 and rec.sample_period > 0
     assert all(map(math.isfinite, rec.q.ravel())) and all(map(math.isfinite, rec.tau.ravel()))
+
+
+def test_overflowing_sample_count_is_an_error_not_a_crash():
+    # found by the slow hypothesis profile: duration / T overflowed to inf
+    with pytest.raises(ScenarioError, match=r"run: too large: inf samples per trial"):
+        parse(BASE.replace("duration = 2.0", "duration = 1.797693134862316e+305"))

@@ -92,6 +92,12 @@ def scenario_errors(v: dict[str, Any]) -> list[str]:
             f"({v['duration']} s)"
         )
         T_ok = False
+    if d_ok and T_ok and v["duration"] / v["sample_period"] > 1e12:
+        e.append(
+            f"run: too large: {v['duration'] / v['sample_period']:.3g} samples per trial "
+            f"(run.duration / run.sample_period)"
+        )
+        d_ok = False
     s_ok = _num(e, "run.seeds", v["seeds"], 1, L["max_seeds"], integer=True)
     _num(e, "run.seed", v["seed"], 0, L["seed_bound"] - 1, integer=True)
     _num(e, "run.substeps", v["substeps"], 1, L["max_substeps"], integer=True)
