@@ -83,7 +83,7 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     n = round(args.duration / args.sample_period)
     est = run_estimate(n, args.seeds, 1)
     if est.bytes > LIMITS["max_bytes"] or est.seconds > LIMITS["max_seconds"]:
-        raise ParameterError(f"simulate: too large: {est}; reduce --duration or --seeds")
+        raise ParameterError(f"run too large: {est}; reduce --duration or --seeds")
     if est.large:
         print(f"estimate: {est}", file=sys.stderr)
     outputs = OutputSet(args.out)

@@ -58,7 +58,10 @@ def check_output_file(path: str | Path) -> Path:
     path = Path(path)
     if path.is_dir():
         raise OutputError(f"{path}: is a folder, expected a file name")
-    check_output_dir(path.parent)
+    try:
+        check_output_dir(path.parent)
+    except OutputError as exc:
+        raise OutputError(f"{path}: cannot write the file: {exc}") from None
     return path
 
 
