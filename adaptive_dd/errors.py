@@ -8,6 +8,7 @@ from __future__ import annotations
 
 __all__ = [
     "DataError",
+    "OutputError",
     "ParameterError",
     "ScenarioError",
     "SignalError",
@@ -28,3 +29,7 @@ class DataError(ValueError):
 
 class ScenarioError(ValueError):
     """A benchmark scenario (TOML) is invalid; names file, key and reason."""
+
+
+class OutputError(ValueError):
+    """An output folder or file cannot be created or written; names the path and the reason."""

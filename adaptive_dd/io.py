@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import csv
+import io
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -10,8 +11,25 @@ import numpy as np
 from numpy.typing import NDArray
 
 from adaptive_dd.errors import DataError
+from adaptive_dd.outputs import atomic_write
 
-__all__ = ["Recording", "read_recording", "write_recording"]
+__all__ = [
+    "MIN_EQUATIONS",
+    "Recording",
+    "check_identifiable",
+    "read_recording",
+    "read_text",
+    "write_recording",
+]
+
+MIN_EQUATIONS = 70
+"""Fewest usable equations (10 per base parameter) ``identify`` accepts."""
+MIN_MOTION = 1e-3
+"""rad: a joint whose position range is below this has not moved."""
+MAX_FILTER_SAMPLES = 10_000
+"""Largest ``tau_f / T``: the filters look back ~10 tau_f, longer ones make identification crawl."""
+MAX_RECORD_SAMPLES = 10_000_000
+"""Longest record ``identify`` accepts (memory of the filtered regressors)."""
 
 REQUIRED = ("t", "q1", "q2", "tau1", "tau2")
 OPTIONAL = ("qd1", "qd2")
@@ -34,8 +52,23 @@ def write_recording(path: str | Path, t, q, qd, tau) -> Path:
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     data = np.column_stack((t, q, qd, tau))
-    np.savetxt(path, data, delimiter=",", header="t,q1,q2,qd1,qd2,tau1,tau2", comments="", fmt="%.10g")
+    with atomic_write(path, encoding="utf-8") as fh:
+        np.savetxt(fh, data, delimiter=",", header="t,q1,q2,qd1,qd2,tau1,tau2", comments="", fmt="%.10g")
     return path
+
+
+def read_text(path: Path, error: type[ValueError] = DataError) -> str:
+    """A file's text, read as UTF-8 with or without a BOM; other encodings name the byte offset."""
+    try:
+        raw = path.read_bytes()
+    except OSError as exc:
+        raise error(f"{path}: cannot read: {exc.strerror or exc}") from None
+    bom = 3 if raw.startswith(b"\xef\xbb\xbf") else 0
+    try:
+        return raw[bom:].decode("utf-8")
+    except UnicodeDecodeError as exc:
+        at = bom + exc.start
+        raise error(f"{path}: not UTF-8 text: byte {raw[at]:#04x} at offset {at}; save it as UTF-8") from None
 
 
 def read_recording(path: str | Path, rtol_dt: float = 1e-3) -> Recording:
@@ -50,7 +83,7 @@ def read_recording(path: str | Path, rtol_dt: float = 1e-3) -> Recording:
     path = Path(path)
     if not path.is_file():
         raise DataError(f"{path}: no such file")
-    with path.open(newline="") as fh:
+    with io.StringIO(read_text(path), newline="") as fh:
         reader = csv.reader(fh)
         try:
             header = [h.strip() for h in next(reader)]
@@ -109,3 +142,34 @@ def read_recording(path: str | Path, rtol_dt: float = 1e-3) -> Recording:
         sample_period=T,
         source=str(path),
     )
+
+
+def check_identifiable(rec: Recording, tau_f: float) -> None:
+    """Refuse, before any work, a record that cannot be identified or would take too long.
+
+    Raises
+    ------
+    DataError
+        Non-positive or too long ``tau_f`` for the sample period, a record too long,
+        or a record in which neither joint moves.
+    """
+    T, n = rec.sample_period, rec.t.size
+    if not (np.isfinite(tau_f) and tau_f > 0):
+        raise DataError(f"{rec.source}: --tau-f must be a positive number of seconds, got {tau_f}")
+    if tau_f / T > MAX_FILTER_SAMPLES:
+        raise DataError(
+            f"{rec.source}: tau_f / T = {tau_f / T:.3g} samples (tau_f = {tau_f} s, T = {T:.3g} s) "
+            f"exceeds {MAX_FILTER_SAMPLES}; use a smaller --tau-f or a slower sampling"
+        )
+    if 10 * tau_f > n * T:
+        raise DataError(
+            f"{rec.source}: the record ({n * T:.3g} s) is shorter than 10 tau_f = {10 * tau_f:.3g} s"
+        )
+    if n > MAX_RECORD_SAMPLES:
+        raise DataError(f"{rec.source}: {n} samples; at most {MAX_RECORD_SAMPLES}")
+    span = np.ptp(rec.q, axis=0)
+    if np.all(span < MIN_MOTION):
+        raise DataError(
+            f"{rec.source}: the arm does not move (position range {span.round(6)} rad, below "
+            f"{MIN_MOTION} rad): nothing to identify"
+        )

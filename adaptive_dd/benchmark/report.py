@@ -7,6 +7,7 @@ import json
 from pathlib import Path
 
 from adaptive_dd.benchmark.runner import BenchmarkResult
+from adaptive_dd.outputs import atomic_write
 
 __all__ = ["format_report", "write_csv", "write_json"]
 
@@ -177,14 +178,17 @@ def _targets(metrics: dict, res: BenchmarkResult) -> list[str]:
 
 
 def write_json(metrics: dict, path: str | Path) -> Path:
+    """The metrics as JSON, written atomically (temporary file renamed into place)."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(json.dumps(metrics, indent=1))
+    text = json.dumps(metrics, indent=1)
+    with atomic_write(path, encoding="utf-8") as fh:
+        fh.write(text)
     return path
 
 
 def write_csv(metrics: dict, path: str | Path) -> Path:
-    """One row per controller and segment."""
+    """One row per controller and segment, written atomically."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     keys = [
@@ -200,7 +204,7 @@ def write_csv(metrics: dict, path: str | Path) -> Path:
         "saturation_fraction",
         "mass_estimate",
     ]
-    with path.open("w", newline="") as fh:
+    with atomic_write(path, newline="", encoding="utf-8") as fh:
         w = csv.writer(fh)
         w.writerow(["controller", *keys, "rms_error_joint1", "rms_error_joint2", "failed_trials"])
         for name, c in metrics["controllers"].items():

@@ -1,52 +1,109 @@
-"""Benchmark scenarios: TOML files read with ``tomllib`` and checked key by key.
+"""Benchmark scenarios: TOML files read with ``tomllib`` and checked field by field.
 
-::
+Every key is optional; the value after ``=`` below is the default that is used
+(and shown as such by ``adaptive-dd validate``) when a key is left out::
 
     [run]
-    duration = 20.0            # s
-    sample_period = 0.001      # s
-    seeds = 10                 # Monte-Carlo trials per controller
-    seed = 0                   # base seed (optional)
-    substeps = 2               # RK4 steps per sample (optional)
+    duration = 20.0            # s, > 0 (the run size is limited, see below)
+    sample_period = 0.001      # s, T in [1e-5, 0.1] and T <= duration / 10
+    seeds = 10                 # Monte-Carlo trials per controller, 1 .. 10000
+    seed = 0                   # base seed, 0 <= seed < 2**63
+    substeps = 2               # RK4 steps per sample, 1 .. 100
     controllers = ["pd", "ct_nominal", "ct_oracle", "adaptive_ct_paper", "adaptive_ct",
                    "slotine_li", "slotine_li_oracle"]
+                               # names, or import paths "package.module:Class"
 
-    [control]                  # optional
-    bandwidth = 40.0           # rad/s, shared by all controllers
-    damping = 1.0
+    [control]
+    bandwidth = 40.0           # rad/s, shared by all controllers; bandwidth * T <= 0.2
+    damping = 1.0              # in (0, 10]
+
+    [controllers.NAME]         # settings of one listed controller (NAME: its name, or the
+    key = value                # class name of an import path); plain TOML values, kept as given
 
     [reference]                # q_d(t) = offset + w(t) sum_k a_k sin(2 pi f_k t + phase_k);
-                               # a file without [reference] uses the default scenario's
-    ramp = 1.0                 # optional: w rises smoothly from 0 to 1 over this many s
+                               # default: the shipped payload_swap scenario's reference
+    ramp = 0.0                 # s, w rises smoothly from 0 to 1 over this time, 0 <= ramp <= 1e6
     joint1 = { offset = 0.0, amplitude = [0.5, 0.2], frequency = [0.4, 1.1], phase = [0.0, 0.0] }
     joint2 = { offset = 0.0, amplitude = [0.6, 0.2], frequency = [0.5, 1.3], phase = [0.0, 0.0] }
+                               # rad, Hz, rad; |offset| + sum |a_k| <= 10 rad; 0 < f_k <= 0.1 / T;
+                               # |phase_k| <= 100 rad; at most 50 terms; phase defaults to zeros
 
     [[payload]]                # a disk at the tip of link 2 from `at` on; 0 kg before the first
-    at = 5.0
-    mass = 3.0
-    radius = 0.05              # optional, m
+    at = 5.0                   # s, required; every segment holds at least one sample
+    mass = 3.0                 # kg, required, 0 .. 50
+    radius = 0.05              # m, 0 .. 0.5, the same for every disk
 
-    [noise]                    # optional; defaults are Tables 2 and 4
-    position_variance = [1e-8, 1e-7]
-    velocity_variance = [5e-5, 1e-4]
+    [noise]                    # Tables 2 and 4 of the paper
+    position_variance = [1e-8, 1e-7]   # rad^2, each in [0, 1]
+    velocity_variance = [5e-5, 1e-4]   # (rad/s)^2, each in [0, 1]
+
+Why these limits: a reference component at frequency f sampled at T is seen
+by the discrete controllers with ``1 / (f T)`` samples per period; the loop
+tracks it only well below its bandwidth (40 rad/s ~ 6.4 Hz at 1 kHz), so we
+require at least 10 samples per period (``f <= 0.1 / T``, 100 Hz at 1 kHz),
+five times inside the Nyquist limit ``0.5 / T``. ``bandwidth * T <= 0.2`` keeps
+the discrete PD part of every controller well inside its stability region.
+Masses above 50 kg are beyond what the arm's direct-drive motors can lift.
+Finally the size of the run (samples x seeds x controllers) is estimated and a
+run above 4 GiB of recorded signals or 24 h of estimated wall time is refused
+(:func:`run_estimate`).
+
+All problems of a file are collected and raised at once as one
+:class:`~adaptive_dd.errors.ScenarioError` whose lines read ``file: key: reason``.
+Checks live in ``Scenario.__post_init__``, so ``dataclasses.replace`` cannot
+bypass them.
 """
 
 from __future__ import annotations
 
+import itertools
 import tomllib
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 from importlib import resources
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
-from adaptive_dd.controllers import CONTROLLERS
 from adaptive_dd.errors import ScenarioError
 
-__all__ = ["Reference", "Scenario", "default_scenario_path", "load_scenario"]
+__all__ = [
+    "LIMITS",
+    "Reference",
+    "RunEstimate",
+    "Scenario",
+    "default_scenario_path",
+    "format_scenario",
+    "load_scenario",
+    "parse_scenario",
+    "read_toml",
+    "run_estimate",
+]
 
 Array = NDArray[np.float64]
+
+LIMITS = {
+    "min_sample_period": 1e-5,  # s
+    "max_sample_period": 0.1,  # s
+    "max_seeds": 10_000,
+    "seed_bound": 2**63,
+    "max_substeps": 100,
+    "max_bandwidth_T": 0.2,  # bandwidth [rad/s] * T [s]
+    "max_damping": 10.0,
+    "max_mass": 50.0,  # kg
+    "max_radius": 0.5,  # m
+    "max_angle": 10.0,  # rad, |offset| + sum |amplitude|
+    "max_phase": 100.0,  # rad
+    "max_terms": 50,
+    "max_swaps": 1000,
+    "max_variance": 1.0,
+    "nyquist_fraction": 0.1,  # f <= nyquist_fraction / T; the Nyquist limit is 0.5 / T
+    "max_bytes": 4 * 2**30,
+    "max_seconds": 24 * 3600.0,
+    "large_seconds": 60.0,  # the CLI prints the estimate above this
+}
+"""Documented bounds of the scenario checks (see the module docstring)."""
 
 _KEYS = {
     "run": {"duration", "sample_period", "seeds", "seed", "substeps", "controllers"},
@@ -54,8 +111,34 @@ _KEYS = {
     "reference": {"ramp", "joint1", "joint2"},
     "payload": {"at", "mass", "radius"},
     "noise": {"position_variance", "velocity_variance"},
+    "controllers": None,  # one sub-table per controller, free keys
 }
 _JOINT_KEYS = {"offset", "amplitude", "frequency", "phase"}
+_FIELD_KEY = {
+    "name": "name",
+    "duration": "run.duration",
+    "sample_period": "run.sample_period",
+    "seeds": "run.seeds",
+    "seed": "run.seed",
+    "substeps": "run.substeps",
+    "controllers": "run.controllers",
+    "bandwidth": "control.bandwidth",
+    "damping": "control.damping",
+    "reference": "reference",
+    "swap_times": "payload.at",
+    "swap_masses": "payload.mass",
+    "payload_radius": "payload.radius",
+    "position_variance": "noise.position_variance",
+    "velocity_variance": "noise.velocity_variance",
+    "controller_options": "controllers",
+    "source": "source",
+}
+# Recorded per trial and sample by the runner (q, tau, saturation, sigma_hat, metrics'
+# temporaries), and wall time per sample and controller (batch over seeds) measured for
+# the default scenario on the development machine (README: 28-45 s).
+_BYTES_PER_SAMPLE_TRIAL = 160
+_SECONDS_PER_SAMPLE_CONTROLLER = 2e-4
+_SECONDS_PER_SAMPLE_TRIAL = 2e-5
 
 
 @dataclass(frozen=True)
@@ -98,8 +181,49 @@ class Reference:
 
 
 @dataclass(frozen=True)
+class RunEstimate:
+    """Size of a benchmark run: samples per trial, trials, memory [bytes] and wall time [s]."""
+
+    n_samples: int
+    trials: int
+    bytes: float
+    seconds: float
+
+    @property
+    def large(self) -> bool:
+        """True when the CLI should print the estimate before running."""
+        return self.seconds > LIMITS["large_seconds"]
+
+    def __str__(self) -> str:
+        return (
+            f"{self.n_samples} samples x {self.trials} trials: about {self.bytes / 2**20:.3g} MiB "
+            f"and {_duration(self.seconds)}"
+        )
+
+
+def _duration(s: float) -> str:
+    if s < 120:
+        return f"{s:.3g} s"
+    return f"{s / 60:.3g} min" if s < 7200 else f"{s / 3600:.3g} h"
+
+
+def run_estimate(n_samples: int, n_seeds: int, n_controllers: int) -> RunEstimate:
+    """Rough memory and wall time of a closed-loop run (a guide, not a promise)."""
+    trials = n_seeds * n_controllers
+    nbytes = float(n_samples) * trials * _BYTES_PER_SAMPLE_TRIAL
+    secs = float(n_samples) * (
+        n_controllers * _SECONDS_PER_SAMPLE_CONTROLLER + trials * _SECONDS_PER_SAMPLE_TRIAL
+    )
+    return RunEstimate(int(n_samples), int(trials), nbytes, secs)
+
+
+@dataclass(frozen=True)
 class Scenario:
-    """A checked benchmark scenario (see the module docstring for the file format)."""
+    """A checked benchmark scenario (see the module docstring for the file format).
+
+    Constructing one (also through ``dataclasses.replace``) checks every field and
+    raises one :class:`ScenarioError` listing all problems.
+    """
 
     name: str
     duration: float
@@ -117,10 +241,19 @@ class Scenario:
     bandwidth: float = 40.0
     damping: float = 1.0
     source: str = "<memory>"
-    extra: dict = field(default_factory=dict)
+    controller_options: tuple[tuple[str, tuple[tuple[str, Any], ...]], ...] = ()
+    defaulted: frozenset[str] = field(default=frozenset(), compare=False)
+
+    def __post_init__(self) -> None:
+        from adaptive_dd.benchmark.scenario_checks import scenario_errors
+
+        errors = scenario_errors({f.name: getattr(self, f.name) for f in fields(self)})
+        if errors:
+            raise _scenario_error(str(self.source), errors)
 
     @property
     def n_samples(self) -> int:
+        """Samples per trial, ``round(duration / sample_period)``."""
         return round(self.duration / self.sample_period)
 
     def segments(self) -> list[tuple[float, float, float]]:
@@ -129,34 +262,49 @@ class Scenario:
         masses = [0.0, *self.swap_masses]
         return [(edges[i], edges[i + 1], masses[i]) for i in range(len(masses))]
 
+    def segment_samples(self) -> list[int]:
+        """Number of samples ``k T`` in each segment ``[start, end)``."""
+        from adaptive_dd.benchmark.scenario_checks import first_sample
+
+        T, n = self.sample_period, self.n_samples
+        edges = [0, *(first_sample(t, T) for t in self.swap_times), n]
+        return [b - a for a, b in itertools.pairwise(edges)]
+
+    def estimate(self) -> RunEstimate:
+        """Memory and time estimate of this run (:func:`run_estimate`)."""
+        return run_estimate(self.n_samples, self.seeds, len(self.controllers))
+
+    def options(self, name: str) -> dict[str, Any]:
+        """Settings of controller ``name`` from its ``[controllers.NAME]`` table (plain values)."""
+        from adaptive_dd.benchmark.scenario_checks import thaw
+
+        for n, opts in self.controller_options:
+            if n == name:
+                return thaw(opts)
+        return {}
+
+
+def _scenario_error(src: str, errors: list[str]) -> ScenarioError:
+    lines = [f"{src}: {e}" for e in errors]
+    if len(lines) == 1:
+        return ScenarioError(lines[0])
+    return ScenarioError(f"{src}: {len(lines)} errors\n" + "\n".join("  " + ln for ln in lines))
+
 
 def default_scenario_path() -> Path:
     """The ``payload_swap`` scenario shipped with the package."""
     return Path(str(resources.files("adaptive_dd.scenarios").joinpath("payload_swap.toml")))
 
 
-def _err(src: str, key: str, msg: str) -> ScenarioError:
-    return ScenarioError(f"{src}: [{key}] {msg}" if not key.startswith("[") else f"{src}: {key} {msg}")
+def read_toml(path: Path) -> dict:
+    """Parse a TOML file read as UTF-8 (a BOM is allowed); errors name the file and position."""
+    from adaptive_dd.io import read_text
 
-
-def _num(src: str, key: str, v, *, positive: bool = False, integer: bool = False, nonneg: bool = False):
-    if isinstance(v, bool) or not isinstance(v, int | float):
-        raise ScenarioError(f"{src}: key '{key}' must be a number, got {v!r}")
-    if integer and not isinstance(v, int):
-        raise ScenarioError(f"{src}: key '{key}' must be an integer, got {v!r}")
-    if not np.isfinite(v):
-        raise ScenarioError(f"{src}: key '{key}' must be finite, got {v!r}")
-    if positive and v <= 0:
-        raise ScenarioError(f"{src}: key '{key}' must be > 0, got {v!r}")
-    if nonneg and v < 0:
-        raise ScenarioError(f"{src}: key '{key}' must be >= 0, got {v!r}")
-    return v
-
-
-def _pair(src: str, key: str, v) -> tuple[float, float]:
-    if not isinstance(v, list) or len(v) != 2:
-        raise ScenarioError(f"{src}: key '{key}' must be a list of two numbers, got {v!r}")
-    return tuple(float(_num(src, key, x, nonneg=True)) for x in v)  # type: ignore[return-value]
+    text = read_text(path, ScenarioError)
+    try:
+        return tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise ScenarioError(f"{path}: not valid TOML: {exc}") from None
 
 
 def load_scenario(path: str | Path | None = None) -> Scenario:
@@ -165,139 +313,61 @@ def load_scenario(path: str | Path | None = None) -> Scenario:
     Raises
     ------
     ScenarioError
-        Naming the file, the key and the reason: unknown table or key, wrong type,
-        unknown controller, negative mass, swap at or beyond the duration,
-        non-increasing swap times, reference lists of unequal length, ...
+        Listing every problem as ``file: key: reason``: unknown table or key, wrong
+        type, non-finite or out-of-range value, unknown controller, frequency above
+        ``0.1 / T``, a payload segment without samples, a run too large, ...
     """
     path = Path(path) if path is not None else default_scenario_path()
-    src = str(path)
     if not path.is_file():
-        raise ScenarioError(f"{src}: no such scenario file")
-    try:
-        data = tomllib.loads(path.read_text())
-    except tomllib.TOMLDecodeError as exc:
-        raise ScenarioError(f"{src}: not valid TOML: {exc}") from None
-    return parse_scenario(data, src, name=path.stem)
+        raise ScenarioError(f"{path}: no such scenario file")
+    return parse_scenario(read_toml(path), str(path), name=path.stem)
 
 
 def parse_scenario(data: dict, src: str = "<memory>", name: str = "scenario") -> Scenario:
-    """Check a scenario given as a dict (the parsed TOML)."""
-    for table, val in data.items():
-        if table not in _KEYS:
-            raise ScenarioError(f"{src}: unknown table [{table}]; allowed: {sorted(_KEYS)}")
-        items = val if table == "payload" else [val]
-        if table == "payload" and not isinstance(val, list):
-            raise ScenarioError(f"{src}: 'payload' must be an array of tables [[payload]]")
-        for item in items:
-            if not isinstance(item, dict):
-                raise ScenarioError(f"{src}: [{table}] must be a table")
-            for key in item:
-                if key not in _KEYS[table]:
-                    raise ScenarioError(
-                        f"{src}: unknown key '{table}.{key}'; allowed: {sorted(_KEYS[table])}"
-                    )
-    run = data.get("run", {})
-    duration = float(_num(src, "run.duration", run.get("duration", 20.0), positive=True))
-    T = float(_num(src, "run.sample_period", run.get("sample_period", 0.001), positive=True))
-    if T > duration / 10:
-        raise ScenarioError(f"{src}: key 'run.sample_period' = {T} is too long for duration {duration}")
-    seeds = int(_num(src, "run.seeds", run.get("seeds", 10), positive=True, integer=True))
-    seed = int(_num(src, "run.seed", run.get("seed", 0), integer=True, nonneg=True))
-    substeps = int(_num(src, "run.substeps", run.get("substeps", 2), positive=True, integer=True))
-    ctrls = run.get("controllers", list(CONTROLLERS))
-    if not isinstance(ctrls, list) or not ctrls:
-        raise ScenarioError(f"{src}: key 'run.controllers' must be a non-empty list of names")
-    for c in ctrls:
-        if c not in CONTROLLERS:
-            raise ScenarioError(
-                f"{src}: key 'run.controllers': unknown controller {c!r}; known: {CONTROLLERS}"
-            )
-    if len(set(ctrls)) != len(ctrls):
-        raise ScenarioError(f"{src}: key 'run.controllers' lists a controller twice: {ctrls}")
-    control = data.get("control", {})
-    bw = float(_num(src, "control.bandwidth", control.get("bandwidth", 40.0), positive=True))
-    zeta = float(_num(src, "control.damping", control.get("damping", 1.0), positive=True))
-    if "reference" in data:
-        reference = _parse_reference(src, data["reference"])
-    elif src == str(default_scenario_path()):
-        raise ScenarioError(f"{src}: the default scenario must define [reference]")
-    else:
-        reference = load_scenario().reference
-    times, masses, radius = [], [], None
-    for i, p in enumerate(data.get("payload", [])):
-        where = f"payload[{i}]"
-        for key in ("at", "mass"):
-            if key not in p:
-                raise ScenarioError(f"{src}: key '{where}.{key}' is missing")
-        at = float(_num(src, f"{where}.at", p["at"], positive=True))
-        m = _num(src, f"{where}.mass", p["mass"])
-        if m < 0:
-            raise ScenarioError(f"{src}: key '{where}.mass' must be >= 0 kg, got {m}")
-        if at >= duration:
-            raise ScenarioError(
-                f"{src}: key '{where}.at' = {at} s is not before the end of the run ({duration} s)"
-            )
-        if times and at <= times[-1]:
-            raise ScenarioError(
-                f"{src}: key '{where}.at' = {at} s: swap times must increase (previous {times[-1]})"
-            )
-        r = float(_num(src, f"{where}.radius", p.get("radius", 0.05), nonneg=True))
-        if radius is not None and r != radius:
-            raise ScenarioError(f"{src}: key '{where}.radius': all payload disks must share one radius")
-        radius = r
-        times.append(at)
-        masses.append(float(m))
-    noise = data.get("noise", {})
-    pv = _pair(src, "noise.position_variance", noise.get("position_variance", [1e-8, 1e-7]))
-    vv = _pair(src, "noise.velocity_variance", noise.get("velocity_variance", [5e-5, 1e-4]))
-    return Scenario(
-        name=name,
-        duration=duration,
-        sample_period=T,
-        seeds=seeds,
-        controllers=tuple(ctrls),
-        reference=reference,
-        swap_times=tuple(times),
-        swap_masses=tuple(masses),
-        payload_radius=0.05 if radius is None else radius,
-        position_variance=pv,
-        velocity_variance=vv,
-        seed=seed,
-        substeps=substeps,
-        bandwidth=bw,
-        damping=zeta,
-        source=src,
+    """Check a scenario given as a dict (the parsed TOML); all problems are raised at once."""
+    from adaptive_dd.benchmark.scenario_checks import scenario_errors, scenario_fields
+
+    values, errors = scenario_fields(data, src == str(default_scenario_path()))
+    values.update(name=name, source=src)
+    errors += [e for e in scenario_errors(values) if e.split(":")[0] not in _bad_keys(errors)]
+    if errors:
+        raise _scenario_error(src, errors)
+    return Scenario(**values)
+
+
+def _bad_keys(errors: list[str]) -> set[str]:
+    return {e.split(":")[0] for e in errors}
+
+
+def format_scenario(sc: Scenario) -> str:
+    """Every field of a scenario as ``key = value``, defaults marked ``(default)``."""
+    lines = [f"# {sc.source}: valid; {sc.estimate()}"]
+    order = ("duration", "sample_period", "seeds", "seed", "substeps", "controllers", "bandwidth")
+    order += ("damping", "swap_times", "swap_masses", "payload_radius", "position_variance")
+    for name in (*order, "velocity_variance"):
+        key = _FIELD_KEY[name]
+        mark = "   (default)" if key in sc.defaulted else ""
+        lines.append(f"{key} = {_show(getattr(sc, name))}{mark}")
+    ref = sc.reference
+    mark = "   (default)" if "reference" in sc.defaulted else ""
+    lines.append(f"reference.ramp = {ref.ramp!r}{mark}")
+    for j in range(2):
+        lines.append(
+            f"reference.joint{j + 1} = {{ offset = {ref.offset[j]!r}, amplitude = "
+            f"{_show(ref.amplitude[j])}, frequency = {_show(ref.frequency[j])}, phase = "
+            f"{_show(ref.phase[j])} }}{mark}"
+        )
+    for n, _ in sc.controller_options:
+        lines.append(f"controllers.{n} = {sc.options(n)!r}")
+    segs = ", ".join(
+        f"{a:g}-{b:g} s: {m:g} kg ({k} samples)"
+        for (a, b, m), k in zip(sc.segments(), sc.segment_samples(), strict=True)
     )
+    lines.append(f"# segments: {segs}")
+    return "\n".join(lines)
 
 
-def _parse_reference(src: str, ref: dict) -> Reference:
-    ramp = float(_num(src, "reference.ramp", ref.get("ramp", 0.0), nonneg=True))
-    offs, amps, freqs, phases = [], [], [], []
-    for j in ("joint1", "joint2"):
-        spec = ref.get(j, {"offset": 0.0, "amplitude": [], "frequency": [], "phase": []})
-        if not isinstance(spec, dict):
-            raise ScenarioError(f"{src}: key 'reference.{j}' must be an inline table")
-        for key in spec:
-            if key not in _JOINT_KEYS:
-                raise ScenarioError(
-                    f"{src}: unknown key 'reference.{j}.{key}'; allowed: {sorted(_JOINT_KEYS)}"
-                )
-        off = float(_num(src, f"reference.{j}.offset", spec.get("offset", 0.0)))
-        lists = []
-        for key in ("amplitude", "frequency", "phase"):
-            v = spec.get(key, [0.0] * len(spec.get("amplitude", [])) if key == "phase" else [])
-            if not isinstance(v, list):
-                raise ScenarioError(f"{src}: key 'reference.{j}.{key}' must be a list, got {v!r}")
-            lists.append(tuple(float(_num(src, f"reference.{j}.{key}", x)) for x in v))
-        if not (len(lists[0]) == len(lists[1]) == len(lists[2])):
-            raise ScenarioError(
-                f"{src}: key 'reference.{j}': amplitude, frequency and phase must have equal lengths, "
-                f"got {len(lists[0])}, {len(lists[1])}, {len(lists[2])}"
-            )
-        if any(f <= 0 for f in lists[1]):
-            raise ScenarioError(f"{src}: key 'reference.{j}.frequency': frequencies must be > 0 Hz")
-        offs.append(off)
-        amps.append(lists[0])
-        freqs.append(lists[1])
-        phases.append(lists[2])
-    return Reference(tuple(offs), tuple(amps), tuple(freqs), tuple(phases), ramp)
+def _show(v: Any) -> str:
+    if isinstance(v, tuple):
+        return "[" + ", ".join(_show(x) for x in v) + "]"
+    return repr(v)

@@ -1,0 +1,379 @@
+"""Field checks of :class:`~adaptive_dd.benchmark.scenario.Scenario` and the TOML -> fields step.
+
+Each check appends ``"key: reason"`` to a list so that every problem of a
+scenario is reported at once; the bounds are ``scenario.LIMITS``.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+from adaptive_dd.controllers import CONTROLLERS
+
+__all__ = ["first_sample", "freeze", "scenario_errors", "scenario_fields", "thaw"]
+
+_NUM = (int, float, np.integer, np.floating)
+
+
+class _Table(tuple):
+    """A TOML table frozen as a tuple of ``(key, value)`` pairs (hashable)."""
+
+    __slots__ = ()
+
+
+def freeze(value: Any) -> Any:
+    """Lists -> tuples and tables -> sorted ``(key, value)`` tuples, recursively (hashable)."""
+    if isinstance(value, dict):
+        return _Table(sorted((str(k), freeze(v)) for k, v in value.items()))
+    if isinstance(value, list | tuple):
+        return tuple(freeze(v) for v in value)
+    return value
+
+
+def thaw(value: Any) -> Any:
+    """The inverse of :func:`freeze`: plain dicts and lists again."""
+    if isinstance(value, _Table):
+        return {k: thaw(v) for k, v in value}
+    if isinstance(value, tuple):
+        return [thaw(v) for v in value]
+    return value
+
+
+def first_sample(t: float, sample_period: float) -> int:
+    """Index of the first sample ``k T >= t`` (a payload change at t acts from there on)."""
+    return math.ceil(t / sample_period - 1e-9)
+
+
+def _short(v: Any) -> str:
+    s = repr(v)
+    return s if len(s) <= 40 else s[:37] + "..."
+
+
+def _num(errs: list, key: str, v: Any, lo: float, hi: float, *, integer=False, lo_open=False) -> bool:
+    """Check one number in ``[lo, hi]`` (``(lo, hi]`` with lo_open); False and a message if not."""
+    if isinstance(v, bool) or not isinstance(v, _NUM) or (integer and not isinstance(v, int | np.integer)):
+        errs.append(f"{key}: must be {'an integer' if integer else 'a number'}, got {_short(v)}")
+        return False
+    if not isinstance(v, int | np.integer) and not math.isfinite(v):
+        errs.append(f"{key}: must be finite, got {v!r}")
+        return False
+    if (v <= lo if lo_open else v < lo) or v > hi:
+        errs.append(f"{key}: must be in {'(' if lo_open else '['}{lo:g}, {hi:g}], got {_short(v)}")
+        return False
+    return True
+
+
+def _nums(errs: list, key: str, v: Any, lo: float, hi: float, *, n: int | None = None, **kw) -> bool:
+    """A tuple of numbers, each in range; of length n when given."""
+    if not isinstance(v, tuple) or (n is not None and len(v) != n):
+        what = f"a list of {n} numbers" if n is not None else "a list of numbers"
+        errs.append(f"{key}: must be {what}, got {_short(v)}")
+        return False
+    return all([_num(errs, key, x, lo, hi, **kw) for x in v])
+
+
+def scenario_errors(v: dict[str, Any]) -> list[str]:
+    """Every problem of the scenario fields ``v`` (a dict of Scenario's fields) as ``key: reason``."""
+    from adaptive_dd.benchmark.scenario import LIMITS as L
+    from adaptive_dd.benchmark.scenario import Reference, run_estimate
+
+    e: list[str] = []
+    for k in ("name", "source"):
+        if not isinstance(v[k], str):
+            e.append(f"{k}: must be a string, got {_short(v[k])}")
+    d_ok = _num(e, "run.duration", v["duration"], 0, math.inf, lo_open=True)
+    T_ok = _num(e, "run.sample_period", v["sample_period"], L["min_sample_period"], L["max_sample_period"])
+    if d_ok and T_ok and v["sample_period"] > v["duration"] / 10:
+        e.append(
+            f"run.sample_period: {v['sample_period']} s is more than a tenth of run.duration "
+            f"({v['duration']} s)"
+        )
+        T_ok = False
+    if d_ok and T_ok and v["duration"] / v["sample_period"] > 1e12:
+        e.append(
+            f"run: too large: {v['duration'] / v['sample_period']:.3g} samples per trial "
+            f"(run.duration / run.sample_period)"
+        )
+        d_ok = False
+    s_ok = _num(e, "run.seeds", v["seeds"], 1, L["max_seeds"], integer=True)
+    _num(e, "run.seed", v["seed"], 0, L["seed_bound"] - 1, integer=True)
+    _num(e, "run.substeps", v["substeps"], 1, L["max_substeps"], integer=True)
+    c_ok = _check_controllers(e, v["controllers"])
+    if _num(e, "control.bandwidth", v["bandwidth"], 0, 1e5, lo_open=True) and T_ok:
+        if v["bandwidth"] * v["sample_period"] > L["max_bandwidth_T"]:
+            e.append(
+                f"control.bandwidth: {v['bandwidth']} rad/s at T = {v['sample_period']} s gives "
+                f"bandwidth * T = {v['bandwidth'] * v['sample_period']:.3g} > {L['max_bandwidth_T']}"
+            )
+    _num(e, "control.damping", v["damping"], 0, L["max_damping"], lo_open=True)
+    _num(e, "payload.radius", v["payload_radius"], 0, L["max_radius"])
+    for k in ("position_variance", "velocity_variance"):
+        _nums(e, f"noise.{k}", v[k], 0, L["max_variance"], n=2)
+    _check_payload(e, v, d_ok and T_ok)
+    if not isinstance(v["reference"], Reference):
+        e.append(f"reference: must be a Reference, got {_short(v['reference'])}")
+    else:
+        _check_reference(e, v["reference"], v["sample_period"] if T_ok else None)
+    _check_options(e, v["controller_options"], v["controllers"] if c_ok else ())
+    if d_ok and T_ok and s_ok and c_ok:
+        est = run_estimate(round(v["duration"] / v["sample_period"]), v["seeds"], len(v["controllers"]))
+        if est.bytes > L["max_bytes"] or est.seconds > L["max_seconds"]:
+            e.append(
+                f"run: too large: {est}; the limits are {L['max_bytes'] / 2**30:g} GiB and "
+                f"{L['max_seconds'] / 3600:g} h (reduce run.duration, run.seeds or run.controllers)"
+            )
+    return e
+
+
+def _label(name: str) -> str:
+    return name.rsplit(":", 1)[-1].rsplit(".", 1)[-1] if ":" in name else name
+
+
+def _check_controllers(e: list, c: Any) -> bool:
+    import re
+
+    path = re.compile(r"^[A-Za-z_]\w*(\.[A-Za-z_]\w*)*:[A-Za-z_]\w*(\.[A-Za-z_]\w*)*$")
+    if not isinstance(c, tuple) or not c or not all(isinstance(x, str) for x in c):
+        e.append(f"run.controllers: must be a non-empty list of names, got {_short(c)}")
+        return False
+    ok = True
+    for x in c:
+        if x not in CONTROLLERS and not path.match(x):
+            e.append(
+                f"run.controllers: unknown controller {x!r}; known: {', '.join(CONTROLLERS)}, "
+                "or an import path 'package.module:Class'"
+            )
+            ok = False
+    if len(set(c)) != len(c) or len({_label(x) for x in c}) != len(c):
+        e.append(f"run.controllers: a controller (or label) is listed twice: {list(c)}")
+        ok = False
+    return ok
+
+
+def _check_payload(e: list, v: dict, timing_ok: bool) -> None:
+    from adaptive_dd.benchmark.scenario import LIMITS as L
+
+    times, masses = v["swap_times"], v["swap_masses"]
+    if not isinstance(times, tuple) or not isinstance(masses, tuple) or len(times) != len(masses):
+        e.append(f"payload: swap_times and swap_masses must be tuples of equal length, got {_short(times)}")
+        return
+    if len(times) > L["max_swaps"]:
+        e.append(f"payload: {len(times)} payload changes; at most {L['max_swaps']}")
+        return
+    d = v["duration"] if timing_ok else math.inf
+    ok = True
+    for i, (t, m) in enumerate(zip(times, masses, strict=True)):
+        ok &= _num(e, f"payload[{i}].at", t, 0, d, lo_open=True)
+        _num(e, f"payload[{i}].mass", m, 0, L["max_mass"])
+        if ok and i and t <= times[i - 1]:
+            e.append(f"payload[{i}].at: {t} s: swap times must increase (previous {times[i - 1]} s)")
+            ok = False
+        elif (
+            ok
+            and timing_ok
+            and min(t - (times[i - 1] if i else 0.0), d - t) < v["sample_period"] * (1 - 1e-9)
+        ):
+            e.append(
+                f"payload[{i}].at: {t} s is less than one sample (T = {v['sample_period']} s) from "
+                "the previous change, t = 0 or the end of the run"
+            )
+            ok = False
+    if not (ok and timing_ok):
+        return
+    T = v["sample_period"]
+    edges = [0, *(first_sample(t, T) for t in times), round(v["duration"] / T)]
+    for i in range(len(edges) - 1):
+        if edges[i + 1] - edges[i] < 1:
+            where = f"payload[{i}].at" if i < len(times) else f"payload[{i - 1}].at"
+            e.append(
+                f"{where}: segment {i} ({[0.0, *times][i]} s to "
+                f"{[*times, v['duration']][i]} s) holds no sample at T = {T} s; changes must be "
+                "at least one sample apart, after t = 0 and before the end of the run"
+            )
+
+
+def _check_reference(e: list, ref: Any, T: float | None) -> None:
+    from adaptive_dd.benchmark.scenario import LIMITS as L
+
+    _num(e, "reference.ramp", ref.ramp, 0, 1e6)  # may outlast a short run: the ramp is just cut
+    fmax = L["nyquist_fraction"] / T if T is not None else math.inf
+    for name, obj in (("offset", ref.offset), ("amplitude", ref.amplitude), ("frequency", ref.frequency)):
+        if not isinstance(obj, tuple) or len(obj) != 2:
+            e.append(f"reference.{name}: must hold one entry per joint, got {_short(obj)}")
+            return
+    if not isinstance(ref.phase, tuple) or len(ref.phase) != 2:
+        e.append(f"reference.phase: must hold one entry per joint, got {_short(ref.phase)}")
+        return
+    for j in range(2):
+        key = f"reference.joint{j + 1}"
+        off_ok = _num(e, f"{key}.offset", ref.offset[j], -L["max_angle"], L["max_angle"])
+        a, f, p = ref.amplitude[j], ref.frequency[j], ref.phase[j]
+        a_ok = _nums(e, f"{key}.amplitude", a, -L["max_angle"], L["max_angle"])
+        f_ok = isinstance(f, tuple) and all(
+            [_num(e, f"{key}.frequency", x, 0, math.inf, lo_open=True) for x in f]
+        )
+        if not isinstance(f, tuple):
+            e.append(f"{key}.frequency: must be a list of numbers, got {_short(f)}")
+        _nums(e, f"{key}.phase", p, -L["max_phase"], L["max_phase"])
+        if not (a_ok and f_ok and isinstance(p, tuple)):
+            continue
+        if not len(a) == len(f) == len(p):
+            e.append(
+                f"{key}: amplitude, frequency and phase must have equal lengths, "
+                f"got {len(a)}, {len(f)}, {len(p)}"
+            )
+        elif len(a) > L["max_terms"]:
+            e.append(f"{key}: {len(a)} sine terms; at most {L['max_terms']}")
+        if off_ok and abs(ref.offset[j]) + sum(abs(x) for x in a) > L["max_angle"]:
+            e.append(f"{key}: |offset| + sum |amplitude| exceeds {L['max_angle']} rad")
+        for x in f:
+            if x > fmax:
+                e.append(
+                    f"{key}.frequency: {x} Hz is above {fmax:g} Hz = {L['nyquist_fraction']} / T "
+                    f"(at least 10 samples per period; the Nyquist limit is {0.5 / T:g} Hz)"
+                )
+
+
+def _plain(e: list, key: str, x: Any) -> None:
+    if isinstance(x, _Table):
+        for k, y in x:
+            _plain(e, f"{key}.{k}", y)
+    elif isinstance(x, tuple):
+        for y in x:
+            _plain(e, key, y)
+    elif isinstance(x, float) and not math.isfinite(x):
+        e.append(f"{key}: must be finite, got {x!r}")
+    elif not isinstance(x, str | int | float | bool):
+        e.append(f"{key}: must be a plain value (number, string, boolean, list, table), got {_short(x)}")
+
+
+def _check_options(e: list, opts: Any, ctrls: tuple) -> None:
+    if not isinstance(opts, tuple):
+        e.append(f"controllers: options must be a tuple of (name, settings), got {_short(opts)}")
+        return
+    names = set(ctrls) | {_label(c) for c in ctrls}
+    for item in opts:
+        if not (isinstance(item, tuple) and len(item) == 2 and isinstance(item[1], _Table)):
+            e.append(f"controllers: each entry must be (name, frozen table), got {_short(item)}")
+            continue
+        name, table = item
+        if ctrls and name not in names:
+            e.append(f"controllers.{name}: not a controller of run.controllers ({', '.join(ctrls)})")
+        _plain(e, f"controllers.{name}", table)
+
+
+def scenario_fields(data: Any, is_default: bool) -> tuple[dict[str, Any], list[str]]:
+    """Scenario fields from a parsed TOML dict (defaults filled in) and the structural errors."""
+    from adaptive_dd.benchmark.scenario import _KEYS
+
+    e: list[str] = []
+    if not isinstance(data, dict):
+        return {}, ["<top>: must be a TOML document"]
+    tables: dict[str, Any] = {}
+    for t, val in data.items():
+        if t not in _KEYS:
+            e.append(f"[{t}]: unknown table; allowed: {', '.join(sorted(_KEYS))}")
+        elif t == "payload":
+            if not isinstance(val, list) or not all(isinstance(x, dict) for x in val):
+                e.append("payload: must be an array of tables [[payload]]")
+            else:
+                tables[t] = val
+        elif not isinstance(val, dict):
+            e.append(f"{t}: must be a table [{t}], got {_short(val)}")
+        else:
+            tables[t] = val
+    for t, allowed in _KEYS.items():
+        if allowed is None:
+            continue
+        for item in tables.get(t, []) if t == "payload" else [tables.get(t, {})]:
+            for k in item:
+                if k not in allowed:
+                    e.append(f"{t}.{k}: unknown key; allowed: {', '.join(sorted(allowed))}")
+    defaulted: set[str] = set()
+
+    def get(table: str, key: str, default: Any) -> Any:
+        tab = tables.get(table, {})
+        if key in tab:
+            return freeze(tab[key])
+        defaulted.add(f"{table}.{key}")
+        return freeze(default)
+
+    v: dict[str, Any] = {
+        "duration": get("run", "duration", 20.0),
+        "sample_period": get("run", "sample_period", 0.001),
+        "seeds": get("run", "seeds", 10),
+        "seed": get("run", "seed", 0),
+        "substeps": get("run", "substeps", 2),
+        "controllers": get("run", "controllers", list(CONTROLLERS)),
+        "bandwidth": get("control", "bandwidth", 40.0),
+        "damping": get("control", "damping", 1.0),
+        "position_variance": get("noise", "position_variance", [1e-8, 1e-7]),
+        "velocity_variance": get("noise", "velocity_variance", [5e-5, 1e-4]),
+    }
+    _payload_fields(e, tables.get("payload", []), v, defaulted)
+    v["reference"] = _reference_field(e, tables, is_default, defaulted)
+    v["controller_options"] = tuple(
+        (str(n), freeze(o) if isinstance(o, dict) else o) for n, o in tables.get("controllers", {}).items()
+    )
+    for n, o in v["controller_options"]:
+        if not isinstance(o, _Table):
+            e.append(f"controllers.{n}: must be a table [controllers.{n}], got {_short(o)}")
+    v["controller_options"] = tuple(x for x in v["controller_options"] if isinstance(x[1], _Table))
+    v["defaulted"] = frozenset(defaulted)
+    return v, e
+
+
+def _payload_fields(e: list, items: list, v: dict, defaulted: set) -> None:
+    times, masses, radii = [], [], []
+    for i, p in enumerate(items):
+        missing = [k for k in ("at", "mass") if k not in p]
+        for k in missing:
+            e.append(f"payload[{i}].{k}: missing (each [[payload]] needs at and mass)")
+        if not missing:
+            times.append(freeze(p["at"]))
+            masses.append(freeze(p["mass"]))
+        if "radius" in p:
+            radii.append(freeze(p["radius"]))
+    if len({repr(r) for r in radii}) > 1:
+        e.append(f"payload.radius: all payload disks must share one radius, got {radii}")
+    if not radii:
+        defaulted.add("payload.radius")
+    v["swap_times"], v["swap_masses"] = tuple(times), tuple(masses)
+    v["payload_radius"] = radii[0] if radii else 0.05
+
+
+def _reference_field(e: list, tables: dict, is_default: bool, defaulted: set) -> Any:
+    from adaptive_dd.benchmark.scenario import Reference, load_scenario
+
+    if "reference" not in tables:
+        if is_default:
+            e.append("reference: the default scenario must define [reference]")
+            return Reference((0.0, 0.0), ((), ()), ((), ()), ((), ()))
+        defaulted.add("reference")
+        return load_scenario().reference
+    ref = tables["reference"]
+    parts: dict[str, list] = {"offset": [], "amplitude": [], "frequency": [], "phase": []}
+    for j in ("joint1", "joint2"):
+        spec = ref.get(j, {})
+        if not isinstance(spec, dict):
+            e.append(f"reference.{j}: must be an inline table {{ offset = ..., amplitude = [...] }}")
+            spec = {}
+        for k in spec:
+            if k not in parts:
+                e.append(f"reference.{j}.{k}: unknown key; allowed: amplitude, frequency, offset, phase")
+        amp = freeze(spec.get("amplitude", []))
+        parts["offset"].append(freeze(spec.get("offset", 0.0)))
+        parts["amplitude"].append(amp)
+        parts["frequency"].append(freeze(spec.get("frequency", [])))
+        zeros = (0.0,) * len(amp) if isinstance(amp, tuple) else ()
+        parts["phase"].append(freeze(spec.get("phase", zeros)))
+    return Reference(
+        tuple(parts["offset"]),
+        tuple(parts["amplitude"]),
+        tuple(parts["frequency"]),
+        tuple(parts["phase"]),
+        freeze(ref.get("ramp", 0.0)),
+    )

@@ -1,0 +1,163 @@
+"""Seeded mutation fuzz of the scenario loader (issue 13).
+
+Mutates the shipped scenario files (delete / duplicate keys, wrong types, NaN,
+inf, 1e300, negative and zero values, seeds like 2**64, swaps closer than a
+sample, frequencies above Nyquist, a BOM, non-UTF-8 bytes, ...) and counts:
+
+* precise errors: ``ScenarioError`` whose message names the file;
+* crashes: any other exception;
+* meaningless accepted: a scenario that loads but fails an independent sanity
+  judgement (non-finite numbers, frequency >= 0.5 / T, a segment without a
+  sample, seeds out of range, an absurd size, ...).
+
+Run: ``PYTHONPATH=. python benchmarks/fuzz_scenarios.py [--n 2000] [--seed 0]``
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import random
+import re
+import tempfile
+from collections import Counter
+from pathlib import Path
+
+from adaptive_dd.benchmark.scenario import default_scenario_path, load_scenario
+from adaptive_dd.errors import ScenarioError
+
+ROOT = Path(__file__).resolve().parent
+BAD_VALUES = [
+    "nan", "inf", "-inf", "1e300", "-1e300", "-1", "0", "0.0", "1e-300", "18446744073709551616",
+    "9223372036854775808", "1000000000", '"text"', "true", "[]", "[1, 2, 3]", "{ a = 1 }", "-0.0",
+    "2.5", "1e-7", "100000", "1.7e308",
+]  # fmt: skip
+
+
+def sources() -> list[Path]:
+    return [default_scenario_path(), *sorted((ROOT / "scenarios").glob("*.toml"))]
+
+
+def _value_lines(text: str) -> list[int]:
+    return [i for i, ln in enumerate(text.splitlines()) if re.match(r"^\s*[\w.]+\s*=", ln)]
+
+
+def mutate(text: str, rng: random.Random) -> tuple[str, bytes | None]:
+    """One random mutation; returns (kind, new bytes)."""
+    lines = text.splitlines()
+    idx = _value_lines(text)
+    kind = rng.choice(
+        ["delete", "duplicate", "value", "value", "value", "seed", "swap_close", "nyquist",
+         "bom", "bytes", "array_item", "unknown_key", "table", "period"]
+    )  # fmt: skip
+    i = rng.choice(idx)
+    key = lines[i].split("=", 1)[0].strip()
+    if kind == "delete":
+        del lines[i]
+    elif kind == "duplicate":
+        lines.insert(i, lines[i])
+    elif kind == "value":
+        lines[i] = f"{key} = {rng.choice(BAD_VALUES)}"
+    elif kind == "seed":
+        lines.insert(
+            _after(lines, "[run]"), f"seed = {rng.choice(['18446744073709551616', '-1', '2.0', 'nan'])}"
+        )
+    elif kind == "swap_close":
+        lines += ["[[payload]]", f"at = {rng.choice(['20.0000001', '0.0000001', '19.9999', '0.0', '1e-12'])}",
+                  "mass = 1.0"]  # fmt: skip
+    elif kind == "nyquist":
+        f = rng.choice(["500.0", "499.9", "1000.0", "250.0", "1e300", "0.0", "-1.0", "101.0"])
+        lines = [re.sub(r"frequency = \[[^\]]*\]", f"frequency = [{f}, 1.0]", ln) for ln in lines]
+    elif kind == "bom":
+        return kind, b"\xef\xbb\xbf" + "\n".join(lines).encode()
+    elif kind == "bytes":
+        raw = bytearray("\n".join(lines).encode())
+        raw[rng.randrange(len(raw))] = rng.choice([0xFF, 0xC3, 0x80, 0xFE])
+        return kind, bytes(raw)
+    elif kind == "array_item":
+        lines[i] = re.sub(
+            r"\[([^\]]*)\]", lambda m: f"[{m.group(1)}, {rng.choice(BAD_VALUES)}]", lines[i], count=1
+        )
+    elif kind == "unknown_key":
+        lines.insert(i, f"{key}x = 1")
+    elif kind == "table":
+        lines.insert(0, rng.choice(["[runs]", "[run]", "payload = 3", "[[noise]]"]))
+    elif kind == "period":
+        lines.insert(_after(lines, "[run]"), "")
+        lines = [ln for ln in lines if not ln.strip().startswith("sample_period")]
+        lines.insert(
+            _after(lines, "[run]"), f"sample_period = {rng.choice(['1e-300', '0.5', '0.01', '1e-6'])}"
+        )
+    return kind, "\n".join(lines).encode()
+
+
+def _after(lines: list[str], header: str) -> int:
+    return lines.index(header) + 1 if header in lines else 0
+
+
+def meaningless(sc) -> str | None:
+    """An independent judgement of a loaded scenario; a reason or None."""
+    nums = [sc.duration, sc.sample_period, sc.bandwidth, sc.damping, sc.payload_radius,
+            *sc.swap_times, *sc.swap_masses, *sc.position_variance, *sc.velocity_variance,
+            *sc.reference.offset, sc.reference.ramp]  # fmt: skip
+    for j in range(2):
+        nums += [*sc.reference.amplitude[j], *sc.reference.frequency[j], *sc.reference.phase[j]]
+    if not all(isinstance(x, int | float) and math.isfinite(x) and abs(x) < 1e6 for x in nums):
+        return "non-finite or huge number"
+    T = sc.sample_period
+    if any(f <= 0 or f >= 0.5 / T for fs in sc.reference.frequency for f in fs):
+        return "frequency at or above Nyquist"
+    if min(sc.segment_samples()) < 1:
+        return "segment without a sample"
+    if not (0 <= sc.seed < 2**63) or not (1 <= sc.seeds <= 10_000):
+        return "seed(s) out of range"
+    if any(m < 0 or m > 100 for m in sc.swap_masses) or sc.duration / T > 1e9:
+        return "absurd mass or size"
+    if sc.estimate().bytes > 8 * 2**30:
+        return "run too large"
+    return None
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(allow_abbrev=False)
+    ap.add_argument("--n", type=int, default=2000)
+    ap.add_argument("--seed", type=int, default=0)
+    args = ap.parse_args()
+    rng = random.Random(args.seed)
+    texts = [p.read_text() for p in sources()]
+    counts: Counter = Counter()
+    examples: dict[str, str] = {}
+    with tempfile.TemporaryDirectory() as tmp:
+        path = Path(tmp) / "mutant.toml"
+        for _ in range(args.n):
+            kind, raw = mutate(rng.choice(texts), rng)
+            path.write_bytes(raw)
+            try:
+                sc = load_scenario(path)
+            except ScenarioError as exc:
+                named = str(path) in str(exc)
+                counts["precise error" if named else "error not naming the file"] += 1
+                continue
+            except Exception as exc:
+                counts["crash"] += 1
+                examples.setdefault(f"crash {kind}", f"{type(exc).__name__}: {exc}")
+                continue
+            why = meaningless(sc)
+            counts["meaningless accepted" if why else "valid accepted"] += 1
+            if why:
+                examples.setdefault(f"meaningless {kind}", why)
+    print(f"{args.n} mutations (seed {args.seed}) of {len(texts)} shipped scenario files:")
+    for k in (
+        "precise error",
+        "error not naming the file",
+        "crash",
+        "meaningless accepted",
+        "valid accepted",
+    ):
+        print(f"  {k:28s} {counts[k]}")
+    for k, v in examples.items():
+        print(f"  example {k}: {v}")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,257 @@
+"""Faults at the command line and in writing outputs (issue 13): exit 2 with one line, nothing lost."""
+
+import os
+
+import numpy as np
+import pytest
+
+from adaptive_dd.cli import EXIT_INTERNAL, EXIT_INTERRUPTED, main
+from adaptive_dd.outputs import PARTIAL_MARKER, OutputSet, atomic_write, check_output_dir
+
+TINY = """
+[run]
+duration = 0.3
+sample_period = 0.001
+seeds = 1
+controllers = ["pd"]
+[[payload]]
+at = 0.15
+mass = 1.0
+"""
+
+
+@pytest.fixture
+def tiny(tmp_path):
+    p = tmp_path / "tiny.toml"
+    p.write_text(TINY)
+    return p
+
+
+def old_set(folder):
+    folder.mkdir(parents=True, exist_ok=True)
+    for name in ("metrics.csv", "metrics.json", "tracking_error.png"):
+        (folder / name).write_text("old")
+
+
+def assert_old_set_intact(folder):
+    assert sorted(p.name for p in folder.iterdir()) == ["metrics.csv", "metrics.json", "tracking_error.png"]
+    assert all((folder / n).read_text() == "old" for n in ("metrics.csv", "metrics.json"))
+
+
+def test_file_in_the_way_is_refused_before_the_run(tmp_path, tiny, monkeypatch, capsys):
+    import adaptive_dd.benchmark.runner as runner
+
+    monkeypatch.setattr(runner, "run_benchmark", lambda *a, **k: pytest.fail("ran before checking"))
+    (tmp_path / "file").write_text("x")
+    assert main(["benchmark", str(tiny), "--out", str(tmp_path / "file" / "out")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and f"{tmp_path / 'file'} is a file" in err
+    assert main(["benchmark", str(tiny), "--json", str(tmp_path / "file" / "m.json")]) == 2
+    assert main(["benchmark", str(tiny), "--json", str(tmp_path), "--out", str(tmp_path / "o")]) == 2
+    assert "is a folder" in capsys.readouterr().err
+
+
+@pytest.mark.skipif(os.geteuid() == 0, reason="root writes into read-only folders")
+def test_read_only_folder_is_refused(tmp_path, tiny):
+    ro = tmp_path / "ro"
+    ro.mkdir()
+    ro.chmod(0o500)
+    try:
+        assert main(["benchmark", str(tiny), "--out", str(ro / "out")]) == 2
+    finally:
+        ro.chmod(0o700)
+
+
+def test_unwritable_folder_is_refused(tmp_path, monkeypatch):
+    from pathlib import Path
+
+    real = Path.write_bytes
+
+    def denied(self, data):
+        if self.name.startswith(".write-test"):
+            raise PermissionError(13, "Permission denied", str(self))
+        return real(self, data)
+
+    monkeypatch.setattr(Path, "write_bytes", denied)
+    with pytest.raises(ValueError, match="output folder is not writable: Permission denied"):
+        check_output_dir(tmp_path / "x")
+
+
+def test_interrupted_run_leaves_the_old_set(tmp_path, tiny, monkeypatch, capsys):
+    import adaptive_dd.plotting as plotting
+
+    out = tmp_path / "out"
+    old_set(out)
+
+    def interrupt(*a, **k):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(plotting, "plot_tracking_errors", interrupt)  # after the CSV and JSON
+    assert main(["benchmark", str(tiny), "--out", str(out), "--no-progress"]) == EXIT_INTERRUPTED
+    assert_old_set_intact(out)  # no new CSV/JSON, no staging folder, no marker
+    monkeypatch.undo()
+    assert main(["benchmark", str(tiny), "--out", str(out), "--no-progress"]) == 0
+    assert (out / "metrics.csv").read_text().startswith("controller,")
+    assert not any(p.name.startswith(".") or p.name == PARTIAL_MARKER for p in out.iterdir())
+
+
+def test_interrupted_commit_is_marked_partial(tmp_path, monkeypatch):
+    out = tmp_path / "out"
+    old_set(out)
+    s = OutputSet(out)
+    for name in ("metrics.csv", "metrics.json"):
+        s.path(name).write_text("new")
+    real, calls = os.replace, []
+
+    def replace(a, b):
+        calls.append(b)
+        if len(calls) == 3:  # marker, first file, then the interruption
+            raise KeyboardInterrupt
+        real(a, b)
+
+    monkeypatch.setattr(os, "replace", replace)
+    with pytest.raises(KeyboardInterrupt):
+        s.commit()
+    assert (out / PARTIAL_MARKER).is_file()  # a mix, but marked
+    assert "partly updated" in (out / PARTIAL_MARKER).read_text()
+
+
+def test_atomic_write_keeps_the_old_file_on_failure(tmp_path):
+    p = tmp_path / "a.json"
+    p.write_text("old")
+    with pytest.raises(KeyboardInterrupt), atomic_write(p) as fh:
+        fh.write("new, half")
+        raise KeyboardInterrupt
+    assert p.read_text() == "old" and sorted(x.name for x in tmp_path.iterdir()) == ["a.json"]
+
+
+def test_output_set_discards_on_error(tmp_path):
+    out = tmp_path / "o"
+    old_set(out)
+    with pytest.raises(RuntimeError), OutputSet(out) as s:
+        s.path("metrics.csv").write_text("new")
+        raise RuntimeError("boom")
+    assert_old_set_intact(out)
+
+
+def test_internal_error_short_message_and_debug_traceback(monkeypatch, capsys):
+    import adaptive_dd.cli as cli
+
+    def boom(args):
+        raise RuntimeError("something broke")
+
+    monkeypatch.setattr(cli, "_cmd_validate", boom)
+    assert main(["validate"]) == EXIT_INTERNAL
+    err = capsys.readouterr().err
+    assert "internal error: RuntimeError: something broke" in err
+    assert "adaptive_dd issue tracker" in err and "--debug" in err and "Traceback" not in err
+    assert main(["--debug", "validate"]) == EXIT_INTERNAL
+    assert "Traceback" in capsys.readouterr().err
+
+
+def test_plain_value_error_outside_our_code_is_internal(monkeypatch, capsys):
+    import adaptive_dd.cli as cli
+
+    monkeypatch.setattr(cli, "_cmd_validate", lambda args: np.zeros(0).max())
+    assert main(["validate"]) == EXIT_INTERNAL
+
+
+def test_version_and_no_abbreviations(capsys):
+    with pytest.raises(SystemExit) as e:
+        main(["--version"])
+    assert e.value.code == 0 and "adaptive-dd 0.1.0" in capsys.readouterr().out
+    with pytest.raises(SystemExit) as e:
+        main(["benchmark", "--seed", "2"])
+    assert e.value.code == 2 and "unrecognized arguments: --seed" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize(
+    "argv, match",
+    [
+        (["simulate", "--sample-period", "0"], "--sample-period: 0 is outside"),
+        (["simulate", "--duration", "nan"], "--duration: nan is outside"),
+        (["simulate", "--seeds", "0"], "--seeds: 0 is outside"),
+        (["simulate", "--payload", "-1"], "--payload: -1 is outside"),
+        (["check", "--states", "x"], "--states: not an integer"),
+        (["benchmark", "--seeds", "18446744073709551616"], "--seeds: 18446744073709551616 is outside"),
+        (["identify", "x.csv", "--tau-f", "0"], "--tau-f: 0 is outside"),
+    ],
+)
+def test_bad_numeric_options_exit_2(argv, match, capsys):
+    with pytest.raises(SystemExit) as e:
+        main(argv)
+    assert e.value.code == 2 and match in capsys.readouterr().err
+
+
+def test_absurd_run_is_refused_with_the_estimate(tmp_path, capsys):
+    assert main(["simulate", "--duration", "1e9", "--out", str(tmp_path / "s")]) == 2
+    err = capsys.readouterr().err
+    assert "too large" in err and "MiB" in err and " h" in err
+    assert not (tmp_path / "s").exists()
+
+
+def test_validate_prints_defaults_or_all_errors(tmp_path, capsys):
+    assert main(["validate"]) == 0
+    assert "run.substeps = 2   (default)" in capsys.readouterr().out
+    bad = tmp_path / "bad.toml"
+    bad.write_text("[run]\nseeds = 0\nduration = nan\n")
+    assert main(["validate", str(bad)]) == 2
+    err = capsys.readouterr().err
+    assert "2 errors" in err and "bad.toml: run.seeds:" in err and "bad.toml: run.duration:" in err
+
+
+def write_csv(path, q):
+    t = np.arange(len(q)) * 1e-3
+    tau = np.zeros_like(q)
+    from adaptive_dd.io import write_recording
+
+    return write_recording(path, t, q, q * 0, tau)
+
+
+def test_identify_refuses_a_record_without_motion(tmp_path, capsys):
+    p = write_csv(tmp_path / "zeros.csv", np.zeros((2000, 2)))
+    assert main(["identify", str(p), "--out", str(tmp_path / "id")]) == 2
+    assert "does not move" in capsys.readouterr().err
+    assert not (tmp_path / "id" / "convergence.png").exists()
+
+
+def test_identify_refuses_long_filters_and_too_few_equations(tmp_path, monkeypatch, capsys):
+    q = np.sin(np.arange(2000)[:, None] * 1e-2 * np.array([1.0, 1.3]))
+    p = write_csv(tmp_path / "rec.csv", q)
+    assert main(["identify", str(p), "--tau-f", "100", "--out", str(tmp_path / "id")]) == 2
+    assert "tau_f / T = 1e+05" in capsys.readouterr().err
+    assert main(["identify", str(p), "--tau-f", "0.5", "--out", str(tmp_path / "id")]) == 2
+    assert "shorter than 10 tau_f" in capsys.readouterr().err
+
+    import adaptive_dd.identification.estimators as est
+
+    class Few:
+        n_used, split, final, std, theta = 12, "full", np.ones(7), np.ones(7), np.ones((2000, 7))
+
+    monkeypatch.setattr(est, "estimate", lambda *a, **k: Few())
+    assert main(["identify", str(p), "--out", str(tmp_path / "id")]) == 2
+    err = capsys.readouterr().err
+    assert "only 12 usable equations" in err and "at least 70" in err
+
+
+def test_plain_value_error_from_our_code_is_a_user_error(monkeypatch, capsys):
+    import adaptive_dd.cli as cli
+    from adaptive_dd.controllers import make_controller
+
+    monkeypatch.setattr(cli, "_cmd_validate", lambda args: make_controller("nope"))
+    assert main(["validate"]) == 2
+    assert "error: unknown controller 'nope'" in capsys.readouterr().err
+
+
+def test_large_run_prints_its_estimate_first(tiny, tmp_path, monkeypatch, capsys):
+    import adaptive_dd.benchmark.runner as runner
+    from adaptive_dd.benchmark.scenario import LIMITS
+
+    def interrupt(*a, **k):
+        raise KeyboardInterrupt
+
+    monkeypatch.setitem(LIMITS, "large_seconds", 0.0)
+    monkeypatch.setattr(runner, "run_benchmark", interrupt)
+    assert main(["benchmark", str(tiny), "--out", str(tmp_path / "o")]) == EXIT_INTERRUPTED
+    assert "estimate: 300 samples x 1 trials: about" in capsys.readouterr().err
+    assert list((tmp_path / "o").iterdir()) == []  # the staging folder is gone
