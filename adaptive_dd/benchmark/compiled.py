@@ -3,7 +3,8 @@
 For the built-in controllers (``pd``, ``ct_nominal``, ``ct_oracle``, ``ct_oracle_textbook``,
 ``adaptive_ct``, ``adaptive_ct_paper``, ``slotine_li``, ``slotine_li_oracle``)
 :func:`closed_loop_block` runs a block of samples of every trial, trials in parallel
-across cores (``numba.prange``), calling the same compiled pieces as the Python path: the actuator and sensor models
+across cores (``numba.prange``), calling the same compiled pieces as the Python path:
+the actuator and sensor models
 (:mod:`adaptive_dd.plant.sampling`), the plant integrator, the control laws
 (:mod:`adaptive_dd.controllers.laws`), the online estimator
 (:mod:`adaptive_dd.identification.online_kernel`) and the streamed metrics
