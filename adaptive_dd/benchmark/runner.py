@@ -23,13 +23,14 @@ from __future__ import annotations
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import numpy as np
 from numpy.typing import NDArray
 
 from adaptive_dd.benchmark.scenario import Scenario
 from adaptive_dd.benchmark.streaming import N_ACC, accumulate_batch, segment_bounds
-from adaptive_dd.controllers import Controller, Gains, make_controller
+from adaptive_dd.controllers import Controller, Gains, controller_label, make_controller
 from adaptive_dd.errors import ParameterError, SignalError
 from adaptive_dd.plant.parameters import TABLE1_SIGMA, payload_sigma_delta
 from adaptive_dd.plant.simulator import ArmSimulator, PayloadSchedule, SensorConfig
@@ -149,7 +150,15 @@ def run_benchmark(
         raise ParameterError(f"engine must be one of {ENGINES}, got {engine!r}")
     t0 = time.perf_counter()
     gains = Gains(scenario.bandwidth, scenario.damping)
-    ctrls = controllers or {name: make_controller(name, gains) for name in scenario.controllers}
+    if controllers is None:
+        ctrls = {}
+        for spec in scenario.controllers:
+            opts = scenario.options(controller_label(spec)) or scenario.options(spec)
+            src = Path(scenario.source)
+            search = (src.parent, Path.cwd()) if src.is_file() else (Path.cwd(),)
+            ctrls[controller_label(spec, opts)] = make_controller(spec, gains, opts, search=search)
+    else:
+        ctrls = controllers
     idx = tuple(range(scenario.seeds)) if seed_indices is None else tuple(int(i) for i in seed_indices)
     if not idx or min(idx) < 0:
         raise ParameterError(f"seed_indices must be a non-empty list of indices >= 0, got {seed_indices}")

@@ -1,0 +1,215 @@
+"""Controllers by name or import path, with settings from a scenario's ``[controllers.NAME]`` table.
+
+A scenario lists built-in names (:data:`CONTROLLERS`) or import paths ``"package.module:Class"``
+of your own classes (the protocol: ``docs/controllers.md``). Settings every controller takes:
+
+``bandwidth``, ``damping``
+    Override the scenario's ``[control]`` gains for this controller.
+``label``
+    The name the controller's results carry (default: the built-in name, or the class name).
+
+Built-in settings:
+
+``adaptive_ct``
+    ``boost_bandwidth``, ``boost_duration``, ``estimator = {...}`` (fields of
+    :class:`~adaptive_dd.identification.online.OnlineConfig`: ``tau_f``, ``split``,
+    ``construction``, ``p0_payload``, ``p0_j2``, ``project``, ``align``), ``detector = {...}``
+    (fields of :class:`~adaptive_dd.identification.online.ChangeDetector`), or
+    ``detector = false`` for none.
+``slotine_li``
+    ``gamma`` (seven adaptation gains).
+``ct_nominal``, ``pd``
+    ``sigma`` (the fixed model, seven base parameters).
+
+A plug-in class is called with its table's settings as keyword arguments, plus ``gains``
+(:class:`Gains`) and ``sigma_nominal`` (the arm's base parameters) if its ``__init__``
+takes them. Unknown settings are errors naming the controller and the key.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import importlib
+import inspect
+import sys
+from typing import Any
+
+import numpy as np
+
+from adaptive_dd.controllers.adaptive import ADAPTIVE_ONLINE, AdaptiveCT
+from adaptive_dd.controllers.base import DEFAULT_GAINS, Controller, Gains
+from adaptive_dd.controllers.feedback import PD, ComputedTorque
+from adaptive_dd.controllers.slotine_li import SlotineLi
+from adaptive_dd.errors import ParameterError
+from adaptive_dd.identification.online import ChangeDetector, OnlineConfig
+from adaptive_dd.plant.parameters import TABLE1_SIGMA
+
+__all__ = ["CONTROLLERS", "controller_label", "load_controller_class", "make_controller"]
+
+CONTROLLERS = (
+    "pd",
+    "ct_nominal",
+    "ct_oracle",
+    "ct_oracle_textbook",
+    "adaptive_ct_paper",
+    "adaptive_ct",
+    "slotine_li",
+    "slotine_li_oracle",
+)
+"""Names a scenario may list."""
+
+COMMON = {"bandwidth", "damping", "label"}
+ONLINE_KEYS = {"tau_f", "split", "construction", "p0_payload", "p0_j2", "project", "align"}
+
+
+def controller_label(spec: str, options: dict | None = None) -> str:
+    """The name results carry: the ``label`` setting, the built-in name, or the class name."""
+    if options and "label" in options:
+        return str(options["label"])
+    return spec.rsplit(":", 1)[-1].rsplit(".", 1)[-1] if ":" in spec else spec
+
+
+def load_controller_class(path: str, search: tuple = ()) -> type:
+    """Import ``"package.module:Class"``; clear errors for a missing module, class or protocol.
+
+    The module is looked up on the Python path, then in the folders ``search`` (the
+    scenario file's folder and the working directory, when a scenario names it).
+    """
+    if ":" not in path:
+        raise ParameterError(f"controller {path!r}: an import path is 'package.module:Class'")
+    mod_name, _, attr = path.partition(":")
+    extra = [str(p) for p in search if str(p) not in sys.path]
+    sys.path[len(sys.path) :] = extra
+    try:
+        obj = importlib.import_module(mod_name)
+    except ImportError as exc:
+        raise ParameterError(f"controller {path!r}: cannot import module {mod_name!r}: {exc}") from None
+    finally:
+        for p in extra:
+            sys.path.remove(p)
+    for part in attr.split("."):
+        if not hasattr(obj, part):
+            raise ParameterError(f"controller {path!r}: module {mod_name!r} has no {attr!r}")
+        obj = getattr(obj, part)
+    missing = [m for m in ("reset", "command", "observe") if not callable(getattr(obj, m, None))]
+    if not inspect.isclass(obj) or missing:
+        raise ParameterError(
+            f"controller {path!r}: not a controller class (needs reset, command, observe; missing {missing})"
+        )
+    return obj
+
+
+def _unknown(spec: str, options: dict, allowed: set) -> None:
+    bad = sorted(set(options) - allowed)
+    if bad:
+        raise ParameterError(f"controllers.{spec}: unknown setting(s) {bad}; allowed: {sorted(allowed)}")
+
+
+def _sigma(spec: str, options: dict) -> np.ndarray:
+    from adaptive_dd.plant.parameters import validate_sigma
+
+    return validate_sigma(options.get("sigma", TABLE1_SIGMA), f"controllers.{spec}.sigma")
+
+
+def _online(spec: str, options: dict) -> OnlineConfig:
+    est = dict(options.get("estimator", {}))
+    _unknown(f"{spec}.estimator", est, ONLINE_KEYS)
+    det = options.get("detector", {})
+    kw: dict[str, Any] = dict(est)
+    if det is False:
+        kw["detector"] = None
+    elif isinstance(det, dict):
+        fields = {f.name for f in dataclasses.fields(ChangeDetector)}
+        _unknown(f"{spec}.detector", det, fields)
+        kw["detector"] = ChangeDetector(**det)
+    else:
+        raise ParameterError(
+            f"controllers.{spec}.detector: a table of detector settings or false, got {det!r}"
+        )
+    return dataclasses.replace(ADAPTIVE_ONLINE, **kw)
+
+
+def _builtin(spec: str, g: Gains, options: dict, sigma_nominal) -> Controller:
+    o = {k: v for k, v in options.items() if k not in COMMON}
+    allowed = {
+        "pd": {"sigma"},
+        "ct_nominal": {"sigma"},
+        "adaptive_ct": {"boost_bandwidth", "boost_duration", "estimator", "detector"},
+        "slotine_li": {"gamma"},
+    }.get(spec, set())
+    _unknown(spec, o, allowed)
+    if spec == "pd":
+        return PD(g, _sigma(spec, o) if "sigma" in o else sigma_nominal)
+    if spec == "ct_nominal":
+        return ComputedTorque(g, _sigma(spec, o) if "sigma" in o else sigma_nominal)
+    if spec == "ct_oracle":
+        return ComputedTorque(g, sigma_nominal, oracle=True)
+    if spec == "ct_oracle_textbook":
+        return ComputedTorque(g, sigma_nominal, oracle=True, reference_velocity=False)
+    if spec == "adaptive_ct_paper":
+        from adaptive_dd.controllers.adaptive import adaptive_ct_paper
+
+        return adaptive_ct_paper(g, sigma_nominal)
+    if spec == "adaptive_ct":
+        boost = {k: o[k] for k in ("boost_bandwidth", "boost_duration") if k in o}
+        return AdaptiveCT(_online(spec, o), g, sigma_nominal, **boost)
+    if spec == "slotine_li":
+        return SlotineLi(g, o["gamma"], sigma_nominal) if "gamma" in o else SlotineLi(g, theta0=sigma_nominal)
+    return SlotineLi(g, theta0=sigma_nominal, oracle=True)
+
+
+def make_controller(
+    spec: str,
+    gains: Gains | None = None,
+    options: dict | None = None,
+    sigma_nominal=TABLE1_SIGMA,
+    search: tuple = (),
+) -> Controller:
+    """A controller by built-in name or import path, with its settings.
+
+    Raises
+    ------
+    ParameterError
+        Unknown name, an import path that does not load, an unknown or invalid setting
+        (naming the controller and the key).
+    """
+    options = dict(options or {})
+    base = gains or DEFAULT_GAINS
+    try:
+        g = Gains(options.get("bandwidth", base.bandwidth), options.get("damping", base.damping))
+    except ParameterError as exc:
+        raise ParameterError(f"controllers.{spec}: {exc}") from None
+    if spec in CONTROLLERS:
+        try:
+            ctrl = _builtin(spec, g, options, sigma_nominal)
+        except (TypeError, ValueError) as exc:
+            raise ParameterError(f"controllers.{spec}: {exc}") from None
+    elif ":" in spec:
+        ctrl = _plugin(spec, g, options, sigma_nominal, search)
+    else:
+        raise ParameterError(
+            f"unknown controller {spec!r}; choose from {CONTROLLERS} or 'package.module:Class'"
+        )
+    if "label" in options:
+        ctrl.name = str(options["label"])
+    return ctrl
+
+
+def _plugin(spec: str, g: Gains, options: dict, sigma_nominal, search: tuple) -> Controller:
+    cls = load_controller_class(spec, search)
+    kw = {k: v for k, v in options.items() if k not in COMMON}
+    params = inspect.signature(cls).parameters
+    takes_any = any(p.kind is inspect.Parameter.VAR_KEYWORD for p in params.values())
+    if "gains" in params or takes_any:
+        kw["gains"] = g
+    if "sigma_nominal" in params:
+        kw["sigma_nominal"] = sigma_nominal
+    if not takes_any:
+        _unknown(spec, {k: v for k, v in kw.items() if k not in ("gains", "sigma_nominal")}, set(params))
+    try:
+        ctrl = cls(**kw)
+    except (TypeError, ValueError) as exc:
+        raise ParameterError(f"controllers.{spec}: {type(exc).__name__}: {exc}") from None
+    if not hasattr(ctrl, "name") or ctrl.name == Controller.name:
+        ctrl.name = controller_label(spec)
+    return ctrl

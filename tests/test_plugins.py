@@ -1,0 +1,79 @@
+"""Controllers by import path with their settings, the worked example plug-in, the registry's errors."""
+
+import dataclasses
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from adaptive_dd.benchmark.metrics import compute_metrics
+from adaptive_dd.benchmark.runner import run_benchmark
+from adaptive_dd.benchmark.scenario import load_scenario
+from adaptive_dd.controllers import AdaptiveCT, make_controller
+from adaptive_dd.errors import ParameterError
+
+EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
+
+
+def test_the_example_plugin_runs_from_a_scenario_with_its_settings():
+    sc = load_scenario(EXAMPLES / "plugin.toml")
+    sc = dataclasses.replace(sc, seeds=2, duration=4.0, swap_times=(2.0,), swap_masses=(3.0,))
+    res = run_benchmark(sc, progress=False)
+    assert "payload_gradient" in res.runs  # the label from [controllers.PayloadGradient]
+    run = res.runs["payload_gradient"]
+    assert run.engine == "python" and not run.failed.any() and run.floor == "slotine_li_oracle"
+    m = compute_metrics(res)["controllers"]
+    seg = m["payload_gradient"]["segments"][1]
+    assert seg["ratio_to_floor"] is not None
+    assert 1.0 < seg["mass_estimate"] < 4.0  # it learns the 3 kg disk (from 0)
+    # gamma from the table reached the object: a run with another gamma gives other numbers
+    from adaptive_dd.benchmark.scenario_checks import freeze
+
+    other = dataclasses.replace(sc, controller_options=(("PayloadGradient", freeze({"gamma": 1.0})),))
+    res2 = run_benchmark(dataclasses.replace(other, controllers=sc.controllers[2:3]), progress=False)
+    assert not np.allclose(res2.runs["PayloadGradient"].acc, run.acc)
+
+
+def test_builtin_settings_reach_the_controller():
+    c = make_controller("adaptive_ct", options={"boost_duration": 0.05, "estimator": {"tau_f": 0.02}})
+    assert isinstance(c, AdaptiveCT) and c.boost_duration == 0.05 and c.online.tau_f == 0.02
+    c = make_controller("adaptive_ct", options={"detector": False, "boost_bandwidth": None})
+    assert c.online.detector is None
+    c = make_controller("ct_oracle", options={"bandwidth": 20.0, "label": "slow_oracle"})
+    assert c.gains.bandwidth == 20.0 and c.name == "slow_oracle"
+
+
+@pytest.mark.parametrize(
+    ("spec", "options", "match"),
+    [
+        ("adaptive_ct", {"tauf": 0.02}, "unknown setting"),
+        ("adaptive_ct", {"estimator": {"tau": 1}}, "unknown setting"),
+        ("adaptive_ct", {"detector": {"threshold": 0.5}}, "threshold"),
+        ("slotine_li", {"gamma": [1.0, 2.0]}, "gamma"),
+        ("ct_oracle", {"bandwidth": -1.0}, "bandwidth"),
+        ("nope", {}, "unknown controller"),
+        ("no_such_module_xyz:Ctrl", {}, "cannot import"),
+        ("adaptive_dd.controllers:NoSuchClass", {}, "has no"),
+        ("adaptive_dd.plant:TABLE1_SIGMA", {}, "not a controller class"),
+        ("adaptive_dd.controllers:ComputedTorque", {"unknown_key": 1}, "unknown setting"),
+    ],
+)
+def test_bad_controller_specs_and_settings_are_named(spec, options, match):
+    with pytest.raises(ParameterError, match=match):
+        make_controller(spec, options=options)
+
+
+def test_a_plugin_written_against_the_old_interface_still_works():
+    """reset / command(q, qd, q_d, qd_d, qdd_d, sigma_true=None) / observe, no new attributes."""
+    from adaptive_dd.controllers import Controller
+
+    class OldPD(Controller):
+        name = "old_pd"
+
+        def command(self, q, qd, q_d, qd_d, qdd_d, sigma_true=None):
+            assert sigma_true is None  # only oracles see the true model
+            return 100.0 * (q_d - q) + 10.0 * (qd_d - qd)
+
+    sc = dataclasses.replace(load_scenario(), seeds=1, duration=0.5, swap_times=(), swap_masses=())
+    res = run_benchmark(sc, progress=False, controllers={"old_pd": OldPD()})
+    assert not res.runs["old_pd"].failed.any() and not res.runs["old_pd"].error
