@@ -20,12 +20,34 @@ from adaptive_dd.errors import (
     SignalError,
 )
 
-__version__ = "0.1.0"
+__version__ = "0.2.0"
+
+
+def __getattr__(name: str):
+    """The library entry points, imported on first use (keeps ``import adaptive_dd`` light)."""
+    lazy = {
+        "Simulation": "adaptive_dd.simulation",
+        "run_trial": "adaptive_dd.simulation",
+        "load_scenario": "adaptive_dd.benchmark.scenario",
+        "run_benchmark": "adaptive_dd.benchmark.runner",
+        "make_controller": "adaptive_dd.controllers",
+    }
+    if name in lazy:
+        import importlib
+
+        return getattr(importlib.import_module(lazy[name]), name)
+    raise AttributeError(f"module 'adaptive_dd' has no attribute {name!r}")
+
 
 __all__ = [
     "DataError",
     "ParameterError",
     "ScenarioError",
     "SignalError",
+    "Simulation",
     "__version__",
+    "load_scenario",
+    "make_controller",
+    "run_benchmark",
+    "run_trial",
 ]

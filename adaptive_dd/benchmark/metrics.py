@@ -170,7 +170,15 @@ def compute_metrics(res: BenchmarkResult) -> dict:
             "segments": segs,
         }
     _add_seed_statistics(res, out)
-    return {"scenario": sc.source, "seeds": sc.seeds, "wall_time_s": res.wall_time, "controllers": out}
+    from adaptive_dd.benchmark.results import provenance
+
+    return {
+        "scenario": sc.source,
+        "seeds": sc.seeds,
+        "wall_time_s": res.wall_time,
+        "provenance": provenance(res),
+        "controllers": out,
+    }
 
 
 def _seed_list(x: np.ndarray, ok: np.ndarray) -> list:

@@ -98,6 +98,25 @@ class BenchmarkResult:
     wall_time: float = 0.0
     seed_indices: tuple = ()
 
+    def to_frame(self):
+        """One row per controller x seed x segment (pandas DataFrame; see
+        :func:`adaptive_dd.benchmark.results.to_frame`)."""
+        from adaptive_dd.benchmark.results import to_frame
+
+        return to_frame(self)
+
+    def summary(self):
+        """Per controller and segment: mean, median, p90, max of the per-seed ratio to the floor."""
+        from adaptive_dd.benchmark.results import summary_frame
+
+        return summary_frame(self)
+
+    def metrics(self) -> dict:
+        """The metrics of :func:`adaptive_dd.benchmark.metrics.compute_metrics` (the JSON layout)."""
+        from adaptive_dd.benchmark.metrics import compute_metrics
+
+        return compute_metrics(self)
+
 
 def _trial_rngs(seed: int, indices: Sequence[int]) -> list[np.random.Generator]:
     return [np.random.default_rng([int(seed), int(i)]) for i in indices]

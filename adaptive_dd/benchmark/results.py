@@ -1,0 +1,154 @@
+"""Benchmark results as data: one row per controller x seed x segment, summaries, provenance."""
+
+from __future__ import annotations
+
+import dataclasses
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+
+__all__ = ["provenance", "scenario_dict", "summary_frame", "to_frame"]
+
+
+def to_frame(res):
+    """Long table (pandas DataFrame): one row per controller x seed x segment.
+
+    Columns: ``controller, seed, segment, start, end, mass, rms_error, rms_error_settled,
+    rms_error_joint1, rms_error_joint2, max_error, rms_torque, saturation_fraction,
+    recovery_time, mass_estimate, floor, ratio_to_floor, detection_delay, false_alarms,
+    failed, engine``; errors in rad, torques in N m, times in s. ``seed`` is the seed index
+    i of trial i (noise seeded by ``(scenario.seed, i)``, the same for every controller).
+    """
+    import pandas as pd
+
+    from adaptive_dd.benchmark.metrics import FALSE_ALARM_WINDOW, per_seed_segment_metrics
+
+    sc = res.scenario
+    segs = sc.segments()
+    per = {name: per_seed_segment_metrics(res, run) for name, run in res.runs.items()}
+    rows = []
+    for name, run in res.runs.items():
+        m = per[name]
+        floor = run.floor if run.floor in per else None
+        false = None
+        if run.alarm_times is not None:
+            false = [
+                sum(1 for x in tr if not any(0 <= x - s < FALSE_ALARM_WINDOW for s in sc.swap_times))
+                for tr in run.alarm_times
+            ]
+        for i, seed in enumerate(res.seed_indices):
+            for s, (a, b, mass) in enumerate(segs):
+                delay = np.nan
+                if run.alarm_times is not None and s > 0:
+                    hits = [x - a for x in run.alarm_times[i] if 0 <= x - a < FALSE_ALARM_WINDOW]
+                    delay = min(hits) if hits else np.nan
+                row = {"controller": name, "seed": seed, "segment": s, "start": a, "end": b, "mass": mass}
+                row.update({k: float(v[i, s]) for k, v in m.items()})
+                row["floor"] = floor
+                row["ratio_to_floor"] = (
+                    float(m["rms_error"][i, s] / per[floor]["rms_error"][i, s]) if floor else np.nan
+                )
+                row["detection_delay"] = delay
+                row["false_alarms"] = np.nan if false is None else false[i]
+                row["failed"] = bool(run.failed[i])
+                row["engine"] = run.engine
+                rows.append(row)
+    return pd.DataFrame(rows)
+
+
+def summary_frame(res):
+    """Per controller and segment: mean, median, p90 and max of the per-seed RMS error and
+    ratio to the floor, and the worst seed (failed trials left out)."""
+    df = to_frame(res)
+    df = df[~df["failed"]]
+
+    def p90(x):
+        return float(np.nanpercentile(x, 90)) if x.notna().any() else np.nan
+
+    g = df.groupby(["controller", "segment", "mass"], sort=False)
+    out = g.agg(
+        rms_error_mean=("rms_error", "mean"),
+        rms_error_median=("rms_error", "median"),
+        ratio_mean=("ratio_to_floor", "mean"),
+        ratio_median=("ratio_to_floor", "median"),
+        ratio_p90=("ratio_to_floor", p90),
+        ratio_max=("ratio_to_floor", "max"),
+        n=("seed", "size"),
+    )
+
+    def worst(x):
+        r = x["ratio_to_floor"]
+        return int(x["seed"].iloc[int(np.nanargmax(r))]) if r.notna().any() else -1
+
+    out["worst_seed"] = g.apply(worst, include_groups=False)
+    return out.reset_index()
+
+
+def scenario_dict(sc) -> dict:
+    """The resolved scenario as JSON-ready data (every field, defaults filled in)."""
+    out = {}
+    for f in dataclasses.fields(sc):
+        v = getattr(sc, f.name)
+        if f.name == "defaulted":
+            v = sorted(v)
+        elif f.name == "controller_options":
+            v = {n: sc.options(n) for n, _ in v}
+        elif dataclasses.is_dataclass(v):
+            v = dataclasses.asdict(v)
+        elif hasattr(v, "to_dict"):
+            v = v.to_dict()
+        out[f.name] = _jsonable(v)
+    return out
+
+
+def _jsonable(v):
+    if isinstance(v, dict):
+        return {str(k): _jsonable(x) for k, x in v.items()}
+    if isinstance(v, list | tuple):
+        return [_jsonable(x) for x in v]
+    if isinstance(v, np.ndarray):
+        return v.tolist()
+    if isinstance(v, np.generic):
+        return v.item()
+    if isinstance(v, frozenset | set):
+        return sorted(v)
+    return v
+
+
+def provenance(res) -> dict:
+    """What a figure in a paper needs to be traced back: version, commit, command, seeds, time."""
+    from adaptive_dd import __version__
+
+    commit = None
+    try:
+        here = Path(__file__).resolve().parent
+        out = subprocess.run(
+            ["git", "rev-parse", "HEAD"], cwd=here, capture_output=True, text=True, timeout=5, check=False
+        )
+        commit = out.stdout.strip() or None
+        if commit:
+            dirty = subprocess.run(
+                ["git", "status", "--porcelain", "--untracked-files=no"],
+                cwd=here,
+                capture_output=True,
+                text=True,
+                timeout=5,
+                check=False,
+            )
+            commit += "+dirty" if dirty.stdout.strip() else ""
+    except (OSError, subprocess.SubprocessError):
+        commit = None
+    return {
+        "package": "adaptive_dd",
+        "version": __version__,
+        "git_commit": commit,
+        "command_line": list(sys.argv),
+        "python": sys.version.split()[0],
+        "seed": res.scenario.seed,
+        "seed_indices": list(res.seed_indices),
+        "wall_time_s": res.wall_time,
+        "engines": {n: r.engine for n, r in res.runs.items()},
+        "scenario": scenario_dict(res.scenario),
+    }

@@ -1,0 +1,69 @@
+"""One trial in one's own loop, and results as data."""
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from adaptive_dd.benchmark.scenario import load_scenario
+from adaptive_dd.controllers import ComputedTorque, computed_torque_law
+from adaptive_dd.errors import SignalError
+from adaptive_dd.simulation import Simulation, run_trial
+
+
+@pytest.fixture(scope="module")
+def short():
+    return dataclasses.replace(
+        load_scenario(),
+        seeds=2,
+        duration=1.0,
+        swap_times=(0.6,),
+        swap_masses=(3.0,),
+        controllers=("ct_oracle",),
+    )
+
+
+def test_stepping_one_arm_by_hand_equals_the_benchmark_trial(short):
+    sim = Simulation(short, seed_index=1)
+    meas = sim.reset()
+    g = ComputedTorque(oracle=True).gains
+    while not sim.done:
+        tau = computed_torque_law(
+            meas.q[None],
+            meas.qd[None],
+            meas.q_d,
+            meas.qd_d,
+            meas.qdd_d,
+            sim.sigma_true[None],
+            g.kp,
+            g.kd,
+            g.lam,
+        )[0]
+        before = meas.q_d - sim.q_true
+        meas = sim.step(tau)
+    assert sim.payload_mass == 3.0 and not sim.failed
+    res = run_trial(ComputedTorque(oracle=True), short, seed_index=1, name="ct_oracle")
+    run = res.runs["ct_oracle"]
+    np.testing.assert_allclose(run.e_norm[0, -1], np.linalg.norm(before), rtol=1e-6)
+    with pytest.raises(SignalError, match="done"):
+        sim.step(np.zeros(2))
+    with pytest.raises(SignalError, match="shape"):
+        sim.reset() and sim.step(np.zeros(3))
+
+
+def test_results_as_a_long_table_and_a_summary(short):
+    sc = dataclasses.replace(short, controllers=("ct_oracle", "adaptive_ct"))
+    from adaptive_dd.benchmark.runner import run_benchmark
+
+    res = run_benchmark(sc, progress=False)
+    df = res.to_frame()
+    assert len(df) == 2 * sc.seeds * len(sc.segments())  # controller x seed x segment
+    a = df[(df.controller == "adaptive_ct") & (df.segment == 1)]
+    o = df[(df.controller == "ct_oracle") & (df.segment == 1)]
+    np.testing.assert_allclose(a.ratio_to_floor.to_numpy(), a.rms_error.to_numpy() / o.rms_error.to_numpy())
+    s = res.summary()
+    row = s[(s.controller == "adaptive_ct") & (s.segment == 1)].iloc[0]
+    assert row.ratio_max == pytest.approx(a.ratio_to_floor.max()) and row.n == sc.seeds
+    m = res.metrics()
+    prov = m["provenance"]
+    assert prov["version"] and prov["seed_indices"] == [0, 1] and prov["scenario"]["swap_masses"] == [3.0]
