@@ -154,11 +154,23 @@ def akf_predict(state: AKFState, tau: ArrayLike, cfg: AKFConfig) -> AKFState:
     x = state.x
     sg = project_sigma(x[..., 4:])
     q1, qd1, stuck, slip = plant_step(
-        x[..., :2], x[..., 2:4], state.stuck, state.slip, np.asarray(tau, float), sg, cfg.sample_period, cfg.substeps
+        x[..., :2],
+        x[..., 2:4],
+        state.stuck,
+        state.slip,
+        np.asarray(tau, float),
+        sg,
+        cfg.sample_period,
+        cfg.substeps,
     )
     tau2 = np.broadcast_to(np.asarray(tau, float)[..., None, :], (*x.shape[:-1], 2, 2))
     a, g, p = local_sensitivities(
-        np.stack((x[..., :2], q1), -2), np.stack((x[..., 2:4], qd1), -2), tau2, sg, cfg.sample_period, cfg.jacobian_substeps
+        np.stack((x[..., :2], q1), -2),
+        np.stack((x[..., 2:4], qd1), -2),
+        tau2,
+        sg,
+        cfg.sample_period,
+        cfg.jacobian_substeps,
     )
     f = np.zeros_like(state.P)
     f[..., :4, :4], f[..., :4, 4:] = a[..., 0, :, :], p[..., 0, :, :]
@@ -172,7 +184,9 @@ def akf_predict(state: AKFState, tau: ArrayLike, cfg: AKFConfig) -> AKFState:
     return AKFState(xn, 0.5 * (pn + np.swapaxes(pn, -1, -2)), stuck, slip)
 
 
-def akf_update(state: AKFState, q_meas: ArrayLike, qd_meas: ArrayLike, cfg: AKFConfig) -> tuple[AKFState, dict]:
+def akf_update(
+    state: AKFState, q_meas: ArrayLike, qd_meas: ArrayLike, cfg: AKFConfig
+) -> tuple[AKFState, dict]:
     """Kalman update with the measured ``q, qd (..., 2)``; returns the state and ``{"innovation", "S"}``.
 
     Joseph form ``(I - K H) P (I - K H)^T + K R K^T``; sigma is projected onto physically
