@@ -17,8 +17,6 @@ import argparse
 import json
 import time
 
-import numpy as np
-
 from adaptive_dd.experiments import table2_torque, trial_rngs
 from adaptive_dd.identification.limits import (
     LIMIT_ESTIMATORS,

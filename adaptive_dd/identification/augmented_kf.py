@@ -125,7 +125,7 @@ def akf_init(
     sigma_std: ArrayLike,
     q0: ArrayLike,
     qd0: ArrayLike,
-    cfg: AKFConfig = AKFConfig(),  # noqa: B008
+    cfg: AKFConfig = AKFConfig(),
 ) -> AKFState:
     """Initial state: sigma0 with std ``sigma_std``, the arm at ``q0, qd0`` known to the sensor noise.
 
@@ -231,7 +231,7 @@ class AugmentedKalmanFilter:
     that will be applied over it; the first call only updates.
     """
 
-    def __init__(self, sigma0: ArrayLike, sigma_std: ArrayLike, cfg: AKFConfig = AKFConfig()) -> None:  # noqa: B008
+    def __init__(self, sigma0: ArrayLike, sigma_std: ArrayLike, cfg: AKFConfig = AKFConfig()) -> None:
         self.sigma0, self.sigma_std0 = np.asarray(sigma0, float), np.asarray(sigma_std, float)
         self.cfg = cfg
         self.state: AKFState | None = None

@@ -165,7 +165,8 @@ def format_bound_table(crb: FisherResult, estimates: dict, secs: dict | None = N
     lines.append("cells: bias ± std of the estimate over seeds [%] (std / bound)")
     lines.append("")
     lines.append(
-        f"{'estimator':16s} {'kind':8s} {'worst std/bound':>15s} {'target':>7s} {'worst |bias|/bound':>19s}  verdict"
+        f"{'estimator':16s} {'kind':8s} {'worst std/bound':>15s} {'target':>7s} "
+        f"{'worst |bias|/bound':>19s}  verdict"
     )
     for name in estimates:
         r = [x for x in rows if x["estimator"] == name]
