@@ -30,10 +30,8 @@ from numpy.typing import NDArray
 
 from adaptive_dd.errors import ParameterError
 from adaptive_dd.experiments import TABLE2
-from adaptive_dd.identification.augmented_kf import AKFConfig, AugmentedKalmanFilter
 from adaptive_dd.identification.estimators import estimate
 from adaptive_dd.identification.fisher import FisherResult, fisher_information
-from adaptive_dd.identification.output_error import output_error_fit
 from adaptive_dd.plant.parameters import SIGMA_NAMES, TABLE1_SIGMA
 
 __all__ = [
@@ -90,6 +88,9 @@ def run_information_estimators(
     progress : callable, optional
         Called with a label after each estimator.
     """
+    from adaptive_dd.identification.augmented_kf import AKFConfig, AugmentedKalmanFilter
+    from adaptive_dd.identification.output_error import output_error_fit
+
     bad = [e for e in estimators if e not in LIMIT_ESTIMATORS]
     if bad:
         raise ParameterError(f"unknown estimator(s) {bad}; choose from {LIMIT_ESTIMATORS}")
@@ -121,17 +122,20 @@ def run_information_estimators(
     return out, secs
 
 
-def bound_rows(crb: FisherResult, estimates: dict, sigma: Array = TABLE1_SIGMA) -> list[dict]:
+def bound_rows(
+    crb: FisherResult, estimates: dict, sigma: Array = TABLE1_SIGMA, kinds: dict | None = None
+) -> list[dict]:
     """Tidy rows per (estimator, parameter): bound, bias, std of the estimate, ratio, target met.
 
-    ``estimates[name]`` is ``(n_trials, 7)``. Percentages are of sigma; ``est_std_pct`` is
+    ``estimates[label]`` is ``(n_trials, 7)``; ``kinds[label]`` names the estimator whose
+    target applies (default: the label). Percentages are of sigma; ``est_std_pct`` is
     the standard deviation of the estimate over trials (ddof = 1).
     """
     rows = []
     for name, est in estimates.items():
         err = 100.0 * (np.asarray(est) - sigma) / sigma
         bias, std = err.mean(axis=0), err.std(axis=0, ddof=1)
-        target = TARGETS.get(name)
+        target = TARGETS.get((kinds or {}).get(name, name))
         for k, p in enumerate(SIGMA_NAMES):
             ratio = float(std[k] / crb.crb_std_pct[k])
             rows.append(
@@ -151,33 +155,37 @@ def bound_rows(crb: FisherResult, estimates: dict, sigma: Array = TABLE1_SIGMA) 
     return rows
 
 
-def format_bound_table(crb: FisherResult, estimates: dict, secs: dict | None = None) -> str:
+def format_bound_table(
+    crb: FisherResult, estimates: dict, secs: dict | None = None, kinds: dict | None = None
+) -> str:
     """Per parameter the bound, then per estimator ``bias ± std (std/bound)`` and the target."""
-    rows = bound_rows(crb, estimates)
-    head = f"{'':22s}" + "".join(f"{n:>21s}" for n in SIGMA_NAMES)
-    lines = [head, f"{'CRB std [%]':22s}" + "".join(f"{v:21.4f}" for v in crb.crb_std_pct)]
+    kinds = kinds or {}
+    rows = bound_rows(crb, estimates, kinds=kinds)
+    w = max(22, *(len(n) + 1 for n in estimates))
+    head = f"{'':{w}s}" + "".join(f"{n:>21s}" for n in SIGMA_NAMES)
+    lines = [head, f"{'CRB std [%]':{w}s}" + "".join(f"{v:21.4f}" for v in crb.crb_std_pct)]
     for name in estimates:
         r = [x for x in rows if x["estimator"] == name]
         cells = "".join(
             f"{x['bias_pct']:+8.4f}±{x['est_std_pct']:<6.4f}({x['std_over_crb']:5.1f})" for x in r
         )
-        lines.append(f"{name:22s}" + cells)
+        lines.append(f"{name:{w}s}" + cells)
     lines.append("cells: bias ± std of the estimate over seeds [%] (std / bound)")
     lines.append("")
     lines.append(
-        f"{'estimator':16s} {'kind':8s} {'worst std/bound':>15s} {'target':>7s} "
+        f"{'estimator':{w}s} {'kind':8s} {'worst std/bound':>15s} {'target':>7s} "
         f"{'worst |bias|/bound':>19s}  verdict"
     )
     for name in estimates:
         r = [x for x in rows if x["estimator"] == name]
         worst = max(x["std_over_crb"] for x in r)
         wb = max(x["bias_over_crb"] for x in r)
-        target = TARGETS.get(name)
-        kind = "online" if name in ONLINE else "offline"
+        target = TARGETS.get(kinds.get(name, name))
+        kind = "online" if kinds.get(name, name) in ONLINE else "offline"
         verdict = "-" if target is None else ("met" if worst <= target else "NOT met")
         t = "" if secs is None or name not in secs else f"  ({secs[name]:.1f} s)"
         tt = "-" if target is None else f"{target:.0f}x"
-        lines.append(f"{name:16s} {kind:8s} {worst:15.2f} {tt:>7s} {wb:19.2f}  {verdict}{t}")
+        lines.append(f"{name:{w}s} {kind:8s} {worst:15.2f} {tt:>7s} {wb:19.2f}  {verdict}{t}")
     return "\n".join(lines)
 
 
