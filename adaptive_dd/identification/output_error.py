@@ -194,10 +194,15 @@ def output_error_fit(
         segment then starts there. Knowing that the arm starts at rest is worth a lot:
         on Table 2 the bound on d2 is 0.008 % with x0 known, 0.025 % without.
     """
-    y = np.column_stack((np.asarray(q_meas, float), np.asarray(qd_meas, float)))
-    tau = np.asarray(tau, dtype=float)
-    if y.shape != (tau.shape[0], 4) or tau.shape[-1] != 2 or not np.all(np.isfinite(y)):
-        raise SignalError(f"q_meas, qd_meas, tau must be finite (N, 2) records, got {y.shape}, {tau.shape}")
+    q_meas, qd_meas, tau = (np.asarray(a, dtype=float) for a in (q_meas, qd_meas, tau))
+    if not (q_meas.shape == qd_meas.shape == tau.shape and tau.ndim == 2 and tau.shape[-1] == 2):
+        raise SignalError(
+            f"q_meas, qd_meas, tau must be (N, 2) records of one length, got "
+            f"{q_meas.shape}, {qd_meas.shape}, {tau.shape}"
+        )
+    y = np.column_stack((q_meas, qd_meas))
+    if not (np.all(np.isfinite(y)) and np.all(np.isfinite(tau))):
+        raise SignalError("q_meas, qd_meas, tau records must be finite")
     if segment_length < 2 or continuity_weight <= 0:
         raise ParameterError(
             f"need segment_length >= 2 and continuity_weight > 0, got {segment_length}, {continuity_weight}"
