@@ -176,7 +176,6 @@ def _reproduce_figures(res, tau_f: tuple, out: Path) -> list:
 def _cmd_identify(args: argparse.Namespace) -> int:
     from adaptive_dd.identification.estimators import estimate
     from adaptive_dd.io import read_recording
-    from adaptive_dd.plant.parameters import SIGMA_NAMES
     from adaptive_dd.plotting import plot_estimates
 
     rec = read_recording(args.data)
@@ -211,7 +210,23 @@ def _cmd_identify(args: argparse.Namespace) -> int:
             "warning: the estimate is not finite: the record does not excite the arm enough", file=sys.stderr
         )
         return 1
-    crb = _identify_bound(rec, final, args)
+    _print_with_bound(final, std, _identify_bound(rec, final, args), rec, args)
+    out = Path(args.out)
+    ref = np.full(7, np.nan) if args.true is None else np.asarray(args.true, float)
+    path = plot_estimates(
+        rec.t,
+        res.theta[None],
+        np.where(np.isfinite(ref), ref, final),
+        out / "convergence.png",
+        f"{Path(args.data).name}: {args.estimator} ({args.method})",
+    )
+    print(f"wrote {path}")
+    return 0
+
+
+def _print_with_bound(final, std, crb, rec, args: argparse.Namespace) -> None:
+    from adaptive_dd.plant.parameters import SIGMA_NAMES
+
     print(f"{'param':>6} {'estimate':>12} {'std':>10} {'CRB std':>10} {'CRB [%]':>9} {'std/CRB':>8}")
     for k, name in enumerate(SIGMA_NAMES):
         print(
@@ -224,17 +239,6 @@ def _cmd_identify(args: argparse.Namespace) -> int:
         f"signals {'q, qd' if rec.qd is not None else 'q'}), evaluated at the estimate; "
         f"condition number {crb.condition_number:.3g}"
     )
-    out = Path(args.out)
-    ref = np.full(7, np.nan) if args.true is None else np.asarray(args.true, float)
-    path = plot_estimates(
-        rec.t,
-        res.theta[None],
-        np.where(np.isfinite(ref), ref, final),
-        out / "convergence.png",
-        f"{Path(args.data).name}: {args.estimator} ({args.method})",
-    )
-    print(f"wrote {path}")
-    return 0
 
 
 def _identify_output_error(rec, sigma0, args: argparse.Namespace):
