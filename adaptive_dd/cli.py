@@ -236,7 +236,8 @@ def _print_with_bound(final, std, crb, rec, args: argparse.Namespace) -> None:
     print(
         f"CRB: the smallest std any unbiased estimator can reach from this record (measured "
         f"torque, noise variances q {args.position_variance}, qd {args.velocity_variance}, "
-        f"signals {'q, qd' if rec.qd is not None else 'q'}), evaluated at the estimate; "
+        f"signals {'q, qd' if rec.qd is not None else 'q'}, initial state unknown), evaluated at the "
+        "estimate; "
         f"condition number {crb.condition_number:.3g}"
     )
 
@@ -260,7 +261,7 @@ def _identify_output_error(rec, sigma0, args: argparse.Namespace):
 
 
 def _identify_bound(rec, sigma, args: argparse.Namespace):
-    """Cramér-Rao bound at the estimate for the record's torque, starting where the record starts."""
+    """Cramér-Rao bound at the estimate for the record's torque, the initial state estimated too."""
     from adaptive_dd.identification.fisher import fisher_information
     from adaptive_dd.plant.parameters import project_sigma
 
@@ -277,6 +278,7 @@ def _identify_bound(rec, sigma, args: argparse.Namespace):
         measured=("q", "qd") if rec.qd is not None else ("q",),
         q0=rec.q[0],
         qd0=qd0,
+        initial_state="unknown",
     )
 
 

@@ -136,3 +136,13 @@ def test_mass_time_scales_with_noise_and_others(swap_record):
     assert mass_information_time(*args, rel=1e-7, mass=3.0) is None
     with pytest.raises(ParameterError, match="k_swap"):
         mass_information_time(q, qd, tau, 2499, 1e-3, sa, payload_sigma_delta(1.0), mass=3.0)
+
+
+def test_unknown_initial_state_costs_information(table2_bound):
+    """The Schur complement over the initial state: never more information, here much less on d2."""
+    tau = table2_torque(1, 4000)[0]
+    unk = fisher_information(TABLE1_SIGMA, tau, initial_state="unknown")
+    assert np.all(unk.crb_std >= table2_bound.crb_std * (1 - 1e-9))
+    assert unk.crb_std[6] > 1.5 * table2_bound.crb_std[6]
+    with pytest.raises(ParameterError, match="initial_state"):
+        fisher_information(TABLE1_SIGMA, tau, initial_state="guessed")

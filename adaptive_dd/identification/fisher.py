@@ -238,6 +238,7 @@ def fisher_information(
     method: str = "sensitivity",
     encoder_counts: ArrayLike | None = None,
     rel_step: float = 1e-6,
+    initial_state: str = "known",
 ) -> FisherResult:
     """Fisher information and Cramér-Rao bounds of sigma for an open- or closed-loop record.
 
@@ -267,6 +268,12 @@ def fisher_information(
         Add encoder quantization as white noise of variance ``Delta^2 / 12``.
     rel_step : float
         Relative step of the finite differences.
+    initial_state : {"known", "unknown"}
+        ``"unknown"``: the state at sample 0 is estimated from the data too (a nuisance
+        parameter; the information about sigma is the Schur complement). Knowing that the
+        arm starts at rest is worth a lot: on Table 2 the bound on d2 is 0.008 % with the
+        initial state known, 0.025 % without. Only with ``method="sensitivity"`` and no
+        torque noise.
     """
     sg = validate_sigma(sigma)
     tau = np.asarray(tau, dtype=float)
@@ -276,13 +283,21 @@ def fisher_information(
     if method == "sensitivity":
         q, qd = simulate_trajectory(sg, tau, sample_period, q0, qd0, substeps)
         a, g, p = local_sensitivities(q, qd, tau, sg, sample_period, substeps)
+        if initial_state not in ("known", "unknown"):
+            raise ParameterError(f"initial_state must be 'known' or 'unknown', got {initial_state!r}")
         if torque_variance is not None:
             info = innovation_fisher(a, g, p, var, torque_variance)
+        elif initial_state == "unknown":
+            s0 = np.concatenate((np.eye(4), np.zeros((4, 7))), axis=-1)
+            full = fisher_from_sensitivities(chain_sensitivities(a, np.concatenate((0 * a, p), -1), s0), var)
+            info = full[4:, 4:] - full[4:, :4] @ np.linalg.solve(full[:4, :4], full[:4, 4:])
         else:
             info = fisher_from_sensitivities(chain_sensitivities(a, p), var)
     elif method == "finite_difference":
-        if torque_variance is not None:
-            raise ParameterError("torque_variance needs method='sensitivity' (innovations form)")
+        if torque_variance is not None or initial_state != "known":
+            raise ParameterError(
+                "torque_variance and initial_state='unknown' need method='sensitivity' (innovations form)"
+            )
         sens = finite_difference_sensitivities(sg, tau, sample_period, q0, qd0, substeps, rel_step)
         info = fisher_from_sensitivities(sens, var)
     else:
