@@ -155,24 +155,21 @@ def _cmd_reproduce(args: argparse.Namespace) -> int:
 
 def _reproduce(args: argparse.Namespace, tau_f: tuple, outputs) -> list[Path]:
     from adaptive_dd.identification.reproduce import (
+        format_bounds,
         format_summary,
         format_table,
-        model_responses,
         run_reproduce,
     )
-    from adaptive_dd.plant.parameters import TABLE1_SIGMA
-    from adaptive_dd.plotting import plot_estimates, plot_model_response
 
-    fig5 = ("M2", "15", "paper")
-    ours = ("M2", "full", "exact")
     res = run_reproduce(
         seeds=args.seeds,
         seed=args.seed,
         tau_f=tau_f,
         estimators=tuple(args.estimators),
         progress=not args.no_progress,
-        keep_theta=(fig5, ours),
+        keep_theta=(_FIG5, _OURS),
         noise=not args.no_noise,
+        extra_estimators=tuple(args.extra_estimators),
     )
     if args.no_noise:
         print("\nNOISE-FREE sensors (--no-noise): the errors below are modelling errors only")
@@ -193,24 +190,45 @@ def _reproduce(args: argparse.Namespace, tau_f: tuple, outputs) -> list[Path]:
             print(format_table(res, method, "full", "exact", with_paper=False) + "\n")
     print("Worst mean error over the seven parameters [%], every configuration:")
     print(format_summary(res) + "\n")
-    out = Path(args.out)
+    if res.crb is not None:
+        print(
+            "Against the information limit (Cramér-Rao bound of this experiment: Table 2 torques, "
+            "Table 2 + 4 noise, q and qd measured, torque known):"
+        )
+        print(format_bounds(res) + "\n")
+    written = _reproduce_figures(res, tau_f, outputs)
+    if args.json:
+        res.write_json(outputs.extra(args.json))
+        written.append(Path(args.json))
+    return written
+
+
+_FIG5 = ("M2", "15", "paper")
+_OURS = ("M2", "full", "exact")
+
+
+def _reproduce_figures(res, tau_f: tuple, outputs) -> list:
+    """Fig. 5-like estimate histories and the Fig. 7 model responses; prints Fig. 7's rms."""
+    from adaptive_dd.identification.reproduce import model_responses
+    from adaptive_dd.plant.parameters import TABLE1_SIGMA
+    from adaptive_dd.plotting import plot_estimates, plot_model_response
+
+    out = outputs.folder
     written = []
     t = res.sim.t
     i5 = tau_f.index(0.006) if 0.006 in tau_f else 0
     i_best = tau_f.index(0.02) if 0.02 in tau_f else len(tau_f) - 1
     figures = (
-        (fig5, i5, "fig5_paper_M2.png", "paper's M2 estimator, split (15)"),
-        (ours, i_best, "fig5_exact_M2.png", "estimator 'exact' (M2)"),
+        (_FIG5, i5, "fig5_paper_M2.png", "paper's M2 estimator, split (15)", "paper M2"),
+        (_OURS, i_best, "fig5_exact_M2.png", "estimator 'exact' (M2)", "exact M2"),
     )
-    for key, i, name, label in figures:
+    models = {}
+    for key, i, name, label, short in figures:
         if key in res.theta:
             title = f"Estimates, {label}, tau_f = {tau_f[i]}"
             plot_estimates(t, res.theta[key][i], TABLE1_SIGMA, outputs.path(name), title)
             written.append(out / name)
-    models = {}
-    for key, i, label in ((fig5, i5, "paper M2"), (ours, i_best, "exact M2")):
-        if key in res.theta:
-            models[f"{label}, tau_f = {tau_f[i]}"] = res.theta[key][i][:, -1].mean(axis=0)
+            models[f"{short}, tau_f = {tau_f[i]}"] = res.theta[key][i][:, -1].mean(axis=0)
     if models:
         arm_q, qs = model_responses(models, res.sim.t.size)
         plot_model_response(
@@ -224,9 +242,6 @@ def _reproduce(args: argparse.Namespace, tau_f: tuple, outputs) -> list[Path]:
         for k, q in qs.items():
             rms = np.sqrt(((q - arm_q) ** 2).mean(axis=0))
             print(f"Fig. 7: rms difference arm - model ({k}): {rms.round(4)} rad")
-    if args.json:
-        res.write_json(outputs.extra(args.json))
-        written.append(Path(args.json))
     return written
 
 
@@ -242,19 +257,21 @@ def _cmd_identify(args: argparse.Namespace) -> int:
     check_identifiable(rec, args.tau_f)
     outputs = OutputSet(args.out)
     with outputs:
+        if args.online:
+            return _identify_online(args, rec, outputs)
         return _identify(args, rec, outputs, estimate, MIN_EQUATIONS)
 
 
 def _identify(args, rec, outputs, estimate, min_equations: int) -> int:
     from adaptive_dd.errors import DataError
-    from adaptive_dd.plant.parameters import SIGMA_NAMES
     from adaptive_dd.plotting import plot_estimates
 
+    oe = args.estimator == "output_error"
     res = estimate(
         rec.q,
         rec.tau,
         rec.qd,
-        estimator=args.estimator,
+        estimator="exact" if oe else args.estimator,
         method=args.method,
         split=args.split,
         tau_f=args.tau_f,
@@ -270,24 +287,131 @@ def _identify(args, rec, outputs, estimate, min_equations: int) -> int:
             f"{rec.source}: only {int(res.n_used)} usable equations (the arm barely moves or the "
             f"record is short); identify needs at least {min_equations}"
         )
-    print(f"{'param':>6} {'estimate':>12} {'std':>10}")
-    for k, name in enumerate(SIGMA_NAMES):
-        print(f"{name:>6} {res.final[k]:12.5g} {res.std[k]:10.2g}")
-    if not np.all(np.isfinite(res.final)):
+    final, std = res.final, res.std
+    if oe:
+        final, std = _identify_output_error(rec, res.final, args)
+    if not np.all(np.isfinite(final)):
         print(
             "warning: the estimate is not finite: the record does not excite the arm enough", file=sys.stderr
         )
         return 1
+    _print_with_bound(final, std, _identify_bound(rec, final, args), rec, args)
     ref = np.full(7, np.nan) if args.true is None else np.asarray(args.true, float)
     plot_estimates(
         rec.t,
         res.theta[None],
-        np.where(np.isfinite(ref), ref, res.final),
+        np.where(np.isfinite(ref), ref, final),
         outputs.path("convergence.png"),
         f"{Path(args.data).name}: {args.estimator} ({args.method})",
+        reference_label="true value" if args.true is not None else "final estimate",
     )
     print(f"wrote {Path(args.out) / 'convergence.png'}")
     return 0
+
+
+def _identify_online(args, rec, outputs) -> int:
+    """The online estimator of ``adaptive_ct`` over a record: estimates and alarms over time."""
+    import dataclasses
+
+    from adaptive_dd.controllers.adaptive import ADAPTIVE_ONLINE
+    from adaptive_dd.errors import DataError
+    from adaptive_dd.identification.online import run_online
+    from adaptive_dd.outputs import atomic_write
+    from adaptive_dd.plant.parameters import SIGMA_NAMES, TABLE1_SIGMA, payload_mass_from_sigma
+    from adaptive_dd.plotting import plot_estimates
+
+    if rec.qd is None:
+        raise DataError(f"{args.data}: --online needs the measured velocity (columns qd1, qd2)")
+    cfg = dataclasses.replace(ADAPTIVE_ONLINE, sample_period=rec.sample_period, tau_f=args.tau_f)
+    r = run_online(rec.q, rec.qd, rec.tau, cfg, TABLE1_SIGMA)
+    model, alarms = r.sigma_model[0], r.alarm_times()[0]
+    mass = payload_mass_from_sigma(model, TABLE1_SIGMA)
+    print(
+        f"{rec.source}: online estimator of adaptive_ct (tau_f = {args.tau_f} s, started at Table 1), "
+        f"{rec.t.size} samples; {len(alarms)} change alarm(s)"
+        + (f" at {', '.join(f'{a:.3f}' for a in alarms)} s" if alarms else "")
+        + f"; skipped samples {int(r.n_skipped[0])}"
+    )
+    print(f"{'param':>6} {'final':>12}")
+    for k, name in enumerate(SIGMA_NAMES):
+        print(f"{name:>6} {model[-1, k]:12.5g}")
+    print(f"payload mass implied at the end: {mass[-1]:.3f} kg")
+    path = outputs.path("online.csv")
+    with atomic_write(path) as fh:
+        fh.write("t," + ",".join(SIGMA_NAMES) + ",payload_mass,alarm\n")
+        for k in range(rec.t.size):
+            vals = ",".join(f"{v:.9g}" for v in model[k])
+            fh.write(f"{rec.t[k]:.9g},{vals},{mass[k]:.6g},{int(r.alarm[0, k])}\n")
+    ref = np.full(7, np.nan) if args.true is None else np.asarray(args.true, float)
+    plot_estimates(
+        rec.t,
+        model[None],
+        np.where(np.isfinite(ref), ref, model[-1]),
+        outputs.path("online.png"),
+        f"{Path(args.data).name}: online estimator of adaptive_ct",
+        reference_label="true value" if args.true is not None else "final estimate",
+        alarms=alarms,
+    )
+    print(f"wrote {Path(args.out) / 'online.csv'}, {Path(args.out) / 'online.png'}")
+    return 0
+
+
+def _print_with_bound(final, std, crb, rec, args: argparse.Namespace) -> None:
+    from adaptive_dd.plant.parameters import SIGMA_NAMES
+
+    print(f"{'param':>6} {'estimate':>12} {'std':>10} {'CRB std':>10} {'CRB [%]':>9} {'std/CRB':>8}")
+    for k, name in enumerate(SIGMA_NAMES):
+        print(
+            f"{name:>6} {final[k]:12.5g} {std[k]:10.2g} {crb.crb_std[k]:10.2g} "
+            f"{crb.crb_std_pct[k]:9.2g} {std[k] / crb.crb_std[k]:8.1f}"
+        )
+    print(
+        f"CRB: the smallest std any unbiased estimator can reach from this record (measured "
+        f"torque, noise variances q {args.position_variance}, qd {args.velocity_variance}, "
+        f"signals {'q, qd' if rec.qd is not None else 'q'}, initial state unknown), evaluated at the "
+        "estimate; "
+        f"condition number {crb.condition_number:.3g}"
+    )
+
+
+def _identify_output_error(rec, sigma0, args: argparse.Namespace):
+    from adaptive_dd.identification.output_error import output_error_fit
+
+    if rec.qd is None:
+        raise ValueError(f"{args.data}: estimator output_error needs columns qd1, qd2")
+    fit = output_error_fit(
+        rec.q,
+        rec.qd,
+        rec.tau,
+        sigma0,
+        rec.sample_period,
+        args.position_variance,
+        args.velocity_variance,
+    )
+    print(f"output error: {fit.nfev} evaluations, {fit.message}")
+    return fit.sigma, fit.std
+
+
+def _identify_bound(rec, sigma, args: argparse.Namespace):
+    """Cramér-Rao bound at the estimate for the record's torque, the initial state estimated too."""
+    from adaptive_dd.identification.fisher import fisher_information
+    from adaptive_dd.plant.parameters import project_sigma
+
+    qd0 = np.zeros(2)
+    if rec.qd is not None:  # a measured velocity within 3 noise std of zero: at rest (stuck)
+        at_rest = np.abs(rec.qd[0]) <= 3 * np.sqrt(np.asarray(args.velocity_variance))
+        qd0 = np.where(at_rest, 0.0, rec.qd[0])
+    return fisher_information(
+        project_sigma(sigma),
+        rec.tau,
+        rec.sample_period,
+        args.position_variance,
+        args.velocity_variance,
+        measured=("q", "qd") if rec.qd is not None else ("q",),
+        q0=rec.q[0],
+        qd0=qd0,
+        initial_state="unknown",
+    )
 
 
 def _cmd_benchmark(args: argparse.Namespace) -> int:
@@ -367,8 +491,9 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--out", default="results/simulate", help="output folder")
     s.set_defaults(func=_cmd_simulate)
 
+    from adaptive_dd.experiments import TABLE2
     from adaptive_dd.identification.estimators import ESTIMATORS
-    from adaptive_dd.identification.reproduce import DEFAULT_ESTIMATORS
+    from adaptive_dd.identification.reproduce import DEFAULT_ESTIMATORS, EXTRA_ESTIMATORS
 
     r = _sub(sub, "reproduce", help="reproduce Tables 3 and 5 of the paper (and ours beside)")
     r.add_argument("--seeds", type=_SEEDS, default=10, help="Monte-Carlo seeds (default 10)")
@@ -386,6 +511,13 @@ def build_parser() -> argparse.ArgumentParser:
         choices=ESTIMATORS,
         help="estimators to run (kalman equals batch_ls here and costs ~1 min more)",
     )
+    r.add_argument(
+        "--extra-estimators",
+        nargs="+",
+        default=[],
+        choices=EXTRA_ESTIMATORS,
+        help="also run output error (~6 s per seed) and/or the augmented EKF (~1 min per 10 seeds)",
+    )
     r.add_argument("--out", default="results/reproduce", help="folder for figures")
     r.add_argument("--json", metavar="PATH", help="write tidy rows as JSON")
     r.add_argument("--no-noise", action="store_true", help="noise-free sensors (modelling errors only)")
@@ -394,12 +526,39 @@ def build_parser() -> argparse.ArgumentParser:
 
     i = _sub(sub, "identify", help="estimate sigma from a recorded experiment (CSV)")
     i.add_argument("data", help="CSV with header t,q1,q2,qd1,qd2,tau1,tau2 (qd optional for M1)")
-    i.add_argument("--estimator", default="exact", choices=ESTIMATORS)
+    i.add_argument(
+        "--estimator",
+        default="exact",
+        choices=(*ESTIMATORS, "output_error"),
+        help="output_error: maximum likelihood started from 'exact' (needs qd)",
+    )
     i.add_argument("--method", default="M2", choices=("M1", "M2"))
     i.add_argument("--split", default="15", choices=("15", "16", "full"), help="split of 'paper'")
     i.add_argument("--tau-f", type=_POS, default=0.02, help="filter time constant [s]")
     i.add_argument(
         "--true", type=_number(float, -1e6, 1e6), nargs=7, metavar="S", help="true sigma, to mark on the plot"
+    )
+    i.add_argument(
+        "--position-variance",
+        type=_number(float, 0.0, 1.0),
+        nargs=2,
+        default=list(TABLE2["position_variance"]),
+        metavar="V",
+        help="noise variance of q1, q2 [rad^2] for the bound (default: Table 2)",
+    )
+    i.add_argument(
+        "--velocity-variance",
+        type=_number(float, 0.0, 1.0),
+        nargs=2,
+        default=list(TABLE2["velocity_variance"]),
+        metavar="V",
+        help="noise variance of qd1, qd2 [(rad/s)^2] for the bound (default: Table 4)",
+    )
+    i.add_argument(
+        "--online",
+        action="store_true",
+        help="run the online estimator of adaptive_ct (change detection included) over the record; "
+        "writes online.csv (estimates, payload mass and alarms over time) and online.png",
     )
     i.add_argument("--out", default="results/identify")
     i.set_defaults(func=_cmd_identify)

@@ -58,10 +58,21 @@ def _mark_swaps(axes, t, mass) -> None:
             a.axvline(t[i], color="k", ls=":", lw=1)
 
 
-def plot_estimates(t, theta, sigma_true, path: str | Path, title: str = "", names=SIGMA_NAMES) -> Path:
-    """Estimates over time (mean over trials, band of +-1 std), true values dashed (Fig. 5).
+def plot_estimates(
+    t,
+    theta,
+    sigma_true,
+    path: str | Path,
+    title: str = "",
+    names=SIGMA_NAMES,
+    reference_label: str = "true value",
+    alarms=(),
+) -> Path:
+    """Estimates over time (mean over trials, band of +-1 std), a reference dashed (Fig. 5).
 
-    ``theta`` has shape (n_trials, n_samples, 7); ``sigma_true`` (7,) or (n_samples, 7).
+    ``theta`` has shape (n_trials, n_samples, 7); ``sigma_true`` (7,) or (n_samples, 7) is
+    drawn dashed and named ``reference_label`` (the true value, or the final estimate when
+    the truth is unknown); ``alarms``: times [s] marked by vertical lines.
     """
     theta = np.asarray(theta)
     st = np.broadcast_to(np.asarray(sigma_true), (theta.shape[1], 7))
@@ -76,11 +87,14 @@ def plot_estimates(t, theta, sigma_true, path: str | Path, title: str = "", name
         ax.set_ylim(lo - pad, hi + pad)
         ax.set_ylabel(f"{names[k]} [{UNITS[k]}]")
         ax.grid(alpha=0.3)
+        for a in alarms:
+            ax.axvline(a, color="C3", lw=0.8, alpha=0.7)
     axes.flat[7].axis("off")
     axes.flat[7].text(
         0.05,
         0.5,
-        "solid: estimate (mean ± std over seeds)\ndashed: true value",
+        f"solid: estimate (mean ± std over seeds)\ndashed: {reference_label}"
+        + ("\nred lines: change alarms" if len(alarms) else ""),
         transform=axes.flat[7].transAxes,
     )
     for ax in axes[-1]:

@@ -103,7 +103,8 @@ def test_reproduce_rows_and_noise_switch(tmp_path):
     rows = json.loads(noisy.write_json(tmp_path / "rows.json").read_text())
     assert len(rows) == 2 * 2 * 7  # (paper 15, exact full) x tau_f x params
     keys = {"method", "split", "estimator", "tau_f", "param", "mean_pct", "std_pct", "paper_pct"}
-    assert all(set(r) == keys for r in rows)
+    bound = {"crb_std_pct", "bias_pct", "est_std_pct", "std_over_crb"}  # issue 12
+    assert all(set(r) == keys | bound for r in rows)
     paper = [r for r in rows if r["estimator"] == "paper" and r["tau_f"] == 0.006 and r["param"] == "J1"]
     assert paper[0]["paper_pct"] == 9.3  # Table 5
     assert all(r["paper_pct"] is None for r in rows if r["estimator"] == "exact")

@@ -187,3 +187,22 @@ def test_wrong_shapes_are_rejected():
         run_online(
             np.zeros((1, 5, 2)), np.zeros((1, 4, 2)), np.zeros((1, 5, 2)), OnlineConfig(), TABLE1_SIGMA
         )
+
+
+def test_identify_online_on_a_recorded_csv(tmp_path, swap_record):
+    """The same estimator over a CSV: estimates and alarms over time as CSV and a figure."""
+    import csv
+
+    from adaptive_dd.cli import main
+    from adaptive_dd.io import write_recording
+
+    r = swap_record
+    path = tmp_path / "rec.csv"
+    write_recording(path, r.t, r.q_meas[0], r.qd_meas[0], r.tau[0])
+    assert main(["identify", str(path), "--online", "--tau-f", "0.01", "--out", str(tmp_path / "o")]) == 0
+    rows = list(csv.DictReader((tmp_path / "o" / "online.csv").open()))
+    assert len(rows) == r.t.size
+    alarms = [float(x["t"]) for x in rows if x["alarm"] == "1"]
+    assert len(alarms) == 1 and 4.0 < alarms[0] < 4.15
+    assert abs(float(rows[-1]["payload_mass"]) - 3.0) < 0.15
+    assert (tmp_path / "o" / "online.png").stat().st_size > 10_000

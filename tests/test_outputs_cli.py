@@ -5,6 +5,7 @@ import os
 import numpy as np
 import pytest
 
+import adaptive_dd
 from adaptive_dd.cli import EXIT_INTERNAL, EXIT_INTERRUPTED, main
 from adaptive_dd.outputs import PARTIAL_MARKER, OutputSet, atomic_write, check_output_dir
 
@@ -159,7 +160,7 @@ def test_plain_value_error_outside_our_code_is_internal(monkeypatch, capsys):
 def test_version_and_no_abbreviations(capsys):
     with pytest.raises(SystemExit) as e:
         main(["--version"])
-    assert e.value.code == 0 and "adaptive-dd 0.1.0" in capsys.readouterr().out
+    assert e.value.code == 0 and f"adaptive-dd {adaptive_dd.__version__}" in capsys.readouterr().out
     with pytest.raises(SystemExit) as e:
         main(["benchmark", "--seed", "2"])
     assert e.value.code == 2 and "unrecognized arguments: --seed" in capsys.readouterr().err

@@ -1,6 +1,17 @@
 """Identification of sigma: derivative filters (M1, M2), filtered regressions, RLS (eq. 14),
-batch least squares, a filterpy Kalman estimator, and the reproduction of Tables 3 and 5."""
+batch least squares, a filterpy Kalman estimator, the reproduction of Tables 3 and 5, and
+against the information limit: output sensitivities, Fisher information and Cramér-Rao
+bounds, output-error (maximum-likelihood) estimation and an augmented-state EKF."""
 
+from adaptive_dd.identification.augmented_kf import (
+    AKFConfig,
+    AKFState,
+    AugmentedKalmanFilter,
+    akf_init,
+    akf_predict,
+    akf_step,
+    akf_update,
+)
 from adaptive_dd.identification.estimators import (
     ESTIMATORS,
     EXACT_RLS,
@@ -21,7 +32,16 @@ from adaptive_dd.identification.filters import (
     filter_record,
     filter_step,
 )
+from adaptive_dd.identification.fisher import (
+    FisherResult,
+    crb_from_fisher,
+    fisher_from_sensitivities,
+    fisher_information,
+    linear_gaussian_crb,
+    mass_information_time,
+)
 from adaptive_dd.identification.kalman import KalmanParameterEstimator
+from adaptive_dd.identification.output_error import OutputErrorResult, output_error_fit
 from adaptive_dd.identification.regressors import FilteredRegression, OnlineRegressor, filtered_regression
 from adaptive_dd.identification.rls import (
     RecursiveLeastSquares,
@@ -31,32 +51,57 @@ from adaptive_dd.identification.rls import (
     rls_init,
     rls_step,
 )
+from adaptive_dd.identification.sensitivity import (
+    chain_sensitivities,
+    finite_difference_sensitivities,
+    local_sensitivities,
+    simulate_trajectory,
+)
 
 __all__ = [
     "ESTIMATORS",
     "EXACT_RLS",
     "PAPER_RLS",
     "SPLITS",
+    "AKFConfig",
+    "AKFState",
+    "AugmentedKalmanFilter",
     "EstimationResult",
     "FilterBank",
     "FilteredRegression",
+    "FisherResult",
     "KalmanParameterEstimator",
     "OnlineRegressor",
+    "OutputErrorResult",
     "RLSConfig",
     "RLSState",
     "RecursiveLeastSquares",
     "SplitRLS",
     "StreamingFilter",
+    "akf_init",
+    "akf_predict",
+    "akf_step",
+    "akf_update",
     "align_torque",
     "batch_least_squares",
+    "chain_sensitivities",
+    "crb_from_fisher",
     "design_filter_bank",
     "estimate",
     "excitation_mask",
     "filter_record",
     "filter_step",
     "filtered_regression",
+    "finite_difference_sensitivities",
+    "fisher_from_sensitivities",
+    "fisher_information",
+    "linear_gaussian_crb",
+    "local_sensitivities",
+    "mass_information_time",
+    "output_error_fit",
     "prepare_regression",
     "rls_init",
     "rls_step",
+    "simulate_trajectory",
     "solve_regression",
 ]

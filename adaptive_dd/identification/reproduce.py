@@ -17,13 +17,23 @@ import numpy as np
 from adaptive_dd.errors import ParameterError
 from adaptive_dd.experiments import TABLE2, table2_torque, trial_rngs
 from adaptive_dd.identification.estimators import ESTIMATORS, prepare_regression, solve_regression
+from adaptive_dd.identification.fisher import FisherResult
+from adaptive_dd.identification.limits import (
+    LIMIT_ESTIMATORS,
+    bound_rows,
+    format_bound_table,
+    run_information_estimators,
+    table2_bound,
+)
 from adaptive_dd.plant.parameters import SIGMA_NAMES, TABLE1_SIGMA, project_sigma
 from adaptive_dd.plant.simulator import ActuatorConfig, SensorConfig, simulate_open_loop
 
 __all__ = [
+    "EXTRA_ESTIMATORS",
     "PAPER_TABLES",
     "TAU_F_GRID",
     "ReproduceResult",
+    "format_bounds",
     "format_summary",
     "format_table",
     "model_responses",
@@ -57,20 +67,36 @@ PAPER_TABLES = {
 """Tables 3 (M1) and 5 (M2) of the paper: error [%] per tau_f of TAU_F_GRID (rows)."""
 
 DEFAULT_ESTIMATORS = ("paper", "batch_ls", "exact", "exact_batch_ls")
+EXTRA_ESTIMATORS = ("output_error", "akf")
+"""Estimators that work on the whole state, not the filtered regression (no tau_f, M2 data)."""
 
 
 @dataclass
 class ReproduceResult:
-    """Errors per configuration; ``errors[(method, split, estimator)]`` is ``(n_tau_f, n_seeds, 7)`` [%]."""
+    """Errors per configuration; ``errors[(method, split, estimator)]`` is ``(n_tau_f, n_seeds, 7)`` [%].
+
+    ``signed`` holds the same errors with their sign; ``crb`` the Cramér-Rao bound of the
+    experiment (None without noise); ``extra[name]`` the final estimates ``(n_seeds, 7)``
+    of the estimators of :data:`EXTRA_ESTIMATORS`.
+    """
 
     tau_f: tuple
     seeds: int
     errors: dict = field(default_factory=dict)
     theta: dict = field(default_factory=dict)  # (method, split, estimator) -> (n_tau_f, seeds, N, 7)
     sim: object = None
+    signed: dict = field(default_factory=dict)
+    crb: FisherResult | None = None
+    extra: dict = field(default_factory=dict)
 
     def rows(self) -> list[dict]:
-        """Tidy rows: method, split, estimator, tau_f, param, mean_pct, std_pct, paper_pct."""
+        """Tidy rows: method, split, estimator, tau_f, param, mean_pct, std_pct, paper_pct, and
+        against the bound: crb_std_pct, bias_pct, est_std_pct (std of the signed estimate
+        over seeds, ddof 1), std_over_crb.
+
+        ``mean_pct`` and ``std_pct`` are the mean and std of ``|error|`` (as in the paper's
+        tables); the estimate's own spread, comparable with the bound, is ``est_std_pct``.
+        """
         out = []
         for (method, split, est), err in self.errors.items():
             for i, tf in enumerate(self.tau_f):
@@ -79,19 +105,31 @@ class ReproduceResult:
                     if est == "paper" and split == "15" and tf in TAU_F_GRID:
                         paper = float(PAPER_TABLES[method][TAU_F_GRID.index(tf), k])
                     e = err[i, :, k]
-                    out.append(
-                        {
-                            "method": method,
-                            "split": split,
-                            "estimator": est,
-                            "tau_f": float(tf),
-                            "param": name,
-                            "mean_pct": float(np.mean(e)),
-                            "std_pct": float(np.std(e)),
-                            "paper_pct": paper,
-                        }
-                    )
+                    row = {
+                        "method": method,
+                        "split": split,
+                        "estimator": est,
+                        "tau_f": float(tf),
+                        "param": name,
+                        "mean_pct": float(np.mean(e)),
+                        "std_pct": float(np.std(e)),
+                        "paper_pct": paper,
+                    }
+                    out.append(row | self._against_bound(self.signed[(method, split, est)][i, :, k], k))
+        if self.crb is not None:
+            for r in bound_rows(self.crb, self.extra):
+                out.append({"method": None, "split": None, "tau_f": None} | r)
         return out
+
+    def _against_bound(self, e: np.ndarray, k: int) -> dict:
+        crb = None if self.crb is None else float(self.crb.crb_std_pct[k])
+        std = float(np.std(e, ddof=1)) if e.size > 1 else float("nan")
+        return {
+            "crb_std_pct": crb,
+            "bias_pct": float(np.mean(e)),
+            "est_std_pct": std,
+            "std_over_crb": None if crb is None else std / crb,
+        }
 
     def write_json(self, path: str | Path) -> Path:
         path = Path(path)
@@ -111,6 +149,7 @@ def run_reproduce(
     progress: bool = True,
     keep_theta: tuple = (),
     noise: bool = True,
+    extra_estimators: tuple = (),
 ) -> ReproduceResult:
     """Simulate the Table 2 (+ Table 4) experiment and estimate with every configuration.
 
@@ -126,15 +165,20 @@ def run_reproduce(
         Configurations whose whole estimate history to keep (for figures).
     noise : bool
         Table 2 / Table 4 sensor noise (False: noise-free sensors, quantization kept),
-        to separate modelling errors from noise.
+        to separate modelling errors from noise. With noise, the Cramér-Rao bound of the
+        experiment is computed too (``res.crb``).
+    extra_estimators : tuple of {"output_error", "akf"}
+        Run these too on the measured data (see :mod:`adaptive_dd.identification.limits`).
     """
     from tqdm.auto import tqdm
 
     if seeds < 1:
         raise ParameterError(f"seeds must be >= 1, got {seeds}")
-    bad = [e for e in estimators if e not in ESTIMATORS]
+    bad = [e for e in estimators if e not in ESTIMATORS] + [
+        e for e in extra_estimators if e not in EXTRA_ESTIMATORS
+    ]
     if bad:
-        raise ParameterError(f"unknown estimator(s) {bad}; choose from {ESTIMATORS}")
+        raise ParameterError(f"unknown estimator(s) {bad}; choose from {ESTIMATORS + EXTRA_ESTIMATORS}")
     if any(t <= 0 for t in tau_f):
         raise ParameterError(f"tau_f values must be > 0, got {tau_f}")
     sensor = SensorConfig(
@@ -166,11 +210,36 @@ def run_reproduce(
         )
         if est != "kalman":
             bar.update(1)
-        res.errors[(method, split, est)] = 100 * np.abs(theta[..., -1, :] - TABLE1_SIGMA) / TABLE1_SIGMA
+        res.signed[(method, split, est)] = 100 * (theta[..., -1, :] - TABLE1_SIGMA) / TABLE1_SIGMA
+        res.errors[(method, split, est)] = np.abs(res.signed[(method, split, est)])
         if (method, split, est) in keep_theta:
             res.theta[(method, split, est)] = theta
     bar.close()
+    if noise:
+        res.crb = table2_bound(sim.tau[0])
+    if extra_estimators:
+        names = tuple(e for e in LIMIT_ESTIMATORS if e in extra_estimators)
+        res.extra, _ = run_information_estimators(sim.q_meas, sim.qd_meas, sim.tau, names)
     return res
+
+
+def format_bounds(res: ReproduceResult, tau_f: float | None = None) -> str:
+    """Per parameter the bound beside every estimator's bias, std and std / bound.
+
+    Filtered-regression estimators at ``tau_f`` (default: 0.02 if run, else the largest).
+    """
+    if res.crb is None:
+        return "no bound: noise-free sensors"
+    tf = tau_f if tau_f is not None else (0.02 if 0.02 in res.tau_f else max(res.tau_f))
+    i = res.tau_f.index(tf)
+    estimates, kinds = {}, {}
+    for (method, split, est), e in res.signed.items():
+        label = f"{method} {est}" + (f" ({split})" if est == "paper" else "") + f" tau_f={tf:g}"
+        estimates[label] = TABLE1_SIGMA * (1 + e[i] / 100.0)
+        kinds[label] = est
+    for name, est in res.extra.items():
+        estimates[name], kinds[name] = est, name
+    return format_bound_table(res.crb, estimates, kinds=kinds)
 
 
 def format_table(res: ReproduceResult, method: str, split: str, estimator: str, with_paper: bool) -> str:
