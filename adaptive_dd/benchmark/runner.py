@@ -10,6 +10,7 @@ stopped and counted; the rest of the benchmark goes on.
 
 from __future__ import annotations
 
+import dataclasses
 import time
 from dataclasses import dataclass, field
 
@@ -19,8 +20,7 @@ from numpy.typing import NDArray
 from adaptive_dd.benchmark.scenario import Scenario
 from adaptive_dd.controllers import Controller, Gains, make_controller
 from adaptive_dd.experiments import trial_rngs
-from adaptive_dd.plant.parameters import TABLE1_SIGMA
-from adaptive_dd.plant.simulator import ArmSimulator, PayloadSchedule, SensorConfig
+from adaptive_dd.plant.simulator import ArmSimulator, PayloadSchedule
 
 __all__ = ["MAX_ERROR", "BenchmarkResult", "ControllerRun", "run_benchmark"]
 
@@ -99,12 +99,14 @@ def run_benchmark(
         B,
         N,
         rngs,
-        sigma0=TABLE1_SIGMA,
+        arm=scenario.arm,
         payload=PayloadSchedule(scenario.swap_times, scenario.swap_masses, radius=scenario.payload_radius),
         sample_period=T,
         substeps=scenario.substeps,
-        sensor=SensorConfig(
-            position_variance=scenario.position_variance, velocity_variance=scenario.velocity_variance
+        sensor=dataclasses.replace(
+            scenario.arm.sensor,
+            position_variance=scenario.position_variance,
+            velocity_variance=scenario.velocity_variance,
         ),
         q0=q_d[0],
         qd0=qd_d[0],

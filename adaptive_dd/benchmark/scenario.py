@@ -42,6 +42,7 @@ from numpy.typing import NDArray
 
 from adaptive_dd.controllers import CONTROLLERS
 from adaptive_dd.errors import ScenarioError
+from adaptive_dd.plant.arm import Arm, arm_from_tables
 
 __all__ = ["Reference", "Scenario", "default_scenario_path", "load_scenario"]
 
@@ -53,6 +54,8 @@ _KEYS = {
     "reference": {"ramp", "joint1", "joint2"},
     "payload": {"at", "mass", "radius"},
     "noise": {"position_variance", "velocity_variance"},
+    "arm": None,  # checked by adaptive_dd.plant.arm.arm_from_tables
+    "plant": None,
 }
 _JOINT_KEYS = {"offset", "amplitude", "frequency", "phase"}
 
@@ -117,6 +120,7 @@ class Scenario:
     damping: float = 1.0
     source: str = "<memory>"
     extra: dict = field(default_factory=dict)
+    arm: Arm = field(default_factory=Arm.sice)
 
     @property
     def n_samples(self) -> int:
@@ -184,6 +188,8 @@ def parse_scenario(data: dict, src: str = "<memory>", name: str = "scenario") ->
     for table, val in data.items():
         if table not in _KEYS:
             raise ScenarioError(f"{src}: unknown table [{table}]; allowed: {sorted(_KEYS)}")
+        if _KEYS[table] is None:
+            continue
         items = val if table == "payload" else [val]
         if table == "payload" and not isinstance(val, list):
             raise ScenarioError(f"{src}: 'payload' must be an array of tables [[payload]]")
@@ -222,6 +228,7 @@ def parse_scenario(data: dict, src: str = "<memory>", name: str = "scenario") ->
         raise ScenarioError(f"{src}: the default scenario must define [reference]")
     else:
         reference = load_scenario().reference
+    arm = arm_from_tables(data.get("arm"), data.get("plant"), src)
     times, masses, radius = [], [], None
     for i, p in enumerate(data.get("payload", [])):
         where = f"payload[{i}]"
@@ -240,7 +247,7 @@ def parse_scenario(data: dict, src: str = "<memory>", name: str = "scenario") ->
             raise ScenarioError(
                 f"{src}: key '{where}.at' = {at} s: swap times must increase (previous {times[-1]})"
             )
-        r = float(_num(src, f"{where}.radius", p.get("radius", 0.05), nonneg=True))
+        r = float(_num(src, f"{where}.radius", p.get("radius", arm.payload_radius), nonneg=True))
         if radius is not None and r != radius:
             raise ScenarioError(f"{src}: key '{where}.radius': all payload disks must share one radius")
         radius = r
@@ -258,7 +265,7 @@ def parse_scenario(data: dict, src: str = "<memory>", name: str = "scenario") ->
         reference=reference,
         swap_times=tuple(times),
         swap_masses=tuple(masses),
-        payload_radius=0.05 if radius is None else radius,
+        payload_radius=arm.payload_radius if radius is None else radius,
         position_variance=pv,
         velocity_variance=vv,
         seed=seed,
@@ -266,6 +273,7 @@ def parse_scenario(data: dict, src: str = "<memory>", name: str = "scenario") ->
         bandwidth=bw,
         damping=zeta,
         source=src,
+        arm=arm,
     )
 
 

@@ -9,7 +9,7 @@ at the end of the 10 000 samples (ERRATA.md), reported as mean and std over seed
 from __future__ import annotations
 
 import json
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -17,8 +17,9 @@ import numpy as np
 from adaptive_dd.errors import ParameterError
 from adaptive_dd.experiments import TABLE2, table2_torque, trial_rngs
 from adaptive_dd.identification.estimators import ESTIMATORS, prepare_regression, solve_regression
-from adaptive_dd.plant.parameters import SIGMA_NAMES, TABLE1_SIGMA, project_sigma
-from adaptive_dd.plant.simulator import ActuatorConfig, SensorConfig, simulate_open_loop
+from adaptive_dd.plant.arm import Arm
+from adaptive_dd.plant.parameters import SIGMA_NAMES, project_sigma
+from adaptive_dd.plant.simulator import simulate_open_loop
 
 __all__ = [
     "PAPER_TABLES",
@@ -137,11 +138,13 @@ def run_reproduce(
         raise ParameterError(f"unknown estimator(s) {bad}; choose from {ESTIMATORS}")
     if any(t <= 0 for t in tau_f):
         raise ParameterError(f"tau_f values must be > 0, got {tau_f}")
-    sensor = SensorConfig(
+    arm = Arm.sice()  # the paper's arm
+    sensor = replace(
+        arm.sensor,
         position_variance=TABLE2["position_variance"] if noise else (0.0, 0.0),
         velocity_variance=TABLE2["velocity_variance"] if noise else (0.0, 0.0),
     )
-    sim = simulate_open_loop(table2_torque(seeds, n_samples), trial_rngs(seed, seeds), sensor=sensor)
+    sim = simulate_open_loop(table2_torque(seeds, n_samples), trial_rngs(seed, seeds), arm=arm, sensor=sensor)
     jobs = [(m, s, e) for m in methods for e in estimators for s in (splits if e == "paper" else ("full",))]
     res = ReproduceResult(tuple(tau_f), seeds, sim=sim)
     prepared = {}
@@ -166,7 +169,7 @@ def run_reproduce(
         )
         if est != "kalman":
             bar.update(1)
-        res.errors[(method, split, est)] = 100 * np.abs(theta[..., -1, :] - TABLE1_SIGMA) / TABLE1_SIGMA
+        res.errors[(method, split, est)] = 100 * np.abs(theta[..., -1, :] - arm.sigma) / arm.sigma
         if (method, split, est) in keep_theta:
             res.theta[(method, split, est)] = theta
     bar.close()
@@ -214,13 +217,14 @@ def model_responses(models: dict, n_samples: int = TABLE2["n_samples"]) -> tuple
     q_models : dict
         Label -> ndarray (n_samples, 2).
     """
-    clean = SensorConfig(quantize=False, position_variance=(0, 0), velocity_variance=(0, 0))
+    sice = Arm.sice()
+    clean = replace(sice.sensor, quantize=False, position_variance=(0, 0), velocity_variance=(0, 0))
     tau = table2_torque(1, n_samples)
-    arm = simulate_open_loop(tau, np.random.default_rng(0), sensor=clean, actuator=ActuatorConfig())
-    q_models = {
-        label: simulate_open_loop(tau, np.random.default_rng(0), sigma0=project_sigma(sigma), sensor=clean).q[
-            0
-        ]
-        for label, sigma in models.items()
-    }
-    return arm.q[0], q_models
+    rec = simulate_open_loop(tau, np.random.default_rng(0), arm=sice, sensor=clean)
+    q_models = {}
+    for label, sigma in models.items():
+        model = simulate_open_loop(
+            tau, np.random.default_rng(0), arm=sice, sigma0=project_sigma(sigma), sensor=clean
+        )
+        q_models[label] = model.q[0]
+    return rec.q[0], q_models
