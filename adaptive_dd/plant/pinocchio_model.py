@@ -131,7 +131,9 @@ def cross_check(
     Parameters
     ----------
     arm : Arm or PhysicalParameters, optional
-        The arm (default :meth:`Arm.sice`).
+        The arm (default :meth:`Arm.sice`). For an Arm, the sigma compared is
+        ``arm.sigma`` or ``arm.sigma_with_payload(...)``, so the check covers the
+        arm's payload effect too; Pinocchio gets the disk as a separate body.
     payload : Payload, optional
         A tip disk at ``l2``.
     n_states : int
@@ -149,8 +151,10 @@ def cross_check(
     """
     rng = np.random.default_rng(0) if rng is None else rng
     params = as_physical(arm)
-    phys = params if payload is None else params.with_payload(payload)
-    sigma = phys.to_sigma()
+    if isinstance(arm, Arm):  # the arm's own sigma and payload effect, against a disk body in Pinocchio
+        sigma = arm.sigma if payload is None else arm.sigma_with_payload(payload.mass, payload.radius)
+    else:
+        sigma = (params if payload is None else params.with_payload(payload)).to_sigma()
     sigma_nf = sigma.copy()
     sigma_nf[3:] = 0.0
     model = build_model(params, payload)
