@@ -202,27 +202,22 @@ class Arm:
         return replace(arm, **overrides) if overrides else arm
 
     @classmethod
-    def from_physical(cls, physical: PhysicalParameters, payload_radius: float = 0.05, **kwargs) -> Arm:
-        """An arm from the physical parameters of eq. (10) (link lengths included)."""
+    def from_physical(cls, physical: PhysicalParameters, **kwargs) -> Arm:
+        """An arm from the physical parameters of eq. (10) (link lengths included).
+
+        ``kwargs``: the other fields (``payload_radius``, ``actuator``, ``friction``, ...).
+        """
         if not isinstance(physical, PhysicalParameters):
             raise ParameterError(f"from_physical needs PhysicalParameters, got {physical!r}")
-        return cls(
-            sigma=physical.to_sigma(),
-            l1=physical.l1,
-            l2=physical.l2,
-            payload_radius=payload_radius,
-            physical=physical,
-            **kwargs,
-        )
+        return cls(sigma=physical.to_sigma(), l1=physical.l1, l2=physical.l2, physical=physical, **kwargs)
 
     @classmethod
-    def from_sigma(
-        cls, sigma: ArrayLike, l1: float, l2: float, payload_radius: float = 0.05, **kwargs
-    ) -> Arm:
-        """An arm known by its base parameters (eq. 9) and geometry only."""
-        return cls(
-            sigma=np.asarray(sigma, dtype=float), l1=l1, l2=l2, payload_radius=payload_radius, **kwargs
-        )
+    def from_sigma(cls, sigma: ArrayLike, l1: float, l2: float, **kwargs) -> Arm:
+        """An arm known by its base parameters (eq. 9) and geometry only.
+
+        ``kwargs``: the other fields (``payload_radius``, ``actuator``, ``friction``, ...).
+        """
+        return cls(sigma=np.asarray(sigma, dtype=float), l1=l1, l2=l2, **kwargs)
 
     # ------------------------------------------------------------------ interface
     @property

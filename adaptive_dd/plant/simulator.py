@@ -348,7 +348,7 @@ def simulate_open_loop(
         rec.before(k, sim, qm, qdm)
         tau, sat = sim.step(tau_cmd[:, k])
         rec.after(k, tau_cmd[:, k], tau, sat)
-    return rec.result(sim)
+    return rec.result(sim, arm=sim.arm.to_dict())
 
 
 class _Recorder:
