@@ -55,20 +55,50 @@ def _sub(sub, name: str, **kw) -> argparse.ArgumentParser:
     return sub.add_parser(name, allow_abbrev=False, **kw)
 
 
+def _load_arm(path: str | None):
+    """The Arm of a scenario file's ``[arm]`` and ``[plant]`` tables (SICE arm if ``path`` is None)."""
+    import tomllib
+
+    from adaptive_dd.errors import ScenarioError
+    from adaptive_dd.plant.arm import Arm, arm_from_tables
+
+    if path is None:
+        return Arm.sice()
+    p = Path(path)
+    if not p.is_file():
+        raise ScenarioError(f"{path}: no such scenario file")
+    try:
+        data = tomllib.loads(p.read_text())
+    except tomllib.TOMLDecodeError as exc:
+        raise ScenarioError(f"{path}: not valid TOML: {exc}") from None
+    return arm_from_tables(data.get("arm"), data.get("plant"), str(path))
+
+
 def _cmd_check(args: argparse.Namespace) -> int:
-    from adaptive_dd.plant.parameters import TABLE1_PHYSICAL, Payload
+    from adaptive_dd.plant.parameters import Payload
     from adaptive_dd.plant.pinocchio_model import cross_check
 
-    payload = Payload(args.payload, args.radius) if args.payload else None
-    label = f"payload {args.payload} kg" if payload else "no payload"
-    print(f"Cross-check of adaptive_dd.plant against Pinocchio ({label}, {args.states} random states)")
-    results = cross_check(
-        TABLE1_PHYSICAL, payload, n_states=args.states, rng=np.random.default_rng(args.seed)
-    )
-    for r in results:
-        print("  " + str(r))
-    failed = [r for r in results if not r.passed]
-    print(f"{len(results) - len(failed)} passed, {len(failed)} failed")
+    arm = _load_arm(args.arm)
+    radius = arm.payload_radius if args.radius is None else args.radius
+    # with --arm: the arm without payload and with one (--payload, or 2 kg)
+    masses = [0.0, args.payload or 2.0] if args.arm else [args.payload]
+    failed = 0
+    for mass in masses:
+        payload = Payload(mass, radius) if mass else None
+        label = f"payload {mass} kg, radius {radius} m" if payload else "no payload"
+        where = f"arm of {args.arm}" if args.arm else "the SICE arm"
+        print(
+            f"Cross-check of adaptive_dd.plant against Pinocchio ({where}, {label}, "
+            f"{args.states} random states)"
+        )
+        if arm.physical is None:
+            print("  (sigma-only arm: Pinocchio model built from Arm.equivalent_physical())")
+        results = cross_check(arm, payload, n_states=args.states, rng=np.random.default_rng(args.seed))
+        for r in results:
+            print("  " + str(r))
+        bad = [r for r in results if not r.passed]
+        print(f"{len(results) - len(bad)} passed, {len(bad)} failed")
+        failed += len(bad)
     return 1 if failed else 0
 
 
@@ -92,27 +122,27 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
 
 
 def _simulate(args: argparse.Namespace, n: int, outputs) -> int:
+    import dataclasses
+
     from adaptive_dd.experiments import TABLE2, table2_torque, trial_rngs
     from adaptive_dd.io import write_recording
-    from adaptive_dd.plant.simulator import (
-        ActuatorConfig,
-        PayloadSchedule,
-        SensorConfig,
-        simulate_open_loop,
-    )
+    from adaptive_dd.plant.simulator import PayloadSchedule, simulate_open_loop
     from adaptive_dd.plotting import plot_trajectory
 
     tau = table2_torque(args.seeds, n, args.sample_period)
-    sensor = SensorConfig(
+    arm = _load_arm(args.arm)
+    sensor = dataclasses.replace(
+        arm.sensor,
         quantize=not args.no_quantize,
         position_variance=(0.0, 0.0) if args.no_noise else TABLE2["position_variance"],
         velocity_variance=(0.0, 0.0) if args.no_noise else TABLE2["velocity_variance"],
     )
-    actuator = ActuatorConfig(saturate=not args.no_saturate, quantize=not args.no_quantize)
+    actuator = dataclasses.replace(arm.actuator, saturate=not args.no_saturate, quantize=not args.no_quantize)
     payload = PayloadSchedule(initial_mass=args.payload, radius=args.radius)
     res = simulate_open_loop(
         tau,
         trial_rngs(args.seed, args.seeds),
+        arm=arm,
         sample_period=args.sample_period,
         substeps=args.substeps,
         payload=payload,
@@ -126,6 +156,7 @@ def _simulate(args: argparse.Namespace, n: int, outputs) -> int:
         f"Table 2 experiment: 1 Hz sine torques {TABLE2['amplitude']} N m, {args.duration} s at "
         f"T = {args.sample_period} s, payload {args.payload} kg, {args.seeds} trial(s)"
     )
+    print(f"  arm: {args.arm or 'SICE'} (l1 = {arm.l1} m, l2 = {arm.l2} m), plant friction {arm.friction}")
     print(f"  max |q|   [rad]    : {np.abs(res.q).max(axis=(0, 1)).round(4)}")
     print(f"  max |qd|  [rad/s]  : {np.abs(res.qd).max(axis=(0, 1)).round(4)}")
     print(f"  rms tau   [N m]    : {np.sqrt((res.tau**2).mean(axis=(0, 1))).round(4)}")
@@ -470,7 +501,10 @@ def build_parser() -> argparse.ArgumentParser:
 
     c = _sub(sub, "check", help="cross-check the dynamics against Pinocchio")
     c.add_argument("--payload", type=_MASS, default=0.0, metavar="KG", help="tip disk mass [kg]")
-    c.add_argument("--radius", type=_RADIUS, default=0.05, help="tip disk radius [m]")
+    c.add_argument("--radius", type=_RADIUS, help="tip disk radius [m] (default: the arm's)")
+    c.add_argument(
+        "--arm", metavar="SCENARIO", help="check the [arm] of a scenario TOML, with and without payload"
+    )
     c.add_argument("--states", type=_number(int, 1, 100_000), default=200, help="number of random states")
     c.add_argument("--seed", type=_SEED, default=0)
     c.set_defaults(func=_cmd_check)
@@ -484,7 +518,8 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--seeds", type=_SEEDS, default=1, help="number of trials (noise seeds)")
     s.add_argument("--seed", type=_SEED, default=0, help="base seed")
     s.add_argument("--payload", type=_MASS, default=0.0, metavar="KG")
-    s.add_argument("--radius", type=_RADIUS, default=0.05)
+    s.add_argument("--radius", type=_RADIUS, help="tip disk radius [m] (default: the arm's)")
+    s.add_argument("--arm", metavar="SCENARIO", help="simulate the [arm] and [plant] of a scenario TOML")
     s.add_argument("--no-noise", action="store_true", help="noise-free sensors")
     s.add_argument("--no-quantize", action="store_true", help="no encoder or D/A quantization")
     s.add_argument("--no-saturate", action="store_true", help="no torque saturation")

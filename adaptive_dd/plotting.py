@@ -143,8 +143,6 @@ def plot_tracking_errors(res, path: str | Path, window: float = 0.05) -> Path:
 
 def plot_benchmark_estimates(res, path: str | Path) -> Path:
     """J1, J2, r and the payload mass estimated by the adaptive controllers, against the truth."""
-    from adaptive_dd.plant.parameters import TABLE1_SIGMA, payload_mass_from_sigma
-
     fig, axes = plt.subplots(2, 2, figsize=(11, 7), sharex=True)
     panels = [(0, "J1 [kg m²]"), (1, "J2 [kg m²]"), (2, "r [kg m²]")]
     for ax, (k, label) in zip(axes.flat[:3], panels, strict=True):
@@ -159,7 +157,9 @@ def plot_benchmark_estimates(res, path: str | Path) -> Path:
         sh = run.sigma_hat[kept].mean(axis=0)
         for ax, (k, _) in zip(axes.flat[:3], panels, strict=True):
             ax.plot(res.t, sh[:, k], color=f"C{i}", lw=1.0, label=name)
-        axes.flat[3].plot(res.t, payload_mass_from_sigma(sh, TABLE1_SIGMA), color=f"C{i}", lw=1.0, label=name)
+        axes.flat[3].plot(
+            res.t, res.scenario.arm.payload_mass_from_sigma(sh), color=f"C{i}", lw=1.0, label=name
+        )
     for ax in axes.flat:
         ax.grid(alpha=0.3)
         _mark_swaps(ax, res.t, res.mass)

@@ -122,7 +122,7 @@ def test_pinocchio_regressor_columns_directly(rng):
     model = build_model(TABLE1_PHYSICAL)
     data = model.createData()
     q, qd, qdd = random_states(rng, 5)
-    k = base_parameter_map()
+    k = base_parameter_map(0.2)
     for i in range(5):
         y = pin.computeJointTorqueRegressor(model, data, q[i], qd[i], qdd[i])
         phi = regressor(q[i], qd[i], qdd[i])

@@ -68,7 +68,7 @@ def smooth_record():
         np.random.default_rng(0),
         sigma0=sigma,
         sensor=CLEAN,
-        actuator=ActuatorConfig(quantize=False),
+        actuator=ActuatorConfig((70.0, 15.0), quantize=False),
         substeps=4,
     )
     return res, sigma

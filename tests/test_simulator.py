@@ -11,6 +11,7 @@ from adaptive_dd.plant import (
     TABLE1_PHYSICAL,
     TABLE1_SIGMA,
     ActuatorConfig,
+    Arm,
     ArmSimulator,
     PayloadSchedule,
     SensorConfig,
@@ -20,7 +21,7 @@ from adaptive_dd.plant import (
 from adaptive_dd.plant.pinocchio_model import build_model
 
 NO_SENSOR_EFFECTS = SensorConfig(quantize=False, position_variance=(0, 0), velocity_variance=(0, 0))
-IDEAL_ACTUATOR = ActuatorConfig(saturate=False, quantize=False)
+IDEAL_ACTUATOR = ActuatorConfig((70.0, 15.0), saturate=False, quantize=False)
 
 
 def test_integration_matches_pinocchio_aba_with_scipy():
@@ -104,14 +105,14 @@ def test_sensor_noise_and_quantization():
 
 
 def test_actuator_saturation_and_dac_quantization():
-    act = ActuatorConfig()
+    act = Arm.sice().actuator
     tau, sat = act.apply(np.array([[100.0, -20.0], [1.0001, 0.5]]))
     assert sat.tolist() == [[True, True], [False, False]]
     lsb = 2 * np.array([70.0, 15.0]) / 4096
     assert tau[0, 0] <= 70.0 and tau[0, 1] == -15.0
     np.testing.assert_allclose(tau / lsb, np.round(tau / lsb), atol=1e-9)
     assert np.all(np.abs(tau[1] - [1.0001, 0.5]) <= lsb / 2)
-    raw, _ = ActuatorConfig(saturate=False, quantize=False).apply(np.array([[100.0, 0.1234]]))
+    raw, _ = ActuatorConfig((70.0, 15.0), saturate=False, quantize=False).apply(np.array([[100.0, 0.1234]]))
     np.testing.assert_array_equal(raw, [[100.0, 0.1234]])
 
 

@@ -23,7 +23,7 @@ from numba import njit, prange
 from adaptive_dd.benchmark.streaming import accumulate_trial
 from adaptive_dd.controllers.laws import boost_trial, ct_trial, pd_trial, slotine_li_trial
 from adaptive_dd.identification.online_kernel import C_SINCE_ALARM, online_step_trial
-from adaptive_dd.plant.integrator import _plant_step_kernel
+from adaptive_dd.plant.integrator import step_trials
 from adaptive_dd.plant.sampling import actuate_trial, measure_trial
 
 __all__ = ["LAW_ADAPTIVE", "LAW_CT", "LAW_CT_ORACLE", "LAW_PD", "CompiledSpec", "compiled_spec"]
@@ -119,8 +119,9 @@ def closed_loop_block(
 
     noise : (n, k1 - k0, 4) standard normal; ref : (N, 6) q_d, qd_d, qdd_d; sig_seg : (n_sw + 1, 7)
     true sigma before the first swap and after each; swap_k : (n_sw,) sample of each swap;
-    plant_f : [T, max_speed, max_error, lim1, lim2, lsb1, lsb2, res1, res2, std1..4];
-    plant_i : [substeps, saturate, quantize_dac, quantize_encoder].
+    plant_f : [T, max_speed, max_error, lim1, lim2, lsb1, lsb2, res1, res2, std1..4, friction
+    velocity, stribeck ratio, stribeck velocity];
+    plant_i : [substeps, saturate, quantize_dac, quantize_encoder, friction code].
     """
     n = q.shape[0]
     T, max_speed, max_error = plant_f[0], plant_f[1], plant_f[2]
@@ -153,9 +154,10 @@ def closed_loop_block(
             if failed[i]:
                 tau[0], tau[1] = 0.0, 0.0
             p1, p2 = q[i, 0], q[i, 1]
-            _plant_step_kernel(
+            step_trials(
                 q[i : i + 1], qd[i : i + 1], stuck[i : i + 1], slip[i : i + 1],
                 tau.reshape(1, 2), sg_true.reshape(1, 7), T, plant_i[0],
+                plant_i[4], plant_f[13], plant_f[14], plant_f[15],
             )  # fmt: skip
             ok = np.isfinite(q[i, 0]) and np.isfinite(q[i, 1])
             ok = ok and abs(qd[i, 0]) < max_speed and abs(qd[i, 1]) < max_speed

@@ -11,12 +11,13 @@ from adaptive_dd.benchmark.runner import (
     SETTLE,
     ControllerRun,
     _new_run,
+    _sensor,
     _trial_rngs,
     _true_sigma,
 )
 from adaptive_dd.benchmark.streaming import segment_bounds
 from adaptive_dd.identification.online import OnlineConfig, online_init
-from adaptive_dd.plant.simulator import MAX_SPEED, ActuatorConfig, SensorConfig
+from adaptive_dd.plant.simulator import MAX_SPEED
 
 __all__ = ["run_compiled"]
 
@@ -33,14 +34,14 @@ def run_compiled(name, ctrl, spec: CompiledSpec, scenario, idx, ref, keep: int, 
     seg_start, seg_end, seg_settled = segment_bounds(scenario.segments(), T, SETTLE)
     run = _new_run(name, ctrl, S, len(seg_start), N, keep, estimates, "compiled")
     K = run.q.shape[0]
-    act, sens = (
-        ActuatorConfig(),
-        SensorConfig(
-            position_variance=scenario.position_variance, velocity_variance=scenario.velocity_variance
-        ),
+    arm = scenario.arm
+    act, sens = arm.actuator, _sensor(scenario)
+    plant_f = np.concatenate(
+        ([T, MAX_SPEED, MAX_ERROR], act._lim, act._lsb, sens.resolution, sens.noise_std, arm.friction_params)
     )
-    plant_f = np.concatenate(([T, MAX_SPEED, MAX_ERROR], act._lim, act._lsb, sens.resolution, sens.noise_std))
-    plant_i = np.array([scenario.substeps, act.saturate, act.quantize, sens.quantize], dtype=np.int64)
+    plant_i = np.array(
+        [scenario.substeps, act.saturate, act.quantize, sens.quantize, arm.friction_code], dtype=np.int64
+    )
     sigma_true, _ = _true_sigma(scenario, np.arange(N) * T)
     swap_k = np.array([int(np.ceil(at / T - 1e-9)) for at in scenario.swap_times], dtype=np.int64)
     sig_seg = np.ascontiguousarray(sigma_true[np.concatenate(([0], np.minimum(swap_k, N - 1)))])

@@ -53,7 +53,6 @@ import numpy as np
 
 from adaptive_dd.benchmark.runner import SETTLE, BenchmarkResult
 from adaptive_dd.benchmark.streaming import segment_bounds
-from adaptive_dd.plant.parameters import TABLE1_SIGMA, payload_mass_from_sigma
 
 __all__ = ["RECOVERY_BAND", "RECOVERY_DWELL", "RECOVERY_FLOOR", "compute_metrics", "moving_rms"]
 
@@ -111,7 +110,7 @@ def per_seed_segment_metrics(res: BenchmarkResult, run) -> dict[str, np.ndarray]
         "recovery_time": _recovery_times(run.e_norm, start, end, T),
     }
     if run.sigma_end is not None:
-        out["mass_estimate"] = payload_mass_from_sigma(run.sigma_end, TABLE1_SIGMA)
+        out["mass_estimate"] = sc.arm.payload_mass_from_sigma(run.sigma_end)
     for v in out.values():
         v[run.failed] = np.nan
     return out

@@ -20,6 +20,7 @@ of the benchmark goes on.
 
 from __future__ import annotations
 
+import dataclasses
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -32,8 +33,7 @@ from adaptive_dd.benchmark.scenario import Scenario
 from adaptive_dd.benchmark.streaming import N_ACC, accumulate_batch, segment_bounds
 from adaptive_dd.controllers import Controller, Gains, controller_label, make_controller
 from adaptive_dd.errors import ParameterError, SignalError
-from adaptive_dd.plant.parameters import TABLE1_SIGMA, payload_sigma_delta
-from adaptive_dd.plant.simulator import ArmSimulator, PayloadSchedule, SensorConfig
+from adaptive_dd.plant.simulator import ArmSimulator, PayloadSchedule
 
 __all__ = ["ENGINES", "MAX_ERROR", "SETTLE", "BenchmarkResult", "ControllerRun", "run_benchmark"]
 
@@ -126,15 +126,23 @@ def _payload(scenario: Scenario) -> PayloadSchedule:
     return PayloadSchedule(scenario.swap_times, scenario.swap_masses, radius=scenario.payload_radius)
 
 
+def _sensor(scenario: Scenario):
+    """The arm's sensors with the scenario's noise."""
+    return dataclasses.replace(
+        scenario.arm.sensor,
+        position_variance=scenario.position_variance,
+        velocity_variance=scenario.velocity_variance,
+    )
+
+
 def _true_sigma(scenario: Scenario, t: Array) -> tuple[Array, Array]:
     """True sigma and payload mass at every sample, as the simulator applies them."""
-    pay = _payload(scenario)
     T = scenario.sample_period
     k_sw = [int(np.ceil(at / T - 1e-9)) for at in scenario.swap_times]
     masses = np.array([0.0, *scenario.swap_masses])
     w = np.searchsorted(np.array(k_sw, dtype=np.int64), np.arange(t.size), side="right")
     mass = masses[w]
-    return TABLE1_SIGMA + payload_sigma_delta(mass, pay.radius), mass
+    return scenario.arm.sigma_with_payload(mass, scenario.payload_radius), mass
 
 
 def run_benchmark(
@@ -175,7 +183,9 @@ def run_benchmark(
             opts = scenario.options(controller_label(spec)) or scenario.options(spec)
             src = Path(scenario.source)
             search = (src.parent, Path.cwd()) if src.is_file() else (Path.cwd(),)
-            ctrls[controller_label(spec, opts)] = make_controller(spec, gains, opts, search=search)
+            ctrls[controller_label(spec, opts)] = make_controller(
+                spec, gains, opts, arm=scenario.arm, search=search
+            )
     else:
         ctrls = controllers
     idx = tuple(range(scenario.seeds)) if seed_indices is None else tuple(int(i) for i in seed_indices)
@@ -244,13 +254,11 @@ def _run_python(name, ctrl, scenario, idx, reference, keep, bar) -> ControllerRu
         S,
         N,
         _trial_rngs(scenario.seed, idx),
-        sigma0=TABLE1_SIGMA,
+        arm=scenario.arm,
         payload=_payload(scenario),
         sample_period=T,
         substeps=scenario.substeps,
-        sensor=SensorConfig(
-            position_variance=scenario.position_variance, velocity_variance=scenario.velocity_variance
-        ),
+        sensor=_sensor(scenario),
         q0=q_d[0],
         qd0=qd_d[0],
     )

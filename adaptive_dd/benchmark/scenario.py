@@ -67,6 +67,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from adaptive_dd.errors import ScenarioError
+from adaptive_dd.plant.arm import Arm, arm_from_tables
 
 __all__ = [
     "LIMITS",
@@ -112,6 +113,8 @@ _KEYS = {
     "payload": {"at", "mass", "radius"},
     "noise": {"position_variance", "velocity_variance"},
     "controllers": None,  # one sub-table per controller, free keys
+    "arm": None,  # checked by adaptive_dd.plant.arm.arm_from_tables
+    "plant": None,
 }
 _JOINT_KEYS = {"offset", "amplitude", "frequency", "phase"}
 _FIELD_KEY = {
@@ -243,6 +246,7 @@ class Scenario:
     source: str = "<memory>"
     controller_options: tuple[tuple[str, tuple[tuple[str, Any], ...]], ...] = ()
     defaulted: frozenset[str] = field(default=frozenset(), compare=False)
+    arm: Arm = field(default_factory=Arm.sice)
 
     def __post_init__(self) -> None:
         from adaptive_dd.benchmark.scenario_checks import scenario_errors
@@ -329,6 +333,12 @@ def parse_scenario(data: dict, src: str = "<memory>", name: str = "scenario") ->
 
     values, errors = scenario_fields(data, src == str(default_scenario_path()))
     values.update(name=name, source=src)
+    try:
+        values["arm"] = arm_from_tables(data.get("arm"), data.get("plant"), src)
+        if "payload.radius" in values.get("defaulted", ()):
+            values["payload_radius"] = values["arm"].payload_radius
+    except ScenarioError as exc:
+        errors.append(str(exc).removeprefix(f"{src}: "))
     errors += [e for e in scenario_errors(values) if e.split(":")[0] not in _bad_keys(errors)]
     if errors:
         raise _scenario_error(src, errors)

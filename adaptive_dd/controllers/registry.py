@@ -39,10 +39,10 @@ import numpy as np
 from adaptive_dd.controllers.adaptive import ADAPTIVE_ONLINE, AdaptiveCT
 from adaptive_dd.controllers.base import DEFAULT_GAINS, Controller, Gains
 from adaptive_dd.controllers.feedback import PD, ComputedTorque
-from adaptive_dd.controllers.slotine_li import SlotineLi
+from adaptive_dd.controllers.slotine_li import DEFAULT_GAMMA, SlotineLi
 from adaptive_dd.errors import ParameterError
 from adaptive_dd.identification.online import ChangeDetector, OnlineConfig
-from adaptive_dd.plant.parameters import TABLE1_SIGMA
+from adaptive_dd.plant.arm import Arm
 
 __all__ = ["CONTROLLERS", "controller_label", "load_controller_class", "make_controller"]
 
@@ -108,7 +108,7 @@ def _unknown(spec: str, options: dict, allowed: set) -> None:
 def _sigma(spec: str, options: dict) -> np.ndarray:
     from adaptive_dd.plant.parameters import validate_sigma
 
-    return validate_sigma(options.get("sigma", TABLE1_SIGMA), f"controllers.{spec}.sigma")
+    return validate_sigma(options["sigma"], f"controllers.{spec}.sigma")
 
 
 def _online(spec: str, options: dict) -> OnlineConfig:
@@ -129,7 +129,8 @@ def _online(spec: str, options: dict) -> OnlineConfig:
     return dataclasses.replace(ADAPTIVE_ONLINE, **kw)
 
 
-def _builtin(spec: str, g: Gains, options: dict, sigma_nominal) -> Controller:
+def _builtin(spec: str, g: Gains, options: dict, arm) -> Controller:
+    sigma_nominal = arm.sigma
     o = {k: v for k, v in options.items() if k not in COMMON}
     allowed = {
         "pd": {"sigma"},
@@ -149,20 +150,36 @@ def _builtin(spec: str, g: Gains, options: dict, sigma_nominal) -> Controller:
     if spec == "adaptive_ct_paper":
         from adaptive_dd.controllers.adaptive import adaptive_ct_paper
 
-        return adaptive_ct_paper(g, sigma_nominal)
+        ctrl = adaptive_ct_paper(g, sigma_nominal)
+        ctrl.online = dataclasses.replace(
+            ctrl.online, payload_direction=tuple(float(x) for x in arm.payload_direction(0.0))
+        )
+        return ctrl
     if spec == "adaptive_ct":
         boost = {k: o[k] for k in ("boost_bandwidth", "boost_duration") if k in o}
-        return AdaptiveCT(_online(spec, o), g, sigma_nominal, **boost)
+        online = dataclasses.replace(
+            _online(spec, o), payload_direction=tuple(float(x) for x in arm.payload_direction(0.0))
+        )
+        return AdaptiveCT(online, g, sigma_nominal, **boost)
     if spec == "slotine_li":
-        return SlotineLi(g, o["gamma"], sigma_nominal) if "gamma" in o else SlotineLi(g, theta0=sigma_nominal)
-    return SlotineLi(g, theta0=sigma_nominal, oracle=True)
+        gamma = o.get("gamma", DEFAULT_GAMMA)
+        return SlotineLi(g, gamma, sigma_nominal, bounds=slotine_bounds(arm))
+    return SlotineLi(g, theta0=sigma_nominal, bounds=slotine_bounds(arm), oracle=True)
+
+
+def slotine_bounds(arm) -> tuple:
+    """Slotine-Li's a-priori box for an arm: half the nominal sigma up to 1.5x plus a 5 kg disk
+    of radius 0.1 m (the built-in default, :data:`~adaptive_dd.controllers.slotine_li.DEFAULT_BOUNDS`,
+    for the SICE arm)."""
+    s = arm.sigma
+    return 0.5 * s, 1.5 * s + (arm.sigma_with_payload(5.0, 0.1) - s)
 
 
 def make_controller(
     spec: str,
     gains: Gains | None = None,
     options: dict | None = None,
-    sigma_nominal=TABLE1_SIGMA,
+    arm=None,
     search: tuple = (),
 ) -> Controller:
     """A controller by built-in name or import path, with its settings.
@@ -174,6 +191,7 @@ def make_controller(
         (naming the controller and the key).
     """
     options = dict(options or {})
+    arm = arm or Arm.sice()
     base = gains or DEFAULT_GAINS
     try:
         g = Gains(options.get("bandwidth", base.bandwidth), options.get("damping", base.damping))
@@ -181,11 +199,11 @@ def make_controller(
         raise ParameterError(f"controllers.{spec}: {exc}") from None
     if spec in CONTROLLERS:
         try:
-            ctrl = _builtin(spec, g, options, sigma_nominal)
+            ctrl = _builtin(spec, g, options, arm)
         except (TypeError, ValueError) as exc:
             raise ParameterError(f"controllers.{spec}: {exc}") from None
     elif ":" in spec:
-        ctrl = _plugin(spec, g, options, sigma_nominal, search)
+        ctrl = _plugin(spec, g, options, arm.sigma, search)
     else:
         raise ParameterError(
             f"unknown controller {spec!r}; choose from {CONTROLLERS} or 'package.module:Class'"

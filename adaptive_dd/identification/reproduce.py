@@ -9,7 +9,7 @@ at the end of the 10 000 samples (ERRATA.md), reported as mean and std over seed
 from __future__ import annotations
 
 import json
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -25,8 +25,9 @@ from adaptive_dd.identification.limits import (
     run_information_estimators,
     table2_bound,
 )
-from adaptive_dd.plant.parameters import SIGMA_NAMES, TABLE1_SIGMA, project_sigma
-from adaptive_dd.plant.simulator import ActuatorConfig, SensorConfig, simulate_open_loop
+from adaptive_dd.plant.arm import Arm
+from adaptive_dd.plant.parameters import SIGMA_NAMES, project_sigma
+from adaptive_dd.plant.simulator import simulate_open_loop
 
 __all__ = [
     "EXTRA_ESTIMATORS",
@@ -181,11 +182,13 @@ def run_reproduce(
         raise ParameterError(f"unknown estimator(s) {bad}; choose from {ESTIMATORS + EXTRA_ESTIMATORS}")
     if any(t <= 0 for t in tau_f):
         raise ParameterError(f"tau_f values must be > 0, got {tau_f}")
-    sensor = SensorConfig(
+    arm = Arm.sice()  # the paper's arm
+    sensor = replace(
+        arm.sensor,
         position_variance=TABLE2["position_variance"] if noise else (0.0, 0.0),
         velocity_variance=TABLE2["velocity_variance"] if noise else (0.0, 0.0),
     )
-    sim = simulate_open_loop(table2_torque(seeds, n_samples), trial_rngs(seed, seeds), sensor=sensor)
+    sim = simulate_open_loop(table2_torque(seeds, n_samples), trial_rngs(seed, seeds), arm=arm, sensor=sensor)
     jobs = [(m, s, e) for m in methods for e in estimators for s in (splits if e == "paper" else ("full",))]
     res = ReproduceResult(tuple(tau_f), seeds, sim=sim)
     prepared = {}
@@ -210,7 +213,7 @@ def run_reproduce(
         )
         if est != "kalman":
             bar.update(1)
-        res.signed[(method, split, est)] = 100 * (theta[..., -1, :] - TABLE1_SIGMA) / TABLE1_SIGMA
+        res.signed[(method, split, est)] = 100 * (theta[..., -1, :] - arm.sigma) / arm.sigma
         res.errors[(method, split, est)] = np.abs(res.signed[(method, split, est)])
         if (method, split, est) in keep_theta:
             res.theta[(method, split, est)] = theta
@@ -235,7 +238,7 @@ def format_bounds(res: ReproduceResult, tau_f: float | None = None) -> str:
     estimates, kinds = {}, {}
     for (method, split, est), e in res.signed.items():
         label = f"{method} {est}" + (f" ({split})" if est == "paper" else "") + f" tau_f={tf:g}"
-        estimates[label] = TABLE1_SIGMA * (1 + e[i] / 100.0)
+        estimates[label] = Arm.sice().sigma * (1 + e[i] / 100.0)
         kinds[label] = est
     for name, est in res.extra.items():
         estimates[name], kinds[name] = est, name
@@ -283,13 +286,14 @@ def model_responses(models: dict, n_samples: int = TABLE2["n_samples"]) -> tuple
     q_models : dict
         Label -> ndarray (n_samples, 2).
     """
-    clean = SensorConfig(quantize=False, position_variance=(0, 0), velocity_variance=(0, 0))
+    sice = Arm.sice()
+    clean = replace(sice.sensor, quantize=False, position_variance=(0, 0), velocity_variance=(0, 0))
     tau = table2_torque(1, n_samples)
-    arm = simulate_open_loop(tau, np.random.default_rng(0), sensor=clean, actuator=ActuatorConfig())
-    q_models = {
-        label: simulate_open_loop(tau, np.random.default_rng(0), sigma0=project_sigma(sigma), sensor=clean).q[
-            0
-        ]
-        for label, sigma in models.items()
-    }
-    return arm.q[0], q_models
+    rec = simulate_open_loop(tau, np.random.default_rng(0), arm=sice, sensor=clean)
+    q_models = {}
+    for label, sigma in models.items():
+        model = simulate_open_loop(
+            tau, np.random.default_rng(0), arm=sice, sigma0=project_sigma(sigma), sensor=clean
+        )
+        q_models[label] = model.q[0]
+    return rec.q[0], q_models

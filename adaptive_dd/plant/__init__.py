@@ -1,11 +1,15 @@
-"""The SICE two-link direct-drive arm: parameters, dynamics, simulator, Pinocchio check."""
+"""A two-link direct-drive arm (default: the SICE arm): parameters, dynamics, simulator, Pinocchio check."""
 
+from adaptive_dd.plant.arm import FRICTION_LAWS, Arm
+from adaptive_dd.plant.devices import ActuatorConfig, SensorConfig
 from adaptive_dd.plant.dynamics import (
     coriolis_matrix,
+    coriolis_vector,
     forward_dynamics,
     friction,
     inverse_dynamics,
     mass_matrix,
+    mass_matrix_entries,
     regressor,
     regressor_reference,
 )
@@ -25,15 +29,14 @@ from adaptive_dd.plant.parameters import (
     validate_sigma,
 )
 from adaptive_dd.plant.simulator import (
-    ActuatorConfig,
     ArmSimulator,
     PayloadSchedule,
-    SensorConfig,
     SimulationResult,
     simulate_open_loop,
 )
 
 __all__ = [
+    "FRICTION_LAWS",
     "L1",
     "L2",
     "SIGMA_NAMES",
@@ -41,6 +44,7 @@ __all__ = [
     "TABLE1_SIGMA",
     "TORQUE_LIMITS",
     "ActuatorConfig",
+    "Arm",
     "ArmSimulator",
     "Payload",
     "PayloadSchedule",
@@ -48,10 +52,12 @@ __all__ = [
     "SensorConfig",
     "SimulationResult",
     "coriolis_matrix",
+    "coriolis_vector",
     "forward_dynamics",
     "friction",
     "inverse_dynamics",
     "mass_matrix",
+    "mass_matrix_entries",
     "payload_mass_from_sigma",
     "payload_sigma_delta",
     "plant_step",

@@ -15,10 +15,12 @@ from adaptive_dd.plant.parameters import validate_sigma
 
 __all__ = [
     "coriolis_matrix",
+    "coriolis_vector",
     "forward_dynamics",
     "friction",
     "inverse_dynamics",
     "mass_matrix",
+    "mass_matrix_entries",
     "regressor",
     "regressor_reference",
 ]
@@ -38,22 +40,31 @@ def as_joint_array(x: ArrayLike, name: str) -> Array:
 
 
 # --------------------------------------------------------------------- kernels
-def _mass_entries(q2: Array, sigma: Array) -> tuple[Array, Array, Array]:
+def mass_matrix_entries(q2: Array, sigma: Array) -> tuple[Array, Array, Array]:
+    """Entries ``(M11, M12, M22)`` of M(q) (eq. 3), each ``(...)``; no checks (a kernel).
+
+    Parameters
+    ----------
+    q2 : ndarray (...)
+        Angle of joint 2 [rad].
+    sigma : ndarray (..., 7)
+        Base parameters.
+    """
     c2 = np.cos(q2)
     j2 = sigma[..., 1]
     rc = sigma[..., 2] * c2
     return sigma[..., 0] + j2 + 2.0 * rc, j2 + rc, j2 + 0.0 * rc
 
 
-mass_matrix_entries = _mass_entries
-"""``(M11, M12, M22)`` of eq. (3) from ``q2 (...)`` and ``sigma (..., 7)``, without checks (a kernel)."""
-
-
-def _coriolis_vector(q: Array, qd: Array, sigma: Array) -> Array:
-    """C(q, qd) qd of eq. (4)."""
+def coriolis_vector(q: Array, qd: Array, sigma: Array) -> Array:
+    """``C(q, qd) qd`` of eq. (4), ``(..., 2)`` [N m]; no checks (a kernel)."""
     rs = sigma[..., 2] * np.sin(q[..., 1])
     qd1, qd2 = qd[..., 0], qd[..., 1]
     return np.stack((-rs * qd2 * (2.0 * qd1 + qd2), rs * qd1 * qd1), axis=-1)
+
+
+_mass_entries = mass_matrix_entries  # old private names, kept for callers not yet moved
+_coriolis_vector = coriolis_vector
 
 
 def _friction(qd: Array, sigma: Array, sgn: Array | None = None) -> Array:
@@ -91,7 +102,7 @@ def mass_matrix(q: ArrayLike, sigma: ArrayLike) -> Array:
     """Inertia matrix M(q) of eq. (3), shape ``(..., 2, 2)`` [kg m^2]."""
     q = as_joint_array(q, "q")
     s = validate_sigma(sigma)
-    m11, m12, m22 = _mass_entries(q[..., 1], s)
+    m11, m12, m22 = mass_matrix_entries(q[..., 1], s)
     row1 = np.stack((m11, m12), axis=-1)
     row2 = np.stack((m12, m22), axis=-1)
     return np.stack((row1, row2), axis=-2)
@@ -180,9 +191,9 @@ def inverse_dynamics(q: ArrayLike, qd: ArrayLike, qdd: ArrayLike, sigma: ArrayLi
     qd = as_joint_array(qd, "qd")
     qdd = as_joint_array(qdd, "qdd")
     s = validate_sigma(sigma)
-    m11, m12, m22 = _mass_entries(q[..., 1], s)
+    m11, m12, m22 = mass_matrix_entries(q[..., 1], s)
     mq = np.stack((m11 * qdd[..., 0] + m12 * qdd[..., 1], m12 * qdd[..., 0] + m22 * qdd[..., 1]), -1)
-    return mq + _coriolis_vector(q, qd, s) + _friction(qd, s)
+    return mq + coriolis_vector(q, qd, s) + _friction(qd, s)
 
 
 def forward_dynamics(q: ArrayLike, qd: ArrayLike, tau: ArrayLike, sigma: ArrayLike) -> Array:
@@ -195,5 +206,5 @@ def forward_dynamics(q: ArrayLike, qd: ArrayLike, tau: ArrayLike, sigma: ArrayLi
     qd = as_joint_array(qd, "qd")
     tau = as_joint_array(tau, "tau")
     s = validate_sigma(sigma)
-    m11, m12, m22 = _mass_entries(q[..., 1], s)
-    return _solve2(m11, m12, m22, tau - _coriolis_vector(q, qd, s) - _friction(qd, s))
+    m11, m12, m22 = mass_matrix_entries(q[..., 1], s)
+    return _solve2(m11, m12, m22, tau - coriolis_vector(q, qd, s) - _friction(qd, s))

@@ -14,6 +14,16 @@ reaches zero within a substep, the substep is split there, the modes are decided
 anew and the rest of the substep is integrated. This hybrid model has no
 chattering at zero velocity, unlike integrating ``sgn(qd)`` directly.
 
+Smooth plant friction
+---------------------
+With ``friction_code`` 1 (``"tanh"``) or 2 (``"stribeck"``) the Coulomb term is a
+smooth function of the velocity (see :mod:`adaptive_dd.plant.arm`) and
+:func:`_smooth_step_kernel` integrates the ODE with plain RK4, without modes. Near
+zero velocity that ODE is stiff (slope ``d_i / v``); each substep is therefore split
+into as many equal RK4 steps as keep ``h * rho`` below 2 (RK4 is stable up to
+2.78 on the negative real axis), with ``rho`` a bound on the spectral radius of
+``M^-1 K``, ``K`` the largest friction slopes, at the current q2.
+
 Sampling
 --------
 Each call of :meth:`ArmSimulator.step` holds the torque constant for one sample
@@ -27,7 +37,12 @@ import numpy as np
 from numba import njit
 from numpy.typing import NDArray
 
-__all__ = ["plant_step"]
+from adaptive_dd.errors import ParameterError
+
+__all__ = ["FRICTION_CODES", "plant_step"]
+
+FRICTION_CODES = {"stick-slip": 0, "tanh": 1, "stribeck": 2}
+"""Integer code of each plant friction law (:attr:`adaptive_dd.plant.arm.Arm.friction`)."""
 
 Array = NDArray[np.float64]
 
@@ -157,6 +172,86 @@ def _plant_step_kernel(q, qd, stuck, slip, tau, sigma, T, substeps):  # pragma: 
         slip[i, 0], slip[i, 1] = sl1, sl2
 
 
+@njit(cache=True, fastmath=False)
+def _coulomb(v, d, code, vc, ratio, vs):  # pragma: no cover - compiled
+    """Smooth Coulomb torque of one joint: tanh (code 1) or Stribeck (code 2)."""
+    g = d
+    if code == 2:
+        g = d * (1.0 + (ratio - 1.0) * np.exp(-((v / vs) ** 2)))
+    return g * np.tanh(v / vc)
+
+
+@njit(cache=True, fastmath=False)
+def _smooth_accel(q2, v1, v2, t1, t2, sg, code, vc, ratio, vs):  # pragma: no cover - compiled
+    j1, j2, r, b1, b2, d1, d2 = sg[0], sg[1], sg[2], sg[3], sg[4], sg[5], sg[6]
+    c2, s2 = np.cos(q2), np.sin(q2)
+    m11 = j1 + j2 + 2.0 * r * c2
+    m12 = j2 + r * c2
+    m22 = j2
+    r1 = t1 + r * s2 * v2 * (2.0 * v1 + v2) - b1 * v1 - _coulomb(v1, d1, code, vc, ratio, vs)
+    r2 = t2 - r * s2 * v1 * v1 - b2 * v2 - _coulomb(v2, d2, code, vc, ratio, vs)
+    det = m11 * m22 - m12 * m12
+    return (m22 * r1 - m12 * r2) / det, (m11 * r2 - m12 * r1) / det
+
+
+@njit(cache=True, fastmath=False)
+def _smooth_step_kernel(q, qd, tau, sigma, T, substeps, code, vc, ratio, vs):  # pragma: no cover
+    n = q.shape[0]
+    h = T / substeps
+    for i in range(n):
+        sg = sigma[i]
+        p1, p2, v1, v2 = q[i, 0], q[i, 1], qd[i, 0], qd[i, 1]
+        t1, t2 = tau[i, 0], tau[i, 1]
+        # largest friction slopes: tanh' <= 1 / vc; Stribeck adds |g'| <= (k - 1) d sqrt(2/e) / vs
+        extra = 0.0 if code != 2 else (ratio - 1.0) * 0.8578 / vs
+        kpeak = (ratio if code == 2 else 1.0) / vc + extra
+        k1 = sg[3] + sg[5] * kpeak
+        k2 = sg[4] + sg[6] * kpeak
+        for _ in range(substeps):
+            c2 = np.cos(p2)
+            m11 = sg[0] + sg[1] + 2.0 * sg[2] * c2
+            m22 = sg[1]
+            det = m11 * m22 - (sg[1] + sg[2] * c2) ** 2
+            rho = (k1 * m22 + k2 * m11) / det  # trace of M^-1 K >= its spectral radius
+            m = max(1, int(np.ceil(h * rho / 2.0)))
+            dt = h / m
+            for _ in range(m):
+                a11, a12 = _smooth_accel(p2, v1, v2, t1, t2, sg, code, vc, ratio, vs)
+                w1, w2 = v1 + 0.5 * dt * a11, v2 + 0.5 * dt * a12
+                a21, a22 = _smooth_accel(p2 + 0.5 * dt * v2, w1, w2, t1, t2, sg, code, vc, ratio, vs)
+                x1, x2 = v1 + 0.5 * dt * a21, v2 + 0.5 * dt * a22
+                a31, a32 = _smooth_accel(p2 + 0.5 * dt * w2, x1, x2, t1, t2, sg, code, vc, ratio, vs)
+                y1, y2 = v1 + dt * a31, v2 + dt * a32
+                a41, a42 = _smooth_accel(p2 + dt * x2, y1, y2, t1, t2, sg, code, vc, ratio, vs)
+                p1 = p1 + (dt / 6.0) * (v1 + 2.0 * w1 + 2.0 * x1 + y1)
+                p2 = p2 + (dt / 6.0) * (v2 + 2.0 * w2 + 2.0 * x2 + y2)
+                v1 = v1 + (dt / 6.0) * (a11 + 2.0 * a21 + 2.0 * a31 + a41)
+                v2 = v2 + (dt / 6.0) * (a12 + 2.0 * a22 + 2.0 * a32 + a42)
+        q[i, 0], q[i, 1], qd[i, 0], qd[i, 1] = p1, p2, v1, v2
+
+
+@njit(cache=True, fastmath=False)
+def step_trials(q, qd, stuck, slip, tau, sigma, T, substeps, code, vc, ratio, vs):  # pragma: no cover
+    """Compiled dispatch of one sample on ``(n, 2)`` arrays (the compiled closed loop calls this).
+
+    Stick-slip (code 0) runs :func:`_plant_step_kernel` unchanged; the smooth laws
+    run :func:`_smooth_step_kernel` and leave ``stuck`` False, ``slip`` unchanged.
+    """
+    if code == 0:
+        _plant_step_kernel(q, qd, stuck, slip, tau, sigma, T, substeps)
+        return
+    _smooth_step_kernel(q, qd, tau, sigma, T, substeps, code, vc, ratio, vs)
+    stuck[:, :] = False
+
+
+def step_kernel(
+    q, qd, stuck, slip, tau, sigma, T, substeps, friction_code=0, friction_params=(0.02, 1.5, 0.1)
+):
+    """Advance contiguous ``(n, 2)`` state arrays in place by one sample (no checks)."""
+    vc, ratio, vs = (float(x) for x in friction_params)
+    step_trials(q, qd, stuck, slip, tau, sigma, float(T), int(substeps), int(friction_code), vc, ratio, vs)
+
+
 def plant_step(
     q: Array,
     qd: Array,
@@ -166,6 +261,8 @@ def plant_step(
     sigma: Array,
     T: float,
     substeps: int = 2,
+    friction_code: int = 0,
+    friction_params: tuple[float, float, float] = (0.02, 1.5, 0.1),
 ) -> tuple[Array, Array, NDArray[np.bool_], Array]:
     """Advance the arm by one sample with torque ``tau`` held constant (pure function).
 
@@ -187,6 +284,10 @@ def plant_step(
         Sample period [s].
     substeps : int
         RK4 steps per sample.
+    friction_code : int
+        Plant friction law, :data:`FRICTION_CODES`: 0 stick-slip, 1 tanh, 2 stribeck.
+    friction_params : (float, float, float)
+        ``(friction_velocity, stribeck_ratio, stribeck_velocity)`` of the smooth laws.
 
     Returns
     -------
@@ -200,5 +301,7 @@ def plant_step(
     sl_ = np.ascontiguousarray(np.broadcast_to(slip, shape), dtype=float).reshape(flat).copy()
     tau_ = np.ascontiguousarray(np.broadcast_to(tau, shape), dtype=float).reshape(flat)
     sig_ = np.ascontiguousarray(np.broadcast_to(sigma, (*shape[:-1], 7)), dtype=float).reshape(-1, 7)
-    _plant_step_kernel(q_, qd_, st_, sl_, tau_, sig_, float(T), int(substeps))
+    if friction_code not in FRICTION_CODES.values():
+        raise ParameterError(f"friction_code must be one of {FRICTION_CODES}, got {friction_code!r}")
+    step_kernel(q_, qd_, st_, sl_, tau_, sig_, float(T), int(substeps), friction_code, friction_params)
     return q_.reshape(shape), qd_.reshape(shape), st_.reshape(shape), sl_.reshape(shape)

@@ -5,6 +5,11 @@ Pinocchio (``pin``) is the rigid-body reference: ``crba`` (mass matrix), ``rnea`
 ``computeJointTorqueRegressor``. Pinocchio has no friction, so every comparison
 uses sigma with ``b = d = 0``; gravity acts along -z and gives no torque about
 the vertical joint axes.
+
+Both functions take an :class:`~adaptive_dd.plant.arm.Arm` (default
+:meth:`Arm.sice`) or its :class:`PhysicalParameters`. An arm known only by its
+base parameters is built from :meth:`Arm.equivalent_physical`, a physical set
+with the same sigma (rigid-body dynamics depend on sigma alone).
 """
 
 from __future__ import annotations
@@ -15,6 +20,8 @@ import numpy as np
 import pinocchio as pin
 from numpy.typing import NDArray
 
+from adaptive_dd.errors import ParameterError
+from adaptive_dd.plant.arm import Arm
 from adaptive_dd.plant.dynamics import (
     coriolis_matrix,
     forward_dynamics,
@@ -22,10 +29,11 @@ from adaptive_dd.plant.dynamics import (
     mass_matrix,
     regressor,
 )
-from adaptive_dd.plant.parameters import TABLE1_PHYSICAL, Payload, PhysicalParameters
+from adaptive_dd.plant.parameters import Payload, PhysicalParameters
 
 __all__ = [
     "CheckResult",
+    "as_physical",
     "base_parameter_map",
     "build_model",
     "cross_check",
@@ -41,15 +49,27 @@ def _link_inertia(mass: float, com_x: float, izz: float) -> pin.Inertia:
     return pin.Inertia(mass, np.array([com_x, 0.0, 0.0]), np.diag([ixx * 0.1, izz, izz]))
 
 
-def build_model(params: PhysicalParameters = TABLE1_PHYSICAL, payload: Payload | None = None) -> pin.Model:
+def as_physical(arm: Arm | PhysicalParameters | None) -> PhysicalParameters:
+    """Physical parameters of an arm (default :meth:`Arm.sice`); see the module docstring."""
+    if arm is None:
+        return Arm.sice().equivalent_physical()
+    if isinstance(arm, Arm):
+        return arm.equivalent_physical()
+    if isinstance(arm, PhysicalParameters):
+        return arm
+    raise ParameterError(f"expected an Arm or PhysicalParameters, got {type(arm).__name__}")
+
+
+def build_model(arm: Arm | PhysicalParameters | None = None, payload: Payload | None = None) -> pin.Model:
     """Two revolute joints about z in the horizontal plane, as a ``pinocchio.Model``.
 
     Link i has mass ``m_i``, centre of mass at ``a_i`` along the link and inertia
     ``I_i`` about its centre (z axis); joint 2 sits at ``l1`` along link 1. A
     payload is a separate body on joint 2: a disk centred at ``l2``.
     """
+    params = as_physical(arm)
     model = pin.Model()
-    model.name = "sice_dd_arm"
+    model.name = "two_link_dd_arm"
     j1 = model.addJoint(0, pin.JointModelRZ(), pin.SE3.Identity(), "joint1")
     model.appendBodyToJoint(j1, _link_inertia(params.m1, params.a1, params.I1), pin.SE3.Identity())
     placement = pin.SE3(np.eye(3), np.array([params.l1, 0.0, 0.0]))
@@ -65,7 +85,7 @@ def build_model(params: PhysicalParameters = TABLE1_PHYSICAL, payload: Payload |
     return model
 
 
-def base_parameter_map(l1: float = 0.2) -> NDArray[np.float64]:
+def base_parameter_map(l1: float) -> NDArray[np.float64]:
     """Matrix ``K (20, 3)`` with ``Y_pin @ K == regressor[..., :3]`` (columns J1, J2, r).
 
     ``J1`` acts like ``Izz`` of body 1 about joint 1, ``J2`` like ``Izz`` of body 2
@@ -100,7 +120,7 @@ def _rel(a: NDArray, b: NDArray) -> float:
 
 
 def cross_check(
-    params: PhysicalParameters = TABLE1_PHYSICAL,
+    arm: Arm | PhysicalParameters | None = None,
     payload: Payload | None = None,
     n_states: int = 200,
     rng: np.random.Generator | None = None,
@@ -110,8 +130,12 @@ def cross_check(
 
     Parameters
     ----------
-    params, payload
-        The arm (physical parameters, optional tip disk).
+    arm : Arm or PhysicalParameters, optional
+        The arm (default :meth:`Arm.sice`). For an Arm, the sigma compared is
+        ``arm.sigma`` or ``arm.sigma_with_payload(...)``, so the check covers the
+        arm's payload effect too; Pinocchio gets the disk as a separate body.
+    payload : Payload, optional
+        A tip disk at ``l2``.
     n_states : int
         Random states (q in [-pi, pi], qd in [-5, 5] rad/s, qdd in [-50, 50] rad/s^2).
     rng : numpy.random.Generator, optional
@@ -126,8 +150,11 @@ def cross_check(
         positive definiteness and skew symmetry of dM/dt - 2C.
     """
     rng = np.random.default_rng(0) if rng is None else rng
-    phys = params if payload is None else params.with_payload(payload)
-    sigma = phys.to_sigma()
+    params = as_physical(arm)
+    if isinstance(arm, Arm):  # the arm's own sigma and payload effect, against a disk body in Pinocchio
+        sigma = arm.sigma if payload is None else arm.sigma_with_payload(payload.mass, payload.radius)
+    else:
+        sigma = (params if payload is None else params.with_payload(payload)).to_sigma()
     sigma_nf = sigma.copy()
     sigma_nf[3:] = 0.0
     model = build_model(params, payload)

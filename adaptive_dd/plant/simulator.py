@@ -11,21 +11,16 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-from functools import cached_property
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from adaptive_dd.errors import ParameterError, SignalError
+from adaptive_dd.plant.arm import Arm
+from adaptive_dd.plant.devices import ActuatorConfig, SensorConfig
 from adaptive_dd.plant.dynamics import as_joint_array
-from adaptive_dd.plant.integrator import _plant_step_kernel
-from adaptive_dd.plant.parameters import (
-    TABLE1_SIGMA,
-    TORQUE_LIMITS,
-    payload_sigma_delta,
-    validate_sigma,
-)
-from adaptive_dd.plant.sampling import actuate_batch, measure_batch
+from adaptive_dd.plant.integrator import step_kernel
+from adaptive_dd.plant.parameters import validate_sigma
 
 __all__ = [
     "ActuatorConfig",
@@ -41,112 +36,8 @@ Array = NDArray[np.float64]
 MAX_SPEED = 200.0
 """|qd| [rad/s] above which a trial counts as runaway (diverged)."""
 
-
-# ------------------------------------------------------------------ actuators
-@dataclass(frozen=True)
-class ActuatorConfig:
-    """Torque path from command to joint.
-
-    Attributes
-    ----------
-    torque_limit : (float, float)
-        Saturation torques [N m] of joints 1, 2 (70, 15 for the SICE arm).
-    saturate : bool
-        Clip commands to +-torque_limit.
-    quantize : bool
-        Model the 12-bit D/A over +-8 V: the torque is rounded to a step of
-        ``2 * torque_limit / 2**dac_bits``.
-    dac_bits : int
-        D/A resolution.
-    """
-
-    torque_limit: tuple[float, float] = TORQUE_LIMITS
-    saturate: bool = True
-    quantize: bool = True
-    dac_bits: int = 12
-
-    def __post_init__(self) -> None:
-        if len(self.torque_limit) != 2 or min(self.torque_limit) <= 0:
-            raise ParameterError(f"torque_limit must be two positive values, got {self.torque_limit}")
-        if self.dac_bits < 1:
-            raise ParameterError(f"dac_bits must be >= 1, got {self.dac_bits}")
-
-    @cached_property
-    def _lim(self) -> Array:
-        return np.asarray(self.torque_limit, dtype=float)
-
-    @cached_property
-    def _lsb(self) -> Array:
-        return 2.0 * self._lim / 2**self.dac_bits
-
-    def apply(self, tau_cmd: Array) -> tuple[Array, NDArray[np.bool_]]:
-        """Return the applied torque and a per-joint flag of saturation (``tau_cmd (n, 2)``)."""
-        cmd = np.ascontiguousarray(tau_cmd, dtype=float).reshape(-1, 2)
-        tau = np.empty_like(cmd)
-        sat = np.empty(cmd.shape, dtype=np.bool_)
-        actuate_batch(cmd, self._lim, self._lsb, self.saturate, self.quantize, tau, sat)
-        return tau.reshape(np.shape(tau_cmd)), sat.reshape(np.shape(tau_cmd))
-
-
-# --------------------------------------------------------------------- sensors
-@dataclass(frozen=True)
-class SensorConfig:
-    """Measurement of q (encoder) and qd (F/V conversion).
-
-    Attributes
-    ----------
-    encoder_counts : (int, int)
-        Pulses per revolution (614400 and 507904 on the SICE arm).
-    quantize : bool
-        Round the position to the encoder resolution before adding noise.
-    position_variance : (float, float)
-        Variance [rad^2] of additive white noise on q (Table 2).
-    velocity_variance : (float, float)
-        Variance [(rad/s)^2] of additive white noise on qd (Table 4).
-    """
-
-    encoder_counts: tuple[int, int] = (614400, 507904)
-    quantize: bool = True
-    position_variance: tuple[float, float] = (1e-8, 1e-7)
-    velocity_variance: tuple[float, float] = (5e-5, 1e-4)
-
-    def __post_init__(self) -> None:
-        for name in ("encoder_counts", "position_variance", "velocity_variance"):
-            v = getattr(self, name)
-            if len(v) != 2 or not all(np.isfinite(v)):
-                raise ParameterError(f"SensorConfig.{name} must be two finite values, got {v}")
-        if min(self.encoder_counts) <= 0:
-            raise ParameterError(f"encoder_counts must be > 0, got {self.encoder_counts}")
-        if min(self.position_variance) < 0 or min(self.velocity_variance) < 0:
-            raise ParameterError(
-                f"noise variances must be >= 0, got position {self.position_variance}, "
-                f"velocity {self.velocity_variance}"
-            )
-
-    @cached_property
-    def resolution(self) -> Array:
-        """Encoder step [rad] of each joint."""
-        return 2.0 * np.pi / np.asarray(self.encoder_counts, dtype=float)
-
-    @cached_property
-    def noise_std(self) -> Array:
-        """Standard deviations ``[sq1, sq2, sqd1, sqd2]``."""
-        return np.sqrt(np.concatenate((self.position_variance, self.velocity_variance)))
-
-    def measure(self, q: Array, qd: Array, noise: Array) -> tuple[Array, Array]:
-        """Measured ``(q, qd)`` from true values ``(n, 2)`` and standard normal ``noise (n, 4)``."""
-        qm, qdm = np.empty_like(q), np.empty_like(qd)
-        measure_batch(
-            np.ascontiguousarray(q),
-            np.ascontiguousarray(qd),
-            np.ascontiguousarray(noise),
-            self.resolution,
-            self.noise_std,
-            self.quantize,
-            qm,
-            qdm,
-        )
-        return qm, qdm
+NOISE_CHUNK = 1024
+"""Samples of sensor noise drawn at a time per trial generator."""
 
 
 # -------------------------------------------------------------------- payloads
@@ -156,6 +47,8 @@ class PayloadSchedule:
 
     ``masses[k]`` [kg] holds from ``times[k]`` on; before ``times[0]`` the mass is
     ``initial_mass``. Masses may carry a trailing batch axis (one value per trial).
+    ``radius`` [m] of the disks; None means the arm's :attr:`Arm.payload_radius`.
+    Where the disk mounts (``l1``, ``l2``) is the arm's.
 
     Raises
     ------
@@ -166,7 +59,7 @@ class PayloadSchedule:
     times: tuple[float, ...] = ()
     masses: tuple = ()
     initial_mass: float | Sequence[float] = 0.0
-    radius: float = 0.05
+    radius: float | None = None
 
     def __post_init__(self) -> None:
         t = np.asarray(self.times, dtype=float)
@@ -180,7 +73,7 @@ class PayloadSchedule:
             a = np.asarray(m, dtype=float)
             if np.any(~np.isfinite(a)) or np.any(a < 0):
                 raise ParameterError(f"payload mass must be finite and >= 0, got {m}")
-        if not np.isfinite(self.radius) or self.radius < 0:
+        if self.radius is not None and (not np.isfinite(self.radius) or self.radius < 0):
             raise ParameterError(f"payload radius must be >= 0, got {self.radius}")
 
     def mass_at(self, t: float) -> Array:
@@ -189,9 +82,9 @@ class PayloadSchedule:
         m = self.initial_mass if k == 0 else self.masses[k - 1]
         return np.asarray(m, dtype=float)
 
-    def sigma_at(self, t: float, sigma0: Array) -> Array:
-        """Base parameters at time t: ``sigma0`` plus the disk (``(..., 7)``)."""
-        return sigma0 + payload_sigma_delta(self.mass_at(t), self.radius)
+    def sigma_at(self, t: float, arm: Arm) -> Array:
+        """Base parameters of ``arm`` at time t with the disk (``(..., 7)``)."""
+        return arm.sigma_with_payload(self.mass_at(t), self.radius)
 
 
 # ------------------------------------------------------------- stateful wrapper
@@ -247,13 +140,46 @@ class SimulationResult:
         np.savez_compressed(path, sample_period=self.sample_period, **arrays)
 
 
-def _noise_for(rng: np.random.Generator | Sequence[np.random.Generator], n_trials: int, n: int):
-    if isinstance(rng, np.random.Generator):
-        return rng.standard_normal((n_trials, n, 4))
-    rngs = list(rng)
-    if len(rngs) != n_trials:
-        raise ParameterError(f"need one Generator per trial: {n_trials} trials, {len(rngs)} rngs")
-    return np.stack([g.standard_normal((n, 4)) for g in rngs])
+class _NoiseSource:
+    """Standard normal sensor noise ``(n_trials, 4)`` per sample, drawn in chunks.
+
+    With one generator per trial, ``NOISE_CHUNK`` samples are drawn at a time per
+    trial: the same numbers as one ``g.standard_normal((n_samples, 4))`` per trial
+    (the generator fills arrays in order), with memory that does not grow with the
+    horizon. One shared generator for several trials draws the whole
+    ``(n_trials, n_samples, 4)`` block up front, as before (its numbers depend on
+    that order); pass one generator per trial to bound memory.
+    """
+
+    def __init__(self, rng, n_trials: int, n_samples: int) -> None:
+        self.n_samples = n_samples
+        if isinstance(rng, np.random.Generator):
+            if n_trials == 1:
+                self.rngs = [rng]
+            else:
+                self.rngs = None
+                self.block = rng.standard_normal((n_trials, n_samples, 4))
+                self.start = 0
+                return
+        else:
+            self.rngs = list(rng)
+            if len(self.rngs) != n_trials:
+                raise ParameterError(
+                    f"need one Generator per trial: {n_trials} trials, {len(self.rngs)} rngs"
+                )
+        self.start, self.block = 0, np.zeros((n_trials, 0, 4))
+
+    def at(self, k: int) -> Array:
+        """Noise of sample k; samples must be asked for in increasing order."""
+        if self.rngs is None:
+            return self.block[:, k]
+        if not self.start <= k < self.start + self.block.shape[1]:
+            if k < self.start:
+                raise SignalError(f"sensor noise of sample {k} was already discarded (now at {self.start})")
+            self.start = self.start + self.block.shape[1]
+            n = min(NOISE_CHUNK, self.n_samples - self.start)
+            self.block = np.stack([g.standard_normal((n, 4)) for g in self.rngs])
+        return self.block[:, k - self.start]
 
 
 class ArmSimulator:
@@ -264,20 +190,25 @@ class ArmSimulator:
     n_trials : int
         Batch size.
     n_samples : int
-        Number of samples the run will take (sensor noise is drawn up front so a
-        trial's noise depends only on its own generator).
+        Number of samples the run will take.
     rng : numpy.random.Generator or sequence of them
-        One shared generator, or one per trial (reproducible trial by trial).
-    sigma0 : array_like (7,) or (n_trials, 7)
-        Base parameters without payload.
+        One shared generator, or one per trial (reproducible trial by trial; the
+        noise is then drawn in chunks of ``NOISE_CHUNK`` samples).
+    arm : Arm, optional
+        The plant: base parameters, payload geometry, actuator, sensors and
+        friction law (default :meth:`Arm.sice`).
     payload : PayloadSchedule, optional
+        Payload disks over time (mounted at the arm's ``l2``).
     sample_period : float
         T [s], > 0.
     substeps : int
         RK4 steps per sample.
-    actuator, sensor : ActuatorConfig, SensorConfig
     q0, qd0 : array_like (2,) or (n_trials, 2)
         Initial state; the arm starts stuck where qd0 == 0.
+    sigma0 : array_like (7,) or (n_trials, 7), optional
+        Base parameters without payload in place of ``arm.sigma`` (e.g. one per trial).
+    actuator, sensor : ActuatorConfig, SensorConfig, optional
+        In place of the arm's.
     """
 
     def __init__(
@@ -285,14 +216,16 @@ class ArmSimulator:
         n_trials: int,
         n_samples: int,
         rng: np.random.Generator | Sequence[np.random.Generator],
-        sigma0: ArrayLike = TABLE1_SIGMA,
+        arm: Arm | None = None,
         payload: PayloadSchedule | None = None,
         sample_period: float = 0.001,
         substeps: int = 2,
-        actuator: ActuatorConfig | None = None,
-        sensor: SensorConfig | None = None,
         q0: ArrayLike = (0.0, 0.0),
         qd0: ArrayLike = (0.0, 0.0),
+        *,
+        sigma0: ArrayLike | None = None,
+        actuator: ActuatorConfig | None = None,
+        sensor: SensorConfig | None = None,
     ) -> None:
         if not np.isfinite(sample_period) or sample_period <= 0:
             raise ParameterError(f"sample_period T must be > 0, got {sample_period}")
@@ -300,12 +233,16 @@ class ArmSimulator:
             raise ParameterError(f"substeps must be >= 1, got {substeps}")
         if n_trials < 1 or n_samples < 1:
             raise ParameterError(f"n_trials and n_samples must be >= 1, got {n_trials}, {n_samples}")
+        if arm is not None and not isinstance(arm, Arm):
+            raise ParameterError(f"arm must be an Arm, got {type(arm).__name__}")
+        self.arm = Arm.sice() if arm is None else arm
         self.n_trials, self.n_samples = int(n_trials), int(n_samples)
         self.T, self.substeps = float(sample_period), int(substeps)
-        self.sigma0 = np.broadcast_to(validate_sigma(sigma0, "sigma0"), (n_trials, 7)).copy()
+        s0 = self.arm.sigma if sigma0 is None else validate_sigma(sigma0, "sigma0")
+        self.sigma0 = np.broadcast_to(s0, (n_trials, 7)).copy()
         self.payload = payload or PayloadSchedule()
-        self.actuator = actuator or ActuatorConfig()
-        self.sensor = sensor or SensorConfig()
+        self.actuator = actuator or self.arm.actuator
+        self.sensor = sensor or self.arm.sensor
         shape = (self.n_trials, 2)
         self.q = np.broadcast_to(as_joint_array(q0, "q0"), shape).copy()
         self.qd = np.broadcast_to(as_joint_array(qd0, "qd0"), shape).copy()
@@ -314,7 +251,7 @@ class ArmSimulator:
         self.failed = np.zeros(self.n_trials, dtype=bool)
         self.failed_at = np.full(self.n_trials, -1)
         self.k = 0
-        self._noise = _noise_for(rng, self.n_trials, self.n_samples)
+        self._noise = _NoiseSource(rng, self.n_trials, self.n_samples)
         # a swap at time `at` takes effect at the first sample k with k T >= at
         self._swap_samples = {int(np.ceil(at / self.T - 1e-9)) for at in self.payload.times}
         self._update_sigma()
@@ -325,13 +262,15 @@ class ArmSimulator:
 
     def _update_sigma(self) -> None:
         self.mass = np.broadcast_to(self.payload.mass_at(self.t), (self.n_trials,))
-        self.sigma = np.ascontiguousarray(self.sigma0 + payload_sigma_delta(self.mass, self.payload.radius))
+        self.sigma = np.ascontiguousarray(
+            self.arm.sigma_with_payload(self.mass, self.payload.radius, self.sigma0)
+        )
 
     def measure(self) -> tuple[Array, Array]:
         """Measured (q, qd) at the current sample."""
         if self.k >= self.n_samples:
             raise SignalError(f"simulator was built for {self.n_samples} samples; asked for sample {self.k}")
-        return self.sensor.measure(self.q, self.qd, self._noise[:, self.k])
+        return self.sensor.measure(self.q, self.qd, self._noise.at(self.k))
 
     def step(self, tau_cmd: ArrayLike) -> tuple[Array, NDArray[np.bool_]]:
         """Apply ``tau_cmd (n_trials, 2)`` for one sample; return applied torque and saturation.
@@ -350,7 +289,7 @@ class ArmSimulator:
         if self.failed.any():
             tau = np.where(self.failed[:, None], 0.0, tau)
         q_prev = self.q.copy()
-        _plant_step_kernel(
+        step_kernel(
             self.q,
             self.qd,
             self.stuck,
@@ -359,6 +298,8 @@ class ArmSimulator:
             self.sigma,
             self.T,
             self.substeps,
+            self.arm.friction_code,
+            self.arm.friction_params,
         )
         ok = np.isfinite(self.q).all(axis=-1) & (np.abs(self.qd) < MAX_SPEED).all(axis=-1)
         bad = bad_cmd | ~ok
@@ -391,7 +332,7 @@ def simulate_open_loop(
     rng : Generator or sequence of Generators
         Sensor noise source(s).
     **kwargs
-        Passed to :class:`ArmSimulator` (sigma0, payload, sample_period, ...).
+        Passed to :class:`ArmSimulator` (arm, payload, sample_period, sensor, ...).
     """
     tau_cmd = np.asarray(tau_cmd, dtype=float)
     if tau_cmd.ndim != 3 or tau_cmd.shape[-1] != 2:
@@ -407,7 +348,7 @@ def simulate_open_loop(
         rec.before(k, sim, qm, qdm)
         tau, sat = sim.step(tau_cmd[:, k])
         rec.after(k, tau_cmd[:, k], tau, sat)
-    return rec.result(sim)
+    return rec.result(sim, arm=sim.arm.to_dict())
 
 
 class _Recorder:
