@@ -1,4 +1,4 @@
-"""Command-line interface: ``adaptive-dd {check,simulate,reproduce,identify,benchmark}``."""
+"""Command-line interface: ``adaptive-dd {check,simulate,reproduce,identify,benchmark,sweep}``."""
 
 from __future__ import annotations
 
@@ -238,6 +238,34 @@ def _cmd_benchmark(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_sweep(args: argparse.Namespace) -> int:
+    import dataclasses
+
+    from adaptive_dd.sweep import run_sweep
+    from adaptive_dd.sweep_spec import load_sweep
+
+    sweep = load_sweep(args.sweep)
+    if args.block is not None:
+        if args.block < 1:
+            raise ValueError(f"--block must be >= 1, got {args.block}")
+        sweep = dataclasses.replace(sweep, block=min(args.block, sweep.seeds))
+    if args.workers is not None and args.workers < 1:
+        raise ValueError(f"--workers must be >= 1, got {args.workers}")
+    if args.scheduler and args.workers:
+        print("adaptive-dd sweep: --workers is ignored with --scheduler", file=sys.stderr)
+    res = run_sweep(
+        sweep, args.out, scheduler=args.scheduler, workers=args.workers, progress=not args.no_progress
+    )
+    failed = res.table.loc[res.table["failed"], "error"]
+    print(
+        f"{len(res.table)} rows ({res.failed_rows} failed), {res.ran} tasks run, {res.reused} reused; "
+        f"wrote {res.table_path}" + "".join(f", {p}" for p in res.heatmaps)
+    )
+    for msg, count in failed.value_counts().head(5).items():
+        print(f"  failed rows: {count} x {msg}")
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="adaptive-dd", description=__doc__)
     sub = p.add_subparsers(dest="command", required=True)
@@ -300,6 +328,15 @@ def build_parser() -> argparse.ArgumentParser:
     b.add_argument("--seeds", type=int, help="override the scenario's number of seeds")
     b.add_argument("--no-progress", action="store_true")
     b.set_defaults(func=_cmd_benchmark)
+
+    w = sub.add_parser("sweep", help="grid over scenario fields x controllers x seeds, on Dask")
+    w.add_argument("sweep", help="sweep TOML (see docs/sweeps.md)")
+    w.add_argument("--out", default="results/sweep", help="folder for cells, table and heatmaps")
+    w.add_argument("--scheduler", metavar="ADDRESS", help="a running Dask scheduler (default: local cluster)")
+    w.add_argument("--workers", type=int, help="local cluster worker processes (default: all cores)")
+    w.add_argument("--block", type=int, metavar="SEEDS", help="seeds per task (overrides sweep.block)")
+    w.add_argument("--no-progress", action="store_true")
+    w.set_defaults(func=_cmd_sweep)
     return p
 
 

@@ -11,6 +11,7 @@ stopped and counted; the rest of the benchmark goes on.
 from __future__ import annotations
 
 import time
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -18,7 +19,6 @@ from numpy.typing import NDArray
 
 from adaptive_dd.benchmark.scenario import Scenario
 from adaptive_dd.controllers import Controller, Gains, make_controller
-from adaptive_dd.experiments import trial_rngs
 from adaptive_dd.plant.parameters import TABLE1_SIGMA
 from adaptive_dd.plant.simulator import ArmSimulator, PayloadSchedule, SensorConfig
 
@@ -72,6 +72,7 @@ def run_benchmark(
     scenario: Scenario,
     progress: bool = True,
     controllers: dict[str, Controller] | None = None,
+    seed_indices: Sequence[int] | None = None,
 ) -> BenchmarkResult:
     """Run every controller of the scenario over all seeds.
 
@@ -83,6 +84,10 @@ def run_benchmark(
     controllers : dict, optional
         Controller objects by name, in place of ``make_controller(name)`` (for
         custom gains or your own controller classes).
+    seed_indices : sequence of int, optional
+        Which trials to run (default ``range(scenario.seeds)``): trial i of every
+        controller uses ``numpy.random.default_rng([scenario.seed, seed_indices[i]])``,
+        so a block of seeds run alone gives the same numbers as inside a full run.
     """
     from tqdm.auto import tqdm
 
@@ -90,11 +95,12 @@ def run_benchmark(
     gains = Gains(scenario.bandwidth, scenario.damping)
     ctrls = controllers or {name: make_controller(name, gains) for name in scenario.controllers}
     names = list(ctrls)
-    S, N, T = scenario.seeds, scenario.n_samples, scenario.sample_period
+    idx = range(scenario.seeds) if seed_indices is None else [int(i) for i in seed_indices]
+    S, N, T = len(idx), scenario.n_samples, scenario.sample_period
     B = len(names) * S
     t = np.arange(N) * T
     q_d, qd_d, qdd_d = scenario.reference.sample(t)
-    rngs = [g for _ in names for g in trial_rngs(scenario.seed, S)]
+    rngs = [np.random.default_rng([int(scenario.seed), i]) for _ in names for i in idx]
     sim = ArmSimulator(
         B,
         N,
