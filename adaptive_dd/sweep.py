@@ -345,15 +345,17 @@ def run_sweep(
     )
     lost: dict[str, list] = {}
     if todo:
-        own = None
-        if client is None:
-            client, own = _client(scheduler, workers)
+        made = client is None
+        cluster = None
+        if made:
+            client, cluster = _client(scheduler, workers)
         try:
             lost = _run_tasks(todo, cells_dir, ext, client, progress)
         finally:
-            if own is not None:
+            if made:
                 client.close()
-                own.close()
+            if cluster is not None:
+                cluster.close()
     table = _assemble(sweep, cells, cells_dir, ext, lost)
     path = _write_atomic(table, out / f"results.{ext}")
     maps = []

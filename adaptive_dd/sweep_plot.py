@@ -29,18 +29,24 @@ def _grid(ratios: pd.DataFrame, x: str, y: str) -> tuple[list, list, np.ndarray,
 
 
 def _plot_one(ratios: pd.DataFrame, heatmap: Mapping[str, Any], title: str, path: Path) -> Path:
+    from matplotlib.colors import LogNorm
     from matplotlib.figure import Figure
 
     x, y = heatmap["x"], heatmap["y"]
     xs, ys, z, n = _grid(ratios, x, y)
     fig = Figure(figsize=(1.2 * len(xs) + 3, 0.8 * len(ys) + 2.5), layout="constrained")
     ax = fig.subplots()
-    cmap = "viridis"
-    im = ax.imshow(np.ma.masked_invalid(z), origin="lower", aspect="auto", cmap=cmap)
+    finite = z[np.isfinite(z)]
+    log = finite.size > 0 and finite.min() > 0 and finite.max() > 10 * finite.min()
+    norm = LogNorm(finite.min(), finite.max()) if log else None
+    im = ax.imshow(np.ma.masked_invalid(z), origin="lower", aspect="auto", cmap="viridis", norm=norm)
     ax.set_facecolor("0.85")
+    mid = np.sqrt(finite.min() * finite.max()) if log else (np.mean(finite) if finite.size else 0.0)
     for i, j in itertools.product(range(len(ys)), range(len(xs))):
-        label = "n/a" if not np.isfinite(z[i, j]) else f"{z[i, j]:.2f}\n({n[i, j]})"
-        ax.text(j, i, label, ha="center", va="center", fontsize=8, color="w")
+        ok = np.isfinite(z[i, j])
+        label = f"{z[i, j]:.3g}\n({n[i, j]})" if ok else "n/a"
+        color = "k" if ok and z[i, j] > mid else "w" if ok else "k"
+        ax.text(j, i, label, ha="center", va="center", fontsize=8, color=color)
     ax.set_xticks(range(len(xs)), [f"{v:g}" if isinstance(v, float) else str(v) for v in xs])
     ax.set_yticks(range(len(ys)), [f"{v:g}" if isinstance(v, float) else str(v) for v in ys])
     ax.set_xlabel(x)
