@@ -263,6 +263,16 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
     )
     for msg, count in failed.value_counts().head(5).items():
         print(f"  failed rows: {count} x {msg}")
+    if sweep.heatmap:
+        from adaptive_dd.sweep import ratio_medians
+
+        hm = sweep.heatmap
+        r = ratio_medians(res.table, hm, [a for a, _ in sweep.axes])
+        print(
+            f"median over seeds of rms {hm['adaptive']} / rms {hm['floor']}, segment {hm['segment']}"
+            f" (rows {hm['y']}, columns {hm['x']}; median over any other axes):"
+        )
+        print(r.pivot_table(index=hm["y"], columns=hm["x"], values="ratio", aggfunc="median").round(3))
     return 0
 
 

@@ -346,3 +346,32 @@ def test_separate_scheduler_and_worker_give_the_same_numbers(tmp_path, client):
                 p.wait()
     assert remote.ran == 16
     pd.testing.assert_frame_equal(remote.table, local.table)
+
+
+# ---- the command line ---------------------------------------------------------------------
+
+
+def test_cli_reports_a_bad_sweep_file(tmp_path, capsys):
+    from adaptive_dd.cli import main
+
+    path = _write(tmp_path, SWEEP.replace("block = 1", "block = -1"))
+    assert main(["sweep", str(path), "--out", str(tmp_path / "out")]) == 2
+    err = capsys.readouterr().err
+    assert "adaptive-dd sweep: error:" in err and "key 'sweep.block'" in err and str(path) in err
+    assert main(["sweep", str(_write(tmp_path)), "--block", "0"]) == 2
+    assert "--block must be >= 1" in capsys.readouterr().err
+
+
+@pytest.mark.slow
+def test_cli_runs_on_a_local_cluster_and_resumes(tmp_path, capsys):
+    from adaptive_dd.cli import main
+
+    path = _write(tmp_path, SWEEP.replace("[1.0, 6.0]", "[1.0]"))
+    out = tmp_path / "out"
+    assert main(["sweep", str(path), "--out", str(out), "--workers", "1", "--no-progress"]) == 0
+    first = capsys.readouterr().out
+    assert "8 tasks run, 0 reused" in first and "heatmap.png" in first
+    assert main(["sweep", str(path), "--out", str(out), "--block", "2", "--no-progress"]) == 0
+    assert "4 tasks run, 0 reused" in capsys.readouterr().out  # blocks of 2 seeds are new tasks
+    assert main(["sweep", str(path), "--out", str(out), "--no-progress"]) == 0
+    assert "0 tasks run, 8 reused" in capsys.readouterr().out
