@@ -46,6 +46,7 @@ import argparse
 import dataclasses
 import inspect
 import json
+import os
 import resource
 import subprocess
 import sys
@@ -253,6 +254,7 @@ def main(argv: list[str] | None = None) -> None:
     engines = [e for e in args.engines if _engine_kwargs(e) is not None]
     skipped = [e for e in args.engines if e not in engines]
     print(f"closed loop, T = 1 ms, 2 RK4 substeps; {args.duration} s per trial; engines: {engines}")
+    print(f"cores: {os.cpu_count()}, load average (1, 5, 15 min) at start: {os.getloadavg()}")
     if skipped:
         print(f"engines not offered by run_benchmark (no 'engine' keyword): {skipped}")
     print(f"{'configuration':52s} {'sim s / wall s':>16s}  {'target':>22s}  status")
@@ -272,6 +274,7 @@ def main(argv: list[str] | None = None) -> None:
         )
     if args.seeds_memory > 0:
         _memory_lines(args, best)
+    print(f"load average at end: {os.getloadavg()} (other processes slow every figure above)")
 
 
 if __name__ == "__main__":

@@ -375,3 +375,22 @@ def test_cli_runs_on_a_local_cluster_and_resumes(tmp_path, capsys):
     assert "4 tasks run, 0 reused" in capsys.readouterr().out  # blocks of 2 seeds are new tasks
     assert main(["sweep", str(path), "--out", str(out), "--no-progress"]) == 0
     assert "0 tasks run, 8 reused" in capsys.readouterr().out
+
+
+def test_one_heatmap_per_combination_of_the_other_axes(tmp_path):
+    from adaptive_dd.sweep_plot import plot_ratio_heatmaps
+
+    grid = [(m, t, bw) for bw in (30.0, 50.0) for m in (1.0, 5.0) for t in (0.1, 0.2)]
+    ratios = pd.DataFrame(
+        [
+            {"point": i, "m": m, "t": t, "bw": bw, "ratio": 1.0 + i, "n_seeds": 2}
+            for i, (m, t, bw) in enumerate(grid)
+        ]
+    )
+    hm = {"x": "m", "y": "t", "adaptive": "adaptive_ct", "floor": "ct_oracle", "segment": 1}
+    paths = plot_ratio_heatmaps(ratios, hm, ["m", "t", "bw"], tmp_path)
+    assert [p.name for p in paths] == ["heatmap_0.png", "heatmap_1.png"]
+    assert all(p.stat().st_size > 0 for p in paths)
+    assert [p.name for p in plot_ratio_heatmaps(ratios[ratios.bw == 30.0], hm, ["m", "t"], tmp_path)] == [
+        "heatmap.png"
+    ]
