@@ -366,15 +366,16 @@ def test_cli_reports_a_bad_sweep_file(tmp_path, capsys):
 def test_cli_runs_on_a_local_cluster_and_resumes(tmp_path, capsys):
     from adaptive_dd.cli import main
 
-    path = _write(tmp_path, SWEEP.replace("[1.0, 6.0]", "[1.0]"))
+    path = _write(tmp_path)
     out = tmp_path / "out"
-    assert main(["sweep", str(path), "--out", str(out), "--workers", "1", "--no-progress"]) == 0
+    args = ["sweep", str(path), "--out", str(out), "--workers", "1", "--no-progress"]
+    assert main([*args, "--block", "2"]) == 0
     first = capsys.readouterr().out
-    assert "8 tasks run, 0 reused" in first and "heatmap.png" in first
-    assert main(["sweep", str(path), "--out", str(out), "--block", "2", "--no-progress"]) == 0
-    assert "4 tasks run, 0 reused" in capsys.readouterr().out  # blocks of 2 seeds are new tasks
-    assert main(["sweep", str(path), "--out", str(out), "--no-progress"]) == 0
-    assert "0 tasks run, 8 reused" in capsys.readouterr().out
+    assert "8 tasks run, 0 reused" in first and "heatmap.png" in first and "swap_time" in first
+    assert main(args) == 0
+    assert "16 tasks run, 0 reused" in capsys.readouterr().out  # blocks of 1 seed are new tasks
+    assert main(args) == 0
+    assert "0 tasks run, 16 reused" in capsys.readouterr().out
 
 
 def test_one_heatmap_per_combination_of_the_other_axes(tmp_path):
