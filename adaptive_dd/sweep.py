@@ -282,7 +282,7 @@ def _client(scheduler: str | None, workers: int | None):
         return Client(scheduler), None
     n = workers or os.cpu_count() or 1
     cluster = LocalCluster(
-        n_workers=n, threads_per_worker=1, processes=True, env=dict(WORKER_ENV), dashboard_address=None
+        n_workers=n, threads_per_worker=1, processes=True, env=dict(WORKER_ENV), dashboard_address=":0"
     )
     return Client(cluster), cluster
 

@@ -56,7 +56,7 @@ def _write(tmp_path: Path, sweep: str = SWEEP, base: str = BASE) -> Path:
 def client():
     with (
         distributed.LocalCluster(
-            n_workers=1, threads_per_worker=2, processes=False, dashboard_address=None
+            n_workers=1, threads_per_worker=2, processes=False, dashboard_address=":0"
         ) as cluster,
         distributed.Client(cluster) as c,
     ):
