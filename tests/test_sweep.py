@@ -395,3 +395,22 @@ def test_one_heatmap_per_combination_of_the_other_axes(tmp_path):
     assert [p.name for p in plot_ratio_heatmaps(ratios[ratios.bw == 30.0], hm, ["m", "t"], tmp_path)] == [
         "heatmap.png"
     ]
+
+
+def _thread_env() -> dict:
+    keys = ("NUMBA_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS", "OPENBLAS_NUM_THREADS")
+    return {k: os.environ.get(k) for k in keys}
+
+
+@pytest.mark.slow
+def test_local_cluster_workers_are_single_threaded():
+    from adaptive_dd.sweep import WORKER_ENV, _client
+
+    client, cluster = _client(None, 1)
+    try:
+        info = client.scheduler_info()["workers"]
+        assert [w["nthreads"] for w in info.values()] == [1]
+        assert list(client.run(_thread_env).values()) == [WORKER_ENV]
+    finally:
+        client.close()
+        cluster.close()
