@@ -1,4 +1,4 @@
-"""Command-line interface: ``adaptive-dd {check,simulate,reproduce,identify,benchmark,validate}``.
+"""Command-line interface: ``adaptive-dd {check,simulate,reproduce,identify,benchmark,sweep,validate}``.
 
 Exit codes: 0 success, 1 a check or an estimate failed, 2 a user error (bad option,
 scenario, record or output path; one line naming the problem), 3 an internal error
@@ -490,6 +490,40 @@ def _cmd_validate(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_sweep(args: argparse.Namespace) -> int:
+    import dataclasses
+
+    from adaptive_dd.sweep import run_sweep
+    from adaptive_dd.sweep_spec import load_sweep
+
+    sweep = load_sweep(args.sweep)
+    if args.block is not None:
+        sweep = dataclasses.replace(sweep, block=min(args.block, sweep.seeds))
+    if args.scheduler and args.workers:
+        print("adaptive-dd sweep: --workers is ignored with --scheduler", file=sys.stderr)
+    res = run_sweep(
+        sweep, args.out, scheduler=args.scheduler, workers=args.workers, progress=not args.no_progress
+    )
+    failed = res.table.loc[res.table["failed"], "error"]
+    print(
+        f"{len(res.table)} rows ({res.failed_rows} failed), {res.ran} tasks run, {res.reused} reused; "
+        f"wrote {res.table_path}" + "".join(f", {p}" for p in res.heatmaps)
+    )
+    for msg, count in failed.value_counts().head(5).items():
+        print(f"  failed rows: {count} x {msg}")
+    if sweep.heatmap:
+        from adaptive_dd.sweep import ratio_medians
+
+        hm = sweep.heatmap
+        r = ratio_medians(res.table, hm, [a for a, _ in sweep.axes])
+        print(
+            f"median over seeds of rms {hm['adaptive']} / rms {hm['floor']}, segment {hm['segment']}"
+            f" (rows {hm['y']}, columns {hm['x']}; median over any other axes):"
+        )
+        print(r.pivot_table(index=hm["y"], columns=hm["x"], values="ratio", aggfunc="median").round(3))
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The ``adaptive-dd`` parser (no abbreviations of options; checked numeric options)."""
     from adaptive_dd import __version__
@@ -609,6 +643,17 @@ def build_parser() -> argparse.ArgumentParser:
     v = _sub(sub, "validate", help="check a scenario and print it resolved (defaults marked)")
     v.add_argument("scenario", nargs="?", help="scenario TOML (default: the shipped payload_swap)")
     v.set_defaults(func=_cmd_validate)
+
+    w = _sub(sub, "sweep", help="grid over scenario fields x controllers x seeds, on Dask")
+    w.add_argument("sweep", help="sweep TOML (see docs/sweeps.md)")
+    w.add_argument("--out", default="results/sweep", help="folder for cells, table and heatmaps")
+    w.add_argument("--scheduler", metavar="ADDRESS", help="a running Dask scheduler (default: local cluster)")
+    w.add_argument(
+        "--workers", type=_number(int, 1, 1024), help="local cluster worker processes (default: all cores)"
+    )
+    w.add_argument("--block", type=_SEEDS, metavar="SEEDS", help="seeds per task (overrides sweep.block)")
+    w.add_argument("--no-progress", action="store_true")
+    w.set_defaults(func=_cmd_sweep)
     return p
 
 

@@ -1,0 +1,412 @@
+"""Parameter sweeps on Dask: tasks of (grid point, controller, block of seeds).
+
+A task runs one controller on one grid point's scenario for a block of seed
+indices and returns per-seed, per-segment metric rows (never trajectories), via
+:func:`run_cell`, the one place that touches the benchmark runner. Tasks that are
+identical (same scenario, controller, settings and seeds, e.g. the floor
+controller at two values of another controller's setting) run once.
+
+Each finished task's rows are written atomically to ``OUT/cells/<key>.parquet``
+(``.csv`` without pyarrow), ``key`` a hash of the task, and reused by the next run:
+an interrupted sweep resumes. A trial that diverges gives rows with ``failed`` set
+from the segment where it failed on; a task that raises gives failed rows with the
+message. Neither stops the sweep. The final table ``OUT/results.parquet|csv`` has one
+row per grid point x controller x seed x segment; ``OUT/heatmap*.png`` shows the
+per-seed-median ratio of the adaptive controller's RMS error to the floor's
+(common random numbers: both ran on the same noise).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+import json
+import os
+import tempfile
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from adaptive_dd.benchmark.scenario import Scenario
+from adaptive_dd.sweep_spec import Sweep
+
+__all__ = [
+    "CELL_VERSION",
+    "WORKER_ENV",
+    "SweepResult",
+    "Task",
+    "execute_task",
+    "failed_rows",
+    "plan_tasks",
+    "ratio_medians",
+    "run_cell",
+    "run_sweep",
+]
+
+CELL_VERSION = 1
+"""Part of every task key: bump it when the rows a task returns change meaning."""
+
+WORKER_ENV = {
+    "NUMBA_NUM_THREADS": "1",
+    "OMP_NUM_THREADS": "1",
+    "MKL_NUM_THREADS": "1",
+    "OPENBLAS_NUM_THREADS": "1",
+}
+"""One thread of numeric work per worker process (workers do not oversubscribe the cores)."""
+
+ROW_COLUMNS = {
+    "seed": "int64",
+    "segment": "int64",
+    "start": "float64",
+    "end": "float64",
+    "mass": "float64",
+    "rms_error": "float64",
+    "max_error": "float64",
+    "failed": "bool",
+    "error": "object",
+}
+"""The columns of a task's rows and their dtypes."""
+
+
+def _make_controller(name: str, scenario: Scenario, settings: Mapping[str, Any] | None):
+    """The controller with the grid point's settings (as a scenario's ``[controllers.NAME]`` table)."""
+    from adaptive_dd.controllers import Gains, make_controller
+
+    gains = Gains(scenario.bandwidth, scenario.damping)
+    return make_controller(name, gains, dict(settings or {}), arm=scenario.arm)
+
+
+def run_cell(
+    scenario: Scenario,
+    controller: str,
+    seed_indices: Sequence[int],
+    settings: Mapping[str, Any] | None = None,
+) -> list[dict]:
+    """Run one controller over some seeds of a scenario; per-seed, per-segment rows.
+
+    The only use of the benchmark runner in the sweep (swap it here for another engine).
+
+    Parameters
+    ----------
+    scenario : Scenario
+    controller : str
+        A built-in controller name.
+    seed_indices : sequence of int
+        Trial i uses the noise of ``(scenario.seed, seed_indices[i])``, as in a full run.
+    settings : mapping, optional
+        Keyword arguments of the controller's factory (``adaptive_ct(gains, **settings)``).
+
+    Returns
+    -------
+    list of dict
+        One row per seed and segment with :data:`ROW_COLUMNS`: ``rms_error`` and
+        ``max_error`` of ``|q_d - q|`` [rad] over the segment; ``failed`` when the
+        trial diverged (or its controller raised) before the segment's end, then the
+        metrics are NaN and ``error`` says why.
+    """
+    from adaptive_dd.benchmark.runner import run_benchmark
+
+    ctrl = _make_controller(controller, scenario, settings)
+    res = run_benchmark(scenario, progress=False, controllers={controller: ctrl}, seed_indices=seed_indices)
+    run = res.runs[controller]
+    T = scenario.sample_period
+    rows = []
+    for i, seed in enumerate(seed_indices):
+        at = int(run.failed_at[i]) if run.failed[i] else -1
+        why = run.error or f"trial diverged at t = {at * T:.3f} s"
+        for j, (start, end, mass) in enumerate(scenario.segments()):
+            a, b = round(start / T), round(end / T)
+            bad = bool(run.failed[i]) and at < b
+            rows.append(
+                {
+                    "seed": int(seed),
+                    "segment": j,
+                    "start": start,
+                    "end": end,
+                    "mass": mass,
+                    "rms_error": np.nan if bad else float(np.sqrt(run.acc[i, j, 0] / (b - a))),
+                    "max_error": np.nan if bad else float(run.acc[i, j, 3]),
+                    "failed": bad,
+                    "error": why if bad else "",
+                }
+            )
+    return rows
+
+
+@dataclass(frozen=True)
+class Task:
+    """One unit of work: a controller on a scenario for a block of seeds."""
+
+    key: str
+    scenario: Scenario
+    controller: str
+    settings: tuple[tuple[str, Any], ...]
+    seeds: tuple[int, ...]
+
+
+def _task_key(scenario: Scenario, controller: str, settings, seeds) -> str:
+    sc = dataclasses.asdict(scenario)
+    for k in ("name", "source", "seeds", "controllers", "defaulted"):
+        sc.pop(k, None)
+    blob = {"v": CELL_VERSION, "scenario": sc, "controller": controller, "settings": settings, "seeds": seeds}
+    text = json.dumps(blob, sort_keys=True, default=repr)
+    return hashlib.sha256(text.encode()).hexdigest()[:20]
+
+
+def plan_tasks(sweep: Sweep) -> tuple[dict[str, Task], list[tuple[int, str, str]]]:
+    """The distinct tasks of a sweep, and ``(point index, controller, task key)`` per cell.
+
+    Returns
+    -------
+    tasks : dict
+        Task by key, in first-use order; identical tasks appear once.
+    cells : list of (int, str, str)
+        Every grid point x controller x seed block, with the key of its task.
+    """
+    tasks: dict[str, Task] = {}
+    cells = []
+    for p in sweep.points:
+        for c in sweep.controllers:
+            settings = tuple(sorted(p.settings_for(c).items()))
+            for block in sweep.seed_blocks():
+                key = _task_key(p.scenario, c, settings, block)
+                tasks.setdefault(key, Task(key, p.scenario, c, settings, block))
+                cells.append((p.index, c, key))
+    return tasks, cells
+
+
+def failed_rows(task: Task, message: str) -> list[dict]:
+    """Rows of a task that did not run: every seed and segment failed with the message."""
+    return [
+        {
+            "seed": s,
+            "segment": j,
+            "start": start,
+            "end": end,
+            "mass": mass,
+            "rms_error": np.nan,
+            "max_error": np.nan,
+            "failed": True,
+            "error": message,
+        }
+        for s in task.seeds
+        for j, (start, end, mass) in enumerate(task.scenario.segments())
+    ]
+
+
+def execute_task(task: Task) -> list[dict]:
+    """Run a task on a worker; an exception becomes failed rows with its message."""
+    try:
+        return run_cell(task.scenario, task.controller, task.seeds, dict(task.settings))
+    except Exception as exc:  # recorded in the table, never kills the sweep
+        return failed_rows(task, f"{type(exc).__name__}: {exc}")
+
+
+def _have_parquet() -> bool:
+    try:
+        import pyarrow  # noqa: F401
+    except ImportError:
+        return False
+    return True
+
+
+def _typed(df: pd.DataFrame) -> pd.DataFrame:
+    df = df.astype({k: v for k, v in ROW_COLUMNS.items() if k != "error"})
+    df["error"] = df["error"].fillna("").astype(object)
+    return df
+
+
+def _write_atomic(df: pd.DataFrame, path: Path) -> Path:
+    """Write a table to ``path`` through a temporary file and ``os.replace``."""
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.stem}.", suffix=".tmp")
+    os.close(fd)
+    try:
+        if path.suffix == ".parquet":
+            df.to_parquet(tmp, index=False)
+        else:
+            df.to_csv(tmp, index=False, float_format="%.17g")
+        os.replace(tmp, path)
+    finally:
+        if os.path.exists(tmp):
+            os.remove(tmp)
+    return path
+
+
+def _read(path: Path) -> pd.DataFrame:
+    df = pd.read_parquet(path) if path.suffix == ".parquet" else pd.read_csv(path, keep_default_na=False)
+    if path.suffix == ".csv":
+        for col in ("rms_error", "max_error"):
+            df[col] = pd.to_numeric(df[col].replace("", np.nan))
+    return _typed(df)
+
+
+@dataclass
+class SweepResult:
+    """What a sweep produced.
+
+    Attributes
+    ----------
+    table : pandas.DataFrame
+        One row per grid point x controller x seed x segment.
+    table_path : Path
+    heatmaps : list of Path
+    reused, ran : int
+        Tasks read back from ``OUT/cells`` and tasks run now.
+    failed_rows : int
+        Rows with ``failed`` set.
+    """
+
+    table: pd.DataFrame
+    table_path: Path
+    heatmaps: list
+    reused: int
+    ran: int
+    failed_rows: int
+
+
+def _client(scheduler: str | None, workers: int | None):
+    """A Dask client: to ``scheduler``, or to a new local cluster of single-threaded workers."""
+    from distributed import Client, LocalCluster
+
+    if scheduler:
+        return Client(scheduler), None
+    n = workers or os.cpu_count() or 1
+    cluster = LocalCluster(
+        n_workers=n, threads_per_worker=1, processes=True, env=dict(WORKER_ENV), dashboard_address=":0"
+    )
+    return Client(cluster), cluster
+
+
+def _run_tasks(todo: list[Task], cells_dir: Path, ext: str, client, progress: bool) -> dict[str, list]:
+    """Submit tasks, write each one's rows as it completes; rows of lost tasks (not cached)."""
+    from distributed import as_completed
+    from tqdm.auto import tqdm
+
+    futures = {client.submit(execute_task, t, key=f"sweep-{t.key}", pure=False): t for t in todo}
+    lost: dict[str, list] = {}
+    bar = tqdm(as_completed(futures), total=len(futures), desc="sweep", unit="task", disable=not progress)
+    for fut in bar:
+        task = futures[fut]
+        try:
+            rows = fut.result()
+        except Exception as exc:  # a worker died or the task could not be sent
+            lost[task.key] = failed_rows(task, f"task lost: {type(exc).__name__}: {exc}")
+            continue
+        _write_atomic(_typed(pd.DataFrame(rows, columns=list(ROW_COLUMNS))), cells_dir / f"{task.key}.{ext}")
+    return lost
+
+
+def run_sweep(
+    sweep: Sweep,
+    out: str | Path,
+    *,
+    scheduler: str | None = None,
+    workers: int | None = None,
+    client=None,
+    progress: bool = True,
+) -> SweepResult:
+    """Run a sweep on Dask, resuming from ``OUT/cells``; write the table and heatmaps.
+
+    Parameters
+    ----------
+    sweep : Sweep
+        From :func:`~adaptive_dd.sweep_spec.load_sweep`.
+    out : path
+        Output folder.
+    scheduler : str, optional
+        Address of a running Dask scheduler (``tcp://host:8786``); default: a
+        ``LocalCluster`` of ``workers`` single-threaded processes (default: all cores).
+    client : distributed.Client, optional
+        Use this client instead (tests).
+    progress : bool
+        Show a progress bar over completed tasks.
+    """
+    out = Path(out)
+    cells_dir = out / "cells"
+    cells_dir.mkdir(parents=True, exist_ok=True)
+    ext = "parquet" if _have_parquet() else "csv"
+    tasks, cells = plan_tasks(sweep)
+    todo = [t for k, t in tasks.items() if not (cells_dir / f"{k}.{ext}").is_file()]
+    reused = len(tasks) - len(todo)
+    print(
+        f"sweep {sweep.source}: {len(sweep.points)} grid points x {len(sweep.controllers)} controllers x "
+        f"{sweep.seeds} seeds = {len(cells)} cells in {len(tasks)} distinct tasks; "
+        f"{reused} reused from {cells_dir}, {len(todo)} to run"
+    )
+    lost: dict[str, list] = {}
+    if todo:
+        made = client is None
+        cluster = None
+        if made:
+            client, cluster = _client(scheduler, workers)
+        try:
+            lost = _run_tasks(todo, cells_dir, ext, client, progress)
+        finally:
+            if made:
+                client.close()
+            if cluster is not None:
+                cluster.close()
+    table = _assemble(sweep, cells, cells_dir, ext, lost)
+    path = _write_atomic(table, out / f"results.{ext}")
+    maps = []
+    if sweep.heatmap:
+        from adaptive_dd.sweep_plot import plot_ratio_heatmaps
+
+        ratios = ratio_medians(table, sweep.heatmap, [a for a, _ in sweep.axes])
+        maps = plot_ratio_heatmaps(ratios, sweep.heatmap, [a for a, _ in sweep.axes], out)
+    return SweepResult(table, path, maps, reused, len(todo), int(table["failed"].sum()))
+
+
+def _assemble(sweep: Sweep, cells, cells_dir: Path, ext: str, lost: dict) -> pd.DataFrame:
+    """The tidy table: grid coordinates + controller + task rows, in grid order."""
+    cache: dict[str, pd.DataFrame] = {}
+    parts = []
+    for index, controller, key in cells:
+        if key not in cache:
+            cache[key] = _typed(pd.DataFrame(lost[key])) if key in lost else _read(cells_dir / f"{key}.{ext}")
+        df = cache[key].copy()
+        df.insert(0, "controller", controller)
+        for pos, (axis, value) in enumerate(sweep.points[index].values):
+            df.insert(pos, axis, [value] * len(df))
+        df.insert(0, "point", index)
+        df["task"] = key
+        parts.append(df)
+    return pd.concat(parts, ignore_index=True)
+
+
+def ratio_medians(table: pd.DataFrame, heatmap: Mapping[str, Any], axes: Sequence[str]) -> pd.DataFrame:
+    """Per grid point: the median over seeds of ``rms(adaptive) / rms(floor)`` in one segment.
+
+    The ratio is formed per seed (both controllers ran on that seed's noise), then the
+    median is taken over the seeds where both trials finished the segment.
+
+    Parameters
+    ----------
+    table : DataFrame
+        The sweep's table (:func:`run_sweep`).
+    heatmap : mapping
+        ``adaptive``, ``floor`` (controller names) and ``segment`` (index).
+    axes : sequence of str
+        The grid axes (columns of the table).
+
+    Returns
+    -------
+    DataFrame
+        One row per grid point: ``point``, the axes, ``ratio`` (NaN if no seed
+        finished), ``n_seeds`` (seeds in the median).
+    """
+    seg = table[table["segment"] == heatmap["segment"]]
+    cols = ["point", "seed"]
+    a = seg[seg["controller"] == heatmap["adaptive"]].set_index(cols)["rms_error"]
+    f = seg[seg["controller"] == heatmap["floor"]].set_index(cols)["rms_error"]
+    per_seed = (a / f).rename("ratio").reset_index()
+    per_seed = per_seed[np.isfinite(per_seed["ratio"])]
+    med = per_seed.groupby("point")["ratio"].agg(["median", "count"])
+    points = table.drop_duplicates("point").set_index("point")[list(axes)]
+    out = points.join(med).rename(columns={"median": "ratio", "count": "n_seeds"})
+    out["n_seeds"] = out["n_seeds"].fillna(0).astype(int)
+    return out.reset_index()

@@ -1,0 +1,90 @@
+"""Heatmaps of a sweep: the adaptive/floor RMS ratio over two grid axes.
+
+Plotting only; the ratios come from :func:`adaptive_dd.sweep.ratio_medians`. Uses
+``matplotlib.figure.Figure`` directly (no pyplot, no backend set at import).
+"""
+
+from __future__ import annotations
+
+import itertools
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+__all__ = ["plot_ratio_heatmaps"]
+
+
+def _grid(ratios: pd.DataFrame, x: str, y: str) -> tuple[list, list, np.ndarray, np.ndarray]:
+    xs = list(dict.fromkeys(ratios[x]))
+    ys = list(dict.fromkeys(ratios[y]))
+    z = np.full((len(ys), len(xs)), np.nan)
+    n = np.zeros((len(ys), len(xs)), dtype=int)
+    for _, r in ratios.iterrows():
+        i, j = ys.index(r[y]), xs.index(r[x])
+        z[i, j], n[i, j] = r["ratio"], r["n_seeds"]
+    return xs, ys, z, n
+
+
+def _plot_one(ratios: pd.DataFrame, heatmap: Mapping[str, Any], title: str, path: Path) -> Path:
+    from matplotlib.colors import LogNorm
+    from matplotlib.figure import Figure
+
+    x, y = heatmap["x"], heatmap["y"]
+    xs, ys, z, n = _grid(ratios, x, y)
+    fig = Figure(figsize=(1.2 * len(xs) + 3, 0.8 * len(ys) + 2.5), layout="constrained")
+    ax = fig.subplots()
+    finite = z[np.isfinite(z)]
+    log = finite.size > 0 and finite.min() > 0 and finite.max() > 10 * finite.min()
+    norm = LogNorm(finite.min(), finite.max()) if log else None
+    im = ax.imshow(np.ma.masked_invalid(z), origin="lower", aspect="auto", cmap="viridis", norm=norm)
+    ax.set_facecolor("0.85")
+    mid = np.sqrt(finite.min() * finite.max()) if log else (np.mean(finite) if finite.size else 0.0)
+    for i, j in itertools.product(range(len(ys)), range(len(xs))):
+        ok = np.isfinite(z[i, j])
+        label = f"{z[i, j]:.3g}\n({n[i, j]})" if ok else "n/a"
+        color = "k" if ok and z[i, j] > mid else "w" if ok else "k"
+        ax.text(j, i, label, ha="center", va="center", fontsize=8, color=color)
+    ax.set_xticks(range(len(xs)), [f"{v:g}" if isinstance(v, float) else str(v) for v in xs])
+    ax.set_yticks(range(len(ys)), [f"{v:g}" if isinstance(v, float) else str(v) for v in ys])
+    ax.set_xlabel(x)
+    ax.set_ylabel(y)
+    fig.colorbar(im, ax=ax, label=f"median rms {heatmap['adaptive']} / rms {heatmap['floor']}")
+    ax.set_title(title, fontsize=9)
+    fig.savefig(path, dpi=110)
+    return path
+
+
+def plot_ratio_heatmaps(
+    ratios: pd.DataFrame, heatmap: Mapping[str, Any], axes: Sequence[str], out: str | Path
+) -> list[Path]:
+    """One heatmap PNG per combination of the grid axes other than x and y.
+
+    Parameters
+    ----------
+    ratios : DataFrame
+        From :func:`adaptive_dd.sweep.ratio_medians`.
+    heatmap : mapping
+        ``x``, ``y``, ``adaptive``, ``floor``, ``segment``.
+    axes : sequence of str
+        All grid axes.
+    out : path
+        Folder: writes ``heatmap.png`` (or ``heatmap_<i>.png``, one per combination).
+
+    Returns
+    -------
+    list of Path
+    """
+    out = Path(out)
+    others = [a for a in axes if a not in (heatmap["x"], heatmap["y"])]
+    base = f"segment {heatmap['segment']}, per-seed ratio, median over seeds (count)"
+    groups = list(ratios.groupby(others, sort=False)) if others else [((), ratios)]
+    paths = []
+    for i, (vals, sub) in enumerate(groups):
+        vals = vals if isinstance(vals, tuple) else (vals,)
+        extra = ", ".join(f"{a} = {v}" for a, v in zip(others, vals, strict=True))
+        name = "heatmap.png" if len(groups) == 1 else f"heatmap_{i}.png"
+        paths.append(_plot_one(sub, heatmap, base + (f"\n{extra}" if extra else ""), out / name))
+    return paths

@@ -1,0 +1,309 @@
+"""Sweep files: a grid over scenario fields x controllers x seeds, read and checked.
+
+A sweep file is TOML::
+
+    [sweep]
+    scenario = "short_swap.toml"   # relative to this file; "default" (or omitted): the shipped one
+    seeds = 4                      # seed indices 0 .. seeds-1 (optional: the scenario's)
+    seed = 0                       # base seed (optional: the scenario's)
+    block = 2                      # seeds per task (optional: all seeds in one task)
+    controllers = ["ct_oracle", "adaptive_ct"]   # optional: the scenario's
+    swap = 0                       # which [[payload]] of the scenario the grid's
+                                   # payload_mass and swap_time change (0-based; default 0)
+    duration = 5.0                 # optional: override run.duration [s]
+
+    [grid]                         # every combination is one grid point (file order)
+    payload_mass = [0.5, 2.0, 5.0, 10.0]   # kg, of payload `swap`
+    swap_time = [1.5, 2.0, 2.5]            # s, of payload `swap`
+    bandwidth = [30.0, 40.0]               # rad/s (control.bandwidth)
+    noise_scale = [1.0, 4.0]               # multiplies both noise variances
+
+    [grid.controller.adaptive_ct]  # controller settings, passed on as an opaque dict
+    tau_f = [0.006, 0.01]
+
+    [heatmap]                      # optional; defaults shown
+    x = "payload_mass"             # grid axes (default: the first two with > 1 value)
+    y = "swap_time"
+    adaptive = "adaptive_ct"
+    floor = "ct_oracle"
+    segment = 1                    # segment index (default: the one starting at payload `swap`)
+
+Axis names of controller settings are ``"<controller>.<key>"`` (e.g. ``"adaptive_ct.tau_f"``).
+Every grid point is checked when the file is read (swap times increasing and before the
+end, masses >= 0, ...): errors name the file, the key and the reason.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import itertools
+import tomllib
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from adaptive_dd.benchmark.scenario import Scenario, default_scenario_path, load_scenario
+from adaptive_dd.controllers import CONTROLLERS
+from adaptive_dd.errors import ScenarioError
+
+__all__ = ["SCENARIO_AXES", "GridPoint", "Sweep", "SweepError", "load_sweep", "parse_sweep"]
+
+SCENARIO_AXES = ("payload_mass", "swap_time", "bandwidth", "noise_scale")
+"""Scenario fields a grid may vary."""
+
+_SWEEP_KEYS = {"scenario", "seeds", "seed", "block", "controllers", "swap", "duration"}
+_HEATMAP_KEYS = {"x", "y", "adaptive", "floor", "segment"}
+
+
+class SweepError(ScenarioError):
+    """A sweep file is invalid; names the file, the key and the reason."""
+
+
+@dataclass(frozen=True)
+class GridPoint:
+    """One point of the grid.
+
+    Attributes
+    ----------
+    index : int
+        Position in the expanded grid (file order, last axis fastest).
+    values : tuple of (axis, value)
+        The grid coordinates, scenario axes and ``"<controller>.<key>"`` axes.
+    scenario : Scenario
+        The base scenario with the scenario axes applied.
+    settings : tuple of (controller, tuple of (key, value))
+        Controller settings of this point (opaque to the sweep).
+    """
+
+    index: int
+    values: tuple[tuple[str, Any], ...]
+    scenario: Scenario
+    settings: tuple[tuple[str, tuple[tuple[str, Any], ...]], ...] = ()
+
+    def settings_for(self, controller: str) -> dict[str, Any]:
+        """The settings dict of one controller (empty if none)."""
+        return dict(dict(self.settings).get(controller, ()))
+
+
+@dataclass(frozen=True)
+class Sweep:
+    """A checked sweep: base scenario, seeds, controllers, grid and heatmap choice."""
+
+    source: str
+    base: Scenario
+    seeds: int
+    block: int
+    controllers: tuple[str, ...]
+    axes: tuple[tuple[str, tuple[Any, ...]], ...]
+    points: tuple[GridPoint, ...]
+    heatmap: dict[str, Any] | None
+
+    def seed_blocks(self) -> list[tuple[int, ...]]:
+        """Seed indices ``0 .. seeds-1`` cut into blocks of ``block``."""
+        idx = range(self.seeds)
+        return [tuple(idx[i : i + self.block]) for i in range(0, self.seeds, self.block)]
+
+
+def load_sweep(path: str | Path) -> Sweep:
+    """Read and check a sweep file (see the module docstring).
+
+    Raises
+    ------
+    SweepError
+        Naming the file, the key and the reason.
+    """
+    path = Path(path)
+    src = str(path)
+    if not path.is_file():
+        raise SweepError(f"{src}: no such sweep file")
+    try:
+        data = tomllib.loads(path.read_text())
+    except tomllib.TOMLDecodeError as exc:
+        raise SweepError(f"{src}: not valid TOML: {exc}") from None
+    return parse_sweep(data, src, base_dir=path.parent)
+
+
+def _int(src: str, key: str, v: Any, minimum: int) -> int:
+    if isinstance(v, bool) or not isinstance(v, int) or v < minimum:
+        raise SweepError(f"{src}: key '{key}' must be an integer >= {minimum}, got {v!r}")
+    return v
+
+
+def _base_scenario(src: str, sw: dict, base_dir: Path) -> Scenario:
+    name = sw.get("scenario", "default")
+    if not isinstance(name, str):
+        raise SweepError(f"{src}: key 'sweep.scenario' must be a path or \"default\", got {name!r}")
+    path = default_scenario_path() if name == "default" else base_dir / name
+    if not path.is_file():
+        raise SweepError(f"{src}: key 'sweep.scenario': no such scenario file {str(path)!r}")
+    try:
+        sc = load_scenario(path)
+    except ScenarioError as exc:
+        raise SweepError(f"{src}: key 'sweep.scenario': {exc}") from None
+    if "duration" in sw:
+        d = sw["duration"]
+        if isinstance(d, bool) or not isinstance(d, int | float) or not d > 0:
+            raise SweepError(f"{src}: key 'sweep.duration' must be a number > 0 s, got {d!r}")
+        late = [t for t in sc.swap_times if t >= d]
+        if late:
+            raise SweepError(
+                f"{src}: key 'sweep.duration' = {d} s ends before the scenario's swap at {late[0]} s"
+            )
+        sc = dataclasses.replace(sc, duration=float(d))
+    return sc
+
+
+def _controllers(src: str, sw: dict, base: Scenario) -> tuple[str, ...]:
+    ctrls = sw.get("controllers", list(base.controllers))
+    if not isinstance(ctrls, list) or not ctrls or not all(isinstance(c, str) for c in ctrls):
+        raise SweepError(f"{src}: key 'sweep.controllers' must be a non-empty list of names, got {ctrls!r}")
+    for c in ctrls:
+        if c not in CONTROLLERS:
+            raise SweepError(
+                f"{src}: key 'sweep.controllers': unknown controller {c!r}; known: {CONTROLLERS}"
+            )
+    if len(set(ctrls)) != len(ctrls):
+        raise SweepError(f"{src}: key 'sweep.controllers' lists a controller twice: {ctrls}")
+    return tuple(ctrls)
+
+
+def _values(src: str, key: str, v: Any, *, numeric: bool) -> tuple[Any, ...]:
+    if not isinstance(v, list) or not v:
+        raise SweepError(f"{src}: key '{key}' must be a non-empty list of values, got {v!r}")
+    for x in v:
+        if numeric and (isinstance(x, bool) or not isinstance(x, int | float)):
+            raise SweepError(f"{src}: key '{key}': values must be numbers, got {x!r}")
+    if len(set(map(repr, v))) != len(v):
+        raise SweepError(f"{src}: key '{key}' lists a value twice: {v!r}")
+    return tuple(float(x) for x in v) if numeric else tuple(v)
+
+
+def _axes(src: str, grid: Any, ctrls: tuple[str, ...]) -> tuple[tuple[str, tuple[Any, ...]], ...]:
+    if not isinstance(grid, dict):
+        raise SweepError(f"{src}: [grid] must be a table")
+    axes = []
+    for key, v in grid.items():
+        if key == "controller":
+            if not isinstance(v, dict):
+                raise SweepError(f"{src}: key 'grid.controller' must be a table of [grid.controller.NAME]")
+            for name, table in v.items():
+                if name not in ctrls:
+                    raise SweepError(
+                        f"{src}: key 'grid.controller.{name}': {name!r} is not in sweep.controllers {ctrls}"
+                    )
+                if not isinstance(table, dict) or not table:
+                    raise SweepError(f"{src}: key 'grid.controller.{name}' must be a table of settings lists")
+                for k, vals in table.items():
+                    full = f"grid.controller.{name}.{k}"
+                    axes.append((f"{name}.{k}", _values(src, full, vals, numeric=False)))
+        elif key in SCENARIO_AXES:
+            axes.append((key, _values(src, f"grid.{key}", v, numeric=True)))
+        else:
+            raise SweepError(f"{src}: unknown key 'grid.{key}'; allowed: {[*SCENARIO_AXES, 'controller']}")
+    return tuple(axes)
+
+
+def _apply(src: str, base: Scenario, swap: int, coords: dict[str, float]) -> Scenario:
+    """The base scenario with the scenario axes of one grid point applied."""
+    times, masses = list(base.swap_times), list(base.swap_masses)
+    changes: dict[str, Any] = {}
+    where = ", ".join(f"{k} = {v}" for k, v in coords.items())
+    if "payload_mass" in coords:
+        if coords["payload_mass"] < 0:
+            m = coords["payload_mass"]
+            raise SweepError(f"{src}: key 'grid.payload_mass': mass must be >= 0 kg, got {m}")
+        masses[swap] = coords["payload_mass"]
+    if "swap_time" in coords:
+        t = coords["swap_time"]
+        lo = times[swap - 1] if swap > 0 else 0.0
+        hi = times[swap + 1] if swap + 1 < len(times) else base.duration
+        if not lo < t < hi:
+            raise SweepError(
+                f"{src}: key 'grid.swap_time' = {t} s (at {where}): payload {swap} must swap "
+                f"strictly between {lo} s and {hi} s (the neighbouring swaps or the run's end)"
+            )
+        times[swap] = t
+    if "bandwidth" in coords:
+        if not coords["bandwidth"] > 0:
+            raise SweepError(f"{src}: key 'grid.bandwidth' must be > 0 rad/s, got {coords['bandwidth']}")
+        changes["bandwidth"] = coords["bandwidth"]
+    if "noise_scale" in coords:
+        s = coords["noise_scale"]
+        if not s >= 0:
+            raise SweepError(f"{src}: key 'grid.noise_scale' must be >= 0, got {s}")
+        changes["position_variance"] = tuple(s * v for v in base.position_variance)
+        changes["velocity_variance"] = tuple(s * v for v in base.velocity_variance)
+    return dataclasses.replace(base, swap_times=tuple(times), swap_masses=tuple(masses), **changes)
+
+
+def _heatmap(src: str, hm: Any, axes, ctrls, swap: int, n_segments: int) -> dict[str, Any] | None:
+    if not isinstance(hm, dict):
+        raise SweepError(f"{src}: [heatmap] must be a table")
+    for key in hm:
+        if key not in _HEATMAP_KEYS:
+            raise SweepError(f"{src}: unknown key 'heatmap.{key}'; allowed: {sorted(_HEATMAP_KEYS)}")
+    names = [a for a, _ in axes]
+    varied = [a for a, v in axes if len(v) > 1]
+    out = {
+        "x": hm.get("x", varied[0] if varied else None),
+        "y": hm.get("y", varied[1] if len(varied) > 1 else None),
+        "adaptive": hm.get("adaptive", "adaptive_ct"),
+        "floor": hm.get("floor", "ct_oracle"),
+        "segment": hm.get("segment", swap + 1),
+    }
+    explicit = bool(hm)
+    for key in ("x", "y"):
+        if out[key] is None or out[key] not in names:
+            if not explicit:
+                return None
+            raise SweepError(f"{src}: key 'heatmap.{key}' = {out[key]!r} must name a grid axis: {names}")
+    if out["x"] == out["y"]:
+        raise SweepError(f"{src}: keys 'heatmap.x' and 'heatmap.y' name the same axis {out['x']!r}")
+    for key in ("adaptive", "floor"):
+        if out[key] not in ctrls:
+            if not explicit:
+                return None
+            raise SweepError(f"{src}: key 'heatmap.{key}' = {out[key]!r} is not in sweep.controllers {ctrls}")
+    seg = _int(src, "heatmap.segment", out["segment"], 0)
+    if seg >= n_segments:
+        raise SweepError(f"{src}: key 'heatmap.segment' = {seg}: the scenario has {n_segments} segments")
+    return out
+
+
+def parse_sweep(data: dict, src: str = "<memory>", base_dir: str | Path = ".") -> Sweep:
+    """Check a sweep given as a dict (the parsed TOML) and expand its grid."""
+    for table in data:
+        if table not in ("sweep", "grid", "heatmap"):
+            raise SweepError(f"{src}: unknown table [{table}]; allowed: ['grid', 'heatmap', 'sweep']")
+    sw = data.get("sweep", {})
+    if not isinstance(sw, dict):
+        raise SweepError(f"{src}: [sweep] must be a table")
+    for key in sw:
+        if key not in _SWEEP_KEYS:
+            raise SweepError(f"{src}: unknown key 'sweep.{key}'; allowed: {sorted(_SWEEP_KEYS)}")
+    base = _base_scenario(src, sw, Path(base_dir))
+    if "seed" in sw:
+        base = dataclasses.replace(base, seed=_int(src, "sweep.seed", sw["seed"], 0))
+    seeds = _int(src, "sweep.seeds", sw.get("seeds", base.seeds), 1)
+    block = _int(src, "sweep.block", sw.get("block", seeds), 1)
+    ctrls = _controllers(src, sw, base)
+    base = dataclasses.replace(base, seeds=seeds, controllers=ctrls)
+    axes = _axes(src, data.get("grid", {}), ctrls)
+    swap = _int(src, "sweep.swap", sw.get("swap", 0), 0)
+    if any(a in ("payload_mass", "swap_time") for a, _ in axes) and swap >= len(base.swap_times):
+        raise SweepError(
+            f"{src}: key 'sweep.swap' = {swap}: the scenario has {len(base.swap_times)} payload swap(s)"
+        )
+    points = []
+    for i, combo in enumerate(itertools.product(*(v for _, v in axes))):
+        values = tuple((a, v) for (a, _), v in zip(axes, combo, strict=True))
+        coords = {a: v for a, v in values if a in SCENARIO_AXES}
+        settings: dict[str, list] = {}
+        for a, v in values:
+            if a not in SCENARIO_AXES:
+                name, key = a.split(".", 1)
+                settings.setdefault(name, []).append((key, v))
+        sc = _apply(src, base, swap, coords)
+        points.append(GridPoint(i, values, sc, tuple((n, tuple(kv)) for n, kv in settings.items())))
+    hm = _heatmap(src, data.get("heatmap", {}), axes, ctrls, swap, len(base.swap_times) + 1)
+    return Sweep(src, base, seeds, min(block, seeds), ctrls, axes, tuple(points), hm)

@@ -1,0 +1,284 @@
+"""Speed and memory of the closed loop, against the targets of issue 11.
+
+Prints, in one run:
+
+* for each built-in controller, simulated seconds per wall second for one trial and
+  for a batch of trials, on the Python path of :func:`adaptive_dd.benchmark.run_benchmark`
+  and, when ``run_benchmark`` accepts ``engine=`` (detected, never required), on
+  ``engine="compiled"`` (its first call, compile included, is timed apart);
+* the anchor: a per-sample Python loop of ``pinocchio.aba`` (RK4, 2 substeps per
+  sample, viscous + smooth Coulomb friction as torque) with a numpy computed-torque
+  law on the SICE arm (:func:`adaptive_dd.plant.pinocchio_model.build_model`);
+* peak RSS and wall time of the default scenario at N seeds for one controller,
+  measured in a child process (``resource.getrusage``) under an address-space cap;
+* the default benchmark (all controllers) at 10 seeds, wall time.
+
+Each line is marked against the issue's targets (``met`` / ``NOT met``; ``-`` where
+the issue sets none). The trials are the default scenario's reference and noise,
+shortened to ``--duration`` s with one 3 kg swap at mid-run.
+
+Usage::
+
+    python benchmarks/speed.py [--duration S] [--batch N] [--pin-duration S]
+                               [--seeds-memory N] [--memory-controller NAME]
+                               [--memory-cap-gib G] [--default-seeds N]
+                               [--controllers NAME ...] [--engines python compiled]
+
+Options
+-------
+--duration S           simulated seconds per trial for the speed lines (default 2)
+--batch N              trials in a batch (default 64)
+--pin-duration S       simulated seconds of the Pinocchio loop (default 1)
+--seeds-memory N       seeds of the memory run; 0 skips it (default 1000)
+--memory-controller    controller of the memory run (default adaptive_ct; "all" for all)
+--memory-cap-gib G     address-space cap of the memory child [GiB] (default 8): a run that
+                       needs more fails with MemoryError and is printed as NOT met
+--default-seeds N      seeds of the full default benchmark timing; 0 skips it (default 10)
+--controllers ...      controllers of the speed lines (default: all built-in)
+--engines ...          engines to try (default: python compiled)
+
+Asserts nothing; speed is never asserted in tests.
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import inspect
+import json
+import os
+import resource
+import subprocess
+import sys
+import time
+
+import numpy as np
+
+TARGETS = {
+    "single": 1000.0,  # one trial of adaptive_ct, simulated s per wall s
+    "vs_pinocchio": 100.0,  # ... and x the Pinocchio loop
+    "batch": 3000.0,  # batch of adaptive_ct on 2 cores
+    "memory_gib": 1.0,  # default scenario at 1000 seeds
+    "memory_wall": 60.0,  # s, default benchmark at 1000 seeds
+    "default10_wall": 5.0,  # s, default benchmark at 10 seeds after the first compile
+}
+
+
+def _mark(ok: bool | None) -> str:
+    return "-" if ok is None else "met" if ok else "NOT met"
+
+
+def _engine_kwargs(engine: str) -> dict | None:
+    """Keyword arguments selecting an engine, or None if run_benchmark has no such engine."""
+    from adaptive_dd.benchmark.runner import run_benchmark
+
+    if "engine" not in inspect.signature(run_benchmark).parameters:
+        return {} if engine == "python" else None
+    return {"engine": engine}
+
+
+def _scenario(n_trials: int, duration: float):
+    from adaptive_dd.benchmark.scenario import load_scenario
+
+    return dataclasses.replace(
+        load_scenario(), seeds=n_trials, duration=duration, swap_times=(duration / 2,), swap_masses=(3.0,)
+    )
+
+
+def sim_rate(controller: str, n_trials: int, duration: float, engine: str) -> float:
+    """Simulated seconds (summed over trials) per wall second of one run_benchmark call."""
+    from adaptive_dd.benchmark.runner import run_benchmark
+
+    sc = dataclasses.replace(_scenario(n_trials, duration), controllers=(controller,))
+    t0 = time.perf_counter()
+    run_benchmark(sc, progress=False, **_engine_kwargs(engine))
+    return n_trials * duration / (time.perf_counter() - t0)
+
+
+def pinocchio_rate(duration: float, substeps: int = 2, seed: int = 0) -> float:
+    """The anchor: per-sample Python loop of ``pin.aba`` + RK4 + numpy computed torque."""
+    import pinocchio as pin
+
+    from adaptive_dd.benchmark.scenario import load_scenario
+    from adaptive_dd.controllers.feedback import computed_torque_law
+    from adaptive_dd.plant import TABLE1_PHYSICAL, TABLE1_SIGMA
+    from adaptive_dd.plant.pinocchio_model import build_model
+
+    model = build_model(TABLE1_PHYSICAL)
+    data = model.createData()
+    T = 1e-3
+    n = round(duration / T)
+    q_d, qd_d, qdd_d = load_scenario().reference.sample(np.arange(n) * T)
+    b, d = TABLE1_SIGMA[3:5], TABLE1_SIGMA[5:7]
+    rng = np.random.default_rng(seed)
+
+    def accel(q, v, tau):
+        return pin.aba(model, data, q, v, tau - b * v - d * np.tanh(v / 1e-3))
+
+    t0 = time.perf_counter()
+    q, v = q_d[0].copy(), qd_d[0].copy()
+    h = T / substeps
+    for k in range(n):
+        qm = q + 1e-4 * rng.standard_normal(2)
+        vm = v + 7e-3 * rng.standard_normal(2)
+        tau = computed_torque_law(qm, vm, q_d[k], qd_d[k], qdd_d[k], TABLE1_SIGMA, 1600.0, 80.0)
+        for _ in range(substeps):  # RK4 on (q, v); torque held over the sample
+            a1 = accel(q, v, tau)
+            a2 = accel(q + 0.5 * h * v, v + 0.5 * h * a1, tau)
+            a3 = accel(q + 0.5 * h * (v + 0.5 * h * a1), v + 0.5 * h * a2, tau)
+            a4 = accel(q + h * (v + 0.5 * h * a2), v + h * a3, tau)
+            q = q + h * v + h * h / 6 * (a1 + a2 + a3)
+            v = v + h / 6 * (a1 + 2 * a2 + 2 * a3 + a4)
+    return duration / (time.perf_counter() - t0)
+
+
+def _memory_child(seeds: int, controller: str, engine: str, cap_gib: float) -> None:
+    """Run in a child: the default scenario at ``seeds`` seeds; print wall and peak RSS as JSON."""
+    cap = int(cap_gib * 2**30)
+    resource.setrlimit(resource.RLIMIT_AS, (cap, cap))
+    from adaptive_dd.benchmark.runner import run_benchmark
+    from adaptive_dd.benchmark.scenario import load_scenario
+
+    sc = dataclasses.replace(load_scenario(), seeds=seeds)
+    if controller != "all":
+        sc = dataclasses.replace(sc, controllers=(controller,))
+    t0 = time.perf_counter()
+    error = ""
+    try:
+        run_benchmark(sc, progress=False, **_engine_kwargs(engine))
+    except MemoryError as exc:
+        error = f"MemoryError under a {cap_gib:g} GiB address-space cap: {exc}"
+    wall = time.perf_counter() - t0
+    rss_kib = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss  # KiB on Linux
+    print(json.dumps({"wall": wall, "rss_gib": rss_kib / 2**20, "error": error}))
+
+
+def memory_run(seeds: int, controller: str, engine: str, cap_gib: float) -> dict:
+    """Peak RSS [GiB] and wall [s] of the default scenario at ``seeds`` seeds, in a subprocess."""
+    cmd = [sys.executable, __file__, "--_memory-child", str(seeds), controller, engine, str(cap_gib)]
+    p = subprocess.run(cmd, capture_output=True, text=True, check=False)
+    lines = [ln for ln in p.stdout.splitlines() if ln.startswith("{")]
+    if p.returncode != 0 or not lines:
+        tail = (p.stderr.strip().splitlines() or ["?"])[-1]
+        return {
+            "wall": float("nan"),
+            "rss_gib": float("nan"),
+            "error": f"child exited {p.returncode}: {tail}",
+        }
+    return json.loads(lines[-1])
+
+
+def default_benchmark_wall(seeds: int, engine: str) -> float:
+    """Wall time [s] of the full default benchmark (all controllers) at ``seeds`` seeds."""
+    from adaptive_dd.benchmark.runner import run_benchmark
+    from adaptive_dd.benchmark.scenario import load_scenario
+
+    sc = dataclasses.replace(load_scenario(), seeds=seeds)
+    t0 = time.perf_counter()
+    run_benchmark(sc, progress=False, **_engine_kwargs(engine))
+    return time.perf_counter() - t0
+
+
+def _line(name: str, value: str, target: str, ok: bool | None) -> None:
+    print(f"{name:52s} {value:>16s}  {target:>22s}  {_mark(ok)}")
+
+
+def _speed_lines(args, engines: list[str], pin: float) -> None:
+    for engine in engines:
+        if engine != "python":  # the first call compiles; time it apart
+            t0 = time.perf_counter()
+            sim_rate(args.controllers[0], 1, 0.05, engine)
+            print(f"[{engine}] first call (compile, {args.controllers[0]}): {time.perf_counter() - t0:.1f} s")
+        for c in args.controllers:
+            sim_rate(c, 1, 0.02, engine)  # warm (imports, caches)
+            one = sim_rate(c, 1, args.duration, engine)
+            many = sim_rate(c, args.batch, args.duration, engine)
+            main = c == "adaptive_ct"
+            _line(
+                f"{c}, 1 trial [{engine}]",
+                f"{one:.1f}",
+                f">= {TARGETS['single']:g}" if main else "",
+                one >= TARGETS["single"] if main else None,
+            )
+            if main:
+                _line(
+                    f"{c}, 1 trial / Pinocchio loop [{engine}]",
+                    f"{one / pin:.2f}x",
+                    f">= {TARGETS['vs_pinocchio']:g}x",
+                    one / pin >= TARGETS["vs_pinocchio"],
+                )
+            _line(
+                f"{c}, batch of {args.batch} [{engine}]",
+                f"{many:.1f}",
+                f">= {TARGETS['batch']:g}" if main else "",
+                many >= TARGETS["batch"] if main else None,
+            )
+
+
+def _memory_lines(args, engine: str) -> None:
+    n = args.seeds_memory
+    r = memory_run(n, args.memory_controller, engine, args.memory_cap_gib)
+    at1000 = n == 1000
+    label = f"default scenario, {n} seeds, {args.memory_controller} [{engine}]"
+    note = "" if at1000 else " (target at 1000)"
+    if r["error"]:
+        print(f"{label}: {r['error']}")
+    _line(
+        f"{label}: peak RSS",
+        f"{r['rss_gib']:.2f} GiB",
+        f"<= {TARGETS['memory_gib']:g} GiB{note}",
+        (not r["error"] and r["rss_gib"] <= TARGETS["memory_gib"]) if at1000 else None,
+    )
+    _line(
+        f"{label}: wall",
+        f"{r['wall']:.1f} s",
+        f"<= {TARGETS['memory_wall']:g} s{note}",
+        (not r["error"] and r["wall"] <= TARGETS["memory_wall"]) if at1000 else None,
+    )
+
+
+def main(argv: list[str] | None = None) -> None:
+    from adaptive_dd.controllers import CONTROLLERS
+
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--duration", type=float, default=2.0)
+    p.add_argument("--batch", type=int, default=64)
+    p.add_argument("--pin-duration", type=float, default=1.0)
+    p.add_argument("--seeds-memory", type=int, default=1000)
+    p.add_argument("--memory-controller", default="adaptive_ct", choices=(*CONTROLLERS, "all"))
+    p.add_argument("--memory-cap-gib", type=float, default=8.0)
+    p.add_argument("--default-seeds", type=int, default=10)
+    p.add_argument("--controllers", nargs="+", default=list(CONTROLLERS), choices=CONTROLLERS)
+    p.add_argument("--engines", nargs="+", default=["python", "compiled"])
+    args = p.parse_args(argv)
+    engines = [e for e in args.engines if _engine_kwargs(e) is not None]
+    skipped = [e for e in args.engines if e not in engines]
+    print(f"closed loop, T = 1 ms, 2 RK4 substeps; {args.duration} s per trial; engines: {engines}")
+    print(f"cores: {os.cpu_count()}, load average (1, 5, 15 min) at start: {os.getloadavg()}")
+    if skipped:
+        print(f"engines not offered by run_benchmark (no 'engine' keyword): {skipped}")
+    print(f"{'configuration':52s} {'sim s / wall s':>16s}  {'target':>22s}  status")
+    pin = pinocchio_rate(args.pin_duration)
+    _line("Pinocchio aba + RK4 (2 substeps) + numpy CT, 1 trial", f"{pin:.1f}", "anchor", None)
+    _speed_lines(args, engines, pin)
+    best = engines[-1]
+    if args.default_seeds > 0:
+        default_benchmark_wall(1, best)  # first compile / imports
+        w = default_benchmark_wall(args.default_seeds, best)
+        at10 = args.default_seeds == 10
+        _line(
+            f"default benchmark, {args.default_seeds} seeds, all controllers [{best}]",
+            f"{w:.1f} s",
+            f"<= {TARGETS['default10_wall']:g} s" + ("" if at10 else " (target at 10)"),
+            w <= TARGETS["default10_wall"] if at10 else None,
+        )
+    if args.seeds_memory > 0:
+        _memory_lines(args, best)
+    print(f"load average at end: {os.getloadavg()} (other processes slow every figure above)")
+
+
+if __name__ == "__main__":
+    if len(sys.argv) > 1 and sys.argv[1] == "--_memory-child":
+        _memory_child(int(sys.argv[2]), sys.argv[3], sys.argv[4], float(sys.argv[5]))
+    else:
+        main()

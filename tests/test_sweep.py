@@ -1,0 +1,417 @@
+"""Sweeps: grid expansion and validation, seed blocks, resume, failures, the table, a real cluster."""
+
+from __future__ import annotations
+
+import dataclasses
+import os
+import socket
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from adaptive_dd.benchmark.runner import run_benchmark
+from adaptive_dd.benchmark.scenario import load_scenario
+from adaptive_dd.sweep import plan_tasks, ratio_medians, run_cell, run_sweep
+from adaptive_dd.sweep_spec import SweepError, load_sweep, parse_sweep
+
+distributed = pytest.importorskip("distributed")
+
+BASE = """
+[run]
+duration = 0.3
+controllers = ["ct_oracle", "adaptive_ct"]
+[[payload]]
+at = 0.1
+mass = 3.0
+[[payload]]
+at = 0.2
+mass = 0.0
+"""
+
+SWEEP = """
+[sweep]
+scenario = "base.toml"
+seeds = 2
+block = 1
+controllers = ["ct_oracle", "adaptive_ct"]
+[grid]
+payload_mass = [1.0, 6.0]
+swap_time = [0.08, 0.12]
+"""
+
+
+def _write(tmp_path: Path, sweep: str = SWEEP, base: str = BASE) -> Path:
+    (tmp_path / "base.toml").write_text(base)
+    path = tmp_path / "sweep.toml"
+    path.write_text(sweep)
+    return path
+
+
+@pytest.fixture(scope="module")
+def client():
+    with (
+        distributed.LocalCluster(
+            n_workers=1, threads_per_worker=2, processes=False, dashboard_address=":0"
+        ) as cluster,
+        distributed.Client(cluster) as c,
+    ):
+        yield c
+
+
+# ---- the sweep file ---------------------------------------------------------------------
+
+
+def test_grid_expansion_applies_each_axis(tmp_path):
+    text = SWEEP.replace("0.12]", "0.12]\nbandwidth = [30.0, 50.0]\nnoise_scale = [4.0]")
+    text += "[grid.controller.adaptive_ct]\ntau_f = [0.006, 0.02]\n"
+    sw = load_sweep(_write(tmp_path, text))
+    base = load_scenario(tmp_path / "base.toml")
+    assert len(sw.points) == 2 * 2 * 2 * 1 * 2
+    assert [a for a, _ in sw.axes] == [
+        "payload_mass",
+        "swap_time",
+        "bandwidth",
+        "noise_scale",
+        "adaptive_ct.tau_f",
+    ]
+    p = sw.points[-1]  # last axis fastest: the last value of every axis
+    assert dict(p.values) == {
+        "payload_mass": 6.0,
+        "swap_time": 0.12,
+        "bandwidth": 50.0,
+        "noise_scale": 4.0,
+        "adaptive_ct.tau_f": 0.02,
+    }
+    sc = p.scenario
+    assert sc.swap_masses == (6.0, 0.0) and sc.swap_times == (0.12, 0.2)  # only payload 0 changes
+    assert sc.bandwidth == 50.0
+    np.testing.assert_allclose(sc.position_variance, 4 * np.asarray(base.position_variance))
+    np.testing.assert_allclose(sc.velocity_variance, 4 * np.asarray(base.velocity_variance))
+    assert p.settings_for("adaptive_ct") == {"tau_f": 0.02} and p.settings_for("ct_oracle") == {}
+    assert sw.points[0].settings_for("adaptive_ct") == {"tau_f": 0.006}
+    assert sw.points[1].settings_for("adaptive_ct") == {"tau_f": 0.02}
+    assert sw.seed_blocks() == [(0,), (1,)]
+
+
+def test_swap_index_selects_the_payload(tmp_path):
+    text = SWEEP.replace("block = 1", "block = 1\nswap = 1").replace("[0.08, 0.12]", "[0.15, 0.25]")
+    sw = load_sweep(_write(tmp_path, text))
+    assert sw.points[-1].scenario.swap_times == (0.1, 0.25)
+    assert sw.points[-1].scenario.swap_masses == (3.0, 6.0)
+
+
+def test_identical_tasks_run_once(tmp_path):
+    # ct_oracle takes no settings: its task is the same at both tau_f values
+    text = SWEEP.replace("[1.0, 6.0]", "[1.0]").replace("[0.08, 0.12]", "[0.08]")
+    text += "[grid.controller.adaptive_ct]\ntau_f = [0.006, 0.02]\n"
+    tasks, cells = plan_tasks(load_sweep(_write(tmp_path, text)))
+    assert len(cells) == 2 * 2 * 2  # points x controllers x blocks
+    assert len(tasks) == 2 + 2 * 2  # ct_oracle once per block, adaptive_ct per tau_f and block
+
+
+@pytest.mark.parametrize(
+    ("edit", "needle"),
+    [
+        (("[grid]", "[grid]\nspeed = [1.0]"), "unknown key 'grid.speed'"),
+        (("block = 1", "block = 0"), "key 'sweep.block' must be an integer >= 1"),
+        (("seeds = 2", "seeds = 2.5"), "key 'sweep.seeds' must be an integer"),
+        (("[0.08, 0.12]", "[0.08, 0.25]"), "key 'grid.swap_time' = 0.25 s"),
+        (("[1.0, 6.0]", "[1.0, -2.0]"), "key 'grid.payload_mass': mass must be >= 0"),
+        (("[1.0, 6.0]", "[1.0, 1.0]"), "key 'grid.payload_mass' lists a value twice"),
+        (("[1.0, 6.0]", '["heavy"]'), "key 'grid.payload_mass': values must be numbers"),
+        (('"ct_oracle", "adaptive_ct"]', '"ct_oracle", "mpc"]'), "unknown controller 'mpc'"),
+        (('"base.toml"', '"nope.toml"'), "key 'sweep.scenario': no such scenario file"),
+        (("block = 1", "block = 1\nswap = 2"), "key 'sweep.swap' = 2"),
+        (("block = 1", "block = 1\nduration = 0.15"), "key 'sweep.duration' = 0.15 s ends before"),
+        (("[grid]", "[heatmap]\nx = 'mass'\n[grid]"), "key 'heatmap.x' = 'mass' must name a grid axis"),
+        (("[grid]", "[heatmap]\nfloor = 'pd'\n[grid]"), "key 'heatmap.floor' = 'pd' is not in"),
+        (("[grid]", "[heatmap]\nsegment = 3\n[grid]"), "key 'heatmap.segment' = 3"),
+        (("[grid]", "[grid.controller.pd]\nkp = [1]\n[grid]"), "key 'grid.controller.pd'"),
+        (("[sweep]", "[sweeps]"), "unknown table [sweeps]"),
+    ],
+)
+def test_validation_names_file_key_and_reason(tmp_path, edit, needle):
+    path = _write(tmp_path, SWEEP.replace(*edit))
+    with pytest.raises(SweepError) as info:
+        load_sweep(path)
+    assert str(path) in str(info.value)
+    assert needle in str(info.value)
+
+
+def test_sweep_error_is_a_value_error():
+    with pytest.raises(ValueError, match="unknown table"):
+        parse_sweep({"grids": {}}, "x.toml")
+
+
+def test_default_heatmap_axes_and_none_without_two_axes(tmp_path):
+    assert load_sweep(_write(tmp_path)).heatmap == {
+        "x": "payload_mass",
+        "y": "swap_time",
+        "adaptive": "adaptive_ct",
+        "floor": "ct_oracle",
+        "segment": 1,
+    }
+    one_axis = SWEEP.replace("swap_time = [0.08, 0.12]\n", "")
+    assert load_sweep(_write(tmp_path, one_axis)).heatmap is None
+
+
+# ---- seeds, cells and the table ---------------------------------------------------------------
+
+
+def test_seed_block_equals_the_same_seeds_in_a_full_run(tmp_path):
+    sc = dataclasses.replace(load_scenario(_write(tmp_path).parent / "base.toml"), seeds=3)
+    full = run_benchmark(sc, progress=False)
+    part = run_benchmark(sc, progress=False, seed_indices=[2, 1])
+    for name in sc.controllers:
+        np.testing.assert_array_equal(part.runs[name].q, full.runs[name].q[[2, 1]])
+        np.testing.assert_array_equal(part.runs[name].tau, full.runs[name].tau[[2, 1]])
+    rows = run_cell(sc, "adaptive_ct", [1])
+    both = run_cell(sc, "adaptive_ct", [0, 1])
+    assert rows == [r for r in both if r["seed"] == 1]
+    assert rows != [dict(r, seed=1) for r in both if r["seed"] == 0]  # the seeds differ
+
+
+def test_run_cell_rows_match_the_trajectory(tmp_path):
+    sc = load_scenario(_write(tmp_path).parent / "base.toml")
+    rows = run_cell(sc, "ct_oracle", [0])
+    res = run_benchmark(dataclasses.replace(sc, seeds=1), progress=False, controllers=None)
+    en = np.sqrt(((res.q_d - res.runs["ct_oracle"].q[0]) ** 2).sum(axis=-1))
+    assert [(r["start"], r["end"], r["mass"]) for r in rows] == sc.segments()
+    for r in rows:
+        seg = en[round(r["start"] / sc.sample_period) : round(r["end"] / sc.sample_period)]
+        assert r["rms_error"] == pytest.approx(np.sqrt(np.mean(seg**2)), rel=1e-12)
+        assert r["max_error"] == pytest.approx(seg.max(), rel=1e-12)
+        assert not r["failed"] and r["error"] == ""
+
+
+def test_diverging_trial_fails_from_its_segment_on(tmp_path):
+    wild = """
+[run]
+duration = 0.3
+controllers = ["ct_oracle"]
+[reference]
+ramp = 0.1
+joint1 = { amplitude = [10.0], frequency = [1.5] }
+joint2 = { amplitude = [0.1], frequency = [1.0] }
+[[payload]]
+at = 0.03
+mass = 1.0
+"""
+    sc = load_scenario(_write(tmp_path, base=wild).parent / "base.toml")
+    rows = run_cell(sc, "ct_oracle", [0])
+    assert [r["failed"] for r in rows] == [False, True]
+    assert np.isfinite(rows[0]["rms_error"]) and np.isnan(rows[1]["rms_error"])
+    assert rows[1]["error"].startswith("trial diverged at t = ")
+
+
+def test_sweep_table_columns_and_order(tmp_path, client):
+    sw = load_sweep(_write(tmp_path))
+    res = run_sweep(sw, tmp_path / "out", client=client, progress=False)
+    t = res.table
+    assert list(t.columns) == [
+        "point",
+        "payload_mass",
+        "swap_time",
+        "controller",
+        "seed",
+        "segment",
+        "start",
+        "end",
+        "mass",
+        "rms_error",
+        "max_error",
+        "failed",
+        "error",
+        "task",
+    ]
+    assert len(t) == 4 * 2 * 2 * 3  # points x controllers x seeds x segments
+    assert t.groupby(["point", "controller", "seed"]).size().eq(3).all()
+    row = t[(t.point == 3) & (t.controller == "adaptive_ct") & (t.seed == 1) & (t.segment == 1)]
+    assert row[["payload_mass", "swap_time", "start", "mass"]].values.tolist() == [[6.0, 0.12, 0.12, 6.0]]
+    expected = run_cell(sw.points[3].scenario, "adaptive_ct", [1])[1]["rms_error"]
+    assert row["rms_error"].item() == expected
+    assert res.failed_rows == 0 and res.ran == 16 and res.reused == 0
+    on_disk = pd.read_parquet(res.table_path) if res.table_path.suffix == ".parquet" else None
+    if on_disk is not None:
+        pd.testing.assert_frame_equal(on_disk, t, check_dtype=False)
+    assert [p.name for p in res.heatmaps] == ["heatmap.png"] and res.heatmaps[0].stat().st_size > 0
+
+
+def test_resume_reads_cells_and_gives_the_same_table(tmp_path, client):
+    sw = load_sweep(_write(tmp_path))
+    out = tmp_path / "out"
+    first = run_sweep(sw, out, client=client, progress=False)
+    cells = sorted((out / "cells").iterdir())
+    assert len(cells) == 16 and not any(p.name.endswith(".tmp") for p in cells)
+    cells[0].unlink()  # as if interrupted before this task finished
+    again = run_sweep(sw, out, client=client, progress=False)
+    assert (again.reused, again.ran) == (15, 1)
+    pd.testing.assert_frame_equal(again.table, first.table)
+    # a reused cell is read, not recomputed: doctor one and see it in the table
+    doctored = pd.read_parquet(cells[1]) if cells[1].suffix == ".parquet" else pd.read_csv(cells[1])
+    doctored["rms_error"] = 123.0
+    doctored.to_parquet(cells[1]) if cells[1].suffix == ".parquet" else doctored.to_csv(cells[1])
+    third = run_sweep(sw, out, client=client, progress=False)
+    assert third.ran == 0
+    assert (third.table.loc[third.table.task == cells[1].stem, "rms_error"] == 123.0).all()
+
+
+def test_csv_cells_without_pyarrow(tmp_path, client, monkeypatch):
+    import adaptive_dd.sweep as sweep_mod
+
+    sw = load_sweep(_write(tmp_path))
+    monkeypatch.setattr(sweep_mod, "_have_parquet", lambda: False)
+    first = run_sweep(sw, tmp_path / "out", client=client, progress=False)
+    assert first.table_path.name == "results.csv"
+    assert {p.suffix for p in (tmp_path / "out" / "cells").iterdir()} == {".csv"}
+    again = run_sweep(sw, tmp_path / "out", client=client, progress=False)
+    assert again.reused == 16
+    pd.testing.assert_frame_equal(again.table, first.table)
+    assert (again.table["error"] == "").all()
+
+
+def test_failing_task_is_recorded_and_the_sweep_completes(tmp_path, client):
+    text = SWEEP + "[grid.controller.adaptive_ct]\nbogus = [1, 2]\n"
+    sw = load_sweep(_write(tmp_path, text))
+    res = run_sweep(sw, tmp_path / "out", client=client, progress=False)
+    t = res.table
+    bad = t[t.controller == "adaptive_ct"]
+    assert bad["failed"].all() and bad["rms_error"].isna().all()
+    assert bad["error"].str.contains("ParameterError").all() and bad["error"].str.contains("bogus").all()
+    good = t[t.controller == "ct_oracle"]
+    assert not good["failed"].any() and np.isfinite(good["rms_error"]).all()
+    assert res.failed_rows == len(bad)
+    assert ratio_medians(t, sw.heatmap, [a for a, _ in sw.axes])["n_seeds"].eq(0).all()
+
+
+def test_ratio_is_per_seed_then_median():
+    rows = []
+    for seed, (a, f) in enumerate([(2.0, 1.0), (9.0, 3.0), (1.0, 4.0)]):
+        for c, v in (("adaptive_ct", a), ("ct_oracle", f)):
+            rows.append({"point": 0, "m": 1.0, "controller": c, "seed": seed, "segment": 1, "rms_error": v})
+    t = pd.DataFrame(rows)
+    hm = {"adaptive": "adaptive_ct", "floor": "ct_oracle", "segment": 1}
+    r = ratio_medians(t, hm, ["m"])
+    assert r["ratio"].item() == 2.0  # median of 2, 3, 0.25 (a ratio of medians would be 2/3)
+    assert r["n_seeds"].item() == 3
+
+
+# ---- a cluster started separately ---------------------------------------------------------
+
+
+def _free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def _dask_cli() -> list[str]:
+    exe = Path(sys.executable).parent / "dask"
+    return [str(exe)] if exe.exists() else [sys.executable, "-m", "dask"]
+
+
+@pytest.mark.slow
+def test_separate_scheduler_and_worker_give_the_same_numbers(tmp_path, client):
+    sw = load_sweep(_write(tmp_path))
+    local = run_sweep(sw, tmp_path / "local", client=client, progress=False)
+    port = _free_port()
+    address = f"tcp://127.0.0.1:{port}"
+    root = str(Path(__file__).resolve().parents[1])
+    env = dict(os.environ, PYTHONPATH=root, NUMBA_NUM_THREADS="1", OMP_NUM_THREADS="1")
+    opts = {"env": env, "stdout": subprocess.DEVNULL, "stderr": subprocess.DEVNULL, "cwd": tmp_path}
+    procs = [
+        subprocess.Popen([*_dask_cli(), "scheduler", "--host", "127.0.0.1", "--port", str(port)], **opts)
+    ]
+    try:
+        time.sleep(1.0)
+        procs.append(
+            subprocess.Popen([*_dask_cli(), "worker", address, "--nworkers", "1", "--nthreads", "1"], **opts)
+        )
+        with distributed.Client(address, timeout=60) as c:
+            c.wait_for_workers(1, timeout=120)
+        remote = run_sweep(sw, tmp_path / "remote", scheduler=address, progress=False)
+    finally:
+        for p in reversed(procs):
+            p.terminate()
+        for p in procs:
+            try:
+                p.wait(timeout=20)
+            except subprocess.TimeoutExpired:
+                p.kill()
+                p.wait()
+    assert remote.ran == 16
+    pd.testing.assert_frame_equal(remote.table, local.table)
+
+
+# ---- the command line ---------------------------------------------------------------------
+
+
+def test_cli_reports_a_bad_sweep_file(tmp_path, capsys):
+    from adaptive_dd.cli import main
+
+    path = _write(tmp_path, SWEEP.replace("block = 1", "block = -1"))
+    assert main(["sweep", str(path), "--out", str(tmp_path / "out")]) == 2
+    err = capsys.readouterr().err
+    assert "adaptive-dd sweep: error:" in err and "key 'sweep.block'" in err and str(path) in err
+    with pytest.raises(SystemExit) as e:
+        main(["sweep", str(_write(tmp_path)), "--block", "0"])
+    assert e.value.code == 2 and "--block: 0 is outside" in capsys.readouterr().err
+
+
+@pytest.mark.slow
+def test_cli_runs_on_a_local_cluster_and_resumes(tmp_path, capsys):
+    from adaptive_dd.cli import main
+
+    path = _write(tmp_path)
+    out = tmp_path / "out"
+    args = ["sweep", str(path), "--out", str(out), "--workers", "1", "--no-progress"]
+    assert main([*args, "--block", "2"]) == 0
+    first = capsys.readouterr().out
+    assert "8 tasks run, 0 reused" in first and "heatmap.png" in first and "swap_time" in first
+    assert main(args) == 0
+    assert "16 tasks run, 0 reused" in capsys.readouterr().out  # blocks of 1 seed are new tasks
+    assert main(args) == 0
+    assert "0 tasks run, 16 reused" in capsys.readouterr().out
+
+
+def test_one_heatmap_per_combination_of_the_other_axes(tmp_path):
+    from adaptive_dd.sweep_plot import plot_ratio_heatmaps
+
+    grid = [(m, t, bw) for bw in (30.0, 50.0) for m in (1.0, 5.0) for t in (0.1, 0.2)]
+    ratios = pd.DataFrame(
+        [
+            {"point": i, "m": m, "t": t, "bw": bw, "ratio": 1.0 + i, "n_seeds": 2}
+            for i, (m, t, bw) in enumerate(grid)
+        ]
+    )
+    hm = {"x": "m", "y": "t", "adaptive": "adaptive_ct", "floor": "ct_oracle", "segment": 1}
+    paths = plot_ratio_heatmaps(ratios, hm, ["m", "t", "bw"], tmp_path)
+    assert [p.name for p in paths] == ["heatmap_0.png", "heatmap_1.png"]
+    assert all(p.stat().st_size > 0 for p in paths)
+    assert [p.name for p in plot_ratio_heatmaps(ratios[ratios.bw == 30.0], hm, ["m", "t"], tmp_path)] == [
+        "heatmap.png"
+    ]
+
+
+def _thread_env() -> dict:
+    keys = ("NUMBA_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS", "OPENBLAS_NUM_THREADS")
+    return {k: os.environ.get(k) for k in keys}
+
+
+@pytest.mark.slow
+def test_local_cluster_workers_are_single_threaded():
+    from adaptive_dd.sweep import WORKER_ENV, _client
+
+    client, cluster = _client(None, 1)
+    try:
+        info = client.scheduler_info()["workers"]
+        assert [w["nthreads"] for w in info.values()] == [1]
+        assert list(client.run(_thread_env).values()) == [WORKER_ENV]
+    finally:
+        client.close()
+        cluster.close()
