@@ -124,3 +124,21 @@ def test_engine_choice_is_checked(swap_scenario):
         run_benchmark(swap_scenario, progress=False, engine="gpu")
     with pytest.raises(ParameterError, match="no compiled path"):
         run_benchmark(swap_scenario, progress=False, engine="compiled", controllers={"x": Raises("none")})
+
+
+def test_mass_learning_time_is_the_last_entry_into_the_band():
+    from adaptive_dd.benchmark.metrics import mass_learning_time
+
+    m = np.array([[0.0, 2.0, 3.2, 2.99, 3.01, 3.0], [0.0, 3.0, 3.0, 3.0, 3.0, 2.0]])
+    t = mass_learning_time(m, 3.0, 0.0, 0.01)
+    assert t[0] == pytest.approx(0.03) and np.isnan(t[1])  # row 1 leaves the band at the end
+
+
+def test_the_report_holds_the_information_limit_beside_the_learning_time(both_paths):
+    rc, _ = both_paths
+    m = compute_metrics(rc)["controllers"]
+    seg = m["adaptive_ct"]["segments"][1]
+    info = seg["information_time"]
+    assert 0 < info["known"] < info["unknown"] < 1.0  # knowing the rest of the arm helps
+    assert 0 < seg["mass_learning_time"] < 1.0
+    assert seg["sigma_true"][0] == pytest.approx(0.429 + 3.0 * 0.04)  # J1 + m l1^2

@@ -113,7 +113,7 @@ def closed_loop_block(
     xf, u_last, cnt, tau_prev, theta, P, lam, short, long, sigma_model,
     ci, cf, A, B, C, D, d, group, rows,
     seg_start, seg_settled, acc, e_norm, sigma_end, seg_end, alarm_t, n_alarms,
-    rec_n, q_rec, tau_rec, sat_rec, sig_rec,
+    rec_n, q_rec, qd_rec, tau_rec, sat_rec, sig_rec,
 ):  # pragma: no cover - compiled  # fmt: skip
     """Samples ``k0 .. k1 - 1`` of every trial (prange over trials); state arrays updated in place.
 
@@ -154,6 +154,8 @@ def closed_loop_block(
             if failed[i]:
                 tau[0], tau[1] = 0.0, 0.0
             p1, p2 = q[i, 0], q[i, 1]
+            if i < rec_n:
+                qd_rec[i, k, 0], qd_rec[i, k, 1] = qd[i, 0], qd[i, 1]
             step_trials(
                 q[i : i + 1], qd[i : i + 1], stuck[i : i + 1], slip[i : i + 1],
                 tau.reshape(1, 2), sg_true.reshape(1, 7), T, plant_i[0],

@@ -61,7 +61,7 @@ def run_compiled(name, ctrl, spec: CompiledSpec, scenario, idx, ref, keep: int, 
             k0, k1, noise, ref, sig_seg, swap_k, plant_f, plant_i, spec.law, spec.gains, spec.sigma,
             spec.extra, q, qd, stuck, slip, run.failed, run.failed_at, *state, *cfg.packed,
             seg_start, seg_settled, run.acc, run.e_norm, sigma_end, seg_end, alarm_t, n_alarms,
-            K, run.q, run.tau, run.saturated, sig_rec,
+            K, run.q, run.qd, run.tau, run.saturated, sig_rec,
         )  # fmt: skip
         if bar is not None:
             bar.update(k1 - k0)

@@ -158,6 +158,7 @@ def compute_metrics(res: BenchmarkResult) -> dict:
                     "rms_torque": _mean(m["rms_torque"][:, i], ok),
                     "saturation_fraction": _mean(m["saturation_fraction"][:, i], ok),
                     "mass_estimate": _mean(m["mass_estimate"][:, i], ok) if "mass_estimate" in m else None,
+                    "sigma_true": [float(x) for x in sc.arm.sigma_with_payload(mass, sc.payload_radius)],
                 }
             )
         total = np.sqrt(run.acc[..., 0].sum(axis=1) / sc.n_samples)
@@ -169,6 +170,7 @@ def compute_metrics(res: BenchmarkResult) -> dict:
             "segments": segs,
         }
     _add_seed_statistics(res, out)
+    _add_information_times(res, out)
     from adaptive_dd.benchmark.results import provenance
 
     return {
@@ -243,3 +245,73 @@ def _add_seed_statistics(res: BenchmarkResult, out: dict) -> None:
                 for tr in run.alarm_times
             ]
             seg["detection_delay_per_seed"] = [d if g else None for d, g in zip(first, ok, strict=True)]
+
+
+INFO_WINDOW = 1.0
+"""[s] after a swap searched for the information-limited time."""
+
+
+def mass_learning_time(m_hat: np.ndarray, mass: float, removed: float, T: float, rel: float = 0.05):
+    """First time after which the estimated mass stays within ``rel`` of the truth (per row), NaN if never.
+
+    ``rel`` is taken of the payload that changed (``max(mass, removed)``), so a removal is judged
+    on the mass that left.
+    """
+    tol = rel * max(mass, removed)
+    outside = np.abs(m_hat - mass) > tol  # (n, N)
+    n = outside.shape[-1]
+    last = np.where(outside.any(axis=-1), n - 1 - np.argmax(outside[..., ::-1], axis=-1), -1)
+    return np.where(last < n - 1, (last + 1) * T, np.nan)
+
+
+def _add_information_times(res: BenchmarkResult, out: dict) -> None:
+    """Per swap: the time the information limit needs to know the payload mass within 5 %
+    (first kept seed of a controller with recorded trajectories, the oracle's if present),
+    beside the time each controller with an estimate took (median over the kept seeds)."""
+    from adaptive_dd.identification.fisher import mass_information_time
+
+    sc = res.scenario
+    if not sc.swap_times:
+        return
+    T = sc.sample_period
+    ref = next(
+        (
+            r
+            for n, r in sorted(res.runs.items(), key=lambda x: x[0] != "ct_oracle")
+            if r.q is not None and r.q.shape[0]
+        ),
+        None,
+    )
+    segs = sc.segments()
+    w = round(INFO_WINDOW / T)
+    d = sc.arm.payload_direction(sc.payload_radius)
+    for i in range(1, len(segs)):
+        a, b, mass = segs[i]
+        removed = segs[i - 1][2]
+        k0 = int(np.ceil(a / T - 1e-9))
+        k1 = min(round(b / T), k0 + w)
+        info = {"known": None, "unknown": None}
+        if ref is not None and not ref.failed[0] and max(mass, removed) > 0:
+            for others in info:
+                info[others] = mass_information_time(
+                    ref.q[0, k0 - 1 : k1],
+                    ref.qd[0, k0 - 1 : k1],
+                    ref.tau[0, k0 - 1 : k1],
+                    1,
+                    T,
+                    sc.arm.sigma_with_payload(mass, sc.payload_radius),
+                    d,
+                    sc.position_variance,
+                    sc.velocity_variance,
+                    mass=max(mass, removed),
+                    others=others,
+                )
+        for name, run in res.runs.items():
+            seg = out[name]["segments"][i]
+            seg["information_time"] = info
+            seg["mass_learning_time"] = None
+            if run.sigma_hat is not None and run.sigma_hat.shape[0]:
+                kept = ~run.failed[: run.sigma_hat.shape[0]]
+                m_hat = sc.arm.payload_mass_from_sigma(run.sigma_hat[kept, k0 : round(b / T)])
+                tl = mass_learning_time(m_hat, mass, removed, T)
+                seg["mass_learning_time"] = None if np.all(np.isnan(tl)) else float(np.nanmedian(tl))

@@ -64,8 +64,8 @@ class ControllerRun:
     error : message if the controller raised, else ""
     alarm_times : per trial, the times [s] a change detector fired (or None)
     floor : name of the controller this one is measured against (or None)
-    q, tau, saturated, sigma_hat : trajectories ``(n_kept, n_samples, ...)`` of the first
-        seeds (true q [rad], applied torque [N m], saturation, estimate), or None
+    q, qd, tau, saturated, sigma_hat : trajectories ``(n_kept, n_samples, ...)`` of the first
+        seeds (true q [rad] and qd [rad/s], applied torque [N m], saturation, estimate), or None
     engine : "python" or "compiled"
     """
 
@@ -79,6 +79,7 @@ class ControllerRun:
     alarm_times: list | None = None
     floor: str | None = None
     q: Array | None = None
+    qd: Array | None = None
     tau: Array | None = None
     saturated: NDArray[np.bool_] | None = None
     sigma_hat: Array | None = None
@@ -239,6 +240,7 @@ def _new_run(
         failed_at=np.full(S, -1),
         floor=getattr(ctrl, "floor", "ct_oracle"),
         q=np.zeros((K, N, 2)),
+        qd=np.zeros((K, N, 2)),
         tau=np.zeros((K, N, 2)),
         saturated=np.zeros((K, N, 2), dtype=bool),
         sigma_hat=np.full((K, N, 7), np.nan) if adaptive else None,
@@ -276,7 +278,7 @@ def _run_python(name, ctrl, scenario, idx, reference, keep, bar) -> ControllerRu
         qm, qdm = sim.measure()
         err = q_d[k] - sim.q
         if K:
-            run.q[:, k] = sim.q[:K]
+            run.q[:, k], run.qd[:, k] = sim.q[:K], sim.qd[:K]
         tau = np.full((S, 2), np.nan)
         if not error:
             try:

@@ -136,12 +136,13 @@ _FIELD_KEY = {
     "controller_options": "controllers",
     "source": "source",
 }
-# Recorded per trial and sample by the runner (q, tau, saturation, sigma_hat, metrics'
-# temporaries), and wall time per sample and controller (batch over seeds) measured for
-# the default scenario on the development machine (README: 28-45 s).
-_BYTES_PER_SAMPLE_TRIAL = 160
-_SECONDS_PER_SAMPLE_CONTROLLER = 2e-4
-_SECONDS_PER_SAMPLE_TRIAL = 2e-5
+# Kept per trial and sample by the runner: the error norm as float32 (metrics stream; full
+# trajectories only for the first few seeds); wall time per sample and controller (the
+# per-block overhead) and per trial-sample on the compiled path, measured with
+# `adaptive-dd benchmark --seeds 200` on the development machine (2 cores).
+_BYTES_PER_SAMPLE_TRIAL = 5
+_SECONDS_PER_SAMPLE_CONTROLLER = 2e-5
+_SECONDS_PER_SAMPLE_TRIAL = 1.5e-6
 
 
 @dataclass(frozen=True)
