@@ -475,11 +475,16 @@ def _benchmark(args: argparse.Namespace, sc, outputs) -> list[Path]:
     out = Path(args.out)
     write_csv(metrics, outputs.path("metrics.csv"))
     write_json(metrics, outputs.extra(args.json) if args.json else outputs.path("metrics.json"))
-    plot_tracking_errors(res, outputs.path("tracking_error.png"))
-    written = [out / "metrics.csv", Path(args.json or out / "metrics.json"), out / "tracking_error.png"]
+    fmts = tuple(args.figure_formats)
+    plot_tracking_errors(res, outputs.path("tracking_error.png"), formats=fmts)
+    written = [out / "metrics.csv", Path(args.json or out / "metrics.json")]
+    written += [out / f"tracking_error.{f}" for f in fmts]
     if any(r.sigma_hat is not None for r in res.runs.values()):
-        plot_benchmark_estimates(res, outputs.path("estimates.png"))
-        written.append(out / "estimates.png")
+        plot_benchmark_estimates(res, outputs.path("estimates.png"), formats=fmts)
+        written += [out / f"estimates.{f}" for f in fmts]
+    frame = res.to_frame()
+    frame.to_csv(outputs.path("per_seed.csv"), index=False)
+    written.append(out / "per_seed.csv")
     return written
 
 
@@ -637,6 +642,13 @@ def build_parser() -> argparse.ArgumentParser:
     b.add_argument("--out", default="results/benchmark", help="folder for CSV, JSON and figures")
     b.add_argument("--json", metavar="PATH", help="where to write the JSON (default OUT/metrics.json)")
     b.add_argument("--seeds", type=_SEEDS, help="override the scenario's number of seeds")
+    b.add_argument(
+        "--figure-formats",
+        nargs="+",
+        default=["png"],
+        choices=("png", "pdf", "svg"),
+        help="formats of the figures (default png)",
+    )
     b.add_argument("--no-progress", action="store_true")
     b.set_defaults(func=_cmd_benchmark)
 

@@ -13,11 +13,14 @@ import numpy as np
 from adaptive_dd.plant.parameters import SIGMA_NAMES
 
 __all__ = [
+    "STYLES",
+    "controller_style",
     "plot_benchmark_estimates",
     "plot_estimates",
     "plot_model_response",
     "plot_tracking_errors",
     "plot_trajectory",
+    "save_figure",
 ]
 
 UNITS = ("kg m²", "kg m²", "kg m²", "N m s", "N m s", "N m", "N m")
@@ -29,6 +32,45 @@ def _save(fig, path: str | Path) -> Path:
     fig.savefig(path, dpi=120, bbox_inches="tight")
     plt.close(fig)
     return path
+
+
+STYLES = {
+    "ct_oracle": ("black", "-", 2.4, 1),
+    "ct_oracle_textbook": ("0.45", "-", 1.6, 1),
+    "slotine_li_oracle": ("tab:green", "-", 2.4, 1),
+    "adaptive_ct": ("tab:blue", "-", 1.0, 3),
+    "adaptive_ct_paper": ("tab:orange", "-.", 1.0, 2),
+    "slotine_li": ("darkgreen", "--", 1.0, 2),
+    "ct_nominal": ("tab:red", "--", 1.0, 2),
+    "pd": ("tab:purple", ":", 1.0, 2),
+}
+"""(colour, line style, width, z-order) of each built-in controller, the same in every figure;
+oracles are drawn wide and underneath, so the adaptive curve stays visible on top of them."""
+_EXTRA = ("tab:brown", "tab:pink", "tab:olive", "tab:cyan", "tab:gray", "gold", "teal", "navy")
+
+
+def controller_style(name: str) -> dict:
+    """Line properties of a controller: :data:`STYLES`, or a colour fixed by its name."""
+    if name in STYLES:
+        c, ls, lw, z = STYLES[name]
+    else:
+        import zlib
+
+        c, ls, lw, z = _EXTRA[zlib.crc32(name.encode()) % len(_EXTRA)], "-", 1.0, 3
+    return {"color": c, "ls": ls, "lw": lw, "zorder": z}
+
+
+def save_figure(fig, path: str | Path, formats: tuple[str, ...] = ("png",)) -> list[Path]:
+    """Write ``fig`` as ``path`` with each suffix of ``formats`` (png, pdf, svg); close it."""
+    path = Path(path)
+    out = []
+    for f in formats:
+        p = path.with_suffix("." + f)
+        p.parent.mkdir(parents=True, exist_ok=True)
+        fig.savefig(p, dpi=120, bbox_inches="tight")
+        out.append(p)
+    plt.close(fig)
+    return out
 
 
 def plot_trajectory(result, path: str | Path, trial: int = 0) -> Path:
@@ -118,19 +160,22 @@ def plot_model_response(t, q_arm, models: dict, path: str | Path, title: str = "
     return _save(fig, path)
 
 
-def plot_tracking_errors(res, path: str | Path, window: float = 0.05) -> Path:
-    """50 ms moving RMS of |e| (mean over seeds) for every controller, swaps marked, log scale."""
+def plot_tracking_errors(res, path: str | Path | None = None, window: float = 0.05, formats=("png",)):
+    """50 ms moving RMS of |e| (mean over seeds) for every controller, swaps marked, log scale.
+
+    Returns the Figure; with ``path``, also writes it in each of ``formats`` (and closes it).
+    """
     from adaptive_dd.benchmark.metrics import moving_rms
 
     T = res.scenario.sample_period
     fig, ax = plt.subplots(figsize=(10, 5))
-    for i, (name, run) in enumerate(res.runs.items()):
+    for name, run in res.runs.items():
         ok = ~run.failed
         if not ok.any():
             continue
         e = run.e_norm[ok].astype(float)
         m = moving_rms(e, max(1, round(window / T))).mean(axis=0)
-        ax.semilogy(res.t, np.maximum(m * 1e3, 1e-4), color=f"C{i}", lw=1.0, label=name)
+        ax.semilogy(res.t, np.maximum(m * 1e3, 1e-4), label=name, **controller_style(name))
     _mark_swaps(ax, res.t, res.mass)
     for a, b, m in res.scenario.segments():
         ax.text(0.5 * (a + b), 1.0, f"{m:g} kg", transform=ax.get_xaxis_transform(), ha="center", va="bottom")
@@ -138,11 +183,16 @@ def plot_tracking_errors(res, path: str | Path, window: float = 0.05) -> Path:
     ax.set_ylabel(f"tracking error |q_d - q|, {window * 1e3:.0f} ms RMS [mrad]")
     ax.grid(alpha=0.3, which="both")
     ax.legend(fontsize=8, ncol=3)
-    return _save(fig, path)
+    if path is not None:
+        save_figure(fig, path, formats)
+    return fig
 
 
-def plot_benchmark_estimates(res, path: str | Path) -> Path:
-    """J1, J2, r and the payload mass estimated by the adaptive controllers, against the truth."""
+def plot_benchmark_estimates(res, path: str | Path | None = None, formats=("png",)):
+    """J1, J2, r and the payload mass estimated by the adaptive controllers, against the truth.
+
+    Returns the Figure; with ``path``, also writes it in each of ``formats`` (and closes it).
+    """
     fig, axes = plt.subplots(2, 2, figsize=(11, 7), sharex=True)
     panels = [(0, "J1 [kg m²]"), (1, "J2 [kg m²]"), (2, "r [kg m²]")]
     for ax, (k, label) in zip(axes.flat[:3], panels, strict=True):
@@ -150,15 +200,15 @@ def plot_benchmark_estimates(res, path: str | Path) -> Path:
         ax.set_ylabel(label)
     axes.flat[3].plot(res.t, res.mass, "k--", lw=1.5, label="true")
     axes.flat[3].set_ylabel("payload mass [kg]")
-    for i, (name, run) in enumerate(res.runs.items()):
+    for name, run in res.runs.items():
         kept = ~run.failed[: 0 if run.sigma_hat is None else run.sigma_hat.shape[0]]
         if run.sigma_hat is None or not kept.any():
             continue
         sh = run.sigma_hat[kept].mean(axis=0)
         for ax, (k, _) in zip(axes.flat[:3], panels, strict=True):
-            ax.plot(res.t, sh[:, k], color=f"C{i}", lw=1.0, label=name)
+            ax.plot(res.t, sh[:, k], label=name, **controller_style(name))
         axes.flat[3].plot(
-            res.t, res.scenario.arm.payload_mass_from_sigma(sh), color=f"C{i}", lw=1.0, label=name
+            res.t, res.scenario.arm.payload_mass_from_sigma(sh), label=name, **controller_style(name)
         )
     for ax in axes.flat:
         ax.grid(alpha=0.3)
@@ -167,5 +217,7 @@ def plot_benchmark_estimates(res, path: str | Path) -> Path:
     axes.flat[0].legend(fontsize=8)
     for ax in axes[-1]:
         ax.set_xlabel("t [s]")
-    fig.suptitle("Estimates of the adaptive controllers (mean over seeds)")
-    return _save(fig, path)
+    fig.suptitle("Estimates of the adaptive controllers (mean over the seeds with kept trajectories)")
+    if path is not None:
+        save_figure(fig, path, formats)
+    return fig

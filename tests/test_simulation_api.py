@@ -67,3 +67,21 @@ def test_results_as_a_long_table_and_a_summary(short):
     m = res.metrics()
     prov = m["provenance"]
     assert prov["version"] and prov["seed_indices"] == [0, 1] and prov["scenario"]["swap_masses"] == [3.0]
+
+
+def test_figures_are_returned_with_one_style_per_controller(short, tmp_path):
+    from adaptive_dd.benchmark.runner import run_benchmark
+    from adaptive_dd.plotting import controller_style, plot_benchmark_estimates, plot_tracking_errors
+
+    sc = dataclasses.replace(short, controllers=("ct_oracle", "adaptive_ct"))
+    res = run_benchmark(sc, progress=False)
+    fig = plot_tracking_errors(res)
+    lines = {ln.get_label(): ln for ln in fig.axes[0].get_lines()}
+    for name in ("ct_oracle", "adaptive_ct"):
+        st = controller_style(name)
+        assert lines[name].get_color() == st["color"] and lines[name].get_zorder() == st["zorder"]
+    assert lines["ct_oracle"].get_zorder() < lines["adaptive_ct"].get_zorder()  # oracle underneath
+    assert controller_style("my_pkg.mod:Mine") == controller_style("my_pkg.mod:Mine")
+    fig2 = plot_benchmark_estimates(res, tmp_path / "est.png", formats=("png", "svg"))
+    assert (tmp_path / "est.png").is_file() and (tmp_path / "est.svg").is_file()
+    assert fig2.axes[0].get_lines()[1].get_color() == controller_style("adaptive_ct")["color"]
