@@ -23,7 +23,7 @@ from numba import njit, prange
 from adaptive_dd.benchmark.streaming import accumulate_trial
 from adaptive_dd.controllers.laws import boost_trial, ct_trial, pd_trial, slotine_li_trial
 from adaptive_dd.identification.online_kernel import C_SINCE_ALARM, online_step_trial
-from adaptive_dd.plant.integrator import step_trials
+from adaptive_dd.plant.integrator import step_one
 from adaptive_dd.plant.sampling import actuate_trial, measure_trial
 
 __all__ = ["LAW_ADAPTIVE", "LAW_CT", "LAW_CT_ORACLE", "LAW_PD", "CompiledSpec", "compiled_spec"]
@@ -156,9 +156,8 @@ def closed_loop_block(
             p1, p2 = q[i, 0], q[i, 1]
             if i < rec_n:
                 qd_rec[i, k, 0], qd_rec[i, k, 1] = qd[i, 0], qd[i, 1]
-            step_trials(
-                q[i : i + 1], qd[i : i + 1], stuck[i : i + 1], slip[i : i + 1],
-                tau.reshape(1, 2), sg_true.reshape(1, 7), T, plant_i[0],
+            step_one(
+                q, qd, stuck, slip, i, tau, sg_true, T, plant_i[0],
                 plant_i[4], plant_f[13], plant_f[14], plant_f[15],
             )  # fmt: skip
             ok = np.isfinite(q[i, 0]) and np.isfinite(q[i, 1])

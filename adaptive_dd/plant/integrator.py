@@ -126,50 +126,51 @@ def _resolve(p2, v1, v2, t1, t2, sg, r1, r2, sl1, sl2):  # pragma: no cover - co
 
 
 @njit(cache=True, fastmath=False)
-def _plant_step_kernel(q, qd, stuck, slip, tau, sigma, T, substeps):  # pragma: no cover
-    n = q.shape[0]
+def _stick_slip_one(q, qd, stuck, slip, i, t1, t2, sg, T, substeps):  # pragma: no cover - compiled
+    """One sample of trial i (row i of the state arrays) under the held torque (t1, t2)."""
     h = T / substeps
-    for i in range(n):
-        sg = sigma[i]
-        p1, p2, v1, v2 = q[i, 0], q[i, 1], qd[i, 0], qd[i, 1]
-        st1, st2, sl1, sl2 = stuck[i, 0], stuck[i, 1], slip[i, 0], slip[i, 1]
-        t1, t2 = tau[i, 0], tau[i, 1]
-        cz1, cz2 = sg[5] > 0.0, sg[6] > 0.0  # joints with Coulomb friction
-        for _ in range(substeps):
-            r1, r2 = v1 == 0.0 and cz1, v2 == 0.0 and cz2
-            st1, st2 = False, False
-            if r1 or r2:
-                st1, st2, sl1, sl2 = _resolve(p2, v1, v2, t1, t2, sg, r1, r2, sl1, sl2)
-            n1, n2, u1, u2, c1, c2, a1, a2 = _rk4(p1, p2, v1, v2, h, t1, t2, sg, st1, st2, sl1, sl2)
-            c1 = c1 and cz1
-            c2 = c2 and cz2
-            if c1 or c2:
-                # a velocity reaches zero: step to the first crossing (located from the
-                # initial acceleration), decide the friction modes there, finish the substep
-                f1 = min(1.0, abs(v1) / (h * abs(a1))) if c1 and v1 * a1 < 0.0 else (0.0 if c1 else 1.0)
-                f2 = min(1.0, abs(v2) / (h * abs(a2))) if c2 and v2 * a2 < 0.0 else (0.0 if c2 else 1.0)
-                f = min(f1, f2)
-                if f > 0.0:
-                    p1, p2, v1, v2, _, _, _, _ = _rk4(p1, p2, v1, v2, f * h, t1, t2, sg, st1, st2, sl1, sl2)
-                if c1 and f1 <= f:
-                    v1 = 0.0
-                if c2 and f2 <= f:
-                    v2 = 0.0
-                st1, st2, sl1, sl2 = _resolve(
-                    p2, v1, v2, t1, t2, sg, v1 == 0.0 and cz1, v2 == 0.0 and cz2, sl1, sl2
-                )
-                n1, n2, u1, u2, z1, z2, _, _ = _rk4(
-                    p1, p2, v1, v2, (1.0 - f) * h, t1, t2, sg, st1, st2, sl1, sl2
-                )
-                # another crossing within the same substep: rest there (decided next substep)
-                if z1 and cz1 and f < 1.0:
-                    u1 = 0.0
-                if z2 and cz2 and f < 1.0:
-                    u2 = 0.0
-            p1, p2, v1, v2 = n1, n2, u1, u2
-        q[i, 0], q[i, 1], qd[i, 0], qd[i, 1] = p1, p2, v1, v2
-        stuck[i, 0], stuck[i, 1] = st1 and v1 == 0.0, st2 and v2 == 0.0
-        slip[i, 0], slip[i, 1] = sl1, sl2
+    p1, p2, v1, v2 = q[i, 0], q[i, 1], qd[i, 0], qd[i, 1]
+    st1, st2, sl1, sl2 = stuck[i, 0], stuck[i, 1], slip[i, 0], slip[i, 1]
+    cz1, cz2 = sg[5] > 0.0, sg[6] > 0.0  # joints with Coulomb friction
+    for _ in range(substeps):
+        r1, r2 = v1 == 0.0 and cz1, v2 == 0.0 and cz2
+        st1, st2 = False, False
+        if r1 or r2:
+            st1, st2, sl1, sl2 = _resolve(p2, v1, v2, t1, t2, sg, r1, r2, sl1, sl2)
+        n1, n2, u1, u2, c1, c2, a1, a2 = _rk4(p1, p2, v1, v2, h, t1, t2, sg, st1, st2, sl1, sl2)
+        c1 = c1 and cz1
+        c2 = c2 and cz2
+        if c1 or c2:
+            # a velocity reaches zero: step to the first crossing (located from the
+            # initial acceleration), decide the friction modes there, finish the substep
+            f1 = min(1.0, abs(v1) / (h * abs(a1))) if c1 and v1 * a1 < 0.0 else (0.0 if c1 else 1.0)
+            f2 = min(1.0, abs(v2) / (h * abs(a2))) if c2 and v2 * a2 < 0.0 else (0.0 if c2 else 1.0)
+            f = min(f1, f2)
+            if f > 0.0:
+                p1, p2, v1, v2, _, _, _, _ = _rk4(p1, p2, v1, v2, f * h, t1, t2, sg, st1, st2, sl1, sl2)
+            if c1 and f1 <= f:
+                v1 = 0.0
+            if c2 and f2 <= f:
+                v2 = 0.0
+            st1, st2, sl1, sl2 = _resolve(
+                p2, v1, v2, t1, t2, sg, v1 == 0.0 and cz1, v2 == 0.0 and cz2, sl1, sl2
+            )
+            n1, n2, u1, u2, z1, z2, _, _ = _rk4(p1, p2, v1, v2, (1.0 - f) * h, t1, t2, sg, st1, st2, sl1, sl2)
+            # another crossing within the same substep: rest there (decided next substep)
+            if z1 and cz1 and f < 1.0:
+                u1 = 0.0
+            if z2 and cz2 and f < 1.0:
+                u2 = 0.0
+        p1, p2, v1, v2 = n1, n2, u1, u2
+    q[i, 0], q[i, 1], qd[i, 0], qd[i, 1] = p1, p2, v1, v2
+    stuck[i, 0], stuck[i, 1] = st1 and v1 == 0.0, st2 and v2 == 0.0
+    slip[i, 0], slip[i, 1] = sl1, sl2
+
+
+@njit(cache=True, fastmath=False)
+def _plant_step_kernel(q, qd, stuck, slip, tau, sigma, T, substeps):  # pragma: no cover
+    for i in range(q.shape[0]):
+        _stick_slip_one(q, qd, stuck, slip, i, tau[i, 0], tau[i, 1], sigma[i], T, substeps)
 
 
 @njit(cache=True, fastmath=False)
@@ -195,39 +196,42 @@ def _smooth_accel(q2, v1, v2, t1, t2, sg, code, vc, ratio, vs):  # pragma: no co
 
 
 @njit(cache=True, fastmath=False)
-def _smooth_step_kernel(q, qd, tau, sigma, T, substeps, code, vc, ratio, vs):  # pragma: no cover
-    n = q.shape[0]
+def _smooth_one(q, qd, i, t1, t2, sg, T, substeps, code, vc, ratio, vs):  # pragma: no cover - compiled
+    """One sample of trial i with a smooth friction law (plain RK4, stiff substeps split)."""
     h = T / substeps
-    for i in range(n):
-        sg = sigma[i]
-        p1, p2, v1, v2 = q[i, 0], q[i, 1], qd[i, 0], qd[i, 1]
-        t1, t2 = tau[i, 0], tau[i, 1]
-        # largest friction slopes: tanh' <= 1 / vc; Stribeck adds |g'| <= (k - 1) d sqrt(2/e) / vs
-        extra = 0.0 if code != 2 else (ratio - 1.0) * 0.8578 / vs
-        kpeak = (ratio if code == 2 else 1.0) / vc + extra
-        k1 = sg[3] + sg[5] * kpeak
-        k2 = sg[4] + sg[6] * kpeak
-        for _ in range(substeps):
-            c2 = np.cos(p2)
-            m11 = sg[0] + sg[1] + 2.0 * sg[2] * c2
-            m22 = sg[1]
-            det = m11 * m22 - (sg[1] + sg[2] * c2) ** 2
-            rho = (k1 * m22 + k2 * m11) / det  # trace of M^-1 K >= its spectral radius
-            m = max(1, int(np.ceil(h * rho / 2.0)))
-            dt = h / m
-            for _ in range(m):
-                a11, a12 = _smooth_accel(p2, v1, v2, t1, t2, sg, code, vc, ratio, vs)
-                w1, w2 = v1 + 0.5 * dt * a11, v2 + 0.5 * dt * a12
-                a21, a22 = _smooth_accel(p2 + 0.5 * dt * v2, w1, w2, t1, t2, sg, code, vc, ratio, vs)
-                x1, x2 = v1 + 0.5 * dt * a21, v2 + 0.5 * dt * a22
-                a31, a32 = _smooth_accel(p2 + 0.5 * dt * w2, x1, x2, t1, t2, sg, code, vc, ratio, vs)
-                y1, y2 = v1 + dt * a31, v2 + dt * a32
-                a41, a42 = _smooth_accel(p2 + dt * x2, y1, y2, t1, t2, sg, code, vc, ratio, vs)
-                p1 = p1 + (dt / 6.0) * (v1 + 2.0 * w1 + 2.0 * x1 + y1)
-                p2 = p2 + (dt / 6.0) * (v2 + 2.0 * w2 + 2.0 * x2 + y2)
-                v1 = v1 + (dt / 6.0) * (a11 + 2.0 * a21 + 2.0 * a31 + a41)
-                v2 = v2 + (dt / 6.0) * (a12 + 2.0 * a22 + 2.0 * a32 + a42)
-        q[i, 0], q[i, 1], qd[i, 0], qd[i, 1] = p1, p2, v1, v2
+    p1, p2, v1, v2 = q[i, 0], q[i, 1], qd[i, 0], qd[i, 1]
+    # largest friction slopes: tanh' <= 1 / vc; Stribeck adds |g'| <= (k - 1) d sqrt(2/e) / vs
+    extra = 0.0 if code != 2 else (ratio - 1.0) * 0.8578 / vs
+    kpeak = (ratio if code == 2 else 1.0) / vc + extra
+    k1 = sg[3] + sg[5] * kpeak
+    k2 = sg[4] + sg[6] * kpeak
+    for _ in range(substeps):
+        c2 = np.cos(p2)
+        m11 = sg[0] + sg[1] + 2.0 * sg[2] * c2
+        m22 = sg[1]
+        det = m11 * m22 - (sg[1] + sg[2] * c2) ** 2
+        rho = (k1 * m22 + k2 * m11) / det  # trace of M^-1 K >= its spectral radius
+        m = max(1, int(np.ceil(h * rho / 2.0)))
+        dt = h / m
+        for _ in range(m):
+            a11, a12 = _smooth_accel(p2, v1, v2, t1, t2, sg, code, vc, ratio, vs)
+            w1, w2 = v1 + 0.5 * dt * a11, v2 + 0.5 * dt * a12
+            a21, a22 = _smooth_accel(p2 + 0.5 * dt * v2, w1, w2, t1, t2, sg, code, vc, ratio, vs)
+            x1, x2 = v1 + 0.5 * dt * a21, v2 + 0.5 * dt * a22
+            a31, a32 = _smooth_accel(p2 + 0.5 * dt * w2, x1, x2, t1, t2, sg, code, vc, ratio, vs)
+            y1, y2 = v1 + dt * a31, v2 + dt * a32
+            a41, a42 = _smooth_accel(p2 + dt * x2, y1, y2, t1, t2, sg, code, vc, ratio, vs)
+            p1 = p1 + (dt / 6.0) * (v1 + 2.0 * w1 + 2.0 * x1 + y1)
+            p2 = p2 + (dt / 6.0) * (v2 + 2.0 * w2 + 2.0 * x2 + y2)
+            v1 = v1 + (dt / 6.0) * (a11 + 2.0 * a21 + 2.0 * a31 + a41)
+            v2 = v2 + (dt / 6.0) * (a12 + 2.0 * a22 + 2.0 * a32 + a42)
+    q[i, 0], q[i, 1], qd[i, 0], qd[i, 1] = p1, p2, v1, v2
+
+
+@njit(cache=True, fastmath=False)
+def _smooth_step_kernel(q, qd, tau, sigma, T, substeps, code, vc, ratio, vs):  # pragma: no cover
+    for i in range(q.shape[0]):
+        _smooth_one(q, qd, i, tau[i, 0], tau[i, 1], sigma[i], T, substeps, code, vc, ratio, vs)
 
 
 @njit(cache=True, fastmath=False)
@@ -242,6 +246,18 @@ def step_trials(q, qd, stuck, slip, tau, sigma, T, substeps, code, vc, ratio, vs
         return
     _smooth_step_kernel(q, qd, tau, sigma, T, substeps, code, vc, ratio, vs)
     stuck[:, :] = False
+
+
+@njit(cache=True, fastmath=False)
+def step_one(q, qd, stuck, slip, i, tau, sg, T, substeps, code, vc, ratio, vs):  # pragma: no cover
+    """Trial i of ``(n, 2)`` state arrays by one sample under ``tau (2,)`` with ``sg (7,)``
+    (what the compiled closed loop calls; the same arithmetic as :func:`step_trials`)."""
+    if code == 0:
+        _stick_slip_one(q, qd, stuck, slip, i, tau[0], tau[1], sg, T, substeps)
+        return
+    _smooth_one(q, qd, i, tau[0], tau[1], sg, T, substeps, code, vc, ratio, vs)
+    stuck[i, 0] = False
+    stuck[i, 1] = False
 
 
 def step_kernel(
