@@ -241,7 +241,7 @@ _OURS = ("M2", "full", "exact")
 def _reproduce_figures(res, tau_f: tuple, outputs) -> list:
     """Fig. 5-like estimate histories and the Fig. 7 model responses; prints Fig. 7's rms."""
     from adaptive_dd.identification.reproduce import model_responses
-    from adaptive_dd.plant.parameters import TABLE1_SIGMA
+    from adaptive_dd.plant.arm import Arm
     from adaptive_dd.plotting import plot_estimates, plot_model_response
 
     out = outputs.folder
@@ -257,7 +257,7 @@ def _reproduce_figures(res, tau_f: tuple, outputs) -> list:
     for key, i, name, label, short in figures:
         if key in res.theta:
             title = f"Estimates, {label}, tau_f = {tau_f[i]}"
-            plot_estimates(t, res.theta[key][i], TABLE1_SIGMA, outputs.path(name), title)
+            plot_estimates(t, res.theta[key][i], Arm.sice().sigma, outputs.path(name), title)
             written.append(out / name)
             models[f"{short}, tau_f = {tau_f[i]}"] = res.theta[key][i][:, -1].mean(axis=0)
     if models:
@@ -348,15 +348,17 @@ def _identify_online(args, rec, outputs) -> int:
     from adaptive_dd.errors import DataError
     from adaptive_dd.identification.online import run_online
     from adaptive_dd.outputs import atomic_write
-    from adaptive_dd.plant.parameters import SIGMA_NAMES, TABLE1_SIGMA, payload_mass_from_sigma
+    from adaptive_dd.plant.arm import Arm
+    from adaptive_dd.plant.parameters import SIGMA_NAMES
     from adaptive_dd.plotting import plot_estimates
 
     if rec.qd is None:
         raise DataError(f"{args.data}: --online needs the measured velocity (columns qd1, qd2)")
     cfg = dataclasses.replace(ADAPTIVE_ONLINE, sample_period=rec.sample_period, tau_f=args.tau_f)
-    r = run_online(rec.q, rec.qd, rec.tau, cfg, TABLE1_SIGMA)
+    sice = Arm.sice()  # a record's arm: the SICE arm (the nominal model the estimator starts from)
+    r = run_online(rec.q, rec.qd, rec.tau, cfg, sice.sigma)
     model, alarms = r.sigma_model[0], r.alarm_times()[0]
-    mass = payload_mass_from_sigma(model, TABLE1_SIGMA)
+    mass = sice.payload_mass_from_sigma(model)
     print(
         f"{rec.source}: online estimator of adaptive_ct (tau_f = {args.tau_f} s, started at Table 1), "
         f"{rec.t.size} samples; {len(alarms)} change alarm(s)"

@@ -23,11 +23,10 @@ from typing import NamedTuple
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from adaptive_dd.benchmark.runner import _payload, _trial_rngs, run_benchmark
+from adaptive_dd.benchmark.runner import _payload, _sensor, _trial_rngs, run_benchmark
 from adaptive_dd.benchmark.scenario import Scenario, load_scenario
 from adaptive_dd.errors import SignalError
-from adaptive_dd.plant.parameters import TABLE1_SIGMA
-from adaptive_dd.plant.simulator import ArmSimulator, SensorConfig
+from adaptive_dd.plant.simulator import ArmSimulator
 
 __all__ = ["Measurement", "Simulation", "run_trial"]
 
@@ -75,13 +74,11 @@ class Simulation:
             1,
             sc.n_samples,
             _trial_rngs(sc.seed, [self.seed_index]),
-            sigma0=TABLE1_SIGMA,
+            arm=sc.arm,
             payload=_payload(sc),
             sample_period=sc.sample_period,
             substeps=sc.substeps,
-            sensor=SensorConfig(
-                position_variance=sc.position_variance, velocity_variance=sc.velocity_variance
-            ),
+            sensor=_sensor(sc),
             q0=q_d[0],
             qd0=qd_d[0],
         )

@@ -1,6 +1,7 @@
 """One trial in one's own loop, and results as data."""
 
 import dataclasses
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -85,3 +86,36 @@ def test_figures_are_returned_with_one_style_per_controller(short, tmp_path):
     fig2 = plot_benchmark_estimates(res, tmp_path / "est.png", formats=("png", "svg"))
     assert (tmp_path / "est.png").is_file() and (tmp_path / "est.svg").is_file()
     assert fig2.axes[0].get_lines()[1].get_color() == controller_style("adaptive_ct")["color"]
+
+
+def test_no_module_constant_outside_the_default_factory():
+    """Everything physical comes from an Arm; only parameters.py defines and arm.py's
+    Arm.sice() reads the SICE constants (plant/__init__ re-exports them)."""
+    import re
+    from pathlib import Path
+
+    import adaptive_dd
+
+    root = Path(adaptive_dd.__file__).parent
+    allowed = {root / "plant" / "parameters.py", root / "plant" / "arm.py", root / "plant" / "__init__.py"}
+    pat = re.compile(r"\b(TABLE1_SIGMA|TABLE1_PHYSICAL|TORQUE_LIMITS|L1|L2)\b")
+    offenders = [
+        f"{p.relative_to(root)}:{i}"
+        for p in root.rglob("*.py")
+        if p not in allowed
+        for i, line in enumerate(p.read_text().splitlines(), 1)
+        if pat.search(line.split("#")[0])
+    ]
+    assert offenders == []
+
+
+def test_one_trial_of_another_arm_uses_that_arm(tmp_path):
+    from adaptive_dd.benchmark.scenario import load_scenario
+
+    sc = load_scenario(Path(__file__).resolve().parent.parent / "benchmarks" / "scenarios" / "other_arm.toml")
+    sim = Simulation(dataclasses.replace(sc, duration=0.2, swap_times=(0.1,), swap_masses=(2.0,)))
+    sim.reset()
+    np.testing.assert_allclose(sim.sigma_true, sc.arm.sigma)
+    while not sim.done:
+        sim.step(np.zeros(2))
+    np.testing.assert_allclose(sim.sigma_true, sc.arm.sigma_with_payload(2.0, sc.payload_radius))

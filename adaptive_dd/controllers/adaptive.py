@@ -26,12 +26,12 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from adaptive_dd.controllers.base import DEFAULT_GAINS, Controller, Gains
-from adaptive_dd.controllers.feedback import computed_torque_law
+from adaptive_dd.controllers.feedback import _sice_sigma, computed_torque_law
 from adaptive_dd.controllers.laws import boost_batch
 from adaptive_dd.errors import ParameterError
 from adaptive_dd.identification.estimators import PAPER_RLS
 from adaptive_dd.identification.online import OnlineConfig, OnlineEstimator
-from adaptive_dd.plant.parameters import TABLE1_SIGMA, validate_sigma
+from adaptive_dd.plant.parameters import validate_sigma
 
 __all__ = ["ADAPTIVE_ONLINE", "PAPER_ONLINE", "AdaptiveCT", "adaptive_ct", "adaptive_ct_paper"]
 
@@ -79,7 +79,7 @@ class AdaptiveCT(Controller):
         self,
         online: OnlineConfig = ADAPTIVE_ONLINE,
         gains: Gains = DEFAULT_GAINS,
-        sigma_nominal: ArrayLike = TABLE1_SIGMA,
+        sigma_nominal: ArrayLike | None = None,
         boost_bandwidth: float | None = 300.0,
         boost_duration: float = 0.2,
         name: str = "adaptive_ct",
@@ -93,7 +93,9 @@ class AdaptiveCT(Controller):
         if boost_bandwidth is not None and online.detector is None and boost_duration > 0:
             raise ParameterError("a boost after alarms needs an estimator with a change detector")
         self.online, self.gains, self.name = online, gains, name
-        self.sigma_nominal = validate_sigma(sigma_nominal, "sigma_nominal")
+        self.sigma_nominal = validate_sigma(
+            _sice_sigma() if sigma_nominal is None else sigma_nominal, "sigma_nominal"
+        )
         self.boost_bandwidth, self.boost_duration = boost_bandwidth, boost_duration
         self.estimator: OnlineEstimator | None = None
 
@@ -134,7 +136,7 @@ class AdaptiveCT(Controller):
 
 def adaptive_ct(
     gains: Gains = DEFAULT_GAINS,
-    sigma_nominal: ArrayLike = TABLE1_SIGMA,
+    sigma_nominal: ArrayLike | None = None,
     online: OnlineConfig = ADAPTIVE_ONLINE,
     **kwargs,
 ) -> AdaptiveCT:
@@ -142,6 +144,6 @@ def adaptive_ct(
     return AdaptiveCT(online, gains, sigma_nominal, name="adaptive_ct", **kwargs)
 
 
-def adaptive_ct_paper(gains: Gains = DEFAULT_GAINS, sigma_nominal: ArrayLike = TABLE1_SIGMA) -> AdaptiveCT:
+def adaptive_ct_paper(gains: Gains = DEFAULT_GAINS, sigma_nominal: ArrayLike | None = None) -> AdaptiveCT:
     """Computed torque on the paper's online M2 estimator, as the paper has it."""
     return AdaptiveCT(PAPER_ONLINE, gains, sigma_nominal, boost_bandwidth=None, name="adaptive_ct_paper")

@@ -17,7 +17,6 @@ from numpy.typing import NDArray
 
 from adaptive_dd.errors import ParameterError
 from adaptive_dd.plant.dynamics import _mass_entries
-from adaptive_dd.plant.parameters import TABLE1_SIGMA
 
 __all__ = ["DEFAULT_GAINS", "Controller", "Gains"]
 
@@ -65,8 +64,12 @@ class Gains:
         w, z = self.bandwidth, max(self.damping, 1.0)
         return w * z - w * np.sqrt(z * z - 1.0)
 
-    def nominal_inertia(self, sigma: Array = TABLE1_SIGMA) -> Array:
-        """``diag M(q = 0)`` of the nominal model, (2,) [kg m^2]."""
+    def nominal_inertia(self, sigma: Array | None = None) -> Array:
+        """``diag M(q = 0)`` of the nominal model (default: the SICE arm), (2,) [kg m^2]."""
+        if sigma is None:
+            from adaptive_dd.plant.arm import Arm
+
+            sigma = Arm.sice().sigma
         m11, _, m22 = _mass_entries(np.zeros(()), np.asarray(sigma, float))
         return np.array([float(m11), float(m22)])
 

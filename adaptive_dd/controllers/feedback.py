@@ -7,7 +7,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from adaptive_dd.controllers.base import DEFAULT_GAINS, Controller, Gains
 from adaptive_dd.controllers.laws import ct_batch, pd_batch
-from adaptive_dd.plant.parameters import TABLE1_SIGMA, validate_sigma
+from adaptive_dd.plant.parameters import validate_sigma
 
 __all__ = ["PD", "ComputedTorque", "computed_torque_law"]
 
@@ -44,13 +44,21 @@ def computed_torque_law(
     return ct_batch(q, qd, q_d, qd_d, qdd_d, sigma, kp, kd, lam)
 
 
+def _sice_sigma():
+    """The default nominal model: the SICE arm's base parameters (``Arm.sice()``)."""
+    from adaptive_dd.plant.arm import Arm
+
+    return Arm.sice().sigma
+
+
 class PD(Controller):
     """``tau = Kp' e + Kd' e_dot`` with ``Kp' = diag(M0) omega^2``, ``Kd' = diag(M0) 2 zeta omega``."""
 
     name = "pd"
 
-    def __init__(self, gains: Gains = DEFAULT_GAINS, sigma_nominal: ArrayLike = TABLE1_SIGMA) -> None:
+    def __init__(self, gains: Gains = DEFAULT_GAINS, sigma_nominal: ArrayLike | None = None) -> None:
         self.gains = gains
+        sigma_nominal = _sice_sigma() if sigma_nominal is None else sigma_nominal
         m0 = gains.nominal_inertia(validate_sigma(sigma_nominal))
         self.kp, self.kd = m0 * gains.kp, m0 * gains.kd
 
@@ -76,14 +84,14 @@ class ComputedTorque(Controller):
     def __init__(
         self,
         gains: Gains = DEFAULT_GAINS,
-        sigma: ArrayLike = TABLE1_SIGMA,
+        sigma: ArrayLike | None = None,
         oracle: bool = False,
         reference_velocity: bool = True,
     ) -> None:
         self.gains, self.oracle, self.reference = gains, oracle, reference_velocity
         self.needs_true_model = oracle
         self.floor = None if oracle else ("ct_oracle" if reference_velocity else "ct_oracle_textbook")
-        self.sigma = validate_sigma(sigma)
+        self.sigma = validate_sigma(_sice_sigma() if sigma is None else sigma)
         base = "ct_oracle" if oracle else "ct_nominal"
         self.name = base if reference_velocity else base + "_textbook"
 

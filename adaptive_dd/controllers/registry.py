@@ -39,7 +39,7 @@ import numpy as np
 from adaptive_dd.controllers.adaptive import ADAPTIVE_ONLINE, AdaptiveCT
 from adaptive_dd.controllers.base import DEFAULT_GAINS, Controller, Gains
 from adaptive_dd.controllers.feedback import PD, ComputedTorque
-from adaptive_dd.controllers.slotine_li import DEFAULT_GAMMA, SlotineLi
+from adaptive_dd.controllers.slotine_li import DEFAULT_GAMMA, SlotineLi, default_bounds
 from adaptive_dd.errors import ParameterError
 from adaptive_dd.identification.online import ChangeDetector, OnlineConfig
 from adaptive_dd.plant.arm import Arm
@@ -168,11 +168,8 @@ def _builtin(spec: str, g: Gains, options: dict, arm) -> Controller:
 
 
 def slotine_bounds(arm) -> tuple:
-    """Slotine-Li's a-priori box for an arm: half the nominal sigma up to 1.5x plus a 5 kg disk
-    of radius 0.1 m (the built-in default, :data:`~adaptive_dd.controllers.slotine_li.DEFAULT_BOUNDS`,
-    for the SICE arm)."""
-    s = arm.sigma
-    return 0.5 * s, 1.5 * s + (arm.sigma_with_payload(5.0, 0.1) - s)
+    """Slotine-Li's a-priori box for an arm (:func:`~adaptive_dd.controllers.slotine_li.default_bounds`)."""
+    return default_bounds(arm.sigma, arm)
 
 
 def make_controller(

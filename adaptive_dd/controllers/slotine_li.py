@@ -29,9 +29,10 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from adaptive_dd.controllers.base import DEFAULT_GAINS, Controller, Gains
+from adaptive_dd.controllers.feedback import _sice_sigma
 from adaptive_dd.controllers.laws import slotine_li_batch
 from adaptive_dd.errors import ParameterError
-from adaptive_dd.plant.parameters import R_MIN, TABLE1_SIGMA, payload_sigma_delta, validate_sigma
+from adaptive_dd.plant.parameters import R_MIN, validate_sigma
 
 __all__ = ["SlotineLi"]
 
@@ -42,8 +43,15 @@ PROJECTION = np.array([1e-3, 0.05, R_MIN])
 DEFAULT_GAMMA = np.array([0.05, 0.05, 0.05, 0.5, 0.1, 0.5, 0.1])
 """Adaptation gains Gamma (diagonal), per parameter."""
 
-DEFAULT_BOUNDS = (0.5 * TABLE1_SIGMA, 1.5 * TABLE1_SIGMA + payload_sigma_delta(5.0, 0.1))
-"""A priori box for the estimates: half the nominal up to 1.5x nominal plus a 5 kg disk."""
+
+def default_bounds(sigma0, arm=None) -> tuple:
+    """A priori box for the estimates: half the nominal up to 1.5x nominal plus a 5 kg disk of
+    radius 0.1 m at the arm's tip (the SICE arm's geometry unless ``arm`` is given)."""
+    from adaptive_dd.plant.arm import Arm
+
+    arm = arm or Arm.sice()
+    s = np.asarray(sigma0, dtype=float)
+    return 0.5 * s, 1.5 * s + arm.payload_direction(0.1) * 5.0
 
 
 class SlotineLi(Controller):
@@ -70,14 +78,16 @@ class SlotineLi(Controller):
         self,
         gains: Gains = DEFAULT_GAINS,
         gamma: ArrayLike = DEFAULT_GAMMA,
-        theta0: ArrayLike = TABLE1_SIGMA,
-        bounds: tuple = DEFAULT_BOUNDS,
+        theta0: ArrayLike | None = None,
+        bounds: tuple | None = None,
         oracle: bool = False,
     ) -> None:
         self.gains, self.oracle = gains, oracle
         self.needs_true_model = oracle
         self.name = "slotine_li_oracle" if oracle else "slotine_li"
         self.floor = None if oracle else "slotine_li_oracle"
+        theta0 = _sice_sigma() if theta0 is None else theta0
+        bounds = default_bounds(theta0) if bounds is None else bounds
         self.lo, self.hi = (np.asarray(b, dtype=float) for b in bounds)
         self.gamma = np.asarray(gamma, dtype=float)
         if self.gamma.shape != (7,) or np.any(~(self.gamma > 0)):

@@ -32,7 +32,10 @@ from adaptive_dd.errors import ParameterError
 from adaptive_dd.experiments import TABLE2
 from adaptive_dd.identification.estimators import estimate
 from adaptive_dd.identification.fisher import FisherResult, fisher_information
-from adaptive_dd.plant.parameters import SIGMA_NAMES, TABLE1_SIGMA
+from adaptive_dd.plant.arm import Arm
+from adaptive_dd.plant.parameters import SIGMA_NAMES
+
+SICE_SIGMA = Arm.sice().sigma
 
 __all__ = [
     "LIMIT_ESTIMATORS",
@@ -67,7 +70,7 @@ def table2_bound(tau: Array, n_samples: int | None = None, measured=("q", "qd"))
     """
     tau = np.asarray(tau, dtype=float)[:n_samples]
     return fisher_information(
-        TABLE1_SIGMA,
+        SICE_SIGMA,
         tau,
         TABLE2["sample_period"],
         TABLE2["position_variance"],
@@ -131,7 +134,7 @@ def run_information_estimators(
 
 
 def bound_rows(
-    crb: FisherResult, estimates: dict, sigma: Array = TABLE1_SIGMA, kinds: dict | None = None
+    crb: FisherResult, estimates: dict, sigma: Array = SICE_SIGMA, kinds: dict | None = None
 ) -> list[dict]:
     """Tidy rows per (estimator, parameter): bound, bias, std of the estimate, ratio, target met.
 
