@@ -17,7 +17,7 @@ TABLE2 = {
     "position_variance": (1e-8, 1e-7),  # rad^2
     "velocity_variance": (5e-5, 1e-4),  # (rad/s)^2, Table 4
 }
-"""Conditions of Table 2 (plus the Table 4 velocity noise), read as in ERRATA.md."""
+"""Conditions of Table 2 (plus the Table 4 velocity noise), read as in docs/paper_reading.md."""
 
 
 def table2_torque(

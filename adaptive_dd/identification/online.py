@@ -58,7 +58,7 @@ Array = NDArray[np.float64]
 
 SPLIT_STAGES = {"full": ((0, 1), ()), "15": ((1, 0), (1, 2, 4, 6)), "16": ((0, 1), (0, 1, 2, 3, 5))}
 """Per split: regressor rows of the two stages, and the parameters of the first stage
-(the others form the second; ERRATA.md: the splits are cascaded)."""
+(the others form the second; docs/paper_reading.md: the splits are cascaded)."""
 
 
 def _finite(name: str, v: float, lo: float | None = None, hi: float | None = None, strict=True) -> None:

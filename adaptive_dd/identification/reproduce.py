@@ -3,7 +3,7 @@
 One Monte-Carlo batch of the Table 2 experiment (with Table 4 velocity noise) is
 simulated; every (method, estimator, split) runs once over all ``tau_f`` and
 seeds stacked in one batch. Estimation error: ``|sigma_hat - sigma| / sigma * 100``
-at the end of the 10 000 samples (ERRATA.md), reported as mean and std over seeds.
+at the end of the 10 000 samples (docs/paper_reading.md), reported as mean and std over seeds.
 """
 
 from __future__ import annotations

@@ -260,7 +260,7 @@ class Arm:
         """Base parameters with a tip disk of mass ``mass`` [kg], shape ``(..., 7)``.
 
         Adds ``m l1^2`` to J1, ``m l2^2 + m R^2 / 2`` to J2 and ``m l1 l2`` to r
-        (parallel-axis theorem; ERRATA.md); friction is unchanged. ``sigma0``
+        (parallel-axis theorem; docs/paper_reading.md); friction is unchanged. ``sigma0``
         (``(..., 7)``) replaces :attr:`sigma` as the unloaded arm.
         """
         base = self.sigma if sigma0 is None else np.asarray(sigma0, dtype=float)

@@ -109,7 +109,7 @@ def payload_sigma_delta(
     """Change of sigma caused by a tip disk: ``(..., 7)``.
 
     A tip mass ``m`` adds ``m l1^2`` to J1, ``m l2^2 + m R^2/2`` to J2 and
-    ``m l1 l2`` to r (ERRATA.md); friction is unchanged.
+    ``m l1 l2`` to r (docs/paper_reading.md); friction is unchanged.
     """
     m = np.asarray(mass, dtype=float)
     rad = np.asarray(radius, dtype=float)
@@ -211,7 +211,7 @@ TABLE1_PHYSICAL = PhysicalParameters(
     d1=3.208,
     d2=0.743,
 )
-"""A physical set that maps exactly onto Table 1 (ERRATA.md: a2 = 0.08 m, m2 = r/(l1 a2)).
+"""A physical set that maps exactly onto Table 1 (docs/paper_reading.md: a2 = 0.08 m, m2 = r/(l1 a2)).
 
 The paper gives only base parameters; this is one consistent choice, used for the
 Pinocchio model. ``TABLE1_PHYSICAL.to_sigma()`` equals ``TABLE1_SIGMA`` to rounding.
