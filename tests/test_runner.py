@@ -142,3 +142,24 @@ def test_the_report_holds_the_information_limit_beside_the_learning_time(both_pa
     assert 0 < info["known"] < info["unknown"] < 1.0  # knowing the rest of the arm helps
     assert 0 < seg["mass_learning_time"] < 1.0
     assert seg["sigma_true"][0] == pytest.approx(0.429 + 3.0 * 0.04)  # J1 + m l1^2
+
+
+def test_sensor_dropouts_are_held_skipped_and_counted_not_divergence(swap_scenario):
+    """A lost measurement (NaN) is not a diverging trial: the law holds the last good one, the
+    estimator skips and counts it; both paths agree and the report says how many."""
+    sc = dataclasses.replace(swap_scenario, dropout=0.01, controllers=("ct_oracle", "adaptive_ct"))
+    rc = run_benchmark(sc, progress=False, engine="compiled")
+    rp = run_benchmark(sc, progress=False, engine="python")
+    for name in sc.controllers:
+        a, b = rc.runs[name], rp.runs[name]
+        assert not a.failed.any() and a.dropped.min() > 20
+        np.testing.assert_array_equal(a.dropped, b.dropped)
+        np.testing.assert_allclose(a.acc, b.acc, rtol=1e-12, atol=1e-12)
+    run = rc.runs["adaptive_ct"]
+    assert (run.skipped > run.dropped).all()  # each loss taints the filters for 10 tau_f
+    np.testing.assert_array_equal(run.skipped, rp.runs["adaptive_ct"].skipped)
+    assert all(len(tr) == 2 for tr in run.alarm_times)  # both swaps still found
+    m = compute_metrics(rc)["controllers"]["adaptive_ct"]
+    assert m["dropped_samples"] == int(run.dropped.sum()) and m["failed_trials"] == 0
+    with pytest.raises(Exception, match="dropout"):
+        dataclasses.replace(sc, dropout=0.9)

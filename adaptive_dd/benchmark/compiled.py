@@ -114,6 +114,7 @@ def closed_loop_block(
     ci, cf, A, B, C, D, d, group, rows,
     seg_start, seg_settled, acc, e_norm, sigma_end, seg_end, alarm_t, n_alarms,
     rec_n, q_rec, qd_rec, tau_rec, sat_rec, sig_rec,
+    drop, hq, hqd, n_drop,
 ):  # pragma: no cover - compiled  # fmt: skip
     """Samples ``k0 .. k1 - 1`` of every trial (prange over trials); state arrays updated in place.
 
@@ -134,12 +135,20 @@ def closed_loop_block(
         cmd = np.empty(2)
         tau = np.empty(2)
         eps = np.empty(2)
+        lost_q = np.full(2, np.nan)
+        has_drop = drop.shape[1] > 0
         for k in range(k0, k1):
             w = 0
             while w < swap_k.shape[0] and k >= swap_k[w]:
                 w += 1
             sg_true = sig_seg[w]
             measure_trial(q[i], qd[i], noise[i, k - k0], res, std, plant_i[3] == 1, qm, qdm)
+            lost = has_drop and drop[i, k - k0]
+            if lost:  # the law gets the last good measurement, the estimator the NaN
+                n_drop[i] += 1
+                qm[0], qm[1], qdm[0], qdm[1] = hq[i, 0], hq[i, 1], hqd[i, 0], hqd[i, 1]
+            else:
+                hq[i, 0], hq[i, 1], hqd[i, 0], hqd[i, 1] = qm[0], qm[1], qdm[0], qdm[1]
             e1, e2 = ref[k, 0] - q[i, 0], ref[k, 1] - q[i, 1]
             _command(
                 law, g, sg_fixed, sg_true, theta[i] if law == LAW_SLOTINE else sigma_model[i],
@@ -174,7 +183,8 @@ def closed_loop_block(
             if adaptive:
                 alarm = online_step_trial(
                     i, xf, u_last, cnt, tau_prev, theta, P, lam, short, long, sigma_model,
-                    qm, qdm, tau, ci, cf, A, B, C, D, d, group, rows, eps,
+                    lost_q if lost else qm, lost_q if lost else qdm, tau,
+                    ci, cf, A, B, C, D, d, group, rows, eps,
                 )  # fmt: skip
                 if alarm == 1 and n_alarms[i] < alarm_t.shape[1]:
                     alarm_t[i, n_alarms[i]] = k * T

@@ -10,6 +10,8 @@ from adaptive_dd.benchmark.runner import (
     MAX_ERROR,
     SETTLE,
     ControllerRun,
+    _dropout_block,
+    _dropout_rngs,
     _new_run,
     _sensor,
     _trial_rngs,
@@ -54,17 +56,24 @@ def run_compiled(name, ctrl, spec: CompiledSpec, scenario, idx, ref, keep: int, 
     n_alarms = np.zeros(S, dtype=np.int64)
     sig_rec = run.sigma_hat if estimates else np.zeros((0, N, 7))
     sigma_end = run.sigma_end if estimates else np.zeros((S, len(seg_start), 7))
+    drop_rngs = _dropout_rngs(scenario, idx)
+    no_drop = np.zeros((S, 0), dtype=np.bool_)
+    hq, hqd = q.copy(), qd.copy()
+    run.dropped = np.zeros(S, dtype=np.int64)
     for k0 in range(0, N, CHUNK):
         k1 = min(N, k0 + CHUNK)
         noise = np.ascontiguousarray(np.stack([g.standard_normal((k1 - k0, 4)) for g in rngs]))
+        drop = no_drop if drop_rngs is None else _dropout_block(drop_rngs, scenario.dropout, k1 - k0)
         closed_loop_block(
             k0, k1, noise, ref, sig_seg, swap_k, plant_f, plant_i, spec.law, spec.gains, spec.sigma,
             spec.extra, q, qd, stuck, slip, run.failed, run.failed_at, *state, *cfg.packed,
             seg_start, seg_settled, run.acc, run.e_norm, sigma_end, seg_end, alarm_t, n_alarms,
-            K, run.q, run.qd, run.tau, run.saturated, sig_rec,
+            K, run.q, run.qd, run.tau, run.saturated, sig_rec, drop, hq, hqd, run.dropped,
         )  # fmt: skip
         if bar is not None:
             bar.update(k1 - k0)
+    if adaptive:
+        run.skipped = state.n_skipped.copy()
     if adaptive and cfg.detector is not None:
         run.alarm_times = [list(alarm_t[i, : min(n, MAX_ALARMS)]) for i, n in enumerate(n_alarms)]
     return run

@@ -167,6 +167,8 @@ def compute_metrics(res: BenchmarkResult) -> dict:
             "failed_trials": int(run.failed.sum()),
             "error": run.error or None,
             "engine": run.engine,
+            "dropped_samples": None if run.dropped is None else int(run.dropped[ok].sum()),
+            "skipped_samples_per_seed": None if run.skipped is None else [int(x) for x in run.skipped],
             "segments": segs,
         }
     _add_seed_statistics(res, out)

@@ -71,6 +71,19 @@ def format_report(metrics: dict, res: BenchmarkResult) -> str:
         if c["failed_trials"]
     ]
     lines.append("failed trials: " + (", ".join(fails) if fails else "none"))
+    drops = [f"{n}: {c['dropped_samples']}" for n, c in ctrls.items() if c.get("dropped_samples")]
+    if drops:
+        skips = [
+            f"{n}: {sum(c['skipped_samples_per_seed'])}"
+            for n, c in ctrls.items()
+            if c.get("skipped_samples_per_seed") is not None
+        ]
+        lines.append(
+            "lost measurements (noise.dropout; the law holds the last good one): " + ", ".join(drops)
+        )
+        lines.append(
+            "samples the estimators skipped (NaN, the filters' memory after each loss): " + ", ".join(skips)
+        )
     lines += ["", "Targets (measured, not asserted):"]
     lines += _targets(metrics, res)
     return "\n".join(lines)

@@ -67,6 +67,11 @@ class ControllerRun:
     q, qd, tau, saturated, sigma_hat : trajectories ``(n_kept, n_samples, ...)`` of the first
         seeds (true q [rad] and qd [rad/s], applied torque [N m], saturation, estimate), or None
     engine : "python" or "compiled"
+    dropped : int (n_seeds,)
+        Samples whose measurement was lost (scenario ``noise.dropout``); the control law gets
+        the last good measurement, the estimator the NaN (skipped and counted).
+    skipped : int (n_seeds,) or None
+        Samples the controller's estimator skipped as non-finite.
     """
 
     name: str
@@ -84,6 +89,8 @@ class ControllerRun:
     saturated: NDArray[np.bool_] | None = None
     sigma_hat: Array | None = None
     engine: str = "python"
+    dropped: NDArray[np.int_] | None = None
+    skipped: NDArray[np.int_] | None = None
 
 
 @dataclass
@@ -219,6 +226,18 @@ def run_benchmark(
     return res
 
 
+def _dropout_rngs(scenario: Scenario, indices) -> list[np.random.Generator] | None:
+    """Generators of the measurement dropouts, one per trial, apart from the sensor noise's."""
+    if scenario.dropout <= 0:
+        return None
+    return [np.random.default_rng([int(scenario.seed), int(i), 1]) for i in indices]
+
+
+def _dropout_block(rngs, p: float, n: int) -> NDArray[np.bool_]:
+    """The next ``n`` samples' dropouts of every trial, ``(n_trials, n)`` (drawn block by block)."""
+    return np.ascontiguousarray(np.stack([g.random(n) < p for g in rngs]))
+
+
 def _progress(show: bool, total: int, name: str):
     if not show:
         return None
@@ -274,8 +293,21 @@ def _run_python(name, ctrl, scenario, idx, reference, keep, bar) -> ControllerRu
     run = _new_run(name, ctrl, S, len(seg_start), N, keep, adaptive, "python")
     K = run.q.shape[0]
     seg = 0
+    drop_rngs = _dropout_rngs(scenario, idx)
+    held_q, held_qd = np.broadcast_to(q_d[0], (S, 2)).copy(), np.broadcast_to(qd_d[0], (S, 2)).copy()
+    run.dropped = np.zeros(S, dtype=int)
     for k in range(N):
         qm, qdm = sim.measure()
+        qm_obs, qdm_obs = qm, qdm
+        if drop_rngs is not None:
+            if k % CHUNK == 0:
+                drops = _dropout_block(drop_rngs, scenario.dropout, min(CHUNK, N - k))
+            lost = drops[:, k % CHUNK]
+            run.dropped += lost
+            held_q, held_qd = np.where(lost[:, None], held_q, qm), np.where(lost[:, None], held_qd, qdm)
+            qm_obs = np.where(lost[:, None], np.nan, qm)
+            qdm_obs = np.where(lost[:, None], np.nan, qdm)
+            qm, qdm = held_q, held_qd
         err = q_d[k] - sim.q
         if K:
             run.q[:, k], run.qd[:, k] = sim.q[:K], sim.qd[:K]
@@ -296,7 +328,7 @@ def _run_python(name, ctrl, scenario, idx, reference, keep, bar) -> ControllerRu
             run.tau[:, k], run.saturated[:, k] = applied[:K], sat[:K]
         if not error:
             try:
-                ctrl.observe(qm, qdm, applied)
+                ctrl.observe(qm_obs, qdm_obs, applied)
                 if adaptive:
                     est = np.asarray(ctrl.sigma_hat)
                     if K:
@@ -315,4 +347,5 @@ def _run_python(name, ctrl, scenario, idx, reference, keep, bar) -> ControllerRu
     if error:
         run.failed[:] = True
     run.alarm_times = None if error else ctrl.alarm_times
+    run.skipped = None if error else ctrl.skipped_samples
     return run

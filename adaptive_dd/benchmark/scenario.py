@@ -36,6 +36,7 @@ Every key is optional; the value after ``=`` below is the default that is used
     [noise]                    # Tables 2 and 4 of the paper
     position_variance = [1e-8, 1e-7]   # rad^2, each in [0, 1]
     velocity_variance = [5e-5, 1e-4]   # (rad/s)^2, each in [0, 1]
+    dropout = 0.0              # probability that a sample's measurement is lost (NaN), 0 .. 0.5
 
 Why these limits: a reference component at frequency f sampled at T is seen
 by the discrete controllers with ``1 / (f T)`` samples per period; the loop
@@ -111,7 +112,7 @@ _KEYS = {
     "control": {"bandwidth", "damping"},
     "reference": {"ramp", "joint1", "joint2"},
     "payload": {"at", "mass", "radius"},
-    "noise": {"position_variance", "velocity_variance"},
+    "noise": {"position_variance", "velocity_variance", "dropout"},
     "controllers": None,  # one sub-table per controller, free keys
     "arm": None,  # checked by adaptive_dd.plant.arm.arm_from_tables
     "plant": None,
@@ -133,6 +134,7 @@ _FIELD_KEY = {
     "payload_radius": "payload.radius",
     "position_variance": "noise.position_variance",
     "velocity_variance": "noise.velocity_variance",
+    "dropout": "noise.dropout",
     "controller_options": "controllers",
     "source": "source",
 }
@@ -240,6 +242,7 @@ class Scenario:
     payload_radius: float = 0.05
     position_variance: tuple[float, float] = (1e-8, 1e-7)
     velocity_variance: tuple[float, float] = (5e-5, 1e-4)
+    dropout: float = 0.0
     seed: int = 0
     substeps: int = 2
     bandwidth: float = 40.0
@@ -355,7 +358,7 @@ def format_scenario(sc: Scenario) -> str:
     lines = [f"# {sc.source}: valid; {sc.estimate()}"]
     order = ("duration", "sample_period", "seeds", "seed", "substeps", "controllers", "bandwidth")
     order += ("damping", "swap_times", "swap_masses", "payload_radius", "position_variance")
-    for name in (*order, "velocity_variance"):
+    for name in (*order, "velocity_variance", "dropout"):
         key = _FIELD_KEY[name]
         mark = "   (default)" if key in sc.defaulted else ""
         lines.append(f"{key} = {_show(getattr(sc, name))}{mark}")

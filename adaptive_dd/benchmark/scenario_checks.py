@@ -112,6 +112,7 @@ def scenario_errors(v: dict[str, Any]) -> list[str]:
     _num(e, "payload.radius", v["payload_radius"], 0, L["max_radius"])
     for k in ("position_variance", "velocity_variance"):
         _nums(e, f"noise.{k}", v[k], 0, L["max_variance"], n=2)
+    _num(e, "noise.dropout", v.get("dropout", 0.0), 0, 0.5)
     _check_payload(e, v, d_ok and T_ok)
     if not isinstance(v["reference"], Reference):
         e.append(f"reference: must be a Reference, got {_short(v['reference'])}")
@@ -312,6 +313,7 @@ def scenario_fields(data: Any, is_default: bool) -> tuple[dict[str, Any], list[s
         "damping": get("control", "damping", 1.0),
         "position_variance": get("noise", "position_variance", [1e-8, 1e-7]),
         "velocity_variance": get("noise", "velocity_variance", [5e-5, 1e-4]),
+        "dropout": get("noise", "dropout", 0.0),
     }
     _payload_fields(e, tables.get("payload", []), v, defaulted)
     v["reference"] = _reference_field(e, tables, is_default, defaulted)

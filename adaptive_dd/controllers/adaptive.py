@@ -130,6 +130,10 @@ class AdaptiveCT(Controller):
         return self.estimator.theta
 
     @property
+    def skipped_samples(self):
+        return self.estimator.state.n_skipped.copy()
+
+    @property
     def alarm_times(self) -> list[list[float]] | None:
         return self.estimator.alarm_times if self.online.detector is not None else None
 

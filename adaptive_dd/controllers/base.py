@@ -118,6 +118,11 @@ class Controller:
         return None
 
     @property
+    def skipped_samples(self):
+        """Per trial, samples its estimator skipped as non-finite (sensor dropouts); None if none."""
+        return None
+
+    @property
     def alarm_times(self) -> list[list[float]] | None:
         """Per trial, the times [s] a change detector raised an alarm; None without a detector."""
         return None
