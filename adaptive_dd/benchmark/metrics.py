@@ -135,9 +135,10 @@ def compute_metrics(res: BenchmarkResult) -> dict:
     """Metrics in the JSON layout of the README (``{"controllers": {NAME: {...}}}``)."""
     sc = res.scenario
     out = {}
+    per = {name: per_seed_segment_metrics(res, run) for name, run in res.runs.items()}
     for name, run in res.runs.items():
         ok = ~run.failed
-        m = per_seed_segment_metrics(res, run)
+        m = per[name]
         segs = []
         for i, (start, end, mass) in enumerate(sc.segments()):
             delay = None
@@ -171,7 +172,7 @@ def compute_metrics(res: BenchmarkResult) -> dict:
             "skipped_samples_per_seed": None if run.skipped is None else [int(x) for x in run.skipped],
             "segments": segs,
         }
-    _add_seed_statistics(res, out)
+    _add_seed_statistics(res, out, per)
     _add_information_times(res, out)
     from adaptive_dd.benchmark.results import provenance
 
@@ -211,12 +212,12 @@ def ratio_statistics(ratio: np.ndarray) -> dict | None:
     }
 
 
-def _add_seed_statistics(res: BenchmarkResult, out: dict) -> None:
+def _add_seed_statistics(res: BenchmarkResult, out: dict, per: dict) -> None:
     """Per-seed lists, ratios to each controller's floor, false alarms and detection delays."""
     sc = res.scenario
     per_seed = {}
     for name, run in res.runs.items():
-        rms = per_seed_segment_metrics(res, run)["rms_error"].T  # (n_segments, n_seeds)
+        rms = per[name]["rms_error"].T  # (n_segments, n_seeds)
         per_seed[name] = rms
         for seg, r in zip(out[name]["segments"], rms, strict=True):
             seg["rms_error_per_seed"] = _seed_list(r, ~run.failed)

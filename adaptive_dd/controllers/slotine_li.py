@@ -32,12 +32,12 @@ from adaptive_dd.controllers.base import DEFAULT_GAINS, Controller, Gains
 from adaptive_dd.controllers.feedback import _sice_sigma
 from adaptive_dd.controllers.laws import slotine_li_batch
 from adaptive_dd.errors import ParameterError
-from adaptive_dd.plant.parameters import R_MIN, validate_sigma
+from adaptive_dd.plant.parameters import PROJECTION_J_MIN, PROJECTION_MARGIN, R_MIN, validate_sigma
 
 __all__ = ["SlotineLi"]
 
 NO_ADAPTATION = np.zeros(0)
-PROJECTION = np.array([1e-3, 0.05, R_MIN])
+PROJECTION = np.array([PROJECTION_J_MIN, PROJECTION_MARGIN, R_MIN])
 """``(j_min, margin, r_min)`` of :func:`adaptive_dd.plant.project_sigma`, for the compiled law."""
 
 DEFAULT_GAMMA = np.array([0.05, 0.05, 0.05, 0.5, 0.1, 0.5, 0.1])

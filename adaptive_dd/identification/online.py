@@ -38,9 +38,10 @@ from numpy.typing import ArrayLike, NDArray
 
 from adaptive_dd.errors import ParameterError, SignalError
 from adaptive_dd.identification import online_kernel as K
+from adaptive_dd.identification.estimators import SPLITS
 from adaptive_dd.identification.filters import FilterBank, design_filter_bank
 from adaptive_dd.identification.rls import RLSConfig
-from adaptive_dd.plant.parameters import R_MIN, project_sigma
+from adaptive_dd.plant.parameters import PROJECTION_J_MIN, PROJECTION_MARGIN, R_MIN, project_sigma
 
 __all__ = [
     "ChangeDetector",
@@ -56,7 +57,10 @@ __all__ = [
 
 Array = NDArray[np.float64]
 
-SPLIT_STAGES = {"full": ((0, 1), ()), "15": ((1, 0), (1, 2, 4, 6)), "16": ((0, 1), (0, 1, 2, 3, 5))}
+SPLIT_STAGES = {
+    name: ((0, 1), ()) if stages is None else ((stages[0][0], stages[1][0]), stages[0][1])
+    for name, stages in SPLITS.items()
+}
 """Per split: regressor rows of the two stages, and the parameters of the first stage
 (the others form the second; docs/paper_reading.md: the splits are cascaded)."""
 
@@ -160,11 +164,6 @@ class ChangeDetector:
                 f"ChangeDetector.reopen_again must be true or false, got {self.reopen_again!r}"
             )
 
-
-PROJECT_J_MIN = 1e-3
-"""Smallest J1, J2 [kg m^2] of a projected model (:func:`adaptive_dd.plant.project_sigma`)."""
-PROJECT_MARGIN = 0.05
-"""Projected models keep ``r^2 <= (1 - margin) J1 J2``."""
 
 SICE_PAYLOAD_DIRECTION = (0.04, 0.04, 0.04, 0.0, 0.0, 0.0, 0.0)
 """d sigma / d m of a point mass at the tip of the SICE arm (l1 = l2 = 0.2 m)."""
@@ -291,7 +290,7 @@ class OnlineConfig:
             cap = self.rls.max_trace if self.rls.max_trace is not None else self.rls.p0 * sizes[g]
             cf[K.F_CAP0 if g == 0 else K.F_CAP1] = cap
         cf[K.F_SEL_THRESHOLD] = 0.0 if self.selection is None else self.selection[0]
-        cf[K.F_J_MIN], cf[K.F_MARGIN], cf[K.F_R_MIN] = PROJECT_J_MIN, PROJECT_MARGIN, R_MIN
+        cf[K.F_J_MIN], cf[K.F_MARGIN], cf[K.F_R_MIN] = PROJECTION_J_MIN, PROJECTION_MARGIN, R_MIN
         if det is not None:
             ci[K.I_DETECT] = 1
             ci[K.I_WARMUP] = round(det.warmup / T)
@@ -383,7 +382,7 @@ def online_init(cfg: OnlineConfig, n_trials: int, theta0: ArrayLike) -> OnlineSt
     cnt = np.zeros((n_trials, K.N_CNT), dtype=np.int64)
     cnt[:, K.C_SINCE_ALARM] = K.BIG
     cnt[:, K.C_REOPEN_AT] = -1
-    model = th.copy() if cfg.project == "none" else project_sigma(th, PROJECT_J_MIN, PROJECT_MARGIN)
+    model = th.copy() if cfg.project == "none" else project_sigma(th, PROJECTION_J_MIN, PROJECTION_MARGIN)
     if cfg.project == "state":
         th = model.copy()
     return OnlineState(

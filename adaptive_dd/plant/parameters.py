@@ -222,7 +222,15 @@ R_MIN = 1e-9
 """Smallest r [kg m^2] that :func:`project_sigma` returns."""
 
 
-def project_sigma(sigma: ArrayLike, j_min: float = 1e-3, margin: float = 0.05) -> NDArray[np.float64]:
+PROJECTION_J_MIN = 1e-3
+"""Smallest J1, J2 [kg m^2] of a projected model."""
+PROJECTION_MARGIN = 0.05
+"""Projected models keep ``r^2 <= (1 - margin) J1 J2``."""
+
+
+def project_sigma(
+    sigma: ArrayLike, j_min: float = PROJECTION_J_MIN, margin: float = PROJECTION_MARGIN
+) -> NDArray[np.float64]:
     """Nearest physically consistent base parameters (cheap projection), ``(..., 7)``.
 
     ``J1, J2 >= j_min``, ``r >= R_MIN`` (validate_sigma needs r > 0), friction ``>= 0``,
