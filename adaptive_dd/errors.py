@@ -12,6 +12,7 @@ __all__ = [
     "ParameterError",
     "ScenarioError",
     "SignalError",
+    "UrdfError",
 ]
 
 
@@ -33,3 +34,7 @@ class ScenarioError(ValueError):
 
 class OutputError(ValueError):
     """An output folder or file cannot be created or written; names the path and the reason."""
+
+
+class UrdfError(ValueError):
+    """A robot description (URDF) cannot be used; names the file, the element and the reason."""

@@ -69,6 +69,7 @@ from numpy.typing import NDArray
 
 from adaptive_dd.errors import ScenarioError
 from adaptive_dd.plant.arm import Arm, arm_from_tables
+from adaptive_dd.plant.serial_arm import SerialArm
 
 __all__ = [
     "LIMITS",
@@ -110,8 +111,8 @@ LIMITS = {
 _KEYS = {
     "run": {"duration", "sample_period", "seeds", "seed", "substeps", "controllers"},
     "control": {"bandwidth", "damping"},
-    "reference": {"ramp", "joint1", "joint2"},
-    "payload": {"at", "mass", "radius"},
+    "reference": None,  # ramp and one entry per joint, checked against the arm
+    "payload": {"at", "mass", "radius", "com", "inertia"},
     "noise": {"position_variance", "velocity_variance", "dropout"},
     "controllers": None,  # one sub-table per controller, free keys
     "arm": None,  # checked by adaptive_dd.plant.arm.arm_from_tables
@@ -151,18 +152,22 @@ _SECONDS_PER_SAMPLE_TRIAL = 1.5e-6
 class Reference:
     """``q_d(t) = offset + w(t) sum_k a_k sin(2 pi f_k t + phase_k)`` per joint, w a C^2 ramp."""
 
-    offset: tuple[float, float]
-    amplitude: tuple[tuple[float, ...], tuple[float, ...]]
-    frequency: tuple[tuple[float, ...], tuple[float, ...]]
-    phase: tuple[tuple[float, ...], tuple[float, ...]]
+    offset: tuple[float, ...]
+    amplitude: tuple[tuple[float, ...], ...]
+    frequency: tuple[tuple[float, ...], ...]
+    phase: tuple[tuple[float, ...], ...]
     ramp: float = 0.0
 
+    @property
+    def n_joints(self) -> int:
+        return len(self.offset)
+
     def sample(self, t: Array) -> tuple[Array, Array, Array]:
-        """``q_d, qd_d, qdd_d`` at times t, each of shape ``(len(t), 2)``."""
+        """``q_d, qd_d, qdd_d`` at times t, each of shape ``(len(t), n_joints)``."""
         t = np.asarray(t, dtype=float)
         w, dw, ddw = self._ramp(t)
-        out = np.zeros((3, t.size, 2))
-        for j in range(2):
+        out = np.zeros((3, t.size, self.n_joints))
+        for j in range(self.n_joints):
             s = ds = dds = np.zeros_like(t)
             for a, f, p in zip(self.amplitude[j], self.frequency[j], self.phase[j], strict=True):
                 om = 2 * np.pi * f
@@ -250,7 +255,9 @@ class Scenario:
     source: str = "<memory>"
     controller_options: tuple[tuple[str, tuple[tuple[str, Any], ...]], ...] = ()
     defaulted: frozenset[str] = field(default=frozenset(), compare=False)
-    arm: Arm = field(default_factory=Arm.sice)
+    arm: Arm | SerialArm = field(default_factory=Arm.sice)
+    swap_com: tuple = ()
+    swap_inertia: tuple = ()
 
     def __post_init__(self) -> None:
         from adaptive_dd.benchmark.scenario_checks import scenario_errors
@@ -258,6 +265,26 @@ class Scenario:
         errors = scenario_errors({f.name: getattr(self, f.name) for f in fields(self)})
         if errors:
             raise _scenario_error(str(self.source), errors)
+
+    @property
+    def n_joints(self) -> int:
+        return self.arm.n_joints
+
+    def payload_of(self, i: int) -> dict:
+        """Mass, com and inertia of the payload of swap ``i`` (keyword arguments of
+        ``arm.sigma_with_payload``; com and inertia only for a URDF arm)."""
+        kw: dict = {"mass": self.swap_masses[i], "radius": self.payload_radius}
+        if self.swap_com and self.swap_com[i] is not None:
+            kw["com"] = self.swap_com[i]
+        if self.swap_inertia and self.swap_inertia[i] is not None:
+            kw["inertia"] = self.swap_inertia[i]
+        return kw
+
+    def segment_sigmas(self) -> NDArray[np.float64]:
+        """True base parameters of each constant-payload segment, ``(n_segments, p)``."""
+        rows = [self.arm.sigma_with_payload(0.0, radius=self.payload_radius)]
+        rows += [self.arm.sigma_with_payload(**self.payload_of(i)) for i in range(len(self.swap_times))]
+        return np.array(rows)
 
     @property
     def n_samples(self) -> int:
@@ -335,14 +362,27 @@ def parse_scenario(data: dict, src: str = "<memory>", name: str = "scenario") ->
     """Check a scenario given as a dict (the parsed TOML); all problems are raised at once."""
     from adaptive_dd.benchmark.scenario_checks import scenario_errors, scenario_fields
 
-    values, errors = scenario_fields(data, src == str(default_scenario_path()))
-    values.update(name=name, source=src)
+    if isinstance(data, dict) and not data:
+        raise ScenarioError(
+            f"{src}: the scenario is empty; give at least one table (e.g. [run]); the shipped default "
+            "is what `adaptive-dd benchmark` runs without a file"
+        )
+    arm, errors = None, []
     try:
-        values["arm"] = arm_from_tables(data.get("arm"), data.get("plant"), src)
-        if "payload.radius" in values.get("defaulted", ()):
-            values["payload_radius"] = values["arm"].payload_radius
+        arm = arm_from_tables(
+            data.get("arm") if isinstance(data, dict) else None,
+            data.get("plant") if isinstance(data, dict) else None,
+            src,
+        )
     except ScenarioError as exc:
         errors.append(str(exc).removeprefix(f"{src}: "))
+    values, more = scenario_fields(data, src == str(default_scenario_path()), arm)
+    errors += more
+    values.update(name=name, source=src)
+    if arm is not None:
+        values["arm"] = arm
+        if "payload.radius" in values.get("defaulted", ()):
+            values["payload_radius"] = arm.payload_radius
     errors += [e for e in scenario_errors(values) if e.split(":")[0] not in _bad_keys(errors)]
     if errors:
         raise _scenario_error(src, errors)
@@ -365,7 +405,7 @@ def format_scenario(sc: Scenario) -> str:
     ref = sc.reference
     mark = "   (default)" if "reference" in sc.defaulted else ""
     lines.append(f"reference.ramp = {ref.ramp!r}{mark}")
-    for j in range(2):
+    for j in range(ref.n_joints):
         lines.append(
             f"reference.joint{j + 1} = {{ offset = {ref.offset[j]!r}, amplitude = "
             f"{_show(ref.amplitude[j])}, frequency = {_show(ref.frequency[j])}, phase = "

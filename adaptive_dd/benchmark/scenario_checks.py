@@ -110,14 +110,15 @@ def scenario_errors(v: dict[str, Any]) -> list[str]:
             )
     _num(e, "control.damping", v["damping"], 0, L["max_damping"], lo_open=True)
     _num(e, "payload.radius", v["payload_radius"], 0, L["max_radius"])
+    n_joints = _n_joints(v)
     for k in ("position_variance", "velocity_variance"):
-        _nums(e, f"noise.{k}", v[k], 0, L["max_variance"], n=2)
+        _nums(e, f"noise.{k}", v[k], 0, L["max_variance"], n=n_joints)
     _num(e, "noise.dropout", v.get("dropout", 0.0), 0, 0.5)
     _check_payload(e, v, d_ok and T_ok)
     if not isinstance(v["reference"], Reference):
         e.append(f"reference: must be a Reference, got {_short(v['reference'])}")
     else:
-        _check_reference(e, v["reference"], v["sample_period"] if T_ok else None)
+        _check_reference(e, v["reference"], v["sample_period"] if T_ok else None, n_joints)
     _check_options(e, v["controller_options"], v["controllers"] if c_ok else ())
     if d_ok and T_ok and s_ok and c_ok:
         est = run_estimate(round(v["duration"] / v["sample_period"]), v["seeds"], len(v["controllers"]))
@@ -127,6 +128,11 @@ def scenario_errors(v: dict[str, Any]) -> list[str]:
                 f"{L['max_seconds'] / 3600:g} h (reduce run.duration, run.seeds or run.controllers)"
             )
     return e
+
+
+def _n_joints(v: dict) -> int:
+    arm = v.get("arm")
+    return arm.n_joints if arm is not None else 2
 
 
 def _label(name: str) -> str:
@@ -196,19 +202,19 @@ def _check_payload(e: list, v: dict, timing_ok: bool) -> None:
             )
 
 
-def _check_reference(e: list, ref: Any, T: float | None) -> None:
+def _check_reference(e: list, ref: Any, T: float | None, n: int = 2) -> None:
     from adaptive_dd.benchmark.scenario import LIMITS as L
 
     _num(e, "reference.ramp", ref.ramp, 0, 1e6)  # may outlast a short run: the ramp is just cut
     fmax = L["nyquist_fraction"] / T if T is not None else math.inf
     for name, obj in (("offset", ref.offset), ("amplitude", ref.amplitude), ("frequency", ref.frequency)):
-        if not isinstance(obj, tuple) or len(obj) != 2:
-            e.append(f"reference.{name}: must hold one entry per joint, got {_short(obj)}")
+        if not isinstance(obj, tuple) or len(obj) != n:
+            e.append(f"reference.{name}: must hold one entry per joint ({n}), got {_short(obj)}")
             return
-    if not isinstance(ref.phase, tuple) or len(ref.phase) != 2:
-        e.append(f"reference.phase: must hold one entry per joint, got {_short(ref.phase)}")
+    if not isinstance(ref.phase, tuple) or len(ref.phase) != n:
+        e.append(f"reference.phase: must hold one entry per joint ({n}), got {_short(ref.phase)}")
         return
-    for j in range(2):
+    for j in range(n):
         key = f"reference.joint{j + 1}"
         off_ok = _num(e, f"{key}.offset", ref.offset[j], -L["max_angle"], L["max_angle"])
         a, f, p = ref.amplitude[j], ref.frequency[j], ref.phase[j]
@@ -266,8 +272,11 @@ def _check_options(e: list, opts: Any, ctrls: tuple) -> None:
         _plain(e, f"controllers.{name}", table)
 
 
-def scenario_fields(data: Any, is_default: bool) -> tuple[dict[str, Any], list[str]]:
-    """Scenario fields from a parsed TOML dict (defaults filled in) and the structural errors."""
+def scenario_fields(data: Any, is_default: bool, arm: Any = None) -> tuple[dict[str, Any], list[str]]:
+    """Scenario fields from a parsed TOML dict (defaults filled in) and the structural errors.
+
+    ``arm`` (the scenario's arm, None if its tables were wrong) gives the number and
+    names of the joints and, for a URDF arm, the default noise variances."""
     from adaptive_dd.benchmark.scenario import _KEYS
 
     e: list[str] = []
@@ -311,12 +320,12 @@ def scenario_fields(data: Any, is_default: bool) -> tuple[dict[str, Any], list[s
         "controllers": get("run", "controllers", list(CONTROLLERS)),
         "bandwidth": get("control", "bandwidth", 40.0),
         "damping": get("control", "damping", 1.0),
-        "position_variance": get("noise", "position_variance", [1e-8, 1e-7]),
-        "velocity_variance": get("noise", "velocity_variance", [5e-5, 1e-4]),
+        "position_variance": get("noise", "position_variance", _default_noise(arm, "position_variance")),
+        "velocity_variance": get("noise", "velocity_variance", _default_noise(arm, "velocity_variance")),
         "dropout": get("noise", "dropout", 0.0),
     }
-    _payload_fields(e, tables.get("payload", []), v, defaulted)
-    v["reference"] = _reference_field(e, tables, is_default, defaulted)
+    _payload_fields(e, tables.get("payload", []), v, defaulted, arm)
+    v["reference"] = _reference_field(e, tables, is_default, defaulted, arm)
     v["controller_options"] = tuple(
         (str(n), freeze(o) if isinstance(o, dict) else o) for n, o in tables.get("controllers", {}).items()
     )
@@ -328,9 +337,48 @@ def scenario_fields(data: Any, is_default: bool) -> tuple[dict[str, Any], list[s
     return v, e
 
 
-def _payload_fields(e: list, items: list, v: dict, defaulted: set) -> None:
+def _default_noise(arm: Any, key: str) -> list:
+    from adaptive_dd.plant.serial_arm import SerialArm
+
+    if isinstance(arm, SerialArm):
+        return list(getattr(arm.sensor, key))
+    return [1e-8, 1e-7] if key == "position_variance" else [5e-5, 1e-4]
+
+
+def _payload_fields(e: list, items: list, v: dict, defaulted: set, arm: Any = None) -> None:
+    from adaptive_dd.plant.serial_arm import SerialArm, payload_parameters
+
     times, masses, radii = [], [], []
+    coms, inertias = [], []
     for i, p in enumerate(items):
+        for key, size in (("com", 3), ("inertia", 6)):
+            if key not in p:
+                (coms if key == "com" else inertias).append(None)
+                continue
+            x = p[key]
+            if arm is not None and not isinstance(arm, SerialArm):
+                e.append(
+                    f"payload[{i}].{key}: the two-link arm's payload is a disk at the tip (mass, radius); "
+                    "a centre of mass or inertia needs a URDF arm ([arm] urdf = ... or robot = ...)"
+                )
+            elif not (
+                isinstance(x, list)
+                and len(x) == size
+                and all(
+                    not isinstance(y, bool)
+                    and isinstance(y, int | float)
+                    and math.isfinite(y)
+                    and abs(y) <= 100
+                    for y in x
+                )
+            ):
+                e.append(f"payload[{i}].{key}: must be a list of {size} finite numbers, got {_short(x)}")
+            (coms if key == "com" else inertias).append(freeze(x))
+        if inertias[-1] is not None and isinstance(inertias[-1], tuple) and len(inertias[-1]) == 6:
+            try:
+                payload_parameters(1.0, None, inertias[-1])
+            except ValueError as exc:
+                e.append(f"payload[{i}].inertia: {exc}")
         missing = [k for k in ("at", "mass") if k not in p]
         for k in missing:
             e.append(f"payload[{i}].{k}: missing (each [[payload]] needs at and mass)")
@@ -344,21 +392,43 @@ def _payload_fields(e: list, items: list, v: dict, defaulted: set) -> None:
     if not radii:
         defaulted.add("payload.radius")
     v["swap_times"], v["swap_masses"] = tuple(times), tuple(masses)
+    v["swap_com"] = tuple(coms) if any(c is not None for c in coms) else ()
+    v["swap_inertia"] = tuple(inertias) if any(c is not None for c in inertias) else ()
     v["payload_radius"] = radii[0] if radii else 0.05
 
 
-def _reference_field(e: list, tables: dict, is_default: bool, defaulted: set) -> Any:
+def _reference_field(e: list, tables: dict, is_default: bool, defaulted: set, arm: Any = None) -> Any:
     from adaptive_dd.benchmark.scenario import Reference, load_scenario
 
+    n = arm.n_joints if arm is not None else 2
+    names = tuple(getattr(arm, "joint_names", ()))
     if "reference" not in tables:
-        if is_default:
-            e.append("reference: the default scenario must define [reference]")
-            return Reference((0.0, 0.0), ((), ()), ((), ()), ((), ()))
+        if is_default or n != 2:
+            e.append(
+                "reference: the default scenario must define [reference]"
+                if is_default
+                else f"reference: an arm of {n} joints needs a [reference] table with joint1 .. joint{n}"
+            )
+            return Reference((0.0,) * n, ((),) * n, ((),) * n, ((),) * n)
         defaulted.add("reference")
         return load_scenario().reference
     ref = tables["reference"]
+    keys = [f"joint{j + 1}" for j in range(n)]
+    for k in ref:
+        if k == "ramp" or k in keys:
+            continue
+        if k in names:
+            keys[names.index(k)] = k
+        else:
+            e.append(
+                f"reference.{k}: not a joint of this {n}-joint arm; use joint1 .. joint{n}"
+                + (f" or the URDF joint names {list(names)}" if names else "")
+            )
+    for j, k in enumerate(keys):
+        if k not in ref and not (names and names[j] in ref):
+            e.append(f"reference.{k}: missing; the arm has {n} joints and each needs a reference")
     parts: dict[str, list] = {"offset": [], "amplitude": [], "frequency": [], "phase": []}
-    for j in ("joint1", "joint2"):
+    for j in keys:
         spec = ref.get(j, {})
         if not isinstance(spec, dict):
             e.append(f"reference.{j}: must be an inline table {{ offset = ..., amplitude = [...] }}")

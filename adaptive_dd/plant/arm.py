@@ -202,6 +202,20 @@ class Arm:
         return replace(arm, **overrides) if overrides else arm
 
     @classmethod
+    def from_urdf(cls, path, payload_frame: str | None = None, gravity=(0.0, 0.0, -9.81), **overrides):
+        """Any serial arm from a URDF (:meth:`adaptive_dd.plant.serial_arm.SerialArm.from_urdf`).
+
+        Returns an :class:`Arm` when the URDF is the paper's kind of two-link arm
+        (:func:`~adaptive_dd.plant.serial_arm.as_two_link`: the closed-form fast path),
+        else the general :class:`~adaptive_dd.plant.serial_arm.SerialArm`.
+        """
+        from adaptive_dd.plant.serial_arm import SerialArm, as_two_link
+
+        general = SerialArm.from_urdf(path, payload_frame, gravity, **overrides)
+        two = as_two_link(general)
+        return general if two is None else two
+
+    @classmethod
     def from_physical(cls, physical: PhysicalParameters, **kwargs) -> Arm:
         """An arm from the physical parameters of eq. (10) (link lengths included).
 
@@ -455,7 +469,12 @@ def _plant_kwargs(src: str, plant: dict) -> dict:
 
 
 def arm_from_tables(arm_table: dict | None, plant_table: dict | None, src: str = "<memory>") -> Arm:
-    """The :class:`Arm` of a scenario's ``[arm]`` and ``[plant]`` tables.
+    """The arm of a scenario's ``[arm]`` and ``[plant]`` tables.
+
+    An ``[arm]`` table with ``urdf`` or ``robot`` describes any serial arm
+    (:func:`adaptive_dd.plant.serial_arm.urdf_arm_from_table`: a
+    :class:`~adaptive_dd.plant.serial_arm.SerialArm`, or an :class:`Arm` when the URDF
+    is the paper's kind of two-link arm). Otherwise:
 
     ``[arm]`` gives either the physical parameters (eq. 10)
     ``l1, l2, m1, m2, a1, a2, I1, I2, b = [b1, b2], d = [d1, d2]`` or the base
@@ -471,8 +490,13 @@ def arm_from_tables(arm_table: dict | None, plant_table: dict | None, src: str =
         Naming ``src``, the key and the reason: unknown key, missing key, wrong
         type, non-finite value, value out of range, inconsistent arm.
     """
+    plant_kw = _plant_kwargs(src, {} if plant_table is None else plant_table)
+    if isinstance(arm_table, dict) and ("urdf" in arm_table or "robot" in arm_table):
+        from adaptive_dd.plant.serial_arm import urdf_arm_from_table
+
+        return urdf_arm_from_table(src, arm_table, plant_kw)
     kw = Arm.sice().__dict__.copy() if arm_table is None else _arm_kwargs(src, arm_table)
-    kw.update(_plant_kwargs(src, {} if plant_table is None else plant_table))
+    kw.update(plant_kw)
     try:
         return Arm(**kw)
     except ParameterError as exc:

@@ -42,8 +42,10 @@ class ActuatorConfig:
 
     def __post_init__(self) -> None:
         lim = self.torque_limit
-        if len(lim) != 2 or not all(np.isfinite(lim)) or min(lim) <= 0:
-            raise ParameterError(f"torque_limit must be two positive values, got {self.torque_limit}")
+        if not 1 <= len(lim) <= 62 or not all(np.isfinite(lim)) or min(lim) <= 0:
+            raise ParameterError(
+                f"torque_limit must be one positive value per joint, got {self.torque_limit}"
+            )
         if self.dac_bits < 1:
             raise ParameterError(f"dac_bits must be >= 1, got {self.dac_bits}")
 
@@ -60,7 +62,7 @@ class ActuatorConfig:
 
         The compiled :func:`adaptive_dd.plant.sampling.actuate_trial` does the work (the
         compiled closed loop calls the same function)."""
-        cmd = np.ascontiguousarray(tau_cmd, dtype=float).reshape(-1, 2)
+        cmd = np.ascontiguousarray(tau_cmd, dtype=float).reshape(-1, len(self.torque_limit))
         tau = np.empty_like(cmd)
         sat = np.empty(cmd.shape, dtype=np.bool_)
         actuate_batch(cmd, self._lim, self._lsb, self.saturate, self.quantize, tau, sat)
@@ -90,10 +92,13 @@ class SensorConfig:
     velocity_variance: tuple[float, float] = (5e-5, 1e-4)
 
     def __post_init__(self) -> None:
+        n = len(self.encoder_counts)
         for name in ("encoder_counts", "position_variance", "velocity_variance"):
             v = getattr(self, name)
-            if len(v) != 2 or not all(np.isfinite(v)):
-                raise ParameterError(f"SensorConfig.{name} must be two finite values, got {v}")
+            if len(v) != n or n < 1 or not all(np.isfinite(v)):
+                raise ParameterError(
+                    f"SensorConfig.{name} must hold one finite value per joint ({n}), got {v}"
+                )
         if min(self.encoder_counts) <= 0:
             raise ParameterError(f"encoder_counts must be > 0, got {self.encoder_counts}")
         if min(self.position_variance) < 0 or min(self.velocity_variance) < 0:
@@ -109,11 +114,11 @@ class SensorConfig:
 
     @cached_property
     def noise_std(self) -> Array:
-        """Standard deviations ``[sq1, sq2, sqd1, sqd2]``."""
+        """Standard deviations ``[sq_1 .. sq_n, sqd_1 .. sqd_n]``."""
         return np.sqrt(np.concatenate((self.position_variance, self.velocity_variance)))
 
     def measure(self, q: Array, qd: Array, noise: Array) -> tuple[Array, Array]:
-        """Measured ``(q, qd)`` from true values ``(n, 2)`` and standard normal ``noise (n, 4)``
+        """Measured ``(q, qd)`` from true values ``(m, n)`` and standard normal ``noise (m, 2n)``
         (:func:`adaptive_dd.plant.sampling.measure_trial`)."""
         qm, qdm = np.empty_like(q), np.empty_like(qd)
         measure_batch(

@@ -15,12 +15,12 @@ __all__ = ["actuate_trial", "measure_trial", "project_trial"]
 
 @njit(cache=True)
 def actuate_trial(tau_cmd, lim, lsb, saturate, quantize, out):  # pragma: no cover - compiled
-    """Applied torque ``out (2,)`` from the command; returns a bit mask of saturated joints.
+    """Applied torque ``out (n,)`` from the command; returns a bit mask of saturated joints.
 
     Saturation at ``+-lim``; a D/A of step ``lsb`` whose top code is ``lim - lsb``.
     """
     mask = 0
-    for j in range(2):
+    for j in range(tau_cmd.shape[0]):
         t = tau_cmd[j]
         if abs(t) > lim[j]:
             mask |= 1 << j
@@ -36,19 +36,20 @@ def actuate_trial(tau_cmd, lim, lsb, saturate, quantize, out):  # pragma: no cov
 
 @njit(cache=True)
 def measure_trial(q, qd, noise, res, std, quantize, qm, qdm):  # pragma: no cover - compiled
-    """Measured ``qm, qdm (2,)``: encoder quantization of q, then additive noise ``noise (4,) * std``."""
-    for j in range(2):
+    """Measured ``qm, qdm (n,)``: encoder quantization of q, then additive noise ``noise (2n,) * std``."""
+    n = q.shape[0]
+    for j in range(n):
         p = np.round(q[j] / res[j]) * res[j] if quantize else q[j]
         qm[j] = p + noise[j] * std[j]
-        qdm[j] = qd[j] + noise[2 + j] * std[2 + j]
+        qdm[j] = qd[j] + noise[n + j] * std[n + j]
 
 
 @njit(cache=True)
 def actuate_batch(tau_cmd, lim, lsb, saturate, quantize, out, sat):  # pragma: no cover - compiled
     for i in range(tau_cmd.shape[0]):
         m = actuate_trial(tau_cmd[i], lim, lsb, saturate, quantize, out[i])
-        sat[i, 0] = (m & 1) != 0
-        sat[i, 1] = (m & 2) != 0
+        for j in range(tau_cmd.shape[1]):
+            sat[i, j] = (m & (1 << j)) != 0
 
 
 @njit(cache=True)

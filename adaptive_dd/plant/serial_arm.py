@@ -1,0 +1,748 @@
+"""The :class:`SerialArm`: any fixed-base serial arm from a URDF, with friction, armature and payload.
+
+Parameters
+----------
+Standard parameters ``pi`` (13 n): per link the ten inertial parameters about the
+joint frame (Pinocchio's order), then per joint viscous friction ``fv``, Coulomb
+friction ``fc`` and armature ``Ia`` (:mod:`adaptive_dd.plant.base_parameters`).
+The base parameters ``sigma = B pi`` (p of them) are found once per arm by QR
+with pivoting; the base regressor is a column subset of the standard one, so
+
+    arm.regressor(q, qd, qdd) @ arm.sigma == inverse dynamics (friction included),
+
+batch axis first, shape ``(..., n, p)``.
+
+Payload
+-------
+A rigid body fixed to the payload frame (a link of the URDF): mass ``m``, centre
+of mass ``c`` in that frame, inertia about the centre of mass ``I_c`` (or a disk
+of radius R, axis along the frame's z: ``I_c = m diag(R^2/4, R^2/4, R^2/2)``).
+Its ten parameters about the frame's origin, ``pi_p``, enter the base parameters
+linearly: ``sigma(payload) = sigma + P pi_p`` with ``P = payload_basis`` (p x 10,
+rank up to 10). :meth:`SerialArm.payload_from_sigma` inverts that by least
+squares on the identifiable part.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import NamedTuple
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from adaptive_dd.errors import ParameterError
+from adaptive_dd.plant.base_parameters import BaseParameters, base_parameters, standard_names
+from adaptive_dd.plant.devices import ActuatorConfig, SensorConfig
+from adaptive_dd.plant.urdf import read_urdf
+
+__all__ = ["DEFAULT_GRAVITY", "PayloadEstimate", "SerialArm", "payload_parameters"]
+
+Array = NDArray[np.float64]
+
+DEFAULT_GRAVITY = (0.0, 0.0, -9.81)
+"""Gravity in the base frame [m/s^2] unless a scenario or caller gives another."""
+DEFAULT_ENCODER_COUNTS = 2**20
+"""Counts per revolution of a URDF arm's encoders unless given (a 20-bit encoder)."""
+DEFAULT_POSITION_VARIANCE = 1e-8
+"""rad^2, as the SICE arm's joint 1 (Table 2 of the paper)."""
+DEFAULT_VELOCITY_VARIANCE = 5e-5
+"""(rad/s)^2, as the SICE arm's joint 1 (Table 4 of the paper)."""
+DEFAULT_DAC_BITS = 16
+"""D/A resolution of a URDF arm's torque command unless given."""
+_FRICTION_LAWS = ("stick-slip", "tanh", "stribeck")
+
+
+def payload_parameters(
+    mass: float, com: ArrayLike | None = None, inertia: ArrayLike | None = None, radius: float = 0.0
+) -> Array:
+    """The ten inertial parameters of a rigid body about its frame's origin, ``(10,)``.
+
+    Parameters
+    ----------
+    mass : float
+        [kg], >= 0.
+    com : array_like (3,), optional
+        Centre of mass in the body frame [m] (default the origin).
+    inertia : array_like (6,) or (3, 3), optional
+        Inertia about the centre of mass ``[ixx, iyy, izz, ixy, ixz, iyz]`` [kg m^2];
+        default a disk of ``radius`` about the frame's z axis.
+    radius : float
+        Disk radius [m] when ``inertia`` is not given.
+    """
+    m = float(mass)
+    if not math.isfinite(m) or m < 0:
+        raise ParameterError(f"payload mass must be finite and >= 0 kg, got {mass!r}")
+    c = np.zeros(3) if com is None else np.asarray(com, dtype=float)
+    if c.shape != (3,) or not np.all(np.isfinite(c)):
+        raise ParameterError(f"payload com must be 3 finite numbers [m], got {com!r}")
+    if inertia is None:
+        r2 = float(radius) ** 2
+        Ic = m * np.diag([r2 / 4, r2 / 4, r2 / 2])
+    else:
+        v = np.asarray(inertia, dtype=float)
+        if v.shape == (6,):
+            ixx, iyy, izz, ixy, ixz, iyz = v
+            Ic = np.array([[ixx, ixy, ixz], [ixy, iyy, iyz], [ixz, iyz, izz]])
+        elif v.shape == (3, 3):
+            Ic = v
+        else:
+            raise ParameterError(f"payload inertia must be [ixx, iyy, izz, ixy, ixz, iyz], got {inertia!r}")
+        lam = np.linalg.eigvalsh(0.5 * (Ic + Ic.T))
+        if not np.all(np.isfinite(lam)) or lam[0] < -1e-12 or lam[2] > lam[0] + lam[1] + 1e-12:
+            raise ParameterError(
+                f"payload inertia {v.tolist()} is not a rigid body's (principal moments {lam.tolist()}: "
+                "each must be >= 0 and at most the sum of the other two)"
+            )
+    Io = Ic + m * (c @ c * np.eye(3) - np.outer(c, c))
+    return np.array([m, *(m * c), Io[0, 0], Io[0, 1], Io[1, 1], Io[0, 2], Io[1, 2], Io[2, 2]])
+
+
+class PayloadEstimate(NamedTuple):
+    """A payload recovered from base parameters (:meth:`SerialArm.payload_from_sigma`).
+
+    ``mass`` [kg], ``com`` (3,) [m] in the payload frame (nan where not identifiable),
+    ``params`` (10,) least-squares parameters about the frame origin, ``identifiable``
+    (10,) bool: which of the ten are determined by the base parameters.
+    """
+
+    mass: Array
+    com: Array
+    params: Array
+    identifiable: NDArray[np.bool_]
+
+
+def _vec(name: str, v, n: int, lo: float = 0.0) -> Array:
+    a = np.array(v, dtype=float).reshape(-1)
+    if a.shape != (n,) or not np.all(np.isfinite(a)) or np.any(a < lo):
+        raise ParameterError(f"SerialArm.{name} must be {n} finite values >= {lo:g}, got {v!r}")
+    a.setflags(write=False)
+    return a
+
+
+@dataclass(frozen=True, eq=False)
+class SerialArm:
+    """A fixed-base serial arm of n revolute/prismatic joints described by a URDF.
+
+    Build it with :meth:`from_urdf`. Immutable; :func:`dataclasses.replace` makes
+    variants (other friction, limits, sensors, plant friction law).
+
+    Attributes
+    ----------
+    urdf : Path
+        The description.
+    payload_frame : str
+        The link that carries the payload.
+    gravity : ndarray (3,)
+        [m/s^2] in the base frame.
+    viscous, coulomb, armature : ndarray (n,)
+        Per joint [N m s, N m, kg m^2] (URDF ``<dynamics damping friction>``; armature 0
+        unless given).
+    position_limits : ndarray (n, 2)
+        [rad or m]; ``+-inf`` for continuous joints.
+    velocity_limits : ndarray (n,)
+        [rad/s or m/s].
+    actuator : ActuatorConfig
+        Torque limits (URDF ``effort``) and D/A.
+    sensor : SensorConfig
+        Encoders and noise.
+    payload_radius : float
+        Default disk radius [m] of a payload given by mass alone.
+    friction, friction_velocity, stribeck_ratio, stribeck_velocity
+        The simulated plant's friction law, as on :class:`adaptive_dd.plant.arm.Arm`.
+    """
+
+    urdf: Path
+    payload_frame: str
+    gravity: Array
+    viscous: Array
+    coulomb: Array
+    armature: Array
+    position_limits: Array
+    velocity_limits: Array
+    actuator: ActuatorConfig
+    sensor: SensorConfig
+    joint_names: tuple[str, ...] = ()
+    locked: tuple[str, ...] = ()
+    payload_radius: float = 0.05
+    friction: str = "stick-slip"
+    friction_velocity: float = 0.02
+    stribeck_ratio: float = 1.5
+    stribeck_velocity: float = 0.1
+    _cache: dict = field(default_factory=dict, repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "urdf", Path(self.urdf))
+        n = len(self.joint_names)
+        if n < 1:
+            raise ParameterError("SerialArm needs at least one joint")
+        g = np.array(self.gravity, dtype=float)
+        if g.shape != (3,) or not np.all(np.isfinite(g)) or np.linalg.norm(g) > 100:
+            raise ParameterError(
+                f"SerialArm.gravity must be 3 finite numbers of norm <= 100 m/s^2, got {self.gravity!r}"
+            )
+        g.setflags(write=False)
+        object.__setattr__(self, "gravity", g)
+        for name in ("viscous", "coulomb", "armature"):
+            object.__setattr__(self, name, _vec(name, getattr(self, name), n))
+        lim = np.array(self.position_limits, dtype=float)
+        if lim.shape != (n, 2) or np.any(np.isnan(lim)) or np.any(lim[:, 0] >= lim[:, 1]):
+            raise ParameterError(f"SerialArm.position_limits must be (n, 2) with lower < upper, got {lim!r}")
+        lim.setflags(write=False)
+        object.__setattr__(self, "position_limits", lim)
+        vel = np.array(self.velocity_limits, dtype=float)
+        if vel.shape != (n,) or np.any(np.isnan(vel)) or np.any(vel <= 0):
+            raise ParameterError(f"SerialArm.velocity_limits must be {n} values > 0, got {vel!r}")
+        vel.setflags(write=False)
+        object.__setattr__(self, "velocity_limits", vel)
+        if len(self.actuator.torque_limit) != n or len(self.sensor.encoder_counts) != n:
+            raise ParameterError(
+                f"SerialArm: actuator and sensor must have {n} joints, got "
+                f"{len(self.actuator.torque_limit)} and {len(self.sensor.encoder_counts)}"
+            )
+        if not (math.isfinite(self.payload_radius) and 0 <= self.payload_radius <= 10):
+            raise ParameterError(
+                f"SerialArm.payload_radius must be in [0, 10] m, got {self.payload_radius!r}"
+            )
+        if self.friction not in _FRICTION_LAWS:
+            raise ParameterError(f"SerialArm.friction must be one of {_FRICTION_LAWS}, got {self.friction!r}")
+        for name in ("friction_velocity", "stribeck_velocity"):
+            v = getattr(self, name)
+            if not (math.isfinite(v) and v > 0):
+                raise ParameterError(f"SerialArm.{name} must be > 0, got {v!r}")
+        if not (math.isfinite(self.stribeck_ratio) and self.stribeck_ratio >= 1):
+            raise ParameterError(f"SerialArm.stribeck_ratio must be >= 1, got {self.stribeck_ratio!r}")
+        object.__setattr__(self, "_cache", {})
+
+    # ----------------------------------------------------------------- factories
+    @classmethod
+    def from_urdf(
+        cls,
+        path: str | Path,
+        payload_frame: str | None = None,
+        gravity: ArrayLike = DEFAULT_GRAVITY,
+        **overrides,
+    ) -> SerialArm:
+        """An arm from a URDF file (checked by :func:`adaptive_dd.plant.urdf.read_urdf`).
+
+        ``overrides`` replace fields (``viscous``, ``coulomb``, ``armature``, ``sensor``,
+        ``actuator``, ``friction``, ...). Friction comes from ``<dynamics>``, torque
+        limits from ``<limit effort>``.
+        """
+        robot = read_urdf(path, payload_frame)
+        n = len(robot.joints)
+        kw = dict(
+            urdf=Path(path),
+            payload_frame=robot.payload_frame,
+            gravity=np.asarray(gravity, dtype=float),
+            viscous=[j.damping for j in robot.joints],
+            coulomb=[j.friction for j in robot.joints],
+            armature=np.zeros(n),
+            position_limits=[[j.lower, j.upper] for j in robot.joints],
+            velocity_limits=[j.velocity for j in robot.joints],
+            actuator=ActuatorConfig(tuple(j.effort for j in robot.joints), dac_bits=DEFAULT_DAC_BITS),
+            sensor=SensorConfig(
+                encoder_counts=(DEFAULT_ENCODER_COUNTS,) * n,
+                position_variance=(DEFAULT_POSITION_VARIANCE,) * n,
+                velocity_variance=(DEFAULT_VELOCITY_VARIANCE,) * n,
+            ),
+            joint_names=robot.joint_names,
+            locked=robot.locked,
+        )
+        kw.update(overrides)
+        return cls(**kw)
+
+    # ------------------------------------------------------------ derived, cached
+    def _cached(self, key: str, make):
+        if key not in self._cache:
+            self._cache[key] = make()
+        return self._cache[key]
+
+    def __getstate__(self) -> dict:
+        state = self.__dict__.copy()
+        state["_cache"] = {}
+        return state
+
+    def __setstate__(self, state: dict) -> None:
+        self.__dict__.update(state)
+
+    @property
+    def n_joints(self) -> int:
+        return len(self.joint_names)
+
+    @property
+    def model(self):
+        """The Pinocchio model (gravity set; off-chain joints locked)."""
+        return self._cached("model", lambda: read_urdf(self.urdf, self.payload_frame).model(self.gravity))
+
+    @property
+    def chain(self):
+        """The arrays the compiled kernels take (:class:`adaptive_dd.plant.chain.Chain`)."""
+        from adaptive_dd.plant.chain import chain_from_model
+
+        return self._cached("chain", lambda: chain_from_model(self.model))
+
+    @property
+    def pi_links(self) -> Array:
+        """Standard inertial parameters of the links, ``(10 n,)``."""
+
+        def make():
+            m = self.model
+            return np.concatenate([m.inertias[i].toDynamicParameters() for i in range(1, m.njoints)])
+
+        return self._cached("pi_links", make)
+
+    @property
+    def pi(self) -> Array:
+        """All standard parameters ``[links, fv, fc, Ia]``, ``(13 n,)``."""
+        return np.concatenate([self.pi_links, self.viscous, self.coulomb, self.armature])
+
+    @property
+    def base(self) -> BaseParameters:
+        """The base parameter structure (QR on 60 random states, seed 0: deterministic)."""
+        lim = self.position_limits
+        return self._cached(
+            "base",
+            lambda: base_parameters(
+                self.standard_regressor, self.n_joints, lim[:, 0], lim[:, 1], np.random.default_rng(0)
+            ),
+        )
+
+    @property
+    def sigma(self) -> Array:
+        """Base parameters of the arm without payload, ``(p,)``."""
+        return self.base.B @ self.pi
+
+    @property
+    def sigma_names(self) -> tuple[str, ...]:
+        return self.base.names
+
+    @property
+    def standard_names(self) -> tuple[str, ...]:
+        return standard_names(self.n_joints)
+
+    @property
+    def payload_joint(self) -> int:
+        """Index (0-based) of the link that carries the payload frame."""
+        return self._payload_frame[0]
+
+    @property
+    def _payload_frame(self):
+        def make():
+            m = self.model
+            if not m.existFrame(self.payload_frame):
+                raise ParameterError(f"{self.urdf}: payload frame {self.payload_frame!r} not in the model")
+            f = m.frames[m.getFrameId(self.payload_frame)]
+            return int(f.parentJoint) - 1, f.placement
+
+        return self._cached("payload_frame", make)
+
+    @property
+    def payload_map(self) -> Array:
+        """``(10, 10)``: payload parameters about the payload frame -> about its link's joint frame."""
+
+        def make():
+            import pinocchio as pin
+
+            _, placement = self._payload_frame
+            p0 = payload_parameters(1.0, [0.01, 0.02, 0.03], radius=0.1)
+
+            def moved(p):
+                return placement.act(pin.Inertia.FromDynamicParameters(p)).toDynamicParameters()
+
+            base = moved(p0)
+            return np.stack([moved(p0 + np.eye(10)[k]) - base for k in range(10)], axis=1)
+
+        return self._cached("payload_map", make)
+
+    @property
+    def payload_basis(self) -> Array:
+        """``(p, 10)``: how the payload's ten parameters (about its frame) move sigma."""
+        j = self.payload_joint
+        return self.base.B[:, 10 * j : 10 * j + 10] @ self.payload_map
+
+    # ------------------------------------------------------------------ dynamics
+    def standard_regressor(self, q: ArrayLike, qd: ArrayLike, qdd: ArrayLike) -> Array:
+        """``W(q, qd, qdd)`` of the standard parameters, ``(..., n, 13 n)``."""
+        q, qd, qdd = (np.asarray(x, dtype=float) for x in (q, qd, qdd))
+        n = self.n_joints
+        shape = np.broadcast_shapes(q.shape, qd.shape, qdd.shape)
+        if shape[-1:] != (n,):
+            raise ParameterError(f"states must have shape (..., {n}), got {shape}")
+        q, qd, qdd = (np.broadcast_to(x, shape).reshape(-1, n) for x in (q, qd, qdd))
+        Y = self._rigid_regressor(q, qd, qdd)
+        eye = np.eye(n)
+        W = np.concatenate(
+            [Y, eye * qd[:, None, :], eye * np.sign(qd)[:, None, :], eye * qdd[:, None, :]], axis=2
+        )
+        return W.reshape(*shape[:-1], n, 13 * n)
+
+    def _rigid_regressor(self, q: Array, qd: Array, qdd: Array) -> Array:
+        import pinocchio as pin
+
+        m = self.model
+        data = m.createData()
+        out = np.empty((q.shape[0], self.n_joints, 10 * self.n_joints))
+        for i in range(q.shape[0]):
+            out[i] = pin.computeJointTorqueRegressor(m, data, self.pin_configuration(q[i]), qd[i], qdd[i])
+        return out
+
+    def pin_configuration(self, q: ArrayLike) -> Array:
+        """Pinocchio's configuration of joint positions ``q (n,)`` (continuous joints as cos, sin)."""
+        m = self.model
+        out = []
+        for i, x in enumerate(np.asarray(q, dtype=float)):
+            out += [np.cos(x), np.sin(x)] if m.joints[i + 1].nq == 2 else [x]
+        return np.array(out)
+
+    def regressor(self, q: ArrayLike, qd: ArrayLike, qdd: ArrayLike) -> Array:
+        """Base regressor ``(..., n, p)``: ``regressor @ sigma`` is the joint torque."""
+        return self.standard_regressor(q, qd, qdd)[..., self.base.independent]
+
+    def inverse_dynamics(self, q, qd, qdd, sigma: ArrayLike | None = None) -> Array:
+        """Joint torques ``(..., n)`` (friction and armature included)."""
+        s = self.sigma if sigma is None else np.asarray(sigma, dtype=float)
+        return np.einsum("...ij,...j->...i", self.regressor(q, qd, qdd), s)
+
+    def mass_matrix(self, q: ArrayLike, sigma: ArrayLike | None = None) -> Array:
+        """M(q) with armature, ``(..., n, n)``, from base parameters (default :attr:`sigma`)."""
+        q = np.asarray(q, dtype=float)
+        n = self.n_joints
+        zero = np.zeros_like(q)
+        s = self.sigma if sigma is None else np.asarray(sigma, dtype=float)
+        g = self.inverse_dynamics(q, zero, zero, s)
+        cols = [
+            self.inverse_dynamics(q, zero, np.broadcast_to(np.eye(n)[k], q.shape), s) - g for k in range(n)
+        ]
+        return np.stack(cols, axis=-1)
+
+    def nominal_inertia(self) -> Array:
+        """Diagonal of M at the middle of the position limits (0 for unbounded joints), ``(n,)``."""
+        lim = self.position_limits
+        mid = np.where(np.isfinite(lim).all(axis=1), lim.mean(axis=1), 0.0)
+        return np.diag(self.mass_matrix(mid)).copy()
+
+    # ------------------------------------------------------------------- payload
+    def sigma_with_payload(
+        self,
+        mass: ArrayLike,
+        com: ArrayLike | None = None,
+        inertia: ArrayLike | None = None,
+        radius: float | None = None,
+        sigma0: ArrayLike | None = None,
+    ) -> Array:
+        """Base parameters with a rigid body on the payload frame, ``(..., p)``.
+
+        ``mass`` may be an array (one disk per entry, the same com and inertia);
+        ``radius`` (default :attr:`payload_radius`) is used when ``inertia`` is not given.
+        """
+        base = self.sigma if sigma0 is None else np.asarray(sigma0, dtype=float)
+        rad = self.payload_radius if radius is None else radius
+        m = np.asarray(mass, dtype=float)
+        if inertia is None:  # a disk: every parameter scales with the mass
+            pp = m[..., None] * payload_parameters(1.0, com, radius=rad)
+        else:
+            flat = [payload_parameters(float(x), com, inertia) for x in m.reshape(-1)]
+            pp = np.reshape(flat, (*m.shape, 10))
+        return base + pp @ self.payload_basis.T
+
+    def payload_direction(self, radius: ArrayLike | None = None) -> Array:
+        """``d sigma / d m`` of a disk at the payload frame's origin, ``(p,)``."""
+        rad = self.payload_radius if radius is None else float(radius)
+        return self.payload_basis @ payload_parameters(1.0, radius=rad)
+
+    def payload_from_sigma(self, sigma_hat: ArrayLike, sigma0: ArrayLike | None = None) -> PayloadEstimate:
+        """The payload implied by base parameters ``(..., p)`` (least squares on :attr:`payload_basis`).
+
+        Parameters not determined by the base parameters (a null direction of the
+        basis) are reported in ``identifiable``; the com of an unidentifiable axis is nan.
+        """
+        s0 = self.sigma if sigma0 is None else np.asarray(sigma0, dtype=float)
+        d = np.asarray(sigma_hat, dtype=float) - s0
+        P = self.payload_basis
+        pinv = np.linalg.pinv(P, rcond=1e-9)
+        params = d @ pinv.T
+        ident = self.payload_identifiable
+        m = params[..., 0]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            com = params[..., 1:4] / m[..., None]
+        com = np.where(ident[1:4], com, np.nan)
+        return PayloadEstimate(m, com, params, ident)
+
+    @property
+    def payload_identifiable(self) -> NDArray[np.bool_]:
+        """Which of the payload's ten parameters the base parameters determine, ``(10,)``."""
+
+        def make():
+            P = self.payload_basis
+            _, s, vt = np.linalg.svd(P)
+            null = vt[np.sum(s > 1e-9 * s[0]) :]
+            return np.all(np.abs(null) < 1e-8, axis=0) if len(null) else np.ones(10, dtype=bool)
+
+        return self._cached("payload_ident", make)
+
+    def payload_mass_from_sigma(self, sigma_hat: ArrayLike) -> Array:
+        """Payload mass [kg] implied by base parameters ``(..., p)``, shape ``(...)``."""
+        return self.payload_from_sigma(sigma_hat).mass
+
+    @property
+    def payload_rank(self) -> int:
+        """Rank of :attr:`payload_basis` (how many payload directions the base parameters see)."""
+        s = np.linalg.svd(self.payload_basis, compute_uv=False)
+        return int(np.sum(s > 1e-9 * s[0]))
+
+    # -------------------------------------------------------------------- misc
+    @property
+    def friction_code(self) -> int:
+        return _FRICTION_LAWS.index(self.friction)
+
+    @property
+    def friction_params(self) -> tuple[float, float, float]:
+        return (self.friction_velocity, self.stribeck_ratio, self.stribeck_velocity)
+
+    def with_(self, **changes) -> SerialArm:
+        """:func:`dataclasses.replace`, keeping nothing cached that depends on what changed."""
+        return replace(self, **changes)
+
+    def to_dict(self) -> dict:
+        """JSON-able description (for results metadata)."""
+        return {
+            "urdf": str(self.urdf),
+            "joints": list(self.joint_names),
+            "locked": list(self.locked),
+            "payload_frame": self.payload_frame,
+            "gravity": self.gravity.tolist(),
+            "viscous": self.viscous.tolist(),
+            "coulomb": self.coulomb.tolist(),
+            "armature": self.armature.tolist(),
+            "position_limits": self.position_limits.tolist(),
+            "velocity_limits": self.velocity_limits.tolist(),
+            "torque_limit": list(self.actuator.torque_limit),
+            "sigma": self.sigma.tolist(),
+            "sigma_names": list(self.sigma_names),
+            "payload_radius": self.payload_radius,
+            "friction": self.friction,
+            "friction_velocity": self.friction_velocity,
+            "stribeck_ratio": self.stribeck_ratio,
+            "stribeck_velocity": self.stribeck_velocity,
+        }
+
+    def _key(self) -> tuple:
+        return (
+            str(self.urdf),
+            self.payload_frame,
+            self.joint_names,
+            tuple(self.gravity),
+            tuple(self.viscous),
+            tuple(self.coulomb),
+            tuple(self.armature),
+            tuple(map(tuple, self.position_limits)),
+            tuple(self.velocity_limits),
+            self.actuator,
+            self.sensor,
+            self.payload_radius,
+            self.friction,
+            self.friction_params,
+        )
+
+    def __eq__(self, other: object) -> bool:
+        return isinstance(other, SerialArm) and self._key() == other._key()
+
+    def __hash__(self) -> int:
+        return hash(self._key())
+
+
+# ------------------------------------------------------------------ the fast path
+def as_two_link(arm: SerialArm, atol: float = 1e-12):
+    """The two-link :class:`~adaptive_dd.plant.arm.Arm` equal to ``arm``, or None if it is not one.
+
+    The closed forms of the paper (eqs. 3-8) hold for two revolute joints about
+    parallel z axes, joint 2 at ``(l1, 0, 0)`` of joint 1's frame, centres of mass
+    on the links' x axes, gravity along z (no gravity torque), no armature, and the
+    payload frame at ``(l2, 0, z)`` of link 2 with its axes aligned. Such an arm is
+    exactly an :class:`Arm` (physical parameters of eq. 10); the benchmark then runs
+    the two-link kernels, held equal to the general ones by a test.
+    """
+    from adaptive_dd.plant.arm import Arm
+    from adaptive_dd.plant.parameters import PhysicalParameters
+
+    if arm.n_joints != 2 or np.any(arm.armature != 0) or arm.locked:
+        return None
+    m = arm.model
+    for i in (1, 2):
+        j = m.joints[i]
+        if j.shortname() not in ("JointModelRZ", "JointModelRUBZ"):
+            return None
+        if not np.allclose(m.jointPlacements[i].rotation, np.eye(3), atol=atol):
+            return None
+    p2 = m.jointPlacements[2].translation
+    if abs(p2[1]) > atol or p2[0] <= 0:
+        return None
+    if abs(arm.gravity[0]) > atol or abs(arm.gravity[1]) > atol:
+        return None
+    link, placement = arm._payload_frame
+    pt = placement.translation
+    if (
+        link != 1
+        or abs(pt[1]) > atol
+        or pt[0] <= 0
+        or not np.allclose(placement.rotation, np.eye(3), atol=atol)
+    ):
+        return None
+    inert = [m.inertias[i] for i in (1, 2)]
+    if any(abs(body.lever[1]) > atol for body in inert):
+        return None
+    lo, hi = arm.position_limits[:, 0], arm.position_limits[:, 1]
+    del lo, hi  # the two-link Arm has no position limits; the scenario's reference keeps within them
+    phys = PhysicalParameters(
+        I1=float(inert[0].inertia[2, 2]),
+        I2=float(inert[1].inertia[2, 2]),
+        m1=float(inert[0].mass),
+        m2=float(inert[1].mass),
+        a1=float(inert[0].lever[0]),
+        a2=float(inert[1].lever[0]),
+        b1=float(arm.viscous[0]),
+        b2=float(arm.viscous[1]),
+        d1=float(arm.coulomb[0]),
+        d2=float(arm.coulomb[1]),
+        l1=float(p2[0]),
+        l2=float(pt[0]),
+    )
+    return Arm.from_physical(
+        phys,
+        payload_radius=arm.payload_radius,
+        actuator=arm.actuator,
+        sensor=arm.sensor,
+        friction=arm.friction,
+        friction_velocity=arm.friction_velocity,
+        stribeck_ratio=arm.stribeck_ratio,
+        stribeck_velocity=arm.stribeck_velocity,
+    )
+
+
+# ------------------------------------------------------------------ scenario tables
+URDF_ARM_KEYS = (
+    "urdf",
+    "robot",
+    "payload_frame",
+    "gravity",
+    "viscous",
+    "coulomb",
+    "armature",
+    "torque_limit",
+    "encoder_counts",
+    "dac_bits",
+    "payload_radius",
+    "general",
+)
+"""Keys of an ``[arm]`` table that names a URDF (``urdf = "file"`` or ``robot = "ur5"``)."""
+
+
+def urdf_arm_from_table(src: str, table: dict, plant_kw: dict):
+    """The arm of an ``[arm]`` table with ``urdf`` (a path relative to the scenario file) or ``robot``.
+
+    ``robot`` names a shipped robot (:data:`adaptive_dd.robots.ROBOTS`). Optional:
+    ``payload_frame`` (a link), ``gravity = [x, y, z]`` (default ``[0, 0, -9.81]``),
+    per-joint lists ``viscous``, ``coulomb``, ``armature``, ``torque_limit``,
+    ``encoder_counts``, and ``dac_bits``, ``payload_radius``. A URDF that is the
+    paper's kind of two-link arm becomes an :class:`~adaptive_dd.plant.arm.Arm` (the
+    closed-form fast path, :func:`as_two_link`) unless ``general = true``.
+
+    Raises
+    ------
+    ScenarioError
+        Naming ``src``, the key and the reason (URDF problems name the URDF file too).
+    """
+    from adaptive_dd.errors import ScenarioError, UrdfError
+
+    unknown = [k for k in table if k not in URDF_ARM_KEYS]
+    if unknown:
+        raise ScenarioError(
+            f"{src}: unknown key 'arm.{unknown[0]}'; allowed with a URDF: {sorted(URDF_ARM_KEYS)}"
+        )
+    if ("urdf" in table) == ("robot" in table):
+        raise ScenarioError(
+            f"{src}: [arm] needs exactly one of 'urdf' (a file) and 'robot' (a shipped robot)"
+        )
+    frame = table.get("payload_frame")
+    if frame is not None and not isinstance(frame, str):
+        raise ScenarioError(f"{src}: key 'arm.payload_frame' must be a link name, got {frame!r}")
+    if "robot" in table:
+        from adaptive_dd.robots import ROBOTS, robot_urdf
+
+        name = table["robot"]
+        if name not in ROBOTS:
+            raise ScenarioError(
+                f"{src}: key 'arm.robot' = {name!r} is not a shipped robot; known: {sorted(ROBOTS)}"
+            )
+        path = robot_urdf(name)
+        frame = frame or ROBOTS[name].payload_frame
+    else:
+        if not isinstance(table["urdf"], str) or not table["urdf"]:
+            raise ScenarioError(f"{src}: key 'arm.urdf' must be a file path, got {table['urdf']!r}")
+        path = Path(table["urdf"])
+        if not path.is_absolute():
+            path = (Path(src).parent if Path(src).is_file() else Path.cwd()) / path
+    gravity = table.get("gravity", list(DEFAULT_GRAVITY))
+    if not (isinstance(gravity, list) and len(gravity) == 3 and all(_is_num(x) for x in gravity)):
+        raise ScenarioError(f"{src}: key 'arm.gravity' must be [x, y, z] in m/s^2, got {gravity!r}")
+    try:
+        arm = SerialArm.from_urdf(path, frame, gravity=[float(x) for x in gravity])
+    except UrdfError as exc:
+        raise ScenarioError(f"{src}: [arm] urdf: {exc}") from None
+    except ParameterError as exc:
+        raise ScenarioError(f"{src}: [arm]: {exc}") from None
+    n = arm.n_joints
+    kw: dict = dict(plant_kw)
+    for key, lo in (("viscous", 0.0), ("coulomb", 0.0), ("armature", 0.0)):
+        if key in table:
+            kw[key] = _table_vector(src, key, table[key], n, lo, strict=False)
+    if "torque_limit" in table:
+        lim = _table_vector(src, "torque_limit", table["torque_limit"], n, 0.0, strict=True)
+        kw["actuator"] = replace(arm.actuator, torque_limit=tuple(lim))
+    if "dac_bits" in table:
+        bits = table["dac_bits"]
+        if isinstance(bits, bool) or not isinstance(bits, int) or not 1 <= bits <= 32:
+            raise ScenarioError(f"{src}: key 'arm.dac_bits' must be an integer in [1, 32], got {bits!r}")
+        kw["actuator"] = replace(kw.get("actuator", arm.actuator), dac_bits=bits)
+    if "encoder_counts" in table:
+        counts = _table_vector(src, "encoder_counts", table["encoder_counts"], n, 0.0, strict=True)
+        if np.any(counts != np.round(counts)) or np.any(counts > 2**40):
+            raise ScenarioError(
+                f"{src}: key 'arm.encoder_counts' must be integers in [1, 2^40], got {counts}"
+            )
+        kw["sensor"] = replace(arm.sensor, encoder_counts=tuple(int(c) for c in counts))
+    if "payload_radius" in table:
+        r = table["payload_radius"]
+        if not _is_num(r) or not 0 <= r <= 0.5:
+            raise ScenarioError(f"{src}: key 'arm.payload_radius' must be in [0, 0.5] m, got {r!r}")
+        kw["payload_radius"] = float(r)
+    try:
+        arm = replace(arm, **kw)
+        _ = arm.sigma  # base parameters now, so that a singular model is reported here
+    except ParameterError as exc:
+        raise ScenarioError(f"{src}: [arm]/[plant]: {exc}") from None
+    general = table.get("general", False)
+    if not isinstance(general, bool):
+        raise ScenarioError(f"{src}: key 'arm.general' must be true or false, got {general!r}")
+    two = None if general else as_two_link(arm)
+    return arm if two is None else two
+
+
+def _is_num(x) -> bool:
+    return not isinstance(x, bool) and isinstance(x, int | float) and math.isfinite(x)
+
+
+def _table_vector(src: str, key: str, v, n: int, lo: float, strict: bool) -> Array:
+    from adaptive_dd.errors import ScenarioError
+
+    if not isinstance(v, list) or len(v) != n or not all(_is_num(x) for x in v):
+        raise ScenarioError(
+            f"{src}: key 'arm.{key}' must be a list of {n} finite numbers (one per joint), got {v!r}"
+        )
+    a = np.array(v, dtype=float)
+    if np.any(a <= lo if strict else a < lo):
+        raise ScenarioError(f"{src}: key 'arm.{key}' must be {'>' if strict else '>='} {lo:g}, got {v!r}")
+    return a
