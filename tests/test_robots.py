@@ -147,6 +147,7 @@ def test_sice_tip_frame():
 def test_sice_limits_not_reached_by_shipped_scenario():
     model = _load("sice_arm")
     scen = tomllib.loads((ROOT / "adaptive_dd" / "scenarios" / "payload_swap.toml").read_text())
+    peaks = []
     for k in range(2):
         ref = scen["reference"][f"joint{k + 1}"]
         amp, freq = np.asarray(ref["amplitude"]), np.asarray(ref["frequency"])
@@ -154,6 +155,10 @@ def test_sice_limits_not_reached_by_shipped_scenario():
         qd_max = float(np.sum(amp * 2 * PI * freq))
         assert q_max < 0.5 * model.upperPositionLimit[k] and -q_max > 0.5 * model.lowerPositionLimit[k]
         assert qd_max < 0.6 * model.velocityLimit[k]
+        peaks.append((q_max, qd_max))
+    # the figures the file's comment gives
+    (q1, qd1), (q2, qd2) = peaks
+    assert f"{q1:.1f} / {q2:.1f} rad and {qd1:.2f} / {qd2:.2f} rad/s" in robot_urdf("sice_arm").read_text()
 
 
 # --------------------------------------------------------------------------------- vertical3
@@ -172,8 +177,11 @@ def test_vertical3_gravity_below_half_the_effort():
         worst = np.maximum(worst, np.abs(pin.computeGeneralizedGravity(model, data, q)))
     np.testing.assert_allclose(worst, np.abs(stretched), rtol=0.02)
     assert np.all(worst < 0.5 * model.effortLimit), (worst, model.effortLimit)
-    # a hand value for joint 3: m3 g L3/2
-    np.testing.assert_allclose(abs(stretched[2]), 1.5 * 9.81 * 0.125, rtol=1e-12)
+    # by hand (masses 4, 3, 1.5 kg at the middle of links 0.4, 0.35, 0.25 m), as the file's comment says
+    by_hand = 9.81 * np.array([4 * 0.2 + 3 * 0.575 + 1.5 * 0.875, 3 * 0.175 + 1.5 * 0.475, 1.5 * 0.125])
+    np.testing.assert_allclose(np.abs(stretched), by_hand, rtol=1e-12)
+    text = robot_urdf("vertical3").read_text()
+    assert " / ".join(f"{t:.1f}" for t in by_hand) + " N m" in text
 
 
 # ---------------------------------------------------------------------------------- UR5

@@ -126,9 +126,9 @@ Izz of each link is I_i about its centre of mass; Ixx = Iyy = Izz (not seen by p
 chosen so the inertia is positive definite and meets the triangle inequality).
 <dynamics> damping = b_i [N m s/rad], friction = d_i [N m] of Table 1.
 Position limits +-pi and velocity limits {_f(2 * PI)} rad/s are this project's choice, not the
-paper's: the shipped scenario adaptive_dd/scenarios/payload_swap.toml asks at most 0.7 / 0.8 rad
-and 2.64 / 3.52 rad/s of joints 1 / 2 (sum of its sine amplitudes, and of amplitude * 2 pi f);
-tests/test_robots.py checks this margin against the scenario file.
+paper's: the shipped scenario adaptive_dd/scenarios/payload_swap.toml asks of joints 1 / 2 at most
+0.7 / 0.8 rad and 2.64 / 3.52 rad/s (sum of its sine amplitudes, and of amplitude * 2 pi f);
+tests/test_robots.py checks these figures and the margin against the scenario file.
 Frame `tip` (fixed, at l2 along link 2) is the payload frame: the paper's disk sits there.
 """
     vel = 2 * PI
@@ -185,9 +185,23 @@ VERTICAL3 = {
 }
 
 
+def vertical3_static_gravity(g: float = 9.81) -> tuple[float, ...]:
+    """Gravity torque [N m] of each joint of vertical3 at the stretched-out pose (q = 0), by hand.
+
+    ``tau_j = g * sum_{k >= j} m_k (x_k - x_j)`` with ``x_k`` the centre of mass of link k and
+    ``x_j`` joint j along the horizontal arm.
+    """
+    v = VERTICAL3
+    joints = np.concatenate([[0.0], np.cumsum(v["lengths"])[:-1]])
+    coms = joints + 0.5 * np.asarray(v["lengths"])
+    m = np.asarray(v["masses"])
+    return tuple(float(g * np.sum(m[j:] * (coms[j:] - joints[j]))) for j in range(3))
+
+
 def vertical3() -> str:
     v = VERTICAL3
-    comment = """
+    tau = " / ".join(f"{t:.1f}" for t in vertical3_static_gravity())
+    comment = f"""
 vertical3: the project's own illustrative three-joint planar arm in a vertical plane; not a
 product, no published source. Joint axes along y, links along x at q = 0 (the stretched-out,
 horizontal pose, where gravity torque is largest), gravity along -z acts on every joint.
@@ -196,7 +210,7 @@ of the box about its centre: Ixx = m (w^2 + w^2)/12, Iyy = Izz = m (L^2 + w^2)/1
 Masses 4.0 / 3.0 / 1.5 kg; viscous 0.8 / 0.5 / 0.2 N m s/rad and Coulomb 1.5 / 0.8 / 0.3 N m
 (plausible for geared joints of this size, assumed).
 Effort limits 100 / 40 / 10 N m: the static gravity torque at the stretched-out pose is
-37.6 / 12.1 / 1.8 N m, below half of each (tests/test_robots.py checks it with pin.rnea).
+{tau} N m (g = 9.81), below half of each (tests/test_robots.py checks it with pin.rnea).
 Position limits +-pi, velocity limits 3 / 4 / 5 rad/s. Frame `tool` at the tip of link 3
 is the payload frame.
 """
