@@ -114,7 +114,7 @@ def sice_arm() -> str:
     from adaptive_dd.plant.parameters import TABLE1_PHYSICAL as P
     from adaptive_dd.plant.parameters import TORQUE_LIMITS
 
-    comment = f"""
+    comment = """
 The SICE standard direct-drive arm SR-402DD, as adaptive_dd.plant.Arm.sice().
 Source: "Recursive simultaneous estimation of a two-link direct drive manipulator with
 great variation of payload", Table 1 (base parameters J1 J2 r b1 b2 d1 d2), torque limits
@@ -125,7 +125,7 @@ Horizontal plane: joint axes along z, links along x, gravity (-z) gives no torqu
 Izz of each link is I_i about its centre of mass; Ixx = Iyy = Izz (not seen by planar motion,
 chosen so the inertia is positive definite and meets the triangle inequality).
 <dynamics> damping = b_i [N m s/rad], friction = d_i [N m] of Table 1.
-Position limits +-pi and velocity limits {_f(2 * PI)} rad/s are this project's choice, not the
+Position limits +-pi and velocity limits 2 pi rad/s are this project's choice, not the
 paper's: the shipped scenario adaptive_dd/scenarios/payload_swap.toml asks of joints 1 / 2 at most
 0.7 / 0.8 rad and 2.64 / 3.52 rad/s (sum of its sine amplitudes, and of amplitude * 2 pi f);
 tests/test_robots.py checks these figures and the margin against the scenario file.
@@ -354,6 +354,7 @@ PANDA_MDH = {
     "alpha": (0.0, -PI / 2, PI / 2, PI / 2, -PI / 2, PI / 2, PI / 2),
     "flange_d": 0.107,
 }
+# frankaemika/franka_ros franka_description/robots/panda/joint_limits.yaml
 PANDA_Q_MIN = (-2.8973, -1.7628, -2.8973, -3.0718, -2.8973, -0.0175, -2.8973)
 PANDA_Q_MAX = (2.8973, 1.7628, 2.8973, -0.0698, 2.8973, 3.7525, 2.8973)
 PANDA_DQ_MAX = (2.175, 2.175, 2.175, 2.175, 2.61, 2.61, 2.61)
@@ -424,8 +425,9 @@ barycentric inertias (link-frame axes) of Tables VIII and IX of its supplementar
 typed in marcocognetti/FrankaEmikaPandaDynModel matlab/ConvertDynPars2VREP/DynPars2VREP.m.
 Kinematics: Franka's documented modified DH table (a = 0 0 0 0.0825 -0.0825 0 0.088,
 d = 0.333 0 0.316 0 0.384 0 0, alpha = 0 -pi/2 pi/2 pi/2 -pi/2 pi/2 pi/2, flange d = 0.107);
-link i's frame is DH frame i. Limits: Franka's documented joint limits (position, velocity
-2.175 x4 / 2.61 x3 rad/s, effort 87 x4 / 12 x3 N m).
+link i's frame is DH frame i. Limits: Franka's joint limits (position, velocity 2.175 x4 /
+2.61 x3 rad/s, effort 87 x4 / 12 x3 N m), frankaemika/franka_ros
+franka_description/robots/panda/joint_limits.yaml.
 Friction: Gaz et al.'s model (FrankaEmikaPandaDynModel matlab/dyn_model_panda/get_FrictionTorque.m)
 is tau_f = -A/(1+exp(-alpha phi)) + A/(1+exp(-alpha (qd+phi))). Its odd part is fitted by least
 squares with b qd + d sign(qd) on 0 < qd <= the joint's velocity limit (tools/make_robot_urdfs.py,
