@@ -1,0 +1,105 @@
+"""The robots adaptive_dd ships, as URDF files written from published parameter tables.
+
+Each file has no meshes; its header comment names the source of every number.
+The files are the output of ``tools/make_robot_urdfs.py`` (``--check`` compares).
+
+>>> import pinocchio as pin
+>>> model = pin.buildModelFromUrdf(str(robot_urdf("sice_arm")))
+>>> model.nq
+2
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+__all__ = ["ROBOTS", "RobotInfo", "UnknownRobotError", "robot_urdf"]
+
+_HERE = Path(__file__).resolve().parent
+
+
+@dataclass(frozen=True)
+class RobotInfo:
+    """One shipped robot.
+
+    Attributes
+    ----------
+    file : str
+        File name in ``adaptive_dd/robots/``.
+    payload_frame : str
+        Name of the frame where a payload is attached (a fixed frame at the flange or tip).
+    description : str
+        One line: what it is and where its numbers come from.
+    """
+
+    file: str
+    payload_frame: str
+    description: str
+
+
+ROBOTS: dict[str, RobotInfo] = {
+    "sice_arm": RobotInfo(
+        "sice_arm.urdf",
+        "tip",
+        "SICE SR-402DD two-link direct-drive arm, horizontal (Arm.sice()); Table 1 of 'Recursive "
+        "simultaneous estimation of a two-link direct drive manipulator with great variation of payload'",
+    ),
+    "vertical3": RobotInfo(
+        "vertical3.urdf",
+        "tool",
+        "three-joint planar arm in a vertical plane, gravity acting; the project's own illustrative "
+        "arm, not a product",
+    ),
+    "ur5": RobotInfo(
+        "ur5.urdf",
+        "tool0",
+        "Universal Robots UR5: UR's DH table, masses and centres of mass, cylinder inertias of "
+        "ros-industrial/universal_robot ur_description; friction assumed",
+    ),
+    "panda": RobotInfo(
+        "panda.urdf",
+        "panda_link8",
+        "Franka Emika Panda (7 joints, no hand): inertial parameters and friction identified by Gaz "
+        "et al., IEEE RA-L 4(4) 2019; Franka's modified DH and joint limits",
+    ),
+}
+"""Name -> :class:`RobotInfo` of every robot shipped in ``adaptive_dd/robots/``."""
+
+
+class UnknownRobotError(KeyError):
+    """A robot name that is not in :data:`ROBOTS`; the message lists the known names."""
+
+    def __str__(self) -> str:  # KeyError's str() would quote the whole message
+        return str(self.args[0]) if self.args else ""
+
+
+def robot_urdf(name: str) -> Path:
+    """Path of a shipped robot's URDF file.
+
+    Parameters
+    ----------
+    name : str
+        A key of :data:`ROBOTS` (``"sice_arm"``, ``"vertical3"``, ``"ur5"``, ``"panda"``).
+
+    Returns
+    -------
+    pathlib.Path
+        Absolute path of the ``.urdf`` file, which exists.
+
+    Raises
+    ------
+    UnknownRobotError
+        ``name`` is not a known robot (a ``KeyError``); the message lists the known ones.
+    FileNotFoundError
+        The package was installed without its ``*.urdf`` data files.
+    """
+    try:
+        info = ROBOTS[name]
+    except (KeyError, TypeError):
+        known = ", ".join(sorted(ROBOTS))
+        raise UnknownRobotError(f"unknown robot {name!r}; known robots: {known}") from None
+    path = _HERE / info.file
+    if not path.is_file():
+        raise FileNotFoundError(f"robot {name!r}: {path} is missing (package data not installed?)")
+    return path
