@@ -56,9 +56,8 @@ def _sub(sub, name: str, **kw) -> argparse.ArgumentParser:
 
 
 def _load_arm(path: str | None):
-    """The Arm of a scenario file's ``[arm]`` and ``[plant]`` tables (SICE arm if ``path`` is None)."""
-    import tomllib
-
+    """The arm of a scenario file's ``[arm]`` and ``[plant]`` tables (SICE arm if ``path`` is None)."""
+    from adaptive_dd.benchmark.scenario import read_toml
     from adaptive_dd.errors import ScenarioError
     from adaptive_dd.plant.arm import Arm, arm_from_tables
 
@@ -67,16 +66,14 @@ def _load_arm(path: str | None):
     p = Path(path)
     if not p.is_file():
         raise ScenarioError(f"{path}: no such scenario file")
-    try:
-        data = tomllib.loads(p.read_text())
-    except tomllib.TOMLDecodeError as exc:
-        raise ScenarioError(f"{path}: not valid TOML: {exc}") from None
+    data = read_toml(p)
     return arm_from_tables(data.get("arm"), data.get("plant"), str(path))
 
 
 def _cmd_check(args: argparse.Namespace) -> int:
     from adaptive_dd.plant.parameters import Payload
     from adaptive_dd.plant.pinocchio_model import cross_check
+    from adaptive_dd.plant.serial_arm import SerialArm
 
     arm = _load_arm(args.arm)
     radius = arm.payload_radius if args.radius is None else args.radius
@@ -87,13 +84,27 @@ def _cmd_check(args: argparse.Namespace) -> int:
         payload = Payload(mass, radius) if mass else None
         label = f"payload {mass} kg, radius {radius} m" if payload else "no payload"
         where = f"arm of {args.arm}" if args.arm else "the SICE arm"
-        print(
-            f"Cross-check of adaptive_dd.plant against Pinocchio ({where}, {label}, "
-            f"{args.states} random states)"
-        )
-        if arm.physical is None:
-            print("  (sigma-only arm: Pinocchio model built from Arm.equivalent_physical())")
-        results = cross_check(arm, payload, n_states=args.states, rng=np.random.default_rng(args.seed))
+        if isinstance(arm, SerialArm):
+            from adaptive_dd.plant.serial_check import serial_cross_check
+
+            print(
+                f"Cross-check against Pinocchio ({where}: {arm.n_joints} joints of {arm.urdf.name}, "
+                f"{label} at '{arm.payload_frame}', {args.states} random states)"
+            )
+            results = serial_cross_check(
+                arm,
+                {"mass": mass, "radius": radius} if mass else None,
+                n_states=args.states,
+                rng=np.random.default_rng(args.seed),
+            )
+        else:
+            print(
+                f"Cross-check of adaptive_dd.plant against Pinocchio ({where}, {label}, "
+                f"{args.states} random states)"
+            )
+            if arm.physical is None:
+                print("  (sigma-only arm: Pinocchio model built from Arm.equivalent_physical())")
+            results = cross_check(arm, payload, n_states=args.states, rng=np.random.default_rng(args.seed))
         for r in results:
             print("  " + str(r))
         bad = [r for r in results if not r.passed]
@@ -493,8 +504,39 @@ def _benchmark(args: argparse.Namespace, sc, outputs) -> list[Path]:
 def _cmd_validate(args: argparse.Namespace) -> int:
     from adaptive_dd.benchmark.scenario import format_scenario, load_scenario
 
-    print(format_scenario(load_scenario(args.scenario)))
+    sc = load_scenario(args.scenario)
+    print(format_scenario(sc))
+    from adaptive_dd.plant.serial_arm import SerialArm
+
+    if isinstance(sc.arm, SerialArm):
+        print(describe_serial_arm(sc.arm))
     return 0
+
+
+def describe_serial_arm(arm) -> str:
+    """What ``validate`` prints of a URDF arm: joints, base parameters, payload subspace."""
+    lines = [f"# arm: {arm.urdf} ({arm.n_joints} joints, payload frame '{arm.payload_frame}')"]
+    lim = arm.position_limits
+    for j, name in enumerate(arm.joint_names):
+        lines.append(
+            f"#   joint{j + 1} {name}: limits [{lim[j, 0]:.4g}, {lim[j, 1]:.4g}], velocity "
+            f"{arm.velocity_limits[j]:.4g}, effort {arm.actuator.torque_limit[j]:.4g}, viscous "
+            f"{arm.viscous[j]:.4g}, Coulomb {arm.coulomb[j]:.4g}, armature {arm.armature[j]:.4g}"
+        )
+    if arm.locked:
+        lines.append(f"#   locked at 0 (off the chain): {', '.join(arm.locked)}")
+    lines.append(f"# base parameters: {arm.base.count} of {13 * arm.n_joints} standard")
+    for k, (name, v) in enumerate(zip(arm.sigma_names, arm.sigma, strict=True)):
+        lines.append(f"#   sigma[{k}] = {v:.6g}: {name}")
+    if arm.base.unidentifiable:
+        lines.append(f"# no torque depends on: {', '.join(arm.base.unidentifiable)}")
+    names = ("m", "mx", "my", "mz", "Ixx", "Ixy", "Iyy", "Ixz", "Iyz", "Izz")
+    seen = [n for n, ok in zip(names, arm.payload_identifiable, strict=True) if ok]
+    lines.append(
+        f"# payload subspace: rank {arm.payload_rank} of 10; determined by the base parameters: "
+        f"{', '.join(seen)}"
+    )
+    return "\n".join(lines)
 
 
 def _cmd_sweep(args: argparse.Namespace) -> int:

@@ -1,4 +1,4 @@
-"""Base parameters of a serial arm by numerical QR with column pivoting (Gautier's method).
+"""Base parameters of a serial arm by numerical QR on sampled regressors (Gautier's method).
 
 The standard parameters of an n-joint arm are, per link, the ten inertial
 parameters of Pinocchio's ordering about the joint frame (``m, m cx, m cy, m cz,
@@ -11,7 +11,7 @@ and the joint torque is ``W(q, qd, qdd) pi`` with ``W = [Y | diag(qd) |
 diag(sgn qd) | diag(qdd)]``, ``Y`` Pinocchio's joint-torque regressor. Many
 columns of ``W`` are zero or linear combinations of others for every motion; the
 *base parameters* are the independent combinations. Stacking ``W`` over random
-states and factorising ``W P = Q R`` (column pivoting) splits the columns into
+states and factorising it by QR (columns in the standard order) splits them into
 independent ``b`` and dependent ``d`` ones with ``W_d = W_b K``,
 ``K = R_bb^-1 R_bd``; then ``W pi = W_b (pi_b + K pi_d)`` and
 
@@ -80,6 +80,8 @@ class BaseParameters:
 def _term(c: float, name: str) -> str:
     if abs(c - 1.0) < 1e-12:
         return name
+    if abs(c + 1.0) < 1e-12:
+        return f"-{name}"
     return f"{c:.6g}*{name}"
 
 
@@ -119,19 +121,17 @@ def base_parameters(
     norms = np.linalg.norm(W, axis=0)
     zero = norms <= rtol * max(norms.max(), 1e-300)
     cols = np.flatnonzero(~zero)
-    # scale columns so that pivoting does not favour parameters with large units
+    # Columns in the standard order (link 1 first, armature last): a column is kept when it is
+    # independent of the kept columns before it (unpivoted QR: |R_jj| of the scaled columns),
+    # so a parameter is regrouped onto those of the links nearer the base, as in Khalil and
+    # Gautier's closed-form grouping (e.g. Izz1 + l1^2 m2 + Ia1), and the names read naturally.
     Ws = W[:, cols] / norms[cols]
-    _, R, piv = scipy.linalg.qr(Ws, mode="economic", pivoting=True)
-    d = np.abs(np.diag(R))
-    rank = int(np.sum(d > rtol * d[0]))
-    b_loc, d_loc = piv[:rank], piv[rank:]
-    K = scipy.linalg.solve_triangular(R[:rank, :rank], R[:rank, rank:])
-    # undo the column scaling: W_d = W_b K  with  W = Ws * norms
-    K = K * norms[cols][d_loc][None, :] / norms[cols][b_loc][:, None]
+    R = scipy.linalg.qr(Ws, mode="r")[0]
+    keep = np.abs(np.diag(R)) > rtol * np.sqrt(Ws.shape[0])
+    b_idx, d_idx = cols[keep], cols[~keep]
+    K = np.linalg.lstsq(W[:, b_idx], W[:, d_idx], rcond=None)[0]
     K[np.abs(K) < 1e-10] = 0.0
-    order = np.argsort(cols[b_loc])
-    b_idx, d_idx = cols[b_loc][order], cols[d_loc]
-    K = K[order]
+    rank = len(b_idx)
     B = np.zeros((rank, 13 * n))
     B[np.arange(rank), b_idx] = 1.0
     B[:, d_idx] = K
