@@ -138,7 +138,7 @@ def test_payload_parameters_of_a_disk_and_bad_bodies():
     assert p[9] == pytest.approx(2.0 * 0.01 / 2) and p[4] == pytest.approx(2.0 * 0.01 / 4)
     p = payload_parameters(1.0, [0.0, 0.0, 0.1], [0.0, 0.0, 0.0, 0, 0, 0])
     assert p[4] == pytest.approx(0.01) and p[9] == 0.0  # parallel axis: Ixx about the frame origin
-    with pytest.raises(ValueError, match="triangle|rigid body"):
+    with pytest.raises(ValueError, match=r"triangle|rigid body"):
         payload_parameters(1.0, None, [1.0, 1.0, 3.0, 0, 0, 0])
     with pytest.raises(ValueError, match="mass"):
         payload_parameters(-1.0)
@@ -198,15 +198,16 @@ def test_bad_urdf_structure(tmp_path):
         "</robot>",
         '<joint name="j2" type="fixed"><parent link="base"/><child link="tip"/></joint></robot>',
     )
-    with pytest.raises(UrdfError, match="link 'tip' has two parent joints.*closed chain"):
+    with pytest.raises(UrdfError, match=r"link 'tip' has two parent joints.*closed chain"):
         read_urdf(_write(tmp_path, closed))
     with pytest.raises(UrdfError, match="no movable joint"):
         read_urdf(_write(tmp_path, ok), payload_frame="base")
     branched = ok.replace(
         "</robot>",
-        '<link name="tip2"/><joint name="jx" type="fixed"><parent link="l1"/><child link="tip2"/></joint></robot>',
+        '<link name="tip2"/><joint name="jx" type="fixed"><parent link="l1"/>'
+        '<child link="tip2"/></joint></robot>',
     )
-    with pytest.raises(UrdfError, match="deepest links.*name the payload frame"):
+    with pytest.raises(UrdfError, match=r"deepest links.*name the payload frame"):
         read_urdf(_write(tmp_path, branched))
     robot = read_urdf(_write(tmp_path, branched), payload_frame="tip2")
     assert robot.joint_names == ("j1",)
