@@ -129,7 +129,7 @@ def bench_kernels(n_states: int = 20000, n_python: int = 5000, seed: int = 0) ->
     print(f"6-joint UR5-like chain, {n_states} random states; best of 5 runs")
     print("compiled kernels timed inside a numba loop over the states (no Python call overhead);")
     print("Pinocchio called from a Python loop (includes the Python call overhead)")
-    print(f"{'kernel':<18s} {'compiled [us]':>14s}   {"pinocchio from Python":<32s} {'[us]':>7s}")
+    print(f"{'kernel':<18s} {'compiled [us]':>14s}   {'pinocchio from Python':<32s} {'[us]':>7s}")
     for name, ours, pin_name, theirs in rows:
         print(f"{name:<18s} {ours:14.2f}   pin.{pin_name:<28s} {theirs:7.2f}")
 
