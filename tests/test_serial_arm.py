@@ -312,3 +312,31 @@ def test_example_robot_data_urdfs_load_and_pass_the_check():
     arm = SerialArm.from_urdf(base / "ur_description/urdf/ur5_robot.urdf", "tool0")
     assert arm.n_joints == 6
     assert all(r.passed for r in serial_cross_check(arm, {"mass": 2.0}, n_states=10))
+
+
+@pytest.mark.parametrize("name", ["vertical3", "ur5", "panda"])
+def test_every_shipped_robot_passes_the_pinocchio_check(arms, name):
+    from adaptive_dd.plant.serial_check import serial_cross_check
+
+    for payload in (None, {"mass": 2.0, "com": [0.01, 0.0, 0.03]}):
+        results = serial_cross_check(arms[name], payload, n_states=8, rng=np.random.default_rng(5))
+        assert all(r.passed for r in results), [str(r) for r in results if not r.passed]
+
+
+def test_sice_from_urdf_gives_the_default_benchmark_numbers():
+    """Issue target: per-seed RMS within 1e-6 relative of Arm.sice()'s (a short run, all controllers)."""
+    import dataclasses
+    from pathlib import Path
+
+    from adaptive_dd.benchmark.runner import run_benchmark
+    from adaptive_dd.benchmark.scenario import load_scenario
+
+    here = Path(__file__).resolve().parents[1] / "benchmarks" / "scenarios" / "sice_urdf.toml"
+    urdf = load_scenario(here)
+    default = load_scenario()
+    assert isinstance(urdf.arm, Arm) and not isinstance(default.arm, SerialArm)
+    short = {"duration": 6.0, "seeds": 2, "swap_times": (5.0,), "swap_masses": (3.0,)}
+    a = run_benchmark(dataclasses.replace(urdf, **short), progress=False)
+    b = run_benchmark(dataclasses.replace(default, **short), progress=False)
+    for name, run in b.runs.items():
+        np.testing.assert_allclose(a.runs[name].acc, run.acc, rtol=1e-6, atol=1e-12)

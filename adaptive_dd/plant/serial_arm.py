@@ -380,14 +380,9 @@ class SerialArm:
         return W.reshape(*shape[:-1], n, 13 * n)
 
     def _rigid_regressor(self, q: Array, qd: Array, qdd: Array) -> Array:
-        import pinocchio as pin
+        from adaptive_dd.plant.chain import regressor_batch
 
-        m = self.model
-        data = m.createData()
-        out = np.empty((q.shape[0], self.n_joints, 10 * self.n_joints))
-        for i in range(q.shape[0]):
-            out[i] = pin.computeJointTorqueRegressor(m, data, self.pin_configuration(q[i]), qd[i], qdd[i])
-        return out
+        return regressor_batch(self.chain, q, qd, qdd)
 
     def pin_configuration(self, q: ArrayLike) -> Array:
         """Pinocchio's configuration of joint positions ``q (n,)`` (continuous joints as cos, sin)."""
