@@ -715,9 +715,10 @@ def build_parser() -> argparse.ArgumentParser:
 
 def _is_user_error(exc: BaseException) -> bool:
     """Our errors, file-system errors, and plain ValueErrors raised by adaptive_dd's own code."""
-    from adaptive_dd.errors import DataError, ScenarioError, SignalError
+    from adaptive_dd.errors import DataError, ScenarioError, SignalError, UrdfError
 
-    if isinstance(exc, ParameterError | ScenarioError | DataError | SignalError | OutputError | OSError):
+    errors = ParameterError | ScenarioError | DataError | SignalError | OutputError | UrdfError | OSError
+    if isinstance(exc, errors):
         return True
     if type(exc) is ValueError and exc.__traceback__ is not None:
         last = traceback.extract_tb(exc.__traceback__)[-1].filename
