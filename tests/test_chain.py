@@ -163,7 +163,7 @@ def test_identities(n, seed):
     np.testing.assert_allclose(reg @ pi, tau, rtol=0, atol=ATOL)
     for j in range(n):
         C.body_regressor(ch, j, q, qd, qdd, body)
-        np.testing.assert_array_equal(body, reg[:, 10 * j : 10 * j + 10])
+        np.testing.assert_allclose(body, reg[:, 10 * j : 10 * j + 10], rtol=0, atol=ATOL)
     C.rnea_ref(ch, pi, q, qd, qd, qdd, tau_ref)
     np.testing.assert_allclose(tau_ref, tau, rtol=0, atol=ATOL)
 
@@ -172,7 +172,7 @@ def test_identities(n, seed):
     np.testing.assert_allclose(reg @ pi, tau_ref, rtol=0, atol=ATOL)
     for j in range(n):
         C.body_slotine_li_regressor(ch, j, q, qd, qdr, qddr, body)
-        np.testing.assert_array_equal(body, reg[:, 10 * j : 10 * j + 10])
+        np.testing.assert_allclose(body, reg[:, 10 * j : 10 * j + 10], rtol=0, atol=ATOL)
 
     m = np.empty((n, n))
     C.mass_matrix(ch, pi, q, m)
