@@ -143,33 +143,40 @@ def plant_params(
 
 @njit(cache=True)
 def _scratch(n):  # pragma: no cover - compiled
-    """Per-call scratch: chain workspace, M, a factor, float rows, free-joint indices, flags."""
+    """Per-call scratch: chain workspace, M (stages), a factor, float rows, free-joint indices,
+    flags, M at the substep's start (``rows[18]`` holds its bias), reused by its first stage."""
     return (
         workspace(n),
         np.empty((n, n)),
         np.empty((n, n)),
-        np.empty((18, n)),
+        np.empty((19, n)),
         np.empty((2, n), dtype=np.int64),
         np.zeros((3, n), dtype=np.bool_),
+        np.empty((n, n)),
     )
 
 
 @njit(cache=True, fastmath={"contract", "reassoc"})
-def _accel(ch, pi, fv, fc, arm, law, fp, q, v, tau, stuck, sdir, sc, acc, hold):  # pragma: no cover
+def _dynamics(ch, pi, arm, q, v, w, bias, m):  # pragma: no cover - compiled
+    """``bias = rnea(q, v, 0)`` (n,) and ``m = M(q) + diag(armature)`` (n, n); w: chain workspace."""
+    bias_and_mass(ch, pi, q, v, w, bias, m)
+    for i in range(q.shape[0]):
+        m[i, i] += arm[i]
+
+
+@njit(cache=True, fastmath={"contract", "reassoc"})
+def _solve(fv, fc, law, fp, v, tau, stuck, sdir, bias, m, sc, acc, hold):  # pragma: no cover - compiled
     """Accelerations ``acc`` (n,) with the stuck joints held; ``hold`` (n,) torque to hold each stuck joint.
 
-    Friction: law 0 ``fc sgn(v)`` (``sdir`` at v == 0), else the smooth law. Returns
-    False if ``M + diag(armature)`` restricted to the free joints is not positive definite.
+    Uses the terms ``bias, m`` of :func:`_dynamics`. Friction: law 0 ``fc sgn(v)``
+    (``sdir`` at v == 0), else the smooth law. Returns False if ``M + diag(armature)``
+    restricted to the free joints is not positive definite.
     """
-    w, m, lf, rows, idx = sc[0], sc[1], sc[2], sc[3], sc[4][0]
-    bias = rows[0]
-    rhs = rows[1]
-    n = q.shape[0]
-    bias_and_mass(ch, pi, q, v, w, bias, m)
+    lf, rhs, idx = sc[2], sc[3][1], sc[4][0]
+    n = v.shape[0]
     vc, ratio, vs = fp[0], fp[1], fp[2]
     nf = 0
     for i in range(n):
-        m[i, i] += arm[i]
         if stuck[i]:
             continue
         if law == 0:
@@ -212,6 +219,8 @@ def _accel(ch, pi, fv, fc, arm, law, fp, q, v, tau, stuck, sdir, sc, acc, hold):
         acc[i] = 0.0
     for ii in range(nf):
         acc[idx[ii]] = rhs[ii]
+    if nf == n:
+        return True
     for i in range(n):
         if stuck[i]:
             x = tau[i] - bias[i]
@@ -240,8 +249,10 @@ def _resolve(ch, pi, fv, fc, arm, fp, q, v, tau, rest, stuck, sdir, sc):  # prag
     for i in range(n):
         stuck[i] = rest[i]
     n_rel = 0
+    bias0, m0 = sc[3][18], sc[6]
+    _dynamics(ch, pi, arm, q, v, sc[0], bias0, m0)
     for _ in range(n + 1):
-        if not _accel(ch, pi, fv, fc, arm, 0, fp, q, v, tau, stuck, sdir, sc, acc, hold):
+        if not _solve(fv, fc, 0, fp, v, tau, stuck, sdir, bias0, m0, sc, acc, hold):
             return False
         worst, excess = -1, 0.0
         for i in range(n):
@@ -260,7 +271,7 @@ def _resolve(ch, pi, fv, fc, arm, fp, q, v, tau, rest, stuck, sdir, sc):  # prag
     for k in range(n_rel):
         r = order[k]
         stuck[r] = True
-        if not _accel(ch, pi, fv, fc, arm, 0, fp, q, v, tau, stuck, sdir, sc, acc, hold):
+        if not _solve(fv, fc, 0, fp, v, tau, stuck, sdir, bias0, m0, sc, acc, hold):
             return False
         if not _consistent(rest, stuck, acc, hold, sdir, fc):
             stuck[r] = False
@@ -271,12 +282,16 @@ def _resolve(ch, pi, fv, fc, arm, fp, q, v, tau, rest, stuck, sdir, sc):  # prag
 
 
 @njit(cache=True, fastmath={"contract", "reassoc"})
-def _rk4(ch, pi, fv, fc, arm, law, fp, q, v, tau, dt, stuck, sdir, sc, qn, vn, cross):  # pragma: no cover
+def _rk4(
+    ch, pi, fv, fc, arm, law, fp, q, v, tau, dt, stuck, sdir, sc, reuse, qn, vn, cross
+):  # pragma: no cover
     """One classical RK4 step of length dt with the modes fixed, into (qn, vn).
 
-    ``cross[i]``: moving joint i's velocity changed sign (or reached 0) in some
-    stage, so the step met the Coulomb discontinuity (stick-slip law only).
-    Returns False if a mass matrix was not positive definite.
+    The first stage takes the start slots of :func:`_dynamics`, computed here unless
+    ``reuse`` (they already hold the terms at (q, v)). ``cross[i]``: moving joint i's
+    velocity changed sign (or reached 0) in some stage, so the step met the Coulomb
+    discontinuity (stick-slip law only). Returns False if a mass matrix was not
+    positive definite.
     """
     n = q.shape[0]
     rows = sc[3]
@@ -291,19 +306,25 @@ def _rk4(ch, pi, fv, fc, arm, law, fp, q, v, tau, dt, stuck, sdir, sc, qn, vn, c
         rows[11],
         rows[14],
     )
-    ok = _accel(ch, pi, fv, fc, arm, law, fp, q, v, tau, stuck, sdir, sc, a1, hd)
+    w, bias0, m0, bias, m = sc[0], sc[3][18], sc[6], sc[3][0], sc[1]
+    if not reuse:
+        _dynamics(ch, pi, arm, q, v, w, bias0, m0)
+    ok = _solve(fv, fc, law, fp, v, tau, stuck, sdir, bias0, m0, sc, a1, hd)
     for i in range(n):
         wv[i] = v[i] + 0.5 * dt * a1[i]
         qs[i] = q[i] + 0.5 * dt * v[i]
-    ok &= _accel(ch, pi, fv, fc, arm, law, fp, qs, wv, tau, stuck, sdir, sc, a2, hd)
+    _dynamics(ch, pi, arm, qs, wv, w, bias, m)
+    ok &= _solve(fv, fc, law, fp, wv, tau, stuck, sdir, bias, m, sc, a2, hd)
     for i in range(n):
         xv[i] = v[i] + 0.5 * dt * a2[i]
         qs[i] = q[i] + 0.5 * dt * wv[i]
-    ok &= _accel(ch, pi, fv, fc, arm, law, fp, qs, xv, tau, stuck, sdir, sc, a3, hd)
+    _dynamics(ch, pi, arm, qs, xv, w, bias, m)
+    ok &= _solve(fv, fc, law, fp, xv, tau, stuck, sdir, bias, m, sc, a3, hd)
     for i in range(n):
         yv[i] = v[i] + dt * a3[i]
         qs[i] = q[i] + dt * xv[i]
-    ok &= _accel(ch, pi, fv, fc, arm, law, fp, qs, yv, tau, stuck, sdir, sc, a4, hd)
+    _dynamics(ch, pi, arm, qs, yv, w, bias, m)
+    ok &= _solve(fv, fc, law, fp, yv, tau, stuck, sdir, bias, m, sc, a4, hd)
     for i in range(n):
         qn[i] = q[i] + (dt / 6.0) * (v[i] + 2.0 * wv[i] + 2.0 * xv[i] + yv[i])
         vn[i] = 0.0 if stuck[i] else v[i] + (dt / 6.0) * (a1[i] + 2.0 * a2[i] + 2.0 * a3[i] + a4[i])
@@ -316,7 +337,10 @@ def _rk4(ch, pi, fv, fc, arm, law, fp, q, v, tau, dt, stuck, sdir, sc, qn, vn, c
 
 @njit(cache=True)
 def _decide(ch, pi, fv, fc, arm, fp, q, v, tau, stuck, sdir, sc):  # pragma: no cover - compiled
-    """Modes at the current state: resting joints with Coulomb friction go through :func:`_resolve`."""
+    """Modes at the current state: resting joints with Coulomb friction go through :func:`_resolve`.
+
+    Returns (ok, whether the start slots now hold the dynamics at (q, v)).
+    """
     rest = sc[5][0]
     any_rest = False
     for i in range(q.shape[0]):
@@ -324,8 +348,8 @@ def _decide(ch, pi, fv, fc, arm, fp, q, v, tau, stuck, sdir, sc):  # pragma: no 
         stuck[i] = False
         any_rest |= rest[i]
     if not any_rest:
-        return True
-    return _resolve(ch, pi, fv, fc, arm, fp, q, v, tau, rest, stuck, sdir, sc)
+        return True, False
+    return _resolve(ch, pi, fv, fc, arm, fp, q, v, tau, rest, stuck, sdir, sc), True
 
 
 @njit(cache=True)
@@ -339,8 +363,9 @@ def _stick_slip(ch, pi, fv, fc, arm, fp, q, qd, tau, T, substeps, stuck, sc):  #
     sdir[:] = 1.0
     ok = True
     for _ in range(substeps):
-        ok &= _decide(ch, pi, fv, fc, arm, fp, q, qd, tau, stuck, sdir, sc)
-        ok &= _rk4(ch, pi, fv, fc, arm, 0, fp, q, qd, tau, h, stuck, sdir, sc, qn, vn, cross)
+        good, have = _decide(ch, pi, fv, fc, arm, fp, q, qd, tau, stuck, sdir, sc)
+        ok &= good
+        ok &= _rk4(ch, pi, fv, fc, arm, 0, fp, q, qd, tau, h, stuck, sdir, sc, have, qn, vn, cross)
         f = 1.0
         any_cross = False
         a1 = rows[4]
@@ -359,14 +384,18 @@ def _stick_slip(ch, pi, fv, fc, arm, fp, q, qd, tau, T, substeps, stuck, sc):  #
             # a velocity reaches zero: step to the first crossing (located from the initial
             # acceleration), decide the modes there, finish the substep
             if f > 0.0:
-                ok &= _rk4(ch, pi, fv, fc, arm, 0, fp, q, qd, tau, f * h, stuck, sdir, sc, qn, vn, z)
+                # same start state and modes: the start slots still hold its dynamics
+                ok &= _rk4(ch, pi, fv, fc, arm, 0, fp, q, qd, tau, f * h, stuck, sdir, sc, True, qn, vn, z)
                 for i in range(n):
                     q[i], qd[i] = qn[i], vn[i]
             for i in range(n):
                 if cross[i] and frac[i] <= f:
                     qd[i] = 0.0
-            ok &= _decide(ch, pi, fv, fc, arm, fp, q, qd, tau, stuck, sdir, sc)
-            ok &= _rk4(ch, pi, fv, fc, arm, 0, fp, q, qd, tau, (1.0 - f) * h, stuck, sdir, sc, qn, vn, z)
+            good, have = _decide(ch, pi, fv, fc, arm, fp, q, qd, tau, stuck, sdir, sc)
+            ok &= good
+            ok &= _rk4(
+                ch, pi, fv, fc, arm, 0, fp, q, qd, tau, (1.0 - f) * h, stuck, sdir, sc, have, qn, vn, z
+            )
             # another crossing within the same substep: rest there (decided next substep)
             for i in range(n):
                 if z[i] and fc[i] > 0.0 and f < 1.0:
@@ -393,7 +422,8 @@ def _smooth(ch, pi, fv, fc, arm, law, fp, q, qd, tau, T, substeps, stuck, sc):  
     ok = True
     for _ in range(substeps):
         # factor M + diag(armature) (all joints free) and rho = sum_i K_i (M^-1)_ii
-        ok &= _accel(ch, pi, fv, fc, arm, law, fp, q, qd, tau, stuck, sdir, sc, rows[4], rows[14])
+        _dynamics(ch, pi, arm, q, qd, sc[0], rows[18], sc[6])
+        ok &= _solve(fv, fc, law, fp, qd, tau, stuck, sdir, rows[18], sc[6], sc, rows[4], rows[14])
         rho = 0.0
         for i in range(n):
             # column i of L^-1 by forward substitution; (M^-1)_ii is its squared norm
@@ -407,8 +437,11 @@ def _smooth(ch, pi, fv, fc, arm, law, fp, q, qd, tau, T, substeps, stuck, sc):  
             rho += (fv[i] + fc[i] * kpeak) * nrm
         m = max(1, int(np.ceil(h * rho / 2.0)))
         dt = h / m
-        for _ in range(m):
-            ok &= _rk4(ch, pi, fv, fc, arm, law, fp, q, qd, tau, dt, stuck, sdir, sc, qn, vn, flags[1])
+        for k in range(m):
+            # the first step starts where the start slots were filled
+            ok &= _rk4(
+                ch, pi, fv, fc, arm, law, fp, q, qd, tau, dt, stuck, sdir, sc, k == 0, qn, vn, flags[1]
+            )
             for i in range(n):
                 q[i], qd[i] = qn[i], vn[i]
     return ok
