@@ -149,14 +149,14 @@ def _scratch(n):  # pragma: no cover - compiled
         workspace(n),
         np.empty((n, n)),
         np.empty((n, n)),
-        np.empty((19, n)),
+        np.empty((20, n)),
         np.empty((2, n), dtype=np.int64),
         np.zeros((3, n), dtype=np.bool_),
         np.empty((n, n)),
     )
 
 
-@njit(cache=True, fastmath={"contract", "reassoc"})
+@njit(cache=True, fastmath={"contract", "reassoc"}, inline="always")
 def _dynamics(ch, pi, arm, q, v, w, bias, m):  # pragma: no cover - compiled
     """``bias = rnea(q, v, 0)`` (n,) and ``m = M(q) + diag(armature)`` (n, n); w: chain workspace."""
     bias_and_mass(ch, pi, q, v, w, bias, m)
@@ -164,7 +164,7 @@ def _dynamics(ch, pi, arm, q, v, w, bias, m):  # pragma: no cover - compiled
         m[i, i] += arm[i]
 
 
-@njit(cache=True, fastmath={"contract", "reassoc"})
+@njit(cache=True, fastmath={"contract", "reassoc"}, inline="always")
 def _solve(fv, fc, law, fp, v, tau, stuck, sdir, bias, m, sc, acc, hold):  # pragma: no cover - compiled
     """Accelerations ``acc`` (n,) with the stuck joints held; ``hold`` (n,) torque to hold each stuck joint.
 
@@ -190,7 +190,9 @@ def _solve(fv, fc, law, fp, v, tau, stuck, sdir, bias, m, sc, acc, hold):  # pra
         idx[nf] = i
         rhs[nf] = tau[i] - bias[i] - fv[i] * v[i] - coul
         nf += 1
-    # Cholesky of the free block, then the two triangular solves
+    # Cholesky of the free block (reciprocal diagonal kept: no division in the loops),
+    # then the two triangular solves
+    inv = sc[3][19]
     for jj in range(nf):
         j = idx[jj]
         d = m[j, j]
@@ -200,21 +202,23 @@ def _solve(fv, fc, law, fp, v, tau, stuck, sdir, bias, m, sc, acc, hold):  # pra
             return False
         d = np.sqrt(d)
         lf[jj, jj] = d
+        r = 1.0 / d
+        inv[jj] = r
         for ii in range(jj + 1, nf):
             x = m[idx[ii], j]
             for kk in range(jj):
                 x -= lf[ii, kk] * lf[jj, kk]
-            lf[ii, jj] = x / d
+            lf[ii, jj] = x * r
     for ii in range(nf):
         x = rhs[ii]
         for kk in range(ii):
             x -= lf[ii, kk] * rhs[kk]
-        rhs[ii] = x / lf[ii, ii]
+        rhs[ii] = x * inv[ii]
     for ii in range(nf - 1, -1, -1):
         x = rhs[ii]
         for kk in range(ii + 1, nf):
             x -= lf[kk, ii] * rhs[kk]
-        rhs[ii] = x / lf[ii, ii]
+        rhs[ii] = x * inv[ii]
     for i in range(n):
         acc[i] = 0.0
     for ii in range(nf):

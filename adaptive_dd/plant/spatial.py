@@ -28,7 +28,7 @@ def cross3(a0, a1, a2, b0, b1, b2):  # pragma: no cover - compiled
     return a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0
 
 
-@njit(cache=True, fastmath={"contract", "reassoc"})
+@njit(cache=True, fastmath={"contract", "reassoc"}, inline="always")
 def kinematics(ch, q, qd, rw, pw, s, v):  # pragma: no cover - compiled
     """World pose (rw (n,3,3), pw (n,3)), joint motion s (n,6) and body velocity v (n,6).
 
@@ -91,7 +91,7 @@ def kinematics(ch, q, qd, rw, pw, s, v):  # pragma: no cover - compiled
         v[i, 0], v[i, 1], v[i, 2], v[i, 3], v[i, 4], v[i, 5] = vl0, vl1, vl2, va0, va1, va2
 
 
-@njit(cache=True, fastmath={"contract", "reassoc"})
+@njit(cache=True, fastmath={"contract", "reassoc"}, inline="always")
 def world_inertia(pi, rw, pw, iw):  # pragma: no cover - compiled
     """Each link's inertia about the world origin in world axes, iw (n, 10), Pinocchio's order."""
     n = rw.shape[0]
