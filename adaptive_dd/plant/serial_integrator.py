@@ -149,7 +149,7 @@ def _scratch(n):  # pragma: no cover - compiled
         workspace(n),
         np.empty((n, n)),
         np.empty((n, n)),
-        np.empty((20, n)),
+        np.empty((21, n)),
         np.empty((2, n), dtype=np.int64),
         np.zeros((3, n), dtype=np.bool_),
         np.empty((n, n)),
@@ -299,7 +299,7 @@ def _rk4(
     """
     n = q.shape[0]
     rows = sc[3]
-    a1, a2, a3, a4, qs, wv, xv, yv, hd = (
+    a1, a2, a3, a4, qs, wv, xv, yv, hd, vcur = (
         rows[4],
         rows[5],
         rows[6],
@@ -309,26 +309,28 @@ def _rk4(
         rows[10],
         rows[11],
         rows[14],
+        rows[20],
     )
     w, bias0, m0, bias, m = sc[0], sc[3][18], sc[6], sc[3][0], sc[1]
-    if not reuse:
-        _dynamics(ch, pi, arm, q, v, w, bias0, m0)
-    ok = _solve(fv, fc, law, fp, v, tau, stuck, sdir, bias0, m0, sc, a1, hd)
-    for i in range(n):
-        wv[i] = v[i] + 0.5 * dt * a1[i]
-        qs[i] = q[i] + 0.5 * dt * v[i]
-    _dynamics(ch, pi, arm, qs, wv, w, bias, m)
-    ok &= _solve(fv, fc, law, fp, wv, tau, stuck, sdir, bias, m, sc, a2, hd)
-    for i in range(n):
-        xv[i] = v[i] + 0.5 * dt * a2[i]
-        qs[i] = q[i] + 0.5 * dt * wv[i]
-    _dynamics(ch, pi, arm, qs, xv, w, bias, m)
-    ok &= _solve(fv, fc, law, fp, xv, tau, stuck, sdir, bias, m, sc, a3, hd)
-    for i in range(n):
-        yv[i] = v[i] + dt * a3[i]
-        qs[i] = q[i] + dt * xv[i]
-    _dynamics(ch, pi, arm, qs, yv, w, bias, m)
-    ok &= _solve(fv, fc, law, fp, yv, tau, stuck, sdir, bias, m, sc, a4, hd)
+    ok = True
+    # one call site for the four stages (the dynamics are inlined: one copy of the code)
+    for st in range(4):
+        if st == 0:
+            for i in range(n):
+                qs[i] = q[i]
+                vcur[i] = v[i]
+        else:
+            c = 1.0 if st == 3 else 0.5
+            for i in range(n):
+                vprev = v[i] if st == 1 else rows[7 + st, i]  # previous stage's velocity
+                vcur[i] = v[i] + c * dt * rows[3 + st, i]
+                qs[i] = q[i] + c * dt * vprev
+                rows[8 + st, i] = vcur[i]
+        bb = bias0 if st == 0 else bias
+        mm = m0 if st == 0 else m
+        if st > 0 or not reuse:
+            _dynamics(ch, pi, arm, qs, vcur, w, bb, mm)
+        ok &= _solve(fv, fc, law, fp, vcur, tau, stuck, sdir, bb, mm, sc, rows[4 + st], hd)
     for i in range(n):
         qn[i] = q[i] + (dt / 6.0) * (v[i] + 2.0 * wv[i] + 2.0 * xv[i] + yv[i])
         vn[i] = 0.0 if stuck[i] else v[i] + (dt / 6.0) * (a1[i] + 2.0 * a2[i] + 2.0 * a3[i] + a4[i])
