@@ -57,20 +57,15 @@ def _sub(sub, name: str, **kw) -> argparse.ArgumentParser:
 
 def _load_arm(path: str | None):
     """The Arm of a scenario file's ``[arm]`` and ``[plant]`` tables (SICE arm if ``path`` is None)."""
-    import tomllib
-
+    from adaptive_dd.benchmark.scenario import read_toml
     from adaptive_dd.errors import ScenarioError
     from adaptive_dd.plant.arm import Arm, arm_from_tables
 
     if path is None:
         return Arm.sice()
-    p = Path(path)
-    if not p.is_file():
+    if not Path(path).is_file():
         raise ScenarioError(f"{path}: no such scenario file")
-    try:
-        data = tomllib.loads(p.read_text())
-    except tomllib.TOMLDecodeError as exc:
-        raise ScenarioError(f"{path}: not valid TOML: {exc}") from None
+    data = read_toml(Path(path))
     return arm_from_tables(data.get("arm"), data.get("plant"), str(path))
 
 

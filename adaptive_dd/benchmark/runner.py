@@ -33,6 +33,7 @@ from adaptive_dd.benchmark.scenario import Scenario
 from adaptive_dd.benchmark.streaming import N_ACC, accumulate_batch, segment_bounds
 from adaptive_dd.controllers import Controller, Gains, controller_label, make_controller
 from adaptive_dd.errors import ParameterError, SignalError
+from adaptive_dd.plant.sampling import first_sample
 from adaptive_dd.plant.simulator import ArmSimulator, PayloadSchedule
 
 __all__ = ["ENGINES", "MAX_ERROR", "SETTLE", "BenchmarkResult", "ControllerRun", "run_benchmark"]
@@ -105,6 +106,8 @@ class BenchmarkResult:
     runs: dict = field(default_factory=dict)
     wall_time: float = 0.0
     seed_indices: tuple = ()
+    cache: dict = field(default_factory=dict, repr=False, compare=False)
+    """Derived per-seed arrays, computed once (``metrics.per_seed_segment_metrics``)."""
 
     def to_frame(self):
         """One row per controller x seed x segment (pandas DataFrame; see
@@ -146,7 +149,7 @@ def _sensor(scenario: Scenario):
 def _true_sigma(scenario: Scenario, t: Array) -> tuple[Array, Array]:
     """True sigma and payload mass at every sample, as the simulator applies them."""
     T = scenario.sample_period
-    k_sw = [int(np.ceil(at / T - 1e-9)) for at in scenario.swap_times]
+    k_sw = [first_sample(at, T) for at in scenario.swap_times]
     masses = np.array([0.0, *scenario.swap_masses])
     w = np.searchsorted(np.array(k_sw, dtype=np.int64), np.arange(t.size), side="right")
     mass = masses[w]

@@ -58,7 +58,6 @@ bypass them.
 from __future__ import annotations
 
 import itertools
-import tomllib
 from dataclasses import dataclass, field, fields
 from importlib import resources
 from pathlib import Path
@@ -69,6 +68,7 @@ from numpy.typing import NDArray
 
 from adaptive_dd.errors import ScenarioError
 from adaptive_dd.plant.arm import Arm, arm_from_tables
+from adaptive_dd.plant.parameters import PAYLOAD_RADIUS
 
 __all__ = [
     "LIMITS",
@@ -239,7 +239,7 @@ class Scenario:
     reference: Reference
     swap_times: tuple[float, ...]
     swap_masses: tuple[float, ...]
-    payload_radius: float = 0.05
+    payload_radius: float = PAYLOAD_RADIUS
     position_variance: tuple[float, float] = (1e-8, 1e-7)
     velocity_variance: tuple[float, float] = (5e-5, 1e-4)
     dropout: float = 0.0
@@ -272,7 +272,7 @@ class Scenario:
 
     def segment_samples(self) -> list[int]:
         """Number of samples ``k T`` in each segment ``[start, end)``."""
-        from adaptive_dd.benchmark.scenario_checks import first_sample
+        from adaptive_dd.plant.sampling import first_sample
 
         T, n = self.sample_period, self.n_samples
         edges = [0, *(first_sample(t, T) for t in self.swap_times), n]
@@ -305,14 +305,11 @@ def default_scenario_path() -> Path:
 
 
 def read_toml(path: Path) -> dict:
-    """Parse a TOML file read as UTF-8 (a BOM is allowed); errors name the file and position."""
-    from adaptive_dd.io import read_text
+    """Parse a TOML file read as UTF-8 (a BOM is allowed); errors name the file and position
+    (:func:`adaptive_dd.io.read_toml` raising ``ScenarioError``)."""
+    from adaptive_dd.io import read_toml as _read
 
-    text = read_text(path, ScenarioError)
-    try:
-        return tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise ScenarioError(f"{path}: not valid TOML: {exc}") from None
+    return _read(path, ScenarioError)
 
 
 def load_scenario(path: str | Path | None = None) -> Scenario:

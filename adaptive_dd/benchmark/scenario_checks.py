@@ -12,6 +12,8 @@ from typing import Any
 import numpy as np
 
 from adaptive_dd.controllers import CONTROLLERS
+from adaptive_dd.plant.parameters import PAYLOAD_RADIUS
+from adaptive_dd.plant.sampling import first_sample
 
 __all__ = ["first_sample", "freeze", "scenario_errors", "scenario_fields", "thaw"]
 
@@ -40,11 +42,6 @@ def thaw(value: Any) -> Any:
     if isinstance(value, tuple):
         return [thaw(v) for v in value]
     return value
-
-
-def first_sample(t: float, sample_period: float) -> int:
-    """Index of the first sample ``k T >= t`` (a payload change at t acts from there on)."""
-    return math.ceil(t / sample_period - 1e-9)
 
 
 def _short(v: Any) -> str:
@@ -344,7 +341,7 @@ def _payload_fields(e: list, items: list, v: dict, defaulted: set) -> None:
     if not radii:
         defaulted.add("payload.radius")
     v["swap_times"], v["swap_masses"] = tuple(times), tuple(masses)
-    v["payload_radius"] = radii[0] if radii else 0.05
+    v["payload_radius"] = radii[0] if radii else PAYLOAD_RADIUS
 
 
 def _reference_field(e: list, tables: dict, is_default: bool, defaulted: set) -> Any:

@@ -40,6 +40,7 @@ from adaptive_dd.errors import ParameterError, ScenarioError
 from adaptive_dd.plant import dynamics
 from adaptive_dd.plant.devices import ActuatorConfig, SensorConfig
 from adaptive_dd.plant.parameters import (
+    PAYLOAD_RADIUS,
     SIGMA_NAMES,
     Payload,
     PhysicalParameters,
@@ -112,7 +113,7 @@ class Arm:
     sigma: Array
     l1: float
     l2: float
-    payload_radius: float = 0.05
+    payload_radius: float = PAYLOAD_RADIUS
     physical: PhysicalParameters | None = None
     actuator: ActuatorConfig = field(default_factory=lambda: Arm.sice().actuator)
     sensor: SensorConfig = field(default_factory=lambda: Arm.sice().sensor)
@@ -190,7 +191,7 @@ class Arm:
             sigma=TABLE1_SIGMA,
             l1=L1,
             l2=L2,
-            payload_radius=0.05,
+            payload_radius=PAYLOAD_RADIUS,
             physical=TABLE1_PHYSICAL,
             actuator=ActuatorConfig(TORQUE_LIMITS, dac_bits=12),
             sensor=SensorConfig(
