@@ -32,6 +32,7 @@ from numpy.typing import NDArray
 from adaptive_dd.benchmark.scenario import Scenario
 from adaptive_dd.benchmark.streaming import N_ACC, accumulate_batch, segment_bounds
 from adaptive_dd.controllers import Controller, Gains, controller_label, make_controller
+from adaptive_dd.controllers.base import declared
 from adaptive_dd.errors import ParameterError, SignalError
 from adaptive_dd.plant.sampling import first_sample
 from adaptive_dd.plant.simulator import ArmSimulator, PayloadSchedule
@@ -260,7 +261,7 @@ def _new_run(
         sigma_end=np.full((S, n_seg, 7), np.nan) if adaptive else None,
         failed=np.zeros(S, dtype=bool),
         failed_at=np.full(S, -1),
-        floor=getattr(ctrl, "floor", "ct_oracle"),
+        floor=declared(ctrl, "floor"),
         q=np.zeros((K, N, 2)),
         qd=np.zeros((K, N, 2)),
         tau=np.zeros((K, N, 2)),
@@ -289,7 +290,7 @@ def _run_python(name, ctrl, scenario, idx, reference, keep, bar) -> ControllerRu
     error = ""
     try:
         ctrl.reset(S, T)
-        adaptive = ctrl.adaptive
+        adaptive = declared(ctrl, "adaptive")
     except Exception as exc:  # contain any controller failure to its own trials
         error, adaptive = f"{type(exc).__name__} in reset: {exc}", False
     seg_start, seg_end, seg_settled = segment_bounds(scenario.segments(), T, SETTLE)
@@ -317,7 +318,7 @@ def _run_python(name, ctrl, scenario, idx, reference, keep, bar) -> ControllerRu
         tau = np.full((S, 2), np.nan)
         if not error:
             try:
-                truth = {"sigma_true": sim.sigma} if ctrl.needs_true_model else {}
+                truth = {"sigma_true": sim.sigma} if declared(ctrl, "needs_true_model") else {}
                 cmd = np.asarray(ctrl.command(qm, qdm, q_d[k], qd_d[k], qdd_d[k], **truth), dtype=float)
                 if cmd.shape != (S, 2):
                     raise SignalError(f"command returned shape {cmd.shape}, expected ({S}, 2)")
@@ -333,7 +334,7 @@ def _run_python(name, ctrl, scenario, idx, reference, keep, bar) -> ControllerRu
             try:
                 ctrl.observe(qm_obs, qdm_obs, applied)
                 if adaptive:
-                    est = np.asarray(ctrl.sigma_hat)
+                    est = np.asarray(declared(ctrl, "sigma_hat"))
                     if K:
                         run.sigma_hat[:, k] = est[:K]
                     while seg + 1 < len(seg_end) and k >= seg_end[seg]:
@@ -349,6 +350,6 @@ def _run_python(name, ctrl, scenario, idx, reference, keep, bar) -> ControllerRu
     run.failed, run.failed_at, run.error = sim.failed.copy(), sim.failed_at.copy(), error
     if error:
         run.failed[:] = True
-    run.alarm_times = None if error else ctrl.alarm_times
-    run.skipped = None if error else ctrl.skipped_samples
+    run.alarm_times = None if error else declared(ctrl, "alarm_times")
+    run.skipped = None if error else declared(ctrl, "skipped_samples")
     return run
