@@ -196,7 +196,7 @@ def _check_payload(e: list, v: dict, timing_ok: bool) -> None:
 def _check_reference(e: list, ref: Any, T: float | None) -> None:
     from adaptive_dd.benchmark.scenario import LIMITS as L
 
-    _num(e, "reference.ramp", ref.ramp, 0, 1e6)  # may outlast a short run: the ramp is just cut
+    _num(e, "reference.ramp", ref.ramp, 0, L["max_ramp"])  # may outlast a short run: the ramp is just cut
     fmax = L["nyquist_fraction"] / T if T is not None else math.inf
     for name, obj in (("offset", ref.offset), ("amplitude", ref.amplitude), ("frequency", ref.frequency)):
         if not isinstance(obj, tuple) or len(obj) != 2:
