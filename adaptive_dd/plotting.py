@@ -165,16 +165,13 @@ def plot_tracking_errors(res, path: str | Path | None = None, window: float = 0.
 
     Returns the Figure; with ``path``, also writes it in each of ``formats`` (and closes it).
     """
-    from adaptive_dd.benchmark.metrics import moving_rms
+    from adaptive_dd.benchmark.metrics import error_trace
 
-    T = res.scenario.sample_period
     fig, ax = plt.subplots(figsize=(10, 5))
     for name, run in res.runs.items():
-        ok = ~run.failed
-        if not ok.any():
+        m = error_trace(res, run, window)
+        if m is None:
             continue
-        e = run.e_norm[ok].astype(float)
-        m = moving_rms(e, max(1, round(window / T))).mean(axis=0)
         ax.semilogy(res.t, np.maximum(m * 1e3, 1e-4), label=name, **controller_style(name))
     _mark_swaps(ax, res.t, res.mass)
     for a, b, m in res.scenario.segments():

@@ -74,10 +74,12 @@ __all__ = [
     "SATURATION_LIMIT",
     "compute_metrics",
     "detection_delays",
+    "error_trace",
     "false_alarm_counts",
     "moving_rms",
     "per_seed_segment_metrics",
     "ratio_statistics",
+    "release_error_norm",
     "segment_failed",
     "segment_rms",
 ]
@@ -192,6 +194,32 @@ def _recovery_times(e_norm: np.ndarray, start, end, T: float) -> np.ndarray:
             settle = _settling_time(smooth[:, a:b] > band[:, None], round(RECOVERY_DWELL / T))
             out[c : c + SEED_CHUNK, s] = settle * T
     return out
+
+
+def error_trace(res: BenchmarkResult, run, window: float = WINDOW) -> np.ndarray | None:
+    """``(n_samples,)``: the ``window`` moving RMS of ``|e|`` [rad], mean over the seeds that did not
+    fail (None if all failed); computed ``SEED_CHUNK`` seeds at a time and kept in ``res.cache``."""
+    key = ("trace", run.name, window)
+    if key not in res.cache:
+        ok = np.flatnonzero(~run.failed)
+        n = max(1, round(window / res.scenario.sample_period))
+        total = np.zeros(run.e_norm.shape[1])
+        for c in range(0, ok.size, SEED_CHUNK):
+            total += moving_rms(run.e_norm[ok[c : c + SEED_CHUNK]].astype(float), n).sum(axis=0)
+        res.cache[key] = total / ok.size if ok.size else None
+    return res.cache[key]
+
+
+def release_error_norm(res: BenchmarkResult, run, keep: int = 0) -> None:
+    """Derive everything that needs a run's per-sample error norm (per-seed metrics with recovery
+    times, the figure's error trace), then keep only its first ``keep`` seeds' norm.
+
+    Passed as ``run_benchmark(..., on_run=release_error_norm)`` by the CLI: memory then holds one
+    controller's ``(n_seeds, n_samples)`` float32 norm at a time (80 MB at 1000 seeds of 20 s).
+    """
+    per_seed_segment_metrics(res, run)
+    error_trace(res, run)
+    run.e_norm = run.e_norm[:keep].copy()
 
 
 def false_alarm_counts(alarm_times, swaps) -> list[int]:

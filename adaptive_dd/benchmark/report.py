@@ -209,6 +209,8 @@ def _targets(metrics: dict, res: BenchmarkResult) -> list[str]:
                 if sa["rms_error"] and sn["rms_error"]:
                     r = sn["rms_error"] / sa["rms_error"]
                     ok = "met" if r >= TARGET_RATIO_NOMINAL else "NOT met"
+                    if sa.get("floor_saturated"):
+                        ok = "no verdict: the floor saturates"
                     out.append(
                         f"  ct_nominal / adaptive_ct RMS error in the {sa['mass']:g} kg segment: {r:5.1f}x "
                         f"(target >= {TARGET_RATIO_NOMINAL}x: {ok})"

@@ -165,6 +165,7 @@ def run_benchmark(
     engine: str = "auto",
     keep_trajectories: int = 3,
     seed_indices: Sequence[int] | None = None,
+    on_run=None,
 ) -> BenchmarkResult:
     """Run every controller of the scenario over all seeds.
 
@@ -184,6 +185,10 @@ def run_benchmark(
     seed_indices : sequence of int, optional
         Seed indices of the trials (default ``range(scenario.seeds)``): a block of seeds
         run alone gives the same numbers as inside a full run.
+    on_run : callable, optional
+        ``on_run(result, run)`` after each controller's trials (the CLI passes
+        :func:`~adaptive_dd.benchmark.metrics.release_error_norm`, which derives what needs the
+        per-sample error norm and frees it, so memory holds one controller's norm at a time).
     """
     if engine not in ENGINES:
         raise ParameterError(f"engine must be one of {ENGINES}, got {engine!r}")
@@ -224,6 +229,8 @@ def run_benchmark(
         else:
             run = _run_python(name, ctrl, scenario, idx, (q_d, qd_d, qdd_d), keep_trajectories, bar)
         res.runs[name] = run
+        if on_run is not None:
+            on_run(res, run)
     if bar is not None:
         bar.close()
     res.wall_time = time.perf_counter() - t0
