@@ -191,6 +191,7 @@ def _line(name: str, value: str, target: str, ok: bool | None) -> None:
 
 def _speed_lines(args, engines: list[str], pin: float) -> None:
     for engine in engines:
+        ones = {}
         if engine != "python":  # the first call compiles; time it apart
             t0 = time.perf_counter()
             sim_rate(args.controllers[0], 1, 0.05, engine)
@@ -199,6 +200,7 @@ def _speed_lines(args, engines: list[str], pin: float) -> None:
             sim_rate(c, 1, 0.02, engine)  # warm (imports, caches)
             one = sim_rate(c, 1, args.single_duration, engine, repeat=args.repeat)
             many = sim_rate(c, args.batch, args.duration, engine, repeat=args.repeat)
+            ones[c] = one
             main = c == "adaptive_ct"
             _line(
                 f"{c}, 1 trial of {args.single_duration:g} s [{engine}]",
@@ -219,6 +221,22 @@ def _speed_lines(args, engines: list[str], pin: float) -> None:
                 f">= {TARGETS['batch']:g}" if main else "",
                 many >= TARGETS["batch"] if main else None,
             )
+        _cost_lines(ones, engine)
+
+
+def _cost_lines(ones: dict, engine: str) -> None:
+    """Wall time per simulated sample (T = 1 ms) of the 1-trial lines, and the online estimator's
+    share: ``adaptive_ct`` less ``ct_oracle`` (the same plant and law without the estimator)."""
+    us = {c: 1e3 / r for c, r in ones.items()}  # µs per sample = 1 ms / (sim s per wall s)
+    for c, v in us.items():
+        _line(f"{c}, 1 trial [{engine}]: µs per sample", f"{v:.2f} µs", "", None)
+    if "adaptive_ct" in us and "ct_oracle" in us:
+        _line(
+            f"online estimator (adaptive_ct - ct_oracle) [{engine}]",
+            f"{us['adaptive_ct'] - us['ct_oracle']:.2f} µs",
+            "",
+            None,
+        )
 
 
 def _memory_lines(args) -> None:
