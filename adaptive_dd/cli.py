@@ -63,10 +63,9 @@ def _load_arm(path: str | None):
 
     if path is None:
         return Arm.sice()
-    p = Path(path)
-    if not p.is_file():
+    if not Path(path).is_file():
         raise ScenarioError(f"{path}: no such scenario file")
-    data = read_toml(p)
+    data = read_toml(Path(path))
     return arm_from_tables(data.get("arm"), data.get("plant"), str(path))
 
 
@@ -198,6 +197,7 @@ def _cmd_reproduce(args: argparse.Namespace) -> int:
 def _reproduce(args: argparse.Namespace, tau_f: tuple, outputs) -> list[Path]:
     from adaptive_dd.identification.reproduce import (
         format_bounds,
+        format_comparison,
         format_summary,
         format_table,
         run_reproduce,
@@ -223,6 +223,11 @@ def _reproduce(args: argparse.Namespace, tau_f: tuple, outputs) -> list[Path]:
         if (method, "15", "paper") in res.errors:
             print(f"{table} ({method}, estimator 'paper', split (15)):")
             print(format_table(res, method, "15", "paper", with_paper=True) + "\n")
+            print(
+                f"{table}: ours / paper = ratio (mean error [%] over {args.seeds} seeds; "
+                "README, Identification: why they differ)"
+            )
+            print(format_comparison(res, method) + "\n")
     for method in ("M1", "M2"):
         if (method, "full", "exact") in res.errors:
             print(
@@ -477,12 +482,12 @@ def _cmd_benchmark(args: argparse.Namespace) -> int:
 
 
 def _benchmark(args: argparse.Namespace, sc, outputs) -> list[Path]:
-    from adaptive_dd.benchmark.metrics import compute_metrics
+    from adaptive_dd.benchmark.metrics import compute_metrics, release_error_norm
     from adaptive_dd.benchmark.report import format_report, write_csv, write_json
     from adaptive_dd.benchmark.runner import run_benchmark
     from adaptive_dd.plotting import plot_benchmark_estimates, plot_tracking_errors
 
-    res = run_benchmark(sc, progress=not args.no_progress)
+    res = run_benchmark(sc, progress=not args.no_progress, on_run=release_error_norm)
     metrics = compute_metrics(res)
     print(format_report(metrics, res))
     out = Path(args.out)

@@ -19,6 +19,7 @@ __all__ = [
     "check_identifiable",
     "read_recording",
     "read_text",
+    "read_toml",
     "write_recording",
 ]
 
@@ -69,6 +70,24 @@ def read_text(path: Path, error: type[ValueError] = DataError) -> str:
     except UnicodeDecodeError as exc:
         at = bom + exc.start
         raise error(f"{path}: not UTF-8 text: byte {raw[at]:#04x} at offset {at}; save it as UTF-8") from None
+
+
+def read_toml(path: str | Path, error: type[ValueError] = DataError) -> dict:
+    """A TOML file parsed: the one reader of the package's TOML files (scenarios, arms, sweeps).
+
+    Read as UTF-8 with or without a BOM (:func:`read_text`); a missing file, another encoding or
+    invalid TOML raises ``error`` naming the file (and the position).
+    """
+    import tomllib
+
+    path = Path(path)
+    if not path.is_file():
+        raise error(f"{path}: no such file")
+    text = read_text(path, error)
+    try:
+        return tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise error(f"{path}: not valid TOML: {exc}") from None
 
 
 def read_recording(path: str | Path, rtol_dt: float = 1e-3) -> Recording:

@@ -108,19 +108,20 @@ def run_cell(
         trial diverged (or its controller raised) before the segment's end, then the
         metrics are NaN and ``error`` says why.
     """
+    from adaptive_dd.benchmark.metrics import per_seed_segment_metrics
     from adaptive_dd.benchmark.runner import run_benchmark
 
     ctrl = _make_controller(controller, scenario, settings)
     res = run_benchmark(scenario, progress=False, controllers={controller: ctrl}, seed_indices=seed_indices)
     run = res.runs[controller]
+    per = per_seed_segment_metrics(res, run, recovery=False)  # NaN: the benchmark's failure rule
     T = scenario.sample_period
     rows = []
     for i, seed in enumerate(seed_indices):
         at = int(run.failed_at[i]) if run.failed[i] else -1
         why = run.error or f"trial diverged at t = {at * T:.3f} s"
         for j, (start, end, mass) in enumerate(scenario.segments()):
-            a, b = round(start / T), round(end / T)
-            bad = bool(run.failed[i]) and at < b
+            bad = bool(np.isnan(per["rms_error"][i, j]))
             rows.append(
                 {
                     "seed": int(seed),
@@ -128,8 +129,8 @@ def run_cell(
                     "start": start,
                     "end": end,
                     "mass": mass,
-                    "rms_error": np.nan if bad else float(np.sqrt(run.acc[i, j, 0] / (b - a))),
-                    "max_error": np.nan if bad else float(run.acc[i, j, 3]),
+                    "rms_error": float(per["rms_error"][i, j]),
+                    "max_error": float(per["max_error"][i, j]),
                     "failed": bad,
                     "error": why if bad else "",
                 }

@@ -37,7 +37,6 @@ from __future__ import annotations
 
 import dataclasses
 import itertools
-import tomllib
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -45,6 +44,7 @@ from typing import Any
 from adaptive_dd.benchmark.scenario import Scenario, default_scenario_path, load_scenario
 from adaptive_dd.controllers import CONTROLLERS
 from adaptive_dd.errors import ScenarioError
+from adaptive_dd.io import read_toml
 
 __all__ = ["SCENARIO_AXES", "GridPoint", "Sweep", "SweepError", "load_sweep", "parse_sweep"]
 
@@ -116,10 +116,7 @@ def load_sweep(path: str | Path) -> Sweep:
     src = str(path)
     if not path.is_file():
         raise SweepError(f"{src}: no such sweep file")
-    try:
-        data = tomllib.loads(path.read_text())
-    except tomllib.TOMLDecodeError as exc:
-        raise SweepError(f"{src}: not valid TOML: {exc}") from None
+    data = read_toml(path, SweepError)
     return parse_sweep(data, src, base_dir=path.parent)
 
 

@@ -1,8 +1,11 @@
 """Seeded mutation fuzz of the scenario loader (issue 13).
 
-Mutates the shipped scenario files (delete / duplicate keys, wrong types, NaN,
-inf, 1e300, negative and zero values, seeds like 2**64, swaps closer than a
-sample, frequencies above Nyquist, a BOM, non-UTF-8 bytes, ...) and counts:
+Mutates the shipped scenario files and every table a scenario may hold (``[run]``,
+``[control]``, ``[reference]``, ``[[payload]]``, ``[noise]``, ``[arm]`` in both forms,
+``[plant]``, ``[controllers.NAME]``): delete / duplicate keys, wrong types, NaN, inf, 1e300,
+negative and zero values, the sign of any number, any number scaled by up to 1e9, seeds like
+2**64, swaps closer than a sample, frequencies above Nyquist, a BOM, non-UTF-8 bytes, an
+empty file, ... and counts:
 
 * precise errors: ``ScenarioError`` whose message names the file;
 * crashes: any other exception;
@@ -10,7 +13,8 @@ sample, frequencies above Nyquist, a BOM, non-UTF-8 bytes, ...) and counts:
   judgement (non-finite numbers, frequency >= 0.5 / T, a segment without a
   sample, seeds out of range, an absurd size, ...).
 
-Run: ``PYTHONPATH=. python benchmarks/fuzz_scenarios.py [--n 2000] [--seed 0]``
+Run: ``PYTHONPATH=. python benchmarks/fuzz_scenarios.py [--n 2000] [--seed 0]``; a small
+configuration runs in the test suite (``tests/test_validation.py``).
 """
 
 from __future__ import annotations
@@ -32,6 +36,20 @@ BAD_VALUES = [
     "9223372036854775808", "1000000000", '"text"', "true", "[]", "[1, 2, 3]", "{ a = 1 }", "-0.0",
     "2.5", "1e-7", "100000", "1.7e308",
 ]  # fmt: skip
+ARM_SIGMA = """[arm]
+sigma = [0.52, 0.04, 0.05, 3.0, 0.6, 2.0, 0.5]
+l1 = 0.2
+l2 = 0.2
+"""
+PLANT_KEYS = ["friction", "friction_velocity", "stribeck_ratio", "stribeck_velocity"]
+CONTROLLER_TABLES = {
+    "adaptive_ct": ["boost_bandwidth", "boost_duration", "bandwidth", "damping", "detector",
+                    "estimator"],
+    "slotine_li": ["gamma", "bandwidth", "damping"],
+    "ct_nominal": ["sigma", "bandwidth"],
+    "pd": ["sigma", "damping"],
+}  # fmt: skip
+NUMBER = re.compile(r"(?<![\w.])(\d+\.?\d*(?:e[-+]?\d+)?)")
 
 
 def sources() -> list[Path]:
@@ -48,8 +66,35 @@ def mutate(text: str, rng: random.Random) -> tuple[str, bytes | None]:
     idx = _value_lines(text)
     kind = rng.choice(
         ["delete", "duplicate", "value", "value", "value", "seed", "swap_close", "nyquist",
-         "bom", "bytes", "array_item", "unknown_key", "table", "period"]
+         "bom", "bytes", "array_item", "unknown_key", "table", "period", "sign", "sign", "scale",
+         "scale", "arm_sigma", "plant", "controllers", "controllers", "empty"]
     )  # fmt: skip
+    if kind == "empty":
+        return kind, rng.choice([b"", b"\n", b"# only a comment\n", b"\xef\xbb\xbf"])
+    if kind == "arm_sigma":
+        lines = [ln for ln in lines if not ln.startswith("[arm]")]
+        lines += ARM_SIGMA.splitlines()
+        if rng.random() < 0.8:
+            j = rng.randrange(len(lines) - 3, len(lines))
+            k = lines[j].split("=", 1)[0].strip()
+            lines[j] = f"{k} = {rng.choice(BAD_VALUES)}" if rng.random() < 0.5 else _negate(lines[j], rng)
+        return kind, "\n".join(lines).encode()
+    if kind == "plant":
+        lines = [ln for ln in lines if not ln.startswith("[plant]")]
+        key = rng.choice(PLANT_KEYS)
+        val = rng.choice([*BAD_VALUES, '"tanh"', '"stribeck"', '"lugre?"', "0.02", "2.0"])
+        lines += ["[plant]", f"{key} = {val}"]
+        return kind, "\n".join(lines).encode()
+    if kind == "controllers":
+        name = rng.choice(list(CONTROLLER_TABLES))
+        key = rng.choice(CONTROLLER_TABLES[name])
+        val = rng.choice([*BAD_VALUES, "{ threshold = -1.0 }", "{ tau_f = -0.01 }", "{ lam = 2.0 }",
+                          "[0.5, 0.04, 0.05, 3.0, 0.6, 2.0, -0.5]", "false", "200.0", "0.5"])  # fmt: skip
+        text2 = "\n".join(lines)
+        if name not in text2.split("controllers =", 1)[-1].split("\n", 1)[0]:
+            lines = [re.sub(r"^controllers = \[", f'controllers = ["{name}", ', ln) for ln in lines]
+        lines += [f"[controllers.{name}]", f"{key} = {val}"]
+        return kind, "\n".join(lines).encode()
     i = rng.choice(idx)
     key = lines[i].split("=", 1)[0].strip()
     if kind == "delete":
@@ -78,6 +123,15 @@ def mutate(text: str, rng: random.Random) -> tuple[str, bytes | None]:
         lines[i] = re.sub(
             r"\[([^\]]*)\]", lambda m: f"[{m.group(1)}, {rng.choice(BAD_VALUES)}]", lines[i], count=1
         )
+    elif kind == "sign":
+        lines[i] = _negate(lines[i], rng)
+    elif kind == "scale":
+        nums = list(NUMBER.finditer(lines[i].split("=", 1)[1])) if "=" in lines[i] else []
+        if nums:
+            m = rng.choice(nums)
+            off = len(lines[i].split("=", 1)[0]) + 1
+            x = float(m.group(1)) * rng.choice([1e3, 1e6, 1e9, 1e-9])
+            lines[i] = lines[i][: off + m.start()] + repr(x) + lines[i][off + m.end() :]
     elif kind == "unknown_key":
         lines.insert(i, f"{key}x = 1")
     elif kind == "table":
@@ -89,6 +143,18 @@ def mutate(text: str, rng: random.Random) -> tuple[str, bytes | None]:
             _after(lines, "[run]"), f"sample_period = {rng.choice(['1e-300', '0.5', '0.01', '1e-6'])}"
         )
     return kind, "\n".join(lines).encode()
+
+
+def _negate(line: str, rng: random.Random) -> str:
+    """The line with the sign of one of its numbers (after the '=') flipped."""
+    if "=" not in line:
+        return line
+    key, val = line.split("=", 1)
+    nums = list(NUMBER.finditer(val))
+    if not nums:
+        return line
+    m = rng.choice(nums)
+    return key + "=" + val[: m.start()] + "-" + val[m.start() :]
 
 
 def _after(lines: list[str], header: str) -> int:
@@ -115,21 +181,57 @@ def meaningless(sc) -> str | None:
         return "absurd mass or size"
     if sc.estimate().bytes > 8 * 2**30:
         return "run too large"
+    return _meaningless_arm(sc.arm) or _meaningless_controllers(sc)
+
+
+def _meaningless_arm(arm) -> str | None:
+    """An arm no direct-drive two-link arm is: lengths, inertias, friction, limits out of scale."""
+    import numpy as np
+
+    s = np.asarray(arm.sigma, float)
+    if not (0 < arm.l1 <= 2 and 0 < arm.l2 <= 2):
+        return f"link length out of scale (l1 {arm.l1}, l2 {arm.l2} m)"
+    if not np.all(np.isfinite(s)) or np.any(s < 0) or np.any(s > 1e3) or s[0] <= 0 or s[1] <= 0:
+        return f"base parameters out of scale: {s}"
+    if not (0 <= arm.payload_radius <= 0.5):
+        return f"payload radius {arm.payload_radius} m"
+    lim = np.asarray(arm.actuator.torque_limit, float)
+    if np.any(lim <= 0) or np.any(lim > 1e4):
+        return f"torque limit {lim}"
+    if not (0 < arm.friction_velocity <= 10):
+        return f"friction velocity {arm.friction_velocity}"
     return None
 
 
-def main() -> None:
-    ap = argparse.ArgumentParser(allow_abbrev=False)
-    ap.add_argument("--n", type=int, default=2000)
-    ap.add_argument("--seed", type=int, default=0)
-    args = ap.parse_args()
-    rng = random.Random(args.seed)
+def _meaningless_controllers(sc) -> str | None:
+    """Built-in controllers whose settings are meaningless: signs, gains beyond the sample rate."""
+    from adaptive_dd.controllers import CONTROLLERS
+
+    for name in sc.controllers:
+        o = sc.options(name)
+        if name not in CONTROLLERS or not o:
+            continue
+        for k, v in o.items():
+            vals = v.values() if isinstance(v, dict) else (v if isinstance(v, list) else [v])
+            for x in vals:
+                if isinstance(x, int | float) and not isinstance(x, bool):
+                    if not math.isfinite(x) or x < 0 or abs(x) > 1e6:
+                        return f"controllers.{name}.{k} = {v!r}"
+        bw = o.get("bandwidth", sc.bandwidth)
+        if bw * sc.sample_period > 0.2:
+            return f"controllers.{name}.bandwidth {bw} at T = {sc.sample_period}"
+    return None
+
+
+def fuzz(n: int, seed: int) -> tuple[Counter, dict[str, str]]:
+    """``n`` mutants (seeded); the counts of each outcome and one example of each failure kind."""
+    rng = random.Random(seed)
     texts = [p.read_text() for p in sources()]
     counts: Counter = Counter()
     examples: dict[str, str] = {}
     with tempfile.TemporaryDirectory() as tmp:
         path = Path(tmp) / "mutant.toml"
-        for _ in range(args.n):
+        for _ in range(n):
             kind, raw = mutate(rng.choice(texts), rng)
             path.write_bytes(raw)
             try:
@@ -142,11 +244,20 @@ def main() -> None:
                 counts["crash"] += 1
                 examples.setdefault(f"crash {kind}", f"{type(exc).__name__}: {exc}")
                 continue
-            why = meaningless(sc)
+            why = "an empty file accepted" if kind == "empty" else meaningless(sc)
             counts["meaningless accepted" if why else "valid accepted"] += 1
             if why:
                 examples.setdefault(f"meaningless {kind}", why)
-    print(f"{args.n} mutations (seed {args.seed}) of {len(texts)} shipped scenario files:")
+    return counts, examples
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(allow_abbrev=False)
+    ap.add_argument("--n", type=int, default=2000)
+    ap.add_argument("--seed", type=int, default=0)
+    args = ap.parse_args()
+    counts, examples = fuzz(args.n, args.seed)
+    print(f"{args.n} mutations (seed {args.seed}) of {len(sources())} shipped scenario files:")
     for k in (
         "precise error",
         "error not naming the file",

@@ -143,3 +143,20 @@ def test_cli_benchmark_reports_a_bad_scenario(tmp_path, capsys):
     assert main(["benchmark", str(p), "--no-progress"]) == 2
     err = capsys.readouterr().err
     assert str(p) in err and "unknown controller 'nope'" in err
+
+
+def test_releasing_the_error_norm_as_the_run_goes_changes_no_figure(small_run):
+    """The CLI derives per controller what needs the per-sample error norm and frees it
+    (run_benchmark(on_run=release_error_norm)): every metric equals the kept-norm run's."""
+    from adaptive_dd.benchmark.metrics import error_trace, release_error_norm
+
+    released = run_benchmark(small_run.scenario, progress=False, on_run=release_error_norm)
+    assert all(r.e_norm.shape[0] == 0 for r in released.runs.values())
+    a, b = compute_metrics(small_run)["controllers"], compute_metrics(released)["controllers"]
+    for name in a:
+        for sa, sb in zip(a[name]["segments"], b[name]["segments"], strict=True):
+            for key in ("rms_error", "recovery_time", "max_error", "ratio_to_floor", "detection_delay"):
+                assert sa[key] == sb[key], (name, key)
+        np.testing.assert_array_equal(
+            error_trace(small_run, small_run.runs[name]), error_trace(released, released.runs[name])
+        )

@@ -9,7 +9,8 @@ import pytest
 from adaptive_dd.benchmark.metrics import compute_metrics
 from adaptive_dd.benchmark.runner import run_benchmark
 from adaptive_dd.benchmark.scenario import load_scenario
-from adaptive_dd.controllers import AdaptiveCT, make_controller
+from adaptive_dd.cli import main
+from adaptive_dd.controllers import AdaptiveCT, ComputedTorque, Controller, make_controller
 from adaptive_dd.errors import ParameterError
 
 EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
@@ -77,3 +78,46 @@ def test_a_plugin_written_against_the_old_interface_still_works():
     sc = dataclasses.replace(load_scenario(), seeds=1, duration=0.5, swap_times=(), swap_masses=())
     res = run_benchmark(sc, progress=False, controllers={"old_pd": OldPD()})
     assert not res.runs["old_pd"].failed.any() and not res.runs["old_pd"].error
+
+
+class BarePD:
+    """A plain PD written against reset / command / observe alone: no base class, no attributes."""
+
+    def reset(self, n_trials, sample_period):
+        self.n = n_trials
+
+    def command(self, q, qd, q_d, qd_d, qdd_d):
+        return 100.0 * (q_d - q) + 10.0 * (qd_d - qd)
+
+    def observe(self, q, qd, tau):
+        pass
+
+
+def test_a_bare_class_without_base_runs_as_the_docs_say(tmp_path, capsys):
+    """docs/controllers.md: a class written against reset / command / observe alone works."""
+    assert not isinstance(BarePD(), Controller)
+    sc = dataclasses.replace(load_scenario(), seeds=2, duration=0.5, swap_times=(0.25,), swap_masses=(1.0,))
+    res = run_benchmark(
+        sc, progress=False, controllers={"bare": BarePD(), "ct_oracle": ComputedTorque(oracle=True)}
+    )
+    run = res.runs["bare"]
+    assert not run.failed.any() and not run.error
+    assert run.floor == "ct_oracle" and run.sigma_hat is None and run.alarm_times is None
+    m = res.metrics()["controllers"]["bare"]
+    assert m["failed_trials"] == 0 and m["segments"][1]["ratio_to_floor"]["n"] == 2
+    # and from a scenario file, through the CLI
+    (tmp_path / "bare_mod.py").write_text(
+        "class BarePD:\n"
+        "    def reset(self, n, T):\n        pass\n"
+        "    def command(self, q, qd, q_d, qd_d, qdd_d):\n"
+        "        return 100.0 * (q_d - q) + 10.0 * (qd_d - qd)\n"
+        "    def observe(self, q, qd, tau):\n        pass\n"
+    )
+    (tmp_path / "bare.toml").write_text(
+        '[run]\nduration = 0.5\nseeds = 1\ncontrollers = ["bare_mod:BarePD"]\n'
+    )
+    assert (
+        main(["benchmark", str(tmp_path / "bare.toml"), "--out", str(tmp_path / "out"), "--no-progress"]) == 0
+    )
+    out = capsys.readouterr().out
+    assert "failed trials: none" in out

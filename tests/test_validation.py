@@ -77,13 +77,16 @@ def test_replace_cannot_bypass_validation_and_scenario_is_hashable():
 
 def test_controller_options_and_import_paths():
     text = BASE.replace('"adaptive_ct"]', '"mypkg.ctrl:Fancy"]') + (
-        "[controllers.Fancy]\ngain = [1, 2]\nmode = { a = 1.5 }\n[controllers.pd]\nkp = 3\n"
+        "[controllers.Fancy]\ngain = [1, 2]\nmode = { a = 1.5 }\n[controllers.pd]\nbandwidth = 30.0\n"
     )
     sc = parse(text)
     hash(sc)
     assert sc.controllers == ("pd", "mypkg.ctrl:Fancy")
-    assert sc.options("Fancy") == {"gain": [1, 2], "mode": {"a": 1.5}}
-    assert sc.options("pd") == {"kp": 3} and sc.options("none") == {}
+    assert sc.options("Fancy") == {"gain": [1, 2], "mode": {"a": 1.5}}  # a plug-in's settings: as given
+    assert sc.options("pd") == {"bandwidth": 30.0} and sc.options("none") == {}
+    # a built-in's settings are checked when the file is read, not when the run starts
+    with pytest.raises(ScenarioError, match=r"F.toml: controllers.pd: unknown setting\(s\) \['kp'\]"):
+        parse(text.replace("bandwidth = 30.0", "kp = 3"))
 
 
 def test_encodings(tmp_path):
@@ -198,3 +201,97 @@ def test_overflowing_sample_count_is_an_error_not_a_crash():
     # found by the slow hypothesis profile: duration / T overflowed to inf
     with pytest.raises(ScenarioError, match=r"run: too large: inf samples per trial"):
         parse(BASE.replace("duration = 2.0", "duration = 1.797693134862316e+305"))
+
+
+def test_an_empty_scenario_file_is_refused(tmp_path):
+    for raw in (b"", b"# only a comment\n", b"\xef\xbb\xbf"):
+        p = tmp_path / "empty.toml"
+        p.write_bytes(raw)
+        with pytest.raises(ScenarioError, match=r"empty.toml: empty scenario"):
+            load_scenario(p)
+
+
+ARM = """
+[arm]
+l1 = 0.3
+l2 = 0.25
+m1 = 2.0
+m2 = 6.0
+a1 = 0.15
+a2 = 0.1
+I1 = 0.02
+I2 = 0.03
+b = [4.0, 1.0]
+d = [2.5, 0.6]
+"""
+
+
+@pytest.mark.parametrize(
+    ("old", "new", "match"),
+    [
+        ("l1 = 0.3", "l1 = 1e300", r"arm.l1' must be <= 2"),  # overflowed in parameters.py before
+        ("a1 = 0.15", "a1 = 1.7e308", r"arm.a1' must be <= 3"),
+        ("a2 = 0.1", "a2 = 1e300", r"arm.a2' must be <= 3"),
+        ("l2 = 0.25", "l2 = 1e9", r"arm.l2' must be <= 2"),
+        ("m2 = 6.0", "m2 = 1e17", r"arm.m2' must be <= 500"),
+        ("I1 = 0.02", "I1 = -0.02", r"arm.I1' must be > 0"),
+        ("b = [4.0, 1.0]", "b = [4.0, -1.0]", r"arm.b\[1\]' must be >= 0"),
+    ],
+)
+def test_arm_tables_have_physical_bounds(old, new, match):
+    assert parse(BASE + ARM).arm.l1 == 0.3
+    with pytest.raises(ScenarioError, match=r"F.toml: .*" + match):
+        parse(BASE + ARM.replace(old, new))
+
+
+@pytest.mark.parametrize(
+    ("table", "match"),
+    [
+        (
+            "[controllers.adaptive_ct]\nbandwidth = -40.0",
+            r"controllers.adaptive_ct.bandwidth: must be in \(0",
+        ),
+        ("[controllers.adaptive_ct]\nbandwidth = 400.0", r"bandwidth \* T = 0.4 > 0.2"),
+        ("[controllers.adaptive_ct]\nboost_bandwidth = 1e300", r"boost_bandwidth: must be in \(0"),
+        ("[controllers.adaptive_ct]\nboost_duration = 1e300", r"boost_duration: must be in \[0, 2\]"),
+        ("[controllers.adaptive_ct]\ndamping = 1.7e308", r"controllers.adaptive_ct.damping: must be in"),
+        (
+            "[controllers.adaptive_ct]\ndetector = { threshold = 1e300 }",
+            r"detector.threshold: must be finite",
+        ),
+        ("[controllers.pd]\nsigma = [0.5, 0.04, 0.05, 3.0, 0.6, 2.0, -0.5]", r"controllers.pd"),
+    ],
+)
+def test_builtin_controller_settings_are_checked_on_reading(table, match):
+    with pytest.raises(ScenarioError, match=r"F.toml: .*" + match):
+        parse(BASE + table + "\n")
+
+
+def test_sweep_and_arm_files_read_toml_like_scenarios(tmp_path):
+    """One TOML reader: a BOM is accepted everywhere, errors name the file."""
+    from adaptive_dd.cli import _load_arm
+    from adaptive_dd.io import read_toml
+
+    p = tmp_path / "arm.toml"
+    p.write_bytes(b"\xef\xbb\xbf" + ARM.encode())
+    assert _load_arm(str(p)).l1 == 0.3
+    p.write_bytes(b"[arm\n")
+    with pytest.raises(ScenarioError, match=r"arm.toml: not valid TOML"):
+        _load_arm(str(p))
+    with pytest.raises(ValueError, match=r"nope.toml: no such file"):
+        read_toml(tmp_path / "nope.toml")
+
+
+def test_fuzzer_small_configuration_finds_no_crash_and_no_meaningless_scenario():
+    """benchmarks/fuzz_scenarios.py in a small configuration (the README prints the 2000-mutation one)."""
+    import importlib.util
+    from pathlib import Path
+
+    path = Path(__file__).resolve().parent.parent / "benchmarks" / "fuzz_scenarios.py"
+    spec = importlib.util.spec_from_file_location("fuzz_scenarios", path)
+    fz = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(fz)
+    counts, examples = fz.fuzz(300, 7)
+    assert counts["crash"] == 0 and counts["meaningless accepted"] == 0, examples
+    assert counts["error not naming the file"] == 0
+    assert counts["precise error"] > 100 and counts["valid accepted"] > 20

@@ -19,6 +19,7 @@ from adaptive_dd.benchmark.runner import (
 )
 from adaptive_dd.benchmark.streaming import segment_bounds
 from adaptive_dd.identification.online import OnlineConfig, online_init
+from adaptive_dd.plant.sampling import first_sample
 from adaptive_dd.plant.simulator import MAX_SPEED
 
 __all__ = ["run_compiled"]
@@ -45,7 +46,7 @@ def run_compiled(name, ctrl, spec: CompiledSpec, scenario, idx, ref, keep: int, 
         [scenario.substeps, act.saturate, act.quantize, sens.quantize, arm.friction_code], dtype=np.int64
     )
     sigma_true, _ = _true_sigma(scenario, np.arange(N) * T)
-    swap_k = np.array([int(np.ceil(at / T - 1e-9)) for at in scenario.swap_times], dtype=np.int64)
+    swap_k = np.array([first_sample(at, T) for at in scenario.swap_times], dtype=np.int64)
     sig_seg = np.ascontiguousarray(sigma_true[np.concatenate(([0], np.minimum(swap_k, N - 1)))])
     q = np.broadcast_to(ref[0, 0:2], (S, 2)).copy()
     qd = np.broadcast_to(ref[0, 2:4], (S, 2)).copy()

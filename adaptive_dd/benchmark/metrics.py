@@ -11,9 +11,9 @@ rms_error_settled
 max_error
     ``max |e|`` over the segment.
 detection_delay
-    Controllers with a change detector: time from the segment start to the first
-    alarm in the segment (mean over the seeds that raised one), None otherwise or
-    for the first segment.
+    Controllers with a change detector: time from the swap to the first alarm within
+    ``FALSE_ALARM_WINDOW`` after it, mean over the seeds that raised one (``detected`` of them;
+    ``missed``: kept seeds that raised none), None otherwise or for the first segment.
 recovery_time
     After a swap at ``t_s``: the time until the 50 ms moving RMS of ``|e|`` enters
     a band and stays inside it for ``RECOVERY_DWELL`` (0.5 s). The band is ``RECOVERY_BAND`` times
@@ -26,9 +26,16 @@ rms_torque
     ``sqrt(mean |tau|^2)`` of the applied torque [N m].
 saturation_fraction
     Fraction of samples with a joint's command beyond its limit.
+floor_saturation, floor_saturated
+    The floor's saturation fraction in the segment, and whether it exceeds
+    ``SATURATION_LIMIT`` (1 %): there the floor is not the law with the true model but a
+    saturated loop, its ratio says nothing and the report gives no verdict.
 mass_estimate
     Payload mass implied by the estimates at the end of the segment
     (:func:`~adaptive_dd.plant.payload_mass_from_sigma`); None for fixed models.
+
+A trial that diverged is left out of the segments that end after its failure (the segments
+before it count); a controller that raised is left out everywhere.
 
 Per seed (trial i uses the noise of seed ``(scenario.seed, i)`` for every controller,
 so ratios are taken seed by seed: common random numbers):
@@ -39,10 +46,14 @@ ratio_to_floor
     Statistics of ``rms_error / rms_error of the floor`` per seed, where the floor is the
     same law with the true model (``Controller.floor``; e.g. ``ct_oracle`` for
     ``adaptive_ct``): ``mean``, ``median``, ``p90``, ``max``, ``ci95`` (t-interval of the
-    mean), ``worst_seed``, ``n``. None when the floor is not in the run.
+    mean), ``worst_seed`` (the seed index of the largest ratio), ``n``. None when the floor
+    is not in the run.
 detection_delay_per_seed
     Segments after a swap: the first alarm within ``FALSE_ALARM_WINDOW`` after the swap,
     per seed (None: missed or failed).
+missed_swaps_per_seed
+    Per controller with a detector: swaps with no alarm within ``FALSE_ALARM_WINDOW`` after
+    them, per seed (None: failed); ``missed_swaps``: their sum.
 false_alarms_per_seed
     Per controller with a detector: alarms that follow no swap by ``FALSE_ALARM_WINDOW``.
 """
@@ -53,14 +64,33 @@ import numpy as np
 
 from adaptive_dd.benchmark.runner import SETTLE, BenchmarkResult
 from adaptive_dd.benchmark.streaming import segment_bounds
+from adaptive_dd.plant.sampling import first_sample
 
-__all__ = ["RECOVERY_BAND", "RECOVERY_DWELL", "RECOVERY_FLOOR", "compute_metrics", "moving_rms"]
+__all__ = [
+    "FALSE_ALARM_WINDOW",
+    "RECOVERY_BAND",
+    "RECOVERY_DWELL",
+    "RECOVERY_FLOOR",
+    "SATURATION_LIMIT",
+    "compute_metrics",
+    "detection_delays",
+    "error_trace",
+    "false_alarm_counts",
+    "moving_rms",
+    "per_seed_segment_metrics",
+    "ratio_statistics",
+    "release_error_norm",
+    "segment_failed",
+    "segment_rms",
+]
 
 RECOVERY_BAND = 1.5
 RECOVERY_FLOOR = 5e-5  # rad
 RECOVERY_DWELL = 0.5  # s
 WINDOW = 0.05  # s
 FALSE_ALARM_WINDOW = 0.3  # s: an alarm later than this after every swap is a false alarm
+SATURATION_LIMIT = 0.01  # fraction of samples: a floor saturated more than this is no floor
+SEED_CHUNK = 64  # seeds per block of the per-sample post-processing (bounds its memory)
 
 
 def moving_rms(x: np.ndarray, n: int, axis: int = -1) -> np.ndarray:
@@ -86,49 +116,125 @@ def _settling_time(above: np.ndarray, dwell: int) -> np.ndarray:
     return np.where(good.any(axis=-1), first, np.nan).astype(float)
 
 
-def _mean(x: np.ndarray, ok: np.ndarray):
-    v = x[ok]
-    v = v[np.isfinite(v)] if v.dtype.kind == "f" else v
+def _mean(x: np.ndarray):
+    """Mean of the finite entries (None if there is none)."""
+    v = np.asarray(x, float)
+    v = v[np.isfinite(v)]
     return float(np.mean(v)) if v.size else None
 
 
-def per_seed_segment_metrics(res: BenchmarkResult, run) -> dict[str, np.ndarray]:
-    """Per seed and segment, ``(n_seeds, n_segments)`` arrays from the streamed sums (NaN: failed)."""
+def segment_failed(failed: np.ndarray, failed_at: np.ndarray, end: np.ndarray) -> np.ndarray:
+    """``(n_seeds, n_segments)`` bool: the trial failed before the segment's end sample.
+
+    The one failure rule of the benchmark and the sweep: a diverged trial (``failed_at >= 0``,
+    the sample it was stopped at) is left out of the segments that end after its failure; a
+    trial failed without a sample (its controller raised: ``failed_at < 0``) everywhere.
+    """
+    failed = np.asarray(failed, bool)[:, None]
+    at = np.asarray(failed_at)[:, None]
+    return failed & ((at < 0) | (at < np.asarray(end)[None, :]))
+
+
+def segment_rms(sums: np.ndarray, n) -> np.ndarray:
+    """RMS from streamed sums of squares over ``n`` samples: the one per-seed RMS of the package."""
+    return np.sqrt(np.asarray(sums, float) / n)
+
+
+def per_seed_segment_metrics(res: BenchmarkResult, run, recovery: bool = True) -> dict[str, np.ndarray]:
+    """Per seed and segment, ``(n_seeds, n_segments)`` arrays from the streamed sums.
+
+    NaN where the trial failed before the segment's end (:func:`segment_failed`). Computed once
+    per run and kept in ``res.cache`` (the JSON, the report and the per-seed table share it);
+    ``recovery=False`` leaves out the recovery times (they need the per-sample error norm).
+    """
+    key = ("per_seed", run.name, recovery)
+    if key in res.cache:
+        return res.cache[key]
     sc = res.scenario
     T = sc.sample_period
     start, end, settled = segment_bounds(sc.segments(), T, SETTLE)
     n, n_set = (end - start).astype(float), (end - settled).astype(float)
     acc = run.acc
     out = {
-        "rms_error": np.sqrt(acc[..., 0] / n),
-        "rms_error_joint1": np.sqrt(acc[..., 1] / n),
-        "rms_error_joint2": np.sqrt(acc[..., 2] / n),
+        "rms_error": segment_rms(acc[..., 0], n),
+        "rms_error_joint1": segment_rms(acc[..., 1], n),
+        "rms_error_joint2": segment_rms(acc[..., 2], n),
         "max_error": acc[..., 3].copy(),
-        "rms_torque": np.sqrt(acc[..., 4] / n),
+        "rms_torque": segment_rms(acc[..., 4], n),
         "saturation_fraction": acc[..., 5] / n,
-        "rms_error_settled": np.sqrt(acc[..., 6] / n_set),
-        "recovery_time": _recovery_times(run.e_norm, start, end, T),
+        "rms_error_settled": segment_rms(acc[..., 6], n_set),
     }
+    if recovery:
+        out["recovery_time"] = _recovery_times(run.e_norm, start, end, T)
     if run.sigma_end is not None:
         out["mass_estimate"] = sc.arm.payload_mass_from_sigma(run.sigma_end)
+    bad = segment_failed(run.failed, run.failed_at, end)
+    if run.error:
+        bad[:] = True
     for v in out.values():
-        v[run.failed] = np.nan
+        v[bad] = np.nan
+    res.cache[key] = out
     return out
 
 
 def _recovery_times(e_norm: np.ndarray, start, end, T: float) -> np.ndarray:
-    """Recovery time after each swap (see the module docstring), ``(n_seeds, n_segments)``; NaN if none."""
-    smooth = moving_rms(e_norm.astype(float), max(1, round(WINDOW / T)))
+    """Recovery time after each swap (see the module docstring), ``(n_seeds, n_segments)``; NaN if none.
+
+    Computed ``SEED_CHUNK`` seeds at a time, so the float64 work arrays stay small at 1000 seeds."""
     out = np.full((e_norm.shape[0], len(start)), np.nan)
     n1 = round(1.0 / T)
-    for s, (a, b) in enumerate(zip(start, end, strict=True)):
-        if a == 0:
-            continue
-        pre = smooth[:, max(0, a - n1) : a].max(axis=1)
-        post = smooth[:, max(a, b - n1) : b].max(axis=1)
-        band = np.maximum(RECOVERY_BAND * np.maximum(pre, post), RECOVERY_FLOOR)
-        out[:, s] = _settling_time(smooth[:, a:b] > band[:, None], round(RECOVERY_DWELL / T)) * T
+    for c in range(0, e_norm.shape[0], SEED_CHUNK):
+        smooth = moving_rms(e_norm[c : c + SEED_CHUNK].astype(float), max(1, round(WINDOW / T)))
+        for s, (a, b) in enumerate(zip(start, end, strict=True)):
+            if a == 0:
+                continue
+            pre = smooth[:, max(0, a - n1) : a].max(axis=1)
+            post = smooth[:, max(a, b - n1) : b].max(axis=1)
+            band = np.maximum(RECOVERY_BAND * np.maximum(pre, post), RECOVERY_FLOOR)
+            settle = _settling_time(smooth[:, a:b] > band[:, None], round(RECOVERY_DWELL / T))
+            out[c : c + SEED_CHUNK, s] = settle * T
     return out
+
+
+def error_trace(res: BenchmarkResult, run, window: float = WINDOW) -> np.ndarray | None:
+    """``(n_samples,)``: the ``window`` moving RMS of ``|e|`` [rad], mean over the seeds that did not
+    fail (None if all failed); computed ``SEED_CHUNK`` seeds at a time and kept in ``res.cache``."""
+    key = ("trace", run.name, window)
+    if key not in res.cache:
+        ok = np.flatnonzero(~run.failed)
+        n = max(1, round(window / res.scenario.sample_period))
+        total = np.zeros(run.e_norm.shape[1])
+        for c in range(0, ok.size, SEED_CHUNK):
+            total += moving_rms(run.e_norm[ok[c : c + SEED_CHUNK]].astype(float), n).sum(axis=0)
+        res.cache[key] = total / ok.size if ok.size else None
+    return res.cache[key]
+
+
+def release_error_norm(res: BenchmarkResult, run, keep: int = 0) -> None:
+    """Derive everything that needs a run's per-sample error norm (per-seed metrics with recovery
+    times, the figure's error trace), then keep only its first ``keep`` seeds' norm.
+
+    Passed as ``run_benchmark(..., on_run=release_error_norm)`` by the CLI: memory then holds one
+    controller's ``(n_seeds, n_samples)`` float32 norm at a time (80 MB at 1000 seeds of 20 s).
+    """
+    per_seed_segment_metrics(res, run)
+    error_trace(res, run)
+    run.e_norm = run.e_norm[:keep].copy()
+
+
+def false_alarm_counts(alarm_times, swaps) -> list[int]:
+    """Per trial: alarms [s] that follow no swap [s] by less than ``FALSE_ALARM_WINDOW``."""
+    return [
+        sum(1 for x in tr if not any(0 <= x - s < FALSE_ALARM_WINDOW for s in swaps)) for tr in alarm_times
+    ]
+
+
+def detection_delays(alarm_times, swap: float) -> list[float | None]:
+    """Per trial: the first alarm within ``FALSE_ALARM_WINDOW`` after ``swap``, less the swap [s]
+    (None: missed)."""
+    return [
+        min((x - swap for x in tr if 0 <= x - swap < FALSE_ALARM_WINDOW), default=None) for tr in alarm_times
+    ]
 
 
 def compute_metrics(res: BenchmarkResult) -> dict:
@@ -137,34 +243,30 @@ def compute_metrics(res: BenchmarkResult) -> dict:
     out = {}
     per = {name: per_seed_segment_metrics(res, run) for name, run in res.runs.items()}
     for name, run in res.runs.items():
-        ok = ~run.failed
         m = per[name]
         segs = []
         for i, (start, end, mass) in enumerate(sc.segments()):
-            delay = None
-            if run.alarm_times is not None and i > 0:
-                first = [min((x for x in tr if start <= x < end), default=np.nan) for tr in run.alarm_times]
-                delay = _mean(np.asarray(first) - start, ok)
             segs.append(
                 {
                     "start": start,
                     "end": end,
                     "mass": mass,
-                    "rms_error": _mean(m["rms_error"][:, i], ok),
-                    "rms_error_settled": _mean(m["rms_error_settled"][:, i], ok),
-                    "detection_delay": delay,
-                    "rms_error_joint": [_mean(m[f"rms_error_joint{j}"][:, i], ok) for j in (1, 2)],
-                    "max_error": _mean(m["max_error"][:, i], ok),
-                    "recovery_time": _mean(m["recovery_time"][:, i], ok) if i > 0 else None,
-                    "rms_torque": _mean(m["rms_torque"][:, i], ok),
-                    "saturation_fraction": _mean(m["saturation_fraction"][:, i], ok),
-                    "mass_estimate": _mean(m["mass_estimate"][:, i], ok) if "mass_estimate" in m else None,
+                    "rms_error": _mean(m["rms_error"][:, i]),
+                    "rms_error_settled": _mean(m["rms_error_settled"][:, i]),
+                    "detection_delay": None,
+                    "rms_error_joint": [_mean(m[f"rms_error_joint{j}"][:, i]) for j in (1, 2)],
+                    "max_error": _mean(m["max_error"][:, i]),
+                    "recovery_time": _mean(m["recovery_time"][:, i]) if i > 0 else None,
+                    "rms_torque": _mean(m["rms_torque"][:, i]),
+                    "saturation_fraction": _mean(m["saturation_fraction"][:, i]),
+                    "mass_estimate": _mean(m["mass_estimate"][:, i]) if "mass_estimate" in m else None,
                     "sigma_true": [float(x) for x in sc.arm.sigma_with_payload(mass, sc.payload_radius)],
                 }
             )
-        total = np.sqrt(run.acc[..., 0].sum(axis=1) / sc.n_samples)
+        ok = ~run.failed if not run.error else np.zeros_like(run.failed)
+        total = segment_rms(run.acc[..., 0].sum(axis=1), sc.n_samples)
         out[name] = {
-            "rms_error": _mean(total, ok),
+            "rms_error": _mean(np.where(ok, total, np.nan)),
             "failed_trials": int(run.failed.sum()),
             "error": run.error or None,
             "engine": run.engine,
@@ -185,16 +287,31 @@ def compute_metrics(res: BenchmarkResult) -> dict:
     }
 
 
-def _seed_list(x: np.ndarray, ok: np.ndarray) -> list:
-    return [float(v) if (good and np.isfinite(v)) else None for v, good in zip(x, ok, strict=True)]
+def _seed_list(x: np.ndarray) -> list:
+    return [float(v) if np.isfinite(v) else None for v in x]
 
 
-def ratio_statistics(ratio: np.ndarray) -> dict | None:
+def ratio_statistics(ratio: np.ndarray, seeds=None) -> dict | None:
     """Mean, median, p90, max, 95 % t-interval of the mean and worst seed of per-seed ratios.
 
-    NaN entries (failed trials) are left out."""
+    Parameters
+    ----------
+    ratio : ndarray (n_seeds,)
+        Per-seed ratios; NaN entries (failed trials) are left out.
+    seeds : sequence of int, optional
+        The seed index of each entry (default ``0 .. n_seeds - 1``); ``worst_seed`` is one of them.
+
+    Returns
+    -------
+    dict or None
+        ``mean``, ``median``, ``p90`` (linear interpolation between order statistics, numpy's
+        default), ``max``, ``ci95`` (Student-t interval of the mean; None for one seed),
+        ``worst_seed`` and ``n`` (seeds counted); None when no entry is finite.
+    """
     from scipy import stats
 
+    ratio = np.asarray(ratio, float)
+    seeds = np.arange(ratio.size) if seeds is None else np.asarray(seeds)
     idx = np.flatnonzero(np.isfinite(ratio))
     if idx.size == 0:
         return None
@@ -207,47 +324,50 @@ def ratio_statistics(ratio: np.ndarray) -> dict | None:
         "p90": float(np.percentile(r, 90)),
         "max": float(r.max()),
         "ci95": [mean - half, mean + half] if np.isfinite(half) else None,
-        "worst_seed": int(idx[np.argmax(r)]),
+        "worst_seed": int(seeds[idx[np.argmax(r)]]),
         "n": int(r.size),
     }
 
 
 def _add_seed_statistics(res: BenchmarkResult, out: dict, per: dict) -> None:
-    """Per-seed lists, ratios to each controller's floor, false alarms and detection delays."""
+    """Per-seed lists, ratios to each controller's floor, the floor's saturation, false alarms,
+    missed swaps and detection delays."""
     sc = res.scenario
-    per_seed = {}
+    seeds = res.seed_indices or tuple(range(sc.seeds))
+    for name in res.runs:
+        for i, seg in enumerate(out[name]["segments"]):
+            seg["rms_error_per_seed"] = _seed_list(per[name]["rms_error"][:, i])
+    floors = {r.floor for r in res.runs.values() if r.floor in res.runs}
     for name, run in res.runs.items():
-        rms = per[name]["rms_error"].T  # (n_segments, n_seeds)
-        per_seed[name] = rms
-        for seg, r in zip(out[name]["segments"], rms, strict=True):
-            seg["rms_error_per_seed"] = _seed_list(r, ~run.failed)
-    for name, run in res.runs.items():
-        floor = run.floor if run.floor in per_seed else None
+        floor = run.floor if run.floor in per else None
         out[name]["floor"] = floor
         for i, seg in enumerate(out[name]["segments"]):
             seg["ratio_to_floor"] = None
+            ref = floor or (name if name in floors else None)
+            seg["floor_saturation"] = out[ref]["segments"][i]["saturation_fraction"] if ref else None
+            fs = seg["floor_saturation"]
+            seg["floor_saturated"] = bool(fs is not None and fs > SATURATION_LIMIT)
             if floor is not None:
                 with np.errstate(divide="ignore", invalid="ignore"):
-                    ratio = per_seed[name][i] / per_seed[floor][i]
-                seg["ratio_to_floor"] = ratio_statistics(np.where(np.isfinite(ratio), ratio, np.nan))
+                    ratio = per[name]["rms_error"][:, i] / per[floor]["rms_error"][:, i]
+                seg["ratio_to_floor"] = ratio_statistics(np.where(np.isfinite(ratio), ratio, np.nan), seeds)
         if run.alarm_times is None:
             continue
-        swaps = sc.swap_times
-        false = [
-            sum(1 for x in tr if not any(0 <= x - s < FALSE_ALARM_WINDOW for s in swaps))
-            for tr in run.alarm_times
-        ]
-        out[name]["false_alarms_per_seed"] = [
-            None if f else n for n, f in zip(false, run.failed, strict=True)
-        ]
-        ok = ~run.failed
+        ok = ~run.failed if not run.error else np.zeros_like(run.failed)
+        false = false_alarm_counts(run.alarm_times, sc.swap_times)
+        out[name]["false_alarms_per_seed"] = [n if g else None for n, g in zip(false, ok, strict=True)]
         out[name]["trials_with_false_alarms"] = int(sum(1 for n, g in zip(false, ok, strict=True) if g and n))
-        for seg, s in zip(out[name]["segments"][1:], swaps, strict=True):
-            first = [
-                min((x - s for x in tr if 0 <= x - s < FALSE_ALARM_WINDOW), default=None)
-                for tr in run.alarm_times
-            ]
+        missed = np.zeros(len(ok), dtype=int)
+        for seg, s in zip(out[name]["segments"][1:], sc.swap_times, strict=True):
+            first = detection_delays(run.alarm_times, s)
             seg["detection_delay_per_seed"] = [d if g else None for d, g in zip(first, ok, strict=True)]
+            hit = [d for d, g in zip(first, ok, strict=True) if g and d is not None]
+            seg["detection_delay"] = float(np.mean(hit)) if hit else None
+            seg["detected"] = len(hit)
+            seg["missed"] = int(ok.sum()) - len(hit)
+            missed += np.array([d is None for d in first], dtype=int)
+        out[name]["missed_swaps_per_seed"] = [int(n) if g else None for n, g in zip(missed, ok, strict=True)]
+        out[name]["missed_swaps"] = int(missed[ok].sum())
 
 
 INFO_WINDOW = 1.0
@@ -267,10 +387,19 @@ def mass_learning_time(m_hat: np.ndarray, mass: float, removed: float, T: float,
     return np.where(last < n - 1, (last + 1) * T, np.nan)
 
 
+def _median(x: list) -> float | None:
+    v = np.asarray([np.nan if y is None else y for y in x], float)
+    return float(np.nanmedian(v)) if np.isfinite(v).any() else None
+
+
 def _add_information_times(res: BenchmarkResult, out: dict) -> None:
-    """Per swap: the time the information limit needs to know the payload mass within 5 %
-    (first kept seed of a controller with recorded trajectories, the oracle's if present),
-    beside the time each controller with an estimate took (median over the kept seeds)."""
+    """Per swap: the time the information limit needs to know the payload mass within 5 %, beside
+    the time each controller with an estimate took.
+
+    Both need per-sample trajectories, which are kept for the first ``keep_trajectories`` seeds
+    only: the limit is the median over those seeds of the reference run (the oracle's if present;
+    ``information_seeds``: how many), the learning times the median over a controller's kept
+    seeds that did not fail (``learning_seeds``). The JSON and the report say how many seeds."""
     from adaptive_dd.identification.fisher import mass_information_time
 
     sc = res.scenario
@@ -286,35 +415,49 @@ def _add_information_times(res: BenchmarkResult, out: dict) -> None:
         None,
     )
     segs = sc.segments()
+    _, ends, _ = segment_bounds(segs, T, SETTLE)
     w = round(INFO_WINDOW / T)
     d = sc.arm.payload_direction(sc.payload_radius)
     for i in range(1, len(segs)):
-        a, b, mass = segs[i]
+        a, _, mass = segs[i]
         removed = segs[i - 1][2]
-        k0 = int(np.ceil(a / T - 1e-9))
-        k1 = min(round(b / T), k0 + w)
-        info = {"known": None, "unknown": None}
-        if ref is not None and not ref.failed[0] and max(mass, removed) > 0:
-            for others in info:
-                info[others] = mass_information_time(
-                    ref.q[0, k0 - 1 : k1],
-                    ref.qd[0, k0 - 1 : k1],
-                    ref.tau[0, k0 - 1 : k1],
-                    1,
-                    T,
-                    sc.arm.sigma_with_payload(mass, sc.payload_radius),
-                    d,
-                    sc.position_variance,
-                    sc.velocity_variance,
-                    mass=max(mass, removed),
-                    others=others,
-                )
+        k0 = first_sample(a, T)
+        k1 = min(int(ends[i]), k0 + w)
+        info = {"known": None, "unknown": None, "seeds": 0, "reference": None}
+        if ref is not None and max(mass, removed) > 0:
+            kept = [j for j in range(ref.q.shape[0]) if not ref.failed[j]]
+            times = {"known": [], "unknown": []}
+            for j in kept:
+                for others in times:
+                    times[others].append(
+                        mass_information_time(
+                            ref.q[j, k0 - 1 : k1],
+                            ref.qd[j, k0 - 1 : k1],
+                            ref.tau[j, k0 - 1 : k1],
+                            1,
+                            T,
+                            sc.arm.sigma_with_payload(mass, sc.payload_radius),
+                            d,
+                            sc.position_variance,
+                            sc.velocity_variance,
+                            mass=max(mass, removed),
+                            others=others,
+                        )
+                    )
+            info = {
+                "known": _median(times["known"]),
+                "unknown": _median(times["unknown"]),
+                "seeds": len(kept),
+                "reference": ref.name,
+            }
         for name, run in res.runs.items():
             seg = out[name]["segments"][i]
             seg["information_time"] = info
             seg["mass_learning_time"] = None
+            seg["learning_seeds"] = 0
             if run.sigma_hat is not None and run.sigma_hat.shape[0]:
                 kept = ~run.failed[: run.sigma_hat.shape[0]]
-                m_hat = sc.arm.payload_mass_from_sigma(run.sigma_hat[kept, k0 : round(b / T)])
+                m_hat = sc.arm.payload_mass_from_sigma(run.sigma_hat[kept, k0 : int(ends[i])])
                 tl = mass_learning_time(m_hat, mass, removed, T)
+                seg["learning_seeds"] = int(kept.sum())
                 seg["mass_learning_time"] = None if np.all(np.isnan(tl)) else float(np.nanmedian(tl))

@@ -23,7 +23,7 @@ def to_frame(res):
     """
     import pandas as pd
 
-    from adaptive_dd.benchmark.metrics import FALSE_ALARM_WINDOW, per_seed_segment_metrics
+    from adaptive_dd.benchmark.metrics import detection_delays, false_alarm_counts, per_seed_segment_metrics
 
     sc = res.scenario
     segs = sc.segments()
@@ -32,18 +32,13 @@ def to_frame(res):
     for name, run in res.runs.items():
         m = per[name]
         floor = run.floor if run.floor in per else None
-        false = None
+        false, delays = None, {}
         if run.alarm_times is not None:
-            false = [
-                sum(1 for x in tr if not any(0 <= x - s < FALSE_ALARM_WINDOW for s in sc.swap_times))
-                for tr in run.alarm_times
-            ]
+            false = false_alarm_counts(run.alarm_times, sc.swap_times)
+            delays = {s: detection_delays(run.alarm_times, a) for s, (a, _, _) in enumerate(segs) if s > 0}
         for i, seed in enumerate(res.seed_indices):
             for s, (a, b, mass) in enumerate(segs):
-                delay = np.nan
-                if run.alarm_times is not None and s > 0:
-                    hits = [x - a for x in run.alarm_times[i] if 0 <= x - a < FALSE_ALARM_WINDOW]
-                    delay = min(hits) if hits else np.nan
+                delay = delays[s][i] if s in delays and delays[s][i] is not None else np.nan
                 row = {"controller": name, "seed": seed, "segment": s, "start": a, "end": b, "mass": mass}
                 row.update({k: float(v[i, s]) for k, v in m.items()})
                 row["floor"] = floor

@@ -32,7 +32,9 @@ from numpy.typing import NDArray
 from adaptive_dd.benchmark.scenario import Scenario
 from adaptive_dd.benchmark.streaming import N_ACC, accumulate_batch, segment_bounds
 from adaptive_dd.controllers import Controller, Gains, controller_label, make_controller
+from adaptive_dd.controllers.base import declared
 from adaptive_dd.errors import ParameterError, SignalError
+from adaptive_dd.plant.sampling import first_sample
 from adaptive_dd.plant.simulator import ArmSimulator, PayloadSchedule
 
 __all__ = ["ENGINES", "MAX_ERROR", "SETTLE", "BenchmarkResult", "ControllerRun", "run_benchmark"]
@@ -105,6 +107,8 @@ class BenchmarkResult:
     runs: dict = field(default_factory=dict)
     wall_time: float = 0.0
     seed_indices: tuple = ()
+    cache: dict = field(default_factory=dict, repr=False, compare=False)
+    """Derived per-seed arrays, computed once (``metrics.per_seed_segment_metrics``)."""
 
     def to_frame(self):
         """One row per controller x seed x segment (pandas DataFrame; see
@@ -146,7 +150,7 @@ def _sensor(scenario: Scenario):
 def _true_sigma(scenario: Scenario, t: Array) -> tuple[Array, Array]:
     """True sigma and payload mass at every sample, as the simulator applies them."""
     T = scenario.sample_period
-    k_sw = [int(np.ceil(at / T - 1e-9)) for at in scenario.swap_times]
+    k_sw = [first_sample(at, T) for at in scenario.swap_times]
     masses = np.array([0.0, *scenario.swap_masses])
     w = np.searchsorted(np.array(k_sw, dtype=np.int64), np.arange(t.size), side="right")
     mass = masses[w]
@@ -161,6 +165,7 @@ def run_benchmark(
     engine: str = "auto",
     keep_trajectories: int = 3,
     seed_indices: Sequence[int] | None = None,
+    on_run=None,
 ) -> BenchmarkResult:
     """Run every controller of the scenario over all seeds.
 
@@ -180,6 +185,10 @@ def run_benchmark(
     seed_indices : sequence of int, optional
         Seed indices of the trials (default ``range(scenario.seeds)``): a block of seeds
         run alone gives the same numbers as inside a full run.
+    on_run : callable, optional
+        ``on_run(result, run)`` after each controller's trials (the CLI passes
+        :func:`~adaptive_dd.benchmark.metrics.release_error_norm`, which derives what needs the
+        per-sample error norm and frees it, so memory holds one controller's norm at a time).
     """
     if engine not in ENGINES:
         raise ParameterError(f"engine must be one of {ENGINES}, got {engine!r}")
@@ -220,6 +229,8 @@ def run_benchmark(
         else:
             run = _run_python(name, ctrl, scenario, idx, (q_d, qd_d, qdd_d), keep_trajectories, bar)
         res.runs[name] = run
+        if on_run is not None:
+            on_run(res, run)
     if bar is not None:
         bar.close()
     res.wall_time = time.perf_counter() - t0
@@ -257,7 +268,7 @@ def _new_run(
         sigma_end=np.full((S, n_seg, 7), np.nan) if adaptive else None,
         failed=np.zeros(S, dtype=bool),
         failed_at=np.full(S, -1),
-        floor=getattr(ctrl, "floor", "ct_oracle"),
+        floor=declared(ctrl, "floor"),
         q=np.zeros((K, N, 2)),
         qd=np.zeros((K, N, 2)),
         tau=np.zeros((K, N, 2)),
@@ -286,7 +297,7 @@ def _run_python(name, ctrl, scenario, idx, reference, keep, bar) -> ControllerRu
     error = ""
     try:
         ctrl.reset(S, T)
-        adaptive = ctrl.adaptive
+        adaptive = declared(ctrl, "adaptive")
     except Exception as exc:  # contain any controller failure to its own trials
         error, adaptive = f"{type(exc).__name__} in reset: {exc}", False
     seg_start, seg_end, seg_settled = segment_bounds(scenario.segments(), T, SETTLE)
@@ -314,7 +325,7 @@ def _run_python(name, ctrl, scenario, idx, reference, keep, bar) -> ControllerRu
         tau = np.full((S, 2), np.nan)
         if not error:
             try:
-                truth = {"sigma_true": sim.sigma} if ctrl.needs_true_model else {}
+                truth = {"sigma_true": sim.sigma} if declared(ctrl, "needs_true_model") else {}
                 cmd = np.asarray(ctrl.command(qm, qdm, q_d[k], qd_d[k], qdd_d[k], **truth), dtype=float)
                 if cmd.shape != (S, 2):
                     raise SignalError(f"command returned shape {cmd.shape}, expected ({S}, 2)")
@@ -330,7 +341,7 @@ def _run_python(name, ctrl, scenario, idx, reference, keep, bar) -> ControllerRu
             try:
                 ctrl.observe(qm_obs, qdm_obs, applied)
                 if adaptive:
-                    est = np.asarray(ctrl.sigma_hat)
+                    est = np.asarray(declared(ctrl, "sigma_hat"))
                     if K:
                         run.sigma_hat[:, k] = est[:K]
                     while seg + 1 < len(seg_end) and k >= seg_end[seg]:
@@ -346,6 +357,6 @@ def _run_python(name, ctrl, scenario, idx, reference, keep, bar) -> ControllerRu
     run.failed, run.failed_at, run.error = sim.failed.copy(), sim.failed_at.copy(), error
     if error:
         run.failed[:] = True
-    run.alarm_times = None if error else ctrl.alarm_times
-    run.skipped = None if error else ctrl.skipped_samples
+    run.alarm_times = None if error else declared(ctrl, "alarm_times")
+    run.skipped = None if error else declared(ctrl, "skipped_samples")
     return run

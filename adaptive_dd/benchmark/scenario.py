@@ -22,7 +22,7 @@ Every key is optional; the value after ``=`` below is the default that is used
 
     [reference]                # q_d(t) = offset + w(t) sum_k a_k sin(2 pi f_k t + phase_k);
                                # default: the shipped payload_swap scenario's reference
-    ramp = 0.0                 # s, w rises smoothly from 0 to 1 over this time, 0 <= ramp <= 1e6
+    ramp = 0.0                 # s, w rises smoothly from 0 to 1 over this time, 0 <= ramp <= 3600
     joint1 = { offset = 0.0, amplitude = [0.5, 0.2], frequency = [0.4, 1.1], phase = [0.0, 0.0] }
     joint2 = { offset = 0.0, amplitude = [0.6, 0.2], frequency = [0.5, 1.3], phase = [0.0, 0.0] }
                                # rad, Hz, rad; |offset| + sum |a_k| <= 10 rad; 0 < f_k <= 0.1 / T;
@@ -58,7 +58,7 @@ bypass them.
 from __future__ import annotations
 
 import itertools
-import tomllib
+import math
 from dataclasses import dataclass, field, fields
 from importlib import resources
 from pathlib import Path
@@ -70,6 +70,7 @@ from numpy.typing import NDArray
 from adaptive_dd.errors import ScenarioError
 from adaptive_dd.plant.arm import Arm, arm_from_tables
 from adaptive_dd.plant.serial_arm import SerialArm
+from adaptive_dd.plant.parameters import PAYLOAD_RADIUS
 
 __all__ = [
     "LIMITS",
@@ -105,6 +106,8 @@ LIMITS = {
     "max_bytes": 4 * 2**30,
     "max_seconds": 24 * 3600.0,
     "large_seconds": 60.0,  # the CLI prints the estimate above this
+    "max_ramp": 3600.0,  # s
+    "max_setting": 1e6,  # |any number| in a built-in controller's [controllers.NAME] table
 }
 """Documented bounds of the scenario checks (see the module docstring)."""
 
@@ -244,7 +247,7 @@ class Scenario:
     reference: Reference
     swap_times: tuple[float, ...]
     swap_masses: tuple[float, ...]
-    payload_radius: float = 0.05
+    payload_radius: float = PAYLOAD_RADIUS
     position_variance: tuple[float, float] = (1e-8, 1e-7)
     velocity_variance: tuple[float, float] = (5e-5, 1e-4)
     dropout: float = 0.0
@@ -299,7 +302,7 @@ class Scenario:
 
     def segment_samples(self) -> list[int]:
         """Number of samples ``k T`` in each segment ``[start, end)``."""
-        from adaptive_dd.benchmark.scenario_checks import first_sample
+        from adaptive_dd.plant.sampling import first_sample
 
         T, n = self.sample_period, self.n_samples
         edges = [0, *(first_sample(t, T) for t in self.swap_times), n]
@@ -332,14 +335,11 @@ def default_scenario_path() -> Path:
 
 
 def read_toml(path: Path) -> dict:
-    """Parse a TOML file read as UTF-8 (a BOM is allowed); errors name the file and position."""
-    from adaptive_dd.io import read_text
+    """Parse a TOML file read as UTF-8 (a BOM is allowed); errors name the file and position
+    (:func:`adaptive_dd.io.read_toml` raising ``ScenarioError``)."""
+    from adaptive_dd.io import read_toml as _read
 
-    text = read_text(path, ScenarioError)
-    try:
-        return tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise ScenarioError(f"{path}: not valid TOML: {exc}") from None
+    return _read(path, ScenarioError)
 
 
 def load_scenario(path: str | Path | None = None) -> Scenario:
@@ -355,18 +355,19 @@ def load_scenario(path: str | Path | None = None) -> Scenario:
     path = Path(path) if path is not None else default_scenario_path()
     if not path.is_file():
         raise ScenarioError(f"{path}: no such scenario file")
-    return parse_scenario(read_toml(path), str(path), name=path.stem)
+    data = read_toml(path)
+    if not data:
+        raise ScenarioError(
+            f"{path}: empty scenario (no table, no key): nothing to run; for the default scenario "
+            "give no file (`adaptive-dd benchmark`), or start from `adaptive-dd validate`'s output"
+        )
+    return parse_scenario(data, str(path), name=path.stem)
 
 
 def parse_scenario(data: dict, src: str = "<memory>", name: str = "scenario") -> Scenario:
     """Check a scenario given as a dict (the parsed TOML); all problems are raised at once."""
     from adaptive_dd.benchmark.scenario_checks import scenario_errors, scenario_fields
 
-    if isinstance(data, dict) and not data:
-        raise ScenarioError(
-            f"{src}: the scenario is empty; give at least one table (e.g. [run]); the shipped default "
-            "is what `adaptive-dd benchmark` runs without a file"
-        )
     arm, errors = None, []
     try:
         arm = arm_from_tables(
@@ -384,9 +385,69 @@ def parse_scenario(data: dict, src: str = "<memory>", name: str = "scenario") ->
         if "payload.radius" in values.get("defaulted", ()):
             values["payload_radius"] = arm.payload_radius
     errors += [e for e in scenario_errors(values) if e.split(":")[0] not in _bad_keys(errors)]
+    if not errors:
+        errors += _controller_setting_errors(values)
     if errors:
         raise _scenario_error(src, errors)
     return Scenario(**values)
+
+
+def _numbers(x: Any, key: str):
+    """Every number in a (nested) setting as ``(key, value)``."""
+    if isinstance(x, dict):
+        for k, y in x.items():
+            yield from _numbers(y, f"{key}.{k}")
+    elif isinstance(x, list | tuple):
+        for y in x:
+            yield from _numbers(y, key)
+    elif isinstance(x, int | float) and not isinstance(x, bool):
+        yield key, float(x)
+
+
+def _controller_setting_errors(v: dict) -> list[str]:
+    """Each built-in controller with a ``[controllers.NAME]`` table built once, so a bad setting
+    (a negative gain, a bandwidth the sample period cannot carry, an unknown key) is an error of
+    the file, not of the run. ``bandwidth``, ``boost_bandwidth`` and ``damping`` have the bounds
+    of ``[control]``; ``boost_duration`` is at most the run; every number is finite and within
+    ``LIMITS["max_setting"]``."""
+    from adaptive_dd.benchmark.scenario_checks import _num, thaw
+    from adaptive_dd.controllers import CONTROLLERS, Gains, make_controller
+
+    errs: list[str] = []
+    opts = {n: thaw(o) for n, o in v["controller_options"]}
+    T = v["sample_period"]
+    for name in v["controllers"]:
+        if name not in CONTROLLERS or name not in opts:
+            continue
+        o, n0 = opts[name], len(errs)
+        for bw in ("bandwidth", "boost_bandwidth"):
+            key = f"controllers.{name}.{bw}"
+            if (
+                bw in o
+                and _num(errs, key, o[bw], 0, 1e5, lo_open=True)
+                and o[bw] * T > LIMITS["max_bandwidth_T"]
+            ):
+                errs.append(
+                    f"{key}: {o[bw]} rad/s at T = {T} s gives "
+                    f"bandwidth * T = {o[bw] * T:.3g} > {LIMITS['max_bandwidth_T']}"
+                )
+        if "boost_duration" in o:
+            _num(errs, f"controllers.{name}.boost_duration", o["boost_duration"], 0, v["duration"])
+        if "damping" in o:
+            _num(errs, f"controllers.{name}.damping", o["damping"], 0, LIMITS["max_damping"], lo_open=True)
+        for key, x in _numbers(o, f"controllers.{name}"):
+            if not math.isfinite(x) or abs(x) > LIMITS["max_setting"]:
+                errs.append(f"{key}: must be finite and within +-{LIMITS['max_setting']:g}, got {x!r}")
+        if len(errs) > n0:
+            continue
+        try:
+            make_controller(name, Gains(v["bandwidth"], v["damping"]), o, arm=v["arm"])
+        except (ValueError, TypeError, ArithmeticError) as exc:
+            msg = str(exc)
+            while msg.startswith(f"controllers.{name}"):  # the registry names the controller too
+                msg = msg.removeprefix(f"controllers.{name}").removeprefix(": ")
+            errs.append(f"controllers.{name}{'' if msg.startswith('.') else ': '}{msg}")
+    return errs
 
 
 def _bad_keys(errors: list[str]) -> set[str]:

@@ -12,6 +12,8 @@ from typing import Any
 import numpy as np
 
 from adaptive_dd.controllers import CONTROLLERS
+from adaptive_dd.plant.parameters import PAYLOAD_RADIUS
+from adaptive_dd.plant.sampling import first_sample
 
 __all__ = ["first_sample", "freeze", "scenario_errors", "scenario_fields", "thaw"]
 
@@ -40,11 +42,6 @@ def thaw(value: Any) -> Any:
     if isinstance(value, tuple):
         return [thaw(v) for v in value]
     return value
-
-
-def first_sample(t: float, sample_period: float) -> int:
-    """Index of the first sample ``k T >= t`` (a payload change at t acts from there on)."""
-    return math.ceil(t / sample_period - 1e-9)
 
 
 def _short(v: Any) -> str:
@@ -205,7 +202,7 @@ def _check_payload(e: list, v: dict, timing_ok: bool) -> None:
 def _check_reference(e: list, ref: Any, T: float | None, n: int = 2) -> None:
     from adaptive_dd.benchmark.scenario import LIMITS as L
 
-    _num(e, "reference.ramp", ref.ramp, 0, 1e6)  # may outlast a short run: the ramp is just cut
+    _num(e, "reference.ramp", ref.ramp, 0, L["max_ramp"])  # may outlast a short run: the ramp is just cut
     fmax = L["nyquist_fraction"] / T if T is not None else math.inf
     for name, obj in (("offset", ref.offset), ("amplitude", ref.amplitude), ("frequency", ref.frequency)):
         if not isinstance(obj, tuple) or len(obj) != n:
@@ -394,7 +391,7 @@ def _payload_fields(e: list, items: list, v: dict, defaulted: set, arm: Any = No
     v["swap_times"], v["swap_masses"] = tuple(times), tuple(masses)
     v["swap_com"] = tuple(coms) if any(c is not None for c in coms) else ()
     v["swap_inertia"] = tuple(inertias) if any(c is not None for c in inertias) else ()
-    v["payload_radius"] = radii[0] if radii else 0.05
+    v["payload_radius"] = radii[0] if radii else PAYLOAD_RADIUS
 
 
 def _reference_field(e: list, tables: dict, is_default: bool, defaulted: set, arm: Any = None) -> Any:

@@ -10,6 +10,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from adaptive_dd.plant.sampling import first_sample
+
 __all__ = ["ACC_FIELDS", "accumulate_trial", "segment_bounds"]
 
 ACC_FIELDS = (
@@ -29,9 +31,13 @@ N_ACC = len(ACC_FIELDS)
 def segment_bounds(
     segments, sample_period: float, settle: float
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """``(start, end, settled_start)`` sample indices of each ``(t0, t1, mass)`` segment."""
-    start = np.array([round(a / sample_period) for a, _, _ in segments], dtype=np.int64)
-    end = np.array([round(b / sample_period) for _, b, _ in segments], dtype=np.int64)
+    """``(start, end, settled_start)`` sample indices of each ``(t0, t1, mass)`` segment.
+
+    A segment starts at :func:`~adaptive_dd.plant.sampling.first_sample` of its start time (the
+    sample at which the plant's payload changes); the last one ends at ``round(duration / T)``."""
+    start = np.array([first_sample(a, sample_period) for a, _, _ in segments], dtype=np.int64)
+    n = round(segments[-1][1] / sample_period)
+    end = np.array([*start[1:], n], dtype=np.int64)
     settled = np.minimum(end - 1, start + round(settle / sample_period))
     return start, end, settled
 

@@ -18,7 +18,7 @@ from numpy.typing import NDArray
 from adaptive_dd.errors import ParameterError
 from adaptive_dd.plant.dynamics import _mass_entries
 
-__all__ = ["DEFAULT_GAINS", "Controller", "Gains"]
+__all__ = ["DECLARED", "DEFAULT_GAINS", "Controller", "Gains", "declared"]
 
 Array = NDArray[np.float64]
 
@@ -131,3 +131,26 @@ class Controller:
     def adaptive(self) -> bool:
         """True for controllers that expose an estimate (:attr:`sigma_hat`)."""
         return self.sigma_hat is not None
+
+
+DECLARED = {
+    "name": None,
+    "needs_true_model": False,
+    "floor": "ct_oracle",
+    "sigma_hat": None,
+    "alarm_times": None,
+    "skipped_samples": None,
+}
+"""What a controller may declare and the default a class without it gets (docs/controllers.md)."""
+
+
+def declared(ctrl, attr: str):
+    """A controller's declared attribute, or the documented default (:data:`DECLARED`).
+
+    The runner reads every optional attribute through this, so a class written against
+    ``reset / command / observe`` alone, with no base class, runs as the docs say;
+    ``"adaptive"`` is whether it exposes an estimate (``sigma_hat`` not None)."""
+    if attr == "adaptive":
+        return declared(ctrl, "sigma_hat") is not None
+    default = type(ctrl).__name__ if attr == "name" else DECLARED[attr]
+    return getattr(ctrl, attr, default)

@@ -150,7 +150,9 @@ def _rls_update(theta, P, lam, stage, phi, y, group, g, cf, forget):  # pragma: 
     """Eq. (14) for one scalar equation on parameter group g; returns the prior error.
 
     The same arithmetic as :func:`~adaptive_dd.identification.rls.rls_step`; P is kept
-    block diagonal over the groups, so the update touches group g's block only.
+    block diagonal over the groups, so the update touches group g's block only: the
+    group's indices are gathered once (ascending, so every sum runs in the order of the
+    full loops) and the loops run over the block alone.
     A non-finite equation or a non-positive denominator leaves everything unchanged
     and returns NaN.
     """
@@ -158,45 +160,49 @@ def _rls_update(theta, P, lam, stage, phi, y, group, g, cf, forget):  # pragma: 
     lam_prev = lam[stage]
     lam_new = (1.0 - cf[F_MU]) * lam_prev + cf[F_MU] if forget else lam_prev
     lam_eff = lam_new if forget else 1.0
-    pphi = np.zeros(n)
-    eps = y
+    buf = np.empty(2 * n)  # pphi, then the block's indices (as floats: one allocation)
+    m = 0
     for i in range(n):
-        if group[i] != g:
-            continue
+        if group[i] == g:
+            buf[n + m] = i
+            m += 1
+    eps = y
+    for a in range(m):
+        i = int(buf[n + a])
         eps -= phi[i] * theta[i]
         acc = 0.0
-        for j in range(n):
-            if group[j] == g:
-                acc += P[i, j] * phi[j]
-        pphi[i] = acc
+        for b in range(m):
+            j = int(buf[n + b])
+            acc += P[i, j] * phi[j]
+        buf[a] = acc
     den = lam_eff
-    for i in range(n):
-        den += phi[i] * pphi[i] if group[i] == g else 0.0
+    for a in range(m):
+        den += phi[int(buf[n + a])] * buf[a]
     if not (np.isfinite(eps) and np.isfinite(den) and den > 0.0):
         return np.nan
     tr = 0.0
-    for i in range(n):
-        if group[i] != g:
-            continue
-        gain = pphi[i] / den
+    for a in range(m):
+        i = int(buf[n + a])
+        gain = buf[a] / den
         theta[i] += gain * eps
-        for j in range(n):
-            if group[j] == g:
-                P[i, j] = (P[i, j] - gain * pphi[j]) / lam_eff
+        for b in range(m):
+            j = int(buf[n + b])
+            P[i, j] = (P[i, j] - gain * buf[b]) / lam_eff
         tr += P[i, i]
-    for i in range(n):  # keep P symmetric
-        for j in range(i + 1, n):
-            if group[i] == g and group[j] == g:
-                s = 0.5 * (P[i, j] + P[j, i])
-                P[i, j] = s
-                P[j, i] = s
+    for a in range(m):  # keep P symmetric
+        i = int(buf[n + a])
+        for b in range(a + 1, m):
+            j = int(buf[n + b])
+            s = 0.5 * (P[i, j] + P[j, i])
+            P[i, j] = s
+            P[j, i] = s
     cap = cf[F_CAP1] if g == 1 else cf[F_CAP0]
     if cap > 0.0 and tr > cap:
         scale = cap / tr
-        for i in range(n):
-            for j in range(n):
-                if group[i] == g and group[j] == g:
-                    P[i, j] *= scale
+        for a in range(m):
+            i = int(buf[n + a])
+            for b in range(m):
+                P[i, int(buf[n + b])] *= scale
     lam[stage] = lam_new
     return eps
 

@@ -35,9 +35,11 @@ __all__ = [
     "TAU_F_GRID",
     "ReproduceResult",
     "format_bounds",
+    "format_comparison",
     "format_summary",
     "format_table",
     "model_responses",
+    "paper_comparison",
     "run_reproduce",
 ]
 
@@ -243,6 +245,40 @@ def format_bounds(res: ReproduceResult, tau_f: float | None = None) -> str:
     for name, est in res.extra.items():
         estimates[name], kinds[name] = est, name
     return format_bound_table(res.crb, estimates, kinds=kinds)
+
+
+def paper_comparison(res: ReproduceResult, method: str) -> list[dict]:
+    """Ours against the paper (estimator ``paper``, split 15) per tau_f of the paper's grid and
+    parameter: ``tau_f, param, ours_pct`` (mean |error| over seeds), ``paper_pct`` and
+    ``ratio = ours / paper``."""
+    err = res.errors.get((method, "15", "paper"))
+    if err is None:
+        return []
+    out = []
+    for i, tf in enumerate(res.tau_f):
+        if tf not in TAU_F_GRID:
+            continue
+        for k, name in enumerate(SIGMA_NAMES):
+            ours, paper = float(err[i, :, k].mean()), float(PAPER_TABLES[method][TAU_F_GRID.index(tf), k])
+            out.append({"tau_f": float(tf), "param": name, "ours_pct": ours, "paper_pct": paper,
+                        "ratio": ours / paper if paper > 0 else float("nan")})  # fmt: skip
+    return out
+
+
+def format_comparison(res: ReproduceResult, method: str) -> str:
+    """The paper's value beside ours and their ratio, per tau_f (rows) and parameter (columns):
+    cells ``ours / paper = ratio`` [%] (estimator ``paper``, split 15)."""
+    rows = paper_comparison(res, method)
+    if not rows:
+        return ""
+    head = f"{'tau_f':>6} " + " ".join(f"{n:>18s}" for n in SIGMA_NAMES)
+    lines = [head]
+    for tf in dict.fromkeys(r["tau_f"] for r in rows):
+        cells = [
+            f"{r['ours_pct']:5.1f}/{r['paper_pct']:4.1f}={r['ratio']:5.2f}" for r in rows if r["tau_f"] == tf
+        ]
+        lines.append(f"{tf:6.3f} " + " ".join(f"{c:>18s}" for c in cells))
+    return "\n".join(lines)
 
 
 def format_table(res: ReproduceResult, method: str, split: str, estimator: str, with_paper: bool) -> str:

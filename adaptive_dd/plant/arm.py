@@ -40,6 +40,7 @@ from adaptive_dd.errors import ParameterError, ScenarioError
 from adaptive_dd.plant import dynamics
 from adaptive_dd.plant.devices import ActuatorConfig, SensorConfig
 from adaptive_dd.plant.parameters import (
+    PAYLOAD_RADIUS,
     SIGMA_NAMES,
     Payload,
     PhysicalParameters,
@@ -112,7 +113,7 @@ class Arm:
     sigma: Array
     l1: float
     l2: float
-    payload_radius: float = 0.05
+    payload_radius: float = PAYLOAD_RADIUS
     physical: PhysicalParameters | None = None
     actuator: ActuatorConfig = field(default_factory=lambda: Arm.sice().actuator)
     sensor: SensorConfig = field(default_factory=lambda: Arm.sice().sensor)
@@ -190,7 +191,7 @@ class Arm:
             sigma=TABLE1_SIGMA,
             l1=L1,
             l2=L2,
-            payload_radius=0.05,
+            payload_radius=PAYLOAD_RADIUS,
             physical=TABLE1_PHYSICAL,
             actuator=ActuatorConfig(TORQUE_LIMITS, dac_bits=12),
             sensor=SensorConfig(
@@ -384,6 +385,37 @@ _SIGMA_KEYS = ("sigma", "l1", "l2")
 _ARM_OPTIONAL = ("payload_radius", "torque_limit")
 _PLANT_KEYS = ("friction", "friction_velocity", "stribeck_ratio", "stribeck_velocity")
 
+ARM_BOUNDS = {
+    "arm.l1": 2.0,  # m: a direct-drive arm's link; beyond this no motor of the kind moves it
+    "arm.l2": 2.0,
+    "arm.a1": 3.0,  # m (PhysicalParameters further requires a_i <= 1.5 l_i)
+    "arm.a2": 3.0,
+    "arm.m1": 500.0,  # kg
+    "arm.m2": 500.0,
+    "arm.I1": 100.0,  # kg m^2
+    "arm.I2": 100.0,
+    "arm.sigma[0]": 1000.0,  # J1 [kg m^2]
+    "arm.sigma[1]": 1000.0,  # J2
+    "arm.sigma[2]": 1000.0,  # r
+    "arm.sigma[3]": 1000.0,  # b1 [N m s/rad]
+    "arm.sigma[4]": 1000.0,  # b2
+    "arm.sigma[5]": 1000.0,  # d1 [N m]
+    "arm.sigma[6]": 1000.0,  # d2
+    "arm.b[0]": 1000.0,
+    "arm.b[1]": 1000.0,
+    "arm.d[0]": 1000.0,
+    "arm.d[1]": 1000.0,
+    "arm.payload_radius": 0.5,  # m, as the scenario's payload.radius
+    "arm.torque_limit[0]": 1e4,  # N m
+    "arm.torque_limit[1]": 1e4,
+    "plant.friction_velocity": 10.0,  # rad/s
+    "plant.stribeck_velocity": 10.0,
+    "plant.stribeck_ratio": 100.0,
+}
+"""Upper bounds of the ``[arm]`` and ``[plant]`` numbers: physically plausible for a two-link
+direct-drive arm, and far enough below overflow that every derived quantity (``m l^2``, the
+mass matrix, its determinant) stays finite."""
+
 
 def _table_number(src: str, key: str, v, *, lower: float | None = None, strict: bool = True) -> float:
     if isinstance(v, bool) or not isinstance(v, int | float):
@@ -392,6 +424,9 @@ def _table_number(src: str, key: str, v, *, lower: float | None = None, strict: 
         raise ScenarioError(f"{src}: key '{key}' must be finite, got {v!r}")
     if lower is not None and (v <= lower if strict else v < lower):
         raise ScenarioError(f"{src}: key '{key}' must be {'>' if strict else '>='} {lower:g}, got {v!r}")
+    hi = ARM_BOUNDS.get(key)
+    if hi is not None and v > hi:
+        raise ScenarioError(f"{src}: key '{key}' must be <= {hi:g} (ARM_BOUNDS), got {v!r}")
     return float(v)
 
 
@@ -442,7 +477,7 @@ def _arm_kwargs(src: str, arm: dict) -> dict:
     d = _table_list(src, "arm.d", arm["d"], 2, lower=0.0, strict=False)
     try:
         phys = PhysicalParameters(b1=b[0], b2=b[1], d1=d[0], d2=d[1], l1=l1, l2=l2, **num)
-    except ParameterError as exc:
+    except (ParameterError, ArithmeticError) as exc:
         raise ScenarioError(f"{src}: [arm]: {exc}") from None
     kw.update(sigma=phys.to_sigma(), l1=l1, l2=l2, physical=phys)
     return kw
@@ -499,5 +534,5 @@ def arm_from_tables(arm_table: dict | None, plant_table: dict | None, src: str =
     kw.update(plant_kw)
     try:
         return Arm(**kw)
-    except ParameterError as exc:
-        raise ScenarioError(f"{src}: [arm]/[plant]: {exc}") from None
+    except (ParameterError, ArithmeticError) as exc:
+        raise ScenarioError(f"{src}: [arm]/[plant]: {type(exc).__name__}: {exc}") from None

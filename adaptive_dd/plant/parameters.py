@@ -18,6 +18,7 @@ from adaptive_dd.errors import ParameterError
 __all__ = [
     "L1",
     "L2",
+    "PAYLOAD_RADIUS",
     "SIGMA_NAMES",
     "TABLE1_PHYSICAL",
     "TABLE1_SIGMA",
@@ -36,6 +37,8 @@ L2 = 0.2
 """Length of link 2 [m]."""
 TORQUE_LIMITS = (70.0, 15.0)
 """Maximum actuator torques [N m] of joints 1 and 2 (Section 1)."""
+PAYLOAD_RADIUS = 0.05
+"""Default radius [m] of the payload disk (the one place this default is written)."""
 
 SIGMA_NAMES = ("J1", "J2", "r", "b1", "b2", "d1", "d2")
 """Names of the base parameters, in the order of eq. (9)."""
@@ -89,7 +92,7 @@ class Payload:
     """
 
     mass: float
-    radius: float = 0.05
+    radius: float = PAYLOAD_RADIUS
 
     def __post_init__(self) -> None:
         for f in ("mass", "radius"):
@@ -104,7 +107,7 @@ class Payload:
 
 
 def payload_sigma_delta(
-    mass: ArrayLike, radius: ArrayLike = 0.05, l1: float = L1, l2: float = L2
+    mass: ArrayLike, radius: ArrayLike = PAYLOAD_RADIUS, l1: float = L1, l2: float = L2
 ) -> NDArray[np.float64]:
     """Change of sigma caused by a tip disk: ``(..., 7)``.
 

@@ -7,10 +7,21 @@ closed loop the per-trial functions.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from numba import njit
 
-__all__ = ["actuate_trial", "measure_trial", "project_trial"]
+__all__ = ["actuate_trial", "first_sample", "measure_trial", "project_trial"]
+
+
+def first_sample(t: float, sample_period: float) -> int:
+    """Index of the first sample ``k T >= t`` [s -> samples]: the one conversion of a time to a sample.
+
+    A payload change at ``t`` acts on the plant from this sample on, and the metrics' segment
+    starts there; ``1e-9`` of a sample absorbs the rounding of ``t / T`` (``2.0 / 0.001``).
+    """
+    return math.ceil(t / sample_period - 1e-9)
 
 
 @njit(cache=True)

@@ -21,6 +21,7 @@ from adaptive_dd.plant.devices import ActuatorConfig, SensorConfig
 from adaptive_dd.plant.dynamics import as_joint_array
 from adaptive_dd.plant.integrator import step_kernel
 from adaptive_dd.plant.parameters import validate_sigma
+from adaptive_dd.plant.sampling import first_sample
 
 __all__ = [
     "ActuatorConfig",
@@ -253,7 +254,7 @@ class ArmSimulator:
         self.k = 0
         self._noise = _NoiseSource(rng, self.n_trials, self.n_samples)
         # a swap at time `at` takes effect at the first sample k with k T >= at
-        self._swap_samples = {int(np.ceil(at / self.T - 1e-9)) for at in self.payload.times}
+        self._swap_samples = {first_sample(at, self.T) for at in self.payload.times}
         self._update_sigma()
 
     @property

@@ -1,0 +1,194 @@
+"""The headline statistics on small hand-made inputs: every number worked out by hand.
+
+Each test pins one figure the report prints (per-seed ratios, mean / median / p90 / max / 95 %
+interval, worst seed index, false alarms and the window's edges, missed swaps, detection
+delays, the floor's saturation); a fault planted in any of them in ``benchmark/metrics.py``
+fails here.
+"""
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from adaptive_dd.benchmark.metrics import (
+    FALSE_ALARM_WINDOW,
+    compute_metrics,
+    detection_delays,
+    false_alarm_counts,
+    ratio_statistics,
+    segment_failed,
+)
+from adaptive_dd.benchmark.report import format_report
+from adaptive_dd.benchmark.runner import BenchmarkResult, ControllerRun
+from adaptive_dd.benchmark.scenario import load_scenario
+from adaptive_dd.benchmark.streaming import segment_bounds
+
+T = 0.001
+SWAP = 1.0
+
+
+def test_ratio_statistics_by_hand():
+    r = np.array([1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0, 9.0, 10.0])
+    seeds = np.arange(100, 110)
+    st = ratio_statistics(r[::-1].copy(), seeds)  # worst (10) at position 0, seed 100
+    assert st["mean"] == pytest.approx(5.5)
+    assert st["median"] == pytest.approx(5.5)
+    assert st["p90"] == pytest.approx(9.1)  # 9 + 0.1 (10 - 9): linear interpolation
+    assert st["max"] == 10.0
+    assert st["worst_seed"] == 100 and st["n"] == 10
+    # sample std of 1..10 = sqrt(110 / 12); t(0.975, 9) = 2.2621571628
+    half = 2.2621571628 * np.sqrt(110 / 12) / np.sqrt(10)
+    np.testing.assert_allclose(st["ci95"], [5.5 - half, 5.5 + half], rtol=1e-9)
+
+
+def test_ratio_statistics_skips_nan_and_names_the_seed_not_the_position():
+    r = np.array([1.0, np.nan, 1.2, 3.0, 1.1])
+    st = ratio_statistics(r, seeds=[7, 8, 9, 42, 11])
+    assert st["n"] == 4 and st["worst_seed"] == 42 and st["max"] == 3.0
+    assert st["median"] == pytest.approx(1.15)  # (1.1 + 1.2) / 2: even count
+    assert st["mean"] == pytest.approx(6.3 / 4)
+    assert ratio_statistics(np.array([2.0]))["ci95"] is None  # one seed: no interval
+    assert ratio_statistics(np.array([np.nan, np.nan])) is None
+
+
+def test_false_alarm_window_edges():
+    w = FALSE_ALARM_WINDOW
+    assert w == 0.3
+    trials = [
+        [SWAP],  # exactly at the swap: detected, delay 0
+        [SWAP + 0.29],  # inside the window
+        [SWAP + 0.31],  # just past the window: false alarm, swap missed
+        [SWAP - 0.001],  # just before the swap: false alarm, swap missed
+        [],  # nothing: missed, no false alarm
+        [SWAP + 0.02, SWAP + 0.05, 0.5],  # two in the window (first counts), one false
+    ]
+    assert false_alarm_counts(trials, (SWAP,)) == [0, 0, 1, 1, 0, 1]
+    d = detection_delays(trials, SWAP)
+    assert d[0] == 0.0 and d[1] == pytest.approx(0.29) and d[5] == pytest.approx(0.02)
+    assert d[2] is None and d[3] is None and d[4] is None
+
+
+def test_segment_failed_rule():
+    end = np.array([1000, 2000])
+    bad = segment_failed(np.array([False, True, True, True]), np.array([-1, 1500, 100, -1]), end)
+    assert bad.tolist() == [[False, False], [False, True], [True, True], [True, True]]
+
+
+def _fake_result(seed_indices=(10, 11, 12, 13), sat_oracle=(0.0, 0.0)):
+    """Two controllers x 4 seeds x 2 segments (swap to 1 kg at 1 s) with hand-set streamed sums."""
+    sc = dataclasses.replace(
+        load_scenario(),
+        seeds=len(seed_indices),
+        duration=2.0,
+        swap_times=(SWAP,),
+        swap_masses=(1.0,),
+        controllers=("ct_oracle", "adaptive_ct"),
+    )
+    N = sc.n_samples
+    start, end, settled = segment_bounds(sc.segments(), T, 0.5)
+    n = (end - start).astype(float)
+    S = len(seed_indices)
+
+    def run(name, rms, alarms, floor, sat):
+        acc = np.zeros((S, 2, 7))
+        rms = np.asarray(rms, float)
+        acc[..., 0] = rms**2 * n
+        acc[..., 1] = acc[..., 2] = acc[..., 0] / 2
+        acc[..., 3] = 2 * rms
+        acc[..., 4] = n
+        acc[..., 5] = np.asarray(sat)[None, :] * n
+        acc[..., 6] = rms**2 * (end - settled)
+        return ControllerRun(
+            name=name,
+            acc=acc,
+            e_norm=np.zeros((S, N), dtype=np.float32),
+            sigma_end=None,
+            failed=np.zeros(S, dtype=bool),
+            failed_at=np.full(S, -1),
+            alarm_times=alarms,
+            floor=floor,
+        )
+
+    oracle = np.array([[1.0, 1.0], [1.0, 2.0], [2.0, 1.0], [1.0, 1.0]]) * 1e-4
+    ratio = np.array([[1.0, 1.1], [1.0, 1.2], [1.0, 3.0], [1.0, 1.05]])
+    alarms = [[SWAP + 0.02], [SWAP + 0.04, 0.4], [SWAP + 0.31], []]
+    res = BenchmarkResult(sc, np.arange(N) * T, np.zeros((N, 2)), np.zeros((N, 7)), np.zeros(N))
+    res.seed_indices = tuple(seed_indices)
+    res.runs["ct_oracle"] = run("ct_oracle", oracle, None, None, sat_oracle)
+    res.runs["adaptive_ct"] = run("adaptive_ct", oracle * ratio, alarms, "ct_oracle", (0.0, 0.0))
+    return res, ratio
+
+
+def test_compute_metrics_per_seed_ratios_alarms_and_missed_swaps():
+    res, ratio = _fake_result()
+    m = compute_metrics(res)["controllers"]
+    a = m["adaptive_ct"]
+    assert a["floor"] == "ct_oracle"
+    st = a["segments"][1]["ratio_to_floor"]
+    assert st["mean"] == pytest.approx(ratio[:, 1].mean())
+    assert st["median"] == pytest.approx(1.15)
+    assert st["p90"] == pytest.approx(np.percentile([1.05, 1.1, 1.2, 3.0], 90))
+    assert st["p90"] == pytest.approx(1.2 + 0.7 * 1.8)  # by hand: 0.9 * 3 = 2.7 -> 1.2 + 0.7 (3.0 - 1.2)
+    assert st["max"] == pytest.approx(3.0) and st["worst_seed"] == 12 and st["n"] == 4
+    assert a["segments"][0]["ratio_to_floor"]["max"] == pytest.approx(1.0)
+    # per-seed RMS in the JSON is the hand-set one
+    np.testing.assert_allclose(a["segments"][1]["rms_error_per_seed"], [1.1e-4, 2.4e-4, 3e-4, 1.05e-4])
+    # alarms: seed 0 detects at 20 ms, seed 1 at 40 ms plus a false alarm at 0.4 s, seed 2's alarm
+    # is 10 ms past the window (false, and the swap missed), seed 3 raises none (missed)
+    assert a["false_alarms_per_seed"] == [0, 1, 1, 0]
+    assert a["trials_with_false_alarms"] == 2
+    assert a["missed_swaps_per_seed"] == [0, 0, 1, 1] and a["missed_swaps"] == 2
+    seg = a["segments"][1]
+    assert seg["detection_delay_per_seed"][:2] == pytest.approx([0.02, 0.04])
+    assert seg["detection_delay_per_seed"][2:] == [None, None]
+    assert seg["detection_delay"] == pytest.approx(0.03) and seg["detected"] == 2 and seg["missed"] == 2
+    assert a["segments"][0]["detection_delay"] is None
+    assert "false_alarms_per_seed" not in m["ct_oracle"]
+
+
+def test_report_prints_missed_swaps_false_alarms_and_worst_seed_index():
+    res, _ = _fake_result()
+    text = format_report(compute_metrics(res), res)
+    assert "adaptive_ct missed swaps: 2 of 4 (target 0: NOT met)" in text
+    assert "adaptive_ct trials with a false alarm: 2 of 4 (50.0 %)" in text
+    assert "max 3.00 (seed 12)" in text
+    assert "#12" in text
+
+
+def test_a_saturated_floor_gets_no_verdict():
+    res, _ = _fake_result(sat_oracle=(0.0, 0.029))
+    m = compute_metrics(res)
+    seg = m["controllers"]["adaptive_ct"]["segments"]
+    assert seg[1]["floor_saturated"] and not seg[0]["floor_saturated"]
+    assert seg[1]["floor_saturation"] == pytest.approx(0.029)
+    assert m["controllers"]["ct_oracle"]["segments"][1]["floor_saturated"]
+    text = format_report(m, res)
+    assert "no verdict, ct_oracle saturates 2.90 % of samples" in text
+    assert "ct_oracle saturated fraction (max over segments): 2.900 %" in text
+    assert "NOT met: the saturated segments have no verdict" in text
+
+
+def test_a_failed_trial_is_left_out_after_its_failure_only():
+    res, _ = _fake_result()
+    run = res.runs["adaptive_ct"]
+    run.failed[3], run.failed_at[3] = True, 1500  # diverged in segment 1
+    m = compute_metrics(res)["controllers"]["adaptive_ct"]
+    assert m["segments"][0]["ratio_to_floor"]["n"] == 4
+    assert m["segments"][1]["ratio_to_floor"]["n"] == 3
+    assert m["segments"][1]["rms_error_per_seed"][3] is None
+    assert m["false_alarms_per_seed"][3] is None and m["missed_swaps_per_seed"][3] is None
+    assert m["missed_swaps"] == 1
+
+
+def test_one_conversion_of_seconds_to_samples():
+    """A swap at 2.5005 s with T = 1 ms: the plant changes at sample 2501 and so does the segment."""
+    from adaptive_dd.benchmark.runner import _true_sigma
+    from adaptive_dd.plant.sampling import first_sample
+
+    assert first_sample(2.5005, 1e-3) == 2501 and first_sample(2.0, 1e-3) == 2000
+    start, end, _ = segment_bounds([(0.0, 2.5005, 0.0), (2.5005, 5.0, 1.0)], 1e-3, 0.5)
+    assert start.tolist() == [0, 2501] and end.tolist() == [2501, 5000]
+    sc = dataclasses.replace(load_scenario(), seeds=1, duration=5.0, swap_times=(2.5005,), swap_masses=(1.0,))
+    _, mass = _true_sigma(sc, np.arange(sc.n_samples) * T)
+    assert mass[2500] == 0.0 and mass[2501] == 1.0
