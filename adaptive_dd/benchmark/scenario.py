@@ -69,8 +69,8 @@ from numpy.typing import NDArray
 
 from adaptive_dd.errors import ScenarioError
 from adaptive_dd.plant.arm import Arm, arm_from_tables
-from adaptive_dd.plant.serial_arm import SerialArm
 from adaptive_dd.plant.parameters import PAYLOAD_RADIUS
+from adaptive_dd.plant.serial_arm import SerialArm
 
 __all__ = [
     "LIMITS",
