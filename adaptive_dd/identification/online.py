@@ -52,6 +52,7 @@ __all__ = [
     "OnlineState",
     "online_init",
     "online_step",
+    "rearm_time",
     "run_online",
 ]
 
@@ -123,6 +124,24 @@ class ChangeDetector:
         moves sigma by ``m d``), after clearing the old covariance of J1, J2 and r.
     p_j2 : float
         Extra variance [(kg m^2)^2] on J2 alone (the disk's own inertia).
+    direction_window : float
+        Time constant [s] of the payload-direction gate of the energy test.
+    persist_window : float
+        Time constant [s] of the persistence test.
+    persist_min : int
+        Samples the persistence test needs after it restarted (``resume`` after an alarm).
+    min_mass : float
+        Smallest payload change [kg] an alarm may claim (``|dm_hat|``).
+    min_explained : float
+        Fraction of the weighted prior-error energy that a payload change must explain, in (0, 1].
+
+    Re-arming
+    ---------
+    After any alarm the persistence test is armed again after
+    ``max(holdoff, resume * freeze * tau_f + persist_min * T)`` (0.2 s with the defaults at
+    1 kHz, counted in samples in which the equations are in use): whatever the long-run level
+    learned, a model that stays wrong along the payload direction by ``min_mass`` or more
+    raises a new alarm then (:func:`rearm_time`).
     """
 
     short_window: float = 0.005
@@ -137,6 +156,11 @@ class ChangeDetector:
     reopen_again: bool = True
     p_mass: float = 100.0
     p_j2: float = 1e-3
+    direction_window: float = 0.02
+    persist_window: float = 0.1
+    persist_min: int = 100
+    min_mass: float = 0.25
+    min_explained: float = 0.5
 
     def __post_init__(self) -> None:
         _finite("ChangeDetector.short_window", self.short_window, 0.0)
@@ -151,6 +175,17 @@ class ChangeDetector:
         for name in ("warmup", "holdoff", "freeze", "resume", "p_j2"):
             _finite(f"ChangeDetector.{name}", getattr(self, name), 0.0, strict=False)
         _finite("ChangeDetector.p_mass", self.p_mass, 0.0)
+        for name in ("direction_window", "persist_window", "min_mass"):
+            _finite(f"ChangeDetector.{name}", getattr(self, name), 0.0)
+        _finite("ChangeDetector.min_explained", self.min_explained, 0.0, 1.0)
+        if (
+            not isinstance(self.persist_min, int)
+            or isinstance(self.persist_min, bool)
+            or self.persist_min < 1
+        ):
+            raise ParameterError(
+                f"ChangeDetector.persist_min must be an integer >= 1, got {self.persist_min!r}"
+            )
         if (
             not isinstance(self.min_learned, int)
             or isinstance(self.min_learned, bool)
@@ -304,6 +339,10 @@ class OnlineConfig:
             cf[K.F_THRESHOLD2] = det.threshold**2
             cf[K.F_SLOW_FACTOR] = det.slow_factor**2
             cf[K.F_P_MASS], cf[K.F_P_J2] = det.p_mass, det.p_j2
+            cf[K.F_ALPHA_DIR] = min(1.0, T / det.direction_window)
+            cf[K.F_ALPHA_PERSIST] = min(1.0, T / det.persist_window)
+            cf[K.F_MIN_MASS], cf[K.F_MIN_EXPLAINED] = det.min_mass, det.min_explained
+            ci[K.I_PERSIST_MIN] = det.persist_min
         b = self.bank
         d = np.asarray(self.payload_direction, dtype=float)
         rows = np.array(SPLIT_STAGES[self.split][0], dtype=np.int64)
@@ -319,6 +358,21 @@ class OnlineConfig:
         return p
 
 
+def rearm_time(cfg: OnlineConfig) -> float:
+    """Longest time [s] after any alarm before the detector can raise the next one.
+
+    ``max(holdoff, resume * freeze * tau_f + persist_min * T)`` in samples in which the
+    equations are in use (see :class:`ChangeDetector`, "Re-arming"). Raises
+    :class:`~adaptive_dd.errors.ParameterError` for a config without a detector.
+    """
+    det = cfg.detector
+    if det is None:
+        raise ParameterError("rearm_time: the OnlineConfig has no detector")
+    T = cfg.sample_period
+    resume = cfg.samples(det.freeze) * det.resume
+    return max(round(det.holdoff / T), resume + det.persist_min) * T
+
+
 @lru_cache(maxsize=32)
 def _bank(tau_f: float, sample_period: float) -> FilterBank:
     return design_filter_bank("M2", tau_f, sample_period)
@@ -330,8 +384,9 @@ class OnlineState(NamedTuple):
     xf : (n, 9, 2) filter states per channel; u_last : (n, 9) last finite channel sample;
     cnt : (n, 11) int counters (see ``online_kernel.C_*``: samples, alarms, skips, ...);
     tau_prev : (n, 2); theta : (n, 7) RLS estimate; P : (n, 7, 7); lam : (n, 2) forgetting
-    factor per stage; short, long : (n, 2) detector averages; sigma_model : (n, 7) the
-    model for control (projected).
+    factor per stage; short : (n, N_SHORT) detector statistics (``online_kernel.S_*``: short
+    averages, payload-direction sums, persistence window, weights); long : (n, 2) long-run
+    levels; sigma_model : (n, 7) the model for control (projected).
     """
 
     xf: Array
@@ -393,7 +448,7 @@ def online_init(cfg: OnlineConfig, n_trials: int, theta0: ArrayLike) -> OnlineSt
         theta=th,
         P=np.broadcast_to(cfg.initial_covariance(), (n_trials, 7, 7)).copy(),
         lam=np.full((n_trials, 2), cfg.rls.lam0),
-        short=np.zeros((n_trials, 2)),
+        short=np.zeros((n_trials, K.N_SHORT)),
         long=np.zeros((n_trials, 2)),
         sigma_model=model,
     )

@@ -36,7 +36,8 @@ I_RESUME = 10
 I_FREEZE = 11
 I_REOPEN_AGAIN = 12
 I_PROJECT = 13  # 0 none, 1 the control model only, 2 the estimator state too
-N_CI = 14
+I_PERSIST_MIN = 14  # samples the persistence test needs since it restarted
+N_CI = 15
 
 # float slots of cf
 F_LAM0 = 0
@@ -53,7 +54,19 @@ F_MARGIN = 10
 F_R_MIN = 11
 F_CAP1 = 12
 F_SLOW_FACTOR = 13  # threshold2 multiplier while the other joint is slow
-N_CF = 14
+F_ALPHA_DIR = 14  # EWMA weight of the payload-direction test (short window)
+F_ALPHA_PERSIST = 15  # EWMA weight of the persistence test
+F_MIN_MASS = 16  # [kg] smallest payload change an alarm may claim
+F_MIN_EXPLAINED = 17  # fraction of the weighted error energy the payload direction must explain
+N_CF = 18
+
+# columns of the detector statistics `short` (n, N_SHORT)
+S_E2 = 0  # 0, 1: short average of the squared prior error per equation
+S_DIR = 2  # 2, 3, 4: short averages of sum_j w_j phi_d,j e_j, w_j phi_d,j^2, w_j e_j^2
+S_PER = 5  # 5, 6, 7: the same over the persistence window (restarted at each alarm)
+S_PER_N = 8  # samples in the persistence window
+S_LREF = 9  # 9, 10: last long-run level per equation that was learned in full (the weights w_j)
+N_SHORT = 11
 
 # columns of the per-trial integer state `cnt`
 C_STARTED = 0
@@ -268,29 +281,76 @@ def _regress(i, xf, u_last, cnt, tau_prev, q, qd, tau, ci, A, B, C, D, phi, y): 
 
 
 @njit(cache=True)
-def _detect(i, eps, act, short, long, cnt, ci, cf):  # pragma: no cover - compiled
+def _direction(sh, k, a, b, e, alpha):  # pragma: no cover - compiled
+    """EWMA of the three payload-direction sums into columns k, k + 1, k + 2 of ``sh``."""
+    sh[k] += alpha * (a - sh[k])
+    sh[k + 1] += alpha * (b - sh[k + 1])
+    sh[k + 2] += alpha * (e - sh[k + 2])
+
+
+@njit(cache=True)
+def _explained(sh, k, cf):  # pragma: no cover - compiled
+    """True when the sums at column k say: a payload change of at least ``min_mass`` explains
+    at least ``min_explained`` of the weighted error energy (``A^2 / (B E)``, ``|A / B|``)."""
+    a, b, e = sh[k], sh[k + 1], sh[k + 2]
+    if not (b > 0.0 and e > 0.0):
+        return False
+    return abs(a) >= cf[F_MIN_MASS] * b and a * a >= cf[F_MIN_EXPLAINED] * b * e
+
+
+@njit(cache=True)
+def _detect(i, eps, act, phi_d, short, long, cnt, ci, cf):  # pragma: no cover - compiled
     """Update the detector statistics of trial i; return True on an alarm.
 
-    The short average follows every usable prior error; the long-run level learns
-    only while both joints move, from ``resume`` samples after the last alarm on, starts anew (bias-corrected,
-    as an average of what it has seen) after each alarm, and an alarm needs
-    ``min_learned`` learned samples of that equation: an alarm cannot re-arm itself
-    on the transient it caused.
+    Two tests, both asking that a payload change explain the errors (the *direction gate*):
+    a change of the tip mass by ``dm`` makes the prior errors ``e_j = phi_d,j dm`` with
+    ``phi_d = phi d`` (d: the payload direction), in both equations at once and in that
+    ratio; friction the model lacks makes errors of another shape (one joint, at its
+    reversals). With weights ``w_j = 1 / level_j``, ``dm_hat = A / B`` and the explained
+    fraction ``A^2 / (B E)`` over a window, ``A, B, E`` the averages of ``sum_j w_j phi_d,j e_j``,
+    ``sum_j w_j phi_d,j^2`` and ``sum_j w_j e_j^2``.
+
+    1. The *energy test* (fast): the short average of ``e_j^2`` exceeds ``threshold^2`` times
+       the long-run level (learned only while both joints move, from ``resume`` samples after
+       the last alarm on, bias-corrected, restarted at each alarm, needing ``min_learned``
+       samples), and the gate holds over the direction window.
+    2. The *persistence test* (cannot lock up): over the persistence window, restarted at each
+       alarm and filled from ``resume`` samples after it, ``|dm_hat| >= min_mass`` and the
+       explained fraction is reached, after ``persist_min`` samples. It needs no learned
+       level (the weights keep the last fully learned one), so a model left wrong along the
+       payload direction (a swap masked by a false alarm, a level learned on a wrong model)
+       raises an alarm within ``resume + persist_min`` samples of motion after the holdoff.
     """
     a_s, a_l = cf[F_ALPHA_SHORT], cf[F_ALPHA_LONG]
+    sh = short[i]
     learn = cnt[i, C_SINCE_ALARM] >= ci[I_RESUME]
+    a_sum, b_sum, e_sum = 0.0, 0.0, 0.0
     for j in range(2):
         e = eps[j]
         if not (act[j] and np.isfinite(e)):
             continue
         e2 = e * e
-        short[i, j] += a_s * (e2 - short[i, j])
+        sh[S_E2 + j] += a_s * (e2 - sh[S_E2 + j])
         if learn and act[1 - j]:
             long[i, j] += a_l * (e2 - long[i, j])
             cnt[i, C_LEARNED1 + j] += 1
+        n_l = cnt[i, C_LEARNED1 + j]
+        if n_l >= ci[I_MIN_LEARNED]:
+            sh[S_LREF + j] = long[i, j] / (1.0 - (1.0 - a_l) ** n_l)
+        w = 1.0 / sh[S_LREF + j] if sh[S_LREF + j] > 0.0 else 0.0
+        if np.isfinite(phi_d[j]):
+            a_sum += w * phi_d[j] * e
+            b_sum += w * phi_d[j] * phi_d[j]
+            e_sum += w * e2
+    _direction(sh, S_DIR, a_sum, b_sum, e_sum, cf[F_ALPHA_DIR])
+    if learn:
+        _direction(sh, S_PER, a_sum, b_sum, e_sum, cf[F_ALPHA_PERSIST])
+        sh[S_PER_N] += 1.0
     if cnt[i, C_K] < ci[I_WARMUP] or cnt[i, C_SINCE_ALARM] <= ci[I_HOLDOFF]:
         return False
-    alarm = False
+    if sh[S_PER_N] >= ci[I_PERSIST_MIN] and _explained(sh, S_PER, cf):
+        return True
+    energy = False
     for j in range(2):
         n_l = cnt[i, C_LEARNED1 + j]
         if n_l < ci[I_MIN_LEARNED] or not act[j]:  # only an equation in use may alarm
@@ -299,9 +359,9 @@ def _detect(i, eps, act, short, long, cnt, ci, cf):  # pragma: no cover - compil
         # a joint that stops or reverses (stick-slip) disturbs the other joint's equation
         # through the coupling for about the filters' memory: ask more of the evidence then
         thr = cf[F_THRESHOLD2] if act[1 - j] else cf[F_THRESHOLD2] * cf[F_SLOW_FACTOR]
-        if short[i, j] > thr * level + 1e-300:
-            alarm = True
-    return alarm
+        if sh[S_E2 + j] > thr * level + 1e-300:
+            energy = True
+    return energy and _explained(sh, S_DIR, cf)
 
 
 @njit(cache=True)
@@ -331,7 +391,7 @@ def online_step_trial(
                 # errors of the approach to it (it restarts at the long-run level)
                 n_l = cnt[i, C_LEARNED1 + j]
                 a_l = cf[F_ALPHA_LONG]
-                short[i, j] = long[i, j] / (1.0 - (1.0 - a_l) ** n_l) if n_l > 0 else 0.0
+                short[i, S_E2 + j] = long[i, j] / (1.0 - (1.0 - a_l) ** n_l) if n_l > 0 else 0.0
     det_act = act.copy()
     if ci[I_DETECT] == 1 and ci[I_REOPEN_AGAIN] == 0 and cnt[i, C_SINCE_ALARM] < ci[I_FREEZE]:
         act[:] = False  # frozen after an alarm
@@ -364,7 +424,11 @@ def online_step_trial(
     if ci[I_DETECT] == 1:
         if cnt[i, C_REOPEN_AT] == cnt[i, C_K]:
             _reopen(Pi, group, d, cf)
-        if _detect(i, eps_out, det_act, short, long, cnt, ci, cf):
+        phi_d = np.zeros(2)
+        for r in range(2):
+            for j in range(7):
+                phi_d[r] += phi[r, j] * d[j]
+        if _detect(i, eps_out, det_act, phi_d, short, long, cnt, ci, cf):
             alarm = 1
             _reopen(Pi, group, d, cf)
             cnt[i, C_ALARMS] += 1
@@ -373,6 +437,8 @@ def online_step_trial(
             cnt[i, C_LEARNED2] = 0
             long[i, 0] = 0.0
             long[i, 1] = 0.0
+            for c in range(S_PER, S_PER_N + 1):  # the persistence window starts anew
+                short[i, c] = 0.0
             if ci[I_REOPEN_AGAIN] == 1:
                 cnt[i, C_REOPEN_AT] = cnt[i, C_K] + ci[I_FREEZE]
         else:
