@@ -52,6 +52,7 @@ __all__ = [
     "OnlineState",
     "online_init",
     "online_step",
+    "raise_alarm",
     "rearm_time",
     "run_online",
 ]
@@ -85,21 +86,22 @@ def _finite(name: str, v: float, lo: float | None = None, hi: float | None = Non
 class ChangeDetector:
     """Detects a sudden change of the plant (a payload swap) from the prior prediction errors.
 
-    Per equation j, a short exponential average ``s_j`` of the squared prior error is
-    compared with a long-run level ``l_j``; an alarm is raised when
-    ``s_j > threshold**2 * l_j`` for either equation. The long-run level is the
-    bias-corrected average of what it has learned (``l / (1 - (1 - a)^n)``), learns only
-    from ``resume`` filter-freeze times after the last alarm on, and starts anew at
-    each alarm; an equation may alarm only after ``min_learned`` learned samples.
-    So an alarm cannot re-arm itself on the transient it caused, and after a swap the
-    level is that of the new payload, not the old one.
+    A generalized likelihood ratio (GLR) test of a change of the tip mass, at each of the
+    onsets of the last ``16 * glr_spacing``, on the prior errors of both equations weighted by
+    their long-run levels; an alarm needs the change to explain the errors (``min_mass``,
+    ``min_explained``, both equations alike: ``hetero``), and uses an equation only while its
+    joint moves faster than ``speed`` (friction the model lacks lives at low speed). A
+    persistence test over ``persist_window`` re-arms the detector after any alarm: a model
+    left wrong along the payload direction is found again within :func:`rearm_time` of
+    motion. The kernel's ``_detect`` documents the arithmetic. One setting serves every
+    shipped scenario and plant friction law (``benchmarks/detector_acceptance.py``).
 
     Attributes
     ----------
     short_window, long_window : float
         Time constants [s] of the two averages (``0 < short < long``).
     threshold : float
-        Ratio of RMS errors that raises an alarm, > 1.
+        Ratio of RMS errors that raises an alarm, > 1 (energy test of the paper's construction).
     warmup : float
         No alarm before this time [s] from the start.
     min_learned : int
@@ -125,7 +127,7 @@ class ChangeDetector:
     p_j2 : float
         Extra variance [(kg m^2)^2] on J2 alone (the disk's own inertia).
     direction_window : float
-        Time constant [s] of the payload-direction gate of the energy test.
+        Time constant [s] of the payload-direction gate of the energy test (paper's construction).
     persist_window : float
         Time constant [s] of the persistence test.
     persist_min : int
@@ -134,6 +136,17 @@ class ChangeDetector:
         Smallest payload change [kg] an alarm may claim (``|dm_hat|``).
     min_explained : float
         Fraction of the weighted prior-error energy that a payload change must explain, in (0, 1].
+    glr_threshold : float
+        Threshold of the GLR score ``A^2 / B`` (weighted errors are coloured by the filters, so it
+        is set on the benchmark's false-alarm rate rather than a chi-square quantile).
+    glr_spacing : float
+        [s] between the onsets of two GLR candidates (16 candidates).
+    glr_min_age : float
+        [s] a GLR candidate must have run before it may alarm.
+    hetero : float
+        The heterogeneity of a candidate over the two equations counts ``1 / hetero`` against it.
+    speed : float
+        [rad/s] an equation feeds the tests (and the levels) only while its joint is faster.
 
     Re-arming
     ---------
@@ -161,6 +174,11 @@ class ChangeDetector:
     persist_min: int = 100
     min_mass: float = 0.25
     min_explained: float = 0.5
+    glr_threshold: float = 300.0
+    glr_spacing: float = 0.003
+    glr_min_age: float = 0.005
+    hetero: float = 1.0
+    speed: float = 0.25
 
     def __post_init__(self) -> None:
         _finite("ChangeDetector.short_window", self.short_window, 0.0)
@@ -175,9 +193,10 @@ class ChangeDetector:
         for name in ("warmup", "holdoff", "freeze", "resume", "p_j2"):
             _finite(f"ChangeDetector.{name}", getattr(self, name), 0.0, strict=False)
         _finite("ChangeDetector.p_mass", self.p_mass, 0.0)
-        for name in ("direction_window", "persist_window", "min_mass"):
+        for name in ("direction_window", "persist_window", "min_mass", "glr_threshold", "glr_spacing", "hetero", "speed"):
             _finite(f"ChangeDetector.{name}", getattr(self, name), 0.0)
         _finite("ChangeDetector.min_explained", self.min_explained, 0.0, 1.0)
+        _finite("ChangeDetector.glr_min_age", self.glr_min_age, 0.0, strict=False)
         if (
             not isinstance(self.persist_min, int)
             or isinstance(self.persist_min, bool)
@@ -343,6 +362,11 @@ class OnlineConfig:
             cf[K.F_ALPHA_PERSIST] = min(1.0, T / det.persist_window)
             cf[K.F_MIN_MASS], cf[K.F_MIN_EXPLAINED] = det.min_mass, det.min_explained
             ci[K.I_PERSIST_MIN] = det.persist_min
+            ci[K.I_GLR_SPACING] = max(1, round(det.glr_spacing / T))
+            ci[K.I_GLR_MIN_AGE] = round(det.glr_min_age / T)
+            cf[K.F_GLR_THRESHOLD] = det.glr_threshold
+            cf[K.F_HETERO] = det.hetero
+            cf[K.F_DET_SPEED] = det.speed
         b = self.bank
         d = np.asarray(self.payload_direction, dtype=float)
         rows = np.array(SPLIT_STAGES[self.split][0], dtype=np.int64)
@@ -356,6 +380,27 @@ class OnlineConfig:
         p = self.rls.p0 * np.eye(7) + self.p0_payload * np.outer(d, d) * same
         p[1, 1] += self.p0_j2
         return p
+
+
+def raise_alarm(state: OnlineState, cfg: OnlineConfig, trials: ArrayLike | None = None) -> OnlineState:
+    """The state after an alarm raised from outside (pure function), e.g. a gripper's signal.
+
+    Does to each trial in ``trials`` (default: all) exactly what a detector alarm does
+    (:func:`~adaptive_dd.identification.online_kernel.on_alarm`): re-opens the covariance along
+    the payload direction and restarts the detector's levels, so the detector is re-armed
+    within :func:`rearm_time`. The alarm is counted in ``state.alarms``.
+    """
+    if cfg.detector is None:
+        raise ParameterError("raise_alarm: the OnlineConfig has no detector")
+    new = state.copy()
+    n = new.theta.shape[0]
+    idx = np.arange(n) if trials is None else np.atleast_1d(np.asarray(trials, dtype=np.int64))
+    if idx.size and (idx.min() < 0 or idx.max() >= n):
+        raise ParameterError(f"raise_alarm: trials must lie in [0, {n - 1}], got {trials!r}")
+    ci, cf, *_, d, group, _ = cfg.packed
+    for i in idx:
+        K.on_alarm(int(i), new.P, new.cnt, new.long, new.short, group, d, ci, cf)
+    return new
 
 
 def rearm_time(cfg: OnlineConfig) -> float:
