@@ -40,7 +40,14 @@ def run_compiled(name, ctrl, spec: CompiledSpec, scenario, idx, ref, keep: int, 
     arm = scenario.arm
     act, sens = arm.actuator, _sensor(scenario)
     plant_f = np.concatenate(
-        ([T, MAX_SPEED, MAX_ERROR], act._lim, act._lsb, sens.resolution, sens.noise_std, friction_vector(arm.friction_params))
+        (
+            [T, MAX_SPEED, MAX_ERROR],
+            act._lim,
+            act._lsb,
+            sens.resolution,
+            sens.noise_std,
+            friction_vector(arm.friction_params),
+        )
     )
     plant_i = np.array(
         [scenario.substeps, act.saturate, act.quantize, sens.quantize, arm.friction_code], dtype=np.int64

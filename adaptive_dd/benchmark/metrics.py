@@ -309,9 +309,27 @@ def _add_information_times(res: BenchmarkResult, out: dict) -> None:
                     mass=max(mass, removed),
                     others=others,
                 )
+        limit = None
+        if ref is not None and not ref.failed[0] and mass != removed:
+            from adaptive_dd.identification.detection_limit import detection_limit
+
+            limit = detection_limit(
+                ref.q[0, k0 - 1 : k1],
+                ref.qd[0, k0 - 1 : k1],
+                ref.tau[0, k0 - 1 : k1],
+                1,
+                T,
+                sc.arm.sigma_with_payload(mass, sc.payload_radius),
+                d,
+                abs(mass - removed),
+                sc.position_variance,
+                sc.velocity_variance,
+                n_tests=sc.n_samples,
+            )
         for name, run in res.runs.items():
             seg = out[name]["segments"][i]
             seg["information_time"] = info
+            seg["detection_limit"] = limit
             seg["mass_learning_time"] = None
             if run.sigma_hat is not None and run.sigma_hat.shape[0]:
                 kept = ~run.failed[: run.sigma_hat.shape[0]]

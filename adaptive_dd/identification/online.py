@@ -193,7 +193,15 @@ class ChangeDetector:
         for name in ("warmup", "holdoff", "freeze", "resume", "p_j2"):
             _finite(f"ChangeDetector.{name}", getattr(self, name), 0.0, strict=False)
         _finite("ChangeDetector.p_mass", self.p_mass, 0.0)
-        for name in ("direction_window", "persist_window", "min_mass", "glr_threshold", "glr_spacing", "hetero", "speed"):
+        for name in (
+            "direction_window",
+            "persist_window",
+            "min_mass",
+            "glr_threshold",
+            "glr_spacing",
+            "hetero",
+            "speed",
+        ):
             _finite(f"ChangeDetector.{name}", getattr(self, name), 0.0)
         _finite("ChangeDetector.min_explained", self.min_explained, 0.0, 1.0)
         _finite("ChangeDetector.glr_min_age", self.glr_min_age, 0.0, strict=False)
