@@ -174,7 +174,7 @@ class ChangeDetector:
     persist_min: int = 100
     min_mass: float = 0.25
     min_explained: float = 0.5
-    glr_threshold: float = 300.0
+    glr_threshold: float = 400.0
     glr_spacing: float = 0.003
     glr_min_age: float = 0.005
     hetero: float = 1.0
