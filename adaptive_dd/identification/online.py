@@ -146,7 +146,9 @@ class ChangeDetector:
     hetero : float
         The heterogeneity of a candidate over the two equations counts ``1 / hetero`` against it.
     speed : float
-        [rad/s] an equation feeds the tests (and the levels) only while its joint is faster.
+        [rad/s] an equation feeds the tests (and the levels) only while its joint is faster ...
+    speed_memory : float
+        ... and has been for this many tau_f.
 
     Re-arming
     ---------
@@ -179,6 +181,7 @@ class ChangeDetector:
     glr_min_age: float = 0.005
     hetero: float = 1.0
     speed: float = 0.25
+    speed_memory: float = 6.0
 
     def __post_init__(self) -> None:
         _finite("ChangeDetector.short_window", self.short_window, 0.0)
@@ -375,6 +378,7 @@ class OnlineConfig:
             cf[K.F_GLR_THRESHOLD] = det.glr_threshold
             cf[K.F_HETERO] = det.hetero
             cf[K.F_DET_SPEED] = det.speed
+            ci[K.I_SPEED_MEMORY] = self.samples(det.speed_memory)
         b = self.bank
         d = np.asarray(self.payload_direction, dtype=float)
         rows = np.array(SPLIT_STAGES[self.split][0], dtype=np.int64)

@@ -39,7 +39,8 @@ I_PROJECT = 13  # 0 none, 1 the control model only, 2 the estimator state too
 I_PERSIST_MIN = 14  # samples the persistence test needs since it restarted
 I_GLR_SPACING = 15  # samples between the onsets of two GLR candidates
 I_GLR_MIN_AGE = 16  # samples a candidate must have run before it may alarm
-N_CI = 17
+I_SPEED_MEMORY = 17  # samples a joint must have been faster than F_DET_SPEED
+N_CI = 18
 
 # float slots of cf
 F_LAM0 = 0
@@ -372,7 +373,7 @@ def _glr_update(sh, u, k, eps, act, w, ci, cf, A, B, C, D, d):  # pragma: no cov
 
 
 @njit(cache=True)
-def _detect(i, eps, act, phi_d, u, short, long, cnt, ci, cf, A, B, C, D, d):  # pragma: no cover
+def _detect(i, eps, act, rest, phi_d, u, short, long, cnt, ci, cf, A, B, C, D, d):  # pragma: no cover
     """Update the detector statistics of trial i; return True on an alarm.
 
     Every test asks that a change of the tip mass explain the prior errors: a change ``dm``
@@ -435,7 +436,11 @@ def _detect(i, eps, act, phi_d, u, short, long, cnt, ci, cf, A, B, C, D, d):  # 
         return True
     if ci[I_CONSTRUCTION] == 1:  # the GLR on the payload direction
         gate = abs(ga) >= cf[F_MIN_MASS] * gb and ga * ga >= cf[F_MIN_EXPLAINED] * gb * ge
-        return glr >= cf[F_GLR_THRESHOLD] and gate
+        # a joint that stops or sticks disturbs the other joint's equation for the filters'
+        # memory (the sampled filters meet an acceleration jump): while a joint has been at
+        # rest within the selection memory (rest False), ask slow_factor (RMS) times more
+        thr = cf[F_GLR_THRESHOLD] if rest[0] and rest[1] else cf[F_GLR_THRESHOLD] * np.sqrt(cf[F_SLOW_FACTOR])
+        return glr >= thr and gate
     # the paper's construction has no GLR: the energy test, gated over the direction window
     energy = False
     for j in range(2):
@@ -498,11 +503,12 @@ def online_step_trial(
                 a_l = cf[F_ALPHA_LONG]
                 short[i, S_E2 + j] = long[i, j] / (1.0 - (1.0 - a_l) ** n_l) if n_l > 0 else 0.0
     det_act = act.copy()
+    sel_act = act.copy()  # False while a joint was at rest within the selection memory
     if ci[I_DETECT] == 1:
         for j in range(2):  # friction the model lacks lives at low speed: the tests skip it
             c = C_SINCE_SLOW_DET1 + j
             cnt[i, c] = 0 if abs(qd[j]) <= cf[F_DET_SPEED] else min(cnt[i, c] + 1, BIG)
-            det_act[j] = det_act[j] and cnt[i, c] > ci[I_SEL_MEMORY]
+            det_act[j] = det_act[j] and cnt[i, c] > ci[I_SPEED_MEMORY]
     if ci[I_DETECT] == 1 and ci[I_REOPEN_AGAIN] == 0 and cnt[i, C_SINCE_ALARM] < ci[I_FREEZE]:
         act[:] = False  # frozen after an alarm
     th, Pi, li = theta[i], P[i], lam[i]
@@ -538,7 +544,7 @@ def online_step_trial(
         for r in range(2):
             for j in range(7):
                 phi_d[r] += phi[r, j] * d[j]
-        if _detect(i, eps_out, det_act, phi_d, u_last[i], short, long, cnt, ci, cf, A, B, C, D, d):
+        if _detect(i, eps_out, det_act, sel_act, phi_d, u_last[i], short, long, cnt, ci, cf, A, B, C, D, d):
             alarm = 1
             on_alarm(i, P, cnt, long, short, group, d, ci, cf)
         else:
