@@ -388,7 +388,8 @@ def _detect(i, eps, act, rest, phi_d, u, short, long, cnt, ci, cf, A, B, C, D, d
     1. **GLR** (exact construction): the generalized likelihood ratio ``A^2 / B`` of a mass
        change at each of the last ``GLR_CANDIDATES`` onsets (:func:`_glr_update`), less the
        heterogeneity over the two equations / ``hetero``, above ``glr_threshold``, with
-       ``|A / B| >= min_mass`` [kg] and ``A^2 / (B E) >= min_explained``.
+       ``|A / B| >= min_mass`` [kg] and ``A^2 / (B E) >= min_explained``; the threshold is
+       ``slow_factor`` times higher while a joint was at rest within the selection memory.
     2. **Persistence** (cannot lock up): over the persistence window (restarted at each alarm,
        filled from ``resume`` samples after it) the same ``|dm_hat| >= min_mass`` and
        explained fraction, with ``psi = phi d`` (long after a change the post-onset regressor
