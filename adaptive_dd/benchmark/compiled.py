@@ -109,7 +109,7 @@ def _command(
 @njit(cache=True, parallel=True)
 def closed_loop_block(
     k0, k1, noise, ref, sig_seg, swap_k, plant_f, plant_i, law, g, sg_fixed,
-    extra, q, qd, stuck, slip, failed, failed_at,
+    extra, q, qd, stuck, slip, zb, failed, failed_at,
     xf, u_last, cnt, tau_prev, theta, P, lam, short, long, sigma_model,
     ci, cf, A, B, C, D, d, group, rows,
     seg_start, seg_settled, acc, e_norm, sigma_end, seg_end, alarm_t, n_alarms,
@@ -121,7 +121,8 @@ def closed_loop_block(
     noise : (n, k1 - k0, 4) standard normal; ref : (N, 6) q_d, qd_d, qdd_d; sig_seg : (n_sw + 1, 7)
     true sigma before the first swap and after each; swap_k : (n_sw,) sample of each swap;
     plant_f : [T, max_speed, max_error, lim1, lim2, lsb1, lsb2, res1, res2, std1..4, friction
-    velocity, stribeck ratio, stribeck velocity];
+    velocity, stribeck ratio, stribeck velocity, LuGre sigma0 (2), sigma1 (2)]; zb : (n, 2) LuGre
+    bristle state;
     plant_i : [substeps, saturate, quantize_dac, quantize_encoder, friction code].
     """
     n = q.shape[0]
@@ -166,8 +167,7 @@ def closed_loop_block(
             if i < rec_n:
                 qd_rec[i, k, 0], qd_rec[i, k, 1] = qd[i, 0], qd[i, 1]
             step_one(
-                q, qd, stuck, slip, i, tau, sg_true, T, plant_i[0],
-                plant_i[4], plant_f[13], plant_f[14], plant_f[15],
+                q, qd, stuck, slip, zb, i, tau, sg_true, T, plant_i[0], plant_i[4], plant_f[13:20],
             )  # fmt: skip
             ok = np.isfinite(q[i, 0]) and np.isfinite(q[i, 1])
             ok = ok and abs(qd[i, 0]) < max_speed and abs(qd[i, 1]) < max_speed

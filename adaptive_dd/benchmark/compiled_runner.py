@@ -19,6 +19,7 @@ from adaptive_dd.benchmark.runner import (
 )
 from adaptive_dd.benchmark.streaming import segment_bounds
 from adaptive_dd.identification.online import OnlineConfig, online_init
+from adaptive_dd.plant.integrator import friction_vector
 from adaptive_dd.plant.sampling import first_sample
 from adaptive_dd.plant.simulator import MAX_SPEED
 
@@ -40,7 +41,14 @@ def run_compiled(name, ctrl, spec: CompiledSpec, scenario, idx, ref, keep: int, 
     arm = scenario.arm
     act, sens = arm.actuator, _sensor(scenario)
     plant_f = np.concatenate(
-        ([T, MAX_SPEED, MAX_ERROR], act._lim, act._lsb, sens.resolution, sens.noise_std, arm.friction_params)
+        (
+            [T, MAX_SPEED, MAX_ERROR],
+            act._lim,
+            act._lsb,
+            sens.resolution,
+            sens.noise_std,
+            friction_vector(arm.friction_params),
+        )
     )
     plant_i = np.array(
         [scenario.substeps, act.saturate, act.quantize, sens.quantize, arm.friction_code], dtype=np.int64
@@ -50,7 +58,7 @@ def run_compiled(name, ctrl, spec: CompiledSpec, scenario, idx, ref, keep: int, 
     sig_seg = np.ascontiguousarray(sigma_true[np.concatenate(([0], np.minimum(swap_k, N - 1)))])
     q = np.broadcast_to(ref[0, 0:2], (S, 2)).copy()
     qd = np.broadcast_to(ref[0, 2:4], (S, 2)).copy()
-    stuck, slip = qd == 0.0, np.ones((S, 2))
+    stuck, slip, zb = qd == 0.0, np.ones((S, 2)), np.zeros((S, 2))
     cfg = spec.online if adaptive else OnlineConfig(sample_period=T, tau_f=max(0.01, T))  # unused
     state = online_init(cfg, S, spec.sigma)
     alarm_t = np.zeros((S, MAX_ALARMS))
@@ -67,7 +75,7 @@ def run_compiled(name, ctrl, spec: CompiledSpec, scenario, idx, ref, keep: int, 
         drop = no_drop if drop_rngs is None else _dropout_block(drop_rngs, scenario.dropout, k1 - k0)
         closed_loop_block(
             k0, k1, noise, ref, sig_seg, swap_k, plant_f, plant_i, spec.law, spec.gains, spec.sigma,
-            spec.extra, q, qd, stuck, slip, run.failed, run.failed_at, *state, *cfg.packed,
+            spec.extra, q, qd, stuck, slip, zb, run.failed, run.failed_at, *state, *cfg.packed,
             seg_start, seg_settled, run.acc, run.e_norm, sigma_end, seg_end, alarm_t, n_alarms,
             K, run.q, run.qd, run.tau, run.saturated, sig_rec, drop, hq, hqd, run.dropped,
         )  # fmt: skip

@@ -450,9 +450,32 @@ def _add_information_times(res: BenchmarkResult, out: dict) -> None:
                 "seeds": len(kept),
                 "reference": ref.name,
             }
+        limit = None
+        if ref is not None and max(mass, removed) > 0 and mass != removed:
+            from adaptive_dd.identification.detection_limit import detection_limit
+
+            limits = [
+                detection_limit(
+                    ref.q[j, k0 - 1 : k1],
+                    ref.qd[j, k0 - 1 : k1],
+                    ref.tau[j, k0 - 1 : k1],
+                    1,
+                    T,
+                    sc.arm.sigma_with_payload(mass, sc.payload_radius),
+                    d,
+                    abs(mass - removed),
+                    sc.position_variance,
+                    sc.velocity_variance,
+                    n_tests=sc.n_samples,
+                )
+                for j in range(ref.q.shape[0])
+                if not ref.failed[j]
+            ]
+            limit = _median(limits)
         for name, run in res.runs.items():
             seg = out[name]["segments"][i]
             seg["information_time"] = info
+            seg["detection_limit"] = limit
             seg["mass_learning_time"] = None
             seg["learning_seeds"] = 0
             if run.sigma_hat is not None and run.sigma_hat.shape[0]:

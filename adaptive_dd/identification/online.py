@@ -52,6 +52,8 @@ __all__ = [
     "OnlineState",
     "online_init",
     "online_step",
+    "raise_alarm",
+    "rearm_time",
     "run_online",
 ]
 
@@ -84,21 +86,22 @@ def _finite(name: str, v: float, lo: float | None = None, hi: float | None = Non
 class ChangeDetector:
     """Detects a sudden change of the plant (a payload swap) from the prior prediction errors.
 
-    Per equation j, a short exponential average ``s_j`` of the squared prior error is
-    compared with a long-run level ``l_j``; an alarm is raised when
-    ``s_j > threshold**2 * l_j`` for either equation. The long-run level is the
-    bias-corrected average of what it has learned (``l / (1 - (1 - a)^n)``), learns only
-    from ``resume`` filter-freeze times after the last alarm on, and starts anew at
-    each alarm; an equation may alarm only after ``min_learned`` learned samples.
-    So an alarm cannot re-arm itself on the transient it caused, and after a swap the
-    level is that of the new payload, not the old one.
+    A generalized likelihood ratio (GLR) test of a change of the tip mass, at each of the
+    onsets of the last ``16 * glr_spacing``, on the prior errors of both equations weighted by
+    their long-run levels; an alarm needs the change to explain the errors (``min_mass``,
+    ``min_explained``, both equations alike: ``hetero``), and uses an equation only while its
+    joint moves faster than ``speed`` (friction the model lacks lives at low speed). A
+    persistence test over ``persist_window`` re-arms the detector after any alarm: a model
+    left wrong along the payload direction is found again within :func:`rearm_time` of
+    motion. The kernel's ``_detect`` documents the arithmetic. One setting serves every
+    shipped scenario and plant friction law (``benchmarks/detector_acceptance.py``).
 
     Attributes
     ----------
     short_window, long_window : float
         Time constants [s] of the two averages (``0 < short < long``).
     threshold : float
-        Ratio of RMS errors that raises an alarm, > 1.
+        Ratio of RMS errors that raises an alarm, > 1 (energy test of the paper's construction).
     warmup : float
         No alarm before this time [s] from the start.
     min_learned : int
@@ -123,6 +126,37 @@ class ChangeDetector:
         moves sigma by ``m d``), after clearing the old covariance of J1, J2 and r.
     p_j2 : float
         Extra variance [(kg m^2)^2] on J2 alone (the disk's own inertia).
+    direction_window : float
+        Time constant [s] of the payload-direction gate of the energy test (paper's construction).
+    persist_window : float
+        Time constant [s] of the persistence test.
+    persist_min : int
+        Samples the persistence test needs after it restarted (``resume`` after an alarm).
+    min_mass : float
+        Smallest payload change [kg] an alarm may claim (``|dm_hat|``).
+    min_explained : float
+        Fraction of the weighted prior-error energy that a payload change must explain, in (0, 1].
+    glr_threshold : float
+        Threshold of the GLR score ``A^2 / B`` (weighted errors are coloured by the filters, so it
+        is set on the benchmark's false-alarm rate rather than a chi-square quantile).
+    glr_spacing : float
+        [s] between the onsets of two GLR candidates (16 candidates).
+    glr_min_age : float
+        [s] a GLR candidate must have run before it may alarm.
+    hetero : float
+        The heterogeneity of a candidate over the two equations counts ``1 / hetero`` against it.
+    speed : float
+        [rad/s] an equation feeds the tests (and the levels) only while its joint is faster ...
+    speed_memory : float
+        ... and has been for this many tau_f.
+
+    Re-arming
+    ---------
+    After any alarm the persistence test is armed again after
+    ``max(holdoff, resume * freeze * tau_f + persist_min * T)`` (0.2 s with the defaults at
+    1 kHz, counted in samples in which the equations are in use): whatever the long-run level
+    learned, a model that stays wrong along the payload direction by ``min_mass`` or more
+    raises a new alarm then (:func:`rearm_time`).
     """
 
     short_window: float = 0.005
@@ -137,6 +171,17 @@ class ChangeDetector:
     reopen_again: bool = True
     p_mass: float = 100.0
     p_j2: float = 1e-3
+    direction_window: float = 0.02
+    persist_window: float = 0.1
+    persist_min: int = 100
+    min_mass: float = 0.25
+    min_explained: float = 0.5
+    glr_threshold: float = 400.0
+    glr_spacing: float = 0.003
+    glr_min_age: float = 0.005
+    hetero: float = 1.0
+    speed: float = 0.25
+    speed_memory: float = 6.0
 
     def __post_init__(self) -> None:
         _finite("ChangeDetector.short_window", self.short_window, 0.0)
@@ -151,6 +196,26 @@ class ChangeDetector:
         for name in ("warmup", "holdoff", "freeze", "resume", "p_j2"):
             _finite(f"ChangeDetector.{name}", getattr(self, name), 0.0, strict=False)
         _finite("ChangeDetector.p_mass", self.p_mass, 0.0)
+        for name in (
+            "direction_window",
+            "persist_window",
+            "min_mass",
+            "glr_threshold",
+            "glr_spacing",
+            "hetero",
+            "speed",
+        ):
+            _finite(f"ChangeDetector.{name}", getattr(self, name), 0.0)
+        _finite("ChangeDetector.min_explained", self.min_explained, 0.0, 1.0)
+        _finite("ChangeDetector.glr_min_age", self.glr_min_age, 0.0, strict=False)
+        if (
+            not isinstance(self.persist_min, int)
+            or isinstance(self.persist_min, bool)
+            or self.persist_min < 1
+        ):
+            raise ParameterError(
+                f"ChangeDetector.persist_min must be an integer >= 1, got {self.persist_min!r}"
+            )
         if (
             not isinstance(self.min_learned, int)
             or isinstance(self.min_learned, bool)
@@ -304,6 +369,16 @@ class OnlineConfig:
             cf[K.F_THRESHOLD2] = det.threshold**2
             cf[K.F_SLOW_FACTOR] = det.slow_factor**2
             cf[K.F_P_MASS], cf[K.F_P_J2] = det.p_mass, det.p_j2
+            cf[K.F_ALPHA_DIR] = min(1.0, T / det.direction_window)
+            cf[K.F_ALPHA_PERSIST] = min(1.0, T / det.persist_window)
+            cf[K.F_MIN_MASS], cf[K.F_MIN_EXPLAINED] = det.min_mass, det.min_explained
+            ci[K.I_PERSIST_MIN] = det.persist_min
+            ci[K.I_GLR_SPACING] = max(1, round(det.glr_spacing / T))
+            ci[K.I_GLR_MIN_AGE] = round(det.glr_min_age / T)
+            cf[K.F_GLR_THRESHOLD] = det.glr_threshold
+            cf[K.F_HETERO] = det.hetero
+            cf[K.F_DET_SPEED] = det.speed
+            ci[K.I_SPEED_MEMORY] = self.samples(det.speed_memory)
         b = self.bank
         d = np.asarray(self.payload_direction, dtype=float)
         rows = np.array(SPLIT_STAGES[self.split][0], dtype=np.int64)
@@ -319,6 +394,42 @@ class OnlineConfig:
         return p
 
 
+def raise_alarm(state: OnlineState, cfg: OnlineConfig, trials: ArrayLike | None = None) -> OnlineState:
+    """The state after an alarm raised from outside (pure function), e.g. a gripper's signal.
+
+    Does to each trial in ``trials`` (default: all) exactly what a detector alarm does
+    (:func:`~adaptive_dd.identification.online_kernel.on_alarm`): re-opens the covariance along
+    the payload direction and restarts the detector's levels, so the detector is re-armed
+    within :func:`rearm_time`. The alarm is counted in ``state.alarms``.
+    """
+    if cfg.detector is None:
+        raise ParameterError("raise_alarm: the OnlineConfig has no detector")
+    new = state.copy()
+    n = new.theta.shape[0]
+    idx = np.arange(n) if trials is None else np.atleast_1d(np.asarray(trials, dtype=np.int64))
+    if idx.size and (idx.min() < 0 or idx.max() >= n):
+        raise ParameterError(f"raise_alarm: trials must lie in [0, {n - 1}], got {trials!r}")
+    ci, cf, *_, d, group, _ = cfg.packed
+    for i in idx:
+        K.on_alarm(int(i), new.P, new.cnt, new.long, new.short, group, d, ci, cf)
+    return new
+
+
+def rearm_time(cfg: OnlineConfig) -> float:
+    """Longest time [s] after any alarm before the detector can raise the next one.
+
+    ``max(holdoff, resume * freeze * tau_f + persist_min * T)`` in samples in which the
+    equations are in use (see :class:`ChangeDetector`, "Re-arming"). Raises
+    :class:`~adaptive_dd.errors.ParameterError` for a config without a detector.
+    """
+    det = cfg.detector
+    if det is None:
+        raise ParameterError("rearm_time: the OnlineConfig has no detector")
+    T = cfg.sample_period
+    resume = cfg.samples(det.freeze) * det.resume
+    return max(round(det.holdoff / T), resume + det.persist_min) * T
+
+
 @lru_cache(maxsize=32)
 def _bank(tau_f: float, sample_period: float) -> FilterBank:
     return design_filter_bank("M2", tau_f, sample_period)
@@ -330,8 +441,9 @@ class OnlineState(NamedTuple):
     xf : (n, 9, 2) filter states per channel; u_last : (n, 9) last finite channel sample;
     cnt : (n, 11) int counters (see ``online_kernel.C_*``: samples, alarms, skips, ...);
     tau_prev : (n, 2); theta : (n, 7) RLS estimate; P : (n, 7, 7); lam : (n, 2) forgetting
-    factor per stage; short, long : (n, 2) detector averages; sigma_model : (n, 7) the
-    model for control (projected).
+    factor per stage; short : (n, N_SHORT) detector statistics (``online_kernel.S_*``: short
+    averages, payload-direction sums, persistence window, weights); long : (n, 2) long-run
+    levels; sigma_model : (n, 7) the model for control (projected).
     """
 
     xf: Array
@@ -393,7 +505,7 @@ def online_init(cfg: OnlineConfig, n_trials: int, theta0: ArrayLike) -> OnlineSt
         theta=th,
         P=np.broadcast_to(cfg.initial_covariance(), (n_trials, 7, 7)).copy(),
         lam=np.full((n_trials, 2), cfg.rls.lam0),
-        short=np.zeros((n_trials, 2)),
+        short=np.zeros((n_trials, K.N_SHORT)),
         long=np.zeros((n_trials, 2)),
         sigma_model=model,
     )

@@ -26,6 +26,24 @@ Plant friction laws (per joint i, ``b_i``, ``d_i`` from sigma)
     ``k = stribeck_ratio`` (static over Coulomb friction, >= 1) and
     ``v_s = stribeck_velocity`` [rad/s]: friction peaks at ``k d_i`` near rest and
     falls to ``d_i`` for ``|qd_i| >> v_s``.
+``"lugre"``
+    The dynamic LuGre model (Canudas de Wit, Olsson, Astrom, Lischinsky, "A new model
+    for control of systems with friction", IEEE TAC 40(3), 1995): a bristle deflection
+    ``z_i`` per joint, ``dz/dt = v - sigma0 |v| z / g(v)``,
+    ``g(v) = d_i (1 + (k - 1) exp(-(v / v_s)^2))``, torque
+    ``sigma0 z + sigma1 dz/dt + b_i v``. The paper's ``Fc`` is ``d_i``, ``Fs = k d_i``,
+    its ``sigma2`` is ``b_i``. It gives pre-sliding (a joint under a torque below
+    breakaway moves elastically by about ``tau / sigma0``, bounded, then stops), the
+    Stribeck effect, hysteresis at reversals and a friction lag. Defaults, from the
+    paper's own simulation values (sigma0 = 1e5 N/m, sigma1 = sqrt(1e5) N s/m for a 1 kg
+    mass, Fs / Fc = 1.5 N / 1 N): ``lugre_stiffness`` sigma0 = 1e5 N m/rad per joint
+    (the paper's number read in rotational units: a breakaway deflection d_i / sigma0 of
+    32 and 7 urad on the SICE arm, below one encoder count for joint 2);
+    ``lugre_damping`` sigma1 = sqrt(sigma0 J_i) with ``J_i = M_ii(q2 = 0)`` (the paper's
+    rule sigma1 = sqrt(sigma0 m): a bristle mode damped at 0.5 of critical); ``k =
+    stribeck_ratio`` = 1.5 (the paper's Fs / Fc); ``v_s = stribeck_velocity`` (0.1 rad/s
+    by default: the paper's 0.001 m/s belongs to a 1 kg slider; see the scenario
+    ``benchmarks/scenarios/lugre_friction.toml`` for the value it uses).
 """
 
 from __future__ import annotations
@@ -53,7 +71,7 @@ __all__ = ["FRICTION_LAWS", "Arm", "arm_from_tables"]
 
 Array = NDArray[np.float64]
 
-FRICTION_LAWS = ("stick-slip", "tanh", "stribeck")
+FRICTION_LAWS = ("stick-slip", "tanh", "stribeck", "lugre")
 """Plant friction laws; the index is the integer code the compiled integrator takes."""
 
 GEOMETRY_FACTOR = 1.5
@@ -92,14 +110,18 @@ class Arm:
         Torque limits and D/A (default: the SICE arm's).
     sensor : SensorConfig
         Encoder counts and noise variances (default: the SICE arm's).
-    friction : {"stick-slip", "tanh", "stribeck"}
+    friction : {"stick-slip", "tanh", "stribeck", "lugre"}
         The simulated plant's friction law (module docstring).
     friction_velocity : float
         ``v`` [rad/s] of the tanh and stribeck laws, > 0.
     stribeck_ratio : float
         Static over Coulomb friction ``k`` (stribeck law), >= 1.
     stribeck_velocity : float
-        ``v_s`` [rad/s] of the stribeck law, > 0.
+        ``v_s`` [rad/s] of the stribeck and lugre laws, > 0.
+    lugre_stiffness : (float, float)
+        Bristle stiffness sigma0 per joint [N m/rad] (lugre law).
+    lugre_damping : (float, float) or None
+        Bristle damping sigma1 per joint [N m s/rad]; None: ``sqrt(sigma0_i M_ii(q2 = 0))``.
 
     Raises
     ------
@@ -121,6 +143,8 @@ class Arm:
     friction_velocity: float = 0.02
     stribeck_ratio: float = 1.5
     stribeck_velocity: float = 0.1
+    lugre_stiffness: tuple[float, float] = (1e5, 1e5)
+    lugre_damping: tuple[float, float] | None = None
 
     def __post_init__(self) -> None:
         s = np.array(validate_sigma(self.sigma, "Arm.sigma"), dtype=float, copy=True)
@@ -154,6 +178,19 @@ class Arm:
         if k < 1:
             raise ParameterError(f"Arm.stribeck_ratio (static / Coulomb friction) must be >= 1, got {k!r}")
         object.__setattr__(self, "stribeck_ratio", k)
+        self._check_lugre()
+
+    def _check_lugre(self) -> None:
+        for name in ("lugre_stiffness", "lugre_damping"):
+            v = getattr(self, name)
+            if v is None and name == "lugre_damping":
+                continue
+            if not isinstance(v, tuple | list | np.ndarray) or len(v) != 2:
+                raise ParameterError(f"Arm.{name} must be two values (one per joint), got {v!r}")
+            vals = tuple(_finite(f"{name}[{i}]", x) for i, x in enumerate(v))
+            if min(vals) <= 0:
+                raise ParameterError(f"Arm.{name} must be > 0 per joint, got {v!r}")
+            object.__setattr__(self, name, vals)
 
     def _check_physical(self) -> None:
         p = self.physical
@@ -246,9 +283,25 @@ class Arm:
         return FRICTION_LAWS.index(self.friction)
 
     @property
-    def friction_params(self) -> tuple[float, float, float]:
-        """``(friction_velocity, stribeck_ratio, stribeck_velocity)`` for the integrator."""
-        return (self.friction_velocity, self.stribeck_ratio, self.stribeck_velocity)
+    def lugre_sigma1(self) -> tuple[float, float]:
+        """Bristle damping per joint [N m s/rad]: :attr:`lugre_damping` or ``sqrt(sigma0_i M_ii(q2 = 0))``."""
+        if self.lugre_damping is not None:
+            return self.lugre_damping
+        j1, j2, r = self.sigma[0], self.sigma[1], self.sigma[2]
+        inertia = (j1 + j2 + 2.0 * r, j2)
+        return tuple(float(np.sqrt(s0 * m)) for s0, m in zip(self.lugre_stiffness, inertia, strict=True))
+
+    @property
+    def friction_params(self) -> tuple[float, ...]:
+        """``(friction_velocity, stribeck_ratio, stribeck_velocity, sigma0_1, sigma0_2, sigma1_1,
+        sigma1_2)`` for the integrator (:data:`adaptive_dd.plant.integrator.N_FRICTION_PARAMS`)."""
+        return (
+            self.friction_velocity,
+            self.stribeck_ratio,
+            self.stribeck_velocity,
+            *self.lugre_stiffness,
+            *self.lugre_sigma1,
+        )
 
     def _radius(self, radius: ArrayLike | None) -> Array:
         rad = np.asarray(self.payload_radius if radius is None else radius, dtype=float)
@@ -353,6 +406,8 @@ class Arm:
             "friction_velocity": self.friction_velocity,
             "stribeck_ratio": self.stribeck_ratio,
             "stribeck_velocity": self.stribeck_velocity,
+            "lugre_stiffness": list(self.lugre_stiffness),
+            "lugre_damping": list(self.lugre_sigma1),
         }
 
     def _key(self) -> tuple:
@@ -383,7 +438,14 @@ def _jsonable(d: dict) -> dict:
 _PHYSICAL_KEYS = ("l1", "l2", "m1", "m2", "a1", "a2", "I1", "I2", "b", "d")
 _SIGMA_KEYS = ("sigma", "l1", "l2")
 _ARM_OPTIONAL = ("payload_radius", "torque_limit")
-_PLANT_KEYS = ("friction", "friction_velocity", "stribeck_ratio", "stribeck_velocity")
+_PLANT_KEYS = (
+    "friction",
+    "friction_velocity",
+    "stribeck_ratio",
+    "stribeck_velocity",
+    "lugre_stiffness",
+    "lugre_damping",
+)
 
 ARM_BOUNDS = {
     "arm.l1": 2.0,  # m: a direct-drive arm's link; beyond this no motor of the kind moves it
@@ -500,6 +562,9 @@ def _plant_kwargs(src: str, plant: dict) -> dict:
         kw["stribeck_ratio"] = _table_number(
             src, "plant.stribeck_ratio", plant["stribeck_ratio"], lower=1.0, strict=False
         )
+    for key in ("lugre_stiffness", "lugre_damping"):
+        if key in plant:
+            kw[key] = _table_list(src, f"plant.{key}", plant[key], 2, lower=0.0, strict=True)
     return kw
 
 
@@ -516,7 +581,8 @@ def arm_from_tables(arm_table: dict | None, plant_table: dict | None, src: str =
     parameters ``sigma = [J1, J2, r, b1, b2, d1, d2]`` with ``l1, l2``; both forms
     accept ``payload_radius`` [m] and ``torque_limit = [tau1, tau2]`` [N m]. Mixing
     the forms is an error. ``[plant]`` gives ``friction`` ("stick-slip", "tanh",
-    "stribeck"), ``friction_velocity``, ``stribeck_ratio``, ``stribeck_velocity``.
+    "stribeck", "lugre"), ``friction_velocity``, ``stribeck_ratio``, ``stribeck_velocity``,
+    ``lugre_stiffness = [s0_1, s0_2]``, ``lugre_damping = [s1_1, s1_2]``.
     A missing table means the SICE arm's values (:meth:`Arm.sice`, stick-slip).
 
     Raises

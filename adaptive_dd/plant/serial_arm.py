@@ -691,6 +691,11 @@ def urdf_arm_from_table(src: str, table: dict, plant_kw: dict):
         raise ScenarioError(f"{src}: [arm]: {exc}") from None
     n = arm.n_joints
     kw: dict = dict(plant_kw)
+    # LuGre friction is a two-link plant law (adaptive_dd.plant.integrator); kept aside until the
+    # fast path decides which plant runs
+    lugre = {k: kw.pop(k) for k in ("lugre_stiffness", "lugre_damping") if k in kw}
+    if kw.get("friction") == "lugre":
+        lugre["friction"] = kw.pop("friction")
     for key, lo in (("viscous", 0.0), ("coulomb", 0.0), ("armature", 0.0)):
         if key in table:
             kw[key] = _table_vector(src, key, table[key], n, lo, strict=False)
@@ -723,7 +728,12 @@ def urdf_arm_from_table(src: str, table: dict, plant_kw: dict):
     if not isinstance(general, bool):
         raise ScenarioError(f"{src}: key 'arm.general' must be true or false, got {general!r}")
     two = None if general else as_two_link(arm)
-    return arm if two is None else two
+    if two is None and lugre:
+        raise ScenarioError(
+            f"{src}: [plant] LuGre friction is implemented for the two-link arm only; the plant of "
+            f"this {n}-joint arm has stick-slip, tanh and stribeck friction"
+        )
+    return arm if two is None else (replace(two, **lugre) if lugre else two)
 
 
 def _is_num(x) -> bool:

@@ -249,6 +249,7 @@ class ArmSimulator:
         self.qd = np.broadcast_to(as_joint_array(qd0, "qd0"), shape).copy()
         self.stuck = np.ascontiguousarray(self.qd == 0.0)
         self.slip = np.ones(shape)
+        self.z = np.zeros(shape)  # LuGre bristle deflection [rad] (relaxed at the start)
         self.failed = np.zeros(self.n_trials, dtype=bool)
         self.failed_at = np.full(self.n_trials, -1)
         self.k = 0
@@ -301,6 +302,7 @@ class ArmSimulator:
             self.substeps,
             self.arm.friction_code,
             self.arm.friction_params,
+            self.z,
         )
         ok = np.isfinite(self.q).all(axis=-1) & (np.abs(self.qd) < MAX_SPEED).all(axis=-1)
         bad = bad_cmd | ~ok
