@@ -378,6 +378,8 @@ def parse_scenario(data: dict, src: str = "<memory>", name: str = "scenario") ->
     except ScenarioError as exc:
         errors.append(str(exc).removeprefix(f"{src}: "))
     values, more = scenario_fields(data, src == str(default_scenario_path()), arm)
+    if errors:  # the arm is wrong: the number of joints, hence per-joint lists, cannot be judged
+        more = [e for e in more if not e.startswith(("reference.", "noise.position", "noise.velocity"))]
     errors += more
     values.update(name=name, source=src)
     if arm is not None:
