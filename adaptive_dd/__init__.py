@@ -1,4 +1,4 @@
-"""adaptive_dd: identification and adaptive control of a two-link direct-drive arm.
+"""adaptive_dd: identification and adaptive control of robot arms across payload changes.
 
 Subpackages
 -----------
@@ -13,7 +13,11 @@ benchmark
     Payload-swap tracking benchmark driven by TOML scenarios.
 """
 
-from adaptive_dd.errors import (
+from adaptive_dd import _numba_cache
+
+_numba_cache.configure()  # before any kernel is decorated: see adaptive_dd/_numba_cache.py
+
+from adaptive_dd.errors import (  # noqa: E402
     DataError,
     ParameterError,
     ScenarioError,
