@@ -463,6 +463,7 @@ def est_init(
         lam=np.full(m, cfg.lam0),
         short=np.zeros((m, n)),
         long=np.zeros((m, n)),
+        ref=np.zeros((m, n)),
         eps=np.full((m, n), np.nan),
     )
     return c, state

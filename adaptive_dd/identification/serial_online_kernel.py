@@ -167,6 +167,8 @@ class EstState(NamedTuple):
         Forgetting factor.
     short, long : (m, n)
         Detector averages of the squared weighted prior errors.
+    ref : (m, n)
+        Level each row had established before the last alarm (0: none).
     eps : (m, n)
         Weighted prior errors of the last sample (NaN where a row was not used).
     """
@@ -183,6 +185,7 @@ class EstState(NamedTuple):
     lam: np.ndarray
     short: np.ndarray
     long: np.ndarray
+    ref: np.ndarray
     eps: np.ndarray
 
 
@@ -368,10 +371,16 @@ def _detect(c, s, i, eps, act):  # pragma: no cover - compiled
     samples are learned), so that a change during the learning is not absorbed.
     A row may alarm once it has been *seen* ``min_learned`` times since the last alarm
     (seen, not learned: gated samples count, so the re-arm time is bounded), outside
-    the warm-up and the hold-off. The level is at least ``floor^2``: a row that is nearly
-    noise-free (a wrist joint) would otherwise alarm on the regression's own modelling
-    error, which varies with the motion. The threshold is ``slow^2`` times higher while
-    another row is out of use (a joint that is slow or reversing disturbs the others).
+    the warm-up and the hold-off. Until then, a row that had established its level
+    before the last alarm is compared with that level (``ref``, with the threshold
+    times ``slow``, as the estimate may still be converging): a change that
+    follows a false alarm within the re-learning time is detected after the hold-off.
+    ``ref`` is set only from an established level, so this adds at most one alarm
+    (a swap that raises the noise level cannot chain alarms through it). The level is at
+    least ``floor^2``: a row that is nearly noise-free (a wrist joint) would otherwise
+    alarm on the regression's own modelling error, which varies with the motion. The
+    threshold is ``slow^2`` times higher while another row is out of use (a joint that
+    is slow or reversing disturbs the others).
     """
     n = eps.shape[0]
     ints, fl = c.ints, c.floats
@@ -402,11 +411,17 @@ def _detect(c, s, i, eps, act):  # pragma: no cover - compiled
             n_act += 1
     alarm = False
     for j in range(n):
-        nl = s.learned[i, j]
-        if s.seen[i, j] < ints[I_MIN_LEARNED] or nl < 1 or not act[j]:
+        if not act[j]:
             continue
-        level = max(s.long[i, j] / (1.0 - (1.0 - a_l) ** nl), fl[F_FLOOR2])
+        nl = s.learned[i, j]
         thr = fl[F_THRESHOLD2] if n_act == ints[I_N_ROWS] else fl[F_THRESHOLD2] * fl[F_SLOW2]
+        if s.seen[i, j] >= ints[I_MIN_LEARNED] and nl >= 1:
+            level = max(s.long[i, j] / (1.0 - (1.0 - a_l) ** nl), fl[F_FLOOR2])
+        elif s.ref[i, j] > 0.0:  # still re-learning: the level established before the last alarm,
+            level = s.ref[i, j]  # with the stricter threshold (the estimate may still converge)
+            thr = fl[F_THRESHOLD2] * fl[F_SLOW2]
+        else:
+            continue
         if s.short[i, j] > thr * level + 1e-300:
             alarm = True
     return alarm
@@ -490,7 +505,13 @@ def est_step_trial(c, s, i, q, qd, tau):  # pragma: no cover - compiled
             cnt[C_ALARMS] += 1
             cnt[C_SINCE_ALARM] = 0
             cnt[C_LAST_ALARM] = cnt[C_K]
+            a_l = fl[F_ALPHA_LONG]
             for j in range(n):
+                nl = s.learned[i, j]
+                # the level this row had established (0: none) serves until it re-learns
+                s.ref[i, j] = 0.0
+                if s.seen[i, j] >= ints[I_MIN_LEARNED] and nl >= 1:
+                    s.ref[i, j] = max(s.long[i, j] / (1.0 - (1.0 - a_l) ** nl), fl[F_FLOOR2])
                 s.seen[i, j] = 0
                 s.learned[i, j] = 0
                 s.long[i, j] = 0.0
