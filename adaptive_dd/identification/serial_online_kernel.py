@@ -428,6 +428,40 @@ def _detect(c, s, i, eps, act):  # pragma: no cover - compiled
 
 
 @njit(cache=True)
+def _alarm(c, s, i, k):  # pragma: no cover - compiled
+    """What an alarm at sample k does: re-open P, count, restart the level (keeping it as ``ref``)."""
+    ints, fl = c.ints, c.floats
+    cnt = s.cnt[i]
+    _reopen(c, s.P[i])
+    cnt[C_ALARMS] += 1
+    cnt[C_SINCE_ALARM] = 0
+    cnt[C_LAST_ALARM] = k
+    a_l = fl[F_ALPHA_LONG]
+    for j in range(s.seen.shape[1]):
+        nl = s.learned[i, j]
+        # the level this row had established (0: none) serves until it re-learns
+        s.ref[i, j] = 0.0
+        if s.seen[i, j] >= ints[I_MIN_LEARNED] and nl >= 1:
+            s.ref[i, j] = max(s.long[i, j] / (1.0 - (1.0 - a_l) ** nl), fl[F_FLOOR2])
+        s.seen[i, j] = 0
+        s.learned[i, j] = 0
+        s.long[i, j] = 0.0
+    if ints[I_REOPEN_AGAIN] == 1:
+        cnt[C_REOPEN_AT] = k + ints[I_FREEZE]
+
+
+@njit(cache=True)
+def est_force_alarm_trial(c, s, i):  # pragma: no cover - compiled
+    """Raise an alarm on trial i at its last stepped sample, as if the detector had.
+
+    For a caller that knows of a change (a tool changer's signal) and for tests of what
+    follows an alarm. Does nothing before the first sample.
+    """
+    if s.cnt[i, C_K] > 0:
+        _alarm(c, s, i, s.cnt[i, C_K] - 1)
+
+
+@njit(cache=True)
 def est_step_trial(c, s, i, q, qd, tau):  # pragma: no cover - compiled
     """Advance trial i by one sample in place; return 1 on a change alarm at this sample, else 0.
 
@@ -501,22 +535,7 @@ def est_step_trial(c, s, i, q, qd, tau):  # pragma: no cover - compiled
             _reopen(c, Pi)
         if _detect(c, s, i, s.eps[i], act):
             alarm = 1
-            _reopen(c, Pi)
-            cnt[C_ALARMS] += 1
-            cnt[C_SINCE_ALARM] = 0
-            cnt[C_LAST_ALARM] = cnt[C_K]
-            a_l = fl[F_ALPHA_LONG]
-            for j in range(n):
-                nl = s.learned[i, j]
-                # the level this row had established (0: none) serves until it re-learns
-                s.ref[i, j] = 0.0
-                if s.seen[i, j] >= ints[I_MIN_LEARNED] and nl >= 1:
-                    s.ref[i, j] = max(s.long[i, j] / (1.0 - (1.0 - a_l) ** nl), fl[F_FLOOR2])
-                s.seen[i, j] = 0
-                s.learned[i, j] = 0
-                s.long[i, j] = 0.0
-            if ints[I_REOPEN_AGAIN] == 1:
-                cnt[C_REOPEN_AT] = cnt[C_K] + ints[I_FREEZE]
+            _alarm(c, s, i, cnt[C_K])
         else:
             cnt[C_SINCE_ALARM] = min(cnt[C_SINCE_ALARM] + 1, BIG)
     cnt[C_K] += 1
@@ -552,6 +571,10 @@ def project_payload(src, dst, eig_min):  # pragma: no cover - compiled
             dst[k] = np.nan
         return
     lam, V = np.linalg.eigh(J)
+    if lam[0] >= eig_min:  # already consistent: unchanged, to the last bit
+        for k in range(10):
+            dst[k] = src[k]
+        return
     if lam[0] < eig_min:
         for k in range(4):
             lam[k] = max(lam[k], eig_min)
