@@ -302,30 +302,47 @@ def _regression(c, qf, qdf, qddf, sf, tf, phi, y):  # pragma: no cover - compile
 
 
 @njit(cache=True)
-def _rls_row(theta, P, phi, y, lam_eff, pphi):  # pragma: no cover - compiled
-    """Eq. (14) for one scalar equation (symmetric P update); returns the prior error (NaN: unchanged)."""
+def _rls_row(theta, P, phi, y, lam_eff, pphi, nz):  # pragma: no cover - compiled
+    """Eq. (14) for one scalar equation; returns the prior error (NaN: nothing changed).
+
+    ``P phi`` is accumulated over the nonzero entries of phi only (rows of P, P being
+    symmetric), and the update ``P - g g^T`` with ``g = P phi / sqrt(den)`` keeps P
+    symmetric to the last bit (a product of two floats does not depend on their order).
+    """
     p = theta.shape[0]
+    m = 0
+    for a in range(p):
+        if phi[a] != 0.0:
+            nz[m] = a
+            m += 1
     eps = y
+    for a in range(p):
+        pphi[a] = 0.0
+    for t in range(m):
+        b = nz[t]
+        f = phi[b]
+        eps -= f * theta[b]
+        for a in range(p):
+            pphi[a] += P[b, a] * f
     den = lam_eff
-    for a in range(p):
-        eps -= phi[a] * theta[a]
-        acc = 0.0
-        for b in range(p):
-            acc += P[a, b] * phi[b]
-        pphi[a] = acc
-    for a in range(p):
-        den += phi[a] * pphi[a]
+    for t in range(m):
+        den += phi[nz[t]] * pphi[nz[t]]
     if not (np.isfinite(eps) and np.isfinite(den) and den > 0.0):
         return np.nan
     inv = 1.0 / den
+    root = np.sqrt(inv)
     for a in range(p):
         theta[a] += pphi[a] * inv * eps
+        pphi[a] *= root
     for a in range(p):
-        ka = pphi[a] * inv
-        for b in range(a, p):
-            v = (P[a, b] - ka * pphi[b]) / lam_eff
-            P[a, b] = v
-            P[b, a] = v
+        ga = pphi[a]
+        for b in range(p):
+            P[a, b] -= ga * pphi[b]
+    if lam_eff != 1.0:
+        il = 1.0 / lam_eff
+        for a in range(p):
+            for b in range(p):
+                P[a, b] *= il
     return eps
 
 
@@ -508,6 +525,7 @@ def est_step_trial(c, s, i, q, qd, tau):  # pragma: no cover - compiled
         _regression(c, qf, qdf, qddf, sf, tf, phi, y)
         pphi = np.empty(p)
         row = np.empty(p)
+        nz = np.empty(p, dtype=np.int64)
         first = True
         for j in range(n_rows):
             if not act[j]:
@@ -519,7 +537,7 @@ def est_step_trial(c, s, i, q, qd, tau):  # pragma: no cover - compiled
             wj = c.w[j]
             for k in range(p):
                 row[k] = phi[j, k] / wj
-            s.eps[i, j] = _rls_row(th, Pi, row, y[j] / wj, lam_eff, pphi)
+            s.eps[i, j] = _rls_row(th, Pi, row, y[j] / wj, lam_eff, pphi, nz)
         if not first and fl[F_CAP] > 0.0:
             tr = 0.0
             for k in range(p):
@@ -540,6 +558,68 @@ def est_step_trial(c, s, i, q, qd, tau):  # pragma: no cover - compiled
             cnt[C_SINCE_ALARM] = min(cnt[C_SINCE_ALARM] + 1, BIG)
     cnt[C_K] += 1
     return alarm
+
+
+@njit(cache=True)
+def _eigh4(J):  # pragma: no cover - compiled
+    """Eigenvalues and eigenvectors (columns) of a symmetric 4 x 4 matrix by cyclic Jacobi rotations.
+
+    Cheaper than LAPACK through numba for this size; converges quadratically (a handful of
+    sweeps to the last bits).
+    """
+    A = J.copy()
+    V = np.eye(4)
+    for _ in range(30):
+        off = 0.0
+        scale = 0.0
+        for a in range(4):
+            scale += A[a, a] * A[a, a]
+            for b in range(a + 1, 4):
+                off += A[a, b] * A[a, b]
+        if off <= 1e-32 * scale or off == 0.0:
+            break
+        for a in range(3):
+            for b in range(a + 1, 4):
+                if A[a, b] == 0.0:
+                    continue
+                theta = (A[b, b] - A[a, a]) / (2.0 * A[a, b])
+                t = np.sign(theta) / (abs(theta) + np.sqrt(theta * theta + 1.0)) if theta != 0.0 else 1.0
+                cs = 1.0 / np.sqrt(t * t + 1.0)
+                sn = t * cs
+                for k in range(4):  # A <- A G (columns a, b)
+                    x, y = A[k, a], A[k, b]
+                    A[k, a] = cs * x - sn * y
+                    A[k, b] = sn * x + cs * y
+                for k in range(4):  # A <- G^T A (rows a, b)
+                    x, y = A[a, k], A[b, k]
+                    A[a, k] = cs * x - sn * y
+                    A[b, k] = sn * x + cs * y
+                for k in range(4):
+                    x, y = V[k, a], V[k, b]
+                    V[k, a] = cs * x - sn * y
+                    V[k, b] = sn * x + cs * y
+    lam = np.empty(4)
+    for k in range(4):
+        lam[k] = A[k, k]
+    return lam, V
+
+
+@njit(cache=True)
+def _positive_definite(J, shift):  # pragma: no cover - compiled
+    """True if ``J - shift I`` (4 x 4) is positive definite (a Cholesky factorisation succeeds)."""
+    L = np.zeros((4, 4))
+    for a in range(4):
+        for b in range(a + 1):
+            acc = J[a, b] - (shift if a == b else 0.0)
+            for k in range(b):
+                acc -= L[a, k] * L[b, k]
+            if a == b:
+                if not acc > 0.0:
+                    return False
+                L[a, a] = np.sqrt(acc)
+            else:
+                L[a, b] = acc / L[b, b]
+    return True
 
 
 @njit(cache=True)
@@ -570,12 +650,16 @@ def project_payload(src, dst, eig_min):  # pragma: no cover - compiled
         for k in range(10):
             dst[k] = np.nan
         return
-    lam, V = np.linalg.eigh(J)
-    if lam[0] >= eig_min:  # already consistent: unchanged, to the last bit
+    if _positive_definite(J, eig_min):  # already consistent (the common case): unchanged
         for k in range(10):
             dst[k] = src[k]
         return
-    if lam[0] < eig_min:
+    lam, V = _eigh4(J)
+    if lam.min() >= eig_min:
+        for k in range(10):
+            dst[k] = src[k]
+        return
+    if True:
         for k in range(4):
             lam[k] = max(lam[k], eig_min)
         for a in range(4):
