@@ -50,6 +50,7 @@ from numpy.typing import ArrayLike, NDArray
 from adaptive_dd.errors import ParameterError, SignalError
 from adaptive_dd.identification import serial_online_kernel as K
 from adaptive_dd.identification.filters import FilterBank, design_filter_bank
+from adaptive_dd.identification.pseudo_inertia import project_payload
 from adaptive_dd.identification.serial_online_kernel import (
     EstCfg,
     EstState,
@@ -57,7 +58,6 @@ from adaptive_dd.identification.serial_online_kernel import (
     est_model_trial,
     est_payload_trial,
     est_step_trial,
-    project_payload,
 )
 from adaptive_dd.plant.serial_arm import SerialArm
 
