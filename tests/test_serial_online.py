@@ -373,3 +373,49 @@ def test_full_mode_recovers_the_base_parameters(ur5):
     est_payload_trial(c, s, 0, p)
     raw = c.pbasis_pinv @ (s.theta[0] - c.sigma0)
     assert np.allclose(ur5.base.B @ pi, s.theta[0] + c.pbasis @ (p - raw), rtol=0, atol=1e-9)
+
+
+# ------------------------------------------------------------------------ against the plant
+def _closed_loop(arm, seed, n, payloads, swap):
+    """UR5 on the compiled stick-slip plant (RK4, 2 substeps) under a computed-torque law with
+    the true model on the measured state (40 rad/s), the shipped sensor noise; (q_m, qd_m, tau)."""
+    from adaptive_dd.plant.chain import rnea
+    from adaptive_dd.plant.serial_integrator import plant_params, serial_plant_step
+
+    t = np.arange(n) * T
+    rng = np.random.default_rng(seed)
+    qr, qdr, qddr = exciting_motion(arm, t, rng, offset=POSTURE, speed=0.4)
+    j = arm.payload_joint
+    pis = []
+    for p in payloads:
+        pi = arm.pi_links.copy()
+        pi[10 * j : 10 * j + 10] += arm.payload_map @ p
+        pis.append(pi)
+    pps = [plant_params(arm.chain, pi, arm.viscous, arm.coulomb, arm.armature, arm.friction) for pi in pis]
+    sq, sv = np.sqrt(arm.sensor.position_variance), np.sqrt(arm.sensor.velocity_variance)
+    lim = np.asarray(arm.actuator.torque_limit)
+    q, qd = qr[0].copy(), qdr[0].copy()
+    out = [np.empty((n, 6)) for _ in range(3)]
+    stuck = np.zeros(6, dtype=bool)
+    tau = np.empty(6)
+    for k in range(n):
+        s = int(k >= swap)
+        qm = q + sq * rng.standard_normal(6)
+        qdm = qd + sv * rng.standard_normal(6)
+        a = qddr[k] + 1600.0 * (qr[k] - qm) + 80.0 * (qdr[k] - qdm)
+        rnea(arm.chain, pis[s], qm, qdm, a, tau)
+        tau[:] = np.clip(tau + arm.viscous * qdm + arm.coulomb * np.sign(qdr[k]), -lim, lim)
+        out[0][k], out[1][k], out[2][k] = qm, qdm, tau
+        assert serial_plant_step(arm.chain, pps[s], q, qd, tau, T, 2, stuck)
+    return out
+
+
+def test_payload_mode_on_the_stick_slip_plant_in_closed_loop(ur5):
+    """The simulated plant (stick-slip friction, zero-order hold, RK4), 12 s, swap at 6 s."""
+    qm, qdm, tau = _closed_loop(ur5, 21, 12_000, [PAY_A, PAY_B], 6_000)
+    rec = run_serial_online(ur5, SerialOnlineConfig(), qm, qdm, tau)
+    for end, pay in ((5_999, PAY_A), (11_999, PAY_B)):
+        assert abs(rec.mass[0, end] - pay[0]) < 0.05 * pay[0], (end, rec.mass[0, end])
+        assert np.linalg.norm(rec.com[0, end] - _com(pay)) < 0.01, (end, rec.com[0, end])
+    (alarms,) = rec.alarm_times()
+    assert len(alarms) == 1 and 6.0 <= alarms[0] < 6.05, alarms
