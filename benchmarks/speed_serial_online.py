@@ -9,8 +9,9 @@ UR5 (the shipped URDF), a prescribed exciting motion with the shipped sensor noi
 * the chain kernels it calls (``rnea``, ``body_regressor``, ``regressor``) for scale;
 * ``run_serial_online`` (the recorded whole-record path, from Python).
 
-Compilation is excluded (one warm-up run first). Figures vary with the machine's load:
-nothing is asserted.
+Compilation is excluded (one warm-up run first). Times are CPU time of the thread
+(``time.thread_time``, best of 3), robust to other processes on a shared machine; nothing
+is asserted.
 """
 
 from __future__ import annotations
@@ -71,9 +72,9 @@ def _reg(ch, q, qd, out):  # pragma: no cover - compiled
 def _best(fn, repeat: int = 3) -> float:
     best = np.inf
     for _ in range(repeat):
-        t0 = time.perf_counter()
+        t0 = time.thread_time()
         fn()
-        best = min(best, time.perf_counter() - t0)
+        best = min(best, time.thread_time() - t0)
     return best
 
 
@@ -86,7 +87,7 @@ def main() -> None:
     rec = prescribed_record(arm, t, motion, [payload_parameters(1.0, [0, 0, 0.05])], rng=rng)
     q, qd, tau = rec.q_meas, rec.qd_meas, rec.tau
     n = arm.n_joints
-    print(f"UR5, {N} samples, base parameters p = {arm.base.count}; microseconds per sample (best of 3)")
+    print(f"UR5, {N} samples, base parameters p = {arm.base.count}; CPU microseconds per sample (best of 3)")
     ch, pi = arm.chain, np.ascontiguousarray(arm.pi_links)
     out_n, out_b, out_r = np.empty(n), np.empty((n, 10)), np.empty((n, 10 * n))
     for label, fn in (
