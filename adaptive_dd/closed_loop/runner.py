@@ -47,7 +47,7 @@ MAX_ALARMS = 256
 
 
 def make_controllers(scenario) -> dict:
-    """The scenario's controllers by label: built-ins of :data:`SERIAL_CONTROLLERS`, plug-ins by import path."""
+    """The scenario's controllers by label: built-ins (:data:`SERIAL_CONTROLLERS`), plug-ins by path."""
     from pathlib import Path
 
     from adaptive_dd.controllers import Gains, controller_label, make_controller
@@ -71,7 +71,7 @@ def make_controllers(scenario) -> dict:
 
 
 def true_parameters(scenario) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Per sample: the segment index ``(N,)``, the true base parameters ``(N, p)``, the payload mass ``(N,)``."""
+    """Per sample: segment index ``(N,)``, true base parameters ``(N, p)``, payload mass ``(N,)``."""
     from adaptive_dd.closed_loop.types import segment_starts
 
     seg = np.searchsorted(segment_starts(scenario), np.arange(scenario.n_samples), side="right") - 1
