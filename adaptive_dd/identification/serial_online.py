@@ -1,0 +1,591 @@
+"""Online identification for any serial arm (N joints): a compiled pure step.
+
+The N-joint generalisation of :mod:`~adaptive_dd.identification.online`::
+
+    c, s = est_init(cfg, arm, n_trials)               # EstCfg (read-only), EstState (in place)
+    alarm = est_step_trial(c, s, i, q, qd, tau)       # compiled: one sample of trial i
+    est_model_trial(c, s, i, pi_out)                  # compiled: the model control uses (13 n,)
+    info = est_step(c, s, q, qd, tau)                 # Python: every trial, the same kernel
+    rec = run_serial_online(arm, cfg, q, qd, tau)     # a whole record; equals stepping
+
+Two modes (:class:`SerialOnlineConfig`):
+
+``"payload"`` (default)
+    The arm is known (its standard parameters ``arm.pi``); the ten parameters of the
+    payload about its frame are estimated, as industrial payload identification does.
+    Equation: ``y = G0 tau - tau_arm(qf, qdf, qddf) = phi theta`` with
+    ``phi = body_regressor(link jp) @ payload_map`` (n x 10).
+``"full"``
+    All base parameters ``sigma = B pi`` (p of them): ``phi`` is the base regressor
+    (rigid columns of :func:`~adaptive_dd.plant.chain.regressor` plus friction and
+    armature columns, selected by ``arm.base.independent``).
+
+Both evaluate the regressor at the filtered signals of the M2 method (eq. 20, Tustin):
+``qf = G0 q``, ``qdf = G0 qd``, ``qddf = G1 qd``, Coulomb column ``G0 sgn(qd)``, and
+``y = G0 tau``. The estimator is RLS with the variable forgetting factor of eq. (14),
+one scalar update per joint equation (the paper's splits generalised: each row is a
+split; the forgetting factor advances once per sample). The change detector, the
+re-opening along the payload subspace, the start-up covariance shaped along the payload
+subspace and the projection of the control model (not of the estimator's state) follow
+the lessons of ``payload-swap-adaptation.md`` (see :func:`~adaptive_dd.identification.
+serial_online_kernel._detect`).
+
+**Re-arm bound.** After any alarm, the next alarm is possible as soon as
+``since_alarm > holdoff`` and one used row has been seen ``min_learned`` times from
+``resume`` samples after the alarm on: at most ``max(holdoff, resume + min_learned)``
+samples in which that row is in use (``SerialOnlineConfig.rearm_samples``). The level
+does not learn from a sample whose squared error exceeds ``gate^2`` times it, so a
+change that happens while the detector re-learns is still detected at re-arm.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from functools import lru_cache
+from typing import NamedTuple
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from adaptive_dd.errors import ParameterError, SignalError
+from adaptive_dd.identification import serial_online_kernel as K
+from adaptive_dd.identification.filters import FilterBank, design_filter_bank
+from adaptive_dd.identification.serial_online_kernel import (
+    EstCfg,
+    EstState,
+    est_model_trial,
+    est_payload_trial,
+    est_step_trial,
+    project_payload,
+)
+from adaptive_dd.plant.serial_arm import SerialArm
+
+__all__ = [
+    "EstCfg",
+    "EstInfo",
+    "EstState",
+    "SerialDetector",
+    "SerialOnlineConfig",
+    "SerialOnlineRecord",
+    "est_init",
+    "est_model",
+    "est_model_trial",
+    "est_payload_trial",
+    "est_step",
+    "est_step_trial",
+    "payload_prior",
+    "project_payload",
+    "run_serial_online",
+    "state_alarms",
+    "state_skipped",
+]
+
+Array = NDArray[np.float64]
+MODES = ("payload", "full")
+
+
+def _num(owner: str, name: str, v, lo=None, hi=None, strict=True) -> None:
+    ok = isinstance(v, int | float) and not isinstance(v, bool) and np.isfinite(v)
+    if ok and lo is not None:
+        ok = v > lo if strict else v >= lo
+    if ok and hi is not None:
+        ok = v <= hi
+    if not ok:
+        cond = ""
+        if lo is not None:
+            cond = f" {'>' if strict else '>='} {lo}"
+        if hi is not None:
+            cond += f" and <= {hi}"
+        raise ParameterError(f"{owner}.{name} must be a finite number{cond}, got {v!r}")
+
+
+def _int(owner: str, name: str, v, lo: int) -> None:
+    if not isinstance(v, int | np.integer) or isinstance(v, bool) or v < lo:
+        raise ParameterError(f"{owner}.{name} must be an integer >= {lo}, got {v!r}")
+
+
+def _bool(owner: str, name: str, v) -> None:
+    if not isinstance(v, bool):
+        raise ParameterError(f"{owner}.{name} must be true or false, got {v!r}")
+
+
+@dataclass(frozen=True)
+class SerialDetector:
+    """Change detector on the rows' prior errors (one per joint equation).
+
+    Attributes
+    ----------
+    short_window, long_window : float
+        Time constants [s] of the short average and the long-run level (short < long).
+    threshold : float
+        RMS ratio short / level that raises an alarm, > 1.
+    slow_factor : float
+        The threshold is this many times higher while another row is out of use.
+    warmup : float
+        No alarm before this time [s].
+    min_learned : int
+        Samples a row must have been seen since the last alarm before it may alarm.
+    holdoff : float
+        No alarm for this long after one [s].
+    freeze : float
+        Filter memory after a change, in units of tau_f (the second re-opening).
+    resume : float
+        The level resumes learning this many freeze times after an alarm.
+    gate : float
+        RMS ratio above which a sample is not learned by the level.
+    gate_after : int
+        Learned samples before the gate applies.
+    reopen_again : bool
+        Re-open the covariance again ``freeze`` after an alarm.
+    reopen_mass_std : float
+        Standard deviation [kg] of the payload mass re-opened on an alarm (the other
+        payload parameters scale with it, see :func:`payload_prior`).
+    floor : float
+        Floor [N m, RMS, in the units of the weighted equation] of the long-run level:
+        an error below ``threshold * floor`` never alarms.
+    """
+
+    short_window: float = 0.02
+    long_window: float = 1.0
+    threshold: float = 4.0
+    slow_factor: float = 2.0
+    warmup: float = 0.5
+    min_learned: int = 200
+    holdoff: float = 0.2
+    freeze: float = 3.0
+    resume: float = 3.0
+    gate: float = 8.0
+    gate_after: int = 20
+    reopen_again: bool = True
+    reopen_mass_std: float = 10.0
+    floor: float = 0.05
+
+    def __post_init__(self) -> None:
+        o = "SerialDetector"
+        _num(o, "short_window", self.short_window, 0.0)
+        _num(o, "long_window", self.long_window, 0.0)
+        if not self.short_window < self.long_window:
+            raise ParameterError(
+                f"{o} needs short_window < long_window, got {self.short_window}, {self.long_window}"
+            )
+        _num(o, "threshold", self.threshold, 1.0)
+        _num(o, "slow_factor", self.slow_factor, 1.0, strict=False)
+        _num(o, "gate", self.gate, 1.0)
+        for name in ("warmup", "holdoff", "freeze", "resume"):
+            _num(o, name, getattr(self, name), 0.0, strict=False)
+        _num(o, "reopen_mass_std", self.reopen_mass_std, 0.0)
+        _num(o, "floor", self.floor, 0.0, strict=False)
+        _int(o, "min_learned", self.min_learned, 1)
+        _int(o, "gate_after", self.gate_after, 1)
+        _bool(o, "reopen_again", self.reopen_again)
+
+
+@dataclass(frozen=True)
+class SerialOnlineConfig:
+    """Settings of the N-joint online estimator.
+
+    Attributes
+    ----------
+    sample_period : float
+        T [s].
+    tau_f : float
+        Time constant of the M2 filters [s] (eq. 20).
+    mode : {"payload", "full"}
+        Estimate the payload's ten parameters (arm known) or all base parameters.
+    lam0, mu : float
+        Forgetting factor lambda(0) in (0, 1] and its rate towards 1, mu in [0, 1] (eq. 14).
+    payload_mass_std : float
+        Start-up standard deviation [kg] of the payload mass (shapes P0 along the payload).
+    payload_size : float
+        Length scale r [m] of the payload prior: first moments ``m c`` have standard
+        deviation ``payload_mass_std r``, inertias ``payload_mass_std r^2``.
+    p0_arm : float
+        Full mode: start-up variance of every base parameter (isotropic part of P0), >= 0.
+    max_trace : float or None
+        Cap on trace(P); None: the trace of the start-up or re-opened covariance, whichever is larger.
+    align : bool
+        Use ``(tau(t-1) + tau(t)) / 2``: the torque at the sample instant under zero-order hold.
+    selection : (float, float) or None
+        Data selection ``(threshold [rad/s], memory in units of tau_f)``.
+    taint : float
+        Filter memory [units of tau_f] during which a non-finite sample keeps the equations out of use.
+    row_weights : tuple of float or None
+        Equation j is divided by ``row_weights[j]`` (None: 1).
+    detector : SerialDetector or None
+    project : bool
+        Project the model control uses onto physically consistent payloads (the
+        estimator's state stays unprojected).
+    eig_min : float
+        Smallest eigenvalue [kg m^2] of the projected pseudo-inertia, >= 0.
+    """
+
+    sample_period: float = 1e-3
+    tau_f: float = 0.01
+    mode: str = "payload"
+    lam0: float = 0.99995
+    mu: float = 0.0
+    payload_mass_std: float = 5.0
+    payload_size: float = 0.1
+    p0_arm: float = 1e-6
+    max_trace: float | None = None
+    align: bool = True
+    selection: tuple[float, float] | None = (0.05, 6.0)
+    taint: float = 10.0
+    row_weights: tuple[float, ...] | None = None
+    detector: SerialDetector | None = field(default_factory=SerialDetector)
+    project: bool = True
+    eig_min: float = 0.0
+
+    def __post_init__(self) -> None:
+        o = "SerialOnlineConfig"
+        _num(o, "sample_period", self.sample_period, 0.0)
+        _num(o, "tau_f", self.tau_f, 0.0)
+        if self.tau_f < self.sample_period or self.tau_f > 1e4 * self.sample_period:
+            raise ParameterError(
+                f"{o}.tau_f = {self.tau_f} s must lie between the sample period {self.sample_period} s "
+                "and 10 000 of them"
+            )
+        if self.mode not in MODES:
+            raise ParameterError(f"{o}.mode must be one of {MODES}, got {self.mode!r}")
+        _num(o, "lam0", self.lam0, 0.0, 1.0)
+        _num(o, "mu", self.mu, 0.0, 1.0, strict=False)
+        _num(o, "payload_mass_std", self.payload_mass_std, 0.0, strict=False)
+        _num(o, "payload_size", self.payload_size, 0.0)
+        _num(o, "p0_arm", self.p0_arm, 0.0, strict=False)
+        if self.max_trace is not None:
+            _num(o, "max_trace", self.max_trace, 0.0)
+        _bool(o, "align", self.align)
+        _bool(o, "project", self.project)
+        _num(o, "taint", self.taint, 0.0, strict=False)
+        _num(o, "eig_min", self.eig_min, 0.0, strict=False)
+        if self.selection is not None:
+            if not isinstance(self.selection, tuple | list) or len(self.selection) != 2:
+                raise ParameterError(
+                    f"{o}.selection must be (threshold, memory) or None, got {self.selection!r}"
+                )
+            _num(o, "selection[0] (threshold)", self.selection[0], 0.0, strict=False)
+            _num(o, "selection[1] (memory)", self.selection[1], 0.0, strict=False)
+        if self.row_weights is not None:
+            w = np.asarray(self.row_weights, dtype=float)
+            if w.ndim != 1 or not np.all(np.isfinite(w)) or np.any(w <= 0):
+                raise ParameterError(f"{o}.row_weights must be finite values > 0, got {self.row_weights!r}")
+        if self.detector is not None and not isinstance(self.detector, SerialDetector):
+            raise ParameterError(
+                f"{o}.detector must be a SerialDetector or None, got {type(self.detector).__name__}"
+            )
+        if self.mode == "payload" and self.payload_mass_std == 0:
+            raise ParameterError(f"{o}.payload_mass_std must be > 0 in payload mode, got 0")
+
+    @property
+    def bank(self) -> FilterBank:
+        return _bank(self.tau_f, self.sample_period)
+
+    def samples(self, n_tau_f: float) -> int:
+        """``n_tau_f`` filter time constants in samples (the one place this conversion is made)."""
+        return int(np.ceil(n_tau_f * self.tau_f / self.sample_period - 1e-9))
+
+    def seconds(self, t: float) -> int:
+        """``t`` seconds in samples."""
+        return int(np.ceil(t / self.sample_period - 1e-9))
+
+    @property
+    def rearm_samples(self) -> int:
+        """Bound on the samples (with a row in use) after an alarm before the next may be raised."""
+        d = self.detector
+        if d is None:
+            return 0
+        resume = self.samples(d.freeze) * d.resume
+        return int(max(self.seconds(d.holdoff) + 1, np.ceil(resume) + d.min_learned))
+
+
+@lru_cache(maxsize=32)
+def _bank(tau_f: float, sample_period: float) -> FilterBank:
+    return design_filter_bank("M2", tau_f, sample_period)
+
+
+def payload_prior(mass_std: float, size: float) -> Array:
+    """Covariance (10, 10) of a payload prior: ``diag(s^2, (s r)^2 x3, (s r^2)^2 x6)``.
+
+    ``s`` = ``mass_std`` [kg], ``r`` = ``size`` [m]: a body of up to about ``s`` kg within
+    ``r`` of the payload frame.
+    """
+    s, r = float(mass_std), float(size)
+    return np.diag([s**2] + [(s * r) ** 2] * 3 + [(s * r * r) ** 2] * 6)
+
+
+def _orth(M: Array, rtol: float = 1e-9) -> Array:
+    u, sv, _ = np.linalg.svd(M, full_matrices=False)
+    return np.ascontiguousarray(u[:, sv > rtol * max(sv[0], 1e-300)])
+
+
+def _pack(cfg: SerialOnlineConfig, arm: SerialArm) -> tuple[EstCfg, Array]:
+    n = arm.n_joints
+    pi0 = np.ascontiguousarray(arm.pi, dtype=float)
+    pmap = np.ascontiguousarray(arm.payload_map)
+    jp = arm.payload_joint
+    S0 = payload_prior(cfg.payload_mass_std, cfg.payload_size)
+    det = cfg.detector
+    S1 = payload_prior(det.reopen_mass_std if det else 0.0, cfg.payload_size)
+    if cfg.mode == "payload":
+        p = 10
+        indep = np.arange(10, dtype=np.int64)
+        Bpinv = np.zeros((13 * n, 10))
+        sigma0 = np.zeros(10)
+        pbasis = np.eye(10)
+        pbasis_pinv = np.eye(10)
+        U = np.eye(10)
+        P0, Pr = S0, S1
+        n_rows = jp + 1  # joints after the payload's link do not feel it
+    else:
+        B = arm.base.B
+        p = B.shape[0]
+        indep = np.asarray(arm.base.independent, dtype=np.int64)
+        Bpinv = np.linalg.pinv(B)
+        sigma0 = B @ pi0
+        pbasis = arm.payload_basis
+        pbasis_pinv = np.linalg.pinv(pbasis, rcond=1e-9)
+        U = _orth(pbasis)
+        P0 = cfg.p0_arm * np.eye(p) + pbasis @ S0 @ pbasis.T
+        Pr = pbasis @ S1 @ pbasis.T
+        n_rows = n
+    cap = cfg.max_trace if cfg.max_trace is not None else max(np.trace(P0), np.trace(Pr))
+    w = np.ones(n) if cfg.row_weights is None else np.asarray(cfg.row_weights, dtype=float)
+    if w.shape != (n,):
+        raise ParameterError(
+            f"SerialOnlineConfig.row_weights must have {n} values (joints), got {w.shape[0]}"
+        )
+    b = cfg.bank
+    ints = np.zeros(K.N_I, dtype=np.int64)
+    fl = np.zeros(K.N_F)
+    T = cfg.sample_period
+    ints[K.I_ALIGN] = int(cfg.align)
+    ints[K.I_SELECT] = int(cfg.selection is not None)
+    ints[K.I_SEL_MEMORY] = 0 if cfg.selection is None else cfg.samples(cfg.selection[1])
+    ints[K.I_TAINT] = cfg.samples(cfg.taint)
+    ints[K.I_PROJECT] = int(cfg.project)
+    ints[K.I_N_ROWS] = n_rows
+    fl[K.F_LAM0], fl[K.F_MU], fl[K.F_CAP] = cfg.lam0, cfg.mu, cap
+    fl[K.F_SEL_THRESHOLD] = 0.0 if cfg.selection is None else cfg.selection[0]
+    fl[K.F_EIG_MIN] = cfg.eig_min
+    if det is not None:
+        ints[K.I_DETECT] = 1
+        ints[K.I_WARMUP] = cfg.seconds(det.warmup)
+        ints[K.I_MIN_LEARNED] = det.min_learned
+        ints[K.I_HOLDOFF] = cfg.seconds(det.holdoff)
+        ints[K.I_FREEZE] = cfg.samples(det.freeze)
+        ints[K.I_RESUME] = int(np.ceil(ints[K.I_FREEZE] * det.resume))
+        ints[K.I_REOPEN_AGAIN] = int(det.reopen_again)
+        ints[K.I_GATE_AFTER] = det.gate_after
+        fl[K.F_ALPHA_SHORT] = min(1.0, T / det.short_window)
+        fl[K.F_ALPHA_LONG] = min(1.0, T / det.long_window)
+        fl[K.F_THRESHOLD2] = det.threshold**2
+        fl[K.F_SLOW2] = det.slow_factor**2
+        fl[K.F_GATE2] = det.gate**2
+        fl[K.F_FLOOR2] = det.floor**2
+    xs0 = np.linalg.solve(np.eye(b.order) - b.A, b.B[:, 0])
+    c = np.ascontiguousarray
+    return EstCfg(
+        ch=arm.chain,
+        mode=K.MODE_PAYLOAD if cfg.mode == "payload" else K.MODE_FULL,
+        pi0=pi0,
+        jp=int(jp),
+        pmap=pmap,
+        indep=indep,
+        Bpinv=c(Bpinv),
+        sigma0=c(sigma0),
+        pbasis=c(pbasis),
+        pbasis_pinv=c(pbasis_pinv),
+        U=U,
+        P_reopen=c(Pr),
+        A=c(b.A),
+        Bf=c(b.B[:, 0]),
+        C=c(b.C),
+        D=c(b.D[:, 0]),
+        xs0=xs0,
+        w=c(w),
+        ints=ints,
+        floats=fl,
+    ), P0
+
+
+def est_init(
+    cfg: SerialOnlineConfig, arm: SerialArm, n_trials: int, sigma_nominal: ArrayLike | None = None
+) -> tuple[EstCfg, EstState]:
+    """Compiled configuration and initial state of ``n_trials`` estimators.
+
+    Parameters
+    ----------
+    cfg : SerialOnlineConfig
+    arm : SerialArm
+        The arm (its standard parameters ``arm.pi`` are the known part in payload mode).
+    n_trials : int
+    sigma_nominal : array_like (p,) or (n_trials, p), optional
+        Nominal base parameters: the initial estimate in full mode (default ``arm.sigma``);
+        in payload mode the initial payload is the one it implies
+        (``arm.payload_from_sigma``; default no payload).
+
+    Returns
+    -------
+    EstCfg, EstState
+    """
+    if not isinstance(cfg, SerialOnlineConfig):
+        raise ParameterError(f"cfg must be a SerialOnlineConfig, got {type(cfg).__name__}")
+    if not isinstance(n_trials, int | np.integer) or isinstance(n_trials, bool) or n_trials < 1:
+        raise ParameterError(f"n_trials must be an integer >= 1, got {n_trials!r}")
+    c, P0 = _pack(cfg, arm)
+    n = arm.n_joints
+    p = P0.shape[0]
+    if sigma_nominal is None:
+        th0 = np.zeros(10) if cfg.mode == "payload" else arm.sigma
+    else:
+        s = np.asarray(sigma_nominal, dtype=float)
+        if s.shape[-1] != arm.base.count or not np.all(np.isfinite(s)):
+            raise ParameterError(
+                f"sigma_nominal must be {arm.base.count} finite base parameters, got shape {s.shape}"
+            )
+        th0 = arm.payload_from_sigma(s).params if cfg.mode == "payload" else s
+    theta = np.broadcast_to(th0, (n_trials, p)).copy()
+    cnt = np.zeros((n_trials, K.N_CNT), dtype=np.int64)
+    cnt[:, K.C_SINCE_ALARM] = K.BIG
+    cnt[:, K.C_LAST_ALARM] = -1
+    cnt[:, K.C_REOPEN_AT] = -1
+    m = n_trials
+    state = EstState(
+        xf=np.zeros((m, 4 * n, cfg.bank.order)),
+        u_last=np.zeros((m, 4 * n)),
+        tau_prev=np.zeros((m, n)),
+        cnt=cnt,
+        since_slow=np.zeros((m, n), dtype=np.int64),
+        seen=np.zeros((m, n), dtype=np.int64),
+        learned=np.zeros((m, n), dtype=np.int64),
+        theta=theta,
+        P=np.broadcast_to(P0, (m, p, p)).copy(),
+        lam=np.full(m, cfg.lam0),
+        short=np.zeros((m, n)),
+        long=np.zeros((m, n)),
+        eps=np.full((m, n), np.nan),
+    )
+    return c, state
+
+
+class EstInfo(NamedTuple):
+    """What one :func:`est_step` did, per trial: ``alarm (m,)`` bool, weighted prior errors
+    ``eps (m, n)`` (NaN where a row was not used), forgetting factor ``lam (m,)``."""
+
+    alarm: NDArray[np.bool_]
+    eps: Array
+    lam: Array
+
+
+def _sample(x: ArrayLike, shape: tuple, name: str) -> Array:
+    a = np.asarray(x, dtype=float)
+    if a.shape != shape:
+        raise SignalError(f"{name} must have shape {shape}, got {a.shape}")
+    return np.ascontiguousarray(a)
+
+
+def est_step(c: EstCfg, s: EstState, q: ArrayLike, qd: ArrayLike, tau: ArrayLike) -> EstInfo:
+    """One sample of every trial (``q, qd, tau (m, n)``), updating ``s`` in place.
+
+    The same compiled :func:`est_step_trial` as the closed loop. Non-finite values are
+    skipped and counted (``state_skipped(s)``).
+    """
+    shape = s.eps.shape
+    q, qd, tau = (_sample(x, shape, nm) for x, nm in ((q, "q"), (qd, "qd"), (tau, "tau")))
+    alarm = np.zeros(shape[0], dtype=np.int64)
+    K.est_step_batch(c, s, q, qd, tau, alarm)
+    return EstInfo(alarm.astype(bool), s.eps.copy(), s.lam.copy())
+
+
+def est_model(c: EstCfg, s: EstState) -> Array:
+    """The model control uses, standard parameters ``(m, 13 n)`` (see :func:`est_model_trial`)."""
+    out = np.empty((s.theta.shape[0], c.pi0.shape[0]))
+    for i in range(out.shape[0]):
+        est_model_trial(c, s, i, out[i])
+    return out
+
+
+def state_alarms(s: EstState) -> NDArray[np.int64]:
+    """Alarms raised so far, per trial."""
+    return s.cnt[:, K.C_ALARMS].copy()
+
+
+def state_skipped(s: EstState) -> NDArray[np.int64]:
+    """Samples skipped as non-finite, per trial."""
+    return s.cnt[:, K.C_SKIPPED].copy()
+
+
+@dataclass(frozen=True)
+class SerialOnlineRecord:
+    """The estimator run over records; arrays ``(n_trials, n_samples, ...)``.
+
+    Attributes
+    ----------
+    t : (n_samples,) sample times [s]
+    theta : (..., p) the estimator's estimate after each sample
+    payload : (..., 10) the payload it implies (projected if ``cfg.project``), about the payload frame
+    alarm : bool (...) a change alarm at that sample
+    eps : (..., n) weighted prior errors (NaN where a row was not used)
+    lam : (...) forgetting factor
+    n_skipped : (n_trials,) samples skipped as non-finite
+    """
+
+    t: Array
+    theta: Array
+    payload: Array
+    alarm: NDArray[np.bool_]
+    eps: Array
+    lam: Array
+    n_skipped: NDArray[np.int64]
+
+    @property
+    def mass(self) -> Array:
+        """Payload mass [kg], ``(n_trials, n_samples)``."""
+        return self.payload[..., 0]
+
+    @property
+    def com(self) -> Array:
+        """Payload centre of mass [m] in its frame, ``(n_trials, n_samples, 3)`` (NaN at zero mass)."""
+        m = self.payload[..., :1]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            return np.where(m > 0, self.payload[..., 1:4] / m, np.nan)
+
+    def alarm_times(self) -> list[list[float]]:
+        """Per trial, the times [s] of the alarms."""
+        return [list(self.t[np.flatnonzero(a)]) for a in self.alarm]
+
+
+def run_serial_online(
+    arm: SerialArm,
+    cfg: SerialOnlineConfig,
+    q: ArrayLike,
+    qd: ArrayLike,
+    tau: ArrayLike,
+    sigma_nominal: ArrayLike | None = None,
+) -> SerialOnlineRecord:
+    """Run the estimator over whole records ``q, qd, tau (n_samples, n)`` or ``(n_trials, n_samples, n)``.
+
+    Equals :func:`est_step` sample by sample, bit for bit (one compiled loop per trial
+    over the same :func:`est_step_trial`).
+    """
+    q, qd, tau = (np.ascontiguousarray(np.asarray(x, dtype=float)) for x in (q, qd, tau))
+    if q.ndim == 2:
+        q, qd, tau = q[None], qd[None], tau[None]
+    n = arm.n_joints
+    if q.ndim != 3 or q.shape[-1] != n or qd.shape != q.shape or tau.shape != q.shape:
+        raise SignalError(
+            f"q, qd and tau must share a shape (n_trials, n_samples, {n}), "
+            f"got {q.shape}, {qd.shape}, {tau.shape}"
+        )
+    m, N, _ = q.shape
+    c, s = est_init(cfg, arm, m, sigma_nominal)
+    p = s.theta.shape[1]
+    theta = np.empty((m, N, p))
+    payload = np.empty((m, N, 10))
+    eps = np.empty((m, N, n))
+    alarm = np.zeros((m, N), dtype=np.int64)
+    lam = np.empty((m, N))
+    for i in range(m):
+        K.est_run_trial(c, s, i, q[i], qd[i], tau[i], theta[i], payload[i], eps[i], alarm[i], lam[i])
+    t = np.arange(N) * cfg.sample_period
+    return SerialOnlineRecord(t, theta, payload, alarm.astype(bool), eps, lam, state_skipped(s))

@@ -1,0 +1,648 @@
+"""Compiled per-trial step of the N-joint online estimator (:mod:`~adaptive_dd.identification.serial_online`).
+
+:func:`est_step_trial` advances trial ``i`` of an :class:`EstState` by one sample, in
+place; :func:`est_model_trial` writes the model that control uses (standard
+parameters, projected). The Python path and any compiled closed loop call these
+same functions. Configuration travels as one :class:`EstCfg` NamedTuple of arrays
+and scalars (built by :func:`~adaptive_dd.identification.serial_online.est_init`).
+
+One sample, per trial:
+
+1. non-finite input: the last finite channels are held, the sample is counted as
+   skipped, and the filtered equations are not used for ``taint`` samples (the
+   filters' memory);
+2. M2 filter bank (eq. 20, Tustin; the same matrices as
+   :func:`~adaptive_dd.identification.filters.design_filter_bank`) on the channels
+   ``q, qd, tau, sgn(qd)`` (outputs G0, G1); the regressor is evaluated at the filtered
+   signals ``qf = G0 q, qdf = G0 qd, qddf = G1 qd``, friction columns at ``G0 qd``,
+   ``G0 sgn(qd)`` (the paper's M2 construction generalised to n joints);
+3. data selection: equation j is used once joint j has been faster than the
+   threshold for the filters' memory;
+4. RLS of eq. (14), one scalar update per used joint equation (row weights ``w``);
+   the forgetting factor advances once per sample, at the first used row;
+5. the change detector on the rows' prior errors (:func:`_detect`); on an alarm the
+   covariance is re-opened along the payload subspace (and once more when the
+   filters' memory has passed the alarm).
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+from numba import njit
+
+from adaptive_dd.plant.chain import Chain, body_regressor, regressor, rnea
+
+# columns of the per-trial integer state `cnt`
+C_K = 0  # samples stepped
+C_STARTED = 1
+C_SINCE_BAD = 2  # samples since the last non-finite input
+C_SKIPPED = 3  # samples with a non-finite input
+C_ALARMS = 4
+C_SINCE_ALARM = 5
+C_LAST_ALARM = 6  # sample index of the last alarm (-1: none)
+C_REOPEN_AT = 7  # sample at which the covariance is re-opened again (-1: none)
+N_CNT = 8
+
+BIG = 1 << 40
+MODE_PAYLOAD = 0
+MODE_FULL = 1
+
+
+class EstCfg(NamedTuple):
+    """Everything the compiled step needs (built by ``est_init``; read-only).
+
+    Attributes
+    ----------
+    ch : Chain
+        Kinematics of the arm.
+    mode : int
+        0 payload (10 parameters of the payload, arm known), 1 full (base parameters).
+    pi0 : (13 n,)
+        Standard parameters of the known (nominal) arm, without payload.
+    jp : int
+        Link (0-based) that carries the payload frame.
+    pmap : (10, 10)
+        Payload parameters about the payload frame -> about link jp's joint frame.
+    indep : (p,) int64
+        Base columns of the standard regressor (full mode).
+    Bpinv : (13 n, p)
+        Pseudo-inverse of the base map B (full mode; ``B @ Bpinv == I``).
+    sigma0 : (p,)
+        ``B pi0`` (full mode; zeros(10) in payload mode).
+    pbasis : (p, 10)
+        How the payload's ten parameters move theta (identity in payload mode).
+    pbasis_pinv : (10, p)
+        Pseudo-inverse of ``pbasis``.
+    U : (p, r)
+        Orthonormal basis of the payload subspace of theta (re-opened on an alarm).
+    P_reopen : (p, p)
+        Covariance put along U on an alarm.
+    A, Bf, C, D : filter bank matrices (order x order, order, 2 x order, 2)
+    xs0 : (order,)
+        Filter state of a unit constant input.
+    w : (n,)
+        Row weights: equation j is divided by ``w[j]``.
+    ints : (N_I,) int64, floats : (N_F,) float64
+        Scalar settings, slots ``I_*`` and ``F_*`` of this module.
+    """
+
+    ch: Chain
+    mode: int
+    pi0: np.ndarray
+    jp: int
+    pmap: np.ndarray
+    indep: np.ndarray
+    Bpinv: np.ndarray
+    sigma0: np.ndarray
+    pbasis: np.ndarray
+    pbasis_pinv: np.ndarray
+    U: np.ndarray
+    P_reopen: np.ndarray
+    A: np.ndarray
+    Bf: np.ndarray
+    C: np.ndarray
+    D: np.ndarray
+    xs0: np.ndarray
+    w: np.ndarray
+    ints: np.ndarray
+    floats: np.ndarray
+
+
+# integer slots of EstCfg.ints
+I_ALIGN = 0
+I_SELECT = 1
+I_SEL_MEMORY = 2  # samples
+I_TAINT = 3  # samples
+I_DETECT = 4
+I_WARMUP = 5  # samples
+I_MIN_LEARNED = 6
+I_HOLDOFF = 7
+I_RESUME = 8
+I_FREEZE = 9
+I_REOPEN_AGAIN = 10
+I_PROJECT = 11
+I_GATE_AFTER = 12  # learned samples before the learning gate applies
+I_N_ROWS = 13  # rows (joints 0 .. n_rows-1) that carry information
+N_I = 14
+
+# float slots of EstCfg.floats
+F_LAM0 = 0
+F_MU = 1
+F_CAP = 2  # trace cap of P (<= 0: none)
+F_SEL_THRESHOLD = 3
+F_ALPHA_SHORT = 4
+F_ALPHA_LONG = 5
+F_THRESHOLD2 = 6
+F_SLOW2 = 7
+F_GATE2 = 8
+F_EIG_MIN = 9  # smallest eigenvalue kept in the projected pseudo-inertia
+F_FLOOR2 = 10  # floor of the detector's level (squared weighted error)
+N_F = 11
+
+
+class EstState(NamedTuple):
+    """State of a batch of estimators; every array has the trial axis first.
+
+    Attributes
+    ----------
+    xf : (m, 4 n, order)
+        Filter states of the channels ``q, qd, tau, sgn(qd)`` (n each).
+    u_last : (m, 4 n)
+        Last finite channel sample (held over a dropout).
+    tau_prev : (m, n)
+        Torque of the previous sample (alignment).
+    cnt : (m, N_CNT) int64
+        Counters, columns ``C_*`` (samples, skipped, alarms, last alarm, ...).
+    since_slow : (m, n) int64
+        Samples since joint j was last slow (data selection).
+    seen, learned : (m, n) int64
+        Detector: rows seen and rows learned by the long-run level since the last alarm.
+    theta : (m, p)
+        The estimator's estimate (unprojected).
+    P : (m, p, p)
+        Its covariance.
+    lam : (m,)
+        Forgetting factor.
+    short, long : (m, n)
+        Detector averages of the squared weighted prior errors.
+    eps : (m, n)
+        Weighted prior errors of the last sample (NaN where a row was not used).
+    """
+
+    xf: np.ndarray
+    u_last: np.ndarray
+    tau_prev: np.ndarray
+    cnt: np.ndarray
+    since_slow: np.ndarray
+    seen: np.ndarray
+    learned: np.ndarray
+    theta: np.ndarray
+    P: np.ndarray
+    lam: np.ndarray
+    short: np.ndarray
+    long: np.ndarray
+    eps: np.ndarray
+
+
+@njit(cache=True)
+def _filter_channels(c, s, i, u, f):  # pragma: no cover - compiled
+    """One sample of the bank on every channel of trial i: ``f[ch] = [G0 u, G1 u]``."""
+    A, Bf, C, D = c.A, c.Bf, c.C, c.D
+    order = A.shape[0]
+    xf = s.xf[i]
+    tmp = np.empty(order)
+    for ch in range(u.shape[0]):
+        for o in range(2):
+            acc = D[o] * u[ch]
+            for m in range(order):
+                acc += C[o, m] * xf[ch, m]
+            f[ch, o] = acc
+        for m in range(order):
+            acc = Bf[m] * u[ch]
+            for k in range(order):
+                acc += A[m, k] * xf[ch, k]
+            tmp[m] = acc
+        for m in range(order):
+            xf[ch, m] = tmp[m]
+
+
+@njit(cache=True)
+def _filtered_signals(c, s, i, q, qd, tau, qf, qdf, qddf, sf, tf):  # pragma: no cover - compiled
+    """Filter sample (q, qd, tau) of trial i; return True if the filtered equations are usable."""
+    n = q.shape[0]
+    cnt = s.cnt[i]
+    u = np.empty(4 * n)
+    for j in range(n):
+        t = tau[j]
+        if c.ints[I_ALIGN] == 1:
+            prev = tau[j] if cnt[C_STARTED] == 0 else s.tau_prev[i, j]
+            t = 0.5 * (tau[j] + prev)
+        u[j] = q[j]
+        u[n + j] = qd[j]
+        u[2 * n + j] = t
+        u[3 * n + j] = np.sign(qd[j])
+    bad = False
+    for k in range(4 * n):
+        if not np.isfinite(u[k]):
+            bad = True
+    if c.ints[I_ALIGN] == 1:
+        for j in range(n):
+            if np.isfinite(tau[j]):
+                s.tau_prev[i, j] = tau[j]
+    if cnt[C_STARTED] == 0:  # the filters start in the steady state of the first sample
+        for k in range(4 * n):
+            s.u_last[i, k] = u[k] if np.isfinite(u[k]) else 0.0
+            for m in range(c.xs0.shape[0]):
+                s.xf[i, k, m] = s.u_last[i, k] * c.xs0[m]
+        cnt[C_SINCE_BAD] = BIG
+        cnt[C_STARTED] = 1
+    if bad:  # hold the last finite sample of every channel
+        for k in range(4 * n):
+            u[k] = s.u_last[i, k]
+        cnt[C_SINCE_BAD] = 0
+        cnt[C_SKIPPED] += 1
+    else:
+        for k in range(4 * n):
+            s.u_last[i, k] = u[k]
+        cnt[C_SINCE_BAD] = min(cnt[C_SINCE_BAD] + 1, BIG)
+    f = np.empty((4 * n, 2))
+    _filter_channels(c, s, i, u, f)
+    for j in range(n):
+        qf[j] = f[j, 0]
+        qdf[j] = f[n + j, 0]
+        qddf[j] = f[n + j, 1]
+        tf[j] = f[2 * n + j, 0]
+        sf[j] = f[3 * n + j, 0]
+    return cnt[C_SINCE_BAD] > c.ints[I_TAINT]
+
+
+@njit(cache=True)
+def _regression(c, qf, qdf, qddf, sf, tf, phi, y):  # pragma: no cover - compiled
+    """The regression ``y = phi theta`` (n x p) at the filtered signals."""
+    n = qf.shape[0]
+    p = phi.shape[1]
+    if c.mode == MODE_PAYLOAD:
+        known = np.empty(n)
+        rnea(c.ch, c.pi0[: 10 * n], qf, qdf, qddf, known)
+        yb = np.empty((n, 10))
+        body_regressor(c.ch, c.jp, qf, qdf, qddf, yb)
+        for r in range(n):
+            fv, fc, ia = c.pi0[10 * n + r], c.pi0[11 * n + r], c.pi0[12 * n + r]
+            y[r] = tf[r] - (known[r] + fv * qdf[r] + fc * sf[r] + ia * qddf[r])
+            for k in range(10):
+                acc = 0.0
+                for m in range(10):
+                    acc += yb[r, m] * c.pmap[m, k]
+                phi[r, k] = acc
+        return
+    W = np.empty((n, 10 * n))
+    regressor(c.ch, qf, qdf, qddf, W)
+    for r in range(n):
+        y[r] = tf[r]
+        for k in range(p):
+            col = c.indep[k]
+            if col < 10 * n:
+                phi[r, k] = W[r, col]
+            else:
+                kind = (col - 10 * n) // n
+                jj = (col - 10 * n) % n
+                if jj != r:
+                    phi[r, k] = 0.0
+                elif kind == 0:
+                    phi[r, k] = qdf[r]
+                elif kind == 1:
+                    phi[r, k] = sf[r]
+                else:
+                    phi[r, k] = qddf[r]
+
+
+@njit(cache=True)
+def _rls_row(theta, P, phi, y, lam_eff, pphi):  # pragma: no cover - compiled
+    """Eq. (14) for one scalar equation (symmetric P update); returns the prior error (NaN: unchanged)."""
+    p = theta.shape[0]
+    eps = y
+    den = lam_eff
+    for a in range(p):
+        eps -= phi[a] * theta[a]
+        acc = 0.0
+        for b in range(p):
+            acc += P[a, b] * phi[b]
+        pphi[a] = acc
+    for a in range(p):
+        den += phi[a] * pphi[a]
+    if not (np.isfinite(eps) and np.isfinite(den) and den > 0.0):
+        return np.nan
+    inv = 1.0 / den
+    for a in range(p):
+        theta[a] += pphi[a] * inv * eps
+    for a in range(p):
+        ka = pphi[a] * inv
+        for b in range(a, p):
+            v = (P[a, b] - ka * pphi[b]) / lam_eff
+            P[a, b] = v
+            P[b, a] = v
+    return eps
+
+
+@njit(cache=True)
+def _reopen(c, P):  # pragma: no cover - compiled
+    """``P <- (I - U U^T) P (I - U U^T) + P_reopen``: forget what was known along the payload subspace."""
+    U = c.U
+    p, r = U.shape
+    # Q = P U (p x r), S = U^T P U (r x r)
+    Q = np.zeros((p, r))
+    for a in range(p):
+        for k in range(r):
+            acc = 0.0
+            for b in range(p):
+                acc += P[a, b] * U[b, k]
+            Q[a, k] = acc
+    S = np.zeros((r, r))
+    for k in range(r):
+        for m in range(r):
+            acc = 0.0
+            for a in range(p):
+                acc += U[a, k] * Q[a, m]
+            S[k, m] = acc
+    # (I-UU^T)P(I-UU^T) = P - U Q^T - Q U^T + U S U^T
+    for a in range(p):
+        for b in range(p):
+            acc = P[a, b]
+            for k in range(r):
+                acc -= U[a, k] * Q[b, k] + Q[a, k] * U[b, k]
+                for m in range(r):
+                    acc += U[a, k] * S[k, m] * U[b, m]
+            P[a, b] = acc + c.P_reopen[a, b]
+
+
+@njit(cache=True)
+def _detect(c, s, i, eps, act):  # pragma: no cover - compiled
+    """Update the detector of trial i with the rows' prior errors; return True on an alarm.
+
+    Per row j: a short average of ``eps_j^2`` against a long-run level, the
+    bias-corrected average ``long / (1 - (1 - a)^learned)`` of what it learned. The
+    level learns from ``resume`` samples after the last alarm on, and not from a
+    sample whose ``eps^2`` exceeds ``gate^2`` times the level (once ``gate_after``
+    samples are learned), so that a change during the learning is not absorbed.
+    A row may alarm once it has been *seen* ``min_learned`` times since the last alarm
+    (seen, not learned: gated samples count, so the re-arm time is bounded), outside
+    the warm-up and the hold-off. The level is at least ``floor^2``: a row that is nearly
+    noise-free (a wrist joint) would otherwise alarm on the regression's own modelling
+    error, which varies with the motion. The threshold is ``slow^2`` times higher while
+    another row is out of use (a joint that is slow or reversing disturbs the others).
+    """
+    n = eps.shape[0]
+    ints, fl = c.ints, c.floats
+    a_s, a_l = fl[F_ALPHA_SHORT], fl[F_ALPHA_LONG]
+    cnt = s.cnt[i]
+    learn = cnt[C_SINCE_ALARM] >= ints[I_RESUME]
+    for j in range(n):
+        e = eps[j]
+        if not (act[j] and np.isfinite(e)):
+            continue
+        e2 = e * e
+        s.short[i, j] += a_s * (e2 - s.short[i, j])
+        if learn:
+            s.seen[i, j] += 1
+            nl = s.learned[i, j]
+            ok = True
+            if nl >= ints[I_GATE_AFTER]:
+                level = max(s.long[i, j] / (1.0 - (1.0 - a_l) ** nl), fl[F_FLOOR2])
+                ok = e2 <= fl[F_GATE2] * level
+            if ok:
+                s.long[i, j] += a_l * (e2 - s.long[i, j])
+                s.learned[i, j] = nl + 1
+    if cnt[C_K] < ints[I_WARMUP] or cnt[C_SINCE_ALARM] <= ints[I_HOLDOFF]:
+        return False
+    n_act = 0
+    for j in range(n):
+        if act[j]:
+            n_act += 1
+    alarm = False
+    for j in range(n):
+        nl = s.learned[i, j]
+        if s.seen[i, j] < ints[I_MIN_LEARNED] or nl < 1 or not act[j]:
+            continue
+        level = max(s.long[i, j] / (1.0 - (1.0 - a_l) ** nl), fl[F_FLOOR2])
+        thr = fl[F_THRESHOLD2] if n_act == ints[I_N_ROWS] else fl[F_THRESHOLD2] * fl[F_SLOW2]
+        if s.short[i, j] > thr * level + 1e-300:
+            alarm = True
+    return alarm
+
+
+@njit(cache=True)
+def est_step_trial(c, s, i, q, qd, tau):  # pragma: no cover - compiled
+    """Advance trial i by one sample in place; return 1 on a change alarm at this sample, else 0.
+
+    Parameters
+    ----------
+    c : EstCfg
+    s : EstState
+    i : int
+        Trial index.
+    q, qd : (n,)
+        Measured joint positions [rad] and velocities [rad/s] at this sample.
+    tau : (n,)
+        Torque applied over this sample [N m]. A non-finite q, qd or tau skips the
+        sample (counted in ``cnt[i, C_SKIPPED]``).
+    """
+    n = q.shape[0]
+    p = s.theta.shape[1]
+    ints, fl = c.ints, c.floats
+    cnt = s.cnt[i]
+    qf, qdf, qddf, sf, tf = np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty(n)
+    usable = _filtered_signals(c, s, i, q, qd, tau, qf, qdf, qddf, sf, tf)
+    act = np.zeros(n, dtype=np.bool_)
+    n_rows = ints[I_N_ROWS]
+    for j in range(n):
+        if ints[I_SELECT] == 1:
+            if np.isfinite(qd[j]) and abs(qd[j]) <= fl[F_SEL_THRESHOLD]:
+                s.since_slow[i, j] = 0
+            else:
+                s.since_slow[i, j] = min(s.since_slow[i, j] + 1, BIG)
+            act[j] = s.since_slow[i, j] > ints[I_SEL_MEMORY]
+            if s.since_slow[i, j] == ints[I_SEL_MEMORY] + 1 and s.learned[i, j] > 0:
+                # back in use after a slow phase: the short average restarts at the level
+                nl = s.learned[i, j]
+                s.short[i, j] = s.long[i, j] / (1.0 - (1.0 - fl[F_ALPHA_LONG]) ** nl)
+        else:
+            act[j] = True
+        act[j] = act[j] and usable and j < n_rows
+    for j in range(n):
+        s.eps[i, j] = np.nan
+    th, Pi = s.theta[i], s.P[i]
+    if usable:
+        phi = np.empty((n, p))
+        y = np.empty(n)
+        _regression(c, qf, qdf, qddf, sf, tf, phi, y)
+        pphi = np.empty(p)
+        row = np.empty(p)
+        first = True
+        for j in range(n_rows):
+            if not act[j]:
+                continue
+            if first:
+                s.lam[i] = (1.0 - fl[F_MU]) * s.lam[i] + fl[F_MU]
+            lam_eff = s.lam[i] if first else 1.0
+            first = False
+            wj = c.w[j]
+            for k in range(p):
+                row[k] = phi[j, k] / wj
+            s.eps[i, j] = _rls_row(th, Pi, row, y[j] / wj, lam_eff, pphi)
+        if not first and fl[F_CAP] > 0.0:
+            tr = 0.0
+            for k in range(p):
+                tr += Pi[k, k]
+            if tr > fl[F_CAP]:
+                scale = fl[F_CAP] / tr
+                for a in range(p):
+                    for b in range(p):
+                        Pi[a, b] *= scale
+    alarm = 0
+    if ints[I_DETECT] == 1:
+        if cnt[C_REOPEN_AT] == cnt[C_K]:
+            _reopen(c, Pi)
+        if _detect(c, s, i, s.eps[i], act):
+            alarm = 1
+            _reopen(c, Pi)
+            cnt[C_ALARMS] += 1
+            cnt[C_SINCE_ALARM] = 0
+            cnt[C_LAST_ALARM] = cnt[C_K]
+            for j in range(n):
+                s.seen[i, j] = 0
+                s.learned[i, j] = 0
+                s.long[i, j] = 0.0
+            if ints[I_REOPEN_AGAIN] == 1:
+                cnt[C_REOPEN_AT] = cnt[C_K] + ints[I_FREEZE]
+        else:
+            cnt[C_SINCE_ALARM] = min(cnt[C_SINCE_ALARM] + 1, BIG)
+    cnt[C_K] += 1
+    return alarm
+
+
+@njit(cache=True)
+def project_payload(src, dst, eig_min):  # pragma: no cover - compiled
+    """Nearest physically consistent payload (10,) -> dst: clip the pseudo-inertia's eigenvalues.
+
+    ``src = [m, m c (3), Ixx, Ixy, Iyy, Ixz, Iyz, Izz]`` about the payload frame. The 4 x 4
+    pseudo-inertia ``J = [[tr(I)/2 1 - I, m c], [m c^T, m]]`` (Wensing, Kim and Slotine,
+    RA-L 2018) is made positive semidefinite by clipping its eigenvalues at ``eig_min``
+    (the Frobenius-nearest such J); mass ``J[3, 3] >= 0`` follows.
+    """
+    J = np.empty((4, 4))
+    ixx, ixy, iyy, ixz, iyz, izz = src[4], src[5], src[6], src[7], src[8], src[9]
+    half = 0.5 * (ixx + iyy + izz)
+    J[0, 0], J[1, 1], J[2, 2] = half - ixx, half - iyy, half - izz
+    J[0, 1] = J[1, 0] = -ixy
+    J[0, 2] = J[2, 0] = -ixz
+    J[1, 2] = J[2, 1] = -iyz
+    for k in range(3):
+        J[k, 3] = J[3, k] = src[1 + k]
+    J[3, 3] = src[0]
+    ok = True
+    for a in range(4):
+        for b in range(4):
+            if not np.isfinite(J[a, b]):
+                ok = False
+    if not ok:
+        for k in range(10):
+            dst[k] = np.nan
+        return
+    lam, V = np.linalg.eigh(J)
+    if lam[0] < eig_min:
+        for k in range(4):
+            lam[k] = max(lam[k], eig_min)
+        for a in range(4):
+            for b in range(4):
+                acc = 0.0
+                for k in range(4):
+                    acc += V[a, k] * lam[k] * V[b, k]
+                J[a, b] = acc
+        for a in range(4):  # symmetric to the last bit
+            for b in range(a + 1, 4):
+                J[a, b] = J[b, a] = 0.5 * (J[a, b] + J[b, a])
+    tr = J[0, 0] + J[1, 1] + J[2, 2]
+    dst[0] = J[3, 3]
+    for k in range(3):
+        dst[1 + k] = J[k, 3]
+    dst[4] = tr - J[0, 0]
+    dst[5] = -J[0, 1]
+    dst[6] = tr - J[1, 1]
+    dst[7] = -J[0, 2]
+    dst[8] = -J[1, 2]
+    dst[9] = tr - J[2, 2]
+
+
+@njit(cache=True)
+def _payload_raw(c, th, raw):  # pragma: no cover - compiled
+    """The payload (10,) implied by an estimate theta, unprojected (full mode: least squares on pbasis)."""
+    p = th.shape[0]
+    if c.mode == MODE_PAYLOAD:
+        for k in range(10):
+            raw[k] = th[k]
+        return
+    for k in range(10):
+        acc = 0.0
+        for a in range(p):
+            acc += c.pbasis_pinv[k, a] * (th[a] - c.sigma0[a])
+        raw[k] = acc
+
+
+@njit(cache=True)
+def est_payload_trial(c, s, i, out):  # pragma: no cover - compiled
+    """The payload (10,) about its frame implied by trial i's estimate, projected if set to."""
+    raw = np.empty(10)
+    _payload_raw(c, s.theta[i], raw)
+    if c.ints[I_PROJECT] == 1:
+        project_payload(raw, out, c.floats[F_EIG_MIN])
+    else:
+        for k in range(10):
+            out[k] = raw[k]
+
+
+@njit(cache=True)
+def est_model_trial(c, s, i, pi_out):  # pragma: no cover - compiled
+    """The model control uses for trial i, as standard parameters ``pi_out (13 n,)``.
+
+    Payload mode: the arm's ``pi0`` with the (projected) payload folded into link ``jp``
+    through ``pmap``. Full mode: ``pi0 + Bpinv (theta_p - B pi0)``, where ``theta_p`` is
+    theta with its payload part replaced by the projected one
+    (``theta_p = theta + pbasis (payload_projected - payload_raw)``), so that
+    ``B pi_out == theta_p``.
+    """
+    m = pi_out.shape[0]
+    for k in range(m):
+        pi_out[k] = c.pi0[k]
+    th = s.theta[i]
+    p = th.shape[0]
+    raw = np.empty(10)
+    _payload_raw(c, th, raw)
+    pay = np.empty(10)
+    if c.ints[I_PROJECT] == 1:
+        project_payload(raw, pay, c.floats[F_EIG_MIN])
+    else:
+        for k in range(10):
+            pay[k] = raw[k]
+    if c.mode == MODE_PAYLOAD:
+        base = 10 * c.jp
+        for a in range(10):
+            acc = 0.0
+            for b in range(10):
+                acc += c.pmap[a, b] * pay[b]
+            pi_out[base + a] += acc
+        return
+    d = np.empty(p)
+    for a in range(p):
+        acc = th[a] - c.sigma0[a]
+        for k in range(10):
+            acc += c.pbasis[a, k] * (pay[k] - raw[k])
+        d[a] = acc
+    for k in range(m):
+        acc = 0.0
+        for a in range(p):
+            acc += c.Bpinv[k, a] * d[a]
+        pi_out[k] += acc
+
+
+@njit(cache=True)
+def est_step_batch(c, s, q, qd, tau, alarm):  # pragma: no cover - compiled
+    """:func:`est_step_trial` over every trial (``q, qd, tau (m, n)``), alarms into ``alarm (m,)``."""
+    for i in range(q.shape[0]):
+        alarm[i] = est_step_trial(c, s, i, q[i], qd[i], tau[i])
+
+
+@njit(cache=True)
+def est_run_trial(
+    c, s, i, q, qd, tau, theta_rec, payload_rec, eps_rec, alarm_rec, lam_rec
+):  # pragma: no cover
+    """Step trial i through a record ``(N, n)``, recording after every sample."""
+    pay = np.empty(10)
+    for k in range(q.shape[0]):
+        alarm_rec[k] = est_step_trial(c, s, i, q[k], qd[k], tau[k])
+        theta_rec[k] = s.theta[i]
+        est_payload_trial(c, s, i, pay)
+        payload_rec[k] = pay
+        eps_rec[k] = s.eps[i]
+        lam_rec[k] = s.lam[i]
