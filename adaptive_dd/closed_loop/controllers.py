@@ -198,12 +198,20 @@ class SerialLaw:
     def adaptive(self) -> bool:
         return bool(self._form.estimates) if self._form is not None else False
 
+    has_detector = False
+    """True for laws whose estimator raises change alarms."""
+
     @property
     def alarm_times(self) -> list[list[float]] | None:
         return None
 
     @property
     def skipped_samples(self):
+        """Per trial, samples its estimator skipped as non-finite (None without an estimator)."""
+        return None if self._form is None else self.skipped(self._form)
+
+    def skipped(self, form: CompiledForm):
+        """Samples skipped by the estimator of ``form``, per trial (None without an estimator)."""
         return None
 
     def pi_from_sigma(self, sigma) -> Array:
@@ -321,7 +329,12 @@ class AdaptiveCT(SerialLaw):
             ) from None
         self._est = serial_online
         est = dict(self.settings.get("estimator", {}))
+        det = est.get("detector", {})
         try:
+            if det is False:
+                est["detector"] = None
+            elif isinstance(det, dict):
+                est["detector"] = serial_online.SerialDetector(**det)
             self.online = serial_online.SerialOnlineConfig(**est)
         except TypeError as exc:
             raise ParameterError(f"controllers.{self.name}.estimator: {exc}") from None
@@ -350,8 +363,15 @@ class AdaptiveCT(SerialLaw):
         return CompiledForm(cfg, state, self._est.est_step_trial, self._est.est_model_trial, ec, es, True)
 
     @property
+    def has_detector(self) -> bool:
+        return self.online.detector is not None
+
+    @property
     def alarm_times(self):
-        return self._alarms
+        return self._alarms if self.has_detector else None
+
+    def skipped(self, form: CompiledForm):
+        return self._est.state_skipped(form.es)
 
 
 SERIAL_CONTROLLERS: dict[str, type[SerialLaw]] = {

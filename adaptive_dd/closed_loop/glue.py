@@ -14,7 +14,8 @@ One sample of one trial is:
 4. the estimator: compiled (:func:`estimator_trial_sample`) or the controller's ``observe``;
    then :func:`record_estimate_trial` keeps the estimate at each segment's end.
 
-The compiled path runs all four inside :func:`closed_loop_block` (trials in ``prange``);
+The compiled path runs all four inside :func:`closed_loop_block` (a range of trials, the
+GIL released so that threads run ranges in parallel);
 the Python path calls the batch wrappers (``*_batch``) around the Python controller, so
 both paths do the same arithmetic in the same order.
 """
@@ -24,7 +25,7 @@ from __future__ import annotations
 from typing import NamedTuple
 
 import numpy as np
-from numba import njit, prange
+from numba import njit
 from numpy.typing import NDArray
 
 from adaptive_dd.closed_loop.laws import law_trial
@@ -182,21 +183,23 @@ def _sigma_of(B, pi, out):  # pragma: no cover - compiled
         out[r] = acc
 
 
-@njit(cache=True, parallel=True)
+@njit(cache=True, nogil=True)
 def closed_loop_block(
-    k0, k1, ch, rc, io, pl, ts, acc, rec, alarms, noise, drop, cfg, ls, pi_true, B,
+    i0, i1, k0, k1, ch, rc, io, pl, ts, acc, rec, alarms, noise, drop, cfg, ls, pi_true, B,
     est_step, est_model, ec, es, estimates,
 ):  # pragma: no cover - compiled  # fmt: skip
-    """Samples ``k0 .. k1 - 1`` of every trial (``prange`` over trials), state updated in place.
+    """Samples ``k0 .. k1 - 1`` of trials ``i0 .. i1 - 1``, state updated in place.
+
+    The GIL is released: the runner runs disjoint ranges of trials in threads (numba's
+    ``prange`` cannot take the estimator's configuration, a NamedTuple holding a NamedTuple).
 
     ``noise (S, k1 - k0, 2 n)`` standard normal; ``drop (S, k1 - k0)`` lost measurements
     (or ``(S, 0)``: none); ``cfg, ls`` the law; ``pi_true (G, 13 n)`` the true model per
     segment; ``B (p, 13 n)`` standard -> base parameters; ``est_step, est_model, ec, es`` the
     estimator (or the ``no_estimator_*`` hooks); ``estimates``: record ``B pi_model``.
     """
-    S = ts.q.shape[0]
     n = ts.q.shape[1]
-    for i in prange(S):
+    for i in range(i0, i1):
         qm, qdm, qm_obs, qdm_obs = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
         cmd, tau = np.empty(n), np.empty(n)
         sig = np.empty(B.shape[0])

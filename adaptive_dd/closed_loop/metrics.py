@@ -7,7 +7,10 @@ import numpy as np
 
 from adaptive_dd.closed_loop.types import StreamedSums
 
-__all__ = ["payload_at_segment_ends", "serial_segment_metrics", "total_rms"]
+__all__ = ["MIN_COM_MASS", "payload_at_segment_ends", "serial_segment_metrics", "total_rms"]
+
+MIN_COM_MASS = 0.1
+"""[kg]: below this estimated mass the centre of mass (first moment / mass) is not reported."""
 
 
 def _counts(res) -> tuple[np.ndarray, np.ndarray]:
@@ -22,7 +25,8 @@ def serial_segment_metrics(res, run) -> dict[str, np.ndarray]:
     """``(n_seeds, n_segments)`` arrays, NaN for failed trials: ``rms_error``, ``rms_error_joint{j}``
     (j = 1 .. n), ``max_error``, ``rms_torque``, ``saturation_fraction``, ``rms_error_settled``,
     and for controllers with an estimate ``mass_estimate`` [kg] and ``com_estimate_{x,y,z}`` [m]
-    (:meth:`SerialArm.payload_from_sigma` of the estimate at the segment's last sample)."""
+    (:meth:`SerialArm.payload_from_sigma` of the estimate at the segment's last sample; the
+    centre of mass NaN below :data:`MIN_COM_MASS`)."""
     acc: StreamedSums = run.acc
     n, n_set = _counts(res)
     out = {"rms_error": np.sqrt(acc.sum_e2 / n)}
@@ -37,8 +41,9 @@ def serial_segment_metrics(res, run) -> dict[str, np.ndarray]:
     if run.sigma_end is not None:
         est = payload_at_segment_ends(res.scenario.arm, run.sigma_end)
         out["mass_estimate"] = est.mass
+        small = ~(np.abs(est.mass) >= MIN_COM_MASS)
         for c, axis in enumerate("xyz"):
-            out[f"com_estimate_{axis}"] = est.com[..., c]
+            out[f"com_estimate_{axis}"] = np.where(small, np.nan, est.com[..., c])
     for v in out.values():
         v[run.failed] = np.nan
     return out

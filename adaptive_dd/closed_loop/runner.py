@@ -3,14 +3,15 @@
 Trial i of every controller uses the noise of seed ``(scenario.seed, seed_indices[i])``
 (common random numbers), drawn in blocks of :data:`CHUNK` samples: ``(CHUNK, 2 n)`` standard
 normals per trial, dropouts from a second generator ``(seed, i, 1)``. Built-in controllers
-run compiled (:func:`~adaptive_dd.closed_loop.glue.closed_loop_block`, a whole block of a
-trial in one call, trials in parallel); any other controller object (a plug-in with
+run compiled (:func:`~adaptive_dd.closed_loop.glue.closed_loop_block`, a block of samples of
+a range of trials in one call, ranges in parallel threads); any other controller object (a plug-in with
 ``reset / command / observe``) runs on the Python path, one ``command`` per sample for the
 whole batch. Both call the same compiled glue.
 """
 
 from __future__ import annotations
 
+import itertools
 from collections.abc import Sequence
 
 import numpy as np
@@ -22,7 +23,6 @@ from adaptive_dd.closed_loop.glue import (
     apply_batch,
     closed_loop_block,
     measure_batch,
-    no_estimator_step,
     sigma_batch,
 )
 from adaptive_dd.closed_loop.plant import INTERIM
@@ -197,16 +197,34 @@ def _run_compiled(name, ctrl: SerialLaw, scenario, idx, rc, io, pl, keep, bar) -
     for k0 in range(0, N, CHUNK):
         k1 = min(N, k0 + CHUNK)
         noise, drop = draws.block(k1 - k0)
-        closed_loop_block(
+        args = (
             k0, k1, ctrl.ch, rc, io, pl, ts, acc, rec, alarms, noise, drop, form.cfg, form.state, pi_true, B,
             form.est_step, form.est_model, form.ec, form.es, form.estimates,
         )  # fmt: skip
+        _in_threads(closed_loop_block, S, args)
         if bar is not None:
             bar.update(k1 - k0)
     run = _finish(name, ctrl, scenario, acc, rec, ts, "compiled", form.estimates)
-    if form.est_step is not no_estimator_step:
+    run.skipped = ctrl.skipped(form)
+    if ctrl.has_detector:
         run.alarm_times = [list(alarms.times[i, : min(c, MAX_ALARMS)]) for i, c in enumerate(alarms.count)]
     return run
+
+
+def _in_threads(kernel, S: int, args: tuple) -> None:
+    """``kernel(i0, i1, *args)`` over disjoint ranges of the S trials, one per numba thread."""
+    import numba
+
+    m = max(1, min(S, numba.config.NUMBA_NUM_THREADS))
+    edges = np.linspace(0, S, m + 1).astype(int)
+    if m == 1:
+        kernel(0, S, *args)
+        return
+    from concurrent.futures import ThreadPoolExecutor
+
+    with ThreadPoolExecutor(m) as pool:
+        for f in [pool.submit(kernel, int(a), int(b), *args) for a, b in itertools.pairwise(edges)]:
+            f.result()
 
 
 def _run_python(name, ctrl, scenario, idx, rc, io, pl, keep, bar) -> ControllerRun:
