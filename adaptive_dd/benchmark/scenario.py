@@ -14,7 +14,8 @@ Every key is optional; the value after ``=`` below is the default that is used
                                # names, or import paths "package.module:Class"
 
     [control]
-    bandwidth = 40.0           # rad/s, shared by all controllers; bandwidth * T <= 0.2
+    bandwidth = 40.0           # rad/s, shared by all controllers; bandwidth * T <= 0.2;
+                               # an N-joint (URDF) arm also takes one value per joint
     damping = 1.0              # in (0, 10]
 
     [controllers.NAME]         # settings of one listed controller (NAME: its name, or the
@@ -250,7 +251,7 @@ class Scenario:
     dropout: float = 0.0
     seed: int = 0
     substeps: int = 2
-    bandwidth: float = 40.0
+    bandwidth: float | tuple[float, ...] = 40.0
     damping: float = 1.0
     source: str = "<memory>"
     controller_options: tuple[tuple[str, tuple[tuple[str, Any], ...]], ...] = ()
