@@ -19,7 +19,7 @@ from typing import Any, NamedTuple
 import numpy as np
 from numpy.typing import NDArray
 
-from adaptive_dd.closed_loop.glue import estimator_batch, no_estimator_model, no_estimator_step
+from adaptive_dd.closed_loop.glue import estimator_batch
 from adaptive_dd.closed_loop.laws import (
     KIND_CT,
     KIND_PD,
@@ -89,14 +89,13 @@ class JointGains:
 
 
 class CompiledForm(NamedTuple):
-    """What the compiled loop runs for one controller: the law, its per-trial state, the estimator
-    hooks (``est_step, est_model`` compiled functions and their ``ec, es`` records) and whether
+    """What the compiled loop runs for one controller: the law, its per-trial state, the
+    estimator's records ``ec, es`` (two arrays when it has none:
+    :func:`~adaptive_dd.closed_loop.glue.estimator_step` is chosen by their type) and whether
     the trial's model is an estimate to record (``estimates``)."""
 
     cfg: LawConfig
     state: LawState
-    est_step: Any
-    est_model: Any
     ec: Any
     es: Any
     estimates: bool
@@ -159,9 +158,7 @@ class SerialLaw:
         """The law, a fresh per-trial state and the estimator hooks for ``n_trials`` trials."""
         cfg = self.law_config(sample_period)
         est = cfg.model == MODEL_TRIAL
-        return CompiledForm(
-            cfg, LawState.start(cfg, n_trials), no_estimator_step, no_estimator_model, *_NO_EST, est
-        )
+        return CompiledForm(cfg, LawState.start(cfg, n_trials), *_NO_EST, est)
 
     # ------------------------------------------------------------------- Python form
     def reset(self, n_trials: int, sample_period: float) -> None:
@@ -182,7 +179,7 @@ class SerialLaw:
 
     def observe(self, q, qd, tau) -> None:
         f = self._form
-        alarm = estimator_batch(f.est_step, f.est_model, f.ec, f.es, f.state, q, qd, tau)
+        alarm = estimator_batch(f.ec, f.es, f.state, q, qd, tau)
         for i in np.flatnonzero(alarm == 1):
             self._alarms[i].append(self._k * self.T)
         self._k += 1
@@ -360,7 +357,7 @@ class AdaptiveCT(SerialLaw):
         state = LawState.start(cfg, n_trials)
         for i in range(n_trials):
             self._est.est_model_trial(ec, es, i, state.pi_model[i])
-        return CompiledForm(cfg, state, self._est.est_step_trial, self._est.est_model_trial, ec, es, True)
+        return CompiledForm(cfg, state, ec, es, True)
 
     @property
     def has_detector(self) -> bool:

@@ -25,11 +25,13 @@ from __future__ import annotations
 from typing import NamedTuple
 
 import numpy as np
-from numba import njit
+from numba import njit, types
+from numba.extending import overload
 from numpy.typing import NDArray
 
 from adaptive_dd.closed_loop.laws import law_trial
 from adaptive_dd.closed_loop.plant import plant_step
+from adaptive_dd.identification.serial_online_kernel import est_model_trial, est_step_trial
 from adaptive_dd.plant.sampling import actuate_trial, measure_trial
 
 __all__ = [
@@ -38,11 +40,11 @@ __all__ = [
     "apply_trial_sample",
     "closed_loop_block",
     "estimator_batch",
+    "estimator_model",
+    "estimator_step",
     "estimator_trial_sample",
     "measure_batch",
     "measure_trial_sample",
-    "no_estimator_model",
-    "no_estimator_step",
     "record_estimate_trial",
     "segment_of",
     "sigma_batch",
@@ -150,27 +152,41 @@ def record_estimate_trial(rc, rec, i, k, s, sigma):  # pragma: no cover - compil
         rec.sigma[i, k, :] = sigma
 
 
-@njit(cache=True)
-def no_estimator_step(c, s, i, q, qd, tau):  # pragma: no cover - compiled
-    """The estimator hook of laws without an estimator: never an alarm."""
-    return 0
+def estimator_step(ec, es, i, q, qd, tau):  # pragma: no cover - replaced by the overload
+    """One sample of trial i's estimator: 1 on an alarm. Chosen at compile time by the type of
+    ``ec``: an array means no estimator (never an alarm), an ``EstCfg`` the N-joint online
+    estimator (:func:`~adaptive_dd.identification.serial_online.est_step_trial`)."""
+    raise NotImplementedError("compiled only")
+
+
+def estimator_model(ec, es, i, pi_out):  # pragma: no cover - replaced by the overload
+    """The model control uses ``pi_out (13 n,)`` (left as it is without an estimator)."""
+    raise NotImplementedError("compiled only")
+
+
+@overload(estimator_step)
+def _estimator_step(ec, es, i, q, qd, tau):
+    if isinstance(ec, types.Array):
+        return lambda ec, es, i, q, qd, tau: 0
+    return lambda ec, es, i, q, qd, tau: est_step_trial(ec, es, i, q, qd, tau)
+
+
+@overload(estimator_model)
+def _estimator_model(ec, es, i, pi_out):
+    if isinstance(ec, types.Array):
+        return lambda ec, es, i, pi_out: None
+    return lambda ec, es, i, pi_out: est_model_trial(ec, es, i, pi_out)
 
 
 @njit(cache=True)
-def no_estimator_model(c, s, i, pi_out):  # pragma: no cover - compiled
-    """The model hook of laws without an estimator: leaves the model as it is."""
-    return
-
-
-@njit(cache=True)
-def estimator_trial_sample(est_step, est_model, ec, es, ls, i, qm_obs, qdm_obs, tau):  # pragma: no cover
+def estimator_trial_sample(ec, es, ls, i, qm_obs, qdm_obs, tau):  # pragma: no cover - compiled
     """The estimator's step on the applied torque, the alarm counter, the model for the next command."""
-    alarm = est_step(ec, es, i, qm_obs, qdm_obs, tau)
+    alarm = estimator_step(ec, es, i, qm_obs, qdm_obs, tau)
     if alarm == 1:
         ls.since_alarm[i] = 0
     else:
         ls.since_alarm[i] += 1
-    est_model(ec, es, i, ls.pi_model[i])
+    estimator_model(ec, es, i, ls.pi_model[i])
     return alarm
 
 
@@ -185,18 +201,16 @@ def _sigma_of(B, pi, out):  # pragma: no cover - compiled
 
 @njit(cache=True, nogil=True)
 def closed_loop_block(
-    i0, i1, k0, k1, ch, rc, io, pl, ts, acc, rec, alarms, noise, drop, cfg, ls, pi_true, B,
-    est_step, est_model, ec, es, estimates,
+    i0, i1, k0, k1, ch, rc, io, pl, ts, acc, rec, alarms, noise, drop, cfg, ls, pi_true, B, ec, es, estimates,
 ):  # pragma: no cover - compiled  # fmt: skip
     """Samples ``k0 .. k1 - 1`` of trials ``i0 .. i1 - 1``, state updated in place.
 
-    The GIL is released: the runner runs disjoint ranges of trials in threads (numba's
-    ``prange`` cannot take the estimator's configuration, a NamedTuple holding a NamedTuple).
-
     ``noise (S, k1 - k0, 2 n)`` standard normal; ``drop (S, k1 - k0)`` lost measurements
     (or ``(S, 0)``: none); ``cfg, ls`` the law; ``pi_true (G, 13 n)`` the true model per
-    segment; ``B (p, 13 n)`` standard -> base parameters; ``est_step, est_model, ec, es`` the
-    estimator (or the ``no_estimator_*`` hooks); ``estimates``: record ``B pi_model``.
+    segment; ``B (p, 13 n)`` standard -> base parameters; ``ec, es`` the estimator's records
+    (arrays: none; see :func:`estimator_step`); ``estimates``: record ``B pi_model``.
+    The GIL is released: the runner runs disjoint ranges of trials in threads (numba's
+    ``prange`` cannot take the estimator's configuration, a NamedTuple holding a NamedTuple).
     """
     n = ts.q.shape[1]
     for i in range(i0, i1):
@@ -212,7 +226,7 @@ def closed_loop_block(
                 qm, qdm, rc.q_d[k], rc.qd_d[k], rc.qdd_d[k], cmd,
             )  # fmt: skip
             apply_trial_sample(ch, rc, io, pl, ts, acc, rec, i, k, s, cmd, tau)
-            if estimator_trial_sample(est_step, est_model, ec, es, ls, i, qm_obs, qdm_obs, tau) == 1:
+            if estimator_trial_sample(ec, es, ls, i, qm_obs, qdm_obs, tau) == 1:
                 if alarms.count[i] < alarms.times.shape[1]:
                     alarms.times[i, alarms.count[i]] = k * rc.T
                 alarms.count[i] += 1
@@ -262,14 +276,14 @@ def sigma_batch(rc, rec, k: int, s: int, sigma) -> None:
 
 
 @njit(cache=True)
-def _estimator_loop(est_step, est_model, ec, es, ls, qm_obs, qdm_obs, tau, alarm):  # pragma: no cover
+def _estimator_loop(ec, es, ls, qm_obs, qdm_obs, tau, alarm):  # pragma: no cover - compiled
     for i in range(tau.shape[0]):
-        alarm[i] = estimator_trial_sample(est_step, est_model, ec, es, ls, i, qm_obs[i], qdm_obs[i], tau[i])
+        alarm[i] = estimator_trial_sample(ec, es, ls, i, qm_obs[i], qdm_obs[i], tau[i])
 
 
-def estimator_batch(est_step, est_model, ec, es, ls, qm_obs, qdm_obs, tau) -> NDArray[np.int64]:
+def estimator_batch(ec, es, ls, qm_obs, qdm_obs, tau) -> NDArray[np.int64]:
     """:func:`estimator_trial_sample` for every trial ``(S, n)``; returns the alarms ``(S,)`` (1: alarm)."""
     alarm = np.zeros(tau.shape[0], dtype=np.int64)
     c = np.ascontiguousarray
-    _estimator_loop(est_step, est_model, ec, es, ls, c(qm_obs), c(qdm_obs), c(tau), alarm)
+    _estimator_loop(ec, es, ls, c(qm_obs), c(qdm_obs), c(tau), alarm)
     return alarm

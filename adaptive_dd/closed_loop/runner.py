@@ -199,7 +199,7 @@ def _run_compiled(name, ctrl: SerialLaw, scenario, idx, rc, io, pl, keep, bar) -
         noise, drop = draws.block(k1 - k0)
         args = (
             k0, k1, ctrl.ch, rc, io, pl, ts, acc, rec, alarms, noise, drop, form.cfg, form.state, pi_true, B,
-            form.est_step, form.est_model, form.ec, form.es, form.estimates,
+            form.ec, form.es, form.estimates,
         )  # fmt: skip
         _in_threads(closed_loop_block, S, args)
         if bar is not None:
@@ -220,6 +220,7 @@ def _in_threads(kernel, S: int, args: tuple) -> None:
     if m == 1:
         kernel(0, S, *args)
         return
+    kernel(0, 0, *args)  # compile (or load) in this thread: numba's dispatch is not thread-safe
     from concurrent.futures import ThreadPoolExecutor
 
     with ThreadPoolExecutor(m) as pool:
