@@ -100,7 +100,7 @@ class BenchmarkResult:
     scenario: Scenario
     t: Array
     q_d: Array
-    sigma_true: Array  # (n_samples, 7)
+    sigma_true: Array  # (n_samples, p): 7 for the two-link arm, arm.base.count for a URDF arm
     mass: Array  # (n_samples,)
     runs: dict = field(default_factory=dict)
     wall_time: float = 0.0

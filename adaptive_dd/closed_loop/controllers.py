@@ -141,7 +141,7 @@ class SerialLaw:
         raise NotImplementedError
 
     def _config(self, T: float, kind: int, model: int, **kw) -> LawConfig:
-        n, z = self.arm.n_joints, np.zeros(self.arm.n_joints)
+        z = np.zeros(self.arm.n_joints)
         g = self.gains
         base = dict(
             kind=kind, model=model, reference_velocity=True, kp=g.kp, kd=g.kd, lam=g.roots()[0],
@@ -151,7 +151,6 @@ class SerialLaw:
             T=float(T),
         )  # fmt: skip
         base.update(kw)
-        del n
         return LawConfig(**base)
 
     def compiled_form(self, n_trials: int, sample_period: float) -> CompiledForm:
@@ -317,13 +316,8 @@ class AdaptiveCT(SerialLaw):
 
     def __init__(self, arm, bandwidth=40.0, damping: float = 1.0, **settings) -> None:
         super().__init__(arm, bandwidth, damping, **settings)
-        try:
-            from adaptive_dd.identification import serial_online
-        except ImportError:
-            raise ParameterError(
-                "adaptive_ct for an N-joint arm needs adaptive_dd.identification.serial_online "
-                "(the N-joint estimator), which this build does not have"
-            ) from None
+        from adaptive_dd.identification import serial_online
+
         self._est = serial_online
         est = dict(self.settings.get("estimator", {}))
         det = est.get("detector", {})
