@@ -359,7 +359,7 @@ def mass_matrix(ch, pi, q, out):  # pragma: no cover - compiled
     _composite_mass(w[2], w[4], out, w[9][n : n + 10], w[8][0])
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath={"contract", "reassoc"}, inline="always")
 def bias_and_mass(ch, pi, q, qd, w, bias, m):  # pragma: no cover - compiled
     """``bias = rnea(q, qd, 0)`` (n,) and ``m = M(q)`` (n, n) in one pass, no allocation.
 
