@@ -115,22 +115,21 @@ def main() -> None:
     sc = _scenario()
     print(f"UR5 tool swap: {sc.duration} s at T = {sc.sample_period} s, {sc.n_joints} joints")
     print(f"NUMBA_NUM_THREADS = {os.environ.get('NUMBA_NUM_THREADS', '(unset)')}, cores = {os.cpu_count()}")
-    from adaptive_dd.closed_loop.plant import INTERIM
-
-    print("plant: " + ("interim RK4 + tanh friction" if INTERIM else "serial_integrator.serial_plant_step"))
+    print(f"plant: serial_plant_step, {sc.arm.friction} friction, {sc.substeps} RK4 substeps")
     x_anchor = anchor(sc)
     print(f"anchor (Python loop: pin.rnea law, RK4 x2 over pin.aba): {x_anchor:8.1f} simulated s per wall s")
     for name, target in (("adaptive_ct", TARGET_ADAPTIVE_X), ("ct_oracle", TARGET_ORACLE_X)):
         x = one_trial(sc, name)
         print(
-            f"{name:12s} one trial, compiled: {x:8.1f} simulated s per wall s ({x / x_anchor:5.1f}x the anchor) "
-            f"(target >= {target:g}x real time: {_verdict(x >= target)})"
+            f"{name:12s} one trial, compiled: {x:8.1f} simulated s per wall s "
+            f"({x / x_anchor:5.1f}x the anchor) (target >= {target:g}x real time: {_verdict(x >= target)})"
         )
     if args.full:
         secs, gib, _ = full_run(args.seeds)
         print(
-            f"adaptive-dd benchmark ur5_tool_swap.toml --seeds {args.seeds} ({len(sc.controllers)} controllers), "
-            f"/usr/bin/time -v: wall {secs:.1f} s (target <= {TARGET_FULL_S:g} s: {_verdict(secs <= TARGET_FULL_S)}), "
+            f"adaptive-dd benchmark ur5_tool_swap.toml --seeds {args.seeds} "
+            f"({len(sc.controllers)} controllers), /usr/bin/time -v: wall {secs:.1f} s "
+            f"(target <= {TARGET_FULL_S:g} s: {_verdict(secs <= TARGET_FULL_S)}), "
             f"peak RSS {gib:.2f} GiB (target < {TARGET_FULL_GIB:g} GiB: {_verdict(gib < TARGET_FULL_GIB)})"
         )
 

@@ -25,7 +25,6 @@ from adaptive_dd.closed_loop.glue import (
     measure_batch,
     sigma_batch,
 )
-from adaptive_dd.closed_loop.plant import INTERIM
 from adaptive_dd.closed_loop.types import (
     Plant,
     Recording,
@@ -180,7 +179,7 @@ def _finish(name, ctrl, scenario, acc, rec, ts, engine, estimates) -> Controller
         tau=rec.tau,
         saturated=rec.saturated,
         sigma_hat=rec.sigma if estimates and K else None,
-        engine=engine + ("+interim-plant" if INTERIM else ""),
+        engine=engine,
         dropped=ts.n_dropped,
     )
 
