@@ -53,6 +53,7 @@ from adaptive_dd.identification.filters import FilterBank, design_filter_bank
 from adaptive_dd.identification.serial_online_kernel import (
     EstCfg,
     EstState,
+    est_force_alarm_trial,
     est_model_trial,
     est_payload_trial,
     est_step_trial,
@@ -67,6 +68,7 @@ __all__ = [
     "SerialDetector",
     "SerialOnlineConfig",
     "SerialOnlineRecord",
+    "est_force_alarm_trial",
     "est_init",
     "est_model",
     "est_model_trial",
@@ -153,7 +155,7 @@ class SerialDetector:
     min_learned: int = 200
     holdoff: float = 0.2
     freeze: float = 3.0
-    resume: float = 3.0
+    resume: float = 10.0
     gate: float = 8.0
     gate_after: int = 20
     reopen_again: bool = True
@@ -463,6 +465,7 @@ def est_init(
         lam=np.full(m, cfg.lam0),
         short=np.zeros((m, n)),
         long=np.zeros((m, n)),
+        ref=np.zeros((m, n)),
         eps=np.full((m, n), np.nan),
     )
     return c, state

@@ -167,6 +167,8 @@ class EstState(NamedTuple):
         Forgetting factor.
     short, long : (m, n)
         Detector averages of the squared weighted prior errors.
+    ref : (m, n)
+        Level each row had established before the last alarm (0: none).
     eps : (m, n)
         Weighted prior errors of the last sample (NaN where a row was not used).
     """
@@ -183,6 +185,7 @@ class EstState(NamedTuple):
     lam: np.ndarray
     short: np.ndarray
     long: np.ndarray
+    ref: np.ndarray
     eps: np.ndarray
 
 
@@ -299,30 +302,47 @@ def _regression(c, qf, qdf, qddf, sf, tf, phi, y):  # pragma: no cover - compile
 
 
 @njit(cache=True)
-def _rls_row(theta, P, phi, y, lam_eff, pphi):  # pragma: no cover - compiled
-    """Eq. (14) for one scalar equation (symmetric P update); returns the prior error (NaN: unchanged)."""
+def _rls_row(theta, P, phi, y, lam_eff, pphi, nz):  # pragma: no cover - compiled
+    """Eq. (14) for one scalar equation; returns the prior error (NaN: nothing changed).
+
+    ``P phi`` is accumulated over the nonzero entries of phi only (rows of P, P being
+    symmetric), and the update ``P - g g^T`` with ``g = P phi / sqrt(den)`` keeps P
+    symmetric to the last bit (a product of two floats does not depend on their order).
+    """
     p = theta.shape[0]
+    m = 0
+    for a in range(p):
+        if phi[a] != 0.0:
+            nz[m] = a
+            m += 1
     eps = y
+    for a in range(p):
+        pphi[a] = 0.0
+    for t in range(m):
+        b = nz[t]
+        f = phi[b]
+        eps -= f * theta[b]
+        for a in range(p):
+            pphi[a] += P[b, a] * f
     den = lam_eff
-    for a in range(p):
-        eps -= phi[a] * theta[a]
-        acc = 0.0
-        for b in range(p):
-            acc += P[a, b] * phi[b]
-        pphi[a] = acc
-    for a in range(p):
-        den += phi[a] * pphi[a]
+    for t in range(m):
+        den += phi[nz[t]] * pphi[nz[t]]
     if not (np.isfinite(eps) and np.isfinite(den) and den > 0.0):
         return np.nan
     inv = 1.0 / den
+    root = np.sqrt(inv)
     for a in range(p):
         theta[a] += pphi[a] * inv * eps
+        pphi[a] *= root
     for a in range(p):
-        ka = pphi[a] * inv
-        for b in range(a, p):
-            v = (P[a, b] - ka * pphi[b]) / lam_eff
-            P[a, b] = v
-            P[b, a] = v
+        ga = pphi[a]
+        for b in range(p):
+            P[a, b] -= ga * pphi[b]
+    if lam_eff != 1.0:
+        il = 1.0 / lam_eff
+        for a in range(p):
+            for b in range(p):
+                P[a, b] *= il
     return eps
 
 
@@ -368,10 +388,16 @@ def _detect(c, s, i, eps, act):  # pragma: no cover - compiled
     samples are learned), so that a change during the learning is not absorbed.
     A row may alarm once it has been *seen* ``min_learned`` times since the last alarm
     (seen, not learned: gated samples count, so the re-arm time is bounded), outside
-    the warm-up and the hold-off. The level is at least ``floor^2``: a row that is nearly
-    noise-free (a wrist joint) would otherwise alarm on the regression's own modelling
-    error, which varies with the motion. The threshold is ``slow^2`` times higher while
-    another row is out of use (a joint that is slow or reversing disturbs the others).
+    the warm-up and the hold-off. Until then, a row that had established its level
+    before the last alarm is compared with that level (``ref``, with the threshold
+    times ``slow``, as the estimate may still be converging): a change that
+    follows a false alarm within the re-learning time is detected after the hold-off.
+    ``ref`` is set only from an established level, so this adds at most one alarm
+    (a swap that raises the noise level cannot chain alarms through it). The level is at
+    least ``floor^2``: a row that is nearly noise-free (a wrist joint) would otherwise
+    alarm on the regression's own modelling error, which varies with the motion. The
+    threshold is ``slow^2`` times higher while another row is out of use (a joint that
+    is slow or reversing disturbs the others).
     """
     n = eps.shape[0]
     ints, fl = c.ints, c.floats
@@ -402,14 +428,54 @@ def _detect(c, s, i, eps, act):  # pragma: no cover - compiled
             n_act += 1
     alarm = False
     for j in range(n):
-        nl = s.learned[i, j]
-        if s.seen[i, j] < ints[I_MIN_LEARNED] or nl < 1 or not act[j]:
+        if not act[j]:
             continue
-        level = max(s.long[i, j] / (1.0 - (1.0 - a_l) ** nl), fl[F_FLOOR2])
+        nl = s.learned[i, j]
         thr = fl[F_THRESHOLD2] if n_act == ints[I_N_ROWS] else fl[F_THRESHOLD2] * fl[F_SLOW2]
+        if s.seen[i, j] >= ints[I_MIN_LEARNED] and nl >= 1:
+            level = max(s.long[i, j] / (1.0 - (1.0 - a_l) ** nl), fl[F_FLOOR2])
+        elif s.ref[i, j] > 0.0:  # still re-learning: the level established before the last alarm,
+            level = s.ref[i, j]  # with the stricter threshold (the estimate may still converge)
+            thr = fl[F_THRESHOLD2] * fl[F_SLOW2]
+        else:
+            continue
         if s.short[i, j] > thr * level + 1e-300:
             alarm = True
     return alarm
+
+
+@njit(cache=True)
+def _alarm(c, s, i, k):  # pragma: no cover - compiled
+    """What an alarm at sample k does: re-open P, count, restart the level (keeping it as ``ref``)."""
+    ints, fl = c.ints, c.floats
+    cnt = s.cnt[i]
+    _reopen(c, s.P[i])
+    cnt[C_ALARMS] += 1
+    cnt[C_SINCE_ALARM] = 0
+    cnt[C_LAST_ALARM] = k
+    a_l = fl[F_ALPHA_LONG]
+    for j in range(s.seen.shape[1]):
+        nl = s.learned[i, j]
+        # the level this row had established (0: none) serves until it re-learns
+        s.ref[i, j] = 0.0
+        if s.seen[i, j] >= ints[I_MIN_LEARNED] and nl >= 1:
+            s.ref[i, j] = max(s.long[i, j] / (1.0 - (1.0 - a_l) ** nl), fl[F_FLOOR2])
+        s.seen[i, j] = 0
+        s.learned[i, j] = 0
+        s.long[i, j] = 0.0
+    if ints[I_REOPEN_AGAIN] == 1:
+        cnt[C_REOPEN_AT] = k + ints[I_FREEZE]
+
+
+@njit(cache=True)
+def est_force_alarm_trial(c, s, i):  # pragma: no cover - compiled
+    """Raise an alarm on trial i at its last stepped sample, as if the detector had.
+
+    For a caller that knows of a change (a tool changer's signal) and for tests of what
+    follows an alarm. Does nothing before the first sample.
+    """
+    if s.cnt[i, C_K] > 0:
+        _alarm(c, s, i, s.cnt[i, C_K] - 1)
 
 
 @njit(cache=True)
@@ -459,6 +525,7 @@ def est_step_trial(c, s, i, q, qd, tau):  # pragma: no cover - compiled
         _regression(c, qf, qdf, qddf, sf, tf, phi, y)
         pphi = np.empty(p)
         row = np.empty(p)
+        nz = np.empty(p, dtype=np.int64)
         first = True
         for j in range(n_rows):
             if not act[j]:
@@ -470,7 +537,7 @@ def est_step_trial(c, s, i, q, qd, tau):  # pragma: no cover - compiled
             wj = c.w[j]
             for k in range(p):
                 row[k] = phi[j, k] / wj
-            s.eps[i, j] = _rls_row(th, Pi, row, y[j] / wj, lam_eff, pphi)
+            s.eps[i, j] = _rls_row(th, Pi, row, y[j] / wj, lam_eff, pphi, nz)
         if not first and fl[F_CAP] > 0.0:
             tr = 0.0
             for k in range(p):
@@ -486,20 +553,73 @@ def est_step_trial(c, s, i, q, qd, tau):  # pragma: no cover - compiled
             _reopen(c, Pi)
         if _detect(c, s, i, s.eps[i], act):
             alarm = 1
-            _reopen(c, Pi)
-            cnt[C_ALARMS] += 1
-            cnt[C_SINCE_ALARM] = 0
-            cnt[C_LAST_ALARM] = cnt[C_K]
-            for j in range(n):
-                s.seen[i, j] = 0
-                s.learned[i, j] = 0
-                s.long[i, j] = 0.0
-            if ints[I_REOPEN_AGAIN] == 1:
-                cnt[C_REOPEN_AT] = cnt[C_K] + ints[I_FREEZE]
+            _alarm(c, s, i, cnt[C_K])
         else:
             cnt[C_SINCE_ALARM] = min(cnt[C_SINCE_ALARM] + 1, BIG)
     cnt[C_K] += 1
     return alarm
+
+
+@njit(cache=True)
+def _eigh4(J):  # pragma: no cover - compiled
+    """Eigenvalues and eigenvectors (columns) of a symmetric 4 x 4 matrix by cyclic Jacobi rotations.
+
+    Cheaper than LAPACK through numba for this size; converges quadratically (a handful of
+    sweeps to the last bits).
+    """
+    A = J.copy()
+    V = np.eye(4)
+    for _ in range(30):
+        off = 0.0
+        scale = 0.0
+        for a in range(4):
+            scale += A[a, a] * A[a, a]
+            for b in range(a + 1, 4):
+                off += A[a, b] * A[a, b]
+        if off <= 1e-32 * scale or off == 0.0:
+            break
+        for a in range(3):
+            for b in range(a + 1, 4):
+                if A[a, b] == 0.0:
+                    continue
+                theta = (A[b, b] - A[a, a]) / (2.0 * A[a, b])
+                t = np.sign(theta) / (abs(theta) + np.sqrt(theta * theta + 1.0)) if theta != 0.0 else 1.0
+                cs = 1.0 / np.sqrt(t * t + 1.0)
+                sn = t * cs
+                for k in range(4):  # A <- A G (columns a, b)
+                    x, y = A[k, a], A[k, b]
+                    A[k, a] = cs * x - sn * y
+                    A[k, b] = sn * x + cs * y
+                for k in range(4):  # A <- G^T A (rows a, b)
+                    x, y = A[a, k], A[b, k]
+                    A[a, k] = cs * x - sn * y
+                    A[b, k] = sn * x + cs * y
+                for k in range(4):
+                    x, y = V[k, a], V[k, b]
+                    V[k, a] = cs * x - sn * y
+                    V[k, b] = sn * x + cs * y
+    lam = np.empty(4)
+    for k in range(4):
+        lam[k] = A[k, k]
+    return lam, V
+
+
+@njit(cache=True)
+def _positive_definite(J, shift):  # pragma: no cover - compiled
+    """True if ``J - shift I`` (4 x 4) is positive definite (a Cholesky factorisation succeeds)."""
+    L = np.zeros((4, 4))
+    for a in range(4):
+        for b in range(a + 1):
+            acc = J[a, b] - (shift if a == b else 0.0)
+            for k in range(b):
+                acc -= L[a, k] * L[b, k]
+            if a == b:
+                if not acc > 0.0:
+                    return False
+                L[a, a] = np.sqrt(acc)
+            else:
+                L[a, b] = acc / L[b, b]
+    return True
 
 
 @njit(cache=True)
@@ -530,8 +650,16 @@ def project_payload(src, dst, eig_min):  # pragma: no cover - compiled
         for k in range(10):
             dst[k] = np.nan
         return
-    lam, V = np.linalg.eigh(J)
-    if lam[0] < eig_min:
+    if _positive_definite(J, eig_min):  # already consistent (the common case): unchanged
+        for k in range(10):
+            dst[k] = src[k]
+        return
+    lam, V = _eigh4(J)
+    if lam.min() >= eig_min:
+        for k in range(10):
+            dst[k] = src[k]
+        return
+    if True:
         for k in range(4):
             lam[k] = max(lam[k], eig_min)
         for a in range(4):

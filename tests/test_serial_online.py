@@ -1,0 +1,375 @@
+"""The N-joint online estimator (serial_online): agreement with a numpy/Pinocchio pipeline,
+stepping vs whole record, payload identification across a swap on a UR5, detection once,
+no alarm at constant payload, re-arming after a false alarm, dropouts, projection, full mode."""
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from adaptive_dd.errors import ParameterError, SignalError
+from adaptive_dd.identification.filters import design_filter_bank, filter_record
+from adaptive_dd.identification.rls import RLSConfig, rls_init, rls_step
+from adaptive_dd.identification.serial_online import (
+    SerialDetector,
+    SerialOnlineConfig,
+    est_force_alarm_trial,
+    est_init,
+    est_model,
+    est_model_trial,
+    est_payload_trial,
+    est_step,
+    project_payload,
+    run_serial_online,
+    state_alarms,
+    state_skipped,
+)
+from adaptive_dd.plant.prescribed import exciting_motion, prescribed_record
+from adaptive_dd.plant.serial_arm import SerialArm, payload_parameters
+from adaptive_dd.robots import ROBOTS, robot_urdf
+
+T = 1e-3
+POSTURE = [0.0, -1.2, 1.2, -1.5, -1.5, 0.0]  # UR5: elbow up, wrist down
+PAY_A = payload_parameters(1.0, [0.0, 0.0, 0.05], radius=0.05)
+PAY_B = payload_parameters(2.5, [0.03, 0.0, 0.08], radius=0.05)
+
+
+@pytest.fixture(scope="module")
+def ur5():
+    return SerialArm.from_urdf(robot_urdf("ur5"), ROBOTS["ur5"].payload_frame)
+
+
+def _record(arm, seed, n, payloads, swaps=(), speed=0.5):
+    t = np.arange(n) * T
+    rng = np.random.default_rng(seed)
+    motion = exciting_motion(arm, t, rng, offset=POSTURE, speed=speed)
+    return prescribed_record(arm, t, motion, payloads, swaps, rng=rng)
+
+
+@pytest.fixture(scope="module")
+def swap_record(ur5):
+    """20 s at 1 kHz, the shipped sensor noise, 1 kg payload then 2.5 kg from 10 s on."""
+    return _record(ur5, 1, 20_000, [PAY_A, PAY_B], [10_000])
+
+
+def _com(p):
+    return p[1:4] / p[0]
+
+
+# ------------------------------------------------------------------------------------ settings
+@pytest.mark.parametrize(
+    "kw, match",
+    [
+        ({"mode": "joint"}, "mode.*'joint'"),
+        ({"tau_f": 1e-4}, "tau_f = 0.0001"),
+        ({"lam0": 1.5}, "lam0.*1.5"),
+        ({"mu": -0.1}, "mu.*-0.1"),
+        ({"payload_size": 0.0}, "payload_size.*0.0"),
+        ({"selection": (0.05,)}, "selection"),
+        ({"row_weights": (1.0, -1.0)}, "row_weights"),
+        ({"detector": "yes"}, "detector.*str"),
+        ({"project": 1}, "project.*1"),
+        ({"max_trace": float("nan")}, "max_trace.*nan"),
+    ],
+)
+def test_bad_settings_name_the_field_and_value(kw, match):
+    with pytest.raises(ParameterError, match=match):
+        SerialOnlineConfig(**kw)
+
+
+@pytest.mark.parametrize(
+    "kw, match",
+    [
+        ({"threshold": 1.0}, "threshold.*1.0"),
+        ({"short_window": 2.0}, "short_window < long_window"),
+        ({"min_learned": 0}, "min_learned.*0"),
+        ({"reopen_again": "no"}, "reopen_again.*'no'"),
+        ({"floor": -1.0}, "floor.*-1.0"),
+    ],
+)
+def test_bad_detector_settings_name_the_field_and_value(kw, match):
+    with pytest.raises(ParameterError, match=match):
+        SerialDetector(**kw)
+
+
+def test_wrong_shapes_are_refused(ur5):
+    c, s = est_init(SerialOnlineConfig(), ur5, 2)
+    with pytest.raises(SignalError, match=r"q must have shape \(2, 6\)"):
+        est_step(c, s, np.zeros((2, 5)), np.zeros((2, 6)), np.zeros((2, 6)))
+    with pytest.raises(ParameterError, match="row_weights must have 6"):
+        est_init(SerialOnlineConfig(row_weights=(1.0, 2.0)), ur5, 1)
+    with pytest.raises(ParameterError, match="n_trials"):
+        est_init(SerialOnlineConfig(), ur5, 0)
+
+
+# ------------------------------------------------------------------- the arithmetic, independently
+@pytest.mark.parametrize("mode", ["payload", "full"])
+def test_compiled_step_equals_a_numpy_pinocchio_pipeline(ur5, swap_record, mode):
+    """Filters by scipy's lfilter, regressor by Pinocchio, RLS by rls_step: same estimate."""
+    n = 400
+    r = swap_record
+    cfg = SerialOnlineConfig(mode=mode, align=False, selection=None, detector=None, max_trace=1e12,
+                             lam0=0.999, mu=0.01)  # fmt: skip
+    rec = run_serial_online(ur5, cfg, r.q_meas[:n], r.qd_meas[:n], r.tau[:n])
+    bank = design_filter_bank("M2", cfg.tau_f, T)
+    chans = np.stack([r.q_meas[:n], r.qd_meas[:n], r.tau[:n], np.sign(r.qd_meas[:n])])  # (4, N, 6)
+    f = filter_record(bank, chans, axis=1, initial=chans[:, 0])  # (4, N, 6, 2)
+    qf, qdf, qddf, tf, sf = f[0, ..., 0], f[1, ..., 0], f[1, ..., 1], f[2, ..., 0], f[3, ..., 0]
+    W = ur5.standard_regressor(qf, qdf, qddf)  # (N, 6, 78), friction columns at G0 qd, G0 sgn(qd):
+    W[..., 66:72] = np.eye(6) * sf[:, None, :]
+    if mode == "payload":
+        j = ur5.payload_joint
+        phi = W[..., 10 * j : 10 * j + 10] @ ur5.payload_map
+        y = tf - W @ ur5.pi
+        theta0 = np.zeros(10)
+    else:
+        phi = W[..., ur5.base.independent]
+        y = tf
+        theta0 = ur5.sigma
+    _, s0 = est_init(cfg, ur5, 1)
+    rc = RLSConfig(lam0=cfg.lam0, mu=cfg.mu, p0=1.0, max_trace=1e12)
+    st_ = rls_init(len(theta0), rc, theta0=theta0)._replace(P=s0.P[0].copy())
+    for k in range(n):
+        for row in range(6):
+            st_, _ = rls_step(st_, phi[k, row], y[k, row], rc, forget=row == 0)
+    scale = np.maximum(np.abs(st_.theta), 1e-3)
+    assert np.max(np.abs(rec.theta[0, -1] - st_.theta) / scale) < 1e-6
+    assert np.max(np.abs(rec.theta[0, -1] - theta0) / scale) > 1e-3  # it did move
+
+
+@pytest.mark.parametrize("mode", ["payload", "full"])
+def test_stepping_equals_the_whole_record_bit_for_bit(ur5, mode):
+    """Two trials, 1.6 s, a swap at 1.0 s (an alarm inside), a dropout: every output identical."""
+    n = 1600
+    recs = [_record(ur5, seed, n, [PAY_A, PAY_B], [1000]) for seed in (3, 4)]
+    q = np.stack([r.q_meas for r in recs])
+    qd = np.stack([r.qd_meas for r in recs])
+    tau = np.stack([r.tau for r in recs])
+    q[1, 300, 2] = np.nan
+    cfg = SerialOnlineConfig(mode=mode)
+    rec = run_serial_online(ur5, cfg, q, qd, tau)
+    c, s = est_init(cfg, ur5, 2)
+    theta = np.empty_like(rec.theta)
+    eps = np.empty_like(rec.eps)
+    alarm = np.zeros(rec.alarm.shape, dtype=bool)
+    pay = np.empty(10)
+    for k in range(n):
+        info = est_step(c, s, q[:, k], qd[:, k], tau[:, k])
+        theta[:, k], eps[:, k], alarm[:, k] = s.theta, info.eps, info.alarm
+        est_payload_trial(c, s, 1, pay)
+        assert np.array_equal(pay, rec.payload[1, k])
+    assert rec.alarm.any(axis=1).all()
+    assert np.array_equal(alarm, rec.alarm)
+    assert np.array_equal(theta, rec.theta)
+    assert np.array_equal(eps, rec.eps, equal_nan=True)
+    assert np.array_equal(state_skipped(s), rec.n_skipped)
+    assert rec.n_skipped.tolist() == [0, 1]
+
+
+# ---------------------------------------------------------------------------------- payload mode
+def test_payload_mode_identifies_each_segment_and_detects_the_swap_once(ur5, swap_record):
+    rec = run_serial_online(
+        ur5, SerialOnlineConfig(), swap_record.q_meas, swap_record.qd_meas, swap_record.tau
+    )
+    for end, pay in ((9_999, PAY_A), (19_999, PAY_B)):
+        m = rec.mass[0, end]
+        assert abs(m - pay[0]) < 0.05 * pay[0], (end, m)
+        assert np.linalg.norm(rec.com[0, end] - _com(pay)) < 0.01, (end, rec.com[0, end])
+    (alarms,) = rec.alarm_times()
+    assert len(alarms) == 1 and 10.0 <= alarms[0] < 10.05, alarms
+
+
+def test_the_control_model_carries_the_payload(ur5, swap_record):
+    """est_model_trial: the arm's pi with the estimated payload folded in; its torques match the truth."""
+    r = swap_record
+    cfg = SerialOnlineConfig()
+    c, s = est_init(cfg, ur5, 1)
+    for k in range(9_000):
+        est_step(c, s, r.q_meas[k : k + 1], r.qd_meas[k : k + 1], r.tau[k : k + 1])
+    pi = np.empty(78)
+    est_model_trial(c, s, 0, pi)
+    j = ur5.payload_joint
+    pay = np.empty(10)
+    est_payload_trial(c, s, 0, pay)
+    expect = ur5.pi.copy()
+    expect[10 * j : 10 * j + 10] += ur5.payload_map @ pay
+    assert np.allclose(pi, expect, rtol=0, atol=1e-12)
+    true_pi = ur5.pi.copy()
+    true_pi[10 * j : 10 * j + 10] += ur5.payload_map @ PAY_A
+    k = np.arange(0, 9_000, 97)
+    W = ur5.standard_regressor(r.q[k], r.qd[k], r.qdd[k])
+    err = np.abs(W @ (pi - true_pi)).max()
+    assert err < 0.02 * np.abs(W @ true_pi).max(), err
+    assert np.array_equal(est_model(c, s)[0], pi)
+
+
+def test_no_alarm_over_a_long_run_at_constant_payload(ur5):
+    """Two 30 s trials (different motions and noise), one payload throughout: no alarm."""
+    recs = [_record(ur5, seed, 30_000, [PAY_B]) for seed in (11, 12)]
+    stack = [np.stack([getattr(r, a) for r in recs]) for a in ("q_meas", "qd_meas", "tau")]
+    rec = run_serial_online(ur5, SerialOnlineConfig(), *stack)
+    assert not rec.alarm.any(), rec.alarm_times()
+    assert np.all(np.abs(rec.mass[:, -1] - PAY_B[0]) < 0.05 * PAY_B[0])
+
+
+def test_the_detector_rearms_within_its_bound(ur5):
+    """A glitch raises a false alarm; a payload swap right after the documented re-arm bound
+    raises the next alarm."""
+    cfg = SerialOnlineConfig()
+    bound = cfg.rearm_samples
+    assert bound == 500  # holdoff 200; resume 10 x 30 + min_learned 200 samples
+    k1 = 1_500
+    r = _record(ur5, 7, 4_000, [PAY_A])
+    tau = r.tau.copy()
+    tau[k1 : k1 + 20, 1] += 8.0
+    first = run_serial_online(ur5, cfg, r.q_meas, r.qd_meas, tau)
+    (hits,) = np.nonzero(first.alarm[0])
+    assert len(hits) == 1 and k1 <= hits[0] < k1 + 30, hits
+    k2 = hits[0] + bound + 1
+    r = _record(ur5, 7, 4_000, [PAY_A, PAY_B], [k2])  # the same motion and noise, a swap at k2
+    tau = r.tau.copy()
+    tau[k1 : k1 + 20, 1] += 8.0
+    rec = run_serial_online(ur5, cfg, r.q_meas, r.qd_meas, tau)
+    (hits2,) = np.nonzero(rec.alarm[0])
+    assert len(hits2) == 2 and hits2[0] == hits[0] and k2 <= hits2[1] < k2 + 60, hits2
+
+
+@pytest.mark.parametrize("before", [0.05, 0.15, 0.29, 0.45])
+def test_a_swap_just_after_a_forced_false_alarm_is_still_detected(ur5, before):
+    """A false alarm forced `before` s ahead of a true swap: the swap still raises one alarm,
+    within the re-arm bound, and the payload is identified."""
+    ks = 2_000
+    r = _record(ur5, 5, 3_500, [PAY_A, PAY_B], [ks])
+    cfg = SerialOnlineConfig()
+    c, s = est_init(cfg, ur5, 1)
+    kf = ks - round(before / T)
+    hits = []
+    for k in range(3_500):
+        if est_step(c, s, r.q_meas[k : k + 1], r.qd_meas[k : k + 1], r.tau[k : k + 1]).alarm[0]:
+            hits.append(k)
+        if k == kf:
+            est_force_alarm_trial(c, s, 0)
+    assert state_alarms(s).tolist() == [len(hits) + 1]
+    assert len(hits) == 1 and ks <= hits[0] <= max(ks + 50, kf + cfg.rearm_samples), hits
+    pay = np.empty(10)
+    est_payload_trial(c, s, 0, pay)
+    assert abs(pay[0] - PAY_B[0]) < 0.05 * PAY_B[0]
+    assert np.linalg.norm(_com(pay) - _com(PAY_B)) < 0.01
+
+
+def test_a_glitch_just_before_a_swap_does_not_mask_it(ur5):
+    """A torque glitch (20 ms, 8 N m) raises a false alarm 0.29 s before a swap: the swap raises another."""
+    ks = 2_000
+    r = _record(ur5, 5, 3_500, [PAY_A, PAY_B], [ks])
+    tau = r.tau.copy()
+    kg = ks - 290
+    tau[kg : kg + 20, 1] += 8.0
+    cfg = SerialOnlineConfig()
+    rec = run_serial_online(ur5, cfg, r.q_meas, r.qd_meas, tau)
+    hits = np.flatnonzero(rec.alarm[0])
+    assert len(hits) == 2 and kg <= hits[0] < kg + 30 and ks <= hits[1] < ks + 50, hits
+    assert abs(rec.mass[0, -1] - PAY_B[0]) < 0.05 * PAY_B[0]
+    assert np.linalg.norm(rec.com[0, -1] - _com(PAY_B)) < 0.01
+
+
+def test_non_finite_samples_are_skipped_and_counted(ur5):
+    r = _record(ur5, 8, 6_000, [PAY_A])
+    q, qd, tau = r.q_meas.copy(), r.qd_meas.copy(), r.tau.copy()
+    rng = np.random.default_rng(0)
+    bad = rng.choice(np.arange(1_000, 5_000), 12, replace=False)
+    q[bad[:4], 0] = np.nan
+    qd[bad[4:8], 3] = np.inf
+    tau[bad[8:], 5] = np.nan
+    rec = run_serial_online(ur5, SerialOnlineConfig(), q, qd, tau)
+    assert rec.n_skipped.tolist() == [12]
+    assert np.all(np.isfinite(rec.theta)) and np.all(np.isfinite(rec.payload))
+    assert np.all(np.isnan(rec.eps[0, bad]))  # no equation used at a bad sample
+    assert not rec.alarm.any()
+    assert abs(rec.mass[0, -1] - PAY_A[0]) < 0.05 * PAY_A[0]
+
+
+# ----------------------------------------------------------------------------------- projection
+def _pseudo_inertia(p):
+    m, h = p[0], p[1:4]
+    ixx, ixy, iyy, ixz, iyz, izz = p[4:]
+    inertia = np.array([[ixx, ixy, ixz], [ixy, iyy, iyz], [ixz, iyz, izz]])
+    J = np.zeros((4, 4))
+    J[:3, :3] = 0.5 * np.trace(inertia) * np.eye(3) - inertia
+    J[:3, 3] = J[3, :3] = h
+    J[3, 3] = m
+    return J
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.lists(st.floats(-5.0, 5.0), min_size=10, max_size=10), st.floats(1e-3, 1.0))
+def test_projection_keeps_mass_nonnegative_and_pseudo_inertia_psd(values, scale):
+    raw = np.array(values) * np.array([1.0] + [scale] * 3 + [scale**2] * 6)
+    out = np.empty(10)
+    project_payload(raw, out, 0.0)
+    tol = 1e-12 * max(1.0, np.abs(raw).max())
+    assert out[0] >= -tol
+    assert np.linalg.eigvalsh(_pseudo_inertia(out)).min() >= -tol
+    again = np.empty(10)
+    project_payload(out, again, 0.0)  # a consistent payload is its own projection
+    assert np.allclose(again, out, rtol=0, atol=1e-9 * max(1.0, np.abs(out).max()))
+    # nearest in the pseudo-inertia's Frobenius norm: no farther than the origin-free clip of J
+    J = _pseudo_inertia(raw)
+    lam, V = np.linalg.eigh(J)
+    assert np.allclose(
+        _pseudo_inertia(out), (V * np.maximum(lam, 0)) @ V.T, atol=1e-9 * max(1, np.abs(J).max())
+    )
+
+
+def test_projection_leaves_a_rigid_body_unchanged():
+    rng = np.random.default_rng(3)
+    for _ in range(20):
+        p = payload_parameters(rng.uniform(0.1, 5), rng.uniform(-0.1, 0.1, 3), radius=rng.uniform(0, 0.1))
+        out = np.empty(10)
+        project_payload(p, out, 0.0)
+        assert np.allclose(out, p, rtol=0, atol=1e-12)  # a flat disk lies on the boundary
+
+
+def test_the_control_model_is_projected_but_the_state_is_not(ur5):
+    c, s = est_init(SerialOnlineConfig(), ur5, 1)
+    s.theta[0] = PAY_A
+    s.theta[0, 0] = -2.0  # a negative mass in the estimator's state
+    pay = np.empty(10)
+    est_payload_trial(c, s, 0, pay)
+    assert s.theta[0, 0] == -2.0
+    assert pay[0] >= 0 and np.linalg.eigvalsh(_pseudo_inertia(pay)).min() >= -1e-12
+    c2, s2 = est_init(SerialOnlineConfig(project=False), ur5, 1)
+    s2.theta[0] = s.theta[0]
+    est_payload_trial(c2, s2, 0, pay)
+    assert np.array_equal(pay, s.theta[0])
+
+
+# ------------------------------------------------------------------------------------ full mode
+def test_full_mode_recovers_the_base_parameters(ur5):
+    """From base parameters 30 % off, an exciting 20 s record: torques within 1 %, payload mass within 5 %."""
+    n = 20_000
+    t = np.arange(n) * T
+    rng = np.random.default_rng(3)
+    motion = exciting_motion(ur5, t, rng, offset=POSTURE, speed=0.6, frequency=(0.3, 1.5), n_terms=3)
+    pay = payload_parameters(1.5, [0.02, 0.0, 0.05], radius=0.05)
+    r = prescribed_record(ur5, t, motion, [pay], rng=rng)
+    truth = ur5.sigma + ur5.payload_basis @ pay
+    s0 = ur5.sigma * (1 + 0.3 * rng.standard_normal(ur5.base.count))
+    cfg = SerialOnlineConfig(mode="full", p0_arm=1.0, detector=None, lam0=1.0)
+    rec = run_serial_online(ur5, cfg, r.q_meas, r.qd_meas, r.tau, sigma_nominal=s0)
+    k = np.arange(0, n, 37)
+    W = ur5.regressor(r.q[k], r.qd[k], r.qdd[k]).reshape(-1, ur5.base.count)
+
+    def rel(x):
+        return np.linalg.norm(W @ (x - truth)) / np.linalg.norm(W @ truth)
+
+    assert rel(s0) > 0.1
+    assert rel(rec.theta[0, -1]) < 0.01, rel(rec.theta[0, -1])
+    assert abs(rec.mass[0, -1] - 1.5) < 0.05 * 1.5
+    # the control model: B pi_out equals theta with its payload part projected
+    c, s = est_init(cfg, ur5, 1, sigma_nominal=rec.theta[0, -1])
+    pi = np.empty(78)
+    est_model_trial(c, s, 0, pi)
+    p = np.empty(10)
+    est_payload_trial(c, s, 0, p)
+    raw = c.pbasis_pinv @ (s.theta[0] - c.sigma0)
+    assert np.allclose(ur5.base.B @ pi, s.theta[0] + c.pbasis @ (p - raw), rtol=0, atol=1e-9)
