@@ -178,10 +178,10 @@ def _information_lines(c: dict) -> list[str]:
         ok = best is not None and best <= TARGET_INFO_RATIO * info["known"]
         unk = info.get("unknown")
         unk_s = f"{1e3 * unk:.0f} ms" if unk is not None else "beyond the window"
+        unk_s = f", {unk_s} (all unknown)" if "unknown" in info else " (arm known, payload mode)"
         out.append(
             f"  payload mass within 5 % after the swap at {seg['start']:g} s ({seg['mass']:g} kg): "
-            f"information limit {1e3 * info['known']:.0f} ms (other parameters known), {unk_s} "
-            "(all unknown); "
+            f"information limit {1e3 * info['known']:.0f} ms (other parameters known){unk_s}; "
             + ", ".join(f"{n} {1e3 * t:.0f} ms" for n, t in took.items())
             + f" (target best <= {TARGET_INFO_RATIO:g}x the known-parameters limit: "
             + ("met)" if ok else "NOT met)")

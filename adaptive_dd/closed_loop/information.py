@@ -13,8 +13,9 @@ INFO_WINDOW = 1.0
 
 
 def add_information_times(res, out: dict) -> None:
-    """Fill ``information_time`` (None when the N-joint estimator's
-    ``payload_information_time`` is not available) and ``mass_learning_time`` (median over the
+    """Fill ``information_time`` (the information-limited time to know the payload mass to 5 %
+    along ct_oracle's first kept trajectory; None without ct_oracle, beyond the window, or for
+    a removal after an empty segment) and ``mass_learning_time`` (median over the
     kept seeds of the first time after which the estimated mass stays within 5 % of the
     payload that changed) of every segment after a swap."""
     from adaptive_dd.benchmark.metrics import mass_learning_time
@@ -45,9 +46,28 @@ def add_information_times(res, out: dict) -> None:
 
 
 def _information_function():
-    """The information-limited time along the oracle's first kept trajectory, or None."""
-    try:
-        from adaptive_dd.identification.serial_online import payload_information_time  # noqa: F401
-    except ImportError:
-        return None
-    return None
+    """``f(res, oracle_run, segment, k0, k1) -> {"known": seconds} or None``: the time the Cramer-Rao bound on
+    the payload mass takes to fall below 5 % of the payload that changed (the new one, or the
+    one removed), along the oracle's first kept trajectory (qdd by differentiating the true qd),
+    from :func:`adaptive_dd.identification.payload_information.payload_information_time`."""
+    from adaptive_dd.identification.payload_information import payload_information_time
+    from adaptive_dd.plant.serial_arm import payload_parameters
+
+    def info(res, oracle, i, k0, k1):
+        sc = res.scenario
+        j = i - 1 if sc.swap_masses[i - 1] > 0 else i - 2  # the payload that came, or that left
+        if j < 0 or sc.swap_masses[j] <= 0:
+            return None
+        p = sc.payload_of(j)
+        pay = payload_parameters(p["mass"], p.get("com"), p.get("inertia"), p.get("radius", 0.0))
+        T = sc.sample_period
+        lo = max(0, k0 - 1)
+        q, qd = oracle.q[0, lo:k1], oracle.qd[0, lo:k1]
+        qdd = np.gradient(qd, T, axis=0)
+        pv, vv = np.asarray(sc.position_variance), np.asarray(sc.velocity_variance)
+        t = payload_information_time(
+            sc.arm, q, qd, qdd, pay, k0 - lo, sample_period=T, position_variance=pv, velocity_variance=vv
+        )
+        return {"known": t} if np.isfinite(t) else None
+
+    return info
