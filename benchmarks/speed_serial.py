@@ -87,12 +87,14 @@ def one_trial(sc, name: str) -> float:
     return sc.duration / wall
 
 
-def full_run(seeds: int) -> tuple[float, float, str]:
-    """``adaptive-dd benchmark`` of the UR5 scenario under /usr/bin/time -v: wall s, peak GiB, report."""
+def full_run(seeds: int, out: str | None = None) -> tuple[float, float, str]:
+    """``adaptive-dd benchmark`` of the UR5 scenario under /usr/bin/time -v: wall s, peak GiB, report.
+
+    The outputs go to ``out`` (kept), else to a temporary folder."""
     path = str(resources.files("adaptive_dd.scenarios").joinpath("ur5_tool_swap.toml"))
-    with tempfile.TemporaryDirectory() as out:
+    with tempfile.TemporaryDirectory() as tmp:
         cmd = ["/usr/bin/time", "-v", sys.executable, "-m", "adaptive_dd.cli", "benchmark", path]
-        cmd += ["--seeds", str(seeds), "--out", out, "--no-progress"]
+        cmd += ["--seeds", str(seeds), "--out", out or tmp, "--no-progress"]
         p = subprocess.run(cmd, capture_output=True, text=True, check=False)
     if p.returncode != 0:
         raise RuntimeError(f"benchmark failed ({p.returncode}):\n{p.stderr[-3000:]}")
@@ -111,6 +113,9 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--full", action="store_true", help="also the 200-seed run under /usr/bin/time -v")
     ap.add_argument("--seeds", type=int, default=200)
+    ap.add_argument(
+        "--out", default=None, help="keep the full run's outputs (report.txt, metrics, figures) here"
+    )
     args = ap.parse_args()
     sc = _scenario()
     print(f"UR5 tool swap: {sc.duration} s at T = {sc.sample_period} s, {sc.n_joints} joints")
@@ -125,7 +130,10 @@ def main() -> None:
             f"({x / x_anchor:5.1f}x the anchor) (target >= {target:g}x real time: {_verdict(x >= target)})"
         )
     if args.full:
-        secs, gib, _ = full_run(args.seeds)
+        secs, gib, report = full_run(args.seeds, args.out)
+        if args.out:
+            with open(os.path.join(args.out, "report.txt"), "w", encoding="utf-8") as fh:
+                fh.write(report)
         print(
             f"adaptive-dd benchmark ur5_tool_swap.toml --seeds {args.seeds} "
             f"({len(sc.controllers)} controllers), /usr/bin/time -v: wall {secs:.1f} s "
