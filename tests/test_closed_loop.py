@@ -237,3 +237,37 @@ def test_scenario_checks_for_n_joint_arms():
             "ct_oracle", load_scenario(_shipped("vertical3_payload")).arm, options={"gain": 1}
         )
     assert set(SERIAL_CONTROLLERS) >= {"pd", "ct_nominal", "ct_oracle", "adaptive_ct", "slotine_li"}
+
+
+def test_cli_benchmark_of_an_n_joint_scenario_writes_every_output(tmp_path, capsys):
+    import json
+
+    import pandas as pd
+
+    from adaptive_dd.cli import main
+
+    src = tmp_path / "v3.toml"
+    src.write_text(
+        '[arm]\nrobot = "vertical3"\n'
+        '[run]\nduration = 1.2\nseeds = 2\ncontrollers = ["ct_nominal", "ct_oracle", "slotine_li"]\n'
+        "[control]\nbandwidth = [40.0, 40.0, 50.0]\n"
+        "[reference]\nramp = 0.2\n"
+        "joint1 = { offset = 0.3, amplitude = [0.4], frequency = [0.3] }\n"
+        "joint2 = { offset = -0.6, amplitude = [0.5], frequency = [0.4] }\n"
+        "joint3 = { offset = 0.4, amplitude = [0.6], frequency = [0.5] }\n"
+        "[[payload]]\nat = 0.6\nmass = 1.0\ncom = [0.03, 0.0, 0.0]\n",
+        encoding="utf-8",
+    )
+    out = tmp_path / "out"
+    assert main(["benchmark", str(src), "--out", str(out), "--no-progress"]) == 0
+    text = capsys.readouterr().out
+    assert "payload centre of mass estimated" in text and "ct_nominal / ct_oracle" in text
+    m = json.loads((out / "metrics.json").read_text(encoding="utf-8"))
+    seg = m["controllers"]["slotine_li"]["segments"][1]
+    assert len(seg["rms_error_joint"]) == 3 and seg["com_true"] == [0.03, 0.0, 0.0]
+    assert m["controllers"]["ct_oracle"]["segments"][1]["ratio_to_floor"] is None
+    assert m["provenance"]["scenario"]["arm"]["joints"] == ["joint1", "joint2", "joint3"]
+    frame = pd.read_csv(out / "per_seed.csv")
+    assert {"rms_error_joint3", "com_estimate_x"} <= set(frame.columns) and len(frame) == 3 * 2 * 2
+    for f in ("tracking_error.png", "joint_errors.png", "estimates.png", "metrics.csv"):
+        assert (out / f).stat().st_size > 0
