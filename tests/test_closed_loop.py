@@ -103,6 +103,11 @@ def test_ct_oracle_tracks_far_better_than_ct_nominal_on_loaded_ur5():
     np.testing.assert_allclose(rms["ct_nominal"][0], rms["ct_oracle"][0], rtol=1e-9)  # no payload: same model
     for s in (1, 2):  # 2 kg, then 5 kg
         assert rms["ct_nominal"][s] > 10 * rms["ct_oracle"][s], (s, rms)
+    from adaptive_dd.benchmark.metrics import compute_metrics
+
+    segs = compute_metrics(res)["controllers"]["ct_nominal"]["segments"]
+    for s in (1, 2):  # the information-limited time along ct_oracle's trajectory: a few samples
+        assert 0 < segs[s]["information_time"]["known"] < 0.05, segs[s]["information_time"]
 
 
 class Runaway:
