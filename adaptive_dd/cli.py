@@ -500,6 +500,11 @@ def _benchmark(args: argparse.Namespace, sc, outputs) -> list[Path]:
     if any(r.sigma_hat is not None for r in res.runs.values()):
         plot_benchmark_estimates(res, outputs.path("estimates.png"), formats=fmts)
         written += [out / f"estimates.{f}" for f in fmts]
+    if sc.n_joints != 2:  # N-joint arms: one panel per joint as well
+        from adaptive_dd.plotting import plot_joint_errors
+
+        plot_joint_errors(res, outputs.path("joint_errors.png"), formats=fmts)
+        written += [out / f"joint_errors.{f}" for f in fmts]
     frame = res.to_frame()
     frame.to_csv(outputs.path("per_seed.csv"), index=False)
     written.append(out / "per_seed.csv")

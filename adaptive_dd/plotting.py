@@ -17,7 +17,9 @@ __all__ = [
     "controller_style",
     "plot_benchmark_estimates",
     "plot_estimates",
+    "plot_joint_errors",
     "plot_model_response",
+    "plot_payload_estimates",
     "plot_tracking_errors",
     "plot_trajectory",
     "save_figure",
@@ -200,6 +202,8 @@ def plot_benchmark_estimates(res, path: str | Path | None = None, formats=("png"
 
     Returns the Figure; with ``path``, also writes it in each of ``formats`` (and closes it).
     """
+    if res.scenario.arm.n_joints != 2 or res.sigma_true.shape[-1] != 7:
+        return plot_payload_estimates(res, path, formats)
     fig, axes = plt.subplots(2, 2, figsize=(11, 7), sharex=True)
     panels = [(0, "J1 [kg m²]"), (1, "J2 [kg m²]"), (2, "r [kg m²]")]
     s = slice(None, None, _step(res.t.size))
@@ -227,6 +231,93 @@ def plot_benchmark_estimates(res, path: str | Path | None = None, formats=("png"
     for ax in axes[-1]:
         ax.set_xlabel("t [s]")
     fig.suptitle("Estimates of the adaptive controllers (mean over the seeds with kept trajectories)")
+    if path is not None:
+        save_figure(fig, path, formats)
+    return fig
+
+
+def plot_payload_estimates(res, path: str | Path | None = None, formats=("png",)):
+    """N-joint arms: the payload mass and centre of mass (x, y, z in the payload frame) that
+    each estimating controller holds (mean over the kept seeds), against the truth.
+
+    Returns the Figure; with ``path``, also writes it in each of ``formats`` (and closes it).
+    """
+    arm, sc = res.scenario.arm, res.scenario
+    fig, axes = plt.subplots(2, 2, figsize=(11, 7), sharex=True)
+    truth = arm.payload_from_sigma(res.sigma_true)
+    com_true = np.full((res.t.size, 3), np.nan)
+    starts = np.searchsorted(res.t, [0.0, *sc.swap_times], side="left")
+    for i, a in enumerate(starts):
+        b = starts[i + 1] if i + 1 < len(starts) else res.t.size
+        if i and sc.swap_masses[i - 1] > 0:
+            com_true[a:b] = sc.payload_of(i - 1).get("com") or (0.0, 0.0, 0.0)
+    axes.flat[0].plot(res.t, truth.mass, "k--", lw=1.5, label="true")
+    axes.flat[0].set_ylabel("payload mass [kg]")
+    for c, ax in enumerate(axes.flat[1:]):
+        ax.plot(res.t, 1e3 * com_true[:, c], "k--", lw=1.5, label="true")
+        ax.set_ylabel(f"centre of mass {'xyz'[c]} [mm]")
+    for name, run in res.runs.items():
+        kept = ~run.failed[: 0 if run.sigma_hat is None else run.sigma_hat.shape[0]]
+        if run.sigma_hat is None or not kept.any():
+            continue
+        with np.errstate(invalid="ignore", divide="ignore"):
+            est = arm.payload_from_sigma(run.sigma_hat[kept].mean(axis=0))
+        style = controller_style(name)
+        axes.flat[0].plot(res.t, est.mass, label=name, **style)
+        com = np.where(np.abs(est.mass)[:, None] >= 0.1, est.com, np.nan)
+        for c, ax in enumerate(axes.flat[1:]):
+            ax.plot(res.t, 1e3 * com[:, c], label=name, **style)
+    top = max(sc.swap_masses or (1.0,))
+    axes.flat[0].set_ylim(-0.2 * top - 0.1, 1.4 * top + 0.1)
+    for ax in axes.flat[1:]:
+        ax.set_ylim(-250, 250)
+    for ax in axes.flat:
+        ax.grid(alpha=0.3)
+        _mark_swaps(ax, res.t, res.mass)
+    axes.flat[0].legend(fontsize=8)
+    for ax in axes[-1]:
+        ax.set_xlabel("t [s]")
+    fig.suptitle("Payload held by the estimating controllers (mean over the seeds with kept trajectories)")
+    if path is not None:
+        save_figure(fig, path, formats)
+    return fig
+
+
+def plot_joint_errors(res, path: str | Path | None = None, window: float = 0.05, formats=("png",)):
+    """Small multiples, one panel per joint: the 50 ms moving RMS of ``q_d - q`` of the first kept
+    seed of every controller (log scale, swaps marked); readable for 7 joints.
+
+    Returns the Figure; with ``path``, also writes it in each of ``formats`` (and closes it).
+    """
+    from adaptive_dd.benchmark.metrics import moving_rms
+
+    n = res.scenario.n_joints
+    T = res.scenario.sample_period
+    cols = 2 if n <= 4 else 3
+    rows = -(-n // cols)
+    fig, axes = plt.subplots(rows, cols, figsize=(4.2 * cols, 2.4 * rows), sharex=True, squeeze=False)
+    w = max(1, round(window / T))
+    for name, run in res.runs.items():
+        if run.q is None or not run.q.shape[0] or run.failed[0]:
+            continue
+        e = res.q_d - run.q[0]
+        m = moving_rms(e, w, axis=0)
+        for j in range(n):
+            axes.flat[j].semilogy(
+                res.t, np.maximum(1e3 * m[:, j], 1e-4), label=name, **controller_style(name)
+            )
+    for j, ax in enumerate(axes.flat):
+        if j >= n:
+            ax.axis("off")
+            continue
+        ax.set_title(f"joint {j + 1}", fontsize=9)
+        ax.grid(alpha=0.3, which="both")
+        _mark_swaps(ax, res.t, res.mass)
+    axes.flat[0].set_ylabel(f"|e_j|, {window * 1e3:.0f} ms RMS [mrad]")
+    handles, labels = axes.flat[0].get_legend_handles_labels()
+    fig.legend(handles, labels, loc="lower center", ncol=min(len(labels), 4), fontsize=8)
+    fig.suptitle(f"Tracking error per joint (seed {res.seed_indices[0]})")
+    fig.tight_layout(rect=(0, 0.06, 1, 0.97))
     if path is not None:
         save_figure(fig, path, formats)
     return fig

@@ -152,6 +152,13 @@ def per_seed_segment_metrics(res: BenchmarkResult, run, recovery: bool = True) -
         return res.cache[key]
     sc = res.scenario
     T = sc.sample_period
+    if hasattr(run.acc, "sum_e2_joint"):  # an N-joint run (adaptive_dd.closed_loop)
+        from adaptive_dd.closed_loop.metrics import serial_segment_metrics
+
+        out = serial_segment_metrics(res, run)
+        out["recovery_time"] = _recovery_times(run.e_norm, *_serial_bounds(sc), T)
+        out["recovery_time"][run.failed] = np.nan
+        return out
     start, end, settled = segment_bounds(sc.segments(), T, SETTLE)
     n, n_set = (end - start).astype(float), (end - settled).astype(float)
     acc = run.acc
@@ -175,6 +182,13 @@ def per_seed_segment_metrics(res: BenchmarkResult, run, recovery: bool = True) -
         v[bad] = np.nan
     res.cache[key] = out
     return out
+
+
+def _serial_bounds(sc):
+    from adaptive_dd.closed_loop.types import run_constants
+
+    rc = run_constants(sc)
+    return rc.seg_start, rc.seg_end
 
 
 def _recovery_times(e_norm: np.ndarray, start, end, T: float) -> np.ndarray:
@@ -242,6 +256,7 @@ def compute_metrics(res: BenchmarkResult) -> dict:
     sc = res.scenario
     out = {}
     per = {name: per_seed_segment_metrics(res, run) for name, run in res.runs.items()}
+    seg_sigma = _segment_sigmas(sc)
     for name, run in res.runs.items():
         m = per[name]
         segs = []
@@ -254,17 +269,23 @@ def compute_metrics(res: BenchmarkResult) -> dict:
                     "rms_error": _mean(m["rms_error"][:, i]),
                     "rms_error_settled": _mean(m["rms_error_settled"][:, i]),
                     "detection_delay": None,
-                    "rms_error_joint": [_mean(m[f"rms_error_joint{j}"][:, i]) for j in (1, 2)],
+                    "rms_error_joint": [
+                        _mean(m[f"rms_error_joint{j}"][:, i]) for j in range(1, sc.n_joints + 1)
+                    ],
                     "max_error": _mean(m["max_error"][:, i]),
                     "recovery_time": _mean(m["recovery_time"][:, i]) if i > 0 else None,
                     "rms_torque": _mean(m["rms_torque"][:, i]),
                     "saturation_fraction": _mean(m["saturation_fraction"][:, i]),
                     "mass_estimate": _mean(m["mass_estimate"][:, i]) if "mass_estimate" in m else None,
-                    "sigma_true": [float(x) for x in sc.arm.sigma_with_payload(mass, sc.payload_radius)],
+                    "sigma_true": [float(x) for x in seg_sigma[i]],
                 }
             )
+            if "com_estimate_x" in m:
+                segs[-1]["com_estimate"] = [_mean(m[f"com_estimate_{a}"][:, i]) for a in "xyz"]
+                segs[-1]["com_true"] = _com_true(sc, i)
         ok = ~run.failed if not run.error else np.zeros_like(run.failed)
-        total = segment_rms(run.acc[..., 0].sum(axis=1), sc.n_samples)
+        sums = run.acc.sum_e2 if hasattr(run.acc, "sum_e2") else run.acc[..., 0]
+        total = segment_rms(sums.sum(axis=1), sc.n_samples)
         out[name] = {
             "rms_error": _mean(np.where(ok, total, np.nan)),
             "failed_trials": int(run.failed.sum()),
@@ -285,6 +306,23 @@ def compute_metrics(res: BenchmarkResult) -> dict:
         "provenance": provenance(res),
         "controllers": out,
     }
+
+
+def _segment_sigmas(sc) -> np.ndarray:
+    """True base parameters per segment ``(G, p)``."""
+    from adaptive_dd.plant.serial_arm import SerialArm
+
+    if isinstance(sc.arm, SerialArm):
+        return sc.segment_sigmas()
+    return np.array([sc.arm.sigma_with_payload(m, sc.payload_radius) for _, _, m in sc.segments()])
+
+
+def _com_true(sc, i: int):
+    """Centre of mass [m] of segment i's payload in the payload frame (None without payload)."""
+    if i == 0 or sc.swap_masses[i - 1] == 0:
+        return None
+    com = sc.payload_of(i - 1).get("com")
+    return [float(x) for x in com] if com is not None else [0.0, 0.0, 0.0]
 
 
 def _seed_list(x: np.ndarray) -> list:
@@ -404,6 +442,13 @@ def _add_information_times(res: BenchmarkResult, out: dict) -> None:
 
     sc = res.scenario
     if not sc.swap_times:
+        return
+    from adaptive_dd.plant.serial_arm import SerialArm
+
+    if isinstance(sc.arm, SerialArm):  # N joints: adaptive_dd.closed_loop.information
+        from adaptive_dd.closed_loop.information import add_information_times
+
+        add_information_times(res, out)
         return
     T = sc.sample_period
     ref = next(

@@ -63,6 +63,7 @@ def format_report(metrics: dict, res: BenchmarkResult) -> str:
             )
             lines.append(f"{name:18s}{cells}")
         lines.append("")
+    lines += _payload_tables(ctrls, head)
     lines += _seed_tables(ctrls, head)
     fails = [
         f"{n}: {c['failed_trials']}" + (f" ({c['error']})" if c["error"] else "")
@@ -86,6 +87,41 @@ def format_report(metrics: dict, res: BenchmarkResult) -> str:
     lines += ["", "Targets (measured, not asserted):"]
     lines += _targets(metrics, res)
     return "\n".join(lines)
+
+
+def _payload_tables(ctrls: dict, head: str) -> list[str]:
+    """N-joint runs: the payload's centre of mass estimated at the end of each segment, and
+    ct_nominal's RMS error over ct_oracle's per segment."""
+    lines = []
+    rows = [(n, c) for n, c in ctrls.items() if any("com_estimate" in s for s in c["segments"])]
+    if rows:
+        lines += ["payload centre of mass estimated at the end of the segment [mm] (x, y, z)", head]
+        first = rows[0][1]["segments"]
+        truth = "".join(
+            f"{'none':>16}" if s.get("com_true") is None else f"{_xyz(s['com_true']):>16}" for s in first
+        )
+        lines.append(f"{'(true)':18s}{truth}")
+        for name, c in rows:
+            lines.append(f"{name:18s}" + "".join(f"{_xyz(s.get('com_estimate')):>16}" for s in c["segments"]))
+        lines.append("")
+    if "ct_nominal" in ctrls and "ct_oracle" in ctrls and rows:
+        cells = ""
+        for sn, so in zip(ctrls["ct_nominal"]["segments"], ctrls["ct_oracle"]["segments"], strict=True):
+            ok = sn["rms_error"] is not None and so["rms_error"]
+            cells += f"{sn['rms_error'] / so['rms_error']:16.1f}" if ok else f"{'—':>16}"
+        lines += [
+            "RMS error of ct_nominal / ct_oracle (means over seeds)",
+            head,
+            f"{'ct_nominal':18s}{cells}",
+            "",
+        ]
+    return lines
+
+
+def _xyz(v) -> str:
+    if v is None or any(x is None for x in v):
+        return "—"
+    return ",".join(f"{1e3 * x:.0f}" for x in v)
 
 
 def _seed_tables(ctrls: dict, head: str) -> list[str]:
@@ -148,10 +184,12 @@ def _information_lines(c: dict) -> list[str]:
         ok = best is not None and best <= TARGET_INFO_RATIO * info["known"]
         unk = info.get("unknown")
         unk_s = f"{1e3 * unk:.0f} ms" if unk is not None else "beyond the window"
+        unk_s = f", {unk_s} (all unknown)" if "unknown" in info else " (arm known, payload mode)"
         out.append(
             f"  payload mass within 5 % after the swap at {seg['start']:g} s ({seg['mass']:g} kg): "
-            f"information limit {1e3 * info['known']:.0f} ms (other parameters known), {unk_s} "
-            f"(all unknown) (median over {info['seeds']} seed(s) of {info['reference']}'s trajectory); "
+            f"information limit {1e3 * info['known']:.0f} ms (other parameters known){unk_s} "
+            f"(median over {info.get('seeds', 1)} seed(s) of {info.get('reference', 'the oracle')}'s "
+            "trajectory); "
             + ", ".join(f"{n} {1e3 * t:.0f} ms" for n, t in took.items())
             + (f" (median over {max(n_learn)} seed(s) with kept trajectories)" if n_learn else "")
             + f" (target best <= {TARGET_INFO_RATIO:g}x the known-parameters limit: "
@@ -322,7 +360,11 @@ def write_csv(metrics: dict, path: str | Path) -> Path:
     ]
     with atomic_write(path, newline="", encoding="utf-8") as fh:
         w = csv.writer(fh)
-        w.writerow(["controller", *keys, "rms_error_joint1", "rms_error_joint2", "failed_trials"])
+        n_joints = max(
+            len(s["rms_error_joint"]) for c in metrics["controllers"].values() for s in c["segments"]
+        )
+        joints = [f"rms_error_joint{j}" for j in range(1, n_joints + 1)]
+        w.writerow(["controller", *keys, *joints, "failed_trials"])
         for name, c in metrics["controllers"].items():
             for s in c["segments"]:
                 w.writerow([name, *(s[k] for k in keys), *s["rms_error_joint"], c["failed_trials"]])

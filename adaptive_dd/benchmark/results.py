@@ -90,7 +90,7 @@ def scenario_dict(sc) -> dict:
             v = sorted(v)
         elif f.name == "controller_options":
             v = {n: sc.options(n) for n, _ in v}
-        elif dataclasses.is_dataclass(v):
+        elif dataclasses.is_dataclass(v) and type(v).__name__ != "SerialArm":  # SerialArm: to_dict
             v = dataclasses.asdict(v)
         elif hasattr(v, "to_dict"):
             v = v.to_dict()
@@ -109,6 +109,8 @@ def _jsonable(v):
         return v.item()
     if isinstance(v, frozenset | set):
         return sorted(v)
+    if isinstance(v, Path):
+        return str(v)
     return v
 
 

@@ -102,7 +102,7 @@ class BenchmarkResult:
     scenario: Scenario
     t: Array
     q_d: Array
-    sigma_true: Array  # (n_samples, 7)
+    sigma_true: Array  # (n_samples, p): 7 for the two-link arm, arm.base.count for a URDF arm
     mass: Array  # (n_samples,)
     runs: dict = field(default_factory=dict)
     wall_time: float = 0.0
@@ -193,6 +193,21 @@ def run_benchmark(
     if engine not in ENGINES:
         raise ParameterError(f"engine must be one of {ENGINES}, got {engine!r}")
     t0 = time.perf_counter()
+    from adaptive_dd.plant.serial_arm import SerialArm
+
+    if isinstance(scenario.arm, SerialArm):  # any N-joint arm: adaptive_dd.closed_loop
+        from adaptive_dd.closed_loop.runner import run_serial
+
+        n = scenario.n_samples * len(controllers or scenario.controllers)
+        bar = _progress(progress, n, scenario.name)
+        res = run_serial(
+            scenario, controllers, seed_indices=seed_indices, keep_trajectories=keep_trajectories,
+            engine=engine, bar=bar,
+        )  # fmt: skip
+        if bar is not None:
+            bar.close()
+        res.wall_time = time.perf_counter() - t0
+        return res
     gains = Gains(scenario.bandwidth, scenario.damping)
     if controllers is None:
         ctrls = {}

@@ -14,7 +14,8 @@ Every key is optional; the value after ``=`` below is the default that is used
                                # names, or import paths "package.module:Class"
 
     [control]
-    bandwidth = 40.0           # rad/s, shared by all controllers; bandwidth * T <= 0.2
+    bandwidth = 40.0           # rad/s, shared by all controllers; bandwidth * T <= 0.2;
+                               # an N-joint (URDF) arm also takes one value per joint
     damping = 1.0              # in (0, 10]
 
     [controllers.NAME]         # settings of one listed controller (NAME: its name, or the
@@ -149,6 +150,9 @@ _FIELD_KEY = {
 _BYTES_PER_SAMPLE_TRIAL = 5
 _SECONDS_PER_SAMPLE_CONTROLLER = 2e-5
 _SECONDS_PER_SAMPLE_TRIAL = 1.5e-6
+# N-joint (URDF) arms: per trial-sample, times n_joints^2 (the UR5 scenario's 7 controllers,
+# adaptive_dd.closed_loop, about 9 us per trial-sample on one core of the development machine).
+_SECONDS_PER_SAMPLE_TRIAL_JOINT2 = 2.5e-7
 
 
 @dataclass(frozen=True)
@@ -221,13 +225,15 @@ def _duration(s: float) -> str:
     return f"{s / 60:.3g} min" if s < 7200 else f"{s / 3600:.3g} h"
 
 
-def run_estimate(n_samples: int, n_seeds: int, n_controllers: int) -> RunEstimate:
-    """Rough memory and wall time of a closed-loop run (a guide, not a promise)."""
+def run_estimate(
+    n_samples: int, n_seeds: int, n_controllers: int, n_joints: int | None = None
+) -> RunEstimate:
+    """Rough memory and wall time of a closed-loop run (a guide, not a promise); ``n_joints``
+    for an N-joint (URDF) arm, None for the two-link arm's closed forms."""
     trials = n_seeds * n_controllers
     nbytes = float(n_samples) * trials * _BYTES_PER_SAMPLE_TRIAL
-    secs = float(n_samples) * (
-        n_controllers * _SECONDS_PER_SAMPLE_CONTROLLER + trials * _SECONDS_PER_SAMPLE_TRIAL
-    )
+    per = _SECONDS_PER_SAMPLE_TRIAL if n_joints is None else _SECONDS_PER_SAMPLE_TRIAL_JOINT2 * n_joints**2
+    secs = float(n_samples) * (n_controllers * _SECONDS_PER_SAMPLE_CONTROLLER + trials * per)
     return RunEstimate(int(n_samples), int(trials), nbytes, secs)
 
 
@@ -253,7 +259,7 @@ class Scenario:
     dropout: float = 0.0
     seed: int = 0
     substeps: int = 2
-    bandwidth: float = 40.0
+    bandwidth: float | tuple[float, ...] = 40.0
     damping: float = 1.0
     source: str = "<memory>"
     controller_options: tuple[tuple[str, tuple[tuple[str, Any], ...]], ...] = ()
@@ -310,7 +316,10 @@ class Scenario:
 
     def estimate(self) -> RunEstimate:
         """Memory and time estimate of this run (:func:`run_estimate`)."""
-        return run_estimate(self.n_samples, self.seeds, len(self.controllers))
+        serial = isinstance(self.arm, SerialArm)
+        return run_estimate(
+            self.n_samples, self.seeds, len(self.controllers), self.n_joints if serial else None
+        )
 
     def options(self, name: str) -> dict[str, Any]:
         """Settings of controller ``name`` from its ``[controllers.NAME]`` table (plain values)."""

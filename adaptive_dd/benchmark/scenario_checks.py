@@ -98,12 +98,18 @@ def scenario_errors(v: dict[str, Any]) -> list[str]:
     s_ok = _num(e, "run.seeds", v["seeds"], 1, L["max_seeds"], integer=True)
     _num(e, "run.seed", v["seed"], 0, L["seed_bound"] - 1, integer=True)
     _num(e, "run.substeps", v["substeps"], 1, L["max_substeps"], integer=True)
-    c_ok = _check_controllers(e, v["controllers"])
-    if _num(e, "control.bandwidth", v["bandwidth"], 0, 1e5, lo_open=True) and T_ok:
-        if v["bandwidth"] * v["sample_period"] > L["max_bandwidth_T"]:
+    c_ok = _check_controllers(e, v["controllers"], v.get("arm"))
+    bw = v["bandwidth"]
+    if isinstance(bw, tuple) and _serial(v):  # one per joint, N-joint arms only
+        bw_ok = _nums(e, "control.bandwidth", bw, 0, 1e5, n=_n_joints(v), lo_open=True)
+        bw = max(bw) if bw_ok else bw
+    else:
+        bw_ok = _num(e, "control.bandwidth", bw, 0, 1e5, lo_open=True)
+    if bw_ok and T_ok:
+        if bw * v["sample_period"] > L["max_bandwidth_T"]:
             e.append(
-                f"control.bandwidth: {v['bandwidth']} rad/s at T = {v['sample_period']} s gives "
-                f"bandwidth * T = {v['bandwidth'] * v['sample_period']:.3g} > {L['max_bandwidth_T']}"
+                f"control.bandwidth: {bw} rad/s at T = {v['sample_period']} s gives "
+                f"bandwidth * T = {bw * v['sample_period']:.3g} > {L['max_bandwidth_T']}"
             )
     _num(e, "control.damping", v["damping"], 0, L["max_damping"], lo_open=True)
     _num(e, "payload.radius", v["payload_radius"], 0, L["max_radius"])
@@ -136,7 +142,13 @@ def _label(name: str) -> str:
     return name.rsplit(":", 1)[-1].rsplit(".", 1)[-1] if ":" in name else name
 
 
-def _check_controllers(e: list, c: Any) -> bool:
+def _serial(v: dict) -> bool:
+    from adaptive_dd.plant.serial_arm import SerialArm
+
+    return isinstance(v.get("arm"), SerialArm)
+
+
+def _check_controllers(e: list, c: Any, arm: Any = None) -> bool:
     import re
 
     path = re.compile(r"^[A-Za-z_]\w*(\.[A-Za-z_]\w*)*:[A-Za-z_]\w*(\.[A-Za-z_]\w*)*$")
@@ -151,6 +163,18 @@ def _check_controllers(e: list, c: Any) -> bool:
                 "or an import path 'package.module:Class'"
             )
             ok = False
+    from adaptive_dd.plant.serial_arm import SerialArm
+
+    if isinstance(arm, SerialArm):
+        from adaptive_dd.closed_loop.controllers import TWO_LINK_ONLY
+
+        for x in c:
+            if x in TWO_LINK_ONLY:
+                e.append(
+                    f"run.controllers: {x!r} is for the two-link arm only (the paper's estimator of its "
+                    f"seven parameters), not for this {arm.n_joints}-joint arm; use 'adaptive_ct'"
+                )
+                ok = False
     if len(set(c)) != len(c) or len({_label(x) for x in c}) != len(c):
         e.append(f"run.controllers: a controller (or label) is listed twice: {list(c)}")
         ok = False
@@ -314,7 +338,7 @@ def scenario_fields(data: Any, is_default: bool, arm: Any = None) -> tuple[dict[
         "seeds": get("run", "seeds", 10),
         "seed": get("run", "seed", 0),
         "substeps": get("run", "substeps", 2),
-        "controllers": get("run", "controllers", list(CONTROLLERS)),
+        "controllers": get("run", "controllers", _default_controllers(arm)),
         "bandwidth": get("control", "bandwidth", 40.0),
         "damping": get("control", "damping", 1.0),
         "position_variance": get("noise", "position_variance", _default_noise(arm, "position_variance")),
@@ -332,6 +356,16 @@ def scenario_fields(data: Any, is_default: bool, arm: Any = None) -> tuple[dict[
     v["controller_options"] = tuple(x for x in v["controller_options"] if isinstance(x[1], _Table))
     v["defaulted"] = frozenset(defaulted)
     return v, e
+
+
+def _default_controllers(arm: Any) -> list:
+    from adaptive_dd.plant.serial_arm import SerialArm
+
+    if isinstance(arm, SerialArm):
+        from adaptive_dd.closed_loop.controllers import TWO_LINK_ONLY
+
+        return [c for c in CONTROLLERS if c not in TWO_LINK_ONLY]
+    return list(CONTROLLERS)
 
 
 def _default_noise(arm: Any, key: str) -> list:

@@ -1,0 +1,24 @@
+"""The closed loop for any serial arm (:class:`~adaptive_dd.plant.serial_arm.SerialArm`).
+
+Layout (data first, then arithmetic, then drivers):
+
+:mod:`~adaptive_dd.closed_loop.types`
+    NamedTuples of arrays that travel into the compiled kernels (run constants, actuator
+    and sensor, plant, per-trial state, streamed sums, recordings, law configuration).
+:mod:`~adaptive_dd.closed_loop.laws`
+    The one compiled law kernel of the computed-torque family (PD, computed torque with a
+    fixed, true or estimated model, Slotine-Li with payload adaptation).
+:mod:`~adaptive_dd.closed_loop.glue`
+    The per-sample glue written once (measure, guard, actuate, plant step, divergence,
+    failure freeze, metrics, recording) and the compiled whole-block driver.
+:mod:`~adaptive_dd.closed_loop.controllers`
+    One class per built-in controller, owning its Python ``command`` and its compiled form;
+    :data:`~adaptive_dd.closed_loop.controllers.SERIAL_CONTROLLERS` (name -> class).
+:mod:`~adaptive_dd.closed_loop.runner`
+    :func:`~adaptive_dd.closed_loop.runner.run_serial`: every controller over every seed.
+"""
+
+from adaptive_dd.closed_loop.controllers import SERIAL_CONTROLLERS, make_serial_controller
+from adaptive_dd.closed_loop.runner import run_serial
+
+__all__ = ["SERIAL_CONTROLLERS", "make_serial_controller", "run_serial"]

@@ -1,0 +1,405 @@
+"""Built-in controllers for N-joint arms: one class each, owning its Python and compiled forms.
+
+Each class turns its settings into a :class:`~adaptive_dd.closed_loop.laws.LawConfig` of the
+computed-torque family (:meth:`SerialLaw.law_config`) and, for ``adaptive_ct``, an estimator.
+:meth:`SerialLaw.compiled_form` returns what the compiled loop runs (the law, its per-trial
+state, the estimator hooks); the Python form (:meth:`reset`, :meth:`command`,
+:meth:`observe`, the protocol of ``docs/controllers.md``) runs the same compiled form one
+sample at a time for the whole batch, so the two paths agree to rounding.
+
+Adding a built-in is one change in this file: a subclass of :class:`SerialLaw` that says
+its ``law_config`` (and settings), and an entry in :data:`SERIAL_CONTROLLERS`.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import Any, NamedTuple
+
+import numpy as np
+from numpy.typing import NDArray
+
+from adaptive_dd.closed_loop.glue import estimator_batch
+from adaptive_dd.closed_loop.laws import (
+    KIND_CT,
+    KIND_PD,
+    KIND_SLOTINE,
+    MODEL_FIXED,
+    MODEL_NONE,
+    MODEL_TRIAL,
+    MODEL_TRUE,
+    LawConfig,
+    LawState,
+    law_batch,
+)
+from adaptive_dd.errors import ParameterError
+
+__all__ = [
+    "SERIAL_CONTROLLERS",
+    "AdaptiveCT",
+    "CTNominal",
+    "CTOracle",
+    "CTOracleTextbook",
+    "CompiledForm",
+    "JointGains",
+    "PDControl",
+    "SerialLaw",
+    "SlotineLi",
+    "SlotineLiOracle",
+    "make_serial_controller",
+]
+
+Array = NDArray[np.float64]
+
+
+@dataclasses.dataclass(frozen=True)
+class JointGains:
+    """Per-joint bandwidth ``omega (n,)`` [rad/s] and damping ``zeta``.
+
+    Computed torque: ``kp = omega^2``, ``kd = 2 zeta omega``, ``lam`` the smaller root of
+    ``x^2 - 2 zeta omega x + omega^2``; Slotine-Li: ``lam`` and ``k`` the two roots (the poles
+    of computed torque with a perfect model).
+    """
+
+    bandwidth: Array
+    damping: float
+
+    @classmethod
+    def of(cls, bandwidth, damping: float, n: int) -> JointGains:
+        w = np.broadcast_to(np.asarray(bandwidth, dtype=float), (n,)).copy()
+        if not (np.all(np.isfinite(w)) and np.all(w > 0)):
+            raise ParameterError(f"bandwidth must be > 0 rad/s per joint ({n}), got {bandwidth!r}")
+        if not (np.isfinite(damping) and damping > 0):
+            raise ParameterError(f"damping must be > 0, got {damping!r}")
+        return cls(w, float(damping))
+
+    @property
+    def kp(self) -> Array:
+        return self.bandwidth**2
+
+    @property
+    def kd(self) -> Array:
+        return 2.0 * self.damping * self.bandwidth
+
+    def roots(self) -> tuple[Array, Array]:
+        """``(lam, k)``: smaller and larger root of ``x^2 - 2 zeta omega x + omega^2``."""
+        w, z = self.bandwidth, max(self.damping, 1.0)
+        r = w * np.sqrt(z * z - 1.0)
+        return w * z - r, w * z + r
+
+
+class CompiledForm(NamedTuple):
+    """What the compiled loop runs for one controller: the law, its per-trial state, the
+    estimator's records ``ec, es`` (two arrays when it has none:
+    :func:`~adaptive_dd.closed_loop.glue.estimator_step` is chosen by their type) and whether
+    the trial's model is an estimate to record (``estimates``)."""
+
+    cfg: LawConfig
+    state: LawState
+    ec: Any
+    es: Any
+    estimates: bool
+
+
+_NO_EST = (np.zeros(1), np.zeros(1))
+
+
+class SerialLaw:
+    """Base of the built-ins: settings, gains, the arm's nominal model, both forms.
+
+    Parameters
+    ----------
+    arm : SerialArm
+    bandwidth : float or sequence of n floats
+        [rad/s].
+    damping : float
+    **settings
+        The controller's own settings (:attr:`SETTINGS`); others are an error.
+    """
+
+    name = "serial_law"
+    floor: str | None = "ct_oracle"
+    needs_true_model = False
+    SETTINGS: frozenset = frozenset()
+
+    def __init__(self, arm, bandwidth=40.0, damping: float = 1.0, **settings) -> None:
+        bad = sorted(set(settings) - set(self.SETTINGS))
+        if bad:
+            raise ParameterError(
+                f"controllers.{self.name}: unknown setting(s) {bad}; allowed: {sorted(self.SETTINGS)}"
+            )
+        self.arm, self.settings = arm, settings
+        self.gains = JointGains.of(bandwidth, damping, arm.n_joints)
+        self.ch = arm.chain
+        self.pi_nominal = np.ascontiguousarray(arm.pi, dtype=float)
+        self._B = np.ascontiguousarray(arm.base.B, dtype=float)
+        self._form: CompiledForm | None = None
+
+    # ------------------------------------------------------------------ compiled form
+    def law_config(self, sample_period: float) -> LawConfig:
+        """The typed configuration of this law (subclasses say which)."""
+        raise NotImplementedError
+
+    def _config(self, T: float, kind: int, model: int, **kw) -> LawConfig:
+        z = np.zeros(self.arm.n_joints)
+        g = self.gains
+        base = dict(
+            kind=kind, model=model, reference_velocity=True, kp=g.kp, kd=g.kd, lam=g.roots()[0],
+            pi_fixed=self.pi_nominal, boost_kp=z, boost_kd=z.copy(), boost_samples=0, adapt=False,
+            gamma=np.zeros(10), lo=np.full(10, -np.inf), hi=np.full(10, np.inf), com_radius=np.inf,
+            payload_joint=int(self.arm.payload_joint), payload_map=np.ascontiguousarray(self.arm.payload_map),
+            T=float(T),
+        )  # fmt: skip
+        base.update(kw)
+        return LawConfig(**base)
+
+    def compiled_form(self, n_trials: int, sample_period: float) -> CompiledForm:
+        """The law, a fresh per-trial state and the estimator hooks for ``n_trials`` trials."""
+        cfg = self.law_config(sample_period)
+        est = cfg.model == MODEL_TRIAL
+        return CompiledForm(cfg, LawState.start(cfg, n_trials), *_NO_EST, est)
+
+    # ------------------------------------------------------------------- Python form
+    def reset(self, n_trials: int, sample_period: float) -> None:
+        self.n_trials, self.T = int(n_trials), float(sample_period)
+        self._form = self.compiled_form(n_trials, sample_period)
+        self._alarms: list[list[float]] = [[] for _ in range(n_trials)]
+        self._k = 0
+
+    def command(self, q, qd, q_d, qd_d, qdd_d, sigma_true=None) -> Array:
+        """Torque command ``(n_trials, n)`` [N m] from measured ``q, qd (n_trials, n)``."""
+        f = self._form
+        pi_true = None
+        if f.cfg.model == MODEL_TRUE:
+            if sigma_true is None:
+                raise ValueError(f"{self.name} needs the true model at every sample")
+            pi_true = self.pi_from_sigma(sigma_true)
+        return law_batch(self.ch, f.cfg, f.state, q, qd, q_d, qd_d, qdd_d, pi_true)
+
+    def observe(self, q, qd, tau) -> None:
+        f = self._form
+        alarm = estimator_batch(f.ec, f.es, f.state, q, qd, tau)
+        for i in np.flatnonzero(alarm == 1):
+            self._alarms[i].append(self._k * self.T)
+        self._k += 1
+
+    @property
+    def sigma_hat(self) -> Array | None:
+        """The trials' models in base parameters ``(n_trials, p)`` (controllers with an estimate)."""
+        if self._form is None or not self._form.estimates:
+            return None
+        return self._form.state.pi_model @ self._B.T
+
+    @property
+    def adaptive(self) -> bool:
+        return bool(self._form.estimates) if self._form is not None else False
+
+    has_detector = False
+    """True for laws whose estimator raises change alarms."""
+
+    @property
+    def alarm_times(self) -> list[list[float]] | None:
+        return None
+
+    @property
+    def skipped_samples(self):
+        """Per trial, samples its estimator skipped as non-finite (None without an estimator)."""
+        return None if self._form is None else self.skipped(self._form)
+
+    def skipped(self, form: CompiledForm):
+        """Samples skipped by the estimator of ``form``, per trial (None without an estimator)."""
+        return None
+
+    def pi_from_sigma(self, sigma) -> Array:
+        """Standard parameters ``(S, 13 n)`` giving the torques of base parameters ``sigma (S, p)``:
+        the nominal model plus the payload that explains ``sigma - sigma_nominal``."""
+        arm = self.arm
+        d = np.asarray(sigma, dtype=float) - arm.sigma
+        pp = d @ np.linalg.pinv(arm.payload_basis, rcond=1e-9).T
+        j = arm.payload_joint
+        pi = np.broadcast_to(self.pi_nominal, (d.shape[0], self.pi_nominal.size)).copy()
+        pi[:, 10 * j : 10 * j + 10] += pp @ arm.payload_map.T
+        return pi
+
+
+class PDControl(SerialLaw):
+    """``tau = Kp e + Kd e'`` with ``Kp = omega^2 M0``, ``Kd = 2 zeta omega M0`` (M0: the diagonal of
+    the nominal inertia at the middle of the joint ranges); no model, no gravity compensation."""
+
+    name = "pd"
+
+    def law_config(self, sample_period):
+        m0 = self.arm.nominal_inertia()
+        return self._config(sample_period, KIND_PD, MODEL_NONE, kp=self.gains.kp * m0, kd=self.gains.kd * m0)
+
+
+class CTNominal(SerialLaw):
+    """Computed torque (reference velocity) with the arm's model without payload."""
+
+    name = "ct_nominal"
+
+    def law_config(self, sample_period):
+        return self._config(sample_period, KIND_CT, MODEL_FIXED)
+
+
+class CTOracle(SerialLaw):
+    """Computed torque with the true model at every sample; Coriolis and friction at the reference
+    velocity ``qd_d + lam e`` (the floor of ``adaptive_ct``)."""
+
+    name = "ct_oracle"
+    floor = None
+    needs_true_model = True
+
+    def law_config(self, sample_period):
+        return self._config(sample_period, KIND_CT, MODEL_TRUE)
+
+
+class CTOracleTextbook(CTOracle):
+    """The textbook computed torque with the true model: Coriolis and friction at the measured ``qd``."""
+
+    name = "ct_oracle_textbook"
+
+    def law_config(self, sample_period):
+        return self._config(sample_period, KIND_CT, MODEL_TRUE, reference_velocity=False)
+
+
+DEFAULT_PAYLOAD_GAMMA = (2.0, 0.2, 0.2, 0.2, 0.02, 0.02, 0.02, 0.02, 0.02, 0.02)
+"""Slotine-Li adaptation gains of the payload's ten parameters (m, m c, I about the frame)."""
+
+
+class SlotineLiOracle(SerialLaw):
+    """Slotine-Li with the true model and no adaptation (the floor of ``slotine_li``)."""
+
+    name = "slotine_li_oracle"
+    floor = None
+    needs_true_model = True
+
+    def law_config(self, sample_period):
+        lam, k = self.gains.roots()
+        return self._config(sample_period, KIND_SLOTINE, MODEL_TRUE, lam=lam, kd=k)
+
+
+class SlotineLi(SerialLaw):
+    """Slotine-Li adapting the payload's ten parameters from the nominal arm (gradient law on the
+    link's Slotine-Li regressor times the payload map), projected on a box
+    (``max_mass`` [kg], ``com_radius`` [m]) with ``m >= 0`` and ``|c| <= com_radius``."""
+
+    name = "slotine_li"
+    floor = "slotine_li_oracle"
+    SETTINGS = frozenset({"gamma", "max_mass", "com_radius"})
+
+    def law_config(self, sample_period):
+        lam, k = self.gains.roots()
+        gamma = np.asarray(self.settings.get("gamma", DEFAULT_PAYLOAD_GAMMA), dtype=float)
+        if gamma.shape != (10,) or not np.all(gamma > 0):
+            raise ParameterError(f"controllers.{self.name}.gamma: 10 positive gains, got {gamma.tolist()}")
+        m_max = float(self.settings.get("max_mass", 20.0))
+        r = float(self.settings.get("com_radius", 0.3))
+        if not (m_max > 0 and r > 0):
+            raise ParameterError(f"controllers.{self.name}: max_mass and com_radius must be > 0")
+        i_max = m_max * r * r * 2.0
+        hi = np.array([m_max, *(m_max * r,) * 3, i_max, i_max / 2, i_max, i_max / 2, i_max / 2, i_max])
+        lo = np.array([0.0, *(-m_max * r,) * 3, 0.0, -i_max / 2, 0.0, -i_max / 2, -i_max / 2, 0.0])
+        return self._config(
+            sample_period, KIND_SLOTINE, MODEL_TRIAL, lam=lam, kd=k, adapt=True, gamma=gamma, lo=lo, hi=hi,
+            com_radius=r,
+        )  # fmt: skip
+
+
+class AdaptiveCT(SerialLaw):
+    """Computed torque on the N-joint online estimator's projected model
+    (:mod:`adaptive_dd.identification.serial_online`), the feedback raised to ``boost_bandwidth``
+    through the nominal inertia for ``boost_duration`` after an alarm."""
+
+    name = "adaptive_ct"
+    SETTINGS = frozenset({"boost_bandwidth", "boost_duration", "estimator"})
+
+    def __init__(self, arm, bandwidth=40.0, damping: float = 1.0, **settings) -> None:
+        super().__init__(arm, bandwidth, damping, **settings)
+        from adaptive_dd.identification import serial_online
+
+        self._est = serial_online
+        est = dict(self.settings.get("estimator", {}))
+        det = est.get("detector", {})
+        try:
+            if det is False:
+                est["detector"] = None
+            elif isinstance(det, dict):
+                est["detector"] = serial_online.SerialDetector(**det)
+            self.online = serial_online.SerialOnlineConfig(**est)
+        except TypeError as exc:
+            raise ParameterError(f"controllers.{self.name}.estimator: {exc}") from None
+        self.boost_bandwidth = float(self.settings.get("boost_bandwidth", 300.0))
+        self.boost_duration = float(self.settings.get("boost_duration", 0.2))
+        if not (self.boost_bandwidth > 0 and self.boost_duration >= 0):
+            raise ParameterError(f"controllers.{self.name}: boost_bandwidth > 0 and boost_duration >= 0")
+
+    def law_config(self, sample_period):
+        w, wb, z = self.gains.bandwidth, self.boost_bandwidth, self.gains.damping
+        wb = np.maximum(wb, w)
+        return self._config(
+            sample_period, KIND_CT, MODEL_TRIAL, boost_kp=wb**2 - w**2, boost_kd=2.0 * z * (wb - w),
+            boost_samples=round(self.boost_duration / sample_period),
+        )  # fmt: skip
+
+    def compiled_form(self, n_trials, sample_period):
+        cfg = self.law_config(sample_period)
+        online = self.online
+        if hasattr(online, "sample_period") and online.sample_period != sample_period:
+            online = dataclasses.replace(online, sample_period=sample_period)
+        ec, es = self._est.est_init(online, self.arm, n_trials)
+        state = LawState.start(cfg, n_trials)
+        for i in range(n_trials):
+            self._est.est_model_trial(ec, es, i, state.pi_model[i])
+        return CompiledForm(cfg, state, ec, es, True)
+
+    @property
+    def has_detector(self) -> bool:
+        return self.online.detector is not None
+
+    @property
+    def alarm_times(self):
+        return self._alarms if self.has_detector else None
+
+    def skipped(self, form: CompiledForm):
+        return self._est.state_skipped(form.es)
+
+
+SERIAL_CONTROLLERS: dict[str, type[SerialLaw]] = {
+    "pd": PDControl,
+    "ct_nominal": CTNominal,
+    "ct_oracle": CTOracle,
+    "ct_oracle_textbook": CTOracleTextbook,
+    "adaptive_ct": AdaptiveCT,
+    "slotine_li": SlotineLi,
+    "slotine_li_oracle": SlotineLiOracle,
+}
+"""Built-in controllers for N-joint arms, name -> class."""
+
+TWO_LINK_ONLY = ("adaptive_ct_paper",)
+"""Built-ins of the two-link arm alone (the paper's estimator is written for its seven parameters)."""
+
+
+def make_serial_controller(name: str, arm, bandwidth=40.0, damping: float = 1.0, options=None) -> SerialLaw:
+    """A built-in N-joint controller by name, with its ``[controllers.NAME]`` settings.
+
+    Raises
+    ------
+    ParameterError
+        An unknown name (or a two-link-only one), or an unknown or invalid setting.
+    """
+    opts = {k: v for k, v in (options or {}).items() if k not in ("bandwidth", "damping", "label")}
+    bw = (options or {}).get("bandwidth", bandwidth)
+    dmp = (options or {}).get("damping", damping)
+    if name in TWO_LINK_ONLY:
+        raise ParameterError(
+            f"controller {name!r} is for the two-link arm only; not for a {arm.n_joints}-joint arm"
+        )
+    if name not in SERIAL_CONTROLLERS:
+        raise ParameterError(
+            f"unknown controller {name!r}; built-ins for N-joint arms: {sorted(SERIAL_CONTROLLERS)}"
+        )
+    ctrl = SERIAL_CONTROLLERS[name](arm, bw, dmp, **opts)
+    if options and "label" in options:
+        ctrl.name = str(options["label"])
+    return ctrl

@@ -1,0 +1,73 @@
+"""Per swap of an N-joint run: the information-limited time to know the payload, beside the
+time each estimating controller took (``information_time`` and ``mass_learning_time`` of
+each segment in the metrics)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["INFO_WINDOW", "add_information_times"]
+
+INFO_WINDOW = 1.0
+"""[s] after a swap searched for the information-limited time."""
+
+
+def add_information_times(res, out: dict) -> None:
+    """Fill ``information_time`` (the information-limited time to know the payload mass to 5 %
+    along ct_oracle's first kept trajectory; None without ct_oracle, beyond the window, or for
+    a removal after an empty segment) and ``mass_learning_time`` (median over the
+    kept seeds of the first time after which the estimated mass stays within 5 % of the
+    payload that changed) of every segment after a swap."""
+    from adaptive_dd.benchmark.metrics import mass_learning_time
+    from adaptive_dd.closed_loop.types import run_constants
+
+    sc = res.scenario
+    rc = run_constants(sc)
+    segs = sc.segments()
+    info_fn = _information_function()
+    oracle = res.runs.get("ct_oracle")
+    for i in range(1, len(segs)):
+        mass, removed = segs[i][2], segs[i - 1][2]
+        k0, k1 = int(rc.seg_start[i]), int(rc.seg_end[i])
+        info = None
+        if info_fn is not None and oracle is not None and oracle.q.shape[0] and not oracle.failed[0]:
+            k_end = min(k1, k0 + round(INFO_WINDOW / rc.T))
+            info = info_fn(res, oracle, i, k0, k_end)
+        for name, run in res.runs.items():
+            seg = out[name]["segments"][i]
+            seg["information_time"] = info
+            seg["mass_learning_time"] = None
+            if run.sigma_hat is not None and run.sigma_hat.shape[0]:
+                kept = ~run.failed[: run.sigma_hat.shape[0]]
+                with np.errstate(invalid="ignore", divide="ignore"):
+                    m_hat = sc.arm.payload_mass_from_sigma(run.sigma_hat[kept, k0:k1])
+                tl = mass_learning_time(m_hat, mass, removed, rc.T)
+                seg["mass_learning_time"] = None if np.all(np.isnan(tl)) else float(np.nanmedian(tl))
+
+
+def _information_function():
+    """``f(res, oracle_run, segment, k0, k1) -> {"known": seconds} or None``: the time the Cramer-Rao bound on
+    the payload mass takes to fall below 5 % of the payload that changed (the new one, or the
+    one removed), along the oracle's first kept trajectory (qdd by differentiating the true qd),
+    from :func:`adaptive_dd.identification.payload_information.payload_information_time`."""
+    from adaptive_dd.identification.payload_information import payload_information_time
+    from adaptive_dd.plant.serial_arm import payload_parameters
+
+    def info(res, oracle, i, k0, k1):
+        sc = res.scenario
+        j = i - 1 if sc.swap_masses[i - 1] > 0 else i - 2  # the payload that came, or that left
+        if j < 0 or sc.swap_masses[j] <= 0:
+            return None
+        p = sc.payload_of(j)
+        pay = payload_parameters(p["mass"], p.get("com"), p.get("inertia"), p.get("radius", 0.0))
+        T = sc.sample_period
+        lo = max(0, k0 - 1)
+        q, qd = oracle.q[0, lo:k1], oracle.qd[0, lo:k1]
+        qdd = np.gradient(qd, T, axis=0)
+        pv, vv = np.asarray(sc.position_variance), np.asarray(sc.velocity_variance)
+        t = payload_information_time(
+            sc.arm, q, qd, qdd, pay, k0 - lo, sample_period=T, position_variance=pv, velocity_variance=vv
+        )
+        return {"known": t} if np.isfinite(t) else None
+
+    return info

@@ -1,0 +1,265 @@
+"""The computed-torque family for N joints: one typed configuration, one compiled kernel.
+
+Every built-in law is
+
+    tau = rnea_ref(pi_model, q, qd, qd_r, a) + fv qd_r + fc sgn(qd_r) + Ia a + feedback
+
+with ``e = q_d - q``, ``e' = qd_d - qd`` and, per :class:`LawConfig`:
+
+* ``KIND_PD``: no model, ``tau = kp e + kd e'`` (gains per joint, N m/rad, N m s/rad);
+* ``KIND_CT``: computed torque, ``a = qdd_d + kd e' + kp e``; the reference-velocity law
+  ``qd_r = qd_d + lam e`` (Coriolis and friction at the reference velocity, as the two-link
+  ``ct_oracle``) or the textbook law ``qd_r = qd`` with Coulomb friction at ``sgn(qd_d)`` (as
+  the two-link ``ct_oracle_textbook``: the sign of a noisy measured speed would chatter);
+  no other feedback;
+* ``KIND_SLOTINE``: Slotine-Li, ``qd_r = qd_d + lam e``, ``a = qdd_d + lam e'``, feedback
+  ``kd M0(q) s`` with ``s = e' + lam e`` and M0 the nominal inertia (armature included).
+
+The model ``pi_model`` (13 n standard parameters ``[links, fv, fc, Ia]``) is the fixed one
+of the configuration (``MODEL_FIXED``), the true one of the current segment
+(``MODEL_TRUE``), or the trial's own (``MODEL_TRIAL``: the estimator's projected model, or
+the nominal model plus the adapted payload). After an alarm, for ``boost_samples`` samples,
+``M0(q) (dkp e + dkd e')`` is added (adaptive_ct's bandwidth boost).
+
+Slotine-Li's payload adaptation: with ``Y_p = Y_j(q, qd, qd_r, a) P`` (the link-j block of
+the Slotine-Li regressor times the payload map P of the payload frame),
+``theta += T Gamma Y_p^T s``, then ``theta`` is clipped to ``[lo, hi]``; the mass kept
+``>= 0`` and the centre of mass inside a ball of radius ``com_radius``.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+from numba import njit
+from numpy.typing import NDArray
+
+from adaptive_dd.plant.chain import body_slotine_li_regressor, mass_matrix, rnea_ref
+
+__all__ = [
+    "KIND_CT",
+    "KIND_PD",
+    "KIND_SLOTINE",
+    "MODEL_FIXED",
+    "MODEL_NONE",
+    "MODEL_TRIAL",
+    "MODEL_TRUE",
+    "LawConfig",
+    "LawState",
+    "law_batch",
+    "law_trial",
+    "model_torque",
+]
+
+Array = NDArray[np.float64]
+
+KIND_PD, KIND_CT, KIND_SLOTINE = 0, 1, 2
+MODEL_NONE, MODEL_FIXED, MODEL_TRUE, MODEL_TRIAL = 0, 1, 2, 3
+
+
+class LawConfig(NamedTuple):
+    """A built-in law (see the module docstring).
+
+    Attributes
+    ----------
+    kind, model : int
+        ``KIND_*`` and ``MODEL_*``.
+    reference_velocity : bool
+        Computed torque: ``qd_r = qd_d + lam e`` (else ``qd``).
+    kp, kd, lam : ndarray (n,)
+        Gains per joint (PD: N m/rad and N m s/rad; others: 1/s^2, 1/s, 1/s).
+    pi_fixed : ndarray (13 n,)
+        The fixed (nominal) model; also M0 of the Slotine-Li feedback and the boost.
+    boost_kp, boost_kd : ndarray (n,)
+        Added feedback during a boost (1/s^2, 1/s), through M0(q).
+    boost_samples : int
+        Samples after an alarm during which the boost acts (0: never).
+    adapt : bool
+        Slotine-Li adapts the payload (``theta``) after the command.
+    gamma, lo, hi : ndarray (10,)
+        Adaptation gains and box of the payload parameters (about the payload frame).
+    com_radius : float
+        [m] bound of the adapted centre of mass.
+    payload_joint : int
+        Link (0-based) carrying the payload frame.
+    payload_map : ndarray (10, 10)
+        Payload parameters about the payload frame -> about the link's joint frame.
+    T : float
+        Sample period [s] (the adaptation step).
+    """
+
+    kind: int
+    model: int
+    reference_velocity: bool
+    kp: Array
+    kd: Array
+    lam: Array
+    pi_fixed: Array
+    boost_kp: Array
+    boost_kd: Array
+    boost_samples: int
+    adapt: bool
+    gamma: Array
+    lo: Array
+    hi: Array
+    com_radius: float
+    payload_joint: int
+    payload_map: Array
+    T: float
+
+
+class LawState(NamedTuple):
+    """Per-trial state of a law: ``pi_model (S, 13 n)`` (MODEL_TRIAL), ``theta (S, 10)``
+    adapted payload parameters, ``since_alarm (S,)`` samples since the last alarm."""
+
+    pi_model: Array
+    theta: Array
+    since_alarm: NDArray[np.int64]
+
+    @classmethod
+    def start(cls, cfg: LawConfig, n_trials: int) -> LawState:
+        """Every trial at the fixed model, no payload adapted, no recent alarm."""
+        pi = np.broadcast_to(cfg.pi_fixed, (n_trials, cfg.pi_fixed.shape[0])).copy()
+        big = np.full(n_trials, np.iinfo(np.int64).max // 2, dtype=np.int64)
+        return cls(pi, np.zeros((n_trials, 10)), big)
+
+
+@njit(cache=True)
+def model_torque(ch, pi, q, qd, qdr, qc, a, out):  # pragma: no cover - compiled
+    """``rnea_ref(pi_links, q, qd, qdr, a) + fv qdr + fc sgn(qc) + Ia a`` into ``out (n,)``.
+
+    ``pi (13 n,)`` standard parameters; ``qc`` the velocity whose sign sets the Coulomb torque
+    (``qdr``; the textbook law: ``qd_d``); torques [N m].
+    """
+    n = q.shape[0]
+    rnea_ref(ch, pi[: 10 * n], q, qd, qdr, a, out)
+    for j in range(n):
+        out[j] += pi[10 * n + j] * qdr[j] + pi[11 * n + j] * np.sign(qc[j]) + pi[12 * n + j] * a[j]
+
+
+@njit(cache=True)
+def _add_nominal_inertia(ch, cfg, q, v, out):  # pragma: no cover - compiled
+    """``out += M0(q) v`` with M0 the nominal mass matrix plus armature."""
+    n = q.shape[0]
+    m = np.empty((n, n))
+    mass_matrix(ch, cfg.pi_fixed[: 10 * n], q, m)
+    for r in range(n):
+        acc = cfg.pi_fixed[12 * n + r] * v[r]
+        for c in range(n):
+            acc += m[r, c] * v[c]
+        out[r] += acc
+
+
+@njit(cache=True)
+def _adapt_payload(ch, cfg, q, qd, qdr, a, s, theta, pi_model):  # pragma: no cover - compiled
+    """One gradient step of the payload parameters, projected; pi_model rebuilt from them."""
+    n = q.shape[0]
+    j = cfg.payload_joint
+    yb = np.empty((n, 10))
+    body_slotine_li_regressor(ch, j, q, qd, qdr, a, yb)
+    g = np.zeros(10)  # Y_p^T s = P^T (Y_j^T s)
+    for c in range(10):
+        acc = 0.0
+        for r in range(n):
+            acc += yb[r, c] * s[r]
+        g[c] = acc
+    for k in range(10):
+        upd = 0.0
+        for c in range(10):
+            upd += cfg.payload_map[c, k] * g[c]
+        upd *= cfg.T * cfg.gamma[k]
+        th = theta[k] + (upd if np.isfinite(upd) else 0.0)
+        theta[k] = min(max(th, cfg.lo[k]), cfg.hi[k])
+    theta[0] = max(theta[0], 0.0)
+    mc = np.sqrt(theta[1] ** 2 + theta[2] ** 2 + theta[3] ** 2)
+    lim = cfg.com_radius * theta[0]
+    if mc > lim:
+        f = lim / mc
+        theta[1], theta[2], theta[3] = f * theta[1], f * theta[2], f * theta[3]
+    for c in range(pi_model.shape[0]):
+        pi_model[c] = cfg.pi_fixed[c]
+    for c in range(10):
+        acc = 0.0
+        for k in range(10):
+            acc += cfg.payload_map[c, k] * theta[k]
+        pi_model[10 * j + c] += acc
+
+
+@njit(cache=True)
+def law_trial(
+    ch, cfg, pi_true, pi_model, theta, since_alarm, q, qd, q_d, qd_d, qdd_d, out
+):  # pragma: no cover
+    """Torque command ``out (n,)`` [N m] of one trial from its measured ``q, qd (n,)``.
+
+    ``pi_true (13 n,)`` the current true model (MODEL_TRUE), ``pi_model (13 n,)`` and
+    ``theta (10,)`` the trial's model and adapted payload (updated in place when the law
+    adapts), ``since_alarm`` samples since its estimator's last alarm.
+    """
+    n = q.shape[0]
+    e = np.empty(n)
+    ed = np.empty(n)
+    for j in range(n):
+        e[j] = q_d[j] - q[j]
+        ed[j] = qd_d[j] - qd[j]
+    if cfg.kind == KIND_PD:
+        for j in range(n):
+            out[j] = cfg.kp[j] * e[j] + cfg.kd[j] * ed[j]
+        return
+    qdr = np.empty(n)
+    a = np.empty(n)
+    for j in range(n):
+        if cfg.kind == KIND_CT:
+            a[j] = qdd_d[j] + cfg.kd[j] * ed[j] + cfg.kp[j] * e[j]
+            qdr[j] = qd_d[j] + cfg.lam[j] * e[j] if cfg.reference_velocity else qd[j]
+        else:
+            a[j] = qdd_d[j] + cfg.lam[j] * ed[j]
+            qdr[j] = qd_d[j] + cfg.lam[j] * e[j]
+    qc = qdr if cfg.reference_velocity else qd_d
+    if cfg.model == MODEL_TRUE:
+        model_torque(ch, pi_true, q, qd, qdr, qc, a, out)
+    elif cfg.model == MODEL_TRIAL:
+        model_torque(ch, pi_model, q, qd, qdr, qc, a, out)
+    else:
+        model_torque(ch, cfg.pi_fixed, q, qd, qdr, qc, a, out)
+    if cfg.kind == KIND_SLOTINE:
+        s = np.empty(n)
+        for j in range(n):
+            s[j] = cfg.kd[j] * (ed[j] + cfg.lam[j] * e[j])
+        _add_nominal_inertia(ch, cfg, q, s, out)
+        if cfg.adapt:
+            for j in range(n):
+                s[j] = ed[j] + cfg.lam[j] * e[j]
+            _adapt_payload(ch, cfg, q, qd, qdr, a, s, theta, pi_model)
+    if cfg.boost_samples > 0 and since_alarm < cfg.boost_samples:
+        v = np.empty(n)
+        for j in range(n):
+            v[j] = cfg.boost_kp[j] * e[j] + cfg.boost_kd[j] * ed[j]
+        _add_nominal_inertia(ch, cfg, q, v, out)
+
+
+@njit(cache=True)
+def _law_loop(ch, cfg, pi_true, st, q, qd, q_d, qd_d, qdd_d, out):  # pragma: no cover - compiled
+    for i in range(q.shape[0]):
+        law_trial(
+            ch, cfg, pi_true[i], st.pi_model[i], st.theta[i], st.since_alarm[i],
+            q[i], qd[i], q_d, qd_d, qdd_d, out[i],
+        )  # fmt: skip
+
+
+def law_batch(ch, cfg: LawConfig, state: LawState, q, qd, q_d, qd_d, qdd_d, pi_true=None) -> Array:
+    """:func:`law_trial` for every trial: ``q, qd (S, n)``, reference ``(n,)``; returns ``(S, n)``.
+
+    ``pi_true (S, 13 n)`` is needed only for ``MODEL_TRUE``; ``state`` is updated in place.
+    """
+    q = np.ascontiguousarray(q, dtype=float)
+    qd = np.ascontiguousarray(qd, dtype=float)
+    if pi_true is None:
+        pi_true = np.zeros((q.shape[0], 13 * q.shape[1]))
+    out = np.empty_like(q)
+    c = np.ascontiguousarray
+    _law_loop(
+        ch, cfg, c(pi_true, dtype=float), state, q, qd,
+        c(q_d, dtype=float), c(qd_d, dtype=float), c(qdd_d, dtype=float), out,
+    )  # fmt: skip
+    return out

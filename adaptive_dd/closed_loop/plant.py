@@ -1,0 +1,25 @@
+"""The plant step the closed loop calls: one trial, one sample, zero-order hold, in place.
+
+:func:`adaptive_dd.plant.serial_integrator.serial_plant_step` (RK4 substeps; stick-slip,
+tanh or Stribeck friction) on the link parameters of the current payload segment.
+"""
+
+from __future__ import annotations
+
+from numba import njit
+
+from adaptive_dd.plant.serial_integrator import PlantParams, serial_plant_step
+
+__all__ = ["plant_step"]
+
+
+@njit(cache=True)
+def plant_step(ch, pl, seg, q, qd, tau, T, stuck):  # pragma: no cover - compiled
+    """Advance one trial's ``q, qd (n,)`` over one sample under ``tau (n,)`` in segment ``seg``.
+
+    ``pl`` is the run's :class:`~adaptive_dd.closed_loop.types.Plant`; ``stuck (n,)`` receives
+    the joints held by Coulomb friction. Returns False if the dynamics failed (a mass matrix
+    not positive definite, a non-finite state); the loop's runaway rule catches the state.
+    """
+    pp = PlantParams(pl.pi_seg[seg], pl.fv, pl.fc, pl.armature, pl.friction_law, pl.fparams)
+    return serial_plant_step(ch, pp, q, qd, tau, T, pl.substeps, stuck)

@@ -1,0 +1,282 @@
+"""Every controller of a scenario over every seed, on an N-joint arm.
+
+Trial i of every controller uses the noise of seed ``(scenario.seed, seed_indices[i])``
+(common random numbers), drawn in blocks of :data:`CHUNK` samples: ``(CHUNK, 2 n)`` standard
+normals per trial, dropouts from a second generator ``(seed, i, 1)``. Built-in controllers
+run compiled (:func:`~adaptive_dd.closed_loop.glue.closed_loop_block`, a block of samples of
+a range of trials in one call, ranges in parallel threads); any other controller object (a plug-in with
+``reset / command / observe``) runs on the Python path, one ``command`` per sample for the
+whole batch. Both call the same compiled glue.
+"""
+
+from __future__ import annotations
+
+import itertools
+from collections.abc import Sequence
+
+import numpy as np
+
+from adaptive_dd.benchmark.runner import BenchmarkResult, ControllerRun
+from adaptive_dd.closed_loop.controllers import SerialLaw, make_serial_controller
+from adaptive_dd.closed_loop.glue import (
+    Alarms,
+    apply_batch,
+    closed_loop_block,
+    measure_batch,
+    sigma_batch,
+)
+from adaptive_dd.closed_loop.types import (
+    Plant,
+    Recording,
+    RunConstants,
+    StreamedSums,
+    TrialState,
+    io_of,
+    plant_of,
+    run_constants,
+)
+from adaptive_dd.errors import SignalError
+
+__all__ = ["CHUNK", "MAX_ALARMS", "make_controllers", "run_serial", "true_parameters"]
+
+CHUNK = 1024
+"""Samples per block of drawn noise (and per call of the compiled loop)."""
+MAX_ALARMS = 256
+"""Alarm times kept per trial on the compiled path (the count goes on)."""
+
+
+def make_controllers(scenario) -> dict:
+    """The scenario's controllers by label: built-ins (:data:`SERIAL_CONTROLLERS`), plug-ins by path."""
+    from pathlib import Path
+
+    from adaptive_dd.controllers import Gains, controller_label, make_controller
+
+    out = {}
+    src = Path(scenario.source)
+    search = (src.parent, Path.cwd()) if src.is_file() else (Path.cwd(),)
+    for spec in scenario.controllers:
+        opts = scenario.options(controller_label(spec)) or scenario.options(spec)
+        label = controller_label(spec, opts)
+        if ":" in spec:
+            bw = opts.get("bandwidth", scenario.bandwidth)
+            g = Gains(float(np.max(bw)), opts.get("damping", scenario.damping))
+            ctrl = make_controller(
+                spec, g, {**opts, "bandwidth": g.bandwidth}, arm=scenario.arm, search=search
+            )
+        else:
+            ctrl = make_serial_controller(spec, scenario.arm, scenario.bandwidth, scenario.damping, opts)
+        out[label] = ctrl
+    return out
+
+
+def true_parameters(scenario) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Per sample: segment index ``(N,)``, true base parameters ``(N, p)``, payload mass ``(N,)``."""
+    from adaptive_dd.closed_loop.types import segment_starts
+
+    seg = np.searchsorted(segment_starts(scenario), np.arange(scenario.n_samples), side="right") - 1
+    masses = np.array([0.0, *scenario.swap_masses])
+    return seg, scenario.segment_sigmas()[seg], masses[seg]
+
+
+def run_serial(
+    scenario,
+    controllers: dict | None = None,
+    *,
+    seed_indices: Sequence[int] | None = None,
+    keep_trajectories: int = 3,
+    engine: str = "auto",
+    bar=None,
+) -> BenchmarkResult:
+    """Run every controller of ``scenario`` (an N-joint arm) over its seeds.
+
+    Parameters
+    ----------
+    scenario : Scenario
+        With ``scenario.arm`` a :class:`~adaptive_dd.plant.serial_arm.SerialArm`.
+    controllers : dict, optional
+        Controller objects by name (default: the scenario's, :func:`make_controllers`).
+    seed_indices : sequence of int, optional
+        Default ``range(scenario.seeds)``.
+    keep_trajectories : int
+        First seeds whose trajectories are kept.
+    engine : {"auto", "python", "compiled"}
+        ``python`` runs the built-ins through their Python form too.
+    bar : tqdm-like or None
+        Progress (samples).
+    """
+    from adaptive_dd.errors import ParameterError
+
+    ctrls = make_controllers(scenario) if controllers is None else controllers
+    idx = tuple(range(scenario.seeds)) if seed_indices is None else tuple(int(i) for i in seed_indices)
+    rc, io, pl = run_constants(scenario), io_of(scenario), plant_of(scenario)
+    _, sigma_true, mass = true_parameters(scenario)
+    t = np.arange(scenario.n_samples) * rc.T
+    res = BenchmarkResult(scenario, t, rc.q_d, sigma_true, mass, seed_indices=idx)
+    for name, ctrl in ctrls.items():
+        compiled = isinstance(ctrl, SerialLaw) and engine != "python"
+        if engine == "compiled" and not compiled:
+            raise ParameterError(f"engine='compiled': no compiled path for {name!r}; use engine='auto'")
+        runner = _run_compiled if compiled else _run_python
+        res.runs[name] = runner(name, ctrl, scenario, idx, rc, io, pl, keep_trajectories, bar)
+    return res
+
+
+# ------------------------------------------------------------------------ shared set-up
+def _trial_state(rc: RunConstants, S: int) -> TrialState:
+    n = rc.q_d.shape[1]
+    q = np.broadcast_to(rc.q_d[0], (S, n)).copy()
+    qd = np.broadcast_to(rc.qd_d[0], (S, n)).copy()
+    z = np.zeros(S, dtype=np.int64)
+    return TrialState(q, qd, qd == 0.0, np.zeros(S, np.bool_), z - 1, q.copy(), qd.copy(), z.copy())
+
+
+def _recording(S: int, K: int, N: int, n: int, p: int, G: int, estimates: bool) -> Recording:
+    return Recording(
+        np.zeros((K, N, n)), np.zeros((K, N, n)), np.zeros((K, N, n)), np.zeros((K, N, n), np.bool_),
+        np.full((K if estimates else 0, N, p), np.nan), np.full((S, G, p), np.nan),
+    )  # fmt: skip
+
+
+class _Draws:
+    """Sensor noise and dropouts of every trial, drawn block by block."""
+
+    def __init__(self, scenario, idx, n: int):
+        self.rngs = [np.random.default_rng([int(scenario.seed), int(i)]) for i in idx]
+        self.p = float(scenario.dropout)
+        self.drop_rngs = (
+            [np.random.default_rng([int(scenario.seed), int(i), 1]) for i in idx] if self.p else None
+        )
+        self.n = n
+
+    def block(self, m: int):
+        noise = np.ascontiguousarray(np.stack([g.standard_normal((m, 2 * self.n)) for g in self.rngs]))
+        if self.drop_rngs is None:
+            drop = np.zeros((len(self.rngs), 0), dtype=np.bool_)
+        else:
+            drop = np.ascontiguousarray(np.stack([g.random(m) < self.p for g in self.drop_rngs]))
+        return noise, drop
+
+
+def _true_pi(pl: Plant) -> np.ndarray:
+    """``(G, 13 n)``: the true model of every segment (links with payload, the arm's friction)."""
+    G = pl.pi_seg.shape[0]
+    fr = np.concatenate((pl.fv, pl.fc, pl.armature))
+    return np.ascontiguousarray(np.hstack((pl.pi_seg, np.broadcast_to(fr, (G, fr.size)))))
+
+
+def _finish(name, ctrl, scenario, acc, rec, ts, engine, estimates) -> ControllerRun:
+    K = rec.q.shape[0]
+    return ControllerRun(
+        name=name,
+        acc=acc,
+        e_norm=acc.e_norm,
+        sigma_end=rec.sigma_end if estimates else None,
+        failed=ts.failed,
+        failed_at=ts.failed_at,
+        floor=getattr(ctrl, "floor", "ct_oracle"),
+        q=rec.q,
+        qd=rec.qd,
+        tau=rec.tau,
+        saturated=rec.saturated,
+        sigma_hat=rec.sigma if estimates and K else None,
+        engine=engine,
+        dropped=ts.n_dropped,
+    )
+
+
+# ------------------------------------------------------------------------ the two paths
+def _run_compiled(name, ctrl: SerialLaw, scenario, idx, rc, io, pl, keep, bar) -> ControllerRun:
+    S, N, n = len(idx), scenario.n_samples, scenario.n_joints
+    G, p = pl.pi_seg.shape[0], scenario.arm.base.B.shape[0]
+    form = ctrl.compiled_form(S, rc.T)
+    ts, acc = _trial_state(rc, S), StreamedSums.zeros(S, G, n, N)
+    rec = _recording(S, min(keep, S), N, n, p, G, form.estimates)
+    alarms = Alarms(np.zeros((S, MAX_ALARMS)), np.zeros(S, dtype=np.int64))
+    draws, pi_true, B = _Draws(scenario, idx, n), _true_pi(pl), np.ascontiguousarray(scenario.arm.base.B)
+    for k0 in range(0, N, CHUNK):
+        k1 = min(N, k0 + CHUNK)
+        noise, drop = draws.block(k1 - k0)
+        args = (
+            k0, k1, ctrl.ch, rc, io, pl, ts, acc, rec, alarms, noise, drop, form.cfg, form.state, pi_true, B,
+            form.ec, form.es, form.estimates,
+        )  # fmt: skip
+        _in_threads(closed_loop_block, S, args)
+        if bar is not None:
+            bar.update(k1 - k0)
+    run = _finish(name, ctrl, scenario, acc, rec, ts, "compiled", form.estimates)
+    run.skipped = ctrl.skipped(form)
+    if ctrl.has_detector:
+        run.alarm_times = [list(alarms.times[i, : min(c, MAX_ALARMS)]) for i, c in enumerate(alarms.count)]
+    return run
+
+
+def _in_threads(kernel, S: int, args: tuple) -> None:
+    """``kernel(i0, i1, *args)`` over disjoint ranges of the S trials, one per numba thread."""
+    import numba
+
+    m = max(1, min(S, numba.config.NUMBA_NUM_THREADS))
+    edges = np.linspace(0, S, m + 1).astype(int)
+    if m == 1:
+        kernel(0, S, *args)
+        return
+    kernel(0, 0, *args)  # compile (or load) in this thread: numba's dispatch is not thread-safe
+    from concurrent.futures import ThreadPoolExecutor
+
+    with ThreadPoolExecutor(m) as pool:
+        for f in [pool.submit(kernel, int(a), int(b), *args) for a, b in itertools.pairwise(edges)]:
+            f.result()
+
+
+def _run_python(name, ctrl, scenario, idx, rc, io, pl, keep, bar) -> ControllerRun:
+    """One controller's trials as a vectorised batch, one ``command`` per sample."""
+    S, N, n, T = len(idx), scenario.n_samples, scenario.n_joints, rc.T
+    G, p = pl.pi_seg.shape[0], scenario.arm.base.B.shape[0]
+    sig_seg = scenario.segment_sigmas()
+    error = ""
+    try:
+        ctrl.reset(S, T)
+        estimates = getattr(ctrl, "sigma_hat", None) is not None
+    except Exception as exc:  # contain any controller failure to its own trials
+        error, estimates = f"{type(exc).__name__} in reset: {exc}", False
+    truth = bool(getattr(ctrl, "needs_true_model", False))
+    ts, acc = _trial_state(rc, S), StreamedSums.zeros(S, G, n, N)
+    rec = _recording(S, min(keep, S), N, n, p, G, estimates)
+    draws, ch = _Draws(scenario, idx, n), scenario.arm.chain
+    s = 0
+    for k in range(N):
+        if k % CHUNK == 0:
+            noise, drop = draws.block(min(CHUNK, N - k))
+        while s + 1 < G and k >= rc.seg_start[s + 1]:
+            s += 1
+        lost = drop[:, k % CHUNK] if drop.shape[1] else np.zeros(S, dtype=np.bool_)
+        qm, qdm, qm_obs, qdm_obs = measure_batch(io, ts, noise[:, k % CHUNK], lost)
+        cmd = np.full((S, n), np.nan)
+        if not error:
+            try:
+                kw = {"sigma_true": np.broadcast_to(sig_seg[s], (S, p)).copy()} if truth else {}
+                out = np.asarray(ctrl.command(qm, qdm, rc.q_d[k], rc.qd_d[k], rc.qdd_d[k], **kw), dtype=float)
+                if out.shape != (S, n):
+                    raise SignalError(f"command returned shape {out.shape}, expected ({S}, {n})")
+                cmd = out
+            except Exception as exc:
+                error = f"{type(exc).__name__} in command at t = {k * T:.3f} s: {exc}"
+        tau = apply_batch(ch, rc, io, pl, ts, acc, rec, k, s, cmd)
+        if not error:
+            try:
+                ctrl.observe(qm_obs, qdm_obs, tau)
+                if estimates:
+                    sigma_batch(rc, rec, k, s, np.asarray(ctrl.sigma_hat, dtype=float))
+            except Exception as exc:
+                error = f"{type(exc).__name__} in observe at t = {k * T:.3f} s: {exc}"
+        if bar is not None and k % 1000 == 999:
+            bar.update(1000)
+    if bar is not None:
+        bar.update(N % 1000)
+    run = _finish(name, ctrl, scenario, acc, rec, ts, "python", estimates)
+    run.error = error
+    if error:
+        run.failed[:] = True
+    else:
+        run.alarm_times = getattr(ctrl, "alarm_times", None)
+        run.skipped = getattr(ctrl, "skipped_samples", None)
+    return run

@@ -1,0 +1,241 @@
+"""What travels into the compiled closed loop: NamedTuples of arrays, one per concern.
+
+numba compiles NamedTuples of arrays (and scalars) as structs, so every kernel takes a
+handful of named records instead of dozens of positional arguments, and nothing is read
+by slot number. Shapes use ``n`` joints, ``S`` trials, ``N`` samples, ``G`` payload
+segments, ``p`` base parameters, ``K`` trials whose trajectories are recorded.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+from numpy.typing import NDArray
+
+from adaptive_dd.benchmark.scenario_checks import first_sample
+
+__all__ = [
+    "MAX_ERROR",
+    "MAX_SPEED",
+    "SETTLE",
+    "Io",
+    "Plant",
+    "Recording",
+    "RunConstants",
+    "StreamedSums",
+    "TrialState",
+    "io_of",
+    "pi_with_payload",
+    "plant_of",
+    "run_constants",
+    "segment_starts",
+]
+
+Array = NDArray[np.float64]
+
+MAX_ERROR = 3.0
+"""Tracking error [rad] (any joint) beyond which a trial counts as diverged."""
+MAX_SPEED = 1e3
+"""Joint speed [rad/s] beyond which a trial counts as diverged (runaway)."""
+SETTLE = 0.5
+"""[s] left out at the start of each segment for the settled RMS error."""
+
+
+class RunConstants(NamedTuple):
+    """The run's timing, reference and segments (the same for every trial).
+
+    Attributes
+    ----------
+    T : float
+        Sample period [s].
+    max_error, max_speed : float
+        Divergence thresholds [rad], [rad/s].
+    q_d, qd_d, qdd_d : ndarray (N, n)
+        Reference [rad, rad/s, rad/s^2] at every sample.
+    seg_start, seg_end, seg_settled : ndarray of int64 (G,)
+        First sample of each segment (:func:`~adaptive_dd.benchmark.scenario_checks.first_sample`
+        of the swap time), one past its last, first sample counted in the settled RMS.
+    """
+
+    T: float
+    max_error: float
+    max_speed: float
+    q_d: Array
+    qd_d: Array
+    qdd_d: Array
+    seg_start: NDArray[np.int64]
+    seg_end: NDArray[np.int64]
+    seg_settled: NDArray[np.int64]
+
+
+class Io(NamedTuple):
+    """Actuator (saturation, D/A) and sensor (encoder, noise) of the arm, per joint.
+
+    ``lim, lsb (n,)`` [N m]; ``res (n,)`` encoder step [rad]; ``std (2 n,)`` noise standard
+    deviations of q then qd.
+    """
+
+    lim: Array
+    lsb: Array
+    saturate: bool
+    quantize_dac: bool
+    res: Array
+    std: Array
+    quantize_encoder: bool
+
+
+class Plant(NamedTuple):
+    """The simulated arm: link parameters per payload segment and the joints' friction.
+
+    Attributes
+    ----------
+    pi_seg : ndarray (G, 10 n)
+        Standard link parameters with each segment's payload.
+    fv, fc, armature : ndarray (n,)
+        Viscous [N m s], Coulomb [N m] friction and armature [kg m^2].
+    friction_law : int
+        0 stick-slip, 1 tanh, 2 Stribeck (:attr:`SerialArm.friction_code`).
+    fparams : ndarray (3,)
+        Friction velocity, Stribeck ratio, Stribeck velocity.
+    substeps : int
+        RK4 substeps per sample.
+    """
+
+    pi_seg: Array
+    fv: Array
+    fc: Array
+    armature: Array
+    friction_law: int
+    fparams: Array
+    substeps: int
+
+
+class TrialState(NamedTuple):
+    """Per-trial state of the loop, updated in place.
+
+    ``q, qd (S, n)`` true state; ``stuck (S, n)`` stick-slip flags; ``failed (S,)``,
+    ``failed_at (S,)`` (sample or -1); ``held_q, held_qd (S, n)`` last good measurement
+    (dropouts); ``n_dropped (S,)``.
+    """
+
+    q: Array
+    qd: Array
+    stuck: NDArray[np.bool_]
+    failed: NDArray[np.bool_]
+    failed_at: NDArray[np.int64]
+    held_q: Array
+    held_qd: Array
+    n_dropped: NDArray[np.int64]
+
+
+class StreamedSums(NamedTuple):
+    """Metrics accumulated per trial and segment as the run streams.
+
+    Attributes
+    ----------
+    sum_e2 : (S, G)
+        Sum over the segment's samples of ``|e|^2`` [rad^2] (e on the true q).
+    sum_e2_joint : (S, G, n)
+        The same per joint.
+    max_e : (S, G)
+        Max ``|e|`` [rad].
+    sum_tau2 : (S, G)
+        Sum of ``|tau|^2`` of the applied torque [N^2 m^2].
+    n_saturated : (S, G)
+        Samples with a joint's command beyond its limit.
+    sum_e2_settled : (S, G)
+        Sum of ``|e|^2`` from ``seg_settled`` on.
+    e_norm : float32 (S, N)
+        ``|e|`` at every sample (recovery times).
+    """
+
+    sum_e2: Array
+    sum_e2_joint: Array
+    max_e: Array
+    sum_tau2: Array
+    n_saturated: Array
+    sum_e2_settled: Array
+    e_norm: NDArray[np.float32]
+
+    @classmethod
+    def zeros(cls, S: int, G: int, n: int, N: int) -> StreamedSums:
+        z = np.zeros((S, G))
+        return cls(
+            z, np.zeros((S, G, n)), z.copy(), z.copy(), z.copy(), z.copy(), np.zeros((S, N), np.float32)
+        )
+
+
+class Recording(NamedTuple):
+    """Trajectories of the first ``K`` trials and the estimate at each segment's end.
+
+    ``q, qd, tau (K, N, n)`` true state and applied torque; ``saturated (K, N, n)``;
+    ``sigma (K', N, p)`` the estimate in base parameters (K' = K for controllers with an
+    estimate, else 0); ``sigma_end (S, G, p)`` the estimate at each segment's last sample.
+    """
+
+    q: Array
+    qd: Array
+    tau: Array
+    saturated: NDArray[np.bool_]
+    sigma: Array
+    sigma_end: Array
+
+
+# ---------------------------------------------------------------------------- builders
+def segment_starts(scenario) -> NDArray[np.int64]:
+    """First sample of each payload segment (0, then each swap's ``first_sample``)."""
+    T = scenario.sample_period
+    return np.array([0, *(first_sample(t, T) for t in scenario.swap_times)], dtype=np.int64)
+
+
+def run_constants(scenario) -> RunConstants:
+    """Timing, reference and segment bounds of a scenario."""
+    N, T = scenario.n_samples, scenario.sample_period
+    q_d, qd_d, qdd_d = scenario.reference.sample(np.arange(N) * T)
+    start = segment_starts(scenario)
+    end = np.append(start[1:], N).astype(np.int64)
+    settled = np.minimum(end - 1, start + round(SETTLE / T)).astype(np.int64)
+    c = np.ascontiguousarray
+    return RunConstants(float(T), MAX_ERROR, MAX_SPEED, c(q_d), c(qd_d), c(qdd_d), start, end, settled)
+
+
+def io_of(scenario) -> Io:
+    """Actuator and sensor of the scenario's arm, with the scenario's noise."""
+    act, sens = scenario.arm.actuator, scenario.arm.sensor
+    std = np.sqrt(np.concatenate((scenario.position_variance, scenario.velocity_variance)))
+    return Io(
+        act._lim, act._lsb, bool(act.saturate), bool(act.quantize), sens.resolution, std, bool(sens.quantize)
+    )
+
+
+def pi_with_payload(arm, payload: dict | None) -> Array:
+    """Standard link parameters ``(10 n,)`` of ``arm`` carrying ``payload`` (keyword arguments of
+    :func:`~adaptive_dd.plant.serial_arm.payload_parameters`; None: no payload)."""
+    from adaptive_dd.plant.serial_arm import payload_parameters
+
+    pi = np.array(arm.pi_links, dtype=float)
+    if payload is None:
+        return pi
+    j = arm.payload_joint
+    pp = payload_parameters(
+        payload["mass"], payload.get("com"), payload.get("inertia"), payload.get("radius", arm.payload_radius)
+    )
+    pi[10 * j : 10 * j + 10] += arm.payload_map @ pp
+    return pi
+
+
+def plant_of(scenario) -> Plant:
+    """The simulated arm of a scenario, with every segment's payload."""
+    arm = scenario.arm
+    rows = [pi_with_payload(arm, None)]
+    rows += [pi_with_payload(arm, scenario.payload_of(i)) for i in range(len(scenario.swap_times))]
+    return Plant(
+        np.ascontiguousarray(rows),
+        np.array(arm.viscous, dtype=float),
+        np.array(arm.coulomb, dtype=float),
+        np.array(arm.armature, dtype=float),
+        int(arm.friction_code),
+        np.array(arm.friction_params, dtype=float),
+        int(scenario.substeps),
+    )

@@ -1,0 +1,278 @@
+"""The N-joint closed loop (adaptive_dd.closed_loop): both paths agree, failures stay contained,
+the laws are the arm's inverse dynamics, the metrics are the streamed sums, the shipped
+scenarios stay within the arms' limits."""
+
+from __future__ import annotations
+
+import dataclasses
+import tomllib
+from importlib import resources
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+from adaptive_dd.benchmark.scenario import load_scenario, parse_scenario
+from adaptive_dd.closed_loop.controllers import SERIAL_CONTROLLERS, make_serial_controller
+from adaptive_dd.closed_loop.metrics import serial_segment_metrics
+from adaptive_dd.closed_loop.runner import run_serial
+from adaptive_dd.closed_loop.types import StreamedSums, run_constants
+from adaptive_dd.errors import ParameterError, ScenarioError
+
+
+def _shipped(name: str) -> str:
+    return str(resources.files("adaptive_dd.scenarios").joinpath(f"{name}.toml"))
+
+
+def _short(name: str, duration: float, swaps: tuple, seeds: int = 2, **run) -> object:
+    """A shipped scenario cut to ``duration`` with payload changes at ``swaps`` (same payloads)."""
+    data = tomllib.loads(open(_shipped(name), encoding="utf-8").read())
+    data["run"] = {**data["run"], "duration": duration, "seeds": seeds, **run}
+    for p, at in zip(data["payload"], swaps, strict=False):
+        p["at"] = at
+    data["payload"] = data["payload"][: len(swaps)]
+    data["reference"]["ramp"] = 0.2
+    return parse_scenario(data, "test.toml", name=name)
+
+
+class Wrapped:
+    """A bare reset/command/observe class (no base class) around a built-in's Python form."""
+
+    def __init__(self, inner):
+        self.inner = inner
+
+    def reset(self, n_trials, sample_period):
+        self.inner.reset(n_trials, sample_period)
+
+    def command(self, q, qd, q_d, qd_d, qdd_d):
+        return self.inner.command(q, qd, q_d, qd_d, qdd_d)
+
+    def observe(self, q, qd, tau):
+        self.inner.observe(q, qd, tau)
+
+
+FIELDS = ("sum_e2", "sum_e2_joint", "max_e", "sum_tau2", "n_saturated", "sum_e2_settled")
+
+
+def _same(a, b, rtol=1e-12):
+    for f in FIELDS:
+        x, y = getattr(a.acc, f), getattr(b.acc, f)
+        np.testing.assert_allclose(x, y, rtol=rtol, atol=1e-300, err_msg=f)
+    np.testing.assert_allclose(a.q, b.q, rtol=rtol, atol=1e-13)
+    np.testing.assert_array_equal(a.failed, b.failed)
+
+
+def test_compiled_and_python_paths_agree_with_two_swaps_and_alarms():
+    sc = _short("ur5_tool_swap", 1.6, (0.6, 1.2), seeds=2, controllers=["adaptive_ct", "slotine_li"])
+    sc = dataclasses.replace(sc, dropout=0.002)
+    arm = sc.arm
+
+    def ctrls():
+        return {n: make_serial_controller(n, arm, sc.bandwidth, sc.damping) for n in sc.controllers}
+
+    comp = run_serial(sc, ctrls(), engine="compiled")
+    py = run_serial(sc, ctrls(), engine="python")
+    wrapped = run_serial(sc, {"w": Wrapped(make_serial_controller("slotine_li", arm))})
+    assert comp.runs["adaptive_ct"].engine.startswith("compiled")
+    assert py.runs["adaptive_ct"].engine.startswith("python") and wrapped.runs["w"].engine.startswith(
+        "python"
+    )
+    for name in sc.controllers:
+        a, b = comp.runs[name], py.runs[name]
+        _same(a, b)
+        np.testing.assert_allclose(a.sigma_end, b.sigma_end, rtol=1e-12, atol=1e-12)
+        np.testing.assert_array_equal(a.dropped, b.dropped)
+        assert a.dropped.sum() > 0
+    _same(comp.runs["slotine_li"], wrapped.runs["w"])
+    alarms_c, alarms_p = comp.runs["adaptive_ct"].alarm_times, py.runs["adaptive_ct"].alarm_times
+    assert alarms_c == alarms_p
+    # both swaps (the 2 kg tool, then the 5 kg one) are detected within 0.3 s in every trial
+    for tr in alarms_c:
+        for at in (0.6, 1.2):
+            assert any(0 <= x - at < 0.3 for x in tr), tr
+
+
+def test_ct_oracle_tracks_far_better_than_ct_nominal_on_loaded_ur5():
+    sc = _short("ur5_tool_swap", 2.4, (0.8, 1.6), seeds=1, controllers=["ct_nominal", "ct_oracle"])
+    res = run_serial(sc)
+    rms = {
+        n: np.sqrt(r.acc.sum_e2[0] / np.diff(np.r_[run_constants(sc).seg_start, sc.n_samples]))
+        for n, r in res.runs.items()
+    }
+    assert not any(r.failed.any() for r in res.runs.values())
+    np.testing.assert_allclose(rms["ct_nominal"][0], rms["ct_oracle"][0], rtol=1e-9)  # no payload: same model
+    for s in (1, 2):  # 2 kg, then 5 kg
+        assert rms["ct_nominal"][s] > 10 * rms["ct_oracle"][s], (s, rms)
+    from adaptive_dd.benchmark.metrics import compute_metrics
+
+    segs = compute_metrics(res)["controllers"]["ct_nominal"]["segments"]
+    for s in (1, 2):  # the information-limited time along ct_oracle's trajectory: a few samples
+        assert 0 < segs[s]["information_time"]["known"] < 0.05, segs[s]["information_time"]
+
+
+class Runaway:
+    """Trial 0: positive velocity feedback at the torque limit (runs away); others: ct_nominal."""
+
+    def __init__(self, inner, lim):
+        self.inner, self.lim = inner, lim
+
+    def reset(self, n_trials, sample_period):
+        self.inner.reset(n_trials, sample_period)
+
+    def command(self, q, qd, q_d, qd_d, qdd_d):
+        tau = self.inner.command(q, qd, q_d, qd_d, qdd_d)
+        tau[0] = self.lim * np.where(qd[0] >= 0, 1.0, -1.0)
+        return tau
+
+    def observe(self, q, qd, tau):
+        pass
+
+
+class Raises:
+    def reset(self, n_trials, sample_period):
+        self.k = 0
+
+    def command(self, q, qd, q_d, qd_d, qdd_d):
+        self.k += 1
+        if self.k > 50:
+            raise RuntimeError("boom")
+        return np.zeros_like(q)
+
+    def observe(self, q, qd, tau):
+        pass
+
+
+def test_a_diverging_trial_is_contained_and_a_raising_controller_fails_only_its_trials():
+    sc = _short("vertical3_payload", 1.2, (0.6,), seeds=2, controllers=["ct_nominal"])
+    arm = sc.arm
+    lim = np.array(arm.actuator.torque_limit)
+    res = run_serial(
+        sc,
+        {
+            "ct_nominal": make_serial_controller("ct_nominal", arm),
+            "runaway": Runaway(make_serial_controller("ct_nominal", arm), lim),
+            "raises": Raises(),
+        },
+    )
+    good, bad, boom = res.runs["ct_nominal"], res.runs["runaway"], res.runs["raises"]
+    assert bad.failed[0] and not bad.failed[1] and bad.failed_at[0] > 0
+    assert np.all(np.isfinite(bad.q)) and np.all(bad.tau[0, bad.failed_at[0] + 1 :] == 0)
+    # trial 1 of the sabotaged controller is untouched: the same as ct_nominal's trial 1
+    np.testing.assert_allclose(bad.acc.sum_e2[1], good.acc.sum_e2[1], rtol=1e-12)
+    assert boom.failed.all() and "RuntimeError in command" in boom.error and "boom" in boom.error
+    assert not good.failed.any()
+    m = serial_segment_metrics(res, bad)
+    assert np.isnan(m["rms_error"][0]).all() and np.isfinite(m["rms_error"][1]).all()
+
+
+def test_laws_are_the_arms_inverse_dynamics_on_the_reference(rng):
+    sc = load_scenario(_shipped("ur5_tool_swap"))
+    arm = sc.arm
+    n = arm.n_joints
+    q = rng.uniform(-1, 1, (4, n))
+    qd = rng.uniform(-1, 1, (4, n))
+    qdd = rng.uniform(-2, 2, (4, n))
+    sigma = sc.segment_sigmas()[2]  # the 5 kg tool with its offset centre of mass
+    want = arm.inverse_dynamics(q, qd, qdd, sigma)
+    for name in ("ct_oracle", "ct_oracle_textbook", "slotine_li_oracle"):
+        c = make_serial_controller(name, arm)
+        c.reset(4, sc.sample_period)
+        got = np.stack(
+            [c.command(q[i : i + 1], qd[i : i + 1], q[i], qd[i], qdd[i], sigma[None]) for i in range(4)]
+        )
+        np.testing.assert_allclose(got[:, 0], want, rtol=1e-9, atol=1e-9, err_msg=name)
+    c = make_serial_controller("ct_nominal", arm)
+    c.reset(4, sc.sample_period)
+    got = np.stack([c.command(q[i : i + 1], qd[i : i + 1], q[i], qd[i], qdd[i])[0] for i in range(4)])
+    np.testing.assert_allclose(got, arm.inverse_dynamics(q, qd, qdd), rtol=1e-9, atol=1e-9)
+
+
+def test_serial_metrics_from_hand_made_sums():
+    sc = _short("vertical3_payload", 0.01, (0.004,), seeds=2)
+    S, G, n, N = 2, 2, 3, sc.n_samples
+    acc = StreamedSums.zeros(S, G, n, N)
+    acc.sum_e2_joint[:] = np.arange(S * G * n, dtype=float).reshape(S, G, n)
+    acc.sum_e2[:] = acc.sum_e2_joint.sum(-1)
+    acc.max_e[:] = [[1.0, 2.0], [3.0, 4.0]]
+    acc.sum_tau2[:] = 16.0
+    acc.n_saturated[:] = [[2, 0], [0, 3]]
+    acc.sum_e2_settled[:] = 9.0
+    run = SimpleNamespace(acc=acc, failed=np.array([False, True]), sigma_end=None)
+    m = serial_segment_metrics(SimpleNamespace(scenario=sc), run)
+    counts = np.array([4.0, 6.0])  # samples 0..3 and 4..9
+    np.testing.assert_allclose(m["rms_error"][0], np.sqrt(acc.sum_e2[0] / counts))
+    for j in range(n):
+        np.testing.assert_allclose(
+            m[f"rms_error_joint{j + 1}"][0], np.sqrt(acc.sum_e2_joint[0, :, j] / counts)
+        )
+    np.testing.assert_allclose(m["saturation_fraction"][0], [2 / 4, 0.0])
+    np.testing.assert_allclose(m["rms_torque"][0], 4.0 / np.sqrt(counts))
+    np.testing.assert_allclose(m["rms_error_settled"][0], [3.0, 3.0])  # one settled sample each
+    assert np.isnan(m["rms_error"][1]).all() and "rms_error_joint4" not in m
+
+
+@pytest.mark.parametrize("name", ["ur5_tool_swap", "panda_payload", "vertical3_payload"])
+def test_shipped_references_stay_within_limits_with_the_heaviest_payload(name):
+    sc = load_scenario(_shipped(name))
+    arm = sc.arm
+    q, qd, qdd = sc.reference.sample(np.arange(sc.n_samples) * sc.sample_period)
+    heavy = sc.segment_sigmas()[1 + int(np.argmax(sc.swap_masses))]
+    tau = arm.inverse_dynamics(q, qd, qdd, heavy)
+    assert np.all(q > arm.position_limits[:, 0]) and np.all(q < arm.position_limits[:, 1])
+    assert np.all(np.abs(qd).max(axis=0) < 0.9 * arm.velocity_limits)
+    assert np.all(np.abs(tau).max(axis=0) < 0.9 * np.array(arm.actuator.torque_limit))
+    assert np.all(np.ptp(q, axis=0) > 0.5)  # every joint is excited
+
+
+def test_scenario_checks_for_n_joint_arms():
+    data = tomllib.loads(open(_shipped("ur5_tool_swap"), encoding="utf-8").read())
+    data["control"] = {"bandwidth": [40, 40, 40, 60, 60, 60]}
+    assert parse_scenario(data, "x.toml").bandwidth == (40, 40, 40, 60, 60, 60)
+    data["control"] = {"bandwidth": [40, 50]}
+    with pytest.raises(ScenarioError, match=r"control\.bandwidth: must be a list of 6"):
+        parse_scenario(data, "x.toml")
+    data["control"] = {"bandwidth": 40.0}
+    data["run"] = {**data["run"], "controllers": ["adaptive_ct_paper", "ct_oracle"]}
+    with pytest.raises(ScenarioError, match="'adaptive_ct_paper' is for the two-link arm only"):
+        parse_scenario(data, "x.toml")
+    with pytest.raises(ParameterError, match="two-link arm only"):
+        make_serial_controller("adaptive_ct_paper", load_scenario(_shipped("vertical3_payload")).arm)
+    with pytest.raises(ParameterError, match="unknown setting"):
+        make_serial_controller(
+            "ct_oracle", load_scenario(_shipped("vertical3_payload")).arm, options={"gain": 1}
+        )
+    assert set(SERIAL_CONTROLLERS) >= {"pd", "ct_nominal", "ct_oracle", "adaptive_ct", "slotine_li"}
+
+
+def test_cli_benchmark_of_an_n_joint_scenario_writes_every_output(tmp_path, capsys):
+    import json
+
+    import pandas as pd
+
+    from adaptive_dd.cli import main
+
+    src = tmp_path / "v3.toml"
+    src.write_text(
+        '[arm]\nrobot = "vertical3"\n'
+        '[run]\nduration = 1.2\nseeds = 2\ncontrollers = ["ct_nominal", "ct_oracle", "slotine_li"]\n'
+        "[control]\nbandwidth = [40.0, 40.0, 50.0]\n"
+        "[reference]\nramp = 0.2\n"
+        "joint1 = { offset = 0.3, amplitude = [0.4], frequency = [0.3] }\n"
+        "joint2 = { offset = -0.6, amplitude = [0.5], frequency = [0.4] }\n"
+        "joint3 = { offset = 0.4, amplitude = [0.6], frequency = [0.5] }\n"
+        "[[payload]]\nat = 0.6\nmass = 1.0\ncom = [0.03, 0.0, 0.0]\n",
+        encoding="utf-8",
+    )
+    out = tmp_path / "out"
+    assert main(["benchmark", str(src), "--out", str(out), "--no-progress"]) == 0
+    text = capsys.readouterr().out
+    assert "payload centre of mass estimated" in text and "ct_nominal / ct_oracle" in text
+    m = json.loads((out / "metrics.json").read_text(encoding="utf-8"))
+    seg = m["controllers"]["slotine_li"]["segments"][1]
+    assert len(seg["rms_error_joint"]) == 3 and seg["com_true"] == [0.03, 0.0, 0.0]
+    assert m["controllers"]["ct_oracle"]["segments"][1]["ratio_to_floor"] is None
+    assert m["provenance"]["scenario"]["arm"]["joints"] == ["joint1", "joint2", "joint3"]
+    frame = pd.read_csv(out / "per_seed.csv")
+    assert {"rms_error_joint3", "com_estimate_x"} <= set(frame.columns) and len(frame) == 3 * 2 * 2
+    for f in ("tracking_error.png", "joint_errors.png", "estimates.png", "metrics.csv"):
+        assert (out / f).stat().st_size > 0
