@@ -30,7 +30,7 @@ from numba.extending import overload
 from numpy.typing import NDArray
 
 from adaptive_dd.closed_loop.laws import law_trial
-from adaptive_dd.closed_loop.plant import plant_step
+from adaptive_dd.closed_loop.plant import plant_scratch, plant_step
 from adaptive_dd.identification.serial_online_kernel import est_model_trial, est_step_trial
 from adaptive_dd.plant.sampling import actuate_trial, measure_trial
 
@@ -46,6 +46,7 @@ __all__ = [
     "measure_batch",
     "measure_trial_sample",
     "record_estimate_trial",
+    "sample_work",
     "segment_of",
     "sigma_batch",
 ]
@@ -104,10 +105,17 @@ def _accumulate(rc, acc, i, s, k, e, tau, mask):  # pragma: no cover - compiled
 
 
 @njit(cache=True)
-def apply_trial_sample(ch, rc, io, pl, ts, acc, rec, i, k, s, cmd, tau):  # pragma: no cover
-    """Steps 3 of the module docstring for trial i at sample k (segment s); ``tau (n,)`` applied."""
+def sample_work(n):  # pragma: no cover - compiled
+    """Work arrays of one trial's :func:`apply_trial_sample`: plant scratch, error, previous q."""
+    return plant_scratch(n), np.empty(n), np.empty(n)
+
+
+@njit(cache=True)
+def apply_trial_sample(ch, rc, io, pl, ts, acc, rec, i, k, s, cmd, tau, work):  # pragma: no cover
+    """Steps 3 of the module docstring for trial i at sample k (segment s); ``tau (n,)`` applied;
+    ``work``: :func:`sample_work` (allocated once per trial, not per sample)."""
     n = cmd.shape[0]
-    e = np.empty(n)
+    sc, e, prev = work
     bad = False
     for j in range(n):
         e[j] = rc.q_d[k, j] - ts.q[i, j]
@@ -119,11 +127,12 @@ def apply_trial_sample(ch, rc, io, pl, ts, acc, rec, i, k, s, cmd, tau):  # prag
     if ts.failed[i]:
         tau[:] = 0.0
     keep = i < rec.q.shape[0]
-    prev = ts.q[i].copy()
+    for j in range(n):
+        prev[j] = ts.q[i, j]
     if keep:
         for j in range(n):
             rec.q[i, k, j], rec.qd[i, k, j] = ts.q[i, j], ts.qd[i, j]
-    plant_step(ch, pl, s, ts.q[i], ts.qd[i], tau, rc.T, ts.stuck[i])
+    plant_step(ch, pl, s, ts.q[i], ts.qd[i], tau, rc.T, ts.stuck[i], sc)
     ok = True
     for j in range(n):
         if not (np.isfinite(ts.q[i, j]) and abs(ts.qd[i, j]) < rc.max_speed):
@@ -217,6 +226,7 @@ def closed_loop_block(
         qm, qdm, qm_obs, qdm_obs = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
         cmd, tau = np.empty(n), np.empty(n)
         sig = np.empty(B.shape[0])
+        work = sample_work(n)
         for k in range(k0, k1):
             s = segment_of(rc, k)
             lost = drop.shape[1] > 0 and drop[i, k - k0]
@@ -225,7 +235,7 @@ def closed_loop_block(
                 ch, cfg, pi_true[s], ls.pi_model[i], ls.theta[i], ls.since_alarm[i],
                 qm, qdm, rc.q_d[k], rc.qd_d[k], rc.qdd_d[k], cmd,
             )  # fmt: skip
-            apply_trial_sample(ch, rc, io, pl, ts, acc, rec, i, k, s, cmd, tau)
+            apply_trial_sample(ch, rc, io, pl, ts, acc, rec, i, k, s, cmd, tau, work)
             if estimator_trial_sample(ec, es, ls, i, qm_obs, qdm_obs, tau) == 1:
                 if alarms.count[i] < alarms.times.shape[1]:
                     alarms.times[i, alarms.count[i]] = k * rc.T
@@ -252,8 +262,9 @@ def measure_batch(io, ts, noise, lost) -> tuple:
 
 @njit(cache=True)
 def _apply_loop(ch, rc, io, pl, ts, acc, rec, k, s, cmd, tau):  # pragma: no cover - compiled
+    work = sample_work(cmd.shape[1])  # one per call: trials run one after the other here
     for i in range(cmd.shape[0]):
-        apply_trial_sample(ch, rc, io, pl, ts, acc, rec, i, k, s, cmd[i], tau[i])
+        apply_trial_sample(ch, rc, io, pl, ts, acc, rec, i, k, s, cmd[i], tau[i], work)
 
 
 def apply_batch(ch, rc, io, pl, ts, acc, rec, k: int, s: int, cmd) -> NDArray[np.float64]:

@@ -8,18 +8,19 @@ from __future__ import annotations
 
 from numba import njit
 
-from adaptive_dd.plant.serial_integrator import PlantParams, serial_plant_step
+from adaptive_dd.plant.serial_integrator import PlantParams, plant_scratch, serial_plant_step_in
 
-__all__ = ["plant_step"]
+__all__ = ["plant_scratch", "plant_step"]
 
 
 @njit(cache=True)
-def plant_step(ch, pl, seg, q, qd, tau, T, stuck):  # pragma: no cover - compiled
+def plant_step(ch, pl, seg, q, qd, tau, T, stuck, sc):  # pragma: no cover - compiled
     """Advance one trial's ``q, qd (n,)`` over one sample under ``tau (n,)`` in segment ``seg``.
 
     ``pl`` is the run's :class:`~adaptive_dd.closed_loop.types.Plant`; ``stuck (n,)`` receives
-    the joints held by Coulomb friction. Returns False if the dynamics failed (a mass matrix
+    the joints held by Coulomb friction; ``sc`` is the trial's scratch (:func:`plant_scratch`,
+    allocated once). Returns False if the dynamics failed (a mass matrix
     not positive definite, a non-finite state); the loop's runaway rule catches the state.
     """
     pp = PlantParams(pl.pi_seg[seg], pl.fv, pl.fc, pl.armature, pl.friction_law, pl.fparams)
-    return serial_plant_step(ch, pp, q, qd, tau, T, pl.substeps, stuck)
+    return serial_plant_step_in(ch, pp, q, qd, tau, T, pl.substeps, stuck, sc)

@@ -490,7 +490,19 @@ def serial_plant_step(ch, pp, q, qd, tau, T, substeps, stuck):  # pragma: no cov
     bool
         False if a mass matrix was not positive definite or the state is not finite.
     """
-    sc = _scratch(q.shape[0])
+    return serial_plant_step_in(ch, pp, q, qd, tau, T, substeps, stuck, _scratch(q.shape[0]))
+
+
+@njit(cache=True)
+def plant_scratch(n):  # pragma: no cover - compiled
+    """The scratch arrays of one arm's step (:func:`serial_plant_step_in`), allocated once."""
+    return _scratch(n)
+
+
+@njit(cache=True)
+def serial_plant_step_in(ch, pp, q, qd, tau, T, substeps, stuck, sc):  # pragma: no cover - compiled
+    """:func:`serial_plant_step` with its scratch ``sc`` (:func:`plant_scratch`) given: no
+    allocation per sample (a closed loop allocates it once per trial)."""
     return _step(ch, pp.pi, pp.fv, pp.fc, pp.armature, pp.law, pp.fparams, q, qd, tau, T, substeps, stuck, sc)
 
 
