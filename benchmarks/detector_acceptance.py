@@ -9,6 +9,8 @@ detector's settings are the same everywhere). Per scenario and plant it prints, 
 the per-seed ratio adaptive_ct / ct_oracle (mean, p90, max and worst seed), the trials with a
 false alarm, the swaps missed (no alarm within 0.3 s after the swap), the median detection
 delay and the detection limit (:mod:`adaptive_dd.identification.detection_limit`) beside it.
+``--detector KEY=VALUE ...`` runs ``adaptive_ct`` with those :class:`ChangeDetector` settings in
+place of the defaults (the same ones everywhere), to judge a setting before it becomes the default.
 """
 
 from __future__ import annotations
@@ -24,6 +26,8 @@ import numpy as np
 from adaptive_dd.benchmark.metrics import FALSE_ALARM_WINDOW, compute_metrics
 from adaptive_dd.benchmark.runner import run_benchmark
 from adaptive_dd.benchmark.scenario import default_scenario_path, load_scenario
+from adaptive_dd.benchmark.scenario_checks import freeze
+from adaptive_dd.identification.online import ChangeDetector
 
 ROOT = Path(__file__).resolve().parent
 PLANTS = {
@@ -50,9 +54,25 @@ def missed_swaps(alarm_times: list[list[float]], swaps, failed) -> np.ndarray:
     )
 
 
-def evaluate(sc, plant: dict | None, seeds: int) -> tuple[list[str], dict]:
+def detector_settings(pairs: list[str]) -> dict:
+    """``["glr_threshold=300", ...]`` -> ``{"glr_threshold": 300.0}`` (typed as the defaults)."""
+    fields = {f.name: f for f in dataclasses.fields(ChangeDetector)}
+    out = {}
+    for pair in pairs:
+        key, sep, value = pair.partition("=")
+        if not sep or key not in fields:
+            raise SystemExit(f"--detector: expected KEY=VALUE with KEY one of {sorted(fields)}, got {pair!r}")
+        default = getattr(ChangeDetector(), key)
+        out[key] = value.lower() == "true" if isinstance(default, bool) else type(default)(value)
+    ChangeDetector(**out)  # a bad value fails here, by name
+    return out
+
+
+def evaluate(sc, plant: dict | None, seeds: int, detector: dict | None = None) -> tuple[list[str], dict]:
     arm = sc.arm if plant is None else dataclasses.replace(sc.arm, **plant)
     sc = dataclasses.replace(sc, arm=arm, seeds=seeds, controllers=("ct_oracle", "adaptive_ct"))
+    if detector:
+        sc = dataclasses.replace(sc, controller_options=(("adaptive_ct", freeze({"detector": detector})),))
     res = run_benchmark(sc, progress=False, keep_trajectories=1)
     m = compute_metrics(res)
     a = m["controllers"]["adaptive_ct"]
@@ -88,7 +108,11 @@ def main() -> None:
     ap.add_argument("--seeds", type=int, default=50)
     ap.add_argument("--scenarios", nargs="*", help="scenario files (default: every shipped one)")
     ap.add_argument("--plants", nargs="*", default=list(PLANTS), choices=list(PLANTS))
+    ap.add_argument("--detector", nargs="*", default=[], metavar="KEY=VALUE", help="ChangeDetector settings")
     args = ap.parse_args()
+    detector = detector_settings(args.detector)
+    if detector:
+        print(f"adaptive_ct detector settings: {detector} (else the defaults)", flush=True)
     paths = [Path(p) for p in args.scenarios] if args.scenarios else scenario_paths()
     t0 = time.perf_counter()
     tot = {
@@ -114,7 +138,7 @@ def main() -> None:
                 print(f"{name}: the same run as {seen[key]}", flush=True)
                 continue
             seen[key] = name
-            lines, s = evaluate(sc, spec, args.seeds)
+            lines, s = evaluate(sc, spec, args.seeds, detector)
             print(name, flush=True)
             print("\n".join(lines), flush=True)
             tot["fa"] += s["fa"]

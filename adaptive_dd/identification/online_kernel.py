@@ -64,7 +64,8 @@ F_MIN_EXPLAINED = 17  # fraction of the weighted error energy the payload direct
 F_GLR_THRESHOLD = 18  # threshold on A^2 / B of a GLR candidate
 F_HETERO = 19  # a candidate's score is A^2 / B - heterogeneity / F_HETERO
 F_DET_SPEED = 20  # [rad/s] an equation feeds the payload tests only while its joint is faster
-N_CF = 21
+F_REMOVAL = 21  # a GLR alarm may claim removing at most this many times the mass carried (+ min_mass)
+N_CF = 22
 
 # columns of the detector statistics `short` (n, N_SHORT)
 S_E2 = 0  # 0, 1: short average of the squared prior error per equation
@@ -72,7 +73,8 @@ S_DIR = 2  # 2, 3, 4: short averages of sum_j w_j phi_d,j e_j, w_j phi_d,j^2, w_
 S_PER = 5  # 5, 6, 7: the same over the persistence window (restarted at each alarm)
 S_PER_N = 8  # samples in the persistence window
 S_LREF = 9  # 9, 10: last long-run level per equation that was learned in full (the weights w_j)
-S_GLR = 11  # GLR candidates, GLR_STRIDE columns each (see _glr_update)
+S_M0 = 11  # d . theta0 / (d . d) of the start estimate (the arm without payload): the mass origin
+S_GLR = 12  # GLR candidates, GLR_STRIDE columns each (see _glr_update)
 GLR_CANDIDATES = 16
 GLR_CHANNELS = 5  # exact-construction channels of the inertial columns (J1, J2, r)
 G_X = 0  # filter state, GLR_CHANNELS x 2
@@ -379,7 +381,7 @@ def _glr_update(sh, u, k, eps, act, w, ci, cf, A, B, C, D, d):  # pragma: no cov
 
 
 @njit(cache=True)
-def _detect(i, eps, act, rest, phi_d, u, short, long, cnt, ci, cf, A, B, C, D, d):  # pragma: no cover
+def _detect(i, eps, act, rest, phi_d, u, th, short, long, cnt, ci, cf, A, B, C, D, d):  # pragma: no cover
     """Update the detector statistics of trial i; return True on an alarm.
 
     Every test asks that a change of the tip mass explain the prior errors: a change ``dm``
@@ -395,7 +397,13 @@ def _detect(i, eps, act, rest, phi_d, u, short, long, cnt, ci, cf, A, B, C, D, d
        change at each of the last ``GLR_CANDIDATES`` onsets (:func:`_glr_update`), less the
        heterogeneity over the two equations / ``hetero``, above ``glr_threshold``, with
        ``|A / B| >= min_mass`` [kg] and ``A^2 / (B E) >= min_explained``; the threshold is
-       ``slow_factor`` times higher while a joint was at rest within the selection memory.
+       ``slow_factor`` times higher while a joint was at rest within the selection memory; and
+       the change must leave a payload that can exist: ``dm_hat >= -(removal m_hat + min_mass)``,
+       ``m_hat = d . (theta - theta0) / (d . d)`` the mass the estimate carries over the start
+       estimate (the arm without payload). A stick event of one joint disturbs the other
+       joint's equation like a payload change of either sign; at no payload only the sign
+       that adds mass can be a swap (the false alarms of ``alternating.toml`` at 1.85 s claimed
+       -0.7 to -1.3 kg at 0 kg).
     2. **Persistence** (cannot lock up): over the persistence window (restarted at each alarm,
        filled from ``resume`` samples after it) the same ``|dm_hat| >= min_mass`` and
        explained fraction, with ``psi = phi d`` (long after a change the post-onset regressor
@@ -443,6 +451,10 @@ def _detect(i, eps, act, rest, phi_d, u, short, long, cnt, ci, cf, A, B, C, D, d
         return True
     if ci[I_CONSTRUCTION] == 1:  # the GLR on the payload direction
         gate = abs(ga) >= cf[F_MIN_MASS] * gb and ga * ga >= cf[F_MIN_EXPLAINED] * gb * ge
+        dd = d[0] * d[0] + d[1] * d[1] + d[2] * d[2]
+        if gate and dd > 0.0:  # the payload left after the change must be able to exist
+            m_hat = (d[0] * th[0] + d[1] * th[1] + d[2] * th[2]) / dd - sh[S_M0]
+            gate = ga >= -(cf[F_REMOVAL] * max(m_hat, 0.0) + cf[F_MIN_MASS]) * gb
         # a joint that stops or sticks disturbs the other joint's equation for the filters'
         # memory (the sampled filters meet an acceleration jump): while a joint has been at
         # rest within the selection memory (rest False), ask slow_factor (RMS) times more
@@ -551,7 +563,9 @@ def online_step_trial(
         for r in range(2):
             for j in range(7):
                 phi_d[r] += phi[r, j] * d[j]
-        if _detect(i, eps_out, det_act, sel_act, phi_d, u_last[i], short, long, cnt, ci, cf, A, B, C, D, d):
+        if _detect(
+            i, eps_out, det_act, sel_act, phi_d, u_last[i], th, short, long, cnt, ci, cf, A, B, C, D, d
+        ):
             alarm = 1
             on_alarm(i, P, cnt, long, short, group, d, ci, cf)
         else:
