@@ -1,0 +1,181 @@
+"""Compiled spatial-algebra helpers of :mod:`adaptive_dd.plant.chain`.
+
+Spatial vectors are ``[linear; angular]`` (Pinocchio's order), expressed in the
+world frame at the world origin unless said otherwise. A link inertia is held as
+10 numbers ``(m, h, Ixx, Ixy, Iyy, Ixz, Iyz, Izz)``: mass, first moment ``h = m c``
+and rotational inertia about the frame's origin (Pinocchio's dynamic-parameter
+order), so that composite inertias add entry by entry.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+__all__ = [
+    "add_cross_force",
+    "apply_inertia",
+    "cross3",
+    "kinematics",
+    "motion_cross",
+    "to_local",
+    "world_inertia",
+]
+
+
+@njit(cache=True, inline="always")
+def cross3(a0, a1, a2, b0, b1, b2):  # pragma: no cover - compiled
+    return a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0
+
+
+@njit(cache=True)
+def kinematics(ch, q, qd, rw, pw, s, v):  # pragma: no cover - compiled
+    """World pose (rw (n,3,3), pw (n,3)), joint motion s (n,6) and body velocity v (n,6)."""
+    n = q.shape[0]
+    r_par = np.eye(3)
+    p0, p1, p2 = 0.0, 0.0, 0.0
+    vl0 = vl1 = vl2 = va0 = va1 = va2 = 0.0
+    for i in range(n):
+        a = ch.axis[i]
+        # base orientation of frame i: R_{i-1} rot_i
+        for r in range(3):
+            for c in range(3):
+                rw[i, r, c] = (
+                    r_par[r, 0] * ch.rot[i, 0, c]
+                    + r_par[r, 1] * ch.rot[i, 1, c]
+                    + r_par[r, 2] * ch.rot[i, 2, c]
+                )
+        t = ch.trans[i]
+        o0 = p0 + r_par[0, 0] * t[0] + r_par[0, 1] * t[1] + r_par[0, 2] * t[2]
+        o1 = p1 + r_par[1, 0] * t[0] + r_par[1, 1] * t[1] + r_par[1, 2] * t[2]
+        o2 = p2 + r_par[2, 0] * t[0] + r_par[2, 1] * t[1] + r_par[2, 2] * t[2]
+        # world axis (unchanged by the joint's own motion)
+        w0 = rw[i, 0, 0] * a[0] + rw[i, 0, 1] * a[1] + rw[i, 0, 2] * a[2]
+        w1 = rw[i, 1, 0] * a[0] + rw[i, 1, 1] * a[1] + rw[i, 1, 2] * a[2]
+        w2 = rw[i, 2, 0] * a[0] + rw[i, 2, 1] * a[1] + rw[i, 2, 2] * a[2]
+        if ch.jtype[i] == 0:
+            cq, sq = np.cos(q[i]), np.sin(q[i])
+            # R = B (c I + s [a]x + (1 - c) a a^T) = c B + s [w]x B + (1 - c) w a^T
+            for r in range(3):
+                b0, b1, b2 = rw[i, r, 0], rw[i, r, 1], rw[i, r, 2]
+                wr = w0 if r == 0 else (w1 if r == 1 else w2)
+                for c in range(3):
+                    # ([w]x B)[r, c] = (w x B[:, c])[r]
+                    bc0, bc1, bc2 = rw[i, 0, c], rw[i, 1, c], rw[i, 2, c]
+                    x0, x1, x2 = cross3(w0, w1, w2, bc0, bc1, bc2)
+                    xr = x0 if r == 0 else (x1 if r == 1 else x2)
+                    br = b0 if c == 0 else (b1 if c == 1 else b2)
+                    r_par[r, c] = cq * br + sq * xr + (1.0 - cq) * wr * a[c]
+            for r in range(3):
+                for c in range(3):
+                    rw[i, r, c] = r_par[r, c]
+            p0, p1, p2 = o0, o1, o2
+            l0, l1, l2 = cross3(p0, p1, p2, w0, w1, w2)
+            s[i, 0], s[i, 1], s[i, 2], s[i, 3], s[i, 4], s[i, 5] = l0, l1, l2, w0, w1, w2
+        else:
+            for r in range(3):
+                for c in range(3):
+                    r_par[r, c] = rw[i, r, c]
+            p0, p1, p2 = o0 + w0 * q[i], o1 + w1 * q[i], o2 + w2 * q[i]
+            s[i, 0], s[i, 1], s[i, 2], s[i, 3], s[i, 4], s[i, 5] = w0, w1, w2, 0.0, 0.0, 0.0
+        pw[i, 0], pw[i, 1], pw[i, 2] = p0, p1, p2
+        vl0 += s[i, 0] * qd[i]
+        vl1 += s[i, 1] * qd[i]
+        vl2 += s[i, 2] * qd[i]
+        va0 += s[i, 3] * qd[i]
+        va1 += s[i, 4] * qd[i]
+        va2 += s[i, 5] * qd[i]
+        v[i, 0], v[i, 1], v[i, 2], v[i, 3], v[i, 4], v[i, 5] = vl0, vl1, vl2, va0, va1, va2
+
+
+@njit(cache=True)
+def world_inertia(pi, rw, pw, iw):  # pragma: no cover - compiled
+    """Each link's inertia about the world origin in world axes, iw (n, 10), Pinocchio's order."""
+    n = rw.shape[0]
+    for j in range(n):
+        b = 10 * j
+        m = pi[b]
+        r = rw[j]
+        h0 = r[0, 0] * pi[b + 1] + r[0, 1] * pi[b + 2] + r[0, 2] * pi[b + 3]
+        h1 = r[1, 0] * pi[b + 1] + r[1, 1] * pi[b + 2] + r[1, 2] * pi[b + 3]
+        h2 = r[2, 0] * pi[b + 1] + r[2, 1] * pi[b + 2] + r[2, 2] * pi[b + 3]
+        ixx, ixy, iyy, ixz, iyz, izz = pi[b + 4], pi[b + 5], pi[b + 6], pi[b + 7], pi[b + 8], pi[b + 9]
+        # R I R^T (symmetric): first T = R I
+        t00 = r[0, 0] * ixx + r[0, 1] * ixy + r[0, 2] * ixz
+        t01 = r[0, 0] * ixy + r[0, 1] * iyy + r[0, 2] * iyz
+        t02 = r[0, 0] * ixz + r[0, 1] * iyz + r[0, 2] * izz
+        t10 = r[1, 0] * ixx + r[1, 1] * ixy + r[1, 2] * ixz
+        t11 = r[1, 0] * ixy + r[1, 1] * iyy + r[1, 2] * iyz
+        t12 = r[1, 0] * ixz + r[1, 1] * iyz + r[1, 2] * izz
+        t20 = r[2, 0] * ixx + r[2, 1] * ixy + r[2, 2] * ixz
+        t21 = r[2, 0] * ixy + r[2, 1] * iyy + r[2, 2] * iyz
+        t22 = r[2, 0] * ixz + r[2, 1] * iyz + r[2, 2] * izz
+        jxx = t00 * r[0, 0] + t01 * r[0, 1] + t02 * r[0, 2]
+        jxy = t00 * r[1, 0] + t01 * r[1, 1] + t02 * r[1, 2]
+        jyy = t10 * r[1, 0] + t11 * r[1, 1] + t12 * r[1, 2]
+        jxz = t00 * r[2, 0] + t01 * r[2, 1] + t02 * r[2, 2]
+        jyz = t10 * r[2, 0] + t11 * r[2, 1] + t12 * r[2, 2]
+        jzz = t20 * r[2, 0] + t21 * r[2, 1] + t22 * r[2, 2]
+        # shift to the world origin: I_O = I_P + m(|p|^2 1 - p p^T) + 2 (p.h) 1 - h p^T - p h^T
+        p0, p1, p2 = pw[j, 0], pw[j, 1], pw[j, 2]
+        pp = p0 * p0 + p1 * p1 + p2 * p2
+        ph = p0 * h0 + p1 * h1 + p2 * h2
+        d = m * pp + 2.0 * ph
+        iw[j, 0] = m
+        iw[j, 1] = h0 + m * p0
+        iw[j, 2] = h1 + m * p1
+        iw[j, 3] = h2 + m * p2
+        iw[j, 4] = jxx + d - m * p0 * p0 - 2.0 * h0 * p0
+        iw[j, 5] = jxy - m * p0 * p1 - h0 * p1 - p0 * h1
+        iw[j, 6] = jyy + d - m * p1 * p1 - 2.0 * h1 * p1
+        iw[j, 7] = jxz - m * p0 * p2 - h0 * p2 - p0 * h2
+        iw[j, 8] = jyz - m * p1 * p2 - h1 * p2 - p1 * h2
+        iw[j, 9] = jzz + d - m * p2 * p2 - 2.0 * h2 * p2
+
+
+@njit(cache=True, inline="always")
+def apply_inertia(y, x, out):  # pragma: no cover - compiled
+    """out = I x: lin = m xl + xa x h, ang = h x xl + I xa; y = (m, h, Ixx, Ixy, Iyy, Ixz, Iyz, Izz)."""
+    m, h0, h1, h2 = y[0], y[1], y[2], y[3]
+    l0, l1, l2 = cross3(x[3], x[4], x[5], h0, h1, h2)
+    a0, a1, a2 = cross3(h0, h1, h2, x[0], x[1], x[2])
+    out[0] = m * x[0] + l0
+    out[1] = m * x[1] + l1
+    out[2] = m * x[2] + l2
+    out[3] = a0 + y[4] * x[3] + y[5] * x[4] + y[7] * x[5]
+    out[4] = a1 + y[5] * x[3] + y[6] * x[4] + y[8] * x[5]
+    out[5] = a2 + y[7] * x[3] + y[8] * x[4] + y[9] * x[5]
+
+
+@njit(cache=True, inline="always")
+def add_cross_force(v, f, out, scale):  # pragma: no cover - compiled
+    """out += scale * (v x* f) = scale * (w x fl, w x fa + vl x fl)."""
+    a0, a1, a2 = cross3(v[3], v[4], v[5], f[0], f[1], f[2])
+    b0, b1, b2 = cross3(v[3], v[4], v[5], f[3], f[4], f[5])
+    c0, c1, c2 = cross3(v[0], v[1], v[2], f[0], f[1], f[2])
+    out[0] += scale * a0
+    out[1] += scale * a1
+    out[2] += scale * a2
+    out[3] += scale * (b0 + c0)
+    out[4] += scale * (b1 + c1)
+    out[5] += scale * (b2 + c2)
+
+
+@njit(cache=True, inline="always")
+def motion_cross(v, x, out):  # pragma: no cover - compiled
+    """out = v x x = (w x xl + vl x xa, w x xa)."""
+    a0, a1, a2 = cross3(v[3], v[4], v[5], x[0], x[1], x[2])
+    b0, b1, b2 = cross3(v[0], v[1], v[2], x[3], x[4], x[5])
+    c0, c1, c2 = cross3(v[3], v[4], v[5], x[3], x[4], x[5])
+    out[0], out[1], out[2] = a0 + b0, a1 + b1, a2 + b2
+    out[3], out[4], out[5] = c0, c1, c2
+
+
+@njit(cache=True, inline="always")
+def to_local(r, p, x, out):  # pragma: no cover - compiled
+    """A world motion x (at the world origin) in a frame at p with axes r: (R^T (xl + xa x p), R^T xa)."""
+    c0, c1, c2 = cross3(x[3], x[4], x[5], p[0], p[1], p[2])
+    l0, l1, l2 = x[0] + c0, x[1] + c1, x[2] + c2
+    for k in range(3):
+        out[k] = r[0, k] * l0 + r[1, k] * l1 + r[2, k] * l2
+        out[3 + k] = r[0, k] * x[3] + r[1, k] * x[4] + r[2, k] * x[5]
