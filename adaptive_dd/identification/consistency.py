@@ -65,11 +65,7 @@ def params_from_pseudo_inertia(J: ArrayLike) -> Array:
         [
             J[..., 3, 3, None],
             J[..., :3, 3],
-            np.stack(
-                [inertia[..., 0, 0], inertia[..., 0, 1], inertia[..., 1, 1], inertia[..., 0, 2]]
-                + [inertia[..., 1, 2], inertia[..., 2, 2]],
-                -1,
-            ),
+            np.stack([inertia[..., i, j] for i, j in ((0, 0), (0, 1), (1, 1), (0, 2), (1, 2), (2, 2))], -1),
         ],
         axis=-1,
     )

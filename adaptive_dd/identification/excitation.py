@@ -164,7 +164,7 @@ def _logdet(F: Array, d: Array) -> float:
 def multisine(
     arm, lim: ExcitationLimits, harmonics: int = 5, f0: float = 0.1, grid: int = 200
 ) -> FourierTrajectory:
-    """The plain multi-sine of the same harmonics, scaled per joint to the largest amplitude within ``lim``."""
+    """The plain multi-sine of the same harmonics, scaled per joint to the largest amplitude in ``lim``."""
     model = serial_model(arm)
     n, K = arm.n_joints, harmonics
     k = np.arange(1, K + 1)

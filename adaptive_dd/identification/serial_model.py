@@ -1,4 +1,4 @@
-"""The model an N-joint identification works with: compiled dynamics of a :class:`SerialArm` in base parameters.
+"""The model of N-joint identification: compiled dynamics of a :class:`SerialArm` in base parameters.
 
 Parameters
 ----------
@@ -173,7 +173,7 @@ def mass_matrix(model: SerialModel, pi: ArrayLike, q: ArrayLike) -> Array:
 def rk4_step(
     model: SerialModel, pi: Array, q: Array, qd: Array, tau: Array, T: float, substeps: int = 2
 ) -> tuple[Array, Array]:
-    """One sample of the plant under torque held over ``T`` [s]: RK4 with ``substeps`` steps, batch ``(..., n)``."""
+    """One sample under torque held over ``T`` [s]: RK4 with ``substeps`` steps, batch ``(..., n)``."""
     h = T / substeps
     for _ in range(substeps):
         a1 = forward_dynamics(model, pi, q, qd, tau)

@@ -308,7 +308,7 @@ def serial_output_error(
     else:
         E, theta = np.asarray(E, dtype=float), np.zeros(np.shape(E)[1])
     w = 1.0 / np.asarray(std, dtype=float)
-    n, T, L = model.n, float(sample_period), int(segment_length)
+    T, L = float(sample_period), int(segment_length)
     y, nseg = _segments(np.concatenate([q, qd], axis=1), L)
     tau_s, _ = _segments(tau, L)
     nodes = y[:, 0].copy()

@@ -134,7 +134,7 @@ def simulate_serial_record(
         raise ParameterError(f"need duration >= 10 samples of T > 0, got {duration} s, T = {sample_period} s")
     if not (0 < bandwidth * sample_period <= 0.2):
         raise ParameterError(f"bandwidth {bandwidth} rad/s with T = {sample_period} s: need 0 < w T <= 0.2")
-    N = int(round(duration / sample_period))
+    N = round(duration / sample_period)
     t = np.arange(N) * sample_period
     qd_ref, qdd_ref_v, qdd_ref = reference.sample(t)
     if qd_ref.shape != (N, n):
