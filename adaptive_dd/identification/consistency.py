@@ -26,7 +26,9 @@ from scipy.optimize import least_squares
 from adaptive_dd.errors import ParameterError
 
 __all__ = [
+    "ConsistentArmFit",
     "ConsistentFit",
+    "consistent_arm_fit",
     "consistent_fit",
     "is_physical",
     "params_from_pseudo_inertia",
@@ -152,3 +154,62 @@ def consistent_fit(pi_hat: ArrayLike, information: ArrayLike) -> ConsistentFit:
     sol = least_squares(residual, _to_log_cholesky(J, 1e-6 * scale), method="lm", xtol=1e-12, ftol=1e-12)
     params = _from_log_cholesky(sol.x)
     return ConsistentFit(params, pi_hat.copy(), lam_min, float(np.linalg.norm(sol.fun)), False)
+
+
+@dataclass(frozen=True)
+class ConsistentArmFit:
+    """All links' standard parameters, each link physical, whose base parameters fit an estimate.
+
+    Attributes
+    ----------
+    pi : ndarray (13 n,)
+        Links (each pseudo-inertia positive definite), then fv, fc, Ia (>= 0).
+    sigma : ndarray (p,)
+        ``B pi``: the nearest physically consistent base parameters.
+    distance : float
+        Mahalanobis distance from the unconstrained estimate to ``sigma`` (in its std):
+        about 0 when the estimate is consistent, large when no physical arm has it.
+    """
+
+    pi: Array
+    sigma: Array
+    distance: float
+
+
+def consistent_arm_fit(
+    model, sigma_hat: ArrayLike, information: ArrayLike, prior_weight: float = 1e-6
+) -> ConsistentArmFit:
+    """Physically consistent standard parameters nearest (Mahalanobis) to base parameters ``sigma_hat``.
+
+    The base parameters do not fix the standard ones; among those that fit, the fit keeps
+    close to the URDF's (a penalty ``prior_weight`` on the relative change of each). Links
+    by log-Cholesky, friction and armature bounded below by 0; solved by
+    ``scipy.optimize.least_squares`` (trust-region reflective).
+    """
+    sigma_hat = np.asarray(sigma_hat, float)
+    F = np.asarray(information, float)
+    Lf = np.linalg.cholesky(0.5 * (F + F.T) + 1e-12 * np.trace(F) / len(F) * np.eye(len(F)))
+    n = model.n
+    ref = model.pi_ref
+    links_ref = ref[: 10 * n].reshape(n, 10)
+    x0 = np.concatenate(
+        [
+            np.concatenate([_to_log_cholesky(pseudo_inertia(links_ref[j]), 1e-8) for j in range(n)]),
+            ref[10 * n :],
+        ]
+    )
+    scale = np.maximum(np.abs(ref), 1e-3 * np.abs(ref).max())
+
+    def pi_of(x):
+        links = np.concatenate([_from_log_cholesky(x[10 * j : 10 * j + 10]) for j in range(n)])
+        return np.concatenate([links, x[10 * n :]])
+
+    def residual(x):
+        pi = pi_of(x)
+        return np.concatenate([Lf.T @ (model.B @ pi - sigma_hat), np.sqrt(prior_weight) * (pi - ref) / scale])
+
+    lo = np.concatenate([np.full(10 * n, -np.inf), np.zeros(3 * n)])
+    sol = least_squares(residual, np.maximum(x0, lo), bounds=(lo, np.inf), method="trf", max_nfev=200)
+    pi = pi_of(sol.x)
+    sig = model.B @ pi
+    return ConsistentArmFit(pi, sig, float(np.linalg.norm(Lf.T @ (sig - sigma_hat))))
