@@ -57,7 +57,9 @@ def _fit(arm, q, qd, tau):
 def _main_task(args):
     robot, seed, duration = args
     arm = load_scenario(SCENARIO.format(robot)).arm
-    rec = simulate_serial_record(arm, load_scenario(SCENARIO.format(robot)).reference, duration, trial_rngs(seed, 1))
+    rec = simulate_serial_record(
+        arm, load_scenario(SCENARIO.format(robot)).reference, duration, trial_rngs(seed, 1)
+    )
     w, o, _, ok = _fit(arm, rec.q[0], rec.qd[0], rec.tau[0])
     return w - rec.sigma_true, o - rec.sigma_true, ok
 
@@ -84,7 +86,11 @@ def _light_task(args):
     model = serial_model(arm)
     pr = payload_from_record(arm, model, rec.q[0], rec.qd[0], rec.tau[0], measurement_std(arm))
     c = pr.consistent
-    return c.was_physical, is_physical(c.params, atol=1e-12), float(np.linalg.eigvalsh(pseudo_inertia(c.params))[0])
+    return (
+        c.was_physical,
+        is_physical(c.params, atol=1e-12),
+        float(np.linalg.eigvalsh(pseudo_inertia(c.params))[0]),
+    )
 
 
 def _map(fn, jobs, workers):
@@ -98,14 +104,18 @@ def _verdict(ok: bool) -> str:
     return "met" if ok else "NOT met"
 
 
-def run_robot(robot: str, seeds: int, workers: int, duration: float, pair_duration: float, design: bool) -> list:
+def run_robot(
+    robot: str, seeds: int, workers: int, duration: float, pair_duration: float, design: bool
+) -> list:
     sc = load_scenario(SCENARIO.format(robot))
     arm = sc.arm
     model = serial_model(arm)
     rows = []
     t0 = time.time()
     ref = simulate_serial_record(arm, sc.reference, duration, trial_rngs(0, 1))
-    crb, _ = serial_crb(model, ref.sigma_true, ref.q_true[0], ref.qd_true[0], ref.tau[0], measurement_std(arm))
+    crb, _ = serial_crb(
+        model, ref.sigma_true, ref.q_true[0], ref.qd_true[0], ref.tau[0], measurement_std(arm)
+    )
     res = _map(_main_task, [(robot, s, duration) for s in range(seeds)], workers)
     ew = np.array([r[0] for r in res])
     eo = np.array([r[1] for r in res])
@@ -134,8 +144,22 @@ def run_robot(robot: str, seeds: int, workers: int, duration: float, pair_durati
         f"{100 * m_err.max():.3f} % (median bound {100 * m_std / PAYLOAD['mass']:.3f} %), centre of mass error worst "
         f"{1e3 * c_err.max():.3f} mm; {time.time() - t0:.0f} s"
     )
-    rows.append((f"{robot}: payload mass error (worst seed)", f"{100 * m_err.max():.3f} %", "<= 1 %", _verdict(m_err.max() <= 0.01)))
-    rows.append((f"{robot}: payload com error (worst seed)", f"{1e3 * c_err.max():.3f} mm", "<= 5 mm", _verdict(c_err.max() <= 0.005)))
+    rows.append(
+        (
+            f"{robot}: payload mass error (worst seed)",
+            f"{100 * m_err.max():.3f} %",
+            "<= 1 %",
+            _verdict(m_err.max() <= 0.01),
+        )
+    )
+    rows.append(
+        (
+            f"{robot}: payload com error (worst seed)",
+            f"{1e3 * c_err.max():.3f} mm",
+            "<= 5 mm",
+            _verdict(c_err.max() <= 0.005),
+        )
+    )
     light = _map(_light_task, [(robot, s, pair_duration) for s in range(seeds)], workers)
     impossible = sum(not r[0] for r in light)
     physical = all(r[1] for r in light)
@@ -144,7 +168,14 @@ def run_robot(robot: str, seeds: int, workers: int, duration: float, pair_durati
         f"{impossible} of {seeds} seeds; constrained fit physical on all: {physical} (smallest pseudo-inertia "
         f"eigenvalue {min(r[2] for r in light):.3g})"
     )
-    rows.append((f"{robot}: constrained payload always physical", f"{impossible}/{seeds} unconstrained impossible", "all physical", _verdict(physical and impossible > 0)))
+    rows.append(
+        (
+            f"{robot}: constrained payload always physical",
+            f"{impossible}/{seeds} unconstrained impossible",
+            "all physical",
+            _verdict(physical and impossible > 0),
+        )
+    )
     if design:
         from adaptive_dd.cli_serial import excitation_bounds
         from adaptive_dd.identification.excitation import ExcitationLimits, design_excitation, multisine
@@ -159,7 +190,14 @@ def run_robot(robot: str, seeds: int, workers: int, duration: float, pair_durati
             f"  excitation: worst relative bound plain multi-sine {100 * b['plain'][0]:.3g} % ({b['plain'][1][:40]}), "
             f"designed {100 * b['designed'][0]:.3g} % ({b['designed'][1][:40]}): {ratio:.1f}x; {time.time() - t0:.0f} s"
         )
-        rows.append((f"{robot}: designed / plain worst bound", f"{ratio:.1f}x smaller", ">= 10x", _verdict(ratio >= 10)))
+        rows.append(
+            (
+                f"{robot}: designed / plain worst bound",
+                f"{ratio:.1f}x smaller",
+                ">= 10x",
+                _verdict(ratio >= 10),
+            )
+        )
     return rows
 
 

@@ -143,10 +143,11 @@ def consistent_fit(pi_hat: ArrayLike, information: ArrayLike) -> ConsistentFit:
     except np.linalg.LinAlgError:
         raise ParameterError("the information matrix of the payload is not positive definite") from None
     J = pseudo_inertia(pi_hat)
-    lam_min = float(np.linalg.eigvalsh(J)[0])
-    if lam_min > 0:
+    lam = np.linalg.eigvalsh(J)
+    lam_min = float(lam[0])
+    scale = max(float(np.abs(lam).max()), 1e-12)
+    if lam_min >= -1e-12 * scale:  # semidefinite to rounding: a thin disk, a point mass
         return ConsistentFit(pi_hat.copy(), pi_hat.copy(), lam_min, 0.0, True)
-    scale = max(float(np.abs(np.linalg.eigvalsh(J)).max()), 1e-12)
 
     def residual(theta):
         return Lf.T @ (_from_log_cholesky(theta) - pi_hat)

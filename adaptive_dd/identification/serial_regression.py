@@ -38,6 +38,7 @@ __all__ = [
     "SerialRegression",
     "WlsResult",
     "check_excitation",
+    "check_motion",
     "momentum_regressors",
     "serial_filtered_regression",
     "weighted_least_squares",
@@ -115,6 +116,7 @@ def serial_filtered_regression(
         )
     if not (np.all(np.isfinite(q)) and np.all(np.isfinite(qd)) and np.all(np.isfinite(tau))):
         raise SignalError("q, qd, tau must be finite")
+    check_motion(q, model.names)
     bank = design_filter_bank("M2", tau_f, sample_period)
     Yp, Yr = momentum_regressors(model, q, qd)
     fp = filter_record(bank, Yp, axis=0, initial=Yp[0])[..., 1]
@@ -171,6 +173,29 @@ def weighted_least_squares(reg: SerialRegression, names: tuple[str, ...] = ()) -
     scale = np.linalg.norm(A, axis=0)
     cov = np.linalg.inv((A / scale).T @ (A / scale)) / np.outer(scale, scale)
     return WlsResult(sigma, np.sqrt(np.abs(np.diag(cov))), rstd)
+
+
+MIN_MOTION = 0.01
+"""rad: a joint whose position range is below this has not moved (its friction is not excited)."""
+
+
+def check_motion(q: Array, names: tuple[str, ...]) -> None:
+    """Refuse a record in which some joint does not move, naming the base parameters it leaves unseen.
+
+    Raises
+    ------
+    DataError
+        Naming the joint, its range and its friction and armature parameters (those whose base
+        name is ``fv<j>``, ``fc<j>``, ``Ia<j>`` or contains them).
+    """
+    span = np.ptp(q, axis=0)
+    for j in np.flatnonzero(span < MIN_MOTION):
+        tags = (f"fv{j + 1}", f"fc{j + 1}", f"Ia{j + 1}")
+        hit = [nm for nm in names if any(t in nm.replace(" ", "").split("+") for t in tags)]
+        raise DataError(
+            f"the record does not excite base parameter(s) {', '.join(repr(h) for h in hit) or tags}: "
+            f"joint {j + 1} moves only {span[j]:.2g} rad (less than {MIN_MOTION} rad)"
+        )
 
 
 def check_excitation(phi: Array, names: tuple[str, ...] = (), rtol: float = 1e-7) -> None:
