@@ -127,19 +127,22 @@ def _print_payload(label: str, pr) -> None:
     c = pr.consistent
     print(
         f"{label}: mass {pr.mass:.5g} +- {pr.mass_std:.2g} kg; centre of mass "
-        f"[{', '.join(f'{x * 1e3:.2f}' for x in pr.com)}] +- [{', '.join(f'{x * 1e3:.2g}' for x in pr.com_std)}]"
+        f"[{', '.join(f'{x * 1e3:.2f}' for x in pr.com)}] +- "
+        f"[{', '.join(f'{x * 1e3:.2g}' for x in pr.com_std)}]"
         " mm in the payload frame"
     )
     ic = pr.inertia_com
     print(
-        f"  inertia about the centre of mass [kg m^2]: Ixx {ic[0, 0]:.4g}, Iyy {ic[1, 1]:.4g}, Izz {ic[2, 2]:.4g}, "
+        f"  inertia about the centre of mass [kg m^2]: Ixx {ic[0, 0]:.4g}, Iyy {ic[1, 1]:.4g}, Izz "
+        f"{ic[2, 2]:.4g}, "
         f"Ixy {ic[0, 1]:.3g}, Ixz {ic[0, 2]:.3g}, Iyz {ic[1, 2]:.3g}"
     )
     if c.was_physical:
         print(f"  physically consistent as estimated (pseudo-inertia min eigenvalue {c.min_eigenvalue:.3g})")
     else:
         print(
-            f"  the unconstrained estimate is not a rigid body (pseudo-inertia eigenvalue {c.min_eigenvalue:.3g}); "
+            "  the unconstrained estimate is not a rigid body (pseudo-inertia eigenvalue "
+            f"{c.min_eigenvalue:.3g}); "
             f"constrained fit {c.distance:.2f} std away: values above are the constrained ones"
         )
 
@@ -171,7 +174,8 @@ def identify_serial(args: argparse.Namespace, arm, outputs) -> int:
             max_iter=args.max_iter,
         )
         print(
-            f"{rec.source}: {rec.t.size} samples; the arm known (its URDF), the payload's 10 parameters fitted"
+            f"{rec.source}: {rec.t.size} samples; the arm known (its URDF), the payload's 10 parameters "
+            "fitted"
         )
         _print_payload("payload (one record, arm known)", pr)
         return 0
@@ -179,7 +183,8 @@ def identify_serial(args: argparse.Namespace, arm, outputs) -> int:
     oe = ident.oe
     print(
         f"{rec.source}: {rec.t.size} samples at T = {rec.sample_period:.6g} s, {arm.n_joints} joints, "
-        f"{model.p} base parameters; velocities {'measured' if ident.qd_measured else 'estimated (not in the file)'}"
+        f"{model.p} base parameters; velocities "
+        f"{'measured' if ident.qd_measured else 'estimated (not in the file)'}"
     )
     print(
         f"output error: {oe.iterations} iterations, {'converged' if oe.converged else 'NOT converged'}, "
@@ -187,7 +192,8 @@ def identify_serial(args: argparse.Namespace, arm, outputs) -> int:
     )
     _print_estimates(model, ident)
     print(
-        f"CRB: Cramér-Rao std at the estimate for this record, q and qd measured with the arm's sensor noise, "
+        "CRB: Cramér-Rao std at the estimate for this record, q and qd measured with the arm's sensor "
+        "noise, "
         f"torque known, segments of {oe.segment_length} samples with unknown initial states"
     )
     reg = ident.regression
@@ -225,7 +231,7 @@ def identify_serial(args: argparse.Namespace, arm, outputs) -> int:
 
 
 def simulate_serial(args: argparse.Namespace, scenario_path: str, outputs) -> int:
-    """``adaptive-dd simulate --arm SCENARIO`` for an N-joint arm: identification records with a known truth."""
+    """``adaptive-dd simulate --arm SCENARIO`` for an N-joint arm: identification records, truth known."""
     from adaptive_dd.benchmark.scenario import load_scenario
     from adaptive_dd.experiments import trial_rngs
     from adaptive_dd.identification.serial_records import simulate_serial_record, write_serial_recording
@@ -268,23 +274,26 @@ def simulate_serial(args: argparse.Namespace, scenario_path: str, outputs) -> in
     print(
         f"{arm.n_joints}-joint arm of {scenario_path}: the scenario's reference tracked by computed torque "
         f"(the plant's own model, 40 rad/s), {args.duration} s at T = {args.sample_period} s, payload "
-        f"{args.payload} kg, {args.seeds} trial(s), smooth friction (tanh, v_f = {arm.friction_velocity} rad/s)"
+        f"{args.payload} kg, {args.seeds} trial(s), smooth friction (tanh, v_f = {arm.friction_velocity} "
+        "rad/s)"
     )
     print(
-        f"  max |q - q_ref| [rad] : {np.abs(rec.q_true - sc.reference.sample(rec.t)[0]).max(axis=(0, 1)).round(4)}"
+        "  max |q - q_ref| [rad] : "
+        f"{np.abs(rec.q_true - sc.reference.sample(rec.t)[0]).max(axis=(0, 1)).round(4)}"
     )
     print(f"  max |qd|  [rad/s]     : {np.abs(rec.qd_true).max(axis=(0, 1)).round(3)}")
     print(f"  rms tau   [N m]       : {np.sqrt((rec.tau**2).mean(axis=(0, 1))).round(3)}")
     print(f"  saturated fraction    : {rec.saturated.max(axis=0).round(4)}")
     out = Path(args.out)
     print(
-        f"wrote {out / 'trajectory.csv'} (trial 0, measured), {out / 'trajectory.npz'} (all trials and the truth)"
+        f"wrote {out / 'trajectory.csv'} (trial 0, measured), {out / 'trajectory.npz'} (all trials and "
+        "the truth)"
     )
     return 0
 
 
 def cmd_excite(args: argparse.Namespace) -> int:
-    """``adaptive-dd excite --arm SCENARIO``: design an exciting trajectory, print its bound beside a multi-sine."""
+    """``adaptive-dd excite --arm SCENARIO``: design an exciting trajectory; its bound beside a multi-sine."""
     from adaptive_dd.benchmark.scenario import load_scenario
     from adaptive_dd.errors import ScenarioError
     from adaptive_dd.identification.excitation import (
@@ -312,8 +321,10 @@ def cmd_excite(args: argparse.Namespace) -> int:
     )
     rows = excitation_bounds(arm, {"plain multi-sine": plain, "designed": best}, args.duration)
     print(
-        f"{arm.n_joints}-joint arm of {args.arm}: {args.harmonics} harmonics of {args.f0} Hz; limits: positions "
-        f"less {args.margin} rad, {0.8:.0%} of velocity and torque limits, |qdd| <= {args.acceleration} rad/s^2"
+        f"{arm.n_joints}-joint arm of {args.arm}: {args.harmonics} harmonics of {args.f0} Hz; limits: "
+        "positions "
+        f"less {args.margin} rad, {0.8:.0%} of velocity and torque limits, |qdd| <= {args.acceleration} "
+        "rad/s^2"
     )
     print(f"SLSQP: {res.nit} iterations, {res.message}")
     print(f"{'trajectory':<18} {'worst bound':>12}  {'worst base parameter':<{NAME_WIDTH}} {'median':>9}")
@@ -321,7 +332,8 @@ def cmd_excite(args: argparse.Namespace) -> int:
         print(f"{label:<18} {100 * worst:11.3g}%  {_short(name):<{NAME_WIDTH}} {100 * med:8.3g}%")
     ratio = rows["plain multi-sine"][0] / rows["designed"][0]
     print(
-        f"the designed trajectory shrinks the worst bound {ratio:.1f}x (Cramér-Rao std of the segmented output "
+        f"the designed trajectory shrinks the worst bound {ratio:.1f}x (Cramér-Rao std of the segmented "
+        "output "
         f"error on a {args.duration} s record tracking it, relative to each parameter's magnitude)"
     )
     text = reference_toml(best.reference(ramp=args.ramp), f"designed by adaptive-dd excite --arm {args.arm}")

@@ -125,11 +125,13 @@ def run_robot(
     bias = np.abs(eo.mean(axis=0)) / crb
     k = int(np.argmax(ro))
     print(
-        f"{robot}: {model.p} base parameters, {seeds} records of {duration} s; output error converged on {conv}; "
+        f"{robot}: {model.p} base parameters, {seeds} records of {duration} s; output error converged on "
+        f"{conv}; "
         f"{time.time() - t0:.0f} s"
     )
     print(
-        f"  output error RMS error / CRB: worst {ro[k]:.2f} ({model.names[k][:50]}), median {np.median(ro):.2f}, "
+        f"  output error RMS error / CRB: worst {ro[k]:.2f} ({model.names[k][:50]}), median "
+        f"{np.median(ro):.2f}, "
         f"largest |bias| / CRB {bias.max():.2f}; WLS (exact filtered regression): worst {rw.max():.1f}, "
         f"median {np.median(rw):.1f}"
     )
@@ -140,8 +142,10 @@ def run_robot(
     c_err = np.array([np.linalg.norm(p[1] - PAYLOAD["com"]) for p in pairs])
     m_std = np.median([p[2] for p in pairs])
     print(
-        f"  payload {PAYLOAD['mass']} kg from {seeds} loaded/unloaded pairs of {pair_duration} s: mass error worst "
-        f"{100 * m_err.max():.3f} % (median bound {100 * m_std / PAYLOAD['mass']:.3f} %), centre of mass error worst "
+        f"  payload {PAYLOAD['mass']} kg from {seeds} loaded/unloaded pairs of {pair_duration} s: mass "
+        "error worst "
+        f"{100 * m_err.max():.3f} % (median bound {100 * m_std / PAYLOAD['mass']:.3f} %), centre of mass "
+        "error worst "
         f"{1e3 * c_err.max():.3f} mm; {time.time() - t0:.0f} s"
     )
     rows.append(
@@ -165,7 +169,8 @@ def run_robot(
     physical = all(r[1] for r in light)
     print(
         f"  light payload ({LIGHT['mass']} kg point mass): the unconstrained estimate is not a rigid body on "
-        f"{impossible} of {seeds} seeds; constrained fit physical on all: {physical} (smallest pseudo-inertia "
+        f"{impossible} of {seeds} seeds; constrained fit physical on all: {physical} (smallest "
+        "pseudo-inertia "
         f"eigenvalue {min(r[2] for r in light):.3g})"
     )
     rows.append(
@@ -187,8 +192,10 @@ def run_robot(
         b = excitation_bounds(arm, {"plain": plain, "designed": best}, 10.0)
         ratio = b["plain"][0] / b["designed"][0]
         print(
-            f"  excitation: worst relative bound plain multi-sine {100 * b['plain'][0]:.3g} % ({b['plain'][1][:40]}), "
-            f"designed {100 * b['designed'][0]:.3g} % ({b['designed'][1][:40]}): {ratio:.1f}x; {time.time() - t0:.0f} s"
+            f"  excitation: worst relative bound plain multi-sine {100 * b['plain'][0]:.3g} % "
+            f"({b['plain'][1][:40]}), "
+            f"designed {100 * b['designed'][0]:.3g} % ({b['designed'][1][:40]}): {ratio:.1f}x; "
+            f"{time.time() - t0:.0f} s"
         )
         rows.append(
             (

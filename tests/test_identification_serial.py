@@ -169,7 +169,7 @@ def test_output_error_is_held_to_the_bound(arm3, model3):
 
 
 def test_standard_parameters_identifiable(arm3, model3):
-    vals, std, ok = standard_from_base(model3, arm3.sigma, np.eye(model3.p) * 1e-6)
+    vals, _std, ok = standard_from_base(model3, arm3.sigma, np.eye(model3.p) * 1e-6)
     names = arm3.standard_names
     for k in np.flatnonzero(ok):
         assert vals[k] == pytest.approx(arm3.pi[k], abs=1e-9)
