@@ -105,7 +105,13 @@ def _verdict(ok: bool) -> str:
 
 
 def run_robot(
-    robot: str, seeds: int, workers: int, duration: float, pair_duration: float, design: bool
+    robot: str,
+    seeds: int,
+    workers: int,
+    duration: float,
+    pair_duration: float,
+    design: bool,
+    payload: bool = True,
 ) -> list:
     sc = load_scenario(SCENARIO.format(robot))
     arm = sc.arm
@@ -136,51 +142,52 @@ def run_robot(
         f"median {np.median(rw):.1f}"
     )
     rows.append((f"{robot}: output error worst RMS / CRB", f"{ro[k]:.2f}", "<= 3", _verdict(ro[k] <= 3)))
-    t0 = time.time()
-    pairs = _map(_pair_task, [(robot, s, pair_duration) for s in range(seeds)], workers)
-    m_err = np.array([abs(p[0] - PAYLOAD["mass"]) / PAYLOAD["mass"] for p in pairs])
-    c_err = np.array([np.linalg.norm(p[1] - PAYLOAD["com"]) for p in pairs])
-    m_std = np.median([p[2] for p in pairs])
-    print(
-        f"  payload {PAYLOAD['mass']} kg from {seeds} loaded/unloaded pairs of {pair_duration} s: mass "
-        "error worst "
-        f"{100 * m_err.max():.3f} % (median bound {100 * m_std / PAYLOAD['mass']:.3f} %), centre of mass "
-        "error worst "
-        f"{1e3 * c_err.max():.3f} mm; {time.time() - t0:.0f} s"
-    )
-    rows.append(
-        (
-            f"{robot}: payload mass error (worst seed)",
-            f"{100 * m_err.max():.3f} %",
-            "<= 1 %",
-            _verdict(m_err.max() <= 0.01),
+    if payload:
+        t0 = time.time()
+        pairs = _map(_pair_task, [(robot, s, pair_duration) for s in range(seeds)], workers)
+        m_err = np.array([abs(p[0] - PAYLOAD["mass"]) / PAYLOAD["mass"] for p in pairs])
+        c_err = np.array([np.linalg.norm(p[1] - PAYLOAD["com"]) for p in pairs])
+        m_std = np.median([p[2] for p in pairs])
+        print(
+            f"  payload {PAYLOAD['mass']} kg from {seeds} loaded/unloaded pairs of {pair_duration} s: mass "
+            "error worst "
+            f"{100 * m_err.max():.3f} % (median bound {100 * m_std / PAYLOAD['mass']:.3f} %), centre of mass "
+            "error worst "
+            f"{1e3 * c_err.max():.3f} mm; {time.time() - t0:.0f} s"
         )
-    )
-    rows.append(
-        (
-            f"{robot}: payload com error (worst seed)",
-            f"{1e3 * c_err.max():.3f} mm",
-            "<= 5 mm",
-            _verdict(c_err.max() <= 0.005),
+        rows.append(
+            (
+                f"{robot}: payload mass error (worst seed)",
+                f"{100 * m_err.max():.3f} %",
+                "<= 1 %",
+                _verdict(m_err.max() <= 0.01),
+            )
         )
-    )
-    light = _map(_light_task, [(robot, s, pair_duration) for s in range(seeds)], workers)
-    impossible = sum(not r[0] for r in light)
-    physical = all(r[1] for r in light)
-    print(
-        f"  light payload ({LIGHT['mass']} kg point mass): the unconstrained estimate is not a rigid body on "
-        f"{impossible} of {seeds} seeds; constrained fit physical on all: {physical} (smallest "
-        "pseudo-inertia "
-        f"eigenvalue {min(r[2] for r in light):.3g})"
-    )
-    rows.append(
-        (
-            f"{robot}: constrained payload always physical",
-            f"{impossible}/{seeds} unconstrained impossible",
-            "all physical",
-            _verdict(physical and impossible > 0),
+        rows.append(
+            (
+                f"{robot}: payload com error (worst seed)",
+                f"{1e3 * c_err.max():.3f} mm",
+                "<= 5 mm",
+                _verdict(c_err.max() <= 0.005),
+            )
         )
-    )
+        light = _map(_light_task, [(robot, s, pair_duration) for s in range(seeds)], workers)
+        impossible = sum(not r[0] for r in light)
+        physical = all(r[1] for r in light)
+        print(
+            f"  light payload ({LIGHT['mass']} kg point mass): the unconstrained estimate is not a rigid "
+            f"body on {impossible} of {seeds} seeds; constrained fit physical on all: {physical} (smallest "
+            "pseudo-inertia "
+            f"eigenvalue {min(r[2] for r in light):.3g})"
+        )
+        rows.append(
+            (
+                f"{robot}: constrained payload always physical",
+                f"{impossible}/{seeds} unconstrained impossible",
+                "all physical",
+                _verdict(physical and impossible > 0),
+            )
+        )
     if design:
         from adaptive_dd.cli_serial import excitation_bounds
         from adaptive_dd.identification.excitation import ExcitationLimits, design_excitation, multisine
@@ -215,11 +222,14 @@ def main() -> None:
     p.add_argument("--duration", type=float, default=20.0)
     p.add_argument("--pair-duration", type=float, default=10.0)
     p.add_argument("--workers", type=int, default=1)
-    p.add_argument("--no-design", action="store_true")
+    p.add_argument("--no-design", action="store_true", help="skip the excitation comparison")
+    p.add_argument("--no-payload", action="store_true", help="skip the payload pairs and the light payload")
     a = p.parse_args()
     rows = []
     for robot in a.robots:
-        rows += run_robot(robot, a.seeds, a.workers, a.duration, a.pair_duration, not a.no_design)
+        rows += run_robot(
+            robot, a.seeds, a.workers, a.duration, a.pair_duration, not a.no_design, not a.no_payload
+        )
     print(f"\n{'target':<45} {'measured':>28} {'target':>12}  status")
     for r in rows:
         print(f"{r[0]:<45} {r[1]:>28} {r[2]:>12}  {r[3]}")
