@@ -40,6 +40,7 @@ from adaptive_dd.errors import ParameterError, SignalError
 from adaptive_dd.plant.spatial import (
     add_cross_force,
     apply_inertia,
+    cross3,
     kinematics,
     motion_cross,
     to_local,
@@ -48,6 +49,7 @@ from adaptive_dd.plant.spatial import (
 
 __all__ = [
     "Chain",
+    "bias_and_mass",
     "body_regressor",
     "body_slotine_li_regressor",
     "chain_from_model",
@@ -67,6 +69,7 @@ __all__ = [
     "slotine_li_regressor",
     "slotine_li_regressor_batch",
     "standard_parameters",
+    "workspace",
 ]
 
 REVOLUTE, PRISMATIC = 0, 1
@@ -206,8 +209,8 @@ def pin_configuration(model: pin.Model, q: NDArray) -> NDArray[np.float64]:
 
 
 @njit(cache=True)
-def _work(n):  # pragma: no cover - compiled
-    """Scratch arrays of one state, cut from one allocation."""
+def workspace(n):  # pragma: no cover - compiled
+    """Scratch arrays of one state (a tuple), cut from one allocation: pass to :func:`bias_and_mass`."""
     buf = np.empty(n * 55 + 46)
     rw = buf[: 9 * n].reshape((n, 3, 3))
     pw = buf[9 * n : 12 * n].reshape((n, 3))
@@ -292,7 +295,7 @@ def rnea(ch, pi, q, qd, qdd, out):  # pragma: no cover - compiled
         Joint positions [rad or m], velocities, accelerations.
     out : ndarray, shape (n,)
     """
-    w = _work(q.shape[0])
+    w = workspace(q.shape[0])
     kinematics(ch, q, qd, w[0], w[1], w[2], w[3])
     world_inertia(pi, w[0], w[1], w[4])
     _torque(ch, pi, q, qd, qd, qdd, 1.0, True, w, out)
@@ -304,7 +307,7 @@ def rnea_ref(ch, pi, q, qd, qdr, qddr, out):  # pragma: no cover - compiled
 
     ``rnea_ref(q, qd, qd, qdd) == rnea(q, qd, qdd)``; shapes as :func:`rnea`.
     """
-    w = _work(q.shape[0])
+    w = workspace(q.shape[0])
     kinematics(ch, q, qd, w[0], w[1], w[2], w[3])
     world_inertia(pi, w[0], w[1], w[4])
     _torque(ch, pi, q, qd, qdr, qddr, 1.0, False, w, out)
@@ -314,7 +317,7 @@ def rnea_ref(ch, pi, q, qd, qdr, qddr, out):  # pragma: no cover - compiled
 def coriolis_matrix(ch, pi, q, qd, out):  # pragma: no cover - compiled
     """Coriolis matrix C(q, qd) into out (n, n); == ``pin.computeCoriolisMatrix`` (dM/dt - 2C skew)."""
     n = q.shape[0]
-    w = _work(n)
+    w = workspace(n)
     kinematics(ch, q, qd, w[0], w[1], w[2], w[3])
     world_inertia(pi, w[0], w[1], w[4])
     e = np.zeros(n)
@@ -350,10 +353,92 @@ def _composite_mass(s, iw, out, yc, t):  # pragma: no cover - compiled
 def mass_matrix(ch, pi, q, out):  # pragma: no cover - compiled
     """Joint-space mass matrix M(q) into out (n, n), both triangles; == ``pin.crba``."""
     n = q.shape[0]
-    w = _work(n)
+    w = workspace(n)
     kinematics(ch, q, w[9][:n] * 0.0, w[0], w[1], w[2], w[3])
     world_inertia(pi, w[0], w[1], w[4])
     _composite_mass(w[2], w[4], out, w[9][n : n + 10], w[8][0])
+
+
+@njit(cache=True, fastmath={"contract", "reassoc"}, inline="always")
+def bias_and_mass(ch, pi, q, qd, w, bias, m):  # pragma: no cover - compiled
+    """``bias = rnea(q, qd, 0)`` (n,) and ``m = M(q)`` (n, n) in one pass, no allocation.
+
+    The plant integrator's inner step; ``w = workspace(n)`` is scratch. Same
+    arithmetic as :func:`rnea` and :func:`mass_matrix`, written with scalars.
+    """
+    rw, pw, s, v, iw, f = w[0], w[1], w[2], w[3], w[4], w[7]
+    n = q.shape[0]
+    kinematics(ch, q, qd, rw, pw, s, v)
+    world_inertia(pi, rw, pw, iw)
+    al0, al1, al2 = -ch.gravity[0], -ch.gravity[1], -ch.gravity[2]
+    aa0 = aa1 = aa2 = 0.0
+    for i in range(n):
+        vl0, vl1, vl2, w0, w1, w2 = v[i, 0], v[i, 1], v[i, 2], v[i, 3], v[i, 4], v[i, 5]
+        sl0, sl1, sl2, sa0, sa1, sa2 = s[i, 0], s[i, 1], s[i, 2], s[i, 3], s[i, 4], s[i, 5]
+        # a += (v x S) qd: (w x Sl + vl x Sa, w x Sa) qd
+        x0, x1, x2 = cross3(w0, w1, w2, sl0, sl1, sl2)
+        y0, y1, y2 = cross3(vl0, vl1, vl2, sa0, sa1, sa2)
+        z0, z1, z2 = cross3(w0, w1, w2, sa0, sa1, sa2)
+        u = qd[i]
+        al0 += (x0 + y0) * u
+        al1 += (x1 + y1) * u
+        al2 += (x2 + y2) * u
+        aa0 += z0 * u
+        aa1 += z1 * u
+        aa2 += z2 * u
+        mass, h0, h1, h2 = iw[i, 0], iw[i, 1], iw[i, 2], iw[i, 3]
+        ixx, ixy, iyy, ixz, iyz, izz = iw[i, 4], iw[i, 5], iw[i, 6], iw[i, 7], iw[i, 8], iw[i, 9]
+        # I a: (m al + aa x h, h x al + I aa)
+        c0, c1, c2 = cross3(aa0, aa1, aa2, h0, h1, h2)
+        d0, d1, d2 = cross3(h0, h1, h2, al0, al1, al2)
+        fl0, fl1, fl2 = mass * al0 + c0, mass * al1 + c1, mass * al2 + c2
+        fa0 = d0 + ixx * aa0 + ixy * aa1 + ixz * aa2
+        fa1 = d1 + ixy * aa0 + iyy * aa1 + iyz * aa2
+        fa2 = d2 + ixz * aa0 + iyz * aa1 + izz * aa2
+        # p = I v, then f += v x* p = (w x pl, w x pa + vl x pl)
+        c0, c1, c2 = cross3(w0, w1, w2, h0, h1, h2)
+        d0, d1, d2 = cross3(h0, h1, h2, vl0, vl1, vl2)
+        pl0, pl1, pl2 = mass * vl0 + c0, mass * vl1 + c1, mass * vl2 + c2
+        pa0 = d0 + ixx * w0 + ixy * w1 + ixz * w2
+        pa1 = d1 + ixy * w0 + iyy * w1 + iyz * w2
+        pa2 = d2 + ixz * w0 + iyz * w1 + izz * w2
+        x0, x1, x2 = cross3(w0, w1, w2, pl0, pl1, pl2)
+        y0, y1, y2 = cross3(w0, w1, w2, pa0, pa1, pa2)
+        z0, z1, z2 = cross3(vl0, vl1, vl2, pl0, pl1, pl2)
+        f[i, 0], f[i, 1], f[i, 2] = fl0 + x0, fl1 + x1, fl2 + x2
+        f[i, 3], f[i, 4], f[i, 5] = fa0 + y0 + z0, fa1 + y1 + z1, fa2 + y2 + z2
+    g0 = g1 = g2 = g3 = g4 = g5 = 0.0
+    cm = ch0 = ch1 = ch2 = cxx = cxy = cyy = cxz = cyz = czz = 0.0
+    for i in range(n - 1, -1, -1):
+        g0 += f[i, 0]
+        g1 += f[i, 1]
+        g2 += f[i, 2]
+        g3 += f[i, 3]
+        g4 += f[i, 4]
+        g5 += f[i, 5]
+        sl0, sl1, sl2, sa0, sa1, sa2 = s[i, 0], s[i, 1], s[i, 2], s[i, 3], s[i, 4], s[i, 5]
+        bias[i] = sl0 * g0 + sl1 * g1 + sl2 * g2 + sa0 * g3 + sa1 * g4 + sa2 * g5
+        cm += iw[i, 0]
+        ch0 += iw[i, 1]
+        ch1 += iw[i, 2]
+        ch2 += iw[i, 3]
+        cxx += iw[i, 4]
+        cxy += iw[i, 5]
+        cyy += iw[i, 6]
+        cxz += iw[i, 7]
+        cyz += iw[i, 8]
+        czz += iw[i, 9]
+        # t = Ic S_i
+        c0, c1, c2 = cross3(sa0, sa1, sa2, ch0, ch1, ch2)
+        d0, d1, d2 = cross3(ch0, ch1, ch2, sl0, sl1, sl2)
+        t0, t1, t2 = cm * sl0 + c0, cm * sl1 + c1, cm * sl2 + c2
+        t3 = d0 + cxx * sa0 + cxy * sa1 + cxz * sa2
+        t4 = d1 + cxy * sa0 + cyy * sa1 + cyz * sa2
+        t5 = d2 + cxz * sa0 + cyz * sa1 + czz * sa2
+        for k in range(i + 1):
+            x = s[k, 0] * t0 + s[k, 1] * t1 + s[k, 2] * t2 + s[k, 3] * t3 + s[k, 4] * t4 + s[k, 5] * t5
+            m[k, i] = x
+            m[i, k] = x
 
 
 @njit(cache=True)
@@ -394,14 +479,9 @@ def forward_dynamics(ch, pi, armature, q, qd, tau, out):  # pragma: no cover - c
     mass matrix is not positive definite or a value is not finite.
     """
     n = q.shape[0]
-    w = _work(n)
+    w = workspace(n)
     m = np.empty((n, n))
-    kinematics(ch, q, qd, w[0], w[1], w[2], w[3])
-    world_inertia(pi, w[0], w[1], w[4])
-    zero = w[9][:n]
-    zero[:] = 0.0
-    _torque(ch, pi, q, qd, qd, zero, 1.0, True, w, out)
-    _composite_mass(w[2], w[4], m, w[9][n : n + 10], w[8][0])
+    bias_and_mass(ch, pi, q, qd, w, out, m)
     for i in range(n):
         m[i, i] += armature[i]
         out[i] = tau[i] - out[i]
@@ -432,7 +512,7 @@ def _local_regressor(v, vr, ar, same, a, y, f, t1, t2):  # pragma: no cover - co
 def _regressor_blocks(ch, q, qd, qdr, qddr, same, j0, j1, out, col0):  # pragma: no cover - compiled
     """Columns of links j0..j1-1 of the (Slotine-Li) regressor into out[:, col0 + 10 (j - j0) ...]."""
     n = q.shape[0]
-    rw, pw, s, v, _, vr, ar, f, small, vec = _work(n)
+    rw, pw, s, v, _, vr, ar, f, small, vec = workspace(n)
     kinematics(ch, q, qd, rw, pw, s, v)
     _ref_motion(ch, s, v, qdr, qddr, 1.0, vr, ar, small[0])
     a = np.empty((6, 10))

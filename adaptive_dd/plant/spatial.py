@@ -28,67 +28,70 @@ def cross3(a0, a1, a2, b0, b1, b2):  # pragma: no cover - compiled
     return a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath={"contract", "reassoc"}, inline="always")
 def kinematics(ch, q, qd, rw, pw, s, v):  # pragma: no cover - compiled
-    """World pose (rw (n,3,3), pw (n,3)), joint motion s (n,6) and body velocity v (n,6)."""
+    """World pose (rw (n,3,3), pw (n,3)), joint motion s (n,6) and body velocity v (n,6).
+
+    ``R_i = R_{i-1} rot_i E_i``, ``E_i = exp([axis_i]x q_i)`` (revolute) or the identity
+    (prismatic, which moves the origin by ``R_{i-1} rot_i axis_i q_i``). Written with
+    scalar indexing only (no array views in the loop: each costs reference counting).
+    """
     n = q.shape[0]
-    r_par = np.eye(3)
+    axis, rot, trans, jtype = ch.axis, ch.rot, ch.trans, ch.jtype
     p0, p1, p2 = 0.0, 0.0, 0.0
     vl0 = vl1 = vl2 = va0 = va1 = va2 = 0.0
     for i in range(n):
-        a = ch.axis[i]
-        # base orientation of frame i: R_{i-1} rot_i
-        for r in range(3):
-            for c in range(3):
-                rw[i, r, c] = (
-                    r_par[r, 0] * ch.rot[i, 0, c]
-                    + r_par[r, 1] * ch.rot[i, 1, c]
-                    + r_par[r, 2] * ch.rot[i, 2, c]
-                )
-        t = ch.trans[i]
-        o0 = p0 + r_par[0, 0] * t[0] + r_par[0, 1] * t[1] + r_par[0, 2] * t[2]
-        o1 = p1 + r_par[1, 0] * t[0] + r_par[1, 1] * t[1] + r_par[1, 2] * t[2]
-        o2 = p2 + r_par[2, 0] * t[0] + r_par[2, 1] * t[1] + r_par[2, 2] * t[2]
-        # world axis (unchanged by the joint's own motion)
-        w0 = rw[i, 0, 0] * a[0] + rw[i, 0, 1] * a[1] + rw[i, 0, 2] * a[2]
-        w1 = rw[i, 1, 0] * a[0] + rw[i, 1, 1] * a[1] + rw[i, 1, 2] * a[2]
-        w2 = rw[i, 2, 0] * a[0] + rw[i, 2, 1] * a[1] + rw[i, 2, 2] * a[2]
-        if ch.jtype[i] == 0:
+        a0, a1, a2 = axis[i, 0], axis[i, 1], axis[i, 2]
+        t0, t1, t2 = trans[i, 0], trans[i, 1], trans[i, 2]
+        # B = R_{i-1} rot_i (into rw[i]) and the joint origin o = p_{i-1} + R_{i-1} t_i
+        if i == 0:
+            for r in range(3):
+                for c in range(3):
+                    rw[0, r, c] = rot[0, r, c]
+            o0, o1, o2 = t0, t1, t2
+        else:
+            k = i - 1
+            for r in range(3):
+                for c in range(3):
+                    rw[i, r, c] = (
+                        rw[k, r, 0] * rot[i, 0, c] + rw[k, r, 1] * rot[i, 1, c] + rw[k, r, 2] * rot[i, 2, c]
+                    )
+            o0 = p0 + rw[k, 0, 0] * t0 + rw[k, 0, 1] * t1 + rw[k, 0, 2] * t2
+            o1 = p1 + rw[k, 1, 0] * t0 + rw[k, 1, 1] * t1 + rw[k, 1, 2] * t2
+            o2 = p2 + rw[k, 2, 0] * t0 + rw[k, 2, 1] * t1 + rw[k, 2, 2] * t2
+        # world axis B a (unchanged by the joint's own motion)
+        w0 = rw[i, 0, 0] * a0 + rw[i, 0, 1] * a1 + rw[i, 0, 2] * a2
+        w1 = rw[i, 1, 0] * a0 + rw[i, 1, 1] * a1 + rw[i, 1, 2] * a2
+        w2 = rw[i, 2, 0] * a0 + rw[i, 2, 1] * a1 + rw[i, 2, 2] * a2
+        if jtype[i] == 0:
             cq, sq = np.cos(q[i]), np.sin(q[i])
-            # R = B (c I + s [a]x + (1 - c) a a^T) = c B + s [w]x B + (1 - c) w a^T
+            kc = 1.0 - cq
+            e00, e01, e02 = cq + kc * a0 * a0, kc * a0 * a1 - sq * a2, kc * a0 * a2 + sq * a1
+            e10, e11, e12 = kc * a1 * a0 + sq * a2, cq + kc * a1 * a1, kc * a1 * a2 - sq * a0
+            e20, e21, e22 = kc * a2 * a0 - sq * a1, kc * a2 * a1 + sq * a0, cq + kc * a2 * a2
             for r in range(3):
                 b0, b1, b2 = rw[i, r, 0], rw[i, r, 1], rw[i, r, 2]
-                wr = w0 if r == 0 else (w1 if r == 1 else w2)
-                for c in range(3):
-                    # ([w]x B)[r, c] = (w x B[:, c])[r]
-                    bc0, bc1, bc2 = rw[i, 0, c], rw[i, 1, c], rw[i, 2, c]
-                    x0, x1, x2 = cross3(w0, w1, w2, bc0, bc1, bc2)
-                    xr = x0 if r == 0 else (x1 if r == 1 else x2)
-                    br = b0 if c == 0 else (b1 if c == 1 else b2)
-                    r_par[r, c] = cq * br + sq * xr + (1.0 - cq) * wr * a[c]
-            for r in range(3):
-                for c in range(3):
-                    rw[i, r, c] = r_par[r, c]
+                rw[i, r, 0] = b0 * e00 + b1 * e10 + b2 * e20
+                rw[i, r, 1] = b0 * e01 + b1 * e11 + b2 * e21
+                rw[i, r, 2] = b0 * e02 + b1 * e12 + b2 * e22
             p0, p1, p2 = o0, o1, o2
             l0, l1, l2 = cross3(p0, p1, p2, w0, w1, w2)
             s[i, 0], s[i, 1], s[i, 2], s[i, 3], s[i, 4], s[i, 5] = l0, l1, l2, w0, w1, w2
         else:
-            for r in range(3):
-                for c in range(3):
-                    r_par[r, c] = rw[i, r, c]
             p0, p1, p2 = o0 + w0 * q[i], o1 + w1 * q[i], o2 + w2 * q[i]
             s[i, 0], s[i, 1], s[i, 2], s[i, 3], s[i, 4], s[i, 5] = w0, w1, w2, 0.0, 0.0, 0.0
         pw[i, 0], pw[i, 1], pw[i, 2] = p0, p1, p2
-        vl0 += s[i, 0] * qd[i]
-        vl1 += s[i, 1] * qd[i]
-        vl2 += s[i, 2] * qd[i]
-        va0 += s[i, 3] * qd[i]
-        va1 += s[i, 4] * qd[i]
-        va2 += s[i, 5] * qd[i]
+        u = qd[i]
+        vl0 += s[i, 0] * u
+        vl1 += s[i, 1] * u
+        vl2 += s[i, 2] * u
+        va0 += s[i, 3] * u
+        va1 += s[i, 4] * u
+        va2 += s[i, 5] * u
         v[i, 0], v[i, 1], v[i, 2], v[i, 3], v[i, 4], v[i, 5] = vl0, vl1, vl2, va0, va1, va2
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath={"contract", "reassoc"}, inline="always")
 def world_inertia(pi, rw, pw, iw):  # pragma: no cover - compiled
     """Each link's inertia about the world origin in world axes, iw (n, 10), Pinocchio's order."""
     n = rw.shape[0]
