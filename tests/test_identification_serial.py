@@ -278,3 +278,13 @@ def test_cli_simulate_and_identify_end_to_end(tmp_path, capsys):
         main(["identify", "--arm", str(scen), str(csv), "--baseline", str(csv), "--out", str(tmp_path / "x")])
         == 2
     )
+
+
+def test_benchmark_plant_with_smooth_friction_is_the_model(arm3):
+    """plant="serial" (the compiled benchmark plant) under the tanh law equals the identification model."""
+    a = simulate_serial_record(
+        arm3.with_(friction="tanh"), REF3, 0.5, [np.random.default_rng(0)], noise=False, plant="serial"
+    )
+    b = simulate_serial_record(arm3, REF3, 0.5, [np.random.default_rng(0)], noise=False)
+    np.testing.assert_allclose(a.q_true, b.q_true, atol=1e-10)
+    np.testing.assert_allclose(a.tau, b.tau, atol=1e-8)
