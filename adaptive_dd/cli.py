@@ -602,6 +602,13 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--no-noise", action="store_true", help="noise-free sensors")
     s.add_argument("--no-quantize", action="store_true", help="no encoder or D/A quantization")
     s.add_argument("--no-saturate", action="store_true", help="no torque saturation")
+    s.add_argument(
+        "--plant",
+        default="model",
+        choices=("model", "serial"),
+        help="arm from a URDF: the identification model's RK4 with tanh friction (default) or the "
+        "benchmark's compiled plant with the arm's friction law (stick-slip)",
+    )
     s.add_argument("--out", default="results/simulate", help="output folder")
     s.set_defaults(func=_cmd_simulate)
 

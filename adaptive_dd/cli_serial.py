@@ -257,6 +257,7 @@ def simulate_serial(args: argparse.Namespace, scenario_path: str, outputs) -> in
         substeps=args.substeps,
         noise=not args.no_noise,
         quantize=not args.no_quantize,
+        plant=getattr(args, "plant", "model"),
     )
     write_serial_recording(outputs.path("trajectory.csv"), rec.t, rec.q[0], rec.qd[0], rec.tau[0])
     np.savez_compressed(

@@ -55,22 +55,22 @@ def _fit(arm, q, qd, tau):
 
 
 def _main_task(args):
-    robot, seed, duration = args
+    robot, seed, duration, plant = args
     arm = load_scenario(SCENARIO.format(robot)).arm
     rec = simulate_serial_record(
-        arm, load_scenario(SCENARIO.format(robot)).reference, duration, trial_rngs(seed, 1)
+        arm, load_scenario(SCENARIO.format(robot)).reference, duration, trial_rngs(seed, 1), plant=plant
     )
     w, o, _, ok = _fit(arm, rec.q[0], rec.qd[0], rec.tau[0])
     return w - rec.sigma_true, o - rec.sigma_true, ok
 
 
 def _pair_task(args):
-    robot, seed, duration = args
+    robot, seed, duration, plant = args
     sc = load_scenario(SCENARIO.format(robot))
     arm = sc.arm
     pp = payload_parameters(PAYLOAD["mass"], PAYLOAD["com"], radius=PAYLOAD["radius"])
-    loaded = simulate_serial_record(arm, sc.reference, duration, trial_rngs(seed, 1), payload=pp)
-    unloaded = simulate_serial_record(arm, sc.reference, duration, trial_rngs(seed + 10_000, 1))
+    loaded = simulate_serial_record(arm, sc.reference, duration, trial_rngs(seed, 1), payload=pp, plant=plant)
+    unloaded = simulate_serial_record(arm, sc.reference, duration, trial_rngs(seed + 10_000, 1), plant=plant)
     _, sl, cl, _ = _fit(arm, loaded.q[0], loaded.qd[0], loaded.tau[0])
     _, su, cu, _ = _fit(arm, unloaded.q[0], unloaded.qd[0], unloaded.tau[0])
     pr = payload_from_pair(arm, sl, cl, su, cu)
@@ -78,11 +78,13 @@ def _pair_task(args):
 
 
 def _light_task(args):
-    robot, seed, duration = args
+    robot, seed, duration, plant = args
     sc = load_scenario(SCENARIO.format(robot))
     arm = sc.arm
     pp = payload_parameters(LIGHT["mass"], LIGHT["com"], radius=LIGHT["radius"])
-    rec = simulate_serial_record(arm, sc.reference, duration, trial_rngs(seed + 20_000, 1), payload=pp)
+    rec = simulate_serial_record(
+        arm, sc.reference, duration, trial_rngs(seed + 20_000, 1), payload=pp, plant=plant
+    )
     model = serial_model(arm)
     pr = payload_from_record(arm, model, rec.q[0], rec.qd[0], rec.tau[0], measurement_std(arm))
     c = pr.consistent
@@ -112,17 +114,18 @@ def run_robot(
     pair_duration: float,
     design: bool,
     payload: bool = True,
+    plant: str = "model",
 ) -> list:
     sc = load_scenario(SCENARIO.format(robot))
     arm = sc.arm
     model = serial_model(arm)
     rows = []
     t0 = time.time()
-    ref = simulate_serial_record(arm, sc.reference, duration, trial_rngs(0, 1))
+    ref = simulate_serial_record(arm, sc.reference, duration, trial_rngs(0, 1), plant=plant)
     crb, _ = serial_crb(
         model, ref.sigma_true, ref.q_true[0], ref.qd_true[0], ref.tau[0], measurement_std(arm)
     )
-    res = _map(_main_task, [(robot, s, duration) for s in range(seeds)], workers)
+    res = _map(_main_task, [(robot, s, duration, plant) for s in range(seeds)], workers)
     ew = np.array([r[0] for r in res])
     eo = np.array([r[1] for r in res])
     conv = sum(r[2] for r in res)
@@ -144,7 +147,7 @@ def run_robot(
     rows.append((f"{robot}: output error worst RMS / CRB", f"{ro[k]:.2f}", "<= 3", _verdict(ro[k] <= 3)))
     if payload:
         t0 = time.time()
-        pairs = _map(_pair_task, [(robot, s, pair_duration) for s in range(seeds)], workers)
+        pairs = _map(_pair_task, [(robot, s, pair_duration, plant) for s in range(seeds)], workers)
         m_err = np.array([abs(p[0] - PAYLOAD["mass"]) / PAYLOAD["mass"] for p in pairs])
         c_err = np.array([np.linalg.norm(p[1] - PAYLOAD["com"]) for p in pairs])
         m_std = np.median([p[2] for p in pairs])
@@ -171,7 +174,7 @@ def run_robot(
                 _verdict(c_err.max() <= 0.005),
             )
         )
-        light = _map(_light_task, [(robot, s, pair_duration) for s in range(seeds)], workers)
+        light = _map(_light_task, [(robot, s, pair_duration, plant) for s in range(seeds)], workers)
         impossible = sum(not r[0] for r in light)
         physical = all(r[1] for r in light)
         print(
@@ -224,11 +227,17 @@ def main() -> None:
     p.add_argument("--workers", type=int, default=1)
     p.add_argument("--no-design", action="store_true", help="skip the excitation comparison")
     p.add_argument("--no-payload", action="store_true", help="skip the payload pairs and the light payload")
+    p.add_argument(
+        "--plant",
+        default="model",
+        choices=("model", "serial"),
+        help="records from the identification model (default) or the benchmark's stick-slip plant",
+    )
     a = p.parse_args()
     rows = []
     for robot in a.robots:
         rows += run_robot(
-            robot, a.seeds, a.workers, a.duration, a.pair_duration, not a.no_design, not a.no_payload
+            robot, a.seeds, a.workers, a.duration, a.pair_duration, not a.no_design, not a.no_payload, a.plant
         )
     print(f"\n{'target':<45} {'measured':>28} {'target':>12}  status")
     for r in rows:
