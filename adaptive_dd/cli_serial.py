@@ -275,8 +275,12 @@ def simulate_serial(args: argparse.Namespace, scenario_path: str, outputs) -> in
     print(
         f"{arm.n_joints}-joint arm of {scenario_path}: the scenario's reference tracked by computed torque "
         f"(the plant's own model, 40 rad/s), {args.duration} s at T = {args.sample_period} s, payload "
-        f"{args.payload} kg, {args.seeds} trial(s), smooth friction (tanh, v_f = {arm.friction_velocity} "
-        "rad/s)"
+        f"{args.payload} kg, {args.seeds} trial(s), "
+        + (
+            f"the benchmark's plant, friction {arm.friction}"
+            if getattr(args, "plant", "model") == "serial"
+            else f"the identification model (RK4, friction tanh, v_f = {arm.friction_velocity} rad/s)"
+        )
     )
     print(
         "  max |q - q_ref| [rad] : "
