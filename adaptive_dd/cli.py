@@ -127,6 +127,14 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     if est.large:
         print(f"estimate: {est}", file=sys.stderr)
     outputs = OutputSet(args.out)
+    if args.arm:
+        from adaptive_dd.plant.serial_arm import SerialArm
+
+        if isinstance(_load_arm(args.arm), SerialArm):  # N joints: identification records (cli_serial)
+            from adaptive_dd.cli_serial import simulate_serial
+
+            with outputs:
+                return simulate_serial(args, args.arm, outputs)
     with outputs:
         return _simulate(args, n, outputs)
 
@@ -298,6 +306,18 @@ def _cmd_identify(args: argparse.Namespace) -> int:
     from adaptive_dd.io import MIN_EQUATIONS, check_identifiable, read_recording
     from adaptive_dd.outputs import OutputSet
 
+    if args.arm:  # an N-joint arm from a URDF: its own path (adaptive_dd.cli_serial)
+        from adaptive_dd.plant.serial_arm import SerialArm
+
+        arm = _load_arm(args.arm)
+        if isinstance(arm, SerialArm):
+            from adaptive_dd.cli_serial import identify_serial
+
+            outputs = OutputSet(args.out)
+            with outputs:
+                return identify_serial(args, arm, outputs)
+    elif args.baseline or args.payload_only:
+        raise DataError("--baseline and --payload-only need --arm SCENARIO (an arm from a URDF)")
     rec = read_recording(args.data)
     if args.method == "M2" and rec.qd is None:
         raise DataError(f"{args.data}: method M2 needs columns qd1, qd2 (use --method M1 for position only)")
@@ -463,6 +483,12 @@ def _identify_bound(rec, sigma, args: argparse.Namespace):
     )
 
 
+def _cmd_excite(args: argparse.Namespace) -> int:
+    from adaptive_dd.cli_serial import cmd_excite
+
+    return cmd_excite(args)
+
+
 def _cmd_benchmark(args: argparse.Namespace) -> int:
     import dataclasses
 
@@ -612,10 +638,29 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--seed", type=_SEED, default=0, help="base seed")
     s.add_argument("--payload", type=_MASS, default=0.0, metavar="KG")
     s.add_argument("--radius", type=_RADIUS, help="tip disk radius [m] (default: the arm's)")
-    s.add_argument("--arm", metavar="SCENARIO", help="simulate the [arm] and [plant] of a scenario TOML")
+    s.add_argument(
+        "--com",
+        type=_number(float, -1.0, 1.0),
+        nargs=3,
+        metavar="M",
+        help="payload centre of mass in the payload frame [m] (arm from a URDF; default 0 0 0)",
+    )
+    s.add_argument(
+        "--arm",
+        metavar="SCENARIO",
+        help="simulate the [arm] and [plant] of a scenario TOML; an arm from a URDF tracks the scenario's "
+        "[reference] by computed torque and writes t, q1..qN, qd1..qdN, tau1..tauN",
+    )
     s.add_argument("--no-noise", action="store_true", help="noise-free sensors")
     s.add_argument("--no-quantize", action="store_true", help="no encoder or D/A quantization")
     s.add_argument("--no-saturate", action="store_true", help="no torque saturation")
+    s.add_argument(
+        "--plant",
+        default="model",
+        choices=("model", "serial"),
+        help="arm from a URDF: the identification model's RK4 with tanh friction (default) or the "
+        "benchmark's compiled plant with the arm's friction law (stick-slip)",
+    )
     s.add_argument("--out", default="results/simulate", help="output folder")
     s.set_defaults(func=_cmd_simulate)
 
@@ -688,8 +733,40 @@ def build_parser() -> argparse.ArgumentParser:
         help="run the online estimator of adaptive_ct (change detection included) over the record; "
         "writes online.csv (estimates, payload mass and alarms over time) and online.png",
     )
+    i.add_argument(
+        "--arm",
+        metavar="SCENARIO",
+        help="the [arm] of a scenario TOML (a URDF: N joints, CSV t, q1..qN, [qd1..qdN,] tau1..tauN); "
+        "prints WLS and output error with the Cramér-Rao bound",
+    )
+    i.add_argument("--baseline", metavar="CSV", help="with --arm: an unloaded record; prints the payload")
+    i.add_argument(
+        "--payload-only", action="store_true", help="with --arm: the arm known (URDF), fit the payload alone"
+    )
+    i.add_argument(
+        "--segment-length",
+        type=_number(int, 10, 10**6),
+        default=200,
+        help="with --arm: output-error segment length [samples] (default 200)",
+    )
+    i.add_argument(
+        "--max-iter", type=_number(int, 1, 1000), default=30, help="with --arm: output-error iterations"
+    )
     i.add_argument("--out", default="results/identify")
     i.set_defaults(func=_cmd_identify)
+
+    e = _sub(sub, "excite", help="design an exciting trajectory for an arm from a URDF")
+    e.add_argument("--arm", required=True, metavar="SCENARIO", help="scenario TOML with [arm] urdf/robot")
+    e.add_argument("--harmonics", type=_number(int, 1, 20), default=5, help="Fourier harmonics (default 5)")
+    e.add_argument("--f0", type=_POS, default=0.1, help="base frequency [Hz] (default 0.1: 10 s period)")
+    e.add_argument("--acceleration", type=_POS, default=5.0, help="|qdd| limit [rad/s^2] (default 5)")
+    e.add_argument("--margin", type=_number(float, 0.0, 1.0), default=0.1, help="position margin [rad]")
+    e.add_argument("--maxiter", type=_number(int, 1, 10000), default=100, help="SLSQP iterations")
+    e.add_argument("--duration", type=_POS, default=10.0, help="record length for the bounds [s]")
+    e.add_argument("--ramp", type=_number(float, 0.0, 100.0), default=0.5, help="reference ramp [s]")
+    e.add_argument("--seed", type=_SEED, default=0, help="seed of the random start")
+    e.add_argument("--out", default="results/excite/scenario.toml", help="scenario file to write")
+    e.set_defaults(func=_cmd_excite)
 
     b = _sub(sub, "benchmark", help="payload-swap tracking benchmark (the main job)")
     b.add_argument("scenario", nargs="?", help="scenario TOML (default: the shipped payload_swap)")

@@ -1,4 +1,9 @@
-"""Reading and writing recorded experiments (CSV: t, q1, q2, qd1, qd2, tau1, tau2)."""
+"""Reading and writing recorded experiments.
+
+Two-link records: CSV ``t, q1, q2, qd1, qd2, tau1, tau2`` (:func:`read_recording`).
+N-joint records: ``t, q1..qN, qd1..qdN, tau1..tauN``, velocities optional
+(:func:`read_serial_recording`).
+"""
 
 from __future__ import annotations
 
@@ -18,6 +23,7 @@ __all__ = [
     "Recording",
     "check_identifiable",
     "read_recording",
+    "read_serial_recording",
     "read_text",
     "read_toml",
     "write_recording",
@@ -192,3 +198,93 @@ def check_identifiable(rec: Recording, tau_f: float) -> None:
             f"{rec.source}: the arm does not move (position range {span.round(6)} rad, below "
             f"{MIN_MOTION} rad): nothing to identify"
         )
+
+
+def _parse_rows(path: Path, reader, header: list[str]) -> NDArray[np.float64]:
+    """Rows of numbers under ``header``; a bad cell names its line and column."""
+    rows = []
+    for lineno, row in enumerate(reader, start=2):
+        if not row or all(not c.strip() for c in row):
+            continue
+        if len(row) != len(header):
+            raise DataError(f"{path}: line {lineno}: {len(row)} cells, header has {len(header)}")
+        vals = []
+        for col, cell in zip(header, row, strict=True):
+            try:
+                v = float(cell)
+            except ValueError:
+                raise DataError(f"{path}: line {lineno}, column '{col}': not a number: {cell!r}") from None
+            if not np.isfinite(v):
+                raise DataError(f"{path}: line {lineno}, column '{col}': non-finite value {cell!r}")
+            vals.append(v)
+        rows.append(vals)
+    if len(rows) < 10:
+        raise DataError(f"{path}: {len(rows)} data rows; need at least 10")
+    return np.array(rows)
+
+
+def _sample_period(path: Path, t: NDArray[np.float64], rtol_dt: float) -> float:
+    dt = np.diff(t)
+    T = float(np.median(dt))
+    if T <= 0:
+        raise DataError(f"{path}: column 't' is not increasing")
+    bad = np.flatnonzero(np.abs(dt - T) > rtol_dt * T)
+    if bad.size:
+        i = int(bad[0])
+        raise DataError(
+            f"{path}: line {i + 3}, column 't': non-uniform sampling, step {dt[i]:.6g} s "
+            f"where the median step is {T:.6g} s"
+        )
+    return T
+
+
+def read_serial_recording(path: str | Path, n_joints: int, rtol_dt: float = 1e-3) -> Recording:
+    """Read an N-joint CSV record ``t, q1..qN, [qd1..qdN,] tau1..tauN`` for an arm of ``n_joints``.
+
+    Returns a :class:`Recording` with ``q, tau (N, n)`` and ``qd (N, n)`` or None.
+
+    Raises
+    ------
+    DataError
+        Naming the file (and line, column): columns that do not match the arm's joint count
+        (which columns are missing or extra), non-numeric or non-finite cells, too few rows,
+        non-uniform sampling.
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise DataError(f"{path}: no such file")
+    n = int(n_joints)
+    q_cols = [f"q{j + 1}" for j in range(n)]
+    qd_cols = [f"qd{j + 1}" for j in range(n)]
+    tau_cols = [f"tau{j + 1}" for j in range(n)]
+    expected = "t, " + ", ".join(q_cols + qd_cols + tau_cols)
+    with io.StringIO(read_text(path), newline="") as fh:
+        reader = csv.reader(fh)
+        try:
+            header = [h.strip() for h in next(reader)]
+        except StopIteration:
+            raise DataError(f"{path}: empty file, expected a header {expected}") from None
+        if len(set(header)) != len(header):
+            raise DataError(f"{path}: line 1: duplicate column names in {header}")
+        has_qd = any(h.startswith("qd") for h in header)
+        want = ["t", *q_cols, *(qd_cols if has_qd else []), *tau_cols]
+        missing = [h for h in want if h not in header]
+        extra = [h for h in header if h not in want]
+        if missing or extra:
+            n_file = sum(1 for h in header if h.startswith("tau"))
+            raise DataError(
+                f"{path}: line 1: the columns do not fit an arm of {n} joints (the file has {len(header)} "
+                f"columns, {n_file} torque column(s)); missing {missing}, unexpected {extra}; expected "
+                f"{expected} (qd columns optional)"
+            )
+        a = _parse_rows(path, reader, header)
+    col = {h: a[:, i] for i, h in enumerate(header)}
+    T = _sample_period(path, col["t"], rtol_dt)
+    return Recording(
+        t=col["t"],
+        q=np.column_stack([col[c] for c in q_cols]),
+        tau=np.column_stack([col[c] for c in tau_cols]),
+        qd=np.column_stack([col[c] for c in qd_cols]) if has_qd else None,
+        sample_period=T,
+        source=str(path),
+    )

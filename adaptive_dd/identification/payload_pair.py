@@ -1,0 +1,127 @@
+"""A payload's mass, centre of mass and inertia from identified base parameters.
+
+A rigid body on the payload frame moves the base parameters along
+:attr:`SerialArm.payload_basis` ``P (p, 10)``: ``sigma_loaded = sigma_unloaded + P pi_p``.
+
+* **From a pair** of records (loaded, unloaded), each identified with its covariance:
+  generalised least squares ``pi_p = (P^T C^-1 P)^-1 P^T C^-1 (sigma_L - sigma_U)``,
+  ``C = C_L + C_U``, covariance ``(P^T C^-1 P)^-1``.
+* **From one record with the arm known**: output error on the ten payload parameters
+  alone (:func:`~adaptive_dd.identification.serial_output_error.serial_output_error`
+  with ``E = P``), covariance the inverse of their Fisher information.
+
+Either way the result carries the constrained (physically consistent) fit of
+:mod:`adaptive_dd.identification.consistency`, and mass, centre of mass [m] (in the
+payload frame) and inertia about the centre of mass with first-order standard deviations.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from adaptive_dd.errors import ParameterError
+from adaptive_dd.identification.consistency import ConsistentFit, consistent_fit
+
+__all__ = ["PayloadResult", "payload_from_pair", "payload_from_params", "payload_from_record"]
+
+Array = NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class PayloadResult:
+    """An identified payload.
+
+    Attributes
+    ----------
+    params : ndarray (10,)
+        Unconstrained estimate about the payload frame.
+    cov : ndarray (10, 10)
+        Its covariance (Cramér-Rao when the inputs were).
+    mass, mass_std : float
+        [kg].
+    com, com_std : ndarray (3,)
+        Centre of mass in the payload frame [m] (constrained fit) and its std.
+    inertia_com : ndarray (3, 3)
+        Inertia about the centre of mass [kg m^2] (constrained fit).
+    consistent : ConsistentFit
+    """
+
+    params: Array
+    cov: Array
+    mass: float
+    mass_std: float
+    com: Array
+    com_std: Array
+    inertia_com: Array
+    consistent: ConsistentFit
+
+
+def _inertia_about_com(p: Array) -> Array:
+    m, h = p[0], p[1:4]
+    Io = np.array([[p[4], p[5], p[7]], [p[5], p[6], p[8]], [p[7], p[8], p[9]]])
+    c = h / m if m > 0 else np.zeros(3)
+    return Io - m * (c @ c * np.eye(3) - np.outer(c, c))
+
+
+def payload_from_params(params: ArrayLike, cov: ArrayLike) -> PayloadResult:
+    """Mass, com and inertia (with stds and the consistent fit) from ten parameters and their covariance."""
+    p = np.asarray(params, dtype=float)
+    C = np.asarray(cov, dtype=float)
+    fit = consistent_fit(p, np.linalg.pinv(C, rcond=1e-12, hermitian=True))
+    q = fit.params
+    m = q[0]
+    com = q[1:4] / m if m > 0 else np.full(3, np.nan)
+    # d c / d [m, h] = [-h/m^2, 1/m]
+    com_std = np.empty(3)
+    for k in range(3):
+        g = np.zeros(10)
+        g[0], g[1 + k] = -q[1 + k] / m**2, 1.0 / m
+        com_std[k] = np.sqrt(max(g @ C @ g, 0.0))
+    return PayloadResult(p, C, float(m), float(np.sqrt(C[0, 0])), com, com_std, _inertia_about_com(q), fit)
+
+
+def payload_from_pair(
+    arm, sigma_loaded: ArrayLike, cov_loaded: ArrayLike, sigma_unloaded: ArrayLike, cov_unloaded: ArrayLike
+) -> PayloadResult:
+    """The payload from a loaded and an unloaded identification (module docstring).
+
+    Raises
+    ------
+    ParameterError
+        If the base parameters do not determine all ten payload parameters on this arm.
+    """
+    P = arm.payload_basis
+    if arm.payload_rank < 10:
+        names = ("m", "mx", "my", "mz", "Ixx", "Ixy", "Iyy", "Ixz", "Iyz", "Izz")
+        missing = [nm for nm, ok in zip(names, arm.payload_identifiable, strict=True) if not ok]
+        raise ParameterError(
+            f"on this arm the base parameters determine only {arm.payload_rank} of the payload's 10 "
+            f"parameters (not: {missing}); a pair of records cannot give them"
+        )
+    d = np.asarray(sigma_loaded, float) - np.asarray(sigma_unloaded, float)
+    C = np.asarray(cov_loaded, float) + np.asarray(cov_unloaded, float)
+    Ci = np.linalg.pinv(C, rcond=1e-14, hermitian=True)
+    info = P.T @ Ci @ P
+    cov = np.linalg.inv(info)
+    return payload_from_params(cov @ P.T @ Ci @ d, cov)
+
+
+def payload_from_record(
+    arm,
+    model,
+    q: ArrayLike,
+    qd: ArrayLike,
+    tau: ArrayLike,
+    std: ArrayLike,
+    sigma_arm: ArrayLike | None = None,
+    **oe_kw,
+) -> PayloadResult:
+    """The payload from one loaded record with the arm known (``sigma_arm``, default the URDF's)."""
+    from adaptive_dd.identification.serial_output_error import serial_output_error
+
+    s0 = model.sigma_ref if sigma_arm is None else np.asarray(sigma_arm, float)
+    fit = serial_output_error(model, q, qd, tau, s0, std, E=arm.payload_basis, **oe_kw)
+    return payload_from_params(fit.theta, np.linalg.inv(fit.information))
