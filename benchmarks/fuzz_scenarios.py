@@ -166,7 +166,7 @@ def meaningless(sc) -> str | None:
     nums = [sc.duration, sc.sample_period, sc.bandwidth, sc.damping, sc.payload_radius,
             *sc.swap_times, *sc.swap_masses, *sc.position_variance, *sc.velocity_variance,
             *sc.reference.offset, sc.reference.ramp]  # fmt: skip
-    for j in range(2):
+    for j in range(sc.reference.n_joints):
         nums += [*sc.reference.amplitude[j], *sc.reference.frequency[j], *sc.reference.phase[j]]
     if not all(isinstance(x, int | float) and math.isfinite(x) and abs(x) < 1e6 for x in nums):
         return "non-finite or huge number"
@@ -185,8 +185,22 @@ def meaningless(sc) -> str | None:
 
 
 def _meaningless_arm(arm) -> str | None:
-    """An arm no direct-drive two-link arm is: lengths, inertias, friction, limits out of scale."""
+    """An arm no direct-drive two-link arm is: lengths, inertias, friction, limits out of scale
+    (for a URDF arm: its per-joint friction, armature, limits and gravity)."""
     import numpy as np
+
+    from adaptive_dd.plant.serial_arm import SerialArm
+
+    if isinstance(arm, SerialArm):
+        vec = np.concatenate([arm.viscous, arm.coulomb, arm.armature])
+        lim = np.asarray(arm.actuator.torque_limit, float)
+        if not np.all(np.isfinite(vec)) or np.any(vec < 0) or np.any(vec > 1e4):
+            return f"joint friction or armature out of scale: {vec}"
+        if np.any(lim <= 0) or np.any(lim > 1e5):
+            return f"torque limit {lim}"
+        if not (0 <= arm.payload_radius <= 0.5) or np.linalg.norm(arm.gravity) > 100:
+            return f"payload radius {arm.payload_radius} m or gravity {arm.gravity}"
+        return None
 
     s = np.asarray(arm.sigma, float)
     if not (0 < arm.l1 <= 2 and 0 < arm.l2 <= 2):

@@ -696,11 +696,19 @@ def urdf_arm_from_table(src: str, table: dict, plant_kw: dict):
     lugre = {k: kw.pop(k) for k in ("lugre_stiffness", "lugre_damping") if k in kw}
     if kw.get("friction") == "lugre":
         lugre["friction"] = kw.pop("friction")
-    for key, lo in (("viscous", 0.0), ("coulomb", 0.0), ("armature", 0.0)):
+    for key in ("viscous", "coulomb", "armature"):
         if key in table:
-            kw[key] = _table_vector(src, key, table[key], n, lo, strict=False)
+            kw[key] = _table_vector(src, key, table[key], n, 0.0, strict=False, hi=URDF_TABLE_BOUNDS[key])
     if "torque_limit" in table:
-        lim = _table_vector(src, "torque_limit", table["torque_limit"], n, 0.0, strict=True)
+        lim = _table_vector(
+            src,
+            "torque_limit",
+            table["torque_limit"],
+            n,
+            0.0,
+            strict=True,
+            hi=URDF_TABLE_BOUNDS["torque_limit"],
+        )
         kw["actuator"] = replace(arm.actuator, torque_limit=tuple(lim))
     if "dac_bits" in table:
         bits = table["dac_bits"]
@@ -740,7 +748,12 @@ def _is_num(x) -> bool:
     return not isinstance(x, bool) and isinstance(x, int | float) and math.isfinite(x)
 
 
-def _table_vector(src: str, key: str, v, n: int, lo: float, strict: bool) -> Array:
+URDF_TABLE_BOUNDS = {"viscous": 1e4, "coulomb": 1e4, "armature": 1e3, "torque_limit": 1e5}
+"""Upper bounds of the per-joint overrides of a URDF arm (N m s, N m, kg m^2, N m): beyond
+them no actuator of an arm is meant."""
+
+
+def _table_vector(src: str, key: str, v, n: int, lo: float, strict: bool, hi: float = math.inf) -> Array:
     from adaptive_dd.errors import ScenarioError
 
     if not isinstance(v, list) or len(v) != n or not all(_is_num(x) for x in v):
@@ -750,4 +763,6 @@ def _table_vector(src: str, key: str, v, n: int, lo: float, strict: bool) -> Arr
     a = np.array(v, dtype=float)
     if np.any(a <= lo if strict else a < lo):
         raise ScenarioError(f"{src}: key 'arm.{key}' must be {'>' if strict else '>='} {lo:g}, got {v!r}")
+    if np.any(a > hi):
+        raise ScenarioError(f"{src}: key 'arm.{key}' must be <= {hi:g}, got {v!r}")
     return a
