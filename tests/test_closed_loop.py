@@ -32,6 +32,8 @@ def _short(name: str, duration: float, swaps: tuple, seeds: int = 2, **run) -> o
         p["at"] = at
     data["payload"] = data["payload"][: len(swaps)]
     data["reference"]["ramp"] = 0.2
+    listed = data["run"].get("controllers", ())
+    data["controllers"] = {k: v for k, v in data.get("controllers", {}).items() if k in listed}
     return parse_scenario(data, "test.toml", name=name)
 
 
