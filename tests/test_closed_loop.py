@@ -32,6 +32,8 @@ def _short(name: str, duration: float, swaps: tuple, seeds: int = 2, **run) -> o
         p["at"] = at
     data["payload"] = data["payload"][: len(swaps)]
     data["reference"]["ramp"] = 0.2
+    listed = data["run"].get("controllers", ())
+    data["controllers"] = {k: v for k, v in data.get("controllers", {}).items() if k in listed}
     return parse_scenario(data, "test.toml", name=name)
 
 
@@ -242,6 +244,19 @@ def test_scenario_checks_for_n_joint_arms():
             "ct_oracle", load_scenario(_shipped("vertical3_payload")).arm, options={"gain": 1}
         )
     assert set(SERIAL_CONTROLLERS) >= {"pd", "ct_nominal", "ct_oracle", "adaptive_ct", "slotine_li"}
+
+
+def test_an_n_joint_scenario_takes_the_n_joint_estimators_settings():
+    data = tomllib.loads(open(_shipped("ur5_tool_swap"), encoding="utf-8").read())
+    est = {"row_weights": [1.0, 1.0, 1.0, 0.5, 0.5, 0.5], "bound_radius": 0.2, "detector": {"floor": 0.1}}
+    data["controllers"] = {"adaptive_ct": {"estimator": est}}
+    sc = parse_scenario(data, "x.toml")
+    online = make_serial_controller("adaptive_ct", sc.arm, options=sc.options("adaptive_ct")).online
+    assert list(online.row_weights) == est["row_weights"]
+    assert online.bound_radius == 0.2 and online.detector.floor == 0.1
+    data["controllers"] = {"adaptive_ct": {"estimator": {"row_weightz": 1.0}}}
+    with pytest.raises(ScenarioError, match=r"controllers\.adaptive_ct\.estimator.*row_weightz"):
+        parse_scenario(data, "x.toml")
 
 
 def test_cli_benchmark_of_an_n_joint_scenario_writes_every_output(tmp_path, capsys):

@@ -70,6 +70,7 @@ def _com(p):
         ({"detector": "yes"}, "detector.*str"),
         ({"project": 1}, "project.*1"),
         ({"max_trace": float("nan")}, "max_trace.*nan"),
+        ({"bound_radius": 0.0}, "bound_radius.*0.0"),
     ],
 )
 def test_bad_settings_name_the_field_and_value(kw, match):
@@ -327,6 +328,49 @@ def test_projection_leaves_a_rigid_body_unchanged():
         out = np.empty(10)
         project_payload(p, out, 0.0)
         assert np.allclose(out, p, rtol=0, atol=1e-12)  # a flat disk lies on the boundary
+
+
+@settings(max_examples=200, deadline=None)
+@given(
+    st.lists(st.floats(-5.0, 5.0), min_size=10, max_size=10),
+    st.floats(1e-3, 1.0),
+    st.floats(0.01, 0.5),
+)
+def test_projection_onto_a_ball_is_consistent_and_within_it(values, scale, radius):
+    raw = np.array(values) * np.array([1.0] + [scale] * 3 + [scale**2] * 6)
+    out = np.empty(10)
+    project_payload(raw, out, 0.0, radius)
+    J = _pseudo_inertia(out)
+    tol = 1e-12 * max(1.0, np.abs(raw).max())
+    assert out[0] >= 0.0
+    assert np.linalg.eigvalsh(J).min() >= -tol
+    assert np.trace(J[:3, :3]) <= out[0] * radius**2 + tol  # tr(Sigma) <= m R^2
+    assert np.linalg.norm(out[1:4]) <= out[0] * radius + tol  # |m c| <= m R
+    again = np.empty(10)
+    project_payload(out, again, 0.0, radius)  # a payload within the ball is its own projection
+    assert np.allclose(again, out, rtol=0, atol=1e-9 * max(1.0, np.abs(out).max()))
+
+
+def test_projection_onto_a_ball_leaves_a_body_within_it_unchanged_and_empties_a_vanishing_mass():
+    rng = np.random.default_rng(4)
+    for _ in range(20):  # a disk of radius <= 0.1 m whose centre is <= 0.1 m out lies in a 0.25 m ball
+        p = payload_parameters(rng.uniform(0.1, 5), rng.uniform(-0.1, 0.1, 3) / np.sqrt(3), radius=0.1)
+        out = np.empty(10)
+        project_payload(p, out, 0.0, 0.25)
+        assert np.allclose(out, p, rtol=0, atol=1e-12)  # a flat disk lies on the PSD boundary
+    # what the estimator left with no payload on: 1.6 g holding 4e-3 kg m^2 of inertia
+    raw = np.array([1.6e-3, 2e-4, -1e-4, 3e-4, 4e-3, 1e-4, 3e-3, 0.0, -2e-4, 2e-3])
+    out = np.empty(10)
+    project_payload(raw, out, 0.0, 0.25)
+    assert out[0] <= raw[0]
+    assert np.abs(out[4:]).max() <= 2 * out[0] * 0.25**2 + 1e-18  # inertia of at most m R^2 per axis
+    assert np.linalg.norm(out[1:4]) <= out[0] * 0.25 + 1e-18
+    zero = np.empty(10)
+    project_payload(np.r_[0.0, 0.0, 0.0, 0.0, raw[4:]], zero, 0.0, 0.25)  # no mass: nothing else either
+    assert np.all(zero == 0.0)
+    unbounded = np.empty(10)
+    project_payload(raw, unbounded, 0.0)  # without the ball, PSD only: the inertia stays
+    assert unbounded[4] > 1e-3
 
 
 def test_the_control_model_is_projected_but_the_state_is_not(ur5):

@@ -422,7 +422,9 @@ def _controller_setting_errors(v: dict) -> list[str]:
     of ``[control]``; ``boost_duration`` is at most the run; every number is finite and within
     ``LIMITS["max_setting"]``."""
     from adaptive_dd.benchmark.scenario_checks import _num, thaw
+    from adaptive_dd.closed_loop.controllers import make_serial_controller
     from adaptive_dd.controllers import CONTROLLERS, Gains, make_controller
+    from adaptive_dd.plant.serial_arm import SerialArm
 
     errs: list[str] = []
     opts = {n: thaw(o) for n, o in v["controller_options"]}
@@ -452,7 +454,10 @@ def _controller_setting_errors(v: dict) -> list[str]:
         if len(errs) > n0:
             continue
         try:
-            make_controller(name, Gains(v["bandwidth"], v["damping"]), o, arm=v["arm"])
+            if isinstance(v["arm"], SerialArm):  # the N-joint built-ins (their own settings)
+                make_serial_controller(name, v["arm"], v["bandwidth"], v["damping"], o)
+            else:
+                make_controller(name, Gains(v["bandwidth"], v["damping"]), o, arm=v["arm"])
         except (ValueError, TypeError, ArithmeticError) as exc:
             msg = str(exc)
             while msg.startswith(f"controllers.{name}"):  # the registry names the controller too

@@ -5,7 +5,10 @@ Pinocchio's order) are physically consistent exactly when its 4 x 4 pseudo-inert
 ``J = [[tr(I)/2 1 - I, m c], [m c^T, m]]`` is positive semidefinite (Wensing, Kim and
 Slotine, "Linear matrix inequalities for physically consistent inertial parameter
 identification", IEEE RA-L 3(1), 2018). :func:`project_payload` clips J's eigenvalues: the
-nearest consistent body in J's Frobenius norm. Compiled (a per-sample step calls it).
+nearest consistent body in J's Frobenius norm; given a radius R, it then also bounds the body to
+a ball of radius R about its frame (the bounding-ellipsoid constraint of the same paper,
+``tr(Sigma) <= m R^2`` for J's second-moment block ``Sigma``, which implies ``|c| <= R``).
+Compiled (a per-sample step calls it).
 """
 
 from __future__ import annotations
@@ -79,14 +82,81 @@ def _positive_definite(J, shift):  # pragma: no cover - compiled
 
 
 @njit(cache=True)
-def project_payload(src, dst, eig_min):  # pragma: no cover - compiled
+def _bound_ball(dst, radius):  # pragma: no cover - compiled
+    """Bound a consistent payload (10,) in place to a ball of ``radius`` [m] about its frame.
+
+    With ``Sigma = tr(I)/2 1 - I`` (J's second-moment block) and ``h = m c``: if
+    ``|c| > R``, h is scaled to ``|c| = R``; then the Schur complement
+    ``S = Sigma - h h^T / m`` (positive semidefinite for a consistent body) is scaled by
+    ``s in [0, 1]`` so that ``tr(Sigma) <= m R^2`` (Wensing, Kim and Slotine, RA-L 2018,
+    bounding ellipsoid; a ball here). Scaling S keeps J positive semidefinite; as ``m -> 0``
+    the first and second moments go to 0 with it. A payload within the ball is unchanged.
+    """
+    m = dst[0]
+    r2 = radius * radius
+    if not m > 0.0:
+        for k in range(10):
+            dst[k] = 0.0
+        return
+    hh = dst[1] * dst[1] + dst[2] * dst[2] + dst[3] * dst[3]
+    tr_sigma = 0.5 * (dst[4] + dst[6] + dst[9])
+    if hh <= m * m * r2 and tr_sigma <= m * r2:
+        return
+    S = np.empty((3, 3))
+    S[0, 0], S[1, 1], S[2, 2] = tr_sigma - dst[4], tr_sigma - dst[6], tr_sigma - dst[9]
+    S[0, 1] = S[1, 0] = -dst[5]
+    S[0, 2] = S[2, 0] = -dst[7]
+    S[1, 2] = S[2, 1] = -dst[8]
+    h = np.empty(3)
+    for k in range(3):
+        h[k] = dst[1 + k]
+    if hh > m * m * r2:  # centre of mass beyond the ball: onto its surface
+        f = np.sqrt(m * m * r2 / hh)
+        for k in range(3):
+            h[k] *= f
+        hh = m * m * r2
+    tr_s = 0.0
+    for a in range(3):
+        for b in range(3):
+            S[a, b] -= h[a] * h[b] / m
+        tr_s += S[a, a]
+    room = m * r2 - hh / m  # what the spread about the centre of mass may add to tr(Sigma)
+    scale = 1.0
+    if tr_s > room:
+        scale = max(room, 0.0) / tr_s
+    for a in range(3):
+        for b in range(3):
+            S[a, b] = h[a] * h[b] / m + scale * S[a, b]
+    tr = S[0, 0] + S[1, 1] + S[2, 2]
+    for k in range(3):
+        dst[1 + k] = h[k]
+    dst[4] = tr - S[0, 0]
+    dst[5] = -S[0, 1]
+    dst[6] = tr - S[1, 1]
+    dst[7] = -S[0, 2]
+    dst[8] = -S[1, 2]
+    dst[9] = tr - S[2, 2]
+
+
+@njit(cache=True)
+def project_payload(src, dst, eig_min, radius=0.0):  # pragma: no cover - compiled
     """Nearest physically consistent payload (10,) -> dst: clip the pseudo-inertia's eigenvalues.
 
     ``src = [m, m c (3), Ixx, Ixy, Iyy, Ixz, Iyz, Izz]`` about the payload frame. The 4 x 4
     pseudo-inertia ``J = [[tr(I)/2 1 - I, m c], [m c^T, m]]`` (Wensing, Kim and Slotine,
     RA-L 2018) is made positive semidefinite by clipping its eigenvalues at ``eig_min``
-    (the Frobenius-nearest such J); mass ``J[3, 3] >= 0`` follows.
+    (the Frobenius-nearest such J); mass ``J[3, 3] >= 0`` follows. If ``radius`` [m] > 0,
+    the result is then bounded to a ball of that radius about the payload frame
+    (:func:`_bound_ball`): ``|c| <= radius`` and ``tr(Sigma) <= m radius^2``.
     """
+    _project_psd(src, dst, eig_min)
+    if radius > 0.0 and np.isfinite(dst[0]):
+        _bound_ball(dst, radius)
+
+
+@njit(cache=True)
+def _project_psd(src, dst, eig_min):  # pragma: no cover - compiled
+    """Eigenvalue clipping of :func:`project_payload` (without the ball)."""
     J = np.empty((4, 4))
     ixx, ixy, iyy, ixz, iyz, izz = src[4], src[5], src[6], src[7], src[8], src[9]
     half = 0.5 * (ixx + iyy + izz)

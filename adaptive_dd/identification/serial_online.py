@@ -219,6 +219,11 @@ class SerialOnlineConfig:
         estimator's state stays unprojected).
     eig_min : float
         Smallest eigenvalue [kg m^2] of the projected pseudo-inertia, >= 0.
+    bound_radius : float or None
+        Radius R [m] of a ball about the payload frame that holds the payload: the projected
+        model also has ``|c| <= R`` and ``tr(Sigma) <= m R^2`` (Sigma: the pseudo-inertia's
+        second-moment block), so a vanishing mass carries vanishing first moments and
+        inertia. None: no bound (positive semidefiniteness only).
     """
 
     sample_period: float = 1e-3
@@ -237,6 +242,7 @@ class SerialOnlineConfig:
     detector: SerialDetector | None = field(default_factory=SerialDetector)
     project: bool = True
     eig_min: float = 0.0
+    bound_radius: float | None = 0.25
 
     def __post_init__(self) -> None:
         o = "SerialOnlineConfig"
@@ -260,6 +266,8 @@ class SerialOnlineConfig:
         _bool(o, "project", self.project)
         _num(o, "taint", self.taint, 0.0, strict=False)
         _num(o, "eig_min", self.eig_min, 0.0, strict=False)
+        if self.bound_radius is not None:
+            _num(o, "bound_radius", self.bound_radius, 0.0)
         if self.selection is not None:
             if not isinstance(self.selection, tuple | list) or len(self.selection) != 2:
                 raise ParameterError(
@@ -369,6 +377,7 @@ def _pack(cfg: SerialOnlineConfig, arm: SerialArm) -> tuple[EstCfg, Array]:
     fl[K.F_LAM0], fl[K.F_MU], fl[K.F_CAP] = cfg.lam0, cfg.mu, cap
     fl[K.F_SEL_THRESHOLD] = 0.0 if cfg.selection is None else cfg.selection[0]
     fl[K.F_EIG_MIN] = cfg.eig_min
+    fl[K.F_RADIUS] = 0.0 if cfg.bound_radius is None else cfg.bound_radius
     if det is not None:
         ints[K.I_DETECT] = 1
         ints[K.I_WARMUP] = cfg.seconds(det.warmup)

@@ -140,7 +140,8 @@ F_SLOW2 = 7
 F_GATE2 = 8
 F_EIG_MIN = 9  # smallest eigenvalue kept in the projected pseudo-inertia
 F_FLOOR2 = 10  # floor of the detector's level (squared weighted error)
-N_F = 11
+F_RADIUS = 11  # radius [m] of the ball about the payload frame the projected payload lies in (0: none)
+N_F = 12
 
 
 class EstState(NamedTuple):
@@ -582,7 +583,7 @@ def est_payload_trial(c, s, i, out):  # pragma: no cover - compiled
     raw = np.empty(10)
     _payload_raw(c, s.theta[i], raw)
     if c.ints[I_PROJECT] == 1:
-        project_payload(raw, out, c.floats[F_EIG_MIN])
+        project_payload(raw, out, c.floats[F_EIG_MIN], c.floats[F_RADIUS])
     else:
         for k in range(10):
             out[k] = raw[k]
@@ -607,7 +608,7 @@ def est_model_trial(c, s, i, pi_out):  # pragma: no cover - compiled
     _payload_raw(c, th, raw)
     pay = np.empty(10)
     if c.ints[I_PROJECT] == 1:
-        project_payload(raw, pay, c.floats[F_EIG_MIN])
+        project_payload(raw, pay, c.floats[F_EIG_MIN], c.floats[F_RADIUS])
     else:
         for k in range(10):
             pay[k] = raw[k]
