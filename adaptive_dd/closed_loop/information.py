@@ -37,8 +37,10 @@ def add_information_times(res, out: dict) -> None:
             seg = out[name]["segments"][i]
             seg["information_time"] = info
             seg["mass_learning_time"] = None
+            seg["learning_seeds"] = 0
             if run.sigma_hat is not None and run.sigma_hat.shape[0]:
                 kept = ~run.failed[: run.sigma_hat.shape[0]]
+                seg["learning_seeds"] = int(kept.sum())
                 with np.errstate(invalid="ignore", divide="ignore"):
                     m_hat = sc.arm.payload_mass_from_sigma(run.sigma_hat[kept, k0:k1])
                 tl = mass_learning_time(m_hat, mass, removed, rc.T)
@@ -68,6 +70,6 @@ def _information_function():
         t = payload_information_time(
             sc.arm, q, qd, qdd, pay, k0 - lo, sample_period=T, position_variance=pv, velocity_variance=vv
         )
-        return {"known": t} if np.isfinite(t) else None
+        return {"known": t, "seeds": 1, "reference": oracle.name} if np.isfinite(t) else None
 
     return info
