@@ -124,40 +124,10 @@ def read_recording(path: str | Path, rtol_dt: float = 1e-3) -> Recording:
             raise DataError(f"{path}: line 1: give both qd1 and qd2 or neither")
         if len(set(header)) != len(header):
             raise DataError(f"{path}: line 1: duplicate column names in {header}")
-        rows = []
-        for lineno, row in enumerate(reader, start=2):
-            if not row or all(not c.strip() for c in row):
-                continue
-            if len(row) != len(header):
-                raise DataError(f"{path}: line {lineno}: {len(row)} cells, header has {len(header)}")
-            vals = []
-            for col, cell in zip(header, row, strict=True):
-                try:
-                    v = float(cell)
-                except ValueError:
-                    raise DataError(
-                        f"{path}: line {lineno}, column '{col}': not a number: {cell!r}"
-                    ) from None
-                if not np.isfinite(v):
-                    raise DataError(f"{path}: line {lineno}, column '{col}': non-finite value {cell!r}")
-                vals.append(v)
-            rows.append(vals)
-    if len(rows) < 10:
-        raise DataError(f"{path}: {len(rows)} data rows; need at least 10")
-    a = np.array(rows)
+        a = _parse_rows(path, reader, header)
     col = {h: a[:, i] for i, h in enumerate(header)}
     t = col["t"]
-    dt = np.diff(t)
-    T = float(np.median(dt))
-    if T <= 0:
-        raise DataError(f"{path}: column 't' is not increasing")
-    bad = np.flatnonzero(np.abs(dt - T) > rtol_dt * T)
-    if bad.size:
-        i = int(bad[0])
-        raise DataError(
-            f"{path}: line {i + 3}, column 't': non-uniform sampling, step {dt[i]:.6g} s "
-            f"where the median step is {T:.6g} s"
-        )
+    T = _sample_period(path, t, rtol_dt)
     qd = np.column_stack((col["qd1"], col["qd2"])) if "qd1" in col else None
     return Recording(
         t=t,
