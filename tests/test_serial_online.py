@@ -13,6 +13,7 @@ from adaptive_dd.identification.rls import RLSConfig, rls_init, rls_step
 from adaptive_dd.identification.serial_online import (
     SerialDetector,
     SerialOnlineConfig,
+    compact_prior,
     est_force_alarm_trial,
     est_init,
     est_model,
@@ -71,6 +72,7 @@ def _com(p):
         ({"project": 1}, "project.*1"),
         ({"max_trace": float("nan")}, "max_trace.*nan"),
         ({"bound_radius": 0.0}, "bound_radius.*0.0"),
+        ({"prior_radius": -0.05}, "prior_radius.*-0.05"),
     ],
 )
 def test_bad_settings_name_the_field_and_value(kw, match):
@@ -381,10 +383,57 @@ def test_the_control_model_is_projected_but_the_state_is_not(ur5):
     est_payload_trial(c, s, 0, pay)
     assert s.theta[0, 0] == -2.0
     assert pay[0] >= 0 and np.linalg.eigvalsh(_pseudo_inertia(pay)).min() >= -1e-12
-    c2, s2 = est_init(SerialOnlineConfig(project=False), ur5, 1)
+    c2, s2 = est_init(SerialOnlineConfig(project=False, prior_radius=None), ur5, 1)
     s2.theta[0] = s.theta[0]
     est_payload_trial(c2, s2, 0, pay)
     assert np.array_equal(pay, s.theta[0])
+
+
+# ------------------------------------------------------------------------------------ compact prior
+def _sphere_inertia(pay, rho):
+    m, h = pay[0], pay[1:4]
+    full = (h @ h * np.eye(3) - np.outer(h, h)) / m + 0.4 * m * rho**2 * np.eye(3)
+    return full[[0, 0, 1, 0, 1, 2], [0, 1, 1, 2, 2, 2]]  # Ixx, Ixy, Iyy, Ixz, Iyz, Izz
+
+
+def test_the_compact_prior_moves_only_an_uninformed_inertia():
+    """compact_prior: an inertia with a large variance goes to the sphere at the centre of mass, one
+    with a small variance stays; the mass and first moments never move; the covariance shrinks."""
+    raw = PAY_B.copy()
+    raw[4:] = [0.5, 0.1, -0.3, 0.05, 0.2, 0.4]  # an inertia far from any compact body
+    rho = 0.05
+    P = np.diag(np.r_[np.full(4, 1e-6), np.full(6, 1e3)])
+    out, Pc = raw.copy(), P.copy()
+    compact_prior(out, Pc, rho)
+    assert np.array_equal(out[:4], raw[:4])
+    assert np.allclose(out[4:], _sphere_inertia(raw, rho), rtol=0, atol=1e-6), out[4:]
+    assert np.all(np.diag(Pc)[4:] < np.diag(P)[4:]) and np.linalg.eigvalsh(Pc).min() > -1e-12
+    P = np.diag(np.r_[np.full(4, 1e-6), np.full(6, 1e-14)])  # the data know the inertia
+    out = raw.copy()
+    compact_prior(out, P.copy(), rho)
+    assert np.allclose(out, raw, rtol=0, atol=1e-6) and not np.array_equal(out, raw)
+
+
+def test_the_prior_is_on_the_control_model_only_and_off_when_asked(ur5, swap_record):
+    """150 ms after the swap the prior brings the control model's inertia nearer the truth; the
+    estimator's state does not depend on it, and before the projection neither do the mass and
+    first moments."""
+    r = swap_record
+    runs = {}
+    for rho in (0.05, None):
+        for project in (True, False):
+            c, s = est_init(SerialOnlineConfig(prior_radius=rho, project=project), ur5, 1)
+            for k in range(10_150):
+                est_step(c, s, r.q_meas[k : k + 1], r.qd_meas[k : k + 1], r.tau[k : k + 1])
+            pay = np.empty(10)
+            est_payload_trial(c, s, 0, pay)
+            runs[rho, project] = (s.theta[0].copy(), pay)
+    assert np.array_equal(runs[0.05, True][0], runs[None, True][0])
+    assert np.array_equal(runs[0.05, False][1][:4], runs[None, False][1][:4])
+    assert np.array_equal(runs[None, False][1], runs[None, False][0])  # off and unprojected: the state
+    err_on = np.abs(runs[0.05, True][1][4:] - PAY_B[4:]).max()
+    err_off = np.abs(runs[None, True][1][4:] - PAY_B[4:]).max()
+    assert err_on < 0.5 * err_off, (err_on, err_off)
 
 
 # ------------------------------------------------------------------------------------ full mode

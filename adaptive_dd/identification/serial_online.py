@@ -54,6 +54,7 @@ from adaptive_dd.identification.pseudo_inertia import project_payload
 from adaptive_dd.identification.serial_online_kernel import (
     EstCfg,
     EstState,
+    compact_prior,
     est_force_alarm_trial,
     est_model_trial,
     est_payload_trial,
@@ -68,6 +69,7 @@ __all__ = [
     "SerialDetector",
     "SerialOnlineConfig",
     "SerialOnlineRecord",
+    "compact_prior",
     "est_force_alarm_trial",
     "est_init",
     "est_model",
@@ -224,6 +226,15 @@ class SerialOnlineConfig:
         model also has ``|c| <= R`` and ``tr(Sigma) <= m R^2`` (Sigma: the pseudo-inertia's
         second-moment block), so a vanishing mass carries vanishing first moments and
         inertia. None: no bound (positive semidefiniteness only).
+    prior_radius : float or None
+        Radius rho [m] of a compact-payload prior on the model control uses (not on the
+        estimator's state): the payload's inertia about its frame is taken, a priori, as a
+        solid sphere of radius rho at the estimated centre of mass, each inertia component
+        with standard deviation ``m rho^2``
+        (:func:`~adaptive_dd.identification.serial_online_kernel.compact_prior`).
+        After a swap the data fix the mass and centre of mass within tens of ms but the
+        inertia only over about a second; the prior holds the model at a plausible inertia
+        until then. None or 0: no prior.
     """
 
     sample_period: float = 1e-3
@@ -243,6 +254,7 @@ class SerialOnlineConfig:
     project: bool = True
     eig_min: float = 0.0
     bound_radius: float | None = 0.25
+    prior_radius: float | None = 0.05
 
     def __post_init__(self) -> None:
         o = "SerialOnlineConfig"
@@ -268,6 +280,8 @@ class SerialOnlineConfig:
         _num(o, "eig_min", self.eig_min, 0.0, strict=False)
         if self.bound_radius is not None:
             _num(o, "bound_radius", self.bound_radius, 0.0)
+        if self.prior_radius is not None:
+            _num(o, "prior_radius", self.prior_radius, 0.0, strict=False)
         if self.selection is not None:
             if not isinstance(self.selection, tuple | list) or len(self.selection) != 2:
                 raise ParameterError(
@@ -378,6 +392,7 @@ def _pack(cfg: SerialOnlineConfig, arm: SerialArm) -> tuple[EstCfg, Array]:
     fl[K.F_SEL_THRESHOLD] = 0.0 if cfg.selection is None else cfg.selection[0]
     fl[K.F_EIG_MIN] = cfg.eig_min
     fl[K.F_RADIUS] = 0.0 if cfg.bound_radius is None else cfg.bound_radius
+    fl[K.F_PRIOR_RADIUS] = 0.0 if cfg.prior_radius is None else cfg.prior_radius
     if det is not None:
         ints[K.I_DETECT] = 1
         ints[K.I_WARMUP] = cfg.seconds(det.warmup)

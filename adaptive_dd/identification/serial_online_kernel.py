@@ -141,7 +141,8 @@ F_GATE2 = 8
 F_EIG_MIN = 9  # smallest eigenvalue kept in the projected pseudo-inertia
 F_FLOOR2 = 10  # floor of the detector's level (squared weighted error)
 F_RADIUS = 11  # radius [m] of the ball about the payload frame the projected payload lies in (0: none)
-N_F = 12
+F_PRIOR_RADIUS = 12  # radius [m] of the compact-payload prior on the model control uses (0: none)
+N_F = 13
 
 
 class EstState(NamedTuple):
@@ -578,15 +579,99 @@ def _payload_raw(c, th, raw):  # pragma: no cover - compiled
 
 
 @njit(cache=True)
+def _payload_cov(c, P, out):  # pragma: no cover - compiled
+    """Covariance (10, 10) of the payload's parameters: P itself (payload mode), else
+    ``pbasis_pinv P pbasis_pinv^T``."""
+    if c.mode == MODE_PAYLOAD:
+        for a in range(10):
+            for b in range(10):
+                out[a, b] = P[a, b]
+        return
+    p = P.shape[0]
+    tmp = np.zeros((10, p))
+    for a in range(10):
+        for b in range(p):
+            acc = 0.0
+            for k in range(p):
+                acc += c.pbasis_pinv[a, k] * P[k, b]
+            tmp[a, b] = acc
+    for a in range(10):
+        for b in range(10):
+            acc = 0.0
+            for k in range(p):
+                acc += tmp[a, k] * c.pbasis_pinv[b, k]
+            out[a, b] = acc
+
+
+@njit(cache=True)
+def compact_prior(raw, Pc, rho):  # pragma: no cover - compiled
+    """Combine ``raw (10,)`` (covariance ``Pc (10, 10)``, overwritten) with a prior that the
+    payload is compact: its inertia about the frame ``I = m S(c)^T S(c) + 0.4 m rho^2 1``
+    (a solid sphere of radius ``rho`` [m] at the estimated centre of mass ``c`` with the
+    estimated mass ``m``), each of the six inertia components with standard deviation
+    ``m rho^2 + 1e-6`` [kg m^2]. Six scalar Kalman updates (pseudo-measurements of the
+    inertia) on the inertia block of ``Pc``, given the mass and first moments: those are left
+    as they are (they are the well-determined part; moving them through their correlation
+    with the inertia corrupted the unloaded arm's model, where the prior pins the inertia).
+
+    Right after a swap the data determine the payload's mass and first moments within
+    tens of milliseconds but its inertia only over a second (the inertia's columns are
+    weakly excited); the prior keeps the model control uses at a plausible inertia
+    meanwhile, and the data override it as P shrinks (no effect once the inertia is known).
+    """
+    m = max(raw[0], 0.0)
+    hx, hy, hz = raw[1], raw[2], raw[3]
+    mean = np.zeros(6)
+    if m > 1e-9:
+        h2 = hx * hx + hy * hy + hz * hz
+        sph = 0.4 * m * rho * rho
+        # (|h|^2 1 - h h^T) / m + sphere; order Ixx, Ixy, Iyy, Ixz, Iyz, Izz
+        mean[0] = (h2 - hx * hx) / m + sph
+        mean[1] = -hx * hy / m
+        mean[2] = (h2 - hy * hy) / m + sph
+        mean[3] = -hx * hz / m
+        mean[4] = -hy * hz / m
+        mean[5] = (h2 - hz * hz) / m + sph
+    std = m * rho * rho + 1e-6
+    R = std * std
+    g = np.empty(10)
+    row = np.empty(10)
+    for t in range(6):
+        r = 4 + t
+        S = Pc[r, r] + R
+        if not (np.isfinite(S) and S > 0.0):
+            return
+        innov = mean[t] - raw[r]
+        for a in range(4, 10):
+            g[a] = Pc[a, r] / S
+            row[a] = Pc[r, a]
+        for a in range(4, 10):
+            raw[a] += g[a] * innov
+            for b in range(4, 10):
+                Pc[a, b] -= g[a] * row[b]
+
+
+@njit(cache=True)
+def _control_payload(c, s, i, raw, pay):  # pragma: no cover - compiled
+    """The payload the model control uses: ``raw`` with the compact prior (if set), projected (if set)."""
+    rho = c.floats[F_PRIOR_RADIUS]
+    if rho > 0.0:
+        Pc = np.empty((10, 10))
+        _payload_cov(c, s.P[i], Pc)
+        compact_prior(raw, Pc, rho)
+    if c.ints[I_PROJECT] == 1:
+        project_payload(raw, pay, c.floats[F_EIG_MIN], c.floats[F_RADIUS])
+    else:
+        for k in range(10):
+            pay[k] = raw[k]
+
+
+@njit(cache=True)
 def est_payload_trial(c, s, i, out):  # pragma: no cover - compiled
     """The payload (10,) about its frame implied by trial i's estimate, projected if set to."""
     raw = np.empty(10)
     _payload_raw(c, s.theta[i], raw)
-    if c.ints[I_PROJECT] == 1:
-        project_payload(raw, out, c.floats[F_EIG_MIN], c.floats[F_RADIUS])
-    else:
-        for k in range(10):
-            out[k] = raw[k]
+    _control_payload(c, s, i, raw, out)
 
 
 @njit(cache=True)
@@ -606,12 +691,9 @@ def est_model_trial(c, s, i, pi_out):  # pragma: no cover - compiled
     p = th.shape[0]
     raw = np.empty(10)
     _payload_raw(c, th, raw)
+    raw_est = raw.copy()
     pay = np.empty(10)
-    if c.ints[I_PROJECT] == 1:
-        project_payload(raw, pay, c.floats[F_EIG_MIN], c.floats[F_RADIUS])
-    else:
-        for k in range(10):
-            pay[k] = raw[k]
+    _control_payload(c, s, i, raw, pay)
     if c.mode == MODE_PAYLOAD:
         base = 10 * c.jp
         for a in range(10):
@@ -624,7 +706,7 @@ def est_model_trial(c, s, i, pi_out):  # pragma: no cover - compiled
     for a in range(p):
         acc = th[a] - c.sigma0[a]
         for k in range(10):
-            acc += c.pbasis[a, k] * (pay[k] - raw[k])
+            acc += c.pbasis[a, k] * (pay[k] - raw_est[k])
         d[a] = acc
     for k in range(m):
         acc = 0.0
