@@ -110,6 +110,20 @@ def test_ct_oracle_tracks_far_better_than_ct_nominal_on_loaded_ur5():
     segs = compute_metrics(res)["controllers"]["ct_nominal"]["segments"]
     for s in (1, 2):  # the information-limited time along ct_oracle's trajectory: a few samples
         assert 0 < segs[s]["information_time"]["known"] < 0.05, segs[s]["information_time"]
+        assert 0 < segs[s]["information_time"]["com_known"] < 0.1, segs[s]["information_time"]
+
+
+def test_com_learning_time_is_when_the_estimate_settles_within_1_cm():
+    from adaptive_dd.closed_loop.information import com_learning_time
+
+    com = np.array([0.04, 0.0, 0.06])
+    est = np.tile(com, (3, 100, 1))
+    est[0, :30] += [0.02, 0.0, 0.0]  # 2 cm off for 30 samples
+    est[0, 50] += [0.0, 0.0, 0.011]  # once more 1.1 cm off at sample 50: settled after it
+    est[1, :] += [0.0, 0.009, 0.0]  # always within 1 cm: known from the first sample
+    est[2, -1] = np.nan  # the last sample not finite: never settled
+    t = com_learning_time(est, com, 1e-3)
+    assert t[0] == pytest.approx(0.051) and t[1] == 0.0 and np.isnan(t[2]), t
 
 
 class Runaway:

@@ -7,6 +7,8 @@ import pytest
 from adaptive_dd.errors import ParameterError
 from adaptive_dd.identification.filters import design_filter_bank, filter_record
 from adaptive_dd.identification.payload_information import (
+    payload_com_bound,
+    payload_com_information_time,
     payload_information_time,
     payload_mass_bound,
     payload_mass_bound_colored,
@@ -97,6 +99,43 @@ def test_the_colored_bound_is_the_covariance_of_generalised_least_squares(ur5, r
     masses = (e @ gain.T)[:, 0]
     assert np.isclose(masses.std(), bound[-1], rtol=0.08), (masses.std(), bound[-1])
     assert np.all(np.diff(bound[np.isfinite(bound)]) <= 1e-12)  # information only accumulates
+
+
+def test_the_com_bound_is_the_scatter_of_least_squares_centres_of_mass(ur5, record):
+    """White errors drawn from R: the centre of mass h/m of weighted least squares scatters as the
+    delta-method bound says (a Jacobian without its -h/m^2 column fails this)."""
+    k = slice(3_000, 3_300)
+    Phi, R = payload_regression_noise(ur5, record.q[k], record.qd[k], record.qdd[k], PAY, sample_period=T)
+    bound = payload_com_bound(Phi, R, PAY)
+    L = np.linalg.cholesky(R)
+    Li = np.linalg.inv(L)
+    A = np.einsum("kij,kja->kia", Li, Phi).reshape(-1, 10)  # whitened
+    gain = np.linalg.pinv(A)
+    rng = np.random.default_rng(0)
+    e = rng.standard_normal((2_000, A.shape[0]))  # whitened errors: identity covariance
+    th = PAY + e @ gain.T
+    com = th[:, 1:4] / th[:, :1]
+    scatter = np.sqrt(np.trace(np.cov(com.T)))
+    assert np.isclose(scatter, bound[-1], rtol=0.08), (scatter, bound[-1])
+    assert np.all(np.diff(bound[np.isfinite(bound)]) <= 1e-12)
+    assert np.isinf(bound[0])  # one sample (six equations) cannot fix ten parameters
+
+
+def test_the_com_information_time(ur5, record):
+    r = record
+    kw = dict(sample_period=T, window=100)
+    t1 = payload_com_information_time(ur5, r.q, r.qd, r.qdd, PAY, 3_000, **kw)
+    t3 = payload_com_information_time(ur5, r.q, r.qd, r.qdd, PAY, 3_000, tol=0.003, **kw)
+    assert 0 < t1 < t3 <= 0.1
+    w = payload_com_information_time(ur5, r.q, r.qd, r.qdd, PAY, 3_000, model="white", **kw)
+    k = slice(3_000, 3_000 + 1000)
+    std = payload_com_bound(
+        *payload_regression_noise(ur5, r.q[k], r.qd[k], r.qdd[k], PAY, sample_period=T), PAY
+    )
+    i = round(w / T) - 1
+    assert std[i] <= 0.01 < std[i - 1]
+    with pytest.raises(ParameterError, match=r"tol.*-0\.01"):
+        payload_com_information_time(ur5, r.q, r.qd, r.qdd, PAY, 3_000, tol=-0.01, **kw)
 
 
 def test_the_bounds_scale_with_the_noise(ur5, record):

@@ -195,6 +195,19 @@ def _information_lines(c: dict) -> list[str]:
             + f" (target best <= {TARGET_INFO_RATIO:g}x the known-parameters limit: "
             + ("met)" if ok else "NOT met)")
         )
+        com = {n: x["segments"][i].get("com_learning_time") for n, x in c.items()}
+        if "com_known" in info:
+            lim = info["com_known"]
+            lim_s = f"{1e3 * lim:.0f} ms" if lim is not None else "beyond the window"
+            took_s = [
+                f"{n} {'never' if t is None else f'{1e3 * t:.0f} ms'}" for n, t in com.items() if n in took
+            ]
+            out.append(
+                f"  payload centre of mass within 1 cm after the swap at {seg['start']:g} s: "
+                f"information limit {lim_s}; "
+                + ", ".join(took_s)
+                + (f" (median over {max(n_learn)} seed(s))" if n_learn else "")
+            )
     return out
 
 

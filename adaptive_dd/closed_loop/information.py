@@ -1,15 +1,30 @@
 """Per swap of an N-joint run: the information-limited time to know the payload, beside the
-time each estimating controller took (``information_time`` and ``mass_learning_time`` of
-each segment in the metrics)."""
+time each estimating controller took (``information_time``, ``mass_learning_time`` and
+``com_learning_time`` of each segment in the metrics): its mass within 5 % and its centre of
+mass within 1 cm."""
 
 from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["INFO_WINDOW", "add_information_times"]
+__all__ = ["COM_TOL", "INFO_WINDOW", "add_information_times", "com_learning_time"]
 
 INFO_WINDOW = 1.0
 """[s] after a swap searched for the information-limited time."""
+
+COM_TOL = 0.01
+"""[m] the centre of mass counts as known within this distance."""
+
+
+def com_learning_time(com_hat: np.ndarray, com: np.ndarray, T: float, tol: float = COM_TOL) -> np.ndarray:
+    """First time [s] after which the estimated centre of mass ``com_hat (n, N, 3)`` stays within
+    ``tol`` [m] of ``com (3,)`` (per row), NaN if it never settles there (a NaN estimate counts as
+    outside)."""
+    with np.errstate(invalid="ignore"):
+        outside = ~(np.linalg.norm(com_hat - np.asarray(com, float), axis=-1) <= tol)  # (n, N)
+    n = outside.shape[-1]
+    last = np.where(outside.any(axis=-1), n - 1 - np.argmax(outside[..., ::-1], axis=-1), -1)
+    return np.where(last < n - 1, (last + 1) * T, np.nan)
 
 
 def add_information_times(res, out: dict) -> None:
@@ -37,22 +52,31 @@ def add_information_times(res, out: dict) -> None:
             seg = out[name]["segments"][i]
             seg["information_time"] = info
             seg["mass_learning_time"] = None
+            seg["com_learning_time"] = None
             seg["learning_seeds"] = 0
             if run.sigma_hat is not None and run.sigma_hat.shape[0]:
                 kept = ~run.failed[: run.sigma_hat.shape[0]]
                 seg["learning_seeds"] = int(kept.sum())
                 with np.errstate(invalid="ignore", divide="ignore"):
-                    m_hat = sc.arm.payload_mass_from_sigma(run.sigma_hat[kept, k0:k1])
-                tl = mass_learning_time(m_hat, mass, removed, rc.T)
+                    est = sc.arm.payload_from_sigma(run.sigma_hat[kept, k0:k1])
+                tl = mass_learning_time(est.mass, mass, removed, rc.T)
                 seg["mass_learning_time"] = None if np.all(np.isnan(tl)) else float(np.nanmedian(tl))
+                if mass > 0:  # a payload on: where is its centre of mass
+                    tc = com_learning_time(est.com, sc.payload_of(i - 1).get("com", np.zeros(3)), rc.T)
+                    seg["com_learning_time"] = None if np.all(np.isnan(tc)) else float(np.nanmedian(tc))
 
 
 def _information_function():
     """``f(res, oracle_run, segment, k0, k1) -> {"known": seconds} or None``: the time the Cramer-Rao bound on
     the payload mass takes to fall below 5 % of the payload that changed (the new one, or the
     one removed), along the oracle's first kept trajectory (qdd by differentiating the true qd),
-    from :func:`adaptive_dd.identification.payload_information.payload_information_time`."""
-    from adaptive_dd.identification.payload_information import payload_information_time
+    from :func:`adaptive_dd.identification.payload_information.payload_information_time`; and
+    (``"com_known"``, when a payload came) the time to know its centre of mass within 1 cm
+    (:func:`~adaptive_dd.identification.payload_information.payload_com_information_time`)."""
+    from adaptive_dd.identification.payload_information import (
+        payload_com_information_time,
+        payload_information_time,
+    )
     from adaptive_dd.plant.serial_arm import payload_parameters
 
     def info(res, oracle, i, k0, k1):
@@ -67,9 +91,14 @@ def _information_function():
         q, qd = oracle.q[0, lo:k1], oracle.qd[0, lo:k1]
         qdd = np.gradient(qd, T, axis=0)
         pv, vv = np.asarray(sc.position_variance), np.asarray(sc.velocity_variance)
-        t = payload_information_time(
-            sc.arm, q, qd, qdd, pay, k0 - lo, sample_period=T, position_variance=pv, velocity_variance=vv
-        )
-        return {"known": t, "seeds": 1, "reference": oracle.name} if np.isfinite(t) else None
+        kw = dict(sample_period=T, position_variance=pv, velocity_variance=vv)
+        t = payload_information_time(sc.arm, q, qd, qdd, pay, k0 - lo, **kw)
+        if not np.isfinite(t):
+            return None
+        out = {"known": t, "seeds": 1, "reference": oracle.name}
+        if j == i - 1:  # the payload came: its centre of mass
+            tc = payload_com_information_time(sc.arm, q, qd, qdd, pay, k0 - lo, tol=COM_TOL, **kw)
+            out["com_known"] = float(tc) if np.isfinite(tc) else None
+        return out
 
     return info

@@ -43,7 +43,10 @@ equations that span the swap are not modelled: the bound is optimistic there); t
 arm's parameters are exact; the sensor noise is white and Gaussian (encoder
 quantisation ignored). The Fisher information ``F(t)`` of the ten payload parameters
 gives the bound on the mass ``var(m) >= 1 / (F_mm - F_mr F_rr^+ F_rm)`` (the other nine
-unknown; the pseudo-inverse drops directions the motion does not excite).
+unknown; the pseudo-inverse drops directions the motion does not excite). The bound on the
+centre of mass ``c = h / m`` (``h`` the first moments) is the delta method's,
+``cov(c) >= J C_mh J^T`` with ``C_mh`` the (m, h) block of ``F^+`` and ``J = [-h/m^2, I/m]``;
+:func:`payload_com_information_time` reports when ``sqrt(tr cov(c))`` falls below a tolerance.
 """
 
 from __future__ import annotations
@@ -61,6 +64,8 @@ from adaptive_dd.plant.serial_arm import SerialArm
 
 __all__ = [
     "filter_noise_gram",
+    "payload_com_bound",
+    "payload_com_information_time",
     "payload_information_time",
     "payload_mass_bound",
     "payload_mass_bound_colored",
@@ -191,6 +196,33 @@ def payload_mass_bound(Phi: ArrayLike, R: ArrayLike) -> Array:
     return _schur_std(np.cumsum(info, axis=0))
 
 
+def _com_std(F: Array, payload: Array, rcond: float = 1e-10) -> Array:
+    """Bound on the centre of mass's error [m] (``sqrt`` of the trace of its covariance) from
+    cumulative Fisher informations ``F (N, 10, 10)`` about ``payload (10,)``; inf while the
+    mass or first moments are not determined."""
+    m, h = payload[0], payload[1:4]
+    J = np.hstack([-h[:, None] / m**2, np.eye(3) / m])  # d(h/m) / d(m, h)
+    C = np.linalg.pinv(F, rcond=rcond, hermitian=True)
+    var = np.einsum("ia,nab,ib->n", J, C[:, :4, :4], J)
+    # a direction the pseudo-inverse dropped carries no information, not a bound of zero: (m, h)
+    # are determined when their unit vectors lie in F's range (the projector F F^+ keeps them)
+    proj = np.einsum("nab,nbc->nac", F, C)[:, :, :4]
+    ok = np.all(np.abs(proj - np.eye(10)[:, :4]) < 1e-6, axis=(1, 2))
+    return np.where(ok, np.sqrt(np.maximum(var, 0.0)), np.inf)
+
+
+def payload_com_bound(Phi: ArrayLike, R: ArrayLike, payload: ArrayLike) -> Array:
+    """White-noise model: Cramér-Rao bound [m] on the centre of mass's error after each sample, ``(N,)``.
+
+    ``sqrt(tr cov(c))`` by the delta method (module docstring); ``Phi (N, n, 10)``,
+    ``R (N, n, n)`` as :func:`payload_mass_bound`, ``payload (10,)`` the true payload.
+    """
+    Phi, R = np.asarray(Phi, dtype=float), np.asarray(R, dtype=float)
+    reg = 1e-12 * np.maximum(np.trace(R, axis1=1, axis2=2), 1e-300)[:, None, None] * np.eye(R.shape[1])
+    info = np.einsum("nia,nij,njb->nab", Phi, np.linalg.inv(R + reg), Phi)
+    return _com_std(np.cumsum(info, axis=0), np.asarray(payload, dtype=float))
+
+
 def payload_regression_covariance(
     arm: SerialArm,
     q: ArrayLike,
@@ -242,6 +274,38 @@ def payload_mass_bound_colored(Phi: ArrayLike, S: ArrayLike) -> Array:
     return _schur_std(np.cumsum(np.einsum("kia,kib->kab", X, X), axis=0))
 
 
+def _check(payload, tol, model, window) -> Array:
+    pay = np.asarray(payload, dtype=float)
+    if pay.shape != (10,) or not pay[0] > 0:
+        raise ParameterError(f"payload must be 10 parameters with a mass > 0, got {payload!r}")
+    if not (isinstance(tol, int | float) and tol > 0):
+        raise ParameterError(f"tol must be a number > 0, got {tol!r}")
+    if model not in ("colored", "white"):
+        raise ParameterError(f"model must be 'colored' or 'white', got {model!r}")
+    if not isinstance(window, int | np.integer) or window < 1:
+        raise ParameterError(f"window must be an integer >= 1, got {window!r}")
+    return pay
+
+
+def _information(arm, q, qd, qdd, pay, swap_sample, model, window, kw) -> Array:
+    """Cumulative Fisher information ``(K, 10, 10)`` of the payload from the swap on."""
+    q, qd, qdd = _states(arm, q, qd, qdd)
+    if not 0 <= swap_sample < q.shape[0]:
+        raise ParameterError(f"swap_sample must be in [0, {q.shape[0]}), got {swap_sample!r}")
+    end = q.shape[0] if model == "white" else min(q.shape[0], swap_sample + window)
+    s = slice(swap_sample, end)
+    if model == "white":
+        Phi, R = payload_regression_noise(arm, q[s], qd[s], qdd[s], pay, **kw)
+        reg = 1e-12 * np.maximum(np.trace(R, axis1=1, axis2=2), 1e-300)[:, None, None] * np.eye(R.shape[1])
+        return np.cumsum(np.einsum("nia,nij,njb->nab", Phi, np.linalg.inv(R + reg), Phi), axis=0)
+    Phi, S = payload_regression_covariance(arm, q[s], qd[s], qdd[s], pay, **kw)
+    K, n = Phi.shape[:2]
+    S = S.reshape(K * n, K * n)
+    S = S + 1e-12 * np.trace(S) / (K * n) * np.eye(K * n)
+    X = solve_triangular(np.linalg.cholesky(S), Phi.reshape(K * n, 10), lower=True).reshape(K, n, 10)
+    return np.cumsum(np.einsum("kia,kib->kab", X, X), axis=0)
+
+
 def payload_information_time(
     arm: SerialArm,
     q: ArrayLike,
@@ -285,29 +349,49 @@ def payload_information_time(
     window : int
         Samples after the swap the colored model considers (its cost grows as ``window^3``).
     """
-    pay = np.asarray(payload, dtype=float)
-    if pay.shape != (10,) or not pay[0] > 0:
-        raise ParameterError(f"payload must be 10 parameters with a mass > 0, got {payload!r}")
+    pay = _check(payload, tol, model, window)
     if not 0 < tol < 1:
         raise ParameterError(f"tol must be in (0, 1), got {tol!r}")
-    if model not in ("colored", "white"):
-        raise ParameterError(f"model must be 'colored' or 'white', got {model!r}")
-    if not isinstance(window, int | np.integer) or window < 1:
-        raise ParameterError(f"window must be an integer >= 1, got {window!r}")
-    q, qd, qdd = _states(arm, q, qd, qdd)
-    if not 0 <= swap_sample < q.shape[0]:
-        raise ParameterError(f"swap_sample must be in [0, {q.shape[0]}), got {swap_sample!r}")
-    end = q.shape[0] if model == "white" else min(q.shape[0], swap_sample + window)
-    s = slice(swap_sample, end)
     kw = dict(
         sample_period=sample_period,
         tau_f=tau_f,
         position_variance=position_variance,
         velocity_variance=velocity_variance,
     )
-    if model == "white":
-        std = payload_mass_bound(*payload_regression_noise(arm, q[s], qd[s], qdd[s], pay, **kw))
-    else:
-        std = payload_mass_bound_colored(*payload_regression_covariance(arm, q[s], qd[s], qdd[s], pay, **kw))
+    std = _schur_std(_information(arm, q, qd, qdd, pay, swap_sample, model, window, kw))
     hit = np.flatnonzero(std <= tol * pay[0])
+    return float((hit[0] + 1) * sample_period) if len(hit) else float("inf")
+
+
+def payload_com_information_time(
+    arm: SerialArm,
+    q: ArrayLike,
+    qd: ArrayLike,
+    qdd: ArrayLike,
+    payload: ArrayLike,
+    swap_sample: int,
+    *,
+    sample_period: float,
+    tau_f: float = 0.01,
+    position_variance: ArrayLike | None = None,
+    velocity_variance: ArrayLike | None = None,
+    tol: float = 0.01,
+    model: str = "colored",
+    window: int = 300,
+) -> float:
+    """Seconds after a swap at which the Cramér-Rao bound on the payload's centre of mass
+    (``sqrt(tr cov(c))``, delta method) falls below ``tol`` [m].
+
+    As :func:`payload_information_time` (same arguments, same model), for the centre of mass
+    instead of the mass; ``tol`` is in metres (default 1 cm). ``inf`` if not reached.
+    """
+    pay = _check(payload, tol, model, window)
+    kw = dict(
+        sample_period=sample_period,
+        tau_f=tau_f,
+        position_variance=position_variance,
+        velocity_variance=velocity_variance,
+    )
+    std = _com_std(_information(arm, q, qd, qdd, pay, swap_sample, model, window, kw), pay)
+    hit = np.flatnonzero(std <= tol)
     return float((hit[0] + 1) * sample_period) if len(hit) else float("inf")
