@@ -124,6 +124,11 @@ def test_com_learning_time_is_when_the_estimate_settles_within_1_cm():
     est[2, -1] = np.nan  # the last sample not finite: never settled
     t = com_learning_time(est, com, 1e-3)
     assert t[0] == pytest.approx(0.051) and t[1] == 0.0 and np.isnan(t[2]), t
+    planar = est.copy()
+    planar[:, :, 1] = np.nan  # a planar arm: no y component estimated
+    t2 = com_learning_time(planar, com, 1e-3, axes=[True, False, True])
+    assert t2[0] == pytest.approx(0.051) and t2[1] == 0.0 and np.isnan(t2[2]), t2
+    assert np.all(np.isnan(com_learning_time(planar, com, 1e-3)))  # judged on y too: never
 
 
 class Runaway:

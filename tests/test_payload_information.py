@@ -127,6 +127,8 @@ def test_the_com_information_time(ur5, record):
     t1 = payload_com_information_time(ur5, r.q, r.qd, r.qdd, PAY, 3_000, **kw)
     t3 = payload_com_information_time(ur5, r.q, r.qd, r.qdd, PAY, 3_000, tol=0.003, **kw)
     assert 0 < t1 < t3 <= 0.1
+    t_xz = payload_com_information_time(ur5, r.q, r.qd, r.qdd, PAY, 3_000, axes=[True, False, True], **kw)
+    assert 0 < t_xz <= t1  # fewer components to know: no later
     w = payload_com_information_time(ur5, r.q, r.qd, r.qdd, PAY, 3_000, model="white", **kw)
     k = slice(3_000, 3_000 + 1000)
     std = payload_com_bound(

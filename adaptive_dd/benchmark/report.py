@@ -203,7 +203,13 @@ def _information_lines(c: dict) -> list[str]:
                 f"{n} {'never' if t is None else f'{1e3 * t:.0f} ms'}" for n, t in com.items() if n in took
             ]
             out.append(
-                f"  payload centre of mass within 1 cm after the swap at {seg['start']:g} s: "
+                f"  payload centre of mass within 1 cm after the swap at {seg['start']:g} s"
+                + (
+                    f" ({info['com_axes']} only: the rest is not identifiable)"
+                    if info.get("com_axes", "xyz") != "xyz"
+                    else ""
+                )
+                + ": "
                 f"information limit {lim_s}; "
                 + ", ".join(took_s)
                 + (f" (median over {max(n_learn)} seed(s))" if n_learn else "")

@@ -16,12 +16,17 @@ COM_TOL = 0.01
 """[m] the centre of mass counts as known within this distance."""
 
 
-def com_learning_time(com_hat: np.ndarray, com: np.ndarray, T: float, tol: float = COM_TOL) -> np.ndarray:
+def com_learning_time(
+    com_hat: np.ndarray, com: np.ndarray, T: float, tol: float = COM_TOL, axes=None
+) -> np.ndarray:
     """First time [s] after which the estimated centre of mass ``com_hat (n, N, 3)`` stays within
     ``tol`` [m] of ``com (3,)`` (per row), NaN if it never settles there (a NaN estimate counts as
-    outside)."""
+    outside). ``axes``: a (3,) mask of the components judged (default all; a planar arm's
+    estimate has no out-of-plane component)."""
+    ax = np.ones(3, bool) if axes is None else np.asarray(axes, bool)
+    d = (com_hat - np.asarray(com, float))[..., ax]
     with np.errstate(invalid="ignore"):
-        outside = ~(np.linalg.norm(com_hat - np.asarray(com, float), axis=-1) <= tol)  # (n, N)
+        outside = ~(np.linalg.norm(d, axis=-1) <= tol)  # (n, N)
     n = outside.shape[-1]
     last = np.where(outside.any(axis=-1), n - 1 - np.argmax(outside[..., ::-1], axis=-1), -1)
     return np.where(last < n - 1, (last + 1) * T, np.nan)
@@ -62,7 +67,8 @@ def add_information_times(res, out: dict) -> None:
                 tl = mass_learning_time(est.mass, mass, removed, rc.T)
                 seg["mass_learning_time"] = None if np.all(np.isnan(tl)) else float(np.nanmedian(tl))
                 if mass > 0:  # a payload on: where is its centre of mass
-                    tc = com_learning_time(est.com, sc.payload_of(i - 1).get("com", np.zeros(3)), rc.T)
+                    com = sc.payload_of(i - 1).get("com", np.zeros(3))
+                    tc = com_learning_time(est.com, com, rc.T, axes=sc.arm.payload_identifiable[1:4])
                     seg["com_learning_time"] = None if np.all(np.isnan(tc)) else float(np.nanmedian(tc))
 
 
@@ -97,7 +103,9 @@ def _information_function():
             return None
         out = {"known": t, "seeds": 1, "reference": oracle.name}
         if j == i - 1:  # the payload came: its centre of mass
-            tc = payload_com_information_time(sc.arm, q, qd, qdd, pay, k0 - lo, tol=COM_TOL, **kw)
+            ax = sc.arm.payload_identifiable[1:4]
+            tc = payload_com_information_time(sc.arm, q, qd, qdd, pay, k0 - lo, tol=COM_TOL, axes=ax, **kw)
+            out["com_axes"] = "".join(a for a, k in zip("xyz", ax, strict=True) if k)
             out["com_known"] = float(tc) if np.isfinite(tc) else None
         return out
 

@@ -196,18 +196,20 @@ def payload_mass_bound(Phi: ArrayLike, R: ArrayLike) -> Array:
     return _schur_std(np.cumsum(info, axis=0))
 
 
-def _com_std(F: Array, payload: Array, rcond: float = 1e-10) -> Array:
-    """Bound on the centre of mass's error [m] (``sqrt`` of the trace of its covariance) from
-    cumulative Fisher informations ``F (N, 10, 10)`` about ``payload (10,)``; inf while the
-    mass or first moments are not determined."""
+def _com_std(F: Array, payload: Array, axes=None, rcond: float = 1e-10) -> Array:
+    """Bound on the centre of mass's error [m] (``sqrt`` of the trace of its covariance over
+    ``axes``, a (3,) mask, default all) from cumulative Fisher informations ``F (N, 10, 10)``
+    about ``payload (10,)``; inf while the mass or those first moments are not determined."""
     m, h = payload[0], payload[1:4]
-    J = np.hstack([-h[:, None] / m**2, np.eye(3) / m])  # d(h/m) / d(m, h)
+    ax = np.ones(3, bool) if axes is None else np.asarray(axes, bool)
+    J = np.hstack([-h[:, None] / m**2, np.eye(3) / m])[ax]  # d(h/m) / d(m, h)
     C = np.linalg.pinv(F, rcond=rcond, hermitian=True)
     var = np.einsum("ia,nab,ib->n", J, C[:, :4, :4], J)
-    # a direction the pseudo-inverse dropped carries no information, not a bound of zero: (m, h)
-    # are determined when their unit vectors lie in F's range (the projector F F^+ keeps them)
-    proj = np.einsum("nab,nbc->nac", F, C)[:, :, :4]
-    ok = np.all(np.abs(proj - np.eye(10)[:, :4]) < 1e-6, axis=(1, 2))
+    # a direction the pseudo-inverse dropped carries no information, not a bound of zero: m and
+    # the h's asked for are determined when their unit vectors lie in F's range (F F^+ keeps them)
+    cols = np.flatnonzero(np.r_[True, ax])
+    proj = np.einsum("nab,nbc->nac", F, C)[:, :, cols]
+    ok = np.all(np.abs(proj - np.eye(10)[:, cols]) < 1e-6, axis=(1, 2))
     return np.where(ok, np.sqrt(np.maximum(var, 0.0)), np.inf)
 
 
@@ -378,12 +380,15 @@ def payload_com_information_time(
     tol: float = 0.01,
     model: str = "colored",
     window: int = 300,
+    axes: ArrayLike | None = None,
 ) -> float:
     """Seconds after a swap at which the Cramér-Rao bound on the payload's centre of mass
     (``sqrt(tr cov(c))``, delta method) falls below ``tol`` [m].
 
     As :func:`payload_information_time` (same arguments, same model), for the centre of mass
-    instead of the mass; ``tol`` is in metres (default 1 cm). ``inf`` if not reached.
+    instead of the mass; ``tol`` is in metres (default 1 cm). ``axes``: a (3,) mask of the
+    components to judge (default all; a planar arm sees only the in-plane ones,
+    ``arm.payload_identifiable[1:4]``). ``inf`` if not reached.
     """
     pay = _check(payload, tol, model, window)
     kw = dict(
@@ -392,6 +397,6 @@ def payload_com_information_time(
         position_variance=position_variance,
         velocity_variance=velocity_variance,
     )
-    std = _com_std(_information(arm, q, qd, qdd, pay, swap_sample, model, window, kw), pay)
+    std = _com_std(_information(arm, q, qd, qdd, pay, swap_sample, model, window, kw), pay, axes)
     hit = np.flatnonzero(std <= tol)
     return float((hit[0] + 1) * sample_period) if len(hit) else float("inf")
