@@ -264,6 +264,11 @@ def test_workspace_variants_equal_the_allocating_kernels_bit_for_bit(rng):
             C.body_slotine_li_regressor(ch, j, q, qd, qdr, qddr, y_want)
             C.body_slotine_li_regressor_in(ch, j, q, qd, qdr, qddr, w, a, y_got)
             np.testing.assert_array_equal(y_got, y_want)
+            C.body_regressor(ch, j, q, qd, qdd, y_want)
+            C.rnea(ch, pi, q, qd, qdd, want)
+            C.rnea_body_regressor_in(ch, pi, j, q, qd, qdd, w, a, got, y_got)
+            np.testing.assert_array_equal(got, want)
+            np.testing.assert_array_equal(y_got, y_want)
     assert np.isfinite(m_got).all()
 
 

@@ -67,6 +67,7 @@ __all__ = [
     "regressor_batch",
     "rnea",
     "rnea_batch",
+    "rnea_body_regressor_in",
     "rnea_in",
     "rnea_ref",
     "rnea_ref_batch",
@@ -542,10 +543,18 @@ def _regressor_blocks(ch, q, qd, qdr, qddr, same, j0, j1, out, col0):  # pragma:
 @njit(cache=True)
 def _regressor_blocks_in(ch, q, qd, qdr, qddr, same, j0, j1, w, a, out, col0):  # pragma: no cover
     """:func:`_regressor_blocks` with its scratch given: ``w = workspace(n)``, ``a (6, 10)``."""
-    n = q.shape[0]
-    rw, pw, s, v, _, vr, ar, f, small, vec = w
+    rw, pw, s, v, _, vr, ar, _, small, _ = w
     kinematics(ch, q, qd, rw, pw, s, v)
     _ref_motion(ch, s, v, qdr, qddr, 1.0, vr, ar, small[0])
+    _columns_from_motion(same, j0, j1, w, a, out, col0)
+
+
+@njit(cache=True)
+def _columns_from_motion(same, j0, j1, w, a, out, col0):  # pragma: no cover - compiled
+    """The per-link part of :func:`_regressor_blocks_in`, its kinematics and reference motion
+    (``vr, ar``) already in the workspace ``w``."""
+    rw, pw, s, v, _, vr, ar, f, small, vec = w
+    n = s.shape[0]
     y = vec[:10]
     vl, vrl, arl = small[0], small[1], small[2]
     sl = small[3]
@@ -598,6 +607,17 @@ def body_slotine_li_regressor(ch, j, q, qd, qdr, qddr, out):  # pragma: no cover
 def body_regressor_in(ch, j, q, qd, qdd, w, a, out):  # pragma: no cover - compiled
     """:func:`body_regressor` with its scratch given: ``w = workspace(n)``, ``a (6, 10)`` (no allocation)."""
     _regressor_blocks_in(ch, q, qd, qd, qdd, True, j, j + 1, w, a, out, 0)
+
+
+@njit(cache=True)
+def rnea_body_regressor_in(ch, pi, j, q, qd, qdd, w, a, tau, y):  # pragma: no cover - compiled
+    """:func:`rnea_in` into ``tau (n,)`` and :func:`body_regressor_in` of link ``j`` into ``y (n, 10)``
+    at the same state, with the kinematics and the reference motion computed once (the same
+    numbers as the two calls); scratch as :func:`body_regressor_in`."""
+    kinematics(ch, q, qd, w[0], w[1], w[2], w[3])
+    world_inertia(pi, w[0], w[1], w[4])
+    _torque(ch, pi, q, qd, qd, qdd, 1.0, True, w, tau)  # leaves vr, ar at (qd, qdd) in w[5], w[6]
+    _columns_from_motion(True, j, j + 1, w, a, y, 0)
 
 
 @njit(cache=True)
