@@ -227,6 +227,9 @@ def main() -> None:
     print(f"  {'whole loop, adaptive_ct (run_serial, 1 trial)':48s} {whole['adaptive_ct']:8.3f}")
     glue = whole["adaptive_ct"] - (plant + law_a + t_both) / N * 1e6
     print(f"  {'  glue + set-up (whole - plant - law - est)':48s} {glue:8.3f}")
+    for name in ("ct_oracle", "adaptive_ct"):
+        share = plant / N * 1e6 / whole[name]
+        print(f"  plant's share of the whole loop, {name}: {100 * share:.0f} %")
 
 
 if __name__ == "__main__":
