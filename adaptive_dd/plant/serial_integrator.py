@@ -366,7 +366,8 @@ def _stick_slip(ch, pi, fv, fc, arm, fp, q, qd, tau, T, substeps, stuck, sc):  #
     rows, flags = sc[3], sc[5]
     qn, vn, frac, sdir = rows[12], rows[13], rows[15], rows[16]
     cross, z = flags[1], flags[2]
-    sdir[:] = 1.0
+    for i in range(n):
+        sdir[i] = 1.0
     ok = True
     for _ in range(substeps):
         good, have = _decide(ch, pi, fv, fc, arm, fp, q, qd, tau, stuck, sdir, sc)
