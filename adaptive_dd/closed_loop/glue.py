@@ -156,9 +156,11 @@ def apply_trial_sample(ch, rc, io, pl, ts, acc, rec, i, k, s, cmd, tau, work):  
 def record_estimate_trial(rc, rec, i, k, s, sigma):  # pragma: no cover - compiled
     """Keep the estimate ``sigma (p,)`` at the segment's last sample, and for recorded trials."""
     if k == rc.seg_end[s] - 1:
-        rec.sigma_end[i, s, :] = sigma
+        for c in range(sigma.shape[0]):
+            rec.sigma_end[i, s, c] = sigma[c]
     if i < rec.sigma.shape[0]:
-        rec.sigma[i, k, :] = sigma
+        for c in range(sigma.shape[0]):
+            rec.sigma[i, k, c] = sigma[c]
 
 
 def estimator_step(ec, es, i, q, qd, tau):  # pragma: no cover - replaced by the overload
