@@ -10,8 +10,9 @@ of the loop, timed inside numba loops (Python call overhead excluded, compilatio
 * the estimator's step (``est_step_trial``) and its parts (filters, regression, the row-by-row
   RLS, the detector), and the model that control uses (``est_model_trial``: the payload's
   projection);
-* the whole loop (``closed_loop_block`` through ``run_serial``, one trial); "glue" is the
-  whole minus the kernels (measurement, divergence rules, metrics, recording).
+* the whole loop (``closed_loop_block`` through ``run_serial``, one trial, recorded); "glue" is
+  the whole minus the kernels (measurement, divergence rules, metrics, recording, the run's
+  Python set-up); "recording" is the whole less the same trial unrecorded.
 
 CPU time of this thread, best of 3, microseconds per sample; nothing is asserted.
 """
@@ -157,6 +158,7 @@ def main() -> None:
             holder["res"] = run_serial(one, keep_trajectories=1)
 
         whole[name] = _best(run) / N * 1e6
+        whole[name + " unrecorded"] = _best(lambda one=one: run_serial(one, keep_trajectories=0)) / N * 1e6
         r = holder["res"].runs[name]
         recs[name] = (r.q[0], r.qd[0], r.tau[0])
 
@@ -227,6 +229,9 @@ def main() -> None:
     print(f"  {'whole loop, adaptive_ct (run_serial, 1 trial)':48s} {whole['adaptive_ct']:8.3f}")
     glue = whole["adaptive_ct"] - (plant + law_a + t_both) / N * 1e6
     print(f"  {'  glue + set-up (whole - plant - law - est)':48s} {glue:8.3f}")
+    for name in ("ct_oracle", "adaptive_ct"):
+        rec = whole[name] - whole[name + " unrecorded"]
+        print(f"  {'  of which recording the trial (' + name + ')':48s} {rec:8.3f}")
     for name in ("ct_oracle", "adaptive_ct"):
         share = plant / N * 1e6 / whole[name]
         print(f"  plant's share of the whole loop, {name}: {100 * share:.0f} %")
