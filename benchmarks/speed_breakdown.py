@@ -4,7 +4,8 @@ Runs one trial of ``adaptive_ct`` and one of ``ct_oracle`` on the UR5 tool-swap 
 (recording its trajectories), then replays the recorded states through each compiled kernel
 of the loop, timed inside numba loops (Python call overhead excluded, compilation excluded):
 
-* the plant step (``closed_loop.plant.plant_step``: stick-slip active set, RK4 substeps);
+* the plant step (``closed_loop.plant.plant_step``: stick-slip active set, RK4 substeps) and
+  its parts: the rigid-body terms and the Cholesky solve of one RK4 stage, times the stages;
 * the law (``closed_loop.laws.law_trial_in``: ct_oracle on the true model, adaptive_ct on its
   trial model);
 * the estimator's step (``est_step_trial``) and its parts (filters, regression, the row-by-row
@@ -30,6 +31,7 @@ from adaptive_dd.closed_loop.glue import segment_of
 from adaptive_dd.closed_loop.laws import law_trial_in, law_work
 from adaptive_dd.closed_loop.plant import plant_scratch, plant_step
 from adaptive_dd.identification import serial_online_kernel as K
+from adaptive_dd.plant import serial_integrator as SI
 
 
 def _scenario():
@@ -50,6 +52,24 @@ def _plant_loop(ch, pl, rc, q_rec, qd_rec, tau_rec, sc):  # pragma: no cover - c
         plant_step(ch, pl, segment_of(rc, k), q, qd, tau_rec[k], rc.T, stuck, sc)
         acc += q[0]
     return acc
+
+
+@njit(cache=True, fastmath={"contract", "reassoc"})  # the flags of the integrator's RK4 step
+def _dynamics_loop(ch, pl, rc, q_rec, qd_rec, tau_rec, sc, solve):  # pragma: no cover - compiled
+    """The plant's rigid-body terms (bias, M + armature) at each recorded state, and its
+    Cholesky solve for the accelerations if ``solve``."""
+    n = q_rec.shape[1]
+    stuck = np.zeros(n, dtype=np.bool_)
+    sdir, acc, hold = np.ones(n), np.zeros(n), np.empty(n)
+    bias, m = sc[3][0], sc[1]
+    t = 0.0
+    for k in range(q_rec.shape[0]):
+        s = segment_of(rc, k)
+        SI._dynamics(ch, pl.pi_seg[s], pl.armature, q_rec[k], qd_rec[k], sc[0], bias, m)
+        if solve:
+            SI._solve(pl.fv, pl.fc, 0, pl.fparams, qd_rec[k], tau_rec[k], stuck, sdir, bias, m, sc, acc, hold)
+        t += bias[0] + acc[0]
+    return t
 
 
 @njit(cache=True)
@@ -176,6 +196,14 @@ def main() -> None:
             _best(lambda: _plant_loop(ch, pl, rc, q, qd, tau, scr)),
         )
     ]
+    calls = 4 * pl.substeps  # RK4 stages per sample (more where a velocity crosses zero)
+    t_dyn = _best(lambda: _dynamics_loop(ch, pl, rc, q, qd, tau, scr, False))
+    t_sol = _best(lambda: _dynamics_loop(ch, pl, rc, q, qd, tau, scr, True)) - t_dyn
+    rows += [
+        (f"  of which rigid-body terms, {calls} x {t_dyn / N * 1e6:.3f}", calls * t_dyn),
+        (f"  of which Cholesky solves, {calls} x {t_sol / N * 1e6:.3f}", calls * t_sol),
+        ("  rest (stages, modes, crossings, calls)", rows[0][1] - calls * (t_dyn + t_sol)),
+    ]
     pi_true = _true_pi(pl)
     out = np.empty(n)
     ctrls = {}
@@ -222,7 +250,8 @@ def main() -> None:
     ]
     for label, t in rows:
         print(f"  {label:48s} {t / N * 1e6:8.3f}")
-    plant, law_o, law_a = rows[0][1], rows[1][1], rows[2][1]
+    t_of = dict(rows)
+    plant, law_o, law_a = rows[0][1], t_of["law_trial ct_oracle"], t_of["law_trial adaptive_ct"]
     print(f"  {'whole loop, ct_oracle (run_serial, 1 trial)':48s} {whole['ct_oracle']:8.3f}")
     glue = whole["ct_oracle"] - (plant + law_o) / N * 1e6
     print(f"  {'  glue + set-up (whole - plant - law)':48s} {glue:8.3f}")
