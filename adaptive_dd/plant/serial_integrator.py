@@ -454,7 +454,7 @@ def _smooth(ch, pi, fv, fc, arm, law, fp, q, qd, tau, T, substeps, stuck, sc):  
     return ok
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _step(ch, pi, fv, fc, arm, law, fp, q, qd, tau, T, substeps, stuck, sc):  # pragma: no cover
     if law == 0:
         ok = _stick_slip(ch, pi, fv, fc, arm, fp, q, qd, tau, T, substeps, stuck, sc)
@@ -500,7 +500,7 @@ def plant_scratch(n):  # pragma: no cover - compiled
     return _scratch(n)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def serial_plant_step_in(ch, pp, q, qd, tau, T, substeps, stuck, sc):  # pragma: no cover - compiled
     """:func:`serial_plant_step` with its scratch ``sc`` (:func:`plant_scratch`) given: no
     allocation per sample (a closed loop allocates it once per trial)."""
