@@ -80,7 +80,8 @@ def one_trial(sc, name: str) -> tuple[float, float]:
     ``name`` on the compiled path (compile excluded)."""
     from adaptive_dd.closed_loop.runner import run_serial
 
-    one = dataclasses.replace(sc, seeds=1, controllers=(name,))
+    opts = tuple(o for o in sc.controller_options if o[0] == name)
+    one = dataclasses.replace(sc, seeds=1, controllers=(name,), controller_options=opts)
     run_serial(dataclasses.replace(one, duration=0.2, swap_times=(0.05, 0.1, 0.15)))  # compile
     t0, c0 = time.perf_counter(), time.thread_time()
     res = run_serial(one)

@@ -208,6 +208,35 @@ def test_laws_are_the_arms_inverse_dynamics_on_the_reference(rng):
     np.testing.assert_allclose(got, arm.inverse_dynamics(q, qd, qdd), rtol=1e-9, atol=1e-9)
 
 
+def test_law_with_its_scratch_given_equals_the_allocating_law(rng):
+    """``law_trial_in`` with one scratch (``law_work``) reused over samples, NaN-filled at the
+    start, gives bit for bit what ``law_trial`` gives with fresh scratch, for every built-in
+    law, adapting ones included (their state is stepped twice, side by side)."""
+    from adaptive_dd.closed_loop.laws import law_trial, law_trial_in, law_work
+
+    sc = load_scenario(_shipped("ur5_tool_swap"))
+    arm, n = sc.arm, sc.arm.n_joints
+    work = law_work(n)
+    for arr in work[1:]:
+        arr[...] = np.nan
+    for arr in work[0]:
+        arr[...] = np.nan
+    for name in SERIAL_CONTROLLERS:
+        form = make_serial_controller(name, arm).compiled_form(1, sc.sample_period)
+        pi = form.state.pi_model[0] * (1.0 + 0.05 * rng.standard_normal(13 * n))  # a true model
+        st_a = (form.state.pi_model[0].copy(), form.state.theta[0].copy())
+        st_b = (form.state.pi_model[0].copy(), form.state.theta[0].copy())
+        for k in range(4):
+            q, qd, q_d, qd_d, qdd_d = (rng.uniform(-1, 1, n) for _ in range(5))
+            since = k  # inside any boost window first, then later
+            want, got = np.empty(n), np.empty(n)
+            law_trial(arm.chain, form.cfg, pi, *st_a, since, q, qd, q_d, qd_d, qdd_d, want)
+            law_trial_in(arm.chain, form.cfg, pi, *st_b, since, q, qd, q_d, qd_d, qdd_d, work, got)
+            np.testing.assert_array_equal(got, want, err_msg=name)
+            assert np.isfinite(got).all(), name
+            np.testing.assert_array_equal(st_b[1], st_a[1], err_msg=name)
+
+
 def test_serial_metrics_from_hand_made_sums():
     sc = _short("vertical3_payload", 0.01, (0.004,), seeds=2)
     S, G, n, N = 2, 2, 3, sc.n_samples

@@ -4,7 +4,7 @@ One sample of one trial is:
 
 1. :func:`measure_trial_sample`: encoder and noise (drawn in blocks by the runner), a lost
    measurement replaced by the last good one for the law and by NaN for the estimator;
-2. the command: the compiled law (:func:`~adaptive_dd.closed_loop.laws.law_trial`) or a
+2. the command: the compiled law (:func:`~adaptive_dd.closed_loop.laws.law_trial_in`) or a
    Python controller's ``command`` for the whole batch;
 3. :func:`apply_trial_sample`: the divergence rule (a non-finite command or an error beyond
    ``max_error`` zeroes the command and fails the trial), saturation and D/A, the plant
@@ -29,7 +29,7 @@ from numba import njit, types
 from numba.extending import overload
 from numpy.typing import NDArray
 
-from adaptive_dd.closed_loop.laws import law_trial
+from adaptive_dd.closed_loop.laws import law_trial_in, law_work
 from adaptive_dd.closed_loop.plant import plant_scratch, plant_step
 from adaptive_dd.identification.serial_online_kernel import est_model_trial, est_step_trial
 from adaptive_dd.plant.sampling import actuate_trial, measure_trial
@@ -156,9 +156,11 @@ def apply_trial_sample(ch, rc, io, pl, ts, acc, rec, i, k, s, cmd, tau, work):  
 def record_estimate_trial(rc, rec, i, k, s, sigma):  # pragma: no cover - compiled
     """Keep the estimate ``sigma (p,)`` at the segment's last sample, and for recorded trials."""
     if k == rc.seg_end[s] - 1:
-        rec.sigma_end[i, s, :] = sigma
+        for c in range(sigma.shape[0]):
+            rec.sigma_end[i, s, c] = sigma[c]
     if i < rec.sigma.shape[0]:
-        rec.sigma[i, k, :] = sigma
+        for c in range(sigma.shape[0]):
+            rec.sigma[i, k, c] = sigma[c]
 
 
 def estimator_step(ec, es, i, q, qd, tau):  # pragma: no cover - replaced by the overload
@@ -200,11 +202,37 @@ def estimator_trial_sample(ec, es, ls, i, qm_obs, qdm_obs, tau):  # pragma: no c
 
 
 @njit(cache=True)
-def _sigma_of(B, pi, out):  # pragma: no cover - compiled
+def _nonzero_columns(B):  # pragma: no cover - compiled
+    """Per row of ``B (p, m)``: its nonzero columns in order, ``cols (p, m)`` and their count ``(p,)``."""
+    p, m = B.shape
+    cols = np.empty((p, m), dtype=np.int64)
+    count = np.zeros(p, dtype=np.int64)
+    for r in range(p):
+        for c in range(m):
+            if B[r, c] != 0.0:
+                cols[r, count[r]] = c
+                count[r] += 1
+    return cols, count
+
+
+@njit(cache=True)
+def _sigma_of(B, cols, count, pi, out):  # pragma: no cover - compiled
+    """``out = B pi`` over B's nonzero entries (the same sums in the same order as the dense
+    product: a skipped term ``0 * pi_c`` adds exactly zero for a finite ``pi``); a non-finite
+    ``pi`` falls back to the dense product so that NaN spreads as it would."""
+    finite = True
+    for c in range(pi.shape[0]):
+        if not np.isfinite(pi[c]):
+            finite = False
     for r in range(B.shape[0]):
         acc = 0.0
-        for c in range(B.shape[1]):
-            acc += B[r, c] * pi[c]
+        if finite:
+            for t in range(count[r]):
+                c = cols[r, t]
+                acc += B[r, c] * pi[c]
+        else:
+            for c in range(B.shape[1]):
+                acc += B[r, c] * pi[c]
         out[r] = acc
 
 
@@ -222,18 +250,20 @@ def closed_loop_block(
     ``prange`` cannot take the estimator's configuration, a NamedTuple holding a NamedTuple).
     """
     n = ts.q.shape[1]
+    cols, count = _nonzero_columns(B)
     for i in range(i0, i1):
         qm, qdm, qm_obs, qdm_obs = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
         cmd, tau = np.empty(n), np.empty(n)
         sig = np.empty(B.shape[0])
         work = sample_work(n)
+        lw = law_work(n)
         for k in range(k0, k1):
             s = segment_of(rc, k)
             lost = drop.shape[1] > 0 and drop[i, k - k0]
             measure_trial_sample(io, ts, i, noise[i, k - k0], lost, qm, qdm, qm_obs, qdm_obs)
-            law_trial(
+            law_trial_in(
                 ch, cfg, pi_true[s], ls.pi_model[i], ls.theta[i], ls.since_alarm[i],
-                qm, qdm, rc.q_d[k], rc.qd_d[k], rc.qdd_d[k], cmd,
+                qm, qdm, rc.q_d[k], rc.qd_d[k], rc.qdd_d[k], lw, cmd,
             )  # fmt: skip
             apply_trial_sample(ch, rc, io, pl, ts, acc, rec, i, k, s, cmd, tau, work)
             if estimator_trial_sample(ec, es, ls, i, qm_obs, qdm_obs, tau) == 1:
@@ -241,7 +271,7 @@ def closed_loop_block(
                     alarms.times[i, alarms.count[i]] = k * rc.T
                 alarms.count[i] += 1
             if estimates and (k == rc.seg_end[s] - 1 or i < rec.sigma.shape[0]):
-                _sigma_of(B, ls.pi_model[i], sig)
+                _sigma_of(B, cols, count, ls.pi_model[i], sig)
                 record_estimate_trial(rc, rec, i, k, s, sig)
 
 

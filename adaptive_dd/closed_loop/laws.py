@@ -35,7 +35,7 @@ import numpy as np
 from numba import njit
 from numpy.typing import NDArray
 
-from adaptive_dd.plant.chain import body_slotine_li_regressor, mass_matrix, rnea_ref
+from adaptive_dd.plant.chain import body_slotine_li_regressor_in, mass_matrix_in, rnea_ref_in, workspace
 
 __all__ = [
     "KIND_CT",
@@ -49,6 +49,8 @@ __all__ = [
     "LawState",
     "law_batch",
     "law_trial",
+    "law_trial_in",
+    "law_work",
     "model_torque",
 ]
 
@@ -126,24 +128,44 @@ class LawState(NamedTuple):
 
 
 @njit(cache=True)
+def law_work(n):  # pragma: no cover - compiled
+    """Scratch of one trial's :func:`law_trial_in` (allocated once per trial, not per sample):
+    the chain workspace, ``(6, n)`` rows (e, e', qd_r, a, s, v), ``M (n, n)``, ``Y (n, 10)``,
+    ``(6, 10)``, ``(10,)``."""
+    return (
+        workspace(n),
+        np.empty((6, n)),
+        np.empty((n, n)),
+        np.empty((n, 10)),
+        np.empty((6, 10)),
+        np.empty(10),
+    )
+
+
+@njit(cache=True)
 def model_torque(ch, pi, q, qd, qdr, qc, a, out):  # pragma: no cover - compiled
     """``rnea_ref(pi_links, q, qd, qdr, a) + fv qdr + fc sgn(qc) + Ia a`` into ``out (n,)``.
 
     ``pi (13 n,)`` standard parameters; ``qc`` the velocity whose sign sets the Coulomb torque
     (``qdr``; the textbook law: ``qd_d``); torques [N m].
     """
+    _model_torque(ch, pi, q, qd, qdr, qc, a, workspace(q.shape[0]), out)
+
+
+@njit(cache=True)
+def _model_torque(ch, pi, q, qd, qdr, qc, a, w, out):  # pragma: no cover - compiled
     n = q.shape[0]
-    rnea_ref(ch, pi[: 10 * n], q, qd, qdr, a, out)
+    rnea_ref_in(ch, pi[: 10 * n], q, qd, qdr, a, w, out)
     for j in range(n):
         out[j] += pi[10 * n + j] * qdr[j] + pi[11 * n + j] * np.sign(qc[j]) + pi[12 * n + j] * a[j]
 
 
 @njit(cache=True)
-def _add_nominal_inertia(ch, cfg, q, v, out):  # pragma: no cover - compiled
+def _add_nominal_inertia(ch, cfg, q, v, work, out):  # pragma: no cover - compiled
     """``out += M0(q) v`` with M0 the nominal mass matrix plus armature."""
     n = q.shape[0]
-    m = np.empty((n, n))
-    mass_matrix(ch, cfg.pi_fixed[: 10 * n], q, m)
+    m = work[2]
+    mass_matrix_in(ch, cfg.pi_fixed[: 10 * n], q, work[0], m)
     for r in range(n):
         acc = cfg.pi_fixed[12 * n + r] * v[r]
         for c in range(n):
@@ -152,13 +174,13 @@ def _add_nominal_inertia(ch, cfg, q, v, out):  # pragma: no cover - compiled
 
 
 @njit(cache=True)
-def _adapt_payload(ch, cfg, q, qd, qdr, a, s, theta, pi_model):  # pragma: no cover - compiled
+def _adapt_payload(ch, cfg, q, qd, qdr, a, s, theta, pi_model, work):  # pragma: no cover - compiled
     """One gradient step of the payload parameters, projected; pi_model rebuilt from them."""
     n = q.shape[0]
     j = cfg.payload_joint
-    yb = np.empty((n, 10))
-    body_slotine_li_regressor(ch, j, q, qd, qdr, a, yb)
-    g = np.zeros(10)  # Y_p^T s = P^T (Y_j^T s)
+    yb = work[3]
+    body_slotine_li_regressor_in(ch, j, q, qd, qdr, a, work[0], work[4], yb)
+    g = work[5]  # Y_p^T s = P^T (Y_j^T s)
     for c in range(10):
         acc = 0.0
         for r in range(n):
@@ -196,9 +218,19 @@ def law_trial(
     ``theta (10,)`` the trial's model and adapted payload (updated in place when the law
     adapts), ``since_alarm`` samples since its estimator's last alarm.
     """
+    law_trial_in(
+        ch, cfg, pi_true, pi_model, theta, since_alarm, q, qd, q_d, qd_d, qdd_d, law_work(q.shape[0]), out
+    )
+
+
+@njit(cache=True)
+def law_trial_in(
+    ch, cfg, pi_true, pi_model, theta, since_alarm, q, qd, q_d, qd_d, qdd_d, work, out
+):  # pragma: no cover
+    """:func:`law_trial` with its scratch ``work`` (:func:`law_work`) given: no allocation per sample."""
     n = q.shape[0]
-    e = np.empty(n)
-    ed = np.empty(n)
+    rows = work[1]
+    e, ed, qdr, a, s, v = rows[0], rows[1], rows[2], rows[3], rows[4], rows[5]
     for j in range(n):
         e[j] = q_d[j] - q[j]
         ed[j] = qd_d[j] - qd[j]
@@ -206,8 +238,6 @@ def law_trial(
         for j in range(n):
             out[j] = cfg.kp[j] * e[j] + cfg.kd[j] * ed[j]
         return
-    qdr = np.empty(n)
-    a = np.empty(n)
     for j in range(n):
         if cfg.kind == KIND_CT:
             a[j] = qdd_d[j] + cfg.kd[j] * ed[j] + cfg.kp[j] * e[j]
@@ -216,34 +246,34 @@ def law_trial(
             a[j] = qdd_d[j] + cfg.lam[j] * ed[j]
             qdr[j] = qd_d[j] + cfg.lam[j] * e[j]
     qc = qdr if cfg.reference_velocity else qd_d
+    w = work[0]
     if cfg.model == MODEL_TRUE:
-        model_torque(ch, pi_true, q, qd, qdr, qc, a, out)
+        _model_torque(ch, pi_true, q, qd, qdr, qc, a, w, out)
     elif cfg.model == MODEL_TRIAL:
-        model_torque(ch, pi_model, q, qd, qdr, qc, a, out)
+        _model_torque(ch, pi_model, q, qd, qdr, qc, a, w, out)
     else:
-        model_torque(ch, cfg.pi_fixed, q, qd, qdr, qc, a, out)
+        _model_torque(ch, cfg.pi_fixed, q, qd, qdr, qc, a, w, out)
     if cfg.kind == KIND_SLOTINE:
-        s = np.empty(n)
         for j in range(n):
             s[j] = cfg.kd[j] * (ed[j] + cfg.lam[j] * e[j])
-        _add_nominal_inertia(ch, cfg, q, s, out)
+        _add_nominal_inertia(ch, cfg, q, s, work, out)
         if cfg.adapt:
             for j in range(n):
                 s[j] = ed[j] + cfg.lam[j] * e[j]
-            _adapt_payload(ch, cfg, q, qd, qdr, a, s, theta, pi_model)
+            _adapt_payload(ch, cfg, q, qd, qdr, a, s, theta, pi_model, work)
     if cfg.boost_samples > 0 and since_alarm < cfg.boost_samples:
-        v = np.empty(n)
         for j in range(n):
             v[j] = cfg.boost_kp[j] * e[j] + cfg.boost_kd[j] * ed[j]
-        _add_nominal_inertia(ch, cfg, q, v, out)
+        _add_nominal_inertia(ch, cfg, q, v, work, out)
 
 
 @njit(cache=True)
 def _law_loop(ch, cfg, pi_true, st, q, qd, q_d, qd_d, qdd_d, out):  # pragma: no cover - compiled
+    work = law_work(q.shape[1])  # one per call: trials run one after the other here
     for i in range(q.shape[0]):
-        law_trial(
+        law_trial_in(
             ch, cfg, pi_true[i], st.pi_model[i], st.theta[i], st.since_alarm[i],
-            q[i], qd[i], q_d, qd_d, qdd_d, out[i],
+            q[i], qd[i], q_d, qd_d, qdd_d, work, out[i],
         )  # fmt: skip
 
 

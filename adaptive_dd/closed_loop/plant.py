@@ -13,7 +13,7 @@ from adaptive_dd.plant.serial_integrator import PlantParams, plant_scratch, seri
 __all__ = ["plant_scratch", "plant_step"]
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def plant_step(ch, pl, seg, q, qd, tau, T, stuck, sc):  # pragma: no cover - compiled
     """Advance one trial's ``q, qd (n,)`` over one sample under ``tau (n,)`` in segment ``seg``.
 

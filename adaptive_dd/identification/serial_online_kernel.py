@@ -33,7 +33,7 @@ import numpy as np
 from numba import njit
 
 from adaptive_dd.identification.pseudo_inertia import project_payload
-from adaptive_dd.plant.chain import Chain, body_regressor, regressor, rnea
+from adaptive_dd.plant.chain import Chain, regressor, rnea_body_regressor_in, workspace
 
 # columns of the per-trial integer state `cnt`
 C_K = 0  # samples stepped
@@ -271,9 +271,11 @@ def _regression(c, qf, qdf, qddf, sf, tf, phi, y):  # pragma: no cover - compile
     p = phi.shape[1]
     if c.mode == MODE_PAYLOAD:
         known = np.empty(n)
-        rnea(c.ch, c.pi0[: 10 * n], qf, qdf, qddf, known)
         yb = np.empty((n, 10))
-        body_regressor(c.ch, c.jp, qf, qdf, qddf, yb)
+        # rnea and the payload link's regressor at one state: its kinematics computed once
+        rnea_body_regressor_in(
+            c.ch, c.pi0[: 10 * n], c.jp, qf, qdf, qddf, workspace(n), np.empty((6, 10)), known, yb
+        )
         for r in range(n):
             fv, fc, ia = c.pi0[10 * n + r], c.pi0[11 * n + r], c.pi0[12 * n + r]
             y[r] = tf[r] - (known[r] + fv * qdf[r] + fc * sf[r] + ia * qddf[r])

@@ -51,7 +51,9 @@ __all__ = [
     "Chain",
     "bias_and_mass",
     "body_regressor",
+    "body_regressor_in",
     "body_slotine_li_regressor",
+    "body_slotine_li_regressor_in",
     "chain_from_model",
     "coriolis_matrix",
     "coriolis_matrix_batch",
@@ -59,13 +61,17 @@ __all__ = [
     "forward_dynamics_batch",
     "mass_matrix",
     "mass_matrix_batch",
+    "mass_matrix_in",
     "pin_configuration",
     "regressor",
     "regressor_batch",
     "rnea",
     "rnea_batch",
+    "rnea_body_regressor_in",
+    "rnea_in",
     "rnea_ref",
     "rnea_ref_batch",
+    "rnea_ref_in",
     "slotine_li_regressor",
     "slotine_li_regressor_batch",
     "standard_parameters",
@@ -295,7 +301,12 @@ def rnea(ch, pi, q, qd, qdd, out):  # pragma: no cover - compiled
         Joint positions [rad or m], velocities, accelerations.
     out : ndarray, shape (n,)
     """
-    w = workspace(q.shape[0])
+    rnea_in(ch, pi, q, qd, qdd, workspace(q.shape[0]), out)
+
+
+@njit(cache=True)
+def rnea_in(ch, pi, q, qd, qdd, w, out):  # pragma: no cover - compiled
+    """:func:`rnea` with its scratch ``w = workspace(n)`` given (no allocation: a loop allocates it once)."""
     kinematics(ch, q, qd, w[0], w[1], w[2], w[3])
     world_inertia(pi, w[0], w[1], w[4])
     _torque(ch, pi, q, qd, qd, qdd, 1.0, True, w, out)
@@ -307,7 +318,12 @@ def rnea_ref(ch, pi, q, qd, qdr, qddr, out):  # pragma: no cover - compiled
 
     ``rnea_ref(q, qd, qd, qdd) == rnea(q, qd, qdd)``; shapes as :func:`rnea`.
     """
-    w = workspace(q.shape[0])
+    rnea_ref_in(ch, pi, q, qd, qdr, qddr, workspace(q.shape[0]), out)
+
+
+@njit(cache=True)
+def rnea_ref_in(ch, pi, q, qd, qdr, qddr, w, out):  # pragma: no cover - compiled
+    """:func:`rnea_ref` with its scratch ``w = workspace(n)`` given (no allocation)."""
     kinematics(ch, q, qd, w[0], w[1], w[2], w[3])
     world_inertia(pi, w[0], w[1], w[4])
     _torque(ch, pi, q, qd, qdr, qddr, 1.0, False, w, out)
@@ -352,9 +368,17 @@ def _composite_mass(s, iw, out, yc, t):  # pragma: no cover - compiled
 @njit(cache=True)
 def mass_matrix(ch, pi, q, out):  # pragma: no cover - compiled
     """Joint-space mass matrix M(q) into out (n, n), both triangles; == ``pin.crba``."""
+    mass_matrix_in(ch, pi, q, workspace(q.shape[0]), out)
+
+
+@njit(cache=True)
+def mass_matrix_in(ch, pi, q, w, out):  # pragma: no cover - compiled
+    """:func:`mass_matrix` with its scratch ``w = workspace(n)`` given (no allocation)."""
     n = q.shape[0]
-    w = workspace(n)
-    kinematics(ch, q, w[9][:n] * 0.0, w[0], w[1], w[2], w[3])
+    zero = w[9][n + 10 : 2 * n + 10]
+    for i in range(n):
+        zero[i] = 0.0
+    kinematics(ch, q, zero, w[0], w[1], w[2], w[3])
     world_inertia(pi, w[0], w[1], w[4])
     _composite_mass(w[2], w[4], out, w[9][n : n + 10], w[8][0])
 
@@ -511,11 +535,26 @@ def _local_regressor(v, vr, ar, same, a, y, f, t1, t2):  # pragma: no cover - co
 @njit(cache=True)
 def _regressor_blocks(ch, q, qd, qdr, qddr, same, j0, j1, out, col0):  # pragma: no cover - compiled
     """Columns of links j0..j1-1 of the (Slotine-Li) regressor into out[:, col0 + 10 (j - j0) ...]."""
-    n = q.shape[0]
-    rw, pw, s, v, _, vr, ar, f, small, vec = workspace(n)
+    _regressor_blocks_in(
+        ch, q, qd, qdr, qddr, same, j0, j1, workspace(q.shape[0]), np.empty((6, 10)), out, col0
+    )
+
+
+@njit(cache=True)
+def _regressor_blocks_in(ch, q, qd, qdr, qddr, same, j0, j1, w, a, out, col0):  # pragma: no cover
+    """:func:`_regressor_blocks` with its scratch given: ``w = workspace(n)``, ``a (6, 10)``."""
+    rw, pw, s, v, _, vr, ar, _, small, _ = w
     kinematics(ch, q, qd, rw, pw, s, v)
     _ref_motion(ch, s, v, qdr, qddr, 1.0, vr, ar, small[0])
-    a = np.empty((6, 10))
+    _columns_from_motion(same, j0, j1, w, a, out, col0)
+
+
+@njit(cache=True)
+def _columns_from_motion(same, j0, j1, w, a, out, col0):  # pragma: no cover - compiled
+    """The per-link part of :func:`_regressor_blocks_in`, its kinematics and reference motion
+    (``vr, ar``) already in the workspace ``w``."""
+    rw, pw, s, v, _, vr, ar, f, small, vec = w
+    n = s.shape[0]
     y = vec[:10]
     vl, vrl, arl = small[0], small[1], small[2]
     sl = small[3]
@@ -562,6 +601,29 @@ def body_regressor(ch, j, q, qd, qdd, out):  # pragma: no cover - compiled
 def body_slotine_li_regressor(ch, j, q, qd, qdr, qddr, out):  # pragma: no cover - compiled
     """Columns of link j (0-based) of :func:`slotine_li_regressor`, out (n, 10), O(n) work."""
     _regressor_blocks(ch, q, qd, qdr, qddr, False, j, j + 1, out, 0)
+
+
+@njit(cache=True)
+def body_regressor_in(ch, j, q, qd, qdd, w, a, out):  # pragma: no cover - compiled
+    """:func:`body_regressor` with its scratch given: ``w = workspace(n)``, ``a (6, 10)`` (no allocation)."""
+    _regressor_blocks_in(ch, q, qd, qd, qdd, True, j, j + 1, w, a, out, 0)
+
+
+@njit(cache=True)
+def rnea_body_regressor_in(ch, pi, j, q, qd, qdd, w, a, tau, y):  # pragma: no cover - compiled
+    """:func:`rnea_in` into ``tau (n,)`` and :func:`body_regressor_in` of link ``j`` into ``y (n, 10)``
+    at the same state, with the kinematics and the reference motion computed once (the same
+    numbers as the two calls); scratch as :func:`body_regressor_in`."""
+    kinematics(ch, q, qd, w[0], w[1], w[2], w[3])
+    world_inertia(pi, w[0], w[1], w[4])
+    _torque(ch, pi, q, qd, qd, qdd, 1.0, True, w, tau)  # leaves vr, ar at (qd, qdd) in w[5], w[6]
+    _columns_from_motion(True, j, j + 1, w, a, y, 0)
+
+
+@njit(cache=True)
+def body_slotine_li_regressor_in(ch, j, q, qd, qdr, qddr, w, a, out):  # pragma: no cover - compiled
+    """:func:`body_slotine_li_regressor` with its scratch given (as :func:`body_regressor_in`)."""
+    _regressor_blocks_in(ch, q, qd, qdr, qddr, False, j, j + 1, w, a, out, 0)
 
 
 # ----------------------------------------------------------------------------- batch wrappers

@@ -366,7 +366,8 @@ def _stick_slip(ch, pi, fv, fc, arm, fp, q, qd, tau, T, substeps, stuck, sc):  #
     rows, flags = sc[3], sc[5]
     qn, vn, frac, sdir = rows[12], rows[13], rows[15], rows[16]
     cross, z = flags[1], flags[2]
-    sdir[:] = 1.0
+    for i in range(n):
+        sdir[i] = 1.0
     ok = True
     for _ in range(substeps):
         good, have = _decide(ch, pi, fv, fc, arm, fp, q, qd, tau, stuck, sdir, sc)
@@ -453,7 +454,7 @@ def _smooth(ch, pi, fv, fc, arm, law, fp, q, qd, tau, T, substeps, stuck, sc):  
     return ok
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _step(ch, pi, fv, fc, arm, law, fp, q, qd, tau, T, substeps, stuck, sc):  # pragma: no cover
     if law == 0:
         ok = _stick_slip(ch, pi, fv, fc, arm, fp, q, qd, tau, T, substeps, stuck, sc)
@@ -499,7 +500,7 @@ def plant_scratch(n):  # pragma: no cover - compiled
     return _scratch(n)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def serial_plant_step_in(ch, pp, q, qd, tau, T, substeps, stuck, sc):  # pragma: no cover - compiled
     """:func:`serial_plant_step` with its scratch ``sc`` (:func:`plant_scratch`) given: no
     allocation per sample (a closed loop allocates it once per trial)."""
