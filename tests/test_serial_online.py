@@ -353,6 +353,18 @@ def test_projection_onto_a_ball_is_consistent_and_within_it(values, scale, radiu
     assert np.allclose(again, out, rtol=0, atol=1e-9 * max(1.0, np.abs(out).max()))
 
 
+def test_projection_of_a_point_mass_on_the_ball_surface_does_not_divide_by_zero():
+    """Found by hypothesis: a first projection left a point mass exactly on the ball's surface
+    (no spread, tr_s = 0, room < 0 by round-off); projecting it again divided 0 by 0."""
+    raw = np.array([0.0, 1.708142752371046, -1.9, -1.0554732485163179, -1.9, 0.0, 0.0])
+    raw = np.r_[raw, 0.8246017042535403, 2.190343359432653, -1.8179526042325196]
+    raw *= np.array([1.0] + [1e-3] * 3 + [1e-6] * 6)
+    out, again = np.empty(10), np.empty(10)
+    project_payload(raw, out, 0.0, 0.1437920259974524)
+    project_payload(out, again, 0.0, 0.1437920259974524)
+    assert np.all(np.isfinite(again)) and np.allclose(again, out, rtol=1e-9, atol=1e-15), (out, again)
+
+
 def test_projection_onto_a_ball_leaves_a_body_within_it_unchanged_and_empties_a_vanishing_mass():
     rng = np.random.default_rng(4)
     for _ in range(20):  # a disk of radius <= 0.1 m whose centre is <= 0.1 m out lies in a 0.25 m ball

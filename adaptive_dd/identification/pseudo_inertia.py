@@ -122,7 +122,7 @@ def _bound_ball(dst, radius):  # pragma: no cover - compiled
         tr_s += S[a, a]
     room = m * r2 - hh / m  # what the spread about the centre of mass may add to tr(Sigma)
     scale = 1.0
-    if tr_s > room:
+    if tr_s > room and tr_s > 0.0:  # (no spread to scale when tr_s is 0: room < 0 by round-off only)
         scale = max(room, 0.0) / tr_s
     for a in range(3):
         for b in range(3):
