@@ -176,6 +176,26 @@ def payload_regression_noise(
     return Phi, R
 
 
+def _white_information(Phi: ArrayLike, R: ArrayLike) -> Array:
+    """Cumulative Fisher information ``(N, 10, 10)`` of independent samples ``Phi (N, n, 10)``
+    with error covariances ``R (N, n, n)``."""
+    Phi, R = np.asarray(Phi, dtype=float), np.asarray(R, dtype=float)
+    reg = 1e-12 * np.maximum(np.trace(R, axis1=1, axis2=2), 1e-300)[:, None, None] * np.eye(R.shape[1])
+    return np.cumsum(np.einsum("nia,nij,njb->nab", Phi, np.linalg.inv(R + reg), Phi), axis=0)
+
+
+def _colored_information(Phi: ArrayLike, S: ArrayLike) -> Array:
+    """Cumulative Fisher information ``(K, 10, 10)`` of ``Phi (K, n, 10)`` with the joint error
+    covariance ``S (K, n, K, n)``: whitened by S's Cholesky factor (causal, so the first t blocks
+    carry the first t samples' information)."""
+    Phi, S = np.asarray(Phi, dtype=float), np.asarray(S, dtype=float)
+    K, n = Phi.shape[:2]
+    S = S.reshape(K * n, K * n)
+    S = S + 1e-12 * np.trace(S) / (K * n) * np.eye(K * n)
+    X = solve_triangular(np.linalg.cholesky(S), Phi.reshape(K * n, 10), lower=True).reshape(K, n, 10)
+    return np.cumsum(np.einsum("kia,kib->kab", X, X), axis=0)
+
+
 def _schur_std(F: Array, rcond: float = 1e-10) -> Array:
     """Bound on the mass's standard deviation from cumulative Fisher informations ``F (N, 10, 10)``."""
     Frr_pinv = np.linalg.pinv(F[:, 1:, 1:], rcond=rcond, hermitian=True)
@@ -190,10 +210,7 @@ def payload_mass_bound(Phi: ArrayLike, R: ArrayLike) -> Array:
     ``Phi (N, n, 10)``, ``R (N, n, n)``: the samples from the swap on
     (:func:`payload_regression_noise`); inf while the mass is not determined.
     """
-    Phi, R = np.asarray(Phi, dtype=float), np.asarray(R, dtype=float)
-    reg = 1e-12 * np.maximum(np.trace(R, axis1=1, axis2=2), 1e-300)[:, None, None] * np.eye(R.shape[1])
-    info = np.einsum("nia,nij,njb->nab", Phi, np.linalg.inv(R + reg), Phi)
-    return _schur_std(np.cumsum(info, axis=0))
+    return _schur_std(_white_information(Phi, R))
 
 
 def _com_std(F: Array, payload: Array, axes=None, rcond: float = 1e-10) -> Array:
@@ -219,10 +236,7 @@ def payload_com_bound(Phi: ArrayLike, R: ArrayLike, payload: ArrayLike) -> Array
     ``sqrt(tr cov(c))`` by the delta method (module docstring); ``Phi (N, n, 10)``,
     ``R (N, n, n)`` as :func:`payload_mass_bound`, ``payload (10,)`` the true payload.
     """
-    Phi, R = np.asarray(Phi, dtype=float), np.asarray(R, dtype=float)
-    reg = 1e-12 * np.maximum(np.trace(R, axis1=1, axis2=2), 1e-300)[:, None, None] * np.eye(R.shape[1])
-    info = np.einsum("nia,nij,njb->nab", Phi, np.linalg.inv(R + reg), Phi)
-    return _com_std(np.cumsum(info, axis=0), np.asarray(payload, dtype=float))
+    return _com_std(_white_information(Phi, R), np.asarray(payload, dtype=float))
 
 
 def payload_regression_covariance(
@@ -268,12 +282,7 @@ def payload_mass_bound_colored(Phi: ArrayLike, S: ArrayLike) -> Array:
     whitening by the Cholesky factor of S is causal, so the first t blocks of
     ``L^-1 Phi`` carry the information of the first t samples.
     """
-    Phi, S = np.asarray(Phi, dtype=float), np.asarray(S, dtype=float)
-    K, n = Phi.shape[:2]
-    S = S.reshape(K * n, K * n)
-    S = S + 1e-12 * np.trace(S) / (K * n) * np.eye(K * n)
-    X = solve_triangular(np.linalg.cholesky(S), Phi.reshape(K * n, 10), lower=True).reshape(K, n, 10)
-    return _schur_std(np.cumsum(np.einsum("kia,kib->kab", X, X), axis=0))
+    return _schur_std(_colored_information(Phi, S))
 
 
 def _check(payload, tol, model, window) -> Array:
@@ -297,15 +306,8 @@ def _information(arm, q, qd, qdd, pay, swap_sample, model, window, kw) -> Array:
     end = q.shape[0] if model == "white" else min(q.shape[0], swap_sample + window)
     s = slice(swap_sample, end)
     if model == "white":
-        Phi, R = payload_regression_noise(arm, q[s], qd[s], qdd[s], pay, **kw)
-        reg = 1e-12 * np.maximum(np.trace(R, axis1=1, axis2=2), 1e-300)[:, None, None] * np.eye(R.shape[1])
-        return np.cumsum(np.einsum("nia,nij,njb->nab", Phi, np.linalg.inv(R + reg), Phi), axis=0)
-    Phi, S = payload_regression_covariance(arm, q[s], qd[s], qdd[s], pay, **kw)
-    K, n = Phi.shape[:2]
-    S = S.reshape(K * n, K * n)
-    S = S + 1e-12 * np.trace(S) / (K * n) * np.eye(K * n)
-    X = solve_triangular(np.linalg.cholesky(S), Phi.reshape(K * n, 10), lower=True).reshape(K, n, 10)
-    return np.cumsum(np.einsum("kia,kib->kab", X, X), axis=0)
+        return _white_information(*payload_regression_noise(arm, q[s], qd[s], qdd[s], pay, **kw))
+    return _colored_information(*payload_regression_covariance(arm, q[s], qd[s], qdd[s], pay, **kw))
 
 
 def payload_information_time(
