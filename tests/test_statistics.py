@@ -20,9 +20,9 @@ from adaptive_dd.benchmark.metrics import (
     segment_failed,
 )
 from adaptive_dd.benchmark.report import format_report
-from adaptive_dd.benchmark.runner import BenchmarkResult, ControllerRun
 from adaptive_dd.benchmark.scenario import load_scenario
 from adaptive_dd.benchmark.streaming import segment_bounds
+from adaptive_dd.benchmark.types import BenchmarkResult, ControllerRun
 
 T = 0.001
 SWAP = 1.0
@@ -183,12 +183,12 @@ def test_a_failed_trial_is_left_out_after_its_failure_only():
 
 def test_one_conversion_of_seconds_to_samples():
     """A swap at 2.5005 s with T = 1 ms: the plant changes at sample 2501 and so does the segment."""
-    from adaptive_dd.benchmark.runner import _true_sigma
+    from adaptive_dd.benchmark.trials import true_sigma
     from adaptive_dd.plant.sampling import first_sample
 
     assert first_sample(2.5005, 1e-3) == 2501 and first_sample(2.0, 1e-3) == 2000
     start, end, _ = segment_bounds([(0.0, 2.5005, 0.0), (2.5005, 5.0, 1.0)], 1e-3, 0.5)
     assert start.tolist() == [0, 2501] and end.tolist() == [2501, 5000]
     sc = dataclasses.replace(load_scenario(), seeds=1, duration=5.0, swap_times=(2.5005,), swap_masses=(1.0,))
-    _, mass = _true_sigma(sc, np.arange(sc.n_samples) * T)
+    _, mass = true_sigma(sc, np.arange(sc.n_samples) * T)
     assert mass[2500] == 0.0 and mass[2501] == 1.0

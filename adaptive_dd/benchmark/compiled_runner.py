@@ -5,19 +5,16 @@ from __future__ import annotations
 import numpy as np
 
 from adaptive_dd.benchmark.compiled import LAW_ADAPTIVE, LAW_SLOTINE, CompiledSpec, closed_loop_block
-from adaptive_dd.benchmark.runner import (
-    CHUNK,
-    MAX_ERROR,
-    SETTLE,
-    ControllerRun,
-    _dropout_block,
-    _dropout_rngs,
-    _new_run,
-    _sensor,
-    _trial_rngs,
-    _true_sigma,
-)
 from adaptive_dd.benchmark.streaming import segment_bounds
+from adaptive_dd.benchmark.trials import (
+    dropout_block,
+    dropout_rngs,
+    new_run,
+    sensor_of,
+    trial_rngs,
+    true_sigma,
+)
+from adaptive_dd.benchmark.types import CHUNK, MAX_ALARMS, MAX_ERROR, SETTLE, ControllerRun
 from adaptive_dd.identification.online import OnlineConfig, online_init
 from adaptive_dd.plant.integrator import friction_vector
 from adaptive_dd.plant.sampling import first_sample
@@ -25,21 +22,18 @@ from adaptive_dd.plant.simulator import MAX_SPEED
 
 __all__ = ["run_compiled"]
 
-MAX_ALARMS = 256
-"""Alarm times kept per trial (the count goes on)."""
-
 
 def run_compiled(name, ctrl, spec: CompiledSpec, scenario, idx, ref, keep: int, bar) -> ControllerRun:
     """One controller's trials on the compiled path; the same result as the Python path."""
     S, N, T = len(idx), scenario.n_samples, scenario.sample_period
-    rngs = _trial_rngs(scenario.seed, idx)
+    rngs = trial_rngs(scenario.seed, idx)
     adaptive = spec.law == LAW_ADAPTIVE
     estimates = adaptive or spec.law == LAW_SLOTINE
     seg_start, seg_end, seg_settled = segment_bounds(scenario.segments(), T, SETTLE)
-    run = _new_run(name, ctrl, S, len(seg_start), N, keep, estimates, "compiled")
+    run = new_run(name, ctrl, S, len(seg_start), N, keep, estimates, "compiled")
     K = run.q.shape[0]
     arm = scenario.arm
-    act, sens = arm.actuator, _sensor(scenario)
+    act, sens = arm.actuator, sensor_of(scenario)
     plant_f = np.concatenate(
         (
             [T, MAX_SPEED, MAX_ERROR],
@@ -53,7 +47,7 @@ def run_compiled(name, ctrl, spec: CompiledSpec, scenario, idx, ref, keep: int, 
     plant_i = np.array(
         [scenario.substeps, act.saturate, act.quantize, sens.quantize, arm.friction_code], dtype=np.int64
     )
-    sigma_true, _ = _true_sigma(scenario, np.arange(N) * T)
+    sigma_true, _ = true_sigma(scenario, np.arange(N) * T)
     swap_k = np.array([first_sample(at, T) for at in scenario.swap_times], dtype=np.int64)
     sig_seg = np.ascontiguousarray(sigma_true[np.concatenate(([0], np.minimum(swap_k, N - 1)))])
     q = np.broadcast_to(ref[0, 0:2], (S, 2)).copy()
@@ -65,14 +59,14 @@ def run_compiled(name, ctrl, spec: CompiledSpec, scenario, idx, ref, keep: int, 
     n_alarms = np.zeros(S, dtype=np.int64)
     sig_rec = run.sigma_hat if estimates else np.zeros((0, N, 7))
     sigma_end = run.sigma_end if estimates else np.zeros((S, len(seg_start), 7))
-    drop_rngs = _dropout_rngs(scenario, idx)
+    drop_rngs = dropout_rngs(scenario, idx)
     no_drop = np.zeros((S, 0), dtype=np.bool_)
     hq, hqd = q.copy(), qd.copy()
     run.dropped = np.zeros(S, dtype=np.int64)
     for k0 in range(0, N, CHUNK):
         k1 = min(N, k0 + CHUNK)
         noise = np.ascontiguousarray(np.stack([g.standard_normal((k1 - k0, 4)) for g in rngs]))
-        drop = no_drop if drop_rngs is None else _dropout_block(drop_rngs, scenario.dropout, k1 - k0)
+        drop = no_drop if drop_rngs is None else dropout_block(drop_rngs, scenario.dropout, k1 - k0)
         closed_loop_block(
             k0, k1, noise, ref, sig_seg, swap_k, plant_f, plant_i, spec.law, spec.gains, spec.sigma,
             spec.extra, q, qd, stuck, slip, zb, run.failed, run.failed_at, *state, *cfg.packed,

@@ -62,8 +62,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from adaptive_dd.benchmark.runner import SETTLE, BenchmarkResult
+from adaptive_dd.benchmark.provenance import provenance
 from adaptive_dd.benchmark.streaming import segment_bounds
+from adaptive_dd.benchmark.types import SETTLE, BenchmarkResult
 from adaptive_dd.plant.sampling import first_sample
 
 __all__ = [
@@ -297,7 +298,6 @@ def compute_metrics(res: BenchmarkResult) -> dict:
         }
     _add_seed_statistics(res, out, per)
     _add_information_times(res, out)
-    from adaptive_dd.benchmark.results import provenance
 
     return {
         "scenario": sc.source,
