@@ -91,18 +91,23 @@ def _fake_result(seed_indices=(10, 11, 12, 13), sat_oracle=(0.0, 0.0)):
     S = len(seed_indices)
 
     def run(name, rms, alarms, floor, sat):
-        acc = np.zeros((S, 2, 7))
+        from adaptive_dd.closed_loop.types import StreamedSums
+
         rms = np.asarray(rms, float)
-        acc[..., 0] = rms**2 * n
-        acc[..., 1] = acc[..., 2] = acc[..., 0] / 2
-        acc[..., 3] = 2 * rms
-        acc[..., 4] = n
-        acc[..., 5] = np.asarray(sat)[None, :] * n
-        acc[..., 6] = rms**2 * (end - settled)
+        e2 = rms**2 * n
+        acc = StreamedSums(
+            sum_e2=e2,
+            sum_e2_joint=np.stack([e2 / 2, e2 / 2], axis=-1),
+            max_e=2 * rms,
+            sum_tau2=np.broadcast_to(n, (S, 2)).copy(),
+            n_saturated=np.broadcast_to(np.asarray(sat)[None, :] * n, (S, 2)).copy(),
+            sum_e2_settled=rms**2 * (end - settled),
+            e_norm=np.zeros((S, N), dtype=np.float32),
+        )
         return ControllerRun(
             name=name,
             acc=acc,
-            e_norm=np.zeros((S, N), dtype=np.float32),
+            e_norm=acc.e_norm,
             sigma_end=None,
             failed=np.zeros(S, dtype=bool),
             failed_at=np.full(S, -1),

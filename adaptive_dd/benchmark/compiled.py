@@ -8,9 +8,16 @@ the actuator and sensor models
 (:mod:`adaptive_dd.plant.sampling`), the plant integrator, the control laws
 (:mod:`adaptive_dd.controllers.laws`), the online estimator
 (:mod:`adaptive_dd.identification.online_kernel`) and the streamed metrics
-(:mod:`adaptive_dd.benchmark.streaming`). A controller spec says which law, with which
-gains and model (:func:`compiled_spec`); plug-in controllers have none and run on the
-Python path.
+(:func:`~adaptive_dd.benchmark.streaming.accumulate_trial`). A controller spec says which
+law, with which gains and model (:func:`compiled_spec`); plug-in controllers have none and
+run on the Python path.
+
+What travels into the kernel is named: the run constants, actuator and sensor, streamed
+sums, recordings and alarms are the N-joint loop's records
+(:mod:`adaptive_dd.closed_loop.types`, :class:`~adaptive_dd.closed_loop.glue.Alarms`); the
+two-link plant (:class:`TwoLinkPlant`), trial state (:class:`TwoLinkTrialState`), law
+(:class:`TwoLinkGains`) and estimator configuration (:class:`OnlineKernelConfig`) are
+defined here; the estimator state is :class:`~adaptive_dd.identification.online.OnlineState`.
 """
 
 from __future__ import annotations
@@ -19,6 +26,7 @@ from typing import NamedTuple
 
 import numpy as np
 from numba import njit, prange
+from numpy.typing import NDArray
 
 from adaptive_dd.benchmark.streaming import accumulate_trial
 from adaptive_dd.controllers.laws import boost_trial, ct_trial, pd_trial, slotine_li_trial
@@ -26,22 +34,144 @@ from adaptive_dd.identification.online_kernel import C_SINCE_ALARM, online_step_
 from adaptive_dd.plant.integrator import step_one
 from adaptive_dd.plant.sampling import actuate_trial, measure_trial
 
-__all__ = ["LAW_ADAPTIVE", "LAW_CT", "LAW_CT_ORACLE", "LAW_PD", "CompiledSpec", "compiled_spec"]
+__all__ = [
+    "LAW_ADAPTIVE",
+    "LAW_CT",
+    "LAW_CT_ORACLE",
+    "LAW_PD",
+    "LAW_SLOTINE",
+    "LAW_SLOTINE_ORACLE",
+    "CompiledSpec",
+    "OnlineKernelConfig",
+    "TwoLinkGains",
+    "TwoLinkPlant",
+    "TwoLinkTrialState",
+    "closed_loop_block",
+    "compiled_spec",
+]
+
+Array = NDArray[np.float64]
 
 LAW_PD, LAW_CT, LAW_CT_ORACLE, LAW_ADAPTIVE, LAW_SLOTINE, LAW_SLOTINE_ORACLE = 0, 1, 2, 3, 4, 5
 
-# slots of CompiledSpec.gains
-G_KP, G_KD, G_LAM, G_PD_KP1, G_PD_KP2, G_PD_KD1, G_PD_KD2, G_DKP, G_DKD, G_BOOST_N = range(10)
+
+class TwoLinkGains(NamedTuple):
+    """A two-link built-in law and its gains (the fields a law does not use are zero).
+
+    Attributes
+    ----------
+    law : int
+        ``LAW_*``: PD, computed torque on the fixed / true / estimated model (the last is
+        ``adaptive_ct``), Slotine-Li adapting / on the true model.
+    kp, kd, lam : float
+        Computed-torque gains [1/s^2], [1/s], and the reference filter's ``lam`` [1/s]
+        (< 0: the textbook law); Slotine-Li: ``kd`` and ``lam``.
+    pd_kp, pd_kd : ndarray (2,)
+        PD gains per joint [N m/rad], [N m s/rad].
+    boost_kp, boost_kd : float
+        Feedback added during a boost after an alarm (``adaptive_ct``), through M0(q).
+    boost_samples : float
+        Samples a boost lasts after an alarm (0: no boost).
+    sigma : ndarray (7,)
+        The fixed model (computed torque), the nominal one (``adaptive_ct``: start and boost),
+        the start of the estimate and the model of M0 (Slotine-Li).
+    gamma, lo, hi : ndarray (7,)
+        Slotine-Li's adaptation gains and box.
+    projection : ndarray (3,)
+        Slotine-Li's projection constants (:data:`~adaptive_dd.controllers.slotine_li.PROJECTION`).
+    """
+
+    law: int
+    kp: float
+    kd: float
+    lam: float
+    pd_kp: Array
+    pd_kd: Array
+    boost_kp: float
+    boost_kd: float
+    boost_samples: float
+    sigma: Array
+    gamma: Array
+    lo: Array
+    hi: Array
+    projection: Array
+
+
+class OnlineKernelConfig(NamedTuple):
+    """:attr:`OnlineConfig.packed <adaptive_dd.identification.online.OnlineConfig.packed>` by
+    name: ``ci, cf`` integer and float settings, ``A, B, C, D`` the derivative filters'
+    state space, ``d`` payload direction, ``group`` parameter groups, ``split_rows (2,)``."""
+
+    ci: NDArray[np.int64]
+    cf: Array
+    A: Array
+    B: Array
+    C: Array
+    D: Array
+    d: Array
+    group: NDArray[np.int64]
+    split_rows: NDArray[np.int64]
+
+
+class TwoLinkPlant(NamedTuple):
+    """The two-link plant of a run (:func:`adaptive_dd.plant.integrator.step_one`).
+
+    ``sigma_seg (G, 7)`` true base parameters before the first swap and after each;
+    ``swap_k (G - 1,)`` sample of each swap; ``substeps`` RK4 substeps per sample;
+    ``friction_code`` (:attr:`Arm.friction_code <adaptive_dd.plant.arm.Arm.friction_code>`);
+    ``fparams`` :func:`~adaptive_dd.plant.integrator.friction_vector` of the arm (friction
+    velocity, Stribeck ratio and velocity, LuGre sigma0 (2), sigma1 (2)).
+    """
+
+    sigma_seg: Array
+    swap_k: NDArray[np.int64]
+    substeps: int
+    friction_code: int
+    fparams: Array
+
+
+class TwoLinkTrialState(NamedTuple):
+    """Per-trial state of the two-link loop, trial axis first: ``q, qd (S, 2)``, ``stuck (S, 2)``
+    joints held by Coulomb friction, ``slip (S, 2)`` stick-slip state, ``z (S, 2)`` LuGre bristle
+    state, ``failed (S,)``, ``failed_at (S,)`` sample of the failure (-1), ``held_q, held_qd (S, 2)``
+    the last good measurement, ``n_dropped (S,)`` measurements lost."""
+
+    q: Array
+    qd: Array
+    stuck: NDArray[np.bool_]
+    slip: Array
+    z: Array
+    failed: NDArray[np.bool_]
+    failed_at: NDArray[np.int64]
+    held_q: Array
+    held_qd: Array
+    n_dropped: NDArray[np.int64]
 
 
 class CompiledSpec(NamedTuple):
-    """What the compiled loop needs of a controller: the law, its gains, its model, its estimator."""
+    """What the compiled loop needs of a controller: its law and gains, its estimator."""
 
-    law: int
-    gains: np.ndarray  # (10,) see G_*
-    sigma: np.ndarray  # (7,) fixed model (CT) or nominal model (adaptive: start and boost)
+    gains: TwoLinkGains
     online: object  # OnlineConfig or None
-    extra: np.ndarray = np.zeros(24)  # Slotine-Li: gamma (7), lo (7), hi (7), projection (3)
+
+    @property
+    def law(self) -> int:
+        return self.gains.law
+
+    @property
+    def sigma(self) -> Array:
+        return self.gains.sigma
+
+
+def _gains(law: int, sigma=None, **kw) -> TwoLinkGains:
+    z2, z7 = np.zeros(2), np.zeros(7)
+    base = dict(
+        law=law, kp=0.0, kd=0.0, lam=0.0, pd_kp=z2, pd_kd=z2, boost_kp=0.0, boost_kd=0.0,
+        boost_samples=0.0, sigma=z7 if sigma is None else np.array(sigma, dtype=float),
+        gamma=z7, lo=z7, hi=z7, projection=np.zeros(3),
+    )  # fmt: skip
+    base.update(kw)
+    return TwoLinkGains(**base)
 
 
 def compiled_spec(ctrl, sample_period: float) -> CompiledSpec | None:
@@ -52,149 +182,179 @@ def compiled_spec(ctrl, sample_period: float) -> CompiledSpec | None:
     from adaptive_dd.controllers.feedback import PD, ComputedTorque
     from adaptive_dd.controllers.slotine_li import PROJECTION, SlotineLi
 
-    g = np.zeros(10)
     kind = type(ctrl)
     if kind is PD:
-        g[G_PD_KP1 : G_PD_KP2 + 1], g[G_PD_KD1 : G_PD_KD2 + 1] = ctrl.kp, ctrl.kd
-        return CompiledSpec(LAW_PD, g, np.zeros(7), None)
+        kp, kd = (np.array(np.broadcast_to(x, (2,)), dtype=float) for x in (ctrl.kp, ctrl.kd))
+        return CompiledSpec(_gains(LAW_PD, pd_kp=kp, pd_kd=kd), None)
     if kind is ComputedTorque:
         gn = ctrl.gains
-        g[G_KP], g[G_KD], g[G_LAM] = gn.kp, gn.kd, gn.lam if ctrl.reference else -1.0
-        return CompiledSpec(LAW_CT_ORACLE if ctrl.oracle else LAW_CT, g, np.asarray(ctrl.sigma, float), None)
+        lam = float(gn.lam) if ctrl.reference else -1.0
+        law = LAW_CT_ORACLE if ctrl.oracle else LAW_CT
+        return CompiledSpec(_gains(law, ctrl.sigma, kp=float(gn.kp), kd=float(gn.kd), lam=lam), None)
     if kind is SlotineLi:
-        g[G_KP], g[G_KD], g[G_LAM] = 0.0, ctrl.kd, ctrl.lam
-        extra = np.concatenate((ctrl.gamma, ctrl.lo, ctrl.hi, PROJECTION))
         law = LAW_SLOTINE_ORACLE if ctrl.oracle else LAW_SLOTINE
-        return CompiledSpec(law, g, np.asarray(ctrl.theta0, float), None, extra)
+        box = {k: np.array(getattr(ctrl, k), dtype=float) for k in ("gamma", "lo", "hi")}
+        g = _gains(
+            law, ctrl.theta0, kd=float(ctrl.kd), lam=float(ctrl.lam), projection=PROJECTION.copy(), **box
+        )
+        return CompiledSpec(g, None)
     if kind is AdaptiveCT:
         gn = ctrl.gains
-        g[G_KP], g[G_KD], g[G_LAM] = gn.kp, gn.kd, gn.lam
+        boost = {}
         if ctrl.boost_bandwidth is not None:
-            g[G_DKP], g[G_DKD] = ctrl.boost_gains
-            g[G_BOOST_N] = ctrl.boost_duration / sample_period
+            dkp, dkd = ctrl.boost_gains
+            boost = dict(boost_kp=float(dkp), boost_kd=float(dkd))
+            boost["boost_samples"] = float(ctrl.boost_duration / sample_period)
+        g = _gains(
+            LAW_ADAPTIVE, ctrl.sigma_nominal, kp=float(gn.kp), kd=float(gn.kd), lam=float(gn.lam), **boost
+        )
         online = ctrl.online
         if online.sample_period != sample_period:
             online = dataclasses.replace(online, sample_period=sample_period)
-        return CompiledSpec(LAW_ADAPTIVE, g, np.asarray(ctrl.sigma_nominal, float), online)
+        return CompiledSpec(g, online)
     return None
 
 
 @njit(cache=True)
-def _command(
-    law, g, sg_fixed, sg_true, sg_model, since_alarm, q, qd, q_d, qd_d, qdd_d, out, extra, T
-):  # pragma: no cover
+def _command(g, T, sg_true, sg_model, since_alarm, q, qd, q_d, qd_d, qdd_d, out):  # pragma: no cover
+    """The command of law ``g.law`` into ``out (2,)``; ``sg_model`` the trial's estimate."""
+    law = g.law
     if law == LAW_SLOTINE:
         slotine_li_trial(
-            q, qd, q_d, qd_d, qdd_d, sg_model, sg_fixed, g[G_LAM], g[G_KD], T,
-            extra[0:7], extra[7:14], extra[14:21], extra[21:24], out,
+            q, qd, q_d, qd_d, qdd_d, sg_model, g.sigma, g.lam, g.kd, T, g.gamma, g.lo, g.hi, g.projection, out
         )  # fmt: skip
     elif law == LAW_SLOTINE_ORACLE:
         th = sg_true.copy()
         slotine_li_trial(
-            q, qd, q_d, qd_d, qdd_d, th, sg_fixed, g[G_LAM], g[G_KD], T,
-            extra[0:0], extra[7:14], extra[14:21], extra[21:24], out,
+            q, qd, q_d, qd_d, qdd_d, th, g.sigma, g.lam, g.kd, T, g.gamma[0:0], g.lo, g.hi, g.projection, out
         )  # fmt: skip
     elif law == LAW_PD:
-        pd_trial(q, qd, q_d, qd_d, g[G_PD_KP1 : G_PD_KP2 + 1], g[G_PD_KD1 : G_PD_KD2 + 1], out)
+        pd_trial(q, qd, q_d, qd_d, g.pd_kp, g.pd_kd, out)
     elif law == LAW_CT:
-        ct_trial(q, qd, q_d, qd_d, qdd_d, sg_fixed, g[G_KP], g[G_KD], g[G_LAM], out)
+        ct_trial(q, qd, q_d, qd_d, qdd_d, g.sigma, g.kp, g.kd, g.lam, out)
     elif law == LAW_CT_ORACLE:
-        ct_trial(q, qd, q_d, qd_d, qdd_d, sg_true, g[G_KP], g[G_KD], g[G_LAM], out)
+        ct_trial(q, qd, q_d, qd_d, qdd_d, sg_true, g.kp, g.kd, g.lam, out)
     else:
-        ct_trial(q, qd, q_d, qd_d, qdd_d, sg_model, g[G_KP], g[G_KD], g[G_LAM], out)
-        if g[G_BOOST_N] > 0 and since_alarm < g[G_BOOST_N]:
-            boost_trial(q, qd, q_d, qd_d, sg_fixed, g[G_DKP], g[G_DKD], out)
+        ct_trial(q, qd, q_d, qd_d, qdd_d, sg_model, g.kp, g.kd, g.lam, out)
+        if g.boost_samples > 0 and since_alarm < g.boost_samples:
+            boost_trial(q, qd, q_d, qd_d, g.sigma, g.boost_kp, g.boost_kd, out)
 
 
 @njit(cache=True, parallel=True)
-def closed_loop_block(
-    k0, k1, noise, ref, sig_seg, swap_k, plant_f, plant_i, law, g, sg_fixed,
-    extra, q, qd, stuck, slip, zb, failed, failed_at,
-    xf, u_last, cnt, tau_prev, theta, P, lam, short, long, sigma_model,
-    ci, cf, A, B, C, D, d, group, rows,
-    seg_start, seg_settled, acc, e_norm, sigma_end, seg_end, alarm_t, n_alarms,
-    rec_n, q_rec, qd_rec, tau_rec, sat_rec, sig_rec,
-    drop, hq, hqd, n_drop,
-):  # pragma: no cover - compiled  # fmt: skip
-    """Samples ``k0 .. k1 - 1`` of every trial (prange over trials); state arrays updated in place.
+def closed_loop_block(k0, k1, noise, drop, rc, io, pl, g, ts, es, ec, acc, rec, alarms):  # pragma: no cover
+    """Samples ``k0 .. k1 - 1`` of every trial (prange over trials); state updated in place.
 
-    noise : (n, k1 - k0, 4) standard normal; ref : (N, 6) q_d, qd_d, qdd_d; sig_seg : (n_sw + 1, 7)
-    true sigma before the first swap and after each; swap_k : (n_sw,) sample of each swap;
-    plant_f : [T, max_speed, max_error, lim1, lim2, lsb1, lsb2, res1, res2, std1..4, friction
-    velocity, stribeck ratio, stribeck velocity, LuGre sigma0 (2), sigma1 (2)]; zb : (n, 2) LuGre
-    bristle state;
-    plant_i : [substeps, saturate, quantize_dac, quantize_encoder, friction code].
+    Parameters
+    ----------
+    k0, k1 : int
+        The block of samples.
+    noise : ndarray (S, k1 - k0, 4)
+        Standard normal sensor noise (q1, q2, qd1, qd2).
+    drop : ndarray of bool (S, k1 - k0) or (S, 0)
+        Lost measurements (none: ``(S, 0)``).
+    rc : RunConstants
+        Sample period, divergence limits, reference ``q_d, qd_d, qdd_d (N, 2)``, segments.
+    io : Io
+        Actuator and sensor.
+    pl : TwoLinkPlant
+    g : TwoLinkGains
+        The law.
+    ts : TwoLinkTrialState
+    es : OnlineState
+        The estimator's state (``adaptive_ct``; its ``theta`` is also Slotine-Li's estimate).
+    ec : OnlineKernelConfig
+        The estimator's configuration.
+    acc : StreamedSums
+        Per trial and segment (:func:`~adaptive_dd.benchmark.streaming.accumulate_trial`).
+    rec : Recording
+        Trajectories of the first ``rec.q.shape[0]`` trials, the estimate at each segment's end.
+    alarms : Alarms
+        Change-detector alarm times [s] (the count stops at the capacity).
     """
-    n = q.shape[0]
-    T, max_speed, max_error = plant_f[0], plant_f[1], plant_f[2]
-    lim, lsb, res, std = plant_f[3:5], plant_f[5:7], plant_f[7:9], plant_f[9:13]
+    for i in prange(ts.q.shape[0]):
+        trial_block(i, k0, k1, noise, drop, rc, io, pl, g, ts, es, ec, acc, rec, alarms)
+
+
+@njit(cache=True)
+def trial_block(i, k0, k1, noise, drop, rc, io, pl, g, ts, es, ec, acc, rec, alarms):  # pragma: no cover
+    """Samples ``k0 .. k1 - 1`` of trial i (see :func:`closed_loop_block`).
+
+    A function of its own because numba 0.68's parallel loop loses the writes its own body makes
+    to arrays reached through a NamedTuple (``a.count[i] += 1`` in a ``prange`` body leaves
+    ``a.count`` unchanged); writes made in a function it calls are kept.
+    """
+    T = rc.T
+    law = g.law
     adaptive = law == LAW_ADAPTIVE
     estimates = adaptive or law == LAW_SLOTINE
-    for i in prange(n):
-        qm = np.empty(2)
-        qdm = np.empty(2)
-        cmd = np.empty(2)
-        tau = np.empty(2)
-        eps = np.empty(2)
-        lost_q = np.full(2, np.nan)
-        has_drop = drop.shape[1] > 0
-        for k in range(k0, k1):
-            w = 0
-            while w < swap_k.shape[0] and k >= swap_k[w]:
-                w += 1
-            sg_true = sig_seg[w]
-            measure_trial(q[i], qd[i], noise[i, k - k0], res, std, plant_i[3] == 1, qm, qdm)
-            lost = has_drop and drop[i, k - k0]
-            if lost:  # the law gets the last good measurement, the estimator the NaN
-                n_drop[i] += 1
-                qm[0], qm[1], qdm[0], qdm[1] = hq[i, 0], hq[i, 1], hqd[i, 0], hqd[i, 1]
-            else:
-                hq[i, 0], hq[i, 1], hqd[i, 0], hqd[i, 1] = qm[0], qm[1], qdm[0], qdm[1]
-            e1, e2 = ref[k, 0] - q[i, 0], ref[k, 1] - q[i, 1]
-            _command(
-                law, g, sg_fixed, sg_true, theta[i] if law == LAW_SLOTINE else sigma_model[i],
-                cnt[i, C_SINCE_ALARM], qm, qdm, ref[k, 0:2], ref[k, 2:4], ref[k, 4:6], cmd, extra, T,
+    rec_n = rec.q.shape[0]
+    qm = np.empty(2)
+    qdm = np.empty(2)
+    cmd = np.empty(2)
+    tau = np.empty(2)
+    eps = np.empty(2)
+    lost_q = np.full(2, np.nan)
+    has_drop = drop.shape[1] > 0
+    for k in range(k0, k1):
+        w = 0
+        while w < pl.swap_k.shape[0] and k >= pl.swap_k[w]:
+            w += 1
+        sg_true = pl.sigma_seg[w]
+        measure_trial(ts.q[i], ts.qd[i], noise[i, k - k0], io.res, io.std, io.quantize_encoder, qm, qdm)
+        lost = has_drop and drop[i, k - k0]
+        if lost:  # the law gets the last good measurement, the estimator the NaN
+            ts.n_dropped[i] += 1
+            qm[0], qm[1] = ts.held_q[i, 0], ts.held_q[i, 1]
+            qdm[0], qdm[1] = ts.held_qd[i, 0], ts.held_qd[i, 1]
+        else:
+            ts.held_q[i, 0], ts.held_q[i, 1] = qm[0], qm[1]
+            ts.held_qd[i, 0], ts.held_qd[i, 1] = qdm[0], qdm[1]
+        e1, e2 = rc.q_d[k, 0] - ts.q[i, 0], rc.q_d[k, 1] - ts.q[i, 1]
+        _command(
+            g, T, sg_true, es.theta[i] if law == LAW_SLOTINE else es.sigma_model[i],
+            es.cnt[i, C_SINCE_ALARM], qm, qdm, rc.q_d[k], rc.qd_d[k], rc.qdd_d[k], cmd,
+        )  # fmt: skip
+        bad = not (np.isfinite(cmd[0]) and np.isfinite(cmd[1]))
+        if max(abs(e1), abs(e2)) > rc.max_error:
+            bad = True
+        if bad:
+            cmd[0], cmd[1] = 0.0, 0.0
+        mask = actuate_trial(cmd, io.lim, io.lsb, io.saturate, io.quantize_dac, tau)
+        if ts.failed[i]:
+            tau[0], tau[1] = 0.0, 0.0
+        p1, p2 = ts.q[i, 0], ts.q[i, 1]
+        if i < rec_n:
+            rec.qd[i, k, 0], rec.qd[i, k, 1] = ts.qd[i, 0], ts.qd[i, 1]
+        step_one(
+            ts.q, ts.qd, ts.stuck, ts.slip, ts.z, i, tau, sg_true, T, pl.substeps, pl.friction_code,
+            pl.fparams,
+        )  # fmt: skip
+        ok = np.isfinite(ts.q[i, 0]) and np.isfinite(ts.q[i, 1])
+        ok = ok and abs(ts.qd[i, 0]) < rc.max_speed and abs(ts.qd[i, 1]) < rc.max_speed
+        if bad or not ok or ts.failed[i]:
+            if not ts.failed[i]:
+                ts.failed_at[i] = k
+            ts.failed[i] = True
+            ts.q[i, 0] = p1 if np.isfinite(p1) else 0.0
+            ts.q[i, 1] = p2 if np.isfinite(p2) else 0.0
+            ts.qd[i, 0], ts.qd[i, 1] = 0.0, 0.0
+            ts.stuck[i, 0], ts.stuck[i, 1] = True, True
+        s = accumulate_trial(acc, i, k, rc.seg_start, rc.seg_settled, e1, e2, tau, mask)
+        if adaptive:
+            alarm = online_step_trial(
+                i, es.xf, es.u_last, es.cnt, es.tau_prev, es.theta, es.P, es.lam, es.short, es.long,
+                es.sigma_model, lost_q if lost else qm, lost_q if lost else qdm, tau,
+                ec.ci, ec.cf, ec.A, ec.B, ec.C, ec.D, ec.d, ec.group, ec.split_rows, eps,
             )  # fmt: skip
-            bad = not (np.isfinite(cmd[0]) and np.isfinite(cmd[1]))
-            if max(abs(e1), abs(e2)) > max_error:
-                bad = True
-            if bad:
-                cmd[0], cmd[1] = 0.0, 0.0
-            mask = actuate_trial(cmd, lim, lsb, plant_i[1] == 1, plant_i[2] == 1, tau)
-            if failed[i]:
-                tau[0], tau[1] = 0.0, 0.0
-            p1, p2 = q[i, 0], q[i, 1]
-            if i < rec_n:
-                qd_rec[i, k, 0], qd_rec[i, k, 1] = qd[i, 0], qd[i, 1]
-            step_one(
-                q, qd, stuck, slip, zb, i, tau, sg_true, T, plant_i[0], plant_i[4], plant_f[13:20],
-            )  # fmt: skip
-            ok = np.isfinite(q[i, 0]) and np.isfinite(q[i, 1])
-            ok = ok and abs(qd[i, 0]) < max_speed and abs(qd[i, 1]) < max_speed
-            if bad or not ok or failed[i]:
-                if not failed[i]:
-                    failed_at[i] = k
-                failed[i] = True
-                q[i, 0] = p1 if np.isfinite(p1) else 0.0
-                q[i, 1] = p2 if np.isfinite(p2) else 0.0
-                qd[i, 0], qd[i, 1] = 0.0, 0.0
-                stuck[i, 0], stuck[i, 1] = True, True
-            s = accumulate_trial(acc[i], e_norm[i], k, seg_start, seg_settled, e1, e2, tau, mask)
-            if adaptive:
-                alarm = online_step_trial(
-                    i, xf, u_last, cnt, tau_prev, theta, P, lam, short, long, sigma_model,
-                    lost_q if lost else qm, lost_q if lost else qdm, tau,
-                    ci, cf, A, B, C, D, d, group, rows, eps,
-                )  # fmt: skip
-                if alarm == 1 and n_alarms[i] < alarm_t.shape[1]:
-                    alarm_t[i, n_alarms[i]] = k * T
-                    n_alarms[i] += 1
-            if estimates and k == seg_end[s] - 1:
-                sigma_end[i, s] = theta[i]
-            if i < rec_n:
-                q_rec[i, k, 0], q_rec[i, k, 1] = ref[k, 0] - e1, ref[k, 1] - e2
-                tau_rec[i, k, 0], tau_rec[i, k, 1] = tau[0], tau[1]
-                sat_rec[i, k, 0], sat_rec[i, k, 1] = (mask & 1) != 0, (mask & 2) != 0
-                if estimates:
-                    for j in range(7):
-                        sig_rec[i, k, j] = theta[i, j]
+            if alarm == 1 and alarms.count[i] < alarms.times.shape[1]:
+                alarms.times[i, alarms.count[i]] = k * T
+                alarms.count[i] += 1
+        if estimates and k == rc.seg_end[s] - 1:
+            rec.sigma_end[i, s] = es.theta[i]
+        if i < rec_n:
+            rec.q[i, k, 0], rec.q[i, k, 1] = rc.q_d[k, 0] - e1, rc.q_d[k, 1] - e2
+            rec.tau[i, k, 0], rec.tau[i, k, 1] = tau[0], tau[1]
+            rec.saturated[i, k, 0], rec.saturated[i, k, 1] = (mask & 1) != 0, (mask & 2) != 0
+            if estimates:
+                for j in range(7):
+                    rec.sigma[i, k, j] = es.theta[i, j]

@@ -130,11 +130,12 @@ def run_benchmark(
     if engine == "compiled" and any(s is None for s in specs.values()):
         names = [n for n, s in specs.items() if s is None]
         raise ParameterError(f"engine='compiled': no compiled path for {names}; use engine='auto'")
-    ref = np.ascontiguousarray(np.concatenate((q_d, qd_d, qdd_d), axis=1))
     bar = _progress(progress, len(ctrls) * N, scenario.name)
     for name, ctrl in ctrls.items():
         if specs[name] is not None:
-            run = run_compiled(name, ctrl, specs[name], scenario, idx, ref, keep_trajectories, bar)
+            run = run_compiled(
+                name, ctrl, specs[name], scenario, idx, (q_d, qd_d, qdd_d), keep_trajectories, bar
+            )
         else:
             run = _run_python(name, ctrl, scenario, idx, (q_d, qd_d, qdd_d), keep_trajectories, bar)
         res.runs[name] = run
@@ -210,7 +211,7 @@ def _run_python(name, ctrl, scenario, idx, reference, keep, bar) -> ControllerRu
                 error = f"{type(exc).__name__} in command at t = {k * T:.3f} s: {exc}"
         tau = np.where((np.abs(err).max(axis=-1) > MAX_ERROR)[:, None], np.nan, tau)
         applied, sat = sim.step(tau)
-        accumulate_batch(run.acc, run.e_norm, k, seg_start, seg_settled, err, applied, sat)
+        accumulate_batch(run.acc, k, seg_start, seg_settled, err, applied, sat)
         if K:
             run.tau[:, k], run.saturated[:, k] = applied[:K], sat[:K]
         if not error:

@@ -11,8 +11,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from adaptive_dd.benchmark.scenario import Scenario
-from adaptive_dd.benchmark.streaming import N_ACC
 from adaptive_dd.benchmark.types import ControllerRun
+from adaptive_dd.closed_loop.types import StreamedSums
 from adaptive_dd.controllers.base import declared
 from adaptive_dd.plant.sampling import first_sample
 from adaptive_dd.plant.simulator import PayloadSchedule
@@ -72,11 +72,15 @@ def dropout_block(rngs, p: float, n: int) -> NDArray[np.bool_]:
 def new_run(
     name: str, ctrl, S: int, n_seg: int, N: int, keep: int, adaptive: bool, engine: str
 ) -> ControllerRun:
+    """An empty run of ``S`` trials: zero streamed sums
+    (:class:`~adaptive_dd.closed_loop.types.StreamedSums`; ``run.e_norm`` is ``run.acc.e_norm``),
+    trajectories of the first ``keep`` trials, the estimates if ``adaptive``."""
     K = min(keep, S)
+    acc = StreamedSums.zeros(S, n_seg, 2, N)
     return ControllerRun(
         name=name,
-        acc=np.zeros((S, n_seg, N_ACC)),
-        e_norm=np.zeros((S, N), dtype=np.float32),
+        acc=acc,
+        e_norm=acc.e_norm,
         sigma_end=np.full((S, n_seg, 7), np.nan) if adaptive else None,
         failed=np.zeros(S, dtype=bool),
         failed_at=np.full(S, -1),

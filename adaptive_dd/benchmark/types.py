@@ -17,6 +17,7 @@ from numpy.typing import NDArray
 
 if TYPE_CHECKING:
     from adaptive_dd.benchmark.scenario import Scenario
+    from adaptive_dd.closed_loop.types import StreamedSums
 
 __all__ = ["CHUNK", "ENGINES", "MAX_ALARMS", "MAX_ERROR", "SETTLE", "BenchmarkResult", "ControllerRun"]
 
@@ -39,8 +40,10 @@ class ControllerRun:
     Attributes
     ----------
     name : str
-    acc : ndarray (n_seeds, n_segments, 7)
-        Streamed sums per trial and segment (:data:`~adaptive_dd.benchmark.streaming.ACC_FIELDS`).
+    acc : StreamedSums
+        Streamed sums per trial and segment, by name (:class:`~adaptive_dd.closed_loop.types.StreamedSums`:
+        ``sum_e2 (n_seeds, n_segments)``, ``sum_e2_joint (n_seeds, n_segments, n_joints)``, ``max_e``,
+        ``sum_tau2``, ``n_saturated``, ``sum_e2_settled``; ``e_norm`` is :attr:`e_norm`).
     e_norm : ndarray of float32 (n_seeds, n_samples)
         Tracking error norm ``|q_d - q|`` of the true q [rad].
     sigma_end : ndarray (n_seeds, n_segments, 7) or None
@@ -60,7 +63,7 @@ class ControllerRun:
     """
 
     name: str
-    acc: Array
+    acc: StreamedSums
     e_norm: NDArray[np.float32]
     sigma_end: Array | None
     failed: NDArray[np.bool_]
