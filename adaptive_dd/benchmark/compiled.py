@@ -46,8 +46,16 @@ __all__ = [
     "TwoLinkGains",
     "TwoLinkPlant",
     "TwoLinkTrialState",
+    "apply_batch",
+    "apply_sample",
     "closed_loop_block",
     "compiled_spec",
+    "estimate_batch",
+    "measure_batch",
+    "measure_sample",
+    "record_estimate",
+    "segment_of",
+    "trial_block",
 ]
 
 Array = NDArray[np.float64]
@@ -276,6 +284,87 @@ def closed_loop_block(k0, k1, noise, drop, rc, io, pl, g, ts, es, ec, acc, rec, 
 
 
 @njit(cache=True)
+def segment_of(pl, k):  # pragma: no cover - compiled
+    """Payload segment of sample ``k``: the swaps at or before it (indexes ``pl.sigma_seg``)."""
+    w = 0
+    while w < pl.swap_k.shape[0] and k >= pl.swap_k[w]:
+        w += 1
+    return w
+
+
+@njit(cache=True)
+def measure_sample(io, ts, i, noise, lost, qm, qdm):  # pragma: no cover - compiled
+    """Trial i's measured ``qm, qdm (2,)`` from ``noise (4,)`` standard normal; a ``lost``
+    measurement is replaced by the last good one (``ts.held_q, ts.held_qd``) and counted.
+    The estimator gets NaN for a lost one (the caller's choice)."""
+    measure_trial(ts.q[i], ts.qd[i], noise, io.res, io.std, io.quantize_encoder, qm, qdm)
+    if lost:  # the law gets the last good measurement, the estimator the NaN
+        ts.n_dropped[i] += 1
+        qm[0], qm[1] = ts.held_q[i, 0], ts.held_q[i, 1]
+        qdm[0], qdm[1] = ts.held_qd[i, 0], ts.held_qd[i, 1]
+    else:
+        ts.held_q[i, 0], ts.held_q[i, 1] = qm[0], qm[1]
+        ts.held_qd[i, 0], ts.held_qd[i, 1] = qdm[0], qdm[1]
+
+
+@njit(cache=True)
+def apply_sample(rc, io, pl, ts, acc, rec, i, k, cmd, tau):  # pragma: no cover - compiled
+    """Apply trial i's command ``cmd (2,)`` [N m] over sample k; returns its segment.
+
+    The divergence rule (a non-finite command or a tracking error beyond ``rc.max_error``
+    zeroes the command and fails the trial), saturation and D/A into ``tau (2,)`` (zero once
+    failed), the plant step, the runaway rule (non-finite q or ``|qd| >= rc.max_speed``), the
+    failure freeze (the last good q, at rest, stuck), the streamed sums and the recording of
+    the first ``rec.q.shape[0]`` trials (q and qd before the step, the applied torque and its
+    saturation). ``cmd`` is zeroed in place when the rule applies.
+    """
+    e1, e2 = rc.q_d[k, 0] - ts.q[i, 0], rc.q_d[k, 1] - ts.q[i, 1]
+    bad = not (np.isfinite(cmd[0]) and np.isfinite(cmd[1]))
+    if max(abs(e1), abs(e2)) > rc.max_error:
+        bad = True
+    if bad:
+        cmd[0], cmd[1] = 0.0, 0.0
+    mask = actuate_trial(cmd, io.lim, io.lsb, io.saturate, io.quantize_dac, tau)
+    if ts.failed[i]:
+        tau[0], tau[1] = 0.0, 0.0
+    p1, p2 = ts.q[i, 0], ts.q[i, 1]
+    keep = i < rec.q.shape[0]
+    if keep:
+        rec.qd[i, k, 0], rec.qd[i, k, 1] = ts.qd[i, 0], ts.qd[i, 1]
+    step_one(
+        ts.q, ts.qd, ts.stuck, ts.slip, ts.z, i, tau, pl.sigma_seg[segment_of(pl, k)], rc.T, pl.substeps,
+        pl.friction_code, pl.fparams,
+    )  # fmt: skip
+    ok = np.isfinite(ts.q[i, 0]) and np.isfinite(ts.q[i, 1])
+    ok = ok and abs(ts.qd[i, 0]) < rc.max_speed and abs(ts.qd[i, 1]) < rc.max_speed
+    if bad or not ok or ts.failed[i]:
+        if not ts.failed[i]:
+            ts.failed_at[i] = k
+        ts.failed[i] = True
+        ts.q[i, 0] = p1 if np.isfinite(p1) else 0.0
+        ts.q[i, 1] = p2 if np.isfinite(p2) else 0.0
+        ts.qd[i, 0], ts.qd[i, 1] = 0.0, 0.0
+        ts.stuck[i, 0], ts.stuck[i, 1] = True, True
+    s = accumulate_trial(acc, i, k, rc.seg_start, rc.seg_settled, e1, e2, tau, mask)
+    if keep:
+        rec.q[i, k, 0], rec.q[i, k, 1] = rc.q_d[k, 0] - e1, rc.q_d[k, 1] - e2
+        rec.tau[i, k, 0], rec.tau[i, k, 1] = tau[0], tau[1]
+        rec.saturated[i, k, 0], rec.saturated[i, k, 1] = (mask & 1) != 0, (mask & 2) != 0
+    return s
+
+
+@njit(cache=True)
+def record_estimate(rc, rec, i, k, s, theta):  # pragma: no cover - compiled
+    """Trial i's estimate ``theta (7,)`` after sample k (segment s): at the segment's last sample
+    into ``rec.sigma_end``, and into ``rec.sigma`` for the first ``rec.sigma.shape[0]`` trials."""
+    if k == rc.seg_end[s] - 1:
+        rec.sigma_end[i, s] = theta
+    if i < rec.sigma.shape[0]:
+        for j in range(7):
+            rec.sigma[i, k, j] = theta[j]
+
+
+@njit(cache=True)
 def trial_block(i, k0, k1, noise, drop, rc, io, pl, g, ts, es, ec, acc, rec, alarms):  # pragma: no cover
     """Samples ``k0 .. k1 - 1`` of trial i (see :func:`closed_loop_block`).
 
@@ -283,11 +372,9 @@ def trial_block(i, k0, k1, noise, drop, rc, io, pl, g, ts, es, ec, acc, rec, ala
     to arrays reached through a NamedTuple (``a.count[i] += 1`` in a ``prange`` body leaves
     ``a.count`` unchanged); writes made in a function it calls are kept.
     """
-    T = rc.T
     law = g.law
     adaptive = law == LAW_ADAPTIVE
     estimates = adaptive or law == LAW_SLOTINE
-    rec_n = rec.q.shape[0]
     qm = np.empty(2)
     qdm = np.empty(2)
     cmd = np.empty(2)
@@ -296,50 +383,14 @@ def trial_block(i, k0, k1, noise, drop, rc, io, pl, g, ts, es, ec, acc, rec, ala
     lost_q = np.full(2, np.nan)
     has_drop = drop.shape[1] > 0
     for k in range(k0, k1):
-        w = 0
-        while w < pl.swap_k.shape[0] and k >= pl.swap_k[w]:
-            w += 1
-        sg_true = pl.sigma_seg[w]
-        measure_trial(ts.q[i], ts.qd[i], noise[i, k - k0], io.res, io.std, io.quantize_encoder, qm, qdm)
         lost = has_drop and drop[i, k - k0]
-        if lost:  # the law gets the last good measurement, the estimator the NaN
-            ts.n_dropped[i] += 1
-            qm[0], qm[1] = ts.held_q[i, 0], ts.held_q[i, 1]
-            qdm[0], qdm[1] = ts.held_qd[i, 0], ts.held_qd[i, 1]
-        else:
-            ts.held_q[i, 0], ts.held_q[i, 1] = qm[0], qm[1]
-            ts.held_qd[i, 0], ts.held_qd[i, 1] = qdm[0], qdm[1]
-        e1, e2 = rc.q_d[k, 0] - ts.q[i, 0], rc.q_d[k, 1] - ts.q[i, 1]
+        measure_sample(io, ts, i, noise[i, k - k0], lost, qm, qdm)
+        model = es.theta[i] if law == LAW_SLOTINE else es.sigma_model[i]
         _command(
-            g, T, sg_true, es.theta[i] if law == LAW_SLOTINE else es.sigma_model[i],
-            es.cnt[i, C_SINCE_ALARM], qm, qdm, rc.q_d[k], rc.qd_d[k], rc.qdd_d[k], cmd,
+            g, rc.T, pl.sigma_seg[segment_of(pl, k)], model, es.cnt[i, C_SINCE_ALARM], qm, qdm, rc.q_d[k],
+            rc.qd_d[k], rc.qdd_d[k], cmd,
         )  # fmt: skip
-        bad = not (np.isfinite(cmd[0]) and np.isfinite(cmd[1]))
-        if max(abs(e1), abs(e2)) > rc.max_error:
-            bad = True
-        if bad:
-            cmd[0], cmd[1] = 0.0, 0.0
-        mask = actuate_trial(cmd, io.lim, io.lsb, io.saturate, io.quantize_dac, tau)
-        if ts.failed[i]:
-            tau[0], tau[1] = 0.0, 0.0
-        p1, p2 = ts.q[i, 0], ts.q[i, 1]
-        if i < rec_n:
-            rec.qd[i, k, 0], rec.qd[i, k, 1] = ts.qd[i, 0], ts.qd[i, 1]
-        step_one(
-            ts.q, ts.qd, ts.stuck, ts.slip, ts.z, i, tau, sg_true, T, pl.substeps, pl.friction_code,
-            pl.fparams,
-        )  # fmt: skip
-        ok = np.isfinite(ts.q[i, 0]) and np.isfinite(ts.q[i, 1])
-        ok = ok and abs(ts.qd[i, 0]) < rc.max_speed and abs(ts.qd[i, 1]) < rc.max_speed
-        if bad or not ok or ts.failed[i]:
-            if not ts.failed[i]:
-                ts.failed_at[i] = k
-            ts.failed[i] = True
-            ts.q[i, 0] = p1 if np.isfinite(p1) else 0.0
-            ts.q[i, 1] = p2 if np.isfinite(p2) else 0.0
-            ts.qd[i, 0], ts.qd[i, 1] = 0.0, 0.0
-            ts.stuck[i, 0], ts.stuck[i, 1] = True, True
-        s = accumulate_trial(acc, i, k, rc.seg_start, rc.seg_settled, e1, e2, tau, mask)
+        s = apply_sample(rc, io, pl, ts, acc, rec, i, k, cmd, tau)
         if adaptive:
             alarm = online_step_trial(
                 i, es.xf, es.u_last, es.cnt, es.tau_prev, es.theta, es.P, es.lam, es.short, es.long,
@@ -347,14 +398,37 @@ def trial_block(i, k0, k1, noise, drop, rc, io, pl, g, ts, es, ec, acc, rec, ala
                 ec.ci, ec.cf, ec.A, ec.B, ec.C, ec.D, ec.d, ec.group, ec.split_rows, eps,
             )  # fmt: skip
             if alarm == 1 and alarms.count[i] < alarms.times.shape[1]:
-                alarms.times[i, alarms.count[i]] = k * T
+                alarms.times[i, alarms.count[i]] = k * rc.T
                 alarms.count[i] += 1
-        if estimates and k == rc.seg_end[s] - 1:
-            rec.sigma_end[i, s] = es.theta[i]
-        if i < rec_n:
-            rec.q[i, k, 0], rec.q[i, k, 1] = rc.q_d[k, 0] - e1, rc.q_d[k, 1] - e2
-            rec.tau[i, k, 0], rec.tau[i, k, 1] = tau[0], tau[1]
-            rec.saturated[i, k, 0], rec.saturated[i, k, 1] = (mask & 1) != 0, (mask & 2) != 0
-            if estimates:
-                for j in range(7):
-                    rec.sigma[i, k, j] = es.theta[i, j]
+        if estimates:
+            record_estimate(rc, rec, i, k, s, es.theta[i])
+
+
+@njit(cache=True)
+def measure_batch(io, ts, noise, drop, qm, qdm, qm_obs, qdm_obs):  # pragma: no cover - compiled
+    """:func:`measure_sample` for every trial (the Python path): ``noise (S, 4)``, ``drop (S,)``
+    or ``(0,)``; the law's ``qm, qdm (S, 2)``, the estimator's ``qm_obs, qdm_obs`` (NaN if lost)."""
+    for i in range(ts.q.shape[0]):
+        lost = drop.shape[0] > 0 and drop[i]
+        measure_sample(io, ts, i, noise[i], lost, qm[i], qdm[i])
+        for j in range(2):
+            qm_obs[i, j] = np.nan if lost else qm[i, j]
+            qdm_obs[i, j] = np.nan if lost else qdm[i, j]
+
+
+@njit(cache=True)
+def apply_batch(rc, io, pl, ts, acc, rec, k, cmd, tau):  # pragma: no cover - compiled
+    """:func:`apply_sample` for every trial (the Python path): ``cmd (S, 2)`` the Python
+    controller's command (zeroed where the rule applies), ``tau (S, 2)`` the applied torque;
+    returns the segment of sample k."""
+    s = 0
+    for i in range(ts.q.shape[0]):
+        s = apply_sample(rc, io, pl, ts, acc, rec, i, k, cmd[i], tau[i])
+    return s
+
+
+@njit(cache=True)
+def estimate_batch(rc, rec, k, s, theta):  # pragma: no cover - compiled
+    """:func:`record_estimate` for every trial (the Python path): ``theta (S, 7)``."""
+    for i in range(theta.shape[0]):
+        record_estimate(rc, rec, i, k, s, theta[i])
