@@ -9,15 +9,18 @@ the actuator and sensor models
 (:mod:`adaptive_dd.controllers.laws`), the online estimator
 (:mod:`adaptive_dd.identification.online_kernel`) and the streamed metrics
 (:func:`~adaptive_dd.benchmark.streaming.accumulate_trial`). A controller spec says which
-law, with which gains and model (:func:`compiled_spec`); plug-in controllers have none and
+law, with which gains and model (each built-in's ``compiled_spec`` method:
+:func:`~adaptive_dd.controllers.compiled_form.compiled_spec`); plug-in controllers have none and
 run on the Python path.
 
 What travels into the kernel is named: the run constants, actuator and sensor, streamed
 sums, recordings and alarms are the N-joint loop's records
 (:mod:`adaptive_dd.closed_loop.types`, :class:`~adaptive_dd.closed_loop.glue.Alarms`); the
-two-link plant (:class:`TwoLinkPlant`), trial state (:class:`TwoLinkTrialState`), law
-(:class:`TwoLinkGains`) and estimator configuration (:class:`OnlineKernelConfig`) are
-defined here; the estimator state is :class:`~adaptive_dd.identification.online.OnlineState`.
+two-link plant (:class:`TwoLinkPlant`), trial state (:class:`TwoLinkTrialState`) and
+estimator configuration (:class:`OnlineKernelConfig`) are
+defined here; the law is the controller's
+:class:`~adaptive_dd.controllers.compiled_form.TwoLinkGains`; the estimator state is
+:class:`~adaptive_dd.identification.online.OnlineState`.
 """
 
 from __future__ import annotations
@@ -29,6 +32,17 @@ from numba import njit, prange
 from numpy.typing import NDArray
 
 from adaptive_dd.benchmark.streaming import accumulate_trial
+from adaptive_dd.controllers.compiled_form import (
+    LAW_ADAPTIVE,
+    LAW_CT,
+    LAW_CT_ORACLE,
+    LAW_PD,
+    LAW_SLOTINE,
+    LAW_SLOTINE_ORACLE,
+    CompiledSpec,
+    TwoLinkGains,
+    compiled_spec,
+)
 from adaptive_dd.controllers.laws import boost_trial, ct_trial, pd_trial, slotine_li_trial
 from adaptive_dd.identification.online_kernel import C_SINCE_ALARM, online_step_trial
 from adaptive_dd.plant.integrator import step_one
@@ -59,50 +73,6 @@ __all__ = [
 ]
 
 Array = NDArray[np.float64]
-
-LAW_PD, LAW_CT, LAW_CT_ORACLE, LAW_ADAPTIVE, LAW_SLOTINE, LAW_SLOTINE_ORACLE = 0, 1, 2, 3, 4, 5
-
-
-class TwoLinkGains(NamedTuple):
-    """A two-link built-in law and its gains (the fields a law does not use are zero).
-
-    Attributes
-    ----------
-    law : int
-        ``LAW_*``: PD, computed torque on the fixed / true / estimated model (the last is
-        ``adaptive_ct``), Slotine-Li adapting / on the true model.
-    kp, kd, lam : float
-        Computed-torque gains [1/s^2], [1/s], and the reference filter's ``lam`` [1/s]
-        (< 0: the textbook law); Slotine-Li: ``kd`` and ``lam``.
-    pd_kp, pd_kd : ndarray (2,)
-        PD gains per joint [N m/rad], [N m s/rad].
-    boost_kp, boost_kd : float
-        Feedback added during a boost after an alarm (``adaptive_ct``), through M0(q).
-    boost_samples : float
-        Samples a boost lasts after an alarm (0: no boost).
-    sigma : ndarray (7,)
-        The fixed model (computed torque), the nominal one (``adaptive_ct``: start and boost),
-        the start of the estimate and the model of M0 (Slotine-Li).
-    gamma, lo, hi : ndarray (7,)
-        Slotine-Li's adaptation gains and box.
-    projection : ndarray (3,)
-        Slotine-Li's projection constants (:data:`~adaptive_dd.controllers.slotine_li.PROJECTION`).
-    """
-
-    law: int
-    kp: float
-    kd: float
-    lam: float
-    pd_kp: Array
-    pd_kd: Array
-    boost_kp: float
-    boost_kd: float
-    boost_samples: float
-    sigma: Array
-    gamma: Array
-    lo: Array
-    hi: Array
-    projection: Array
 
 
 class OnlineKernelConfig(NamedTuple):
@@ -156,74 +126,7 @@ class TwoLinkTrialState(NamedTuple):
     n_dropped: NDArray[np.int64]
 
 
-class CompiledSpec(NamedTuple):
-    """What the compiled loop needs of a controller: its law and gains, its estimator."""
-
-    gains: TwoLinkGains
-    online: object  # OnlineConfig or None
-
-    @property
-    def law(self) -> int:
-        return self.gains.law
-
-    @property
-    def sigma(self) -> Array:
-        return self.gains.sigma
-
-
-def _gains(law: int, sigma=None, **kw) -> TwoLinkGains:
-    z2, z7 = np.zeros(2), np.zeros(7)
-    base = dict(
-        law=law, kp=0.0, kd=0.0, lam=0.0, pd_kp=z2, pd_kd=z2, boost_kp=0.0, boost_kd=0.0,
-        boost_samples=0.0, sigma=z7 if sigma is None else np.array(sigma, dtype=float),
-        gamma=z7, lo=z7, hi=z7, projection=np.zeros(3),
-    )  # fmt: skip
-    base.update(kw)
-    return TwoLinkGains(**base)
-
-
-def compiled_spec(ctrl, sample_period: float) -> CompiledSpec | None:
-    """The spec of a built-in controller, or None (run it on the Python path)."""
-    import dataclasses
-
-    from adaptive_dd.controllers.adaptive import AdaptiveCT
-    from adaptive_dd.controllers.feedback import PD, ComputedTorque
-    from adaptive_dd.controllers.slotine_li import PROJECTION, SlotineLi
-
-    kind = type(ctrl)
-    if kind is PD:
-        kp, kd = (np.array(np.broadcast_to(x, (2,)), dtype=float) for x in (ctrl.kp, ctrl.kd))
-        return CompiledSpec(_gains(LAW_PD, pd_kp=kp, pd_kd=kd), None)
-    if kind is ComputedTorque:
-        gn = ctrl.gains
-        lam = float(gn.lam) if ctrl.reference else -1.0
-        law = LAW_CT_ORACLE if ctrl.oracle else LAW_CT
-        return CompiledSpec(_gains(law, ctrl.sigma, kp=float(gn.kp), kd=float(gn.kd), lam=lam), None)
-    if kind is SlotineLi:
-        law = LAW_SLOTINE_ORACLE if ctrl.oracle else LAW_SLOTINE
-        box = {k: np.array(getattr(ctrl, k), dtype=float) for k in ("gamma", "lo", "hi")}
-        g = _gains(
-            law, ctrl.theta0, kd=float(ctrl.kd), lam=float(ctrl.lam), projection=PROJECTION.copy(), **box
-        )
-        return CompiledSpec(g, None)
-    if kind is AdaptiveCT:
-        gn = ctrl.gains
-        boost = {}
-        if ctrl.boost_bandwidth is not None:
-            dkp, dkd = ctrl.boost_gains
-            boost = dict(boost_kp=float(dkp), boost_kd=float(dkd))
-            boost["boost_samples"] = float(ctrl.boost_duration / sample_period)
-        g = _gains(
-            LAW_ADAPTIVE, ctrl.sigma_nominal, kp=float(gn.kp), kd=float(gn.kd), lam=float(gn.lam), **boost
-        )
-        online = ctrl.online
-        if online.sample_period != sample_period:
-            online = dataclasses.replace(online, sample_period=sample_period)
-        return CompiledSpec(g, online)
-    return None
-
-
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _command(g, T, sg_true, sg_model, since_alarm, q, qd, q_d, qd_d, qdd_d, out):  # pragma: no cover
     """The command of law ``g.law`` into ``out (2,)``; ``sg_model`` the trial's estimate."""
     law = g.law
@@ -283,7 +186,7 @@ def closed_loop_block(k0, k1, noise, drop, rc, io, pl, g, ts, es, ec, acc, rec, 
         trial_block(i, k0, k1, noise, drop, rc, io, pl, g, ts, es, ec, acc, rec, alarms)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def segment_of(pl, k):  # pragma: no cover - compiled
     """Payload segment of sample ``k``: the swaps at or before it (indexes ``pl.sigma_seg``)."""
     w = 0
@@ -292,7 +195,7 @@ def segment_of(pl, k):  # pragma: no cover - compiled
     return w
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def measure_sample(io, ts, i, noise, lost, qm, qdm):  # pragma: no cover - compiled
     """Trial i's measured ``qm, qdm (2,)`` from ``noise (4,)`` standard normal; a ``lost``
     measurement is replaced by the last good one (``ts.held_q, ts.held_qd``) and counted.
@@ -307,7 +210,7 @@ def measure_sample(io, ts, i, noise, lost, qm, qdm):  # pragma: no cover - compi
         ts.held_qd[i, 0], ts.held_qd[i, 1] = qdm[0], qdm[1]
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def apply_sample(rc, io, pl, ts, acc, rec, i, k, cmd, tau):  # pragma: no cover - compiled
     """Apply trial i's command ``cmd (2,)`` [N m] over sample k; returns its segment.
 
@@ -353,7 +256,7 @@ def apply_sample(rc, io, pl, ts, acc, rec, i, k, cmd, tau):  # pragma: no cover 
     return s
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def record_estimate(rc, rec, i, k, s, theta):  # pragma: no cover - compiled
     """Trial i's estimate ``theta (7,)`` after sample k (segment s): at the segment's last sample
     into ``rec.sigma_end``, and into ``rec.sigma`` for the first ``rec.sigma.shape[0]`` trials."""
@@ -370,7 +273,9 @@ def trial_block(i, k0, k1, noise, drop, rc, io, pl, g, ts, es, ec, acc, rec, ala
 
     A function of its own because numba 0.68's parallel loop loses the writes its own body makes
     to arrays reached through a NamedTuple (``a.count[i] += 1`` in a ``prange`` body leaves
-    ``a.count`` unchanged); writes made in a function it calls are kept.
+    ``a.count`` unchanged); writes made in a function it calls are kept. The per-sample pieces
+    are inlined into it (``inline="always"``): a call passing the records' arrays costs a
+    reference-count update per array.
     """
     law = g.law
     adaptive = law == LAW_ADAPTIVE

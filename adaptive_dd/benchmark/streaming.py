@@ -30,7 +30,7 @@ def segment_bounds(
     return start, end, settled
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def accumulate_trial(acc, i, k, seg_start, seg_settled, e1, e2, tau, sat_mask):  # pragma: no cover
     """Add sample k of trial i (error ``e1, e2`` [rad], applied ``tau (2,)``, ``sat_mask`` bit j set
     if joint j saturated) to ``acc`` (:class:`~adaptive_dd.closed_loop.types.StreamedSums`);
