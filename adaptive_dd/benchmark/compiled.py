@@ -189,82 +189,102 @@ def closed_loop_block(k0, k1, noise, drop, rc, io, pl, g, ts, es, ec, acc, rec, 
 @njit(cache=True, inline="always")
 def segment_of(pl, k):  # pragma: no cover - compiled
     """Payload segment of sample ``k``: the swaps at or before it (indexes ``pl.sigma_seg``)."""
+    return _segment(pl.swap_k, k)
+
+
+@njit(cache=True, inline="always")
+def _segment(swap_k, k):  # pragma: no cover - compiled
+    """:func:`segment_of` on the plant's ``swap_k``."""
     w = 0
-    while w < pl.swap_k.shape[0] and k >= pl.swap_k[w]:
+    while w < swap_k.shape[0] and k >= swap_k[w]:
         w += 1
     return w
 
 
+# The per-sample glue takes plain arrays, unpacked from the records once per trial block (or
+# per sample on the Python path): each read of an array out of a NamedTuple inside the sample
+# loop costs a reference-count update that numba does not prune (measured: 30 % of the pd loop).
+
+
 @njit(cache=True, inline="always")
-def measure_sample(io, ts, i, noise, lost, qm, qdm):  # pragma: no cover - compiled
-    """Trial i's measured ``qm, qdm (2,)`` from ``noise (4,)`` standard normal; a ``lost``
-    measurement is replaced by the last good one (``ts.held_q, ts.held_qd``) and counted.
-    The estimator gets NaN for a lost one (the caller's choice)."""
-    measure_trial(ts.q[i], ts.qd[i], noise, io.res, io.std, io.quantize_encoder, qm, qdm)
+def measure_sample(
+    q, qd, held_q, held_qd, n_dropped, res, std, quantize, i, noise, lost, qm, qdm
+):  # pragma: no cover
+    """Trial i's measured ``qm, qdm (2,)`` from ``noise (4,)`` standard normal (``res, std,
+    quantize`` of :class:`~adaptive_dd.closed_loop.types.Io`); a ``lost`` measurement is replaced
+    by the last good one (``held_q, held_qd (S, 2)``) and counted in ``n_dropped (S,)``. The
+    estimator gets NaN for a lost one (the caller's choice)."""
+    measure_trial(q[i], qd[i], noise, res, std, quantize, qm, qdm)
     if lost:  # the law gets the last good measurement, the estimator the NaN
-        ts.n_dropped[i] += 1
-        qm[0], qm[1] = ts.held_q[i, 0], ts.held_q[i, 1]
-        qdm[0], qdm[1] = ts.held_qd[i, 0], ts.held_qd[i, 1]
+        n_dropped[i] += 1
+        qm[0], qm[1] = held_q[i, 0], held_q[i, 1]
+        qdm[0], qdm[1] = held_qd[i, 0], held_qd[i, 1]
     else:
-        ts.held_q[i, 0], ts.held_q[i, 1] = qm[0], qm[1]
-        ts.held_qd[i, 0], ts.held_qd[i, 1] = qdm[0], qdm[1]
+        held_q[i, 0], held_q[i, 1] = qm[0], qm[1]
+        held_qd[i, 0], held_qd[i, 1] = qdm[0], qdm[1]
 
 
 @njit(cache=True, inline="always")
-def apply_sample(rc, io, pl, ts, acc, rec, i, k, cmd, tau):  # pragma: no cover - compiled
+def apply_sample(
+    T, max_error, max_speed, q_d, seg_start, seg_settled, lim, lsb, saturate, quantize_dac,
+    sg_true, substeps, friction_code, fparams, q, qd, stuck, slip, z, failed, failed_at,
+    acc, q_rec, qd_rec, tau_rec, sat_rec, i, k, cmd, tau,
+):  # pragma: no cover - compiled  # fmt: skip
     """Apply trial i's command ``cmd (2,)`` [N m] over sample k; returns its segment.
 
-    The divergence rule (a non-finite command or a tracking error beyond ``rc.max_error``
+    The arguments are the fields of :class:`~adaptive_dd.closed_loop.types.RunConstants`,
+    :class:`~adaptive_dd.closed_loop.types.Io`, :class:`TwoLinkPlant` and :class:`TwoLinkTrialState`
+    of the same names, ``sg_true (7,)`` the true base parameters over sample k, the streamed sums
+    ``acc`` and the recording's ``q, qd, tau, saturated`` (``q_rec, qd_rec, tau_rec, sat_rec``).
+    The divergence rule (a non-finite command or a tracking error beyond ``max_error``
     zeroes the command and fails the trial), saturation and D/A into ``tau (2,)`` (zero once
-    failed), the plant step, the runaway rule (non-finite q or ``|qd| >= rc.max_speed``), the
+    failed), the plant step, the runaway rule (non-finite q or ``|qd| >= max_speed``), the
     failure freeze (the last good q, at rest, stuck), the streamed sums and the recording of
-    the first ``rec.q.shape[0]`` trials (q and qd before the step, the applied torque and its
+    the first ``q_rec.shape[0]`` trials (q and qd before the step, the applied torque and its
     saturation). ``cmd`` is zeroed in place when the rule applies.
     """
-    e1, e2 = rc.q_d[k, 0] - ts.q[i, 0], rc.q_d[k, 1] - ts.q[i, 1]
+    e1, e2 = q_d[k, 0] - q[i, 0], q_d[k, 1] - q[i, 1]
     bad = not (np.isfinite(cmd[0]) and np.isfinite(cmd[1]))
-    if max(abs(e1), abs(e2)) > rc.max_error:
+    if max(abs(e1), abs(e2)) > max_error:
         bad = True
     if bad:
         cmd[0], cmd[1] = 0.0, 0.0
-    mask = actuate_trial(cmd, io.lim, io.lsb, io.saturate, io.quantize_dac, tau)
-    if ts.failed[i]:
+    mask = actuate_trial(cmd, lim, lsb, saturate, quantize_dac, tau)
+    if failed[i]:
         tau[0], tau[1] = 0.0, 0.0
-    p1, p2 = ts.q[i, 0], ts.q[i, 1]
-    keep = i < rec.q.shape[0]
+    p1, p2 = q[i, 0], q[i, 1]
+    keep = i < q_rec.shape[0]
     if keep:
-        rec.qd[i, k, 0], rec.qd[i, k, 1] = ts.qd[i, 0], ts.qd[i, 1]
-    step_one(
-        ts.q, ts.qd, ts.stuck, ts.slip, ts.z, i, tau, pl.sigma_seg[segment_of(pl, k)], rc.T, pl.substeps,
-        pl.friction_code, pl.fparams,
-    )  # fmt: skip
-    ok = np.isfinite(ts.q[i, 0]) and np.isfinite(ts.q[i, 1])
-    ok = ok and abs(ts.qd[i, 0]) < rc.max_speed and abs(ts.qd[i, 1]) < rc.max_speed
-    if bad or not ok or ts.failed[i]:
-        if not ts.failed[i]:
-            ts.failed_at[i] = k
-        ts.failed[i] = True
-        ts.q[i, 0] = p1 if np.isfinite(p1) else 0.0
-        ts.q[i, 1] = p2 if np.isfinite(p2) else 0.0
-        ts.qd[i, 0], ts.qd[i, 1] = 0.0, 0.0
-        ts.stuck[i, 0], ts.stuck[i, 1] = True, True
-    s = accumulate_trial(acc, i, k, rc.seg_start, rc.seg_settled, e1, e2, tau, mask)
+        qd_rec[i, k, 0], qd_rec[i, k, 1] = qd[i, 0], qd[i, 1]
+    step_one(q, qd, stuck, slip, z, i, tau, sg_true, T, substeps, friction_code, fparams)
+    ok = np.isfinite(q[i, 0]) and np.isfinite(q[i, 1])
+    ok = ok and abs(qd[i, 0]) < max_speed and abs(qd[i, 1]) < max_speed
+    if bad or not ok or failed[i]:
+        if not failed[i]:
+            failed_at[i] = k
+        failed[i] = True
+        q[i, 0] = p1 if np.isfinite(p1) else 0.0
+        q[i, 1] = p2 if np.isfinite(p2) else 0.0
+        qd[i, 0], qd[i, 1] = 0.0, 0.0
+        stuck[i, 0], stuck[i, 1] = True, True
+    s = accumulate_trial(acc, i, k, seg_start, seg_settled, e1, e2, tau, mask)
     if keep:
-        rec.q[i, k, 0], rec.q[i, k, 1] = rc.q_d[k, 0] - e1, rc.q_d[k, 1] - e2
-        rec.tau[i, k, 0], rec.tau[i, k, 1] = tau[0], tau[1]
-        rec.saturated[i, k, 0], rec.saturated[i, k, 1] = (mask & 1) != 0, (mask & 2) != 0
+        q_rec[i, k, 0], q_rec[i, k, 1] = q_d[k, 0] - e1, q_d[k, 1] - e2
+        tau_rec[i, k, 0], tau_rec[i, k, 1] = tau[0], tau[1]
+        sat_rec[i, k, 0], sat_rec[i, k, 1] = (mask & 1) != 0, (mask & 2) != 0
     return s
 
 
 @njit(cache=True, inline="always")
-def record_estimate(rc, rec, i, k, s, theta):  # pragma: no cover - compiled
+def record_estimate(seg_end, sigma_end, sigma_rec, i, k, s, theta):  # pragma: no cover - compiled
     """Trial i's estimate ``theta (7,)`` after sample k (segment s): at the segment's last sample
-    into ``rec.sigma_end``, and into ``rec.sigma`` for the first ``rec.sigma.shape[0]`` trials."""
-    if k == rc.seg_end[s] - 1:
-        rec.sigma_end[i, s] = theta
-    if i < rec.sigma.shape[0]:
+    (``seg_end``) into ``sigma_end (S, G, 7)``, and into ``sigma_rec`` (the recording's ``sigma``)
+    for its first ``sigma_rec.shape[0]`` trials."""
+    if k == seg_end[s] - 1:
+        sigma_end[i, s] = theta
+    if i < sigma_rec.shape[0]:
         for j in range(7):
-            rec.sigma[i, k, j] = theta[j]
+            sigma_rec[i, k, j] = theta[j]
 
 
 @njit(cache=True)
@@ -273,13 +293,37 @@ def trial_block(i, k0, k1, noise, drop, rc, io, pl, g, ts, es, ec, acc, rec, ala
 
     A function of its own because numba 0.68's parallel loop loses the writes its own body makes
     to arrays reached through a NamedTuple (``a.count[i] += 1`` in a ``prange`` body leaves
-    ``a.count`` unchanged); writes made in a function it calls are kept. The per-sample pieces
-    are inlined into it (``inline="always"``): a call passing the records' arrays costs a
-    reference-count update per array.
+    ``a.count`` unchanged); writes made in a function it calls are kept. The records' fields are
+    read out once, before the sample loop, and the per-sample pieces, inlined into it
+    (``inline="always"``), take them as plain arrays.
     """
     law = g.law
     adaptive = law == LAW_ADAPTIVE
     estimates = adaptive or law == LAW_SLOTINE
+    T, max_error, max_speed, q_d, qd_d, qdd_d = rc.T, rc.max_error, rc.max_speed, rc.q_d, rc.qd_d, rc.qdd_d
+    seg_start, seg_end, seg_settled = rc.seg_start, rc.seg_end, rc.seg_settled
+    lim, lsb, saturate, quantize_dac = io.lim, io.lsb, io.saturate, io.quantize_dac
+    res, std, quantize_encoder = io.res, io.std, io.quantize_encoder
+    sigma_seg, swap_k, substeps, friction_code, fparams = (
+        pl.sigma_seg,
+        pl.swap_k,
+        pl.substeps,
+        pl.friction_code,
+        pl.fparams,
+    )
+    q, qd, stuck, slip, z, failed, failed_at = ts.q, ts.qd, ts.stuck, ts.slip, ts.z, ts.failed, ts.failed_at
+    held_q, held_qd, n_dropped = ts.held_q, ts.held_qd, ts.n_dropped
+    q_rec, qd_rec, tau_rec, sat_rec, sigma_rec, sigma_end = (
+        rec.q,
+        rec.qd,
+        rec.tau,
+        rec.saturated,
+        rec.sigma,
+        rec.sigma_end,
+    )
+    xf, u_last, cnt, tau_prev, theta, P, lam, short, long, sigma_model = es
+    ci, cf, A, B, C, D, d, group, split_rows = ec
+    alarm_t, n_alarms = alarms.times, alarms.count
     qm = np.empty(2)
     qdm = np.empty(2)
     cmd = np.empty(2)
@@ -289,24 +333,28 @@ def trial_block(i, k0, k1, noise, drop, rc, io, pl, g, ts, es, ec, acc, rec, ala
     has_drop = drop.shape[1] > 0
     for k in range(k0, k1):
         lost = has_drop and drop[i, k - k0]
-        measure_sample(io, ts, i, noise[i, k - k0], lost, qm, qdm)
-        model = es.theta[i] if law == LAW_SLOTINE else es.sigma_model[i]
-        _command(
-            g, rc.T, pl.sigma_seg[segment_of(pl, k)], model, es.cnt[i, C_SINCE_ALARM], qm, qdm, rc.q_d[k],
-            rc.qd_d[k], rc.qdd_d[k], cmd,
+        measure_sample(
+            q, qd, held_q, held_qd, n_dropped, res, std, quantize_encoder, i, noise[i, k - k0], lost, qm, qdm
+        )
+        model = theta[i] if law == LAW_SLOTINE else sigma_model[i]
+        sg_true = sigma_seg[_segment(swap_k, k)]
+        _command(g, T, sg_true, model, cnt[i, C_SINCE_ALARM], qm, qdm, q_d[k], qd_d[k], qdd_d[k], cmd)
+        s = apply_sample(
+            T, max_error, max_speed, q_d, seg_start, seg_settled, lim, lsb, saturate, quantize_dac,
+            sg_true, substeps, friction_code, fparams, q, qd, stuck, slip, z, failed, failed_at,
+            acc, q_rec, qd_rec, tau_rec, sat_rec, i, k, cmd, tau,
         )  # fmt: skip
-        s = apply_sample(rc, io, pl, ts, acc, rec, i, k, cmd, tau)
         if adaptive:
             alarm = online_step_trial(
-                i, es.xf, es.u_last, es.cnt, es.tau_prev, es.theta, es.P, es.lam, es.short, es.long,
-                es.sigma_model, lost_q if lost else qm, lost_q if lost else qdm, tau,
-                ec.ci, ec.cf, ec.A, ec.B, ec.C, ec.D, ec.d, ec.group, ec.split_rows, eps,
+                i, xf, u_last, cnt, tau_prev, theta, P, lam, short, long,
+                sigma_model, lost_q if lost else qm, lost_q if lost else qdm, tau,
+                ci, cf, A, B, C, D, d, group, split_rows, eps,
             )  # fmt: skip
-            if alarm == 1 and alarms.count[i] < alarms.times.shape[1]:
-                alarms.times[i, alarms.count[i]] = k * rc.T
-                alarms.count[i] += 1
+            if alarm == 1 and n_alarms[i] < alarm_t.shape[1]:
+                alarm_t[i, n_alarms[i]] = k * T
+                n_alarms[i] += 1
         if estimates:
-            record_estimate(rc, rec, i, k, s, es.theta[i])
+            record_estimate(seg_end, sigma_end, sigma_rec, i, k, s, theta[i])
 
 
 @njit(cache=True)
@@ -315,7 +363,10 @@ def measure_batch(io, ts, noise, drop, qm, qdm, qm_obs, qdm_obs):  # pragma: no 
     or ``(0,)``; the law's ``qm, qdm (S, 2)``, the estimator's ``qm_obs, qdm_obs`` (NaN if lost)."""
     for i in range(ts.q.shape[0]):
         lost = drop.shape[0] > 0 and drop[i]
-        measure_sample(io, ts, i, noise[i], lost, qm[i], qdm[i])
+        measure_sample(
+            ts.q, ts.qd, ts.held_q, ts.held_qd, ts.n_dropped, io.res, io.std, io.quantize_encoder, i,
+            noise[i], lost, qm[i], qdm[i],
+        )  # fmt: skip
         for j in range(2):
             qm_obs[i, j] = np.nan if lost else qm[i, j]
             qdm_obs[i, j] = np.nan if lost else qdm[i, j]
@@ -327,8 +378,14 @@ def apply_batch(rc, io, pl, ts, acc, rec, k, cmd, tau):  # pragma: no cover - co
     controller's command (zeroed where the rule applies), ``tau (S, 2)`` the applied torque;
     returns the segment of sample k."""
     s = 0
+    sg_true = pl.sigma_seg[segment_of(pl, k)]
     for i in range(ts.q.shape[0]):
-        s = apply_sample(rc, io, pl, ts, acc, rec, i, k, cmd[i], tau[i])
+        s = apply_sample(
+            rc.T, rc.max_error, rc.max_speed, rc.q_d, rc.seg_start, rc.seg_settled, io.lim, io.lsb,
+            io.saturate, io.quantize_dac, sg_true, pl.substeps, pl.friction_code, pl.fparams, ts.q, ts.qd,
+            ts.stuck, ts.slip, ts.z, ts.failed, ts.failed_at, acc, rec.q, rec.qd, rec.tau, rec.saturated,
+            i, k, cmd[i], tau[i],
+        )  # fmt: skip
     return s
 
 
@@ -336,4 +393,4 @@ def apply_batch(rc, io, pl, ts, acc, rec, k, cmd, tau):  # pragma: no cover - co
 def estimate_batch(rc, rec, k, s, theta):  # pragma: no cover - compiled
     """:func:`record_estimate` for every trial (the Python path): ``theta (S, 7)``."""
     for i in range(theta.shape[0]):
-        record_estimate(rc, rec, i, k, s, theta[i])
+        record_estimate(rc.seg_end, rec.sigma_end, rec.sigma, i, k, s, theta[i])
