@@ -126,6 +126,26 @@ class TwoLinkTrialState(NamedTuple):
     n_dropped: NDArray[np.int64]
 
 
+COPY_PROPAGATE_ONLY = {
+    k: False
+    for k in (
+        "comprehension",
+        "prange",
+        "setitem",
+        "reduction",
+        "numpy",
+        "stencil",
+        "fusion",
+        "inplace_binop",
+    )
+}
+"""numba's ``parallel`` options with every conversion off: what is left is the parallel pipeline's
+copy propagation, which removes the argument copies (``param = caller_var``) that inlining
+leaves in the sample loop; each copy of an array is a reference-count update that numba does not
+prune (measured: pd 0.54 -> 0.43 us per trial-sample, benchmarks/two_link_speed_ab.py). Nothing
+runs in parallel: the function has no ``prange`` and no array expression is converted."""
+
+
 @njit(cache=True, inline="always")
 def _command(g, T, sg_true, sg_model, since_alarm, q, qd, q_d, qd_d, qdd_d, out):  # pragma: no cover
     """The command of law ``g.law`` into ``out (2,)``; ``sg_model`` the trial's estimate."""
@@ -287,7 +307,7 @@ def record_estimate(seg_end, sigma_end, sigma_rec, i, k, s, theta):  # pragma: n
             sigma_rec[i, k, j] = theta[j]
 
 
-@njit(cache=True)
+@njit(cache=True, parallel=COPY_PROPAGATE_ONLY)
 def trial_block(i, k0, k1, noise, drop, rc, io, pl, g, ts, es, ec, acc, rec, alarms):  # pragma: no cover
     """Samples ``k0 .. k1 - 1`` of trial i (see :func:`closed_loop_block`).
 
@@ -295,7 +315,8 @@ def trial_block(i, k0, k1, noise, drop, rc, io, pl, g, ts, es, ec, acc, rec, ala
     to arrays reached through a NamedTuple (``a.count[i] += 1`` in a ``prange`` body leaves
     ``a.count`` unchanged); writes made in a function it calls are kept. The records' fields are
     read out once, before the sample loop, and the per-sample pieces, inlined into it
-    (``inline="always"``), take them as plain arrays.
+    (``inline="always"``), take them as plain arrays; compiled with :data:`COPY_PROPAGATE_ONLY`
+    so that the inlined calls' argument copies cost no reference-count update per sample.
     """
     law = g.law
     adaptive = law == LAW_ADAPTIVE
