@@ -13,7 +13,10 @@ written once (:mod:`adaptive_dd.benchmark.compiled`), so the two paths agree to 
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
+from numba.core.errors import NumbaPerformanceWarning
 
 from adaptive_dd.benchmark.compiled import (
     LAW_ADAPTIVE,
@@ -120,7 +123,12 @@ def run_compiled(name, ctrl, spec: CompiledSpec, scenario, idx, reference, keep:
     for k0 in range(0, N, CHUNK):
         k1 = min(N, k0 + CHUNK)
         noise, drop = draws.block(k1 - k0)
-        closed_loop_block(k0, k1, noise, drop, rc, io, pl, spec.gains, ts, es, ec, run.acc, rec, alarms)
+        with warnings.catch_warnings():  # trial_block asks for numba's parallel pipeline on purpose
+            warnings.filterwarnings(  # (COPY_PROPAGATE_ONLY); its compilation warns that nothing ran parallel
+                "ignore", message=r"\s*The keyword argument 'parallel=True' was specified",
+                category=NumbaPerformanceWarning,
+            )  # fmt: skip
+            closed_loop_block(k0, k1, noise, drop, rc, io, pl, spec.gains, ts, es, ec, run.acc, rec, alarms)
         if bar is not None:
             bar.update(k1 - k0)
     if adaptive:
