@@ -23,8 +23,9 @@ from typing import NamedTuple
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from adaptive_dd.benchmark.runner import _payload, _sensor, _trial_rngs, run_benchmark
+from adaptive_dd.benchmark.runner import run_benchmark
 from adaptive_dd.benchmark.scenario import Scenario, load_scenario
+from adaptive_dd.benchmark.trials import payload_schedule, sensor_of, trial_rngs
 from adaptive_dd.errors import SignalError
 from adaptive_dd.plant.simulator import ArmSimulator
 
@@ -73,12 +74,12 @@ class Simulation:
         self._sim = ArmSimulator(
             1,
             sc.n_samples,
-            _trial_rngs(sc.seed, [self.seed_index]),
+            trial_rngs(sc.seed, [self.seed_index]),
             arm=sc.arm,
-            payload=_payload(sc),
+            payload=payload_schedule(sc),
             sample_period=sc.sample_period,
             substeps=sc.substeps,
-            sensor=_sensor(sc),
+            sensor=sensor_of(sc),
             q0=q_d[0],
             qd0=qd_d[0],
         )

@@ -157,7 +157,7 @@ def _controllers(src: str, sw: dict, base: Scenario) -> tuple[str, ...]:
     for c in ctrls:
         if c not in CONTROLLERS:
             raise SweepError(
-                f"{src}: key 'sweep.controllers': unknown controller {c!r}; known: {CONTROLLERS}"
+                f"{src}: key 'sweep.controllers': unknown controller {c!r}; known: {tuple(CONTROLLERS)}"
             )
     if len(set(ctrls)) != len(ctrls):
         raise SweepError(f"{src}: key 'sweep.controllers' lists a controller twice: {ctrls}")

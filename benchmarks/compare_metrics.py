@@ -1,62 +1,72 @@
-"""Compare two ``metrics.json`` of ``adaptive-dd benchmark`` number by number.
+"""Compare two benchmark ``metrics.json`` files number by number (a refactoring's safety net).
 
-    python benchmarks/compare_metrics.py BEFORE/metrics.json AFTER/metrics.json
+Usage::
 
-Prints the worst relative difference over every float (wall times and provenance left out)
-and any other value that differs; exits 1 if the structures differ. Used to check that a speed
-change leaves the results unchanged (e.g. the UR5 scenario at 20 seeds, main against a branch).
+    python benchmarks/compare_metrics.py BEFORE.json AFTER.json [--rtol 1e-9]
+
+Every number (ratios, RMS, alarms, delays, masses, ...) must agree to ``rtol`` relative
+(``atol = rtol`` near zero); NaN/None must match; keys must match. The provenance block
+(commit, command line, wall time, engines), wall-time fields and the scenario's file path are
+left out. Prints the
+count of numbers compared and each difference; exits 1 on any difference.
 """
 
 from __future__ import annotations
 
+import argparse
 import json
 import math
 import sys
 
-SKIP = ("wall_time", "provenance")
+SKIP = {"provenance", "wall_time", "wall_time_s", "wall time"}
 
 
-def compare(a, b, path: str = "") -> tuple[int, float, str, list[str]]:
-    """(floats compared, worst relative difference, where, other differences)."""
-    count, worst, where, other = 0, 0.0, "", []
-    if any(s in path for s in SKIP):
-        return count, worst, where, other
+def walk(a, b, path, out, stats):
     if isinstance(a, dict) and isinstance(b, dict):
         if set(a) != set(b):
-            raise ValueError(f"{path}: keys differ: {sorted(set(a) ^ set(b))}")
-        parts = [compare(a[k], b[k], f"{path}/{k}") for k in a]
+            out.append(f"{path}: keys differ: {sorted(set(a) ^ set(b))}")
+        for k in sorted(set(a) & set(b)):
+            if k in SKIP or "wall" in k or (k == "scenario" and isinstance(a[k], str)):
+                continue  # the scenario's path differs between worktrees
+            walk(a[k], b[k], f"{path}.{k}", out, stats)
     elif isinstance(a, list) and isinstance(b, list):
         if len(a) != len(b):
-            raise ValueError(f"{path}: lengths {len(a)} and {len(b)}")
-        parts = [compare(x, y, f"{path}[{i}]") for i, (x, y) in enumerate(zip(a, b, strict=True))]
-    elif isinstance(a, float) and isinstance(b, float):
+            out.append(f"{path}: lengths {len(a)} != {len(b)}")
+        for i, (x, y) in enumerate(zip(a, b, strict=False)):
+            walk(x, y, f"{path}[{i}]", out, stats)
+    elif isinstance(a, bool) or isinstance(b, bool) or isinstance(a, str) or a is None or b is None:
+        stats["other"] += 1
+        if a != b:
+            out.append(f"{path}: {a!r} != {b!r}")
+    elif isinstance(a, int | float) and isinstance(b, int | float):
+        stats["numbers"] += 1
         if math.isnan(a) or math.isnan(b):
-            return 1, (0.0 if math.isnan(a) and math.isnan(b) else math.inf), path, other
-        r = abs(a - b) / max(abs(a), abs(b), 1e-300)
-        return 1, r, path, other
-    else:
-        return 0, 0.0, "", ([] if a == b else [f"{path}: {a!r} != {b!r}"])
-    for c, w, p, o in parts:
-        count += c
-        other += o
-        if w > worst:
-            worst, where = w, p
-    return count, worst, where, other
+            if not (math.isnan(a) and math.isnan(b)):
+                out.append(f"{path}: {a!r} != {b!r}")
+        elif abs(a - b) > stats["rtol"] * max(abs(a), abs(b), 1.0):
+            out.append(f"{path}: {a!r} != {b!r} (rel {abs(a - b) / max(abs(a), abs(b), 1e-300):.2e})")
+    elif a != b:
+        out.append(f"{path}: {a!r} != {b!r}")
 
 
 def main() -> int:
-    with open(sys.argv[1], encoding="utf-8") as fa, open(sys.argv[2], encoding="utf-8") as fb:
-        a, b = json.load(fa), json.load(fb)
-    try:
-        count, worst, where, other = compare(a, b)
-    except ValueError as exc:
-        print(f"structures differ: {exc}")
-        return 1
-    for line in other:
-        print(f"differs: {line}")
-    at = f" at {where}" if where else ""
-    print(f"{count} floats compared; worst relative difference {worst:.3g}{at}")
-    return 0
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("before")
+    ap.add_argument("after")
+    ap.add_argument("--rtol", type=float, default=1e-9)
+    args = ap.parse_args()
+    with open(args.before) as f:
+        a = json.load(f)
+    with open(args.after) as f:
+        b = json.load(f)
+    out: list[str] = []
+    stats = {"numbers": 0, "other": 0, "rtol": args.rtol}
+    walk(a, b, "", out, stats)
+    print(f"compared {stats['numbers']} numbers and {stats['other']} other values at rtol {args.rtol:g}")
+    for line in out[:50]:
+        print("DIFF", line)
+    print("agree" if not out else f"{len(out)} differences")
+    return 1 if out else 0
 
 
 if __name__ == "__main__":

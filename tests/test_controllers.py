@@ -157,3 +157,22 @@ def test_bad_gains_and_detector():
         Gains(damping=-1.0)
     with pytest.raises(ParameterError, match="boost_bandwidth"):
         adaptive_ct(boost_bandwidth=-1.0)
+
+
+def test_each_builtin_owns_its_compiled_form_and_a_subclass_runs_in_python():
+    from adaptive_dd.controllers import CONTROLLERS, make_controller
+    from adaptive_dd.controllers.compiled_form import LAW_ADAPTIVE, LAW_PD, compiled_spec
+
+    specs = {n: compiled_spec(make_controller(n), 0.001) for n in CONTROLLERS}
+    assert specs["pd"].law == LAW_PD and specs["adaptive_ct"].law == LAW_ADAPTIVE
+    assert len({s.law for s in specs.values()}) == 6  # ct_oracle(_textbook), adaptive_ct(_paper) share
+    pd = make_controller("pd")
+    np.testing.assert_array_equal(compiled_spec(pd, 0.001).gains.pd_kd, pd.kd)
+
+    class Mine(type(pd)):
+        pass
+
+    assert compiled_spec(Mine(), 0.001) is None  # its Python form may differ: the Python path
+    ac = compiled_spec(make_controller("adaptive_ct", options={"boost_duration": 0.1}), 0.002)
+    assert ac.gains.boost_samples == pytest.approx(50.0) and ac.online.sample_period == 0.002
+    assert ac.gains.lam == pytest.approx(make_controller("adaptive_ct").gains.lam)

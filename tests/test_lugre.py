@@ -126,6 +126,11 @@ def test_compiled_and_python_closed_loops_agree_on_the_lugre_plant():
     for name in sc.controllers:
         a, b = rc.runs[name], rp.runs[name]
         np.testing.assert_allclose(a.q, b.q, rtol=0, atol=1e-12)
-        np.testing.assert_allclose(a.acc, b.acc, rtol=1e-12, atol=1e-12)
+        np.testing.assert_allclose(_acc(a), _acc(b), rtol=1e-12, atol=1e-12)
     assert rc.runs["adaptive_ct"].alarm_times == rp.runs["adaptive_ct"].alarm_times
     assert all(any(0 <= x - 1.5 < 0.3 for x in tr) for tr in rc.runs["adaptive_ct"].alarm_times)
+
+
+def _acc(run):
+    """A run's streamed sums (``StreamedSums`` but the error norm) as one flat array."""
+    return np.concatenate([np.ravel(x) for x in run.acc[:-1]])

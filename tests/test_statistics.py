@@ -20,9 +20,9 @@ from adaptive_dd.benchmark.metrics import (
     segment_failed,
 )
 from adaptive_dd.benchmark.report import format_report
-from adaptive_dd.benchmark.runner import BenchmarkResult, ControllerRun
 from adaptive_dd.benchmark.scenario import load_scenario
 from adaptive_dd.benchmark.streaming import segment_bounds
+from adaptive_dd.benchmark.types import BenchmarkResult, ControllerRun
 
 T = 0.001
 SWAP = 1.0
@@ -91,18 +91,23 @@ def _fake_result(seed_indices=(10, 11, 12, 13), sat_oracle=(0.0, 0.0)):
     S = len(seed_indices)
 
     def run(name, rms, alarms, floor, sat):
-        acc = np.zeros((S, 2, 7))
+        from adaptive_dd.closed_loop.types import StreamedSums
+
         rms = np.asarray(rms, float)
-        acc[..., 0] = rms**2 * n
-        acc[..., 1] = acc[..., 2] = acc[..., 0] / 2
-        acc[..., 3] = 2 * rms
-        acc[..., 4] = n
-        acc[..., 5] = np.asarray(sat)[None, :] * n
-        acc[..., 6] = rms**2 * (end - settled)
+        e2 = rms**2 * n
+        acc = StreamedSums(
+            sum_e2=e2,
+            sum_e2_joint=np.stack([e2 / 2, e2 / 2], axis=-1),
+            max_e=2 * rms,
+            sum_tau2=np.broadcast_to(n, (S, 2)).copy(),
+            n_saturated=np.broadcast_to(np.asarray(sat)[None, :] * n, (S, 2)).copy(),
+            sum_e2_settled=rms**2 * (end - settled),
+            e_norm=np.zeros((S, N), dtype=np.float32),
+        )
         return ControllerRun(
             name=name,
             acc=acc,
-            e_norm=np.zeros((S, N), dtype=np.float32),
+            e_norm=acc.e_norm,
             sigma_end=None,
             failed=np.zeros(S, dtype=bool),
             failed_at=np.full(S, -1),
@@ -183,12 +188,12 @@ def test_a_failed_trial_is_left_out_after_its_failure_only():
 
 def test_one_conversion_of_seconds_to_samples():
     """A swap at 2.5005 s with T = 1 ms: the plant changes at sample 2501 and so does the segment."""
-    from adaptive_dd.benchmark.runner import _true_sigma
+    from adaptive_dd.benchmark.trials import true_sigma
     from adaptive_dd.plant.sampling import first_sample
 
     assert first_sample(2.5005, 1e-3) == 2501 and first_sample(2.0, 1e-3) == 2000
     start, end, _ = segment_bounds([(0.0, 2.5005, 0.0), (2.5005, 5.0, 1.0)], 1e-3, 0.5)
     assert start.tolist() == [0, 2501] and end.tolist() == [2501, 5000]
     sc = dataclasses.replace(load_scenario(), seeds=1, duration=5.0, swap_times=(2.5005,), swap_masses=(1.0,))
-    _, mass = _true_sigma(sc, np.arange(sc.n_samples) * T)
+    _, mass = true_sigma(sc, np.arange(sc.n_samples) * T)
     assert mass[2500] == 0.0 and mass[2501] == 1.0

@@ -62,8 +62,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from adaptive_dd.benchmark.runner import SETTLE, BenchmarkResult
+from adaptive_dd.benchmark.provenance import provenance
 from adaptive_dd.benchmark.streaming import segment_bounds
+from adaptive_dd.benchmark.types import SETTLE, BenchmarkResult
 from adaptive_dd.plant.sampling import first_sample
 
 __all__ = [
@@ -152,7 +153,9 @@ def per_seed_segment_metrics(res: BenchmarkResult, run, recovery: bool = True) -
         return res.cache[key]
     sc = res.scenario
     T = sc.sample_period
-    if hasattr(run.acc, "sum_e2_joint"):  # an N-joint run (adaptive_dd.closed_loop)
+    from adaptive_dd.plant.serial_arm import SerialArm
+
+    if isinstance(sc.arm, SerialArm):  # an N-joint run (adaptive_dd.closed_loop)
         from adaptive_dd.closed_loop.metrics import serial_segment_metrics
 
         out = serial_segment_metrics(res, run)
@@ -163,13 +166,13 @@ def per_seed_segment_metrics(res: BenchmarkResult, run, recovery: bool = True) -
     n, n_set = (end - start).astype(float), (end - settled).astype(float)
     acc = run.acc
     out = {
-        "rms_error": segment_rms(acc[..., 0], n),
-        "rms_error_joint1": segment_rms(acc[..., 1], n),
-        "rms_error_joint2": segment_rms(acc[..., 2], n),
-        "max_error": acc[..., 3].copy(),
-        "rms_torque": segment_rms(acc[..., 4], n),
-        "saturation_fraction": acc[..., 5] / n,
-        "rms_error_settled": segment_rms(acc[..., 6], n_set),
+        "rms_error": segment_rms(acc.sum_e2, n),
+        "rms_error_joint1": segment_rms(acc.sum_e2_joint[..., 0], n),
+        "rms_error_joint2": segment_rms(acc.sum_e2_joint[..., 1], n),
+        "max_error": acc.max_e.copy(),
+        "rms_torque": segment_rms(acc.sum_tau2, n),
+        "saturation_fraction": acc.n_saturated / n,
+        "rms_error_settled": segment_rms(acc.sum_e2_settled, n_set),
     }
     if recovery:
         out["recovery_time"] = _recovery_times(run.e_norm, start, end, T)
@@ -234,6 +237,7 @@ def release_error_norm(res: BenchmarkResult, run, keep: int = 0) -> None:
     per_seed_segment_metrics(res, run)
     error_trace(res, run)
     run.e_norm = run.e_norm[:keep].copy()
+    run.acc = run.acc._replace(e_norm=run.e_norm)  # the streamed sums held the same array
 
 
 def false_alarm_counts(alarm_times, swaps) -> list[int]:
@@ -284,8 +288,7 @@ def compute_metrics(res: BenchmarkResult) -> dict:
                 segs[-1]["com_estimate"] = [_mean(m[f"com_estimate_{a}"][:, i]) for a in "xyz"]
                 segs[-1]["com_true"] = _com_true(sc, i)
         ok = ~run.failed if not run.error else np.zeros_like(run.failed)
-        sums = run.acc.sum_e2 if hasattr(run.acc, "sum_e2") else run.acc[..., 0]
-        total = segment_rms(sums.sum(axis=1), sc.n_samples)
+        total = segment_rms(run.acc.sum_e2.sum(axis=1), sc.n_samples)
         out[name] = {
             "rms_error": _mean(np.where(ok, total, np.nan)),
             "failed_trials": int(run.failed.sum()),
@@ -297,7 +300,6 @@ def compute_metrics(res: BenchmarkResult) -> dict:
         }
     _add_seed_statistics(res, out, per)
     _add_information_times(res, out)
-    from adaptive_dd.benchmark.results import provenance
 
     return {
         "scenario": sc.source,

@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from adaptive_dd.benchmark.metrics import SATURATION_LIMIT
-from adaptive_dd.benchmark.runner import BenchmarkResult
+from adaptive_dd.benchmark.types import BenchmarkResult
 from adaptive_dd.outputs import atomic_write
 
 __all__ = ["format_report", "write_csv", "write_json"]

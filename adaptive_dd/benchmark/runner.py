@@ -5,7 +5,8 @@ controller c (common random numbers), so controllers are compared on identical n
 Built-in controllers run on the compiled path (:mod:`adaptive_dd.benchmark.compiled`: the
 whole loop of a trial in one numba call, trials in parallel); any other controller runs on
 the Python path (one vectorised batch per controller, a Python call per sample). Both
-paths call the same compiled pieces and agree to rounding (a test holds them to 1e-12).
+paths (:mod:`adaptive_dd.benchmark.drivers`) call the same compiled per-sample glue and agree
+to rounding (a test holds them to 1e-12).
 
 Memory does not grow with seeds x samples beyond the error norm (float32, for recovery
 times): metrics are accumulated per trial and segment as the run goes
@@ -20,141 +21,27 @@ of the benchmark goes on.
 
 from __future__ import annotations
 
-import dataclasses
 import time
 from collections.abc import Sequence
-from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
-from numpy.typing import NDArray
 
+from adaptive_dd.benchmark.compiled import compiled_spec
+from adaptive_dd.benchmark.drivers import run_compiled, run_python
 from adaptive_dd.benchmark.scenario import Scenario
-from adaptive_dd.benchmark.streaming import N_ACC, accumulate_batch, segment_bounds
+from adaptive_dd.benchmark.trials import true_sigma
+from adaptive_dd.benchmark.types import (
+    ENGINES,
+    MAX_ERROR,
+    SETTLE,
+    BenchmarkResult,
+    ControllerRun,
+)
 from adaptive_dd.controllers import Controller, Gains, controller_label, make_controller
-from adaptive_dd.controllers.base import declared
-from adaptive_dd.errors import ParameterError, SignalError
-from adaptive_dd.plant.sampling import first_sample
-from adaptive_dd.plant.simulator import ArmSimulator, PayloadSchedule
+from adaptive_dd.errors import ParameterError
 
 __all__ = ["ENGINES", "MAX_ERROR", "SETTLE", "BenchmarkResult", "ControllerRun", "run_benchmark"]
-
-Array = NDArray[np.float64]
-MAX_ERROR = 3.0
-"""Tracking error [rad] beyond which a trial counts as diverged."""
-SETTLE = 0.5
-"""[s] left out at the start of each segment for ``rms_error_settled``."""
-ENGINES = ("auto", "python", "compiled")
-CHUNK = 1024
-"""Samples per block of drawn noise (and per call of the compiled loop)."""
-
-
-@dataclass
-class ControllerRun:
-    """One controller's trials.
-
-    Attributes
-    ----------
-    name : str
-    acc : ndarray (n_seeds, n_segments, 7)
-        Streamed sums per trial and segment (:data:`~adaptive_dd.benchmark.streaming.ACC_FIELDS`).
-    e_norm : ndarray of float32 (n_seeds, n_samples)
-        Tracking error norm ``|q_d - q|`` of the true q [rad].
-    sigma_end : ndarray (n_seeds, n_segments, 7) or None
-        Estimate at the last sample of each segment (controllers with an estimate).
-    failed : bool (n_seeds,); failed_at : sample index or -1
-    error : message if the controller raised, else ""
-    alarm_times : per trial, the times [s] a change detector fired (or None)
-    floor : name of the controller this one is measured against (or None)
-    q, qd, tau, saturated, sigma_hat : trajectories ``(n_kept, n_samples, ...)`` of the first
-        seeds (true q [rad] and qd [rad/s], applied torque [N m], saturation, estimate), or None
-    engine : "python" or "compiled"
-    dropped : int (n_seeds,)
-        Samples whose measurement was lost (scenario ``noise.dropout``); the control law gets
-        the last good measurement, the estimator the NaN (skipped and counted).
-    skipped : int (n_seeds,) or None
-        Samples the controller's estimator skipped as non-finite.
-    """
-
-    name: str
-    acc: Array
-    e_norm: NDArray[np.float32]
-    sigma_end: Array | None
-    failed: NDArray[np.bool_]
-    failed_at: NDArray[np.int_]
-    error: str = ""
-    alarm_times: list | None = None
-    floor: str | None = None
-    q: Array | None = None
-    qd: Array | None = None
-    tau: Array | None = None
-    saturated: NDArray[np.bool_] | None = None
-    sigma_hat: Array | None = None
-    engine: str = "python"
-    dropped: NDArray[np.int_] | None = None
-    skipped: NDArray[np.int_] | None = None
-
-
-@dataclass
-class BenchmarkResult:
-    """Everything a benchmark run produced; see :mod:`adaptive_dd.benchmark.metrics`."""
-
-    scenario: Scenario
-    t: Array
-    q_d: Array
-    sigma_true: Array  # (n_samples, p): 7 for the two-link arm, arm.base.count for a URDF arm
-    mass: Array  # (n_samples,)
-    runs: dict = field(default_factory=dict)
-    wall_time: float = 0.0
-    seed_indices: tuple = ()
-    cache: dict = field(default_factory=dict, repr=False, compare=False)
-    """Derived per-seed arrays, computed once (``metrics.per_seed_segment_metrics``)."""
-
-    def to_frame(self):
-        """One row per controller x seed x segment (pandas DataFrame; see
-        :func:`adaptive_dd.benchmark.results.to_frame`)."""
-        from adaptive_dd.benchmark.results import to_frame
-
-        return to_frame(self)
-
-    def summary(self):
-        """Per controller and segment: mean, median, p90, max of the per-seed ratio to the floor."""
-        from adaptive_dd.benchmark.results import summary_frame
-
-        return summary_frame(self)
-
-    def metrics(self) -> dict:
-        """The metrics of :func:`adaptive_dd.benchmark.metrics.compute_metrics` (the JSON layout)."""
-        from adaptive_dd.benchmark.metrics import compute_metrics
-
-        return compute_metrics(self)
-
-
-def _trial_rngs(seed: int, indices: Sequence[int]) -> list[np.random.Generator]:
-    return [np.random.default_rng([int(seed), int(i)]) for i in indices]
-
-
-def _payload(scenario: Scenario) -> PayloadSchedule:
-    return PayloadSchedule(scenario.swap_times, scenario.swap_masses, radius=scenario.payload_radius)
-
-
-def _sensor(scenario: Scenario):
-    """The arm's sensors with the scenario's noise."""
-    return dataclasses.replace(
-        scenario.arm.sensor,
-        position_variance=scenario.position_variance,
-        velocity_variance=scenario.velocity_variance,
-    )
-
-
-def _true_sigma(scenario: Scenario, t: Array) -> tuple[Array, Array]:
-    """True sigma and payload mass at every sample, as the simulator applies them."""
-    T = scenario.sample_period
-    k_sw = [first_sample(at, T) for at in scenario.swap_times]
-    masses = np.array([0.0, *scenario.swap_masses])
-    w = np.searchsorted(np.array(k_sw, dtype=np.int64), np.arange(t.size), side="right")
-    mass = masses[w]
-    return scenario.arm.sigma_with_payload(mass, scenario.payload_radius), mass
 
 
 def run_benchmark(
@@ -226,23 +113,20 @@ def run_benchmark(
     N, T = scenario.n_samples, scenario.sample_period
     t = np.arange(N) * T
     q_d, qd_d, qdd_d = scenario.reference.sample(t)
-    sigma_true, mass = _true_sigma(scenario, t)
+    sigma_true, mass = true_sigma(scenario, t)
     res = BenchmarkResult(scenario, t, q_d, sigma_true, mass, seed_indices=idx)
-    from adaptive_dd.benchmark.compiled import compiled_spec
-
     specs = {n: (compiled_spec(c, T) if engine != "python" else None) for n, c in ctrls.items()}
     if engine == "compiled" and any(s is None for s in specs.values()):
         names = [n for n, s in specs.items() if s is None]
         raise ParameterError(f"engine='compiled': no compiled path for {names}; use engine='auto'")
-    ref = np.ascontiguousarray(np.concatenate((q_d, qd_d, qdd_d), axis=1))
     bar = _progress(progress, len(ctrls) * N, scenario.name)
     for name, ctrl in ctrls.items():
         if specs[name] is not None:
-            from adaptive_dd.benchmark.compiled_runner import run_compiled
-
-            run = run_compiled(name, ctrl, specs[name], scenario, idx, ref, keep_trajectories, bar)
+            run = run_compiled(
+                name, ctrl, specs[name], scenario, idx, (q_d, qd_d, qdd_d), keep_trajectories, bar
+            )
         else:
-            run = _run_python(name, ctrl, scenario, idx, (q_d, qd_d, qdd_d), keep_trajectories, bar)
+            run = run_python(name, ctrl, scenario, idx, (q_d, qd_d, qdd_d), keep_trajectories, bar)
         res.runs[name] = run
         if on_run is not None:
             on_run(res, run)
@@ -252,126 +136,9 @@ def run_benchmark(
     return res
 
 
-def _dropout_rngs(scenario: Scenario, indices) -> list[np.random.Generator] | None:
-    """Generators of the measurement dropouts, one per trial, apart from the sensor noise's."""
-    if scenario.dropout <= 0:
-        return None
-    return [np.random.default_rng([int(scenario.seed), int(i), 1]) for i in indices]
-
-
-def _dropout_block(rngs, p: float, n: int) -> NDArray[np.bool_]:
-    """The next ``n`` samples' dropouts of every trial, ``(n_trials, n)`` (drawn block by block)."""
-    return np.ascontiguousarray(np.stack([g.random(n) < p for g in rngs]))
-
-
 def _progress(show: bool, total: int, name: str):
     if not show:
         return None
     from tqdm.auto import tqdm
 
     return tqdm(total=total, desc=f"benchmark {name}", unit="sample", mininterval=0.5, unit_scale=True)
-
-
-def _new_run(
-    name: str, ctrl, S: int, n_seg: int, N: int, keep: int, adaptive: bool, engine: str
-) -> ControllerRun:
-    K = min(keep, S)
-    return ControllerRun(
-        name=name,
-        acc=np.zeros((S, n_seg, N_ACC)),
-        e_norm=np.zeros((S, N), dtype=np.float32),
-        sigma_end=np.full((S, n_seg, 7), np.nan) if adaptive else None,
-        failed=np.zeros(S, dtype=bool),
-        failed_at=np.full(S, -1),
-        floor=declared(ctrl, "floor"),
-        q=np.zeros((K, N, 2)),
-        qd=np.zeros((K, N, 2)),
-        tau=np.zeros((K, N, 2)),
-        saturated=np.zeros((K, N, 2), dtype=bool),
-        sigma_hat=np.full((K, N, 7), np.nan) if adaptive else None,
-        engine=engine,
-    )
-
-
-def _run_python(name, ctrl, scenario, idx, reference, keep, bar) -> ControllerRun:
-    """One controller's trials on the Python path (a vectorised batch, one call per sample)."""
-    S, N, T = len(idx), scenario.n_samples, scenario.sample_period
-    q_d, qd_d, qdd_d = reference
-    sim = ArmSimulator(
-        S,
-        N,
-        _trial_rngs(scenario.seed, idx),
-        arm=scenario.arm,
-        payload=_payload(scenario),
-        sample_period=T,
-        substeps=scenario.substeps,
-        sensor=_sensor(scenario),
-        q0=q_d[0],
-        qd0=qd_d[0],
-    )
-    error = ""
-    try:
-        ctrl.reset(S, T)
-        adaptive = declared(ctrl, "adaptive")
-    except Exception as exc:  # contain any controller failure to its own trials
-        error, adaptive = f"{type(exc).__name__} in reset: {exc}", False
-    seg_start, seg_end, seg_settled = segment_bounds(scenario.segments(), T, SETTLE)
-    run = _new_run(name, ctrl, S, len(seg_start), N, keep, adaptive, "python")
-    K = run.q.shape[0]
-    seg = 0
-    drop_rngs = _dropout_rngs(scenario, idx)
-    held_q, held_qd = np.broadcast_to(q_d[0], (S, 2)).copy(), np.broadcast_to(qd_d[0], (S, 2)).copy()
-    run.dropped = np.zeros(S, dtype=int)
-    for k in range(N):
-        qm, qdm = sim.measure()
-        qm_obs, qdm_obs = qm, qdm
-        if drop_rngs is not None:
-            if k % CHUNK == 0:
-                drops = _dropout_block(drop_rngs, scenario.dropout, min(CHUNK, N - k))
-            lost = drops[:, k % CHUNK]
-            run.dropped += lost
-            held_q, held_qd = np.where(lost[:, None], held_q, qm), np.where(lost[:, None], held_qd, qdm)
-            qm_obs = np.where(lost[:, None], np.nan, qm)
-            qdm_obs = np.where(lost[:, None], np.nan, qdm)
-            qm, qdm = held_q, held_qd
-        err = q_d[k] - sim.q
-        if K:
-            run.q[:, k], run.qd[:, k] = sim.q[:K], sim.qd[:K]
-        tau = np.full((S, 2), np.nan)
-        if not error:
-            try:
-                truth = {"sigma_true": sim.sigma} if declared(ctrl, "needs_true_model") else {}
-                cmd = np.asarray(ctrl.command(qm, qdm, q_d[k], qd_d[k], qdd_d[k], **truth), dtype=float)
-                if cmd.shape != (S, 2):
-                    raise SignalError(f"command returned shape {cmd.shape}, expected ({S}, 2)")
-                tau = cmd
-            except Exception as exc:
-                error = f"{type(exc).__name__} in command at t = {k * T:.3f} s: {exc}"
-        tau = np.where((np.abs(err).max(axis=-1) > MAX_ERROR)[:, None], np.nan, tau)
-        applied, sat = sim.step(tau)
-        accumulate_batch(run.acc, run.e_norm, k, seg_start, seg_settled, err, applied, sat)
-        if K:
-            run.tau[:, k], run.saturated[:, k] = applied[:K], sat[:K]
-        if not error:
-            try:
-                ctrl.observe(qm_obs, qdm_obs, applied)
-                if adaptive:
-                    est = np.asarray(declared(ctrl, "sigma_hat"))
-                    if K:
-                        run.sigma_hat[:, k] = est[:K]
-                    while seg + 1 < len(seg_end) and k >= seg_end[seg]:
-                        seg += 1
-                    if k == seg_end[seg] - 1:
-                        run.sigma_end[:, seg] = est
-            except Exception as exc:
-                error = f"{type(exc).__name__} in observe at t = {k * T:.3f} s: {exc}"
-        if bar is not None and k % 1000 == 999:
-            bar.update(1000)
-    if bar is not None:
-        bar.update(N % 1000)
-    run.failed, run.failed_at, run.error = sim.failed.copy(), sim.failed_at.copy(), error
-    if error:
-        run.failed[:] = True
-    run.alarm_times = None if error else declared(ctrl, "alarm_times")
-    run.skipped = None if error else declared(ctrl, "skipped_samples")
-    return run

@@ -68,6 +68,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from adaptive_dd.benchmark.scenario_base import LIMITS, Reference, RunEstimate, run_estimate
+from adaptive_dd.benchmark.scenario_checks import check_number, scenario_errors, scenario_fields, thaw
 from adaptive_dd.errors import ScenarioError
 from adaptive_dd.plant.arm import Arm, arm_from_tables
 from adaptive_dd.plant.parameters import PAYLOAD_RADIUS
@@ -88,41 +90,6 @@ __all__ = [
 
 Array = NDArray[np.float64]
 
-LIMITS = {
-    "min_sample_period": 1e-5,  # s
-    "max_sample_period": 0.1,  # s
-    "max_seeds": 10_000,
-    "seed_bound": 2**63,
-    "max_substeps": 100,
-    "max_bandwidth_T": 0.2,  # bandwidth [rad/s] * T [s]
-    "max_damping": 10.0,
-    "max_mass": 50.0,  # kg
-    "max_radius": 0.5,  # m
-    "max_angle": 10.0,  # rad, |offset| + sum |amplitude|
-    "max_phase": 100.0,  # rad
-    "max_terms": 50,
-    "max_swaps": 1000,
-    "max_variance": 1.0,
-    "nyquist_fraction": 0.1,  # f <= nyquist_fraction / T; the Nyquist limit is 0.5 / T
-    "max_bytes": 4 * 2**30,
-    "max_seconds": 24 * 3600.0,
-    "large_seconds": 60.0,  # the CLI prints the estimate above this
-    "max_ramp": 3600.0,  # s
-    "max_setting": 1e6,  # |any number| in a built-in controller's [controllers.NAME] table
-}
-"""Documented bounds of the scenario checks (see the module docstring)."""
-
-_KEYS = {
-    "run": {"duration", "sample_period", "seeds", "seed", "substeps", "controllers"},
-    "control": {"bandwidth", "damping"},
-    "reference": None,  # ramp and one entry per joint, checked against the arm
-    "payload": {"at", "mass", "radius", "com", "inertia"},
-    "noise": {"position_variance", "velocity_variance", "dropout"},
-    "controllers": None,  # one sub-table per controller, free keys
-    "arm": None,  # checked by adaptive_dd.plant.arm.arm_from_tables
-    "plant": None,
-}
-_JOINT_KEYS = {"offset", "amplitude", "frequency", "phase"}
 _FIELD_KEY = {
     "name": "name",
     "duration": "run.duration",
@@ -143,98 +110,6 @@ _FIELD_KEY = {
     "controller_options": "controllers",
     "source": "source",
 }
-# Kept per trial and sample by the runner: the error norm as float32 (metrics stream; full
-# trajectories only for the first few seeds); wall time per sample and controller (the
-# per-block overhead) and per trial-sample on the compiled path, measured with
-# `adaptive-dd benchmark --seeds 200` on the development machine (2 cores).
-_BYTES_PER_SAMPLE_TRIAL = 5
-_SECONDS_PER_SAMPLE_CONTROLLER = 2e-5
-_SECONDS_PER_SAMPLE_TRIAL = 1.5e-6
-# N-joint (URDF) arms: per trial-sample, times n_joints^2 (the UR5 scenario's 7 controllers,
-# adaptive_dd.closed_loop, about 9 us per trial-sample on one core of the development machine).
-_SECONDS_PER_SAMPLE_TRIAL_JOINT2 = 2.5e-7
-
-
-@dataclass(frozen=True)
-class Reference:
-    """``q_d(t) = offset + w(t) sum_k a_k sin(2 pi f_k t + phase_k)`` per joint, w a C^2 ramp."""
-
-    offset: tuple[float, ...]
-    amplitude: tuple[tuple[float, ...], ...]
-    frequency: tuple[tuple[float, ...], ...]
-    phase: tuple[tuple[float, ...], ...]
-    ramp: float = 0.0
-
-    @property
-    def n_joints(self) -> int:
-        return len(self.offset)
-
-    def sample(self, t: Array) -> tuple[Array, Array, Array]:
-        """``q_d, qd_d, qdd_d`` at times t, each of shape ``(len(t), n_joints)``."""
-        t = np.asarray(t, dtype=float)
-        w, dw, ddw = self._ramp(t)
-        out = np.zeros((3, t.size, self.n_joints))
-        for j in range(self.n_joints):
-            s = ds = dds = np.zeros_like(t)
-            for a, f, p in zip(self.amplitude[j], self.frequency[j], self.phase[j], strict=True):
-                om = 2 * np.pi * f
-                s = s + a * np.sin(om * t + p)
-                ds = ds + a * om * np.cos(om * t + p)
-                dds = dds - a * om**2 * np.sin(om * t + p)
-            out[0, :, j] = self.offset[j] + w * s
-            out[1, :, j] = dw * s + w * ds
-            out[2, :, j] = ddw * s + 2 * dw * ds + w * dds
-        return out[0], out[1], out[2]
-
-    def _ramp(self, t: Array) -> tuple[Array, Array, Array]:
-        if self.ramp <= 0:
-            one = np.ones_like(t)
-            return one, 0 * one, 0 * one
-        x = np.clip(t / self.ramp, 0.0, 1.0)
-        inside = (t > 0) & (t < self.ramp)
-        w = 10 * x**3 - 15 * x**4 + 6 * x**5
-        dw = np.where(inside, (30 * x**2 - 60 * x**3 + 30 * x**4) / self.ramp, 0.0)
-        ddw = np.where(inside, (60 * x - 180 * x**2 + 120 * x**3) / self.ramp**2, 0.0)
-        return w, dw, ddw
-
-
-@dataclass(frozen=True)
-class RunEstimate:
-    """Size of a benchmark run: samples per trial, trials, memory [bytes] and wall time [s]."""
-
-    n_samples: int
-    trials: int
-    bytes: float
-    seconds: float
-
-    @property
-    def large(self) -> bool:
-        """True when the CLI should print the estimate before running."""
-        return self.seconds > LIMITS["large_seconds"]
-
-    def __str__(self) -> str:
-        return (
-            f"{self.n_samples} samples x {self.trials} trials: about {self.bytes / 2**20:.3g} MiB "
-            f"and {_duration(self.seconds)}"
-        )
-
-
-def _duration(s: float) -> str:
-    if s < 120:
-        return f"{s:.3g} s"
-    return f"{s / 60:.3g} min" if s < 7200 else f"{s / 3600:.3g} h"
-
-
-def run_estimate(
-    n_samples: int, n_seeds: int, n_controllers: int, n_joints: int | None = None
-) -> RunEstimate:
-    """Rough memory and wall time of a closed-loop run (a guide, not a promise); ``n_joints``
-    for an N-joint (URDF) arm, None for the two-link arm's closed forms."""
-    trials = n_seeds * n_controllers
-    nbytes = float(n_samples) * trials * _BYTES_PER_SAMPLE_TRIAL
-    per = _SECONDS_PER_SAMPLE_TRIAL if n_joints is None else _SECONDS_PER_SAMPLE_TRIAL_JOINT2 * n_joints**2
-    secs = float(n_samples) * (n_controllers * _SECONDS_PER_SAMPLE_CONTROLLER + trials * per)
-    return RunEstimate(int(n_samples), int(trials), nbytes, secs)
 
 
 @dataclass(frozen=True)
@@ -269,8 +144,6 @@ class Scenario:
     swap_inertia: tuple = ()
 
     def __post_init__(self) -> None:
-        from adaptive_dd.benchmark.scenario_checks import scenario_errors
-
         errors = scenario_errors({f.name: getattr(self, f.name) for f in fields(self)})
         if errors:
             raise _scenario_error(str(self.source), errors)
@@ -323,8 +196,6 @@ class Scenario:
 
     def options(self, name: str) -> dict[str, Any]:
         """Settings of controller ``name`` from its ``[controllers.NAME]`` table (plain values)."""
-        from adaptive_dd.benchmark.scenario_checks import thaw
-
         for n, opts in self.controller_options:
             if n == name:
                 return thaw(opts)
@@ -375,8 +246,6 @@ def load_scenario(path: str | Path | None = None) -> Scenario:
 
 def parse_scenario(data: dict, src: str = "<memory>", name: str = "scenario") -> Scenario:
     """Check a scenario given as a dict (the parsed TOML); all problems are raised at once."""
-    from adaptive_dd.benchmark.scenario_checks import scenario_errors, scenario_fields
-
     arm, errors = None, []
     try:
         arm = arm_from_tables(
@@ -386,7 +255,9 @@ def parse_scenario(data: dict, src: str = "<memory>", name: str = "scenario") ->
         )
     except ScenarioError as exc:
         errors.append(str(exc).removeprefix(f"{src}: "))
-    values, more = scenario_fields(data, src == str(default_scenario_path()), arm)
+    values, more = scenario_fields(
+        data, src == str(default_scenario_path()), arm, default_reference=lambda: load_scenario().reference
+    )
     if errors:  # the arm is wrong: the number of joints, hence per-joint lists, cannot be judged
         more = [e for e in more if not e.startswith(("reference.", "noise.position", "noise.velocity"))]
     errors += more
@@ -421,7 +292,6 @@ def _controller_setting_errors(v: dict) -> list[str]:
     the file, not of the run. ``bandwidth``, ``boost_bandwidth`` and ``damping`` have the bounds
     of ``[control]``; ``boost_duration`` is at most the run; every number is finite and within
     ``LIMITS["max_setting"]``."""
-    from adaptive_dd.benchmark.scenario_checks import _num, thaw
     from adaptive_dd.closed_loop.controllers import make_serial_controller
     from adaptive_dd.controllers import CONTROLLERS, Gains, make_controller
     from adaptive_dd.plant.serial_arm import SerialArm
@@ -437,7 +307,7 @@ def _controller_setting_errors(v: dict) -> list[str]:
             key = f"controllers.{name}.{bw}"
             if (
                 bw in o
-                and _num(errs, key, o[bw], 0, 1e5, lo_open=True)
+                and check_number(errs, key, o[bw], 0, 1e5, lo_open=True)
                 and o[bw] * T > LIMITS["max_bandwidth_T"]
             ):
                 errs.append(
@@ -445,9 +315,11 @@ def _controller_setting_errors(v: dict) -> list[str]:
                     f"bandwidth * T = {o[bw] * T:.3g} > {LIMITS['max_bandwidth_T']}"
                 )
         if "boost_duration" in o:
-            _num(errs, f"controllers.{name}.boost_duration", o["boost_duration"], 0, v["duration"])
+            check_number(errs, f"controllers.{name}.boost_duration", o["boost_duration"], 0, v["duration"])
         if "damping" in o:
-            _num(errs, f"controllers.{name}.damping", o["damping"], 0, LIMITS["max_damping"], lo_open=True)
+            check_number(
+                errs, f"controllers.{name}.damping", o["damping"], 0, LIMITS["max_damping"], lo_open=True
+            )
         for key, x in _numbers(o, f"controllers.{name}"):
             if not math.isfinite(x) or abs(x) > LIMITS["max_setting"]:
                 errs.append(f"{key}: must be finite and within +-{LIMITS['max_setting']:g}, got {x!r}")

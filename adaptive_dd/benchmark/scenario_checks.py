@@ -11,6 +11,7 @@ from typing import Any
 
 import numpy as np
 
+from adaptive_dd.benchmark.scenario_base import KEYS, LIMITS, Reference, run_estimate
 from adaptive_dd.controllers import CONTROLLERS
 from adaptive_dd.plant.parameters import PAYLOAD_RADIUS
 from adaptive_dd.plant.sampling import first_sample
@@ -49,7 +50,7 @@ def _short(v: Any) -> str:
     return s if len(s) <= 40 else s[:37] + "..."
 
 
-def _num(errs: list, key: str, v: Any, lo: float, hi: float, *, integer=False, lo_open=False) -> bool:
+def check_number(errs: list, key: str, v: Any, lo: float, hi: float, *, integer=False, lo_open=False) -> bool:
     """Check one number in ``[lo, hi]`` (``(lo, hi]`` with lo_open); False and a message if not."""
     if isinstance(v, bool) or not isinstance(v, _NUM) or (integer and not isinstance(v, int | np.integer)):
         errs.append(f"{key}: must be {'an integer' if integer else 'a number'}, got {_short(v)}")
@@ -69,20 +70,21 @@ def _nums(errs: list, key: str, v: Any, lo: float, hi: float, *, n: int | None =
         what = f"a list of {n} numbers" if n is not None else "a list of numbers"
         errs.append(f"{key}: must be {what}, got {_short(v)}")
         return False
-    return all([_num(errs, key, x, lo, hi, **kw) for x in v])
+    return all([check_number(errs, key, x, lo, hi, **kw) for x in v])
 
 
 def scenario_errors(v: dict[str, Any]) -> list[str]:
     """Every problem of the scenario fields ``v`` (a dict of Scenario's fields) as ``key: reason``."""
-    from adaptive_dd.benchmark.scenario import LIMITS as L
-    from adaptive_dd.benchmark.scenario import Reference, run_estimate
+    L = LIMITS
 
     e: list[str] = []
     for k in ("name", "source"):
         if not isinstance(v[k], str):
             e.append(f"{k}: must be a string, got {_short(v[k])}")
-    d_ok = _num(e, "run.duration", v["duration"], 0, math.inf, lo_open=True)
-    T_ok = _num(e, "run.sample_period", v["sample_period"], L["min_sample_period"], L["max_sample_period"])
+    d_ok = check_number(e, "run.duration", v["duration"], 0, math.inf, lo_open=True)
+    T_ok = check_number(
+        e, "run.sample_period", v["sample_period"], L["min_sample_period"], L["max_sample_period"]
+    )
     if d_ok and T_ok and v["sample_period"] > v["duration"] / 10:
         e.append(
             f"run.sample_period: {v['sample_period']} s is more than a tenth of run.duration "
@@ -95,28 +97,28 @@ def scenario_errors(v: dict[str, Any]) -> list[str]:
             f"(run.duration / run.sample_period)"
         )
         d_ok = False
-    s_ok = _num(e, "run.seeds", v["seeds"], 1, L["max_seeds"], integer=True)
-    _num(e, "run.seed", v["seed"], 0, L["seed_bound"] - 1, integer=True)
-    _num(e, "run.substeps", v["substeps"], 1, L["max_substeps"], integer=True)
+    s_ok = check_number(e, "run.seeds", v["seeds"], 1, L["max_seeds"], integer=True)
+    check_number(e, "run.seed", v["seed"], 0, L["seed_bound"] - 1, integer=True)
+    check_number(e, "run.substeps", v["substeps"], 1, L["max_substeps"], integer=True)
     c_ok = _check_controllers(e, v["controllers"], v.get("arm"))
     bw = v["bandwidth"]
     if isinstance(bw, tuple) and _serial(v):  # one per joint, N-joint arms only
         bw_ok = _nums(e, "control.bandwidth", bw, 0, 1e5, n=_n_joints(v), lo_open=True)
         bw = max(bw) if bw_ok else bw
     else:
-        bw_ok = _num(e, "control.bandwidth", bw, 0, 1e5, lo_open=True)
+        bw_ok = check_number(e, "control.bandwidth", bw, 0, 1e5, lo_open=True)
     if bw_ok and T_ok:
         if bw * v["sample_period"] > L["max_bandwidth_T"]:
             e.append(
                 f"control.bandwidth: {bw} rad/s at T = {v['sample_period']} s gives "
                 f"bandwidth * T = {bw * v['sample_period']:.3g} > {L['max_bandwidth_T']}"
             )
-    _num(e, "control.damping", v["damping"], 0, L["max_damping"], lo_open=True)
-    _num(e, "payload.radius", v["payload_radius"], 0, L["max_radius"])
+    check_number(e, "control.damping", v["damping"], 0, L["max_damping"], lo_open=True)
+    check_number(e, "payload.radius", v["payload_radius"], 0, L["max_radius"])
     n_joints = _n_joints(v)
     for k in ("position_variance", "velocity_variance"):
         _nums(e, f"noise.{k}", v[k], 0, L["max_variance"], n=n_joints)
-    _num(e, "noise.dropout", v.get("dropout", 0.0), 0, 0.5)
+    check_number(e, "noise.dropout", v.get("dropout", 0.0), 0, 0.5)
     _check_payload(e, v, d_ok and T_ok)
     if not isinstance(v["reference"], Reference):
         e.append(f"reference: must be a Reference, got {_short(v['reference'])}")
@@ -182,7 +184,7 @@ def _check_controllers(e: list, c: Any, arm: Any = None) -> bool:
 
 
 def _check_payload(e: list, v: dict, timing_ok: bool) -> None:
-    from adaptive_dd.benchmark.scenario import LIMITS as L
+    L = LIMITS
 
     times, masses = v["swap_times"], v["swap_masses"]
     if not isinstance(times, tuple) or not isinstance(masses, tuple) or len(times) != len(masses):
@@ -194,8 +196,8 @@ def _check_payload(e: list, v: dict, timing_ok: bool) -> None:
     d = v["duration"] if timing_ok else math.inf
     ok = True
     for i, (t, m) in enumerate(zip(times, masses, strict=True)):
-        ok &= _num(e, f"payload[{i}].at", t, 0, d, lo_open=True)
-        _num(e, f"payload[{i}].mass", m, 0, L["max_mass"])
+        ok &= check_number(e, f"payload[{i}].at", t, 0, d, lo_open=True)
+        check_number(e, f"payload[{i}].mass", m, 0, L["max_mass"])
         if ok and i and t <= times[i - 1]:
             e.append(f"payload[{i}].at: {t} s: swap times must increase (previous {times[i - 1]} s)")
             ok = False
@@ -224,9 +226,11 @@ def _check_payload(e: list, v: dict, timing_ok: bool) -> None:
 
 
 def _check_reference(e: list, ref: Any, T: float | None, n: int = 2) -> None:
-    from adaptive_dd.benchmark.scenario import LIMITS as L
+    L = LIMITS
 
-    _num(e, "reference.ramp", ref.ramp, 0, L["max_ramp"])  # may outlast a short run: the ramp is just cut
+    check_number(
+        e, "reference.ramp", ref.ramp, 0, L["max_ramp"]
+    )  # may outlast a short run: the ramp is just cut
     fmax = L["nyquist_fraction"] / T if T is not None else math.inf
     for name, obj in (("offset", ref.offset), ("amplitude", ref.amplitude), ("frequency", ref.frequency)):
         if not isinstance(obj, tuple) or len(obj) != n:
@@ -237,11 +241,11 @@ def _check_reference(e: list, ref: Any, T: float | None, n: int = 2) -> None:
         return
     for j in range(n):
         key = f"reference.joint{j + 1}"
-        off_ok = _num(e, f"{key}.offset", ref.offset[j], -L["max_angle"], L["max_angle"])
+        off_ok = check_number(e, f"{key}.offset", ref.offset[j], -L["max_angle"], L["max_angle"])
         a, f, p = ref.amplitude[j], ref.frequency[j], ref.phase[j]
         a_ok = _nums(e, f"{key}.amplitude", a, -L["max_angle"], L["max_angle"])
         f_ok = isinstance(f, tuple) and all(
-            [_num(e, f"{key}.frequency", x, 0, math.inf, lo_open=True) for x in f]
+            [check_number(e, f"{key}.frequency", x, 0, math.inf, lo_open=True) for x in f]
         )
         if not isinstance(f, tuple):
             e.append(f"{key}.frequency: must be a list of numbers, got {_short(f)}")
@@ -293,20 +297,22 @@ def _check_options(e: list, opts: Any, ctrls: tuple) -> None:
         _plain(e, f"controllers.{name}", table)
 
 
-def scenario_fields(data: Any, is_default: bool, arm: Any = None) -> tuple[dict[str, Any], list[str]]:
+def scenario_fields(
+    data: Any, is_default: bool, arm: Any = None, default_reference=None
+) -> tuple[dict[str, Any], list[str]]:
     """Scenario fields from a parsed TOML dict (defaults filled in) and the structural errors.
 
     ``arm`` (the scenario's arm, None if its tables were wrong) gives the number and
-    names of the joints and, for a URDF arm, the default noise variances."""
-    from adaptive_dd.benchmark.scenario import _KEYS
-
+    names of the joints and, for a URDF arm, the default noise variances; ``default_reference()``
+    gives the reference of a two-link scenario without a ``[reference]`` table (the default
+    scenario's)."""
     e: list[str] = []
     if not isinstance(data, dict):
         return {}, ["<top>: must be a TOML document"]
     tables: dict[str, Any] = {}
     for t, val in data.items():
-        if t not in _KEYS:
-            e.append(f"[{t}]: unknown table; allowed: {', '.join(sorted(_KEYS))}")
+        if t not in KEYS:
+            e.append(f"[{t}]: unknown table; allowed: {', '.join(sorted(KEYS))}")
         elif t == "payload":
             if not isinstance(val, list) or not all(isinstance(x, dict) for x in val):
                 e.append("payload: must be an array of tables [[payload]]")
@@ -316,7 +322,7 @@ def scenario_fields(data: Any, is_default: bool, arm: Any = None) -> tuple[dict[
             e.append(f"{t}: must be a table [{t}], got {_short(val)}")
         else:
             tables[t] = val
-    for t, allowed in _KEYS.items():
+    for t, allowed in KEYS.items():
         if allowed is None:
             continue
         for item in tables.get(t, []) if t == "payload" else [tables.get(t, {})]:
@@ -346,7 +352,7 @@ def scenario_fields(data: Any, is_default: bool, arm: Any = None) -> tuple[dict[
         "dropout": get("noise", "dropout", 0.0),
     }
     _payload_fields(e, tables.get("payload", []), v, defaulted, arm)
-    v["reference"] = _reference_field(e, tables, is_default, defaulted, arm)
+    v["reference"] = _reference_field(e, tables, is_default, defaulted, arm, default_reference)
     v["controller_options"] = tuple(
         (str(n), freeze(o) if isinstance(o, dict) else o) for n, o in tables.get("controllers", {}).items()
     )
@@ -428,8 +434,9 @@ def _payload_fields(e: list, items: list, v: dict, defaulted: set, arm: Any = No
     v["payload_radius"] = radii[0] if radii else PAYLOAD_RADIUS
 
 
-def _reference_field(e: list, tables: dict, is_default: bool, defaulted: set, arm: Any = None) -> Any:
-    from adaptive_dd.benchmark.scenario import Reference, load_scenario
+def _reference_field(
+    e: list, tables: dict, is_default: bool, defaulted: set, arm: Any = None, default_reference=None
+) -> Any:
 
     n = arm.n_joints if arm is not None else 2
     names = tuple(getattr(arm, "joint_names", ()))
@@ -442,7 +449,9 @@ def _reference_field(e: list, tables: dict, is_default: bool, defaulted: set, ar
             )
             return Reference((0.0,) * n, ((),) * n, ((),) * n, ((),) * n)
         defaulted.add("reference")
-        return load_scenario().reference
+        if default_reference is None:
+            raise ValueError("scenario_fields: no [reference] table and no default_reference given")
+        return default_reference()
     ref = tables["reference"]
     keys = [f"joint{j + 1}" for j in range(n)]
     for k in ref:

@@ -1,8 +1,9 @@
 """Metrics accumulated while a run streams: per trial and payload segment, nothing per sample
 but the error norm (float32, for recovery times) and, for the first few seeds, trajectories.
 
-Both the Python runner and the compiled closed loop call :func:`accumulate_trial`, so the
-two paths accumulate the same sums in the same order.
+The sums are the closed loop's :class:`~adaptive_dd.closed_loop.types.StreamedSums` (the
+N-joint runs hold the same record). Both two-link paths, the Python runner and the compiled
+closed loop, call :func:`accumulate_trial`, so they accumulate the same sums in the same order.
 """
 
 from __future__ import annotations
@@ -12,20 +13,7 @@ from numba import njit
 
 from adaptive_dd.plant.sampling import first_sample
 
-__all__ = ["ACC_FIELDS", "accumulate_trial", "segment_bounds"]
-
-ACC_FIELDS = (
-    "sum_e2",
-    "sum_e2_joint1",
-    "sum_e2_joint2",
-    "max_e",
-    "sum_tau2",
-    "n_saturated",
-    "sum_e2_settled",
-)
-"""Per trial and segment: sums of |e|^2 (both joints and per joint), max |e|, sum of |tau|^2,
-samples with a saturated joint, sum of |e|^2 after the settling time."""
-N_ACC = len(ACC_FIELDS)
+__all__ = ["accumulate_batch", "accumulate_trial", "segment_bounds"]
 
 
 def segment_bounds(
@@ -42,31 +30,33 @@ def segment_bounds(
     return start, end, settled
 
 
-@njit(cache=True)
-def accumulate_trial(acc, e_norm, k, seg_start, seg_settled, e1, e2, tau, sat_mask):  # pragma: no cover
-    """Add sample k of one trial (error ``e1, e2`` [rad], applied ``tau (2,)``) to ``acc (n_seg, 7)``."""
+@njit(cache=True, inline="always")
+def accumulate_trial(acc, i, k, seg_start, seg_settled, e1, e2, tau, sat_mask):  # pragma: no cover
+    """Add sample k of trial i (error ``e1, e2`` [rad], applied ``tau (2,)``, ``sat_mask`` bit j set
+    if joint j saturated) to ``acc`` (:class:`~adaptive_dd.closed_loop.types.StreamedSums`);
+    returns the sample's segment."""
     s = 0
     while s + 1 < seg_start.shape[0] and k >= seg_start[s + 1]:
         s += 1
     en2 = e1 * e1 + e2 * e2
     en = np.sqrt(en2)
-    acc[s, 0] += en2
-    acc[s, 1] += e1 * e1
-    acc[s, 2] += e2 * e2
-    if en > acc[s, 3]:
-        acc[s, 3] = en
-    acc[s, 4] += tau[0] * tau[0] + tau[1] * tau[1]
+    acc.sum_e2[i, s] += en2
+    acc.sum_e2_joint[i, s, 0] += e1 * e1
+    acc.sum_e2_joint[i, s, 1] += e2 * e2
+    if en > acc.max_e[i, s]:
+        acc.max_e[i, s] = en
+    acc.sum_tau2[i, s] += tau[0] * tau[0] + tau[1] * tau[1]
     if sat_mask != 0:
-        acc[s, 5] += 1.0
+        acc.n_saturated[i, s] += 1.0
     if k >= seg_settled[s]:
-        acc[s, 6] += en2
-    e_norm[k] = en
+        acc.sum_e2_settled[i, s] += en2
+    acc.e_norm[i, k] = en
     return s
 
 
 @njit(cache=True)
-def accumulate_batch(acc, e_norm, k, seg_start, seg_settled, err, tau, sat):  # pragma: no cover
+def accumulate_batch(acc, k, seg_start, seg_settled, err, tau, sat):  # pragma: no cover
     """:func:`accumulate_trial` for every trial: ``err, tau (n, 2)``, ``sat (n, 2)`` bool."""
     for i in range(err.shape[0]):
         m = (1 if sat[i, 0] else 0) | (2 if sat[i, 1] else 0)
-        accumulate_trial(acc[i], e_norm[i], k, seg_start, seg_settled, err[i, 0], err[i, 1], tau[i], m)
+        accumulate_trial(acc, i, k, seg_start, seg_settled, err[i, 0], err[i, 1], tau[i], m)

@@ -16,7 +16,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from adaptive_dd.benchmark.runner import BenchmarkResult, ControllerRun
+from adaptive_dd.benchmark.types import BenchmarkResult, ControllerRun
 from adaptive_dd.closed_loop.controllers import SerialLaw, make_serial_controller
 from adaptive_dd.closed_loop.glue import (
     Alarms,

@@ -13,7 +13,7 @@ from typing import NamedTuple
 import numpy as np
 from numpy.typing import NDArray
 
-from adaptive_dd.benchmark.scenario_checks import first_sample
+from adaptive_dd.plant.sampling import first_sample
 
 __all__ = [
     "MAX_ERROR",

@@ -26,6 +26,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from adaptive_dd.controllers.base import DEFAULT_GAINS, Controller, Gains
+from adaptive_dd.controllers.compiled_form import LAW_ADAPTIVE, CompiledSpec, two_link_gains
 from adaptive_dd.controllers.feedback import _sice_sigma, computed_torque_law
 from adaptive_dd.controllers.laws import boost_batch
 from adaptive_dd.errors import ParameterError
@@ -136,6 +137,23 @@ class AdaptiveCT(Controller):
     @property
     def alarm_times(self) -> list[list[float]] | None:
         return self.estimator.alarm_times if self.online.detector is not None else None
+
+    def compiled_spec(self, sample_period: float) -> CompiledSpec:
+        """The compiled loop's form: the gains, the nominal model (start and boost), the boost
+        after an alarm, and the estimator at ``sample_period``."""
+        g = self.gains
+        boost = {}
+        if self.boost_bandwidth is not None:
+            dkp, dkd = self.boost_gains
+            boost = dict(boost_kp=float(dkp), boost_kd=float(dkd))
+            boost["boost_samples"] = float(self.boost_duration / sample_period)
+        gains = two_link_gains(
+            LAW_ADAPTIVE, self.sigma_nominal, kp=float(g.kp), kd=float(g.kd), lam=float(g.lam), **boost
+        )
+        online = self.online
+        if online.sample_period != sample_period:
+            online = dataclasses.replace(online, sample_period=sample_period)
+        return CompiledSpec(gains, online)
 
 
 def adaptive_ct(

@@ -6,6 +6,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from adaptive_dd.controllers.base import DEFAULT_GAINS, Controller, Gains
+from adaptive_dd.controllers.compiled_form import LAW_CT, LAW_CT_ORACLE, LAW_PD, CompiledSpec, two_link_gains
 from adaptive_dd.controllers.laws import ct_batch, pd_batch
 from adaptive_dd.plant.parameters import validate_sigma
 
@@ -65,6 +66,11 @@ class PD(Controller):
     def command(self, q, qd, q_d, qd_d, qdd_d, sigma_true=None):
         return pd_batch(q, qd, q_d, qd_d, self.kp, self.kd)
 
+    def compiled_spec(self, sample_period: float) -> CompiledSpec:
+        """The compiled loop's form: PD's gains per joint."""
+        kp, kd = (np.array(np.broadcast_to(x, (2,)), dtype=float) for x in (self.kp, self.kd))
+        return CompiledSpec(two_link_gains(LAW_PD, pd_kp=kp, pd_kd=kd), None)
+
 
 class ComputedTorque(Controller):
     """Computed torque with a fixed model (``ct_nominal``) or the true one (``ct_oracle``).
@@ -103,3 +109,10 @@ class ComputedTorque(Controller):
         return computed_torque_law(
             q, qd, q_d, qd_d, qdd_d, sigma, g.kp, g.kd, g.lam if self.reference else None
         )
+
+    def compiled_spec(self, sample_period: float) -> CompiledSpec:
+        """The compiled loop's form: the fixed model (or the true one) and the gains."""
+        g = self.gains
+        lam = float(g.lam) if self.reference else -1.0
+        law = LAW_CT_ORACLE if self.oracle else LAW_CT
+        return CompiledSpec(two_link_gains(law, self.sigma, kp=float(g.kp), kd=float(g.kd), lam=lam), None)

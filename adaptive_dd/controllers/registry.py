@@ -32,6 +32,7 @@ import dataclasses
 import importlib
 import inspect
 import sys
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -44,21 +45,10 @@ from adaptive_dd.errors import ParameterError
 from adaptive_dd.identification.online import ChangeDetector, OnlineConfig
 from adaptive_dd.plant.arm import Arm
 
-__all__ = ["CONTROLLERS", "controller_label", "load_controller_class", "make_controller"]
-
-CONTROLLERS = (
-    "pd",
-    "ct_nominal",
-    "ct_oracle",
-    "ct_oracle_textbook",
-    "adaptive_ct_paper",
-    "adaptive_ct",
-    "slotine_li",
-    "slotine_li_oracle",
-)
-"""Names a scenario may list."""
+__all__ = ["CONTROLLERS", "Builtin", "controller_label", "load_controller_class", "make_controller"]
 
 COMMON = {"bandwidth", "damping", "label"}
+
 ONLINE_KEYS = {"tau_f", "split", "construction", "p0_payload", "p0_j2", "project", "align"}
 
 
@@ -129,42 +119,67 @@ def _online(spec: str, options: dict) -> OnlineConfig:
     return dataclasses.replace(ADAPTIVE_ONLINE, **kw)
 
 
-def _builtin(spec: str, g: Gains, options: dict, arm) -> Controller:
-    sigma_nominal = arm.sigma
-    o = {k: v for k, v in options.items() if k not in COMMON}
-    allowed = {
-        "pd": {"sigma"},
-        "ct_nominal": {"sigma"},
-        "adaptive_ct": {"boost_bandwidth", "boost_duration", "estimator", "detector"},
-        "slotine_li": {"gamma"},
-    }.get(spec, set())
-    _unknown(spec, o, allowed)
-    if spec == "pd":
-        return PD(g, _sigma(spec, o) if "sigma" in o else sigma_nominal)
-    if spec == "ct_nominal":
-        return ComputedTorque(g, _sigma(spec, o) if "sigma" in o else sigma_nominal)
-    if spec == "ct_oracle":
-        return ComputedTorque(g, sigma_nominal, oracle=True)
-    if spec == "ct_oracle_textbook":
-        return ComputedTorque(g, sigma_nominal, oracle=True, reference_velocity=False)
-    if spec == "adaptive_ct_paper":
-        from adaptive_dd.controllers.adaptive import adaptive_ct_paper
+@dataclasses.dataclass(frozen=True)
+class Builtin:
+    """A built-in controller: ``make(gains, settings, arm)`` builds it (the settings without the
+    common ones, checked against ``settings`` first)."""
 
-        ctrl = adaptive_ct_paper(g, sigma_nominal)
-        ctrl.online = dataclasses.replace(
-            ctrl.online, payload_direction=tuple(float(x) for x in arm.payload_direction(0.0))
-        )
-        return ctrl
-    if spec == "adaptive_ct":
-        boost = {k: o[k] for k in ("boost_bandwidth", "boost_duration") if k in o}
-        online = dataclasses.replace(
-            _online(spec, o), payload_direction=tuple(float(x) for x in arm.payload_direction(0.0))
-        )
-        return AdaptiveCT(online, g, sigma_nominal, **boost)
-    if spec == "slotine_li":
-        gamma = o.get("gamma", DEFAULT_GAMMA)
-        return SlotineLi(g, gamma, sigma_nominal, bounds=slotine_bounds(arm))
-    return SlotineLi(g, theta0=sigma_nominal, bounds=slotine_bounds(arm), oracle=True)
+    make: Callable[[Gains, dict, Any], Controller]
+    settings: frozenset[str] = frozenset()
+
+
+def _model(spec: str, o: dict, arm) -> np.ndarray:
+    """The fixed model: the ``sigma`` setting, else the arm's base parameters."""
+    return _sigma(spec, o) if "sigma" in o else arm.sigma
+
+
+def _adaptive_ct_paper(g: Gains, o: dict, arm) -> Controller:
+    from adaptive_dd.controllers.adaptive import adaptive_ct_paper
+
+    ctrl = adaptive_ct_paper(g, arm.sigma)
+    ctrl.online = dataclasses.replace(
+        ctrl.online, payload_direction=tuple(float(x) for x in arm.payload_direction(0.0))
+    )
+    return ctrl
+
+
+def _adaptive_ct(g: Gains, o: dict, arm) -> Controller:
+    boost = {k: o[k] for k in ("boost_bandwidth", "boost_duration") if k in o}
+    online = dataclasses.replace(
+        _online("adaptive_ct", o), payload_direction=tuple(float(x) for x in arm.payload_direction(0.0))
+    )
+    return AdaptiveCT(online, g, arm.sigma, **boost)
+
+
+CONTROLLERS: dict[str, Builtin] = {
+    "pd": Builtin(lambda g, o, arm: PD(g, _model("pd", o, arm)), frozenset({"sigma"})),
+    "ct_nominal": Builtin(
+        lambda g, o, arm: ComputedTorque(g, _model("ct_nominal", o, arm)), frozenset({"sigma"})
+    ),
+    "ct_oracle": Builtin(lambda g, o, arm: ComputedTorque(g, arm.sigma, oracle=True)),
+    "ct_oracle_textbook": Builtin(
+        lambda g, o, arm: ComputedTorque(g, arm.sigma, oracle=True, reference_velocity=False)
+    ),
+    "adaptive_ct_paper": Builtin(_adaptive_ct_paper),
+    "adaptive_ct": Builtin(
+        _adaptive_ct, frozenset({"boost_bandwidth", "boost_duration", "estimator", "detector"})
+    ),
+    "slotine_li": Builtin(
+        lambda g, o, arm: SlotineLi(g, o.get("gamma", DEFAULT_GAMMA), arm.sigma, bounds=slotine_bounds(arm)),
+        frozenset({"gamma"}),
+    ),
+    "slotine_li_oracle": Builtin(
+        lambda g, o, arm: SlotineLi(g, theta0=arm.sigma, bounds=slotine_bounds(arm), oracle=True)
+    ),
+}
+"""Names a scenario may list, each with its factory and settings (a new built-in: one entry)."""
+
+
+def _builtin(spec: str, g: Gains, options: dict, arm) -> Controller:
+    o = {k: v for k, v in options.items() if k not in COMMON}
+    entry = CONTROLLERS[spec]
+    _unknown(spec, o, set(entry.settings))
+    return entry.make(g, o, arm)
 
 
 def slotine_bounds(arm) -> tuple:
@@ -203,7 +218,7 @@ def make_controller(
         ctrl = _plugin(spec, g, options, arm.sigma, search)
     else:
         raise ParameterError(
-            f"unknown controller {spec!r}; choose from {CONTROLLERS} or 'package.module:Class'"
+            f"unknown controller {spec!r}; choose from {tuple(CONTROLLERS)} or 'package.module:Class'"
         )
     if "label" in options:
         ctrl.name = str(options["label"])

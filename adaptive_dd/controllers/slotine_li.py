@@ -29,6 +29,12 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from adaptive_dd.controllers.base import DEFAULT_GAINS, Controller, Gains
+from adaptive_dd.controllers.compiled_form import (
+    LAW_SLOTINE,
+    LAW_SLOTINE_ORACLE,
+    CompiledSpec,
+    two_link_gains,
+)
 from adaptive_dd.controllers.feedback import _sice_sigma
 from adaptive_dd.controllers.laws import slotine_li_batch
 from adaptive_dd.errors import ParameterError
@@ -116,3 +122,12 @@ class SlotineLi(Controller):
     @property
     def sigma_hat(self):
         return None if self.oracle else self.theta
+
+    def compiled_spec(self, sample_period: float) -> CompiledSpec:
+        """The compiled loop's form: the gains, the start of the estimate (the model of M0), the box."""
+        law = LAW_SLOTINE_ORACLE if self.oracle else LAW_SLOTINE
+        box = {k: np.array(getattr(self, k), dtype=float) for k in ("gamma", "lo", "hi")}
+        g = two_link_gains(
+            law, self.theta0, kd=float(self.kd), lam=float(self.lam), projection=PROJECTION.copy(), **box
+        )
+        return CompiledSpec(g, None)

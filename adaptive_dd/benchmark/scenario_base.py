@@ -1,0 +1,146 @@
+"""What the scenario reader and its checks share: the documented bounds (:data:`LIMITS`), the
+tables and keys a scenario file may hold (:data:`KEYS`), the reference trajectory
+(:class:`Reference`) and the size estimate of a run (:func:`run_estimate`).
+
+:mod:`~adaptive_dd.benchmark.scenario` and :mod:`~adaptive_dd.benchmark.scenario_checks` both
+import this module; neither imports the other's private names.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+__all__ = ["KEYS", "LIMITS", "Reference", "RunEstimate", "run_estimate"]
+
+Array = NDArray[np.float64]
+
+LIMITS = {
+    "min_sample_period": 1e-5,  # s
+    "max_sample_period": 0.1,  # s
+    "max_seeds": 10_000,
+    "seed_bound": 2**63,
+    "max_substeps": 100,
+    "max_bandwidth_T": 0.2,  # bandwidth [rad/s] * T [s]
+    "max_damping": 10.0,
+    "max_mass": 50.0,  # kg
+    "max_radius": 0.5,  # m
+    "max_angle": 10.0,  # rad, |offset| + sum |amplitude|
+    "max_phase": 100.0,  # rad
+    "max_terms": 50,
+    "max_swaps": 1000,
+    "max_variance": 1.0,
+    "nyquist_fraction": 0.1,  # f <= nyquist_fraction / T; the Nyquist limit is 0.5 / T
+    "max_bytes": 4 * 2**30,
+    "max_seconds": 24 * 3600.0,
+    "large_seconds": 60.0,  # the CLI prints the estimate above this
+    "max_ramp": 3600.0,  # s
+    "max_setting": 1e6,  # |any number| in a built-in controller's [controllers.NAME] table
+}
+"""Documented bounds of the scenario checks (see the module docstring)."""
+
+KEYS = {
+    "run": {"duration", "sample_period", "seeds", "seed", "substeps", "controllers"},
+    "control": {"bandwidth", "damping"},
+    "reference": None,  # ramp and one entry per joint, checked against the arm
+    "payload": {"at", "mass", "radius", "com", "inertia"},
+    "noise": {"position_variance", "velocity_variance", "dropout"},
+    "controllers": None,  # one sub-table per controller, free keys
+    "arm": None,  # checked by adaptive_dd.plant.arm.arm_from_tables
+    "plant": None,
+}
+
+# Kept per trial and sample by the runner: the error norm as float32 (metrics stream; full
+# trajectories only for the first few seeds); wall time per sample and controller (the
+# per-block overhead) and per trial-sample on the compiled path, measured with
+# `adaptive-dd benchmark --seeds 200` on the development machine (2 cores).
+_BYTES_PER_SAMPLE_TRIAL = 5
+_SECONDS_PER_SAMPLE_CONTROLLER = 2e-5
+_SECONDS_PER_SAMPLE_TRIAL = 1.5e-6
+# N-joint (URDF) arms: per trial-sample, times n_joints^2 (the UR5 scenario's 7 controllers,
+# adaptive_dd.closed_loop, about 9 us per trial-sample on one core of the development machine).
+_SECONDS_PER_SAMPLE_TRIAL_JOINT2 = 2.5e-7
+
+
+@dataclass(frozen=True)
+class Reference:
+    """``q_d(t) = offset + w(t) sum_k a_k sin(2 pi f_k t + phase_k)`` per joint, w a C^2 ramp."""
+
+    offset: tuple[float, ...]
+    amplitude: tuple[tuple[float, ...], ...]
+    frequency: tuple[tuple[float, ...], ...]
+    phase: tuple[tuple[float, ...], ...]
+    ramp: float = 0.0
+
+    @property
+    def n_joints(self) -> int:
+        return len(self.offset)
+
+    def sample(self, t: Array) -> tuple[Array, Array, Array]:
+        """``q_d, qd_d, qdd_d`` at times t, each of shape ``(len(t), n_joints)``."""
+        t = np.asarray(t, dtype=float)
+        w, dw, ddw = self._ramp(t)
+        out = np.zeros((3, t.size, self.n_joints))
+        for j in range(self.n_joints):
+            s = ds = dds = np.zeros_like(t)
+            for a, f, p in zip(self.amplitude[j], self.frequency[j], self.phase[j], strict=True):
+                om = 2 * np.pi * f
+                s = s + a * np.sin(om * t + p)
+                ds = ds + a * om * np.cos(om * t + p)
+                dds = dds - a * om**2 * np.sin(om * t + p)
+            out[0, :, j] = self.offset[j] + w * s
+            out[1, :, j] = dw * s + w * ds
+            out[2, :, j] = ddw * s + 2 * dw * ds + w * dds
+        return out[0], out[1], out[2]
+
+    def _ramp(self, t: Array) -> tuple[Array, Array, Array]:
+        if self.ramp <= 0:
+            one = np.ones_like(t)
+            return one, 0 * one, 0 * one
+        x = np.clip(t / self.ramp, 0.0, 1.0)
+        inside = (t > 0) & (t < self.ramp)
+        w = 10 * x**3 - 15 * x**4 + 6 * x**5
+        dw = np.where(inside, (30 * x**2 - 60 * x**3 + 30 * x**4) / self.ramp, 0.0)
+        ddw = np.where(inside, (60 * x - 180 * x**2 + 120 * x**3) / self.ramp**2, 0.0)
+        return w, dw, ddw
+
+
+@dataclass(frozen=True)
+class RunEstimate:
+    """Size of a benchmark run: samples per trial, trials, memory [bytes] and wall time [s]."""
+
+    n_samples: int
+    trials: int
+    bytes: float
+    seconds: float
+
+    @property
+    def large(self) -> bool:
+        """True when the CLI should print the estimate before running."""
+        return self.seconds > LIMITS["large_seconds"]
+
+    def __str__(self) -> str:
+        return (
+            f"{self.n_samples} samples x {self.trials} trials: about {self.bytes / 2**20:.3g} MiB "
+            f"and {_duration(self.seconds)}"
+        )
+
+
+def _duration(s: float) -> str:
+    if s < 120:
+        return f"{s:.3g} s"
+    return f"{s / 60:.3g} min" if s < 7200 else f"{s / 3600:.3g} h"
+
+
+def run_estimate(
+    n_samples: int, n_seeds: int, n_controllers: int, n_joints: int | None = None
+) -> RunEstimate:
+    """Rough memory and wall time of a closed-loop run (a guide, not a promise); ``n_joints``
+    for an N-joint (URDF) arm, None for the two-link arm's closed forms."""
+    trials = n_seeds * n_controllers
+    nbytes = float(n_samples) * trials * _BYTES_PER_SAMPLE_TRIAL
+    per = _SECONDS_PER_SAMPLE_TRIAL if n_joints is None else _SECONDS_PER_SAMPLE_TRIAL_JOINT2 * n_joints**2
+    secs = float(n_samples) * (n_controllers * _SECONDS_PER_SAMPLE_CONTROLLER + trials * per)
+    return RunEstimate(int(n_samples), int(trials), nbytes, secs)

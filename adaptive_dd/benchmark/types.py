@@ -1,0 +1,116 @@
+"""What a benchmark run produces, and the constants of the two-link loop: one module that the
+runner, the compiled path, the metrics and the reports import (none of them imports another
+for these).
+
+:class:`BenchmarkResult`'s ``to_frame``, ``summary`` and ``metrics`` are doors to
+:mod:`~adaptive_dd.benchmark.results` and :mod:`~adaptive_dd.benchmark.metrics`, imported
+when called (those modules import this one).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
+
+import numpy as np
+from numpy.typing import NDArray
+
+if TYPE_CHECKING:
+    from adaptive_dd.benchmark.scenario import Scenario
+    from adaptive_dd.closed_loop.types import StreamedSums
+
+__all__ = ["CHUNK", "ENGINES", "MAX_ALARMS", "MAX_ERROR", "SETTLE", "BenchmarkResult", "ControllerRun"]
+
+Array = NDArray[np.float64]
+MAX_ERROR = 3.0
+"""Tracking error [rad] beyond which a trial counts as diverged."""
+SETTLE = 0.5
+"""[s] left out at the start of each segment for ``rms_error_settled``."""
+ENGINES = ("auto", "python", "compiled")
+CHUNK = 1024
+"""Samples per block of drawn noise (and per call of the compiled loop)."""
+MAX_ALARMS = 256
+"""Alarm times kept per trial on the compiled path (the count goes on)."""
+
+
+@dataclass
+class ControllerRun:
+    """One controller's trials.
+
+    Attributes
+    ----------
+    name : str
+    acc : StreamedSums
+        Streamed sums per trial and segment, by name (:class:`~adaptive_dd.closed_loop.types.StreamedSums`:
+        ``sum_e2 (n_seeds, n_segments)``, ``sum_e2_joint (n_seeds, n_segments, n_joints)``, ``max_e``,
+        ``sum_tau2``, ``n_saturated``, ``sum_e2_settled``; ``e_norm`` is :attr:`e_norm`).
+    e_norm : ndarray of float32 (n_seeds, n_samples)
+        Tracking error norm ``|q_d - q|`` of the true q [rad].
+    sigma_end : ndarray (n_seeds, n_segments, 7) or None
+        Estimate at the last sample of each segment (controllers with an estimate).
+    failed : bool (n_seeds,); failed_at : sample index or -1
+    error : message if the controller raised, else ""
+    alarm_times : per trial, the times [s] a change detector fired (or None)
+    floor : name of the controller this one is measured against (or None)
+    q, qd, tau, saturated, sigma_hat : trajectories ``(n_kept, n_samples, ...)`` of the first
+        seeds (true q [rad] and qd [rad/s], applied torque [N m], saturation, estimate), or None
+    engine : "python" or "compiled"
+    dropped : int (n_seeds,)
+        Samples whose measurement was lost (scenario ``noise.dropout``); the control law gets
+        the last good measurement, the estimator the NaN (skipped and counted).
+    skipped : int (n_seeds,) or None
+        Samples the controller's estimator skipped as non-finite.
+    """
+
+    name: str
+    acc: StreamedSums
+    e_norm: NDArray[np.float32]
+    sigma_end: Array | None
+    failed: NDArray[np.bool_]
+    failed_at: NDArray[np.int_]
+    error: str = ""
+    alarm_times: list | None = None
+    floor: str | None = None
+    q: Array | None = None
+    qd: Array | None = None
+    tau: Array | None = None
+    saturated: NDArray[np.bool_] | None = None
+    sigma_hat: Array | None = None
+    engine: str = "python"
+    dropped: NDArray[np.int_] | None = None
+    skipped: NDArray[np.int_] | None = None
+
+
+@dataclass
+class BenchmarkResult:
+    """Everything a benchmark run produced; see :mod:`adaptive_dd.benchmark.metrics`."""
+
+    scenario: Scenario
+    t: Array
+    q_d: Array
+    sigma_true: Array  # (n_samples, p): 7 for the two-link arm, arm.base.count for a URDF arm
+    mass: Array  # (n_samples,)
+    runs: dict = field(default_factory=dict)
+    wall_time: float = 0.0
+    seed_indices: tuple = ()
+    cache: dict = field(default_factory=dict, repr=False, compare=False)
+    """Derived per-seed arrays, computed once (``metrics.per_seed_segment_metrics``)."""
+
+    def to_frame(self):
+        """One row per controller x seed x segment (pandas DataFrame; see
+        :func:`adaptive_dd.benchmark.results.to_frame`)."""
+        from adaptive_dd.benchmark.results import to_frame
+
+        return to_frame(self)
+
+    def summary(self):
+        """Per controller and segment: mean, median, p90, max of the per-seed ratio to the floor."""
+        from adaptive_dd.benchmark.results import summary_frame
+
+        return summary_frame(self)
+
+    def metrics(self) -> dict:
+        """The metrics of :func:`adaptive_dd.benchmark.metrics.compute_metrics` (the JSON layout)."""
+        from adaptive_dd.benchmark.metrics import compute_metrics
+
+        return compute_metrics(self)

@@ -1,0 +1,40 @@
+"""Wall time per simulated sample of the two-link compiled closed loop, for comparing source trees.
+
+Usage (one line per tree; alternate the trees a few times, the machine's load moves every figure)::
+
+    NUMBA_NUM_THREADS=1 PYTHONPATH=/path/to/tree python benchmarks/two_link_speed_ab.py
+
+Prints, for ``pd``, ``ct_nominal``, ``slotine_li`` and ``adaptive_ct`` on the default scenario
+(20 s), the best of three ``run_benchmark(engine="compiled")`` calls in microseconds per
+trial-sample, for 1 and 16 seeds (compilation excluded: a short warm-up run first). Asserts nothing.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import time
+
+import adaptive_dd
+from adaptive_dd.benchmark import load_scenario, run_benchmark
+from adaptive_dd.benchmark.scenario import default_scenario_path
+
+
+def main() -> None:
+    sc = load_scenario(default_scenario_path())
+    out = []
+    for name in ("pd", "ct_nominal", "slotine_li", "adaptive_ct"):
+        for seeds in (1, 16):
+            s = dataclasses.replace(sc, seeds=seeds, controllers=(name,))
+            warm = dataclasses.replace(s, duration=0.5, swap_times=(), swap_masses=())
+            run_benchmark(warm, progress=False, engine="compiled")
+            best = float("inf")
+            for _ in range(3):
+                t0 = time.perf_counter()
+                run_benchmark(s, progress=False, engine="compiled")
+                best = min(best, time.perf_counter() - t0)
+            out.append(f"{name}/{seeds}: {best / (s.n_samples * seeds) * 1e6:.2f}")
+    print(adaptive_dd.__file__, "us per trial-sample:", " ".join(out), flush=True)
+
+
+if __name__ == "__main__":
+    main()
