@@ -14,6 +14,7 @@ import argparse
 
 import numpy as np
 
+from adaptive_dd.benchmark.metrics import mass_learning_time
 from adaptive_dd.closed_loop.information import com_learning_time
 from adaptive_dd.identification.payload_information import (
     payload_com_information_time,
@@ -56,15 +57,14 @@ def main() -> None:
         c, m = np.round(e_com[:, dt], 1), np.round(e_m[:, dt], 3)
         print(f"  +{dt:4d} ms  com error [mm] {c}  mass error [kg] {m}")
     tc = com_learning_time(rec.com[:, SWAP:], com_true, T)
-    within = np.abs(rec.mass[:, SWAP:] - B[0]) > 0.05 * B[0]
-    last = np.where(within.any(-1), within.shape[-1] - np.argmax(within[:, ::-1], -1), 0)
+    tm = mass_learning_time(rec.mass[:, SWAP:], B[0], A[0], T)
     r = recs[0]
     kw = dict(sample_period=T, tau_f=a.tau_f)
     lim_m = payload_information_time(ur5, r.q, r.qd, r.qdd, B, SWAP, **kw)
     lim_c = payload_com_information_time(ur5, r.q, r.qd, r.qdd, B, SWAP, **kw)
     print(
         f"centre of mass within 1 cm: estimator {1e3 * np.nanmedian(tc):.0f} ms (median), information "
-        f"limit {1e3 * lim_c:.0f} ms; mass within 5 %: estimator {np.median(last):.0f} ms, "
+        f"limit {1e3 * lim_c:.0f} ms; mass within 5 %: estimator {1e3 * np.nanmedian(tm):.0f} ms, "
         f"limit {1e3 * lim_m:.0f} ms"
     )
 

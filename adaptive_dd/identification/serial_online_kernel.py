@@ -581,24 +581,25 @@ def _payload_raw(c, th, raw):  # pragma: no cover - compiled
 
 
 @njit(cache=True)
-def _payload_cov(c, P, out):  # pragma: no cover - compiled
-    """Covariance (10, 10) of the payload's parameters: P itself (payload mode), else
-    ``pbasis_pinv P pbasis_pinv^T``."""
+def _inertia_cov(c, P, out):  # pragma: no cover - compiled
+    """The inertia block ``out[4:, 4:]`` of the payload parameters' covariance (the part
+    :func:`compact_prior` reads; the rest of ``out (10, 10)`` is left as it is): P's own block in
+    payload mode, else that block of ``pbasis_pinv P pbasis_pinv^T``."""
     if c.mode == MODE_PAYLOAD:
-        for a in range(10):
-            for b in range(10):
+        for a in range(4, 10):
+            for b in range(4, 10):
                 out[a, b] = P[a, b]
         return
     p = P.shape[0]
     tmp = np.zeros((10, p))
-    for a in range(10):
+    for a in range(4, 10):
         for b in range(p):
             acc = 0.0
             for k in range(p):
                 acc += c.pbasis_pinv[a, k] * P[k, b]
             tmp[a, b] = acc
-    for a in range(10):
-        for b in range(10):
+    for a in range(4, 10):
+        for b in range(4, 10):
             acc = 0.0
             for k in range(p):
                 acc += tmp[a, k] * c.pbasis_pinv[b, k]
@@ -607,7 +608,8 @@ def _payload_cov(c, P, out):  # pragma: no cover - compiled
 
 @njit(cache=True)
 def compact_prior(raw, Pc, rho):  # pragma: no cover - compiled
-    """Combine ``raw (10,)`` (covariance ``Pc (10, 10)``, overwritten) with a prior that the
+    """Combine ``raw (10,)`` (covariance ``Pc (10, 10)``, of which only the inertia block
+    ``Pc[4:, 4:]`` is read, and overwritten) with a prior that the
     payload is compact: its inertia about the frame ``I = m S(c)^T S(c) + 0.4 m rho^2 1``
     (a solid sphere of radius ``rho`` [m] at the estimated centre of mass ``c`` with the
     estimated mass ``m``), each of the six inertia components with standard deviation
@@ -659,7 +661,7 @@ def _control_payload(c, s, i, raw, pay):  # pragma: no cover - compiled
     rho = c.floats[F_PRIOR_RADIUS]
     if rho > 0.0:
         Pc = np.empty((10, 10))
-        _payload_cov(c, s.P[i], Pc)
+        _inertia_cov(c, s.P[i], Pc)
         compact_prior(raw, Pc, rho)
     if c.ints[I_PROJECT] == 1:
         project_payload(raw, pay, c.floats[F_EIG_MIN], c.floats[F_RADIUS])
@@ -693,7 +695,7 @@ def est_model_trial(c, s, i, pi_out):  # pragma: no cover - compiled
     p = th.shape[0]
     raw = np.empty(10)
     _payload_raw(c, th, raw)
-    raw_est = raw.copy()
+    raw_est = raw.copy() if c.mode != MODE_PAYLOAD else raw  # full mode: theta's own payload
     pay = np.empty(10)
     _control_payload(c, s, i, raw, pay)
     if c.mode == MODE_PAYLOAD:
