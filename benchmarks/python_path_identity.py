@@ -14,7 +14,8 @@ raises) and the N-joint arm (``vertical3_payload``: the built-ins, a bare wrappe
 trial, a raising controller), and stores every array of every run (streamed sums, error
 norm, trajectories, estimates, failures, dropouts, alarms, skipped samples, the error
 message). ``compare`` asserts equality at rtol 0 (NaN equal to NaN), prints the count of
-numbers compared and each difference, and exits 1 on any.
+numbers compared and each difference, and exits 1 on any. The compiled path's runs of the same
+built-ins are dumped too (they draw from the same noise blocks).
 """
 
 from __future__ import annotations
@@ -34,80 +35,52 @@ RUN_FIELDS += ("dropped", "skipped")
 
 
 class _Bare:
-    """A reset/command/observe class with no base class, around another controller."""
+    """A reset/command/observe class with no base class around another controller; after
+    ``after`` commands it goes wrong in ``where``: ``reset``, ``command`` or ``observe`` raise,
+    ``shape`` returns a command of the wrong shape, ``nan`` makes trial 0's command NaN."""
 
-    def __init__(self, inner):
-        self.inner = inner
-
-    def reset(self, n_trials, sample_period):
-        self.inner.reset(n_trials, sample_period)
-
-    def command(self, q, qd, q_d, qd_d, qdd_d):
-        return self.inner.command(q, qd, q_d, qd_d, qdd_d)
-
-    def observe(self, q, qd, tau):
-        self.inner.observe(q, qd, tau)
-
-
-class _Raises(_Bare):
-    """Raises in ``where`` (``reset``, ``command``, ``observe``; ``shape``: a command of the wrong
-    shape) after ``after`` samples."""
-
-    def __init__(self, inner, after: int, where: str = "command"):
-        super().__init__(inner)
-        self.after, self.k, self.where = after, 0, where
+    def __init__(self, inner, after: int = 0, where: str = ""):
+        self.inner, self.after, self.where, self.k = inner, after, where, 0
 
     def reset(self, n_trials, sample_period):
         if self.where == "reset":
             raise RuntimeError("boom")
-        super().reset(n_trials, sample_period)
+        self.inner.reset(n_trials, sample_period)
 
     def command(self, q, qd, q_d, qd_d, qdd_d):
         self.k += 1
-        tau = super().command(q, qd, q_d, qd_d, qdd_d)
-        if self.k > self.after and self.where in ("command", "shape"):
-            if self.where == "shape":
-                return tau[:, :1]
+        tau = np.array(self.inner.command(q, qd, q_d, qd_d, qdd_d), dtype=float)
+        late = self.where and self.k > self.after
+        if late and self.where == "command":
             raise RuntimeError("boom")
-        return tau
+        if late and self.where == "nan":
+            tau[0] = np.nan
+        return tau[:, :1] if late and self.where == "shape" else tau
 
     def observe(self, q, qd, tau):
-        if self.k > self.after and self.where == "observe":
+        if self.where == "observe" and self.k > self.after:
             raise RuntimeError("boom")
-        super().observe(q, qd, tau)
+        self.inner.observe(q, qd, tau)
 
 
-class _NaNTrial0(_Bare):
-    """Trial 0's command turns NaN after ``after`` samples (that trial fails, the others go on)."""
-
-    def __init__(self, inner, after: int):
-        super().__init__(inner)
-        self.after, self.k = after, 0
-
-    def command(self, q, qd, q_d, qd_d, qdd_d):
-        self.k += 1
-        tau = np.array(super().command(q, qd, q_d, qd_d, qdd_d), dtype=float)
-        if self.k > self.after:
-            tau[0] = np.nan
-        return tau
-
-
-def _two_link() -> dict:
+def _two_link(engine: str = "python") -> dict:
     from adaptive_dd.benchmark import load_scenario, run_benchmark
     from adaptive_dd.controllers import DEFAULT_GAINS, make_controller
 
     sc = load_scenario(ROOT / "examples" / "plugin.toml")
     sc = dataclasses.replace(sc, seeds=3, duration=1.6, swap_times=(0.6, 1.1), swap_masses=(3.0, 1.0))
     sc = dataclasses.replace(sc, dropout=0.01)
-    res = run_benchmark(sc, progress=False, engine="python", keep_trajectories=2)
+    res = run_benchmark(sc, progress=False, engine=engine, keep_trajectories=2)
+    if engine != "python":
+        return res.runs
     extra = {
         "pd": make_controller("pd", DEFAULT_GAINS),
         "ct_oracle_textbook": make_controller("ct_oracle_textbook", DEFAULT_GAINS),
         "adaptive_ct_paper": make_controller("adaptive_ct_paper", DEFAULT_GAINS),
         "bare": _Bare(make_controller("adaptive_ct", DEFAULT_GAINS)),
-        "nan": _NaNTrial0(make_controller("ct_nominal", DEFAULT_GAINS), 700),
+        "nan": _Bare(make_controller("ct_nominal", DEFAULT_GAINS), 700, "nan"),
         **{
-            f"raises_{w}": _Raises(make_controller("adaptive_ct", DEFAULT_GAINS), 900, w)
+            f"raises_{w}": _Bare(make_controller("adaptive_ct", DEFAULT_GAINS), 900, w)
             for w in ("reset", "command", "observe", "shape")
         },
     }
@@ -115,7 +88,7 @@ def _two_link() -> dict:
     return {**res.runs, **res2.runs}
 
 
-def _n_joint() -> dict:
+def _n_joint(engine: str = "python") -> dict:
     from adaptive_dd.benchmark.scenario import parse_scenario
     from adaptive_dd.closed_loop.controllers import make_serial_controller
     from adaptive_dd.closed_loop.runner import run_serial
@@ -130,10 +103,12 @@ def _n_joint() -> dict:
     sc = dataclasses.replace(parse_scenario(data, "identity.toml", name="identity"), dropout=0.01)
     arm = sc.arm
     ctrls = {n: make_serial_controller(n, arm) for n in ("adaptive_ct", "slotine_li", "ct_oracle", "pd")}
+    if engine != "python":
+        return run_serial(sc, ctrls, engine=engine, keep_trajectories=2).runs
     ctrls["bare"] = _Bare(make_serial_controller("slotine_li", arm))
-    ctrls["nan"] = _NaNTrial0(make_serial_controller("ct_nominal", arm), 500)
+    ctrls["nan"] = _Bare(make_serial_controller("ct_nominal", arm), 500, "nan")
     for w in ("reset", "command", "observe", "shape"):
-        ctrls[f"raises_{w}"] = _Raises(make_serial_controller("adaptive_ct", arm), 700, w)
+        ctrls[f"raises_{w}"] = _Bare(make_serial_controller("adaptive_ct", arm), 700, w)
     return run_serial(sc, ctrls, engine="python", keep_trajectories=2).runs
 
 
@@ -160,6 +135,8 @@ def _arrays(prefix: str, runs: dict) -> dict:
 
 def dump(path: str) -> None:
     arrays = {**_arrays("two_link", _two_link()), **_arrays("n_joint", _n_joint())}
+    arrays |= _arrays("two_link_compiled", _two_link("auto"))  # the noise blocks are shared
+    arrays |= _arrays("n_joint_compiled", _n_joint("compiled"))
     np.savez_compressed(path, **arrays)
     print(f"{len(arrays)} arrays, {sum(a.size for a in arrays.values())} values -> {path}")
 

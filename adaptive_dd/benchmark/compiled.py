@@ -380,25 +380,28 @@ def trial_block(i, k0, k1, noise, drop, rc, io, pl, g, ts, es, ec, acc, rec, ala
 
 
 @njit(cache=True)
-def measure_batch(io, ts, noise, drop, qm, qdm, qm_obs, qdm_obs):  # pragma: no cover - compiled
-    """:func:`measure_sample` for every trial (the Python path): ``noise (S, 4)``, ``drop (S,)``
-    or ``(0,)``; the law's ``qm, qdm (S, 2)``, the estimator's ``qm_obs, qdm_obs`` (NaN if lost)."""
+def _measure_loop(io, ts, noise, lost, qm, qdm, qm_obs, qdm_obs):  # pragma: no cover - compiled
     for i in range(ts.q.shape[0]):
-        lost = drop.shape[0] > 0 and drop[i]
         measure_sample(
             ts.q, ts.qd, ts.held_q, ts.held_qd, ts.n_dropped, io.res, io.std, io.quantize_encoder, i,
-            noise[i], lost, qm[i], qdm[i],
+            noise[i], lost[i], qm[i], qdm[i],
         )  # fmt: skip
         for j in range(2):
-            qm_obs[i, j] = np.nan if lost else qm[i, j]
-            qdm_obs[i, j] = np.nan if lost else qdm[i, j]
+            qm_obs[i, j] = np.nan if lost[i] else qm[i, j]
+            qdm_obs[i, j] = np.nan if lost[i] else qdm[i, j]
+
+
+def measure_batch(io, ts, noise, lost) -> tuple[Array, Array, Array, Array]:
+    """:func:`measure_sample` for every trial (the Python path): ``noise (S, 4)``, ``lost (S,)``
+    -> the law's ``qm, qdm (S, 2)`` and the estimator's ``qm_obs, qdm_obs`` (NaN if lost)."""
+    S = ts.q.shape[0]
+    qm, qdm, qm_obs, qdm_obs = (np.empty((S, 2)) for _ in range(4))
+    _measure_loop(io, ts, np.ascontiguousarray(noise), np.ascontiguousarray(lost), qm, qdm, qm_obs, qdm_obs)
+    return qm, qdm, qm_obs, qdm_obs
 
 
 @njit(cache=True)
-def apply_batch(rc, io, pl, ts, acc, rec, k, cmd, tau):  # pragma: no cover - compiled
-    """:func:`apply_sample` for every trial (the Python path): ``cmd (S, 2)`` the Python
-    controller's command (zeroed where the rule applies), ``tau (S, 2)`` the applied torque;
-    returns the segment of sample k."""
+def _apply_loop(rc, io, pl, ts, acc, rec, k, cmd, tau):  # pragma: no cover - compiled
     s = 0
     sg_true = pl.sigma_seg[segment_of(pl, k)]
     for i in range(ts.q.shape[0]):
@@ -409,6 +412,15 @@ def apply_batch(rc, io, pl, ts, acc, rec, k, cmd, tau):  # pragma: no cover - co
             i, k, cmd[i], tau[i],
         )  # fmt: skip
     return s
+
+
+def apply_batch(rc, io, pl, ts, acc, rec, k: int, cmd) -> tuple[Array, int]:
+    """:func:`apply_sample` for every trial (the Python path): ``cmd (S, 2)`` the Python
+    controller's command (copied); returns the applied torque ``(S, 2)`` and the segment of sample k."""
+    cmd = np.array(cmd, dtype=float, order="C")
+    tau = np.empty_like(cmd)
+    s = _apply_loop(rc, io, pl, ts, acc, rec, k, cmd, tau)
+    return tau, int(s)
 
 
 @njit(cache=True)
