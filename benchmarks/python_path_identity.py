@@ -3,9 +3,12 @@
 A refactoring's safety net for the driver of the Python path
 (:func:`adaptive_dd.closed_loop.python_path.run_python_batch`)::
 
-    python benchmarks/python_path_identity.py dump BEFORE.npz    # on the old commit
-    python benchmarks/python_path_identity.py dump AFTER.npz     # on the new one
+    PYTHONPATH=/old/tree python benchmarks/python_path_identity.py dump BEFORE.npz
+    PYTHONPATH=. python benchmarks/python_path_identity.py dump AFTER.npz
     python benchmarks/python_path_identity.py compare BEFORE.npz AFTER.npz
+
+(without ``PYTHONPATH`` the installed ``adaptive_dd`` is imported, not this tree's: ``dump``
+prints which one it ran).
 
 ``dump`` runs, on the Python path and with measurement dropouts, the two-link arm (every
 built-in through its Python form, the example plug-in ``examples/payload_gradient.py``, a
@@ -138,7 +141,10 @@ def dump(path: str) -> None:
     arrays |= _arrays("two_link_compiled", _two_link("auto"))  # the noise blocks are shared
     arrays |= _arrays("n_joint_compiled", _n_joint("compiled"))
     np.savez_compressed(path, **arrays)
-    print(f"{len(arrays)} arrays, {sum(a.size for a in arrays.values())} values -> {path}")
+    import adaptive_dd
+
+    n = sum(a.size for a in arrays.values())
+    print(f"{len(arrays)} arrays, {n} values of {adaptive_dd.__file__} -> {path}")
 
 
 def compare(a_path: str, b_path: str) -> int:
