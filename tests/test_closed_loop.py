@@ -94,6 +94,46 @@ def test_compiled_and_python_paths_agree_with_two_swaps_and_alarms():
             assert any(0 <= x - at < 0.3 for x in tr), tr
 
 
+def test_noise_blocks_are_each_trials_generator_in_order():
+    """The blocks are the numbers of one draw per trial (generator (seed, i)), whatever the block
+    size; dropouts come from (seed, i, 1); no dropouts: an empty second axis."""
+    from adaptive_dd.benchmark.types import CHUNK
+    from adaptive_dd.closed_loop.noise import NoiseBlocks
+
+    sc = SimpleNamespace(seed=7, dropout=0.3)
+    N = 2 * CHUNK + 17
+    got = list(NoiseBlocks(sc, [3, 5], 6).blocks(N))
+    assert [(k0, k1) for k0, k1, _, _ in got] == [(0, CHUNK), (CHUNK, 2 * CHUNK), (2 * CHUNK, N)]
+    noise = np.concatenate([b[2] for b in got], axis=1)
+    drop = np.concatenate([b[3] for b in got], axis=1)
+    for row, i in enumerate((3, 5)):
+        np.testing.assert_array_equal(noise[row], np.random.default_rng([7, i]).standard_normal((N, 6)))
+        np.testing.assert_array_equal(drop[row], np.random.default_rng([7, i, 1]).random(N) < 0.3)
+    _, _, _, none = next(NoiseBlocks(SimpleNamespace(seed=7, dropout=0.0), [3, 5], 6).blocks(N))
+    assert none.shape == (2, 0)
+
+
+class OneRowEstimate(Wrapped):
+    """A plug-in whose ``sigma_hat`` is one row ``(p,)``: it stands for every trial
+    (docs/controllers.md), as on the two-link arm."""
+
+    def __init__(self, inner, sigma):
+        super().__init__(inner)
+        self.sigma_hat = sigma
+
+
+def test_python_path_broadcasts_a_one_row_estimate_on_the_n_joint_arm():
+    sc = _short("vertical3_payload", 0.4, (0.2,), seeds=2, controllers=["ct_nominal"])
+    p = sc.arm.base.B.shape[0]
+    sigma = np.arange(1.0, p + 1.0)
+    run = run_serial(sc, {"one": OneRowEstimate(make_serial_controller("ct_nominal", sc.arm), sigma)}).runs[
+        "one"
+    ]
+    assert not run.error and not run.failed.any()
+    assert run.sigma_end.shape == (2, 2, p) and np.all(run.sigma_end == sigma)
+    assert run.sigma_hat.shape == (2, sc.n_samples, p) and np.all(run.sigma_hat == sigma)
+
+
 def test_ct_oracle_tracks_far_better_than_ct_nominal_on_loaded_ur5():
     sc = _short("ur5_tool_swap", 2.4, (0.8, 1.6), seeds=1, controllers=["ct_nominal", "ct_oracle"])
     res = run_serial(sc)

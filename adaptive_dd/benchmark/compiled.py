@@ -41,9 +41,9 @@ from adaptive_dd.controllers.compiled_form import (
     LAW_SLOTINE_ORACLE,
     CompiledSpec,
     TwoLinkGains,
+    command_trial,
     compiled_spec,
 )
-from adaptive_dd.controllers.laws import boost_trial, ct_trial, pd_trial, slotine_li_trial
 from adaptive_dd.identification.online_kernel import C_SINCE_ALARM, online_step_trial
 from adaptive_dd.plant.integrator import step_one
 from adaptive_dd.plant.sampling import actuate_trial, measure_trial
@@ -144,31 +144,6 @@ copy propagation, which removes the argument copies (``param = caller_var``) tha
 leaves in the sample loop; each copy of an array is a reference-count update that numba does not
 prune (pd: 0.55 -> 0.43 us per trial-sample, benchmarks/two_link_speed_ab.py). Nothing
 runs in parallel: the function has no ``prange`` and no array expression is converted."""
-
-
-@njit(cache=True, inline="always")
-def _command(g, T, sg_true, sg_model, since_alarm, q, qd, q_d, qd_d, qdd_d, out):  # pragma: no cover
-    """The command of law ``g.law`` into ``out (2,)``; ``sg_model`` the trial's estimate."""
-    law = g.law
-    if law == LAW_SLOTINE:
-        slotine_li_trial(
-            q, qd, q_d, qd_d, qdd_d, sg_model, g.sigma, g.lam, g.kd, T, g.gamma, g.lo, g.hi, g.projection, out
-        )  # fmt: skip
-    elif law == LAW_SLOTINE_ORACLE:
-        th = sg_true.copy()
-        slotine_li_trial(
-            q, qd, q_d, qd_d, qdd_d, th, g.sigma, g.lam, g.kd, T, g.gamma[0:0], g.lo, g.hi, g.projection, out
-        )  # fmt: skip
-    elif law == LAW_PD:
-        pd_trial(q, qd, q_d, qd_d, g.pd_kp, g.pd_kd, out)
-    elif law == LAW_CT:
-        ct_trial(q, qd, q_d, qd_d, qdd_d, g.sigma, g.kp, g.kd, g.lam, out)
-    elif law == LAW_CT_ORACLE:
-        ct_trial(q, qd, q_d, qd_d, qdd_d, sg_true, g.kp, g.kd, g.lam, out)
-    else:
-        ct_trial(q, qd, q_d, qd_d, qdd_d, sg_model, g.kp, g.kd, g.lam, out)
-        if g.boost_samples > 0 and since_alarm < g.boost_samples:
-            boost_trial(q, qd, q_d, qd_d, g.sigma, g.boost_kp, g.boost_kd, out)
 
 
 @njit(cache=True, parallel=True)
@@ -360,7 +335,7 @@ def trial_block(i, k0, k1, noise, drop, rc, io, pl, g, ts, es, ec, acc, rec, ala
         )
         model = theta[i] if law == LAW_SLOTINE else sigma_model[i]
         sg_true = sigma_seg[_segment(swap_k, k)]
-        _command(g, T, sg_true, model, cnt[i, C_SINCE_ALARM], qm, qdm, q_d[k], qd_d[k], qdd_d[k], cmd)
+        command_trial(g, T, sg_true, model, cnt[i, C_SINCE_ALARM], qm, qdm, q_d[k], qd_d[k], qdd_d[k], cmd)
         s = apply_sample(
             T, max_error, max_speed, q_d, seg_start, seg_settled, lim, lsb, saturate, quantize_dac,
             sg_true, substeps, friction_code, fparams, q, qd, stuck, slip, z, failed, failed_at,
@@ -380,25 +355,28 @@ def trial_block(i, k0, k1, noise, drop, rc, io, pl, g, ts, es, ec, acc, rec, ala
 
 
 @njit(cache=True)
-def measure_batch(io, ts, noise, drop, qm, qdm, qm_obs, qdm_obs):  # pragma: no cover - compiled
-    """:func:`measure_sample` for every trial (the Python path): ``noise (S, 4)``, ``drop (S,)``
-    or ``(0,)``; the law's ``qm, qdm (S, 2)``, the estimator's ``qm_obs, qdm_obs`` (NaN if lost)."""
+def _measure_loop(io, ts, noise, lost, qm, qdm, qm_obs, qdm_obs):  # pragma: no cover - compiled
     for i in range(ts.q.shape[0]):
-        lost = drop.shape[0] > 0 and drop[i]
         measure_sample(
             ts.q, ts.qd, ts.held_q, ts.held_qd, ts.n_dropped, io.res, io.std, io.quantize_encoder, i,
-            noise[i], lost, qm[i], qdm[i],
+            noise[i], lost[i], qm[i], qdm[i],
         )  # fmt: skip
         for j in range(2):
-            qm_obs[i, j] = np.nan if lost else qm[i, j]
-            qdm_obs[i, j] = np.nan if lost else qdm[i, j]
+            qm_obs[i, j] = np.nan if lost[i] else qm[i, j]
+            qdm_obs[i, j] = np.nan if lost[i] else qdm[i, j]
+
+
+def measure_batch(io, ts, noise, lost) -> tuple[Array, Array, Array, Array]:
+    """:func:`measure_sample` for every trial (the Python path): ``noise (S, 4)``, ``lost (S,)``
+    -> the law's ``qm, qdm (S, 2)`` and the estimator's ``qm_obs, qdm_obs`` (NaN if lost)."""
+    S = ts.q.shape[0]
+    qm, qdm, qm_obs, qdm_obs = (np.empty((S, 2)) for _ in range(4))
+    _measure_loop(io, ts, np.ascontiguousarray(noise), np.ascontiguousarray(lost), qm, qdm, qm_obs, qdm_obs)
+    return qm, qdm, qm_obs, qdm_obs
 
 
 @njit(cache=True)
-def apply_batch(rc, io, pl, ts, acc, rec, k, cmd, tau):  # pragma: no cover - compiled
-    """:func:`apply_sample` for every trial (the Python path): ``cmd (S, 2)`` the Python
-    controller's command (zeroed where the rule applies), ``tau (S, 2)`` the applied torque;
-    returns the segment of sample k."""
+def _apply_loop(rc, io, pl, ts, acc, rec, k, cmd, tau):  # pragma: no cover - compiled
     s = 0
     sg_true = pl.sigma_seg[segment_of(pl, k)]
     for i in range(ts.q.shape[0]):
@@ -409,6 +387,15 @@ def apply_batch(rc, io, pl, ts, acc, rec, k, cmd, tau):  # pragma: no cover - co
             i, k, cmd[i], tau[i],
         )  # fmt: skip
     return s
+
+
+def apply_batch(rc, io, pl, ts, acc, rec, k: int, cmd) -> tuple[Array, int]:
+    """:func:`apply_sample` for every trial (the Python path): ``cmd (S, 2)`` the Python
+    controller's command (copied); returns the applied torque ``(S, 2)`` and the segment of sample k."""
+    cmd = np.array(cmd, dtype=float, order="C")
+    tau = np.empty_like(cmd)
+    s = _apply_loop(rc, io, pl, ts, acc, rec, k, cmd, tau)
+    return tau, int(s)
 
 
 @njit(cache=True)

@@ -1,25 +1,25 @@
-"""The set-up every two-link trial shares, whichever path runs it: its random generators
-(sensor noise and dropouts, common random numbers across controllers), its sensors, the true
-parameters at every sample, and an empty :class:`~adaptive_dd.benchmark.types.ControllerRun`."""
+"""The set-up every two-link trial shares, whichever path runs it: its sensor-noise generators
+(:func:`~adaptive_dd.closed_loop.noise.trial_rngs`, common random numbers across controllers;
+the run draws them, and its dropouts, through :class:`~adaptive_dd.closed_loop.noise.NoiseBlocks`),
+its sensors, the true parameters at every sample, and an empty
+:class:`~adaptive_dd.benchmark.types.ControllerRun`."""
 
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Sequence
 
 import numpy as np
 from numpy.typing import NDArray
 
 from adaptive_dd.benchmark.scenario import Scenario
 from adaptive_dd.benchmark.types import ControllerRun
+from adaptive_dd.closed_loop.noise import trial_rngs
 from adaptive_dd.closed_loop.types import StreamedSums
 from adaptive_dd.controllers.base import declared
 from adaptive_dd.plant.sampling import first_sample
 from adaptive_dd.plant.simulator import PayloadSchedule
 
 __all__ = [
-    "dropout_block",
-    "dropout_rngs",
     "new_run",
     "payload_schedule",
     "sensor_of",
@@ -28,10 +28,6 @@ __all__ = [
 ]
 
 Array = NDArray[np.float64]
-
-
-def trial_rngs(seed: int, indices: Sequence[int]) -> list[np.random.Generator]:
-    return [np.random.default_rng([int(seed), int(i)]) for i in indices]
 
 
 def payload_schedule(scenario: Scenario) -> PayloadSchedule:
@@ -55,18 +51,6 @@ def true_sigma(scenario: Scenario, t: Array) -> tuple[Array, Array]:
     w = np.searchsorted(np.array(k_sw, dtype=np.int64), np.arange(t.size), side="right")
     mass = masses[w]
     return scenario.arm.sigma_with_payload(mass, scenario.payload_radius), mass
-
-
-def dropout_rngs(scenario: Scenario, indices) -> list[np.random.Generator] | None:
-    """Generators of the measurement dropouts, one per trial, apart from the sensor noise's."""
-    if scenario.dropout <= 0:
-        return None
-    return [np.random.default_rng([int(scenario.seed), int(i), 1]) for i in indices]
-
-
-def dropout_block(rngs, p: float, n: int) -> NDArray[np.bool_]:
-    """The next ``n`` samples' dropouts of every trial, ``(n_trials, n)`` (drawn block by block)."""
-    return np.ascontiguousarray(np.stack([g.random(n) < p for g in rngs]))
 
 
 def new_run(

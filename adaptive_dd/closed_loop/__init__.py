@@ -11,6 +11,11 @@ Layout (data first, then arithmetic, then drivers):
 :mod:`~adaptive_dd.closed_loop.glue`
     The per-sample glue written once (measure, guard, actuate, plant step, divergence,
     failure freeze, metrics, recording) and the compiled whole-block driver.
+:mod:`~adaptive_dd.closed_loop.noise`
+    Sensor noise and dropouts of every trial, drawn block by block (both arms, both paths).
+:mod:`~adaptive_dd.closed_loop.python_path`
+    The Python path (a controller object's ``reset / command / observe``) written once for
+    both arms, around each arm's batch glue.
 :mod:`~adaptive_dd.closed_loop.controllers`
     One class per built-in controller, owning its Python ``command`` and its compiled form;
     :data:`~adaptive_dd.closed_loop.controllers.SERIAL_CONTROLLERS` (name -> class).

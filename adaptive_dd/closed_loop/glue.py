@@ -36,6 +36,7 @@ from adaptive_dd.plant.sampling import actuate_trial, measure_trial
 
 __all__ = [
     "Alarms",
+    "alarm_lists",
     "apply_batch",
     "apply_trial_sample",
     "closed_loop_block",
@@ -57,6 +58,12 @@ class Alarms(NamedTuple):
 
     times: NDArray[np.float64]
     count: NDArray[np.int64]
+
+
+def alarm_lists(alarms: Alarms) -> list[list[float]]:
+    """Per trial, the alarm times [s] that were kept (at most the capacity)."""
+    cap = alarms.times.shape[1]
+    return [list(alarms.times[i, : min(c, cap)]) for i, c in enumerate(alarms.count)]
 
 
 @njit(cache=True)
@@ -291,18 +298,21 @@ def measure_batch(io, ts, noise, lost) -> tuple:
 
 
 @njit(cache=True)
-def _apply_loop(ch, rc, io, pl, ts, acc, rec, k, s, cmd, tau):  # pragma: no cover - compiled
+def _apply_loop(ch, rc, io, pl, ts, acc, rec, k, cmd, tau):  # pragma: no cover - compiled
+    s = segment_of(rc, k)
     work = sample_work(cmd.shape[1])  # one per call: trials run one after the other here
     for i in range(cmd.shape[0]):
         apply_trial_sample(ch, rc, io, pl, ts, acc, rec, i, k, s, cmd[i], tau[i], work)
+    return s
 
 
-def apply_batch(ch, rc, io, pl, ts, acc, rec, k: int, s: int, cmd) -> NDArray[np.float64]:
-    """Step 3 for every trial; ``cmd (S, n)`` (copied); returns the applied torque ``(S, n)``."""
+def apply_batch(ch, rc, io, pl, ts, acc, rec, k: int, cmd) -> tuple[NDArray[np.float64], int]:
+    """Step 3 for every trial; ``cmd (S, n)`` (copied); returns the applied torque ``(S, n)`` and
+    the segment of sample k."""
     cmd = np.array(cmd, dtype=float, order="C")
     tau = np.empty_like(cmd)
-    _apply_loop(ch, rc, io, pl, ts, acc, rec, k, s, cmd, tau)
-    return tau
+    s = _apply_loop(ch, rc, io, pl, ts, acc, rec, k, cmd, tau)
+    return tau, int(s)
 
 
 @njit(cache=True)

@@ -1,30 +1,37 @@
 """Every controller of a scenario over every seed, on an N-joint arm.
 
 Trial i of every controller uses the noise of seed ``(scenario.seed, seed_indices[i])``
-(common random numbers), drawn in blocks of :data:`CHUNK` samples: ``(CHUNK, 2 n)`` standard
-normals per trial, dropouts from a second generator ``(seed, i, 1)``. Built-in controllers
-run compiled (:func:`~adaptive_dd.closed_loop.glue.closed_loop_block`, a block of samples of
-a range of trials in one call, ranges in parallel threads); any other controller object (a plug-in with
-``reset / command / observe``) runs on the Python path, one ``command`` per sample for the
-whole batch. Both call the same compiled glue.
+(common random numbers), drawn in blocks of :data:`CHUNK` samples
+(:class:`~adaptive_dd.closed_loop.noise.NoiseBlocks`: ``(CHUNK, 2 n)`` standard normals per
+trial, dropouts from a second generator ``(seed, i, 1)``). Built-in controllers run compiled
+(:func:`~adaptive_dd.closed_loop.glue.closed_loop_block`, a block of samples of a range of
+trials in one call, ranges in parallel threads); any other controller object (a plug-in with
+``reset / command / observe``) runs on the Python path
+(:func:`~adaptive_dd.closed_loop.python_path.run_python_batch`, shared with the two-link arm),
+one ``command`` per sample for the whole batch. Both call the same compiled glue.
 """
 
 from __future__ import annotations
 
 import itertools
 from collections.abc import Sequence
+from functools import partial
 
 import numpy as np
 
-from adaptive_dd.benchmark.types import BenchmarkResult, ControllerRun
+from adaptive_dd.benchmark.types import CHUNK, MAX_ALARMS, BenchmarkResult, ControllerRun
 from adaptive_dd.closed_loop.controllers import SerialLaw, make_serial_controller
 from adaptive_dd.closed_loop.glue import (
     Alarms,
+    alarm_lists,
     apply_batch,
     closed_loop_block,
     measure_batch,
+    segment_of,
     sigma_batch,
 )
+from adaptive_dd.closed_loop.noise import NoiseBlocks
+from adaptive_dd.closed_loop.python_path import PythonGlue, run_python_batch
 from adaptive_dd.closed_loop.types import (
     Plant,
     Recording,
@@ -35,14 +42,9 @@ from adaptive_dd.closed_loop.types import (
     plant_of,
     run_constants,
 )
-from adaptive_dd.errors import SignalError
+from adaptive_dd.controllers.base import declared
 
 __all__ = ["CHUNK", "MAX_ALARMS", "make_controllers", "run_serial", "true_parameters"]
-
-CHUNK = 1024
-"""Samples per block of drawn noise (and per call of the compiled loop)."""
-MAX_ALARMS = 256
-"""Alarm times kept per trial on the compiled path (the count goes on)."""
 
 
 def make_controllers(scenario) -> dict:
@@ -122,39 +124,30 @@ def run_serial(
 
 
 # ------------------------------------------------------------------------ shared set-up
-def _trial_state(rc: RunConstants, S: int) -> TrialState:
-    n = rc.q_d.shape[1]
+def _records(
+    name, ctrl, scenario, rc: RunConstants, pl: Plant, S: int, keep: int, estimates: bool, engine: str
+):
+    """``(run, ts, acc, rec)``: an empty run of S trials over the arrays its paths fill in place
+    (trial state at the reference's start, streamed sums, the recording of the first ``keep``)."""
+    N, n = rc.q_d.shape
+    G, p = pl.pi_seg.shape[0], scenario.arm.base.B.shape[0]
+    K = min(keep, S)
     q = np.broadcast_to(rc.q_d[0], (S, n)).copy()
     qd = np.broadcast_to(rc.qd_d[0], (S, n)).copy()
     z = np.zeros(S, dtype=np.int64)
-    return TrialState(q, qd, qd == 0.0, np.zeros(S, np.bool_), z - 1, q.copy(), qd.copy(), z.copy())
-
-
-def _recording(S: int, K: int, N: int, n: int, p: int, G: int, estimates: bool) -> Recording:
-    return Recording(
+    ts = TrialState(q, qd, qd == 0.0, np.zeros(S, np.bool_), z - 1, q.copy(), qd.copy(), z.copy())
+    acc = StreamedSums.zeros(S, G, n, N)
+    rec = Recording(
         np.zeros((K, N, n)), np.zeros((K, N, n)), np.zeros((K, N, n)), np.zeros((K, N, n), np.bool_),
         np.full((K if estimates else 0, N, p), np.nan), np.full((S, G, p), np.nan),
     )  # fmt: skip
-
-
-class _Draws:
-    """Sensor noise and dropouts of every trial, drawn block by block."""
-
-    def __init__(self, scenario, idx, n: int):
-        self.rngs = [np.random.default_rng([int(scenario.seed), int(i)]) for i in idx]
-        self.p = float(scenario.dropout)
-        self.drop_rngs = (
-            [np.random.default_rng([int(scenario.seed), int(i), 1]) for i in idx] if self.p else None
-        )
-        self.n = n
-
-    def block(self, m: int):
-        noise = np.ascontiguousarray(np.stack([g.standard_normal((m, 2 * self.n)) for g in self.rngs]))
-        if self.drop_rngs is None:
-            drop = np.zeros((len(self.rngs), 0), dtype=np.bool_)
-        else:
-            drop = np.ascontiguousarray(np.stack([g.random(m) < self.p for g in self.drop_rngs]))
-        return noise, drop
+    run = ControllerRun(
+        name=name, acc=acc, e_norm=acc.e_norm, sigma_end=rec.sigma_end if estimates else None,
+        failed=ts.failed, failed_at=ts.failed_at, floor=declared(ctrl, "floor"), q=rec.q, qd=rec.qd,
+        tau=rec.tau, saturated=rec.saturated, sigma_hat=rec.sigma if estimates and K else None,
+        engine=engine, dropped=ts.n_dropped,
+    )  # fmt: skip
+    return run, ts, acc, rec
 
 
 def _true_pi(pl: Plant) -> np.ndarray:
@@ -164,38 +157,14 @@ def _true_pi(pl: Plant) -> np.ndarray:
     return np.ascontiguousarray(np.hstack((pl.pi_seg, np.broadcast_to(fr, (G, fr.size)))))
 
 
-def _finish(name, ctrl, scenario, acc, rec, ts, engine, estimates) -> ControllerRun:
-    K = rec.q.shape[0]
-    return ControllerRun(
-        name=name,
-        acc=acc,
-        e_norm=acc.e_norm,
-        sigma_end=rec.sigma_end if estimates else None,
-        failed=ts.failed,
-        failed_at=ts.failed_at,
-        floor=getattr(ctrl, "floor", "ct_oracle"),
-        q=rec.q,
-        qd=rec.qd,
-        tau=rec.tau,
-        saturated=rec.saturated,
-        sigma_hat=rec.sigma if estimates and K else None,
-        engine=engine,
-        dropped=ts.n_dropped,
-    )
-
-
 # ------------------------------------------------------------------------ the two paths
 def _run_compiled(name, ctrl: SerialLaw, scenario, idx, rc, io, pl, keep, bar) -> ControllerRun:
     S, N, n = len(idx), scenario.n_samples, scenario.n_joints
-    G, p = pl.pi_seg.shape[0], scenario.arm.base.B.shape[0]
     form = ctrl.compiled_form(S, rc.T)
-    ts, acc = _trial_state(rc, S), StreamedSums.zeros(S, G, n, N)
-    rec = _recording(S, min(keep, S), N, n, p, G, form.estimates)
+    run, ts, acc, rec = _records(name, ctrl, scenario, rc, pl, S, keep, form.estimates, "compiled")
     alarms = Alarms(np.zeros((S, MAX_ALARMS)), np.zeros(S, dtype=np.int64))
-    draws, pi_true, B = _Draws(scenario, idx, n), _true_pi(pl), np.ascontiguousarray(scenario.arm.base.B)
-    for k0 in range(0, N, CHUNK):
-        k1 = min(N, k0 + CHUNK)
-        noise, drop = draws.block(k1 - k0)
+    pi_true, B = _true_pi(pl), np.ascontiguousarray(scenario.arm.base.B)
+    for k0, k1, noise, drop in NoiseBlocks(scenario, idx, 2 * n).blocks(N):
         args = (
             k0, k1, ctrl.ch, rc, io, pl, ts, acc, rec, alarms, noise, drop, form.cfg, form.state, pi_true, B,
             form.ec, form.es, form.estimates,
@@ -203,10 +172,9 @@ def _run_compiled(name, ctrl: SerialLaw, scenario, idx, rc, io, pl, keep, bar) -
         _in_threads(closed_loop_block, S, args)
         if bar is not None:
             bar.update(k1 - k0)
-    run = _finish(name, ctrl, scenario, acc, rec, ts, "compiled", form.estimates)
     run.skipped = ctrl.skipped(form)
     if ctrl.has_detector:
-        run.alarm_times = [list(alarms.times[i, : min(c, MAX_ALARMS)]) for i, c in enumerate(alarms.count)]
+        run.alarm_times = alarm_lists(alarms)
     return run
 
 
@@ -228,55 +196,18 @@ def _in_threads(kernel, S: int, args: tuple) -> None:
 
 
 def _run_python(name, ctrl, scenario, idx, rc, io, pl, keep, bar) -> ControllerRun:
-    """One controller's trials as a vectorised batch, one ``command`` per sample."""
-    S, N, n, T = len(idx), scenario.n_samples, scenario.n_joints, rc.T
-    G, p = pl.pi_seg.shape[0], scenario.arm.base.B.shape[0]
+    """One controller's trials on the Python path
+    (:func:`~adaptive_dd.closed_loop.python_path.run_python_batch`)."""
     sig_seg = scenario.segment_sigmas()
-    error = ""
-    try:
-        ctrl.reset(S, T)
-        estimates = getattr(ctrl, "sigma_hat", None) is not None
-    except Exception as exc:  # contain any controller failure to its own trials
-        error, estimates = f"{type(exc).__name__} in reset: {exc}", False
-    truth = bool(getattr(ctrl, "needs_true_model", False))
-    ts, acc = _trial_state(rc, S), StreamedSums.zeros(S, G, n, N)
-    rec = _recording(S, min(keep, S), N, n, p, G, estimates)
-    draws, ch = _Draws(scenario, idx, n), scenario.arm.chain
-    s = 0
-    for k in range(N):
-        if k % CHUNK == 0:
-            noise, drop = draws.block(min(CHUNK, N - k))
-        while s + 1 < G and k >= rc.seg_start[s + 1]:
-            s += 1
-        lost = drop[:, k % CHUNK] if drop.shape[1] else np.zeros(S, dtype=np.bool_)
-        qm, qdm, qm_obs, qdm_obs = measure_batch(io, ts, noise[:, k % CHUNK], lost)
-        cmd = np.full((S, n), np.nan)
-        if not error:
-            try:
-                kw = {"sigma_true": np.broadcast_to(sig_seg[s], (S, p)).copy()} if truth else {}
-                out = np.asarray(ctrl.command(qm, qdm, rc.q_d[k], rc.qd_d[k], rc.qdd_d[k], **kw), dtype=float)
-                if out.shape != (S, n):
-                    raise SignalError(f"command returned shape {out.shape}, expected ({S}, {n})")
-                cmd = out
-            except Exception as exc:
-                error = f"{type(exc).__name__} in command at t = {k * T:.3f} s: {exc}"
-        tau = apply_batch(ch, rc, io, pl, ts, acc, rec, k, s, cmd)
-        if not error:
-            try:
-                ctrl.observe(qm_obs, qdm_obs, tau)
-                if estimates:
-                    sigma_batch(rc, rec, k, s, np.asarray(ctrl.sigma_hat, dtype=float))
-            except Exception as exc:
-                error = f"{type(exc).__name__} in observe at t = {k * T:.3f} s: {exc}"
-        if bar is not None and k % 1000 == 999:
-            bar.update(1000)
-    if bar is not None:
-        bar.update(N % 1000)
-    run = _finish(name, ctrl, scenario, acc, rec, ts, "python", estimates)
-    run.error = error
-    if error:
-        run.failed[:] = True
-    else:
-        run.alarm_times = getattr(ctrl, "alarm_times", None)
-        run.skipped = getattr(ctrl, "skipped_samples", None)
-    return run
+
+    def records(estimates: bool):
+        run, ts, acc, rec = _records(name, ctrl, scenario, rc, pl, len(idx), keep, estimates, "python")
+        glue = PythonGlue(
+            measure=partial(measure_batch, io, ts),
+            sigma_true=lambda k: sig_seg[segment_of(rc, k)],
+            apply=partial(apply_batch, scenario.arm.chain, rc, io, pl, ts, acc, rec),
+            record_estimate=partial(sigma_batch, rc, rec),
+        )
+        return run, glue
+
+    return run_python_batch(ctrl, rc, NoiseBlocks(scenario, idx, 2 * scenario.n_joints), records, bar)

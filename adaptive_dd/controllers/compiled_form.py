@@ -3,8 +3,17 @@
 Each built-in class owns its form (a ``compiled_spec(sample_period)`` method returning a
 :class:`CompiledSpec`); :func:`compiled_spec` asks the controller for it. The compiled loop
 (:mod:`adaptive_dd.benchmark.compiled`) runs the law ``TwoLinkGains.law`` names with those
-gains. A controller without the method (a plug-in), or of a subclass that does not define it
-itself (its Python form may differ), runs on the Python path.
+gains through :func:`command_trial`, the one dispatch on the law, kept here beside the codes
+and the gains (a new law: its class, and here its code, gains and branch). A controller
+without the method (a plug-in), or of a subclass that does not define it itself (its Python
+form may differ), runs on the Python path.
+
+Why a branch here and not a law function that each class hands over: numba compiles a
+function that takes another jitted function (or a gains tuple of a type of its own) once per
+such argument, so the whole sample loop (``trial_block``; its compile time is printed by
+``benchmarks/two_link_compile_time.py``) would be compiled once per law; a first-class function
+type (a pointer) is never inlined into the sample loop, and numba's caching of functions that
+take one is an open problem (numba issues 9237, 10280).
 """
 
 from __future__ import annotations
@@ -12,7 +21,10 @@ from __future__ import annotations
 from typing import NamedTuple
 
 import numpy as np
+from numba import njit
 from numpy.typing import NDArray
+
+from adaptive_dd.controllers.laws import boost_trial, ct_trial, pd_trial, slotine_li_trial
 
 __all__ = [
     "LAW_ADAPTIVE",
@@ -23,6 +35,7 @@ __all__ = [
     "LAW_SLOTINE_ORACLE",
     "CompiledSpec",
     "TwoLinkGains",
+    "command_trial",
     "compiled_spec",
     "two_link_gains",
 ]
@@ -108,3 +121,36 @@ def compiled_spec(ctrl, sample_period: float) -> CompiledSpec | None:
     if "compiled_spec" not in vars(type(ctrl)):
         return None
     return ctrl.compiled_spec(sample_period)
+
+
+@njit(cache=True, inline="always")
+def command_trial(g, T, sg_true, sg_model, since_alarm, q, qd, q_d, qd_d, qdd_d, out):  # pragma: no cover
+    """One trial's command of law ``g.law`` into ``out (2,)`` [N m] (the compiled loop's only
+    dispatch on the law, inlined into its sample loop).
+
+    ``T`` sample period [s]; ``sg_true (7,)`` the true base parameters over the sample (oracles);
+    ``sg_model (7,)`` the trial's estimate (``adaptive_ct``: the estimator's model; Slotine-Li:
+    its ``theta``, adapted in place); ``since_alarm`` samples since the detector's last alarm
+    (``adaptive_ct``'s boost); ``q, qd (2,)`` measured; ``q_d, qd_d, qdd_d (2,)`` the reference.
+    A new law is a ``LAW_*`` code, its gains in :class:`TwoLinkGains` and its branch here.
+    """
+    law = g.law
+    if law == LAW_SLOTINE:
+        slotine_li_trial(
+            q, qd, q_d, qd_d, qdd_d, sg_model, g.sigma, g.lam, g.kd, T, g.gamma, g.lo, g.hi, g.projection, out
+        )  # fmt: skip
+    elif law == LAW_SLOTINE_ORACLE:
+        th = sg_true.copy()
+        slotine_li_trial(
+            q, qd, q_d, qd_d, qdd_d, th, g.sigma, g.lam, g.kd, T, g.gamma[0:0], g.lo, g.hi, g.projection, out
+        )  # fmt: skip
+    elif law == LAW_PD:
+        pd_trial(q, qd, q_d, qd_d, g.pd_kp, g.pd_kd, out)
+    elif law == LAW_CT:
+        ct_trial(q, qd, q_d, qd_d, qdd_d, g.sigma, g.kp, g.kd, g.lam, out)
+    elif law == LAW_CT_ORACLE:
+        ct_trial(q, qd, q_d, qd_d, qdd_d, sg_true, g.kp, g.kd, g.lam, out)
+    else:
+        ct_trial(q, qd, q_d, qd_d, qdd_d, sg_model, g.kp, g.kd, g.lam, out)
+        if g.boost_samples > 0 and since_alarm < g.boost_samples:
+            boost_trial(q, qd, q_d, qd_d, g.sigma, g.boost_kp, g.boost_kd, out)

@@ -1,0 +1,139 @@
+"""The Python path of the closed loop, written once for both arms.
+
+A controller object with ``reset / command / observe`` (a plug-in, or a built-in run with
+``engine="python"``) runs as one vectorised batch: one ``command`` and one ``observe`` per
+sample for all the trials, between the arm's batch wrappers of its compiled per-trial glue
+(:class:`PythonGlue`): the measurement with its dropouts, then the divergence rule, actuator,
+plant step, failure freeze, streamed sums and recordings, then the estimate's record. The
+two-link arm (:func:`adaptive_dd.benchmark.drivers.run_python`) and the N-joint arm
+(:func:`adaptive_dd.closed_loop.runner.run_serial`) differ only in that glue and their records.
+
+A controller that raises (at reset, command or observe), or returns a command of the wrong
+shape, fails its own trials with the message in ``run.error``; the run goes on (the plant
+then gets a NaN command, which the divergence rule turns into a failed trial at rest).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import NamedTuple
+
+import numpy as np
+from numpy.typing import NDArray
+
+from adaptive_dd.benchmark.types import ControllerRun
+from adaptive_dd.closed_loop.noise import NoiseBlocks
+from adaptive_dd.closed_loop.types import RunConstants
+from adaptive_dd.controllers.base import declared
+from adaptive_dd.errors import SignalError
+
+__all__ = ["PythonGlue", "run_python_batch"]
+
+Array = NDArray[np.float64]
+
+
+class PythonGlue(NamedTuple):
+    """One arm's per-sample glue around a Python controller, bound to one run's records.
+
+    Attributes
+    ----------
+    measure : callable
+        ``measure(noise (S, 2 n), lost (S,)) -> qm, qdm, qm_obs, qdm_obs`` each ``(S, n)``, new
+        arrays: the law's measurement (the last good one where lost) and the estimator's (NaN
+        where lost).
+    sigma_true : callable
+        ``sigma_true(k) -> (p,)`` the true base parameters over sample k (for oracles).
+    apply : callable
+        ``apply(k, cmd (S, n)) -> tau (S, n), s``: the command applied over sample k (``cmd`` is
+        not changed), the torque that was applied, the sample's payload segment.
+    record_estimate : callable
+        ``record_estimate(k, s, sigma (S, p))``: the estimate after sample k (segment s).
+    """
+
+    measure: Callable
+    sigma_true: Callable
+    apply: Callable
+    record_estimate: Callable
+
+
+def run_python_batch(
+    ctrl, rc: RunConstants, draws: NoiseBlocks, records: Callable, bar=None
+) -> ControllerRun:
+    """One controller object's trials on the Python path.
+
+    Parameters
+    ----------
+    ctrl : object
+        ``reset(n_trials, T)``, ``command(q, qd, q_d, qd_d, qdd_d[, sigma_true]) -> (S, n)``,
+        ``observe(q, qd, tau)``; the optional attributes of
+        :data:`~adaptive_dd.controllers.base.DECLARED` (read through
+        :func:`~adaptive_dd.controllers.base.declared`).
+    rc : RunConstants
+        Sample period and the reference ``q_d, qd_d, qdd_d (N, n)``.
+    draws : NoiseBlocks
+        The trials' sensor noise and dropouts (S trials).
+    records : callable
+        ``records(estimates) -> (run, glue)`` after ``reset``: the empty
+        :class:`~adaptive_dd.benchmark.types.ControllerRun` (with the estimate's arrays if
+        ``estimates``) and the :class:`PythonGlue` bound to its arrays.
+    bar : tqdm-like or None
+        Progress (samples).
+
+    Returns
+    -------
+    ControllerRun
+        ``run``, filled in; ``error``, ``alarm_times`` and ``skipped`` from the controller.
+    """
+    S, (N, n), T = draws.n_trials, rc.q_d.shape, rc.T
+    error = ""
+    try:
+        ctrl.reset(S, T)
+        estimates = bool(declared(ctrl, "adaptive"))
+    except Exception as exc:  # contain any controller failure to its own trials
+        error, estimates = f"{type(exc).__name__} in reset: {exc}", False
+    run, glue = records(estimates)
+    truth = bool(declared(ctrl, "needs_true_model"))
+    no_drop = np.zeros(S, dtype=np.bool_)
+    for k0, k1, noise, drop in draws.blocks(N):
+        for k in range(k0, k1):
+            lost = drop[:, k - k0] if drop.shape[1] else no_drop
+            qm, qdm, qm_obs, qdm_obs = glue.measure(noise[:, k - k0], lost)
+            cmd = np.full((S, n), np.nan)
+            if not error:
+                try:
+                    cmd = _command(ctrl, glue, rc, k, qm, qdm, truth)
+                except Exception as exc:
+                    error = f"{type(exc).__name__} in command at t = {k * T:.3f} s: {exc}"
+            tau, s = glue.apply(k, cmd)
+            if not error:
+                try:
+                    ctrl.observe(qm_obs, qdm_obs, tau)
+                    if estimates:
+                        est = np.asarray(declared(ctrl, "sigma_hat"), dtype=float)
+                        est = np.broadcast_to(est, (S, run.sigma_end.shape[2]))
+                        glue.record_estimate(k, s, np.ascontiguousarray(est))
+                except Exception as exc:
+                    error = f"{type(exc).__name__} in observe at t = {k * T:.3f} s: {exc}"
+            if bar is not None and k % 1000 == 999:
+                bar.update(1000)
+    if bar is not None:
+        bar.update(N % 1000)
+    run.error = error
+    if error:
+        run.failed[:] = True
+    run.alarm_times = None if error else declared(ctrl, "alarm_times")
+    run.skipped = None if error else declared(ctrl, "skipped_samples")
+    return run
+
+
+def _command(ctrl, glue: PythonGlue, rc: RunConstants, k: int, qm: Array, qdm: Array, truth: bool) -> Array:
+    """The controller's command ``(S, n)`` at sample k (the true model passed to an oracle);
+    :class:`~adaptive_dd.errors.SignalError` if it has another shape."""
+    kw = {}
+    if truth:
+        sg = glue.sigma_true(k)
+        kw["sigma_true"] = np.broadcast_to(sg, (qm.shape[0], sg.shape[0])).copy()
+    out = np.asarray(ctrl.command(qm, qdm, rc.q_d[k], rc.qd_d[k], rc.qdd_d[k], **kw), dtype=float)
+    if out.shape != qm.shape:
+        raise SignalError(f"command returned shape {out.shape}, expected ({qm.shape[0]}, {qm.shape[1]})")
+    return out
