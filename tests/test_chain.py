@@ -73,6 +73,39 @@ def test_kernels_match_pinocchio(n, seed):
     np.testing.assert_allclose(reg @ pi, _pin_ref(model, data, pq, qd, qdr, qddr), rtol=0, atol=ATOL)
 
 
+@chains
+@given(n=st.integers(1, 7), seed=st.integers(0, 2**32 - 1))
+def test_momentum_form_matches_pinocchio(n, seed):
+    """p = M qd, wv = g - C^T qd with Pinocchio's M, C, g; link j's blocks add up to them, and
+    d/dt p + wv is the inverse dynamics along a motion (central differences)."""
+    rng = np.random.default_rng(seed)
+    model = random_chain_model(n, rng)
+    data = model.createData()
+    ch, pi = C.chain_from_model(model), C.standard_parameters(model)
+    q, qd, qdd = _state(n, rng, 3)
+    pq = C.pin_configuration(model, q)
+    p, wv, py, wy = np.empty(n), np.empty(n), np.empty((n, 10)), np.empty((n, 10))
+    ps, ws = np.zeros(n), np.zeros(n)
+    for j in range(n):
+        C.momentum_form(ch, pi, j, q, qd, p, wv, py, wy)
+        assert not np.any(py[j + 1 :]) and not np.any(wy[j + 1 :])
+        ps += py @ pi[10 * j : 10 * j + 10]
+        ws += wy @ pi[10 * j : 10 * j + 10]
+    cor = np.atleast_2d(pin.computeCoriolisMatrix(model, data, pq, qd))
+    g = pin.computeGeneralizedGravity(model, data, pq)
+    for got_p, got_w in ((p, wv), (ps, ws)):
+        np.testing.assert_allclose(got_p, _pin_m(model, data, pq) @ qd, rtol=0, atol=ATOL)
+        np.testing.assert_allclose(got_w, g - cor.T @ qd, rtol=0, atol=ATOL)
+    # along q(t) = q + t qd + t^2 qdd / 2 at t = 0: d/dt p + wv = rnea(q, qd, qdd)
+    h = 1e-5
+    pp, pm = np.empty(n), np.empty(n)
+    C.momentum_form(ch, pi, 0, q + h * qd + 0.5 * h * h * qdd, qd + h * qdd, pp, ws, py, wy)
+    C.momentum_form(ch, pi, 0, q - h * qd + 0.5 * h * h * qdd, qd - h * qdd, pm, ws, py, wy)
+    tau = np.empty(n)
+    C.rnea(ch, pi, q, qd, qdd, tau)
+    np.testing.assert_allclose((pp - pm) / (2 * h) + wv, tau, rtol=0, atol=1e-6 * (1.0 + np.abs(tau).max()))
+
+
 @settings(max_examples=8, deadline=None)
 @given(n=st.integers(1, 5), seed=st.integers(0, 2**32 - 1))
 def test_slotine_li_regressor_column_by_column(n, seed):

@@ -33,7 +33,7 @@ import numpy as np
 from numba import njit
 
 from adaptive_dd.identification.pseudo_inertia import project_payload
-from adaptive_dd.plant.chain import Chain, regressor, rnea_body_regressor_in, workspace
+from adaptive_dd.plant.chain import Chain, momentum_form_in, regressor, rnea_body_regressor_in, workspace
 
 # columns of the per-trial integer state `cnt`
 C_K = 0  # samples stepped
@@ -44,7 +44,8 @@ C_ALARMS = 4
 C_SINCE_ALARM = 5
 C_LAST_ALARM = 6  # sample index of the last alarm (-1: none)
 C_REOPEN_AT = 7  # sample at which the covariance is re-opened again (-1: none)
-N_CNT = 8
+C_RESTART = 8  # 1: the momentum channels restart at the next sample (set by an alarm)
+N_CNT = 9
 
 BIG = 1 << 40
 MODE_PAYLOAD = 0
@@ -126,7 +127,8 @@ I_REOPEN_AGAIN = 10
 I_PROJECT = 11
 I_GATE_AFTER = 12  # learned samples before the learning gate applies
 I_N_ROWS = 13  # rows (joints 0 .. n_rows-1) that carry information
-N_I = 14
+I_MOMENTUM = 14  # 1: the regression in momentum form (payload mode)
+N_I = 15
 
 # float slots of EstCfg.floats
 F_LAM0 = 0
@@ -193,11 +195,11 @@ class EstState(NamedTuple):
 
 
 @njit(cache=True)
-def _filter_channels(c, s, i, u, f):  # pragma: no cover - compiled
-    """One sample of the bank on every channel of trial i: ``f[ch] = [G0 u, G1 u]``."""
+def _filter_channels(c, s, i, u, f, ch0):  # pragma: no cover - compiled
+    """One sample of the bank on channels ``ch0 ...`` of trial i: ``f[ch] = [G0 u, G1 u]``."""
     A, Bf, C, D = c.A, c.Bf, c.C, c.D
     order = A.shape[0]
-    xf = s.xf[i]
+    xf = s.xf[i, ch0:]
     tmp = np.empty(order)
     for ch in range(u.shape[0]):
         for o in range(2):
@@ -215,10 +217,16 @@ def _filter_channels(c, s, i, u, f):  # pragma: no cover - compiled
 
 
 @njit(cache=True)
-def _filtered_signals(c, s, i, q, qd, tau, qf, qdf, qddf, sf, tf):  # pragma: no cover - compiled
-    """Filter sample (q, qd, tau) of trial i; return True if the filtered equations are usable."""
+def _filtered_signals(c, s, i, q, qd, tau, qf, qdf, qddf, sf, tf, ym, phim):  # pragma: no cover
+    """Filter sample (q, qd, tau) of trial i; return True if the filtered equations are usable.
+
+    Momentum form (``I_MOMENTUM``): also ``ym = G1 p + G0 wv`` (n,) of the known links and
+    ``phim = G1 py + G0 wy`` (n, 10) of the payload's link (:func:`momentum_form_in`), at
+    the held channels.
+    """
     n = q.shape[0]
     cnt = s.cnt[i]
+    start = cnt[C_STARTED] == 0
     u = np.empty(4 * n)
     for j in range(n):
         t = tau[j]
@@ -253,8 +261,12 @@ def _filtered_signals(c, s, i, q, qd, tau, qf, qdf, qddf, sf, tf):  # pragma: no
         for k in range(4 * n):
             s.u_last[i, k] = u[k]
         cnt[C_SINCE_BAD] = min(cnt[C_SINCE_BAD] + 1, BIG)
+    if c.ints[I_MOMENTUM] == 1:
+        _momentum_channels(c, s, i, u, start or cnt[C_RESTART] == 1, tf, ym, phim)
+        cnt[C_RESTART] = 0
+        return cnt[C_SINCE_BAD] > c.ints[I_TAINT]
     f = np.empty((4 * n, 2))
-    _filter_channels(c, s, i, u, f)
+    _filter_channels(c, s, i, u, f, 0)
     for j in range(n):
         qf[j] = f[j, 0]
         qdf[j] = f[n + j, 0]
@@ -265,10 +277,61 @@ def _filtered_signals(c, s, i, q, qd, tau, qf, qdf, qddf, sf, tf):  # pragma: no
 
 
 @njit(cache=True)
-def _regression(c, qf, qdf, qddf, sf, tf, phi, y):  # pragma: no cover - compiled
-    """The regression ``y = phi theta`` (n x p) at the filtered signals."""
+def _momentum_channels(c, s, i, u, restart, tf, ym, phim):  # pragma: no cover - compiled
+    """The momentum form at the held channels ``u`` (q, qd, tau, sgn), filtered.
+
+    Channels ``[tau, p, wv, py, wy]`` (23 n): the known arm's momentum ``p = M qd + ia qd``
+    and rest ``wv = g - C^T qd + fv qd + fc sgn(qd)``, the payload link's ``py, wy`` (n, 10)
+    (:func:`momentum_form_in`). Out: ``tf = G0 tau``, ``ym = G1 p + G0 wv``,
+    ``phim = G1 py + G0 wy``.
+
+    On ``restart`` (the first sample, and the sample after an alarm) the filters start
+    afresh: momentum channels in the steady state of this sample, the others at rest. The
+    equation ``G0 tau = G1 p + G0 wv`` then holds exactly for the signals continued before
+    this sample (momentum constant, torque and rest zero), so the filters carry no memory of
+    a payload that has gone: the equations after an alarm are exact from the first sample on.
+    """
+    n = ym.shape[0]
+    um = np.empty(23 * n)
+    p, wv = um[n : 2 * n], um[2 * n : 3 * n]
+    py = um[3 * n : 13 * n].reshape((n, 10))
+    wy = um[13 * n :].reshape((n, 10))
+    momentum_form_in(
+        c.ch, c.pi0[: 10 * n], c.jp, u[:n], u[n : 2 * n], workspace(n), np.empty((2, 6, 10)), p, wv, py, wy
+    )
+    for r in range(n):
+        qd = u[n + r]
+        um[r] = u[2 * n + r]
+        p[r] += c.pi0[12 * n + r] * qd
+        wv[r] += c.pi0[10 * n + r] * qd + c.pi0[11 * n + r] * u[3 * n + r]
+    if restart:
+        for k in range(23 * n):
+            is_p = (n <= k < 2 * n) or (3 * n <= k < 13 * n)
+            for m in range(c.xs0.shape[0]):
+                s.xf[i, k, m] = um[k] * c.xs0[m] if is_p else 0.0
+    f = np.empty((23 * n, 2))
+    _filter_channels(c, s, i, um, f, 0)
+    for r in range(n):
+        tf[r] = f[r, 0]
+        ym[r] = f[n + r, 1] + f[2 * n + r, 0]
+        for k in range(10):
+            phim[r, k] = f[3 * n + 10 * r + k, 1] + f[13 * n + 10 * r + k, 0]
+
+
+@njit(cache=True)
+def _regression(c, qf, qdf, qddf, sf, tf, ym, phim, phi, y):  # pragma: no cover - compiled
+    """The regression ``y = phi theta`` (n x p) at the filtered signals (or in momentum form)."""
     n = qf.shape[0]
     p = phi.shape[1]
+    if c.mode == MODE_PAYLOAD and c.ints[I_MOMENTUM] == 1:
+        for r in range(n):
+            y[r] = tf[r] - ym[r]
+            for k in range(10):
+                acc = 0.0
+                for m in range(10):
+                    acc += phim[r, m] * c.pmap[m, k]
+                phi[r, k] = acc
+        return
     if c.mode == MODE_PAYLOAD:
         known = np.empty(n)
         yb = np.empty((n, 10))
@@ -470,6 +533,8 @@ def _alarm(c, s, i, k):  # pragma: no cover - compiled
         s.long[i, j] = 0.0
     if ints[I_REOPEN_AGAIN] == 1:
         cnt[C_REOPEN_AT] = k + ints[I_FREEZE]
+    if ints[I_MOMENTUM] == 1:
+        cnt[C_RESTART] = 1
 
 
 @njit(cache=True)
@@ -504,7 +569,8 @@ def est_step_trial(c, s, i, q, qd, tau):  # pragma: no cover - compiled
     ints, fl = c.ints, c.floats
     cnt = s.cnt[i]
     qf, qdf, qddf, sf, tf = np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty(n)
-    usable = _filtered_signals(c, s, i, q, qd, tau, qf, qdf, qddf, sf, tf)
+    ym, phim = np.empty(n), np.empty((n, 10))
+    usable = _filtered_signals(c, s, i, q, qd, tau, qf, qdf, qddf, sf, tf, ym, phim)
     act = np.zeros(n, dtype=np.bool_)
     n_rows = ints[I_N_ROWS]
     for j in range(n):
@@ -527,7 +593,7 @@ def est_step_trial(c, s, i, q, qd, tau):  # pragma: no cover - compiled
     if usable:
         phi = np.empty((n, p))
         y = np.empty(n)
-        _regression(c, qf, qdf, qddf, sf, tf, phi, y)
+        _regression(c, qf, qdf, qddf, sf, tf, ym, phim, phi, y)
         pphi = np.empty(p)
         row = np.empty(p)
         nz = np.empty(p, dtype=np.int64)

@@ -62,6 +62,8 @@ __all__ = [
     "mass_matrix",
     "mass_matrix_batch",
     "mass_matrix_in",
+    "momentum_form",
+    "momentum_form_in",
     "pin_configuration",
     "regressor",
     "regressor_batch",
@@ -624,6 +626,100 @@ def rnea_body_regressor_in(ch, pi, j, q, qd, qdd, w, a, tau, y):  # pragma: no c
 def body_slotine_li_regressor_in(ch, j, q, qd, qdr, qddr, w, a, out):  # pragma: no cover - compiled
     """:func:`body_slotine_li_regressor` with its scratch given (as :func:`body_regressor_in`)."""
     _regressor_blocks_in(ch, q, qd, qdr, qddr, False, j, j + 1, w, a, out, 0)
+
+
+@njit(cache=True)
+def momentum_form(ch, pi, j, q, qd, p, wv, py, wy):  # pragma: no cover - compiled
+    """The dynamics in momentum form, ``tau = d/dt p + wv``, without the acceleration.
+
+    ``p = M(q) qd`` (generalised momentum) and ``wv = g(q) - C(q, qd)^T qd`` (Pinocchio's
+    C, ``dM/dt = C + C^T``) of the links' standard parameters ``pi``, and the same two per
+    unit standard parameter of link ``j`` (about its joint frame, as
+    :func:`body_regressor`): ``py @ pi_j`` and ``wy @ pi_j``. Filtering both sides of
+    ``tau = d/dt p + wv`` with a filter F gives ``F tau = (s F) p + F wv`` exactly, the
+    regressor included: no acceleration and no equation error from evaluating the
+    regressor at filtered signals.
+
+    Parameters
+    ----------
+    ch : Chain
+    pi : ndarray, shape (10 n,)
+    j : int
+        Link (0-based) whose columns go to ``py, wy``.
+    q, qd : ndarray, shape (n,)
+    p, wv : ndarray, shape (n,)
+        Out [N m s], [N m].
+    py, wy : ndarray, shape (n, 10)
+        Out; rows after ``j`` are zero.
+    """
+    momentum_form_in(ch, pi, j, q, qd, workspace(q.shape[0]), np.empty((2, 6, 10)), p, wv, py, wy)
+
+
+@njit(cache=True)
+def momentum_form_in(ch, pi, j, q, qd, w, a, p, wv, py, wy):  # pragma: no cover - compiled
+    """:func:`momentum_form` with its scratch given: ``w = workspace(n)``, ``a (2, 6, 10)``."""
+    # world frame: S_i fixed in link i moves as dS_i/dt = v_i x S_i; the subtree momentum
+    # H_i = sum_{k>=i} I_k v_k has dH_i/dt = sum of the subtree's forces, so
+    # tau_i = S_i . (dH_i/dt + I_sub a_0) = d/dt (S_i . H_i) - (v_i x S_i) . H_i + S_i . I_sub a_0,
+    # a_0 = [-g; 0] the base acceleration that stands for gravity.
+    rw, pw, s, v, iw, _, _, _, small, vec = w
+    n = q.shape[0]
+    kinematics(ch, q, qd, rw, pw, s, v)
+    world_inertia(pi, rw, pw, iw)
+    ag, hs, gs, t, sl, tl = small[0], small[1], small[2], small[3], small[4], small[5]
+    for c in range(6):
+        hs[c] = 0.0
+        gs[c] = 0.0
+        ag[c] = 0.0
+    for c in range(3):
+        ag[c] = -ch.gravity[c]
+    for b in range(n - 1, -1, -1):
+        apply_inertia(iw[b], v[b], t)
+        for c in range(6):
+            hs[c] += t[c]
+        apply_inertia(iw[b], ag, t)
+        for c in range(6):
+            gs[c] += t[c]
+        motion_cross(v[b], s[b], t)
+        pb = 0.0
+        wb = 0.0
+        for c in range(6):
+            pb += s[b, c] * hs[c]
+            wb += s[b, c] * gs[c] - t[c] * hs[c]
+        p[b] = pb
+        wv[b] = wb
+    # link j per unit parameter, in its own frame: I v_j and I a_0 as (6, 10) maps
+    y = vec[:10]
+    to_local(rw[j], pw[j], v[j], sl)
+    to_local(rw[j], pw[j], ag, tl)
+    for k in range(10):
+        y[k] = 0.0
+    for k in range(10):
+        y[k] = 1.0
+        apply_inertia(y, sl, t)
+        for c in range(6):
+            a[0, c, k] = t[c]
+        apply_inertia(y, tl, t)
+        for c in range(6):
+            a[1, c, k] = t[c]
+        y[k] = 0.0
+    for i in range(n):
+        if i > j:
+            for k in range(10):
+                py[i, k] = 0.0
+                wy[i, k] = 0.0
+            continue
+        to_local(rw[j], pw[j], s[i], sl)
+        motion_cross(v[i], s[i], t)
+        to_local(rw[j], pw[j], t, tl)
+        for k in range(10):
+            acc_p = 0.0
+            acc_w = 0.0
+            for c in range(6):
+                acc_p += sl[c] * a[0, c, k]
+                acc_w += sl[c] * a[1, c, k] - tl[c] * a[0, c, k]
+            py[i, k] = acc_p
+            wy[i, k] = acc_w
 
 
 # ----------------------------------------------------------------------------- batch wrappers

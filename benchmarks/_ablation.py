@@ -1,0 +1,33 @@
+"""Shared by the estimator ablations: adaptive_ct's ratio to its floor per segment under one
+setting of its N-joint estimator (``[controllers.adaptive_ct.estimator]``)."""
+
+from __future__ import annotations
+
+import copy
+from pathlib import Path
+
+import numpy as np
+
+from adaptive_dd.benchmark.runner import run_benchmark
+from adaptive_dd.benchmark.scenario import parse_scenario
+
+UR5 = Path(__file__).resolve().parents[1] / "adaptive_dd" / "scenarios" / "ur5_tool_swap.toml"
+
+
+def ablation_row(base: dict, scenario: str, seeds: int, estimator: dict) -> str:
+    """``mean/p90/max`` of adaptive_ct / ct_oracle per segment and the false alarms, as one line,
+    with the scenario's estimator settings updated by ``estimator``."""
+    d = copy.deepcopy(base)
+    d["run"]["seeds"] = seeds
+    d["run"]["controllers"] = ["ct_oracle", "adaptive_ct"]
+    d.setdefault("controllers", {}).setdefault("adaptive_ct", {}).setdefault("estimator", {}).update(
+        estimator
+    )
+    df = run_benchmark(parse_scenario(d, scenario, Path(scenario).stem), progress=False).to_frame()
+    c = df[df.controller == "adaptive_ct"]
+    cells = []
+    for _, s in c.groupby("segment"):
+        r = s.ratio_to_floor.to_numpy(dtype=float)
+        cells.append(f"{np.nanmean(r):.3f}/{np.nanpercentile(r, 90):.3f}/{np.nanmax(r):.2f}")
+    fa = int(np.nansum(c.false_alarms.to_numpy(dtype=float)))
+    return f"{'  '.join(cells)}   {fa}"
