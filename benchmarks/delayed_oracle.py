@@ -50,7 +50,9 @@ class DelayedOracle:
     needs_true_model = True
     floor = "ct_oracle_textbook"
 
-    def __init__(self, arm, gains: JointGains, delay: float, boost: tuple[float, float] | None = None) -> None:
+    def __init__(
+        self, arm, gains: JointGains, delay: float, boost: tuple[float, float] | None = None
+    ) -> None:
         if not delay >= 0:
             raise ValueError(f"delay must be >= 0 s, got {delay!r}")
         self.arm, self.gains, self.delay, self.boost = arm, gains, float(delay), boost

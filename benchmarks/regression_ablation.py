@@ -29,10 +29,15 @@ def main() -> None:
     a = ap.parse_args()
     extra = tomllib.loads("\n".join(a.set))
     base = read_toml(Path(a.scenario))
-    print(f"{a.scenario}: adaptive_ct / ct_oracle, {a.seeds} seeds, estimator settings {extra or 'as shipped'}")
+    print(
+        f"{a.scenario}: adaptive_ct / ct_oracle, {a.seeds} seeds, estimator settings {extra or 'as shipped'}"
+    )
     print("regression  per segment: mean / p90 / max          false alarms")
     for form in a.forms:
-        print(f"{form:10s}  {ablation_row(base, a.scenario, a.seeds, {**extra, 'regression': form})}", flush=True)
+        print(
+            f"{form:10s}  {ablation_row(base, a.scenario, a.seeds, {**extra, 'regression': form})}",
+            flush=True,
+        )
 
 
 if __name__ == "__main__":
