@@ -27,9 +27,9 @@ import numpy as np
 from adaptive_dd.benchmark.runner import run_benchmark
 from adaptive_dd.benchmark.scenario import parse_scenario, read_toml
 from adaptive_dd.closed_loop.controllers import JointGains
+from adaptive_dd.closed_loop.laws import model_torque
 from adaptive_dd.closed_loop.runner import make_controllers
 from adaptive_dd.plant.chain import mass_matrix
-from adaptive_dd.closed_loop.laws import model_torque
 
 UR5 = Path(__file__).resolve().parents[1] / "adaptive_dd" / "scenarios" / "ur5_tool_swap.toml"
 
