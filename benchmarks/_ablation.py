@@ -14,10 +14,13 @@ from adaptive_dd.benchmark.scenario import parse_scenario
 UR5 = Path(__file__).resolve().parents[1] / "adaptive_dd" / "scenarios" / "ur5_tool_swap.toml"
 
 
-def ablation_row(base: dict, scenario: str, seeds: int, estimator: dict) -> str:
-    """``mean/p90/max`` of adaptive_ct / ct_oracle per segment and the false alarms, as one line,
-    with the scenario's estimator settings updated by ``estimator``."""
+def ablation_row(base: dict, scenario: str, seeds: int, estimator: dict, plant: dict | None = None) -> str:
+    """``mean/p90/max`` of adaptive_ct / ct_oracle per segment, the trials with a false alarm and
+    the swaps missed, as one line, with the scenario's estimator settings updated by ``estimator`` (and its
+    ``[plant]`` table by ``plant``)."""
     d = copy.deepcopy(base)
+    if plant:
+        d.setdefault("plant", {}).update(plant)
     d["run"]["seeds"] = seeds
     d["run"]["controllers"] = ["ct_oracle", "adaptive_ct"]
     d.setdefault("controllers", {}).setdefault("adaptive_ct", {}).setdefault("estimator", {}).update(
@@ -29,5 +32,6 @@ def ablation_row(base: dict, scenario: str, seeds: int, estimator: dict) -> str:
     for _, s in c.groupby("segment"):
         r = s.ratio_to_floor.to_numpy(dtype=float)
         cells.append(f"{np.nanmean(r):.3f}/{np.nanpercentile(r, 90):.3f}/{np.nanmax(r):.2f}")
-    fa = int(np.nansum(c.false_alarms.to_numpy(dtype=float)))
-    return f"{'  '.join(cells)}   {fa}"
+    fa = int((c.groupby("seed").false_alarms.sum() > 0).sum())
+    missed = int(np.sum(c.detection_delay.isna() & (c.segment > 0))) if "detection_delay" in c else -1
+    return f"{'  '.join(cells)}   {fa}   {missed}"

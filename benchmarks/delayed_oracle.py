@@ -27,9 +27,9 @@ import numpy as np
 from adaptive_dd.benchmark.runner import run_benchmark
 from adaptive_dd.benchmark.scenario import parse_scenario, read_toml
 from adaptive_dd.closed_loop.controllers import JointGains
+from adaptive_dd.closed_loop.laws import model_torque
 from adaptive_dd.closed_loop.runner import make_controllers
 from adaptive_dd.plant.chain import mass_matrix
-from adaptive_dd.closed_loop.laws import model_torque
 
 UR5 = Path(__file__).resolve().parents[1] / "adaptive_dd" / "scenarios" / "ur5_tool_swap.toml"
 
@@ -50,7 +50,9 @@ class DelayedOracle:
     needs_true_model = True
     floor = "ct_oracle_textbook"
 
-    def __init__(self, arm, gains: JointGains, delay: float, boost: tuple[float, float] | None = None) -> None:
+    def __init__(
+        self, arm, gains: JointGains, delay: float, boost: tuple[float, float] | None = None
+    ) -> None:
         if not delay >= 0:
             raise ValueError(f"delay must be >= 0 s, got {delay!r}")
         self.arm, self.gains, self.delay, self.boost = arm, gains, float(delay), boost

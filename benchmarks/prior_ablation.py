@@ -1,6 +1,6 @@
 """The compact-payload prior of adaptive_ct's N-joint estimator (``prior_radius``), switched off
 and at several radii on one scenario: adaptive_ct's ratio to its floor per segment (mean, p90,
-max over seeds) and false alarms. Same seeds for every setting.
+max over seeds), trials with a false alarm and swaps missed. Same seeds for every setting.
 
     python benchmarks/prior_ablation.py [SCENARIO.toml] [--seeds 20] [--radii 0 0.03 0.05 0.08]
 """
@@ -23,7 +23,7 @@ def main() -> None:
     a = ap.parse_args()
     base = read_toml(Path(a.scenario))
     print(f"{a.scenario}: adaptive_ct / ct_oracle, {a.seeds} seeds")
-    print("prior_radius [m]  per segment: mean / p90 / max          false alarms")
+    print("prior_radius [m]  per segment: mean / p90 / max          trials with a false alarm, swaps missed")
     for rho in a.radii:
         print(f"{rho:16.3f}  {ablation_row(base, a.scenario, a.seeds, {'prior_radius': rho})}", flush=True)
 

@@ -2,7 +2,7 @@
 regression``) on one scenario: ``"signals"`` (the regressor at the filtered signals, the paper's
 M2 construction) against ``"momentum"`` (the momentum form, exact under filtering, its filters
 restarted on an alarm). adaptive_ct's ratio to its floor per segment (mean, p90, max over seeds)
-and false alarms; the same seeds for both.
+trials with a false alarm and swaps missed; the same seeds for both.
 
     python benchmarks/regression_ablation.py [SCENARIO.toml] [--seeds 20] [--set tau_f=0.02 ...]
 
@@ -29,10 +29,15 @@ def main() -> None:
     a = ap.parse_args()
     extra = tomllib.loads("\n".join(a.set))
     base = read_toml(Path(a.scenario))
-    print(f"{a.scenario}: adaptive_ct / ct_oracle, {a.seeds} seeds, estimator settings {extra or 'as shipped'}")
-    print("regression  per segment: mean / p90 / max          false alarms")
+    print(
+        f"{a.scenario}: adaptive_ct / ct_oracle, {a.seeds} seeds, estimator settings {extra or 'as shipped'}"
+    )
+    print("regression  per segment: mean / p90 / max          trials with a false alarm, swaps missed")
     for form in a.forms:
-        print(f"{form:10s}  {ablation_row(base, a.scenario, a.seeds, {**extra, 'regression': form})}", flush=True)
+        print(
+            f"{form:10s}  {ablation_row(base, a.scenario, a.seeds, {**extra, 'regression': form})}",
+            flush=True,
+        )
 
 
 if __name__ == "__main__":

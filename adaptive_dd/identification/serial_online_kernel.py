@@ -319,18 +319,27 @@ def _momentum_channels(c, s, i, u, restart, tf, ym, phim):  # pragma: no cover -
 
 
 @njit(cache=True)
+def _payload_rows(c, link, known, phi, y):  # pragma: no cover - compiled
+    """Payload mode: ``phi = link @ pmap`` (the link's columns in the payload's parameters) and
+    ``y -= known`` (the known arm's part), row by row."""
+    for r in range(link.shape[0]):
+        y[r] -= known[r]
+        for k in range(10):
+            acc = 0.0
+            for m in range(10):
+                acc += link[r, m] * c.pmap[m, k]
+            phi[r, k] = acc
+
+
+@njit(cache=True)
 def _regression(c, qf, qdf, qddf, sf, tf, ym, phim, phi, y):  # pragma: no cover - compiled
     """The regression ``y = phi theta`` (n x p) at the filtered signals (or in momentum form)."""
     n = qf.shape[0]
     p = phi.shape[1]
     if c.mode == MODE_PAYLOAD and c.ints[I_MOMENTUM] == 1:
         for r in range(n):
-            y[r] = tf[r] - ym[r]
-            for k in range(10):
-                acc = 0.0
-                for m in range(10):
-                    acc += phim[r, m] * c.pmap[m, k]
-                phi[r, k] = acc
+            y[r] = tf[r]
+        _payload_rows(c, phim, ym, phi, y)
         return
     if c.mode == MODE_PAYLOAD:
         known = np.empty(n)
@@ -341,12 +350,9 @@ def _regression(c, qf, qdf, qddf, sf, tf, ym, phim, phi, y):  # pragma: no cover
         )
         for r in range(n):
             fv, fc, ia = c.pi0[10 * n + r], c.pi0[11 * n + r], c.pi0[12 * n + r]
-            y[r] = tf[r] - (known[r] + fv * qdf[r] + fc * sf[r] + ia * qddf[r])
-            for k in range(10):
-                acc = 0.0
-                for m in range(10):
-                    acc += yb[r, m] * c.pmap[m, k]
-                phi[r, k] = acc
+            y[r] = tf[r]
+            known[r] += fv * qdf[r] + fc * sf[r] + ia * qddf[r]
+        _payload_rows(c, yb, known, phi, y)
         return
     W = np.empty((n, 10 * n))
     regressor(c.ch, qf, qdf, qddf, W)
