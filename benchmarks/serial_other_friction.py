@@ -4,7 +4,8 @@ the UR5 tool swap) with the plant's friction law replaced (stick-slip as shipped
 ``sgn``). Per segment adaptive_ct / ct_oracle per seed (mean / p90 / max), trials with a false
 alarm, swaps missed. The same seeds for every law.
 
-    python benchmarks/serial_other_friction.py [SCENARIO.toml] [--seeds 50] [--laws stick-slip tanh stribeck tanh@0.1]
+    python benchmarks/serial_other_friction.py [SCENARIO.toml] [--seeds 50]
+        [--laws stick-slip tanh stribeck tanh@0.1]
 
 ``LAW@V`` also sets the plant's ``friction_velocity`` V [rad/s] (tanh: how soft the friction is).
 """
@@ -28,7 +29,7 @@ def main() -> None:
     base = read_toml(Path(a.scenario))
     print(f"{a.scenario}: adaptive_ct / ct_oracle, {a.seeds} seeds, plant friction law replaced")
     print(
-        "plant friction  per segment: mean / p90 / max                        trials with a false alarm, swaps missed"
+        f"{'plant friction':14s}  per segment: mean / p90 / max{' ' * 24}trials with a false alarm, swaps missed"
     )
     for law in a.laws:
         name, _, v = law.partition("@")
