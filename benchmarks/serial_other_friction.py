@@ -28,9 +28,8 @@ def main() -> None:
     a = ap.parse_args()
     base = read_toml(Path(a.scenario))
     print(f"{a.scenario}: adaptive_ct / ct_oracle, {a.seeds} seeds, plant friction law replaced")
-    print(
-        f"{'plant friction':14s}  per segment: mean / p90 / max{' ' * 24}trials with a false alarm, swaps missed"
-    )
+    head = "plant friction  per segment: mean / p90 / max"
+    print(f"{head}{' ' * 24}trials with a false alarm, swaps missed")
     for law in a.laws:
         name, _, v = law.partition("@")
         plant = {"friction": name} | ({"friction_velocity": float(v)} if v else {})
