@@ -112,34 +112,36 @@ def _model_loop(c, s, n_calls, pi_out):  # pragma: no cover - compiled
 
 
 @njit(cache=True)
-def _filter_loop(c, s, qm, qdm, tau, parts):  # pragma: no cover - compiled
+def _filter_loop(c, s, qm, qdm, tau, parts, ym, phim):  # pragma: no cover - compiled
     n = qm.shape[1]
     for k in range(qm.shape[0]):
         pk = parts[k]
-        K._filtered_signals(c, s, 0, qm[k], qdm[k], tau[k], pk[0], pk[1], pk[2], pk[3], pk[4])
+        K._filtered_signals(c, s, 0, qm[k], qdm[k], tau[k], pk[0], pk[1], pk[2], pk[3], pk[4], ym[k], phim[k])
     return n
 
 
 @njit(cache=True)
-def _regression_loop(c, parts, p):  # pragma: no cover - compiled
+def _regression_loop(c, parts, ym, phim, p):  # pragma: no cover - compiled
     n = parts.shape[2]
     phi, y = np.empty((n, p)), np.empty(n)
     a = 0.0
     for k in range(parts.shape[0]):
-        K._regression(c, parts[k, 0], parts[k, 1], parts[k, 2], parts[k, 3], parts[k, 4], phi, y)
+        pk = parts[k]
+        K._regression(c, pk[0], pk[1], pk[2], pk[3], pk[4], ym[k], phim[k], phi, y)
         a += y[0]
     return a
 
 
 @njit(cache=True)
-def _rls_loop(c, parts, theta, P, w):  # pragma: no cover - compiled
+def _rls_loop(c, parts, ym, phim, theta, P, w):  # pragma: no cover - compiled
     n, p = parts.shape[2], theta.shape[0]
     phi, y = np.empty((n, p)), np.empty(n)
     pphi, row, nz = np.empty(p), np.empty(p), np.empty(p, dtype=np.int64)
     # regressions first (not timed separately here: subtract _regression_loop)
     a = 0.0
     for k in range(parts.shape[0]):
-        K._regression(c, parts[k, 0], parts[k, 1], parts[k, 2], parts[k, 3], parts[k, 4], phi, y)
+        pk = parts[k]
+        K._regression(c, pk[0], pk[1], pk[2], pk[3], pk[4], ym[k], phim[k], phi, y)
         for j in range(n):
             for m in range(p):
                 row[m] = phi[j, m] / w[j]
@@ -208,7 +210,7 @@ def main() -> None:
     out = np.empty(n)
     ctrls = {}
     for name in ("ct_oracle", "adaptive_ct"):
-        opts = dict(dict(sc.controller_options).get(name, ()))
+        opts = sc.options(name)
         ctrl = make_serial_controller(name, sc.arm, sc.bandwidth, sc.damping, opts)
         form = ctrl.compiled_form(1, rc.T)
         ctrls[name] = form
@@ -221,7 +223,7 @@ def main() -> None:
 
     def fresh():
         ctrl = make_serial_controller(
-            "adaptive_ct", sc.arm, sc.bandwidth, sc.damping, dict(dict(sc.controller_options)["adaptive_ct"])
+            "adaptive_ct", sc.arm, sc.bandwidth, sc.damping, sc.options("adaptive_ct")
         )
         return ctrl.compiled_form(1, rc.T)
 
@@ -234,14 +236,14 @@ def main() -> None:
     f = fresh()
     _est_loop(f.ec, f.es, qm, qdm, tau, False, pi_out)
     t_model_end = _best(lambda: _model_loop(f.ec, f.es, N, pi_out))
-    parts = np.empty((N, 5, n))
-    t_filter = _best(lambda: _filter_loop(fresh().ec, fresh().es, qm, qdm, tau, parts))
-    t_reg = _best(lambda: _regression_loop(f.ec, parts, p))
+    parts, ym, phim = np.empty((N, 5, n)), np.empty((N, n)), np.empty((N, n, 10))
+    t_filter = _best(lambda: _filter_loop(fresh().ec, fresh().es, qm, qdm, tau, parts, ym, phim))
+    t_reg = _best(lambda: _regression_loop(f.ec, parts, ym, phim, p))
     theta0, P0 = f.es.theta[0].copy(), f.es.P[0].copy()
-    t_rls = _best(lambda: _rls_loop(f.ec, parts, theta0.copy(), P0.copy(), f.ec.w)) - t_reg
+    t_rls = _best(lambda: _rls_loop(f.ec, parts, ym, phim, theta0.copy(), P0.copy(), f.ec.w)) - t_reg
     rows += [
         (f"est_step_trial (p = {p})", t_step),
-        ("  of which filters (4 n channels)", t_filter),
+        ("  of which filters (+ momentum form: 23 n channels)", t_filter),
         ("  of which regression", t_reg),
         (f"  of which RLS, {n} rows", t_rls),
         ("  rest (selection, detector, ...)", t_step - t_filter - t_reg - t_rls),
