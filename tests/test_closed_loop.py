@@ -379,3 +379,40 @@ def test_cli_benchmark_of_an_n_joint_scenario_writes_every_output(tmp_path, caps
     assert {"rms_error_joint3", "com_estimate_x"} <= set(frame.columns) and len(frame) == 3 * 2 * 2
     for f in ("tracking_error.png", "joint_errors.png", "estimates.png", "metrics.csv"):
         assert (out / f).stat().st_size > 0
+
+
+def _delayed_oracle():
+    """``benchmarks/delayed_oracle.py``'s plug-in (a benchmark script, loaded by path)."""
+    import importlib.util
+    from pathlib import Path
+
+    path = Path(__file__).resolve().parents[1] / "benchmarks" / "delayed_oracle.py"
+    spec = importlib.util.spec_from_file_location("delayed_oracle", path)
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod.DelayedOracle
+
+
+def test_the_delayed_oracle_is_the_textbook_oracle_at_zero_delay_and_pays_for_a_delay():
+    """The plug-in behind benchmarks/delayed_oracle.py: at zero delay the same law as the
+    compiled ct_oracle_textbook (Python path against compiled, to rounding); told of the 2 kg
+    pickup 10 ms late it tracks worse in the segment after it, and its boost takes part of that back."""
+    from adaptive_dd.closed_loop.controllers import JointGains
+
+    DelayedOracle = _delayed_oracle()
+    sc = _short("ur5_tool_swap", 1.6, (0.8,), seeds=1, controllers=["ct_oracle_textbook"])
+    gains = JointGains.of(sc.bandwidth, sc.damping, sc.arm.n_joints)
+    ctrls = {
+        "ct_oracle_textbook": make_serial_controller("ct_oracle_textbook", sc.arm),
+        "d0": DelayedOracle(sc.arm, gains, 0.0),
+        "d10": DelayedOracle(sc.arm, gains, 0.01),
+        "d10b": DelayedOracle(sc.arm, gains, 0.01, boost=(300.0, 0.2)),
+    }
+    res = run_serial(sc, ctrls)
+    assert not any(r.error or r.failed.any() for r in res.runs.values())
+    _same(res.runs["d0"], res.runs["ct_oracle_textbook"], rtol=1e-9)
+    e2 = {k: r.acc.sum_e2[0] for k, r in res.runs.items()}
+    base = e2["ct_oracle_textbook"]
+    assert e2["d10"][0] == pytest.approx(base[0], rel=1e-9)  # before the swap: the same
+    assert e2["d10"][1] > 1.2 * base[1], (e2["d10"], base)
+    assert base[1] < e2["d10b"][1] < e2["d10"][1], (e2["d10b"], e2["d10"])
