@@ -7,7 +7,8 @@ alarm, swaps missed. The same seeds for every law.
     python benchmarks/serial_other_friction.py [SCENARIO.toml] [--seeds 50]
         [--laws stick-slip tanh stribeck tanh@0.1]
 
-``LAW@V`` also sets the plant's ``friction_velocity`` V [rad/s] (tanh: how soft the friction is).
+``LAW@V`` also sets the plant's ``friction_velocity`` V [rad/s] (tanh: how soft the friction is);
+``stribeck@VSxK`` its Stribeck velocity VS [rad/s] and static / Coulomb ratio K (default 0.1, 1.5).
 """
 
 from __future__ import annotations
@@ -18,6 +19,19 @@ from pathlib import Path
 from _ablation import UR5, ablation_row
 
 from adaptive_dd.benchmark.scenario import read_toml
+
+
+def _plant(law: str) -> dict:
+    """``LAW``, ``LAW@V`` or ``stribeck@VSxK`` as a ``[plant]`` table."""
+    name, _, arg = law.partition("@")
+    if not arg:
+        return {"friction": name}
+    if name == "stribeck":
+        vs, _, k = arg.partition("x")
+        return {"friction": name, "stribeck_velocity": float(vs)} | (
+            {"stribeck_ratio": float(k)} if k else {}
+        )
+    return {"friction": name, "friction_velocity": float(arg)}
 
 
 def main() -> None:
@@ -31,8 +45,7 @@ def main() -> None:
     head = "plant friction  per segment: mean / p90 / max"
     print(f"{head}{' ' * 24}trials with a false alarm, swaps missed")
     for law in a.laws:
-        name, _, v = law.partition("@")
-        plant = {"friction": name} | ({"friction_velocity": float(v)} if v else {})
+        plant = _plant(law)
         row = ablation_row(base, a.scenario, a.seeds, {}, plant=plant)
         print(f"{law:14s}  {row}", flush=True)
 

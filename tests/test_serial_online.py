@@ -91,6 +91,7 @@ def test_bad_settings_name_the_field_and_value(kw, match):
         ({"min_learned": 0}, "min_learned.*0"),
         ({"reopen_again": "no"}, "reopen_again.*'no'"),
         ({"floor": -1.0}, "floor.*-1.0"),
+        ({"min_rows": 0}, "min_rows.*0"),
     ],
 )
 def test_bad_detector_settings_name_the_field_and_value(kw, match):
@@ -106,6 +107,8 @@ def test_wrong_shapes_are_refused(ur5):
         est_init(SerialOnlineConfig(row_weights=(1.0, 2.0)), ur5, 1)
     with pytest.raises(ParameterError, match="n_trials"):
         est_init(SerialOnlineConfig(), ur5, 0)
+    with pytest.raises(ParameterError, match="min_rows = 7 exceeds the 6 joint equations"):
+        est_init(SerialOnlineConfig(detector=SerialDetector(min_rows=7)), ur5, 1)
 
 
 # ------------------------------------------------------------------- the arithmetic, independently
@@ -303,6 +306,29 @@ def test_no_alarm_over_a_long_run_at_constant_payload(ur5):
     rec = run_serial_online(ur5, SerialOnlineConfig(), *stack)
     assert not rec.alarm.any(), rec.alarm_times()
     assert np.all(np.abs(rec.mass[:, -1] - PAY_B[0]) < 0.05 * PAY_B[0])
+
+
+def test_an_error_in_one_joint_alone_does_not_alarm_with_min_rows(ur5, swap_record):
+    """A torque error in one joint only (what friction the model lacks makes near rest: here
+    +10 N m on the elbow for 60 ms at constant payload) alarms a detector that listens to any row
+    alone, not one that asks for three rows; a payload swap raises errors in three rows and is
+    detected by both, at the same sample."""
+    r = _record(ur5, 5, 4_000, [PAY_B])
+    tau = r.tau.copy()
+    tau[2_500:2_560, 2] += 10.0
+    out = {}
+    for k in (1, 3):
+        cfg = SerialOnlineConfig(detector=SerialDetector(min_rows=k))
+        out[k] = run_serial_online(ur5, cfg, r.q_meas, r.qd_meas, tau).alarm_times()[0]
+    assert len(out[1]) >= 1 and 2.5 <= out[1][0] < 2.6, out[1]
+    assert len(out[3]) == 0, out[3]
+    swaps = {}
+    for k in (1, 3):
+        cfg = SerialOnlineConfig(detector=SerialDetector(min_rows=k))
+        rec = run_serial_online(ur5, cfg, swap_record.q_meas, swap_record.qd_meas, swap_record.tau)
+        swaps[k] = rec.alarm_times()[0]
+    assert len(swaps[3]) == 1 and 10.0 <= swaps[3][0] < 10.05, swaps
+    assert swaps[3][0] == swaps[1][0], swaps
 
 
 def test_the_detector_rearms_within_its_bound(ur5):

@@ -148,6 +148,10 @@ class SerialDetector:
     floor : float
         Floor [N m, RMS, in the units of the weighted equation] of the long-run level:
         an error below ``threshold * floor`` never alarms.
+    min_rows : int
+        An alarm also needs this many rows above half the threshold (RMS), >= 1. A payload
+        change moves every joint the payload's weight and inertia load at once; friction the
+        model lacks (Stribeck, soft friction) errs at one joint near rest. 1: any row alone.
     """
 
     short_window: float = 0.02
@@ -164,6 +168,7 @@ class SerialDetector:
     reopen_again: bool = True
     reopen_mass_std: float = 10.0
     floor: float = 0.05
+    min_rows: int = 1
 
     def __post_init__(self) -> None:
         o = "SerialDetector"
@@ -182,6 +187,7 @@ class SerialDetector:
         _num(o, "floor", self.floor, 0.0, strict=False)
         _int(o, "min_learned", self.min_learned, 1)
         _int(o, "gate_after", self.gate_after, 1)
+        _int(o, "min_rows", self.min_rows, 1)
         _bool(o, "reopen_again", self.reopen_again)
 
 
@@ -444,6 +450,12 @@ def _pack(cfg: SerialOnlineConfig, arm: SerialArm) -> tuple[EstCfg, Array]:
         fl[K.F_SLOW2] = det.slow_factor**2
         fl[K.F_GATE2] = det.gate**2
         fl[K.F_FLOOR2] = det.floor**2
+        if det.min_rows > n_rows:
+            raise ParameterError(
+                f"SerialDetector.min_rows = {det.min_rows} exceeds the {n_rows} joint equations that "
+                "carry the payload"
+            )
+        ints[K.I_MIN_ROWS] = det.min_rows
     xs0 = np.linalg.solve(np.eye(b.order) - b.A, b.B[:, 0])
     c = np.ascontiguousarray
     return EstCfg(

@@ -128,7 +128,8 @@ I_PROJECT = 11
 I_GATE_AFTER = 12  # learned samples before the learning gate applies
 I_N_ROWS = 13  # rows (joints 0 .. n_rows-1) that carry information
 I_MOMENTUM = 14  # 1: the regression in momentum form (payload mode)
-N_I = 15
+I_MIN_ROWS = 15  # rows whose short average must exceed (threshold / 2)^2 times their level for an alarm
+N_I = 16
 
 # float slots of EstCfg.floats
 F_LAM0 = 0
@@ -501,6 +502,7 @@ def _detect(c, s, i, eps, act):  # pragma: no cover - compiled
         if act[j]:
             n_act += 1
     alarm = False
+    n_raised = 0  # rows above a quarter of the threshold (half of it in RMS)
     for j in range(n):
         if not act[j]:
             continue
@@ -515,7 +517,9 @@ def _detect(c, s, i, eps, act):  # pragma: no cover - compiled
             continue
         if s.short[i, j] > thr * level + 1e-300:
             alarm = True
-    return alarm
+        if s.short[i, j] > 0.25 * thr * level + 1e-300:
+            n_raised += 1
+    return alarm and n_raised >= ints[I_MIN_ROWS]
 
 
 @njit(cache=True)
