@@ -246,8 +246,8 @@ class SerialOnlineConfig:
         equation exact from the sample after an alarm on (the filters keep no memory of
         the old payload; the re-openings forget what was learnt between the change and its
         detection). UR5 tool-swap scenario, 20 seeds, adaptive_ct / ct_oracle
-        means per segment 1.009 / 1.089 / 1.158 / 1.071 against 1.009 / 1.130 / 1.351 /
-        1.167 with ``"signals"``; Panda 1.031 / 1.194 / 1.193 / 1.080 against 1.031 /
+        means per segment 1.009 / 1.089 / 1.158 / 1.075 against 1.009 / 1.130 / 1.351 /
+        1.172 with ``"signals"``; Panda 1.031 / 1.194 / 1.193 / 1.080 against 1.031 /
         1.169 / 1.243 / 1.128 (``benchmarks/regression_ablation.py [SCENARIO]``).
     prior_radius : float or None
         Radius rho [m] of a compact-payload prior on the model control uses (not on the
