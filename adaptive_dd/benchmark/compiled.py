@@ -32,38 +32,18 @@ from numba import njit, prange
 from numpy.typing import NDArray
 
 from adaptive_dd.benchmark.streaming import accumulate_trial
-from adaptive_dd.controllers.compiled_form import (
-    LAW_ADAPTIVE,
-    LAW_CT,
-    LAW_CT_ORACLE,
-    LAW_PD,
-    LAW_SLOTINE,
-    LAW_SLOTINE_ORACLE,
-    CompiledSpec,
-    TwoLinkGains,
-    command_trial,
-    compiled_spec,
-)
+from adaptive_dd.controllers.compiled_form import LAW_ADAPTIVE, LAW_SLOTINE, command_trial
 from adaptive_dd.identification.online_kernel import C_SINCE_ALARM, online_step_trial
 from adaptive_dd.plant.integrator import step_one
 from adaptive_dd.plant.sampling import actuate_trial, measure_trial
 
 __all__ = [
-    "LAW_ADAPTIVE",
-    "LAW_CT",
-    "LAW_CT_ORACLE",
-    "LAW_PD",
-    "LAW_SLOTINE",
-    "LAW_SLOTINE_ORACLE",
-    "CompiledSpec",
     "OnlineKernelConfig",
-    "TwoLinkGains",
     "TwoLinkPlant",
     "TwoLinkTrialState",
     "apply_batch",
     "apply_sample",
     "closed_loop_block",
-    "compiled_spec",
     "estimate_batch",
     "measure_batch",
     "measure_sample",

@@ -21,9 +21,6 @@ import numpy as np
 from numba.core.errors import NumbaPerformanceWarning
 
 from adaptive_dd.benchmark.compiled import (
-    LAW_ADAPTIVE,
-    LAW_SLOTINE,
-    CompiledSpec,
     OnlineKernelConfig,
     TwoLinkPlant,
     TwoLinkTrialState,
@@ -40,6 +37,7 @@ from adaptive_dd.closed_loop.glue import Alarms, alarm_lists
 from adaptive_dd.closed_loop.noise import NoiseBlocks
 from adaptive_dd.closed_loop.python_path import PythonGlue, run_python_batch
 from adaptive_dd.closed_loop.types import Io, Recording, RunConstants
+from adaptive_dd.controllers.compiled_form import LAW_ADAPTIVE, LAW_SLOTINE, CompiledSpec
 from adaptive_dd.identification.online import OnlineConfig, online_init
 from adaptive_dd.plant.integrator import friction_vector
 from adaptive_dd.plant.sampling import first_sample
@@ -95,7 +93,7 @@ def _records(name, ctrl, rc: RunConstants, S: int, keep: int, estimates: bool, e
 def run_compiled(name, ctrl, spec: CompiledSpec, scenario, idx, reference, keep: int, bar) -> ControllerRun:
     """One built-in controller's trials on the compiled path; the same result as :func:`run_python`.
 
-    ``spec`` its :func:`~adaptive_dd.benchmark.compiled.compiled_spec`; ``idx`` the seed indices;
+    ``spec`` its :func:`~adaptive_dd.controllers.compiled_form.compiled_spec`; ``idx`` the seed indices;
     ``reference`` ``(q_d, qd_d, qdd_d)``, each ``(n_samples, 2)``; ``keep`` trials recorded;
     ``bar`` a progress bar (samples) or None."""
     S, N, T = len(idx), scenario.n_samples, scenario.sample_period

@@ -27,7 +27,6 @@ from pathlib import Path
 
 import numpy as np
 
-from adaptive_dd.benchmark.compiled import compiled_spec
 from adaptive_dd.benchmark.drivers import run_compiled, run_python
 from adaptive_dd.benchmark.scenario import Scenario
 from adaptive_dd.benchmark.trials import true_sigma
@@ -39,6 +38,7 @@ from adaptive_dd.benchmark.types import (
     ControllerRun,
 )
 from adaptive_dd.controllers import Controller, Gains, controller_label, make_controller
+from adaptive_dd.controllers.compiled_form import compiled_spec
 from adaptive_dd.errors import ParameterError
 
 __all__ = ["ENGINES", "MAX_ERROR", "SETTLE", "BenchmarkResult", "ControllerRun", "run_benchmark"]

@@ -298,8 +298,9 @@ def _check(payload, tol, model, window) -> Array:
     return pay
 
 
-def _information(arm, q, qd, qdd, pay, swap_sample, model, window, kw) -> Array:
-    """Cumulative Fisher information ``(K, 10, 10)`` of the payload from the swap on."""
+def _information(arm, q, qd, qdd, pay, swap_sample, model, window, **kw) -> Array:
+    """Cumulative Fisher information ``(K, 10, 10)`` of the payload from the swap on; ``kw``: the
+    sensor settings of :func:`payload_regression_noise`."""
     q, qd, qdd = _states(arm, q, qd, qdd)
     if not 0 <= swap_sample < q.shape[0]:
         raise ParameterError(f"swap_sample must be in [0, {q.shape[0]}), got {swap_sample!r}")
@@ -308,6 +309,12 @@ def _information(arm, q, qd, qdd, pay, swap_sample, model, window, kw) -> Array:
     if model == "white":
         return _white_information(*payload_regression_noise(arm, q[s], qd[s], qdd[s], pay, **kw))
     return _colored_information(*payload_regression_covariance(arm, q[s], qd[s], qdd[s], pay, **kw))
+
+
+def _first_time(std: Array, bound: float, sample_period: float) -> float:
+    """Seconds after the swap at which ``std`` (one per sample from the swap on) is first within ``bound``."""
+    hit = np.flatnonzero(std <= bound)
+    return float((hit[0] + 1) * sample_period) if len(hit) else float("inf")
 
 
 def payload_information_time(
@@ -356,15 +363,11 @@ def payload_information_time(
     pay = _check(payload, tol, model, window)
     if not 0 < tol < 1:
         raise ParameterError(f"tol must be in (0, 1), got {tol!r}")
-    kw = dict(
-        sample_period=sample_period,
-        tau_f=tau_f,
-        position_variance=position_variance,
-        velocity_variance=velocity_variance,
-    )
-    std = _schur_std(_information(arm, q, qd, qdd, pay, swap_sample, model, window, kw))
-    hit = np.flatnonzero(std <= tol * pay[0])
-    return float((hit[0] + 1) * sample_period) if len(hit) else float("inf")
+    info = _information(
+        arm, q, qd, qdd, pay, swap_sample, model, window, sample_period=sample_period, tau_f=tau_f,
+        position_variance=position_variance, velocity_variance=velocity_variance,
+    )  # fmt: skip
+    return _first_time(_schur_std(info), tol * pay[0], sample_period)
 
 
 def payload_com_information_time(
@@ -393,12 +396,8 @@ def payload_com_information_time(
     ``arm.payload_identifiable[1:4]``). ``inf`` if not reached.
     """
     pay = _check(payload, tol, model, window)
-    kw = dict(
-        sample_period=sample_period,
-        tau_f=tau_f,
-        position_variance=position_variance,
-        velocity_variance=velocity_variance,
-    )
-    std = _com_std(_information(arm, q, qd, qdd, pay, swap_sample, model, window, kw), pay, axes)
-    hit = np.flatnonzero(std <= tol)
-    return float((hit[0] + 1) * sample_period) if len(hit) else float("inf")
+    info = _information(
+        arm, q, qd, qdd, pay, swap_sample, model, window, sample_period=sample_period, tau_f=tau_f,
+        position_variance=position_variance, velocity_variance=velocity_variance,
+    )  # fmt: skip
+    return _first_time(_com_std(info, pay, axes), tol, sample_period)

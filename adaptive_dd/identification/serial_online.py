@@ -482,6 +482,11 @@ def _pack(cfg: SerialOnlineConfig, arm: SerialArm) -> tuple[EstCfg, Array]:
     ), P0
 
 
+def _channels(cfg: SerialOnlineConfig) -> int:
+    """Filter channels per joint of the configured regression form."""
+    return K.MOMENTUM_CHANNELS if cfg.regression_form == "momentum" else K.SIGNAL_CHANNELS
+
+
 def est_init(
     cfg: SerialOnlineConfig, arm: SerialArm, n_trials: int, sigma_nominal: ArrayLike | None = None
 ) -> tuple[EstCfg, EstState]:
@@ -525,7 +530,7 @@ def est_init(
     cnt[:, K.C_REOPEN_AT] = -1
     m = n_trials
     state = EstState(
-        xf=np.zeros((m, (23 if cfg.regression_form == "momentum" else 4) * n, cfg.bank.order)),
+        xf=np.zeros((m, _channels(cfg) * n, cfg.bank.order)),
         u_last=np.zeros((m, 4 * n)),
         tau_prev=np.zeros((m, n)),
         cnt=cnt,

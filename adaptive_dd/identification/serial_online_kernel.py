@@ -48,6 +48,8 @@ C_RESTART = 8  # 1: the momentum channels restart at the next sample (set by an 
 N_CNT = 9
 
 BIG = 1 << 40
+SIGNAL_CHANNELS = 4  # per joint: q, qd, tau, sgn(qd) (the signals form)
+MOMENTUM_CHANNELS = 23  # per joint: tau, p, wv and the payload link's py, wy (10 each)
 MODE_PAYLOAD = 0
 MODE_FULL = 1
 
@@ -249,8 +251,9 @@ def _filtered_signals(c, s, i, q, qd, tau, qf, qdf, qddf, sf, tf, ym, phim):  # 
     if cnt[C_STARTED] == 0:  # the filters start in the steady state of the first sample
         for k in range(4 * n):
             s.u_last[i, k] = u[k] if np.isfinite(u[k]) else 0.0
-            for m in range(c.xs0.shape[0]):
-                s.xf[i, k, m] = s.u_last[i, k] * c.xs0[m]
+            if c.ints[I_MOMENTUM] == 0:  # (the momentum form starts its own, _momentum_channels)
+                for m in range(c.xs0.shape[0]):
+                    s.xf[i, k, m] = s.u_last[i, k] * c.xs0[m]
         cnt[C_SINCE_BAD] = BIG
         cnt[C_STARTED] = 1
     if bad:  # hold the last finite sample of every channel
@@ -293,7 +296,8 @@ def _momentum_channels(c, s, i, u, restart, tf, ym, phim):  # pragma: no cover -
     a payload that has gone: the equations after an alarm are exact from the first sample on.
     """
     n = ym.shape[0]
-    um = np.empty(23 * n)
+    nch = MOMENTUM_CHANNELS * n
+    um = np.empty(nch)
     p, wv = um[n : 2 * n], um[2 * n : 3 * n]
     py = um[3 * n : 13 * n].reshape((n, 10))
     wy = um[13 * n :].reshape((n, 10))
@@ -306,11 +310,11 @@ def _momentum_channels(c, s, i, u, restart, tf, ym, phim):  # pragma: no cover -
         p[r] += c.pi0[12 * n + r] * qd
         wv[r] += c.pi0[10 * n + r] * qd + c.pi0[11 * n + r] * u[3 * n + r]
     if restart:
-        for k in range(23 * n):
+        for k in range(nch):
             is_p = (n <= k < 2 * n) or (3 * n <= k < 13 * n)
             for m in range(c.xs0.shape[0]):
                 s.xf[i, k, m] = um[k] * c.xs0[m] if is_p else 0.0
-    f = np.empty((23 * n, 2))
+    f = np.empty((nch, 2))
     _filter_channels(c, s, i, um, f, 0)
     for r in range(n):
         tf[r] = f[r, 0]
