@@ -148,6 +148,12 @@ class SerialDetector:
     floor : float
         Floor [N m, RMS, in the units of the weighted equation] of the long-run level:
         an error below ``threshold * floor`` never alarms.
+    fast_window : float or None
+        Time constant [s] of a second, faster average of the squared errors, which alarms
+        above ``fast_threshold`` (the same rows, levels and ``min_rows``): a large change is
+        detected before the short average has risen. None: no fast average.
+    fast_threshold : float
+        RMS ratio fast / level that raises an alarm, > 1.
     min_rows : int
         An alarm also needs this many rows above half the threshold (RMS), >= 1. A payload
         change moves every joint the payload's weight and inertia load at once; friction the
@@ -169,6 +175,8 @@ class SerialDetector:
     reopen_mass_std: float = 10.0
     floor: float = 0.05
     min_rows: int = 1
+    fast_window: float | None = None
+    fast_threshold: float = 8.0
 
     def __post_init__(self) -> None:
         o = "SerialDetector"
@@ -188,6 +196,13 @@ class SerialDetector:
         _int(o, "min_learned", self.min_learned, 1)
         _int(o, "gate_after", self.gate_after, 1)
         _int(o, "min_rows", self.min_rows, 1)
+        if self.fast_window is not None:
+            _num(o, "fast_window", self.fast_window, 0.0)
+            if not self.fast_window < self.short_window:
+                raise ParameterError(
+                    f"{o} needs fast_window < short_window, got {self.fast_window}, {self.short_window}"
+                )
+        _num(o, "fast_threshold", self.fast_threshold, 1.0)
         _bool(o, "reopen_again", self.reopen_again)
 
 
@@ -450,6 +465,10 @@ def _pack(cfg: SerialOnlineConfig, arm: SerialArm) -> tuple[EstCfg, Array]:
         fl[K.F_SLOW2] = det.slow_factor**2
         fl[K.F_GATE2] = det.gate**2
         fl[K.F_FLOOR2] = det.floor**2
+        if det.fast_window is not None:
+            ints[K.I_FAST] = 1
+            fl[K.F_ALPHA_FAST] = min(1.0, T / det.fast_window)
+            fl[K.F_FAST2] = det.fast_threshold**2
         if det.min_rows > n_rows:
             raise ParameterError(
                 f"SerialDetector.min_rows = {det.min_rows} exceeds the {n_rows} joint equations that "
@@ -544,6 +563,7 @@ def est_init(
         long=np.zeros((m, n)),
         ref=np.zeros((m, n)),
         eps=np.full((m, n), np.nan),
+        fast=np.zeros((m, n)),
     )
     return c, state
 

@@ -131,7 +131,8 @@ I_GATE_AFTER = 12  # learned samples before the learning gate applies
 I_N_ROWS = 13  # rows (joints 0 .. n_rows-1) that carry information
 I_MOMENTUM = 14  # 1: the regression in momentum form (payload mode)
 I_MIN_ROWS = 15  # rows whose short average must exceed (threshold / 2)^2 times their level for an alarm
-N_I = 16
+I_FAST = 16  # 1: the fast average may also raise an alarm
+N_I = 17
 
 # float slots of EstCfg.floats
 F_LAM0 = 0
@@ -147,7 +148,9 @@ F_EIG_MIN = 9  # smallest eigenvalue kept in the projected pseudo-inertia
 F_FLOOR2 = 10  # floor of the detector's level (squared weighted error)
 F_RADIUS = 11  # radius [m] of the ball about the payload frame the projected payload lies in (0: none)
 F_PRIOR_RADIUS = 12  # radius [m] of the compact-payload prior on the model control uses (0: none)
-N_F = 13
+F_ALPHA_FAST = 13  # the fast average's weight of a sample
+F_FAST2 = 14  # the fast average's threshold (squared RMS ratio)
+N_F = 15
 
 
 class EstState(NamedTuple):
@@ -179,6 +182,8 @@ class EstState(NamedTuple):
         Level each row had established before the last alarm (0: none).
     eps : (m, n)
         Weighted prior errors of the last sample (NaN where a row was not used).
+    fast : (m, n)
+        Detector: the fast average of the squared weighted prior errors (``fast_window``).
     """
 
     xf: np.ndarray
@@ -195,6 +200,7 @@ class EstState(NamedTuple):
     long: np.ndarray
     ref: np.ndarray
     eps: np.ndarray
+    fast: np.ndarray
 
 
 @njit(cache=True)
@@ -489,6 +495,7 @@ def _detect(c, s, i, eps, act):  # pragma: no cover - compiled
             continue
         e2 = e * e
         s.short[i, j] += a_s * (e2 - s.short[i, j])
+        s.fast[i, j] += fl[F_ALPHA_FAST] * (e2 - s.fast[i, j])
         if learn:
             s.seen[i, j] += 1
             nl = s.learned[i, j]
@@ -507,6 +514,8 @@ def _detect(c, s, i, eps, act):  # pragma: no cover - compiled
             n_act += 1
     alarm = False
     n_raised = 0  # rows above a quarter of the threshold (half of it in RMS)
+    fast = False
+    n_fast = 0  # the same for the fast average and its threshold
     for j in range(n):
         if not act[j]:
             continue
@@ -523,7 +532,13 @@ def _detect(c, s, i, eps, act):  # pragma: no cover - compiled
             alarm = True
         if s.short[i, j] > 0.25 * thr * level + 1e-300:
             n_raised += 1
-    return alarm and n_raised >= ints[I_MIN_ROWS]
+        if ints[I_FAST] == 1:
+            thf = fl[F_FAST2] * thr / fl[F_THRESHOLD2]  # the same slow-row and re-learning factors
+            if s.fast[i, j] > thf * level + 1e-300:
+                fast = True
+            if s.fast[i, j] > 0.25 * thf * level + 1e-300:
+                n_fast += 1
+    return (alarm and n_raised >= ints[I_MIN_ROWS]) or (fast and n_fast >= ints[I_MIN_ROWS])
 
 
 @njit(cache=True)
@@ -598,6 +613,7 @@ def est_step_trial(c, s, i, q, qd, tau):  # pragma: no cover - compiled
                 # back in use after a slow phase: the short average restarts at the level
                 nl = s.learned[i, j]
                 s.short[i, j] = s.long[i, j] / (1.0 - (1.0 - fl[F_ALPHA_LONG]) ** nl)
+                s.fast[i, j] = s.short[i, j]
         else:
             act[j] = True
         act[j] = act[j] and usable and j < n_rows
