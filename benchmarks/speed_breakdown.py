@@ -243,7 +243,7 @@ def main() -> None:
     t_rls = _best(lambda: _rls_loop(f.ec, parts, ym, phim, theta0.copy(), P0.copy(), f.ec.w)) - t_reg
     rows += [
         (f"est_step_trial (p = {p})", t_step),
-        ("  of which filters (+ momentum form: 23 n channels)", t_filter),
+        (f"  of which filters (+ momentum form: {K.MOMENTUM_CHANNELS} n channels)", t_filter),
         ("  of which regression", t_reg),
         (f"  of which RLS, {n} rows", t_rls),
         ("  rest (selection, detector, ...)", t_step - t_filter - t_reg - t_rls),

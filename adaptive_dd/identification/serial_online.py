@@ -49,7 +49,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from adaptive_dd.errors import ParameterError, SignalError
 from adaptive_dd.identification import serial_online_kernel as K
-from adaptive_dd.identification.filters import FilterBank, design_filter_bank
+from adaptive_dd.identification.filters import FilterBank, design_filter_bank, summing_realisation
 from adaptive_dd.identification.pseudo_inertia import project_payload
 from adaptive_dd.identification.serial_online_kernel import (
     EstCfg,
@@ -457,6 +457,8 @@ def _pack(cfg: SerialOnlineConfig, arm: SerialArm) -> tuple[EstCfg, Array]:
             )
         ints[K.I_MIN_ROWS] = det.min_rows
     xs0 = np.linalg.solve(np.eye(b.order) - b.A, b.B[:, 0])
+    Am, Bm, Cm, Dm = summing_realisation(b)
+    xm1 = np.linalg.solve(np.eye(b.order) - Am, Bm[:, 1])
     c = np.ascontiguousarray
     return EstCfg(
         ch=arm.chain,
@@ -476,6 +478,11 @@ def _pack(cfg: SerialOnlineConfig, arm: SerialArm) -> tuple[EstCfg, Array]:
         C=c(b.C),
         D=c(b.D[:, 0]),
         xs0=xs0,
+        Am=Am,
+        Bm=Bm,
+        Cm=Cm,
+        Dm=Dm,
+        xm1=xm1,
         w=c(w),
         ints=ints,
         floats=fl,

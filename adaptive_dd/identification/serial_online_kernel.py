@@ -15,7 +15,10 @@ One sample, per trial:
    :func:`~adaptive_dd.identification.filters.design_filter_bank`) on the channels
    ``q, qd, tau, sgn(qd)`` (outputs G0, G1); the regressor is evaluated at the filtered
    signals ``qf = G0 q, qdf = G0 qd, qddf = G1 qd``, friction columns at ``G0 qd``,
-   ``G0 sgn(qd)`` (the paper's M2 construction generalised to n joints);
+   ``G0 sgn(qd)`` (the paper's M2 construction generalised to n joints). The momentum
+   form filters ``G0 tau``, ``G1 p + G0 wv`` and ``G1 py + G0 wy`` instead, each sum as
+   one state of the bank's transposed realisation
+   (:func:`~adaptive_dd.identification.filters.summing_realisation`);
 3. data selection: equation j is used once joint j has been faster than the
    threshold for the filters' memory;
 4. RLS of eq. (14), one scalar update per used joint equation (row weights ``w``);
@@ -49,7 +52,7 @@ N_CNT = 9
 
 BIG = 1 << 40
 SIGNAL_CHANNELS = 4  # per joint: q, qd, tau, sgn(qd) (the signals form)
-MOMENTUM_CHANNELS = 23  # per joint: tau, p, wv and the payload link's py, wy (10 each)
+MOMENTUM_CHANNELS = 12  # per joint: G0 tau, G1 p + G0 wv and the payload link's G1 py + G0 wy (10)
 MODE_PAYLOAD = 0
 MODE_FULL = 1
 
@@ -86,6 +89,11 @@ class EstCfg(NamedTuple):
     A, Bf, C, D : filter bank matrices (order x order, order, 2 x order, 2)
     xs0 : (order,)
         Filter state of a unit constant input.
+    Am, Bm, Cm, Dm : the bank's summing realisation (order x order, order x 2, order, 2)
+        One state, inputs ``u0, u1``, output ``G0 u0 + G1 u1``
+        (:func:`~adaptive_dd.identification.filters.summing_realisation`; the momentum form).
+    xm1 : (order,)
+        Its state of a unit constant ``u1`` and ``u0 = 0``.
     w : (n,)
         Row weights: equation j is divided by ``w[j]``.
     ints : (N_I,) int64, floats : (N_F,) float64
@@ -109,6 +117,11 @@ class EstCfg(NamedTuple):
     C: np.ndarray
     D: np.ndarray
     xs0: np.ndarray
+    Am: np.ndarray
+    Bm: np.ndarray
+    Cm: np.ndarray
+    Dm: np.ndarray
+    xm1: np.ndarray
     w: np.ndarray
     ints: np.ndarray
     floats: np.ndarray
@@ -155,8 +168,10 @@ class EstState(NamedTuple):
 
     Attributes
     ----------
-    xf : (m, 4 n, order)
-        Filter states of the channels ``q, qd, tau, sgn(qd)`` (n each).
+    xf : (m, SIGNAL_CHANNELS n, order) or (m, MOMENTUM_CHANNELS n, order)
+        Filter states: signals form, of the channels ``q, qd, tau, sgn(qd)`` (n each);
+        momentum form, of ``G0 tau``, ``G1 p + G0 wv`` (n each) and ``G1 py + G0 wy`` (10 n,
+        row-major (n, 10)).
     u_last : (m, 4 n)
         Last finite channel sample (held over a dropout).
     tau_prev : (m, n)
@@ -280,47 +295,74 @@ def _filtered_signals(c, s, i, q, qd, tau, qf, qdf, qddf, sf, tf, ym, phim):  # 
     return cnt[C_SINCE_BAD] > c.ints[I_TAINT]
 
 
+@njit(cache=True, inline="always")
+def _summed(c, xf, ch, u1, u0):  # pragma: no cover - compiled
+    """One sample of the summing realisation on channel ``ch`` of ``xf``: return
+    ``G1 u1 + G0 u0`` and advance the channel's state (order 2 written out)."""
+    Am, Bm, Cm, Dm = c.Am, c.Bm, c.Cm, c.Dm
+    order = Am.shape[0]
+    if order == 2:
+        z0, z1 = xf[ch, 0], xf[ch, 1]
+        out = Dm[1] * u1 + Dm[0] * u0 + Cm[0] * z0 + Cm[1] * z1
+        xf[ch, 0] = Am[0, 0] * z0 + Am[0, 1] * z1 + Bm[0, 1] * u1 + Bm[0, 0] * u0
+        xf[ch, 1] = Am[1, 0] * z0 + Am[1, 1] * z1 + Bm[1, 1] * u1 + Bm[1, 0] * u0
+        return out
+    out = Dm[1] * u1 + Dm[0] * u0
+    for m in range(order):
+        out += Cm[m] * xf[ch, m]
+    tmp = np.empty(order)
+    for m in range(order):
+        acc = Bm[m, 1] * u1 + Bm[m, 0] * u0
+        for k in range(order):
+            acc += Am[m, k] * xf[ch, k]
+        tmp[m] = acc
+    for m in range(order):
+        xf[ch, m] = tmp[m]
+    return out
+
+
 @njit(cache=True)
 def _momentum_channels(c, s, i, u, restart, tf, ym, phim):  # pragma: no cover - compiled
     """The momentum form at the held channels ``u`` (q, qd, tau, sgn), filtered.
 
-    Channels ``[tau, p, wv, py, wy]`` (23 n): the known arm's momentum ``p = M qd + ia qd``
-    and rest ``wv = g - C^T qd + fv qd + fc sgn(qd)``, the payload link's ``py, wy`` (n, 10)
-    (:func:`momentum_form_in`). Out: ``tf = G0 tau``, ``ym = G1 p + G0 wv``,
-    ``phim = G1 py + G0 wy``.
+    The known arm's momentum ``p = M qd + ia qd`` and rest ``wv = g - C^T qd + fv qd +
+    fc sgn(qd)``, the payload link's ``py, wy`` (n, 10) (:func:`momentum_form_in`). Out:
+    ``tf = G0 tau``, ``ym = G1 p + G0 wv``, ``phim = G1 py + G0 wy``, each sum one channel of
+    the summing realisation (``MOMENTUM_CHANNELS`` n channels in ``s.xf[i]``: tau, (p, wv),
+    (py, wy) row-major).
 
     On ``restart`` (the first sample, and the sample after an alarm) the filters start
-    afresh: momentum channels in the steady state of this sample, the others at rest. The
-    equation ``G0 tau = G1 p + G0 wv`` then holds exactly for the signals continued before
-    this sample (momentum constant, torque and rest zero), so the filters carry no memory of
-    a payload that has gone: the equations after an alarm are exact from the first sample on.
+    afresh: momentum channels in the steady state of this sample, the others at rest (the
+    state ``p xm1``, ``py xm1``; 0 for tau). The equation ``G0 tau = G1 p + G0 wv`` then holds
+    exactly for the signals continued before this sample (momentum constant, torque and rest
+    zero), so the filters carry no memory of a payload that has gone: the equations after an
+    alarm are exact from the first sample on.
     """
     n = ym.shape[0]
-    nch = MOMENTUM_CHANNELS * n
-    um = np.empty(nch)
-    p, wv = um[n : 2 * n], um[2 * n : 3 * n]
-    py = um[3 * n : 13 * n].reshape((n, 10))
-    wy = um[13 * n :].reshape((n, 10))
-    momentum_form_in(
-        c.ch, c.pi0[: 10 * n], c.jp, u[:n], u[n : 2 * n], workspace(n), np.empty((2, 6, 10)), p, wv, py, wy
-    )
+    buf = np.empty(22 * n + 120)  # p, wv, py, wy and momentum_form_in's (2, 6, 10)
+    p, wv = buf[:n], buf[n : 2 * n]
+    py = buf[2 * n : 12 * n].reshape((n, 10))
+    wy = buf[12 * n : 22 * n].reshape((n, 10))
+    a = buf[22 * n :].reshape((2, 6, 10))
+    momentum_form_in(c.ch, c.pi0[: 10 * n], c.jp, u[:n], u[n : 2 * n], workspace(n), a, p, wv, py, wy)
     for r in range(n):
         qd = u[n + r]
-        um[r] = u[2 * n + r]
         p[r] += c.pi0[12 * n + r] * qd
         wv[r] += c.pi0[10 * n + r] * qd + c.pi0[11 * n + r] * u[3 * n + r]
+    xf = s.xf[i]
     if restart:
-        for k in range(nch):
-            is_p = (n <= k < 2 * n) or (3 * n <= k < 13 * n)
-            for m in range(c.xs0.shape[0]):
-                s.xf[i, k, m] = um[k] * c.xs0[m] if is_p else 0.0
-    f = np.empty((nch, 2))
-    _filter_channels(c, s, i, um, f, 0)
+        for m in range(c.xm1.shape[0]):
+            x1 = c.xm1[m]
+            for r in range(n):
+                xf[r, m] = 0.0
+                xf[n + r, m] = p[r] * x1
+                for k in range(10):
+                    xf[2 * n + 10 * r + k, m] = py[r, k] * x1
     for r in range(n):
-        tf[r] = f[r, 0]
-        ym[r] = f[n + r, 1] + f[2 * n + r, 0]
+        tf[r] = _summed(c, xf, r, 0.0, u[2 * n + r])
+        ym[r] = _summed(c, xf, n + r, p[r], wv[r])
         for k in range(10):
-            phim[r, k] = f[3 * n + 10 * r + k, 1] + f[13 * n + 10 * r + k, 0]
+            phim[r, k] = _summed(c, xf, 2 * n + 10 * r + k, py[r, k], wy[r, k])
 
 
 @njit(cache=True)
