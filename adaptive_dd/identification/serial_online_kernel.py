@@ -295,30 +295,35 @@ def _filtered_signals(c, s, i, q, qd, tau, qf, qdf, qddf, sf, tf, ym, phim):  # 
     return cnt[C_SINCE_BAD] > c.ints[I_TAINT]
 
 
-@njit(cache=True, inline="always")
-def _summed(c, xf, ch, u1, u0):  # pragma: no cover - compiled
-    """One sample of the summing realisation on channel ``ch`` of ``xf``: return
-    ``G1 u1 + G0 u0`` and advance the channel's state (order 2 written out)."""
-    Am, Bm, Cm, Dm = c.Am, c.Bm, c.Cm, c.Dm
+@njit(cache=True)
+def _summed_channels(Am, Bm, Cm, Dm, xf, u1, u0, y):  # pragma: no cover - compiled
+    """One sample of the summing realisation (``Am, Bm, Cm, Dm``) on every channel of ``xf``:
+    ``y = G1 u1 + G0 u0``, the states advanced in place (order 2 written out, its matrices in
+    scalars: a call per channel would cost more than its arithmetic)."""
     order = Am.shape[0]
     if order == 2:
-        z0, z1 = xf[ch, 0], xf[ch, 1]
-        out = Dm[1] * u1 + Dm[0] * u0 + Cm[0] * z0 + Cm[1] * z1
-        xf[ch, 0] = Am[0, 0] * z0 + Am[0, 1] * z1 + Bm[0, 1] * u1 + Bm[0, 0] * u0
-        xf[ch, 1] = Am[1, 0] * z0 + Am[1, 1] * z1 + Bm[1, 1] * u1 + Bm[1, 0] * u0
-        return out
-    out = Dm[1] * u1 + Dm[0] * u0
-    for m in range(order):
-        out += Cm[m] * xf[ch, m]
+        a00, a01, a10, a11 = Am[0, 0], Am[0, 1], Am[1, 0], Am[1, 1]
+        b00, b01, b10, b11 = Bm[0, 0], Bm[0, 1], Bm[1, 0], Bm[1, 1]
+        c0, c1, d0, d1 = Cm[0], Cm[1], Dm[0], Dm[1]
+        for ch in range(y.shape[0]):
+            z0, z1, v1, v0 = xf[ch, 0], xf[ch, 1], u1[ch], u0[ch]
+            y[ch] = d1 * v1 + d0 * v0 + c0 * z0 + c1 * z1
+            xf[ch, 0] = a00 * z0 + a01 * z1 + b01 * v1 + b00 * v0
+            xf[ch, 1] = a10 * z0 + a11 * z1 + b11 * v1 + b10 * v0
+        return
     tmp = np.empty(order)
-    for m in range(order):
-        acc = Bm[m, 1] * u1 + Bm[m, 0] * u0
-        for k in range(order):
-            acc += Am[m, k] * xf[ch, k]
-        tmp[m] = acc
-    for m in range(order):
-        xf[ch, m] = tmp[m]
-    return out
+    for ch in range(y.shape[0]):
+        acc = Dm[1] * u1[ch] + Dm[0] * u0[ch]
+        for m in range(order):
+            acc += Cm[m] * xf[ch, m]
+        y[ch] = acc
+        for m in range(order):
+            acc = Bm[m, 1] * u1[ch] + Bm[m, 0] * u0[ch]
+            for k in range(order):
+                acc += Am[m, k] * xf[ch, k]
+            tmp[m] = acc
+        for m in range(order):
+            xf[ch, m] = tmp[m]
 
 
 @njit(cache=True)
@@ -339,30 +344,31 @@ def _momentum_channels(c, s, i, u, restart, tf, ym, phim):  # pragma: no cover -
     alarm are exact from the first sample on.
     """
     n = ym.shape[0]
-    buf = np.empty(22 * n + 120)  # p, wv, py, wy and momentum_form_in's (2, 6, 10)
-    p, wv = buf[:n], buf[n : 2 * n]
-    py = buf[2 * n : 12 * n].reshape((n, 10))
-    wy = buf[12 * n : 22 * n].reshape((n, 10))
-    a = buf[22 * n :].reshape((2, 6, 10))
+    nch = MOMENTUM_CHANNELS * n
+    buf = np.empty(3 * nch + 120)  # inputs u1 (G1), u0 (G0), outputs; momentum_form_in's (2, 6, 10)
+    u1, u0, y = buf[:nch], buf[nch : 2 * nch], buf[2 * nch : 3 * nch]
+    p, wv = u1[n : 2 * n], u0[n : 2 * n]
+    py = u1[2 * n :].reshape((n, 10))
+    wy = u0[2 * n :].reshape((n, 10))
+    a = buf[3 * nch :].reshape((2, 6, 10))
     momentum_form_in(c.ch, c.pi0[: 10 * n], c.jp, u[:n], u[n : 2 * n], workspace(n), a, p, wv, py, wy)
     for r in range(n):
         qd = u[n + r]
+        u1[r] = 0.0
+        u0[r] = u[2 * n + r]
         p[r] += c.pi0[12 * n + r] * qd
         wv[r] += c.pi0[10 * n + r] * qd + c.pi0[11 * n + r] * u[3 * n + r]
     xf = s.xf[i]
-    if restart:
-        for m in range(c.xm1.shape[0]):
-            x1 = c.xm1[m]
-            for r in range(n):
-                xf[r, m] = 0.0
-                xf[n + r, m] = p[r] * x1
-                for k in range(10):
-                    xf[2 * n + 10 * r + k, m] = py[r, k] * x1
+    if restart:  # the G1 inputs (momentum) in steady state, the G0 inputs at rest
+        for ch in range(nch):
+            for m in range(c.xm1.shape[0]):
+                xf[ch, m] = u1[ch] * c.xm1[m]
+    _summed_channels(c.Am, c.Bm, c.Cm, c.Dm, xf, u1, u0, y)
     for r in range(n):
-        tf[r] = _summed(c, xf, r, 0.0, u[2 * n + r])
-        ym[r] = _summed(c, xf, n + r, p[r], wv[r])
+        tf[r] = y[r]
+        ym[r] = y[n + r]
         for k in range(10):
-            phim[r, k] = _summed(c, xf, 2 * n + 10 * r + k, py[r, k], wy[r, k])
+            phim[r, k] = y[2 * n + 10 * r + k]
 
 
 @njit(cache=True)
