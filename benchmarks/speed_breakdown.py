@@ -114,9 +114,15 @@ def _model_loop(c, s, n_calls, pi_out):  # pragma: no cover - compiled
 @njit(cache=True)
 def _filter_loop(c, s, qm, qdm, tau, parts, ym, phim):  # pragma: no cover - compiled
     n = qm.shape[1]
+    w = K.est_work(n, s.theta.shape[1])
     for k in range(qm.shape[0]):
+        K._filtered_signals(c, s, 0, qm[k], qdm[k], tau[k], w)
         pk = parts[k]
-        K._filtered_signals(c, s, 0, qm[k], qdm[k], tau[k], pk[0], pk[1], pk[2], pk[3], pk[4], ym[k], phim[k])
+        for j in range(n):
+            pk[0, j], pk[1, j], pk[2, j], pk[3, j], pk[4, j] = w.qf[j], w.qdf[j], w.qddf[j], w.sf[j], w.tf[j]
+            ym[k, j] = w.ym[j]
+            for m in range(10):
+                phim[k, j, m] = w.phim[j, m]
     return n
 
 
@@ -124,10 +130,11 @@ def _filter_loop(c, s, qm, qdm, tau, parts, ym, phim):  # pragma: no cover - com
 def _regression_loop(c, parts, ym, phim, p):  # pragma: no cover - compiled
     n = parts.shape[2]
     phi, y = np.empty((n, p)), np.empty(n)
+    w = K.est_work(n, p)
     a = 0.0
     for k in range(parts.shape[0]):
         pk = parts[k]
-        K._regression(c, pk[0], pk[1], pk[2], pk[3], pk[4], ym[k], phim[k], phi, y)
+        K._regression(c, pk[0], pk[1], pk[2], pk[3], pk[4], ym[k], phim[k], phi, y, w)
         a += y[0]
     return a
 
@@ -137,11 +144,12 @@ def _rls_loop(c, parts, ym, phim, theta, P, w):  # pragma: no cover - compiled
     n, p = parts.shape[2], theta.shape[0]
     phi, y = np.empty((n, p)), np.empty(n)
     pphi, row, nz = np.empty(p), np.empty(p), np.empty(p, dtype=np.int64)
+    w = K.est_work(n, p)
     # regressions first (not timed separately here: subtract _regression_loop)
     a = 0.0
     for k in range(parts.shape[0]):
         pk = parts[k]
-        K._regression(c, pk[0], pk[1], pk[2], pk[3], pk[4], ym[k], phim[k], phi, y)
+        K._regression(c, pk[0], pk[1], pk[2], pk[3], pk[4], ym[k], phim[k], phi, y, w)
         for j in range(n):
             for m in range(p):
                 row[m] = phi[j, m] / w[j]

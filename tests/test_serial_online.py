@@ -197,15 +197,12 @@ def test_momentum_channels_equal_the_banks_filters_one_per_signal(ur5, swap_reco
     n = ur5.n_joints
     assert s.xf.shape == (1, K.MOMENTUM_CHANNELS * n, cfg.bank.order) == (1, 12 * n, 2)
     got = np.empty((N, n, 12))  # tf, ym, phim
-    e = np.empty(n)
+    w = K.est_work(n, 10)
     for k in range(N):
         if k == restart_at:
             s.cnt[0, K.C_RESTART] = 1
-        ym, phim = np.empty(n), np.empty((n, 10))
-        K._filtered_signals(
-            c, s, 0, q[k], qd[k], tau[k], e, e.copy(), e.copy(), e.copy(), got[k, :, 0], ym, phim
-        )
-        got[k, :, 1], got[k, :, 2:] = ym, phim
+        K._filtered_signals(c, s, 0, q[k], qd[k], tau[k], w)
+        got[k, :, 0], got[k, :, 1], got[k, :, 2:] = w.tf, w.ym, w.phim
     bank = cfg.bank
     pi, jp = ur5.pi, ur5.payload_joint
     want = np.empty_like(got)

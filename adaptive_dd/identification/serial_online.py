@@ -5,6 +5,8 @@ The N-joint generalisation of :mod:`~adaptive_dd.identification.online`::
     c, s = est_init(cfg, arm, n_trials)               # EstCfg (read-only), EstState (in place)
     alarm = est_step_trial(c, s, i, q, qd, tau)       # compiled: one sample of trial i
     est_model_trial(c, s, i, pi_out)                  # compiled: the model control uses (13 n,)
+    w = est_work(n, p)                                # scratch of a trial, reused from sample to sample:
+    est_step_trial_in(c, s, i, q, qd, tau, w); est_model_trial_in(c, s, i, pi_out, w)  # (no allocation)
     info = est_step(c, s, q, qd, tau)                 # Python: every trial, the same kernel
     rec = run_serial_online(arm, cfg, q, qd, tau)     # a whole record; equals stepping
 
@@ -57,8 +59,11 @@ from adaptive_dd.identification.serial_online_kernel import (
     compact_prior,
     est_force_alarm_trial,
     est_model_trial,
+    est_model_trial_in,
     est_payload_trial,
     est_step_trial,
+    est_step_trial_in,
+    est_work,
 )
 from adaptive_dd.plant.serial_arm import SerialArm
 
@@ -74,9 +79,12 @@ __all__ = [
     "est_init",
     "est_model",
     "est_model_trial",
+    "est_model_trial_in",
     "est_payload_trial",
     "est_step",
     "est_step_trial",
+    "est_step_trial_in",
+    "est_work",
     "payload_prior",
     "project_payload",
     "run_serial_online",
