@@ -75,7 +75,7 @@ def segment_of(rc, k):  # pragma: no cover - compiled
     return s
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def measure_trial_sample(io, ts, i, noise, lost, qm, qdm, qm_obs, qdm_obs):  # pragma: no cover
     """Measured ``qm, qdm (n,)`` for the law and ``qm_obs, qdm_obs`` for the estimator (NaN if lost)."""
     n = qm.shape[0]
@@ -117,7 +117,7 @@ def sample_work(n):  # pragma: no cover - compiled
     return plant_scratch(n), np.empty(n), np.empty(n)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def apply_trial_sample(ch, rc, io, pl, ts, acc, rec, i, k, s, cmd, tau, work):  # pragma: no cover
     """Steps 3 of the module docstring for trial i at sample k (segment s); ``tau (n,)`` applied;
     ``work``: :func:`sample_work` (allocated once per trial, not per sample)."""
@@ -208,7 +208,7 @@ def _estimator_model(ec, es, i, pi_out, ew):
     return lambda ec, es, i, pi_out, ew: est_model_trial_in(ec, es, i, pi_out, ew)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def estimator_trial_sample(ec, es, ls, i, qm_obs, qdm_obs, tau, ew):  # pragma: no cover - compiled
     """The estimator's step on the applied torque, the alarm counter, the model for the next command;
     ``ew`` the estimator's scratch (:func:`estimator_work`)."""

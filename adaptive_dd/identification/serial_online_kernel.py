@@ -696,7 +696,7 @@ def est_step_trial(c, s, i, q, qd, tau):  # pragma: no cover - compiled
     return est_step_trial_in(c, s, i, q, qd, tau, est_work(q.shape[0], s.theta.shape[1]))
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def est_step_trial_in(c, s, i, q, qd, tau, w):  # pragma: no cover - compiled
     """Advance trial i by one sample in place; return 1 on a change alarm at this sample, else 0.
 
@@ -896,7 +896,7 @@ def est_model_trial(c, s, i, pi_out):  # pragma: no cover - compiled
     est_model_trial_in(c, s, i, pi_out, est_work(c.w.shape[0], s.theta.shape[1]))
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def est_model_trial_in(c, s, i, pi_out, w):  # pragma: no cover - compiled
     """The model control uses for trial i, as standard parameters ``pi_out (13 n,)``; ``w``
     (:class:`EstWork`) scratch.
