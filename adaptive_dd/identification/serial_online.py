@@ -5,6 +5,8 @@ The N-joint generalisation of :mod:`~adaptive_dd.identification.online`::
     c, s = est_init(cfg, arm, n_trials)               # EstCfg (read-only), EstState (in place)
     alarm = est_step_trial(c, s, i, q, qd, tau)       # compiled: one sample of trial i
     est_model_trial(c, s, i, pi_out)                  # compiled: the model control uses (13 n,)
+    w = est_work(n, p)                                # scratch of a trial, reused from sample to sample:
+    est_step_trial_in(c, s, i, q, qd, tau, w); est_model_trial_in(c, s, i, pi_out, w)  # (no allocation)
     info = est_step(c, s, q, qd, tau)                 # Python: every trial, the same kernel
     rec = run_serial_online(arm, cfg, q, qd, tau)     # a whole record; equals stepping
 
@@ -49,7 +51,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from adaptive_dd.errors import ParameterError, SignalError
 from adaptive_dd.identification import serial_online_kernel as K
-from adaptive_dd.identification.filters import FilterBank, design_filter_bank
+from adaptive_dd.identification.filters import FilterBank, design_filter_bank, summing_realisation
 from adaptive_dd.identification.pseudo_inertia import project_payload
 from adaptive_dd.identification.serial_online_kernel import (
     EstCfg,
@@ -57,8 +59,11 @@ from adaptive_dd.identification.serial_online_kernel import (
     compact_prior,
     est_force_alarm_trial,
     est_model_trial,
+    est_model_trial_in,
     est_payload_trial,
     est_step_trial,
+    est_step_trial_in,
+    est_work,
 )
 from adaptive_dd.plant.serial_arm import SerialArm
 
@@ -74,9 +79,12 @@ __all__ = [
     "est_init",
     "est_model",
     "est_model_trial",
+    "est_model_trial_in",
     "est_payload_trial",
     "est_step",
     "est_step_trial",
+    "est_step_trial_in",
+    "est_work",
     "payload_prior",
     "project_payload",
     "run_serial_online",
@@ -476,6 +484,8 @@ def _pack(cfg: SerialOnlineConfig, arm: SerialArm) -> tuple[EstCfg, Array]:
             )
         ints[K.I_MIN_ROWS] = det.min_rows
     xs0 = np.linalg.solve(np.eye(b.order) - b.A, b.B[:, 0])
+    Am, Bm, Cm, Dm = summing_realisation(b)
+    xm1 = np.linalg.solve(np.eye(b.order) - Am, Bm[:, 1])
     c = np.ascontiguousarray
     return EstCfg(
         ch=arm.chain,
@@ -495,6 +505,11 @@ def _pack(cfg: SerialOnlineConfig, arm: SerialArm) -> tuple[EstCfg, Array]:
         C=c(b.C),
         D=c(b.D[:, 0]),
         xs0=xs0,
+        Am=Am,
+        Bm=Bm,
+        Cm=Cm,
+        Dm=Dm,
+        xm1=xm1,
         w=c(w),
         ints=ints,
         floats=fl,
