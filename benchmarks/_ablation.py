@@ -14,24 +14,37 @@ from adaptive_dd.benchmark.scenario import parse_scenario
 UR5 = Path(__file__).resolve().parents[1] / "adaptive_dd" / "scenarios" / "ur5_tool_swap.toml"
 
 
-def ablation_row(base: dict, scenario: str, seeds: int, estimator: dict, plant: dict | None = None) -> str:
+def ablation_row(
+    base: dict,
+    scenario: str,
+    seeds: int,
+    estimator: dict,
+    plant: dict | None = None,
+    controller: dict | None = None,
+) -> str:
     """``mean/p90/max`` of adaptive_ct / ct_oracle per segment, the trials with a false alarm and
     the swaps missed, as one line, with the scenario's estimator settings updated by ``estimator`` (and its
-    ``[plant]`` table by ``plant``)."""
+    ``[plant]`` table by ``plant``, adaptive_ct's own settings by ``controller``)."""
     d = copy.deepcopy(base)
     if plant:
         d.setdefault("plant", {}).update(plant)
     d["run"]["seeds"] = seeds
     d["run"]["controllers"] = ["ct_oracle", "adaptive_ct"]
-    d.setdefault("controllers", {}).setdefault("adaptive_ct", {}).setdefault("estimator", {}).update(
-        estimator
-    )
+    ac = d.setdefault("controllers", {}).setdefault("adaptive_ct", {})
+    ac.update(controller or {})
+    ac.setdefault("estimator", {}).update(estimator)
     df = run_benchmark(parse_scenario(d, scenario, Path(scenario).stem), progress=False).to_frame()
     c = df[df.controller == "adaptive_ct"]
+    cells = segment_cells(c)
+    fa = int((c.groupby("seed").false_alarms.sum() > 0).sum())
+    missed = int(np.sum(c.detection_delay.isna() & (c.segment > 0))) if "detection_delay" in c else -1
+    return f"{'  '.join(cells)}   {fa}   {missed}"
+
+
+def segment_cells(c) -> list[str]:
+    """``mean/p90/max`` of the ratio to the floor per segment of one controller's rows of ``to_frame()``."""
     cells = []
     for _, s in c.groupby("segment"):
         r = s.ratio_to_floor.to_numpy(dtype=float)
         cells.append(f"{np.nanmean(r):.3f}/{np.nanpercentile(r, 90):.3f}/{np.nanmax(r):.2f}")
-    fa = int((c.groupby("seed").false_alarms.sum() > 0).sum())
-    missed = int(np.sum(c.detection_delay.isna() & (c.segment > 0))) if "detection_delay" in c else -1
-    return f"{'  '.join(cells)}   {fa}   {missed}"
+    return cells

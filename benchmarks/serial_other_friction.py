@@ -4,7 +4,7 @@ the UR5 tool swap) with the plant's friction law replaced (stick-slip as shipped
 ``sgn``). Per segment adaptive_ct / ct_oracle per seed (mean / p90 / max), trials with a false
 alarm, swaps missed. The same seeds for every law.
 
-    python benchmarks/serial_other_friction.py [SCENARIO.toml] [--seeds 50]
+    python benchmarks/serial_other_friction.py [SCENARIO.toml] [--seeds 50] [--set KEY=VALUE ...]
         [--laws stick-slip tanh stribeck tanh@0.1]
 
 ``LAW@V`` also sets the plant's ``friction_velocity`` V [rad/s] (tanh: how soft the friction is);
@@ -14,6 +14,7 @@ alarm, swaps missed. The same seeds for every law.
 from __future__ import annotations
 
 import argparse
+import tomllib
 from pathlib import Path
 
 from _ablation import UR5, ablation_row
@@ -39,14 +40,19 @@ def main() -> None:
     ap.add_argument("scenario", nargs="?", default=str(UR5))
     ap.add_argument("--seeds", type=int, default=50)
     ap.add_argument("--laws", nargs="+", default=["stick-slip", "tanh", "stribeck", "tanh@0.1"])
+    ap.add_argument("--set", action="append", default=[], metavar="KEY=VALUE")
     a = ap.parse_args()
+    extra = tomllib.loads("\n".join(a.set))
     base = read_toml(Path(a.scenario))
-    print(f"{a.scenario}: adaptive_ct / ct_oracle, {a.seeds} seeds, plant friction law replaced")
+    print(
+        f"{a.scenario}: adaptive_ct / ct_oracle, {a.seeds} seeds, plant friction law replaced, "
+        f"estimator settings {extra or 'as shipped'}"
+    )
     head = "plant friction  per segment: mean / p90 / max"
     print(f"{head}{' ' * 24}trials with a false alarm, swaps missed")
     for law in a.laws:
         plant = _plant(law)
-        row = ablation_row(base, a.scenario, a.seeds, {}, plant=plant)
+        row = ablation_row(base, a.scenario, a.seeds, extra, plant=plant)
         print(f"{law:14s}  {row}", flush=True)
 
 

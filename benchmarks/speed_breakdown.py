@@ -8,9 +8,9 @@ of the loop, timed inside numba loops (Python call overhead excluded, compilatio
   its parts: the rigid-body terms and the Cholesky solve of one RK4 stage, times the stages;
 * the law (``closed_loop.laws.law_trial_in``: ct_oracle on the true model, adaptive_ct on its
   trial model);
-* the estimator's step (``est_step_trial``) and its parts (filters, regression, the row-by-row
-  RLS, the detector), and the model that control uses (``est_model_trial``: the payload's
-  projection);
+* the estimator's step (``est_step_trial_in``, its scratch made once, as in the closed loop)
+  and its parts (filters, regression, the row-by-row RLS, the detector), and the model that
+  control uses (``est_model_trial_in``: the payload's projection);
 * the whole loop (``closed_loop_block`` through ``run_serial``, one trial, recorded); "glue" is
   the whole minus the kernels (measurement, divergence rules, metrics, recording, the run's
   Python set-up); "recording" is the whole less the same trial unrecorded.
@@ -98,25 +98,33 @@ def _law_loop(ch, cfg, pi_true, pi_model, theta, rc, qm, qdm, out):  # pragma: n
 @njit(cache=True)
 def _est_loop(c, s, qm, qdm, tau, with_model, pi_out):  # pragma: no cover - compiled
     a = 0
+    w = K.est_work(qm.shape[1], s.theta.shape[1])  # one scratch per trial, as the closed loop's
     for k in range(qm.shape[0]):
-        a += K.est_step_trial(c, s, 0, qm[k], qdm[k], tau[k])
+        a += K.est_step_trial_in(c, s, 0, qm[k], qdm[k], tau[k], w)
         if with_model:
-            K.est_model_trial(c, s, 0, pi_out)
+            K.est_model_trial_in(c, s, 0, pi_out, w)
     return a
 
 
 @njit(cache=True)
 def _model_loop(c, s, n_calls, pi_out):  # pragma: no cover - compiled
+    w = K.est_work(pi_out.shape[0] // 13, s.theta.shape[1])
     for _ in range(n_calls):
-        K.est_model_trial(c, s, 0, pi_out)
+        K.est_model_trial_in(c, s, 0, pi_out, w)
 
 
 @njit(cache=True)
 def _filter_loop(c, s, qm, qdm, tau, parts, ym, phim):  # pragma: no cover - compiled
     n = qm.shape[1]
+    w = K.est_work(n, s.theta.shape[1])
     for k in range(qm.shape[0]):
+        K._filtered_signals(c, s, 0, qm[k], qdm[k], tau[k], w)
         pk = parts[k]
-        K._filtered_signals(c, s, 0, qm[k], qdm[k], tau[k], pk[0], pk[1], pk[2], pk[3], pk[4], ym[k], phim[k])
+        for j in range(n):
+            pk[0, j], pk[1, j], pk[2, j], pk[3, j], pk[4, j] = w.qf[j], w.qdf[j], w.qddf[j], w.sf[j], w.tf[j]
+            ym[k, j] = w.ym[j]
+            for m in range(10):
+                phim[k, j, m] = w.phim[j, m]
     return n
 
 
@@ -124,10 +132,11 @@ def _filter_loop(c, s, qm, qdm, tau, parts, ym, phim):  # pragma: no cover - com
 def _regression_loop(c, parts, ym, phim, p):  # pragma: no cover - compiled
     n = parts.shape[2]
     phi, y = np.empty((n, p)), np.empty(n)
+    w = K.est_work(n, p)
     a = 0.0
     for k in range(parts.shape[0]):
         pk = parts[k]
-        K._regression(c, pk[0], pk[1], pk[2], pk[3], pk[4], ym[k], phim[k], phi, y)
+        K._regression(c, pk[0], pk[1], pk[2], pk[3], pk[4], ym[k], phim[k], phi, y, w)
         a += y[0]
     return a
 
@@ -137,11 +146,12 @@ def _rls_loop(c, parts, ym, phim, theta, P, w):  # pragma: no cover - compiled
     n, p = parts.shape[2], theta.shape[0]
     phi, y = np.empty((n, p)), np.empty(n)
     pphi, row, nz = np.empty(p), np.empty(p), np.empty(p, dtype=np.int64)
+    ew = K.est_work(n, p)
     # regressions first (not timed separately here: subtract _regression_loop)
     a = 0.0
     for k in range(parts.shape[0]):
         pk = parts[k]
-        K._regression(c, pk[0], pk[1], pk[2], pk[3], pk[4], ym[k], phim[k], phi, y)
+        K._regression(c, pk[0], pk[1], pk[2], pk[3], pk[4], ym[k], phim[k], phi, y, ew)
         for j in range(n):
             for m in range(p):
                 row[m] = phi[j, m] / w[j]
@@ -243,7 +253,7 @@ def main() -> None:
     t_rls = _best(lambda: _rls_loop(f.ec, parts, ym, phim, theta0.copy(), P0.copy(), f.ec.w)) - t_reg
     rows += [
         (f"est_step_trial (p = {p})", t_step),
-        ("  of which filters (+ momentum form: 23 n channels)", t_filter),
+        (f"  of which filters (+ momentum form: {K.MOMENTUM_CHANNELS} n channels)", t_filter),
         ("  of which regression", t_reg),
         (f"  of which RLS, {n} rows", t_rls),
         ("  rest (selection, detector, ...)", t_step - t_filter - t_reg - t_rls),

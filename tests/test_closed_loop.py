@@ -151,6 +151,8 @@ def test_ct_oracle_tracks_far_better_than_ct_nominal_on_loaded_ur5():
     for s in (1, 2):  # the information-limited time along ct_oracle's trajectory: a few samples
         assert 0 < segs[s]["information_time"]["known"] < 0.05, segs[s]["information_time"]
         assert 0 < segs[s]["information_time"]["com_known"] < 0.1, segs[s]["information_time"]
+        # and the optimal test detects each swap within a few samples (limit >= one sample)
+        assert 1e-3 <= segs[s]["detection_limit"] < 0.02, segs[s]["detection_limit"]
 
 
 def test_com_learning_time_is_when_the_estimate_settles_within_1_cm():

@@ -10,6 +10,7 @@ from adaptive_dd.identification.filters import (
     StreamingFilter,
     design_filter_bank,
     filter_record,
+    summing_realisation,
 )
 from adaptive_dd.identification.regressors import OnlineRegressor, filtered_regression
 from adaptive_dd.plant import TABLE1_SIGMA, ActuatorConfig, SensorConfig, simulate_open_loop
@@ -26,6 +27,31 @@ def test_streaming_equals_whole_record(method, tau_f, rng):
     sf = StreamingFilter(bank, (3,), initial=u[:, 0])
     y_str = np.stack([sf(u[:, k]) for k in range(u.shape[1])], axis=1)
     np.testing.assert_allclose(y_str, y_rec, rtol=1e-9, atol=1e-9 * np.abs(y_rec).max())
+
+
+@pytest.mark.parametrize("method", ["M1", "M2"])
+@pytest.mark.parametrize("tau_f", [0.002, 0.02])
+def test_summing_realisation_is_the_sum_of_the_banks_outputs(method, tau_f, rng):
+    """One state driven by u_k through G_k: the sum of the bank's outputs, to round-off, from rest
+    and from the steady state of constant inputs (the restart of the momentum form)."""
+    bank = design_filter_bank(method, tau_f)
+    A, B, C, D = summing_realisation(bank)
+    k_out = bank.n_outputs
+    u = rng.normal(size=(k_out, 2, 800)).cumsum(axis=-1) * 0.01 + rng.normal(size=(k_out, 2, 1))
+    for steady in (False, True):
+        want = np.zeros(u.shape[1:])  # (2, N): the bank's own state space, one state per input
+        for k in range(k_out):
+            sf = StreamingFilter(bank, (2,), initial=u[k, :, 0] if steady else None)
+            for t in range(u.shape[-1]):
+                want[:, t] += sf(u[k, :, t])[:, k]
+        x = np.linalg.solve(np.eye(bank.order) - A, B @ u[:, :, 0]).T if steady else np.zeros((2, bank.order))
+        got = np.empty_like(want)
+        for t in range(u.shape[-1]):
+            got[:, t] = x @ C + u[:, :, t].T @ D
+            x = x @ A.T + u[:, :, t].T @ B.T
+        scale = np.abs(want).max()
+        np.testing.assert_allclose(got, want, rtol=0, atol=1e-12 * scale)
+        assert scale > 0.1
 
 
 @pytest.mark.parametrize("method", ["M1", "M2"])

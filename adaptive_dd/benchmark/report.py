@@ -247,7 +247,7 @@ def detection_limit_lines(c: dict) -> list[str]:
                 parts.append(f"{name} missed in all {n_miss} trials")
         if not parts:
             continue
-        if "detection_limit" not in seg:  # an N-joint arm: no detection limit is computed yet
+        if "detection_limit" not in seg:  # a result written before the limit was computed
             lim_s = "not computed for this arm"
         else:
             lim_s = f"{1e3 * lim:.0f} ms" if lim is not None else "not reached in the window"

@@ -31,7 +31,7 @@ from numpy.typing import NDArray
 
 from adaptive_dd.closed_loop.laws import law_trial_in, law_work
 from adaptive_dd.closed_loop.plant import plant_scratch, plant_step
-from adaptive_dd.identification.serial_online_kernel import est_model_trial, est_step_trial
+from adaptive_dd.identification.serial_online_kernel import est_model_trial_in, est_step_trial_in, est_work
 from adaptive_dd.plant.sampling import actuate_trial, measure_trial
 
 __all__ = [
@@ -75,7 +75,7 @@ def segment_of(rc, k):  # pragma: no cover - compiled
     return s
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def measure_trial_sample(io, ts, i, noise, lost, qm, qdm, qm_obs, qdm_obs):  # pragma: no cover
     """Measured ``qm, qdm (n,)`` for the law and ``qm_obs, qdm_obs`` for the estimator (NaN if lost)."""
     n = qm.shape[0]
@@ -117,7 +117,7 @@ def sample_work(n):  # pragma: no cover - compiled
     return plant_scratch(n), np.empty(n), np.empty(n)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def apply_trial_sample(ch, rc, io, pl, ts, acc, rec, i, k, s, cmd, tau, work):  # pragma: no cover
     """Steps 3 of the module docstring for trial i at sample k (segment s); ``tau (n,)`` applied;
     ``work``: :func:`sample_work` (allocated once per trial, not per sample)."""
@@ -170,41 +170,54 @@ def record_estimate_trial(rc, rec, i, k, s, sigma):  # pragma: no cover - compil
             rec.sigma[i, k, c] = sigma[c]
 
 
-def estimator_step(ec, es, i, q, qd, tau):  # pragma: no cover - replaced by the overload
-    """One sample of trial i's estimator: 1 on an alarm. Chosen at compile time by the type of
-    ``ec``: an array means no estimator (never an alarm), an ``EstCfg`` the N-joint online
-    estimator (:func:`~adaptive_dd.identification.serial_online.est_step_trial`)."""
+def estimator_work(ec, es):  # pragma: no cover - replaced by the overload
+    """Scratch of one trial's estimator, reused from sample to sample (an empty array without one)."""
     raise NotImplementedError("compiled only")
 
 
-def estimator_model(ec, es, i, pi_out):  # pragma: no cover - replaced by the overload
+def estimator_step(ec, es, i, q, qd, tau, ew):  # pragma: no cover - replaced by the overload
+    """One sample of trial i's estimator: 1 on an alarm. Chosen at compile time by the type of
+    ``ec``: an array means no estimator (never an alarm), an ``EstCfg`` the N-joint online
+    estimator (:func:`~adaptive_dd.identification.serial_online.est_step_trial_in`)."""
+    raise NotImplementedError("compiled only")
+
+
+def estimator_model(ec, es, i, pi_out, ew):  # pragma: no cover - replaced by the overload
     """The model control uses ``pi_out (13 n,)`` (left as it is without an estimator)."""
     raise NotImplementedError("compiled only")
 
 
-@overload(estimator_step)
-def _estimator_step(ec, es, i, q, qd, tau):
+@overload(estimator_work)
+def _estimator_work(ec, es):
     if isinstance(ec, types.Array):
-        return lambda ec, es, i, q, qd, tau: 0
-    return lambda ec, es, i, q, qd, tau: est_step_trial(ec, es, i, q, qd, tau)
+        return lambda ec, es: np.empty(0)
+    return lambda ec, es: est_work(ec.w.shape[0], es.theta.shape[1])
+
+
+@overload(estimator_step)
+def _estimator_step(ec, es, i, q, qd, tau, ew):
+    if isinstance(ec, types.Array):
+        return lambda ec, es, i, q, qd, tau, ew: 0
+    return lambda ec, es, i, q, qd, tau, ew: est_step_trial_in(ec, es, i, q, qd, tau, ew)
 
 
 @overload(estimator_model)
-def _estimator_model(ec, es, i, pi_out):
+def _estimator_model(ec, es, i, pi_out, ew):
     if isinstance(ec, types.Array):
-        return lambda ec, es, i, pi_out: None
-    return lambda ec, es, i, pi_out: est_model_trial(ec, es, i, pi_out)
+        return lambda ec, es, i, pi_out, ew: None
+    return lambda ec, es, i, pi_out, ew: est_model_trial_in(ec, es, i, pi_out, ew)
 
 
-@njit(cache=True)
-def estimator_trial_sample(ec, es, ls, i, qm_obs, qdm_obs, tau):  # pragma: no cover - compiled
-    """The estimator's step on the applied torque, the alarm counter, the model for the next command."""
-    alarm = estimator_step(ec, es, i, qm_obs, qdm_obs, tau)
+@njit(cache=True, inline="always")
+def estimator_trial_sample(ec, es, ls, i, qm_obs, qdm_obs, tau, ew):  # pragma: no cover - compiled
+    """The estimator's step on the applied torque, the alarm counter, the model for the next command;
+    ``ew`` the estimator's scratch (:func:`estimator_work`)."""
+    alarm = estimator_step(ec, es, i, qm_obs, qdm_obs, tau, ew)
     if alarm == 1:
         ls.since_alarm[i] = 0
     else:
         ls.since_alarm[i] += 1
-    estimator_model(ec, es, i, ls.pi_model[i])
+    estimator_model(ec, es, i, ls.pi_model[i], ew)
     return alarm
 
 
@@ -264,6 +277,7 @@ def closed_loop_block(
         sig = np.empty(B.shape[0])
         work = sample_work(n)
         lw = law_work(n)
+        ew = estimator_work(ec, es)
         for k in range(k0, k1):
             s = segment_of(rc, k)
             lost = drop.shape[1] > 0 and drop[i, k - k0]
@@ -273,7 +287,7 @@ def closed_loop_block(
                 qm, qdm, rc.q_d[k], rc.qd_d[k], rc.qdd_d[k], lw, cmd,
             )  # fmt: skip
             apply_trial_sample(ch, rc, io, pl, ts, acc, rec, i, k, s, cmd, tau, work)
-            if estimator_trial_sample(ec, es, ls, i, qm_obs, qdm_obs, tau) == 1:
+            if estimator_trial_sample(ec, es, ls, i, qm_obs, qdm_obs, tau, ew) == 1:
                 if alarms.count[i] < alarms.times.shape[1]:
                     alarms.times[i, alarms.count[i]] = k * rc.T
                 alarms.count[i] += 1
@@ -328,8 +342,9 @@ def sigma_batch(rc, rec, k: int, s: int, sigma) -> None:
 
 @njit(cache=True)
 def _estimator_loop(ec, es, ls, qm_obs, qdm_obs, tau, alarm):  # pragma: no cover - compiled
+    ew = estimator_work(ec, es)  # one per call: trials run one after the other here
     for i in range(tau.shape[0]):
-        alarm[i] = estimator_trial_sample(ec, es, ls, i, qm_obs[i], qdm_obs[i], tau[i])
+        alarm[i] = estimator_trial_sample(ec, es, ls, i, qm_obs[i], qdm_obs[i], tau[i], ew)
 
 
 def estimator_batch(ec, es, ls, qm_obs, qdm_obs, tau) -> NDArray[np.int64]:

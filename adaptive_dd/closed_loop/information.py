@@ -1,7 +1,7 @@
 """Per swap of an N-joint run: the information-limited time to know the payload, beside the
 time each estimating controller took (``information_time``, ``mass_learning_time`` and
 ``com_learning_time`` of each segment in the metrics): its mass within 5 % and its centre of
-mass within 1 cm."""
+mass within 1 cm; and the time an optimal test would detect the swap (``detection_limit``)."""
 
 from __future__ import annotations
 
@@ -50,12 +50,14 @@ def add_information_times(res, out: dict) -> None:
         mass, removed = segs[i][2], segs[i - 1][2]
         k0, k1 = int(rc.seg_start[i]), int(rc.seg_end[i])
         info = None
+        k_end = min(k1, k0 + round(INFO_WINDOW / rc.T))
         if info_fn is not None and oracle is not None and oracle.q.shape[0] and not oracle.failed[0]:
-            k_end = min(k1, k0 + round(INFO_WINDOW / rc.T))
             info = info_fn(res, oracle, i, k0, k_end)
+        limit = _detection_limit(sc, oracle, i, k0, k_end)
         for name, run in res.runs.items():
             seg = out[name]["segments"][i]
             seg["information_time"] = info
+            seg["detection_limit"] = limit
             seg["mass_learning_time"] = None
             seg["com_learning_time"] = None
             seg["learning_seeds"] = 0
@@ -70,6 +72,41 @@ def add_information_times(res, out: dict) -> None:
                     com = sc.payload_of(i - 1).get("com", np.zeros(3))
                     tc = com_learning_time(est.com, com, rc.T, axes=sc.arm.payload_identifiable[1:4])
                     seg["com_learning_time"] = None if np.all(np.isnan(tc)) else float(np.nanmedian(tc))
+
+
+def _payload(sc, j: int) -> np.ndarray:
+    """Parameters (10,) of the payload of swap ``j`` (zeros: none, or j < 0)."""
+    from adaptive_dd.plant.serial_arm import payload_parameters
+
+    if j < 0 or sc.swap_masses[j] <= 0:
+        return np.zeros(10)
+    p = sc.payload_of(j)
+    return payload_parameters(p["mass"], p.get("com"), p.get("inertia"), p.get("radius", 0.0))
+
+
+def _detection_limit(sc, oracle, i: int, k0: int, k1: int) -> float | None:
+    """Median over ct_oracle's kept trajectories of the time the optimal test detects the swap
+    that starts segment i (:func:`~adaptive_dd.identification.serial_detection_limit.serial_detection_limit`);
+    None without ct_oracle's trajectories, without a change, or beyond the window."""
+    from adaptive_dd.identification.serial_detection_limit import serial_detection_limit
+
+    if oracle is None or oracle.q is None or not oracle.q.shape[0]:
+        return None
+    before, after = _payload(sc, i - 2), _payload(sc, i - 1)
+    if np.array_equal(before, after) or k1 - k0 < 2:
+        return None
+    times = []
+    for j in range(oracle.q.shape[0]):
+        if oracle.failed[j]:
+            continue
+        t = serial_detection_limit(
+            sc.arm, oracle.q[j, k0:k1], oracle.qd[j, k0:k1], oracle.tau[j, k0:k1], 0, sc.sample_period,
+            before, after, sc.position_variance, sc.velocity_variance, n_tests=sc.n_samples,
+        )  # fmt: skip
+        times.append(np.inf if t is None else t)
+    if not times or not np.isfinite(np.median(times)):
+        return None
+    return float(np.median(times))
 
 
 def _information_function():

@@ -223,7 +223,7 @@ def law_trial(
     )
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def law_trial_in(
     ch, cfg, pi_true, pi_model, theta, since_alarm, q, qd, q_d, qd_d, qdd_d, work, out
 ):  # pragma: no cover

@@ -34,6 +34,7 @@ __all__ = [
     "design_filter_bank",
     "filter_record",
     "filter_step",
+    "summing_realisation",
 ]
 
 Array = NDArray[np.float64]
@@ -129,6 +130,35 @@ def design_filter_bank(method: str, tau_f: float, sample_period: float = 1e-3) -
         D=np.asarray(sysd.D),
         num=tuple(nums),
         den=tuple(dens),
+    )
+
+
+def summing_realisation(bank: FilterBank) -> tuple[Array, Array, Array, Array]:
+    """The bank as one state driven by one input per output, with the sum of the outputs as its output.
+
+    The bank's outputs share their poles (one ``A``), so the transposed (dual, observable-form)
+    realisation ``x+ = A^T x + sum_k C_k^T u_k``, ``y = B^T x + sum_k D_k u_k`` has from input
+    ``k`` the transfer function ``B^T (zI - A^T)^-1 C_k^T + D_k = C_k (zI - A)^-1 B + D_k = G_k``:
+    ``y = sum_k G_k u_k`` costs one state of order ``bank.order`` instead of one per input.
+    The state that continues constant inputs ``u_k`` (steady state) is
+    ``(I - A^T)^-1 sum_k C_k^T u_k``.
+
+    Returns
+    -------
+    A : ndarray, shape (order, order)
+        ``bank.A^T``.
+    B : ndarray, shape (order, n_outputs)
+        Column k: the input vector of ``u_k`` (``bank.C[k]``).
+    C : ndarray, shape (order,)
+        The output vector (``bank.B[:, 0]``).
+    D : ndarray, shape (n_outputs,)
+        Feedthrough of each input (``bank.D[:, 0]``).
+    """
+    return (
+        np.ascontiguousarray(bank.A.T),
+        np.ascontiguousarray(bank.C.T),
+        np.ascontiguousarray(bank.B[:, 0]),
+        np.ascontiguousarray(bank.D[:, 0]),
     )
 
 

@@ -5,6 +5,8 @@ The N-joint generalisation of :mod:`~adaptive_dd.identification.online`::
     c, s = est_init(cfg, arm, n_trials)               # EstCfg (read-only), EstState (in place)
     alarm = est_step_trial(c, s, i, q, qd, tau)       # compiled: one sample of trial i
     est_model_trial(c, s, i, pi_out)                  # compiled: the model control uses (13 n,)
+    w = est_work(n, p)                                # scratch of a trial, reused from sample to sample:
+    est_step_trial_in(c, s, i, q, qd, tau, w); est_model_trial_in(c, s, i, pi_out, w)  # (no allocation)
     info = est_step(c, s, q, qd, tau)                 # Python: every trial, the same kernel
     rec = run_serial_online(arm, cfg, q, qd, tau)     # a whole record; equals stepping
 
@@ -49,7 +51,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from adaptive_dd.errors import ParameterError, SignalError
 from adaptive_dd.identification import serial_online_kernel as K
-from adaptive_dd.identification.filters import FilterBank, design_filter_bank
+from adaptive_dd.identification.filters import FilterBank, design_filter_bank, summing_realisation
 from adaptive_dd.identification.pseudo_inertia import project_payload
 from adaptive_dd.identification.serial_online_kernel import (
     EstCfg,
@@ -57,8 +59,11 @@ from adaptive_dd.identification.serial_online_kernel import (
     compact_prior,
     est_force_alarm_trial,
     est_model_trial,
+    est_model_trial_in,
     est_payload_trial,
     est_step_trial,
+    est_step_trial_in,
+    est_work,
 )
 from adaptive_dd.plant.serial_arm import SerialArm
 
@@ -74,9 +79,12 @@ __all__ = [
     "est_init",
     "est_model",
     "est_model_trial",
+    "est_model_trial_in",
     "est_payload_trial",
     "est_step",
     "est_step_trial",
+    "est_step_trial_in",
+    "est_work",
     "payload_prior",
     "project_payload",
     "run_serial_online",
@@ -148,6 +156,12 @@ class SerialDetector:
     floor : float
         Floor [N m, RMS, in the units of the weighted equation] of the long-run level:
         an error below ``threshold * floor`` never alarms.
+    fast_window : float or None
+        Time constant [s] of a second, faster average of the squared errors, which alarms
+        above ``fast_threshold`` (the same rows, levels and ``min_rows``): a large change is
+        detected before the short average has risen. None: no fast average.
+    fast_threshold : float
+        RMS ratio fast / level that raises an alarm, > 1.
     min_rows : int
         An alarm also needs this many rows above half the threshold (RMS), >= 1. A payload
         change moves every joint the payload's weight and inertia load at once; friction the
@@ -169,6 +183,8 @@ class SerialDetector:
     reopen_mass_std: float = 10.0
     floor: float = 0.05
     min_rows: int = 1
+    fast_window: float | None = None
+    fast_threshold: float = 8.0
 
     def __post_init__(self) -> None:
         o = "SerialDetector"
@@ -188,6 +204,13 @@ class SerialDetector:
         _int(o, "min_learned", self.min_learned, 1)
         _int(o, "gate_after", self.gate_after, 1)
         _int(o, "min_rows", self.min_rows, 1)
+        if self.fast_window is not None:
+            _num(o, "fast_window", self.fast_window, 0.0)
+            if not self.fast_window < self.short_window:
+                raise ParameterError(
+                    f"{o} needs fast_window < short_window, got {self.fast_window}, {self.short_window}"
+                )
+        _num(o, "fast_threshold", self.fast_threshold, 1.0)
         _bool(o, "reopen_again", self.reopen_again)
 
 
@@ -450,6 +473,10 @@ def _pack(cfg: SerialOnlineConfig, arm: SerialArm) -> tuple[EstCfg, Array]:
         fl[K.F_SLOW2] = det.slow_factor**2
         fl[K.F_GATE2] = det.gate**2
         fl[K.F_FLOOR2] = det.floor**2
+        if det.fast_window is not None:
+            ints[K.I_FAST] = 1
+            fl[K.F_ALPHA_FAST] = min(1.0, T / det.fast_window)
+            fl[K.F_FAST2] = det.fast_threshold**2
         if det.min_rows > n_rows:
             raise ParameterError(
                 f"SerialDetector.min_rows = {det.min_rows} exceeds the {n_rows} joint equations that "
@@ -457,6 +484,8 @@ def _pack(cfg: SerialOnlineConfig, arm: SerialArm) -> tuple[EstCfg, Array]:
             )
         ints[K.I_MIN_ROWS] = det.min_rows
     xs0 = np.linalg.solve(np.eye(b.order) - b.A, b.B[:, 0])
+    Am, Bm, Cm, Dm = summing_realisation(b)
+    xm1 = np.linalg.solve(np.eye(b.order) - Am, Bm[:, 1])
     c = np.ascontiguousarray
     return EstCfg(
         ch=arm.chain,
@@ -476,6 +505,11 @@ def _pack(cfg: SerialOnlineConfig, arm: SerialArm) -> tuple[EstCfg, Array]:
         C=c(b.C),
         D=c(b.D[:, 0]),
         xs0=xs0,
+        Am=Am,
+        Bm=Bm,
+        Cm=Cm,
+        Dm=Dm,
+        xm1=xm1,
         w=c(w),
         ints=ints,
         floats=fl,
@@ -544,6 +578,7 @@ def est_init(
         long=np.zeros((m, n)),
         ref=np.zeros((m, n)),
         eps=np.full((m, n), np.nan),
+        fast=np.zeros((m, n)),
     )
     return c, state
 

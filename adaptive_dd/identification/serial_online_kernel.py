@@ -15,7 +15,10 @@ One sample, per trial:
    :func:`~adaptive_dd.identification.filters.design_filter_bank`) on the channels
    ``q, qd, tau, sgn(qd)`` (outputs G0, G1); the regressor is evaluated at the filtered
    signals ``qf = G0 q, qdf = G0 qd, qddf = G1 qd``, friction columns at ``G0 qd``,
-   ``G0 sgn(qd)`` (the paper's M2 construction generalised to n joints);
+   ``G0 sgn(qd)`` (the paper's M2 construction generalised to n joints). The momentum
+   form filters ``G0 tau``, ``G1 p + G0 wv`` and ``G1 py + G0 wy`` instead, each sum as
+   one state of the bank's transposed realisation
+   (:func:`~adaptive_dd.identification.filters.summing_realisation`);
 3. data selection: equation j is used once joint j has been faster than the
    threshold for the filters' memory;
 4. RLS of eq. (14), one scalar update per used joint equation (row weights ``w``);
@@ -49,7 +52,7 @@ N_CNT = 9
 
 BIG = 1 << 40
 SIGNAL_CHANNELS = 4  # per joint: q, qd, tau, sgn(qd) (the signals form)
-MOMENTUM_CHANNELS = 23  # per joint: tau, p, wv and the payload link's py, wy (10 each)
+MOMENTUM_CHANNELS = 12  # per joint: G0 tau, G1 p + G0 wv and the payload link's G1 py + G0 wy (10)
 MODE_PAYLOAD = 0
 MODE_FULL = 1
 
@@ -86,6 +89,11 @@ class EstCfg(NamedTuple):
     A, Bf, C, D : filter bank matrices (order x order, order, 2 x order, 2)
     xs0 : (order,)
         Filter state of a unit constant input.
+    Am, Bm, Cm, Dm : the bank's summing realisation (order x order, order x 2, order, 2)
+        One state, inputs ``u0, u1``, output ``G0 u0 + G1 u1``
+        (:func:`~adaptive_dd.identification.filters.summing_realisation`; the momentum form).
+    xm1 : (order,)
+        Its state of a unit constant ``u1`` and ``u0 = 0``.
     w : (n,)
         Row weights: equation j is divided by ``w[j]``.
     ints : (N_I,) int64, floats : (N_F,) float64
@@ -109,6 +117,11 @@ class EstCfg(NamedTuple):
     C: np.ndarray
     D: np.ndarray
     xs0: np.ndarray
+    Am: np.ndarray
+    Bm: np.ndarray
+    Cm: np.ndarray
+    Dm: np.ndarray
+    xm1: np.ndarray
     w: np.ndarray
     ints: np.ndarray
     floats: np.ndarray
@@ -131,7 +144,8 @@ I_GATE_AFTER = 12  # learned samples before the learning gate applies
 I_N_ROWS = 13  # rows (joints 0 .. n_rows-1) that carry information
 I_MOMENTUM = 14  # 1: the regression in momentum form (payload mode)
 I_MIN_ROWS = 15  # rows whose short average must exceed (threshold / 2)^2 times their level for an alarm
-N_I = 16
+I_FAST = 16  # 1: the fast average may also raise an alarm
+N_I = 17
 
 # float slots of EstCfg.floats
 F_LAM0 = 0
@@ -147,7 +161,9 @@ F_EIG_MIN = 9  # smallest eigenvalue kept in the projected pseudo-inertia
 F_FLOOR2 = 10  # floor of the detector's level (squared weighted error)
 F_RADIUS = 11  # radius [m] of the ball about the payload frame the projected payload lies in (0: none)
 F_PRIOR_RADIUS = 12  # radius [m] of the compact-payload prior on the model control uses (0: none)
-N_F = 13
+F_ALPHA_FAST = 13  # the fast average's weight of a sample
+F_FAST2 = 14  # the fast average's threshold (squared RMS ratio)
+N_F = 15
 
 
 class EstState(NamedTuple):
@@ -155,8 +171,10 @@ class EstState(NamedTuple):
 
     Attributes
     ----------
-    xf : (m, 4 n, order)
-        Filter states of the channels ``q, qd, tau, sgn(qd)`` (n each).
+    xf : (m, SIGNAL_CHANNELS n, order) or (m, MOMENTUM_CHANNELS n, order)
+        Filter states: signals form, of the channels ``q, qd, tau, sgn(qd)`` (n each);
+        momentum form, of ``G0 tau``, ``G1 p + G0 wv`` (n each) and ``G1 py + G0 wy`` (10 n,
+        row-major (n, 10)).
     u_last : (m, 4 n)
         Last finite channel sample (held over a dropout).
     tau_prev : (m, n)
@@ -179,6 +197,8 @@ class EstState(NamedTuple):
         Level each row had established before the last alarm (0: none).
     eps : (m, n)
         Weighted prior errors of the last sample (NaN where a row was not used).
+    fast : (m, n)
+        Detector: the fast average of the squared weighted prior errors (``fast_window``).
     """
 
     xf: np.ndarray
@@ -195,6 +215,88 @@ class EstState(NamedTuple):
     long: np.ndarray
     ref: np.ndarray
     eps: np.ndarray
+    fast: np.ndarray
+
+
+class EstWork(NamedTuple):
+    """Scratch of one trial's step and model (:func:`est_work`): allocated once per run of
+    trials, not at every sample (:func:`est_step_trial_in`, :func:`est_model_trial_in`).
+
+    Attributes
+    ----------
+    chain : tuple
+        ``workspace(n)`` of :mod:`adaptive_dd.plant.chain`.
+    a2 : (2, 6, 10); a1 : (6, 10)
+        Scratch of ``momentum_form_in`` and ``rnea_body_regressor_in``.
+    u : (4 n,)
+        The channels ``q, qd, tau, sgn(qd)`` of this sample.
+    qf, qdf, qddf, sf, tf, ym : (n,)
+        Filtered signals (see :func:`_filtered_signals`).
+    phim : (n, 10)
+    act : (n,) bool
+        Rows used at this sample.
+    phi : (n, p); y : (n,)
+        The regression.
+    pphi, row : (p,); nz : (p,) int64
+        Scratch of :func:`_rls_row`.
+    u1, u0, yf : (MOMENTUM_CHANNELS n,)
+        The momentum form's inputs (G1, G0) and outputs; ``p, wv (n,)`` and ``py, wy (n, 10)``
+        are views into ``u1, u0``.
+    known : (n,); yb : (n, 10); W : (n, 10 n)
+        Scratch of the signals form's regression.
+    raw, raw_est, pay : (10,); Pc : (10, 10); d : (p,)
+        Scratch of the model control uses.
+    """
+
+    chain: tuple
+    a2: np.ndarray
+    a1: np.ndarray
+    u: np.ndarray
+    qf: np.ndarray
+    qdf: np.ndarray
+    qddf: np.ndarray
+    sf: np.ndarray
+    tf: np.ndarray
+    ym: np.ndarray
+    phim: np.ndarray
+    act: np.ndarray
+    phi: np.ndarray
+    y: np.ndarray
+    pphi: np.ndarray
+    row: np.ndarray
+    nz: np.ndarray
+    u1: np.ndarray
+    u0: np.ndarray
+    yf: np.ndarray
+    p: np.ndarray
+    wv: np.ndarray
+    py: np.ndarray
+    wy: np.ndarray
+    known: np.ndarray
+    yb: np.ndarray
+    W: np.ndarray
+    raw: np.ndarray
+    raw_est: np.ndarray
+    pay: np.ndarray
+    Pc: np.ndarray
+    d: np.ndarray
+
+
+@njit(cache=True)
+def est_work(n, p):  # pragma: no cover - compiled
+    """Scratch (:class:`EstWork`) of a trial's step and model, n joints, p parameters."""
+    nch = MOMENTUM_CHANNELS * n
+    u1, u0 = np.zeros(nch), np.zeros(nch)
+    return EstWork(
+        workspace(n), np.empty((2, 6, 10)), np.empty((6, 10)), np.empty(4 * n),
+        np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty((n, 10)),
+        np.zeros(n, dtype=np.bool_), np.empty((n, p)), np.empty(n),
+        np.empty(p), np.empty(p), np.empty(p, dtype=np.int64),
+        u1, u0, np.empty(nch), u1[n : 2 * n], u0[n : 2 * n],
+        u1[2 * n :].reshape((n, 10)), u0[2 * n :].reshape((n, 10)),
+        np.empty(n), np.empty((n, 10)), np.empty((n, 10 * n)),
+        np.empty(10), np.empty(10), np.empty(10), np.empty((10, 10)), np.empty(p),
+    )  # fmt: skip
 
 
 @njit(cache=True)
@@ -219,18 +321,19 @@ def _filter_channels(c, s, i, u, f, ch0):  # pragma: no cover - compiled
             xf[ch, m] = tmp[m]
 
 
-@njit(cache=True)
-def _filtered_signals(c, s, i, q, qd, tau, qf, qdf, qddf, sf, tf, ym, phim):  # pragma: no cover
-    """Filter sample (q, qd, tau) of trial i; return True if the filtered equations are usable.
+@njit(cache=True, inline="always")
+def _filtered_signals(c, s, i, q, qd, tau, w):  # pragma: no cover - compiled
+    """Filter sample (q, qd, tau) of trial i into ``w`` (:class:`EstWork`); return True if the
+    filtered equations are usable.
 
-    Momentum form (``I_MOMENTUM``): also ``ym = G1 p + G0 wv`` (n,) of the known links and
-    ``phim = G1 py + G0 wy`` (n, 10) of the payload's link (:func:`momentum_form_in`), at
-    the held channels.
+    Signals form: ``w.qf, w.qdf, w.qddf, w.sf, w.tf``. Momentum form (``I_MOMENTUM``): ``w.tf``,
+    ``w.ym = G1 p + G0 wv`` (n,) of the known links and ``w.phim = G1 py + G0 wy`` (n, 10) of
+    the payload's link (:func:`momentum_form_in`), at the held channels.
     """
     n = q.shape[0]
     cnt = s.cnt[i]
     start = cnt[C_STARTED] == 0
-    u = np.empty(4 * n)
+    u = w.u
     for j in range(n):
         t = tau[j]
         if c.ints[I_ALIGN] == 1:
@@ -266,11 +369,12 @@ def _filtered_signals(c, s, i, q, qd, tau, qf, qdf, qddf, sf, tf, ym, phim):  # 
             s.u_last[i, k] = u[k]
         cnt[C_SINCE_BAD] = min(cnt[C_SINCE_BAD] + 1, BIG)
     if c.ints[I_MOMENTUM] == 1:
-        _momentum_channels(c, s, i, u, start or cnt[C_RESTART] == 1, tf, ym, phim)
+        _momentum_channels(c, s, i, start or cnt[C_RESTART] == 1, w)
         cnt[C_RESTART] = 0
         return cnt[C_SINCE_BAD] > c.ints[I_TAINT]
     f = np.empty((4 * n, 2))
     _filter_channels(c, s, i, u, f, 0)
+    qf, qdf, qddf, tf, sf = w.qf, w.qdf, w.qddf, w.tf, w.sf
     for j in range(n):
         qf[j] = f[j, 0]
         qdf[j] = f[n + j, 0]
@@ -281,49 +385,78 @@ def _filtered_signals(c, s, i, q, qd, tau, qf, qdf, qddf, sf, tf, ym, phim):  # 
 
 
 @njit(cache=True)
-def _momentum_channels(c, s, i, u, restart, tf, ym, phim):  # pragma: no cover - compiled
-    """The momentum form at the held channels ``u`` (q, qd, tau, sgn), filtered.
+def _summed_channels(Am, Bm, Cm, Dm, xf, u1, u0, y):  # pragma: no cover - compiled
+    """One sample of the summing realisation (``Am, Bm, Cm, Dm``) on every channel of ``xf``:
+    ``y = G1 u1 + G0 u0``, the states advanced in place (order 2 written out, its matrices in
+    scalars: a call per channel would cost more than its arithmetic)."""
+    order = Am.shape[0]
+    if order == 2:
+        a00, a01, a10, a11 = Am[0, 0], Am[0, 1], Am[1, 0], Am[1, 1]
+        b00, b01, b10, b11 = Bm[0, 0], Bm[0, 1], Bm[1, 0], Bm[1, 1]
+        c0, c1, d0, d1 = Cm[0], Cm[1], Dm[0], Dm[1]
+        for ch in range(y.shape[0]):
+            z0, z1, v1, v0 = xf[ch, 0], xf[ch, 1], u1[ch], u0[ch]
+            y[ch] = d1 * v1 + d0 * v0 + c0 * z0 + c1 * z1
+            xf[ch, 0] = a00 * z0 + a01 * z1 + b01 * v1 + b00 * v0
+            xf[ch, 1] = a10 * z0 + a11 * z1 + b11 * v1 + b10 * v0
+        return
+    tmp = np.empty(order)
+    for ch in range(y.shape[0]):
+        acc = Dm[1] * u1[ch] + Dm[0] * u0[ch]
+        for m in range(order):
+            acc += Cm[m] * xf[ch, m]
+        y[ch] = acc
+        for m in range(order):
+            acc = Bm[m, 1] * u1[ch] + Bm[m, 0] * u0[ch]
+            for k in range(order):
+                acc += Am[m, k] * xf[ch, k]
+            tmp[m] = acc
+        for m in range(order):
+            xf[ch, m] = tmp[m]
 
-    Channels ``[tau, p, wv, py, wy]`` (23 n): the known arm's momentum ``p = M qd + ia qd``
-    and rest ``wv = g - C^T qd + fv qd + fc sgn(qd)``, the payload link's ``py, wy`` (n, 10)
-    (:func:`momentum_form_in`). Out: ``tf = G0 tau``, ``ym = G1 p + G0 wv``,
-    ``phim = G1 py + G0 wy``.
+
+@njit(cache=True, inline="always")
+def _momentum_channels(c, s, i, restart, w):  # pragma: no cover - compiled
+    """The momentum form at the held channels ``w.u`` (q, qd, tau, sgn), filtered.
+
+    The known arm's momentum ``p = M qd + ia qd`` and rest ``wv = g - C^T qd + fv qd +
+    fc sgn(qd)``, the payload link's ``py, wy`` (n, 10) (:func:`momentum_form_in`). Out:
+    ``tf = G0 tau``, ``ym = G1 p + G0 wv``, ``phim = G1 py + G0 wy``, each sum one channel of
+    the summing realisation (``MOMENTUM_CHANNELS`` n channels in ``s.xf[i]``: tau, (p, wv),
+    (py, wy) row-major).
 
     On ``restart`` (the first sample, and the sample after an alarm) the filters start
-    afresh: momentum channels in the steady state of this sample, the others at rest. The
-    equation ``G0 tau = G1 p + G0 wv`` then holds exactly for the signals continued before
-    this sample (momentum constant, torque and rest zero), so the filters carry no memory of
-    a payload that has gone: the equations after an alarm are exact from the first sample on.
+    afresh: momentum channels in the steady state of this sample, the others at rest (the
+    state ``p xm1``, ``py xm1``; 0 for tau). The equation ``G0 tau = G1 p + G0 wv`` then holds
+    exactly for the signals continued before this sample (momentum constant, torque and rest
+    zero), so the filters carry no memory of a payload that has gone: the equations after an
+    alarm are exact from the first sample on.
     """
+    tf, ym, phim, u = w.tf, w.ym, w.phim, w.u
     n = ym.shape[0]
     nch = MOMENTUM_CHANNELS * n
-    um = np.empty(nch)
-    p, wv = um[n : 2 * n], um[2 * n : 3 * n]
-    py = um[3 * n : 13 * n].reshape((n, 10))
-    wy = um[13 * n :].reshape((n, 10))
-    momentum_form_in(
-        c.ch, c.pi0[: 10 * n], c.jp, u[:n], u[n : 2 * n], workspace(n), np.empty((2, 6, 10)), p, wv, py, wy
-    )
+    u1, u0, y, p, wv, py, wy = w.u1, w.u0, w.yf, w.p, w.wv, w.py, w.wy  # inputs (G1, G0), outputs
+    momentum_form_in(c.ch, c.pi0[: 10 * n], c.jp, u[:n], u[n : 2 * n], w.chain, w.a2, p, wv, py, wy)
     for r in range(n):
         qd = u[n + r]
-        um[r] = u[2 * n + r]
+        u1[r] = 0.0
+        u0[r] = u[2 * n + r]
         p[r] += c.pi0[12 * n + r] * qd
         wv[r] += c.pi0[10 * n + r] * qd + c.pi0[11 * n + r] * u[3 * n + r]
-    if restart:
-        for k in range(nch):
-            is_p = (n <= k < 2 * n) or (3 * n <= k < 13 * n)
-            for m in range(c.xs0.shape[0]):
-                s.xf[i, k, m] = um[k] * c.xs0[m] if is_p else 0.0
-    f = np.empty((nch, 2))
-    _filter_channels(c, s, i, um, f, 0)
+    xf = s.xf[i]
+    if restart:  # the G1 inputs (momentum) in steady state, the G0 inputs at rest
+        for ch in range(nch):
+            for m in range(c.xm1.shape[0]):
+                xf[ch, m] = u1[ch] * c.xm1[m]
+    _summed_channels(c.Am, c.Bm, c.Cm, c.Dm, xf, u1, u0, y)
     for r in range(n):
-        tf[r] = f[r, 0]
-        ym[r] = f[n + r, 1] + f[2 * n + r, 0]
+        tf[r] = y[r]
+        ym[r] = y[n + r]
         for k in range(10):
-            phim[r, k] = f[3 * n + 10 * r + k, 1] + f[13 * n + 10 * r + k, 0]
+            phim[r, k] = y[2 * n + 10 * r + k]
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _payload_rows(c, link, known, phi, y):  # pragma: no cover - compiled
     """Payload mode: ``phi = link @ pmap`` (the link's columns in the payload's parameters) and
     ``y -= known`` (the known arm's part), row by row."""
@@ -336,9 +469,10 @@ def _payload_rows(c, link, known, phi, y):  # pragma: no cover - compiled
             phi[r, k] = acc
 
 
-@njit(cache=True)
-def _regression(c, qf, qdf, qddf, sf, tf, ym, phim, phi, y):  # pragma: no cover - compiled
-    """The regression ``y = phi theta`` (n x p) at the filtered signals (or in momentum form)."""
+@njit(cache=True, inline="always")
+def _regression(c, qf, qdf, qddf, sf, tf, ym, phim, phi, y, w):  # pragma: no cover - compiled
+    """The regression ``y = phi theta`` (n x p) at the filtered signals (or in momentum form);
+    ``w`` (:class:`EstWork`) its scratch."""
     n = qf.shape[0]
     p = phi.shape[1]
     if c.mode == MODE_PAYLOAD and c.ints[I_MOMENTUM] == 1:
@@ -347,19 +481,16 @@ def _regression(c, qf, qdf, qddf, sf, tf, ym, phim, phi, y):  # pragma: no cover
         _payload_rows(c, phim, ym, phi, y)
         return
     if c.mode == MODE_PAYLOAD:
-        known = np.empty(n)
-        yb = np.empty((n, 10))
+        known, yb = w.known, w.yb
         # rnea and the payload link's regressor at one state: its kinematics computed once
-        rnea_body_regressor_in(
-            c.ch, c.pi0[: 10 * n], c.jp, qf, qdf, qddf, workspace(n), np.empty((6, 10)), known, yb
-        )
+        rnea_body_regressor_in(c.ch, c.pi0[: 10 * n], c.jp, qf, qdf, qddf, w.chain, w.a1, known, yb)
         for r in range(n):
             fv, fc, ia = c.pi0[10 * n + r], c.pi0[11 * n + r], c.pi0[12 * n + r]
             y[r] = tf[r]
             known[r] += fv * qdf[r] + fc * sf[r] + ia * qddf[r]
         _payload_rows(c, yb, known, phi, y)
         return
-    W = np.empty((n, 10 * n))
+    W = w.W
     regressor(c.ch, qf, qdf, qddf, W)
     for r in range(n):
         y[r] = tf[r]
@@ -456,7 +587,7 @@ def _reopen(c, P):  # pragma: no cover - compiled
             P[a, b] = acc + c.P_reopen[a, b]
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _detect(c, s, i, eps, act):  # pragma: no cover - compiled
     """Update the detector of trial i with the rows' prior errors; return True on an alarm.
 
@@ -489,6 +620,7 @@ def _detect(c, s, i, eps, act):  # pragma: no cover - compiled
             continue
         e2 = e * e
         s.short[i, j] += a_s * (e2 - s.short[i, j])
+        s.fast[i, j] += fl[F_ALPHA_FAST] * (e2 - s.fast[i, j])
         if learn:
             s.seen[i, j] += 1
             nl = s.learned[i, j]
@@ -507,6 +639,8 @@ def _detect(c, s, i, eps, act):  # pragma: no cover - compiled
             n_act += 1
     alarm = False
     n_raised = 0  # rows above a quarter of the threshold (half of it in RMS)
+    fast = False
+    n_fast = 0  # the same for the fast average and its threshold
     for j in range(n):
         if not act[j]:
             continue
@@ -523,7 +657,13 @@ def _detect(c, s, i, eps, act):  # pragma: no cover - compiled
             alarm = True
         if s.short[i, j] > 0.25 * thr * level + 1e-300:
             n_raised += 1
-    return alarm and n_raised >= ints[I_MIN_ROWS]
+        if ints[I_FAST] == 1:
+            thf = fl[F_FAST2] * thr / fl[F_THRESHOLD2]  # the same slow-row and re-learning factors
+            if s.fast[i, j] > thf * level + 1e-300:
+                fast = True
+            if s.fast[i, j] > 0.25 * thf * level + 1e-300:
+                n_fast += 1
+    return (alarm and n_raised >= ints[I_MIN_ROWS]) or (fast and n_fast >= ints[I_MIN_ROWS])
 
 
 @njit(cache=True)
@@ -566,6 +706,15 @@ def est_force_alarm_trial(c, s, i):  # pragma: no cover - compiled
 def est_step_trial(c, s, i, q, qd, tau):  # pragma: no cover - compiled
     """Advance trial i by one sample in place; return 1 on a change alarm at this sample, else 0.
 
+    :func:`est_step_trial_in` with its scratch allocated for this call.
+    """
+    return est_step_trial_in(c, s, i, q, qd, tau, est_work(q.shape[0], s.theta.shape[1]))
+
+
+@njit(cache=True, inline="always")
+def est_step_trial_in(c, s, i, q, qd, tau, w):  # pragma: no cover - compiled
+    """Advance trial i by one sample in place; return 1 on a change alarm at this sample, else 0.
+
     Parameters
     ----------
     c : EstCfg
@@ -577,15 +726,15 @@ def est_step_trial(c, s, i, q, qd, tau):  # pragma: no cover - compiled
     tau : (n,)
         Torque applied over this sample [N m]. A non-finite q, qd or tau skips the
         sample (counted in ``cnt[i, C_SKIPPED]``).
+    w : EstWork
+        Scratch (:func:`est_work`), reused from sample to sample (one per thread).
     """
     n = q.shape[0]
     p = s.theta.shape[1]
     ints, fl = c.ints, c.floats
     cnt = s.cnt[i]
-    qf, qdf, qddf, sf, tf = np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty(n)
-    ym, phim = np.empty(n), np.empty((n, 10))
-    usable = _filtered_signals(c, s, i, q, qd, tau, qf, qdf, qddf, sf, tf, ym, phim)
-    act = np.zeros(n, dtype=np.bool_)
+    usable = _filtered_signals(c, s, i, q, qd, tau, w)
+    act = w.act
     n_rows = ints[I_N_ROWS]
     for j in range(n):
         if ints[I_SELECT] == 1:
@@ -598,6 +747,7 @@ def est_step_trial(c, s, i, q, qd, tau):  # pragma: no cover - compiled
                 # back in use after a slow phase: the short average restarts at the level
                 nl = s.learned[i, j]
                 s.short[i, j] = s.long[i, j] / (1.0 - (1.0 - fl[F_ALPHA_LONG]) ** nl)
+                s.fast[i, j] = s.short[i, j]
         else:
             act[j] = True
         act[j] = act[j] and usable and j < n_rows
@@ -605,12 +755,9 @@ def est_step_trial(c, s, i, q, qd, tau):  # pragma: no cover - compiled
         s.eps[i, j] = np.nan
     th, Pi = s.theta[i], s.P[i]
     if usable:
-        phi = np.empty((n, p))
-        y = np.empty(n)
-        _regression(c, qf, qdf, qddf, sf, tf, ym, phim, phi, y)
-        pphi = np.empty(p)
-        row = np.empty(p)
-        nz = np.empty(p, dtype=np.int64)
+        phi, y = w.phi, w.y
+        _regression(c, w.qf, w.qdf, w.qddf, w.sf, w.tf, w.ym, w.phim, phi, y, w)
+        pphi, row, nz = w.pphi, w.row, w.nz
         first = True
         for j in range(n_rows):
             if not act[j]:
@@ -645,7 +792,7 @@ def est_step_trial(c, s, i, q, qd, tau):  # pragma: no cover - compiled
     return alarm
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _payload_raw(c, th, raw):  # pragma: no cover - compiled
     """The payload (10,) implied by an estimate theta, unprojected (full mode: least squares on pbasis)."""
     p = th.shape[0]
@@ -660,7 +807,7 @@ def _payload_raw(c, th, raw):  # pragma: no cover - compiled
         raw[k] = acc
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _inertia_cov(c, P, out):  # pragma: no cover - compiled
     """The inertia block ``out[4:, 4:]`` of the payload parameters' covariance (the part
     :func:`compact_prior` reads; the rest of ``out (10, 10)`` is left as it is): P's own block in
@@ -735,12 +882,12 @@ def compact_prior(raw, Pc, rho):  # pragma: no cover - compiled
                 Pc[a, b] -= g[a] * row[b]
 
 
-@njit(cache=True)
-def _control_payload(c, s, i, raw, pay):  # pragma: no cover - compiled
-    """The payload the model control uses: ``raw`` with the compact prior (if set), projected (if set)."""
+@njit(cache=True, inline="always")
+def _control_payload(c, s, i, raw, pay, Pc):  # pragma: no cover - compiled
+    """The payload the model control uses: ``raw`` with the compact prior (if set), projected (if set);
+    ``Pc (10, 10)`` scratch."""
     rho = c.floats[F_PRIOR_RADIUS]
     if rho > 0.0:
-        Pc = np.empty((10, 10))
         _inertia_cov(c, s.P[i], Pc)
         compact_prior(raw, Pc, rho)
     if c.ints[I_PROJECT] == 1:
@@ -755,12 +902,20 @@ def est_payload_trial(c, s, i, out):  # pragma: no cover - compiled
     """The payload (10,) about its frame implied by trial i's estimate, projected if set to."""
     raw = np.empty(10)
     _payload_raw(c, s.theta[i], raw)
-    _control_payload(c, s, i, raw, out)
+    _control_payload(c, s, i, raw, out, np.empty((10, 10)))
 
 
 @njit(cache=True)
 def est_model_trial(c, s, i, pi_out):  # pragma: no cover - compiled
-    """The model control uses for trial i, as standard parameters ``pi_out (13 n,)``.
+    """The model control uses for trial i, as standard parameters ``pi_out (13 n,)``
+    (:func:`est_model_trial_in` with its scratch allocated for this call)."""
+    est_model_trial_in(c, s, i, pi_out, est_work(c.w.shape[0], s.theta.shape[1]))
+
+
+@njit(cache=True, inline="always")
+def est_model_trial_in(c, s, i, pi_out, w):  # pragma: no cover - compiled
+    """The model control uses for trial i, as standard parameters ``pi_out (13 n,)``; ``w``
+    (:class:`EstWork`) scratch.
 
     Payload mode: the arm's ``pi0`` with the (projected) payload folded into link ``jp``
     through ``pmap``. Full mode: ``pi0 + Bpinv (theta_p - B pi0)``, where ``theta_p`` is
@@ -773,11 +928,14 @@ def est_model_trial(c, s, i, pi_out):  # pragma: no cover - compiled
         pi_out[k] = c.pi0[k]
     th = s.theta[i]
     p = th.shape[0]
-    raw = np.empty(10)
+    raw, pay = w.raw, w.pay
     _payload_raw(c, th, raw)
-    raw_est = raw.copy() if c.mode != MODE_PAYLOAD else raw  # full mode: theta's own payload
-    pay = np.empty(10)
-    _control_payload(c, s, i, raw, pay)
+    raw_est = raw
+    if c.mode != MODE_PAYLOAD:  # full mode: theta's own payload
+        raw_est = w.raw_est
+        for k in range(10):
+            raw_est[k] = raw[k]
+    _control_payload(c, s, i, raw, pay, w.Pc)
     if c.mode == MODE_PAYLOAD:
         base = 10 * c.jp
         for a in range(10):
@@ -786,7 +944,7 @@ def est_model_trial(c, s, i, pi_out):  # pragma: no cover - compiled
                 acc += c.pmap[a, b] * pay[b]
             pi_out[base + a] += acc
         return
-    d = np.empty(p)
+    d = w.d
     for a in range(p):
         acc = th[a] - c.sigma0[a]
         for k in range(10):
@@ -802,8 +960,9 @@ def est_model_trial(c, s, i, pi_out):  # pragma: no cover - compiled
 @njit(cache=True)
 def est_step_batch(c, s, q, qd, tau, alarm):  # pragma: no cover - compiled
     """:func:`est_step_trial` over every trial (``q, qd, tau (m, n)``), alarms into ``alarm (m,)``."""
+    w = est_work(q.shape[1], s.theta.shape[1])
     for i in range(q.shape[0]):
-        alarm[i] = est_step_trial(c, s, i, q[i], qd[i], tau[i])
+        alarm[i] = est_step_trial_in(c, s, i, q[i], qd[i], tau[i], w)
 
 
 @njit(cache=True)
@@ -812,8 +971,9 @@ def est_run_trial(
 ):  # pragma: no cover
     """Step trial i through a record ``(N, n)``, recording after every sample."""
     pay = np.empty(10)
+    w = est_work(q.shape[1], s.theta.shape[1])
     for k in range(q.shape[0]):
-        alarm_rec[k] = est_step_trial(c, s, i, q[k], qd[k], tau[k])
+        alarm_rec[k] = est_step_trial_in(c, s, i, q[k], qd[k], tau[k], w)
         theta_rec[k] = s.theta[i]
         est_payload_trial(c, s, i, pay)
         payload_rec[k] = pay
