@@ -21,10 +21,12 @@ def ablation_row(
     estimator: dict,
     plant: dict | None = None,
     controller: dict | None = None,
+    torque: bool = False,
 ) -> str:
     """``mean/p90/max`` of adaptive_ct / ct_oracle per segment, the trials with a false alarm and
     the swaps missed, as one line, with the scenario's estimator settings updated by ``estimator`` (and its
-    ``[plant]`` table by ``plant``, adaptive_ct's own settings by ``controller``)."""
+    ``[plant]`` table by ``plant``, adaptive_ct's own settings by ``controller``); with ``torque``,
+    also its RMS torque over ct_oracle's per segment and its saturated fraction."""
     d = copy.deepcopy(base)
     if plant:
         d.setdefault("plant", {}).update(plant)
@@ -36,6 +38,16 @@ def ablation_row(
     df = run_benchmark(parse_scenario(d, scenario, Path(scenario).stem), progress=False).to_frame()
     c = df[df.controller == "adaptive_ct"]
     cells = segment_cells(c)
+    if torque:  # RMS torque over ct_oracle's, per segment (mean over seeds), and saturation
+        o = df[df.controller == "ct_oracle"].set_index(["seed", "segment"]).rms_torque
+        r = c.set_index(["seed", "segment"]).rms_torque / o
+        sat = c.groupby("segment").saturation_fraction.mean()
+        cells.append(
+            "torque x "
+            + "/".join(f"{v:.2f}" for v in r.groupby(level="segment").mean())
+            + ", saturated % "
+            + "/".join(f"{100 * v:.2f}" for v in sat)
+        )
     fa = int((c.groupby("seed").false_alarms.sum() > 0).sum())
     missed = int(np.sum(c.detection_delay.isna() & (c.segment > 0))) if "detection_delay" in c else -1
     return f"{'  '.join(cells)}   {fa}   {missed}"

@@ -5,7 +5,8 @@ For each duration: adaptive_ct / ct_oracle per segment (mean / p90 / max over se
 a false alarm, swaps missed), and the same boost on the true model: ``ct_oracle_textbook`` told
 of each swap one sample late and boosted as adaptive_ct is (``delayed_oracle.py``'s plug-in),
 against its own floor. If high gains alone beat the floor, the second row would fall below 1;
-it shows what the boost costs in sensor noise.
+it shows what the boost costs in sensor noise. The first row also prints adaptive_ct's RMS
+torque over ct_oracle's per segment and its saturated fraction [%]: the price of the boost.
 
     python benchmarks/boost_ablation.py [SCENARIO.toml] [--seeds 20] [--durations 0.2 0.5 1.0]
 """
@@ -34,7 +35,7 @@ def main() -> None:
     base = read_toml(Path(a.scenario))
     print(f"{a.scenario}: {a.seeds} seeds; per segment, ratio to the floor per seed: mean / p90 / max")
     for dur in a.durations:
-        row = ablation_row(base, a.scenario, a.seeds, {}, controller={"boost_duration": dur})
+        row = ablation_row(base, a.scenario, a.seeds, {}, controller={"boost_duration": dur}, torque=True)
         print(f"boost {dur:4.2f} s  adaptive_ct / ct_oracle                 {row}", flush=True)
         d = copy.deepcopy(base)
         d["run"]["seeds"] = a.seeds

@@ -269,9 +269,11 @@ class SerialOnlineConfig:
         equation exact from the sample after an alarm on (the filters keep no memory of
         the old payload; the re-openings forget what was learnt between the change and its
         detection). UR5 tool-swap scenario, 20 seeds, adaptive_ct / ct_oracle
-        means per segment 1.009 / 1.089 / 1.158 / 1.075 against 1.009 / 1.130 / 1.351 /
-        1.172 with ``"signals"``; Panda 1.031 / 1.194 / 1.193 / 1.080 against 1.031 /
-        1.169 / 1.243 / 1.128 (``benchmarks/regression_ablation.py [SCENARIO]``).
+        means per segment 1.009 / 1.033 / 1.065 / 1.032 against 1.009 / 1.038 / 1.068 /
+        1.074 with ``"signals"``; Panda 1.031 / 1.051 / 1.052 / 1.047 against 1.031 /
+        1.051 / 1.070 / 1.055 (``benchmarks/regression_ablation.py [SCENARIO]``; with
+        adaptive_ct's boost of 0.2 s the UR5's were 1.089 / 1.158 / 1.075 against 1.130 /
+        1.351 / 1.172).
     prior_radius : float or None
         Radius rho [m] of a compact-payload prior on the model control uses (not on the
         estimator's state): the payload's inertia about its frame is taken, a priori, as a
