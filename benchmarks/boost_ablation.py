@@ -42,11 +42,11 @@ def main() -> None:
         d["run"]["controllers"] = ["ct_oracle_textbook", "adaptive_ct"]
         d.setdefault("controllers", {}).setdefault("adaptive_ct", {})["boost_duration"] = dur
         sc = parse_scenario(d, a.scenario, Path(a.scenario).stem)
-        ac = make_controllers(sc)["adaptive_ct"]
+        ctrls = make_controllers(sc)
+        ac = ctrls.pop("adaptive_ct")
         gains = JointGains.of(sc.bandwidth, sc.damping, sc.arm.n_joints)
         c = DelayedOracle(sc.arm, gains, sc.sample_period, (ac.boost_bandwidth, ac.boost_duration))
-        df = run_benchmark(sc, controllers={"ct_oracle_textbook": make_controllers(sc)["ct_oracle_textbook"],
-                                            c.name: c}, progress=False).to_frame()  # fmt: skip
+        df = run_benchmark(sc, controllers={**ctrls, c.name: c}, progress=False).to_frame()
         cells = segment_cells(df[df.controller == c.name])
         print(f"boost {dur:4.2f} s  true model told 1 sample late / its floor {'  '.join(cells)}", flush=True)
 

@@ -120,15 +120,13 @@ def _information_function():
         payload_com_information_time,
         payload_information_time,
     )
-    from adaptive_dd.plant.serial_arm import payload_parameters
 
     def info(res, oracle, i, k0, k1):
         sc = res.scenario
         j = i - 1 if sc.swap_masses[i - 1] > 0 else i - 2  # the payload that came, or that left
         if j < 0 or sc.swap_masses[j] <= 0:
             return None
-        p = sc.payload_of(j)
-        pay = payload_parameters(p["mass"], p.get("com"), p.get("inertia"), p.get("radius", 0.0))
+        pay = _payload(sc, j)
         T = sc.sample_period
         lo = max(0, k0 - 1)
         q, qd = oracle.q[0, lo:k1], oracle.qd[0, lo:k1]
