@@ -594,8 +594,18 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
         f"{len(res.table)} rows ({res.failed_rows} failed), {res.ran} tasks run, {res.reused} reused; "
         f"wrote {res.table_path}" + "".join(f", {p}" for p in res.heatmaps)
     )
-    for msg, count in failed.value_counts().head(5).items():
-        print(f"  failed rows: {count} x {msg}")
+    if res.failed_rows:
+        n_tasks = res.table.loc[res.table["failed"], "task"].nunique()
+        print(
+            f"{'error' if res.failed_rows == len(res.table) else 'warning'}: {res.failed_rows} of "
+            f"{len(res.table)} rows failed (in {n_tasks} task(s)); why:",
+            file=sys.stderr,
+        )
+        for msg, count in failed.value_counts().head(5).items():
+            print(f"  {count} rows: {msg}", file=sys.stderr)
+    if res.failed_rows == len(res.table):
+        print("every row failed: no heat map drawn; fix the cause above and rerun", file=sys.stderr)
+        return 1
     if sweep.heatmap:
         from adaptive_dd.sweep import ratio_medians
 
