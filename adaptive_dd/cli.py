@@ -52,7 +52,18 @@ _SUBSTEPS = _number(int, 1, 100)
 
 
 def _sub(sub, name: str, **kw) -> argparse.ArgumentParser:
-    return sub.add_parser(name, allow_abbrev=False, **kw)
+    sp = sub.add_parser(name, allow_abbrev=False, **kw)
+    # also after the command (``adaptive-dd benchmark --debug``); SUPPRESS: not reset when absent
+    sp.add_argument("--debug", action="store_true", default=argparse.SUPPRESS, help=argparse.SUPPRESS)
+    return sp
+
+
+def _refuse(args: argparse.Namespace, options: tuple[str, ...], why: str) -> None:
+    """A :class:`ParameterError` naming the first of ``options`` given on the command line and
+    ``why`` it does not apply (an option that does not apply is never silently ignored)."""
+    given = [o for o in options if o in getattr(args, "given", ())]
+    if given:
+        raise ParameterError(f"{', '.join(given)}: {why}")
 
 
 def _load_arm(path: str | None):
@@ -126,16 +137,27 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
         raise ParameterError(f"run too large: {est}; reduce --duration or --seeds")
     if est.large:
         print(f"estimate: {est}", file=sys.stderr)
-    outputs = OutputSet(args.out)
-    if args.arm:
-        from adaptive_dd.plant.serial_arm import SerialArm
+    arm = _load_arm(args.arm)
+    from adaptive_dd.plant.serial_arm import SerialArm
 
-        if isinstance(_load_arm(args.arm), SerialArm):  # N joints: identification records (cli_serial)
-            from adaptive_dd.cli_serial import simulate_serial
+    if isinstance(arm, SerialArm):  # N joints: identification records (cli_serial)
+        from adaptive_dd.cli_serial import simulate_serial
 
-            with outputs:
-                return simulate_serial(args, args.arm, outputs)
-    with outputs:
+        _refuse(
+            args,
+            ("--no-saturate",),
+            f"does not apply to an arm from a URDF (the {arm.n_joints}-joint arm of {args.arm}): its "
+            "computed-torque record is always limited to the arm's torque limits",
+        )
+        with OutputSet(args.out) as outputs:
+            return simulate_serial(args, args.arm, outputs)
+    _refuse(
+        args,
+        ("--com", "--plant"),
+        f"apply to an arm from a URDF only; the {'two-link arm of ' + args.arm if args.arm else 'SICE arm'} "
+        "runs the paper's Table 2 experiment on its own plant (the payload a disk centred on the tip)",
+    )
+    with OutputSet(args.out) as outputs:
         return _simulate(args, n, outputs)
 
 
@@ -313,11 +335,19 @@ def _cmd_identify(args: argparse.Namespace) -> int:
         if isinstance(arm, SerialArm):
             from adaptive_dd.cli_serial import identify_serial
 
+            _refuse(
+                args,
+                _IDENTIFY_TWO_LINK,
+                f"for the two-link arm only, not the {arm.n_joints}-joint arm "
+                f"of {args.arm} (identified by WLS then output error on its base parameters)",
+            )
+
             outputs = OutputSet(args.out)
             with outputs:
                 return identify_serial(args, arm, outputs)
-    elif args.baseline or args.payload_only:
-        raise DataError("--baseline and --payload-only need --arm SCENARIO (an arm from a URDF)")
+    _refuse(
+        args, _IDENTIFY_URDF, "for an arm from a URDF only (--arm SCENARIO with urdf = ... or robot = ...)"
+    )
     rec = read_recording(args.data)
     if args.method == "M2" and rec.qd is None:
         raise DataError(f"{args.data}: method M2 needs columns qd1, qd2 (use --method M1 for position only)")
@@ -327,6 +357,14 @@ def _cmd_identify(args: argparse.Namespace) -> int:
         if args.online:
             return _identify_online(args, rec, outputs)
         return _identify(args, rec, outputs, estimate, MIN_EQUATIONS)
+
+
+_IDENTIFY_TWO_LINK = (
+    "--online", "--estimator", "--method", "--split", "--true", "--position-variance", "--velocity-variance",
+)  # fmt: skip
+"""identify's options of the two-link arm's estimators (the paper's sigma)."""
+_IDENTIFY_URDF = ("--baseline", "--payload-only", "--segment-length", "--max-iter")
+"""identify's options of the N-joint path (:func:`adaptive_dd.cli_serial.identify_serial`)."""
 
 
 def _identify(args, rec, outputs, estimate, min_equations: int) -> int:
@@ -833,7 +871,9 @@ def _user_message(exc: BaseException) -> str:
 def main(argv: list[str] | None = None) -> int:
     """Run the CLI; returns the exit code (0 ok, 1 failed check, 2 user error, 3 internal error)."""
     parser = build_parser()
+    argv = sys.argv[1:] if argv is None else list(argv)
     args = parser.parse_args(argv)
+    args.given = frozenset(a.split("=", 1)[0] for a in argv if a.startswith("--"))
     try:
         return int(args.func(args))
     except KeyboardInterrupt:

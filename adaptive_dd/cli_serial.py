@@ -300,7 +300,6 @@ def simulate_serial(args: argparse.Namespace, scenario_path: str, outputs) -> in
 def cmd_excite(args: argparse.Namespace) -> int:
     """``adaptive-dd excite --arm SCENARIO``: design an exciting trajectory; its bound beside a multi-sine."""
     from adaptive_dd.benchmark.scenario import load_scenario
-    from adaptive_dd.errors import ScenarioError
     from adaptive_dd.identification.excitation import (
         ExcitationLimits,
         design_excitation,
@@ -310,10 +309,9 @@ def cmd_excite(args: argparse.Namespace) -> int:
     from adaptive_dd.outputs import atomic_write
     from adaptive_dd.plant.serial_arm import SerialArm
 
-    sc = load_scenario(args.arm)
-    arm = sc.arm
+    arm = load_scenario(args.arm).arm
     if not isinstance(arm, SerialArm):
-        raise ScenarioError(f"{args.arm}: excite needs an [arm] from a URDF (urdf = ... or robot = ...)")
+        arm = _general_arm(args.arm)
     lim = ExcitationLimits.of_arm(arm, acceleration=args.acceleration, margin=args.margin)
     plain = multisine(arm, lim, args.harmonics, args.f0)
     best, res = design_excitation(
@@ -348,6 +346,23 @@ def cmd_excite(args: argparse.Namespace) -> int:
         fh.write(_replace_reference(Path(args.arm).read_text(), text))
     print(f"wrote {out} (the scenario with the designed [reference])")
     return 0
+
+
+def _general_arm(path: str):
+    """The scenario's URDF arm as the general model (a two-link URDF of the paper's kind loads as
+    the closed forms' :class:`~adaptive_dd.plant.arm.Arm`, which has no URDF to excite)."""
+    from adaptive_dd.benchmark.scenario import read_toml
+    from adaptive_dd.errors import ScenarioError
+    from adaptive_dd.plant.arm import arm_from_tables
+
+    data = read_toml(Path(path))
+    table = data.get("arm")
+    if not (isinstance(table, dict) and ("urdf" in table or "robot" in table)):
+        raise ScenarioError(
+            f"{path}: excite needs an [arm] from a URDF (urdf = ... or robot = ...); for the paper's "
+            'arm use robot = "sice_arm"'
+        )
+    return arm_from_tables({**table, "general": True}, data.get("plant"), str(path))
 
 
 def _replace_reference(src: str, table: str) -> str:
