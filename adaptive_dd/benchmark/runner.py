@@ -103,7 +103,7 @@ def run_benchmark(
             src = Path(scenario.source)
             search = (src.parent, Path.cwd()) if src.is_file() else (Path.cwd(),)
             ctrls[controller_label(spec, opts)] = make_controller(
-                spec, gains, opts, arm=scenario.arm, search=search
+                spec, gains, opts, arm=scenario.arm, search=search, scenario=scenario
             )
     else:
         ctrls = controllers

@@ -62,9 +62,8 @@ def make_controllers(scenario) -> dict:
         if ":" in spec:
             bw = opts.get("bandwidth", scenario.bandwidth)
             g = Gains(float(np.max(bw)), opts.get("damping", scenario.damping))
-            ctrl = make_controller(
-                spec, g, {**opts, "bandwidth": g.bandwidth}, arm=scenario.arm, search=search
-            )
+            opts = {**opts, "bandwidth": g.bandwidth}
+            ctrl = make_controller(spec, g, opts, arm=scenario.arm, search=search, scenario=scenario)
         else:
             ctrl = make_serial_controller(spec, scenario.arm, scenario.bandwidth, scenario.damping, opts)
         out[label] = ctrl
