@@ -584,6 +584,29 @@ def _cmd_validate(args: argparse.Namespace) -> int:
 
     if isinstance(sc.arm, SerialArm):
         print(describe_serial_arm(sc.arm))
+    from adaptive_dd.benchmark.preflight import preflight, torque_peaks
+
+    peak, _, _ = torque_peaks(sc)
+    limit = sc.arm.actuator.torque_limit
+    print(
+        "# peak |tau| along the reference (inverse dynamics, every payload): "
+        + ", ".join(
+            f"joint{j + 1} {peak[j]:.4g} N m ({peak[j] / limit[j]:.0%} of its limit)"
+            for j in range(peak.size)
+        )
+    )
+    problems, warnings = preflight(sc)
+    for w in warnings:
+        print(f"adaptive-dd validate: warning: {w}", file=sys.stderr)
+    if problems:
+        print(f"adaptive-dd validate: {len(problems)} problem(s) the run would meet:", file=sys.stderr)
+        for p in problems:
+            print(f"  {p}", file=sys.stderr)
+        return 1
+    print(
+        f"# checked: the reference within the arm's position and velocity limits (torque: "
+        f"{'see the warning' if warnings else 'within'}); {len(sc.controllers)} controller(s) built"
+    )
     return 0
 
 

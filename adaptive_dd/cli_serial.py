@@ -306,12 +306,13 @@ def cmd_excite(args: argparse.Namespace) -> int:
         multisine,
         reference_toml,
     )
-    from adaptive_dd.outputs import atomic_write
+    from adaptive_dd.outputs import atomic_write, check_output_file
     from adaptive_dd.plant.serial_arm import SerialArm
 
     arm = load_scenario(args.arm).arm
     if not isinstance(arm, SerialArm):
         arm = _general_arm(args.arm)
+    out = check_output_file(args.out)  # before the design, not after it
     lim = ExcitationLimits.of_arm(arm, acceleration=args.acceleration, margin=args.margin)
     plain = multisine(arm, lim, args.harmonics, args.f0)
     best, res = design_excitation(
@@ -340,8 +341,6 @@ def cmd_excite(args: argparse.Namespace) -> int:
         f"error on a {args.duration} s record tracking it, relative to each parameter's magnitude)"
     )
     text = reference_toml(best.reference(ramp=args.ramp), f"designed by adaptive-dd excite --arm {args.arm}")
-    out = Path(args.out)
-    out.parent.mkdir(parents=True, exist_ok=True)
     with atomic_write(out) as fh:
         fh.write(_replace_reference(Path(args.arm).read_text(), text))
     print(f"wrote {out} (the scenario with the designed [reference])")

@@ -123,7 +123,7 @@ def run_cell(
     rows = []
     for i, seed in enumerate(seed_indices):
         at = int(run.failed_at[i]) if run.failed[i] else -1
-        why = run.error or f"trial diverged at t = {at * T:.3f} s"
+        why = run.error or f"trial failed at t = {at * T:.3f} s: {run.failed_why.get(i, 'diverged')}"
         for j, (start, end, mass) in enumerate(scenario.segments()):
             bad = bool(np.isnan(per["rms_error"][i, j]))
             rows.append(
@@ -334,9 +334,10 @@ def run_sweep(
     progress : bool
         Show a progress bar over completed tasks.
     """
+    from adaptive_dd.outputs import check_output_dir
+
     out = Path(out)
-    cells_dir = out / "cells"
-    cells_dir.mkdir(parents=True, exist_ok=True)
+    cells_dir = check_output_dir(out / "cells")  # an unwritable folder is reported before the run
     ext = "parquet" if _have_parquet() else "csv"
     tasks, cells = plan_tasks(sweep)
     todo = [t for k, t in tasks.items() if not (cells_dir / f"{k}.{ext}").is_file()]

@@ -298,6 +298,8 @@ def compute_metrics(res: BenchmarkResult) -> dict:
             "skipped_samples_per_seed": None if run.skipped is None else [int(x) for x in run.skipped],
             "segments": segs,
         }
+        if run.failed.any():  # seed, time and reason of each failed trial
+            out[name]["failures"] = run.failures(sc.sample_period, res.seed_indices or None)
     _add_seed_statistics(res, out, per)
     _add_information_times(res, out)
 

@@ -106,7 +106,9 @@ def run_python_batch(
                     cmd = _command(ctrl, glue, rc, k, qm, qdm, truth)
                 except Exception as exc:
                     error = f"{type(exc).__name__} in command at t = {k * T:.3f} s: {exc}"
+            before = run.failed.copy()
             tau, s = glue.apply(k, cmd)
+            _say_why(run, before, cmd, k * T)
             if not error:
                 try:
                     ctrl.observe(qm_obs, qdm_obs, tau)
@@ -125,9 +127,20 @@ def run_python_batch(
     run.error = error
     if error:
         run.failed[:] = True
+    run.explain_failures(rc.max_error, rc.max_speed)
     run.alarm_times = None if error else declared(ctrl, "alarm_times")
     run.skipped = None if error else declared(ctrl, "skipped_samples")
     return run
+
+
+def _say_why(run: ControllerRun, before, cmd: Array, t: float) -> None:
+    """Name a non-finite command as the reason of the trials that failed on it at time t."""
+    for i in np.flatnonzero(run.failed & ~before):
+        bad = np.flatnonzero(~np.isfinite(cmd[i]))
+        if bad.size:
+            j = int(bad[0])
+            why = f"non-finite torque command (joint {j + 1}: {cmd[i, j]}) at t = {t:.3f} s"
+            run.failed_why[int(i)] = why
 
 
 def _estimate(est, S: int, p: int) -> Array:

@@ -44,30 +44,30 @@ from adaptive_dd.closed_loop.types import (
 )
 from adaptive_dd.controllers.base import declared
 
-__all__ = ["CHUNK", "MAX_ALARMS", "make_controllers", "run_serial", "true_parameters"]
+__all__ = ["CHUNK", "MAX_ALARMS", "make_controller_of", "make_controllers", "run_serial", "true_parameters"]
 
 
 def make_controllers(scenario) -> dict:
     """The scenario's controllers by label: built-ins (:data:`SERIAL_CONTROLLERS`), plug-ins by path."""
+    return dict(make_controller_of(scenario, spec) for spec in scenario.controllers)
+
+
+def make_controller_of(scenario, spec: str) -> tuple[str, object]:
+    """``(label, controller)`` of one entry of the scenario's controller list, with its settings."""
     from pathlib import Path
 
     from adaptive_dd.controllers import Gains, controller_label, make_controller
 
-    out = {}
     src = Path(scenario.source)
     search = (src.parent, Path.cwd()) if src.is_file() else (Path.cwd(),)
-    for spec in scenario.controllers:
-        opts = scenario.options(controller_label(spec)) or scenario.options(spec)
-        label = controller_label(spec, opts)
-        if ":" in spec:
-            bw = opts.get("bandwidth", scenario.bandwidth)
-            g = Gains(float(np.max(bw)), opts.get("damping", scenario.damping))
-            opts = {**opts, "bandwidth": g.bandwidth}
-            ctrl = make_controller(spec, g, opts, arm=scenario.arm, search=search, scenario=scenario)
-        else:
-            ctrl = make_serial_controller(spec, scenario.arm, scenario.bandwidth, scenario.damping, opts)
-        out[label] = ctrl
-    return out
+    opts = scenario.options(controller_label(spec)) or scenario.options(spec)
+    label = controller_label(spec, opts)
+    if ":" in spec:
+        bw = opts.get("bandwidth", scenario.bandwidth)
+        g = Gains(float(np.max(bw)), opts.get("damping", scenario.damping))
+        opts = {**opts, "bandwidth": g.bandwidth}
+        return label, make_controller(spec, g, opts, arm=scenario.arm, search=search, scenario=scenario)
+    return label, make_serial_controller(spec, scenario.arm, scenario.bandwidth, scenario.damping, opts)
 
 
 def true_parameters(scenario) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -174,6 +174,7 @@ def _run_compiled(name, ctrl: SerialLaw, scenario, idx, rc, io, pl, keep, bar) -
     run.skipped = ctrl.skipped(form)
     if ctrl.has_detector:
         run.alarm_times = alarm_lists(alarms)
+    run.explain_failures(rc.max_error, rc.max_speed)
     return run
 
 

@@ -1,0 +1,125 @@
+"""``validate`` checks what the run will meet; a failed trial says why and when; outputs are
+checked before a run (issue 27)."""
+
+from __future__ import annotations
+
+import dataclasses
+from importlib import resources
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from adaptive_dd.benchmark.runner import run_benchmark
+from adaptive_dd.benchmark.scenario import load_scenario
+from adaptive_dd.benchmark.types import ControllerRun
+from adaptive_dd.cli import main
+
+ROOT = Path(__file__).resolve().parent.parent
+PANDA = Path(str(resources.files("adaptive_dd.scenarios").joinpath("panda_payload.toml")))
+
+
+def test_validate_catches_a_reference_beyond_position_and_velocity_limits(tmp_path, capsys):
+    """Issue 27: a reference through joint 4's limit at twice its speed was accepted."""
+    text = PANDA.read_text().replace(
+        "joint4 = { offset = -1.8, amplitude = [0.5, 0.15], frequency = [0.3, 0.85]",
+        "joint4 = { offset = -0.1, amplitude = [0.5, 0.15], frequency = [0.6, 1.7]",
+    )
+    bad = tmp_path / "panda.toml"
+    bad.write_text(text)
+    assert main(["validate", str(PANDA)]) == 0
+    capsys.readouterr()
+    assert main(["validate", str(bad)]) == 1
+    err = capsys.readouterr().err
+    assert "2 problem(s)" in err
+    assert "reference.joint4: q = 0.5489 rad at t = 13.682 s" in err
+    assert "above the joint's upper limit -0.0698 rad" in err
+    assert "reference.joint4: |qd| = " in err and "velocity limit 2.175 rad/s" in err
+
+
+def test_validate_warns_of_a_torque_beyond_the_limit_along_the_reference(capsys):
+    path = ROOT / "benchmarks" / "scenarios" / "alternating.toml"
+    assert main(["validate", str(path)]) == 0  # the benchmark runs through saturation and says so
+    err = capsys.readouterr().err
+    assert "warning: reference.joint2: inverse dynamics along the reference with the 3 kg payload" in err
+    assert "torque limit 15 N m" in err and "joint1" not in err
+
+
+@pytest.mark.parametrize(
+    ("spec", "table", "needle"),
+    [
+        ("payload_gradient:PayloadGradient", "[controllers.PayloadGradient]\nbogus = 1\n", "['bogus']"),
+        ("no_such_module_xyz:Ctrl", "", "cannot import module 'no_such_module_xyz'"),
+        ("payload_gradient:NoSuchClass", "", "has no 'NoSuchClass'"),
+        ("payload_gradient:PayloadGradient", "[controllers.PayloadGradient]\ngamma = -1\n", "gamma must be"),
+    ],
+)
+def test_validate_builds_plugins_with_their_settings(tmp_path, capsys, spec, table, needle):
+    """Issue 27: a plug-in's unknown setting or bad import path passed validate."""
+    (tmp_path / "payload_gradient.py").write_text((ROOT / "examples" / "payload_gradient.py").read_text())
+    path = tmp_path / "s.toml"
+    path.write_text(f'[run]\nduration = 1.0\ncontrollers = ["ct_oracle", "{spec}"]\n{table}')
+    assert main(["validate", str(path)]) == 1
+    err = capsys.readouterr().err
+    assert "1 problem(s)" in err and needle in err, err
+
+
+class NanAfter:
+    """A plug-in whose command turns NaN on trial 1 from t = 0.05 s."""
+
+    def reset(self, n_trials, sample_period):
+        self.k, self.T = 0, sample_period
+
+    def command(self, q, qd, q_d, qd_d, qdd_d):
+        tau = 400.0 * (q_d - q) + 40.0 * (qd_d - qd)
+        if self.k * self.T >= 0.05 - 1e-12:
+            tau[1, 0] = np.nan
+        self.k += 1
+        return tau
+
+    def observe(self, q, qd, tau):
+        pass
+
+
+@pytest.mark.parametrize("arm", ["two_link", "urdf"])
+def test_a_failed_trial_says_why_and_when(arm):
+    """Issue 27: a NaN torque failed a trial with no reason and no time."""
+    sc = load_scenario() if arm == "two_link" else load_scenario(ROOT / "examples" / "plugin_urdf.toml")
+    sc = dataclasses.replace(sc, seeds=2, duration=0.2, swap_times=(0.1,), swap_masses=(1.0,), swap_com=())
+    res = run_benchmark(sc, progress=False, controllers={"nan": NanAfter()})
+    m = res.metrics()["controllers"]["nan"]
+    assert m["failed_trials"] == 1
+    (f,) = m["failures"]
+    assert f["seed"] == 1 and f["t"] == pytest.approx(0.05)
+    assert f["why"] == "non-finite torque command (joint 1: nan) at t = 0.050 s"
+    from adaptive_dd.benchmark.report import format_report
+
+    assert "nan, seed 1, t = 0.050 s: non-finite torque command" in format_report(res.metrics(), res)
+
+
+def test_a_compiled_failure_is_explained_from_the_error_norm():
+    e = np.zeros((3, 10), dtype=np.float32)
+    e[0, 4], e[1, 6] = 0.9, 0.01
+    run = ControllerRun(
+        "x", None, e, None, np.array([True, True, False]), np.array([4, 6, -1]), engine="compiled"
+    )
+    run.explain_failures(max_error=0.5, max_speed=200.0)
+    assert run.failed_why[0].startswith("tracking error |e| = 0.9 rad, beyond max_error = 0.5 rad")
+    assert run.failed_why[1].startswith("runaway: the arm's state became non-finite or a joint exceeded 200")
+    assert 2 not in run.failed_why
+    assert run.failures(0.01, (7, 8, 9))[1] == {"seed": 8, "t": 0.06, "why": run.failed_why[1]}
+
+
+def test_unwritable_outputs_are_reported_before_the_run(tmp_path, capsys):
+    """Issue 27: an unwritable --out was found only after the run (excite, sweep)."""
+    blocker = tmp_path / "file"
+    blocker.write_text("")
+    sice = str(ROOT / "benchmarks" / "scenarios" / "sice_urdf.toml")
+    assert main(["excite", "--arm", sice, "--out", str(blocker / "x.toml")]) == 2
+    cap = capsys.readouterr()
+    assert "SLSQP" not in cap.out and f"{blocker} is a file" in cap.err
+    sweep = tmp_path / "sweep.toml"
+    sweep.write_text('[sweep]\nseeds = 1\ncontrollers = ["ct_oracle"]\n[grid]\npayload_mass = [1.0]\n')
+    assert main(["sweep", str(sweep), "--out", str(blocker / "out"), "--no-progress"]) == 2
+    cap = capsys.readouterr()
+    assert "tasks" not in cap.out and f"{blocker} is a file" in cap.err
