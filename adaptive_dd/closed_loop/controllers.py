@@ -288,15 +288,28 @@ class SlotineLi(SerialLaw):
     floor = "slotine_li_oracle"
     SETTINGS = frozenset({"gamma", "max_mass", "com_radius"})
 
+    def __init__(self, arm, bandwidth=40.0, damping: float = 1.0, **settings) -> None:
+        super().__init__(arm, bandwidth, damping, **settings)
+        where = f"controllers.{self.name}"
+        gamma = self.settings.get("gamma", DEFAULT_PAYLOAD_GAMMA)
+        if isinstance(gamma, np.ndarray):
+            gamma = gamma.tolist()
+        ok = isinstance(gamma, list | tuple) and all(_is_number(g) for g in gamma)
+        if not ok or len(gamma) != 10 or not all(g > 0 for g in gamma):
+            raise ParameterError(
+                f"{where}.gamma: 10 positive adaptation gains (the payload's m, m c, I), got {gamma!r}"
+            )
+        self.gamma = np.array(gamma, dtype=float)
+        for key, default in (("max_mass", 20.0), ("com_radius", 0.3)):
+            v = self.settings.get(key, default)
+            if not (_is_number(v) and v > 0):
+                raise ParameterError(f"{where}.{key}: a number > 0, got {v!r}")
+        self.max_mass = float(self.settings.get("max_mass", 20.0))
+        self.com_radius = float(self.settings.get("com_radius", 0.3))
+
     def law_config(self, sample_period):
         lam, k = self.gains.roots()
-        gamma = np.asarray(self.settings.get("gamma", DEFAULT_PAYLOAD_GAMMA), dtype=float)
-        if gamma.shape != (10,) or not np.all(gamma > 0):
-            raise ParameterError(f"controllers.{self.name}.gamma: 10 positive gains, got {gamma.tolist()}")
-        m_max = float(self.settings.get("max_mass", 20.0))
-        r = float(self.settings.get("com_radius", 0.3))
-        if not (m_max > 0 and r > 0):
-            raise ParameterError(f"controllers.{self.name}: max_mass and com_radius must be > 0")
+        m_max, r, gamma = self.max_mass, self.com_radius, self.gamma
         i_max = m_max * r * r * 2.0
         hi = np.array([m_max, *(m_max * r,) * 3, i_max, i_max / 2, i_max, i_max / 2, i_max / 2, i_max])
         lo = np.array([0.0, *(-m_max * r,) * 3, 0.0, -i_max / 2, 0.0, -i_max / 2, -i_max / 2, 0.0])
@@ -304,6 +317,10 @@ class SlotineLi(SerialLaw):
             sample_period, KIND_SLOTINE, MODEL_TRIAL, lam=lam, kd=k, adapt=True, gamma=gamma, lo=lo, hi=hi,
             com_radius=r,
         )  # fmt: skip
+
+
+def _is_number(x) -> bool:
+    return not isinstance(x, bool) and isinstance(x, int | float) and bool(np.isfinite(x))
 
 
 class AdaptiveCT(SerialLaw):

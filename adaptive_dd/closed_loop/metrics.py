@@ -7,7 +7,7 @@ import numpy as np
 
 from adaptive_dd.closed_loop.types import StreamedSums
 
-__all__ = ["MIN_COM_MASS", "payload_at_segment_ends", "serial_segment_metrics", "total_rms"]
+__all__ = ["MIN_COM_MASS", "payload_at_segment_ends", "serial_segment_metrics"]
 
 MIN_COM_MASS = 0.1
 """[kg]: below this estimated mass the centre of mass (first moment / mass) is not reported."""
@@ -53,8 +53,3 @@ def payload_at_segment_ends(arm, sigma_end: np.ndarray):
     """The payload (mass, com, ...) implied by the estimates ``(..., p)``."""
     with np.errstate(invalid="ignore", divide="ignore"):
         return arm.payload_from_sigma(sigma_end)
-
-
-def total_rms(res, run) -> np.ndarray:
-    """RMS tracking error over the whole run per seed ``(n_seeds,)``."""
-    return np.sqrt(run.acc.sum_e2.sum(axis=1) / res.scenario.n_samples)

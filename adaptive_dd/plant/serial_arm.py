@@ -385,12 +385,11 @@ class SerialArm:
         return regressor_batch(self.chain, q, qd, qdd)
 
     def pin_configuration(self, q: ArrayLike) -> Array:
-        """Pinocchio's configuration of joint positions ``q (n,)`` (continuous joints as cos, sin)."""
-        m = self.model
-        out = []
-        for i, x in enumerate(np.asarray(q, dtype=float)):
-            out += [np.cos(x), np.sin(x)] if m.joints[i + 1].nq == 2 else [x]
-        return np.array(out)
+        """Pinocchio's configuration of joint positions ``q (n,)`` (continuous joints as cos, sin;
+        :func:`adaptive_dd.plant.chain.pin_configuration`)."""
+        from adaptive_dd.plant.chain import pin_configuration
+
+        return pin_configuration(self.model, q)
 
     def regressor(self, q: ArrayLike, qd: ArrayLike, qdd: ArrayLike) -> Array:
         """Base regressor ``(..., n, p)``: ``regressor @ sigma`` is the joint torque."""
@@ -668,7 +667,7 @@ def urdf_arm_from_table(src: str, table: dict, plant_kw: dict):
         from adaptive_dd.robots import ROBOTS, robot_urdf
 
         name = table["robot"]
-        if name not in ROBOTS:
+        if not isinstance(name, str) or name not in ROBOTS:
             raise ScenarioError(
                 f"{src}: key 'arm.robot' = {name!r} is not a shipped robot; known: {sorted(ROBOTS)}"
             )
