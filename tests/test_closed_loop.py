@@ -383,25 +383,13 @@ def test_cli_benchmark_of_an_n_joint_scenario_writes_every_output(tmp_path, caps
         assert (out / f).stat().st_size > 0
 
 
-def _delayed_oracle():
-    """``benchmarks/delayed_oracle.py``'s plug-in (a benchmark script, loaded by path)."""
-    import importlib.util
-    from pathlib import Path
-
-    path = Path(__file__).resolve().parents[1] / "benchmarks" / "delayed_oracle.py"
-    spec = importlib.util.spec_from_file_location("delayed_oracle", path)
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod.DelayedOracle
-
-
 def test_the_delayed_oracle_is_the_textbook_oracle_at_zero_delay_and_pays_for_a_delay():
     """The plug-in behind benchmarks/delayed_oracle.py: at zero delay the same law as the
     compiled ct_oracle_textbook (Python path against compiled, to rounding); told of the 2 kg
     pickup 10 ms late it tracks worse in the segment after it, and its boost takes part of that back."""
     from adaptive_dd.closed_loop.controllers import JointGains
+    from adaptive_dd.closed_loop.delayed_oracle import DelayedOracle
 
-    DelayedOracle = _delayed_oracle()
     sc = _short("ur5_tool_swap", 1.6, (0.8,), seeds=1, controllers=["ct_oracle_textbook"])
     gains = JointGains.of(sc.bandwidth, sc.damping, sc.arm.n_joints)
     ctrls = {

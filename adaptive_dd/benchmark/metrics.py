@@ -60,12 +60,16 @@ false_alarms_per_seed
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 from adaptive_dd.benchmark.provenance import provenance
-from adaptive_dd.benchmark.streaming import segment_bounds
-from adaptive_dd.benchmark.types import SETTLE, BenchmarkResult
+from adaptive_dd.benchmark.streaming import SETTLE, segment_bounds
 from adaptive_dd.plant.sampling import first_sample
+
+if TYPE_CHECKING:  # annotations only: types imports this module for BenchmarkResult.metrics()
+    from adaptive_dd.benchmark.types import BenchmarkResult
 
 __all__ = [
     "FALSE_ALARM_WINDOW",
@@ -77,6 +81,7 @@ __all__ = [
     "detection_delays",
     "error_trace",
     "false_alarm_counts",
+    "missed_swap_counts",
     "moving_rms",
     "per_seed_segment_metrics",
     "ratio_statistics",
@@ -245,6 +250,17 @@ def false_alarm_counts(alarm_times, swaps) -> list[int]:
     return [
         sum(1 for x in tr if not any(0 <= x - s < FALSE_ALARM_WINDOW for s in swaps)) for tr in alarm_times
     ]
+
+
+def missed_swap_counts(alarm_times, swaps, failed) -> np.ndarray:
+    """Per trial, the swaps [s] with no alarm within ``FALSE_ALARM_WINDOW`` after them (0 for a
+    failed trial)."""
+    return np.array(
+        [
+            sum(1 for s in swaps if not any(0 <= x - s < FALSE_ALARM_WINDOW for x in tr)) if not f else 0
+            for tr, f in zip(alarm_times, failed, strict=True)
+        ]
+    )
 
 
 def detection_delays(alarm_times, swap: float) -> list[float | None]:
@@ -416,19 +432,6 @@ INFO_WINDOW = 1.0
 """[s] after a swap searched for the information-limited time."""
 
 
-def mass_learning_time(m_hat: np.ndarray, mass: float, removed: float, T: float, rel: float = 0.05):
-    """First time after which the estimated mass stays within ``rel`` of the truth (per row), NaN if never.
-
-    ``rel`` is taken of the payload that changed (``max(mass, removed)``), so a removal is judged
-    on the mass that left.
-    """
-    tol = rel * max(mass, removed)
-    outside = np.abs(m_hat - mass) > tol  # (n, N)
-    n = outside.shape[-1]
-    last = np.where(outside.any(axis=-1), n - 1 - np.argmax(outside[..., ::-1], axis=-1), -1)
-    return np.where(last < n - 1, (last + 1) * T, np.nan)
-
-
 def _median(x: list) -> float | None:
     v = np.asarray([np.nan if y is None else y for y in x], float)
     return float(np.nanmedian(v)) if np.isfinite(v).any() else None
@@ -442,6 +445,7 @@ def _add_information_times(res: BenchmarkResult, out: dict) -> None:
     only: the limit is the median over those seeds of the reference run (the oracle's if present;
     ``information_seeds``: how many), the learning times the median over a controller's kept
     seeds that did not fail (``learning_seeds``). The JSON and the report say how many seeds."""
+    from adaptive_dd.closed_loop.information import mass_learning_time
     from adaptive_dd.identification.fisher import mass_information_time
 
     sc = res.scenario

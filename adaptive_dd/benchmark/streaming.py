@@ -13,7 +13,10 @@ from numba import njit
 
 from adaptive_dd.plant.sampling import first_sample
 
-__all__ = ["accumulate_trial", "segment_bounds"]
+SETTLE = 0.5
+"""[s] left out at the start of each segment for ``rms_error_settled``."""
+
+__all__ = ["SETTLE", "accumulate_trial", "segment_bounds"]
 
 
 def segment_bounds(

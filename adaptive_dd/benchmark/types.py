@@ -15,6 +15,8 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import NDArray
 
+from adaptive_dd.benchmark.streaming import SETTLE  # a leaf: metrics needs it without this module
+
 if TYPE_CHECKING:
     from adaptive_dd.benchmark.scenario import Scenario
     from adaptive_dd.closed_loop.types import StreamedSums
@@ -24,8 +26,6 @@ __all__ = ["CHUNK", "ENGINES", "MAX_ALARMS", "MAX_ERROR", "SETTLE", "BenchmarkRe
 Array = NDArray[np.float64]
 MAX_ERROR = 3.0
 """Tracking error [rad] beyond which a trial counts as diverged."""
-SETTLE = 0.5
-"""[s] left out at the start of each segment for ``rms_error_settled``."""
 ENGINES = ("auto", "python", "compiled")
 CHUNK = 1024
 """Samples per block of drawn noise (and per call of the compiled loop)."""

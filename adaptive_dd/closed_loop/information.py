@@ -7,13 +7,26 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["COM_TOL", "INFO_WINDOW", "add_information_times", "com_learning_time"]
+__all__ = ["COM_TOL", "INFO_WINDOW", "add_information_times", "com_learning_time", "mass_learning_time"]
 
 INFO_WINDOW = 1.0
 """[s] after a swap searched for the information-limited time."""
 
 COM_TOL = 0.01
 """[m] the centre of mass counts as known within this distance."""
+
+
+def mass_learning_time(m_hat: np.ndarray, mass: float, removed: float, T: float, rel: float = 0.05):
+    """First time after which the estimated mass stays within ``rel`` of the truth (per row), NaN if never.
+
+    ``rel`` is taken of the payload that changed (``max(mass, removed)``), so a removal is judged
+    on the mass that left.
+    """
+    tol = rel * max(mass, removed)
+    outside = np.abs(m_hat - mass) > tol  # (n, N)
+    n = outside.shape[-1]
+    last = np.where(outside.any(axis=-1), n - 1 - np.argmax(outside[..., ::-1], axis=-1), -1)
+    return np.where(last < n - 1, (last + 1) * T, np.nan)
 
 
 def com_learning_time(
@@ -38,7 +51,6 @@ def add_information_times(res, out: dict) -> None:
     a removal after an empty segment) and ``mass_learning_time`` (median over the
     kept seeds of the first time after which the estimated mass stays within 5 % of the
     payload that changed) of every segment after a swap."""
-    from adaptive_dd.benchmark.metrics import mass_learning_time
     from adaptive_dd.closed_loop.types import run_constants
 
     sc = res.scenario
