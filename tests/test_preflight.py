@@ -123,3 +123,48 @@ def test_unwritable_outputs_are_reported_before_the_run(tmp_path, capsys):
     assert main(["sweep", str(sweep), "--out", str(blocker / "out"), "--no-progress"]) == 2
     cap = capsys.readouterr()
     assert "tasks" not in cap.out and f"{blocker} is a file" in cap.err
+
+
+def test_a_failed_trial_keeps_its_segments_before_the_failure_on_every_arm():
+    """Issue 27: a failed trial blanked every segment on an N-joint arm, only the segments from
+    its failure on on the two-link arm; now one rule (metrics.segment_failed) on both."""
+    for sc in (load_scenario(), load_scenario(ROOT / "examples" / "plugin_urdf.toml")):
+        sc = dataclasses.replace(
+            sc, seeds=2, duration=0.2, swap_times=(0.04,), swap_masses=(1.0,), swap_com=()
+        )
+        res = run_benchmark(sc, progress=False, controllers={"nan": NanAfter()})
+        per = res.to_frame()
+        trial1 = per[per.seed == 1].sort_values("segment")
+        assert np.isfinite(trial1.rms_error.iloc[0]) and np.isnan(trial1.rms_error.iloc[1]), sc.name
+        assert np.isfinite(per[per.seed == 0].rms_error).all()
+
+
+def test_information_time_has_the_same_keys_without_an_oracle_on_every_arm():
+    sc = load_scenario(ROOT / "examples" / "plugin_urdf.toml")
+    sc = dataclasses.replace(sc, seeds=1, duration=0.2, swap_times=(0.1,), swap_masses=(1.0,), swap_com=())
+    seg = res_seg = run_benchmark(sc, progress=False, controllers={"pd": NanAfter()}).metrics()
+    seg = res_seg["controllers"]["pd"]["segments"][1]
+    assert seg["information_time"] == {"known": None, "seeds": 0, "reference": None}
+
+
+@pytest.mark.parametrize("arm", ["two_link", "urdf"])
+def test_adaptive_ct_takes_its_detector_table_in_either_place_on_every_arm(arm):
+    from adaptive_dd.benchmark.runner import scenario_controller
+    from adaptive_dd.benchmark.scenario_checks import freeze
+    from adaptive_dd.errors import ParameterError
+
+    base = load_scenario() if arm == "two_link" else load_scenario(ROOT / "examples" / "plugin_urdf.toml")
+    key = "threshold" if arm == "two_link" else "min_rows"
+    value = 7.0 if arm == "two_link" else 4
+
+    def built(opts):
+        sc = dataclasses.replace(
+            base, controllers=("adaptive_ct",), controller_options=(("adaptive_ct", freeze(opts)),)
+        )
+        return scenario_controller(sc, "adaptive_ct")[1].online
+
+    top = built({"detector": {key: value}})
+    inside = built({"estimator": {"detector": {key: value}}})
+    assert top == inside and getattr(top.detector, key) == value
+    with pytest.raises(ParameterError, match="'detector' given twice"):
+        built({"detector": {key: value}, "estimator": {"detector": {key: value}}})

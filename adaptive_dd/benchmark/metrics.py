@@ -164,9 +164,10 @@ def per_seed_segment_metrics(res: BenchmarkResult, run, recovery: bool = True) -
         from adaptive_dd.closed_loop.metrics import serial_segment_metrics
 
         out = serial_segment_metrics(res, run)
-        out["recovery_time"] = _recovery_times(run.e_norm, *_serial_bounds(sc), T)
-        out["recovery_time"][run.failed] = np.nan
-        return out
+        start, end = _serial_bounds(sc)
+        if recovery:
+            out["recovery_time"] = _recovery_times(run.e_norm, start, end, T)
+        return _blank_failed(res, run, out, end, key)
     start, end, settled = segment_bounds(sc.segments(), T, SETTLE)
     n, n_set = (end - start).astype(float), (end - settled).astype(float)
     acc = run.acc
@@ -183,6 +184,11 @@ def per_seed_segment_metrics(res: BenchmarkResult, run, recovery: bool = True) -
         out["recovery_time"] = _recovery_times(run.e_norm, start, end, T)
     if run.sigma_end is not None:
         out["mass_estimate"] = sc.arm.payload_mass_from_sigma(run.sigma_end)
+    return _blank_failed(res, run, out, end, key)
+
+
+def _blank_failed(res: BenchmarkResult, run, out: dict, end: np.ndarray, key) -> dict:
+    """NaN where the trial failed (:func:`segment_failed`, every arm's one rule); cached."""
     bad = segment_failed(run.failed, run.failed_at, end)
     if run.error:
         bad[:] = True

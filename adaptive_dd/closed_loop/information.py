@@ -46,9 +46,10 @@ def com_learning_time(
 
 
 def add_information_times(res, out: dict) -> None:
-    """Fill ``information_time`` (the information-limited time to know the payload mass to 5 %
-    along ct_oracle's first kept trajectory; None without ct_oracle, beyond the window, or for
-    a removal after an empty segment) and ``mass_learning_time`` (median over the
+    """Fill ``information_time`` (``known``: the information-limited time to know the payload
+    mass to 5 % along ct_oracle's first kept trajectory, None without ct_oracle, beyond the
+    window, or for a removal after an empty segment; ``seeds``, ``reference``; ``com_known``,
+    ``com_axes`` when a payload came) and ``mass_learning_time`` (median over the
     kept seeds of the first time after which the estimated mass stays within 5 % of the
     payload that changed) of every segment after a swap."""
     from adaptive_dd.closed_loop.types import run_constants
@@ -65,6 +66,9 @@ def add_information_times(res, out: dict) -> None:
         k_end = min(k1, k0 + round(INFO_WINDOW / rc.T))
         if info_fn is not None and oracle is not None and oracle.q.shape[0] and not oracle.failed[0]:
             info = info_fn(res, oracle, i, k0, k_end)
+        # the two-link arm's keys: a table even when nothing could be computed ("unknown", the
+        # time with every other parameter unknown, is the two-link arm's only)
+        info = info or {"known": None, "seeds": 0, "reference": None}
         limit = _detection_limit(sc, oracle, i, k0, k_end)
         for name, run in res.runs.items():
             seg = out[name]["segments"][i]

@@ -22,7 +22,8 @@ def _counts(res) -> tuple[np.ndarray, np.ndarray]:
 
 
 def serial_segment_metrics(res, run) -> dict[str, np.ndarray]:
-    """``(n_seeds, n_segments)`` arrays, NaN for failed trials: ``rms_error``, ``rms_error_joint{j}``
+    """``(n_seeds, n_segments)`` arrays (the caller blanks failed trials by the benchmark's one
+    rule, :func:`~adaptive_dd.benchmark.metrics.segment_failed`): ``rms_error``, ``rms_error_joint{j}``
     (j = 1 .. n), ``max_error``, ``rms_torque``, ``saturation_fraction``, ``rms_error_settled``,
     and for controllers with an estimate ``mass_estimate`` [kg] and ``com_estimate_{x,y,z}`` [m]
     (:meth:`SerialArm.payload_from_sigma` of the estimate at the segment's last sample; the
@@ -44,8 +45,6 @@ def serial_segment_metrics(res, run) -> dict[str, np.ndarray]:
         small = ~(np.abs(est.mass) >= MIN_COM_MASS)
         for c, axis in enumerate("xyz"):
             out[f"com_estimate_{axis}"] = np.where(small, np.nan, est.com[..., c])
-    for v in out.values():
-        v[run.failed] = np.nan
     return out
 
 

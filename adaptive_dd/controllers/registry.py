@@ -14,8 +14,8 @@ Built-in settings:
     ``boost_bandwidth``, ``boost_duration``, ``estimator = {...}`` (fields of
     :class:`~adaptive_dd.identification.online.OnlineConfig`: ``tau_f``, ``split``,
     ``construction``, ``p0_payload``, ``p0_j2``, ``project``, ``align``), ``detector = {...}``
-    (fields of :class:`~adaptive_dd.identification.online.ChangeDetector`), or
-    ``detector = false`` for none.
+    (fields of :class:`~adaptive_dd.identification.online.ChangeDetector`; also accepted inside
+    ``estimator``, as on an N-joint arm), or ``detector = false`` for none.
 ``slotine_li``
     ``gamma`` (seven adaptation gains).
 ``ct_nominal``, ``pd``
@@ -104,8 +104,14 @@ def _sigma(spec: str, options: dict) -> np.ndarray:
 
 def _online(spec: str, options: dict) -> OnlineConfig:
     est = dict(options.get("estimator", {}))
-    _unknown(f"{spec}.estimator", est, ONLINE_KEYS)
     det = options.get("detector", {})
+    if "detector" in est:  # also accepted inside ``estimator``, as on an N-joint arm
+        if "detector" in options:
+            raise ParameterError(
+                f"controllers.{spec}: 'detector' given twice (at the top and in 'estimator'); keep one"
+            )
+        det = est.pop("detector")
+    _unknown(f"{spec}.estimator", est, ONLINE_KEYS)
     kw: dict[str, Any] = dict(est)
     if det is False:
         kw["detector"] = None
