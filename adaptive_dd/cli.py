@@ -667,7 +667,14 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
     if res.failed_rows == len(res.table):
         print("every row failed: no heat map drawn; fix the cause above and rerun", file=sys.stderr)
         return 1
-    if sweep.heatmap:
+    if sweep.heatmap and not res.heatmaps:
+        hm = sweep.heatmap
+        print(
+            f"no heat map: no grid point has a seed where both {hm['adaptive']} and {hm['floor']} finished "
+            f"segment {hm['segment']}",
+            file=sys.stderr,
+        )
+    elif sweep.heatmap:
         from adaptive_dd.sweep import ratio_medians
 
         hm = sweep.heatmap

@@ -259,6 +259,8 @@ class SweepResult:
         One row per grid point x controller x seed x segment.
     table_path : Path
     heatmaps : list of Path
+        Empty when no grid point has a ratio (every row failed, or no seed where both the
+        adaptive controller and the floor finished the heat map's segment).
     reused, ran : int
         Tasks read back from ``OUT/cells`` and tasks run now.
     failed_rows : int
@@ -363,11 +365,12 @@ def run_sweep(
     table = _assemble(sweep, cells, cells_dir, ext, lost)
     path = _write_atomic(table, out / f"results.{ext}")
     maps = []
-    if sweep.heatmap and not table["failed"].all():  # no empty heat map of a sweep that all failed
+    if sweep.heatmap and not table["failed"].all():
         from adaptive_dd.sweep_plot import plot_ratio_heatmaps
 
         ratios = ratio_medians(table, sweep.heatmap, [a for a, _ in sweep.axes])
-        maps = plot_ratio_heatmaps(ratios, sweep.heatmap, [a for a, _ in sweep.axes], out)
+        if np.isfinite(ratios["ratio"]).any():  # never an empty heat map
+            maps = plot_ratio_heatmaps(ratios, sweep.heatmap, [a for a, _ in sweep.axes], out)
     return SweepResult(table, path, maps, reused, len(todo), int(table["failed"].sum()))
 
 

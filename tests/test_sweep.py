@@ -287,6 +287,7 @@ def test_failing_task_is_recorded_and_the_sweep_completes(tmp_path, client):
     assert not good["failed"].any() and np.isfinite(good["rms_error"]).all()
     assert res.failed_rows == len(bad)
     assert ratio_medians(t, sw.heatmap, [a for a, _ in sw.axes])["n_seeds"].eq(0).all()
+    assert sw.heatmap and res.heatmaps == []  # no ratio anywhere: no empty heat map drawn
 
 
 def test_ratio_is_per_seed_then_median():
