@@ -123,7 +123,7 @@ def run_cell(
     rows = []
     for i, seed in enumerate(seed_indices):
         at = int(run.failed_at[i]) if run.failed[i] else -1
-        why = run.error or f"trial failed at t = {at * T:.3f} s: {run.failed_why.get(i, 'diverged')}"
+        why = run.error or f"trial diverged at t = {at * T:.3f} s: {run.failed_why.get(i, '')}"
         for j, (start, end, mass) in enumerate(scenario.segments()):
             bad = bool(np.isnan(per["rms_error"][i, j]))
             rows.append(

@@ -162,9 +162,10 @@ def _controllers(src: str, sw: dict, base: Scenario) -> tuple[str, ...]:
     for c in ctrls:
         if c not in known:
             kind = "the two-link arm" if two_link else f"this {base.n_joints}-joint arm"
+            if c not in {*CONTROLLERS, *SERIAL_CONTROLLERS}:
+                raise SweepError(f"{src}: key 'sweep.controllers': unknown controller {c!r}; known: {known}")
             raise SweepError(
-                f"{src}: key 'sweep.controllers': {c!r} is not a built-in controller for {kind}; "
-                f"known: {known}"
+                f"{src}: key 'sweep.controllers': controller {c!r} is not for {kind}; known for it: {known}"
             )
     if len(set(ctrls)) != len(ctrls):
         raise SweepError(f"{src}: key 'sweep.controllers' lists a controller twice: {ctrls}")

@@ -224,8 +224,15 @@ def test_a_diverging_trial_is_contained_and_a_raising_controller_fails_only_its_
     np.testing.assert_allclose(bad.acc.sum_e2[1], good.acc.sum_e2[1], rtol=1e-12)
     assert boom.failed.all() and "RuntimeError in command" in boom.error and "boom" in boom.error
     assert not good.failed.any()
-    m = serial_segment_metrics(res, bad)
-    assert np.isnan(m["rms_error"][0]).all() and np.isfinite(m["rms_error"][1]).all()
+    # the benchmark's one failure rule: left out of the segments that end after its failure
+    from adaptive_dd.benchmark.metrics import per_seed_segment_metrics
+    from adaptive_dd.closed_loop.types import run_constants
+
+    m = per_seed_segment_metrics(res, bad)
+    after = bad.failed_at[0] < run_constants(sc).seg_end
+    np.testing.assert_array_equal(np.isnan(m["rms_error"][0]), after)
+    assert after[-1] and np.isfinite(m["rms_error"][1]).all()
+    assert bad.failed_why[0].startswith(("tracking error", "runaway"))
 
 
 def test_laws_are_the_arms_inverse_dynamics_on_the_reference(rng):
@@ -300,7 +307,8 @@ def test_serial_metrics_from_hand_made_sums():
     np.testing.assert_allclose(m["saturation_fraction"][0], [2 / 4, 0.0])
     np.testing.assert_allclose(m["rms_torque"][0], 4.0 / np.sqrt(counts))
     np.testing.assert_allclose(m["rms_error_settled"][0], [3.0, 3.0])  # one settled sample each
-    assert np.isnan(m["rms_error"][1]).all() and "rms_error_joint4" not in m
+    # the failed trial's sums as they are: the caller blanks them (metrics.segment_failed)
+    assert np.isfinite(m["rms_error"][1]).all() and "rms_error_joint4" not in m
 
 
 @pytest.mark.parametrize("name", ["ur5_tool_swap", "panda_payload", "vertical3_payload"])

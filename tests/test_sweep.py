@@ -463,7 +463,7 @@ def test_a_cell_runs_on_a_urdf_arm_with_the_scenario_settings(tmp_path):
 
 def test_a_two_link_only_controller_is_refused_on_a_urdf_arm(tmp_path):
     text = SWEEP.replace('controllers = ["ct_oracle", "adaptive_ct"]', 'controllers = ["adaptive_ct_paper"]')
-    with pytest.raises(SweepError, match="'adaptive_ct_paper' is not a built-in controller for this 3-joint"):
+    with pytest.raises(SweepError, match="controller 'adaptive_ct_paper' is not for this 3-joint arm"):
         load_sweep(_write(tmp_path, text.replace("[grid]", "[grid]"), URDF_BASE))
 
 
