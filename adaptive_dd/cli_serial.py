@@ -7,6 +7,7 @@ when a scenario's arm is a :class:`~adaptive_dd.plant.serial_arm.SerialArm`).
 from __future__ import annotations
 
 import argparse
+import sys
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -334,12 +335,21 @@ def cmd_excite(args: argparse.Namespace) -> int:
     print(f"{'trajectory':<18} {'worst bound':>12}  {'worst base parameter':<{NAME_WIDTH}} {'median':>9}")
     for label, (worst, name, med) in rows.items():
         print(f"{label:<18} {100 * worst:11.3g}%  {_short(name):<{NAME_WIDTH}} {100 * med:8.3g}%")
-    ratio = rows["plain multi-sine"][0] / rows["designed"][0]
-    print(
-        f"the designed trajectory shrinks the worst bound {ratio:.1f}x (Cramér-Rao std of the segmented "
-        "output "
-        f"error on a {args.duration} s record tracking it, relative to each parameter's magnitude)"
-    )
+    bad = [label for label, (worst, _, _) in rows.items() if not np.isfinite(worst)]
+    if bad:  # said, not printed as a ratio of NaNs
+        print(
+            f"warning: the bound of the {' and '.join(bad)} record is not finite: the identification "
+            f"model's sensitivities diverge along it (a stiff friction model at T = 1 ms, or a record "
+            "that leaves the arm's range): the two cannot be compared",
+            file=sys.stderr,
+        )
+    else:
+        ratio = rows["plain multi-sine"][0] / rows["designed"][0]
+        print(
+            f"the designed trajectory shrinks the worst bound {ratio:.1f}x (Cramér-Rao std of the "
+            f"segmented output error on a {args.duration} s record tracking it, relative to each "
+            "parameter's magnitude)"
+        )
     text = reference_toml(best.reference(ramp=args.ramp), f"designed by adaptive-dd excite --arm {args.arm}")
     with atomic_write(out) as fh:
         fh.write(_replace_reference(Path(args.arm).read_text(), text))
