@@ -584,7 +584,10 @@ def _cmd_validate(args: argparse.Namespace) -> int:
 
     if isinstance(sc.arm, SerialArm):
         print(describe_serial_arm(sc.arm))
-    from adaptive_dd.benchmark.preflight import preflight, torque_peaks
+    from adaptive_dd.benchmark.preflight import preflight, resolved_settings, torque_peaks
+
+    for line in resolved_settings(sc):
+        print(line)
 
     peak, _, _ = torque_peaks(sc)
     limit = sc.arm.actuator.torque_limit

@@ -168,3 +168,15 @@ def test_adaptive_ct_takes_its_detector_table_in_either_place_on_every_arm(arm):
     assert top == inside and getattr(top.detector, key) == value
     with pytest.raises(ParameterError, match="'detector' given twice"):
         built({"detector": {key: value}, "estimator": {"detector": {key: value}}})
+
+
+def test_validate_says_the_boost_default_of_each_arm(capsys):
+    """adaptive_ct's boost_duration defaults differ on purpose (0.2 s two-link, 1 s N-joint):
+    validate prints the value the run will use, the default marked."""
+    assert main(["validate"]) == 0
+    out = capsys.readouterr().out
+    assert "controllers.adaptive_ct.boost_duration = 0.2 s   (default)" in out
+    assert "adaptive_ct_paper.boost" not in out
+    ur5 = str(resources.files("adaptive_dd.scenarios").joinpath("ur5_tool_swap.toml"))
+    assert main(["validate", ur5]) == 0
+    assert "controllers.adaptive_ct.boost_duration = 1.0 s   (default)" in capsys.readouterr().out

@@ -17,7 +17,14 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["controller_problems", "preflight", "reference_problems", "torque_peaks", "torque_problems"]
+__all__ = [
+    "controller_problems",
+    "preflight",
+    "reference_problems",
+    "resolved_settings",
+    "torque_peaks",
+    "torque_problems",
+]
 
 TOL = 1e-9
 """Relative tolerance on a limit (a reference that touches it is within it)."""
@@ -101,6 +108,28 @@ def controller_problems(scenario) -> list[str]:
             if not msg.startswith(("controller", "unknown controller")):
                 msg = f"controller {spec!r}: {type(exc).__name__}: {msg}"
             out.append(msg)
+    return out
+
+
+def resolved_settings(scenario) -> list[str]:
+    """``controllers.NAME.key = value`` of the settings whose default differs between the arms
+    (``adaptive_ct``'s boost), ``(default)`` marked: what the run will use, said before it runs."""
+    from adaptive_dd.benchmark.runner import scenario_controller
+
+    out = []
+    for spec in scenario.controllers:
+        try:
+            label, ctrl = scenario_controller(scenario, spec)
+        except Exception:  # reported by controller_problems
+            continue
+        if getattr(ctrl, "boost_bandwidth", None) is None:  # no boost (adaptive_ct_paper, the others)
+            continue
+        given = scenario.options(label) or scenario.options(spec)
+        for key, unit in (("boost_bandwidth", "rad/s"), ("boost_duration", "s")):
+            v = getattr(ctrl, key, None)
+            if v is not None:
+                mark = "" if key in given else "   (default)"
+                out.append(f"controllers.{label}.{key} = {v!r} {unit}{mark}")
     return out
 
 
