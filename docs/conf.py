@@ -1,0 +1,83 @@
+"""Sphinx configuration of the adaptive_dd documentation.
+
+Build (from the repository's root, with ``pip install -e ".[docs]"``)::
+
+    python -m sphinx -W --keep-going -b html docs docs/_build/html
+
+Generated at build time (and ignored by git): ``docs/api/`` (one page per public module,
+from each module's ``__all__``), ``docs/guide/scenario_keys.md`` (every scenario key, from
+the tables the scenario checks use) and ``docs/auto_examples/`` (the gallery, run by
+sphinx-gallery).
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+from pathlib import Path
+
+DOCS = Path(__file__).resolve().parent
+ROOT = DOCS.parent
+sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(DOCS / "_ext"))
+os.environ.setdefault("MPLBACKEND", "Agg")
+
+import adaptive_dd  # noqa: E402
+
+project = "adaptive_dd"
+author = "the adaptive_dd contributors"
+copyright = "2026, the adaptive_dd contributors"
+release = version = adaptive_dd.__version__
+
+extensions = [
+    "sphinx.ext.autodoc",
+    "sphinx.ext.autosummary",
+    "sphinx.ext.mathjax",
+    "numpydoc",
+    "myst_parser",
+    "sphinx_gallery.gen_gallery",
+    "apigen",  # docs/_ext/apigen.py: docs/api/*.rst from each module's __all__
+    "scenario_keys",  # docs/_ext/scenario_keys.py: docs/guide/scenario_keys.md from the checks' tables
+]
+
+source_suffix = {".rst": "restructuredtext", ".md": "markdown"}
+root_doc = "index"
+exclude_patterns = ["_build", "Thumbs.db", ".DS_Store", "auto_examples/*.ipynb", "auto_examples/*.py"]
+templates_path = ["_templates"]
+suppress_warnings = ["myst.header"]  # the older guide pages start at "##"
+
+myst_enable_extensions = ["dollarmath", "colon_fence"]
+myst_heading_anchors = 3
+
+autosummary_generate = True
+autosummary_imported_members = False
+autodoc_default_options = {"members": False}
+autodoc_typehints = "none"  # numpydoc's Parameters sections carry the types
+numpydoc_show_class_members = False
+numpydoc_class_members_toctree = False
+numpydoc_xref_param_type = False
+
+sphinx_gallery_conf = {
+    "examples_dirs": str(ROOT / "examples" / "gallery"),
+    "gallery_dirs": str(DOCS / "auto_examples"),
+    "filename_pattern": r"/plot_",
+    "within_subsection_order": "FileNameSortKey",
+    "download_all_examples": False,
+    "remove_config_comments": True,
+    "matplotlib_animations": False,
+    "reset_modules": ("matplotlib",),
+    "capture_repr": (),
+    "abort_on_example_error": True,
+}
+
+html_theme = "pydata_sphinx_theme"
+html_title = f"adaptive_dd {release}"
+html_theme_options = {
+    "navigation_depth": 2,
+    "show_toc_level": 2,
+    "secondary_sidebar_items": ["page-toc"],
+    "footer_start": ["copyright"],
+    "footer_end": ["sphinx-version"],
+}
+html_static_path: list[str] = []
+html_show_sourcelink = False
