@@ -96,8 +96,14 @@ def module_page(name: str) -> str:
         ("functions", "Functions"),
     ):
         if own[kind]:
-            lines += [f".. rubric:: {heading}", "", ".. autosummary::", "   :toctree: generated",
-                      "   :nosignatures:", ""]
+            lines += [
+                f".. rubric:: {heading}",
+                "",
+                ".. autosummary::",
+                "   :toctree: generated",
+                "   :nosignatures:",
+                "",
+            ]
             lines += [f"   {x}" for x in own[kind]] + [""]
     if own["data"]:
         documented = _attribute_docs(name)
@@ -108,7 +114,12 @@ def module_page(name: str) -> str:
             else:  # no docstring of its own: say what it is rather than show its type's docstring
                 lines += [f".. py:data:: {x}", f"   :type: {_describe(getattr(mod, x))}", ""]
     if reexported:
-        lines += [".. rubric:: Re-exported here", "", "Importable from this module, documented where they are defined:", ""]
+        lines += [
+            ".. rubric:: Re-exported here",
+            "",
+            "Importable from this module, documented where they are defined:",
+            "",
+        ]
         lines += [f"- ``{name}.{x}``: :py:obj:`{target}`" for x, target in reexported] + [""]
     return "\n".join(lines)
 

@@ -23,7 +23,8 @@ from sphinx.errors import ExtensionError
 MEANING = {
     "run.duration": "Length of every trial [s].",
     "run.sample_period": "Sample period T of the controllers, sensors and estimator [s].",
-    "run.seeds": "Trials per controller (seed indices 0 .. seeds-1; seeds share their noise across controllers).",
+    "run.seeds": "Trials per controller (seed indices 0 .. seeds-1; seeds"
+    " share their noise across controllers).",
     "run.seed": "Base seed of the random generator (each trial draws from it and its index).",
     "run.substeps": "RK4 substeps of the plant per sample (the controller holds its torque between samples).",
     "run.controllers": "Built-in names or import paths `package.module:Class` of your own classes.",
@@ -36,7 +37,8 @@ MEANING = {
     "payload.mass": "Payload mass carried from then on [kg].",
     "payload.radius": "Two-link arm: radius of the tip disk [m] (its inertia).",
     "payload.com": "URDF arm: payload centre of mass in the payload frame [m], 3 numbers.",
-    "payload.inertia": "URDF arm: payload inertia about its centre of mass, `[Ixx, Ixy, Iyy, Ixz, Iyz, Izz]` [kg m^2].",
+    "payload.inertia": "URDF arm: payload inertia about its centre of mass, `[Ixx,"
+    " Ixy, Iyy, Ixz, Iyz, Izz]` [kg m^2].",
     "noise.position_variance": "Per joint, variance of the measured position's noise [rad^2].",
     "noise.velocity_variance": "Per joint, variance of the measured velocity's noise [(rad/s)^2].",
     "noise.dropout": "Probability that a sample is lost (NaN): the law holds, the estimator skips it.",
@@ -80,16 +82,19 @@ MEANING = {
     "setting.sigma": "The fixed model's base parameters (seven, two-link arm).",
     "setting.gamma": "Adaptation gains of Slotine-Li.",
     "setting.max_mass": "Largest payload mass the N-joint Slotine-Li estimate may take [kg].",
-    "setting.com_radius": "Largest distance of the payload's centre of mass from the flange [m] (N-joint Slotine-Li).",
+    "setting.com_radius": "Largest distance of the payload's centre of mass from the"
+    " flange [m] (N-joint Slotine-Li).",
     "setting.boost_bandwidth": "Bandwidth of the feedback boost after a change alarm [rad/s].",
     "setting.boost_duration": "How long the boost lasts after an alarm [s].",
     "setting.estimator": "The online estimator's settings (a table; fields below).",
-    "setting.detector": "Two-link `adaptive_ct`: the change detector's settings (a table; fields below), or `false`.",
+    "setting.detector": "Two-link `adaptive_ct`: the change detector's settings (a"
+    " table; fields below), or `false`.",
 }
 
-TWO_LINK_SCENARIO = '[[payload]]\nat = 1.0\nmass = 1.0\n'
+TWO_LINK_SCENARIO = "[[payload]]\nat = 1.0\nmass = 1.0\n"
 URDF_SCENARIO = '[arm]\nrobot = "ur5"\n\n[[payload]]\nat = 1.0\nmass = 1.0\n\n[reference]\n' + "".join(
-    f"joint{j} = {{ offset = 0.0, amplitude = [0.1], frequency = [0.5], phase = [0.0] }}\n" for j in range(1, 7)
+    f"joint{j} = {{ offset = 0.0, amplitude = [0.1], frequency = [0.5], phase = [0.0] }}\n"
+    for j in range(1, 7)
 )
 
 
@@ -166,7 +171,9 @@ def page() -> str:
         "",
     ]
 
-    def table(rows: list[tuple[str, ...]], heads=("key", "default (two-link arm)", "default (URDF arm)", "meaning")):
+    def table(
+        rows: list[tuple[str, ...]], heads=("key", "default (two-link arm)", "default (URDF arm)", "meaning")
+    ):
         out = ["| " + " | ".join(heads) + " |", "|---" * len(heads) + "|"]
         for row in rows:
             out.append("| " + " | ".join(x.replace("|", "\\|") for x in row) + " |")
@@ -188,16 +195,28 @@ def page() -> str:
             key = f"{t}.{k}"
             used.add(key)
             req = "(required)" if t == "payload" and k in ("at", "mass") else ""
-            rows.append((f"`{k}`", _code(two.get(key, "")) or req, _code(urdf.get(key, "")) or req,
-                         MEANING.get(key, "")))
+            rows.append(
+                (
+                    f"`{k}`",
+                    _code(two.get(key, "")) or req,
+                    _code(urdf.get(key, "")) or req,
+                    MEANING.get(key, ""),
+                )
+            )
         lines += table(rows)
     lines += ["## `[reference]`", ""]
     used |= {"reference.ramp", "reference.jointN"}
-    lines += table([
-        ("`ramp`", _code(two.get("reference.ramp", "")), _code(repr(_ramp_default(scenario_base))),
-         MEANING["reference.ramp"]),
-        ("`jointN`", "the paper's two-sine reference", "(required)", MEANING["reference.jointN"]),
-    ])
+    lines += table(
+        [
+            (
+                "`ramp`",
+                _code(two.get("reference.ramp", "")),
+                _code(repr(_ramp_default(scenario_base))),
+                MEANING["reference.ramp"],
+            ),
+            ("`jointN`", "the paper's two-sine reference", "(required)", MEANING["reference.jointN"]),
+        ]
+    )
 
     lines += ["## `[arm]`", "", "Left out: the paper's SICE arm (Table 1). One of three forms:", ""]
     physical = arm_mod._PHYSICAL_KEYS
@@ -206,22 +225,36 @@ def page() -> str:
     rows = []
     for k in dict.fromkeys(physical + sigma_form + optional):
         used.add(f"arm.{k}")
-        form = ("physical (required)" if k in physical and k not in sigma_form else
-                "both forms (required)" if k in physical else
-                "sigma form (required)" if k in sigma_form else "optional")
+        form = (
+            "physical (required)"
+            if k in physical and k not in sigma_form
+            else "both forms (required)"
+            if k in physical
+            else "sigma form (required)"
+            if k in sigma_form
+            else "optional"
+        )
         rows.append((f"`{k}`", form, "", MEANING.get(f"arm.{k}", "")))
-    lines += ["**The paper's kind of two-link arm**, by physical parameters (eq. 10) or by its base",
-              "parameters sigma (eq. 9):", ""]
+    lines += [
+        "**The paper's kind of two-link arm**, by physical parameters (eq. 10) or by its base",
+        "parameters sigma (eq. 9):",
+        "",
+    ]
     lines += table([(a, b, d) for a, b, _, d in rows], heads=("key", "form", "meaning"))
     rows = []
     for k in serial_arm.URDF_ARM_KEYS:
         used.add(f"arm.{k}")
         note = "one of `urdf`, `robot` (required)" if k in ("urdf", "robot") else "optional"
         rows.append((f"`{k}`", note, "", MEANING.get(f"arm.{k}", "")))
-    lines += ["**Any serial arm from a URDF** (`urdf = \"file\"` or `robot = \"ur5\"`):", ""]
+    lines += ['**Any serial arm from a URDF** (`urdf = "file"` or `robot = "ur5"`):', ""]
     lines += table([(a, b, d) for a, b, _, d in rows], heads=("key", "form", "meaning"))
 
-    lines += ["## `[plant]`", "", "The simulated plant only (the controllers and estimators keep their model):", ""]
+    lines += [
+        "## `[plant]`",
+        "",
+        "The simulated plant only (the controllers and estimators keep their model):",
+        "",
+    ]
     rows = []
     for k in arm_mod._PLANT_KEYS:
         used.add(f"plant.{k}")
@@ -243,34 +276,55 @@ def page() -> str:
         serial = SERIAL_CONTROLLERS.get(name)
         serial_set = sorted(serial.SETTINGS) if serial is not None else None
         used |= {f"setting.{k}" for k in (*common, *two_set, *(serial_set or ()))}
-        rows.append((
-            f"`{name}`",
-            ", ".join(f"`{k}`" for k in two_set) or "none",
-            "two-link only" if serial_set is None else (", ".join(f"`{k}`" for k in serial_set) or "none"),
-        ))
+        rows.append(
+            (
+                f"`{name}`",
+                ", ".join(f"`{k}`" for k in two_set) or "none",
+                "two-link only"
+                if serial_set is None
+                else (", ".join(f"`{k}`" for k in serial_set) or "none"),
+            )
+        )
     for name, cls in SERIAL_CONTROLLERS.items():
         if name not in registry.CONTROLLERS:
             used |= {f"setting.{k}" for k in cls.SETTINGS}
             rows.append((f"`{name}`", "N-joint only", ", ".join(f"`{k}`" for k in sorted(cls.SETTINGS))))
     lines += table(rows, heads=("controller", "two-link arm", "URDF arm"))
     lines += [f"Every controller also takes {', '.join(f'`{k}`' for k in common)}.", ""]
-    lines += table([(f"`{k}`", MEANING.get(f"setting.{k}", "")) for k in sorted(
-        {k.removeprefix("setting.") for k in used if k.startswith("setting.")})], heads=("setting", "meaning"))
+    lines += table(
+        [
+            (f"`{k}`", MEANING.get(f"setting.{k}", ""))
+            for k in sorted({k.removeprefix("setting.") for k in used if k.startswith("setting.")})
+        ],
+        heads=("setting", "meaning"),
+    )
 
     for title, cls, mod in (
         ("Two-link `adaptive_ct`: `estimator = {...}`", OnlineConfig, "adaptive_dd.identification.online"),
         ("Two-link `adaptive_ct`: `detector = {...}`", ChangeDetector, "adaptive_dd.identification.online"),
-        ("URDF arm `adaptive_ct`: `estimator = {...}`", SerialOnlineConfig,
-         "adaptive_dd.identification.serial_online"),
-        ("URDF arm `adaptive_ct`: `estimator = { detector = {...} }`", SerialDetector,
-         "adaptive_dd.identification.serial_online"),
+        (
+            "URDF arm `adaptive_ct`: `estimator = {...}`",
+            SerialOnlineConfig,
+            "adaptive_dd.identification.serial_online",
+        ),
+        (
+            "URDF arm `adaptive_ct`: `estimator = { detector = {...} }`",
+            SerialDetector,
+            "adaptive_dd.identification.serial_online",
+        ),
     ):
-        fields = [(n, "see the next table" if n == "detector" and cls is SerialOnlineConfig else d)
-                  for n, d in _fields(cls)]
+        fields = [
+            (n, "see the next table" if n == "detector" and cls is SerialOnlineConfig else d)
+            for n, d in _fields(cls)
+        ]
         if cls is OnlineConfig:
             fields = [f for f in fields if f[0] in registry.ONLINE_KEYS]
-        lines += [f"### {title}", "",
-                  f"Fields of {{py:class}}`{mod}.{cls.__name__}` (their meaning: its docstring):", ""]
+        lines += [
+            f"### {title}",
+            "",
+            f"Fields of {{py:class}}`{mod}.{cls.__name__}` (their meaning: its docstring):",
+            "",
+        ]
         lines += table([(f"`{n}`", f"`{d}`") for n, d in fields], heads=("field", "default"))
     _check(used)
     return "\n".join(lines)
