@@ -56,10 +56,14 @@ def configure() -> str | None:
 
 
 # ------------------------------------------------------------ telling the user about compilation
-COMPILE_SECONDS = {"two-link": 60.0, "serial": 120.0}
-"""Measured one-time compilation of a benchmark's closed-loop kernels with a cold cache, on 2 cores
-(the shipped ``payload_swap`` and ``ur5_tool_swap`` scenarios, every built-in controller): a guide
-for the message and ``validate``'s estimate, not a promise."""
+COMPILE_SECONDS = {"two-link": 60.0, "serial": 190.0}
+"""One-time compilation of a benchmark's closed-loop kernels with a cold cache, on 2 cores: a guide
+for the message and ``validate``'s estimate, not a promise. Measured as the CPU time (user + sys,
+``/usr/bin/time -v``) of ``adaptive-dd benchmark`` with an empty ``NUMBA_CACHE_DIR``, every
+built-in controller, on a shared 2-core machine: 65 s for the default two-link scenario (10
+seeds, runs included) and 211 s for ``ur5_tool_swap.toml`` (2 seeds); their wall times under a
+load average of 8-11 were 4x longer. Compilation is mostly single-threaded, so its CPU time is
+its wall time on a machine that is not shared."""
 
 
 def _closed_loop_kernel(serial: bool):

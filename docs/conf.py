@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import os
 import sys
+import warnings
 from pathlib import Path
 
 DOCS = Path(__file__).resolve().parent
@@ -23,6 +24,10 @@ sys.path.insert(0, str(DOCS / "_ext"))
 os.environ.setdefault("MPLBACKEND", "Agg")
 
 import adaptive_dd  # noqa: E402
+
+# numpydoc reports a docstring section it does not know (and drops it) as a Python warning, which
+# Sphinx's -W does not see: make it stop the build instead.
+warnings.filterwarnings("error", message="Unknown section", category=UserWarning)
 
 project = "adaptive_dd"
 author = "the adaptive_dd contributors"
@@ -81,3 +86,15 @@ html_theme_options = {
 }
 html_static_path: list[str] = []
 html_show_sourcelink = False
+
+
+def _list_real_log(app, docname, source):
+    """Add ``real_log`` (identification from a real arm's log, issue 29) to the identification
+    guide's contents once the page exists; until then the page is left out rather than broken."""
+    if docname == "guide/identification" and (DOCS / "real_log.md").exists():
+        entry = "../identification_serial\n"
+        source[0] = source[0].replace(entry, entry + "../real_log\n", 1)
+
+
+def setup(app):
+    app.connect("source-read", _list_real_log)

@@ -13,7 +13,6 @@ from pathlib import Path
 
 import adaptive_dd
 from adaptive_dd import load_scenario, run_benchmark
-from adaptive_dd.benchmark.metrics import compute_metrics
 from adaptive_dd.plotting import plot_tracking_errors
 
 scenarios = Path(adaptive_dd.__file__).parent / "scenarios"
@@ -25,7 +24,6 @@ print(sc.estimate())
 # Every controller runs the same trials (seed i draws the same sensor noise for each), so
 # ``adaptive_ct`` is compared seed by seed with ``ct_oracle``, the same law with the true model.
 res = run_benchmark(sc, progress=False)
-metrics = compute_metrics(res)
 summary = res.summary()
 print(summary[["controller", "segment", "mass", "rms_error_mean", "ratio_mean"]].to_string(index=False))
 
