@@ -87,13 +87,27 @@ html_static_path: list[str] = []
 html_show_sourcelink = False
 
 
+REAL_LOG_TEXT = "The guide's pages on identification list the\ncommands for records of a real arm."
+
+
 def _list_real_log(app, docname, source):
-    """Add ``real_log`` (identification from a real arm's log, issue 29) to the identification
-    guide's contents once the page exists; until then the page is left out rather than broken."""
-    if docname == "guide/identification" and (DOCS / "real_log.md").exists():
+    """Link ``real_log`` (identification from a real arm's log, issue 29) from the identification
+    guide's contents and from Getting started once the page exists; until then it is left out
+    rather than broken."""
+    if not (DOCS / "real_log.md").exists():
+        return
+    if docname == "guide/identification":
         entry = "../identification_serial\n"
         source[0] = source[0].replace(entry, entry + "../real_log\n", 1)
+    elif docname == "getting_started":
+        source[0] = source[0].replace(REAL_LOG_TEXT, "Records of a real arm, step by step: {doc}`real_log`.")
+
+
+def _reread_on_real_log(app, env, added, changed, removed):
+    """Read the pages that link ``real_log`` again when it appears or goes (incremental builds)."""
+    return ["guide/identification", "getting_started"] if "real_log" in added | removed else []
 
 
 def setup(app):
     app.connect("source-read", _list_real_log)
+    app.connect("env-get-outdated", _reread_on_real_log)
