@@ -108,6 +108,18 @@ def _reread_on_real_log(app, env, added, changed, removed):
     return ["guide/identification", "getting_started"] if "real_log" in added | removed else []
 
 
+def _skip_borrowed_docs(app, what, name, obj, skip, options):
+    """Leave out class members whose only text is not theirs: a named tuple's "Alias for field
+    number N", or a builtin type's docstring shown for a member without one."""
+    if isinstance(obj, property) and not (obj.fget is not None and obj.fget.__doc__):
+        return True  # autodoc would show the docstring of what a base class holds under the name
+    doc = getattr(obj, "__doc__", None) or ""
+    if doc.startswith("Alias for field number") or any(doc == t.__doc__ for t in (bool, int, float, str)):
+        return True
+    return skip
+
+
 def setup(app):
+    app.connect("autodoc-skip-member", _skip_borrowed_docs)
     app.connect("source-read", _list_real_log)
     app.connect("env-get-outdated", _reread_on_real_log)
