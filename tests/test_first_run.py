@@ -83,3 +83,33 @@ def test_the_getting_started_scenario_is_valid(tmp_path):
     shutil.copy(ROOT / "adaptive_dd" / "robots" / "vertical3.urdf", tmp_path / "my_arm.urdf")
     sc = load_scenario(tmp_path / "my_arm.toml")
     assert sc.n_joints == 3 and sc.arm.payload_frame == "tool"
+
+
+def test_the_scenario_keys_page_lists_every_key_and_stops_on_drift(monkeypatch):
+    import sys
+
+    import pytest
+
+    pytest.importorskip("sphinx")
+    sys.path.insert(0, str(ROOT / "docs" / "_ext"))
+    try:
+        import scenario_keys
+    finally:
+        sys.path.remove(str(ROOT / "docs" / "_ext"))
+    from sphinx.errors import ExtensionError
+
+    from adaptive_dd.benchmark.scenario_base import KEYS
+
+    page = scenario_keys.page()
+    for table, keys in KEYS.items():
+        assert f"`[{table}]`" in page or f"`[[{table}]]`" in page or f"`[{table}.NAME]`" in page
+        for k in keys or ():
+            assert f"| `{k}` |" in page, f"{table}.{k}"
+    meaning = dict(scenario_keys.MEANING)
+    del meaning["noise.dropout"]  # a key of the checks without a meaning on the page
+    monkeypatch.setattr(scenario_keys, "MEANING", meaning)
+    with pytest.raises(ExtensionError, match=r"noise\.dropout"):
+        scenario_keys.page()
+    monkeypatch.setattr(scenario_keys, "MEANING", {**scenario_keys.MEANING, "run.gone": "a removed key"})
+    with pytest.raises(ExtensionError, match=r"run\.gone"):
+        scenario_keys.page()
