@@ -91,6 +91,32 @@ MEANING = {
     " table; fields below), or `false`.",
 }
 
+# Keys that arrive with branches not merged yet (issues 28 and 29): written here so the
+# page is complete the day they land; not reported as stale while the code lacks them.
+ARRIVING = {
+    "run.excite": "Seconds of designed excitation run on the plant before the task, the controllers' "
+    "model identified from it (URDF arms; 0: none).",
+    "plant.urdf": "URDF arms: the simulated robot when it is not the `[arm]` (other inertials, the "
+    "same joints and frames); the `[arm]` is then the controllers' model.",
+    "plant.viscous": "Per joint, the plant's own viscous friction [N m s/rad].",
+    "plant.coulomb": "Per joint, the plant's own Coulomb friction [N m].",
+    "plant.armature": "Per joint, the plant's own armature [kg m^2].",
+    "plant.uncertainty": "A plant drawn per seed around the `[arm]` (a table; keys below).",
+    "plant.uncertainty.mass": "Relative spread of each link's mass.",
+    "plant.uncertainty.com": "Spread of each link's centre of mass [m].",
+    "plant.uncertainty.inertia": "Relative spread of each link's inertia.",
+    "plant.uncertainty.viscous": "Relative spread of each joint's viscous friction.",
+    "plant.uncertainty.coulomb": "Relative spread of each joint's Coulomb friction.",
+    "plant.uncertainty.armature": "Relative spread of each joint's armature.",
+    "plant.uncertainty.distribution": "`uniform` or `normal`.",
+    "model.from": "The controllers' model: a URDF whose link inertials replace the `[arm]`'s.",
+    # issue 29 (identification from real logs) and issue 28 part 2/4 (derived settings)
+    "arm.repair_inertia": "`true`: repair chain links whose URDF inertia is not a rigid body's "
+    "(each repair is reported).",
+    "arm.payload_capacity": "Rated payload [kg]; sizes the estimator's re-opening on a change alarm "
+    "(default: the detector's generic size).",
+}
+
 TWO_LINK_SCENARIO = "[[payload]]\nat = 1.0\nmass = 1.0\n"
 URDF_SCENARIO = '[arm]\nrobot = "ur5"\n\n[[payload]]\nat = 1.0\nmass = 1.0\n\n[reference]\n' + "".join(
     f"joint{j} = {{ offset = 0.0, amplitude = [0.1], frequency = [0.5], phase = [0.0] }}\n"
@@ -136,9 +162,22 @@ def _ramp_default(scenario_base) -> float:
     return {f.name: f.default for f in dataclasses.fields(scenario_base.Reference)}["ramp"]
 
 
+def _meaning(key: str) -> str:
+    return MEANING.get(key) or ARRIVING.get(key, "")
+
+
+def _uncertainty_module():
+    """:mod:`adaptive_dd.plant.uncertainty` (the ``[plant]`` truth and ``[model]`` tables), if present."""
+    try:
+        from adaptive_dd.plant import uncertainty
+    except ImportError:
+        return None
+    return uncertainty
+
+
 def _check(used: set[str]) -> None:
-    missing = sorted(used - set(MEANING))
-    stale = sorted(set(MEANING) - used)
+    missing = sorted(used - set(MEANING) - set(ARRIVING))
+    stale = sorted(set(MEANING) - used - set(ARRIVING))
     if missing or stale:
         raise ExtensionError(
             "docs/_ext/scenario_keys.py is out of step with the scenario checks: "
@@ -181,6 +220,8 @@ def page() -> str:
 
     tables = scenario_base.KEYS
     known = {"run", "control", "reference", "payload", "noise", "controllers", "arm", "plant"}
+    if _uncertainty_module() is not None:
+        known.add("model")
     if set(tables) != known:
         raise ExtensionError(
             f"docs/_ext/scenario_keys.py: the scenario tables changed ({sorted(set(tables) ^ known)}): "
@@ -200,7 +241,7 @@ def page() -> str:
                     f"`{k}`",
                     _code(two.get(key, "")) or req,
                     _code(urdf.get(key, "")) or req,
-                    MEANING.get(key, ""),
+                    _meaning(key),
                 )
             )
         lines += table(rows)
@@ -234,7 +275,7 @@ def page() -> str:
             if k in sigma_form
             else "optional"
         )
-        rows.append((f"`{k}`", form, "", MEANING.get(f"arm.{k}", "")))
+        rows.append((f"`{k}`", form, "", _meaning(f"arm.{k}")))
     lines += [
         "**The paper's kind of two-link arm**, by physical parameters (eq. 10) or by its base",
         "parameters sigma (eq. 9):",
@@ -245,7 +286,7 @@ def page() -> str:
     for k in serial_arm.URDF_ARM_KEYS:
         used.add(f"arm.{k}")
         note = "one of `urdf`, `robot` (required)" if k in ("urdf", "robot") else "optional"
-        rows.append((f"`{k}`", note, "", MEANING.get(f"arm.{k}", "")))
+        rows.append((f"`{k}`", note, "", _meaning(f"arm.{k}")))
     lines += ['**Any serial arm from a URDF** (`urdf = "file"` or `robot = "ur5"`):', ""]
     lines += table([(a, b, d) for a, b, _, d in rows], heads=("key", "form", "meaning"))
 
@@ -256,10 +297,25 @@ def page() -> str:
         "",
     ]
     rows = []
-    for k in arm_mod._PLANT_KEYS:
+    uncertainty = _uncertainty_module()
+    plant_keys = arm_mod._PLANT_KEYS + (uncertainty.PLANT_TRUTH_KEYS if uncertainty else ())
+    for k in plant_keys:
         used.add(f"plant.{k}")
-        rows.append((f"`{k}`", MEANING.get(f"plant.{k}", "")))
+        rows.append((f"`{k}`", _meaning(f"plant.{k}")))
     lines += table(rows, heads=("key", "meaning"))
+    if uncertainty is not None:
+        lines += ["### `[plant.uncertainty]`", ""]
+        rows = []
+        for k in uncertainty.UNCERTAINTY_KEYS:
+            used.add(f"plant.uncertainty.{k}")
+            rows.append((f"`{k}`", _meaning(f"plant.uncertainty.{k}")))
+        lines += table(rows, heads=("key", "meaning"))
+        lines += ["## `[model]`", "", "URDF arms: the controllers' model when it is not the `[arm]`:", ""]
+        rows = []
+        for k in uncertainty.MODEL_KEYS:
+            used.add(f"model.{k}")
+            rows.append((f"`{k}`", _meaning(f"model.{k}")))
+        lines += table(rows, heads=("key", "meaning"))
 
     lines += [
         "## `[controllers.NAME]`",
@@ -293,7 +349,7 @@ def page() -> str:
     lines += [f"Every controller also takes {', '.join(f'`{k}`' for k in common)}.", ""]
     lines += table(
         [
-            (f"`{k}`", MEANING.get(f"setting.{k}", ""))
+            (f"`{k}`", _meaning(f"setting.{k}"))
             for k in sorted({k.removeprefix("setting.") for k in used if k.startswith("setting.")})
         ],
         heads=("setting", "meaning"),
