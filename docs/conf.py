@@ -104,8 +104,28 @@ def _list_real_log(app, docname, source):
 
 
 def _reread_on_real_log(app, env, added, changed, removed):
-    """Read the pages that link ``real_log`` again when it appears or goes (incremental builds)."""
-    return ["guide/identification", "getting_started"] if "real_log" in added | removed else []
+    """Read the pages that link ``real_log`` or the other pages again when a page appears or goes
+    (incremental builds)."""
+    if not any("/" not in d for d in added | removed):
+        return []
+    return ["guide/identification", "getting_started", "guide/index"]
+
+
+LISTED = {"index", "getting_started", "results", "limits", "changelog", "real_log"}
+
+
+def _other_pages() -> list[str]:
+    """Top-level pages of docs/ that no contents list names (a page another branch adds): the
+    user guide lists them under its own, so a new page is never left out of the site."""
+    guide = ("index.md", "estimators.md", "identification.md")
+    text = "".join((DOCS / "guide" / f).read_text() for f in guide)
+    return sorted(p.stem for p in DOCS.glob("*.md") if p.stem not in LISTED and f"../{p.stem}\n" not in text)
+
+
+def _list_other_pages(app, docname, source):
+    if docname == "guide/index" and _other_pages():
+        extra = "".join(f"../{name}\n" for name in _other_pages())
+        source[0] = source[0].replace("library\n```", "library\n" + extra + "```", 1)
 
 
 def _skip_borrowed_docs(app, what, name, obj, skip, options):
@@ -122,4 +142,5 @@ def _skip_borrowed_docs(app, what, name, obj, skip, options):
 def setup(app):
     app.connect("autodoc-skip-member", _skip_borrowed_docs)
     app.connect("source-read", _list_real_log)
+    app.connect("source-read", _list_other_pages)
     app.connect("env-get-outdated", _reread_on_real_log)
