@@ -508,13 +508,15 @@ def _cmd_benchmark(args: argparse.Namespace) -> int:
 
 
 def _benchmark(args: argparse.Namespace, sc, outputs) -> list[Path]:
+    from adaptive_dd._numba_cache import announce_compilation
     from adaptive_dd.benchmark.metrics import compute_metrics, release_error_norm
     from adaptive_dd.benchmark.report import format_report, write_csv, write_json
     from adaptive_dd.benchmark.runner import run_benchmark
     from adaptive_dd.plotting import plot_benchmark_estimates, plot_tracking_errors
 
-    res = run_benchmark(sc, progress=not args.no_progress, on_run=release_error_norm)
-    metrics = compute_metrics(res)
+    with announce_compilation(sc.arm):  # a cold cache compiles first: say so, and for how long
+        res = run_benchmark(sc, progress=not args.no_progress, on_run=release_error_norm)
+        metrics = compute_metrics(res)
     print(format_report(metrics, res))
     out = Path(args.out)
     write_csv(metrics, outputs.path("metrics.csv"))

@@ -188,11 +188,15 @@ class Scenario:
         return [b - a for a, b in itertools.pairwise(edges)]
 
     def estimate(self) -> RunEstimate:
-        """Memory and time estimate of this run (:func:`run_estimate`)."""
+        """Memory and time estimate of this run (:func:`run_estimate`), one-time compilation included
+        when numba's cache is cold."""
+        from adaptive_dd._numba_cache import compile_estimate
+
         serial = isinstance(self.arm, SerialArm)
         return run_estimate(
-            self.n_samples, self.seeds, len(self.controllers), self.n_joints if serial else None
-        )
+            self.n_samples, self.seeds, len(self.controllers), self.n_joints if serial else None,
+            compile_seconds=compile_estimate(self.arm),
+        )  # fmt: skip
 
     def options(self, name: str) -> dict[str, Any]:
         """Settings of controller ``name`` from its ``[controllers.NAME]`` table (plain values)."""

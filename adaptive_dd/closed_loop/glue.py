@@ -260,7 +260,7 @@ def _sigma_of(B, cols, count, pi, out):  # pragma: no cover - compiled
 def closed_loop_block(
     i0, i1, k0, k1, ch, rc, io, pl, ts, acc, rec, alarms, noise, drop, cfg, ls, pi_true, B, ec, es, estimates,
 ):  # pragma: no cover - compiled  # fmt: skip
-    """Samples ``k0 .. k1 - 1`` of trials ``i0 .. i1 - 1``, state updated in place.
+    """Samples ``k0`` to ``k1 - 1`` of trials ``i0`` to ``i1 - 1``, state updated in place.
 
     ``noise (S, k1 - k0, 2 n)`` standard normal; ``drop (S, k1 - k0)`` lost measurements
     (or ``(S, 0)``: none); ``cfg, ls`` the law; ``pi_true (G, 13 n)`` the true model per
