@@ -534,6 +534,11 @@ def _benchmark(args: argparse.Namespace, sc, outputs) -> list[Path]:
     frame = res.to_frame()
     frame.to_csv(outputs.path("per_seed.csv"), index=False)
     written.append(out / "per_seed.csv")
+    if res.plant is not None:  # the plant is not the model: each seed's drawn plant
+        from adaptive_dd.benchmark.results import plant_frame
+
+        plant_frame(res).to_csv(outputs.path("plant.csv"), index=False)
+        written.append(out / "plant.csv")
     return written
 
 

@@ -74,6 +74,7 @@ from adaptive_dd.errors import ScenarioError
 from adaptive_dd.plant.arm import Arm, arm_from_tables
 from adaptive_dd.plant.parameters import PAYLOAD_RADIUS
 from adaptive_dd.plant.serial_arm import SerialArm
+from adaptive_dd.plant.uncertainty import PLANT_TRUTH_KEYS, PlantSpec, parse_model, parse_plant
 
 __all__ = [
     "LIMITS",
@@ -142,6 +143,9 @@ class Scenario:
     arm: Arm | SerialArm = field(default_factory=Arm.sice)
     swap_com: tuple = ()
     swap_inertia: tuple = ()
+    plant: PlantSpec | None = None
+    """What the simulated robot is when it is not ``arm`` (:mod:`adaptive_dd.plant.uncertainty`):
+    ``arm`` is then the model the controllers are given. None: the plant is ``arm`` exactly."""
 
     def __post_init__(self) -> None:
         errors = scenario_errors({f.name: getattr(self, f.name) for f in fields(self)})
@@ -246,13 +250,15 @@ def load_scenario(path: str | Path | None = None) -> Scenario:
 
 def parse_scenario(data: dict, src: str = "<memory>", name: str = "scenario") -> Scenario:
     """Check a scenario given as a dict (the parsed TOML); all problems are raised at once."""
-    arm, errors = None, []
+    arm, errors, plant = None, [], None
+    table = data if isinstance(data, dict) else {}
+    plant_table = table.get("plant")
+    law_table = plant_table
+    if isinstance(plant_table, dict):
+        law_table = {k: v for k, v in plant_table.items() if k not in PLANT_TRUTH_KEYS}
     try:
-        arm = arm_from_tables(
-            data.get("arm") if isinstance(data, dict) else None,
-            data.get("plant") if isinstance(data, dict) else None,
-            src,
-        )
+        arm = arm_from_tables(table.get("arm"), law_table, src)
+        arm, plant = _model_and_plant(src, arm, plant_table, table.get("model"))
     except ScenarioError as exc:
         errors.append(str(exc).removeprefix(f"{src}: "))
     values, more = scenario_fields(
@@ -264,6 +270,7 @@ def parse_scenario(data: dict, src: str = "<memory>", name: str = "scenario") ->
     values.update(name=name, source=src)
     if arm is not None:
         values["arm"] = arm
+        values["plant"] = plant
         if "payload.radius" in values.get("defaulted", ()):
             values["payload_radius"] = arm.payload_radius
     errors += [e for e in scenario_errors(values) if e.split(":")[0] not in _bad_keys(errors)]
@@ -272,6 +279,23 @@ def parse_scenario(data: dict, src: str = "<memory>", name: str = "scenario") ->
     if errors:
         raise _scenario_error(src, errors)
     return Scenario(**values)
+
+
+def _model_and_plant(src: str, arm, plant_table, model_table) -> tuple[Any, PlantSpec | None]:
+    """The controllers' model (``[model]``) and the plant (``[plant]``'s truth keys) around ``arm``."""
+    if not isinstance(arm, SerialArm):
+        given = sorted(k for k in (plant_table or {}) if k in PLANT_TRUTH_KEYS)
+        given = [f"plant.{k}" for k in given] + (["[model]"] if model_table is not None else [])
+        if given:
+            raise ScenarioError(
+                f"{src}: {', '.join(given)}: a plant apart from the model is not supported on the two-link "
+                "arm's closed-form path; give the arm as a URDF with `general = true` in [arm] (the paper's "
+                'arm: `robot = "sice_arm"`, `general = true`) to run it on the N-joint path, where it is '
+                "supported"
+            )
+        return arm, None
+    model = parse_model(src, model_table, arm)
+    return model, parse_plant(src, plant_table, arm, model_from=model is not arm)
 
 
 def _numbers(x: Any, key: str):

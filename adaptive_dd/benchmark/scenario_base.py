@@ -49,7 +49,8 @@ KEYS = {
     "noise": {"position_variance", "velocity_variance", "dropout"},
     "controllers": None,  # one sub-table per controller, free keys
     "arm": None,  # checked by adaptive_dd.plant.arm.arm_from_tables
-    "plant": None,
+    "plant": None,  # adaptive_dd.plant.arm.arm_from_tables and adaptive_dd.plant.uncertainty.parse_plant
+    "model": None,  # adaptive_dd.plant.uncertainty.parse_model
 }
 
 # Kept per trial and sample by the runner: the error norm as float32 (metrics stream; full

@@ -44,7 +44,15 @@ from adaptive_dd.closed_loop.types import (
 )
 from adaptive_dd.controllers.base import declared
 
-__all__ = ["CHUNK", "MAX_ALARMS", "make_controllers", "run_serial", "true_parameters"]
+__all__ = [
+    "CHUNK",
+    "MAX_ALARMS",
+    "make_controllers",
+    "plant_record",
+    "run_serial",
+    "true_models",
+    "true_parameters",
+]
 
 
 def make_controllers(scenario) -> dict:
@@ -110,10 +118,12 @@ def run_serial(
 
     ctrls = make_controllers(scenario) if controllers is None else controllers
     idx = tuple(range(scenario.seeds)) if seed_indices is None else tuple(int(i) for i in seed_indices)
-    rc, io, pl = run_constants(scenario), io_of(scenario), plant_of(scenario)
+    rc, io, pl = run_constants(scenario), io_of(scenario), plant_of(scenario, idx)
     _, sigma_true, mass = true_parameters(scenario)
     t = np.arange(scenario.n_samples) * rc.T
     res = BenchmarkResult(scenario, t, rc.q_d, sigma_true, mass, seed_indices=idx)
+    if scenario.plant is not None:
+        res.plant = plant_record(scenario, idx)
     for name, ctrl in ctrls.items():
         compiled = isinstance(ctrl, SerialLaw) and engine != "python"
         if engine == "compiled" and not compiled:
@@ -130,7 +140,7 @@ def _records(
     """``(run, ts, acc, rec)``: an empty run of S trials over the arrays its paths fill in place
     (trial state at the reference's start, streamed sums, the recording of the first ``keep``)."""
     N, n = rc.q_d.shape
-    G, p = pl.pi_seg.shape[0], scenario.arm.base.B.shape[0]
+    G, p = pl.pi_seg.shape[1], scenario.arm.base.B.shape[0]
     K = min(keep, S)
     q = np.broadcast_to(rc.q_d[0], (S, n)).copy()
     qd = np.broadcast_to(rc.qd_d[0], (S, n)).copy()
@@ -150,11 +160,33 @@ def _records(
     return run, ts, acc, rec
 
 
-def _true_pi(pl: Plant) -> np.ndarray:
-    """``(G, 13 n)``: the true model of every segment (links with payload, the arm's friction)."""
-    G = pl.pi_seg.shape[0]
-    fr = np.concatenate((pl.fv, pl.fc, pl.armature))
-    return np.ascontiguousarray(np.hstack((pl.pi_seg, np.broadcast_to(fr, (G, fr.size)))))
+def true_models(pl: Plant) -> np.ndarray:
+    """``(S, G, 13 n)``: trial i's true model in every segment (its plant's links with the payload,
+    its plant's friction and armature): what the oracles are given, and only they."""
+    S, G, _ = pl.pi_seg.shape
+    fr = np.concatenate((pl.fv, pl.fc, pl.armature), axis=1)
+    return np.ascontiguousarray(
+        np.concatenate((pl.pi_seg, np.broadcast_to(fr[:, None, :], (S, G, fr.shape[1]))), 2)
+    )
+
+
+def plant_record(scenario, idx) -> dict:
+    """The plants the trials met (JSON-ready): the nominal plant, the draw's levels and, per seed
+    index, the drawn parameters (:meth:`~adaptive_dd.plant.uncertainty.PlantDraw.to_dict`)."""
+    import dataclasses
+
+    from adaptive_dd.plant.uncertainty import plant_draws
+
+    spec = scenario.plant
+    unc = None if spec.uncertainty is None else dataclasses.asdict(spec.uncertainty)
+    return {
+        "urdf": spec.urdf,
+        "model_urdf": str(scenario.arm.urdf),
+        "uncertainty": unc,
+        "seed_rule": "numpy.random.default_rng([scenario.seed, seed_index, 2])",
+        "nominal": spec.nominal().to_dict(),
+        "seeds": {int(i): d.to_dict() for i, d in zip(idx, plant_draws(scenario, idx), strict=True)},
+    }
 
 
 # ------------------------------------------------------------------------ the two paths
@@ -163,7 +195,7 @@ def _run_compiled(name, ctrl: SerialLaw, scenario, idx, rc, io, pl, keep, bar) -
     form = ctrl.compiled_form(S, rc.T)
     run, ts, acc, rec = _records(name, ctrl, scenario, rc, pl, S, keep, form.estimates, "compiled")
     alarms = Alarms(np.zeros((S, MAX_ALARMS)), np.zeros(S, dtype=np.int64))
-    pi_true, B = _true_pi(pl), np.ascontiguousarray(scenario.arm.base.B)
+    pi_true, B = true_models(pl), np.ascontiguousarray(scenario.arm.base.B)
     for k0, k1, noise, drop in NoiseBlocks(scenario, idx, 2 * n).blocks(N):
         args = (
             k0, k1, ctrl.ch, rc, io, pl, ts, acc, rec, alarms, noise, drop, form.cfg, form.state, pi_true, B,
@@ -198,13 +230,15 @@ def _in_threads(kernel, S: int, args: tuple) -> None:
 def _run_python(name, ctrl, scenario, idx, rc, io, pl, keep, bar) -> ControllerRun:
     """One controller's trials on the Python path
     (:func:`~adaptive_dd.closed_loop.python_path.run_python_batch`)."""
-    sig_seg = scenario.segment_sigmas()
+    pi_true = true_models(pl)
+    sig_true = pi_true @ scenario.arm.base.B.T  # (S, G, p)
 
     def records(estimates: bool):
         run, ts, acc, rec = _records(name, ctrl, scenario, rc, pl, len(idx), keep, estimates, "python")
         glue = PythonGlue(
             measure=partial(measure_batch, io, ts),
-            sigma_true=lambda k: sig_seg[segment_of(rc, k)],
+            sigma_true=lambda k: sig_true[:, segment_of(rc, k)],
+            pi_true=lambda k: pi_true[:, segment_of(rc, k)],
             apply=partial(apply_batch, scenario.arm.chain, rc, io, pl, ts, acc, rec),
             record_estimate=partial(sigma_batch, rc, rec),
         )
