@@ -516,6 +516,8 @@ def _benchmark(args: argparse.Namespace, sc, outputs) -> list[Path]:
     res = run_benchmark(sc, progress=not args.no_progress, on_run=release_error_norm)
     metrics = compute_metrics(res)
     print(format_report(metrics, res))
+    if "excitation_report" in res.cache:  # [run] excite: what the identification found
+        print(res.cache["excitation_report"].summary())
     out = Path(args.out)
     write_csv(metrics, outputs.path("metrics.csv"))
     write_json(metrics, outputs.extra(args.json) if args.json else outputs.path("metrics.json"))

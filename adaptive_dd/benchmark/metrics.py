@@ -310,6 +310,8 @@ def compute_metrics(res: BenchmarkResult) -> dict:
     }
     if res.plant is not None:  # the plant is not the model: what each seed's plant was
         result["plant"] = res.plant
+    if res.excitation is not None:  # [run] excite: the identification before the task
+        result["excitation"] = res.excitation
     return result
 
 

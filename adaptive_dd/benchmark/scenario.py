@@ -9,6 +9,8 @@ Every key is optional; the value after ``=`` below is the default that is used
     seeds = 10                 # Monte-Carlo trials per controller, 1 .. 10000
     seed = 0                   # base seed, 0 <= seed < 2**63
     substeps = 2               # RK4 steps per sample, 1 .. 100
+    excite = 0.0               # s of designed excitation before the task, its identification
+                               # the controllers' model (N-joint arms; 0: none; <= 3600)
     controllers = ["pd", "ct_nominal", "ct_oracle", "adaptive_ct_paper", "adaptive_ct",
                    "slotine_li", "slotine_li_oracle"]
                                # names, or import paths "package.module:Class"
@@ -33,6 +35,16 @@ Every key is optional; the value after ``=`` below is the default that is used
     at = 5.0                   # s, required; every segment holds at least one sample
     mass = 3.0                 # kg, required, 0 .. 50
     radius = 0.05              # m, 0 .. 0.5, the same for every disk
+
+    [plant]                    # N-joint arms: the simulated robot when it is not the [arm]
+    urdf = "FILE"              # other inertials, the same joints and frames (and friction law keys)
+    viscous = [...]            # per joint, the plant's only; also coulomb, armature
+    [plant.uncertainty]        # a plant drawn per seed (adaptive_dd.plant.uncertainty)
+    mass = 0.1                 # relative; com [m]; inertia, viscous, coulomb, armature relative
+    distribution = "uniform"   # or "normal"
+
+    [model]
+    from = "FILE.urdf"         # the controllers' model: these link inertials (N-joint arms)
 
     [noise]                    # Tables 2 and 4 of the paper
     position_variance = [1e-8, 1e-7]   # rad^2, each in [0, 1]
@@ -110,6 +122,7 @@ _FIELD_KEY = {
     "dropout": "noise.dropout",
     "controller_options": "controllers",
     "source": "source",
+    "excite": "run.excite",
 }
 
 
@@ -143,6 +156,9 @@ class Scenario:
     arm: Arm | SerialArm = field(default_factory=Arm.sice)
     swap_com: tuple = ()
     swap_inertia: tuple = ()
+    excite: float = 0.0
+    """[s] of the designed excitation run on the plant before the task, the controllers' model
+    identified from it (:mod:`adaptive_dd.closed_loop.excitation_phase`); 0: none."""
     plant: PlantSpec | None = None
     """What the simulated robot is when it is not ``arm`` (:mod:`adaptive_dd.plant.uncertainty`):
     ``arm`` is then the model the controllers are given. None: the plant is ``arm`` exactly."""
@@ -371,7 +387,7 @@ def format_scenario(sc: Scenario) -> str:
     lines = [f"# {sc.source}: valid; {sc.estimate()}"]
     order = ("duration", "sample_period", "seeds", "seed", "substeps", "controllers", "bandwidth")
     order += ("damping", "swap_times", "swap_masses", "payload_radius", "position_variance")
-    for name in (*order, "velocity_variance", "dropout"):
+    for name in (*order, "velocity_variance", "dropout", "excite"):
         key = _FIELD_KEY[name]
         mark = "   (default)" if key in sc.defaulted else ""
         lines.append(f"{key} = {_show(getattr(sc, name))}{mark}")

@@ -38,11 +38,12 @@ LIMITS = {
     "large_seconds": 60.0,  # the CLI prints the estimate above this
     "max_ramp": 3600.0,  # s
     "max_setting": 1e6,  # |any number| in a built-in controller's [controllers.NAME] table
+    "max_excite": 3600.0,  # s, [run] excite
 }
 """Documented bounds of the scenario checks (see the module docstring)."""
 
 KEYS = {
-    "run": {"duration", "sample_period", "seeds", "seed", "substeps", "controllers"},
+    "run": {"duration", "sample_period", "seeds", "seed", "substeps", "controllers", "excite"},
     "control": {"bandwidth", "damping"},
     "reference": None,  # ramp and one entry per joint, checked against the arm
     "payload": {"at", "mass", "radius", "com", "inertia"},

@@ -116,8 +116,20 @@ def run_serial(
     """
     from adaptive_dd.errors import ParameterError
 
-    ctrls = make_controllers(scenario) if controllers is None else controllers
     idx = tuple(range(scenario.seeds)) if seed_indices is None else tuple(int(i) for i in seed_indices)
+    if scenario.excite > 0:  # identification first, then each seed's identified model
+        if controllers is not None:
+            raise ParameterError(
+                "run.excite: the controllers are built per seed from the identified model; "
+                "give no controller objects (or set [run] excite = 0)"
+            )
+        from adaptive_dd.closed_loop.excitation_phase import run_with_excitation
+
+        res = run_with_excitation(scenario, idx, keep_trajectories, engine)
+        if bar is not None:
+            bar.update(scenario.n_samples * len(res.runs))
+        return res
+    ctrls = make_controllers(scenario) if controllers is None else controllers
     rc, io, pl = run_constants(scenario), io_of(scenario), plant_of(scenario, idx)
     _, sigma_true, mass = true_parameters(scenario)
     t = np.arange(scenario.n_samples) * rc.T
