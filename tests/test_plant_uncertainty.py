@@ -378,3 +378,22 @@ def test_the_drawn_plants_are_in_the_results():
     assert row["mass"] == pytest.approx(want[0]) and row["nominal_mass"] == pytest.approx(sc.arm.pi_links[10])
     assert math.isclose(row["coulomb"], draws[1].coulomb[1])
     assert PlantSpec is not None  # the public name
+
+
+def test_run_excite_is_checked():
+    with pytest.raises(
+        ScenarioError, match=r"x\.toml: run\.excite: 5\.0 s: the excitation phase needs an N-joint"
+    ):
+        parse_scenario({"run": {"excite": 5.0}}, "x.toml")
+    data = _data()
+    data["run"]["excite"] = -1.0
+    with pytest.raises(ScenarioError, match=r"run\.excite"):
+        parse_scenario(data, "u.toml")
+    data["run"]["excite"] = "20 s"
+    with pytest.raises(ScenarioError, match=r"run\.excite"):
+        parse_scenario(data, "u.toml")
+    data["run"]["excite"] = 20.0
+    sc = parse_scenario(data, "u.toml")
+    assert sc.excite == 20.0
+    with pytest.raises(ValueError, match="built per seed from the identified model"):
+        run_serial(sc, {"ct_nominal": make_serial_controller("ct_nominal", sc.arm)})

@@ -32,6 +32,7 @@ from adaptive_dd.errors import ScenarioError
 
 __all__ = [
     "EXCITATION_CONTROLLER",
+    "START_ATTEMPTS",
     "TAU_F",
     "ExcitationReport",
     "excitation_reference",
@@ -114,15 +115,37 @@ class ExcitationReport:
         )
 
 
+START_ATTEMPTS = 5
+"""Random starts tried by :func:`excitation_reference` (the optimum of one may graze a limit)."""
+
+
 def excitation_reference(scenario):
-    """The designed excitation of the scenario's model as a reference (1 s ramp)."""
+    """The designed excitation of the scenario's model (``adaptive-dd excite``'s defaults) as a
+    reference with a 1 s ramp: the first of :data:`START_ATTEMPTS` random starts (generators
+    ``(seed, 4, attempt)``) whose optimum keeps within the limits.
+
+    Raises
+    ------
+    ScenarioError
+        No start gave a trajectory within the arm's limits (naming ``run.excite``).
+    """
+    from adaptive_dd.errors import ParameterError
     from adaptive_dd.identification.excitation import ExcitationLimits, design_excitation
 
     arm = scenario.arm
-    best, _ = design_excitation(
-        arm, ExcitationLimits.of_arm(arm), rng=np.random.default_rng([scenario.seed, 4])
+    last = None
+    for attempt in range(START_ATTEMPTS):
+        rng = np.random.default_rng([int(scenario.seed), 4, attempt])
+        try:
+            best, _ = design_excitation(arm, ExcitationLimits.of_arm(arm), rng=rng)
+        except ParameterError as exc:
+            last = exc
+            continue
+        return best.reference(ramp=1.0)
+    raise ScenarioError(
+        f"{scenario.source}: run.excite: no designed excitation within the arm's limits after "
+        f"{START_ATTEMPTS} starts ({last})"
     )
-    return best.reference(ramp=1.0)
 
 
 def _excitation_scenario(scenario, reference):
