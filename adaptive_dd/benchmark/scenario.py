@@ -402,12 +402,29 @@ def format_scenario(sc: Scenario) -> str:
         )
     for n, _ in sc.controller_options:
         lines.append(f"controllers.{n} = {sc.options(n)!r}")
+    lines += _plant_lines(sc)
     segs = ", ".join(
         f"{a:g}-{b:g} s: {m:g} kg ({k} samples)"
         for (a, b, m), k in zip(sc.segments(), sc.segment_samples(), strict=True)
     )
     lines.append(f"# segments: {segs}")
     return "\n".join(lines)
+
+
+def _plant_lines(sc: Scenario) -> list[str]:
+    """What the plant is when it is not the model (``[plant]``, ``[model]``), for ``validate``."""
+    import dataclasses
+
+    p = sc.plant
+    if p is None:
+        return ["# plant: the [arm] itself (no [plant] table)"] if isinstance(sc.arm, SerialArm) else []
+    out = [f"model.urdf = {str(sc.arm.urdf)!r}   (what every non-oracle controller is given)"]
+    out.append(f"plant.urdf = {p.urdf!r}" if p.urdf else "# plant links: the [arm]'s URDF")
+    for key in ("viscous", "coulomb", "armature"):
+        out.append(f"plant.{key} = {_show(getattr(p, key))}")
+    if p.uncertainty is not None:
+        out.append(f"plant.uncertainty = {dataclasses.asdict(p.uncertainty)!r}")
+    return out
 
 
 def _show(v: Any) -> str:

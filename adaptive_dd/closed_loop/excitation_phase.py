@@ -211,7 +211,7 @@ def identify_excitation(scenario, idx) -> tuple[list[Array], ExcitationReport]:
         pis.append(fit.pi)
         rows["hat"].append(wls.sigma)
         rows["fit"].append(fit.sigma)
-        rows["rstd"].append(wls.rstd)
+        rows["rstd"].append(wls.residual_std)
     report = ExcitationReport(
         float(scenario.excite), tuple(idx), tuple(model.names), sig_plant,
         np.broadcast_to(scenario.arm.sigma, sig_plant.shape).copy(), np.array(rows["hat"]),
