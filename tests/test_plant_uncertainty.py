@@ -268,6 +268,10 @@ def test_plant_urdf_is_the_plant_and_model_from_is_the_model(tmp_path):
     d = sc.plant.nominal()
     assert d.pi_links[10] == pytest.approx(9.5) and base.pi_links[10] == pytest.approx(8.393)
     assert list(d.coulomb) == [5.0, 5.0, 3.0, 1.0, 1.0, 1.0] and list(d.viscous) == list(base.viscous)
+    # the results' true base parameters are the plant's
+    want = base.base.B @ np.concatenate([d.pi_links, d.viscous, d.coulomb, d.armature])
+    np.testing.assert_allclose(sc.segment_sigmas()[0], want, rtol=1e-12, atol=1e-12)
+    assert not np.allclose(sc.segment_sigmas()[0], base.sigma)
     data = _data()
     data["model"] = {"from": str(edited)}
     sc = parse_scenario(data, "m.toml")

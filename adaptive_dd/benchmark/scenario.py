@@ -183,7 +183,18 @@ class Scenario:
         return kw
 
     def segment_sigmas(self) -> NDArray[np.float64]:
-        """True base parameters of each constant-payload segment, ``(n_segments, p)``."""
+        """True base parameters of each constant-payload segment, ``(n_segments, p)``: the arm's, or
+        with a ``[plant]`` the plant's before any draw (each seed's own: the results' ``plant``)."""
+        if self.plant is not None:
+            from adaptive_dd.closed_loop.types import pi_with_payload
+
+            p = self.plant
+            friction = np.concatenate([p.viscous, p.coulomb, p.armature])
+            payloads = [None, *(self.payload_of(i) for i in range(len(self.swap_times)))]
+            B = self.arm.base.B
+            return np.array(
+                [B @ np.concatenate([pi_with_payload(self.arm, x, p.pi_links), friction]) for x in payloads]
+            )
         rows = [self.arm.sigma_with_payload(0.0, radius=self.payload_radius)]
         rows += [self.arm.sigma_with_payload(**self.payload_of(i)) for i in range(len(self.swap_times))]
         return np.array(rows)
