@@ -235,7 +235,11 @@ def plant_of(scenario, seed_indices=(0,)) -> Plant:
     arm = scenario.arm
     draws = plant_draws(scenario, seed_indices)
     payloads = [None, *(scenario.payload_of(i) for i in range(len(scenario.swap_times)))]
-    pi_seg = [[pi_with_payload(arm, p, d.pi_links) for p in payloads] for d in draws]
+    once: dict = {}  # an exact plant is one object for every trial: its segments are built once
+    for d in draws:
+        if id(d) not in once:
+            once[id(d)] = [pi_with_payload(arm, p, d.pi_links) for p in payloads]
+    pi_seg = [once[id(d)] for d in draws]
     c = np.ascontiguousarray
     return Plant(
         c(np.reshape(pi_seg, (len(draws), len(payloads), -1))),
