@@ -96,6 +96,7 @@ __all__ = [
     "default_scenario_path",
     "format_scenario",
     "load_scenario",
+    "model_and_plant",
     "parse_scenario",
     "read_toml",
     "run_estimate",
@@ -285,7 +286,7 @@ def parse_scenario(data: dict, src: str = "<memory>", name: str = "scenario") ->
         law_table = {k: v for k, v in plant_table.items() if k not in PLANT_TRUTH_KEYS}
     try:
         arm = arm_from_tables(table.get("arm"), law_table, src)
-        arm, plant = _model_and_plant(src, arm, plant_table, table.get("model"))
+        arm, plant = model_and_plant(src, arm, plant_table, table.get("model"))
     except ScenarioError as exc:
         errors.append(str(exc).removeprefix(f"{src}: "))
     values, more = scenario_fields(
@@ -308,8 +309,9 @@ def parse_scenario(data: dict, src: str = "<memory>", name: str = "scenario") ->
     return Scenario(**values)
 
 
-def _model_and_plant(src: str, arm, plant_table, model_table) -> tuple[Any, PlantSpec | None]:
-    """The controllers' model (``[model]``) and the plant (``[plant]``'s truth keys) around ``arm``."""
+def model_and_plant(src: str, arm, plant_table, model_table) -> tuple[Any, PlantSpec | None]:
+    """The controllers' model (``[model]``) and the plant (``[plant]``'s truth keys) around ``arm`` (the
+    ``[arm]``); raises :class:`ScenarioError` for these tables on the two-link closed-form arm."""
     if not isinstance(arm, SerialArm):
         given = sorted(k for k in (plant_table or {}) if k in PLANT_TRUTH_KEYS)
         given = [f"plant.{k}" for k in given] + (["[model]"] if model_table is not None else [])
