@@ -445,3 +445,19 @@ def test_the_excitation_phase_identifies_the_plant_and_feeds_the_controllers():
     m = compute_metrics(res)
     assert set(m["excitation"]["seeds"]) == {0, 1} and m["excitation"]["duration"] == 20.0
     assert m["plant"]["seeds"][1] == compute_metrics(base)["plant"]["seeds"][1]  # the same plants
+
+
+def test_simulate_arm_simulates_the_plant(tmp_path):
+    from adaptive_dd.cli import main
+
+    text = _shipped("vertical3_payload_exact").read_text(encoding="utf-8")
+    scen = tmp_path / "v.toml"
+    scen.write_text(
+        text.replace('robot = "vertical3"', 'robot = "vertical3"\n[plant]\ncoulomb = [3.0, 2.0, 1.0]')
+    )
+    out = tmp_path / "sim"
+    assert main(["simulate", "--arm", str(scen), "--duration", "0.2", "--out", str(out)]) == 0
+    sc = parse_scenario(tomllib.loads(scen.read_text()), str(scen))
+    pi_true = np.load(out / "trajectory.npz")["pi_true"]
+    np.testing.assert_allclose(pi_true.reshape(-1)[-9:-3], [*sc.plant.viscous, 3.0, 2.0, 1.0], rtol=1e-12)
+    assert (out / "plant.urdf").is_file() and list(sc.arm.coulomb) != [3.0, 2.0, 1.0]
