@@ -461,3 +461,18 @@ def test_simulate_arm_simulates_the_plant(tmp_path):
     pi_true = np.load(out / "trajectory.npz")["pi_true"]
     np.testing.assert_allclose(pi_true.reshape(-1)[-9:-3], [*sc.plant.viscous, 3.0, 2.0, 1.0], rtol=1e-12)
     assert (out / "plant.urdf").is_file() and list(sc.arm.coulomb) != [3.0, 2.0, 1.0]
+
+
+@pytest.mark.parametrize("name", ["sice_arm", "vertical3", "ur5", "panda", "iiwa14"])
+def test_a_urdf_written_with_other_links_reads_back_exactly(name, tmp_path):
+    from adaptive_dd.plant.serial_arm import SerialArm
+    from adaptive_dd.plant.urdf_write import write_urdf_links
+    from adaptive_dd.robots import ROBOTS
+
+    arm = SerialArm.from_urdf(robot_urdf(name), ROBOTS[name].payload_frame)
+    spec = dataclasses.replace(exact_plant(arm), uncertainty=Uncertainty(**LEVELS))
+    d = draw_plant(spec, plant_rng(0, 1))
+    back = arm.with_(urdf=write_urdf_links(arm, d.pi_links, tmp_path / "x.urdf", "drawn"))
+    np.testing.assert_allclose(back.pi_links, d.pi_links, rtol=1e-12, atol=1e-15)
+    assert not np.allclose(back.pi_links, arm.pi_links)
+    np.testing.assert_array_equal(back.chain.trans, arm.chain.trans)  # the same frames
