@@ -5,6 +5,7 @@ consistent, the oracles given each trial's plant and every other controller the 
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 import tempfile
 import tomllib
@@ -58,6 +59,11 @@ def _uncertain(**levels) -> dict:
 
 
 # --------------------------------------------------------------------------- draws
+@functools.cache
+def _ur5_arm():
+    return load_scenario(_shipped("ur5_tool_swap_exact")).arm
+
+
 @settings(max_examples=40, deadline=None)
 @given(
     seed=st.integers(0, 2**32),
@@ -66,7 +72,7 @@ def _uncertain(**levels) -> dict:
     scale=st.floats(0.0, 1.0),
 )
 def test_draws_are_reproducible_consistent_and_within_their_levels(seed, index, dist, scale):
-    arm = load_scenario(_shipped("ur5_tool_swap_exact")).arm
+    arm = _ur5_arm()
     top = 1.0 if dist == "uniform" else 3.0  # u in [-1, 1], or normal clipped to [-3, 3]
     lv = {k: v * scale * (0.3 if dist == "normal" else 1.0) for k, v in LEVELS.items()}
     spec = dataclasses.replace(exact_plant(arm), uncertainty=Uncertainty(**lv, distribution=dist))
@@ -430,7 +436,7 @@ def test_the_excitation_phase_identifies_the_plant_and_feeds_the_controllers():
     )
     data["reference"]["ramp"] = 1.0  # the file's: this light arm saturates on a shorter one
     data["plant"] = {"uncertainty": LEVELS}
-    data["run"]["excite"] = 20.0
+    data["run"]["excite"] = 10.0
     sc = parse_scenario(data, "v.toml")
     res = run_serial(sc)
     base = run_serial(dataclasses.replace(sc, excite=0.0))
@@ -443,7 +449,7 @@ def test_the_excitation_phase_identifies_the_plant_and_feeds_the_controllers():
     nom, nom0 = res.runs["ct_nominal"].acc.sum_e2[:, 0], base.runs["ct_nominal"].acc.sum_e2[:, 0]
     assert np.all(nom < 0.5 * nom0), (nom, nom0)
     m = compute_metrics(res)
-    assert set(m["excitation"]["seeds"]) == {0, 1} and m["excitation"]["duration"] == 20.0
+    assert set(m["excitation"]["seeds"]) == {0, 1} and m["excitation"]["duration"] == 10.0
     assert m["plant"]["seeds"][1] == compute_metrics(base)["plant"]["seeds"][1]  # the same plants
 
 
