@@ -69,8 +69,10 @@ class ExcitationReport:
     rstd: Array
 
     def errors(self) -> dict[str, Array]:
-        """Per seed, the relative error of the base parameters' torques' scale: ``|x - plant| /
-        max(|plant|, 1 % of the largest)`` for the model before (``model``) and after (``fit``)."""
+        """Per seed and base parameter ``(S, p)``, the error against the plant's,
+        ``|x - plant| / max(|plant|, 1 % of the largest |plant|)`` (the floor keeps parameters near
+        zero from dominating): the model before the phase (``model``), the weighted least squares
+        (``wls``) and the consistent fit, the model after it (``fit``)."""
         scale = np.maximum(
             np.abs(self.sigma_plant), 0.01 * np.abs(self.sigma_plant).max(axis=1, keepdims=True)
         )
