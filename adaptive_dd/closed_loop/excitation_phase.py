@@ -165,8 +165,9 @@ def _excitation_scenario(scenario, reference):
     )
 
 
-def identify_excitation(scenario, idx) -> tuple[list[Array], ExcitationReport]:
-    """Run the excitation on each seed's plant and identify; returns each seed's model
+def identify_excitation(scenario, idx, run_serial) -> tuple[list[Array], ExcitationReport]:
+    """Run the excitation on each seed's plant (``run_serial``: the closed loop's runner,
+    :func:`~adaptive_dd.closed_loop.runner.run_serial`) and identify; returns each seed's model
     ``pi (13 n,)`` (consistent) and the report.
 
     Raises
@@ -174,8 +175,7 @@ def identify_excitation(scenario, idx) -> tuple[list[Array], ExcitationReport]:
     ScenarioError
         ``[run] excite`` too short to identify every base parameter (named).
     """
-    from adaptive_dd.closed_loop.runner import run_serial, true_models
-    from adaptive_dd.closed_loop.types import io_of, plant_of
+    from adaptive_dd.closed_loop.types import io_of, plant_of, true_models
     from adaptive_dd.errors import DataError
     from adaptive_dd.identification.consistency import consistent_arm_fit
     from adaptive_dd.identification.serial_model import serial_model
@@ -222,14 +222,16 @@ def identify_excitation(scenario, idx) -> tuple[list[Array], ExcitationReport]:
     return pis, report
 
 
-def run_with_excitation(scenario, idx, keep: int = 3, engine: str = "auto"):
-    """The excitation phase, then the task with each seed's identified model (module docstring)."""
-    from adaptive_dd.closed_loop.runner import plant_record, run_serial
+def run_with_excitation(scenario, idx, run_serial, keep: int = 3, engine: str = "auto"):
+    """The excitation phase, then the task with each seed's identified model (module docstring);
+    ``run_serial`` runs the closed loop (:func:`~adaptive_dd.closed_loop.runner.run_serial`, which
+    calls this function: passed in, the two modules do not import each other)."""
+    from adaptive_dd.closed_loop.types import plant_record
     from adaptive_dd.plant.uncertainty import exact_plant
     from adaptive_dd.plant.urdf_write import write_urdf_links
 
     idx = tuple(idx)
-    pis, report = identify_excitation(scenario, idx)
+    pis, report = identify_excitation(scenario, idx, run_serial)
     arm, n = scenario.arm, scenario.n_joints
     plant = scenario.plant if scenario.plant is not None else exact_plant(arm)
     parts = []

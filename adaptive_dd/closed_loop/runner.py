@@ -40,7 +40,9 @@ from adaptive_dd.closed_loop.types import (
     TrialState,
     io_of,
     plant_of,
+    plant_record,
     run_constants,
+    true_models,
 )
 from adaptive_dd.controllers.base import declared
 
@@ -125,7 +127,7 @@ def run_serial(
             )
         from adaptive_dd.closed_loop.excitation_phase import run_with_excitation
 
-        res = run_with_excitation(scenario, idx, keep_trajectories, engine)
+        res = run_with_excitation(scenario, idx, run_serial, keep_trajectories, engine)
         if bar is not None:
             bar.update(scenario.n_samples * len(res.runs))
         return res
@@ -170,35 +172,6 @@ def _records(
         engine=engine, dropped=ts.n_dropped,
     )  # fmt: skip
     return run, ts, acc, rec
-
-
-def true_models(pl: Plant) -> np.ndarray:
-    """``(S, G, 13 n)``: trial i's true model in every segment (its plant's links with the payload,
-    its plant's friction and armature): what the oracles are given, and only they."""
-    S, G, _ = pl.pi_seg.shape
-    fr = np.concatenate((pl.fv, pl.fc, pl.armature), axis=1)
-    return np.ascontiguousarray(
-        np.concatenate((pl.pi_seg, np.broadcast_to(fr[:, None, :], (S, G, fr.shape[1]))), 2)
-    )
-
-
-def plant_record(scenario, idx) -> dict:
-    """The plants the trials met (JSON-ready): the nominal plant, the draw's levels and, per seed
-    index, the drawn parameters (:meth:`~adaptive_dd.plant.uncertainty.PlantDraw.to_dict`)."""
-    import dataclasses
-
-    from adaptive_dd.plant.uncertainty import plant_draws
-
-    spec = scenario.plant
-    unc = None if spec.uncertainty is None else dataclasses.asdict(spec.uncertainty)
-    return {
-        "urdf": spec.urdf,
-        "model_urdf": str(scenario.arm.urdf),
-        "uncertainty": unc,
-        "seed_rule": "numpy.random.default_rng([scenario.seed, seed_index, 2])",
-        "nominal": spec.nominal().to_dict(),
-        "seeds": {int(i): d.to_dict() for i, d in zip(idx, plant_draws(scenario, idx), strict=True)},
-    }
 
 
 # ------------------------------------------------------------------------ the two paths
