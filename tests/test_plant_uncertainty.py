@@ -482,3 +482,10 @@ def test_a_urdf_written_with_other_links_reads_back_exactly(name, tmp_path):
     np.testing.assert_allclose(back.pi_links, d.pi_links, rtol=1e-12, atol=1e-15)
     assert not np.allclose(back.pi_links, arm.pi_links)
     np.testing.assert_array_equal(back.chain.trans, arm.chain.trans)  # the same frames
+
+
+def test_a_plant_for_another_arm_is_refused():
+    ur5 = parse_scenario(_uncertain(), "u.toml")
+    other = load_scenario(_shipped("vertical3_payload_exact"))
+    with pytest.raises(ScenarioError, match=r"plant: sized \(60, 6, 6, 6\).*3 joints"):
+        dataclasses.replace(other, plant=ur5.plant)

@@ -100,6 +100,7 @@ def scenario_errors(v: dict[str, Any]) -> list[str]:
     s_ok = check_number(e, "run.seeds", v["seeds"], 1, L["max_seeds"], integer=True)
     check_number(e, "run.seed", v["seed"], 0, L["seed_bound"] - 1, integer=True)
     check_number(e, "run.substeps", v["substeps"], 1, L["max_substeps"], integer=True)
+    _check_plant(e, v)
     if check_number(e, "run.excite", v.get("excite", 0.0), 0, L["max_excite"]) and v.get("excite", 0.0) > 0:
         if not _serial(v):
             e.append(
@@ -148,6 +149,20 @@ def _n_joints(v: dict) -> int:
 
 def _label(name: str) -> str:
     return name.rsplit(":", 1)[-1].rsplit(".", 1)[-1] if ":" in name else name
+
+
+def _check_plant(e: list, v: dict) -> None:
+    """A plant (:class:`~adaptive_dd.plant.uncertainty.PlantSpec`) only on an N-joint arm, sized for it."""
+    p = v.get("plant")
+    if p is None:
+        return
+    if not _serial(v):
+        e.append("plant: a plant apart from the model needs an N-joint arm from a URDF")
+        return
+    n = _n_joints(v)
+    sizes = (len(p.pi_links), len(p.viscous), len(p.coulomb), len(p.armature))
+    if sizes != (10 * n, n, n, n):
+        e.append(f"plant: sized {sizes} (links, viscous, coulomb, armature) for an arm of {n} joints")
 
 
 def _serial(v: dict) -> bool:
