@@ -38,18 +38,20 @@ LIMITS = {
     "large_seconds": 60.0,  # the CLI prints the estimate above this
     "max_ramp": 3600.0,  # s
     "max_setting": 1e6,  # |any number| in a built-in controller's [controllers.NAME] table
+    "max_excite": 3600.0,  # s, [run] excite
 }
 """Documented bounds of the scenario checks (see the module docstring)."""
 
 KEYS = {
-    "run": {"duration", "sample_period", "seeds", "seed", "substeps", "controllers"},
+    "run": {"duration", "sample_period", "seeds", "seed", "substeps", "controllers", "excite"},
     "control": {"bandwidth", "damping"},
     "reference": None,  # ramp and one entry per joint, checked against the arm
     "payload": {"at", "mass", "radius", "com", "inertia"},
     "noise": {"position_variance", "velocity_variance", "dropout"},
     "controllers": None,  # one sub-table per controller, free keys
     "arm": None,  # checked by adaptive_dd.plant.arm.arm_from_tables
-    "plant": None,
+    "plant": None,  # adaptive_dd.plant.arm.arm_from_tables and adaptive_dd.plant.uncertainty.parse_plant
+    "model": None,  # adaptive_dd.plant.uncertainty.parse_model
 }
 
 # Kept per trial and sample by the runner: the error norm as float32 (metrics stream; full
