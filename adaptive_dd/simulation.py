@@ -94,12 +94,14 @@ class _ChainTrial:
     def __init__(self, sc: Scenario, seed_index: int) -> None:
         from adaptive_dd.closed_loop.noise import NoiseBlocks
         from adaptive_dd.closed_loop.runner import _records, true_parameters
-        from adaptive_dd.closed_loop.types import io_of, plant_of, run_constants
+        from adaptive_dd.closed_loop.types import io_of, plant_of, run_constants, true_models
 
         self.sc = sc
-        self.rc, self.io, self.pl = run_constants(sc), io_of(sc), plant_of(sc)
+        self.rc, self.io, self.pl = run_constants(sc), io_of(sc), plant_of(sc, [seed_index])
         _, self.ts, self.acc, self.rec = _records("trial", None, sc, self.rc, self.pl, 1, 1, False, "python")
-        self.seg, self.sigmas, self.masses = true_parameters(sc)
+        self.seg, _, self.masses = true_parameters(sc)
+        # the trial's true base parameters per segment (its plant's draw, if the scenario has one)
+        self.sigmas = (true_models(self.pl)[0] @ sc.arm.base.B.T)[self.seg]
         self.noise = NoiseBlocks(sc, [seed_index], 2 * sc.n_joints)
         self.k, self._buf, self._at = 0, None, 0
 

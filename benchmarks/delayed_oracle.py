@@ -30,7 +30,7 @@ from adaptive_dd.closed_loop.controllers import JointGains
 from adaptive_dd.closed_loop.delayed_oracle import DelayedOracle
 from adaptive_dd.closed_loop.runner import make_controllers
 
-UR5 = Path(__file__).resolve().parents[1] / "adaptive_dd" / "scenarios" / "ur5_tool_swap.toml"
+UR5 = Path(__file__).resolve().parents[1] / "adaptive_dd" / "scenarios" / "ur5_tool_swap_exact.toml"
 
 
 def main() -> None:
