@@ -171,7 +171,11 @@ def test_stepping_a_urdf_arm_by_hand_equals_its_benchmark_trial(ur5_short):
         e_norm.append(np.linalg.norm(meas.q_d - sim.q_true))
         meas = sim.step(ctrl.command(meas.q, meas.qd, meas.q_d, meas.qd_d, meas.qdd_d))
     assert not sim.failed and sim.payload_mass == 2.0
-    np.testing.assert_allclose(sim.sigma_true, sc.segment_sigmas()[1])
+    from adaptive_dd.closed_loop.types import plant_of, true_models
+
+    # this trial's plant (the scenario's [plant] draw for seed index 1), payload segment 1
+    truth = true_models(plant_of(sc, [1]))[0, 1] @ sc.arm.base.B.T
+    np.testing.assert_allclose(sim.sigma_true, truth)
     run = run_trial(_PD(400.0, 40.0), sc, seed_index=1, name="pd").runs["pd"]
     assert not run.failed[0]
     np.testing.assert_allclose(run.e_norm[0], e_norm, rtol=1e-6, atol=1e-12)
