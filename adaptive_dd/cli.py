@@ -55,8 +55,9 @@ def _sub(sub, name: str, **kw) -> argparse.ArgumentParser:
     return sub.add_parser(name, allow_abbrev=False, **kw)
 
 
-def _load_arm(path: str | None):
-    """The arm of a scenario file's ``[arm]`` and ``[plant]`` tables (SICE arm if ``path`` is None)."""
+def _load_arm(path: str | None, repair_inertia: bool = False):
+    """The arm of a scenario file's ``[arm]`` and ``[plant]`` tables (SICE arm if ``path`` is None);
+    ``repair_inertia`` sets ``arm.repair_inertia = true`` (identify's --repair-inertia)."""
     from adaptive_dd.benchmark.scenario import read_toml
     from adaptive_dd.errors import ScenarioError
     from adaptive_dd.plant.arm import Arm, arm_from_tables
@@ -66,7 +67,10 @@ def _load_arm(path: str | None):
     if not Path(path).is_file():
         raise ScenarioError(f"{path}: no such scenario file")
     data = read_toml(Path(path))
-    return arm_from_tables(data.get("arm"), data.get("plant"), str(path))
+    table = data.get("arm")
+    if repair_inertia and isinstance(table, dict):
+        table = {**table, "repair_inertia": True}
+    return arm_from_tables(table, data.get("plant"), str(path))
 
 
 def _cmd_check(args: argparse.Namespace) -> int:
@@ -306,18 +310,30 @@ def _cmd_identify(args: argparse.Namespace) -> int:
     from adaptive_dd.io import MIN_EQUATIONS, check_identifiable, read_recording
     from adaptive_dd.outputs import OutputSet
 
-    if args.arm:  # an N-joint arm from a URDF: its own path (adaptive_dd.cli_serial)
+    if args.arm:  # an N-joint arm from a URDF: its own path (adaptive_dd.cli_log)
         from adaptive_dd.plant.serial_arm import SerialArm
 
-        arm = _load_arm(args.arm)
+        arm = _load_arm(args.arm, args.repair_inertia)
         if isinstance(arm, SerialArm):
-            from adaptive_dd.cli_serial import identify_serial
+            from adaptive_dd.cli_log import identify_log
 
             outputs = OutputSet(args.out)
             with outputs:
-                return identify_serial(args, arm, outputs)
-    elif args.baseline or args.payload_only:
-        raise DataError("--baseline and --payload-only need --arm SCENARIO (an arm from a URDF)")
+                return identify_log(args, arm, outputs)
+    arm_only = {
+        "--baseline": args.baseline,
+        "--payload-only": args.payload_only,
+        "--window": args.window,
+        "--repair-inertia": args.repair_inertia,
+        "--output-error": args.output_error != "auto",
+    }
+    given = [o for o, v in arm_only.items() if v]
+    if given:
+        raise DataError(f"{', '.join(given)}: only with --arm SCENARIO of an N-joint arm from a URDF")
+    if len(args.data) != 1:
+        raise DataError(f"identify without --arm reads one CSV file, got {len(args.data)}: {args.data}")
+    args.data = args.data[0]
+    args.tau_f = 0.02 if args.tau_f is None else args.tau_f
     rec = read_recording(args.data)
     if args.method == "M2" and rec.qd is None:
         raise DataError(f"{args.data}: method M2 needs columns qd1, qd2 (use --method M1 for position only)")
@@ -327,6 +343,22 @@ def _cmd_identify(args: argparse.Namespace) -> int:
         if args.online:
             return _identify_online(args, rec, outputs)
         return _identify(args, rec, outputs, estimate, MIN_EQUATIONS)
+
+
+def _log_options(p: argparse.ArgumentParser) -> None:
+    p.add_argument(
+        "--window",
+        type=_number(float, -1e9, 1e9),
+        nargs=2,
+        metavar=("START", "END"),
+        help="with --arm: the part of the log to use [s of its clock] (replaces record.window)",
+    )
+
+
+def _cmd_predict(args: argparse.Namespace) -> int:
+    from adaptive_dd.cli_log import predict_log
+
+    return predict_log(args)
 
 
 def _identify(args, rec, outputs, estimate, min_equations: int) -> int:
@@ -698,7 +730,12 @@ def build_parser() -> argparse.ArgumentParser:
     r.set_defaults(func=_cmd_reproduce)
 
     i = _sub(sub, "identify", help="estimate sigma from a recorded experiment (CSV)")
-    i.add_argument("data", help="CSV with header t,q1,q2,qd1,qd2,tau1,tau2 (qd optional for M1)")
+    i.add_argument(
+        "data",
+        nargs="*",
+        help="CSV with header t,q1,q2,qd1,qd2,tau1,tau2 (qd optional for M1); with --arm: the log's file(s), "
+        "read as the scenario's [record] says (default: its record.files; see docs/real_log.md)",
+    )
     i.add_argument(
         "--estimator",
         default="exact",
@@ -707,7 +744,12 @@ def build_parser() -> argparse.ArgumentParser:
     )
     i.add_argument("--method", default="M2", choices=("M1", "M2"))
     i.add_argument("--split", default="15", choices=("15", "16", "full"), help="split of 'paper'")
-    i.add_argument("--tau-f", type=_POS, default=0.02, help="filter time constant [s]")
+    i.add_argument(
+        "--tau-f",
+        type=_POS,
+        default=None,
+        help="filter time constant [s] (default 0.02; with --arm: 5 sample periods, at least 0.02)",
+    )
     i.add_argument(
         "--true", type=_number(float, -1e6, 1e6), nargs=7, metavar="S", help="true sigma, to mark on the plot"
     )
@@ -752,8 +794,35 @@ def build_parser() -> argparse.ArgumentParser:
     i.add_argument(
         "--max-iter", type=_number(int, 1, 1000), default=30, help="with --arm: output-error iterations"
     )
-    i.add_argument("--out", default="results/identify")
+    _log_options(i)
+    i.add_argument(
+        "--repair-inertia",
+        action="store_true",
+        help="with --arm: repair chain links whose URDF inertia is not a rigid body's (reported)",
+    )
+    i.add_argument(
+        "--output-error",
+        choices=("auto", "on", "off"),
+        default="auto",
+        help="with --arm: refine by output error (auto: for records in the simulator's format only)",
+    )
+    i.add_argument("--out", default="results/identify", help="folder (with --arm: model.json, estimates.csv)")
     i.set_defaults(func=_cmd_identify)
+
+    r = _sub(sub, "predict", help="torque prediction error of an identified model on another record")
+    r.add_argument("data", nargs="*", help="the record's file(s) (default: the scenario's record.files)")
+    r.add_argument("--arm", required=True, metavar="SCENARIO", help="scenario TOML with [arm] and [record]")
+    r.add_argument("--model", required=True, metavar="JSON", help="model.json written by identify --arm --out")
+    _log_options(r)
+    r.add_argument(
+        "--lowpass",
+        type=_POS,
+        default=2.0,
+        metavar="HZ",
+        help="also compare after a zero-phase Butterworth low-pass (order 4) of both [Hz] (default 2)",
+    )
+    r.add_argument("--out", default="results/predict", help="folder for prediction.csv and prediction.png")
+    r.set_defaults(func=_cmd_predict)
 
     e = _sub(sub, "excite", help="design an exciting trajectory for an arm from a URDF")
     e.add_argument("--arm", required=True, metavar="SCENARIO", help="scenario TOML with [arm] urdf/robot")

@@ -108,6 +108,8 @@ class RecordSpec:
     joint_names : tuple of str
     source : str
         Where the description came from (errors name it).
+    simulator_format : bool
+        No ``[record]`` table: the simulator's columns, velocity columns optional.
     """
 
     files: tuple[Path, ...]
@@ -124,6 +126,7 @@ class RecordSpec:
     sample_period: float | None
     joint_names: tuple[str, ...]
     source: str
+    simulator_format: bool = False
 
 
 @dataclass(frozen=True)
@@ -144,6 +147,8 @@ class LogRecord:
         The file(s).
     notes : tuple of str
         How it was read (resampling, jitter), for the report.
+    simulator_format : bool
+        Read as the simulator writes records (no ``[record]`` table).
     """
 
     t: Array
@@ -155,6 +160,7 @@ class LogRecord:
     sample_period: float
     source: str
     notes: tuple[str, ...] = ()
+    simulator_format: bool = False
 
 
 def _err(src: str, key: str, why: str) -> ScenarioError:
@@ -282,6 +288,7 @@ def record_spec(table: dict | None, joint_names, kinds, src: str, files=None) ->
         sample_period=None if T is None else float(T),
         joint_names=names,
         source=src,
+        simulator_format=default,
     )
 
 
@@ -381,7 +388,10 @@ def read_log(spec: RecordSpec, window: tuple[float, float] | None = None, arm=No
 
     window = window if window is not None else spec.window
     frames = {p: _read_csv(p) for p in spec.files}
-    cols = [*spec.position, *spec.torque, *([] if spec.velocity is None else spec.velocity)]
+    velocity = spec.velocity
+    if spec.simulator_format and velocity and not any(velocity[0] in f.columns for f in frames.values()):
+        velocity = None  # the simulator's format: velocity columns optional
+    cols = [*spec.position, *spec.torque, *([] if velocity is None else velocity)]
     where = _locate(frames, spec, cols)
     clocks = {p: _times(p, f, spec.time) for p, f in frames.items()}
     rows = {p: _window_rows(p, clocks[p], window) for p in frames}
@@ -414,9 +424,9 @@ def read_log(spec: RecordSpec, window: tuple[float, float] | None = None, arm=No
         _check_units(spec, where, q, arm)
     q = q * spec.position_scale
     tau = spec.torque_gain * raw_tau + spec.torque_offset
-    qd_measured = spec.velocity is not None and not spec.derive_velocity
+    qd_measured = velocity is not None and not spec.derive_velocity
     if qd_measured:
-        qd = np.column_stack([column(c, False) for c in spec.velocity]) * spec.position_scale
+        qd = np.column_stack([column(c, False) for c in velocity]) * spec.position_scale
     else:
         qd = derivatives(q, T)[0]
     jitter = (steps.min(), steps.max(), float(np.median(steps)))
@@ -429,7 +439,7 @@ def read_log(spec: RecordSpec, window: tuple[float, float] | None = None, arm=No
         + ("" if qd_measured else "; velocities derived (Savitzky-Golay, cubic, ~0.1 s)"),
     )
     names = ", ".join(str(p) for p in spec.files)
-    return LogRecord(grid, q, qd, tau, qd_measured, spec.used.copy(), T, names, notes)
+    return LogRecord(grid, q, qd, tau, qd_measured, spec.used.copy(), T, names, notes, spec.simulator_format)
 
 
 def _check_stuck(spec: RecordSpec, where: dict, raw: Array) -> None:
