@@ -748,7 +748,7 @@ def build_parser() -> argparse.ArgumentParser:
         "--tau-f",
         type=_POS,
         default=None,
-        help="filter time constant [s] (default 0.02; with --arm: 5 sample periods, at least 0.02)",
+        help="filter time constant [s] (default 0.02; with --arm: 2 sample periods, at least 0.02)",
     )
     i.add_argument(
         "--true", type=_number(float, -1e6, 1e6), nargs=7, metavar="S", help="true sigma, to mark on the plot"
