@@ -812,7 +812,9 @@ def build_parser() -> argparse.ArgumentParser:
     r = _sub(sub, "predict", help="torque prediction error of an identified model on another record")
     r.add_argument("data", nargs="*", help="the record's file(s) (default: the scenario's record.files)")
     r.add_argument("--arm", required=True, metavar="SCENARIO", help="scenario TOML with [arm] and [record]")
-    r.add_argument("--model", required=True, metavar="JSON", help="model.json written by identify --arm --out")
+    r.add_argument(
+        "--model", required=True, metavar="JSON", help="model.json written by identify --arm --out"
+    )
     _log_options(r)
     r.add_argument(
         "--lowpass",

@@ -27,10 +27,9 @@ LOWPASS_ORDER = 4
 
 def read_arm_log(scenario: str, arm, files=None, window=None):
     """The scenario's :class:`~adaptive_dd.record.RecordSpec` and the log it describes, read."""
+    from adaptive_dd.errors import ScenarioError
     from adaptive_dd.io import read_toml
     from adaptive_dd.record import read_log, record_spec
-
-    from adaptive_dd.errors import ScenarioError
 
     table = read_toml(Path(scenario), ScenarioError).get("record")
     spec = record_spec(table, arm.joint_names, arm.joint_kinds, str(scenario), files=files)
@@ -44,8 +43,9 @@ def _short(name: str) -> str:
 def _print_fit(model, fit, names: tuple[str, ...]) -> None:
     used = [names[j] for j in np.flatnonzero(fit.used)]
     print(
-        f"weighted least squares on the exact filtered regression (tau_f = {fit.tau_f:.3g} s), torque channels "
-        f"{', '.join(used)}; {int(fit.identified.sum())} of {model.p} base parameters identified, "
+        f"weighted least squares on the exact filtered regression (tau_f = {fit.tau_f:.3g} s), "
+        f"torque channels {', '.join(used)}; {int(fit.identified.sum())} of {model.p} base parameters "
+        "identified, "
         f"{int((~fit.identified).sum())} held at the URDF's values (the fitted channels do not see them)"
     )
     print(
@@ -123,7 +123,9 @@ def _output_error(args, arm, model, rec, fit) -> None:
         f"output error: {oe.iterations} iterations, {'converged' if oe.converged else 'NOT converged'}, "
         f"normalised residual {2 * oe.cost / oe.n_residuals:.3f} (1 = the noise model)"
     )
-    print(f"{'base parameter':<{NAME_WIDTH}} {'WLS':>11} {'output err':>11} {'CRB std':>9} {'|WLS-OE|/CRB':>12}")
+    print(
+        f"{'base parameter':<{NAME_WIDTH}} {'WLS':>11} {'output err':>11} {'CRB std':>9} {'|WLS-OE|/CRB':>12}"
+    )
     for k, name in enumerate(model.names):
         print(
             f"{_short(name):<{NAME_WIDTH}} {fit.sigma[k]:11.5g} {oe.sigma[k]:11.5g} {oe.std[k]:9.2g} "
@@ -163,8 +165,8 @@ def identify_log(args: argparse.Namespace, arm, outputs) -> int:
     names = arm.joint_names
     tau_f = args.tau_f or filter_time_constant(rec.sample_period)
     print(
-        f"{rec.source}: {rec.t.size} samples at T = {rec.sample_period:.6g} s ({rec.t[0]:.4g}-{rec.t[-1]:.4g} s), "
-        f"{arm.n_joints} joints, {model.p} base parameters; velocities "
+        f"{rec.source}: {rec.t.size} samples at T = {rec.sample_period:.6g} s "
+        f"({rec.t[0]:.4g}-{rec.t[-1]:.4g} s), {arm.n_joints} joints, {model.p} base parameters; velocities "
         f"{'measured' if rec.qd_measured else 'derived from the positions'}"
     )
     for note in rec.notes:
@@ -174,7 +176,9 @@ def identify_log(args: argparse.Namespace, arm, outputs) -> int:
     lim = arm.position_limits
     K = identifiable_subset(model, rec.used, lim[:, 0], lim[:, 1], np.random.default_rng(0))
     try:
-        fit = fit_log(model, rec.q, rec.qd, rec.tau, rec.used, K, tau_f=tau_f, sample_period=rec.sample_period)
+        fit = fit_log(
+            model, rec.q, rec.qd, rec.tau, rec.used, K, tau_f=tau_f, sample_period=rec.sample_period
+        )
     except DataError as exc:
         raise DataError(f"{rec.source}: {exc}") from None
     _print_fit(model, fit, names)
@@ -183,7 +187,11 @@ def identify_log(args: argparse.Namespace, arm, outputs) -> int:
     reg = fit.regression
     pred = reg.phi @ fit.sigma
     plot_torque_fit(
-        rec.t[reg.start :], reg.y, pred, outputs.path("torque_fit.png"), f"{Path(rec.source).name}: filtered fit"
+        rec.t[reg.start :],
+        reg.y,
+        pred,
+        outputs.path("torque_fit.png"),
+        f"{Path(rec.source).name}: filtered fit",
     )
     _write_estimates(outputs.path("estimates.csv"), model, fit)
     written = [outputs.path("estimates.csv"), outputs.path("torque_fit.png")]
@@ -287,7 +295,9 @@ def _payload_only(args, arm, model, rec, tau_f) -> int:
             f"{rec.source}: --payload-only cannot simulate this record open loop ({exc}); identify a loaded "
             "and an unloaded record instead (--baseline)"
         ) from None
-    print(f"{rec.source}: the arm known (its URDF), the payload's 10 parameters fitted (tau_f unused: {tau_f})")
+    print(
+        f"{rec.source}: the arm known (its URDF), the payload's 10 parameters fitted (tau_f unused: {tau_f})"
+    )
     _print_payload("payload (one record, arm known)", pr)
     return 0
 
@@ -299,7 +309,9 @@ def _payload_pair(args, arm, model, fit, tau_f, K) -> None:
 
     _, base = read_arm_log(args.arm, arm, [args.baseline], args.window)
     try:
-        other = fit_log(model, base.q, base.qd, base.tau, base.used, K, tau_f=tau_f, sample_period=base.sample_period)
+        other = fit_log(
+            model, base.q, base.qd, base.tau, base.used, K, tau_f=tau_f, sample_period=base.sample_period
+        )
     except DataError as exc:
         raise DataError(f"{base.source}: {exc}") from None
     pr = payload_from_pair(arm, fit.sigma, fit.cov, other.sigma, other.cov)
@@ -336,8 +348,9 @@ def predict_log(args: argparse.Namespace) -> int:
     names = arm.joint_names
     used = np.asarray(m.used, dtype=bool)
     print(
-        f"{rec.source}: {rec.t.size} samples at T = {rec.sample_period:.6g} s ({rec.t[0]:.4g}-{rec.t[-1]:.4g} s); "
-        f"model {args.model}; accelerations by Savitzky-Golay (cubic, ~0.1 s)"
+        f"{rec.source}: {rec.t.size} samples at T = {rec.sample_period:.6g} s "
+        f"({rec.t[0]:.4g}-{rec.t[-1]:.4g} s); model {args.model}; accelerations by Savitzky-Golay "
+        "(cubic, ~0.1 s)"
     )
     rows = [("unfiltered", rec.tau, tau_hat)]
     if args.lowpass:
@@ -354,7 +367,10 @@ def predict_log(args: argparse.Namespace) -> int:
         print(f"torque prediction error, {label} [N m rms (relative to the torque's rms)]:")
         for j in range(arm.n_joints):
             tag = "" if used[j] else "   (channel not fitted)"
-            print(f"  {names[j]:<24} {err[j]:9.4g} ({100 * err[j] / max(ref[j], 1e-300):5.1f} %) of {ref[j]:.4g}{tag}")
+            print(
+                f"  {names[j]:<24} {err[j]:9.4g} ({100 * err[j] / max(ref[j], 1e-300):5.1f} %) "
+                f"of {ref[j]:.4g}{tag}"
+            )
         pooled = np.sqrt(np.mean((tau - th)[:, used] ** 2))
         print(f"  pooled over the fitted channels: {pooled:.4g} N m")
     outputs = OutputSet(args.out)
@@ -363,9 +379,16 @@ def predict_log(args: argparse.Namespace) -> int:
         with atomic_write(outputs.path("prediction.csv")) as fh:
             head = ["t", *[f"tau{j + 1}" for j in range(n)], *[f"tau_hat{j + 1}" for j in range(n)]]
             np.savetxt(
-                fh, np.column_stack([rec.t, rec.tau, tau_hat]), delimiter=",", header=",".join(head), comments="", fmt="%.8g"
+                fh,
+                np.column_stack([rec.t, rec.tau, tau_hat]),
+                delimiter=",",
+                header=",".join(head),
+                comments="",
+                fmt="%.8g",
             )
         label, tau, th = rows[-1]
-        plot_torque_fit(rec.t, tau, th, outputs.path("prediction.png"), f"measured vs predicted torque ({label})")
+        plot_torque_fit(
+            rec.t, tau, th, outputs.path("prediction.png"), f"measured vs predicted torque ({label})"
+        )
     print(f"wrote {Path(args.out) / 'prediction.csv'}, {Path(args.out) / 'prediction.png'}")
     return 0

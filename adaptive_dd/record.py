@@ -28,7 +28,7 @@ simulator's columns (``position = "q{i}"``, ``velocity = "qd{i}"``, ``torque = "
 Sample times
 ------------
 The filters of the identification run at one sample period, so the log is **resampled**
-onto a uniform grid (the median logged step unless ``sample_period`` is given, starting at
+onto a uniform grid (the mean logged step unless ``sample_period`` is given, starting at
 the window's first logged time): positions by a cubic spline through the logged samples
 (``scipy.interpolate.CubicSpline``, not-a-knot), measured velocities and torques by linear
 interpolation (they are held values). Each file is resampled from its own time column.
@@ -333,8 +333,9 @@ def _numeric(path: Path, frame, col: str, rows: slice) -> Array:
         run = bad[breaks[0]] if breaks.size else bad[-1]
         kind = "not a number" if isinstance(raw[i], str) else "non-finite value"
         raise DataError(
-            f"{path}: lines {i + 2}-{int(run) + 2}, column {col!r}: {kind} ({raw[i]!r}; {bad.size} such row(s) "
-            "in the window): cut the window to avoid them ([record] window or --window) or repair the file"
+            f"{path}: lines {i + 2}-{int(run) + 2}, column {col!r}: {kind} ({raw[i]!r}; {bad.size} such "
+            "row(s) in the window): cut the window to avoid them ([record] window or --window) or repair "
+            "the file"
         )
     return v
 
@@ -398,7 +399,7 @@ def read_log(spec: RecordSpec, window: tuple[float, float] | None = None, arm=No
     first = spec.files[0]
     t0 = clocks[first][rows[first]]
     steps = np.diff(t0)
-    T = spec.sample_period or float(np.median(steps))
+    T = spec.sample_period or float((t0[-1] - t0[0]) / (t0.size - 1))  # the mean step: jitter averages out
     gap = np.flatnonzero(steps > MAX_GAP_STEPS * np.median(steps))
     if gap.size:
         i = int(gap[0]) + rows[first].start

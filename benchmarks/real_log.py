@@ -21,6 +21,7 @@ Run from the repository root::
 from __future__ import annotations
 
 import argparse
+import itertools
 import time
 from pathlib import Path
 
@@ -28,7 +29,12 @@ import numpy as np
 
 from adaptive_dd.cli import _load_arm
 from adaptive_dd.cli_log import lowpass, read_arm_log
-from adaptive_dd.identification.log_fit import filter_time_constant, fit_log, identifiable_subset, predict_torque
+from adaptive_dd.identification.log_fit import (
+    filter_time_constant,
+    fit_log,
+    identifiable_subset,
+    predict_torque,
+)
 from adaptive_dd.identification.serial_model import serial_model
 from adaptive_dd.record import derivatives
 
@@ -89,11 +95,16 @@ def main() -> None:
     }
     meas_lp = lowpass(te.tau, args.lowpass, te.sample_period)
     print(
-        f"{args.scenario}: trained on {args.train[0]}-{args.train[1]} s, predicting {args.test[0]}-{args.test[1]} s; "
-        f"channels {', '.join(names)}"
+        f"{args.scenario}: trained on {args.train[0]}-{args.train[1]} s, predicting "
+        f"{args.test[0]}-{args.test[1]} s; channels {', '.join(names)}"
     )
-    print(f"torque rms over the test window, low-passed {args.lowpass} Hz: {np.round(rms(meas_lp[:, used]), 2)}")
-    print(f"{'model':<40} {'low-passed ' + str(args.lowpass) + ' Hz: per joint':<36} {'pooled':>7}   unfiltered pooled")
+    print(
+        f"torque rms over the test window, low-passed {args.lowpass} Hz: {np.round(rms(meas_lp[:, used]), 2)}"
+    )
+    print(
+        f"{'model':<40} {'low-passed ' + str(args.lowpass) + ' Hz: per joint':<36} {'pooled':>7}"
+        "   unfiltered pooled"
+    )
     for label, th in preds.items():
         e_lp = meas_lp[:, used] - lowpass(th, args.lowpass, te.sample_period)[:, used]
         e = te.tau[:, used] - th[:, used]
@@ -103,9 +114,18 @@ def main() -> None:
     _, whole = read_arm_log(args.scenario, arm)
     edges = np.linspace(whole.t[0], whole.t[-1], args.windows + 1)
     est, std = [], []
-    for a, b in zip(edges[:-1], edges[1:], strict=True):
+    for a, b in itertools.pairwise(edges):
         _, w = read_arm_log(args.scenario, arm, window=(a, b))
-        f = fit_log(model, w.q, w.qd, w.tau, used, K, tau_f=filter_time_constant(w.sample_period), sample_period=w.sample_period)
+        f = fit_log(
+            model,
+            w.q,
+            w.qd,
+            w.tau,
+            used,
+            K,
+            tau_f=filter_time_constant(w.sample_period),
+            sample_period=w.sample_period,
+        )
         est.append(f.sigma[K])
         std.append(f.std[K])
     spread = np.std(np.array(est), axis=0, ddof=1)
@@ -114,8 +134,9 @@ def main() -> None:
     q1, med, q3 = np.percentile(ratio, [25, 50, 75])
     inside = np.mean((ratio > 1 / 3) & (ratio < 3))
     print(
-        f"bounds vs {args.windows} disjoint windows of {edges[1] - edges[0]:.1f} s ({K.sum()} identified base parameters): "
-        f"spread / reported std median {med:.2f} (quartiles {q1:.2f}-{q3:.2f}, min {ratio.min():.2f}, max "
+        f"bounds vs {args.windows} disjoint windows of {edges[1] - edges[0]:.1f} s ({K.sum()} identified "
+        f"base parameters): spread / reported std median {med:.2f} (quartiles {q1:.2f}-{q3:.2f}, "
+        f"min {ratio.min():.2f}, max "
         f"{ratio.max():.2f}); within a factor 3: {100 * inside:.0f} %"
     )
     worst = np.argsort(-np.abs(np.log(ratio)))[:3]

@@ -217,8 +217,27 @@ def consistent_arm_fit(
         pi = pi_of(x)
         return np.concatenate([Lf.T @ (model.B @ pi - sigma_hat), np.sqrt(prior_weight) * (pi - ref) / scale])
 
+    LB = Lf.T @ model.B
+
+    def jac(x):  # d pi / d x is block diagonal: each link's 10 x 10 block by central differences
+        h = 1e-6
+        X = x[: 10 * n].reshape(n, 1, 10) + h * np.eye(10)
+        blocks = (_from_log_cholesky(X) - _from_log_cholesky(X - 2 * h * np.eye(10))) / (2 * h)  # (n, k, out)
+        D = np.eye(13 * n)
+        for j in range(n):
+            D[10 * j : 10 * j + 10, 10 * j : 10 * j + 10] = blocks[j].T
+        return np.vstack([LB @ D, np.sqrt(prior_weight) * D / scale[:, None]])
+
     lo = np.concatenate([np.full(10 * n, -np.inf), np.zeros(3 * n)])
-    sol = least_squares(residual, np.maximum(x0, lo), bounds=(lo, np.inf), method="trf", max_nfev=200)
+    sol = least_squares(
+        residual,
+        np.maximum(x0, lo),
+        jac=jac,
+        bounds=(lo, np.inf),
+        method="trf",
+        max_nfev=200,
+        tr_solver="lsmr",
+    )
     pi = pi_of(sol.x)
     sig = model.B @ pi
     return ConsistentArmFit(pi, sig, float(np.linalg.norm(Lf.T @ (sig - sigma_hat))))

@@ -154,7 +154,7 @@ def _solve(phi: Array, y: Array, w: Array) -> tuple[Array, Array]:
 
 def _newey_west(phi: Array, res: Array, w: Array, scale: Array) -> tuple[Array, int]:
     """Sandwich covariance ``(r, r)`` of the weighted fit and the lag used (module docstring)."""
-    N, _, r = phi.shape
+    N, _, _r = phi.shape
     P = phi / scale
     g = np.einsum("kjr,kj->kr", P, (w**2) * res)  # scores (N, r)
     A = np.einsum("kjr,kjs,j->rs", P, P, w**2)
@@ -223,17 +223,18 @@ def fit_log(
     phi = phi_all[:, :, K]
     if y.shape[0] * used.sum() < 3 * K.sum():
         raise DataError(
-            f"{y.shape[0]} samples of {used.sum()} channels for {K.sum()} parameters: a longer window is needed"
+            f"{y.shape[0]} samples of {used.sum()} channels for {K.sum()} parameters: a longer window "
+            "is needed"
         )
     check_excitation(phi, names)
     w = np.ones(used.sum())
     for _ in range(3):
-        x, scale = _solve(phi, y, w)
+        x, _ = _solve(phi, y, w)
         res = y - phi @ x
         rms = np.sqrt(np.mean(res**2, axis=0))
         s = np.maximum(rms, WEIGHT_FLOOR * np.median(rms))
         w = 1.0 / np.maximum(s, 1e-300)
-    x, scale = _solve(phi, y, w)
+    x, _scale = _solve(phi, y, w)
     res = y - phi @ x
     cov_k, lag = _newey_west(
         phi, res, w, np.linalg.norm((phi * w[None, :, None]).reshape(-1, K.sum()), axis=0)

@@ -294,7 +294,7 @@ class SerialArm:
 
     @property
     def urdf_notes(self) -> tuple[str, ...]:
-        """What reading the URDF did not check or repaired (:attr:`adaptive_dd.plant.urdf.UrdfRobot.notes`)."""
+        """What reading the URDF did not check, or repaired (:attr:`.urdf.UrdfRobot.notes`)."""
         return self._robot.notes
 
     @property
@@ -665,8 +665,8 @@ def urdf_arm_from_table(src: str, table: dict, plant_kw: dict):
     ``payload_frame`` (a link), ``gravity = [x, y, z]`` (default ``[0, 0, -9.81]``),
     per-joint lists ``viscous``, ``coulomb``, ``armature``, ``torque_limit``,
     ``encoder_counts``, and ``dac_bits``, ``payload_radius``, ``repair_inertia`` (repair a
-    chain link's inertia that is not a rigid body's, reported: :func:`adaptive_dd.plant.urdf.read_urdf`). A URDF that is the
-    paper's kind of two-link arm becomes an :class:`~adaptive_dd.plant.arm.Arm` (the
+    chain link's inertia that is not a rigid body's, reported: :func:`adaptive_dd.plant.urdf.read_urdf`).
+    A URDF that is the paper's kind of two-link arm becomes an :class:`~adaptive_dd.plant.arm.Arm` (the
     closed-form fast path, :func:`as_two_link`) unless ``general = true``.
 
     Raises
