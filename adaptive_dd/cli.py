@@ -572,6 +572,11 @@ def _benchmark(args: argparse.Namespace, sc, outputs) -> list[Path]:
 def _cmd_validate(args: argparse.Namespace) -> int:
     from adaptive_dd.benchmark.scenario import format_scenario, load_scenario
 
+    if args.scenario and Path(args.scenario).is_file():
+        from adaptive_dd.cli_log import is_identification_scenario, validate_identification
+
+        if is_identification_scenario(args.scenario):  # [arm] and [record]: no benchmark tables needed
+            return validate_identification(args.scenario)
     sc = load_scenario(args.scenario)
     print(format_scenario(sc))
     from adaptive_dd.plant.serial_arm import SerialArm

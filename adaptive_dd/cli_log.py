@@ -18,7 +18,14 @@ from numpy.typing import NDArray
 
 from adaptive_dd.errors import DataError, ParameterError, SignalError
 
-__all__ = ["identify_log", "lowpass", "predict_log", "read_arm_log"]
+__all__ = [
+    "identify_log",
+    "is_identification_scenario",
+    "lowpass",
+    "predict_log",
+    "read_arm_log",
+    "validate_identification",
+]
 
 Array = NDArray[np.float64]
 NAME_WIDTH = 44
@@ -34,6 +41,64 @@ def read_arm_log(scenario: str, arm, files=None, window=None):
     table = read_toml(Path(scenario), ScenarioError).get("record")
     spec = record_spec(table, arm.joint_names, arm.joint_kinds, str(scenario), files=files)
     return spec, read_log(spec, window=tuple(window) if window else None, arm=arm)
+
+
+IDENTIFICATION_TABLES = ("arm", "plant", "record")
+
+
+def is_identification_scenario(path) -> bool:
+    """A scenario with a ``[record]`` table: an identification, read by ``identify``/``predict``."""
+    from adaptive_dd.errors import ScenarioError
+    from adaptive_dd.io import read_toml
+
+    return "record" in read_toml(Path(path), ScenarioError)
+
+
+def validate_identification(path) -> int:
+    """``adaptive-dd validate`` of an identification scenario: its ``[arm]`` and ``[record]``, resolved.
+
+    Raises
+    ------
+    ScenarioError
+        A table other than ``[arm]``, ``[plant]``, ``[record]`` (a benchmark's tables do not
+        belong here), or what :func:`adaptive_dd.record.record_spec` refuses.
+    """
+    from adaptive_dd.cli import _load_arm, describe_serial_arm
+    from adaptive_dd.errors import ScenarioError
+    from adaptive_dd.io import read_toml
+    from adaptive_dd.plant.serial_arm import SerialArm
+    from adaptive_dd.record import record_spec
+
+    data = read_toml(Path(path), ScenarioError)
+    extra = [k for k in data if k not in IDENTIFICATION_TABLES]
+    if extra:
+        raise ScenarioError(
+            f"{path}: [{extra[0]}]: an identification scenario (with [record]) holds only "
+            f"{', '.join(f'[{t}]' for t in IDENTIFICATION_TABLES)}; keep benchmark tables in another file"
+        )
+    arm = _load_arm(str(path))
+    if not isinstance(arm, SerialArm):
+        raise ScenarioError(f"{path}: [record] needs an [arm] from a URDF (urdf = ... or robot = ...)")
+    spec = record_spec(data["record"], arm.joint_names, arm.joint_kinds, str(path))
+    print(
+        f"# identification scenario {path}: [arm] and [record] (no [reference]: identify and predict "
+        "read a log)"
+    )
+    for note in arm.urdf_notes:
+        print(f"# note: {note}")
+    print(f"record.files = {[str(f) for f in spec.files]}")
+    print(f"record.time = {spec.time!r}")
+    for j, name in enumerate(arm.joint_names):
+        vel = "derived" if spec.derive_velocity or spec.velocity is None else repr(spec.velocity[j])
+        print(
+            f"record.joint{j + 1} = {{ joint = {name!r}, position = {spec.position[j]!r} "
+            f"(x {spec.position_scale[j]:.6g}), "
+            f"velocity = {vel}, torque = {spec.torque_gain[j]:.6g} * {spec.torque[j]!r} + "
+            f"{spec.torque_offset[j]:.6g}{'' if spec.used[j] else ', excluded'} }}"
+        )
+    print(f"record.window = {list(spec.window) if spec.window else 'the whole log'}")
+    print(describe_serial_arm(arm))
+    return 0
 
 
 def _short(name: str) -> str:
@@ -72,6 +137,30 @@ def _print_fit(model, fit, names: tuple[str, ...]) -> None:
             f"warning: {names[j]}: the residual is {ratio:.0f}x the sensor noise ({fit.noise_rms[j]:.2g} N m "
             "after the filter): the model explains this channel far worse than the sensor allows (friction "
             "law, unmodelled dynamics, conversion constants); the std above account for it"
+        )
+
+
+def _print_payload(label: str, pr) -> None:
+    c = pr.consistent
+    print(
+        f"{label}: mass {pr.mass:.5g} +- {pr.mass_std:.2g} kg; centre of mass "
+        f"[{', '.join(f'{x * 1e3:.2f}' for x in pr.com)}] +- "
+        f"[{', '.join(f'{x * 1e3:.2g}' for x in pr.com_std)}]"
+        " mm in the payload frame"
+    )
+    ic = pr.inertia_com
+    print(
+        f"  inertia about the centre of mass [kg m^2]: Ixx {ic[0, 0]:.4g}, Iyy {ic[1, 1]:.4g}, Izz "
+        f"{ic[2, 2]:.4g}, "
+        f"Ixy {ic[0, 1]:.3g}, Ixz {ic[0, 2]:.3g}, Iyz {ic[1, 2]:.3g}"
+    )
+    if c.was_physical:
+        print(f"  physically consistent as estimated (pseudo-inertia min eigenvalue {c.min_eigenvalue:.3g})")
+    else:
+        print(
+            "  the unconstrained estimate is not a rigid body (pseudo-inertia eigenvalue "
+            f"{c.min_eigenvalue:.3g}); "
+            f"constrained fit {c.distance:.2f} std away: values above are the constrained ones"
         )
 
 
@@ -269,7 +358,6 @@ def _write_model(outputs, arm, model, rec, fit, cf, spec) -> list:
 
 
 def _payload_only(args, arm, model, rec, tau_f) -> int:
-    from adaptive_dd.cli_serial import _print_payload
     from adaptive_dd.identification.payload_pair import payload_from_record
     from adaptive_dd.identification.serial_output_error import measurement_std
 
@@ -303,7 +391,6 @@ def _payload_only(args, arm, model, rec, tau_f) -> int:
 
 
 def _payload_pair(args, arm, model, fit, tau_f, K) -> None:
-    from adaptive_dd.cli_serial import _print_payload
     from adaptive_dd.identification.log_fit import fit_log
     from adaptive_dd.identification.payload_pair import payload_from_pair
 
