@@ -275,12 +275,14 @@ def identify_log(args: argparse.Namespace, arm, outputs) -> int:
     cf = _consistent(model, fit)
     reg = fit.regression
     pred = reg.phi @ fit.sigma
+    u = fit.used
     plot_torque_fit(
         rec.t[reg.start :],
-        reg.y,
-        pred,
+        reg.y[:, u],
+        pred[:, u],
         outputs.path("torque_fit.png"),
-        f"{Path(rec.source).name}: filtered fit",
+        f"{Path(rec.source.split(',')[0]).name}: the filtered fit, the fitted channels",
+        labels=[names[j] for j in np.flatnonzero(u)],
     )
     _write_estimates(outputs.path("estimates.csv"), model, fit)
     written = [outputs.path("estimates.csv"), outputs.path("torque_fit.png")]
@@ -475,7 +477,12 @@ def predict_log(args: argparse.Namespace) -> int:
             )
         label, tau, th = rows[-1]
         plot_torque_fit(
-            rec.t, tau, th, outputs.path("prediction.png"), f"measured vs predicted torque ({label})"
+            rec.t,
+            tau[:, used],
+            th[:, used],
+            outputs.path("prediction.png"),
+            f"measured vs predicted torque ({label}), the fitted channels",
+            labels=[names[j] for j in np.flatnonzero(used)],
         )
     print(f"wrote {Path(args.out) / 'prediction.csv'}, {Path(args.out) / 'prediction.png'}")
     return 0

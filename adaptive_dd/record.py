@@ -426,10 +426,13 @@ def read_log(spec: RecordSpec, window: tuple[float, float] | None = None, arm=No
     q = q * spec.position_scale
     tau = spec.torque_gain * raw_tau + spec.torque_offset
     qd_measured = velocity is not None and not spec.derive_velocity
-    if qd_measured:
-        qd = np.column_stack([column(c, False) for c in velocity]) * spec.position_scale
-    else:
-        qd = derivatives(q, T)[0]
+    qd = derivatives(q, T)[0]
+    lag_note = ()
+    if velocity is not None:
+        logged = np.column_stack([column(c, False) for c in velocity]) * spec.position_scale
+        lag_note = (_velocity_lag(logged, qd, T, spec.joint_names, qd_measured),)
+        if qd_measured:
+            qd = logged
     jitter = (steps.min(), steps.max(), float(np.median(steps)))
     notes = (
         f"{len(steps) + 1} logged samples over {t0[0]:.4g}-{t0[-1]:.4g} s, steps {jitter[0] * 1e3:.3g}-"
@@ -438,9 +441,29 @@ def read_log(spec: RecordSpec, window: tuple[float, float] | None = None, arm=No
         + (" and velocities" if qd_measured else "")
         + " by linear interpolation"
         + ("" if qd_measured else "; velocities derived (Savitzky-Golay, cubic, ~0.1 s)"),
+        *lag_note,
     )
     names = ", ".join(str(p) for p in spec.files)
     return LogRecord(grid, q, qd, tau, qd_measured, spec.used.copy(), T, names, notes, spec.simulator_format)
+
+
+def _velocity_lag(logged: Array, derived: Array, T: float, names, used: bool) -> str:
+    """How far the logged velocity lags the positions' derivative (cross-correlation, the joint that
+    moves most) and its gain, as a note."""
+    j = int(np.argmax(np.std(derived, axis=0)))
+    a, b = derived[:, j] - derived[:, j].mean(), logged[:, j] - logged[:, j].mean()
+    m = min(a.size // 4, round(1.0 / T))
+    lags = np.arange(-m, m + 1)
+    c = [np.dot(a[max(0, -k) : a.size - max(0, k)], b[max(0, k) : b.size - max(0, -k)]) for k in lags]
+    k = int(lags[int(np.argmax(c))])
+    gain = np.dot(a, b) / max(np.dot(a, a), 1e-300)
+    text = (
+        f"the logged velocity lags the positions' derivative by {k * T * 1e3:.0f} ms (joint "
+        f"'{names[j]}', gain {gain:.2f})"
+    )
+    if used and k > 2:
+        text += ': it is filtered; velocity_source = "derived" avoids the lag'
+    return text
 
 
 def _check_stuck(spec: RecordSpec, where: dict, raw: Array) -> None:
