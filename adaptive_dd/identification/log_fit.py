@@ -16,7 +16,7 @@ Weights (the stated rule)
     Ordinary least squares first; then each kept channel j is weighted by ``1 / s_j``, with
     ``s_j`` the rms of its filtered residual, floored at a tenth of the median over the kept
     channels (so a channel the model fits suspiciously well, a near-constant one, cannot take
-    all the weight); two passes.
+    all the weight); three passes.
 
 Standard deviations
     On real data the residual is model error more than sensor noise: correlated over time
