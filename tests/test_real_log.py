@@ -319,3 +319,111 @@ def test_cli_identify_and_predict_on_the_tiago_record(tmp_path, capsys):
     files = [str(bad), str(TIAGO / "tiago_velocity.csv.gz"), str(TIAGO / "tiago_effort.csv.gz")]
     assert main(["identify", "--arm", str(SCENARIO), *files, "--out", str(tmp_path / "x")]) == 2
     assert "in degrees it would fit" in capsys.readouterr().err
+
+
+# ----------------------------------------------------------------------------- model files, pairs, validate
+def test_fitted_urdf_carries_the_standard_parameters(tmp_path):
+    """write_fitted_urdf: the arm read back from model.urdf has the written links and friction."""
+    from adaptive_dd.identification.identified_model import write_fitted_urdf
+    from adaptive_dd.plant.serial_arm import SerialArm
+    from adaptive_dd.robots import robot_urdf
+
+    arm = SerialArm.from_urdf(robot_urdf("vertical3"), "tool")
+    n = arm.n_joints
+    pi = np.array(arm.pi, dtype=float)
+    pi[: 10 * n] *= np.repeat([1.1, 0.9, 1.3], 10)  # each link scaled: still a rigid body
+    pi[10 * n :] = np.r_[[0.3, 0.2, 0.1], [0.5, 0.4, 0.3], [0.0, 0.0, 0.0]]
+    back = SerialArm.from_urdf(write_fitted_urdf(arm, pi, tmp_path / "model.urdf"), "tool")
+    np.testing.assert_allclose(back.pi_links, pi[: 10 * n], rtol=1e-9, atol=1e-12)
+    np.testing.assert_allclose(back.viscous, pi[10 * n : 11 * n])
+    np.testing.assert_allclose(back.coulomb, pi[11 * n : 12 * n])
+
+
+def test_model_file_round_trip_and_errors(tmp_path):
+    from adaptive_dd.identification.identified_model import (
+        IdentifiedModel,
+        load_identified_model,
+        save_identified_model,
+    )
+    from adaptive_dd.robots import robot_urdf
+
+    p, n = 2, 3
+    m = IdentifiedModel(
+        urdf=str(robot_urdf("vertical3")),
+        payload_frame="tool",
+        gravity=[0.0, 0.0, -9.81],
+        repair_inertia=False,
+        joint_names=["joint1", "joint2", "joint3"],
+        friction_velocity=0.02,
+        names=["a", "b"],
+        sigma=[1.0, 2.0],
+        sigma_urdf=[1.0, 1.5],
+        std=[0.1, 0.2],
+        identified=[True, False],
+        covariance=[[0.01, 0.0], [0.0, 0.0]],
+        used=[True, True, False],
+        residual_rms=[0.5, 0.4, float("nan")],
+        noise_rms=[0.1, 0.1, 0.1],
+        viscous=[0.0] * n,
+        coulomb=[0.0] * n,
+        armature=[0.0] * n,
+        consistent_sigma=None,
+        consistent_distance=None,
+        fitted_urdf=None,
+        record={"window": [0.0, 1.0]},
+    )
+    path = save_identified_model(tmp_path / "model.json", m)
+    back = load_identified_model(path)
+    assert back.sigma == m.sigma and np.isnan(back.residual_rms[2]) and len(back.covariance) == p
+    text = path.read_text()
+    (tmp_path / "short.json").write_text(
+        text.replace('"sigma": [\n  1.0,\n  2.0\n ]', '"sigma": [\n  1.0\n ]')
+    )
+    with pytest.raises(DataError, match=r"short.json: key 'sigma' has 1 entries, 'names' 2"):
+        load_identified_model(tmp_path / "short.json")
+    (tmp_path / "other.json").write_text('{"format": "something else"}')
+    with pytest.raises(DataError, match=r"other.json: key 'format'"):
+        load_identified_model(tmp_path / "other.json")
+    with pytest.raises(DataError, match=r"no such model file"):
+        load_identified_model(tmp_path / "none.json")
+
+
+def test_payload_pair_names_what_the_pair_does_not_see():
+    """Covariances that are zero where the fitted channels see nothing: a named ParameterError, not
+    a LinAlgError; with full covariances the payload comes back."""
+    from adaptive_dd.errors import ParameterError
+    from adaptive_dd.identification.payload_pair import payload_from_pair
+    from adaptive_dd.plant.serial_arm import SerialArm, payload_parameters
+    from adaptive_dd.robots import ROBOTS, robot_urdf
+
+    arm = SerialArm.from_urdf(robot_urdf("ur5"), ROBOTS["ur5"].payload_frame)
+    P = arm.payload_basis
+    load = payload_parameters(2.0, [0.01, 0.02, 0.05], radius=0.05)
+    s0 = arm.sigma
+    cov = 1e-8 * np.eye(len(s0))
+    pr = payload_from_pair(arm, s0 + P @ load, cov, s0, cov)
+    assert pr.mass == pytest.approx(2.0, rel=1e-3)
+    blind = cov.copy()
+    rows = np.flatnonzero(np.abs(P[:, 0]) > 0)  # every base parameter the payload's mass enters
+    blind[rows, rows] = 0.0
+    with pytest.raises(ParameterError, match=r"does not determine the payload's .*m"):
+        payload_from_pair(arm, s0 + P @ load, blind, s0, blind)
+
+
+def test_validate_an_identification_scenario(tmp_path, capsys):
+    """A scenario with [arm] and [record] validates without a [reference]; a benchmark table is refused."""
+    from adaptive_dd.cli import main
+
+    t = np.arange(200) * 0.01
+    cols = np.column_stack([t, np.sin(t), np.cos(t), 0.1 * t, np.sin(t), np.cos(t), t])
+    np.savetxt(tmp_path / "log.csv", cols, delimiter=",", header="t,q1,q2,q3,tau1,tau2,tau3", comments="")
+    scen = tmp_path / "id.toml"
+    scen.write_text(
+        '[arm]\nrobot = "vertical3"\ngeneral = true\n\n[record]\nfiles = ["log.csv"]\nexclude = ["joint3"]\n'
+    )
+    assert main(["validate", str(scen)]) == 0
+    out = capsys.readouterr().out
+    assert "no [reference]" in out and "record.joint3 = { joint = 'joint3'" in out and "excluded" in out
+    scen.write_text(scen.read_text() + "\n[run]\nduration = 2.0\n")
+    assert main(["validate", str(scen)]) == 2
+    assert "[run]: an identification scenario" in capsys.readouterr().err
