@@ -316,6 +316,23 @@ def _cmd_identify(args: argparse.Namespace) -> int:
         arm = _load_arm(args.arm, args.repair_inertia)
         if isinstance(arm, SerialArm):
             from adaptive_dd.cli_log import identify_log
+            from adaptive_dd.experiments import TABLE2
+
+            two_link = {
+                "--estimator": args.estimator != "exact",
+                "--method": args.method != "M2",
+                "--split": args.split != "15",
+                "--true": args.true is not None,
+                "--online": args.online,
+                "--position-variance": list(args.position_variance) != list(TABLE2["position_variance"]),
+                "--velocity-variance": list(args.velocity_variance) != list(TABLE2["velocity_variance"]),
+            }
+            given = [o for o, v in two_link.items() if v]
+            if given:
+                raise DataError(
+                    f"{', '.join(given)}: options of the two-link identification; an N-joint arm from a "
+                    "URDF (--arm) is identified by weighted least squares (docs/real_log.md)"
+                )
 
             outputs = OutputSet(args.out)
             with outputs:
@@ -326,6 +343,8 @@ def _cmd_identify(args: argparse.Namespace) -> int:
         "--window": args.window,
         "--repair-inertia": args.repair_inertia,
         "--output-error": args.output_error != "auto",
+        "--segment-length": args.segment_length != 200,
+        "--max-iter": args.max_iter != 30,
     }
     given = [o for o, v in arm_only.items() if v]
     if given:

@@ -266,7 +266,15 @@ def identify_log(args: argparse.Namespace, arm, outputs) -> int:
     K = identifiable_subset(model, rec.used, lim[:, 0], lim[:, 1], np.random.default_rng(0))
     try:
         fit = fit_log(
-            model, rec.q, rec.qd, rec.tau, rec.used, K, tau_f=tau_f, sample_period=rec.sample_period
+            model,
+            rec.q,
+            rec.qd,
+            rec.tau,
+            rec.used,
+            K,
+            tau_f=tau_f,
+            sample_period=rec.sample_period,
+            channel_weight=rec.weight,
         )
     except DataError as exc:
         raise DataError(f"{rec.source}: {exc}") from None
@@ -399,7 +407,15 @@ def _payload_pair(args, arm, model, fit, tau_f, K) -> None:
     _, base = read_arm_log(args.arm, arm, [args.baseline], args.window)
     try:
         other = fit_log(
-            model, base.q, base.qd, base.tau, base.used, K, tau_f=tau_f, sample_period=base.sample_period
+            model,
+            base.q,
+            base.qd,
+            base.tau,
+            base.used,
+            K,
+            tau_f=tau_f,
+            sample_period=base.sample_period,
+            channel_weight=base.weight,
         )
     except DataError as exc:
         raise DataError(f"{base.source}: {exc}") from None

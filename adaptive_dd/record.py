@@ -19,6 +19,7 @@ identification scenario (the same file as its ``[arm]``) says how to read it::
                                              # ("rad", "deg", "m", "mm")
     gear_ratio = [1, 1, ...]                 # optional: motor-side positions / velocities
     exclude = ["torso_lift_joint", "arm_5_joint"]   # torque channels left out of the fit
+    torque_weight = [1, 1, 0.5, ...]         # optional: multiplies each channel's weight (0: exclude)
     window = [9.21, 67.9]                    # optional [s] of the log's clock
     sample_period = 0.01                     # optional: the grid to resample to [s]
 
@@ -71,6 +72,7 @@ RECORD_KEYS = (
     "position_unit",
     "gear_ratio",
     "exclude",
+    "torque_weight",
     "window",
     "sample_period",
 )
@@ -103,6 +105,8 @@ class RecordSpec:
         ``tau = torque_gain * logged + torque_offset`` [N m] (the sign folded into the gain).
     used : ndarray of bool (n,)
         Torque channels in the fit (False: excluded).
+    weight : ndarray (n,)
+        Multiplies each channel's weight in the fit (``torque_weight``; 1 by default).
     window : tuple of float or None
     sample_period : float or None
     joint_names : tuple of str
@@ -122,6 +126,7 @@ class RecordSpec:
     torque_gain: Array
     torque_offset: Array
     used: NDArray[np.bool_]
+    weight: Array
     window: tuple[float, float] | None
     sample_period: float | None
     joint_names: tuple[str, ...]
@@ -142,6 +147,8 @@ class LogRecord:
         ``qd`` is the measured velocity (else derived from ``q``).
     used : ndarray of bool (n,)
         Torque channels in the fit.
+    weight : ndarray (n,)
+        Their weight multipliers (``torque_weight``).
     sample_period : float
     source : str
         The file(s).
@@ -157,6 +164,7 @@ class LogRecord:
     tau: Array
     qd_measured: bool
     used: NDArray[np.bool_]
+    weight: Array
     sample_period: float
     source: str
     notes: tuple[str, ...] = ()
@@ -260,7 +268,10 @@ def record_spec(table: dict | None, joint_names, kinds, src: str, files=None) ->
     exclude = t.get("exclude", [])
     if not isinstance(exclude, list) or any(x not in names for x in exclude):
         raise _err(src, "exclude", f"must list joint names of the arm ({', '.join(names)}), got {exclude!r}")
-    used = np.array([nm not in exclude for nm in names])
+    weight = _per_joint(src, "torque_weight", t.get("torque_weight"), n, 1.0)
+    if np.any(weight < 0):
+        raise _err(src, "torque_weight", f"must be >= 0 per joint, got {t.get('torque_weight')!r}")
+    used = np.array([nm not in exclude for nm in names]) & (weight > 0)
     if not used.any():
         raise _err(src, "exclude", "leaves no torque channel to fit")
     window = t.get("window")
@@ -284,6 +295,7 @@ def record_spec(table: dict | None, joint_names, kinds, src: str, files=None) ->
         torque_gain=sign * gain,
         torque_offset=offset,
         used=used,
+        weight=weight,
         window=window,
         sample_period=None if T is None else float(T),
         joint_names=names,
@@ -444,7 +456,19 @@ def read_log(spec: RecordSpec, window: tuple[float, float] | None = None, arm=No
         *lag_note,
     )
     names = ", ".join(str(p) for p in spec.files)
-    return LogRecord(grid, q, qd, tau, qd_measured, spec.used.copy(), T, names, notes, spec.simulator_format)
+    return LogRecord(
+        grid,
+        q,
+        qd,
+        tau,
+        qd_measured,
+        spec.used.copy(),
+        spec.weight.copy(),
+        T,
+        names,
+        notes,
+        spec.simulator_format,
+    )
 
 
 def _velocity_lag(logged: Array, derived: Array, T: float, names, used: bool) -> str:

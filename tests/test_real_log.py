@@ -75,6 +75,8 @@ def test_record_resamples_jittered_log_and_converts(tmp_path):
     inner = slice(10, -10)
     np.testing.assert_allclose(rec.qd[inner], qd_true[inner], atol=2e-4)
     assert not rec.qd_measured and rec.used.tolist() == [True, True, False]
+    both = record_spec(_table(p1, p2, torque_weight=[1.0, 0.0, 2.0]), NAMES, KINDS, "s.toml")
+    assert both.used.tolist() == [True, False, True] and both.weight.tolist() == [1.0, 0.0, 2.0]
     assert "resampled" in rec.notes[0] and "cubic spline" in rec.notes[0]
     # a window in the log's clock
     part = read_log(spec, window=(3.0, 8.0))
@@ -427,3 +429,15 @@ def test_validate_an_identification_scenario(tmp_path, capsys):
     scen.write_text(scen.read_text() + "\n[run]\nduration = 2.0\n")
     assert main(["validate", str(scen)]) == 2
     assert "[run]: an identification scenario" in capsys.readouterr().err
+
+
+def test_identify_refuses_options_of_the_other_path(tmp_path, capsys):
+    """Options that one identification path would ignore are errors naming them."""
+    from adaptive_dd.cli import main
+
+    scen = tmp_path / "id.toml"
+    scen.write_text('[arm]\nrobot = "vertical3"\n\n[record]\nfiles = ["log.csv"]\n')
+    assert main(["identify", "--arm", str(scen), "--method", "M1", "--out", str(tmp_path / "o")]) == 2
+    assert "--method: options of the two-link identification" in capsys.readouterr().err
+    assert main(["identify", "x.csv", "--window", "0", "1", "--out", str(tmp_path / "o")]) == 2
+    assert "--window: only with --arm" in capsys.readouterr().err

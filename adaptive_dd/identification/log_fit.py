@@ -13,7 +13,8 @@ Channels left out
     the others absorb the deviation of those fixed in combination with them.
 
 Weights (the stated rule)
-    Ordinary least squares first; then each kept channel j is weighted by ``1 / s_j``, with
+    Ordinary least squares first; then each kept channel j is weighted by ``c_j / s_j`` (``c_j``
+    the user's ``torque_weight``, 1 by default), with
     ``s_j`` the rms of its filtered residual, floored at a tenth of the median over the kept
     channels (so a channel the model fits suspiciously well, a near-constant one, cannot take
     all the weight); three passes.
@@ -195,6 +196,7 @@ def fit_log(
     *,
     tau_f: float,
     sample_period: float,
+    channel_weight=None,
 ) -> LogFit:
     """Weighted least squares of one log (module docstring).
 
@@ -208,6 +210,8 @@ def fit_log(
         Base parameters to fit (:func:`identifiable_subset`); the others hold the URDF's values.
     tau_f, sample_period : float
         [s].
+    channel_weight : array_like (n,), optional
+        Multiplies each channel's weight from the rule (a user's ``torque_weight``).
 
     Raises
     ------
@@ -227,13 +231,15 @@ def fit_log(
             "is needed"
         )
     check_excitation(phi, names)
-    w = np.ones(used.sum())
+    cw = np.ones(model.n) if channel_weight is None else np.asarray(channel_weight, dtype=float)
+    cw = cw[used]
+    w = cw.copy()
     for _ in range(3):
         x, _ = _solve(phi, y, w)
         res = y - phi @ x
         rms = np.sqrt(np.mean(res**2, axis=0))
         s = np.maximum(rms, WEIGHT_FLOOR * np.median(rms))
-        w = 1.0 / np.maximum(s, 1e-300)
+        w = cw / np.maximum(s, 1e-300)
     x, _scale = _solve(phi, y, w)
     res = y - phi @ x
     cov_k, lag = _newey_west(
