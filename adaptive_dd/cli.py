@@ -805,7 +805,12 @@ def build_parser() -> argparse.ArgumentParser:
         help="the [arm] of a scenario TOML (a URDF: N joints, CSV t, q1..qN, [qd1..qdN,] tau1..tauN); "
         "prints WLS and output error with the Cramér-Rao bound",
     )
-    i.add_argument("--baseline", metavar="CSV", help="with --arm: an unloaded record; prints the payload")
+    i.add_argument(
+        "--baseline",
+        nargs="+",
+        metavar="CSV",
+        help="with --arm: the unloaded record's file(s), read through the same [record]; prints the payload",
+    )
     i.add_argument(
         "--payload-only", action="store_true", help="with --arm: the arm known (URDF), fit the payload alone"
     )

@@ -404,7 +404,7 @@ def _payload_pair(args, arm, model, fit, tau_f, K) -> None:
     from adaptive_dd.identification.log_fit import fit_log
     from adaptive_dd.identification.payload_pair import payload_from_pair
 
-    _, base = read_arm_log(args.arm, arm, [args.baseline], args.window)
+    _, base = read_arm_log(args.arm, arm, args.baseline, args.window)
     try:
         other = fit_log(
             model,
@@ -420,7 +420,8 @@ def _payload_pair(args, arm, model, fit, tau_f, K) -> None:
     except DataError as exc:
         raise DataError(f"{base.source}: {exc}") from None
     pr = payload_from_pair(arm, fit.sigma, fit.cov, other.sigma, other.cov)
-    _print_payload(f"payload (loaded {', '.join(args.data or ['record'])} - unloaded {args.baseline})", pr)
+    loaded = ", ".join(args.data) if args.data else "the scenario's record"
+    _print_payload(f"payload (loaded {loaded} - unloaded {', '.join(args.baseline)})", pr)
 
 
 def lowpass(x: Array, cutoff: float, T: float) -> Array:
