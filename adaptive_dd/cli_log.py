@@ -434,6 +434,28 @@ def lowpass(x: Array, cutoff: float, T: float) -> Array:
     return filtfilt(b, a, x, axis=0)
 
 
+def _check_same_urdf(scenario: str, m, model_path) -> None:
+    """The scenario's ``[arm]`` names the URDF the model was identified on (the model's arm is used)."""
+    from adaptive_dd.errors import ScenarioError
+    from adaptive_dd.io import read_toml
+
+    table = read_toml(Path(scenario), ScenarioError).get("arm") or {}
+    if "robot" in table:
+        from adaptive_dd.robots import robot_urdf
+
+        path = robot_urdf(table["robot"])
+    elif isinstance(table.get("urdf"), str):
+        path = Path(table["urdf"])
+        path = path if path.is_absolute() else Path(scenario).parent / path
+    else:
+        raise ScenarioError(f"{scenario}: predict needs an [arm] with urdf = ... or robot = ...")
+    if Path(path).resolve() != Path(m.urdf).resolve():
+        raise DataError(
+            f"{model_path}: identified on {m.urdf}, but the scenario's [arm] is {path}: use the scenario "
+            "the model was identified with"
+        )
+
+
 def predict_log(args: argparse.Namespace) -> int:
     """``adaptive-dd predict --arm SCENARIO --model model.json [FILES]``: torque prediction error."""
     from adaptive_dd.identification.identified_model import load_identified_model
@@ -442,11 +464,10 @@ def predict_log(args: argparse.Namespace) -> int:
     from adaptive_dd.record import derivatives
 
     m = load_identified_model(args.model)
+    _check_same_urdf(args.arm, m, args.model)
     arm = m.arm()
     model = m.serial_model()
-    spec, rec = read_arm_log(args.arm, arm, args.data, args.window)
-    if list(arm.joint_names) != list(spec.joint_names):
-        raise DataError(f"{args.model}: its joints {m.joint_names} are not the scenario's {spec.joint_names}")
+    _, rec = read_arm_log(args.arm, arm, args.data, args.window)
     qd, qdd = derivatives(rec.q, rec.sample_period)
     if rec.qd_measured:
         qd = rec.qd
