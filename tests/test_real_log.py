@@ -341,7 +341,7 @@ def test_fitted_urdf_carries_the_standard_parameters(tmp_path):
     np.testing.assert_allclose(back.coulomb, pi[11 * n : 12 * n])
 
 
-def test_model_file_round_trip_and_errors(tmp_path):
+def test_model_file_round_trip_and_errors(tmp_path, capsys):
     from adaptive_dd.identification.identified_model import (
         IdentifiedModel,
         load_identified_model,
@@ -376,6 +376,13 @@ def test_model_file_round_trip_and_errors(tmp_path):
     )
     path = save_identified_model(tmp_path / "model.json", m)
     back = load_identified_model(path)
+    # predict with a scenario of another arm: refused, naming both URDFs
+    from adaptive_dd.cli import main
+
+    scen = tmp_path / "ur5.toml"
+    scen.write_text('[arm]\nrobot = "ur5"\n\n[record]\nfiles = ["log.csv"]\n')
+    assert main(["predict", "--arm", str(scen), "--model", str(path), "--out", str(tmp_path / "p")]) == 2
+    assert "vertical3.urdf, but the scenario's [arm] is" in capsys.readouterr().err
     assert back.sigma == m.sigma and np.isnan(back.residual_rms[2]) and len(back.covariance) == p
     text = path.read_text()
     (tmp_path / "short.json").write_text(
