@@ -278,6 +278,11 @@ def identify_log(args: argparse.Namespace, arm, outputs) -> int:
         )
     except DataError as exc:
         raise DataError(f"{rec.source}: {exc}") from None
+    except np.linalg.LinAlgError as exc:  # not met so far: the checks above come first
+        raise DataError(
+            f"{rec.source}: the weighted least squares failed numerically ({exc}); check the record's "
+            "conversions (a huge or constant column) and its window"
+        ) from None
     _print_fit(model, fit, names)
     _output_error(args, arm, model, rec, fit)
     cf = _consistent(model, fit)
