@@ -245,6 +245,33 @@ def record_spec(table: dict | None, joint_names, kinds, src: str, files=None) ->
         raise _err(src, "velocity_source", f"must be 'measured' or 'derived', got {source!r}")
     if source == "measured" and velocity is None:
         raise _err(src, "velocity_source", "is 'measured' but no 'velocity' columns are given")
+    scale = _position_scale(src, t, names, tuple(kinds))
+    gain, offset = _torque_conversion(src, t, n)
+    used, weight = _channels(src, t, names)
+    window, T = _window_period(src, t)
+    return RecordSpec(
+        files=paths,
+        time=time,
+        position=position,
+        torque=torque,
+        velocity=velocity,
+        derive_velocity=source == "derived",
+        position_scale=scale,
+        torque_gain=gain,
+        torque_offset=offset,
+        used=used,
+        weight=weight,
+        window=window,
+        sample_period=T,
+        joint_names=names,
+        source=src,
+        simulator_format=default,
+    )
+
+
+def _position_scale(src: str, t: dict, names: tuple[str, ...], kinds: tuple[str, ...]) -> Array:
+    """Logged position or velocity -> rad or m, per joint (``position_unit``, ``gear_ratio``)."""
+    n = len(names)
     unit = t.get("position_unit", "rad")
     if isinstance(unit, str):  # one unit: for the revolute joints ("rad", "deg") or the prismatic ones
         length = unit in ("m", "mm")
@@ -259,21 +286,33 @@ def record_spec(table: dict | None, joint_names, kinds, src: str, files=None) ->
         if (u in ("m", "mm")) != (k == "prismatic"):
             raise _err(src, "position_unit", f"{u!r} does not fit joint '{names[j]}' ({k})")
     gear = _per_joint(src, "gear_ratio", t.get("gear_ratio"), n, 1.0, nonzero=True)
-    scale = np.array([UNITS[u] for u in units]) / gear
+    return np.array([UNITS[u] for u in units]) / gear
+
+
+def _torque_conversion(src: str, t: dict, n: int) -> tuple[Array, Array]:
+    """``(sign * gain, offset)`` per joint."""
     gain = _per_joint(src, "torque_gain", t.get("torque_gain"), n, 1.0, nonzero=True)
     sign = _per_joint(src, "torque_sign", t.get("torque_sign"), n, 1.0)
     if np.any(np.abs(sign) != 1):
         raise _err(src, "torque_sign", f"must be +1 or -1 per joint, got {t.get('torque_sign')!r}")
-    offset = _per_joint(src, "torque_offset", t.get("torque_offset"), n, 0.0)
+    return sign * gain, _per_joint(src, "torque_offset", t.get("torque_offset"), n, 0.0)
+
+
+def _channels(src: str, t: dict, names: tuple[str, ...]) -> tuple[NDArray[np.bool_], Array]:
+    """Fitted torque channels and their weight multipliers (``exclude``, ``torque_weight``)."""
     exclude = t.get("exclude", [])
     if not isinstance(exclude, list) or any(x not in names for x in exclude):
         raise _err(src, "exclude", f"must list joint names of the arm ({', '.join(names)}), got {exclude!r}")
-    weight = _per_joint(src, "torque_weight", t.get("torque_weight"), n, 1.0)
+    weight = _per_joint(src, "torque_weight", t.get("torque_weight"), len(names), 1.0)
     if np.any(weight < 0):
         raise _err(src, "torque_weight", f"must be >= 0 per joint, got {t.get('torque_weight')!r}")
     used = np.array([nm not in exclude for nm in names]) & (weight > 0)
     if not used.any():
         raise _err(src, "exclude", "leaves no torque channel to fit")
+    return used, weight
+
+
+def _window_period(src: str, t: dict) -> tuple[tuple[float, float] | None, float | None]:
     window = t.get("window")
     if window is not None:
         ok = isinstance(window, list) and len(window) == 2
@@ -284,24 +323,7 @@ def record_spec(table: dict | None, joint_names, kinds, src: str, files=None) ->
     T = t.get("sample_period")
     if T is not None and not (isinstance(T, int | float) and not isinstance(T, bool) and 0 < T < 10):
         raise _err(src, "sample_period", f"must be in (0, 10) s, got {T!r}")
-    return RecordSpec(
-        files=paths,
-        time=time,
-        position=position,
-        torque=torque,
-        velocity=velocity,
-        derive_velocity=source == "derived",
-        position_scale=scale,
-        torque_gain=sign * gain,
-        torque_offset=offset,
-        used=used,
-        weight=weight,
-        window=window,
-        sample_period=None if T is None else float(T),
-        joint_names=names,
-        source=src,
-        simulator_format=default,
-    )
+    return window, None if T is None else float(T)
 
 
 def _read_csv(path: Path):
@@ -445,16 +467,7 @@ def read_log(spec: RecordSpec, window: tuple[float, float] | None = None, arm=No
         lag_note = (_velocity_lag(logged, qd, T, spec.joint_names, qd_measured),)
         if qd_measured:
             qd = logged
-    jitter = (steps.min(), steps.max(), float(np.median(steps)))
-    notes = (
-        f"{len(steps) + 1} logged samples over {t0[0]:.4g}-{t0[-1]:.4g} s, steps {jitter[0] * 1e3:.3g}-"
-        f"{jitter[1] * 1e3:.3g} ms (median {jitter[2] * 1e3:.4g}); resampled to T = {T:.6g} s: positions by "
-        "cubic spline, torques"
-        + (" and velocities" if qd_measured else "")
-        + " by linear interpolation"
-        + ("" if qd_measured else "; velocities derived (Savitzky-Golay, cubic, ~0.1 s)"),
-        *lag_note,
-    )
+    notes = (_resampling_note(t0, T, qd_measured), *lag_note)
     names = ", ".join(str(p) for p in spec.files)
     return LogRecord(
         grid,
@@ -468,6 +481,18 @@ def read_log(spec: RecordSpec, window: tuple[float, float] | None = None, arm=No
         names,
         notes,
         spec.simulator_format,
+    )
+
+
+def _resampling_note(t0: Array, T: float, qd_measured: bool) -> str:
+    steps = np.diff(t0)
+    return (
+        f"{t0.size} logged samples over {t0[0]:.4g}-{t0[-1]:.4g} s, steps {steps.min() * 1e3:.3g}-"
+        f"{steps.max() * 1e3:.3g} ms (median {np.median(steps) * 1e3:.4g}); resampled to T = {T:.6g} s: "
+        "positions by cubic spline, torques"
+        + (" and velocities" if qd_measured else "")
+        + " by linear interpolation"
+        + ("" if qd_measured else "; velocities derived (Savitzky-Golay, cubic, ~0.1 s)")
     )
 
 
