@@ -108,7 +108,7 @@ def main() -> None:
     for label, th in preds.items():
         e_lp = meas_lp[:, used] - lowpass(th, args.lowpass, te.sample_period)[:, used]
         e = te.tau[:, used] - th[:, used]
-        per = " / ".join(f"{x:.4f}" for x in rms(e_lp))
+        per = " / ".join(f"{x:.5f}" for x in rms(e_lp))
         print(f"{label:<40} {per:<36} {np.sqrt(np.mean(e_lp**2)):7.3f}   {np.sqrt(np.mean(e**2)):.3f}")
     # the bounds against disjoint windows
     _, whole = read_arm_log(args.scenario, arm)
