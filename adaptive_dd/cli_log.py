@@ -275,6 +275,7 @@ def identify_log(args: argparse.Namespace, arm, outputs) -> int:
             tau_f=tau_f,
             sample_period=rec.sample_period,
             channel_weight=rec.weight,
+            torque_held=spec.torque_held,
         )
     except DataError as exc:
         raise DataError(f"{rec.source}: {exc}") from None
@@ -409,7 +410,7 @@ def _payload_pair(args, arm, model, fit, tau_f, K) -> None:
     from adaptive_dd.identification.log_fit import fit_log
     from adaptive_dd.identification.payload_pair import payload_from_pair
 
-    _, base = read_arm_log(args.arm, arm, args.baseline, args.window)
+    spec, base = read_arm_log(args.arm, arm, args.baseline, args.window)
     try:
         other = fit_log(
             model,
@@ -421,6 +422,7 @@ def _payload_pair(args, arm, model, fit, tau_f, K) -> None:
             tau_f=tau_f,
             sample_period=base.sample_period,
             channel_weight=base.weight,
+            torque_held=spec.torque_held,
         )
     except DataError as exc:
         raise DataError(f"{base.source}: {exc}") from None

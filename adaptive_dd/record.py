@@ -20,6 +20,8 @@ identification scenario (the same file as its ``[arm]``) says how to read it::
     gear_ratio = [1, 1, ...]                 # optional: motor-side positions / velocities
     exclude = ["torso_lift_joint", "arm_5_joint"]   # torque channels left out of the fit
     torque_weight = [1, 1, 0.5, ...]         # optional: multiplies each channel's weight (0: exclude)
+    torque_held = true                       # a command held over each sample (default), or false:
+                                             # samples of a continuous torque (a torque sensor)
     window = [9.21, 67.9]                    # optional [s] of the log's clock
     sample_period = 0.01                     # optional: the grid to resample to [s]
 
@@ -73,6 +75,7 @@ RECORD_KEYS = (
     "gear_ratio",
     "exclude",
     "torque_weight",
+    "torque_held",
     "window",
     "sample_period",
 )
@@ -107,6 +110,8 @@ class RecordSpec:
         Torque channels in the fit (False: excluded).
     weight : ndarray (n,)
         Multiplies each channel's weight in the fit (``torque_weight``; 1 by default).
+    torque_held : bool
+        The torque is a command held over each sample (else samples of a continuous torque).
     window : tuple of float or None
     sample_period : float or None
     joint_names : tuple of str
@@ -127,6 +132,7 @@ class RecordSpec:
     torque_offset: Array
     used: NDArray[np.bool_]
     weight: Array
+    torque_held: bool
     window: tuple[float, float] | None
     sample_period: float | None
     joint_names: tuple[str, ...]
@@ -249,6 +255,9 @@ def record_spec(table: dict | None, joint_names, kinds, src: str, files=None) ->
     gain, offset = _torque_conversion(src, t, n)
     used, weight = _channels(src, t, names)
     window, T = _window_period(src, t)
+    held = t.get("torque_held", True)
+    if not isinstance(held, bool):
+        raise _err(src, "torque_held", f"must be true or false, got {held!r}")
     return RecordSpec(
         files=paths,
         time=time,
@@ -261,6 +270,7 @@ def record_spec(table: dict | None, joint_names, kinds, src: str, files=None) ->
         torque_offset=offset,
         used=used,
         weight=weight,
+        torque_held=held,
         window=window,
         sample_period=T,
         joint_names=names,

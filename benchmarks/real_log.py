@@ -73,6 +73,9 @@ def main() -> None:
     ap.add_argument("--test", type=float, nargs=2, default=[48.0, 67.9])
     ap.add_argument("--windows", type=int, default=3, help="disjoint windows of the excitation (default 3)")
     ap.add_argument("--lowpass", type=float, default=2.0)
+    ap.add_argument(
+        "--torque-sampled", action="store_true", help="torque_held = false: the efforts as samples, not held"
+    )
     args = ap.parse_args()
     t0 = time.perf_counter()
     arm = _load_arm(args.scenario)
@@ -84,7 +87,10 @@ def main() -> None:
     lim = arm.position_limits
     K = identifiable_subset(model, used, lim[:, 0], lim[:, 1], np.random.default_rng(0))
     T = tr.sample_period
-    fit = fit_log(model, tr.q, tr.qd, tr.tau, used, K, tau_f=filter_time_constant(T), sample_period=T)
+    held = not args.torque_sampled
+    fit = fit_log(
+        model, tr.q, tr.qd, tr.tau, used, K, tau_f=filter_time_constant(T), sample_period=T, torque_held=held
+    )
     qd_te, qdd_te = derivatives(te.q, te.sample_period)
     qd_tr, qdd_tr = derivatives(tr.q, T)
     plain = plain_least_squares(arm, tr.q, qd_tr, qdd_tr, tr.tau, used)
@@ -125,6 +131,7 @@ def main() -> None:
             K,
             tau_f=filter_time_constant(w.sample_period),
             sample_period=w.sample_period,
+            torque_held=held,
         )
         est.append(f.sigma[K])
         std.append(f.std[K])

@@ -197,6 +197,7 @@ def fit_log(
     tau_f: float,
     sample_period: float,
     channel_weight=None,
+    torque_held: bool = True,
 ) -> LogFit:
     """Weighted least squares of one log (module docstring).
 
@@ -212,6 +213,10 @@ def fit_log(
         [s].
     channel_weight : array_like (n,), optional
         Multiplies each channel's weight from the rule (a user's ``torque_weight``).
+    torque_held : bool
+        The torque is held over each sample (a command, as a simulator's or a drive's current
+        loop applies it: the default) rather than sampled from a continuous signal (a joint
+        torque sensor): :func:`~adaptive_dd.identification.serial_regression.serial_filtered_regression`.
 
     Raises
     ------
@@ -221,7 +226,9 @@ def fit_log(
     used = np.asarray(used, dtype=bool)
     K = np.asarray(identified, dtype=bool)
     names = tuple(nm for nm, k in zip(model.names, K, strict=True) if k)
-    reg = serial_filtered_regression(model, q, qd, tau, tau_f=tau_f, sample_period=sample_period)
+    reg = serial_filtered_regression(
+        model, q, qd, tau, tau_f=tau_f, sample_period=sample_period, torque_held=torque_held
+    )
     phi_all = reg.phi[:, used, :]
     y = reg.y[:, used] - phi_all[:, :, ~K] @ model.sigma_ref[~K]
     phi = phi_all[:, :, K]
