@@ -802,8 +802,9 @@ def build_parser() -> argparse.ArgumentParser:
     i.add_argument(
         "--arm",
         metavar="SCENARIO",
-        help="the [arm] of a scenario TOML (a URDF: N joints, CSV t, q1..qN, [qd1..qdN,] tau1..tauN); "
-        "prints WLS and output error with the Cramér-Rao bound",
+        help="a scenario TOML with [arm] from a URDF and, for a real log, [record] (default: CSV t, q1..qN, "
+        "[qd1..qdN,] tau1..tauN); prints weighted least squares with Newey-West std, output error where "
+        "the record can be simulated; writes OUT/model.json (docs/real_log.md)",
     )
     i.add_argument(
         "--baseline",
