@@ -196,9 +196,6 @@ def load_identified_model(path) -> IdentifiedModel:
     return IdentifiedModel(**kw)
 
 
-_INERTIA_KEYS = {"ixx": (0, 0), "ixy": (0, 1), "ixz": (0, 2), "iyy": (1, 1), "iyz": (1, 2), "izz": (2, 2)}
-
-
 def write_fitted_urdf(arm, pi: Array, path) -> Path:
     """The arm's URDF with the standard parameters ``pi (13 n,)`` written in.
 
@@ -206,57 +203,16 @@ def write_fitted_urdf(arm, pi: Array, path) -> Path:
     links fixed to it and the locked branches hanging from it: their ``<inertial>`` are
     removed, their mass now in the body); ``<dynamics damping friction>`` of the chain
     joints get ``fv, fc``. The armature is not a URDF quantity (it stays in model.json).
+    See :func:`adaptive_dd.plant.urdf_write.write_urdf_links`.
     """
-    import xml.etree.ElementTree as ET
+    from adaptive_dd.plant.urdf_write import write_urdf_links
 
-    from adaptive_dd.outputs import atomic_write
-
-    robot = arm._robot
-    root = ET.fromstring(robot.xml) if robot.xml is not None else ET.parse(arm.urdf).getroot()
-    links = {el.get("name"): el for el in root.findall("link")}
-    joints = {j.get("name"): j for j in root.findall("joint")}
-    kids: dict[str, list] = {}
-    for j in root.findall("joint"):
-        kids.setdefault(j.find("parent").get("link"), []).append(j)
-    chain = set(arm.joint_names)
     n = arm.n_joints
-    for k, jname in enumerate(arm.joint_names):
-        body = joints[jname].find("child").get("link")
-        stack = [body]
-        while stack:  # links merged into this body: fixed children and locked branches
-            name = stack.pop()
-            for child in kids.get(name, []):
-                if child.get("name") in chain:
-                    continue
-                cl = child.find("child").get("link")
-                old = links[cl].find("inertial")
-                if old is not None:
-                    links[cl].remove(old)
-                stack.append(cl)
-        _set_inertial(links[body], pi[10 * k : 10 * k + 10])
-        dyn = joints[jname].find("dynamics")
-        if dyn is None:
-            dyn = ET.SubElement(joints[jname], "dynamics")
-        dyn.set("damping", repr(float(pi[10 * n + k])))
-        dyn.set("friction", repr(float(pi[11 * n + k])))
-    path = Path(path)
-    with atomic_write(path, encoding="utf-8") as fh:
-        fh.write(f"<!-- written by adaptive-dd identify: a physically consistent fit on {arm.urdf} -->\n")
-        fh.write(ET.tostring(root, encoding="unicode"))
-    return path
-
-
-def _set_inertial(link, p: Array) -> None:
-    import xml.etree.ElementTree as ET
-
-    m, h = float(p[0]), np.asarray(p[1:4], float)
-    c = h / m
-    Io = np.array([[p[4], p[5], p[7]], [p[5], p[6], p[8]], [p[7], p[8], p[9]]])
-    Ic = Io - m * (c @ c * np.eye(3) - np.outer(c, c))
-    old = link.find("inertial")
-    if old is not None:
-        link.remove(old)
-    el = ET.SubElement(link, "inertial")
-    ET.SubElement(el, "origin", xyz=" ".join(repr(float(x)) for x in c), rpy="0 0 0")
-    ET.SubElement(el, "mass", value=repr(m))
-    ET.SubElement(el, "inertia", {k: repr(float(Ic[r, s])) for k, (r, s) in _INERTIA_KEYS.items()})
+    pi = np.asarray(pi, dtype=float)
+    return write_urdf_links(
+        arm,
+        pi[: 10 * n],
+        path,
+        f"written by adaptive-dd identify: a physically consistent fit on {arm.urdf}",
+        friction=(pi[10 * n : 11 * n], pi[11 * n : 12 * n]),
+    )
