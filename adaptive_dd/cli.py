@@ -15,6 +15,8 @@ from pathlib import Path
 
 import numpy as np
 
+from adaptive_dd.cli_arm import describe_serial_arm
+from adaptive_dd.cli_arm import load_arm as _load_arm
 from adaptive_dd.errors import OutputError, ParameterError
 
 __all__ = ["EXIT_INTERNAL", "EXIT_INTERRUPTED", "EXIT_USAGE", "build_parser", "main"]
@@ -64,29 +66,6 @@ def _refuse(args: argparse.Namespace, options: tuple[str, ...], why: str) -> Non
     given = [o for o in options if o in getattr(args, "given", ())]
     if given:
         raise ParameterError(f"{', '.join(given)}: {why}")
-
-
-def _load_arm(path: str | None, repair_inertia: bool = False):
-    """The arm of a scenario file's ``[arm]`` and ``[plant]`` tables (SICE arm if ``path`` is None):
-    the model its controllers are given (``[model] from`` when there is one); ``repair_inertia``
-    sets ``arm.repair_inertia = true`` (identify's --repair-inertia)."""
-    from adaptive_dd.benchmark.scenario import model_and_plant, read_toml
-    from adaptive_dd.errors import ScenarioError
-    from adaptive_dd.plant.arm import Arm, arm_from_tables
-    from adaptive_dd.plant.uncertainty import PLANT_TRUTH_KEYS
-
-    if path is None:
-        return Arm.sice()
-    if not Path(path).is_file():
-        raise ScenarioError(f"{path}: no such scenario file")
-    data = read_toml(Path(path))
-    table = data.get("arm")
-    if repair_inertia and isinstance(table, dict):
-        table = {**table, "repair_inertia": True}
-    plant = data.get("plant")
-    law = {k: v for k, v in plant.items() if k not in PLANT_TRUTH_KEYS} if isinstance(plant, dict) else plant
-    arm = arm_from_tables(table, law, str(path))
-    return model_and_plant(str(path), arm, plant if isinstance(plant, dict) else None, data.get("model"))[0]
 
 
 def _cmd_check(args: argparse.Namespace) -> int:
@@ -665,32 +644,6 @@ def _cmd_validate(args: argparse.Namespace) -> int:
         f"{'see the warning' if warnings else 'within'}); {len(sc.controllers)} controller(s) built"
     )
     return 0
-
-
-def describe_serial_arm(arm) -> str:
-    """What ``validate`` prints of a URDF arm: joints, base parameters, payload subspace."""
-    lines = [f"# arm: {arm.urdf} ({arm.n_joints} joints, payload frame '{arm.payload_frame}')"]
-    lim = arm.position_limits
-    for j, name in enumerate(arm.joint_names):
-        lines.append(
-            f"#   joint{j + 1} {name}: limits [{lim[j, 0]:.4g}, {lim[j, 1]:.4g}], velocity "
-            f"{arm.velocity_limits[j]:.4g}, effort {arm.actuator.torque_limit[j]:.4g}, viscous "
-            f"{arm.viscous[j]:.4g}, Coulomb {arm.coulomb[j]:.4g}, armature {arm.armature[j]:.4g}"
-        )
-    if arm.locked:
-        lines.append(f"#   locked at 0 (off the chain): {', '.join(arm.locked)}")
-    lines.append(f"# base parameters: {arm.base.count} of {13 * arm.n_joints} standard")
-    for k, (name, v) in enumerate(zip(arm.sigma_names, arm.sigma, strict=True)):
-        lines.append(f"#   sigma[{k}] = {v:.6g}: {name}")
-    if arm.base.unidentifiable:
-        lines.append(f"# no torque depends on: {', '.join(arm.base.unidentifiable)}")
-    names = ("m", "mx", "my", "mz", "Ixx", "Ixy", "Iyy", "Ixz", "Iyz", "Izz")
-    seen = [n for n, ok in zip(names, arm.payload_identifiable, strict=True) if ok]
-    lines.append(
-        f"# payload subspace: rank {arm.payload_rank} of 10; determined by the base parameters: "
-        f"{', '.join(seen)}"
-    )
-    return "\n".join(lines)
 
 
 def _cmd_sweep(args: argparse.Namespace) -> int:
