@@ -50,6 +50,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from adaptive_dd.errors import ParameterError, SignalError
+from adaptive_dd.identification.arm_prior import ArmUncertainty, prior_covariance
 from adaptive_dd.identification import serial_online_kernel as K
 from adaptive_dd.identification.filters import FilterBank, design_filter_bank, summing_realisation
 from adaptive_dd.identification.pseudo_inertia import project_payload
@@ -304,9 +305,20 @@ class SerialOnlineConfig:
     bound_radius: float | None = 0.25
     prior_radius: float | None = 0.05
     regression: str | None = None
+    arm_uncertainty: ArmUncertainty | None = None
 
     def __post_init__(self) -> None:
         o = "SerialOnlineConfig"
+        if isinstance(self.arm_uncertainty, dict):
+            try:
+                object.__setattr__(self, "arm_uncertainty", ArmUncertainty(**self.arm_uncertainty))
+            except TypeError as exc:
+                raise ParameterError(f"{o}.arm_uncertainty: {exc}") from None
+        if self.arm_uncertainty is not None and not isinstance(self.arm_uncertainty, ArmUncertainty):
+            raise ParameterError(
+                f"{o}.arm_uncertainty must be a table of levels (mass, com, inertia, friction, armature) "
+                f"or None, got {self.arm_uncertainty!r}"
+            )
         _num(o, "sample_period", self.sample_period, 0.0)
         _num(o, "tau_f", self.tau_f, 0.0)
         if self.tau_f < self.sample_period or self.tau_f > 1e4 * self.sample_period:
@@ -435,6 +447,8 @@ def _pack(cfg: SerialOnlineConfig, arm: SerialArm) -> tuple[EstCfg, Array]:
         pbasis_pinv = np.linalg.pinv(pbasis, rcond=1e-9)
         U = _orth(pbasis)
         P0 = cfg.p0_arm * np.eye(p) + pbasis @ S0 @ pbasis.T
+        if cfg.arm_uncertainty is not None:
+            P0 = P0 + B @ prior_covariance(arm, cfg.arm_uncertainty) @ B.T
         Pr = pbasis @ S1 @ pbasis.T
         n_rows = n
     cap = cfg.max_trace if cfg.max_trace is not None else max(np.trace(P0), np.trace(Pr))
