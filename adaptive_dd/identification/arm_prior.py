@@ -6,7 +6,7 @@ A URDF from CAD and data sheets is off by about 10 % in link masses, 1 cm in cen
 states such levels; :func:`perturbed_parameters` moves an arm's standard parameters by given
 draws ``u`` in [-1, 1] (per link: mass ``x (1 + mass u)``, centre of mass ``+ com u`` per axis,
 inertia tensor about the centre of mass ``x (1 + inertia u)``; per joint: viscous and Coulomb
-friction ``x (1 + friction u)``, armature ``x (1 + armature u)``), which keeps every link
+friction ``x (1 + viscous u)``, ``x (1 + coulomb u)``, armature ``x (1 + armature u)``), which keeps every link
 physically consistent for levels below 1; :func:`draw_parameters` draws ``u`` uniformly;
 :func:`prior_covariance` is the covariance of the standard parameters under those draws
 (linearised about the URDF, ``Var u = 1/3``): the prior the online estimator puts on the arm's
@@ -25,18 +25,21 @@ from adaptive_dd.errors import ParameterError
 __all__ = ["ArmUncertainty", "draw_parameters", "perturbed_parameters", "prior_covariance"]
 
 Array = NDArray[np.float64]
-_FIELDS = ("mass", "com", "inertia", "friction", "armature")
+_FIELDS = ("mass", "com", "inertia", "viscous", "coulomb", "armature")
 
 
 @dataclass(frozen=True)
 class ArmUncertainty:
-    """Relative (``mass``, ``inertia``, ``friction``, ``armature``, in [0, 1)) and absolute
-    (``com`` [m], >= 0) half-widths of the uniform errors of a URDF's parameters."""
+    """Relative (``mass``, ``inertia``, ``viscous``, ``coulomb``, ``armature``, in [0, 1)) and
+    absolute (``com`` [m], >= 0) half-widths of the uniform errors of a URDF's parameters (the
+    keys of the scenario's ``[plant.uncertainty]``; the defaults are the levels of a URDF from CAD
+    and data sheets, issue 28)."""
 
     mass: float = 0.1
     com: float = 0.01
     inertia: float = 0.2
-    friction: float = 0.5
+    viscous: float = 0.5
+    coulomb: float = 0.5
     armature: float = 0.3
 
     def __post_init__(self) -> None:
@@ -88,8 +91,8 @@ def perturbed_parameters(arm, u: Array, levels: ArmUncertainty) -> Array:
         c2 = c + levels.com * ul[j, 1:4]
         out[10 * j : 10 * j + 10] = _link_params(m2, c2, Ic * (1.0 + levels.inertia * ul[j, 4]))
     uf = u[5 * n :].reshape(3, n)
-    out[10 * n : 11 * n] = arm.viscous * (1.0 + levels.friction * uf[0])
-    out[11 * n : 12 * n] = arm.coulomb * (1.0 + levels.friction * uf[1])
+    out[10 * n : 11 * n] = arm.viscous * (1.0 + levels.viscous * uf[0])
+    out[11 * n : 12 * n] = arm.coulomb * (1.0 + levels.coulomb * uf[1])
     out[12 * n :] = arm.armature * (1.0 + levels.armature * uf[2])
     return out
 
