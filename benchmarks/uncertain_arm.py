@@ -29,6 +29,8 @@ from adaptive_dd.closed_loop.runner import _run_compiled
 from adaptive_dd.closed_loop.types import Plant, io_of, plant_of, run_constants
 from adaptive_dd.identification.arm_prior import ArmUncertainty, draw_parameters
 
+WINDOW = 0.25
+"""[s] Windows of the first segment's RMS ratio (the time to come within 1.2x of the floor)."""
 PLANT_STREAM = 7_777
 """Second key of the plant draws' generator ``(scenario.seed, PLANT_STREAM, seed)``."""
 
@@ -55,6 +57,18 @@ def run_seed(scenario, ctrls: dict, plant: Plant, seed: int) -> dict:
     return {
         name: _run_compiled(name, c, scenario, (seed,), rc, io, plant, 0, None) for name, c in ctrls.items()
     }
+
+
+def time_to_floor(e: np.ndarray, e_floor: np.ndarray, end: int, T: float, level: float = 1.2) -> float:
+    """[s] End of the last window (:data:`WINDOW`) of ``[0, end)`` whose RMS error exceeds ``level``
+    times the floor's (0: none does)."""
+    w = max(1, round(WINDOW / T))
+    last = 0
+    for k in range(0, end - w + 1, w):
+        a, b = e[k : k + w].astype(float), e_floor[k : k + w].astype(float)
+        if np.sqrt(np.mean(a * a)) > level * np.sqrt(np.mean(b * b)):
+            last = k + w
+    return last * T
 
 
 def main() -> None:
@@ -87,7 +101,7 @@ def main() -> None:
     n_seg = len(sc.swap_times) + 1
     lengths = np.array(sc.segment_samples(), dtype=float)
     rms = {nm: np.full((len(seeds), n_seg), np.nan) for nm in ctrls}
-    false, missed, delays = [], [], [[] for _ in sc.swap_times]
+    false, missed, delays, settle = [], [], [[] for _ in sc.swap_times], []
     print(f"{a.scenario}: level {a.level} ({levels}), seeds {seeds[0]}..{seeds[-1]}, settings {a.set}")
     for r, seed in enumerate(seeds):
         plant, _ = drawn_plant(sc, levels, seed)
@@ -96,6 +110,10 @@ def main() -> None:
             rms[nm][r] = np.sqrt(run.acc.sum_e2[0] / lengths)
             if run.failed[0]:
                 rms[nm][r] = np.nan
+        end0 = int(lengths[0])
+        settle.append(
+            time_to_floor(runs["adaptive_ct"].e_norm[0], runs["ct_oracle"].e_norm[0], end0, sc.sample_period)
+        )
         at = runs["adaptive_ct"].alarm_times or [[]]
         false.append(false_alarm_counts(at, sc.swap_times)[0])
         m = 0
@@ -107,17 +125,33 @@ def main() -> None:
         missed.append(m)
         if a.per_seed:
             ratio = rms["adaptive_ct"][r] / rms["ct_oracle"][r]
-            print(f"  seed {seed}: " + " / ".join(f"{x:.3f}" for x in ratio) + f"  alarms {at[0]}", flush=True)
+            print(
+                f"  seed {seed}: " + " / ".join(f"{x:.3f}" for x in ratio) + f"  alarms {at[0]}", flush=True
+            )
     for nm in ("adaptive_ct", "ct_nominal"):
         ratio = rms[nm] / rms["ct_oracle"]
         cells = []
         for i in range(n_seg):
             st = ratio_statistics(ratio[:, i], seeds)
-            cells.append(f"{st['mean']:.3f}/{st['p90']:.3f}/{st['max']:.2f}@{st['worst_seed']}" if st else "nan")
+            cells.append(
+                f"{st['mean']:.3f}/{st['p90']:.3f}/{st['max']:.2f}@{st['worst_seed']}" if st else "nan"
+            )
         print(f"{nm:12s} mean/p90/max@worst per segment: " + "  ".join(cells))
-    print(f"floor (ct_oracle RMS, mrad, mean per segment): " + " / ".join(f"{1e3 * x:.3f}" for x in np.nanmean(rms["ct_oracle"], 0)))
-    print(f"trials with a false alarm: {sum(1 for x in false if x)} / {len(seeds)};  swaps missed: {sum(missed)};"
-          f"  median delay ms: " + " / ".join(f"{1e3 * np.median(x):.0f}" if x else "-" for x in delays))
+    print(
+        "floor (ct_oracle RMS, mrad, mean per segment): "
+        + " / ".join(f"{1e3 * x:.3f}" for x in np.nanmean(rms["ct_oracle"], 0))
+    )
+    st = np.array(settle)
+    print(
+        "first segment: time to come within 1.2x of the floor (0.25 s windows) "
+        f"median {np.median(st):.2f} s, "
+        f"p90 {np.percentile(st, 90):.2f} s, max {st.max():.2f} s"
+    )
+    print(
+        f"trials with a false alarm: {sum(1 for x in false if x)} / {len(seeds)}; "
+        f" swaps missed: {sum(missed)};"
+        f"  median delay ms: " + " / ".join(f"{1e3 * np.median(x):.0f}" if x else "-" for x in delays)
+    )
 
 
 if __name__ == "__main__":

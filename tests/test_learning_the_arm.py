@@ -13,7 +13,15 @@ from adaptive_dd.identification.arm_prior import (
     perturbed_parameters,
     prior_covariance,
 )
-from adaptive_dd.identification.serial_online import SerialOnlineConfig, run_serial_online
+from adaptive_dd.identification.serial_online import (
+    REOPEN_GENERIC,
+    SerialDetector,
+    SerialOnlineConfig,
+    derived_row_weights,
+    est_init,
+    reopen_mass_std,
+    run_serial_online,
+)
 from adaptive_dd.plant.chain import rnea_batch
 from adaptive_dd.plant.prescribed import exciting_motion
 from adaptive_dd.plant.serial_arm import SerialArm
@@ -109,8 +117,8 @@ def test_draws_are_physically_consistent_and_reproducible(arm):
     for j in range(arm.n_joints):
         p = a[10 * j : 10 * j + 10]
         m, h = p[0], p[1:4]
-        I = np.array([[p[4], p[5], p[7]], [p[5], p[6], p[8]], [p[7], p[8], p[9]]])
-        Sig = 0.5 * np.trace(I) * np.eye(3) - I  # second moments: the pseudo-inertia must be PSD
+        Ib = np.array([[p[4], p[5], p[7]], [p[5], p[6], p[8]], [p[7], p[8], p[9]]])
+        Sig = 0.5 * np.trace(Ib) * np.eye(3) - Ib  # second moments: the pseudo-inertia must be PSD
         J = np.block([[Sig, h[:, None]], [h[None, :], np.array([[m]])]])
         assert m > 0 and np.linalg.eigvalsh(J).min() > -1e-12
     # the levels bound the draws
@@ -153,7 +161,7 @@ def test_the_arms_momentum_regression_is_exact(arm):
     the truth: mode "arm" (momentum form of every link, friction and armature columns) predicts
     the filtered torque to 1e-4 of the torque (the filters' discretisation; 0.0026 N m of 68 on
     this record); the regressor at the filtered signals ("full" mode's) errs 37x more."""
-    (q, qd, qdd), _, _, tau = _record(arm, arm.pi, 4, n=3000)
+    (q, qd, _), _, _, tau = _record(arm, arm.pi, 4, n=3000)
     worst = {}
     frozen = ArmUncertainty(0.0, 0.0, 0.0, 0.0, 0.0, 0.0)  # the estimate held at the truth
     for mode in ("arm", "full"):
@@ -165,3 +173,53 @@ def test_the_arms_momentum_regression_is_exact(arm):
         worst[mode] = np.nanmax(np.abs(rec.eps[0, 300:]))  # after the filters' start-up
     assert worst["arm"] < 1e-4 * np.max(np.abs(tau)), worst
     assert worst["full"] > 10 * worst["arm"], worst
+
+
+# ------------------------------------------------------------------ settings derived from the scenario
+@pytest.mark.parametrize(
+    "robot, tuned, tol",
+    [
+        ("ur5", [1.0, 1.0, 1.0, 0.2, 0.2, 0.2], 0.015),
+        ("panda", [1.0, 1.0, 1.0, 1.0, 0.14, 0.14, 0.14], 0.005),
+        ("vertical3", [1.0, 0.4, 0.1], 1e-12),
+    ],
+)
+def test_derived_row_weights_are_the_hand_tuned_ones(robot, tuned, tol):
+    """Torque limit over the largest (the D/A's step): the weights once tuned by hand per arm."""
+    a = SerialArm.from_urdf(robot_urdf(robot), ROBOTS[robot].payload_frame)
+    np.testing.assert_allclose(derived_row_weights(a), tuned, atol=tol)
+
+
+def test_reopening_follows_the_payload_capacity(arm):
+    det = SerialDetector()
+    assert reopen_mass_std(det, arm) == REOPEN_GENERIC
+    assert reopen_mass_std(det, arm.with_(payload_capacity=5.0)) == pytest.approx(3.0)
+    assert reopen_mass_std(SerialDetector(reopen_mass_std=1.0), arm.with_(payload_capacity=5.0)) == 1.0
+    # and it is what the estimator re-opens: the payload block's mass variance after an alarm
+    c5, _ = est_init(SerialOnlineConfig(), arm.with_(payload_capacity=5.0), 1)
+    assert c5.P_reopen[0, 0] == pytest.approx(9.0)
+
+
+@pytest.mark.parametrize(
+    "value, match",
+    [(0.0, "arm.payload_capacity"), (-1.0, "arm.payload_capacity"), ("5", "arm.payload_capacity")],
+)
+def test_a_bad_payload_capacity_is_named(value, match):
+    from importlib import resources
+    from pathlib import Path
+
+    from adaptive_dd.benchmark.scenario import parse_scenario, read_toml
+    from adaptive_dd.errors import ScenarioError
+
+    d = read_toml(Path(str(resources.files("adaptive_dd.scenarios").joinpath("ur5_tool_swap.toml"))))
+    d["arm"]["payload_capacity"] = value
+    with pytest.raises(ScenarioError, match=match):
+        parse_scenario(d, "ur5.toml")
+
+
+def test_the_mode_follows_what_the_scenario_states():
+    assert SerialOnlineConfig().mode == "payload"
+    cfg = SerialOnlineConfig(arm_uncertainty={"mass": 0.1})
+    assert cfg.mode == "arm" and cfg.project is False and cfg.prior_radius is None
+    assert cfg.arm_uncertainty == ArmUncertainty(mass=0.1)
+    assert SerialOnlineConfig(mode="payload", arm_uncertainty={}).project is True

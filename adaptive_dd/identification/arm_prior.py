@@ -6,8 +6,8 @@ A URDF from CAD and data sheets is off by about 10 % in link masses, 1 cm in cen
 states such levels; :func:`perturbed_parameters` moves an arm's standard parameters by given
 draws ``u`` in [-1, 1] (per link: mass ``x (1 + mass u)``, centre of mass ``+ com u`` per axis,
 inertia tensor about the centre of mass ``x (1 + inertia u)``; per joint: viscous and Coulomb
-friction ``x (1 + viscous u)``, ``x (1 + coulomb u)``, armature ``x (1 + armature u)``), which keeps every link
-physically consistent for levels below 1; :func:`draw_parameters` draws ``u`` uniformly;
+friction ``x (1 + viscous u)``, ``x (1 + coulomb u)``, armature ``x (1 + armature u)``), which
+keeps every link physically consistent for levels below 1; :func:`draw_parameters` draws ``u`` uniformly;
 :func:`prior_covariance` is the covariance of the standard parameters under those draws
 (linearised about the URDF, ``Var u = 1/3``): the prior the online estimator puts on the arm's
 base parameters (``B C B^T``).
@@ -59,17 +59,17 @@ class ArmUncertainty:
 def _link_params(m: float, c: Array, Ic: Array) -> Array:
     """Ten parameters about the joint frame (Pinocchio's order) of mass m, com c, inertia Ic about c."""
     S = np.array([[0.0, -c[2], c[1]], [c[2], 0.0, -c[0]], [-c[1], c[0], 0.0]])
-    I = Ic + m * S.T @ S
-    return np.array([m, *(m * c), I[0, 0], I[0, 1], I[1, 1], I[0, 2], I[1, 2], I[2, 2]])
+    Ib = Ic + m * S.T @ S
+    return np.array([m, *(m * c), Ib[0, 0], Ib[0, 1], Ib[1, 1], Ib[0, 2], Ib[1, 2], Ib[2, 2]])
 
 
 def _link_split(p: Array) -> tuple[float, Array, Array]:
     """Mass, com and inertia about the com of ten parameters (zero mass: com 0, inertia as given)."""
     m = float(p[0])
     c = p[1:4] / m if m > 0 else np.zeros(3)
-    I = np.array([[p[4], p[5], p[7]], [p[5], p[6], p[8]], [p[7], p[8], p[9]]])
+    Ib = np.array([[p[4], p[5], p[7]], [p[5], p[6], p[8]], [p[7], p[8], p[9]]])
     S = np.array([[0.0, -c[2], c[1]], [c[2], 0.0, -c[0]], [-c[1], c[0], 0.0]])
-    return m, c, I - m * S.T @ S
+    return m, c, Ib - m * S.T @ S
 
 
 def perturbed_parameters(arm, u: Array, levels: ArmUncertainty) -> Array:

@@ -652,9 +652,10 @@ def urdf_arm_from_table(src: str, table: dict, plant_kw: dict):
     ``payload_frame`` (a link), ``gravity = [x, y, z]`` (default ``[0, 0, -9.81]``),
     per-joint lists ``viscous``, ``coulomb``, ``armature``, ``torque_limit``,
     ``encoder_counts``, and ``dac_bits``, ``payload_radius``, ``payload_capacity`` (the rated
-    payload [kg]: the size of the estimator's re-opening, :mod:`adaptive_dd.identification.serial_online`). A URDF that is the
-    paper's kind of two-link arm becomes an :class:`~adaptive_dd.plant.arm.Arm` (the
-    closed-form fast path, :func:`as_two_link`) unless ``general = true``.
+    payload [kg]: the size of the estimator's re-opening,
+    :mod:`adaptive_dd.identification.serial_online`). A URDF that is the paper's kind of
+    two-link arm becomes an :class:`~adaptive_dd.plant.arm.Arm` (the closed-form fast path,
+    :func:`as_two_link`) unless ``general = true``.
 
     Raises
     ------
