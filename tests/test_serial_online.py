@@ -368,13 +368,17 @@ def test_an_error_in_one_joint_alone_does_not_alarm_with_min_rows(ur5, swap_reco
     tau[2_500:2_560, 2] += 10.0
     out = {}
     for k in (1, 3):
-        cfg = SerialOnlineConfig(detector=SerialDetector(min_rows=k, fast_window=None), row_weights=(1.0,) * 6)
+        cfg = SerialOnlineConfig(
+            detector=SerialDetector(min_rows=k, fast_window=None), row_weights=(1.0,) * 6
+        )
         out[k] = run_serial_online(ur5, cfg, r.q_meas, r.qd_meas, tau).alarm_times()[0]
     assert len(out[1]) >= 1 and 2.5 <= out[1][0] < 2.6, out[1]
     assert len(out[3]) == 0, out[3]
     swaps = {}
     for k in (1, 3):
-        cfg = SerialOnlineConfig(detector=SerialDetector(min_rows=k, fast_window=None), row_weights=(1.0,) * 6)
+        cfg = SerialOnlineConfig(
+            detector=SerialDetector(min_rows=k, fast_window=None), row_weights=(1.0,) * 6
+        )
         rec = run_serial_online(ur5, cfg, swap_record.q_meas, swap_record.qd_meas, swap_record.tau)
         swaps[k] = rec.alarm_times()[0]
     assert len(swaps[3]) == 1 and 10.0 <= swaps[3][0] < 10.05, swaps
