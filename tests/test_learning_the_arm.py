@@ -273,3 +273,12 @@ def test_a_scenario_without_estimator_settings_runs_as_the_tuned_one():
     np.testing.assert_allclose(out["derived"][0], out["tuned"][0], rtol=0.02)
     np.testing.assert_array_equal(out["derived"][1], out["tuned"][1])
     assert np.all(np.isfinite(out["derived"][1][1::2]))  # the swap detected in both seeds
+
+
+def test_the_warm_up_is_longer_while_the_arm_is_learnt(arm):
+    from adaptive_dd.identification import serial_online_kernel as K
+
+    c_pay, _ = est_init(SerialOnlineConfig(), arm, 1)
+    c_arm, _ = est_init(SerialOnlineConfig(mode="arm"), arm, 1)
+    c_set, _ = est_init(SerialOnlineConfig(mode="arm", detector=SerialDetector(warmup=0.2)), arm, 1)
+    assert (c_pay.ints[K.I_WARMUP], c_arm.ints[K.I_WARMUP], c_set.ints[K.I_WARMUP]) == (500, 1000, 200)
