@@ -22,7 +22,14 @@ Two modes (:class:`SerialOnlineConfig`):
     (rigid columns of :func:`~adaptive_dd.plant.chain.regressor` plus friction and
     armature columns, selected by ``arm.base.independent``).
 
-Both evaluate the regressor at the filtered signals of the M2 method (eq. 20, Tustin):
+``"arm"``
+    The arm's base parameters (prior covariance from the URDF's stated uncertainty,
+    :mod:`~adaptive_dd.identification.arm_prior`; never re-opened) and the payload's ten
+    parameters apart (columns: the payload link's through ``payload_map``; re-opened alone at
+    an alarm). Equation: the momentum form of every link plus friction and armature columns
+    (``docs/learning_the_arm.md``).
+
+Payload and full modes can evaluate the regressor at the filtered signals of the M2 method (eq. 20, Tustin):
 ``qf = G0 q``, ``qdf = G0 qd``, ``qddf = G1 qd``, Coulomb column ``G0 sgn(qd)``, and
 ``y = G0 tau``. The estimator is RLS with the variable forgetting factor of eq. (14),
 one scalar update per joint equation (the paper's splits generalised: each row is a
