@@ -65,7 +65,9 @@ class EstCfg(NamedTuple):
     ch : Chain
         Kinematics of the arm.
     mode : int
-        0 payload (10 parameters of the payload, arm known), 1 full (base parameters).
+        0 payload (10 parameters of the payload, arm known), 1 full (base parameters) and
+        mode "arm" (base parameters, then the payload's ten: ``p = indep.size + 10``; the
+        payload's columns are link ``jp``'s through ``pmap``, ``pbasis`` selects the last ten).
     pi0 : (13 n,)
         Standard parameters of the known (nominal) arm, without payload.
     jp : int
@@ -75,7 +77,8 @@ class EstCfg(NamedTuple):
     indep : (p,) int64
         Base columns of the standard regressor (full mode).
     Bpinv : (13 n, p)
-        Pseudo-inverse of the base map B (full mode; ``B @ Bpinv == I``).
+        Pseudo-inverse of the base map B (full mode; ``B @ Bpinv == I``); mode "arm": followed
+        by ``pinv(B) @ payload_basis``, so the payload block enters the model through B.
     sigma0 : (p,)
         ``B pi0`` (full mode; zeros(10) in payload mode).
     pbasis : (p, 10)
