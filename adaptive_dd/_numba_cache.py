@@ -14,6 +14,7 @@ from __future__ import annotations
 import hashlib
 import os
 import shutil
+from contextlib import contextmanager
 from pathlib import Path
 
 KEEP = 8
@@ -52,3 +53,91 @@ def configure() -> str | None:
     except OSError:
         pass
     return str(folder)
+
+
+# ------------------------------------------------------------ telling the user about compilation
+COMPILE_SECONDS = {"two-link": 60.0, "serial": 190.0}
+"""One-time compilation of a benchmark's closed-loop kernels with a cold cache, on 2 cores: a guide
+for the message and ``validate``'s estimate, not a promise. Measured as the CPU time (user + sys,
+``/usr/bin/time -v``) of ``adaptive-dd benchmark`` with an empty ``NUMBA_CACHE_DIR``, every
+built-in controller, on a shared 2-core machine: 65 s for the default two-link scenario (10
+seeds, runs included) and 211 s for ``ur5_tool_swap.toml`` (2 seeds); their wall times under a
+load average of 8-11 were 4x longer. Compilation is mostly single-threaded, so its CPU time is
+its wall time on a machine that is not shared."""
+
+
+def _closed_loop_kernel(serial: bool):
+    if serial:
+        from adaptive_dd.closed_loop.glue import closed_loop_block
+    else:
+        from adaptive_dd.benchmark.compiled import closed_loop_block
+    return closed_loop_block
+
+
+def compile_estimate(arm) -> float:
+    """Seconds of one-time compilation a benchmark on ``arm`` would spend now (0 when cached).
+
+    Cold means numba's cache holds no compiled form of the closed-loop kernel for this state of
+    the source (:func:`configure`); a cached kernel with a new specialisation (another law)
+    still compiles, and the message after the run says so.
+    """
+    from adaptive_dd.plant.serial_arm import SerialArm
+
+    serial = isinstance(arm, SerialArm)
+    cache = getattr(_closed_loop_kernel(serial), "_cache", None)
+    index = getattr(getattr(cache, "_cache_file", None), "_index_path", None)
+    if index is None or os.path.exists(index):
+        return 0.0
+    return COMPILE_SECONDS["serial" if serial else "two-link"]
+
+
+def _compile_seconds(buffer) -> float:
+    """Wall time inside at least one numba compilation, from a recorder's ``(time, event)`` pairs."""
+    total, depth, start = 0.0, 0, 0.0
+    for t, ev in sorted(buffer, key=lambda x: x[0]):
+        if ev.is_start:
+            if depth == 0:
+                start = t
+            depth += 1
+        elif depth > 0:
+            depth -= 1
+            if depth == 0:
+                total += t - start
+    return total
+
+
+def _arm_label(arm) -> str:
+    urdf = getattr(arm, "urdf", None)
+    if urdf is not None:
+        return f"{Path(str(urdf)).stem} ({arm.n_joints} joints)"
+    return "the two-link arm"
+
+
+@contextmanager
+def announce_compilation(arm, stream=None):
+    """Say before a run that numba compiles (cold cache) and after it how long compilation took.
+
+    Prints to ``stream`` (default ``sys.stderr``) a line before, when :func:`compile_estimate`
+    finds the cache cold, and a line after whenever compilation took more than a second.
+    """
+    import sys
+
+    from numba.core import event
+
+    stream = stream or sys.stderr
+    guess = compile_estimate(arm)
+    if guess:
+        import numba
+
+        print(
+            f"compiling the closed-loop kernels for {_arm_label(arm)} (once per source state; about "
+            f"{guess:.0f} s on 2 cores; cached in {numba.config.CACHE_DIR})",
+            file=stream,
+            flush=True,
+        )
+    with event.install_recorder("numba:compile") as rec:
+        yield
+    spent = _compile_seconds(rec.buffer)
+    if spent > 1.0:
+        msg = f"compiled the kernels in {spent:.0f} s (cached: later runs skip this)"
+        print(msg, file=stream, flush=True)

@@ -56,17 +56,22 @@ def _sub(sub, name: str, **kw) -> argparse.ArgumentParser:
 
 
 def _load_arm(path: str | None):
-    """The arm of a scenario file's ``[arm]`` and ``[plant]`` tables (SICE arm if ``path`` is None)."""
-    from adaptive_dd.benchmark.scenario import read_toml
+    """The arm of a scenario file's ``[arm]`` and ``[plant]`` tables (SICE arm if ``path`` is None):
+    the model its controllers are given (``[model] from`` when there is one)."""
+    from adaptive_dd.benchmark.scenario import model_and_plant, read_toml
     from adaptive_dd.errors import ScenarioError
     from adaptive_dd.plant.arm import Arm, arm_from_tables
+    from adaptive_dd.plant.uncertainty import PLANT_TRUTH_KEYS
 
     if path is None:
         return Arm.sice()
     if not Path(path).is_file():
         raise ScenarioError(f"{path}: no such scenario file")
     data = read_toml(Path(path))
-    return arm_from_tables(data.get("arm"), data.get("plant"), str(path))
+    plant = data.get("plant")
+    law = {k: v for k, v in plant.items() if k not in PLANT_TRUTH_KEYS} if isinstance(plant, dict) else plant
+    arm = arm_from_tables(data.get("arm"), law, str(path))
+    return model_and_plant(str(path), arm, plant if isinstance(plant, dict) else None, data.get("model"))[0]
 
 
 def _cmd_check(args: argparse.Namespace) -> int:
@@ -508,14 +513,18 @@ def _cmd_benchmark(args: argparse.Namespace) -> int:
 
 
 def _benchmark(args: argparse.Namespace, sc, outputs) -> list[Path]:
+    from adaptive_dd._numba_cache import announce_compilation
     from adaptive_dd.benchmark.metrics import compute_metrics, release_error_norm
     from adaptive_dd.benchmark.report import format_report, write_csv, write_json
     from adaptive_dd.benchmark.runner import run_benchmark
     from adaptive_dd.plotting import plot_benchmark_estimates, plot_tracking_errors
 
-    res = run_benchmark(sc, progress=not args.no_progress, on_run=release_error_norm)
-    metrics = compute_metrics(res)
+    with announce_compilation(sc.arm):  # a cold cache compiles first: say so, and for how long
+        res = run_benchmark(sc, progress=not args.no_progress, on_run=release_error_norm)
+        metrics = compute_metrics(res)
     print(format_report(metrics, res))
+    if "excitation_report" in res.cache:  # [run] excite: what the identification found
+        print(res.cache["excitation_report"].summary())
     out = Path(args.out)
     write_csv(metrics, outputs.path("metrics.csv"))
     write_json(metrics, outputs.extra(args.json) if args.json else outputs.path("metrics.json"))
@@ -534,6 +543,11 @@ def _benchmark(args: argparse.Namespace, sc, outputs) -> list[Path]:
     frame = res.to_frame()
     frame.to_csv(outputs.path("per_seed.csv"), index=False)
     written.append(out / "per_seed.csv")
+    if res.plant is not None:  # the plant is not the model: each seed's drawn plant
+        from adaptive_dd.benchmark.results import plant_frame
+
+        plant_frame(res).to_csv(outputs.path("plant.csv"), index=False)
+        written.append(out / "plant.csv")
     return written
 
 

@@ -239,6 +239,16 @@ def simulate_serial(args: argparse.Namespace, scenario_path: str, outputs) -> in
 
     sc = load_scenario(scenario_path)
     arm = sc.arm
+    if sc.plant is not None:  # the scenario's robot is not its [arm]: simulate the robot
+        from adaptive_dd.plant.urdf_write import write_urdf_links
+
+        p = sc.plant
+        path = write_urdf_links(arm, p.pi_links, outputs.path("plant.urdf"), f"the plant of {scenario_path}")
+        arm = arm.with_(urdf=path, viscous=p.viscous, coulomb=p.coulomb, armature=p.armature)
+        print(
+            f"the plant: the scenario's [plant] before any draw, written to {Path(args.out) / 'plant.urdf'}"
+            + (" ([plant.uncertainty] draws a plant per benchmark seed; not here)" if p.uncertainty else "")
+        )
     if arm.sensor.quantize == args.no_quantize:
         import dataclasses
 

@@ -172,7 +172,7 @@ def plot_model_response(t, q_arm, models: dict, path: str | Path, title: str = "
 
 
 def plot_tracking_errors(res, path: str | Path | None = None, window: float = 0.05, formats=("png",)):
-    """50 ms moving RMS of |e| (mean over seeds) for every controller, swaps marked, log scale.
+    """50 ms moving RMS of ``|e|`` (mean over seeds) for every controller, swaps marked, log scale.
 
     Returns the Figure; with ``path``, also writes it in each of ``formats`` (and closes it).
     """

@@ -31,7 +31,7 @@ from adaptive_dd.closed_loop.laws import model_torque
 from adaptive_dd.closed_loop.runner import make_controllers
 from adaptive_dd.plant.chain import mass_matrix
 
-UR5 = Path(__file__).resolve().parents[1] / "adaptive_dd" / "scenarios" / "ur5_tool_swap.toml"
+UR5 = Path(__file__).resolve().parents[1] / "adaptive_dd" / "scenarios" / "ur5_tool_swap_exact.toml"
 
 
 class DelayedOracle:

@@ -1,7 +1,7 @@
 """Where adaptive computed torque's model is wrong: per segment and joint, the torque error of the
 model the controller used against the true one along the reference, and the estimated payload.
 
-    python benchmarks/payload_model_error.py adaptive_dd/scenarios/ur5_tool_swap.toml --seeds 2
+    python benchmarks/payload_model_error.py adaptive_dd/scenarios/ur5_tool_swap_exact.toml --seeds 2
 
 Prints, per kept seed and segment (after its first 0.5 s): the RMS per joint of
 ``Y(q_d, qd_d, qdd_d) (sigma_hat - sigma_true)`` [N m], and the payload the model holds at

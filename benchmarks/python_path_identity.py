@@ -13,7 +13,7 @@ prints which one it ran).
 ``dump`` runs, on the Python path and with measurement dropouts, the two-link arm (every
 built-in through its Python form, the example plug-in ``examples/payload_gradient.py``, a
 bare reset/command/observe class, a controller that goes NaN in one trial and one that
-raises) and the N-joint arm (``vertical3_payload``: the built-ins, a bare wrapper, a runaway
+raises) and the N-joint arm (``vertical3_payload_exact``: the built-ins, a bare wrapper, a runaway
 trial, a raising controller), and stores every array of every run (streamed sums, error
 norm, trajectories, estimates, failures, dropouts, alarms, skipped samples, the error
 message). ``compare`` asserts equality at rtol 0 (NaN equal to NaN), prints the count of
@@ -96,7 +96,7 @@ def _n_joint(engine: str = "python") -> dict:
     from adaptive_dd.closed_loop.controllers import make_serial_controller
     from adaptive_dd.closed_loop.runner import run_serial
 
-    path = resources.files("adaptive_dd.scenarios").joinpath("vertical3_payload.toml")
+    path = resources.files("adaptive_dd.scenarios").joinpath("vertical3_payload_exact.toml")
     data = tomllib.loads(path.read_text(encoding="utf-8"))
     data["run"] = {**data["run"], "duration": 1.2, "seeds": 3, "controllers": ["adaptive_ct", "ct_oracle"]}
     for p, at in zip(data["payload"], (0.5, 0.9), strict=False):

@@ -37,7 +37,7 @@ from adaptive_dd.plant import serial_integrator as SI
 def _scenario():
     from adaptive_dd.benchmark.scenario import load_scenario
 
-    return load_scenario(str(resources.files("adaptive_dd.scenarios").joinpath("ur5_tool_swap.toml")))
+    return load_scenario(str(resources.files("adaptive_dd.scenarios").joinpath("ur5_tool_swap_exact.toml")))
 
 
 @njit(cache=True)
@@ -49,7 +49,7 @@ def _plant_loop(ch, pl, rc, q_rec, qd_rec, tau_rec, sc):  # pragma: no cover - c
     for k in range(q_rec.shape[0]):
         for j in range(n):
             q[j], qd[j] = q_rec[k, j], qd_rec[k, j]
-        plant_step(ch, pl, segment_of(rc, k), q, qd, tau_rec[k], rc.T, stuck, sc)
+        plant_step(ch, pl, 0, segment_of(rc, k), q, qd, tau_rec[k], rc.T, stuck, sc)
         acc += q[0]
     return acc
 
@@ -65,9 +65,11 @@ def _dynamics_loop(ch, pl, rc, q_rec, qd_rec, tau_rec, sc, solve):  # pragma: no
     t = 0.0
     for k in range(q_rec.shape[0]):
         s = segment_of(rc, k)
-        SI._dynamics(ch, pl.pi_seg[s], pl.armature, q_rec[k], qd_rec[k], sc[0], bias, m)
+        SI._dynamics(ch, pl.pi_seg[0, s], pl.armature[0], q_rec[k], qd_rec[k], sc[0], bias, m)
         if solve:
-            SI._solve(pl.fv, pl.fc, 0, pl.fparams, qd_rec[k], tau_rec[k], stuck, sdir, bias, m, sc, acc, hold)
+            SI._solve(
+                pl.fv[0], pl.fc[0], 0, pl.fparams, qd_rec[k], tau_rec[k], stuck, sdir, bias, m, sc, acc, hold
+            )
         t += bias[0] + acc[0]
     return t
 
@@ -171,7 +173,7 @@ def _best(fn, repeat: int = 3) -> float:
 
 def main() -> None:
     from adaptive_dd.closed_loop.controllers import make_serial_controller
-    from adaptive_dd.closed_loop.runner import _true_pi, run_serial
+    from adaptive_dd.closed_loop.runner import run_serial, true_models
     from adaptive_dd.closed_loop.types import io_of, plant_of, run_constants
 
     sc = _scenario()
@@ -216,7 +218,7 @@ def main() -> None:
         (f"  of which Cholesky solves, {calls} x {t_sol / N * 1e6:.3f}", calls * t_sol),
         ("  rest (stages, modes, crossings, calls)", rows[0][1] - calls * (t_dyn + t_sol)),
     ]
-    pi_true = _true_pi(pl)
+    pi_true = true_models(pl)[0]  # trial 0 (the plant is the arm here)
     out = np.empty(n)
     ctrls = {}
     for name in ("ct_oracle", "adaptive_ct"):

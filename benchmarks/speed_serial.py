@@ -13,7 +13,7 @@ Prints, in one run:
   units of the anchor measured in this run (the issue set them beside an anchor of about
   23x real time: 100 / 23 = 4.35x anchor for adaptive_ct, 150 / 23 = 6.52x for ct_oracle),
   which factors out the machine;
-* with ``--full``: ``adaptive-dd benchmark ur5_tool_swap.toml --seeds 200`` (every
+* with ``--full``: ``adaptive-dd benchmark ur5_tool_swap_exact.toml --seeds 200`` (every
   controller) under ``/usr/bin/time -v``: wall time and peak resident memory measured from
   outside the process, against the targets (<= 5 min on 2 cores, < 1 GiB).
 """
@@ -42,7 +42,7 @@ TARGET_FULL_GIB = 1.0
 def _scenario():
     from adaptive_dd.benchmark.scenario import load_scenario
 
-    return load_scenario(str(resources.files("adaptive_dd.scenarios").joinpath("ur5_tool_swap.toml")))
+    return load_scenario(str(resources.files("adaptive_dd.scenarios").joinpath("ur5_tool_swap_exact.toml")))
 
 
 def anchor(sc, seconds: float = 2.0) -> tuple[float, float]:
@@ -98,7 +98,7 @@ def full_run(seeds: int, out: str | None = None) -> tuple[float, float, str]:
     """``adaptive-dd benchmark`` of the UR5 scenario under /usr/bin/time -v: wall s, peak GiB, report.
 
     The outputs go to ``out`` (kept), else to a temporary folder."""
-    path = str(resources.files("adaptive_dd.scenarios").joinpath("ur5_tool_swap.toml"))
+    path = str(resources.files("adaptive_dd.scenarios").joinpath("ur5_tool_swap_exact.toml"))
     with tempfile.TemporaryDirectory() as tmp:
         cmd = ["/usr/bin/time", "-v", sys.executable, "-m", "adaptive_dd.cli", "benchmark", path]
         cmd += ["--seeds", str(seeds), "--out", out or tmp, "--no-progress"]
@@ -149,7 +149,7 @@ def main() -> None:
             with open(os.path.join(args.out, "report.txt"), "w", encoding="utf-8") as fh:
                 fh.write(report)
         print(
-            f"adaptive-dd benchmark ur5_tool_swap.toml --seeds {args.seeds} "
+            f"adaptive-dd benchmark ur5_tool_swap_exact.toml --seeds {args.seeds} "
             f"({len(sc.controllers)} controllers), /usr/bin/time -v: wall {secs:.1f} s "
             f"(target <= {TARGET_FULL_S:g} s: {_verdict(secs <= TARGET_FULL_S)}), "
             f"peak RSS {gib:.2f} GiB (target < {TARGET_FULL_GIB:g} GiB: {_verdict(gib < TARGET_FULL_GIB)})"

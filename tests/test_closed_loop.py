@@ -64,8 +64,9 @@ def _same(a, b, rtol=1e-12):
     np.testing.assert_array_equal(a.failed, b.failed)
 
 
-def test_compiled_and_python_paths_agree_with_two_swaps_and_alarms():
-    sc = _short("ur5_tool_swap", 1.6, (0.6, 1.2), seeds=2, controllers=["adaptive_ct", "slotine_li"])
+@pytest.mark.parametrize("name", ["ur5_tool_swap_exact", "ur5_tool_swap"])  # exact arm, drawn plants
+def test_compiled_and_python_paths_agree_with_two_swaps_and_alarms(name):
+    sc = _short(name, 1.6, (0.6, 1.2), seeds=2, controllers=["adaptive_ct", "slotine_li"])
     sc = dataclasses.replace(sc, dropout=0.002)
     arm = sc.arm
 
@@ -88,6 +89,8 @@ def test_compiled_and_python_paths_agree_with_two_swaps_and_alarms():
     _same(comp.runs["slotine_li"], wrapped.runs["w"])
     alarms_c, alarms_p = comp.runs["adaptive_ct"].alarm_times, py.runs["adaptive_ct"].alarm_times
     assert alarms_c == alarms_p
+    if sc.plant is not None:  # the estimator does not learn the arm's own errors (yet): no claim
+        return
     # both swaps (the 2 kg tool, then the 5 kg one) are detected within 0.3 s in every trial
     for tr in alarms_c:
         for at in (0.6, 1.2):
@@ -123,7 +126,7 @@ class OneRowEstimate(Wrapped):
 
 
 def test_python_path_broadcasts_a_one_row_estimate_on_the_n_joint_arm():
-    sc = _short("vertical3_payload", 0.4, (0.2,), seeds=2, controllers=["ct_nominal"])
+    sc = _short("vertical3_payload_exact", 0.4, (0.2,), seeds=2, controllers=["ct_nominal"])
     p = sc.arm.base.B.shape[0]
     sigma = np.arange(1.0, p + 1.0)
     run = run_serial(sc, {"one": OneRowEstimate(make_serial_controller("ct_nominal", sc.arm), sigma)}).runs[
@@ -135,7 +138,7 @@ def test_python_path_broadcasts_a_one_row_estimate_on_the_n_joint_arm():
 
 
 def test_ct_oracle_tracks_far_better_than_ct_nominal_on_loaded_ur5():
-    sc = _short("ur5_tool_swap", 2.4, (0.8, 1.6), seeds=1, controllers=["ct_nominal", "ct_oracle"])
+    sc = _short("ur5_tool_swap_exact", 2.4, (0.8, 1.6), seeds=1, controllers=["ct_nominal", "ct_oracle"])
     res = run_serial(sc)
     rms = {
         n: np.sqrt(r.acc.sum_e2[0] / np.diff(np.r_[run_constants(sc).seg_start, sc.n_samples]))
@@ -206,7 +209,7 @@ class Raises:
 
 
 def test_a_diverging_trial_is_contained_and_a_raising_controller_fails_only_its_trials():
-    sc = _short("vertical3_payload", 1.2, (0.6,), seeds=2, controllers=["ct_nominal"])
+    sc = _short("vertical3_payload_exact", 1.2, (0.6,), seeds=2, controllers=["ct_nominal"])
     arm = sc.arm
     lim = np.array(arm.actuator.torque_limit)
     res = run_serial(
@@ -229,7 +232,7 @@ def test_a_diverging_trial_is_contained_and_a_raising_controller_fails_only_its_
 
 
 def test_laws_are_the_arms_inverse_dynamics_on_the_reference(rng):
-    sc = load_scenario(_shipped("ur5_tool_swap"))
+    sc = load_scenario(_shipped("ur5_tool_swap_exact"))
     arm = sc.arm
     n = arm.n_joints
     q = rng.uniform(-1, 1, (4, n))
@@ -256,7 +259,7 @@ def test_law_with_its_scratch_given_equals_the_allocating_law(rng):
     law, adapting ones included (their state is stepped twice, side by side)."""
     from adaptive_dd.closed_loop.laws import law_trial, law_trial_in, law_work
 
-    sc = load_scenario(_shipped("ur5_tool_swap"))
+    sc = load_scenario(_shipped("ur5_tool_swap_exact"))
     arm, n = sc.arm, sc.arm.n_joints
     work = law_work(n)
     for arr in work[1:]:
@@ -280,7 +283,7 @@ def test_law_with_its_scratch_given_equals_the_allocating_law(rng):
 
 
 def test_serial_metrics_from_hand_made_sums():
-    sc = _short("vertical3_payload", 0.01, (0.004,), seeds=2)
+    sc = _short("vertical3_payload_exact", 0.01, (0.004,), seeds=2)
     S, G, n, N = 2, 2, 3, sc.n_samples
     acc = StreamedSums.zeros(S, G, n, N)
     acc.sum_e2_joint[:] = np.arange(S * G * n, dtype=float).reshape(S, G, n)
@@ -303,7 +306,10 @@ def test_serial_metrics_from_hand_made_sums():
     assert np.isnan(m["rms_error"][1]).all() and "rms_error_joint4" not in m
 
 
-@pytest.mark.parametrize("name", ["ur5_tool_swap", "panda_payload", "vertical3_payload"])
+@pytest.mark.parametrize(
+    "name",
+    ["ur5_tool_swap", "panda_payload", "vertical3_payload", "ur5_tool_swap_exact", "panda_payload_exact"],
+)
 def test_shipped_references_stay_within_limits_with_the_heaviest_payload(name):
     sc = load_scenario(_shipped(name))
     arm = sc.arm
@@ -317,7 +323,7 @@ def test_shipped_references_stay_within_limits_with_the_heaviest_payload(name):
 
 
 def test_scenario_checks_for_n_joint_arms():
-    data = tomllib.loads(open(_shipped("ur5_tool_swap"), encoding="utf-8").read())
+    data = tomllib.loads(open(_shipped("ur5_tool_swap_exact"), encoding="utf-8").read())
     data["control"] = {"bandwidth": [40, 40, 40, 60, 60, 60]}
     assert parse_scenario(data, "x.toml").bandwidth == (40, 40, 40, 60, 60, 60)
     data["control"] = {"bandwidth": [40, 50]}
@@ -328,16 +334,16 @@ def test_scenario_checks_for_n_joint_arms():
     with pytest.raises(ScenarioError, match="'adaptive_ct_paper' is for the two-link arm only"):
         parse_scenario(data, "x.toml")
     with pytest.raises(ParameterError, match="two-link arm only"):
-        make_serial_controller("adaptive_ct_paper", load_scenario(_shipped("vertical3_payload")).arm)
+        make_serial_controller("adaptive_ct_paper", load_scenario(_shipped("vertical3_payload_exact")).arm)
     with pytest.raises(ParameterError, match="unknown setting"):
         make_serial_controller(
-            "ct_oracle", load_scenario(_shipped("vertical3_payload")).arm, options={"gain": 1}
+            "ct_oracle", load_scenario(_shipped("vertical3_payload_exact")).arm, options={"gain": 1}
         )
     assert set(SERIAL_CONTROLLERS) >= {"pd", "ct_nominal", "ct_oracle", "adaptive_ct", "slotine_li"}
 
 
 def test_an_n_joint_scenario_takes_the_n_joint_estimators_settings():
-    data = tomllib.loads(open(_shipped("ur5_tool_swap"), encoding="utf-8").read())
+    data = tomllib.loads(open(_shipped("ur5_tool_swap_exact"), encoding="utf-8").read())
     est = {"row_weights": [1.0, 1.0, 1.0, 0.5, 0.5, 0.5], "bound_radius": 0.2, "detector": {"floor": 0.1}}
     data["controllers"] = {"adaptive_ct": {"estimator": est}}
     sc = parse_scenario(data, "x.toml")
@@ -402,7 +408,7 @@ def test_the_delayed_oracle_is_the_textbook_oracle_at_zero_delay_and_pays_for_a_
     from adaptive_dd.closed_loop.controllers import JointGains
 
     DelayedOracle = _delayed_oracle()
-    sc = _short("ur5_tool_swap", 1.6, (0.8,), seeds=1, controllers=["ct_oracle_textbook"])
+    sc = _short("ur5_tool_swap_exact", 1.6, (0.8,), seeds=1, controllers=["ct_oracle_textbook"])
     gains = JointGains.of(sc.bandwidth, sc.damping, sc.arm.n_joints)
     ctrls = {
         "ct_oracle_textbook": make_serial_controller("ct_oracle_textbook", sc.arm),

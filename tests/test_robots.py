@@ -21,7 +21,7 @@ from adaptive_dd.plant.parameters import L1, L2, TORQUE_LIMITS
 from adaptive_dd.robots import ROBOTS, RobotInfo, UnknownRobotError, robot_urdf
 
 ROOT = Path(__file__).resolve().parents[1]
-N_JOINTS = {"sice_arm": 2, "vertical3": 3, "ur5": 6, "panda": 7}
+N_JOINTS = {"sice_arm": 2, "vertical3": 3, "ur5": 6, "panda": 7, "iiwa14": 7}
 PI = math.pi
 
 

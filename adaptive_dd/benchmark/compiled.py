@@ -128,7 +128,7 @@ runs in parallel: the function has no ``prange`` and no array expression is conv
 
 @njit(cache=True, parallel=True)
 def closed_loop_block(k0, k1, noise, drop, rc, io, pl, g, ts, es, ec, acc, rec, alarms):  # pragma: no cover
-    """Samples ``k0 .. k1 - 1`` of every trial (prange over trials); state updated in place.
+    """Samples ``k0`` to ``k1 - 1`` of every trial (prange over trials); state updated in place.
 
     Parameters
     ----------
@@ -265,7 +265,7 @@ def record_estimate(seg_end, sigma_end, sigma_rec, i, k, s, theta):  # pragma: n
 
 @njit(cache=True, parallel=COPY_PROPAGATE_ONLY)
 def trial_block(i, k0, k1, noise, drop, rc, io, pl, g, ts, es, ec, acc, rec, alarms):  # pragma: no cover
-    """Samples ``k0 .. k1 - 1`` of trial i (see :func:`closed_loop_block`).
+    """Samples ``k0`` to ``k1 - 1`` of trial i (see :func:`closed_loop_block`).
 
     A function of its own because numba 0.68's parallel loop loses the writes its own body makes
     to arrays reached through a NamedTuple (``a.count[i] += 1`` in a ``prange`` body leaves

@@ -301,13 +301,18 @@ def compute_metrics(res: BenchmarkResult) -> dict:
     _add_seed_statistics(res, out, per)
     _add_information_times(res, out)
 
-    return {
+    result = {
         "scenario": sc.source,
         "seeds": sc.seeds,
         "wall_time_s": res.wall_time,
         "provenance": provenance(res),
         "controllers": out,
     }
+    if res.plant is not None:  # the plant is not the model: what each seed's plant was
+        result["plant"] = res.plant
+    if res.excitation is not None:  # [run] excite: the identification before the task
+        result["excitation"] = res.excitation
+    return result
 
 
 def _segment_sigmas(sc) -> np.ndarray:

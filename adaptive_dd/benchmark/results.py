@@ -7,7 +7,7 @@ import numpy as np
 from adaptive_dd.benchmark.metrics import detection_delays, false_alarm_counts, per_seed_segment_metrics
 from adaptive_dd.benchmark.provenance import provenance, scenario_dict
 
-__all__ = ["provenance", "scenario_dict", "summary_frame", "to_frame"]
+__all__ = ["plant_frame", "provenance", "scenario_dict", "summary_frame", "to_frame"]
 
 
 def to_frame(res):
@@ -75,3 +75,35 @@ def summary_frame(res):
 
     out["worst_seed"] = g.apply(worst, include_groups=False)
     return out.reset_index()
+
+
+def plant_frame(res):
+    """The plant each seed met (pandas DataFrame), or None when the plant is the arm itself.
+
+    One row per seed x joint: ``seed, joint, mass`` [kg], ``com_x, com_y, com_z`` [m] (link
+    frame), ``ixx, iyy, izz, ixy, ixz, iyz`` [kg m^2] about the centre of mass, ``viscous``
+    [N m s], ``coulomb`` [N m], ``armature`` [kg m^2], and the same of the nominal plant with the
+    prefix ``nominal_``.
+    """
+    import pandas as pd
+
+    if res.plant is None:
+        return None
+
+    def rows(d: dict) -> list[dict]:
+        out = []
+        for j, link in enumerate(d["links"]):
+            r = {"mass": link["mass"], **dict(zip(("com_x", "com_y", "com_z"), link["com"], strict=True))}
+            r.update(zip(("ixx", "iyy", "izz", "ixy", "ixz", "iyz"), link["inertia"], strict=True))
+            r.update(viscous=d["viscous"][j], coulomb=d["coulomb"][j], armature=d["armature"][j])
+            out.append(r)
+        return out
+
+    nominal = rows(res.plant["nominal"])
+    table = []
+    for seed, d in res.plant["seeds"].items():
+        for j, r in enumerate(rows(d)):
+            table.append(
+                {"seed": int(seed), "joint": j + 1, **r, **{f"nominal_{k}": v for k, v in nominal[j].items()}}
+            )
+    return pd.DataFrame(table)

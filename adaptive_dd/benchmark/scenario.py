@@ -9,6 +9,8 @@ Every key is optional; the value after ``=`` below is the default that is used
     seeds = 10                 # Monte-Carlo trials per controller, 1 .. 10000
     seed = 0                   # base seed, 0 <= seed < 2**63
     substeps = 2               # RK4 steps per sample, 1 .. 100
+    excite = 0.0               # s of designed excitation before the task, its identification
+                               # the controllers' model (N-joint arms; 0: none; <= 3600)
     controllers = ["pd", "ct_nominal", "ct_oracle", "adaptive_ct_paper", "adaptive_ct",
                    "slotine_li", "slotine_li_oracle"]
                                # names, or import paths "package.module:Class"
@@ -33,6 +35,16 @@ Every key is optional; the value after ``=`` below is the default that is used
     at = 5.0                   # s, required; every segment holds at least one sample
     mass = 3.0                 # kg, required, 0 .. 50
     radius = 0.05              # m, 0 .. 0.5, the same for every disk
+
+    [plant]                    # N-joint arms: the simulated robot when it is not the [arm]
+    urdf = "FILE"              # other inertials, the same joints and frames (and friction law keys)
+    viscous = [...]            # per joint, the plant's only; also coulomb, armature
+    [plant.uncertainty]        # a plant drawn per seed (adaptive_dd.plant.uncertainty)
+    mass = 0.1                 # relative; com [m]; inertia, viscous, coulomb, armature relative
+    distribution = "uniform"   # or "normal"
+
+    [model]
+    from = "FILE.urdf"         # the controllers' model: these link inertials (N-joint arms)
 
     [noise]                    # Tables 2 and 4 of the paper
     position_variance = [1e-8, 1e-7]   # rad^2, each in [0, 1]
@@ -74,6 +86,7 @@ from adaptive_dd.errors import ScenarioError
 from adaptive_dd.plant.arm import Arm, arm_from_tables
 from adaptive_dd.plant.parameters import PAYLOAD_RADIUS
 from adaptive_dd.plant.serial_arm import SerialArm
+from adaptive_dd.plant.uncertainty import PLANT_TRUTH_KEYS, PlantSpec, parse_model, parse_plant
 
 __all__ = [
     "LIMITS",
@@ -83,6 +96,7 @@ __all__ = [
     "default_scenario_path",
     "format_scenario",
     "load_scenario",
+    "model_and_plant",
     "parse_scenario",
     "read_toml",
     "run_estimate",
@@ -109,6 +123,7 @@ _FIELD_KEY = {
     "dropout": "noise.dropout",
     "controller_options": "controllers",
     "source": "source",
+    "excite": "run.excite",
 }
 
 
@@ -142,6 +157,12 @@ class Scenario:
     arm: Arm | SerialArm = field(default_factory=Arm.sice)
     swap_com: tuple = ()
     swap_inertia: tuple = ()
+    excite: float = 0.0
+    """[s] of the designed excitation run on the plant before the task, the controllers' model
+    identified from it (:mod:`adaptive_dd.closed_loop.excitation_phase`); 0: none."""
+    plant: PlantSpec | None = None
+    """What the simulated robot is when it is not ``arm`` (:mod:`adaptive_dd.plant.uncertainty`):
+    ``arm`` is then the model the controllers are given. None: the plant is ``arm`` exactly."""
 
     def __post_init__(self) -> None:
         errors = scenario_errors({f.name: getattr(self, f.name) for f in fields(self)})
@@ -163,7 +184,18 @@ class Scenario:
         return kw
 
     def segment_sigmas(self) -> NDArray[np.float64]:
-        """True base parameters of each constant-payload segment, ``(n_segments, p)``."""
+        """True base parameters of each constant-payload segment, ``(n_segments, p)``: the arm's, or
+        with a ``[plant]`` the plant's before any draw (each seed's own: the results' ``plant``)."""
+        if self.plant is not None:
+            from adaptive_dd.closed_loop.types import pi_with_payload
+
+            p = self.plant
+            friction = np.concatenate([p.viscous, p.coulomb, p.armature])
+            payloads = [None, *(self.payload_of(i) for i in range(len(self.swap_times)))]
+            B = self.arm.base.B
+            return np.array(
+                [B @ np.concatenate([pi_with_payload(self.arm, x, p.pi_links), friction]) for x in payloads]
+            )
         rows = [self.arm.sigma_with_payload(0.0, radius=self.payload_radius)]
         rows += [self.arm.sigma_with_payload(**self.payload_of(i)) for i in range(len(self.swap_times))]
         return np.array(rows)
@@ -188,11 +220,15 @@ class Scenario:
         return [b - a for a, b in itertools.pairwise(edges)]
 
     def estimate(self) -> RunEstimate:
-        """Memory and time estimate of this run (:func:`run_estimate`)."""
+        """Memory and time estimate of this run (:func:`run_estimate`), one-time compilation included
+        when numba's cache is cold."""
+        from adaptive_dd._numba_cache import compile_estimate
+
         serial = isinstance(self.arm, SerialArm)
         return run_estimate(
-            self.n_samples, self.seeds, len(self.controllers), self.n_joints if serial else None
-        )
+            self.n_samples, self.seeds, len(self.controllers), self.n_joints if serial else None,
+            compile_seconds=compile_estimate(self.arm),
+        )  # fmt: skip
 
     def options(self, name: str) -> dict[str, Any]:
         """Settings of controller ``name`` from its ``[controllers.NAME]`` table (plain values)."""
@@ -246,13 +282,15 @@ def load_scenario(path: str | Path | None = None) -> Scenario:
 
 def parse_scenario(data: dict, src: str = "<memory>", name: str = "scenario") -> Scenario:
     """Check a scenario given as a dict (the parsed TOML); all problems are raised at once."""
-    arm, errors = None, []
+    arm, errors, plant = None, [], None
+    table = data if isinstance(data, dict) else {}
+    plant_table = table.get("plant")
+    law_table = plant_table
+    if isinstance(plant_table, dict):
+        law_table = {k: v for k, v in plant_table.items() if k not in PLANT_TRUTH_KEYS}
     try:
-        arm = arm_from_tables(
-            data.get("arm") if isinstance(data, dict) else None,
-            data.get("plant") if isinstance(data, dict) else None,
-            src,
-        )
+        arm = arm_from_tables(table.get("arm"), law_table, src)
+        arm, plant = model_and_plant(src, arm, plant_table, table.get("model"))
     except ScenarioError as exc:
         errors.append(str(exc).removeprefix(f"{src}: "))
     values, more = scenario_fields(
@@ -264,6 +302,7 @@ def parse_scenario(data: dict, src: str = "<memory>", name: str = "scenario") ->
     values.update(name=name, source=src)
     if arm is not None:
         values["arm"] = arm
+        values["plant"] = plant
         if "payload.radius" in values.get("defaulted", ()):
             values["payload_radius"] = arm.payload_radius
     errors += [e for e in scenario_errors(values) if e.split(":")[0] not in _bad_keys(errors)]
@@ -272,6 +311,24 @@ def parse_scenario(data: dict, src: str = "<memory>", name: str = "scenario") ->
     if errors:
         raise _scenario_error(src, errors)
     return Scenario(**values)
+
+
+def model_and_plant(src: str, arm, plant_table, model_table) -> tuple[Any, PlantSpec | None]:
+    """The controllers' model (``[model]``) and the plant (``[plant]``'s truth keys) around ``arm`` (the
+    ``[arm]``); raises :class:`ScenarioError` for these tables on the two-link closed-form arm."""
+    if not isinstance(arm, SerialArm):
+        given = sorted(k for k in (plant_table or {}) if k in PLANT_TRUTH_KEYS)
+        given = [f"plant.{k}" for k in given] + (["[model]"] if model_table is not None else [])
+        if given:
+            raise ScenarioError(
+                f"{src}: {', '.join(given)}: a plant apart from the model is not supported on the two-link "
+                "arm's closed-form path; give the arm as a URDF with `general = true` in [arm] (the paper's "
+                'arm: `robot = "sice_arm"`, `general = true`) to run it on the N-joint path, where it is '
+                "supported"
+            )
+        return arm, None
+    model = parse_model(src, model_table, arm)
+    return model, parse_plant(src, plant_table, arm, model_from=model is not arm)
 
 
 def _numbers(x: Any, key: str):
@@ -347,7 +404,7 @@ def format_scenario(sc: Scenario) -> str:
     lines = [f"# {sc.source}: valid; {sc.estimate()}"]
     order = ("duration", "sample_period", "seeds", "seed", "substeps", "controllers", "bandwidth")
     order += ("damping", "swap_times", "swap_masses", "payload_radius", "position_variance")
-    for name in (*order, "velocity_variance", "dropout"):
+    for name in (*order, "velocity_variance", "dropout", "excite"):
         key = _FIELD_KEY[name]
         mark = "   (default)" if key in sc.defaulted else ""
         lines.append(f"{key} = {_show(getattr(sc, name))}{mark}")
@@ -362,12 +419,29 @@ def format_scenario(sc: Scenario) -> str:
         )
     for n, _ in sc.controller_options:
         lines.append(f"controllers.{n} = {sc.options(n)!r}")
+    lines += _plant_lines(sc)
     segs = ", ".join(
         f"{a:g}-{b:g} s: {m:g} kg ({k} samples)"
         for (a, b, m), k in zip(sc.segments(), sc.segment_samples(), strict=True)
     )
     lines.append(f"# segments: {segs}")
     return "\n".join(lines)
+
+
+def _plant_lines(sc: Scenario) -> list[str]:
+    """What the plant is when it is not the model (``[plant]``, ``[model]``), for ``validate``."""
+    import dataclasses
+
+    p = sc.plant
+    if p is None:
+        return ["# plant: the [arm] itself (no [plant] table)"] if isinstance(sc.arm, SerialArm) else []
+    out = [f"model.urdf = {str(sc.arm.urdf)!r}   (what every non-oracle controller is given)"]
+    out.append(f"plant.urdf = {p.urdf!r}" if p.urdf else "# plant links: the [arm]'s URDF")
+    for key in ("viscous", "coulomb", "armature"):
+        out.append(f"plant.{key} = {_show(getattr(p, key))}")
+    if p.uncertainty is not None:
+        out.append(f"plant.uncertainty = {dataclasses.asdict(p.uncertainty)!r}")
+    return out
 
 
 def _show(v: Any) -> str:

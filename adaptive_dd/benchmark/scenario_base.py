@@ -38,18 +38,20 @@ LIMITS = {
     "large_seconds": 60.0,  # the CLI prints the estimate above this
     "max_ramp": 3600.0,  # s
     "max_setting": 1e6,  # |any number| in a built-in controller's [controllers.NAME] table
+    "max_excite": 3600.0,  # s, [run] excite
 }
 """Documented bounds of the scenario checks (see the module docstring)."""
 
 KEYS = {
-    "run": {"duration", "sample_period", "seeds", "seed", "substeps", "controllers"},
+    "run": {"duration", "sample_period", "seeds", "seed", "substeps", "controllers", "excite"},
     "control": {"bandwidth", "damping"},
     "reference": None,  # ramp and one entry per joint, checked against the arm
     "payload": {"at", "mass", "radius", "com", "inertia"},
     "noise": {"position_variance", "velocity_variance", "dropout"},
     "controllers": None,  # one sub-table per controller, free keys
     "arm": None,  # checked by adaptive_dd.plant.arm.arm_from_tables
-    "plant": None,
+    "plant": None,  # adaptive_dd.plant.arm.arm_from_tables and adaptive_dd.plant.uncertainty.parse_plant
+    "model": None,  # adaptive_dd.plant.uncertainty.parse_model
 }
 
 # Kept per trial and sample by the runner: the error norm as float32 (metrics stream; full
@@ -109,12 +111,14 @@ class Reference:
 
 @dataclass(frozen=True)
 class RunEstimate:
-    """Size of a benchmark run: samples per trial, trials, memory [bytes] and wall time [s]."""
+    """Size of a benchmark run: samples per trial, trials, memory [bytes] and wall time [s]
+    (``compile_seconds`` of it the one-time compilation of a cold cache)."""
 
     n_samples: int
     trials: int
     bytes: float
     seconds: float
+    compile_seconds: float = 0.0
 
     @property
     def large(self) -> bool:
@@ -125,6 +129,12 @@ class RunEstimate:
         return (
             f"{self.n_samples} samples x {self.trials} trials: about {self.bytes / 2**20:.3g} MiB "
             f"and {_duration(self.seconds)}"
+            + (
+                f" (of which about {_duration(self.compile_seconds)} compiling the kernels, once: "
+                "numba's cache is cold)"
+                if self.compile_seconds
+                else ""
+            )
         )
 
 
@@ -135,12 +145,17 @@ def _duration(s: float) -> str:
 
 
 def run_estimate(
-    n_samples: int, n_seeds: int, n_controllers: int, n_joints: int | None = None
+    n_samples: int,
+    n_seeds: int,
+    n_controllers: int,
+    n_joints: int | None = None,
+    compile_seconds: float = 0.0,
 ) -> RunEstimate:
     """Rough memory and wall time of a closed-loop run (a guide, not a promise); ``n_joints``
-    for an N-joint (URDF) arm, None for the two-link arm's closed forms."""
+    for an N-joint (URDF) arm, None for the two-link arm's closed forms; ``compile_seconds``
+    of one-time compilation added to the time."""
     trials = n_seeds * n_controllers
     nbytes = float(n_samples) * trials * _BYTES_PER_SAMPLE_TRIAL
     per = _SECONDS_PER_SAMPLE_TRIAL if n_joints is None else _SECONDS_PER_SAMPLE_TRIAL_JOINT2 * n_joints**2
     secs = float(n_samples) * (n_controllers * _SECONDS_PER_SAMPLE_CONTROLLER + trials * per)
-    return RunEstimate(int(n_samples), int(trials), nbytes, secs)
+    return RunEstimate(int(n_samples), int(trials), nbytes, secs + compile_seconds, float(compile_seconds))

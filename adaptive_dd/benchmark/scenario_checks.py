@@ -100,6 +100,13 @@ def scenario_errors(v: dict[str, Any]) -> list[str]:
     s_ok = check_number(e, "run.seeds", v["seeds"], 1, L["max_seeds"], integer=True)
     check_number(e, "run.seed", v["seed"], 0, L["seed_bound"] - 1, integer=True)
     check_number(e, "run.substeps", v["substeps"], 1, L["max_substeps"], integer=True)
+    _check_plant(e, v)
+    if check_number(e, "run.excite", v.get("excite", 0.0), 0, L["max_excite"]) and v.get("excite", 0.0) > 0:
+        if not _serial(v):
+            e.append(
+                f"run.excite: {v['excite']} s: the excitation phase needs an N-joint arm from a URDF "
+                '([arm] robot = ... or urdf = ...; the paper\'s arm: robot = "sice_arm", general = true)'
+            )
     c_ok = _check_controllers(e, v["controllers"], v.get("arm"))
     bw = v["bandwidth"]
     if isinstance(bw, tuple) and _serial(v):  # one per joint, N-joint arms only
@@ -142,6 +149,20 @@ def _n_joints(v: dict) -> int:
 
 def _label(name: str) -> str:
     return name.rsplit(":", 1)[-1].rsplit(".", 1)[-1] if ":" in name else name
+
+
+def _check_plant(e: list, v: dict) -> None:
+    """A plant (:class:`~adaptive_dd.plant.uncertainty.PlantSpec`) only on an N-joint arm, sized for it."""
+    p = v.get("plant")
+    if p is None:
+        return
+    if not _serial(v):
+        e.append("plant: a plant apart from the model needs an N-joint arm from a URDF")
+        return
+    n = _n_joints(v)
+    sizes = (len(p.pi_links), len(p.viscous), len(p.coulomb), len(p.armature))
+    if sizes != (10 * n, n, n, n):
+        e.append(f"plant: sized {sizes} (links, viscous, coulomb, armature) for an arm of {n} joints")
 
 
 def _serial(v: dict) -> bool:
@@ -350,6 +371,7 @@ def scenario_fields(
         "position_variance": get("noise", "position_variance", _default_noise(arm, "position_variance")),
         "velocity_variance": get("noise", "velocity_variance", _default_noise(arm, "velocity_variance")),
         "dropout": get("noise", "dropout", 0.0),
+        "excite": get("run", "excite", 0.0),
     }
     _payload_fields(e, tables.get("payload", []), v, defaulted, arm)
     v["reference"] = _reference_field(e, tables, is_default, defaulted, arm, default_reference)

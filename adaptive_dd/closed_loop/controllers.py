@@ -167,11 +167,18 @@ class SerialLaw:
         self._alarms: list[list[float]] = [[] for _ in range(n_trials)]
         self._k = 0
 
-    def command(self, q, qd, q_d, qd_d, qdd_d, sigma_true=None) -> Array:
-        """Torque command ``(n_trials, n)`` [N m] from measured ``q, qd (n_trials, n)``."""
+    takes_pi_true = True
+    """The Python path gives ``pi_true`` (each trial's plant) as well as ``sigma_true``."""
+
+    def command(self, q, qd, q_d, qd_d, qdd_d, sigma_true=None, pi_true=None) -> Array:
+        """Torque command ``(n_trials, n)`` [N m] from measured ``q, qd (n_trials, n)``; an oracle
+        uses ``pi_true (n_trials, 13 n)`` if given, else the payload explaining ``sigma_true``."""
         f = self._form
-        pi_true = None
-        if f.cfg.model == MODEL_TRUE:
+        if f.cfg.model != MODEL_TRUE:
+            pi_true = None
+        elif pi_true is not None:
+            pi_true = np.ascontiguousarray(pi_true, dtype=float)
+        else:
             if sigma_true is None:
                 raise ValueError(f"{self.name} needs the true model at every sample")
             pi_true = self.pi_from_sigma(sigma_true)

@@ -139,7 +139,7 @@ def apply_trial_sample(ch, rc, io, pl, ts, acc, rec, i, k, s, cmd, tau, work):  
     if keep:
         for j in range(n):
             rec.q[i, k, j], rec.qd[i, k, j] = ts.q[i, j], ts.qd[i, j]
-    plant_step(ch, pl, s, ts.q[i], ts.qd[i], tau, rc.T, ts.stuck[i], sc)
+    plant_step(ch, pl, i, s, ts.q[i], ts.qd[i], tau, rc.T, ts.stuck[i], sc)
     ok = True
     for j in range(n):
         if not (np.isfinite(ts.q[i, j]) and abs(ts.qd[i, j]) < rc.max_speed):
@@ -260,11 +260,11 @@ def _sigma_of(B, cols, count, pi, out):  # pragma: no cover - compiled
 def closed_loop_block(
     i0, i1, k0, k1, ch, rc, io, pl, ts, acc, rec, alarms, noise, drop, cfg, ls, pi_true, B, ec, es, estimates,
 ):  # pragma: no cover - compiled  # fmt: skip
-    """Samples ``k0 .. k1 - 1`` of trials ``i0 .. i1 - 1``, state updated in place.
+    """Samples ``k0`` to ``k1 - 1`` of trials ``i0`` to ``i1 - 1``, state updated in place.
 
     ``noise (S, k1 - k0, 2 n)`` standard normal; ``drop (S, k1 - k0)`` lost measurements
-    (or ``(S, 0)``: none); ``cfg, ls`` the law; ``pi_true (G, 13 n)`` the true model per
-    segment; ``B (p, 13 n)`` standard -> base parameters; ``ec, es`` the estimator's records
+    (or ``(S, 0)``: none); ``cfg, ls`` the law; ``pi_true (S, G, 13 n)`` trial i's true model
+    per segment (its plant); ``B (p, 13 n)`` standard -> base parameters; ``ec, es`` the estimator's records
     (arrays: none; see :func:`estimator_step`); ``estimates``: record ``B pi_model``.
     The GIL is released: the runner runs disjoint ranges of trials in threads (numba's
     ``prange`` cannot take the estimator's configuration, a NamedTuple holding a NamedTuple).
@@ -283,7 +283,7 @@ def closed_loop_block(
             lost = drop.shape[1] > 0 and drop[i, k - k0]
             measure_trial_sample(io, ts, i, noise[i, k - k0], lost, qm, qdm, qm_obs, qdm_obs)
             law_trial_in(
-                ch, cfg, pi_true[s], ls.pi_model[i], ls.theta[i], ls.since_alarm[i],
+                ch, cfg, pi_true[i, s], ls.pi_model[i], ls.theta[i], ls.since_alarm[i],
                 qm, qdm, rc.q_d[k], rc.qd_d[k], rc.qdd_d[k], lw, cmd,
             )  # fmt: skip
             apply_trial_sample(ch, rc, io, pl, ts, acc, rec, i, k, s, cmd, tau, work)

@@ -1,7 +1,8 @@
 """The plant step the closed loop calls: one trial, one sample, zero-order hold, in place.
 
 :func:`adaptive_dd.plant.serial_integrator.serial_plant_step` (RK4 substeps; stick-slip,
-tanh or Stribeck friction) on the link parameters of the current payload segment.
+tanh or Stribeck friction) on trial i's plant (its link parameters in the current payload
+segment, its friction).
 """
 
 from __future__ import annotations
@@ -14,13 +15,13 @@ __all__ = ["plant_scratch", "plant_step"]
 
 
 @njit(cache=True, inline="always")
-def plant_step(ch, pl, seg, q, qd, tau, T, stuck, sc):  # pragma: no cover - compiled
-    """Advance one trial's ``q, qd (n,)`` over one sample under ``tau (n,)`` in segment ``seg``.
+def plant_step(ch, pl, i, seg, q, qd, tau, T, stuck, sc):  # pragma: no cover - compiled
+    """Advance trial i's ``q, qd (n,)`` over one sample under ``tau (n,)`` in segment ``seg``.
 
     ``pl`` is the run's :class:`~adaptive_dd.closed_loop.types.Plant`; ``stuck (n,)`` receives
     the joints held by Coulomb friction; ``sc`` is the trial's scratch (:func:`plant_scratch`,
     allocated once). Returns False if the dynamics failed (a mass matrix
     not positive definite, a non-finite state); the loop's runaway rule catches the state.
     """
-    pp = PlantParams(pl.pi_seg[seg], pl.fv, pl.fc, pl.armature, pl.friction_law, pl.fparams)
+    pp = PlantParams(pl.pi_seg[i, seg], pl.fv[i], pl.fc[i], pl.armature[i], pl.friction_law, pl.fparams)
     return serial_plant_step_in(ch, pp, q, qd, tau, T, pl.substeps, stuck, sc)

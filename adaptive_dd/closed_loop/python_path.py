@@ -42,18 +42,23 @@ class PythonGlue(NamedTuple):
         arrays: the law's measurement (the last good one where lost) and the estimator's (NaN
         where lost).
     sigma_true : callable
-        ``sigma_true(k) -> (p,)`` the true base parameters over sample k (for oracles).
+        ``sigma_true(k) -> (p,) or (S, p)`` the true base parameters over sample k (for oracles;
+        per trial when each trial has its own plant).
     apply : callable
         ``apply(k, cmd (S, n)) -> tau (S, n), s``: the command applied over sample k (``cmd`` is
         not changed), the torque that was applied, the sample's payload segment.
     record_estimate : callable
         ``record_estimate(k, s, sigma (S, p))``: the estimate after sample k (segment s).
+    pi_true : callable or None
+        ``pi_true(k) -> (S, 13 n)`` each trial's true standard parameters over sample k (N-joint
+        arm), given to a controller with ``takes_pi_true`` (the built-in oracles' Python form).
     """
 
     measure: Callable
     sigma_true: Callable
     apply: Callable
     record_estimate: Callable
+    pi_true: Callable | None = None
 
 
 def run_python_batch(
@@ -131,8 +136,10 @@ def _command(ctrl, glue: PythonGlue, rc: RunConstants, k: int, qm: Array, qdm: A
     :class:`~adaptive_dd.errors.SignalError` if it has another shape."""
     kw = {}
     if truth:
-        sg = glue.sigma_true(k)
-        kw["sigma_true"] = np.broadcast_to(sg, (qm.shape[0], sg.shape[0])).copy()
+        sg = np.asarray(glue.sigma_true(k))
+        kw["sigma_true"] = np.broadcast_to(sg, (qm.shape[0], sg.shape[-1])).copy()
+        if glue.pi_true is not None and getattr(ctrl, "takes_pi_true", False):
+            kw["pi_true"] = glue.pi_true(k)
     out = np.asarray(ctrl.command(qm, qdm, rc.q_d[k], rc.qd_d[k], rc.qdd_d[k], **kw), dtype=float)
     if out.shape != qm.shape:
         raise SignalError(f"command returned shape {out.shape}, expected ({qm.shape[0]}, {qm.shape[1]})")

@@ -40,11 +40,21 @@ from adaptive_dd.closed_loop.types import (
     TrialState,
     io_of,
     plant_of,
+    plant_record,
     run_constants,
+    true_models,
 )
 from adaptive_dd.controllers.base import declared
 
-__all__ = ["CHUNK", "MAX_ALARMS", "make_controllers", "run_serial", "true_parameters"]
+__all__ = [
+    "CHUNK",
+    "MAX_ALARMS",
+    "make_controllers",
+    "plant_record",
+    "run_serial",
+    "true_models",
+    "true_parameters",
+]
 
 
 def make_controllers(scenario) -> dict:
@@ -109,12 +119,26 @@ def run_serial(
     """
     from adaptive_dd.errors import ParameterError
 
-    ctrls = make_controllers(scenario) if controllers is None else controllers
     idx = tuple(range(scenario.seeds)) if seed_indices is None else tuple(int(i) for i in seed_indices)
-    rc, io, pl = run_constants(scenario), io_of(scenario), plant_of(scenario)
+    if scenario.excite > 0:  # identification first, then each seed's identified model
+        if controllers is not None:
+            raise ParameterError(
+                "run.excite: the controllers are built per seed from the identified model; "
+                "give no controller objects (or set [run] excite = 0)"
+            )
+        from adaptive_dd.closed_loop.excitation_phase import run_with_excitation
+
+        res = run_with_excitation(scenario, idx, run_serial, keep_trajectories, engine)
+        if bar is not None:
+            bar.update(scenario.n_samples * len(res.runs))
+        return res
+    ctrls = make_controllers(scenario) if controllers is None else controllers
+    rc, io, pl = run_constants(scenario), io_of(scenario), plant_of(scenario, idx)
     _, sigma_true, mass = true_parameters(scenario)
     t = np.arange(scenario.n_samples) * rc.T
     res = BenchmarkResult(scenario, t, rc.q_d, sigma_true, mass, seed_indices=idx)
+    if scenario.plant is not None:
+        res.plant = plant_record(scenario, idx)
     for name, ctrl in ctrls.items():
         compiled = isinstance(ctrl, SerialLaw) and engine != "python"
         if engine == "compiled" and not compiled:
@@ -131,7 +155,7 @@ def _records(
     """``(run, ts, acc, rec)``: an empty run of S trials over the arrays its paths fill in place
     (trial state at the reference's start, streamed sums, the recording of the first ``keep``)."""
     N, n = rc.q_d.shape
-    G, p = pl.pi_seg.shape[0], scenario.arm.base.B.shape[0]
+    G, p = pl.pi_seg.shape[1], scenario.arm.base.B.shape[0]
     K = min(keep, S)
     q = np.broadcast_to(rc.q_d[0], (S, n)).copy()
     qd = np.broadcast_to(rc.qd_d[0], (S, n)).copy()
@@ -151,20 +175,13 @@ def _records(
     return run, ts, acc, rec
 
 
-def _true_pi(pl: Plant) -> np.ndarray:
-    """``(G, 13 n)``: the true model of every segment (links with payload, the arm's friction)."""
-    G = pl.pi_seg.shape[0]
-    fr = np.concatenate((pl.fv, pl.fc, pl.armature))
-    return np.ascontiguousarray(np.hstack((pl.pi_seg, np.broadcast_to(fr, (G, fr.size)))))
-
-
 # ------------------------------------------------------------------------ the two paths
 def _run_compiled(name, ctrl: SerialLaw, scenario, idx, rc, io, pl, keep, bar) -> ControllerRun:
     S, N, n = len(idx), scenario.n_samples, scenario.n_joints
     form = ctrl.compiled_form(S, rc.T)
     run, ts, acc, rec = _records(name, ctrl, scenario, rc, pl, S, keep, form.estimates, "compiled")
     alarms = Alarms(np.zeros((S, MAX_ALARMS)), np.zeros(S, dtype=np.int64))
-    pi_true, B = _true_pi(pl), np.ascontiguousarray(scenario.arm.base.B)
+    pi_true, B = true_models(pl), np.ascontiguousarray(scenario.arm.base.B)
     for k0, k1, noise, drop in NoiseBlocks(scenario, idx, 2 * n).blocks(N):
         args = (
             k0, k1, ctrl.ch, rc, io, pl, ts, acc, rec, alarms, noise, drop, form.cfg, form.state, pi_true, B,
@@ -199,13 +216,15 @@ def _in_threads(kernel, S: int, args: tuple) -> None:
 def _run_python(name, ctrl, scenario, idx, rc, io, pl, keep, bar) -> ControllerRun:
     """One controller's trials on the Python path
     (:func:`~adaptive_dd.closed_loop.python_path.run_python_batch`)."""
-    sig_seg = scenario.segment_sigmas()
+    pi_true = true_models(pl)
+    sig_true = pi_true @ scenario.arm.base.B.T  # (S, G, p)
 
     def records(estimates: bool):
         run, ts, acc, rec = _records(name, ctrl, scenario, rc, pl, len(idx), keep, estimates, "python")
         glue = PythonGlue(
             measure=partial(measure_batch, io, ts),
-            sigma_true=lambda k: sig_seg[segment_of(rc, k)],
+            sigma_true=lambda k: sig_true[:, segment_of(rc, k)],
+            pi_true=lambda k: pi_true[:, segment_of(rc, k)],
             apply=partial(apply_batch, scenario.arm.chain, rc, io, pl, ts, acc, rec),
             record_estimate=partial(sigma_batch, rc, rec),
         )

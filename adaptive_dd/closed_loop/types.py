@@ -28,8 +28,10 @@ __all__ = [
     "io_of",
     "pi_with_payload",
     "plant_of",
+    "plant_record",
     "run_constants",
     "segment_starts",
+    "true_models",
 ]
 
 Array = NDArray[np.float64]
@@ -86,14 +88,14 @@ class Io(NamedTuple):
 
 
 class Plant(NamedTuple):
-    """The simulated arm: link parameters per payload segment and the joints' friction.
+    """The simulated arm of each trial: link parameters per payload segment and the joints' friction.
 
     Attributes
     ----------
-    pi_seg : ndarray (G, 10 n)
-        Standard link parameters with each segment's payload.
-    fv, fc, armature : ndarray (n,)
-        Viscous [N m s], Coulomb [N m] friction and armature [kg m^2].
+    pi_seg : ndarray (S, G, 10 n)
+        Standard link parameters of trial i's plant with each segment's payload.
+    fv, fc, armature : ndarray (S, n)
+        Viscous [N m s], Coulomb [N m] friction and armature [kg m^2] of trial i's plant.
     friction_law : int
         0 stick-slip, 1 tanh, 2 Stribeck (:attr:`SerialArm.friction_code`).
     fparams : ndarray (3,)
@@ -209,12 +211,13 @@ def io_of(scenario) -> Io:
     )
 
 
-def pi_with_payload(arm, payload: dict | None) -> Array:
-    """Standard link parameters ``(10 n,)`` of ``arm`` carrying ``payload`` (keyword arguments of
+def pi_with_payload(arm, payload: dict | None, pi_links=None) -> Array:
+    """Standard link parameters ``(10 n,)`` of ``arm`` (or of links ``pi_links (10 n,)`` on its
+    kinematics) carrying ``payload`` (keyword arguments of
     :func:`~adaptive_dd.plant.serial_arm.payload_parameters`; None: no payload)."""
     from adaptive_dd.plant.serial_arm import payload_parameters
 
-    pi = np.array(arm.pi_links, dtype=float)
+    pi = np.array(arm.pi_links if pi_links is None else pi_links, dtype=float)
     if payload is None:
         return pi
     j = arm.payload_joint
@@ -225,17 +228,56 @@ def pi_with_payload(arm, payload: dict | None) -> Array:
     return pi
 
 
-def plant_of(scenario) -> Plant:
-    """The simulated arm of a scenario, with every segment's payload."""
+def plant_of(scenario, seed_indices=(0,)) -> Plant:
+    """The simulated arm of each trial (seed indices ``seed_indices``), with every segment's payload:
+    ``scenario.arm`` itself, or the plant of ``scenario.plant`` drawn for that seed
+    (:func:`~adaptive_dd.plant.uncertainty.plant_draws`)."""
+    from adaptive_dd.plant.uncertainty import plant_draws
+
     arm = scenario.arm
-    rows = [pi_with_payload(arm, None)]
-    rows += [pi_with_payload(arm, scenario.payload_of(i)) for i in range(len(scenario.swap_times))]
+    draws = plant_draws(scenario, seed_indices)
+    payloads = [None, *(scenario.payload_of(i) for i in range(len(scenario.swap_times)))]
+    once: dict = {}  # an exact plant is one object for every trial: its segments are built once
+    for d in draws:
+        if id(d) not in once:
+            once[id(d)] = [pi_with_payload(arm, p, d.pi_links) for p in payloads]
+    pi_seg = [once[id(d)] for d in draws]
+    c = np.ascontiguousarray
     return Plant(
-        np.ascontiguousarray(rows),
-        np.array(arm.viscous, dtype=float),
-        np.array(arm.coulomb, dtype=float),
-        np.array(arm.armature, dtype=float),
+        c(np.reshape(pi_seg, (len(draws), len(payloads), -1))),
+        c([d.viscous for d in draws], dtype=float),
+        c([d.coulomb for d in draws], dtype=float),
+        c([d.armature for d in draws], dtype=float),
         int(arm.friction_code),
         np.array(arm.friction_params, dtype=float),
         int(scenario.substeps),
     )
+
+
+def true_models(pl: Plant) -> np.ndarray:
+    """``(S, G, 13 n)``: trial i's true model in every segment (its plant's links with the payload,
+    its plant's friction and armature): what the oracles are given, and only they."""
+    S, G, _ = pl.pi_seg.shape
+    fr = np.concatenate((pl.fv, pl.fc, pl.armature), axis=1)
+    return np.ascontiguousarray(
+        np.concatenate((pl.pi_seg, np.broadcast_to(fr[:, None, :], (S, G, fr.shape[1]))), 2)
+    )
+
+
+def plant_record(scenario, idx) -> dict:
+    """The plants the trials met (JSON-ready): the nominal plant, the draw's levels and, per seed
+    index, the drawn parameters (:meth:`~adaptive_dd.plant.uncertainty.PlantDraw.to_dict`)."""
+    import dataclasses
+
+    from adaptive_dd.plant.uncertainty import plant_draws
+
+    spec = scenario.plant
+    unc = None if spec.uncertainty is None else dataclasses.asdict(spec.uncertainty)
+    return {
+        "urdf": spec.urdf,
+        "model_urdf": str(scenario.arm.urdf),
+        "uncertainty": unc,
+        "seed_rule": "numpy.random.default_rng([scenario.seed, seed_index, 2])",
+        "nominal": spec.nominal().to_dict(),
+        "seeds": {int(i): d.to_dict() for i, d in zip(idx, plant_draws(scenario, idx), strict=True)},
+    }

@@ -81,15 +81,15 @@ DEFAULT_GAINS = Gains()
 class Controller:
     """Base class. Subclasses set ``name`` and implement :meth:`command`.
 
+    A two-link built-in also defines ``compiled_spec(sample_period)`` on its own class: its law
+    and gains as a typed tuple (:mod:`adaptive_dd.controllers.compiled_form`), which the
+    benchmark runs compiled; a class without it (a plug-in, a subclass) runs on the Python path.
+
     Attributes
     ----------
     name : str
     needs_true_model : bool
         Receives ``sigma_true`` in :meth:`command` (oracles only).
-
-    A two-link built-in also defines ``compiled_spec(sample_period)`` on its own class: its law
-    and gains as a typed tuple (:mod:`adaptive_dd.controllers.compiled_form`), which the
-    benchmark runs compiled; a class without it (a plug-in, a subclass) runs on the Python path.
     """
 
     name = "controller"

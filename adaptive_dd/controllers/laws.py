@@ -179,7 +179,7 @@ def pd_batch(q, qd, q_d, qd_d, kp, kd):
 
 
 def boost_batch(tau, q, qd, q_d, qd_d, sigma0, dkp: float, dkd: float, on):
-    """``tau`` plus :func:`boost_trial` where ``on (n,)``; ``tau, q, ... (n, 2)``."""
+    """``tau`` plus :func:`boost_trial` where ``on (n,)``; ``tau``, ``q`` and the other arrays ``(n, 2)``."""
     shape, (a, b, c, d, t) = _flat(q, qd, q_d, qd_d, tau)
     out = t.copy()
     on = np.ascontiguousarray(np.broadcast_to(np.asarray(on, dtype=np.bool_), (a.shape[0],)))

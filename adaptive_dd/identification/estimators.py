@@ -1,7 +1,7 @@
 """Online estimators of sigma from filtered regressions, and the named pipelines.
 
 Splits (Section 3.1, cascaded as in docs/paper_reading.md)
-----------------------------------------------
+----------------------------------------------------------
 ``"15"``: equation 2 estimates ``[J2 r b2 d2]`` from ``y2`` exactly; equation 1
 estimates ``[J1 b1 d1]`` from ``y1 - (qdd1 + qdd2) J2_hat - phi13 r_hat`` with
 J2_hat, r_hat just updated by equation 2.

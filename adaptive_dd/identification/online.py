@@ -159,9 +159,9 @@ class ChangeDetector:
         either sign, and at no payload only added mass can be a swap. The persistence test is
         not gated (a start estimate that carries a payload is still corrected by it).
 
-    Re-arming
-    ---------
-    After any alarm the persistence test is armed again after
+    Notes
+    -----
+    Re-arming: after any alarm the persistence test is armed again after
     ``max(holdoff, resume * freeze * tau_f + persist_min * T)`` (0.2 s with the defaults at
     1 kHz, counted in samples in which the equations are in use): whatever the long-run level
     learned, a model that stays wrong along the payload direction by ``min_mass`` or more
@@ -431,7 +431,7 @@ def rearm_time(cfg: OnlineConfig) -> float:
     """Longest time [s] after any alarm before the detector can raise the next one.
 
     ``max(holdoff, resume * freeze * tau_f + persist_min * T)`` in samples in which the
-    equations are in use (see :class:`ChangeDetector`, "Re-arming"). Raises
+    equations are in use (see :class:`ChangeDetector`, Notes). Raises
     :class:`~adaptive_dd.errors.ParameterError` for a config without a detector.
     """
     det = cfg.detector

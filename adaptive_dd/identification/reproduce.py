@@ -249,7 +249,7 @@ def format_bounds(res: ReproduceResult, tau_f: float | None = None) -> str:
 
 def paper_comparison(res: ReproduceResult, method: str) -> list[dict]:
     """Ours against the paper (estimator ``paper``, split 15) per tau_f of the paper's grid and
-    parameter: ``tau_f, param, ours_pct`` (mean |error| over seeds), ``paper_pct`` and
+    parameter: ``tau_f, param, ours_pct`` (mean ``|error|`` over seeds), ``paper_pct`` and
     ``ratio = ours / paper``."""
     err = res.errors.get((method, "15", "paper"))
     if err is None:

@@ -14,7 +14,7 @@ arm (a URDF through Pinocchio) can implement the same interface later:
 ``to_dict``.
 
 Plant friction laws (per joint i, ``b_i``, ``d_i`` from sigma)
--------------------------------------------------------------
+--------------------------------------------------------------
 ``"stick-slip"`` (default)
     ``b_i qd_i + d_i sgn(qd_i)`` with true sticking at rest (hybrid integrator).
 ``"tanh"``

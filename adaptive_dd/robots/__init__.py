@@ -63,6 +63,12 @@ ROBOTS: dict[str, RobotInfo] = {
         "Franka Emika Panda (7 joints, no hand): inertial parameters and friction identified by Gaz "
         "et al., IEEE RA-L 4(4) 2019; Franka's modified DH and joint limits",
     ),
+    "iiwa14": RobotInfo(
+        "iiwa14.urdf",
+        "iiwa_link_ee_kuka",
+        "KUKA LBR iiwa 14 R820 (7 joints): kinematics, limits and inertials of Drake's "
+        "iiwa14_no_collision.urdf (BSD-3-Clause)",
+    ),
 }
 """Name -> :class:`RobotInfo` of every robot shipped in ``adaptive_dd/robots/``."""
 
@@ -80,7 +86,7 @@ def robot_urdf(name: str) -> Path:
     Parameters
     ----------
     name : str
-        A key of :data:`ROBOTS` (``"sice_arm"``, ``"vertical3"``, ``"ur5"``, ``"panda"``).
+        A key of :data:`ROBOTS` (``"sice_arm"``, ``"vertical3"``, ``"ur5"``, ``"panda"``, ``"iiwa14"``).
 
     Returns
     -------

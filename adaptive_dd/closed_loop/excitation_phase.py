@@ -1,0 +1,293 @@
+"""Identification feeds adaptation: the excitation phase of a scenario (``[run] excite = SECONDS``).
+
+What a lab does before a task, on each seed's plant:
+
+1. the designed excitation of ``adaptive-dd excite`` (:func:`excitation_reference`: the
+   D-optimal Fourier trajectory of :func:`~adaptive_dd.identification.excitation.design_excitation`
+   within the arm's limits, from the controllers' model), tracked for ``excite`` seconds by
+   ``ct_nominal`` on the model (the robot's own controller), not scored;
+2. the record, with sensor noise at the scenario's levels (generator ``(seed, i, 3)``), identified
+   as ``adaptive-dd identify`` does: the filtered regression and its two-pass weighted least
+   squares (:func:`~adaptive_dd.identification.serial_regression.weighted_least_squares`), then the
+   physically consistent standard parameters nearest to it
+   (:func:`~adaptive_dd.identification.consistency.consistent_arm_fit`);
+3. the task run with that identified model as every non-oracle controller's model (the
+   oracles are given the plant, as always), one seed at a time (each seed has its own model),
+   the results joined seed by seed (:func:`join_results`).
+
+The identification is reported (:class:`ExcitationReport`, ``metrics.json``'s ``excitation``):
+per seed, the error of the URDF's and of the identified base parameters against the plant's.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import tempfile
+from pathlib import Path
+
+import numpy as np
+from numpy.typing import NDArray
+
+from adaptive_dd.errors import ScenarioError
+
+__all__ = [
+    "EXCITATION_CONTROLLER",
+    "START_ATTEMPTS",
+    "TAU_F",
+    "ExcitationReport",
+    "excitation_reference",
+    "identify_excitation",
+    "join_results",
+    "run_with_excitation",
+]
+
+Array = NDArray[np.float64]
+
+EXCITATION_CONTROLLER = "ct_nominal"
+"""The controller that tracks the excitation (on the model: what a lab's robot runs)."""
+TAU_F = 0.02
+"""[s] time constant of the identification's filters (``adaptive-dd identify``'s default)."""
+
+
+@dataclasses.dataclass
+class ExcitationReport:
+    """The excitation phase's identification, per seed.
+
+    ``sigma_plant, sigma_model, sigma_hat, sigma_fit (S, p)``: base parameters of each seed's
+    plant, of the controllers' model before the phase, of the weighted least squares and of the
+    consistent fit (the model after the phase); ``names (p,)``; ``rstd (S, n)`` the residual
+    torque std per joint [N m].
+    """
+
+    duration: float
+    seed_indices: tuple
+    names: tuple
+    sigma_plant: Array
+    sigma_model: Array
+    sigma_hat: Array
+    sigma_fit: Array
+    rstd: Array
+
+    def errors(self) -> dict[str, Array]:
+        """Per seed and base parameter ``(S, p)``, the error against the plant's,
+        ``|x - plant| / max(|plant|, 1 % of the largest |plant|)`` (the floor keeps parameters near
+        zero from dominating): the model before the phase (``model``), the weighted least squares
+        (``wls``) and the consistent fit, the model after it (``fit``)."""
+        scale = np.maximum(
+            np.abs(self.sigma_plant), 0.01 * np.abs(self.sigma_plant).max(axis=1, keepdims=True)
+        )
+        return {
+            "model": np.abs(self.sigma_model - self.sigma_plant) / scale,
+            "wls": np.abs(self.sigma_hat - self.sigma_plant) / scale,
+            "fit": np.abs(self.sigma_fit - self.sigma_plant) / scale,
+        }
+
+    def to_dict(self) -> dict:
+        """JSON-ready: per seed the median and max relative error before and after, the residual std."""
+        err = self.errors()
+        seeds = {}
+        for k, i in enumerate(self.seed_indices):
+            seeds[int(i)] = {
+                key: {
+                    "median": float(np.median(e[k])),
+                    "max": float(e[k].max()),
+                    "worst": self.names[int(e[k].argmax())],
+                }
+                for key, e in err.items()
+            }
+            seeds[int(i)]["residual_std"] = self.rstd[k].tolist()
+        return {
+            "duration": self.duration,
+            "controller": EXCITATION_CONTROLLER,
+            "tau_f": TAU_F,
+            "seeds": seeds,
+        }
+
+    def summary(self) -> str:
+        """One line per quantity: median over seeds of each seed's median and max relative error."""
+        err = self.errors()
+        parts = [
+            f"{key}: median {100 * np.median(np.median(e, axis=1)):.3g} %, "
+            f"worst {100 * np.median(e.max(axis=1)):.3g} %"
+            for key, e in err.items()
+        ]
+        return (
+            f"excitation {self.duration:g} s, base parameters vs the plant's (median over seeds) - "
+            + "; ".join(parts)
+        )
+
+
+START_ATTEMPTS = 5
+"""Random starts tried by :func:`excitation_reference` (the optimum of one may graze a limit)."""
+
+
+def excitation_reference(scenario):
+    """The designed excitation of the scenario's model (``adaptive-dd excite``'s defaults) as a
+    reference with a 1 s ramp: the first of :data:`START_ATTEMPTS` random starts (generators
+    ``(seed, 4, attempt)``) whose optimum keeps within the limits.
+
+    Raises
+    ------
+    ScenarioError
+        No start gave a trajectory within the arm's limits (naming ``run.excite``).
+    """
+    from adaptive_dd.errors import ParameterError
+    from adaptive_dd.identification.excitation import ExcitationLimits, design_excitation
+
+    arm = scenario.arm
+    last = None
+    for attempt in range(START_ATTEMPTS):
+        rng = np.random.default_rng([int(scenario.seed), 4, attempt])
+        try:
+            best, _ = design_excitation(arm, ExcitationLimits.of_arm(arm), rng=rng)
+        except ParameterError as exc:
+            last = exc
+            continue
+        return best.reference(ramp=1.0)
+    raise ScenarioError(
+        f"{scenario.source}: run.excite: no designed excitation within the arm's limits after "
+        f"{START_ATTEMPTS} starts ({last})"
+    )
+
+
+def _excitation_scenario(scenario, reference):
+    return dataclasses.replace(
+        scenario,
+        duration=float(scenario.excite),
+        reference=reference,
+        swap_times=(),
+        swap_masses=(),
+        swap_com=(),
+        swap_inertia=(),
+        controllers=(EXCITATION_CONTROLLER,),
+        controller_options=(),
+        excite=0.0,
+    )
+
+
+def identify_excitation(scenario, idx, run_serial) -> tuple[list[Array], ExcitationReport]:
+    """Run the excitation on each seed's plant (``run_serial``: the closed loop's runner,
+    :func:`~adaptive_dd.closed_loop.runner.run_serial`) and identify; returns each seed's model
+    ``pi (13 n,)`` (consistent) and the report.
+
+    Raises
+    ------
+    ScenarioError
+        ``[run] excite`` too short to identify every base parameter (named).
+    """
+    from adaptive_dd.closed_loop.types import io_of, plant_of, true_models
+    from adaptive_dd.errors import DataError
+    from adaptive_dd.identification.consistency import consistent_arm_fit
+    from adaptive_dd.identification.serial_model import serial_model
+    from adaptive_dd.identification.serial_regression import (
+        serial_filtered_regression,
+        weighted_least_squares,
+    )
+
+    exc = _excitation_scenario(scenario, excitation_reference(scenario))
+    res = run_serial(exc, seed_indices=idx, keep_trajectories=len(idx))
+    run = res.runs[EXCITATION_CONTROLLER]
+    if run.failed.any():
+        raise ScenarioError(
+            f"{scenario.source}: run.excite: the excitation failed on seed(s) "
+            f"{[int(i) for i, f in zip(idx, run.failed, strict=True) if f]} (tracking lost)"
+        )
+    model = serial_model(scenario.arm)
+    std = io_of(scenario).std
+    n, T = scenario.n_joints, scenario.sample_period
+    B = scenario.arm.base.B
+    sig_plant = true_models(plant_of(exc, idx))[:, 0] @ B.T
+    pis, rows = [], {"hat": [], "fit": [], "rstd": []}
+    for k, i in enumerate(idx):
+        rng = np.random.default_rng([int(scenario.seed), int(i), 3])
+        qm = run.q[k] + std[:n] * rng.standard_normal(run.q[k].shape)
+        qdm = run.qd[k] + std[n:] * rng.standard_normal(run.qd[k].shape)
+        reg = serial_filtered_regression(model, qm, qdm, run.tau[k], tau_f=TAU_F, sample_period=T)
+        try:
+            wls = weighted_least_squares(reg, model.names)
+        except DataError as exc_:
+            raise ScenarioError(
+                f"{scenario.source}: run.excite = {scenario.excite} s: {exc_}; excite longer"
+            ) from None
+        fit = consistent_arm_fit(model, wls.sigma, np.diag(1.0 / np.maximum(wls.std, 1e-12) ** 2))
+        pis.append(fit.pi)
+        rows["hat"].append(wls.sigma)
+        rows["fit"].append(fit.sigma)
+        rows["rstd"].append(wls.residual_std)
+    report = ExcitationReport(
+        float(scenario.excite), tuple(idx), tuple(model.names), sig_plant,
+        np.broadcast_to(scenario.arm.sigma, sig_plant.shape).copy(), np.array(rows["hat"]),
+        np.array(rows["fit"]), np.array(rows["rstd"]),
+    )  # fmt: skip
+    return pis, report
+
+
+def run_with_excitation(scenario, idx, run_serial, keep: int = 3, engine: str = "auto"):
+    """The excitation phase, then the task with each seed's identified model (module docstring);
+    ``run_serial`` runs the closed loop (:func:`~adaptive_dd.closed_loop.runner.run_serial`, which
+    calls this function: passed in, the two modules do not import each other)."""
+    from adaptive_dd.closed_loop.types import plant_record
+    from adaptive_dd.plant.uncertainty import exact_plant
+    from adaptive_dd.plant.urdf_write import write_urdf_links
+
+    idx = tuple(idx)
+    pis, report = identify_excitation(scenario, idx, run_serial)
+    arm, n = scenario.arm, scenario.n_joints
+    plant = scenario.plant if scenario.plant is not None else exact_plant(arm)
+    parts = []
+    with tempfile.TemporaryDirectory(prefix="adaptive_dd_excite_") as tmp:
+        for k, (i, pi) in enumerate(zip(idx, pis, strict=True)):
+            path = write_urdf_links(arm, pi[: 10 * n], Path(tmp) / f"identified_seed{i}.urdf", "identified")
+            model = arm.with_(
+                urdf=path, viscous=pi[10 * n : 11 * n], coulomb=pi[11 * n : 12 * n], armature=pi[12 * n :]
+            )
+            _ = model.pi_links, model.chain, model.base  # read while the file exists
+            one = dataclasses.replace(scenario, arm=model, plant=plant, excite=0.0)
+            parts.append(
+                run_serial(one, seed_indices=(i,), keep_trajectories=1 if k < keep else 0, engine=engine)
+            )
+    res = join_results(parts, scenario, idx)
+    res.plant = plant_record(dataclasses.replace(scenario, plant=plant), idx)
+    res.excitation = report.to_dict()
+    res.cache["excitation_report"] = report
+    return res
+
+
+_PER_TRIAL = (
+    "sigma_end",
+    "failed",
+    "failed_at",
+    "q",
+    "qd",
+    "tau",
+    "saturated",
+    "sigma_hat",
+    "dropped",
+    "skipped",
+)
+
+
+def _cat(xs):
+    if any(x is None for x in xs):
+        return None
+    return np.concatenate(xs, axis=0)
+
+
+def join_results(parts: list, scenario, idx):
+    """One :class:`~adaptive_dd.benchmark.types.BenchmarkResult` of per-seed runs (in order)."""
+    from adaptive_dd.benchmark.types import BenchmarkResult, ControllerRun
+    from adaptive_dd.closed_loop.types import StreamedSums
+
+    first = parts[0]
+    res = BenchmarkResult(scenario, first.t, first.q_d, first.sigma_true, first.mass, seed_indices=tuple(idx))
+    for name, run0 in first.runs.items():
+        runs = [p.runs[name] for p in parts]
+        acc = StreamedSums(*(np.concatenate([getattr(r.acc, f) for r in runs]) for f in StreamedSums._fields))
+        alarms = None if run0.alarm_times is None else [a for r in runs for a in r.alarm_times]
+        cat = {f: _cat([getattr(r, f) for r in runs]) for f in _PER_TRIAL}
+        error = "; ".join(dict.fromkeys(r.error for r in runs if r.error))
+        res.runs[name] = ControllerRun(
+            name=name, acc=acc, e_norm=acc.e_norm, error=error, alarm_times=alarms, floor=run0.floor,
+            engine=run0.engine, **cat,
+        )  # fmt: skip
+    return res

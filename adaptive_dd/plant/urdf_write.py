@@ -1,0 +1,77 @@
+"""Writing an arm's URDF back with other link inertials (an identified or drawn model).
+
+The arm's own URDF is copied with every movable chain joint's child link given the link's
+ten parameters (about its joint frame, :attr:`SerialArm.pi_links
+<adaptive_dd.plant.serial_arm.SerialArm.pi_links>`'s layout) as its ``<inertial>``, and
+every body Pinocchio merges into that link (fixed children, locked joints' subtrees) left
+without one, so that reading the file back gives exactly those parameters. Kinematics, limits,
+friction and every other element are the original's.
+"""
+
+from __future__ import annotations
+
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from adaptive_dd.errors import ParameterError
+
+__all__ = ["write_urdf_links"]
+
+
+def _f(x: float) -> str:
+    return repr(float(x))
+
+
+def write_urdf_links(arm, pi_links: ArrayLike, path: str | Path, comment: str = "") -> Path:
+    """Write ``arm``'s URDF with links ``pi_links (10 n,)`` to ``path``; returns the path.
+
+    Raises
+    ------
+    ParameterError
+        ``pi_links`` of the wrong size, or a link that is not a rigid body's
+        (:func:`~adaptive_dd.plant.uncertainty.check_link`).
+    """
+    from adaptive_dd.plant.uncertainty import check_link, link_parts
+
+    pi = np.asarray(pi_links, dtype=float).reshape(-1)
+    n = arm.n_joints
+    if pi.shape != (10 * n,):
+        raise ParameterError(f"pi_links must have {10 * n} values (10 per link), got {pi.shape}")
+    tree = ET.parse(arm.urdf)
+    root = tree.getroot()
+    links = {el.get("name"): el for el in root.findall("link")}
+    joints = {el.get("name"): el for el in root.findall("joint")}
+    children: dict[str, list] = {}
+    for j in joints.values():
+        children.setdefault(j.find("parent").get("link"), []).append(j)
+    chain = set(arm.joint_names)
+    for k, name in enumerate(arm.joint_names):
+        child = joints[name].find("child").get("link")
+        stack = [child]
+        while stack:  # the bodies merged into link k: everything below it up to the next chain joint
+            link = links[stack.pop()]
+            for el in link.findall("inertial"):
+                link.remove(el)
+            stack += [
+                j.find("child").get("link")
+                for j in children.get(link.get("name"), ())
+                if j.get("name") not in chain
+            ]
+        p = pi[10 * k : 10 * k + 10]
+        check_link(p, f"link {k + 1} ({child})")
+        m, c, Ic = link_parts(p)
+        if m <= 0:
+            continue
+        inertial = ET.SubElement(links[child], "inertial")
+        ET.SubElement(inertial, "origin", {"xyz": " ".join(_f(x) for x in c), "rpy": "0 0 0"})
+        ET.SubElement(inertial, "mass", {"value": _f(m)})
+        names = {"ixx": (0, 0), "ixy": (0, 1), "ixz": (0, 2), "iyy": (1, 1), "iyz": (1, 2), "izz": (2, 2)}
+        ET.SubElement(inertial, "inertia", {k2: _f(Ic[a, b]) for k2, (a, b) in names.items()})
+    if comment:
+        root.insert(0, ET.Comment(f" {comment} "))
+    path = Path(path)
+    tree.write(path, encoding="utf-8", xml_declaration=True)
+    return path

@@ -1,0 +1,34 @@
+"""
+The UR5 tool swap
+=================
+
+The shipped scenario ``ur5_tool_swap.toml``: a UR5 under gravity tracks a two-sine reference
+on every joint; a 2 kg tool is picked up at 4 s, replaced by a 5 kg tool at 10 s and put down
+at 16 s. Here with 2 seeds and three controllers (the full run: ``adaptive-dd benchmark
+adaptive_dd/scenarios/ur5_tool_swap.toml --seeds 200``, on :doc:`../results`).
+"""
+
+import dataclasses
+from pathlib import Path
+
+import adaptive_dd
+from adaptive_dd import load_scenario, run_benchmark
+from adaptive_dd.plotting import plot_tracking_errors
+
+scenarios = Path(adaptive_dd.__file__).parent / "scenarios"
+sc = load_scenario(scenarios / "ur5_tool_swap.toml")
+sc = dataclasses.replace(sc, seeds=2, controllers=("ct_nominal", "ct_oracle", "adaptive_ct"))
+print(sc.estimate())
+
+# %%
+# Every controller runs the same trials (seed i draws the same sensor noise for each), so
+# ``adaptive_ct`` is compared seed by seed with ``ct_oracle``, the same law with the true model.
+res = run_benchmark(sc, progress=False)
+summary = res.summary()
+print(summary[["controller", "segment", "mass", "rms_error_mean", "ratio_mean"]].to_string(index=False))
+
+# %%
+# The tracking error over time (50 ms moving RMS, mean over the seeds): ``ct_nominal`` keeps
+# the model without payload, ``adaptive_ct`` detects each swap within milliseconds and stays on
+# the oracle's curve.
+fig = plot_tracking_errors(res)

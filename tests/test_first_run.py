@@ -1,0 +1,115 @@
+"""The first run says that it compiles, and the docs' getting-started scenario stays valid."""
+
+from __future__ import annotations
+
+import re
+import shutil
+from pathlib import Path
+from types import SimpleNamespace
+
+import numba
+from numba.core import event
+
+from adaptive_dd import _numba_cache
+from adaptive_dd.benchmark.scenario import load_scenario
+from adaptive_dd.benchmark.scenario_base import run_estimate
+from adaptive_dd.plant.arm import Arm
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def _fake_kernel(index: Path):
+    return SimpleNamespace(_cache=SimpleNamespace(_cache_file=SimpleNamespace(_index_path=str(index))))
+
+
+def test_a_cold_cache_is_announced_and_counted_in_the_estimate(monkeypatch, tmp_path, capsys):
+    index = tmp_path / "compiled.closed_loop_block-1.py311.nbi"
+    monkeypatch.setattr(_numba_cache, "_closed_loop_kernel", lambda serial: _fake_kernel(index))
+    cold = _numba_cache.compile_estimate(Arm.sice())
+    assert cold == _numba_cache.COMPILE_SECONDS["two-link"] > 0
+    sc = load_scenario()
+    est = sc.estimate()
+    assert est.compile_seconds == cold and est.seconds > cold
+    assert "compiling the kernels, once" in str(est)
+    with _numba_cache.announce_compilation(sc.arm):
+        pass
+    err = capsys.readouterr().err
+    assert err.startswith("compiling the closed-loop kernels for the two-link arm (once per source state;")
+    assert str(numba.config.CACHE_DIR) in err
+    index.write_bytes(b"")  # the kernel is in the cache now
+    assert _numba_cache.compile_estimate(Arm.sice()) == 0.0
+    assert sc.estimate().compile_seconds == 0.0 and "compiling" not in str(sc.estimate())
+    with _numba_cache.announce_compilation(sc.arm):
+        pass
+    assert capsys.readouterr().err == ""  # warm, nothing compiled: nothing said
+
+
+def test_compile_time_is_the_wall_time_inside_any_compilation():
+    def ev(kind):
+        return event.Event("numba:compile", kind)
+
+    start, end = event.EventStatus.START, event.EventStatus.END
+    # an outer compilation 0-10 s compiling a callee 2-5 s, then another 20-23 s
+    buffer = [(0.0, ev(start)), (2.0, ev(start)), (5.0, ev(end)), (10.0, ev(end)), (20.0, ev(start)),
+              (23.0, ev(end))]  # fmt: skip
+    assert _numba_cache._compile_seconds(buffer) == 13.0
+    assert _numba_cache._compile_seconds(list(reversed(buffer))) == 13.0  # order of the records
+    assert _numba_cache._compile_seconds([]) == 0.0
+
+
+def test_the_compile_time_is_printed_after_a_compilation(monkeypatch, capsys):
+    monkeypatch.setattr(_numba_cache, "compile_estimate", lambda arm: 0.0)
+    monkeypatch.setattr(_numba_cache, "_compile_seconds", lambda buffer: 42.4)
+    with _numba_cache.announce_compilation(Arm.sice()):
+        pass
+    assert capsys.readouterr().err == "compiled the kernels in 42 s (cached: later runs skip this)\n"
+
+
+def test_run_estimate_adds_compilation():
+    warm, cold = run_estimate(1000, 2, 3), run_estimate(1000, 2, 3, compile_seconds=50.0)
+    assert cold.seconds == warm.seconds + 50.0 and "50 s compiling" in str(cold)
+
+
+def test_the_readme_test_line_is_the_one_ci_runs():
+    ci = (ROOT / ".ci" / "run").read_text()
+    line = 'python3 -m venv .venv && .venv/bin/pip install -e ".[test]" && .venv/bin/python -m pytest'
+    assert line in (ROOT / "README.md").read_text() and line in ci
+
+
+def test_the_getting_started_scenario_is_valid(tmp_path):
+    text = (ROOT / "docs" / "getting_started.md").read_text()
+    toml = re.search(r"```toml\n(# my_arm\.toml\n.*?)```", text, re.S).group(1)
+    (tmp_path / "my_arm.toml").write_text(toml)
+    shutil.copy(ROOT / "adaptive_dd" / "robots" / "vertical3.urdf", tmp_path / "my_arm.urdf")
+    sc = load_scenario(tmp_path / "my_arm.toml")
+    assert sc.n_joints == 3 and sc.arm.payload_frame == "tool"
+
+
+def test_the_scenario_keys_page_lists_every_key_and_stops_on_drift(monkeypatch):
+    import sys
+
+    import pytest
+
+    pytest.importorskip("sphinx")
+    sys.path.insert(0, str(ROOT / "docs" / "_ext"))
+    try:
+        import scenario_keys
+    finally:
+        sys.path.remove(str(ROOT / "docs" / "_ext"))
+    from sphinx.errors import ExtensionError
+
+    from adaptive_dd.benchmark.scenario_base import KEYS
+
+    page = scenario_keys.page()
+    for table, keys in KEYS.items():
+        assert f"`[{table}]`" in page or f"`[[{table}]]`" in page or f"`[{table}.NAME]`" in page
+        for k in keys or ():
+            assert f"| `{k}` |" in page, f"{table}.{k}"
+    meaning = dict(scenario_keys.MEANING)
+    del meaning["noise.dropout"]  # a key of the checks without a meaning on the page
+    monkeypatch.setattr(scenario_keys, "MEANING", meaning)
+    with pytest.raises(ExtensionError, match=r"noise\.dropout"):
+        scenario_keys.page()
+    monkeypatch.setattr(scenario_keys, "MEANING", {**scenario_keys.MEANING, "run.gone": "a removed key"})
+    with pytest.raises(ExtensionError, match=r"run\.gone"):
+        scenario_keys.page()
