@@ -55,9 +55,10 @@ def _sub(sub, name: str, **kw) -> argparse.ArgumentParser:
     return sub.add_parser(name, allow_abbrev=False, **kw)
 
 
-def _load_arm(path: str | None):
+def _load_arm(path: str | None, repair_inertia: bool = False):
     """The arm of a scenario file's ``[arm]`` and ``[plant]`` tables (SICE arm if ``path`` is None):
-    the model its controllers are given (``[model] from`` when there is one)."""
+    the model its controllers are given (``[model] from`` when there is one); ``repair_inertia``
+    sets ``arm.repair_inertia = true`` (identify's --repair-inertia)."""
     from adaptive_dd.benchmark.scenario import model_and_plant, read_toml
     from adaptive_dd.errors import ScenarioError
     from adaptive_dd.plant.arm import Arm, arm_from_tables
@@ -68,9 +69,12 @@ def _load_arm(path: str | None):
     if not Path(path).is_file():
         raise ScenarioError(f"{path}: no such scenario file")
     data = read_toml(Path(path))
+    table = data.get("arm")
+    if repair_inertia and isinstance(table, dict):
+        table = {**table, "repair_inertia": True}
     plant = data.get("plant")
     law = {k: v for k, v in plant.items() if k not in PLANT_TRUTH_KEYS} if isinstance(plant, dict) else plant
-    arm = arm_from_tables(data.get("arm"), law, str(path))
+    arm = arm_from_tables(table, law, str(path))
     return model_and_plant(str(path), arm, plant if isinstance(plant, dict) else None, data.get("model"))[0]
 
 
@@ -311,18 +315,49 @@ def _cmd_identify(args: argparse.Namespace) -> int:
     from adaptive_dd.io import MIN_EQUATIONS, check_identifiable, read_recording
     from adaptive_dd.outputs import OutputSet
 
-    if args.arm:  # an N-joint arm from a URDF: its own path (adaptive_dd.cli_serial)
+    if args.arm:  # an N-joint arm from a URDF: its own path (adaptive_dd.cli_log)
         from adaptive_dd.plant.serial_arm import SerialArm
 
-        arm = _load_arm(args.arm)
+        arm = _load_arm(args.arm, args.repair_inertia)
         if isinstance(arm, SerialArm):
-            from adaptive_dd.cli_serial import identify_serial
+            from adaptive_dd.cli_log import identify_log
+            from adaptive_dd.experiments import TABLE2
+
+            two_link = {
+                "--estimator": args.estimator != "exact",
+                "--method": args.method != "M2",
+                "--split": args.split != "15",
+                "--true": args.true is not None,
+                "--online": args.online,
+                "--position-variance": list(args.position_variance) != list(TABLE2["position_variance"]),
+                "--velocity-variance": list(args.velocity_variance) != list(TABLE2["velocity_variance"]),
+            }
+            given = [o for o, v in two_link.items() if v]
+            if given:
+                raise DataError(
+                    f"{', '.join(given)}: options of the two-link identification; an N-joint arm from a "
+                    "URDF (--arm) is identified by weighted least squares (docs/real_log.md)"
+                )
 
             outputs = OutputSet(args.out)
             with outputs:
-                return identify_serial(args, arm, outputs)
-    elif args.baseline or args.payload_only:
-        raise DataError("--baseline and --payload-only need --arm SCENARIO (an arm from a URDF)")
+                return identify_log(args, arm, outputs)
+    arm_only = {
+        "--baseline": args.baseline,
+        "--payload-only": args.payload_only,
+        "--window": args.window,
+        "--repair-inertia": args.repair_inertia,
+        "--output-error": args.output_error != "auto",
+        "--segment-length": args.segment_length != 200,
+        "--max-iter": args.max_iter != 30,
+    }
+    given = [o for o, v in arm_only.items() if v]
+    if given:
+        raise DataError(f"{', '.join(given)}: only with --arm SCENARIO of an N-joint arm from a URDF")
+    if len(args.data) != 1:
+        raise DataError(f"identify without --arm reads one CSV file, got {len(args.data)}: {args.data}")
+    args.data = args.data[0]
+    args.tau_f = 0.02 if args.tau_f is None else args.tau_f
     rec = read_recording(args.data)
     if args.method == "M2" and rec.qd is None:
         raise DataError(f"{args.data}: method M2 needs columns qd1, qd2 (use --method M1 for position only)")
@@ -332,6 +367,22 @@ def _cmd_identify(args: argparse.Namespace) -> int:
         if args.online:
             return _identify_online(args, rec, outputs)
         return _identify(args, rec, outputs, estimate, MIN_EQUATIONS)
+
+
+def _log_options(p: argparse.ArgumentParser) -> None:
+    p.add_argument(
+        "--window",
+        type=_number(float, -1e9, 1e9),
+        nargs=2,
+        metavar=("START", "END"),
+        help="with --arm: the part of the log to use [s of its clock] (replaces record.window)",
+    )
+
+
+def _cmd_predict(args: argparse.Namespace) -> int:
+    from adaptive_dd.cli_log import predict_log
+
+    return predict_log(args)
 
 
 def _identify(args, rec, outputs, estimate, min_equations: int) -> int:
@@ -554,6 +605,11 @@ def _benchmark(args: argparse.Namespace, sc, outputs) -> list[Path]:
 def _cmd_validate(args: argparse.Namespace) -> int:
     from adaptive_dd.benchmark.scenario import format_scenario, load_scenario
 
+    if args.scenario and Path(args.scenario).is_file():
+        from adaptive_dd.cli_log import is_identification_scenario, validate_identification
+
+        if is_identification_scenario(args.scenario):  # [arm] and [record]: no benchmark tables needed
+            return validate_identification(args.scenario)
     sc = load_scenario(args.scenario)
     print(format_scenario(sc))
     from adaptive_dd.plant.serial_arm import SerialArm
@@ -712,7 +768,12 @@ def build_parser() -> argparse.ArgumentParser:
     r.set_defaults(func=_cmd_reproduce)
 
     i = _sub(sub, "identify", help="estimate sigma from a recorded experiment (CSV)")
-    i.add_argument("data", help="CSV with header t,q1,q2,qd1,qd2,tau1,tau2 (qd optional for M1)")
+    i.add_argument(
+        "data",
+        nargs="*",
+        help="CSV with header t,q1,q2,qd1,qd2,tau1,tau2 (qd optional for M1); with --arm: the log's file(s), "
+        "read as the scenario's [record] says (default: its record.files; see docs/real_log.md)",
+    )
     i.add_argument(
         "--estimator",
         default="exact",
@@ -721,7 +782,12 @@ def build_parser() -> argparse.ArgumentParser:
     )
     i.add_argument("--method", default="M2", choices=("M1", "M2"))
     i.add_argument("--split", default="15", choices=("15", "16", "full"), help="split of 'paper'")
-    i.add_argument("--tau-f", type=_POS, default=0.02, help="filter time constant [s]")
+    i.add_argument(
+        "--tau-f",
+        type=_POS,
+        default=None,
+        help="filter time constant [s] (default 0.02; with --arm: 2 sample periods, at least 0.02)",
+    )
     i.add_argument(
         "--true", type=_number(float, -1e6, 1e6), nargs=7, metavar="S", help="true sigma, to mark on the plot"
     )
@@ -750,10 +816,16 @@ def build_parser() -> argparse.ArgumentParser:
     i.add_argument(
         "--arm",
         metavar="SCENARIO",
-        help="the [arm] of a scenario TOML (a URDF: N joints, CSV t, q1..qN, [qd1..qdN,] tau1..tauN); "
-        "prints WLS and output error with the Cramér-Rao bound",
+        help="a scenario TOML with [arm] from a URDF and, for a real log, [record] (default: CSV t, q1..qN, "
+        "[qd1..qdN,] tau1..tauN); prints weighted least squares with Newey-West std, output error where "
+        "the record can be simulated; writes OUT/model.json (docs/real_log.md)",
     )
-    i.add_argument("--baseline", metavar="CSV", help="with --arm: an unloaded record; prints the payload")
+    i.add_argument(
+        "--baseline",
+        nargs="+",
+        metavar="CSV",
+        help="with --arm: the unloaded record's file(s), read through the same [record]; prints the payload",
+    )
     i.add_argument(
         "--payload-only", action="store_true", help="with --arm: the arm known (URDF), fit the payload alone"
     )
@@ -766,8 +838,37 @@ def build_parser() -> argparse.ArgumentParser:
     i.add_argument(
         "--max-iter", type=_number(int, 1, 1000), default=30, help="with --arm: output-error iterations"
     )
-    i.add_argument("--out", default="results/identify")
+    _log_options(i)
+    i.add_argument(
+        "--repair-inertia",
+        action="store_true",
+        help="with --arm: repair chain links whose URDF inertia is not a rigid body's (reported)",
+    )
+    i.add_argument(
+        "--output-error",
+        choices=("auto", "on", "off"),
+        default="auto",
+        help="with --arm: refine by output error (auto: for records in the simulator's format only)",
+    )
+    i.add_argument("--out", default="results/identify", help="folder (with --arm: model.json, estimates.csv)")
     i.set_defaults(func=_cmd_identify)
+
+    r = _sub(sub, "predict", help="torque prediction error of an identified model on another record")
+    r.add_argument("data", nargs="*", help="the record's file(s) (default: the scenario's record.files)")
+    r.add_argument("--arm", required=True, metavar="SCENARIO", help="scenario TOML with [arm] and [record]")
+    r.add_argument(
+        "--model", required=True, metavar="JSON", help="model.json written by identify --arm --out"
+    )
+    _log_options(r)
+    r.add_argument(
+        "--lowpass",
+        type=_POS,
+        default=2.0,
+        metavar="HZ",
+        help="also compare after a zero-phase Butterworth low-pass (order 4) of both [Hz] (default 2)",
+    )
+    r.add_argument("--out", default="results/predict", help="folder for prediction.csv and prediction.png")
+    r.set_defaults(func=_cmd_predict)
 
     e = _sub(sub, "excite", help="design an exciting trajectory for an arm from a URDF")
     e.add_argument("--arm", required=True, metavar="SCENARIO", help="scenario TOML with [arm] urdf/robot")

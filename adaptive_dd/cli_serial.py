@@ -1,233 +1,26 @@
-"""The N-joint commands of the CLI: ``identify --arm``, ``simulate --arm`` and ``excite`` for a SerialArm.
+"""The N-joint commands of the CLI: ``simulate --arm`` and ``excite`` for a SerialArm.
 
 Kept apart from :mod:`adaptive_dd.cli` (which parses the arguments and dispatches here
-when a scenario's arm is a :class:`~adaptive_dd.plant.serial_arm.SerialArm`).
+when a scenario's arm is a :class:`~adaptive_dd.plant.serial_arm.SerialArm`);
+``identify --arm`` and ``predict`` are in :mod:`adaptive_dd.cli_log`.
 """
 
 from __future__ import annotations
 
 import argparse
-from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 from numpy.typing import NDArray
 
-from adaptive_dd.errors import DataError
-
-__all__ = ["SerialIdentification", "cmd_excite", "identify_record", "identify_serial", "simulate_serial"]
+__all__ = ["cmd_excite", "simulate_serial"]
 
 Array = NDArray[np.float64]
 NAME_WIDTH = 44
 
 
-@dataclass(frozen=True)
-class SerialIdentification:
-    """Both estimates of one record: WLS on the exact filtered regression, then output error."""
-
-    wls: object
-    oe: object
-    regression: object
-    qd_measured: bool
-
-
-def _velocity(rec, tau_f: float) -> Array:
-    """Measured qd, or a Savitzky-Golay derivative of q (window ~ 2 tau_f) when not recorded."""
-    if rec.qd is not None:
-        return rec.qd
-    from scipy.signal import savgol_filter
-
-    win = max(5, 2 * round(tau_f / rec.sample_period) + 1)
-    return savgol_filter(rec.q, win, 2, deriv=1, delta=rec.sample_period, axis=0)
-
-
-def identify_record(
-    arm, model, rec, *, tau_f: float, segment_length: int, max_iter: int
-) -> SerialIdentification:
-    """WLS then output error on one N-joint record (velocities estimated when not recorded).
-
-    Raises
-    ------
-    DataError
-        The record is too short, or does not excite some base parameter (named).
-    """
-    from adaptive_dd.identification.serial_output_error import measurement_std, serial_output_error
-    from adaptive_dd.identification.serial_regression import (
-        serial_filtered_regression,
-        weighted_least_squares,
-    )
-
-    T = rec.sample_period
-    if rec.t.size < max(2 * segment_length, 20 * tau_f / T):
-        raise DataError(
-            f"{rec.source}: {rec.t.size} samples; need at least two segments of {segment_length} and "
-            f"20 tau_f = {20 * tau_f:.3g} s"
-        )
-    qd = _velocity(rec, tau_f)
-    reg = serial_filtered_regression(model, rec.q, qd, rec.tau, tau_f=tau_f, sample_period=T)
-    try:
-        wls = weighted_least_squares(reg, model.names)
-    except DataError as exc:
-        raise DataError(f"{rec.source}: {exc}") from None
-    std = measurement_std(arm)
-    if rec.qd is None:  # velocities not measured: fit the positions alone
-        std = std.copy()
-        std[arm.n_joints :] = np.inf
-    oe = serial_output_error(
-        model,
-        rec.q,
-        qd,
-        rec.tau,
-        wls.sigma,
-        std,
-        sample_period=T,
-        segment_length=segment_length,
-        max_iter=max_iter,
-    )
-    return SerialIdentification(wls, oe, reg, rec.qd is not None)
-
-
 def _short(name: str) -> str:
     return name if len(name) <= NAME_WIDTH else name[: NAME_WIDTH - 3] + "..."
-
-
-def _print_estimates(model, ident: SerialIdentification) -> None:
-    wls, oe = ident.wls, ident.oe
-    print(
-        f"{'base parameter':<{NAME_WIDTH}} {'WLS':>11} {'output err':>11} {'CRB std':>9} "
-        f"{'CRB/|est| %':>11} {'|WLS-OE|/CRB':>12}"
-    )
-    for k, name in enumerate(model.names):
-        rel = 100 * oe.std[k] / max(abs(oe.sigma[k]), 1e-300)
-        print(
-            f"{_short(name):<{NAME_WIDTH}} {wls.sigma[k]:11.5g} {oe.sigma[k]:11.5g} {oe.std[k]:9.2g} "
-            f"{rel:11.3g} {abs(wls.sigma[k] - oe.sigma[k]) / oe.std[k]:12.1f}"
-        )
-
-
-def _print_standard(model, arm, oe) -> None:
-    from adaptive_dd.identification.serial_model import standard_from_base
-
-    vals, std, ok = standard_from_base(model, oe.sigma, np.linalg.inv(oe.information))
-    names = arm.standard_names
-    got = [f"{names[k]} = {vals[k]:.5g} +- {std[k]:.2g}" for k in np.flatnonzero(ok)]
-    print(f"standard parameters identified on their own ({len(got)} of {len(names)}): " + "; ".join(got))
-    none = set(arm.base.unidentifiable)
-    print(
-        f"unidentifiable (no torque depends on them, {len(none)}): "
-        + (", ".join(n for n in names if n in none) or "none")
-    )
-    print(
-        f"the other {len(names) - len(got) - len(none)} enter only through the base combinations above "
-        "(the URDF's values are needed to split them)"
-    )
-
-
-def _print_payload(label: str, pr) -> None:
-    c = pr.consistent
-    print(
-        f"{label}: mass {pr.mass:.5g} +- {pr.mass_std:.2g} kg; centre of mass "
-        f"[{', '.join(f'{x * 1e3:.2f}' for x in pr.com)}] +- "
-        f"[{', '.join(f'{x * 1e3:.2g}' for x in pr.com_std)}]"
-        " mm in the payload frame"
-    )
-    ic = pr.inertia_com
-    print(
-        f"  inertia about the centre of mass [kg m^2]: Ixx {ic[0, 0]:.4g}, Iyy {ic[1, 1]:.4g}, Izz "
-        f"{ic[2, 2]:.4g}, "
-        f"Ixy {ic[0, 1]:.3g}, Ixz {ic[0, 2]:.3g}, Iyz {ic[1, 2]:.3g}"
-    )
-    if c.was_physical:
-        print(f"  physically consistent as estimated (pseudo-inertia min eigenvalue {c.min_eigenvalue:.3g})")
-    else:
-        print(
-            "  the unconstrained estimate is not a rigid body (pseudo-inertia eigenvalue "
-            f"{c.min_eigenvalue:.3g}); "
-            f"constrained fit {c.distance:.2f} std away: values above are the constrained ones"
-        )
-
-
-def identify_serial(args: argparse.Namespace, arm, outputs) -> int:
-    """``adaptive-dd identify --arm SCENARIO rec.csv`` for an N-joint arm."""
-    from adaptive_dd.identification.consistency import consistent_arm_fit
-    from adaptive_dd.identification.payload_pair import payload_from_pair, payload_from_record
-    from adaptive_dd.identification.serial_model import serial_model
-    from adaptive_dd.identification.serial_output_error import measurement_std
-    from adaptive_dd.identification_plots import plot_torque_fit
-    from adaptive_dd.io import read_serial_recording
-    from adaptive_dd.outputs import atomic_write
-
-    rec = read_serial_recording(args.data, arm.n_joints)
-    model = serial_model(arm)
-    kw = dict(tau_f=args.tau_f, segment_length=args.segment_length, max_iter=args.max_iter)
-    if args.payload_only:
-        qd = _velocity(rec, args.tau_f)
-        pr = payload_from_record(
-            arm,
-            model,
-            rec.q,
-            qd,
-            rec.tau,
-            measurement_std(arm),
-            sample_period=rec.sample_period,
-            segment_length=args.segment_length,
-            max_iter=args.max_iter,
-        )
-        print(
-            f"{rec.source}: {rec.t.size} samples; the arm known (its URDF), the payload's 10 parameters "
-            "fitted"
-        )
-        _print_payload("payload (one record, arm known)", pr)
-        return 0
-    ident = identify_record(arm, model, rec, **kw)
-    oe = ident.oe
-    print(
-        f"{rec.source}: {rec.t.size} samples at T = {rec.sample_period:.6g} s, {arm.n_joints} joints, "
-        f"{model.p} base parameters; velocities "
-        f"{'measured' if ident.qd_measured else 'estimated (not in the file)'}"
-    )
-    print(
-        f"output error: {oe.iterations} iterations, {'converged' if oe.converged else 'NOT converged'}, "
-        f"normalised residual {2 * oe.cost / oe.n_residuals:.3f} (1 = the noise model)"
-    )
-    _print_estimates(model, ident)
-    print(
-        "CRB: Cramér-Rao std at the estimate for this record, q and qd measured with the arm's sensor "
-        "noise, "
-        f"torque known, segments of {oe.segment_length} samples with unknown initial states"
-    )
-    reg = ident.regression
-    pred = np.einsum("knp,p->kn", reg.phi, oe.sigma)
-    res = reg.y - pred
-    print(
-        "residual torque per joint (filtered, output-error estimate) [N m rms]: "
-        + ", ".join(f"{x:.3g}" for x in np.sqrt(np.mean(res**2, axis=0)))
-    )
-    _print_standard(model, arm, oe)
-    fit = consistent_arm_fit(model, oe.sigma, oe.information)
-    print(
-        f"nearest physically consistent arm (every link's pseudo-inertia positive definite, friction >= 0): "
-        f"{fit.distance:.2f} std from the estimate"
-    )
-    t = rec.t[reg.start :]
-    plot_torque_fit(
-        t, reg.y, pred, outputs.path("torque_fit.png"), f"{Path(args.data).name}: measured vs predicted"
-    )
-    with atomic_write(outputs.path("estimates.csv")) as fh:
-        fh.write("name,wls,wls_std,output_error,crb_std\n")
-        for k, name in enumerate(model.names):
-            fh.write(
-                f'"{name}",{ident.wls.sigma[k]:.10g},{ident.wls.std[k]:.4g},{oe.sigma[k]:.10g},{oe.std[k]:.4g}\n'
-            )
-    if args.baseline:
-        base = read_serial_recording(args.baseline, arm.n_joints)
-        other = identify_record(arm, model, base, **kw).oe
-        pr = payload_from_pair(
-            arm, oe.sigma, np.linalg.inv(oe.information), other.sigma, np.linalg.inv(other.information)
-        )
-        _print_payload(f"payload (loaded {Path(args.data).name} - unloaded {Path(args.baseline).name})", pr)
-    print(f"wrote {Path(args.out) / 'estimates.csv'}, {Path(args.out) / 'torque_fit.png'}")
-    return 0
 
 
 def simulate_serial(args: argparse.Namespace, scenario_path: str, outputs) -> int:

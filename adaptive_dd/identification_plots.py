@@ -16,10 +16,12 @@ def plot_torque_fit(
     predicted: NDArray[np.float64],
     path: str | Path,
     title: str = "",
+    labels=None,
 ):
     """Measured against predicted (filtered) torque per joint, with the residual; returns the Figure.
 
-    ``t (N,)`` [s], ``measured, predicted (N, n)`` [N m].
+    ``t (N,)`` [s], ``measured, predicted (N, n)`` [N m]; ``labels`` names the n channels
+    (default ``tau1 .. taun``).
     """
     import matplotlib
 
@@ -32,7 +34,7 @@ def plot_torque_fit(
         ax.plot(t, measured[:, j], lw=0.8, color="0.3", label="measured (filtered)")
         ax.plot(t, predicted[:, j], lw=0.8, ls="--", color="tab:red", label="predicted")
         ax.plot(t, measured[:, j] - predicted[:, j], lw=0.6, color="tab:blue", label="residual")
-        ax.set_ylabel(f"tau{j + 1} [N m]")
+        ax.set_ylabel(f"{labels[j] if labels is not None else f'tau{j + 1}'} [N m]", fontsize=8)
     axes[0, 0].legend(loc="upper right", fontsize=7, ncol=3)
     axes[-1, 0].set_xlabel("t [s]")
     if title:

@@ -272,7 +272,7 @@ def test_cli_simulate_and_identify_end_to_end(tmp_path, capsys):
     nq = tmp_path / "noqd.csv"
     nq.write_text("\n".join(",".join(r.split(",")[i] for i in keep) for r in lines) + "\n")
     assert main(["identify", "--arm", str(scen), str(nq), "--out", str(tmp_path / "id2")]) == 0
-    assert "estimated (not in the file)" in capsys.readouterr().out
+    assert "derived from the positions" in capsys.readouterr().out
     # the payload of a planar arm is not fully identifiable from base parameters: a clear error
     assert (
         main(["identify", "--arm", str(scen), str(csv), "--baseline", str(csv), "--out", str(tmp_path / "x")])

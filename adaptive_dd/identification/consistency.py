@@ -79,11 +79,13 @@ def is_physical(pi: ArrayLike, atol: float = 0.0) -> bool:
 
 
 def _from_log_cholesky(theta: Array) -> Array:
-    L = np.zeros((4, 4))
-    L[_TRIL] = theta
-    d = np.diag_indices(4)
-    L[d] = np.exp(np.clip(L[d], -40.0, 40.0))
-    return params_from_pseudo_inertia(L @ L.T)
+    """``(..., 10)`` log-Cholesky coordinates -> ``(..., 10)`` parameters (a batch of bodies)."""
+    theta = np.asarray(theta, dtype=float)
+    L = np.zeros((*theta.shape[:-1], 4, 4))
+    L[..., _TRIL[0], _TRIL[1]] = theta
+    d = np.arange(4)
+    L[..., d, d] = np.exp(np.clip(L[..., d, d], -40.0, 40.0))
+    return params_from_pseudo_inertia(L @ np.swapaxes(L, -1, -2))
 
 
 def _to_log_cholesky(J: Array, floor: float) -> Array:
@@ -189,7 +191,14 @@ def consistent_arm_fit(
     """
     sigma_hat = np.asarray(sigma_hat, float)
     F = np.asarray(information, float)
-    Lf = np.linalg.cholesky(0.5 * (F + F.T) + 1e-12 * np.trace(F) / len(F) * np.eye(len(F)))
+    if F.shape != (model.p, model.p) or sigma_hat.shape != (model.p,):
+        raise ParameterError(f"need {model.p} base parameters and a ({model.p}, {model.p}) information")
+    if not (np.all(np.isfinite(F)) and np.all(np.isfinite(sigma_hat))):
+        raise ParameterError("the estimate or its information matrix is not finite")
+    # F = Lf Lf^T through its eigen-decomposition: a semidefinite F (some direction not seen) is
+    # allowed (those directions are then left to the prior) where a Cholesky factor would fail
+    lam, V = np.linalg.eigh(0.5 * (F + F.T))
+    Lf = V * np.sqrt(np.maximum(lam, 1e-12 * max(lam.max(), 0.0)))
     n = model.n
     ref = model.pi_ref
     links_ref = ref[: 10 * n].reshape(n, 10)
@@ -202,15 +211,33 @@ def consistent_arm_fit(
     scale = np.maximum(np.abs(ref), 1e-3 * np.abs(ref).max())
 
     def pi_of(x):
-        links = np.concatenate([_from_log_cholesky(x[10 * j : 10 * j + 10]) for j in range(n)])
-        return np.concatenate([links, x[10 * n :]])
+        return np.concatenate([_from_log_cholesky(x[: 10 * n].reshape(n, 10)).reshape(-1), x[10 * n :]])
 
     def residual(x):
         pi = pi_of(x)
         return np.concatenate([Lf.T @ (model.B @ pi - sigma_hat), np.sqrt(prior_weight) * (pi - ref) / scale])
 
+    LB = Lf.T @ model.B
+
+    def jac(x):  # d pi / d x is block diagonal: each link's 10 x 10 block by central differences
+        h = 1e-6
+        X = x[: 10 * n].reshape(n, 1, 10) + h * np.eye(10)
+        blocks = (_from_log_cholesky(X) - _from_log_cholesky(X - 2 * h * np.eye(10))) / (2 * h)  # (n, k, out)
+        D = np.eye(13 * n)
+        for j in range(n):
+            D[10 * j : 10 * j + 10, 10 * j : 10 * j + 10] = blocks[j].T
+        return np.vstack([LB @ D, np.sqrt(prior_weight) * D / scale[:, None]])
+
     lo = np.concatenate([np.full(10 * n, -np.inf), np.zeros(3 * n)])
-    sol = least_squares(residual, np.maximum(x0, lo), bounds=(lo, np.inf), method="trf", max_nfev=200)
+    sol = least_squares(
+        residual,
+        np.maximum(x0, lo),
+        jac=jac,
+        bounds=(lo, np.inf),
+        method="trf",
+        max_nfev=200,
+        tr_solver="lsmr",
+    )
     pi = pi_of(sol.x)
     sig = model.B @ pi
     return ConsistentArmFit(pi, sig, float(np.linalg.norm(Lf.T @ (sig - sigma_hat))))

@@ -103,9 +103,23 @@ def payload_from_pair(
         )
     d = np.asarray(sigma_loaded, float) - np.asarray(sigma_unloaded, float)
     C = np.asarray(cov_loaded, float) + np.asarray(cov_unloaded, float)
+    if not (np.all(np.isfinite(d)) and np.all(np.isfinite(C))):
+        raise ParameterError("the loaded or unloaded estimate or its covariance is not finite")
     Ci = np.linalg.pinv(C, rcond=1e-14, hermitian=True)
-    info = P.T @ Ci @ P
-    cov = np.linalg.inv(info)
+    info = 0.5 * (P.T @ Ci @ P + (P.T @ Ci @ P).T)
+    lam, V = np.linalg.eigh(info)
+    weak = lam <= 1e-10 * max(lam.max(), 1e-300)
+    if weak.any():  # directions of the payload the two estimates do not see (their covariances are 0
+        # or infinite there: channels left out, parameters held at the URDF's values)
+        names = ("m", "mx", "my", "mz", "Ixx", "Ixy", "Iyy", "Ixz", "Iyz", "Izz")
+        v = V[:, np.flatnonzero(weak)]
+        missing = [names[k] for k in np.flatnonzero(np.linalg.norm(v, axis=1) > 0.3)]
+        raise ParameterError(
+            f"the pair does not determine the payload's {', '.join(missing)}: the identified base "
+            "parameters that would carry them are not seen by the fitted torque channels (or not excited); "
+            "fit more channels or move the joints near the payload more"
+        )
+    cov = (V / lam) @ V.T
     return payload_from_params(cov @ P.T @ Ci @ d, cov)
 
 

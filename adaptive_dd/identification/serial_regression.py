@@ -92,6 +92,7 @@ def serial_filtered_regression(
     *,
     tau_f: float = 0.02,
     sample_period: float = 1e-3,
+    torque_held: bool = True,
 ) -> SerialRegression:
     """The exact filtered regression of one record (module docstring).
 
@@ -103,6 +104,10 @@ def serial_filtered_regression(
         Filter time constant [s].
     sample_period : float
         T [s].
+    torque_held : bool
+        The torque is held over each sample (a simulator's or a drive's applied command: the
+        filter is fed the mean of neighbouring samples, see the module docstring); False for a
+        sampled measurement of a continuous torque (a real log's effort), fed as it is.
 
     Raises
     ------
@@ -123,7 +128,7 @@ def serial_filtered_regression(
     fr = filter_record(bank, Yr, axis=0, initial=Yr[0])[..., 0]
     # the torque is held over each sample (zero-order hold); the Tustin filters integrate
     # trapezoidally between samples, so they see the held torque as the mean of neighbours
-    tau_mid = np.concatenate((tau[:1], 0.5 * (tau[1:] + tau[:-1])))
+    tau_mid = np.concatenate((tau[:1], 0.5 * (tau[1:] + tau[:-1]))) if torque_held else tau
     y = filter_record(bank, tau_mid, axis=0, initial=tau[0])[..., 0]
     start = min(int(np.ceil(10 * tau_f / sample_period)), q.shape[0] - 1)
     return SerialRegression((fp + fr)[start:], y[start:], start, float(tau_f))

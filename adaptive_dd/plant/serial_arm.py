@@ -155,6 +155,9 @@ class SerialArm:
     payload_capacity : float or None
         Rated payload [kg] (``[arm] payload_capacity``); sizes the estimator's re-opening on a
         change alarm (None: the detector's generic size).
+    repair_inertia : bool
+        Repair chain links whose URDF inertia is not a rigid body's
+        (:func:`adaptive_dd.plant.urdf.read_urdf`); see :attr:`urdf_notes`.
     """
 
     urdf: Path
@@ -174,6 +177,7 @@ class SerialArm:
     friction_velocity: float = 0.02
     stribeck_ratio: float = 1.5
     stribeck_velocity: float = 0.1
+    repair_inertia: bool = False
     payload_capacity: float | None = None
     _cache: dict = field(default_factory=dict, repr=False, compare=False)
 
@@ -238,7 +242,7 @@ class SerialArm:
         ``actuator``, ``friction``, ...). Friction comes from ``<dynamics>``, torque
         limits from ``<limit effort>``.
         """
-        robot = read_urdf(path, payload_frame)
+        robot = read_urdf(path, payload_frame, repair=bool(overrides.get("repair_inertia", False)))
         n = len(robot.joints)
         kw = dict(
             urdf=Path(path),
@@ -282,7 +286,23 @@ class SerialArm:
     @property
     def model(self):
         """The Pinocchio model (gravity set; off-chain joints locked)."""
-        return self._cached("model", lambda: read_urdf(self.urdf, self.payload_frame).model(self.gravity))
+        return self._cached("model", lambda: self._robot.model(self.gravity))
+
+    @property
+    def _robot(self):
+        return self._cached(
+            "robot", lambda: read_urdf(self.urdf, self.payload_frame, repair=self.repair_inertia)
+        )
+
+    @property
+    def joint_kinds(self) -> tuple[str, ...]:
+        """URDF type of each joint (``revolute``, ``continuous``, ``prismatic``)."""
+        return tuple(j.kind for j in self._robot.joints)
+
+    @property
+    def urdf_notes(self) -> tuple[str, ...]:
+        """What reading the URDF did not check, or repaired (:attr:`.urdf.UrdfRobot.notes`)."""
+        return self._robot.notes
 
     @property
     def chain(self):
@@ -530,6 +550,7 @@ class SerialArm:
             "friction_velocity": self.friction_velocity,
             "stribeck_ratio": self.stribeck_ratio,
             "stribeck_velocity": self.stribeck_velocity,
+            "repair_inertia": self.repair_inertia,
         }
 
     def _key(self) -> tuple:
@@ -549,6 +570,7 @@ class SerialArm:
             self.friction,
             self.friction_params,
             self.payload_capacity,
+            self.repair_inertia,
         )
 
     def __eq__(self, other: object) -> bool:
@@ -641,6 +663,7 @@ URDF_ARM_KEYS = (
     "payload_radius",
     "payload_capacity",
     "general",
+    "repair_inertia",
 )
 """Keys of an ``[arm]`` table that names a URDF (``urdf = "file"`` or ``robot = "ur5"``)."""
 
@@ -651,10 +674,11 @@ def urdf_arm_from_table(src: str, table: dict, plant_kw: dict):
     ``robot`` names a shipped robot (:data:`adaptive_dd.robots.ROBOTS`). Optional:
     ``payload_frame`` (a link), ``gravity = [x, y, z]`` (default ``[0, 0, -9.81]``),
     per-joint lists ``viscous``, ``coulomb``, ``armature``, ``torque_limit``,
-    ``encoder_counts``, and ``dac_bits``, ``payload_radius``, ``payload_capacity`` (the rated
-    payload [kg]: the size of the estimator's re-opening,
-    :mod:`adaptive_dd.identification.serial_online`). A URDF that is the paper's kind of
-    two-link arm becomes an :class:`~adaptive_dd.plant.arm.Arm` (the closed-form fast path,
+    ``encoder_counts``, and ``dac_bits``, ``payload_radius``, ``repair_inertia`` (repair a
+    chain link's inertia that is not a rigid body's, reported: :func:`adaptive_dd.plant.urdf.read_urdf`),
+    ``payload_capacity`` (the rated payload [kg]: the size of the estimator's re-opening,
+    :mod:`adaptive_dd.identification.serial_online`). A URDF that is the paper's kind of two-link
+    arm becomes an :class:`~adaptive_dd.plant.arm.Arm` (the closed-form fast path,
     :func:`as_two_link`) unless ``general = true``.
 
     Raises
@@ -696,7 +720,10 @@ def urdf_arm_from_table(src: str, table: dict, plant_kw: dict):
     if not (isinstance(gravity, list) and len(gravity) == 3 and all(_is_num(x) for x in gravity)):
         raise ScenarioError(f"{src}: key 'arm.gravity' must be [x, y, z] in m/s^2, got {gravity!r}")
     try:
-        arm = SerialArm.from_urdf(path, frame, gravity=[float(x) for x in gravity])
+        repair = table.get("repair_inertia", False)
+        if not isinstance(repair, bool):
+            raise ScenarioError(f"{src}: key 'arm.repair_inertia' must be true or false, got {repair!r}")
+        arm = SerialArm.from_urdf(path, frame, gravity=[float(x) for x in gravity], repair_inertia=repair)
     except UrdfError as exc:
         raise ScenarioError(f"{src}: [arm] urdf: {exc}") from None
     except ParameterError as exc:

@@ -16,6 +16,19 @@ Movable joints *off* that path (a gripper's fingers, say) are locked at 0: their
 bodies are merged into the link they hang from and reported in
 :attr:`UrdfRobot.locked`. A link with two parents (a closed chain), a floating or
 planar joint, or a chain with no movable joint are errors.
+
+Which inertias are checked
+--------------------------
+Only the links of the chain (from the first movable joint to the payload frame) must be
+physically consistent on their own (inertia positive definite, principal moments obeying
+the triangle inequality). Links off the chain (other branches, locked joints, links fixed
+to the base before the first movable joint) are not checked one by one: they are merged
+into the body they hang from (or into the fixed base, where they move nothing), and any
+that would have failed is listed in :attr:`UrdfRobot.notes` (vendor URDFs carry such
+links, e.g. a TIAGo's antennas at the 1e-8 kg m^2 level). A chain link that fails gets an
+error naming the repair; with ``repair_inertia=True`` the repair is made (the smallest
+change of its principal moments that makes it consistent, :func:`repair_inertia`) and
+reported in :attr:`UrdfRobot.notes`.
 """
 
 from __future__ import annotations
@@ -31,7 +44,7 @@ import numpy as np
 
 from adaptive_dd.errors import UrdfError
 
-__all__ = ["JointInfo", "UrdfRobot", "read_urdf"]
+__all__ = ["JointInfo", "UrdfRobot", "read_urdf", "repair_inertia"]
 
 _MOVABLE = ("revolute", "continuous", "prismatic")
 _KNOWN = (*_MOVABLE, "fixed", "floating", "planar")
@@ -77,12 +90,18 @@ class UrdfRobot:
         The link that carries the payload.
     locked : tuple of str
         Movable joints off the chain, locked at 0.
+    notes : tuple of str
+        What was not checked or was repaired (module docstring), one sentence each.
+    xml : str or None
+        The repaired URDF text (None: the file as it is).
     """
 
     path: Path
     joints: tuple[JointInfo, ...]
     payload_frame: str
     locked: tuple[str, ...]
+    notes: tuple[str, ...] = ()
+    xml: str | None = None
 
     @property
     def joint_names(self) -> tuple[str, ...]:
@@ -94,7 +113,10 @@ class UrdfRobot:
 
         try:
             with _quiet():
-                full = pin.buildModelFromUrdf(str(self.path))
+                if self.xml is None:
+                    full = pin.buildModelFromUrdf(str(self.path))
+                else:
+                    full = pin.buildModelFromXML(self.xml)
         except Exception as exc:  # pragma: no cover - the XML checks catch what we know of
             raise UrdfError(f"{self.path}: Pinocchio cannot read it: {exc}") from None
         if self.locked:
@@ -143,11 +165,12 @@ def _num(path, where: str, el, attr: str, default: float | None = None) -> float
     return v
 
 
-def _check_inertial(path, link) -> None:
+def _inertia_of(path, link):
+    """``(mass, inertia (3, 3), <inertia> element)`` of a link, or None without ``<inertial>``."""
     name = link.get("name")
     inertial = link.find("inertial")
     if inertial is None:
-        return
+        return None
     where = f"link '{name}' <inertial>"
     mass = _num(path, f"{where} <mass>", inertial.find("mass"), "value")
     if mass <= 0:
@@ -161,18 +184,44 @@ def _check_inertial(path, link) -> None:
     inertia = np.array(
         [[v["ixx"], v["ixy"], v["ixz"]], [v["ixy"], v["iyy"], v["iyz"]], [v["ixz"], v["iyz"], v["izz"]]]
     )
+    return mass, inertia, el
+
+
+def _inertia_fault(inertia) -> str | None:
+    """Why a rotational inertia is not a rigid body's, or None."""
     lam = np.linalg.eigvalsh(inertia)
     scale = max(abs(lam).max(), 1e-300)
     if lam[0] <= 1e-12 * scale:
-        raise UrdfError(
-            f"{path}: {where}: the inertia is not positive definite (principal moments {lam.tolist()})"
-        )
+        return f"the inertia is not positive definite (principal moments {lam.tolist()})"
     a, b, c = lam
     if c > a + b + 1e-9 * scale:
-        raise UrdfError(
-            f"{path}: {where}: the principal moments {lam.tolist()} violate the triangle inequality "
-            f"({c:.6g} > {a:.6g} + {b:.6g}): no rigid body has this inertia"
+        return (
+            f"the principal moments {lam.tolist()} violate the triangle inequality "
+            f"({c:.6g} > {a:.6g} + {b:.6g}, by {c - a - b:.3g} kg m^2): no rigid body has this inertia"
         )
+    return None
+
+
+def repair_inertia(inertia, margin: float = 1e-6):
+    """The nearest rigid-body inertia in the principal frame: raise the smallest moments.
+
+    Principal moments below ``margin * max`` are raised to it; then, if the largest exceeds
+    the sum of the other two, both of those are raised by half the excess (plus the margin),
+    which is the least change (in the largest moment change) restoring the triangle
+    inequality. The principal axes are kept.
+
+    Returns
+    -------
+    ndarray (3, 3)
+        The repaired inertia [kg m^2].
+    """
+    lam, R = np.linalg.eigh(np.asarray(inertia, dtype=float))
+    eps = margin * max(abs(lam).max(), 1e-300)
+    lam = np.maximum(lam, eps)
+    excess = lam[2] - lam[0] - lam[1]
+    if excess > -eps:
+        lam[:2] += 0.5 * excess + eps
+    return (R * lam) @ R.T
 
 
 def _joint_info(path, j) -> JointInfo:
@@ -201,7 +250,7 @@ def _joint_info(path, j) -> JointInfo:
     return JointInfo(name, kind, effort, vel, lo, hi, damping, friction)
 
 
-def read_urdf(path: str | Path, payload_frame: str | None = None) -> UrdfRobot:
+def read_urdf(path: str | Path, payload_frame: str | None = None, repair: bool = False) -> UrdfRobot:
     """Read and check a URDF file describing a fixed-base serial arm (module docstring).
 
     Parameters
@@ -219,8 +268,11 @@ def read_urdf(path: str | Path, payload_frame: str | None = None) -> UrdfRobot:
         XML that does not parse, no or several root links, a link with two parents
         (closed chain), an unsupported joint type (floating, planar), an unknown
         ``payload_frame``, a chain without movable joints, zero or negative mass,
-        an inertia not positive definite or violating the triangle inequality, a
-        missing effort limit.
+        an inertia of a chain link not positive definite or violating the triangle
+        inequality (unless ``repair``), a missing effort limit.
+    repair : bool
+        Repair the chain links' inconsistent inertias (:func:`repair_inertia`) instead of
+        refusing them; each repair is reported in :attr:`UrdfRobot.notes`.
     """
     path = Path(path)
     if not path.is_file():
@@ -264,8 +316,6 @@ def read_urdf(path: str | Path, payload_frame: str | None = None) -> UrdfRobot:
     roots = [n for n in links if n not in parent_of]
     if len(roots) != 1:
         raise UrdfError(f"{path}: {len(roots)} root links {roots}; a URDF tree has exactly one")
-    for el in links.values():
-        _check_inertial(path, el)
 
     def depth(name: str) -> int:
         d = 0
@@ -298,9 +348,58 @@ def read_urdf(path: str | Path, payload_frame: str | None = None) -> UrdfRobot:
     joints = tuple(_joint_info(path, j) for j in chain if j.get("type") in _MOVABLE)
     if not joints:
         raise UrdfError(f"{path}: no movable joint between the root and the payload frame '{payload_frame}'")
+    first = next(i for i, j in enumerate(chain) if j.get("type") in _MOVABLE)
+    chain_links = [j.find("child").get("link") for j in chain[first:]]
+    notes = _check_inertias(path, links, chain_links, parent_of, repair)
     locked = tuple(
         j.get("name")
         for j in root.findall("joint")
         if j.get("type") in _MOVABLE and j.get("name") not in on_chain
     )
-    return UrdfRobot(path, joints, payload_frame, locked)
+    xml = ET.tostring(root, encoding="unicode") if any(n.startswith("repaired") for n in notes) else None
+    return UrdfRobot(path, joints, payload_frame, locked, notes, xml)
+
+
+def _check_inertias(path, links: dict, chain_links: list, parent_of: dict, repair: bool) -> tuple[str, ...]:
+    """Check the chain links' inertias (repair them if asked); note the others that would fail."""
+    notes, off = [], []
+    for name, el in links.items():
+        got = _inertia_of(path, el)
+        fault = None if got is None else _inertia_fault(got[1])
+        if fault is None:
+            continue
+        if name not in chain_links:
+            host = name
+            while host in parent_of and host not in chain_links:
+                host = parent_of[host].find("parent").get("link")
+            off.append(
+                f"'{name}' ({'merged into ' + repr(host) if host in chain_links else 'fixed to the base'})"
+            )
+            continue
+        if not repair:
+            raise UrdfError(
+                f"{path}: link '{name}' <inertial>: {fault}. It is on the identified chain: fix the "
+                "URDF, or let adaptive_dd raise its smallest principal moments to the nearest rigid "
+                "body (repair_inertia = true in the scenario's [arm], or --repair-inertia)"
+            )
+        fixed = repair_inertia(got[1])
+        for key, (r, c) in {
+            "ixx": (0, 0),
+            "ixy": (0, 1),
+            "ixz": (0, 2),
+            "iyy": (1, 1),
+            "iyz": (1, 2),
+            "izz": (2, 2),
+        }.items():
+            got[2].set(key, repr(float(fixed[r, c])))
+        old, new = np.linalg.eigvalsh(got[1]), np.linalg.eigvalsh(fixed)
+        notes.append(
+            f"repaired link '{name}' inertia: principal moments {np.round(old, 8).tolist()} -> "
+            f"{np.round(new, 8).tolist()} kg m^2 (largest change {np.abs(new - old).max():.3g})"
+        )
+    if off:
+        notes.append(
+            f"{len(off)} link(s) off the chain with inertias that are not a rigid body's, not checked "
+            "(merged with locked joints at 0, or fixed to the base): " + ", ".join(off)
+        )
+    return tuple(notes)

@@ -17,6 +17,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from adaptive_dd.errors import ParameterError
+from adaptive_dd.outputs import atomic_write
 
 __all__ = ["write_urdf_links"]
 
@@ -25,8 +26,14 @@ def _f(x: float) -> str:
     return repr(float(x))
 
 
-def write_urdf_links(arm, pi_links: ArrayLike, path: str | Path, comment: str = "") -> Path:
+def write_urdf_links(
+    arm, pi_links: ArrayLike, path: str | Path, comment: str = "", friction: tuple | None = None
+) -> Path:
     """Write ``arm``'s URDF with links ``pi_links (10 n,)`` to ``path``; returns the path.
+
+    The URDF read is the arm's as repaired (``repair_inertia``), if it was. ``friction = (fv, fc)``
+    (each ``(n,)``) also writes the chain joints' ``<dynamics damping friction>``. The file is
+    written atomically.
 
     Raises
     ------
@@ -40,8 +47,8 @@ def write_urdf_links(arm, pi_links: ArrayLike, path: str | Path, comment: str = 
     n = arm.n_joints
     if pi.shape != (10 * n,):
         raise ParameterError(f"pi_links must have {10 * n} values (10 per link), got {pi.shape}")
-    tree = ET.parse(arm.urdf)
-    root = tree.getroot()
+    xml = arm._robot.xml
+    root = ET.fromstring(xml) if xml is not None else ET.parse(arm.urdf).getroot()
     links = {el.get("name"): el for el in root.findall("link")}
     joints = {el.get("name"): el for el in root.findall("joint")}
     children: dict[str, list] = {}
@@ -60,6 +67,12 @@ def write_urdf_links(arm, pi_links: ArrayLike, path: str | Path, comment: str = 
                 for j in children.get(link.get("name"), ())
                 if j.get("name") not in chain
             ]
+        if friction is not None:
+            dyn = joints[name].find("dynamics")
+            if dyn is None:
+                dyn = ET.SubElement(joints[name], "dynamics")
+            dyn.set("damping", _f(friction[0][k]))
+            dyn.set("friction", _f(friction[1][k]))
         p = pi[10 * k : 10 * k + 10]
         check_link(p, f"link {k + 1} ({child})")
         m, c, Ic = link_parts(p)
@@ -73,5 +86,7 @@ def write_urdf_links(arm, pi_links: ArrayLike, path: str | Path, comment: str = 
     if comment:
         root.insert(0, ET.Comment(f" {comment} "))
     path = Path(path)
-    tree.write(path, encoding="utf-8", xml_declaration=True)
+    with atomic_write(path, encoding="utf-8") as fh:
+        fh.write('<?xml version="1.0" encoding="utf-8"?>\n')
+        fh.write(ET.tostring(root, encoding="unicode"))
     return path

@@ -1,0 +1,218 @@
+"""An identified arm model on disk: ``model.json`` (and ``model.urdf``), written by ``identify --out``.
+
+``model.json`` holds what another part of the project needs to start from an identified
+arm rather than from its URDF: the URDF it was identified on (and how it was read), the
+base parameters with their names, values, covariance and whether each was identified (or
+held at the URDF's value), the noise levels, friction and armature, and where it came from
+(record, window, filter). When a physically consistent set of standard parameters fits the
+estimate, ``model.urdf`` is the URDF with those inertias, friction and damping written in
+(the armature, which URDF cannot hold, stays in ``model.json``).
+
+Load it with :func:`load_identified_model`::
+
+    from adaptive_dd.identification.identified_model import load_identified_model
+    m = load_identified_model("results/tiago/model.json")
+    arm = m.arm()                      # the SerialArm (URDF, friction and armature identified)
+    tau = m.predict(q, qd, qdd)        # joint torques of the identified base parameters
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import asdict, dataclass
+from pathlib import Path
+
+import numpy as np
+from numpy.typing import NDArray
+
+from adaptive_dd.errors import DataError
+
+__all__ = ["FORMAT", "IdentifiedModel", "load_identified_model", "save_identified_model", "write_fitted_urdf"]
+
+Array = NDArray[np.float64]
+FORMAT = "adaptive_dd identified model 1"
+
+
+@dataclass(frozen=True)
+class IdentifiedModel:
+    """What ``model.json`` holds (module docstring); per-joint lists have n entries, others p.
+
+    Attributes
+    ----------
+    urdf : str
+        The URDF identified on (absolute path).
+    payload_frame : str
+    gravity : list of float
+    repair_inertia : bool
+    joint_names : list of str
+    friction_velocity : float
+        ``v_f`` of the Coulomb law ``fc tanh(qd / v_f)`` [rad/s].
+    names : list of str
+        Base parameter names.
+    sigma, sigma_urdf, std : list of float
+    identified : list of bool
+    covariance : list of list of float
+    used : list of bool
+        Torque channels fitted.
+    residual_rms, noise_rms : list of float
+        Filtered residual and sensor noise per channel [N m] (nan: excluded).
+    viscous, coulomb, armature : list of float
+        Per joint [N m s, N m, kg m^2] (the consistent fit's, else the URDF's or identified ones).
+    consistent_sigma : list of float or None
+        Base parameters of the nearest physically consistent arm.
+    consistent_distance : float or None
+        Its distance from the estimate [std].
+    fitted_urdf : str or None
+        ``model.urdf`` beside the file.
+    record : dict
+        Source, window, sample period, tau_f, Newey-West lag.
+    """
+
+    urdf: str
+    payload_frame: str
+    gravity: list
+    repair_inertia: bool
+    joint_names: list
+    friction_velocity: float
+    names: list
+    sigma: list
+    sigma_urdf: list
+    std: list
+    identified: list
+    covariance: list
+    used: list
+    residual_rms: list
+    noise_rms: list
+    viscous: list
+    coulomb: list
+    armature: list
+    consistent_sigma: list | None
+    consistent_distance: float | None
+    fitted_urdf: str | None
+    record: dict
+
+    def arm(self, fitted: bool = False):
+        """The :class:`~adaptive_dd.plant.serial_arm.SerialArm` (``fitted``: from ``model.urdf``)."""
+        from adaptive_dd.plant.serial_arm import SerialArm
+
+        if fitted and self.fitted_urdf is None:
+            raise DataError("this model has no fitted URDF (no physically consistent fit was found)")
+        path = self.fitted_urdf if fitted else self.urdf
+        return SerialArm.from_urdf(
+            path,
+            self.payload_frame,
+            gravity=self.gravity,
+            repair_inertia=self.repair_inertia and not fitted,
+            viscous=np.asarray(self.viscous),
+            coulomb=np.asarray(self.coulomb),
+            armature=np.asarray(self.armature),
+            friction_velocity=self.friction_velocity,
+        )
+
+    def predict(self, q, qd, qdd, model=None) -> Array:
+        """Joint torques ``(N, n)`` [N m] of the identified base parameters."""
+        from adaptive_dd.identification.log_fit import predict_torque
+
+        return predict_torque(model or self.serial_model(), np.asarray(self.sigma), q, qd, qdd)
+
+    def serial_model(self):
+        """The :class:`~adaptive_dd.identification.serial_model.SerialModel` of :meth:`arm`, checked
+        against the stored base parameter names."""
+        from adaptive_dd.identification.serial_model import serial_model
+
+        model = serial_model(self.arm())
+        if list(model.names) != list(self.names):
+            raise DataError(
+                f"{self.urdf}: its base parameters ({model.p}) are not those of the model file "
+                f"({len(self.names)}): the URDF changed since the identification"
+            )
+        return model
+
+
+def save_identified_model(path, model: IdentifiedModel) -> Path:
+    """Write ``model`` as JSON (NaN as null)."""
+    from adaptive_dd.outputs import atomic_write
+
+    def clean(x):
+        if isinstance(x, float) and not np.isfinite(x):
+            return None
+        if isinstance(x, list):
+            return [clean(v) for v in x]
+        if isinstance(x, dict):
+            return {k: clean(v) for k, v in x.items()}
+        return x
+
+    path = Path(path)
+    with atomic_write(path, encoding="utf-8") as fh:
+        json.dump({"format": FORMAT, **clean(asdict(model))}, fh, indent=1)
+    return path
+
+
+def load_identified_model(path) -> IdentifiedModel:
+    """Read a ``model.json`` written by ``adaptive-dd identify --out``.
+
+    Raises
+    ------
+    DataError
+        Naming the file and the key: not JSON, another format, a missing key, lengths that
+        do not agree, a URDF that is gone.
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise DataError(f"{path}: no such model file (written by adaptive-dd identify --out DIR)")
+    try:
+        data = json.loads(path.read_text(encoding="utf-8"))
+    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+        raise DataError(f"{path}: not a JSON model file: {exc}") from None
+    if not isinstance(data, dict) or data.get("format") != FORMAT:
+        raise DataError(f"{path}: key 'format' is not {FORMAT!r}: not a model written by identify --out")
+    fields = IdentifiedModel.__dataclass_fields__
+    missing = [k for k in fields if k not in data]
+    if missing:
+        raise DataError(f"{path}: missing key(s) {missing}")
+
+    def nan(x):
+        return [np.nan if v is None else v for v in x]
+
+    kw = {k: data[k] for k in fields}
+    for k in ("residual_rms", "noise_rms"):
+        kw[k] = nan(kw[k])
+    p, n = len(kw["names"]), len(kw["joint_names"])
+    for k in ("sigma", "sigma_urdf", "std", "identified"):
+        if len(kw[k]) != p:
+            raise DataError(f"{path}: key '{k}' has {len(kw[k])} entries, 'names' {p}")
+    if np.shape(kw["covariance"]) != (p, p):
+        raise DataError(f"{path}: key 'covariance' must be {p} x {p}")
+    for k in ("used", "residual_rms", "noise_rms", "viscous", "coulomb", "armature"):
+        if len(kw[k]) != n:
+            raise DataError(f"{path}: key '{k}' has {len(kw[k])} entries, 'joint_names' {n}")
+    for k in ("urdf", "fitted_urdf"):
+        if kw[k] is not None:
+            u = Path(kw[k])
+            u = u if u.is_absolute() else path.parent / u
+            if not u.is_file():
+                raise DataError(f"{path}: key '{k}': the URDF {u} is not there")
+            kw[k] = str(u)
+    return IdentifiedModel(**kw)
+
+
+def write_fitted_urdf(arm, pi: Array, path) -> Path:
+    """The arm's URDF with the standard parameters ``pi (13 n,)`` written in.
+
+    Each chain joint's child link gets the inertia of its whole body (Pinocchio merges the
+    links fixed to it and the locked branches hanging from it: their ``<inertial>`` are
+    removed, their mass now in the body); ``<dynamics damping friction>`` of the chain
+    joints get ``fv, fc``. The armature is not a URDF quantity (it stays in model.json).
+    See :func:`adaptive_dd.plant.urdf_write.write_urdf_links`.
+    """
+    from adaptive_dd.plant.urdf_write import write_urdf_links
+
+    n = arm.n_joints
+    pi = np.asarray(pi, dtype=float)
+    return write_urdf_links(
+        arm,
+        pi[: 10 * n],
+        path,
+        f"written by adaptive-dd identify: a physically consistent fit on {arm.urdf}",
+        friction=(pi[10 * n : 11 * n], pi[11 * n : 12 * n]),
+    )

@@ -1,0 +1,282 @@
+"""Weighted least squares on a real robot's log, with bounds that mean something on real data.
+
+The regression is the exact filtered one of :mod:`adaptive_dd.identification.serial_regression`
+(``G0 tau = Phi sigma``, no acceleration needed; ``tau_f`` sized to the sample rate by
+:func:`filter_time_constant`). What a real log adds:
+
+Channels left out
+    Torque channels that carry nothing (a wrist reading 0, a torso channel holding the
+    robot's weight) are excluded: their rows leave the regression. The base parameters that
+    the remaining channels cannot see, for any motion, stay at the URDF's values
+    (:func:`identifiable_subset`: the standard regressor's rows of the kept channels at random
+    states, unpivoted QR in the base order, as :mod:`adaptive_dd.plant.base_parameters` does);
+    the others absorb the deviation of those fixed in combination with them.
+
+Weights (the stated rule)
+    Ordinary least squares first; then each kept channel j is weighted by ``c_j / s_j`` (``c_j``
+    the user's ``torque_weight``, 1 by default), with
+    ``s_j`` the rms of its filtered residual, floored at a tenth of the median over the kept
+    channels (so a channel the model fits suspiciously well, a near-constant one, cannot take
+    all the weight); three passes.
+
+Standard deviations
+    On real data the residual is model error more than sensor noise: correlated over time
+    and far larger than the sensors' noise. The covariance is the sandwich
+    ``A^-1 S A^-1`` with ``A = sum_k Phi_k^T W Phi_k`` and ``S`` the Newey-West (Bartlett)
+    estimate of the long-run covariance of the scores ``g_k = Phi_k^T W r_k``, lag ``L`` the
+    residual's correlation time (the first lag at which the autocorrelation of the weighted
+    residual, pooled over channels, falls below 0.05, times 3). Checked on the TIAGo
+    record against the spread of estimates over disjoint windows (benchmarks/real_log.py).
+
+Noise levels
+    Each channel's sensor noise is estimated from the logged torque's second difference
+    (white noise of std ``s`` has a second difference of std ``sqrt(6) s``; real torque
+    content makes this an upper bound), then passed through ``G0``. A residual far above it
+    (:data:`MODEL_ERROR_RATIO`) is reported as model error, with the ratio.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from adaptive_dd.errors import DataError
+from adaptive_dd.identification.filters import design_filter_bank, filter_record
+from adaptive_dd.identification.serial_model import SerialModel, base_regressor
+from adaptive_dd.identification.serial_regression import (
+    SerialRegression,
+    check_excitation,
+    serial_filtered_regression,
+)
+
+__all__ = [
+    "LogFit",
+    "filter_time_constant",
+    "fit_log",
+    "identifiable_subset",
+    "predict_torque",
+]
+
+Array = NDArray[np.float64]
+WEIGHT_FLOOR = 0.1
+"""``s_j`` is at least this fraction of the median residual rms of the kept channels."""
+MODEL_ERROR_RATIO = 10.0
+"""A filtered residual this many times the filtered sensor noise is reported as model error."""
+
+
+@dataclass(frozen=True)
+class LogFit:
+    """The weighted least squares of one log.
+
+    Attributes
+    ----------
+    sigma : ndarray (p,)
+        Base parameters; those not identified hold the URDF's values.
+    identified : ndarray of bool (p,)
+    cov : ndarray (p, p)
+        Newey-West sandwich covariance (zero rows and columns for those not identified).
+    std : ndarray (p,)
+    residual_rms : ndarray (n,)
+        Filtered residual per channel [N m] (nan: excluded).
+    noise_rms : ndarray (n,)
+        The channel's sensor noise after ``G0`` (module docstring) [N m].
+    weights : ndarray (n,)
+        ``1 / s_j`` (0: excluded).
+    lag : int
+        Newey-West lag [samples].
+    tau_f, sample_period : float
+    regression : SerialRegression
+    used : ndarray of bool (n,)
+    """
+
+    sigma: Array
+    identified: NDArray[np.bool_]
+    cov: Array
+    std: Array
+    residual_rms: Array
+    noise_rms: Array
+    weights: Array
+    lag: int
+    tau_f: float
+    sample_period: float
+    regression: SerialRegression
+    used: NDArray[np.bool_]
+
+    def model_error_channels(self) -> list[tuple[int, float]]:
+        """``(joint, residual / noise)`` of the kept channels above :data:`MODEL_ERROR_RATIO`."""
+        ratio = self.residual_rms / np.maximum(self.noise_rms, 1e-300)
+        return [(int(j), float(ratio[j])) for j in np.flatnonzero(self.used) if ratio[j] > MODEL_ERROR_RATIO]
+
+
+def filter_time_constant(sample_period: float) -> float:
+    """``tau_f`` sized to the sample rate: two samples, at least 0.02 s [s].
+
+    ``G0`` then has its double pole at ``1 / (4 pi T)``, a twelfth of the sample rate (8 Hz
+    at 100 Hz), well below the Nyquist frequency; on the TIAGo log a longer filter (3-12
+    samples) predicted the held-out torque slightly worse (benchmarks/real_log.py).
+    """
+    return max(0.02, 2.0 * float(sample_period))
+
+
+def identifiable_subset(
+    model: SerialModel, used, lower, upper, rng: np.random.Generator, n_samples: int = 80
+) -> NDArray[np.bool_]:
+    """Base parameters that the torque channels ``used`` see for some motion (module docstring)."""
+    used = np.asarray(used, dtype=bool)
+    lo = np.where(np.isfinite(lower), lower, -np.pi)
+    hi = np.where(np.isfinite(upper), upper, np.pi)
+    n = model.n
+    q = rng.uniform(lo, hi, (n_samples, n))
+    qd = rng.uniform(-2.0, 2.0, (n_samples, n))
+    qdd = rng.uniform(-5.0, 5.0, (n_samples, n))
+    W = base_regressor(model, q, qd, qdd)[:, used, :].reshape(-1, model.p)
+    norms = np.linalg.norm(W, axis=0)
+    keep = norms > 1e-9 * norms.max()
+    if used.all():
+        return keep
+    import scipy.linalg
+
+    cols = np.flatnonzero(keep)
+    R = scipy.linalg.qr(W[:, cols] / norms[cols], mode="r")[0]
+    keep[cols] = np.abs(np.diag(R)) > 1e-9 * np.sqrt(W.shape[0])
+    return keep
+
+
+def _solve(phi: Array, y: Array, w: Array) -> tuple[Array, Array]:
+    """Weighted least squares of ``y (N, m) ~ phi (N, m, r) x``; returns ``x`` and the column scale."""
+    r = phi.shape[-1]
+    A = (phi * w[None, :, None]).reshape(-1, r)
+    scale = np.linalg.norm(A, axis=0)
+    sol, *_ = np.linalg.lstsq(A / scale, (y * w).reshape(-1), rcond=None)
+    return sol / scale, scale
+
+
+def _newey_west(phi: Array, res: Array, w: Array, scale: Array) -> tuple[Array, int]:
+    """Sandwich covariance ``(r, r)`` of the weighted fit and the lag used (module docstring)."""
+    N, _, _r = phi.shape
+    P = phi / scale
+    g = np.einsum("kjr,kj->kr", P, (w**2) * res)  # scores (N, r)
+    A = np.einsum("kjr,kjs,j->rs", P, P, w**2)
+    u = (res * w).sum(axis=1)
+    u = u - u.mean()
+    f = np.fft.rfft(u, 2 * N)
+    ac = np.fft.irfft(f * np.conj(f))[:N]
+    ac = ac / max(ac[0], 1e-300)
+    below = np.flatnonzero(ac < 0.05)
+    lag = int(min(3 * (below[0] if below.size else N), N // 4))
+    S = g.T @ g
+    for m in range(1, lag + 1):
+        G = g[m:].T @ g[:-m]
+        S += (1.0 - m / (lag + 1)) * (G + G.T)
+    Ainv = np.linalg.pinv(A)
+    cov = Ainv @ S @ Ainv
+    return cov / np.outer(scale, scale), lag
+
+
+def _noise_rms(tau: Array, tau_f: float, T: float) -> Array:
+    """Each channel's white-noise std from its second difference, after ``G0`` [N m]."""
+    s = np.std(np.diff(tau, 2, axis=0), axis=0) / np.sqrt(6.0)
+    bank = design_filter_bank("M2", tau_f, T)
+    m = int(20 * tau_f / T) + 10
+    imp = np.zeros((m, 1))
+    imp[0] = 1.0
+    h = filter_record(bank, imp, axis=0, initial=np.zeros(1))[:, 0, 0]
+    return s * np.sqrt(np.sum(h**2))
+
+
+def fit_log(
+    model: SerialModel,
+    q: Array,
+    qd: Array,
+    tau: Array,
+    used,
+    identified,
+    *,
+    tau_f: float,
+    sample_period: float,
+    channel_weight=None,
+    torque_held: bool = True,
+) -> LogFit:
+    """Weighted least squares of one log (module docstring).
+
+    Parameters
+    ----------
+    q, qd, tau : ndarray (N, n)
+        Uniformly sampled positions [rad, m], velocities, torques [N m].
+    used : array_like of bool (n,)
+        Torque channels in the fit.
+    identified : array_like of bool (p,)
+        Base parameters to fit (:func:`identifiable_subset`); the others hold the URDF's values.
+    tau_f, sample_period : float
+        [s].
+    channel_weight : array_like (n,), optional
+        Multiplies each channel's weight from the rule (a user's ``torque_weight``).
+    torque_held : bool
+        The torque is held over each sample (a command, as a simulator's or a drive's current
+        loop applies it: the default) rather than sampled from a continuous signal (a joint
+        torque sensor): :func:`~adaptive_dd.identification.serial_regression.serial_filtered_regression`.
+
+    Raises
+    ------
+    DataError
+        The log does not excite some base parameter (named), or is too short.
+    """
+    used = np.asarray(used, dtype=bool)
+    K = np.asarray(identified, dtype=bool)
+    names = tuple(nm for nm, k in zip(model.names, K, strict=True) if k)
+    reg = serial_filtered_regression(
+        model, q, qd, tau, tau_f=tau_f, sample_period=sample_period, torque_held=torque_held
+    )
+    phi_all = reg.phi[:, used, :]
+    y = reg.y[:, used] - phi_all[:, :, ~K] @ model.sigma_ref[~K]
+    phi = phi_all[:, :, K]
+    if y.shape[0] * used.sum() < 3 * K.sum():
+        raise DataError(
+            f"{y.shape[0]} samples of {used.sum()} channels for {K.sum()} parameters: a longer window "
+            "is needed"
+        )
+    check_excitation(phi, names)
+    cw = np.ones(model.n) if channel_weight is None else np.asarray(channel_weight, dtype=float)
+    cw = cw[used]
+    w = cw.copy()
+    for _ in range(3):
+        x, _ = _solve(phi, y, w)
+        res = y - phi @ x
+        rms = np.sqrt(np.mean(res**2, axis=0))
+        s = np.maximum(rms, WEIGHT_FLOOR * np.median(rms))
+        w = cw / np.maximum(s, 1e-300)
+    x, _scale = _solve(phi, y, w)
+    res = y - phi @ x
+    cov_k, lag = _newey_west(
+        phi, res, w, np.linalg.norm((phi * w[None, :, None]).reshape(-1, K.sum()), axis=0)
+    )
+    sigma = model.sigma_ref.copy()
+    sigma[K] = x
+    cov = np.zeros((model.p, model.p))
+    cov[np.ix_(K, K)] = cov_k
+    n = model.n
+    residual = np.full(n, np.nan)
+    residual[used] = np.sqrt(np.mean(res**2, axis=0))
+    weights = np.zeros(n)
+    weights[used] = w
+    return LogFit(
+        sigma=sigma,
+        identified=K,
+        cov=cov,
+        std=np.sqrt(np.abs(np.diag(cov))),
+        residual_rms=residual,
+        noise_rms=_noise_rms(tau, tau_f, sample_period),
+        weights=weights,
+        lag=lag,
+        tau_f=float(tau_f),
+        sample_period=float(sample_period),
+        regression=reg,
+        used=used,
+    )
+
+
+def predict_torque(model: SerialModel, sigma: Array, q: Array, qd: Array, qdd: Array) -> Array:
+    """Joint torques ``(N, n)`` [N m] of base parameters ``sigma`` along a motion."""
+    return base_regressor(model, q, qd, qdd) @ np.asarray(sigma, dtype=float)

@@ -1,0 +1,576 @@
+"""A real robot's log as identification reads it: the ``[record]`` table of a scenario.
+
+A log from a robot is rarely the ``t, q1..qN, qd1..qdN, tau1..tauN`` file the simulator
+writes: several files, the vendor's column names, jittered time stamps, raw motor efforts,
+degrees, a gear ratio, channels that carry nothing. The ``[record]`` table of an
+identification scenario (the same file as its ``[arm]``) says how to read it::
+
+    [record]
+    files = ["tiago_position.csv", "tiago_velocity.csv", "tiago_effort.csv"]  # beside the scenario
+    time = "t"                               # the time column of every file [s]
+    position = "- {joint}_position"          # {joint}: the URDF's joint name; {i}: 1, 2, ...
+    velocity = "- {joint}_velocity"          # optional: measured velocity columns
+    torque = "- {joint}_effort"              # torque or raw effort columns
+    velocity_source = "derived"              # "measured" or "derived" (from the positions)
+    torque_gain = [1, 13.6, 13.6, -8.7, ...] # tau = sign * gain * effort + offset, per joint
+    torque_sign = [1, 1, ...]                # optional, default 1
+    torque_offset = [0, 0, ...]              # optional [N m], default 0
+    position_unit = "rad"                    # or "deg" (prismatic joints in m), or one per joint
+                                             # ("rad", "deg", "m", "mm")
+    gear_ratio = [1, 1, ...]                 # optional: motor-side positions / velocities
+    exclude = ["torso_lift_joint", "arm_5_joint"]   # torque channels left out of the fit
+    torque_weight = [1, 1, 0.5, ...]         # optional: multiplies each channel's weight (0: exclude)
+    torque_held = true                       # a command held over each sample (default), or false:
+                                             # samples of a continuous torque (a torque sensor)
+    window = [9.21, 67.9]                    # optional [s] of the log's clock
+    sample_period = 0.01                     # optional: the grid to resample to [s]
+
+Column names may also be lists, one per joint. Without a ``[record]`` table a file has the
+simulator's columns (``position = "q{i}"``, ``velocity = "qd{i}"``, ``torque = "tau{i}"``).
+
+Sample times
+------------
+The filters of the identification run at one sample period, so the log is **resampled**
+onto a uniform grid (the mean logged step unless ``sample_period`` is given, starting at
+the window's first logged time): positions by a cubic spline through the logged samples
+(``scipy.interpolate.CubicSpline``, not-a-knot), measured velocities and torques by linear
+interpolation (they are held values). Each file is resampled from its own time column.
+Derived velocities (and accelerations, for prediction) are Savitzky-Golay derivatives of the
+resampled positions (cubic, window about 0.1 s: :func:`derivatives`).
+
+What is refused, with the file, line or column and the remedy: a missing column, a
+non-numeric or non-finite value (a NaN run: its lines), a time that does not increase (a
+duplicated stamp), a gap longer than five median steps inside the window, a torque channel
+stuck at one value on more than half the window (exclude it), a revolute position whose
+range does not fit the URDF's limits in radians but does in degrees (set ``position_unit``).
+"""
+
+from __future__ import annotations
+
+import difflib
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+from numpy.typing import NDArray
+
+from adaptive_dd.errors import DataError, ScenarioError
+
+__all__ = ["LogRecord", "RecordSpec", "derivatives", "read_log", "record_spec"]
+
+Array = NDArray[np.float64]
+
+RECORD_KEYS = (
+    "files",
+    "time",
+    "position",
+    "velocity",
+    "torque",
+    "velocity_source",
+    "torque_gain",
+    "torque_sign",
+    "torque_offset",
+    "position_unit",
+    "gear_ratio",
+    "exclude",
+    "torque_weight",
+    "torque_held",
+    "window",
+    "sample_period",
+)
+UNITS = {"rad": 1.0, "deg": math.pi / 180.0, "m": 1.0, "mm": 1e-3}
+STUCK_FRACTION = 0.5
+"""A torque channel holding one value on more than this fraction of the window is refused."""
+MAX_GAP_STEPS = 5.0
+"""A step longer than this many median steps inside the window is a gap."""
+DERIVATIVE_WINDOW = 0.1
+"""Savitzky-Golay window [s] of derived velocities and accelerations."""
+
+
+@dataclass(frozen=True)
+class RecordSpec:
+    """How to read a log (module docstring); per-joint arrays have the arm's ``n`` entries.
+
+    Attributes
+    ----------
+    files : tuple of Path
+    time : str
+    position, torque : tuple of str
+        Column names, one per joint.
+    velocity : tuple of str or None
+        Measured velocity columns (None: none in the files).
+    derive_velocity : bool
+        Derive the velocity from the positions even if measured.
+    position_scale : ndarray (n,)
+        Multiplies a logged position or velocity into rad or m (unit and gear ratio).
+    torque_gain, torque_offset : ndarray (n,)
+        ``tau = torque_gain * logged + torque_offset`` [N m] (the sign folded into the gain).
+    used : ndarray of bool (n,)
+        Torque channels in the fit (False: excluded).
+    weight : ndarray (n,)
+        Multiplies each channel's weight in the fit (``torque_weight``; 1 by default).
+    torque_held : bool
+        The torque is a command held over each sample (else samples of a continuous torque).
+    window : tuple of float or None
+    sample_period : float or None
+    joint_names : tuple of str
+    source : str
+        Where the description came from (errors name it).
+    simulator_format : bool
+        No ``[record]`` table: the simulator's columns, velocity columns optional.
+    """
+
+    files: tuple[Path, ...]
+    time: str
+    position: tuple[str, ...]
+    torque: tuple[str, ...]
+    velocity: tuple[str, ...] | None
+    derive_velocity: bool
+    position_scale: Array
+    torque_gain: Array
+    torque_offset: Array
+    used: NDArray[np.bool_]
+    weight: Array
+    torque_held: bool
+    window: tuple[float, float] | None
+    sample_period: float | None
+    joint_names: tuple[str, ...]
+    source: str
+    simulator_format: bool = False
+
+
+@dataclass(frozen=True)
+class LogRecord:
+    """A log on a uniform grid, in rad (m) and N m.
+
+    Attributes
+    ----------
+    t : ndarray (N,)
+        [s], the log's clock.
+    q, qd, tau : ndarray (N, n)
+    qd_measured : bool
+        ``qd`` is the measured velocity (else derived from ``q``).
+    used : ndarray of bool (n,)
+        Torque channels in the fit.
+    weight : ndarray (n,)
+        Their weight multipliers (``torque_weight``).
+    sample_period : float
+    source : str
+        The file(s).
+    notes : tuple of str
+        How it was read (resampling, jitter), for the report.
+    simulator_format : bool
+        Read as the simulator writes records (no ``[record]`` table).
+    """
+
+    t: Array
+    q: Array
+    qd: Array
+    tau: Array
+    qd_measured: bool
+    used: NDArray[np.bool_]
+    weight: Array
+    sample_period: float
+    source: str
+    notes: tuple[str, ...] = ()
+    simulator_format: bool = False
+
+
+def _err(src: str, key: str, why: str) -> ScenarioError:
+    return ScenarioError(f"{src}: key 'record.{key}' {why}")
+
+
+def _columns(src: str, key: str, v, names: tuple[str, ...]) -> tuple[str, ...]:
+    n = len(names)
+    if isinstance(v, str):
+        if "{joint}" not in v and "{i}" not in v:
+            raise _err(src, key, f"= {v!r} must contain {{joint}} or {{i}}, or be a list of {n} names")
+        return tuple(v.replace("{joint}", nm).replace("{i}", str(j + 1)) for j, nm in enumerate(names))
+    if isinstance(v, list) and len(v) == n and all(isinstance(x, str) and x for x in v):
+        return tuple(v)
+    raise _err(src, key, f"must be a column-name pattern or a list of {n} names (one per joint), got {v!r}")
+
+
+def _per_joint(src: str, key: str, v, n: int, default: float, nonzero: bool = False) -> Array:
+    if v is None:
+        return np.full(n, default)
+    if isinstance(v, int | float) and not isinstance(v, bool):
+        v = [v] * n
+    ok = isinstance(v, list) and len(v) == n
+    ok = ok and all(isinstance(x, int | float) and not isinstance(x, bool) and math.isfinite(x) for x in v)
+    if not ok:
+        raise _err(src, key, f"must be a number or a list of {n} finite numbers (one per joint), got {v!r}")
+    a = np.array(v, dtype=float)
+    if nonzero and np.any(a == 0):
+        raise _err(src, key, f"must be nonzero, got {v!r}")
+    return a
+
+
+def record_spec(table: dict | None, joint_names, kinds, src: str, files=None) -> RecordSpec:
+    """The :class:`RecordSpec` of a ``[record]`` table (None: the simulator's columns).
+
+    Parameters
+    ----------
+    table : dict or None
+    joint_names, kinds : sequence of str
+        The arm's joints and their URDF types (``revolute``, ``continuous``, ``prismatic``).
+    src : str
+        The scenario file (relative file names are beside it).
+    files : sequence of str, optional
+        Files given on the command line: they replace ``files``.
+
+    Raises
+    ------
+    ScenarioError
+        Naming the key and the reason.
+    """
+    t = {} if table is None else dict(table)
+    unknown = [k for k in t if k not in RECORD_KEYS]
+    if unknown:
+        raise _err(src, unknown[0], f"is unknown; allowed: {', '.join(RECORD_KEYS)}")
+    names = tuple(joint_names)
+    n = len(names)
+    base = Path(src).parent if Path(src).is_file() else Path.cwd()
+    raw = files if files else t.get("files")
+    if isinstance(raw, str):
+        raw = [raw]
+    if not raw or not isinstance(raw, list | tuple) or not all(isinstance(f, str) and f for f in raw):
+        raise _err(src, "files", "is missing: give the log's file(s) on the command line or in [record]")
+    paths = tuple(Path(f) if (files or Path(f).is_absolute()) else base / f for f in raw)
+    time = t.get("time", "t")
+    if not isinstance(time, str) or not time:
+        raise _err(src, "time", f"must be a column name, got {time!r}")
+    default = table is None
+    position = _columns(src, "position", t.get("position", "q{i}"), names)
+    torque = _columns(src, "torque", t.get("torque", "tau{i}"), names)
+    vel = t.get("velocity", "qd{i}" if default else None)
+    velocity = None if vel is None else _columns(src, "velocity", vel, names)
+    source = t.get("velocity_source", "measured" if velocity else "derived")
+    if source not in ("measured", "derived"):
+        raise _err(src, "velocity_source", f"must be 'measured' or 'derived', got {source!r}")
+    if source == "measured" and velocity is None:
+        raise _err(src, "velocity_source", "is 'measured' but no 'velocity' columns are given")
+    scale = _position_scale(src, t, names, tuple(kinds))
+    gain, offset = _torque_conversion(src, t, n)
+    used, weight = _channels(src, t, names)
+    window, T = _window_period(src, t)
+    held = t.get("torque_held", True)
+    if not isinstance(held, bool):
+        raise _err(src, "torque_held", f"must be true or false, got {held!r}")
+    return RecordSpec(
+        files=paths,
+        time=time,
+        position=position,
+        torque=torque,
+        velocity=velocity,
+        derive_velocity=source == "derived",
+        position_scale=scale,
+        torque_gain=gain,
+        torque_offset=offset,
+        used=used,
+        weight=weight,
+        torque_held=held,
+        window=window,
+        sample_period=T,
+        joint_names=names,
+        source=src,
+        simulator_format=default,
+    )
+
+
+def _position_scale(src: str, t: dict, names: tuple[str, ...], kinds: tuple[str, ...]) -> Array:
+    """Logged position or velocity -> rad or m, per joint (``position_unit``, ``gear_ratio``)."""
+    n = len(names)
+    unit = t.get("position_unit", "rad")
+    if isinstance(unit, str):  # one unit: for the revolute joints ("rad", "deg") or the prismatic ones
+        length = unit in ("m", "mm")
+        units = [unit if (k == "prismatic") == length else ("rad" if length else "m") for k in kinds]
+    else:
+        units = unit
+    if not (isinstance(units, list) and len(units) == n and all(u in UNITS for u in units)):
+        raise _err(
+            src, "position_unit", f"must be one of {sorted(UNITS)} or a list of {n} of them, got {unit!r}"
+        )
+    for j, (u, k) in enumerate(zip(units, kinds, strict=True)):
+        if (u in ("m", "mm")) != (k == "prismatic"):
+            raise _err(src, "position_unit", f"{u!r} does not fit joint '{names[j]}' ({k})")
+    gear = _per_joint(src, "gear_ratio", t.get("gear_ratio"), n, 1.0, nonzero=True)
+    return np.array([UNITS[u] for u in units]) / gear
+
+
+def _torque_conversion(src: str, t: dict, n: int) -> tuple[Array, Array]:
+    """``(sign * gain, offset)`` per joint."""
+    gain = _per_joint(src, "torque_gain", t.get("torque_gain"), n, 1.0, nonzero=True)
+    sign = _per_joint(src, "torque_sign", t.get("torque_sign"), n, 1.0)
+    if np.any(np.abs(sign) != 1):
+        raise _err(src, "torque_sign", f"must be +1 or -1 per joint, got {t.get('torque_sign')!r}")
+    return sign * gain, _per_joint(src, "torque_offset", t.get("torque_offset"), n, 0.0)
+
+
+def _channels(src: str, t: dict, names: tuple[str, ...]) -> tuple[NDArray[np.bool_], Array]:
+    """Fitted torque channels and their weight multipliers (``exclude``, ``torque_weight``)."""
+    exclude = t.get("exclude", [])
+    if not isinstance(exclude, list) or any(x not in names for x in exclude):
+        raise _err(src, "exclude", f"must list joint names of the arm ({', '.join(names)}), got {exclude!r}")
+    weight = _per_joint(src, "torque_weight", t.get("torque_weight"), len(names), 1.0)
+    if np.any(weight < 0):
+        raise _err(src, "torque_weight", f"must be >= 0 per joint, got {t.get('torque_weight')!r}")
+    used = np.array([nm not in exclude for nm in names]) & (weight > 0)
+    if not used.any():
+        raise _err(src, "exclude", "leaves no torque channel to fit")
+    return used, weight
+
+
+def _window_period(src: str, t: dict) -> tuple[tuple[float, float] | None, float | None]:
+    window = t.get("window")
+    if window is not None:
+        ok = isinstance(window, list) and len(window) == 2
+        ok = ok and all(isinstance(x, int | float) and not isinstance(x, bool) for x in window)
+        if not ok or not window[0] < window[1]:
+            raise _err(src, "window", f"must be [start, end] in s with start < end, got {window!r}")
+        window = (float(window[0]), float(window[1]))
+    T = t.get("sample_period")
+    if T is not None and not (isinstance(T, int | float) and not isinstance(T, bool) and 0 < T < 10):
+        raise _err(src, "sample_period", f"must be in (0, 10) s, got {T!r}")
+    return window, None if T is None else float(T)
+
+
+def _read_csv(path: Path):
+    import pandas as pd
+
+    if not path.is_file():
+        raise DataError(f"{path}: no such file")
+    try:
+        frame = pd.read_csv(path, skipinitialspace=False)
+    except (ValueError, pd.errors.ParserError) as exc:
+        raise DataError(f"{path}: not a readable CSV file: {exc}") from None
+    frame.columns = [str(c).strip() for c in frame.columns]
+    return frame
+
+
+def _locate(frames: dict, spec: RecordSpec, wanted: list[str]) -> dict:
+    """``{column: file}`` for every wanted column; a missing one is named with near matches."""
+    where = {}
+    for col in wanted:
+        hits = [p for p, f in frames.items() if col.strip() in f.columns]
+        if not hits:
+            every = [c for f in frames.values() for c in f.columns]
+            near = difflib.get_close_matches(col.strip(), every, n=3)
+            raise DataError(
+                f"{', '.join(str(p) for p in frames)}: no column {col!r} (from [record] of {spec.source})"
+                + (f"; near matches: {near}" if near else f"; columns: {every[:12]}")
+            )
+        where[col] = hits[0]
+    return where
+
+
+def _numeric(path: Path, frame, col: str, rows: slice) -> Array:
+    import pandas as pd
+
+    v = pd.to_numeric(frame[col], errors="coerce").to_numpy(dtype=float)
+    raw = frame[col].to_numpy()
+    bad = np.flatnonzero(~np.isfinite(v[rows])) + (rows.start or 0)
+    if bad.size:
+        i = int(bad[0])
+        breaks = np.flatnonzero(np.diff(bad) != 1)
+        run = bad[breaks[0]] if breaks.size else bad[-1]
+        kind = "not a number" if isinstance(raw[i], str) else "non-finite value"
+        raise DataError(
+            f"{path}: lines {i + 2}-{int(run) + 2}, column {col!r}: {kind} ({raw[i]!r}; {bad.size} such "
+            "row(s) in the window): cut the window to avoid them ([record] window or --window) or repair "
+            "the file"
+        )
+    return v
+
+
+def _times(path: Path, frame, col: str) -> Array:
+    if col not in frame.columns:
+        raise DataError(
+            f"{path}: no time column {col!r} (set [record] time); columns: {list(frame.columns)[:12]}"
+        )
+    t = _numeric(path, frame, col, slice(0, len(frame)))
+    dt = np.diff(t)
+    bad = np.flatnonzero(dt <= 0)
+    if bad.size:
+        i = int(bad[0])
+        what = "repeats" if dt[i] == 0 else "goes back from"
+        raise DataError(
+            f"{path}: line {i + 3}, column {col!r}: time {t[i + 1]!r} {what} line {i + 2}'s {t[i]!r} "
+            f"({bad.size} such step(s)): a duplicated or reordered sample; remove or reorder those rows"
+        )
+    return t
+
+
+def _window_rows(path: Path, t: Array, window) -> slice:
+    lo, hi = (t[0], t[-1]) if window is None else window
+    i0, i1 = int(np.searchsorted(t, lo)), int(np.searchsorted(t, hi, side="right"))
+    if i1 - i0 < 20:
+        raise DataError(
+            f"{path}: the window [{lo:g}, {hi:g}] s holds {max(i1 - i0, 0)} samples (the log spans "
+            f"{t[0]:g}-{t[-1]:g} s): need at least 20"
+        )
+    return slice(i0, i1)
+
+
+def read_log(spec: RecordSpec, window: tuple[float, float] | None = None, arm=None) -> LogRecord:
+    """Read, check, convert and resample a log (module docstring).
+
+    Parameters
+    ----------
+    spec : RecordSpec
+    window : (float, float), optional
+        Replaces ``spec.window`` [s].
+    arm : SerialArm, optional
+        For the unit check against the URDF's position limits.
+
+    Raises
+    ------
+    DataError
+        Naming the file, line or column and the remedy.
+    """
+    from scipy.interpolate import CubicSpline
+
+    window = window if window is not None else spec.window
+    frames = {p: _read_csv(p) for p in spec.files}
+    velocity = spec.velocity
+    if spec.simulator_format and velocity and not any(velocity[0] in f.columns for f in frames.values()):
+        velocity = None  # the simulator's format: velocity columns optional
+    cols = [*spec.position, *spec.torque, *([] if velocity is None else velocity)]
+    where = _locate(frames, spec, cols)
+    clocks = {p: _times(p, f, spec.time) for p, f in frames.items()}
+    rows = {p: _window_rows(p, clocks[p], window) for p in frames}
+    first = spec.files[0]
+    t0 = clocks[first][rows[first]]
+    steps = np.diff(t0)
+    T = spec.sample_period or float((t0[-1] - t0[0]) / (t0.size - 1))  # the mean step: jitter averages out
+    gap = np.flatnonzero(steps > MAX_GAP_STEPS * np.median(steps))
+    if gap.size:
+        i = int(gap[0]) + rows[first].start
+        raise DataError(
+            f"{first}: line {i + 3}, column {spec.time!r}: a gap of {steps[gap[0]]:.4g} s (median step "
+            f"{np.median(steps):.4g} s) at {t0[gap[0]]:.4g} s: cut the window before or after it"
+        )
+    lo = max(clocks[p][rows[p]][0] for p in frames)
+    hi = min(clocks[p][rows[p]][-1] for p in frames)
+    grid = lo + T * np.arange(int(np.floor((hi - lo) / T + 1e-9)) + 1)
+
+    def column(col: str, spline: bool) -> Array:
+        p = where[col]
+        r = rows[p]
+        v = _numeric(p, frames[p], col, r)[r]
+        tt = clocks[p][r]
+        return CubicSpline(tt, v)(grid) if spline else np.interp(grid, tt, v)
+
+    q = np.column_stack([column(c, True) for c in spec.position])
+    raw_tau = np.column_stack([column(c, False) for c in spec.torque])
+    _check_stuck(spec, where, raw_tau)
+    if arm is not None:
+        _check_units(spec, where, q, arm)
+    q = q * spec.position_scale
+    tau = spec.torque_gain * raw_tau + spec.torque_offset
+    qd_measured = velocity is not None and not spec.derive_velocity
+    qd = derivatives(q, T)[0]
+    lag_note = ()
+    if velocity is not None:
+        logged = np.column_stack([column(c, False) for c in velocity]) * spec.position_scale
+        lag_note = (_velocity_lag(logged, qd, T, spec.joint_names, qd_measured),)
+        if qd_measured:
+            qd = logged
+    notes = (_resampling_note(t0, T, qd_measured), *lag_note)
+    names = ", ".join(str(p) for p in spec.files)
+    return LogRecord(
+        grid,
+        q,
+        qd,
+        tau,
+        qd_measured,
+        spec.used.copy(),
+        spec.weight.copy(),
+        T,
+        names,
+        notes,
+        spec.simulator_format,
+    )
+
+
+def _resampling_note(t0: Array, T: float, qd_measured: bool) -> str:
+    steps = np.diff(t0)
+    return (
+        f"{t0.size} logged samples over {t0[0]:.4g}-{t0[-1]:.4g} s, steps {steps.min() * 1e3:.3g}-"
+        f"{steps.max() * 1e3:.3g} ms (median {np.median(steps) * 1e3:.4g}); resampled to T = {T:.6g} s: "
+        "positions by cubic spline, torques"
+        + (" and velocities" if qd_measured else "")
+        + " by linear interpolation"
+        + ("" if qd_measured else "; velocities derived (Savitzky-Golay, cubic, ~0.1 s)")
+    )
+
+
+def _velocity_lag(logged: Array, derived: Array, T: float, names, used: bool) -> str:
+    """How far the logged velocity lags the positions' derivative (cross-correlation, the joint that
+    moves most) and its gain, as a note."""
+    j = int(np.argmax(np.std(derived, axis=0)))
+    a, b = derived[:, j] - derived[:, j].mean(), logged[:, j] - logged[:, j].mean()
+    m = min(a.size // 4, round(1.0 / T))
+    lags = np.arange(-m, m + 1)
+    c = [np.dot(a[max(0, -k) : a.size - max(0, k)], b[max(0, k) : b.size - max(0, -k)]) for k in lags]
+    k = int(lags[int(np.argmax(c))])
+    gain = np.dot(a, b) / max(np.dot(a, a), 1e-300)
+    text = (
+        f"the logged velocity lags the positions' derivative by {k * T * 1e3:.0f} ms (joint "
+        f"'{names[j]}', gain {gain:.2f})"
+    )
+    if used and k > 2:
+        text += ': it is filtered; velocity_source = "derived" avoids the lag'
+    return text
+
+
+def _check_stuck(spec: RecordSpec, where: dict, raw: Array) -> None:
+    for j in np.flatnonzero(spec.used):
+        col = raw[:, j]
+        vals, counts = np.unique(col, return_counts=True)
+        frac = counts.max() / col.size
+        if frac > STUCK_FRACTION:
+            raise DataError(
+                f"{where[spec.torque[j]]}: column {spec.torque[j]!r} (joint '{spec.joint_names[j]}') holds "
+                f"{vals[np.argmax(counts)]:g} on {100 * frac:.0f}% of the window: a channel that carries no "
+                f'torque; leave it out of the fit (exclude = ["{spec.joint_names[j]}"] in [record])'
+            )
+
+
+def _check_units(spec: RecordSpec, where: dict, q_raw: Array, arm) -> None:
+    lim = arm.position_limits
+    for j in range(q_raw.shape[1]):
+        lo, hi = lim[j]
+        if not (np.isfinite(lo) and np.isfinite(hi)):
+            continue
+        qj = q_raw[:, j] * spec.position_scale[j]
+        slack = 0.1 * (hi - lo) + 0.05
+        if qj.min() >= lo - slack and qj.max() <= hi + slack:
+            continue
+        deg = qj * math.pi / 180.0
+        hint = (
+            '; in degrees it would fit: set position_unit = "deg" in [record]'
+            if deg.min() >= lo - slack and deg.max() <= hi + slack
+            else ""
+        )
+        raise DataError(
+            f"{where[spec.position[j]]}: column {spec.position[j]!r} (joint '{spec.joint_names[j]}') spans "
+            f"[{qj.min():.4g}, {qj.max():.4g}], outside the URDF's limits [{lo:.4g}, {hi:.4g}]{hint}"
+            + ("" if hint else ": check the unit, gear ratio and column of this joint")
+        )
+
+
+def derivatives(q: Array, T: float, window: float = DERIVATIVE_WINDOW) -> tuple[Array, Array]:
+    """Velocity and acceleration ``(N, n)`` of uniformly sampled positions (Savitzky-Golay, cubic).
+
+    The window is ``window`` seconds rounded to an odd number of samples (at least 7): a
+    zero-phase smoothing differentiator whose gain falls off above about ``1 / window`` Hz.
+    """
+    from scipy.signal import savgol_filter
+
+    m = max(7, 2 * round(window / T / 2) + 1)
+    m = min(m, q.shape[0] - (1 - q.shape[0] % 2))
+    qd = savgol_filter(q, m, 3, deriv=1, delta=T, axis=0, mode="interp")
+    qdd = savgol_filter(q, m, 3, deriv=2, delta=T, axis=0, mode="interp")
+    return qd, qdd
