@@ -20,7 +20,7 @@ from functools import partial
 import numpy as np
 
 from adaptive_dd.benchmark.types import CHUNK, MAX_ALARMS, BenchmarkResult, ControllerRun
-from adaptive_dd.closed_loop.controllers import SerialLaw, make_serial_controller
+from adaptive_dd.closed_loop.controllers import SerialLaw, make_serial_controller, with_stated_uncertainty
 from adaptive_dd.closed_loop.glue import (
     Alarms,
     alarm_lists,
@@ -76,6 +76,7 @@ def make_controllers(scenario) -> dict:
                 spec, g, {**opts, "bandwidth": g.bandwidth}, arm=scenario.arm, search=search
             )
         else:
+            opts = with_stated_uncertainty(spec, opts, scenario)
             ctrl = make_serial_controller(spec, scenario.arm, scenario.bandwidth, scenario.damping, opts)
         out[label] = ctrl
     return out
