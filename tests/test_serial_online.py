@@ -166,7 +166,7 @@ def test_momentum_form_equals_a_numpy_pinocchio_pipeline(ur5, swap_record):
     n = 300
     r = swap_record
     cfg = SerialOnlineConfig(align=False, selection=None, detector=None, max_trace=1e12, lam0=0.999,
-                             mu=0.01, regression="momentum")  # fmt: skip
+                             mu=0.01, regression="momentum", row_weights=(1.0,) * 6)  # fmt: skip
     rec = run_serial_online(ur5, cfg, r.q_meas[:n], r.qd_meas[:n], r.tau[:n])
     p, w, py, wy = _pin_momentum(ur5, r.q_meas[:n], r.qd_meas[:n])
     bank = design_filter_bank("M2", cfg.tau_f, T)
@@ -259,7 +259,7 @@ def test_compiled_step_equals_a_numpy_pinocchio_pipeline(ur5, swap_record, mode)
     n = 400
     r = swap_record
     cfg = SerialOnlineConfig(mode=mode, align=False, selection=None, detector=None, max_trace=1e12,
-                             lam0=0.999, mu=0.01, regression="signals")  # fmt: skip
+                             lam0=0.999, mu=0.01, regression="signals", row_weights=(1.0,) * 6)  # fmt: skip
     rec = run_serial_online(ur5, cfg, r.q_meas[:n], r.qd_meas[:n], r.tau[:n])
     bank = design_filter_bank("M2", cfg.tau_f, T)
     chans = np.stack([r.q_meas[:n], r.qd_meas[:n], r.tau[:n], np.sign(r.qd_meas[:n])])  # (4, N, 6)
@@ -362,19 +362,25 @@ def test_an_error_in_one_joint_alone_does_not_alarm_with_min_rows(ur5, swap_reco
     """A torque error in one joint only (what friction the model lacks makes near rest: here
     +10 N m on the elbow for 60 ms at constant payload) alarms a detector that listens to any row
     alone, not one that asks for three rows; a payload swap raises errors in three rows and is
-    detected by both, at the same sample."""
+    detected by both, at the same sample. (The detector as it was tuned for this: unit row
+    weights, slow factor 2, no fast average; with the slow factor 1.5 of today's defaults the
+    three-row detector also alarms here, 2.609 s.)"""
     r = _record(ur5, 5, 4_000, [PAY_B])
     tau = r.tau.copy()
     tau[2_500:2_560, 2] += 10.0
     out = {}
     for k in (1, 3):
-        cfg = SerialOnlineConfig(detector=SerialDetector(min_rows=k))
+        cfg = SerialOnlineConfig(
+            detector=SerialDetector(min_rows=k, fast_window=None, slow_factor=2.0), row_weights=(1.0,) * 6
+        )
         out[k] = run_serial_online(ur5, cfg, r.q_meas, r.qd_meas, tau).alarm_times()[0]
     assert len(out[1]) >= 1 and 2.5 <= out[1][0] < 2.6, out[1]
     assert len(out[3]) == 0, out[3]
     swaps = {}
     for k in (1, 3):
-        cfg = SerialOnlineConfig(detector=SerialDetector(min_rows=k))
+        cfg = SerialOnlineConfig(
+            detector=SerialDetector(min_rows=k, fast_window=None, slow_factor=2.0), row_weights=(1.0,) * 6
+        )
         rec = run_serial_online(ur5, cfg, swap_record.q_meas, swap_record.qd_meas, swap_record.tau)
         swaps[k] = rec.alarm_times()[0]
     assert len(swaps[3]) == 1 and 10.0 <= swaps[3][0] < 10.05, swaps
@@ -387,7 +393,7 @@ def test_the_fast_average_detects_a_swap_sooner_and_keeps_min_rows(ur5, swap_rec
     error on the elbow alone that alarms min_rows 1 does not alarm min_rows 3 with it either."""
     fast = dict(fast_window=0.004, fast_threshold=6.0)
     hits = {}
-    for name, kw in (("slow", {}), ("fast", fast)):
+    for name, kw in (("slow", {"fast_window": None}), ("fast", fast)):
         cfg = SerialOnlineConfig(detector=SerialDetector(**kw))
         rec = run_serial_online(ur5, cfg, swap_record.q_meas, swap_record.qd_meas, swap_record.tau)
         (hits[name],) = np.nonzero(rec.alarm[0])

@@ -47,6 +47,7 @@ __all__ = [
     "SlotineLi",
     "SlotineLiOracle",
     "make_serial_controller",
+    "with_stated_uncertainty",
 ]
 
 Array = NDArray[np.float64]
@@ -427,6 +428,25 @@ SERIAL_CONTROLLERS: dict[str, type[SerialLaw]] = {
 
 TWO_LINK_ONLY = ("adaptive_ct_paper",)
 """Built-ins of the two-link arm alone (the paper's estimator is written for its seven parameters)."""
+
+
+def with_stated_uncertainty(name: str, options: dict, scenario) -> dict:
+    """``adaptive_ct``'s options with its estimator's ``arm_uncertainty`` taken from the scenario's
+    ``[plant.uncertainty]`` (``scenario.plant.uncertainty``) when its own table says neither
+    ``arm_uncertainty`` nor ``mode``: a user who states how far the robot may be from its URDF
+    gets an estimator that learns the arm (``docs/learning_the_arm.md``). Normal draws (clipped
+    at 3) are given the uniform levels of the same variance (``level * sqrt(3)``). Other
+    controllers' options, and scenarios that state no uncertainty, are returned as they are."""
+    unc = getattr(getattr(scenario, "plant", None), "uncertainty", None)
+    est = (options or {}).get("estimator", {})
+    if name != "adaptive_ct" or unc is None or not isinstance(est, dict):
+        return options
+    if "arm_uncertainty" in est or "mode" in est:
+        return options
+    scale = np.sqrt(3.0) if getattr(unc, "distribution", "uniform") == "normal" else 1.0
+    keys = ("mass", "com", "inertia", "viscous", "coulomb", "armature")
+    levels = {k: float(getattr(unc, k, 0.0)) * scale for k in keys}
+    return {**options, "estimator": {**est, "arm_uncertainty": levels}}
 
 
 def make_serial_controller(name: str, arm, bandwidth=40.0, damping: float = 1.0, options=None) -> SerialLaw:

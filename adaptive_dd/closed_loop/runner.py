@@ -20,7 +20,7 @@ from functools import partial
 import numpy as np
 
 from adaptive_dd.benchmark.types import CHUNK, MAX_ALARMS, BenchmarkResult, ControllerRun
-from adaptive_dd.closed_loop.controllers import SerialLaw, make_serial_controller
+from adaptive_dd.closed_loop.controllers import SerialLaw, make_serial_controller, with_stated_uncertainty
 from adaptive_dd.closed_loop.glue import (
     Alarms,
     alarm_lists,
@@ -78,6 +78,7 @@ def make_controller_of(scenario, spec: str) -> tuple[str, object]:
         g = Gains(float(np.max(bw)), opts.get("damping", scenario.damping))
         opts = {**opts, "bandwidth": g.bandwidth}
         return label, make_controller(spec, g, opts, arm=scenario.arm, search=search, scenario=scenario)
+    opts = with_stated_uncertainty(spec, opts, scenario)
     return label, make_serial_controller(spec, scenario.arm, scenario.bandwidth, scenario.damping, opts)
 
 

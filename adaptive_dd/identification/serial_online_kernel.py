@@ -65,7 +65,9 @@ class EstCfg(NamedTuple):
     ch : Chain
         Kinematics of the arm.
     mode : int
-        0 payload (10 parameters of the payload, arm known), 1 full (base parameters).
+        0 payload (10 parameters of the payload, arm known), 1 full (base parameters) and
+        mode "arm" (base parameters, then the payload's ten: ``p = indep.size + 10``; the
+        payload's columns are link ``jp``'s through ``pmap``, ``pbasis`` selects the last ten).
     pi0 : (13 n,)
         Standard parameters of the known (nominal) arm, without payload.
     jp : int
@@ -75,7 +77,8 @@ class EstCfg(NamedTuple):
     indep : (p,) int64
         Base columns of the standard regressor (full mode).
     Bpinv : (13 n, p)
-        Pseudo-inverse of the base map B (full mode; ``B @ Bpinv == I``).
+        Pseudo-inverse of the base map B (full mode; ``B @ Bpinv == I``); mode "arm": followed
+        by ``pinv(B) @ payload_basis``, so the payload block enters the model through B.
     sigma0 : (p,)
         ``B pi0`` (full mode; zeros(10) in payload mode).
     pbasis : (p, 10)
@@ -145,7 +148,8 @@ I_N_ROWS = 13  # rows (joints 0 .. n_rows-1) that carry information
 I_MOMENTUM = 14  # 1: the regression in momentum form (payload mode)
 I_MIN_ROWS = 15  # rows whose short average must exceed (threshold / 2)^2 times their level for an alarm
 I_FAST = 16  # 1: the fast average may also raise an alarm
-N_I = 17
+I_RESET_PAYLOAD = 17  # mode "arm": an alarm sets the payload block (theta's last ten) to zero
+N_I = 18
 
 # float slots of EstCfg.floats
 F_LAM0 = 0
@@ -368,6 +372,10 @@ def _filtered_signals(c, s, i, q, qd, tau, w):  # pragma: no cover - compiled
         for k in range(4 * n):
             s.u_last[i, k] = u[k]
         cnt[C_SINCE_BAD] = min(cnt[C_SINCE_BAD] + 1, BIG)
+    if c.ints[I_MOMENTUM] == 1 and c.mode == MODE_FULL:
+        _arm_momentum_channels(c, s, i, start or cnt[C_RESTART] == 1, w)
+        cnt[C_RESTART] = 0
+        return cnt[C_SINCE_BAD] > c.ints[I_TAINT]
     if c.ints[I_MOMENTUM] == 1:
         _momentum_channels(c, s, i, start or cnt[C_RESTART] == 1, w)
         cnt[C_RESTART] = 0
@@ -456,6 +464,71 @@ def _momentum_channels(c, s, i, restart, w):  # pragma: no cover - compiled
             phim[r, k] = y[2 * n + 10 * r + k]
 
 
+def arm_momentum_channels(n: int) -> int:
+    """Filter channels of mode "arm" in momentum form, n joints: torque (n), every link's
+    ``G1 py + G0 wy`` (10 n per link), viscous, Coulomb and armature columns (n each)."""
+    return 4 * n + 10 * n * n
+
+
+@njit(cache=True)
+def _arm_momentum_channels(c, s, i, restart, w):  # pragma: no cover - compiled
+    """Mode "arm" in momentum form: the whole base regression ``w.phi (n, p)``, ``w.y (n,)``.
+
+    ``G0 tau = G1 (Y_p sigma) + G0 (Y_w sigma)`` for the momentum form of every link
+    (:func:`momentum_form_in` once per link), viscous ``G0 qd``, Coulomb ``G0 sgn(qd)`` and
+    armature ``G1 qd`` columns, the payload's ten columns those of link ``jp`` through ``pmap``.
+    Exact for any parameters and any tau_f; on ``restart`` the filters start afresh as in
+    :func:`_momentum_channels` (momentum channels in steady state, the others at rest).
+    """
+    u = w.u
+    n = w.ym.shape[0]
+    nch = 4 * n + 10 * n * n
+    u1 = np.zeros(nch)
+    u0 = np.zeros(nch)
+    y = np.empty(nch)
+    pm, wv = np.empty(n), np.empty(n)
+    py, wy = np.empty((n, 10)), np.empty((n, 10))
+    q, qd = u[:n], u[n : 2 * n]
+    for r in range(n):
+        u0[r] = u[2 * n + r]
+    for j in range(n):
+        momentum_form_in(c.ch, c.pi0[: 10 * n], j, q, qd, w.chain, w.a2, pm, wv, py, wy)
+        for r in range(n):
+            for k in range(10):
+                ch = n + (j * n + r) * 10 + k
+                u1[ch] = py[r, k]
+                u0[ch] = wy[r, k]
+    f0 = n + 10 * n * n
+    for r in range(n):
+        u0[f0 + r] = qd[r]
+        u0[f0 + n + r] = u[3 * n + r]
+        u1[f0 + 2 * n + r] = qd[r]
+    xf = s.xf[i]
+    if restart:
+        for ch in range(nch):
+            for m in range(c.xm1.shape[0]):
+                xf[ch, m] = u1[ch] * c.xm1[m]
+    _summed_channels(c.Am, c.Bm, c.Cm, c.Dm, xf, u1, u0, y)
+    phi, yy = w.phi, w.y
+    pb = c.indep.shape[0]
+    p = phi.shape[1]
+    for r in range(n):
+        yy[r] = y[r]
+        for a in range(pb):
+            col = c.indep[a]
+            if col < 10 * n:
+                phi[r, a] = y[n + ((col // 10) * n + r) * 10 + col % 10]
+            else:
+                kind = (col - 10 * n) // n
+                jj = (col - 10 * n) % n
+                phi[r, a] = y[f0 + kind * n + r] if jj == r else 0.0
+        for k in range(p - pb):
+            acc = 0.0
+            for m in range(10):
+                acc += y[n + (c.jp * n + r) * 10 + m] * c.pmap[m, k]
+            phi[r, pb + k] = acc
+
+
 @njit(cache=True, inline="always")
 def _payload_rows(c, link, known, phi, y):  # pragma: no cover - compiled
     """Payload mode: ``phi = link @ pmap`` (the link's columns in the payload's parameters) and
@@ -475,6 +548,8 @@ def _regression(c, qf, qdf, qddf, sf, tf, ym, phim, phi, y, w):  # pragma: no co
     ``w`` (:class:`EstWork`) its scratch."""
     n = qf.shape[0]
     p = phi.shape[1]
+    if c.mode == MODE_FULL and c.ints[I_MOMENTUM] == 1:  # written by _arm_momentum_channels
+        return
     if c.mode == MODE_PAYLOAD and c.ints[I_MOMENTUM] == 1:
         for r in range(n):
             y[r] = tf[r]
@@ -492,9 +567,11 @@ def _regression(c, qf, qdf, qddf, sf, tf, ym, phim, phi, y, w):  # pragma: no co
         return
     W = w.W
     regressor(c.ch, qf, qdf, qddf, W)
+    pb = c.indep.shape[0]
+    base = 10 * c.jp
     for r in range(n):
         y[r] = tf[r]
-        for k in range(p):
+        for k in range(pb):
             col = c.indep[k]
             if col < 10 * n:
                 phi[r, k] = W[r, col]
@@ -509,6 +586,13 @@ def _regression(c, qf, qdf, qddf, sf, tf, ym, phim, phi, y, w):  # pragma: no co
                     phi[r, k] = sf[r]
                 else:
                     phi[r, k] = qddf[r]
+        # mode "arm": the payload's ten columns after the arm's base ones (the payload link's
+        # columns through pmap, as in payload mode)
+        for k in range(p - pb):
+            acc = 0.0
+            for m in range(10):
+                acc += W[r, base + m] * c.pmap[m, k]
+            phi[r, pb + k] = acc
 
 
 @njit(cache=True)
@@ -672,6 +756,10 @@ def _alarm(c, s, i, k):  # pragma: no cover - compiled
     ints, fl = c.ints, c.floats
     cnt = s.cnt[i]
     _reopen(c, s.P[i])
+    if ints[I_RESET_PAYLOAD] == 1:  # a new payload: nothing known of it but its prior
+        p = s.theta.shape[1]
+        for k in range(p - 10, p):
+            s.theta[i, k] = 0.0
     cnt[C_ALARMS] += 1
     cnt[C_SINCE_ALARM] = 0
     cnt[C_LAST_ALARM] = k

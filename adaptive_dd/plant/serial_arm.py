@@ -152,6 +152,9 @@ class SerialArm:
         Default disk radius [m] of a payload given by mass alone.
     friction, friction_velocity, stribeck_ratio, stribeck_velocity
         The simulated plant's friction law, as on :class:`adaptive_dd.plant.arm.Arm`.
+    payload_capacity : float or None
+        Rated payload [kg] (``[arm] payload_capacity``); sizes the estimator's re-opening on a
+        change alarm (None: the detector's generic size).
     repair_inertia : bool
         Repair chain links whose URDF inertia is not a rigid body's
         (:func:`adaptive_dd.plant.urdf.read_urdf`); see :attr:`urdf_notes`.
@@ -175,6 +178,7 @@ class SerialArm:
     stribeck_ratio: float = 1.5
     stribeck_velocity: float = 0.1
     repair_inertia: bool = False
+    payload_capacity: float | None = None
     _cache: dict = field(default_factory=dict, repr=False, compare=False)
 
     def __post_init__(self) -> None:
@@ -210,6 +214,9 @@ class SerialArm:
             raise ParameterError(
                 f"SerialArm.payload_radius must be in [0, 10] m, got {self.payload_radius!r}"
             )
+        cap = self.payload_capacity
+        if cap is not None and not (_is_num(cap) and 0 < cap <= 1e4):
+            raise ParameterError(f"SerialArm.payload_capacity must be in (0, 1e4] kg or None, got {cap!r}")
         if self.friction not in _FRICTION_LAWS:
             raise ParameterError(f"SerialArm.friction must be one of {_FRICTION_LAWS}, got {self.friction!r}")
         for name in ("friction_velocity", "stribeck_velocity"):
@@ -537,6 +544,7 @@ class SerialArm:
             "sigma": self.sigma.tolist(),
             "sigma_names": list(self.sigma_names),
             "payload_radius": self.payload_radius,
+            "payload_capacity": self.payload_capacity,
             "friction": self.friction,
             "friction_velocity": self.friction_velocity,
             "stribeck_ratio": self.stribeck_ratio,
@@ -560,6 +568,7 @@ class SerialArm:
             self.payload_radius,
             self.friction,
             self.friction_params,
+            self.payload_capacity,
             self.repair_inertia,
         )
 
@@ -583,6 +592,7 @@ URDF_ARM_KEYS = (
     "encoder_counts",
     "dac_bits",
     "payload_radius",
+    "payload_capacity",
     "general",
     "repair_inertia",
 )
@@ -596,12 +606,13 @@ def urdf_arm_from_table(src: str, table: dict, plant_kw: dict):
     ``payload_frame`` (a link), ``gravity = [x, y, z]`` (default ``[0, 0, -9.81]``),
     per-joint lists ``viscous``, ``coulomb``, ``armature``, ``torque_limit``,
     ``encoder_counts``, and ``dac_bits``, ``payload_radius``, ``repair_inertia`` (repair a
-    chain link's inertia that is not a rigid body's, reported: :func:`adaptive_dd.plant.urdf.read_urdf`);
-    ``general`` is read by :func:`adaptive_dd.plant.arm.arm_from_tables`, which turns a URDF of
-    the paper's kind of two-link arm into an :class:`~adaptive_dd.plant.arm.Arm` (the closed-form
-    fast path, :func:`~adaptive_dd.plant.arm.as_two_link`) unless ``general = true``.
-    ``plant_kw``: the ``[plant]`` settings of the general model (LuGre's are the two-link arm's:
-    not here).
+    chain link's inertia that is not a rigid body's, reported: :func:`adaptive_dd.plant.urdf.read_urdf`),
+    ``payload_capacity`` (the rated payload [kg]: the size of the estimator's re-opening,
+    :mod:`adaptive_dd.identification.serial_online`); ``general`` is read by
+    :func:`adaptive_dd.plant.arm.arm_from_tables`, which turns a URDF of the paper's kind of
+    two-link arm into an :class:`~adaptive_dd.plant.arm.Arm` (the closed-form fast path,
+    :func:`~adaptive_dd.plant.arm.as_two_link`) unless ``general = true``. ``plant_kw``: the
+    ``[plant]`` settings of the general model (LuGre's are the two-link arm's: not here).
 
     Raises
     ------
@@ -683,6 +694,13 @@ def urdf_arm_from_table(src: str, table: dict, plant_kw: dict):
         if not _is_num(r) or not 0 <= r <= 0.5:
             raise ScenarioError(f"{src}: key 'arm.payload_radius' must be in [0, 0.5] m, got {r!r}")
         kw["payload_radius"] = float(r)
+    if "payload_capacity" in table:
+        cap = table["payload_capacity"]
+        if not _is_num(cap) or not 0 < cap <= 1e4:
+            raise ScenarioError(
+                f"{src}: key 'arm.payload_capacity' must be the rated payload in (0, 1e4] kg, got {cap!r}"
+            )
+        kw["payload_capacity"] = float(cap)
     try:
         arm = replace(arm, **kw)
         _ = arm.sigma  # base parameters now, so that a singular model is reported here
