@@ -15,6 +15,8 @@ from pathlib import Path
 
 import numpy as np
 
+from adaptive_dd.cli_arm import describe_serial_arm
+from adaptive_dd.cli_arm import load_arm as _load_arm
 from adaptive_dd.errors import OutputError, ParameterError
 
 __all__ = ["EXIT_INTERNAL", "EXIT_INTERRUPTED", "EXIT_USAGE", "build_parser", "main"]
@@ -52,30 +54,18 @@ _SUBSTEPS = _number(int, 1, 100)
 
 
 def _sub(sub, name: str, **kw) -> argparse.ArgumentParser:
-    return sub.add_parser(name, allow_abbrev=False, **kw)
+    sp = sub.add_parser(name, allow_abbrev=False, **kw)
+    # also after the command (``adaptive-dd benchmark --debug``); SUPPRESS: not reset when absent
+    sp.add_argument("--debug", action="store_true", default=argparse.SUPPRESS, help=argparse.SUPPRESS)
+    return sp
 
 
-def _load_arm(path: str | None, repair_inertia: bool = False):
-    """The arm of a scenario file's ``[arm]`` and ``[plant]`` tables (SICE arm if ``path`` is None):
-    the model its controllers are given (``[model] from`` when there is one); ``repair_inertia``
-    sets ``arm.repair_inertia = true`` (identify's --repair-inertia)."""
-    from adaptive_dd.benchmark.scenario import model_and_plant, read_toml
-    from adaptive_dd.errors import ScenarioError
-    from adaptive_dd.plant.arm import Arm, arm_from_tables
-    from adaptive_dd.plant.uncertainty import PLANT_TRUTH_KEYS
-
-    if path is None:
-        return Arm.sice()
-    if not Path(path).is_file():
-        raise ScenarioError(f"{path}: no such scenario file")
-    data = read_toml(Path(path))
-    table = data.get("arm")
-    if repair_inertia and isinstance(table, dict):
-        table = {**table, "repair_inertia": True}
-    plant = data.get("plant")
-    law = {k: v for k, v in plant.items() if k not in PLANT_TRUTH_KEYS} if isinstance(plant, dict) else plant
-    arm = arm_from_tables(table, law, str(path))
-    return model_and_plant(str(path), arm, plant if isinstance(plant, dict) else None, data.get("model"))[0]
+def _refuse(args: argparse.Namespace, options: tuple[str, ...], why: str) -> None:
+    """A :class:`ParameterError` naming the first of ``options`` given on the command line and
+    ``why`` it does not apply (an option that does not apply is never silently ignored)."""
+    given = [o for o in options if o in getattr(args, "given", ())]
+    if given:
+        raise ParameterError(f"{', '.join(given)}: {why}")
 
 
 def _cmd_check(args: argparse.Namespace) -> int:
@@ -135,16 +125,27 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
         raise ParameterError(f"run too large: {est}; reduce --duration or --seeds")
     if est.large:
         print(f"estimate: {est}", file=sys.stderr)
-    outputs = OutputSet(args.out)
-    if args.arm:
-        from adaptive_dd.plant.serial_arm import SerialArm
+    arm = _load_arm(args.arm)
+    from adaptive_dd.plant.serial_arm import SerialArm
 
-        if isinstance(_load_arm(args.arm), SerialArm):  # N joints: identification records (cli_serial)
-            from adaptive_dd.cli_serial import simulate_serial
+    if isinstance(arm, SerialArm):  # N joints: identification records (cli_serial)
+        from adaptive_dd.cli_serial import simulate_serial
 
-            with outputs:
-                return simulate_serial(args, args.arm, outputs)
-    with outputs:
+        _refuse(
+            args,
+            ("--no-saturate",),
+            f"does not apply to an arm from a URDF (the {arm.n_joints}-joint arm of {args.arm}): its "
+            "computed-torque record is always limited to the arm's torque limits",
+        )
+        with OutputSet(args.out) as outputs:
+            return simulate_serial(args, args.arm, outputs)
+    _refuse(
+        args,
+        ("--com", "--plant"),
+        f"apply to an arm from a URDF only; the {'two-link arm of ' + args.arm if args.arm else 'SICE arm'} "
+        "runs the paper's Table 2 experiment on its own plant (the payload a disk centred on the tip)",
+    )
+    with OutputSet(args.out) as outputs:
         return _simulate(args, n, outputs)
 
 
@@ -616,33 +617,33 @@ def _cmd_validate(args: argparse.Namespace) -> int:
 
     if isinstance(sc.arm, SerialArm):
         print(describe_serial_arm(sc.arm))
-    return 0
+    from adaptive_dd.benchmark.preflight import preflight, resolved_settings, torque_peaks
 
+    for line in resolved_settings(sc):
+        print(line)
 
-def describe_serial_arm(arm) -> str:
-    """What ``validate`` prints of a URDF arm: joints, base parameters, payload subspace."""
-    lines = [f"# arm: {arm.urdf} ({arm.n_joints} joints, payload frame '{arm.payload_frame}')"]
-    lim = arm.position_limits
-    for j, name in enumerate(arm.joint_names):
-        lines.append(
-            f"#   joint{j + 1} {name}: limits [{lim[j, 0]:.4g}, {lim[j, 1]:.4g}], velocity "
-            f"{arm.velocity_limits[j]:.4g}, effort {arm.actuator.torque_limit[j]:.4g}, viscous "
-            f"{arm.viscous[j]:.4g}, Coulomb {arm.coulomb[j]:.4g}, armature {arm.armature[j]:.4g}"
+    peak, _, _ = torque_peaks(sc)
+    limit = sc.arm.actuator.torque_limit
+    print(
+        "# peak |tau| along the reference (inverse dynamics, every payload): "
+        + ", ".join(
+            f"joint{j + 1} {peak[j]:.4g} N m ({peak[j] / limit[j]:.0%} of its limit)"
+            for j in range(peak.size)
         )
-    if arm.locked:
-        lines.append(f"#   locked at 0 (off the chain): {', '.join(arm.locked)}")
-    lines.append(f"# base parameters: {arm.base.count} of {13 * arm.n_joints} standard")
-    for k, (name, v) in enumerate(zip(arm.sigma_names, arm.sigma, strict=True)):
-        lines.append(f"#   sigma[{k}] = {v:.6g}: {name}")
-    if arm.base.unidentifiable:
-        lines.append(f"# no torque depends on: {', '.join(arm.base.unidentifiable)}")
-    names = ("m", "mx", "my", "mz", "Ixx", "Ixy", "Iyy", "Ixz", "Iyz", "Izz")
-    seen = [n for n, ok in zip(names, arm.payload_identifiable, strict=True) if ok]
-    lines.append(
-        f"# payload subspace: rank {arm.payload_rank} of 10; determined by the base parameters: "
-        f"{', '.join(seen)}"
     )
-    return "\n".join(lines)
+    problems, warnings = preflight(sc)
+    for w in warnings:
+        print(f"adaptive-dd validate: warning: {w}", file=sys.stderr)
+    if problems:
+        print(f"adaptive-dd validate: {len(problems)} problem(s) the run would meet:", file=sys.stderr)
+        for p in problems:
+            print(f"  {p}", file=sys.stderr)
+        return 1
+    print(
+        f"# checked: the reference within the arm's position and velocity limits (torque: "
+        f"{'see the warning' if warnings else 'within'}); {len(sc.controllers)} controller(s) built"
+    )
+    return 0
 
 
 def _cmd_sweep(args: argparse.Namespace) -> int:
@@ -664,9 +665,26 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
         f"{len(res.table)} rows ({res.failed_rows} failed), {res.ran} tasks run, {res.reused} reused; "
         f"wrote {res.table_path}" + "".join(f", {p}" for p in res.heatmaps)
     )
-    for msg, count in failed.value_counts().head(5).items():
-        print(f"  failed rows: {count} x {msg}")
-    if sweep.heatmap:
+    if res.failed_rows:
+        n_tasks = res.table.loc[res.table["failed"], "task"].nunique()
+        print(
+            f"{'error' if res.failed_rows == len(res.table) else 'warning'}: {res.failed_rows} of "
+            f"{len(res.table)} rows failed (in {n_tasks} task(s)); why:",
+            file=sys.stderr,
+        )
+        for msg, count in failed.value_counts().head(5).items():
+            print(f"  {count} rows: {msg}", file=sys.stderr)
+    if res.failed_rows == len(res.table):
+        print("every row failed: no heat map drawn; fix the cause above and rerun", file=sys.stderr)
+        return 1
+    if sweep.heatmap and not res.heatmaps:
+        hm = sweep.heatmap
+        print(
+            f"no heat map: no grid point has a seed where both {hm['adaptive']} and {hm['floor']} finished "
+            f"segment {hm['segment']}",
+            file=sys.stderr,
+        )
+    elif sweep.heatmap:
         from adaptive_dd.sweep import ratio_medians
 
         hm = sweep.heatmap
@@ -938,7 +956,9 @@ def _user_message(exc: BaseException) -> str:
 def main(argv: list[str] | None = None) -> int:
     """Run the CLI; returns the exit code (0 ok, 1 failed check, 2 user error, 3 internal error)."""
     parser = build_parser()
+    argv = sys.argv[1:] if argv is None else list(argv)
     args = parser.parse_args(argv)
+    args.given = frozenset(a.split("=", 1)[0] for a in argv if a.startswith("--"))
     try:
         return int(args.func(args))
     except KeyboardInterrupt:

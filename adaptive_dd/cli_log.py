@@ -63,7 +63,8 @@ def validate_identification(path) -> int:
         A table other than ``[arm]``, ``[plant]``, ``[record]`` (a benchmark's tables do not
         belong here), or what :func:`adaptive_dd.record.record_spec` refuses.
     """
-    from adaptive_dd.cli import _load_arm, describe_serial_arm
+    from adaptive_dd.cli_arm import describe_serial_arm
+    from adaptive_dd.cli_arm import load_arm as _load_arm
     from adaptive_dd.errors import ScenarioError
     from adaptive_dd.io import read_toml
     from adaptive_dd.plant.serial_arm import SerialArm

@@ -8,6 +8,7 @@ when a scenario's arm is a :class:`~adaptive_dd.plant.serial_arm.SerialArm`);
 from __future__ import annotations
 
 import argparse
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -103,20 +104,19 @@ def simulate_serial(args: argparse.Namespace, scenario_path: str, outputs) -> in
 def cmd_excite(args: argparse.Namespace) -> int:
     """``adaptive-dd excite --arm SCENARIO``: design an exciting trajectory; its bound beside a multi-sine."""
     from adaptive_dd.benchmark.scenario import load_scenario
-    from adaptive_dd.errors import ScenarioError
     from adaptive_dd.identification.excitation import (
         ExcitationLimits,
         design_excitation,
         multisine,
         reference_toml,
     )
-    from adaptive_dd.outputs import atomic_write
+    from adaptive_dd.outputs import atomic_write, check_output_file
     from adaptive_dd.plant.serial_arm import SerialArm
 
-    sc = load_scenario(args.arm)
-    arm = sc.arm
+    arm = load_scenario(args.arm).arm
     if not isinstance(arm, SerialArm):
-        raise ScenarioError(f"{args.arm}: excite needs an [arm] from a URDF (urdf = ... or robot = ...)")
+        arm = _general_arm(args.arm)
+    out = check_output_file(args.out)  # before the design, not after it
     lim = ExcitationLimits.of_arm(arm, acceleration=args.acceleration, margin=args.margin)
     plain = multisine(arm, lim, args.harmonics, args.f0)
     best, res = design_excitation(
@@ -138,19 +138,43 @@ def cmd_excite(args: argparse.Namespace) -> int:
     print(f"{'trajectory':<18} {'worst bound':>12}  {'worst base parameter':<{NAME_WIDTH}} {'median':>9}")
     for label, (worst, name, med) in rows.items():
         print(f"{label:<18} {100 * worst:11.3g}%  {_short(name):<{NAME_WIDTH}} {100 * med:8.3g}%")
-    ratio = rows["plain multi-sine"][0] / rows["designed"][0]
-    print(
-        f"the designed trajectory shrinks the worst bound {ratio:.1f}x (Cramér-Rao std of the segmented "
-        "output "
-        f"error on a {args.duration} s record tracking it, relative to each parameter's magnitude)"
-    )
+    bad = [label for label, (worst, _, _) in rows.items() if not np.isfinite(worst)]
+    if bad:  # said, not printed as a ratio of NaNs
+        print(
+            f"warning: the bound of the {' and '.join(bad)} record is not finite: the identification "
+            f"model's sensitivities diverge along it (a stiff friction model at T = 1 ms, or a record "
+            "that leaves the arm's range): the two cannot be compared",
+            file=sys.stderr,
+        )
+    else:
+        ratio = rows["plain multi-sine"][0] / rows["designed"][0]
+        print(
+            f"the designed trajectory shrinks the worst bound {ratio:.1f}x (Cramér-Rao std of the "
+            f"segmented output error on a {args.duration} s record tracking it, relative to each "
+            "parameter's magnitude)"
+        )
     text = reference_toml(best.reference(ramp=args.ramp), f"designed by adaptive-dd excite --arm {args.arm}")
-    out = Path(args.out)
-    out.parent.mkdir(parents=True, exist_ok=True)
     with atomic_write(out) as fh:
         fh.write(_replace_reference(Path(args.arm).read_text(), text))
     print(f"wrote {out} (the scenario with the designed [reference])")
     return 0
+
+
+def _general_arm(path: str):
+    """The scenario's URDF arm as the general model (a two-link URDF of the paper's kind loads as
+    the closed forms' :class:`~adaptive_dd.plant.arm.Arm`, which has no URDF to excite)."""
+    from adaptive_dd.benchmark.scenario import read_toml
+    from adaptive_dd.errors import ScenarioError
+    from adaptive_dd.plant.arm import arm_from_tables
+
+    data = read_toml(Path(path))
+    table = data.get("arm")
+    if not (isinstance(table, dict) and ("urdf" in table or "robot" in table)):
+        raise ScenarioError(
+            f"{path}: excite needs an [arm] from a URDF (urdf = ... or robot = ...); for the paper's "
+            'arm use robot = "sice_arm"'
+        )
+    return arm_from_tables({**table, "general": True}, data.get("plant"), str(path))
 
 
 def _replace_reference(src: str, table: str) -> str:

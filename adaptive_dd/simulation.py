@@ -11,7 +11,8 @@
         meas = sim.step(tau)
     sim.q_true, sim.sigma_true, sim.payload_mass   # the truth, for analysis
 
-It is the same simulator, noise and payload schedule as trial ``seed_index`` of
+It works on any arm (the two-link arm or an arm from a URDF: ``q, tau`` then have one entry
+per joint) and is the same simulator, noise and payload schedule as trial ``seed_index`` of
 ``adaptive-dd benchmark`` on that scenario; :func:`run_trial` runs a controller object
 over it and returns a result of the benchmark's kind.
 """
@@ -27,6 +28,7 @@ from adaptive_dd.benchmark.runner import run_benchmark
 from adaptive_dd.benchmark.scenario import Scenario, load_scenario
 from adaptive_dd.benchmark.trials import payload_schedule, sensor_of, trial_rngs
 from adaptive_dd.errors import SignalError
+from adaptive_dd.plant.arm import Arm
 from adaptive_dd.plant.simulator import ArmSimulator
 
 __all__ = ["Measurement", "Simulation", "run_trial"]
@@ -35,7 +37,9 @@ Array = NDArray[np.float64]
 
 
 class Measurement(NamedTuple):
-    """What a controller sees at sample k: time [s], measured ``q, qd (2,)`` and the reference."""
+    """What a controller sees at sample k: time [s], measured ``q, qd (n,)`` and the reference
+    ``q_d, qd_d, qdd_d (n,)`` (``n`` joints). After the last sample (``k == n_samples``) it is the
+    measurement of the final state and the reference continued to that time."""
 
     k: int
     t: float
@@ -46,8 +50,92 @@ class Measurement(NamedTuple):
     qdd_d: Array
 
 
+class _TwoLinkTrial:
+    """One trial of the two-link arm: :class:`~adaptive_dd.plant.simulator.ArmSimulator`."""
+
+    def __init__(self, sc: Scenario, seed_index: int, q0: Array, qd0: Array) -> None:
+        # one sample more than the run, so that the final state can be measured too (the
+        # generator fills in order: the first n_samples draws are the benchmark's)
+        self.sim = ArmSimulator(
+            1,
+            sc.n_samples + 1,
+            trial_rngs(sc.seed, [seed_index]),
+            arm=sc.arm,
+            payload=payload_schedule(sc),
+            sample_period=sc.sample_period,
+            substeps=sc.substeps,
+            sensor=sensor_of(sc),
+            q0=q0,
+            qd0=qd0,
+        )
+
+    @property
+    def k(self) -> int:
+        return self.sim.k
+
+    def measure(self) -> tuple[Array, Array]:
+        qm, qdm = self.sim.measure()
+        return qm[0], qdm[0]
+
+    def step(self, tau: Array) -> tuple[Array, NDArray[np.bool_]]:
+        applied, sat = self.sim.step(tau[None])
+        return applied[0], sat[0]
+
+    def truth(self) -> tuple[Array, Array, Array, float, bool]:
+        s = self.sim
+        return s.q[0].copy(), s.qd[0].copy(), s.sigma[0].copy(), float(s.mass[0]), bool(s.failed[0])
+
+
+class _ChainTrial:
+    """One trial of an N-joint arm: the closed loop's per-sample glue
+    (:func:`~adaptive_dd.closed_loop.glue.measure_batch`, :func:`~adaptive_dd.closed_loop.glue.apply_batch`),
+    the benchmark's Python path for one trial."""
+
+    def __init__(self, sc: Scenario, seed_index: int) -> None:
+        from adaptive_dd.closed_loop.noise import NoiseBlocks
+        from adaptive_dd.closed_loop.runner import _records, true_parameters
+        from adaptive_dd.closed_loop.types import io_of, plant_of, run_constants, true_models
+
+        self.sc = sc
+        self.rc, self.io, self.pl = run_constants(sc), io_of(sc), plant_of(sc, [seed_index])
+        _, self.ts, self.acc, self.rec = _records("trial", None, sc, self.rc, self.pl, 1, 1, False, "python")
+        self.seg, _, self.masses = true_parameters(sc)
+        # the trial's true base parameters per segment (its plant's draw, if the scenario has one)
+        self.sigmas = (true_models(self.pl)[0] @ sc.arm.base.B.T)[self.seg]
+        self.noise = NoiseBlocks(sc, [seed_index], 2 * sc.n_joints)
+        self.k, self._buf, self._at = 0, None, 0
+
+    def measure(self) -> tuple[Array, Array]:
+        from adaptive_dd.benchmark.types import CHUNK
+        from adaptive_dd.closed_loop.glue import measure_batch
+
+        if self._buf is None or self._at >= self._buf[0].shape[1]:
+            self._buf, self._at = self.noise.block(CHUNK), 0
+        noise, drop = self._buf
+        lost = drop[:, self._at] if drop.shape[1] else np.zeros(1, dtype=np.bool_)
+        qm, qdm, _, _ = measure_batch(self.io, self.ts, noise[:, self._at], lost)
+        self._at += 1
+        return qm[0], qdm[0]
+
+    def step(self, tau: Array) -> tuple[Array, NDArray[np.bool_]]:
+        from adaptive_dd.closed_loop.glue import apply_batch
+
+        applied, _ = apply_batch(
+            self.sc.arm.chain, self.rc, self.io, self.pl, self.ts, self.acc, self.rec, self.k, tau[None]
+        )
+        sat = self.rec.saturated[0, self.k].copy()
+        self.k += 1
+        return applied[0], sat
+
+    def truth(self) -> tuple[Array, Array, Array, float, bool]:
+        k = min(self.k, self.sc.n_samples - 1)
+        q, qd, failed = self.ts.q[0].copy(), self.ts.qd[0].copy(), bool(self.ts.failed[0])
+        return q, qd, self.sigmas[k].copy(), float(self.masses[k]), failed
+
+
 class Simulation:
-    """One arm of a scenario, stepped by the caller at the sample rate.
+    """One arm of a scenario (the two-link arm or any arm from a URDF), stepped by the caller
+    at the sample rate.
 
     Parameters
     ----------
@@ -61,76 +149,82 @@ class Simulation:
         self.scenario = scenario or load_scenario()
         self.seed_index = int(seed_index)
         sc = self.scenario
-        t = np.arange(sc.n_samples) * sc.sample_period
+        t = np.arange(sc.n_samples + 1) * sc.sample_period  # the final state's time too
         self._ref = sc.reference.sample(t)
-        self._sim: ArmSimulator | None = None
-        self.applied_torque = np.zeros(2)
-        self.saturated = np.zeros(2, dtype=bool)
+        self._trial: _TwoLinkTrial | _ChainTrial | None = None
+        self.applied_torque = np.zeros(sc.n_joints)
+        self.saturated = np.zeros(sc.n_joints, dtype=bool)
+
+    @property
+    def arm(self):
+        """The scenario's arm."""
+        return self.scenario.arm
+
+    @property
+    def n_joints(self) -> int:
+        return self.scenario.n_joints
 
     def reset(self) -> Measurement:
         """Start (again) at t = 0, on the reference, at rest if it is; return the first measurement."""
         sc = self.scenario
         q_d, qd_d, _ = self._ref
-        self._sim = ArmSimulator(
-            1,
-            sc.n_samples,
-            trial_rngs(sc.seed, [self.seed_index]),
-            arm=sc.arm,
-            payload=payload_schedule(sc),
-            sample_period=sc.sample_period,
-            substeps=sc.substeps,
-            sensor=sensor_of(sc),
-            q0=q_d[0],
-            qd0=qd_d[0],
-        )
+        if isinstance(sc.arm, Arm):  # the paper's arm: its closed forms
+            self._trial = _TwoLinkTrial(sc, self.seed_index, q_d[0], qd_d[0])
+        else:
+            self._trial = _ChainTrial(sc, self.seed_index)
+        self.applied_torque = np.zeros(sc.n_joints)
+        self.saturated = np.zeros(sc.n_joints, dtype=bool)
         return self._measure()
 
     def _measure(self) -> Measurement:
-        sim = self._sim
-        if sim.k >= sim.n_samples:
-            return Measurement(sim.k, sim.t, *(np.full(2, np.nan) for _ in range(5)))
-        qm, qdm = sim.measure()
-        k = sim.k
-        return Measurement(k, sim.t, qm[0], qdm[0], self._ref[0][k], self._ref[1][k], self._ref[2][k])
+        tr = self._trial
+        k = tr.k
+        qm, qdm = tr.measure()
+        return Measurement(k, k * self.scenario.sample_period, qm, qdm, *(r[k] for r in self._ref))
 
     def step(self, tau: ArrayLike) -> Measurement:
-        """Apply the torque command ``tau (2,)`` [N m] for one sample; return the next measurement."""
-        if self._sim is None:
+        """Apply the torque command ``tau (n,)`` [N m] for one sample; return the next measurement."""
+        if self._trial is None:
             raise SignalError("call reset() before step()")
         if self.done:
             raise SignalError(f"the scenario's {self.scenario.n_samples} samples are done; call reset()")
         tau = np.asarray(tau, dtype=float)
-        if tau.shape != (2,):
-            raise SignalError(f"tau must have shape (2,), got {tau.shape}")
-        applied, sat = self._sim.step(tau[None])
-        self.applied_torque, self.saturated = applied[0], sat[0]
+        n = self.scenario.n_joints
+        if tau.shape != (n,):
+            raise SignalError(f"tau must have shape ({n},) (one torque per joint), got {tau.shape}")
+        self.applied_torque, self.saturated = self._trial.step(tau)
         return self._measure()
+
+    def _truth(self):
+        if self._trial is None:
+            raise SignalError("call reset() first")
+        return self._trial.truth()
 
     @property
     def done(self) -> bool:
-        return self._sim is not None and self._sim.k >= self._sim.n_samples
+        return self._trial is not None and self._trial.k >= self.scenario.n_samples
 
     @property
     def failed(self) -> bool:
         """The arm diverged (non-finite or runaway) and was stopped."""
-        return bool(self._sim.failed[0])
+        return self._truth()[4]
 
     @property
     def q_true(self) -> Array:
-        return self._sim.q[0].copy()
+        return self._truth()[0]
 
     @property
     def qd_true(self) -> Array:
-        return self._sim.qd[0].copy()
+        return self._truth()[1]
 
     @property
     def sigma_true(self) -> Array:
-        """The true base parameters now, payload included (7,)."""
-        return self._sim.sigma[0].copy()
+        """The true base parameters now, payload included ``(p,)`` (7 on the two-link arm)."""
+        return self._truth()[2]
 
     @property
     def payload_mass(self) -> float:
-        return float(self._sim.mass[0])
+        return self._truth()[3]
 
 
 def run_trial(controller, scenario: Scenario | None = None, seed_index: int = 0, name: str | None = None):

@@ -10,9 +10,10 @@ Each finished task's rows are written atomically to ``OUT/cells/<key>.parquet``
 (``.csv`` without pyarrow), ``key`` a hash of the task, and reused by the next run:
 an interrupted sweep resumes. A trial that diverges gives rows with ``failed`` set
 from the segment where it failed on; a task that raises gives failed rows with the
-message. Neither stops the sweep. The final table ``OUT/results.parquet|csv`` has one
-row per grid point x controller x seed x segment; ``OUT/heatmap*.png`` shows the
-per-seed-median ratio of the adaptive controller's RMS error to the floor's
+message. Neither stops the sweep. A task whose every row failed is not kept in
+``OUT/cells``: the next run tries it again (after a fix, say). The final table
+``OUT/results.parquet|csv`` has one row per grid point x controller x seed x segment;
+``OUT/heatmap*.png`` shows the per-seed-median ratio of the adaptive controller's RMS error to the floor's
 (common random numbers: both ran on the same noise).
 """
 
@@ -72,12 +73,14 @@ ROW_COLUMNS = {
 """The columns of a task's rows and their dtypes."""
 
 
-def _make_controller(name: str, scenario: Scenario, settings: Mapping[str, Any] | None):
-    """The controller with the grid point's settings (as a scenario's ``[controllers.NAME]`` table)."""
-    from adaptive_dd.controllers import Gains, make_controller
+def _cell_scenario(scenario: Scenario, controller: str, settings: Mapping[str, Any] | None) -> Scenario:
+    """The scenario running ``controller`` alone, with its own ``[controllers.NAME]`` settings and
+    the grid point's over them: the benchmark then builds it as for any arm (two-link or URDF)."""
+    from adaptive_dd.benchmark.scenario_checks import freeze
 
-    gains = Gains(scenario.bandwidth, scenario.damping)
-    return make_controller(name, gains, dict(settings or {}), arm=scenario.arm)
+    opts = {**scenario.options(controller), **dict(settings or {})}
+    table = ((controller, freeze(opts)),) if opts else ()
+    return dataclasses.replace(scenario, controllers=(controller,), controller_options=table)
 
 
 def run_cell(
@@ -94,11 +97,12 @@ def run_cell(
     ----------
     scenario : Scenario
     controller : str
-        A built-in controller name.
+        A built-in controller name (for the scenario's arm: two-link or any arm from a URDF); the
+        scenario's ``[controllers.NAME]`` settings apply, ``settings`` over them.
     seed_indices : sequence of int
         Trial i uses the noise of ``(scenario.seed, seed_indices[i])``, as in a full run.
     settings : mapping, optional
-        Keyword arguments of the controller's factory (``adaptive_ct(gains, **settings)``).
+        Settings of the controller, as in a ``[controllers.NAME]`` table.
 
     Returns
     -------
@@ -111,15 +115,15 @@ def run_cell(
     from adaptive_dd.benchmark.metrics import per_seed_segment_metrics
     from adaptive_dd.benchmark.runner import run_benchmark
 
-    ctrl = _make_controller(controller, scenario, settings)
-    res = run_benchmark(scenario, progress=False, controllers={controller: ctrl}, seed_indices=seed_indices)
-    run = res.runs[controller]
+    scenario = _cell_scenario(scenario, controller, settings)
+    res = run_benchmark(scenario, progress=False, seed_indices=seed_indices)
+    (run,) = res.runs.values()
     per = per_seed_segment_metrics(res, run, recovery=False)  # NaN: the benchmark's failure rule
     T = scenario.sample_period
     rows = []
     for i, seed in enumerate(seed_indices):
         at = int(run.failed_at[i]) if run.failed[i] else -1
-        why = run.error or f"trial diverged at t = {at * T:.3f} s"
+        why = run.error or f"trial diverged at t = {at * T:.3f} s: {run.failed_why.get(i, '')}"
         for j, (start, end, mass) in enumerate(scenario.segments()):
             bad = bool(np.isnan(per["rms_error"][i, j]))
             rows.append(
@@ -255,6 +259,8 @@ class SweepResult:
         One row per grid point x controller x seed x segment.
     table_path : Path
     heatmaps : list of Path
+        Empty when no grid point has a ratio (every row failed, or no seed where both the
+        adaptive controller and the floor finished the heat map's segment).
     reused, ran : int
         Tasks read back from ``OUT/cells`` and tasks run now.
     failed_rows : int
@@ -283,7 +289,8 @@ def _client(scheduler: str | None, workers: int | None):
 
 
 def _run_tasks(todo: list[Task], cells_dir: Path, ext: str, client, progress: bool) -> dict[str, list]:
-    """Submit tasks, write each one's rows as it completes; rows of lost tasks (not cached)."""
+    """Submit tasks, write each one's rows as it completes; rows of lost tasks and of tasks whose
+    every row failed (not cached)."""
     from distributed import as_completed
     from tqdm.auto import tqdm
 
@@ -296,6 +303,9 @@ def _run_tasks(todo: list[Task], cells_dir: Path, ext: str, client, progress: bo
             rows = fut.result()
         except Exception as exc:  # a worker died or the task could not be sent
             lost[task.key] = failed_rows(task, f"task lost: {type(exc).__name__}: {exc}")
+            continue
+        if rows and all(r["failed"] for r in rows):  # not cached: the next run tries it again
+            lost[task.key] = rows
             continue
         _write_atomic(_typed(pd.DataFrame(rows, columns=list(ROW_COLUMNS))), cells_dir / f"{task.key}.{ext}")
     return lost
@@ -326,9 +336,10 @@ def run_sweep(
     progress : bool
         Show a progress bar over completed tasks.
     """
+    from adaptive_dd.outputs import check_output_dir
+
     out = Path(out)
-    cells_dir = out / "cells"
-    cells_dir.mkdir(parents=True, exist_ok=True)
+    cells_dir = check_output_dir(out / "cells")  # an unwritable folder is reported before the run
     ext = "parquet" if _have_parquet() else "csv"
     tasks, cells = plan_tasks(sweep)
     todo = [t for k, t in tasks.items() if not (cells_dir / f"{k}.{ext}").is_file()]
@@ -354,11 +365,12 @@ def run_sweep(
     table = _assemble(sweep, cells, cells_dir, ext, lost)
     path = _write_atomic(table, out / f"results.{ext}")
     maps = []
-    if sweep.heatmap:
+    if sweep.heatmap and not table["failed"].all():
         from adaptive_dd.sweep_plot import plot_ratio_heatmaps
 
         ratios = ratio_medians(table, sweep.heatmap, [a for a, _ in sweep.axes])
-        maps = plot_ratio_heatmaps(ratios, sweep.heatmap, [a for a, _ in sweep.axes], out)
+        if np.isfinite(ratios["ratio"]).any():  # never an empty heat map
+            maps = plot_ratio_heatmaps(ratios, sweep.heatmap, [a for a, _ in sweep.axes], out)
     return SweepResult(table, path, maps, reused, len(todo), int(table["failed"].sum()))
 
 

@@ -154,10 +154,18 @@ def _controllers(src: str, sw: dict, base: Scenario) -> tuple[str, ...]:
     ctrls = sw.get("controllers", list(base.controllers))
     if not isinstance(ctrls, list) or not ctrls or not all(isinstance(c, str) for c in ctrls):
         raise SweepError(f"{src}: key 'sweep.controllers' must be a non-empty list of names, got {ctrls!r}")
+    from adaptive_dd.closed_loop.controllers import SERIAL_CONTROLLERS
+    from adaptive_dd.plant.arm import Arm
+
+    two_link = isinstance(base.arm, Arm)
+    known = tuple(CONTROLLERS) if two_link else tuple(SERIAL_CONTROLLERS)
     for c in ctrls:
-        if c not in CONTROLLERS:
+        if c not in known:
+            kind = "the two-link arm" if two_link else f"this {base.n_joints}-joint arm"
+            if c not in {*CONTROLLERS, *SERIAL_CONTROLLERS}:
+                raise SweepError(f"{src}: key 'sweep.controllers': unknown controller {c!r}; known: {known}")
             raise SweepError(
-                f"{src}: key 'sweep.controllers': unknown controller {c!r}; known: {tuple(CONTROLLERS)}"
+                f"{src}: key 'sweep.controllers': controller {c!r} is not for {kind}; known for it: {known}"
             )
     if len(set(ctrls)) != len(ctrls):
         raise SweepError(f"{src}: key 'sweep.controllers' lists a controller twice: {ctrls}")

@@ -23,7 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
-from adaptive_dd.benchmark.metrics import FALSE_ALARM_WINDOW, compute_metrics
+from adaptive_dd.benchmark.metrics import compute_metrics, missed_swap_counts
 from adaptive_dd.benchmark.runner import run_benchmark
 from adaptive_dd.benchmark.scenario import default_scenario_path, load_scenario
 from adaptive_dd.benchmark.scenario_checks import freeze
@@ -42,16 +42,6 @@ PLANTS = {
 
 def scenario_paths() -> list[Path]:
     return [default_scenario_path(), *sorted((ROOT / "scenarios").glob("*.toml"))]
-
-
-def missed_swaps(alarm_times: list[list[float]], swaps, failed) -> np.ndarray:
-    """Per trial, the swaps with no alarm within ``FALSE_ALARM_WINDOW`` after them."""
-    return np.array(
-        [
-            sum(1 for s in swaps if not any(0 <= x - s < FALSE_ALARM_WINDOW for x in tr)) if not f else 0
-            for tr, f in zip(alarm_times, failed, strict=True)
-        ]
-    )
 
 
 def detector_settings(pairs: list[str]) -> dict:
@@ -77,7 +67,7 @@ def evaluate(sc, plant: dict | None, seeds: int, detector: dict | None = None) -
     m = compute_metrics(res)
     a = m["controllers"]["adaptive_ct"]
     run = res.runs["adaptive_ct"]
-    miss = missed_swaps(run.alarm_times, sc.swap_times, run.failed)
+    miss = missed_swap_counts(run.alarm_times, sc.swap_times, run.failed)
     lines = []
     worst = {"mean": 0.0, "p90": 0.0, "max": 0.0, "delay_ratio": 0.0}
     for seg in a["segments"]:

@@ -17,8 +17,7 @@ import argparse
 
 import numpy as np
 
-from adaptive_dd.benchmark.metrics import mass_learning_time
-from adaptive_dd.closed_loop.information import com_learning_time
+from adaptive_dd.closed_loop.information import com_learning_time, mass_learning_time
 from adaptive_dd.identification.payload_information import (
     payload_com_information_time,
     payload_information_time,

@@ -121,3 +121,62 @@ def test_a_bare_class_without_base_runs_as_the_docs_say(tmp_path, capsys):
     )
     out = capsys.readouterr().out
     assert "failed trials: none" in out
+
+
+# ---- plug-ins on any arm (issue 27) ---------------------------------------------------------
+
+
+def test_the_n_joint_example_receives_the_arm_and_the_scenario():
+    from adaptive_dd.plant import SerialArm  # issue 27: this import failed
+
+    sc = load_scenario(EXAMPLES / "plugin_urdf.toml")
+    sc = dataclasses.replace(sc, seeds=1, duration=0.6, swap_times=(0.3,), swap_masses=(2.0,), swap_com=())
+    assert isinstance(sc.arm, SerialArm)
+    ctrl = make_controller(
+        "assumed_payload:AssumedPayload", options={"label": "x"}, arm=sc.arm, search=(EXAMPLES,), scenario=sc
+    )
+    assert ctrl.arm is sc.arm and ctrl.mass == 1.0  # the mean of the scenario's masses 0 and 2 kg
+    res = run_benchmark(sc, progress=False)
+    run = res.runs["assumed_2kg"]
+    assert run.engine == "python" and not run.failed.any() and not run.error
+    assert run.sigma_hat.shape == (1, sc.n_samples, sc.arm.base.count)
+    np.testing.assert_allclose(run.sigma_end[0, 0], sc.arm.sigma_with_payload(2.0))
+    with pytest.raises(ParameterError, match=r"\['arm'\] are given by the runner"):
+        make_controller("assumed_payload:AssumedPayload", options={"arm": 1}, arm=sc.arm, search=(EXAMPLES,))
+
+
+class LateEstimate(Controller):
+    """A PD whose estimate appears only after its first observe (issue 27: it was not reported)."""
+
+    name = "late"
+
+    def reset(self, n_trials, sample_period):
+        super().reset(n_trials, sample_period)
+        self.seen, self.est = 0, None
+
+    def command(self, q, qd, q_d, qd_d, qdd_d, sigma_true=None):
+        return 400.0 * (q_d - q) + 40.0 * (qd_d - qd)
+
+    def observe(self, q, qd, tau):
+        self.seen += 1
+        if self.seen == 3:
+            self.est = np.full(self.p, 1.5)
+
+    @property
+    def sigma_hat(self):
+        return self.est
+
+
+@pytest.mark.parametrize("arm_kind", ["two_link", "urdf"])
+def test_an_estimate_set_after_the_first_sample_is_reported(arm_kind):
+    sc = load_scenario() if arm_kind == "two_link" else load_scenario(EXAMPLES / "plugin_urdf.toml")
+    sc = dataclasses.replace(sc, seeds=2, duration=0.2, swap_times=(0.1,), swap_masses=(1.0,), swap_com=())
+    ctrl = LateEstimate()
+    ctrl.p = sc.arm.sigma.shape[0]
+    run = run_benchmark(sc, progress=False, controllers={"late": ctrl}).runs["late"]
+    assert not run.error and run.sigma_end is not None
+    assert np.all(run.sigma_end == 1.5)  # both segments' ends, both trials
+    assert np.isnan(run.sigma_hat[:, :2]).all() and np.all(run.sigma_hat[:, 2:] == 1.5)
+    # a controller that never estimates reports none
+    run = run_benchmark(sc, progress=False, controllers={"bare": BarePD()}).runs["bare"]
+    assert run.sigma_end is None and run.sigma_hat is None

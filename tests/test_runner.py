@@ -128,7 +128,7 @@ def test_engine_choice_is_checked(swap_scenario):
 
 
 def test_mass_learning_time_is_the_last_entry_into_the_band():
-    from adaptive_dd.benchmark.metrics import mass_learning_time
+    from adaptive_dd.closed_loop.information import mass_learning_time
 
     m = np.array([[0.0, 2.0, 3.2, 2.99, 3.01, 3.0], [0.0, 3.0, 3.0, 3.0, 3.0, 2.0]])
     t = mass_learning_time(m, 3.0, 0.0, 0.01)

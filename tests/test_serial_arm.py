@@ -11,8 +11,9 @@ import pytest
 from adaptive_dd.benchmark.scenario import parse_scenario
 from adaptive_dd.errors import ScenarioError, UrdfError
 from adaptive_dd.plant import Arm
+from adaptive_dd.plant.arm import as_two_link
 from adaptive_dd.plant.dynamics import regressor as paper_regressor
-from adaptive_dd.plant.serial_arm import SerialArm, as_two_link, payload_parameters
+from adaptive_dd.plant.serial_arm import SerialArm, payload_parameters
 from adaptive_dd.plant.urdf import read_urdf
 from adaptive_dd.robots import ROBOTS, robot_urdf
 

@@ -130,3 +130,70 @@ def test_one_trial_of_another_arm_uses_that_arm(tmp_path):
     while not sim.done:
         sim.step(np.zeros(2))
     np.testing.assert_allclose(sim.sigma_true, sc.arm.sigma_with_payload(2.0, sc.payload_radius))
+
+
+class _PD:
+    """A plain Python PD law (a plug-in's interface) for any number of joints."""
+
+    def __init__(self, kp: float, kd: float) -> None:
+        self.kp, self.kd = kp, kd
+
+    def reset(self, n_trials, T):
+        pass
+
+    def command(self, q, qd, q_d, qd_d, qdd_d):
+        return self.kp * (q_d - q) + self.kd * (qd_d - qd)
+
+    def observe(self, q, qd, tau):
+        pass
+
+
+@pytest.fixture(scope="module")
+def ur5_short():
+    from importlib import resources
+
+    sc = load_scenario(str(resources.files("adaptive_dd.scenarios").joinpath("ur5_tool_swap.toml")))
+    return dataclasses.replace(
+        sc, duration=0.3, swap_times=(0.1,), swap_masses=(2.0,), swap_com=(), swap_inertia=(), seeds=2
+    )
+
+
+def test_stepping_a_urdf_arm_by_hand_equals_its_benchmark_trial(ur5_short):
+    """Issue 27: Simulation(...).reset() raised 'arm must be an Arm, got SerialArm' on a URDF arm."""
+    sc = ur5_short
+    n = sc.n_joints
+    sim = Simulation(sc, seed_index=1)
+    meas = sim.reset()
+    assert meas.q.shape == (n,) and meas.q_d.shape == (n,)
+    ctrl = _PD(400.0, 40.0)
+    e_norm = []
+    while not sim.done:
+        e_norm.append(np.linalg.norm(meas.q_d - sim.q_true))
+        meas = sim.step(ctrl.command(meas.q, meas.qd, meas.q_d, meas.qd_d, meas.qdd_d))
+    assert not sim.failed and sim.payload_mass == 2.0
+    from adaptive_dd.closed_loop.types import plant_of, true_models
+
+    # this trial's plant (the scenario's [plant] draw for seed index 1), payload segment 1
+    truth = true_models(plant_of(sc, [1]))[0, 1] @ sc.arm.base.B.T
+    np.testing.assert_allclose(sim.sigma_true, truth)
+    run = run_trial(_PD(400.0, 40.0), sc, seed_index=1, name="pd").runs["pd"]
+    assert not run.failed[0]
+    np.testing.assert_allclose(run.e_norm[0], e_norm, rtol=1e-6, atol=1e-12)
+    # the final measurement is of the final state, not NaN
+    assert np.all(np.isfinite(meas.q)) and np.all(np.isfinite(meas.q_d)) and meas.k == sc.n_samples
+    np.testing.assert_allclose(meas.q, sim.q_true, atol=1e-3)
+    with pytest.raises(SignalError, match=rf"\({n},\)"):
+        sim.reset() and sim.step(np.zeros(2))
+
+
+def test_the_two_link_final_measurement_is_not_nan(short):
+    """Issue 27: the two-link arm's last measurement had q and q_d NaN."""
+    sim = Simulation(short)
+    meas = sim.reset()
+    while not sim.done:
+        meas = sim.step(np.zeros(2))
+    assert meas.k == short.n_samples
+    assert np.all(np.isfinite([*meas.q, *meas.qd, *meas.q_d, *meas.qd_d, *meas.qdd_d]))
+    np.testing.assert_allclose(meas.q, sim.q_true, atol=2e-3)  # sensor noise std 3e-4 rad
+    q_end = short.reference.sample(np.array([short.duration]))[0][0]
+    np.testing.assert_allclose(meas.q_d, q_end)

@@ -287,6 +287,7 @@ def test_failing_task_is_recorded_and_the_sweep_completes(tmp_path, client):
     assert not good["failed"].any() and np.isfinite(good["rms_error"]).all()
     assert res.failed_rows == len(bad)
     assert ratio_medians(t, sw.heatmap, [a for a, _ in sw.axes])["n_seeds"].eq(0).all()
+    assert sw.heatmap and res.heatmaps == []  # no ratio anywhere: no empty heat map drawn
 
 
 def test_ratio_is_per_seed_then_median():
@@ -415,3 +416,80 @@ def test_local_cluster_workers_are_single_threaded():
     finally:
         client.close()
         cluster.close()
+
+
+# ---- any arm; failures said ---------------------------------------------------------------
+
+URDF_BASE = """
+[arm]
+robot = "vertical3"
+[run]
+duration = 0.3
+controllers = ["ct_oracle", "adaptive_ct"]
+[reference]
+ramp = 0.2
+joint1 = { offset = 0.3, amplitude = [0.4, 0.1], frequency = [0.3, 0.9], phase = [0.0, 0.4] }
+joint2 = { offset = -0.6, amplitude = [0.5, 0.15], frequency = [0.4, 1.1], phase = [0.5, 0.0] }
+joint3 = { offset = 0.4, amplitude = [0.6, 0.2], frequency = [0.5, 1.3], phase = [0.0, 0.8] }
+[[payload]]
+at = 0.1
+mass = 1.0
+"""
+
+
+def test_a_cell_runs_on_a_urdf_arm_with_the_scenario_settings(tmp_path):
+    """Issue 27: every row of a sweep on a URDF arm failed with 'sigma must have shape (..., 7)'."""
+    base = URDF_BASE + "[controllers.adaptive_ct]\nboost_duration = 0.3\n"
+    text = SWEEP.replace("payload_mass = [1.0, 6.0]", "payload_mass = [2.0]")
+    sw = load_sweep(_write(tmp_path, text, base))
+    sc = sw.points[0].scenario
+    assert sc.n_joints == 3
+    rows = run_cell(sc, "ct_oracle", [0])
+    assert len(rows) == 2 and not any(r["failed"] for r in rows)
+    assert all(np.isfinite(r["rms_error"]) and r["error"] == "" for r in rows)
+    # the same numbers as the benchmark's trial of that seed
+    one = dataclasses.replace(sc, controllers=("ct_oracle",), controller_options=())
+    res = run_benchmark(one, progress=False, seed_indices=[0])
+    np.testing.assert_allclose(
+        [r["rms_error"] for r in rows], res.to_frame()["rms_error"].to_numpy(), rtol=1e-12
+    )
+    # the scenario's [controllers.adaptive_ct] table applies, the grid's settings over it
+    from adaptive_dd.sweep import _cell_scenario
+
+    cell = _cell_scenario(sc, "adaptive_ct", {"tau_f": 0.01})
+    assert cell.controllers == ("adaptive_ct",)
+    assert cell.options("adaptive_ct") == {"boost_duration": 0.3, "tau_f": 0.01}
+
+
+def test_a_two_link_only_controller_is_refused_on_a_urdf_arm(tmp_path):
+    text = SWEEP.replace('controllers = ["ct_oracle", "adaptive_ct"]', 'controllers = ["adaptive_ct_paper"]')
+    with pytest.raises(SweepError, match="controller 'adaptive_ct_paper' is not for this 3-joint arm"):
+        load_sweep(_write(tmp_path, text.replace("[grid]", "[grid]"), URDF_BASE))
+
+
+def test_cli_a_sweep_whose_rows_all_fail_exits_1_without_a_heat_map(tmp_path, capsys, monkeypatch):
+    """Issue 27: '72 rows (72 failed)' and exit code 0 with an empty heat map."""
+    import adaptive_dd.sweep as sweep_mod
+    from adaptive_dd.cli import main
+
+    def local(scheduler, workers):
+        cluster = distributed.LocalCluster(
+            n_workers=1, threads_per_worker=1, processes=False, dashboard_address=":0"
+        )
+        return distributed.Client(cluster), cluster
+
+    monkeypatch.setattr(sweep_mod, "_client", local)
+    text = SWEEP.replace("payload_mass = [1.0, 6.0]", "payload_mass = [1.0]").replace("0.08, 0.12", "0.12")
+    text = text.replace("seeds = 2", "seeds = 1")
+    text += "[grid.controller.adaptive_ct]\nbogus = [1]\n[grid.controller.ct_oracle]\nbogus = [2]\n"
+    out = tmp_path / "out"
+    assert main(["sweep", str(_write(tmp_path, text)), "--out", str(out), "--no-progress"]) == 1
+    cap = capsys.readouterr()
+    assert "error: 6 of 6 rows failed (in 2 task(s))" in cap.err and "bogus" in cap.err
+    assert "no heat map drawn" in cap.err and not list(out.glob("heatmap*"))
+    assert not list((out / "cells").iterdir())  # failed tasks are not cached: a rerun tries again
+    # partly failed: exit 0, and how many failed and why
+    text = text.replace("[grid.controller.ct_oracle]\nbogus = [2]\n", "")
+    assert main(["sweep", str(_write(tmp_path, text)), "--out", str(out), "--no-progress"]) == 0
+    cap = capsys.readouterr()
+    assert "warning: 3 of 6 rows failed (in 1 task(s)); why:" in cap.err and "bogus" in cap.err

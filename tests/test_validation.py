@@ -283,15 +283,22 @@ def test_sweep_and_arm_files_read_toml_like_scenarios(tmp_path):
 
 
 def test_fuzzer_small_configuration_finds_no_crash_and_no_meaningless_scenario():
-    """benchmarks/fuzz_scenarios.py in a small configuration (the README prints the 2000-mutation one)."""
-    import importlib.util
+    """benchmarks/fuzz_scenarios.py in a small configuration (the README prints the 2000-mutation
+    one), run as a user runs it (a script, not imported by its path)."""
+    import os
+    import re
+    import subprocess
+    import sys
     from pathlib import Path
 
-    path = Path(__file__).resolve().parent.parent / "benchmarks" / "fuzz_scenarios.py"
-    spec = importlib.util.spec_from_file_location("fuzz_scenarios", path)
-    fz = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(fz)
-    counts, examples = fz.fuzz(300, 7)
-    assert counts["crash"] == 0 and counts["meaningless accepted"] == 0, examples
+    root = Path(__file__).resolve().parent.parent
+    env = {**os.environ, "PYTHONPATH": str(root)}
+    script = root / "benchmarks" / "fuzz_scenarios.py"
+    out = subprocess.run(
+        [sys.executable, str(script), "--n", "300", "--seed", "7"], capture_output=True, text=True, env=env
+    )
+    assert out.returncode == 0, out.stderr
+    counts = {k: int(v) for k, v in re.findall(r"^  ([a-z ]+?)\s{2,}(\d+)$", out.stdout, re.M)}
+    assert counts["crash"] == 0 and counts["meaningless accepted"] == 0, out.stdout
     assert counts["error not naming the file"] == 0
     assert counts["precise error"] > 100 and counts["valid accepted"] > 20

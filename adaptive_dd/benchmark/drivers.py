@@ -118,6 +118,7 @@ def run_compiled(name, ctrl, spec: CompiledSpec, scenario, idx, reference, keep:
         run.skipped = es.n_skipped.copy()
     if adaptive and cfg.detector is not None:
         run.alarm_times = alarm_lists(alarms)
+    run.explain_failures(rc.max_error, rc.max_speed)
     return run
 
 

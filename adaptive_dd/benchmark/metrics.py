@@ -60,12 +60,16 @@ false_alarms_per_seed
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 from adaptive_dd.benchmark.provenance import provenance
-from adaptive_dd.benchmark.streaming import segment_bounds
-from adaptive_dd.benchmark.types import SETTLE, BenchmarkResult
+from adaptive_dd.benchmark.streaming import SETTLE, segment_bounds
 from adaptive_dd.plant.sampling import first_sample
+
+if TYPE_CHECKING:  # annotations only: types imports this module for BenchmarkResult.metrics()
+    from adaptive_dd.benchmark.types import BenchmarkResult
 
 __all__ = [
     "FALSE_ALARM_WINDOW",
@@ -77,6 +81,7 @@ __all__ = [
     "detection_delays",
     "error_trace",
     "false_alarm_counts",
+    "missed_swap_counts",
     "moving_rms",
     "per_seed_segment_metrics",
     "ratio_statistics",
@@ -159,9 +164,10 @@ def per_seed_segment_metrics(res: BenchmarkResult, run, recovery: bool = True) -
         from adaptive_dd.closed_loop.metrics import serial_segment_metrics
 
         out = serial_segment_metrics(res, run)
-        out["recovery_time"] = _recovery_times(run.e_norm, *_serial_bounds(sc), T)
-        out["recovery_time"][run.failed] = np.nan
-        return out
+        start, end = _serial_bounds(sc)
+        if recovery:
+            out["recovery_time"] = _recovery_times(run.e_norm, start, end, T)
+        return _blank_failed(res, run, out, end, key)
     start, end, settled = segment_bounds(sc.segments(), T, SETTLE)
     n, n_set = (end - start).astype(float), (end - settled).astype(float)
     acc = run.acc
@@ -178,6 +184,11 @@ def per_seed_segment_metrics(res: BenchmarkResult, run, recovery: bool = True) -
         out["recovery_time"] = _recovery_times(run.e_norm, start, end, T)
     if run.sigma_end is not None:
         out["mass_estimate"] = sc.arm.payload_mass_from_sigma(run.sigma_end)
+    return _blank_failed(res, run, out, end, key)
+
+
+def _blank_failed(res: BenchmarkResult, run, out: dict, end: np.ndarray, key) -> dict:
+    """NaN where the trial failed (:func:`segment_failed`, every arm's one rule); cached."""
     bad = segment_failed(run.failed, run.failed_at, end)
     if run.error:
         bad[:] = True
@@ -247,6 +258,17 @@ def false_alarm_counts(alarm_times, swaps) -> list[int]:
     ]
 
 
+def missed_swap_counts(alarm_times, swaps, failed) -> np.ndarray:
+    """Per trial, the swaps [s] with no alarm within ``FALSE_ALARM_WINDOW`` after them (0 for a
+    failed trial)."""
+    return np.array(
+        [
+            sum(1 for s in swaps if not any(0 <= x - s < FALSE_ALARM_WINDOW for x in tr)) if not f else 0
+            for tr, f in zip(alarm_times, failed, strict=True)
+        ]
+    )
+
+
 def detection_delays(alarm_times, swap: float) -> list[float | None]:
     """Per trial: the first alarm within ``FALSE_ALARM_WINDOW`` after ``swap``, less the swap [s]
     (None: missed)."""
@@ -298,6 +320,8 @@ def compute_metrics(res: BenchmarkResult) -> dict:
             "skipped_samples_per_seed": None if run.skipped is None else [int(x) for x in run.skipped],
             "segments": segs,
         }
+        if run.failed.any():  # seed, time and reason of each failed trial
+            out[name]["failures"] = run.failures(sc.sample_period, res.seed_indices or None)
     _add_seed_statistics(res, out, per)
     _add_information_times(res, out)
 
@@ -419,19 +443,6 @@ INFO_WINDOW = 1.0
 """[s] after a swap searched for the information-limited time."""
 
 
-def mass_learning_time(m_hat: np.ndarray, mass: float, removed: float, T: float, rel: float = 0.05):
-    """First time after which the estimated mass stays within ``rel`` of the truth (per row), NaN if never.
-
-    ``rel`` is taken of the payload that changed (``max(mass, removed)``), so a removal is judged
-    on the mass that left.
-    """
-    tol = rel * max(mass, removed)
-    outside = np.abs(m_hat - mass) > tol  # (n, N)
-    n = outside.shape[-1]
-    last = np.where(outside.any(axis=-1), n - 1 - np.argmax(outside[..., ::-1], axis=-1), -1)
-    return np.where(last < n - 1, (last + 1) * T, np.nan)
-
-
 def _median(x: list) -> float | None:
     v = np.asarray([np.nan if y is None else y for y in x], float)
     return float(np.nanmedian(v)) if np.isfinite(v).any() else None
@@ -445,6 +456,7 @@ def _add_information_times(res: BenchmarkResult, out: dict) -> None:
     only: the limit is the median over those seeds of the reference run (the oracle's if present;
     ``information_seeds``: how many), the learning times the median over a controller's kept
     seeds that did not fail (``learning_seeds``). The JSON and the report say how many seeds."""
+    from adaptive_dd.closed_loop.information import mass_learning_time
     from adaptive_dd.identification.fisher import mass_information_time
 
     sc = res.scenario

@@ -71,6 +71,12 @@ def format_report(metrics: dict, res: BenchmarkResult) -> str:
         if c["failed_trials"]
     ]
     lines.append("failed trials: " + (", ".join(fails) if fails else "none"))
+    for n, c in ctrls.items():
+        for f in c.get("failures", [])[:3]:
+            at = f"t = {f['t']:.3f} s" if f["t"] is not None else "before the first sample"
+            lines.append(f"  {n}, seed {f['seed']}, {at}: {f['why']}")
+        if len(c.get("failures", [])) > 3:
+            lines.append(f"  {n}: {len(c['failures']) - 3} more in metrics.json")
     drops = [f"{n}: {c['dropped_samples']}" for n, c in ctrls.items() if c.get("dropped_samples")]
     if drops:
         skips = [

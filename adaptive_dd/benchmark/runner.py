@@ -41,7 +41,15 @@ from adaptive_dd.controllers import Controller, Gains, controller_label, make_co
 from adaptive_dd.controllers.compiled_form import compiled_spec
 from adaptive_dd.errors import ParameterError
 
-__all__ = ["ENGINES", "MAX_ERROR", "SETTLE", "BenchmarkResult", "ControllerRun", "run_benchmark"]
+__all__ = [
+    "ENGINES",
+    "MAX_ERROR",
+    "SETTLE",
+    "BenchmarkResult",
+    "ControllerRun",
+    "run_benchmark",
+    "scenario_controller",
+]
 
 
 def run_benchmark(
@@ -95,16 +103,8 @@ def run_benchmark(
             bar.close()
         res.wall_time = time.perf_counter() - t0
         return res
-    gains = Gains(scenario.bandwidth, scenario.damping)
     if controllers is None:
-        ctrls = {}
-        for spec in scenario.controllers:
-            opts = scenario.options(controller_label(spec)) or scenario.options(spec)
-            src = Path(scenario.source)
-            search = (src.parent, Path.cwd()) if src.is_file() else (Path.cwd(),)
-            ctrls[controller_label(spec, opts)] = make_controller(
-                spec, gains, opts, arm=scenario.arm, search=search
-            )
+        ctrls = dict(scenario_controller(scenario, spec) for spec in scenario.controllers)
     else:
         ctrls = controllers
     idx = tuple(range(scenario.seeds)) if seed_indices is None else tuple(int(i) for i in seed_indices)
@@ -134,6 +134,29 @@ def run_benchmark(
         bar.close()
     res.wall_time = time.perf_counter() - t0
     return res
+
+
+def scenario_controller(scenario: Scenario, spec: str) -> tuple[str, Controller]:
+    """``(label, controller)`` of one entry of the scenario's controller list, built as the run
+    builds it (on either arm), with its ``[controllers.NAME]`` settings.
+
+    Raises
+    ------
+    ParameterError
+        An unknown name, a plug-in that does not import, an unknown or invalid setting.
+    """
+    from adaptive_dd.plant.serial_arm import SerialArm
+
+    if isinstance(scenario.arm, SerialArm):
+        from adaptive_dd.closed_loop.runner import make_controller_of
+
+        return make_controller_of(scenario, spec)
+    opts = scenario.options(controller_label(spec)) or scenario.options(spec)
+    src = Path(scenario.source)
+    search = (src.parent, Path.cwd()) if src.is_file() else (Path.cwd(),)
+    gains = Gains(scenario.bandwidth, scenario.damping)
+    ctrl = make_controller(spec, gains, opts, arm=scenario.arm, search=search, scenario=scenario)
+    return controller_label(spec, opts), ctrl
 
 
 def _progress(show: bool, total: int, name: str):

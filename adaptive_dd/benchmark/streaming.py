@@ -13,7 +13,10 @@ from numba import njit
 
 from adaptive_dd.plant.sampling import first_sample
 
-__all__ = ["accumulate_batch", "accumulate_trial", "segment_bounds"]
+SETTLE = 0.5
+"""[s] left out at the start of each segment for ``rms_error_settled``."""
+
+__all__ = ["SETTLE", "accumulate_trial", "segment_bounds"]
 
 
 def segment_bounds(
@@ -52,11 +55,3 @@ def accumulate_trial(acc, i, k, seg_start, seg_settled, e1, e2, tau, sat_mask): 
         acc.sum_e2_settled[i, s] += en2
     acc.e_norm[i, k] = en
     return s
-
-
-@njit(cache=True)
-def accumulate_batch(acc, k, seg_start, seg_settled, err, tau, sat):  # pragma: no cover
-    """:func:`accumulate_trial` for every trial: ``err, tau (n, 2)``, ``sat (n, 2)`` bool."""
-    for i in range(err.shape[0]):
-        m = (1 if sat[i, 0] else 0) | (2 if sat[i, 1] else 0)
-        accumulate_trial(acc, i, k, seg_start, seg_settled, err[i, 0], err[i, 1], tau[i], m)

@@ -15,6 +15,8 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import NDArray
 
+from adaptive_dd.benchmark.streaming import SETTLE  # a leaf: metrics needs it without this module
+
 if TYPE_CHECKING:
     from adaptive_dd.benchmark.scenario import Scenario
     from adaptive_dd.closed_loop.types import StreamedSums
@@ -24,8 +26,6 @@ __all__ = ["CHUNK", "ENGINES", "MAX_ALARMS", "MAX_ERROR", "SETTLE", "BenchmarkRe
 Array = NDArray[np.float64]
 MAX_ERROR = 3.0
 """Tracking error [rad] beyond which a trial counts as diverged."""
-SETTLE = 0.5
-"""[s] left out at the start of each segment for ``rms_error_settled``."""
 ENGINES = ("auto", "python", "compiled")
 CHUNK = 1024
 """Samples per block of drawn noise (and per call of the compiled loop)."""
@@ -60,6 +60,8 @@ class ControllerRun:
         the last good measurement, the estimator the NaN (skipped and counted).
     skipped : int (n_seeds,) or None
         Samples the controller's estimator skipped as non-finite.
+    failed_why : dict
+        Why each failed trial (by index) failed (:meth:`explain_failures`).
     """
 
     name: str
@@ -79,6 +81,40 @@ class ControllerRun:
     engine: str = "python"
     dropped: NDArray[np.int_] | None = None
     skipped: NDArray[np.int_] | None = None
+    failed_why: dict = field(default_factory=dict)
+
+    def explain_failures(self, max_error: float, max_speed: float) -> None:
+        """Say why every failed trial without a reason yet failed: the controller's error, else
+        from the error norm at the failed sample (the divergence rule's tracking error), else the
+        runaway rule. The Python path names a non-finite command itself, as it happens."""
+        for i in np.flatnonzero(self.failed):
+            i = int(i)
+            if i in self.failed_why:
+                continue
+            k = int(self.failed_at[i])
+            if self.error or k < 0:
+                self.failed_why[i] = self.error or "the controller failed"
+                continue
+            e = float(self.e_norm[i, k]) if k < self.e_norm.shape[1] else float("nan")
+            if e > max_error:
+                self.failed_why[i] = f"tracking error |e| = {e:.3g} rad, beyond max_error = {max_error:g} rad"
+            else:
+                self.failed_why[i] = (
+                    f"runaway: the arm's state became non-finite or a joint exceeded {max_speed:g} rad/s "
+                    f"(|e| = {e:.3g} rad)"
+                )
+
+    def failures(self, sample_period: float, seed_indices=None) -> list[dict]:
+        """``[{"seed", "t", "why"}]`` of the failed trials (``t`` [s] of the failed sample, None if
+        the controller failed before any)."""
+        idx = range(self.failed.size) if seed_indices is None else seed_indices
+        out = []
+        for i, seed in enumerate(idx):
+            if self.failed[i]:
+                k = int(self.failed_at[i])
+                t = round(k * sample_period, 9) if k >= 0 else None
+                out.append({"seed": int(seed), "t": t, "why": self.failed_why.get(i, self.error or "")})
+        return out
 
 
 @dataclass

@@ -296,15 +296,28 @@ class SlotineLi(SerialLaw):
     floor = "slotine_li_oracle"
     SETTINGS = frozenset({"gamma", "max_mass", "com_radius"})
 
+    def __init__(self, arm, bandwidth=40.0, damping: float = 1.0, **settings) -> None:
+        super().__init__(arm, bandwidth, damping, **settings)
+        where = f"controllers.{self.name}"
+        gamma = self.settings.get("gamma", DEFAULT_PAYLOAD_GAMMA)
+        if isinstance(gamma, np.ndarray):
+            gamma = gamma.tolist()
+        ok = isinstance(gamma, list | tuple) and all(_is_number(g) for g in gamma)
+        if not ok or len(gamma) != 10 or not all(g > 0 for g in gamma):
+            raise ParameterError(
+                f"{where}.gamma: 10 positive adaptation gains (the payload's m, m c, I), got {gamma!r}"
+            )
+        self.gamma = np.array(gamma, dtype=float)
+        for key, default in (("max_mass", 20.0), ("com_radius", 0.3)):
+            v = self.settings.get(key, default)
+            if not (_is_number(v) and v > 0):
+                raise ParameterError(f"{where}.{key}: a number > 0, got {v!r}")
+        self.max_mass = float(self.settings.get("max_mass", 20.0))
+        self.com_radius = float(self.settings.get("com_radius", 0.3))
+
     def law_config(self, sample_period):
         lam, k = self.gains.roots()
-        gamma = np.asarray(self.settings.get("gamma", DEFAULT_PAYLOAD_GAMMA), dtype=float)
-        if gamma.shape != (10,) or not np.all(gamma > 0):
-            raise ParameterError(f"controllers.{self.name}.gamma: 10 positive gains, got {gamma.tolist()}")
-        m_max = float(self.settings.get("max_mass", 20.0))
-        r = float(self.settings.get("com_radius", 0.3))
-        if not (m_max > 0 and r > 0):
-            raise ParameterError(f"controllers.{self.name}: max_mass and com_radius must be > 0")
+        m_max, r, gamma = self.max_mass, self.com_radius, self.gamma
         i_max = m_max * r * r * 2.0
         hi = np.array([m_max, *(m_max * r,) * 3, i_max, i_max / 2, i_max, i_max / 2, i_max / 2, i_max])
         lo = np.array([0.0, *(-m_max * r,) * 3, 0.0, -i_max / 2, 0.0, -i_max / 2, -i_max / 2, 0.0])
@@ -312,6 +325,24 @@ class SlotineLi(SerialLaw):
             sample_period, KIND_SLOTINE, MODEL_TRIAL, lam=lam, kd=k, adapt=True, gamma=gamma, lo=lo, hi=hi,
             com_radius=r,
         )  # fmt: skip
+
+
+def _estimator_table(name: str, settings: dict) -> dict:
+    """The ``estimator`` table with the detector's settings in it: ``detector = {...}`` (or
+    ``false``) is taken at the top of ``[controllers.NAME]`` as on the two-link arm, or inside
+    ``estimator``; both at once is an error."""
+    est = dict(settings.get("estimator", {}))
+    if "detector" in settings:
+        if "detector" in est:
+            raise ParameterError(
+                f"controllers.{name}: 'detector' given twice (at the top and in 'estimator'); keep one"
+            )
+        est["detector"] = settings["detector"]
+    return est
+
+
+def _is_number(x) -> bool:
+    return not isinstance(x, bool) and isinstance(x, int | float) and bool(np.isfinite(x))
 
 
 class AdaptiveCT(SerialLaw):
@@ -327,14 +358,18 @@ class AdaptiveCT(SerialLaw):
     (``benchmarks/boost_ablation.py``)."""
 
     name = "adaptive_ct"
-    SETTINGS = frozenset({"boost_bandwidth", "boost_duration", "estimator"})
+    SETTINGS = frozenset({"boost_bandwidth", "boost_duration", "estimator", "detector"})
+    BOOST_DURATION = 1.0
+    """[s] default ``boost_duration``; the two-link ``adaptive_ct`` keeps 0.2 s on purpose (its
+    estimator learns the paper's sigma within tens of ms; an N-joint payload's centre of mass
+    and inertia take a few hundred: see the class docstring)."""
 
     def __init__(self, arm, bandwidth=40.0, damping: float = 1.0, **settings) -> None:
         super().__init__(arm, bandwidth, damping, **settings)
         from adaptive_dd.identification import serial_online
 
         self._est = serial_online
-        est = dict(self.settings.get("estimator", {}))
+        est = _estimator_table(self.name, self.settings)
         det = est.get("detector", {})
         try:
             if det is False:
@@ -345,7 +380,7 @@ class AdaptiveCT(SerialLaw):
         except TypeError as exc:
             raise ParameterError(f"controllers.{self.name}.estimator: {exc}") from None
         self.boost_bandwidth = float(self.settings.get("boost_bandwidth", 300.0))
-        self.boost_duration = float(self.settings.get("boost_duration", 1.0))
+        self.boost_duration = float(self.settings.get("boost_duration", self.BOOST_DURATION))
         if not (self.boost_bandwidth > 0 and self.boost_duration >= 0):
             raise ParameterError(f"controllers.{self.name}: boost_bandwidth > 0 and boost_duration >= 0")
 

@@ -7,13 +7,26 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["COM_TOL", "INFO_WINDOW", "add_information_times", "com_learning_time"]
+__all__ = ["COM_TOL", "INFO_WINDOW", "add_information_times", "com_learning_time", "mass_learning_time"]
 
 INFO_WINDOW = 1.0
 """[s] after a swap searched for the information-limited time."""
 
 COM_TOL = 0.01
 """[m] the centre of mass counts as known within this distance."""
+
+
+def mass_learning_time(m_hat: np.ndarray, mass: float, removed: float, T: float, rel: float = 0.05):
+    """First time after which the estimated mass stays within ``rel`` of the truth (per row), NaN if never.
+
+    ``rel`` is taken of the payload that changed (``max(mass, removed)``), so a removal is judged
+    on the mass that left.
+    """
+    tol = rel * max(mass, removed)
+    outside = np.abs(m_hat - mass) > tol  # (n, N)
+    n = outside.shape[-1]
+    last = np.where(outside.any(axis=-1), n - 1 - np.argmax(outside[..., ::-1], axis=-1), -1)
+    return np.where(last < n - 1, (last + 1) * T, np.nan)
 
 
 def com_learning_time(
@@ -33,12 +46,12 @@ def com_learning_time(
 
 
 def add_information_times(res, out: dict) -> None:
-    """Fill ``information_time`` (the information-limited time to know the payload mass to 5 %
-    along ct_oracle's first kept trajectory; None without ct_oracle, beyond the window, or for
-    a removal after an empty segment) and ``mass_learning_time`` (median over the
+    """Fill ``information_time`` (``known``: the information-limited time to know the payload
+    mass to 5 % along ct_oracle's first kept trajectory, None without ct_oracle, beyond the
+    window, or for a removal after an empty segment; ``seeds``, ``reference``; ``com_known``,
+    ``com_axes`` when a payload came) and ``mass_learning_time`` (median over the
     kept seeds of the first time after which the estimated mass stays within 5 % of the
     payload that changed) of every segment after a swap."""
-    from adaptive_dd.benchmark.metrics import mass_learning_time
     from adaptive_dd.closed_loop.types import run_constants
 
     sc = res.scenario
@@ -53,6 +66,9 @@ def add_information_times(res, out: dict) -> None:
         k_end = min(k1, k0 + round(INFO_WINDOW / rc.T))
         if info_fn is not None and oracle is not None and oracle.q.shape[0] and not oracle.failed[0]:
             info = info_fn(res, oracle, i, k0, k_end)
+        # the two-link arm's keys: a table even when nothing could be computed ("unknown", the
+        # time with every other parameter unknown, is the two-link arm's only)
+        info = info or {"known": None, "seeds": 0, "reference": None}
         limit = _detection_limit(sc, oracle, i, k0, k_end)
         for name, run in res.runs.items():
             seg = out[name]["segments"][i]

@@ -7,7 +7,7 @@ import numpy as np
 
 from adaptive_dd.closed_loop.types import StreamedSums
 
-__all__ = ["MIN_COM_MASS", "payload_at_segment_ends", "serial_segment_metrics", "total_rms"]
+__all__ = ["MIN_COM_MASS", "payload_at_segment_ends", "serial_segment_metrics"]
 
 MIN_COM_MASS = 0.1
 """[kg]: below this estimated mass the centre of mass (first moment / mass) is not reported."""
@@ -22,7 +22,8 @@ def _counts(res) -> tuple[np.ndarray, np.ndarray]:
 
 
 def serial_segment_metrics(res, run) -> dict[str, np.ndarray]:
-    """``(n_seeds, n_segments)`` arrays, NaN for failed trials: ``rms_error``, ``rms_error_joint{j}``
+    """``(n_seeds, n_segments)`` arrays (the caller blanks failed trials by the benchmark's one
+    rule, :func:`~adaptive_dd.benchmark.metrics.segment_failed`): ``rms_error``, ``rms_error_joint{j}``
     (j = 1 .. n), ``max_error``, ``rms_torque``, ``saturation_fraction``, ``rms_error_settled``,
     and for controllers with an estimate ``mass_estimate`` [kg] and ``com_estimate_{x,y,z}`` [m]
     (:meth:`SerialArm.payload_from_sigma` of the estimate at the segment's last sample; the
@@ -44,8 +45,6 @@ def serial_segment_metrics(res, run) -> dict[str, np.ndarray]:
         small = ~(np.abs(est.mass) >= MIN_COM_MASS)
         for c, axis in enumerate("xyz"):
             out[f"com_estimate_{axis}"] = np.where(small, np.nan, est.com[..., c])
-    for v in out.values():
-        v[run.failed] = np.nan
     return out
 
 
@@ -53,8 +52,3 @@ def payload_at_segment_ends(arm, sigma_end: np.ndarray):
     """The payload (mass, com, ...) implied by the estimates ``(..., p)``."""
     with np.errstate(invalid="ignore", divide="ignore"):
         return arm.payload_from_sigma(sigma_end)
-
-
-def total_rms(res, run) -> np.ndarray:
-    """RMS tracking error over the whole run per seed ``(n_seeds,)``."""
-    return np.sqrt(run.acc.sum_e2.sum(axis=1) / res.scenario.n_samples)

@@ -93,10 +93,12 @@ def run_python_batch(
     error = ""
     try:
         ctrl.reset(S, T)
-        estimates = bool(declared(ctrl, "adaptive"))
     except Exception as exc:  # contain any controller failure to its own trials
-        error, estimates = f"{type(exc).__name__} in reset: {exc}", False
-    run, glue = records(estimates)
+        error = f"{type(exc).__name__} in reset: {exc}"
+    # the estimate's records always: a sigma_hat may appear after reset (then the samples before
+    # it are NaN); dropped at the end if it never does
+    run, glue = records(True)
+    estimated = False
     truth = bool(declared(ctrl, "needs_true_model"))
     no_drop = np.zeros(S, dtype=np.bool_)
     for k0, k1, noise, drop in draws.blocks(N):
@@ -109,26 +111,50 @@ def run_python_batch(
                     cmd = _command(ctrl, glue, rc, k, qm, qdm, truth)
                 except Exception as exc:
                     error = f"{type(exc).__name__} in command at t = {k * T:.3f} s: {exc}"
+            before = run.failed.copy()
             tau, s = glue.apply(k, cmd)
+            _say_why(run, before, cmd, k * T)
             if not error:
                 try:
                     ctrl.observe(qm_obs, qdm_obs, tau)
-                    if estimates:
-                        est = np.asarray(declared(ctrl, "sigma_hat"), dtype=float)
-                        est = np.broadcast_to(est, (S, run.sigma_end.shape[2]))
-                        glue.record_estimate(k, s, np.ascontiguousarray(est))
+                    est = declared(ctrl, "sigma_hat")
+                    if est is not None:
+                        estimated = True
+                        glue.record_estimate(k, s, _estimate(est, S, run.sigma_end.shape[2]))
                 except Exception as exc:
                     error = f"{type(exc).__name__} in observe at t = {k * T:.3f} s: {exc}"
             if bar is not None and k % 1000 == 999:
                 bar.update(1000)
     if bar is not None:
         bar.update(N % 1000)
+    if not estimated:
+        run.sigma_end = run.sigma_hat = None
     run.error = error
     if error:
         run.failed[:] = True
+    run.explain_failures(rc.max_error, rc.max_speed)
     run.alarm_times = None if error else declared(ctrl, "alarm_times")
     run.skipped = None if error else declared(ctrl, "skipped_samples")
     return run
+
+
+def _say_why(run: ControllerRun, before, cmd: Array, t: float) -> None:
+    """Name a non-finite command as the reason of the trials that failed on it at time t."""
+    for i in np.flatnonzero(run.failed & ~before):
+        bad = np.flatnonzero(~np.isfinite(cmd[i]))
+        if bad.size:
+            j = int(bad[0])
+            why = f"non-finite torque command (joint {j + 1}: {cmd[i, j]}) at t = {t:.3f} s"
+            run.failed_why[int(i)] = why
+
+
+def _estimate(est, S: int, p: int) -> Array:
+    """A controller's ``sigma_hat`` as ``(S, p)``; :class:`~adaptive_dd.errors.SignalError` if it
+    has another shape (``(p,)`` stands for every trial)."""
+    a = np.asarray(est, dtype=float)
+    if a.shape not in ((p,), (S, p)):
+        raise SignalError(f"sigma_hat has shape {a.shape}, expected ({S}, {p}) or ({p},)")
+    return np.ascontiguousarray(np.broadcast_to(a, (S, p)))
 
 
 def _command(ctrl, glue: PythonGlue, rc: RunConstants, k: int, qm: Array, qdm: Array, truth: bool) -> Array:

@@ -49,6 +49,7 @@ from adaptive_dd.controllers.base import declared
 __all__ = [
     "CHUNK",
     "MAX_ALARMS",
+    "make_controller_of",
     "make_controllers",
     "plant_record",
     "run_serial",
@@ -59,27 +60,26 @@ __all__ = [
 
 def make_controllers(scenario) -> dict:
     """The scenario's controllers by label: built-ins (:data:`SERIAL_CONTROLLERS`), plug-ins by path."""
+    return dict(make_controller_of(scenario, spec) for spec in scenario.controllers)
+
+
+def make_controller_of(scenario, spec: str) -> tuple[str, object]:
+    """``(label, controller)`` of one entry of the scenario's controller list, with its settings."""
     from pathlib import Path
 
     from adaptive_dd.controllers import Gains, controller_label, make_controller
 
-    out = {}
     src = Path(scenario.source)
     search = (src.parent, Path.cwd()) if src.is_file() else (Path.cwd(),)
-    for spec in scenario.controllers:
-        opts = scenario.options(controller_label(spec)) or scenario.options(spec)
-        label = controller_label(spec, opts)
-        if ":" in spec:
-            bw = opts.get("bandwidth", scenario.bandwidth)
-            g = Gains(float(np.max(bw)), opts.get("damping", scenario.damping))
-            ctrl = make_controller(
-                spec, g, {**opts, "bandwidth": g.bandwidth}, arm=scenario.arm, search=search
-            )
-        else:
-            opts = with_stated_uncertainty(spec, opts, scenario)
-            ctrl = make_serial_controller(spec, scenario.arm, scenario.bandwidth, scenario.damping, opts)
-        out[label] = ctrl
-    return out
+    opts = scenario.options(controller_label(spec)) or scenario.options(spec)
+    label = controller_label(spec, opts)
+    if ":" in spec:
+        bw = opts.get("bandwidth", scenario.bandwidth)
+        g = Gains(float(np.max(bw)), opts.get("damping", scenario.damping))
+        opts = {**opts, "bandwidth": g.bandwidth}
+        return label, make_controller(spec, g, opts, arm=scenario.arm, search=search, scenario=scenario)
+    opts = with_stated_uncertainty(spec, opts, scenario)
+    return label, make_serial_controller(spec, scenario.arm, scenario.bandwidth, scenario.damping, opts)
 
 
 def true_parameters(scenario) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -193,6 +193,7 @@ def _run_compiled(name, ctrl: SerialLaw, scenario, idx, rc, io, pl, keep, bar) -
     run.skipped = ctrl.skipped(form)
     if ctrl.has_detector:
         run.alarm_times = alarm_lists(alarms)
+    run.explain_failures(rc.max_error, rc.max_speed)
     return run
 
 

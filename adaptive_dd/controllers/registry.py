@@ -14,16 +14,17 @@ Built-in settings:
     ``boost_bandwidth``, ``boost_duration``, ``estimator = {...}`` (fields of
     :class:`~adaptive_dd.identification.online.OnlineConfig`: ``tau_f``, ``split``,
     ``construction``, ``p0_payload``, ``p0_j2``, ``project``, ``align``), ``detector = {...}``
-    (fields of :class:`~adaptive_dd.identification.online.ChangeDetector`), or
-    ``detector = false`` for none.
+    (fields of :class:`~adaptive_dd.identification.online.ChangeDetector`; also accepted inside
+    ``estimator``, as on an N-joint arm), or ``detector = false`` for none.
 ``slotine_li``
     ``gamma`` (seven adaptation gains).
 ``ct_nominal``, ``pd``
     ``sigma`` (the fixed model, seven base parameters).
 
 A plug-in class is called with its table's settings as keyword arguments, plus ``gains``
-(:class:`Gains`) and ``sigma_nominal`` (the arm's base parameters) if its ``__init__``
-takes them. Unknown settings are errors naming the controller and the key.
+(:class:`Gains`), ``sigma_nominal`` (the arm's base parameters), ``arm`` (the arm, two-link
+or from a URDF, with the scenario's overrides) and ``scenario`` if its ``__init__`` names
+them. Unknown settings are errors naming the controller and the key.
 """
 
 from __future__ import annotations
@@ -103,8 +104,14 @@ def _sigma(spec: str, options: dict) -> np.ndarray:
 
 def _online(spec: str, options: dict) -> OnlineConfig:
     est = dict(options.get("estimator", {}))
-    _unknown(f"{spec}.estimator", est, ONLINE_KEYS)
     det = options.get("detector", {})
+    if "detector" in est:  # also accepted inside ``estimator``, as on an N-joint arm
+        if "detector" in options:
+            raise ParameterError(
+                f"controllers.{spec}: 'detector' given twice (at the top and in 'estimator'); keep one"
+            )
+        det = est.pop("detector")
+    _unknown(f"{spec}.estimator", est, ONLINE_KEYS)
     kw: dict[str, Any] = dict(est)
     if det is False:
         kw["detector"] = None
@@ -193,8 +200,12 @@ def make_controller(
     options: dict | None = None,
     arm=None,
     search: tuple = (),
+    scenario=None,
 ) -> Controller:
     """A controller by built-in name or import path, with its settings.
+
+    ``arm`` (default the SICE arm) is the arm it controls; ``scenario`` (optional) is handed to a
+    plug-in that asks for it (see :func:`_plugin`).
 
     Raises
     ------
@@ -215,7 +226,8 @@ def make_controller(
         except (TypeError, ValueError) as exc:
             raise ParameterError(f"controllers.{spec}: {exc}") from None
     elif ":" in spec:
-        ctrl = _plugin(spec, g, options, arm.sigma, search)
+        given = {"sigma_nominal": arm.sigma, "arm": arm, "scenario": scenario}
+        ctrl = _plugin(spec, g, options, given, search)
     else:
         raise ParameterError(
             f"unknown controller {spec!r}; choose from {tuple(CONTROLLERS)} or 'package.module:Class'"
@@ -225,17 +237,28 @@ def make_controller(
     return ctrl
 
 
-def _plugin(spec: str, g: Gains, options: dict, sigma_nominal, search: tuple) -> Controller:
+PLUGIN_GIVEN = ("gains", "sigma_nominal", "arm", "scenario")
+"""What the runner hands a plug-in whose ``__init__`` names it: the gains, the arm's base
+parameters without payload, the arm itself, the scenario (None when run outside one)."""
+
+
+def _plugin(spec: str, g: Gains, options: dict, given: dict, search: tuple) -> Controller:
+    """A plug-in class called with its settings and the :data:`PLUGIN_GIVEN` it names
+    (``gains`` also to a ``**kwargs``)."""
     cls = load_controller_class(spec, search)
     kw = {k: v for k, v in options.items() if k not in COMMON}
     params = inspect.signature(cls).parameters
     takes_any = any(p.kind is inspect.Parameter.VAR_KEYWORD for p in params.values())
+    clash = sorted(set(kw) & set(PLUGIN_GIVEN))
+    if clash:
+        raise ParameterError(
+            f"controllers.{spec}: {clash} are given by the runner, not settings (remove them from the table)"
+        )
+    if not takes_any:
+        _unknown(spec, kw, set(params) - set(PLUGIN_GIVEN))
     if "gains" in params or takes_any:
         kw["gains"] = g
-    if "sigma_nominal" in params:
-        kw["sigma_nominal"] = sigma_nominal
-    if not takes_any:
-        _unknown(spec, {k: v for k, v in kw.items() if k not in ("gains", "sigma_nominal")}, set(params))
+    kw.update({k: v for k, v in given.items() if k in params})
     try:
         ctrl = cls(**kw)
     except (TypeError, ValueError) as exc:

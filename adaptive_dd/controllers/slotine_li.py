@@ -95,7 +95,10 @@ class SlotineLi(Controller):
         theta0 = _sice_sigma() if theta0 is None else theta0
         bounds = default_bounds(theta0) if bounds is None else bounds
         self.lo, self.hi = (np.asarray(b, dtype=float) for b in bounds)
-        self.gamma = np.asarray(gamma, dtype=float)
+        try:
+            self.gamma = np.asarray(gamma, dtype=float)
+        except (TypeError, ValueError):
+            raise ParameterError(f"gamma must be 7 positive gains, got {gamma!r}") from None
         if self.gamma.shape != (7,) or np.any(~(self.gamma > 0)):
             raise ParameterError(f"gamma must be 7 positive gains, got {gamma}")
         self.theta0 = validate_sigma(theta0, "theta0")

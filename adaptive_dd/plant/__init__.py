@@ -1,4 +1,6 @@
-"""A two-link direct-drive arm (default: the SICE arm): parameters, dynamics, simulator, Pinocchio check."""
+"""The arms: the paper's two-link direct-drive arm (:class:`Arm`, default the SICE arm: parameters,
+closed-form dynamics, simulator, Pinocchio check) and any serial arm from a URDF
+(:class:`SerialArm`, imported on first use: it loads Pinocchio)."""
 
 from adaptive_dd.plant.arm import FRICTION_LAWS, Arm
 from adaptive_dd.plant.devices import ActuatorConfig, SensorConfig
@@ -50,6 +52,7 @@ __all__ = [
     "PayloadSchedule",
     "PhysicalParameters",
     "SensorConfig",
+    "SerialArm",
     "SimulationResult",
     "coriolis_matrix",
     "coriolis_vector",
@@ -67,3 +70,12 @@ __all__ = [
     "simulate_open_loop",
     "validate_sigma",
 ]
+
+
+def __getattr__(name: str):
+    """``SerialArm`` on first use (its module imports Pinocchio, which takes a second)."""
+    if name == "SerialArm":
+        from adaptive_dd.plant.serial_arm import SerialArm
+
+        return SerialArm
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

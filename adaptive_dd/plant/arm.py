@@ -67,7 +67,7 @@ from adaptive_dd.plant.parameters import (
     validate_sigma,
 )
 
-__all__ = ["FRICTION_LAWS", "Arm", "arm_from_tables"]
+__all__ = ["FRICTION_LAWS", "Arm", "arm_from_tables", "as_two_link"]
 
 Array = NDArray[np.float64]
 
@@ -244,10 +244,10 @@ class Arm:
         """Any serial arm from a URDF (:meth:`adaptive_dd.plant.serial_arm.SerialArm.from_urdf`).
 
         Returns an :class:`Arm` when the URDF is the paper's kind of two-link arm
-        (:func:`~adaptive_dd.plant.serial_arm.as_two_link`: the closed-form fast path),
+        (:func:`as_two_link`: the closed-form fast path),
         else the general :class:`~adaptive_dd.plant.serial_arm.SerialArm`.
         """
-        from adaptive_dd.plant.serial_arm import SerialArm, as_two_link
+        from adaptive_dd.plant.serial_arm import SerialArm
 
         general = SerialArm.from_urdf(path, payload_frame, gravity, **overrides)
         two = as_two_link(general)
@@ -593,12 +593,102 @@ def arm_from_tables(arm_table: dict | None, plant_table: dict | None, src: str =
     """
     plant_kw = _plant_kwargs(src, {} if plant_table is None else plant_table)
     if isinstance(arm_table, dict) and ("urdf" in arm_table or "robot" in arm_table):
-        from adaptive_dd.plant.serial_arm import urdf_arm_from_table
-
-        return urdf_arm_from_table(src, arm_table, plant_kw)
+        return _urdf_arm(src, arm_table, plant_kw)
     kw = Arm.sice().__dict__.copy() if arm_table is None else _arm_kwargs(src, arm_table)
     kw.update(plant_kw)
     try:
         return Arm(**kw)
     except (ParameterError, ArithmeticError) as exc:
         raise ScenarioError(f"{src}: [arm]/[plant]: {type(exc).__name__}: {exc}") from None
+
+
+def _urdf_arm(src: str, table: dict, plant_kw: dict):
+    """The arm of an ``[arm]`` table naming a URDF: the general
+    :class:`~adaptive_dd.plant.serial_arm.SerialArm`
+    (:func:`~adaptive_dd.plant.serial_arm.urdf_arm_from_table`), or the two-link :class:`Arm`
+    when it is one (:func:`as_two_link`) and ``general = true`` is not set. LuGre friction is a
+    two-link plant law: kept aside until the fast path decides which plant runs."""
+    from adaptive_dd.errors import ScenarioError
+    from adaptive_dd.plant.serial_arm import urdf_arm_from_table
+
+    kw = dict(plant_kw)
+    lugre = {k: kw.pop(k) for k in ("lugre_stiffness", "lugre_damping") if k in kw}
+    if kw.get("friction") == "lugre":
+        lugre["friction"] = kw.pop("friction")
+    arm = urdf_arm_from_table(src, table, kw)
+    general = table.get("general", False)
+    if not isinstance(general, bool):
+        raise ScenarioError(f"{src}: key 'arm.general' must be true or false, got {general!r}")
+    two = None if general else as_two_link(arm)
+    if two is None and lugre:
+        raise ScenarioError(
+            f"{src}: [plant] LuGre friction is implemented for the two-link arm only; the plant of "
+            f"this {arm.n_joints}-joint arm has stick-slip, tanh and stribeck friction"
+        )
+    return arm if two is None else (replace(two, **lugre) if lugre else two)
+
+
+# ------------------------------------------------------------------ the fast path
+def as_two_link(arm, atol: float = 1e-12) -> Arm | None:
+    """The two-link :class:`Arm` equal to ``arm`` (a :class:`~adaptive_dd.plant.serial_arm.SerialArm`),
+    or None if it is not one.
+
+    The closed forms of the paper (eqs. 3-8) hold for two revolute joints about
+    parallel z axes, joint 2 at ``(l1, 0, 0)`` of joint 1's frame, centres of mass
+    on the links' x axes, gravity along z (no gravity torque), no armature, and the
+    payload frame at ``(l2, 0, z)`` of link 2 with its axes aligned. Such an arm is
+    exactly an :class:`Arm` (physical parameters of eq. 10); the benchmark then runs
+    the two-link kernels, held equal to the general ones by a test.
+    """
+    if arm.n_joints != 2 or np.any(arm.armature != 0) or arm.locked:
+        return None
+    m = arm.model
+    for i in (1, 2):
+        j = m.joints[i]
+        if j.shortname() not in ("JointModelRZ", "JointModelRUBZ"):
+            return None
+        if not np.allclose(m.jointPlacements[i].rotation, np.eye(3), atol=atol):
+            return None
+    p2 = m.jointPlacements[2].translation
+    if abs(p2[1]) > atol or p2[0] <= 0:
+        return None
+    if abs(arm.gravity[0]) > atol or abs(arm.gravity[1]) > atol:
+        return None
+    link, placement = arm._payload_frame
+    pt = placement.translation
+    if (
+        link != 1
+        or abs(pt[1]) > atol
+        or pt[0] <= 0
+        or not np.allclose(placement.rotation, np.eye(3), atol=atol)
+    ):
+        return None
+    inert = [m.inertias[i] for i in (1, 2)]
+    if any(abs(body.lever[1]) > atol for body in inert):
+        return None
+    lo, hi = arm.position_limits[:, 0], arm.position_limits[:, 1]
+    del lo, hi  # the two-link Arm has no position limits; the scenario's reference keeps within them
+    phys = PhysicalParameters(
+        I1=float(inert[0].inertia[2, 2]),
+        I2=float(inert[1].inertia[2, 2]),
+        m1=float(inert[0].mass),
+        m2=float(inert[1].mass),
+        a1=float(inert[0].lever[0]),
+        a2=float(inert[1].lever[0]),
+        b1=float(arm.viscous[0]),
+        b2=float(arm.viscous[1]),
+        d1=float(arm.coulomb[0]),
+        d2=float(arm.coulomb[1]),
+        l1=float(p2[0]),
+        l2=float(pt[0]),
+    )
+    return Arm.from_physical(
+        phys,
+        payload_radius=arm.payload_radius,
+        actuator=arm.actuator,
+        sensor=arm.sensor,
+        friction=arm.friction,
+        friction_velocity=arm.friction_velocity,
+        stribeck_ratio=arm.stribeck_ratio,
+        stribeck_velocity=arm.stribeck_velocity,
+    )

@@ -412,12 +412,11 @@ class SerialArm:
         return regressor_batch(self.chain, q, qd, qdd)
 
     def pin_configuration(self, q: ArrayLike) -> Array:
-        """Pinocchio's configuration of joint positions ``q (n,)`` (continuous joints as cos, sin)."""
-        m = self.model
-        out = []
-        for i, x in enumerate(np.asarray(q, dtype=float)):
-            out += [np.cos(x), np.sin(x)] if m.joints[i + 1].nq == 2 else [x]
-        return np.array(out)
+        """Pinocchio's configuration of joint positions ``q (n,)`` (continuous joints as cos, sin;
+        :func:`adaptive_dd.plant.chain.pin_configuration`)."""
+        from adaptive_dd.plant.chain import pin_configuration
+
+        return pin_configuration(self.model, q)
 
     def regressor(self, q: ArrayLike, qd: ArrayLike, qdd: ArrayLike) -> Array:
         """Base regressor ``(..., n, p)``: ``regressor @ sigma`` is the joint torque."""
@@ -580,74 +579,6 @@ class SerialArm:
         return hash(self._key())
 
 
-# ------------------------------------------------------------------ the fast path
-def as_two_link(arm: SerialArm, atol: float = 1e-12):
-    """The two-link :class:`~adaptive_dd.plant.arm.Arm` equal to ``arm``, or None if it is not one.
-
-    The closed forms of the paper (eqs. 3-8) hold for two revolute joints about
-    parallel z axes, joint 2 at ``(l1, 0, 0)`` of joint 1's frame, centres of mass
-    on the links' x axes, gravity along z (no gravity torque), no armature, and the
-    payload frame at ``(l2, 0, z)`` of link 2 with its axes aligned. Such an arm is
-    exactly an :class:`Arm` (physical parameters of eq. 10); the benchmark then runs
-    the two-link kernels, held equal to the general ones by a test.
-    """
-    from adaptive_dd.plant.arm import Arm
-    from adaptive_dd.plant.parameters import PhysicalParameters
-
-    if arm.n_joints != 2 or np.any(arm.armature != 0) or arm.locked:
-        return None
-    m = arm.model
-    for i in (1, 2):
-        j = m.joints[i]
-        if j.shortname() not in ("JointModelRZ", "JointModelRUBZ"):
-            return None
-        if not np.allclose(m.jointPlacements[i].rotation, np.eye(3), atol=atol):
-            return None
-    p2 = m.jointPlacements[2].translation
-    if abs(p2[1]) > atol or p2[0] <= 0:
-        return None
-    if abs(arm.gravity[0]) > atol or abs(arm.gravity[1]) > atol:
-        return None
-    link, placement = arm._payload_frame
-    pt = placement.translation
-    if (
-        link != 1
-        or abs(pt[1]) > atol
-        or pt[0] <= 0
-        or not np.allclose(placement.rotation, np.eye(3), atol=atol)
-    ):
-        return None
-    inert = [m.inertias[i] for i in (1, 2)]
-    if any(abs(body.lever[1]) > atol for body in inert):
-        return None
-    lo, hi = arm.position_limits[:, 0], arm.position_limits[:, 1]
-    del lo, hi  # the two-link Arm has no position limits; the scenario's reference keeps within them
-    phys = PhysicalParameters(
-        I1=float(inert[0].inertia[2, 2]),
-        I2=float(inert[1].inertia[2, 2]),
-        m1=float(inert[0].mass),
-        m2=float(inert[1].mass),
-        a1=float(inert[0].lever[0]),
-        a2=float(inert[1].lever[0]),
-        b1=float(arm.viscous[0]),
-        b2=float(arm.viscous[1]),
-        d1=float(arm.coulomb[0]),
-        d2=float(arm.coulomb[1]),
-        l1=float(p2[0]),
-        l2=float(pt[0]),
-    )
-    return Arm.from_physical(
-        phys,
-        payload_radius=arm.payload_radius,
-        actuator=arm.actuator,
-        sensor=arm.sensor,
-        friction=arm.friction,
-        friction_velocity=arm.friction_velocity,
-        stribeck_ratio=arm.stribeck_ratio,
-        stribeck_velocity=arm.stribeck_velocity,
-    )
-
-
 # ------------------------------------------------------------------ scenario tables
 URDF_ARM_KEYS = (
     "urdf",
@@ -677,9 +608,11 @@ def urdf_arm_from_table(src: str, table: dict, plant_kw: dict):
     ``encoder_counts``, and ``dac_bits``, ``payload_radius``, ``repair_inertia`` (repair a
     chain link's inertia that is not a rigid body's, reported: :func:`adaptive_dd.plant.urdf.read_urdf`),
     ``payload_capacity`` (the rated payload [kg]: the size of the estimator's re-opening,
-    :mod:`adaptive_dd.identification.serial_online`). A URDF that is the paper's kind of two-link
-    arm becomes an :class:`~adaptive_dd.plant.arm.Arm` (the closed-form fast path,
-    :func:`as_two_link`) unless ``general = true``.
+    :mod:`adaptive_dd.identification.serial_online`); ``general`` is read by
+    :func:`adaptive_dd.plant.arm.arm_from_tables`, which turns a URDF of the paper's kind of
+    two-link arm into an :class:`~adaptive_dd.plant.arm.Arm` (the closed-form fast path,
+    :func:`~adaptive_dd.plant.arm.as_two_link`) unless ``general = true``. ``plant_kw``: the
+    ``[plant]`` settings of the general model (LuGre's are the two-link arm's: not here).
 
     Raises
     ------
@@ -704,7 +637,7 @@ def urdf_arm_from_table(src: str, table: dict, plant_kw: dict):
         from adaptive_dd.robots import ROBOTS, robot_urdf
 
         name = table["robot"]
-        if name not in ROBOTS:
+        if not isinstance(name, str) or name not in ROBOTS:
             raise ScenarioError(
                 f"{src}: key 'arm.robot' = {name!r} is not a shipped robot; known: {sorted(ROBOTS)}"
             )
@@ -730,11 +663,6 @@ def urdf_arm_from_table(src: str, table: dict, plant_kw: dict):
         raise ScenarioError(f"{src}: [arm]: {exc}") from None
     n = arm.n_joints
     kw: dict = dict(plant_kw)
-    # LuGre friction is a two-link plant law (adaptive_dd.plant.integrator); kept aside until the
-    # fast path decides which plant runs
-    lugre = {k: kw.pop(k) for k in ("lugre_stiffness", "lugre_damping") if k in kw}
-    if kw.get("friction") == "lugre":
-        lugre["friction"] = kw.pop("friction")
     for key in ("viscous", "coulomb", "armature"):
         if key in table:
             kw[key] = _table_vector(src, key, table[key], n, 0.0, strict=False, hi=URDF_TABLE_BOUNDS[key])
@@ -778,16 +706,7 @@ def urdf_arm_from_table(src: str, table: dict, plant_kw: dict):
         _ = arm.sigma  # base parameters now, so that a singular model is reported here
     except ParameterError as exc:
         raise ScenarioError(f"{src}: [arm]/[plant]: {exc}") from None
-    general = table.get("general", False)
-    if not isinstance(general, bool):
-        raise ScenarioError(f"{src}: key 'arm.general' must be true or false, got {general!r}")
-    two = None if general else as_two_link(arm)
-    if two is None and lugre:
-        raise ScenarioError(
-            f"{src}: [plant] LuGre friction is implemented for the two-link arm only; the plant of "
-            f"this {n}-joint arm has stick-slip, tanh and stribeck friction"
-        )
-    return arm if two is None else (replace(two, **lugre) if lugre else two)
+    return arm
 
 
 def _is_num(x) -> bool:

@@ -1,0 +1,139 @@
+"""What a run of a scenario will meet, checked before it runs (``adaptive-dd validate``).
+
+* :func:`reference_problems`: the reference against the arm's joint position and velocity limits
+  (an arm from a URDF has them; the two-link arm has none);
+* :func:`torque_problems`: the reference against the torque limits, by inverse dynamics along it
+  with every segment's payload (the heaviest included): a torque beyond the limit there
+  saturates even a controller that tracks perfectly (a warning: the benchmark runs through
+  saturation and reports it);
+* :func:`controller_problems`: every controller of the scenario built as the run builds it
+  (built-ins with their settings, plug-ins imported from their path with theirs).
+
+Each returns a list of one-line problems (empty: none), naming the joint, the value, the limit
+and the time, or the controller and the reason.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = [
+    "controller_problems",
+    "preflight",
+    "reference_problems",
+    "resolved_settings",
+    "torque_peaks",
+    "torque_problems",
+]
+
+TOL = 1e-9
+"""Relative tolerance on a limit (a reference that touches it is within it)."""
+
+
+def torque_peaks(scenario) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Per joint, the largest ``|tau|`` [N m] of inverse dynamics along the reference over every
+    payload segment's parameters, the sample where it occurs and the segment, each ``(n,)``."""
+    T, N = scenario.sample_period, scenario.n_samples
+    q, qd, qdd = scenario.reference.sample(np.arange(N) * T)
+    Y = scenario.arm.regressor(q, qd, qdd)  # (N, n, p)
+    tau = np.abs(np.einsum("knp,sp->skn", Y, scenario.segment_sigmas()))  # (segments, N, n)
+    flat = tau.reshape(-1, tau.shape[2])
+    at = np.argmax(flat, axis=0)
+    cols = np.arange(flat.shape[1])
+    return flat[at, cols], at % N, at // N
+
+
+def reference_problems(scenario) -> list[str]:
+    """The reference beyond the arm's joint position or velocity limits (see the module)."""
+    arm, T = scenario.arm, scenario.sample_period
+    t = np.arange(scenario.n_samples) * T
+    q, qd, _ = scenario.reference.sample(t)
+    out = []
+    lim = getattr(arm, "position_limits", None)  # an arm from a URDF
+    if lim is not None:
+        for j in range(q.shape[1]):
+            lo, hi = lim[j]
+            k_lo, k_hi = int(np.argmin(q[:, j])), int(np.argmax(q[:, j]))
+            if q[k_lo, j] < lo - TOL * max(1.0, abs(lo)):
+                out.append(
+                    f"reference.joint{j + 1}: q = {q[k_lo, j]:.4g} rad at t = {t[k_lo]:.3f} s is below the "
+                    f"joint's lower limit {lo:.4g} rad (by {lo - q[k_lo, j]:.3g} rad)"
+                )
+            if q[k_hi, j] > hi + TOL * max(1.0, abs(hi)):
+                out.append(
+                    f"reference.joint{j + 1}: q = {q[k_hi, j]:.4g} rad at t = {t[k_hi]:.3f} s is above the "
+                    f"joint's upper limit {hi:.4g} rad (by {q[k_hi, j] - hi:.3g} rad)"
+                )
+    vlim = getattr(arm, "velocity_limits", None)
+    if vlim is not None:
+        for j in range(qd.shape[1]):
+            k = int(np.argmax(np.abs(qd[:, j])))
+            v = abs(qd[k, j])
+            if np.isfinite(vlim[j]) and vlim[j] > 0 and v > vlim[j] * (1 + TOL):
+                out.append(
+                    f"reference.joint{j + 1}: |qd| = {v:.4g} rad/s at t = {t[k]:.3f} s is beyond the joint's "
+                    f"velocity limit {vlim[j]:.4g} rad/s ({v / vlim[j]:.2f} times)"
+                )
+    return out
+
+
+def torque_problems(scenario) -> list[str]:
+    """Joints whose torque along the reference, by inverse dynamics with some segment's payload,
+    is beyond the limit: the actuator will saturate even under perfect tracking (the benchmark
+    runs through it and reports the saturation; a warning, not an error)."""
+    t = np.arange(scenario.n_samples) * scenario.sample_period
+    out = []
+    peak, at, seg = torque_peaks(scenario)
+    masses = [m for _, _, m in scenario.segments()]
+    limit = np.asarray(scenario.arm.actuator.torque_limit, dtype=float)
+    for j in np.flatnonzero(peak > limit * (1 + TOL)):
+        out.append(
+            f"reference.joint{j + 1}: inverse dynamics along the reference with the {masses[seg[j]]:g} kg "
+            f"payload needs |tau| = {peak[j]:.4g} N m at t = {t[at[j]]:.3f} s, beyond the joint's torque "
+            f"limit {limit[j]:.4g} N m ({peak[j] / limit[j]:.2f} times): the actuator will saturate"
+        )
+    return out
+
+
+def controller_problems(scenario) -> list[str]:
+    """Every controller built as the run builds it; one line per controller that cannot be."""
+    from adaptive_dd.benchmark.runner import scenario_controller
+
+    out = []
+    for spec in scenario.controllers:
+        try:
+            scenario_controller(scenario, spec)
+        except Exception as exc:  # a plug-in may raise anything: reported, not a traceback
+            msg = str(exc)
+            if not msg.startswith(("controller", "unknown controller")):
+                msg = f"controller {spec!r}: {type(exc).__name__}: {msg}"
+            out.append(msg)
+    return out
+
+
+def resolved_settings(scenario) -> list[str]:
+    """``controllers.NAME.key = value`` of the settings whose default differs between the arms
+    (``adaptive_ct``'s boost), ``(default)`` marked: what the run will use, said before it runs."""
+    from adaptive_dd.benchmark.runner import scenario_controller
+
+    out = []
+    for spec in scenario.controllers:
+        try:
+            label, ctrl = scenario_controller(scenario, spec)
+        except Exception:  # reported by controller_problems
+            continue
+        if getattr(ctrl, "boost_bandwidth", None) is None:  # no boost (adaptive_ct_paper, the others)
+            continue
+        given = scenario.options(label) or scenario.options(spec)
+        for key, unit in (("boost_bandwidth", "rad/s"), ("boost_duration", "s")):
+            v = getattr(ctrl, key, None)
+            if v is not None:
+                mark = "" if key in given else "   (default)"
+                out.append(f"controllers.{label}.{key} = {v!r} {unit}{mark}")
+    return out
+
+
+def preflight(scenario) -> tuple[list[str], list[str]]:
+    """``(problems, warnings)``: :func:`reference_problems` and :func:`controller_problems` (the
+    run would be meaningless or fail), :func:`torque_problems` (it will saturate)."""
+    return reference_problems(scenario) + controller_problems(scenario), torque_problems(scenario)

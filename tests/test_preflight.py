@@ -1,0 +1,182 @@
+"""``validate`` checks what the run will meet; a failed trial says why and when; outputs are
+checked before a run (issue 27)."""
+
+from __future__ import annotations
+
+import dataclasses
+from importlib import resources
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from adaptive_dd.benchmark.runner import run_benchmark
+from adaptive_dd.benchmark.scenario import load_scenario
+from adaptive_dd.benchmark.types import ControllerRun
+from adaptive_dd.cli import main
+
+ROOT = Path(__file__).resolve().parent.parent
+PANDA = Path(str(resources.files("adaptive_dd.scenarios").joinpath("panda_payload.toml")))
+
+
+def test_validate_catches_a_reference_beyond_position_and_velocity_limits(tmp_path, capsys):
+    """Issue 27: a reference through joint 4's limit at twice its speed was accepted."""
+    text = PANDA.read_text().replace(
+        "joint4 = { offset = -1.8, amplitude = [0.5, 0.15], frequency = [0.3, 0.85]",
+        "joint4 = { offset = -0.1, amplitude = [0.5, 0.15], frequency = [0.6, 1.7]",
+    )
+    bad = tmp_path / "panda.toml"
+    bad.write_text(text)
+    assert main(["validate", str(PANDA)]) == 0
+    capsys.readouterr()
+    assert main(["validate", str(bad)]) == 1
+    err = capsys.readouterr().err
+    assert "2 problem(s)" in err
+    assert "reference.joint4: q = 0.5489 rad at t = 13.682 s" in err
+    assert "above the joint's upper limit -0.0698 rad" in err
+    assert "reference.joint4: |qd| = " in err and "velocity limit 2.175 rad/s" in err
+
+
+def test_validate_warns_of_a_torque_beyond_the_limit_along_the_reference(capsys):
+    path = ROOT / "benchmarks" / "scenarios" / "alternating.toml"
+    assert main(["validate", str(path)]) == 0  # the benchmark runs through saturation and says so
+    err = capsys.readouterr().err
+    assert "warning: reference.joint2: inverse dynamics along the reference with the 3 kg payload" in err
+    assert "torque limit 15 N m" in err and "joint1" not in err
+
+
+@pytest.mark.parametrize(
+    ("spec", "table", "needle"),
+    [
+        ("payload_gradient:PayloadGradient", "[controllers.PayloadGradient]\nbogus = 1\n", "['bogus']"),
+        ("no_such_module_xyz:Ctrl", "", "cannot import module 'no_such_module_xyz'"),
+        ("payload_gradient:NoSuchClass", "", "has no 'NoSuchClass'"),
+        ("payload_gradient:PayloadGradient", "[controllers.PayloadGradient]\ngamma = -1\n", "gamma must be"),
+    ],
+)
+def test_validate_builds_plugins_with_their_settings(tmp_path, capsys, spec, table, needle):
+    """Issue 27: a plug-in's unknown setting or bad import path passed validate."""
+    (tmp_path / "payload_gradient.py").write_text((ROOT / "examples" / "payload_gradient.py").read_text())
+    path = tmp_path / "s.toml"
+    path.write_text(f'[run]\nduration = 1.0\ncontrollers = ["ct_oracle", "{spec}"]\n{table}')
+    assert main(["validate", str(path)]) == 1
+    err = capsys.readouterr().err
+    assert "1 problem(s)" in err and needle in err, err
+
+
+class NanAfter:
+    """A plug-in whose command turns NaN on trial 1 from t = 0.05 s."""
+
+    def reset(self, n_trials, sample_period):
+        self.k, self.T = 0, sample_period
+
+    def command(self, q, qd, q_d, qd_d, qdd_d):
+        tau = 400.0 * (q_d - q) + 40.0 * (qd_d - qd)
+        if self.k * self.T >= 0.05 - 1e-12:
+            tau[1, 0] = np.nan
+        self.k += 1
+        return tau
+
+    def observe(self, q, qd, tau):
+        pass
+
+
+@pytest.mark.parametrize("arm", ["two_link", "urdf"])
+def test_a_failed_trial_says_why_and_when(arm):
+    """Issue 27: a NaN torque failed a trial with no reason and no time."""
+    sc = load_scenario() if arm == "two_link" else load_scenario(ROOT / "examples" / "plugin_urdf.toml")
+    sc = dataclasses.replace(sc, seeds=2, duration=0.2, swap_times=(0.1,), swap_masses=(1.0,), swap_com=())
+    res = run_benchmark(sc, progress=False, controllers={"nan": NanAfter()})
+    m = res.metrics()["controllers"]["nan"]
+    assert m["failed_trials"] == 1
+    (f,) = m["failures"]
+    assert f["seed"] == 1 and f["t"] == pytest.approx(0.05)
+    assert f["why"] == "non-finite torque command (joint 1: nan) at t = 0.050 s"
+    from adaptive_dd.benchmark.report import format_report
+
+    assert "nan, seed 1, t = 0.050 s: non-finite torque command" in format_report(res.metrics(), res)
+
+
+def test_a_compiled_failure_is_explained_from_the_error_norm():
+    e = np.zeros((3, 10), dtype=np.float32)
+    e[0, 4], e[1, 6] = 0.9, 0.01
+    run = ControllerRun(
+        "x", None, e, None, np.array([True, True, False]), np.array([4, 6, -1]), engine="compiled"
+    )
+    run.explain_failures(max_error=0.5, max_speed=200.0)
+    assert run.failed_why[0].startswith("tracking error |e| = 0.9 rad, beyond max_error = 0.5 rad")
+    assert run.failed_why[1].startswith("runaway: the arm's state became non-finite or a joint exceeded 200")
+    assert 2 not in run.failed_why
+    assert run.failures(0.01, (7, 8, 9))[1] == {"seed": 8, "t": 0.06, "why": run.failed_why[1]}
+
+
+def test_unwritable_outputs_are_reported_before_the_run(tmp_path, capsys):
+    """Issue 27: an unwritable --out was found only after the run (excite, sweep)."""
+    blocker = tmp_path / "file"
+    blocker.write_text("")
+    sice = str(ROOT / "benchmarks" / "scenarios" / "sice_urdf.toml")
+    assert main(["excite", "--arm", sice, "--out", str(blocker / "x.toml")]) == 2
+    cap = capsys.readouterr()
+    assert "SLSQP" not in cap.out and f"{blocker} is a file" in cap.err
+    sweep = tmp_path / "sweep.toml"
+    sweep.write_text('[sweep]\nseeds = 1\ncontrollers = ["ct_oracle"]\n[grid]\npayload_mass = [1.0]\n')
+    assert main(["sweep", str(sweep), "--out", str(blocker / "out"), "--no-progress"]) == 2
+    cap = capsys.readouterr()
+    assert "tasks" not in cap.out and f"{blocker} is a file" in cap.err
+
+
+def test_a_failed_trial_keeps_its_segments_before_the_failure_on_every_arm():
+    """Issue 27: a failed trial blanked every segment on an N-joint arm, only the segments from
+    its failure on on the two-link arm; now one rule (metrics.segment_failed) on both."""
+    for sc in (load_scenario(), load_scenario(ROOT / "examples" / "plugin_urdf.toml")):
+        sc = dataclasses.replace(
+            sc, seeds=2, duration=0.2, swap_times=(0.04,), swap_masses=(1.0,), swap_com=()
+        )
+        res = run_benchmark(sc, progress=False, controllers={"nan": NanAfter()})
+        per = res.to_frame()
+        trial1 = per[per.seed == 1].sort_values("segment")
+        assert np.isfinite(trial1.rms_error.iloc[0]) and np.isnan(trial1.rms_error.iloc[1]), sc.name
+        assert np.isfinite(per[per.seed == 0].rms_error).all()
+
+
+def test_information_time_has_the_same_keys_without_an_oracle_on_every_arm():
+    sc = load_scenario(ROOT / "examples" / "plugin_urdf.toml")
+    sc = dataclasses.replace(sc, seeds=1, duration=0.2, swap_times=(0.1,), swap_masses=(1.0,), swap_com=())
+    seg = res_seg = run_benchmark(sc, progress=False, controllers={"pd": NanAfter()}).metrics()
+    seg = res_seg["controllers"]["pd"]["segments"][1]
+    assert seg["information_time"] == {"known": None, "seeds": 0, "reference": None}
+
+
+@pytest.mark.parametrize("arm", ["two_link", "urdf"])
+def test_adaptive_ct_takes_its_detector_table_in_either_place_on_every_arm(arm):
+    from adaptive_dd.benchmark.runner import scenario_controller
+    from adaptive_dd.benchmark.scenario_checks import freeze
+    from adaptive_dd.errors import ParameterError
+
+    base = load_scenario() if arm == "two_link" else load_scenario(ROOT / "examples" / "plugin_urdf.toml")
+    key = "threshold" if arm == "two_link" else "min_rows"
+    value = 7.0 if arm == "two_link" else 4
+
+    def built(opts):
+        sc = dataclasses.replace(
+            base, controllers=("adaptive_ct",), controller_options=(("adaptive_ct", freeze(opts)),)
+        )
+        return scenario_controller(sc, "adaptive_ct")[1].online
+
+    top = built({"detector": {key: value}})
+    inside = built({"estimator": {"detector": {key: value}}})
+    assert top == inside and getattr(top.detector, key) == value
+    with pytest.raises(ParameterError, match="'detector' given twice"):
+        built({"detector": {key: value}, "estimator": {"detector": {key: value}}})
+
+
+def test_validate_says_the_boost_default_of_each_arm(capsys):
+    """adaptive_ct's boost_duration defaults differ on purpose (0.2 s two-link, 1 s N-joint):
+    validate prints the value the run will use, the default marked."""
+    assert main(["validate"]) == 0
+    out = capsys.readouterr().out
+    assert "controllers.adaptive_ct.boost_duration = 0.2 s   (default)" in out
+    assert "adaptive_ct_paper.boost" not in out
+    ur5 = str(resources.files("adaptive_dd.scenarios").joinpath("ur5_tool_swap.toml"))
+    assert main(["validate", ur5]) == 0
+    assert "controllers.adaptive_ct.boost_duration = 1.0 s   (default)" in capsys.readouterr().out
