@@ -290,6 +290,45 @@ def test_plant_urdf_is_the_plant_and_model_from_is_the_model(tmp_path):
     assert pl.pi_seg[0, 0, 10] == pytest.approx(8.393)
 
 
+def test_model_from_an_identified_model_json(tmp_path):
+    """[model] from = model.json (identify --out): the controllers get its consistent fit's links and
+    its friction and armature; a model without a consistent fit, or of other joints, is refused."""
+    from dataclasses import replace
+
+    from adaptive_dd.identification.identified_model import IdentifiedModel, save_identified_model
+
+    base = load_scenario(_shipped("ur5_tool_swap_exact")).arm
+    n, p = base.n_joints, 3
+    _edited_ur5(tmp_path, name="model.urdf")  # the fit's links: the UR5 with link 2 at 9.5 kg
+    m = IdentifiedModel(
+        urdf=str(base.urdf), payload_frame=base.payload_frame, gravity=list(base.gravity),
+        repair_inertia=False, joint_names=list(base.joint_names), friction_velocity=0.01,
+        names=["a", "b", "c"], sigma=[1.0] * p, sigma_urdf=[1.0] * p, std=[0.1] * p,
+        identified=[True] * p, covariance=np.eye(p).tolist(), used=[True] * n,
+        residual_rms=[0.1] * n, noise_rms=[0.1] * n, viscous=[2.0] * n, coulomb=[3.0] * n,
+        armature=[0.25] * n, consistent_sigma=None, consistent_distance=None,
+        fitted_urdf="model.urdf", record={},
+    )  # fmt: skip
+    save_identified_model(tmp_path / "model.json", m)
+    data = _data()
+    data["model"] = {"from": str(tmp_path / "model.json")}
+    sc = parse_scenario(data, "m.toml")
+    assert sc.arm.pi_links[10] == pytest.approx(9.5)  # the fit's links
+    np.testing.assert_array_equal(sc.arm.armature, [0.25] * n)
+    np.testing.assert_array_equal(sc.arm.viscous, [2.0] * n)
+    np.testing.assert_array_equal(sc.arm.coulomb, [3.0] * n)
+    assert sc.plant.nominal().pi_links[10] == pytest.approx(8.393)  # the plant stays the [arm]
+    np.testing.assert_array_equal(sc.plant.nominal().armature, base.armature)
+    save_identified_model(tmp_path / "nofit.json", replace(m, fitted_urdf=None))
+    data["model"] = {"from": str(tmp_path / "nofit.json")}
+    with pytest.raises(ScenarioError, match=r"nofit\.json.*no physically consistent fit"):
+        parse_scenario(data, "m.toml")
+    save_identified_model(tmp_path / "other.json", replace(m, joint_names=["j"] * n))
+    data["model"] = {"from": str(tmp_path / "other.json")}
+    with pytest.raises(ScenarioError, match=r"identified on joints"):
+        parse_scenario(data, "m.toml")
+
+
 @pytest.mark.parametrize(
     ("table", "match"),
     [
@@ -320,7 +359,10 @@ def test_plant_urdf_is_the_plant_and_model_from_is_the_model(tmp_path):
         ({"plant": {"uncertainty": 0.1}}, r"\[plant\.uncertainty\] must be a table"),
         ({"plant": {"urdf": "missing.urdf"}}, r"key 'plant\.urdf' = 'missing\.urdf'.*no such URDF"),
         ({"plant": {"urdf": str(robot_urdf("panda"))}}, r"key 'plant\.urdf'.*'tool0' is not a link"),
-        ({"model": {"from": "identified.json"}}, r"key 'model\.from' = 'identified\.json'.*JSON"),
+        (
+            {"model": {"from": "identified.json"}},
+            r"key 'model\.from' = 'identified\.json'.*no such model file",
+        ),
         ({"model": {"from": str(robot_urdf("panda"))}}, r"key 'model\.from'.*'tool0' is not a link"),
         ({"model": {"frm": "x.urdf"}}, r"unknown key 'model\.frm'"),
         ({"plant": {"friction": "tanh", "viscouss": [1.0] * 6}}, r"unknown key 'plant\.viscouss'"),

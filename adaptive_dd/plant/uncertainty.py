@@ -326,8 +326,7 @@ def parse_plant(src: str, table: dict | None, arm, model_from: bool = False) -> 
         Naming ``src``, the key and the value: a URDF with other joints or frames, a list of the
         wrong length, a negative or too large level, an unknown key of ``[plant.uncertainty]``.
     """
-    from adaptive_dd.errors import UrdfError
-    from adaptive_dd.plant.serial_arm import URDF_TABLE_BOUNDS, SerialArm, _table_vector
+    from adaptive_dd.plant.serial_arm import URDF_TABLE_BOUNDS, _table_vector
 
     table = {} if table is None else {k: v for k, v in table.items() if k in PLANT_TRUTH_KEYS}
     if not table and not model_from:
@@ -339,20 +338,11 @@ def parse_plant(src: str, table: dict | None, arm, model_from: bool = False) -> 
         u = table["urdf"]
         if not isinstance(u, str) or not u:
             raise ScenarioError(f"{src}: key 'plant.urdf' must be a file path, got {u!r}")
-        path = Path(u)
-        if not path.is_absolute():
-            path = (Path(src).parent if Path(src).is_file() else Path.cwd()) / path
-        try:
-            other = SerialArm.from_urdf(path, arm.payload_frame, gravity=arm.gravity)
-            _ = other.chain, other.pi_links
-        except (UrdfError, ParameterError) as exc:
-            raise ScenarioError(f"{src}: key 'plant.urdf' = {u!r}: {exc}") from None
-        why = kinematics_mismatch(arm, other)
-        if why is not None:
-            raise ScenarioError(
-                f"{src}: key 'plant.urdf' = {u!r}: {why}; the plant's URDF must have the same joints and "
-                "frames as the [arm] (other inertial values only)"
-            )
+        path = _scenario_path(src, u)
+        other = _same_arm_urdf(
+            src, "plant.urdf", u, path, arm, "the plant's URDF must have the same joints and frames as the "
+            "[arm] (other inertial values only)"
+        )  # fmt: skip
         urdf = str(path)
         spec = PlantSpec(tuple(float(x) for x in other.pi_links), spec.viscous, spec.coulomb, spec.armature)
     vals = {}
@@ -386,14 +376,16 @@ def parse_model(src: str, table, arm):
     joints' friction and armature, actuators and sensors stay the ``[arm]``'s). The plant stays
     the ``[arm]`` (with the ``[plant]`` table's changes).
 
+    ``from = "DIR/model.json"`` (what ``adaptive-dd identify --out DIR`` writes): the links of its
+    physically consistent fit (``model.urdf`` beside it) and its identified viscous, Coulomb and
+    armature values; the ``[arm]``'s friction law, actuators and sensors stay.
+
     Raises
     ------
     ScenarioError
         Naming ``src``, the key and the value: an unknown key, a missing file, other joints or
-        frames, a ``.json`` model (not readable yet), another kind of file.
+        frames, a model.json that is not one or has no consistent fit, another kind of file.
     """
-    from adaptive_dd.errors import UrdfError
-    from adaptive_dd.plant.serial_arm import SerialArm
 
     if table is None:
         return arm
@@ -407,28 +399,70 @@ def parse_model(src: str, table, arm):
     u = table["from"]
     if not isinstance(u, str) or not u:
         raise ScenarioError(f"{src}: key 'model.from' must be a file path, got {u!r}")
+    path = _scenario_path(src, u)
+    rule = "the model must have the same joints and frames as the [arm]"
+    if path.suffix.lower() == ".json":
+        return _identified_arm(src, u, path, arm, rule)
+    if path.suffix.lower() != ".urdf":
+        raise ScenarioError(
+            f"{src}: key 'model.from' = {u!r}: expected a .urdf file or the model.json that "
+            "`adaptive-dd identify --out DIR` writes"
+        )
+    _same_arm_urdf(src, "model.from", u, path, arm, rule)
+    return arm.with_(urdf=path)
+
+
+def _identified_arm(src: str, u: str, path: Path, arm, rule: str):
+    """The arm of an identified ``model.json``: its physically consistent fit's links (``model.urdf``)
+    and its viscous, Coulomb and armature values; the [arm]'s friction law is kept."""
+    from adaptive_dd.errors import DataError
+    from adaptive_dd.identification.identified_model import load_identified_model
+
+    try:
+        m = load_identified_model(path)
+    except DataError as exc:
+        raise ScenarioError(f"{src}: key 'model.from' = {u!r}: {exc}") from None
+    if m.fitted_urdf is None:
+        raise ScenarioError(
+            f"{src}: key 'model.from' = {u!r}: this model has no physically consistent fit (no model.urdf "
+            "beside it), so it has no link inertials a controller can use; identify on a longer or richer "
+            "record, or give a URDF"
+        )
+    if list(m.joint_names) != list(arm.joint_names):
+        raise ScenarioError(
+            f"{src}: key 'model.from' = {u!r}: identified on joints {list(m.joint_names)}, the [arm] has "
+            f"{list(arm.joint_names)}"
+        )
+    fitted = Path(m.fitted_urdf)
+    _same_arm_urdf(src, "model.from", u, fitted, arm, rule)
+    return arm.with_(
+        urdf=fitted,
+        viscous=np.asarray(m.viscous, dtype=float),
+        coulomb=np.asarray(m.coulomb, dtype=float),
+        armature=np.asarray(m.armature, dtype=float),
+    )
+
+
+def _scenario_path(src: str, u: str) -> Path:
+    """``u`` as given, relative to the scenario file's folder (or the working folder)."""
     path = Path(u)
     if not path.is_absolute():
         path = (Path(src).parent if Path(src).is_file() else Path.cwd()) / path
-    if path.suffix.lower() == ".json":
-        raise ScenarioError(
-            f"{src}: key 'model.from' = {u!r}: an identified model in JSON (`adaptive-dd identify --out`'s "
-            "model.json) cannot be read by this version yet; give a URDF with the identified inertial "
-            "values instead"
-        )
-    if path.suffix.lower() != ".urdf":
-        raise ScenarioError(
-            f"{src}: key 'model.from' = {u!r}: expected a .urdf file (or, later, a model.json)"
-        )
+    return path
+
+
+def _same_arm_urdf(src: str, key: str, u: str, path: Path, arm, rule: str):
+    """The arm of the URDF at ``path`` (the scenario's ``key = u``), checked to have ``arm``'s joints
+    and frames; a :class:`ScenarioError` naming the key, the value and ``rule`` otherwise."""
+    from adaptive_dd.errors import UrdfError
+    from adaptive_dd.plant.serial_arm import SerialArm
+
     try:
         other = SerialArm.from_urdf(path, arm.payload_frame, gravity=arm.gravity)
         _ = other.chain, other.pi_links
     except (UrdfError, ParameterError) as exc:
-        raise ScenarioError(f"{src}: key 'model.from' = {u!r}: {exc}") from None
+        raise ScenarioError(f"{src}: key '{key}' = {u!r}: {exc}") from None
     why = kinematics_mismatch(arm, other)
     if why is not None:
-        raise ScenarioError(
-            f"{src}: key 'model.from' = {u!r}: {why}; the model must have the same joints and frames as "
-            "the [arm]"
-        )
-    return arm.with_(urdf=path)
+        raise ScenarioError(f"{src}: key '{key}' = {u!r}: {why}; {rule}")
+    return other
