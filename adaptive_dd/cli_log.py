@@ -320,11 +320,8 @@ def _write_estimates(path, model, fit) -> None:
 
 
 def _write_model(outputs, arm, model, rec, fit, cf, spec) -> list:
-    from adaptive_dd.identification.identified_model import (
-        IdentifiedModel,
-        save_identified_model,
-        write_fitted_urdf,
-    )
+    from adaptive_dd.identification.identified_model import IdentifiedModel, save_identified_model
+    from adaptive_dd.plant.urdf_write import write_fitted_urdf
 
     n = arm.n_joints
     if cf is not None:

@@ -331,8 +331,8 @@ def test_cli_identify_and_predict_on_the_tiago_record(tmp_path, capsys):
 # ----------------------------------------------------------------------------- model files, pairs, validate
 def test_fitted_urdf_carries_the_standard_parameters(tmp_path):
     """write_fitted_urdf: the arm read back from model.urdf has the written links and friction."""
-    from adaptive_dd.identification.identified_model import write_fitted_urdf
     from adaptive_dd.plant.serial_arm import SerialArm
+    from adaptive_dd.plant.urdf_write import write_fitted_urdf
     from adaptive_dd.robots import robot_urdf
 
     arm = SerialArm.from_urdf(robot_urdf("vertical3"), "tool")

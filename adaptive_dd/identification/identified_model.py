@@ -27,7 +27,7 @@ from numpy.typing import NDArray
 
 from adaptive_dd.errors import DataError
 
-__all__ = ["FORMAT", "IdentifiedModel", "load_identified_model", "save_identified_model", "write_fitted_urdf"]
+__all__ = ["FORMAT", "IdentifiedModel", "load_identified_model", "save_identified_model"]
 
 Array = NDArray[np.float64]
 FORMAT = "adaptive_dd identified model 1"
@@ -194,25 +194,3 @@ def load_identified_model(path) -> IdentifiedModel:
                 raise DataError(f"{path}: key '{k}': the URDF {u} is not there")
             kw[k] = str(u)
     return IdentifiedModel(**kw)
-
-
-def write_fitted_urdf(arm, pi: Array, path) -> Path:
-    """The arm's URDF with the standard parameters ``pi (13 n,)`` written in.
-
-    Each chain joint's child link gets the inertia of its whole body (Pinocchio merges the
-    links fixed to it and the locked branches hanging from it: their ``<inertial>`` are
-    removed, their mass now in the body); ``<dynamics damping friction>`` of the chain
-    joints get ``fv, fc``. The armature is not a URDF quantity (it stays in model.json).
-    See :func:`adaptive_dd.plant.urdf_write.write_urdf_links`.
-    """
-    from adaptive_dd.plant.urdf_write import write_urdf_links
-
-    n = arm.n_joints
-    pi = np.asarray(pi, dtype=float)
-    return write_urdf_links(
-        arm,
-        pi[: 10 * n],
-        path,
-        f"written by adaptive-dd identify: a physically consistent fit on {arm.urdf}",
-        friction=(pi[10 * n : 11 * n], pi[11 * n : 12 * n]),
-    )

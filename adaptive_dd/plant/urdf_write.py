@@ -19,7 +19,7 @@ from numpy.typing import ArrayLike
 from adaptive_dd.errors import ParameterError
 from adaptive_dd.outputs import atomic_write
 
-__all__ = ["write_urdf_links"]
+__all__ = ["write_fitted_urdf", "write_urdf_links"]
 
 
 def _f(x: float) -> str:
@@ -90,3 +90,22 @@ def write_urdf_links(
         fh.write('<?xml version="1.0" encoding="utf-8"?>\n')
         fh.write(ET.tostring(root, encoding="unicode"))
     return path
+
+
+def write_fitted_urdf(arm, pi, path: str | Path) -> Path:
+    """The arm's URDF with the standard parameters ``pi (13 n,)`` written in.
+
+    Each chain joint's child link gets the inertia of its whole body (Pinocchio merges the
+    links fixed to it and the locked branches hanging from it: their ``<inertial>`` are
+    removed, their mass now in the body); ``<dynamics damping friction>`` of the chain
+    joints get ``fv, fc``. The armature is not a URDF quantity (it stays in model.json).
+    """
+    n = arm.n_joints
+    pi = np.asarray(pi, dtype=float)
+    return write_urdf_links(
+        arm,
+        pi[: 10 * n],
+        path,
+        f"written by adaptive-dd identify: a physically consistent fit on {arm.urdf}",
+        friction=(pi[10 * n : 11 * n], pi[11 * n : 12 * n]),
+    )
