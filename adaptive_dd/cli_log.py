@@ -244,7 +244,7 @@ def _consistent(model, fit):
 
 def identify_log(args: argparse.Namespace, arm, outputs) -> int:
     """``adaptive-dd identify --arm SCENARIO [FILES]`` for an arm from a URDF."""
-    from adaptive_dd.identification.log_fit import filter_time_constant, fit_log, identifiable_subset
+    from adaptive_dd.identification.log_fit import filter_time_constant, identifiable_subset
     from adaptive_dd.identification.serial_model import serial_model
     from adaptive_dd.identification_plots import plot_torque_fit
 
@@ -265,26 +265,7 @@ def identify_log(args: argparse.Namespace, arm, outputs) -> int:
         return _payload_only(args, arm, model, rec, tau_f)
     lim = arm.position_limits
     K = identifiable_subset(model, rec.used, lim[:, 0], lim[:, 1], np.random.default_rng(0))
-    try:
-        fit = fit_log(
-            model,
-            rec.q,
-            rec.qd,
-            rec.tau,
-            rec.used,
-            K,
-            tau_f=tau_f,
-            sample_period=rec.sample_period,
-            channel_weight=rec.weight,
-            torque_held=spec.torque_held,
-        )
-    except DataError as exc:
-        raise DataError(f"{rec.source}: {exc}") from None
-    except np.linalg.LinAlgError as exc:  # not met so far: the checks above come first
-        raise DataError(
-            f"{rec.source}: the weighted least squares failed numerically ({exc}); check the record's "
-            "conversions (a huge or constant column) and its window"
-        ) from None
+    fit = _fit_record(model, rec, K, tau_f, spec.torque_held)
     _print_fit(model, fit, names)
     _output_error(args, arm, model, rec, fit)
     cf = _consistent(model, fit)
@@ -404,26 +385,37 @@ def _payload_only(args, arm, model, rec, tau_f) -> int:
     return 0
 
 
-def _payload_pair(args, arm, model, fit, tau_f, K) -> None:
+def _fit_record(model, rec, K, tau_f: float, torque_held: bool):
+    """:func:`~adaptive_dd.identification.log_fit.fit_log` on a read record; its errors name the record."""
     from adaptive_dd.identification.log_fit import fit_log
+
+    try:
+        return fit_log(
+            model,
+            rec.q,
+            rec.qd,
+            rec.tau,
+            rec.used,
+            K,
+            tau_f=tau_f,
+            sample_period=rec.sample_period,
+            channel_weight=rec.weight,
+            torque_held=torque_held,
+        )
+    except DataError as exc:
+        raise DataError(f"{rec.source}: {exc}") from None
+    except np.linalg.LinAlgError as exc:  # not met so far: the record's checks come first
+        raise DataError(
+            f"{rec.source}: the weighted least squares failed numerically ({exc}); check the record's "
+            "conversions (a huge or constant column) and its window"
+        ) from None
+
+
+def _payload_pair(args, arm, model, fit, tau_f, K) -> None:
     from adaptive_dd.identification.payload_pair import payload_from_pair
 
     spec, base = read_arm_log(args.arm, arm, args.baseline, args.window)
-    try:
-        other = fit_log(
-            model,
-            base.q,
-            base.qd,
-            base.tau,
-            base.used,
-            K,
-            tau_f=tau_f,
-            sample_period=base.sample_period,
-            channel_weight=base.weight,
-            torque_held=spec.torque_held,
-        )
-    except DataError as exc:
-        raise DataError(f"{base.source}: {exc}") from None
+    other = _fit_record(model, base, K, tau_f, spec.torque_held)
     pr = payload_from_pair(arm, fit.sigma, fit.cov, other.sigma, other.cov)
     loaded = ", ".join(args.data) if args.data else "the scenario's record"
     _print_payload(f"payload (loaded {loaded} - unloaded {', '.join(args.baseline)})", pr)
