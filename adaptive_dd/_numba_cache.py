@@ -81,9 +81,9 @@ def compile_estimate(arm) -> float:
     the source (:func:`configure`); a cached kernel with a new specialisation (another law)
     still compiles, and the message after the run says so.
     """
-    from adaptive_dd.plant.serial_arm import SerialArm
+    from adaptive_dd.plant.arm import Arm
 
-    serial = isinstance(arm, SerialArm)
+    serial = isinstance(arm, Arm)
     cache = getattr(_closed_loop_kernel(serial), "_cache", None)
     index = getattr(getattr(cache, "_cache_file", None), "_index_path", None)
     if index is None or os.path.exists(index):

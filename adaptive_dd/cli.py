@@ -15,7 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
-from adaptive_dd.cli_arm import describe_serial_arm
+from adaptive_dd.cli_arm import describe_arm
 from adaptive_dd.cli_arm import load_arm as _load_arm
 from adaptive_dd.errors import OutputError, ParameterError
 
@@ -69,9 +69,9 @@ def _refuse(args: argparse.Namespace, options: tuple[str, ...], why: str) -> Non
 
 
 def _cmd_check(args: argparse.Namespace) -> int:
+    from adaptive_dd.plant.arm import Arm
     from adaptive_dd.plant.parameters import Payload
-    from adaptive_dd.plant.pinocchio_model import cross_check
-    from adaptive_dd.plant.serial_arm import SerialArm
+    from adaptive_dd.plant.pinocchio_model import two_link_cross_check
 
     arm = _load_arm(args.arm)
     radius = arm.payload_radius if args.radius is None else args.radius
@@ -82,14 +82,14 @@ def _cmd_check(args: argparse.Namespace) -> int:
         payload = Payload(mass, radius) if mass else None
         label = f"payload {mass} kg, radius {radius} m" if payload else "no payload"
         where = f"arm of {args.arm}" if args.arm else "the SICE arm"
-        if isinstance(arm, SerialArm):
-            from adaptive_dd.plant.serial_check import serial_cross_check
+        if isinstance(arm, Arm):
+            from adaptive_dd.plant.pinocchio_check import cross_check
 
             print(
                 f"Cross-check against Pinocchio ({where}: {arm.n_joints} joints of {arm.urdf.name}, "
                 f"{label} at '{arm.payload_frame}', {args.states} random states)"
             )
-            results = serial_cross_check(
+            results = cross_check(
                 arm,
                 {"mass": mass, "radius": radius} if mass else None,
                 n_states=args.states,
@@ -101,8 +101,10 @@ def _cmd_check(args: argparse.Namespace) -> int:
                 f"{args.states} random states)"
             )
             if arm.physical is None:
-                print("  (sigma-only arm: Pinocchio model built from Arm.equivalent_physical())")
-            results = cross_check(arm, payload, n_states=args.states, rng=np.random.default_rng(args.seed))
+                print("  (sigma-only arm: Pinocchio model built from TwoLinkArm.equivalent_physical())")
+            results = two_link_cross_check(
+                arm, payload, n_states=args.states, rng=np.random.default_rng(args.seed)
+            )
         for r in results:
             print("  " + str(r))
         bad = [r for r in results if not r.passed]
@@ -126,10 +128,10 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     if est.large:
         print(f"estimate: {est}", file=sys.stderr)
     arm = _load_arm(args.arm)
-    from adaptive_dd.plant.serial_arm import SerialArm
+    from adaptive_dd.plant.arm import Arm
 
-    if isinstance(arm, SerialArm):  # N joints: identification records (cli_serial)
-        from adaptive_dd.cli_serial import simulate_serial
+    if isinstance(arm, Arm):  # N joints: identification records (cli_serial)
+        from adaptive_dd.cli_simulate import simulate_arm
 
         _refuse(
             args,
@@ -138,7 +140,7 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
             "computed-torque record is always limited to the arm's torque limits",
         )
         with OutputSet(args.out) as outputs:
-            return simulate_serial(args, args.arm, outputs)
+            return simulate_arm(args, args.arm, outputs)
     _refuse(
         args,
         ("--com", "--plant"),
@@ -275,7 +277,7 @@ _OURS = ("M2", "full", "exact")
 def _reproduce_figures(res, tau_f: tuple, outputs) -> list:
     """Fig. 5-like estimate histories and the Fig. 7 model responses; prints Fig. 7's rms."""
     from adaptive_dd.identification.reproduce import model_responses
-    from adaptive_dd.plant.arm import Arm
+    from adaptive_dd.plant.two_link import TwoLinkArm
     from adaptive_dd.plotting import plot_estimates, plot_model_response
 
     out = outputs.folder
@@ -291,7 +293,7 @@ def _reproduce_figures(res, tau_f: tuple, outputs) -> list:
     for key, i, name, label, short in figures:
         if key in res.theta:
             title = f"Estimates, {label}, tau_f = {tau_f[i]}"
-            plot_estimates(t, res.theta[key][i], Arm.sice().sigma, outputs.path(name), title)
+            plot_estimates(t, res.theta[key][i], TwoLinkArm.sice().sigma, outputs.path(name), title)
             written.append(out / name)
             models[f"{short}, tau_f = {tau_f[i]}"] = res.theta[key][i][:, -1].mean(axis=0)
     if models:
@@ -301,7 +303,7 @@ def _reproduce_figures(res, tau_f: tuple, outputs) -> list:
             arm_q,
             qs,
             outputs.path("fig7_model_response.png"),
-            "Arm and identified models, same torque (Table 2)",
+            "TwoLinkArm and identified models, same torque (Table 2)",
         )
         written.append(out / "fig7_model_response.png")
         for k, q in qs.items():
@@ -317,10 +319,10 @@ def _cmd_identify(args: argparse.Namespace) -> int:
     from adaptive_dd.outputs import OutputSet
 
     if args.arm:  # an N-joint arm from a URDF: its own path (adaptive_dd.cli_log)
-        from adaptive_dd.plant.serial_arm import SerialArm
+        from adaptive_dd.plant.arm import Arm
 
         arm = _load_arm(args.arm, args.repair_inertia)
-        if isinstance(arm, SerialArm):
+        if isinstance(arm, Arm):
             from adaptive_dd.cli_log import identify_log
             from adaptive_dd.experiments import TABLE2
 
@@ -439,17 +441,17 @@ def _identify_online(args, rec, outputs) -> int:
 
     from adaptive_dd.controllers.adaptive import ADAPTIVE_ONLINE
     from adaptive_dd.errors import DataError
-    from adaptive_dd.identification.online import run_online
+    from adaptive_dd.identification.two_link_online import run_two_link_online
     from adaptive_dd.outputs import atomic_write
-    from adaptive_dd.plant.arm import Arm
     from adaptive_dd.plant.parameters import SIGMA_NAMES
+    from adaptive_dd.plant.two_link import TwoLinkArm
     from adaptive_dd.plotting import plot_estimates
 
     if rec.qd is None:
         raise DataError(f"{args.data}: --online needs the measured velocity (columns qd1, qd2)")
     cfg = dataclasses.replace(ADAPTIVE_ONLINE, sample_period=rec.sample_period, tau_f=args.tau_f)
-    sice = Arm.sice()  # a record's arm: the SICE arm (the nominal model the estimator starts from)
-    r = run_online(rec.q, rec.qd, rec.tau, cfg, sice.sigma)
+    sice = TwoLinkArm.sice()  # a record's arm: the SICE arm (the nominal model the estimator starts from)
+    r = run_two_link_online(rec.q, rec.qd, rec.tau, cfg, sice.sigma)
     model, alarms = r.sigma_model[0], r.alarm_times()[0]
     mass = sice.payload_mass_from_sigma(model)
     print(
@@ -501,7 +503,7 @@ def _print_with_bound(final, std, crb, rec, args: argparse.Namespace) -> None:
 
 
 def _identify_output_error(rec, sigma0, args: argparse.Namespace):
-    from adaptive_dd.identification.output_error import output_error_fit
+    from adaptive_dd.identification.two_link_output_error import output_error_fit
 
     if rec.qd is None:
         raise ValueError(f"{args.data}: estimator output_error needs columns qd1, qd2")
@@ -541,7 +543,7 @@ def _identify_bound(rec, sigma, args: argparse.Namespace):
 
 
 def _cmd_excite(args: argparse.Namespace) -> int:
-    from adaptive_dd.cli_serial import cmd_excite
+    from adaptive_dd.cli_simulate import cmd_excite
 
     return cmd_excite(args)
 
@@ -613,10 +615,10 @@ def _cmd_validate(args: argparse.Namespace) -> int:
             return validate_identification(args.scenario)
     sc = load_scenario(args.scenario)
     print(format_scenario(sc))
-    from adaptive_dd.plant.serial_arm import SerialArm
+    from adaptive_dd.plant.arm import Arm
 
-    if isinstance(sc.arm, SerialArm):
-        print(describe_serial_arm(sc.arm))
+    if isinstance(sc.arm, Arm):
+        print(describe_arm(sc.arm))
     from adaptive_dd.benchmark.preflight import preflight, resolved_settings, torque_peaks
 
     for line in resolved_settings(sc):

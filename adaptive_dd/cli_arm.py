@@ -1,13 +1,13 @@
 """The arm a command works on: a scenario file's ``[arm]``, ``[plant]`` and ``[model]``
 (:func:`load_arm`), and what ``validate`` and ``identify`` print of a URDF arm
-(:func:`describe_serial_arm`). Shared by :mod:`adaptive_dd.cli` and :mod:`adaptive_dd.cli_log`
+(:func:`describe_arm`). Shared by :mod:`adaptive_dd.cli` and :mod:`adaptive_dd.cli_log`
 (apart from both, so that neither imports the other)."""
 
 from __future__ import annotations
 
 from pathlib import Path
 
-__all__ = ["describe_serial_arm", "load_arm"]
+__all__ = ["describe_arm", "load_arm"]
 
 
 def load_arm(path: str | None, repair_inertia: bool = False):
@@ -16,11 +16,11 @@ def load_arm(path: str | None, repair_inertia: bool = False):
     sets ``arm.repair_inertia = true`` (identify's --repair-inertia)."""
     from adaptive_dd.benchmark.scenario import model_and_plant, read_toml
     from adaptive_dd.errors import ScenarioError
-    from adaptive_dd.plant.arm import Arm, arm_from_tables
+    from adaptive_dd.plant.two_link import TwoLinkArm, arm_from_tables
     from adaptive_dd.plant.uncertainty import PLANT_TRUTH_KEYS
 
     if path is None:
-        return Arm.sice()
+        return TwoLinkArm.sice()
     if not Path(path).is_file():
         raise ScenarioError(f"{path}: no such scenario file")
     data = read_toml(Path(path))
@@ -33,7 +33,7 @@ def load_arm(path: str | None, repair_inertia: bool = False):
     return model_and_plant(str(path), arm, plant if isinstance(plant, dict) else None, data.get("model"))[0]
 
 
-def describe_serial_arm(arm) -> str:
+def describe_arm(arm) -> str:
     """What ``validate`` prints of a URDF arm: joints, base parameters, payload subspace."""
     lines = [f"# arm: {arm.urdf} ({arm.n_joints} joints, payload frame '{arm.payload_frame}')"]
     lim = arm.position_limits

@@ -63,11 +63,11 @@ def validate_identification(path) -> int:
         A table other than ``[arm]``, ``[plant]``, ``[record]`` (a benchmark's tables do not
         belong here), or what :func:`adaptive_dd.record.record_spec` refuses.
     """
-    from adaptive_dd.cli_arm import describe_serial_arm
+    from adaptive_dd.cli_arm import describe_arm
     from adaptive_dd.cli_arm import load_arm as _load_arm
     from adaptive_dd.errors import ScenarioError
     from adaptive_dd.io import read_toml
-    from adaptive_dd.plant.serial_arm import SerialArm
+    from adaptive_dd.plant.arm import Arm
     from adaptive_dd.record import record_spec
 
     data = read_toml(Path(path), ScenarioError)
@@ -78,7 +78,7 @@ def validate_identification(path) -> int:
             f"{', '.join(f'[{t}]' for t in IDENTIFICATION_TABLES)}; keep benchmark tables in another file"
         )
     arm = _load_arm(str(path))
-    if not isinstance(arm, SerialArm):
+    if not isinstance(arm, Arm):
         raise ScenarioError(f"{path}: [record] needs an [arm] from a URDF (urdf = ... or robot = ...)")
     spec = record_spec(data["record"], arm.joint_names, arm.joint_kinds, str(path))
     print(
@@ -98,7 +98,7 @@ def validate_identification(path) -> int:
             f"{spec.torque_offset[j]:.6g}{'' if spec.used[j] else ', excluded'} }}"
         )
     print(f"record.window = {list(spec.window) if spec.window else 'the whole log'}")
-    print(describe_serial_arm(arm))
+    print(describe_arm(arm))
     return 0
 
 
@@ -177,7 +177,7 @@ def _information(model, fit) -> Array:
 
 def _output_error(args, arm, model, rec, fit) -> None:
     """Output error from the WLS estimate where the record can be simulated, else a message."""
-    from adaptive_dd.identification.serial_output_error import measurement_std, serial_output_error
+    from adaptive_dd.identification.output_error import fit_output_error, measurement_std
 
     mode = args.output_error
     if mode == "off" or (mode == "auto" and not rec.simulator_format):
@@ -195,7 +195,7 @@ def _output_error(args, arm, model, rec, fit) -> None:
     if not rec.qd_measured:
         std[arm.n_joints :] = np.inf
     try:
-        oe = serial_output_error(
+        oe = fit_output_error(
             model,
             rec.q,
             rec.qd,
@@ -245,13 +245,13 @@ def _consistent(model, fit):
 def identify_log(args: argparse.Namespace, arm, outputs) -> int:
     """``adaptive-dd identify --arm SCENARIO [FILES]`` for an arm from a URDF."""
     from adaptive_dd.identification.log_fit import filter_time_constant, identifiable_subset
-    from adaptive_dd.identification.serial_model import serial_model
+    from adaptive_dd.identification.model import arm_model
     from adaptive_dd.identification_plots import plot_torque_fit
 
     for note in arm.urdf_notes:
         print(f"note: {note}")
     spec, rec = read_arm_log(args.arm, arm, args.data, args.window)
-    model = serial_model(arm)
+    model = arm_model(arm)
     names = arm.joint_names
     tau_f = args.tau_f or filter_time_constant(rec.sample_period)
     print(
@@ -353,8 +353,8 @@ def _write_model(outputs, arm, model, rec, fit, cf, spec) -> list:
 
 
 def _payload_only(args, arm, model, rec, tau_f) -> int:
+    from adaptive_dd.identification.output_error import measurement_std
     from adaptive_dd.identification.payload_pair import payload_from_record
-    from adaptive_dd.identification.serial_output_error import measurement_std
 
     if not rec.used.all():
         raise DataError(
@@ -463,7 +463,7 @@ def predict_log(args: argparse.Namespace) -> int:
     m = load_identified_model(args.model)
     _check_same_urdf(args.arm, m, args.model)
     arm = m.arm()
-    model = m.serial_model()
+    model = m.arm_model()
     _, rec = read_arm_log(args.arm, arm, args.data, args.window)
     qd, qdd = derivatives(rec.q, rec.sample_period)
     if rec.qd_measured:

@@ -421,7 +421,7 @@ def read_log(spec: RecordSpec, window: tuple[float, float] | None = None, arm=No
     spec : RecordSpec
     window : (float, float), optional
         Replaces ``spec.window`` [s].
-    arm : SerialArm, optional
+    arm : Arm, optional
         For the unit check against the URDF's position limits.
 
     Raises

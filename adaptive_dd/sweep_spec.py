@@ -154,15 +154,15 @@ def _controllers(src: str, sw: dict, base: Scenario) -> tuple[str, ...]:
     ctrls = sw.get("controllers", list(base.controllers))
     if not isinstance(ctrls, list) or not ctrls or not all(isinstance(c, str) for c in ctrls):
         raise SweepError(f"{src}: key 'sweep.controllers' must be a non-empty list of names, got {ctrls!r}")
-    from adaptive_dd.closed_loop.controllers import SERIAL_CONTROLLERS
-    from adaptive_dd.plant.arm import Arm
+    from adaptive_dd.closed_loop.controllers import ARM_CONTROLLERS
+    from adaptive_dd.plant.two_link import TwoLinkArm
 
-    two_link = isinstance(base.arm, Arm)
-    known = tuple(CONTROLLERS) if two_link else tuple(SERIAL_CONTROLLERS)
+    two_link = isinstance(base.arm, TwoLinkArm)
+    known = tuple(CONTROLLERS) if two_link else tuple(ARM_CONTROLLERS)
     for c in ctrls:
         if c not in known:
             kind = "the two-link arm" if two_link else f"this {base.n_joints}-joint arm"
-            if c not in {*CONTROLLERS, *SERIAL_CONTROLLERS}:
+            if c not in {*CONTROLLERS, *ARM_CONTROLLERS}:
                 raise SweepError(f"{src}: key 'sweep.controllers': unknown controller {c!r}; known: {known}")
             raise SweepError(
                 f"{src}: key 'sweep.controllers': controller {c!r} is not for {kind}; known for it: {known}"

@@ -35,7 +35,7 @@ from adaptive_dd.identification.log_fit import (
     identifiable_subset,
     predict_torque,
 )
-from adaptive_dd.identification.serial_model import serial_model
+from adaptive_dd.identification.model import arm_model
 from adaptive_dd.record import derivatives
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -79,7 +79,7 @@ def main() -> None:
     args = ap.parse_args()
     t0 = time.perf_counter()
     arm = _load_arm(args.scenario)
-    model = serial_model(arm)
+    model = arm_model(arm)
     _, tr = read_arm_log(args.scenario, arm, window=args.train)
     _, te = read_arm_log(args.scenario, arm, window=args.test)
     used = tr.used

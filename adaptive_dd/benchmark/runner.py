@@ -88,14 +88,14 @@ def run_benchmark(
     if engine not in ENGINES:
         raise ParameterError(f"engine must be one of {ENGINES}, got {engine!r}")
     t0 = time.perf_counter()
-    from adaptive_dd.plant.serial_arm import SerialArm
+    from adaptive_dd.plant.arm import Arm
 
-    if isinstance(scenario.arm, SerialArm):  # any N-joint arm: adaptive_dd.closed_loop
-        from adaptive_dd.closed_loop.runner import run_serial
+    if isinstance(scenario.arm, Arm):  # any N-joint arm: adaptive_dd.closed_loop
+        from adaptive_dd.closed_loop.runner import run_closed_loop
 
         n = scenario.n_samples * len(controllers or scenario.controllers)
         bar = _progress(progress, n, scenario.name)
-        res = run_serial(
+        res = run_closed_loop(
             scenario, controllers, seed_indices=seed_indices, keep_trajectories=keep_trajectories,
             engine=engine, bar=bar,
         )  # fmt: skip
@@ -145,9 +145,9 @@ def scenario_controller(scenario: Scenario, spec: str) -> tuple[str, Controller]
     ParameterError
         An unknown name, a plug-in that does not import, an unknown or invalid setting.
     """
-    from adaptive_dd.plant.serial_arm import SerialArm
+    from adaptive_dd.plant.arm import Arm
 
-    if isinstance(scenario.arm, SerialArm):
+    if isinstance(scenario.arm, Arm):
         from adaptive_dd.closed_loop.runner import make_controller_of
 
         return make_controller_of(scenario, spec)

@@ -166,9 +166,9 @@ def _check_plant(e: list, v: dict) -> None:
 
 
 def _serial(v: dict) -> bool:
-    from adaptive_dd.plant.serial_arm import SerialArm
+    from adaptive_dd.plant.arm import Arm
 
-    return isinstance(v.get("arm"), SerialArm)
+    return isinstance(v.get("arm"), Arm)
 
 
 def _check_controllers(e: list, c: Any, arm: Any = None) -> bool:
@@ -186,9 +186,9 @@ def _check_controllers(e: list, c: Any, arm: Any = None) -> bool:
                 "or an import path 'package.module:Class'"
             )
             ok = False
-    from adaptive_dd.plant.serial_arm import SerialArm
+    from adaptive_dd.plant.arm import Arm
 
-    if isinstance(arm, SerialArm):
+    if isinstance(arm, Arm):
         from adaptive_dd.closed_loop.controllers import TWO_LINK_ONLY
 
         for x in c:
@@ -387,9 +387,9 @@ def scenario_fields(
 
 
 def _default_controllers(arm: Any) -> list:
-    from adaptive_dd.plant.serial_arm import SerialArm
+    from adaptive_dd.plant.arm import Arm
 
-    if isinstance(arm, SerialArm):
+    if isinstance(arm, Arm):
         from adaptive_dd.closed_loop.controllers import TWO_LINK_ONLY
 
         return [c for c in CONTROLLERS if c not in TWO_LINK_ONLY]
@@ -397,15 +397,15 @@ def _default_controllers(arm: Any) -> list:
 
 
 def _default_noise(arm: Any, key: str) -> list:
-    from adaptive_dd.plant.serial_arm import SerialArm
+    from adaptive_dd.plant.arm import Arm
 
-    if isinstance(arm, SerialArm):
+    if isinstance(arm, Arm):
         return list(getattr(arm.sensor, key))
     return [1e-8, 1e-7] if key == "position_variance" else [5e-5, 1e-4]
 
 
 def _payload_fields(e: list, items: list, v: dict, defaulted: set, arm: Any = None) -> None:
-    from adaptive_dd.plant.serial_arm import SerialArm, payload_parameters
+    from adaptive_dd.plant.arm import Arm, payload_parameters
 
     times, masses, radii = [], [], []
     coms, inertias = [], []
@@ -415,7 +415,7 @@ def _payload_fields(e: list, items: list, v: dict, defaulted: set, arm: Any = No
                 (coms if key == "com" else inertias).append(None)
                 continue
             x = p[key]
-            if arm is not None and not isinstance(arm, SerialArm):
+            if arm is not None and not isinstance(arm, Arm):
                 e.append(
                     f"payload[{i}].{key}: the two-link arm's payload is a disk at the tip (mass, radius); "
                     "a centre of mass or inertia needs a URDF arm ([arm] urdf = ... or robot = ...)"

@@ -20,7 +20,7 @@ from functools import partial
 import numpy as np
 
 from adaptive_dd.benchmark.types import CHUNK, MAX_ALARMS, BenchmarkResult, ControllerRun
-from adaptive_dd.closed_loop.controllers import SerialLaw, make_serial_controller, with_stated_uncertainty
+from adaptive_dd.closed_loop.controllers import Law, make_arm_controller, with_stated_uncertainty
 from adaptive_dd.closed_loop.glue import (
     Alarms,
     alarm_lists,
@@ -52,14 +52,14 @@ __all__ = [
     "make_controller_of",
     "make_controllers",
     "plant_record",
-    "run_serial",
+    "run_closed_loop",
     "true_models",
     "true_parameters",
 ]
 
 
 def make_controllers(scenario) -> dict:
-    """The scenario's controllers by label: built-ins (:data:`SERIAL_CONTROLLERS`), plug-ins by path."""
+    """The scenario's controllers by label: built-ins (:data:`ARM_CONTROLLERS`), plug-ins by path."""
     return dict(make_controller_of(scenario, spec) for spec in scenario.controllers)
 
 
@@ -79,7 +79,7 @@ def make_controller_of(scenario, spec: str) -> tuple[str, object]:
         opts = {**opts, "bandwidth": g.bandwidth}
         return label, make_controller(spec, g, opts, arm=scenario.arm, search=search, scenario=scenario)
     opts = with_stated_uncertainty(spec, opts, scenario)
-    return label, make_serial_controller(spec, scenario.arm, scenario.bandwidth, scenario.damping, opts)
+    return label, make_arm_controller(spec, scenario.arm, scenario.bandwidth, scenario.damping, opts)
 
 
 def true_parameters(scenario) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -91,7 +91,7 @@ def true_parameters(scenario) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return seg, scenario.segment_sigmas()[seg], masses[seg]
 
 
-def run_serial(
+def run_closed_loop(
     scenario,
     controllers: dict | None = None,
     *,
@@ -105,7 +105,7 @@ def run_serial(
     Parameters
     ----------
     scenario : Scenario
-        With ``scenario.arm`` a :class:`~adaptive_dd.plant.serial_arm.SerialArm`.
+        With ``scenario.arm`` a :class:`~adaptive_dd.plant.arm.Arm`.
     controllers : dict, optional
         Controller objects by name (default: the scenario's, :func:`make_controllers`).
     seed_indices : sequence of int, optional
@@ -128,7 +128,7 @@ def run_serial(
             )
         from adaptive_dd.closed_loop.excitation_phase import run_with_excitation
 
-        res = run_with_excitation(scenario, idx, run_serial, keep_trajectories, engine)
+        res = run_with_excitation(scenario, idx, run_closed_loop, keep_trajectories, engine)
         if bar is not None:
             bar.update(scenario.n_samples * len(res.runs))
         return res
@@ -140,7 +140,7 @@ def run_serial(
     if scenario.plant is not None:
         res.plant = plant_record(scenario, idx)
     for name, ctrl in ctrls.items():
-        compiled = isinstance(ctrl, SerialLaw) and engine != "python"
+        compiled = isinstance(ctrl, Law) and engine != "python"
         if engine == "compiled" and not compiled:
             raise ParameterError(f"engine='compiled': no compiled path for {name!r}; use engine='auto'")
         runner = _run_compiled if compiled else _run_python
@@ -176,7 +176,7 @@ def _records(
 
 
 # ------------------------------------------------------------------------ the two paths
-def _run_compiled(name, ctrl: SerialLaw, scenario, idx, rc, io, pl, keep, bar) -> ControllerRun:
+def _run_compiled(name, ctrl: Law, scenario, idx, rc, io, pl, keep, bar) -> ControllerRun:
     S, N, n = len(idx), scenario.n_samples, scenario.n_joints
     form = ctrl.compiled_form(S, rc.T)
     run, ts, acc, rec = _records(name, ctrl, scenario, rc, pl, S, keep, form.estimates, "compiled")

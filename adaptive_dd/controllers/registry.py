@@ -12,9 +12,9 @@ Built-in settings:
 
 ``adaptive_ct``
     ``boost_bandwidth``, ``boost_duration``, ``estimator = {...}`` (fields of
-    :class:`~adaptive_dd.identification.online.OnlineConfig`: ``tau_f``, ``split``,
+    :class:`~adaptive_dd.identification.two_link_online.TwoLinkOnlineConfig`: ``tau_f``, ``split``,
     ``construction``, ``p0_payload``, ``p0_j2``, ``project``, ``align``), ``detector = {...}``
-    (fields of :class:`~adaptive_dd.identification.online.ChangeDetector`; also accepted inside
+    (fields of :class:`~adaptive_dd.identification.two_link_online.ChangeDetector`; also accepted inside
     ``estimator``, as on an N-joint arm), or ``detector = false`` for none.
 ``slotine_li``
     ``gamma`` (seven adaptation gains).
@@ -43,8 +43,8 @@ from adaptive_dd.controllers.base import DEFAULT_GAINS, Controller, Gains
 from adaptive_dd.controllers.feedback import PD, ComputedTorque
 from adaptive_dd.controllers.slotine_li import DEFAULT_GAMMA, SlotineLi, default_bounds
 from adaptive_dd.errors import ParameterError
-from adaptive_dd.identification.online import ChangeDetector, OnlineConfig
-from adaptive_dd.plant.arm import Arm
+from adaptive_dd.identification.two_link_online import ChangeDetector, TwoLinkOnlineConfig
+from adaptive_dd.plant.two_link import TwoLinkArm
 
 __all__ = ["CONTROLLERS", "Builtin", "controller_label", "load_controller_class", "make_controller"]
 
@@ -102,7 +102,7 @@ def _sigma(spec: str, options: dict) -> np.ndarray:
     return validate_sigma(options["sigma"], f"controllers.{spec}.sigma")
 
 
-def _online(spec: str, options: dict) -> OnlineConfig:
+def _online(spec: str, options: dict) -> TwoLinkOnlineConfig:
     est = dict(options.get("estimator", {}))
     det = options.get("detector", {})
     if "detector" in est:  # also accepted inside ``estimator``, as on an N-joint arm
@@ -214,7 +214,7 @@ def make_controller(
         (naming the controller and the key).
     """
     options = dict(options or {})
-    arm = arm or Arm.sice()
+    arm = arm or TwoLinkArm.sice()
     base = gains or DEFAULT_GAINS
     try:
         g = Gains(options.get("bandwidth", base.bandwidth), options.get("damping", base.damping))

@@ -53,9 +53,9 @@ DEFAULT_GAMMA = np.array([0.05, 0.05, 0.05, 0.5, 0.1, 0.5, 0.1])
 def default_bounds(sigma0, arm=None) -> tuple:
     """A priori box for the estimates: half the nominal up to 1.5x nominal plus a 5 kg disk of
     radius 0.1 m at the arm's tip (the SICE arm's geometry unless ``arm`` is given)."""
-    from adaptive_dd.plant.arm import Arm
+    from adaptive_dd.plant.two_link import TwoLinkArm
 
-    arm = arm or Arm.sice()
+    arm = arm or TwoLinkArm.sice()
     s = np.asarray(sigma0, dtype=float)
     return 0.5 * s, 1.5 * s + arm.payload_direction(0.1) * 5.0
 

@@ -1,6 +1,6 @@
 """Weighted least squares on a real robot's log, with bounds that mean something on real data.
 
-The regression is the exact filtered one of :mod:`adaptive_dd.identification.serial_regression`
+The regression is the exact filtered one of :mod:`adaptive_dd.identification.regression`
 (``G0 tau = Phi sigma``, no acceleration needed; ``tau_f`` sized to the sample rate by
 :func:`filter_time_constant`). What a real log adds:
 
@@ -44,11 +44,11 @@ from numpy.typing import NDArray
 
 from adaptive_dd.errors import DataError
 from adaptive_dd.identification.filters import design_filter_bank, filter_record
-from adaptive_dd.identification.serial_model import SerialModel, base_regressor
-from adaptive_dd.identification.serial_regression import (
-    SerialRegression,
+from adaptive_dd.identification.model import Model, base_regressor
+from adaptive_dd.identification.regression import (
+    Regression,
     check_excitation,
-    serial_filtered_regression,
+    filtered_regression,
 )
 
 __all__ = [
@@ -87,7 +87,7 @@ class LogFit:
     lag : int
         Newey-West lag [samples].
     tau_f, sample_period : float
-    regression : SerialRegression
+    regression : Regression
     used : ndarray of bool (n,)
     """
 
@@ -101,7 +101,7 @@ class LogFit:
     lag: int
     tau_f: float
     sample_period: float
-    regression: SerialRegression
+    regression: Regression
     used: NDArray[np.bool_]
 
     def model_error_channels(self) -> list[tuple[int, float]]:
@@ -121,7 +121,7 @@ def filter_time_constant(sample_period: float) -> float:
 
 
 def identifiable_subset(
-    model: SerialModel, used, lower, upper, rng: np.random.Generator, n_samples: int = 80
+    model: Model, used, lower, upper, rng: np.random.Generator, n_samples: int = 80
 ) -> NDArray[np.bool_]:
     """Base parameters that the torque channels ``used`` see for some motion (module docstring)."""
     used = np.asarray(used, dtype=bool)
@@ -187,7 +187,7 @@ def _noise_rms(tau: Array, tau_f: float, T: float) -> Array:
 
 
 def fit_log(
-    model: SerialModel,
+    model: Model,
     q: Array,
     qd: Array,
     tau: Array,
@@ -216,7 +216,7 @@ def fit_log(
     torque_held : bool
         The torque is held over each sample (a command, as a simulator's or a drive's current
         loop applies it: the default) rather than sampled from a continuous signal (a joint
-        torque sensor): :func:`~adaptive_dd.identification.serial_regression.serial_filtered_regression`.
+        torque sensor): :func:`~adaptive_dd.identification.regression.filtered_regression`.
 
     Raises
     ------
@@ -226,7 +226,7 @@ def fit_log(
     used = np.asarray(used, dtype=bool)
     K = np.asarray(identified, dtype=bool)
     names = tuple(nm for nm, k in zip(model.names, K, strict=True) if k)
-    reg = serial_filtered_regression(
+    reg = filtered_regression(
         model, q, qd, tau, tau_f=tau_f, sample_period=sample_period, torque_held=torque_held
     )
     phi_all = reg.phi[:, used, :]
@@ -277,6 +277,6 @@ def fit_log(
     )
 
 
-def predict_torque(model: SerialModel, sigma: Array, q: Array, qd: Array, qdd: Array) -> Array:
+def predict_torque(model: Model, sigma: Array, q: Array, qd: Array, qdd: Array) -> Array:
     """Joint torques ``(N, n)`` [N m] of base parameters ``sigma`` along a motion."""
     return base_regressor(model, q, qd, qdd) @ np.asarray(sigma, dtype=float)

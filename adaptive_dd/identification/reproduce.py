@@ -25,9 +25,9 @@ from adaptive_dd.identification.limits import (
     run_information_estimators,
     table2_bound,
 )
-from adaptive_dd.plant.arm import Arm
 from adaptive_dd.plant.parameters import SIGMA_NAMES, project_sigma
 from adaptive_dd.plant.simulator import simulate_open_loop
+from adaptive_dd.plant.two_link import TwoLinkArm
 
 __all__ = [
     "EXTRA_ESTIMATORS",
@@ -184,7 +184,7 @@ def run_reproduce(
         raise ParameterError(f"unknown estimator(s) {bad}; choose from {ESTIMATORS + EXTRA_ESTIMATORS}")
     if any(t <= 0 for t in tau_f):
         raise ParameterError(f"tau_f values must be > 0, got {tau_f}")
-    arm = Arm.sice()  # the paper's arm
+    arm = TwoLinkArm.sice()  # the paper's arm
     sensor = replace(
         arm.sensor,
         position_variance=TABLE2["position_variance"] if noise else (0.0, 0.0),
@@ -240,7 +240,7 @@ def format_bounds(res: ReproduceResult, tau_f: float | None = None) -> str:
     estimates, kinds = {}, {}
     for (method, split, est), e in res.signed.items():
         label = f"{method} {est}" + (f" ({split})" if est == "paper" else "") + f" tau_f={tf:g}"
-        estimates[label] = Arm.sice().sigma * (1 + e[i] / 100.0)
+        estimates[label] = TwoLinkArm.sice().sigma * (1 + e[i] / 100.0)
         kinds[label] = est
     for name, est in res.extra.items():
         estimates[name], kinds[name] = est, name
@@ -322,7 +322,7 @@ def model_responses(models: dict, n_samples: int = TABLE2["n_samples"]) -> tuple
     q_models : dict
         Label -> ndarray (n_samples, 2).
     """
-    sice = Arm.sice()
+    sice = TwoLinkArm.sice()
     clean = replace(sice.sensor, quantize=False, position_variance=(0, 0), velocity_variance=(0, 0))
     tau = table2_torque(1, n_samples)
     rec = simulate_open_loop(tau, np.random.default_rng(0), arm=sice, sensor=clean)

@@ -6,9 +6,9 @@ Pinocchio (``pin``) is the rigid-body reference: ``crba`` (mass matrix), ``rnea`
 uses sigma with ``b = d = 0``; gravity acts along -z and gives no torque about
 the vertical joint axes.
 
-Both functions take an :class:`~adaptive_dd.plant.arm.Arm` (default
-:meth:`Arm.sice`) or its :class:`PhysicalParameters`. An arm known only by its
-base parameters is built from :meth:`Arm.equivalent_physical`, a physical set
+Both functions take an :class:`~adaptive_dd.plant.two_link.TwoLinkArm` (default
+:meth:`TwoLinkArm.sice`) or its :class:`PhysicalParameters`. An arm known only by its
+base parameters is built from :meth:`TwoLinkArm.equivalent_physical`, a physical set
 with the same sigma (rigid-body dynamics depend on sigma alone).
 """
 
@@ -21,7 +21,6 @@ import pinocchio as pin
 from numpy.typing import NDArray
 
 from adaptive_dd.errors import ParameterError
-from adaptive_dd.plant.arm import Arm
 from adaptive_dd.plant.dynamics import (
     coriolis_matrix,
     forward_dynamics,
@@ -30,13 +29,14 @@ from adaptive_dd.plant.dynamics import (
     regressor,
 )
 from adaptive_dd.plant.parameters import Payload, PhysicalParameters
+from adaptive_dd.plant.two_link import TwoLinkArm
 
 __all__ = [
     "CheckResult",
     "as_physical",
     "base_parameter_map",
     "build_model",
-    "cross_check",
+    "two_link_cross_check",
 ]
 
 # index of each dynamic parameter of one body in Pinocchio's ordering
@@ -49,18 +49,20 @@ def _link_inertia(mass: float, com_x: float, izz: float) -> pin.Inertia:
     return pin.Inertia(mass, np.array([com_x, 0.0, 0.0]), np.diag([ixx * 0.1, izz, izz]))
 
 
-def as_physical(arm: Arm | PhysicalParameters | None) -> PhysicalParameters:
-    """Physical parameters of an arm (default :meth:`Arm.sice`); see the module docstring."""
+def as_physical(arm: TwoLinkArm | PhysicalParameters | None) -> PhysicalParameters:
+    """Physical parameters of an arm (default :meth:`TwoLinkArm.sice`); see the module docstring."""
     if arm is None:
-        return Arm.sice().equivalent_physical()
-    if isinstance(arm, Arm):
+        return TwoLinkArm.sice().equivalent_physical()
+    if isinstance(arm, TwoLinkArm):
         return arm.equivalent_physical()
     if isinstance(arm, PhysicalParameters):
         return arm
-    raise ParameterError(f"expected an Arm or PhysicalParameters, got {type(arm).__name__}")
+    raise ParameterError(f"expected an TwoLinkArm or PhysicalParameters, got {type(arm).__name__}")
 
 
-def build_model(arm: Arm | PhysicalParameters | None = None, payload: Payload | None = None) -> pin.Model:
+def build_model(
+    arm: TwoLinkArm | PhysicalParameters | None = None, payload: Payload | None = None
+) -> pin.Model:
     """Two revolute joints about z in the horizontal plane, as a ``pinocchio.Model``.
 
     Link i has mass ``m_i``, centre of mass at ``a_i`` along the link and inertia
@@ -119,8 +121,8 @@ def _rel(a: NDArray, b: NDArray) -> float:
     return float(np.max(np.abs(a - b)) / max(1.0, float(np.max(np.abs(b)))))
 
 
-def cross_check(
-    arm: Arm | PhysicalParameters | None = None,
+def two_link_cross_check(
+    arm: TwoLinkArm | PhysicalParameters | None = None,
     payload: Payload | None = None,
     n_states: int = 200,
     rng: np.random.Generator | None = None,
@@ -130,8 +132,8 @@ def cross_check(
 
     Parameters
     ----------
-    arm : Arm or PhysicalParameters, optional
-        The arm (default :meth:`Arm.sice`). For an Arm, the sigma compared is
+    arm : TwoLinkArm or PhysicalParameters, optional
+        The arm (default :meth:`TwoLinkArm.sice`). For an TwoLinkArm, the sigma compared is
         ``arm.sigma`` or ``arm.sigma_with_payload(...)``, so the check covers the
         arm's payload effect too; Pinocchio gets the disk as a separate body.
     payload : Payload, optional
@@ -151,7 +153,9 @@ def cross_check(
     """
     rng = np.random.default_rng(0) if rng is None else rng
     params = as_physical(arm)
-    if isinstance(arm, Arm):  # the arm's own sigma and payload effect, against a disk body in Pinocchio
+    if isinstance(
+        arm, TwoLinkArm
+    ):  # the arm's own sigma and payload effect, against a disk body in Pinocchio
         sigma = arm.sigma if payload is None else arm.sigma_with_payload(payload.mass, payload.radius)
     else:
         sigma = (params if payload is None else params.with_payload(payload)).to_sigma()

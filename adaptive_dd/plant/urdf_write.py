@@ -1,8 +1,8 @@
 """Writing an arm's URDF back with other link inertials (an identified or drawn model).
 
 The arm's own URDF is copied with every movable chain joint's child link given the link's
-ten parameters (about its joint frame, :attr:`SerialArm.pi_links
-<adaptive_dd.plant.serial_arm.SerialArm.pi_links>`'s layout) as its ``<inertial>``, and
+ten parameters (about its joint frame, :attr:`Arm.pi_links
+<adaptive_dd.plant.arm.Arm.pi_links>`'s layout) as its ``<inertial>``, and
 every body Pinocchio merges into that link (fixed children, locked joints' subtrees) left
 without one, so that reading the file back gives exactly those parameters. Kinematics, limits,
 friction and every other element are the original's.

@@ -2,9 +2,9 @@
 
 The keys come from the tables the scenario checks themselves use
 (:data:`adaptive_dd.benchmark.scenario_base.KEYS`, the ``[arm]`` and ``[plant]`` key lists of
-:mod:`adaptive_dd.plant.arm` and :mod:`adaptive_dd.plant.serial_arm`, the controllers'
+:mod:`adaptive_dd.plant.two_link` and :mod:`adaptive_dd.plant.arm`, the controllers'
 settings in :data:`adaptive_dd.controllers.registry.CONTROLLERS` and
-:data:`adaptive_dd.closed_loop.controllers.SERIAL_CONTROLLERS`, the estimator and detector
+:data:`adaptive_dd.closed_loop.controllers.ARM_CONTROLLERS`, the estimator and detector
 dataclasses); the defaults come from resolving minimal scenarios with
 :func:`~adaptive_dd.benchmark.scenario.load_scenario` (what ``adaptive-dd validate`` prints).
 Only the one-line meanings below are written by hand, and the build stops when a key of the
@@ -188,12 +188,12 @@ def _check(used: set[str]) -> None:
 
 def page() -> str:
     from adaptive_dd.benchmark import scenario_base
-    from adaptive_dd.closed_loop.controllers import SERIAL_CONTROLLERS
+    from adaptive_dd.closed_loop.controllers import ARM_CONTROLLERS
     from adaptive_dd.controllers import registry
-    from adaptive_dd.identification.online import ChangeDetector, OnlineConfig
-    from adaptive_dd.identification.serial_online import SerialDetector, SerialOnlineConfig
-    from adaptive_dd.plant import arm as arm_mod
-    from adaptive_dd.plant import serial_arm
+    from adaptive_dd.identification.online import Detector, OnlineConfig
+    from adaptive_dd.identification.two_link_online import ChangeDetector, TwoLinkOnlineConfig
+    from adaptive_dd.plant import arm
+    from adaptive_dd.plant import two_link as arm_mod
 
     two, urdf = _defaults(TWO_LINK_SCENARIO), _defaults(URDF_SCENARIO)
     used: set[str] = set()
@@ -203,7 +203,7 @@ def page() -> str:
         "```{note}",
         "This page is generated when the documentation is built, from the tables the scenario",
         "checks use (`adaptive_dd/benchmark/scenario_base.py`'s `KEYS`, the `[arm]` and `[plant]`",
-        "key lists of `adaptive_dd/plant/arm.py` and `serial_arm.py`, the controllers' settings), so",
+        "key lists of `adaptive_dd/plant/two_link.py` and `arm.py`, the controllers' settings), so",
         "it lists exactly what `adaptive-dd validate` accepts. Defaults are what `validate` prints",
         "for a scenario that leaves the key out. Any other key is an error naming file and key.",
         "```",
@@ -283,7 +283,7 @@ def page() -> str:
     ]
     lines += table([(a, b, d) for a, b, _, d in rows], heads=("key", "form", "meaning"))
     rows = []
-    for k in serial_arm.URDF_ARM_KEYS:
+    for k in arm.URDF_ARM_KEYS:
         used.add(f"arm.{k}")
         note = "one of `urdf`, `robot` (required)" if k in ("urdf", "robot") else "optional"
         rows.append((f"`{k}`", note, "", _meaning(f"arm.{k}")))
@@ -329,7 +329,7 @@ def page() -> str:
     common = sorted(registry.COMMON)
     for name, entry in registry.CONTROLLERS.items():
         two_set = sorted(entry.settings)
-        serial = SERIAL_CONTROLLERS.get(name)
+        serial = ARM_CONTROLLERS.get(name)
         serial_set = sorted(serial.SETTINGS) if serial is not None else None
         used |= {f"setting.{k}" for k in (*common, *two_set, *(serial_set or ()))}
         rows.append(
@@ -341,7 +341,7 @@ def page() -> str:
                 else (", ".join(f"`{k}`" for k in serial_set) or "none"),
             )
         )
-    for name, cls in SERIAL_CONTROLLERS.items():
+    for name, cls in ARM_CONTROLLERS.items():
         if name not in registry.CONTROLLERS:
             used |= {f"setting.{k}" for k in cls.SETTINGS}
             rows.append((f"`{name}`", "N-joint only", ", ".join(f"`{k}`" for k in sorted(cls.SETTINGS))))
@@ -356,24 +356,32 @@ def page() -> str:
     )
 
     for title, cls, mod in (
-        ("Two-link `adaptive_ct`: `estimator = {...}`", OnlineConfig, "adaptive_dd.identification.online"),
-        ("Two-link `adaptive_ct`: `detector = {...}`", ChangeDetector, "adaptive_dd.identification.online"),
+        (
+            "Two-link `adaptive_ct`: `estimator = {...}`",
+            TwoLinkOnlineConfig,
+            "adaptive_dd.identification.two_link_online",
+        ),
+        (
+            "Two-link `adaptive_ct`: `detector = {...}`",
+            ChangeDetector,
+            "adaptive_dd.identification.two_link_online",
+        ),
         (
             "URDF arm `adaptive_ct`: `estimator = {...}`",
-            SerialOnlineConfig,
-            "adaptive_dd.identification.serial_online",
+            OnlineConfig,
+            "adaptive_dd.identification.online",
         ),
         (
             "URDF arm `adaptive_ct`: `estimator = { detector = {...} }`",
-            SerialDetector,
-            "adaptive_dd.identification.serial_online",
+            Detector,
+            "adaptive_dd.identification.online",
         ),
     ):
         fields = [
-            (n, "see the next table" if n == "detector" and cls is SerialOnlineConfig else d)
+            (n, "see the next table" if n == "detector" and cls is OnlineConfig else d)
             for n, d in _fields(cls)
         ]
-        if cls is OnlineConfig:
+        if cls is TwoLinkOnlineConfig:
             fields = [f for f in fields if f[0] in registry.ONLINE_KEYS]
         lines += [
             f"### {title}",

@@ -1,4 +1,4 @@
-"""The N-joint sampled-data plant (adaptive_dd.plant.serial_integrator)."""
+"""The N-joint sampled-data plant (adaptive_dd.plant.integrator)."""
 
 from __future__ import annotations
 
@@ -9,11 +9,11 @@ from chain_models import random_chain_model
 
 from adaptive_dd.errors import ParameterError
 from adaptive_dd.experiments import table2_torque
-from adaptive_dd.plant import Arm
+from adaptive_dd.plant import TwoLinkArm
 from adaptive_dd.plant import chain as C
-from adaptive_dd.plant import serial_integrator as S
-from adaptive_dd.plant.integrator import plant_step
+from adaptive_dd.plant import integrator as S
 from adaptive_dd.plant.pinocchio_model import build_model
+from adaptive_dd.plant.two_link_integrator import two_link_plant_step
 
 T = 1e-3
 
@@ -51,7 +51,7 @@ def test_frictionless_step_is_rk4_over_aba(law, rng):
         q, qd, tau = rng.uniform(-1, 1, size=n), rng.uniform(-2, 2, size=n), rng.uniform(-5, 5, size=n)
         q_ref, qd_ref = _rk4_over_aba(model, q, qd, tau, T, 2)
         stuck = np.ones(n, dtype=bool)
-        assert S.serial_plant_step(ch, pp, q, qd, tau, T, 2, stuck)
+        assert S.plant_step(ch, pp, q, qd, tau, T, 2, stuck)
         np.testing.assert_allclose(q, q_ref, rtol=0, atol=1e-10)
         np.testing.assert_allclose(qd, qd_ref, rtol=0, atol=1e-10)
         assert not stuck.any()
@@ -74,7 +74,7 @@ def test_frictionless_chain_conserves_energy(rng):
     e0 = energy(q, qd)
     q_out, qd_out = np.empty((n_samples, n)), np.empty((n_samples, n))
     tau = np.zeros((n_samples, n))
-    assert S.serial_plant_run(ch, pp, q, qd, tau, T, 2, q_out, qd_out) == n_samples
+    assert S.plant_run(ch, pp, q, qd, tau, T, 2, q_out, qd_out) == n_samples
     drift = max(abs(energy(q_out[k], qd_out[k]) - e0) for k in range(0, n_samples, 50))
     scale = abs(pin.computeKineticEnergy(model, data, C.pin_configuration(model, q), qd)) + 1.0
     assert np.abs(qd_out).max() > 0.1  # it moved
@@ -106,7 +106,7 @@ def test_coulomb_holds_below_breakaway_and_releases_above():
         pp = S.plant_params(ch, pi, np.array([0.1]), np.array([fc]))
         q, qd, stuck = np.zeros(1), np.zeros(1), np.zeros(1, dtype=bool)
         for _ in range(500):
-            assert S.serial_plant_step(ch, pp, q, qd, np.zeros(1), T, 2, stuck)
+            assert S.plant_step(ch, pp, q, qd, np.zeros(1), T, 2, stuck)
         if moves:
             # the link falls: rotation about +y by q puts the com at z = -l sin q, so q grows
             assert q[0] > 0.01 and qd[0] > 0.0 and not stuck[0]
@@ -117,7 +117,7 @@ def test_coulomb_holds_below_breakaway_and_releases_above():
     for tau, moves in ((0.1 * hold, True), (-0.1 * hold, False)):
         q, qd, stuck = np.zeros(1), np.zeros(1), np.zeros(1, dtype=bool)
         for _ in range(200):
-            S.serial_plant_step(ch, pp, q, qd, np.array([tau]), T, 2, stuck)
+            S.plant_step(ch, pp, q, qd, np.array([tau]), T, 2, stuck)
         assert (q[0] > 0.0) == moves and (q[0] == 0.0) != moves
 
 
@@ -129,12 +129,12 @@ def test_three_joint_vertical_chain_stays_held_then_releases():
     q, qd, stuck = np.zeros(3), np.zeros(3), np.zeros(3, dtype=bool)
     pp = S.plant_params(ch, pi, np.full(3, 0.1), 1.01 * np.abs(g_torque))
     for _ in range(300):
-        assert S.serial_plant_step(ch, pp, q, qd, np.zeros(3), T, 2, stuck)
+        assert S.plant_step(ch, pp, q, qd, np.zeros(3), T, 2, stuck)
     assert np.all(q == 0.0) and np.all(qd == 0.0) and stuck.all()
     # weaken the middle joint only: it slides, and the joints it loads may follow
     pp = S.plant_params(ch, pi, np.full(3, 0.1), np.abs(g_torque) * np.array([1.01, 0.5, 1.01]))
     for _ in range(300):
-        assert S.serial_plant_step(ch, pp, q, qd, np.zeros(3), T, 2, stuck)
+        assert S.plant_step(ch, pp, q, qd, np.zeros(3), T, 2, stuck)
     assert q[1] > 0.0 and not stuck[1]
 
 
@@ -143,9 +143,9 @@ def test_reproduces_the_two_link_plant_on_the_sice_arm(law):
     """SICE arm (Table 1, joints about z, link 1 of 0.2 m along x), Table 2 torques, 2000 samples.
 
     The same modes are chosen by both stick-slip rules all along (module docstring
-    of serial_integrator), so the states agree to round-off.
+    of integrator), so the states agree to round-off.
     """
-    arm = Arm.sice(friction=law)
+    arm = TwoLinkArm.sice(friction=law)
     model = build_model(arm)
     ch, pi = C.chain_from_model(model), C.standard_parameters(model)
     sigma = np.asarray(arm.sigma)
@@ -164,8 +164,8 @@ def test_reproduces_the_two_link_plant_on_the_sice_arm(law):
     q2, qd2, st2, sl2 = np.zeros(2), np.zeros(2), np.zeros(2, dtype=bool), np.ones(2)
     worst, n_stuck = 0.0, 0
     for k in range(tau.shape[0]):
-        assert S.serial_plant_step(ch, pp, q, qd, tau[k], T, 2, stuck)
-        q2, qd2, st2, sl2 = plant_step(
+        assert S.plant_step(ch, pp, q, qd, tau[k], T, 2, stuck)
+        q2, qd2, st2, sl2 = two_link_plant_step(
             q2, qd2, st2, sl2, tau[k], sigma, T, 2, arm.friction_code, arm.friction_params
         )
         worst = max(worst, np.abs(q - q2).max(), np.abs(qd - qd2).max())
@@ -188,15 +188,12 @@ def test_batch_and_run_agree_with_the_step(rng):
     q, qd = np.zeros((n_trials, n)), np.zeros((n_trials, n))
     stuck = np.zeros((n_trials, n), dtype=bool)
     for k in range(n_samples):
-        assert S.serial_plant_batch(ch, pi, fv, fc, arm, 0, fparams, q, qd, tau[k], T, 2, stuck).all()
+        assert S.plant_batch(ch, pi, fv, fc, arm, 0, fparams, q, qd, tau[k], T, 2, stuck).all()
     for t in range(n_trials):
         pp = S.plant_params(ch, pi[t], fv[t], fc[t])
         q1, qd1 = np.zeros(n), np.zeros(n)
         q_out, qd_out = np.empty((n_samples, n)), np.empty((n_samples, n))
-        assert (
-            S.serial_plant_run(ch, pp, q1, qd1, np.ascontiguousarray(tau[:, t]), T, 2, q_out, qd_out)
-            == n_samples
-        )
+        assert S.plant_run(ch, pp, q1, qd1, np.ascontiguousarray(tau[:, t]), T, 2, q_out, qd_out) == n_samples
         np.testing.assert_array_equal(q_out[-1], q[t])
         np.testing.assert_array_equal(qd_out[-1], qd[t])
         assert np.abs(q[t]).max() > 0.0
@@ -207,9 +204,9 @@ def test_a_singular_mass_matrix_is_reported():
     ch = C.chain_from_model(model)
     pp = S.plant_params(ch, np.zeros(20), np.zeros(2), np.zeros(2))
     q, qd = np.zeros(2), np.zeros(2)
-    assert not S.serial_plant_step(ch, pp, q, qd, np.ones(2), T, 2, np.zeros(2, dtype=bool))
+    assert not S.plant_step(ch, pp, q, qd, np.ones(2), T, 2, np.zeros(2, dtype=bool))
     q_out, qd_out = np.empty((5, 2)), np.empty((5, 2))
-    assert S.serial_plant_run(ch, pp, np.zeros(2), np.zeros(2), np.ones((5, 2)), T, 2, q_out, qd_out) == 0
+    assert S.plant_run(ch, pp, np.zeros(2), np.zeros(2), np.ones((5, 2)), T, 2, q_out, qd_out) == 0
 
 
 def test_plant_params_are_checked():

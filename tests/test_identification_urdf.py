@@ -24,28 +24,28 @@ from adaptive_dd.identification.excitation import (
     multisine,
     reference_toml,
 )
-from adaptive_dd.identification.payload_pair import payload_from_pair
-from adaptive_dd.identification.serial_model import (
+from adaptive_dd.identification.model import (
+    arm_model,
     base_regressor,
     pi_from_sigma,
-    serial_model,
     standard_from_base,
 )
-from adaptive_dd.identification.serial_output_error import (
+from adaptive_dd.identification.output_error import (
+    cramer_rao_bound,
+    fit_output_error,
     measurement_std,
     schur_information,
     segment_sensitivities,
-    serial_crb,
-    serial_output_error,
     simulate_segments,
 )
-from adaptive_dd.identification.serial_records import simulate_serial_record, write_serial_recording
-from adaptive_dd.identification.serial_regression import (
+from adaptive_dd.identification.payload_pair import payload_from_pair
+from adaptive_dd.identification.records import simulate_record, write_serial_recording
+from adaptive_dd.identification.regression import (
     check_excitation,
-    serial_filtered_regression,
+    filtered_regression,
     weighted_least_squares,
 )
-from adaptive_dd.plant.serial_arm import SerialArm, payload_parameters
+from adaptive_dd.plant.arm import Arm, payload_parameters
 from adaptive_dd.robots import ROBOTS, robot_urdf
 
 REF3 = Reference(
@@ -59,17 +59,17 @@ REF3 = Reference(
 
 @pytest.fixture(scope="module")
 def arm3():
-    return SerialArm.from_urdf(robot_urdf("vertical3"), ROBOTS["vertical3"].payload_frame)
+    return Arm.from_urdf(robot_urdf("vertical3"), ROBOTS["vertical3"].payload_frame)
 
 
 @pytest.fixture(scope="module")
 def model3(arm3):
-    return serial_model(arm3)
+    return arm_model(arm3)
 
 
 @pytest.fixture(scope="module")
 def clean3(arm3):
-    return simulate_serial_record(arm3, REF3, 2.0, [np.random.default_rng(0)], noise=False, quantize=False)
+    return simulate_record(arm3, REF3, 2.0, [np.random.default_rng(0)], noise=False, quantize=False)
 
 
 def test_base_regressor_equals_the_arms(arm3, model3):
@@ -82,7 +82,7 @@ def test_base_regressor_equals_the_arms(arm3, model3):
 
 
 def test_exact_filtered_regression_holds_on_clean_records(model3, clean3):
-    reg = serial_filtered_regression(model3, clean3.q_true[0], clean3.qd_true[0], clean3.tau[0])
+    reg = filtered_regression(model3, clean3.q_true[0], clean3.qd_true[0], clean3.tau[0])
     err = reg.y - np.einsum("knp,p->kn", reg.phi, clean3.sigma_true)
     # exact up to the filters' discretisation: 1e-4 of the torque
     assert np.abs(err).max() < 1e-3 * np.abs(reg.y).max()
@@ -97,9 +97,9 @@ def test_unexcited_parameter_is_named(arm3, model3):
         frequency=((0.3,), (0.4,), (0.5,)),
         phase=((0.0,), (0.5,), (1.0,)),
     )
-    rec = simulate_serial_record(arm3, still, 2.0, [np.random.default_rng(0)])
+    rec = simulate_record(arm3, still, 2.0, [np.random.default_rng(0)])
     with pytest.raises(DataError, match=r"does not excite base parameter.*'fv3'.*joint 3 moves only"):
-        serial_filtered_regression(model3, rec.q[0], rec.qd[0], rec.tau[0])
+        filtered_regression(model3, rec.q[0], rec.qd[0], rec.tau[0])
     # two parameters that the record sees only together: collinear columns
     phi = np.random.default_rng(0).normal(size=(500, 3, model3.p))
     phi[..., 4] = 2.0 * phi[..., 2]
@@ -127,8 +127,8 @@ def test_sensitivities_match_finite_differences(arm3):
     """Against finite differences through the RK4 model, where the Coulomb law is not steep
     (v_f = 0.2 rad/s: the Jacobians frozen over a sample are then accurate; see the module docstring)."""
     arm = arm3.with_(friction_velocity=0.2)
-    model3 = serial_model(arm)
-    clean3 = simulate_serial_record(arm, REF3, 0.5, [np.random.default_rng(0)], noise=False, quantize=False)
+    model3 = arm_model(arm)
+    clean3 = simulate_record(arm, REF3, 0.5, [np.random.default_rng(0)], noise=False, quantize=False)
     pi = pi_from_sigma(model3, clean3.sigma_true)
     x0 = np.concatenate([clean3.q_true[0, :1], clean3.qd_true[0, :1]], axis=1)
     tau = clean3.tau[:, :300]
@@ -152,13 +152,13 @@ def test_sensitivities_match_finite_differences(arm3):
 def test_output_error_is_held_to_the_bound(arm3, model3):
     """Three seeds of a 2.5 s record: every parameter's error within 4 bounds; the bound's scale is right
     (the normalised errors' RMS is between 0.5 and 2)."""
-    rec = simulate_serial_record(arm3, REF3, 2.5, [np.random.default_rng([5, i]) for i in range(3)])
+    rec = simulate_record(arm3, REF3, 2.5, [np.random.default_rng([5, i]) for i in range(3)])
     std = measurement_std(arm3)
-    crb, _ = serial_crb(model3, rec.sigma_true, rec.q_true[0], rec.qd_true[0], rec.tau[0], std)
+    crb, _ = cramer_rao_bound(model3, rec.sigma_true, rec.q_true[0], rec.qd_true[0], rec.tau[0], std)
     z = []
     for s in range(3):
-        wls = weighted_least_squares(serial_filtered_regression(model3, rec.q[s], rec.qd[s], rec.tau[s]))
-        oe = serial_output_error(model3, rec.q[s], rec.qd[s], rec.tau[s], wls.sigma, std)
+        wls = weighted_least_squares(filtered_regression(model3, rec.q[s], rec.qd[s], rec.tau[s]))
+        oe = fit_output_error(model3, rec.q[s], rec.qd[s], rec.tau[s], wls.sigma, std)
         assert oe.converged
         assert 0.9 < 2 * oe.cost / oe.n_residuals < 1.1  # residuals at the noise level
         np.testing.assert_allclose(oe.std, crb, rtol=0.05)  # bound at the estimate ~ at the truth
@@ -193,7 +193,7 @@ def test_pseudo_inertia_roundtrip_and_constrained_fit():
 
 
 def test_payload_from_pair_recovers_a_linear_case():
-    arm = SerialArm.from_urdf(robot_urdf("ur5"), ROBOTS["ur5"].payload_frame)
+    arm = Arm.from_urdf(robot_urdf("ur5"), ROBOTS["ur5"].payload_frame)
     pp = payload_parameters(2.0, [0.01, -0.02, 0.06], radius=0.04)
     su = arm.sigma
     sl = su + arm.payload_basis @ pp
@@ -282,9 +282,9 @@ def test_cli_simulate_and_identify_end_to_end(tmp_path, capsys):
 
 def test_benchmark_plant_with_smooth_friction_is_the_model(arm3):
     """plant="serial" (the compiled benchmark plant) under the tanh law equals the identification model."""
-    a = simulate_serial_record(
+    a = simulate_record(
         arm3.with_(friction="tanh"), REF3, 0.5, [np.random.default_rng(0)], noise=False, plant="serial"
     )
-    b = simulate_serial_record(arm3, REF3, 0.5, [np.random.default_rng(0)], noise=False)
+    b = simulate_record(arm3, REF3, 0.5, [np.random.default_rng(0)], noise=False)
     np.testing.assert_allclose(a.q_true, b.q_true, atol=1e-10)
     np.testing.assert_allclose(a.tau, b.tau, atol=1e-8)

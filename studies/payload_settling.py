@@ -5,7 +5,7 @@ the centre of mass's error and the mass's error at times after the swap (per see
 ``--noise-scale 0`` switches the sensor noise off: what is left is the estimator's own equation
 error (the filtered regression after a swap).
 
-    python benchmarks/payload_settling.py [--seeds 3] [--noise-scale 1] [--tau-f 0.01] [--regression signals]
+    python studies/payload_settling.py [--seeds 3] [--noise-scale 1] [--tau-f 0.01] [--regression signals]
 
 The records' torques are exact at the sample instants (no zero-order hold), so the estimator
 runs with ``align=False``.
@@ -18,13 +18,13 @@ import argparse
 import numpy as np
 
 from adaptive_dd.closed_loop.information import com_learning_time, mass_learning_time
+from adaptive_dd.identification.online import OnlineConfig, run_online
 from adaptive_dd.identification.payload_information import (
     payload_com_information_time,
     payload_information_time,
 )
-from adaptive_dd.identification.serial_online import SerialOnlineConfig, run_serial_online
+from adaptive_dd.plant.arm import Arm, payload_parameters
 from adaptive_dd.plant.prescribed import exciting_motion, prescribed_record
-from adaptive_dd.plant.serial_arm import SerialArm, payload_parameters
 from adaptive_dd.robots import ROBOTS, robot_urdf
 
 T = 1e-3
@@ -39,7 +39,7 @@ def main() -> None:
     ap.add_argument("--tau-f", type=float, default=0.01)
     ap.add_argument("--regression", choices=("signals", "momentum"), default="momentum")
     a = ap.parse_args()
-    ur5 = SerialArm.from_urdf(robot_urdf("ur5"), ROBOTS["ur5"].payload_frame)
+    ur5 = Arm.from_urdf(robot_urdf("ur5"), ROBOTS["ur5"].payload_frame)
     A = payload_parameters(2.0, [0.04, 0.0, 0.06], [0.004, 0.004, 0.003, 0, 0, 0])
     B = payload_parameters(5.0, [0.0, 0.03, 0.08], [0.015, 0.015, 0.01, 0, 0, 0])
     t = np.arange(8_000) * T
@@ -49,13 +49,13 @@ def main() -> None:
         motion = exciting_motion(ur5, t, rng, offset=POSTURE, speed=0.5)
         recs.append(prescribed_record(ur5, t, motion, [A, B], [SWAP], rng=rng, noise_scale=a.noise_scale))
     stack = [np.stack([getattr(r, f) for r in recs]) for f in ("q_meas", "qd_meas", "tau")]
-    cfg = SerialOnlineConfig(
+    cfg = OnlineConfig(
         tau_f=a.tau_f,
         row_weights=(1.0, 1.0, 1.0, 0.2, 0.2, 0.2),
         regression=a.regression,
         align=False,  # the record's torques are exact at the sample instants (no zero-order hold)
     )
-    rec = run_serial_online(ur5, cfg, *stack)
+    rec = run_online(ur5, cfg, *stack)
     com_true = B[1:4] / B[0]
     e_com = 1e3 * np.linalg.norm(rec.com[:, SWAP:] - com_true, axis=-1)
     e_m = np.abs(rec.mass[:, SWAP:] - B[0])

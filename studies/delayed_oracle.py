@@ -11,7 +11,7 @@ check that the plug-in is the same law). ``--boost`` adds adaptive_ct's feedback
 (``M0(q) (dkp e + dkd e')`` raising the bandwidth to ``boost_bandwidth`` for ``boost_duration``)
 from the moment the model switches, as adaptive_ct does from its alarm.
 
-    python benchmarks/delayed_oracle.py [SCENARIO.toml] [--seeds 20] [--delays 0 0.005 0.01 0.02] [--boost]
+    python studies/delayed_oracle.py [SCENARIO.toml] [--seeds 20] [--delays 0 0.005 0.01 0.02] [--boost]
 
 The plug-in runs on the Python path (one compiled ``model_torque`` call per trial and sample).
 """

@@ -1,8 +1,8 @@
-"""Cross-check of a :class:`~adaptive_dd.plant.serial_arm.SerialArm` against Pinocchio.
+"""Cross-check of a :class:`~adaptive_dd.plant.arm.Arm` against Pinocchio.
 
 What is compared, on random states, with and without a payload (the payload is
 appended to Pinocchio's model as a separate body at the payload frame, so the
-check covers :meth:`SerialArm.sigma_with_payload` as well):
+check covers :meth:`Arm.sigma_with_payload` as well):
 
 - the base-parameter model: ``regressor @ sigma`` against ``pin.rnea`` plus
   friction and armature, and ``mass_matrix`` against ``pin.crba`` plus armature;
@@ -20,13 +20,13 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 
+from adaptive_dd.plant.arm import Arm, payload_parameters
 from adaptive_dd.plant.pinocchio_model import CheckResult
-from adaptive_dd.plant.serial_arm import SerialArm, payload_parameters
 
-__all__ = ["loaded_model", "serial_cross_check"]
+__all__ = ["cross_check", "loaded_model"]
 
 
-def loaded_model(arm: SerialArm, payload: dict | None):
+def loaded_model(arm: Arm, payload: dict | None):
     """The arm's Pinocchio model with the payload (keyword arguments of
     :func:`payload_parameters`: mass, com, inertia, radius) appended as a body."""
     model = arm.model.copy()
@@ -42,8 +42,8 @@ def _rel(a, b) -> float:
     return float(np.max(np.abs(np.asarray(a) - np.asarray(b))) / max(1.0, float(np.max(np.abs(b)))))
 
 
-def serial_cross_check(
-    arm: SerialArm,
+def cross_check(
+    arm: Arm,
     payload: dict | None = None,
     n_states: int = 50,
     rng: np.random.Generator | None = None,
@@ -53,7 +53,7 @@ def serial_cross_check(
 
     Parameters
     ----------
-    arm : SerialArm
+    arm : Arm
     payload : dict, optional
         ``mass`` [kg] and optionally ``com`` (3,), ``inertia`` (6,), ``radius``.
     n_states : int

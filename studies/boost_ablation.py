@@ -8,7 +8,7 @@ against its own floor. If high gains alone beat the floor, the second row would 
 it shows what the boost costs in sensor noise. The first row also prints adaptive_ct's RMS
 torque over ct_oracle's per segment and its saturated fraction [%]: the price of the boost.
 
-    python benchmarks/boost_ablation.py [SCENARIO.toml] [--seeds 20] [--durations 0.2 0.5 1.0]
+    python studies/boost_ablation.py [SCENARIO.toml] [--seeds 20] [--durations 0.2 0.5 1.0]
 """
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""Payload mode against full mode on UR5 records: ``python benchmarks/serial_online_modes.py [--seeds 5]``.
+"""Payload mode against full mode on UR5 records: ``python studies/online_modes.py [--seeds 5]``.
 
 UR5 (shipped URDF), a prescribed exciting motion with the shipped sensor noise, 20 s at
 1 kHz, a 1 kg payload swapped for 2.5 kg (another centre of mass) at 10 s. Two cases:
@@ -22,17 +22,17 @@ import argparse
 
 import numpy as np
 
-from adaptive_dd.identification.payload_information import payload_information_time
-from adaptive_dd.identification.serial_online import (
-    SerialOnlineConfig,
+from adaptive_dd.identification.online import (
+    OnlineConfig,
     est_init,
     est_model_trial,
     est_payload_trial,
     est_step_trial,
 )
+from adaptive_dd.identification.payload_information import payload_information_time
+from adaptive_dd.plant.arm import Arm, payload_parameters
 from adaptive_dd.plant.chain import rnea_batch
 from adaptive_dd.plant.prescribed import exciting_motion, prescribed_record
-from adaptive_dd.plant.serial_arm import SerialArm, payload_parameters
 from adaptive_dd.robots import ROBOTS, robot_urdf
 
 T = 1e-3
@@ -73,13 +73,13 @@ def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--seeds", type=int, default=5)
     args = ap.parse_args()
-    arm = SerialArm.from_urdf(robot_urdf("ur5"), ROBOTS["ur5"].payload_frame)
+    arm = Arm.from_urdf(robot_urdf("ur5"), ROBOTS["ur5"].payload_frame)
     n = arm.n_joints
     off = arm.with_(viscous=1.3 * arm.viscous, coulomb=1.3 * arm.coulomb)
     cases = {"exact arm": arm, "friction off": off}
     modes = {
-        "payload": SerialOnlineConfig(),
-        "full": SerialOnlineConfig(mode="full", p0_arm=1e-2),
+        "payload": OnlineConfig(),
+        "full": OnlineConfig(mode="full", p0_arm=1e-2),
     }
     t = np.arange(N) * T
     recs = []

@@ -1,7 +1,7 @@
 """Speed of the N-joint closed loop on the UR5 tool-swap scenario, beside a Pinocchio anchor.
 
-    python benchmarks/speed_serial.py            # one trial of adaptive_ct and ct_oracle, the anchor
-    python benchmarks/speed_serial.py --full     # also 200 seeds x all controllers, timed from outside
+    python benchmarks/speed_arm.py            # one trial of adaptive_ct and ct_oracle, the anchor
+    python benchmarks/speed_arm.py --full     # also 200 seeds x all controllers, timed from outside
 
 Prints, in one run:
 
@@ -82,13 +82,13 @@ def anchor(sc, seconds: float = 2.0) -> tuple[float, float]:
 def one_trial(sc, name: str) -> tuple[float, float]:
     """Simulated s per wall s and per CPU s (of this thread: one trial runs in it) of one trial of
     ``name`` on the compiled path (compile excluded)."""
-    from adaptive_dd.closed_loop.runner import run_serial
+    from adaptive_dd.closed_loop.runner import run_closed_loop
 
     opts = tuple(o for o in sc.controller_options if o[0] == name)
     one = dataclasses.replace(sc, seeds=1, controllers=(name,), controller_options=opts)
-    run_serial(dataclasses.replace(one, duration=0.2, swap_times=(0.05, 0.1, 0.15)))  # compile
+    run_closed_loop(dataclasses.replace(one, duration=0.2, swap_times=(0.05, 0.1, 0.15)))  # compile
     t0, c0 = time.perf_counter(), time.thread_time()
-    res = run_serial(one)
+    res = run_closed_loop(one)
     wall, cpu = time.perf_counter() - t0, time.thread_time() - c0
     assert not res.runs[name].failed.any(), f"{name} failed"
     return sc.duration / wall, sc.duration / cpu
@@ -127,7 +127,7 @@ def main() -> None:
     sc = _scenario()
     print(f"UR5 tool swap: {sc.duration} s at T = {sc.sample_period} s, {sc.n_joints} joints")
     print(f"NUMBA_NUM_THREADS = {os.environ.get('NUMBA_NUM_THREADS', '(unset)')}, cores = {os.cpu_count()}")
-    print(f"plant: serial_plant_step, {sc.arm.friction} friction, {sc.substeps} RK4 substeps")
+    print(f"plant: plant_step, {sc.arm.friction} friction, {sc.substeps} RK4 substeps")
     print("simulated s per wall s, and per CPU s of the thread (robust on a shared machine):")
     xa, ca = anchor(sc)
     print(f"anchor (Python loop: pin.rnea law, RK4 x2 over pin.aba): wall {xa:8.1f}   CPU {ca:8.1f}")

@@ -8,12 +8,12 @@ import pinocchio as pin
 import pytest
 
 from adaptive_dd.errors import ParameterError
-from adaptive_dd.identification.detection_limit import detection_threshold
-from adaptive_dd.identification.serial_detection_limit import (
-    serial_detection_limit,
-    serial_detection_sensitivity,
+from adaptive_dd.identification.detection_limit import (
+    detection_limit,
+    detection_sensitivity,
 )
-from adaptive_dd.plant.serial_arm import SerialArm, payload_parameters
+from adaptive_dd.identification.two_link_detection_limit import detection_threshold
+from adaptive_dd.plant.arm import Arm, payload_parameters
 from adaptive_dd.robots import ROBOTS, robot_urdf
 
 T = 1e-3
@@ -24,7 +24,7 @@ POSTURE = np.array([0.0, -1.3, 1.5, -1.8, -1.57, 0.0])
 
 @pytest.fixture(scope="module")
 def ur5():
-    arm = SerialArm.from_urdf(robot_urdf("ur5"), ROBOTS["ur5"].payload_frame)
+    arm = Arm.from_urdf(robot_urdf("ur5"), ROBOTS["ur5"].payload_frame)
     return arm.with_(armature=np.array([0.5, 0.5, 0.3, 0.1, 0.1, 0.1]))
 
 
@@ -81,7 +81,7 @@ def test_sensitivities_equal_differences_of_whole_simulated_trajectories(ur5, re
     independently (Pinocchio's crba/rnea, numpy RK4) with the payload before + s (after - before),
     s = 1 +- h. A wrong sign, a missing armature or a shifted sample index fails this."""
     q, qd, tau, x0 = record
-    S = serial_detection_sensitivity(ur5, q, qd, tau, 0, T, BEFORE, AFTER)
+    S = detection_sensitivity(ur5, q, qd, tau, 0, T, BEFORE, AFTER)
     h = 1e-4
     Xp = _simulate(ur5, BEFORE + (1 + h) * (AFTER - BEFORE), x0, tau)
     Xm = _simulate(ur5, BEFORE + (1 - h) * (AFTER - BEFORE), x0, tau)
@@ -105,31 +105,29 @@ def test_the_limit_is_the_first_sample_the_glr_statistic_crosses_its_threshold(u
     for n_tests, noise in ((20_000, 1.0), (20_000, 30.0), (10, 30.0)):
         need = detection_threshold(n_tests)
         k = int(np.flatnonzero(np.sqrt(lam / noise) >= need)[0])
-        t = serial_detection_limit(
-            ur5, q, qd, tau, 0, T, BEFORE, AFTER, noise * pv, noise * vv, n_tests=n_tests
-        )
+        t = detection_limit(ur5, q, qd, tau, 0, T, BEFORE, AFTER, noise * pv, noise * vv, n_tests=n_tests)
         assert t == pytest.approx(k * T), (n_tests, noise, t, k)
     # more noise or more tests: later; a record too short for it: None
-    t1 = serial_detection_limit(ur5, q, qd, tau, 0, T, BEFORE, AFTER, pv, vv, n_tests=20_000)
-    t30 = serial_detection_limit(ur5, q, qd, tau, 0, T, BEFORE, AFTER, 30 * pv, 30 * vv, n_tests=20_000)
+    t1 = detection_limit(ur5, q, qd, tau, 0, T, BEFORE, AFTER, pv, vv, n_tests=20_000)
+    t30 = detection_limit(ur5, q, qd, tau, 0, T, BEFORE, AFTER, 30 * pv, 30 * vv, n_tests=20_000)
     assert 0 < t1 < t30
-    assert serial_detection_limit(ur5, q[:3], qd[:3], tau[:3], 0, T, BEFORE, AFTER, 1e6 * pv, 1e6 * vv,
+    assert detection_limit(ur5, q[:3], qd[:3], tau[:3], 0, T, BEFORE, AFTER, 1e6 * pv, 1e6 * vv,
                                   n_tests=20_000) is None  # fmt: skip
 
 
 def test_bad_input_is_named(ur5, record):
     q, qd, tau, _ = record
     with pytest.raises(ParameterError, match="same payload"):
-        serial_detection_limit(ur5, q, qd, tau, 0, T, AFTER, AFTER, n_tests=100)
+        detection_limit(ur5, q, qd, tau, 0, T, AFTER, AFTER, n_tests=100)
     with pytest.raises(ParameterError, match="k_swap"):
-        serial_detection_limit(ur5, q, qd, tau, 39, T, BEFORE, AFTER, n_tests=100)
+        detection_limit(ur5, q, qd, tau, 39, T, BEFORE, AFTER, n_tests=100)
     with pytest.raises(ParameterError, match=r"\(N, 6\)"):
-        serial_detection_limit(ur5, q[:, :5], qd, tau, 0, T, BEFORE, AFTER, n_tests=100)
+        detection_limit(ur5, q[:, :5], qd, tau, 0, T, BEFORE, AFTER, n_tests=100)
     bad = qd.copy()
     bad[5, 2] = np.nan
     with pytest.raises(ParameterError, match="qd holds non-finite"):
-        serial_detection_limit(ur5, q, bad, tau, 0, T, BEFORE, AFTER, n_tests=100)
+        detection_limit(ur5, q, bad, tau, 0, T, BEFORE, AFTER, n_tests=100)
     with pytest.raises(ParameterError, match="noise variances"):
-        serial_detection_limit(ur5, q, qd, tau, 0, T, BEFORE, AFTER, velocity_variance=0.0, n_tests=100)
+        detection_limit(ur5, q, qd, tau, 0, T, BEFORE, AFTER, velocity_variance=0.0, n_tests=100)
     with pytest.raises(ParameterError, match="10 finite payload"):
-        serial_detection_limit(ur5, q, qd, tau, 0, T, BEFORE[:9], AFTER, n_tests=100)
+        detection_limit(ur5, q, qd, tau, 0, T, BEFORE[:9], AFTER, n_tests=100)

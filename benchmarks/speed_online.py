@@ -1,4 +1,4 @@
-"""Cost per sample of the N-joint online estimator: ``python benchmarks/speed_serial_online.py``.
+"""Cost per sample of the N-joint online estimator: ``python benchmarks/speed_online.py``.
 
 UR5 (the shipped URDF), a prescribed exciting motion with the shipped sensor noise,
 20 s at 1 kHz, no payload swap. Prints, per mode (``payload``: 10 parameters,
@@ -7,7 +7,7 @@ UR5 (the shipped URDF), a prescribed exciting motion with the shipped sensor noi
 * ``est_step_trial`` alone, timed inside a numba loop (Python overhead excluded);
 * ``est_step_trial`` + ``est_model_trial`` (what a closed loop calls every sample);
 * the chain kernels it calls (``rnea``, ``body_regressor``, ``regressor``) for scale;
-* ``run_serial_online`` (the recorded whole-record path, from Python).
+* ``run_online`` (the recorded whole-record path, from Python).
 
 Compilation is excluded (one warm-up run first). Times are CPU time of the thread
 (``time.thread_time``, best of 3), robust to other processes on a shared machine; nothing
@@ -21,16 +21,16 @@ import time
 import numpy as np
 from numba import njit
 
-from adaptive_dd.identification.serial_online import (
-    SerialOnlineConfig,
+from adaptive_dd.identification.online import (
+    OnlineConfig,
     est_init,
     est_model_trial,
     est_step_trial,
-    run_serial_online,
+    run_online,
 )
 from adaptive_dd.plant import chain as C
+from adaptive_dd.plant.arm import Arm, payload_parameters
 from adaptive_dd.plant.prescribed import exciting_motion, prescribed_record
-from adaptive_dd.plant.serial_arm import SerialArm, payload_parameters
 from adaptive_dd.robots import ROBOTS, robot_urdf
 
 
@@ -79,7 +79,7 @@ def _best(fn, repeat: int = 3) -> float:
 
 
 def main() -> None:
-    arm = SerialArm.from_urdf(robot_urdf("ur5"), ROBOTS["ur5"].payload_frame)
+    arm = Arm.from_urdf(robot_urdf("ur5"), ROBOTS["ur5"].payload_frame)
     N = 20_000
     t = np.arange(N) * 1e-3
     rng = np.random.default_rng(0)
@@ -98,7 +98,7 @@ def main() -> None:
         fn()
         print(f"  {label:36s} {_best(fn) / N * 1e6:8.2f}")
     for mode in ("payload", "full"):
-        cfg = SerialOnlineConfig(mode=mode)
+        cfg = OnlineConfig(mode=mode)
 
         def step(cfg=cfg):
             c, s = est_init(cfg, arm, 1)
@@ -109,12 +109,12 @@ def main() -> None:
             _steps_model(c, s, q, qd, tau, np.empty(13 * n))
 
         def record(cfg=cfg):
-            run_serial_online(arm, cfg, q, qd, tau)
+            run_online(arm, cfg, q, qd, tau)
 
         for label, fn in (
             ("est_step_trial", step),
             ("est_step_trial + est_model_trial", step_model),
-            ("run_serial_online (recorded)", record),
+            ("run_online (recorded)", record),
         ):
             fn()
             print(f"  {mode:8s} {label:36s} {_best(fn) / N * 1e6:8.2f}")

@@ -1,6 +1,6 @@
 """Sample-by-sample trace of the change detector of ``adaptive_ct`` on one scenario, plant and seed.
 
-``python benchmarks/detector_trace.py SCENARIO --plant stick-slip --seed 7 --window 1.80 1.90``
+``python studies/detector_trace.py SCENARIO --plant stick-slip --seed 7 --window 1.80 1.90``
 runs ``adaptive_ct`` alone on that seed through the Python path (the same compiled step as the
 benchmark) and prints, for every sample in the window: the measured joint speeds, which
 equations feed the tests (``act``: faster than the detector's speed for its memory; ``rest``:
@@ -22,7 +22,7 @@ from adaptive_dd.benchmark.metrics import FALSE_ALARM_WINDOW
 from adaptive_dd.benchmark.runner import run_benchmark
 from adaptive_dd.benchmark.scenario import load_scenario
 from adaptive_dd.controllers.adaptive import adaptive_ct
-from adaptive_dd.identification import online_kernel as K
+from adaptive_dd.identification import two_link_online_kernel as K
 
 PLANTS = {
     "own": None,

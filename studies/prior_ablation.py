@@ -2,7 +2,7 @@
 and at several radii on one scenario: adaptive_ct's ratio to its floor per segment (mean, p90,
 max over seeds), trials with a false alarm and swaps missed. Same seeds for every setting.
 
-    python benchmarks/prior_ablation.py [SCENARIO.toml] [--seeds 20] [--radii 0 0.03 0.05 0.08]
+    python studies/prior_ablation.py [SCENARIO.toml] [--seeds 20] [--radii 0 0.03 0.05 0.08]
 """
 
 from __future__ import annotations

@@ -32,15 +32,15 @@ from numpy.typing import ArrayLike, NDArray
 
 from adaptive_dd.errors import DataError, SignalError
 from adaptive_dd.identification.filters import design_filter_bank, filter_record
-from adaptive_dd.identification.serial_model import SerialModel, base_regressor
+from adaptive_dd.identification.model import Model, base_regressor
 
 __all__ = [
-    "SerialRegression",
+    "Regression",
     "WlsResult",
     "check_excitation",
     "check_motion",
+    "filtered_regression",
     "momentum_regressors",
-    "serial_filtered_regression",
     "weighted_least_squares",
 ]
 
@@ -50,7 +50,7 @@ DIRECTION_STEP = 1e-4
 
 
 @dataclass(frozen=True)
-class SerialRegression:
+class Regression:
     """``y[k] = phi[k] @ sigma`` (+ error) over one record, transient cut.
 
     Attributes
@@ -69,7 +69,7 @@ class SerialRegression:
     tau_f: float
 
 
-def momentum_regressors(model: SerialModel, q: ArrayLike, qd: ArrayLike) -> tuple[Array, Array]:
+def momentum_regressors(model: Model, q: ArrayLike, qd: ArrayLike) -> tuple[Array, Array]:
     """``Y_p(q, qd)`` and ``Y_r(q, qd)``, each ``(..., n, p)`` (module docstring)."""
     q, qd = np.asarray(q, dtype=float), np.asarray(qd, dtype=float)
     zero = np.zeros_like(q)
@@ -84,8 +84,8 @@ def momentum_regressors(model: SerialModel, q: ArrayLike, qd: ArrayLike) -> tupl
     return Yp, Yr
 
 
-def serial_filtered_regression(
-    model: SerialModel,
+def filtered_regression(
+    model: Model,
     q: ArrayLike,
     qd: ArrayLike,
     tau: ArrayLike,
@@ -93,7 +93,7 @@ def serial_filtered_regression(
     tau_f: float = 0.02,
     sample_period: float = 1e-3,
     torque_held: bool = True,
-) -> SerialRegression:
+) -> Regression:
     """The exact filtered regression of one record (module docstring).
 
     Parameters
@@ -131,12 +131,12 @@ def serial_filtered_regression(
     tau_mid = np.concatenate((tau[:1], 0.5 * (tau[1:] + tau[:-1]))) if torque_held else tau
     y = filter_record(bank, tau_mid, axis=0, initial=tau[0])[..., 0]
     start = min(int(np.ceil(10 * tau_f / sample_period)), q.shape[0] - 1)
-    return SerialRegression((fp + fr)[start:], y[start:], start, float(tau_f))
+    return Regression((fp + fr)[start:], y[start:], start, float(tau_f))
 
 
 @dataclass(frozen=True)
 class WlsResult:
-    """Weighted least squares on a :class:`SerialRegression`.
+    """Weighted least squares on a :class:`Regression`.
 
     Attributes
     ----------
@@ -153,7 +153,7 @@ class WlsResult:
     residual_std: Array
 
 
-def weighted_least_squares(reg: SerialRegression, names: tuple[str, ...] = ()) -> WlsResult:
+def weighted_least_squares(reg: Regression, names: tuple[str, ...] = ()) -> WlsResult:
     """Two-pass WLS: ordinary least squares, then each joint weighted by ``1 / std`` of its residuals.
 
     Raises

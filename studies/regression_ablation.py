@@ -4,7 +4,7 @@ M2 construction) against ``"momentum"`` (the momentum form, exact under filterin
 restarted on an alarm). adaptive_ct's ratio to its floor per segment (mean, p90, max over seeds)
 trials with a false alarm and swaps missed; the same seeds for both.
 
-    python benchmarks/regression_ablation.py [SCENARIO.toml] [--seeds 20] [--set tau_f=0.02 ...]
+    python studies/regression_ablation.py [SCENARIO.toml] [--seeds 20] [--set tau_f=0.02 ...]
 
 ``--set KEY=VALUE`` (a TOML value) changes another estimator setting for every row.
 """

@@ -1,7 +1,7 @@
 """Where adaptive computed torque's model is wrong: per segment and joint, the torque error of the
 model the controller used against the true one along the reference, and the estimated payload.
 
-    python benchmarks/payload_model_error.py adaptive_dd/scenarios/ur5_tool_swap_exact.toml --seeds 2
+    python studies/payload_model_error.py adaptive_dd/scenarios/ur5_tool_swap_exact.toml --seeds 2
 
 Prints, per kept seed and segment (after its first 0.5 s): the RMS per joint of
 ``Y(q_d, qd_d, qdd_d) (sigma_hat - sigma_true)`` [N m], and the payload the model holds at
@@ -17,7 +17,7 @@ import dataclasses
 import numpy as np
 
 from adaptive_dd.benchmark.scenario import load_scenario
-from adaptive_dd.closed_loop.runner import run_constants, run_serial
+from adaptive_dd.closed_loop.runner import run_closed_loop, run_constants
 from adaptive_dd.closed_loop.types import segment_starts
 
 
@@ -29,7 +29,7 @@ def main() -> None:
     a = ap.parse_args()
     sc = load_scenario(a.scenario)
     sc = dataclasses.replace(sc, seeds=a.seeds, controllers=("ct_oracle", a.controller))
-    res = run_serial(sc, keep_trajectories=a.seeds)
+    res = run_closed_loop(sc, keep_trajectories=a.seeds)
     run = res.runs[a.controller]
     rc = run_constants(sc)
     arm = sc.arm

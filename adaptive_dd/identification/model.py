@@ -1,4 +1,4 @@
-"""The model of N-joint identification: compiled dynamics of a :class:`SerialArm` in base parameters.
+"""The model of N-joint identification: compiled dynamics of a :class:`Arm` in base parameters.
 
 Parameters
 ----------
@@ -18,7 +18,7 @@ Friction
 ``tau_f = fv qd + fc tanh(qd / v_f)`` with ``v_f`` the arm's ``friction_velocity``
 (0.02 rad/s by default): the Coulomb column of every regressor here is
 ``tanh(qd / v_f)``, so the model is smooth (output-error sensitivities exist) and the
-records simulated by :mod:`adaptive_dd.identification.serial_records` match it exactly.
+records simulated by :mod:`adaptive_dd.identification.records` match it exactly.
 A plant with stick-slip friction differs from it only within ``v_f`` of zero velocity.
 """
 
@@ -33,14 +33,14 @@ from adaptive_dd.errors import ParameterError, SignalError
 from adaptive_dd.plant.chain import Chain, forward_dynamics_batch, mass_matrix_batch, regressor_batch
 
 __all__ = [
-    "SerialModel",
+    "Model",
+    "arm_model",
     "base_regressor",
     "forward_dynamics",
     "mass_matrix",
     "pi_from_sigma",
     "pi_with_payload",
     "rk4_step",
-    "serial_model",
     "standard_from_base",
     "standard_regressor",
     "state_jacobian",
@@ -50,8 +50,8 @@ Array = NDArray[np.float64]
 
 
 @dataclass(frozen=True, eq=False)
-class SerialModel:
-    """Arrays an N-joint identification needs, taken once from a :class:`SerialArm`.
+class Model:
+    """Arrays an N-joint identification needs, taken once from a :class:`Arm`.
 
     Attributes
     ----------
@@ -87,12 +87,12 @@ class SerialModel:
     names: tuple[str, ...]
 
 
-def serial_model(arm) -> SerialModel:
-    """The :class:`SerialModel` of a :class:`~adaptive_dd.plant.serial_arm.SerialArm`."""
+def arm_model(arm) -> Model:
+    """The :class:`Model` of a :class:`~adaptive_dd.plant.arm.Arm`."""
     base = arm.base
     B = np.asarray(base.B, dtype=float)
     pi_ref = np.asarray(arm.pi, dtype=float)
-    return SerialModel(
+    return Model(
         chain=arm.chain,
         n=arm.n_joints,
         p=base.count,
@@ -106,7 +106,7 @@ def serial_model(arm) -> SerialModel:
     )
 
 
-def pi_from_sigma(model: SerialModel, sigma: ArrayLike) -> Array:
+def pi_from_sigma(model: Model, sigma: ArrayLike) -> Array:
     """Standard parameters ``(13 n,)`` with ``B pi = sigma`` nearest to the URDF's (least change)."""
     s = np.asarray(sigma, dtype=float)
     if s.shape != (model.p,) or not np.all(np.isfinite(s)):
@@ -122,7 +122,7 @@ def pi_with_payload(arm, pi: ArrayLike, payload: ArrayLike) -> Array:
     return out
 
 
-def _friction_columns(model: SerialModel, qd: Array, qdd: Array) -> Array:
+def _friction_columns(model: Model, qd: Array, qdd: Array) -> Array:
     n = model.n
     eye = np.eye(n)
     coul = np.tanh(qd / model.friction_velocity)
@@ -131,7 +131,7 @@ def _friction_columns(model: SerialModel, qd: Array, qdd: Array) -> Array:
     )
 
 
-def standard_regressor(model: SerialModel, q: ArrayLike, qd: ArrayLike, qdd: ArrayLike) -> Array:
+def standard_regressor(model: Model, q: ArrayLike, qd: ArrayLike, qdd: ArrayLike) -> Array:
     """``W(q, qd, qdd)`` of the standard parameters, ``(..., n, 13 n)`` (compiled; smooth Coulomb)."""
     q, qd, qdd = (np.asarray(x, dtype=float) for x in (q, qd, qdd))
     shape = np.broadcast_shapes(q.shape, qd.shape, qdd.shape)
@@ -140,17 +140,17 @@ def standard_regressor(model: SerialModel, q: ArrayLike, qd: ArrayLike, qdd: Arr
     return np.concatenate([Y, _friction_columns(model, qd, qdd)], axis=-1)
 
 
-def base_regressor(model: SerialModel, q: ArrayLike, qd: ArrayLike, qdd: ArrayLike) -> Array:
+def base_regressor(model: Model, q: ArrayLike, qd: ArrayLike, qdd: ArrayLike) -> Array:
     """Base regressor ``(..., n, p)``: ``base_regressor @ sigma`` is the joint torque [N m]."""
     return standard_regressor(model, q, qd, qdd)[..., model.independent]
 
 
-def _split(model: SerialModel, pi: Array) -> tuple[Array, Array, Array, Array]:
+def _split(model: Model, pi: Array) -> tuple[Array, Array, Array, Array]:
     n = model.n
     return pi[: 10 * n], pi[10 * n : 11 * n], pi[11 * n : 12 * n], pi[12 * n :]
 
 
-def forward_dynamics(model: SerialModel, pi: ArrayLike, q: ArrayLike, qd: ArrayLike, tau: ArrayLike) -> Array:
+def forward_dynamics(model: Model, pi: ArrayLike, q: ArrayLike, qd: ArrayLike, tau: ArrayLike) -> Array:
     """Joint accelerations ``(..., n)`` under applied torque ``tau`` (friction and armature included).
 
     Raises
@@ -165,14 +165,14 @@ def forward_dynamics(model: SerialModel, pi: ArrayLike, q: ArrayLike, qd: ArrayL
     return forward_dynamics_batch(model.chain, links, ia, q, qd, tau_eff)
 
 
-def mass_matrix(model: SerialModel, pi: ArrayLike, q: ArrayLike) -> Array:
+def mass_matrix(model: Model, pi: ArrayLike, q: ArrayLike) -> Array:
     """``M(q) + diag(Ia)``, ``(..., n, n)``."""
     links, _, _, ia = _split(model, np.asarray(pi, dtype=float))
     return mass_matrix_batch(model.chain, links, q) + np.diag(ia)
 
 
 def rk4_step(
-    model: SerialModel, pi: Array, q: Array, qd: Array, tau: Array, T: float, substeps: int = 2
+    model: Model, pi: Array, q: Array, qd: Array, tau: Array, T: float, substeps: int = 2
 ) -> tuple[Array, Array]:
     """One sample under torque held over ``T`` [s]: RK4 with ``substeps`` steps, batch ``(..., n)``."""
     h = T / substeps
@@ -192,7 +192,7 @@ def rk4_step(
 
 
 def state_jacobian(
-    model: SerialModel, pi: Array, q: Array, qd: Array, tau: Array, eps: float = 1e-7
+    model: Model, pi: Array, q: Array, qd: Array, tau: Array, eps: float = 1e-7
 ) -> tuple[Array, Array, Array]:
     """Linearisation of the continuous dynamics at ``(q, qd)``, batch ``(B, n)``.
 
@@ -225,7 +225,7 @@ def state_jacobian(
 
 
 def standard_from_base(
-    model: SerialModel, sigma: ArrayLike, cov: ArrayLike
+    model: Model, sigma: ArrayLike, cov: ArrayLike
 ) -> tuple[Array, Array, NDArray[np.bool_]]:
     """The standard parameters that the base parameters determine, with their std.
 

@@ -2,7 +2,7 @@
 
 Usage::
 
-    PYTHONPATH=. python benchmarks/identification_serial.py --seeds 20 --workers 2
+    PYTHONPATH=. python benchmarks/identification_arm.py --seeds 20 --workers 2
 
 For the UR5 and the Panda (``benchmarks/scenarios/ident_{robot}.toml``: the shipped URDF,
 an assumed armature, the scenario's plain reference tracked by computed torque; the
@@ -34,12 +34,12 @@ import numpy as np
 from adaptive_dd.benchmark.scenario import load_scenario
 from adaptive_dd.experiments import trial_rngs
 from adaptive_dd.identification.consistency import is_physical, pseudo_inertia
+from adaptive_dd.identification.model import arm_model
+from adaptive_dd.identification.output_error import cramer_rao_bound, fit_output_error, measurement_std
 from adaptive_dd.identification.payload_pair import payload_from_pair, payload_from_record
-from adaptive_dd.identification.serial_model import serial_model
-from adaptive_dd.identification.serial_output_error import measurement_std, serial_crb, serial_output_error
-from adaptive_dd.identification.serial_records import simulate_serial_record
-from adaptive_dd.identification.serial_regression import serial_filtered_regression, weighted_least_squares
-from adaptive_dd.plant.serial_arm import payload_parameters
+from adaptive_dd.identification.records import simulate_record
+from adaptive_dd.identification.regression import filtered_regression, weighted_least_squares
+from adaptive_dd.plant.arm import payload_parameters
 
 SCENARIO = "benchmarks/scenarios/ident_{}.toml"
 PAYLOAD = {"mass": 2.0, "com": [0.01, -0.02, 0.06], "radius": 0.04}
@@ -47,17 +47,17 @@ LIGHT = {"mass": 0.05, "com": [0.03, 0.0, 0.02], "radius": 0.0}
 
 
 def _fit(arm, q, qd, tau):
-    model = serial_model(arm)
+    model = arm_model(arm)
     std = measurement_std(arm)
-    wls = weighted_least_squares(serial_filtered_regression(model, q, qd, tau), model.names)
-    oe = serial_output_error(model, q, qd, tau, wls.sigma, std)
+    wls = weighted_least_squares(filtered_regression(model, q, qd, tau), model.names)
+    oe = fit_output_error(model, q, qd, tau, wls.sigma, std)
     return wls.sigma, oe.sigma, np.linalg.inv(oe.information), oe.converged
 
 
 def _main_task(args):
     robot, seed, duration, plant = args
     arm = load_scenario(SCENARIO.format(robot)).arm
-    rec = simulate_serial_record(
+    rec = simulate_record(
         arm, load_scenario(SCENARIO.format(robot)).reference, duration, trial_rngs(seed, 1), plant=plant
     )
     w, o, _, ok = _fit(arm, rec.q[0], rec.qd[0], rec.tau[0])
@@ -69,8 +69,8 @@ def _pair_task(args):
     sc = load_scenario(SCENARIO.format(robot))
     arm = sc.arm
     pp = payload_parameters(PAYLOAD["mass"], PAYLOAD["com"], radius=PAYLOAD["radius"])
-    loaded = simulate_serial_record(arm, sc.reference, duration, trial_rngs(seed, 1), payload=pp, plant=plant)
-    unloaded = simulate_serial_record(arm, sc.reference, duration, trial_rngs(seed + 10_000, 1), plant=plant)
+    loaded = simulate_record(arm, sc.reference, duration, trial_rngs(seed, 1), payload=pp, plant=plant)
+    unloaded = simulate_record(arm, sc.reference, duration, trial_rngs(seed + 10_000, 1), plant=plant)
     _, sl, cl, _ = _fit(arm, loaded.q[0], loaded.qd[0], loaded.tau[0])
     _, su, cu, _ = _fit(arm, unloaded.q[0], unloaded.qd[0], unloaded.tau[0])
     pr = payload_from_pair(arm, sl, cl, su, cu)
@@ -82,10 +82,8 @@ def _light_task(args):
     sc = load_scenario(SCENARIO.format(robot))
     arm = sc.arm
     pp = payload_parameters(LIGHT["mass"], LIGHT["com"], radius=LIGHT["radius"])
-    rec = simulate_serial_record(
-        arm, sc.reference, duration, trial_rngs(seed + 20_000, 1), payload=pp, plant=plant
-    )
-    model = serial_model(arm)
+    rec = simulate_record(arm, sc.reference, duration, trial_rngs(seed + 20_000, 1), payload=pp, plant=plant)
+    model = arm_model(arm)
     pr = payload_from_record(arm, model, rec.q[0], rec.qd[0], rec.tau[0], measurement_std(arm))
     c = pr.consistent
     return (
@@ -118,11 +116,11 @@ def run_robot(
 ) -> list:
     sc = load_scenario(SCENARIO.format(robot))
     arm = sc.arm
-    model = serial_model(arm)
+    model = arm_model(arm)
     rows = []
     t0 = time.time()
-    ref = simulate_serial_record(arm, sc.reference, duration, trial_rngs(0, 1), plant=plant)
-    crb, _ = serial_crb(
+    ref = simulate_record(arm, sc.reference, duration, trial_rngs(0, 1), plant=plant)
+    crb, _ = cramer_rao_bound(
         model, ref.sigma_true, ref.q_true[0], ref.qd_true[0], ref.tau[0], measurement_std(arm)
     )
     res = _map(_main_task, [(robot, s, duration, plant) for s in range(seeds)], workers)
@@ -192,7 +190,7 @@ def run_robot(
             )
         )
     if design:
-        from adaptive_dd.cli_serial import excitation_bounds
+        from adaptive_dd.cli_simulate import excitation_bounds
         from adaptive_dd.identification.excitation import ExcitationLimits, design_excitation, multisine
 
         t0 = time.time()

@@ -4,7 +4,7 @@ the UR5 tool swap) with the plant's friction law replaced (stick-slip as shipped
 ``sgn``). Per segment adaptive_ct / ct_oracle per seed (mean / p90 / max), trials with a false
 alarm, swaps missed. The same seeds for every law.
 
-    python benchmarks/serial_other_friction.py [SCENARIO.toml] [--seeds 50] [--set KEY=VALUE ...]
+    python studies/other_friction.py [SCENARIO.toml] [--seeds 50] [--set KEY=VALUE ...]
         [--laws stick-slip tanh stribeck tanh@0.1]
 
 ``LAW@V`` also sets the plant's ``friction_velocity`` V [rad/s] (tanh: how soft the friction is);

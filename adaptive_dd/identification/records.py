@@ -1,4 +1,4 @@
-"""Identification records of any :class:`SerialArm` simulated with a known truth.
+"""Identification records of any :class:`Arm` simulated with a known truth.
 
 The experiment
 --------------
@@ -18,9 +18,9 @@ saturation and D/A (:func:`adaptive_dd.plant.sampling.actuate_batch`). The recor
 the measured ``q, qd`` and the **applied** torque (known, as a drive's current loop
 reports it). The plant is, by default (``plant="model"``), RK4 (``substeps`` per sample)
 over the compiled forward dynamics with smooth friction ``fv qd + fc tanh(qd / v_f)``:
-exactly the model of :mod:`adaptive_dd.identification.serial_model`, so that estimators are
+exactly the model of :mod:`adaptive_dd.identification.model`, so that estimators are
 held to the bound without model error. ``plant="serial"`` runs the closed-loop benchmark's
-plant instead (:func:`adaptive_dd.plant.serial_integrator.serial_plant_step` with the arm's
+plant instead (:func:`adaptive_dd.plant.integrator.plant_step` with the arm's
 friction law, stick-slip by default): a record the model does not describe exactly near
 zero velocity.
 
@@ -35,16 +35,16 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from adaptive_dd.errors import ParameterError, SignalError
-from adaptive_dd.identification.serial_model import SerialModel, pi_with_payload, rk4_step, serial_model
+from adaptive_dd.identification.model import Model, arm_model, pi_with_payload, rk4_step
 from adaptive_dd.plant.chain import rnea_batch
 
-__all__ = ["SerialRecord", "inverse_dynamics_pi", "simulate_serial_record", "write_serial_recording"]
+__all__ = ["Record", "inverse_dynamics_pi", "simulate_record", "write_serial_recording"]
 
 Array = NDArray[np.float64]
 
 
 @dataclass(frozen=True)
-class SerialRecord:
+class Record:
     """Simulated records of one arm, trial axis first.
 
     Attributes
@@ -81,7 +81,7 @@ class SerialRecord:
     saturated: Array
 
 
-def inverse_dynamics_pi(model: SerialModel, pi: Array, q: Array, qd: Array, qdd: Array) -> Array:
+def inverse_dynamics_pi(model: Model, pi: Array, q: Array, qd: Array, qdd: Array) -> Array:
     """Joint torques ``(..., n)`` of standard parameters ``pi (13 n,)`` (friction, armature included)."""
     n = model.n
     links, fv, fc, ia = pi[: 10 * n], pi[10 * n : 11 * n], pi[11 * n : 12 * n], pi[12 * n :]
@@ -89,7 +89,7 @@ def inverse_dynamics_pi(model: SerialModel, pi: Array, q: Array, qd: Array, qdd:
     return tau + ia * qdd + fv * qd + fc * np.tanh(qd / model.friction_velocity)
 
 
-def simulate_serial_record(
+def simulate_record(
     arm,
     reference,
     duration: float,
@@ -102,12 +102,12 @@ def simulate_serial_record(
     noise: bool = True,
     quantize: bool = True,
     plant: str = "model",
-) -> SerialRecord:
+) -> Record:
     """Simulate ``len(rngs)`` identification records of ``arm`` tracking ``reference``.
 
     Parameters
     ----------
-    arm : SerialArm
+    arm : Arm
     reference : object with ``sample(t) -> (q_d, qd_d, qdd_d)``, each ``(N, n)``
         E.g. :class:`adaptive_dd.benchmark.scenario.Reference`.
     duration : float
@@ -118,7 +118,7 @@ def simulate_serial_record(
         T [s].
     payload : array_like (10,), optional
         Rigid payload about the payload frame
-        (:func:`adaptive_dd.plant.serial_arm.payload_parameters`).
+        (:func:`adaptive_dd.plant.arm.payload_parameters`).
     bandwidth : float
         Computed-torque bandwidth w [rad/s] (``w T <= 0.2``).
     substeps : int
@@ -146,7 +146,7 @@ def simulate_serial_record(
     qd_ref, qdd_ref_v, qdd_ref = reference.sample(t)
     if qd_ref.shape != (N, n):
         raise ParameterError(f"the reference has {qd_ref.shape[-1]} joints, the arm {n}")
-    model = serial_model(arm)
+    model = arm_model(arm)
     pp = np.zeros(10) if payload is None else np.asarray(payload, dtype=float).reshape(10)
     pi_true = pi_with_payload(arm, model.pi_ref, pp)
     S = len(rngs)
@@ -161,7 +161,7 @@ def simulate_serial_record(
 
     if plant not in ("model", "serial"):
         raise ParameterError(f"plant must be 'model' or 'serial', got {plant!r}")
-    step = _serial_stepper(arm, model, pi_true, S, sample_period, substeps) if plant == "serial" else None
+    step = _stepper(arm, model, pi_true, S, sample_period, substeps) if plant == "serial" else None
     q = np.repeat(qd_ref[:1], S, axis=0).copy()
     qd = np.repeat(qdd_ref_v[:1], S, axis=0).copy()
     out = {k: np.empty((S, N, n)) for k in ("q", "qd", "tau", "q_true", "qd_true")}
@@ -187,8 +187,8 @@ def simulate_serial_record(
         else:
             q, qd = step(q, qd, tau)
     if not np.all(np.isfinite(out["q"])):
-        raise SignalError("simulate_serial_record: non-finite measurement")
-    return SerialRecord(
+        raise SignalError("simulate_record: non-finite measurement")
+    return Record(
         t=t,
         pi_true=pi_true,
         sigma_true=model.B @ pi_true,
@@ -199,9 +199,9 @@ def simulate_serial_record(
     )
 
 
-def _serial_stepper(arm, model: SerialModel, pi: Array, S: int, T: float, substeps: int):
+def _stepper(arm, model: Model, pi: Array, S: int, T: float, substeps: int):
     """A function ``(q, qd, tau) (S, n) -> (q, qd)`` through the compiled benchmark plant."""
-    from adaptive_dd.plant.serial_integrator import plant_params, serial_plant_step
+    from adaptive_dd.plant.integrator import plant_params, plant_step
 
     n = model.n
     pp = plant_params(
@@ -220,10 +220,10 @@ def _serial_stepper(arm, model: SerialModel, pi: Array, S: int, T: float, subste
     def step(q, qd, tau):
         q, qd = np.ascontiguousarray(q).copy(), np.ascontiguousarray(qd).copy()
         for s in range(S):
-            if not serial_plant_step(
+            if not plant_step(
                 model.chain, pp, q[s], qd[s], np.ascontiguousarray(tau[s]), T, substeps, stuck[s]
             ):
-                raise SignalError(f"simulate_serial_record: the plant failed (trial {s})")
+                raise SignalError(f"simulate_record: the plant failed (trial {s})")
         return q, qd
 
     return step

@@ -1,7 +1,7 @@
-"""The N-joint commands of the CLI: ``simulate --arm`` and ``excite`` for a SerialArm.
+"""The N-joint commands of the CLI: ``simulate --arm`` and ``excite`` for a Arm.
 
 Kept apart from :mod:`adaptive_dd.cli` (which parses the arguments and dispatches here
-when a scenario's arm is a :class:`~adaptive_dd.plant.serial_arm.SerialArm`);
+when a scenario's arm is a :class:`~adaptive_dd.plant.arm.Arm`);
 ``identify --arm`` and ``predict`` are in :mod:`adaptive_dd.cli_log`.
 """
 
@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["cmd_excite", "simulate_serial"]
+__all__ = ["cmd_excite", "simulate_arm"]
 
 Array = NDArray[np.float64]
 NAME_WIDTH = 44
@@ -24,12 +24,12 @@ def _short(name: str) -> str:
     return name if len(name) <= NAME_WIDTH else name[: NAME_WIDTH - 3] + "..."
 
 
-def simulate_serial(args: argparse.Namespace, scenario_path: str, outputs) -> int:
+def simulate_arm(args: argparse.Namespace, scenario_path: str, outputs) -> int:
     """``adaptive-dd simulate --arm SCENARIO`` for an N-joint arm: identification records, truth known."""
     from adaptive_dd.benchmark.scenario import load_scenario
     from adaptive_dd.experiments import trial_rngs
-    from adaptive_dd.identification.serial_records import simulate_serial_record, write_serial_recording
-    from adaptive_dd.plant.serial_arm import payload_parameters
+    from adaptive_dd.identification.records import simulate_record, write_serial_recording
+    from adaptive_dd.plant.arm import payload_parameters
 
     sc = load_scenario(scenario_path)
     arm = sc.arm
@@ -51,7 +51,7 @@ def simulate_serial(args: argparse.Namespace, scenario_path: str, outputs) -> in
     payload = (
         payload_parameters(args.payload, args.com or [0.0, 0.0, 0.0], radius=radius) if args.payload else None
     )
-    rec = simulate_serial_record(
+    rec = simulate_record(
         arm,
         sc.reference,
         args.duration,
@@ -111,10 +111,10 @@ def cmd_excite(args: argparse.Namespace) -> int:
         reference_toml,
     )
     from adaptive_dd.outputs import atomic_write, check_output_file
-    from adaptive_dd.plant.serial_arm import SerialArm
+    from adaptive_dd.plant.arm import Arm
 
     arm = load_scenario(args.arm).arm
-    if not isinstance(arm, SerialArm):
+    if not isinstance(arm, Arm):
         arm = _general_arm(args.arm)
     out = check_output_file(args.out)  # before the design, not after it
     lim = ExcitationLimits.of_arm(arm, acceleration=args.acceleration, margin=args.margin)
@@ -162,10 +162,10 @@ def cmd_excite(args: argparse.Namespace) -> int:
 
 def _general_arm(path: str):
     """The scenario's URDF arm as the general model (a two-link URDF of the paper's kind loads as
-    the closed forms' :class:`~adaptive_dd.plant.arm.Arm`, which has no URDF to excite)."""
+    the closed forms' :class:`~adaptive_dd.plant.two_link.TwoLinkArm`, which has no URDF to excite)."""
     from adaptive_dd.benchmark.scenario import read_toml
     from adaptive_dd.errors import ScenarioError
-    from adaptive_dd.plant.arm import arm_from_tables
+    from adaptive_dd.plant.two_link import arm_from_tables
 
     data = read_toml(Path(path))
     table = data.get("arm")
@@ -192,18 +192,16 @@ def _replace_reference(src: str, table: str) -> str:
 def excitation_bounds(arm, trajectories: dict, duration: float) -> dict:
     """``{label: (worst relative bound, its parameter's name, median)}`` of each trajectory's record."""
     from adaptive_dd.identification.excitation import relative_bounds
-    from adaptive_dd.identification.serial_model import serial_model
-    from adaptive_dd.identification.serial_output_error import measurement_std, serial_crb
-    from adaptive_dd.identification.serial_records import simulate_serial_record
+    from adaptive_dd.identification.model import arm_model
+    from adaptive_dd.identification.output_error import cramer_rao_bound, measurement_std
+    from adaptive_dd.identification.records import simulate_record
 
-    model = serial_model(arm)
+    model = arm_model(arm)
     std = measurement_std(arm)
     out = {}
     for label, tr in trajectories.items():
-        rec = simulate_serial_record(
-            arm, tr.reference(ramp=0.5), duration, [np.random.default_rng(0)], noise=False
-        )
-        crb, _ = serial_crb(model, rec.sigma_true, rec.q_true[0], rec.qd_true[0], rec.tau[0], std)
+        rec = simulate_record(arm, tr.reference(ramp=0.5), duration, [np.random.default_rng(0)], noise=False)
+        crb, _ = cramer_rao_bound(model, rec.sigma_true, rec.q_true[0], rec.qd_true[0], rec.tau[0], std)
         rb = relative_bounds(crb, model.sigma_ref, model.names)
         k = int(np.argmax(rb))
         out[label] = (float(rb[k]), model.names[k], float(np.median(rb)))
