@@ -45,6 +45,7 @@ from adaptive_dd.benchmark.scenario import Scenario, default_scenario_path, load
 from adaptive_dd.controllers import CONTROLLERS
 from adaptive_dd.errors import ScenarioError
 from adaptive_dd.io import read_toml
+from adaptive_dd.plant.kind import is_two_link
 
 __all__ = ["SCENARIO_AXES", "GridPoint", "Sweep", "SweepError", "load_sweep", "parse_sweep"]
 
@@ -155,9 +156,8 @@ def _controllers(src: str, sw: dict, base: Scenario) -> tuple[str, ...]:
     if not isinstance(ctrls, list) or not ctrls or not all(isinstance(c, str) for c in ctrls):
         raise SweepError(f"{src}: key 'sweep.controllers' must be a non-empty list of names, got {ctrls!r}")
     from adaptive_dd.closed_loop.controllers import ARM_CONTROLLERS
-    from adaptive_dd.plant.two_link import TwoLinkArm
 
-    two_link = isinstance(base.arm, TwoLinkArm)
+    two_link = is_two_link(base.arm)
     known = tuple(CONTROLLERS) if two_link else tuple(ARM_CONTROLLERS)
     for c in ctrls:
         if c not in known:

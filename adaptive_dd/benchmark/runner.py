@@ -40,6 +40,7 @@ from adaptive_dd.benchmark.types import (
 from adaptive_dd.controllers import Controller, Gains, controller_label, make_controller
 from adaptive_dd.controllers.compiled_form import compiled_spec
 from adaptive_dd.errors import ParameterError
+from adaptive_dd.plant.kind import is_chain
 
 __all__ = [
     "ENGINES",
@@ -88,9 +89,8 @@ def run_benchmark(
     if engine not in ENGINES:
         raise ParameterError(f"engine must be one of {ENGINES}, got {engine!r}")
     t0 = time.perf_counter()
-    from adaptive_dd.plant.arm import Arm
 
-    if isinstance(scenario.arm, Arm):  # any N-joint arm: adaptive_dd.closed_loop
+    if is_chain(scenario.arm):  # any N-joint arm: adaptive_dd.closed_loop
         from adaptive_dd.closed_loop.runner import run_closed_loop
 
         n = scenario.n_samples * len(controllers or scenario.controllers)
@@ -145,9 +145,8 @@ def scenario_controller(scenario: Scenario, spec: str) -> tuple[str, Controller]
     ParameterError
         An unknown name, a plug-in that does not import, an unknown or invalid setting.
     """
-    from adaptive_dd.plant.arm import Arm
 
-    if isinstance(scenario.arm, Arm):
+    if is_chain(scenario.arm):
         from adaptive_dd.closed_loop.runner import make_controller_of
 
         return make_controller_of(scenario, spec)

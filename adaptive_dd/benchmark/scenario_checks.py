@@ -13,6 +13,7 @@ import numpy as np
 
 from adaptive_dd.benchmark.scenario_base import KEYS, LIMITS, Reference, run_estimate
 from adaptive_dd.controllers import CONTROLLERS
+from adaptive_dd.plant.kind import is_chain
 from adaptive_dd.plant.parameters import PAYLOAD_RADIUS
 from adaptive_dd.plant.sampling import first_sample
 
@@ -166,9 +167,7 @@ def _check_plant(e: list, v: dict) -> None:
 
 
 def _serial(v: dict) -> bool:
-    from adaptive_dd.plant.arm import Arm
-
-    return isinstance(v.get("arm"), Arm)
+    return is_chain(v.get("arm"))
 
 
 def _check_controllers(e: list, c: Any, arm: Any = None) -> bool:
@@ -186,9 +185,8 @@ def _check_controllers(e: list, c: Any, arm: Any = None) -> bool:
                 "or an import path 'package.module:Class'"
             )
             ok = False
-    from adaptive_dd.plant.arm import Arm
 
-    if isinstance(arm, Arm):
+    if is_chain(arm):
         from adaptive_dd.closed_loop.controllers import TWO_LINK_ONLY
 
         for x in c:
@@ -387,9 +385,8 @@ def scenario_fields(
 
 
 def _default_controllers(arm: Any) -> list:
-    from adaptive_dd.plant.arm import Arm
 
-    if isinstance(arm, Arm):
+    if is_chain(arm):
         from adaptive_dd.closed_loop.controllers import TWO_LINK_ONLY
 
         return [c for c in CONTROLLERS if c not in TWO_LINK_ONLY]
@@ -397,15 +394,14 @@ def _default_controllers(arm: Any) -> list:
 
 
 def _default_noise(arm: Any, key: str) -> list:
-    from adaptive_dd.plant.arm import Arm
 
-    if isinstance(arm, Arm):
+    if is_chain(arm):
         return list(getattr(arm.sensor, key))
     return [1e-8, 1e-7] if key == "position_variance" else [5e-5, 1e-4]
 
 
 def _payload_fields(e: list, items: list, v: dict, defaulted: set, arm: Any = None) -> None:
-    from adaptive_dd.plant.arm import Arm, payload_parameters
+    from adaptive_dd.plant.arm import payload_parameters
 
     times, masses, radii = [], [], []
     coms, inertias = [], []
@@ -415,7 +411,7 @@ def _payload_fields(e: list, items: list, v: dict, defaulted: set, arm: Any = No
                 (coms if key == "com" else inertias).append(None)
                 continue
             x = p[key]
-            if arm is not None and not isinstance(arm, Arm):
+            if arm is not None and not is_chain(arm):
                 e.append(
                     f"payload[{i}].{key}: the two-link arm's payload is a disk at the tip (mass, radius); "
                     "a centre of mass or inertia needs a URDF arm ([arm] urdf = ... or robot = ...)"

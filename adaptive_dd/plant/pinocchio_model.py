@@ -28,6 +28,7 @@ from adaptive_dd.plant.dynamics import (
     mass_matrix,
     regressor,
 )
+from adaptive_dd.plant.kind import is_two_link
 from adaptive_dd.plant.parameters import Payload, PhysicalParameters
 from adaptive_dd.plant.two_link import TwoLinkArm
 
@@ -53,7 +54,7 @@ def as_physical(arm: TwoLinkArm | PhysicalParameters | None) -> PhysicalParamete
     """Physical parameters of an arm (default :meth:`TwoLinkArm.sice`); see the module docstring."""
     if arm is None:
         return TwoLinkArm.sice().equivalent_physical()
-    if isinstance(arm, TwoLinkArm):
+    if is_two_link(arm):
         return arm.equivalent_physical()
     if isinstance(arm, PhysicalParameters):
         return arm
@@ -153,9 +154,7 @@ def two_link_cross_check(
     """
     rng = np.random.default_rng(0) if rng is None else rng
     params = as_physical(arm)
-    if isinstance(
-        arm, TwoLinkArm
-    ):  # the arm's own sigma and payload effect, against a disk body in Pinocchio
+    if is_two_link(arm):  # the arm's own sigma and payload effect, against a disk body in Pinocchio
         sigma = arm.sigma if payload is None else arm.sigma_with_payload(payload.mass, payload.radius)
     else:
         sigma = (params if payload is None else params.with_payload(payload)).to_sigma()
