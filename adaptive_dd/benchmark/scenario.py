@@ -350,8 +350,7 @@ def _controller_setting_errors(v: dict) -> list[str]:
     the file, not of the run. ``bandwidth``, ``boost_bandwidth`` and ``damping`` have the bounds
     of ``[control]``; ``boost_duration`` is at most the run; every number is finite and within
     ``LIMITS["max_setting"]``."""
-    from adaptive_dd.closed_loop.controllers import make_arm_controller
-    from adaptive_dd.controllers import CONTROLLERS, Gains, make_controller
+    from adaptive_dd.controllers import CONTROLLERS, gains_for, make_controller
 
     errs: list[str] = []
     opts = {n: thaw(o) for n, o in v["controller_options"]}
@@ -383,10 +382,7 @@ def _controller_setting_errors(v: dict) -> list[str]:
         if len(errs) > n0:
             continue
         try:
-            if is_chain(v["arm"]):  # the N-joint built-ins (their own settings)
-                make_arm_controller(name, v["arm"], v["bandwidth"], v["damping"], o)
-            else:
-                make_controller(name, Gains(v["bandwidth"], v["damping"]), o, arm=v["arm"])
+            make_controller(name, gains_for(v["arm"], v["bandwidth"], v["damping"]), o, arm=v["arm"])
         except (ValueError, TypeError, ArithmeticError) as exc:
             msg = str(exc)
             while msg.startswith(f"controllers.{name}"):  # the registry names the controller too

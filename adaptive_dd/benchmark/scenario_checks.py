@@ -187,13 +187,11 @@ def _check_controllers(e: list, c: Any, arm: Any = None) -> bool:
             ok = False
 
     if is_chain(arm):
-        from adaptive_dd.closed_loop.controllers import TWO_LINK_ONLY
-
         for x in c:
-            if x in TWO_LINK_ONLY:
+            if x in CONTROLLERS and not CONTROLLERS[x].applies_to("chain"):
                 e.append(
-                    f"run.controllers: {x!r} is for the two-link arm only (the paper's estimator of its "
-                    f"seven parameters), not for this {arm.n_joints}-joint arm; use 'adaptive_ct'"
+                    f"run.controllers: {x!r} is for the two-link arm only, not for this "
+                    f"{arm.n_joints}-joint arm: {CONTROLLERS[x].only}"
                 )
                 ok = False
     if len(set(c)) != len(c) or len({_label(x) for x in c}) != len(c):
@@ -385,12 +383,8 @@ def scenario_fields(
 
 
 def _default_controllers(arm: Any) -> list:
-
-    if is_chain(arm):
-        from adaptive_dd.closed_loop.controllers import TWO_LINK_ONLY
-
-        return [c for c in CONTROLLERS if c not in TWO_LINK_ONLY]
-    return list(CONTROLLERS)
+    kind = "chain" if is_chain(arm) else "two_link"
+    return [c for c, entry in CONTROLLERS.items() if entry.applies_to(kind)]
 
 
 def _default_noise(arm: Any, key: str) -> list:

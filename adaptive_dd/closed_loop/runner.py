@@ -20,7 +20,7 @@ from functools import partial
 import numpy as np
 
 from adaptive_dd.benchmark.types import CHUNK, MAX_ALARMS, BenchmarkResult, ControllerRun
-from adaptive_dd.closed_loop.controllers import Law, make_arm_controller, with_stated_uncertainty
+from adaptive_dd.closed_loop.controllers import Law, with_stated_uncertainty
 from adaptive_dd.closed_loop.glue import (
     Alarms,
     alarm_lists,
@@ -59,7 +59,8 @@ __all__ = [
 
 
 def make_controllers(scenario) -> dict:
-    """The scenario's controllers by label: built-ins (:data:`ARM_CONTROLLERS`), plug-ins by path."""
+    """The scenario's controllers by label: built-ins and plug-ins by path
+    (:func:`adaptive_dd.controllers.make_controller`)."""
     return dict(make_controller_of(scenario, spec) for spec in scenario.controllers)
 
 
@@ -67,7 +68,7 @@ def make_controller_of(scenario, spec: str) -> tuple[str, object]:
     """``(label, controller)`` of one entry of the scenario's controller list, with its settings."""
     from pathlib import Path
 
-    from adaptive_dd.controllers import Gains, controller_label, make_controller
+    from adaptive_dd.controllers import Gains, controller_label, gains_for, make_controller
 
     src = Path(scenario.source)
     search = (src.parent, Path.cwd()) if src.is_file() else (Path.cwd(),)
@@ -79,7 +80,8 @@ def make_controller_of(scenario, spec: str) -> tuple[str, object]:
         opts = {**opts, "bandwidth": g.bandwidth}
         return label, make_controller(spec, g, opts, arm=scenario.arm, search=search, scenario=scenario)
     opts = with_stated_uncertainty(spec, opts, scenario)
-    return label, make_arm_controller(spec, scenario.arm, scenario.bandwidth, scenario.damping, opts)
+    g = gains_for(scenario.arm, scenario.bandwidth, scenario.damping)
+    return label, make_controller(spec, g, opts, arm=scenario.arm, search=search, scenario=scenario)
 
 
 def true_parameters(scenario) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
