@@ -429,6 +429,7 @@ ARM_CONTROLLERS: dict[str, type[Law]] = {
 :data:`adaptive_dd.controllers.CONTROLLERS` says what each name knows, its settings and defaults
 on each arm, and which arms it runs on)."""
 
+
 def with_stated_uncertainty(name: str, options: dict, scenario) -> dict:
     """``adaptive_ct``'s options with its estimator's ``arm_uncertainty`` taken from the scenario's
     ``[plant.uncertainty]`` (``scenario.plant.uncertainty``) when its own table says neither

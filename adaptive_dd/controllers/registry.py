@@ -33,6 +33,7 @@ import dataclasses
 import importlib
 import inspect
 import sys
+import warnings
 from collections.abc import Callable, Mapping
 from typing import Any
 
@@ -55,6 +56,7 @@ __all__ = [
     "controller_label",
     "controllers_for",
     "gains_for",
+    "inventory",
     "load_controller_class",
     "make_controller",
 ]
@@ -245,7 +247,8 @@ _BOOST = {
     ),
     "detector": Setting(
         "the change detector's settings (ChangeDetector on the two-link arm, Detector on an N-joint "
-        "arm), or false for none; the same table is also accepted inside `estimator` (not both)",
+        "arm), or false for none; written at the top of [controllers.adaptive_ct] (inside `estimator` "
+        "is accepted with a FutureWarning)",
         rule="two detectors: GLR with persistence on sigma; a gate with a fast window on the payload",
     ),
 }
@@ -350,6 +353,36 @@ def gains_for(arm, bandwidth=40.0, damping: float = 1.0):
     return JointGains.of(bandwidth, damping, arm.n_joints)
 
 
+def _show(v: Any) -> str:
+    if v is ABSENT:
+        return "not a setting"
+    if v is None:
+        return "see the meaning"
+    if isinstance(v, tuple):
+        return "(" + ", ".join(f"{x:g}" for x in v) + ")"
+    return f"{v:g}" if isinstance(v, float) else str(v)
+
+
+def inventory() -> str:
+    """The table of every built-in name and setting on both arms, as Markdown (``docs/controllers.md``
+    holds it; ``tests/test_controller_registry.py`` checks the page against this)."""
+    rows = [
+        "| controller | knows | arms | setting | two-link default | N-joint default | rule where they differ"
+        " |",
+        "|---|---|---|---|---|---|---|",
+    ]
+    for name, e in CONTROLLERS.items():
+        arms = "both" if e.applies_to("chain") else f"two-link only ({e.only})"
+        first = f"| `{name}` | {e.knows} | {arms} |"
+        if not e.settings:
+            rows.append(f"{first} none | | | |")
+        for i, (k, st) in enumerate(e.settings.items()):
+            lead = first if i == 0 else "| | | |"
+            defaults = f"{_show(st.two_link)} | {_show(st.chain)}"
+            rows.append(f"{lead} `{k}`: {st.meaning} | {defaults} | {st.rule or 'same'} |")
+    return "\n".join(rows)
+
+
 def controllers_for(arm) -> tuple[str, ...]:
     """The built-in names that run on ``arm`` (every name but the two-link-only ones on an N-joint arm)."""
     kind = arm_kind(arm)
@@ -366,6 +399,25 @@ def _check_settings(spec: str, o: dict, entry: Builtin, kind: str, arm) -> None:
             f"controllers.{spec}.{k}: not a setting on {_arm_words(arm)}: {entry.settings[k].rule}"
         )
     _unknown(spec, o, set(here))
+
+
+def _detector_at_the_top(spec: str, o: dict) -> dict:
+    """``estimator.detector`` moved to the top of the table (its one documented place, on both arms),
+    with a FutureWarning; both at once is an error."""
+    est = o.get("estimator")
+    if not (isinstance(est, dict) and "detector" in est):
+        return o
+    if "detector" in o:
+        raise ParameterError(
+            f"controllers.{spec}: 'detector' given twice (at the top and in 'estimator'); keep one"
+        )
+    warnings.warn(
+        f"controllers.{spec}.estimator.detector: write the detector's table at the top of "
+        f"[controllers.{spec}] (detector = {{...}} or false); inside 'estimator' is accepted for now",
+        FutureWarning,
+        stacklevel=4,
+    )
+    return {**o, "estimator": {k: v for k, v in est.items() if k != "detector"}, "detector": est["detector"]}
 
 
 def _arm_words(arm) -> str:
@@ -394,7 +446,7 @@ def _builtin(spec: str, gains, options: dict, arm) -> Controller:
         raise ParameterError(
             f"controller {spec!r} is for the two-link arm only, not for {_arm_words(arm)}: {entry.only}"
         )
-    o = {k: v for k, v in options.items() if k not in COMMON}
+    o = _detector_at_the_top(spec, {k: v for k, v in options.items() if k not in COMMON})
     _check_settings(spec, o, entry, kind, arm)
     if kind == "chain":
         return _chain_controller(spec, entry, gains, options, o, arm)
