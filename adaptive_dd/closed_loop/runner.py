@@ -20,7 +20,7 @@ from functools import partial
 import numpy as np
 
 from adaptive_dd.benchmark.types import CHUNK, MAX_ALARMS, BenchmarkResult, ControllerRun
-from adaptive_dd.closed_loop.controllers import Law, with_stated_uncertainty
+from adaptive_dd.closed_loop.controllers import Law
 from adaptive_dd.closed_loop.glue import (
     Alarms,
     alarm_lists,
@@ -65,23 +65,11 @@ def make_controllers(scenario) -> dict:
 
 
 def make_controller_of(scenario, spec: str) -> tuple[str, object]:
-    """``(label, controller)`` of one entry of the scenario's controller list, with its settings."""
-    from pathlib import Path
+    """``(label, controller)`` of one entry of the scenario's controller list, with its settings
+    (:func:`adaptive_dd.controllers.registry.scenario_controller`, the same on every arm)."""
+    from adaptive_dd.controllers.registry import scenario_controller
 
-    from adaptive_dd.controllers import Gains, controller_label, gains_for, make_controller
-
-    src = Path(scenario.source)
-    search = (src.parent, Path.cwd()) if src.is_file() else (Path.cwd(),)
-    opts = scenario.options(controller_label(spec)) or scenario.options(spec)
-    label = controller_label(spec, opts)
-    if ":" in spec:
-        bw = opts.get("bandwidth", scenario.bandwidth)
-        g = Gains(float(np.max(bw)), opts.get("damping", scenario.damping))
-        opts = {**opts, "bandwidth": g.bandwidth}
-        return label, make_controller(spec, g, opts, arm=scenario.arm, search=search, scenario=scenario)
-    opts = with_stated_uncertainty(spec, opts, scenario)
-    g = gains_for(scenario.arm, scenario.bandwidth, scenario.damping)
-    return label, make_controller(spec, g, opts, arm=scenario.arm, search=search, scenario=scenario)
+    return scenario_controller(scenario, spec)
 
 
 def true_parameters(scenario) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

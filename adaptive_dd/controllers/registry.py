@@ -59,6 +59,7 @@ __all__ = [
     "inventory",
     "load_controller_class",
     "make_controller",
+    "scenario_controller",
 ]
 
 COMMON = {"bandwidth", "damping", "label"}
@@ -381,6 +382,36 @@ def inventory() -> str:
             defaults = f"{_show(st.two_link)} | {_show(st.chain)}"
             rows.append(f"{lead} `{k}`: {st.meaning} | {defaults} | {st.rule or 'same'} |")
     return "\n".join(rows)
+
+
+def scenario_controller(scenario, spec: str) -> tuple[str, Controller]:
+    """``(label, controller)`` of one entry of a scenario's controller list, on either arm, as the run
+    builds it: its ``[controllers.NAME]`` settings (``adaptive_ct``'s estimator told the scenario's
+    ``[plant.uncertainty]``: :func:`~adaptive_dd.closed_loop.controllers.with_stated_uncertainty`),
+    the ``[control]`` gains in the arm's form (a plug-in gets :class:`Gains` with the largest
+    per-joint bandwidth), plug-ins imported from the scenario's folder or the working directory.
+
+    Raises
+    ------
+    ParameterError
+        An unknown name, a plug-in that does not import, an unknown or invalid setting.
+    """
+    from pathlib import Path
+
+    from adaptive_dd.closed_loop.controllers import with_stated_uncertainty
+
+    src = Path(scenario.source)
+    search = (src.parent, Path.cwd()) if src.is_file() else (Path.cwd(),)
+    opts = scenario.options(controller_label(spec)) or scenario.options(spec)
+    label = controller_label(spec, opts)
+    if ":" in spec:
+        bw = opts.get("bandwidth", scenario.bandwidth)
+        g = Gains(float(np.max(bw)), opts.get("damping", scenario.damping))
+        opts = {**opts, "bandwidth": g.bandwidth}
+    else:
+        opts = with_stated_uncertainty(spec, opts, scenario)
+        g = gains_for(scenario.arm, scenario.bandwidth, scenario.damping)
+    return label, make_controller(spec, g, opts, arm=scenario.arm, search=search, scenario=scenario)
 
 
 def controllers_for(arm) -> tuple[str, ...]:
