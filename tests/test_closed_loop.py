@@ -355,8 +355,8 @@ def test_scenario_checks_for_n_joint_arms():
 
 def test_an_n_joint_scenario_takes_the_n_joint_estimators_settings():
     data = tomllib.loads(open(_shipped("ur5_tool_swap_exact"), encoding="utf-8").read())
-    est = {"row_weights": [1.0, 1.0, 1.0, 0.5, 0.5, 0.5], "bound_radius": 0.2, "detector": {"floor": 0.1}}
-    data["controllers"] = {"adaptive_ct": {"estimator": est}}
+    est = {"row_weights": [1.0, 1.0, 1.0, 0.5, 0.5, 0.5], "bound_radius": 0.2}
+    data["controllers"] = {"adaptive_ct": {"estimator": est, "detector": {"floor": 0.1}}}
     sc = parse_scenario(data, "x.toml")
     online = make_controller("adaptive_ct", options=sc.options("adaptive_ct"), arm=sc.arm).online
     assert list(online.row_weights) == est["row_weights"]
