@@ -47,12 +47,12 @@ def test_an_option_for_the_other_kind_of_arm_is_an_error_naming_it(tmp_path, cap
 
 
 def test_debug_is_accepted_after_the_command(capsys, monkeypatch):
-    import adaptive_dd.cli as cli
+    import adaptive_dd.cli.validate as cli_validate
 
     def broken(args):
         raise RuntimeError("planted")
 
-    monkeypatch.setattr(cli, "_cmd_validate", broken)
+    monkeypatch.setattr(cli_validate, "run", broken)
     assert main(["validate"]) == 3
     assert "Traceback" not in capsys.readouterr().err
     assert main(["validate", "--debug"]) == 3

@@ -1,8 +1,8 @@
-"""The N-joint commands of the CLI: ``simulate --arm`` and ``excite`` for a Arm.
+"""``adaptive-dd excite --arm SCENARIO``: an exciting trajectory for the arm, designed, with its
+identification bound beside a plain multi-sine's; writes the scenario with the designed ``[reference]``.
 
-Kept apart from :mod:`adaptive_dd.cli` (which parses the arguments and dispatches here
-when a scenario's arm is a :class:`~adaptive_dd.plant.arm.Arm`);
-``identify --arm`` and ``predict`` are in :mod:`adaptive_dd.cli_log`.
+Any arm from a URDF, the paper's kind included (designed on its general model); an arm given by
+the paper's tables alone (no URDF) is refused.
 """
 
 from __future__ import annotations
@@ -12,96 +12,29 @@ import sys
 from pathlib import Path
 
 import numpy as np
-from numpy.typing import NDArray
 
-__all__ = ["cmd_excite", "simulate_arm"]
+from adaptive_dd.cli._common import NAME_WIDTH, POS, SEED, add_command, is_two_link, number, short
 
-Array = NDArray[np.float64]
-NAME_WIDTH = 44
+__all__ = ["add_parser", "excitation_bounds", "run"]
 
 
-def _short(name: str) -> str:
-    return name if len(name) <= NAME_WIDTH else name[: NAME_WIDTH - 3] + "..."
+def add_parser(sub) -> None:
+    """The options of ``excite``."""
+    e = add_command(sub, "excite", help="design an exciting trajectory for an arm from a URDF")
+    e.add_argument("--arm", required=True, metavar="SCENARIO", help="scenario TOML with [arm] urdf/robot")
+    e.add_argument("--harmonics", type=number(int, 1, 20), default=5, help="Fourier harmonics (default 5)")
+    e.add_argument("--f0", type=POS, default=0.1, help="base frequency [Hz] (default 0.1: 10 s period)")
+    e.add_argument("--acceleration", type=POS, default=5.0, help="|qdd| limit [rad/s^2] (default 5)")
+    e.add_argument("--margin", type=number(float, 0.0, 1.0), default=0.1, help="position margin [rad]")
+    e.add_argument("--maxiter", type=number(int, 1, 10000), default=100, help="SLSQP iterations")
+    e.add_argument("--duration", type=POS, default=10.0, help="record length for the bounds [s]")
+    e.add_argument("--ramp", type=number(float, 0.0, 100.0), default=0.5, help="reference ramp [s]")
+    e.add_argument("--seed", type=SEED, default=0, help="seed of the random start")
+    e.add_argument("--out", default="results/excite/scenario.toml", help="scenario file to write")
+    e.set_defaults(func=run)
 
 
-def simulate_arm(args: argparse.Namespace, scenario_path: str, outputs) -> int:
-    """``adaptive-dd simulate --arm SCENARIO`` for an N-joint arm: identification records, truth known."""
-    from adaptive_dd.benchmark.scenario import load_scenario
-    from adaptive_dd.experiments import trial_rngs
-    from adaptive_dd.identification.records import simulate_record, write_serial_recording
-    from adaptive_dd.plant.arm import payload_parameters
-
-    sc = load_scenario(scenario_path)
-    arm = sc.arm
-    if sc.plant is not None:  # the scenario's robot is not its [arm]: simulate the robot
-        from adaptive_dd.plant.urdf_write import write_urdf_links
-
-        p = sc.plant
-        path = write_urdf_links(arm, p.pi_links, outputs.path("plant.urdf"), f"the plant of {scenario_path}")
-        arm = arm.with_(urdf=path, viscous=p.viscous, coulomb=p.coulomb, armature=p.armature)
-        print(
-            f"the plant: the scenario's [plant] before any draw, written to {Path(args.out) / 'plant.urdf'}"
-            + (" ([plant.uncertainty] draws a plant per benchmark seed; not here)" if p.uncertainty else "")
-        )
-    if arm.sensor.quantize == args.no_quantize:
-        import dataclasses
-
-        arm = arm.with_(sensor=dataclasses.replace(arm.sensor, quantize=not args.no_quantize))
-    radius = arm.payload_radius if args.radius is None else args.radius
-    payload = (
-        payload_parameters(args.payload, args.com or [0.0, 0.0, 0.0], radius=radius) if args.payload else None
-    )
-    rec = simulate_record(
-        arm,
-        sc.reference,
-        args.duration,
-        trial_rngs(args.seed, args.seeds),
-        sample_period=args.sample_period,
-        payload=payload,
-        substeps=args.substeps,
-        noise=not args.no_noise,
-        quantize=not args.no_quantize,
-        plant=getattr(args, "plant", "model"),
-    )
-    write_serial_recording(outputs.path("trajectory.csv"), rec.t, rec.q[0], rec.qd[0], rec.tau[0])
-    np.savez_compressed(
-        outputs.path("trajectory.npz"),
-        t=rec.t,
-        q=rec.q,
-        qd=rec.qd,
-        tau=rec.tau,
-        q_true=rec.q_true,
-        qd_true=rec.qd_true,
-        sigma_true=rec.sigma_true,
-        pi_true=rec.pi_true,
-        payload=rec.payload,
-    )
-    print(
-        f"{arm.n_joints}-joint arm of {scenario_path}: the scenario's reference tracked by computed torque "
-        f"(the plant's own model, 40 rad/s), {args.duration} s at T = {args.sample_period} s, payload "
-        f"{args.payload} kg, {args.seeds} trial(s), "
-        + (
-            f"the benchmark's plant, friction {arm.friction}"
-            if getattr(args, "plant", "model") == "serial"
-            else f"the identification model (RK4, friction tanh, v_f = {arm.friction_velocity} rad/s)"
-        )
-    )
-    print(
-        "  max |q - q_ref| [rad] : "
-        f"{np.abs(rec.q_true - sc.reference.sample(rec.t)[0]).max(axis=(0, 1)).round(4)}"
-    )
-    print(f"  max |qd|  [rad/s]     : {np.abs(rec.qd_true).max(axis=(0, 1)).round(3)}")
-    print(f"  rms tau   [N m]       : {np.sqrt((rec.tau**2).mean(axis=(0, 1))).round(3)}")
-    print(f"  saturated fraction    : {rec.saturated.max(axis=0).round(4)}")
-    out = Path(args.out)
-    print(
-        f"wrote {out / 'trajectory.csv'} (trial 0, measured), {out / 'trajectory.npz'} (all trials and "
-        "the truth)"
-    )
-    return 0
-
-
-def cmd_excite(args: argparse.Namespace) -> int:
+def run(args: argparse.Namespace) -> int:
     """``adaptive-dd excite --arm SCENARIO``: design an exciting trajectory; its bound beside a multi-sine."""
     from adaptive_dd.benchmark.scenario import load_scenario
     from adaptive_dd.identification.excitation import (
@@ -111,10 +44,9 @@ def cmd_excite(args: argparse.Namespace) -> int:
         reference_toml,
     )
     from adaptive_dd.outputs import atomic_write, check_output_file
-    from adaptive_dd.plant.arm import Arm
 
     arm = load_scenario(args.arm).arm
-    if not isinstance(arm, Arm):
+    if is_two_link(arm):
         arm = _general_arm(args.arm)
     out = check_output_file(args.out)  # before the design, not after it
     lim = ExcitationLimits.of_arm(arm, acceleration=args.acceleration, margin=args.margin)
@@ -128,6 +60,16 @@ def cmd_excite(args: argparse.Namespace) -> int:
         rng=np.random.default_rng(args.seed),
     )
     rows = excitation_bounds(arm, {"plain multi-sine": plain, "designed": best}, args.duration)
+    _print_bounds(args, arm, res, rows)
+    text = reference_toml(best.reference(ramp=args.ramp), f"designed by adaptive-dd excite --arm {args.arm}")
+    with atomic_write(out) as fh:
+        fh.write(_replace_reference(Path(args.arm).read_text(), text))
+    print(f"wrote {out} (the scenario with the designed [reference])")
+    return 0
+
+
+def _print_bounds(args: argparse.Namespace, arm, res, rows: dict) -> None:
+    """The limits, SLSQP's outcome, each trajectory's worst and median bound, and their ratio."""
     print(
         f"{arm.n_joints}-joint arm of {args.arm}: {args.harmonics} harmonics of {args.f0} Hz; limits: "
         "positions "
@@ -137,7 +79,7 @@ def cmd_excite(args: argparse.Namespace) -> int:
     print(f"SLSQP: {res.nit} iterations, {res.message}")
     print(f"{'trajectory':<18} {'worst bound':>12}  {'worst base parameter':<{NAME_WIDTH}} {'median':>9}")
     for label, (worst, name, med) in rows.items():
-        print(f"{label:<18} {100 * worst:11.3g}%  {_short(name):<{NAME_WIDTH}} {100 * med:8.3g}%")
+        print(f"{label:<18} {100 * worst:11.3g}%  {short(name):<{NAME_WIDTH}} {100 * med:8.3g}%")
     bad = [label for label, (worst, _, _) in rows.items() if not np.isfinite(worst)]
     if bad:  # said, not printed as a ratio of NaNs
         print(
@@ -153,11 +95,6 @@ def cmd_excite(args: argparse.Namespace) -> int:
             f"segmented output error on a {args.duration} s record tracking it, relative to each "
             "parameter's magnitude)"
         )
-    text = reference_toml(best.reference(ramp=args.ramp), f"designed by adaptive-dd excite --arm {args.arm}")
-    with atomic_write(out) as fh:
-        fh.write(_replace_reference(Path(args.arm).read_text(), text))
-    print(f"wrote {out} (the scenario with the designed [reference])")
-    return 0
 
 
 def _general_arm(path: str):
