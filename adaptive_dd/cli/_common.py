@@ -90,21 +90,38 @@ def arm_label(args_arm: str | None, arm) -> str:
     return f"{kind} arm of {args_arm}"
 
 
-def load_arm(path: str | None, repair_inertia: bool = False):
+def load_arm(path: str | None, repair_inertia: bool = False, *, general: str | None = None):
     """The arm of a scenario file's ``[arm]`` and ``[plant]`` tables (SICE arm if ``path`` is None):
     the model its controllers are given (``[model] from`` when there is one); ``repair_inertia``
-    sets ``arm.repair_inertia = true`` (identify's --repair-inertia)."""
+    sets ``arm.repair_inertia = true`` (identify's --repair-inertia).
+
+    ``general``: the general :class:`~adaptive_dd.plant.arm.Arm` even where the URDF is the paper's
+    kind of two-link arm (which otherwise loads as the closed forms'
+    :class:`~adaptive_dd.plant.two_link.TwoLinkArm`); the string names what needs it, for the
+    :class:`ScenarioError` raised when the ``[arm]`` names no URDF.
+    """
     from adaptive_dd.benchmark.scenario import model_and_plant, read_toml
     from adaptive_dd.errors import ScenarioError
     from adaptive_dd.plant.two_link import TwoLinkArm, arm_from_tables
     from adaptive_dd.plant.uncertainty import PLANT_TRUTH_KEYS
 
     if path is None:
+        if general:
+            from adaptive_dd.plant.arm import Arm
+
+            return Arm.sice()
         return TwoLinkArm.sice()
     if not Path(path).is_file():
         raise ScenarioError(f"{path}: no such scenario file")
     data = read_toml(Path(path))
     table = data.get("arm")
+    if general:
+        if not (isinstance(table, dict) and ("urdf" in table or "robot" in table)):
+            raise ScenarioError(
+                f"{path}: {general} needs an [arm] from a URDF (urdf = ... or robot = ...); for the "
+                'paper\'s arm use robot = "sice_arm"'
+            )
+        table = {**table, "general": True}
     if repair_inertia and isinstance(table, dict):
         table = {**table, "repair_inertia": True}
     plant = data.get("plant")

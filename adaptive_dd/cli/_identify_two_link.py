@@ -11,25 +11,29 @@ from pathlib import Path
 import numpy as np
 
 
-def identify_two_link(args: argparse.Namespace) -> int:
-    """Read the one CSV, check it can be identified, then the estimator or the online run."""
+def identify_two_link(args: argparse.Namespace, arm) -> int:
+    """Read the one CSV, check it can be identified, then the estimator or the online run (which
+    starts from ``arm``'s sigma: the SICE arm's, Table 1, without ``--arm``)."""
     from adaptive_dd.errors import DataError
     from adaptive_dd.identification.estimators import estimate
+    from adaptive_dd.identification.log_fit import filter_time_constant
     from adaptive_dd.io import MIN_EQUATIONS, check_identifiable, read_recording
     from adaptive_dd.outputs import OutputSet
 
     if len(args.data) != 1:
-        raise DataError(f"identify without --arm reads one CSV file, got {len(args.data)}: {args.data}")
+        which = f"of the two-link arm of {args.arm}" if args.arm else "without --arm"
+        raise DataError(f"identify {which} reads one CSV file, got {len(args.data)}: {args.data}")
     args.data = args.data[0]
-    args.tau_f = 0.02 if args.tau_f is None else args.tau_f
     rec = read_recording(args.data)
+    if args.tau_f is None:  # sized to the sample rate, as on any arm: 0.02 s up to T = 10 ms
+        args.tau_f = filter_time_constant(rec.sample_period)
     if args.method == "M2" and rec.qd is None:
         raise DataError(f"{args.data}: method M2 needs columns qd1, qd2 (use --method M1 for position only)")
     check_identifiable(rec, args.tau_f)
     outputs = OutputSet(args.out)
     with outputs:
         if args.online:
-            return _identify_online(args, rec, outputs)
+            return _identify_online(args, arm, rec, outputs)
         return _identify(args, rec, outputs, estimate, MIN_EQUATIONS)
 
 
@@ -50,7 +54,7 @@ def _identify(args, rec, outputs, estimate, min_equations: int) -> int:
     )
     print(
         f"{rec.source}: {rec.t.size} samples at T = {rec.sample_period:.6g} s; estimator "
-        f"{args.estimator}, method {args.method}, split {res.split}, tau_f = {args.tau_f}"
+        f"{args.estimator}, method {args.method}, split {res.split}, tau_f = {args.tau_f:.6g}"
     )
     print(f"equations used: {int(res.n_used)} of {2 * rec.t.size}")
     if int(res.n_used) < min_equations:
@@ -80,24 +84,24 @@ def _identify(args, rec, outputs, estimate, min_equations: int) -> int:
     return 0
 
 
-def _identify_online(args, rec, outputs) -> int:
+def _identify_online(args, arm, rec, outputs) -> int:
     """The online estimator of ``adaptive_ct`` over a record: estimates and alarms over time."""
     import dataclasses
 
     from adaptive_dd.controllers.adaptive import ADAPTIVE_ONLINE
     from adaptive_dd.errors import DataError
-    from adaptive_dd.identification.two_link_online import run_two_link_online
-    from adaptive_dd.plant.two_link import TwoLinkArm
+    from adaptive_dd.identification import two_link_online
 
     if rec.qd is None:
         raise DataError(f"{args.data}: --online needs the measured velocity (columns qd1, qd2)")
     cfg = dataclasses.replace(ADAPTIVE_ONLINE, sample_period=rec.sample_period, tau_f=args.tau_f)
-    sice = TwoLinkArm.sice()  # a record's arm: the SICE arm (the nominal model the estimator starts from)
-    r = run_two_link_online(rec.q, rec.qd, rec.tau, cfg, sice.sigma)
+    # the arm's sigma: the nominal model the estimator starts from (the SICE arm's without --arm)
+    r = two_link_online.run_two_link_online(rec.q, rec.qd, rec.tau, cfg, arm.sigma)
     model, alarms = r.sigma_model[0], r.alarm_times()[0]
-    mass = sice.payload_mass_from_sigma(model)
+    mass = arm.payload_mass_from_sigma(model)
+    start = f"the sigma of {args.arm}" if args.arm else "Table 1"
     print(
-        f"{rec.source}: online estimator of adaptive_ct (tau_f = {args.tau_f} s, started at Table 1), "
+        f"{rec.source}: online estimator of adaptive_ct (tau_f = {args.tau_f:.6g} s, started at {start}), "
         f"{rec.t.size} samples; {len(alarms)} change alarm(s)"
         + (f" at {', '.join(f'{a:.3f}' for a in alarms)} s" if alarms else "")
         + f"; skipped samples {int(r.n_skipped[0])}"

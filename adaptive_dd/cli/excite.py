@@ -13,7 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
-from adaptive_dd.cli._common import NAME_WIDTH, POS, SEED, add_command, is_two_link, number, short
+from adaptive_dd.cli._common import NAME_WIDTH, POS, SEED, add_command, is_two_link, load_arm, number, short
 
 __all__ = ["add_parser", "excitation_bounds", "run"]
 
@@ -46,8 +46,8 @@ def run(args: argparse.Namespace) -> int:
     from adaptive_dd.outputs import atomic_write, check_output_file
 
     arm = load_scenario(args.arm).arm
-    if is_two_link(arm):
-        arm = _general_arm(args.arm)
+    if is_two_link(arm):  # the paper's kind of URDF: its general model (the closed forms have no URDF)
+        arm = load_arm(args.arm, general="excite")
     out = check_output_file(args.out)  # before the design, not after it
     lim = ExcitationLimits.of_arm(arm, acceleration=args.acceleration, margin=args.margin)
     plain = multisine(arm, lim, args.harmonics, args.f0)
@@ -95,23 +95,6 @@ def _print_bounds(args: argparse.Namespace, arm, res, rows: dict) -> None:
             f"segmented output error on a {args.duration} s record tracking it, relative to each "
             "parameter's magnitude)"
         )
-
-
-def _general_arm(path: str):
-    """The scenario's URDF arm as the general model (a two-link URDF of the paper's kind loads as
-    the closed forms' :class:`~adaptive_dd.plant.two_link.TwoLinkArm`, which has no URDF to excite)."""
-    from adaptive_dd.benchmark.scenario import read_toml
-    from adaptive_dd.errors import ScenarioError
-    from adaptive_dd.plant.two_link import arm_from_tables
-
-    data = read_toml(Path(path))
-    table = data.get("arm")
-    if not (isinstance(table, dict) and ("urdf" in table or "robot" in table)):
-        raise ScenarioError(
-            f"{path}: excite needs an [arm] from a URDF (urdf = ... or robot = ...); for the paper's "
-            'arm use robot = "sice_arm"'
-        )
-    return arm_from_tables({**table, "general": True}, data.get("plant"), str(path))
 
 
 def _replace_reference(src: str, table: str) -> str:

@@ -11,7 +11,15 @@ from __future__ import annotations
 
 import argparse
 
-from adaptive_dd.cli._common import POS, add_command, add_window_option, is_two_link, load_arm, number
+from adaptive_dd.cli._common import (
+    POS,
+    add_command,
+    add_window_option,
+    is_two_link,
+    load_arm,
+    number,
+    refuse,
+)
 
 __all__ = ["add_parser", "run"]
 
@@ -54,7 +62,7 @@ def _add_two_link_options(i: argparse.ArgumentParser) -> None:
         "--tau-f",
         type=POS,
         default=None,
-        help="filter time constant [s] (default 0.02; with --arm: 2 sample periods, at least 0.02)",
+        help="filter time constant [s] (default: 2 sample periods, at least 0.02)",
     )
     i.add_argument(
         "--true", type=number(float, -1e6, 1e6), nargs=7, metavar="S", help="true sigma, to mark on the plot"
@@ -112,52 +120,49 @@ def _add_arm_options(i: argparse.ArgumentParser) -> None:
     )
 
 
+TWO_LINK_OPTIONS = (
+    "--estimator",
+    "--method",
+    "--split",
+    "--true",
+    "--online",
+    "--position-variance",
+    "--velocity-variance",
+)
+"""Options of the paper's identification (:mod:`adaptive_dd.cli._identify_two_link`), refused on
+any other arm."""
+ARM_OPTIONS = (
+    "--baseline",
+    "--payload-only",
+    "--window",
+    "--repair-inertia",
+    "--output-error",
+    "--segment-length",
+    "--max-iter",
+)
+"""Options of the identification of any arm from a log (:mod:`adaptive_dd.cli._identify_log`),
+refused on the paper's arm."""
+
+
 def run(args: argparse.Namespace) -> int:
     """Refuse the other path's options, then identify on the arm's path."""
     from adaptive_dd.errors import DataError
+
+    arm = load_arm(args.arm, args.repair_inertia)
+    if is_two_link(arm):
+        from adaptive_dd.cli._identify_two_link import identify_two_link
+
+        refuse(args, ARM_OPTIONS, "only with --arm SCENARIO of an N-joint arm from a URDF", DataError)
+        return identify_two_link(args, arm)
+    from adaptive_dd.cli._identify_log import identify_log
     from adaptive_dd.outputs import OutputSet
 
-    if args.arm:  # an N-joint arm from a URDF: its own path (adaptive_dd.cli._identify_log)
-        arm = load_arm(args.arm, args.repair_inertia)
-        if not is_two_link(arm):
-            from adaptive_dd.cli._identify_log import identify_log
-
-            _refuse_two_link_options(args)
-            with OutputSet(args.out) as outputs:
-                return identify_log(args, arm, outputs)
-    arm_only = {
-        "--baseline": args.baseline,
-        "--payload-only": args.payload_only,
-        "--window": args.window,
-        "--repair-inertia": args.repair_inertia,
-        "--output-error": args.output_error != "auto",
-        "--segment-length": args.segment_length != 200,
-        "--max-iter": args.max_iter != 30,
-    }
-    given = [o for o, v in arm_only.items() if v]
-    if given:
-        raise DataError(f"{', '.join(given)}: only with --arm SCENARIO of an N-joint arm from a URDF")
-    from adaptive_dd.cli._identify_two_link import identify_two_link
-
-    return identify_two_link(args)
-
-
-def _refuse_two_link_options(args: argparse.Namespace) -> None:
-    from adaptive_dd.errors import DataError
-    from adaptive_dd.experiments import TABLE2
-
-    two_link = {
-        "--estimator": args.estimator != "exact",
-        "--method": args.method != "M2",
-        "--split": args.split != "15",
-        "--true": args.true is not None,
-        "--online": args.online,
-        "--position-variance": list(args.position_variance) != list(TABLE2["position_variance"]),
-        "--velocity-variance": list(args.velocity_variance) != list(TABLE2["velocity_variance"]),
-    }
-    given = [o for o, v in two_link.items() if v]
-    if given:
-        raise DataError(
-            f"{', '.join(given)}: options of the two-link identification; an N-joint arm from a "
-            "URDF (--arm) is identified by weighted least squares (docs/real_log.md)"
-        )
+    refuse(
+        args,
+        TWO_LINK_OPTIONS,
+        "options of the two-link identification; an N-joint arm from a URDF (--arm) is identified by "
+        "weighted least squares (docs/real_log.md)",
+        DataError,
+    )
+    with OutputSet(args.out) as outputs:
+        return identify_log(args, arm, outputs)

@@ -1,11 +1,19 @@
 """``adaptive-dd simulate``: a record of the arm to identify from, its truth known.
 
-The paper's arm (no ``--arm``, or a scenario whose arm is the paper's kind) runs the paper's
-open-loop Table 2 experiment (1 Hz sine torques, the payload a disk centred on the tip) on its
-own compiled plant; any other arm tracks the scenario's ``[reference]`` by computed torque.
-Both take the same duration, sample period, substeps, trials, seed, payload mass and radius,
-noise, quantization and saturation options with the same meaning; ``--com`` and ``--plant``
-apply to an arm from a URDF only and are refused on the paper's arm.
+Two experiments (``--experiment``), each with one meaning on every arm it applies to:
+
+- ``table2``: the paper's open-loop Table 2 experiment (1 Hz sine torques of the SICE arm's
+  amplitudes, the payload a disk centred on the tip) on the closed forms' compiled plant. The
+  paper's two-link arm only: open-loop torques of those amplitudes mean nothing on another arm
+  (under gravity it falls), so it is refused there.
+- ``reference``: the scenario's ``[reference]`` (without ``--arm``: the shipped ``payload_swap``
+  scenario's) tracked by computed torque, on the arm's general model (a URDF arm of the paper's
+  kind included; the SICE arm is :meth:`~adaptive_dd.plant.arm.Arm.sice`); any arm from a URDF.
+
+The default is the paper's experiment on the paper's arm and the reference on any other.
+``--duration``, ``--sample-period``, ``--substeps``, ``--seeds``, ``--seed``, ``--payload``,
+``--radius``, ``--no-noise``, ``--no-quantize``, ``--no-saturate`` and ``--out`` mean the same in
+both; ``--com`` and ``--plant`` are options of the reference experiment, refused with ``table2``.
 """
 
 from __future__ import annotations
@@ -33,12 +41,19 @@ from adaptive_dd.cli._common import (
 )
 from adaptive_dd.errors import ParameterError
 
-__all__ = ["add_parser", "run", "simulate_arm"]
+__all__ = ["EXPERIMENTS", "add_parser", "run", "simulate_arm"]
+
+EXPERIMENTS = ("table2", "reference")
 
 
 def add_parser(sub) -> None:
     """The options of ``simulate``."""
-    s = add_command(sub, "simulate", help="simulate the paper's open-loop Table 2 experiment")
+    s = add_command(
+        sub,
+        "simulate",
+        help="simulate an identification record: the paper's open-loop Table 2 experiment or the "
+        "scenario's reference tracked",
+    )
     s.add_argument(
         "--duration", type=number(float, 0.0, math.inf, lo_open=True), default=10.0, help="[s] (default 10)"
     )
@@ -53,13 +68,19 @@ def add_parser(sub) -> None:
         type=number(float, -1.0, 1.0),
         nargs=3,
         metavar="M",
-        help="payload centre of mass in the payload frame [m] (arm from a URDF; default 0 0 0)",
+        help="payload centre of mass in the payload frame [m] (--experiment reference; default 0 0 0)",
     )
     s.add_argument(
         "--arm",
         metavar="SCENARIO",
-        help="simulate the [arm] and [plant] of a scenario TOML; an arm from a URDF tracks the scenario's "
-        "[reference] by computed torque and writes t, q1..qN, qd1..qdN, tau1..tauN",
+        help="simulate the [arm] and [plant] of a scenario TOML (default: the SICE arm)",
+    )
+    s.add_argument(
+        "--experiment",
+        choices=EXPERIMENTS,
+        help="table2: the paper's open-loop Table 2 experiment (the paper's two-link arm only); "
+        "reference: the scenario's [reference] tracked by computed torque, writes t, q1..qN, qd1..qdN, "
+        "tau1..tauN (any arm from a URDF); default: table2 on the paper's arm, reference on any other",
     )
     s.add_argument("--no-noise", action="store_true", help="noise-free sensors")
     s.add_argument("--no-quantize", action="store_true", help="no encoder or D/A quantization")
@@ -68,7 +89,7 @@ def add_parser(sub) -> None:
         "--plant",
         default="model",
         choices=("model", "serial"),
-        help="arm from a URDF: the identification model's RK4 with tanh friction (default) or the "
+        help="--experiment reference: the identification model's RK4 with tanh friction (default) or the "
         "benchmark's compiled plant with the arm's friction law (stick-slip)",
     )
     s.add_argument("--out", default="results/simulate", help="output folder")
@@ -91,20 +112,22 @@ def run(args: argparse.Namespace) -> int:
     if est.large:
         print(f"estimate: {est}", file=sys.stderr)
     arm = load_arm(args.arm)
-    if not is_two_link(arm):  # N joints: identification records
-        refuse(
-            args,
-            ("--no-saturate",),
-            f"does not apply to an arm from a URDF (the {arm_label(args.arm, arm)}): its "
-            "computed-torque record is always limited to the arm's torque limits",
-        )
+    experiment = args.experiment or ("table2" if is_two_link(arm) else "reference")
+    if experiment == "reference":
         with OutputSet(args.out) as outputs:
             return simulate_arm(args, args.arm, outputs)
+    if not is_two_link(arm):
+        raise ParameterError(
+            f"--experiment table2: the paper's open-loop experiment (sine torques of the SICE arm's "
+            f"amplitudes) is for the paper's two-link arm; the {arm_label(args.arm, arm)} tracks its "
+            "scenario's [reference] (--experiment reference)"
+        )
     refuse(
         args,
         ("--com", "--plant"),
-        f"apply to an arm from a URDF only; the {arm_label(args.arm, arm)} "
-        "runs the paper's Table 2 experiment on its own plant (the payload a disk centred on the tip)",
+        "options of --experiment reference (an arm from a URDF tracking its scenario's [reference]); "
+        f"the {arm_label(args.arm, arm)} runs the paper's Table 2 experiment on its own plant (the "
+        "payload a disk centred on the tip)",
     )
     with OutputSet(args.out) as outputs:
         return _table2(args, arm, n, outputs)
@@ -172,6 +195,11 @@ def simulate_arm(args: argparse.Namespace, scenario_path: str, outputs) -> int:
 
     sc = load_scenario(scenario_path)
     arm = _record_arm(args, sc, scenario_path, outputs)
+    where = (
+        f"{arm.n_joints}-joint arm of {scenario_path}"
+        if scenario_path
+        else "the SICE arm (2 joints; the reference of the shipped payload_swap.toml)"
+    )
     radius = arm.payload_radius if args.radius is None else args.radius
     payload = (
         payload_parameters(args.payload, args.com or [0.0, 0.0, 0.0], radius=radius) if args.payload else None
@@ -201,16 +229,19 @@ def simulate_arm(args: argparse.Namespace, scenario_path: str, outputs) -> int:
         pi_true=rec.pi_true,
         payload=rec.payload,
     )
-    _print_record(args, arm, sc, rec, scenario_path)
+    _print_record(args, arm, sc, rec, where)
     return 0
 
 
 def _record_arm(args: argparse.Namespace, sc, scenario_path: str, outputs):
-    """The arm simulated: the scenario's ``[plant]`` where it has one (written to OUT/plant.urdf),
-    with the sensor's quantization and the actuator's saturation as the options say."""
+    """The arm simulated: the general model of the scenario's arm, its ``[plant]`` where it has one
+    (written to OUT/plant.urdf), with the sensor's quantization and the actuator's saturation as the
+    options say."""
     import dataclasses
 
     arm = sc.arm
+    if is_two_link(arm):  # the paper's kind: its general model (the closed forms track no reference)
+        arm = load_arm(scenario_path, general="--experiment reference")
     if sc.plant is not None:  # the scenario's robot is not its [arm]: simulate the robot
         from adaptive_dd.plant.urdf_write import write_urdf_links
 
@@ -223,13 +254,15 @@ def _record_arm(args: argparse.Namespace, sc, scenario_path: str, outputs):
         )
     if arm.sensor.quantize == args.no_quantize:
         arm = arm.with_(sensor=dataclasses.replace(arm.sensor, quantize=not args.no_quantize))
+    if arm.actuator.saturate == args.no_saturate:
+        arm = arm.with_(actuator=dataclasses.replace(arm.actuator, saturate=not args.no_saturate))
     return arm
 
 
-def _print_record(args: argparse.Namespace, arm, sc, rec, scenario_path: str) -> None:
+def _print_record(args: argparse.Namespace, arm, sc, rec, where: str) -> None:
     plant = getattr(args, "plant", "model")
     print(
-        f"{arm.n_joints}-joint arm of {scenario_path}: the scenario's reference tracked by computed torque "
+        f"{where}: the scenario's reference tracked by computed torque "
         f"(the plant's own model, 40 rad/s), {args.duration} s at T = {args.sample_period} s, payload "
         f"{args.payload} kg, {args.seeds} trial(s), "
         + (

@@ -9,7 +9,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from adaptive_dd.cli._common import SEEDS, add_command, number
+from adaptive_dd.cli._common import SEEDS, add_command, number, refuse
 
 __all__ = ["add_parser", "run"]
 
@@ -21,7 +21,9 @@ def add_parser(sub) -> None:
     w.add_argument("--out", default="results/sweep", help="folder for cells, table and heatmaps")
     w.add_argument("--scheduler", metavar="ADDRESS", help="a running Dask scheduler (default: local cluster)")
     w.add_argument(
-        "--workers", type=number(int, 1, 1024), help="local cluster worker processes (default: all cores)"
+        "--workers",
+        type=number(int, 1, 1024),
+        help="local cluster worker processes (default: all cores; refused with --scheduler)",
     )
     w.add_argument("--block", type=SEEDS, metavar="SEEDS", help="seeds per task (overrides sweep.block)")
     w.add_argument("--no-progress", action="store_true")
@@ -35,11 +37,15 @@ def run(args: argparse.Namespace) -> int:
     from adaptive_dd.sweep import run_sweep
     from adaptive_dd.sweep_spec import load_sweep
 
+    if args.scheduler:
+        refuse(
+            args,
+            ("--workers",),
+            "sizes the local cluster; with --scheduler the running scheduler's own workers run the tasks",
+        )
     sweep = load_sweep(args.sweep)
     if args.block is not None:
         sweep = dataclasses.replace(sweep, block=min(args.block, sweep.seeds))
-    if args.scheduler and args.workers:
-        print("adaptive-dd sweep: --workers is ignored with --scheduler", file=sys.stderr)
     res = run_sweep(
         sweep, args.out, scheduler=args.scheduler, workers=args.workers, progress=not args.no_progress
     )
