@@ -172,3 +172,24 @@ def test_sweep_workers_with_a_scheduler_is_an_error(tmp_path, capsys):
     argv = ["sweep", str(tmp_path / "none.toml"), "--scheduler", "tcp://127.0.0.1:1", "--workers", "2"]
     err = _error(capsys, argv)
     assert "error: --workers: sizes the local cluster" in err
+
+
+def test_the_arm_kind_is_asked_in_one_place():
+    """The CLI asks the arm's kind through ``arm.closed_form`` in ``cli/_common.py`` only, and never
+    tests the arm's class (issue 27: the type tests on the arm's class go)."""
+    import ast
+
+    from adaptive_dd.cli._common import is_two_link, load_arm
+    from adaptive_dd.plant.arm import Arm
+    from adaptive_dd.plant.two_link import TwoLinkArm
+
+    assert TwoLinkArm.sice().closed_form and not Arm.sice().closed_form
+    assert is_two_link(load_arm(SICE_URDF)) and not is_two_link(load_arm(SICE_URDF, general="test"))
+    asked = []
+    for f in sorted((ROOT / "adaptive_dd" / "cli").glob("*.py")):
+        for node in ast.walk(ast.parse(f.read_text())):
+            if isinstance(node, ast.Attribute) and node.attr == "closed_form":
+                asked.append(f.name)
+            if isinstance(node, ast.Call) and getattr(node.func, "id", None) == "isinstance":
+                assert "Arm" not in ast.unparse(node.args[1]), f"{f.name}: {ast.unparse(node)}"
+    assert asked == ["_common.py"]

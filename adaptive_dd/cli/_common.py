@@ -76,10 +76,9 @@ def short(name: str) -> str:
 def is_two_link(arm) -> bool:
     """True for the paper's closed-form two-link arm (:class:`~adaptive_dd.plant.two_link.TwoLinkArm`:
     the SICE arm, an arm of the paper's tables, or a URDF of the paper's kind), False for any other
-    arm (:class:`~adaptive_dd.plant.arm.Arm`). The one place the command line asks."""
-    from adaptive_dd.plant.two_link import TwoLinkArm
-
-    return isinstance(arm, TwoLinkArm)
+    arm (:class:`~adaptive_dd.plant.arm.Arm`): the arm's ``closed_form``. The one place the command
+    line asks."""
+    return arm.closed_form
 
 
 def arm_label(args_arm: str | None, arm) -> str:
