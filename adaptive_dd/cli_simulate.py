@@ -1,7 +1,7 @@
-"""The N-joint commands of the CLI: ``simulate --arm`` and ``excite`` for a Arm.
+"""The N-joint commands of the CLI: ``simulate --arm`` and ``excite`` for an Arm.
 
 Kept apart from :mod:`adaptive_dd.cli` (which parses the arguments and dispatches here
-when a scenario's arm is a :class:`~adaptive_dd.plant.arm.Arm`);
+when a scenario's arm is an :class:`~adaptive_dd.plant.arm.Arm`);
 ``identify --arm`` and ``predict`` are in :mod:`adaptive_dd.cli_log`.
 """
 

@@ -618,7 +618,7 @@ def urdf_arm_from_table(src: str, table: dict, plant_kw: dict):
     ``payload_capacity`` (the rated payload [kg]: the size of the estimator's re-opening,
     :mod:`adaptive_dd.identification.online`); ``general`` is read by
     :func:`adaptive_dd.plant.two_link.arm_from_tables`, which turns a URDF of the paper's kind of
-    two-link arm into an :class:`~adaptive_dd.plant.two_link.TwoLinkArm` (the closed-form fast path,
+    two-link arm into a :class:`~adaptive_dd.plant.two_link.TwoLinkArm` (the closed-form fast path,
     :func:`~adaptive_dd.plant.two_link.as_two_link`) unless ``general = true``. ``plant_kw``: the
     ``[plant]`` settings of the general model (LuGre's are the two-link arm's: not here).
 

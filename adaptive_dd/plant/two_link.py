@@ -1,6 +1,6 @@
 """The :class:`TwoLinkArm`: everything physical about a two-link horizontal arm, in one object.
 
-An :class:`TwoLinkArm` holds the base parameters ``sigma`` (eq. 9, without payload), the
+A :class:`TwoLinkArm` holds the base parameters ``sigma`` (eq. 9, without payload), the
 physical parameters of eq. (10) when they are known, the link lengths (``l2`` is
 where the payload disk mounts), the default payload disk radius, the actuator and
 sensor models, and the friction law of the *simulated plant*. Controllers and
@@ -247,7 +247,7 @@ class TwoLinkArm:
     def from_urdf(cls, path, payload_frame: str | None = None, gravity=(0.0, 0.0, -9.81), **overrides):
         """Any serial arm from a URDF (:meth:`adaptive_dd.plant.arm.Arm.from_urdf`).
 
-        Returns an :class:`TwoLinkArm` when the URDF is the paper's kind of two-link arm
+        Returns a :class:`TwoLinkArm` when the URDF is the paper's kind of two-link arm
         (:func:`as_two_link`: the closed-form fast path),
         else the general :class:`~adaptive_dd.plant.arm.Arm`.
         """
@@ -577,7 +577,7 @@ def arm_from_tables(arm_table: dict | None, plant_table: dict | None, src: str =
 
     An ``[arm]`` table with ``urdf`` or ``robot`` describes any serial arm
     (:func:`adaptive_dd.plant.arm.urdf_arm_from_table`: a
-    :class:`~adaptive_dd.plant.arm.Arm`, or an :class:`TwoLinkArm` when the URDF
+    :class:`~adaptive_dd.plant.arm.Arm`, or a :class:`TwoLinkArm` when the URDF
     is the paper's kind of two-link arm). Otherwise:
 
     ``[arm]`` gives either the physical parameters (eq. 10)
@@ -634,14 +634,14 @@ def _urdf_arm(src: str, table: dict, plant_kw: dict):
 
 # ------------------------------------------------------------------ the fast path
 def as_two_link(arm, atol: float = 1e-12) -> TwoLinkArm | None:
-    """The two-link :class:`TwoLinkArm` equal to ``arm`` (a :class:`~adaptive_dd.plant.arm.Arm`),
+    """The two-link :class:`TwoLinkArm` equal to ``arm`` (an :class:`~adaptive_dd.plant.arm.Arm`),
     or None if it is not one.
 
     The closed forms of the paper (eqs. 3-8) hold for two revolute joints about
     parallel z axes, joint 2 at ``(l1, 0, 0)`` of joint 1's frame, centres of mass
     on the links' x axes, gravity along z (no gravity torque), no armature, and the
     payload frame at ``(l2, 0, z)`` of link 2 with its axes aligned. Such an arm is
-    exactly an :class:`TwoLinkArm` (physical parameters of eq. 10); the benchmark then runs
+    exactly a :class:`TwoLinkArm` (physical parameters of eq. 10); the benchmark then runs
     the two-link kernels, held equal to the general ones by a test.
     """
     if arm.n_joints != 2 or np.any(arm.armature != 0) or arm.locked:

@@ -250,7 +250,7 @@ def draw_plant(spec: PlantSpec, rng: np.random.Generator) -> PlantDraw:
 
 
 def exact_plant(arm) -> PlantSpec:
-    """The plant equal to ``arm`` (a :class:`~adaptive_dd.plant.arm.Arm`)."""
+    """The plant equal to ``arm`` (an :class:`~adaptive_dd.plant.arm.Arm`)."""
     t = lambda x: tuple(float(v) for v in x)  # noqa: E731
     return PlantSpec(t(arm.pi_links), t(arm.viscous), t(arm.coulomb), t(arm.armature))
 
@@ -314,7 +314,7 @@ def _uncertainty(src: str, table) -> Uncertainty:
 
 
 def parse_plant(src: str, table: dict | None, arm, model_from: bool = False) -> PlantSpec | None:
-    """The plant of a ``[plant]`` table around ``arm`` (the ``[arm]``: a Arm).
+    """The plant of a ``[plant]`` table around ``arm`` (the ``[arm]``: an Arm).
 
     Only the keys of :data:`PLANT_TRUTH_KEYS` are read here (the friction law's keys are the
     arm's, :func:`~adaptive_dd.plant.two_link.arm_from_tables`). Returns None when the plant is the
