@@ -165,7 +165,7 @@ def _general_arm(path: str):
     the closed forms' :class:`~adaptive_dd.plant.two_link.TwoLinkArm`, which has no URDF to excite)."""
     from adaptive_dd.benchmark.scenario import read_toml
     from adaptive_dd.errors import ScenarioError
-    from adaptive_dd.plant.two_link import arm_from_tables
+    from adaptive_dd.plant.arm_tables import arm_from_tables
 
     data = read_toml(Path(path))
     table = data.get("arm")
