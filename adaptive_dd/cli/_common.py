@@ -101,7 +101,8 @@ def load_arm(path: str | None, repair_inertia: bool = False, *, general: str | N
     """
     from adaptive_dd.benchmark.scenario import model_and_plant, read_toml
     from adaptive_dd.errors import ScenarioError
-    from adaptive_dd.plant.two_link import TwoLinkArm, arm_from_tables
+    from adaptive_dd.plant.arm_tables import arm_from_tables
+    from adaptive_dd.plant.two_link import TwoLinkArm
     from adaptive_dd.plant.uncertainty import PLANT_TRUTH_KEYS
 
     if path is None:

@@ -235,7 +235,7 @@ class ArmSimulator:
         if n_trials < 1 or n_samples < 1:
             raise ParameterError(f"n_trials and n_samples must be >= 1, got {n_trials}, {n_samples}")
         if arm is not None and not isinstance(arm, TwoLinkArm):
-            raise ParameterError(f"arm must be an TwoLinkArm, got {type(arm).__name__}")
+            raise ParameterError(f"arm must be a TwoLinkArm, got {type(arm).__name__}")
         self.arm = TwoLinkArm.sice() if arm is None else arm
         self.n_trials, self.n_samples = int(n_trials), int(n_samples)
         self.T, self.substeps = float(sample_period), int(substeps)
