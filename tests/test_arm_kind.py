@@ -1,6 +1,6 @@
-"""One place decides an arm's path (issue 27): no type test on the arm's class outside
-``adaptive_dd/plant/kind.py`` (and the two arm classes' own ``__eq__``), found by an AST scan
-of the package as ``tests/test_import_graph.py`` does for imports."""
+"""One place decides an arm's path (issue 27): ``adaptive_dd/plant/kind.py`` asks the arm
+(``closed_form``), and no module tests the arm's class (the two arm classes' own ``__eq__``
+aside), found by an AST scan of the package as ``tests/test_import_graph.py`` does for imports."""
 
 from __future__ import annotations
 
@@ -18,13 +18,8 @@ from adaptive_dd.plant.two_link import TwoLinkArm
 
 ROOT = Path(adaptive_dd.__file__).resolve().parent
 ARM_CLASSES = {"Arm", "TwoLinkArm"}
-ALLOWED = {"plant/kind.py": None, "plant/arm.py": 1, "plant/two_link.py": 1}
-"""Files allowed type tests on the arm's class, with how many (None: any): the one place, and
-each class's own ``__eq__``."""
-PENDING = {"cli.py": 4, "cli_log.py": 1, "cli_simulate.py": 1}
-"""The CLI's type tests, owned by the CLI's rework (issue 27, another branch): frozen at their
-count, so a new one fails here too. Route them through ``adaptive_dd.plant.kind`` and delete
-their entries."""
+ALLOWED = {"plant/arm.py": 1, "plant/two_link.py": 1}
+"""Files allowed type tests on the arm's class, with how many: each class's own ``__eq__``."""
 
 
 def _names(node: ast.AST) -> set[str]:
@@ -66,23 +61,18 @@ def test_the_scan_finds_planted_type_tests():
     assert arm_type_tests(src) == [1, 3, 4, 5]
 
 
-def test_no_type_test_on_the_arm_class_outside_the_one_place():
+def test_no_type_test_on_the_arm_class_in_the_package():
     found = {}
     for path in sorted(ROOT.rglob("*.py")):
         rel = path.relative_to(ROOT).as_posix()
         lines = arm_type_tests(path.read_text(encoding="utf-8"))
         if lines:
             found[rel] = lines
-    assert "plant/kind.py" in found  # the scan sees the one place
-    bad = {
-        rel: lines
-        for rel, lines in found.items()
-        if (rel not in ALLOWED and PENDING.get(rel) != len(lines))
-        or (rel in ALLOWED and ALLOWED[rel] is not None and len(lines) != ALLOWED[rel])
-    }
+    assert set(found) >= set(ALLOWED)  # the scan sees the classes' own __eq__
+    bad = {rel: lines for rel, lines in found.items() if len(lines) != ALLOWED.get(rel, 0)}
     assert not bad, (
-        f"type tests on the arm's class outside adaptive_dd/plant/kind.py: {bad}; "
-        "ask adaptive_dd.plant.kind (is_two_link, is_chain, require_two_link) instead"
+        f"type tests on the arm's class: {bad}; ask adaptive_dd.plant.kind "
+        "(is_two_link, is_chain, arm_kind, require_two_link) instead"
     )
 
 

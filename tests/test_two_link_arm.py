@@ -29,9 +29,9 @@ from adaptive_dd.plant import (
     simulate_open_loop,
     two_link_plant_step,
 )
+from adaptive_dd.plant.arm_tables import arm_from_tables
 from adaptive_dd.plant.pinocchio_model import two_link_cross_check
 from adaptive_dd.plant.simulator import NOISE_CHUNK
-from adaptive_dd.plant.two_link import arm_from_tables
 
 SCENARIOS = Path(__file__).resolve().parents[1] / "benchmarks" / "scenarios"
 CLEAN = SensorConfig(quantize=False, position_variance=(0, 0), velocity_variance=(0, 0))

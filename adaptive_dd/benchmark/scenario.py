@@ -84,9 +84,10 @@ from adaptive_dd.benchmark.scenario_base import LIMITS, Reference, RunEstimate, 
 from adaptive_dd.benchmark.scenario_checks import check_number, scenario_errors, scenario_fields, thaw
 from adaptive_dd.errors import ScenarioError
 from adaptive_dd.plant.arm import Arm
+from adaptive_dd.plant.arm_tables import arm_from_tables
 from adaptive_dd.plant.kind import is_chain
 from adaptive_dd.plant.parameters import PAYLOAD_RADIUS
-from adaptive_dd.plant.two_link import TwoLinkArm, arm_from_tables
+from adaptive_dd.plant.two_link import TwoLinkArm
 from adaptive_dd.plant.uncertainty import PLANT_TRUTH_KEYS, PlantSpec, parse_model, parse_plant
 
 __all__ = [

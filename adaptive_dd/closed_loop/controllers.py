@@ -34,6 +34,7 @@ from adaptive_dd.closed_loop.laws import (
     law_batch,
 )
 from adaptive_dd.errors import ParameterError
+from adaptive_dd.errors import is_finite_number as _is_number
 
 __all__ = [
     "ARM_CONTROLLERS",
@@ -339,10 +340,6 @@ def _estimator_table(name: str, settings: dict) -> dict:
             )
         est["detector"] = settings["detector"]
     return est
-
-
-def _is_number(x) -> bool:
-    return not isinstance(x, bool) and isinstance(x, int | float) and bool(np.isfinite(x))
 
 
 class AdaptiveCT(Law):

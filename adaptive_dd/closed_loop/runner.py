@@ -95,7 +95,7 @@ def run_closed_loop(
     Parameters
     ----------
     scenario : Scenario
-        With ``scenario.arm`` a :class:`~adaptive_dd.plant.arm.Arm`.
+        With ``scenario.arm`` an :class:`~adaptive_dd.plant.arm.Arm`.
     controllers : dict, optional
         Controller objects by name (default: the scenario's, :func:`make_controllers`).
     seed_indices : sequence of int, optional

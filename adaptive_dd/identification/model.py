@@ -1,4 +1,4 @@
-"""The model of N-joint identification: compiled dynamics of a :class:`Arm` in base parameters.
+"""The model of N-joint identification: compiled dynamics of an :class:`Arm` in base parameters.
 
 Parameters
 ----------
@@ -51,7 +51,7 @@ Array = NDArray[np.float64]
 
 @dataclass(frozen=True, eq=False)
 class Model:
-    """Arrays an N-joint identification needs, taken once from a :class:`Arm`.
+    """Arrays an N-joint identification needs, taken once from an :class:`Arm`.
 
     Attributes
     ----------
@@ -88,7 +88,7 @@ class Model:
 
 
 def arm_model(arm) -> Model:
-    """The :class:`Model` of a :class:`~adaptive_dd.plant.arm.Arm`."""
+    """The :class:`Model` of an :class:`~adaptive_dd.plant.arm.Arm`."""
     base = arm.base
     B = np.asarray(base.B, dtype=float)
     pi_ref = np.asarray(arm.pi, dtype=float)

@@ -28,12 +28,13 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import NamedTuple
+from typing import ClassVar, NamedTuple
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from adaptive_dd.errors import ParameterError
+from adaptive_dd.errors import is_finite_number as _is_num
 from adaptive_dd.plant.base_parameters import BaseParameters, base_parameters, standard_names
 from adaptive_dd.plant.devices import ActuatorConfig, SensorConfig
 from adaptive_dd.plant.urdf import read_urdf
@@ -180,6 +181,9 @@ class Arm:
     repair_inertia: bool = False
     payload_capacity: float | None = None
     _cache: dict = field(default_factory=dict, repr=False, compare=False)
+    closed_form: ClassVar[bool] = False
+    """False: the general kernels (True on :class:`~adaptive_dd.plant.two_link.TwoLinkArm`, the
+    paper's closed forms)."""
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "urdf", Path(self.urdf))
@@ -585,157 +589,3 @@ class Arm:
 
     def __hash__(self) -> int:
         return hash(self._key())
-
-
-# ------------------------------------------------------------------ scenario tables
-URDF_ARM_KEYS = (
-    "urdf",
-    "robot",
-    "payload_frame",
-    "gravity",
-    "viscous",
-    "coulomb",
-    "armature",
-    "torque_limit",
-    "encoder_counts",
-    "dac_bits",
-    "payload_radius",
-    "payload_capacity",
-    "general",
-    "repair_inertia",
-)
-"""Keys of an ``[arm]`` table that names a URDF (``urdf = "file"`` or ``robot = "ur5"``)."""
-
-
-def urdf_arm_from_table(src: str, table: dict, plant_kw: dict):
-    """The arm of an ``[arm]`` table with ``urdf`` (a path relative to the scenario file) or ``robot``.
-
-    ``robot`` names a shipped robot (:data:`adaptive_dd.robots.ROBOTS`). Optional:
-    ``payload_frame`` (a link), ``gravity = [x, y, z]`` (default ``[0, 0, -9.81]``),
-    per-joint lists ``viscous``, ``coulomb``, ``armature``, ``torque_limit``,
-    ``encoder_counts``, and ``dac_bits``, ``payload_radius``, ``repair_inertia`` (repair a
-    chain link's inertia that is not a rigid body's, reported: :func:`adaptive_dd.plant.urdf.read_urdf`),
-    ``payload_capacity`` (the rated payload [kg]: the size of the estimator's re-opening,
-    :mod:`adaptive_dd.identification.online`); ``general`` is read by
-    :func:`adaptive_dd.plant.two_link.arm_from_tables`, which turns a URDF of the paper's kind of
-    two-link arm into an :class:`~adaptive_dd.plant.two_link.TwoLinkArm` (the closed-form fast path,
-    :func:`~adaptive_dd.plant.two_link.as_two_link`) unless ``general = true``. ``plant_kw``: the
-    ``[plant]`` settings of the general model (LuGre's are the two-link arm's: not here).
-
-    Raises
-    ------
-    ScenarioError
-        Naming ``src``, the key and the reason (URDF problems name the URDF file too).
-    """
-    from adaptive_dd.errors import ScenarioError, UrdfError
-
-    unknown = [k for k in table if k not in URDF_ARM_KEYS]
-    if unknown:
-        raise ScenarioError(
-            f"{src}: unknown key 'arm.{unknown[0]}'; allowed with a URDF: {sorted(URDF_ARM_KEYS)}"
-        )
-    if ("urdf" in table) == ("robot" in table):
-        raise ScenarioError(
-            f"{src}: [arm] needs exactly one of 'urdf' (a file) and 'robot' (a shipped robot)"
-        )
-    frame = table.get("payload_frame")
-    if frame is not None and not isinstance(frame, str):
-        raise ScenarioError(f"{src}: key 'arm.payload_frame' must be a link name, got {frame!r}")
-    if "robot" in table:
-        from adaptive_dd.robots import ROBOTS, robot_urdf
-
-        name = table["robot"]
-        if not isinstance(name, str) or name not in ROBOTS:
-            raise ScenarioError(
-                f"{src}: key 'arm.robot' = {name!r} is not a shipped robot; known: {sorted(ROBOTS)}"
-            )
-        path = robot_urdf(name)
-        frame = frame or ROBOTS[name].payload_frame
-    else:
-        if not isinstance(table["urdf"], str) or not table["urdf"]:
-            raise ScenarioError(f"{src}: key 'arm.urdf' must be a file path, got {table['urdf']!r}")
-        path = Path(table["urdf"])
-        if not path.is_absolute():
-            path = (Path(src).parent if Path(src).is_file() else Path.cwd()) / path
-    gravity = table.get("gravity", list(DEFAULT_GRAVITY))
-    if not (isinstance(gravity, list) and len(gravity) == 3 and all(_is_num(x) for x in gravity)):
-        raise ScenarioError(f"{src}: key 'arm.gravity' must be [x, y, z] in m/s^2, got {gravity!r}")
-    try:
-        repair = table.get("repair_inertia", False)
-        if not isinstance(repair, bool):
-            raise ScenarioError(f"{src}: key 'arm.repair_inertia' must be true or false, got {repair!r}")
-        arm = Arm.from_urdf(path, frame, gravity=[float(x) for x in gravity], repair_inertia=repair)
-    except UrdfError as exc:
-        raise ScenarioError(f"{src}: [arm] urdf: {exc}") from None
-    except ParameterError as exc:
-        raise ScenarioError(f"{src}: [arm]: {exc}") from None
-    n = arm.n_joints
-    kw: dict = dict(plant_kw)
-    for key in ("viscous", "coulomb", "armature"):
-        if key in table:
-            kw[key] = _table_vector(src, key, table[key], n, 0.0, strict=False, hi=URDF_TABLE_BOUNDS[key])
-    if "torque_limit" in table:
-        lim = _table_vector(
-            src,
-            "torque_limit",
-            table["torque_limit"],
-            n,
-            0.0,
-            strict=True,
-            hi=URDF_TABLE_BOUNDS["torque_limit"],
-        )
-        kw["actuator"] = replace(arm.actuator, torque_limit=tuple(lim))
-    if "dac_bits" in table:
-        bits = table["dac_bits"]
-        if isinstance(bits, bool) or not isinstance(bits, int) or not 1 <= bits <= 32:
-            raise ScenarioError(f"{src}: key 'arm.dac_bits' must be an integer in [1, 32], got {bits!r}")
-        kw["actuator"] = replace(kw.get("actuator", arm.actuator), dac_bits=bits)
-    if "encoder_counts" in table:
-        counts = _table_vector(src, "encoder_counts", table["encoder_counts"], n, 0.0, strict=True)
-        if np.any(counts != np.round(counts)) or np.any(counts > 2**40):
-            raise ScenarioError(
-                f"{src}: key 'arm.encoder_counts' must be integers in [1, 2^40], got {counts}"
-            )
-        kw["sensor"] = replace(arm.sensor, encoder_counts=tuple(int(c) for c in counts))
-    if "payload_radius" in table:
-        r = table["payload_radius"]
-        if not _is_num(r) or not 0 <= r <= 0.5:
-            raise ScenarioError(f"{src}: key 'arm.payload_radius' must be in [0, 0.5] m, got {r!r}")
-        kw["payload_radius"] = float(r)
-    if "payload_capacity" in table:
-        cap = table["payload_capacity"]
-        if not _is_num(cap) or not 0 < cap <= 1e4:
-            raise ScenarioError(
-                f"{src}: key 'arm.payload_capacity' must be the rated payload in (0, 1e4] kg, got {cap!r}"
-            )
-        kw["payload_capacity"] = float(cap)
-    try:
-        arm = replace(arm, **kw)
-        _ = arm.sigma  # base parameters now, so that a singular model is reported here
-    except ParameterError as exc:
-        raise ScenarioError(f"{src}: [arm]/[plant]: {exc}") from None
-    return arm
-
-
-def _is_num(x) -> bool:
-    return not isinstance(x, bool) and isinstance(x, int | float) and math.isfinite(x)
-
-
-URDF_TABLE_BOUNDS = {"viscous": 1e4, "coulomb": 1e4, "armature": 1e3, "torque_limit": 1e5}
-"""Upper bounds of the per-joint overrides of a URDF arm (N m s, N m, kg m^2, N m): beyond
-them no actuator of an arm is meant."""
-
-
-def _table_vector(src: str, key: str, v, n: int, lo: float, strict: bool, hi: float = math.inf) -> Array:
-    from adaptive_dd.errors import ScenarioError
-
-    if not isinstance(v, list) or len(v) != n or not all(_is_num(x) for x in v):
-        raise ScenarioError(
-            f"{src}: key 'arm.{key}' must be a list of {n} finite numbers (one per joint), got {v!r}"
-        )
-    a = np.array(v, dtype=float)
-    if np.any(a <= lo if strict else a < lo):
-        raise ScenarioError(f"{src}: key 'arm.{key}' must be {'>' if strict else '>='} {lo:g}, got {v!r}")
-    if np.any(a > hi):
-        raise ScenarioError(f"{src}: key 'arm.{key}' must be <= {hi:g}, got {v!r}")
-    return a

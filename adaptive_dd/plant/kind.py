@@ -1,4 +1,4 @@
-"""Which path an arm runs on: the one place outside the arm classes that tests an arm's class.
+"""Which path an arm runs on: the one place the package asks (the arm says it: ``closed_form``).
 
 Two arm types exist (issue 27 merges them step by step):
 
@@ -10,9 +10,12 @@ Two arm types exist (issue 27 merges them step by step):
   loop (:mod:`adaptive_dd.closed_loop`), the payload estimator
   (:mod:`adaptive_dd.identification.online`).
 
-Every module that chooses between the two asks here (``is_two_link`` / ``is_chain``), so the day
+Each class states its kind as the class attribute ``closed_form`` (True on ``TwoLinkArm``); every
+module that chooses between the two paths asks here (``is_two_link`` / ``is_chain``), so the day
 the closed forms become a fast path of :class:`Arm` the choice changes in one file.
-``tests/test_arm_kind.py`` fails when a type test on the arm's class appears anywhere else.
+``tests/test_arm_kind.py`` fails when a type test on the arm's class appears anywhere in the
+package (the classes' own ``__eq__`` aside); the command line asks through
+``adaptive_dd.cli._common.is_two_link``, which reads the same attribute.
 """
 
 from __future__ import annotations
@@ -25,20 +28,17 @@ __all__ = ["arm_kind", "is_chain", "is_two_link", "require_two_link"]
 
 
 def is_two_link(arm: Any) -> bool:
-    """True for the paper's closed-form arm (:class:`~adaptive_dd.plant.two_link.TwoLinkArm`): it runs
-    on the two-link path. False for an :class:`~adaptive_dd.plant.arm.Arm` and for anything else."""
-    from adaptive_dd.plant.two_link import TwoLinkArm
-
-    return isinstance(arm, TwoLinkArm)
+    """True for the paper's closed-form arm (:class:`~adaptive_dd.plant.two_link.TwoLinkArm`,
+    ``closed_form`` True): it runs on the two-link path. False for an
+    :class:`~adaptive_dd.plant.arm.Arm` and for anything that is not an arm."""
+    return getattr(arm, "closed_form", None) is True
 
 
 def is_chain(arm: Any) -> bool:
-    """True for any serial arm as an :class:`~adaptive_dd.plant.arm.Arm` (a URDF, or ``Arm.sice()``):
-    it runs on the N-joint path (:mod:`adaptive_dd.closed_loop`). False for the two-link
-    closed-form arm and for anything else (``None``)."""
-    from adaptive_dd.plant.arm import Arm
-
-    return isinstance(arm, Arm)
+    """True for any serial arm as an :class:`~adaptive_dd.plant.arm.Arm` (``closed_form`` False: a
+    URDF, or ``Arm.sice()``): it runs on the N-joint path (:mod:`adaptive_dd.closed_loop`). False for
+    the two-link closed-form arm and for anything that is not an arm (``None``)."""
+    return getattr(arm, "closed_form", None) is False
 
 
 def arm_kind(arm: Any) -> str:

@@ -1,4 +1,4 @@
-"""Cross-check of a :class:`~adaptive_dd.plant.arm.Arm` against Pinocchio.
+"""Cross-check of an :class:`~adaptive_dd.plant.arm.Arm` against Pinocchio.
 
 What is compared, on random states, with and without a payload (the payload is
 appended to Pinocchio's model as a separate body at the payload frame, so the

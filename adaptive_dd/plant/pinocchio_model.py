@@ -6,7 +6,7 @@ Pinocchio (``pin``) is the rigid-body reference: ``crba`` (mass matrix), ``rnea`
 uses sigma with ``b = d = 0``; gravity acts along -z and gives no torque about
 the vertical joint axes.
 
-Both functions take an :class:`~adaptive_dd.plant.two_link.TwoLinkArm` (default
+Both functions take a :class:`~adaptive_dd.plant.two_link.TwoLinkArm` (default
 :meth:`TwoLinkArm.sice`) or its :class:`PhysicalParameters`. An arm known only by its
 base parameters is built from :meth:`TwoLinkArm.equivalent_physical`, a physical set
 with the same sigma (rigid-body dynamics depend on sigma alone).
@@ -58,7 +58,7 @@ def as_physical(arm: TwoLinkArm | PhysicalParameters | None) -> PhysicalParamete
         return arm.equivalent_physical()
     if isinstance(arm, PhysicalParameters):
         return arm
-    raise ParameterError(f"expected an TwoLinkArm or PhysicalParameters, got {type(arm).__name__}")
+    raise ParameterError(f"expected a TwoLinkArm or PhysicalParameters, got {type(arm).__name__}")
 
 
 def build_model(
@@ -134,7 +134,7 @@ def two_link_cross_check(
     Parameters
     ----------
     arm : TwoLinkArm or PhysicalParameters, optional
-        The arm (default :meth:`TwoLinkArm.sice`). For an TwoLinkArm, the sigma compared is
+        The arm (default :meth:`TwoLinkArm.sice`). For a TwoLinkArm, the sigma compared is
         ``arm.sigma`` or ``arm.sigma_with_payload(...)``, so the check covers the
         arm's payload effect too; Pinocchio gets the disk as a separate body.
     payload : Payload, optional

@@ -1,6 +1,6 @@
 """The :class:`TwoLinkArm`: everything physical about a two-link horizontal arm, in one object.
 
-An :class:`TwoLinkArm` holds the base parameters ``sigma`` (eq. 9, without payload), the
+A :class:`TwoLinkArm` holds the base parameters ``sigma`` (eq. 9, without payload), the
 physical parameters of eq. (10) when they are known, the link lengths (``l2`` is
 where the payload disk mounts), the default payload disk radius, the actuator and
 sensor models, and the friction law of the *simulated plant*. Controllers and
@@ -50,11 +50,12 @@ from __future__ import annotations
 
 import math
 from dataclasses import asdict, dataclass, field, replace
+from typing import ClassVar
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from adaptive_dd.errors import ParameterError, ScenarioError
+from adaptive_dd.errors import ParameterError
 from adaptive_dd.plant import dynamics
 from adaptive_dd.plant.devices import ActuatorConfig, SensorConfig
 from adaptive_dd.plant.parameters import (
@@ -67,7 +68,7 @@ from adaptive_dd.plant.parameters import (
     validate_sigma,
 )
 
-__all__ = ["FRICTION_LAWS", "TwoLinkArm", "arm_from_tables", "as_two_link"]
+__all__ = ["FRICTION_LAWS", "TwoLinkArm", "as_two_link"]
 
 Array = NDArray[np.float64]
 
@@ -145,6 +146,9 @@ class TwoLinkArm:
     stribeck_velocity: float = 0.1
     lugre_stiffness: tuple[float, float] = (1e5, 1e5)
     lugre_damping: tuple[float, float] | None = None
+    closed_form: ClassVar[bool] = True
+    """True: the paper's closed forms (eqs. 3-9), the two-link fast path (False on the general
+    :class:`~adaptive_dd.plant.arm.Arm`); what the command line asks to choose the paper's experiments."""
 
     def __post_init__(self) -> None:
         s = np.array(validate_sigma(self.sigma, "TwoLinkArm.sigma"), dtype=float, copy=True)
@@ -247,7 +251,7 @@ class TwoLinkArm:
     def from_urdf(cls, path, payload_frame: str | None = None, gravity=(0.0, 0.0, -9.81), **overrides):
         """Any serial arm from a URDF (:meth:`adaptive_dd.plant.arm.Arm.from_urdf`).
 
-        Returns an :class:`TwoLinkArm` when the URDF is the paper's kind of two-link arm
+        Returns a :class:`TwoLinkArm` when the URDF is the paper's kind of two-link arm
         (:func:`as_two_link`: the closed-form fast path),
         else the general :class:`~adaptive_dd.plant.arm.Arm`.
         """
@@ -438,210 +442,16 @@ def _jsonable(d: dict) -> dict:
     return {k: list(v) if isinstance(v, tuple) else v for k, v in d.items()}
 
 
-# ------------------------------------------------------------ scenario tables
-_PHYSICAL_KEYS = ("l1", "l2", "m1", "m2", "a1", "a2", "I1", "I2", "b", "d")
-_SIGMA_KEYS = ("sigma", "l1", "l2")
-_ARM_OPTIONAL = ("payload_radius", "torque_limit")
-_PLANT_KEYS = (
-    "friction",
-    "friction_velocity",
-    "stribeck_ratio",
-    "stribeck_velocity",
-    "lugre_stiffness",
-    "lugre_damping",
-)
-
-ARM_BOUNDS = {
-    "arm.l1": 2.0,  # m: a direct-drive arm's link; beyond this no motor of the kind moves it
-    "arm.l2": 2.0,
-    "arm.a1": 3.0,  # m (PhysicalParameters further requires a_i <= 1.5 l_i)
-    "arm.a2": 3.0,
-    "arm.m1": 500.0,  # kg
-    "arm.m2": 500.0,
-    "arm.I1": 100.0,  # kg m^2
-    "arm.I2": 100.0,
-    "arm.sigma[0]": 1000.0,  # J1 [kg m^2]
-    "arm.sigma[1]": 1000.0,  # J2
-    "arm.sigma[2]": 1000.0,  # r
-    "arm.sigma[3]": 1000.0,  # b1 [N m s/rad]
-    "arm.sigma[4]": 1000.0,  # b2
-    "arm.sigma[5]": 1000.0,  # d1 [N m]
-    "arm.sigma[6]": 1000.0,  # d2
-    "arm.b[0]": 1000.0,
-    "arm.b[1]": 1000.0,
-    "arm.d[0]": 1000.0,
-    "arm.d[1]": 1000.0,
-    "arm.payload_radius": 0.5,  # m, as the scenario's payload.radius
-    "arm.torque_limit[0]": 1e4,  # N m
-    "arm.torque_limit[1]": 1e4,
-    "plant.friction_velocity": 10.0,  # rad/s
-    "plant.stribeck_velocity": 10.0,
-    "plant.stribeck_ratio": 100.0,
-}
-"""Upper bounds of the ``[arm]`` and ``[plant]`` numbers: physically plausible for a two-link
-direct-drive arm, and far enough below overflow that every derived quantity (``m l^2``, the
-mass matrix, its determinant) stays finite."""
-
-
-def _table_number(src: str, key: str, v, *, lower: float | None = None, strict: bool = True) -> float:
-    if isinstance(v, bool) or not isinstance(v, int | float):
-        raise ScenarioError(f"{src}: key '{key}' must be a number, got {v!r}")
-    if not math.isfinite(v):
-        raise ScenarioError(f"{src}: key '{key}' must be finite, got {v!r}")
-    if lower is not None and (v <= lower if strict else v < lower):
-        raise ScenarioError(f"{src}: key '{key}' must be {'>' if strict else '>='} {lower:g}, got {v!r}")
-    hi = ARM_BOUNDS.get(key)
-    if hi is not None and v > hi:
-        raise ScenarioError(f"{src}: key '{key}' must be <= {hi:g} (ARM_BOUNDS), got {v!r}")
-    return float(v)
-
-
-def _table_list(src: str, key: str, v, n: int, *, lower: float, strict: bool) -> tuple[float, ...]:
-    if not isinstance(v, list) or len(v) != n:
-        raise ScenarioError(f"{src}: key '{key}' must be a list of {n} numbers, got {v!r}")
-    return tuple(_table_number(src, f"{key}[{i}]", x, lower=lower, strict=strict) for i, x in enumerate(v))
-
-
-def _check_keys(src: str, table: str, data: dict, allowed: tuple[str, ...]) -> None:
-    if not isinstance(data, dict):
-        raise ScenarioError(f"{src}: [{table}] must be a table, got {data!r}")
-    for key in data:
-        if key not in allowed:
-            raise ScenarioError(f"{src}: unknown key '{table}.{key}'; allowed: {sorted(allowed)}")
-
-
-def _arm_kwargs(src: str, arm: dict) -> dict:
-    """Geometry, parameters and actuator of an ``[arm]`` table as TwoLinkArm keyword arguments."""
-    _check_keys(src, "arm", arm, tuple(dict.fromkeys(_PHYSICAL_KEYS + _SIGMA_KEYS + _ARM_OPTIONAL)))
-    physical_only = [k for k in _PHYSICAL_KEYS if k in arm and k not in _SIGMA_KEYS]
-    if "sigma" in arm and physical_only:
-        raise ScenarioError(
-            f"{src}: [arm] gives both 'sigma' and physical keys {physical_only}: use one form "
-            f"(physical {list(_PHYSICAL_KEYS)} or 'sigma' with l1, l2)"
-        )
-    required = _SIGMA_KEYS if "sigma" in arm else _PHYSICAL_KEYS
-    for key in required:
-        if key not in arm:
-            raise ScenarioError(f"{src}: key 'arm.{key}' is missing (required: {list(required)})")
-    kw: dict = {}
-    sice = TwoLinkArm.sice()
-    kw["payload_radius"] = _table_number(
-        src, "arm.payload_radius", arm.get("payload_radius", sice.payload_radius), lower=0.0, strict=False
-    )
-    if "torque_limit" in arm:
-        lim = _table_list(src, "arm.torque_limit", arm["torque_limit"], 2, lower=0.0, strict=True)
-        kw["actuator"] = replace(sice.actuator, torque_limit=lim)
-    l1 = _table_number(src, "arm.l1", arm["l1"], lower=0.0)
-    l2 = _table_number(src, "arm.l2", arm["l2"], lower=0.0)
-    if "sigma" in arm:
-        kw["sigma"] = np.array(_table_list(src, "arm.sigma", arm["sigma"], 7, lower=0.0, strict=False))
-        kw["l1"], kw["l2"] = l1, l2
-        return kw
-    num = {k: _table_number(src, f"arm.{k}", arm[k], lower=0.0) for k in ("m1", "m2", "I1", "I2")}
-    num.update({k: _table_number(src, f"arm.{k}", arm[k], lower=0.0, strict=False) for k in ("a1", "a2")})
-    b = _table_list(src, "arm.b", arm["b"], 2, lower=0.0, strict=False)
-    d = _table_list(src, "arm.d", arm["d"], 2, lower=0.0, strict=False)
-    try:
-        phys = PhysicalParameters(b1=b[0], b2=b[1], d1=d[0], d2=d[1], l1=l1, l2=l2, **num)
-    except (ParameterError, ArithmeticError) as exc:
-        raise ScenarioError(f"{src}: [arm]: {exc}") from None
-    kw.update(sigma=phys.to_sigma(), l1=l1, l2=l2, physical=phys)
-    return kw
-
-
-def _plant_kwargs(src: str, plant: dict) -> dict:
-    _check_keys(src, "plant", plant, _PLANT_KEYS)
-    kw: dict = {}
-    if "friction" in plant:
-        f = plant["friction"]
-        if f not in FRICTION_LAWS:
-            raise ScenarioError(
-                f"{src}: key 'plant.friction' must be one of {list(FRICTION_LAWS)}, got {f!r}"
-            )
-        kw["friction"] = f
-    for key in ("friction_velocity", "stribeck_velocity"):
-        if key in plant:
-            kw[key] = _table_number(src, f"plant.{key}", plant[key], lower=0.0)
-    if "stribeck_ratio" in plant:
-        kw["stribeck_ratio"] = _table_number(
-            src, "plant.stribeck_ratio", plant["stribeck_ratio"], lower=1.0, strict=False
-        )
-    for key in ("lugre_stiffness", "lugre_damping"):
-        if key in plant:
-            kw[key] = _table_list(src, f"plant.{key}", plant[key], 2, lower=0.0, strict=True)
-    return kw
-
-
-def arm_from_tables(arm_table: dict | None, plant_table: dict | None, src: str = "<memory>") -> TwoLinkArm:
-    """The arm of a scenario's ``[arm]`` and ``[plant]`` tables.
-
-    An ``[arm]`` table with ``urdf`` or ``robot`` describes any serial arm
-    (:func:`adaptive_dd.plant.arm.urdf_arm_from_table`: a
-    :class:`~adaptive_dd.plant.arm.Arm`, or an :class:`TwoLinkArm` when the URDF
-    is the paper's kind of two-link arm). Otherwise:
-
-    ``[arm]`` gives either the physical parameters (eq. 10)
-    ``l1, l2, m1, m2, a1, a2, I1, I2, b = [b1, b2], d = [d1, d2]`` or the base
-    parameters ``sigma = [J1, J2, r, b1, b2, d1, d2]`` with ``l1, l2``; both forms
-    accept ``payload_radius`` [m] and ``torque_limit = [tau1, tau2]`` [N m]. Mixing
-    the forms is an error. ``[plant]`` gives ``friction`` ("stick-slip", "tanh",
-    "stribeck", "lugre"), ``friction_velocity``, ``stribeck_ratio``, ``stribeck_velocity``,
-    ``lugre_stiffness = [s0_1, s0_2]``, ``lugre_damping = [s1_1, s1_2]``.
-    A missing table means the SICE arm's values (:meth:`TwoLinkArm.sice`, stick-slip).
-
-    Raises
-    ------
-    ScenarioError
-        Naming ``src``, the key and the reason: unknown key, missing key, wrong
-        type, non-finite value, value out of range, inconsistent arm.
-    """
-    plant_kw = _plant_kwargs(src, {} if plant_table is None else plant_table)
-    if isinstance(arm_table, dict) and ("urdf" in arm_table or "robot" in arm_table):
-        return _urdf_arm(src, arm_table, plant_kw)
-    kw = TwoLinkArm.sice().__dict__.copy() if arm_table is None else _arm_kwargs(src, arm_table)
-    kw.update(plant_kw)
-    try:
-        return TwoLinkArm(**kw)
-    except (ParameterError, ArithmeticError) as exc:
-        raise ScenarioError(f"{src}: [arm]/[plant]: {type(exc).__name__}: {exc}") from None
-
-
-def _urdf_arm(src: str, table: dict, plant_kw: dict):
-    """The arm of an ``[arm]`` table naming a URDF: the general
-    :class:`~adaptive_dd.plant.arm.Arm`
-    (:func:`~adaptive_dd.plant.arm.urdf_arm_from_table`), or the two-link :class:`TwoLinkArm`
-    when it is one (:func:`as_two_link`) and ``general = true`` is not set. LuGre friction is a
-    two-link plant law: kept aside until the fast path decides which plant runs."""
-    from adaptive_dd.errors import ScenarioError
-    from adaptive_dd.plant.arm import urdf_arm_from_table
-
-    kw = dict(plant_kw)
-    lugre = {k: kw.pop(k) for k in ("lugre_stiffness", "lugre_damping") if k in kw}
-    if kw.get("friction") == "lugre":
-        lugre["friction"] = kw.pop("friction")
-    arm = urdf_arm_from_table(src, table, kw)
-    general = table.get("general", False)
-    if not isinstance(general, bool):
-        raise ScenarioError(f"{src}: key 'arm.general' must be true or false, got {general!r}")
-    two = None if general else as_two_link(arm)
-    if two is None and lugre:
-        raise ScenarioError(
-            f"{src}: [plant] LuGre friction is implemented for the two-link arm only; the plant of "
-            f"this {arm.n_joints}-joint arm has stick-slip, tanh and stribeck friction"
-        )
-    return arm if two is None else (replace(two, **lugre) if lugre else two)
-
-
 # ------------------------------------------------------------------ the fast path
 def as_two_link(arm, atol: float = 1e-12) -> TwoLinkArm | None:
-    """The two-link :class:`TwoLinkArm` equal to ``arm`` (a :class:`~adaptive_dd.plant.arm.Arm`),
+    """The two-link :class:`TwoLinkArm` equal to ``arm`` (an :class:`~adaptive_dd.plant.arm.Arm`),
     or None if it is not one.
 
     The closed forms of the paper (eqs. 3-8) hold for two revolute joints about
     parallel z axes, joint 2 at ``(l1, 0, 0)`` of joint 1's frame, centres of mass
     on the links' x axes, gravity along z (no gravity torque), no armature, and the
     payload frame at ``(l2, 0, z)`` of link 2 with its axes aligned. Such an arm is
-    exactly an :class:`TwoLinkArm` (physical parameters of eq. 10); the benchmark then runs
+    exactly a :class:`TwoLinkArm` (physical parameters of eq. 10); the benchmark then runs
     the two-link kernels, held equal to the general ones by a test.
     """
     if arm.n_joints != 2 or np.any(arm.armature != 0) or arm.locked:

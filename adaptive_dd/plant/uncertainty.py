@@ -250,7 +250,7 @@ def draw_plant(spec: PlantSpec, rng: np.random.Generator) -> PlantDraw:
 
 
 def exact_plant(arm) -> PlantSpec:
-    """The plant equal to ``arm`` (a :class:`~adaptive_dd.plant.arm.Arm`)."""
+    """The plant equal to ``arm`` (an :class:`~adaptive_dd.plant.arm.Arm`)."""
     t = lambda x: tuple(float(v) for v in x)  # noqa: E731
     return PlantSpec(t(arm.pi_links), t(arm.viscous), t(arm.coulomb), t(arm.armature))
 
@@ -314,10 +314,10 @@ def _uncertainty(src: str, table) -> Uncertainty:
 
 
 def parse_plant(src: str, table: dict | None, arm, model_from: bool = False) -> PlantSpec | None:
-    """The plant of a ``[plant]`` table around ``arm`` (the ``[arm]``: a Arm).
+    """The plant of a ``[plant]`` table around ``arm`` (the ``[arm]``: an Arm).
 
     Only the keys of :data:`PLANT_TRUTH_KEYS` are read here (the friction law's keys are the
-    arm's, :func:`~adaptive_dd.plant.two_link.arm_from_tables`). Returns None when the plant is the
+    arm's, :func:`~adaptive_dd.plant.arm_tables.arm_from_tables`). Returns None when the plant is the
     arm exactly and the controllers' model is the arm too (``model_from`` False).
 
     Raises
@@ -326,7 +326,7 @@ def parse_plant(src: str, table: dict | None, arm, model_from: bool = False) -> 
         Naming ``src``, the key and the value: a URDF with other joints or frames, a list of the
         wrong length, a negative or too large level, an unknown key of ``[plant.uncertainty]``.
     """
-    from adaptive_dd.plant.arm import URDF_TABLE_BOUNDS, _table_vector
+    from adaptive_dd.plant.arm_tables import URDF_TABLE_BOUNDS, _table_vector
 
     table = {} if table is None else {k: v for k, v in table.items() if k in PLANT_TRUTH_KEYS}
     if not table and not model_from:

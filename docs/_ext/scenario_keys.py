@@ -190,8 +190,7 @@ def page() -> str:
     from adaptive_dd.controllers import registry
     from adaptive_dd.identification.online import Detector, OnlineConfig
     from adaptive_dd.identification.two_link_online import ChangeDetector, TwoLinkOnlineConfig
-    from adaptive_dd.plant import arm
-    from adaptive_dd.plant import two_link as arm_mod
+    from adaptive_dd.plant import arm_tables
 
     two, urdf = _defaults(TWO_LINK_SCENARIO), _defaults(URDF_SCENARIO)
     used: set[str] = set()
@@ -201,7 +200,7 @@ def page() -> str:
         "```{note}",
         "This page is generated when the documentation is built, from the tables the scenario",
         "checks use (`adaptive_dd/benchmark/scenario_base.py`'s `KEYS`, the `[arm]` and `[plant]`",
-        "key lists of `adaptive_dd/plant/two_link.py` and `arm.py`, the controllers' settings), so",
+        "key lists of `adaptive_dd/plant/arm_tables.py`, the controllers' settings), so",
         "it lists exactly what `adaptive-dd validate` accepts. Defaults are what `validate` prints",
         "for a scenario that leaves the key out. Any other key is an error naming file and key.",
         "```",
@@ -258,9 +257,9 @@ def page() -> str:
     )
 
     lines += ["## `[arm]`", "", "Left out: the paper's SICE arm (Table 1). One of three forms:", ""]
-    physical = arm_mod._PHYSICAL_KEYS
-    sigma_form = arm_mod._SIGMA_KEYS
-    optional = arm_mod._ARM_OPTIONAL
+    physical = arm_tables._PHYSICAL_KEYS
+    sigma_form = arm_tables._SIGMA_KEYS
+    optional = arm_tables._ARM_OPTIONAL
     rows = []
     for k in dict.fromkeys(physical + sigma_form + optional):
         used.add(f"arm.{k}")
@@ -281,7 +280,7 @@ def page() -> str:
     ]
     lines += table([(a, b, d) for a, b, _, d in rows], heads=("key", "form", "meaning"))
     rows = []
-    for k in arm.URDF_ARM_KEYS:
+    for k in arm_tables.URDF_ARM_KEYS:
         used.add(f"arm.{k}")
         note = "one of `urdf`, `robot` (required)" if k in ("urdf", "robot") else "optional"
         rows.append((f"`{k}`", note, "", _meaning(f"arm.{k}")))
@@ -296,7 +295,7 @@ def page() -> str:
     ]
     rows = []
     uncertainty = _uncertainty_module()
-    plant_keys = arm_mod._PLANT_KEYS + (uncertainty.PLANT_TRUTH_KEYS if uncertainty else ())
+    plant_keys = arm_tables._PLANT_KEYS + (uncertainty.PLANT_TRUTH_KEYS if uncertainty else ())
     for k in plant_keys:
         used.add(f"plant.{k}")
         rows.append((f"`{k}`", _meaning(f"plant.{k}")))
