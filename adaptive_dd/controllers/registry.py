@@ -446,7 +446,7 @@ def _detector_at_the_top(spec: str, o: dict) -> dict:
         f"controllers.{spec}.estimator.detector: write the detector's table at the top of "
         f"[controllers.{spec}] (detector = {{...}} or false); inside 'estimator' is accepted for now",
         FutureWarning,
-        stacklevel=4,
+        stacklevel=2,  # one place: shown once per run, not once per caller
     )
     return {**o, "estimator": {k: v for k, v in est.items() if k != "detector"}, "detector": est["detector"]}
 
