@@ -190,7 +190,7 @@ def run_robot(
             )
         )
     if design:
-        from adaptive_dd.cli_simulate import excitation_bounds
+        from adaptive_dd.cli.excite import excitation_bounds
         from adaptive_dd.identification.excitation import ExcitationLimits, design_excitation, multisine
 
         t0 = time.time()

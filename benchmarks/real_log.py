@@ -27,8 +27,8 @@ from pathlib import Path
 
 import numpy as np
 
-from adaptive_dd.cli import _load_arm
-from adaptive_dd.cli_log import lowpass, read_arm_log
+from adaptive_dd.cli._common import load_arm, read_arm_log
+from adaptive_dd.cli.predict import lowpass
 from adaptive_dd.identification.log_fit import (
     filter_time_constant,
     fit_log,
@@ -78,7 +78,7 @@ def main() -> None:
     )
     args = ap.parse_args()
     t0 = time.perf_counter()
-    arm = _load_arm(args.scenario)
+    arm = load_arm(args.scenario)
     model = arm_model(arm)
     _, tr = read_arm_log(args.scenario, arm, window=args.train)
     _, te = read_arm_log(args.scenario, arm, window=args.test)

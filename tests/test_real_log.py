@@ -263,13 +263,13 @@ def test_consistent_arm_fit_takes_a_semidefinite_information():
 def test_tiago_held_out_prediction():
     """The shipped record: trained on 9.21-30 s, the held-out 48-67.9 s predicted on arm_1-4 with a
     pooled error (2 Hz low-pass) of 0.73 N m (measured), against 4.3 for the URDF."""
-    from adaptive_dd.cli import _load_arm
-    from adaptive_dd.cli_log import lowpass, read_arm_log
+    from adaptive_dd.cli._common import load_arm, read_arm_log
+    from adaptive_dd.cli.predict import lowpass
     from adaptive_dd.identification.log_fit import fit_log, identifiable_subset, predict_torque
     from adaptive_dd.identification.model import arm_model
     from adaptive_dd.record import derivatives
 
-    arm = _load_arm(str(SCENARIO))
+    arm = load_arm(str(SCENARIO))
     model = arm_model(arm)
     _, tr = read_arm_log(str(SCENARIO), arm, window=(9.21, 30.0))
     _, te = read_arm_log(str(SCENARIO), arm, window=(48.0, 67.9))

@@ -28,7 +28,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import NamedTuple
+from typing import ClassVar, NamedTuple
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -181,6 +181,9 @@ class Arm:
     repair_inertia: bool = False
     payload_capacity: float | None = None
     _cache: dict = field(default_factory=dict, repr=False, compare=False)
+    closed_form: ClassVar[bool] = False
+    """False: the general kernels (True on :class:`~adaptive_dd.plant.two_link.TwoLinkArm`, the
+    paper's closed forms)."""
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "urdf", Path(self.urdf))

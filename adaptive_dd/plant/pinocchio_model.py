@@ -28,6 +28,7 @@ from adaptive_dd.plant.dynamics import (
     mass_matrix,
     regressor,
 )
+from adaptive_dd.plant.kind import is_two_link
 from adaptive_dd.plant.parameters import Payload, PhysicalParameters
 from adaptive_dd.plant.two_link import TwoLinkArm
 
@@ -53,7 +54,7 @@ def as_physical(arm: TwoLinkArm | PhysicalParameters | None) -> PhysicalParamete
     """Physical parameters of an arm (default :meth:`TwoLinkArm.sice`); see the module docstring."""
     if arm is None:
         return TwoLinkArm.sice().equivalent_physical()
-    if isinstance(arm, TwoLinkArm):
+    if is_two_link(arm):
         return arm.equivalent_physical()
     if isinstance(arm, PhysicalParameters):
         return arm
@@ -149,7 +150,7 @@ def positive_definite_check(M: NDArray) -> CheckResult:
 
 def _two_link_sigma(arm, params: PhysicalParameters, payload: Payload | None) -> NDArray[np.float64]:
     """The sigma compared: a TwoLinkArm's own (with its payload effect), else from the physical set."""
-    if isinstance(arm, TwoLinkArm):
+    if is_two_link(arm):  # its own sigma and payload effect, against a disk body in Pinocchio
         return arm.sigma if payload is None else arm.sigma_with_payload(payload.mass, payload.radius)
     return (params if payload is None else params.with_payload(payload)).to_sigma()
 

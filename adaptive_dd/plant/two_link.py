@@ -50,6 +50,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import asdict, dataclass, field, replace
+from typing import ClassVar
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -145,6 +146,9 @@ class TwoLinkArm:
     stribeck_velocity: float = 0.1
     lugre_stiffness: tuple[float, float] = (1e5, 1e5)
     lugre_damping: tuple[float, float] | None = None
+    closed_form: ClassVar[bool] = True
+    """True: the paper's closed forms (eqs. 3-9), the two-link fast path (False on the general
+    :class:`~adaptive_dd.plant.arm.Arm`); what the command line asks to choose the paper's experiments."""
 
     def __post_init__(self) -> None:
         s = np.array(validate_sigma(self.sigma, "TwoLinkArm.sigma"), dtype=float, copy=True)

@@ -1,10 +1,10 @@
-"""``identify --arm`` and ``predict --arm``: identification of any serial arm from a log, and its check.
+"""``identify --arm``: identification of any arm from a log (the paper's two-link arm has its own
+path, :mod:`adaptive_dd.cli._identify_two_link`).
 
-Kept apart from :mod:`adaptive_dd.cli` (which parses the arguments). The record is read
-through the scenario's ``[record]`` table (:mod:`adaptive_dd.record`; without one, the
-simulator's ``t, q1.., qd1.., tau1..`` columns), identified by weighted least squares on the
-exact filtered regression (:mod:`adaptive_dd.identification.log_fit`), then, where it can
-simulate the record, refined by output error; the model goes to ``OUT/model.json``
+The record is read through the scenario's ``[record]`` table (:mod:`adaptive_dd.record`;
+without one, the simulator's ``t, q1.., qd1.., tau1..`` columns), identified by weighted least
+squares on the exact filtered regression (:mod:`adaptive_dd.identification.log_fit`), then,
+where it can simulate the record, refined by output error; the model goes to ``OUT/model.json``
 (:mod:`adaptive_dd.identification.identified_model`).
 """
 
@@ -16,94 +16,10 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
+from adaptive_dd.cli._common import NAME_WIDTH, read_arm_log, short
 from adaptive_dd.errors import DataError, ParameterError, SignalError
 
-__all__ = [
-    "identify_log",
-    "is_identification_scenario",
-    "lowpass",
-    "predict_log",
-    "read_arm_log",
-    "validate_identification",
-]
-
 Array = NDArray[np.float64]
-NAME_WIDTH = 44
-LOWPASS_ORDER = 4
-
-
-def read_arm_log(scenario: str, arm, files=None, window=None):
-    """The scenario's :class:`~adaptive_dd.record.RecordSpec` and the log it describes, read."""
-    from adaptive_dd.errors import ScenarioError
-    from adaptive_dd.io import read_toml
-    from adaptive_dd.record import read_log, record_spec
-
-    table = read_toml(Path(scenario), ScenarioError).get("record")
-    spec = record_spec(table, arm.joint_names, arm.joint_kinds, str(scenario), files=files)
-    return spec, read_log(spec, window=tuple(window) if window else None, arm=arm)
-
-
-IDENTIFICATION_TABLES = ("arm", "plant", "record")
-
-
-def is_identification_scenario(path) -> bool:
-    """A scenario with a ``[record]`` table: an identification, read by ``identify``/``predict``."""
-    from adaptive_dd.errors import ScenarioError
-    from adaptive_dd.io import read_toml
-
-    return "record" in read_toml(Path(path), ScenarioError)
-
-
-def validate_identification(path) -> int:
-    """``adaptive-dd validate`` of an identification scenario: its ``[arm]`` and ``[record]``, resolved.
-
-    Raises
-    ------
-    ScenarioError
-        A table other than ``[arm]``, ``[plant]``, ``[record]`` (a benchmark's tables do not
-        belong here), or what :func:`adaptive_dd.record.record_spec` refuses.
-    """
-    from adaptive_dd.cli_arm import describe_arm
-    from adaptive_dd.cli_arm import load_arm as _load_arm
-    from adaptive_dd.errors import ScenarioError
-    from adaptive_dd.io import read_toml
-    from adaptive_dd.plant.arm import Arm
-    from adaptive_dd.record import record_spec
-
-    data = read_toml(Path(path), ScenarioError)
-    extra = [k for k in data if k not in IDENTIFICATION_TABLES]
-    if extra:
-        raise ScenarioError(
-            f"{path}: [{extra[0]}]: an identification scenario (with [record]) holds only "
-            f"{', '.join(f'[{t}]' for t in IDENTIFICATION_TABLES)}; keep benchmark tables in another file"
-        )
-    arm = _load_arm(str(path))
-    if not isinstance(arm, Arm):
-        raise ScenarioError(f"{path}: [record] needs an [arm] from a URDF (urdf = ... or robot = ...)")
-    spec = record_spec(data["record"], arm.joint_names, arm.joint_kinds, str(path))
-    print(
-        f"# identification scenario {path}: [arm] and [record] (no [reference]: identify and predict "
-        "read a log)"
-    )
-    for note in arm.urdf_notes:
-        print(f"# note: {note}")
-    print(f"record.files = {[str(f) for f in spec.files]}")
-    print(f"record.time = {spec.time!r}")
-    for j, name in enumerate(arm.joint_names):
-        vel = "derived" if spec.derive_velocity or spec.velocity is None else repr(spec.velocity[j])
-        print(
-            f"record.joint{j + 1} = {{ joint = {name!r}, position = {spec.position[j]!r} "
-            f"(x {spec.position_scale[j]:.6g}), "
-            f"velocity = {vel}, torque = {spec.torque_gain[j]:.6g} * {spec.torque[j]!r} + "
-            f"{spec.torque_offset[j]:.6g}{'' if spec.used[j] else ', excluded'} }}"
-        )
-    print(f"record.window = {list(spec.window) if spec.window else 'the whole log'}")
-    print(describe_arm(arm))
-    return 0
-
-
-def _short(name: str) -> str:
-    return name if len(name) <= NAME_WIDTH else name[: NAME_WIDTH - 3] + "..."
 
 
 def _print_fit(model, fit, names: tuple[str, ...]) -> None:
@@ -123,12 +39,12 @@ def _print_fit(model, fit, names: tuple[str, ...]) -> None:
         if fit.identified[k]:
             rel = 100 * fit.std[k] / max(abs(fit.sigma[k]), 1e-300)
             print(
-                f"{_short(name):<{NAME_WIDTH}} {fit.sigma[k]:11.5g} {fit.std[k]:9.2g} {rel:11.3g} "
+                f"{short(name):<{NAME_WIDTH}} {fit.sigma[k]:11.5g} {fit.std[k]:9.2g} {rel:11.3g} "
                 f"{model.sigma_ref[k]:11.5g}"
             )
     fixed = [model.names[k] for k in np.flatnonzero(~fit.identified)]
     if fixed:
-        print(f"held at the URDF's values: {', '.join(_short(f) for f in fixed)}")
+        print(f"held at the URDF's values: {', '.join(short(f) for f in fixed)}")
     print(
         "per channel [N m rms], filtered: residual "
         + ", ".join(f"{names[j]} {fit.residual_rms[j]:.3g}" for j in np.flatnonzero(fit.used))
@@ -218,7 +134,7 @@ def _output_error(args, arm, model, rec, fit) -> None:
     )
     for k, name in enumerate(model.names):
         print(
-            f"{_short(name):<{NAME_WIDTH}} {fit.sigma[k]:11.5g} {oe.sigma[k]:11.5g} {oe.std[k]:9.2g} "
+            f"{short(name):<{NAME_WIDTH}} {fit.sigma[k]:11.5g} {oe.sigma[k]:11.5g} {oe.std[k]:9.2g} "
             f"{abs(fit.sigma[k] - oe.sigma[k]) / oe.std[k]:12.1f}"
         )
     print(
@@ -419,105 +335,3 @@ def _payload_pair(args, arm, model, fit, tau_f, K) -> None:
     pr = payload_from_pair(arm, fit.sigma, fit.cov, other.sigma, other.cov)
     loaded = ", ".join(args.data) if args.data else "the scenario's record"
     _print_payload(f"payload (loaded {loaded} - unloaded {', '.join(args.baseline)})", pr)
-
-
-def lowpass(x: Array, cutoff: float, T: float) -> Array:
-    """Zero-phase Butterworth low-pass (order 4, forward and backward) along axis 0."""
-    from scipy.signal import butter, filtfilt
-
-    if not 0 < cutoff < 0.5 / T:
-        raise ParameterError(f"--lowpass {cutoff} Hz must be in (0, {0.5 / T:.4g}) (the Nyquist frequency)")
-    b, a = butter(LOWPASS_ORDER, cutoff, fs=1.0 / T)
-    return filtfilt(b, a, x, axis=0)
-
-
-def _check_same_urdf(scenario: str, m, model_path) -> None:
-    """The scenario's ``[arm]`` names the URDF the model was identified on (the model's arm is used)."""
-    from adaptive_dd.errors import ScenarioError
-    from adaptive_dd.io import read_toml
-
-    table = read_toml(Path(scenario), ScenarioError).get("arm") or {}
-    if "robot" in table:
-        from adaptive_dd.robots import robot_urdf
-
-        path = robot_urdf(table["robot"])
-    elif isinstance(table.get("urdf"), str):
-        path = Path(table["urdf"])
-        path = path if path.is_absolute() else Path(scenario).parent / path
-    else:
-        raise ScenarioError(f"{scenario}: predict needs an [arm] with urdf = ... or robot = ...")
-    if Path(path).resolve() != Path(m.urdf).resolve():
-        raise DataError(
-            f"{model_path}: identified on {m.urdf}, but the scenario's [arm] is {path}: use the scenario "
-            "the model was identified with"
-        )
-
-
-def predict_log(args: argparse.Namespace) -> int:
-    """``adaptive-dd predict --arm SCENARIO --model model.json [FILES]``: torque prediction error."""
-    from adaptive_dd.identification.identified_model import load_identified_model
-    from adaptive_dd.identification_plots import plot_torque_fit
-    from adaptive_dd.outputs import OutputSet, atomic_write
-    from adaptive_dd.record import derivatives
-
-    m = load_identified_model(args.model)
-    _check_same_urdf(args.arm, m, args.model)
-    arm = m.arm()
-    model = m.arm_model()
-    _, rec = read_arm_log(args.arm, arm, args.data, args.window)
-    qd, qdd = derivatives(rec.q, rec.sample_period)
-    if rec.qd_measured:
-        qd = rec.qd
-    tau_hat = m.predict(rec.q, qd, qdd, model)
-    names = arm.joint_names
-    used = np.asarray(m.used, dtype=bool)
-    print(
-        f"{rec.source}: {rec.t.size} samples at T = {rec.sample_period:.6g} s "
-        f"({rec.t[0]:.4g}-{rec.t[-1]:.4g} s); model {args.model}; accelerations by Savitzky-Golay "
-        "(cubic, ~0.1 s)"
-    )
-    rows = [("unfiltered", rec.tau, tau_hat)]
-    if args.lowpass:
-        rows.append(
-            (
-                f"low-passed {args.lowpass:g} Hz",
-                lowpass(rec.tau, args.lowpass, rec.sample_period),
-                lowpass(tau_hat, args.lowpass, rec.sample_period),
-            )
-        )
-    for label, tau, th in rows:
-        err = np.sqrt(np.mean((tau - th) ** 2, axis=0))
-        ref = np.sqrt(np.mean(tau**2, axis=0))
-        print(f"torque prediction error, {label} [N m rms (relative to the torque's rms)]:")
-        for j in range(arm.n_joints):
-            tag = "" if used[j] else "   (channel not fitted)"
-            print(
-                f"  {names[j]:<24} {err[j]:9.4g} ({100 * err[j] / max(ref[j], 1e-300):5.1f} %) "
-                f"of {ref[j]:.4g}{tag}"
-            )
-        pooled = np.sqrt(np.mean((tau - th)[:, used] ** 2))
-        print(f"  pooled over the fitted channels: {pooled:.4g} N m")
-    outputs = OutputSet(args.out)
-    with outputs:
-        n = arm.n_joints
-        with atomic_write(outputs.path("prediction.csv")) as fh:
-            head = ["t", *[f"tau{j + 1}" for j in range(n)], *[f"tau_hat{j + 1}" for j in range(n)]]
-            np.savetxt(
-                fh,
-                np.column_stack([rec.t, rec.tau, tau_hat]),
-                delimiter=",",
-                header=",".join(head),
-                comments="",
-                fmt="%.8g",
-            )
-        label, tau, th = rows[-1]
-        plot_torque_fit(
-            rec.t,
-            tau[:, used],
-            th[:, used],
-            outputs.path("prediction.png"),
-            f"measured vs predicted torque ({label}), the fitted channels",
-            labels=[names[j] for j in np.flatnonzero(used)],
-        )
-    print(f"wrote {Path(args.out) / 'prediction.csv'}, {Path(args.out) / 'prediction.png'}")
-    return 0
