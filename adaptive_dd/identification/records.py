@@ -136,27 +136,20 @@ def simulate_record(
     SignalError
         If the simulated state becomes non-finite.
     """
-    n = arm.n_joints
     _check_timing(duration, sample_period, bandwidth)
-    N = round(duration / sample_period)
-    t = np.arange(N) * sample_period
-    ref = reference.sample(t)
-    if ref[0].shape != (N, n):
-        raise ParameterError(f"the reference has {ref[0].shape[-1]} joints, the arm {n}")
+    t, ref = _reference_samples(reference, duration, sample_period, arm.n_joints)
     model = arm_model(arm)
     pp = np.zeros(10) if payload is None else np.asarray(payload, dtype=float).reshape(10)
     pi_true = pi_with_payload(arm, model.pi_ref, pp)
     step = _plant_step(plant, arm, model, pi_true, len(rngs), sample_period, substeps)
     out, sat_count = _track(arm, model, pi_true, ref, rngs, step, bandwidth, noise, quantize)
-    if not np.all(np.isfinite(out["q"])):
-        raise SignalError("simulate_record: non-finite measurement")
     return Record(
         t=t,
         pi_true=pi_true,
         sigma_true=model.B @ pi_true,
         payload=pp,
         sample_period=float(sample_period),
-        saturated=sat_count / N,
+        saturated=sat_count / t.size,
         **out,
     )
 
@@ -166,6 +159,16 @@ def _check_timing(duration: float, sample_period: float, bandwidth: float) -> No
         raise ParameterError(f"need duration >= 10 samples of T > 0, got {duration} s, T = {sample_period} s")
     if not (0 < bandwidth * sample_period <= 0.2):
         raise ParameterError(f"bandwidth {bandwidth} rad/s with T = {sample_period} s: need 0 < w T <= 0.2")
+
+
+def _reference_samples(reference, duration: float, sample_period: float, n: int):
+    """The sample instants ``t (N,)`` and the reference ``(q_d, qd_d, qdd_d)`` there, each ``(N, n)``."""
+    N = round(duration / sample_period)
+    t = np.arange(N) * sample_period
+    ref = reference.sample(t)
+    if ref[0].shape != (N, n):
+        raise ParameterError(f"the reference has {ref[0].shape[-1]} joints, the arm {n}")
+    return t, ref
 
 
 def _plant_step(plant: str, arm, model: Model, pi_true: Array, S: int, T: float, substeps: int):
@@ -182,7 +185,8 @@ def _track(arm, model: Model, pi_true: Array, ref, rngs, step, bandwidth: float,
     the reference's first state; ``step(q, qd, tau) -> (q, qd)`` advances the plant one sample.
 
     Returns the measured, applied and true signals ``q, qd, tau, q_true, qd_true`` (each
-    ``(S, N, n)``, a dict) and the count of saturated samples ``(S, n)``.
+    ``(S, N, n)``, a dict) and the count of saturated samples ``(S, n)``; a non-finite
+    measurement is an error.
     """
     from adaptive_dd.plant.sampling import actuate_batch, measure_batch
 
@@ -216,6 +220,8 @@ def _track(arm, model: Model, pi_true: Array, ref, rngs, step, bandwidth: float,
         for key, v in (("q", qm), ("qd", qdm), ("tau", tau), ("q_true", q), ("qd_true", qd)):
             out[key][:, k] = v
         q, qd = step(q, qd, tau)
+    if not np.all(np.isfinite(out["q"])):
+        raise SignalError("simulate_record: non-finite measurement")
     return out, sat_count
 
 
