@@ -172,9 +172,9 @@ def _best(fn, repeat: int = 3) -> float:
 
 
 def main() -> None:
-    from adaptive_dd.closed_loop.controllers import make_arm_controller
     from adaptive_dd.closed_loop.runner import run_closed_loop, true_models
     from adaptive_dd.closed_loop.types import io_of, plant_of, run_constants
+    from adaptive_dd.controllers import gains_for, make_controller
 
     sc = _scenario()
     N, n = sc.n_samples, sc.n_joints
@@ -225,7 +225,7 @@ def main() -> None:
     ctrls = {}
     for name in ("ct_oracle", "adaptive_ct"):
         opts = sc.options(name)
-        ctrl = make_arm_controller(name, sc.arm, sc.bandwidth, sc.damping, opts)
+        ctrl = make_controller(name, gains_for(sc.arm, sc.bandwidth, sc.damping), opts, arm=sc.arm)
         form = ctrl.compiled_form(1, rc.T)
         ctrls[name] = form
         pim, th = form.state.pi_model[0].copy(), form.state.theta[0].copy()
@@ -236,7 +236,9 @@ def main() -> None:
     pi_out = np.empty(13 * n)
 
     def fresh():
-        ctrl = make_arm_controller("adaptive_ct", sc.arm, sc.bandwidth, sc.damping, sc.options("adaptive_ct"))
+        ctrl = make_controller(
+            "adaptive_ct", gains_for(sc.arm, sc.bandwidth, sc.damping), sc.options("adaptive_ct"), arm=sc.arm
+        )
         return ctrl.compiled_form(1, rc.T)
 
     def est(with_model):

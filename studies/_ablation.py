@@ -34,6 +34,9 @@ def ablation_row(
     d["run"]["controllers"] = ["ct_oracle", "adaptive_ct"]
     ac = d.setdefault("controllers", {}).setdefault("adaptive_ct", {})
     ac.update(controller or {})
+    estimator = dict(estimator)
+    if "detector" in estimator:  # the detector's table sits at the top of [controllers.adaptive_ct]
+        ac["detector"] = estimator.pop("detector")
     ac.setdefault("estimator", {}).update(estimator)
     df = run_benchmark(parse_scenario(d, scenario, Path(scenario).stem), progress=False).to_frame()
     c = df[df.controller == "adaptive_ct"]

@@ -260,13 +260,13 @@ def test_a_scenario_without_estimator_settings_runs_as_the_tuned_one():
     assert "estimator" not in base.get("controllers", {}).get("adaptive_ct", {})
     base["run"] |= {"duration": 4.5, "seeds": 2, "controllers": ["ct_oracle", "adaptive_ct"]}
     base["payload"] = base["payload"][:1]
-    tuned = {
-        "row_weights": [1.0, 1.0, 1.0, 1.0, 0.14, 0.14, 0.14],
+    tuned = {  # [controllers.adaptive_ct]: the estimator's table and the detector's
+        "estimator": {"row_weights": [1.0, 1.0, 1.0, 1.0, 0.14, 0.14, 0.14]},
         "detector": {"reopen_mass_std": 2.0, "slow_factor": 1.5, "fast_window": 0.004, "fast_threshold": 6.0},
     }
     out = {}
     for name, est in (("derived", None), ("tuned", tuned)):
-        d = {**base, "controllers": {"adaptive_ct": {"estimator": est}} if est else {}}
+        d = {**base, "controllers": {"adaptive_ct": est} if est else {}}
         df = run_benchmark(parse_scenario(d, "panda.toml", "panda"), progress=False).to_frame()
         c = df[df.controller == "adaptive_ct"].sort_values(["seed", "segment"])
         out[name] = (c.ratio_to_floor.to_numpy(float), c.detection_delay.to_numpy(float))

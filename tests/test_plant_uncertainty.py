@@ -18,9 +18,9 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from adaptive_dd.benchmark.scenario import load_scenario, parse_scenario
-from adaptive_dd.closed_loop.controllers import make_arm_controller
 from adaptive_dd.closed_loop.runner import run_closed_loop, true_models
 from adaptive_dd.closed_loop.types import pi_with_payload, plant_of
+from adaptive_dd.controllers import make_controller
 from adaptive_dd.errors import ScenarioError
 from adaptive_dd.identification.consistency import is_physical
 from adaptive_dd.plant.uncertainty import (
@@ -205,7 +205,7 @@ def test_the_oracle_is_given_each_trials_plant_and_ct_nominal_the_model():
         np.testing.assert_allclose(pi_true[i, 1, : want.size], want, rtol=1e-12)
         np.testing.assert_allclose(pi_true[i, 1, want.size :], d.armature, rtol=1e-12)
         assert not np.allclose(pi_true[i, 0], sc.arm.pi)
-    nominal = make_arm_controller("ct_nominal", sc.arm)
+    nominal = make_controller("ct_nominal", arm=sc.arm)
     np.testing.assert_array_equal(nominal.pi_nominal, sc.arm.pi)  # the others: the [arm]'s URDF
     res = run_closed_loop(sc)
     exact = run_closed_loop(dataclasses.replace(sc, plant=None))
@@ -223,7 +223,7 @@ class SeesTheTruth:
     needs_true_model = True
 
     def __init__(self, arm):
-        self.inner = make_arm_controller("ct_oracle", arm)
+        self.inner = make_controller("ct_oracle", arm=arm)
         self.seen = []
 
     def reset(self, n_trials, sample_period):
@@ -243,7 +243,7 @@ def test_python_path_gives_oracles_each_trials_plant():
     data["payload"] = [{**data["payload"][0], "at": 0.2}]
     sc = parse_scenario(data, "u.toml")
     plug = SeesTheTruth(sc.arm)
-    ctrls = {"ct_oracle": make_arm_controller("ct_oracle", sc.arm), "plug": plug}
+    ctrls = {"ct_oracle": make_controller("ct_oracle", arm=sc.arm), "plug": plug}
     compiled = run_closed_loop(sc, {"ct_oracle": ctrls["ct_oracle"]})
     python = run_closed_loop(sc, ctrls, engine="python")
     np.testing.assert_allclose(
@@ -284,7 +284,7 @@ def test_plant_urdf_is_the_plant_and_model_from_is_the_model(tmp_path):
     assert sc.arm.pi_links[10] == pytest.approx(9.5)  # the model: the identified links
     assert sc.plant.nominal().pi_links[10] == pytest.approx(8.393)  # the plant: the [arm]
     np.testing.assert_array_equal(sc.arm.armature, base.armature)
-    ctrl = make_arm_controller("ct_nominal", sc.arm)
+    ctrl = make_controller("ct_nominal", arm=sc.arm)
     assert ctrl.pi_nominal[10] == pytest.approx(9.5)
     pl = plant_of(sc, (0,))
     assert pl.pi_seg[0, 0, 10] == pytest.approx(8.393)
@@ -448,7 +448,7 @@ def test_run_excite_is_checked():
     sc = parse_scenario(data, "u.toml")
     assert sc.excite == 20.0
     with pytest.raises(ValueError, match="built per seed from the identified model"):
-        run_closed_loop(sc, {"ct_nominal": make_arm_controller("ct_nominal", sc.arm)})
+        run_closed_loop(sc, {"ct_nominal": make_controller("ct_nominal", arm=sc.arm)})
 
 
 def test_a_model_from_the_plants_own_urdf_tracks_as_the_oracle(tmp_path):

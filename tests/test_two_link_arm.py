@@ -256,7 +256,7 @@ def test_simulator_takes_payload_physics_from_the_arm():
 
 
 def test_simulator_rejects_a_non_arm():
-    with pytest.raises(ParameterError, match="arm must be a TwoLinkArm"):
+    with pytest.raises(ParameterError, match="needs the two-link closed-form arm"):
         ArmSimulator(1, 10, np.random.default_rng(0), arm=TABLE1_SIGMA)
 
 

@@ -66,6 +66,7 @@ import numpy as np
 
 from adaptive_dd.benchmark.provenance import provenance
 from adaptive_dd.benchmark.streaming import SETTLE, segment_bounds
+from adaptive_dd.plant.kind import is_chain
 from adaptive_dd.plant.sampling import first_sample
 
 if TYPE_CHECKING:  # annotations only: types imports this module for BenchmarkResult.metrics()
@@ -158,9 +159,8 @@ def per_seed_segment_metrics(res: BenchmarkResult, run, recovery: bool = True) -
         return res.cache[key]
     sc = res.scenario
     T = sc.sample_period
-    from adaptive_dd.plant.arm import Arm
 
-    if isinstance(sc.arm, Arm):  # an N-joint run (adaptive_dd.closed_loop)
+    if is_chain(sc.arm):  # an N-joint run (adaptive_dd.closed_loop)
         from adaptive_dd.closed_loop.metrics import segment_metrics
 
         out = segment_metrics(res, run)
@@ -341,9 +341,8 @@ def compute_metrics(res: BenchmarkResult) -> dict:
 
 def _segment_sigmas(sc) -> np.ndarray:
     """True base parameters per segment ``(G, p)``."""
-    from adaptive_dd.plant.arm import Arm
 
-    if isinstance(sc.arm, Arm):
+    if is_chain(sc.arm):
         return sc.segment_sigmas()
     return np.array([sc.arm.sigma_with_payload(m, sc.payload_radius) for _, _, m in sc.segments()])
 
@@ -462,9 +461,8 @@ def _add_information_times(res: BenchmarkResult, out: dict) -> None:
     sc = res.scenario
     if not sc.swap_times:
         return
-    from adaptive_dd.plant.arm import Arm
 
-    if isinstance(sc.arm, Arm):  # N joints: adaptive_dd.closed_loop.information
+    if is_chain(sc.arm):  # N joints: adaptive_dd.closed_loop.information
         from adaptive_dd.closed_loop.information import add_information_times
 
         add_information_times(res, out)

@@ -85,6 +85,7 @@ from adaptive_dd.benchmark.scenario_checks import check_number, scenario_errors,
 from adaptive_dd.errors import ScenarioError
 from adaptive_dd.plant.arm import Arm
 from adaptive_dd.plant.arm_tables import arm_from_tables
+from adaptive_dd.plant.kind import is_chain
 from adaptive_dd.plant.parameters import PAYLOAD_RADIUS
 from adaptive_dd.plant.two_link import TwoLinkArm
 from adaptive_dd.plant.uncertainty import PLANT_TRUTH_KEYS, PlantSpec, parse_model, parse_plant
@@ -225,7 +226,7 @@ class Scenario:
         when numba's cache is cold."""
         from adaptive_dd._numba_cache import compile_estimate
 
-        serial = isinstance(self.arm, Arm)
+        serial = is_chain(self.arm)
         return run_estimate(
             self.n_samples, self.seeds, len(self.controllers), self.n_joints if serial else None,
             compile_seconds=compile_estimate(self.arm),
@@ -317,7 +318,7 @@ def parse_scenario(data: dict, src: str = "<memory>", name: str = "scenario") ->
 def model_and_plant(src: str, arm, plant_table, model_table) -> tuple[Any, PlantSpec | None]:
     """The controllers' model (``[model]``) and the plant (``[plant]``'s truth keys) around ``arm`` (the
     ``[arm]``); raises :class:`ScenarioError` for these tables on the two-link closed-form arm."""
-    if not isinstance(arm, Arm):
+    if not is_chain(arm):
         given = sorted(k for k in (plant_table or {}) if k in PLANT_TRUTH_KEYS)
         given = [f"plant.{k}" for k in given] + (["[model]"] if model_table is not None else [])
         if given:
@@ -350,9 +351,7 @@ def _controller_setting_errors(v: dict) -> list[str]:
     the file, not of the run. ``bandwidth``, ``boost_bandwidth`` and ``damping`` have the bounds
     of ``[control]``; ``boost_duration`` is at most the run; every number is finite and within
     ``LIMITS["max_setting"]``."""
-    from adaptive_dd.closed_loop.controllers import make_arm_controller
-    from adaptive_dd.controllers import CONTROLLERS, Gains, make_controller
-    from adaptive_dd.plant.arm import Arm
+    from adaptive_dd.controllers import CONTROLLERS, gains_for, make_controller
 
     errs: list[str] = []
     opts = {n: thaw(o) for n, o in v["controller_options"]}
@@ -384,10 +383,7 @@ def _controller_setting_errors(v: dict) -> list[str]:
         if len(errs) > n0:
             continue
         try:
-            if isinstance(v["arm"], Arm):  # the N-joint built-ins (their own settings)
-                make_arm_controller(name, v["arm"], v["bandwidth"], v["damping"], o)
-            else:
-                make_controller(name, Gains(v["bandwidth"], v["damping"]), o, arm=v["arm"])
+            make_controller(name, gains_for(v["arm"], v["bandwidth"], v["damping"]), o, arm=v["arm"])
         except (ValueError, TypeError, ArithmeticError) as exc:
             msg = str(exc)
             while msg.startswith(f"controllers.{name}"):  # the registry names the controller too
@@ -435,7 +431,7 @@ def _plant_lines(sc: Scenario) -> list[str]:
 
     p = sc.plant
     if p is None:
-        return ["# plant: the [arm] itself (no [plant] table)"] if isinstance(sc.arm, Arm) else []
+        return ["# plant: the [arm] itself (no [plant] table)"] if is_chain(sc.arm) else []
     out = [f"model.urdf = {str(sc.arm.urdf)!r}   (what every non-oracle controller is given)"]
     out.append(f"plant.urdf = {p.urdf!r}" if p.urdf else "# plant links: the [arm]'s URDF")
     for key in ("viscous", "coulomb", "armature"):

@@ -18,12 +18,13 @@ Layout (data first, then arithmetic, then drivers):
     both arms, around each arm's batch glue.
 :mod:`~adaptive_dd.closed_loop.controllers`
     One class per built-in controller, owning its Python ``command`` and its compiled form;
-    :data:`~adaptive_dd.closed_loop.controllers.ARM_CONTROLLERS` (name -> class).
+    :data:`~adaptive_dd.closed_loop.controllers.ARM_CONTROLLERS` (name -> class), built by
+    :func:`adaptive_dd.controllers.make_controller` like every controller on every arm.
 :mod:`~adaptive_dd.closed_loop.runner`
     :func:`~adaptive_dd.closed_loop.runner.run_closed_loop`: every controller over every seed.
 """
 
-from adaptive_dd.closed_loop.controllers import ARM_CONTROLLERS, make_arm_controller
+from adaptive_dd.closed_loop.controllers import ARM_CONTROLLERS
 from adaptive_dd.closed_loop.runner import run_closed_loop
 
-__all__ = ["ARM_CONTROLLERS", "make_arm_controller", "run_closed_loop"]
+__all__ = ["ARM_CONTROLLERS", "run_closed_loop"]

@@ -7,8 +7,9 @@ state, the estimator hooks); the Python form (:meth:`reset`, :meth:`command`,
 :meth:`observe`, the protocol of ``docs/controllers.md``) runs the same compiled form one
 sample at a time for the whole batch, so the two paths agree to rounding.
 
-Adding a built-in is one change in this file: a subclass of :class:`Law` that says
-its ``law_config`` (and settings), and an entry in :data:`ARM_CONTROLLERS`.
+Adding a built-in: a subclass of :class:`Law` here that says its ``law_config`` (and
+settings), an entry in :data:`ARM_CONTROLLERS`, and its row in the one registry
+(:data:`adaptive_dd.controllers.CONTROLLERS`: what it knows, its settings and defaults per arm).
 """
 
 from __future__ import annotations
@@ -47,7 +48,6 @@ __all__ = [
     "PDControl",
     "SlotineLi",
     "SlotineLiOracle",
-    "make_arm_controller",
     "with_stated_uncertainty",
 ]
 
@@ -421,10 +421,10 @@ ARM_CONTROLLERS: dict[str, type[Law]] = {
     "slotine_li": SlotineLi,
     "slotine_li_oracle": SlotineLiOracle,
 }
-"""Built-in controllers for N-joint arms, name -> class."""
-
-TWO_LINK_ONLY = ("adaptive_ct_paper",)
-"""Built-ins of the two-link arm alone (the paper's estimator is written for its seven parameters)."""
+"""The N-joint form of each built-in, name -> class. Build controllers with
+:func:`adaptive_dd.controllers.make_controller` (the one entry point for every arm: its table
+:data:`adaptive_dd.controllers.CONTROLLERS` says what each name knows, its settings and defaults
+on each arm, and which arms it runs on)."""
 
 
 def with_stated_uncertainty(name: str, options: dict, scenario) -> dict:
@@ -444,28 +444,3 @@ def with_stated_uncertainty(name: str, options: dict, scenario) -> dict:
     keys = ("mass", "com", "inertia", "viscous", "coulomb", "armature")
     levels = {k: float(getattr(unc, k, 0.0)) * scale for k in keys}
     return {**options, "estimator": {**est, "arm_uncertainty": levels}}
-
-
-def make_arm_controller(name: str, arm, bandwidth=40.0, damping: float = 1.0, options=None) -> Law:
-    """A built-in N-joint controller by name, with its ``[controllers.NAME]`` settings.
-
-    Raises
-    ------
-    ParameterError
-        An unknown name (or a two-link-only one), or an unknown or invalid setting.
-    """
-    opts = {k: v for k, v in (options or {}).items() if k not in ("bandwidth", "damping", "label")}
-    bw = (options or {}).get("bandwidth", bandwidth)
-    dmp = (options or {}).get("damping", damping)
-    if name in TWO_LINK_ONLY:
-        raise ParameterError(
-            f"controller {name!r} is for the two-link arm only; not for a {arm.n_joints}-joint arm"
-        )
-    if name not in ARM_CONTROLLERS:
-        raise ParameterError(
-            f"unknown controller {name!r}; built-ins for N-joint arms: {sorted(ARM_CONTROLLERS)}"
-        )
-    ctrl = ARM_CONTROLLERS[name](arm, bw, dmp, **opts)
-    if options and "label" in options:
-        ctrl.name = str(options["label"])
-    return ctrl

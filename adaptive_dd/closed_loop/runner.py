@@ -20,7 +20,7 @@ from functools import partial
 import numpy as np
 
 from adaptive_dd.benchmark.types import CHUNK, MAX_ALARMS, BenchmarkResult, ControllerRun
-from adaptive_dd.closed_loop.controllers import Law, make_arm_controller, with_stated_uncertainty
+from adaptive_dd.closed_loop.controllers import Law
 from adaptive_dd.closed_loop.glue import (
     Alarms,
     alarm_lists,
@@ -59,27 +59,17 @@ __all__ = [
 
 
 def make_controllers(scenario) -> dict:
-    """The scenario's controllers by label: built-ins (:data:`ARM_CONTROLLERS`), plug-ins by path."""
+    """The scenario's controllers by label: built-ins and plug-ins by path
+    (:func:`adaptive_dd.controllers.make_controller`)."""
     return dict(make_controller_of(scenario, spec) for spec in scenario.controllers)
 
 
 def make_controller_of(scenario, spec: str) -> tuple[str, object]:
-    """``(label, controller)`` of one entry of the scenario's controller list, with its settings."""
-    from pathlib import Path
+    """``(label, controller)`` of one entry of the scenario's controller list, with its settings
+    (:func:`adaptive_dd.controllers.registry.scenario_controller`, the same on every arm)."""
+    from adaptive_dd.controllers.registry import scenario_controller
 
-    from adaptive_dd.controllers import Gains, controller_label, make_controller
-
-    src = Path(scenario.source)
-    search = (src.parent, Path.cwd()) if src.is_file() else (Path.cwd(),)
-    opts = scenario.options(controller_label(spec)) or scenario.options(spec)
-    label = controller_label(spec, opts)
-    if ":" in spec:
-        bw = opts.get("bandwidth", scenario.bandwidth)
-        g = Gains(float(np.max(bw)), opts.get("damping", scenario.damping))
-        opts = {**opts, "bandwidth": g.bandwidth}
-        return label, make_controller(spec, g, opts, arm=scenario.arm, search=search, scenario=scenario)
-    opts = with_stated_uncertainty(spec, opts, scenario)
-    return label, make_arm_controller(spec, scenario.arm, scenario.bandwidth, scenario.damping, opts)
+    return scenario_controller(scenario, spec)
 
 
 def true_parameters(scenario) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -51,6 +51,7 @@ segment only.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -310,43 +311,75 @@ def fit_output_error(
         raise SignalError(f"q, qd, tau must be (N, {model.n}), got {q.shape}, {qd.shape}, {tau.shape}")
     if segment_length < 2:
         raise ParameterError(f"segment_length must be >= 2, got {segment_length}")
-    s0 = np.asarray(sigma0, dtype=float)
-    if E is None:  # all base parameters free: theta is sigma itself
-        E, theta, s0 = np.eye(model.p), s0.copy(), np.zeros(model.p)
-    else:
-        E, theta = np.asarray(E, dtype=float), np.zeros(np.shape(E)[1])
+    s0, E, theta = _parametrisation(model, sigma0, E)
     w = 1.0 / np.asarray(std, dtype=float)
     T, L = float(sample_period), int(segment_length)
     y, nseg = _segments(np.concatenate([q, qd], axis=1), L)
     tau_s, _ = _segments(tau, L)
-    nodes = y[:, 0].copy()
 
     def residuals(th, x0):
         pi = pi_from_sigma(model, s0 + E @ th)
         xs = simulate_segments(model, pi, x0, tau_s, T, substeps)
         return pi, xs, ((y - xs) * w).reshape(nseg, -1)
 
+    def jacobians(pi, xs):
+        return _jacobians(model, pi, xs, tau_s, T, E, w)
+
+    fit = _levenberg_marquardt(residuals, jacobians, theta, y[:, 0].copy(), max_iter, rtol)
+    S, _, _, _ = schur_information(*jacobians(fit.pi, fit.xs))
+    std_theta = np.sqrt(np.abs(np.diag(np.linalg.inv(S))))
+    return OutputErrorResult(
+        sigma=s0 + E @ fit.theta,
+        theta=fit.theta,
+        std=std_theta,
+        information=S,
+        nodes=fit.nodes,
+        cost=fit.cost,
+        n_residuals=int(fit.r.size),
+        iterations=fit.iterations,
+        converged=fit.converged,
+        segment_length=L,
+    )
+
+
+def _parametrisation(model: Model, sigma0: ArrayLike, E: Array | None) -> tuple[Array, Array, Array]:
+    """``s0, E, theta`` with ``sigma = s0 + E theta`` and theta's start: ``sigma0`` itself with
+    ``E`` the identity when no ``E`` is given (all base parameters free), else 0."""
+    s0 = np.asarray(sigma0, dtype=float)
+    if E is None:  # all base parameters free: theta is sigma itself
+        return np.zeros(model.p), np.eye(model.p), s0.copy()
+    return s0, np.asarray(E, dtype=float), np.zeros(np.shape(E)[1])
+
+
+class _Fit(NamedTuple):
+    """Where :func:`_levenberg_marquardt` stopped: the estimate, its simulation and residuals."""
+
+    theta: Array
+    nodes: Array
+    pi: Array
+    xs: Array
+    r: Array
+    cost: float
+    iterations: int
+    converged: bool
+
+
+def _levenberg_marquardt(
+    residuals, jacobians, theta: Array, nodes: Array, max_iter: int, rtol: float
+) -> _Fit:
+    """Levenberg-Marquardt over theta and the segment-start states ``nodes``.
+
+    ``residuals(theta, nodes) -> (pi, xs, r)`` simulates the segments and returns the
+    normalised residuals ``r (nseg, L 2n)``; ``jacobians(pi, xs) -> (A, C)`` their derivatives
+    in theta and in the nodes. Converged when no step lowers the cost or the cost decreases
+    by less than the fraction ``rtol``.
+    """
     pi, xs, r = residuals(theta, nodes)
     cost = 0.5 * float(np.sum(r**2))
     lam, it, converged = 1e-3, 0, False
     for it in range(1, max_iter + 1):  # noqa: B007 - the count is reported
-        A, C = _jacobians(model, pi, xs, tau_s, T, E, w)
-        while True:
-            S, b, U_inv, W = schur_information(A, C, r, damping=lam)
-            Sd = S + lam * np.diag(np.diag(S))
-            d_th = -np.linalg.solve(Sd, b)
-            gc = np.einsum("jks,jk->js", C, r)
-            d_x = -np.einsum("jst,jt->js", U_inv, gc + np.einsum("jsm,m->js", W, d_th))
-            try:
-                trial = residuals(theta + d_th, nodes + d_x)
-            except (SignalError, ParameterError):
-                trial = None
-            new_cost = np.inf if trial is None else 0.5 * float(np.sum(trial[2] ** 2))
-            if new_cost <= cost:
-                break
-            lam *= 10.0
-            if lam > 1e10:
-                break
+        A, C = jacobians(pi, xs)
+        d_th, d_x, trial, new_cost, lam = _damped_step(residuals, A, C, r, theta, nodes, cost, lam)
         if new_cost > cost:
             converged = True  # no step lowers the cost: a minimum to machine precision
             break
@@ -358,18 +391,33 @@ def fit_output_error(
         if decrease < rtol:
             converged = True
             break
-    A, C = _jacobians(model, pi, xs, tau_s, T, E, w)
-    S, _, _, _ = schur_information(A, C)
-    std_theta = np.sqrt(np.abs(np.diag(np.linalg.inv(S))))
-    return OutputErrorResult(
-        sigma=s0 + E @ theta,
-        theta=theta,
-        std=std_theta,
-        information=S,
-        nodes=nodes,
-        cost=cost,
-        n_residuals=int(r.size),
-        iterations=it,
-        converged=converged,
-        segment_length=L,
-    )
+    return _Fit(theta, nodes, pi, xs, r, cost, it, converged)
+
+
+def _damped_step(
+    residuals, A: Array, C: Array, r: Array, theta: Array, nodes: Array, cost: float, lam: float
+):
+    """One Levenberg-Marquardt step from ``(theta, nodes)``: the damping ``lam`` grows tenfold
+    (up to 1e10) until the step lowers ``cost``; the node increments are eliminated through
+    the Schur complement (:func:`schur_information`).
+
+    Returns ``d_theta, d_nodes``, the trial's ``residuals(...)`` (None where the simulation
+    failed), its cost (inf where it failed) and the damping used.
+    """
+    while True:
+        S, b, U_inv, W = schur_information(A, C, r, damping=lam)
+        Sd = S + lam * np.diag(np.diag(S))
+        d_th = -np.linalg.solve(Sd, b)
+        gc = np.einsum("jks,jk->js", C, r)
+        d_x = -np.einsum("jst,jt->js", U_inv, gc + np.einsum("jsm,m->js", W, d_th))
+        try:
+            trial = residuals(theta + d_th, nodes + d_x)
+        except (SignalError, ParameterError):
+            trial = None
+        new_cost = np.inf if trial is None else 0.5 * float(np.sum(trial[2] ** 2))
+        if new_cost <= cost:
+            break
+        lam *= 10.0
+        if lam > 1e10:
+            break
+    return d_th, d_x, trial, new_cost, lam

@@ -194,6 +194,34 @@ def output_error_fit(
         segment then starts there. Knowing that the arm starts at rest is worth a lot:
         on Table 2 the bound on d2 is 0.008 % with x0 known, 0.025 % without.
     """
+    y, tau = _checked_inputs(q_meas, qd_meas, tau, segment_length, continuity_weight)
+    var = output_variances(position_variance, velocity_variance, measured)
+    var_state = output_variances(position_variance, velocity_variance)
+    x0_ = None if x0 is None else np.asarray(x0, dtype=float).reshape(4)
+    T, L = float(sample_period), int(segment_length)
+    prob = _Problem(y, tau, var, var_state, L, T, int(substeps), continuity_weight, x0_)
+    nodes0 = y[:: prob.seg][: prob.nseg]
+    p0 = np.concatenate((validate_sigma(sigma0), (nodes0 if x0_ is None else nodes0[1:]).ravel()))
+    # Levenberg-Marquardt (MINPACK, QR): the dense Jacobian has ~4 N rows and 7 + 4 N / L columns
+    sol = least_squares(prob.residuals, p0, jac=prob.jacobian, x_scale="jac", max_nfev=max_nfev, method="lm")
+    sg, nodes = prob.split(sol.x)
+    return TwoLinkOutputErrorResult(
+        sg.copy(),
+        _gauss_newton_std(sol.jac),
+        nodes.copy(),
+        float(sol.cost),
+        int(sol.fun.size),
+        int(sol.nfev),
+        bool(sol.success),
+        str(sol.message),
+        int(segment_length),
+    )
+
+
+def _checked_inputs(
+    q_meas, qd_meas, tau, segment_length: int, continuity_weight: float
+) -> tuple[Array, Array]:
+    """The measurements ``y = [q qd] (N, 4)`` and ``tau (N, 2)``, checked with the segment settings."""
     q_meas, qd_meas, tau = (np.asarray(a, dtype=float) for a in (q_meas, qd_meas, tau))
     if not (q_meas.shape == qd_meas.shape == tau.shape and tau.ndim == 2 and tau.shape[-1] == 2):
         raise SignalError(
@@ -207,39 +235,14 @@ def output_error_fit(
         raise ParameterError(
             f"need segment_length >= 2 and continuity_weight > 0, got {segment_length}, {continuity_weight}"
         )
-    var = output_variances(position_variance, velocity_variance, measured)
-    var_state = output_variances(position_variance, velocity_variance)
-    x0_ = None if x0 is None else np.asarray(x0, dtype=float).reshape(4)
-    prob = _Problem(
-        y,
-        tau,
-        var,
-        var_state,
-        int(segment_length),
-        float(sample_period),
-        int(substeps),
-        continuity_weight,
-        x0_,
-    )
-    nodes0 = y[:: prob.seg][: prob.nseg]
-    p0 = np.concatenate((validate_sigma(sigma0), (nodes0 if x0_ is None else nodes0[1:]).ravel()))
-    # Levenberg-Marquardt (MINPACK, QR): the dense Jacobian has ~4 N rows and 7 + 4 N / L columns
-    sol = least_squares(prob.residuals, p0, jac=prob.jacobian, x_scale="jac", max_nfev=max_nfev, method="lm")
-    jtj = sol.jac.T @ sol.jac
+    return y, tau
+
+
+def _gauss_newton_std(jac: Array) -> Array:
+    """Standard deviations of sigma from ``(J^T J)^-1`` (NaN where J^T J is singular)."""
+    jtj = jac.T @ jac
     try:
         cov = np.linalg.inv(jtj)
-        std = np.sqrt(np.abs(np.diag(cov)[:7]))
+        return np.sqrt(np.abs(np.diag(cov)[:7]))
     except np.linalg.LinAlgError:
-        std = np.full(7, np.nan)
-    sg, nodes = prob.split(sol.x)
-    return TwoLinkOutputErrorResult(
-        sg.copy(),
-        std,
-        nodes.copy(),
-        float(sol.cost),
-        int(sol.fun.size),
-        int(sol.nfev),
-        bool(sol.success),
-        str(sol.message),
-        int(segment_length),
-    )
+        return np.full(7, np.nan)

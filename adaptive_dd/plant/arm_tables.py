@@ -259,9 +259,20 @@ def urdf_arm_from_table(src: str, table: dict, plant_kw: dict):
     ScenarioError
         Naming ``src``, the key and the reason (URDF problems name the URDF file too).
     """
-    from adaptive_dd.errors import UrdfError
-    from adaptive_dd.plant.arm import DEFAULT_GRAVITY, Arm
+    path, frame = _urdf_source(src, table)
+    arm = _load_urdf_arm(src, table, path, frame)
+    kw = _arm_overrides(src, table, arm, plant_kw)
+    try:
+        arm = replace(arm, **kw)
+        _ = arm.sigma  # base parameters now, so that a singular model is reported here
+    except ParameterError as exc:
+        raise ScenarioError(f"{src}: [arm]/[plant]: {exc}") from None
+    return arm
 
+
+def _urdf_source(src: str, table: dict) -> tuple[Path, str | None]:
+    """The URDF file (``urdf`` relative to the scenario file, or a shipped ``robot``'s) and the
+    payload frame named in the table (a shipped robot's own when not named); checks the keys."""
     unknown = [k for k in table if k not in URDF_ARM_KEYS]
     if unknown:
         raise ScenarioError(
@@ -282,14 +293,21 @@ def urdf_arm_from_table(src: str, table: dict, plant_kw: dict):
             raise ScenarioError(
                 f"{src}: key 'arm.robot' = {name!r} is not a shipped robot; known: {sorted(ROBOTS)}"
             )
-        path = robot_urdf(name)
-        frame = frame or ROBOTS[name].payload_frame
-    else:
-        if not isinstance(table["urdf"], str) or not table["urdf"]:
-            raise ScenarioError(f"{src}: key 'arm.urdf' must be a file path, got {table['urdf']!r}")
-        path = Path(table["urdf"])
-        if not path.is_absolute():
-            path = (Path(src).parent if Path(src).is_file() else Path.cwd()) / path
+        return robot_urdf(name), frame or ROBOTS[name].payload_frame
+    if not isinstance(table["urdf"], str) or not table["urdf"]:
+        raise ScenarioError(f"{src}: key 'arm.urdf' must be a file path, got {table['urdf']!r}")
+    path = Path(table["urdf"])
+    if not path.is_absolute():
+        path = (Path(src).parent if Path(src).is_file() else Path.cwd()) / path
+    return path, frame
+
+
+def _load_urdf_arm(src: str, table: dict, path: Path, frame: str | None):
+    """:meth:`Arm.from_urdf` with the table's ``gravity`` and ``repair_inertia``; a URDF or
+    parameter problem becomes a ScenarioError naming ``src``."""
+    from adaptive_dd.errors import UrdfError
+    from adaptive_dd.plant.arm import DEFAULT_GRAVITY, Arm
+
     gravity = table.get("gravity", list(DEFAULT_GRAVITY))
     if not (isinstance(gravity, list) and len(gravity) == 3 and all(_is_num(x) for x in gravity)):
         raise ScenarioError(f"{src}: key 'arm.gravity' must be [x, y, z] in m/s^2, got {gravity!r}")
@@ -297,26 +315,24 @@ def urdf_arm_from_table(src: str, table: dict, plant_kw: dict):
         repair = table.get("repair_inertia", False)
         if not isinstance(repair, bool):
             raise ScenarioError(f"{src}: key 'arm.repair_inertia' must be true or false, got {repair!r}")
-        arm = Arm.from_urdf(path, frame, gravity=[float(x) for x in gravity], repair_inertia=repair)
+        return Arm.from_urdf(path, frame, gravity=[float(x) for x in gravity], repair_inertia=repair)
     except UrdfError as exc:
         raise ScenarioError(f"{src}: [arm] urdf: {exc}") from None
     except ParameterError as exc:
         raise ScenarioError(f"{src}: [arm]: {exc}") from None
+
+
+def _arm_overrides(src: str, table: dict, arm, plant_kw: dict) -> dict:
+    """The ``[plant]`` settings plus the table's overrides of the URDF arm (friction, armature,
+    actuator, sensor, payload radius and capacity), checked: keyword arguments of ``replace``."""
     n = arm.n_joints
     kw: dict = dict(plant_kw)
     for key in ("viscous", "coulomb", "armature"):
         if key in table:
             kw[key] = _table_vector(src, key, table[key], n, 0.0, strict=False, hi=URDF_TABLE_BOUNDS[key])
     if "torque_limit" in table:
-        lim = _table_vector(
-            src,
-            "torque_limit",
-            table["torque_limit"],
-            n,
-            0.0,
-            strict=True,
-            hi=URDF_TABLE_BOUNDS["torque_limit"],
-        )
+        hi = URDF_TABLE_BOUNDS["torque_limit"]
+        lim = _table_vector(src, "torque_limit", table["torque_limit"], n, 0.0, strict=True, hi=hi)
         kw["actuator"] = replace(arm.actuator, torque_limit=tuple(lim))
     if "dac_bits" in table:
         bits = table["dac_bits"]
@@ -342,12 +358,7 @@ def urdf_arm_from_table(src: str, table: dict, plant_kw: dict):
                 f"{src}: key 'arm.payload_capacity' must be the rated payload in (0, 1e4] kg, got {cap!r}"
             )
         kw["payload_capacity"] = float(cap)
-    try:
-        arm = replace(arm, **kw)
-        _ = arm.sigma  # base parameters now, so that a singular model is reported here
-    except ParameterError as exc:
-        raise ScenarioError(f"{src}: [arm]/[plant]: {exc}") from None
-    return arm
+    return kw
 
 
 URDF_TABLE_BOUNDS = {"viscous": 1e4, "coulomb": 1e4, "armature": 1e3, "torque_limit": 1e5}

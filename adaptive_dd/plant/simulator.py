@@ -18,6 +18,7 @@ from numpy.typing import ArrayLike, NDArray
 from adaptive_dd.errors import ParameterError, SignalError
 from adaptive_dd.plant.devices import ActuatorConfig, SensorConfig
 from adaptive_dd.plant.dynamics import as_joint_array
+from adaptive_dd.plant.kind import require_two_link
 from adaptive_dd.plant.parameters import validate_sigma
 from adaptive_dd.plant.sampling import first_sample
 from adaptive_dd.plant.two_link import TwoLinkArm
@@ -234,8 +235,8 @@ class ArmSimulator:
             raise ParameterError(f"substeps must be >= 1, got {substeps}")
         if n_trials < 1 or n_samples < 1:
             raise ParameterError(f"n_trials and n_samples must be >= 1, got {n_trials}, {n_samples}")
-        if arm is not None and not isinstance(arm, TwoLinkArm):
-            raise ParameterError(f"arm must be a TwoLinkArm, got {type(arm).__name__}")
+        if arm is not None:
+            require_two_link(arm, "ArmSimulator(arm=...)")
         self.arm = TwoLinkArm.sice() if arm is None else arm
         self.n_trials, self.n_samples = int(n_trials), int(n_samples)
         self.T, self.substeps = float(sample_period), int(substeps)

@@ -454,20 +454,38 @@ def as_two_link(arm, atol: float = 1e-12) -> TwoLinkArm | None:
     exactly a :class:`TwoLinkArm` (physical parameters of eq. 10); the benchmark then runs
     the two-link kernels, held equal to the general ones by a test.
     """
-    if arm.n_joints != 2 or np.any(arm.armature != 0) or arm.locked:
+    if not _is_paper_geometry(arm, atol):
         return None
+    # the two-link TwoLinkArm has no position limits; the scenario's reference keeps within them
+    phys = _physical_parameters(arm)
+    return TwoLinkArm.from_physical(
+        phys,
+        payload_radius=arm.payload_radius,
+        actuator=arm.actuator,
+        sensor=arm.sensor,
+        friction=arm.friction,
+        friction_velocity=arm.friction_velocity,
+        stribeck_ratio=arm.stribeck_ratio,
+        stribeck_velocity=arm.stribeck_velocity,
+    )
+
+
+def _is_paper_geometry(arm, atol: float) -> bool:
+    """Whether the arm has the geometry of the paper's closed forms (:func:`as_two_link`)."""
+    if arm.n_joints != 2 or np.any(arm.armature != 0) or arm.locked:
+        return False
     m = arm.model
     for i in (1, 2):
         j = m.joints[i]
         if j.shortname() not in ("JointModelRZ", "JointModelRUBZ"):
-            return None
+            return False
         if not np.allclose(m.jointPlacements[i].rotation, np.eye(3), atol=atol):
-            return None
+            return False
     p2 = m.jointPlacements[2].translation
     if abs(p2[1]) > atol or p2[0] <= 0:
-        return None
+        return False
     if abs(arm.gravity[0]) > atol or abs(arm.gravity[1]) > atol:
-        return None
+        return False
     link, placement = arm._payload_frame
     pt = placement.translation
     if (
@@ -476,13 +494,15 @@ def as_two_link(arm, atol: float = 1e-12) -> TwoLinkArm | None:
         or pt[0] <= 0
         or not np.allclose(placement.rotation, np.eye(3), atol=atol)
     ):
-        return None
+        return False
+    return not any(abs(m.inertias[i].lever[1]) > atol for i in (1, 2))
+
+
+def _physical_parameters(arm) -> PhysicalParameters:
+    """The physical parameters (eq. 10) of an arm of the paper's geometry."""
+    m = arm.model
     inert = [m.inertias[i] for i in (1, 2)]
-    if any(abs(body.lever[1]) > atol for body in inert):
-        return None
-    lo, hi = arm.position_limits[:, 0], arm.position_limits[:, 1]
-    del lo, hi  # the two-link TwoLinkArm has no position limits; the scenario's reference keeps within them
-    phys = PhysicalParameters(
+    return PhysicalParameters(
         I1=float(inert[0].inertia[2, 2]),
         I2=float(inert[1].inertia[2, 2]),
         m1=float(inert[0].mass),
@@ -493,16 +513,6 @@ def as_two_link(arm, atol: float = 1e-12) -> TwoLinkArm | None:
         b2=float(arm.viscous[1]),
         d1=float(arm.coulomb[0]),
         d2=float(arm.coulomb[1]),
-        l1=float(p2[0]),
-        l2=float(pt[0]),
-    )
-    return TwoLinkArm.from_physical(
-        phys,
-        payload_radius=arm.payload_radius,
-        actuator=arm.actuator,
-        sensor=arm.sensor,
-        friction=arm.friction,
-        friction_velocity=arm.friction_velocity,
-        stribeck_ratio=arm.stribeck_ratio,
-        stribeck_velocity=arm.stribeck_velocity,
+        l1=float(m.jointPlacements[2].translation[0]),
+        l2=float(arm._payload_frame[1].translation[0]),
     )

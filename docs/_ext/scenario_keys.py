@@ -3,8 +3,7 @@
 The keys come from the tables the scenario checks themselves use
 (:data:`adaptive_dd.benchmark.scenario_base.KEYS`, the ``[arm]`` and ``[plant]`` key lists of
 :mod:`adaptive_dd.plant.two_link` and :mod:`adaptive_dd.plant.arm`, the controllers'
-settings in :data:`adaptive_dd.controllers.registry.CONTROLLERS` and
-:data:`adaptive_dd.closed_loop.controllers.ARM_CONTROLLERS`, the estimator and detector
+settings in :data:`adaptive_dd.controllers.registry.CONTROLLERS` (both arms), the estimator and detector
 dataclasses); the defaults come from resolving minimal scenarios with
 :func:`~adaptive_dd.benchmark.scenario.load_scenario` (what ``adaptive-dd validate`` prints).
 Only the one-line meanings below are written by hand, and the build stops when a key of the
@@ -81,14 +80,14 @@ MEANING = {
     "setting.label": "The name the controller's results carry.",
     "setting.sigma": "The fixed model's base parameters (seven, two-link arm).",
     "setting.gamma": "Adaptation gains of Slotine-Li.",
-    "setting.max_mass": "Largest payload mass the N-joint Slotine-Li estimate may take [kg].",
-    "setting.com_radius": "Largest distance of the payload's centre of mass from the"
-    " flange [m] (N-joint Slotine-Li).",
+    "setting.max_mass": "Largest payload mass Slotine-Li's box admits [kg] (5 two-link, 20 N-joint).",
+    "setting.com_radius": "The payload's size in Slotine-Li's box [m]: the disk's radius at the tip"
+    " (two-link, 0.1), its centre of mass from the flange (N-joint, 0.3).",
     "setting.boost_bandwidth": "Bandwidth of the feedback boost after a change alarm [rad/s].",
     "setting.boost_duration": "How long the boost lasts after an alarm [s].",
     "setting.estimator": "The online estimator's settings (a table; fields below).",
-    "setting.detector": "Two-link `adaptive_ct`: the change detector's settings (a"
-    " table; fields below), or `false`.",
+    "setting.detector": "`adaptive_ct`: the change detector's settings (a table at the top of"
+    " `[controllers.adaptive_ct]`; fields below), or `false`.",
 }
 
 # Keys that arrive with branches not merged yet (issues 28 and 29): written here so the
@@ -188,7 +187,6 @@ def _check(used: set[str]) -> None:
 
 def page() -> str:
     from adaptive_dd.benchmark import scenario_base
-    from adaptive_dd.closed_loop.controllers import ARM_CONTROLLERS
     from adaptive_dd.controllers import registry
     from adaptive_dd.identification.online import Detector, OnlineConfig
     from adaptive_dd.identification.two_link_online import ChangeDetector, TwoLinkOnlineConfig
@@ -327,23 +325,14 @@ def page() -> str:
     rows = []
     common = sorted(registry.COMMON)
     for name, entry in registry.CONTROLLERS.items():
-        two_set = sorted(entry.settings)
-        serial = ARM_CONTROLLERS.get(name)
-        serial_set = sorted(serial.SETTINGS) if serial is not None else None
-        used |= {f"setting.{k}" for k in (*common, *two_set, *(serial_set or ()))}
-        rows.append(
-            (
-                f"`{name}`",
-                ", ".join(f"`{k}`" for k in two_set) or "none",
-                "two-link only"
-                if serial_set is None
-                else (", ".join(f"`{k}`" for k in serial_set) or "none"),
-            )
-        )
-    for name, cls in ARM_CONTROLLERS.items():
-        if name not in registry.CONTROLLERS:
-            used |= {f"setting.{k}" for k in cls.SETTINGS}
-            rows.append((f"`{name}`", "N-joint only", ", ".join(f"`{k}`" for k in sorted(cls.SETTINGS))))
+        two_set = sorted(entry.settings_on("two_link")) if entry.applies_to("two_link") else None
+        serial_set = sorted(entry.settings_on("chain")) if entry.applies_to("chain") else None
+        used |= {f"setting.{k}" for k in (*common, *(two_set or ()), *(serial_set or ()))}
+
+        def cell(keys, other):
+            return f"{other} only" if keys is None else (", ".join(f"`{k}`" for k in keys) or "none")
+
+        rows.append((f"`{name}`", cell(two_set, "N-joint"), cell(serial_set, "two-link")))
     lines += table(rows, heads=("controller", "two-link arm", "URDF arm"))
     lines += [f"Every controller also takes {', '.join(f'`{k}`' for k in common)}.", ""]
     lines += table(
