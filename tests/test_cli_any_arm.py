@@ -175,21 +175,21 @@ def test_sweep_workers_with_a_scheduler_is_an_error(tmp_path, capsys):
 
 
 def test_the_arm_kind_is_asked_in_one_place():
-    """The CLI asks the arm's kind through ``arm.closed_form`` in ``cli/_common.py`` only, and never
-    tests the arm's class (issue 27: the type tests on the arm's class go)."""
+    """The CLI asks the arm's kind through :func:`adaptive_dd.plant.kind.is_two_link` (the package's one
+    place, imported by ``cli/_common.py``), never reads ``closed_form`` itself nor tests the arm's
+    class (issue 27: the type tests on the arm's class go)."""
     import ast
 
-    from adaptive_dd.cli._common import is_two_link, load_arm
-    from adaptive_dd.plant.arm import Arm
-    from adaptive_dd.plant.two_link import TwoLinkArm
+    from adaptive_dd.cli import _common
+    from adaptive_dd.plant import kind
 
-    assert TwoLinkArm.sice().closed_form and not Arm.sice().closed_form
-    assert is_two_link(load_arm(SICE_URDF)) and not is_two_link(load_arm(SICE_URDF, general="test"))
-    asked = []
+    assert _common.is_two_link is kind.is_two_link
+    assert _common.is_two_link(_common.load_arm(SICE_URDF))
+    assert not _common.is_two_link(_common.load_arm(SICE_URDF, general="test"))
     for f in sorted((ROOT / "adaptive_dd" / "cli").glob("*.py")):
         for node in ast.walk(ast.parse(f.read_text())):
-            if isinstance(node, ast.Attribute) and node.attr == "closed_form":
-                asked.append(f.name)
+            assert not (isinstance(node, ast.Attribute) and node.attr == "closed_form"), f.name
             if isinstance(node, ast.Call) and getattr(node.func, "id", None) == "isinstance":
                 assert "Arm" not in ast.unparse(node.args[1]), f"{f.name}: {ast.unparse(node)}"
-    assert asked == ["_common.py"]
+            if isinstance(node, ast.FunctionDef):
+                assert node.name not in ("is_two_link", "is_chain"), f"{f.name}: a second {node.name}"
