@@ -193,3 +193,22 @@ def test_the_arm_kind_is_asked_in_one_place():
                 assert "Arm" not in ast.unparse(node.args[1]), f"{f.name}: {ast.unparse(node)}"
             if isinstance(node, ast.FunctionDef):
                 assert node.name not in ("is_two_link", "is_chain"), f"{f.name}: a second {node.name}"
+
+
+@pytest.mark.parametrize("scenario", [None, "adaptive_dd/scenarios/ur5_tool_swap.toml"])
+def test_benchmark_controllers_option_keeps_the_floor(scenario, capsys):
+    """``benchmark --controllers adaptive_ct`` runs adaptive_ct and its floor ct_oracle (said on
+    stderr), in the scenario's order, on either arm; a name the scenario lacks is a usage error."""
+    from adaptive_dd.benchmark.scenario import load_scenario
+    from adaptive_dd.cli import main
+    from adaptive_dd.cli.benchmark import only_controllers
+
+    root = Path(__file__).resolve().parents[1]
+    sc = load_scenario(None if scenario is None else root / scenario)
+    assert only_controllers(sc, ["adaptive_ct"]) == ("ct_oracle", "adaptive_ct")
+    assert "ct_oracle added (the floor of adaptive_ct)" in capsys.readouterr().err
+    assert only_controllers(sc, ["pd", "ct_oracle"]) == ("pd", "ct_oracle")
+    args = ["benchmark"] + ([] if scenario is None else [str(root / scenario)])
+    assert main([*args, "--controllers", "adaptive_ct", "no_such_law", "--no-progress"]) == 2
+    err = capsys.readouterr().err
+    assert "no_such_law not among" in err and "adaptive_ct" in err
