@@ -1,7 +1,7 @@
 """Where a segment's excess over the floor comes from: adaptive_ct's squared tracking error in
 windows after the swap that starts the segment, its share of the segment's sum, and the RMS
 ratio to ct_oracle in each window (median over seeds); the segment's ratio without its first 50
-ms and 0.5 s; the median detection delay.
+ms and 0.5 s; the saturated fraction of both; the median detection delay.
 
     python benchmarks/swap_transient.py SCENARIO.toml SEGMENT [--seeds 20]
 """
@@ -52,6 +52,12 @@ def main() -> None:
         i = round(cut / T)
         r = np.mean(np.sqrt(ea[:, i:].mean(1) / eo[:, i:].mean(1)))
         print(f"ratio without the segment's first {1e3 * cut:g} ms: mean {r:.3f}")
+    n = float(k1 - k0)
+    sat = {nm: res.runs[nm].acc.n_saturated[:, g] / n for nm in ("adaptive_ct", "ct_oracle")}
+    print(
+        "samples with a saturated joint in the segment: "
+        + ", ".join(f"{nm} mean {100 * v.mean():.3f} % (max {100 * v.max():.3f} %)" for nm, v in sat.items())
+    )
     swap = sc.swap_times[g - 1]
     delays = [
         min((x - swap for x in at if 0 <= x - swap < FALSE_ALARM_WINDOW), default=np.nan)
