@@ -426,7 +426,10 @@ def test_the_detector_rearms_within_its_bound(ur5):
     tau[k1 : k1 + 20, 1] += 8.0
     rec = run_online(ur5, cfg, r.q_meas, r.qd_meas, tau)
     (hits2,) = np.nonzero(rec.alarm[0])
-    assert len(hits2) == 2 and hits2[0] == hits[0] and k2 <= hits2[1] < k2 + 60, hits2
+    # within 92 ms: the rows judge it on what they re-learnt since the glitch (within 60 ms while a
+    # row out of use kept its pre-glitch level past the bound, which after a real swap is stale:
+    # the iiwa's false alarms, test_the_level_before_an_alarm_serves_no_longer_than_the_rearm_bound)
+    assert len(hits2) == 2 and hits2[0] == hits[0] and k2 <= hits2[1] < k2 + 100, hits2
 
 
 @pytest.mark.parametrize("before", [0.05, 0.15, 0.29, 0.45])
@@ -716,3 +719,56 @@ def test_payload_mode_on_the_stick_slip_plant_in_closed_loop(ur5):
         assert np.linalg.norm(rec.com[0, end] - _com(pay)) < 0.01, (end, rec.com[0, end])
     (alarms,) = rec.alarm_times()
     assert len(alarms) == 1 and 6.0 <= alarms[0] < 6.05, alarms
+
+
+def _drive_detector(c, s, eps_of, act_of, k0, k1):
+    """Feed the detector of trial 0 alone (``_detect``, then what the step does with its answer)
+    over samples ``k0 .. k1 - 1``; ``eps_of(k)``, ``act_of(k)``: the rows' prior errors and use
+    at sample k. The alarm samples."""
+    from adaptive_dd.identification import online_kernel as K
+
+    hits = []
+    for k in range(k0, k1):
+        if K._detect(c, s, 0, eps_of(k), act_of(k)):
+            K._alarm(c, s, 0, s.cnt[0, K.C_K])
+            hits.append(k)
+        else:
+            s.cnt[0, K.C_SINCE_ALARM] += 1
+        s.cnt[0, K.C_K] += 1
+    return hits
+
+
+def test_the_level_before_an_alarm_serves_no_longer_than_the_rearm_bound(ur5):
+    """After an alarm a row that stays out of use is compared with its pre-alarm level only within
+    resume + min_learned samples: a swap raises the residual's noise (the velocity's noise times
+    the inertia a row carries), and a row back in use after the bound with 10x its old noise
+    raises no alarm; the same row back within the bound does (the pre-alarm level still serves)."""
+    from adaptive_dd.identification import online_kernel as K
+
+    cfg = OnlineConfig(detector=Detector(fast_window=None))
+    n = ur5.n_joints
+    bound = int(cfg.samples(cfg.detector.freeze) * cfg.detector.resume) + cfg.detector.min_learned
+    rng = np.random.default_rng(5)
+    noise = rng.standard_normal((20_000, n))
+    k_alarm = 3_000
+    for back, alarms in ((bound + 300, False), (bound - 150, True)):
+        c, s = est_init(cfg, ur5, 1)
+
+        def eps_of(k, back=back):
+            e = 0.1 * noise[k].copy()
+            if k >= k_alarm + back:
+                e[0] *= 10.0  # the new payload's noise on row 0, back in use
+            return e
+
+        def act_of(k, back=back):
+            act = np.ones(n, dtype=np.bool_)
+            act[0] = not (k_alarm < k < k_alarm + back)  # row 0 out of use after the alarm
+            return act
+
+        assert _drive_detector(c, s, eps_of, act_of, 0, k_alarm) == []  # steady noise: no alarm
+        K._alarm(c, s, 0, k_alarm)  # the swap's alarm
+        hits = _drive_detector(c, s, eps_of, act_of, k_alarm + 1, k_alarm + 1_500)
+        if alarms:
+            assert len(hits) >= 1 and k_alarm + back <= hits[0] < k_alarm + back + 50, hits
+        else:
+            assert hits == [], (back, hits)

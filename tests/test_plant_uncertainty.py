@@ -492,7 +492,42 @@ def test_the_excitation_phase_identifies_the_plant_and_feeds_the_controllers():
     assert np.all(nom < 0.5 * nom0), (nom, nom0)
     m = compute_metrics(res)
     assert set(m["excitation"]["seeds"]) == {0, 1} and m["excitation"]["duration"] == 10.0
+    step = np.abs(rep.sigma_fit - rep.sigma_hat)  # what it knows: at least the fit's own step
+    assert rep.sigma_std.shape == rep.sigma_fit.shape and np.all(rep.sigma_std >= step)
+    assert np.all(rep.sigma_std > 0)
     assert m["plant"]["seeds"][1] == compute_metrics(base)["plant"]["seeds"][1]  # the same plants
+
+
+def test_after_an_excitation_phase_adaptive_ct_starts_from_what_the_identification_knows():
+    """[run] excite: adaptive_ct's arm prior is the identification's (``arm_prior_std``, each
+    seed's), not the URDF's stated uncertainty about the identified model; a table that states
+    its own mode is left alone; the std reaches the estimator's start-up covariance."""
+    from adaptive_dd.closed_loop.excitation_phase import identified_prior
+    from adaptive_dd.closed_loop.runner import make_controller_of
+    from adaptive_dd.errors import ParameterError
+    from adaptive_dd.identification.online import OnlineConfig, est_init
+
+    data = _data("vertical3_payload_exact", controllers=["ct_oracle", "adaptive_ct"])
+    data["plant"] = {"uncertainty": LEVELS}
+    sc = parse_scenario(data, "v.toml")
+    pb = sc.arm.base.B.shape[0]
+    std = np.linspace(1e-3, 2e-2, pb)
+    one = dataclasses.replace(sc, controller_options=identified_prior(sc, std))
+    _, ctrl = make_controller_of(one, "adaptive_ct")
+    assert ctrl.online.mode == "arm" and ctrl.online.arm_uncertainty is None
+    np.testing.assert_allclose(ctrl.online.arm_prior_std, std)
+    _, s = est_init(ctrl.online, sc.arm, 1)
+    np.testing.assert_allclose(np.diag(s.P[0])[:pb], ctrl.online.p0_arm + std**2, rtol=1e-12)
+    _, urdf = make_controller_of(sc, "adaptive_ct")  # without the phase: the stated uncertainty
+    assert urdf.online.arm_uncertainty is not None and urdf.online.arm_prior_std is None
+    data["controllers"] = {"adaptive_ct": {"estimator": {"mode": "payload"}}}
+    own = parse_scenario(data, "v.toml")
+    kept = dataclasses.replace(own, controller_options=identified_prior(own, std))
+    assert make_controller_of(kept, "adaptive_ct")[1].online.mode == "payload"
+    with pytest.raises(ParameterError, match="3 values; this arm has"):
+        est_init(OnlineConfig(arm_prior_std=(1.0, 1.0, 1.0)), sc.arm, 1)
+    with pytest.raises(ParameterError, match="not both"):
+        OnlineConfig(arm_prior_std=(1.0,), arm_uncertainty={})
 
 
 def test_simulate_arm_simulates_the_plant(tmp_path):

@@ -56,6 +56,14 @@ missed_swaps_per_seed
     them, per seed (None: failed); ``missed_swaps``: their sum.
 false_alarms_per_seed
     Per controller with a detector: alarms that follow no swap by ``FALSE_ALARM_WINDOW``.
+detection_delay_median
+    Segments after a swap: the median of ``detection_delay_per_seed`` over the trials that
+    detected it (None: none did); the report compares it with ``detection_limit``.
+time_to_floor
+    First segment, controllers whose floor ran: per seed the time [s] after which the 0.25 s
+    moving RMS error stays within 1.2x the floor's to the first swap (``"never"`` if it does not),
+    with its median, p90, max and the count of never
+    (:mod:`~adaptive_dd.benchmark.time_to_floor`).
 """
 
 from __future__ import annotations
@@ -243,10 +251,17 @@ def release_error_norm(res: BenchmarkResult, run, keep: int = 0) -> None:
     times, the figure's error trace), then keep only its first ``keep`` seeds' norm.
 
     Passed as ``run_benchmark(..., on_run=release_error_norm)`` by the CLI: memory then holds one
-    controller's ``(n_seeds, n_samples)`` float32 norm at a time (80 MB at 1000 seeds of 20 s).
+    controller's ``(n_seeds, n_samples)`` float32 norm at a time (80 MB at 1000 seeds of 20 s),
+    and each controller's norm over the first segment only (the time to come within 1.2x of the
+    floor, :mod:`~adaptive_dd.benchmark.time_to_floor`).
     """
     per_seed_segment_metrics(res, run)
     error_trace(res, run)
+    from adaptive_dd.benchmark.time_to_floor import first_segment_norm
+
+    first = first_segment_norm(res, run)  # the first segment's norm, for the time to the floor
+    if first is not None:
+        res.cache[("first_segment_norm", run.name)] = first.copy()
     run.e_norm = run.e_norm[:keep].copy()
     run.acc = run.acc._replace(e_norm=run.e_norm)  # the streamed sums held the same array
 
@@ -324,6 +339,9 @@ def compute_metrics(res: BenchmarkResult) -> dict:
             out[name]["failures"] = run.failures(sc.sample_period, res.seed_indices or None)
     _add_seed_statistics(res, out, per)
     _add_information_times(res, out)
+    from adaptive_dd.benchmark.time_to_floor import add_time_to_floor
+
+    add_time_to_floor(res, out)
 
     result = {
         "scenario": sc.source,
@@ -431,6 +449,7 @@ def _add_seed_statistics(res: BenchmarkResult, out: dict, per: dict) -> None:
             seg["detection_delay_per_seed"] = [d if g else None for d, g in zip(first, ok, strict=True)]
             hit = [d for d, g in zip(first, ok, strict=True) if g and d is not None]
             seg["detection_delay"] = float(np.mean(hit)) if hit else None
+            seg["detection_delay_median"] = float(np.median(hit)) if hit else None
             seg["detected"] = len(hit)
             seg["missed"] = int(ok.sum()) - len(hit)
             missed += np.array([d is None for d in first], dtype=int)

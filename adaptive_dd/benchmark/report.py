@@ -154,6 +154,7 @@ def _seed_tables(ctrls: dict, head: str) -> list[str]:
             ci = st and st["ci95"]
             cells += f"{ci[0]:7.2f}-{ci[1]:.2f} #{st['worst_seed']:<4d}" if ci else f"{'—':>16}"
         lines.append(f"{name:18s}{cells}")
+    lines += [time_to_floor_line(n, c) for n, c in rows if c["segments"][0].get("time_to_floor")]
     fa = [(n, c) for n, c in ctrls.items() if "false_alarms_per_seed" in c]
     for name, c in fa:
         n_ok = sum(1 for x in c["false_alarms_per_seed"] if x is not None)
@@ -169,6 +170,22 @@ def _seed_tables(ctrls: dict, head: str) -> list[str]:
             + (f" ({per_swap})" if per_swap else "")
         )
     return [*lines, ""]
+
+
+def _seconds(t) -> str:
+    return "never" if t == "never" else ("—" if t is None else f"{t:.2f} s")
+
+
+def time_to_floor_line(name: str, c: dict) -> str:
+    """The first segment's time to come within 1.2x of the floor
+    (:mod:`~adaptive_dd.benchmark.time_to_floor`)."""
+    tf = c["segments"][0]["time_to_floor"]
+    return (
+        f"{name}: first segment, time until its {tf['window']:g} s moving RMS error stays within "
+        f"{tf['level']:g}x {c['floor']}'s: median {_seconds(tf['median'])}, p90 {_seconds(tf['p90'])}, "
+        f"max {_seconds(tf['max'])}; never within it by the segment's end "
+        f"({tf['segment_length']:g} s) in {tf['never']} of {tf['n']} trials"
+    )
 
 
 TARGET_INFO_RATIO = 3.0
@@ -299,6 +316,8 @@ def _targets(metrics: dict, res: BenchmarkResult) -> list[str]:
                 f"(target mean <= {TARGET_RATIO_MEAN}, p90 <= {TARGET_RATIO_P90}, max <= {TARGET_RATIO_MAX}: "
                 f"{'met' if ok else 'NOT met'})"
             )
+        if a["segments"][0].get("time_to_floor"):
+            out.append("  " + time_to_floor_line("adaptive_ct", a) + " (printed, no target)")
         if "missed_swaps" in a:
             n_ok = sum(1 for x in a["missed_swaps_per_seed"] if x is not None)
             n_sw = n_ok * (len(a["segments"]) - 1)

@@ -6,6 +6,7 @@ import numpy as np
 
 from adaptive_dd.benchmark.metrics import detection_delays, false_alarm_counts, per_seed_segment_metrics
 from adaptive_dd.benchmark.provenance import provenance, scenario_dict
+from adaptive_dd.benchmark.time_to_floor import per_seed_time_to_floor
 
 __all__ = ["plant_frame", "provenance", "scenario_dict", "summary_frame", "to_frame"]
 
@@ -15,8 +16,10 @@ def to_frame(res):
 
     Columns: ``controller, seed, segment, start, end, mass, rms_error, rms_error_settled,
     rms_error_joint1, rms_error_joint2, max_error, rms_torque, saturation_fraction,
-    recovery_time, mass_estimate, floor, ratio_to_floor, detection_delay, false_alarms,
-    failed, engine``; errors in rad, torques in N m, times in s. ``seed`` is the seed index
+    recovery_time, mass_estimate, floor, ratio_to_floor, time_to_floor, detection_delay,
+    false_alarms, failed, engine``; errors in rad, torques in N m, times in s. ``time_to_floor``:
+    first segment only (NaN elsewhere, and without a floor or for a failed trial), ``inf``
+    when never (:mod:`~adaptive_dd.benchmark.time_to_floor`). ``seed`` is the seed index
     i of trial i (noise seeded by ``(scenario.seed, i)``, the same for every controller).
     """
     import pandas as pd
@@ -28,6 +31,8 @@ def to_frame(res):
     for name, run in res.runs.items():
         m = per[name]
         floor = run.floor if run.floor in per else None
+        ttf = per_seed_time_to_floor(res, run)
+        ttf = np.full(len(res.seed_indices), np.nan) if ttf is None else ttf
         false, delays = None, {}
         if run.alarm_times is not None:
             false = false_alarm_counts(run.alarm_times, sc.swap_times)
@@ -41,6 +46,7 @@ def to_frame(res):
                 row["ratio_to_floor"] = (
                     float(m["rms_error"][i, s] / per[floor]["rms_error"][i, s]) if floor else np.nan
                 )
+                row["time_to_floor"] = ttf[i] if s == 0 else np.nan
                 row["detection_delay"] = delay
                 row["false_alarms"] = np.nan if false is None else false[i]
                 row["failed"] = bool(run.failed[i])

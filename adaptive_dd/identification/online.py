@@ -42,7 +42,8 @@ online_kernel._detect`).
 **Re-arm bound.** After any alarm, the next alarm is possible as soon as
 ``since_alarm > holdoff`` and one used row has been seen ``min_learned`` times from
 ``resume`` samples after the alarm on: at most ``max(holdoff, resume + min_learned)``
-samples in which that row is in use (``OnlineConfig.rearm_samples``). The level
+samples in which that row is in use; the level established before the alarm serves no longer
+than ``resume + min_learned`` samples after it (``OnlineConfig.rearm_samples``). The level
 does not learn from a sample whose squared error exceeds ``gate^2`` times it, so a
 change that happens while the detector re-learns is still detected at re-arm.
 """
@@ -327,6 +328,12 @@ class OnlineConfig:
         (:func:`~adaptive_dd.identification.arm_prior.prior_covariance`). None in mode
         ``"arm"``: the default levels (masses 10 %, com 1 cm, inertias 20 %, friction 50 %,
         armature 30 %). In mode ``"full"``, added to ``p0_arm``.
+    arm_prior_std : tuple of float or None
+        Mode ``"arm"``: the standard deviations ``(p,)`` of the arm's base parameters (in the
+        order of ``arm.base``) about the model, in place of the covariance ``arm_uncertainty``
+        implies: what an identification knows (``[run] excite`` passes each seed's,
+        :func:`~adaptive_dd.closed_loop.excitation_phase.identify_excitation`). Given, the mode
+        defaults to ``"arm"``.
     reset_payload : bool
         Mode ``"arm"``: an alarm also sets the payload block to zero (a new payload, nothing
         known of it but its prior). Off by default: it loses what the block had absorbed of
@@ -355,6 +362,7 @@ class OnlineConfig:
     regression: str | None = None
     arm_uncertainty: ArmUncertainty | None = None
     reset_payload: bool = False
+    arm_prior_std: tuple[float, ...] | None = None
 
     def __post_init__(self) -> None:
         o = "OnlineConfig"
@@ -369,8 +377,19 @@ class OnlineConfig:
                 f"armature) or None, got {self.arm_uncertainty!r}"
             )
         # what the scenario states decides: an arm known only to its stated uncertainty is learnt
+        if self.arm_prior_std is not None:
+            v = np.asarray(self.arm_prior_std, dtype=float)
+            if v.ndim != 1 or v.size == 0 or not np.all(np.isfinite(v) & (v >= 0)):
+                raise ParameterError(
+                    f"{o}.arm_prior_std must be a list of finite values >= 0 (one per base parameter), "
+                    f"got {self.arm_prior_std!r}"
+                )
+            object.__setattr__(self, "arm_prior_std", tuple(float(x) for x in v))
+            if self.arm_uncertainty is not None:
+                raise ParameterError(f"{o}: give arm_uncertainty or arm_prior_std, not both")
         if self.mode is None:
-            object.__setattr__(self, "mode", "payload" if self.arm_uncertainty is None else "arm")
+            learnt = self.arm_uncertainty is not None or self.arm_prior_std is not None
+            object.__setattr__(self, "mode", "arm" if learnt else "payload")
         arm_mode = self.mode == "arm"
         if self.project is None:  # the payload block also carries the arm's residual along the
             object.__setattr__(self, "project", not arm_mode)  # payload's directions: not a payload
@@ -538,9 +557,17 @@ def _pack(cfg: OnlineConfig, arm: Arm) -> tuple[EstCfg, Array]:
         pbasis = np.vstack((np.zeros((pb, 10)), np.eye(10)))
         pbasis_pinv = pbasis.T.copy()
         U = pbasis.copy()
-        levels = cfg.arm_uncertainty if cfg.arm_uncertainty is not None else ArmUncertainty()
         P0 = np.zeros((p, p))
-        P0[:pb, :pb] = cfg.p0_arm * np.eye(pb) + B @ prior_covariance(arm, levels) @ B.T
+        if cfg.arm_prior_std is not None:  # what an identification knows of the arm
+            if len(cfg.arm_prior_std) != pb:
+                raise ParameterError(
+                    f"OnlineConfig.arm_prior_std has {len(cfg.arm_prior_std)} values; this arm has "
+                    f"{pb} base parameters"
+                )
+            P0[:pb, :pb] = cfg.p0_arm * np.eye(pb) + np.diag(np.square(cfg.arm_prior_std))
+        else:
+            levels = cfg.arm_uncertainty if cfg.arm_uncertainty is not None else ArmUncertainty()
+            P0[:pb, :pb] = cfg.p0_arm * np.eye(pb) + B @ prior_covariance(arm, levels) @ B.T
         P0[pb:, pb:] = S0
         Pr = np.zeros((p, p))
         Pr[pb:, pb:] = S1

@@ -1,0 +1,94 @@
+"""``[run] excite`` with the estimator's mode "arm": the task's report with and without an
+excitation phase before it, on one scenario (ct_oracle, ct_nominal and adaptive_ct only).
+
+    python studies/excitation_phase.py SCENARIO.toml [--seeds 20] [--excite 20] [--first-seed 0]
+        [--only with|without] [--urdf-prior]
+
+Prints, for ``excite = 0`` and ``excite = SECONDS``, adaptive_ct / ct_oracle per segment (mean,
+p90, max over seeds), the first segment's time to come within 1.2x of the floor
+(:mod:`adaptive_dd.benchmark.time_to_floor`), trials with a false alarm, missed swaps, the median
+detection delay, ct_nominal / ct_oracle per segment, and the identification's errors.
+``--urdf-prior``: adaptive_ct's arm prior after the phase is the scenario's stated uncertainty
+(``[plant.uncertainty]``) about the identified model, not what the identification knows (the
+default, :func:`adaptive_dd.closed_loop.excitation_phase.identified_prior`).
+"""
+
+from __future__ import annotations
+
+import argparse
+import copy
+from pathlib import Path
+
+import numpy as np
+
+from adaptive_dd.benchmark.metrics import compute_metrics
+from adaptive_dd.benchmark.report import time_to_floor_line
+from adaptive_dd.benchmark.runner import run_benchmark
+from adaptive_dd.benchmark.scenario import parse_scenario, read_toml
+
+
+def summary(d: dict, source: str, seeds: list[int]) -> list[str]:
+    """The figures of one run of the scenario ``d`` over ``seeds``."""
+    sc = parse_scenario(d, source, Path(source).stem)
+    res = run_benchmark(sc, progress=False, seed_indices=seeds)
+    m = compute_metrics(res)
+    c = m["controllers"]
+    a = c["adaptive_ct"]
+    lines = []
+    for name in ("adaptive_ct", "ct_nominal"):
+        cells = [
+            f"{s['ratio_to_floor']['mean']:.3f}/{s['ratio_to_floor']['p90']:.3f}/{s['ratio_to_floor']['max']:.2f}"
+            for s in c[name]["segments"]
+        ]
+        lines.append(f"  {name} / ct_oracle mean/p90/max per segment: " + "  ".join(cells))
+    lines.append("  " + time_to_floor_line("adaptive_ct", a))
+    delays = [s.get("detection_delay_median") for s in a["segments"][1:]]
+    limits = [s.get("detection_limit") for s in a["segments"][1:]]
+    lines.append(
+        f"  trials with a false alarm {a['trials_with_false_alarms']} of {len(seeds)}, missed swaps "
+        f"{a['missed_swaps']}, median detection delay ms "
+        + " / ".join("-" if x is None else f"{1e3 * x:.0f}" for x in delays)
+        + " (limit "
+        + " / ".join("-" if x is None else f"{1e3 * x:.0f}" for x in limits)
+        + ")"
+    )
+    if res.excitation is not None:
+        rep = res.cache["excitation_report"]
+        err = rep.errors()
+        lines.append(
+            "  identification: base parameters' error against the plant's, median (worst) over "
+            f"parameters and seeds: model {np.median(err['model']):.3g} ({err['model'].max():.3g}), "
+            f"identified {np.median(err['fit']):.3g} ({err['fit'].max():.3g})"
+        )
+    lines.append(f"  wall time {res.wall_time:.0f} s")
+    return lines
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser()
+    ap.add_argument("scenario")
+    ap.add_argument("--seeds", type=int, default=20)
+    ap.add_argument("--first-seed", type=int, default=0)
+    ap.add_argument("--excite", type=float, default=20.0)
+    ap.add_argument("--only", choices=("with", "without"), default=None)
+    ap.add_argument("--urdf-prior", action="store_true")
+    a = ap.parse_args()
+    base = copy.deepcopy(read_toml(Path(a.scenario)))
+    base["run"]["controllers"] = ["ct_oracle", "ct_nominal", "adaptive_ct"]
+    if a.urdf_prior:
+        levels = {k: v for k, v in base["plant"]["uncertainty"].items() if k != "distribution"}
+        ac = base.setdefault("controllers", {}).setdefault("adaptive_ct", {})
+        ac.setdefault("estimator", {})["arm_uncertainty"] = levels
+    seeds = list(range(a.first_seed, a.first_seed + a.seeds))
+    runs = {"without": 0.0, "with": a.excite}
+    for label, excite in runs.items():
+        if a.only and label != a.only:
+            continue
+        d = copy.deepcopy(base)
+        d["run"]["excite"] = excite
+        print(f"{a.scenario}, seeds {seeds[0]}..{seeds[-1]}, excite = {excite:g} s:", flush=True)
+        print("\n".join(summary(d, a.scenario, seeds)), flush=True)
+
+
+if __name__ == "__main__":
+    main()
