@@ -13,6 +13,7 @@ from __future__ import annotations
 import importlib
 import inspect
 import pkgutil
+import shutil
 from pathlib import Path
 
 PACKAGE = "adaptive_dd"
@@ -162,6 +163,11 @@ def generate(app) -> None:
     for m in modules:
         _write(out / f"{m}.rst", module_page(m))
     _write(out / "index.rst", index_page(modules))
+    for page in out.glob("adaptive_dd*.rst"):  # a renamed or removed module's page goes with it
+        if page.stem not in modules:
+            page.unlink()
+    # autosummary's pages of each object: written afresh, so a removed function's page goes too
+    shutil.rmtree(out / "generated", ignore_errors=True)
 
 
 def setup(app):
