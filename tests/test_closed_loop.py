@@ -292,7 +292,7 @@ def test_law_with_its_scratch_given_equals_the_allocating_law(rng):
             np.testing.assert_array_equal(st_b[1], st_a[1], err_msg=name)
 
 
-def test_serial_metrics_from_hand_made_sums():
+def test_arm_metrics_from_hand_made_sums():
     sc = _short("vertical3_payload_exact", 0.01, (0.004,), seeds=2)
     S, G, n, N = 2, 2, 3, sc.n_samples
     acc = StreamedSums.zeros(S, G, n, N)
