@@ -158,7 +158,9 @@ def closed_loop_block(k0, k1, noise, drop, rc, io, pl, g, ts, es, ec, acc, rec, 
         Change-detector alarm times [s] (the count stops at the capacity).
     """
     for i in prange(ts.q.shape[0]):
-        trial_block(i, k0, k1, noise, drop, rc, io, pl, g, ts, es, ec, acc, rec, alarms)
+        # np.int64: the parallel loop's index is uint64 once lowered and int64 when typed; the
+        # same type in both compiles trial_block (the sample loop) once, not twice
+        trial_block(np.int64(i), k0, k1, noise, drop, rc, io, pl, g, ts, es, ec, acc, rec, alarms)
 
 
 @njit(cache=True, inline="always")

@@ -1,0 +1,99 @@
+"""Each shared kernel is compiled once, whatever calls it (a fresh clone's first run compiles less).
+
+numba compiles a function once per tuple of argument types, and ``True``, ``0`` or a read-only
+array are types of their own: a kernel reached with ``0`` from one call site and an ``int64`` from
+another is compiled twice (``benchmarks/compile_profile.py --why`` lists such kernels). These
+tests count the compiled signatures of the kernels that were compiled twice or three times before.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import tomllib
+from importlib import resources
+
+import numba
+import numpy as np
+
+from adaptive_dd.benchmark.scenario import load_scenario, parse_scenario
+from adaptive_dd.closed_loop.controllers import SERIAL_CONTROLLERS
+from adaptive_dd.plant import chain as C
+from adaptive_dd.plant import serial_integrator as S
+
+
+def _ur5(duration: float | None = None):
+    """The shipped UR5 scenario (cut to ``duration`` with no payload change, 1 seed, if given)."""
+    path = str(resources.files("adaptive_dd.scenarios").joinpath("ur5_tool_swap.toml"))
+    if duration is None:
+        return load_scenario(path)
+    data = tomllib.loads(open(path, encoding="utf-8").read())
+    data["run"] = {**data["run"], "duration": duration, "seeds": 1, "controllers": ["pd", "adaptive_ct"]}
+    data["payload"], data["reference"]["ramp"] = [], 0.2
+    data["controllers"] = {k: v for k, v in data.get("controllers", {}).items() if k in ("pd", "adaptive_ct")}
+    return parse_scenario(data, "test.toml", name="ur5_tool_swap")
+
+
+def test_every_builtin_controller_passes_the_loop_the_same_types():
+    """One compiled closed loop for every built-in N-joint controller, with or without estimator."""
+    sc = _ur5()
+    types = {}
+    for name, cls in SERIAL_CONTROLLERS.items():
+        form = cls(sc.arm).compiled_form(2, sc.sample_period)
+        types[name] = tuple(numba.typeof(x) for x in (form.cfg, form.state, form.ec, form.es))
+    first = next(iter(types.values()))
+    assert all(t == first for t in types.values()), {k: v != first for k, v in types.items()}
+
+
+def test_the_integrator_step_compiles_once_for_both_friction_laws():
+    """``_rk4`` (the integrator's largest kernel) serves the stick-slip and the smooth laws."""
+    sc = _ur5()
+    ch, n = sc.arm.chain, sc.n_joints
+    for law in ("stick-slip", "tanh"):
+        pp = S.plant_params(ch, sc.arm.pi, np.full(n, 0.1), np.full(n, 0.5), law=law)
+        q, qd, stuck = np.full(n, 0.3), np.zeros(n), np.zeros(n, dtype=bool)
+        for _ in range(3):  # from rest: the stick-slip law decides modes and steps to crossings
+            assert S.serial_plant_step(ch, pp, q, qd, np.ones(n), 1e-3, 2, stuck)
+    assert len(S._rk4.signatures) == 1, S._rk4.signatures
+
+
+def test_the_chain_kernels_compile_once_for_every_caller(rng):
+    """Batch wrappers (read-only inputs allowed) and in-place kernels share one compiled form."""
+    sc = _ur5()
+    ch, pi, n = sc.arm.chain, sc.arm.pi[: 10 * sc.n_joints], sc.n_joints
+    q = np.broadcast_to(rng.normal(size=n), (3, n))  # a read-only view
+    qd, qdd = rng.normal(size=(3, n)), rng.normal(size=(3, n))
+    C.regressor_batch(ch, q, qd, qdd)
+    C.slotine_li_regressor_batch(ch, q, qd, qd, qdd)
+    C.rnea_batch(ch, pi, q, qd, qdd)
+    C.rnea_ref_batch(ch, pi, q, qd, qd, qdd)
+    C.mass_matrix_batch(ch, pi, q)
+    w, a, out = C.workspace(n), np.empty((6, 10)), np.empty((n, 10))
+    C.body_regressor_in(ch, 2, q[0].copy(), qd[0], qdd[0], w, a, out)
+    C.body_slotine_li_regressor_in(ch, 2, q[0].copy(), qd[0], qd[0], qdd[0], w, a, out)
+    C.rnea_body_regressor_in(ch, pi, 2, q[0].copy(), qd[0], qdd[0], w, a, np.empty(n), out)
+    C.mass_matrix_in(ch, pi, q[0].copy(), w, np.empty((n, n)))
+    for kernel in (
+        C._torque, C._body_force, C._ref_motion, C._local_regressor, C._columns_from_motion,
+        C._regressor_blocks, C._regressor_blocks_in, C.regressor, C.mass_matrix_in,
+    ):  # fmt: skip
+        assert len(kernel.signatures) == 1, (kernel.__name__, kernel.signatures)
+
+
+def test_the_two_link_sample_loop_compiles_once():
+    """The parallel loop's index (uint64 once lowered) reaches ``trial_block`` as the int64 it was typed as."""
+    from adaptive_dd.benchmark import compiled, run_benchmark
+
+    sc = dataclasses.replace(load_scenario(), seeds=2, duration=0.02, swap_times=(), swap_masses=())
+    run_benchmark(dataclasses.replace(sc, controllers=("pd",)), progress=False, engine="compiled")
+    assert len(compiled.trial_block.signatures) == 1, compiled.trial_block.signatures
+
+
+def test_a_controller_without_estimator_and_one_with_compile_one_loop():
+    """A short UR5 run of ``pd`` and ``adaptive_ct``: one compiled closed loop, one ``_rk4``."""
+    from adaptive_dd.closed_loop import glue
+    from adaptive_dd.closed_loop.runner import run_serial
+
+    res = run_serial(_ur5(duration=0.01))
+    assert [r.name for r in res.runs] == ["pd", "adaptive_ct"]
+    assert len(glue.closed_loop_block.signatures) == 1, glue.closed_loop_block.signatures
+    assert len(S._rk4.signatures) == 1, S._rk4.signatures
