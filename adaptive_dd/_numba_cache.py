@@ -66,9 +66,9 @@ def kernel_sources(package: Path) -> list[Path]:
     modules defining records (``NamedTuple``); the package's ``__init__.py`` and this file."""
     modules = {_module_name(package, f): f for f in package.rglob("*.py")}
     texts = {m: f.read_text(encoding="utf-8", errors="replace") for m, f in modules.items()}
-    keep = {m for m, t in texts.items() if _RECORDS.search(t)}
-    keep |= {m for m, f in modules.items() if f.parent == package and f.name in ("__init__.py", "_numba_cache.py")}
-    todo = [m for m, t in texts.items() if _COMPILES.search(t) and modules[m] != Path(__file__)]
+    setup = {m for m, f in modules.items() if f.parent == package and f.name in ("__init__.py", "_numba_cache.py")}
+    keep = setup | {m for m, t in texts.items() if _RECORDS.search(t)}
+    todo = [m for m, t in texts.items() if _COMPILES.search(t) and m not in setup]
     seen: set[str] = set()
     while todo:
         m = todo.pop()
