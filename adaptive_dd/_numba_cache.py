@@ -31,7 +31,9 @@ _COMPILES = re.compile(
 _RECORDS = re.compile(r"\bNamedTuple\b|\bnamedtuple\(")
 """Text of a module that may define a record type compiled code receives (its fields are read by
 position in the compiled code)."""
-_IMPORT = re.compile(r"^[ \t]*(?:from[ \t]+(\.*[\w.]*)[ \t]+import[ \t]+(\([^)]*\)|[^\n]*)|import[ \t]+([^\n]*))", re.M)
+_IMPORT = re.compile(
+    r"^[ \t]*(?:from[ \t]+(\.*[\w.]*)[ \t]+import[ \t]+(\([^)]*\)|[^\n]*)|import[ \t]+([^\n]*))", re.M
+)
 
 
 def _module_name(package: Path, f: Path) -> str:
@@ -66,7 +68,8 @@ def kernel_sources(package: Path) -> list[Path]:
     modules defining records (``NamedTuple``); the package's ``__init__.py`` and this file."""
     modules = {_module_name(package, f): f for f in package.rglob("*.py")}
     texts = {m: f.read_text(encoding="utf-8", errors="replace") for m, f in modules.items()}
-    setup = {m for m, f in modules.items() if f.parent == package and f.name in ("__init__.py", "_numba_cache.py")}
+    names = ("__init__.py", Path(__file__).name)
+    setup = {m for m, f in modules.items() if f.parent == package and f.name in names}
     keep = setup | {m for m, t in texts.items() if _RECORDS.search(t)}
     todo = [m for m, t in texts.items() if _COMPILES.search(t) and m not in setup]
     seen: set[str] = set()

@@ -73,7 +73,7 @@ def _differences(sigs: list[tuple]) -> list[str]:
 
 def main() -> None:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    p.add_argument("scenario", nargs="?", default=None, help="scenario TOML (default: the two-link payload_swap)")
+    p.add_argument("scenario", nargs="?", default=None, help="scenario TOML (default: two-link payload_swap)")
     p.add_argument("--seeds", type=int, default=2)
     p.add_argument("--top", type=int, default=25, help="rows of the table (largest self time first)")
     p.add_argument("--why", action="store_true", help="list the differing argument types of repeated kernels")
@@ -93,7 +93,7 @@ def main() -> None:
     shutil.rmtree(os.environ["NUMBA_CACHE_DIR"], ignore_errors=True)
 
     rows: dict[str, list] = defaultdict(lambda: [0, 0.0, 0.0, [], []])
-    for name, args, incl, own, depth, caller in listener.done:
+    for name, args, incl, own, _depth, caller in listener.done:
         r = rows[name]
         r[0], r[1], r[2] = r[0] + 1, r[1] + incl, r[2] + own
         r[3].append(args)
@@ -101,19 +101,22 @@ def main() -> None:
     top_level = sum(ev[2] for ev in listener.done if ev[4] == 0)
     import adaptive_dd
 
-    print(f"adaptive-dd {' '.join(argv[:-2])} (exit {rc}); {adaptive_dd.__file__}; cold cache; load {os.getloadavg()[0]:.2f}")
+    load = os.getloadavg()[0]
+    cmd = " ".join(argv[:-2])
+    print(f"adaptive-dd {cmd} (exit {rc}); {adaptive_dd.__file__}; cold cache; load {load:.2f}")
     print(f"{'count':>5} {'incl':>6} {'self':>6}  function (CPU seconds)")
     for name, (n, incl, own, *_) in sorted(rows.items(), key=lambda kv: -kv[1][2])[: a.top]:
         print(f"{n:5d} {incl:6.1f} {own:6.1f}  {name}")
     repeated = {k: v for k, v in rows.items() if v[0] > 1}
     print(
         f"{len(rows)} functions, {len(listener.done)} compilations "
-        f"({len(repeated)} functions compiled more than once: {sum(v[0] - 1 for v in repeated.values())} extra)"
+        f"({len(repeated)} functions compiled more than once, "
+        f"{sum(v[0] - 1 for v in repeated.values())} extra compilations)"
     )
     cpu = (cpu1.user - cpu0.user) + (cpu1.system - cpu0.system)
     print(f"wall {wall:.1f} s; CPU (user+sys) {cpu:.1f} s, of which compiling {top_level:.1f} s")
     if a.why:
-        for name, (n, incl, own, sigs, callers) in sorted(repeated.items(), key=lambda kv: -kv[1][2]):
+        for name, (n, _incl, own, sigs, callers) in sorted(repeated.items(), key=lambda kv: -kv[1][2]):
             print(f"\n{name}: {n} specialisations, {own:.1f} s self; first called from {' | '.join(callers)}")
             for line in _differences(sigs):
                 print("   ", line)

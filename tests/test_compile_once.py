@@ -80,7 +80,8 @@ def test_the_chain_kernels_compile_once_for_every_caller(rng):
 
 
 def test_the_two_link_sample_loop_compiles_once():
-    """The parallel loop's index (uint64 once lowered) reaches ``trial_block`` as the int64 it was typed as."""
+    """The parallel loop's index (uint64 once lowered) reaches ``trial_block`` as the int64 it was
+    typed as."""
     from adaptive_dd.benchmark import compiled, run_benchmark
 
     sc = dataclasses.replace(load_scenario(), seeds=2, duration=0.02, swap_times=(), swap_masses=())

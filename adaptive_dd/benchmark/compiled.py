@@ -259,7 +259,8 @@ def record_estimate(seg_end, sigma_end, sigma_rec, i, k, s, theta):  # pragma: n
     (``seg_end``) into ``sigma_end (S, G, 7)``, and into ``sigma_rec`` (the recording's ``sigma``)
     for its first ``sigma_rec.shape[0]`` trials."""
     if k == seg_end[s] - 1:
-        sigma_end[i, s] = theta
+        for j in range(7):  # a loop, not sigma_end[i, s] = theta: numba would compile the
+            sigma_end[i, s, j] = theta[j]  # slice assignment's shape-error message (string code)
     if i < sigma_rec.shape[0]:
         for j in range(7):
             sigma_rec[i, k, j] = theta[j]

@@ -368,7 +368,7 @@ def _stick_slip(ch, pi, fv, fc, arm, fp, q, qd, tau, T, substeps, stuck, sc):  #
     cross, z = flags[1], flags[2]
     # law 0 and "reuse" as typed values, not the literals 0 and True: numba compiles a callee once
     # per literal value, and _rk4 (the integrator's largest kernel) is then compiled once, with _smooth's
-    law0, reuse = np.int64(0), np.bool_(True)
+    law0, held = np.int64(0), np.bool_(True)
     for i in range(n):
         sdir[i] = 1.0
     ok = True
@@ -395,7 +395,7 @@ def _stick_slip(ch, pi, fv, fc, arm, fp, q, qd, tau, T, substeps, stuck, sc):  #
             # acceleration), decide the modes there, finish the substep
             if f > 0.0:
                 # same start state and modes: the start slots still hold its dynamics
-                ok &= _rk4(ch, pi, fv, fc, arm, law0, fp, q, qd, tau, f * h, stuck, sdir, sc, reuse, qn, vn, z)
+                ok &= _rk4(ch, pi, fv, fc, arm, law0, fp, q, qd, tau, f * h, stuck, sdir, sc, held, qn, vn, z)
                 for i in range(n):
                     q[i], qd[i] = qn[i], vn[i]
             for i in range(n):
