@@ -142,9 +142,9 @@ def compile_estimate(arm) -> float:
     the source (:func:`configure`); a cached kernel with a new specialisation (another law)
     still compiles, and the message after the run says so.
     """
-    from adaptive_dd.plant.serial_arm import SerialArm
+    from adaptive_dd.plant.kind import is_chain
 
-    serial = isinstance(arm, SerialArm)
+    serial = is_chain(arm)
     cache = getattr(_closed_loop_kernel(serial), "_cache", None)
     index = getattr(getattr(cache, "_cache_file", None), "_index_path", None)
     if index is None or os.path.exists(index):

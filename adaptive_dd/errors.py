@@ -6,6 +6,8 @@ message names the offending parameter, key, file or line and the value.
 
 from __future__ import annotations
 
+import math
+
 __all__ = [
     "DataError",
     "OutputError",
@@ -13,7 +15,13 @@ __all__ = [
     "ScenarioError",
     "SignalError",
     "UrdfError",
+    "is_finite_number",
 ]
+
+
+def is_finite_number(x) -> bool:
+    """True for a finite ``int`` or ``float`` read from a file (a ``bool`` is not a number)."""
+    return not isinstance(x, bool) and isinstance(x, int | float) and math.isfinite(x)
 
 
 class ParameterError(ValueError):

@@ -231,26 +231,9 @@ def record_spec(table: dict | None, joint_names, kinds, src: str, files=None) ->
         raise _err(src, unknown[0], f"is unknown; allowed: {', '.join(RECORD_KEYS)}")
     names = tuple(joint_names)
     n = len(names)
-    base = Path(src).parent if Path(src).is_file() else Path.cwd()
-    raw = files if files else t.get("files")
-    if isinstance(raw, str):
-        raw = [raw]
-    if not raw or not isinstance(raw, list | tuple) or not all(isinstance(f, str) and f for f in raw):
-        raise _err(src, "files", "is missing: give the log's file(s) on the command line or in [record]")
-    paths = tuple(Path(f) if (files or Path(f).is_absolute()) else base / f for f in raw)
-    time = t.get("time", "t")
-    if not isinstance(time, str) or not time:
-        raise _err(src, "time", f"must be a column name, got {time!r}")
+    paths = _log_files(src, t, files)
     default = table is None
-    position = _columns(src, "position", t.get("position", "q{i}"), names)
-    torque = _columns(src, "torque", t.get("torque", "tau{i}"), names)
-    vel = t.get("velocity", "qd{i}" if default else None)
-    velocity = None if vel is None else _columns(src, "velocity", vel, names)
-    source = t.get("velocity_source", "measured" if velocity else "derived")
-    if source not in ("measured", "derived"):
-        raise _err(src, "velocity_source", f"must be 'measured' or 'derived', got {source!r}")
-    if source == "measured" and velocity is None:
-        raise _err(src, "velocity_source", "is 'measured' but no 'velocity' columns are given")
+    time, position, torque, velocity, source = _signal_columns(src, t, names, default)
     scale = _position_scale(src, t, names, tuple(kinds))
     gain, offset = _torque_conversion(src, t, n)
     used, weight = _channels(src, t, names)
@@ -277,6 +260,36 @@ def record_spec(table: dict | None, joint_names, kinds, src: str, files=None) ->
         source=src,
         simulator_format=default,
     )
+
+
+def _log_files(src: str, t: dict, files) -> tuple[Path, ...]:
+    """The log's files: those of the command line as given, else ``files`` of the table
+    (relative to the scenario file)."""
+    base = Path(src).parent if Path(src).is_file() else Path.cwd()
+    raw = files if files else t.get("files")
+    if isinstance(raw, str):
+        raw = [raw]
+    if not raw or not isinstance(raw, list | tuple) or not all(isinstance(f, str) and f for f in raw):
+        raise _err(src, "files", "is missing: give the log's file(s) on the command line or in [record]")
+    return tuple(Path(f) if (files or Path(f).is_absolute()) else base / f for f in raw)
+
+
+def _signal_columns(src: str, t: dict, names: tuple[str, ...], default: bool):
+    """The time column, the position, torque and velocity (or None) column names per joint, and
+    the velocity's source (``measured`` or ``derived``); the simulator's names by default."""
+    time = t.get("time", "t")
+    if not isinstance(time, str) or not time:
+        raise _err(src, "time", f"must be a column name, got {time!r}")
+    position = _columns(src, "position", t.get("position", "q{i}"), names)
+    torque = _columns(src, "torque", t.get("torque", "tau{i}"), names)
+    vel = t.get("velocity", "qd{i}" if default else None)
+    velocity = None if vel is None else _columns(src, "velocity", vel, names)
+    source = t.get("velocity_source", "measured" if velocity else "derived")
+    if source not in ("measured", "derived"):
+        raise _err(src, "velocity_source", f"must be 'measured' or 'derived', got {source!r}")
+    if source == "measured" and velocity is None:
+        raise _err(src, "velocity_source", "is 'measured' but no 'velocity' columns are given")
+    return time, position, torque, velocity, source
 
 
 def _position_scale(src: str, t: dict, names: tuple[str, ...], kinds: tuple[str, ...]) -> Array:
@@ -421,7 +434,7 @@ def read_log(spec: RecordSpec, window: tuple[float, float] | None = None, arm=No
     spec : RecordSpec
     window : (float, float), optional
         Replaces ``spec.window`` [s].
-    arm : SerialArm, optional
+    arm : Arm, optional
         For the unit check against the URDF's position limits.
 
     Raises
@@ -429,8 +442,6 @@ def read_log(spec: RecordSpec, window: tuple[float, float] | None = None, arm=No
     DataError
         Naming the file, line or column and the remedy.
     """
-    from scipy.interpolate import CubicSpline
-
     window = window if window is not None else spec.window
     frames = {p: _read_csv(p) for p in spec.files}
     velocity = spec.velocity
@@ -440,28 +451,11 @@ def read_log(spec: RecordSpec, window: tuple[float, float] | None = None, arm=No
     where = _locate(frames, spec, cols)
     clocks = {p: _times(p, f, spec.time) for p, f in frames.items()}
     rows = {p: _window_rows(p, clocks[p], window) for p in frames}
-    first = spec.files[0]
-    t0 = clocks[first][rows[first]]
-    steps = np.diff(t0)
-    T = spec.sample_period or float((t0[-1] - t0[0]) / (t0.size - 1))  # the mean step: jitter averages out
-    gap = np.flatnonzero(steps > MAX_GAP_STEPS * np.median(steps))
-    if gap.size:
-        i = int(gap[0]) + rows[first].start
-        raise DataError(
-            f"{first}: line {i + 3}, column {spec.time!r}: a gap of {steps[gap[0]]:.4g} s (median step "
-            f"{np.median(steps):.4g} s) at {t0[gap[0]]:.4g} s: cut the window before or after it"
-        )
+    t0, T = _first_clock(spec, clocks, rows)
     lo = max(clocks[p][rows[p]][0] for p in frames)
     hi = min(clocks[p][rows[p]][-1] for p in frames)
     grid = lo + T * np.arange(int(np.floor((hi - lo) / T + 1e-9)) + 1)
-
-    def column(col: str, spline: bool) -> Array:
-        p = where[col]
-        r = rows[p]
-        v = _numeric(p, frames[p], col, r)[r]
-        tt = clocks[p][r]
-        return CubicSpline(tt, v)(grid) if spline else np.interp(grid, tt, v)
-
+    column = _resampler(frames, where, clocks, rows, grid)
     q = np.column_stack([column(c, True) for c in spec.position])
     raw_tau = np.column_stack([column(c, False) for c in spec.torque])
     _check_stuck(spec, where, raw_tau)
@@ -492,6 +486,38 @@ def read_log(spec: RecordSpec, window: tuple[float, float] | None = None, arm=No
         notes,
         spec.simulator_format,
     )
+
+
+def _first_clock(spec: RecordSpec, clocks: dict, rows: dict) -> tuple[Array, float]:
+    """The first file's times in the window and the sample period (``spec.sample_period``, else
+    the mean step); a gap of more than ``MAX_GAP_STEPS`` median steps is an error."""
+    first = spec.files[0]
+    t0 = clocks[first][rows[first]]
+    steps = np.diff(t0)
+    T = spec.sample_period or float((t0[-1] - t0[0]) / (t0.size - 1))  # the mean step: jitter averages out
+    gap = np.flatnonzero(steps > MAX_GAP_STEPS * np.median(steps))
+    if gap.size:
+        i = int(gap[0]) + rows[first].start
+        raise DataError(
+            f"{first}: line {i + 3}, column {spec.time!r}: a gap of {steps[gap[0]]:.4g} s (median step "
+            f"{np.median(steps):.4g} s) at {t0[gap[0]]:.4g} s: cut the window before or after it"
+        )
+    return t0, T
+
+
+def _resampler(frames: dict, where: dict, clocks: dict, rows: dict, grid: Array):
+    """``column(name, spline) -> (len(grid),)``: a logged column in the window, checked numeric,
+    resampled on ``grid`` by a cubic spline (positions) or linearly (torques, velocities)."""
+    from scipy.interpolate import CubicSpline
+
+    def column(col: str, spline: bool) -> Array:
+        p = where[col]
+        r = rows[p]
+        v = _numeric(p, frames[p], col, r)[r]
+        tt = clocks[p][r]
+        return CubicSpline(tt, v)(grid) if spline else np.interp(grid, tt, v)
+
+    return column
 
 
 def _resampling_note(t0: Array, T: float, qd_measured: bool) -> str:

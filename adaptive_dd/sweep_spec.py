@@ -42,9 +42,10 @@ from pathlib import Path
 from typing import Any
 
 from adaptive_dd.benchmark.scenario import Scenario, default_scenario_path, load_scenario
-from adaptive_dd.controllers import CONTROLLERS
+from adaptive_dd.controllers import CONTROLLERS, controllers_for
 from adaptive_dd.errors import ScenarioError
 from adaptive_dd.io import read_toml
+from adaptive_dd.plant.kind import is_two_link
 
 __all__ = ["SCENARIO_AXES", "GridPoint", "Sweep", "SweepError", "load_sweep", "parse_sweep"]
 
@@ -154,18 +155,15 @@ def _controllers(src: str, sw: dict, base: Scenario) -> tuple[str, ...]:
     ctrls = sw.get("controllers", list(base.controllers))
     if not isinstance(ctrls, list) or not ctrls or not all(isinstance(c, str) for c in ctrls):
         raise SweepError(f"{src}: key 'sweep.controllers' must be a non-empty list of names, got {ctrls!r}")
-    from adaptive_dd.closed_loop.controllers import SERIAL_CONTROLLERS
-    from adaptive_dd.plant.arm import Arm
-
-    two_link = isinstance(base.arm, Arm)
-    known = tuple(CONTROLLERS) if two_link else tuple(SERIAL_CONTROLLERS)
+    known = controllers_for(base.arm)
     for c in ctrls:
         if c not in known:
-            kind = "the two-link arm" if two_link else f"this {base.n_joints}-joint arm"
-            if c not in {*CONTROLLERS, *SERIAL_CONTROLLERS}:
+            kind = "the two-link arm" if is_two_link(base.arm) else f"this {base.n_joints}-joint arm"
+            if c not in CONTROLLERS:
                 raise SweepError(f"{src}: key 'sweep.controllers': unknown controller {c!r}; known: {known}")
             raise SweepError(
-                f"{src}: key 'sweep.controllers': controller {c!r} is not for {kind}; known for it: {known}"
+                f"{src}: key 'sweep.controllers': controller {c!r} is not for {kind} "
+                f"({CONTROLLERS[c].only}); known for it: {known}"
             )
     if len(set(ctrls)) != len(ctrls):
         raise SweepError(f"{src}: key 'sweep.controllers' lists a controller twice: {ctrls}")

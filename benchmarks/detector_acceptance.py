@@ -8,7 +8,7 @@ replaced by stick-slip, tanh (v = 0.02 and 0.1 rad/s: the second creeps about 0.
 detector's settings are the same everywhere). Per scenario and plant it prints, per segment,
 the per-seed ratio adaptive_ct / ct_oracle (mean, p90, max and worst seed), the trials with a
 false alarm, the swaps missed (no alarm within 0.3 s after the swap), the median detection
-delay and the detection limit (:mod:`adaptive_dd.identification.detection_limit`) beside it.
+delay and the detection limit (:mod:`adaptive_dd.identification.two_link_detection_limit`) beside it.
 ``--detector KEY=VALUE ...`` runs ``adaptive_ct`` with those :class:`ChangeDetector` settings in
 place of the defaults (the same ones everywhere), to judge a setting before it becomes the default.
 """
@@ -27,7 +27,7 @@ from adaptive_dd.benchmark.metrics import compute_metrics, missed_swap_counts
 from adaptive_dd.benchmark.runner import run_benchmark
 from adaptive_dd.benchmark.scenario import default_scenario_path, load_scenario
 from adaptive_dd.benchmark.scenario_checks import freeze
-from adaptive_dd.identification.online import ChangeDetector
+from adaptive_dd.identification.two_link_online import ChangeDetector
 
 ROOT = Path(__file__).resolve().parent
 PLANTS = {

@@ -189,9 +189,9 @@ def _meaningless_arm(arm) -> str | None:
     (for a URDF arm: its per-joint friction, armature, limits and gravity)."""
     import numpy as np
 
-    from adaptive_dd.plant.serial_arm import SerialArm
+    from adaptive_dd.plant.arm import Arm
 
-    if isinstance(arm, SerialArm):
+    if isinstance(arm, Arm):
         vec = np.concatenate([arm.viscous, arm.coulomb, arm.armature])
         lim = np.asarray(arm.actuator.torque_limit, float)
         if not np.all(np.isfinite(vec)) or np.any(vec < 0) or np.any(vec > 1e4):

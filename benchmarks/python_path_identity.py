@@ -93,8 +93,8 @@ def _two_link(engine: str = "python") -> dict:
 
 def _n_joint(engine: str = "python") -> dict:
     from adaptive_dd.benchmark.scenario import parse_scenario
-    from adaptive_dd.closed_loop.controllers import make_serial_controller
-    from adaptive_dd.closed_loop.runner import run_serial
+    from adaptive_dd.closed_loop.runner import run_closed_loop
+    from adaptive_dd.controllers import make_controller
 
     path = resources.files("adaptive_dd.scenarios").joinpath("vertical3_payload_exact.toml")
     data = tomllib.loads(path.read_text(encoding="utf-8"))
@@ -105,14 +105,14 @@ def _n_joint(engine: str = "python") -> dict:
     data["controllers"] = {}
     sc = dataclasses.replace(parse_scenario(data, "identity.toml", name="identity"), dropout=0.01)
     arm = sc.arm
-    ctrls = {n: make_serial_controller(n, arm) for n in ("adaptive_ct", "slotine_li", "ct_oracle", "pd")}
+    ctrls = {n: make_controller(n, arm=arm) for n in ("adaptive_ct", "slotine_li", "ct_oracle", "pd")}
     if engine != "python":
-        return run_serial(sc, ctrls, engine=engine, keep_trajectories=2).runs
-    ctrls["bare"] = _Bare(make_serial_controller("slotine_li", arm))
-    ctrls["nan"] = _Bare(make_serial_controller("ct_nominal", arm), 500, "nan")
+        return run_closed_loop(sc, ctrls, engine=engine, keep_trajectories=2).runs
+    ctrls["bare"] = _Bare(make_controller("slotine_li", arm=arm))
+    ctrls["nan"] = _Bare(make_controller("ct_nominal", arm=arm), 500, "nan")
     for w in ("reset", "command", "observe", "shape"):
-        ctrls[f"raises_{w}"] = _Bare(make_serial_controller("adaptive_ct", arm), 700, w)
-    return run_serial(sc, ctrls, engine="python", keep_trajectories=2).runs
+        ctrls[f"raises_{w}"] = _Bare(make_controller("adaptive_ct", arm=arm), 700, w)
+    return run_closed_loop(sc, ctrls, engine="python", keep_trajectories=2).runs
 
 
 def _arrays(prefix: str, runs: dict) -> dict:

@@ -27,15 +27,15 @@ from pathlib import Path
 
 import numpy as np
 
-from adaptive_dd.cli import _load_arm
-from adaptive_dd.cli_log import lowpass, read_arm_log
+from adaptive_dd.cli._common import load_arm, read_arm_log
+from adaptive_dd.cli.predict import lowpass
 from adaptive_dd.identification.log_fit import (
     filter_time_constant,
     fit_log,
     identifiable_subset,
     predict_torque,
 )
-from adaptive_dd.identification.serial_model import serial_model
+from adaptive_dd.identification.model import arm_model
 from adaptive_dd.record import derivatives
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -78,8 +78,8 @@ def main() -> None:
     )
     args = ap.parse_args()
     t0 = time.perf_counter()
-    arm = _load_arm(args.scenario)
-    model = serial_model(arm)
+    arm = load_arm(args.scenario)
+    model = arm_model(arm)
     _, tr = read_arm_log(args.scenario, arm, window=args.train)
     _, te = read_arm_log(args.scenario, arm, window=args.test)
     used = tr.used

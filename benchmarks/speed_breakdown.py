@@ -11,7 +11,7 @@ of the loop, timed inside numba loops (Python call overhead excluded, compilatio
 * the estimator's step (``est_step_trial_in``, its scratch made once, as in the closed loop)
   and its parts (filters, regression, the row-by-row RLS, the detector), and the model that
   control uses (``est_model_trial_in``: the payload's projection);
-* the whole loop (``closed_loop_block`` through ``run_serial``, one trial, recorded); "glue" is
+* the whole loop (``closed_loop_block`` through ``run_closed_loop``, one trial, recorded); "glue" is
   the whole minus the kernels (measurement, divergence rules, metrics, recording, the run's
   Python set-up); "recording" is the whole less the same trial unrecorded.
 
@@ -30,8 +30,8 @@ from numba import njit
 from adaptive_dd.closed_loop.glue import segment_of
 from adaptive_dd.closed_loop.laws import law_trial_in, law_work
 from adaptive_dd.closed_loop.plant import plant_scratch, plant_step
-from adaptive_dd.identification import serial_online_kernel as K
-from adaptive_dd.plant import serial_integrator as SI
+from adaptive_dd.identification import online_kernel as K
+from adaptive_dd.plant import integrator as SI
 
 
 def _scenario():
@@ -172,9 +172,9 @@ def _best(fn, repeat: int = 3) -> float:
 
 
 def main() -> None:
-    from adaptive_dd.closed_loop.controllers import make_serial_controller
-    from adaptive_dd.closed_loop.runner import run_serial, true_models
+    from adaptive_dd.closed_loop.runner import run_closed_loop, true_models
     from adaptive_dd.closed_loop.types import io_of, plant_of, run_constants
+    from adaptive_dd.controllers import gains_for, make_controller
 
     sc = _scenario()
     N, n = sc.n_samples, sc.n_joints
@@ -185,14 +185,16 @@ def main() -> None:
     for name in ("ct_oracle", "adaptive_ct"):
         opts = tuple(o for o in sc.controller_options if o[0] == name)
         one = dataclasses.replace(sc, seeds=1, controllers=(name,), controller_options=opts)
-        run_serial(dataclasses.replace(one, duration=0.2, swap_times=(0.05, 0.1, 0.15)))  # compile
+        run_closed_loop(dataclasses.replace(one, duration=0.2, swap_times=(0.05, 0.1, 0.15)))  # compile
         holder = {}
 
         def run(one=one, holder=holder):
-            holder["res"] = run_serial(one, keep_trajectories=1)
+            holder["res"] = run_closed_loop(one, keep_trajectories=1)
 
         whole[name] = _best(run) / N * 1e6
-        whole[name + " unrecorded"] = _best(lambda one=one: run_serial(one, keep_trajectories=0)) / N * 1e6
+        whole[name + " unrecorded"] = (
+            _best(lambda one=one: run_closed_loop(one, keep_trajectories=0)) / N * 1e6
+        )
         r = holder["res"].runs[name]
         recs[name] = (r.q[0], r.qd[0], r.tau[0])
 
@@ -223,7 +225,7 @@ def main() -> None:
     ctrls = {}
     for name in ("ct_oracle", "adaptive_ct"):
         opts = sc.options(name)
-        ctrl = make_serial_controller(name, sc.arm, sc.bandwidth, sc.damping, opts)
+        ctrl = make_controller(name, gains_for(sc.arm, sc.bandwidth, sc.damping), opts, arm=sc.arm)
         form = ctrl.compiled_form(1, rc.T)
         ctrls[name] = form
         pim, th = form.state.pi_model[0].copy(), form.state.theta[0].copy()
@@ -234,8 +236,8 @@ def main() -> None:
     pi_out = np.empty(13 * n)
 
     def fresh():
-        ctrl = make_serial_controller(
-            "adaptive_ct", sc.arm, sc.bandwidth, sc.damping, sc.options("adaptive_ct")
+        ctrl = make_controller(
+            "adaptive_ct", gains_for(sc.arm, sc.bandwidth, sc.damping), sc.options("adaptive_ct"), arm=sc.arm
         )
         return ctrl.compiled_form(1, rc.T)
 
@@ -266,10 +268,10 @@ def main() -> None:
         print(f"  {label:48s} {t / N * 1e6:8.3f}")
     t_of = dict(rows)
     plant, law_o, law_a = rows[0][1], t_of["law_trial ct_oracle"], t_of["law_trial adaptive_ct"]
-    print(f"  {'whole loop, ct_oracle (run_serial, 1 trial)':48s} {whole['ct_oracle']:8.3f}")
+    print(f"  {'whole loop, ct_oracle (run_closed_loop, 1 trial)':48s} {whole['ct_oracle']:8.3f}")
     glue = whole["ct_oracle"] - (plant + law_o) / N * 1e6
     print(f"  {'  glue + set-up (whole - plant - law)':48s} {glue:8.3f}")
-    print(f"  {'whole loop, adaptive_ct (run_serial, 1 trial)':48s} {whole['adaptive_ct']:8.3f}")
+    print(f"  {'whole loop, adaptive_ct (run_closed_loop, 1 trial)':48s} {whole['adaptive_ct']:8.3f}")
     glue = whole["adaptive_ct"] - (plant + law_a + t_both) / N * 1e6
     print(f"  {'  glue + set-up (whole - plant - law - est)':48s} {glue:8.3f}")
     for name in ("ct_oracle", "adaptive_ct"):

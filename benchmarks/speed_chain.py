@@ -8,9 +8,9 @@ many states (Python call overhead excluded), beside Pinocchio's ``aba``, ``rnea`
 ``crba`` and ``computeJointTorqueRegressor`` called from Python (as a Python user
 calls them), all in this one run.
 
-Then the open-loop plant (:mod:`adaptive_dd.plant.serial_integrator`) of the same
+Then the open-loop plant (:mod:`adaptive_dd.plant.integrator`) of the same
 chain at 1 kHz, 2 RK4 substeps, stick-slip friction, one trial: simulated seconds
-per wall-clock second of ``serial_plant_run``, beside a Python per-sample loop of
+per wall-clock second of ``plant_run``, beside a Python per-sample loop of
 RK4 over ``pin.aba`` with the same viscous and Coulomb (``sgn``) friction.
 """
 
@@ -23,7 +23,7 @@ import pinocchio as pin
 from numba import njit
 
 from adaptive_dd.plant import chain as C
-from adaptive_dd.plant import serial_integrator as S
+from adaptive_dd.plant import integrator as S
 
 # (name, joint, placement rotation rpy, placement xyz, link mass [kg], com xyz, rod length [m])
 _UR5 = (
@@ -171,7 +171,7 @@ def bench_plant(duration: float = 10.0, python_duration: float = 1.0) -> None:
 
     def compiled():
         q, qd = q0.copy(), np.zeros(n)
-        done = S.serial_plant_run(ch, pp, q, qd, tau, T, substeps, q_out, qd_out)
+        done = S.plant_run(ch, pp, q, qd, tau, T, substeps, q_out, qd_out)
         if done != tau.shape[0]:
             raise RuntimeError(f"plant step failed at sample {done}")
 
@@ -209,7 +209,7 @@ def bench_plant(duration: float = 10.0, python_duration: float = 1.0) -> None:
     print(f"(stick-slip friction fv = 0.5, fc = 1.0; {100 * stuck_share:.1f} % of joint-samples at rest)")
     print(f"{'':<44s} {'wall clock':>31s}   {'CPU time of this thread':>31s}")
     for name, wall, cpu in (
-        ("compiled serial_plant_run", us, us_cpu),
+        ("compiled plant_run", us, us_cpu),
         ("Python loop, RK4 over pin.aba (sgn friction)", us_py, us_py_cpu),
     ):
         print(

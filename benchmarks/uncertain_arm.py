@@ -20,14 +20,15 @@ import tomllib
 from pathlib import Path
 
 import numpy as np
-from _ablation import UR5
 
 from adaptive_dd.benchmark.metrics import detection_delays, false_alarm_counts, ratio_statistics
 from adaptive_dd.benchmark.scenario import parse_scenario, read_toml
-from adaptive_dd.closed_loop.controllers import make_serial_controller
 from adaptive_dd.closed_loop.runner import _run_compiled
 from adaptive_dd.closed_loop.types import Plant, io_of, plant_of, run_constants
+from adaptive_dd.controllers import gains_for, make_controller
 from adaptive_dd.identification.arm_prior import ArmUncertainty, draw_parameters
+
+UR5 = Path(__file__).resolve().parents[1] / "adaptive_dd" / "scenarios" / "ur5_tool_swap_exact.toml"
 
 WINDOW = 0.25
 """[s] Windows of the first segment's RMS ratio (the time to come within 1.2x of the floor)."""
@@ -93,7 +94,7 @@ def main() -> None:
     d["run"]["controllers"] = ["ct_oracle", "ct_nominal", "adaptive_ct"]
     sc = parse_scenario(d, a.scenario, Path(a.scenario).stem)
     ctrls = {
-        nm: make_serial_controller(nm, sc.arm, sc.bandwidth, sc.damping, sc.options(nm))
+        nm: make_controller(nm, gains_for(sc.arm, sc.bandwidth, sc.damping), sc.options(nm), arm=sc.arm)
         for nm in sc.controllers
     }
     levels = ArmUncertainty().scaled(a.level)

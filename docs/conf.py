@@ -97,7 +97,7 @@ def _list_real_log(app, docname, source):
     if not (DOCS / "real_log.md").exists():
         return
     if docname == "guide/identification":
-        entry = "../identification_serial\n"
+        entry = "../identification_urdf\n"
         source[0] = source[0].replace(entry, entry + "../real_log\n", 1)
     elif docname == "getting_started":
         source[0] = source[0].replace(REAL_LOG_TEXT, "Records of a real arm, step by step: {doc}`real_log`.")

@@ -1,411 +1,347 @@
-"""The Arm object, scenario [arm]/[plant] tables, smooth plant friction, chunked noise."""
+"""Any serial arm from a URDF: checks of the file, base parameters, payload, the two-link fast path."""
 
-import dataclasses
-import hashlib
-import json
-import math
-from pathlib import Path
+from __future__ import annotations
+
+import textwrap
 
 import numpy as np
+import pinocchio as pin
 import pytest
-from scipy.integrate import solve_ivp
 
-from adaptive_dd.benchmark.scenario import load_scenario
-from adaptive_dd.cli import main
-from adaptive_dd.errors import ParameterError, ScenarioError
-from adaptive_dd.experiments import table2_torque, trial_rngs
-from adaptive_dd.plant import (
-    TABLE1_PHYSICAL,
-    TABLE1_SIGMA,
-    ActuatorConfig,
-    Arm,
-    ArmSimulator,
-    Payload,
-    PayloadSchedule,
-    PhysicalParameters,
-    SensorConfig,
-    inverse_dynamics,
-    mass_matrix,
-    plant_step,
-    simulate_open_loop,
-)
-from adaptive_dd.plant.arm import arm_from_tables
-from adaptive_dd.plant.pinocchio_model import cross_check
-from adaptive_dd.plant.simulator import NOISE_CHUNK
-
-SCENARIOS = Path(__file__).resolve().parents[1] / "benchmarks" / "scenarios"
-CLEAN = SensorConfig(quantize=False, position_variance=(0, 0), velocity_variance=(0, 0))
-IDEAL = ActuatorConfig((70.0, 15.0), saturate=False, quantize=False)
-OTHER = PhysicalParameters(
-    I1=0.02, I2=0.03, m1=2.0, m2=6.0, a1=0.15, a2=0.1, b1=4.0, b2=1.0, d1=2.5, d2=0.6, l1=0.3, l2=0.25
-)
-OTHER_TABLE = {
-    "l1": 0.3,
-    "l2": 0.25,
-    "m1": 2.0,
-    "m2": 6.0,
-    "a1": 0.15,
-    "a2": 0.1,
-    "I1": 0.02,
-    "I2": 0.03,
-    "b": [4.0, 1.0],
-    "d": [2.5, 0.6],
-    "payload_radius": 0.04,
-}
+from adaptive_dd.benchmark.scenario import parse_scenario
+from adaptive_dd.errors import ScenarioError, UrdfError
+from adaptive_dd.plant import TwoLinkArm
+from adaptive_dd.plant.arm import Arm, payload_parameters
+from adaptive_dd.plant.dynamics import regressor as paper_regressor
+from adaptive_dd.plant.two_link import as_two_link
+from adaptive_dd.plant.urdf import read_urdf
+from adaptive_dd.robots import ROBOTS, robot_urdf
 
 
-# ----------------------------------------------------------------------- Arm
-def test_sice_arm_is_table_1():
-    arm = Arm.sice()
-    np.testing.assert_array_equal(arm.sigma, TABLE1_SIGMA)
-    assert (arm.l1, arm.l2, arm.payload_radius) == (0.2, 0.2, 0.05)
-    assert arm.physical == TABLE1_PHYSICAL and arm.actuator.torque_limit == (70.0, 15.0)
-    assert arm.actuator.dac_bits == 12 and arm.sensor.encoder_counts == (614400, 507904)
-    assert arm.friction == "stick-slip" and arm.n_joints == 2
-    np.testing.assert_allclose(arm.nominal_inertia(), np.diagonal(mass_matrix([0.0, 0.0], TABLE1_SIGMA)))
-    assert not arm.sigma.flags.writeable
+@pytest.fixture(scope="module")
+def arms():
+    return {name: Arm.from_urdf(robot_urdf(name), info.payload_frame) for name, info in ROBOTS.items()}
 
 
-@pytest.mark.parametrize("mass, radius", [(0.0, None), (2.0, None), (3.5, 0.08), (1.0, 0.0)])
-def test_payload_effect_is_the_parallel_axis_result(mass, radius):
-    arm = Arm.from_physical(OTHER, payload_radius=0.04)
-    r = arm.payload_radius if radius is None else radius
+def _states(arm, rng, m=6):
+    n = arm.n_joints
+    return rng.uniform(-1.5, 1.5, (m, n)), rng.normal(size=(m, n)), rng.normal(size=(m, n)) * 3
+
+
+def _pin_torque(arm, model, q, qd, qdd):
+    data = model.createData()
+    out = [pin.rnea(model, data, arm.pin_configuration(q[i]), qd[i], qdd[i]) for i in range(len(q))]
+    return np.array(out) + arm.viscous * qd + arm.coulomb * np.sign(qd) + arm.armature * qdd
+
+
+@pytest.mark.parametrize("name", list(ROBOTS))
+def test_base_regressor_times_sigma_is_pinocchio_inverse_dynamics_with_friction(arms, name):
+    n = arms[name].n_joints
+    arm = Arm.from_urdf(robot_urdf(name), ROBOTS[name].payload_frame, armature=np.full(n, 0.01))
+    q, qd, qdd = _states(arm, np.random.default_rng(1))
+    ref = _pin_torque(arm, arm.model, q, qd, qdd)
+    np.testing.assert_allclose(arm.inverse_dynamics(q, qd, qdd), ref, atol=1e-10)
+    np.testing.assert_allclose(arm.standard_regressor(q, qd, qdd) @ arm.pi, ref, atol=1e-10)
+    M = arm.mass_matrix(q)
+    data = arm.model.createData()
+    for i in range(len(q)):
+        Mp = pin.crba(arm.model, data, arm.pin_configuration(q[i]))
+        Mp = np.triu(Mp) + np.triu(Mp, 1).T + np.diag(arm.armature)
+        np.testing.assert_allclose(M[i], Mp, atol=1e-10)
+
+
+@pytest.mark.parametrize("name", list(ROBOTS))
+def test_base_parameter_count_is_the_rank_of_pinocchios_regressor(arms, name):
+    """Independent of our QR: the numerical rank (SVD) of stacked Pinocchio regressors plus
+    friction and armature columns, on states of another seed."""
+    arm = arms[name]
+    n = arm.n_joints
+    rng = np.random.default_rng(11)
+    q, qd, qdd = rng.uniform(-2, 2, (3, 80, n))
+    data = arm.model.createData()
+    rows = []
+    for i in range(80):
+        Y = pin.computeJointTorqueRegressor(arm.model, data, arm.pin_configuration(q[i]), qd[i], qdd[i])
+        rows.append(np.hstack([Y, np.diag(qd[i]), np.diag(np.sign(qd[i])), np.diag(qdd[i])]))
+    W = np.vstack(rows)
+    norms = np.linalg.norm(W, axis=0)
+    W = W[:, norms > 1e-9 * norms.max()]  # columns no torque depends on (rounding noise only)
+    s = np.linalg.svd(W / np.linalg.norm(W, axis=0), compute_uv=False)
+    assert arm.base.count == int(np.sum(s > 1e-8 * s[0]))
+
+
+@pytest.mark.parametrize(("name", "inertial"), [("ur5", 36), ("vertical3", 9), ("sice_arm", 4)])
+def test_inertial_base_parameter_counts_known_from_the_literature(arms, name, inertial):
+    """UR5: 36 (Gautier-Khalil grouping, as FIGAROH and the notes count); planar nR with
+    gravity in the plane: 3n; planar 2R horizontal with centres of mass anywhere: 4."""
+    arm = arms[name]
+    inert = [s for s in arm.sigma_names if not s.startswith(("fv", "fc", "Ia"))]
+    assert len(inert) == inertial
+
+
+def test_sice_urdf_spans_the_papers_regressor(arms):
+    """A fixed map T with W_base T = Phi_paper (eq. 8) at every state, and sigma_paper from it."""
+    arm = arms["sice_arm"]
+    rng = np.random.default_rng(2)
+    q, qd, qdd = (rng.normal(size=(40, 2)) for _ in range(3))
+    Wb = arm.regressor(q, qd, qdd).reshape(-1, arm.base.count)
+    phi = paper_regressor(q, qd, qdd).reshape(-1, 7)
+    T, *_ = np.linalg.lstsq(Wb, phi, rcond=None)
+    np.testing.assert_allclose(Wb @ T, phi, atol=1e-10)
+    # centres of mass on the link axes: the general base parameters carry the paper's sigma
+    sigma = arm.sigma
+    names = arm.sigma_names
+    got = {n: v for n, v in zip(names, sigma, strict=True)}
+    sice = TwoLinkArm.sice().sigma
+    assert got["Izz1 + 0.04*m2 + Ia1"] == pytest.approx(sice[0])
+    assert got["Izz2"] == pytest.approx(sice[1])
+    assert 0.2 * got["mx2"] == pytest.approx(sice[2])
+    assert got["my2"] == 0.0
+
+
+def test_sice_urdf_is_the_sice_arm_through_the_fast_path(arms):
+    two = as_two_link(arms["sice_arm"])
+    assert isinstance(two, TwoLinkArm)
+    np.testing.assert_allclose(two.sigma, TwoLinkArm.sice().sigma, rtol=1e-14, atol=1e-15)
+    assert (two.l1, two.l2) == (0.2, 0.2)
+    np.testing.assert_allclose(as_two_link(Arm.sice()).sigma, TwoLinkArm.sice().sigma, rtol=1e-14, atol=1e-15)
+    assert Arm.sice().payload_frame == "tip" and Arm.sice().n_joints == 2
+    assert as_two_link(arms["ur5"]) is None and as_two_link(arms["vertical3"]) is None
+    assert isinstance(TwoLinkArm.from_urdf(robot_urdf("sice_arm"), "tip"), TwoLinkArm)
+    assert isinstance(TwoLinkArm.from_urdf(robot_urdf("vertical3"), "tool"), Arm)
+    # the general kernels and the closed forms agree on the SICE arm, payload included
+    rng = np.random.default_rng(3)
+    q, qd, qdd = _states(arms["sice_arm"], rng)
+    general = arms["sice_arm"].inverse_dynamics(q, qd, qdd, arms["sice_arm"].sigma_with_payload(3.0))
+    closed = paper_regressor(q, qd, qdd) @ two.sigma_with_payload(3.0)
+    np.testing.assert_allclose(general, closed, atol=1e-11)
+
+
+@pytest.mark.parametrize("name", ["ur5", "panda", "vertical3"])
+def test_payload_enters_sigma_linearly_as_pinocchio_says(arms, name):
+    from adaptive_dd.plant.pinocchio_check import loaded_model
+
+    arm = arms[name]
+    body = {"mass": 2.5, "com": [0.01, -0.02, 0.06], "inertia": [0.011, 0.009, 0.006, 0.001, 0.0, -0.0005]}
+    q, qd, qdd = _states(arm, np.random.default_rng(4))
+    ref = _pin_torque(arm, loaded_model(arm, body), q, qd, qdd)
     np.testing.assert_allclose(
-        arm.sigma_with_payload(mass, radius), OTHER.with_payload(Payload(mass, r)).to_sigma(), rtol=1e-12
+        arm.inverse_dynamics(q, qd, qdd, arm.sigma_with_payload(**body)), ref, atol=1e-10
     )
-    np.testing.assert_allclose(
-        arm.payload_direction(radius) * mass, arm.sigma_with_payload(mass, radius) - arm.sigma
-    )
-    assert arm.payload_mass_from_sigma(arm.sigma_with_payload(mass, radius)) == pytest.approx(mass, abs=1e-12)
+    est = arm.payload_from_sigma(arm.sigma_with_payload(**body))
+    assert est.mass == pytest.approx(2.5, abs=1e-10)
+    ok = est.identifiable[1:4]
+    np.testing.assert_allclose(est.com[ok], np.array(body["com"])[ok], atol=1e-10)
+    assert np.all(np.isnan(est.com[~ok]))
 
 
-def test_payload_effect_broadcasts_over_trials():
-    arm = Arm.from_physical(OTHER)
-    m = np.array([[0.0, 1.0], [2.0, 3.0]])
-    s = arm.sigma_with_payload(m)
-    assert s.shape == (2, 2, 7)
-    np.testing.assert_allclose(arm.payload_mass_from_sigma(s), m, atol=1e-12)
+def test_payload_parameters_of_a_disk_and_bad_bodies():
+    p = payload_parameters(2.0, radius=0.1)
+    assert p[0] == 2.0 and np.all(p[1:4] == 0)
+    assert p[9] == pytest.approx(2.0 * 0.01 / 2) and p[4] == pytest.approx(2.0 * 0.01 / 4)
+    p = payload_parameters(1.0, [0.0, 0.0, 0.1], [0.0, 0.0, 0.0, 0, 0, 0])
+    assert p[4] == pytest.approx(0.01) and p[9] == 0.0  # parallel axis: Ixx about the frame origin
+    with pytest.raises(ValueError, match=r"triangle|rigid body"):
+        payload_parameters(1.0, None, [1.0, 1.0, 3.0, 0, 0, 0])
+    with pytest.raises(ValueError, match="mass"):
+        payload_parameters(-1.0)
 
 
-@pytest.mark.parametrize("mass", [0.0, 2.0])
-def test_second_arm_agrees_with_pinocchio(mass):
-    arm = Arm.from_physical(OTHER, payload_radius=0.06)
-    results = cross_check(arm, Payload(mass, 0.06) if mass else None, n_states=30)
-    assert all(r.passed for r in results), [str(r) for r in results if not r.passed]
+URDF_OK = """
+<robot name="r">
+  <link name="base"/>
+  <link name="l1"><inertial><mass value="{m}"/><origin xyz="0.1 0 0"/>
+    <inertia ixx="{ixx}" iyy="0.01" izz="0.01" ixy="0" ixz="0" iyz="0"/></inertial></link>
+  <link name="tip"/>
+  <joint name="j1" type="{kind}"><parent link="base"/><child link="l1"/><axis xyz="0 0 1"/>
+    {limit}</joint>
+  <joint name="jt" type="fixed"><parent link="l1"/><child link="tip"/><origin xyz="0.2 0 0"/></joint>
+</robot>
+"""
+LIMIT = '<limit effort="10" velocity="2" lower="-3" upper="3"/>'
 
 
-def test_sigma_only_arm_builds_an_equivalent_physical_set_for_pinocchio():
-    arm = Arm.from_sigma(OTHER.to_sigma(), l1=0.3, l2=0.25)
-    phys = arm.equivalent_physical()
-    np.testing.assert_allclose(phys.to_sigma(), arm.sigma, rtol=1e-12)
-    assert min(phys.I1, phys.I2, phys.m1, phys.m2) > 0
-    assert all(r.passed for r in cross_check(arm, Payload(2.0, 0.05), n_states=20))
-
-
-def test_cross_check_catches_a_wrong_payload_effect(monkeypatch):
-    arm = Arm.from_physical(OTHER)
-    monkeypatch.setattr(Arm, "sigma_with_payload", lambda self, m, r=None, s0=None: self.sigma + 0.01 * m)
-    assert not all(r.passed for r in cross_check(arm, Payload(2.0, 0.05), n_states=10))
-
-
-def test_arm_is_hashable_comparable_and_json_able():
-    a, b = Arm.sice(), Arm.sice()
-    assert a == b and hash(a) == hash(b) and a != Arm.sice(friction="tanh")
-    d = json.loads(json.dumps(a.to_dict()))
-    assert d["l1"] == 0.2 and d["sigma"] == TABLE1_SIGMA.tolist() and d["physical"]["m2"] == 10.125
-    assert d["actuator"]["torque_limit"] == [70.0, 15.0] and d["friction"] == "stick-slip"
-
-
-def _bad_physical(**kw):
-    return dataclasses.replace(OTHER, **kw)
+def _write(tmp_path, text, name="r.urdf"):
+    p = tmp_path / name
+    p.write_text(textwrap.dedent(text))
+    return p
 
 
 @pytest.mark.parametrize(
-    "make, match",
+    ("fields", "match"),
     [
-        (lambda: Arm.from_sigma([0.0, 0.09, 0.18, 4, 1, 2.5, 0.6], 0.3, 0.25), "J1 must be > 0"),
-        (lambda: Arm.from_sigma([0.6, 0.09, 0.25, 4, 1, 2.5, 0.6], 0.3, 0.25), "J1\\*J2 - r\\^2"),
-        (lambda: Arm.from_sigma([0.6, np.nan, 0.18, 4, 1, 2.5, 0.6], 0.3, 0.25), "non-finite"),
-        (lambda: Arm.from_sigma(OTHER.to_sigma(), 0.0, 0.25), "Arm.l1 must be > 0"),
-        (lambda: Arm.from_sigma(OTHER.to_sigma(), 0.3, math.inf), "Arm.l2 must be finite"),
-        (lambda: Arm.from_sigma(OTHER.to_sigma(), 0.3, 0.25, payload_radius=-0.1), "payload_radius"),
-        (lambda: Arm.from_physical(_bad_physical(a2=0.5)), "physical.a2 = 0.5"),
-        (lambda: Arm.from_physical(_bad_physical(m2=-1.0)), "m2 must be > 0"),
-        (lambda: Arm.from_physical(_bad_physical(I1=0.0)), "I1 must be > 0"),
-        (lambda: Arm(sigma=OTHER.to_sigma(), l1=0.2, l2=0.25, physical=OTHER), "Arm.l1 = 0.2 differs"),
-        (lambda: Arm(sigma=TABLE1_SIGMA, l1=0.3, l2=0.25, physical=OTHER), "sigma\\[0\\] \\(J1\\)"),
-        (lambda: Arm.sice(friction="coulomb"), "friction must be one of"),
-        (lambda: Arm.sice(friction_velocity=0.0), "friction_velocity must be > 0"),
-        (lambda: Arm.sice(stribeck_velocity=-1.0), "stribeck_velocity must be > 0"),
-        (lambda: Arm.sice(stribeck_ratio=0.5), "stribeck_ratio"),
-        (lambda: Arm.sice(friction_velocity="fast"), "friction_velocity must be a number"),
-        (lambda: Arm.sice(actuator=(70, 15)), "Arm.actuator must be an ActuatorConfig"),
+        ({"m": "0"}, r"link 'l1'.*mass 0.0 kg must be > 0"),
+        ({"m": "-1"}, r"mass -1.0 kg must be > 0"),
+        ({"ixx": "0.05"}, r"link 'l1'.*triangle inequality"),
+        ({"ixx": "-0.01"}, r"link 'l1'.*not positive definite"),
+        ({"kind": "floating"}, r"joint 'j1'.*'floating' is not supported"),
+        ({"kind": "planar"}, r"joint 'j1'.*'planar'"),
+        ({"kind": "ball"}, r"joint 'j1': unknown type 'ball'"),
+        ({"limit": '<limit velocity="2" lower="-3" upper="3"/>'}, r"joint 'j1'.*effort"),
+        ({"limit": ""}, r"joint 'j1'.*effort"),
     ],
 )
-def test_arm_validation_names_field_and_value(make, match):
-    with pytest.raises(ParameterError, match=match):
-        make()
+def test_bad_urdf_names_file_element_and_reason(tmp_path, fields, match):
+    kw = {"m": "1.0", "ixx": "0.01", "kind": "revolute", "limit": LIMIT, **fields}
+    p = _write(tmp_path, URDF_OK.format(**kw))
+    with pytest.raises(UrdfError, match=match) as exc:
+        Arm.from_urdf(p)
+    assert str(p) in str(exc.value)
 
 
-def test_payload_arguments_are_checked():
-    arm = Arm.sice()
-    with pytest.raises(ParameterError, match="payload mass"):
-        arm.sigma_with_payload(-1.0)
-    with pytest.raises(ParameterError, match="payload radius"):
-        arm.payload_direction(np.nan)
+def test_bad_urdf_structure(tmp_path):
+    with pytest.raises(UrdfError, match="no such URDF file"):
+        read_urdf(tmp_path / "missing.urdf")
+    with pytest.raises(UrdfError, match="not valid XML"):
+        read_urdf(_write(tmp_path, "<robot><link name='a'></robot>"))
+    ok = URDF_OK.format(m="1", ixx="0.01", kind="revolute", limit=LIMIT)
+    with pytest.raises(UrdfError, match="payload_frame 'nope' is not a link"):
+        read_urdf(_write(tmp_path, ok), payload_frame="nope")
+    closed = ok.replace(
+        "</robot>",
+        '<joint name="j2" type="fixed"><parent link="base"/><child link="tip"/></joint></robot>',
+    )
+    with pytest.raises(UrdfError, match=r"link 'tip' has two parent joints.*closed chain"):
+        read_urdf(_write(tmp_path, closed))
+    with pytest.raises(UrdfError, match="no movable joint"):
+        read_urdf(_write(tmp_path, ok), payload_frame="base")
+    branched = ok.replace(
+        "</robot>",
+        '<link name="tip2"/><joint name="jx" type="fixed"><parent link="l1"/>'
+        '<child link="tip2"/></joint></robot>',
+    )
+    with pytest.raises(UrdfError, match=r"deepest links.*name the payload frame"):
+        read_urdf(_write(tmp_path, branched))
+    robot = read_urdf(_write(tmp_path, branched), payload_frame="tip2")
+    assert robot.joint_names == ("j1",)
 
 
-# ------------------------------------------------------------ scenario tables
-def test_arm_from_tables_physical_form():
-    arm = arm_from_tables(OTHER_TABLE, None, "x.toml")
-    assert arm == Arm.from_physical(OTHER, payload_radius=0.04)
+def test_off_chain_joints_are_locked_and_their_mass_merged(tmp_path):
+    text = URDF_OK.format(m="1", ixx="0.01", kind="revolute", limit=LIMIT).replace(
+        "</robot>",
+        '<link name="finger"><inertial><mass value="0.5"/><inertia ixx="0.001" iyy="0.001" izz="0.001"'
+        ' ixy="0" ixz="0" iyz="0"/></inertial></link>'
+        '<joint name="jf" type="prismatic"><parent link="l1"/><child link="finger"/><origin xyz="0.1 0 0"/>'
+        '<axis xyz="1 0 0"/><limit effort="5" velocity="1" lower="0" upper="0.04"/></joint></robot>',
+    )
+    arm = Arm.from_urdf(_write(tmp_path, text), payload_frame="tip")
+    assert arm.locked == ("jf",) and arm.n_joints == 1
+    assert arm.model.inertias[1].mass == pytest.approx(1.5)
 
 
-def test_arm_from_tables_sigma_form_and_plant():
-    t = {"sigma": OTHER.to_sigma().tolist(), "l1": 0.3, "l2": 0.25, "torque_limit": [100, 20]}
-    arm = arm_from_tables(t, {"friction": "tanh", "friction_velocity": 0.03}, "x.toml")
-    assert arm.physical is None and arm.payload_radius == 0.05 and arm.actuator.torque_limit == (100.0, 20.0)
-    np.testing.assert_array_equal(arm.sigma, OTHER.to_sigma())
-    assert (arm.friction, arm.friction_velocity, arm.friction_code) == ("tanh", 0.03, 1)
+UR5_SCENARIO = """
+[run]
+duration = 2.0
+controllers = ["pd"]
+[arm]
+robot = "ur5"
+{arm_extra}
+[reference]
+joint1 = {{ amplitude = [0.5], frequency = [0.3] }}
+joint2 = {{ offset = -1.0, amplitude = [0.4], frequency = [0.25] }}
+joint3 = {{ offset = 1.0, amplitude = [0.4], frequency = [0.35] }}
+joint4 = {{ amplitude = [0.5], frequency = [0.4] }}
+wrist_2_joint = {{ amplitude = [0.5], frequency = [0.45] }}
+{last}
+[[payload]]
+at = 1.0
+mass = 2.0
+com = [0.0, 0.0, 0.05]
+{inertia}
+"""
 
 
-def test_arm_from_tables_without_tables_is_the_sice_arm():
-    assert arm_from_tables(None, None) == Arm.sice()
-    assert arm_from_tables(None, {"friction": "stribeck"}) == Arm.sice(friction="stribeck")
+def _ur5(arm_extra="", last="joint6 = { amplitude = [0.5], frequency = [0.5] }", inertia=""):
+    import tomllib
+
+    text = UR5_SCENARIO.format(arm_extra=arm_extra, last=last, inertia=inertia)
+    return parse_scenario(tomllib.loads(text), "ur5.toml")
+
+
+def test_scenario_with_a_shipped_robot():
+    sc = _ur5(
+        arm_extra="viscous = [1, 1, 1, 0.5, 0.5, 0.5]", inertia="inertia = [0.004, 0.004, 0.002, 0, 0, 0]"
+    )
+    assert sc.n_joints == 6 and isinstance(sc.arm, Arm)
+    assert sc.arm.viscous.tolist() == [1, 1, 1, 0.5, 0.5, 0.5]
+    assert sc.reference.sample(np.array([0.5]))[0].shape == (1, 6)
+    sig = sc.segment_sigmas()
+    assert sig.shape == (2, sc.arm.base.count)
+    assert sc.arm.payload_from_sigma(sig[1]).mass == pytest.approx(2.0)
+    np.testing.assert_allclose(sc.arm.payload_from_sigma(sig[1]).com, [0, 0, 0.05], atol=1e-10)
+    assert len(sc.position_variance) == 6
 
 
 @pytest.mark.parametrize(
-    "arm, plant, match",
+    ("kw", "match"),
     [
-        ({**OTHER_TABLE, "sigma": [1, 1, 0.1, 0, 0, 0, 0]}, None, "both 'sigma' and physical keys"),
-        ({**OTHER_TABLE, "mass": 1.0}, None, "unknown key 'arm.mass'"),
-        ({k: v for k, v in OTHER_TABLE.items() if k != "I2"}, None, "'arm.I2' is missing"),
-        ({"sigma": [1, 1, 0.1, 0, 0, 0, 0], "l1": 0.3}, None, "'arm.l2' is missing"),
-        ({**OTHER_TABLE, "m1": "2 kg"}, None, "'arm.m1' must be a number"),
-        ({**OTHER_TABLE, "m2": math.nan}, None, "'arm.m2' must be finite"),
-        ({**OTHER_TABLE, "I1": -0.02}, None, "'arm.I1' must be > 0"),
-        ({**OTHER_TABLE, "l1": 0}, None, "'arm.l1' must be > 0"),
-        ({**OTHER_TABLE, "b": [4.0]}, None, "'arm.b' must be a list of 2"),
-        ({**OTHER_TABLE, "d": [2.5, -0.6]}, None, "'arm.d\\[1\\]' must be >= 0"),
-        ({**OTHER_TABLE, "a2": 0.9}, None, "a2 = 0.9"),
-        ({"sigma": [0.6, 0.09, 0.25, 4, 1, 2.5, 0.6], "l1": 0.3, "l2": 0.25}, None, "J1\\*J2 - r\\^2"),
-        ({"sigma": [1, 2, 3], "l1": 0.3, "l2": 0.25}, None, "'arm.sigma' must be a list of 7"),
-        (None, {"friction": "coulomb"}, "'plant.friction' must be one of"),
-        (None, {"friction_velocity": 0.0}, "'plant.friction_velocity' must be > 0"),
-        (None, {"stribeck_ratio": 0.9}, "'plant.stribeck_ratio' must be >= 1"),
-        (None, {"velocity": 0.1}, "unknown key 'plant.velocity'"),
-        ([1, 2], None, "\\[arm\\] must be a table"),
+        ({"last": ""}, r"reference.joint6: missing"),
+        ({"last": "joint7 = { amplitude = [0.1], frequency = [0.1] }"}, r"reference.joint7: not a joint"),
+        ({"arm_extra": "viscous = [1, 1]"}, r"arm.viscous' must be a list of 6"),
+        ({"arm_extra": 'payload_frame = "nowhere"'}, r"payload_frame 'nowhere' is not a link"),
+        ({"arm_extra": "gravity = [0, 0]"}, r"arm.gravity"),
+        ({"arm_extra": "torque_limit = [1, 1, 1, 1, 1, -1]"}, r"arm.torque_limit' must be > 0"),
+        ({"inertia": "inertia = [1, 1, 3, 0, 0, 0]"}, r"payload\[0\].inertia:.*rigid body"),
+        ({"arm_extra": "wheels = 4"}, r"unknown key 'arm.wheels'"),
     ],
 )
-def test_arm_from_tables_errors_name_file_key_and_reason(arm, plant, match):
-    with pytest.raises(ScenarioError, match=match) as exc:
-        arm_from_tables(arm, plant, "my.toml")
-    assert str(exc.value).startswith("my.toml:")
+def test_bad_urdf_scenarios_name_the_key(kw, match):
+    with pytest.raises(ScenarioError, match=match):
+        _ur5(**kw)
 
 
-def test_scenarios_carry_their_arm(tmp_path):
-    assert load_scenario().arm == Arm.sice()
-    other = load_scenario(SCENARIOS / "other_arm.toml")
-    assert other.arm == Arm.from_physical(OTHER, payload_radius=0.05)
-    assert other.payload_radius == 0.05 and 2.0 in other.swap_masses
-    smooth = load_scenario(SCENARIOS / "smooth_friction.toml")
-    assert smooth.arm == Arm.sice(friction="tanh", friction_velocity=0.02)
-    assert smooth.reference == load_scenario().reference
-    p = tmp_path / "r.toml"
-    p.write_text(
-        "[arm]\nsigma = [0.6, 0.09, 0.18, 4, 1, 2.5, 0.6]\nl1 = 0.3\nl2 = 0.25\npayload_radius = 0.07\n"
+def test_unknown_robot_and_urdf_path_relative_to_the_scenario(tmp_path):
+    import tomllib
+
+    with pytest.raises(ScenarioError, match="not a shipped robot"):
+        parse_scenario(tomllib.loads('[arm]\nrobot = "r2d2"\n'), "x.toml")
+    p = _write(tmp_path, URDF_OK.format(m="1", ixx="0.01", kind="revolute", limit=LIMIT), "one.urdf")
+    sc_file = tmp_path / "s.toml"
+    sc_file.write_text(
+        '[run]\nduration = 1.0\ncontrollers = ["pd"]\n[arm]\nurdf = "one.urdf"\n'
+        "[reference]\njoint1 = { amplitude = [0.2], frequency = [0.5] }\n"
     )
-    assert load_scenario(p).payload_radius == 0.07  # [[payload]] without radius: the arm's
-    p.write_text("[plant]\nfriction = 'dry'\n")
-    with pytest.raises(ScenarioError, match=r"r\.toml.*plant\.friction"):
-        load_scenario(p)
+    from adaptive_dd.benchmark.scenario import load_scenario
+
+    sc = load_scenario(sc_file)
+    assert sc.arm.urdf == p and sc.n_joints == 1
 
 
-def test_other_arm_reference_is_within_the_actuator_limits():
-    sc = load_scenario(SCENARIOS / "other_arm.toml")
-    q, qd, qdd = sc.reference.sample(np.arange(sc.n_samples) * sc.sample_period)
-    tau = inverse_dynamics(q, qd, qdd, sc.arm.sigma_with_payload(max(sc.swap_masses)))
-    peak = np.abs(tau).max(axis=0)
-    np.testing.assert_allclose(peak, [27.4, 8.7], atol=0.05)  # the figures in the file's comment
-    assert np.all(peak < 0.7 * np.array(sc.arm.actuator.torque_limit))
+def test_example_robot_data_urdfs_load_and_pass_the_check():
+    erd = pytest.importorskip("example_robot_data")
+    from adaptive_dd.plant.pinocchio_check import cross_check
+
+    base = __import__("pathlib").Path(erd.getModelPath("ur_description/urdf/ur5_robot.urdf"))
+    arm = Arm.from_urdf(base / "ur_description/urdf/ur5_robot.urdf", "tool0")
+    assert arm.n_joints == 6
+    assert all(r.passed for r in cross_check(arm, {"mass": 2.0}, n_states=10))
 
 
-# ----------------------------------------------------------------- simulator
-def test_simulator_takes_payload_physics_from_the_arm():
-    arm = Arm.from_physical(OTHER, payload_radius=0.04)
-    sched = PayloadSchedule(times=(0.002,), masses=(2.0,))
-    sim = ArmSimulator(2, 10, trial_rngs(0, 2), arm=arm, payload=sched)
-    np.testing.assert_array_equal(sim.sigma, np.broadcast_to(arm.sigma, (2, 7)))
-    for _ in range(3):
-        sim.measure()
-        sim.step(np.zeros((2, 2)))
-    np.testing.assert_allclose(sim.sigma[0], OTHER.with_payload(Payload(2.0, 0.04)).to_sigma(), rtol=1e-12)
-    wide = ArmSimulator(
-        1, 10, trial_rngs(0, 1), arm=arm, payload=PayloadSchedule(initial_mass=2.0, radius=0.1)
-    )
-    np.testing.assert_allclose(wide.sigma[0], arm.sigma_with_payload(2.0, 0.1))
-    np.testing.assert_allclose(sched.sigma_at(1.0, arm), arm.sigma_with_payload(2.0))
-    assert sim.actuator is arm.actuator and sim.sensor is arm.sensor
-    res = simulate_open_loop(np.zeros((1, 5, 2)), np.random.default_rng(0), arm=arm)
-    assert res.meta["arm"] == arm.to_dict()
+@pytest.mark.parametrize("name", ["vertical3", "ur5", "panda"])
+def test_every_shipped_robot_passes_the_pinocchio_check(arms, name):
+    from adaptive_dd.plant.pinocchio_check import cross_check
+
+    for payload in (None, {"mass": 2.0, "com": [0.01, 0.0, 0.03]}):
+        results = cross_check(arms[name], payload, n_states=8, rng=np.random.default_rng(5))
+        assert all(r.passed for r in results), [str(r) for r in results if not r.passed]
 
 
-def test_simulator_rejects_a_non_arm():
-    with pytest.raises(ParameterError, match="arm must be an Arm"):
-        ArmSimulator(1, 10, np.random.default_rng(0), arm=TABLE1_SIGMA)
+def test_sice_from_urdf_gives_the_default_benchmark_numbers():
+    """Issue target: per-seed RMS within 1e-6 relative of TwoLinkArm.sice()'s (a short run, all
+    controllers)."""
+    import dataclasses
+    from pathlib import Path
 
+    from adaptive_dd.benchmark.runner import run_benchmark
+    from adaptive_dd.benchmark.scenario import load_scenario
 
-# Hashes of a stick-slip run (payload swap, sticking, both kinds of generator) made
-# with the code before the Arm and the smooth friction laws (commit 3c9901b).
-STICK_SLIP_GOLDEN = [
-    {
-        "q": "456fbc2c2a2f1fcb",
-        "qd": "dfdb3f58ec815c29",
-        "q_meas": "96c4aea2825c3951",
-        "qd_meas": "48371e4dcbee571c",
-    },
-    {
-        "q": "456fbc2c2a2f1fcb",
-        "qd": "dfdb3f58ec815c29",
-        "q_meas": "23687ae34992ac14",
-        "qd_meas": "e53988be629ea9cc",
-    },
-]
-
-
-@pytest.mark.parametrize("shared", [False, True])
-def test_stick_slip_plant_is_bit_identical_to_before(shared):
-    tau = table2_torque(2, 3000)
-    tau[1] *= 0.3  # trial 1 sticks for long stretches
-    rng = np.random.default_rng(11) if shared else trial_rngs(11, 2)
-    r = simulate_open_loop(tau, rng, payload=PayloadSchedule(times=(1.5,), masses=(2.0,)))
-    assert 0.1 < (r.qd == 0).mean() < 0.5  # the run does exercise sticking
-    got = {
-        k: hashlib.sha256(np.ascontiguousarray(getattr(r, k)).tobytes()).hexdigest()[:16]
-        for k in STICK_SLIP_GOLDEN[0]
-    }
-    assert got == STICK_SLIP_GOLDEN[int(shared)]
-
-
-def test_noise_is_drawn_in_chunks_with_the_same_numbers():
-    n = 2 * NOISE_CHUNK + 300
-    sim = ArmSimulator(
-        3,
-        n,
-        trial_rngs(4, 3),
-        actuator=IDEAL,
-        sensor=dataclasses.replace(CLEAN, position_variance=(1.0, 1.0), velocity_variance=(1.0, 1.0)),
-    )
-    got = np.zeros((3, n, 4))
-    for k in range(n):
-        qm, qdm = sim.measure()
-        got[:, k] = np.concatenate((qm, qdm), axis=-1)
-        assert sim._noise.block.shape[1] <= NOISE_CHUNK
-        sim.step(np.zeros((3, 2)))
-    up_front = np.stack([g.standard_normal((n, 4)) for g in trial_rngs(4, 3)])
-    np.testing.assert_array_equal(got, up_front)  # state stays 0: measurement = noise
-    with pytest.raises(Exception, match="built for"):
-        sim.measure()
-
-
-# ------------------------------------------------------------ smooth friction
-def _hold(arm, tau, n, q0=(0.0, 0.0), qd0=(0.0, 0.0)):
-    taus = np.broadcast_to(np.asarray(tau, float), (1, n, 2))
-    return simulate_open_loop(
-        taus, np.random.default_rng(0), arm=arm, sensor=CLEAN, actuator=IDEAL, q0=q0, qd0=qd0
-    )
-
-
-@pytest.mark.parametrize("v", [0.02, 0.002])  # 0.002: stiff, RK4 steps refined
-def test_tanh_plant_creeps_under_a_torque_below_coulomb_friction(v):
-    d2, b2 = TABLE1_SIGMA[6], TABLE1_SIGMA[4]
-    tau = [0.0, 0.5 * d2]
-    stuck = _hold(Arm.sice(), tau, 2000)
-    assert np.all(stuck.qd == 0.0)
-    smooth = _hold(Arm.sice(friction="tanh", friction_velocity=v), tau, 2000)
-    # steady creep: d2 tanh(w / v) + b2 w = tau2 (joint 2 alone; joint 1 barely moves)
-    w = v * np.arctanh(0.5)
-    for _ in range(50):
-        w -= (d2 * np.tanh(w / v) + b2 * w - tau[1]) / (d2 / v / np.cosh(w / v) ** 2 + b2)
-    assert smooth.q[0, -1, 1] > w  # 2 s of creep at about w
-    np.testing.assert_allclose(smooth.qd[0, -1, 1], w, rtol=0.02)
-    np.testing.assert_allclose(smooth.qd[0, -100:, 1], w, rtol=0.02)  # steady, no chatter
-
-
-@pytest.mark.parametrize("law", ["tanh", "stribeck"])
-def test_smooth_plants_match_coulomb_far_from_zero_velocity(law):
-    a, b = Arm.sice(), Arm.sice(friction=law, friction_velocity=0.01, stribeck_velocity=0.05)
-    kw = {"tau": [20.0, 5.0], "n": 300, "qd0": (2.0, 1.5)}
-    ref, got = _hold(a, **kw), _hold(b, **kw)
-    assert np.abs(ref.qd).min() > 20 * 0.05  # |qd| >> v and v_s throughout
-    # the smooth kernel takes finer RK4 steps (stiffness near zero velocity): O(1e-9) apart
-    np.testing.assert_allclose(got.q, ref.q, rtol=0, atol=2e-8)
-    np.testing.assert_allclose(got.qd, ref.qd, rtol=0, atol=2e-6)
-
-
-def test_stribeck_plant_holds_near_rest_between_coulomb_and_static_friction():
-    d2 = TABLE1_SIGMA[6]
-    kw = {"tau": [0.0, 1.2 * d2], "n": 1000}
-    tanh = _hold(Arm.sice(friction="tanh"), **kw)
-    strib = _hold(Arm.sice(friction="stribeck", stribeck_ratio=1.5, stribeck_velocity=0.1), **kw)
-    assert tanh.qd[0, -1, 1] > 0.1  # above d: breaks away
-    assert 0 < strib.qd[0, -1, 1] < 0.05  # below the static peak 1.5 d: slow creep
-
-
-def test_tanh_integrator_matches_scipy_on_the_same_ode():
-    v, T, n = 0.02, 1e-3, 300
-    j1, j2, r, b1, b2, d1, d2 = TABLE1_SIGMA
-    tau = table2_torque(1, n)[0] * 0.5
-
-    def f(t, x):  # eq. (3)-(4) written out, tanh Coulomb friction
-        k = min(int(t / T + 1e-9), n - 1)
-        c, s_ = math.cos(x[1]), math.sin(x[1])
-        m11, m12 = j1 + j2 + 2 * r * c, j2 + r * c
-        r1 = tau[k, 0] + r * s_ * x[3] * (2 * x[2] + x[3]) - b1 * x[2] - d1 * math.tanh(x[2] / v)
-        r2 = tau[k, 1] - r * s_ * x[2] ** 2 - b2 * x[3] - d2 * math.tanh(x[3] / v)
-        det = m11 * j2 - m12 * m12
-        return [x[2], x[3], (j2 * r1 - m12 * r2) / det, (m11 * r2 - m12 * r1) / det]
-
-    x = np.zeros(4)
-    for k in range(n):
-        x = solve_ivp(f, (k * T, (k + 1) * T), x, rtol=1e-10, atol=1e-12, method="LSODA").y[:, -1]
-    q, qd = np.zeros((1, 2)), np.zeros((1, 2))
-    st, sl = np.zeros((1, 2), bool), np.ones((1, 2))
-    for k in range(n):
-        q, qd, st, sl = plant_step(q, qd, st, sl, tau[k][None], TABLE1_SIGMA[None], T, 2, 1, (v, 1.5, 0.1))
-    assert np.abs(x[2:]).max() > 0.1  # it moved
-    np.testing.assert_allclose(q[0], x[:2], atol=1e-7)
-    np.testing.assert_allclose(qd[0], x[2:], atol=1e-5)
-
-
-def test_stiff_tanh_plant_stays_stable_and_rejects_bad_codes():
-    r = simulate_open_loop(
-        table2_torque(2, 2000), trial_rngs(0, 2), arm=Arm.sice(friction="tanh", friction_velocity=0.001)
-    )
-    assert not r.failed.any() and np.all(np.isfinite(r.q)) and np.abs(r.qd).max() < 5
-    z = np.zeros((1, 2))
-    with pytest.raises(ParameterError, match="friction_code"):
-        plant_step(z, z, z.astype(bool), z + 1, z, TABLE1_SIGMA[None], 1e-3, 2, 7)
-
-
-# ------------------------------------------------------------------------ CLI
-def test_cli_check_and_simulate_take_an_arm(tmp_path, capsys):
-    assert main(["check", "--arm", str(SCENARIOS / "other_arm.toml"), "--states", "10"]) == 0
-    out = capsys.readouterr().out
-    assert out.count("9 passed, 0 failed") == 2 and "payload 2.0 kg" in out
-    sim = tmp_path / "sim"
-    argv = [
-        "simulate",
-        "--arm",
-        str(SCENARIOS / "smooth_friction.toml"),
-        "--duration",
-        "0.5",
-        "--out",
-        str(sim),
-    ]
-    assert main(argv) == 0
-    assert "plant friction tanh" in capsys.readouterr().out
-    bad = tmp_path / "bad.toml"
-    bad.write_text("[arm]\nl1 = 0.3\n")
-    assert main(["check", "--arm", str(bad)]) == 2
-    assert "bad.toml" in capsys.readouterr().err
+    here = Path(__file__).resolve().parents[1] / "benchmarks" / "scenarios" / "sice_urdf.toml"
+    urdf = load_scenario(here)
+    default = load_scenario()
+    assert isinstance(urdf.arm, TwoLinkArm) and not isinstance(default.arm, Arm)
+    short = {"duration": 6.0, "seeds": 2, "swap_times": (5.0,), "swap_masses": (3.0,)}
+    a = run_benchmark(dataclasses.replace(urdf, **short), progress=False)
+    b = run_benchmark(dataclasses.replace(default, **short), progress=False)
+    for name, run in b.runs.items():
+        for f, x, y in zip(run.acc._fields[:-1], a.runs[name].acc, run.acc, strict=False):  # not e_norm
+            np.testing.assert_allclose(x, y, rtol=1e-6, atol=1e-12, err_msg=f"{name} {f}")

@@ -17,8 +17,8 @@ from adaptive_dd.identification.augmented_kf import (
 )
 from adaptive_dd.identification.fisher import output_variances
 from adaptive_dd.identification.sensitivity import simulate_trajectory
-from adaptive_dd.plant.integrator import plant_step
 from adaptive_dd.plant.parameters import TABLE1_SIGMA
+from adaptive_dd.plant.two_link_integrator import two_link_plant_step
 
 
 @pytest.fixture(scope="module")
@@ -48,7 +48,7 @@ def test_update_equals_filterpy(rng):
 def test_predict_moves_the_arm_by_the_plant_step():
     st = akf_init(TABLE1_SIGMA, 0.01 * TABLE1_SIGMA, (0.1, -0.2), (0.5, 1.0))
     pr = akf_predict(st, np.array([3.0, 1.0]), AKFConfig())
-    q, qd, _, _ = plant_step(
+    q, qd, _, _ = two_link_plant_step(
         np.array([0.1, -0.2]),
         np.array([0.5, 1.0]),
         np.zeros(2, bool),

@@ -1,11 +1,14 @@
 """The command line on both kinds of arm (issue 27): every option that does not apply to the
-arm's kind is an error naming it, ``--debug`` after the command, ``excite`` on a two-link URDF."""
+arm's kind is an error naming it, the options both kinds share mean the same on both (``simulate
+--no-saturate``, ``--experiment reference``, ``identify --online --arm``, ``--tau-f``'s default),
+``--debug`` after the command, ``excite`` on a two-link URDF."""
 
 from __future__ import annotations
 
 from importlib import resources
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from adaptive_dd.cli import main
@@ -25,7 +28,8 @@ def _error(capsys, argv) -> str:
 @pytest.mark.parametrize(
     "argv, named",
     [
-        (["simulate", "--arm", UR5, "--no-saturate"], "--no-saturate"),
+        (["simulate", "--arm", UR5, "--experiment", "table2"], "--experiment table2"),
+        (["simulate", "--arm", SICE_URDF, "--experiment", "table2", "--com", "0", "0", "0.1"], "--com"),
         (["simulate", "--com", "0", "0", "0.1"], "--com"),
         (["simulate", "--plant", "serial"], "--plant"),
         (["simulate", "--arm", SICE_URDF, "--plant", "model"], "--plant"),
@@ -33,6 +37,9 @@ def _error(capsys, argv) -> str:
         (["identify", "rec.csv", "--arm", UR5, "--method", "M1"], "--method"),
         (["identify", "rec.csv", "--arm", UR5, "--estimator", "paper"], "--estimator"),
         (["identify", "rec.csv", "--arm", UR5, "--split", "16"], "--split"),
+        (["identify", "rec.csv", "--arm", UR5, "--estimator", "exact"], "--estimator"),  # its default
+        (["identify", "rec.csv", "--output-error", "auto"], "--output-error"),  # its default
+        (["identify", "rec.csv", "--arm", SICE_URDF, "--window", "0", "1"], "--window"),
         (["identify", "rec.csv", "--arm", UR5, "--true", *["1"] * 7], "--true"),
         (["identify", "rec.csv", "--baseline", "b.csv"], "--baseline"),
         (["identify", "rec.csv", "--payload-only"], "--payload-only"),
@@ -47,12 +54,12 @@ def test_an_option_for_the_other_kind_of_arm_is_an_error_naming_it(tmp_path, cap
 
 
 def test_debug_is_accepted_after_the_command(capsys, monkeypatch):
-    import adaptive_dd.cli as cli
+    import adaptive_dd.cli.validate as cli_validate
 
     def broken(args):
         raise RuntimeError("planted")
 
-    monkeypatch.setattr(cli, "_cmd_validate", broken)
+    monkeypatch.setattr(cli_validate, "run", broken)
     assert main(["validate"]) == 3
     assert "Traceback" not in capsys.readouterr().err
     assert main(["validate", "--debug"]) == 3
@@ -71,3 +78,118 @@ def test_excite_works_on_the_two_link_urdf_arm(tmp_path, capsys):
     assert "[reference]" in text and 'robot = "sice_arm"' in text
     err = _error(capsys, ["excite", "--arm", str(ROOT / "adaptive_dd" / "scenarios" / "payload_swap.toml")])
     assert "excite needs an [arm] from a URDF" in err and 'robot = "sice_arm"' in err
+
+
+def _capture(monkeypatch, module, name: str) -> dict:
+    """Replace ``module.name`` by a function that keeps its arguments and stops the command."""
+    seen: dict = {}
+
+    def stop(*args, **kwargs):
+        seen["args"], seen["kwargs"] = args, kwargs
+        raise RuntimeError("captured")
+
+    monkeypatch.setattr(module, name, stop)
+    return seen
+
+
+@pytest.mark.parametrize("no_saturate", [False, True])
+def test_no_saturate_applies_to_a_urdf_arm(tmp_path, capsys, monkeypatch, no_saturate):
+    """--no-saturate was refused on an arm from a URDF: the record's actuator now saturates or not."""
+    import adaptive_dd.identification.records as records
+
+    seen = _capture(monkeypatch, records, "simulate_record")
+    argv = ["simulate", "--arm", UR5, "--duration", "0.1", "--out", str(tmp_path / "o")]
+    assert main(argv + ["--no-saturate"] * no_saturate) == 3
+    assert seen["args"][0].actuator.saturate is not no_saturate
+
+
+@pytest.mark.parametrize("scenario", [SICE_URDF, None])
+def test_the_reference_experiment_runs_on_the_two_link_arm(tmp_path, capsys, scenario):
+    """simulate --experiment reference: the scenario's reference tracked on the paper's arm too (its
+    general model); without --arm the SICE arm tracks the shipped payload_swap's reference."""
+    out = tmp_path / "o"
+    argv = ["simulate", "--experiment", "reference", "--duration", "0.2", "--out", str(out)]
+    assert main(argv + (["--arm", scenario] if scenario else [])) == 0
+    text = capsys.readouterr().out
+    assert "the scenario's reference tracked by computed torque" in text
+    assert ("2-joint arm of" if scenario else "the SICE arm (2 joints") in text
+    head = (out / "trajectory.csv").read_text().splitlines()
+    assert head[0] == "t,q1,q2,qd1,qd2,tau1,tau2" and len(head) == 201
+    assert np.load(out / "trajectory.npz")["q_true"].shape == (1, 200, 2)
+
+
+def test_the_reference_experiment_needs_a_urdf(tmp_path, capsys):
+    lugre = str(ROOT / "benchmarks" / "scenarios" / "lugre_friction.toml")
+    err = _error(capsys, ["simulate", "--arm", lugre, "--experiment", "reference", "--out", str(tmp_path)])
+    assert "--experiment reference needs an [arm] from a URDF" in err and lugre in err
+
+
+def _two_link_record(path, T: float, n: int):
+    from adaptive_dd.io import write_recording
+
+    t = np.arange(n) * T
+    q = np.sin(t[:, None] * np.array([1.0, 1.3]))
+    return write_recording(path, t, q, np.cos(t[:, None] * np.array([1.0, 1.3])), np.zeros_like(q))
+
+
+def test_identify_online_starts_from_the_scenario_arm(tmp_path, capsys, monkeypatch):
+    """identify --online --arm TWO_LINK.toml started from the SICE arm whatever the scenario said."""
+    import adaptive_dd.identification.two_link_online as online
+    from adaptive_dd.cli._common import load_arm
+    from adaptive_dd.plant.two_link import TwoLinkArm
+
+    sice = TwoLinkArm.sice()
+    arm_toml = tmp_path / "arm.toml"
+    sigma = ", ".join(repr(1.2 * float(v)) for v in sice.sigma)
+    arm_toml.write_text(f"[arm]\nsigma = [{sigma}]\nl1 = {sice.l1}\nl2 = {sice.l2}\n")
+    rec = _two_link_record(tmp_path / "rec.csv", 1e-3, 2000)
+    seen = _capture(monkeypatch, online, "run_two_link_online")
+    argv = ["identify", str(rec), "--online", "--out", str(tmp_path / "id")]
+    assert main([*argv, "--arm", str(arm_toml)]) == 3
+    np.testing.assert_array_equal(seen["args"][4], load_arm(str(arm_toml)).sigma)
+    assert not np.allclose(seen["args"][4], sice.sigma)
+    assert main(argv) == 3  # without --arm: the SICE arm (Table 1)
+    np.testing.assert_array_equal(seen["args"][4], sice.sigma)
+
+
+@pytest.mark.parametrize("T, tau_f", [(1e-3, 0.02), (0.02, 0.04)])
+def test_identify_tau_f_default_is_sized_to_the_sample_rate_on_the_two_link_arm(
+    tmp_path, capsys, monkeypatch, T, tau_f
+):
+    """One default on every arm: two sample periods, at least 0.02 s (was 0.02 s whatever T)."""
+    import adaptive_dd.identification.estimators as est
+
+    class Few:
+        n_used, split, final, std = 12, "full", np.ones(7), np.ones(7)
+
+    monkeypatch.setattr(est, "estimate", lambda *a, **k: Few())
+    rec = _two_link_record(tmp_path / "rec.csv", T, 400)
+    assert main(["identify", str(rec), "--out", str(tmp_path / "id")]) == 2  # too few equations
+    assert f"tau_f = {tau_f}\n" in capsys.readouterr().out
+
+
+def test_sweep_workers_with_a_scheduler_is_an_error(tmp_path, capsys):
+    argv = ["sweep", str(tmp_path / "none.toml"), "--scheduler", "tcp://127.0.0.1:1", "--workers", "2"]
+    err = _error(capsys, argv)
+    assert "error: --workers: sizes the local cluster" in err
+
+
+def test_the_arm_kind_is_asked_in_one_place():
+    """The CLI asks the arm's kind through ``arm.closed_form`` in ``cli/_common.py`` only, and never
+    tests the arm's class (issue 27: the type tests on the arm's class go)."""
+    import ast
+
+    from adaptive_dd.cli._common import is_two_link, load_arm
+    from adaptive_dd.plant.arm import Arm
+    from adaptive_dd.plant.two_link import TwoLinkArm
+
+    assert TwoLinkArm.sice().closed_form and not Arm.sice().closed_form
+    assert is_two_link(load_arm(SICE_URDF)) and not is_two_link(load_arm(SICE_URDF, general="test"))
+    asked = []
+    for f in sorted((ROOT / "adaptive_dd" / "cli").glob("*.py")):
+        for node in ast.walk(ast.parse(f.read_text())):
+            if isinstance(node, ast.Attribute) and node.attr == "closed_form":
+                asked.append(f.name)
+            if isinstance(node, ast.Call) and getattr(node.func, "id", None) == "isinstance":
+                assert "Arm" not in ast.unparse(node.args[1]), f"{f.name}: {ast.unparse(node)}"
+    assert asked == ["_common.py"]

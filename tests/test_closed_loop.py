@@ -13,10 +13,11 @@ import numpy as np
 import pytest
 
 from adaptive_dd.benchmark.scenario import load_scenario, parse_scenario
-from adaptive_dd.closed_loop.controllers import SERIAL_CONTROLLERS, make_serial_controller
-from adaptive_dd.closed_loop.metrics import serial_segment_metrics
-from adaptive_dd.closed_loop.runner import run_serial
+from adaptive_dd.closed_loop.controllers import ARM_CONTROLLERS
+from adaptive_dd.closed_loop.metrics import segment_metrics
+from adaptive_dd.closed_loop.runner import run_closed_loop
 from adaptive_dd.closed_loop.types import StreamedSums, run_constants
+from adaptive_dd.controllers import gains_for, make_controller
 from adaptive_dd.errors import ParameterError, ScenarioError
 
 
@@ -71,11 +72,13 @@ def test_compiled_and_python_paths_agree_with_two_swaps_and_alarms(name):
     arm = sc.arm
 
     def ctrls():
-        return {n: make_serial_controller(n, arm, sc.bandwidth, sc.damping) for n in sc.controllers}
+        return {
+            n: make_controller(n, gains_for(arm, sc.bandwidth, sc.damping), arm=arm) for n in sc.controllers
+        }
 
-    comp = run_serial(sc, ctrls(), engine="compiled")
-    py = run_serial(sc, ctrls(), engine="python")
-    wrapped = run_serial(sc, {"w": Wrapped(make_serial_controller("slotine_li", arm))})
+    comp = run_closed_loop(sc, ctrls(), engine="compiled")
+    py = run_closed_loop(sc, ctrls(), engine="python")
+    wrapped = run_closed_loop(sc, {"w": Wrapped(make_controller("slotine_li", arm=arm))})
     assert comp.runs["adaptive_ct"].engine.startswith("compiled")
     assert py.runs["adaptive_ct"].engine.startswith("python") and wrapped.runs["w"].engine.startswith(
         "python"
@@ -129,7 +132,7 @@ def test_python_path_broadcasts_a_one_row_estimate_on_the_n_joint_arm():
     sc = _short("vertical3_payload_exact", 0.4, (0.2,), seeds=2, controllers=["ct_nominal"])
     p = sc.arm.base.B.shape[0]
     sigma = np.arange(1.0, p + 1.0)
-    run = run_serial(sc, {"one": OneRowEstimate(make_serial_controller("ct_nominal", sc.arm), sigma)}).runs[
+    run = run_closed_loop(sc, {"one": OneRowEstimate(make_controller("ct_nominal", arm=sc.arm), sigma)}).runs[
         "one"
     ]
     assert not run.error and not run.failed.any()
@@ -139,7 +142,7 @@ def test_python_path_broadcasts_a_one_row_estimate_on_the_n_joint_arm():
 
 def test_ct_oracle_tracks_far_better_than_ct_nominal_on_loaded_ur5():
     sc = _short("ur5_tool_swap_exact", 2.4, (0.8, 1.6), seeds=1, controllers=["ct_nominal", "ct_oracle"])
-    res = run_serial(sc)
+    res = run_closed_loop(sc)
     rms = {
         n: np.sqrt(r.acc.sum_e2[0] / np.diff(np.r_[run_constants(sc).seg_start, sc.n_samples]))
         for n, r in res.runs.items()
@@ -212,11 +215,11 @@ def test_a_diverging_trial_is_contained_and_a_raising_controller_fails_only_its_
     sc = _short("vertical3_payload_exact", 1.2, (0.6,), seeds=2, controllers=["ct_nominal"])
     arm = sc.arm
     lim = np.array(arm.actuator.torque_limit)
-    res = run_serial(
+    res = run_closed_loop(
         sc,
         {
-            "ct_nominal": make_serial_controller("ct_nominal", arm),
-            "runaway": Runaway(make_serial_controller("ct_nominal", arm), lim),
+            "ct_nominal": make_controller("ct_nominal", arm=arm),
+            "runaway": Runaway(make_controller("ct_nominal", arm=arm), lim),
             "raises": Raises(),
         },
     )
@@ -248,13 +251,13 @@ def test_laws_are_the_arms_inverse_dynamics_on_the_reference(rng):
     sigma = sc.segment_sigmas()[2]  # the 5 kg tool with its offset centre of mass
     want = arm.inverse_dynamics(q, qd, qdd, sigma)
     for name in ("ct_oracle", "ct_oracle_textbook", "slotine_li_oracle"):
-        c = make_serial_controller(name, arm)
+        c = make_controller(name, arm=arm)
         c.reset(4, sc.sample_period)
         got = np.stack(
             [c.command(q[i : i + 1], qd[i : i + 1], q[i], qd[i], qdd[i], sigma[None]) for i in range(4)]
         )
         np.testing.assert_allclose(got[:, 0], want, rtol=1e-9, atol=1e-9, err_msg=name)
-    c = make_serial_controller("ct_nominal", arm)
+    c = make_controller("ct_nominal", arm=arm)
     c.reset(4, sc.sample_period)
     got = np.stack([c.command(q[i : i + 1], qd[i : i + 1], q[i], qd[i], qdd[i])[0] for i in range(4)])
     np.testing.assert_allclose(got, arm.inverse_dynamics(q, qd, qdd), rtol=1e-9, atol=1e-9)
@@ -273,8 +276,8 @@ def test_law_with_its_scratch_given_equals_the_allocating_law(rng):
         arr[...] = np.nan
     for arr in work[0]:
         arr[...] = np.nan
-    for name in SERIAL_CONTROLLERS:
-        form = make_serial_controller(name, arm).compiled_form(1, sc.sample_period)
+    for name in ARM_CONTROLLERS:
+        form = make_controller(name, arm=arm).compiled_form(1, sc.sample_period)
         pi = form.state.pi_model[0] * (1.0 + 0.05 * rng.standard_normal(13 * n))  # a true model
         st_a = (form.state.pi_model[0].copy(), form.state.theta[0].copy())
         st_b = (form.state.pi_model[0].copy(), form.state.theta[0].copy())
@@ -300,7 +303,7 @@ def test_serial_metrics_from_hand_made_sums():
     acc.n_saturated[:] = [[2, 0], [0, 3]]
     acc.sum_e2_settled[:] = 9.0
     run = SimpleNamespace(acc=acc, failed=np.array([False, True]), sigma_end=None)
-    m = serial_segment_metrics(SimpleNamespace(scenario=sc), run)
+    m = segment_metrics(SimpleNamespace(scenario=sc), run)
     counts = np.array([4.0, 6.0])  # samples 0..3 and 4..9
     np.testing.assert_allclose(m["rms_error"][0], np.sqrt(acc.sum_e2[0] / counts))
     for j in range(n):
@@ -342,20 +345,20 @@ def test_scenario_checks_for_n_joint_arms():
     with pytest.raises(ScenarioError, match="'adaptive_ct_paper' is for the two-link arm only"):
         parse_scenario(data, "x.toml")
     with pytest.raises(ParameterError, match="two-link arm only"):
-        make_serial_controller("adaptive_ct_paper", load_scenario(_shipped("vertical3_payload_exact")).arm)
+        make_controller("adaptive_ct_paper", arm=load_scenario(_shipped("vertical3_payload_exact")).arm)
     with pytest.raises(ParameterError, match="unknown setting"):
-        make_serial_controller(
-            "ct_oracle", load_scenario(_shipped("vertical3_payload_exact")).arm, options={"gain": 1}
+        make_controller(
+            "ct_oracle", options={"gain": 1}, arm=load_scenario(_shipped("vertical3_payload_exact")).arm
         )
-    assert set(SERIAL_CONTROLLERS) >= {"pd", "ct_nominal", "ct_oracle", "adaptive_ct", "slotine_li"}
+    assert set(ARM_CONTROLLERS) >= {"pd", "ct_nominal", "ct_oracle", "adaptive_ct", "slotine_li"}
 
 
 def test_an_n_joint_scenario_takes_the_n_joint_estimators_settings():
     data = tomllib.loads(open(_shipped("ur5_tool_swap_exact"), encoding="utf-8").read())
-    est = {"row_weights": [1.0, 1.0, 1.0, 0.5, 0.5, 0.5], "bound_radius": 0.2, "detector": {"floor": 0.1}}
-    data["controllers"] = {"adaptive_ct": {"estimator": est}}
+    est = {"row_weights": [1.0, 1.0, 1.0, 0.5, 0.5, 0.5], "bound_radius": 0.2}
+    data["controllers"] = {"adaptive_ct": {"estimator": est, "detector": {"floor": 0.1}}}
     sc = parse_scenario(data, "x.toml")
-    online = make_serial_controller("adaptive_ct", sc.arm, options=sc.options("adaptive_ct")).online
+    online = make_controller("adaptive_ct", options=sc.options("adaptive_ct"), arm=sc.arm).online
     assert list(online.row_weights) == est["row_weights"]
     assert online.bound_radius == 0.2 and online.detector.floor == 0.1
     data["controllers"] = {"adaptive_ct": {"estimator": {"row_weightz": 1.0}}}
@@ -398,7 +401,7 @@ def test_cli_benchmark_of_an_n_joint_scenario_writes_every_output(tmp_path, caps
 
 
 def test_the_delayed_oracle_is_the_textbook_oracle_at_zero_delay_and_pays_for_a_delay():
-    """The plug-in behind benchmarks/delayed_oracle.py: at zero delay the same law as the
+    """The plug-in behind studies/delayed_oracle.py: at zero delay the same law as the
     compiled ct_oracle_textbook (Python path against compiled, to rounding); told of the 2 kg
     pickup 10 ms late it tracks worse in the segment after it, and its boost takes part of that back."""
     from adaptive_dd.closed_loop.controllers import JointGains
@@ -407,12 +410,12 @@ def test_the_delayed_oracle_is_the_textbook_oracle_at_zero_delay_and_pays_for_a_
     sc = _short("ur5_tool_swap_exact", 1.6, (0.8,), seeds=1, controllers=["ct_oracle_textbook"])
     gains = JointGains.of(sc.bandwidth, sc.damping, sc.arm.n_joints)
     ctrls = {
-        "ct_oracle_textbook": make_serial_controller("ct_oracle_textbook", sc.arm),
+        "ct_oracle_textbook": make_controller("ct_oracle_textbook", arm=sc.arm),
         "d0": DelayedOracle(sc.arm, gains, 0.0),
         "d10": DelayedOracle(sc.arm, gains, 0.01),
         "d10b": DelayedOracle(sc.arm, gains, 0.01, boost=(300.0, 0.2)),
     }
-    res = run_serial(sc, ctrls)
+    res = run_closed_loop(sc, ctrls)
     assert not any(r.error or r.failed.any() for r in res.runs.values())
     _same(res.runs["d0"], res.runs["ct_oracle_textbook"], rtol=1e-9)
     e2 = {k: r.acc.sum_e2[0] for k, r in res.runs.items()}

@@ -16,9 +16,9 @@ import numba
 import numpy as np
 
 from adaptive_dd.benchmark.scenario import load_scenario, parse_scenario
-from adaptive_dd.closed_loop.controllers import SERIAL_CONTROLLERS
+from adaptive_dd.closed_loop.controllers import ARM_CONTROLLERS
 from adaptive_dd.plant import chain as C
-from adaptive_dd.plant import serial_integrator as S
+from adaptive_dd.plant import integrator as S
 
 
 def _ur5(duration: float | None = None):
@@ -37,7 +37,7 @@ def test_every_builtin_controller_passes_the_loop_the_same_types():
     """One compiled closed loop for every built-in N-joint controller, with or without estimator."""
     sc = _ur5()
     types = {}
-    for name, cls in SERIAL_CONTROLLERS.items():
+    for name, cls in ARM_CONTROLLERS.items():
         form = cls(sc.arm).compiled_form(2, sc.sample_period)
         types[name] = tuple(numba.typeof(x) for x in (form.cfg, form.state, form.ec, form.es))
     first = next(iter(types.values()))
@@ -52,7 +52,7 @@ def test_the_integrator_step_compiles_once_for_both_friction_laws():
         pp = S.plant_params(ch, sc.arm.pi, np.full(n, 0.1), np.full(n, 0.5), law=law)
         q, qd, stuck = np.full(n, 0.3), np.zeros(n), np.zeros(n, dtype=bool)
         for _ in range(3):  # from rest: the stick-slip law decides modes and steps to crossings
-            assert S.serial_plant_step(ch, pp, q, qd, np.ones(n), 1e-3, 2, stuck)
+            assert S.plant_step(ch, pp, q, qd, np.ones(n), 1e-3, 2, stuck)
     assert len(S._rk4.signatures) == 1, S._rk4.signatures
 
 
@@ -92,9 +92,9 @@ def test_the_two_link_sample_loop_compiles_once():
 def test_a_controller_without_estimator_and_one_with_compile_one_loop():
     """A short UR5 run of ``pd`` and ``adaptive_ct``: one compiled closed loop, one ``_rk4``."""
     from adaptive_dd.closed_loop import glue
-    from adaptive_dd.closed_loop.runner import run_serial
+    from adaptive_dd.closed_loop.runner import run_closed_loop
 
-    res = run_serial(_ur5(duration=0.01))
+    res = run_closed_loop(_ur5(duration=0.01))
     assert [r.name for r in res.runs] == ["pd", "adaptive_ct"]
     assert len(glue.closed_loop_block.signatures) == 1, glue.closed_loop_block.signatures
     assert len(S._rk4.signatures) == 1, S._rk4.signatures

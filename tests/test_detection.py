@@ -11,16 +11,16 @@ import pytest
 
 from adaptive_dd.errors import ParameterError
 from adaptive_dd.experiments import table2_torque, trial_rngs
-from adaptive_dd.identification.detection_limit import detection_limit, detection_threshold
 from adaptive_dd.identification.fisher import mass_information_time
-from adaptive_dd.identification.online import (
-    OnlineConfig,
+from adaptive_dd.identification.sensitivity import simulate_trajectory
+from adaptive_dd.identification.two_link_detection_limit import detection_threshold, two_link_detection_limit
+from adaptive_dd.identification.two_link_online import (
     OnlineEstimator,
+    TwoLinkOnlineConfig,
     online_init,
     raise_alarm,
     rearm_time,
 )
-from adaptive_dd.identification.sensitivity import simulate_trajectory
 from adaptive_dd.plant import TABLE1_SIGMA, PayloadSchedule, payload_mass_from_sigma, simulate_open_loop
 from adaptive_dd.plant.parameters import payload_sigma_delta
 
@@ -45,17 +45,17 @@ def _run(r, cfg, forced_at=None):
 
 
 def test_rearm_time_is_the_documented_rule():
-    cfg = OnlineConfig()
+    cfg = TwoLinkOnlineConfig()
     det = cfg.detector
     resume = cfg.samples(det.freeze) * det.resume
     assert rearm_time(cfg) == pytest.approx(max(det.holdoff, (resume + det.persist_min) * 1e-3))
     assert rearm_time(cfg) <= 0.25
     with pytest.raises(ParameterError, match="no detector"):
-        rearm_time(OnlineConfig(detector=None))
+        rearm_time(TwoLinkOnlineConfig(detector=None))
 
 
 def test_raise_alarm_is_pure_and_does_what_an_alarm_does():
-    cfg = OnlineConfig()
+    cfg = TwoLinkOnlineConfig()
     s0 = online_init(cfg, 3, TABLE1_SIGMA)
     s1 = raise_alarm(s0, cfg, trials=[1])
     assert s0.alarms.tolist() == [0, 0, 0] and s1.alarms.tolist() == [0, 1, 0]
@@ -75,7 +75,7 @@ def test_a_swap_after_a_forced_alarm_is_detected_within_the_rearm_bound(swap_rec
     detector raised none again. Forced here by :func:`raise_alarm`: the detector is re-armed
     ``rearm_time`` after it, so the swap is detected as if nothing had happened (within
     0.1 s), and the mass is known at the end."""
-    cfg = OnlineConfig()
+    cfg = TwoLinkOnlineConfig()
     assert SWAP - 0.29 + rearm_time(cfg) < SWAP
     est = _run(swap_record, cfg, forced_at=SWAP - 0.29)
     for times in est.alarm_times:
@@ -88,7 +88,7 @@ def test_a_swap_inside_the_holdoff_of_a_forced_alarm_is_found_by_the_persistence
     follows it only part way (1.4-1.8 kg: both joints nearly stop from 4.1 to 4.25 s), and the
     persistence test raises the alarm once ``rearm_time`` of motion has passed (at 4.56 s);
     the mass is right at the end."""
-    cfg = OnlineConfig()
+    cfg = TwoLinkOnlineConfig()
     est = _run(swap_record, cfg, forced_at=SWAP - 0.1)
     for times in est.alarm_times:
         assert any(SWAP + 0.1 <= t <= SWAP + 0.7 for t in times), times
@@ -96,7 +96,7 @@ def test_a_swap_inside_the_holdoff_of_a_forced_alarm_is_found_by_the_persistence
 
 
 def test_without_the_forced_alarm_the_swap_is_detected_once(swap_record):
-    est = _run(swap_record, OnlineConfig())
+    est = _run(swap_record, TwoLinkOnlineConfig())
     for times in est.alarm_times:
         assert len(times) == 1 and SWAP <= times[0] < SWAP + 0.1, times
 
@@ -106,7 +106,7 @@ def test_a_model_left_wrong_along_the_payload_direction_is_found_again():
     would take its forgetting time, 20 s, to move): the detector raises an alarm once armed,
     and the mass is right within 0.5 s of it."""
     r = simulate_open_loop(table2_torque(2, 4000), trial_rngs(7, 2))
-    cfg = dataclasses.replace(OnlineConfig(), p0_payload=0.0)
+    cfg = dataclasses.replace(TwoLinkOnlineConfig(), p0_payload=0.0)
     est = OnlineEstimator(cfg, 2, TABLE1_SIGMA + payload_sigma_delta(2.0))
     for k in range(r.q_meas.shape[1]):
         est.update(r.q_meas[:, k], r.qd_meas[:, k], r.tau[:, k])
@@ -128,7 +128,7 @@ def test_a_removal_is_claimed_by_the_glr_only_up_to_the_mass_carried(removal_rec
     payload (the start estimate is the mass origin), the same removal claims -3 kg at 0 kg
     carried: the GLR may not raise it (a stick event looks like that), and the persistence test
     does, later but within the re-arming time of the swap."""
-    cfg = OnlineConfig()
+    cfg = TwoLinkOnlineConfig()
     est = OnlineEstimator(cfg, 2, TABLE1_SIGMA)
     loaded = OnlineEstimator(
         dataclasses.replace(cfg, p0_payload=0.0), 2, TABLE1_SIGMA + payload_sigma_delta(3.0)
@@ -170,10 +170,10 @@ def test_detection_limit_is_the_information_limit_at_the_glr_threshold():
     sa = TABLE1_SIGMA + payload_sigma_delta(3.0)
     q, qd = simulate_trajectory(sa, tau, 1e-3)
     d, k0 = payload_sigma_delta(1.0), 500
-    t3 = detection_limit(q, qd, tau, k0, 1e-3, sa, d, 3.0, n_tests=20_000)
+    t3 = two_link_detection_limit(q, qd, tau, k0, 1e-3, sa, d, 3.0, n_tests=20_000)
     c = detection_threshold(20_000)
     t_info = mass_information_time(q, qd, tau, k0, 1e-3, sa, d, rel=1.0, mass=3.0, z=c)
     assert t3 is not None and t3 == pytest.approx(t_info)
-    t1 = detection_limit(q, qd, tau, k0, 1e-3, sa, d, 1.0, n_tests=20_000)
+    t1 = two_link_detection_limit(q, qd, tau, k0, 1e-3, sa, d, 1.0, n_tests=20_000)
     assert t1 is not None and t3 <= t1
-    assert detection_limit(q, qd, tau, k0, 1e-3, sa, d, 1e-6, n_tests=20_000) is None
+    assert two_link_detection_limit(q, qd, tau, k0, 1e-3, sa, d, 1e-6, n_tests=20_000) is None

@@ -20,7 +20,7 @@ from adaptive_dd.plant import (
     regressor_reference,
     validate_sigma,
 )
-from adaptive_dd.plant.pinocchio_model import base_parameter_map, build_model, cross_check
+from adaptive_dd.plant.pinocchio_model import base_parameter_map, build_model, two_link_cross_check
 
 
 def random_states(rng, n=50):
@@ -101,7 +101,7 @@ def test_mass_matrix_spd_and_skew_symmetry(rng):
 
 @pytest.mark.parametrize("mass", [0.0, 1.0, 3.0])
 def test_cross_check_against_pinocchio_passes(mass):
-    res = cross_check(TABLE1_PHYSICAL, Payload(mass) if mass else None, n_states=100)
+    res = two_link_cross_check(TABLE1_PHYSICAL, Payload(mass) if mass else None, n_states=100)
     assert len(res) == 9
     for r in res:
         assert r.passed, str(r)
@@ -114,7 +114,7 @@ def test_cross_check_detects_a_wrong_model(monkeypatch):
     wrong = PhysicalParameters(**{**TABLE1_PHYSICAL.__dict__, "l1": 0.25})
     real_build = pm.build_model
     monkeypatch.setattr(pm, "build_model", lambda params, payload=None: real_build(wrong, payload))
-    res = pm.cross_check(TABLE1_PHYSICAL, n_states=20)
+    res = pm.two_link_cross_check(TABLE1_PHYSICAL, n_states=20)
     assert not all(r.passed for r in res)
 
 

@@ -142,10 +142,12 @@ def test_a_nan_sample_is_skipped_not_spread(table2_noisy):
     b = estimate(q, r.tau[:1], qd, estimator="exact_batch_ls", tau_f=0.02)
     assert np.all(np.isfinite(b.final)) and np.all(np.isfinite(b.std))
     # the same online, sample by sample
-    from adaptive_dd.identification.online import OnlineConfig, run_online
+    from adaptive_dd.identification.two_link_online import TwoLinkOnlineConfig, run_two_link_online
 
-    cfg = OnlineConfig(tau_f=0.02, rls=EXACT_RLS, p0_payload=0.0, p0_j2=0.0, detector=None, project="none")
-    rec = run_online(q, qd, r.tau[:1], cfg, np.zeros(7))
+    cfg = TwoLinkOnlineConfig(
+        tau_f=0.02, rls=EXACT_RLS, p0_payload=0.0, p0_j2=0.0, detector=None, project="none"
+    )
+    rec = run_two_link_online(q, qd, r.tau[:1], cfg, np.zeros(7))
     assert np.all(np.isfinite(rec.theta)) and rec.n_skipped[0] > 0
     np.testing.assert_allclose(rec.theta[0, -1], clean.final[0], rtol=0.02)
 

@@ -12,7 +12,7 @@ from adaptive_dd.identification.filters import (
     filter_record,
     summing_realisation,
 )
-from adaptive_dd.identification.regressors import OnlineRegressor, filtered_regression
+from adaptive_dd.identification.regressors import OnlineRegressor, two_link_filtered_regression
 from adaptive_dd.plant import TABLE1_SIGMA, ActuatorConfig, SensorConfig, simulate_open_loop
 
 CLEAN = SensorConfig(quantize=False, position_variance=(0, 0), velocity_variance=(0, 0))
@@ -105,7 +105,7 @@ def test_exact_construction_removes_the_nonlinear_filtering_error(smooth_record)
     tau = align_torque(res.tau)
     out = {}
     for c in ("paper", "exact"):
-        fr = filtered_regression(res.q_meas, tau, res.qd_meas, construction=c, tau_f=0.006)
+        fr = two_link_filtered_regression(res.q_meas, tau, res.qd_meas, construction=c, tau_f=0.006)
         r = fr.y - fr.phi @ sigma
         out[c] = np.sqrt((r[0, 200:] ** 2).mean(axis=0))
     scale = np.sqrt((res.tau**2).mean(axis=(0, 1)))
@@ -115,7 +115,7 @@ def test_exact_construction_removes_the_nonlinear_filtering_error(smooth_record)
 
 def test_unaligned_torque_leaves_a_half_sample_error(smooth_record):
     res, sigma = smooth_record
-    fr = filtered_regression(res.q_meas, res.tau, res.qd_meas, construction="exact", tau_f=0.006)
+    fr = two_link_filtered_regression(res.q_meas, res.tau, res.qd_meas, construction="exact", tau_f=0.006)
     r = np.sqrt(((fr.y - fr.phi @ sigma)[0, 200:] ** 2).mean(axis=0))
     assert np.all(r > 1e-3 * np.sqrt((res.tau**2).mean(axis=(0, 1))))
 
@@ -124,7 +124,7 @@ def test_unaligned_torque_leaves_a_half_sample_error(smooth_record):
 @pytest.mark.parametrize("method", ["M1", "M2"])
 def test_online_regressor_equals_record(construction, method):
     res = simulate_open_loop(table2_torque(2, 600), np.random.default_rng(1))
-    fr = filtered_regression(
+    fr = two_link_filtered_regression(
         res.q_meas, res.tau, res.qd_meas, method=method, construction=construction, tau_f=0.006
     )
     online = OnlineRegressor((2,), method=method, construction=construction, tau_f=0.006)
@@ -138,8 +138,8 @@ def test_online_regressor_equals_record(construction, method):
 def test_regression_input_errors():
     q = np.zeros((100, 2))
     with pytest.raises(SignalError, match="M2 needs the measured velocity"):
-        filtered_regression(q, q, None, method="M2")
+        two_link_filtered_regression(q, q, None, method="M2")
     with pytest.raises(SignalError, match="equal shapes"):
-        filtered_regression(q, q[:50], q)
+        two_link_filtered_regression(q, q[:50], q)
     with pytest.raises(ParameterError, match="construction"):
-        filtered_regression(q, q, q, construction="magic")
+        two_link_filtered_regression(q, q, q, construction="magic")

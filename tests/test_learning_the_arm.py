@@ -13,18 +13,18 @@ from adaptive_dd.identification.arm_prior import (
     perturbed_parameters,
     prior_covariance,
 )
-from adaptive_dd.identification.serial_online import (
+from adaptive_dd.identification.online import (
     REOPEN_GENERIC,
-    SerialDetector,
-    SerialOnlineConfig,
+    Detector,
+    OnlineConfig,
     derived_row_weights,
     est_init,
     reopen_mass_std,
-    run_serial_online,
+    run_online,
 )
+from adaptive_dd.plant.arm import Arm
 from adaptive_dd.plant.chain import rnea_batch
 from adaptive_dd.plant.prescribed import exciting_motion
-from adaptive_dd.plant.serial_arm import SerialArm
 from adaptive_dd.robots import ROBOTS, robot_urdf
 
 T = 1e-3
@@ -32,7 +32,7 @@ T = 1e-3
 
 @pytest.fixture(scope="module")
 def arm():
-    return SerialArm.from_urdf(robot_urdf("vertical3"), ROBOTS["vertical3"].payload_frame)
+    return Arm.from_urdf(robot_urdf("vertical3"), ROBOTS["vertical3"].payload_frame)
 
 
 def _record(arm, pi_plant, seed, n=15_000, noise=1.0):
@@ -54,8 +54,8 @@ def _learnt_sigma(arm, pi_plant, seed=3, noise=1.0):
     a record of the plant, the estimator starting from the URDF (torques exact at the samples:
     no zero-order-hold alignment)."""
     _, qm, qdm, tau = _record(arm, pi_plant, seed, noise=noise)
-    cfg = SerialOnlineConfig(mode="arm", detector=None, align=False)
-    rec = run_serial_online(arm, cfg, qm, qdm, tau)
+    cfg = OnlineConfig(mode="arm", detector=None, align=False)
+    rec = run_online(arm, cfg, qm, qdm, tau)
     th = rec.theta[0, -1]
     pb = arm.base.count
     return th[:pb] + arm.payload_basis @ th[pb:]
@@ -105,7 +105,7 @@ def test_without_the_prior_the_arm_is_not_learnt(arm):
     pi_plant = arm.pi.copy()
     pi_plant[10 * n] *= 1.5
     _, qm, qdm, tau = _record(arm, pi_plant, 3)
-    rec = run_serial_online(arm, SerialOnlineConfig(mode="full", detector=None), qm, qdm, tau)
+    rec = run_online(arm, OnlineConfig(mode="full", detector=None), qm, qdm, tau)
     col = list(arm.base.independent).index(10 * n)
     assert abs(rec.theta[0, -1, col] - pi_plant[10 * n]) > 0.2 * (pi_plant[10 * n] - arm.pi[10 * n])
 
@@ -153,7 +153,7 @@ def test_prior_covariance_matches_the_draws(arm):
 )
 def test_bad_settings_are_named(kw, match):
     with pytest.raises(ParameterError, match=match):
-        SerialOnlineConfig(**kw)
+        OnlineConfig(**kw)
 
 
 def test_the_arms_momentum_regression_is_exact(arm):
@@ -165,11 +165,11 @@ def test_the_arms_momentum_regression_is_exact(arm):
     worst = {}
     frozen = ArmUncertainty(0.0, 0.0, 0.0, 0.0, 0.0, 0.0)  # the estimate held at the truth
     for mode in ("arm", "full"):
-        cfg = SerialOnlineConfig(
+        cfg = OnlineConfig(
             mode=mode, detector=None, selection=None, align=False, arm_uncertainty=frozen,
             payload_mass_std=1e-9, row_weights=(1.0,) * arm.n_joints,
         )  # fmt: skip
-        rec = run_serial_online(arm, cfg, q, qd, tau)
+        rec = run_online(arm, cfg, q, qd, tau)
         worst[mode] = np.nanmax(np.abs(rec.eps[0, 300:]))  # after the filters' start-up
     assert worst["arm"] < 1e-4 * np.max(np.abs(tau)), worst
     assert worst["full"] > 10 * worst["arm"], worst
@@ -186,17 +186,17 @@ def test_the_arms_momentum_regression_is_exact(arm):
 )
 def test_derived_row_weights_are_the_hand_tuned_ones(robot, tuned, tol):
     """Torque limit over the largest (the D/A's step): the weights once tuned by hand per arm."""
-    a = SerialArm.from_urdf(robot_urdf(robot), ROBOTS[robot].payload_frame)
+    a = Arm.from_urdf(robot_urdf(robot), ROBOTS[robot].payload_frame)
     np.testing.assert_allclose(derived_row_weights(a), tuned, atol=tol)
 
 
 def test_reopening_follows_the_payload_capacity(arm):
-    det = SerialDetector()
+    det = Detector()
     assert reopen_mass_std(det, arm) == REOPEN_GENERIC
     assert reopen_mass_std(det, arm.with_(payload_capacity=5.0)) == pytest.approx(3.0)
-    assert reopen_mass_std(SerialDetector(reopen_mass_std=1.0), arm.with_(payload_capacity=5.0)) == 1.0
+    assert reopen_mass_std(Detector(reopen_mass_std=1.0), arm.with_(payload_capacity=5.0)) == 1.0
     # and it is what the estimator re-opens: the payload block's mass variance after an alarm
-    c5, _ = est_init(SerialOnlineConfig(), arm.with_(payload_capacity=5.0), 1)
+    c5, _ = est_init(OnlineConfig(), arm.with_(payload_capacity=5.0), 1)
     assert c5.P_reopen[0, 0] == pytest.approx(9.0)
 
 
@@ -218,11 +218,11 @@ def test_a_bad_payload_capacity_is_named(value, match):
 
 
 def test_the_mode_follows_what_the_scenario_states():
-    assert SerialOnlineConfig().mode == "payload"
-    cfg = SerialOnlineConfig(arm_uncertainty={"mass": 0.1})
+    assert OnlineConfig().mode == "payload"
+    cfg = OnlineConfig(arm_uncertainty={"mass": 0.1})
     assert cfg.mode == "arm" and cfg.project is False and cfg.prior_radius is None
     assert cfg.arm_uncertainty == ArmUncertainty(mass=0.1)
-    assert SerialOnlineConfig(mode="payload", arm_uncertainty={}).project is True
+    assert OnlineConfig(mode="payload", arm_uncertainty={}).project is True
 
 
 def test_a_stated_plant_uncertainty_reaches_the_estimator():
@@ -236,7 +236,7 @@ def test_a_stated_plant_uncertainty_reaches_the_estimator():
     sc = SimpleNamespace(plant=SimpleNamespace(uncertainty=unc))
     out = with_stated_uncertainty("adaptive_ct", {"estimator": {"lam0": 1.0}}, sc)
     assert out["estimator"] == {"lam0": 1.0, "arm_uncertainty": vars(unc)}
-    assert SerialOnlineConfig(**out["estimator"]).mode == "arm"
+    assert OnlineConfig(**out["estimator"]).mode == "arm"
     mine = {"estimator": {"mode": "payload"}}
     assert with_stated_uncertainty("adaptive_ct", mine, sc) is mine
     assert with_stated_uncertainty("ct_nominal", {}, sc) == {}
@@ -260,13 +260,13 @@ def test_a_scenario_without_estimator_settings_runs_as_the_tuned_one():
     assert "estimator" not in base.get("controllers", {}).get("adaptive_ct", {})
     base["run"] |= {"duration": 4.5, "seeds": 2, "controllers": ["ct_oracle", "adaptive_ct"]}
     base["payload"] = base["payload"][:1]
-    tuned = {
-        "row_weights": [1.0, 1.0, 1.0, 1.0, 0.14, 0.14, 0.14],
+    tuned = {  # [controllers.adaptive_ct]: the estimator's table and the detector's
+        "estimator": {"row_weights": [1.0, 1.0, 1.0, 1.0, 0.14, 0.14, 0.14]},
         "detector": {"reopen_mass_std": 2.0, "slow_factor": 1.5, "fast_window": 0.004, "fast_threshold": 6.0},
     }
     out = {}
     for name, est in (("derived", None), ("tuned", tuned)):
-        d = {**base, "controllers": {"adaptive_ct": {"estimator": est}} if est else {}}
+        d = {**base, "controllers": {"adaptive_ct": est} if est else {}}
         df = run_benchmark(parse_scenario(d, "panda.toml", "panda"), progress=False).to_frame()
         c = df[df.controller == "adaptive_ct"].sort_values(["seed", "segment"])
         out[name] = (c.ratio_to_floor.to_numpy(float), c.detection_delay.to_numpy(float))
@@ -276,9 +276,9 @@ def test_a_scenario_without_estimator_settings_runs_as_the_tuned_one():
 
 
 def test_the_warm_up_is_longer_while_the_arm_is_learnt(arm):
-    from adaptive_dd.identification import serial_online_kernel as K
+    from adaptive_dd.identification import online_kernel as K
 
-    c_pay, _ = est_init(SerialOnlineConfig(), arm, 1)
-    c_arm, _ = est_init(SerialOnlineConfig(mode="arm"), arm, 1)
-    c_set, _ = est_init(SerialOnlineConfig(mode="arm", detector=SerialDetector(warmup=0.2)), arm, 1)
+    c_pay, _ = est_init(OnlineConfig(), arm, 1)
+    c_arm, _ = est_init(OnlineConfig(mode="arm"), arm, 1)
+    c_set, _ = est_init(OnlineConfig(mode="arm", detector=Detector(warmup=0.2)), arm, 1)
     assert (c_pay.ints[K.I_WARMUP], c_arm.ints[K.I_WARMUP], c_set.ints[K.I_WARMUP]) == (500, 1000, 200)

@@ -12,12 +12,12 @@ import pytest
 from adaptive_dd.benchmark.runner import run_benchmark
 from adaptive_dd.benchmark.scenario import load_scenario
 from adaptive_dd.errors import ParameterError, ScenarioError
-from adaptive_dd.plant import TABLE1_SIGMA, Arm
-from adaptive_dd.plant.arm import arm_from_tables
-from adaptive_dd.plant.integrator import lugre_step, plant_step
+from adaptive_dd.plant import TABLE1_SIGMA, TwoLinkArm
+from adaptive_dd.plant.arm_tables import arm_from_tables
 from adaptive_dd.plant.simulator import ArmSimulator
+from adaptive_dd.plant.two_link_integrator import lugre_step, two_link_plant_step
 
-ARM = Arm.sice(friction="lugre")
+ARM = TwoLinkArm.sice(friction="lugre")
 FP = ARM.friction_params
 
 
@@ -100,7 +100,7 @@ def test_the_simulator_carries_the_bristle_state_and_plant_step_refuses_lugre():
     assert 0 < sim.z[0, 0] < TABLE1_SIGMA[5] / FP[3]
     z = np.zeros((1, 2))
     with pytest.raises(ParameterError, match="lugre_step"):
-        plant_step(z, z, z.astype(bool), z + 1, z, TABLE1_SIGMA[None], 1e-3, 2, 3)
+        two_link_plant_step(z, z, z.astype(bool), z + 1, z, TABLE1_SIGMA[None], 1e-3, 2, 3)
 
 
 def test_lugre_parameters_from_a_scenario_table_and_their_errors():

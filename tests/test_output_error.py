@@ -6,8 +6,8 @@ import pytest
 from adaptive_dd.errors import ParameterError, SignalError
 from adaptive_dd.experiments import table2_torque
 from adaptive_dd.identification.fisher import fisher_information, output_variances
-from adaptive_dd.identification.output_error import _Problem, output_error_fit
 from adaptive_dd.identification.sensitivity import simulate_trajectory
+from adaptive_dd.identification.two_link_output_error import _Problem, output_error_fit
 from adaptive_dd.plant.parameters import TABLE1_SIGMA
 
 N = 2000

@@ -136,12 +136,12 @@ def test_output_set_discards_on_error(tmp_path):
 
 
 def test_internal_error_short_message_and_debug_traceback(monkeypatch, capsys):
-    import adaptive_dd.cli as cli
+    import adaptive_dd.cli.validate as cli_validate
 
     def boom(args):
         raise RuntimeError("something broke")
 
-    monkeypatch.setattr(cli, "_cmd_validate", boom)
+    monkeypatch.setattr(cli_validate, "run", boom)
     assert main(["validate"]) == EXIT_INTERNAL
     err = capsys.readouterr().err
     assert "internal error: RuntimeError: something broke" in err
@@ -151,9 +151,9 @@ def test_internal_error_short_message_and_debug_traceback(monkeypatch, capsys):
 
 
 def test_plain_value_error_outside_our_code_is_internal(monkeypatch, capsys):
-    import adaptive_dd.cli as cli
+    import adaptive_dd.cli.validate as cli_validate
 
-    monkeypatch.setattr(cli, "_cmd_validate", lambda args: np.zeros(0).max())
+    monkeypatch.setattr(cli_validate, "run", lambda args: np.zeros(0).max())
     assert main(["validate"]) == EXIT_INTERNAL
 
 
@@ -236,10 +236,10 @@ def test_identify_refuses_long_filters_and_too_few_equations(tmp_path, monkeypat
 
 
 def test_plain_value_error_from_our_code_is_a_user_error(monkeypatch, capsys):
-    import adaptive_dd.cli as cli
+    import adaptive_dd.cli.validate as cli_validate
     from adaptive_dd.controllers import make_controller
 
-    monkeypatch.setattr(cli, "_cmd_validate", lambda args: make_controller("nope"))
+    monkeypatch.setattr(cli_validate, "run", lambda args: make_controller("nope"))
     assert main(["validate"]) == 2
     assert "error: unknown controller 'nope'" in capsys.readouterr().err
 

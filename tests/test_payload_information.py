@@ -15,8 +15,8 @@ from adaptive_dd.identification.payload_information import (
     payload_regression_covariance,
     payload_regression_noise,
 )
+from adaptive_dd.plant.arm import Arm, payload_parameters
 from adaptive_dd.plant.prescribed import exciting_motion, prescribed_record
-from adaptive_dd.plant.serial_arm import SerialArm, payload_parameters
 from adaptive_dd.robots import ROBOTS, robot_urdf
 
 T = 1e-3
@@ -25,7 +25,7 @@ PAY = payload_parameters(2.5, [0.03, 0.0, 0.08], radius=0.05)
 
 @pytest.fixture(scope="module")
 def ur5():
-    return SerialArm.from_urdf(robot_urdf("ur5"), ROBOTS["ur5"].payload_frame)
+    return Arm.from_urdf(robot_urdf("ur5"), ROBOTS["ur5"].payload_frame)
 
 
 @pytest.fixture(scope="module")

@@ -18,9 +18,9 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from adaptive_dd.benchmark.scenario import load_scenario, parse_scenario
-from adaptive_dd.closed_loop.controllers import make_serial_controller
-from adaptive_dd.closed_loop.runner import run_serial, true_models
+from adaptive_dd.closed_loop.runner import run_closed_loop, true_models
 from adaptive_dd.closed_loop.types import pi_with_payload, plant_of
+from adaptive_dd.controllers import make_controller
 from adaptive_dd.errors import ScenarioError
 from adaptive_dd.identification.consistency import is_physical
 from adaptive_dd.plant.uncertainty import (
@@ -205,10 +205,10 @@ def test_the_oracle_is_given_each_trials_plant_and_ct_nominal_the_model():
         np.testing.assert_allclose(pi_true[i, 1, : want.size], want, rtol=1e-12)
         np.testing.assert_allclose(pi_true[i, 1, want.size :], d.armature, rtol=1e-12)
         assert not np.allclose(pi_true[i, 0], sc.arm.pi)
-    nominal = make_serial_controller("ct_nominal", sc.arm)
+    nominal = make_controller("ct_nominal", arm=sc.arm)
     np.testing.assert_array_equal(nominal.pi_nominal, sc.arm.pi)  # the others: the [arm]'s URDF
-    res = run_serial(sc)
-    exact = run_serial(dataclasses.replace(sc, plant=None))
+    res = run_closed_loop(sc)
+    exact = run_closed_loop(dataclasses.replace(sc, plant=None))
     o, n = _rms(res.runs["ct_oracle"], sc), _rms(res.runs["ct_nominal"], sc)
     o_x, n_x = _rms(exact.runs["ct_oracle"], sc), _rms(exact.runs["ct_nominal"], sc)
     np.testing.assert_allclose(n_x[:, 0], o_x[:, 0], rtol=1e-9)  # exact arm, no payload: one model
@@ -223,7 +223,7 @@ class SeesTheTruth:
     needs_true_model = True
 
     def __init__(self, arm):
-        self.inner = make_serial_controller("ct_oracle", arm)
+        self.inner = make_controller("ct_oracle", arm=arm)
         self.seen = []
 
     def reset(self, n_trials, sample_period):
@@ -243,9 +243,9 @@ def test_python_path_gives_oracles_each_trials_plant():
     data["payload"] = [{**data["payload"][0], "at": 0.2}]
     sc = parse_scenario(data, "u.toml")
     plug = SeesTheTruth(sc.arm)
-    ctrls = {"ct_oracle": make_serial_controller("ct_oracle", sc.arm), "plug": plug}
-    compiled = run_serial(sc, {"ct_oracle": ctrls["ct_oracle"]})
-    python = run_serial(sc, ctrls, engine="python")
+    ctrls = {"ct_oracle": make_controller("ct_oracle", arm=sc.arm), "plug": plug}
+    compiled = run_closed_loop(sc, {"ct_oracle": ctrls["ct_oracle"]})
+    python = run_closed_loop(sc, ctrls, engine="python")
     np.testing.assert_allclose(
         python.runs["ct_oracle"].acc.sum_e2, compiled.runs["ct_oracle"].acc.sum_e2, rtol=1e-9
     )
@@ -284,7 +284,7 @@ def test_plant_urdf_is_the_plant_and_model_from_is_the_model(tmp_path):
     assert sc.arm.pi_links[10] == pytest.approx(9.5)  # the model: the identified links
     assert sc.plant.nominal().pi_links[10] == pytest.approx(8.393)  # the plant: the [arm]
     np.testing.assert_array_equal(sc.arm.armature, base.armature)
-    ctrl = make_serial_controller("ct_nominal", sc.arm)
+    ctrl = make_controller("ct_nominal", arm=sc.arm)
     assert ctrl.pi_nominal[10] == pytest.approx(9.5)
     pl = plant_of(sc, (0,))
     assert pl.pi_seg[0, 0, 10] == pytest.approx(8.393)
@@ -417,7 +417,7 @@ def test_the_drawn_plants_are_in_the_results():
     data["run"] = {**data["run"], "duration": 0.2, "controllers": ["ct_oracle"]}
     data["payload"] = [{**data["payload"][0], "at": 0.1}]
     sc = parse_scenario(data, "u.toml")
-    res = run_serial(sc)
+    res = run_closed_loop(sc)
     m = compute_metrics(res)
     draws = plant_draws(sc, (0, 1))
     got = m["plant"]["seeds"][1]["links"][1]
@@ -448,7 +448,7 @@ def test_run_excite_is_checked():
     sc = parse_scenario(data, "u.toml")
     assert sc.excite == 20.0
     with pytest.raises(ValueError, match="built per seed from the identified model"):
-        run_serial(sc, {"ct_nominal": make_serial_controller("ct_nominal", sc.arm)})
+        run_closed_loop(sc, {"ct_nominal": make_controller("ct_nominal", arm=sc.arm)})
 
 
 def test_a_model_from_the_plants_own_urdf_tracks_as_the_oracle(tmp_path):
@@ -457,9 +457,9 @@ def test_a_model_from_the_plants_own_urdf_tracks_as_the_oracle(tmp_path):
     edited = _edited_ur5(tmp_path)
     data = _data(duration=0.6, swaps=(0.3,), controllers=["ct_nominal", "ct_oracle"])
     data["plant"] = {"urdf": str(edited)}
-    wrong = run_serial(parse_scenario(data, "p.toml"))
+    wrong = run_closed_loop(parse_scenario(data, "p.toml"))
     data["model"] = {"from": str(edited)}
-    right = run_serial(parse_scenario(data, "p.toml"))
+    right = run_closed_loop(parse_scenario(data, "p.toml"))
     e = {k: r.runs[n].acc.sum_e2[:, 0] for k, r in (("w", wrong), ("r", right)) for n in ("ct_nominal",)}
     oracle = right.runs["ct_oracle"].acc.sum_e2[:, 0]
     np.testing.assert_allclose(e["r"], oracle, rtol=1e-9)
@@ -480,8 +480,8 @@ def test_the_excitation_phase_identifies_the_plant_and_feeds_the_controllers():
     data["plant"] = {"uncertainty": LEVELS}
     data["run"]["excite"] = 10.0
     sc = parse_scenario(data, "v.toml")
-    res = run_serial(sc)
-    base = run_serial(dataclasses.replace(sc, excite=0.0))
+    res = run_closed_loop(sc)
+    base = run_closed_loop(dataclasses.replace(sc, excite=0.0))
     rep = res.cache["excitation_report"]
     err = rep.errors()
     assert np.all(np.median(err["fit"], axis=1) < 0.5 * np.median(err["model"], axis=1)), rep.summary()
@@ -513,11 +513,11 @@ def test_simulate_arm_simulates_the_plant(tmp_path):
 
 @pytest.mark.parametrize("name", ["sice_arm", "vertical3", "ur5", "panda", "iiwa14"])
 def test_a_urdf_written_with_other_links_reads_back_exactly(name, tmp_path):
-    from adaptive_dd.plant.serial_arm import SerialArm
+    from adaptive_dd.plant.arm import Arm
     from adaptive_dd.plant.urdf_write import write_urdf_links
     from adaptive_dd.robots import ROBOTS
 
-    arm = SerialArm.from_urdf(robot_urdf(name), ROBOTS[name].payload_frame)
+    arm = Arm.from_urdf(robot_urdf(name), ROBOTS[name].payload_frame)
     spec = dataclasses.replace(exact_plant(arm), uncertainty=Uncertainty(**LEVELS))
     d = draw_plant(spec, plant_rng(0, 1))
     back = arm.with_(urdf=write_urdf_links(arm, d.pi_links, tmp_path / "x.urdf", "drawn"))

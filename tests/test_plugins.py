@@ -127,11 +127,11 @@ def test_a_bare_class_without_base_runs_as_the_docs_say(tmp_path, capsys):
 
 
 def test_the_n_joint_example_receives_the_arm_and_the_scenario():
-    from adaptive_dd.plant import SerialArm  # issue 27: this import failed
+    from adaptive_dd.plant import Arm  # issue 27: this import failed
 
     sc = load_scenario(EXAMPLES / "plugin_urdf.toml")
     sc = dataclasses.replace(sc, seeds=1, duration=0.6, swap_times=(0.3,), swap_masses=(2.0,), swap_com=())
-    assert isinstance(sc.arm, SerialArm)
+    assert isinstance(sc.arm, Arm)
     ctrl = make_controller(
         "assumed_payload:AssumedPayload", options={"label": "x"}, arm=sc.arm, search=(EXAMPLES,), scenario=sc
     )

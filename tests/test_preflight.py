@@ -148,7 +148,7 @@ def test_information_time_has_the_same_keys_without_an_oracle_on_every_arm():
 
 
 @pytest.mark.parametrize("arm", ["two_link", "urdf"])
-def test_adaptive_ct_takes_its_detector_table_in_either_place_on_every_arm(arm):
+def test_adaptive_ct_takes_its_detector_table_at_the_top_on_every_arm_and_inside_with_a_warning(arm):
     from adaptive_dd.benchmark.runner import scenario_controller
     from adaptive_dd.benchmark.scenario_checks import freeze
     from adaptive_dd.errors import ParameterError
@@ -164,7 +164,8 @@ def test_adaptive_ct_takes_its_detector_table_in_either_place_on_every_arm(arm):
         return scenario_controller(sc, "adaptive_ct")[1].online
 
     top = built({"detector": {key: value}})
-    inside = built({"estimator": {"detector": {key: value}}})
+    with pytest.warns(FutureWarning, match=r"estimator\.detector: write the detector's table at the top"):
+        inside = built({"estimator": {"detector": {key: value}}})
     assert top == inside and getattr(top.detector, key) == value
     with pytest.raises(ParameterError, match="'detector' given twice"):
         built({"detector": {key: value}, "estimator": {"detector": {key: value}}})

@@ -215,13 +215,13 @@ def test_excluded_channels_hold_unseen_parameters_and_fit_the_rest():
     """A noise-free log of a perturbed vertical3 arm, joint 3's channel excluded: the parameters only
     channel 3 sees stay at the URDF's values, and the fitted channels are predicted exactly."""
     from adaptive_dd.identification.log_fit import fit_log, identifiable_subset, predict_torque
-    from adaptive_dd.identification.serial_model import serial_model
-    from adaptive_dd.plant.serial_arm import SerialArm
+    from adaptive_dd.identification.model import arm_model
+    from adaptive_dd.plant.arm import Arm
     from adaptive_dd.record import derivatives
     from adaptive_dd.robots import robot_urdf
 
-    arm = SerialArm.from_urdf(robot_urdf("vertical3"))
-    model = serial_model(arm)
+    arm = Arm.from_urdf(robot_urdf("vertical3"))
+    model = arm_model(arm)
     T = 0.002
     t = np.arange(5000) * T
     q = np.column_stack([0.8 * np.sin(1.1 * t), 0.6 * np.sin(1.7 * t + 1), 0.9 * np.sin(2.3 * t + 2)])
@@ -248,11 +248,11 @@ def test_excluded_channels_hold_unseen_parameters_and_fit_the_rest():
 
 def test_consistent_arm_fit_takes_a_semidefinite_information():
     from adaptive_dd.identification.consistency import consistent_arm_fit
-    from adaptive_dd.identification.serial_model import serial_model
-    from adaptive_dd.plant.serial_arm import SerialArm
+    from adaptive_dd.identification.model import arm_model
+    from adaptive_dd.plant.arm import Arm
     from adaptive_dd.robots import robot_urdf
 
-    model = serial_model(SerialArm.from_urdf(robot_urdf("vertical3")))
+    model = arm_model(Arm.from_urdf(robot_urdf("vertical3")))
     F = np.eye(model.p)
     F[0, 0] = 0.0  # a direction the record did not see
     fit = consistent_arm_fit(model, model.sigma_ref, F)
@@ -263,14 +263,14 @@ def test_consistent_arm_fit_takes_a_semidefinite_information():
 def test_tiago_held_out_prediction():
     """The shipped record: trained on 9.21-30 s, the held-out 48-67.9 s predicted on arm_1-4 with a
     pooled error (2 Hz low-pass) of 0.73 N m (measured), against 4.3 for the URDF."""
-    from adaptive_dd.cli import _load_arm
-    from adaptive_dd.cli_log import lowpass, read_arm_log
+    from adaptive_dd.cli._common import load_arm, read_arm_log
+    from adaptive_dd.cli.predict import lowpass
     from adaptive_dd.identification.log_fit import fit_log, identifiable_subset, predict_torque
-    from adaptive_dd.identification.serial_model import serial_model
+    from adaptive_dd.identification.model import arm_model
     from adaptive_dd.record import derivatives
 
-    arm = _load_arm(str(SCENARIO))
-    model = serial_model(arm)
+    arm = load_arm(str(SCENARIO))
+    model = arm_model(arm)
     _, tr = read_arm_log(str(SCENARIO), arm, window=(9.21, 30.0))
     _, te = read_arm_log(str(SCENARIO), arm, window=(48.0, 67.9))
     assert tr.used.tolist() == [False, True, True, True, True, False, False, False]
@@ -331,16 +331,16 @@ def test_cli_identify_and_predict_on_the_tiago_record(tmp_path, capsys):
 # ----------------------------------------------------------------------------- model files, pairs, validate
 def test_fitted_urdf_carries_the_standard_parameters(tmp_path):
     """write_fitted_urdf: the arm read back from model.urdf has the written links and friction."""
-    from adaptive_dd.plant.serial_arm import SerialArm
+    from adaptive_dd.plant.arm import Arm
     from adaptive_dd.plant.urdf_write import write_fitted_urdf
     from adaptive_dd.robots import robot_urdf
 
-    arm = SerialArm.from_urdf(robot_urdf("vertical3"), "tool")
+    arm = Arm.from_urdf(robot_urdf("vertical3"), "tool")
     n = arm.n_joints
     pi = np.array(arm.pi, dtype=float)
     pi[: 10 * n] *= np.repeat([1.1, 0.9, 1.3], 10)  # each link scaled: still a rigid body
     pi[10 * n :] = np.r_[[0.3, 0.2, 0.1], [0.5, 0.4, 0.3], [0.0, 0.0, 0.0]]
-    back = SerialArm.from_urdf(write_fitted_urdf(arm, pi, tmp_path / "model.urdf"), "tool")
+    back = Arm.from_urdf(write_fitted_urdf(arm, pi, tmp_path / "model.urdf"), "tool")
     np.testing.assert_allclose(back.pi_links, pi[: 10 * n], rtol=1e-9, atol=1e-12)
     np.testing.assert_allclose(back.viscous, pi[10 * n : 11 * n])
     np.testing.assert_allclose(back.coulomb, pi[11 * n : 12 * n])
@@ -407,10 +407,10 @@ def test_payload_pair_names_what_the_pair_does_not_see():
     a LinAlgError; with full covariances the payload comes back."""
     from adaptive_dd.errors import ParameterError
     from adaptive_dd.identification.payload_pair import payload_from_pair
-    from adaptive_dd.plant.serial_arm import SerialArm, payload_parameters
+    from adaptive_dd.plant.arm import Arm, payload_parameters
     from adaptive_dd.robots import ROBOTS, robot_urdf
 
-    arm = SerialArm.from_urdf(robot_urdf("ur5"), ROBOTS["ur5"].payload_frame)
+    arm = Arm.from_urdf(robot_urdf("ur5"), ROBOTS["ur5"].payload_frame)
     P = arm.payload_basis
     load = payload_parameters(2.0, [0.01, 0.02, 0.05], radius=0.05)
     s0 = arm.sigma

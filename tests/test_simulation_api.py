@@ -100,15 +100,15 @@ def test_figures_are_returned_with_one_style_per_controller(short, tmp_path):
 
 
 def test_no_module_constant_outside_the_default_factory():
-    """Everything physical comes from an Arm; only parameters.py defines and arm.py's
-    Arm.sice() reads the SICE constants (plant/__init__ re-exports them)."""
+    """Everything physical comes from a TwoLinkArm; only parameters.py defines and two_link.py's
+    TwoLinkArm.sice() reads the SICE constants (plant/__init__ re-exports them)."""
     import re
     from pathlib import Path
 
     import adaptive_dd
 
     root = Path(adaptive_dd.__file__).parent
-    allowed = {root / "plant" / "parameters.py", root / "plant" / "arm.py", root / "plant" / "__init__.py"}
+    allowed = {root / "plant" / name for name in ("parameters.py", "two_link.py", "__init__.py")}
     pat = re.compile(r"\b(TABLE1_SIGMA|TABLE1_PHYSICAL|TORQUE_LIMITS|L1|L2)\b")
     offenders = [
         f"{p.relative_to(root)}:{i}"
@@ -159,7 +159,7 @@ def ur5_short():
 
 
 def test_stepping_a_urdf_arm_by_hand_equals_its_benchmark_trial(ur5_short):
-    """Issue 27: Simulation(...).reset() raised 'arm must be an Arm, got SerialArm' on a URDF arm."""
+    """Issue 27: Simulation(...).reset() raised 'arm must be a TwoLinkArm, got Arm' on a URDF arm."""
     sc = ur5_short
     n = sc.n_joints
     sim = Simulation(sc, seed_index=1)

@@ -11,12 +11,12 @@ from adaptive_dd.plant import (
     TABLE1_PHYSICAL,
     TABLE1_SIGMA,
     ActuatorConfig,
-    Arm,
     ArmSimulator,
     PayloadSchedule,
     SensorConfig,
-    plant_step,
+    TwoLinkArm,
     simulate_open_loop,
+    two_link_plant_step,
 )
 from adaptive_dd.plant.pinocchio_model import build_model
 
@@ -47,7 +47,7 @@ def test_integration_matches_pinocchio_aba_with_scipy():
     q, qd = x[None, :2], x[None, 2:]
     stuck, slip = np.zeros((1, 2), bool), np.ones((1, 2))
     for k in range(n):
-        q, qd, stuck, slip = plant_step(q, qd, stuck, slip, tau[k][None], sigma[None], T, 2)
+        q, qd, stuck, slip = two_link_plant_step(q, qd, stuck, slip, tau[k][None], sigma[None], T, 2)
     np.testing.assert_allclose(q[0], ref[-1, :2], atol=1e-9)
     np.testing.assert_allclose(qd[0], ref[-1, 2:], atol=1e-8)
 
@@ -105,7 +105,7 @@ def test_sensor_noise_and_quantization():
 
 
 def test_actuator_saturation_and_dac_quantization():
-    act = Arm.sice().actuator
+    act = TwoLinkArm.sice().actuator
     tau, sat = act.apply(np.array([[100.0, -20.0], [1.0001, 0.5]]))
     assert sat.tolist() == [[True, True], [False, False]]
     lsb = 2 * np.array([70.0, 15.0]) / 4096

@@ -7,7 +7,7 @@ across cores (``numba.prange``), calling the same compiled pieces as the Python 
 the actuator and sensor models
 (:mod:`adaptive_dd.plant.sampling`), the plant integrator, the control laws
 (:mod:`adaptive_dd.controllers.laws`), the online estimator
-(:mod:`adaptive_dd.identification.online_kernel`) and the streamed metrics
+(:mod:`adaptive_dd.identification.two_link_online_kernel`) and the streamed metrics
 (:func:`~adaptive_dd.benchmark.streaming.accumulate_trial`). A controller spec says which
 law, with which gains and model (each built-in's ``compiled_spec`` method:
 :func:`~adaptive_dd.controllers.compiled_form.compiled_spec`); plug-in controllers have none and
@@ -20,7 +20,7 @@ two-link plant (:class:`TwoLinkPlant`), trial state (:class:`TwoLinkTrialState`)
 estimator configuration (:class:`OnlineKernelConfig`) are
 defined here; the law is the controller's
 :class:`~adaptive_dd.controllers.compiled_form.TwoLinkGains`; the estimator state is
-:class:`~adaptive_dd.identification.online.OnlineState`.
+:class:`~adaptive_dd.identification.two_link_online.OnlineState`.
 """
 
 from __future__ import annotations
@@ -33,9 +33,9 @@ from numpy.typing import NDArray
 
 from adaptive_dd.benchmark.streaming import accumulate_trial
 from adaptive_dd.controllers.compiled_form import LAW_ADAPTIVE, LAW_SLOTINE, command_trial
-from adaptive_dd.identification.online_kernel import C_SINCE_ALARM, online_step_trial
-from adaptive_dd.plant.integrator import step_one
+from adaptive_dd.identification.two_link_online_kernel import C_SINCE_ALARM, online_step_trial
 from adaptive_dd.plant.sampling import actuate_trial, measure_trial
+from adaptive_dd.plant.two_link_integrator import step_one
 
 __all__ = [
     "OnlineKernelConfig",
@@ -56,9 +56,10 @@ Array = NDArray[np.float64]
 
 
 class OnlineKernelConfig(NamedTuple):
-    """:attr:`OnlineConfig.packed <adaptive_dd.identification.online.OnlineConfig.packed>` by
-    name: ``ci, cf`` integer and float settings, ``A, B, C, D`` the derivative filters'
-    state space, ``d`` payload direction, ``group`` parameter groups, ``split_rows (2,)``."""
+    """:attr:`TwoLinkOnlineConfig.packed
+    <adaptive_dd.identification.two_link_online.TwoLinkOnlineConfig.packed>` by name: ``ci, cf``
+    integer and float settings, ``A, B, C, D`` the derivative filters' state space,
+    ``d`` payload direction, ``group`` parameter groups, ``split_rows (2,)``."""
 
     ci: NDArray[np.int64]
     cf: Array
@@ -72,12 +73,13 @@ class OnlineKernelConfig(NamedTuple):
 
 
 class TwoLinkPlant(NamedTuple):
-    """The two-link plant of a run (:func:`adaptive_dd.plant.integrator.step_one`).
+    """The two-link plant of a run (:func:`adaptive_dd.plant.two_link_integrator.step_one`).
 
     ``sigma_seg (G, 7)`` true base parameters before the first swap and after each;
     ``swap_k (G - 1,)`` sample of each swap; ``substeps`` RK4 substeps per sample;
-    ``friction_code`` (:attr:`Arm.friction_code <adaptive_dd.plant.arm.Arm.friction_code>`);
-    ``fparams`` :func:`~adaptive_dd.plant.integrator.friction_vector` of the arm (friction
+    ``friction_code`` (:attr:`TwoLinkArm.friction_code
+    <adaptive_dd.plant.two_link.TwoLinkArm.friction_code>`);
+    ``fparams`` :func:`~adaptive_dd.plant.two_link_integrator.friction_vector` of the arm (friction
     velocity, Stribeck ratio and velocity, LuGre sigma0 (2), sigma1 (2)).
     """
 

@@ -38,10 +38,10 @@ from adaptive_dd.closed_loop.noise import NoiseBlocks
 from adaptive_dd.closed_loop.python_path import PythonGlue, run_python_batch
 from adaptive_dd.closed_loop.types import Io, Recording, RunConstants
 from adaptive_dd.controllers.compiled_form import LAW_ADAPTIVE, LAW_SLOTINE, CompiledSpec
-from adaptive_dd.identification.online import OnlineConfig, online_init
-from adaptive_dd.plant.integrator import friction_vector
+from adaptive_dd.identification.two_link_online import TwoLinkOnlineConfig, online_init
 from adaptive_dd.plant.sampling import first_sample
 from adaptive_dd.plant.simulator import MAX_SPEED
+from adaptive_dd.plant.two_link_integrator import friction_vector
 
 __all__ = ["run_compiled", "run_python"]
 
@@ -101,7 +101,7 @@ def run_compiled(name, ctrl, spec: CompiledSpec, scenario, idx, reference, keep:
     estimates = adaptive or spec.law == LAW_SLOTINE
     rc, io, pl = _constants(scenario, reference)
     run, ts, rec = _records(name, ctrl, rc, S, keep, estimates, "compiled")
-    cfg = spec.online if adaptive else OnlineConfig(sample_period=T, tau_f=max(0.01, T))  # unused
+    cfg = spec.online if adaptive else TwoLinkOnlineConfig(sample_period=T, tau_f=max(0.01, T))  # unused
     es = online_init(cfg, S, spec.sigma)
     ec = OnlineKernelConfig(*cfg.packed)
     alarms = Alarms(np.zeros((S, MAX_ALARMS)), np.zeros(S, dtype=np.int64))

@@ -66,6 +66,7 @@ import numpy as np
 
 from adaptive_dd.benchmark.provenance import provenance
 from adaptive_dd.benchmark.streaming import SETTLE, segment_bounds
+from adaptive_dd.plant.kind import is_chain
 from adaptive_dd.plant.sampling import first_sample
 
 if TYPE_CHECKING:  # annotations only: types imports this module for BenchmarkResult.metrics()
@@ -158,13 +159,12 @@ def per_seed_segment_metrics(res: BenchmarkResult, run, recovery: bool = True) -
         return res.cache[key]
     sc = res.scenario
     T = sc.sample_period
-    from adaptive_dd.plant.serial_arm import SerialArm
 
-    if isinstance(sc.arm, SerialArm):  # an N-joint run (adaptive_dd.closed_loop)
-        from adaptive_dd.closed_loop.metrics import serial_segment_metrics
+    if is_chain(sc.arm):  # an N-joint run (adaptive_dd.closed_loop)
+        from adaptive_dd.closed_loop.metrics import segment_metrics
 
-        out = serial_segment_metrics(res, run)
-        start, end = _serial_bounds(sc)
+        out = segment_metrics(res, run)
+        start, end = _bounds(sc)
         if recovery:
             out["recovery_time"] = _recovery_times(run.e_norm, start, end, T)
         return _blank_failed(res, run, out, end, key)
@@ -198,7 +198,7 @@ def _blank_failed(res: BenchmarkResult, run, out: dict, end: np.ndarray, key) ->
     return out
 
 
-def _serial_bounds(sc):
+def _bounds(sc):
     from adaptive_dd.closed_loop.types import run_constants
 
     rc = run_constants(sc)
@@ -341,9 +341,8 @@ def compute_metrics(res: BenchmarkResult) -> dict:
 
 def _segment_sigmas(sc) -> np.ndarray:
     """True base parameters per segment ``(G, p)``."""
-    from adaptive_dd.plant.serial_arm import SerialArm
 
-    if isinstance(sc.arm, SerialArm):
+    if is_chain(sc.arm):
         return sc.segment_sigmas()
     return np.array([sc.arm.sigma_with_payload(m, sc.payload_radius) for _, _, m in sc.segments()])
 
@@ -462,9 +461,8 @@ def _add_information_times(res: BenchmarkResult, out: dict) -> None:
     sc = res.scenario
     if not sc.swap_times:
         return
-    from adaptive_dd.plant.serial_arm import SerialArm
 
-    if isinstance(sc.arm, SerialArm):  # N joints: adaptive_dd.closed_loop.information
+    if is_chain(sc.arm):  # N joints: adaptive_dd.closed_loop.information
         from adaptive_dd.closed_loop.information import add_information_times
 
         add_information_times(res, out)
@@ -516,10 +514,10 @@ def _add_information_times(res: BenchmarkResult, out: dict) -> None:
             }
         limit = None
         if ref is not None and max(mass, removed) > 0 and mass != removed:
-            from adaptive_dd.identification.detection_limit import detection_limit
+            from adaptive_dd.identification.two_link_detection_limit import two_link_detection_limit
 
             limits = [
-                detection_limit(
+                two_link_detection_limit(
                     ref.q[j, k0 - 1 : k1],
                     ref.qd[j, k0 - 1 : k1],
                     ref.tau[j, k0 - 1 : k1],

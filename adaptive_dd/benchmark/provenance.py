@@ -22,7 +22,7 @@ def scenario_dict(sc) -> dict:
             v = sorted(v)
         elif f.name == "controller_options":
             v = {n: sc.options(n) for n, _ in v}
-        elif dataclasses.is_dataclass(v) and type(v).__name__ != "SerialArm":  # SerialArm: to_dict
+        elif dataclasses.is_dataclass(v) and type(v).__name__ != "Arm":  # Arm: to_dict
             v = dataclasses.asdict(v)
         elif hasattr(v, "to_dict"):
             v = v.to_dict()

@@ -228,7 +228,7 @@ TARGET_DETECTION_RATIO = 2.0
 
 def detection_limit_lines(c: dict) -> list[str]:
     """Per swap: each detector's median delay (and p90, max) beside the detection limit of an
-    optimal test (:mod:`adaptive_dd.identification.detection_limit`), and the target on it."""
+    optimal test (:mod:`adaptive_dd.identification.two_link_detection_limit`), and the target on it."""
     out = []
     first = next(iter(c.values()))
     for i, seg in enumerate(first["segments"][1:], start=1):

@@ -23,7 +23,6 @@ from __future__ import annotations
 
 import time
 from collections.abc import Sequence
-from pathlib import Path
 
 import numpy as np
 
@@ -37,9 +36,10 @@ from adaptive_dd.benchmark.types import (
     BenchmarkResult,
     ControllerRun,
 )
-from adaptive_dd.controllers import Controller, Gains, controller_label, make_controller
+from adaptive_dd.controllers import Controller
 from adaptive_dd.controllers.compiled_form import compiled_spec
 from adaptive_dd.errors import ParameterError
+from adaptive_dd.plant.kind import is_chain
 
 __all__ = [
     "ENGINES",
@@ -88,14 +88,13 @@ def run_benchmark(
     if engine not in ENGINES:
         raise ParameterError(f"engine must be one of {ENGINES}, got {engine!r}")
     t0 = time.perf_counter()
-    from adaptive_dd.plant.serial_arm import SerialArm
 
-    if isinstance(scenario.arm, SerialArm):  # any N-joint arm: adaptive_dd.closed_loop
-        from adaptive_dd.closed_loop.runner import run_serial
+    if is_chain(scenario.arm):  # any N-joint arm: adaptive_dd.closed_loop
+        from adaptive_dd.closed_loop.runner import run_closed_loop
 
         n = scenario.n_samples * len(controllers or scenario.controllers)
         bar = _progress(progress, n, scenario.name)
-        res = run_serial(
+        res = run_closed_loop(
             scenario, controllers, seed_indices=seed_indices, keep_trajectories=keep_trajectories,
             engine=engine, bar=bar,
         )  # fmt: skip
@@ -138,25 +137,10 @@ def run_benchmark(
 
 def scenario_controller(scenario: Scenario, spec: str) -> tuple[str, Controller]:
     """``(label, controller)`` of one entry of the scenario's controller list, built as the run
-    builds it (on either arm), with its ``[controllers.NAME]`` settings.
+    builds it (on either arm: :func:`adaptive_dd.controllers.registry.scenario_controller`)."""
+    from adaptive_dd.controllers.registry import scenario_controller as build
 
-    Raises
-    ------
-    ParameterError
-        An unknown name, a plug-in that does not import, an unknown or invalid setting.
-    """
-    from adaptive_dd.plant.serial_arm import SerialArm
-
-    if isinstance(scenario.arm, SerialArm):
-        from adaptive_dd.closed_loop.runner import make_controller_of
-
-        return make_controller_of(scenario, spec)
-    opts = scenario.options(controller_label(spec)) or scenario.options(spec)
-    src = Path(scenario.source)
-    search = (src.parent, Path.cwd()) if src.is_file() else (Path.cwd(),)
-    gains = Gains(scenario.bandwidth, scenario.damping)
-    ctrl = make_controller(spec, gains, opts, arm=scenario.arm, search=search, scenario=scenario)
-    return controller_label(spec, opts), ctrl
+    return build(scenario, spec)
 
 
 def _progress(show: bool, total: int, name: str):

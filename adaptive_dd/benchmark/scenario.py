@@ -83,9 +83,11 @@ from numpy.typing import NDArray
 from adaptive_dd.benchmark.scenario_base import LIMITS, Reference, RunEstimate, run_estimate
 from adaptive_dd.benchmark.scenario_checks import check_number, scenario_errors, scenario_fields, thaw
 from adaptive_dd.errors import ScenarioError
-from adaptive_dd.plant.arm import Arm, arm_from_tables
+from adaptive_dd.plant.arm import Arm
+from adaptive_dd.plant.arm_tables import arm_from_tables
+from adaptive_dd.plant.kind import is_chain
 from adaptive_dd.plant.parameters import PAYLOAD_RADIUS
-from adaptive_dd.plant.serial_arm import SerialArm
+from adaptive_dd.plant.two_link import TwoLinkArm
 from adaptive_dd.plant.uncertainty import PLANT_TRUTH_KEYS, PlantSpec, parse_model, parse_plant
 
 __all__ = [
@@ -154,7 +156,7 @@ class Scenario:
     source: str = "<memory>"
     controller_options: tuple[tuple[str, tuple[tuple[str, Any], ...]], ...] = ()
     defaulted: frozenset[str] = field(default=frozenset(), compare=False)
-    arm: Arm | SerialArm = field(default_factory=Arm.sice)
+    arm: TwoLinkArm | Arm = field(default_factory=TwoLinkArm.sice)
     swap_com: tuple = ()
     swap_inertia: tuple = ()
     excite: float = 0.0
@@ -224,7 +226,7 @@ class Scenario:
         when numba's cache is cold."""
         from adaptive_dd._numba_cache import compile_estimate
 
-        serial = isinstance(self.arm, SerialArm)
+        serial = is_chain(self.arm)
         return run_estimate(
             self.n_samples, self.seeds, len(self.controllers), self.n_joints if serial else None,
             compile_seconds=compile_estimate(self.arm),
@@ -316,7 +318,7 @@ def parse_scenario(data: dict, src: str = "<memory>", name: str = "scenario") ->
 def model_and_plant(src: str, arm, plant_table, model_table) -> tuple[Any, PlantSpec | None]:
     """The controllers' model (``[model]``) and the plant (``[plant]``'s truth keys) around ``arm`` (the
     ``[arm]``); raises :class:`ScenarioError` for these tables on the two-link closed-form arm."""
-    if not isinstance(arm, SerialArm):
+    if not is_chain(arm):
         given = sorted(k for k in (plant_table or {}) if k in PLANT_TRUTH_KEYS)
         given = [f"plant.{k}" for k in given] + (["[model]"] if model_table is not None else [])
         if given:
@@ -349,9 +351,7 @@ def _controller_setting_errors(v: dict) -> list[str]:
     the file, not of the run. ``bandwidth``, ``boost_bandwidth`` and ``damping`` have the bounds
     of ``[control]``; ``boost_duration`` is at most the run; every number is finite and within
     ``LIMITS["max_setting"]``."""
-    from adaptive_dd.closed_loop.controllers import make_serial_controller
-    from adaptive_dd.controllers import CONTROLLERS, Gains, make_controller
-    from adaptive_dd.plant.serial_arm import SerialArm
+    from adaptive_dd.controllers import CONTROLLERS, gains_for, make_controller
 
     errs: list[str] = []
     opts = {n: thaw(o) for n, o in v["controller_options"]}
@@ -383,10 +383,7 @@ def _controller_setting_errors(v: dict) -> list[str]:
         if len(errs) > n0:
             continue
         try:
-            if isinstance(v["arm"], SerialArm):  # the N-joint built-ins (their own settings)
-                make_serial_controller(name, v["arm"], v["bandwidth"], v["damping"], o)
-            else:
-                make_controller(name, Gains(v["bandwidth"], v["damping"]), o, arm=v["arm"])
+            make_controller(name, gains_for(v["arm"], v["bandwidth"], v["damping"]), o, arm=v["arm"])
         except (ValueError, TypeError, ArithmeticError) as exc:
             msg = str(exc)
             while msg.startswith(f"controllers.{name}"):  # the registry names the controller too
@@ -434,7 +431,7 @@ def _plant_lines(sc: Scenario) -> list[str]:
 
     p = sc.plant
     if p is None:
-        return ["# plant: the [arm] itself (no [plant] table)"] if isinstance(sc.arm, SerialArm) else []
+        return ["# plant: the [arm] itself (no [plant] table)"] if is_chain(sc.arm) else []
     out = [f"model.urdf = {str(sc.arm.urdf)!r}   (what every non-oracle controller is given)"]
     out.append(f"plant.urdf = {p.urdf!r}" if p.urdf else "# plant links: the [arm]'s URDF")
     for key in ("viscous", "coulomb", "armature"):

@@ -49,8 +49,8 @@ KEYS = {
     "payload": {"at", "mass", "radius", "com", "inertia"},
     "noise": {"position_variance", "velocity_variance", "dropout"},
     "controllers": None,  # one sub-table per controller, free keys
-    "arm": None,  # checked by adaptive_dd.plant.arm.arm_from_tables
-    "plant": None,  # adaptive_dd.plant.arm.arm_from_tables and adaptive_dd.plant.uncertainty.parse_plant
+    "arm": None,  # checked by adaptive_dd.plant.arm_tables.arm_from_tables
+    "plant": None,  # adaptive_dd.plant.arm_tables.arm_from_tables, adaptive_dd.plant.uncertainty.parse_plant
     "model": None,  # adaptive_dd.plant.uncertainty.parse_model
 }
 

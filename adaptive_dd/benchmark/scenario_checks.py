@@ -13,6 +13,7 @@ import numpy as np
 
 from adaptive_dd.benchmark.scenario_base import KEYS, LIMITS, Reference, run_estimate
 from adaptive_dd.controllers import CONTROLLERS
+from adaptive_dd.plant.kind import is_chain
 from adaptive_dd.plant.parameters import PAYLOAD_RADIUS
 from adaptive_dd.plant.sampling import first_sample
 
@@ -166,9 +167,7 @@ def _check_plant(e: list, v: dict) -> None:
 
 
 def _serial(v: dict) -> bool:
-    from adaptive_dd.plant.serial_arm import SerialArm
-
-    return isinstance(v.get("arm"), SerialArm)
+    return is_chain(v.get("arm"))
 
 
 def _check_controllers(e: list, c: Any, arm: Any = None) -> bool:
@@ -186,16 +185,13 @@ def _check_controllers(e: list, c: Any, arm: Any = None) -> bool:
                 "or an import path 'package.module:Class'"
             )
             ok = False
-    from adaptive_dd.plant.serial_arm import SerialArm
 
-    if isinstance(arm, SerialArm):
-        from adaptive_dd.closed_loop.controllers import TWO_LINK_ONLY
-
+    if is_chain(arm):
         for x in c:
-            if x in TWO_LINK_ONLY:
+            if x in CONTROLLERS and not CONTROLLERS[x].applies_to("chain"):
                 e.append(
-                    f"run.controllers: {x!r} is for the two-link arm only (the paper's estimator of its "
-                    f"seven parameters), not for this {arm.n_joints}-joint arm; use 'adaptive_ct'"
+                    f"run.controllers: {x!r} is for the two-link arm only, not for this "
+                    f"{arm.n_joints}-joint arm: {CONTROLLERS[x].only}"
                 )
                 ok = False
     if len(set(c)) != len(c) or len({_label(x) for x in c}) != len(c):
@@ -387,25 +383,19 @@ def scenario_fields(
 
 
 def _default_controllers(arm: Any) -> list:
-    from adaptive_dd.plant.serial_arm import SerialArm
-
-    if isinstance(arm, SerialArm):
-        from adaptive_dd.closed_loop.controllers import TWO_LINK_ONLY
-
-        return [c for c in CONTROLLERS if c not in TWO_LINK_ONLY]
-    return list(CONTROLLERS)
+    kind = "chain" if is_chain(arm) else "two_link"
+    return [c for c, entry in CONTROLLERS.items() if entry.applies_to(kind)]
 
 
 def _default_noise(arm: Any, key: str) -> list:
-    from adaptive_dd.plant.serial_arm import SerialArm
 
-    if isinstance(arm, SerialArm):
+    if is_chain(arm):
         return list(getattr(arm.sensor, key))
     return [1e-8, 1e-7] if key == "position_variance" else [5e-5, 1e-4]
 
 
 def _payload_fields(e: list, items: list, v: dict, defaulted: set, arm: Any = None) -> None:
-    from adaptive_dd.plant.serial_arm import SerialArm, payload_parameters
+    from adaptive_dd.plant.arm import payload_parameters
 
     times, masses, radii = [], [], []
     coms, inertias = [], []
@@ -415,7 +405,7 @@ def _payload_fields(e: list, items: list, v: dict, defaulted: set, arm: Any = No
                 (coms if key == "com" else inertias).append(None)
                 continue
             x = p[key]
-            if arm is not None and not isinstance(arm, SerialArm):
+            if arm is not None and not is_chain(arm):
                 e.append(
                     f"payload[{i}].{key}: the two-link arm's payload is a disk at the tip (mass, radius); "
                     "a centre of mass or inertia needs a URDF arm ([arm] urdf = ... or robot = ...)"

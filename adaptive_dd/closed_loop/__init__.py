@@ -1,4 +1,4 @@
-"""The closed loop for any serial arm (:class:`~adaptive_dd.plant.serial_arm.SerialArm`).
+"""The closed loop for any serial arm (:class:`~adaptive_dd.plant.arm.Arm`).
 
 Layout (data first, then arithmetic, then drivers):
 
@@ -18,12 +18,13 @@ Layout (data first, then arithmetic, then drivers):
     both arms, around each arm's batch glue.
 :mod:`~adaptive_dd.closed_loop.controllers`
     One class per built-in controller, owning its Python ``command`` and its compiled form;
-    :data:`~adaptive_dd.closed_loop.controllers.SERIAL_CONTROLLERS` (name -> class).
+    :data:`~adaptive_dd.closed_loop.controllers.ARM_CONTROLLERS` (name -> class), built by
+    :func:`adaptive_dd.controllers.make_controller` like every controller on every arm.
 :mod:`~adaptive_dd.closed_loop.runner`
-    :func:`~adaptive_dd.closed_loop.runner.run_serial`: every controller over every seed.
+    :func:`~adaptive_dd.closed_loop.runner.run_closed_loop`: every controller over every seed.
 """
 
-from adaptive_dd.closed_loop.controllers import SERIAL_CONTROLLERS, make_serial_controller
-from adaptive_dd.closed_loop.runner import run_serial
+from adaptive_dd.closed_loop.controllers import ARM_CONTROLLERS
+from adaptive_dd.closed_loop.runner import run_closed_loop
 
-__all__ = ["SERIAL_CONTROLLERS", "make_serial_controller", "run_serial"]
+__all__ = ["ARM_CONTROLLERS", "run_closed_loop"]

@@ -1,14 +1,15 @@
 """Built-in controllers for N-joint arms: one class each, owning its Python and compiled forms.
 
 Each class turns its settings into a :class:`~adaptive_dd.closed_loop.laws.LawConfig` of the
-computed-torque family (:meth:`SerialLaw.law_config`) and, for ``adaptive_ct``, an estimator.
-:meth:`SerialLaw.compiled_form` returns what the compiled loop runs (the law, its per-trial
+computed-torque family (:meth:`Law.law_config`) and, for ``adaptive_ct``, an estimator.
+:meth:`Law.compiled_form` returns what the compiled loop runs (the law, its per-trial
 state, the estimator hooks); the Python form (:meth:`reset`, :meth:`command`,
 :meth:`observe`, the protocol of ``docs/controllers.md``) runs the same compiled form one
 sample at a time for the whole batch, so the two paths agree to rounding.
 
-Adding a built-in is one change in this file: a subclass of :class:`SerialLaw` that says
-its ``law_config`` (and settings), and an entry in :data:`SERIAL_CONTROLLERS`.
+Adding a built-in: a subclass of :class:`Law` here that says its ``law_config`` (and
+settings), an entry in :data:`ARM_CONTROLLERS`, and its row in the one registry
+(:data:`adaptive_dd.controllers.CONTROLLERS`: what it knows, its settings and defaults per arm).
 """
 
 from __future__ import annotations
@@ -33,20 +34,20 @@ from adaptive_dd.closed_loop.laws import (
     law_batch,
 )
 from adaptive_dd.errors import ParameterError
+from adaptive_dd.errors import is_finite_number as _is_number
 
 __all__ = [
-    "SERIAL_CONTROLLERS",
+    "ARM_CONTROLLERS",
     "AdaptiveCT",
     "CTNominal",
     "CTOracle",
     "CTOracleTextbook",
     "CompiledForm",
     "JointGains",
+    "Law",
     "PDControl",
-    "SerialLaw",
     "SlotineLi",
     "SlotineLiOracle",
-    "make_serial_controller",
     "with_stated_uncertainty",
 ]
 
@@ -91,7 +92,7 @@ class JointGains:
 
 class CompiledForm(NamedTuple):
     """What the compiled loop runs for one controller: the law, its per-trial state, the
-    estimator's records ``ec, es`` (:func:`~adaptive_dd.identification.serial_online.est_none`
+    estimator's records ``ec, es`` (:func:`~adaptive_dd.identification.online.est_none`
     when it has none: the same types, so that one compiled loop serves every built-in) and whether
     the trial's model is an estimate to record (``estimates``)."""
 
@@ -102,12 +103,12 @@ class CompiledForm(NamedTuple):
     estimates: bool
 
 
-class SerialLaw:
+class Law:
     """Base of the built-ins: settings, gains, the arm's nominal model, both forms.
 
     Parameters
     ----------
-    arm : SerialArm
+    arm : Arm
     bandwidth : float or sequence of n floats
         [rad/s].
     damping : float
@@ -115,7 +116,7 @@ class SerialLaw:
         The controller's own settings (:attr:`SETTINGS`); others are an error.
     """
 
-    name = "serial_law"
+    name = "arm_law"
     floor: str | None = "ct_oracle"
     needs_true_model = False
     SETTINGS: frozenset = frozenset()
@@ -155,7 +156,7 @@ class SerialLaw:
         """The law, a fresh per-trial state and the estimator hooks for ``n_trials`` trials."""
         cfg = self.law_config(sample_period)
         est = cfg.model == MODEL_TRIAL
-        from adaptive_dd.identification.serial_online import est_none
+        from adaptive_dd.identification.online import est_none
 
         return CompiledForm(cfg, LawState.start(cfg, n_trials), *est_none(self.arm), est)
 
@@ -229,7 +230,7 @@ class SerialLaw:
         return pi
 
 
-class PDControl(SerialLaw):
+class PDControl(Law):
     """``tau = Kp e + Kd e'`` with ``Kp = omega^2 M0``, ``Kd = 2 zeta omega M0`` (M0: the diagonal of
     the nominal inertia at the middle of the joint ranges); no model, no gravity compensation."""
 
@@ -240,7 +241,7 @@ class PDControl(SerialLaw):
         return self._config(sample_period, KIND_PD, MODEL_NONE, kp=self.gains.kp * m0, kd=self.gains.kd * m0)
 
 
-class CTNominal(SerialLaw):
+class CTNominal(Law):
     """Computed torque (reference velocity) with the arm's model without payload."""
 
     name = "ct_nominal"
@@ -249,7 +250,7 @@ class CTNominal(SerialLaw):
         return self._config(sample_period, KIND_CT, MODEL_FIXED)
 
 
-class CTOracle(SerialLaw):
+class CTOracle(Law):
     """Computed torque with the true model at every sample; Coriolis and friction at the reference
     velocity ``qd_d + lam e`` (the floor of ``adaptive_ct``)."""
 
@@ -274,7 +275,7 @@ DEFAULT_PAYLOAD_GAMMA = (2.0, 0.2, 0.2, 0.2, 0.02, 0.02, 0.02, 0.02, 0.02, 0.02)
 """Slotine-Li adaptation gains of the payload's ten parameters (m, m c, I about the frame)."""
 
 
-class SlotineLiOracle(SerialLaw):
+class SlotineLiOracle(Law):
     """Slotine-Li with the true model and no adaptation (the floor of ``slotine_li``)."""
 
     name = "slotine_li_oracle"
@@ -286,7 +287,7 @@ class SlotineLiOracle(SerialLaw):
         return self._config(sample_period, KIND_SLOTINE, MODEL_TRUE, lam=lam, kd=k)
 
 
-class SlotineLi(SerialLaw):
+class SlotineLi(Law):
     """Slotine-Li adapting the payload's ten parameters from the nominal arm (gradient law on the
     link's Slotine-Li regressor times the payload map), projected on a box
     (``max_mass`` [kg], ``com_radius`` [m]) with ``m >= 0`` and ``|c| <= com_radius``."""
@@ -340,13 +341,9 @@ def _estimator_table(name: str, settings: dict) -> dict:
     return est
 
 
-def _is_number(x) -> bool:
-    return not isinstance(x, bool) and isinstance(x, int | float) and bool(np.isfinite(x))
-
-
-class AdaptiveCT(SerialLaw):
+class AdaptiveCT(Law):
     """Computed torque on the N-joint online estimator's projected model
-    (:mod:`adaptive_dd.identification.serial_online`), the feedback raised to ``boost_bandwidth``
+    (:mod:`adaptive_dd.identification.online`), the feedback raised to ``boost_bandwidth``
     (300 rad/s) through the nominal inertia for ``boost_duration`` (1 s) after an alarm.
 
     The boost holds the arm while the new payload is learnt: the mass is known within tens of
@@ -354,7 +351,7 @@ class AdaptiveCT(SerialLaw):
     and Panda scenarios' loaded segments were 1.09-1.16x their floor, with 1 s 1.03-1.07 (20
     seeds); the same boost on the true model (``ct_oracle_textbook`` told 1 ms late) stays at
     1.00-1.01x: high gains alone do not beat the floor, they pass more sensor noise
-    (``benchmarks/boost_ablation.py``)."""
+    (``studies/boost_ablation.py``)."""
 
     name = "adaptive_ct"
     SETTINGS = frozenset({"boost_bandwidth", "boost_duration", "estimator", "detector"})
@@ -365,17 +362,17 @@ class AdaptiveCT(SerialLaw):
 
     def __init__(self, arm, bandwidth=40.0, damping: float = 1.0, **settings) -> None:
         super().__init__(arm, bandwidth, damping, **settings)
-        from adaptive_dd.identification import serial_online
+        from adaptive_dd.identification import online
 
-        self._est = serial_online
+        self._est = online
         est = _estimator_table(self.name, self.settings)
         det = est.get("detector", {})
         try:
             if det is False:
                 est["detector"] = None
             elif isinstance(det, dict):
-                est["detector"] = serial_online.SerialDetector(**det)
-            self.online = serial_online.SerialOnlineConfig(**est)
+                est["detector"] = online.Detector(**det)
+            self.online = online.OnlineConfig(**est)
         except TypeError as exc:
             raise ParameterError(f"controllers.{self.name}.estimator: {exc}") from None
         self.boost_bandwidth = float(self.settings.get("boost_bandwidth", 300.0))
@@ -414,7 +411,7 @@ class AdaptiveCT(SerialLaw):
         return self._est.state_skipped(form.es)
 
 
-SERIAL_CONTROLLERS: dict[str, type[SerialLaw]] = {
+ARM_CONTROLLERS: dict[str, type[Law]] = {
     "pd": PDControl,
     "ct_nominal": CTNominal,
     "ct_oracle": CTOracle,
@@ -423,10 +420,10 @@ SERIAL_CONTROLLERS: dict[str, type[SerialLaw]] = {
     "slotine_li": SlotineLi,
     "slotine_li_oracle": SlotineLiOracle,
 }
-"""Built-in controllers for N-joint arms, name -> class."""
-
-TWO_LINK_ONLY = ("adaptive_ct_paper",)
-"""Built-ins of the two-link arm alone (the paper's estimator is written for its seven parameters)."""
+"""The N-joint form of each built-in, name -> class. Build controllers with
+:func:`adaptive_dd.controllers.make_controller` (the one entry point for every arm: its table
+:data:`adaptive_dd.controllers.CONTROLLERS` says what each name knows, its settings and defaults
+on each arm, and which arms it runs on)."""
 
 
 def with_stated_uncertainty(name: str, options: dict, scenario) -> dict:
@@ -446,28 +443,3 @@ def with_stated_uncertainty(name: str, options: dict, scenario) -> dict:
     keys = ("mass", "com", "inertia", "viscous", "coulomb", "armature")
     levels = {k: float(getattr(unc, k, 0.0)) * scale for k in keys}
     return {**options, "estimator": {**est, "arm_uncertainty": levels}}
-
-
-def make_serial_controller(name: str, arm, bandwidth=40.0, damping: float = 1.0, options=None) -> SerialLaw:
-    """A built-in N-joint controller by name, with its ``[controllers.NAME]`` settings.
-
-    Raises
-    ------
-    ParameterError
-        An unknown name (or a two-link-only one), or an unknown or invalid setting.
-    """
-    opts = {k: v for k, v in (options or {}).items() if k not in ("bandwidth", "damping", "label")}
-    bw = (options or {}).get("bandwidth", bandwidth)
-    dmp = (options or {}).get("damping", damping)
-    if name in TWO_LINK_ONLY:
-        raise ParameterError(
-            f"controller {name!r} is for the two-link arm only; not for a {arm.n_joints}-joint arm"
-        )
-    if name not in SERIAL_CONTROLLERS:
-        raise ParameterError(
-            f"unknown controller {name!r}; built-ins for N-joint arms: {sorted(SERIAL_CONTROLLERS)}"
-        )
-    ctrl = SERIAL_CONTROLLERS[name](arm, bw, dmp, **opts)
-    if options and "label" in options:
-        ctrl.name = str(options["label"])
-    return ctrl

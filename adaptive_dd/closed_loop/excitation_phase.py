@@ -8,7 +8,7 @@ What a lab does before a task, on each seed's plant:
    ``ct_nominal`` on the model (the robot's own controller), not scored;
 2. the record, with sensor noise at the scenario's levels (generator ``(seed, i, 3)``), identified
    as ``adaptive-dd identify`` does: the filtered regression and its two-pass weighted least
-   squares (:func:`~adaptive_dd.identification.serial_regression.weighted_least_squares`), then the
+   squares (:func:`~adaptive_dd.identification.regression.weighted_least_squares`), then the
    physically consistent standard parameters nearest to it
    (:func:`~adaptive_dd.identification.consistency.consistent_arm_fit`);
 3. the task run with that identified model as every non-oracle controller's model (the
@@ -165,9 +165,9 @@ def _excitation_scenario(scenario, reference):
     )
 
 
-def identify_excitation(scenario, idx, run_serial) -> tuple[list[Array], ExcitationReport]:
-    """Run the excitation on each seed's plant (``run_serial``: the closed loop's runner,
-    :func:`~adaptive_dd.closed_loop.runner.run_serial`) and identify; returns each seed's model
+def identify_excitation(scenario, idx, run_closed_loop) -> tuple[list[Array], ExcitationReport]:
+    """Run the excitation on each seed's plant (``run_closed_loop``: the closed loop's runner,
+    :func:`~adaptive_dd.closed_loop.runner.run_closed_loop`) and identify; returns each seed's model
     ``pi (13 n,)`` (consistent) and the report.
 
     Raises
@@ -178,21 +178,21 @@ def identify_excitation(scenario, idx, run_serial) -> tuple[list[Array], Excitat
     from adaptive_dd.closed_loop.types import io_of, plant_of, true_models
     from adaptive_dd.errors import DataError
     from adaptive_dd.identification.consistency import consistent_arm_fit
-    from adaptive_dd.identification.serial_model import serial_model
-    from adaptive_dd.identification.serial_regression import (
-        serial_filtered_regression,
+    from adaptive_dd.identification.model import arm_model
+    from adaptive_dd.identification.regression import (
+        filtered_regression,
         weighted_least_squares,
     )
 
     exc = _excitation_scenario(scenario, excitation_reference(scenario))
-    res = run_serial(exc, seed_indices=idx, keep_trajectories=len(idx))
+    res = run_closed_loop(exc, seed_indices=idx, keep_trajectories=len(idx))
     run = res.runs[EXCITATION_CONTROLLER]
     if run.failed.any():
         raise ScenarioError(
             f"{scenario.source}: run.excite: the excitation failed on seed(s) "
             f"{[int(i) for i, f in zip(idx, run.failed, strict=True) if f]} (tracking lost)"
         )
-    model = serial_model(scenario.arm)
+    model = arm_model(scenario.arm)
     std = io_of(scenario).std
     n, T = scenario.n_joints, scenario.sample_period
     B = scenario.arm.base.B
@@ -202,7 +202,7 @@ def identify_excitation(scenario, idx, run_serial) -> tuple[list[Array], Excitat
         rng = np.random.default_rng([int(scenario.seed), int(i), 3])
         qm = run.q[k] + std[:n] * rng.standard_normal(run.q[k].shape)
         qdm = run.qd[k] + std[n:] * rng.standard_normal(run.qd[k].shape)
-        reg = serial_filtered_regression(model, qm, qdm, run.tau[k], tau_f=TAU_F, sample_period=T)
+        reg = filtered_regression(model, qm, qdm, run.tau[k], tau_f=TAU_F, sample_period=T)
         try:
             wls = weighted_least_squares(reg, model.names)
         except DataError as exc_:
@@ -222,16 +222,16 @@ def identify_excitation(scenario, idx, run_serial) -> tuple[list[Array], Excitat
     return pis, report
 
 
-def run_with_excitation(scenario, idx, run_serial, keep: int = 3, engine: str = "auto"):
+def run_with_excitation(scenario, idx, run_closed_loop, keep: int = 3, engine: str = "auto"):
     """The excitation phase, then the task with each seed's identified model (module docstring);
-    ``run_serial`` runs the closed loop (:func:`~adaptive_dd.closed_loop.runner.run_serial`, which
+    ``run_closed_loop`` runs the closed loop (:func:`~adaptive_dd.closed_loop.runner.run_closed_loop`, which
     calls this function: passed in, the two modules do not import each other)."""
     from adaptive_dd.closed_loop.types import plant_record
     from adaptive_dd.plant.uncertainty import exact_plant
     from adaptive_dd.plant.urdf_write import write_urdf_links
 
     idx = tuple(idx)
-    pis, report = identify_excitation(scenario, idx, run_serial)
+    pis, report = identify_excitation(scenario, idx, run_closed_loop)
     arm, n = scenario.arm, scenario.n_joints
     plant = scenario.plant if scenario.plant is not None else exact_plant(arm)
     parts = []
@@ -244,7 +244,7 @@ def run_with_excitation(scenario, idx, run_serial, keep: int = 3, engine: str = 
             _ = model.pi_links, model.chain, model.base  # read while the file exists
             one = dataclasses.replace(scenario, arm=model, plant=plant, excite=0.0)
             parts.append(
-                run_serial(one, seed_indices=(i,), keep_trajectories=1 if k < keep else 0, engine=engine)
+                run_closed_loop(one, seed_indices=(i,), keep_trajectories=1 if k < keep else 0, engine=engine)
             )
     res = join_results(parts, scenario, idx)
     res.plant = plant_record(dataclasses.replace(scenario, plant=plant), idx)

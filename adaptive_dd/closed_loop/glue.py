@@ -31,7 +31,7 @@ from numpy.typing import NDArray
 
 from adaptive_dd.closed_loop.laws import law_trial_in, law_work
 from adaptive_dd.closed_loop.plant import plant_scratch, plant_step
-from adaptive_dd.identification.serial_online_kernel import est_model_trial_in, est_step_trial_in, est_work
+from adaptive_dd.identification.online_kernel import est_model_trial_in, est_step_trial_in, est_work
 from adaptive_dd.plant.sampling import actuate_trial, measure_trial
 
 __all__ = [
@@ -178,9 +178,9 @@ def estimator_work(ec, es):  # pragma: no cover - replaced by the overload
 def estimator_step(ec, es, i, q, qd, tau, ew):  # pragma: no cover - replaced by the overload
     """One sample of trial i's estimator: 1 on an alarm. Chosen at compile time by the type of
     ``ec``: an array means no estimator (never an alarm), an ``EstCfg`` the N-joint online
-    estimator (:func:`~adaptive_dd.identification.serial_online.est_step_trial_in`), skipped
+    estimator (:func:`~adaptive_dd.identification.online.est_step_trial_in`), skipped
     when its state ``es`` has no trials
-    (:func:`~adaptive_dd.identification.serial_online.est_none`: the built-in controllers without
+    (:func:`~adaptive_dd.identification.online.est_none`: the built-in controllers without
     an estimator pass that, so that every built-in runs one compiled loop)."""
     raise NotImplementedError("compiled only")
 

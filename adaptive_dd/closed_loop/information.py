@@ -1,7 +1,7 @@
 """Per swap of an N-joint run: the information-limited time to know the payload, beside the
 time each estimating controller took (``information_time``, ``mass_learning_time`` and
 ``com_learning_time`` of each segment in the metrics): its mass within 5 % and its centre of
-mass within 1 cm; and the time an optimal test would detect the swap (``detection_limit``)."""
+mass within 1 cm; and the time an optimal test would detect the swap (``two_link_detection_limit``)."""
 
 from __future__ import annotations
 
@@ -92,7 +92,7 @@ def add_information_times(res, out: dict) -> None:
 
 def _payload(sc, j: int) -> np.ndarray:
     """Parameters (10,) of the payload of swap ``j`` (zeros: none, or j < 0)."""
-    from adaptive_dd.plant.serial_arm import payload_parameters
+    from adaptive_dd.plant.arm import payload_parameters
 
     if j < 0 or sc.swap_masses[j] <= 0:
         return np.zeros(10)
@@ -102,9 +102,9 @@ def _payload(sc, j: int) -> np.ndarray:
 
 def _detection_limit(sc, oracle, i: int, k0: int, k1: int) -> float | None:
     """Median over ct_oracle's kept trajectories of the time the optimal test detects the swap
-    that starts segment i (:func:`~adaptive_dd.identification.serial_detection_limit.serial_detection_limit`);
+    that starts segment i (:func:`~adaptive_dd.identification.detection_limit.detection_limit`);
     None without ct_oracle's trajectories, without a change, or beyond the window."""
-    from adaptive_dd.identification.serial_detection_limit import serial_detection_limit
+    from adaptive_dd.identification.detection_limit import detection_limit
 
     if oracle is None or oracle.q is None or not oracle.q.shape[0]:
         return None
@@ -115,7 +115,7 @@ def _detection_limit(sc, oracle, i: int, k0: int, k1: int) -> float | None:
     for j in range(oracle.q.shape[0]):
         if oracle.failed[j]:
             continue
-        t = serial_detection_limit(
+        t = detection_limit(
             sc.arm, oracle.q[j, k0:k1], oracle.qd[j, k0:k1], oracle.tau[j, k0:k1], 0, sc.sample_period,
             before, after, sc.position_variance, sc.velocity_variance, n_tests=sc.n_samples,
         )  # fmt: skip

@@ -7,7 +7,7 @@ import numpy as np
 
 from adaptive_dd.closed_loop.types import StreamedSums
 
-__all__ = ["MIN_COM_MASS", "payload_at_segment_ends", "serial_segment_metrics"]
+__all__ = ["MIN_COM_MASS", "payload_at_segment_ends", "segment_metrics"]
 
 MIN_COM_MASS = 0.1
 """[kg]: below this estimated mass the centre of mass (first moment / mass) is not reported."""
@@ -21,12 +21,12 @@ def _counts(res) -> tuple[np.ndarray, np.ndarray]:
     return (rc.seg_end - rc.seg_start).astype(float), (rc.seg_end - rc.seg_settled).astype(float)
 
 
-def serial_segment_metrics(res, run) -> dict[str, np.ndarray]:
+def segment_metrics(res, run) -> dict[str, np.ndarray]:
     """``(n_seeds, n_segments)`` arrays (the caller blanks failed trials by the benchmark's one
     rule, :func:`~adaptive_dd.benchmark.metrics.segment_failed`): ``rms_error``, ``rms_error_joint{j}``
     (j = 1 .. n), ``max_error``, ``rms_torque``, ``saturation_fraction``, ``rms_error_settled``,
     and for controllers with an estimate ``mass_estimate`` [kg] and ``com_estimate_{x,y,z}`` [m]
-    (:meth:`SerialArm.payload_from_sigma` of the estimate at the segment's last sample; the
+    (:meth:`Arm.payload_from_sigma` of the estimate at the segment's last sample; the
     centre of mass NaN below :data:`MIN_COM_MASS`)."""
     acc: StreamedSums = run.acc
     n, n_set = _counts(res)

@@ -1,6 +1,6 @@
 """The plant step the closed loop calls: one trial, one sample, zero-order hold, in place.
 
-:func:`adaptive_dd.plant.serial_integrator.serial_plant_step` (RK4 substeps; stick-slip,
+:func:`adaptive_dd.plant.integrator.plant_step` (RK4 substeps; stick-slip,
 tanh or Stribeck friction) on trial i's plant (its link parameters in the current payload
 segment, its friction).
 """
@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from numba import njit
 
-from adaptive_dd.plant.serial_integrator import PlantParams, plant_scratch, serial_plant_step_in
+from adaptive_dd.plant.integrator import PlantParams, plant_scratch, plant_step_in
 
 __all__ = ["plant_scratch", "plant_step"]
 
@@ -24,4 +24,4 @@ def plant_step(ch, pl, i, seg, q, qd, tau, T, stuck, sc):  # pragma: no cover - 
     not positive definite, a non-finite state); the loop's runaway rule catches the state.
     """
     pp = PlantParams(pl.pi_seg[i, seg], pl.fv[i], pl.fc[i], pl.armature[i], pl.friction_law, pl.fparams)
-    return serial_plant_step_in(ch, pp, q, qd, tau, T, pl.substeps, stuck, sc)
+    return plant_step_in(ch, pp, q, qd, tau, T, pl.substeps, stuck, sc)

@@ -6,7 +6,7 @@ sample for all the trials, between the arm's batch wrappers of its compiled per-
 (:class:`PythonGlue`): the measurement with its dropouts, then the divergence rule, actuator,
 plant step, failure freeze, streamed sums and recordings, then the estimate's record. The
 two-link arm (:func:`adaptive_dd.benchmark.drivers.run_python`) and the N-joint arm
-(:func:`adaptive_dd.closed_loop.runner.run_serial`) differ only in that glue and their records.
+(:func:`adaptive_dd.closed_loop.runner.run_closed_loop`) differ only in that glue and their records.
 
 A controller that raises (at reset, command or observe), or returns a command of the wrong
 shape, fails its own trials with the message in ``run.error``; the run goes on (the plant

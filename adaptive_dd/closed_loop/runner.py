@@ -20,7 +20,7 @@ from functools import partial
 import numpy as np
 
 from adaptive_dd.benchmark.types import CHUNK, MAX_ALARMS, BenchmarkResult, ControllerRun
-from adaptive_dd.closed_loop.controllers import SerialLaw, make_serial_controller, with_stated_uncertainty
+from adaptive_dd.closed_loop.controllers import Law
 from adaptive_dd.closed_loop.glue import (
     Alarms,
     alarm_lists,
@@ -52,34 +52,24 @@ __all__ = [
     "make_controller_of",
     "make_controllers",
     "plant_record",
-    "run_serial",
+    "run_closed_loop",
     "true_models",
     "true_parameters",
 ]
 
 
 def make_controllers(scenario) -> dict:
-    """The scenario's controllers by label: built-ins (:data:`SERIAL_CONTROLLERS`), plug-ins by path."""
+    """The scenario's controllers by label: built-ins and plug-ins by path
+    (:func:`adaptive_dd.controllers.make_controller`)."""
     return dict(make_controller_of(scenario, spec) for spec in scenario.controllers)
 
 
 def make_controller_of(scenario, spec: str) -> tuple[str, object]:
-    """``(label, controller)`` of one entry of the scenario's controller list, with its settings."""
-    from pathlib import Path
+    """``(label, controller)`` of one entry of the scenario's controller list, with its settings
+    (:func:`adaptive_dd.controllers.registry.scenario_controller`, the same on every arm)."""
+    from adaptive_dd.controllers.registry import scenario_controller
 
-    from adaptive_dd.controllers import Gains, controller_label, make_controller
-
-    src = Path(scenario.source)
-    search = (src.parent, Path.cwd()) if src.is_file() else (Path.cwd(),)
-    opts = scenario.options(controller_label(spec)) or scenario.options(spec)
-    label = controller_label(spec, opts)
-    if ":" in spec:
-        bw = opts.get("bandwidth", scenario.bandwidth)
-        g = Gains(float(np.max(bw)), opts.get("damping", scenario.damping))
-        opts = {**opts, "bandwidth": g.bandwidth}
-        return label, make_controller(spec, g, opts, arm=scenario.arm, search=search, scenario=scenario)
-    opts = with_stated_uncertainty(spec, opts, scenario)
-    return label, make_serial_controller(spec, scenario.arm, scenario.bandwidth, scenario.damping, opts)
+    return scenario_controller(scenario, spec)
 
 
 def true_parameters(scenario) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -91,7 +81,7 @@ def true_parameters(scenario) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return seg, scenario.segment_sigmas()[seg], masses[seg]
 
 
-def run_serial(
+def run_closed_loop(
     scenario,
     controllers: dict | None = None,
     *,
@@ -105,7 +95,7 @@ def run_serial(
     Parameters
     ----------
     scenario : Scenario
-        With ``scenario.arm`` a :class:`~adaptive_dd.plant.serial_arm.SerialArm`.
+        With ``scenario.arm`` an :class:`~adaptive_dd.plant.arm.Arm`.
     controllers : dict, optional
         Controller objects by name (default: the scenario's, :func:`make_controllers`).
     seed_indices : sequence of int, optional
@@ -128,7 +118,7 @@ def run_serial(
             )
         from adaptive_dd.closed_loop.excitation_phase import run_with_excitation
 
-        res = run_with_excitation(scenario, idx, run_serial, keep_trajectories, engine)
+        res = run_with_excitation(scenario, idx, run_closed_loop, keep_trajectories, engine)
         if bar is not None:
             bar.update(scenario.n_samples * len(res.runs))
         return res
@@ -140,7 +130,7 @@ def run_serial(
     if scenario.plant is not None:
         res.plant = plant_record(scenario, idx)
     for name, ctrl in ctrls.items():
-        compiled = isinstance(ctrl, SerialLaw) and engine != "python"
+        compiled = isinstance(ctrl, Law) and engine != "python"
         if engine == "compiled" and not compiled:
             raise ParameterError(f"engine='compiled': no compiled path for {name!r}; use engine='auto'")
         runner = _run_compiled if compiled else _run_python
@@ -176,7 +166,7 @@ def _records(
 
 
 # ------------------------------------------------------------------------ the two paths
-def _run_compiled(name, ctrl: SerialLaw, scenario, idx, rc, io, pl, keep, bar) -> ControllerRun:
+def _run_compiled(name, ctrl: Law, scenario, idx, rc, io, pl, keep, bar) -> ControllerRun:
     S, N, n = len(idx), scenario.n_samples, scenario.n_joints
     form = ctrl.compiled_form(S, rc.T)
     run, ts, acc, rec = _records(name, ctrl, scenario, rc, pl, S, keep, form.estimates, "compiled")

@@ -97,7 +97,7 @@ class Plant(NamedTuple):
     fv, fc, armature : ndarray (S, n)
         Viscous [N m s], Coulomb [N m] friction and armature [kg m^2] of trial i's plant.
     friction_law : int
-        0 stick-slip, 1 tanh, 2 Stribeck (:attr:`SerialArm.friction_code`).
+        0 stick-slip, 1 tanh, 2 Stribeck (:attr:`Arm.friction_code`).
     fparams : ndarray (3,)
         Friction velocity, Stribeck ratio, Stribeck velocity.
     substeps : int
@@ -214,8 +214,8 @@ def io_of(scenario) -> Io:
 def pi_with_payload(arm, payload: dict | None, pi_links=None) -> Array:
     """Standard link parameters ``(10 n,)`` of ``arm`` (or of links ``pi_links (10 n,)`` on its
     kinematics) carrying ``payload`` (keyword arguments of
-    :func:`~adaptive_dd.plant.serial_arm.payload_parameters`; None: no payload)."""
-    from adaptive_dd.plant.serial_arm import payload_parameters
+    :func:`~adaptive_dd.plant.arm.payload_parameters`; None: no payload)."""
+    from adaptive_dd.plant.arm import payload_parameters
 
     pi = np.array(arm.pi_links if pi_links is None else pi_links, dtype=float)
     if payload is None:

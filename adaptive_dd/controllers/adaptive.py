@@ -1,7 +1,7 @@
 """Adaptive computed torque: an online estimator feeds the computed-torque law every sample.
 
 The controller holds no identification logic: it composes
-:class:`~adaptive_dd.identification.online.OnlineEstimator` (filters, RLS, change
+:class:`~adaptive_dd.identification.two_link_online.OnlineEstimator` (filters, RLS, change
 detection, re-opening, projection) with :func:`~adaptive_dd.controllers.feedback.computed_torque_law`.
 
 ``adaptive_ct``
@@ -31,17 +31,17 @@ from adaptive_dd.controllers.feedback import _sice_sigma, computed_torque_law
 from adaptive_dd.controllers.laws import boost_batch
 from adaptive_dd.errors import ParameterError
 from adaptive_dd.identification.estimators import PAPER_RLS
-from adaptive_dd.identification.online import OnlineConfig, OnlineEstimator
+from adaptive_dd.identification.two_link_online import OnlineEstimator, TwoLinkOnlineConfig
 from adaptive_dd.plant.parameters import validate_sigma
 
 __all__ = ["ADAPTIVE_ONLINE", "PAPER_ONLINE", "AdaptiveCT", "adaptive_ct", "adaptive_ct_paper"]
 
 Array = NDArray[np.float64]
 
-ADAPTIVE_ONLINE = OnlineConfig()
-"""Estimator of ``adaptive_ct`` (the defaults of :class:`OnlineConfig`)."""
+ADAPTIVE_ONLINE = TwoLinkOnlineConfig()
+"""Estimator of ``adaptive_ct`` (the defaults of :class:`TwoLinkOnlineConfig`)."""
 
-PAPER_ONLINE = OnlineConfig(
+PAPER_ONLINE = TwoLinkOnlineConfig(
     tau_f=0.006,
     construction="paper",
     split="15",
@@ -64,7 +64,7 @@ class AdaptiveCT(Controller):
 
     Parameters
     ----------
-    online : OnlineConfig
+    online : TwoLinkOnlineConfig
         The estimator (its ``sample_period`` is set at :meth:`reset`).
     gains : Gains
     sigma_nominal : array_like (7,)
@@ -78,15 +78,15 @@ class AdaptiveCT(Controller):
 
     def __init__(
         self,
-        online: OnlineConfig = ADAPTIVE_ONLINE,
+        online: TwoLinkOnlineConfig = ADAPTIVE_ONLINE,
         gains: Gains = DEFAULT_GAINS,
         sigma_nominal: ArrayLike | None = None,
         boost_bandwidth: float | None = 300.0,
         boost_duration: float = 0.2,
         name: str = "adaptive_ct",
     ) -> None:
-        if not isinstance(online, OnlineConfig):
-            raise ParameterError(f"online must be an OnlineConfig, got {type(online).__name__}")
+        if not isinstance(online, TwoLinkOnlineConfig):
+            raise ParameterError(f"online must be an TwoLinkOnlineConfig, got {type(online).__name__}")
         if boost_bandwidth is not None and not (np.isfinite(boost_bandwidth) and boost_bandwidth > 0):
             raise ParameterError(f"boost_bandwidth must be > 0 rad/s or None, got {boost_bandwidth!r}")
         if not (np.isfinite(boost_duration) and boost_duration >= 0):
@@ -159,7 +159,7 @@ class AdaptiveCT(Controller):
 def adaptive_ct(
     gains: Gains = DEFAULT_GAINS,
     sigma_nominal: ArrayLike | None = None,
-    online: OnlineConfig = ADAPTIVE_ONLINE,
+    online: TwoLinkOnlineConfig = ADAPTIVE_ONLINE,
     **kwargs,
 ) -> AdaptiveCT:
     """Computed torque on the payload-swap estimator (see the module docstring)."""

@@ -89,7 +89,8 @@ class TwoLinkGains(NamedTuple):
 
 class CompiledSpec(NamedTuple):
     """What the compiled loop needs of a controller: its law and gains, its estimator
-    (an :class:`~adaptive_dd.identification.online.OnlineConfig` at the run's sample period, or None)."""
+    (an :class:`~adaptive_dd.identification.two_link_online.TwoLinkOnlineConfig` at the run's
+    sample period, or None)."""
 
     gains: TwoLinkGains
     online: object

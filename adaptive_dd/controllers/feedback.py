@@ -46,10 +46,10 @@ def computed_torque_law(
 
 
 def _sice_sigma():
-    """The default nominal model: the SICE arm's base parameters (``Arm.sice()``)."""
-    from adaptive_dd.plant.arm import Arm
+    """The default nominal model: the SICE arm's base parameters (``TwoLinkArm.sice()``)."""
+    from adaptive_dd.plant.two_link import TwoLinkArm
 
-    return Arm.sice().sigma
+    return TwoLinkArm.sice().sigma
 
 
 class PD(Controller):

@@ -12,9 +12,9 @@ Built-in settings:
 
 ``adaptive_ct``
     ``boost_bandwidth``, ``boost_duration``, ``estimator = {...}`` (fields of
-    :class:`~adaptive_dd.identification.online.OnlineConfig`: ``tau_f``, ``split``,
+    :class:`~adaptive_dd.identification.two_link_online.TwoLinkOnlineConfig`: ``tau_f``, ``split``,
     ``construction``, ``p0_payload``, ``p0_j2``, ``project``, ``align``), ``detector = {...}``
-    (fields of :class:`~adaptive_dd.identification.online.ChangeDetector`; also accepted inside
+    (fields of :class:`~adaptive_dd.identification.two_link_online.ChangeDetector`; also accepted inside
     ``estimator``, as on an N-joint arm), or ``detector = false`` for none.
 ``slotine_li``
     ``gamma`` (seven adaptation gains).
@@ -33,7 +33,8 @@ import dataclasses
 import importlib
 import inspect
 import sys
-from collections.abc import Callable
+import warnings
+from collections.abc import Callable, Mapping
 from typing import Any
 
 import numpy as np
@@ -41,12 +42,25 @@ import numpy as np
 from adaptive_dd.controllers.adaptive import ADAPTIVE_ONLINE, AdaptiveCT
 from adaptive_dd.controllers.base import DEFAULT_GAINS, Controller, Gains
 from adaptive_dd.controllers.feedback import PD, ComputedTorque
-from adaptive_dd.controllers.slotine_li import DEFAULT_GAMMA, SlotineLi, default_bounds
+from adaptive_dd.controllers.slotine_li import COM_RADIUS, DEFAULT_GAMMA, MAX_MASS, SlotineLi, default_bounds
 from adaptive_dd.errors import ParameterError
-from adaptive_dd.identification.online import ChangeDetector, OnlineConfig
-from adaptive_dd.plant.arm import Arm
+from adaptive_dd.identification.two_link_online import ChangeDetector, TwoLinkOnlineConfig
+from adaptive_dd.plant.kind import arm_kind, is_two_link
+from adaptive_dd.plant.two_link import TwoLinkArm
 
-__all__ = ["CONTROLLERS", "Builtin", "controller_label", "load_controller_class", "make_controller"]
+__all__ = [
+    "ABSENT",
+    "CONTROLLERS",
+    "Builtin",
+    "Setting",
+    "controller_label",
+    "controllers_for",
+    "gains_for",
+    "inventory",
+    "load_controller_class",
+    "make_controller",
+    "scenario_controller",
+]
 
 COMMON = {"bandwidth", "damping", "label"}
 
@@ -102,7 +116,7 @@ def _sigma(spec: str, options: dict) -> np.ndarray:
     return validate_sigma(options["sigma"], f"controllers.{spec}.sigma")
 
 
-def _online(spec: str, options: dict) -> OnlineConfig:
+def _online(spec: str, options: dict) -> TwoLinkOnlineConfig:
     est = dict(options.get("estimator", {}))
     det = options.get("detector", {})
     if "detector" in est:  # also accepted inside ``estimator``, as on an N-joint arm
@@ -126,18 +140,56 @@ def _online(spec: str, options: dict) -> OnlineConfig:
     return dataclasses.replace(ADAPTIVE_ONLINE, **kw)
 
 
+ABSENT = "-"
+"""A setting's default on an arm where the controller does not take it (the table says why)."""
+
+
+@dataclasses.dataclass(frozen=True)
+class Setting:
+    """One setting of a built-in controller: its default on each kind of arm and what it means.
+
+    ``two_link`` / ``chain`` is the default on the two-link closed-form arm / on an N-joint
+    :class:`~adaptive_dd.plant.arm.Arm`: a value (filled in when the table leaves the key out), None
+    (the value is derived, as ``meaning`` says), or :data:`ABSENT` (not a setting on that arm:
+    giving it is an error quoting ``rule``). ``rule`` says why the defaults differ, or why one
+    arm lacks the setting."""
+
+    meaning: str
+    two_link: Any = None
+    chain: Any = None
+    rule: str = ""
+
+    def default(self, kind: str) -> Any:
+        return self.two_link if kind == "two_link" else self.chain
+
+
 @dataclasses.dataclass(frozen=True)
 class Builtin:
-    """A built-in controller: ``make(gains, settings, arm)`` builds it (the settings without the
-    common ones, checked against ``settings`` first)."""
+    """A built-in controller name: what it knows, its settings, and its form on each kind of arm.
 
-    make: Callable[[Gains, dict, Any], Controller]
-    settings: frozenset[str] = frozenset()
+    ``make(gains, settings, arm)`` builds the two-link form (None: N-joint only); ``chain`` names
+    the N-joint class in :data:`~adaptive_dd.closed_loop.controllers.ARM_CONTROLLERS` (None:
+    two-link only, ``only`` says why)."""
+
+    knows: str
+    law: str
+    make: Callable[[Gains, dict, Any], Controller] | None
+    chain: str | None
+    settings: Mapping[str, Setting] = dataclasses.field(default_factory=dict)
+    only: str = ""
+
+    def applies_to(self, kind: str) -> bool:
+        """Whether the controller runs on this kind of arm (``"two_link"`` or ``"chain"``)."""
+        return (self.make if kind == "two_link" else self.chain) is not None
+
+    def settings_on(self, kind: str) -> dict[str, Any]:
+        """Settings the controller takes on this kind of arm, with their defaults there."""
+        return {k: s.default(kind) for k, s in self.settings.items() if s.default(kind) is not ABSENT}
 
 
 def _model(spec: str, o: dict, arm) -> np.ndarray:
     """The fixed model: the ``sigma`` setting, else the arm's base parameters."""
-    return _sigma(spec, o) if "sigma" in o else arm.sigma
+    return _sigma(spec, o) if o.get("sigma") is not None else arm.sigma
 
 
 def _adaptive_ct_paper(g: Gains, o: dict, arm) -> Controller:
@@ -158,79 +210,349 @@ def _adaptive_ct(g: Gains, o: dict, arm) -> Controller:
     return AdaptiveCT(online, g, arm.sigma, **boost)
 
 
-CONTROLLERS: dict[str, Builtin] = {
-    "pd": Builtin(lambda g, o, arm: PD(g, _model("pd", o, arm)), frozenset({"sigma"})),
-    "ct_nominal": Builtin(
-        lambda g, o, arm: ComputedTorque(g, _model("ct_nominal", o, arm)), frozenset({"sigma"})
+def _slotine_li(g: Gains, o: dict, arm) -> Controller:
+    where = "controllers.slotine_li"
+    for key in ("max_mass", "com_radius"):
+        v = o[key]
+        if isinstance(v, bool) or not isinstance(v, int | float) or not (np.isfinite(v) and v > 0):
+            raise ParameterError(f"{where}.{key}: a number > 0, got {v!r}")
+    bounds = slotine_bounds(arm, o["max_mass"], o["com_radius"])
+    return SlotineLi(g, o["gamma"], arm.sigma, bounds=bounds)
+
+
+_SIGMA = Setting(
+    "the fixed model, seven base parameters (J1 J2 r b1 b2 d1 d2); default: the arm's",
+    two_link=None,
+    chain=ABSENT,
+    rule="on an N-joint arm the controllers' model is the scenario's [model] table (docs/plant_and_model.md)",
+)
+_BOOST = {
+    "boost_bandwidth": Setting(
+        "bandwidth [rad/s] of the feedback for boost_duration after each alarm (through the nominal inertia)",
+        300.0,
+        300.0,
     ),
-    "ct_oracle": Builtin(lambda g, o, arm: ComputedTorque(g, arm.sigma, oracle=True)),
-    "ct_oracle_textbook": Builtin(
-        lambda g, o, arm: ComputedTorque(g, arm.sigma, oracle=True, reference_velocity=False)
+    "boost_duration": Setting(
+        "how long the boost lasts after an alarm [s]",
+        0.2,
+        1.0,
+        rule="the boost lasts while the estimator learns the new payload: the paper's sigma (two-link) "
+        "within tens of ms, an N-joint payload's centre of mass and inertia over a few hundred "
+        "(docs/controllers.md, studies/boost_ablation.py)",
     ),
-    "adaptive_ct_paper": Builtin(_adaptive_ct_paper),
-    "adaptive_ct": Builtin(
-        _adaptive_ct, frozenset({"boost_bandwidth", "boost_duration", "estimator", "detector"})
+    "estimator": Setting(
+        "the estimator's settings: TwoLinkOnlineConfig's fields on the two-link arm (tau_f, split, "
+        "construction, p0_payload, p0_j2, project, align), OnlineConfig's on an N-joint arm; "
+        "default: the estimator's own",
+        rule="two estimators: the paper's sigma with its splits; the payload's ten parameters",
     ),
-    "slotine_li": Builtin(
-        lambda g, o, arm: SlotineLi(g, o.get("gamma", DEFAULT_GAMMA), arm.sigma, bounds=slotine_bounds(arm)),
-        frozenset({"gamma"}),
-    ),
-    "slotine_li_oracle": Builtin(
-        lambda g, o, arm: SlotineLi(g, theta0=arm.sigma, bounds=slotine_bounds(arm), oracle=True)
+    "detector": Setting(
+        "the change detector's settings (ChangeDetector on the two-link arm, Detector on an N-joint "
+        "arm), or false for none; written at the top of [controllers.adaptive_ct] (inside `estimator` "
+        "is accepted with a FutureWarning)",
+        rule="two detectors: GLR with persistence on sigma; a gate with a fast window on the payload",
     ),
 }
-"""Names a scenario may list, each with its factory and settings (a new built-in: one entry)."""
+_GAMMA_RULE = (
+    "one gain per adapted parameter: sigma's seven on the two-link arm, the payload's ten on an N-joint arm"
+)
+_BOX_RULE = (
+    "the box admits a payload up to max_mass, of size com_radius: on the two-link arm a disk of that "
+    "radius at the tip (5 kg, 0.1 m: the paper's payloads), on an N-joint arm a centre of mass within "
+    "com_radius of the payload frame (20 kg, 0.3 m: industrial arms' tools)"
+)
+_SLOTINE = {
+    "gamma": Setting(
+        "adaptation gains",
+        tuple(float(x) for x in DEFAULT_GAMMA),
+        (2.0, 0.2, 0.2, 0.2, 0.02, 0.02, 0.02, 0.02, 0.02, 0.02),
+        rule=_GAMMA_RULE,
+    ),
+    "max_mass": Setting("the heaviest payload the a-priori box admits [kg]", 5.0, 20.0, rule=_BOX_RULE),
+    "com_radius": Setting("the payload's size in the a-priori box [m]", 0.1, 0.3, rule=_BOX_RULE),
+}
+_TWO_LINK_ONLY = (
+    "the paper's estimator (eq. 19, split 15) of the two-link arm's seven base parameters; "
+    "on an N-joint arm use 'adaptive_ct'"
+)
+
+CONTROLLERS: dict[str, Builtin] = {
+    "pd": Builtin(
+        "nominal model (inertia, to scale the gains)",
+        "PD on the joint errors, gains scaled by the nominal inertia (q = 0 on the two-link arm, the "
+        "middle of the joint ranges on an N-joint arm); no gravity compensation",
+        lambda g, o, arm: PD(g, _model("pd", o, arm)),
+        "pd",
+        {"sigma": _SIGMA},
+    ),
+    "ct_nominal": Builtin(
+        "nominal model",
+        "computed torque (reference velocity) on the model without payload",
+        lambda g, o, arm: ComputedTorque(g, _model("ct_nominal", o, arm)),
+        "ct_nominal",
+        {"sigma": _SIGMA},
+    ),
+    "ct_oracle": Builtin(
+        "true model",
+        "computed torque on the true model at every sample (the floor of adaptive_ct)",
+        lambda g, o, arm: ComputedTorque(g, arm.sigma, oracle=True),
+        "ct_oracle",
+    ),
+    "ct_oracle_textbook": Builtin(
+        "true model",
+        "the textbook computed torque: Coriolis and friction at the measured velocity",
+        lambda g, o, arm: ComputedTorque(g, arm.sigma, oracle=True, reference_velocity=False),
+        "ct_oracle_textbook",
+    ),
+    "adaptive_ct_paper": Builtin(
+        "estimator (the paper's)",
+        "the paper's adaptive computed torque: eq. (19), split (15), eq. (14)",
+        _adaptive_ct_paper,
+        None,
+        only=_TWO_LINK_ONLY,
+    ),
+    "adaptive_ct": Builtin(
+        "estimator (payload swaps, with a change detector)",
+        "computed torque on the online estimate, the feedback boosted after each alarm",
+        _adaptive_ct,
+        "adaptive_ct",
+        _BOOST,
+    ),
+    "slotine_li": Builtin(
+        "estimator (gradient adaptation)",
+        "Slotine-Li adaptive control, estimates projected on an a-priori box",
+        _slotine_li,
+        "slotine_li",
+        _SLOTINE,
+    ),
+    "slotine_li_oracle": Builtin(
+        "true model",
+        "Slotine-Li with the true model and no adaptation (the floor of slotine_li)",
+        lambda g, o, arm: SlotineLi(g, theta0=arm.sigma, bounds=slotine_bounds(arm), oracle=True),
+        "slotine_li_oracle",
+    ),
+}
+"""Every built-in controller name, on every arm: what it knows, its law, its settings with their
+default on each arm (and the rule where they differ), and its two forms. A new built-in: one
+entry here (and its N-joint class in :mod:`adaptive_dd.closed_loop.controllers`)."""
 
 
-def _builtin(spec: str, g: Gains, options: dict, arm) -> Controller:
-    o = {k: v for k, v in options.items() if k not in COMMON}
+def gains_for(arm, bandwidth=40.0, damping: float = 1.0):
+    """The ``[control]`` gains in the form ``arm``'s controllers take: :class:`Gains` on the two-link
+    arm, :class:`~adaptive_dd.closed_loop.controllers.JointGains` (one bandwidth per joint, a single
+    value broadcast) on an N-joint arm.
+
+    Raises
+    ------
+    ParameterError
+        A bandwidth or damping that is not > 0.
+    """
+    if is_two_link(arm):
+        return Gains(bandwidth, damping)
+    from adaptive_dd.closed_loop.controllers import JointGains
+
+    return JointGains.of(bandwidth, damping, arm.n_joints)
+
+
+def _show(v: Any) -> str:
+    if v is ABSENT:
+        return "not a setting"
+    if v is None:
+        return "see the meaning"
+    if isinstance(v, tuple):
+        return "(" + ", ".join(f"{x:g}" for x in v) + ")"
+    return f"{v:g}" if isinstance(v, float) else str(v)
+
+
+def inventory() -> str:
+    """The table of every built-in name and setting on both arms, as Markdown (``docs/controllers.md``
+    holds it; ``tests/test_controller_registry.py`` checks the page against this)."""
+    rows = [
+        "| controller | knows | arms | setting | two-link default | N-joint default | rule where they differ"
+        " |",
+        "|---|---|---|---|---|---|---|",
+    ]
+    for name, e in CONTROLLERS.items():
+        arms = "both" if e.applies_to("chain") else f"two-link only ({e.only})"
+        first = f"| `{name}` | {e.knows} | {arms} |"
+        if not e.settings:
+            rows.append(f"{first} none | | | |")
+        for i, (k, st) in enumerate(e.settings.items()):
+            lead = first if i == 0 else "| | | |"
+            defaults = f"{_show(st.two_link)} | {_show(st.chain)}"
+            rows.append(f"{lead} `{k}`: {st.meaning} | {defaults} | {st.rule or 'same'} |")
+    return "\n".join(rows)
+
+
+def scenario_controller(scenario, spec: str) -> tuple[str, Controller]:
+    """``(label, controller)`` of one entry of a scenario's controller list, on either arm, as the run
+    builds it: its ``[controllers.NAME]`` settings (``adaptive_ct``'s estimator told the scenario's
+    ``[plant.uncertainty]``: :func:`~adaptive_dd.closed_loop.controllers.with_stated_uncertainty`),
+    the ``[control]`` gains in the arm's form (a plug-in gets :class:`Gains` with the largest
+    per-joint bandwidth), plug-ins imported from the scenario's folder or the working directory.
+
+    Raises
+    ------
+    ParameterError
+        An unknown name, a plug-in that does not import, an unknown or invalid setting.
+    """
+    from pathlib import Path
+
+    from adaptive_dd.closed_loop.controllers import with_stated_uncertainty
+
+    src = Path(scenario.source)
+    search = (src.parent, Path.cwd()) if src.is_file() else (Path.cwd(),)
+    opts = scenario.options(controller_label(spec)) or scenario.options(spec)
+    label = controller_label(spec, opts)
+    if ":" in spec:
+        bw = opts.get("bandwidth", scenario.bandwidth)
+        g = Gains(float(np.max(bw)), opts.get("damping", scenario.damping))
+        opts = {**opts, "bandwidth": g.bandwidth}
+    else:
+        opts = with_stated_uncertainty(spec, opts, scenario)
+        g = gains_for(scenario.arm, scenario.bandwidth, scenario.damping)
+    return label, make_controller(spec, g, opts, arm=scenario.arm, search=search, scenario=scenario)
+
+
+def controllers_for(arm) -> tuple[str, ...]:
+    """The built-in names that run on ``arm`` (every name but the two-link-only ones on an N-joint arm)."""
+    kind = arm_kind(arm)
+    return tuple(n for n, e in CONTROLLERS.items() if e.applies_to(kind))
+
+
+def _check_settings(spec: str, o: dict, entry: Builtin, kind: str, arm) -> None:
+    """Unknown settings, and settings the other arm alone takes, are errors naming controller and key."""
+    here = entry.settings_on(kind)
+    elsewhere = sorted(k for k in o if k in entry.settings and k not in here)
+    if elsewhere:
+        k = elsewhere[0]
+        raise ParameterError(
+            f"controllers.{spec}.{k}: not a setting on {_arm_words(arm)}: {entry.settings[k].rule}"
+        )
+    _unknown(spec, o, set(here))
+
+
+def _detector_at_the_top(spec: str, o: dict) -> dict:
+    """``estimator.detector`` moved to the top of the table (its one documented place, on both arms),
+    with a FutureWarning; both at once is an error."""
+    est = o.get("estimator")
+    if not (isinstance(est, dict) and "detector" in est):
+        return o
+    if "detector" in o:
+        raise ParameterError(
+            f"controllers.{spec}: 'detector' given twice (at the top and in 'estimator'); keep one"
+        )
+    warnings.warn(
+        f"controllers.{spec}.estimator.detector: write the detector's table at the top of "
+        f"[controllers.{spec}] (detector = {{...}} or false); inside 'estimator' is accepted for now",
+        FutureWarning,
+        stacklevel=4,
+    )
+    return {**o, "estimator": {k: v for k, v in est.items() if k != "detector"}, "detector": est["detector"]}
+
+
+def _arm_words(arm) -> str:
+    return "the two-link arm" if is_two_link(arm) else f"this {arm.n_joints}-joint arm"
+
+
+def _chain_controller(spec: str, entry: Builtin, gains, options: dict, o: dict, arm) -> Controller:
+    """The N-joint form (:mod:`adaptive_dd.closed_loop.controllers`), the table's defaults filled in."""
+    from adaptive_dd.closed_loop.controllers import ARM_CONTROLLERS
+
+    filled = {k: v for k, v in entry.settings_on("chain").items() if v is not None}
+    bw = options.get("bandwidth", gains.bandwidth)
+    dmp = options.get("damping", gains.damping)
+    try:
+        return ARM_CONTROLLERS[entry.chain](arm, bw, dmp, **{**filled, **o})
+    except ParameterError:
+        raise
+    except (TypeError, ValueError) as exc:
+        raise ParameterError(f"controllers.{spec}: {exc}") from None
+
+
+def _builtin(spec: str, gains, options: dict, arm) -> Controller:
     entry = CONTROLLERS[spec]
-    _unknown(spec, o, set(entry.settings))
-    return entry.make(g, o, arm)
+    kind = arm_kind(arm)
+    if not entry.applies_to(kind):
+        raise ParameterError(
+            f"controller {spec!r} is for the two-link arm only, not for {_arm_words(arm)}: {entry.only}"
+        )
+    o = _detector_at_the_top(spec, {k: v for k, v in options.items() if k not in COMMON})
+    _check_settings(spec, o, entry, kind, arm)
+    if kind == "chain":
+        return _chain_controller(spec, entry, gains, options, o, arm)
+    try:
+        g = Gains(options.get("bandwidth", gains.bandwidth), options.get("damping", gains.damping))
+    except ParameterError as exc:
+        raise ParameterError(f"controllers.{spec}: {exc}") from None
+    filled = {k: v for k, v in entry.settings_on("two_link").items() if v is not None}
+    try:
+        return entry.make(g, {**filled, **o}, arm)
+    except (TypeError, ValueError) as exc:
+        raise ParameterError(f"controllers.{spec}: {exc}") from None
 
 
-def slotine_bounds(arm) -> tuple:
-    """Slotine-Li's a-priori box for an arm (:func:`~adaptive_dd.controllers.slotine_li.default_bounds`)."""
-    return default_bounds(arm.sigma, arm)
+def slotine_bounds(arm, max_mass: float = MAX_MASS, com_radius: float = COM_RADIUS) -> tuple:
+    """Slotine-Li's a-priori box on a two-link arm (:func:`.slotine_li.default_bounds`)."""
+    return default_bounds(arm.sigma, arm, max_mass, com_radius)
 
 
 def make_controller(
     spec: str,
-    gains: Gains | None = None,
+    gains=None,
     options: dict | None = None,
     arm=None,
     search: tuple = (),
     scenario=None,
 ) -> Controller:
-    """A controller by built-in name or import path, with its settings.
+    """A controller by built-in name (:data:`CONTROLLERS`) or import path, with its settings, for any arm.
 
-    ``arm`` (default the SICE arm) is the arm it controls; ``scenario`` (optional) is handed to a
-    plug-in that asks for it (see :func:`_plugin`).
+    The one entry point for every arm: on the two-link closed-form arm a built-in is its two-link
+    class (:mod:`adaptive_dd.controllers`), on an N-joint :class:`~adaptive_dd.plant.arm.Arm` its
+    class in :mod:`adaptive_dd.closed_loop.controllers`; the same name takes the same settings
+    with the defaults :data:`CONTROLLERS` states for that arm.
+
+    Parameters
+    ----------
+    spec : str
+        A built-in name or ``"package.module:Class"``.
+    gains : Gains, optional
+        The scenario's ``[control]`` gains (default 40 rad/s, critically damped); on an N-joint
+        arm anything with ``bandwidth`` (one value or one per joint) and ``damping``
+        (:class:`~adaptive_dd.closed_loop.controllers.JointGains`). The table's ``bandwidth`` and
+        ``damping`` override them.
+    options : dict, optional
+        The ``[controllers.NAME]`` table.
+    arm : TwoLinkArm or Arm, optional
+        The arm it controls (default the SICE arm, two-link).
+    search : tuple
+        Folders to import a plug-in from.
+    scenario : Scenario, optional
+        Handed to a plug-in that asks for it (see :func:`_plugin`).
 
     Raises
     ------
     ParameterError
-        Unknown name, an import path that does not load, an unknown or invalid setting
-        (naming the controller and the key).
+        Unknown name, a two-link-only name on an N-joint arm, an import path that does not load,
+        an unknown or invalid setting, or a setting of the other arm only (naming the controller,
+        the key and why).
     """
     options = dict(options or {})
-    arm = arm or Arm.sice()
+    arm = arm or TwoLinkArm.sice()
     base = gains or DEFAULT_GAINS
-    try:
-        g = Gains(options.get("bandwidth", base.bandwidth), options.get("damping", base.damping))
-    except ParameterError as exc:
-        raise ParameterError(f"controllers.{spec}: {exc}") from None
     if spec in CONTROLLERS:
-        try:
-            ctrl = _builtin(spec, g, options, arm)
-        except (TypeError, ValueError) as exc:
-            raise ParameterError(f"controllers.{spec}: {exc}") from None
+        ctrl = _builtin(spec, base, options, arm)
     elif ":" in spec:
+        try:
+            g = Gains(options.get("bandwidth", base.bandwidth), options.get("damping", base.damping))
+        except ParameterError as exc:
+            raise ParameterError(f"controllers.{spec}: {exc}") from None
         given = {"sigma_nominal": arm.sigma, "arm": arm, "scenario": scenario}
         ctrl = _plugin(spec, g, options, given, search)
     else:
         raise ParameterError(
-            f"unknown controller {spec!r}; choose from {tuple(CONTROLLERS)} or 'package.module:Class'"
+            f"unknown controller {spec!r}; built-ins for {_arm_words(arm)}: {controllers_for(arm)}, "
+            "or 'package.module:Class'"
         )
     if "label" in options:
         ctrl.name = str(options["label"])

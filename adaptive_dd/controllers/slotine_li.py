@@ -50,14 +50,19 @@ DEFAULT_GAMMA = np.array([0.05, 0.05, 0.05, 0.5, 0.1, 0.5, 0.1])
 """Adaptation gains Gamma (diagonal), per parameter."""
 
 
-def default_bounds(sigma0, arm=None) -> tuple:
-    """A priori box for the estimates: half the nominal up to 1.5x nominal plus a 5 kg disk of
-    radius 0.1 m at the arm's tip (the SICE arm's geometry unless ``arm`` is given)."""
-    from adaptive_dd.plant.arm import Arm
+MAX_MASS, COM_RADIUS = 5.0, 0.1
+"""Defaults of the box's payload on the two-link arm: up to 5 kg, a disk of radius 0.1 m."""
 
-    arm = arm or Arm.sice()
+
+def default_bounds(sigma0, arm=None, max_mass: float = MAX_MASS, com_radius: float = COM_RADIUS) -> tuple:
+    """A priori box for the estimates: half the nominal up to 1.5x nominal plus a payload of
+    ``max_mass`` [kg] (5) as a disk of radius ``com_radius`` [m] (0.1) at the arm's tip (the SICE
+    arm's geometry unless ``arm`` is given)."""
+    from adaptive_dd.plant.two_link import TwoLinkArm
+
+    arm = arm or TwoLinkArm.sice()
     s = np.asarray(sigma0, dtype=float)
-    return 0.5 * s, 1.5 * s + arm.payload_direction(0.1) * 5.0
+    return 0.5 * s, 1.5 * s + arm.payload_direction(com_radius) * max_mass
 
 
 class SlotineLi(Controller):

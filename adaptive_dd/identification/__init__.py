@@ -41,8 +41,11 @@ from adaptive_dd.identification.fisher import (
     mass_information_time,
 )
 from adaptive_dd.identification.kalman import KalmanParameterEstimator
-from adaptive_dd.identification.output_error import OutputErrorResult, output_error_fit
-from adaptive_dd.identification.regressors import FilteredRegression, OnlineRegressor, filtered_regression
+from adaptive_dd.identification.regressors import (
+    FilteredRegression,
+    OnlineRegressor,
+    two_link_filtered_regression,
+)
 from adaptive_dd.identification.rls import (
     RecursiveLeastSquares,
     RLSConfig,
@@ -57,6 +60,7 @@ from adaptive_dd.identification.sensitivity import (
     local_sensitivities,
     simulate_trajectory,
 )
+from adaptive_dd.identification.two_link_output_error import TwoLinkOutputErrorResult, output_error_fit
 
 __all__ = [
     "ESTIMATORS",
@@ -72,12 +76,12 @@ __all__ = [
     "FisherResult",
     "KalmanParameterEstimator",
     "OnlineRegressor",
-    "OutputErrorResult",
     "RLSConfig",
     "RLSState",
     "RecursiveLeastSquares",
     "SplitRLS",
     "StreamingFilter",
+    "TwoLinkOutputErrorResult",
     "akf_init",
     "akf_predict",
     "akf_step",
@@ -91,7 +95,6 @@ __all__ = [
     "excitation_mask",
     "filter_record",
     "filter_step",
-    "filtered_regression",
     "finite_difference_sensitivities",
     "fisher_from_sensitivities",
     "fisher_information",
@@ -104,4 +107,5 @@ __all__ = [
     "rls_step",
     "simulate_trajectory",
     "solve_regression",
+    "two_link_filtered_regression",
 ]

@@ -1,7 +1,7 @@
 """Online estimation of sigma: an extended Kalman filter on the state augmented with sigma.
 
 State ``x = [q1, q2, qd1, qd2, J1, J2, r, b1, b2, d1, d2]`` (11). Between samples the arm
-part moves by the compiled stick-slip step (:func:`adaptive_dd.plant.integrator.plant_step`)
+part moves by the compiled stick-slip step (:func:`adaptive_dd.plant.two_link_integrator.two_link_plant_step`)
 under the known applied torque, sigma stays (or walks with variance ``param_variance``):
 
     x_{k+1} = [f(x_k, sigma, tau_k); sigma],     y_k = [q_k, qd_k] + e_k   (measured rows)
@@ -29,8 +29,8 @@ from adaptive_dd.errors import ParameterError, SignalError
 from adaptive_dd.experiments import TABLE2
 from adaptive_dd.identification.fisher import SIGNALS, output_variances
 from adaptive_dd.identification.sensitivity import local_sensitivities
-from adaptive_dd.plant.integrator import plant_step
 from adaptive_dd.plant.parameters import project_sigma
+from adaptive_dd.plant.two_link_integrator import two_link_plant_step
 
 __all__ = [
     "AKFConfig",
@@ -101,7 +101,7 @@ class AKFState:
         ``[q1 q2 qd1 qd2 J1 J2 r b1 b2 d1 d2]``.
     P : ndarray (..., 11, 11)
     stuck, slip : ndarray (..., 2)
-        Friction modes of the predicted arm (as :func:`plant_step` keeps them).
+        Friction modes of the predicted arm (as :func:`two_link_plant_step` keeps them).
     """
 
     x: Array
@@ -153,7 +153,7 @@ def akf_predict(state: AKFState, tau: ArrayLike, cfg: AKFConfig) -> AKFState:
     """Propagate over one sample with the applied torque ``tau (..., 2)`` held."""
     x = state.x
     sg = project_sigma(x[..., 4:])
-    q1, qd1, stuck, slip = plant_step(
+    q1, qd1, stuck, slip = two_link_plant_step(
         x[..., :2],
         x[..., 2:4],
         state.stuck,

@@ -195,37 +195,20 @@ def consistent_arm_fit(
         raise ParameterError(f"need {model.p} base parameters and a ({model.p}, {model.p}) information")
     if not (np.all(np.isfinite(F)) and np.all(np.isfinite(sigma_hat))):
         raise ParameterError("the estimate or its information matrix is not finite")
-    # F = Lf Lf^T through its eigen-decomposition: a semidefinite F (some direction not seen) is
-    # allowed (those directions are then left to the prior) where a Cholesky factor would fail
-    lam, V = np.linalg.eigh(0.5 * (F + F.T))
-    Lf = V * np.sqrt(np.maximum(lam, 1e-12 * max(lam.max(), 0.0)))
+    Lf = _information_factor(F)
     n = model.n
     ref = model.pi_ref
-    links_ref = ref[: 10 * n].reshape(n, 10)
-    x0 = np.concatenate(
-        [
-            np.concatenate([_to_log_cholesky(pseudo_inertia(links_ref[j]), 1e-8) for j in range(n)]),
-            ref[10 * n :],
-        ]
-    )
+    x0 = _log_cholesky_coordinates(ref, n)
     scale = np.maximum(np.abs(ref), 1e-3 * np.abs(ref).max())
 
-    def pi_of(x):
-        return np.concatenate([_from_log_cholesky(x[: 10 * n].reshape(n, 10)).reshape(-1), x[10 * n :]])
-
     def residual(x):
-        pi = pi_of(x)
+        pi = _pi_of(x, n)
         return np.concatenate([Lf.T @ (model.B @ pi - sigma_hat), np.sqrt(prior_weight) * (pi - ref) / scale])
 
     LB = Lf.T @ model.B
 
-    def jac(x):  # d pi / d x is block diagonal: each link's 10 x 10 block by central differences
-        h = 1e-6
-        X = x[: 10 * n].reshape(n, 1, 10) + h * np.eye(10)
-        blocks = (_from_log_cholesky(X) - _from_log_cholesky(X - 2 * h * np.eye(10))) / (2 * h)  # (n, k, out)
-        D = np.eye(13 * n)
-        for j in range(n):
-            D[10 * j : 10 * j + 10, 10 * j : 10 * j + 10] = blocks[j].T
+    def jac(x):
+        D = _pi_jacobian(x, n)
         return np.vstack([LB @ D, np.sqrt(prior_weight) * D / scale[:, None]])
 
     lo = np.concatenate([np.full(10 * n, -np.inf), np.zeros(3 * n)])
@@ -238,6 +221,43 @@ def consistent_arm_fit(
         max_nfev=200,
         tr_solver="lsmr",
     )
-    pi = pi_of(sol.x)
+    pi = _pi_of(sol.x, n)
     sig = model.B @ pi
     return ConsistentArmFit(pi, sig, float(np.linalg.norm(Lf.T @ (sig - sigma_hat))))
+
+
+def _information_factor(F: Array) -> Array:
+    """``Lf`` with ``F = Lf Lf^T``, through the eigen-decomposition: a semidefinite F (some
+    direction not seen) is allowed (those directions are then left to the prior) where a
+    Cholesky factor would fail."""
+    lam, V = np.linalg.eigh(0.5 * (F + F.T))
+    return V * np.sqrt(np.maximum(lam, 1e-12 * max(lam.max(), 0.0)))
+
+
+def _log_cholesky_coordinates(pi: Array, n: int) -> Array:
+    """Standard parameters ``pi (13 n,)`` as the fit's unknowns: each link's 10 in log-Cholesky
+    coordinates of its pseudo-inertia, then friction and armature as they are."""
+    links = pi[: 10 * n].reshape(n, 10)
+    return np.concatenate(
+        [
+            np.concatenate([_to_log_cholesky(pseudo_inertia(links[j]), 1e-8) for j in range(n)]),
+            pi[10 * n :],
+        ]
+    )
+
+
+def _pi_of(x: Array, n: int) -> Array:
+    """Standard parameters ``(13 n,)`` of the fit's unknowns (:func:`_log_cholesky_coordinates`)."""
+    return np.concatenate([_from_log_cholesky(x[: 10 * n].reshape(n, 10)).reshape(-1), x[10 * n :]])
+
+
+def _pi_jacobian(x: Array, n: int) -> Array:
+    """``d pi / d x`` ``(13 n, 13 n)``: block diagonal, each link's 10 x 10 block by central
+    differences, the identity on friction and armature."""
+    h = 1e-6
+    X = x[: 10 * n].reshape(n, 1, 10) + h * np.eye(10)
+    blocks = (_from_log_cholesky(X) - _from_log_cholesky(X - 2 * h * np.eye(10))) / (2 * h)  # (n, k, out)
+    D = np.eye(13 * n)
+    for j in range(n):
+        D[10 * j : 10 * j + 10, 10 * j : 10 * j + 10] = blocks[j].T
+    return D

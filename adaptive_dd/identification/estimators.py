@@ -37,7 +37,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from adaptive_dd.errors import ParameterError
 from adaptive_dd.identification.kalman import KalmanParameterEstimator
-from adaptive_dd.identification.regressors import filtered_regression
+from adaptive_dd.identification.regressors import two_link_filtered_regression
 from adaptive_dd.identification.rls import RLSConfig, batch_least_squares, rls_init, rls_step
 
 __all__ = [
@@ -252,7 +252,7 @@ def prepare_regression(
         raise ParameterError(f"threshold and memory_factor must be >= 0, got {threshold}, {memory_factor}")
     exact = estimator.startswith("exact")
     tau = np.asarray(tau, dtype=float)
-    fr = filtered_regression(
+    fr = two_link_filtered_regression(
         q,
         align_torque(tau) if exact else tau,
         qd,

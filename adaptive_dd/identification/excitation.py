@@ -20,7 +20,7 @@ The comparison
 A plain multi-sine of the same harmonics (amplitudes ``1/k``, Schroeder phases, the same
 pattern on every joint, the offset mid-range), scaled per joint to the largest amplitude
 that meets the same limits. Each trajectory's bound is the Cramér-Rao bound of the
-segmented output error (:func:`~adaptive_dd.identification.serial_output_error.serial_crb`)
+segmented output error (:func:`~adaptive_dd.identification.output_error.cramer_rao_bound`)
 on a simulated record tracking it; the worst parameter is the largest std relative to the
 parameter's magnitude, floored at 1 % of the largest of its kind (mass, first moment,
 inertia, viscous, Coulomb) so that parameters near zero are compared on their kind's scale.
@@ -36,7 +36,7 @@ from scipy.optimize import brentq, minimize
 
 from adaptive_dd.benchmark.scenario import Reference
 from adaptive_dd.errors import ParameterError
-from adaptive_dd.identification.serial_model import SerialModel, base_regressor, serial_model
+from adaptive_dd.identification.model import Model, arm_model, base_regressor
 
 __all__ = [
     "ExcitationLimits",
@@ -130,7 +130,7 @@ def _unpack(x: Array, n: int, K: int, f0: float) -> FourierTrajectory:
     return FourierTrajectory(x[:n], x[n : n + n * K].reshape(n, K), x[n + n * K :].reshape(n, K), f0)
 
 
-def _constraints(model: SerialModel, tr: FourierTrajectory, t: Array, lim: ExcitationLimits) -> Array:
+def _constraints(model: Model, tr: FourierTrajectory, t: Array, lim: ExcitationLimits) -> Array:
     """Slack of every limit at every grid point (>= 0 when met), normalised by the limit."""
     q, qd, qdd = tr.sample(t)
     tau = base_regressor(model, q, qd, qdd) @ model.sigma_ref
@@ -146,7 +146,7 @@ def _constraints(model: SerialModel, tr: FourierTrajectory, t: Array, lim: Excit
     )
 
 
-def _information(model: SerialModel, tr: FourierTrajectory, t: Array, lim: ExcitationLimits) -> Array:
+def _information(model: Model, tr: FourierTrajectory, t: Array, lim: ExcitationLimits) -> Array:
     q, qd, qdd = tr.sample(t)
     Y = base_regressor(model, q, qd, qdd) / lim.torque[None, :, None]
     A = Y.reshape(-1, model.p)
@@ -165,7 +165,7 @@ def multisine(
     arm, lim: ExcitationLimits, harmonics: int = 5, f0: float = 0.1, grid: int = 200
 ) -> FourierTrajectory:
     """The plain multi-sine of the same harmonics, scaled per joint to the largest amplitude in ``lim``."""
-    model = serial_model(arm)
+    model = arm_model(arm)
     n, K = arm.n_joints, harmonics
     k = np.arange(1, K + 1)
     phase = -np.pi * k * (k - 1) / K  # Schroeder
@@ -233,7 +233,7 @@ def design_excitation(
         If the optimum violates a limit by more than 1 % on the fine grid.
     """
     lim = lim or ExcitationLimits.of_arm(arm)
-    model = serial_model(arm)
+    model = arm_model(arm)
     n, K = arm.n_joints, harmonics
     t = np.linspace(0, 1 / f0, grid, endpoint=False)
     x0 = _pack(start or _random_start(model, lim, n, K, f0, t, rng or np.random.default_rng(0)))

@@ -283,16 +283,7 @@ def fisher_information(
     if method == "sensitivity":
         q, qd = simulate_trajectory(sg, tau, sample_period, q0, qd0, substeps)
         a, g, p = local_sensitivities(q, qd, tau, sg, sample_period, substeps)
-        if initial_state not in ("known", "unknown"):
-            raise ParameterError(f"initial_state must be 'known' or 'unknown', got {initial_state!r}")
-        if torque_variance is not None:
-            info = innovation_fisher(a, g, p, var, torque_variance)
-        elif initial_state == "unknown":
-            s0 = np.concatenate((np.eye(4), np.zeros((4, 7))), axis=-1)
-            full = fisher_from_sensitivities(chain_sensitivities(a, np.concatenate((0 * a, p), -1), s0), var)
-            info = full[4:, 4:] - full[4:, :4] @ np.linalg.solve(full[:4, :4], full[:4, 4:])
-        else:
-            info = fisher_from_sensitivities(chain_sensitivities(a, p), var)
+        info = _sensitivity_information(a, g, p, var, torque_variance, initial_state)
     elif method == "finite_difference":
         if torque_variance is not None or initial_state != "known":
             raise ParameterError(
@@ -303,6 +294,21 @@ def fisher_information(
     else:
         raise ParameterError(f"method must be 'sensitivity' or 'finite_difference', got {method!r}")
     return crb_from_fisher(info, sg, method, tau.shape[0])
+
+
+def _sensitivity_information(a, g, p, var, torque_variance, initial_state: str) -> Array:
+    """Fisher information (7, 7) of sigma from the local sensitivities ``a, g, p`` of the step:
+    the innovations form with torque noise, the Schur complement over an unknown initial
+    state, or the sum over the chained sensitivities."""
+    if initial_state not in ("known", "unknown"):
+        raise ParameterError(f"initial_state must be 'known' or 'unknown', got {initial_state!r}")
+    if torque_variance is not None:
+        return innovation_fisher(a, g, p, var, torque_variance)
+    if initial_state == "unknown":
+        s0 = np.concatenate((np.eye(4), np.zeros((4, 7))), axis=-1)
+        full = fisher_from_sensitivities(chain_sensitivities(a, np.concatenate((0 * a, p), -1), s0), var)
+        return full[4:, 4:] - full[4:, :4] @ np.linalg.solve(full[:4, :4], full[:4, 4:])
+    return fisher_from_sensitivities(chain_sensitivities(a, p), var)
 
 
 def _mass_functional() -> Array:
@@ -384,18 +390,30 @@ def mass_information_time(
     sg = validate_sigma(sigma_after)
     var = output_variances(position_variance, velocity_variance, measured)
     a, _, p = local_sensitivities(q[k_swap:], qd[k_swap:], tau[k_swap:], sg, sample_period, substeps)
-    w = 1.0 / var
     if others == "known":
-        s = chain_sensitivities(a, p @ np.asarray(payload_direction, float)[:, None])[..., 0]
-        info = np.cumsum(np.einsum("ki,i,ki->k", s, w, s))
-        with np.errstate(divide="ignore"):
-            var_m = np.where(info > 0, 1.0 / np.where(info > 0, info, 1.0), np.inf)
+        var_m = _mass_variance_known(a, p, 1.0 / var, payload_direction)
     else:
-        s = chain_sensitivities(a, p)
-        info = np.cumsum(np.einsum("kia,i,kib->kab", s, w, s), axis=0)
-        c = _mass_functional()
-        ok = np.linalg.matrix_rank(info, hermitian=True) == 7
-        var_m = np.full(n - k_swap, np.inf)
-        var_m[ok] = np.einsum("i,kij,j->k", c, np.linalg.inv(info[ok]), c)
+        var_m = _mass_variance_unknown(a, p, 1.0 / var)
     hit = np.flatnonzero(z * np.sqrt(var_m) <= rel * mass)
     return None if hit.size == 0 else float(hit[0] * sample_period)
+
+
+def _mass_variance_known(a, p, w, payload_direction) -> Array:
+    """Cramér-Rao variance of the mass at each sample after the swap, the arm without payload
+    known (the information along ``payload_direction`` only); inf before any information."""
+    s = chain_sensitivities(a, p @ np.asarray(payload_direction, float)[:, None])[..., 0]
+    info = np.cumsum(np.einsum("ki,i,ki->k", s, w, s))
+    with np.errstate(divide="ignore"):
+        return np.where(info > 0, 1.0 / np.where(info > 0, info, 1.0), np.inf)
+
+
+def _mass_variance_unknown(a, p, w) -> Array:
+    """Cramér-Rao variance of the mass read from all seven estimated base parameters
+    (:func:`_mass_functional`) at each sample after the swap; inf while the information is singular."""
+    s = chain_sensitivities(a, p)
+    info = np.cumsum(np.einsum("kia,i,kib->kab", s, w, s), axis=0)
+    c = _mass_functional()
+    ok = np.linalg.matrix_rank(info, hermitian=True) == 7
+    var_m = np.full(info.shape[0], np.inf)
+    var_m[ok] = np.einsum("i,kij,j->k", c, np.linalg.inv(info[ok]), c)
+    return var_m

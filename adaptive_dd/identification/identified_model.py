@@ -12,7 +12,7 @@ Load it with :func:`load_identified_model`::
 
     from adaptive_dd.identification.identified_model import load_identified_model
     m = load_identified_model("results/tiago/model.json")
-    arm = m.arm()                      # the SerialArm (URDF, friction and armature identified)
+    arm = m.arm()                      # the Arm (URDF, friction and armature identified)
     tau = m.predict(q, qd, qdd)        # joint torques of the identified base parameters
 """
 
@@ -92,13 +92,13 @@ class IdentifiedModel:
     record: dict
 
     def arm(self, fitted: bool = False):
-        """The :class:`~adaptive_dd.plant.serial_arm.SerialArm` (``fitted``: from ``model.urdf``)."""
-        from adaptive_dd.plant.serial_arm import SerialArm
+        """The :class:`~adaptive_dd.plant.arm.Arm` (``fitted``: from ``model.urdf``)."""
+        from adaptive_dd.plant.arm import Arm
 
         if fitted and self.fitted_urdf is None:
             raise DataError("this model has no fitted URDF (no physically consistent fit was found)")
         path = self.fitted_urdf if fitted else self.urdf
-        return SerialArm.from_urdf(
+        return Arm.from_urdf(
             path,
             self.payload_frame,
             gravity=self.gravity,
@@ -113,14 +113,14 @@ class IdentifiedModel:
         """Joint torques ``(N, n)`` [N m] of the identified base parameters."""
         from adaptive_dd.identification.log_fit import predict_torque
 
-        return predict_torque(model or self.serial_model(), np.asarray(self.sigma), q, qd, qdd)
+        return predict_torque(model or self.arm_model(), np.asarray(self.sigma), q, qd, qdd)
 
-    def serial_model(self):
-        """The :class:`~adaptive_dd.identification.serial_model.SerialModel` of :meth:`arm`, checked
+    def arm_model(self):
+        """The :class:`~adaptive_dd.identification.model.Model` of :meth:`arm`, checked
         against the stored base parameter names."""
-        from adaptive_dd.identification.serial_model import serial_model
+        from adaptive_dd.identification.model import arm_model
 
-        model = serial_model(self.arm())
+        model = arm_model(self.arm())
         if list(model.names) != list(self.names):
             raise DataError(
                 f"{self.urdf}: its base parameters ({model.p}) are not those of the model file "

@@ -32,10 +32,10 @@ from adaptive_dd.errors import ParameterError
 from adaptive_dd.experiments import TABLE2
 from adaptive_dd.identification.estimators import estimate
 from adaptive_dd.identification.fisher import FisherResult, fisher_information
-from adaptive_dd.plant.arm import Arm
 from adaptive_dd.plant.parameters import SIGMA_NAMES
+from adaptive_dd.plant.two_link import TwoLinkArm
 
-SICE_SIGMA = Arm.sice().sigma
+SICE_SIGMA = TwoLinkArm.sice().sigma
 
 __all__ = [
     "LIMIT_ESTIMATORS",
@@ -100,7 +100,7 @@ def run_information_estimators(
         Called with a label after each estimator.
     """
     from adaptive_dd.identification.augmented_kf import AKFConfig, AugmentedKalmanFilter
-    from adaptive_dd.identification.output_error import output_error_fit
+    from adaptive_dd.identification.two_link_output_error import output_error_fit
 
     bad = [e for e in estimators if e not in LIMIT_ESTIMATORS]
     if bad:

@@ -1,6 +1,6 @@
 """Weighted least squares on a real robot's log, with bounds that mean something on real data.
 
-The regression is the exact filtered one of :mod:`adaptive_dd.identification.serial_regression`
+The regression is the exact filtered one of :mod:`adaptive_dd.identification.regression`
 (``G0 tau = Phi sigma``, no acceleration needed; ``tau_f`` sized to the sample rate by
 :func:`filter_time_constant`). What a real log adds:
 
@@ -44,11 +44,11 @@ from numpy.typing import NDArray
 
 from adaptive_dd.errors import DataError
 from adaptive_dd.identification.filters import design_filter_bank, filter_record
-from adaptive_dd.identification.serial_model import SerialModel, base_regressor
-from adaptive_dd.identification.serial_regression import (
-    SerialRegression,
+from adaptive_dd.identification.model import Model, base_regressor
+from adaptive_dd.identification.regression import (
+    Regression,
     check_excitation,
-    serial_filtered_regression,
+    filtered_regression,
 )
 
 __all__ = [
@@ -87,7 +87,7 @@ class LogFit:
     lag : int
         Newey-West lag [samples].
     tau_f, sample_period : float
-    regression : SerialRegression
+    regression : Regression
     used : ndarray of bool (n,)
     """
 
@@ -101,7 +101,7 @@ class LogFit:
     lag: int
     tau_f: float
     sample_period: float
-    regression: SerialRegression
+    regression: Regression
     used: NDArray[np.bool_]
 
     def model_error_channels(self) -> list[tuple[int, float]]:
@@ -121,7 +121,7 @@ def filter_time_constant(sample_period: float) -> float:
 
 
 def identifiable_subset(
-    model: SerialModel, used, lower, upper, rng: np.random.Generator, n_samples: int = 80
+    model: Model, used, lower, upper, rng: np.random.Generator, n_samples: int = 80
 ) -> NDArray[np.bool_]:
     """Base parameters that the torque channels ``used`` see for some motion (module docstring)."""
     used = np.asarray(used, dtype=bool)
@@ -187,7 +187,7 @@ def _noise_rms(tau: Array, tau_f: float, T: float) -> Array:
 
 
 def fit_log(
-    model: SerialModel,
+    model: Model,
     q: Array,
     qd: Array,
     tau: Array,
@@ -216,7 +216,7 @@ def fit_log(
     torque_held : bool
         The torque is held over each sample (a command, as a simulator's or a drive's current
         loop applies it: the default) rather than sampled from a continuous signal (a joint
-        torque sensor): :func:`~adaptive_dd.identification.serial_regression.serial_filtered_regression`.
+        torque sensor): :func:`~adaptive_dd.identification.regression.filtered_regression`.
 
     Raises
     ------
@@ -225,42 +225,16 @@ def fit_log(
     """
     used = np.asarray(used, dtype=bool)
     K = np.asarray(identified, dtype=bool)
-    names = tuple(nm for nm, k in zip(model.names, K, strict=True) if k)
-    reg = serial_filtered_regression(
+    reg = filtered_regression(
         model, q, qd, tau, tau_f=tau_f, sample_period=sample_period, torque_held=torque_held
     )
-    phi_all = reg.phi[:, used, :]
-    y = reg.y[:, used] - phi_all[:, :, ~K] @ model.sigma_ref[~K]
-    phi = phi_all[:, :, K]
-    if y.shape[0] * used.sum() < 3 * K.sum():
-        raise DataError(
-            f"{y.shape[0]} samples of {used.sum()} channels for {K.sum()} parameters: a longer window "
-            "is needed"
-        )
-    check_excitation(phi, names)
+    phi, y = _identified_regression(model, reg, used, K)
     cw = np.ones(model.n) if channel_weight is None else np.asarray(channel_weight, dtype=float)
-    cw = cw[used]
-    w = cw.copy()
-    for _ in range(3):
-        x, _ = _solve(phi, y, w)
-        res = y - phi @ x
-        rms = np.sqrt(np.mean(res**2, axis=0))
-        s = np.maximum(rms, WEIGHT_FLOOR * np.median(rms))
-        w = cw / np.maximum(s, 1e-300)
-    x, _scale = _solve(phi, y, w)
-    res = y - phi @ x
+    x, res, w = _reweighted_fit(phi, y, cw[used])
     cov_k, lag = _newey_west(
         phi, res, w, np.linalg.norm((phi * w[None, :, None]).reshape(-1, K.sum()), axis=0)
     )
-    sigma = model.sigma_ref.copy()
-    sigma[K] = x
-    cov = np.zeros((model.p, model.p))
-    cov[np.ix_(K, K)] = cov_k
-    n = model.n
-    residual = np.full(n, np.nan)
-    residual[used] = np.sqrt(np.mean(res**2, axis=0))
-    weights = np.zeros(n)
-    weights[used] = w
+    sigma, cov, residual, weights = _in_full(model, K, used, x, cov_k, res, w)
     return LogFit(
         sigma=sigma,
         identified=K,
@@ -277,6 +251,53 @@ def fit_log(
     )
 
 
-def predict_torque(model: SerialModel, sigma: Array, q: Array, qd: Array, qdd: Array) -> Array:
+def _identified_regression(model: Model, reg, used: NDArray[np.bool_], K: NDArray[np.bool_]):
+    """``phi (N, m, k)`` and ``y (N, m)`` of the used channels and the identified parameters, the
+    torque of the parameters held at the URDF's values moved to ``y``; checked: enough samples,
+    every identified parameter excited."""
+    names = tuple(nm for nm, k in zip(model.names, K, strict=True) if k)
+    phi_all = reg.phi[:, used, :]
+    y = reg.y[:, used] - phi_all[:, :, ~K] @ model.sigma_ref[~K]
+    phi = phi_all[:, :, K]
+    if y.shape[0] * used.sum() < 3 * K.sum():
+        raise DataError(
+            f"{y.shape[0]} samples of {used.sum()} channels for {K.sum()} parameters: a longer window "
+            "is needed"
+        )
+    check_excitation(phi, names)
+    return phi, y
+
+
+def _in_full(model: Model, K, used, x: Array, cov_k: Array, res: Array, w: Array):
+    """The fit in the full vectors: sigma and its covariance over all ``p`` base parameters (the
+    others at the URDF's values, zero covariance), the residual RMS and weight of all ``n``
+    channels (NaN and 0 where unused)."""
+    sigma = model.sigma_ref.copy()
+    sigma[K] = x
+    cov = np.zeros((model.p, model.p))
+    cov[np.ix_(K, K)] = cov_k
+    n = model.n
+    residual = np.full(n, np.nan)
+    residual[used] = np.sqrt(np.mean(res**2, axis=0))
+    weights = np.zeros(n)
+    weights[used] = w
+    return sigma, cov, residual, weights
+
+
+def _reweighted_fit(phi: Array, y: Array, cw: Array) -> tuple[Array, Array, Array]:
+    """The weighted fit after three rounds of the weighting rule (module docstring): the
+    estimate, its residuals ``(N, m)`` and the channel weights ``cw / rms`` used."""
+    w = cw.copy()
+    for _ in range(3):
+        x, _ = _solve(phi, y, w)
+        res = y - phi @ x
+        rms = np.sqrt(np.mean(res**2, axis=0))
+        s = np.maximum(rms, WEIGHT_FLOOR * np.median(rms))
+        w = cw / np.maximum(s, 1e-300)
+    x, _scale = _solve(phi, y, w)
+    return x, y - phi @ x, w
+
+
+def predict_torque(model: Model, sigma: Array, q: Array, qd: Array, qdd: Array) -> Array:
     """Joint torques ``(N, n)`` [N m] of base parameters ``sigma`` along a motion."""
     return base_regressor(model, q, qd, qdd) @ np.asarray(sigma, dtype=float)

@@ -1,612 +1,1069 @@
-"""Compiled per-trial kernel of the online estimator (see :mod:`adaptive_dd.identification.online`).
+"""Compiled per-trial step of the N-joint online estimator (:mod:`~adaptive_dd.identification.online`).
 
-One call of :func:`online_step_trial` advances trial ``i`` of a batch of estimator
-states by one sample, in place: the M2 derivative filter bank (eq. 19/20, Tustin),
-the filtered regression (the paper's construction or the exact one), data
-selection, recursive least squares (eq. 14) on the chosen split, the change
-detector, covariance re-opening along the payload direction and projection of the
-model used for control. The Python path (:func:`~adaptive_dd.identification.online.online_step`)
-and the compiled closed loop call this same function; nothing here is duplicated.
+:func:`est_step_trial` advances trial ``i`` of an :class:`EstState` by one sample, in
+place; :func:`est_model_trial` writes the model that control uses (standard
+parameters, projected). The Python path and any compiled closed loop call these
+same functions. Configuration travels as one :class:`EstCfg` NamedTuple of arrays
+and scalars (built by :func:`~adaptive_dd.identification.online.est_init`).
 
-Configuration travels as two flat arrays (``cf`` floats, ``ci`` integers) whose
-slots are the module constants below, plus the filter matrices, the payload
-direction and the parameter groups of the split. This keeps the kernel a plain
-numba function of arrays (cacheable, callable from other compiled code).
+One sample, per trial:
+
+1. non-finite input: the last finite channels are held, the sample is counted as
+   skipped, and the filtered equations are not used for ``taint`` samples (the
+   filters' memory);
+2. M2 filter bank (eq. 20, Tustin; the same matrices as
+   :func:`~adaptive_dd.identification.filters.design_filter_bank`) on the channels
+   ``q, qd, tau, sgn(qd)`` (outputs G0, G1); the regressor is evaluated at the filtered
+   signals ``qf = G0 q, qdf = G0 qd, qddf = G1 qd``, friction columns at ``G0 qd``,
+   ``G0 sgn(qd)`` (the paper's M2 construction generalised to n joints). The momentum
+   form filters ``G0 tau``, ``G1 p + G0 wv`` and ``G1 py + G0 wy`` instead, each sum as
+   one state of the bank's transposed realisation
+   (:func:`~adaptive_dd.identification.filters.summing_realisation`);
+3. data selection: equation j is used once joint j has been faster than the
+   threshold for the filters' memory;
+4. RLS of eq. (14), one scalar update per used joint equation (row weights ``w``);
+   the forgetting factor advances once per sample, at the first used row;
+5. the change detector on the rows' prior errors (:func:`_detect`); on an alarm the
+   covariance is re-opened along the payload subspace (and once more when the
+   filters' memory has passed the alarm).
 """
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 from numba import njit
 
-from adaptive_dd.plant.sampling import project_trial
+from adaptive_dd.identification.pseudo_inertia import project_payload
+from adaptive_dd.plant.chain import Chain, momentum_form_in, regressor, rnea_body_regressor_in, workspace
 
-# integer slots of ci
-I_CONSTRUCTION = 0  # 0 paper, 1 exact
-I_SPLIT = 1  # 0 full, 1 "15", 2 "16"
-I_ALIGN = 2
-I_SELECT = 3  # data selection on/off
-I_SEL_MEMORY = 4  # samples
-I_TAINT = 5  # samples a non-finite input taints the filtered equations
-I_DETECT = 6
-I_WARMUP = 7  # samples
-I_MIN_LEARNED = 8
-I_HOLDOFF = 9
-I_RESUME = 10
-I_FREEZE = 11
-I_REOPEN_AGAIN = 12
-I_PROJECT = 13  # 0 none, 1 the control model only, 2 the estimator state too
-I_PERSIST_MIN = 14  # samples the persistence test needs since it restarted
-I_GLR_SPACING = 15  # samples between the onsets of two GLR candidates
-I_GLR_MIN_AGE = 16  # samples a candidate must have run before it may alarm
-I_SPEED_MEMORY = 17  # samples a joint must have been faster than F_DET_SPEED
-N_CI = 18
+# columns of the per-trial integer state `cnt`
+C_K = 0  # samples stepped
+C_STARTED = 1
+C_SINCE_BAD = 2  # samples since the last non-finite input
+C_SKIPPED = 3  # samples with a non-finite input
+C_ALARMS = 4
+C_SINCE_ALARM = 5
+C_LAST_ALARM = 6  # sample index of the last alarm (-1: none)
+C_REOPEN_AT = 7  # sample at which the covariance is re-opened again (-1: none)
+C_RESTART = 8  # 1: the momentum channels restart at the next sample (set by an alarm)
+N_CNT = 9
 
-# float slots of cf
+BIG = 1 << 40
+SIGNAL_CHANNELS = 4  # per joint: q, qd, tau, sgn(qd) (the signals form)
+MOMENTUM_CHANNELS = 12  # per joint: G0 tau, G1 p + G0 wv and the payload link's G1 py + G0 wy (10)
+MODE_PAYLOAD = 0
+MODE_FULL = 1
+
+
+class EstCfg(NamedTuple):
+    """Everything the compiled step needs (built by ``est_init``; read-only).
+
+    Attributes
+    ----------
+    ch : Chain
+        Kinematics of the arm.
+    mode : int
+        0 payload (10 parameters of the payload, arm known), 1 full (base parameters) and
+        mode "arm" (base parameters, then the payload's ten: ``p = indep.size + 10``; the
+        payload's columns are link ``jp``'s through ``pmap``, ``pbasis`` selects the last ten).
+    pi0 : (13 n,)
+        Standard parameters of the known (nominal) arm, without payload.
+    jp : int
+        Link (0-based) that carries the payload frame.
+    pmap : (10, 10)
+        Payload parameters about the payload frame -> about link jp's joint frame.
+    indep : (p,) int64
+        Base columns of the standard regressor (full mode).
+    Bpinv : (13 n, p)
+        Pseudo-inverse of the base map B (full mode; ``B @ Bpinv == I``); mode "arm": followed
+        by ``pinv(B) @ payload_basis``, so the payload block enters the model through B.
+    sigma0 : (p,)
+        ``B pi0`` (full mode; zeros(10) in payload mode).
+    pbasis : (p, 10)
+        How the payload's ten parameters move theta (identity in payload mode).
+    pbasis_pinv : (10, p)
+        Pseudo-inverse of ``pbasis``.
+    U : (p, r)
+        Orthonormal basis of the payload subspace of theta (re-opened on an alarm).
+    P_reopen : (p, p)
+        Covariance put along U on an alarm.
+    A, Bf, C, D : filter bank matrices (order x order, order, 2 x order, 2)
+    xs0 : (order,)
+        Filter state of a unit constant input.
+    Am, Bm, Cm, Dm : the bank's summing realisation (order x order, order x 2, order, 2)
+        One state, inputs ``u0, u1``, output ``G0 u0 + G1 u1``
+        (:func:`~adaptive_dd.identification.filters.summing_realisation`; the momentum form).
+    xm1 : (order,)
+        Its state of a unit constant ``u1`` and ``u0 = 0``.
+    w : (n,)
+        Row weights: equation j is divided by ``w[j]``.
+    ints : (N_I,) int64, floats : (N_F,) float64
+        Scalar settings, slots ``I_*`` and ``F_*`` of this module.
+    """
+
+    ch: Chain
+    mode: int
+    pi0: np.ndarray
+    jp: int
+    pmap: np.ndarray
+    indep: np.ndarray
+    Bpinv: np.ndarray
+    sigma0: np.ndarray
+    pbasis: np.ndarray
+    pbasis_pinv: np.ndarray
+    U: np.ndarray
+    P_reopen: np.ndarray
+    A: np.ndarray
+    Bf: np.ndarray
+    C: np.ndarray
+    D: np.ndarray
+    xs0: np.ndarray
+    Am: np.ndarray
+    Bm: np.ndarray
+    Cm: np.ndarray
+    Dm: np.ndarray
+    xm1: np.ndarray
+    w: np.ndarray
+    ints: np.ndarray
+    floats: np.ndarray
+
+
+# integer slots of EstCfg.ints
+I_ALIGN = 0
+I_SELECT = 1
+I_SEL_MEMORY = 2  # samples
+I_TAINT = 3  # samples
+I_DETECT = 4
+I_WARMUP = 5  # samples
+I_MIN_LEARNED = 6
+I_HOLDOFF = 7
+I_RESUME = 8
+I_FREEZE = 9
+I_REOPEN_AGAIN = 10
+I_PROJECT = 11
+I_GATE_AFTER = 12  # learned samples before the learning gate applies
+I_N_ROWS = 13  # rows (joints 0 .. n_rows-1) that carry information
+I_MOMENTUM = 14  # 1: the regression in momentum form (payload mode)
+I_MIN_ROWS = 15  # rows whose short average must exceed (threshold / 2)^2 times their level for an alarm
+I_FAST = 16  # 1: the fast average may also raise an alarm
+I_RESET_PAYLOAD = 17  # mode "arm": an alarm sets the payload block (theta's last ten) to zero
+N_I = 18
+
+# float slots of EstCfg.floats
 F_LAM0 = 0
 F_MU = 1
-F_CAP0 = 2  # trace cap of the covariance block of group 0 (F_CAP1: group 1); <= 0: none
+F_CAP = 2  # trace cap of P (<= 0: none)
 F_SEL_THRESHOLD = 3
 F_ALPHA_SHORT = 4
 F_ALPHA_LONG = 5
 F_THRESHOLD2 = 6
-F_P_MASS = 7
-F_P_J2 = 8
-F_J_MIN = 9
-F_MARGIN = 10
-F_R_MIN = 11
-F_CAP1 = 12
-F_SLOW_FACTOR = 13  # threshold2 multiplier while the other joint is slow
-F_ALPHA_DIR = 14  # EWMA weight of the payload-direction test (short window)
-F_ALPHA_PERSIST = 15  # EWMA weight of the persistence test
-F_MIN_MASS = 16  # [kg] smallest payload change an alarm may claim
-F_MIN_EXPLAINED = 17  # fraction of the weighted error energy the payload direction must explain
-F_GLR_THRESHOLD = 18  # threshold on A^2 / B of a GLR candidate
-F_HETERO = 19  # a candidate's score is A^2 / B - heterogeneity / F_HETERO
-F_DET_SPEED = 20  # [rad/s] an equation feeds the payload tests only while its joint is faster
-F_REMOVAL = 21  # a GLR alarm may claim removing at most this many times the mass carried (+ min_mass)
-N_CF = 22
-F_XS0 = N_CF  # cf[F_XS0:]: the filters' state under a unit constant input, (I - A)^-1 B (order,)
+F_SLOW2 = 7
+F_GATE2 = 8
+F_EIG_MIN = 9  # smallest eigenvalue kept in the projected pseudo-inertia
+F_FLOOR2 = 10  # floor of the detector's level (squared weighted error)
+F_RADIUS = 11  # radius [m] of the ball about the payload frame the projected payload lies in (0: none)
+F_PRIOR_RADIUS = 12  # radius [m] of the compact-payload prior on the model control uses (0: none)
+F_ALPHA_FAST = 13  # the fast average's weight of a sample
+F_FAST2 = 14  # the fast average's threshold (squared RMS ratio)
+N_F = 15
 
-# columns of the detector statistics `short` (n, N_SHORT)
-S_E2 = 0  # 0, 1: short average of the squared prior error per equation
-S_DIR = 2  # 2, 3, 4: short averages of sum_j w_j phi_d,j e_j, w_j phi_d,j^2, w_j e_j^2
-S_PER = 5  # 5, 6, 7: the same over the persistence window (restarted at each alarm)
-S_PER_N = 8  # samples in the persistence window
-S_LREF = 9  # 9, 10: last long-run level per equation that was learned in full (the weights w_j)
-S_M0 = 11  # d . theta0 / (d . d) of the start estimate (the arm without payload): the mass origin
-S_GLR = 12  # GLR candidates, GLR_STRIDE columns each (see _glr_update)
-GLR_CANDIDATES = 16
-GLR_CHANNELS = 5  # exact-construction channels of the inertial columns (J1, J2, r)
-G_X = 0  # filter state, GLR_CHANNELS x 2
-G_OFF = 10  # channel values at the onset (channels 0..3, those filtered by G1)
-G_A = 14  # per equation j: sum of w_j psi_j e_j (G_A + j), w_j psi_j^2 (G_A + 2 + j)
-G_E = 18  # sum of w_j e_j^2 over both equations
-G_AGE = 19
-GLR_STRIDE = 20
-N_SHORT = S_GLR + GLR_CANDIDATES * GLR_STRIDE
 
-# columns of the per-trial integer state `cnt`
-C_STARTED = 0
-C_SINCE_BAD = 1
-C_SINCE_SLOW1 = 2
-C_SINCE_SLOW2 = 3
-C_SKIPPED = 4
-C_LEARNED1 = 5
-C_LEARNED2 = 6
-C_SINCE_ALARM = 7
-C_REOPEN_AT = 8
-C_ALARMS = 9
-C_K = 10
-C_SINCE_SLOW_DET1 = 11  # samples since joint 1 was slower than the detector's speed (12: joint 2)
-N_CNT = 13
+class EstState(NamedTuple):
+    """State of a batch of estimators; every array has the trial axis first.
 
-BIG = 1 << 40
+    Attributes
+    ----------
+    xf : (m, SIGNAL_CHANNELS n, order) or (m, MOMENTUM_CHANNELS n, order)
+        Filter states: signals form, of the channels ``q, qd, tau, sgn(qd)`` (n each);
+        momentum form, of ``G0 tau``, ``G1 p + G0 wv`` (n each) and ``G1 py + G0 wy`` (10 n,
+        row-major (n, 10)).
+    u_last : (m, 4 n)
+        Last finite channel sample (held over a dropout).
+    tau_prev : (m, n)
+        Torque of the previous sample (alignment).
+    cnt : (m, N_CNT) int64
+        Counters, columns ``C_*`` (samples, skipped, alarms, last alarm, ...).
+    since_slow : (m, n) int64
+        Samples since joint j was last slow (data selection).
+    seen, learned : (m, n) int64
+        Detector: rows seen and rows learned by the long-run level since the last alarm.
+    theta : (m, p)
+        The estimator's estimate (unprojected).
+    P : (m, p, p)
+        Its covariance.
+    lam : (m,)
+        Forgetting factor.
+    short, long : (m, n)
+        Detector averages of the squared weighted prior errors.
+    ref : (m, n)
+        Level each row had established before the last alarm (0: none).
+    eps : (m, n)
+        Weighted prior errors of the last sample (NaN where a row was not used).
+    fast : (m, n)
+        Detector: the fast average of the squared weighted prior errors (``fast_window``).
+    """
+
+    xf: np.ndarray
+    u_last: np.ndarray
+    tau_prev: np.ndarray
+    cnt: np.ndarray
+    since_slow: np.ndarray
+    seen: np.ndarray
+    learned: np.ndarray
+    theta: np.ndarray
+    P: np.ndarray
+    lam: np.ndarray
+    short: np.ndarray
+    long: np.ndarray
+    ref: np.ndarray
+    eps: np.ndarray
+    fast: np.ndarray
+
+
+class EstWork(NamedTuple):
+    """Scratch of one trial's step and model (:func:`est_work`): allocated once per run of
+    trials, not at every sample (:func:`est_step_trial_in`, :func:`est_model_trial_in`).
+
+    Attributes
+    ----------
+    chain : tuple
+        ``workspace(n)`` of :mod:`adaptive_dd.plant.chain`.
+    a2 : (2, 6, 10); a1 : (6, 10)
+        Scratch of ``momentum_form_in`` and ``rnea_body_regressor_in``.
+    u : (4 n,)
+        The channels ``q, qd, tau, sgn(qd)`` of this sample.
+    qf, qdf, qddf, sf, tf, ym : (n,)
+        Filtered signals (see :func:`_filtered_signals`).
+    phim : (n, 10)
+    act : (n,) bool
+        Rows used at this sample.
+    phi : (n, p); y : (n,)
+        The regression.
+    pphi, row : (p,); nz : (p,) int64
+        Scratch of :func:`_rls_row`.
+    u1, u0, yf : (MOMENTUM_CHANNELS n,)
+        The momentum form's inputs (G1, G0) and outputs; ``p, wv (n,)`` and ``py, wy (n, 10)``
+        are views into ``u1, u0``.
+    known : (n,); yb : (n, 10); W : (n, 10 n)
+        Scratch of the signals form's regression.
+    raw, raw_est, pay : (10,); Pc : (10, 10); d : (p,)
+        Scratch of the model control uses.
+    """
+
+    chain: tuple
+    a2: np.ndarray
+    a1: np.ndarray
+    u: np.ndarray
+    qf: np.ndarray
+    qdf: np.ndarray
+    qddf: np.ndarray
+    sf: np.ndarray
+    tf: np.ndarray
+    ym: np.ndarray
+    phim: np.ndarray
+    act: np.ndarray
+    phi: np.ndarray
+    y: np.ndarray
+    pphi: np.ndarray
+    row: np.ndarray
+    nz: np.ndarray
+    u1: np.ndarray
+    u0: np.ndarray
+    yf: np.ndarray
+    p: np.ndarray
+    wv: np.ndarray
+    py: np.ndarray
+    wy: np.ndarray
+    known: np.ndarray
+    yb: np.ndarray
+    W: np.ndarray
+    raw: np.ndarray
+    raw_est: np.ndarray
+    pay: np.ndarray
+    Pc: np.ndarray
+    d: np.ndarray
 
 
 @njit(cache=True)
-def _channels(cons, q, qd, tau, u):  # pragma: no cover - compiled
-    """Raw channels of one sample into ``u``; returns their number."""
-    if cons == 1:
-        c2, s2 = np.cos(q[1]), np.sin(q[1])
-        u[0], u[1] = qd[0], qd[1]
-        u[2] = c2 * (2.0 * qd[0] + qd[1])
-        u[3] = c2 * qd[0]
-        u[4] = s2 * qd[0] * (qd[0] + qd[1])
-        u[5], u[6] = np.sign(qd[0]), np.sign(qd[1])
-        u[7], u[8] = tau[0], tau[1]
-        return 9
-    u[0], u[1], u[2], u[3] = q[0], q[1], qd[0], qd[1]
-    u[4], u[5] = np.sign(qd[0]), np.sign(qd[1])
-    u[6], u[7] = tau[0], tau[1]
-    return 8
+def est_work(n, p):  # pragma: no cover - compiled
+    """Scratch (:class:`EstWork`) of a trial's step and model, n joints, p parameters."""
+    nch = MOMENTUM_CHANNELS * n
+    u1, u0 = np.zeros(nch), np.zeros(nch)
+    return EstWork(
+        workspace(n), np.empty((2, 6, 10)), np.empty((6, 10)), np.empty(4 * n),
+        np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty((n, 10)),
+        np.zeros(n, dtype=np.bool_), np.empty((n, p)), np.empty(n),
+        np.empty(p), np.empty(p), np.empty(p, dtype=np.int64),
+        u1, u0, np.empty(nch), u1[n : 2 * n], u0[n : 2 * n],
+        u1[2 * n :].reshape((n, 10)), u0[2 * n :].reshape((n, 10)),
+        np.empty(n), np.empty((n, 10)), np.empty((n, 10 * n)),
+        np.empty(10), np.empty(10), np.empty(10), np.empty((10, 10)), np.empty(p),
+    )  # fmt: skip
 
 
 @njit(cache=True)
-def _assemble(cons, f, phi, y):  # pragma: no cover - compiled
-    """Regression ``y = phi sigma`` (2 x 7) from filtered channels ``f (n_ch, 2)`` = [G0, G1]."""
-    for r in range(2):
-        for j in range(7):
-            phi[r, j] = 0.0
-    if cons == 1:
-        phi[0, 0] = f[0, 1]
-        phi[0, 1] = f[0, 1] + f[1, 1]
-        phi[1, 1] = phi[0, 1]
-        phi[0, 2] = f[2, 1]
-        phi[1, 2] = f[3, 1] + f[4, 0]
-        phi[0, 3] = f[0, 0]
-        phi[1, 4] = f[1, 0]
-        phi[0, 5] = f[5, 0]
-        phi[1, 6] = f[6, 0]
-        y[0], y[1] = f[7, 0], f[8, 0]
-        return
-    q2 = f[1, 0]
-    v1, v2 = f[2, 0], f[3, 0]
-    a1, a2 = f[2, 1], f[3, 1]
-    c2, s2 = np.cos(q2), np.sin(q2)
-    phi[0, 0] = a1
-    phi[0, 1] = a1 + a2
-    phi[1, 1] = a1 + a2
-    phi[0, 2] = c2 * (2.0 * a1 + a2) - s2 * (2.0 * v1 * v2 + v2 * v2)
-    phi[1, 2] = c2 * a1 + s2 * v1 * v1
-    phi[0, 3] = v1
-    phi[1, 4] = v2
-    phi[0, 5] = f[4, 0]
-    phi[1, 6] = f[5, 0]
-    y[0], y[1] = f[6, 0], f[7, 0]
-
-
-@njit(cache=True)
-def _filter(xf, u, n_ch, A, B, C, D, f):  # pragma: no cover - compiled
-    """One sample of the filter bank on n_ch channels; outputs into f (n_ch, n_out)."""
+def _filter_channels(c, s, i, u, f, ch0):  # pragma: no cover - compiled
+    """One sample of the bank on channels ``ch0 ...`` of trial i: ``f[ch] = [G0 u, G1 u]``."""
+    A, Bf, C, D = c.A, c.Bf, c.C, c.D
     order = A.shape[0]
-    n_out = C.shape[0]
+    xf = s.xf[i, ch0:]
     tmp = np.empty(order)
-    for c in range(n_ch):
-        for o in range(n_out):
-            acc = D[o] * u[c]
+    for ch in range(u.shape[0]):
+        for o in range(2):
+            acc = D[o] * u[ch]
             for m in range(order):
-                acc += C[o, m] * xf[c, m]
-            f[c, o] = acc
+                acc += C[o, m] * xf[ch, m]
+            f[ch, o] = acc
         for m in range(order):
-            acc = B[m] * u[c]
-            for n in range(order):
-                acc += A[m, n] * xf[c, n]
+            acc = Bf[m] * u[ch]
+            for k in range(order):
+                acc += A[m, k] * xf[ch, k]
             tmp[m] = acc
         for m in range(order):
-            xf[c, m] = tmp[m]
+            xf[ch, m] = tmp[m]
+
+
+@njit(cache=True, inline="always")
+def _filtered_signals(c, s, i, q, qd, tau, w):  # pragma: no cover - compiled
+    """Filter sample (q, qd, tau) of trial i into ``w`` (:class:`EstWork`); return True if the
+    filtered equations are usable.
+
+    Signals form: ``w.qf, w.qdf, w.qddf, w.sf, w.tf``. Momentum form (``I_MOMENTUM``): ``w.tf``,
+    ``w.ym = G1 p + G0 wv`` (n,) of the known links and ``w.phim = G1 py + G0 wy`` (n, 10) of
+    the payload's link (:func:`momentum_form_in`), at the held channels.
+    """
+    n = q.shape[0]
+    cnt = s.cnt[i]
+    start = cnt[C_STARTED] == 0
+    u = w.u
+    for j in range(n):
+        t = tau[j]
+        if c.ints[I_ALIGN] == 1:
+            prev = tau[j] if cnt[C_STARTED] == 0 else s.tau_prev[i, j]
+            t = 0.5 * (tau[j] + prev)
+        u[j] = q[j]
+        u[n + j] = qd[j]
+        u[2 * n + j] = t
+        u[3 * n + j] = np.sign(qd[j])
+    bad = False
+    for k in range(4 * n):
+        if not np.isfinite(u[k]):
+            bad = True
+    if c.ints[I_ALIGN] == 1:
+        for j in range(n):
+            if np.isfinite(tau[j]):
+                s.tau_prev[i, j] = tau[j]
+    if cnt[C_STARTED] == 0:  # the filters start in the steady state of the first sample
+        for k in range(4 * n):
+            s.u_last[i, k] = u[k] if np.isfinite(u[k]) else 0.0
+            if c.ints[I_MOMENTUM] == 0:  # (the momentum form starts its own, _momentum_channels)
+                for m in range(c.xs0.shape[0]):
+                    s.xf[i, k, m] = s.u_last[i, k] * c.xs0[m]
+        cnt[C_SINCE_BAD] = BIG
+        cnt[C_STARTED] = 1
+    if bad:  # hold the last finite sample of every channel
+        for k in range(4 * n):
+            u[k] = s.u_last[i, k]
+        cnt[C_SINCE_BAD] = 0
+        cnt[C_SKIPPED] += 1
+    else:
+        for k in range(4 * n):
+            s.u_last[i, k] = u[k]
+        cnt[C_SINCE_BAD] = min(cnt[C_SINCE_BAD] + 1, BIG)
+    if c.ints[I_MOMENTUM] == 1 and c.mode == MODE_FULL:
+        _arm_momentum_channels(c, s, i, start or cnt[C_RESTART] == 1, w)
+        cnt[C_RESTART] = 0
+        return cnt[C_SINCE_BAD] > c.ints[I_TAINT]
+    if c.ints[I_MOMENTUM] == 1:
+        _momentum_channels(c, s, i, start or cnt[C_RESTART] == 1, w)
+        cnt[C_RESTART] = 0
+        return cnt[C_SINCE_BAD] > c.ints[I_TAINT]
+    f = np.empty((4 * n, 2))
+    _filter_channels(c, s, i, u, f, 0)
+    qf, qdf, qddf, tf, sf = w.qf, w.qdf, w.qddf, w.tf, w.sf
+    for j in range(n):
+        qf[j] = f[j, 0]
+        qdf[j] = f[n + j, 0]
+        qddf[j] = f[n + j, 1]
+        tf[j] = f[2 * n + j, 0]
+        sf[j] = f[3 * n + j, 0]
+    return cnt[C_SINCE_BAD] > c.ints[I_TAINT]
 
 
 @njit(cache=True)
-def _rls_update(theta, P, lam, stage, phi, y, group, g, cf, forget):  # pragma: no cover
-    """Eq. (14) for one scalar equation on parameter group g; returns the prior error.
+def _summed_channels(Am, Bm, Cm, Dm, xf, u1, u0, y):  # pragma: no cover - compiled
+    """One sample of the summing realisation (``Am, Bm, Cm, Dm``) on every channel of ``xf``:
+    ``y = G1 u1 + G0 u0``, the states advanced in place (order 2 written out, its matrices in
+    scalars: a call per channel would cost more than its arithmetic)."""
+    order = Am.shape[0]
+    if order == 2:
+        a00, a01, a10, a11 = Am[0, 0], Am[0, 1], Am[1, 0], Am[1, 1]
+        b00, b01, b10, b11 = Bm[0, 0], Bm[0, 1], Bm[1, 0], Bm[1, 1]
+        c0, c1, d0, d1 = Cm[0], Cm[1], Dm[0], Dm[1]
+        for ch in range(y.shape[0]):
+            z0, z1, v1, v0 = xf[ch, 0], xf[ch, 1], u1[ch], u0[ch]
+            y[ch] = d1 * v1 + d0 * v0 + c0 * z0 + c1 * z1
+            xf[ch, 0] = a00 * z0 + a01 * z1 + b01 * v1 + b00 * v0
+            xf[ch, 1] = a10 * z0 + a11 * z1 + b11 * v1 + b10 * v0
+        return
+    tmp = np.empty(order)
+    for ch in range(y.shape[0]):
+        acc = Dm[1] * u1[ch] + Dm[0] * u0[ch]
+        for m in range(order):
+            acc += Cm[m] * xf[ch, m]
+        y[ch] = acc
+        for m in range(order):
+            acc = Bm[m, 1] * u1[ch] + Bm[m, 0] * u0[ch]
+            for k in range(order):
+                acc += Am[m, k] * xf[ch, k]
+            tmp[m] = acc
+        for m in range(order):
+            xf[ch, m] = tmp[m]
 
-    The same arithmetic as :func:`~adaptive_dd.identification.rls.rls_step`; P is kept
-    block diagonal over the groups, so the update touches group g's block only: the
-    group's indices are gathered once (ascending, so every sum runs in the order of the
-    full loops) and the loops run over the block alone.
-    A non-finite equation or a non-positive denominator leaves everything unchanged
-    and returns NaN.
+
+@njit(cache=True, inline="always")
+def _momentum_channels(c, s, i, restart, w):  # pragma: no cover - compiled
+    """The momentum form at the held channels ``w.u`` (q, qd, tau, sgn), filtered.
+
+    The known arm's momentum ``p = M qd + ia qd`` and rest ``wv = g - C^T qd + fv qd +
+    fc sgn(qd)``, the payload link's ``py, wy`` (n, 10) (:func:`momentum_form_in`). Out:
+    ``tf = G0 tau``, ``ym = G1 p + G0 wv``, ``phim = G1 py + G0 wy``, each sum one channel of
+    the summing realisation (``MOMENTUM_CHANNELS`` n channels in ``s.xf[i]``: tau, (p, wv),
+    (py, wy) row-major).
+
+    On ``restart`` (the first sample, and the sample after an alarm) the filters start
+    afresh: momentum channels in the steady state of this sample, the others at rest (the
+    state ``p xm1``, ``py xm1``; 0 for tau). The equation ``G0 tau = G1 p + G0 wv`` then holds
+    exactly for the signals continued before this sample (momentum constant, torque and rest
+    zero), so the filters carry no memory of a payload that has gone: the equations after an
+    alarm are exact from the first sample on.
     """
-    n = theta.shape[0]
-    lam_prev = lam[stage]
-    lam_new = (1.0 - cf[F_MU]) * lam_prev + cf[F_MU] if forget else lam_prev
-    lam_eff = lam_new if forget else 1.0
-    buf = np.empty(2 * n)  # pphi, then the block's indices (as floats: one allocation)
+    tf, ym, phim, u = w.tf, w.ym, w.phim, w.u
+    n = ym.shape[0]
+    nch = MOMENTUM_CHANNELS * n
+    u1, u0, y, p, wv, py, wy = w.u1, w.u0, w.yf, w.p, w.wv, w.py, w.wy  # inputs (G1, G0), outputs
+    momentum_form_in(c.ch, c.pi0[: 10 * n], c.jp, u[:n], u[n : 2 * n], w.chain, w.a2, p, wv, py, wy)
+    for r in range(n):
+        qd = u[n + r]
+        u1[r] = 0.0
+        u0[r] = u[2 * n + r]
+        p[r] += c.pi0[12 * n + r] * qd
+        wv[r] += c.pi0[10 * n + r] * qd + c.pi0[11 * n + r] * u[3 * n + r]
+    xf = s.xf[i]
+    if restart:  # the G1 inputs (momentum) in steady state, the G0 inputs at rest
+        for ch in range(nch):
+            for m in range(c.xm1.shape[0]):
+                xf[ch, m] = u1[ch] * c.xm1[m]
+    _summed_channels(c.Am, c.Bm, c.Cm, c.Dm, xf, u1, u0, y)
+    for r in range(n):
+        tf[r] = y[r]
+        ym[r] = y[n + r]
+        for k in range(10):
+            phim[r, k] = y[2 * n + 10 * r + k]
+
+
+def arm_momentum_channels(n: int) -> int:
+    """Filter channels of mode "arm" in momentum form, n joints: torque (n), every link's
+    ``G1 py + G0 wy`` (10 n per link), viscous, Coulomb and armature columns (n each)."""
+    return 4 * n + 10 * n * n
+
+
+@njit(cache=True)
+def _arm_momentum_channels(c, s, i, restart, w):  # pragma: no cover - compiled
+    """Mode "arm" in momentum form: the whole base regression ``w.phi (n, p)``, ``w.y (n,)``.
+
+    ``G0 tau = G1 (Y_p sigma) + G0 (Y_w sigma)`` for the momentum form of every link
+    (:func:`momentum_form_in` once per link), viscous ``G0 qd``, Coulomb ``G0 sgn(qd)`` and
+    armature ``G1 qd`` columns, the payload's ten columns those of link ``jp`` through ``pmap``.
+    Exact for any parameters and any tau_f; on ``restart`` the filters start afresh as in
+    :func:`_momentum_channels` (momentum channels in steady state, the others at rest).
+    """
+    u = w.u
+    n = w.ym.shape[0]
+    nch = 4 * n + 10 * n * n
+    u1 = np.zeros(nch)
+    u0 = np.zeros(nch)
+    y = np.empty(nch)
+    pm, wv = np.empty(n), np.empty(n)
+    py, wy = np.empty((n, 10)), np.empty((n, 10))
+    q, qd = u[:n], u[n : 2 * n]
+    for r in range(n):
+        u0[r] = u[2 * n + r]
+    for j in range(n):
+        momentum_form_in(c.ch, c.pi0[: 10 * n], j, q, qd, w.chain, w.a2, pm, wv, py, wy)
+        for r in range(n):
+            for k in range(10):
+                ch = n + (j * n + r) * 10 + k
+                u1[ch] = py[r, k]
+                u0[ch] = wy[r, k]
+    f0 = n + 10 * n * n
+    for r in range(n):
+        u0[f0 + r] = qd[r]
+        u0[f0 + n + r] = u[3 * n + r]
+        u1[f0 + 2 * n + r] = qd[r]
+    xf = s.xf[i]
+    if restart:
+        for ch in range(nch):
+            for m in range(c.xm1.shape[0]):
+                xf[ch, m] = u1[ch] * c.xm1[m]
+    _summed_channels(c.Am, c.Bm, c.Cm, c.Dm, xf, u1, u0, y)
+    phi, yy = w.phi, w.y
+    pb = c.indep.shape[0]
+    p = phi.shape[1]
+    for r in range(n):
+        yy[r] = y[r]
+        for a in range(pb):
+            col = c.indep[a]
+            if col < 10 * n:
+                phi[r, a] = y[n + ((col // 10) * n + r) * 10 + col % 10]
+            else:
+                kind = (col - 10 * n) // n
+                jj = (col - 10 * n) % n
+                phi[r, a] = y[f0 + kind * n + r] if jj == r else 0.0
+        for k in range(p - pb):
+            acc = 0.0
+            for m in range(10):
+                acc += y[n + (c.jp * n + r) * 10 + m] * c.pmap[m, k]
+            phi[r, pb + k] = acc
+
+
+@njit(cache=True, inline="always")
+def _payload_rows(c, link, known, phi, y):  # pragma: no cover - compiled
+    """Payload mode: ``phi = link @ pmap`` (the link's columns in the payload's parameters) and
+    ``y -= known`` (the known arm's part), row by row."""
+    for r in range(link.shape[0]):
+        y[r] -= known[r]
+        for k in range(10):
+            acc = 0.0
+            for m in range(10):
+                acc += link[r, m] * c.pmap[m, k]
+            phi[r, k] = acc
+
+
+@njit(cache=True, inline="always")
+def _regression(c, qf, qdf, qddf, sf, tf, ym, phim, phi, y, w):  # pragma: no cover - compiled
+    """The regression ``y = phi theta`` (n x p) at the filtered signals (or in momentum form);
+    ``w`` (:class:`EstWork`) its scratch."""
+    n = qf.shape[0]
+    p = phi.shape[1]
+    if c.mode == MODE_FULL and c.ints[I_MOMENTUM] == 1:  # written by _arm_momentum_channels
+        return
+    if c.mode == MODE_PAYLOAD and c.ints[I_MOMENTUM] == 1:
+        for r in range(n):
+            y[r] = tf[r]
+        _payload_rows(c, phim, ym, phi, y)
+        return
+    if c.mode == MODE_PAYLOAD:
+        known, yb = w.known, w.yb
+        # rnea and the payload link's regressor at one state: its kinematics computed once
+        rnea_body_regressor_in(c.ch, c.pi0[: 10 * n], c.jp, qf, qdf, qddf, w.chain, w.a1, known, yb)
+        for r in range(n):
+            fv, fc, ia = c.pi0[10 * n + r], c.pi0[11 * n + r], c.pi0[12 * n + r]
+            y[r] = tf[r]
+            known[r] += fv * qdf[r] + fc * sf[r] + ia * qddf[r]
+        _payload_rows(c, yb, known, phi, y)
+        return
+    W = w.W
+    regressor(c.ch, qf, qdf, qddf, W)
+    pb = c.indep.shape[0]
+    base = 10 * c.jp
+    for r in range(n):
+        y[r] = tf[r]
+        for k in range(pb):
+            col = c.indep[k]
+            if col < 10 * n:
+                phi[r, k] = W[r, col]
+            else:
+                kind = (col - 10 * n) // n
+                jj = (col - 10 * n) % n
+                if jj != r:
+                    phi[r, k] = 0.0
+                elif kind == 0:
+                    phi[r, k] = qdf[r]
+                elif kind == 1:
+                    phi[r, k] = sf[r]
+                else:
+                    phi[r, k] = qddf[r]
+        # mode "arm": the payload's ten columns after the arm's base ones (the payload link's
+        # columns through pmap, as in payload mode)
+        for k in range(p - pb):
+            acc = 0.0
+            for m in range(10):
+                acc += W[r, base + m] * c.pmap[m, k]
+            phi[r, pb + k] = acc
+
+
+@njit(cache=True)
+def _rls_row(theta, P, phi, y, lam_eff, pphi, nz):  # pragma: no cover - compiled
+    """Eq. (14) for one scalar equation; returns the prior error (NaN: nothing changed).
+
+    ``P phi`` is accumulated over the nonzero entries of phi only (rows of P, P being
+    symmetric), and the update ``P - g g^T`` with ``g = P phi / sqrt(den)`` keeps P
+    symmetric to the last bit (a product of two floats does not depend on their order).
+    """
+    p = theta.shape[0]
     m = 0
-    for i in range(n):
-        if group[i] == g:
-            buf[n + m] = i
+    for a in range(p):
+        if phi[a] != 0.0:
+            nz[m] = a
             m += 1
     eps = y
-    for a in range(m):
-        i = int(buf[n + a])
-        eps -= phi[i] * theta[i]
-        acc = 0.0
-        for b in range(m):
-            j = int(buf[n + b])
-            acc += P[i, j] * phi[j]
-        buf[a] = acc
+    for a in range(p):
+        pphi[a] = 0.0
+    for t in range(m):
+        b = nz[t]
+        f = phi[b]
+        eps -= f * theta[b]
+        for a in range(p):
+            pphi[a] += P[b, a] * f
     den = lam_eff
-    for a in range(m):
-        den += phi[int(buf[n + a])] * buf[a]
+    for t in range(m):
+        den += phi[nz[t]] * pphi[nz[t]]
     if not (np.isfinite(eps) and np.isfinite(den) and den > 0.0):
         return np.nan
-    tr = 0.0
-    for a in range(m):
-        i = int(buf[n + a])
-        gain = buf[a] / den
-        theta[i] += gain * eps
-        for b in range(m):
-            j = int(buf[n + b])
-            P[i, j] = (P[i, j] - gain * buf[b]) / lam_eff
-        tr += P[i, i]
-    for a in range(m):  # keep P symmetric
-        i = int(buf[n + a])
-        for b in range(a + 1, m):
-            j = int(buf[n + b])
-            s = 0.5 * (P[i, j] + P[j, i])
-            P[i, j] = s
-            P[j, i] = s
-    cap = cf[F_CAP1] if g == 1 else cf[F_CAP0]
-    if cap > 0.0 and tr > cap:
-        scale = cap / tr
-        for a in range(m):
-            i = int(buf[n + a])
-            for b in range(m):
-                P[i, int(buf[n + b])] *= scale
-    lam[stage] = lam_new
+    inv = 1.0 / den
+    root = np.sqrt(inv)
+    for a in range(p):
+        theta[a] += pphi[a] * inv * eps
+        pphi[a] *= root
+    for a in range(p):
+        ga = pphi[a]
+        for b in range(p):
+            P[a, b] -= ga * pphi[b]
+    if lam_eff != 1.0:
+        il = 1.0 / lam_eff
+        for a in range(p):
+            for b in range(p):
+                P[a, b] *= il
     return eps
 
 
 @njit(cache=True)
-def _reopen(P, group, d, cf):  # pragma: no cover - compiled
-    """Clear the inertial covariance (J1, J2, r) and open it along the payload direction d.
+def _reopen(c, P):  # pragma: no cover - compiled
+    """``P <- (I - U U^T) P (I - U U^T) + P_reopen``: forget what was known along the payload subspace."""
+    U = c.U
+    p, r = U.shape
+    # Q = P U (p x r), S = U^T P U (r x r)
+    Q = np.zeros((p, r))
+    for a in range(p):
+        for k in range(r):
+            acc = 0.0
+            for b in range(p):
+                acc += P[a, b] * U[b, k]
+            Q[a, k] = acc
+    S = np.zeros((r, r))
+    for k in range(r):
+        for m in range(r):
+            acc = 0.0
+            for a in range(p):
+                acc += U[a, k] * Q[a, m]
+            S[k, m] = acc
+    # (I-UU^T)P(I-UU^T) = P - U Q^T - Q U^T + U S U^T
+    for a in range(p):
+        for b in range(p):
+            acc = P[a, b]
+            for k in range(r):
+                acc -= U[a, k] * Q[b, k] + Q[a, k] * U[b, k]
+                for m in range(r):
+                    acc += U[a, k] * S[k, m] * U[b, m]
+            P[a, b] = acc + c.P_reopen[a, b]
 
-    Per parameter group, so a split's covariance stays block diagonal.
+
+@njit(cache=True, inline="always")
+def _detect(c, s, i, eps, act):  # pragma: no cover - compiled
+    """Update the detector of trial i with the rows' prior errors; return True on an alarm.
+
+    Per row j: a short average of ``eps_j^2`` against a long-run level, the
+    bias-corrected average ``long / (1 - (1 - a)^learned)`` of what it learned. The
+    level learns from ``resume`` samples after the last alarm on, and not from a
+    sample whose ``eps^2`` exceeds ``gate^2`` times the level (once ``gate_after``
+    samples are learned), so that a change during the learning is not absorbed.
+    A row may alarm once it has been *seen* ``min_learned`` times since the last alarm
+    (seen, not learned: gated samples count, so the re-arm time is bounded), outside
+    the warm-up and the hold-off. Until then, a row that had established its level
+    before the last alarm is compared with that level (``ref``, with the threshold
+    times ``slow``, as the estimate may still be converging): a change that
+    follows a false alarm within the re-learning time is detected after the hold-off.
+    ``ref`` is set only from an established level, so this adds at most one alarm
+    (a swap that raises the noise level cannot chain alarms through it). The level is at
+    least ``floor^2``: a row that is nearly noise-free (a wrist joint) would otherwise
+    alarm on the regression's own modelling error, which varies with the motion. The
+    threshold is ``slow^2`` times higher while another row is out of use (a joint that
+    is slow or reversing disturbs the others).
     """
-    n = P.shape[0]
-    for i in range(3):
-        for j in range(n):
-            P[i, j] = 0.0
-            P[j, i] = 0.0
-    for i in range(3):
-        for j in range(3):
-            if group[i] == group[j]:
-                P[i, j] += cf[F_P_MASS] * d[i] * d[j]
-    P[1, 1] += cf[F_P_J2]
-
-
-@njit(cache=True)
-def _project(src, dst, cf):  # pragma: no cover - compiled
-    """Nearest physically consistent sigma (as :func:`adaptive_dd.plant.project_sigma`)."""
-    project_trial(src, dst, cf[F_J_MIN], cf[F_MARGIN], cf[F_R_MIN])
-
-
-@njit(cache=True)
-def _regress(i, xf, u_last, cnt, tau_prev, q, qd, tau, ci, cf, A, B, C, D, phi, y):  # pragma: no cover
-    """Filtered regression of trial i's sample into (phi, y); NaN while a bad input taints it."""
-    cons = ci[I_CONSTRUCTION]
-    u = np.empty(9)
-    t_used = np.empty(2)
-    for j in range(2):
-        if ci[I_ALIGN] == 1:
-            prev = tau[j] if cnt[i, C_STARTED] == 0 else tau_prev[i, j]
-            t_used[j] = 0.5 * (tau[j] + prev)
-            tau_prev[i, j] = tau[j]
-        else:
-            t_used[j] = tau[j]
-    n_ch = _channels(cons, q, qd, t_used, u)
-    bad = False
-    for c in range(n_ch):
-        if not np.isfinite(u[c]):
-            bad = True
-    if cnt[i, C_STARTED] == 0:  # filters start in the steady state of the first sample
-        xs0 = cf[F_XS0 : F_XS0 + A.shape[0]]
-        for c in range(n_ch):
-            u_last[i, c] = u[c] if np.isfinite(u[c]) else 0.0
-            for m in range(A.shape[0]):
-                xf[i, c, m] = u_last[i, c] * xs0[m]
-        cnt[i, C_SINCE_BAD] = BIG
-        cnt[i, C_STARTED] = 1
-    if bad:  # hold the last finite sample
-        for c in range(n_ch):
-            u[c] = u_last[i, c]
-        cnt[i, C_SINCE_BAD] = 0
-    else:
-        for c in range(n_ch):
-            u_last[i, c] = u[c]
-        cnt[i, C_SINCE_BAD] = min(cnt[i, C_SINCE_BAD] + 1, BIG)
-    f = np.empty((n_ch, C.shape[0]))
-    _filter(xf[i], u, n_ch, A, B, C, D, f)
-    _assemble(cons, f, phi, y)
-    if cnt[i, C_SINCE_BAD] <= ci[I_TAINT]:
-        phi[:, :] = np.nan
-        y[:] = np.nan
-
-
-@njit(cache=True)
-def _direction(sh, k, a, b, e, alpha):  # pragma: no cover - compiled
-    """EWMA of the three payload-direction sums into columns k, k + 1, k + 2 of ``sh``."""
-    sh[k] += alpha * (a - sh[k])
-    sh[k + 1] += alpha * (b - sh[k + 1])
-    sh[k + 2] += alpha * (e - sh[k + 2])
-
-
-@njit(cache=True)
-def _explained(sh, k, cf):  # pragma: no cover - compiled
-    """True when the sums at column k say: a payload change of at least ``min_mass`` explains
-    at least ``min_explained`` of the weighted error energy (``A^2 / (B E)``, ``|A / B|``)."""
-    a, b, e = sh[k], sh[k + 1], sh[k + 2]
-    if not (b > 0.0 and e > 0.0):
-        return False
-    return abs(a) >= cf[F_MIN_MASS] * b and a * a >= cf[F_MIN_EXPLAINED] * b * e
-
-
-@njit(cache=True)
-def _glr_update(sh, u, k, eps, act, w, ci, cf, A, B, C, D, d):  # pragma: no cover - compiled
-    """Advance every GLR candidate by one sample; return ``(best A^2 / B, its A, B, E)``.
-
-    Candidate c models a payload change at its onset ``k_c``: the prior errors it predicts are
-    ``dm psi_c(k)``, with ``psi_c`` the regressor along the payload direction d of the motion
-    *after* the onset only. By linearity of the filters, ``psi_c`` is the exact construction's
-    J1, J2, r columns computed by a filter bank started from rest at ``k_c`` on the channels
-    ``u - u(k_c)`` (those the derivative filter G1 reads: a jump of the parameters at ``k_c``
-    leaves ``G0 (M qdd)`` = ``G1 (qd - qd(k_c))`` on the post-swap part) and ``u`` (the one G0
-    reads). A new candidate starts every ``glr_spacing`` samples, replacing the oldest, so the
-    onsets of the last ``GLR_CANDIDATES * spacing`` samples are covered.
-    """
-    spacing = ci[I_GLR_SPACING]
-    if k % spacing == 0:  # restart the oldest candidate at this sample
-        c0 = S_GLR + ((k // spacing) % GLR_CANDIDATES) * GLR_STRIDE
-        for m in range(GLR_STRIDE):
-            sh[c0 + m] = 0.0
-        for ch in range(4):
-            sh[c0 + G_OFF + ch] = u[ch]
-    best, ba, bb, be = 0.0, 0.0, 0.0, 0.0
-    f = np.empty((GLR_CHANNELS, 2))
-    for c in range(GLR_CANDIDATES):
-        c0 = S_GLR + c * GLR_STRIDE
-        if k - c * spacing < 0 and k < GLR_CANDIDATES * spacing:
-            continue  # not started yet
-        for ch in range(GLR_CHANNELS):
-            x = c0 + G_X + 2 * ch
-            v = u[ch] - sh[c0 + G_OFF + ch] if ch < 4 else u[ch]
-            for o in range(2):
-                f[ch, o] = D[o] * v + C[o, 0] * sh[x] + C[o, 1] * sh[x + 1]
-            x0 = A[0, 0] * sh[x] + A[0, 1] * sh[x + 1] + B[0] * v
-            x1 = A[1, 0] * sh[x] + A[1, 1] * sh[x + 1] + B[1] * v
-            sh[x], sh[x + 1] = x0, x1
-        psi0 = d[0] * f[0, 1] + d[1] * (f[0, 1] + f[1, 1]) + d[2] * f[2, 1]
-        psi1 = d[1] * (f[0, 1] + f[1, 1]) + d[2] * (f[3, 1] + f[4, 0])
-        for j in range(2):
-            e = eps[j]
-            if act[j] and np.isfinite(e) and w[j] > 0.0:
-                psi = psi0 if j == 0 else psi1
-                sh[c0 + G_A + j] += w[j] * psi * e
-                sh[c0 + G_A + 2 + j] += w[j] * psi * psi
-                sh[c0 + G_E] += w[j] * e * e
-        sh[c0 + G_AGE] += 1.0
-        a0, a1, b0, b1 = sh[c0 + G_A], sh[c0 + G_A + 1], sh[c0 + G_A + 2], sh[c0 + G_A + 3]
-        a, b = a0 + a1, b0 + b1
-        if sh[c0 + G_AGE] < ci[I_GLR_MIN_AGE] or not b > 0.0:
-            continue
-        glr = a * a / b
-        # heterogeneity: what one payload change per equation explains beyond a common one;
-        # friction at one joint's reversal is explained by one equation, a payload by both
-        het = (a0 * a0 / b0 if b0 > 0.0 else 0.0) + (a1 * a1 / b1 if b1 > 0.0 else 0.0) - glr
-        score = glr - het / cf[F_HETERO]
-        if score > best:
-            best, ba, bb, be = score, a, b, sh[c0 + G_E]
-    return best, ba, bb, be
-
-
-@njit(cache=True)
-def _detect(i, eps, act, rest, phi_d, u, th, short, long, cnt, ci, cf, A, B, C, D, d):  # pragma: no cover
-    """Update the detector statistics of trial i; return True on an alarm.
-
-    Every test asks that a change of the tip mass explain the prior errors: a change ``dm``
-    makes ``e_j = psi_j dm`` in both equations at once, ``psi`` the regressor along the payload
-    direction d; friction the model lacks makes errors of another shape, at low speed. Errors
-    are weighted by ``w_j = 1 / level_j`` (the long-run level of equation j: learned only
-    while both joints are faster than ``speed``, from ``resume`` samples after the last alarm
-    on, bias-corrected; the weight keeps the last level learned in full and may only fall
-    while a new one is learned), and an equation feeds the tests only while its joint has
-    been faster than ``speed`` for the selection memory.
-
-    1. **GLR** (exact construction): the generalized likelihood ratio ``A^2 / B`` of a mass
-       change at each of the last ``GLR_CANDIDATES`` onsets (:func:`_glr_update`), less the
-       heterogeneity over the two equations / ``hetero``, above ``glr_threshold``, with
-       ``|A / B| >= min_mass`` [kg] and ``A^2 / (B E) >= min_explained``; the threshold is
-       ``slow_factor`` times higher while a joint was at rest within the selection memory; and
-       the change must leave a payload that can exist: ``dm_hat >= -(removal m_hat + min_mass)``,
-       ``m_hat = d . (theta - theta0) / (d . d)`` the mass the estimate carries over the start
-       estimate (the arm without payload). A stick event of one joint disturbs the other
-       joint's equation like a payload change of either sign; at no payload only the sign
-       that adds mass can be a swap (the false alarms of ``alternating.toml`` at 1.85 s claimed
-       -0.7 to -1.3 kg at 0 kg).
-    2. **Persistence** (cannot lock up): over the persistence window (restarted at each alarm,
-       filled from ``resume`` samples after it) the same ``|dm_hat| >= min_mass`` and
-       explained fraction, with ``psi = phi d`` (long after a change the post-onset regressor
-       is the whole one), after ``persist_min`` samples. A model left wrong along d (a swap
-       masked by an alarm, levels learned on a wrong model) raises an alarm within
-       :func:`~adaptive_dd.identification.online.rearm_time` of motion.
-    3. The paper's construction (no GLR): the short average of ``e_j^2`` above ``threshold^2``
-       times the level (``slow_factor`` more while the other joint is slow), after
-       ``min_learned`` learned samples, gated as 2. over the direction window.
-    """
-    a_s, a_l = cf[F_ALPHA_SHORT], cf[F_ALPHA_LONG]
-    sh = short[i]
-    learn = cnt[i, C_SINCE_ALARM] >= ci[I_RESUME]
-    a_sum, b_sum, e_sum = 0.0, 0.0, 0.0
-    w = np.zeros(2)
-    for j in range(2):
+    n = eps.shape[0]
+    ints, fl = c.ints, c.floats
+    a_s, a_l = fl[F_ALPHA_SHORT], fl[F_ALPHA_LONG]
+    cnt = s.cnt[i]
+    learn = cnt[C_SINCE_ALARM] >= ints[I_RESUME]
+    for j in range(n):
         e = eps[j]
         if not (act[j] and np.isfinite(e)):
             continue
         e2 = e * e
-        sh[S_E2 + j] += a_s * (e2 - sh[S_E2 + j])
-        if learn and act[1 - j]:
-            long[i, j] += a_l * (e2 - long[i, j])
-            cnt[i, C_LEARNED1 + j] += 1
-        n_l = cnt[i, C_LEARNED1 + j]
-        if n_l >= ci[I_MIN_LEARNED]:
-            sh[S_LREF + j] = long[i, j] / (1.0 - (1.0 - a_l) ** n_l)
-        elif n_l >= ci[I_MIN_LEARNED] // 8:  # relearning: the weight may only fall meanwhile
-            sh[S_LREF + j] = max(sh[S_LREF + j], long[i, j] / (1.0 - (1.0 - a_l) ** n_l))
-        w[j] = 1.0 / sh[S_LREF + j] if sh[S_LREF + j] > 0.0 else 0.0
-        if np.isfinite(phi_d[j]):
-            a_sum += w[j] * phi_d[j] * e
-            b_sum += w[j] * phi_d[j] * phi_d[j]
-            e_sum += w[j] * e2
-    _direction(sh, S_DIR, a_sum, b_sum, e_sum, cf[F_ALPHA_DIR])
-    if learn:
-        _direction(sh, S_PER, a_sum, b_sum, e_sum, cf[F_ALPHA_PERSIST])
-        sh[S_PER_N] += 1.0
-    glr, ga, gb, ge = 0.0, 0.0, 0.0, 0.0
-    if ci[I_CONSTRUCTION] == 1:
-        glr, ga, gb, ge = _glr_update(sh, u, cnt[i, C_K], eps, act, w, ci, cf, A, B, C, D, d)
-    if cnt[i, C_K] < ci[I_WARMUP] or cnt[i, C_SINCE_ALARM] <= ci[I_HOLDOFF]:
+        s.short[i, j] += a_s * (e2 - s.short[i, j])
+        s.fast[i, j] += fl[F_ALPHA_FAST] * (e2 - s.fast[i, j])
+        if learn:
+            s.seen[i, j] += 1
+            nl = s.learned[i, j]
+            ok = True
+            if nl >= ints[I_GATE_AFTER]:
+                level = max(s.long[i, j] / (1.0 - (1.0 - a_l) ** nl), fl[F_FLOOR2])
+                ok = e2 <= fl[F_GATE2] * level
+            if ok:
+                s.long[i, j] += a_l * (e2 - s.long[i, j])
+                s.learned[i, j] = nl + 1
+    if cnt[C_K] < ints[I_WARMUP] or cnt[C_SINCE_ALARM] <= ints[I_HOLDOFF]:
         return False
-    if sh[S_PER_N] >= ci[I_PERSIST_MIN] and _explained(sh, S_PER, cf):
-        return True
-    if ci[I_CONSTRUCTION] == 1:  # the GLR on the payload direction
-        gate = abs(ga) >= cf[F_MIN_MASS] * gb and ga * ga >= cf[F_MIN_EXPLAINED] * gb * ge
-        dd = d[0] * d[0] + d[1] * d[1] + d[2] * d[2]
-        if gate and dd > 0.0:  # the payload left after the change must be able to exist
-            m_hat = (d[0] * th[0] + d[1] * th[1] + d[2] * th[2]) / dd - sh[S_M0]
-            gate = ga >= -(cf[F_REMOVAL] * max(m_hat, 0.0) + cf[F_MIN_MASS]) * gb
-        # a joint that stops or sticks disturbs the other joint's equation for the filters'
-        # memory (the sampled filters meet an acceleration jump): while a joint has been at
-        # rest within the selection memory (rest False), ask slow_factor (RMS) times more
-        thr = cf[F_GLR_THRESHOLD] if rest[0] and rest[1] else cf[F_GLR_THRESHOLD] * np.sqrt(cf[F_SLOW_FACTOR])
-        return glr >= thr and gate
-    # the paper's construction has no GLR: the energy test, gated over the direction window
-    energy = False
-    for j in range(2):
-        n_l = cnt[i, C_LEARNED1 + j]
-        if n_l < ci[I_MIN_LEARNED] or not act[j]:  # only an equation in use may alarm
+    n_act = 0
+    for j in range(n):
+        if act[j]:
+            n_act += 1
+    alarm = False
+    n_raised = 0  # rows above a quarter of the threshold (half of it in RMS)
+    fast = False
+    n_fast = 0  # the same for the fast average and its threshold
+    for j in range(n):
+        if not act[j]:
             continue
-        level = long[i, j] / (1.0 - (1.0 - a_l) ** n_l)
-        # a joint that stops or reverses (stick-slip) disturbs the other joint's equation
-        # through the coupling for about the filters' memory: ask more of the evidence then
-        thr = cf[F_THRESHOLD2] if act[1 - j] else cf[F_THRESHOLD2] * cf[F_SLOW_FACTOR]
-        if sh[S_E2 + j] > thr * level + 1e-300:
-            energy = True
-    return energy and _explained(sh, S_DIR, cf)
-
-
-@njit(cache=True)
-def on_alarm(i, P, cnt, long, short, group, d, ci, cf):  # pragma: no cover - compiled
-    """What an alarm does to trial i: re-open the covariance along the payload direction
-    (again after ``freeze`` with ``reopen_again``), restart the long-run levels and the
-    persistence window, count it. The weights ``S_LREF`` and the GLR candidates are kept."""
-    _reopen(P[i], group, d, cf)
-    cnt[i, C_ALARMS] += 1
-    cnt[i, C_SINCE_ALARM] = 0
-    cnt[i, C_LEARNED1] = 0
-    cnt[i, C_LEARNED2] = 0
-    long[i, 0] = 0.0
-    long[i, 1] = 0.0
-    for c in range(S_PER, S_PER_N + 1):  # the persistence window starts anew
-        short[i, c] = 0.0
-    if ci[I_REOPEN_AGAIN] == 1:
-        cnt[i, C_REOPEN_AT] = cnt[i, C_K] + ci[I_FREEZE]
-
-
-@njit(cache=True)
-def online_step_trial(
-    i, xf, u_last, cnt, tau_prev, theta, P, lam, short, long, sigma_model,
-    q, qd, tau, ci, cf, A, B, C, D, d, group, split_rows, eps_out,
-):  # pragma: no cover - compiled  # fmt: skip
-    """Advance trial i by one sample in place; return 1 on a change alarm, else 0.
-
-    ``q, qd (2,)`` measured at this sample, ``tau (2,)`` the torque applied over it.
-    ``split_rows (2,)``: the regressor row of the first and second stage (full: 0, 1).
-    The prior errors of the two equations go to ``eps_out (2,)`` (NaN when unused).
-    """
-    phi = np.empty((2, 7))
-    y = np.empty(2)
-    _regress(i, xf, u_last, cnt, tau_prev, q, qd, tau, ci, cf, A, B, C, D, phi, y)
-    act = np.ones(2, dtype=np.bool_)
-    if ci[I_SELECT] == 1:
-        for j in range(2):
-            if abs(qd[j]) <= cf[F_SEL_THRESHOLD]:
-                cnt[i, C_SINCE_SLOW1 + j] = 0
-            else:
-                cnt[i, C_SINCE_SLOW1 + j] = min(cnt[i, C_SINCE_SLOW1 + j] + 1, BIG)
-            act[j] = cnt[i, C_SINCE_SLOW1 + j] > ci[I_SEL_MEMORY]
-            if cnt[i, C_SINCE_SLOW1 + j] == ci[I_SEL_MEMORY] + 1:
-                # back in use after a slow phase: the short average must not carry the
-                # errors of the approach to it (it restarts at the long-run level)
-                n_l = cnt[i, C_LEARNED1 + j]
-                a_l = cf[F_ALPHA_LONG]
-                short[i, S_E2 + j] = long[i, j] / (1.0 - (1.0 - a_l) ** n_l) if n_l > 0 else 0.0
-    det_act = act.copy()
-    sel_act = act.copy()  # False while a joint was at rest within the selection memory
-    if ci[I_DETECT] == 1:
-        for j in range(2):  # friction the model lacks lives at low speed: the tests skip it
-            c = C_SINCE_SLOW_DET1 + j
-            cnt[i, c] = 0 if abs(qd[j]) <= cf[F_DET_SPEED] else min(cnt[i, c] + 1, BIG)
-            det_act[j] = det_act[j] and cnt[i, c] > ci[I_SPEED_MEMORY]
-    if ci[I_DETECT] == 1 and ci[I_REOPEN_AGAIN] == 0 and cnt[i, C_SINCE_ALARM] < ci[I_FREEZE]:
-        act[:] = False  # frozen after an alarm
-    th, Pi, li = theta[i], P[i], lam[i]
-    eps_out[:] = np.nan
-    skipped = False
-    split = ci[I_SPLIT]
-    for stage in range(2):
-        r = split_rows[stage]
-        g = 0 if split == 0 else stage
-        yr = y[r]
-        if split != 0 and stage == 1:  # cascade: remove the first stage's part
-            for j in range(7):
-                if group[j] != g:
-                    yr -= phi[r, j] * th[j]
-        if not act[r]:
-            continue
-        ph = np.zeros(7)
-        for j in range(7):
-            if group[j] == g:
-                ph[j] = phi[r, j]
-        forget = split != 0 or stage == 0
-        e = _rls_update(th, Pi, li, stage if split != 0 else 0, ph, yr, group, g, cf, forget)
-        eps_out[r] = e
-        if not np.isfinite(e):
-            skipped = True
-    if skipped:
-        cnt[i, C_SKIPPED] += 1
-    alarm = 0
-    if ci[I_DETECT] == 1:
-        if cnt[i, C_REOPEN_AT] == cnt[i, C_K]:
-            _reopen(Pi, group, d, cf)
-        phi_d = np.zeros(2)
-        for r in range(2):
-            for j in range(7):
-                phi_d[r] += phi[r, j] * d[j]
-        if _detect(
-            i, eps_out, det_act, sel_act, phi_d, u_last[i], th, short, long, cnt, ci, cf, A, B, C, D, d
-        ):
-            alarm = 1
-            on_alarm(i, P, cnt, long, short, group, d, ci, cf)
+        nl = s.learned[i, j]
+        thr = fl[F_THRESHOLD2] if n_act == ints[I_N_ROWS] else fl[F_THRESHOLD2] * fl[F_SLOW2]
+        if s.seen[i, j] >= ints[I_MIN_LEARNED] and nl >= 1:
+            level = max(s.long[i, j] / (1.0 - (1.0 - a_l) ** nl), fl[F_FLOOR2])
+        elif s.ref[i, j] > 0.0:  # still re-learning: the level established before the last alarm,
+            level = s.ref[i, j]  # with the stricter threshold (the estimate may still converge)
+            thr = fl[F_THRESHOLD2] * fl[F_SLOW2]
         else:
-            cnt[i, C_SINCE_ALARM] = min(cnt[i, C_SINCE_ALARM] + 1, BIG)
-    if ci[I_PROJECT] == 2:
-        _project(th, th, cf)
-    if ci[I_PROJECT] >= 1:
-        _project(th, sigma_model[i], cf)
-    else:
-        for j in range(7):
-            sigma_model[i, j] = th[j]
-    cnt[i, C_K] += 1
+            continue
+        if s.short[i, j] > thr * level + 1e-300:
+            alarm = True
+        if s.short[i, j] > 0.25 * thr * level + 1e-300:
+            n_raised += 1
+        if ints[I_FAST] == 1:
+            thf = fl[F_FAST2] * thr / fl[F_THRESHOLD2]  # the same slow-row and re-learning factors
+            if s.fast[i, j] > thf * level + 1e-300:
+                fast = True
+            if s.fast[i, j] > 0.25 * thf * level + 1e-300:
+                n_fast += 1
+    return (alarm and n_raised >= ints[I_MIN_ROWS]) or (fast and n_fast >= ints[I_MIN_ROWS])
+
+
+@njit(cache=True)
+def _alarm(c, s, i, k):  # pragma: no cover - compiled
+    """What an alarm at sample k does: re-open P, count, restart the level (keeping it as ``ref``)."""
+    ints, fl = c.ints, c.floats
+    cnt = s.cnt[i]
+    _reopen(c, s.P[i])
+    if ints[I_RESET_PAYLOAD] == 1:  # a new payload: nothing known of it but its prior
+        p = s.theta.shape[1]
+        for k in range(p - 10, p):
+            s.theta[i, k] = 0.0
+    cnt[C_ALARMS] += 1
+    cnt[C_SINCE_ALARM] = 0
+    cnt[C_LAST_ALARM] = k
+    a_l = fl[F_ALPHA_LONG]
+    for j in range(s.seen.shape[1]):
+        nl = s.learned[i, j]
+        # the level this row had established (0: none) serves until it re-learns
+        s.ref[i, j] = 0.0
+        if s.seen[i, j] >= ints[I_MIN_LEARNED] and nl >= 1:
+            s.ref[i, j] = max(s.long[i, j] / (1.0 - (1.0 - a_l) ** nl), fl[F_FLOOR2])
+        s.seen[i, j] = 0
+        s.learned[i, j] = 0
+        s.long[i, j] = 0.0
+    if ints[I_REOPEN_AGAIN] == 1:
+        cnt[C_REOPEN_AT] = k + ints[I_FREEZE]
+    if ints[I_MOMENTUM] == 1:
+        cnt[C_RESTART] = 1
+
+
+@njit(cache=True)
+def est_force_alarm_trial(c, s, i):  # pragma: no cover - compiled
+    """Raise an alarm on trial i at its last stepped sample, as if the detector had.
+
+    For a caller that knows of a change (a tool changer's signal) and for tests of what
+    follows an alarm. Does nothing before the first sample.
+    """
+    if s.cnt[i, C_K] > 0:
+        _alarm(c, s, i, s.cnt[i, C_K] - 1)
+
+
+@njit(cache=True)
+def est_step_trial(c, s, i, q, qd, tau):  # pragma: no cover - compiled
+    """Advance trial i by one sample in place; return 1 on a change alarm at this sample, else 0.
+
+    :func:`est_step_trial_in` with its scratch allocated for this call.
+    """
+    return est_step_trial_in(c, s, i, q, qd, tau, est_work(q.shape[0], s.theta.shape[1]))
+
+
+@njit(cache=True, inline="always")
+def est_step_trial_in(c, s, i, q, qd, tau, w):  # pragma: no cover - compiled
+    """Advance trial i by one sample in place; return 1 on a change alarm at this sample, else 0.
+
+    Parameters
+    ----------
+    c : EstCfg
+    s : EstState
+    i : int
+        Trial index.
+    q, qd : (n,)
+        Measured joint positions [rad] and velocities [rad/s] at this sample.
+    tau : (n,)
+        Torque applied over this sample [N m]. A non-finite q, qd or tau skips the
+        sample (counted in ``cnt[i, C_SKIPPED]``).
+    w : EstWork
+        Scratch (:func:`est_work`), reused from sample to sample (one per thread).
+    """
+    n = q.shape[0]
+    p = s.theta.shape[1]
+    ints, fl = c.ints, c.floats
+    cnt = s.cnt[i]
+    usable = _filtered_signals(c, s, i, q, qd, tau, w)
+    act = w.act
+    n_rows = ints[I_N_ROWS]
+    for j in range(n):
+        if ints[I_SELECT] == 1:
+            if np.isfinite(qd[j]) and abs(qd[j]) <= fl[F_SEL_THRESHOLD]:
+                s.since_slow[i, j] = 0
+            else:
+                s.since_slow[i, j] = min(s.since_slow[i, j] + 1, BIG)
+            act[j] = s.since_slow[i, j] > ints[I_SEL_MEMORY]
+            if s.since_slow[i, j] == ints[I_SEL_MEMORY] + 1 and s.learned[i, j] > 0:
+                # back in use after a slow phase: the short average restarts at the level
+                nl = s.learned[i, j]
+                s.short[i, j] = s.long[i, j] / (1.0 - (1.0 - fl[F_ALPHA_LONG]) ** nl)
+                s.fast[i, j] = s.short[i, j]
+        else:
+            act[j] = True
+        act[j] = act[j] and usable and j < n_rows
+    for j in range(n):
+        s.eps[i, j] = np.nan
+    th, Pi = s.theta[i], s.P[i]
+    if usable:
+        phi, y = w.phi, w.y
+        _regression(c, w.qf, w.qdf, w.qddf, w.sf, w.tf, w.ym, w.phim, phi, y, w)
+        pphi, row, nz = w.pphi, w.row, w.nz
+        first = True
+        for j in range(n_rows):
+            if not act[j]:
+                continue
+            if first:
+                s.lam[i] = (1.0 - fl[F_MU]) * s.lam[i] + fl[F_MU]
+            lam_eff = s.lam[i] if first else 1.0
+            first = False
+            wj = c.w[j]
+            for k in range(p):
+                row[k] = phi[j, k] / wj
+            s.eps[i, j] = _rls_row(th, Pi, row, y[j] / wj, lam_eff, pphi, nz)
+        if not first and fl[F_CAP] > 0.0:
+            tr = 0.0
+            for k in range(p):
+                tr += Pi[k, k]
+            if tr > fl[F_CAP]:
+                scale = fl[F_CAP] / tr
+                for a in range(p):
+                    for b in range(p):
+                        Pi[a, b] *= scale
+    alarm = 0
+    if ints[I_DETECT] == 1:
+        if cnt[C_REOPEN_AT] == cnt[C_K]:
+            _reopen(c, Pi)
+        if _detect(c, s, i, s.eps[i], act):
+            alarm = 1
+            _alarm(c, s, i, cnt[C_K])
+        else:
+            cnt[C_SINCE_ALARM] = min(cnt[C_SINCE_ALARM] + 1, BIG)
+    cnt[C_K] += 1
     return alarm
 
 
+@njit(cache=True, inline="always")
+def _payload_raw(c, th, raw):  # pragma: no cover - compiled
+    """The payload (10,) implied by an estimate theta, unprojected (full mode: least squares on pbasis)."""
+    p = th.shape[0]
+    if c.mode == MODE_PAYLOAD:
+        for k in range(10):
+            raw[k] = th[k]
+        return
+    for k in range(10):
+        acc = 0.0
+        for a in range(p):
+            acc += c.pbasis_pinv[k, a] * (th[a] - c.sigma0[a])
+        raw[k] = acc
+
+
+@njit(cache=True, inline="always")
+def _inertia_cov(c, P, out):  # pragma: no cover - compiled
+    """The inertia block ``out[4:, 4:]`` of the payload parameters' covariance (the part
+    :func:`compact_prior` reads; the rest of ``out (10, 10)`` is left as it is): P's own block in
+    payload mode, else that block of ``pbasis_pinv P pbasis_pinv^T``."""
+    if c.mode == MODE_PAYLOAD:
+        for a in range(4, 10):
+            for b in range(4, 10):
+                out[a, b] = P[a, b]
+        return
+    p = P.shape[0]
+    tmp = np.zeros((10, p))
+    for a in range(4, 10):
+        for b in range(p):
+            acc = 0.0
+            for k in range(p):
+                acc += c.pbasis_pinv[a, k] * P[k, b]
+            tmp[a, b] = acc
+    for a in range(4, 10):
+        for b in range(4, 10):
+            acc = 0.0
+            for k in range(p):
+                acc += tmp[a, k] * c.pbasis_pinv[b, k]
+            out[a, b] = acc
+
+
 @njit(cache=True)
-def online_step_batch(
-    xf, u_last, cnt, tau_prev, theta, P, lam, short, long, sigma_model,
-    q, qd, tau, ci, cf, A, B, C, D, d, group, split_rows, eps, alarm,
-):  # pragma: no cover - compiled  # fmt: skip
-    """:func:`online_step_trial` over every trial of the batch (``q, qd, tau (n, 2)``)."""
+def compact_prior(raw, Pc, rho):  # pragma: no cover - compiled
+    """Combine ``raw (10,)`` (covariance ``Pc (10, 10)``, of which only the inertia block
+    ``Pc[4:, 4:]`` is read, and overwritten) with a prior that the
+    payload is compact: its inertia about the frame ``I = m S(c)^T S(c) + 0.4 m rho^2 1``
+    (a solid sphere of radius ``rho`` [m] at the estimated centre of mass ``c`` with the
+    estimated mass ``m``), each of the six inertia components with standard deviation
+    ``m rho^2 + 1e-6`` [kg m^2]. Six scalar Kalman updates (pseudo-measurements of the
+    inertia) on the inertia block of ``Pc``, given the mass and first moments: those are left
+    as they are (they are the well-determined part; moving them through their correlation
+    with the inertia corrupted the unloaded arm's model, where the prior pins the inertia).
+
+    Right after a swap the data determine the payload's mass and first moments within
+    tens of milliseconds but its inertia only over a second (the inertia's columns are
+    weakly excited); the prior keeps the model control uses at a plausible inertia
+    meanwhile, and the data override it as P shrinks (no effect once the inertia is known).
+    """
+    m = max(raw[0], 0.0)
+    hx, hy, hz = raw[1], raw[2], raw[3]
+    mean = np.zeros(6)
+    if m > 1e-9:
+        h2 = hx * hx + hy * hy + hz * hz
+        sph = 0.4 * m * rho * rho
+        # (|h|^2 1 - h h^T) / m + sphere; order Ixx, Ixy, Iyy, Ixz, Iyz, Izz
+        mean[0] = (h2 - hx * hx) / m + sph
+        mean[1] = -hx * hy / m
+        mean[2] = (h2 - hy * hy) / m + sph
+        mean[3] = -hx * hz / m
+        mean[4] = -hy * hz / m
+        mean[5] = (h2 - hz * hz) / m + sph
+    std = m * rho * rho + 1e-6
+    R = std * std
+    g = np.empty(10)
+    row = np.empty(10)
+    for t in range(6):
+        r = 4 + t
+        S = Pc[r, r] + R
+        if not (np.isfinite(S) and S > 0.0):
+            return
+        innov = mean[t] - raw[r]
+        for a in range(4, 10):
+            g[a] = Pc[a, r] / S
+            row[a] = Pc[r, a]
+        for a in range(4, 10):
+            raw[a] += g[a] * innov
+            for b in range(4, 10):
+                Pc[a, b] -= g[a] * row[b]
+
+
+@njit(cache=True, inline="always")
+def _control_payload(c, s, i, raw, pay, Pc):  # pragma: no cover - compiled
+    """The payload the model control uses: ``raw`` with the compact prior (if set), projected (if set);
+    ``Pc (10, 10)`` scratch."""
+    rho = c.floats[F_PRIOR_RADIUS]
+    if rho > 0.0:
+        _inertia_cov(c, s.P[i], Pc)
+        compact_prior(raw, Pc, rho)
+    if c.ints[I_PROJECT] == 1:
+        project_payload(raw, pay, c.floats[F_EIG_MIN], c.floats[F_RADIUS])
+    else:
+        for k in range(10):
+            pay[k] = raw[k]
+
+
+@njit(cache=True)
+def est_payload_trial(c, s, i, out):  # pragma: no cover - compiled
+    """The payload (10,) about its frame implied by trial i's estimate, projected if set to."""
+    raw = np.empty(10)
+    _payload_raw(c, s.theta[i], raw)
+    _control_payload(c, s, i, raw, out, np.empty((10, 10)))
+
+
+@njit(cache=True)
+def est_model_trial(c, s, i, pi_out):  # pragma: no cover - compiled
+    """The model control uses for trial i, as standard parameters ``pi_out (13 n,)``
+    (:func:`est_model_trial_in` with its scratch allocated for this call)."""
+    est_model_trial_in(c, s, i, pi_out, est_work(c.w.shape[0], s.theta.shape[1]))
+
+
+@njit(cache=True, inline="always")
+def est_model_trial_in(c, s, i, pi_out, w):  # pragma: no cover - compiled
+    """The model control uses for trial i, as standard parameters ``pi_out (13 n,)``; ``w``
+    (:class:`EstWork`) scratch.
+
+    Payload mode: the arm's ``pi0`` with the (projected) payload folded into link ``jp``
+    through ``pmap``. Full mode: ``pi0 + Bpinv (theta_p - B pi0)``, where ``theta_p`` is
+    theta with its payload part replaced by the projected one
+    (``theta_p = theta + pbasis (payload_projected - payload_raw)``), so that
+    ``B pi_out == theta_p``.
+    """
+    m = pi_out.shape[0]
+    for k in range(m):
+        pi_out[k] = c.pi0[k]
+    th = s.theta[i]
+    p = th.shape[0]
+    raw, pay = w.raw, w.pay
+    _payload_raw(c, th, raw)
+    raw_est = raw
+    if c.mode != MODE_PAYLOAD:  # full mode: theta's own payload
+        raw_est = w.raw_est
+        for k in range(10):
+            raw_est[k] = raw[k]
+    _control_payload(c, s, i, raw, pay, w.Pc)
+    if c.mode == MODE_PAYLOAD:
+        base = 10 * c.jp
+        for a in range(10):
+            acc = 0.0
+            for b in range(10):
+                acc += c.pmap[a, b] * pay[b]
+            pi_out[base + a] += acc
+        return
+    d = w.d
+    for a in range(p):
+        acc = th[a] - c.sigma0[a]
+        for k in range(10):
+            acc += c.pbasis[a, k] * (pay[k] - raw_est[k])
+        d[a] = acc
+    for k in range(m):
+        acc = 0.0
+        for a in range(p):
+            acc += c.Bpinv[k, a] * d[a]
+        pi_out[k] += acc
+
+
+@njit(cache=True)
+def est_step_batch(c, s, q, qd, tau, alarm):  # pragma: no cover - compiled
+    """:func:`est_step_trial` over every trial (``q, qd, tau (m, n)``), alarms into ``alarm (m,)``."""
+    w = est_work(q.shape[1], s.theta.shape[1])
     for i in range(q.shape[0]):
-        alarm[i] = online_step_trial(
-            i, xf, u_last, cnt, tau_prev, theta, P, lam, short, long, sigma_model,
-            q[i], qd[i], tau[i], ci, cf, A, B, C, D, d, group, split_rows, eps[i],
-        )  # fmt: skip
+        alarm[i] = est_step_trial_in(c, s, i, q[i], qd[i], tau[i], w)
 
 
 @njit(cache=True)
-def online_run_trial(
-    i, xf, u_last, cnt, tau_prev, theta, P, lam, short, long, sigma_model,
-    q, qd, tau, ci, cf, A, B, C, D, d, group, split_rows,
-    theta_rec, model_rec, eps_rec, alarm_rec, lam_rec,
-):  # pragma: no cover - compiled  # fmt: skip
-    """Step trial i through a record ``q, qd, tau (N, 2)``, recording after every sample."""
+def est_run_trial(
+    c, s, i, q, qd, tau, theta_rec, payload_rec, eps_rec, alarm_rec, lam_rec
+):  # pragma: no cover
+    """Step trial i through a record ``(N, n)``, recording after every sample."""
+    pay = np.empty(10)
+    w = est_work(q.shape[1], s.theta.shape[1])
     for k in range(q.shape[0]):
-        alarm_rec[k] = online_step_trial(
-            i, xf, u_last, cnt, tau_prev, theta, P, lam, short, long, sigma_model,
-            q[k], qd[k], tau[k], ci, cf, A, B, C, D, d, group, split_rows, eps_rec[k],
-        )  # fmt: skip
-        theta_rec[k] = theta[i]
-        model_rec[k] = sigma_model[i]
-        lam_rec[k] = lam[i, 0]
+        alarm_rec[k] = est_step_trial_in(c, s, i, q[k], qd[k], tau[k], w)
+        theta_rec[k] = s.theta[i]
+        est_payload_trial(c, s, i, pay)
+        payload_rec[k] = pay
+        eps_rec[k] = s.eps[i]
+        lam_rec[k] = s.lam[i]

@@ -1,6 +1,6 @@
 """How fast a payload's mass can be known after a swap: a Cramér-Rao bound along a trajectory.
 
-The model (the payload regression of :mod:`~adaptive_dd.identification.serial_online`,
+The model (the payload regression of :mod:`~adaptive_dd.identification.online`,
 arm known, payload's ten parameters ``theta`` unknown)::
 
     y_k = Phi_k theta + e_k,     Phi_k = body_regressor(q_k, qd_k, qdd_k; link jp) @ payload_map
@@ -59,8 +59,8 @@ from scipy.linalg import solve_triangular
 
 from adaptive_dd.errors import ParameterError, SignalError
 from adaptive_dd.identification.filters import design_filter_bank, filter_record
+from adaptive_dd.plant.arm import Arm
 from adaptive_dd.plant.chain import mass_matrix_batch, regressor_batch, rnea_batch
-from adaptive_dd.plant.serial_arm import SerialArm
 
 __all__ = [
     "filter_noise_gram",
@@ -93,7 +93,7 @@ def filter_noise_gram(tau_f: float, sample_period: float) -> Array:
     return h.T @ h
 
 
-def _states(arm: SerialArm, q, qd, qdd) -> tuple[Array, Array, Array]:
+def _states(arm: Arm, q, qd, qdd) -> tuple[Array, Array, Array]:
     q, qd, qdd = (np.asarray(x, dtype=float) for x in (q, qd, qdd))
     n = arm.n_joints
     if q.ndim != 2 or q.shape[1] != n or qd.shape != q.shape or qdd.shape != q.shape:
@@ -105,7 +105,7 @@ def _states(arm: SerialArm, q, qd, qdd) -> tuple[Array, Array, Array]:
     return q, qd, qdd
 
 
-def _variances(arm: SerialArm, position_variance, velocity_variance) -> tuple[Array, Array]:
+def _variances(arm: Arm, position_variance, velocity_variance) -> tuple[Array, Array]:
     n = arm.n_joints
     sq = np.asarray(arm.sensor.position_variance if position_variance is None else position_variance, float)
     sv = np.asarray(arm.sensor.velocity_variance if velocity_variance is None else velocity_variance, float)
@@ -114,7 +114,7 @@ def _variances(arm: SerialArm, position_variance, velocity_variance) -> tuple[Ar
     return sq, sv
 
 
-def _linearisation(arm: SerialArm, q, qd, qdd, payload) -> tuple[Array, Array, Array, Array]:
+def _linearisation(arm: Arm, q, qd, qdd, payload) -> tuple[Array, Array, Array, Array]:
     """``Phi (N, n, 10)``, ``M (N, n, n)`` with armature, ``D_qd``, ``D_q (N, n, n)`` at the true state."""
     pay = np.asarray(payload, dtype=float)
     if pay.shape != (10,) or not np.all(np.isfinite(pay)):
@@ -138,7 +138,7 @@ def _linearisation(arm: SerialArm, q, qd, qdd, payload) -> tuple[Array, Array, A
 
 
 def payload_regression_noise(
-    arm: SerialArm,
+    arm: Arm,
     q: ArrayLike,
     qd: ArrayLike,
     qdd: ArrayLike,
@@ -153,7 +153,7 @@ def payload_regression_noise(
 
     Parameters
     ----------
-    arm : SerialArm
+    arm : Arm
     q, qd, qdd : (N, n)
         The true trajectory [rad, rad/s, rad/s^2].
     payload : (10,)
@@ -240,7 +240,7 @@ def payload_com_bound(Phi: ArrayLike, R: ArrayLike, payload: ArrayLike) -> Array
 
 
 def payload_regression_covariance(
-    arm: SerialArm,
+    arm: Arm,
     q: ArrayLike,
     qd: ArrayLike,
     qdd: ArrayLike,
@@ -318,7 +318,7 @@ def _first_time(std: Array, bound: float, sample_period: float) -> float:
 
 
 def payload_information_time(
-    arm: SerialArm,
+    arm: Arm,
     q: ArrayLike,
     qd: ArrayLike,
     qdd: ArrayLike,
@@ -342,7 +342,7 @@ def payload_information_time(
 
     Parameters
     ----------
-    arm : SerialArm
+    arm : Arm
     q, qd, qdd : (N, n)
         The oracle trajectory of the whole record [rad, rad/s, rad/s^2].
     payload : (10,)
@@ -371,7 +371,7 @@ def payload_information_time(
 
 
 def payload_com_information_time(
-    arm: SerialArm,
+    arm: Arm,
     q: ArrayLike,
     qd: ArrayLike,
     qdd: ArrayLike,

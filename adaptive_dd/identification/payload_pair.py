@@ -1,13 +1,13 @@
 """A payload's mass, centre of mass and inertia from identified base parameters.
 
 A rigid body on the payload frame moves the base parameters along
-:attr:`SerialArm.payload_basis` ``P (p, 10)``: ``sigma_loaded = sigma_unloaded + P pi_p``.
+:attr:`Arm.payload_basis` ``P (p, 10)``: ``sigma_loaded = sigma_unloaded + P pi_p``.
 
 * **From a pair** of records (loaded, unloaded), each identified with its covariance:
   generalised least squares ``pi_p = (P^T C^-1 P)^-1 P^T C^-1 (sigma_L - sigma_U)``,
   ``C = C_L + C_U``, covariance ``(P^T C^-1 P)^-1``.
 * **From one record with the arm known**: output error on the ten payload parameters
-  alone (:func:`~adaptive_dd.identification.serial_output_error.serial_output_error`
+  alone (:func:`~adaptive_dd.identification.output_error.fit_output_error`
   with ``E = P``), covariance the inverse of their Fisher information.
 
 Either way the result carries the constrained (physically consistent) fit of
@@ -134,8 +134,8 @@ def payload_from_record(
     **oe_kw,
 ) -> PayloadResult:
     """The payload from one loaded record with the arm known (``sigma_arm``, default the URDF's)."""
-    from adaptive_dd.identification.serial_output_error import serial_output_error
+    from adaptive_dd.identification.output_error import fit_output_error
 
     s0 = model.sigma_ref if sigma_arm is None else np.asarray(sigma_arm, float)
-    fit = serial_output_error(model, q, qd, tau, s0, std, E=arm.payload_basis, **oe_kw)
+    fit = fit_output_error(model, q, qd, tau, s0, std, E=arm.payload_basis, **oe_kw)
     return payload_from_params(fit.theta, np.linalg.inv(fit.information))

@@ -39,7 +39,7 @@ __all__ = [
     "CONSTRUCTIONS",
     "FilteredRegression",
     "OnlineRegressor",
-    "filtered_regression",
+    "two_link_filtered_regression",
 ]
 
 Array = NDArray[np.float64]
@@ -113,7 +113,7 @@ def _backward_difference(q: Array, T: float, axis: int = -2) -> Array:
     return np.concatenate((first, d), axis=axis)
 
 
-def filtered_regression(
+def two_link_filtered_regression(
     q: ArrayLike,
     tau: ArrayLike,
     qd: ArrayLike | None = None,
@@ -197,7 +197,7 @@ class OnlineRegressor:
     batch_shape : tuple
         Leading shape of each sample, e.g. ``(n_trials,)``.
     method, construction, tau_f, sample_period
-        As in :func:`filtered_regression`.
+        As in :func:`two_link_filtered_regression`.
     """
 
     def __init__(

@@ -25,9 +25,9 @@ from adaptive_dd.identification.limits import (
     run_information_estimators,
     table2_bound,
 )
-from adaptive_dd.plant.arm import Arm
 from adaptive_dd.plant.parameters import SIGMA_NAMES, project_sigma
 from adaptive_dd.plant.simulator import simulate_open_loop
+from adaptive_dd.plant.two_link import TwoLinkArm
 
 __all__ = [
     "EXTRA_ESTIMATORS",
@@ -173,8 +173,26 @@ def run_reproduce(
     extra_estimators : tuple of {"output_error", "akf"}
         Run these too on the measured data (see :mod:`adaptive_dd.identification.limits`).
     """
-    from tqdm.auto import tqdm
+    _check_configurations(seeds, tau_f, estimators, extra_estimators)
+    arm = TwoLinkArm.sice()  # the paper's arm
+    sensor = replace(
+        arm.sensor,
+        position_variance=TABLE2["position_variance"] if noise else (0.0, 0.0),
+        velocity_variance=TABLE2["velocity_variance"] if noise else (0.0, 0.0),
+    )
+    sim = simulate_open_loop(table2_torque(seeds, n_samples), trial_rngs(seed, seeds), arm=arm, sensor=sensor)
+    jobs = [(m, s, e) for m in methods for e in estimators for s in (splits if e == "paper" else ("full",))]
+    res = ReproduceResult(tuple(tau_f), seeds, sim=sim)
+    _estimate_all(res, arm.sigma, jobs, keep_theta, progress)
+    if noise:
+        res.crb = table2_bound(sim.tau[0])
+    if extra_estimators:
+        names = tuple(e for e in LIMIT_ESTIMATORS if e in extra_estimators)
+        res.extra, _ = run_information_estimators(sim.q_meas, sim.qd_meas, sim.tau, names)
+    return res
 
+
+def _check_configurations(seeds: int, tau_f: tuple, estimators: tuple, extra_estimators: tuple) -> None:
     if seeds < 1:
         raise ParameterError(f"seeds must be >= 1, got {seeds}")
     bad = [e for e in estimators if e not in ESTIMATORS] + [
@@ -184,15 +202,15 @@ def run_reproduce(
         raise ParameterError(f"unknown estimator(s) {bad}; choose from {ESTIMATORS + EXTRA_ESTIMATORS}")
     if any(t <= 0 for t in tau_f):
         raise ParameterError(f"tau_f values must be > 0, got {tau_f}")
-    arm = Arm.sice()  # the paper's arm
-    sensor = replace(
-        arm.sensor,
-        position_variance=TABLE2["position_variance"] if noise else (0.0, 0.0),
-        velocity_variance=TABLE2["velocity_variance"] if noise else (0.0, 0.0),
-    )
-    sim = simulate_open_loop(table2_torque(seeds, n_samples), trial_rngs(seed, seeds), arm=arm, sensor=sensor)
-    jobs = [(m, s, e) for m in methods for e in estimators for s in (splits if e == "paper" else ("full",))]
-    res = ReproduceResult(tuple(tau_f), seeds, sim=sim)
+
+
+def _estimate_all(res: ReproduceResult, sigma, jobs: list, keep_theta: tuple, progress: bool) -> None:
+    """Run every ``(method, split, estimator)`` of ``jobs`` on ``res.sim`` at every ``res.tau_f``
+    and store the errors [%] against ``sigma`` (and the histories asked for) in ``res``. The
+    filtered regression is prepared once per method and kind of estimator."""
+    from tqdm.auto import tqdm
+
+    sim, tau_f = res.sim, res.tau_f
     prepared = {}
     bar = tqdm(total=len(jobs), desc="reproduce", unit="config", disable=not progress)
     for method, split, est in jobs:
@@ -215,17 +233,11 @@ def run_reproduce(
         )
         if est != "kalman":
             bar.update(1)
-        res.signed[(method, split, est)] = 100 * (theta[..., -1, :] - arm.sigma) / arm.sigma
+        res.signed[(method, split, est)] = 100 * (theta[..., -1, :] - sigma) / sigma
         res.errors[(method, split, est)] = np.abs(res.signed[(method, split, est)])
         if (method, split, est) in keep_theta:
             res.theta[(method, split, est)] = theta
     bar.close()
-    if noise:
-        res.crb = table2_bound(sim.tau[0])
-    if extra_estimators:
-        names = tuple(e for e in LIMIT_ESTIMATORS if e in extra_estimators)
-        res.extra, _ = run_information_estimators(sim.q_meas, sim.qd_meas, sim.tau, names)
-    return res
 
 
 def format_bounds(res: ReproduceResult, tau_f: float | None = None) -> str:
@@ -240,7 +252,7 @@ def format_bounds(res: ReproduceResult, tau_f: float | None = None) -> str:
     estimates, kinds = {}, {}
     for (method, split, est), e in res.signed.items():
         label = f"{method} {est}" + (f" ({split})" if est == "paper" else "") + f" tau_f={tf:g}"
-        estimates[label] = Arm.sice().sigma * (1 + e[i] / 100.0)
+        estimates[label] = TwoLinkArm.sice().sigma * (1 + e[i] / 100.0)
         kinds[label] = est
     for name, est in res.extra.items():
         estimates[name], kinds[name] = est, name
@@ -322,7 +334,7 @@ def model_responses(models: dict, n_samples: int = TABLE2["n_samples"]) -> tuple
     q_models : dict
         Label -> ndarray (n_samples, 2).
     """
-    sice = Arm.sice()
+    sice = TwoLinkArm.sice()
     clean = replace(sice.sensor, quantize=False, position_variance=(0, 0), velocity_variance=(0, 0))
     tau = table2_torque(1, n_samples)
     rec = simulate_open_loop(tau, np.random.default_rng(0), arm=sice, sensor=clean)

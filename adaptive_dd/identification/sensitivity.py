@@ -30,7 +30,7 @@ Forward sensitivity equations (:func:`local_sensitivities`, :func:`chain_sensiti
 Finite differences (:func:`finite_difference_sensitivities`)
     Central differences ``(x(sigma + h_j e_j) - x(sigma - h_j e_j)) / (2 h_j)`` of whole
     trajectories through the compiled stick-slip step
-    :func:`adaptive_dd.plant.integrator.plant_step`, all 14 perturbed arms in one batch.
+    :func:`adaptive_dd.plant.two_link_integrator.two_link_plant_step`, all 14 perturbed arms in one batch.
     Step ``h_j = rel_step * |sigma_j|`` with ``rel_step = 1e-6`` by default. The kernel
     decides breakaway from rest at substep starts, so a breakaway time moves by whole
     substeps (T / substeps) when a parameter changes: a difference that straddles such a
@@ -49,8 +49,8 @@ from numpy.typing import ArrayLike, NDArray
 
 from adaptive_dd.errors import ParameterError, SignalError
 from adaptive_dd.plant.dynamics import regressor
-from adaptive_dd.plant.integrator import plant_step
 from adaptive_dd.plant.parameters import validate_sigma
+from adaptive_dd.plant.two_link_integrator import two_link_plant_step
 
 __all__ = [
     "chain_sensitivities",
@@ -99,7 +99,9 @@ def simulate_trajectory(
     sg_b = np.broadcast_to(sg, (*shape, 7))
     for k in range(n):
         qs[..., k, :], qds[..., k, :] = q, qd
-        q, qd, stuck, slip = plant_step(q, qd, stuck, slip, tau_b[..., k, :], sg_b, sample_period, substeps)
+        q, qd, stuck, slip = two_link_plant_step(
+            q, qd, stuck, slip, tau_b[..., k, :], sg_b, sample_period, substeps
+        )
     return qs, qds
 
 

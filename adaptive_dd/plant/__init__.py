@@ -1,8 +1,7 @@
-"""The arms: the paper's two-link direct-drive arm (:class:`Arm`, default the SICE arm: parameters,
+"""The arms: the paper's two-link direct-drive arm (:class:`TwoLinkArm`, default the SICE arm: parameters,
 closed-form dynamics, simulator, Pinocchio check) and any serial arm from a URDF
-(:class:`SerialArm`, imported on first use: it loads Pinocchio)."""
+(:class:`Arm`, imported on first use: it loads Pinocchio)."""
 
-from adaptive_dd.plant.arm import FRICTION_LAWS, Arm
 from adaptive_dd.plant.devices import ActuatorConfig, SensorConfig
 from adaptive_dd.plant.dynamics import (
     coriolis_matrix,
@@ -15,7 +14,6 @@ from adaptive_dd.plant.dynamics import (
     regressor,
     regressor_reference,
 )
-from adaptive_dd.plant.integrator import plant_step
 from adaptive_dd.plant.parameters import (
     L1,
     L2,
@@ -36,6 +34,8 @@ from adaptive_dd.plant.simulator import (
     SimulationResult,
     simulate_open_loop,
 )
+from adaptive_dd.plant.two_link import FRICTION_LAWS, TwoLinkArm
+from adaptive_dd.plant.two_link_integrator import two_link_plant_step
 
 __all__ = [
     "FRICTION_LAWS",
@@ -52,8 +52,8 @@ __all__ = [
     "PayloadSchedule",
     "PhysicalParameters",
     "SensorConfig",
-    "SerialArm",
     "SimulationResult",
+    "TwoLinkArm",
     "coriolis_matrix",
     "coriolis_vector",
     "forward_dynamics",
@@ -63,19 +63,19 @@ __all__ = [
     "mass_matrix_entries",
     "payload_mass_from_sigma",
     "payload_sigma_delta",
-    "plant_step",
     "project_sigma",
     "regressor",
     "regressor_reference",
     "simulate_open_loop",
+    "two_link_plant_step",
     "validate_sigma",
 ]
 
 
 def __getattr__(name: str):
-    """``SerialArm`` on first use (its module imports Pinocchio, which takes a second)."""
-    if name == "SerialArm":
-        from adaptive_dd.plant.serial_arm import SerialArm
+    """``Arm`` on first use (its module imports Pinocchio, which takes a second)."""
+    if name == "Arm":
+        from adaptive_dd.plant.arm import Arm
 
-        return SerialArm
+        return Arm
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -1,426 +1,587 @@
-"""The :class:`Arm`: everything physical about a two-link horizontal arm, in one object.
+"""The :class:`Arm`: any fixed-base serial arm from a URDF, with friction, armature and payload.
 
-An :class:`Arm` holds the base parameters ``sigma`` (eq. 9, without payload), the
-physical parameters of eq. (10) when they are known, the link lengths (``l2`` is
-where the payload disk mounts), the default payload disk radius, the actuator and
-sensor models, and the friction law of the *simulated plant*. Controllers and
-estimators keep the paper's friction model (viscous plus Coulomb, eqs. 5-6);
-only the simulated plant changes with :attr:`Arm.friction`.
+Parameters
+----------
+Standard parameters ``pi`` (13 n): per link the ten inertial parameters about the
+joint frame (Pinocchio's order), then per joint viscous friction ``fv``, Coulomb
+friction ``fc`` and armature ``Ia`` (:mod:`adaptive_dd.plant.base_parameters`).
+The base parameters ``sigma = B pi`` (p of them) are found once per arm by QR
+with pivoting; the base regressor is a column subset of the standard one, so
 
-What the rest of the package asks of an arm is kept small, so that an N-joint
-arm (a URDF through Pinocchio) can implement the same interface later:
-``n_joints``, ``sigma``, ``mass_matrix``, ``regressor``, ``sigma_with_payload``,
-``payload_direction``, ``payload_mass_from_sigma``, ``nominal_inertia``,
-``to_dict``.
+    arm.regressor(q, qd, qdd) @ arm.sigma == inverse dynamics (friction included),
 
-Plant friction laws (per joint i, ``b_i``, ``d_i`` from sigma)
---------------------------------------------------------------
-``"stick-slip"`` (default)
-    ``b_i qd_i + d_i sgn(qd_i)`` with true sticking at rest (hybrid integrator).
-``"tanh"``
-    ``b_i qd_i + d_i tanh(qd_i / v)``, ``v = friction_velocity`` [rad/s]: smooth,
-    a joint at rest under a torque below ``d_i`` creeps at about
-    ``v atanh(tau / d_i)``.
-``"stribeck"``
-    ``b_i qd_i + d_i (1 + (k - 1) exp(-(qd_i / v_s)^2)) tanh(qd_i / v)`` with
-    ``k = stribeck_ratio`` (static over Coulomb friction, >= 1) and
-    ``v_s = stribeck_velocity`` [rad/s]: friction peaks at ``k d_i`` near rest and
-    falls to ``d_i`` for ``|qd_i| >> v_s``.
-``"lugre"``
-    The dynamic LuGre model (Canudas de Wit, Olsson, Astrom, Lischinsky, "A new model
-    for control of systems with friction", IEEE TAC 40(3), 1995): a bristle deflection
-    ``z_i`` per joint, ``dz/dt = v - sigma0 |v| z / g(v)``,
-    ``g(v) = d_i (1 + (k - 1) exp(-(v / v_s)^2))``, torque
-    ``sigma0 z + sigma1 dz/dt + b_i v``. The paper's ``Fc`` is ``d_i``, ``Fs = k d_i``,
-    its ``sigma2`` is ``b_i``. It gives pre-sliding (a joint under a torque below
-    breakaway moves elastically by about ``tau / sigma0``, bounded, then stops), the
-    Stribeck effect, hysteresis at reversals and a friction lag. Defaults, from the
-    paper's own simulation values (sigma0 = 1e5 N/m, sigma1 = sqrt(1e5) N s/m for a 1 kg
-    mass, Fs / Fc = 1.5 N / 1 N): ``lugre_stiffness`` sigma0 = 1e5 N m/rad per joint
-    (the paper's number read in rotational units: a breakaway deflection d_i / sigma0 of
-    32 and 7 urad on the SICE arm, below one encoder count for joint 2);
-    ``lugre_damping`` sigma1 = sqrt(sigma0 J_i) with ``J_i = M_ii(q2 = 0)`` (the paper's
-    rule sigma1 = sqrt(sigma0 m): a bristle mode damped at 0.5 of critical); ``k =
-    stribeck_ratio`` = 1.5 (the paper's Fs / Fc); ``v_s = stribeck_velocity`` (0.1 rad/s
-    by default: the paper's 0.001 m/s belongs to a 1 kg slider; see the scenario
-    ``benchmarks/scenarios/lugre_friction.toml`` for the value it uses).
+batch axis first, shape ``(..., n, p)``.
+
+Payload
+-------
+A rigid body fixed to the payload frame (a link of the URDF): mass ``m``, centre
+of mass ``c`` in that frame, inertia about the centre of mass ``I_c`` (or a disk
+of radius R, axis along the frame's z: ``I_c = m diag(R^2/4, R^2/4, R^2/2)``).
+Its ten parameters about the frame's origin, ``pi_p``, enter the base parameters
+linearly: ``sigma(payload) = sigma + P pi_p`` with ``P = payload_basis`` (p x 10,
+rank up to 10). :meth:`Arm.payload_from_sigma` inverts that by least
+squares on the identifiable part.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import asdict, dataclass, field, replace
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import ClassVar, NamedTuple
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from adaptive_dd.errors import ParameterError, ScenarioError
-from adaptive_dd.plant import dynamics
+from adaptive_dd.errors import ParameterError
+from adaptive_dd.errors import is_finite_number as _is_num
+from adaptive_dd.plant.base_parameters import BaseParameters, base_parameters, standard_names
 from adaptive_dd.plant.devices import ActuatorConfig, SensorConfig
-from adaptive_dd.plant.parameters import (
-    PAYLOAD_RADIUS,
-    SIGMA_NAMES,
-    Payload,
-    PhysicalParameters,
-    payload_mass_from_sigma,
-    payload_sigma_delta,
-    validate_sigma,
-)
+from adaptive_dd.plant.urdf import read_urdf
 
-__all__ = ["FRICTION_LAWS", "Arm", "arm_from_tables", "as_two_link"]
+__all__ = ["DEFAULT_GRAVITY", "Arm", "PayloadEstimate", "payload_parameters"]
 
 Array = NDArray[np.float64]
 
-FRICTION_LAWS = ("stick-slip", "tanh", "stribeck", "lugre")
-"""Plant friction laws; the index is the integer code the compiled integrator takes."""
+DEFAULT_GRAVITY = (0.0, 0.0, -9.81)
+"""Gravity in the base frame [m/s^2] unless a scenario or caller gives another."""
+DEFAULT_ENCODER_COUNTS = 2**20
+"""Counts per revolution of a URDF arm's encoders unless given (a 20-bit encoder)."""
+DEFAULT_POSITION_VARIANCE = 1e-8
+"""rad^2, as the SICE arm's joint 1 (Table 2 of the paper)."""
+DEFAULT_VELOCITY_VARIANCE = 5e-5
+"""(rad/s)^2, as the SICE arm's joint 1 (Table 4 of the paper)."""
+DEFAULT_DAC_BITS = 16
+"""D/A resolution of a URDF arm's torque command unless given."""
+_FRICTION_LAWS = ("stick-slip", "tanh", "stribeck")
 
-GEOMETRY_FACTOR = 1.5
-"""A centre of mass ``a_i`` must lie within ``[0, GEOMETRY_FACTOR * l_i]``."""
+
+def payload_parameters(
+    mass: float, com: ArrayLike | None = None, inertia: ArrayLike | None = None, radius: float = 0.0
+) -> Array:
+    """The ten inertial parameters of a rigid body about its frame's origin, ``(10,)``.
+
+    Parameters
+    ----------
+    mass : float
+        [kg], >= 0.
+    com : array_like (3,), optional
+        Centre of mass in the body frame [m] (default the origin).
+    inertia : array_like (6,) or (3, 3), optional
+        Inertia about the centre of mass ``[ixx, iyy, izz, ixy, ixz, iyz]`` [kg m^2];
+        default a disk of ``radius`` about the frame's z axis.
+    radius : float
+        Disk radius [m] when ``inertia`` is not given.
+    """
+    m = float(mass)
+    if not math.isfinite(m) or m < 0:
+        raise ParameterError(f"payload mass must be finite and >= 0 kg, got {mass!r}")
+    c = np.zeros(3) if com is None else np.asarray(com, dtype=float)
+    if c.shape != (3,) or not np.all(np.isfinite(c)):
+        raise ParameterError(f"payload com must be 3 finite numbers [m], got {com!r}")
+    if inertia is None:
+        r2 = float(radius) ** 2
+        Ic = m * np.diag([r2 / 4, r2 / 4, r2 / 2])
+    else:
+        v = np.asarray(inertia, dtype=float)
+        if v.shape == (6,):
+            ixx, iyy, izz, ixy, ixz, iyz = v
+            Ic = np.array([[ixx, ixy, ixz], [ixy, iyy, iyz], [ixz, iyz, izz]])
+        elif v.shape == (3, 3):
+            Ic = v
+        else:
+            raise ParameterError(f"payload inertia must be [ixx, iyy, izz, ixy, ixz, iyz], got {inertia!r}")
+        lam = np.linalg.eigvalsh(0.5 * (Ic + Ic.T))
+        if not np.all(np.isfinite(lam)) or lam[0] < -1e-12 or lam[2] > lam[0] + lam[1] + 1e-12:
+            raise ParameterError(
+                f"payload inertia {v.tolist()} is not a rigid body's (principal moments {lam.tolist()}: "
+                "each must be >= 0 and at most the sum of the other two)"
+            )
+    Io = Ic + m * (c @ c * np.eye(3) - np.outer(c, c))
+    return np.array([m, *(m * c), Io[0, 0], Io[0, 1], Io[1, 1], Io[0, 2], Io[1, 2], Io[2, 2]])
 
 
-def _finite(name: str, v) -> float:
-    if isinstance(v, bool) or not isinstance(v, int | float | np.floating | np.integer):
-        raise ParameterError(f"Arm.{name} must be a number, got {v!r}")
-    if not math.isfinite(v):
-        raise ParameterError(f"Arm.{name} must be finite, got {v!r}")
-    return float(v)
+class PayloadEstimate(NamedTuple):
+    """A payload recovered from base parameters (:meth:`Arm.payload_from_sigma`).
+
+    ``mass`` [kg], ``com`` (3,) [m] in the payload frame (nan where not identifiable),
+    ``params`` (10,) least-squares parameters about the frame origin, ``identifiable``
+    (10,) bool: which of the ten are determined by the base parameters.
+    """
+
+    mass: Array
+    com: Array
+    params: Array
+    identifiable: NDArray[np.bool_]
+
+
+def _vec(name: str, v, n: int, lo: float = 0.0) -> Array:
+    a = np.array(v, dtype=float).reshape(-1)
+    if a.shape != (n,) or not np.all(np.isfinite(a)) or np.any(a < lo):
+        raise ParameterError(f"Arm.{name} must be {n} finite values >= {lo:g}, got {v!r}")
+    a.setflags(write=False)
+    return a
 
 
 @dataclass(frozen=True, eq=False)
 class Arm:
-    """A two-link horizontal arm: parameters, geometry, actuators, sensors, plant friction.
+    """A fixed-base serial arm of n revolute/prismatic joints described by a URDF.
 
-    Build it with :meth:`sice`, :meth:`from_physical` or :meth:`from_sigma`
-    rather than directly. Immutable; use :func:`dataclasses.replace` for variants
-    (validation runs again).
+    Build it with :meth:`from_urdf`. Immutable; :func:`dataclasses.replace` makes
+    variants (other friction, limits, sensors, plant friction law).
 
     Attributes
     ----------
-    sigma : ndarray (7,)
-        Base parameters ``[J1 J2 r b1 b2 d1 d2]`` (eq. 9) without payload
-        [kg m^2, kg m^2, kg m^2, N m s, N m s, N m, N m]; read-only.
-    l1, l2 : float
-        Length of link 1 (joint 1 to joint 2) and distance from joint 2 to the
-        payload mount [m].
-    payload_radius : float
-        Default radius [m] of the payload disk (its own inertia ``m R^2 / 2``).
-    physical : PhysicalParameters or None
-        The eq. (10) parameters when known; ``physical.to_sigma() == sigma``.
+    urdf : Path
+        The description.
+    payload_frame : str
+        The link that carries the payload.
+    gravity : ndarray (3,)
+        [m/s^2] in the base frame.
+    viscous, coulomb, armature : ndarray (n,)
+        Per joint [N m s, N m, kg m^2] (URDF ``<dynamics damping friction>``; armature 0
+        unless given).
+    position_limits : ndarray (n, 2)
+        [rad or m]; ``+-inf`` for continuous joints.
+    velocity_limits : ndarray (n,)
+        [rad/s or m/s].
     actuator : ActuatorConfig
-        Torque limits and D/A (default: the SICE arm's).
+        Torque limits (URDF ``effort``) and D/A.
     sensor : SensorConfig
-        Encoder counts and noise variances (default: the SICE arm's).
-    friction : {"stick-slip", "tanh", "stribeck", "lugre"}
-        The simulated plant's friction law (module docstring).
-    friction_velocity : float
-        ``v`` [rad/s] of the tanh and stribeck laws, > 0.
-    stribeck_ratio : float
-        Static over Coulomb friction ``k`` (stribeck law), >= 1.
-    stribeck_velocity : float
-        ``v_s`` [rad/s] of the stribeck and lugre laws, > 0.
-    lugre_stiffness : (float, float)
-        Bristle stiffness sigma0 per joint [N m/rad] (lugre law).
-    lugre_damping : (float, float) or None
-        Bristle damping sigma1 per joint [N m s/rad]; None: ``sqrt(sigma0_i M_ii(q2 = 0))``.
-
-    Raises
-    ------
-    ParameterError
-        Naming the field and the value: non-finite numbers, non-positive
-        inertias, masses or lengths, ``J1 J2 <= r^2``, a centre of mass outside
-        ``[0, 1.5 l_i]``, physical and base parameters that disagree, an unknown
-        friction law, non-positive friction velocities.
+        Encoders and noise.
+    payload_radius : float
+        Default disk radius [m] of a payload given by mass alone.
+    friction, friction_velocity, stribeck_ratio, stribeck_velocity
+        The simulated plant's friction law, as on :class:`adaptive_dd.plant.two_link.TwoLinkArm`.
+    payload_capacity : float or None
+        Rated payload [kg] (``[arm] payload_capacity``); sizes the estimator's re-opening on a
+        change alarm (None: the detector's generic size).
+    repair_inertia : bool
+        Repair chain links whose URDF inertia is not a rigid body's
+        (:func:`adaptive_dd.plant.urdf.read_urdf`); see :attr:`urdf_notes`.
     """
 
-    sigma: Array
-    l1: float
-    l2: float
-    payload_radius: float = PAYLOAD_RADIUS
-    physical: PhysicalParameters | None = None
-    actuator: ActuatorConfig = field(default_factory=lambda: Arm.sice().actuator)
-    sensor: SensorConfig = field(default_factory=lambda: Arm.sice().sensor)
+    urdf: Path
+    payload_frame: str
+    gravity: Array
+    viscous: Array
+    coulomb: Array
+    armature: Array
+    position_limits: Array
+    velocity_limits: Array
+    actuator: ActuatorConfig
+    sensor: SensorConfig
+    joint_names: tuple[str, ...] = ()
+    locked: tuple[str, ...] = ()
+    payload_radius: float = 0.05
     friction: str = "stick-slip"
     friction_velocity: float = 0.02
     stribeck_ratio: float = 1.5
     stribeck_velocity: float = 0.1
-    lugre_stiffness: tuple[float, float] = (1e5, 1e5)
-    lugre_damping: tuple[float, float] | None = None
+    repair_inertia: bool = False
+    payload_capacity: float | None = None
+    _cache: dict = field(default_factory=dict, repr=False, compare=False)
+    closed_form: ClassVar[bool] = False
+    """False: the general kernels (True on :class:`~adaptive_dd.plant.two_link.TwoLinkArm`, the
+    paper's closed forms)."""
 
     def __post_init__(self) -> None:
-        s = np.array(validate_sigma(self.sigma, "Arm.sigma"), dtype=float, copy=True)
-        if s.shape != (7,):
-            raise ParameterError(f"Arm.sigma must have shape (7,), got {s.shape}")
-        s.setflags(write=False)
-        object.__setattr__(self, "sigma", s)
-        for name in ("l1", "l2"):
-            v = _finite(name, getattr(self, name))
-            if v <= 0:
-                raise ParameterError(f"Arm.{name} must be > 0 m, got {v!r}")
-            object.__setattr__(self, name, v)
-        rad = _finite("payload_radius", self.payload_radius)
-        if rad < 0:
-            raise ParameterError(f"Arm.payload_radius must be >= 0 m, got {rad!r}")
-        object.__setattr__(self, "payload_radius", rad)
-        if self.physical is not None:
-            self._check_physical()
-        if not isinstance(self.actuator, ActuatorConfig):
-            raise ParameterError(f"Arm.actuator must be an ActuatorConfig, got {self.actuator!r}")
-        if not isinstance(self.sensor, SensorConfig):
-            raise ParameterError(f"Arm.sensor must be a SensorConfig, got {self.sensor!r}")
-        if self.friction not in FRICTION_LAWS:
-            raise ParameterError(f"Arm.friction must be one of {FRICTION_LAWS}, got {self.friction!r}")
-        for name in ("friction_velocity", "stribeck_velocity"):
-            v = _finite(name, getattr(self, name))
-            if v <= 0:
-                raise ParameterError(f"Arm.{name} must be > 0 rad/s, got {v!r}")
-            object.__setattr__(self, name, v)
-        k = _finite("stribeck_ratio", self.stribeck_ratio)
-        if k < 1:
-            raise ParameterError(f"Arm.stribeck_ratio (static / Coulomb friction) must be >= 1, got {k!r}")
-        object.__setattr__(self, "stribeck_ratio", k)
-        self._check_lugre()
-
-    def _check_lugre(self) -> None:
-        for name in ("lugre_stiffness", "lugre_damping"):
-            v = getattr(self, name)
-            if v is None and name == "lugre_damping":
-                continue
-            if not isinstance(v, tuple | list | np.ndarray) or len(v) != 2:
-                raise ParameterError(f"Arm.{name} must be two values (one per joint), got {v!r}")
-            vals = tuple(_finite(f"{name}[{i}]", x) for i, x in enumerate(v))
-            if min(vals) <= 0:
-                raise ParameterError(f"Arm.{name} must be > 0 per joint, got {v!r}")
-            object.__setattr__(self, name, vals)
-
-    def _check_physical(self) -> None:
-        p = self.physical
-        if not isinstance(p, PhysicalParameters):
-            raise ParameterError(f"Arm.physical must be PhysicalParameters or None, got {p!r}")
-        for name, a, length in (("a1", p.a1, p.l1), ("a2", p.a2, p.l2)):
-            if not 0 <= a <= GEOMETRY_FACTOR * length:
-                raise ParameterError(
-                    f"Arm.physical.{name} = {a!r} m: the centre of mass must lie within "
-                    f"[0, {GEOMETRY_FACTOR} * l{name[1]}] = [0, {GEOMETRY_FACTOR * length:g}] m"
-                )
-        for name in ("l1", "l2"):
-            mine, theirs = getattr(self, name), getattr(p, name)
-            if mine != theirs:
-                raise ParameterError(f"Arm.{name} = {mine!r} differs from physical.{name} = {theirs!r}")
-        ref = p.to_sigma()
-        bad = ~np.isclose(self.sigma, ref, rtol=1e-9, atol=1e-12)
-        if bad.any():
-            k = int(np.argmax(bad))
+        object.__setattr__(self, "urdf", Path(self.urdf))
+        n = len(self.joint_names)
+        if n < 1:
+            raise ParameterError("Arm needs at least one joint")
+        g = np.array(self.gravity, dtype=float)
+        if g.shape != (3,) or not np.all(np.isfinite(g)) or np.linalg.norm(g) > 100:
             raise ParameterError(
-                f"Arm.sigma[{k}] ({SIGMA_NAMES[k]}) = {self.sigma[k]!r} differs from "
-                f"physical.to_sigma() = {ref[k]!r}"
+                f"Arm.gravity must be 3 finite numbers of norm <= 100 m/s^2, got {self.gravity!r}"
             )
+        g.setflags(write=False)
+        object.__setattr__(self, "gravity", g)
+        for name in ("viscous", "coulomb", "armature"):
+            object.__setattr__(self, name, _vec(name, getattr(self, name), n))
+        lim = np.array(self.position_limits, dtype=float)
+        if lim.shape != (n, 2) or np.any(np.isnan(lim)) or np.any(lim[:, 0] >= lim[:, 1]):
+            raise ParameterError(f"Arm.position_limits must be (n, 2) with lower < upper, got {lim!r}")
+        lim.setflags(write=False)
+        object.__setattr__(self, "position_limits", lim)
+        vel = np.array(self.velocity_limits, dtype=float)
+        if vel.shape != (n,) or np.any(np.isnan(vel)) or np.any(vel <= 0):
+            raise ParameterError(f"Arm.velocity_limits must be {n} values > 0, got {vel!r}")
+        vel.setflags(write=False)
+        object.__setattr__(self, "velocity_limits", vel)
+        if len(self.actuator.torque_limit) != n or len(self.sensor.encoder_counts) != n:
+            raise ParameterError(
+                f"Arm: actuator and sensor must have {n} joints, got "
+                f"{len(self.actuator.torque_limit)} and {len(self.sensor.encoder_counts)}"
+            )
+        if not (math.isfinite(self.payload_radius) and 0 <= self.payload_radius <= 10):
+            raise ParameterError(f"Arm.payload_radius must be in [0, 10] m, got {self.payload_radius!r}")
+        cap = self.payload_capacity
+        if cap is not None and not (_is_num(cap) and 0 < cap <= 1e4):
+            raise ParameterError(f"Arm.payload_capacity must be in (0, 1e4] kg or None, got {cap!r}")
+        if self.friction not in _FRICTION_LAWS:
+            raise ParameterError(f"Arm.friction must be one of {_FRICTION_LAWS}, got {self.friction!r}")
+        for name in ("friction_velocity", "stribeck_velocity"):
+            v = getattr(self, name)
+            if not (math.isfinite(v) and v > 0):
+                raise ParameterError(f"Arm.{name} must be > 0, got {v!r}")
+        if not (math.isfinite(self.stribeck_ratio) and self.stribeck_ratio >= 1):
+            raise ParameterError(f"Arm.stribeck_ratio must be >= 1, got {self.stribeck_ratio!r}")
+        object.__setattr__(self, "_cache", {})
 
     # ----------------------------------------------------------------- factories
     @classmethod
     def sice(cls, **overrides) -> Arm:
-        """The SICE arm of the paper: Table 1, l1 = l2 = 0.2 m, 0.05 m disk, (70, 15) N m, 12-bit D/A.
+        """The paper's SICE two-link arm as an :class:`Arm` (the shipped ``sice_arm.urdf``, payload at
+        ``tip``). :func:`~adaptive_dd.plant.two_link.as_two_link` of it is
+        :meth:`TwoLinkArm.sice() <adaptive_dd.plant.two_link.TwoLinkArm.sice>`, the closed-form
+        fast path the benchmark chooses for it."""
+        from adaptive_dd.robots import robot_urdf
 
-        ``overrides`` replace fields (e.g. ``friction="tanh"``).
+        return cls.from_urdf(robot_urdf("sice_arm"), "tip", **overrides)
+
+    @classmethod
+    def from_urdf(
+        cls,
+        path: str | Path,
+        payload_frame: str | None = None,
+        gravity: ArrayLike = DEFAULT_GRAVITY,
+        **overrides,
+    ) -> Arm:
+        """An arm from a URDF file (checked by :func:`adaptive_dd.plant.urdf.read_urdf`).
+
+        ``overrides`` replace fields (``viscous``, ``coulomb``, ``armature``, ``sensor``,
+        ``actuator``, ``friction``, ...). Friction comes from ``<dynamics>``, torque
+        limits from ``<limit effort>``.
         """
-        from adaptive_dd.plant.parameters import L1, L2, TABLE1_PHYSICAL, TABLE1_SIGMA, TORQUE_LIMITS
-
-        arm = cls(
-            sigma=TABLE1_SIGMA,
-            l1=L1,
-            l2=L2,
-            payload_radius=PAYLOAD_RADIUS,
-            physical=TABLE1_PHYSICAL,
-            actuator=ActuatorConfig(TORQUE_LIMITS, dac_bits=12),
+        robot = read_urdf(path, payload_frame, repair=bool(overrides.get("repair_inertia", False)))
+        n = len(robot.joints)
+        kw = dict(
+            urdf=Path(path),
+            payload_frame=robot.payload_frame,
+            gravity=np.asarray(gravity, dtype=float),
+            viscous=[j.damping for j in robot.joints],
+            coulomb=[j.friction for j in robot.joints],
+            armature=np.zeros(n),
+            position_limits=[[j.lower, j.upper] for j in robot.joints],
+            velocity_limits=[j.velocity for j in robot.joints],
+            actuator=ActuatorConfig(tuple(j.effort for j in robot.joints), dac_bits=DEFAULT_DAC_BITS),
             sensor=SensorConfig(
-                encoder_counts=(614400, 507904),
-                position_variance=(1e-8, 1e-7),
-                velocity_variance=(5e-5, 1e-4),
+                encoder_counts=(DEFAULT_ENCODER_COUNTS,) * n,
+                position_variance=(DEFAULT_POSITION_VARIANCE,) * n,
+                velocity_variance=(DEFAULT_VELOCITY_VARIANCE,) * n,
             ),
+            joint_names=robot.joint_names,
+            locked=robot.locked,
         )
-        return replace(arm, **overrides) if overrides else arm
+        kw.update(overrides)
+        return cls(**kw)
 
-    @classmethod
-    def from_urdf(cls, path, payload_frame: str | None = None, gravity=(0.0, 0.0, -9.81), **overrides):
-        """Any serial arm from a URDF (:meth:`adaptive_dd.plant.serial_arm.SerialArm.from_urdf`).
+    # ------------------------------------------------------------ derived, cached
+    def _cached(self, key: str, make):
+        if key not in self._cache:
+            self._cache[key] = make()
+        return self._cache[key]
 
-        Returns an :class:`Arm` when the URDF is the paper's kind of two-link arm
-        (:func:`as_two_link`: the closed-form fast path),
-        else the general :class:`~adaptive_dd.plant.serial_arm.SerialArm`.
-        """
-        from adaptive_dd.plant.serial_arm import SerialArm
+    def __getstate__(self) -> dict:
+        state = self.__dict__.copy()
+        state["_cache"] = {}
+        return state
 
-        general = SerialArm.from_urdf(path, payload_frame, gravity, **overrides)
-        two = as_two_link(general)
-        return general if two is None else two
+    def __setstate__(self, state: dict) -> None:
+        self.__dict__.update(state)
 
-    @classmethod
-    def from_physical(cls, physical: PhysicalParameters, **kwargs) -> Arm:
-        """An arm from the physical parameters of eq. (10) (link lengths included).
-
-        ``kwargs``: the other fields (``payload_radius``, ``actuator``, ``friction``, ...).
-        """
-        if not isinstance(physical, PhysicalParameters):
-            raise ParameterError(f"from_physical needs PhysicalParameters, got {physical!r}")
-        return cls(sigma=physical.to_sigma(), l1=physical.l1, l2=physical.l2, physical=physical, **kwargs)
-
-    @classmethod
-    def from_sigma(cls, sigma: ArrayLike, l1: float, l2: float, **kwargs) -> Arm:
-        """An arm known by its base parameters (eq. 9) and geometry only.
-
-        ``kwargs``: the other fields (``payload_radius``, ``actuator``, ``friction``, ...).
-        """
-        return cls(sigma=np.asarray(sigma, dtype=float), l1=l1, l2=l2, **kwargs)
-
-    # ------------------------------------------------------------------ interface
     @property
     def n_joints(self) -> int:
-        """Number of joints (2)."""
-        return 2
+        return len(self.joint_names)
 
     @property
-    def friction_code(self) -> int:
-        """Integer code of :attr:`friction` for the compiled integrator."""
-        return FRICTION_LAWS.index(self.friction)
+    def model(self):
+        """The Pinocchio model (gravity set; off-chain joints locked)."""
+        return self._cached("model", lambda: self._robot.model(self.gravity))
 
     @property
-    def lugre_sigma1(self) -> tuple[float, float]:
-        """Bristle damping per joint [N m s/rad]: :attr:`lugre_damping` or ``sqrt(sigma0_i M_ii(q2 = 0))``."""
-        if self.lugre_damping is not None:
-            return self.lugre_damping
-        j1, j2, r = self.sigma[0], self.sigma[1], self.sigma[2]
-        inertia = (j1 + j2 + 2.0 * r, j2)
-        return tuple(float(np.sqrt(s0 * m)) for s0, m in zip(self.lugre_stiffness, inertia, strict=True))
-
-    @property
-    def friction_params(self) -> tuple[float, ...]:
-        """``(friction_velocity, stribeck_ratio, stribeck_velocity, sigma0_1, sigma0_2, sigma1_1,
-        sigma1_2)`` for the integrator (:data:`adaptive_dd.plant.integrator.N_FRICTION_PARAMS`)."""
-        return (
-            self.friction_velocity,
-            self.stribeck_ratio,
-            self.stribeck_velocity,
-            *self.lugre_stiffness,
-            *self.lugre_sigma1,
+    def _robot(self):
+        return self._cached(
+            "robot", lambda: read_urdf(self.urdf, self.payload_frame, repair=self.repair_inertia)
         )
 
-    def _radius(self, radius: ArrayLike | None) -> Array:
-        rad = np.asarray(self.payload_radius if radius is None else radius, dtype=float)
-        if np.any(~np.isfinite(rad)) or np.any(rad < 0):
-            raise ParameterError(f"payload radius must be finite and >= 0 m, got {rad}")
-        return rad
+    @property
+    def joint_kinds(self) -> tuple[str, ...]:
+        """URDF type of each joint (``revolute``, ``continuous``, ``prismatic``)."""
+        return tuple(j.kind for j in self._robot.joints)
 
-    def payload_direction(self, radius: ArrayLike | None = None) -> Array:
-        """``d sigma / d m`` of a tip disk, shape ``(..., 7)`` [m^2].
+    @property
+    def urdf_notes(self) -> tuple[str, ...]:
+        """What reading the URDF did not check, or repaired (:attr:`.urdf.UrdfRobot.notes`)."""
+        return self._robot.notes
 
-        ``[l1^2, l2^2 + R^2 / 2, l1 l2, 0, 0, 0, 0]``; ``R`` defaults to
-        :attr:`payload_radius`.
-        """
-        rad = self._radius(radius)
-        out = np.zeros((*rad.shape, 7))
-        out[..., 0] = self.l1**2
-        out[..., 1] = self.l2**2 + 0.5 * rad**2
-        out[..., 2] = self.l1 * self.l2
-        return out
+    @property
+    def chain(self):
+        """The arrays the compiled kernels take (:class:`adaptive_dd.plant.chain.Chain`)."""
+        from adaptive_dd.plant.chain import chain_from_model
 
-    def sigma_with_payload(
-        self, mass: ArrayLike, radius: ArrayLike | None = None, sigma0: ArrayLike | None = None
-    ) -> Array:
-        """Base parameters with a tip disk of mass ``mass`` [kg], shape ``(..., 7)``.
+        return self._cached("chain", lambda: chain_from_model(self.model))
 
-        Adds ``m l1^2`` to J1, ``m l2^2 + m R^2 / 2`` to J2 and ``m l1 l2`` to r
-        (parallel-axis theorem; docs/paper_reading.md); friction is unchanged. ``sigma0``
-        (``(..., 7)``) replaces :attr:`sigma` as the unloaded arm.
-        """
-        base = self.sigma if sigma0 is None else np.asarray(sigma0, dtype=float)
-        return base + payload_sigma_delta(mass, self._radius(radius), self.l1, self.l2)
+    @property
+    def pi_links(self) -> Array:
+        """Standard inertial parameters of the links, ``(10 n,)``."""
 
-    def payload_mass_from_sigma(self, sigma_hat: ArrayLike) -> Array:
-        """Tip mass [kg] implied by estimated base parameters ``(..., 7)``, shape ``(...)``.
+        def make():
+            m = self.model
+            return np.concatenate([m.inertias[i].toDynamicParameters() for i in range(1, m.njoints)])
 
-        Least squares on the changes of J1 and r from :attr:`sigma` (J2 also holds
-        the disk's own inertia, whose radius is unknown).
-        """
-        return payload_mass_from_sigma(sigma_hat, self.sigma, self.l1, self.l2)
+        return self._cached("pi_links", make)
 
-    def mass_matrix(self, q: ArrayLike, sigma: ArrayLike | None = None) -> Array:
-        """Inertia matrix M(q) of eq. (3), ``(..., 2, 2)``; ``sigma`` defaults to :attr:`sigma`."""
-        return dynamics.mass_matrix(q, self.sigma if sigma is None else sigma)
+    @property
+    def pi(self) -> Array:
+        """All standard parameters ``[links, fv, fc, Ia]``, ``(13 n,)``."""
+        return np.concatenate([self.pi_links, self.viscous, self.coulomb, self.armature])
+
+    @property
+    def base(self) -> BaseParameters:
+        """The base parameter structure (QR on 60 random states, seed 0: deterministic)."""
+        lim = self.position_limits
+        return self._cached(
+            "base",
+            lambda: base_parameters(
+                self.standard_regressor, self.n_joints, lim[:, 0], lim[:, 1], np.random.default_rng(0)
+            ),
+        )
+
+    @property
+    def sigma(self) -> Array:
+        """Base parameters of the arm without payload, ``(p,)``."""
+        return self.base.B @ self.pi
+
+    @property
+    def sigma_names(self) -> tuple[str, ...]:
+        return self.base.names
+
+    @property
+    def standard_names(self) -> tuple[str, ...]:
+        return standard_names(self.n_joints)
+
+    @property
+    def payload_joint(self) -> int:
+        """Index (0-based) of the link that carries the payload frame."""
+        return self._payload_frame[0]
+
+    @property
+    def _payload_frame(self):
+        def make():
+            m = self.model
+            if not m.existFrame(self.payload_frame):
+                raise ParameterError(f"{self.urdf}: payload frame {self.payload_frame!r} not in the model")
+            f = m.frames[m.getFrameId(self.payload_frame)]
+            return int(f.parentJoint) - 1, f.placement
+
+        return self._cached("payload_frame", make)
+
+    @property
+    def payload_map(self) -> Array:
+        """``(10, 10)``: payload parameters about the payload frame -> about its link's joint frame."""
+
+        def make():
+            import pinocchio as pin
+
+            _, placement = self._payload_frame
+            p0 = payload_parameters(1.0, [0.01, 0.02, 0.03], radius=0.1)
+
+            def moved(p):
+                return placement.act(pin.Inertia.FromDynamicParameters(p)).toDynamicParameters()
+
+            base = moved(p0)
+            return np.stack([moved(p0 + np.eye(10)[k]) - base for k in range(10)], axis=1)
+
+        return self._cached("payload_map", make)
+
+    @property
+    def payload_basis(self) -> Array:
+        """``(p, 10)``: how the payload's ten parameters (about its frame) move sigma."""
+        j = self.payload_joint
+        return self.base.B[:, 10 * j : 10 * j + 10] @ self.payload_map
+
+    # ------------------------------------------------------------------ dynamics
+    def standard_regressor(self, q: ArrayLike, qd: ArrayLike, qdd: ArrayLike) -> Array:
+        """``W(q, qd, qdd)`` of the standard parameters, ``(..., n, 13 n)``."""
+        q, qd, qdd = (np.asarray(x, dtype=float) for x in (q, qd, qdd))
+        n = self.n_joints
+        shape = np.broadcast_shapes(q.shape, qd.shape, qdd.shape)
+        if shape[-1:] != (n,):
+            raise ParameterError(f"states must have shape (..., {n}), got {shape}")
+        q, qd, qdd = (np.broadcast_to(x, shape).reshape(-1, n) for x in (q, qd, qdd))
+        Y = self._rigid_regressor(q, qd, qdd)
+        eye = np.eye(n)
+        W = np.concatenate(
+            [Y, eye * qd[:, None, :], eye * np.sign(qd)[:, None, :], eye * qdd[:, None, :]], axis=2
+        )
+        return W.reshape(*shape[:-1], n, 13 * n)
+
+    def _rigid_regressor(self, q: Array, qd: Array, qdd: Array) -> Array:
+        from adaptive_dd.plant.chain import regressor_batch
+
+        return regressor_batch(self.chain, q, qd, qdd)
+
+    def pin_configuration(self, q: ArrayLike) -> Array:
+        """Pinocchio's configuration of joint positions ``q (n,)`` (continuous joints as cos, sin;
+        :func:`adaptive_dd.plant.chain.pin_configuration`)."""
+        from adaptive_dd.plant.chain import pin_configuration
+
+        return pin_configuration(self.model, q)
 
     def regressor(self, q: ArrayLike, qd: ArrayLike, qdd: ArrayLike) -> Array:
-        """Regressor Phi(q, qd, qdd) of eq. (8), ``(..., 2, 7)``: ``Phi @ sigma`` is the torque."""
-        return dynamics.regressor(q, qd, qdd)
+        """Base regressor ``(..., n, p)``: ``regressor @ sigma`` is the joint torque."""
+        return self.standard_regressor(q, qd, qdd)[..., self.base.independent]
+
+    def inverse_dynamics(self, q, qd, qdd, sigma: ArrayLike | None = None) -> Array:
+        """Joint torques ``(..., n)`` (friction and armature included)."""
+        s = self.sigma if sigma is None else np.asarray(sigma, dtype=float)
+        return np.einsum("...ij,...j->...i", self.regressor(q, qd, qdd), s)
+
+    def mass_matrix(self, q: ArrayLike, sigma: ArrayLike | None = None) -> Array:
+        """M(q) with armature, ``(..., n, n)``, from base parameters (default :attr:`sigma`)."""
+        q = np.asarray(q, dtype=float)
+        n = self.n_joints
+        zero = np.zeros_like(q)
+        s = self.sigma if sigma is None else np.asarray(sigma, dtype=float)
+        g = self.inverse_dynamics(q, zero, zero, s)
+        cols = [
+            self.inverse_dynamics(q, zero, np.broadcast_to(np.eye(n)[k], q.shape), s) - g for k in range(n)
+        ]
+        return np.stack(cols, axis=-1)
 
     def nominal_inertia(self) -> Array:
-        """Diagonal of M(q = 0) without payload, ``(2,)`` [kg m^2]: ``[J1 + J2 + 2 r, J2]``."""
-        s = self.sigma
-        return np.array([s[0] + s[1] + 2.0 * s[2], s[1]])
+        """Diagonal of M at the middle of the position limits (0 for unbounded joints), ``(n,)``."""
+        lim = self.position_limits
+        mid = np.where(np.isfinite(lim).all(axis=1), lim.mean(axis=1), 0.0)
+        return np.diag(self.mass_matrix(mid)).copy()
 
-    def equivalent_physical(self) -> PhysicalParameters:
-        """Physical parameters (eq. 10) that map onto :attr:`sigma`.
+    # ------------------------------------------------------------------- payload
+    def sigma_with_payload(
+        self,
+        mass: ArrayLike,
+        com: ArrayLike | None = None,
+        inertia: ArrayLike | None = None,
+        radius: float | None = None,
+        sigma0: ArrayLike | None = None,
+    ) -> Array:
+        """Base parameters with a rigid body on the payload frame, ``(..., p)``.
 
-        :attr:`physical` when known; otherwise one consistent set (rigid-body
-        dynamics depend on sigma only, so any such set is equivalent):
-        ``a2 = l1 sqrt(J2 / J1)``, ``m2 = r / (l1 a2)``, ``I2 = J2 - m2 a2^2``,
-        ``a1 = l1 / 2`` and ``m1 a1^2 = I1 = (J1 - m2 l1^2) / 2``. These lie
-        strictly inside the admissible set whenever ``J1 J2 > r^2``.
+        ``mass`` may be an array (one disk per entry, the same com and inertia);
+        ``radius`` (default :attr:`payload_radius`) is used when ``inertia`` is not given.
         """
-        if self.physical is not None:
-            return self.physical
-        j1, j2, r, b1, b2, d1, d2 = (float(x) for x in self.sigma)
-        a2 = self.l1 * math.sqrt(j2 / j1)
-        m2 = r / (self.l1 * a2)
-        rest = j1 - m2 * self.l1**2
-        a1 = self.l1 / 2
-        return PhysicalParameters(
-            I1=rest / 2,
-            I2=j2 - m2 * a2**2,
-            m1=rest / (2 * a1**2),
-            m2=m2,
-            a1=a1,
-            a2=a2,
-            b1=b1,
-            b2=b2,
-            d1=d1,
-            d2=d2,
-            l1=self.l1,
-            l2=self.l2,
-        )
-
-    def physical_with_payload(self, mass: float, radius: float | None = None) -> PhysicalParameters:
-        """:meth:`equivalent_physical` with the disk added at ``l2`` (parallel-axis theorem)."""
+        base = self.sigma if sigma0 is None else np.asarray(sigma0, dtype=float)
         rad = self.payload_radius if radius is None else radius
-        return self.equivalent_physical().with_payload(Payload(mass, rad))
+        m = np.asarray(mass, dtype=float)
+        if inertia is None:  # a disk: every parameter scales with the mass
+            pp = m[..., None] * payload_parameters(1.0, com, radius=rad)
+        else:
+            flat = [payload_parameters(float(x), com, inertia) for x in m.reshape(-1)]
+            pp = np.reshape(flat, (*m.shape, 10))
+        return base + pp @ self.payload_basis.T
+
+    def payload_direction(self, radius: ArrayLike | None = None) -> Array:
+        """``d sigma / d m`` of a disk at the payload frame's origin, ``(p,)``."""
+        rad = self.payload_radius if radius is None else float(radius)
+        return self.payload_basis @ payload_parameters(1.0, radius=rad)
+
+    def payload_from_sigma(self, sigma_hat: ArrayLike, sigma0: ArrayLike | None = None) -> PayloadEstimate:
+        """The payload implied by base parameters ``(..., p)`` (least squares on :attr:`payload_basis`).
+
+        Parameters not determined by the base parameters (a null direction of the
+        basis) are reported in ``identifiable``; the com of an unidentifiable axis is nan.
+        """
+        s0 = self.sigma if sigma0 is None else np.asarray(sigma0, dtype=float)
+        d = np.asarray(sigma_hat, dtype=float) - s0
+        P = self.payload_basis
+        pinv = np.linalg.pinv(P, rcond=1e-9)
+        params = d @ pinv.T
+        ident = self.payload_identifiable
+        m = params[..., 0]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            com = params[..., 1:4] / m[..., None]
+        com = np.where(ident[1:4], com, np.nan)
+        return PayloadEstimate(m, com, params, ident)
+
+    @property
+    def payload_identifiable(self) -> NDArray[np.bool_]:
+        """Which of the payload's ten parameters the base parameters determine, ``(10,)``."""
+
+        def make():
+            P = self.payload_basis
+            _, s, vt = np.linalg.svd(P)
+            null = vt[np.sum(s > 1e-9 * s[0]) :]
+            return np.all(np.abs(null) < 1e-8, axis=0) if len(null) else np.ones(10, dtype=bool)
+
+        return self._cached("payload_ident", make)
+
+    def payload_mass_from_sigma(self, sigma_hat: ArrayLike) -> Array:
+        """Payload mass [kg] implied by base parameters ``(..., p)``, shape ``(...)``."""
+        return self.payload_from_sigma(sigma_hat).mass
+
+    @property
+    def payload_rank(self) -> int:
+        """Rank of :attr:`payload_basis` (how many payload directions the base parameters see)."""
+        s = np.linalg.svd(self.payload_basis, compute_uv=False)
+        return int(np.sum(s > 1e-9 * s[0]))
+
+    # -------------------------------------------------------------------- misc
+    @property
+    def friction_code(self) -> int:
+        return _FRICTION_LAWS.index(self.friction)
+
+    @property
+    def friction_params(self) -> tuple[float, float, float]:
+        return (self.friction_velocity, self.stribeck_ratio, self.stribeck_velocity)
+
+    def with_(self, **changes) -> Arm:
+        """:func:`dataclasses.replace`, keeping nothing cached that depends on what changed."""
+        return replace(self, **changes)
 
     def to_dict(self) -> dict:
         """JSON-able description (for results metadata)."""
         return {
-            "sigma": [float(x) for x in self.sigma],
-            "sigma_names": list(SIGMA_NAMES),
-            "l1": self.l1,
-            "l2": self.l2,
+            "urdf": str(self.urdf),
+            "joints": list(self.joint_names),
+            "locked": list(self.locked),
+            "payload_frame": self.payload_frame,
+            "gravity": self.gravity.tolist(),
+            "viscous": self.viscous.tolist(),
+            "coulomb": self.coulomb.tolist(),
+            "armature": self.armature.tolist(),
+            "position_limits": self.position_limits.tolist(),
+            "velocity_limits": self.velocity_limits.tolist(),
+            "torque_limit": list(self.actuator.torque_limit),
+            "sigma": self.sigma.tolist(),
+            "sigma_names": list(self.sigma_names),
             "payload_radius": self.payload_radius,
-            "physical": None if self.physical is None else asdict(self.physical),
-            "actuator": _jsonable(asdict(self.actuator)),
-            "sensor": _jsonable(asdict(self.sensor)),
+            "payload_capacity": self.payload_capacity,
             "friction": self.friction,
             "friction_velocity": self.friction_velocity,
             "stribeck_ratio": self.stribeck_ratio,
             "stribeck_velocity": self.stribeck_velocity,
-            "lugre_stiffness": list(self.lugre_stiffness),
-            "lugre_damping": list(self.lugre_sigma1),
+            "repair_inertia": self.repair_inertia,
         }
 
     def _key(self) -> tuple:
         return (
-            tuple(self.sigma.tolist()),
-            self.l1,
-            self.l2,
-            self.payload_radius,
-            self.physical,
+            str(self.urdf),
+            self.payload_frame,
+            self.joint_names,
+            tuple(self.gravity),
+            tuple(self.viscous),
+            tuple(self.coulomb),
+            tuple(self.armature),
+            tuple(map(tuple, self.position_limits)),
+            tuple(self.velocity_limits),
             self.actuator,
             self.sensor,
+            self.payload_radius,
             self.friction,
             self.friction_params,
+            self.payload_capacity,
+            self.repair_inertia,
         )
 
     def __eq__(self, other: object) -> bool:
@@ -428,267 +589,3 @@ class Arm:
 
     def __hash__(self) -> int:
         return hash(self._key())
-
-
-def _jsonable(d: dict) -> dict:
-    return {k: list(v) if isinstance(v, tuple) else v for k, v in d.items()}
-
-
-# ------------------------------------------------------------ scenario tables
-_PHYSICAL_KEYS = ("l1", "l2", "m1", "m2", "a1", "a2", "I1", "I2", "b", "d")
-_SIGMA_KEYS = ("sigma", "l1", "l2")
-_ARM_OPTIONAL = ("payload_radius", "torque_limit")
-_PLANT_KEYS = (
-    "friction",
-    "friction_velocity",
-    "stribeck_ratio",
-    "stribeck_velocity",
-    "lugre_stiffness",
-    "lugre_damping",
-)
-
-ARM_BOUNDS = {
-    "arm.l1": 2.0,  # m: a direct-drive arm's link; beyond this no motor of the kind moves it
-    "arm.l2": 2.0,
-    "arm.a1": 3.0,  # m (PhysicalParameters further requires a_i <= 1.5 l_i)
-    "arm.a2": 3.0,
-    "arm.m1": 500.0,  # kg
-    "arm.m2": 500.0,
-    "arm.I1": 100.0,  # kg m^2
-    "arm.I2": 100.0,
-    "arm.sigma[0]": 1000.0,  # J1 [kg m^2]
-    "arm.sigma[1]": 1000.0,  # J2
-    "arm.sigma[2]": 1000.0,  # r
-    "arm.sigma[3]": 1000.0,  # b1 [N m s/rad]
-    "arm.sigma[4]": 1000.0,  # b2
-    "arm.sigma[5]": 1000.0,  # d1 [N m]
-    "arm.sigma[6]": 1000.0,  # d2
-    "arm.b[0]": 1000.0,
-    "arm.b[1]": 1000.0,
-    "arm.d[0]": 1000.0,
-    "arm.d[1]": 1000.0,
-    "arm.payload_radius": 0.5,  # m, as the scenario's payload.radius
-    "arm.torque_limit[0]": 1e4,  # N m
-    "arm.torque_limit[1]": 1e4,
-    "plant.friction_velocity": 10.0,  # rad/s
-    "plant.stribeck_velocity": 10.0,
-    "plant.stribeck_ratio": 100.0,
-}
-"""Upper bounds of the ``[arm]`` and ``[plant]`` numbers: physically plausible for a two-link
-direct-drive arm, and far enough below overflow that every derived quantity (``m l^2``, the
-mass matrix, its determinant) stays finite."""
-
-
-def _table_number(src: str, key: str, v, *, lower: float | None = None, strict: bool = True) -> float:
-    if isinstance(v, bool) or not isinstance(v, int | float):
-        raise ScenarioError(f"{src}: key '{key}' must be a number, got {v!r}")
-    if not math.isfinite(v):
-        raise ScenarioError(f"{src}: key '{key}' must be finite, got {v!r}")
-    if lower is not None and (v <= lower if strict else v < lower):
-        raise ScenarioError(f"{src}: key '{key}' must be {'>' if strict else '>='} {lower:g}, got {v!r}")
-    hi = ARM_BOUNDS.get(key)
-    if hi is not None and v > hi:
-        raise ScenarioError(f"{src}: key '{key}' must be <= {hi:g} (ARM_BOUNDS), got {v!r}")
-    return float(v)
-
-
-def _table_list(src: str, key: str, v, n: int, *, lower: float, strict: bool) -> tuple[float, ...]:
-    if not isinstance(v, list) or len(v) != n:
-        raise ScenarioError(f"{src}: key '{key}' must be a list of {n} numbers, got {v!r}")
-    return tuple(_table_number(src, f"{key}[{i}]", x, lower=lower, strict=strict) for i, x in enumerate(v))
-
-
-def _check_keys(src: str, table: str, data: dict, allowed: tuple[str, ...]) -> None:
-    if not isinstance(data, dict):
-        raise ScenarioError(f"{src}: [{table}] must be a table, got {data!r}")
-    for key in data:
-        if key not in allowed:
-            raise ScenarioError(f"{src}: unknown key '{table}.{key}'; allowed: {sorted(allowed)}")
-
-
-def _arm_kwargs(src: str, arm: dict) -> dict:
-    """Geometry, parameters and actuator of an ``[arm]`` table as Arm keyword arguments."""
-    _check_keys(src, "arm", arm, tuple(dict.fromkeys(_PHYSICAL_KEYS + _SIGMA_KEYS + _ARM_OPTIONAL)))
-    physical_only = [k for k in _PHYSICAL_KEYS if k in arm and k not in _SIGMA_KEYS]
-    if "sigma" in arm and physical_only:
-        raise ScenarioError(
-            f"{src}: [arm] gives both 'sigma' and physical keys {physical_only}: use one form "
-            f"(physical {list(_PHYSICAL_KEYS)} or 'sigma' with l1, l2)"
-        )
-    required = _SIGMA_KEYS if "sigma" in arm else _PHYSICAL_KEYS
-    for key in required:
-        if key not in arm:
-            raise ScenarioError(f"{src}: key 'arm.{key}' is missing (required: {list(required)})")
-    kw: dict = {}
-    sice = Arm.sice()
-    kw["payload_radius"] = _table_number(
-        src, "arm.payload_radius", arm.get("payload_radius", sice.payload_radius), lower=0.0, strict=False
-    )
-    if "torque_limit" in arm:
-        lim = _table_list(src, "arm.torque_limit", arm["torque_limit"], 2, lower=0.0, strict=True)
-        kw["actuator"] = replace(sice.actuator, torque_limit=lim)
-    l1 = _table_number(src, "arm.l1", arm["l1"], lower=0.0)
-    l2 = _table_number(src, "arm.l2", arm["l2"], lower=0.0)
-    if "sigma" in arm:
-        kw["sigma"] = np.array(_table_list(src, "arm.sigma", arm["sigma"], 7, lower=0.0, strict=False))
-        kw["l1"], kw["l2"] = l1, l2
-        return kw
-    num = {k: _table_number(src, f"arm.{k}", arm[k], lower=0.0) for k in ("m1", "m2", "I1", "I2")}
-    num.update({k: _table_number(src, f"arm.{k}", arm[k], lower=0.0, strict=False) for k in ("a1", "a2")})
-    b = _table_list(src, "arm.b", arm["b"], 2, lower=0.0, strict=False)
-    d = _table_list(src, "arm.d", arm["d"], 2, lower=0.0, strict=False)
-    try:
-        phys = PhysicalParameters(b1=b[0], b2=b[1], d1=d[0], d2=d[1], l1=l1, l2=l2, **num)
-    except (ParameterError, ArithmeticError) as exc:
-        raise ScenarioError(f"{src}: [arm]: {exc}") from None
-    kw.update(sigma=phys.to_sigma(), l1=l1, l2=l2, physical=phys)
-    return kw
-
-
-def _plant_kwargs(src: str, plant: dict) -> dict:
-    _check_keys(src, "plant", plant, _PLANT_KEYS)
-    kw: dict = {}
-    if "friction" in plant:
-        f = plant["friction"]
-        if f not in FRICTION_LAWS:
-            raise ScenarioError(
-                f"{src}: key 'plant.friction' must be one of {list(FRICTION_LAWS)}, got {f!r}"
-            )
-        kw["friction"] = f
-    for key in ("friction_velocity", "stribeck_velocity"):
-        if key in plant:
-            kw[key] = _table_number(src, f"plant.{key}", plant[key], lower=0.0)
-    if "stribeck_ratio" in plant:
-        kw["stribeck_ratio"] = _table_number(
-            src, "plant.stribeck_ratio", plant["stribeck_ratio"], lower=1.0, strict=False
-        )
-    for key in ("lugre_stiffness", "lugre_damping"):
-        if key in plant:
-            kw[key] = _table_list(src, f"plant.{key}", plant[key], 2, lower=0.0, strict=True)
-    return kw
-
-
-def arm_from_tables(arm_table: dict | None, plant_table: dict | None, src: str = "<memory>") -> Arm:
-    """The arm of a scenario's ``[arm]`` and ``[plant]`` tables.
-
-    An ``[arm]`` table with ``urdf`` or ``robot`` describes any serial arm
-    (:func:`adaptive_dd.plant.serial_arm.urdf_arm_from_table`: a
-    :class:`~adaptive_dd.plant.serial_arm.SerialArm`, or an :class:`Arm` when the URDF
-    is the paper's kind of two-link arm). Otherwise:
-
-    ``[arm]`` gives either the physical parameters (eq. 10)
-    ``l1, l2, m1, m2, a1, a2, I1, I2, b = [b1, b2], d = [d1, d2]`` or the base
-    parameters ``sigma = [J1, J2, r, b1, b2, d1, d2]`` with ``l1, l2``; both forms
-    accept ``payload_radius`` [m] and ``torque_limit = [tau1, tau2]`` [N m]. Mixing
-    the forms is an error. ``[plant]`` gives ``friction`` ("stick-slip", "tanh",
-    "stribeck", "lugre"), ``friction_velocity``, ``stribeck_ratio``, ``stribeck_velocity``,
-    ``lugre_stiffness = [s0_1, s0_2]``, ``lugre_damping = [s1_1, s1_2]``.
-    A missing table means the SICE arm's values (:meth:`Arm.sice`, stick-slip).
-
-    Raises
-    ------
-    ScenarioError
-        Naming ``src``, the key and the reason: unknown key, missing key, wrong
-        type, non-finite value, value out of range, inconsistent arm.
-    """
-    plant_kw = _plant_kwargs(src, {} if plant_table is None else plant_table)
-    if isinstance(arm_table, dict) and ("urdf" in arm_table or "robot" in arm_table):
-        return _urdf_arm(src, arm_table, plant_kw)
-    kw = Arm.sice().__dict__.copy() if arm_table is None else _arm_kwargs(src, arm_table)
-    kw.update(plant_kw)
-    try:
-        return Arm(**kw)
-    except (ParameterError, ArithmeticError) as exc:
-        raise ScenarioError(f"{src}: [arm]/[plant]: {type(exc).__name__}: {exc}") from None
-
-
-def _urdf_arm(src: str, table: dict, plant_kw: dict):
-    """The arm of an ``[arm]`` table naming a URDF: the general
-    :class:`~adaptive_dd.plant.serial_arm.SerialArm`
-    (:func:`~adaptive_dd.plant.serial_arm.urdf_arm_from_table`), or the two-link :class:`Arm`
-    when it is one (:func:`as_two_link`) and ``general = true`` is not set. LuGre friction is a
-    two-link plant law: kept aside until the fast path decides which plant runs."""
-    from adaptive_dd.errors import ScenarioError
-    from adaptive_dd.plant.serial_arm import urdf_arm_from_table
-
-    kw = dict(plant_kw)
-    lugre = {k: kw.pop(k) for k in ("lugre_stiffness", "lugre_damping") if k in kw}
-    if kw.get("friction") == "lugre":
-        lugre["friction"] = kw.pop("friction")
-    arm = urdf_arm_from_table(src, table, kw)
-    general = table.get("general", False)
-    if not isinstance(general, bool):
-        raise ScenarioError(f"{src}: key 'arm.general' must be true or false, got {general!r}")
-    two = None if general else as_two_link(arm)
-    if two is None and lugre:
-        raise ScenarioError(
-            f"{src}: [plant] LuGre friction is implemented for the two-link arm only; the plant of "
-            f"this {arm.n_joints}-joint arm has stick-slip, tanh and stribeck friction"
-        )
-    return arm if two is None else (replace(two, **lugre) if lugre else two)
-
-
-# ------------------------------------------------------------------ the fast path
-def as_two_link(arm, atol: float = 1e-12) -> Arm | None:
-    """The two-link :class:`Arm` equal to ``arm`` (a :class:`~adaptive_dd.plant.serial_arm.SerialArm`),
-    or None if it is not one.
-
-    The closed forms of the paper (eqs. 3-8) hold for two revolute joints about
-    parallel z axes, joint 2 at ``(l1, 0, 0)`` of joint 1's frame, centres of mass
-    on the links' x axes, gravity along z (no gravity torque), no armature, and the
-    payload frame at ``(l2, 0, z)`` of link 2 with its axes aligned. Such an arm is
-    exactly an :class:`Arm` (physical parameters of eq. 10); the benchmark then runs
-    the two-link kernels, held equal to the general ones by a test.
-    """
-    if arm.n_joints != 2 or np.any(arm.armature != 0) or arm.locked:
-        return None
-    m = arm.model
-    for i in (1, 2):
-        j = m.joints[i]
-        if j.shortname() not in ("JointModelRZ", "JointModelRUBZ"):
-            return None
-        if not np.allclose(m.jointPlacements[i].rotation, np.eye(3), atol=atol):
-            return None
-    p2 = m.jointPlacements[2].translation
-    if abs(p2[1]) > atol or p2[0] <= 0:
-        return None
-    if abs(arm.gravity[0]) > atol or abs(arm.gravity[1]) > atol:
-        return None
-    link, placement = arm._payload_frame
-    pt = placement.translation
-    if (
-        link != 1
-        or abs(pt[1]) > atol
-        or pt[0] <= 0
-        or not np.allclose(placement.rotation, np.eye(3), atol=atol)
-    ):
-        return None
-    inert = [m.inertias[i] for i in (1, 2)]
-    if any(abs(body.lever[1]) > atol for body in inert):
-        return None
-    lo, hi = arm.position_limits[:, 0], arm.position_limits[:, 1]
-    del lo, hi  # the two-link Arm has no position limits; the scenario's reference keeps within them
-    phys = PhysicalParameters(
-        I1=float(inert[0].inertia[2, 2]),
-        I2=float(inert[1].inertia[2, 2]),
-        m1=float(inert[0].mass),
-        m2=float(inert[1].mass),
-        a1=float(inert[0].lever[0]),
-        a2=float(inert[1].lever[0]),
-        b1=float(arm.viscous[0]),
-        b2=float(arm.viscous[1]),
-        d1=float(arm.coulomb[0]),
-        d2=float(arm.coulomb[1]),
-        l1=float(p2[0]),
-        l2=float(pt[0]),
-    )
-    return Arm.from_physical(
-        phys,
-        payload_radius=arm.payload_radius,
-        actuator=arm.actuator,
-        sensor=arm.sensor,
-        friction=arm.friction,
-        friction_velocity=arm.friction_velocity,
-        stribeck_ratio=arm.stribeck_ratio,
-        stribeck_velocity=arm.stribeck_velocity,
-    )

@@ -25,7 +25,7 @@ class ActuatorConfig:
     ----------
     torque_limit : (float, float)
         Saturation torques [N m] of joints 1, 2 (70, 15 for the SICE arm:
-        :meth:`adaptive_dd.plant.arm.Arm.sice`).
+        :meth:`adaptive_dd.plant.two_link.TwoLinkArm.sice`).
     saturate : bool
         Clip commands to +-torque_limit.
     quantize : bool

@@ -1,481 +1,562 @@
-"""The compiled plant integrator: one sample of the arm under a held torque.
+"""The compiled sampled-data plant for any serial chain: one sample under a held torque.
 
-Friction model
---------------
-Viscous plus Coulomb friction of eqs. (5)-(6), with *sticking*. A joint at rest
-(velocity exactly 0) either sticks, which is consistent while the torque needed
-to hold it, ``|tau_i - (C qd)_i - (M qdd)_i|`` with the other joint's motion taken
-into account, is at most ``d_i``; or it slides from rest in a direction s, which
-is consistent if its acceleration has the sign of s. The modes of the joints at
-rest are chosen jointly (the coupled 2x2 problem: at most 9 combinations, sticking
-first) at the start of every integration substep; within a substep the modes are
-fixed and moving joints see ``d_i sgn(qd_i)``. When a moving joint's velocity
-reaches zero within a substep, the substep is split there, the modes are decided
-anew and the rest of the substep is integrated. This hybrid model has no
-chattering at zero velocity, unlike integrating ``sgn(qd)`` directly.
+The N-joint generalisation of :mod:`adaptive_dd.plant.two_link_integrator` (two links): the
+torque is held over one sample ``T`` (zero-order hold) and the state is advanced by
+``substeps`` classical RK4 steps; the rigid-body terms come from
+:func:`adaptive_dd.plant.chain.bias_and_mass`. Joint friction is viscous ``fv_i qd_i``
+plus a Coulomb term of level ``fc_i`` under one of three laws
+(:data:`adaptive_dd.plant.two_link_integrator.FRICTION_CODES`).
 
-Smooth plant friction
----------------------
-With ``friction_code`` 1 (``"tanh"``) or 2 (``"stribeck"``) the Coulomb term is a
-smooth function of the velocity (see :mod:`adaptive_dd.plant.arm`) and
-:func:`_smooth_step_kernel` integrates the ODE with plain RK4, without modes. Near
-zero velocity that ODE is stiff (slope ``d_i / v``); each substep is therefore split
-into as many equal RK4 steps as keep ``h * rho`` below 2 (RK4 is stable up to
-2.78 on the negative real axis), with ``rho`` a bound on the spectral radius of
-``M^-1 K``, ``K`` the largest friction slopes, at the current q2.
+Stick-slip (law 0)
+------------------
+A joint at rest (velocity exactly 0) with ``fc_i > 0`` either sticks or slides from
+rest. At the start of every substep the modes of the resting joints are decided by
+an active set:
 
-LuGre plant friction
---------------------
-With ``friction_code`` 3 (``"lugre"``) every joint carries a bristle deflection
-``z_i`` [rad] (Canudas de Wit, Olsson, Astrom, Lischinsky, IEEE TAC 40(3), 1995)::
+1. all resting joints start stuck (velocity and acceleration held at 0);
+2. the accelerations of the free joints are solved from
+   ``(M + diag(armature))_FF qdd_F = tau_F - bias_F - fv_F qd_F - fc_F sgn_F``
+   (``bias = rnea(q, qd, 0)``, moving joints with ``sgn = sgn(qd)``, released joints
+   with their slide direction), and each stuck joint's holding torque
+   ``h_i = tau_i - bias_i - ((M + diag(armature)) qdd)_i`` follows;
+3. if some stuck joint needs ``|h_i| > fc_i``, the one with the largest excess
+   ``|h_i| - fc_i`` is released, sliding in the direction ``sgn(h_i)``, and step 2 is
+   repeated (at most n times); otherwise the modes are consistent;
+4. re-stick pass (when two or more joints were released): in the order of release,
+   each released joint is stuck again if the modes then stay consistent (every stuck
+   joint holds, every released joint accelerates in its slide direction): joints stay
+   at rest unless they must move.
 
-    dz/dt = v - sigma0 |v| z / g(v),   g(v) = d + (k d - d) exp(-(v / v_s)^2)
-    F     = sigma0 z + sigma1 dz/dt + b v
+Within a substep the modes are fixed. When a moving joint's velocity reaches zero
+inside a substep (detected as a sign change of its velocity in any RK4 stage), the
+substep is split at the first crossing (located from the initial acceleration, as
+in the two-link integrator), the crossing joints are set to rest, the modes are
+decided anew and the rest of the substep is integrated; a second crossing within
+that remainder also rests there, decided at the next substep.
 
-(``d`` and ``b`` from sigma; ``k``, ``v_s``, ``sigma0``, ``sigma1`` per joint, see
-:mod:`adaptive_dd.plant.arm`). With ``sigma0`` about 1e5 N m/rad the ODE is stiff
-(bristle modes near 5000 rad/s on the SICE arm's near-singular inertia; the relaxation
-rate ``sigma0 |v| / g`` reaches 5e5 1/s at 3.5 rad/s), so :func:`_lugre_one` does not use
-RK4: it takes micro-steps of at most :data:`LUGRE_DT_MAX` with a linearly implicit
-(backward) Euler step in ``(v, z)``, the relaxation rate lagged by one micro-step, and
-the position advanced with the new velocity (semi-implicit Euler)::
+Coulomb friction can admit several consistent mode sets. Step 4 matters there: when
+a moving joint stops while a coupled joint is held, releasing the held joint (largest
+excess) and then both can be consistent, but so is the held joint staying stuck
+while the other reverses (its acceleration continuous); the re-stick pass finds the
+latter. The two-link integrator's enumeration (stick first, joint 1's modes outer)
+picks the same modes on the SICE arm over the Table 2 torques (tests); with n = 2 the
+rules can still differ where both resting joints could slide, each alone consistent.
 
-    z+ = (z + h v+) / (1 + h a),   a = sigma0 |v| / g(v)
-    (M + h diag(K)) v+ = M v + h (tau - c(q, v) - F0)
-    K = (sigma0 h + sigma1) / (1 + h a) + b,   F0 = z (sigma0 - sigma1 a) / (1 + h a)
-
-The step is A-stable on the linear bristle spring-damper and the update of ``z`` is a
-contraction (``|z+| <= (|z| + h |v+|) / (1 + h a)``), so no step size makes it diverge;
-its first-order error is bounded by the micro-step (tests compare it with ten times
-finer steps). A joint without Coulomb friction (``d_i = 0``) keeps ``z_i = 0``.
-
-Sampling
---------
-Each call of :meth:`ArmSimulator.step` holds the torque constant for one sample
-period ``T`` (zero-order hold) and integrates with ``substeps`` classical RK4 steps.
-Nothing stateful (controller, estimator, sensor) runs inside the substeps.
+Smooth laws (1 tanh, 2 Stribeck)
+--------------------------------
+``fc_i tanh(qd_i / v)`` or ``fc_i (1 + (k - 1) exp(-(qd_i / v_s)^2)) tanh(qd_i / v)``
+(:mod:`adaptive_dd.plant.two_link`), integrated by plain RK4; each substep ``h`` is split
+into ``ceil(h rho / 2)`` equal steps, ``rho = trace((M + diag(armature))^-1 K) >= `` the
+spectral radius of ``M^-1 K``, ``K`` the largest friction slopes
+``fv_i + fc_i (k / v + (k - 1) 0.8578 / v_s)`` at the substep's start, as the two-link
+integrator does.
 """
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
-from numba import njit
+from numba import njit, prange
 from numpy.typing import NDArray
 
 from adaptive_dd.errors import ParameterError
+from adaptive_dd.plant.chain import Chain, bias_and_mass, workspace
+from adaptive_dd.plant.two_link_integrator import FRICTION_CODES
 
-__all__ = ["FRICTION_CODES", "LUGRE_DT_MAX", "N_FRICTION_PARAMS", "lugre_step", "plant_step"]
-
-FRICTION_CODES = {"stick-slip": 0, "tanh": 1, "stribeck": 2, "lugre": 3}
-"""Integer code of each plant friction law (:attr:`adaptive_dd.plant.arm.Arm.friction`)."""
-
-Array = NDArray[np.float64]
-
-LUGRE_DT_MAX = 1e-4
-"""Longest micro-step [s] of the LuGre integrator (10 per sample at 1 kHz)."""
-
-N_FRICTION_PARAMS = 7
-"""Length of a friction parameter vector: ``(friction_velocity, stribeck_ratio,
-stribeck_velocity, sigma0_1, sigma0_2, sigma1_1, sigma1_2)``."""
+__all__ = ["PlantParams", "plant_batch", "plant_params", "plant_run", "plant_step"]
 
 
-@njit(cache=True, fastmath=False)
-def _accel_hold(q2, v1, v2, t1, t2, sg, st1, st2, sl1, sl2):  # pragma: no cover - compiled
-    """Accelerations with stuck joints held, and the torque friction must supply (one arm)."""
-    j1, j2, r, b1, b2, d1, d2 = sg[0], sg[1], sg[2], sg[3], sg[4], sg[5], sg[6]
-    c2, s2 = np.cos(q2), np.sin(q2)
-    m11 = j1 + j2 + 2.0 * r * c2
-    m12 = j2 + r * c2
-    m22 = j2
-    cor1 = -r * s2 * v2 * (2.0 * v1 + v2)
-    cor2 = r * s2 * v1 * v1
-    sgn1 = np.sign(v1) if v1 != 0.0 else sl1
-    sgn2 = np.sign(v2) if v2 != 0.0 else sl2
-    r1 = t1 - cor1 - b1 * v1 - d1 * sgn1
-    r2 = t2 - cor2 - b2 * v2 - d2 * sgn2
-    if st1 and st2:
-        a1, a2 = 0.0, 0.0
-    elif st1:
-        a1, a2 = 0.0, r2 / m22
-    elif st2:
-        a1, a2 = r1 / m11, 0.0
-    else:
-        det = m11 * m22 - m12 * m12
-        a1 = (m22 * r1 - m12 * r2) / det
-        a2 = (m11 * r2 - m12 * r1) / det
-    h1 = t1 - cor1 - m11 * a1 - m12 * a2
-    h2 = t2 - cor2 - m12 * a1 - m22 * a2
-    return a1, a2, h1, h2
+class PlantParams(NamedTuple):
+    """The physical plant of one serial arm, as the compiled step takes it.
 
-
-@njit(cache=True, fastmath=False)
-def _rk4(p1, p2, v1, v2, dt, t1, t2, sg, st1, st2, sl1, sl2):  # pragma: no cover - compiled
-    """One classical RK4 step of length dt with the stuck set fixed."""
-    a11, a12, _, _ = _accel_hold(p2, v1, v2, t1, t2, sg, st1, st2, sl1, sl2)
-    w1, w2 = v1 + 0.5 * dt * a11, v2 + 0.5 * dt * a12
-    a21, a22, _, _ = _accel_hold(p2 + 0.5 * dt * v2, w1, w2, t1, t2, sg, st1, st2, sl1, sl2)
-    x1, x2 = v1 + 0.5 * dt * a21, v2 + 0.5 * dt * a22
-    a31, a32, _, _ = _accel_hold(p2 + 0.5 * dt * w2, x1, x2, t1, t2, sg, st1, st2, sl1, sl2)
-    y1, y2 = v1 + dt * a31, v2 + dt * a32
-    a41, a42, _, _ = _accel_hold(p2 + dt * x2, y1, y2, t1, t2, sg, st1, st2, sl1, sl2)
-    n1 = p1 + (dt / 6.0) * (v1 + 2.0 * w1 + 2.0 * x1 + y1)
-    n2 = p2 + (dt / 6.0) * (v2 + 2.0 * w2 + 2.0 * x2 + y2)
-    u1 = 0.0 if st1 else v1 + (dt / 6.0) * (a11 + 2.0 * a21 + 2.0 * a31 + a41)
-    u2 = 0.0 if st2 else v2 + (dt / 6.0) * (a12 + 2.0 * a22 + 2.0 * a32 + a42)
-    # a velocity that changes sign in any stage has met the Coulomb discontinuity:
-    # the step is then not to be trusted (the caller splits it at the crossing)
-    s1 = np.sign(v1) if v1 != 0.0 else sl1
-    s2 = np.sign(v2) if v2 != 0.0 else sl2
-    c1 = (not st1) and min(w1 * s1, x1 * s1, y1 * s1, u1 * s1) <= 0.0
-    c2 = (not st2) and min(w2 * s2, x2 * s2, y2 * s2, u2 * s2) <= 0.0
-    return n1, n2, u1, u2, c1, c2, a11, a12
-
-
-@njit(cache=True, fastmath=False)
-def _resolve(p2, v1, v2, t1, t2, sg, r1, r2, sl1, sl2):  # pragma: no cover - compiled
-    """Friction mode of the joints at rest (``r_i``: qd_i == 0), decided jointly.
-
-    Each joint at rest either sticks (consistent if its holding torque is at most
-    d_i) or slides from rest in direction s (consistent if its acceleration has
-    the sign of s). The combinations are tried, sticking first, and the first
-    consistent one is taken; the 2x2 case has at most 9.
+    Attributes
+    ----------
+    pi : ndarray, shape (10 n,)
+        Standard link parameters (payload already folded in by the caller),
+        :func:`adaptive_dd.plant.chain.standard_parameters`.
+    fv : ndarray, shape (n,)
+        Viscous friction [N m s] (N s/m for prismatic joints).
+    fc : ndarray, shape (n,)
+        Coulomb friction level [N m] (N).
+    armature : ndarray, shape (n,)
+        Rotor inertia added to M's diagonal [kg m^2] (kg).
+    law : int
+        0 stick-slip, 1 tanh, 2 stribeck (:data:`adaptive_dd.plant.two_link_integrator.FRICTION_CODES`).
+    fparams : ndarray, shape (3,)
+        ``friction_velocity, stribeck_ratio, stribeck_velocity`` of the smooth laws.
     """
-    for m1 in range(3 if r1 else 1):
-        for m2 in range(3 if r2 else 1):
-            st1 = r1 and m1 == 0
-            st2 = r2 and m2 == 0
-            s1 = 1.0 if (r1 and m1 == 1) else (-1.0 if (r1 and m1 == 2) else sl1)
-            s2 = 1.0 if (r2 and m2 == 1) else (-1.0 if (r2 and m2 == 2) else sl2)
-            a1, a2, h1, h2 = _accel_hold(p2, v1, v2, t1, t2, sg, st1, st2, s1, s2)
-            ok = True
-            if r1:
-                ok = ok and (abs(h1) <= sg[5] if st1 else a1 * s1 > 0.0)
-            if r2:
-                ok = ok and (abs(h2) <= sg[6] if st2 else a2 * s2 > 0.0)
-            if ok:
-                return st1, st2, s1, s2
-    return r1, r2, sl1, sl2  # numerically borderline: hold them this substep
+
+    pi: NDArray[np.float64]
+    fv: NDArray[np.float64]
+    fc: NDArray[np.float64]
+    armature: NDArray[np.float64]
+    law: int
+    fparams: NDArray[np.float64]
 
 
-@njit(cache=True, fastmath=False)
-def _stick_slip_one(q, qd, stuck, slip, i, t1, t2, sg, T, substeps):  # pragma: no cover - compiled
-    """One sample of trial i (row i of the state arrays) under the held torque (t1, t2)."""
-    h = T / substeps
-    p1, p2, v1, v2 = q[i, 0], q[i, 1], qd[i, 0], qd[i, 1]
-    st1, st2, sl1, sl2 = stuck[i, 0], stuck[i, 1], slip[i, 0], slip[i, 1]
-    cz1, cz2 = sg[5] > 0.0, sg[6] > 0.0  # joints with Coulomb friction
-    for _ in range(substeps):
-        r1, r2 = v1 == 0.0 and cz1, v2 == 0.0 and cz2
-        st1, st2 = False, False
-        if r1 or r2:
-            st1, st2, sl1, sl2 = _resolve(p2, v1, v2, t1, t2, sg, r1, r2, sl1, sl2)
-        n1, n2, u1, u2, c1, c2, a1, a2 = _rk4(p1, p2, v1, v2, h, t1, t2, sg, st1, st2, sl1, sl2)
-        c1 = c1 and cz1
-        c2 = c2 and cz2
-        if c1 or c2:
-            # a velocity reaches zero: step to the first crossing (located from the
-            # initial acceleration), decide the friction modes there, finish the substep
-            f1 = min(1.0, abs(v1) / (h * abs(a1))) if c1 and v1 * a1 < 0.0 else (0.0 if c1 else 1.0)
-            f2 = min(1.0, abs(v2) / (h * abs(a2))) if c2 and v2 * a2 < 0.0 else (0.0 if c2 else 1.0)
-            f = min(f1, f2)
-            if f > 0.0:
-                p1, p2, v1, v2, _, _, _, _ = _rk4(p1, p2, v1, v2, f * h, t1, t2, sg, st1, st2, sl1, sl2)
-            if c1 and f1 <= f:
-                v1 = 0.0
-            if c2 and f2 <= f:
-                v2 = 0.0
-            st1, st2, sl1, sl2 = _resolve(
-                p2, v1, v2, t1, t2, sg, v1 == 0.0 and cz1, v2 == 0.0 and cz2, sl1, sl2
-            )
-            n1, n2, u1, u2, z1, z2, _, _ = _rk4(p1, p2, v1, v2, (1.0 - f) * h, t1, t2, sg, st1, st2, sl1, sl2)
-            # another crossing within the same substep: rest there (decided next substep)
-            if z1 and cz1 and f < 1.0:
-                u1 = 0.0
-            if z2 and cz2 and f < 1.0:
-                u2 = 0.0
-        p1, p2, v1, v2 = n1, n2, u1, u2
-    q[i, 0], q[i, 1], qd[i, 0], qd[i, 1] = p1, p2, v1, v2
-    stuck[i, 0], stuck[i, 1] = st1 and v1 == 0.0, st2 and v2 == 0.0
-    slip[i, 0], slip[i, 1] = sl1, sl2
+def plant_params(
+    ch: Chain,
+    pi: NDArray,
+    fv: NDArray,
+    fc: NDArray,
+    armature: NDArray | None = None,
+    law: str | int = "stick-slip",
+    friction_velocity: float = 0.02,
+    stribeck_ratio: float = 1.5,
+    stribeck_velocity: float = 0.1,
+) -> PlantParams:
+    """Checked :class:`PlantParams` of chain ``ch`` (shapes, finite, friction >= 0, law known).
+
+    ``law`` is a name or code of :data:`adaptive_dd.plant.two_link_integrator.FRICTION_CODES`;
+    ``armature`` defaults to zeros.
+
+    Raises
+    ------
+    ParameterError
+        Naming the field and the offending value.
+    """
+    n = ch.jtype.shape[0]
+    code = FRICTION_CODES.get(law, law) if isinstance(law, str) else law
+    if code not in FRICTION_CODES.values():
+        raise ParameterError(f"friction law must be one of {FRICTION_CODES}, got {law!r}")
+    arrays = {"pi": (pi, 10 * n), "fv": (fv, n), "fc": (fc, n), "armature": (armature, n)}
+    out = {}
+    for name, (value, size) in arrays.items():
+        a = np.zeros(size) if value is None else np.array(value, dtype=np.float64).reshape(-1)
+        if a.shape != (size,) or not np.all(np.isfinite(a)):
+            raise ParameterError(f"plant {name} must be {size} finite numbers, got {value!r}")
+        if name != "pi" and np.any(a < 0.0):
+            raise ParameterError(f"plant {name} must be >= 0, got {a}")
+        out[name] = a
+    fparams = np.array([friction_velocity, stribeck_ratio, stribeck_velocity], dtype=np.float64)
+    if not (np.all(np.isfinite(fparams)) and fparams[0] > 0 and fparams[2] > 0 and fparams[1] >= 1):
+        raise ParameterError(
+            "friction_velocity and stribeck_velocity must be > 0 and stribeck_ratio >= 1, got "
+            f"{friction_velocity!r}, {stribeck_velocity!r}, {stribeck_ratio!r}"
+        )
+    return PlantParams(out["pi"], out["fv"], out["fc"], out["armature"], int(code), fparams)
 
 
-@njit(cache=True, fastmath=False)
-def _plant_step_kernel(q, qd, stuck, slip, tau, sigma, T, substeps):  # pragma: no cover
+# ----------------------------------------------------------------------------- accelerations
+
+
+@njit(cache=True)
+def _scratch(n):  # pragma: no cover - compiled
+    """Per-call scratch: chain workspace, M (stages), a factor, float rows, free-joint indices,
+    flags, M at the substep's start (``rows[18]`` holds its bias), reused by its first stage."""
+    return (
+        workspace(n),
+        np.empty((n, n)),
+        np.empty((n, n)),
+        np.empty((21, n)),
+        np.empty((2, n), dtype=np.int64),
+        np.zeros((3, n), dtype=np.bool_),
+        np.empty((n, n)),
+    )
+
+
+@njit(cache=True, fastmath={"contract", "reassoc"}, inline="always")
+def _dynamics(ch, pi, arm, q, v, w, bias, m):  # pragma: no cover - compiled
+    """``bias = rnea(q, v, 0)`` (n,) and ``m = M(q) + diag(armature)`` (n, n); w: chain workspace."""
+    bias_and_mass(ch, pi, q, v, w, bias, m)
     for i in range(q.shape[0]):
-        _stick_slip_one(q, qd, stuck, slip, i, tau[i, 0], tau[i, 1], sigma[i], T, substeps)
+        m[i, i] += arm[i]
 
 
-@njit(cache=True, fastmath=False)
-def _coulomb(v, d, code, vc, ratio, vs):  # pragma: no cover - compiled
-    """Smooth Coulomb torque of one joint: tanh (code 1) or Stribeck (code 2)."""
-    g = d
-    if code == 2:
-        g = d * (1.0 + (ratio - 1.0) * np.exp(-((v / vs) ** 2)))
-    return g * np.tanh(v / vc)
+@njit(cache=True, fastmath={"contract", "reassoc"}, inline="always")
+def _solve(fv, fc, law, fp, v, tau, stuck, sdir, bias, m, sc, acc, hold):  # pragma: no cover - compiled
+    """Accelerations ``acc`` (n,) with the stuck joints held; ``hold`` (n,) torque to hold each stuck joint.
+
+    Uses the terms ``bias, m`` of :func:`_dynamics`. Friction: law 0 ``fc sgn(v)``
+    (``sdir`` at v == 0), else the smooth law. Returns False if ``M + diag(armature)``
+    restricted to the free joints is not positive definite.
+    """
+    lf, rhs, idx = sc[2], sc[3][1], sc[4][0]
+    n = v.shape[0]
+    vc, ratio, vs = fp[0], fp[1], fp[2]
+    nf = 0
+    for i in range(n):
+        if stuck[i]:
+            continue
+        if law == 0:
+            sg = np.sign(v[i]) if v[i] != 0.0 else sdir[i]
+            coul = fc[i] * sg
+        else:
+            g = fc[i]
+            if law == 2:
+                g = fc[i] * (1.0 + (ratio - 1.0) * np.exp(-((v[i] / vs) ** 2)))
+            coul = g * np.tanh(v[i] / vc)
+        idx[nf] = i
+        rhs[nf] = tau[i] - bias[i] - fv[i] * v[i] - coul
+        nf += 1
+    # Cholesky of the free block (reciprocal diagonal kept: no division in the loops),
+    # then the two triangular solves
+    inv = sc[3][19]
+    for jj in range(nf):
+        j = idx[jj]
+        d = m[j, j]
+        for kk in range(jj):
+            d -= lf[jj, kk] * lf[jj, kk]
+        if not d > 0.0:
+            return False
+        d = np.sqrt(d)
+        lf[jj, jj] = d
+        r = 1.0 / d
+        inv[jj] = r
+        for ii in range(jj + 1, nf):
+            x = m[idx[ii], j]
+            for kk in range(jj):
+                x -= lf[ii, kk] * lf[jj, kk]
+            lf[ii, jj] = x * r
+    for ii in range(nf):
+        x = rhs[ii]
+        for kk in range(ii):
+            x -= lf[ii, kk] * rhs[kk]
+        rhs[ii] = x * inv[ii]
+    for ii in range(nf - 1, -1, -1):
+        x = rhs[ii]
+        for kk in range(ii + 1, nf):
+            x -= lf[kk, ii] * rhs[kk]
+        rhs[ii] = x * inv[ii]
+    for i in range(n):
+        acc[i] = 0.0
+    for ii in range(nf):
+        acc[idx[ii]] = rhs[ii]
+    if nf == n:
+        return True
+    for i in range(n):
+        if stuck[i]:
+            x = tau[i] - bias[i]
+            for j in range(n):
+                x -= m[i, j] * acc[j]
+            hold[i] = x
+        else:
+            hold[i] = 0.0
+    return True
 
 
-@njit(cache=True, fastmath=False)
-def _smooth_accel(q2, v1, v2, t1, t2, sg, code, vc, ratio, vs):  # pragma: no cover - compiled
-    j1, j2, r, b1, b2, d1, d2 = sg[0], sg[1], sg[2], sg[3], sg[4], sg[5], sg[6]
-    c2, s2 = np.cos(q2), np.sin(q2)
-    m11 = j1 + j2 + 2.0 * r * c2
-    m12 = j2 + r * c2
-    m22 = j2
-    r1 = t1 + r * s2 * v2 * (2.0 * v1 + v2) - b1 * v1 - _coulomb(v1, d1, code, vc, ratio, vs)
-    r2 = t2 - r * s2 * v1 * v1 - b2 * v2 - _coulomb(v2, d2, code, vc, ratio, vs)
-    det = m11 * m22 - m12 * m12
-    return (m22 * r1 - m12 * r2) / det, (m11 * r2 - m12 * r1) / det
+@njit(cache=True)
+def _consistent(rest, stuck, acc, hold, sdir, fc):  # pragma: no cover - compiled
+    """Stuck resting joints hold (|h_i| <= fc_i) and released ones accelerate in their slide direction."""
+    for i in range(rest.shape[0]):
+        if rest[i] and ((stuck[i] and abs(hold[i]) > fc[i]) or (not stuck[i] and acc[i] * sdir[i] <= 0.0)):
+            return False
+    return True
 
 
-@njit(cache=True, fastmath=False)
-def _smooth_one(q, qd, i, t1, t2, sg, T, substeps, code, vc, ratio, vs):  # pragma: no cover - compiled
-    """One sample of trial i with a smooth friction law (plain RK4, stiff substeps split)."""
+@njit(cache=True)
+def _resolve(ch, pi, fv, fc, arm, fp, q, v, tau, rest, stuck, sdir, sc):  # pragma: no cover - compiled
+    """Active-set modes of the resting joints (module docstring); False if M is not positive definite."""
+    n = q.shape[0]
+    acc, hold, order = sc[3][2], sc[3][3], sc[4][1]
+    for i in range(n):
+        stuck[i] = rest[i]
+    n_rel = 0
+    bias0, m0 = sc[3][18], sc[6]
+    _dynamics(ch, pi, arm, q, v, sc[0], bias0, m0)
+    for _ in range(n + 1):
+        if not _solve(fv, fc, 0, fp, v, tau, stuck, sdir, bias0, m0, sc, acc, hold):
+            return False
+        worst, excess = -1, 0.0
+        for i in range(n):
+            if stuck[i] and abs(hold[i]) - fc[i] > excess:
+                worst, excess = i, abs(hold[i]) - fc[i]
+        if worst < 0:
+            break
+        stuck[worst] = False
+        sdir[worst] = 1.0 if hold[worst] > 0.0 else -1.0
+        order[n_rel] = worst
+        n_rel += 1
+    if n_rel < 2:
+        return True
+    # re-stick pass: in the order of release, a released joint is stuck again if the
+    # modes stay consistent (joints stay at rest unless they must move)
+    for k in range(n_rel):
+        r = order[k]
+        stuck[r] = True
+        if not _solve(fv, fc, 0, fp, v, tau, stuck, sdir, bias0, m0, sc, acc, hold):
+            return False
+        if not _consistent(rest, stuck, acc, hold, sdir, fc):
+            stuck[r] = False
+    return True
+
+
+# ----------------------------------------------------------------------------- integration
+
+
+@njit(cache=True, fastmath={"contract", "reassoc"})
+def _rk4(
+    ch, pi, fv, fc, arm, law, fp, q, v, tau, dt, stuck, sdir, sc, reuse, qn, vn, cross
+):  # pragma: no cover
+    """One classical RK4 step of length dt with the modes fixed, into (qn, vn).
+
+    The first stage takes the start slots of :func:`_dynamics`, computed here unless
+    ``reuse`` (they already hold the terms at (q, v)). ``cross[i]``: moving joint i's
+    velocity changed sign (or reached 0) in some stage, so the step met the Coulomb
+    discontinuity (stick-slip law only). Returns False if a mass matrix was not
+    positive definite.
+    """
+    n = q.shape[0]
+    rows = sc[3]
+    a1, a2, a3, a4, qs, wv, xv, yv, hd, vcur = (
+        rows[4],
+        rows[5],
+        rows[6],
+        rows[7],
+        rows[8],
+        rows[9],
+        rows[10],
+        rows[11],
+        rows[14],
+        rows[20],
+    )
+    w, bias0, m0, bias, m = sc[0], sc[3][18], sc[6], sc[3][0], sc[1]
+    ok = True
+    # one call site for the four stages (the dynamics are inlined: one copy of the code)
+    for st in range(4):
+        if st == 0:
+            for i in range(n):
+                qs[i] = q[i]
+                vcur[i] = v[i]
+        else:
+            c = 1.0 if st == 3 else 0.5
+            for i in range(n):
+                vprev = v[i] if st == 1 else rows[7 + st, i]  # previous stage's velocity
+                vcur[i] = v[i] + c * dt * rows[3 + st, i]
+                qs[i] = q[i] + c * dt * vprev
+                rows[8 + st, i] = vcur[i]
+        bb = bias0 if st == 0 else bias
+        mm = m0 if st == 0 else m
+        if st > 0 or not reuse:
+            _dynamics(ch, pi, arm, qs, vcur, w, bb, mm)
+        ok &= _solve(fv, fc, law, fp, vcur, tau, stuck, sdir, bb, mm, sc, rows[4 + st], hd)
+    for i in range(n):
+        qn[i] = q[i] + (dt / 6.0) * (v[i] + 2.0 * wv[i] + 2.0 * xv[i] + yv[i])
+        vn[i] = 0.0 if stuck[i] else v[i] + (dt / 6.0) * (a1[i] + 2.0 * a2[i] + 2.0 * a3[i] + a4[i])
+        cross[i] = False
+        if law == 0 and not stuck[i]:
+            s = np.sign(v[i]) if v[i] != 0.0 else sdir[i]
+            cross[i] = min(wv[i] * s, xv[i] * s, yv[i] * s, vn[i] * s) <= 0.0
+    return ok
+
+
+@njit(cache=True)
+def _decide(ch, pi, fv, fc, arm, fp, q, v, tau, stuck, sdir, sc):  # pragma: no cover - compiled
+    """Modes at the current state: resting joints with Coulomb friction go through :func:`_resolve`.
+
+    Returns (ok, whether the start slots now hold the dynamics at (q, v)).
+    """
+    rest = sc[5][0]
+    any_rest = False
+    for i in range(q.shape[0]):
+        rest[i] = v[i] == 0.0 and fc[i] > 0.0
+        stuck[i] = False
+        any_rest |= rest[i]
+    if not any_rest:
+        return True, False
+    return _resolve(ch, pi, fv, fc, arm, fp, q, v, tau, rest, stuck, sdir, sc), True
+
+
+@njit(cache=True)
+def _stick_slip(ch, pi, fv, fc, arm, fp, q, qd, tau, T, substeps, stuck, sc):  # pragma: no cover
+    """One sample under the stick-slip law (module docstring), q and qd in place."""
+    n = q.shape[0]
     h = T / substeps
-    p1, p2, v1, v2 = q[i, 0], q[i, 1], qd[i, 0], qd[i, 1]
-    # largest friction slopes: tanh' <= 1 / vc; Stribeck adds |g'| <= (k - 1) d sqrt(2/e) / vs
-    extra = 0.0 if code != 2 else (ratio - 1.0) * 0.8578 / vs
-    kpeak = (ratio if code == 2 else 1.0) / vc + extra
-    k1 = sg[3] + sg[5] * kpeak
-    k2 = sg[4] + sg[6] * kpeak
+    rows, flags = sc[3], sc[5]
+    qn, vn, frac, sdir = rows[12], rows[13], rows[15], rows[16]
+    cross, z = flags[1], flags[2]
+    # law 0 and "reuse" as typed values, not the literals 0 and True: numba compiles a callee once
+    # per literal value, and _rk4 (the integrator's largest kernel) is then compiled once, with _smooth's
+    law0, held = np.int64(0), np.bool_(True)
+    for i in range(n):
+        sdir[i] = 1.0
+    ok = True
     for _ in range(substeps):
-        c2 = np.cos(p2)
-        m11 = sg[0] + sg[1] + 2.0 * sg[2] * c2
-        m22 = sg[1]
-        det = m11 * m22 - (sg[1] + sg[2] * c2) ** 2
-        rho = (k1 * m22 + k2 * m11) / det  # trace of M^-1 K >= its spectral radius
+        good, have = _decide(ch, pi, fv, fc, arm, fp, q, qd, tau, stuck, sdir, sc)
+        ok &= good
+        ok &= _rk4(ch, pi, fv, fc, arm, law0, fp, q, qd, tau, h, stuck, sdir, sc, have, qn, vn, cross)
+        f = 1.0
+        any_cross = False
+        a1 = rows[4]
+        for i in range(n):
+            cross[i] = cross[i] and fc[i] > 0.0
+            if cross[i]:
+                any_cross = True
+                if qd[i] * a1[i] < 0.0:
+                    frac[i] = min(1.0, abs(qd[i]) / (h * abs(a1[i])))
+                else:
+                    frac[i] = 0.0
+            else:
+                frac[i] = 1.0
+            f = min(f, frac[i])
+        if any_cross:
+            # a velocity reaches zero: step to the first crossing (located from the initial
+            # acceleration), decide the modes there, finish the substep
+            if f > 0.0:
+                # same start state and modes: the start slots still hold its dynamics
+                ok &= _rk4(ch, pi, fv, fc, arm, law0, fp, q, qd, tau, f * h, stuck, sdir, sc, held, qn, vn, z)
+                for i in range(n):
+                    q[i], qd[i] = qn[i], vn[i]
+            for i in range(n):
+                if cross[i] and frac[i] <= f:
+                    qd[i] = 0.0
+            good, have = _decide(ch, pi, fv, fc, arm, fp, q, qd, tau, stuck, sdir, sc)
+            ok &= good
+            ok &= _rk4(
+                ch, pi, fv, fc, arm, law0, fp, q, qd, tau, (1.0 - f) * h, stuck, sdir, sc, have, qn, vn, z
+            )
+            # another crossing within the same substep: rest there (decided next substep)
+            for i in range(n):
+                if z[i] and fc[i] > 0.0 and f < 1.0:
+                    vn[i] = 0.0
+        for i in range(n):
+            q[i], qd[i] = qn[i], vn[i]
+    for i in range(n):
+        stuck[i] = stuck[i] and qd[i] == 0.0
+    return ok
+
+
+@njit(cache=True)
+def _smooth(ch, pi, fv, fc, arm, law, fp, q, qd, tau, T, substeps, stuck, sc):  # pragma: no cover
+    """One sample under a smooth law: RK4, each substep split so that h rho <= 2 (module docstring)."""
+    n = q.shape[0]
+    h = T / substeps
+    vc, ratio, vs = fp[0], fp[1], fp[2]
+    extra = 0.0 if law != 2 else (ratio - 1.0) * 0.8578 / vs
+    kpeak = (ratio if law == 2 else 1.0) / vc + extra
+    rows, lf, flags = sc[3], sc[2], sc[5]
+    qn, vn, sdir, col = rows[12], rows[13], rows[16], rows[17]
+    for i in range(n):
+        stuck[i] = False
+    ok = True
+    for _ in range(substeps):
+        # factor M + diag(armature) (all joints free) and rho = sum_i K_i (M^-1)_ii
+        _dynamics(ch, pi, arm, q, qd, sc[0], rows[18], sc[6])
+        ok &= _solve(fv, fc, law, fp, qd, tau, stuck, sdir, rows[18], sc[6], sc, rows[4], rows[14])
+        rho = 0.0
+        for i in range(n):
+            # column i of L^-1 by forward substitution; (M^-1)_ii is its squared norm
+            nrm = 0.0
+            for r in range(n):
+                x = 1.0 if r == i else 0.0
+                for k in range(i, r):
+                    x -= lf[r, k] * col[k]
+                col[r] = x / lf[r, r] if r >= i else 0.0
+                nrm += col[r] * col[r]
+            rho += (fv[i] + fc[i] * kpeak) * nrm
         m = max(1, int(np.ceil(h * rho / 2.0)))
         dt = h / m
-        for _ in range(m):
-            a11, a12 = _smooth_accel(p2, v1, v2, t1, t2, sg, code, vc, ratio, vs)
-            w1, w2 = v1 + 0.5 * dt * a11, v2 + 0.5 * dt * a12
-            a21, a22 = _smooth_accel(p2 + 0.5 * dt * v2, w1, w2, t1, t2, sg, code, vc, ratio, vs)
-            x1, x2 = v1 + 0.5 * dt * a21, v2 + 0.5 * dt * a22
-            a31, a32 = _smooth_accel(p2 + 0.5 * dt * w2, x1, x2, t1, t2, sg, code, vc, ratio, vs)
-            y1, y2 = v1 + dt * a31, v2 + dt * a32
-            a41, a42 = _smooth_accel(p2 + dt * x2, y1, y2, t1, t2, sg, code, vc, ratio, vs)
-            p1 = p1 + (dt / 6.0) * (v1 + 2.0 * w1 + 2.0 * x1 + y1)
-            p2 = p2 + (dt / 6.0) * (v2 + 2.0 * w2 + 2.0 * x2 + y2)
-            v1 = v1 + (dt / 6.0) * (a11 + 2.0 * a21 + 2.0 * a31 + a41)
-            v2 = v2 + (dt / 6.0) * (a12 + 2.0 * a22 + 2.0 * a32 + a42)
-    q[i, 0], q[i, 1], qd[i, 0], qd[i, 1] = p1, p2, v1, v2
+        for k in range(m):
+            # the first step starts where the start slots were filled
+            ok &= _rk4(
+                ch, pi, fv, fc, arm, law, fp, q, qd, tau, dt, stuck, sdir, sc, k == 0, qn, vn, flags[1]
+            )
+            for i in range(n):
+                q[i], qd[i] = qn[i], vn[i]
+    return ok
 
 
-@njit(cache=True, fastmath=False)
-def _smooth_step_kernel(q, qd, tau, sigma, T, substeps, code, vc, ratio, vs):  # pragma: no cover
+@njit(cache=True, inline="always")
+def _step(ch, pi, fv, fc, arm, law, fp, q, qd, tau, T, substeps, stuck, sc):  # pragma: no cover
+    if law == 0:
+        ok = _stick_slip(ch, pi, fv, fc, arm, fp, q, qd, tau, T, substeps, stuck, sc)
+    else:
+        ok = _smooth(ch, pi, fv, fc, arm, law, fp, q, qd, tau, T, substeps, stuck, sc)
     for i in range(q.shape[0]):
-        _smooth_one(q, qd, i, tau[i, 0], tau[i, 1], sigma[i], T, substeps, code, vc, ratio, vs)
+        ok &= np.isfinite(q[i]) and np.isfinite(qd[i])
+    return ok
 
 
-@njit(cache=True, fastmath=False)
-def _lugre_joint(v, zj, b, d, ratio, vs, s0, s1, h):  # pragma: no cover - compiled
-    """``(1 + h a, K, F0)`` of one joint's implicit LuGre micro-step (module docstring)."""
-    if d <= 0.0:
-        return 1.0, b, 0.0
-    g = d * (1.0 + (ratio - 1.0) * np.exp(-((v / vs) ** 2)))
-    a = s0 * abs(v) / g
-    den = 1.0 + h * a
-    return den, (s0 * h + s1) / den + b, zj * (s0 - s1 * a) / den
+@njit(cache=True)
+def plant_step(ch, pp, q, qd, tau, T, substeps, stuck):  # pragma: no cover - compiled
+    """Advance one arm by one sample in place under the held torque ``tau``.
 
+    Parameters
+    ----------
+    ch : Chain
+    pp : PlantParams
+    q, qd : ndarray, shape (n,)
+        Joint positions [rad or m] and velocities, updated in place.
+    tau : ndarray, shape (n,)
+        Applied joint torque [N m or N], held over the sample.
+    T : float
+        Sample period [s].
+    substeps : int
+        RK4 steps per sample (further split where needed, module docstring).
+    stuck : ndarray of bool, shape (n,)
+        Output: joints held at rest by Coulomb friction at the end of the sample
+        (stick-slip law; False under the smooth laws). Modes are decided anew from
+        the velocities at every substep, so its input value is not used.
 
-@njit(cache=True, fastmath=False)
-def _lugre_one(q, qd, z, i, t1, t2, sg, T, substeps, fp):  # pragma: no cover - compiled
-    """One sample of trial i with LuGre friction (module docstring: implicit micro-steps)."""
-    n = max(substeps, int(np.ceil(T / LUGRE_DT_MAX - 1e-9)))
-    h = T / n
-    j1, j2, r = sg[0], sg[1], sg[2]
-    ratio, vs = fp[1], fp[2]
-    p1, p2, v1, v2 = q[i, 0], q[i, 1], qd[i, 0], qd[i, 1]
-    z1, z2 = z[i, 0], z[i, 1]
-    for _ in range(n):
-        c2, s2 = np.cos(p2), np.sin(p2)
-        m11 = j1 + j2 + 2.0 * r * c2
-        m12 = j2 + r * c2
-        m22 = j2
-        cor1 = -r * s2 * v2 * (2.0 * v1 + v2)
-        cor2 = r * s2 * v1 * v1
-        den1, k1, f1 = _lugre_joint(v1, z1, sg[3], sg[5], ratio, vs, fp[3], fp[5], h)
-        den2, k2, f2 = _lugre_joint(v2, z2, sg[4], sg[6], ratio, vs, fp[4], fp[6], h)
-        a11 = m11 + h * k1
-        a22 = m22 + h * k2
-        r1 = m11 * v1 + m12 * v2 + h * (t1 - cor1 - f1)
-        r2 = m12 * v1 + m22 * v2 + h * (t2 - cor2 - f2)
-        det = a11 * a22 - m12 * m12
-        v1 = (a22 * r1 - m12 * r2) / det
-        v2 = (a11 * r2 - m12 * r1) / det
-        z1 = (z1 + h * v1) / den1 if sg[5] > 0.0 else 0.0
-        z2 = (z2 + h * v2) / den2 if sg[6] > 0.0 else 0.0
-        p1 += h * v1
-        p2 += h * v2
-    q[i, 0], q[i, 1], qd[i, 0], qd[i, 1] = p1, p2, v1, v2
-    z[i, 0], z[i, 1] = z1, z2
-
-
-@njit(cache=True, fastmath=False)
-def step_trials(q, qd, stuck, slip, z, tau, sigma, T, substeps, code, fp):  # pragma: no cover
-    """Compiled dispatch of one sample on ``(n, 2)`` arrays.
-
-    Stick-slip (code 0) runs :func:`_plant_step_kernel` unchanged; the smooth laws
-    run :func:`_smooth_step_kernel` and LuGre :func:`_lugre_one` (bristle state ``z``);
-    both leave ``stuck`` False, ``slip`` unchanged. ``fp (N_FRICTION_PARAMS,)``.
+    Returns
+    -------
+    bool
+        False if a mass matrix was not positive definite or the state is not finite.
     """
-    if code == 0:
-        _plant_step_kernel(q, qd, stuck, slip, tau, sigma, T, substeps)
-        return
-    if code == 3:
-        for i in range(q.shape[0]):
-            _lugre_one(q, qd, z, i, tau[i, 0], tau[i, 1], sigma[i], T, substeps, fp)
-    else:
-        _smooth_step_kernel(q, qd, tau, sigma, T, substeps, code, fp[0], fp[1], fp[2])
-    stuck[:, :] = False
+    return plant_step_in(ch, pp, q, qd, tau, T, substeps, stuck, _scratch(q.shape[0]))
 
 
-@njit(cache=True, fastmath=False)
-def step_one(q, qd, stuck, slip, z, i, tau, sg, T, substeps, code, fp):  # pragma: no cover
-    """Trial i of ``(n, 2)`` state arrays by one sample under ``tau (2,)`` with ``sg (7,)``
-    (what the compiled closed loop calls; the same arithmetic as :func:`step_trials`)."""
-    if code == 0:
-        _stick_slip_one(q, qd, stuck, slip, i, tau[0], tau[1], sg, T, substeps)
-        return
-    if code == 3:
-        _lugre_one(q, qd, z, i, tau[0], tau[1], sg, T, substeps, fp)
-    else:
-        _smooth_one(q, qd, i, tau[0], tau[1], sg, T, substeps, code, fp[0], fp[1], fp[2])
-    stuck[i, 0] = False
-    stuck[i, 1] = False
+@njit(cache=True)
+def plant_scratch(n):  # pragma: no cover - compiled
+    """The scratch arrays of one arm's step (:func:`plant_step_in`), allocated once."""
+    return _scratch(n)
 
 
-def friction_vector(friction_params) -> Array:
-    """``friction_params`` (3 or :data:`N_FRICTION_PARAMS` values) as the kernels' float vector.
+@njit(cache=True, inline="always")
+def plant_step_in(ch, pp, q, qd, tau, T, substeps, stuck, sc):  # pragma: no cover - compiled
+    """:func:`plant_step` with its scratch ``sc`` (:func:`plant_scratch`) given: no
+    allocation per sample (a closed loop allocates it once per trial)."""
+    return _step(ch, pp.pi, pp.fv, pp.fc, pp.armature, pp.law, pp.fparams, q, qd, tau, T, substeps, stuck, sc)
 
-    Three values are the smooth laws' ``(friction_velocity, stribeck_ratio, stribeck_velocity)``;
-    the LuGre stiffness and damping then default to 0 (only LuGre reads them).
+
+@njit(cache=True)
+def plant_run(ch, pp, q, qd, tau, T, substeps, q_out, qd_out):  # pragma: no cover - compiled
+    """Open loop over a torque sequence: ``tau`` (n_samples, n) held one sample each.
+
+    ``q, qd`` (n,) are the initial state (updated in place to the final one);
+    ``q_out, qd_out`` (n_samples, n) receive the state after each sample. Returns
+    the number of samples completed (< n_samples: the step failed, see
+    :func:`plant_step`).
     """
-    fp = np.zeros(N_FRICTION_PARAMS)
-    vals = np.asarray(friction_params, dtype=float).ravel()
-    if vals.size not in (3, N_FRICTION_PARAMS) or not np.all(np.isfinite(vals)):
-        raise ParameterError(
-            f"friction_params must be 3 or {N_FRICTION_PARAMS} finite values, got {friction_params!r}"
+    n = q.shape[0]
+    sc = _scratch(n)
+    stuck = np.zeros(n, dtype=np.bool_)
+    for k in range(tau.shape[0]):
+        if not _step(
+            ch, pp.pi, pp.fv, pp.fc, pp.armature, pp.law, pp.fparams, q, qd, tau[k], T, substeps, stuck, sc
+        ):
+            return k
+        for i in range(n):
+            q_out[k, i] = q[i]
+            qd_out[k, i] = qd[i]
+    return tau.shape[0]
+
+
+@njit(cache=True, parallel=True)
+def plant_batch(ch, pi, fv, fc, armature, law, fparams, q, qd, tau, T, substeps, stuck):  # pragma: no cover
+    """One sample of many trials of the same chain (prange over trials), in place.
+
+    Parameters
+    ----------
+    pi : ndarray, shape (n_trials, 10 n)
+    fv, fc, armature : ndarray, shape (n_trials, n)
+    law : int
+    fparams : ndarray, shape (3,)
+    q, qd, tau : ndarray, shape (n_trials, n)
+    stuck : ndarray of bool, shape (n_trials, n)
+        Output, as in :func:`plant_step`.
+
+    Returns
+    -------
+    ndarray of bool, shape (n_trials,)
+        False for trials whose step failed (see :func:`plant_step`).
+    """
+    n_trials, n = q.shape
+    ok = np.empty(n_trials, dtype=np.bool_)
+    for t in prange(n_trials):
+        sc = _scratch(n)
+        ok[t] = _step(
+            ch, pi[t], fv[t], fc[t], armature[t], law, fparams, q[t], qd[t], tau[t], T, substeps, stuck[t], sc
         )
-    fp[: vals.size] = vals
-    return fp
-
-
-def step_kernel(
-    q, qd, stuck, slip, tau, sigma, T, substeps, friction_code=0, friction_params=(0.02, 1.5, 0.1), z=None
-):
-    """Advance contiguous ``(n, 2)`` state arrays in place by one sample (no checks).
-
-    ``z (n, 2)``: the LuGre bristle state (required with ``friction_code`` 3, else unused).
-    """
-    if z is None:
-        if friction_code == 3:
-            raise ParameterError("the LuGre plant (friction_code 3) needs its bristle state z")
-        z = np.zeros((q.shape[0], 2))
-    fp = friction_vector(friction_params)
-    step_trials(q, qd, stuck, slip, z, tau, sigma, float(T), int(substeps), int(friction_code), fp)
-
-
-def plant_step(
-    q: Array,
-    qd: Array,
-    stuck: NDArray[np.bool_],
-    slip: Array,
-    tau: Array,
-    sigma: Array,
-    T: float,
-    substeps: int = 2,
-    friction_code: int = 0,
-    friction_params: tuple[float, float, float] = (0.02, 1.5, 0.1),
-) -> tuple[Array, Array, NDArray[np.bool_], Array]:
-    """Advance the arm by one sample with torque ``tau`` held constant (pure function).
-
-    Compiled with numba: one loop over the batch, scalar 2x2 algebra inside.
-
-    Parameters
-    ----------
-    q, qd : ndarray, shape (..., 2)
-        State at the start of the sample.
-    stuck : ndarray of bool, shape (..., 2)
-        Joints currently stuck by Coulomb friction.
-    slip : ndarray, shape (..., 2)
-        Direction (+-1) a joint last broke away in; used as sgn(qd) while qd == 0.
-    tau : ndarray, shape (..., 2)
-        Applied torque [N m], held over the sample.
-    sigma : ndarray, shape (..., 7)
-        True base parameters.
-    T : float
-        Sample period [s].
-    substeps : int
-        RK4 steps per sample.
-    friction_code : int
-        Plant friction law, :data:`FRICTION_CODES`: 0 stick-slip, 1 tanh, 2 stribeck
-        (LuGre carries a bristle state: :func:`lugre_step`).
-    friction_params : (float, float, float)
-        ``(friction_velocity, stribeck_ratio, stribeck_velocity)`` of the smooth laws.
-
-    Returns
-    -------
-    q, qd, stuck, slip : the state after ``T`` (new arrays; inputs are not changed).
-    """
-    shape = np.broadcast_shapes(q.shape, qd.shape, tau.shape, (*sigma.shape[:-1], 2))
-    flat = (-1, 2)
-    q_ = np.ascontiguousarray(np.broadcast_to(q, shape), dtype=float).reshape(flat).copy()
-    qd_ = np.ascontiguousarray(np.broadcast_to(qd, shape), dtype=float).reshape(flat).copy()
-    st_ = np.ascontiguousarray(np.broadcast_to(stuck, shape), dtype=np.bool_).reshape(flat).copy()
-    sl_ = np.ascontiguousarray(np.broadcast_to(slip, shape), dtype=float).reshape(flat).copy()
-    tau_ = np.ascontiguousarray(np.broadcast_to(tau, shape), dtype=float).reshape(flat)
-    sig_ = np.ascontiguousarray(np.broadcast_to(sigma, (*shape[:-1], 7)), dtype=float).reshape(-1, 7)
-    if friction_code not in FRICTION_CODES.values():
-        raise ParameterError(f"friction_code must be one of {FRICTION_CODES}, got {friction_code!r}")
-    if friction_code == FRICTION_CODES["lugre"]:
-        raise ParameterError("plant_step has no bristle state: step a LuGre plant with lugre_step")
-    step_kernel(q_, qd_, st_, sl_, tau_, sig_, float(T), int(substeps), friction_code, friction_params)
-    return q_.reshape(shape), qd_.reshape(shape), st_.reshape(shape), sl_.reshape(shape)
-
-
-def lugre_step(
-    q: Array,
-    qd: Array,
-    z: Array,
-    tau: Array,
-    sigma: Array,
-    T: float,
-    friction_params,
-    substeps: int = 2,
-) -> tuple[Array, Array, Array]:
-    """Advance an arm with LuGre friction by one sample under a held torque (pure function).
-
-    Parameters
-    ----------
-    q, qd : ndarray, shape (..., 2)
-        State at the start of the sample [rad], [rad/s].
-    z : ndarray, shape (..., 2)
-        Bristle deflection per joint [rad] (0: relaxed).
-    tau : ndarray, shape (..., 2)
-        Applied torque [N m], held over the sample.
-    sigma : ndarray, shape (..., 7)
-        True base parameters (``b_i`` the viscous term sigma2, ``d_i`` the Coulomb level Fc).
-    T : float
-        Sample period [s].
-    friction_params : sequence of 7 floats
-        :attr:`adaptive_dd.plant.arm.Arm.friction_params` (``stribeck_ratio``,
-        ``stribeck_velocity``, ``sigma0`` and ``sigma1`` per joint are read).
-    substeps : int
-        Lower bound on the micro-steps (at least ``T / LUGRE_DT_MAX`` are taken).
-
-    Returns
-    -------
-    q, qd, z : the state after ``T`` (new arrays).
-    """
-    fp = friction_vector(friction_params)
-    shape = np.broadcast_shapes(q.shape, qd.shape, z.shape, tau.shape, (*sigma.shape[:-1], 2))
-    flat = (-1, 2)
-    q_, qd_, z_ = (
-        np.ascontiguousarray(np.broadcast_to(x, shape), dtype=float).reshape(flat).copy() for x in (q, qd, z)
-    )
-    tau_ = np.ascontiguousarray(np.broadcast_to(tau, shape), dtype=float).reshape(flat)
-    sig_ = np.ascontiguousarray(np.broadcast_to(sigma, (*shape[:-1], 7)), dtype=float).reshape(-1, 7)
-    stuck = np.zeros(q_.shape, dtype=np.bool_)
-    slip = np.ones(q_.shape)
-    step_trials(q_, qd_, stuck, slip, z_, tau_, sig_, float(T), int(substeps), 3, fp)
-    return q_.reshape(shape), qd_.reshape(shape), z_.reshape(shape)
+    return ok

@@ -6,9 +6,9 @@ Pinocchio (``pin``) is the rigid-body reference: ``crba`` (mass matrix), ``rnea`
 uses sigma with ``b = d = 0``; gravity acts along -z and gives no torque about
 the vertical joint axes.
 
-Both functions take an :class:`~adaptive_dd.plant.arm.Arm` (default
-:meth:`Arm.sice`) or its :class:`PhysicalParameters`. An arm known only by its
-base parameters is built from :meth:`Arm.equivalent_physical`, a physical set
+Both functions take a :class:`~adaptive_dd.plant.two_link.TwoLinkArm` (default
+:meth:`TwoLinkArm.sice`) or its :class:`PhysicalParameters`. An arm known only by its
+base parameters is built from :meth:`TwoLinkArm.equivalent_physical`, a physical set
 with the same sigma (rigid-body dynamics depend on sigma alone).
 """
 
@@ -21,7 +21,6 @@ import pinocchio as pin
 from numpy.typing import NDArray
 
 from adaptive_dd.errors import ParameterError
-from adaptive_dd.plant.arm import Arm
 from adaptive_dd.plant.dynamics import (
     coriolis_matrix,
     forward_dynamics,
@@ -29,14 +28,16 @@ from adaptive_dd.plant.dynamics import (
     mass_matrix,
     regressor,
 )
+from adaptive_dd.plant.kind import is_two_link
 from adaptive_dd.plant.parameters import Payload, PhysicalParameters
+from adaptive_dd.plant.two_link import TwoLinkArm
 
 __all__ = [
     "CheckResult",
     "as_physical",
     "base_parameter_map",
     "build_model",
-    "cross_check",
+    "two_link_cross_check",
 ]
 
 # index of each dynamic parameter of one body in Pinocchio's ordering
@@ -49,18 +50,20 @@ def _link_inertia(mass: float, com_x: float, izz: float) -> pin.Inertia:
     return pin.Inertia(mass, np.array([com_x, 0.0, 0.0]), np.diag([ixx * 0.1, izz, izz]))
 
 
-def as_physical(arm: Arm | PhysicalParameters | None) -> PhysicalParameters:
-    """Physical parameters of an arm (default :meth:`Arm.sice`); see the module docstring."""
+def as_physical(arm: TwoLinkArm | PhysicalParameters | None) -> PhysicalParameters:
+    """Physical parameters of an arm (default :meth:`TwoLinkArm.sice`); see the module docstring."""
     if arm is None:
-        return Arm.sice().equivalent_physical()
-    if isinstance(arm, Arm):
+        return TwoLinkArm.sice().equivalent_physical()
+    if is_two_link(arm):
         return arm.equivalent_physical()
     if isinstance(arm, PhysicalParameters):
         return arm
-    raise ParameterError(f"expected an Arm or PhysicalParameters, got {type(arm).__name__}")
+    raise ParameterError(f"expected a TwoLinkArm or PhysicalParameters, got {type(arm).__name__}")
 
 
-def build_model(arm: Arm | PhysicalParameters | None = None, payload: Payload | None = None) -> pin.Model:
+def build_model(
+    arm: TwoLinkArm | PhysicalParameters | None = None, payload: Payload | None = None
+) -> pin.Model:
     """Two revolute joints about z in the horizontal plane, as a ``pinocchio.Model``.
 
     Link i has mass ``m_i``, centre of mass at ``a_i`` along the link and inertia
@@ -115,12 +118,70 @@ class CheckResult:
         return f"{flag} {self.name:<52s} max error {self.max_error:9.2e}  (tol {self.tolerance:.0e})"
 
 
-def _rel(a: NDArray, b: NDArray) -> float:
-    return float(np.max(np.abs(a - b)) / max(1.0, float(np.max(np.abs(b)))))
+def relative_error(a, b) -> float:
+    """Largest ``|a - b|`` relative to ``max(1, max|b|)``: the measure of every check here."""
+    return float(np.max(np.abs(np.asarray(a) - np.asarray(b))) / max(1.0, float(np.max(np.abs(b)))))
 
 
-def cross_check(
-    arm: Arm | PhysicalParameters | None = None,
+def random_states(
+    rng: np.random.Generator, q_low, q_high, n_states: int, n_joints: int, speed, accel, torque
+):
+    """``q, qd, qdd, tau`` of shape ``(n_states, n_joints)``, uniform in ``[q_low, q_high]``,
+    ``+-speed``, ``+-accel``, ``+-torque`` (drawn in that order)."""
+    size = (n_states, n_joints)
+    q = rng.uniform(q_low, q_high, size)
+    qd = rng.uniform(-speed, speed, size)
+    qdd = rng.uniform(-accel, accel, size)
+    tau = rng.uniform(-torque, torque, size)
+    return q, qd, qdd, tau
+
+
+def stack_states(n_states: int, one_state) -> dict[str, NDArray[np.float64]]:
+    """``one_state(i)`` (a dict of arrays) for every state ``i``, each key stacked along a first axis."""
+    rows = [one_state(i) for i in range(n_states)]
+    return {k: np.array([row[k] for row in rows]) for k in rows[0]}
+
+
+def positive_definite_check(M: NDArray) -> CheckResult:
+    """``-min eigenvalue / max`` of the mass matrices ``M (..., n, n)``: passes when not above 0."""
+    eig = np.linalg.eigvalsh(M)
+    return CheckResult("M positive definite: -min eigenvalue / max", float(-eig.min() / eig.max()), 0.0)
+
+
+def _two_link_sigma(arm, params: PhysicalParameters, payload: Payload | None) -> NDArray[np.float64]:
+    """The sigma compared: a TwoLinkArm's own (with its payload effect), else from the physical set."""
+    if is_two_link(arm):  # its own sigma and payload effect, against a disk body in Pinocchio
+        return arm.sigma if payload is None else arm.sigma_with_payload(payload.mass, payload.radius)
+    return (params if payload is None else params.with_payload(payload)).to_sigma()
+
+
+def _two_link_references(model: pin.Model, q, qd, qdd, tau) -> dict[str, NDArray[np.float64]]:
+    """Pinocchio's M, C qd, rnea, aba and joint-torque regressor on every state."""
+    data = model.createData()
+
+    def one(i):
+        m = pin.crba(model, data, q[i])
+        return {
+            "M": np.triu(m) + np.triu(m, 1).T,
+            "C": pin.rnea(model, data, q[i], qd[i], np.zeros(2)).copy(),
+            "rnea": pin.rnea(model, data, q[i], qd[i], qdd[i]).copy(),
+            "aba": pin.aba(model, data, q[i], qd[i], tau[i]).copy(),
+            "Y": pin.computeJointTorqueRegressor(model, data, q[i], qd[i], qdd[i]).copy(),
+        }
+
+    return stack_states(len(q), one)
+
+
+def _skew_check(q, qd, sigma, C) -> CheckResult:
+    """dM/dt along the motion (central difference, error O(h^2)), then dM/dt - 2C + its transpose."""
+    h = 1e-6
+    mdot = (mass_matrix(q + h * qd, sigma) - mass_matrix(q - h * qd, sigma)) / (2 * h)
+    n = mdot - 2 * C
+    return CheckResult("dM/dt - 2C skew-symmetric", relative_error(n + np.swapaxes(n, -1, -2), 0 * n), 1e-6)
+
+
+def two_link_cross_check(
+    arm: TwoLinkArm | PhysicalParameters | None = None,
     payload: Payload | None = None,
     n_states: int = 200,
     rng: np.random.Generator | None = None,
@@ -130,8 +191,8 @@ def cross_check(
 
     Parameters
     ----------
-    arm : Arm or PhysicalParameters, optional
-        The arm (default :meth:`Arm.sice`). For an Arm, the sigma compared is
+    arm : TwoLinkArm or PhysicalParameters, optional
+        The arm (default :meth:`TwoLinkArm.sice`). For a TwoLinkArm, the sigma compared is
         ``arm.sigma`` or ``arm.sigma_with_payload(...)``, so the check covers the
         arm's payload effect too; Pinocchio gets the disk as a separate body.
     payload : Payload, optional
@@ -151,68 +212,31 @@ def cross_check(
     """
     rng = np.random.default_rng(0) if rng is None else rng
     params = as_physical(arm)
-    if isinstance(arm, Arm):  # the arm's own sigma and payload effect, against a disk body in Pinocchio
-        sigma = arm.sigma if payload is None else arm.sigma_with_payload(payload.mass, payload.radius)
-    else:
-        sigma = (params if payload is None else params.with_payload(payload)).to_sigma()
+    sigma = _two_link_sigma(arm, params, payload)
     sigma_nf = sigma.copy()
     sigma_nf[3:] = 0.0
     model = build_model(params, payload)
-    data = model.createData()
-    q = rng.uniform(-np.pi, np.pi, (n_states, 2))
-    qd = rng.uniform(-5, 5, (n_states, 2))
-    qdd = rng.uniform(-50, 50, (n_states, 2))
-    tau = rng.uniform(-20, 20, (n_states, 2))
-    kmap = base_parameter_map(params.l1)
-    pi_true = np.concatenate([model.inertias[i].toDynamicParameters() for i in (1, 2)])
-
-    ref = {k: [] for k in ("M", "C", "rnea", "aba", "Y")}
-    for i in range(n_states):
-        m = pin.crba(model, data, q[i])
-        ref["M"].append(np.triu(m) + np.triu(m, 1).T)
-        ref["C"].append(pin.rnea(model, data, q[i], qd[i], np.zeros(2)).copy())
-        ref["rnea"].append(pin.rnea(model, data, q[i], qd[i], qdd[i]).copy())
-        ref["aba"].append(pin.aba(model, data, q[i], qd[i], tau[i]).copy())
-        ref["Y"].append(pin.computeJointTorqueRegressor(model, data, q[i], qd[i], qdd[i]).copy())
-    ref = {k: np.array(v) for k, v in ref.items()}
-
+    q, qd, qdd, tau = random_states(rng, -np.pi, np.pi, n_states, 2, 5, 50, 20)
+    ref = _two_link_references(model, q, qd, qdd, tau)
     M = mass_matrix(q, sigma)
     C = coriolis_matrix(q, qd, sigma)
     phi = regressor(q, qd, qdd)
-    out = [
-        CheckResult("mass_matrix vs pin.crba", _rel(M, ref["M"]), tol),
-        CheckResult(
-            "coriolis_matrix @ qd vs pin.rnea(q, qd, 0)",
-            _rel((C @ qd[..., None])[..., 0], ref["C"]),
-            tol,
-        ),
-        CheckResult("regressor @ sigma (no friction) vs pin.rnea", _rel(phi @ sigma_nf, ref["rnea"]), tol),
-        CheckResult(
-            "inverse_dynamics (no friction) vs pin.rnea",
-            _rel(inverse_dynamics(q, qd, qdd, sigma_nf), ref["rnea"]),
-            tol,
-        ),
-        CheckResult(
-            "forward_dynamics (no friction) vs pin.aba",
-            _rel(forward_dynamics(q, qd, tau, sigma_nf), ref["aba"]),
-            tol,
-        ),
-        CheckResult(
+    pairs = [
+        ("mass_matrix vs pin.crba", M, ref["M"]),
+        ("coriolis_matrix @ qd vs pin.rnea(q, qd, 0)", (C @ qd[..., None])[..., 0], ref["C"]),
+        ("regressor @ sigma (no friction) vs pin.rnea", phi @ sigma_nf, ref["rnea"]),
+        ("inverse_dynamics (no friction) vs pin.rnea", inverse_dynamics(q, qd, qdd, sigma_nf), ref["rnea"]),
+        ("forward_dynamics (no friction) vs pin.aba", forward_dynamics(q, qd, tau, sigma_nf), ref["aba"]),
+        (
             "pin regressor mapped onto (J1, J2, r) vs regressor[:, :3]",
-            _rel(ref["Y"] @ kmap, phi[..., :3]),
-            tol,
+            ref["Y"] @ base_parameter_map(params.l1),
+            phi[..., :3],
         ),
-        CheckResult(
+        (
             "pin regressor @ pin params vs regressor[:, :3] @ sigma[:3]",
-            _rel(ref["Y"] @ pi_true, phi[..., :3] @ sigma[:3]),
-            tol,
+            ref["Y"] @ np.concatenate([model.inertias[i].toDynamicParameters() for i in (1, 2)]),
+            phi[..., :3] @ sigma[:3],
         ),
     ]
-    eig = np.linalg.eigvalsh(M)
-    out.append(CheckResult("M positive definite: -min eigenvalue / max", float(-eig.min() / eig.max()), 0.0))
-    # dM/dt along the motion (central difference, error O(h^2)), then dM/dt - 2C + its transpose
-    h = 1e-6
-    mdot = (mass_matrix(q + h * qd, sigma) - mass_matrix(q - h * qd, sigma)) / (2 * h)
-    n = mdot - 2 * C
-    out.append(CheckResult("dM/dt - 2C skew-symmetric", _rel(n + np.swapaxes(n, -1, -2), 0 * n), 1e-6))
-    return out
+    out = [CheckResult(name, relative_error(a, b), tol) for name, a, b in pairs]
+    return [*out, positive_definite_check(M), _skew_check(q, qd, sigma, C)]

@@ -15,8 +15,8 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from adaptive_dd.errors import ParameterError
+from adaptive_dd.plant.arm import Arm
 from adaptive_dd.plant.chain import rnea_batch
-from adaptive_dd.plant.serial_arm import SerialArm
 
 __all__ = ["PrescribedRecord", "exciting_motion", "multisine", "prescribed_record"]
 
@@ -41,7 +41,7 @@ def multisine(
 
 
 def exciting_motion(
-    arm: SerialArm,
+    arm: Arm,
     t: ArrayLike,
     rng: np.random.Generator,
     offset: ArrayLike | None = None,
@@ -91,7 +91,7 @@ class PrescribedRecord:
 
 
 def prescribed_record(
-    arm: SerialArm,
+    arm: Arm,
     t: ArrayLike,
     motion: tuple[Array, Array, Array],
     payloads: ArrayLike,
@@ -103,13 +103,13 @@ def prescribed_record(
 
     Parameters
     ----------
-    arm : SerialArm
+    arm : Arm
         Standard parameters ``arm.pi`` (links, friction, armature), sensor noise variances.
     t : (N,)
     motion : three (N, n) arrays
     payloads : (S, 10)
         Payload parameters about the payload frame per segment
-        (:func:`~adaptive_dd.plant.serial_arm.payload_parameters`).
+        (:func:`~adaptive_dd.plant.arm.payload_parameters`).
     swap_samples : (S - 1,) int
         First sample of segments 1 .. S-1.
     rng : numpy.random.Generator, optional

@@ -150,7 +150,7 @@ class PlantDraw(NamedTuple):
 
     @property
     def pi(self) -> Array:
-        """``(13 n,)`` ``[links, fv, fc, Ia]`` (the layout of ``SerialArm.pi``)."""
+        """``(13 n,)`` ``[links, fv, fc, Ia]`` (the layout of ``Arm.pi``)."""
         return np.concatenate([self.pi_links, self.viscous, self.coulomb, self.armature])
 
     def to_dict(self) -> dict:
@@ -250,7 +250,7 @@ def draw_plant(spec: PlantSpec, rng: np.random.Generator) -> PlantDraw:
 
 
 def exact_plant(arm) -> PlantSpec:
-    """The plant equal to ``arm`` (a :class:`~adaptive_dd.plant.serial_arm.SerialArm`)."""
+    """The plant equal to ``arm`` (an :class:`~adaptive_dd.plant.arm.Arm`)."""
     t = lambda x: tuple(float(v) for v in x)  # noqa: E731
     return PlantSpec(t(arm.pi_links), t(arm.viscous), t(arm.coulomb), t(arm.armature))
 
@@ -267,7 +267,7 @@ def plant_draws(scenario, seed_indices) -> list[PlantDraw]:
 
 # --------------------------------------------------------------------- the [plant] table
 def kinematics_mismatch(model_arm, other) -> str | None:
-    """Why two SerialArms do not have the same joints and frames (None: they have)."""
+    """Why two Arms do not have the same joints and frames (None: they have)."""
     if tuple(model_arm.joint_names) != tuple(other.joint_names):
         return f"joints {list(other.joint_names)} differ from the [arm]'s {list(model_arm.joint_names)}"
     a, b = model_arm.chain, other.chain
@@ -314,10 +314,10 @@ def _uncertainty(src: str, table) -> Uncertainty:
 
 
 def parse_plant(src: str, table: dict | None, arm, model_from: bool = False) -> PlantSpec | None:
-    """The plant of a ``[plant]`` table around ``arm`` (the ``[arm]``: a SerialArm).
+    """The plant of a ``[plant]`` table around ``arm`` (the ``[arm]``: an Arm).
 
     Only the keys of :data:`PLANT_TRUTH_KEYS` are read here (the friction law's keys are the
-    arm's, :func:`~adaptive_dd.plant.arm.arm_from_tables`). Returns None when the plant is the
+    arm's, :func:`~adaptive_dd.plant.arm_tables.arm_from_tables`). Returns None when the plant is the
     arm exactly and the controllers' model is the arm too (``model_from`` False).
 
     Raises
@@ -326,7 +326,7 @@ def parse_plant(src: str, table: dict | None, arm, model_from: bool = False) -> 
         Naming ``src``, the key and the value: a URDF with other joints or frames, a list of the
         wrong length, a negative or too large level, an unknown key of ``[plant.uncertainty]``.
     """
-    from adaptive_dd.plant.serial_arm import URDF_TABLE_BOUNDS, _table_vector
+    from adaptive_dd.plant.arm_tables import URDF_TABLE_BOUNDS, _table_vector
 
     table = {} if table is None else {k: v for k, v in table.items() if k in PLANT_TRUTH_KEYS}
     if not table and not model_from:
@@ -455,10 +455,10 @@ def _same_arm_urdf(src: str, key: str, u: str, path: Path, arm, rule: str):
     """The arm of the URDF at ``path`` (the scenario's ``key = u``), checked to have ``arm``'s joints
     and frames; a :class:`ScenarioError` naming the key, the value and ``rule`` otherwise."""
     from adaptive_dd.errors import UrdfError
-    from adaptive_dd.plant.serial_arm import SerialArm
+    from adaptive_dd.plant.arm import Arm
 
     try:
-        other = SerialArm.from_urdf(path, arm.payload_frame, gravity=arm.gravity)
+        other = Arm.from_urdf(path, arm.payload_frame, gravity=arm.gravity)
         _ = other.chain, other.pi_links
     except (UrdfError, ParameterError) as exc:
         raise ScenarioError(f"{src}: key '{key}' = {u!r}: {exc}") from None

@@ -275,6 +275,36 @@ def read_urdf(path: str | Path, payload_frame: str | None = None, repair: bool =
         refusing them; each repair is reported in :attr:`UrdfRobot.notes`.
     """
     path = Path(path)
+    root = _parse_robot(path)
+    links = {el.get("name"): el for el in root.findall("link")}
+    if not links:
+        raise UrdfError(f"{path}: no <link> element")
+    parent_of, children = _joint_tree(path, root, links)
+    payload_frame = _payload_frame(path, links, parent_of, children, payload_frame)
+    chain, name = [], payload_frame
+    while name in parent_of:
+        j = parent_of[name]
+        chain.append(j)
+        name = j.find("parent").get("link")
+    chain.reverse()
+    on_chain = {j.get("name") for j in chain}
+    joints = tuple(_joint_info(path, j) for j in chain if j.get("type") in _MOVABLE)
+    if not joints:
+        raise UrdfError(f"{path}: no movable joint between the root and the payload frame '{payload_frame}'")
+    first = next(i for i, j in enumerate(chain) if j.get("type") in _MOVABLE)
+    chain_links = [j.find("child").get("link") for j in chain[first:]]
+    notes = _check_inertias(path, links, chain_links, parent_of, repair)
+    locked = tuple(
+        j.get("name")
+        for j in root.findall("joint")
+        if j.get("type") in _MOVABLE and j.get("name") not in on_chain
+    )
+    xml = ET.tostring(root, encoding="unicode") if any(n.startswith("repaired") for n in notes) else None
+    return UrdfRobot(path, joints, payload_frame, locked, notes, xml)
+
+
+def _parse_robot(path: Path) -> ET.Element:
+    """The ``<robot>`` element of the file, or an error naming the file and why it cannot be read."""
     if not path.is_file():
         raise UrdfError(f"{path}: no such URDF file")
     try:
@@ -285,9 +315,12 @@ def read_urdf(path: str | Path, payload_frame: str | None = None, repair: bool =
         raise UrdfError(f"{path}: cannot be read: {exc.strerror}") from None
     if root.tag != "robot":
         raise UrdfError(f"{path}: the root element is <{root.tag}>, not <robot>")
-    links = {el.get("name"): el for el in root.findall("link")}
-    if not links:
-        raise UrdfError(f"{path}: no <link> element")
+    return root
+
+
+def _joint_tree(path: Path, root: ET.Element, links: dict) -> tuple[dict, dict]:
+    """``parent_of`` (link name to the joint above it) and ``children`` (link name to the joints
+    below it), checking the joint types, their links, and that the links form one tree."""
     parent_of: dict[str, object] = {}
     children: dict[str, list] = {name: [] for name in links}
     for j in root.findall("joint"):
@@ -316,6 +349,13 @@ def read_urdf(path: str | Path, payload_frame: str | None = None, repair: bool =
     roots = [n for n in links if n not in parent_of]
     if len(roots) != 1:
         raise UrdfError(f"{path}: {len(roots)} root links {roots}; a URDF tree has exactly one")
+    return parent_of, children
+
+
+def _payload_frame(
+    path: Path, links: dict, parent_of: dict, children: dict, payload_frame: str | None
+) -> str:
+    """The named payload frame, checked, or the single deepest link of the tree."""
 
     def depth(name: str) -> int:
         d = 0
@@ -333,31 +373,12 @@ def read_urdf(path: str | Path, payload_frame: str | None = None, repair: bool =
                 f"{path}: the tree has {len(tips)} deepest links {tips}: name the payload frame "
                 "(payload_frame = one of the links)"
             )
-        payload_frame = tips[0]
-    elif payload_frame not in links:
+        return tips[0]
+    if payload_frame not in links:
         raise UrdfError(
             f"{path}: payload_frame {payload_frame!r} is not a link of this URDF; links: {sorted(links)}"
         )
-    chain, name = [], payload_frame
-    while name in parent_of:
-        j = parent_of[name]
-        chain.append(j)
-        name = j.find("parent").get("link")
-    chain.reverse()
-    on_chain = {j.get("name") for j in chain}
-    joints = tuple(_joint_info(path, j) for j in chain if j.get("type") in _MOVABLE)
-    if not joints:
-        raise UrdfError(f"{path}: no movable joint between the root and the payload frame '{payload_frame}'")
-    first = next(i for i, j in enumerate(chain) if j.get("type") in _MOVABLE)
-    chain_links = [j.find("child").get("link") for j in chain[first:]]
-    notes = _check_inertias(path, links, chain_links, parent_of, repair)
-    locked = tuple(
-        j.get("name")
-        for j in root.findall("joint")
-        if j.get("type") in _MOVABLE and j.get("name") not in on_chain
-    )
-    xml = ET.tostring(root, encoding="unicode") if any(n.startswith("repaired") for n in notes) else None
-    return UrdfRobot(path, joints, payload_frame, locked, notes, xml)
+    return payload_frame
 
 
 def _check_inertias(path, links: dict, chain_links: list, parent_of: dict, repair: bool) -> tuple[str, ...]:

@@ -1,8 +1,8 @@
 """Writing an arm's URDF back with other link inertials (an identified or drawn model).
 
 The arm's own URDF is copied with every movable chain joint's child link given the link's
-ten parameters (about its joint frame, :attr:`SerialArm.pi_links
-<adaptive_dd.plant.serial_arm.SerialArm.pi_links>`'s layout) as its ``<inertial>``, and
+ten parameters (about its joint frame, :attr:`Arm.pi_links
+<adaptive_dd.plant.arm.Arm.pi_links>`'s layout) as its ``<inertial>``, and
 every body Pinocchio merges into that link (fixed children, locked joints' subtrees) left
 without one, so that reading the file back gives exactly those parameters. Kinematics, limits,
 friction and every other element are the original's.
@@ -41,7 +41,7 @@ def write_urdf_links(
         ``pi_links`` of the wrong size, or a link that is not a rigid body's
         (:func:`~adaptive_dd.plant.uncertainty.check_link`).
     """
-    from adaptive_dd.plant.uncertainty import check_link, link_parts
+    from adaptive_dd.plant.uncertainty import check_link
 
     pi = np.asarray(pi_links, dtype=float).reshape(-1)
     n = arm.n_joints
@@ -57,32 +57,12 @@ def write_urdf_links(
     chain = set(arm.joint_names)
     for k, name in enumerate(arm.joint_names):
         child = joints[name].find("child").get("link")
-        stack = [child]
-        while stack:  # the bodies merged into link k: everything below it up to the next chain joint
-            link = links[stack.pop()]
-            for el in link.findall("inertial"):
-                link.remove(el)
-            stack += [
-                j.find("child").get("link")
-                for j in children.get(link.get("name"), ())
-                if j.get("name") not in chain
-            ]
+        _remove_inertials_below(links, children, child, chain)
         if friction is not None:
-            dyn = joints[name].find("dynamics")
-            if dyn is None:
-                dyn = ET.SubElement(joints[name], "dynamics")
-            dyn.set("damping", _f(friction[0][k]))
-            dyn.set("friction", _f(friction[1][k]))
+            _set_dynamics(joints[name], friction[0][k], friction[1][k])
         p = pi[10 * k : 10 * k + 10]
         check_link(p, f"link {k + 1} ({child})")
-        m, c, Ic = link_parts(p)
-        if m <= 0:
-            continue
-        inertial = ET.SubElement(links[child], "inertial")
-        ET.SubElement(inertial, "origin", {"xyz": " ".join(_f(x) for x in c), "rpy": "0 0 0"})
-        ET.SubElement(inertial, "mass", {"value": _f(m)})
-        names = {"ixx": (0, 0), "ixy": (0, 1), "ixz": (0, 2), "iyy": (1, 1), "iyz": (1, 2), "izz": (2, 2)}
-        ET.SubElement(inertial, "inertia", {k2: _f(Ic[a, b]) for k2, (a, b) in names.items()})
+        _add_inertial(links[child], p)
     if comment:
         root.insert(0, ET.Comment(f" {comment} "))
     path = Path(path)
@@ -90,6 +70,44 @@ def write_urdf_links(
         fh.write('<?xml version="1.0" encoding="utf-8"?>\n')
         fh.write(ET.tostring(root, encoding="unicode"))
     return path
+
+
+def _remove_inertials_below(links: dict, children: dict, link_name: str, chain: set) -> None:
+    """Remove the ``<inertial>`` of a chain link and of every body merged into it: everything
+    below it up to the next chain joint."""
+    stack = [link_name]
+    while stack:
+        link = links[stack.pop()]
+        for el in link.findall("inertial"):
+            link.remove(el)
+        stack += [
+            j.find("child").get("link")
+            for j in children.get(link.get("name"), ())
+            if j.get("name") not in chain
+        ]
+
+
+def _set_dynamics(joint: ET.Element, damping: float, friction: float) -> None:
+    """Set (or add) the joint's ``<dynamics damping friction>``."""
+    dyn = joint.find("dynamics")
+    if dyn is None:
+        dyn = ET.SubElement(joint, "dynamics")
+    dyn.set("damping", _f(damping))
+    dyn.set("friction", _f(friction))
+
+
+def _add_inertial(link: ET.Element, p) -> None:
+    """Give the link an ``<inertial>`` of the ten parameters ``p`` (none when the mass is 0)."""
+    from adaptive_dd.plant.uncertainty import link_parts
+
+    m, c, Ic = link_parts(p)
+    if m <= 0:
+        return
+    inertial = ET.SubElement(link, "inertial")
+    ET.SubElement(inertial, "origin", {"xyz": " ".join(_f(x) for x in c), "rpy": "0 0 0"})
+    ET.SubElement(inertial, "mass", {"value": _f(m)})
+    names = {"ixx": (0, 0), "ixy": (0, 1), "ixz": (0, 2), "iyy": (1, 1), "iyz": (1, 2), "izz": (2, 2)}
+    ET.SubElement(inertial, "inertia", {k: _f(Ic[a, b]) for k, (a, b) in names.items()})
 
 
 def write_fitted_urdf(arm, pi, path: str | Path) -> Path:

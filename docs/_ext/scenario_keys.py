@@ -2,9 +2,8 @@
 
 The keys come from the tables the scenario checks themselves use
 (:data:`adaptive_dd.benchmark.scenario_base.KEYS`, the ``[arm]`` and ``[plant]`` key lists of
-:mod:`adaptive_dd.plant.arm` and :mod:`adaptive_dd.plant.serial_arm`, the controllers'
-settings in :data:`adaptive_dd.controllers.registry.CONTROLLERS` and
-:data:`adaptive_dd.closed_loop.controllers.SERIAL_CONTROLLERS`, the estimator and detector
+:mod:`adaptive_dd.plant.two_link` and :mod:`adaptive_dd.plant.arm`, the controllers'
+settings in :data:`adaptive_dd.controllers.registry.CONTROLLERS` (both arms), the estimator and detector
 dataclasses); the defaults come from resolving minimal scenarios with
 :func:`~adaptive_dd.benchmark.scenario.load_scenario` (what ``adaptive-dd validate`` prints).
 Only the one-line meanings below are written by hand, and the build stops when a key of the
@@ -81,14 +80,14 @@ MEANING = {
     "setting.label": "The name the controller's results carry.",
     "setting.sigma": "The fixed model's base parameters (seven, two-link arm).",
     "setting.gamma": "Adaptation gains of Slotine-Li.",
-    "setting.max_mass": "Largest payload mass the N-joint Slotine-Li estimate may take [kg].",
-    "setting.com_radius": "Largest distance of the payload's centre of mass from the"
-    " flange [m] (N-joint Slotine-Li).",
+    "setting.max_mass": "Largest payload mass Slotine-Li's box admits [kg] (5 two-link, 20 N-joint).",
+    "setting.com_radius": "The payload's size in Slotine-Li's box [m]: the disk's radius at the tip"
+    " (two-link, 0.1), its centre of mass from the flange (N-joint, 0.3).",
     "setting.boost_bandwidth": "Bandwidth of the feedback boost after a change alarm [rad/s].",
     "setting.boost_duration": "How long the boost lasts after an alarm [s].",
     "setting.estimator": "The online estimator's settings (a table; fields below).",
-    "setting.detector": "Two-link `adaptive_ct`: the change detector's settings (a"
-    " table; fields below), or `false`.",
+    "setting.detector": "`adaptive_ct`: the change detector's settings (a table at the top of"
+    " `[controllers.adaptive_ct]`; fields below), or `false`.",
 }
 
 # Keys that arrive with branches not merged yet (issues 28 and 29): written here so the
@@ -188,12 +187,10 @@ def _check(used: set[str]) -> None:
 
 def page() -> str:
     from adaptive_dd.benchmark import scenario_base
-    from adaptive_dd.closed_loop.controllers import SERIAL_CONTROLLERS
     from adaptive_dd.controllers import registry
-    from adaptive_dd.identification.online import ChangeDetector, OnlineConfig
-    from adaptive_dd.identification.serial_online import SerialDetector, SerialOnlineConfig
-    from adaptive_dd.plant import arm as arm_mod
-    from adaptive_dd.plant import serial_arm
+    from adaptive_dd.identification.online import Detector, OnlineConfig
+    from adaptive_dd.identification.two_link_online import ChangeDetector, TwoLinkOnlineConfig
+    from adaptive_dd.plant import arm_tables
 
     two, urdf = _defaults(TWO_LINK_SCENARIO), _defaults(URDF_SCENARIO)
     used: set[str] = set()
@@ -203,7 +200,7 @@ def page() -> str:
         "```{note}",
         "This page is generated when the documentation is built, from the tables the scenario",
         "checks use (`adaptive_dd/benchmark/scenario_base.py`'s `KEYS`, the `[arm]` and `[plant]`",
-        "key lists of `adaptive_dd/plant/arm.py` and `serial_arm.py`, the controllers' settings), so",
+        "key lists of `adaptive_dd/plant/arm_tables.py`, the controllers' settings), so",
         "it lists exactly what `adaptive-dd validate` accepts. Defaults are what `validate` prints",
         "for a scenario that leaves the key out. Any other key is an error naming file and key.",
         "```",
@@ -260,9 +257,9 @@ def page() -> str:
     )
 
     lines += ["## `[arm]`", "", "Left out: the paper's SICE arm (Table 1). One of three forms:", ""]
-    physical = arm_mod._PHYSICAL_KEYS
-    sigma_form = arm_mod._SIGMA_KEYS
-    optional = arm_mod._ARM_OPTIONAL
+    physical = arm_tables._PHYSICAL_KEYS
+    sigma_form = arm_tables._SIGMA_KEYS
+    optional = arm_tables._ARM_OPTIONAL
     rows = []
     for k in dict.fromkeys(physical + sigma_form + optional):
         used.add(f"arm.{k}")
@@ -283,7 +280,7 @@ def page() -> str:
     ]
     lines += table([(a, b, d) for a, b, _, d in rows], heads=("key", "form", "meaning"))
     rows = []
-    for k in serial_arm.URDF_ARM_KEYS:
+    for k in arm_tables.URDF_ARM_KEYS:
         used.add(f"arm.{k}")
         note = "one of `urdf`, `robot` (required)" if k in ("urdf", "robot") else "optional"
         rows.append((f"`{k}`", note, "", _meaning(f"arm.{k}")))
@@ -298,7 +295,7 @@ def page() -> str:
     ]
     rows = []
     uncertainty = _uncertainty_module()
-    plant_keys = arm_mod._PLANT_KEYS + (uncertainty.PLANT_TRUTH_KEYS if uncertainty else ())
+    plant_keys = arm_tables._PLANT_KEYS + (uncertainty.PLANT_TRUTH_KEYS if uncertainty else ())
     for k in plant_keys:
         used.add(f"plant.{k}")
         rows.append((f"`{k}`", _meaning(f"plant.{k}")))
@@ -328,23 +325,14 @@ def page() -> str:
     rows = []
     common = sorted(registry.COMMON)
     for name, entry in registry.CONTROLLERS.items():
-        two_set = sorted(entry.settings)
-        serial = SERIAL_CONTROLLERS.get(name)
-        serial_set = sorted(serial.SETTINGS) if serial is not None else None
-        used |= {f"setting.{k}" for k in (*common, *two_set, *(serial_set or ()))}
-        rows.append(
-            (
-                f"`{name}`",
-                ", ".join(f"`{k}`" for k in two_set) or "none",
-                "two-link only"
-                if serial_set is None
-                else (", ".join(f"`{k}`" for k in serial_set) or "none"),
-            )
-        )
-    for name, cls in SERIAL_CONTROLLERS.items():
-        if name not in registry.CONTROLLERS:
-            used |= {f"setting.{k}" for k in cls.SETTINGS}
-            rows.append((f"`{name}`", "N-joint only", ", ".join(f"`{k}`" for k in sorted(cls.SETTINGS))))
+        two_set = sorted(entry.settings_on("two_link")) if entry.applies_to("two_link") else None
+        serial_set = sorted(entry.settings_on("chain")) if entry.applies_to("chain") else None
+        used |= {f"setting.{k}" for k in (*common, *(two_set or ()), *(serial_set or ()))}
+
+        def cell(keys, other):
+            return f"{other} only" if keys is None else (", ".join(f"`{k}`" for k in keys) or "none")
+
+        rows.append((f"`{name}`", cell(two_set, "N-joint"), cell(serial_set, "two-link")))
     lines += table(rows, heads=("controller", "two-link arm", "URDF arm"))
     lines += [f"Every controller also takes {', '.join(f'`{k}`' for k in common)}.", ""]
     lines += table(
@@ -356,24 +344,32 @@ def page() -> str:
     )
 
     for title, cls, mod in (
-        ("Two-link `adaptive_ct`: `estimator = {...}`", OnlineConfig, "adaptive_dd.identification.online"),
-        ("Two-link `adaptive_ct`: `detector = {...}`", ChangeDetector, "adaptive_dd.identification.online"),
+        (
+            "Two-link `adaptive_ct`: `estimator = {...}`",
+            TwoLinkOnlineConfig,
+            "adaptive_dd.identification.two_link_online",
+        ),
+        (
+            "Two-link `adaptive_ct`: `detector = {...}`",
+            ChangeDetector,
+            "adaptive_dd.identification.two_link_online",
+        ),
         (
             "URDF arm `adaptive_ct`: `estimator = {...}`",
-            SerialOnlineConfig,
-            "adaptive_dd.identification.serial_online",
+            OnlineConfig,
+            "adaptive_dd.identification.online",
         ),
         (
             "URDF arm `adaptive_ct`: `estimator = { detector = {...} }`",
-            SerialDetector,
-            "adaptive_dd.identification.serial_online",
+            Detector,
+            "adaptive_dd.identification.online",
         ),
     ):
         fields = [
-            (n, "see the next table" if n == "detector" and cls is SerialOnlineConfig else d)
+            (n, "see the next table" if n == "detector" and cls is OnlineConfig else d)
             for n, d in _fields(cls)
         ]
-        if cls is OnlineConfig:
+        if cls is TwoLinkOnlineConfig:
             fields = [f for f in fields if f[0] in registry.ONLINE_KEYS]
         lines += [
             f"### {title}",

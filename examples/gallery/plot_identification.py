@@ -16,22 +16,20 @@ import numpy as np
 
 import adaptive_dd
 from adaptive_dd.benchmark.scenario import load_scenario
-from adaptive_dd.identification.serial_model import serial_model
-from adaptive_dd.identification.serial_records import simulate_serial_record
-from adaptive_dd.identification.serial_regression import serial_filtered_regression, weighted_least_squares
+from adaptive_dd.identification.model import arm_model
+from adaptive_dd.identification.records import simulate_record
+from adaptive_dd.identification.regression import filtered_regression, weighted_least_squares
 
 sc = load_scenario(Path(adaptive_dd.__file__).parent / "scenarios" / "vertical3_payload.toml")
 arm = sc.arm
-rec = simulate_serial_record(arm, sc.reference, 10.0, [np.random.default_rng(1)])
+rec = simulate_record(arm, sc.reference, 10.0, [np.random.default_rng(1)])
 print(f"{rec.t.size} samples, {arm.n_joints} joints, {arm.base.count} base parameters")
 
 # %%
 # The regression filters both sides of the momentum form of the dynamics (no acceleration
 # needed), then weights each joint's equation by its residual variance.
-model = serial_model(arm)
-reg = serial_filtered_regression(
-    model, rec.q[0], rec.qd[0], rec.tau[0], tau_f=0.01, sample_period=rec.sample_period
-)
+model = arm_model(arm)
+reg = filtered_regression(model, rec.q[0], rec.qd[0], rec.tau[0], tau_f=0.01, sample_period=rec.sample_period)
 wls = weighted_least_squares(reg, model.names)
 for name, est, std, true in zip(arm.sigma_names, wls.sigma, wls.std, rec.sigma_true, strict=True):
     print(f"{name:>40}: {est:+.4f} +- {std:.4f} (true {true:+.4f})")

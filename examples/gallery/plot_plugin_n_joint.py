@@ -17,7 +17,7 @@ import numpy as np
 import adaptive_dd
 from adaptive_dd import run_benchmark
 from adaptive_dd.benchmark.scenario import parse_scenario
-from adaptive_dd.closed_loop.controllers import make_serial_controller
+from adaptive_dd.controllers import gains_for, make_controller
 from adaptive_dd.plotting import plot_tracking_errors
 
 
@@ -52,7 +52,9 @@ data["payload"] = [{"at": 2.0, "mass": 1.0, "com": [0.03, 0.0, 0.0]}, {"at": 4.0
 sc = parse_scenario(data, str(path), name="vertical3_short")
 arm = sc.arm
 
-controllers = {n: make_serial_controller(n, arm, sc.bandwidth, sc.damping) for n in sc.controllers}
+controllers = {
+    n: make_controller(n, gains_for(arm, sc.bandwidth, sc.damping), arm=arm) for n in sc.controllers
+}
 controllers["gravity_pd"] = GravityPD(arm, sc.bandwidth)
 res = run_benchmark(sc, progress=False, controllers=controllers)
 summary = res.summary()

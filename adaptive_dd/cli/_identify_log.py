@@ -1,0 +1,337 @@
+"""``identify --arm``: identification of any arm from a log (the paper's two-link arm has its own
+path, :mod:`adaptive_dd.cli._identify_two_link`).
+
+The record is read through the scenario's ``[record]`` table (:mod:`adaptive_dd.record`;
+without one, the simulator's ``t, q1.., qd1.., tau1..`` columns), identified by weighted least
+squares on the exact filtered regression (:mod:`adaptive_dd.identification.log_fit`), then,
+where it can simulate the record, refined by output error; the model goes to ``OUT/model.json``
+(:mod:`adaptive_dd.identification.identified_model`).
+"""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+import numpy as np
+from numpy.typing import NDArray
+
+from adaptive_dd.cli._common import NAME_WIDTH, read_arm_log, short
+from adaptive_dd.errors import DataError, ParameterError, SignalError
+
+Array = NDArray[np.float64]
+
+
+def _print_fit(model, fit, names: tuple[str, ...]) -> None:
+    used = [names[j] for j in np.flatnonzero(fit.used)]
+    print(
+        f"weighted least squares on the exact filtered regression (tau_f = {fit.tau_f:.3g} s), "
+        f"torque channels {', '.join(used)}; {int(fit.identified.sum())} of {model.p} base parameters "
+        "identified, "
+        f"{int((~fit.identified).sum())} held at the URDF's values (the fitted channels do not see them)"
+    )
+    print(
+        "std: Newey-West sandwich on the residual (model error included, correlated over "
+        f"{fit.lag} samples = {fit.lag * fit.sample_period:.3g} s)"
+    )
+    print(f"{'base parameter':<{NAME_WIDTH}} {'estimate':>11} {'std':>9} {'std/|est| %':>11} {'URDF':>11}")
+    for k, name in enumerate(model.names):
+        if fit.identified[k]:
+            rel = 100 * fit.std[k] / max(abs(fit.sigma[k]), 1e-300)
+            print(
+                f"{short(name):<{NAME_WIDTH}} {fit.sigma[k]:11.5g} {fit.std[k]:9.2g} {rel:11.3g} "
+                f"{model.sigma_ref[k]:11.5g}"
+            )
+    fixed = [model.names[k] for k in np.flatnonzero(~fit.identified)]
+    if fixed:
+        print(f"held at the URDF's values: {', '.join(short(f) for f in fixed)}")
+    print(
+        "per channel [N m rms], filtered: residual "
+        + ", ".join(f"{names[j]} {fit.residual_rms[j]:.3g}" for j in np.flatnonzero(fit.used))
+    )
+    for j, ratio in fit.model_error_channels():
+        print(
+            f"warning: {names[j]}: the residual is {ratio:.0f}x the sensor noise ({fit.noise_rms[j]:.2g} N m "
+            "after the filter): the model explains this channel far worse than the sensor allows (friction "
+            "law, unmodelled dynamics, conversion constants); the std above account for it"
+        )
+
+
+def _print_payload(label: str, pr) -> None:
+    c = pr.consistent
+    print(
+        f"{label}: mass {pr.mass:.5g} +- {pr.mass_std:.2g} kg; centre of mass "
+        f"[{', '.join(f'{x * 1e3:.2f}' for x in pr.com)}] +- "
+        f"[{', '.join(f'{x * 1e3:.2g}' for x in pr.com_std)}]"
+        " mm in the payload frame"
+    )
+    ic = pr.inertia_com
+    print(
+        f"  inertia about the centre of mass [kg m^2]: Ixx {ic[0, 0]:.4g}, Iyy {ic[1, 1]:.4g}, Izz "
+        f"{ic[2, 2]:.4g}, "
+        f"Ixy {ic[0, 1]:.3g}, Ixz {ic[0, 2]:.3g}, Iyz {ic[1, 2]:.3g}"
+    )
+    if c.was_physical:
+        print(f"  physically consistent as estimated (pseudo-inertia min eigenvalue {c.min_eigenvalue:.3g})")
+    else:
+        print(
+            "  the unconstrained estimate is not a rigid body (pseudo-inertia eigenvalue "
+            f"{c.min_eigenvalue:.3g}); "
+            f"constrained fit {c.distance:.2f} std away: values above are the constrained ones"
+        )
+
+
+def _information(model, fit) -> Array:
+    """Information for the consistent fit: the estimate's, and those held at the URDF pinned to 0.1 %."""
+    F = np.zeros((model.p, model.p))
+    K = fit.identified
+    F[np.ix_(K, K)] = np.linalg.pinv(fit.cov[np.ix_(K, K)], rcond=1e-12, hermitian=True)
+    pin = 1e-3 * np.maximum(np.abs(model.sigma_ref), 1e-6)
+    F[~K, ~K] = 1.0 / pin[~K] ** 2
+    return F
+
+
+def _output_error(args, arm, model, rec, fit) -> None:
+    """Output error from the WLS estimate where the record can be simulated, else a message."""
+    from adaptive_dd.identification.output_error import fit_output_error, measurement_std
+
+    mode = args.output_error
+    if mode == "off" or (mode == "auto" and not rec.simulator_format):
+        print(
+            "output error: skipped (a real log: the open-loop simulation of a position-controlled arm "
+            "drifts; --output-error on to try it)"
+            if mode == "auto"
+            else "output error: skipped (--output-error off)"
+        )
+        return
+    if not rec.used.all():
+        print("output error: skipped (it simulates every joint; the record leaves torque channels out)")
+        return
+    std = measurement_std(arm).copy()
+    if not rec.qd_measured:
+        std[arm.n_joints :] = np.inf
+    try:
+        oe = fit_output_error(
+            model,
+            rec.q,
+            rec.qd,
+            rec.tau,
+            fit.sigma,
+            std,
+            sample_period=rec.sample_period,
+            segment_length=args.segment_length,
+            max_iter=args.max_iter,
+        )
+    except (SignalError, ParameterError, np.linalg.LinAlgError) as exc:
+        print(f"output error: skipped, the record cannot be simulated from the WLS estimate ({exc})")
+        return
+    print(
+        f"output error: {oe.iterations} iterations, {'converged' if oe.converged else 'NOT converged'}, "
+        f"normalised residual {2 * oe.cost / oe.n_residuals:.3f} (1 = the noise model)"
+    )
+    print(
+        f"{'base parameter':<{NAME_WIDTH}} {'WLS':>11} {'output err':>11} {'CRB std':>9} {'|WLS-OE|/CRB':>12}"
+    )
+    for k, name in enumerate(model.names):
+        print(
+            f"{short(name):<{NAME_WIDTH}} {fit.sigma[k]:11.5g} {oe.sigma[k]:11.5g} {oe.std[k]:9.2g} "
+            f"{abs(fit.sigma[k] - oe.sigma[k]) / oe.std[k]:12.1f}"
+        )
+    print(
+        "CRB: Cramér-Rao std at the estimate for this record, q and qd measured with the arm's sensor "
+        f"noise, torque known, segments of {oe.segment_length} samples with unknown initial states"
+    )
+
+
+def _consistent(model, fit):
+    from adaptive_dd.identification.consistency import consistent_arm_fit
+
+    try:
+        cf = consistent_arm_fit(model, fit.sigma, _information(model, fit))
+    except (ValueError, np.linalg.LinAlgError) as exc:
+        print(f"no physically consistent fit: {exc}")
+        return None
+    print(
+        "nearest physically consistent arm (every link's pseudo-inertia positive definite, friction and "
+        f"armature >= 0): {cf.distance:.2f} std from the estimate"
+    )
+    return cf
+
+
+def identify_log(args: argparse.Namespace, arm, outputs) -> int:
+    """``adaptive-dd identify --arm SCENARIO [FILES]`` for an arm from a URDF."""
+    from adaptive_dd.identification.log_fit import filter_time_constant, identifiable_subset
+    from adaptive_dd.identification.model import arm_model
+    from adaptive_dd.identification_plots import plot_torque_fit
+
+    for note in arm.urdf_notes:
+        print(f"note: {note}")
+    spec, rec = read_arm_log(args.arm, arm, args.data, args.window)
+    model = arm_model(arm)
+    names = arm.joint_names
+    tau_f = args.tau_f or filter_time_constant(rec.sample_period)
+    print(
+        f"{rec.source}: {rec.t.size} samples at T = {rec.sample_period:.6g} s "
+        f"({rec.t[0]:.4g}-{rec.t[-1]:.4g} s), {arm.n_joints} joints, {model.p} base parameters; velocities "
+        f"{'measured' if rec.qd_measured else 'derived from the positions'}"
+    )
+    for note in rec.notes:
+        print(f"  {note}")
+    if args.payload_only:
+        return _payload_only(args, arm, model, rec, tau_f)
+    lim = arm.position_limits
+    K = identifiable_subset(model, rec.used, lim[:, 0], lim[:, 1], np.random.default_rng(0))
+    fit = _fit_record(model, rec, K, tau_f, spec.torque_held)
+    _print_fit(model, fit, names)
+    _output_error(args, arm, model, rec, fit)
+    cf = _consistent(model, fit)
+    reg = fit.regression
+    pred = reg.phi @ fit.sigma
+    u = fit.used
+    plot_torque_fit(
+        rec.t[reg.start :],
+        reg.y[:, u],
+        pred[:, u],
+        outputs.path("torque_fit.png"),
+        f"{Path(rec.source.split(',')[0]).name}: the filtered fit, the fitted channels",
+        labels=[names[j] for j in np.flatnonzero(u)],
+    )
+    _write_estimates(outputs.path("estimates.csv"), model, fit)
+    written = [outputs.path("estimates.csv"), outputs.path("torque_fit.png")]
+    written += _write_model(outputs, arm, model, rec, fit, cf, spec)
+    if args.baseline:
+        _payload_pair(args, arm, model, fit, tau_f, K)
+    print("wrote " + ", ".join(str(Path(args.out) / Path(p).name) for p in written))
+    return 0
+
+
+def _write_estimates(path, model, fit) -> None:
+    from adaptive_dd.outputs import atomic_write
+
+    with atomic_write(path) as fh:
+        fh.write("name,estimate,std,identified,urdf\n")
+        for k, name in enumerate(model.names):
+            fh.write(
+                f'"{name}",{fit.sigma[k]:.10g},{fit.std[k]:.4g},{int(fit.identified[k])},{model.sigma_ref[k]:.10g}\n'
+            )
+
+
+def _write_model(outputs, arm, model, rec, fit, cf, spec) -> list:
+    from adaptive_dd.identification.identified_model import IdentifiedModel, save_identified_model
+    from adaptive_dd.plant.urdf_write import write_fitted_urdf
+
+    n = arm.n_joints
+    if cf is not None:
+        fr = cf.pi[10 * n :]
+    else:  # friction from the estimate where identified alone, else the URDF's
+        fr = model.pi_ref[10 * n :].copy()
+        for k, name in enumerate(model.names):
+            if name.startswith(("fv", "fc")) and fit.identified[k] and "+" not in name:
+                j = int(name[2:]) - 1
+                fr[j if name.startswith("fv") else n + j] = max(fit.sigma[k], 0.0)
+    fitted = None
+    if cf is not None:
+        fitted = write_fitted_urdf(arm, cf.pi, outputs.path("model.urdf"))
+    m = IdentifiedModel(
+        urdf=str(Path(arm.urdf).resolve()),
+        payload_frame=arm.payload_frame,
+        gravity=arm.gravity.tolist(),
+        repair_inertia=arm.repair_inertia,
+        joint_names=list(arm.joint_names),
+        friction_velocity=float(arm.friction_velocity),
+        names=list(model.names),
+        sigma=fit.sigma.tolist(),
+        sigma_urdf=model.sigma_ref.tolist(),
+        std=fit.std.tolist(),
+        identified=fit.identified.tolist(),
+        covariance=fit.cov.tolist(),
+        used=fit.used.tolist(),
+        residual_rms=fit.residual_rms.tolist(),
+        noise_rms=fit.noise_rms.tolist(),
+        viscous=fr[:n].tolist(),
+        coulomb=fr[n : 2 * n].tolist(),
+        armature=fr[2 * n :].tolist(),
+        consistent_sigma=None if cf is None else cf.sigma.tolist(),
+        consistent_distance=None if cf is None else float(cf.distance),
+        fitted_urdf=None if fitted is None else fitted.name,
+        record={
+            "source": rec.source,
+            "window": [float(rec.t[0]), float(rec.t[-1])],
+            "sample_period": rec.sample_period,
+            "tau_f": fit.tau_f,
+            "newey_west_lag": fit.lag,
+            "velocity": "measured" if rec.qd_measured else "derived",
+            "scenario": str(spec.source),
+        },
+    )
+    out = [save_identified_model(outputs.path("model.json"), m)]
+    return out + ([fitted] if fitted is not None else [])
+
+
+def _payload_only(args, arm, model, rec, tau_f) -> int:
+    from adaptive_dd.identification.output_error import measurement_std
+    from adaptive_dd.identification.payload_pair import payload_from_record
+
+    if not rec.used.all():
+        raise DataError(
+            f"{rec.source}: --payload-only fits by output error, which simulates every joint; the record "
+            "leaves torque channels out: identify a loaded and an unloaded record instead (--baseline)"
+        )
+    try:
+        pr = payload_from_record(
+            arm,
+            model,
+            rec.q,
+            rec.qd,
+            rec.tau,
+            measurement_std(arm),
+            sample_period=rec.sample_period,
+            segment_length=args.segment_length,
+            max_iter=args.max_iter,
+        )
+    except (SignalError, np.linalg.LinAlgError) as exc:
+        raise DataError(
+            f"{rec.source}: --payload-only cannot simulate this record open loop ({exc}); identify a loaded "
+            "and an unloaded record instead (--baseline)"
+        ) from None
+    print(
+        f"{rec.source}: the arm known (its URDF), the payload's 10 parameters fitted (tau_f unused: {tau_f})"
+    )
+    _print_payload("payload (one record, arm known)", pr)
+    return 0
+
+
+def _fit_record(model, rec, K, tau_f: float, torque_held: bool):
+    """:func:`~adaptive_dd.identification.log_fit.fit_log` on a read record; its errors name the record."""
+    from adaptive_dd.identification.log_fit import fit_log
+
+    try:
+        return fit_log(
+            model,
+            rec.q,
+            rec.qd,
+            rec.tau,
+            rec.used,
+            K,
+            tau_f=tau_f,
+            sample_period=rec.sample_period,
+            channel_weight=rec.weight,
+            torque_held=torque_held,
+        )
+    except DataError as exc:
+        raise DataError(f"{rec.source}: {exc}") from None
+    except np.linalg.LinAlgError as exc:  # not met so far: the record's checks come first
+        raise DataError(
+            f"{rec.source}: the weighted least squares failed numerically ({exc}); check the record's "
+            "conversions (a huge or constant column) and its window"
+        ) from None
+
+
+def _payload_pair(args, arm, model, fit, tau_f, K) -> None:
+    from adaptive_dd.identification.payload_pair import payload_from_pair
+
+    spec, base = read_arm_log(args.arm, arm, args.baseline, args.window)
+    other = _fit_record(model, base, K, tau_f, spec.torque_held)
+    pr = payload_from_pair(arm, fit.sigma, fit.cov, other.sigma, other.cov)
+    loaded = ", ".join(args.data) if args.data else "the scenario's record"
+    _print_payload(f"payload (loaded {loaded} - unloaded {', '.join(args.baseline)})", pr)

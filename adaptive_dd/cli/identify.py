@@ -1,0 +1,168 @@
+"""``adaptive-dd identify``: the arm's parameters from a record.
+
+The paper's arm (no ``--arm``, or a scenario whose arm is the paper's kind) is identified from
+one CSV by the paper's estimators on its seven base parameters (eq. 9), with the Cramér-Rao
+bound beside (:mod:`adaptive_dd.cli._identify_two_link`); any other arm from its log, read as
+the scenario's ``[record]`` says, by weighted least squares and output error
+(:mod:`adaptive_dd.cli._identify_log`). The options of one path are refused on the other.
+"""
+
+from __future__ import annotations
+
+import argparse
+
+from adaptive_dd.cli._common import (
+    POS,
+    add_command,
+    add_window_option,
+    is_two_link,
+    load_arm,
+    number,
+    refuse,
+)
+
+__all__ = ["add_parser", "run"]
+
+
+def add_parser(sub) -> None:
+    """The options of ``identify``."""
+    i = add_command(sub, "identify", help="estimate sigma from a recorded experiment (CSV)")
+    i.add_argument(
+        "data",
+        nargs="*",
+        help="CSV with header t,q1,q2,qd1,qd2,tau1,tau2 (qd optional for M1); with --arm: the log's file(s), "
+        "read as the scenario's [record] says (default: its record.files; see docs/real_log.md)",
+    )
+    _add_two_link_options(i)
+    i.add_argument(
+        "--arm",
+        metavar="SCENARIO",
+        help="a scenario TOML with [arm] from a URDF and, for a real log, [record] (default: CSV t, q1..qN, "
+        "[qd1..qdN,] tau1..tauN); prints weighted least squares with Newey-West std, output error where "
+        "the record can be simulated; writes OUT/model.json (docs/real_log.md)",
+    )
+    _add_arm_options(i)
+    i.add_argument("--out", default="results/identify", help="folder (with --arm: model.json, estimates.csv)")
+    i.set_defaults(func=run)
+
+
+def _add_two_link_options(i: argparse.ArgumentParser) -> None:
+    from adaptive_dd.experiments import TABLE2
+    from adaptive_dd.identification.estimators import ESTIMATORS
+
+    i.add_argument(
+        "--estimator",
+        default="exact",
+        choices=(*ESTIMATORS, "output_error"),
+        help="output_error: maximum likelihood started from 'exact' (needs qd)",
+    )
+    i.add_argument("--method", default="M2", choices=("M1", "M2"))
+    i.add_argument("--split", default="15", choices=("15", "16", "full"), help="split of 'paper'")
+    i.add_argument(
+        "--tau-f",
+        type=POS,
+        default=None,
+        help="filter time constant [s] (default: 2 sample periods, at least 0.02)",
+    )
+    i.add_argument(
+        "--true", type=number(float, -1e6, 1e6), nargs=7, metavar="S", help="true sigma, to mark on the plot"
+    )
+    for option, what, default, table in (
+        ("--position-variance", "q1, q2 [rad^2]", "position_variance", "Table 2"),
+        ("--velocity-variance", "qd1, qd2 [(rad/s)^2]", "velocity_variance", "Table 4"),
+    ):
+        i.add_argument(
+            option,
+            type=number(float, 0.0, 1.0),
+            nargs=2,
+            default=list(TABLE2[default]),
+            metavar="V",
+            help=f"noise variance of {what} for the bound (default: {table})",
+        )
+    i.add_argument(
+        "--online",
+        action="store_true",
+        help="run the online estimator of adaptive_ct (change detection included) over the record; "
+        "writes online.csv (estimates, payload mass and alarms over time) and online.png",
+    )
+
+
+def _add_arm_options(i: argparse.ArgumentParser) -> None:
+    i.add_argument(
+        "--baseline",
+        nargs="+",
+        metavar="CSV",
+        help="with --arm: the unloaded record's file(s), read through the same [record]; prints the payload",
+    )
+    i.add_argument(
+        "--payload-only", action="store_true", help="with --arm: the arm known (URDF), fit the payload alone"
+    )
+    i.add_argument(
+        "--segment-length",
+        type=number(int, 10, 10**6),
+        default=200,
+        help="with --arm: output-error segment length [samples] (default 200)",
+    )
+    i.add_argument(
+        "--max-iter", type=number(int, 1, 1000), default=30, help="with --arm: output-error iterations"
+    )
+    add_window_option(i)
+    i.add_argument(
+        "--repair-inertia",
+        action="store_true",
+        help="with --arm: repair chain links whose URDF inertia is not a rigid body's (reported)",
+    )
+    i.add_argument(
+        "--output-error",
+        choices=("auto", "on", "off"),
+        default="auto",
+        help="with --arm: refine by output error (auto: for records in the simulator's format only)",
+    )
+
+
+TWO_LINK_OPTIONS = (
+    "--estimator",
+    "--method",
+    "--split",
+    "--true",
+    "--online",
+    "--position-variance",
+    "--velocity-variance",
+)
+"""Options of the paper's identification (:mod:`adaptive_dd.cli._identify_two_link`), refused on
+any other arm."""
+ARM_OPTIONS = (
+    "--baseline",
+    "--payload-only",
+    "--window",
+    "--repair-inertia",
+    "--output-error",
+    "--segment-length",
+    "--max-iter",
+)
+"""Options of the identification of any arm from a log (:mod:`adaptive_dd.cli._identify_log`),
+refused on the paper's arm."""
+
+
+def run(args: argparse.Namespace) -> int:
+    """Refuse the other path's options, then identify on the arm's path."""
+    from adaptive_dd.errors import DataError
+
+    arm = load_arm(args.arm, args.repair_inertia)
+    if is_two_link(arm):
+        from adaptive_dd.cli._identify_two_link import identify_two_link
+
+        refuse(args, ARM_OPTIONS, "only with --arm SCENARIO of an N-joint arm from a URDF", DataError)
+        return identify_two_link(args, arm)
+    from adaptive_dd.cli._identify_log import identify_log
+    from adaptive_dd.outputs import OutputSet
+
+    refuse(
+        args,
+        TWO_LINK_OPTIONS,
+        "options of the two-link identification; an N-joint arm from a URDF (--arm) is identified by "
+        "weighted least squares (docs/real_log.md)",
+        DataError,
+    )
+    with OutputSet(args.out) as outputs:
+        return identify_log(args, arm, outputs)

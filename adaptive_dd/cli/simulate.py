@@ -1,0 +1,285 @@
+"""``adaptive-dd simulate``: a record of the arm to identify from, its truth known.
+
+Two experiments (``--experiment``), each with one meaning on every arm it applies to:
+
+- ``table2``: the paper's open-loop Table 2 experiment (1 Hz sine torques of the SICE arm's
+  amplitudes, the payload a disk centred on the tip) on the closed forms' compiled plant. The
+  paper's two-link arm only: open-loop torques of those amplitudes mean nothing on another arm
+  (under gravity it falls), so it is refused there.
+- ``reference``: the scenario's ``[reference]`` (without ``--arm``: the shipped ``payload_swap``
+  scenario's) tracked by computed torque, on the arm's general model (a URDF arm of the paper's
+  kind included; the SICE arm is :meth:`~adaptive_dd.plant.arm.Arm.sice`); any arm from a URDF.
+
+The default is the paper's experiment on the paper's arm and the reference on any other.
+``--duration``, ``--sample-period``, ``--substeps``, ``--seeds``, ``--seed``, ``--payload``,
+``--radius``, ``--no-noise``, ``--no-quantize``, ``--no-saturate`` and ``--out`` mean the same in
+both; ``--com`` and ``--plant`` are options of the reference experiment, refused with ``table2``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+from pathlib import Path
+
+import numpy as np
+
+from adaptive_dd.cli._common import (
+    MASS,
+    PERIOD,
+    RADIUS,
+    SEED,
+    SEEDS,
+    SUBSTEPS,
+    add_command,
+    arm_label,
+    is_two_link,
+    load_arm,
+    number,
+    refuse,
+)
+from adaptive_dd.errors import ParameterError
+
+__all__ = ["EXPERIMENTS", "add_parser", "run", "simulate_arm"]
+
+EXPERIMENTS = ("table2", "reference")
+
+
+def add_parser(sub) -> None:
+    """The options of ``simulate``."""
+    s = add_command(
+        sub,
+        "simulate",
+        help="simulate an identification record: the paper's open-loop Table 2 experiment or the "
+        "scenario's reference tracked",
+    )
+    s.add_argument(
+        "--duration", type=number(float, 0.0, math.inf, lo_open=True), default=10.0, help="[s] (default 10)"
+    )
+    s.add_argument("--sample-period", type=PERIOD, default=1e-3, help="T [s] (default 0.001)")
+    s.add_argument("--substeps", type=SUBSTEPS, default=2, help="RK4 steps per sample")
+    s.add_argument("--seeds", type=SEEDS, default=1, help="number of trials (noise seeds)")
+    s.add_argument("--seed", type=SEED, default=0, help="base seed")
+    s.add_argument("--payload", type=MASS, default=0.0, metavar="KG")
+    s.add_argument("--radius", type=RADIUS, help="tip disk radius [m] (default: the arm's)")
+    s.add_argument(
+        "--com",
+        type=number(float, -1.0, 1.0),
+        nargs=3,
+        metavar="M",
+        help="payload centre of mass in the payload frame [m] (--experiment reference; default 0 0 0)",
+    )
+    s.add_argument(
+        "--arm",
+        metavar="SCENARIO",
+        help="simulate the [arm] and [plant] of a scenario TOML (default: the SICE arm)",
+    )
+    s.add_argument(
+        "--experiment",
+        choices=EXPERIMENTS,
+        help="table2: the paper's open-loop Table 2 experiment (the paper's two-link arm only); "
+        "reference: the scenario's [reference] tracked by computed torque, writes t, q1..qN, qd1..qdN, "
+        "tau1..tauN (any arm from a URDF); default: table2 on the paper's arm, reference on any other",
+    )
+    s.add_argument("--no-noise", action="store_true", help="noise-free sensors")
+    s.add_argument("--no-quantize", action="store_true", help="no encoder or D/A quantization")
+    s.add_argument("--no-saturate", action="store_true", help="no torque saturation")
+    s.add_argument(
+        "--plant",
+        default="model",
+        choices=("model", "serial"),
+        help="--experiment reference: the identification model's RK4 with tanh friction (default) or the "
+        "benchmark's compiled plant with the arm's friction law (stick-slip)",
+    )
+    s.add_argument("--out", default="results/simulate", help="output folder")
+    s.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    """Check the run's size, then the paper's experiment or the N-joint record."""
+    from adaptive_dd.benchmark.scenario import LIMITS, run_estimate
+    from adaptive_dd.outputs import OutputSet
+
+    if args.duration < 10 * args.sample_period:
+        raise ParameterError(
+            f"--duration {args.duration} s is shorter than 10 samples of {args.sample_period} s"
+        )
+    n = round(args.duration / args.sample_period)
+    est = run_estimate(n, args.seeds, 1)
+    if est.bytes > LIMITS["max_bytes"] or est.seconds > LIMITS["max_seconds"]:
+        raise ParameterError(f"run too large: {est}; reduce --duration or --seeds")
+    if est.large:
+        print(f"estimate: {est}", file=sys.stderr)
+    arm = load_arm(args.arm)
+    experiment = args.experiment or ("table2" if is_two_link(arm) else "reference")
+    if experiment == "reference":
+        with OutputSet(args.out) as outputs:
+            return simulate_arm(args, args.arm, outputs)
+    if not is_two_link(arm):
+        raise ParameterError(
+            f"--experiment table2: the paper's open-loop experiment (sine torques of the SICE arm's "
+            f"amplitudes) is for the paper's two-link arm; the {arm_label(args.arm, arm)} tracks its "
+            "scenario's [reference] (--experiment reference)"
+        )
+    refuse(
+        args,
+        ("--com", "--plant"),
+        "options of --experiment reference (an arm from a URDF tracking its scenario's [reference]); "
+        f"the {arm_label(args.arm, arm)} runs the paper's Table 2 experiment on its own plant (the "
+        "payload a disk centred on the tip)",
+    )
+    with OutputSet(args.out) as outputs:
+        return _table2(args, arm, n, outputs)
+
+
+def _table2(args: argparse.Namespace, arm, n: int, outputs) -> int:
+    """The paper's open-loop Table 2 experiment on a two-link arm."""
+    import dataclasses
+
+    from adaptive_dd.experiments import TABLE2, table2_torque, trial_rngs
+    from adaptive_dd.io import write_recording
+    from adaptive_dd.plant.simulator import PayloadSchedule, simulate_open_loop
+    from adaptive_dd.plotting import plot_trajectory
+
+    tau = table2_torque(args.seeds, n, args.sample_period)
+    sensor = dataclasses.replace(
+        arm.sensor,
+        quantize=not args.no_quantize,
+        position_variance=(0.0, 0.0) if args.no_noise else TABLE2["position_variance"],
+        velocity_variance=(0.0, 0.0) if args.no_noise else TABLE2["velocity_variance"],
+    )
+    actuator = dataclasses.replace(arm.actuator, saturate=not args.no_saturate, quantize=not args.no_quantize)
+    res = simulate_open_loop(
+        tau,
+        trial_rngs(args.seed, args.seeds),
+        arm=arm,
+        sample_period=args.sample_period,
+        substeps=args.substeps,
+        payload=PayloadSchedule(initial_mass=args.payload, radius=args.radius),
+        sensor=sensor,
+        actuator=actuator,
+    )
+    res.save(str(outputs.path("trajectory.npz")))
+    write_recording(outputs.path("trajectory.csv"), res.t, res.q_meas[0], res.qd_meas[0], res.tau[0])
+    plot_trajectory(res, outputs.path("trajectory.png"))
+    _print_table2(args, arm, res, TABLE2)
+    return 0
+
+
+def _print_table2(args: argparse.Namespace, arm, res, table2: dict) -> None:
+    print(
+        f"Table 2 experiment: 1 Hz sine torques {table2['amplitude']} N m, {args.duration} s at "
+        f"T = {args.sample_period} s, payload {args.payload} kg, {args.seeds} trial(s)"
+    )
+    print(f"  arm: {args.arm or 'SICE'} (l1 = {arm.l1} m, l2 = {arm.l2} m), plant friction {arm.friction}")
+    print(f"  max |q|   [rad]    : {np.abs(res.q).max(axis=(0, 1)).round(4)}")
+    print(f"  max |qd|  [rad/s]  : {np.abs(res.qd).max(axis=(0, 1)).round(4)}")
+    print(f"  rms tau   [N m]    : {np.sqrt((res.tau**2).mean(axis=(0, 1))).round(4)}")
+    print(f"  stuck fraction     : {(res.qd == 0).mean(axis=(0, 1)).round(4)}")
+    print(f"  saturated fraction : {res.saturated.mean(axis=(0, 1)).round(4)}")
+    print(f"  failed trials      : {int(res.failed.sum())}")
+    out = Path(args.out)
+    print(
+        f"wrote {out / 'trajectory.npz'} (all trials), {out / 'trajectory.csv'} (trial 0, "
+        f"measured), {out / 'trajectory.png'}"
+    )
+
+
+def simulate_arm(args: argparse.Namespace, scenario_path: str, outputs) -> int:
+    """``adaptive-dd simulate --arm SCENARIO`` for an N-joint arm: identification records, truth known."""
+    from adaptive_dd.benchmark.scenario import load_scenario
+    from adaptive_dd.experiments import trial_rngs
+    from adaptive_dd.identification.records import simulate_record, write_serial_recording
+    from adaptive_dd.plant.arm import payload_parameters
+
+    sc = load_scenario(scenario_path)
+    arm = _record_arm(args, sc, scenario_path, outputs)
+    where = (
+        f"{arm.n_joints}-joint arm of {scenario_path}"
+        if scenario_path
+        else "the SICE arm (2 joints; the reference of the shipped payload_swap.toml)"
+    )
+    radius = arm.payload_radius if args.radius is None else args.radius
+    payload = (
+        payload_parameters(args.payload, args.com or [0.0, 0.0, 0.0], radius=radius) if args.payload else None
+    )
+    rec = simulate_record(
+        arm,
+        sc.reference,
+        args.duration,
+        trial_rngs(args.seed, args.seeds),
+        sample_period=args.sample_period,
+        payload=payload,
+        substeps=args.substeps,
+        noise=not args.no_noise,
+        quantize=not args.no_quantize,
+        plant=getattr(args, "plant", "model"),
+    )
+    write_serial_recording(outputs.path("trajectory.csv"), rec.t, rec.q[0], rec.qd[0], rec.tau[0])
+    np.savez_compressed(
+        outputs.path("trajectory.npz"),
+        t=rec.t,
+        q=rec.q,
+        qd=rec.qd,
+        tau=rec.tau,
+        q_true=rec.q_true,
+        qd_true=rec.qd_true,
+        sigma_true=rec.sigma_true,
+        pi_true=rec.pi_true,
+        payload=rec.payload,
+    )
+    _print_record(args, arm, sc, rec, where)
+    return 0
+
+
+def _record_arm(args: argparse.Namespace, sc, scenario_path: str, outputs):
+    """The arm simulated: the general model of the scenario's arm, its ``[plant]`` where it has one
+    (written to OUT/plant.urdf), with the sensor's quantization and the actuator's saturation as the
+    options say."""
+    import dataclasses
+
+    arm = sc.arm
+    if is_two_link(arm):  # the paper's kind: its general model (the closed forms track no reference)
+        arm = load_arm(scenario_path, general="--experiment reference")
+    if sc.plant is not None:  # the scenario's robot is not its [arm]: simulate the robot
+        from adaptive_dd.plant.urdf_write import write_urdf_links
+
+        p = sc.plant
+        path = write_urdf_links(arm, p.pi_links, outputs.path("plant.urdf"), f"the plant of {scenario_path}")
+        arm = arm.with_(urdf=path, viscous=p.viscous, coulomb=p.coulomb, armature=p.armature)
+        print(
+            f"the plant: the scenario's [plant] before any draw, written to {Path(args.out) / 'plant.urdf'}"
+            + (" ([plant.uncertainty] draws a plant per benchmark seed; not here)" if p.uncertainty else "")
+        )
+    if arm.sensor.quantize == args.no_quantize:
+        arm = arm.with_(sensor=dataclasses.replace(arm.sensor, quantize=not args.no_quantize))
+    if arm.actuator.saturate == args.no_saturate:
+        arm = arm.with_(actuator=dataclasses.replace(arm.actuator, saturate=not args.no_saturate))
+    return arm
+
+
+def _print_record(args: argparse.Namespace, arm, sc, rec, where: str) -> None:
+    plant = getattr(args, "plant", "model")
+    print(
+        f"{where}: the scenario's reference tracked by computed torque "
+        f"(the plant's own model, 40 rad/s), {args.duration} s at T = {args.sample_period} s, payload "
+        f"{args.payload} kg, {args.seeds} trial(s), "
+        + (
+            f"the benchmark's plant, friction {arm.friction}"
+            if plant == "serial"
+            else f"the identification model (RK4, friction tanh, v_f = {arm.friction_velocity} rad/s)"
+        )
+    )
+    print(
+        "  max |q - q_ref| [rad] : "
+        f"{np.abs(rec.q_true - sc.reference.sample(rec.t)[0]).max(axis=(0, 1)).round(4)}"
+    )
+    print(f"  max |qd|  [rad/s]     : {np.abs(rec.qd_true).max(axis=(0, 1)).round(3)}")
+    print(f"  rms tau   [N m]       : {np.sqrt((rec.tau**2).mean(axis=(0, 1))).round(3)}")
+    print(f"  saturated fraction    : {rec.saturated.max(axis=0).round(4)}")
+    out = Path(args.out)
+    print(
+        f"wrote {out / 'trajectory.csv'} (trial 0, measured), {out / 'trajectory.npz'} (all trials and "
+        "the truth)"
+    )

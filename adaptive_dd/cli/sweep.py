@@ -1,0 +1,95 @@
+"""``adaptive-dd sweep SWEEP.toml``: a grid over scenario fields x controllers x seeds, on Dask.
+
+Any arm the sweep's scenario names. Exits 1 when every row failed (no heat map drawn), and
+says why the failed rows failed.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+from adaptive_dd.cli._common import SEEDS, add_command, number, refuse
+
+__all__ = ["add_parser", "run"]
+
+
+def add_parser(sub) -> None:
+    """The options of ``sweep``."""
+    w = add_command(sub, "sweep", help="grid over scenario fields x controllers x seeds, on Dask")
+    w.add_argument("sweep", help="sweep TOML (see docs/sweeps.md)")
+    w.add_argument("--out", default="results/sweep", help="folder for cells, table and heatmaps")
+    w.add_argument("--scheduler", metavar="ADDRESS", help="a running Dask scheduler (default: local cluster)")
+    w.add_argument(
+        "--workers",
+        type=number(int, 1, 1024),
+        help="local cluster worker processes (default: all cores; refused with --scheduler)",
+    )
+    w.add_argument("--block", type=SEEDS, metavar="SEEDS", help="seeds per task (overrides sweep.block)")
+    w.add_argument("--no-progress", action="store_true")
+    w.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    """Run the sweep (cells already computed are reused); report failures and the heat map's table."""
+    import dataclasses
+
+    from adaptive_dd.sweep import run_sweep
+    from adaptive_dd.sweep_spec import load_sweep
+
+    if args.scheduler:
+        refuse(
+            args,
+            ("--workers",),
+            "sizes the local cluster; with --scheduler the running scheduler's own workers run the tasks",
+        )
+    sweep = load_sweep(args.sweep)
+    if args.block is not None:
+        sweep = dataclasses.replace(sweep, block=min(args.block, sweep.seeds))
+    res = run_sweep(
+        sweep, args.out, scheduler=args.scheduler, workers=args.workers, progress=not args.no_progress
+    )
+    print(
+        f"{len(res.table)} rows ({res.failed_rows} failed), {res.ran} tasks run, {res.reused} reused; "
+        f"wrote {res.table_path}" + "".join(f", {p}" for p in res.heatmaps)
+    )
+    if res.failed_rows:
+        _print_failures(res)
+    if res.failed_rows == len(res.table):
+        print("every row failed: no heat map drawn; fix the cause above and rerun", file=sys.stderr)
+        return 1
+    _print_heatmap(res, sweep)
+    return 0
+
+
+def _print_failures(res) -> None:
+    """How many rows failed, in how many tasks, and the five commonest reasons (on stderr)."""
+    failed = res.table.loc[res.table["failed"], "error"]
+    n_tasks = res.table.loc[res.table["failed"], "task"].nunique()
+    print(
+        f"{'error' if res.failed_rows == len(res.table) else 'warning'}: {res.failed_rows} of "
+        f"{len(res.table)} rows failed (in {n_tasks} task(s)); why:",
+        file=sys.stderr,
+    )
+    for msg, count in failed.value_counts().head(5).items():
+        print(f"  {count} rows: {msg}", file=sys.stderr)
+
+
+def _print_heatmap(res, sweep) -> None:
+    """The heat map's ratios as a table, or why there is no heat map."""
+    hm = sweep.heatmap
+    if hm and not res.heatmaps:
+        print(
+            f"no heat map: no grid point has a seed where both {hm['adaptive']} and {hm['floor']} finished "
+            f"segment {hm['segment']}",
+            file=sys.stderr,
+        )
+    elif hm:
+        from adaptive_dd.sweep import ratio_medians
+
+        r = ratio_medians(res.table, hm, [a for a, _ in sweep.axes])
+        print(
+            f"median over seeds of rms {hm['adaptive']} / rms {hm['floor']}, segment {hm['segment']}"
+            f" (rows {hm['y']}, columns {hm['x']}; median over any other axes):"
+        )
+        print(r.pivot_table(index=hm["y"], columns=hm["x"], values="ratio", aggfunc="median").round(3))

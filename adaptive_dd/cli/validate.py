@@ -1,0 +1,133 @@
+"""``adaptive-dd validate [SCENARIO]``: a scenario checked and printed resolved (defaults marked).
+
+A benchmark scenario: its tables, the resolved controller settings, the peak torque along the
+reference and what the run would meet (:func:`adaptive_dd.benchmark.preflight.preflight`), on
+every arm; an arm from a URDF also prints its joints, base parameters and payload subspace. An
+identification scenario (with ``[record]``): its ``[arm]`` and ``[record]``, resolved.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from adaptive_dd.cli._common import add_command, describe_arm, is_two_link, load_arm
+
+__all__ = ["add_parser", "is_identification_scenario", "run", "validate_identification"]
+
+IDENTIFICATION_TABLES = ("arm", "plant", "record")
+
+
+def add_parser(sub) -> None:
+    """The options of ``validate``."""
+    v = add_command(sub, "validate", help="check a scenario and print it resolved (defaults marked)")
+    v.add_argument("scenario", nargs="?", help="scenario TOML (default: the shipped payload_swap)")
+    v.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    """Print the scenario resolved; 1 if the run would meet a problem."""
+    from adaptive_dd.benchmark.preflight import resolved_settings
+    from adaptive_dd.benchmark.scenario import format_scenario, load_scenario
+
+    if args.scenario and Path(args.scenario).is_file():
+        if is_identification_scenario(args.scenario):  # [arm] and [record]: no benchmark tables needed
+            return validate_identification(args.scenario)
+    sc = load_scenario(args.scenario)
+    print(format_scenario(sc))
+    if not is_two_link(sc.arm):
+        print(describe_arm(sc.arm))
+    for line in resolved_settings(sc):
+        print(line)
+    _print_torque_peaks(sc)
+    return _preflight(sc)
+
+
+def _print_torque_peaks(sc) -> None:
+    from adaptive_dd.benchmark.preflight import torque_peaks
+
+    peak, _, _ = torque_peaks(sc)
+    limit = sc.arm.actuator.torque_limit
+    print(
+        "# peak |tau| along the reference (inverse dynamics, every payload): "
+        + ", ".join(
+            f"joint{j + 1} {peak[j]:.4g} N m ({peak[j] / limit[j]:.0%} of its limit)"
+            for j in range(peak.size)
+        )
+    )
+
+
+def _preflight(sc) -> int:
+    from adaptive_dd.benchmark.preflight import preflight
+
+    problems, warnings = preflight(sc)
+    for w in warnings:
+        print(f"adaptive-dd validate: warning: {w}", file=sys.stderr)
+    if problems:
+        print(f"adaptive-dd validate: {len(problems)} problem(s) the run would meet:", file=sys.stderr)
+        for p in problems:
+            print(f"  {p}", file=sys.stderr)
+        return 1
+    print(
+        f"# checked: the reference within the arm's position and velocity limits (torque: "
+        f"{'see the warning' if warnings else 'within'}); {len(sc.controllers)} controller(s) built"
+    )
+    return 0
+
+
+def is_identification_scenario(path) -> bool:
+    """A scenario with a ``[record]`` table: an identification, read by ``identify``/``predict``."""
+    from adaptive_dd.errors import ScenarioError
+    from adaptive_dd.io import read_toml
+
+    return "record" in read_toml(Path(path), ScenarioError)
+
+
+def validate_identification(path) -> int:
+    """``adaptive-dd validate`` of an identification scenario: its ``[arm]`` and ``[record]``, resolved.
+
+    Raises
+    ------
+    ScenarioError
+        A table other than ``[arm]``, ``[plant]``, ``[record]`` (a benchmark's tables do not
+        belong here), or what :func:`adaptive_dd.record.record_spec` refuses.
+    """
+    from adaptive_dd.errors import ScenarioError
+    from adaptive_dd.io import read_toml
+    from adaptive_dd.record import record_spec
+
+    data = read_toml(Path(path), ScenarioError)
+    extra = [k for k in data if k not in IDENTIFICATION_TABLES]
+    if extra:
+        raise ScenarioError(
+            f"{path}: [{extra[0]}]: an identification scenario (with [record]) holds only "
+            f"{', '.join(f'[{t}]' for t in IDENTIFICATION_TABLES)}; keep benchmark tables in another file"
+        )
+    arm = load_arm(str(path))
+    if is_two_link(arm):
+        raise ScenarioError(f"{path}: [record] needs an [arm] from a URDF (urdf = ... or robot = ...)")
+    spec = record_spec(data["record"], arm.joint_names, arm.joint_kinds, str(path))
+    print(
+        f"# identification scenario {path}: [arm] and [record] (no [reference]: identify and predict "
+        "read a log)"
+    )
+    for note in arm.urdf_notes:
+        print(f"# note: {note}")
+    _print_record_spec(spec, arm.joint_names)
+    print(describe_arm(arm))
+    return 0
+
+
+def _print_record_spec(spec, joint_names) -> None:
+    print(f"record.files = {[str(f) for f in spec.files]}")
+    print(f"record.time = {spec.time!r}")
+    for j, name in enumerate(joint_names):
+        vel = "derived" if spec.derive_velocity or spec.velocity is None else repr(spec.velocity[j])
+        print(
+            f"record.joint{j + 1} = {{ joint = {name!r}, position = {spec.position[j]!r} "
+            f"(x {spec.position_scale[j]:.6g}), "
+            f"velocity = {vel}, torque = {spec.torque_gain[j]:.6g} * {spec.torque[j]!r} + "
+            f"{spec.torque_offset[j]:.6g}{'' if spec.used[j] else ', excluded'} }}"
+        )
+    print(f"record.window = {list(spec.window) if spec.window else 'the whole log'}")

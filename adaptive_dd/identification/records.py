@@ -1,0 +1,252 @@
+"""Identification records of any :class:`Arm` simulated with a known truth.
+
+The experiment
+--------------
+The arm (its URDF parameters plus an optional rigid payload on the payload frame)
+tracks a reference ``q_d(t)`` (a scenario's ``[reference]``, e.g. a designed
+excitation from :mod:`adaptive_dd.identification.excitation`) under **computed torque
+with the plant's own model** (the URDF's parameters and the payload: a well-tuned
+controller, so that the arm follows the reference whatever the payload), at the sample
+rate with zero-order hold::
+
+    tau_cmd = M(q_m) (qdd_d + 2 w (qd_d - qd_m) + w^2 (q_d - q_m)) + h(q_m, qd_m)
+
+``w`` the bandwidth [rad/s], ``q_m, qd_m`` the measured signals (encoder quantization and
+white Gaussian noise of the arm's :class:`~adaptive_dd.plant.devices.SensorConfig`, through
+:func:`adaptive_dd.plant.sampling.measure_batch`), the command through the actuator's
+saturation and D/A (:func:`adaptive_dd.plant.sampling.actuate_batch`). The record holds
+the measured ``q, qd`` and the **applied** torque (known, as a drive's current loop
+reports it). The plant is, by default (``plant="model"``), RK4 (``substeps`` per sample)
+over the compiled forward dynamics with smooth friction ``fv qd + fc tanh(qd / v_f)``:
+exactly the model of :mod:`adaptive_dd.identification.model`, so that estimators are
+held to the bound without model error. ``plant="serial"`` runs the closed-loop benchmark's
+plant instead (:func:`adaptive_dd.plant.integrator.plant_step` with the arm's
+friction law, stick-slip by default): a record the model does not describe exactly near
+zero velocity.
+
+Trials run as one batch (axis 0), each with its own noise from its own generator.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from adaptive_dd.errors import ParameterError, SignalError
+from adaptive_dd.identification.model import Model, arm_model, pi_with_payload, rk4_step
+from adaptive_dd.plant.chain import rnea_batch
+
+__all__ = ["Record", "inverse_dynamics_pi", "simulate_record", "write_serial_recording"]
+
+Array = NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class Record:
+    """Simulated records of one arm, trial axis first.
+
+    Attributes
+    ----------
+    t : ndarray (N,)
+        Sample instants [s].
+    q, qd : ndarray (S, N, n)
+        Measured joint positions [rad] and velocities [rad/s].
+    tau : ndarray (S, N, n)
+        Applied torque held over each sample [N m].
+    q_true, qd_true : ndarray (S, N, n)
+        The plant's state at the sample instants.
+    pi_true : ndarray (13 n,)
+        Standard parameters of the simulated plant (payload included).
+    sigma_true : ndarray (p,)
+        Its base parameters.
+    payload : ndarray (10,)
+        The payload's parameters about the payload frame (zeros: none).
+    sample_period : float
+    saturated : ndarray (S, n)
+        Fraction of samples with the command saturated, per joint.
+    """
+
+    t: Array
+    q: Array
+    qd: Array
+    tau: Array
+    q_true: Array
+    qd_true: Array
+    pi_true: Array
+    sigma_true: Array
+    payload: Array
+    sample_period: float
+    saturated: Array
+
+
+def inverse_dynamics_pi(model: Model, pi: Array, q: Array, qd: Array, qdd: Array) -> Array:
+    """Joint torques ``(..., n)`` of standard parameters ``pi (13 n,)`` (friction, armature included)."""
+    n = model.n
+    links, fv, fc, ia = pi[: 10 * n], pi[10 * n : 11 * n], pi[11 * n : 12 * n], pi[12 * n :]
+    tau = rnea_batch(model.chain, links, q, qd, qdd)
+    return tau + ia * qdd + fv * qd + fc * np.tanh(qd / model.friction_velocity)
+
+
+def simulate_record(
+    arm,
+    reference,
+    duration: float,
+    rngs: list[np.random.Generator],
+    *,
+    sample_period: float = 1e-3,
+    payload: ArrayLike | None = None,
+    bandwidth: float = 40.0,
+    substeps: int = 2,
+    noise: bool = True,
+    quantize: bool = True,
+    plant: str = "model",
+) -> Record:
+    """Simulate ``len(rngs)`` identification records of ``arm`` tracking ``reference``.
+
+    Parameters
+    ----------
+    arm : Arm
+    reference : object with ``sample(t) -> (q_d, qd_d, qdd_d)``, each ``(N, n)``
+        E.g. :class:`adaptive_dd.benchmark.scenario.Reference`.
+    duration : float
+        [s].
+    rngs : list of numpy.random.Generator
+        One per trial (the sensor noise).
+    sample_period : float
+        T [s].
+    payload : array_like (10,), optional
+        Rigid payload about the payload frame
+        (:func:`adaptive_dd.plant.arm.payload_parameters`).
+    bandwidth : float
+        Computed-torque bandwidth w [rad/s] (``w T <= 0.2``).
+    substeps : int
+        RK4 steps per sample.
+    noise, quantize : bool
+        Sensor noise; encoder and D/A quantization.
+    plant : {"model", "serial"}
+        The identification model's RK4 (default) or the benchmark's compiled plant with the
+        arm's friction law (module docstring).
+
+    Raises
+    ------
+    ParameterError
+        Bad duration, period, bandwidth, or a reference for another number of joints.
+    SignalError
+        If the simulated state becomes non-finite.
+    """
+    n = arm.n_joints
+    if not (np.isfinite(duration) and duration >= 10 * sample_period and sample_period > 0):
+        raise ParameterError(f"need duration >= 10 samples of T > 0, got {duration} s, T = {sample_period} s")
+    if not (0 < bandwidth * sample_period <= 0.2):
+        raise ParameterError(f"bandwidth {bandwidth} rad/s with T = {sample_period} s: need 0 < w T <= 0.2")
+    N = round(duration / sample_period)
+    t = np.arange(N) * sample_period
+    qd_ref, qdd_ref_v, qdd_ref = reference.sample(t)
+    if qd_ref.shape != (N, n):
+        raise ParameterError(f"the reference has {qd_ref.shape[-1]} joints, the arm {n}")
+    model = arm_model(arm)
+    pp = np.zeros(10) if payload is None else np.asarray(payload, dtype=float).reshape(10)
+    pi_true = pi_with_payload(arm, model.pi_ref, pp)
+    S = len(rngs)
+    sensor, act = arm.sensor, arm.actuator
+    std = sensor.noise_std if noise else np.zeros(2 * n)
+    res = sensor.resolution
+    lim, lsb = (
+        np.asarray(act.torque_limit, float),
+        2.0 * np.asarray(act.torque_limit, float) / 2**act.dac_bits,
+    )
+    from adaptive_dd.plant.sampling import actuate_batch, measure_batch
+
+    if plant not in ("model", "serial"):
+        raise ParameterError(f"plant must be 'model' or 'serial', got {plant!r}")
+    step = _stepper(arm, model, pi_true, S, sample_period, substeps) if plant == "serial" else None
+    q = np.repeat(qd_ref[:1], S, axis=0).copy()
+    qd = np.repeat(qdd_ref_v[:1], S, axis=0).copy()
+    out = {k: np.empty((S, N, n)) for k in ("q", "qd", "tau", "q_true", "qd_true")}
+    sat_count = np.zeros((S, n))
+    kp, kd = bandwidth**2, 2.0 * bandwidth
+    block = 1024
+    for k in range(N):
+        if k % block == 0:  # noise drawn in blocks, each trial from its own generator
+            m = min(block, N - k)
+            z = np.stack([g.standard_normal((m, 2 * n)) for g in rngs], axis=1)  # (m, S, 2n)
+        qm, qdm = np.empty_like(q), np.empty_like(qd)
+        measure_batch(q, qd, np.ascontiguousarray(z[k % block]), res, std, quantize, qm, qdm)
+        a = qdd_ref[k] + kd * (qdd_ref_v[k] - qdm) + kp * (qd_ref[k] - qm)
+        cmd = inverse_dynamics_pi(model, pi_true, qm, qdm, a)
+        tau = np.empty_like(cmd)
+        sat = np.empty(cmd.shape, dtype=np.bool_)
+        actuate_batch(np.ascontiguousarray(cmd), lim, lsb, act.saturate, quantize, tau, sat)
+        sat_count += sat
+        for key, v in (("q", qm), ("qd", qdm), ("tau", tau), ("q_true", q), ("qd_true", qd)):
+            out[key][:, k] = v
+        if step is None:
+            q, qd = rk4_step(model, pi_true, q, qd, tau, sample_period, substeps)
+        else:
+            q, qd = step(q, qd, tau)
+    if not np.all(np.isfinite(out["q"])):
+        raise SignalError("simulate_record: non-finite measurement")
+    return Record(
+        t=t,
+        pi_true=pi_true,
+        sigma_true=model.B @ pi_true,
+        payload=pp,
+        sample_period=float(sample_period),
+        saturated=sat_count / N,
+        **out,
+    )
+
+
+def _stepper(arm, model: Model, pi: Array, S: int, T: float, substeps: int):
+    """A function ``(q, qd, tau) (S, n) -> (q, qd)`` through the compiled benchmark plant."""
+    from adaptive_dd.plant.integrator import plant_params, plant_step
+
+    n = model.n
+    pp = plant_params(
+        model.chain,
+        pi[: 10 * n],
+        pi[10 * n : 11 * n],
+        pi[11 * n : 12 * n],
+        pi[12 * n :],
+        law=arm.friction,
+        friction_velocity=arm.friction_velocity,
+        stribeck_ratio=arm.stribeck_ratio,
+        stribeck_velocity=arm.stribeck_velocity,
+    )
+    stuck = np.zeros((S, n), dtype=np.bool_)
+
+    def step(q, qd, tau):
+        q, qd = np.ascontiguousarray(q).copy(), np.ascontiguousarray(qd).copy()
+        for s in range(S):
+            if not plant_step(
+                model.chain, pp, q[s], qd[s], np.ascontiguousarray(tau[s]), T, substeps, stuck[s]
+            ):
+                raise SignalError(f"simulate_record: the plant failed (trial {s})")
+        return q, qd
+
+    return step
+
+
+def write_serial_recording(path, t: Array, q: Array, qd: Array | None, tau: Array):
+    """Write one N-joint record as CSV ``t, q1..qN, qd1..qdN, tau1..tauN`` (qd columns left out if None)."""
+    from pathlib import Path
+
+    from adaptive_dd.outputs import atomic_write
+
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    n = q.shape[-1]
+    cols = [f"q{j + 1}" for j in range(n)]
+    parts = [t[:, None], q]
+    if qd is not None:
+        cols += [f"qd{j + 1}" for j in range(n)]
+        parts.append(qd)
+    cols += [f"tau{j + 1}" for j in range(n)]
+    parts.append(tau)
+    with atomic_write(path, encoding="utf-8") as fh:
+        np.savetxt(
+            fh, np.column_stack(parts), delimiter=",", header="t," + ",".join(cols), comments="", fmt="%.10g"
+        )
+    return path

@@ -1,0 +1,381 @@
+"""The arm of a scenario's ``[arm]`` and ``[plant]`` tables: the one place that builds an arm
+from a scenario.
+
+:func:`arm_from_tables` reads the tables: the paper's two-link arm from its physical or base
+parameters (:class:`~adaptive_dd.plant.two_link.TwoLinkArm`), or any arm from a URDF
+(:func:`urdf_arm_from_table`, an :class:`~adaptive_dd.plant.arm.Arm`), which becomes the
+two-link closed-form fast path when it is the paper's kind of arm
+(:func:`~adaptive_dd.plant.two_link.as_two_link`). Every error names the file, the key, the
+value and the bound.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+from numpy.typing import NDArray
+
+from adaptive_dd.errors import ParameterError, ScenarioError
+from adaptive_dd.errors import is_finite_number as _is_num
+from adaptive_dd.plant.parameters import PhysicalParameters
+from adaptive_dd.plant.two_link import FRICTION_LAWS, TwoLinkArm, as_two_link
+
+__all__ = ["ARM_BOUNDS", "URDF_ARM_KEYS", "arm_from_tables", "urdf_arm_from_table"]
+
+Array = NDArray[np.float64]
+
+# ------------------------------------------------------------ the paper's arm
+_PHYSICAL_KEYS = ("l1", "l2", "m1", "m2", "a1", "a2", "I1", "I2", "b", "d")
+_SIGMA_KEYS = ("sigma", "l1", "l2")
+_ARM_OPTIONAL = ("payload_radius", "torque_limit")
+_PLANT_KEYS = (
+    "friction",
+    "friction_velocity",
+    "stribeck_ratio",
+    "stribeck_velocity",
+    "lugre_stiffness",
+    "lugre_damping",
+)
+
+ARM_BOUNDS = {
+    "arm.l1": 2.0,  # m: a direct-drive arm's link; beyond this no motor of the kind moves it
+    "arm.l2": 2.0,
+    "arm.a1": 3.0,  # m (PhysicalParameters further requires a_i <= 1.5 l_i)
+    "arm.a2": 3.0,
+    "arm.m1": 500.0,  # kg
+    "arm.m2": 500.0,
+    "arm.I1": 100.0,  # kg m^2
+    "arm.I2": 100.0,
+    "arm.sigma[0]": 1000.0,  # J1 [kg m^2]
+    "arm.sigma[1]": 1000.0,  # J2
+    "arm.sigma[2]": 1000.0,  # r
+    "arm.sigma[3]": 1000.0,  # b1 [N m s/rad]
+    "arm.sigma[4]": 1000.0,  # b2
+    "arm.sigma[5]": 1000.0,  # d1 [N m]
+    "arm.sigma[6]": 1000.0,  # d2
+    "arm.b[0]": 1000.0,
+    "arm.b[1]": 1000.0,
+    "arm.d[0]": 1000.0,
+    "arm.d[1]": 1000.0,
+    "arm.payload_radius": 0.5,  # m, as the scenario's payload.radius
+    "arm.torque_limit[0]": 1e4,  # N m
+    "arm.torque_limit[1]": 1e4,
+    "plant.friction_velocity": 10.0,  # rad/s
+    "plant.stribeck_velocity": 10.0,
+    "plant.stribeck_ratio": 100.0,
+}
+"""Upper bounds of the ``[arm]`` and ``[plant]`` numbers: physically plausible for a two-link
+direct-drive arm, and far enough below overflow that every derived quantity (``m l^2``, the
+mass matrix, its determinant) stays finite."""
+
+
+def _table_number(src: str, key: str, v, *, lower: float | None = None, strict: bool = True) -> float:
+    if isinstance(v, bool) or not isinstance(v, int | float):
+        raise ScenarioError(f"{src}: key '{key}' must be a number, got {v!r}")
+    if not math.isfinite(v):
+        raise ScenarioError(f"{src}: key '{key}' must be finite, got {v!r}")
+    if lower is not None and (v <= lower if strict else v < lower):
+        raise ScenarioError(f"{src}: key '{key}' must be {'>' if strict else '>='} {lower:g}, got {v!r}")
+    hi = ARM_BOUNDS.get(key)
+    if hi is not None and v > hi:
+        raise ScenarioError(f"{src}: key '{key}' must be <= {hi:g} (ARM_BOUNDS), got {v!r}")
+    return float(v)
+
+
+def _table_list(src: str, key: str, v, n: int, *, lower: float, strict: bool) -> tuple[float, ...]:
+    if not isinstance(v, list) or len(v) != n:
+        raise ScenarioError(f"{src}: key '{key}' must be a list of {n} numbers, got {v!r}")
+    return tuple(_table_number(src, f"{key}[{i}]", x, lower=lower, strict=strict) for i, x in enumerate(v))
+
+
+def _check_keys(src: str, table: str, data: dict, allowed: tuple[str, ...]) -> None:
+    if not isinstance(data, dict):
+        raise ScenarioError(f"{src}: [{table}] must be a table, got {data!r}")
+    for key in data:
+        if key not in allowed:
+            raise ScenarioError(f"{src}: unknown key '{table}.{key}'; allowed: {sorted(allowed)}")
+
+
+def _arm_kwargs(src: str, arm: dict) -> dict:
+    """Geometry, parameters and actuator of an ``[arm]`` table as TwoLinkArm keyword arguments."""
+    _check_keys(src, "arm", arm, tuple(dict.fromkeys(_PHYSICAL_KEYS + _SIGMA_KEYS + _ARM_OPTIONAL)))
+    physical_only = [k for k in _PHYSICAL_KEYS if k in arm and k not in _SIGMA_KEYS]
+    if "sigma" in arm and physical_only:
+        raise ScenarioError(
+            f"{src}: [arm] gives both 'sigma' and physical keys {physical_only}: use one form "
+            f"(physical {list(_PHYSICAL_KEYS)} or 'sigma' with l1, l2)"
+        )
+    required = _SIGMA_KEYS if "sigma" in arm else _PHYSICAL_KEYS
+    for key in required:
+        if key not in arm:
+            raise ScenarioError(f"{src}: key 'arm.{key}' is missing (required: {list(required)})")
+    kw: dict = {}
+    sice = TwoLinkArm.sice()
+    kw["payload_radius"] = _table_number(
+        src, "arm.payload_radius", arm.get("payload_radius", sice.payload_radius), lower=0.0, strict=False
+    )
+    if "torque_limit" in arm:
+        lim = _table_list(src, "arm.torque_limit", arm["torque_limit"], 2, lower=0.0, strict=True)
+        kw["actuator"] = replace(sice.actuator, torque_limit=lim)
+    l1 = _table_number(src, "arm.l1", arm["l1"], lower=0.0)
+    l2 = _table_number(src, "arm.l2", arm["l2"], lower=0.0)
+    if "sigma" in arm:
+        kw["sigma"] = np.array(_table_list(src, "arm.sigma", arm["sigma"], 7, lower=0.0, strict=False))
+        kw["l1"], kw["l2"] = l1, l2
+        return kw
+    num = {k: _table_number(src, f"arm.{k}", arm[k], lower=0.0) for k in ("m1", "m2", "I1", "I2")}
+    num.update({k: _table_number(src, f"arm.{k}", arm[k], lower=0.0, strict=False) for k in ("a1", "a2")})
+    b = _table_list(src, "arm.b", arm["b"], 2, lower=0.0, strict=False)
+    d = _table_list(src, "arm.d", arm["d"], 2, lower=0.0, strict=False)
+    try:
+        phys = PhysicalParameters(b1=b[0], b2=b[1], d1=d[0], d2=d[1], l1=l1, l2=l2, **num)
+    except (ParameterError, ArithmeticError) as exc:
+        raise ScenarioError(f"{src}: [arm]: {exc}") from None
+    kw.update(sigma=phys.to_sigma(), l1=l1, l2=l2, physical=phys)
+    return kw
+
+
+def _plant_kwargs(src: str, plant: dict) -> dict:
+    _check_keys(src, "plant", plant, _PLANT_KEYS)
+    kw: dict = {}
+    if "friction" in plant:
+        f = plant["friction"]
+        if f not in FRICTION_LAWS:
+            raise ScenarioError(
+                f"{src}: key 'plant.friction' must be one of {list(FRICTION_LAWS)}, got {f!r}"
+            )
+        kw["friction"] = f
+    for key in ("friction_velocity", "stribeck_velocity"):
+        if key in plant:
+            kw[key] = _table_number(src, f"plant.{key}", plant[key], lower=0.0)
+    if "stribeck_ratio" in plant:
+        kw["stribeck_ratio"] = _table_number(
+            src, "plant.stribeck_ratio", plant["stribeck_ratio"], lower=1.0, strict=False
+        )
+    for key in ("lugre_stiffness", "lugre_damping"):
+        if key in plant:
+            kw[key] = _table_list(src, f"plant.{key}", plant[key], 2, lower=0.0, strict=True)
+    return kw
+
+
+def arm_from_tables(arm_table: dict | None, plant_table: dict | None, src: str = "<memory>") -> TwoLinkArm:
+    """The arm of a scenario's ``[arm]`` and ``[plant]`` tables.
+
+    An ``[arm]`` table with ``urdf`` or ``robot`` describes any serial arm
+    (:func:`adaptive_dd.plant.arm.urdf_arm_from_table`: a
+    :class:`~adaptive_dd.plant.arm.Arm`, or a :class:`TwoLinkArm` when the URDF
+    is the paper's kind of two-link arm). Otherwise:
+
+    ``[arm]`` gives either the physical parameters (eq. 10)
+    ``l1, l2, m1, m2, a1, a2, I1, I2, b = [b1, b2], d = [d1, d2]`` or the base
+    parameters ``sigma = [J1, J2, r, b1, b2, d1, d2]`` with ``l1, l2``; both forms
+    accept ``payload_radius`` [m] and ``torque_limit = [tau1, tau2]`` [N m]. Mixing
+    the forms is an error. ``[plant]`` gives ``friction`` ("stick-slip", "tanh",
+    "stribeck", "lugre"), ``friction_velocity``, ``stribeck_ratio``, ``stribeck_velocity``,
+    ``lugre_stiffness = [s0_1, s0_2]``, ``lugre_damping = [s1_1, s1_2]``.
+    A missing table means the SICE arm's values (:meth:`TwoLinkArm.sice`, stick-slip).
+
+    Raises
+    ------
+    ScenarioError
+        Naming ``src``, the key and the reason: unknown key, missing key, wrong
+        type, non-finite value, value out of range, inconsistent arm.
+    """
+    plant_kw = _plant_kwargs(src, {} if plant_table is None else plant_table)
+    if isinstance(arm_table, dict) and ("urdf" in arm_table or "robot" in arm_table):
+        return _urdf_arm(src, arm_table, plant_kw)
+    kw = TwoLinkArm.sice().__dict__.copy() if arm_table is None else _arm_kwargs(src, arm_table)
+    kw.update(plant_kw)
+    try:
+        return TwoLinkArm(**kw)
+    except (ParameterError, ArithmeticError) as exc:
+        raise ScenarioError(f"{src}: [arm]/[plant]: {type(exc).__name__}: {exc}") from None
+
+
+def _urdf_arm(src: str, table: dict, plant_kw: dict):
+    """The arm of an ``[arm]`` table naming a URDF: the general
+    :class:`~adaptive_dd.plant.arm.Arm`
+    (:func:`~adaptive_dd.plant.arm.urdf_arm_from_table`), or the two-link :class:`TwoLinkArm`
+    when it is one (:func:`as_two_link`) and ``general = true`` is not set. LuGre friction is a
+    two-link plant law: kept aside until the fast path decides which plant runs."""
+    # urdf_arm_from_table, defined below, imports Pinocchio on first use
+    kw = dict(plant_kw)
+    lugre = {k: kw.pop(k) for k in ("lugre_stiffness", "lugre_damping") if k in kw}
+    if kw.get("friction") == "lugre":
+        lugre["friction"] = kw.pop("friction")
+    arm = urdf_arm_from_table(src, table, kw)
+    general = table.get("general", False)
+    if not isinstance(general, bool):
+        raise ScenarioError(f"{src}: key 'arm.general' must be true or false, got {general!r}")
+    two = None if general else as_two_link(arm)
+    if two is None and lugre:
+        raise ScenarioError(
+            f"{src}: [plant] LuGre friction is implemented for the two-link arm only; the plant of "
+            f"this {arm.n_joints}-joint arm has stick-slip, tanh and stribeck friction"
+        )
+    return arm if two is None else (replace(two, **lugre) if lugre else two)
+
+
+# ------------------------------------------------------------ any arm from a URDF
+URDF_ARM_KEYS = (
+    "urdf",
+    "robot",
+    "payload_frame",
+    "gravity",
+    "viscous",
+    "coulomb",
+    "armature",
+    "torque_limit",
+    "encoder_counts",
+    "dac_bits",
+    "payload_radius",
+    "payload_capacity",
+    "general",
+    "repair_inertia",
+)
+"""Keys of an ``[arm]`` table that names a URDF (``urdf = "file"`` or ``robot = "ur5"``)."""
+
+
+def urdf_arm_from_table(src: str, table: dict, plant_kw: dict):
+    """The arm of an ``[arm]`` table with ``urdf`` (a path relative to the scenario file) or ``robot``.
+
+    ``robot`` names a shipped robot (:data:`adaptive_dd.robots.ROBOTS`). Optional:
+    ``payload_frame`` (a link), ``gravity = [x, y, z]`` (default ``[0, 0, -9.81]``),
+    per-joint lists ``viscous``, ``coulomb``, ``armature``, ``torque_limit``,
+    ``encoder_counts``, and ``dac_bits``, ``payload_radius``, ``repair_inertia`` (repair a
+    chain link's inertia that is not a rigid body's, reported: :func:`adaptive_dd.plant.urdf.read_urdf`),
+    ``payload_capacity`` (the rated payload [kg]: the size of the estimator's re-opening,
+    :mod:`adaptive_dd.identification.online`); ``general`` is read by
+    :func:`adaptive_dd.plant.two_link.arm_from_tables`, which turns a URDF of the paper's kind of
+    two-link arm into a :class:`~adaptive_dd.plant.two_link.TwoLinkArm` (the closed-form fast path,
+    :func:`~adaptive_dd.plant.two_link.as_two_link`) unless ``general = true``. ``plant_kw``: the
+    ``[plant]`` settings of the general model (LuGre's are the two-link arm's: not here).
+
+    Raises
+    ------
+    ScenarioError
+        Naming ``src``, the key and the reason (URDF problems name the URDF file too).
+    """
+    path, frame = _urdf_source(src, table)
+    arm = _load_urdf_arm(src, table, path, frame)
+    kw = _arm_overrides(src, table, arm, plant_kw)
+    try:
+        arm = replace(arm, **kw)
+        _ = arm.sigma  # base parameters now, so that a singular model is reported here
+    except ParameterError as exc:
+        raise ScenarioError(f"{src}: [arm]/[plant]: {exc}") from None
+    return arm
+
+
+def _urdf_source(src: str, table: dict) -> tuple[Path, str | None]:
+    """The URDF file (``urdf`` relative to the scenario file, or a shipped ``robot``'s) and the
+    payload frame named in the table (a shipped robot's own when not named); checks the keys."""
+    unknown = [k for k in table if k not in URDF_ARM_KEYS]
+    if unknown:
+        raise ScenarioError(
+            f"{src}: unknown key 'arm.{unknown[0]}'; allowed with a URDF: {sorted(URDF_ARM_KEYS)}"
+        )
+    if ("urdf" in table) == ("robot" in table):
+        raise ScenarioError(
+            f"{src}: [arm] needs exactly one of 'urdf' (a file) and 'robot' (a shipped robot)"
+        )
+    frame = table.get("payload_frame")
+    if frame is not None and not isinstance(frame, str):
+        raise ScenarioError(f"{src}: key 'arm.payload_frame' must be a link name, got {frame!r}")
+    if "robot" in table:
+        from adaptive_dd.robots import ROBOTS, robot_urdf
+
+        name = table["robot"]
+        if not isinstance(name, str) or name not in ROBOTS:
+            raise ScenarioError(
+                f"{src}: key 'arm.robot' = {name!r} is not a shipped robot; known: {sorted(ROBOTS)}"
+            )
+        return robot_urdf(name), frame or ROBOTS[name].payload_frame
+    if not isinstance(table["urdf"], str) or not table["urdf"]:
+        raise ScenarioError(f"{src}: key 'arm.urdf' must be a file path, got {table['urdf']!r}")
+    path = Path(table["urdf"])
+    if not path.is_absolute():
+        path = (Path(src).parent if Path(src).is_file() else Path.cwd()) / path
+    return path, frame
+
+
+def _load_urdf_arm(src: str, table: dict, path: Path, frame: str | None):
+    """:meth:`Arm.from_urdf` with the table's ``gravity`` and ``repair_inertia``; a URDF or
+    parameter problem becomes a ScenarioError naming ``src``."""
+    from adaptive_dd.errors import UrdfError
+    from adaptive_dd.plant.arm import DEFAULT_GRAVITY, Arm
+
+    gravity = table.get("gravity", list(DEFAULT_GRAVITY))
+    if not (isinstance(gravity, list) and len(gravity) == 3 and all(_is_num(x) for x in gravity)):
+        raise ScenarioError(f"{src}: key 'arm.gravity' must be [x, y, z] in m/s^2, got {gravity!r}")
+    try:
+        repair = table.get("repair_inertia", False)
+        if not isinstance(repair, bool):
+            raise ScenarioError(f"{src}: key 'arm.repair_inertia' must be true or false, got {repair!r}")
+        return Arm.from_urdf(path, frame, gravity=[float(x) for x in gravity], repair_inertia=repair)
+    except UrdfError as exc:
+        raise ScenarioError(f"{src}: [arm] urdf: {exc}") from None
+    except ParameterError as exc:
+        raise ScenarioError(f"{src}: [arm]: {exc}") from None
+
+
+def _arm_overrides(src: str, table: dict, arm, plant_kw: dict) -> dict:
+    """The ``[plant]`` settings plus the table's overrides of the URDF arm (friction, armature,
+    actuator, sensor, payload radius and capacity), checked: keyword arguments of ``replace``."""
+    n = arm.n_joints
+    kw: dict = dict(plant_kw)
+    for key in ("viscous", "coulomb", "armature"):
+        if key in table:
+            kw[key] = _table_vector(src, key, table[key], n, 0.0, strict=False, hi=URDF_TABLE_BOUNDS[key])
+    if "torque_limit" in table:
+        hi = URDF_TABLE_BOUNDS["torque_limit"]
+        lim = _table_vector(src, "torque_limit", table["torque_limit"], n, 0.0, strict=True, hi=hi)
+        kw["actuator"] = replace(arm.actuator, torque_limit=tuple(lim))
+    if "dac_bits" in table:
+        bits = table["dac_bits"]
+        if isinstance(bits, bool) or not isinstance(bits, int) or not 1 <= bits <= 32:
+            raise ScenarioError(f"{src}: key 'arm.dac_bits' must be an integer in [1, 32], got {bits!r}")
+        kw["actuator"] = replace(kw.get("actuator", arm.actuator), dac_bits=bits)
+    if "encoder_counts" in table:
+        counts = _table_vector(src, "encoder_counts", table["encoder_counts"], n, 0.0, strict=True)
+        if np.any(counts != np.round(counts)) or np.any(counts > 2**40):
+            raise ScenarioError(
+                f"{src}: key 'arm.encoder_counts' must be integers in [1, 2^40], got {counts}"
+            )
+        kw["sensor"] = replace(arm.sensor, encoder_counts=tuple(int(c) for c in counts))
+    if "payload_radius" in table:
+        r = table["payload_radius"]
+        if not _is_num(r) or not 0 <= r <= 0.5:
+            raise ScenarioError(f"{src}: key 'arm.payload_radius' must be in [0, 0.5] m, got {r!r}")
+        kw["payload_radius"] = float(r)
+    if "payload_capacity" in table:
+        cap = table["payload_capacity"]
+        if not _is_num(cap) or not 0 < cap <= 1e4:
+            raise ScenarioError(
+                f"{src}: key 'arm.payload_capacity' must be the rated payload in (0, 1e4] kg, got {cap!r}"
+            )
+        kw["payload_capacity"] = float(cap)
+    return kw
+
+
+URDF_TABLE_BOUNDS = {"viscous": 1e4, "coulomb": 1e4, "armature": 1e3, "torque_limit": 1e5}
+"""Upper bounds of the per-joint overrides of a URDF arm (N m s, N m, kg m^2, N m): beyond
+them no actuator of an arm is meant."""
+
+
+def _table_vector(src: str, key: str, v, n: int, lo: float, strict: bool, hi: float = math.inf) -> Array:
+    from adaptive_dd.errors import ScenarioError
+
+    if not isinstance(v, list) or len(v) != n or not all(_is_num(x) for x in v):
+        raise ScenarioError(
+            f"{src}: key 'arm.{key}' must be a list of {n} finite numbers (one per joint), got {v!r}"
+        )
+    a = np.array(v, dtype=float)
+    if np.any(a <= lo if strict else a < lo):
+        raise ScenarioError(f"{src}: key 'arm.{key}' must be {'>' if strict else '>='} {lo:g}, got {v!r}")
+    if np.any(a > hi):
+        raise ScenarioError(f"{src}: key 'arm.{key}' must be <= {hi:g}, got {v!r}")
+    return a

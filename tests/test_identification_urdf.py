@@ -1,0 +1,290 @@
+"""N-joint identification (issue 20): regression identities, the bound, estimators held to it, payload,
+consistency, excitation, records and CLI errors. Most on the shipped three-joint vertical arm."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from adaptive_dd.benchmark.scenario import Reference
+from adaptive_dd.errors import DataError, ParameterError
+from adaptive_dd.identification.consistency import (
+    consistent_fit,
+    is_physical,
+    params_from_pseudo_inertia,
+    pseudo_inertia,
+)
+from adaptive_dd.identification.excitation import (
+    ExcitationLimits,
+    FourierTrajectory,
+    _constraints,
+    _information,
+    _logdet,
+    design_excitation,
+    multisine,
+    reference_toml,
+)
+from adaptive_dd.identification.model import (
+    arm_model,
+    base_regressor,
+    pi_from_sigma,
+    standard_from_base,
+)
+from adaptive_dd.identification.output_error import (
+    cramer_rao_bound,
+    fit_output_error,
+    measurement_std,
+    schur_information,
+    segment_sensitivities,
+    simulate_segments,
+)
+from adaptive_dd.identification.payload_pair import payload_from_pair
+from adaptive_dd.identification.records import simulate_record, write_serial_recording
+from adaptive_dd.identification.regression import (
+    check_excitation,
+    filtered_regression,
+    weighted_least_squares,
+)
+from adaptive_dd.plant.arm import Arm, payload_parameters
+from adaptive_dd.robots import ROBOTS, robot_urdf
+
+REF3 = Reference(
+    offset=(0.2, -0.4, 0.5),
+    amplitude=((0.8, 0.3), (0.6, 0.3), (0.7, 0.3)),
+    frequency=((0.3, 0.9), (0.4, 1.1), (0.5, 1.3)),
+    phase=((0.0, 1.0), (0.5, 2.0), (1.0, 0.3)),
+    ramp=0.2,
+)
+
+
+@pytest.fixture(scope="module")
+def arm3():
+    return Arm.from_urdf(robot_urdf("vertical3"), ROBOTS["vertical3"].payload_frame)
+
+
+@pytest.fixture(scope="module")
+def model3(arm3):
+    return arm_model(arm3)
+
+
+@pytest.fixture(scope="module")
+def clean3(arm3):
+    return simulate_record(arm3, REF3, 2.0, [np.random.default_rng(0)], noise=False, quantize=False)
+
+
+def test_base_regressor_equals_the_arms(arm3, model3):
+    rng = np.random.default_rng(1)
+    q = rng.uniform(-2, 2, (20, 3))
+    qd = rng.choice([-1, 1], (20, 3)) * rng.uniform(2, 3, (20, 3))  # tanh(qd / 0.02) == sign(qd)
+    qdd = rng.uniform(-5, 5, (20, 3))
+    np.testing.assert_allclose(base_regressor(model3, q, qd, qdd), arm3.regressor(q, qd, qdd), atol=1e-10)
+    np.testing.assert_allclose(pi_from_sigma(model3, arm3.sigma) @ model3.B.T, arm3.sigma, atol=1e-12)
+
+
+def test_exact_filtered_regression_holds_on_clean_records(model3, clean3):
+    reg = filtered_regression(model3, clean3.q_true[0], clean3.qd_true[0], clean3.tau[0])
+    err = reg.y - np.einsum("knp,p->kn", reg.phi, clean3.sigma_true)
+    # exact up to the filters' discretisation: 1e-4 of the torque
+    assert np.abs(err).max() < 1e-3 * np.abs(reg.y).max()
+    sol = weighted_least_squares(reg, model3.names)
+    np.testing.assert_allclose(sol.sigma, clean3.sigma_true, rtol=2e-3, atol=1e-3)
+
+
+def test_unexcited_parameter_is_named(arm3, model3):
+    still = Reference(
+        offset=(0.2, -0.4, 0.5),
+        amplitude=((0.8,), (0.6,), (0.0,)),
+        frequency=((0.3,), (0.4,), (0.5,)),
+        phase=((0.0,), (0.5,), (1.0,)),
+    )
+    rec = simulate_record(arm3, still, 2.0, [np.random.default_rng(0)])
+    with pytest.raises(DataError, match=r"does not excite base parameter.*'fv3'.*joint 3 moves only"):
+        filtered_regression(model3, rec.q[0], rec.qd[0], rec.tau[0])
+    # two parameters that the record sees only together: collinear columns
+    phi = np.random.default_rng(0).normal(size=(500, 3, model3.p))
+    phi[..., 4] = 2.0 * phi[..., 2]
+    with pytest.raises(DataError, match=r"does not excite base parameter '(mz2|m3)"):
+        check_excitation(phi, model3.names)
+
+
+def test_schur_bound_equals_least_squares_monte_carlo():
+    """Linear-Gaussian case: y_j = A_j theta + C_j x_j + e; LS std over 2000 draws = sqrt(diag S^-1)."""
+    rng = np.random.default_rng(2)
+    nseg, R, m, s = 6, 30, 3, 2
+    A, C = rng.normal(size=(nseg, R, m)), rng.normal(size=(nseg, R, s))
+    S, _, _, _ = schur_information(A, C)
+    bound = np.sqrt(np.diag(np.linalg.inv(S)))
+    big = np.zeros((nseg * R, m + nseg * s))
+    for j in range(nseg):
+        big[j * R : (j + 1) * R, :m] = A[j]
+        big[j * R : (j + 1) * R, m + j * s : m + (j + 1) * s] = C[j]
+    e = rng.normal(size=(2000, nseg * R))
+    est = np.linalg.lstsq(big, e.T, rcond=None)[0][:m].T
+    np.testing.assert_allclose(est.std(axis=0), bound, rtol=0.08)
+
+
+def test_sensitivities_match_finite_differences(arm3):
+    """Against finite differences through the RK4 model, where the Coulomb law is not steep
+    (v_f = 0.2 rad/s: the Jacobians frozen over a sample are then accurate; see the module docstring)."""
+    arm = arm3.with_(friction_velocity=0.2)
+    model3 = arm_model(arm)
+    clean3 = simulate_record(arm, REF3, 0.5, [np.random.default_rng(0)], noise=False, quantize=False)
+    pi = pi_from_sigma(model3, clean3.sigma_true)
+    x0 = np.concatenate([clean3.q_true[0, :1], clean3.qd_true[0, :1]], axis=1)
+    tau = clean3.tau[:, :300]
+    xs = simulate_segments(model3, pi, x0, tau, 1e-3)
+    Z = segment_sensitivities(model3, pi, xs, tau, 1e-3)
+    for col in (1, 4, 6 + 0, 6 + 5, 6 + 11):  # two states, three parameters
+        h = 1e-6
+        if col < 6:
+            dx = np.zeros(6)
+            dx[col] = h
+            xp = simulate_segments(model3, pi, x0 + dx, tau, 1e-3)
+        else:
+            ds = np.zeros(model3.p)
+            ds[col - 6] = h * max(1.0, abs(clean3.sigma_true[col - 6]))
+            xp = simulate_segments(model3, pi_from_sigma(model3, clean3.sigma_true + ds), x0, tau, 1e-3)
+            h = ds[col - 6]
+        fd = (xp - xs)[0, -1] / h
+        np.testing.assert_allclose(Z[0, -1, :, col], fd, rtol=1e-2, atol=1e-2 * np.abs(fd).max())
+
+
+def test_output_error_is_held_to_the_bound(arm3, model3):
+    """Three seeds of a 2.5 s record: every parameter's error within 4 bounds; the bound's scale is right
+    (the normalised errors' RMS is between 0.5 and 2)."""
+    rec = simulate_record(arm3, REF3, 2.5, [np.random.default_rng([5, i]) for i in range(3)])
+    std = measurement_std(arm3)
+    crb, _ = cramer_rao_bound(model3, rec.sigma_true, rec.q_true[0], rec.qd_true[0], rec.tau[0], std)
+    z = []
+    for s in range(3):
+        wls = weighted_least_squares(filtered_regression(model3, rec.q[s], rec.qd[s], rec.tau[s]))
+        oe = fit_output_error(model3, rec.q[s], rec.qd[s], rec.tau[s], wls.sigma, std)
+        assert oe.converged
+        assert 0.9 < 2 * oe.cost / oe.n_residuals < 1.1  # residuals at the noise level
+        np.testing.assert_allclose(oe.std, crb, rtol=0.05)  # bound at the estimate ~ at the truth
+        z.append((oe.sigma - rec.sigma_true) / crb)
+    z = np.array(z)
+    assert np.abs(z).max() < 4.0
+    assert 0.5 < np.sqrt(np.mean(z**2)) < 2.0
+
+
+def test_standard_parameters_identifiable(arm3, model3):
+    vals, _std, ok = standard_from_base(model3, arm3.sigma, np.eye(model3.p) * 1e-6)
+    names = arm3.standard_names
+    for k in np.flatnonzero(ok):
+        assert vals[k] == pytest.approx(arm3.pi[k], abs=1e-9)
+    assert ok[names.index("fv2")] and ok[names.index("Iyy3")]
+    assert not ok[names.index("m1")] and np.isnan(vals[names.index("m1")])
+
+
+def test_pseudo_inertia_roundtrip_and_constrained_fit():
+    pp = payload_parameters(1.5, [0.01, -0.02, 0.05], [0.002, 0.003, 0.004, 0.0, 0.0, 0.0])
+    np.testing.assert_allclose(params_from_pseudo_inertia(pseudo_inertia(pp)), pp, atol=1e-15)
+    assert is_physical(pp)
+    F = np.diag(1.0 / np.maximum(np.abs(pp), 1e-4) ** 2)
+    same = consistent_fit(pp, F)
+    assert same.was_physical and same.distance == 0.0
+    bad = payload_parameters(0.05, [0.03, 0.0, 0.02], radius=0.0)
+    bad[9] -= 2e-5  # Izz below what a point mass at that place has: no rigid body
+    assert not is_physical(bad)
+    fit = consistent_fit(bad, np.diag(1.0 / np.full(10, 1e-4) ** 2))
+    assert not fit.was_physical and fit.min_eigenvalue < 0
+    assert is_physical(fit.params, atol=1e-12) and fit.distance > 0
+
+
+def test_payload_from_pair_recovers_a_linear_case():
+    arm = Arm.from_urdf(robot_urdf("ur5"), ROBOTS["ur5"].payload_frame)
+    pp = payload_parameters(2.0, [0.01, -0.02, 0.06], radius=0.04)
+    su = arm.sigma
+    sl = su + arm.payload_basis @ pp
+    cov = np.eye(arm.base.count) * 1e-10
+    pr = payload_from_pair(arm, sl, cov, su, cov)
+    assert pr.mass == pytest.approx(2.0, rel=1e-6)
+    np.testing.assert_allclose(pr.com, [0.01, -0.02, 0.06], atol=1e-6)
+    assert pr.consistent.was_physical
+
+
+def test_payload_pair_refused_where_the_arm_cannot_see_it(arm3):
+    with pytest.raises(ParameterError, match="determine only"):
+        payload_from_pair(arm3, arm3.sigma, np.eye(17), arm3.sigma, np.eye(17))
+
+
+def test_fourier_reference_roundtrip(arm3):
+    tr = FourierTrajectory(np.array([0.1, -0.2, 0.3]), np.full((3, 2), 0.2), np.full((3, 2), -0.1), 0.2)
+    t = np.linspace(0, 5, 101)
+    for a, b in zip(tr.sample(t), tr.reference().sample(t), strict=True):
+        np.testing.assert_allclose(a, b, atol=1e-12)
+    assert reference_toml(tr.reference()).count("joint") == 3
+
+
+def test_designed_excitation_keeps_limits_and_beats_the_multisine(arm3, model3):
+    lim = ExcitationLimits.of_arm(arm3, acceleration=5.0)
+    plain = multisine(arm3, lim, harmonics=3, f0=0.2, grid=60)
+    best, _ = design_excitation(arm3, lim, harmonics=3, f0=0.2, grid=60, maxiter=40)
+    t = np.linspace(0, 5, 400, endpoint=False)
+    assert np.min(_constraints(model3, best, t, lim)) > -0.01
+    assert np.min(_constraints(model3, plain, t, lim)) > -0.01
+    d = np.ones(model3.p)
+    assert (
+        _logdet(_information(model3, best, t, lim), d) > _logdet(_information(model3, plain, t, lim), d) + 5
+    )
+
+
+def test_read_serial_recording_names_the_problem(tmp_path, arm3, clean3):
+    from adaptive_dd.cli import main
+    from adaptive_dd.io import read_serial_recording
+
+    path = write_serial_recording(tmp_path / "r.csv", clean3.t, clean3.q[0], clean3.qd[0], clean3.tau[0])
+    rec = read_serial_recording(path, 3)
+    assert rec.q.shape == (2000, 3) and rec.sample_period == pytest.approx(1e-3)
+    with pytest.raises(DataError, match=r"do not fit an arm of 6 joints.*missing \['q4'"):
+        read_serial_recording(path, 6)
+    lines = path.read_text().splitlines()
+    lines[5] = lines[5].replace(lines[5].split(",")[2], "nan", 1)
+    bad = tmp_path / "bad.csv"
+    bad.write_text("\n".join(lines) + "\n")
+    with pytest.raises(DataError, match=r"line 6, column 'q2': non-finite"):
+        read_serial_recording(bad, 3)
+    scen = tmp_path / "s.toml"
+    scen.write_text('[arm]\nrobot = "ur5"\n')
+    assert main(["identify", "--arm", str(scen), str(path), "--out", str(tmp_path / "o")]) == 2
+
+
+@pytest.mark.slow
+def test_cli_simulate_and_identify_end_to_end(tmp_path, capsys):
+    """simulate --arm writes an N-joint record; identify --arm reads it back, with and without qd."""
+    from adaptive_dd.cli import main
+    from adaptive_dd.identification.excitation import reference_toml
+
+    scen = tmp_path / "v3.toml"
+    scen.write_text('[arm]\nrobot = "vertical3"\n\n' + reference_toml(REF3))
+    assert main(["simulate", "--arm", str(scen), "--duration", "2.5", "--out", str(tmp_path / "sim")]) == 0
+    csv = tmp_path / "sim" / "trajectory.csv"
+    assert csv.read_text().splitlines()[0] == "t,q1,q2,q3,qd1,qd2,qd3,tau1,tau2,tau3"
+    assert main(["identify", "--arm", str(scen), str(csv), "--out", str(tmp_path / "id")]) == 0
+    out = capsys.readouterr().out
+    assert "output error:" in out and "converged" in out and "CRB std" in out
+    assert (tmp_path / "id" / "torque_fit.png").is_file()
+    # positions only: output error fits q alone
+    lines = csv.read_text().splitlines()
+    cols = lines[0].split(",")
+    keep = [i for i, c in enumerate(cols) if not c.startswith("qd")]
+    nq = tmp_path / "noqd.csv"
+    nq.write_text("\n".join(",".join(r.split(",")[i] for i in keep) for r in lines) + "\n")
+    assert main(["identify", "--arm", str(scen), str(nq), "--out", str(tmp_path / "id2")]) == 0
+    assert "derived from the positions" in capsys.readouterr().out
+    # the payload of a planar arm is not fully identifiable from base parameters: a clear error
+    assert (
+        main(["identify", "--arm", str(scen), str(csv), "--baseline", str(csv), "--out", str(tmp_path / "x")])
+        == 2
+    )
+
+
+def test_benchmark_plant_with_smooth_friction_is_the_model(arm3):
+    """plant="serial" (the compiled benchmark plant) under the tanh law equals the identification model."""
+    a = simulate_record(
+        arm3.with_(friction="tanh"), REF3, 0.5, [np.random.default_rng(0)], noise=False, plant="serial"
+    )
+    b = simulate_record(arm3, REF3, 0.5, [np.random.default_rng(0)], noise=False)
+    np.testing.assert_allclose(a.q_true, b.q_true, atol=1e-10)
+    np.testing.assert_allclose(a.tau, b.tau, atol=1e-8)
