@@ -13,11 +13,9 @@ import dataclasses
 import tomllib
 from importlib import resources
 
-import numba
 import numpy as np
 
 from adaptive_dd.benchmark.scenario import load_scenario, parse_scenario
-from adaptive_dd.closed_loop.controllers import ARM_CONTROLLERS
 from adaptive_dd.plant import chain as C
 from adaptive_dd.plant import integrator as S
 
@@ -26,7 +24,11 @@ def _specialisations(kernel) -> set[str]:
     """Argument types ``kernel`` is compiled for: in this process, or in numba's cache for this
     state of its source (a callee loaded from the cache with its caller has no signature in memory)."""
     index = kernel._cache._cache_file._load_index()
-    return {str(tuple(s)) for s in kernel.signatures} | {str(tuple(key[0])) for key in index}
+
+    def text(types):
+        return ", ".join(str(t) for t in types)
+
+    return {text(s) for s in kernel.signatures} | {text(key[0]) for key in index}
 
 
 def _ur5(duration: float | None = None):
@@ -41,19 +43,9 @@ def _ur5(duration: float | None = None):
     return parse_scenario(data, "test.toml", name="ur5_tool_swap")
 
 
-def test_every_builtin_controller_passes_the_loop_the_same_types():
-    """One compiled closed loop for every built-in N-joint controller, with or without estimator."""
-    sc = _ur5()
-    types = {}
-    for name, cls in ARM_CONTROLLERS.items():
-        form = cls(sc.arm).compiled_form(2, sc.sample_period)
-        types[name] = tuple(numba.typeof(x) for x in (form.cfg, form.state, form.ec, form.es))
-    first = next(iter(types.values()))
-    assert [k for k, t in types.items() if t != first] == [], "other argument types than pd's"
-
-
-def test_the_integrator_step_compiles_once_for_both_friction_laws():
-    """``_rk4`` (the integrator's largest kernel) serves the stick-slip and the smooth laws."""
+def test_the_integrator_step_compiles_once_per_friction_law_family():
+    """``_rk4`` (the integrator's largest kernel): one copy for the stick-slip law (its law a
+    compile-time constant: faster), one for the smooth laws; not one more per call site."""
     sc = _ur5()
     ch, n = sc.arm.chain, sc.n_joints
     for law in ("stick-slip", "tanh"):
@@ -61,7 +53,7 @@ def test_the_integrator_step_compiles_once_for_both_friction_laws():
         q, qd, stuck = np.full(n, 0.3), np.zeros(n), np.zeros(n, dtype=bool)
         for _ in range(3):  # from rest: the stick-slip law decides modes and steps to crossings
             assert S.plant_step(ch, pp, q, qd, np.ones(n), 1e-3, 2, stuck)
-    assert len(_specialisations(S._rk4)) == 1, _specialisations(S._rk4)
+    assert len(_specialisations(S._rk4)) == 2, _specialisations(S._rk4)
 
 
 def test_the_chain_kernels_compile_once_for_every_caller(rng):
@@ -97,12 +89,14 @@ def test_the_two_link_sample_loop_compiles_once():
     assert len(_specialisations(compiled.trial_block)) == 1, _specialisations(compiled.trial_block)
 
 
-def test_a_controller_without_estimator_and_one_with_compile_one_loop():
-    """A short UR5 run of ``pd`` and ``adaptive_ct``: one compiled closed loop, one ``_rk4``."""
+def test_a_short_run_compiles_the_loop_once_with_and_once_without_estimator():
+    """A short UR5 run of ``pd`` and ``adaptive_ct``: the loop once with and once without the
+    estimator (with the stick-slip ``_rk4`` on a constant law, ct_oracle ran at 98 simulated s per
+    CPU s against 78 with one loop for both), the stick-slip ``_rk4`` once."""
     from adaptive_dd.closed_loop import glue
     from adaptive_dd.closed_loop.runner import run_closed_loop
 
     res = run_closed_loop(_ur5(duration=0.01))
     assert list(res.runs) == ["pd", "adaptive_ct"]
-    assert len(_specialisations(glue.closed_loop_block)) == 1, _specialisations(glue.closed_loop_block)
-    assert len(_specialisations(S._rk4)) == 1, _specialisations(S._rk4)
+    assert len(_specialisations(glue.closed_loop_block)) == 2, _specialisations(glue.closed_loop_block)
+    assert len([s for s in _specialisations(S._rk4) if "Literal[int](0)" in s]) == 1

@@ -92,8 +92,8 @@ class JointGains:
 
 class CompiledForm(NamedTuple):
     """What the compiled loop runs for one controller: the law, its per-trial state, the
-    estimator's records ``ec, es`` (:func:`~adaptive_dd.identification.online.est_none`
-    when it has none: the same types, so that one compiled loop serves every built-in) and whether
+    estimator's records ``ec, es`` (two arrays when it has none:
+    :func:`~adaptive_dd.closed_loop.glue.estimator_step` is chosen by their type) and whether
     the trial's model is an estimate to record (``estimates``)."""
 
     cfg: LawConfig
@@ -101,6 +101,9 @@ class CompiledForm(NamedTuple):
     ec: Any
     es: Any
     estimates: bool
+
+
+_NO_EST = (np.zeros(1), np.zeros(1))
 
 
 class Law:
@@ -156,9 +159,7 @@ class Law:
         """The law, a fresh per-trial state and the estimator hooks for ``n_trials`` trials."""
         cfg = self.law_config(sample_period)
         est = cfg.model == MODEL_TRIAL
-        from adaptive_dd.identification.online import est_none
-
-        return CompiledForm(cfg, LawState.start(cfg, n_trials), *est_none(self.arm), est)
+        return CompiledForm(cfg, LawState.start(cfg, n_trials), *_NO_EST, est)
 
     # ------------------------------------------------------------------- Python form
     def reset(self, n_trials: int, sample_period: float) -> None:

@@ -178,16 +178,12 @@ def estimator_work(ec, es):  # pragma: no cover - replaced by the overload
 def estimator_step(ec, es, i, q, qd, tau, ew):  # pragma: no cover - replaced by the overload
     """One sample of trial i's estimator: 1 on an alarm. Chosen at compile time by the type of
     ``ec``: an array means no estimator (never an alarm), an ``EstCfg`` the N-joint online
-    estimator (:func:`~adaptive_dd.identification.online.est_step_trial_in`), skipped
-    when its state ``es`` has no trials
-    (:func:`~adaptive_dd.identification.online.est_none`: the built-in controllers without
-    an estimator pass that, so that every built-in runs one compiled loop)."""
+    estimator (:func:`~adaptive_dd.identification.online.est_step_trial_in`)."""
     raise NotImplementedError("compiled only")
 
 
 def estimator_model(ec, es, i, pi_out, ew):  # pragma: no cover - replaced by the overload
-    """The model control uses ``pi_out (13 n,)`` (left as it is without an estimator, or with a
-    state of no trials)."""
+    """The model control uses ``pi_out (13 n,)`` (left as it is without an estimator)."""
     raise NotImplementedError("compiled only")
 
 
@@ -202,25 +198,14 @@ def _estimator_work(ec, es):
 def _estimator_step(ec, es, i, q, qd, tau, ew):
     if isinstance(ec, types.Array):
         return lambda ec, es, i, q, qd, tau, ew: 0
-
-    def step(ec, es, i, q, qd, tau, ew):
-        if es.theta.shape[0] == 0:  # est_none: no estimator
-            return 0
-        return est_step_trial_in(ec, es, i, q, qd, tau, ew)
-
-    return step
+    return lambda ec, es, i, q, qd, tau, ew: est_step_trial_in(ec, es, i, q, qd, tau, ew)
 
 
 @overload(estimator_model)
 def _estimator_model(ec, es, i, pi_out, ew):
     if isinstance(ec, types.Array):
         return lambda ec, es, i, pi_out, ew: None
-
-    def model(ec, es, i, pi_out, ew):
-        if es.theta.shape[0] > 0:  # not est_none
-            est_model_trial_in(ec, es, i, pi_out, ew)
-
-    return model
+    return lambda ec, es, i, pi_out, ew: est_model_trial_in(ec, es, i, pi_out, ew)
 
 
 @njit(cache=True, inline="always")

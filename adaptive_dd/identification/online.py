@@ -89,7 +89,6 @@ __all__ = [
     "est_model",
     "est_model_trial",
     "est_model_trial_in",
-    "est_none",
     "est_payload_trial",
     "est_step",
     "est_step_trial",
@@ -713,18 +712,6 @@ def est_init(
         fast=np.zeros((m, n)),
     )
     return c, state
-
-
-def est_none(arm: Arm) -> tuple[EstCfg, EstState]:
-    """The records of no estimator: a default configuration and a state of zero trials.
-
-    The compiled closed loop (:func:`~adaptive_dd.closed_loop.glue.estimator_step`) skips the
-    estimator of a zero-trial state, so that a controller without one runs the same compiled
-    loop, of the same argument types, as a controller with one: the loop is compiled once for
-    both, not once each.
-    """
-    c, s = est_init(OnlineConfig(), arm, 1)
-    return c, EstState(*(np.ascontiguousarray(a[:0]) for a in s))
 
 
 class EstInfo(NamedTuple):
