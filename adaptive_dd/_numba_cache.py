@@ -117,13 +117,13 @@ def configure() -> str | None:
 
 
 # ------------------------------------------------------------ telling the user about compilation
-COMPILE_SECONDS = {"two-link": 35.0, "serial": 120.0}
+COMPILE_SECONDS = {"two-link": 35.0, "serial": 145.0}
 """One-time compilation of a benchmark's closed-loop kernels with a cold cache, on 2 cores: a guide
 for the message and ``validate``'s estimate, not a promise. Measured by
 ``benchmarks/compile_profile.py [SCENARIO] --seeds 2`` (an empty ``NUMBA_CACHE_DIR``, every
 built-in controller; CPU seconds inside numba's compilations): 31.6 s for the default two-link
-scenario and 121 s for ``ur5_tool_swap.toml`` (any N-joint arm compiles the same kernels), on a
-2-core machine shared at a load average of 6-15 (the wall time was 5-10x longer there).
+scenario (load average 15) and 146 s for ``ur5_tool_swap.toml`` (load average 6; any N-joint arm
+compiles the same kernels) on a shared 2-core machine, where the wall time was 3-10x longer.
 Compilation runs in one thread before the trials start, so on a machine that is not shared its
 wall time is about its CPU time."""
 
