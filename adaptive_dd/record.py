@@ -263,8 +263,7 @@ def record_spec(table: dict | None, joint_names, kinds, src: str, files=None) ->
 
 
 def _log_files(src: str, t: dict, files) -> tuple[Path, ...]:
-    """The log's files: those of the command line as given, else ``files`` of the table
-    (relative to the scenario file)."""
+    """The log's files: the command line's as given, else the table's (beside the scenario file)."""
     base = Path(src).parent if Path(src).is_file() else Path.cwd()
     raw = files if files else t.get("files")
     if isinstance(raw, str):
@@ -489,8 +488,8 @@ def read_log(spec: RecordSpec, window: tuple[float, float] | None = None, arm=No
 
 
 def _first_clock(spec: RecordSpec, clocks: dict, rows: dict) -> tuple[Array, float]:
-    """The first file's times in the window and the sample period (``spec.sample_period``, else
-    the mean step); a gap of more than ``MAX_GAP_STEPS`` median steps is an error."""
+    """The first file's times in the window and the sample period (given, else the mean step),
+    with no gap of more than ``MAX_GAP_STEPS`` median steps."""
     first = spec.files[0]
     t0 = clocks[first][rows[first]]
     steps = np.diff(t0)
@@ -506,8 +505,7 @@ def _first_clock(spec: RecordSpec, clocks: dict, rows: dict) -> tuple[Array, flo
 
 
 def _resampler(frames: dict, where: dict, clocks: dict, rows: dict, grid: Array):
-    """``column(name, spline) -> (len(grid),)``: a logged column in the window, checked numeric,
-    resampled on ``grid`` by a cubic spline (positions) or linearly (torques, velocities)."""
+    """``column(name, spline)``: a logged column in the window, checked, on ``grid`` (spline or linear)."""
     from scipy.interpolate import CubicSpline
 
     def column(col: str, spline: bool) -> Array:

@@ -175,21 +175,40 @@ def test_sweep_workers_with_a_scheduler_is_an_error(tmp_path, capsys):
 
 
 def test_the_arm_kind_is_asked_in_one_place():
-    """The CLI asks the arm's kind through ``arm.closed_form`` in ``cli/_common.py`` only, and never
-    tests the arm's class (issue 27: the type tests on the arm's class go)."""
+    """The CLI asks the arm's kind through :func:`adaptive_dd.plant.kind.is_two_link` (the package's one
+    place, imported by ``cli/_common.py``), never reads ``closed_form`` itself nor tests the arm's
+    class (issue 27: the type tests on the arm's class go)."""
     import ast
 
-    from adaptive_dd.cli._common import is_two_link, load_arm
-    from adaptive_dd.plant.arm import Arm
-    from adaptive_dd.plant.two_link import TwoLinkArm
+    from adaptive_dd.cli import _common
+    from adaptive_dd.plant import kind
 
-    assert TwoLinkArm.sice().closed_form and not Arm.sice().closed_form
-    assert is_two_link(load_arm(SICE_URDF)) and not is_two_link(load_arm(SICE_URDF, general="test"))
-    asked = []
+    assert _common.is_two_link is kind.is_two_link
+    assert _common.is_two_link(_common.load_arm(SICE_URDF))
+    assert not _common.is_two_link(_common.load_arm(SICE_URDF, general="test"))
     for f in sorted((ROOT / "adaptive_dd" / "cli").glob("*.py")):
         for node in ast.walk(ast.parse(f.read_text())):
-            if isinstance(node, ast.Attribute) and node.attr == "closed_form":
-                asked.append(f.name)
+            assert not (isinstance(node, ast.Attribute) and node.attr == "closed_form"), f.name
             if isinstance(node, ast.Call) and getattr(node.func, "id", None) == "isinstance":
                 assert "Arm" not in ast.unparse(node.args[1]), f"{f.name}: {ast.unparse(node)}"
-    assert asked == ["_common.py"]
+            if isinstance(node, ast.FunctionDef):
+                assert node.name not in ("is_two_link", "is_chain"), f"{f.name}: a second {node.name}"
+
+
+@pytest.mark.parametrize("scenario", [None, "adaptive_dd/scenarios/ur5_tool_swap.toml"])
+def test_benchmark_controllers_option_keeps_the_floor(scenario, capsys):
+    """``benchmark --controllers adaptive_ct`` runs adaptive_ct and its floor ct_oracle (said on
+    stderr), in the scenario's order, on either arm; a name the scenario lacks is a usage error."""
+    from adaptive_dd.benchmark.scenario import load_scenario
+    from adaptive_dd.cli import main
+    from adaptive_dd.cli.benchmark import only_controllers
+
+    root = Path(__file__).resolve().parents[1]
+    sc = load_scenario(None if scenario is None else root / scenario)
+    assert only_controllers(sc, ["adaptive_ct"]) == ("ct_oracle", "adaptive_ct")
+    assert "ct_oracle added (the floor of adaptive_ct)" in capsys.readouterr().err
+    assert only_controllers(sc, ["pd", "ct_oracle"]) == ("pd", "ct_oracle")
+    args = ["benchmark"] + ([] if scenario is None else [str(root / scenario)])
+    assert main([*args, "--controllers", "adaptive_ct", "no_such_law", "--no-progress"]) == 2
+    err = capsys.readouterr().err
+    assert "no_such_law not among" in err and "adaptive_ct" in err

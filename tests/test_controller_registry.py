@@ -117,3 +117,19 @@ def test_the_docs_page_holds_the_registry_table():
         "docs/controllers.md's controller table is out of step with CONTROLLERS: paste the output of "
         "python -c 'from adaptive_dd.controllers.registry import inventory; print(inventory())'"
     )
+
+
+def test_validate_says_each_arms_default_from_the_table():
+    from importlib import resources
+
+    from adaptive_dd.benchmark.preflight import resolved_settings
+    from adaptive_dd.benchmark.scenario import load_scenario
+
+    two = resolved_settings(load_scenario())
+    ur5 = load_scenario(str(resources.files("adaptive_dd.scenarios").joinpath("ur5_tool_swap_exact.toml")))
+    chain = resolved_settings(ur5)
+    assert "controllers.slotine_li.max_mass = 5.0 kg   (default)" in two
+    assert "controllers.slotine_li.max_mass = 20.0 kg   (default)" in chain
+    assert "controllers.adaptive_ct.boost_duration = 0.2 s   (default)" in two
+    assert "controllers.adaptive_ct.boost_duration = 1.0 s   (default)" in chain
+    assert not any("adaptive_ct_paper" in line for line in two + chain)

@@ -112,24 +112,30 @@ def controller_problems(scenario) -> list[str]:
 
 
 def resolved_settings(scenario) -> list[str]:
-    """``controllers.NAME.key = value`` of the settings whose default differs between the arms
-    (``adaptive_ct``'s boost), ``(default)`` marked: what the run will use, said before it runs."""
-    from adaptive_dd.benchmark.runner import scenario_controller
+    """``controllers.NAME.key = value`` of each listed built-in's settings with a value default in
+    :data:`~adaptive_dd.controllers.CONTROLLERS` (``adaptive_ct``'s boost, ``slotine_li``'s gains
+    and box), ``(default)`` marked: what the run will use on this arm, said before it runs
+    (several differ between the arms, by the rule the table states)."""
+    from adaptive_dd.controllers.registry import ABSENT, CONTROLLERS, controller_label
+    from adaptive_dd.plant.kind import arm_kind
 
+    kind = arm_kind(scenario.arm)
     out = []
     for spec in scenario.controllers:
-        try:
-            label, ctrl = scenario_controller(scenario, spec)
-        except Exception:  # reported by controller_problems
+        entry = CONTROLLERS.get(spec)
+        if entry is None or not entry.applies_to(kind):  # plug-ins; reported by controller_problems
             continue
-        if getattr(ctrl, "boost_bandwidth", None) is None:  # no boost (adaptive_ct_paper, the others)
-            continue
-        given = scenario.options(label) or scenario.options(spec)
-        for key, unit in (("boost_bandwidth", "rad/s"), ("boost_duration", "s")):
-            v = getattr(ctrl, key, None)
-            if v is not None:
-                mark = "" if key in given else "   (default)"
-                out.append(f"controllers.{label}.{key} = {v!r} {unit}{mark}")
+        given = scenario.options(spec)
+        label = controller_label(spec, given)
+        for key, st in entry.settings.items():
+            default = st.default(kind)
+            if default is None or default is ABSENT:
+                continue
+            v = given.get(key, default)
+            if isinstance(v, tuple | list):
+                v = list(v)
+            mark = "" if key in given else "   (default)"
+            out.append(f"controllers.{label}.{key} = {v!r}{' ' + st.unit if st.unit else ''}{mark}")
     return out
 
 

@@ -1,8 +1,8 @@
 """What the command modules share: checked option types, the refusal of an option that does
-not apply, the arm a command works on (:func:`load_arm`, and :func:`is_two_link`, the one
-place the command line tells the paper's closed-form arm from any other), what ``validate``
-prints of a URDF arm (:func:`describe_arm`) and a log read through a scenario's ``[record]``
-(:func:`read_arm_log`)."""
+not apply, the arm a command works on (:func:`load_arm`; the paper's closed-form arm is told from
+any other by :func:`adaptive_dd.plant.kind.is_two_link`, the package's one place, imported here
+for the commands), what ``validate`` prints of a URDF arm (:func:`describe_arm`) and a log read
+through a scenario's ``[record]`` (:func:`read_arm_log`)."""
 
 from __future__ import annotations
 
@@ -11,6 +11,7 @@ import math
 from pathlib import Path
 
 from adaptive_dd.errors import ParameterError
+from adaptive_dd.plant.kind import is_two_link  # the one place the package asks an arm's kind
 
 NAME_WIDTH = 44
 
@@ -71,14 +72,6 @@ def refuse(args: argparse.Namespace, options: tuple[str, ...], why: str, error=P
 def short(name: str) -> str:
     """``name`` cut to :data:`NAME_WIDTH` characters (a base parameter's name in a table)."""
     return name if len(name) <= NAME_WIDTH else name[: NAME_WIDTH - 3] + "..."
-
-
-def is_two_link(arm) -> bool:
-    """True for the paper's closed-form two-link arm (:class:`~adaptive_dd.plant.two_link.TwoLinkArm`:
-    the SICE arm, an arm of the paper's tables, or a URDF of the paper's kind), False for any other
-    arm (:class:`~adaptive_dd.plant.arm.Arm`): the arm's ``closed_form``. The one place the command
-    line asks."""
-    return arm.closed_form
 
 
 def arm_label(args_arm: str | None, arm) -> str:

@@ -24,6 +24,12 @@ def add_parser(sub) -> None:
     b.add_argument("--json", metavar="PATH", help="where to write the JSON (default OUT/metrics.json)")
     b.add_argument("--seeds", type=SEEDS, help="override the scenario's number of seeds")
     b.add_argument(
+        "--controllers",
+        nargs="+",
+        metavar="NAME",
+        help="run only these of the scenario's controllers (each one's floor is added: ratios need it)",
+    )
+    b.add_argument(
         "--figure-formats",
         nargs="+",
         default=["png"],
@@ -44,6 +50,8 @@ def run(args: argparse.Namespace) -> int:
     sc = load_scenario(args.scenario)
     if args.seeds is not None:
         sc = dataclasses.replace(sc, seeds=args.seeds)
+    if args.controllers:
+        sc = dataclasses.replace(sc, controllers=only_controllers(sc, args.controllers))
     if sc.estimate().large:
         print(f"estimate: {sc.estimate()}", file=sys.stderr)
     outputs = OutputSet(args.out, extras=(args.json,) if args.json else ())
@@ -95,3 +103,25 @@ def _figures(res, sc, outputs, out: Path, fmts: tuple) -> list[Path]:
         plot_joint_errors(res, outputs.path("joint_errors.png"), formats=fmts)
         written += [out / f"joint_errors.{f}" for f in fmts]
     return written
+
+
+def only_controllers(sc, names: list[str]) -> tuple[str, ...]:
+    """The scenario's controllers among ``names``, with the floor of each (``adaptive_ct`` brings
+    ``ct_oracle``), in the scenario's order; a name the scenario does not list is an error naming
+    the scenario's list."""
+    from adaptive_dd.benchmark.runner import scenario_controller
+    from adaptive_dd.errors import ParameterError
+
+    unknown = [n for n in names if n not in sc.controllers]
+    if unknown:
+        raise ParameterError(
+            f"--controllers: {', '.join(unknown)} not among {sc.source}'s controllers "
+            f"{list(sc.controllers)}; name some of those"
+        )
+    keep = set(names)
+    for n in names:
+        floor = getattr(scenario_controller(sc, n)[1], "floor", None)
+        if floor is not None and floor not in keep and floor in sc.controllers:
+            keep.add(floor)
+            print(f"--controllers: {floor} added (the floor of {n})", file=sys.stderr)
+    return tuple(c for c in sc.controllers if c in keep)

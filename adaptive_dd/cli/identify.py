@@ -15,6 +15,7 @@ from adaptive_dd.cli._common import (
     POS,
     add_command,
     add_window_option,
+    arm_label,
     is_two_link,
     load_arm,
     number,
@@ -152,7 +153,12 @@ def run(args: argparse.Namespace) -> int:
     if is_two_link(arm):
         from adaptive_dd.cli._identify_two_link import identify_two_link
 
-        refuse(args, ARM_OPTIONS, "only with --arm SCENARIO of an N-joint arm from a URDF", DataError)
+        why = (
+            "only with --arm SCENARIO of an arm from a URDF, identified by weighted least squares; the "
+            f"{arm_label(args.arm, arm)} is identified by the paper's estimators ([arm] general = true "
+            "takes a URDF of the paper's kind to the general path)"
+        )
+        refuse(args, ARM_OPTIONS, why, DataError)
         return identify_two_link(args, arm)
     from adaptive_dd.cli._identify_log import identify_log
     from adaptive_dd.outputs import OutputSet

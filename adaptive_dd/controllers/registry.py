@@ -158,6 +158,7 @@ class Setting:
     two_link: Any = None
     chain: Any = None
     rule: str = ""
+    unit: str = ""
 
     def default(self, kind: str) -> Any:
         return self.two_link if kind == "two_link" else self.chain
@@ -231,11 +232,13 @@ _BOOST = {
         "bandwidth [rad/s] of the feedback for boost_duration after each alarm (through the nominal inertia)",
         300.0,
         300.0,
+        unit="rad/s",
     ),
     "boost_duration": Setting(
         "how long the boost lasts after an alarm [s]",
         0.2,
         1.0,
+        unit="s",
         rule="the boost lasts while the estimator learns the new payload: the paper's sigma (two-link) "
         "within tens of ms, an N-joint payload's centre of mass and inertia over a few hundred "
         "(docs/controllers.md, studies/boost_ablation.py)",
@@ -268,8 +271,8 @@ _SLOTINE = {
         (2.0, 0.2, 0.2, 0.2, 0.02, 0.02, 0.02, 0.02, 0.02, 0.02),
         rule=_GAMMA_RULE,
     ),
-    "max_mass": Setting("the heaviest payload the a-priori box admits [kg]", 5.0, 20.0, rule=_BOX_RULE),
-    "com_radius": Setting("the payload's size in the a-priori box [m]", 0.1, 0.3, rule=_BOX_RULE),
+    "max_mass": Setting("the heaviest payload the a-priori box admits [kg]", 5.0, 20.0, _BOX_RULE, "kg"),
+    "com_radius": Setting("the payload's size in the a-priori box [m]", 0.1, 0.3, _BOX_RULE, "m"),
 }
 _TWO_LINK_ONLY = (
     "the paper's estimator (eq. 19, split 15) of the two-link arm's seven base parameters; "
@@ -446,7 +449,7 @@ def _detector_at_the_top(spec: str, o: dict) -> dict:
         f"controllers.{spec}.estimator.detector: write the detector's table at the top of "
         f"[controllers.{spec}] (detector = {{...}} or false); inside 'estimator' is accepted for now",
         FutureWarning,
-        stacklevel=4,
+        stacklevel=2,  # one place: shown once per run, not once per caller
     )
     return {**o, "estimator": {k: v for k, v in est.items() if k != "detector"}, "detector": est["detector"]}
 

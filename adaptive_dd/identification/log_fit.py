@@ -230,10 +230,8 @@ def fit_log(
     )
     phi, y = _identified_regression(model, reg, used, K)
     cw = np.ones(model.n) if channel_weight is None else np.asarray(channel_weight, dtype=float)
-    x, res, w = _reweighted_fit(phi, y, cw[used])
-    cov_k, lag = _newey_west(
-        phi, res, w, np.linalg.norm((phi * w[None, :, None]).reshape(-1, K.sum()), axis=0)
-    )
+    x, res, w, scale = _reweighted_fit(phi, y, cw[used])
+    cov_k, lag = _newey_west(phi, res, w, scale)
     sigma, cov, residual, weights = _in_full(model, K, used, x, cov_k, res, w)
     return LogFit(
         sigma=sigma,
@@ -284,9 +282,10 @@ def _in_full(model: Model, K, used, x: Array, cov_k: Array, res: Array, w: Array
     return sigma, cov, residual, weights
 
 
-def _reweighted_fit(phi: Array, y: Array, cw: Array) -> tuple[Array, Array, Array]:
+def _reweighted_fit(phi: Array, y: Array, cw: Array) -> tuple[Array, Array, Array, Array]:
     """The weighted fit after three rounds of the weighting rule (module docstring): the
-    estimate, its residuals ``(N, m)`` and the channel weights ``cw / rms`` used."""
+    estimate, its residuals ``(N, m)``, the channel weights ``cw / rms`` used and the column
+    scale of the weighted regressor (:func:`_solve`)."""
     w = cw.copy()
     for _ in range(3):
         x, _ = _solve(phi, y, w)
@@ -294,8 +293,8 @@ def _reweighted_fit(phi: Array, y: Array, cw: Array) -> tuple[Array, Array, Arra
         rms = np.sqrt(np.mean(res**2, axis=0))
         s = np.maximum(rms, WEIGHT_FLOOR * np.median(rms))
         w = cw / np.maximum(s, 1e-300)
-    x, _scale = _solve(phi, y, w)
-    return x, y - phi @ x, w
+    x, scale = _solve(phi, y, w)
+    return x, y - phi @ x, w, scale
 
 
 def predict_torque(model: Model, sigma: Array, q: Array, qd: Array, qdd: Array) -> Array:

@@ -326,6 +326,11 @@ def fit_output_error(
         return _jacobians(model, pi, xs, tau_s, T, E, w)
 
     fit = _levenberg_marquardt(residuals, jacobians, theta, y[:, 0].copy(), max_iter, rtol)
+    return _result(fit, s0, E, jacobians, L)
+
+
+def _result(fit: _Fit, s0: Array, E: Array, jacobians, L: int) -> OutputErrorResult:
+    """The estimate where the iterations stopped, with its Cramér-Rao bound (segment states unknown)."""
     S, _, _, _ = schur_information(*jacobians(fit.pi, fit.xs))
     std_theta = np.sqrt(np.abs(np.diag(np.linalg.inv(S))))
     return OutputErrorResult(

@@ -136,20 +136,62 @@ def simulate_record(
     SignalError
         If the simulated state becomes non-finite.
     """
-    n = arm.n_joints
+    _check_timing(duration, sample_period, bandwidth)
+    t, ref = _reference_samples(reference, duration, sample_period, arm.n_joints)
+    model = arm_model(arm)
+    pp = np.zeros(10) if payload is None else np.asarray(payload, dtype=float).reshape(10)
+    pi_true = pi_with_payload(arm, model.pi_ref, pp)
+    step = _plant_step(plant, arm, model, pi_true, len(rngs), sample_period, substeps)
+    out, sat_count = _track(arm, model, pi_true, ref, rngs, step, bandwidth, noise, quantize)
+    return Record(
+        t=t,
+        pi_true=pi_true,
+        sigma_true=model.B @ pi_true,
+        payload=pp,
+        sample_period=float(sample_period),
+        saturated=sat_count / t.size,
+        **out,
+    )
+
+
+def _check_timing(duration: float, sample_period: float, bandwidth: float) -> None:
     if not (np.isfinite(duration) and duration >= 10 * sample_period and sample_period > 0):
         raise ParameterError(f"need duration >= 10 samples of T > 0, got {duration} s, T = {sample_period} s")
     if not (0 < bandwidth * sample_period <= 0.2):
         raise ParameterError(f"bandwidth {bandwidth} rad/s with T = {sample_period} s: need 0 < w T <= 0.2")
+
+
+def _reference_samples(reference, duration: float, sample_period: float, n: int):
+    """The sample instants ``t (N,)`` and the reference ``(q_d, qd_d, qdd_d)`` there, each ``(N, n)``."""
     N = round(duration / sample_period)
     t = np.arange(N) * sample_period
-    qd_ref, qdd_ref_v, qdd_ref = reference.sample(t)
-    if qd_ref.shape != (N, n):
-        raise ParameterError(f"the reference has {qd_ref.shape[-1]} joints, the arm {n}")
-    model = arm_model(arm)
-    pp = np.zeros(10) if payload is None else np.asarray(payload, dtype=float).reshape(10)
-    pi_true = pi_with_payload(arm, model.pi_ref, pp)
-    S = len(rngs)
+    ref = reference.sample(t)
+    if ref[0].shape != (N, n):
+        raise ParameterError(f"the reference has {ref[0].shape[-1]} joints, the arm {n}")
+    return t, ref
+
+
+def _plant_step(plant: str, arm, model: Model, pi_true: Array, S: int, T: float, substeps: int):
+    """``step(q, qd, tau) -> (q, qd)`` over one sample: the model's RK4 or the benchmark's plant."""
+    if plant not in ("model", "serial"):
+        raise ParameterError(f"plant must be 'model' or 'serial', got {plant!r}")
+    if plant == "serial":
+        return _stepper(arm, model, pi_true, S, T, substeps)
+    return lambda q, qd, tau: rk4_step(model, pi_true, q, qd, tau, T, substeps)
+
+
+def _track(arm, model: Model, pi_true: Array, ref, rngs, step, bandwidth: float, noise: bool, quantize: bool):
+    """Computed torque along ``ref = (q_d, qd_d, qdd_d)`` (each ``(N, n)``), sample by sample, from
+    the reference's first state; ``step(q, qd, tau) -> (q, qd)`` advances the plant one sample.
+
+    Returns the measured, applied and true signals ``q, qd, tau, q_true, qd_true`` (each
+    ``(S, N, n)``, a dict) and the count of saturated samples ``(S, n)``; a non-finite
+    measurement is an error.
+    """
+    from adaptive_dd.plant.sampling import actuate_batch, measure_batch
+
+    q_d, qd_d, qdd_d = ref
+    (N, n), S = q_d.shape, len(rngs)
     sensor, act = arm.sensor, arm.actuator
     std = sensor.noise_std if noise else np.zeros(2 * n)
     res = sensor.resolution
@@ -157,13 +199,8 @@ def simulate_record(
         np.asarray(act.torque_limit, float),
         2.0 * np.asarray(act.torque_limit, float) / 2**act.dac_bits,
     )
-    from adaptive_dd.plant.sampling import actuate_batch, measure_batch
-
-    if plant not in ("model", "serial"):
-        raise ParameterError(f"plant must be 'model' or 'serial', got {plant!r}")
-    step = _stepper(arm, model, pi_true, S, sample_period, substeps) if plant == "serial" else None
-    q = np.repeat(qd_ref[:1], S, axis=0).copy()
-    qd = np.repeat(qdd_ref_v[:1], S, axis=0).copy()
+    q = np.repeat(q_d[:1], S, axis=0).copy()
+    qd = np.repeat(qd_d[:1], S, axis=0).copy()
     out = {k: np.empty((S, N, n)) for k in ("q", "qd", "tau", "q_true", "qd_true")}
     sat_count = np.zeros((S, n))
     kp, kd = bandwidth**2, 2.0 * bandwidth
@@ -174,7 +211,7 @@ def simulate_record(
             z = np.stack([g.standard_normal((m, 2 * n)) for g in rngs], axis=1)  # (m, S, 2n)
         qm, qdm = np.empty_like(q), np.empty_like(qd)
         measure_batch(q, qd, np.ascontiguousarray(z[k % block]), res, std, quantize, qm, qdm)
-        a = qdd_ref[k] + kd * (qdd_ref_v[k] - qdm) + kp * (qd_ref[k] - qm)
+        a = qdd_d[k] + kd * (qd_d[k] - qdm) + kp * (q_d[k] - qm)
         cmd = inverse_dynamics_pi(model, pi_true, qm, qdm, a)
         tau = np.empty_like(cmd)
         sat = np.empty(cmd.shape, dtype=np.bool_)
@@ -182,21 +219,10 @@ def simulate_record(
         sat_count += sat
         for key, v in (("q", qm), ("qd", qdm), ("tau", tau), ("q_true", q), ("qd_true", qd)):
             out[key][:, k] = v
-        if step is None:
-            q, qd = rk4_step(model, pi_true, q, qd, tau, sample_period, substeps)
-        else:
-            q, qd = step(q, qd, tau)
+        q, qd = step(q, qd, tau)
     if not np.all(np.isfinite(out["q"])):
         raise SignalError("simulate_record: non-finite measurement")
-    return Record(
-        t=t,
-        pi_true=pi_true,
-        sigma_true=model.B @ pi_true,
-        payload=pp,
-        sample_period=float(sample_period),
-        saturated=sat_count / N,
-        **out,
-    )
+    return out, sat_count
 
 
 def _stepper(arm, model: Model, pi: Array, S: int, T: float, substeps: int):

@@ -204,6 +204,11 @@ def output_error_fit(
     p0 = np.concatenate((validate_sigma(sigma0), (nodes0 if x0_ is None else nodes0[1:]).ravel()))
     # Levenberg-Marquardt (MINPACK, QR): the dense Jacobian has ~4 N rows and 7 + 4 N / L columns
     sol = least_squares(prob.residuals, p0, jac=prob.jacobian, x_scale="jac", max_nfev=max_nfev, method="lm")
+    return _result(prob, sol, int(segment_length))
+
+
+def _result(prob: _Problem, sol, segment_length: int) -> TwoLinkOutputErrorResult:
+    """The solver's solution as the estimate, its standard deviations and the segment states."""
     sg, nodes = prob.split(sol.x)
     return TwoLinkOutputErrorResult(
         sg.copy(),
@@ -214,7 +219,7 @@ def output_error_fit(
         int(sol.nfev),
         bool(sol.success),
         str(sol.message),
-        int(segment_length),
+        segment_length,
     )
 
 

@@ -14,8 +14,8 @@ Each class states its kind as the class attribute ``closed_form`` (True on ``Two
 module that chooses between the two paths asks here (``is_two_link`` / ``is_chain``), so the day
 the closed forms become a fast path of :class:`Arm` the choice changes in one file.
 ``tests/test_arm_kind.py`` fails when a type test on the arm's class appears anywhere in the
-package (the classes' own ``__eq__`` aside); the command line asks through
-``adaptive_dd.cli._common.is_two_link``, which reads the same attribute.
+package (the classes' own ``__eq__`` aside); the command line asks here too (through
+``adaptive_dd.cli._common``, which imports :func:`is_two_link`).
 """
 
 from __future__ import annotations
