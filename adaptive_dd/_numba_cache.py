@@ -1,29 +1,90 @@
-"""Where numba caches the compiled kernels: one folder per state of the package's source.
+"""Where numba caches the compiled kernels: one folder per state of the kernels' source.
 
 numba's own cache (``cache=True``) is invalidated by the source file of the function it
 compiled, not by the files of the functions that one calls: after an edit of, say, the
 estimator kernel, the closed loop that inlines it would silently run the old code from
-``__pycache__``. Keying the cache folder by a hash of every source file of the package
-rules that out (a changed file gives a fresh folder and one compilation). The folder is
-``$XDG_CACHE_HOME/adaptive_dd/numba/<hash>`` (``~/.cache`` by default); the 8 newest are kept.
-Setting ``NUMBA_CACHE_DIR`` yourself turns this off.
+``__pycache__``. Keying the cache folder by a hash of every source file compiled code can
+depend on rules that out (a changed file gives a fresh folder and one compilation). Those files
+(:func:`kernel_sources`) are the modules that define compiled functions (``@njit``, ``@overload``,
+...) or the ``NamedTuple`` records passed to them, every package module they import (at the top
+or inside a function, directly or through another), the package's ``__init__.py`` and this file;
+an edit elsewhere (the command line, the reports, the docs' examples) keeps the compiled kernels.
+The folder is ``$XDG_CACHE_HOME/adaptive_dd/numba/<hash>`` (``~/.cache`` by default); the 8
+newest are kept. Setting ``NUMBA_CACHE_DIR`` yourself turns this off.
 """
 
 from __future__ import annotations
 
 import hashlib
 import os
+import re
 import shutil
 from contextlib import contextmanager
 from pathlib import Path
 
 KEEP = 8
 
+_COMPILES = re.compile(
+    r"@(?:numba\.)?(?:njit|jit|overload\w*|register_jitable|intrinsic|vectorize|guvectorize|jitclass)\b"
+)
+"""Text of a module that defines compiled code."""
+_RECORDS = re.compile(r"\bNamedTuple\b|\bnamedtuple\(")
+"""Text of a module that may define a record type compiled code receives (its fields are read by
+position in the compiled code)."""
+_IMPORT = re.compile(
+    r"^[ \t]*(?:from[ \t]+(\.*[\w.]*)[ \t]+import[ \t]+(\([^)]*\)|[^\n]*)|import[ \t]+([^\n]*))", re.M
+)
+
+
+def _module_name(package: Path, f: Path) -> str:
+    parts = list(f.relative_to(package.parent).with_suffix("").parts)
+    return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
+
+
+def _imported(name: str, is_package: bool, text: str, modules: dict) -> set[str]:
+    """The package's modules that module ``name`` imports anywhere in its text (at the top, in a
+    function, or in a docstring's example: too many is safe, too few would not be)."""
+    here = name.split(".") if is_package else name.split(".")[:-1]
+    found = set()
+    for base, what, plain in _IMPORT.findall(text):
+        if plain:
+            names = [w.split(" as ")[0].strip() for w in plain.split("#")[0].split(",")]
+        else:
+            if base.startswith("."):
+                level = len(base) - len(base.lstrip("."))
+                rest = base[level:]
+                base = ".".join([*here[: len(here) - level + 1], *([rest] if rest else [])])
+            items = what.split("#")[0].strip("()").replace("\n", " ").split(",")
+            names = [base, *(f"{base}.{w.split(' as ')[0].strip()}" for w in items if w.strip())]
+        # the module named (``from a.b import c``: a.b, and a.b.c if c is a module); not the
+        # packages above it, whose __init__ runs but whose names the importer does not read
+        found |= set(names) & modules.keys()
+    return found
+
+
+def kernel_sources(package: Path) -> list[Path]:
+    """The package's ``.py`` files that compiled code can depend on (module docstring), sorted:
+    the modules defining compiled code and, recursively, the package modules they import; the
+    modules defining records (``NamedTuple``); the package's ``__init__.py`` and this file."""
+    modules = {_module_name(package, f): f for f in package.rglob("*.py")}
+    texts = {m: f.read_text(encoding="utf-8", errors="replace") for m, f in modules.items()}
+    names = ("__init__.py", Path(__file__).name)
+    setup = {m for m, f in modules.items() if f.parent == package and f.name in names}
+    keep = setup | {m for m, t in texts.items() if _RECORDS.search(t)}
+    todo = [m for m, t in texts.items() if _COMPILES.search(t) and m not in setup]
+    seen: set[str] = set()
+    while todo:
+        m = todo.pop()
+        if m not in seen:
+            seen.add(m)
+            todo.extend(_imported(m, modules[m].name == "__init__.py", texts[m], modules) - seen)
+    return sorted(modules[m] for m in seen | keep)
+
 
 def source_hash(package: Path) -> str:
-    """SHA-1 of every ``.py`` file of the package (names and contents), 16 hex digits."""
+    """SHA-1 of the files of :func:`kernel_sources` (names and contents), 16 hex digits."""
     h = hashlib.sha1()
-    for f in sorted(package.rglob("*.py")):
+    for f in kernel_sources(package):
         h.update(f.relative_to(package).as_posix().encode())
         h.update(f.read_bytes())
     return h.hexdigest()[:16]
@@ -56,14 +117,15 @@ def configure() -> str | None:
 
 
 # ------------------------------------------------------------ telling the user about compilation
-COMPILE_SECONDS = {"two-link": 60.0, "serial": 190.0}
+COMPILE_SECONDS = {"two-link": 35.0, "serial": 145.0}
 """One-time compilation of a benchmark's closed-loop kernels with a cold cache, on 2 cores: a guide
-for the message and ``validate``'s estimate, not a promise. Measured as the CPU time (user + sys,
-``/usr/bin/time -v``) of ``adaptive-dd benchmark`` with an empty ``NUMBA_CACHE_DIR``, every
-built-in controller, on a shared 2-core machine: 65 s for the default two-link scenario (10
-seeds, runs included) and 211 s for ``ur5_tool_swap.toml`` (2 seeds); their wall times under a
-load average of 8-11 were 4x longer. Compilation is mostly single-threaded, so its CPU time is
-its wall time on a machine that is not shared."""
+for the message and ``validate``'s estimate, not a promise. Measured by
+``benchmarks/compile_profile.py [SCENARIO] --seeds 2`` (an empty ``NUMBA_CACHE_DIR``, every
+built-in controller; CPU seconds inside numba's compilations): 31.6 s for the default two-link
+scenario (load average 15) and 146 s for ``ur5_tool_swap.toml`` (load average 6; any N-joint arm
+compiles the same kernels) on a shared 2-core machine, where the wall time was 3-10x longer.
+Compilation runs in one thread before the trials start, so on a machine that is not shared its
+wall time is about its CPU time."""
 
 
 def _closed_loop_kernel(serial: bool):

@@ -1,4 +1,4 @@
-"""The compiled-kernel cache is keyed by the whole package source (stale kernels cannot run)."""
+"""The compiled-kernel cache is keyed by the source compiled code can depend on (stale kernels cannot run)."""
 
 from __future__ import annotations
 
@@ -7,17 +7,77 @@ import numba
 from adaptive_dd import _numba_cache
 
 
-def test_any_source_change_gives_another_cache_folder(tmp_path):
-    pkg = tmp_path / "pkg"
-    (pkg / "sub").mkdir(parents=True)
-    (pkg / "a.py").write_text("x = 1\n")
-    (pkg / "sub" / "b.py").write_text("y = 2\n")
+def _package(root):
+    """A package with a kernel module, what it imports (at the top, relatively, inside a function),
+    a record type, and a command line that imports the kernel."""
+    files = {
+        "__init__.py": "",
+        "_numba_cache.py": "",
+        "kern.py": (
+            "from numba import njit\nfrom pkg.consts import K\nfrom . import helpers\n\n\n"
+            "@njit\ndef f(x):\n    return x + K + helpers.H\n\n\ndef lazy():\n"
+            "    from pkg.sub.late import L\n    return L\n"
+        ),
+        "consts.py": "K = 1\n",
+        "helpers.py": "H = 2\n",
+        "records.py": "from typing import NamedTuple\n\n\nclass R(NamedTuple):\n    a: float\n    b: float\n",
+        "sub/__init__.py": "",
+        "sub/late.py": "L = 3\n",
+        "cli.py": "from pkg.kern import f\n\nprint(f(1))\n",
+        "report.py": "import pkg.cli\n",
+    }
+    for name, text in files.items():
+        (root / name).parent.mkdir(parents=True, exist_ok=True)
+        (root / name).write_text(text)
+    return root
+
+
+def test_a_change_that_compiled_code_can_see_gives_another_cache_folder(tmp_path):
+    pkg = _package(tmp_path / "pkg")
     h0 = _numba_cache.source_hash(pkg)
     assert _numba_cache.source_hash(pkg) == h0
-    (pkg / "sub" / "b.py").write_text("y = 3\n")  # a callee's file, not the caller's
-    h1 = _numba_cache.source_hash(pkg)
-    (pkg / "sub" / "b.py").rename(pkg / "b2.py")  # same bytes, another module
-    assert len({h0, h1, _numba_cache.source_hash(pkg)}) == 3
+    seen = {h0}
+    # the kernel, what it imports (absolute, relative, inside a function), a record type, the
+    # package's __init__: each edit is a new folder (a callee's file, not the caller's)
+    for name in ("kern.py", "consts.py", "helpers.py", "sub/late.py", "records.py", "__init__.py"):
+        f = pkg / name
+        f.write_text(f.read_text() + "\n# edited\n")
+        h = _numba_cache.source_hash(pkg)
+        assert h not in seen, name
+        seen.add(h)
+    (pkg / "consts.py").rename(pkg / "consts2.py")  # same bytes, another module
+    assert _numba_cache.source_hash(pkg) not in seen
+
+
+def test_a_change_no_compiled_code_can_see_keeps_the_cache_folder(tmp_path):
+    pkg = _package(tmp_path / "pkg")
+    h0 = _numba_cache.source_hash(pkg)
+    (pkg / "cli.py").write_text("from pkg.kern import f\n\nprint(f(2))\n")
+    (pkg / "report.py").write_text("import pkg.cli  # the report\n")
+    (pkg / "docs_example.py").write_text("import pkg.kern\n")
+    assert _numba_cache.source_hash(pkg) == h0
+    names = {f.relative_to(pkg).as_posix() for f in _numba_cache.kernel_sources(pkg)}
+    assert names == {"__init__.py", "_numba_cache.py", "kern.py", "consts.py", "helpers.py", "sub/late.py",
+                     "records.py"}  # fmt: skip
+
+
+def test_the_key_covers_every_module_of_compiled_code_in_the_package():
+    """Every module that compiles, and every package module it imports, is in the key; the
+    command line and the reports are not (an edit there does not recompile)."""
+    import re
+    from pathlib import Path
+
+    import adaptive_dd
+
+    pkg = Path(adaptive_dd.__file__).resolve().parent
+    keyed = set(_numba_cache.kernel_sources(pkg))
+    for f in pkg.rglob("*.py"):
+        if re.search(r"^\s*@(njit|overload)", f.read_text(), re.M):
+            assert f in keyed, f
+    assert pkg / "plant" / "chain.py" in keyed and pkg / "closed_loop" / "types.py" in keyed
+    cli = [f for f in pkg.rglob("*.py") if f.relative_to(pkg).parts[0] in ("cli", "cli.py")]
+    assert cli and not keyed & set(cli)
+    assert pkg / "benchmark" / "report.py" not in keyed
 
 
 def test_the_package_uses_its_folder_unless_the_user_sets_one(monkeypatch, tmp_path):

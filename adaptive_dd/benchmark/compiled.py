@@ -160,7 +160,9 @@ def closed_loop_block(k0, k1, noise, drop, rc, io, pl, g, ts, es, ec, acc, rec, 
         Change-detector alarm times [s] (the count stops at the capacity).
     """
     for i in prange(ts.q.shape[0]):
-        trial_block(i, k0, k1, noise, drop, rc, io, pl, g, ts, es, ec, acc, rec, alarms)
+        # np.int64: the parallel loop's index is uint64 once lowered and int64 when typed; the
+        # same type in both compiles trial_block (the sample loop) once, not twice
+        trial_block(np.int64(i), k0, k1, noise, drop, rc, io, pl, g, ts, es, ec, acc, rec, alarms)
 
 
 @njit(cache=True, inline="always")
@@ -259,7 +261,8 @@ def record_estimate(seg_end, sigma_end, sigma_rec, i, k, s, theta):  # pragma: n
     (``seg_end``) into ``sigma_end (S, G, 7)``, and into ``sigma_rec`` (the recording's ``sigma``)
     for its first ``sigma_rec.shape[0]`` trials."""
     if k == seg_end[s] - 1:
-        sigma_end[i, s] = theta
+        for j in range(7):  # a loop, not sigma_end[i, s] = theta: numba would compile the
+            sigma_end[i, s, j] = theta[j]  # slice assignment's shape-error message (string code)
     if i < sigma_rec.shape[0]:
         for j in range(7):
             sigma_rec[i, k, j] = theta[j]

@@ -34,6 +34,7 @@ from functools import cached_property, lru_cache
 from typing import NamedTuple
 
 import numpy as np
+import scipy.linalg.lapack
 from numpy.typing import ArrayLike, NDArray
 
 from adaptive_dd.errors import ParameterError, SignalError
@@ -398,6 +399,11 @@ class TwoLinkOnlineConfig:
         d = np.asarray(self.payload_direction, dtype=float)
         rows = np.array(SPLIT_STAGES[self.split][0], dtype=np.int64)
         mats = (np.ascontiguousarray(b.A), np.ascontiguousarray(b.B[:, 0]), np.ascontiguousarray(b.C))
+        # the filters' state under a unit constant input, (I - A)^-1 B, after the settings
+        # (slot F_XS0 on): LAPACK's dgesv, the routine numba's np.linalg.solve calls, so the
+        # same numbers as solving in the kernel, which then need not compile numba's solve
+        xs0 = scipy.linalg.lapack.dgesv(np.eye(mats[0].shape[0]) - mats[0], mats[1])[2]
+        cf = np.concatenate((cf, xs0))
         return (ci, cf, *mats, np.ascontiguousarray(b.D[:, 0]), d, self.group, rows)
 
     def initial_covariance(self) -> Array:

@@ -66,6 +66,7 @@ F_HETERO = 19  # a candidate's score is A^2 / B - heterogeneity / F_HETERO
 F_DET_SPEED = 20  # [rad/s] an equation feeds the payload tests only while its joint is faster
 F_REMOVAL = 21  # a GLR alarm may claim removing at most this many times the mass carried (+ min_mass)
 N_CF = 22
+F_XS0 = N_CF  # cf[F_XS0:]: the filters' state under a unit constant input, (I - A)^-1 B (order,)
 
 # columns of the detector statistics `short` (n, N_SHORT)
 S_E2 = 0  # 0, 1: short average of the squared prior error per equation
@@ -263,7 +264,7 @@ def _project(src, dst, cf):  # pragma: no cover - compiled
 
 
 @njit(cache=True)
-def _regress(i, xf, u_last, cnt, tau_prev, q, qd, tau, ci, A, B, C, D, phi, y):  # pragma: no cover
+def _regress(i, xf, u_last, cnt, tau_prev, q, qd, tau, ci, cf, A, B, C, D, phi, y):  # pragma: no cover
     """Filtered regression of trial i's sample into (phi, y); NaN while a bad input taints it."""
     cons = ci[I_CONSTRUCTION]
     u = np.empty(9)
@@ -281,7 +282,7 @@ def _regress(i, xf, u_last, cnt, tau_prev, q, qd, tau, ci, A, B, C, D, phi, y): 
         if not np.isfinite(u[c]):
             bad = True
     if cnt[i, C_STARTED] == 0:  # filters start in the steady state of the first sample
-        xs0 = np.linalg.solve(np.eye(A.shape[0]) - A, B)
+        xs0 = cf[F_XS0 : F_XS0 + A.shape[0]]
         for c in range(n_ch):
             u_last[i, c] = u[c] if np.isfinite(u[c]) else 0.0
             for m in range(A.shape[0]):
@@ -506,7 +507,7 @@ def online_step_trial(
     """
     phi = np.empty((2, 7))
     y = np.empty(2)
-    _regress(i, xf, u_last, cnt, tau_prev, q, qd, tau, ci, A, B, C, D, phi, y)
+    _regress(i, xf, u_last, cnt, tau_prev, q, qd, tau, ci, cf, A, B, C, D, phi, y)
     act = np.ones(2, dtype=np.bool_)
     if ci[I_SELECT] == 1:
         for j in range(2):

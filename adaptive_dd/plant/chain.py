@@ -25,6 +25,13 @@ the world frame at the world origin, so that composite inertias simply add):
   in that link's ``pi``, and project it on the joint axes of the links before it;
 * :func:`forward_dynamics` solves ``(M + diag(armature)) qdd = tau - rnea(q, qd, 0)``
   by Cholesky.
+
+Compilation: numba compiles a kernel once per tuple of argument types, and a constant
+``True``, ``False`` or ``0`` passed to a compiled callee is a literal type of its own (one
+copy for ``True``, another for ``False``); the callers here pass ``np.bool_(...)`` and
+``np.int64(...)`` instead, and the batch wrappers pass writable arrays (a read-only one is
+another type), so that each kernel is compiled once for all its callers
+(``tests/test_compile_once.py``).
 """
 
 from __future__ import annotations
@@ -311,7 +318,7 @@ def rnea_in(ch, pi, q, qd, qdd, w, out):  # pragma: no cover - compiled
     """:func:`rnea` with its scratch ``w = workspace(n)`` given (no allocation: a loop allocates it once)."""
     kinematics(ch, q, qd, w[0], w[1], w[2], w[3])
     world_inertia(pi, w[0], w[1], w[4])
-    _torque(ch, pi, q, qd, qd, qdd, 1.0, True, w, out)
+    _torque(ch, pi, q, qd, qd, qdd, 1.0, np.bool_(True), w, out)
 
 
 @njit(cache=True)
@@ -328,7 +335,7 @@ def rnea_ref_in(ch, pi, q, qd, qdr, qddr, w, out):  # pragma: no cover - compile
     """:func:`rnea_ref` with its scratch ``w = workspace(n)`` given (no allocation)."""
     kinematics(ch, q, qd, w[0], w[1], w[2], w[3])
     world_inertia(pi, w[0], w[1], w[4])
-    _torque(ch, pi, q, qd, qdr, qddr, 1.0, False, w, out)
+    _torque(ch, pi, q, qd, qdr, qddr, 1.0, np.bool_(False), w, out)
 
 
 @njit(cache=True)
@@ -343,7 +350,7 @@ def coriolis_matrix(ch, pi, q, qd, out):  # pragma: no cover - compiled
     col = np.empty(n)
     for k in range(n):
         e[k] = 1.0
-        _torque(ch, pi, q, qd, e, zero, 0.0, False, w, col)
+        _torque(ch, pi, q, qd, e, zero, 0.0, np.bool_(False), w, col)
         for i in range(n):
             out[i, k] = col[i]
         e[k] = 0.0
@@ -583,32 +590,32 @@ def _columns_from_motion(same, j0, j1, w, a, out, col0):  # pragma: no cover - c
 def regressor(ch, q, qd, qdd, out):  # pragma: no cover - compiled
     """Joint torque regressor Y (n, 10 n) into out, ``Y @ pi == rnea``; == pin.computeJointTorqueRegressor."""
     n = q.shape[0]
-    _regressor_blocks(ch, q, qd, qd, qdd, True, 0, n, out, 0)
+    _regressor_blocks(ch, q, qd, qd, qdd, np.bool_(True), np.int64(0), n, out, 0)
 
 
 @njit(cache=True)
 def slotine_li_regressor(ch, q, qd, qdr, qddr, out):  # pragma: no cover - compiled
     """Slotine-Li regressor (n, 10 n) into out, ``@ pi == rnea_ref(q, qd, qdr, qddr)``."""
     n = q.shape[0]
-    _regressor_blocks(ch, q, qd, qdr, qddr, False, 0, n, out, 0)
+    _regressor_blocks(ch, q, qd, qdr, qddr, np.bool_(False), np.int64(0), n, out, 0)
 
 
 @njit(cache=True)
 def body_regressor(ch, j, q, qd, qdd, out):  # pragma: no cover - compiled
     """Columns of link j (0-based) of :func:`regressor`, out (n, 10), O(n) work."""
-    _regressor_blocks(ch, q, qd, qd, qdd, True, j, j + 1, out, 0)
+    _regressor_blocks(ch, q, qd, qd, qdd, np.bool_(True), j, j + 1, out, 0)
 
 
 @njit(cache=True)
 def body_slotine_li_regressor(ch, j, q, qd, qdr, qddr, out):  # pragma: no cover - compiled
     """Columns of link j (0-based) of :func:`slotine_li_regressor`, out (n, 10), O(n) work."""
-    _regressor_blocks(ch, q, qd, qdr, qddr, False, j, j + 1, out, 0)
+    _regressor_blocks(ch, q, qd, qdr, qddr, np.bool_(False), j, j + 1, out, 0)
 
 
 @njit(cache=True)
 def body_regressor_in(ch, j, q, qd, qdd, w, a, out):  # pragma: no cover - compiled
     """:func:`body_regressor` with its scratch given: ``w = workspace(n)``, ``a (6, 10)`` (no allocation)."""
-    _regressor_blocks_in(ch, q, qd, qd, qdd, True, j, j + 1, w, a, out, 0)
+    _regressor_blocks_in(ch, q, qd, qd, qdd, np.bool_(True), j, j + 1, w, a, out, 0)
 
 
 @njit(cache=True)
@@ -618,14 +625,14 @@ def rnea_body_regressor_in(ch, pi, j, q, qd, qdd, w, a, tau, y):  # pragma: no c
     numbers as the two calls); scratch as :func:`body_regressor_in`."""
     kinematics(ch, q, qd, w[0], w[1], w[2], w[3])
     world_inertia(pi, w[0], w[1], w[4])
-    _torque(ch, pi, q, qd, qd, qdd, 1.0, True, w, tau)  # leaves vr, ar at (qd, qdd) in w[5], w[6]
-    _columns_from_motion(True, j, j + 1, w, a, y, 0)
+    _torque(ch, pi, q, qd, qd, qdd, 1.0, np.bool_(True), w, tau)  # leaves vr, ar at (qd, qdd) in w[5], w[6]
+    _columns_from_motion(np.bool_(True), j, j + 1, w, a, y, 0)
 
 
 @njit(cache=True)
 def body_slotine_li_regressor_in(ch, j, q, qd, qdr, qddr, w, a, out):  # pragma: no cover - compiled
     """:func:`body_slotine_li_regressor` with its scratch given (as :func:`body_regressor_in`)."""
-    _regressor_blocks_in(ch, q, qd, qdr, qddr, False, j, j + 1, w, a, out, 0)
+    _regressor_blocks_in(ch, q, qd, qdr, qddr, np.bool_(False), j, j + 1, w, a, out, 0)
 
 
 @njit(cache=True)
@@ -779,12 +786,14 @@ def _states(ch: Chain, *arrays: NDArray) -> tuple[tuple[int, ...], list[NDArray]
         if not np.all(np.isfinite(a)):
             raise SignalError(f"joint array {k} has non-finite values")
     batch = np.broadcast_shapes(*(a.shape[:-1] for a in arrs))
-    flat = [np.ascontiguousarray(np.broadcast_to(a, (*batch, n)).reshape(-1, n)) for a in arrs]
+    # writable copies where needed: a read-only view (broadcast_to's) is another numba type, and
+    # each kernel would be compiled once more for it than the closed loop compiles it
+    flat = [np.require(np.broadcast_to(a, (*batch, n)).reshape(-1, n), requirements="CW") for a in arrs]
     return batch, flat
 
 
 def _pi(ch: Chain, pi: NDArray) -> NDArray[np.float64]:
-    pi = np.ascontiguousarray(pi, dtype=np.float64)
+    pi = np.require(pi, dtype=np.float64, requirements="CW")
     if pi.shape != (10 * ch.jtype.shape[0],):
         raise ParameterError(f"pi has shape {pi.shape}, expected ({10 * ch.jtype.shape[0]},)")
     return pi

@@ -1,0 +1,102 @@
+"""Each shared kernel is compiled once, whatever calls it (a fresh clone's first run compiles less).
+
+numba compiles a function once per tuple of argument types, and ``True``, ``0`` or a read-only
+array are types of their own: a kernel reached with ``0`` from one call site and an ``int64`` from
+another is compiled twice (``benchmarks/compile_profile.py --why`` lists such kernels). These
+tests count the specialisations of the kernels that were compiled twice or three times before
+(in this process and in numba's cache for this source: the count does not depend on the cache).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import tomllib
+from importlib import resources
+
+import numpy as np
+
+from adaptive_dd.benchmark.scenario import load_scenario, parse_scenario
+from adaptive_dd.plant import chain as C
+from adaptive_dd.plant import integrator as S
+
+
+def _specialisations(kernel) -> set[str]:
+    """Argument types ``kernel`` is compiled for: in this process, or in numba's cache for this
+    state of its source (a callee loaded from the cache with its caller has no signature in memory)."""
+    index = kernel._cache._cache_file._load_index()
+
+    def text(types):
+        return ", ".join(str(t) for t in types)
+
+    return {text(s) for s in kernel.signatures} | {text(key[0]) for key in index}
+
+
+def _ur5(duration: float | None = None):
+    """The shipped UR5 scenario (cut to ``duration`` with no payload change, 1 seed, if given)."""
+    path = str(resources.files("adaptive_dd.scenarios").joinpath("ur5_tool_swap.toml"))
+    if duration is None:
+        return load_scenario(path)
+    data = tomllib.loads(open(path, encoding="utf-8").read())
+    data["run"] = {**data["run"], "duration": duration, "seeds": 1, "controllers": ["pd", "adaptive_ct"]}
+    data["payload"], data["reference"]["ramp"] = [], 0.2
+    data["controllers"] = {k: v for k, v in data.get("controllers", {}).items() if k in ("pd", "adaptive_ct")}
+    return parse_scenario(data, "test.toml", name="ur5_tool_swap")
+
+
+def test_the_integrator_step_compiles_once_per_friction_law_family():
+    """``_rk4`` (the integrator's largest kernel): one copy for the stick-slip law (its law a
+    compile-time constant: faster), one for the smooth laws; not one more per call site."""
+    sc = _ur5()
+    ch, n = sc.arm.chain, sc.n_joints
+    for law in ("stick-slip", "tanh"):
+        pp = S.plant_params(ch, sc.arm.pi[: 10 * n], np.full(n, 0.1), np.full(n, 0.5), law=law)
+        q, qd, stuck = np.full(n, 0.3), np.zeros(n), np.zeros(n, dtype=bool)
+        for _ in range(3):  # from rest: the stick-slip law decides modes and steps to crossings
+            assert S.plant_step(ch, pp, q, qd, np.ones(n), 1e-3, 2, stuck)
+    assert len(_specialisations(S._rk4)) == 2, _specialisations(S._rk4)
+
+
+def test_the_chain_kernels_compile_once_for_every_caller(rng):
+    """Batch wrappers (read-only inputs allowed) and in-place kernels share one compiled form."""
+    sc = _ur5()
+    ch, pi, n = sc.arm.chain, sc.arm.pi[: 10 * sc.n_joints], sc.n_joints
+    q = np.broadcast_to(rng.normal(size=n), (3, n))  # a read-only view
+    qd, qdd = rng.normal(size=(3, n)), rng.normal(size=(3, n))
+    C.regressor_batch(ch, q, qd, qdd)
+    C.slotine_li_regressor_batch(ch, q, qd, qd, qdd)
+    C.rnea_batch(ch, pi, q, qd, qdd)
+    C.rnea_ref_batch(ch, pi, q, qd, qd, qdd)
+    C.mass_matrix_batch(ch, pi, q)
+    w, a, out = C.workspace(n), np.empty((6, 10)), np.empty((n, 10))
+    C.body_regressor_in(ch, 2, q[0].copy(), qd[0], qdd[0], w, a, out)
+    C.body_slotine_li_regressor_in(ch, 2, q[0].copy(), qd[0], qd[0], qdd[0], w, a, out)
+    C.rnea_body_regressor_in(ch, pi, 2, q[0].copy(), qd[0], qdd[0], w, a, np.empty(n), out)
+    C.mass_matrix_in(ch, pi, q[0].copy(), w, np.empty((n, n)))
+    for kernel in (
+        C._torque, C._body_force, C._ref_motion, C._local_regressor, C._columns_from_motion,
+        C._regressor_blocks, C._regressor_blocks_in,
+    ):  # fmt: skip
+        assert len(_specialisations(kernel)) == 1, (kernel.__name__, _specialisations(kernel))
+
+
+def test_the_two_link_sample_loop_compiles_once():
+    """The parallel loop's index (uint64 once lowered) reaches ``trial_block`` as the int64 it was
+    typed as."""
+    from adaptive_dd.benchmark import compiled, run_benchmark
+
+    sc = dataclasses.replace(load_scenario(), seeds=2, duration=0.02, swap_times=(), swap_masses=())
+    run_benchmark(dataclasses.replace(sc, controllers=("pd",)), progress=False, engine="compiled")
+    assert len(_specialisations(compiled.trial_block)) == 1, _specialisations(compiled.trial_block)
+
+
+def test_a_short_run_compiles_the_loop_once_with_and_once_without_estimator():
+    """A short UR5 run of ``pd`` and ``adaptive_ct``: the loop once with and once without the
+    estimator (with the stick-slip ``_rk4`` on a constant law, ct_oracle ran at 98 simulated s per
+    CPU s against 78 with one loop for both), the stick-slip ``_rk4`` once."""
+    from adaptive_dd.closed_loop import glue
+    from adaptive_dd.closed_loop.runner import run_closed_loop
+
+    res = run_closed_loop(_ur5(duration=0.01))
+    assert list(res.runs) == ["pd", "adaptive_ct"]
+    assert len(_specialisations(glue.closed_loop_block)) == 2, _specialisations(glue.closed_loop_block)
+    assert len([s for s in _specialisations(S._rk4) if "Literal[int](0)" in s]) == 1
