@@ -73,6 +73,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from adaptive_dd.benchmark.provenance import provenance
+from adaptive_dd.benchmark.segments import moving_rms, segment_failed
 from adaptive_dd.benchmark.streaming import SETTLE, segment_bounds
 from adaptive_dd.plant.kind import is_chain
 from adaptive_dd.plant.sampling import first_sample
@@ -108,17 +109,6 @@ SATURATION_LIMIT = 0.01  # fraction of samples: a floor saturated more than this
 SEED_CHUNK = 64  # seeds per block of the per-sample post-processing (bounds its memory)
 
 
-def moving_rms(x: np.ndarray, n: int, axis: int = -1) -> np.ndarray:
-    """Causal moving RMS over n samples along an axis."""
-    x2 = np.moveaxis(np.asarray(x, float) ** 2, axis, -1)
-    c = np.cumsum(x2, axis=-1)
-    c = np.concatenate((np.zeros((*c.shape[:-1], 1)), c), axis=-1)
-    k = np.arange(x2.shape[-1])
-    lo = np.maximum(k + 1 - n, 0)
-    out = np.sqrt((c[..., k + 1] - c[..., lo]) / (k + 1 - lo))
-    return np.moveaxis(out, -1, axis)
-
-
 def _settling_time(above: np.ndarray, dwell: int) -> np.ndarray:
     """Per row: first index i with ``above[i : i + dwell]`` all False (NaN if none)."""
     n = above.shape[-1]
@@ -136,18 +126,6 @@ def _mean(x: np.ndarray):
     v = np.asarray(x, float)
     v = v[np.isfinite(v)]
     return float(np.mean(v)) if v.size else None
-
-
-def segment_failed(failed: np.ndarray, failed_at: np.ndarray, end: np.ndarray) -> np.ndarray:
-    """``(n_seeds, n_segments)`` bool: the trial failed before the segment's end sample.
-
-    The one failure rule of the benchmark and the sweep: a diverged trial (``failed_at >= 0``,
-    the sample it was stopped at) is left out of the segments that end after its failure; a
-    trial failed without a sample (its controller raised: ``failed_at < 0``) everywhere.
-    """
-    failed = np.asarray(failed, bool)[:, None]
-    at = np.asarray(failed_at)[:, None]
-    return failed & ((at < 0) | (at < np.asarray(end)[None, :]))
 
 
 def segment_rms(sums: np.ndarray, n) -> np.ndarray:

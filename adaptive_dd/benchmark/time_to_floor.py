@@ -28,7 +28,7 @@ import math
 
 import numpy as np
 
-from adaptive_dd.benchmark.metrics import moving_rms, segment_failed
+from adaptive_dd.benchmark.segments import moving_rms, segment_failed
 
 __all__ = [
     "LEVEL",
