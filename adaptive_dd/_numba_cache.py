@@ -9,8 +9,9 @@ depend on rules that out (a changed file gives a fresh folder and one compilatio
 ...) or the ``NamedTuple`` records passed to them, every package module they import (at the top
 or inside a function, directly or through another), the package's ``__init__.py`` and this file;
 an edit elsewhere (the command line, the reports, the docs' examples) keeps the compiled kernels.
-The folder is ``$XDG_CACHE_HOME/adaptive_dd/numba/<hash>`` (``~/.cache`` by default); the 8
-newest are kept. Setting ``NUMBA_CACHE_DIR`` yourself turns this off.
+The folder is ``$XDG_CACHE_HOME/adaptive_dd/numba/<hash>`` (``~/.cache`` by default), or
+``$NUMBA_CACHE_DIR/adaptive_dd/<hash>`` when that variable is set (keyed there too: a cache folder
+shared across edits would otherwise serve stale kernels); the 8 newest are kept.
 """
 
 from __future__ import annotations
@@ -91,11 +92,13 @@ def source_hash(package: Path) -> str:
 
 
 def configure() -> str | None:
-    """Point numba's cache at the folder of this source state; returns it (None if left alone)."""
-    if os.environ.get("NUMBA_CACHE_DIR"):
-        return None
+    """Point numba's cache at the folder of this source state; returns it (None if left alone: the
+    folder cannot be written)."""
     package = Path(__file__).resolve().parent
-    base = Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "adaptive_dd" / "numba"
+    if os.environ.get("NUMBA_CACHE_DIR"):  # the user's folder, keyed inside it
+        base = Path(os.environ["NUMBA_CACHE_DIR"]) / "adaptive_dd"
+    else:
+        base = Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "adaptive_dd" / "numba"
     folder = base / source_hash(package)
     try:
         folder.mkdir(parents=True, exist_ok=True)

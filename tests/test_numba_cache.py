@@ -80,7 +80,7 @@ def test_the_key_covers_every_module_of_compiled_code_in_the_package():
     assert pkg / "benchmark" / "report.py" not in keyed
 
 
-def test_the_package_uses_its_folder_unless_the_user_sets_one(monkeypatch, tmp_path):
+def test_the_package_keys_its_folder_also_inside_the_users(monkeypatch, tmp_path):
     from pathlib import Path
 
     import adaptive_dd
@@ -93,7 +93,10 @@ def test_the_package_uses_its_folder_unless_the_user_sets_one(monkeypatch, tmp_p
         folder = _numba_cache.configure()
         assert folder == str(tmp_path / "adaptive_dd" / "numba" / expected)
         assert numba.config.CACHE_DIR == folder
+        # a NUMBA_CACHE_DIR of the user's own is keyed too (shared across edits it would serve
+        # kernels compiled from another state of the source)
         monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path / "mine"))
-        assert _numba_cache.configure() is None
+        assert _numba_cache.configure() == str(tmp_path / "mine" / "adaptive_dd" / expected)
+        assert numba.config.CACHE_DIR == str(tmp_path / "mine" / "adaptive_dd" / expected)
     finally:
         numba.config.CACHE_DIR = before
