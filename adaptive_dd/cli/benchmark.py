@@ -109,7 +109,7 @@ def only_controllers(sc, names: list[str]) -> tuple[str, ...]:
     """The scenario's controllers among ``names``, with the floor of each (``adaptive_ct`` brings
     ``ct_oracle``), in the scenario's order; a name the scenario does not list is an error naming
     the scenario's list."""
-    from adaptive_dd.benchmark.runner import scenario_controller
+    from adaptive_dd.controllers.registry import scenario_controller
     from adaptive_dd.errors import ParameterError
 
     unknown = [n for n in names if n not in sc.controllers]

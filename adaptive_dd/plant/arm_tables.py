@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
-from adaptive_dd.errors import ParameterError, ScenarioError
+from adaptive_dd.errors import ParameterError, ScenarioError, UrdfError
 from adaptive_dd.errors import is_finite_number as _is_num
 from adaptive_dd.plant.parameters import PhysicalParameters
 from adaptive_dd.plant.two_link import FRICTION_LAWS, TwoLinkArm, as_two_link
@@ -198,10 +198,9 @@ def arm_from_tables(arm_table: dict | None, plant_table: dict | None, src: str =
 def _urdf_arm(src: str, table: dict, plant_kw: dict):
     """The arm of an ``[arm]`` table naming a URDF: the general
     :class:`~adaptive_dd.plant.arm.Arm`
-    (:func:`~adaptive_dd.plant.arm.urdf_arm_from_table`), or the two-link :class:`TwoLinkArm`
+    (:func:`urdf_arm_from_table`), or the two-link :class:`TwoLinkArm`
     when it is one (:func:`as_two_link`) and ``general = true`` is not set. LuGre friction is a
     two-link plant law: kept aside until the fast path decides which plant runs."""
-    # urdf_arm_from_table, defined below, imports Pinocchio on first use
     kw = dict(plant_kw)
     lugre = {k: kw.pop(k) for k in ("lugre_stiffness", "lugre_damping") if k in kw}
     if kw.get("friction") == "lugre":
@@ -305,8 +304,7 @@ def _urdf_source(src: str, table: dict) -> tuple[Path, str | None]:
 def _load_urdf_arm(src: str, table: dict, path: Path, frame: str | None):
     """:meth:`Arm.from_urdf` with the table's ``gravity`` and ``repair_inertia``; a URDF or
     parameter problem becomes a ScenarioError naming ``src``."""
-    from adaptive_dd.errors import UrdfError
-    from adaptive_dd.plant.arm import DEFAULT_GRAVITY, Arm
+    from adaptive_dd.plant.arm import DEFAULT_GRAVITY, Arm  # imports Pinocchio: on first use
 
     gravity = table.get("gravity", list(DEFAULT_GRAVITY))
     if not (isinstance(gravity, list) and len(gravity) == 3 and all(_is_num(x) for x in gravity)):
@@ -367,8 +365,6 @@ them no actuator of an arm is meant."""
 
 
 def _table_vector(src: str, key: str, v, n: int, lo: float, strict: bool, hi: float = math.inf) -> Array:
-    from adaptive_dd.errors import ScenarioError
-
     if not isinstance(v, list) or len(v) != n or not all(_is_num(x) for x in v):
         raise ScenarioError(
             f"{src}: key 'arm.{key}' must be a list of {n} finite numbers (one per joint), got {v!r}"
