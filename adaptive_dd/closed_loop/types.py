@@ -8,7 +8,7 @@ segments, ``p`` base parameters, ``K`` trials whose trajectories are recorded.
 
 from __future__ import annotations
 
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import numpy as np
 from numpy.typing import NDArray
@@ -102,6 +102,8 @@ class Plant(NamedTuple):
         Friction velocity, Stribeck ratio, Stribeck velocity.
     substeps : int
         RK4 substeps per sample.
+    chain : Chain
+        The arm's kinematics (:class:`~adaptive_dd.plant.chain.Chain`).
     """
 
     pi_seg: Array
@@ -111,6 +113,7 @@ class Plant(NamedTuple):
     friction_law: int
     fparams: Array
     substeps: int
+    chain: Any
 
 
 class TrialState(NamedTuple):
@@ -251,6 +254,7 @@ def plant_of(scenario, seed_indices=(0,)) -> Plant:
         int(arm.friction_code),
         np.array(arm.friction_params, dtype=float),
         int(scenario.substeps),
+        arm.chain,
     )
 
 
