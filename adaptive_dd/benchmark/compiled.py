@@ -90,6 +90,12 @@ def _plant_work(pl, n):
         return lambda pl, n: np.empty(0)
 
 
+@overload(glue.plant_joints, inline="always")
+def _plant_joints(pl, q):
+    if _is(pl, TwoLinkPlant):
+        return lambda pl, q: 2
+
+
 @overload(glue.plant_advance, inline="always")
 def _plant_advance(pl, i, s, q, qd, stuck, tau, T, pw):
     if _is(pl, TwoLinkPlant):

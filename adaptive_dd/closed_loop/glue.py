@@ -6,11 +6,12 @@ One sample of one trial is:
    measurement replaced by the last good one for the law and by NaN for the estimator;
 2. the command: the compiled law (:func:`law_command`) or a Python controller's ``command``
    for the whole batch;
-3. :func:`apply_sample`: the divergence rule (a non-finite command or an error beyond
-   ``max_error`` zeroes the command and fails the trial), saturation and D/A, the plant
-   step (:func:`plant_advance`), the runaway rule (non-finite state or ``|qd| >= max_speed``),
-   the failure freeze (a failed trial stays at its last finite position, at rest, with zero
-   torque), the streamed metrics and the recorded trajectories;
+3. :func:`apply_sample` and :func:`accumulate_sample`: the divergence rule (a non-finite
+   command or an error beyond ``max_error`` zeroes the command and fails the trial),
+   saturation and D/A, the plant step (:func:`plant_advance`), the runaway rule (non-finite
+   state or ``|qd| >= max_speed``), the failure freeze (a failed trial stays at its last
+   finite position, at rest, with zero torque), the recorded trajectories and the streamed
+   metrics;
 4. the estimator: compiled (:func:`estimator_sample`) or the controller's ``observe``, its
    alarms counted; then :func:`record_estimate` keeps the estimate (:func:`law_estimate`) at
    each segment's end and for the recorded trials.
@@ -54,6 +55,7 @@ __all__ = [
     "COPY_PROPAGATE_ONLY",
     "Alarms",
     "ChainLaw",
+    "accumulate_sample",
     "alarm_lists",
     "apply_batch",
     "apply_sample",
@@ -69,6 +71,7 @@ __all__ = [
     "measure_batch",
     "measure_sample",
     "plant_advance",
+    "plant_joints",
     "plant_work",
     "record_estimate",
     "segment_of",
@@ -146,6 +149,12 @@ def plant_work(pl, n):  # pragma: no cover - replaced by the overloads
     raise NotImplementedError("compiled only")
 
 
+def plant_joints(pl, q):  # pragma: no cover - replaced by the overloads
+    """The plant's number of joints: a compile-time constant where the plant's type fixes it (the
+    two-link arm: its loops over joints are then unrolled), else ``q.shape[1]``."""
+    raise NotImplementedError("compiled only")
+
+
 def plant_advance(pl, i, s, q, qd, stuck, tau, T, pw):  # pragma: no cover - replaced by the overloads
     """Trial i's plant ``q, qd (S, n)`` by one sample under ``tau (n,)`` (zero-order hold) in
     payload segment s, in place; ``stuck (S, n)`` receives the joints held by Coulomb friction."""
@@ -190,6 +199,12 @@ def _is(typ, cls) -> bool:
 def _plant_work(pl, n):
     if _is(pl, Plant):
         return lambda pl, n: plant_scratch(n)
+
+
+@overload(plant_joints, inline="always")
+def _plant_joints(pl, q):
+    if _is(pl, Plant):
+        return lambda pl, q: q.shape[1]
 
 
 @overload(plant_advance, inline="always")
@@ -330,45 +345,50 @@ def measure_sample(
             held_q[i, j], held_qd[i, j] = qm[j], qdm[j]
 
 
-@njit(cache=True)
-def _accumulate(acc, seg_settled, i, s, k, e, tau, mask):  # pragma: no cover - compiled
+@njit(cache=True, inline="always")
+def accumulate_sample(
+    sum_e2, sum_e2_joint, max_e, sum_tau2, n_saturated, sum_e2_settled, e_norm, seg_settled,
+    i, s, k, e, tau, mask,
+):  # pragma: no cover - compiled  # fmt: skip
     """Add sample k (segment s) of trial i, error ``e (n,)`` [rad] and applied ``tau (n,)``, to the
-    streamed sums ``acc`` (:class:`~adaptive_dd.closed_loop.types.StreamedSums`).
-
-    Not inlined: numba 0.68 loses the writes that the body of a function compiled with its
-    parallel pipeline (:func:`trial_samples`) makes to arrays reached through a NamedTuple;
-    writes made in a function it calls are kept (as for every write below through a record)."""
+    streamed sums (the fields of :class:`~adaptive_dd.closed_loop.types.StreamedSums`), ``mask``
+    the saturation mask of :func:`apply_sample`."""
     en2 = 0.0
     t2 = 0.0
     for j in range(e.shape[0]):
         en2 += e[j] * e[j]
         t2 += tau[j] * tau[j]
-        acc.sum_e2_joint[i, s, j] += e[j] * e[j]
+        sum_e2_joint[i, s, j] += e[j] * e[j]
     en = np.sqrt(en2)
-    acc.sum_e2[i, s] += en2
-    if en > acc.max_e[i, s]:
-        acc.max_e[i, s] = en
-    acc.sum_tau2[i, s] += t2
+    sum_e2[i, s] += en2
+    if en > max_e[i, s]:
+        max_e[i, s] = en
+    sum_tau2[i, s] += t2
     if mask != 0:
-        acc.n_saturated[i, s] += 1.0
+        n_saturated[i, s] += 1.0
     if k >= seg_settled[s]:
-        acc.sum_e2_settled[i, s] += en2
-    acc.e_norm[i, k] = en
+        sum_e2_settled[i, s] += en2
+    e_norm[i, k] = en
 
 
 @njit(cache=True, inline="always")
 def apply_sample(
-    T, max_error, max_speed, q_d, seg_settled, lim, lsb, saturate, quantize_dac, pl, pw,
-    q, qd, stuck, failed, failed_at, acc, q_rec, qd_rec, tau_rec, sat_rec, i, k, s, cmd, tau, e, prev,
+    T, max_error, max_speed, q_d, lim, lsb, saturate, quantize_dac, pl, pw,
+    q, qd, stuck, failed, failed_at, q_rec, qd_rec, tau_rec, sat_rec, i, k, cmd, tau, e, prev, s,
 ):  # pragma: no cover - compiled  # fmt: skip
     """Step 3 of the module docstring for trial i at sample k (segment s): ``cmd (n,)`` [N m]
     (zeroed in place when the divergence rule applies), the applied torque into ``tau (n,)``.
 
+    Returns the saturation mask (bit j: joint j's command beyond its limit); the caller adds the
+    sample to the streamed sums next (:func:`accumulate_sample`, with the error ``e`` this
+    leaves). Not one function with it: a call of more than 30 arguments is compiled as a call
+    with ``*args``, which numba does not inline.
+
     The arguments are the fields of :class:`~adaptive_dd.closed_loop.types.RunConstants`,
     :class:`~adaptive_dd.closed_loop.types.Io` and :class:`~adaptive_dd.closed_loop.types.TrialState`
-    of the same names, the plant ``pl`` and its scratch ``pw`` (:func:`plant_advance`), the
-    streamed sums ``acc`` and the recording's ``q, qd, tau, saturated`` (``q_rec, qd_rec,
-    tau_rec, sat_rec``: the first ``q_rec.shape[0]`` trials, the state before the step, the
+    of the same names, the plant ``pl`` and its scratch ``pw`` (:func:`plant_advance`), and the
+    recording's ``q, qd, tau, saturated``
+    (``q_rec, qd_rec, tau_rec, sat_rec``: the first ``q_rec.shape[0]`` trials, the state before the step, the
     applied torque and its saturation); ``e, prev (n,)`` scratch.
     """
     n = cmd.shape[0]
@@ -403,11 +423,11 @@ def apply_sample(
             q[i, j] = prev[j] if np.isfinite(prev[j]) else 0.0
             qd[i, j] = 0.0
             stuck[i, j] = True
-    _accumulate(acc, seg_settled, i, s, k, e, tau, mask)
     if keep:
         for j in range(n):
             tau_rec[i, k, j] = tau[j]
             sat_rec[i, k, j] = (mask >> j) & 1 == 1
+    return mask
 
 
 @njit(cache=True, inline="always")
@@ -448,10 +468,11 @@ def trial_samples(
     res, std, quantize_encoder = io.res, io.std, io.quantize_encoder
     q, qd, stuck, failed, failed_at = ts.q, ts.qd, ts.stuck, ts.failed, ts.failed_at
     held_q, held_qd, n_dropped = ts.held_q, ts.held_qd, ts.n_dropped
+    sum_e2, sum_e2_joint, max_e, sum_tau2, n_saturated, sum_e2_settled, e_norm = acc
     q_rec, qd_rec, tau_rec, sat_rec = rec.q, rec.qd, rec.tau, rec.saturated
     sigma_rec, sigma_end = rec.sigma, rec.sigma_end
     alarm_t, n_alarms = alarms.times, alarms.count
-    n = q.shape[1]
+    n = plant_joints(pl, q)
     qm, qdm, qm_obs, qdm_obs = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
     cmd, tau, e, prev = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
     sig = np.empty(sigma_end.shape[2])
@@ -465,9 +486,13 @@ def trial_samples(
             qm, qdm, qm_obs, qdm_obs,
         )  # fmt: skip
         law_command(law, ls, pl, i, s, T, qm, qdm, q_d[k], qd_d[k], qdd_d[k], lw, cmd)
-        apply_sample(
-            T, max_error, max_speed, q_d, seg_settled, lim, lsb, saturate, quantize_dac, pl, pw,
-            q, qd, stuck, failed, failed_at, acc, q_rec, qd_rec, tau_rec, sat_rec, i, k, s, cmd, tau, e, prev,
+        mask = apply_sample(
+            T, max_error, max_speed, q_d, lim, lsb, saturate, quantize_dac, pl, pw,
+            q, qd, stuck, failed, failed_at, q_rec, qd_rec, tau_rec, sat_rec, i, k, cmd, tau, e, prev, s,
+        )  # fmt: skip
+        accumulate_sample(
+            sum_e2, sum_e2_joint, max_e, sum_tau2, n_saturated, sum_e2_settled, e_norm, seg_settled,
+            i, s, k, e, tau, mask,
         )  # fmt: skip
         if estimator_sample(ec, es, ls, i, qm_obs, qdm_obs, tau, ew) == 1:
             if n_alarms[i] < alarm_t.shape[1]:
@@ -537,10 +562,14 @@ def _apply_loop(rc, io, pl, ts, acc, rec, k, cmd, tau):  # pragma: no cover - co
     n = cmd.shape[1]
     pw, e, prev = plant_work(pl, n), np.empty(n), np.empty(n)  # one per call: trials one after another
     for i in range(cmd.shape[0]):
-        apply_sample(
-            rc.T, rc.max_error, rc.max_speed, rc.q_d, rc.seg_settled, io.lim, io.lsb, io.saturate,
-            io.quantize_dac, pl, pw, ts.q, ts.qd, ts.stuck, ts.failed, ts.failed_at, acc, rec.q, rec.qd,
-            rec.tau, rec.saturated, i, k, s, cmd[i], tau[i], e, prev,
+        mask = apply_sample(
+            rc.T, rc.max_error, rc.max_speed, rc.q_d, io.lim, io.lsb, io.saturate,
+            io.quantize_dac, pl, pw, ts.q, ts.qd, ts.stuck, ts.failed, ts.failed_at, rec.q, rec.qd,
+            rec.tau, rec.saturated, i, k, cmd[i], tau[i], e, prev, s,
+        )  # fmt: skip
+        accumulate_sample(
+            acc.sum_e2, acc.sum_e2_joint, acc.max_e, acc.sum_tau2, acc.n_saturated, acc.sum_e2_settled,
+            acc.e_norm, rc.seg_settled, i, s, k, e, tau[i], mask,
         )  # fmt: skip
     return s
 
