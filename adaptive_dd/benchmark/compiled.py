@@ -30,7 +30,16 @@ import numpy as np
 from numba.extending import overload
 from numpy.typing import NDArray
 
-from adaptive_dd.closed_loop import glue
+from adaptive_dd.closed_loop.glue import (
+    estimator_sample,
+    estimator_work,
+    law_command,
+    law_estimate,
+    law_work_of,
+    plant_advance,
+    plant_joints,
+    plant_work,
+)
 from adaptive_dd.controllers.compiled_form import LAW_SLOTINE, TwoLinkGains, command_trial
 from adaptive_dd.identification.two_link_online import OnlineState
 from adaptive_dd.identification.two_link_online_kernel import C_SINCE_ALARM, online_step_trial
@@ -84,19 +93,19 @@ def _is(typ, cls) -> bool:
     return getattr(typ, "instance_class", None) is cls
 
 
-@overload(glue.plant_work)
+@overload(plant_work)
 def _plant_work(pl, n):
     if _is(pl, TwoLinkPlant):
         return lambda pl, n: np.empty(0)
 
 
-@overload(glue.plant_joints, inline="always")
+@overload(plant_joints, inline="always")
 def _plant_joints(pl, q):
     if _is(pl, TwoLinkPlant):
         return lambda pl, q: 2
 
 
-@overload(glue.plant_advance, inline="always")
+@overload(plant_advance, inline="always")
 def _plant_advance(pl, i, s, q, qd, stuck, tau, T, pw):
     if _is(pl, TwoLinkPlant):
 
@@ -119,13 +128,13 @@ def _plant_advance(pl, i, s, q, qd, stuck, tau, T, pw):
         return impl
 
 
-@overload(glue.law_work_of)
+@overload(law_work_of)
 def _law_work_of(law, n):
     if _is(law, TwoLinkGains):
         return lambda law, n: np.empty(0)
 
 
-@overload(glue.law_command, inline="always")
+@overload(law_command, inline="always")
 def _law_command(law, ls, pl, i, s, T, q, qd, q_d, qd_d, qdd_d, lw, out):
     if _is(law, TwoLinkGains) and _is(ls, OnlineState):
 
@@ -137,19 +146,19 @@ def _law_command(law, ls, pl, i, s, T, q, qd, q_d, qd_d, qdd_d, lw, out):
         return impl
 
 
-@overload(glue.law_estimate)
+@overload(law_estimate)
 def _law_estimate(law, ls, i, lw, out):
     if _is(law, TwoLinkGains) and _is(ls, OnlineState):
         return lambda law, ls, i, lw, out: ls.theta[i]
 
 
-@overload(glue.estimator_work)
+@overload(estimator_work)
 def _estimator_work(ec, es):
     if _is(ec, OnlineKernelConfig):
         return lambda ec, es: np.empty(2)
 
 
-@overload(glue.estimator_sample, inline="always")
+@overload(estimator_sample, inline="always")
 def _estimator_sample(ec, es, ls, i, q, qd, tau, ew):
     if _is(ec, OnlineKernelConfig):
 
