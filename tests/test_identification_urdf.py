@@ -281,9 +281,9 @@ def test_cli_simulate_and_identify_end_to_end(tmp_path, capsys):
 
 
 def test_benchmark_plant_with_smooth_friction_is_the_model(arm3):
-    """plant="serial" (the compiled benchmark plant) under the tanh law equals the identification model."""
+    """plant="benchmark" (the compiled benchmark plant) under the tanh law equals the identification model."""
     a = simulate_record(
-        arm3.with_(friction="tanh"), REF3, 0.5, [np.random.default_rng(0)], noise=False, plant="serial"
+        arm3.with_(friction="tanh"), REF3, 0.5, [np.random.default_rng(0)], noise=False, plant="benchmark"
     )
     b = simulate_record(arm3, REF3, 0.5, [np.random.default_rng(0)], noise=False)
     np.testing.assert_allclose(a.q_true, b.q_true, atol=1e-10)

@@ -135,8 +135,8 @@ def test_a_failed_trial_keeps_its_segments_before_the_failure_on_every_arm():
         res = run_benchmark(sc, progress=False, controllers={"nan": NanAfter()})
         per = res.to_frame()
         trial1 = per[per.seed == 1].sort_values("segment")
-        assert np.isfinite(trial1.rms_error.iloc[0]) and np.isnan(trial1.rms_error.iloc[1]), sc.name
-        assert np.isfinite(per[per.seed == 0].rms_error).all()
+        assert np.isfinite(trial1.rms_error_rad.iloc[0]) and np.isnan(trial1.rms_error_rad.iloc[1]), sc.name
+        assert np.isfinite(per[per.seed == 0].rms_error_rad).all()
 
 
 def test_information_time_has_the_same_keys_without_an_oracle_on_every_arm():
