@@ -53,7 +53,7 @@ PLANTS = ("model", "benchmark")
 def _plant_name(value: str) -> str:
     """``--plant``'s value; ``serial`` (its name before 0.3) is read as ``benchmark``, with a warning."""
     if value == "serial":
-        print("warning: --plant serial is deprecated; use --plant benchmark (the same plant)", file=sys.stderr)
+        print("warning: --plant serial is deprecated; use --plant benchmark (same plant)", file=sys.stderr)
         return "benchmark"
     return value
 

@@ -177,7 +177,7 @@ def _plant_step(plant: str, arm, model: Model, pi_true: Array, S: int, T: float,
     if plant == "serial":
         import warnings
 
-        warnings.warn("plant='serial' is deprecated; use plant='benchmark' (the same plant)", FutureWarning, 3)
+        warnings.warn("plant='serial' is deprecated; use plant='benchmark'", FutureWarning, 3)
         plant = "benchmark"
     if plant not in ("model", "benchmark"):
         raise ParameterError(f"plant must be 'model' or 'benchmark', got {plant!r}")
