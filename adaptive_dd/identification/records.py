@@ -126,9 +126,8 @@ def simulate_record(
     noise, quantize : bool
         Sensor noise; encoder and D/A quantization.
     plant : {"model", "benchmark"}
-        The identification model's RK4 (default) or the benchmark's compiled plant with the
-        arm's friction law (module docstring); ``"serial"``, its old name, is read as
-        ``"benchmark"`` with a :class:`FutureWarning`.
+        The identification model's RK4 (default) or the benchmark's compiled plant with the arm's
+        friction law (module docstring; ``"serial"``, its old name, warns and is read as it).
 
     Raises
     ------
