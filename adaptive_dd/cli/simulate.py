@@ -204,7 +204,8 @@ def simulate_arm(args: argparse.Namespace, scenario_path: str, outputs) -> int:
     """``adaptive-dd simulate --arm SCENARIO`` for an N-joint arm: identification records, truth known."""
     from adaptive_dd.benchmark.scenario import load_scenario
     from adaptive_dd.experiments import trial_rngs
-    from adaptive_dd.identification.records import simulate_record, write_serial_recording
+    from adaptive_dd.identification.records import simulate_record
+    from adaptive_dd.io import write_recording
     from adaptive_dd.plant.arm import payload_parameters
 
     sc = load_scenario(scenario_path)
@@ -230,7 +231,7 @@ def simulate_arm(args: argparse.Namespace, scenario_path: str, outputs) -> int:
         quantize=not args.no_quantize,
         plant=getattr(args, "plant", "model"),
     )
-    write_serial_recording(outputs.path("trajectory.csv"), rec.t, rec.q[0], rec.qd[0], rec.tau[0])
+    write_recording(outputs.path("trajectory.csv"), rec.t, rec.q[0], rec.qd[0], rec.tau[0])
     np.savez_compressed(
         outputs.path("trajectory.npz"),
         t=rec.t,

@@ -38,7 +38,7 @@ from adaptive_dd.errors import ParameterError, SignalError
 from adaptive_dd.identification.model import Model, arm_model, pi_with_payload, rk4_step
 from adaptive_dd.plant.chain import rnea_batch
 
-__all__ = ["Record", "inverse_dynamics_pi", "simulate_record", "write_serial_recording"]
+__all__ = ["Record", "inverse_dynamics_pi", "simulate_record"]
 
 Array = NDArray[np.float64]
 
@@ -258,26 +258,3 @@ def _stepper(arm, model: Model, pi: Array, S: int, T: float, substeps: int):
         return q, qd
 
     return step
-
-
-def write_serial_recording(path, t: Array, q: Array, qd: Array | None, tau: Array):
-    """Write one N-joint record as CSV ``t, q1..qN, qd1..qdN, tau1..tauN`` (qd columns left out if None)."""
-    from pathlib import Path
-
-    from adaptive_dd.outputs import atomic_write
-
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    n = q.shape[-1]
-    cols = [f"q{j + 1}" for j in range(n)]
-    parts = [t[:, None], q]
-    if qd is not None:
-        cols += [f"qd{j + 1}" for j in range(n)]
-        parts.append(qd)
-    cols += [f"tau{j + 1}" for j in range(n)]
-    parts.append(tau)
-    with atomic_write(path, encoding="utf-8") as fh:
-        np.savetxt(
-            fh, np.column_stack(parts), delimiter=",", header="t," + ",".join(cols), comments="", fmt="%.10g"
-        )
-    return path
