@@ -9,8 +9,9 @@ never absent. Every segment after a swap carries:
     ``known`` [s]: the first time after the swap at which ``Z`` (1.96) times the Cramér-Rao
     standard deviation of the payload mass is within ``REL`` (5 %) of the payload that changed
     (the larger of the one that came and the one that left), every other parameter of the arm
-    known; the median over the reference run's kept trajectories, within :data:`INFO_WINDOW`
-    (None beyond it, or without a payload on either side). The bound is the paper's output-error
+    known; the median over the reference run's kept trajectories, a trajectory where it is not
+    reached within :data:`INFO_WINDOW` counting as later than any (None when the median is not
+    reached, or without a payload on either side). The bound is the paper's output-error
     model of sigma (:func:`~adaptive_dd.identification.fisher.mass_information_time`) on the
     two-link arm, the M2-filtered regression of the payload's ten parameters
     (:func:`~adaptive_dd.identification.payload_information.payload_information_time`) on an
@@ -26,8 +27,8 @@ never absent. Every segment after a swap carries:
     trajectories; None without one).
 ``detection_limit`` [s]
     Median over the reference run's kept trajectories of the time an optimal test (GLR at 1 %
-    false alarms per trial, the rest of the arm known) detects the swap; None without a change
-    or beyond the window.
+    false alarms per trial, the rest of the arm known) detects the swap, as ``known`` counts one
+    not reached; None without a change or when the median is not reached.
 ``mass_learning_time``, ``com_learning_time`` [s]
     Median over a controller's kept, unfailed trajectories of the first time after which its
     estimated mass stays within 5 % of the payload that changed, its centre of mass within 1 cm
