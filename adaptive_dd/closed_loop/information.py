@@ -264,39 +264,31 @@ class _chain:
 
     @staticmethod
     def information(sc, ref, i: int, k0: int, k1: int) -> dict:
-        from adaptive_dd.identification.payload_information import (
-            payload_com_information_time,
-            payload_information_time,
-        )
+        from adaptive_dd.identification.payload_information import payload_information_times
 
         mass, removed = sc.segments()[i][2], sc.segments()[i - 1][2]
         came = mass > 0  # the payload that came, else the one that left
         pay = _payload(sc, i - 1 if came else i - 2)
         T = sc.sample_period
         lo = max(0, k0 - 1)
+        ax = sc.arm.payload_identifiable[1:4]
         kw = dict(
             sample_period=T, position_variance=np.asarray(sc.position_variance),
-            velocity_variance=np.asarray(sc.velocity_variance),
+            velocity_variance=np.asarray(sc.velocity_variance), axes=ax,
+            mass_tol=REL * max(mass, removed) / pay[0] / Z, com_tol=COM_TOL / Z,
         )  # fmt: skip
-        ax = sc.arm.payload_identifiable[1:4]
-        known, com = [], []
         kept = _kept(ref)
-        for j in kept:
+        times = []
+        for j in kept:  # the mass of the payload that changed, its centre of mass, at Z sigma
             q, qd = ref.q[j, lo:k1], ref.qd[j, lo:k1]
-            qdd = np.gradient(qd, T, axis=0)
-            tol = REL * max(mass, removed) / pay[0] / Z  # of the mass that changed, at Z sigma
-            known.append(payload_information_time(sc.arm, q, qd, qdd, pay, k0 - lo, tol=tol, **kw))
-            if came:
-                com.append(
-                    payload_com_information_time(
-                        sc.arm, q, qd, qdd, pay, k0 - lo, tol=COM_TOL / Z, axes=ax, **kw
-                    )
-                )
+            times.append(
+                payload_information_times(sc.arm, q, qd, np.gradient(qd, T, axis=0), pay, k0 - lo, **kw)
+            )
         info = empty_information()
-        info.update(known=_median_limit(known), seeds=len(kept), reference=ref.name)
+        info.update(known=_median_limit([t[0] for t in times]), seeds=len(kept), reference=ref.name)
         if came:
             info["com_axes"] = "".join(a for a, k in zip("xyz", ax, strict=True) if k)
-            info["com_known"] = _median_limit(com)
+            info["com_known"] = _median_limit([t[1] for t in times])
         return info
 
     @staticmethod
