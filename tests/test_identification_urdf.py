@@ -305,10 +305,18 @@ def test_cli_simulate_and_identify_end_to_end(tmp_path, capsys):
 
 
 def test_benchmark_plant_with_smooth_friction_is_the_model(arm3):
-    """plant="serial" (the compiled benchmark plant) under the tanh law equals the identification model."""
+    """plant="benchmark" (the compiled benchmark plant) under the tanh law equals the identification model."""
     a = simulate_record(
-        arm3.with_(friction="tanh"), REF3, 0.5, [np.random.default_rng(0)], noise=False, plant="serial"
+        arm3.with_(friction="tanh"), REF3, 0.5, [np.random.default_rng(0)], noise=False, plant="benchmark"
     )
     b = simulate_record(arm3, REF3, 0.5, [np.random.default_rng(0)], noise=False)
     np.testing.assert_allclose(a.q_true, b.q_true, atol=1e-10)
     np.testing.assert_allclose(a.tau, b.tau, atol=1e-8)
+    # "serial", the old name, is the same plant, with a warning naming the new one
+    with pytest.warns(FutureWarning, match="use plant='benchmark'"):
+        c = simulate_record(
+            arm3.with_(friction="tanh"), REF3, 0.5, [np.random.default_rng(0)], noise=False, plant="serial"
+        )
+    np.testing.assert_array_equal(c.q_true, a.q_true)
+    with pytest.raises(ParameterError, match="plant must be 'model' or 'benchmark'"):
+        simulate_record(arm3, REF3, 0.5, [np.random.default_rng(0)], plant="rk4")
