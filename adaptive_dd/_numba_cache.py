@@ -20,8 +20,11 @@ import hashlib
 import os
 import re
 import shutil
+import time
 from contextlib import contextmanager
 from pathlib import Path
+
+from numba.core import event
 
 KEEP = 8
 
@@ -91,23 +94,42 @@ def source_hash(package: Path) -> str:
     return h.hexdigest()[:16]
 
 
+OPT_LEVEL = 3
+"""LLVM optimisation level of the package's kernels unless ``NUMBA_OPT`` is set (numba's default 3)."""
+
+
+def opt_level() -> int:
+    """The LLVM optimisation level this process compiles at: ``NUMBA_OPT`` if set, else
+    :data:`OPT_LEVEL` (set on numba's configuration by :func:`configure`)."""
+    import numba
+
+    if os.environ.get("NUMBA_OPT"):
+        return int(numba.config.OPT)
+    return OPT_LEVEL
+
+
 def configure() -> str | None:
-    """Point numba's cache at the folder of this source state; returns it (None if left alone: the
-    folder cannot be written)."""
+    """Set the optimisation level (:func:`opt_level`) and point numba's cache at the folder of this
+    source state and level; returns the folder (None if left alone: the folder cannot be written)."""
+    import numba
+
+    level = opt_level()
+    if not os.environ.get("NUMBA_OPT"):
+        numba.config.OPT = type(numba.config.OPT)(level)  # read by each compilation's pass builder
     package = Path(__file__).resolve().parent
     if os.environ.get("NUMBA_CACHE_DIR"):  # the user's folder, keyed inside it
         base = Path(os.environ["NUMBA_CACHE_DIR"]) / "adaptive_dd"
     else:
         base = Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "adaptive_dd" / "numba"
-    folder = base / source_hash(package)
+    # numba's cache index does not record the level: the folder does (code compiled at another
+    # level is another build of the kernels)
+    folder = base / f"{source_hash(package)}-O{level}"
     try:
         folder.mkdir(parents=True, exist_ok=True)
         if not os.access(folder, os.W_OK):
             return None
     except OSError:
         return None
-    import numba
-
     numba.config.CACHE_DIR = str(folder)
     try:
         old = sorted((p for p in base.iterdir() if p.is_dir()), key=lambda p: p.stat().st_mtime)
@@ -178,16 +200,47 @@ def _arm_label(arm) -> str:
     return "the two-link arm"
 
 
+def _kernel_label(dispatcher, args) -> str:
+    """What a kernel compiled from Python is, for the user: ``the N-joint closed loop with the
+    online estimator`` (or without), ``the two-link closed loop``, else ``module.function``."""
+    f = dispatcher.py_func
+    if f.__name__ != "closed_loop_block":
+        return f"{f.__module__.split('.')[-1]}.{f.__name__}"
+    if not f.__module__.startswith("adaptive_dd.closed_loop"):
+        return "the two-link closed loop"
+    est = any(str(a).startswith("EstCfg(") for a in args)
+    return "the N-joint closed loop " + ("with the online estimator" if est else "without an estimator")
+
+
+class _Progress(event.Listener):
+    """A ``numba:compile`` listener printing each kernel compiled from Python (a compilation at
+    depth 0, its callees included) that took over a second: the user sees the work advance."""
+
+    def __init__(self, stream) -> None:
+        self.stream, self.depth, self.start = stream, 0, 0.0
+
+    def on_start(self, ev) -> None:
+        if self.depth == 0:
+            self.start = time.perf_counter()
+        self.depth += 1
+
+    def on_end(self, ev) -> None:
+        self.depth = max(0, self.depth - 1)
+        if self.depth == 0 and (spent := time.perf_counter() - self.start) > 1.0:
+            label = _kernel_label(ev.data["dispatcher"], ev.data["args"])
+            print(f"  {label}: {spent:.0f} s", file=self.stream, flush=True)
+
+
 @contextmanager
 def announce_compilation(arm, stream=None):
-    """Say before a run that numba compiles (cold cache) and after it how long compilation took.
+    """Say before a run that numba compiles (cold cache), as it goes which kernels it compiled,
+    and after it how long compilation took.
 
     Prints to ``stream`` (default ``sys.stderr``) a line before, when :func:`compile_estimate`
-    finds the cache cold, and a line after whenever compilation took more than a second.
+    finds the cache cold, a line per kernel compiled from Python that took over a second
+    (:class:`_Progress`) and a line after whenever compilation took more than a second.
     """
     import sys
-
-    from numba.core import event
 
     stream = stream or sys.stderr
     guess = compile_estimate(arm)
@@ -200,7 +253,8 @@ def announce_compilation(arm, stream=None):
             file=stream,
             flush=True,
         )
-    with event.install_recorder("numba:compile") as rec:
+    progress = _Progress(stream)
+    with event.install_recorder("numba:compile") as rec, event.install_listener("numba:compile", progress):
         yield
     spent = _compile_seconds(rec.buffer)
     if spent > 1.0:
