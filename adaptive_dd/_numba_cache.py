@@ -94,42 +94,23 @@ def source_hash(package: Path) -> str:
     return h.hexdigest()[:16]
 
 
-OPT_LEVEL = 3
-"""LLVM optimisation level of the package's kernels unless ``NUMBA_OPT`` is set (numba's default 3)."""
-
-
-def opt_level() -> int:
-    """The LLVM optimisation level this process compiles at: ``NUMBA_OPT`` if set, else
-    :data:`OPT_LEVEL` (set on numba's configuration by :func:`configure`)."""
-    import numba
-
-    if os.environ.get("NUMBA_OPT"):
-        return int(numba.config.OPT)
-    return OPT_LEVEL
-
-
 def configure() -> str | None:
-    """Set the optimisation level (:func:`opt_level`) and point numba's cache at the folder of this
-    source state and level; returns the folder (None if left alone: the folder cannot be written)."""
-    import numba
-
-    level = opt_level()
-    if not os.environ.get("NUMBA_OPT"):
-        numba.config.OPT = type(numba.config.OPT)(level)  # read by each compilation's pass builder
+    """Point numba's cache at the folder of this source state; returns it (None if left alone: the
+    folder cannot be written)."""
     package = Path(__file__).resolve().parent
     if os.environ.get("NUMBA_CACHE_DIR"):  # the user's folder, keyed inside it
         base = Path(os.environ["NUMBA_CACHE_DIR"]) / "adaptive_dd"
     else:
         base = Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "adaptive_dd" / "numba"
-    # numba's cache index does not record the level: the folder does (code compiled at another
-    # level is another build of the kernels)
-    folder = base / f"{source_hash(package)}-O{level}"
+    folder = base / source_hash(package)
     try:
         folder.mkdir(parents=True, exist_ok=True)
         if not os.access(folder, os.W_OK):
             return None
     except OSError:
         return None
+    import numba
+
     numba.config.CACHE_DIR = str(folder)
     try:
         old = sorted((p for p in base.iterdir() if p.is_dir()), key=lambda p: p.stat().st_mtime)
@@ -142,13 +123,14 @@ def configure() -> str | None:
 
 
 # ------------------------------------------------------------ telling the user about compilation
-COMPILE_SECONDS = {"two-link": 35.0, "serial": 145.0}
+COMPILE_SECONDS = {"two-link": 35.0, "serial": 120.0}
 """One-time compilation of a benchmark's closed-loop kernels with a cold cache, on 2 cores: a guide
 for the message and ``validate``'s estimate, not a promise. Measured by
 ``benchmarks/compile_profile.py [SCENARIO] --seeds 2`` (an empty ``NUMBA_CACHE_DIR``, every
 built-in controller; CPU seconds inside numba's compilations): 31.6 s for the default two-link
-scenario (load average 15) and 146 s for ``ur5_tool_swap.toml`` (load average 6; any N-joint arm
-compiles the same kernels) on a shared 2-core machine, where the wall time was 3-10x longer.
+scenario (load average 15) and 121.5 s for ``ur5_tool_swap.toml`` (load average 14, 136.6 s before
+the friction law became a compile-time record; any N-joint arm compiles the same kernels) on a
+shared 2-core machine, where the wall time was 3-10x longer.
 Compilation runs in one thread before the trials start, so on a machine that is not shared its
 wall time is about its CPU time."""
 
