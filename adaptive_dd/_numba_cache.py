@@ -210,7 +210,9 @@ class _Progress(event.Listener):
         self.depth = max(0, self.depth - 1)
         if self.depth == 0 and (spent := time.perf_counter() - self.start) > 1.0:
             label = _kernel_label(ev.data["dispatcher"], ev.data["args"])
-            print(f"  {label}: {spent:.0f} s", file=self.stream, flush=True)
+            tty = getattr(self.stream, "isatty", lambda: False)()
+            clear = "\r\x1b[K" if tty else ""  # over a progress bar's line, which redraws below
+            print(f"{clear}  {label}: {spent:.0f} s", file=self.stream, flush=True)
 
 
 @contextmanager
