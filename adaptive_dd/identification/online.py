@@ -203,7 +203,7 @@ class Detector:
     reopen_mass_std: float | None = None
     floor: float = 0.05
     min_rows: int = 1
-    fast_window: float | None = 0.004
+    fast_window: float | None = 0.001
     fast_threshold: float = 6.0
 
     def __post_init__(self) -> None:
@@ -627,6 +627,7 @@ def _pack(cfg: OnlineConfig, arm: Arm) -> tuple[EstCfg, Array]:
             ints[K.I_FAST] = 1
             fl[K.F_ALPHA_FAST] = min(1.0, T / det.fast_window)
             fl[K.F_FAST2] = det.fast_threshold**2
+            ints[K.I_FAST_LEARNED] = cfg.seconds(det.long_window)
         if det.min_rows > n_rows:
             raise ParameterError(
                 f"Detector.min_rows = {det.min_rows} exceeds the {n_rows} joint equations that "
