@@ -1,8 +1,8 @@
 """Reading and writing recorded experiments.
 
-Two-link records: CSV ``t, q1, q2, qd1, qd2, tau1, tau2`` (:func:`read_recording`).
-N-joint records: ``t, q1..qN, qd1..qdN, tau1..tauN``, velocities optional
-(:func:`read_serial_recording`).
+A record of an arm of N joints (the paper's arm: N = 2) is a CSV
+``t, q1..qN, qd1..qdN, tau1..tauN``, velocities optional (:func:`read_recording`,
+:func:`write_recording`).
 """
 
 from __future__ import annotations
@@ -23,7 +23,6 @@ __all__ = [
     "Recording",
     "check_identifiable",
     "read_recording",
-    "read_serial_recording",
     "read_text",
     "read_toml",
     "write_recording",
@@ -38,13 +37,11 @@ MAX_FILTER_SAMPLES = 10_000
 MAX_RECORD_SAMPLES = 10_000_000
 """Longest record ``identify`` accepts (memory of the filtered regressors)."""
 
-REQUIRED = ("t", "q1", "q2", "tau1", "tau2")
-OPTIONAL = ("qd1", "qd2")
-
 
 @dataclass(frozen=True)
 class Recording:
-    """One measured experiment; arrays of shape (n_samples,) or (n_samples, 2)."""
+    """One measured experiment: ``t (n_samples,)`` [s]; ``q`` [rad], ``tau`` [N m] and ``qd``
+    [rad/s] (None when the record has no velocities) of shape ``(n_samples, n_joints)``."""
 
     t: NDArray[np.float64]
     q: NDArray[np.float64]
@@ -55,12 +52,23 @@ class Recording:
 
 
 def write_recording(path: str | Path, t, q, qd, tau) -> Path:
-    """Write a recording as CSV with the header ``t,q1,q2,qd1,qd2,tau1,tau2``."""
+    """Write a record as CSV ``t, q1..qN, qd1..qdN, tau1..tauN`` (the qd columns left out when
+    ``qd`` is None); ``q, qd, tau (n_samples, N)``. Written atomically; the folder is created."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    data = np.column_stack((t, q, qd, tau))
+    q = np.asarray(q, float)
+    n = q.shape[-1]
+    cols = [f"q{j + 1}" for j in range(n)]
+    parts = [np.asarray(t, float)[:, None], q]
+    if qd is not None:
+        cols += [f"qd{j + 1}" for j in range(n)]
+        parts.append(np.asarray(qd, float))
+    cols += [f"tau{j + 1}" for j in range(n)]
+    parts.append(np.asarray(tau, float))
     with atomic_write(path, encoding="utf-8") as fh:
-        np.savetxt(fh, data, delimiter=",", header="t,q1,q2,qd1,qd2,tau1,tau2", comments="", fmt="%.10g")
+        np.savetxt(
+            fh, np.column_stack(parts), delimiter=",", header="t," + ",".join(cols), comments="", fmt="%.10g"
+        )
     return path
 
 
@@ -94,49 +102,6 @@ def read_toml(path: str | Path, error: type[ValueError] = DataError) -> dict:
         return tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise error(f"{path}: not valid TOML: {exc}") from None
-
-
-def read_recording(path: str | Path, rtol_dt: float = 1e-3) -> Recording:
-    """Read a CSV recording; every problem names the file, line and column.
-
-    Raises
-    ------
-    DataError
-        Missing file or columns, unknown columns, non-numeric or non-finite cells,
-        too few rows, or non-uniform or non-increasing sampling (``|dt - T| > rtol_dt T``).
-    """
-    path = Path(path)
-    if not path.is_file():
-        raise DataError(f"{path}: no such file")
-    with io.StringIO(read_text(path), newline="") as fh:
-        reader = csv.reader(fh)
-        try:
-            header = [h.strip() for h in next(reader)]
-        except StopIteration:
-            raise DataError(f"{path}: empty file, expected a header t,q1,q2,qd1,qd2,tau1,tau2") from None
-        unknown = [h for h in header if h not in REQUIRED + OPTIONAL]
-        if unknown:
-            raise DataError(f"{path}: line 1: unknown column(s) {unknown}; expected {REQUIRED + OPTIONAL}")
-        missing = [h for h in REQUIRED if h not in header]
-        if missing:
-            raise DataError(f"{path}: line 1: missing column(s) {missing}")
-        if ("qd1" in header) != ("qd2" in header):
-            raise DataError(f"{path}: line 1: give both qd1 and qd2 or neither")
-        if len(set(header)) != len(header):
-            raise DataError(f"{path}: line 1: duplicate column names in {header}")
-        a = _parse_rows(path, reader, header)
-    col = {h: a[:, i] for i, h in enumerate(header)}
-    t = col["t"]
-    T = _sample_period(path, t, rtol_dt)
-    qd = np.column_stack((col["qd1"], col["qd2"])) if "qd1" in col else None
-    return Recording(
-        t=t,
-        q=np.column_stack((col["q1"], col["q2"])),
-        tau=np.column_stack((col["tau1"], col["tau2"])),
-        qd=qd,
-        sample_period=T,
-        source=str(path),
-    )
 
 
 def check_identifiable(rec: Recording, tau_f: float) -> None:
@@ -208,8 +173,9 @@ def _sample_period(path: Path, t: NDArray[np.float64], rtol_dt: float) -> float:
     return T
 
 
-def read_serial_recording(path: str | Path, n_joints: int, rtol_dt: float = 1e-3) -> Recording:
-    """Read an N-joint CSV record ``t, q1..qN, [qd1..qdN,] tau1..tauN`` for an arm of ``n_joints``.
+def read_recording(path: str | Path, n_joints: int = 2, rtol_dt: float = 1e-3) -> Recording:
+    """Read a CSV record ``t, q1..qN, [qd1..qdN,] tau1..tauN`` of an arm of ``n_joints`` (the
+    paper's arm: 2); every problem names the file, line and column.
 
     Returns a :class:`Recording` with ``q, tau (N, n)`` and ``qd (N, n)`` or None.
 
@@ -218,7 +184,7 @@ def read_serial_recording(path: str | Path, n_joints: int, rtol_dt: float = 1e-3
     DataError
         Naming the file (and line, column): columns that do not match the arm's joint count
         (which columns are missing or extra), non-numeric or non-finite cells, too few rows,
-        non-uniform sampling.
+        non-uniform or non-increasing sampling (``|dt - T| > rtol_dt T``).
     """
     path = Path(path)
     if not path.is_file():
@@ -242,10 +208,12 @@ def read_serial_recording(path: str | Path, n_joints: int, rtol_dt: float = 1e-3
         extra = [h for h in header if h not in want]
         if missing or extra:
             n_file = sum(1 for h in header if h.startswith("tau"))
+            what = [f"missing column(s) {missing}"] * bool(missing)
+            what += [f"unknown column(s) {extra}"] * bool(extra)
             raise DataError(
-                f"{path}: line 1: the columns do not fit an arm of {n} joints (the file has {len(header)} "
-                f"columns, {n_file} torque column(s)); missing {missing}, unexpected {extra}; expected "
-                f"{expected} (qd columns optional)"
+                f"{path}: line 1: the columns do not fit an arm of {n} joints: {'; '.join(what)} (the "
+                f"file has {len(header)} columns, {n_file} torque column(s)); expected {expected} (the qd "
+                "columns all or none)"
             )
         a = _parse_rows(path, reader, header)
     col = {h: a[:, i] for i, h in enumerate(header)}
@@ -258,3 +226,21 @@ def read_serial_recording(path: str | Path, n_joints: int, rtol_dt: float = 1e-3
         sample_period=T,
         source=str(path),
     )
+
+
+_RENAMED = {"read_serial_recording": "read_recording", "write_serial_recording": "write_recording"}
+
+
+def __getattr__(name: str):
+    """The old names of :func:`read_recording` and :func:`write_recording` (a FutureWarning)."""
+    if name in _RENAMED:
+        import warnings
+
+        warnings.warn(
+            f"adaptive_dd.io.{name} is now {_RENAMED[name]} (one record format for every arm); the "
+            "old name will be removed",
+            FutureWarning,
+            stacklevel=2,
+        )
+        return globals()[_RENAMED[name]]
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -30,8 +30,8 @@ def main() -> None:
         r = s.ratio_to_floor.to_numpy()
         f = floor[floor.segment == g]
         print(
-            f"{g:7d} {s.mass.iloc[0]:5.1f} {r.mean():11.3f} {np.percentile(r, 90):6.3f} {r.max():6.2f}"
-            f"   {1e3 * s.rms_error_settled.mean():8.3f} / {1e3 * f.rms_error_settled.mean():.3f}"
+            f"{g:7d} {s.mass_kg.iloc[0]:5.1f} {r.mean():11.3f} {np.percentile(r, 90):6.3f} {r.max():6.2f}"
+            f"   {1e3 * s.rms_error_settled_rad.mean():8.3f} / {1e3 * f.rms_error_settled_rad.mean():.3f}"
             f"   {int(np.nansum(s.false_alarms.to_numpy(dtype=float)))}"
         )
 

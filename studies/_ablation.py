@@ -42,8 +42,8 @@ def ablation_row(
     c = df[df.controller == "adaptive_ct"]
     cells = segment_cells(c)
     if torque:  # RMS torque over ct_oracle's, per segment (mean over seeds), and saturation
-        o = df[df.controller == "ct_oracle"].set_index(["seed", "segment"]).rms_torque
-        r = c.set_index(["seed", "segment"]).rms_torque / o
+        o = df[df.controller == "ct_oracle"].set_index(["seed", "segment"]).rms_torque_Nm
+        r = c.set_index(["seed", "segment"]).rms_torque_Nm / o
         sat = c.groupby("segment").saturation_fraction.mean()
         cells.append(
             "torque x "
@@ -52,7 +52,7 @@ def ablation_row(
             + "/".join(f"{100 * v:.2f}" for v in sat)
         )
     fa = int((c.groupby("seed").false_alarms.sum() > 0).sum())
-    missed = int(np.sum(c.detection_delay.isna() & (c.segment > 0))) if "detection_delay" in c else -1
+    missed = int(np.sum(c.detection_delay_s.isna() & (c.segment > 0))) if c.false_alarms.notna().any() else -1
     return f"{'  '.join(cells)}   {fa}   {missed}"
 
 

@@ -31,7 +31,7 @@ def _error(capsys, argv) -> str:
         (["simulate", "--arm", UR5, "--experiment", "table2"], "--experiment table2"),
         (["simulate", "--arm", SICE_URDF, "--experiment", "table2", "--com", "0", "0", "0.1"], "--com"),
         (["simulate", "--com", "0", "0", "0.1"], "--com"),
-        (["simulate", "--plant", "serial"], "--plant"),
+        (["simulate", "--plant", "benchmark"], "--plant"),
         (["simulate", "--arm", SICE_URDF, "--plant", "model"], "--plant"),
         (["identify", "rec.csv", "--arm", UR5, "--online"], "--online"),
         (["identify", "rec.csv", "--arm", UR5, "--method", "M1"], "--method"),
@@ -212,3 +212,17 @@ def test_benchmark_controllers_option_keeps_the_floor(scenario, capsys):
     assert main([*args, "--controllers", "adaptive_ct", "no_such_law", "--no-progress"]) == 2
     err = capsys.readouterr().err
     assert "no_such_law not among" in err and "adaptive_ct" in err
+
+
+def test_plant_serial_is_read_as_benchmark_with_a_warning(capsys):
+    """The ``serial_`` prefix went everywhere else; ``--plant serial`` is its old name: read as
+    ``benchmark``, the warning naming the new one."""
+    from adaptive_dd.cli import build_parser
+
+    assert build_parser().parse_args(["simulate", "--plant", "serial"]).plant == "benchmark"
+    assert "--plant serial is deprecated; use --plant benchmark" in capsys.readouterr().err
+    assert build_parser().parse_args(["simulate", "--plant", "benchmark"]).plant == "benchmark"
+    assert capsys.readouterr().err == ""
+    with pytest.raises(SystemExit):
+        build_parser().parse_args(["simulate", "--plant", "rk4"])
+    assert "invalid choice: 'rk4'" in capsys.readouterr().err

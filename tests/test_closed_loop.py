@@ -395,7 +395,7 @@ def test_cli_benchmark_of_an_n_joint_scenario_writes_every_output(tmp_path, caps
     assert m["controllers"]["ct_oracle"]["segments"][1]["ratio_to_floor"] is None
     assert m["provenance"]["scenario"]["arm"]["joints"] == ["joint1", "joint2", "joint3"]
     frame = pd.read_csv(out / "per_seed.csv")
-    assert {"rms_error_joint3", "com_estimate_x"} <= set(frame.columns) and len(frame) == 3 * 2 * 2
+    assert {"rms_error_joint3_rad", "com_estimate_x_m"} <= set(frame.columns) and len(frame) == 3 * 2 * 2
     for f in ("tracking_error.png", "joint_errors.png", "estimates.png", "metrics.csv"):
         assert (out / f).stat().st_size > 0
 

@@ -3,6 +3,8 @@ consistency, excitation, records and CLI errors. Most on the shipped three-joint
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -15,11 +17,13 @@ from adaptive_dd.identification.consistency import (
     pseudo_inertia,
 )
 from adaptive_dd.identification.excitation import (
+    FINE,
     ExcitationLimits,
     FourierTrajectory,
     _constraints,
     _information,
     _logdet,
+    _within_limits,
     design_excitation,
     multisine,
     reference_toml,
@@ -39,7 +43,7 @@ from adaptive_dd.identification.output_error import (
     simulate_segments,
 )
 from adaptive_dd.identification.payload_pair import payload_from_pair
-from adaptive_dd.identification.records import simulate_record, write_serial_recording
+from adaptive_dd.identification.records import simulate_record
 from adaptive_dd.identification.regression import (
     check_excitation,
     filtered_regression,
@@ -221,8 +225,10 @@ def test_designed_excitation_keeps_limits_and_beats_the_multisine(arm3, model3):
     lim = ExcitationLimits.of_arm(arm3, acceleration=5.0)
     plain = multisine(arm3, lim, harmonics=3, f0=0.2, grid=60)
     best, _ = design_excitation(arm3, lim, harmonics=3, f0=0.2, grid=60, maxiter=40)
-    t = np.linspace(0, 5, 400, endpoint=False)
-    assert np.min(_constraints(model3, best, t, lim)) > -0.01
+    checked = np.linspace(0, 5, 60 * FINE, endpoint=False)  # the design's own check
+    assert np.min(_constraints(model3, best, checked, lim)) >= 0
+    t = np.linspace(0, 5, 4000, endpoint=False)
+    assert np.min(_constraints(model3, best, t, lim)) > -1e-3
     assert np.min(_constraints(model3, plain, t, lim)) > -0.01
     d = np.ones(model3.p)
     assert (
@@ -230,21 +236,39 @@ def test_designed_excitation_keeps_limits_and_beats_the_multisine(arm3, model3):
     )
 
 
-def test_read_serial_recording_names_the_problem(tmp_path, arm3, clean3):
-    from adaptive_dd.cli import main
-    from adaptive_dd.io import read_serial_recording
+def test_an_optimum_crossing_a_limit_between_grid_points_is_shrunk_within_it(model3):
+    """The iiwa's designed excitation crossed a limit by 1.1 % between the optimiser's grid points
+    and the excitation phase was refused; the oscillation is now shrunk within the limits."""
+    tr = FourierTrajectory(np.zeros(3), np.full((3, 2), 0.2), np.full((3, 2), -0.1), 0.2)
+    fine = np.linspace(0, 5, 2000, endpoint=False)
+    peak = np.abs(tr.sample(fine)[1]).max(axis=0)
+    wide = ExcitationLimits(np.full(3, -3.0), np.full(3, 3.0), peak / 0.98, np.full(3, 1e3), np.full(3, 1e6))
+    assert _within_limits(model3, tr, fine, wide) is tr  # within: untouched
+    lim = dataclasses.replace(wide, velocity=peak * 0.98)  # 2 % over on every joint
+    assert np.min(_constraints(model3, tr, fine, lim)) < -0.019
+    shrunk = _within_limits(model3, tr, fine, lim)
+    assert np.min(_constraints(model3, shrunk, fine, lim)) >= 0
+    assert shrunk.a[0, 0] / tr.a[0, 0] == pytest.approx(0.98, abs=2e-3)  # no more than needed
+    np.testing.assert_array_equal(shrunk.q0, tr.q0)
+    with pytest.raises(ParameterError, match=r"still does with its oscillation shrunk to 0\.8"):
+        _within_limits(model3, tr, fine, dataclasses.replace(wide, velocity=peak * 0.7))
 
-    path = write_serial_recording(tmp_path / "r.csv", clean3.t, clean3.q[0], clean3.qd[0], clean3.tau[0])
-    rec = read_serial_recording(path, 3)
+
+def test_read_recording_of_n_joints_names_the_problem(tmp_path, arm3, clean3):
+    from adaptive_dd.cli import main
+    from adaptive_dd.io import read_recording, write_recording
+
+    path = write_recording(tmp_path / "r.csv", clean3.t, clean3.q[0], clean3.qd[0], clean3.tau[0])
+    rec = read_recording(path, 3)
     assert rec.q.shape == (2000, 3) and rec.sample_period == pytest.approx(1e-3)
-    with pytest.raises(DataError, match=r"do not fit an arm of 6 joints.*missing \['q4'"):
-        read_serial_recording(path, 6)
+    with pytest.raises(DataError, match=r"do not fit an arm of 6 joints: missing column\(s\) \['q4'"):
+        read_recording(path, 6)
     lines = path.read_text().splitlines()
     lines[5] = lines[5].replace(lines[5].split(",")[2], "nan", 1)
     bad = tmp_path / "bad.csv"
     bad.write_text("\n".join(lines) + "\n")
     with pytest.raises(DataError, match=r"line 6, column 'q2': non-finite"):
-        read_serial_recording(bad, 3)
+        read_recording(bad, 3)
     scen = tmp_path / "s.toml"
     scen.write_text('[arm]\nrobot = "ur5"\n')
     assert main(["identify", "--arm", str(scen), str(path), "--out", str(tmp_path / "o")]) == 2
@@ -281,10 +305,18 @@ def test_cli_simulate_and_identify_end_to_end(tmp_path, capsys):
 
 
 def test_benchmark_plant_with_smooth_friction_is_the_model(arm3):
-    """plant="serial" (the compiled benchmark plant) under the tanh law equals the identification model."""
+    """plant="benchmark" (the compiled benchmark plant) under the tanh law equals the identification model."""
     a = simulate_record(
-        arm3.with_(friction="tanh"), REF3, 0.5, [np.random.default_rng(0)], noise=False, plant="serial"
+        arm3.with_(friction="tanh"), REF3, 0.5, [np.random.default_rng(0)], noise=False, plant="benchmark"
     )
     b = simulate_record(arm3, REF3, 0.5, [np.random.default_rng(0)], noise=False)
     np.testing.assert_allclose(a.q_true, b.q_true, atol=1e-10)
     np.testing.assert_allclose(a.tau, b.tau, atol=1e-8)
+    # "serial", the old name, is the same plant, with a warning naming the new one
+    with pytest.warns(FutureWarning, match="use plant='benchmark'"):
+        c = simulate_record(
+            arm3.with_(friction="tanh"), REF3, 0.5, [np.random.default_rng(0)], noise=False, plant="serial"
+        )
+    np.testing.assert_array_equal(c.q_true, a.q_true)
+    with pytest.raises(ParameterError, match="plant must be 'model' or 'benchmark'"):
+        simulate_record(arm3, REF3, 0.5, [np.random.default_rng(0)], plant="rk4")

@@ -29,12 +29,29 @@ def test_round_trip(tmp_path):
     assert rec.sample_period == pytest.approx(1e-3)
 
 
+def test_one_record_format_for_every_arm(tmp_path):
+    t = np.arange(30) * 2e-3
+    q = np.random.default_rng(1).normal(size=(30, 3))
+    p = write_recording(tmp_path / "n3.csv", t, q, None, -q)  # no velocities
+    assert p.read_text().splitlines()[0] == "t,q1,q2,q3,tau1,tau2,tau3"
+    rec = read_recording(p, 3)
+    assert rec.qd is None and rec.sample_period == pytest.approx(2e-3)
+    np.testing.assert_allclose(rec.tau, -q, rtol=1e-9)
+    with pytest.raises(DataError, match=r"arm of 2 joints: unknown column\(s\) \['q3', 'tau3'\]"):
+        read_recording(p)  # the paper's arm by default
+    import adaptive_dd.io as io_module
+
+    with pytest.warns(FutureWarning, match="read_serial_recording is now read_recording"):
+        old = io_module.read_serial_recording
+    assert old is read_recording
+
+
 @pytest.mark.parametrize(
     "text, match",
     [
         ("t,q1,q2,tau1\n1,2,3,4\n", "missing column\\(s\\) \\['tau2'\\]"),
         ("t,q1,q2,tau1,tau2,foo\n", "unknown column"),
-        ("t,q1,q2,qd1,tau1,tau2\n", "both qd1 and qd2"),
+        ("t,q1,q2,qd1,tau1,tau2\n", "missing column\\(s\\) \\['qd2'\\].*the qd columns all or none"),
         (good_csv().replace("0.5,0.1\n0.002", "0.5,abc\n0.002", 1), "line 3, column 'tau2': not a number"),
         (good_csv().replace("0.005,5,0", "0.0057,5,0"), "line 7, column 't': non-uniform sampling"),
         (good_csv().replace("0.004,4,0", "0.004,nan,0"), "line 6, column 'q1': non-finite"),

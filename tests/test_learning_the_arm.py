@@ -269,7 +269,7 @@ def test_a_scenario_without_estimator_settings_runs_as_the_tuned_one():
         d = {**base, "controllers": {"adaptive_ct": est} if est else {}}
         df = run_benchmark(parse_scenario(d, "panda.toml", "panda"), progress=False).to_frame()
         c = df[df.controller == "adaptive_ct"].sort_values(["seed", "segment"])
-        out[name] = (c.ratio_to_floor.to_numpy(float), c.detection_delay.to_numpy(float))
+        out[name] = (c.ratio_to_floor.to_numpy(float), c.detection_delay_s.to_numpy(float))
     np.testing.assert_allclose(out["derived"][0], out["tuned"][0], rtol=0.02)
     np.testing.assert_array_equal(out["derived"][1], out["tuned"][1])
     assert np.all(np.isfinite(out["derived"][1][1::2]))  # the swap detected in both seeds

@@ -190,3 +190,16 @@ def test_bad_arguments_are_named(ur5, record, kw, match):
         payload_information_time(ur5, r.q, r.qd, r.qdd, PAY, 100, sample_period=T, **kw)
     with pytest.raises(ParameterError, match="swap_sample"):
         payload_information_time(ur5, r.q, r.qd, r.qdd, PAY, 10**6, sample_period=T)
+
+
+def test_both_information_times_from_one_information(ur5, record):
+    """``payload_information_times`` (what the benchmark's information_time calls, once per
+    trajectory) is the mass and centre-of-mass times of the two functions."""
+    from adaptive_dd.identification.payload_information import payload_information_times
+
+    r = record
+    kw = dict(sample_period=T, window=150, axes=[True, False, True])
+    got = payload_information_times(ur5, r.q, r.qd, r.qdd, PAY, 3_000, mass_tol=0.02, com_tol=0.004, **kw)
+    mass = payload_information_time(ur5, r.q, r.qd, r.qdd, PAY, 3_000, tol=0.02, window=150, sample_period=T)
+    com = payload_com_information_time(ur5, r.q, r.qd, r.qdd, PAY, 3_000, tol=0.004, **kw)
+    assert got == (mass, com) and np.isfinite(mass) and np.isfinite(com)

@@ -451,7 +451,7 @@ def test_a_cell_runs_on_a_urdf_arm_with_the_scenario_settings(tmp_path):
     one = dataclasses.replace(sc, controllers=("ct_oracle",), controller_options=())
     res = run_benchmark(one, progress=False, seed_indices=[0])
     np.testing.assert_allclose(
-        [r["rms_error"] for r in rows], res.to_frame()["rms_error"].to_numpy(), rtol=1e-12
+        [r["rms_error"] for r in rows], res.to_frame()["rms_error_rad"].to_numpy(), rtol=1e-12
     )
     # the scenario's [controllers.adaptive_ct] table applies, the grid's settings over it
     from adaptive_dd.sweep import _cell_scenario

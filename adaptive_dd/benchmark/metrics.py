@@ -1,20 +1,27 @@
-"""Metrics of a benchmark run, per controller and per payload segment.
+"""Metrics of a benchmark run, per controller and per payload segment: one schema on every arm.
 
-Errors are on the *true* joint angles: ``e = q_d - q``, ``|e|`` its Euclidean norm
-over both joints [rad]. Per trial, then averaged over the seeds that did not fail:
+The JSON (:func:`compute_metrics`) has the keys :data:`TOP_KEYS`; each controller the keys
+:data:`CONTROLLER_KEYS`, each of its segments the keys :data:`SEGMENT_KEYS`, on the two-link
+arm and on an N-joint arm alike. A figure that exists on one kind of arm only is ``None`` on the
+other, never absent (``tests/test_result_schema.py`` holds both arms' results to this).
 
-rms_error
-    ``sqrt(mean |e|^2)`` over the segment (``rms_error_joint``: per joint).
-rms_error_settled
+Errors are on the *true* joint angles: ``e = q_d - q``, ``|e|`` its Euclidean norm over the
+joints [rad]. Per trial, then averaged over the seeds that did not fail:
+
+start, end [s], mass [kg]
+    The segment and the payload on the arm during it.
+rms_error [rad]
+    ``sqrt(mean |e|^2)`` over the segment (``rms_error_joint``: per joint, a list of n_joints).
+rms_error_settled [rad]
     ``sqrt(mean |e|^2)`` over the segment less its first ``SETTLE`` (0.5 s): the
     tracking once a swap's transient is over.
-max_error
+max_error [rad]
     ``max |e|`` over the segment.
-detection_delay
+detection_delay [s]
     Controllers with a change detector: time from the swap to the first alarm within
     ``FALSE_ALARM_WINDOW`` after it, mean over the seeds that raised one (``detected`` of them;
     ``missed``: kept seeds that raised none), None otherwise or for the first segment.
-recovery_time
+recovery_time [s]
     After a swap at ``t_s``: the time until the 50 ms moving RMS of ``|e|`` enters
     a band and stays inside it for ``RECOVERY_DWELL`` (0.5 s). The band is ``RECOVERY_BAND`` times
     the peak of that moving RMS over the second before the swap or over the last
@@ -22,48 +29,71 @@ recovery_time
     the payload; friction at reversals makes the steady error spiky, so the band
     is set by its peaks), with a floor ``RECOVERY_FLOOR``. ``None`` for the first segment, and for a trial
     that never does so within the segment.
-rms_torque
-    ``sqrt(mean |tau|^2)`` of the applied torque [N m].
+rms_torque [N m]
+    ``sqrt(mean |tau|^2)`` of the applied torque.
 saturation_fraction
     Fraction of samples with a joint's command beyond its limit.
 floor_saturation, floor_saturated
     The floor's saturation fraction in the segment, and whether it exceeds
     ``SATURATION_LIMIT`` (1 %): there the floor is not the law with the true model but a
     saturated loop, its ratio says nothing and the report gives no verdict.
-mass_estimate
-    Payload mass implied by the estimates at the end of the segment
-    (:func:`~adaptive_dd.plant.payload_mass_from_sigma`); None for fixed models.
+mass_estimate [kg]
+    Payload mass implied by the estimates at the end of the segment (the arm's
+    ``payload_mass_from_sigma``, or ``payload_from_sigma``); None for fixed models.
+com_estimate [m]
+    The payload's centre of mass (x, y, z, payload frame) implied by the estimates at the end
+    of the segment (None below 0.1 kg); N-joint arms only: None on the two-link arm, whose
+    paper's sigma holds the payload at the tip (eq. 9) and no centre of mass.
+com_true [m]
+    The centre of mass of the segment's payload in the payload frame; None without payload.
+sigma_true
+    The arm's true base parameters in the segment: the paper's seven (J1 J2 r b1 b2 d1 d2) on the
+    two-link arm, the arm's ``base.count`` on an N-joint arm (the plant's before any draw).
 
 A trial that diverged is left out of the segments that end after its failure (the segments
-before it count); a controller that raised is left out everywhere.
+before it count); a controller that raised is left out everywhere
+(:func:`~adaptive_dd.benchmark.segments.segment_failed`, the one rule on every arm).
+
+Per controller: ``rms_error`` [rad] over the whole run, ``failed_trials``, ``error`` (the
+controller's exception, or None), ``engine``, ``dropped_samples`` (lost measurements of the kept
+trials), ``skipped_samples_per_seed`` (samples the estimator skipped; None without one),
+``failures`` (``[{"seed", "t" [s], "why"}]`` of every failed trial; ``[]`` when none failed).
 
 Per seed (trial i uses the noise of seed ``(scenario.seed, i)`` for every controller,
 so ratios are taken seed by seed: common random numbers):
 
-rms_error_per_seed
+rms_error_per_seed [rad]
     The segment's RMS error of each trial (None for a failed trial).
 ratio_to_floor
-    Statistics of ``rms_error / rms_error of the floor`` per seed, where the floor is the
-    same law with the true model (``Controller.floor``; e.g. ``ct_oracle`` for
-    ``adaptive_ct``): ``mean``, ``median``, ``p90``, ``max``, ``ci95`` (t-interval of the
-    mean), ``worst_seed`` (the seed index of the largest ratio), ``n``. None when the floor
-    is not in the run.
-detection_delay_per_seed
+    Statistics of ``rms_error / rms_error of the floor`` per seed, where the floor (``floor``: its
+    name, None without) is the same law with the true model (``Controller.floor``; e.g.
+    ``ct_oracle`` for ``adaptive_ct``): ``mean``, ``median``, ``p90``, ``max``, ``ci95``
+    (t-interval of the mean), ``worst_seed`` (the seed index of the largest ratio), ``n``. None
+    when the floor is not in the run.
+detection_delay_per_seed [s]
     Segments after a swap: the first alarm within ``FALSE_ALARM_WINDOW`` after the swap,
-    per seed (None: missed or failed).
+    per seed (None: missed or failed). None for a controller without a detector.
 missed_swaps_per_seed
     Per controller with a detector: swaps with no alarm within ``FALSE_ALARM_WINDOW`` after
-    them, per seed (None: failed); ``missed_swaps``: their sum.
+    them, per seed (None: failed); ``missed_swaps``: their sum. None without a detector.
 false_alarms_per_seed
-    Per controller with a detector: alarms that follow no swap by ``FALSE_ALARM_WINDOW``.
-detection_delay_median
+    Per controller with a detector: alarms that follow no swap by ``FALSE_ALARM_WINDOW``
+    (``trials_with_false_alarms``: the trials with one). None without a detector.
+detection_delay_median [s]
     Segments after a swap: the median of ``detection_delay_per_seed`` over the trials that
     detected it (None: none did); the report compares it with ``detection_limit``.
 time_to_floor
     First segment, controllers whose floor ran: per seed the time [s] after which the 0.25 s
     moving RMS error stays within 1.2x the floor's to the first swap (``"never"`` if it does not),
     with its median, p90, max and the count of never
-    (:mod:`~adaptive_dd.benchmark.time_to_floor`).
+    (:mod:`~adaptive_dd.benchmark.time_to_floor`); None elsewhere.
+information_time, detection_limit, mass_learning_time, com_learning_time, learning_seeds
+    Per swap, the information limit and each controller's time to learn the payload
+    (:mod:`~adaptive_dd.closed_loop.information`, its keys and units); None in the first segment.
+
+Top level: ``scenario`` (its file), ``seeds``, ``wall_time_s`` [s], ``provenance``, ``plant``
+(the plants the trials met when the plant is not the model; None: the plant is the arm),
+``excitation`` (the ``[run] excite`` phase's identification; None without), ``controllers``.
 """
 
 from __future__ import annotations
@@ -76,17 +106,19 @@ from adaptive_dd.benchmark.provenance import provenance
 from adaptive_dd.benchmark.segments import moving_rms, segment_failed
 from adaptive_dd.benchmark.streaming import SETTLE, segment_bounds
 from adaptive_dd.plant.kind import is_chain
-from adaptive_dd.plant.sampling import first_sample
 
 if TYPE_CHECKING:  # annotations only: types imports this module for BenchmarkResult.metrics()
     from adaptive_dd.benchmark.types import BenchmarkResult
 
 __all__ = [
+    "CONTROLLER_KEYS",
     "FALSE_ALARM_WINDOW",
     "RECOVERY_BAND",
     "RECOVERY_DWELL",
     "RECOVERY_FLOOR",
     "SATURATION_LIMIT",
+    "SEGMENT_KEYS",
+    "TOP_KEYS",
     "compute_metrics",
     "detection_delays",
     "error_trace",
@@ -107,6 +139,25 @@ WINDOW = 0.05  # s
 FALSE_ALARM_WINDOW = 0.3  # s: an alarm later than this after every swap is a false alarm
 SATURATION_LIMIT = 0.01  # fraction of samples: a floor saturated more than this is no floor
 SEED_CHUNK = 64  # seeds per block of the per-sample post-processing (bounds its memory)
+
+TOP_KEYS = ("scenario", "seeds", "wall_time_s", "provenance", "plant", "excitation", "controllers")
+"""The keys of the metrics (the JSON), on every arm (module docstring)."""
+CONTROLLER_KEYS = (
+    "rms_error", "failed_trials", "error", "engine", "dropped_samples", "skipped_samples_per_seed",
+    "failures", "floor", "false_alarms_per_seed", "trials_with_false_alarms", "missed_swaps_per_seed",
+    "missed_swaps", "segments",
+)  # fmt: skip
+"""The keys of each controller's entry, on every arm (module docstring)."""
+SEGMENT_KEYS = (
+    "start", "end", "mass", "rms_error", "rms_error_settled", "rms_error_joint", "max_error",
+    "recovery_time", "rms_torque", "saturation_fraction", "mass_estimate", "com_estimate", "com_true",
+    "sigma_true", "rms_error_per_seed", "ratio_to_floor", "floor_saturation", "floor_saturated",
+    "detection_delay", "detection_delay_per_seed", "detection_delay_median", "detected", "missed",
+    "time_to_floor", "information_time", "detection_limit", "mass_learning_time", "com_learning_time",
+    "learning_seeds",
+)  # fmt: skip
+"""The keys of each segment, on every arm (module docstring;
+:data:`~adaptive_dd.closed_loop.information.LEARNING_KEYS` among them)."""
 
 
 def _settling_time(above: np.ndarray, dwell: int) -> np.ndarray:
@@ -271,68 +322,80 @@ def detection_delays(alarm_times, swap: float) -> list[float | None]:
 
 
 def compute_metrics(res: BenchmarkResult) -> dict:
-    """Metrics in the JSON layout of the README (``{"controllers": {NAME: {...}}}``)."""
+    """Metrics in the JSON layout of the README (``{"controllers": {NAME: {...}}}``): the keys of
+    :data:`TOP_KEYS`, each controller's :data:`CONTROLLER_KEYS` and each segment's
+    :data:`SEGMENT_KEYS`, on every arm (a figure one kind of arm lacks is None, never absent)."""
+    from adaptive_dd.benchmark.time_to_floor import add_time_to_floor
+    from adaptive_dd.closed_loop.information import add_information_times
+
     sc = res.scenario
-    out = {}
     per = {name: per_seed_segment_metrics(res, run) for name, run in res.runs.items()}
     seg_sigma = _segment_sigmas(sc)
-    for name, run in res.runs.items():
-        m = per[name]
-        segs = []
-        for i, (start, end, mass) in enumerate(sc.segments()):
-            segs.append(
-                {
-                    "start": start,
-                    "end": end,
-                    "mass": mass,
-                    "rms_error": _mean(m["rms_error"][:, i]),
-                    "rms_error_settled": _mean(m["rms_error_settled"][:, i]),
-                    "detection_delay": None,
-                    "rms_error_joint": [
-                        _mean(m[f"rms_error_joint{j}"][:, i]) for j in range(1, sc.n_joints + 1)
-                    ],
-                    "max_error": _mean(m["max_error"][:, i]),
-                    "recovery_time": _mean(m["recovery_time"][:, i]) if i > 0 else None,
-                    "rms_torque": _mean(m["rms_torque"][:, i]),
-                    "saturation_fraction": _mean(m["saturation_fraction"][:, i]),
-                    "mass_estimate": _mean(m["mass_estimate"][:, i]) if "mass_estimate" in m else None,
-                    "sigma_true": [float(x) for x in seg_sigma[i]],
-                }
-            )
-            if "com_estimate_x" in m:
-                segs[-1]["com_estimate"] = [_mean(m[f"com_estimate_{a}"][:, i]) for a in "xyz"]
-                segs[-1]["com_true"] = _com_true(sc, i)
-        ok = ~run.failed if not run.error else np.zeros_like(run.failed)
-        total = segment_rms(run.acc.sum_e2.sum(axis=1), sc.n_samples)
-        out[name] = {
-            "rms_error": _mean(np.where(ok, total, np.nan)),
-            "failed_trials": int(run.failed.sum()),
-            "error": run.error or None,
-            "engine": run.engine,
-            "dropped_samples": None if run.dropped is None else int(run.dropped[ok].sum()),
-            "skipped_samples_per_seed": None if run.skipped is None else [int(x) for x in run.skipped],
-            "segments": segs,
-        }
-        if run.failed.any():  # seed, time and reason of each failed trial
-            out[name]["failures"] = run.failures(sc.sample_period, res.seed_indices or None)
-    _add_seed_statistics(res, out, per)
-    _add_information_times(res, out)
-    from adaptive_dd.benchmark.time_to_floor import add_time_to_floor
-
+    out = {name: _controller_entry(res, run, per[name], seg_sigma) for name, run in res.runs.items()}
+    _add_floor_ratios(res, out, per)
+    _add_detector_statistics(res, out)
+    add_information_times(res, out)
     add_time_to_floor(res, out)
-
-    result = {
+    return {
         "scenario": sc.source,
         "seeds": sc.seeds,
         "wall_time_s": res.wall_time,
         "provenance": provenance(res),
+        "plant": res.plant,  # the plant is not the model: what each seed's plant was (None: the arm)
+        "excitation": res.excitation,  # [run] excite: the identification before the task (None: none)
         "controllers": out,
     }
-    if res.plant is not None:  # the plant is not the model: what each seed's plant was
-        result["plant"] = res.plant
-    if res.excitation is not None:  # [run] excite: the identification before the task
-        result["excitation"] = res.excitation
-    return result
+
+
+def _controller_entry(res: BenchmarkResult, run, m: dict, seg_sigma: np.ndarray) -> dict:
+    """One controller's :data:`CONTROLLER_KEYS`, its segments' figures from the per-seed ``m``
+    (the floor ratios, detector, information and time-to-floor keys are filled after, None here)."""
+    sc = res.scenario
+    ok = ~run.failed if not run.error else np.zeros_like(run.failed)
+    total = segment_rms(run.acc.sum_e2.sum(axis=1), sc.n_samples)
+    return {
+        "rms_error": _mean(np.where(ok, total, np.nan)),
+        "failed_trials": int(run.failed.sum()),
+        "error": run.error or None,
+        "engine": run.engine,
+        "dropped_samples": None if run.dropped is None else int(run.dropped[ok].sum()),
+        "skipped_samples_per_seed": None if run.skipped is None else [int(x) for x in run.skipped],
+        "failures": run.failures(sc.sample_period, res.seed_indices or None),  # seed, time, why
+        "floor": None,
+        "false_alarms_per_seed": None,
+        "trials_with_false_alarms": None,
+        "missed_swaps_per_seed": None,
+        "missed_swaps": None,
+        "segments": [_segment_entry(sc, m, i, seg_sigma[i]) for i in range(len(sc.segments()))],
+    }
+
+
+def _segment_entry(sc, m: dict, i: int, sigma_true: np.ndarray) -> dict:
+    """Segment i's :data:`SEGMENT_KEYS`: its means over the kept seeds of ``m``, the rest None."""
+    start, end, mass = sc.segments()[i]
+    seg = dict.fromkeys(SEGMENT_KEYS)
+    seg.update(
+        start=start,
+        end=end,
+        mass=mass,
+        rms_error=_mean(m["rms_error"][:, i]),
+        rms_error_settled=_mean(m["rms_error_settled"][:, i]),
+        rms_error_joint=[_mean(m[f"rms_error_joint{j}"][:, i]) for j in range(1, sc.n_joints + 1)],
+        max_error=_mean(m["max_error"][:, i]),
+        recovery_time=_mean(m["recovery_time"][:, i]) if i > 0 else None,
+        rms_torque=_mean(m["rms_torque"][:, i]),
+        saturation_fraction=_mean(m["saturation_fraction"][:, i]),
+        mass_estimate=_mean(m["mass_estimate"][:, i]) if "mass_estimate" in m else None,
+        sigma_true=[float(x) for x in sigma_true],
+        rms_error_per_seed=_seed_list(m["rms_error"][:, i]),
+        com_true=_com_true(sc, i),
+        floor_saturated=False,
+        detected=None,
+        missed=None,
+    )
+    if "com_estimate_x" in m:
+        seg["com_estimate"] = [_mean(m[f"com_estimate_{a}"][:, i]) for a in "xyz"]
+    return seg
 
 
 def _segment_sigmas(sc) -> np.ndarray:
@@ -393,20 +456,14 @@ def ratio_statistics(ratio: np.ndarray, seeds=None) -> dict | None:
     }
 
 
-def _add_seed_statistics(res: BenchmarkResult, out: dict, per: dict) -> None:
-    """Per-seed lists, ratios to each controller's floor, the floor's saturation, false alarms,
-    missed swaps and detection delays."""
-    sc = res.scenario
-    seeds = res.seed_indices or tuple(range(sc.seeds))
-    for name in res.runs:
-        for i, seg in enumerate(out[name]["segments"]):
-            seg["rms_error_per_seed"] = _seed_list(per[name]["rms_error"][:, i])
+def _add_floor_ratios(res: BenchmarkResult, out: dict, per: dict) -> None:
+    """Each controller's floor, and per segment the per-seed ratio to it and the floor's saturation."""
+    seeds = res.seed_indices or tuple(range(res.scenario.seeds))
     floors = {r.floor for r in res.runs.values() if r.floor in res.runs}
     for name, run in res.runs.items():
         floor = run.floor if run.floor in per else None
         out[name]["floor"] = floor
         for i, seg in enumerate(out[name]["segments"]):
-            seg["ratio_to_floor"] = None
             ref = floor or (name if name in floors else None)
             seg["floor_saturation"] = out[ref]["segments"][i]["saturation_fraction"] if ref else None
             fs = seg["floor_saturation"]
@@ -415,6 +472,13 @@ def _add_seed_statistics(res: BenchmarkResult, out: dict, per: dict) -> None:
                 with np.errstate(divide="ignore", invalid="ignore"):
                     ratio = per[name]["rms_error"][:, i] / per[floor]["rms_error"][:, i]
                 seg["ratio_to_floor"] = ratio_statistics(np.where(np.isfinite(ratio), ratio, np.nan), seeds)
+
+
+def _add_detector_statistics(res: BenchmarkResult, out: dict) -> None:
+    """Controllers with a change detector: false alarms, missed swaps and detection delays per
+    seed (None for a failed trial), and per swap their mean, median and counts."""
+    sc = res.scenario
+    for name, run in res.runs.items():
         if run.alarm_times is None:
             continue
         ok = ~run.failed if not run.error else np.zeros_like(run.failed)
@@ -433,113 +497,3 @@ def _add_seed_statistics(res: BenchmarkResult, out: dict, per: dict) -> None:
             missed += np.array([d is None for d in first], dtype=int)
         out[name]["missed_swaps_per_seed"] = [int(n) if g else None for n, g in zip(missed, ok, strict=True)]
         out[name]["missed_swaps"] = int(missed[ok].sum())
-
-
-INFO_WINDOW = 1.0
-"""[s] after a swap searched for the information-limited time."""
-
-
-def _median(x: list) -> float | None:
-    v = np.asarray([np.nan if y is None else y for y in x], float)
-    return float(np.nanmedian(v)) if np.isfinite(v).any() else None
-
-
-def _add_information_times(res: BenchmarkResult, out: dict) -> None:
-    """Per swap: the time the information limit needs to know the payload mass within 5 %, beside
-    the time each controller with an estimate took.
-
-    Both need per-sample trajectories, which are kept for the first ``keep_trajectories`` seeds
-    only: the limit is the median over those seeds of the reference run (the oracle's if present;
-    ``information_seeds``: how many), the learning times the median over a controller's kept
-    seeds that did not fail (``learning_seeds``). The JSON and the report say how many seeds."""
-    from adaptive_dd.closed_loop.information import mass_learning_time
-    from adaptive_dd.identification.fisher import mass_information_time
-
-    sc = res.scenario
-    if not sc.swap_times:
-        return
-
-    if is_chain(sc.arm):  # N joints: adaptive_dd.closed_loop.information
-        from adaptive_dd.closed_loop.information import add_information_times
-
-        add_information_times(res, out)
-        return
-    T = sc.sample_period
-    ref = next(
-        (
-            r
-            for n, r in sorted(res.runs.items(), key=lambda x: x[0] != "ct_oracle")
-            if r.q is not None and r.q.shape[0]
-        ),
-        None,
-    )
-    segs = sc.segments()
-    _, ends, _ = segment_bounds(segs, T, SETTLE)
-    w = round(INFO_WINDOW / T)
-    d = sc.arm.payload_direction(sc.payload_radius)
-    for i in range(1, len(segs)):
-        a, _, mass = segs[i]
-        removed = segs[i - 1][2]
-        k0 = first_sample(a, T)
-        k1 = min(int(ends[i]), k0 + w)
-        info = {"known": None, "unknown": None, "seeds": 0, "reference": None}
-        if ref is not None and max(mass, removed) > 0:
-            kept = [j for j in range(ref.q.shape[0]) if not ref.failed[j]]
-            times = {"known": [], "unknown": []}
-            for j in kept:
-                for others in times:
-                    times[others].append(
-                        mass_information_time(
-                            ref.q[j, k0 - 1 : k1],
-                            ref.qd[j, k0 - 1 : k1],
-                            ref.tau[j, k0 - 1 : k1],
-                            1,
-                            T,
-                            sc.arm.sigma_with_payload(mass, sc.payload_radius),
-                            d,
-                            sc.position_variance,
-                            sc.velocity_variance,
-                            mass=max(mass, removed),
-                            others=others,
-                        )
-                    )
-            info = {
-                "known": _median(times["known"]),
-                "unknown": _median(times["unknown"]),
-                "seeds": len(kept),
-                "reference": ref.name,
-            }
-        limit = None
-        if ref is not None and max(mass, removed) > 0 and mass != removed:
-            from adaptive_dd.identification.two_link_detection_limit import two_link_detection_limit
-
-            limits = [
-                two_link_detection_limit(
-                    ref.q[j, k0 - 1 : k1],
-                    ref.qd[j, k0 - 1 : k1],
-                    ref.tau[j, k0 - 1 : k1],
-                    1,
-                    T,
-                    sc.arm.sigma_with_payload(mass, sc.payload_radius),
-                    d,
-                    abs(mass - removed),
-                    sc.position_variance,
-                    sc.velocity_variance,
-                    n_tests=sc.n_samples,
-                )
-                for j in range(ref.q.shape[0])
-                if not ref.failed[j]
-            ]
-            limit = _median(limits)
-        for name, run in res.runs.items():
-            seg = out[name]["segments"][i]
-            seg["information_time"] = info
-            seg["detection_limit"] = limit
-            seg["mass_learning_time"] = None
-            seg["learning_seeds"] = 0
-            if run.sigma_hat is not None and run.sigma_hat.shape[0]:
-                kept = ~run.failed[: run.sigma_hat.shape[0]]
-                m_hat = sc.arm.payload_mass_from_sigma(run.sigma_hat[kept, k0 : int(ends[i])])
-                tl = mass_learning_time(m_hat, mass, removed, T)
-                seg["learning_seeds"] = int(kept.sum())
-                seg["mass_learning_time"] = None if np.all(np.isnan(tl)) else float(np.nanmedian(tl))

@@ -24,38 +24,30 @@ TARGET_MASS_ABS = 0.05  # kg, for the segments without payload
 TARGET_WALL_S = 60.0
 
 
+TABLES = (
+    ("RMS tracking error |e| [mrad] (true q)", "rms_error", 1e3, "{:16.3f}"),
+    ("RMS tracking error after the first 0.5 s of the segment [mrad]", "rms_error_settled", 1e3, "{:16.3f}"),
+    ("max tracking error |e| [mrad]", "max_error", 1e3, "{:16.2f}"),
+    ("recovery time after the swap [s]", "recovery_time", 1.0, "{:16.3f}"),
+    ("change detected after the swap [ms] (controllers with a detector)", "detection_delay", 1e3, "{:16.1f}"),
+    ("RMS torque [N m]", "rms_torque", 1.0, "{:16.2f}"),
+    ("saturated fraction [%]", "saturation_fraction", 100.0, "{:16.2f}"),
+    ("payload mass estimated at the end of the segment [kg]", "mass_estimate", 1.0, "{:16.3f}"),
+)
+"""The report's per-segment tables: title, metric key, scale to the printed unit, cell format."""
+
+
 def format_report(metrics: dict, res: BenchmarkResult) -> str:
     """Tables per metric (rows: controllers; columns: payload segments) and the targets."""
     ctrls = metrics["controllers"]
-    segs = res.scenario.segments()
-    head = f"{'controller':18s}" + "".join(f"{f'{a:g}-{b:g}s {m:g}kg':>16s}" for a, b, m in segs)
+    sc = res.scenario
+    head = f"{'controller':18s}" + "".join(f"{f'{a:g}-{b:g}s {m:g}kg':>16s}" for a, b, m in sc.segments())
     lines = [
-        f"Scenario {res.scenario.source}: {res.scenario.seeds} seeds, {res.scenario.duration} s at "
-        f"T = {res.scenario.sample_period} s, bandwidth {res.scenario.bandwidth} rad/s; "
-        f"means over seeds (a failed trial left out of the segments after its failure)",
+        f"Scenario {sc.source}: {sc.seeds} seeds, {sc.duration} s at T = {sc.sample_period} s, bandwidth "
+        f"{sc.bandwidth} rad/s; means over seeds (a failed trial left out of the segments after its failure)",
         "",
     ]
-    tables = [
-        ("RMS tracking error |e| [mrad] (true q)", "rms_error", 1e3, "{:16.3f}"),
-        (
-            "RMS tracking error after the first 0.5 s of the segment [mrad]",
-            "rms_error_settled",
-            1e3,
-            "{:16.3f}",
-        ),
-        ("max tracking error |e| [mrad]", "max_error", 1e3, "{:16.2f}"),
-        ("recovery time after the swap [s]", "recovery_time", 1.0, "{:16.3f}"),
-        (
-            "change detected after the swap [ms] (controllers with a detector)",
-            "detection_delay",
-            1e3,
-            "{:16.1f}",
-        ),
-        ("RMS torque [N m]", "rms_torque", 1.0, "{:16.2f}"),
-        ("saturated fraction [%]", "saturation_fraction", 100.0, "{:16.2f}"),
-        ("payload mass estimated at the end of the segment [kg]", "mass_estimate", 1.0, "{:16.3f}"),
-    ]
-    for title, key, scale, fmt in tables:
+    for title, key, scale, fmt in TABLES:
         lines += [title, head]
         for name, c in ctrls.items():
             cells = "".join(
@@ -65,12 +57,20 @@ def format_report(metrics: dict, res: BenchmarkResult) -> str:
         lines.append("")
     lines += _payload_tables(ctrls, head)
     lines += _seed_tables(ctrls, head)
+    lines += _failure_lines(ctrls)
+    lines += ["", "Targets (measured, not asserted):"]
+    lines += _targets(metrics, res)
+    return "\n".join(lines)
+
+
+def _failure_lines(ctrls: dict) -> list[str]:
+    """Failed trials per controller, the first three with seed, time and reason; lost measurements."""
     fails = [
         f"{n}: {c['failed_trials']}" + (f" ({c['error']})" if c["error"] else "")
         for n, c in ctrls.items()
         if c["failed_trials"]
     ]
-    lines.append("failed trials: " + (", ".join(fails) if fails else "none"))
+    lines = ["failed trials: " + (", ".join(fails) if fails else "none")]
     for n, c in ctrls.items():
         for f in c.get("failures", [])[:3]:
             at = f"t = {f['t']:.3f} s" if f["t"] is not None else "before the first sample"
@@ -90,16 +90,14 @@ def format_report(metrics: dict, res: BenchmarkResult) -> str:
         lines.append(
             "samples the estimators skipped (NaN, the filters' memory after each loss): " + ", ".join(skips)
         )
-    lines += ["", "Targets (measured, not asserted):"]
-    lines += _targets(metrics, res)
-    return "\n".join(lines)
+    return lines
 
 
 def _payload_tables(ctrls: dict, head: str) -> list[str]:
     """N-joint runs: the payload's centre of mass estimated at the end of each segment, and
     ct_nominal's RMS error over ct_oracle's per segment."""
     lines = []
-    rows = [(n, c) for n, c in ctrls.items() if any("com_estimate" in s for s in c["segments"])]
+    rows = [(n, c) for n, c in ctrls.items() if any(s.get("com_estimate") for s in c["segments"])]
     if rows:
         lines += ["payload centre of mass estimated at the end of the segment [mm] (x, y, z)", head]
         first = rows[0][1]["segments"]
@@ -155,7 +153,7 @@ def _seed_tables(ctrls: dict, head: str) -> list[str]:
             cells += f"{ci[0]:7.2f}-{ci[1]:.2f} #{st['worst_seed']:<4d}" if ci else f"{'—':>16}"
         lines.append(f"{name:18s}{cells}")
     lines += [time_to_floor_line(n, c) for n, c in rows if c["segments"][0].get("time_to_floor")]
-    fa = [(n, c) for n, c in ctrls.items() if "false_alarms_per_seed" in c]
+    fa = [(n, c) for n, c in ctrls.items() if c.get("false_alarms_per_seed") is not None]
     for name, c in fa:
         n_ok = sum(1 for x in c["false_alarms_per_seed"] if x is not None)
         total = sum(x for x in c["false_alarms_per_seed"] if x is not None)
@@ -191,9 +189,10 @@ def time_to_floor_line(name: str, c: dict) -> str:
 TARGET_INFO_RATIO = 3.0
 
 
-def _information_lines(c: dict) -> list[str]:
+def _information_lines(c: dict, all_unknown: bool) -> list[str]:
     """Per swap: the information-limited time to know the payload mass within 5 %, and each
-    adaptive controller's time (median over the seeds with kept trajectories)."""
+    adaptive controller's time (median over the seeds with kept trajectories); the centre of
+    mass's where it is computed. ``all_unknown``: the arm computes ``unknown`` (the two-link arm)."""
     out = []
     first = next(iter(c.values()))
     for i, seg in enumerate(first["segments"][1:], start=1):
@@ -207,7 +206,7 @@ def _information_lines(c: dict) -> list[str]:
         ok = best is not None and best <= TARGET_INFO_RATIO * info["known"]
         unk = info.get("unknown")
         unk_s = f"{1e3 * unk:.0f} ms" if unk is not None else "beyond the window"
-        unk_s = f", {unk_s} (all unknown)" if "unknown" in info else " (arm known, payload mode)"
+        unk_s = f", {unk_s} (all unknown)" if all_unknown else " (arm known, payload mode)"
         out.append(
             f"  payload mass within 5 % after the swap at {seg['start']:g} s ({seg['mass']:g} kg): "
             f"information limit {1e3 * info['known']:.0f} ms (other parameters known){unk_s} "
@@ -218,26 +217,25 @@ def _information_lines(c: dict) -> list[str]:
             + f" (target best <= {TARGET_INFO_RATIO:g}x the known-parameters limit: "
             + ("met)" if ok else "NOT met)")
         )
-        com = {n: x["segments"][i].get("com_learning_time") for n, x in c.items()}
-        if "com_known" in info:
-            lim = info["com_known"]
-            lim_s = f"{1e3 * lim:.0f} ms" if lim is not None else "beyond the window"
-            took_s = [
-                f"{n} {'never' if t is None else f'{1e3 * t:.0f} ms'}" for n, t in com.items() if n in took
-            ]
-            out.append(
-                f"  payload centre of mass within 1 cm after the swap at {seg['start']:g} s"
-                + (
-                    f" ({info['com_axes']} only: the rest is not identifiable)"
-                    if info.get("com_axes", "xyz") != "xyz"
-                    else ""
-                )
-                + ": "
-                f"information limit {lim_s}; "
-                + ", ".join(took_s)
-                + (f" (median over {max(n_learn)} seed(s))" if n_learn else "")
-            )
+        if info.get("com_axes") is not None:
+            out.append(_com_information_line(c, i, seg, info, took, n_learn))
     return out
+
+
+def _com_information_line(c: dict, i: int, seg: dict, info: dict, took: dict, n_learn: set) -> str:
+    """The centre of mass's information limit after swap i, beside each controller's time."""
+    com = {n: x["segments"][i].get("com_learning_time") for n, x in c.items()}
+    lim = info["com_known"]
+    lim_s = f"{1e3 * lim:.0f} ms" if lim is not None else "beyond the window"
+    took_s = [f"{n} {'never' if t is None else f'{1e3 * t:.0f} ms'}" for n, t in com.items() if n in took]
+    partial = info["com_axes"] != "xyz"
+    return (
+        f"  payload centre of mass within 1 cm after the swap at {seg['start']:g} s"
+        + (f" ({info['com_axes']} only: the rest is not identifiable)" if partial else "")
+        + f": information limit {lim_s}; "
+        + ", ".join(took_s)
+        + (f" (median over {max(n_learn)} seed(s))" if n_learn else "")
+    )
 
 
 TARGET_DETECTION_RATIO = 2.0
@@ -289,66 +287,99 @@ def detection_limit_lines(c: dict) -> list[str]:
 
 
 def _targets(metrics: dict, res: BenchmarkResult) -> list[str]:
+    """The report's target lines: each measured figure beside its target, met or not."""
+    from adaptive_dd.plant.kind import is_chain
+
     c = metrics["controllers"]
-    out = []
-    if "adaptive_ct" in c:
-        a = c["adaptive_ct"]
-        for seg in a["segments"]:
-            st = seg.get("ratio_to_floor")
-            if st is None:
-                continue
-            if seg.get("floor_saturated"):
-                out.append(
-                    f"  adaptive_ct / {a['floor']} per seed, {seg['start']:g}-{seg['end']:g} s "
-                    f"({seg['mass']:g} kg): mean {st['mean']:.3f}: no verdict, {a['floor']} saturates "
-                    f"{100 * seg['floor_saturation']:.2f} % of samples (> {100 * SATURATION_LIMIT:g} %)"
-                )
-                continue
-            ok = (
-                st["mean"] <= TARGET_RATIO_MEAN
-                and st["p90"] <= TARGET_RATIO_P90
-                and st["max"] <= TARGET_RATIO_MAX
-            )
-            out.append(
-                f"  adaptive_ct / {a['floor']} per seed, {seg['start']:g}-{seg['end']:g} s "
-                f"({seg['mass']:g} kg): "
-                f"mean {st['mean']:.3f}, p90 {st['p90']:.3f}, max {st['max']:.2f} (seed {st['worst_seed']}) "
-                f"(target mean <= {TARGET_RATIO_MEAN}, p90 <= {TARGET_RATIO_P90}, max <= {TARGET_RATIO_MAX}: "
-                f"{'met' if ok else 'NOT met'})"
-            )
-        if a["segments"][0].get("time_to_floor"):
-            out.append("  " + time_to_floor_line("adaptive_ct", a) + " (printed, no target)")
-        if "missed_swaps" in a:
-            n_ok = sum(1 for x in a["missed_swaps_per_seed"] if x is not None)
-            n_sw = n_ok * (len(a["segments"]) - 1)
-            out.append(
-                f"  adaptive_ct missed swaps: {a['missed_swaps']} of {n_sw} "
-                f"(target 0: {'met' if a['missed_swaps'] == 0 else 'NOT met'})"
-            )
-        if "trials_with_false_alarms" in a:
-            n_ok = sum(1 for x in a["false_alarms_per_seed"] if x is not None)
-            pct = 100.0 * a["trials_with_false_alarms"] / max(n_ok, 1)
-            ok = "met" if pct <= TARGET_FALSE_ALARM_PCT else "NOT met"
-            out.append(
-                f"  adaptive_ct trials with a false alarm: {a['trials_with_false_alarms']} of {n_ok} "
-                f"({pct:.1f} %) "
-                f"(target <= {TARGET_FALSE_ALARM_PCT:g} %: {ok})"
-            )
-    out += _information_lines(c)
+    out = _adaptive_ct_targets(c["adaptive_ct"]) if "adaptive_ct" in c else []
+    out += _information_lines(c, all_unknown=not is_chain(res.scenario.arm))
     out += detection_limit_lines(c)
-    if "adaptive_ct" in c and "ct_nominal" in c:
-        for sa, sn in zip(c["adaptive_ct"]["segments"], c["ct_nominal"]["segments"], strict=True):
-            if sa["mass"] == max(s["mass"] for s in c["adaptive_ct"]["segments"]) and sa["mass"] > 0:
-                if sa["rms_error"] and sn["rms_error"]:
-                    r = sn["rms_error"] / sa["rms_error"]
-                    ok = "met" if r >= TARGET_RATIO_NOMINAL else "NOT met"
-                    if sa.get("floor_saturated"):
-                        ok = "no verdict: the floor saturates"
-                    out.append(
-                        f"  ct_nominal / adaptive_ct RMS error in the {sa['mass']:g} kg segment: {r:5.1f}x "
-                        f"(target >= {TARGET_RATIO_NOMINAL}x: {ok})"
-                    )
-                break
+    out += _nominal_target(c) + _mass_targets(c)
+    if "ct_oracle" in c:
+        sat = max((s["saturation_fraction"] or 0.0) for s in c["ct_oracle"]["segments"])
+        verdict = "met" if sat <= SATURATION_LIMIT else "NOT met: the saturated segments have no verdict"
+        out.append(
+            f"  ct_oracle saturated fraction (max over segments): {100 * sat:.3f} % "
+            f"(target <= {100 * SATURATION_LIMIT:g} %: {verdict})"
+        )
+    w = metrics["wall_time_s"]
+    out.append(
+        f"  wall time: {w:.1f} s for {len(c)} controllers x {res.scenario.seeds} seeds "
+        f"(target < {TARGET_WALL_S:g} s for the default scenario)"
+    )
+    return out
+
+
+def _adaptive_ct_targets(a: dict) -> list[str]:
+    """adaptive_ct's ratio to its floor per segment, time to the floor, missed swaps, false alarms."""
+    out = []
+    for seg in a["segments"]:
+        st = seg.get("ratio_to_floor")
+        if st is None:
+            continue
+        where = (
+            f"  adaptive_ct / {a['floor']} per seed, {seg['start']:g}-{seg['end']:g} s ({seg['mass']:g} kg): "
+        )
+        if seg.get("floor_saturated"):
+            out.append(
+                where + f"mean {st['mean']:.3f}: no verdict, {a['floor']} saturates "
+                f"{100 * seg['floor_saturation']:.2f} % of samples (> {100 * SATURATION_LIMIT:g} %)"
+            )
+            continue
+        ok = (
+            st["mean"] <= TARGET_RATIO_MEAN
+            and st["p90"] <= TARGET_RATIO_P90
+            and st["max"] <= TARGET_RATIO_MAX
+        )
+        out.append(
+            where
+            + f"mean {st['mean']:.3f}, p90 {st['p90']:.3f}, max {st['max']:.2f} (seed {st['worst_seed']}) "
+            f"(target mean <= {TARGET_RATIO_MEAN}, p90 <= {TARGET_RATIO_P90}, max <= {TARGET_RATIO_MAX}: "
+            f"{'met' if ok else 'NOT met'})"
+        )
+    if a["segments"][0].get("time_to_floor"):
+        out.append("  " + time_to_floor_line("adaptive_ct", a) + " (printed, no target)")
+    if a.get("missed_swaps") is not None:
+        n_ok = sum(1 for x in a["missed_swaps_per_seed"] if x is not None)
+        n_sw = n_ok * (len(a["segments"]) - 1)
+        out.append(
+            f"  adaptive_ct missed swaps: {a['missed_swaps']} of {n_sw} "
+            f"(target 0: {'met' if a['missed_swaps'] == 0 else 'NOT met'})"
+        )
+    if a.get("trials_with_false_alarms") is not None:
+        n_ok = sum(1 for x in a["false_alarms_per_seed"] if x is not None)
+        pct = 100.0 * a["trials_with_false_alarms"] / max(n_ok, 1)
+        ok = "met" if pct <= TARGET_FALSE_ALARM_PCT else "NOT met"
+        out.append(
+            f"  adaptive_ct trials with a false alarm: {a['trials_with_false_alarms']} of {n_ok} "
+            f"({pct:.1f} %) (target <= {TARGET_FALSE_ALARM_PCT:g} %: {ok})"
+        )
+    return out
+
+
+def _nominal_target(c: dict) -> list[str]:
+    """ct_nominal's RMS error over adaptive_ct's in the heaviest payload's segment."""
+    if "adaptive_ct" not in c or "ct_nominal" not in c:
+        return []
+    heaviest = max(s["mass"] for s in c["adaptive_ct"]["segments"])
+    for sa, sn in zip(c["adaptive_ct"]["segments"], c["ct_nominal"]["segments"], strict=True):
+        if sa["mass"] == heaviest and sa["mass"] > 0:
+            if not (sa["rms_error"] and sn["rms_error"]):
+                return []
+            r = sn["rms_error"] / sa["rms_error"]
+            ok = "met" if r >= TARGET_RATIO_NOMINAL else "NOT met"
+            if sa.get("floor_saturated"):
+                ok = "no verdict: the floor saturates"
+            return [
+                f"  ct_nominal / adaptive_ct RMS error in the {sa['mass']:g} kg segment: {r:5.1f}x "
+                f"(target >= {TARGET_RATIO_NOMINAL}x: {ok})"
+            ]
+    return []
+
+
+def _mass_targets(c: dict) -> list[str]:
+    """Each estimating controller's payload mass at the end of each segment against the truth."""
+    out = []
     for name in ("adaptive_ct", "adaptive_ct_paper", "slotine_li"):
         if name not in c:
             continue
@@ -363,18 +394,6 @@ def _targets(metrics: dict, res: BenchmarkResult) -> list[str]:
             f"  payload mass by {name} (target within {TARGET_MASS_PCT:g} %, or "
             f"{TARGET_MASS_ABS} kg at 0 kg): " + ", ".join(parts)
         )
-    if "ct_oracle" in c:
-        sat = max((s["saturation_fraction"] or 0.0) for s in c["ct_oracle"]["segments"])
-        verdict = "met" if sat <= SATURATION_LIMIT else "NOT met: the saturated segments have no verdict"
-        out.append(
-            f"  ct_oracle saturated fraction (max over segments): {100 * sat:.3f} % "
-            f"(target <= {100 * SATURATION_LIMIT:g} %: {verdict})"
-        )
-    w = metrics["wall_time_s"]
-    out.append(
-        f"  wall time: {w:.1f} s for {len(c)} controllers x {res.scenario.seeds} seeds "
-        f"(target < {TARGET_WALL_S:g} s for the default scenario)"
-    )
     return out
 
 

@@ -8,66 +8,126 @@ from adaptive_dd.benchmark.metrics import detection_delays, false_alarm_counts, 
 from adaptive_dd.benchmark.provenance import provenance, scenario_dict
 from adaptive_dd.benchmark.time_to_floor import per_seed_time_to_floor
 
-__all__ = ["plant_frame", "provenance", "scenario_dict", "summary_frame", "to_frame"]
+__all__ = [
+    "UNITS",
+    "column",
+    "frame_columns",
+    "plant_frame",
+    "provenance",
+    "scenario_dict",
+    "summary_frame",
+    "to_frame",
+]
+
+
+UNITS = {
+    "start": "s", "end": "s", "mass": "kg", "rms_error": "rad", "rms_error_settled": "rad",
+    "max_error": "rad", "rms_torque": "Nm", "saturation_fraction": "", "recovery_time": "s",
+    "mass_estimate": "kg", "com_estimate_x": "m", "com_estimate_y": "m", "com_estimate_z": "m",
+    "time_to_floor": "s", "detection_delay": "s", "failed_at": "s",
+}  # fmt: skip
+"""The unit of each quantity of :func:`to_frame` (its column is ``NAME_UNIT``; ``""``: none)."""
+
+_ESTIMATES = ("mass_estimate", "com_estimate_x", "com_estimate_y", "com_estimate_z")
+
+
+def column(name: str) -> str:
+    """The :func:`to_frame` column of a quantity: its name with its unit (``rms_error_rad``)."""
+    unit = "rad" if name.startswith("rms_error_joint") else UNITS.get(name, "")
+    return f"{name}_{unit}" if unit else name
+
+
+def frame_columns(n_joints: int) -> list[str]:
+    """The columns of :func:`to_frame`, in order, for an arm of ``n_joints``: the same on every arm
+    but the per-joint RMS errors."""
+    names = [
+        "controller", "seed", "segment", "start", "end", "mass", "rms_error",
+        *(f"rms_error_joint{j}" for j in range(1, n_joints + 1)),
+        "max_error", "rms_torque", "saturation_fraction", "rms_error_settled", "recovery_time",
+        *_ESTIMATES, "floor", "ratio_to_floor", "time_to_floor", "detection_delay", "false_alarms",
+        "failed", "failed_at", "failure", "engine",
+    ]  # fmt: skip
+    return [column(n) for n in names]
 
 
 def to_frame(res):
-    """Long table (pandas DataFrame): one row per controller x seed x segment.
+    """Long table (pandas DataFrame): one row per controller x seed x segment, the same columns on
+    every arm (:func:`frame_columns`), each quantity's unit in its column's name.
 
-    Columns: ``controller, seed, segment, start, end, mass, rms_error, rms_error_settled,
-    rms_error_joint1, rms_error_joint2, max_error, rms_torque, saturation_fraction,
-    recovery_time, mass_estimate, floor, ratio_to_floor, time_to_floor, detection_delay,
-    false_alarms, failed, engine``; errors in rad, torques in N m, times in s. ``time_to_floor``:
-    first segment only (NaN elsewhere, and without a floor or for a failed trial), ``inf``
-    when never (:mod:`~adaptive_dd.benchmark.time_to_floor`). ``seed`` is the seed index
-    i of trial i (noise seeded by ``(scenario.seed, i)``, the same for every controller).
+    Columns: ``controller, seed, segment, start_s, end_s, mass_kg, rms_error_rad,
+    rms_error_joint1_rad .. rms_error_jointN_rad, max_error_rad, rms_torque_Nm,
+    saturation_fraction, rms_error_settled_rad, recovery_time_s, mass_estimate_kg,
+    com_estimate_x_m, com_estimate_y_m, com_estimate_z_m, floor, ratio_to_floor,
+    time_to_floor_s, detection_delay_s, false_alarms, failed, failed_at_s, failure, engine``
+    (metrics: :mod:`~adaptive_dd.benchmark.metrics`). NaN where a figure does not apply: the
+    estimates for a fixed model (the centre of mass on the two-link arm, whose paper's sigma holds
+    none), ``time_to_floor_s`` outside the first segment, without a floor or for a failed trial
+    (``inf`` when never, :mod:`~adaptive_dd.benchmark.time_to_floor`), the metrics of a failed
+    trial in the segments that end after its failure (``failed``, ``failed_at_s`` [s] and
+    ``failure``: why, on every row of the trial; NaN and ``""`` for a trial that did not fail).
+    ``seed`` is the seed index i of trial i (noise seeded by ``(scenario.seed, i)``, the same
+    for every controller).
     """
     import pandas as pd
 
-    sc = res.scenario
-    segs = sc.segments()
     per = {name: per_seed_segment_metrics(res, run) for name, run in res.runs.items()}
     rows = []
     for name, run in res.runs.items():
-        m = per[name]
-        floor = run.floor if run.floor in per else None
-        ttf = per_seed_time_to_floor(res, run)
-        ttf = np.full(len(res.seed_indices), np.nan) if ttf is None else ttf
-        false, delays = None, {}
-        if run.alarm_times is not None:
-            false = false_alarm_counts(run.alarm_times, sc.swap_times)
-            delays = {s: detection_delays(run.alarm_times, a) for s, (a, _, _) in enumerate(segs) if s > 0}
-        for i, seed in enumerate(res.seed_indices):
-            for s, (a, b, mass) in enumerate(segs):
-                delay = delays[s][i] if s in delays and delays[s][i] is not None else np.nan
-                row = {"controller": name, "seed": seed, "segment": s, "start": a, "end": b, "mass": mass}
-                row.update({k: float(v[i, s]) for k, v in m.items()})
-                row["floor"] = floor
-                row["ratio_to_floor"] = (
-                    float(m["rms_error"][i, s] / per[floor]["rms_error"][i, s]) if floor else np.nan
-                )
-                row["time_to_floor"] = ttf[i] if s == 0 else np.nan
-                row["detection_delay"] = delay
-                row["false_alarms"] = np.nan if false is None else false[i]
-                row["failed"] = bool(run.failed[i])
-                row["engine"] = run.engine
-                rows.append(row)
-    return pd.DataFrame(rows)
+        rows += _controller_rows(res, name, run, per)
+    return pd.DataFrame(rows, columns=frame_columns(res.scenario.n_joints))
+
+
+def _controller_rows(res, name: str, run, per: dict) -> list[dict]:
+    """One controller's rows of :func:`to_frame`."""
+    sc = res.scenario
+    segs = sc.segments()
+    m = per[name]
+    floor = run.floor if run.floor in per else None
+    ttf = per_seed_time_to_floor(res, run)
+    ttf = np.full(len(res.seed_indices), np.nan) if ttf is None else ttf
+    false, delays = None, {}
+    if run.alarm_times is not None:
+        false = false_alarm_counts(run.alarm_times, sc.swap_times)
+        delays = {s: detection_delays(run.alarm_times, a) for s, (a, _, _) in enumerate(segs) if s > 0}
+    why = {f["seed"]: f for f in run.failures(sc.sample_period, res.seed_indices or None)}
+    rows = []
+    for i, seed in enumerate(res.seed_indices):
+        fail = why.get(int(seed))
+        for s, (a, b, mass) in enumerate(segs):
+            delay = delays[s][i] if s in delays and delays[s][i] is not None else np.nan
+            row = {"controller": name, "seed": seed, "segment": s, "start": a, "end": b, "mass": mass}
+            row.update(dict.fromkeys(_ESTIMATES, np.nan))
+            row.update({k: float(v[i, s]) for k, v in m.items()})
+            row["floor"] = floor
+            row["ratio_to_floor"] = (
+                float(m["rms_error"][i, s] / per[floor]["rms_error"][i, s]) if floor else np.nan
+            )
+            row["time_to_floor"] = ttf[i] if s == 0 else np.nan
+            row["detection_delay"] = delay
+            row["false_alarms"] = np.nan if false is None else false[i]
+            row["failed"] = bool(run.failed[i])
+            row["failed_at"] = np.nan if fail is None or fail["t"] is None else fail["t"]
+            row["failure"] = "" if fail is None else fail["why"]
+            row["engine"] = run.engine
+            rows.append({column(k): v for k, v in row.items()})
+    return rows
 
 
 def summary_frame(res):
     """Per controller and segment: mean, median, p90 and max of the per-seed RMS error and
-    ratio to the floor, and the worst seed (failed trials left out)."""
+    ratio to the floor, and the worst seed (failed trials left out). Columns ``controller,
+    segment, mass_kg, rms_error_mean_rad, rms_error_median_rad, ratio_mean, ratio_median,
+    ratio_p90, ratio_max, n, worst_seed``."""
     df = to_frame(res)
     df = df[~df["failed"]]
 
     def p90(x):
         return float(np.nanpercentile(x, 90)) if x.notna().any() else np.nan
 
-    g = df.groupby(["controller", "segment", "mass"], sort=False)
+    g = df.groupby(["controller", "segment", "mass_kg"], sort=False)
     out = g.agg(
-        rms_error_mean=("rms_error", "mean"),
-        rms_error_median=("rms_error", "median"),
+        rms_error_mean_rad=("rms_error_rad", "mean"),
+        rms_error_median_rad=("rms_error_rad", "median"),
         ratio_mean=("ratio_to_floor", "mean"),
         ratio_median=("ratio_to_floor", "median"),
         ratio_p90=("ratio_to_floor", p90),

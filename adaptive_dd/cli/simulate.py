@@ -46,6 +46,18 @@ __all__ = ["EXPERIMENTS", "add_parser", "run", "simulate_arm"]
 EXPERIMENTS = ("table2", "reference")
 
 
+PLANTS = ("model", "benchmark")
+"""``--plant``'s values: the identification model, or the benchmark's plant."""
+
+
+def _plant_name(value: str) -> str:
+    """``--plant``'s value; ``serial`` (its name before 0.3) is read as ``benchmark``, with a warning."""
+    if value == "serial":
+        print("warning: --plant serial is deprecated; use --plant benchmark (same plant)", file=sys.stderr)
+        return "benchmark"
+    return value
+
+
 def add_parser(sub) -> None:
     """The options of ``simulate``."""
     s = add_command(
@@ -88,9 +100,11 @@ def add_parser(sub) -> None:
     s.add_argument(
         "--plant",
         default="model",
-        choices=("model", "serial"),
+        type=_plant_name,
+        choices=PLANTS,
         help="--experiment reference: the identification model's RK4 with tanh friction (default) or the "
-        "benchmark's compiled plant with the arm's friction law (stick-slip)",
+        "benchmark's compiled plant with the arm's friction law (stick-slip); 'serial', its old name, "
+        "is read as 'benchmark' with a warning",
     )
     s.add_argument("--out", default="results/simulate", help="output folder")
     s.set_defaults(func=run)
@@ -190,7 +204,8 @@ def simulate_arm(args: argparse.Namespace, scenario_path: str, outputs) -> int:
     """``adaptive-dd simulate --arm SCENARIO`` for an N-joint arm: identification records, truth known."""
     from adaptive_dd.benchmark.scenario import load_scenario
     from adaptive_dd.experiments import trial_rngs
-    from adaptive_dd.identification.records import simulate_record, write_serial_recording
+    from adaptive_dd.identification.records import simulate_record
+    from adaptive_dd.io import write_recording
     from adaptive_dd.plant.arm import payload_parameters
 
     sc = load_scenario(scenario_path)
@@ -216,7 +231,7 @@ def simulate_arm(args: argparse.Namespace, scenario_path: str, outputs) -> int:
         quantize=not args.no_quantize,
         plant=getattr(args, "plant", "model"),
     )
-    write_serial_recording(outputs.path("trajectory.csv"), rec.t, rec.q[0], rec.qd[0], rec.tau[0])
+    write_recording(outputs.path("trajectory.csv"), rec.t, rec.q[0], rec.qd[0], rec.tau[0])
     np.savez_compressed(
         outputs.path("trajectory.npz"),
         t=rec.t,
@@ -267,7 +282,7 @@ def _print_record(args: argparse.Namespace, arm, sc, rec, where: str) -> None:
         f"{args.payload} kg, {args.seeds} trial(s), "
         + (
             f"the benchmark's plant, friction {arm.friction}"
-            if plant == "serial"
+            if plant == "benchmark"
             else f"the identification model (RK4, friction tanh, v_f = {arm.friction_velocity} rad/s)"
         )
     )

@@ -1,13 +1,61 @@
-"""Per swap of an N-joint run: the information-limited time to know the payload, beside the
-time each estimating controller took (``information_time``, ``mass_learning_time`` and
-``com_learning_time`` of each segment in the metrics): its mass within 5 % and its centre of
-mass within 1 cm; and the time an optimal test would detect the swap (``two_link_detection_limit``)."""
+"""Per swap of a benchmark run, on every arm: the information-limited time to know the payload,
+the time an optimal test detects the swap, and the time each estimating controller took.
+
+One key set and one meaning on every arm (:data:`INFORMATION_KEYS`, and the segment keys of
+:data:`LEARNING_KEYS`); where a figure exists on one kind of arm only it is ``None`` on the other,
+never absent. Every segment after a swap carries:
+
+``information_time`` (a table, :data:`INFORMATION_KEYS`)
+    ``known`` [s]: the first time after the swap at which ``Z`` (1.96) times the Cramér-Rao
+    standard deviation of the payload mass is within ``REL`` (5 %) of the payload that changed
+    (the larger of the one that came and the one that left), every other parameter of the arm
+    known; the median over the reference run's kept trajectories, a trajectory where it is not
+    reached within :data:`INFO_WINDOW` counting as later than any (None when the median is not
+    reached, or without a payload on either side). The bound is the paper's output-error
+    model of sigma (:func:`~adaptive_dd.identification.fisher.mass_information_time`) on the
+    two-link arm, the M2-filtered regression of the payload's ten parameters
+    (:func:`~adaptive_dd.identification.payload_information.payload_information_time`) on an
+    N-joint arm: the same question asked of the sensors each estimator reads.
+    ``unknown`` [s]: the same with all seven base parameters unknown; the two-link arm only
+    (None on an N-joint arm, whose arm is identified before: ``docs/identification_limits.md``).
+    ``com_known`` [s]: the time to know the centre of mass of a payload that came within
+    :data:`COM_TOL` (1 cm; ``Z`` times the root trace of its covariance); N-joint arms only
+    (None on the two-link arm, whose payload sits at the tip by the paper's model, and after a
+    removal). ``com_axes``: the components judged (``"xyz"``, or the identifiable ones of a
+    planar arm; None where ``com_known`` is not computed). ``seeds``: trajectories the medians
+    are over; ``reference``: the run they come from (``ct_oracle``, else the first run with kept
+    trajectories; None without one).
+``detection_limit`` [s]
+    Median over the reference run's kept trajectories of the time an optimal test (GLR at 1 %
+    false alarms per trial, the rest of the arm known) detects the swap, as ``known`` counts one
+    not reached; None without a change or when the median is not reached.
+``mass_learning_time``, ``com_learning_time`` [s]
+    Median over a controller's kept, unfailed trajectories of the first time after which its
+    estimated mass stays within 5 % of the payload that changed, its centre of mass within 1 cm
+    (N-joint arms only: None on the two-link arm); None for a controller without an estimate or
+    when it never does. ``learning_seeds``: the trajectories those medians are over (0: none).
+
+The first segment (no swap) has every one of these keys, ``None`` (``learning_seeds`` 0).
+"""
 
 from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["COM_TOL", "INFO_WINDOW", "add_information_times", "com_learning_time", "mass_learning_time"]
+from adaptive_dd.benchmark.streaming import SETTLE, segment_bounds
+from adaptive_dd.plant.kind import is_chain
+
+__all__ = [
+    "COM_TOL",
+    "INFORMATION_KEYS",
+    "INFO_WINDOW",
+    "LEARNING_KEYS",
+    "REL",
+    "Z",
+    "add_information_times",
+    "com_learning_time",
+    "mass_learning_time",
+]
 
 INFO_WINDOW = 1.0
 """[s] after a swap searched for the information-limited time."""
@@ -15,8 +63,26 @@ INFO_WINDOW = 1.0
 COM_TOL = 0.01
 """[m] the centre of mass counts as known within this distance."""
 
+REL = 0.05
+"""The payload mass counts as known within this fraction of the payload that changed."""
 
-def mass_learning_time(m_hat: np.ndarray, mass: float, removed: float, T: float, rel: float = 0.05):
+Z = 1.96
+"""Standard deviations of the Cramér-Rao bound that must lie within the tolerance (a 95 % interval)."""
+
+INFORMATION_KEYS = ("known", "unknown", "com_known", "com_axes", "seeds", "reference")
+"""The keys of every segment's ``information_time`` table, on every arm (module docstring)."""
+
+LEARNING_KEYS = (
+    "information_time",
+    "detection_limit",
+    "mass_learning_time",
+    "com_learning_time",
+    "learning_seeds",
+)
+"""The keys :func:`add_information_times` gives every segment, on every arm."""
+
+
+def mass_learning_time(m_hat: np.ndarray, mass: float, removed: float, T: float, rel: float = REL):
     """First time after which the estimated mass stays within ``rel`` of the truth (per row), NaN if never.
 
     ``rel`` is taken of the payload that changed (``max(mass, removed)``), so a removal is judged
@@ -45,49 +111,210 @@ def com_learning_time(
     return np.where(last < n - 1, (last + 1) * T, np.nan)
 
 
-def add_information_times(res, out: dict) -> None:
-    """Fill ``information_time`` (``known``: the information-limited time to know the payload
-    mass to 5 % along ct_oracle's first kept trajectory, None without ct_oracle, beyond the
-    window, or for a removal after an empty segment; ``seeds``, ``reference``; ``com_known``,
-    ``com_axes`` when a payload came) and ``mass_learning_time`` (median over the
-    kept seeds of the first time after which the estimated mass stays within 5 % of the
-    payload that changed) of every segment after a swap."""
-    from adaptive_dd.closed_loop.types import run_constants
+def _median(x) -> float | None:
+    """Median of the finite entries (None: none is): a learning time over the trials that learn."""
+    v = np.asarray([np.nan if y is None else y for y in x], float)
+    v = v[np.isfinite(v)]
+    return float(np.median(v)) if v.size else None
 
+
+def _median_limit(x) -> float | None:
+    """Median of limits over trajectories, one not reached (None, inf) counting as later than any;
+    None when the median is not reached."""
+    v = np.asarray([np.inf if y is None else y for y in x], float)
+    m = float(np.median(v)) if v.size else np.inf
+    return m if np.isfinite(m) else None
+
+
+def _reference(res):
+    """The run whose kept trajectories the limits are computed along: ``ct_oracle``, else the
+    first run with kept trajectories; None without one."""
+    runs = sorted(res.runs.items(), key=lambda x: x[0] != "ct_oracle")
+    return next((r for _, r in runs if r.q is not None and r.q.shape[0]), None)
+
+
+def _kept(run) -> list[int]:
+    """The kept trajectories of ``run`` whose trial did not fail."""
+    return [j for j in range(run.q.shape[0]) if not run.failed[j]]
+
+
+def empty_information() -> dict:
+    """``information_time`` when nothing could be computed: every key, None (``seeds`` 0)."""
+    return dict.fromkeys(INFORMATION_KEYS) | {"seeds": 0}
+
+
+def add_information_times(res, out: dict) -> None:
+    """Fill the :data:`LEARNING_KEYS` of every segment of every controller in ``out`` (the
+    metrics' ``{NAME: {"segments": [...]}}``), as the module docstring defines them."""
     sc = res.scenario
-    rc = run_constants(sc)
     segs = sc.segments()
-    info_fn = _information_function()
-    oracle = res.runs.get("ct_oracle")
+    start, end, _ = segment_bounds(segs, sc.sample_period, SETTLE)
+    ref = _reference(res)
+    w = round(INFO_WINDOW / sc.sample_period)
+    forms = _two_link if not is_chain(sc.arm) else _chain
+    for name in res.runs:
+        out[name]["segments"][0].update(dict.fromkeys(LEARNING_KEYS) | {"learning_seeds": 0})
     for i in range(1, len(segs)):
         mass, removed = segs[i][2], segs[i - 1][2]
-        k0, k1 = int(rc.seg_start[i]), int(rc.seg_end[i])
-        info = None
-        k_end = min(k1, k0 + round(INFO_WINDOW / rc.T))
-        if info_fn is not None and oracle is not None and oracle.q.shape[0] and not oracle.failed[0]:
-            info = info_fn(res, oracle, i, k0, k_end)
-        # the two-link arm's keys: a table even when nothing could be computed ("unknown", the
-        # time with every other parameter unknown, is the two-link arm's only)
-        info = info or {"known": None, "seeds": 0, "reference": None}
-        limit = _detection_limit(sc, oracle, i, k0, k_end)
+        k0, k1 = int(start[i]), int(end[i])
+        k_end = min(k1, k0 + w)
+        info, limit = empty_information(), None
+        if ref is not None and _kept(ref) and max(mass, removed) > 0:
+            info = forms.information(sc, ref, i, k0, k_end)
+            limit = forms.detection_limit(sc, ref, i, k0, k_end)
         for name, run in res.runs.items():
             seg = out[name]["segments"][i]
-            seg["information_time"] = info
-            seg["detection_limit"] = limit
-            seg["mass_learning_time"] = None
-            seg["com_learning_time"] = None
-            seg["learning_seeds"] = 0
-            if run.sigma_hat is not None and run.sigma_hat.shape[0]:
-                kept = ~run.failed[: run.sigma_hat.shape[0]]
-                seg["learning_seeds"] = int(kept.sum())
-                with np.errstate(invalid="ignore", divide="ignore"):
-                    est = sc.arm.payload_from_sigma(run.sigma_hat[kept, k0:k1])
-                tl = mass_learning_time(est.mass, mass, removed, rc.T)
-                seg["mass_learning_time"] = None if np.all(np.isnan(tl)) else float(np.nanmedian(tl))
-                if mass > 0:  # a payload on: where is its centre of mass
-                    com = sc.payload_of(i - 1).get("com", np.zeros(3))
-                    tc = com_learning_time(est.com, com, rc.T, axes=sc.arm.payload_identifiable[1:4])
-                    seg["com_learning_time"] = None if np.all(np.isnan(tc)) else float(np.nanmedian(tc))
+            seg.update(information_time=dict(info), detection_limit=limit)
+            seg.update(_learning(sc, forms, run, i, k0, k1))
+
+
+def _learning(sc, forms, run, i: int, k0: int, k1: int) -> dict:
+    """``mass_learning_time``, ``com_learning_time`` and ``learning_seeds`` of one run's segment i."""
+    out = {"mass_learning_time": None, "com_learning_time": None, "learning_seeds": 0}
+    if run.sigma_hat is None or not run.sigma_hat.shape[0]:
+        return out
+    mass, removed = sc.segments()[i][2], sc.segments()[i - 1][2]
+    kept = ~run.failed[: run.sigma_hat.shape[0]]
+    m_hat, com_hat = forms.payload(sc, run.sigma_hat[kept, k0:k1])
+    out["learning_seeds"] = int(kept.sum())
+    out["mass_learning_time"] = _median(mass_learning_time(m_hat, mass, removed, sc.sample_period))
+    if com_hat is not None and mass > 0:  # a payload on: where is its centre of mass
+        com = sc.payload_of(i - 1).get("com", np.zeros(3))
+        tc = com_learning_time(com_hat, com, sc.sample_period, axes=sc.arm.payload_identifiable[1:4])
+        out["com_learning_time"] = _median(tc)
+    return out
+
+
+class _two_link:
+    """The two-link arm's forms: the paper's sigma (eq. 9) and its output-error information."""
+
+    @staticmethod
+    def payload(sc, sigma_hat):
+        """``(mass (n, N), None)``: the paper's sigma holds no payload centre of mass."""
+        return sc.arm.payload_mass_from_sigma(sigma_hat), None
+
+    @staticmethod
+    def information(sc, ref, i: int, k0: int, k1: int) -> dict:
+        from adaptive_dd.identification.fisher import mass_information_time
+
+        _, _, mass = sc.segments()[i]
+        removed = sc.segments()[i - 1][2]
+        kw = dict(
+            sigma_after=sc.arm.sigma_with_payload(mass, sc.payload_radius),
+            payload_direction=sc.arm.payload_direction(sc.payload_radius),
+            position_variance=sc.position_variance, velocity_variance=sc.velocity_variance,
+            rel=REL, mass=max(mass, removed), z=Z,
+        )  # fmt: skip
+        kept = _kept(ref)
+        times = {
+            others: [
+                mass_information_time(
+                    ref.q[j, k0 - 1 : k1],
+                    ref.qd[j, k0 - 1 : k1],
+                    ref.tau[j, k0 - 1 : k1],
+                    1,
+                    sc.sample_period,
+                    others=others,
+                    **kw,
+                )
+                for j in kept
+            ]
+            for others in ("known", "unknown")
+        }
+        info = empty_information()
+        info.update(known=_median_limit(times["known"]), unknown=_median_limit(times["unknown"]))
+        return info | {"seeds": len(kept), "reference": ref.name}
+
+    @staticmethod
+    def detection_limit(sc, ref, i: int, k0: int, k1: int) -> float | None:
+        from adaptive_dd.identification.two_link_detection_limit import two_link_detection_limit
+
+        _, _, mass = sc.segments()[i]
+        removed = sc.segments()[i - 1][2]
+        if mass == removed:
+            return None
+        limits = [
+            two_link_detection_limit(
+                ref.q[j, k0 - 1 : k1],
+                ref.qd[j, k0 - 1 : k1],
+                ref.tau[j, k0 - 1 : k1],
+                1,
+                sc.sample_period,
+                sc.arm.sigma_with_payload(mass, sc.payload_radius),
+                sc.arm.payload_direction(sc.payload_radius),
+                abs(mass - removed),
+                sc.position_variance,
+                sc.velocity_variance,
+                n_tests=sc.n_samples,
+            )
+            for j in _kept(ref)
+        ]
+        return _median_limit(limits)
+
+
+class _chain:
+    """An N-joint arm's forms: the payload's ten parameters and the filtered regression's information."""
+
+    @staticmethod
+    def payload(sc, sigma_hat):
+        """``(mass (n, N), com (n, N, 3))`` implied by the estimates."""
+        with np.errstate(invalid="ignore", divide="ignore"):
+            est = sc.arm.payload_from_sigma(sigma_hat)
+        return est.mass, est.com
+
+    @staticmethod
+    def information(sc, ref, i: int, k0: int, k1: int) -> dict:
+        from adaptive_dd.identification.payload_information import payload_information_times
+
+        mass, removed = sc.segments()[i][2], sc.segments()[i - 1][2]
+        came = mass > 0  # the payload that came, else the one that left
+        pay = _payload(sc, i - 1 if came else i - 2)
+        T = sc.sample_period
+        lo = max(0, k0 - 1)
+        ax = sc.arm.payload_identifiable[1:4]
+        kw = dict(
+            sample_period=T, position_variance=np.asarray(sc.position_variance),
+            velocity_variance=np.asarray(sc.velocity_variance), axes=ax,
+            mass_tol=REL * max(mass, removed) / pay[0] / Z, com_tol=COM_TOL / Z,
+        )  # fmt: skip
+        kept = _kept(ref)
+        times = []
+        for j in kept:  # the mass of the payload that changed, its centre of mass, at Z sigma
+            q, qd = ref.q[j, lo:k1], ref.qd[j, lo:k1]
+            times.append(
+                payload_information_times(sc.arm, q, qd, np.gradient(qd, T, axis=0), pay, k0 - lo, **kw)
+            )
+        info = empty_information()
+        info.update(known=_median_limit([t[0] for t in times]), seeds=len(kept), reference=ref.name)
+        if came:
+            info["com_axes"] = "".join(a for a, k in zip("xyz", ax, strict=True) if k)
+            info["com_known"] = _median_limit([t[1] for t in times])
+        return info
+
+    @staticmethod
+    def detection_limit(sc, ref, i: int, k0: int, k1: int) -> float | None:
+        from adaptive_dd.identification.detection_limit import detection_limit
+
+        before, after = _payload(sc, i - 2), _payload(sc, i - 1)
+        if np.array_equal(before, after) or k1 - k0 < 2:
+            return None
+        times = [
+            detection_limit(
+                sc.arm,
+                ref.q[j, k0:k1],
+                ref.qd[j, k0:k1],
+                ref.tau[j, k0:k1],
+                0,
+                sc.sample_period,
+                before,
+                after,
+                sc.position_variance,
+                sc.velocity_variance,
+                n_tests=sc.n_samples,
+            )
+            for j in _kept(ref)
+        ]
+        return _median_limit(times)
 
 
 def _payload(sc, j: int) -> np.ndarray:
@@ -98,66 +325,3 @@ def _payload(sc, j: int) -> np.ndarray:
         return np.zeros(10)
     p = sc.payload_of(j)
     return payload_parameters(p["mass"], p.get("com"), p.get("inertia"), p.get("radius", 0.0))
-
-
-def _detection_limit(sc, oracle, i: int, k0: int, k1: int) -> float | None:
-    """Median over ct_oracle's kept trajectories of the time the optimal test detects the swap
-    that starts segment i (:func:`~adaptive_dd.identification.detection_limit.detection_limit`);
-    None without ct_oracle's trajectories, without a change, or beyond the window."""
-    from adaptive_dd.identification.detection_limit import detection_limit
-
-    if oracle is None or oracle.q is None or not oracle.q.shape[0]:
-        return None
-    before, after = _payload(sc, i - 2), _payload(sc, i - 1)
-    if np.array_equal(before, after) or k1 - k0 < 2:
-        return None
-    times = []
-    for j in range(oracle.q.shape[0]):
-        if oracle.failed[j]:
-            continue
-        t = detection_limit(
-            sc.arm, oracle.q[j, k0:k1], oracle.qd[j, k0:k1], oracle.tau[j, k0:k1], 0, sc.sample_period,
-            before, after, sc.position_variance, sc.velocity_variance, n_tests=sc.n_samples,
-        )  # fmt: skip
-        times.append(np.inf if t is None else t)
-    if not times or not np.isfinite(np.median(times)):
-        return None
-    return float(np.median(times))
-
-
-def _information_function():
-    """``f(res, oracle_run, segment, k0, k1) -> {"known": seconds} or None``: the time the Cramer-Rao bound on
-    the payload mass takes to fall below 5 % of the payload that changed (the new one, or the
-    one removed), along the oracle's first kept trajectory (qdd by differentiating the true qd),
-    from :func:`adaptive_dd.identification.payload_information.payload_information_time`; and
-    (``"com_known"``, when a payload came) the time to know its centre of mass within 1 cm
-    (:func:`~adaptive_dd.identification.payload_information.payload_com_information_time`)."""
-    from adaptive_dd.identification.payload_information import (
-        payload_com_information_time,
-        payload_information_time,
-    )
-
-    def info(res, oracle, i, k0, k1):
-        sc = res.scenario
-        j = i - 1 if sc.swap_masses[i - 1] > 0 else i - 2  # the payload that came, or that left
-        if j < 0 or sc.swap_masses[j] <= 0:
-            return None
-        pay = _payload(sc, j)
-        T = sc.sample_period
-        lo = max(0, k0 - 1)
-        q, qd = oracle.q[0, lo:k1], oracle.qd[0, lo:k1]
-        qdd = np.gradient(qd, T, axis=0)
-        pv, vv = np.asarray(sc.position_variance), np.asarray(sc.velocity_variance)
-        kw = dict(sample_period=T, position_variance=pv, velocity_variance=vv)
-        t = payload_information_time(sc.arm, q, qd, qdd, pay, k0 - lo, **kw)
-        if not np.isfinite(t):
-            return None
-        out = {"known": t, "seeds": 1, "reference": oracle.name}
-        if j == i - 1:  # the payload came: its centre of mass
-            ax = sc.arm.payload_identifiable[1:4]
-            tc = payload_com_information_time(sc.arm, q, qd, qdd, pay, k0 - lo, tol=COM_TOL, axes=ax, **kw)
-            out["com_axes"] = "".join(a for a, k in zip("xyz", ax, strict=True) if k)
-            out["com_known"] = float(tc) if np.isfinite(tc) else None
-        return out
-
-    return info

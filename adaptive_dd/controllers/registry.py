@@ -39,7 +39,7 @@ from typing import Any
 
 import numpy as np
 
-from adaptive_dd.controllers.adaptive import ADAPTIVE_ONLINE, AdaptiveCT
+from adaptive_dd.controllers.adaptive import ADAPTIVE_ONLINE, BOOST_RULE, AdaptiveCT
 from adaptive_dd.controllers.base import DEFAULT_GAINS, Controller, Gains
 from adaptive_dd.controllers.feedback import PD, ComputedTorque
 from adaptive_dd.controllers.slotine_li import COM_RADIUS, DEFAULT_GAMMA, MAX_MASS, SlotineLi, default_bounds
@@ -239,9 +239,7 @@ _BOOST = {
         0.2,
         1.0,
         unit="s",
-        rule="the boost lasts while the estimator learns the new payload: the paper's sigma (two-link) "
-        "within tens of ms, an N-joint payload's centre of mass and inertia over a few hundred "
-        "(docs/controllers.md, studies/boost_ablation.py)",
+        rule=BOOST_RULE,
     ),
     "estimator": Setting(
         "the estimator's settings: TwoLinkOnlineConfig's fields on the two-link arm (tau_f, split, "

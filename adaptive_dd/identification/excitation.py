@@ -225,12 +225,15 @@ def design_excitation(
     """D-optimal Fourier trajectory within ``lim`` (module docstring); returns it and scipy's result.
 
     Starts from ``start`` or from random coefficients (``rng``, default seed 0) scaled into the
-    limits; the result is checked on a grid twice as fine.
+    limits; the result is checked on a grid :data:`FINE` times finer, and its oscillation about
+    ``q0`` shrunk by the smallest factor that keeps it within the limits there (an optimum sits on
+    a limit at the optimiser's grid points and may cross it between them).
 
     Raises
     ------
     ParameterError
-        If the optimum violates a limit by more than 1 % on the fine grid.
+        If the optimum crosses a limit on a grid :data:`FINE` times finer and shrinking its
+        oscillation to :data:`MIN_SHRINK` does not bring it within (:func:`_within_limits`).
     """
     lim = lim or ExcitationLimits.of_arm(arm)
     model = arm_model(arm)
@@ -261,12 +264,41 @@ def design_excitation(
         constraints=[cons],
         options={"maxiter": maxiter, "ftol": 1e-6},
     )
-    best = _unpack(res.x, n, K, f0)
-    fine = np.linspace(0, 1 / f0, 2 * grid, endpoint=False)
-    worst = float(np.min(_constraints(model, best, fine, lim)))
-    if worst < -0.01:
-        raise ParameterError(f"the designed trajectory exceeds a limit by {-worst:.1%} between grid points")
-    return best, res
+    fine = np.linspace(0, 1 / f0, FINE * grid, endpoint=False)
+    return _within_limits(model, _unpack(res.x, n, K, f0), fine, lim), res
+
+
+FINE = 8
+"""The design's check: a grid this many times finer than the one the optimiser saw."""
+MIN_SHRINK = 0.8
+"""The smallest factor :func:`design_excitation` shrinks an optimum's oscillation by to bring it
+within the limits between grid points (below it the design is refused)."""
+
+
+def _within_limits(
+    model: Model, tr: FourierTrajectory, fine: Array, lim: ExcitationLimits
+) -> FourierTrajectory:
+    """``tr`` if it keeps within ``lim`` on the ``fine`` grid, else its oscillation about ``q0``
+    shrunk by the largest factor that does (an optimum sits on the limits at the optimiser's grid
+    points and may cross them between); refused below :data:`MIN_SHRINK`."""
+
+    def slack(alpha):
+        shrunk = FourierTrajectory(tr.q0, alpha * tr.a, alpha * tr.b, tr.f0)
+        return float(np.min(_constraints(model, shrunk, fine, lim)))
+
+    worst = slack(1.0)
+    if worst >= 0:
+        return tr
+    if slack(MIN_SHRINK) < 0:
+        raise ParameterError(
+            f"the designed trajectory exceeds a limit by {-worst:.1%} between grid points, and still "
+            f"does with its oscillation shrunk to {MIN_SHRINK:g}: try more grid points (grid) or "
+            "fewer harmonics"
+        )
+    alpha = brentq(slack, MIN_SHRINK, 1.0, xtol=1e-6) * (1 - 1e-4)  # the feasible side of the root
+    if slack(alpha) < 0:  # the slack need not be monotone in alpha (torques): the checked factor
+        alpha = MIN_SHRINK
+    return FourierTrajectory(tr.q0, alpha * tr.a, alpha * tr.b, tr.f0)
 
 
 def relative_bounds(crb: Array, sigma: Array, names: tuple[str, ...]) -> Array:

@@ -67,6 +67,7 @@ __all__ = [
     "payload_com_bound",
     "payload_com_information_time",
     "payload_information_time",
+    "payload_information_times",
     "payload_mass_bound",
     "payload_mass_bound_colored",
     "payload_regression_covariance",
@@ -401,3 +402,35 @@ def payload_com_information_time(
         position_variance=position_variance, velocity_variance=velocity_variance,
     )  # fmt: skip
     return _first_time(_com_std(info, pay, axes), tol, sample_period)
+
+
+def payload_information_times(
+    arm: Arm,
+    q: ArrayLike,
+    qd: ArrayLike,
+    qdd: ArrayLike,
+    payload: ArrayLike,
+    swap_sample: int,
+    *,
+    sample_period: float,
+    tau_f: float = 0.01,
+    position_variance: ArrayLike | None = None,
+    velocity_variance: ArrayLike | None = None,
+    mass_tol: float = 0.05,
+    com_tol: float = 0.01,
+    model: str = "colored",
+    window: int = 300,
+    axes: ArrayLike | None = None,
+) -> tuple[float, float]:
+    """``(mass time, centre-of-mass time)`` [s] from one Fisher information: what
+    :func:`payload_information_time` (``tol=mass_tol``) and :func:`payload_com_information_time`
+    (``tol=com_tol``) return, at the cost of one (the colored model's Cholesky factor dominates)."""
+    pay = _check(payload, com_tol, model, window)
+    if not 0 < mass_tol < 1:
+        raise ParameterError(f"mass_tol must be in (0, 1), got {mass_tol!r}")
+    info = _information(
+        arm, q, qd, qdd, pay, swap_sample, model, window, sample_period=sample_period, tau_f=tau_f,
+        position_variance=position_variance, velocity_variance=velocity_variance,
+    )  # fmt: skip
+    mass = _first_time(_schur_std(info), mass_tol * pay[0], sample_period)
+    return mass, _first_time(_com_std(info, pay, axes), com_tol, sample_period)

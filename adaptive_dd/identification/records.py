@@ -19,7 +19,7 @@ the measured ``q, qd`` and the **applied** torque (known, as a drive's current l
 reports it). The plant is, by default (``plant="model"``), RK4 (``substeps`` per sample)
 over the compiled forward dynamics with smooth friction ``fv qd + fc tanh(qd / v_f)``:
 exactly the model of :mod:`adaptive_dd.identification.model`, so that estimators are
-held to the bound without model error. ``plant="serial"`` runs the closed-loop benchmark's
+held to the bound without model error. ``plant="benchmark"`` runs the closed-loop benchmark's
 plant instead (:func:`adaptive_dd.plant.integrator.plant_step` with the arm's
 friction law, stick-slip by default): a record the model does not describe exactly near
 zero velocity.
@@ -38,7 +38,7 @@ from adaptive_dd.errors import ParameterError, SignalError
 from adaptive_dd.identification.model import Model, arm_model, pi_with_payload, rk4_step
 from adaptive_dd.plant.chain import rnea_batch
 
-__all__ = ["Record", "inverse_dynamics_pi", "simulate_record", "write_serial_recording"]
+__all__ = ["Record", "inverse_dynamics_pi", "simulate_record"]
 
 Array = NDArray[np.float64]
 
@@ -125,9 +125,9 @@ def simulate_record(
         RK4 steps per sample.
     noise, quantize : bool
         Sensor noise; encoder and D/A quantization.
-    plant : {"model", "serial"}
-        The identification model's RK4 (default) or the benchmark's compiled plant with the
-        arm's friction law (module docstring).
+    plant : {"model", "benchmark"}
+        The identification model's RK4 (default) or the benchmark's compiled plant with the arm's
+        friction law (module docstring; ``"serial"``, its old name, warns and is read as it).
 
     Raises
     ------
@@ -173,9 +173,14 @@ def _reference_samples(reference, duration: float, sample_period: float, n: int)
 
 def _plant_step(plant: str, arm, model: Model, pi_true: Array, S: int, T: float, substeps: int):
     """``step(q, qd, tau) -> (q, qd)`` over one sample: the model's RK4 or the benchmark's plant."""
-    if plant not in ("model", "serial"):
-        raise ParameterError(f"plant must be 'model' or 'serial', got {plant!r}")
     if plant == "serial":
+        import warnings
+
+        warnings.warn("plant='serial' is deprecated; use plant='benchmark'", FutureWarning, 3)
+        plant = "benchmark"
+    if plant not in ("model", "benchmark"):
+        raise ParameterError(f"plant must be 'model' or 'benchmark', got {plant!r}")
+    if plant == "benchmark":
         return _stepper(arm, model, pi_true, S, T, substeps)
     return lambda q, qd, tau: rk4_step(model, pi_true, q, qd, tau, T, substeps)
 
@@ -253,26 +258,3 @@ def _stepper(arm, model: Model, pi: Array, S: int, T: float, substeps: int):
         return q, qd
 
     return step
-
-
-def write_serial_recording(path, t: Array, q: Array, qd: Array | None, tau: Array):
-    """Write one N-joint record as CSV ``t, q1..qN, qd1..qdN, tau1..tauN`` (qd columns left out if None)."""
-    from pathlib import Path
-
-    from adaptive_dd.outputs import atomic_write
-
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    n = q.shape[-1]
-    cols = [f"q{j + 1}" for j in range(n)]
-    parts = [t[:, None], q]
-    if qd is not None:
-        cols += [f"qd{j + 1}" for j in range(n)]
-        parts.append(qd)
-    cols += [f"tau{j + 1}" for j in range(n)]
-    parts.append(tau)
-    with atomic_write(path, encoding="utf-8") as fh:
-        np.savetxt(
-            fh, np.column_stack(parts), delimiter=",", header="t," + ",".join(cols), comments="", fmt="%.10g"
-        )
-    return path

@@ -58,7 +58,8 @@ controllers = {
 controllers["gravity_pd"] = GravityPD(arm, sc.bandwidth)
 res = run_benchmark(sc, progress=False, controllers=controllers)
 summary = res.summary()
-print(summary[["controller", "segment", "mass", "rms_error_mean", "ratio_mean"]].to_string(index=False))
+columns = ["controller", "segment", "mass_kg", "rms_error_mean_rad", "ratio_mean"]
+print(summary[columns].to_string(index=False))
 
 # %%
 # The built-ins run compiled; the plug-in runs on the Python path (one ``command`` per sample for

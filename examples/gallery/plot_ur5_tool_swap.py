@@ -25,7 +25,8 @@ print(sc.estimate())
 # ``adaptive_ct`` is compared seed by seed with ``ct_oracle``, the same law with the true model.
 res = run_benchmark(sc, progress=False)
 summary = res.summary()
-print(summary[["controller", "segment", "mass", "rms_error_mean", "ratio_mean"]].to_string(index=False))
+columns = ["controller", "segment", "mass_kg", "rms_error_mean_rad", "ratio_mean"]
+print(summary[columns].to_string(index=False))
 
 # %%
 # The tracking error over time (50 ms moving RMS, mean over the seeds): ``ct_nominal`` keeps
