@@ -20,8 +20,11 @@ import hashlib
 import os
 import re
 import shutil
+import time
 from contextlib import contextmanager
 from pathlib import Path
+
+from numba.core import event
 
 KEEP = 8
 
@@ -120,13 +123,14 @@ def configure() -> str | None:
 
 
 # ------------------------------------------------------------ telling the user about compilation
-COMPILE_SECONDS = {"two-link": 35.0, "serial": 145.0}
+COMPILE_SECONDS = {"two-link": 35.0, "serial": 120.0}
 """One-time compilation of a benchmark's closed-loop kernels with a cold cache, on 2 cores: a guide
 for the message and ``validate``'s estimate, not a promise. Measured by
 ``benchmarks/compile_profile.py [SCENARIO] --seeds 2`` (an empty ``NUMBA_CACHE_DIR``, every
 built-in controller; CPU seconds inside numba's compilations): 31.6 s for the default two-link
-scenario (load average 15) and 146 s for ``ur5_tool_swap.toml`` (load average 6; any N-joint arm
-compiles the same kernels) on a shared 2-core machine, where the wall time was 3-10x longer.
+scenario (load average 15) and 121.5 s for ``ur5_tool_swap.toml`` (load average 14, 136.6 s before
+the friction law became a compile-time record; any N-joint arm compiles the same kernels) on a
+shared 2-core machine, where the wall time was 3-10x longer.
 Compilation runs in one thread before the trials start, so on a machine that is not shared its
 wall time is about its CPU time."""
 
@@ -178,16 +182,49 @@ def _arm_label(arm) -> str:
     return "the two-link arm"
 
 
+def _kernel_label(dispatcher, args) -> str:
+    """What a kernel compiled from Python is, for the user: ``the N-joint closed loop with the
+    online estimator`` (or without), ``the two-link closed loop``, else ``module.function``."""
+    f = dispatcher.py_func
+    if f.__name__ != "closed_loop_block":
+        return f"{f.__module__.split('.')[-1]}.{f.__name__}"
+    if not f.__module__.startswith("adaptive_dd.closed_loop"):
+        return "the two-link closed loop"
+    est = any(str(a).startswith("EstCfg(") for a in args)
+    return "the N-joint closed loop " + ("with the online estimator" if est else "without an estimator")
+
+
+class _Progress(event.Listener):
+    """A ``numba:compile`` listener printing each kernel compiled from Python (a compilation at
+    depth 0, its callees included) that took over a second: the user sees the work advance."""
+
+    def __init__(self, stream) -> None:
+        self.stream, self.depth, self.start = stream, 0, 0.0
+
+    def on_start(self, ev) -> None:
+        if self.depth == 0:
+            self.start = time.perf_counter()
+        self.depth += 1
+
+    def on_end(self, ev) -> None:
+        self.depth = max(0, self.depth - 1)
+        if self.depth == 0 and (spent := time.perf_counter() - self.start) > 1.0:
+            label = _kernel_label(ev.data["dispatcher"], ev.data["args"])
+            tty = getattr(self.stream, "isatty", lambda: False)()
+            clear = "\r\x1b[K" if tty else ""  # over a progress bar's line, which redraws below
+            print(f"{clear}  {label}: {spent:.0f} s", file=self.stream, flush=True)
+
+
 @contextmanager
 def announce_compilation(arm, stream=None):
-    """Say before a run that numba compiles (cold cache) and after it how long compilation took.
+    """Say before a run that numba compiles (cold cache), as it goes which kernels it compiled,
+    and after it how long compilation took.
 
     Prints to ``stream`` (default ``sys.stderr``) a line before, when :func:`compile_estimate`
-    finds the cache cold, and a line after whenever compilation took more than a second.
+    finds the cache cold, a line per kernel compiled from Python that took over a second
+    (:class:`_Progress`) and a line after whenever compilation took more than a second.
     """
     import sys
-
-    from numba.core import event
 
     stream = stream or sys.stderr
     guess = compile_estimate(arm)
@@ -200,7 +237,8 @@ def announce_compilation(arm, stream=None):
             file=stream,
             flush=True,
         )
-    with event.install_recorder("numba:compile") as rec:
+    progress = _Progress(stream)
+    with event.install_recorder("numba:compile") as rec, event.install_listener("numba:compile", progress):
         yield
     spent = _compile_seconds(rec.buffer)
     if spent > 1.0:

@@ -14,7 +14,9 @@ included) and the CPU seconds of its own (``self``: nested ones subtracted), lar
 first; then the wall time of the whole command, the CPU time inside at least one compilation, and
 this process's CPU time (user + sys). CPU time (``time.process_time``), not wall time: other work
 on a shared machine slows the wall clock, not the CPU seconds compilation needs (it runs in one
-thread, before the trials start). With ``--why``, every function compiled more than once is listed
+thread, before the trials start). ``--keep-cache`` keeps the filled folder (printed) for a timed
+run of the same kernels after (``NUMBA_CACHE_DIR=FOLDER python benchmarks/speed_arm.py``).
+With ``--why``, every function compiled more than once is listed
 with the argument types that differ between its specialisations (int vs float, readonly vs
 writable, C vs A layout, ...). Asserts nothing: a measurement, to be read beside ``uptime``.
 """
@@ -77,6 +79,11 @@ def main() -> None:
     p.add_argument("--seeds", type=int, default=2)
     p.add_argument("--top", type=int, default=25, help="rows of the table (largest self time first)")
     p.add_argument("--why", action="store_true", help="list the differing argument types of repeated kernels")
+    p.add_argument(
+        "--keep-cache",
+        action="store_true",
+        help="keep the filled cache folder (printed)",
+    )
     a = p.parse_args()
 
     from adaptive_dd.cli import main as cli_main
@@ -90,7 +97,8 @@ def main() -> None:
         rc = cli_main(argv)
     wall, cpu1 = time.perf_counter() - t0, os.times()
     shutil.rmtree(out, ignore_errors=True)
-    shutil.rmtree(os.environ["NUMBA_CACHE_DIR"], ignore_errors=True)
+    if not a.keep_cache:
+        shutil.rmtree(os.environ["NUMBA_CACHE_DIR"], ignore_errors=True)
 
     rows: dict[str, list] = defaultdict(lambda: [0, 0.0, 0.0, [], []])
     for name, args, incl, own, _depth, caller in listener.done:
@@ -103,7 +111,12 @@ def main() -> None:
 
     load = os.getloadavg()[0]
     cmd = " ".join(argv[:-2])
-    print(f"adaptive-dd {cmd} (exit {rc}); {adaptive_dd.__file__}; cold cache; load {load:.2f}")
+    import numba
+
+    opt = f"LLVM -O{int(numba.config.OPT)}"
+    print(f"adaptive-dd {cmd} (exit {rc}); {adaptive_dd.__file__}; cold cache; {opt}; load {load:.2f}")
+    if a.keep_cache:
+        print(f"cache kept: NUMBA_CACHE_DIR={os.environ['NUMBA_CACHE_DIR']}")
     print(f"{'count':>5} {'incl':>6} {'self':>6}  function (CPU seconds)")
     for name, (n, incl, own, *_) in sorted(rows.items(), key=lambda kv: -kv[1][2])[: a.top]:
         print(f"{n:5d} {incl:6.1f} {own:6.1f}  {name}")

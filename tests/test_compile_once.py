@@ -14,6 +14,7 @@ import tomllib
 from importlib import resources
 
 import numpy as np
+import pytest
 
 from adaptive_dd.benchmark.scenario import load_scenario, parse_scenario
 from adaptive_dd.plant import chain as C
@@ -100,3 +101,26 @@ def test_a_short_run_compiles_the_loop_once_with_and_once_without_estimator():
     assert list(res.runs) == ["pd", "adaptive_ct"]
     assert len(_specialisations(glue.closed_loop_block)) == 2, _specialisations(glue.closed_loop_block)
     assert len([s for s in _specialisations(S._rk4) if "Literal[int](0)" in s]) == 1
+
+
+def test_the_friction_law_as_a_record_compiles_its_family_alone():
+    """The closed loop's plant holds the law as a record (:func:`friction_law`): the step it
+    compiles calls one family's integrator (a stick-slip arm does not compile ``_smooth`` and its
+    ``_rk4``); an integer code still compiles both and chooses at run time."""
+    from numba import typeof, types
+
+    from adaptive_dd.closed_loop.types import plant_of
+    from adaptive_dd.errors import ParameterError
+
+    assert isinstance(plant_of(_ur5(duration=0.01)).friction_law, S.StickSlipLaw)
+    a = (types.none,) * 5
+    b = (types.none,) * 8
+    for code, family in ((0, "_stick_slip"), (1, "_smooth"), (2, "_smooth")):
+        law = S.friction_law(code)
+        assert law.code == code
+        called = S._by_law_typed(*a, typeof(law), *b).__code__.co_names
+        assert set(called) & {"_stick_slip", "_smooth"} == {family}, (code, called)
+    both = S._by_law_typed(*a, types.int64, *b).__code__.co_names
+    assert {"_stick_slip", "_smooth"} <= set(both)
+    with pytest.raises(ParameterError, match="friction law code"):
+        S.friction_law(3)

@@ -113,3 +113,39 @@ def test_the_scenario_keys_page_lists_every_key_and_stops_on_drift(monkeypatch):
     monkeypatch.setattr(scenario_keys, "MEANING", {**scenario_keys.MEANING, "run.gone": "a removed key"})
     with pytest.raises(ExtensionError, match=r"run\.gone"):
         scenario_keys.page()
+
+
+def test_each_kernel_compiled_from_python_is_named_as_it_ends(monkeypatch):
+    """One line per compilation at depth 0 over a second (its callees' time inside, not listed)."""
+    import io
+
+    from adaptive_dd.closed_loop import glue
+
+    class Typ:
+        def __init__(self, text):
+            self.text = text
+
+        def __str__(self):
+            return self.text
+
+    clock = iter([0.0, 40.0, 41.0, 70.0, 100.0, 100.5])  # perf_counter at each start/end of depth 0
+    monkeypatch.setattr(_numba_cache.time, "perf_counter", lambda: next(clock))
+    out = io.StringIO()
+    progress = _numba_cache._Progress(out)
+    loop, callee = glue.closed_loop_block, glue.segment_of
+
+    def ev(kernel, *args):
+        return SimpleNamespace(data={"dispatcher": kernel, "args": args})
+
+    progress.on_start(ev(loop, Typ("int64"), Typ("EstCfg(Chain(...")))
+    progress.on_start(ev(callee))
+    progress.on_end(ev(callee))  # nested: not a line of its own
+    progress.on_end(ev(loop, Typ("int64"), Typ("EstCfg(Chain(...")))
+    progress.on_start(ev(loop, Typ("array(float64, 1d, C)")))
+    progress.on_end(ev(loop, Typ("array(float64, 1d, C)")))
+    progress.on_start(ev(callee))
+    progress.on_end(ev(callee))  # half a second: not worth a line
+    assert out.getvalue() == (
+        "  the N-joint closed loop with the online estimator: 40 s\n"
+        "  the N-joint closed loop without an estimator: 29 s\n"
+    )

@@ -8,12 +8,15 @@ segments, ``p`` base parameters, ``K`` trials whose trajectories are recorded.
 
 from __future__ import annotations
 
-from typing import NamedTuple
+from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
 from numpy.typing import NDArray
 
 from adaptive_dd.plant.sampling import first_sample
+
+if TYPE_CHECKING:
+    from adaptive_dd.plant.integrator import SmoothLaw, StickSlipLaw
 
 __all__ = [
     "MAX_ERROR",
@@ -96,8 +99,9 @@ class Plant(NamedTuple):
         Standard link parameters of trial i's plant with each segment's payload.
     fv, fc, armature : ndarray (S, n)
         Viscous [N m s], Coulomb [N m] friction and armature [kg m^2] of trial i's plant.
-    friction_law : int
-        0 stick-slip, 1 tanh, 2 Stribeck (:attr:`Arm.friction_code`).
+    friction_law : StickSlipLaw or SmoothLaw
+        :func:`~adaptive_dd.plant.integrator.friction_law` of :attr:`Arm.friction_code` (0 stick-slip,
+        1 tanh, 2 Stribeck): the law's family a compile-time choice.
     fparams : ndarray (3,)
         Friction velocity, Stribeck ratio, Stribeck velocity.
     substeps : int
@@ -108,7 +112,7 @@ class Plant(NamedTuple):
     fv: Array
     fc: Array
     armature: Array
-    friction_law: int
+    friction_law: StickSlipLaw | SmoothLaw
     fparams: Array
     substeps: int
 
@@ -232,6 +236,7 @@ def plant_of(scenario, seed_indices=(0,)) -> Plant:
     """The simulated arm of each trial (seed indices ``seed_indices``), with every segment's payload:
     ``scenario.arm`` itself, or the plant of ``scenario.plant`` drawn for that seed
     (:func:`~adaptive_dd.plant.uncertainty.plant_draws`)."""
+    from adaptive_dd.plant.integrator import friction_law
     from adaptive_dd.plant.uncertainty import plant_draws
 
     arm = scenario.arm
@@ -248,7 +253,7 @@ def plant_of(scenario, seed_indices=(0,)) -> Plant:
         c([d.viscous for d in draws], dtype=float),
         c([d.coulomb for d in draws], dtype=float),
         c([d.armature for d in draws], dtype=float),
-        int(arm.friction_code),
+        friction_law(arm.friction_code),
         np.array(arm.friction_params, dtype=float),
         int(scenario.substeps),
     )

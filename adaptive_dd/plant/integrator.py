@@ -58,13 +58,23 @@ from typing import NamedTuple
 
 import numpy as np
 from numba import njit, prange
+from numba.extending import overload
 from numpy.typing import NDArray
 
 from adaptive_dd.errors import ParameterError
 from adaptive_dd.plant.chain import Chain, bias_and_mass, workspace
 from adaptive_dd.plant.two_link_integrator import FRICTION_CODES
 
-__all__ = ["PlantParams", "plant_batch", "plant_params", "plant_run", "plant_step"]
+__all__ = [
+    "PlantParams",
+    "SmoothLaw",
+    "StickSlipLaw",
+    "friction_law",
+    "plant_batch",
+    "plant_params",
+    "plant_run",
+    "plant_step",
+]
 
 
 class PlantParams(NamedTuple):
@@ -81,8 +91,10 @@ class PlantParams(NamedTuple):
         Coulomb friction level [N m] (N).
     armature : ndarray, shape (n,)
         Rotor inertia added to M's diagonal [kg m^2] (kg).
-    law : int
-        0 stick-slip, 1 tanh, 2 stribeck (:data:`adaptive_dd.plant.two_link_integrator.FRICTION_CODES`).
+    law : int or StickSlipLaw or SmoothLaw
+        0 stick-slip, 1 tanh, 2 stribeck (:data:`adaptive_dd.plant.two_link_integrator.FRICTION_CODES`);
+        as a code, the step compiles the integrators of both families and chooses at run time; as a
+        :func:`friction_law` record, only its family's.
     fparams : ndarray, shape (3,)
         ``friction_velocity, stribeck_ratio, stribeck_velocity`` of the smooth laws.
     """
@@ -91,8 +103,33 @@ class PlantParams(NamedTuple):
     fv: NDArray[np.float64]
     fc: NDArray[np.float64]
     armature: NDArray[np.float64]
-    law: int
+    law: int | StickSlipLaw | SmoothLaw
     fparams: NDArray[np.float64]
+
+
+class StickSlipLaw(NamedTuple):
+    """The stick-slip law (``code`` 0) as a type of its own (:func:`friction_law`)."""
+
+    code: int
+
+
+class SmoothLaw(NamedTuple):
+    """A smooth law (``code`` 1 tanh, 2 Stribeck) as a type of its own (:func:`friction_law`)."""
+
+    code: int
+
+
+def friction_law(code: int) -> StickSlipLaw | SmoothLaw:
+    """Friction law ``code`` with its family (stick-slip or smooth) a compile-time choice.
+
+    numba compiles a kernel per argument type: a plant step given this record instead of the
+    integer code compiles only its family's integrator (a closed loop on a stick-slip arm does not
+    compile the smooth laws' RK4 and step splitting, about a fifth of its compilation).
+    """
+    code = int(code)
+    if code not in (0, 1, 2):
+        raise ParameterError(f"friction law code of a serial arm must be 0, 1 or 2, got {code!r}")
+    return StickSlipLaw(code) if code == 0 else SmoothLaw(code)
 
 
 def plant_params(
@@ -459,12 +496,39 @@ def _smooth(ch, pi, fv, fc, arm, law, fp, q, qd, tau, T, substeps, stuck, sc):  
     return ok
 
 
+def _by_law(ch, pi, fv, fc, arm, law, fp, q, qd, tau, T, substeps, stuck, sc):  # pragma: no cover
+    """One sample under ``law``: an integer code chooses at run time between :func:`_stick_slip`
+    and :func:`_smooth` (both compiled), a :func:`friction_law` record at compile time."""
+    raise NotImplementedError("compiled only")
+
+
+@overload(_by_law)
+def _by_law_typed(ch, pi, fv, fc, arm, law, fp, q, qd, tau, T, substeps, stuck, sc):
+    family = getattr(law, "instance_class", None)
+    if family is StickSlipLaw:
+
+        def stick_slip(ch, pi, fv, fc, arm, law, fp, q, qd, tau, T, substeps, stuck, sc):
+            return _stick_slip(ch, pi, fv, fc, arm, fp, q, qd, tau, T, substeps, stuck, sc)
+
+        return stick_slip
+    if family is SmoothLaw:
+
+        def smooth(ch, pi, fv, fc, arm, law, fp, q, qd, tau, T, substeps, stuck, sc):
+            return _smooth(ch, pi, fv, fc, arm, law.code, fp, q, qd, tau, T, substeps, stuck, sc)
+
+        return smooth
+
+    def either(ch, pi, fv, fc, arm, law, fp, q, qd, tau, T, substeps, stuck, sc):
+        if law == 0:
+            return _stick_slip(ch, pi, fv, fc, arm, fp, q, qd, tau, T, substeps, stuck, sc)
+        return _smooth(ch, pi, fv, fc, arm, law, fp, q, qd, tau, T, substeps, stuck, sc)
+
+    return either
+
+
 @njit(cache=True, inline="always")
 def _step(ch, pi, fv, fc, arm, law, fp, q, qd, tau, T, substeps, stuck, sc):  # pragma: no cover
-    if law == 0:
-        ok = _stick_slip(ch, pi, fv, fc, arm, fp, q, qd, tau, T, substeps, stuck, sc)
-    else:
-        ok = _smooth(ch, pi, fv, fc, arm, law, fp, q, qd, tau, T, substeps, stuck, sc)
+    ok = _by_law(ch, pi, fv, fc, arm, law, fp, q, qd, tau, T, substeps, stuck, sc)
     for i in range(q.shape[0]):
         ok &= np.isfinite(q[i]) and np.isfinite(qd[i])
     return ok
