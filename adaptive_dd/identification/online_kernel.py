@@ -149,7 +149,8 @@ I_MOMENTUM = 14  # 1: the regression in momentum form (payload mode)
 I_MIN_ROWS = 15  # rows whose short average must exceed (threshold / 2)^2 times their level for an alarm
 I_FAST = 16  # 1: the fast average may also raise an alarm
 I_RESET_PAYLOAD = 17  # mode "arm": an alarm sets the payload block (theta's last ten) to zero
-N_I = 18
+I_FAST_LEARNED = 18  # samples a row's own level must have learned before its fast average may alarm
+N_I = 19
 
 # float slots of EstCfg.floats
 F_LAM0 = 0
@@ -742,7 +743,8 @@ def _detect(c, s, i, eps, act):  # pragma: no cover - compiled
             continue
         nl = s.learned[i, j]
         thr = fl[F_THRESHOLD2] if n_act == ints[I_N_ROWS] else fl[F_THRESHOLD2] * fl[F_SLOW2]
-        if s.seen[i, j] >= ints[I_MIN_LEARNED] and nl >= 1:
+        own = s.seen[i, j] >= ints[I_MIN_LEARNED] and nl >= 1
+        if own:
             level = max(s.long[i, j] / (1.0 - (1.0 - a_l) ** nl), fl[F_FLOOR2])
         elif s.ref[i, j] > 0.0 and cnt[C_SINCE_ALARM] < ints[I_RESUME] + ints[I_MIN_LEARNED]:
             # still re-learning, within the re-arm bound: the level established before the last
@@ -759,7 +761,9 @@ def _detect(c, s, i, eps, act):  # pragma: no cover - compiled
             alarm = True
         if s.short[i, j] > 0.25 * thr * level + 1e-300:
             n_raised += 1
-        if ints[I_FAST] == 1:
+        if ints[I_FAST] == 1 and own and nl >= ints[I_FAST_LEARNED]:
+            # only against a level the row has learned itself over the long window: not the
+            # level of before an alarm, nor one still learning a new payload or the arm
             thf = fl[F_FAST2] * thr / fl[F_THRESHOLD2]  # the same slow-row and re-learning factors
             if s.fast[i, j] > thf * level + 1e-300:
                 fast = True
