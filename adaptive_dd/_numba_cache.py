@@ -136,11 +136,24 @@ wall time is about its CPU time."""
 
 
 def _closed_loop_kernel(serial: bool):
-    if serial:
-        from adaptive_dd.closed_loop.glue import closed_loop_block
-    else:
-        from adaptive_dd.benchmark.compiled import closed_loop_block
+    """The closed loop's one kernel (each kind of arm compiles its own specialisation of it)."""
+    import adaptive_dd.benchmark.compiled  # noqa: F401  (the two-link arm's choices)
+    from adaptive_dd.closed_loop.glue import closed_loop_block
+
     return closed_loop_block
+
+
+def _holds(cache, serial: bool) -> bool:
+    """Whether the kernel's cache index holds a specialisation for this kind of arm (the two-link
+    arm's signature names its ``TwoLinkPlant``); True when the index cannot be read."""
+    load = getattr(getattr(cache, "_cache_file", None), "_load_index", None)
+    if load is None:
+        return True
+    try:
+        keys = load()
+    except Exception:  # an index numba cannot read: it recompiles and says so after the run
+        return True
+    return any(("TwoLinkPlant" in str(key)) != serial for key in keys)
 
 
 def compile_estimate(arm) -> float:
@@ -155,7 +168,7 @@ def compile_estimate(arm) -> float:
     serial = is_chain(arm)
     cache = getattr(_closed_loop_kernel(serial), "_cache", None)
     index = getattr(getattr(cache, "_cache_file", None), "_index_path", None)
-    if index is None or os.path.exists(index):
+    if index is None or (os.path.exists(index) and _holds(cache, serial)):
         return 0.0
     return COMPILE_SECONDS["serial" if serial else "two-link"]
 
@@ -188,7 +201,7 @@ def _kernel_label(dispatcher, args) -> str:
     f = dispatcher.py_func
     if f.__name__ != "closed_loop_block":
         return f"{f.__module__.split('.')[-1]}.{f.__name__}"
-    if not f.__module__.startswith("adaptive_dd.closed_loop"):
+    if any(str(a).startswith("TwoLinkPlant(") for a in args):  # the one loop, on the two-link arm
         return "the two-link closed loop"
     est = any(str(a).startswith("EstCfg(") for a in args)
     return "the N-joint closed loop " + ("with the online estimator" if est else "without an estimator")

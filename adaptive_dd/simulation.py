@@ -120,9 +120,7 @@ class _ChainTrial:
     def step(self, tau: Array) -> tuple[Array, NDArray[np.bool_]]:
         from adaptive_dd.closed_loop.glue import apply_batch
 
-        applied, _ = apply_batch(
-            self.sc.arm.chain, self.rc, self.io, self.pl, self.ts, self.acc, self.rec, self.k, tau[None]
-        )
+        applied, _ = apply_batch(self.rc, self.io, self.pl, self.ts, self.acc, self.rec, self.k, tau[None])
         sat = self.rec.saturated[0, self.k].copy()
         self.k += 1
         return applied[0], sat

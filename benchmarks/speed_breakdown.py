@@ -41,7 +41,7 @@ def _scenario():
 
 
 @njit(cache=True)
-def _plant_loop(ch, pl, rc, q_rec, qd_rec, tau_rec, sc):  # pragma: no cover - compiled
+def _plant_loop(pl, rc, q_rec, qd_rec, tau_rec, sc):  # pragma: no cover - compiled
     n = q_rec.shape[1]
     q, qd = np.empty(n), np.empty(n)
     stuck = np.zeros(n, dtype=np.bool_)
@@ -49,7 +49,7 @@ def _plant_loop(ch, pl, rc, q_rec, qd_rec, tau_rec, sc):  # pragma: no cover - c
     for k in range(q_rec.shape[0]):
         for j in range(n):
             q[j], qd[j] = q_rec[k, j], qd_rec[k, j]
-        plant_step(ch, pl, 0, segment_of(rc, k), q, qd, tau_rec[k], rc.T, stuck, sc)
+        plant_step(pl, 0, segment_of(rc, k), q, qd, tau_rec[k], rc.T, stuck, sc)
         acc += q[0]
     return acc
 
@@ -209,7 +209,7 @@ def main() -> None:
     rows = [
         (
             f"plant_step (stick-slip, RK4 x{pl.substeps})",
-            _best(lambda: _plant_loop(ch, pl, rc, q, qd, tau, scr)),
+            _best(lambda: _plant_loop(pl, rc, q, qd, tau, scr)),
         )
     ]
     calls = 4 * pl.substeps  # RK4 stages per sample (more where a velocity crosses zero)

@@ -80,14 +80,24 @@ def test_the_chain_kernels_compile_once_for_every_caller(rng):
         assert len(_specialisations(kernel)) == 1, (kernel.__name__, _specialisations(kernel))
 
 
-def test_the_two_link_sample_loop_compiles_once():
-    """The parallel loop's index (uint64 once lowered) reaches ``trial_block`` as the int64 it was
-    typed as."""
-    from adaptive_dd.benchmark import compiled, run_benchmark
+def _of_arm(specialisations: set[str], two_link: bool) -> set[str]:
+    """The specialisations of the closed loop's one kernel for one kind of arm (the two-link arm's
+    name its ``TwoLinkPlant``)."""
+    return {s for s in specialisations if ("TwoLinkPlant" in s) == two_link}
+
+
+def test_the_two_link_sample_loop_compiles_once_for_every_law():
+    """The two-link laws are one record type (the law a runtime branch) and carry the estimator's
+    configuration whether they run it or not: ``pd`` and ``adaptive_ct`` share one sample loop."""
+    from adaptive_dd.benchmark import run_benchmark
+    from adaptive_dd.closed_loop import glue
 
     sc = dataclasses.replace(load_scenario(), seeds=2, duration=0.02, swap_times=(), swap_masses=())
-    run_benchmark(dataclasses.replace(sc, controllers=("pd",)), progress=False, engine="compiled")
-    assert len(_specialisations(compiled.trial_block)) == 1, _specialisations(compiled.trial_block)
+    run_benchmark(
+        dataclasses.replace(sc, controllers=("pd", "adaptive_ct")), progress=False, engine="compiled"
+    )
+    loops = _of_arm(_specialisations(glue.trial_samples), two_link=True)
+    assert len(loops) == 1, loops
 
 
 def test_a_short_run_compiles_the_loop_once_with_and_once_without_estimator():
@@ -99,7 +109,8 @@ def test_a_short_run_compiles_the_loop_once_with_and_once_without_estimator():
 
     res = run_closed_loop(_ur5(duration=0.01))
     assert list(res.runs) == ["pd", "adaptive_ct"]
-    assert len(_specialisations(glue.closed_loop_block)) == 2, _specialisations(glue.closed_loop_block)
+    loops = _of_arm(_specialisations(glue.closed_loop_block), two_link=False)
+    assert len(loops) == 2, loops
     assert len([s for s in _specialisations(S._rk4) if "Literal[int](0)" in s]) == 1
 
 

@@ -1,42 +1,41 @@
-"""The two paths of a two-link run, on the same set-up and the same compiled per-sample glue.
+"""The two paths of a two-link run, on the same set-up and the closed loop's one per-sample glue.
 
-:func:`run_compiled` drives :func:`~adaptive_dd.benchmark.compiled.closed_loop_block` over a
-run, block by block (a built-in controller's law and estimator compiled in); :func:`run_python`
-runs any controller object (``reset / command / observe``) on the closed loop's one Python path
+:func:`run_compiled` drives :func:`~adaptive_dd.closed_loop.glue.closed_loop_block` over a run,
+block by block, with the two-link plant, a built-in controller's law and the paper's estimator
+as its compile-time choices (:mod:`adaptive_dd.benchmark.compiled`); :func:`run_python` runs
+any controller object (``reset / command / observe``) on the closed loop's one Python path
 (:func:`~adaptive_dd.closed_loop.python_path.run_python_batch`, shared with the N-joint arm)
 around the batch wrappers of the same per-trial functions
-(:func:`~adaptive_dd.benchmark.compiled.measure_batch`,
-:func:`~adaptive_dd.benchmark.compiled.apply_batch`,
-:func:`~adaptive_dd.benchmark.compiled.estimate_batch`): the measurement with its dropouts,
+(:func:`~adaptive_dd.closed_loop.glue.measure_batch`,
+:func:`~adaptive_dd.closed_loop.glue.apply_batch`,
+:func:`~adaptive_dd.closed_loop.glue.sigma_batch`): the measurement with its dropouts,
 the divergence rule, actuator, plant step, failure freeze, streamed sums and recordings are
-written once (:mod:`adaptive_dd.benchmark.compiled`), so the two paths agree to rounding.
+written once (:mod:`adaptive_dd.closed_loop.glue`), so the two paths agree to rounding.
 """
 
 from __future__ import annotations
 
-import warnings
 from functools import partial
 
 import numpy as np
-from numba.core.errors import NumbaPerformanceWarning
 
-from adaptive_dd.benchmark.compiled import (
-    OnlineKernelConfig,
-    TwoLinkPlant,
-    TwoLinkTrialState,
-    apply_batch,
-    closed_loop_block,
-    estimate_batch,
-    measure_batch,
-    segment_of,
-)
+from adaptive_dd.benchmark.compiled import OnlineKernelConfig, TwoLinkPlant
 from adaptive_dd.benchmark.streaming import segment_bounds
 from adaptive_dd.benchmark.trials import new_run, sensor_of, true_sigma
 from adaptive_dd.benchmark.types import MAX_ALARMS, MAX_ERROR, SETTLE, ControllerRun
-from adaptive_dd.closed_loop.glue import Alarms, alarm_lists
+from adaptive_dd.closed_loop.glue import (
+    Alarms,
+    alarm_lists,
+    apply_batch,
+    closed_loop_block,
+    in_threads,
+    measure_batch,
+    segment_of,
+    sigma_batch,
+)
 from adaptive_dd.closed_loop.noise import NoiseBlocks
 from adaptive_dd.closed_loop.python_path import PythonGlue, run_python_batch
-from adaptive_dd.closed_loop.types import Io, Recording, RunConstants
+from adaptive_dd.closed_loop.types import Io, Recording, RunConstants, TrialState
 from adaptive_dd.controllers.compiled_form import LAW_ADAPTIVE, LAW_SLOTINE, CompiledSpec
 from adaptive_dd.identification.two_link_online import TwoLinkOnlineConfig, online_init
 from adaptive_dd.plant.sampling import first_sample
@@ -46,9 +45,9 @@ from adaptive_dd.plant.two_link_integrator import friction_vector
 __all__ = ["run_compiled", "run_python"]
 
 
-def _constants(scenario, reference) -> tuple[RunConstants, Io, TwoLinkPlant]:
-    """``(rc, io, pl)``: what every trial of every controller shares; ``reference`` is
-    ``(q_d, qd_d, qdd_d)``."""
+def _constants(scenario, reference) -> tuple[RunConstants, Io, np.ndarray]:
+    """``(rc, io, sigma_seg)``: what every trial of every controller shares; ``reference`` is
+    ``(q_d, qd_d, qdd_d)``; ``sigma_seg (G, 7)`` the true base parameters of each segment."""
     N, T = scenario.n_samples, scenario.sample_period
     seg_start, seg_end, seg_settled = segment_bounds(scenario.segments(), T, SETTLE)
     c = np.ascontiguousarray
@@ -64,30 +63,30 @@ def _constants(scenario, reference) -> tuple[RunConstants, Io, TwoLinkPlant]:
     )  # fmt: skip
     sigma_true, _ = true_sigma(scenario, np.arange(N) * T)
     swap_k = np.array([first_sample(at, T) for at in scenario.swap_times], dtype=np.int64)
-    sig_seg = c(sigma_true[np.concatenate(([0], np.minimum(swap_k, N - 1)))])
-    pl = TwoLinkPlant(
-        sig_seg, swap_k, int(scenario.substeps), int(arm.friction_code), friction_vector(arm.friction_params)
-    )
-    return rc, io, pl
+    return rc, io, c(sigma_true[np.concatenate(([0], np.minimum(swap_k, N - 1)))])
 
 
-def _records(name, ctrl, rc: RunConstants, S: int, keep: int, estimates: bool, engine: str):
-    """``(run, ts, rec)``: an empty run of S trials, their state at the reference's start, and the
-    recording over the run's arrays."""
+def _records(
+    name, ctrl, scenario, rc: RunConstants, sigma_seg, S: int, keep: int, estimates: bool, engine: str
+):
+    """``(run, pl, ts, rec)``: an empty run of S trials, their plant and state at the reference's
+    start, and the recording over the run's arrays."""
     N = rc.q_d.shape[0]
     run = new_run(name, ctrl, S, len(rc.seg_start), N, keep, estimates, engine)
     q = np.broadcast_to(rc.q_d[0], (S, 2)).copy()
     qd = np.broadcast_to(rc.qd_d[0], (S, 2)).copy()
     run.dropped = np.zeros(S, dtype=np.int64)
-    ts = TwoLinkTrialState(
-        q, qd, qd == 0.0, np.ones((S, 2)), np.zeros((S, 2)), run.failed, run.failed_at, q.copy(), qd.copy(),
-        run.dropped,
+    arm = scenario.arm
+    pl = TwoLinkPlant(
+        sigma_seg, int(scenario.substeps), int(arm.friction_code), friction_vector(arm.friction_params),
+        np.ones((S, 2)), np.zeros((S, 2)),
     )  # fmt: skip
+    ts = TrialState(q, qd, qd == 0.0, run.failed, run.failed_at, q.copy(), qd.copy(), run.dropped)
     rec = Recording(
         run.q, run.qd, run.tau, run.saturated, run.sigma_hat if estimates else np.zeros((0, N, 7)),
         run.sigma_end if estimates else np.zeros((S, len(rc.seg_start), 7)),
     )  # fmt: skip
-    return run, ts, rec
+    return run, pl, ts, rec
 
 
 def run_compiled(name, ctrl, spec: CompiledSpec, scenario, idx, reference, keep: int, bar) -> ControllerRun:
@@ -99,19 +98,15 @@ def run_compiled(name, ctrl, spec: CompiledSpec, scenario, idx, reference, keep:
     S, N, T = len(idx), scenario.n_samples, scenario.sample_period
     adaptive = spec.law == LAW_ADAPTIVE
     estimates = adaptive or spec.law == LAW_SLOTINE
-    rc, io, pl = _constants(scenario, reference)
-    run, ts, rec = _records(name, ctrl, rc, S, keep, estimates, "compiled")
+    rc, io, sigma_seg = _constants(scenario, reference)
+    run, pl, ts, rec = _records(name, ctrl, scenario, rc, sigma_seg, S, keep, estimates, "compiled")
     cfg = spec.online if adaptive else TwoLinkOnlineConfig(sample_period=T, tau_f=max(0.01, T))  # unused
     es = online_init(cfg, S, spec.sigma)
-    ec = OnlineKernelConfig(*cfg.packed)
+    ec = OnlineKernelConfig(*cfg.packed, adaptive)
     alarms = Alarms(np.zeros((S, MAX_ALARMS)), np.zeros(S, dtype=np.int64))
     for k0, k1, noise, drop in NoiseBlocks(scenario, idx, 4).blocks(N):
-        with warnings.catch_warnings():  # trial_block asks for numba's parallel pipeline on purpose
-            warnings.filterwarnings(  # (COPY_PROPAGATE_ONLY); its compilation warns that nothing ran parallel
-                "ignore", message=r"\s*The keyword argument 'parallel=True' was specified",
-                category=NumbaPerformanceWarning,
-            )  # fmt: skip
-            closed_loop_block(k0, k1, noise, drop, rc, io, pl, spec.gains, ts, es, ec, run.acc, rec, alarms)
+        args = (k0, k1, noise, drop, rc, io, pl, ts, run.acc, rec, alarms, spec.gains, es, ec, es, estimates)
+        in_threads(closed_loop_block, S, args)
         if bar is not None:
             bar.update(k1 - k0)
     if adaptive:
@@ -127,15 +122,15 @@ def run_python(name, ctrl, scenario, idx, reference, keep: int, bar) -> Controll
     (:func:`~adaptive_dd.closed_loop.python_path.run_python_batch`): a vectorised batch, one
     ``command`` and one ``observe`` per sample; a controller that raises fails its own trials
     (``run.error``). Arguments as :func:`run_compiled`'s."""
-    rc, io, pl = _constants(scenario, reference)
+    rc, io, sigma_seg = _constants(scenario, reference)
 
     def records(estimates: bool):
-        run, ts, rec = _records(name, ctrl, rc, len(idx), keep, estimates, "python")
+        run, pl, ts, rec = _records(name, ctrl, scenario, rc, sigma_seg, len(idx), keep, estimates, "python")
         glue = PythonGlue(
             measure=partial(measure_batch, io, ts),
-            sigma_true=lambda k: pl.sigma_seg[segment_of(pl, k)],
+            sigma_true=lambda k: sigma_seg[segment_of(rc, k)],
             apply=partial(apply_batch, rc, io, pl, ts, run.acc, rec),
-            record_estimate=partial(estimate_batch, rc, rec),
+            record_estimate=partial(sigma_batch, rc, rec),
         )
         return run, glue
 

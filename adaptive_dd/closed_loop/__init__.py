@@ -9,8 +9,10 @@ Layout (data first, then arithmetic, then drivers):
     The one compiled law kernel of the computed-torque family (PD, computed torque with a
     fixed, true or estimated model, Slotine-Li with payload adaptation).
 :mod:`~adaptive_dd.closed_loop.glue`
-    The per-sample glue written once (measure, guard, actuate, plant step, divergence,
-    failure freeze, metrics, recording) and the compiled whole-block driver.
+    The per-sample glue written once for every arm (measure, guard, actuate, plant step,
+    divergence, failure freeze, metrics, recording, alarms), with the plant, the law and the
+    estimator as compile-time choices (the two-link arm's: :mod:`adaptive_dd.benchmark.compiled`),
+    and the compiled whole-block driver.
 :mod:`~adaptive_dd.closed_loop.noise`
     Sensor noise and dropouts of every trial, drawn block by block (both arms, both paths).
 :mod:`~adaptive_dd.closed_loop.python_path`

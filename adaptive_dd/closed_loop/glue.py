@@ -1,56 +1,85 @@
-"""The per-sample glue of the N-joint closed loop, written once.
+"""The per-sample glue of the closed loop, written once for every arm.
 
 One sample of one trial is:
 
-1. :func:`measure_trial_sample`: encoder and noise (drawn in blocks by the runner), a lost
+1. :func:`measure_sample`: encoder and noise (drawn in blocks by the runner), a lost
    measurement replaced by the last good one for the law and by NaN for the estimator;
-2. the command: the compiled law (:func:`~adaptive_dd.closed_loop.laws.law_trial_in`) or a
-   Python controller's ``command`` for the whole batch;
-3. :func:`apply_trial_sample`: the divergence rule (a non-finite command or an error beyond
-   ``max_error`` zeroes the command and fails the trial), saturation and D/A, the plant
-   step, the runaway rule (non-finite state or ``|qd| > max_speed``), the failure freeze
-   (a failed trial stays at its last finite position, at rest, with zero torque), the
-   streamed metrics and the recorded trajectories;
-4. the estimator: compiled (:func:`estimator_trial_sample`) or the controller's ``observe``;
-   then :func:`record_estimate_trial` keeps the estimate at each segment's end.
+2. the command: the compiled law (:func:`law_command`) or a Python controller's ``command``
+   for the whole batch;
+3. :func:`apply_sample` and :func:`accumulate_sample`: the divergence rule (a non-finite
+   command or an error beyond ``max_error`` zeroes the command and fails the trial),
+   saturation and D/A, the plant step (:func:`plant_advance`), the runaway rule (non-finite
+   state or ``|qd| >= max_speed``), the failure freeze (a failed trial stays at its last
+   finite position, at rest, with zero torque), the recorded trajectories and the streamed
+   metrics;
+4. the estimator: compiled (:func:`estimator_sample`) or the controller's ``observe``, its
+   alarms counted; then :func:`record_estimate` keeps the estimate (:func:`law_estimate`) at
+   each segment's end and for the recorded trials.
 
-The compiled path runs all four inside :func:`closed_loop_block` (a range of trials, the
-GIL released so that threads run ranges in parallel);
-the Python path calls the batch wrappers (``*_batch``) around the Python controller, so
-both paths do the same arithmetic in the same order.
+The plant, the law and the estimator are compile-time choices: :func:`plant_advance`,
+:func:`law_command`, :func:`law_estimate` and :func:`estimator_sample` are chosen by the
+type of their record. Here are the choices of an N-joint arm
+(:class:`~adaptive_dd.closed_loop.types.Plant`, :class:`ChainLaw`, no estimator or
+:class:`~adaptive_dd.identification.online_kernel.EstCfg`);
+:mod:`adaptive_dd.benchmark.compiled` adds the paper's two-link arm (its closed-form plant,
+its laws and its estimator). The compiled path runs all four inside
+:func:`closed_loop_block` (a range of trials, the GIL released so that threads run ranges
+in parallel: :func:`in_threads`); the Python path calls the batch wrappers (``*_batch``)
+around the Python controller, so both paths do the same arithmetic in the same order.
 """
 
 from __future__ import annotations
 
+import itertools
+import warnings
 from typing import NamedTuple
 
 import numpy as np
 from numba import njit, types
+from numba.core.errors import NumbaPerformanceWarning
 from numba.extending import overload
 from numpy.typing import NDArray
 
-from adaptive_dd.closed_loop.laws import law_trial_in, law_work
+from adaptive_dd.closed_loop.laws import LawConfig, law_trial_in, law_work
 from adaptive_dd.closed_loop.plant import plant_scratch, plant_step
-from adaptive_dd.identification.online_kernel import est_model_trial_in, est_step_trial_in, est_work
+from adaptive_dd.closed_loop.types import Plant
+from adaptive_dd.identification.online_kernel import (
+    EstCfg,
+    est_model_trial_in,
+    est_step_trial_in,
+    est_work,
+)
 from adaptive_dd.plant.sampling import actuate_trial, measure_trial
 
 __all__ = [
+    "COPY_PROPAGATE_ONLY",
     "Alarms",
+    "ChainLaw",
+    "accumulate_sample",
     "alarm_lists",
     "apply_batch",
-    "apply_trial_sample",
+    "apply_sample",
+    "chain_law",
     "closed_loop_block",
     "estimator_batch",
-    "estimator_model",
-    "estimator_step",
-    "estimator_trial_sample",
+    "estimator_sample",
+    "estimator_work",
+    "in_threads",
+    "law_command",
+    "law_estimate",
+    "law_work_of",
     "measure_batch",
-    "measure_trial_sample",
-    "record_estimate_trial",
-    "sample_work",
+    "measure_sample",
+    "plant_advance",
+    "plant_joints",
+    "plant_work",
+    "record_estimate",
     "segment_of",
     "sigma_batch",
+    "trial_samples",
 ]
+
+Array = NDArray[np.float64]
 
 
 class Alarms(NamedTuple):
@@ -66,159 +95,185 @@ def alarm_lists(alarms: Alarms) -> list[list[float]]:
     return [list(alarms.times[i, : min(c, cap)]) for i, c in enumerate(alarms.count)]
 
 
-@njit(cache=True)
+class ChainLaw(NamedTuple):
+    """An N-joint built-in law as the loop takes it: ``cfg`` its
+    :class:`~adaptive_dd.closed_loop.laws.LawConfig`, ``pi_true (S, G, 13 n)`` each trial's
+    true model per segment (what the oracles are given), ``B (p, 13 n)`` standard -> base
+    parameters (the recorded estimate is ``B pi_model``), ``cols, count`` B's nonzero columns
+    per row (:func:`chain_law`)."""
+
+    cfg: LawConfig
+    pi_true: Array
+    B: Array
+    cols: NDArray[np.int64]
+    count: NDArray[np.int64]
+
+
+COPY_PROPAGATE_ONLY = {
+    k: False
+    for k in (
+        "comprehension",
+        "prange",
+        "setitem",
+        "reduction",
+        "numpy",
+        "stencil",
+        "fusion",
+        "inplace_binop",
+    )
+}
+"""numba's ``parallel`` options with every conversion off: what is left is the parallel pipeline's
+copy propagation, which removes the argument copies (``param = caller_var``) that inlining
+leaves in the sample loop; each copy of an array is a reference-count update that numba does not
+prune (two-link pd: 0.55 -> 0.43 us per trial-sample, benchmarks/two_link_speed_ab.py). Nothing
+runs in parallel: :func:`trial_samples` has no ``prange`` and no array expression is converted."""
+
+
+@njit(cache=True, inline="always")
 def segment_of(rc, k):  # pragma: no cover - compiled
-    """Payload segment of sample ``k``."""
+    """Payload segment of sample ``k`` (:class:`~adaptive_dd.closed_loop.types.RunConstants`)."""
+    return _segment(rc.seg_start, k)
+
+
+@njit(cache=True, inline="always")
+def _segment(seg_start, k):  # pragma: no cover - compiled
     s = 0
-    while s + 1 < rc.seg_start.shape[0] and k >= rc.seg_start[s + 1]:
+    while s + 1 < seg_start.shape[0] and k >= seg_start[s + 1]:
         s += 1
     return s
 
 
-@njit(cache=True, inline="always")
-def measure_trial_sample(io, ts, i, noise, lost, qm, qdm, qm_obs, qdm_obs):  # pragma: no cover
-    """Measured ``qm, qdm (n,)`` for the law and ``qm_obs, qdm_obs`` for the estimator (NaN if lost)."""
-    n = qm.shape[0]
-    measure_trial(ts.q[i], ts.qd[i], noise, io.res, io.std, io.quantize_encoder, qm, qdm)
-    if lost:
-        ts.n_dropped[i] += 1
-        for j in range(n):
-            qm_obs[j], qdm_obs[j] = np.nan, np.nan
-            qm[j], qdm[j] = ts.held_q[i, j], ts.held_qd[i, j]
-    else:
-        for j in range(n):
-            qm_obs[j], qdm_obs[j] = qm[j], qdm[j]
-            ts.held_q[i, j], ts.held_qd[i, j] = qm[j], qdm[j]
+# ------------------------------------------------------------------ the compile-time choices
+def plant_work(pl, n):  # pragma: no cover - replaced by the overloads
+    """Scratch of one trial's plant step, allocated once per trial (not per sample)."""
+    raise NotImplementedError("compiled only")
 
 
-@njit(cache=True)
-def _accumulate(rc, acc, i, s, k, e, tau, mask):  # pragma: no cover - compiled
-    en2 = 0.0
-    t2 = 0.0
-    for j in range(e.shape[0]):
-        en2 += e[j] * e[j]
-        t2 += tau[j] * tau[j]
-        acc.sum_e2_joint[i, s, j] += e[j] * e[j]
-    en = np.sqrt(en2)
-    acc.sum_e2[i, s] += en2
-    if en > acc.max_e[i, s]:
-        acc.max_e[i, s] = en
-    acc.sum_tau2[i, s] += t2
-    if mask != 0:
-        acc.n_saturated[i, s] += 1.0
-    if k >= rc.seg_settled[s]:
-        acc.sum_e2_settled[i, s] += en2
-    acc.e_norm[i, k] = en
+def plant_joints(pl, q):  # pragma: no cover - replaced by the overloads
+    """The plant's number of joints: a compile-time constant where the plant's type fixes it (the
+    two-link arm: its loops over joints are then unrolled), else ``q.shape[1]``."""
+    raise NotImplementedError("compiled only")
 
 
-@njit(cache=True)
-def sample_work(n):  # pragma: no cover - compiled
-    """Work arrays of one trial's :func:`apply_trial_sample`: plant scratch, error, previous q."""
-    return plant_scratch(n), np.empty(n), np.empty(n)
+def plant_advance(pl, i, s, q, qd, stuck, tau, T, pw):  # pragma: no cover - replaced by the overloads
+    """Trial i's plant ``q, qd (S, n)`` by one sample under ``tau (n,)`` (zero-order hold) in
+    payload segment s, in place; ``stuck (S, n)`` receives the joints held by Coulomb friction."""
+    raise NotImplementedError("compiled only")
 
 
-@njit(cache=True, inline="always")
-def apply_trial_sample(ch, rc, io, pl, ts, acc, rec, i, k, s, cmd, tau, work):  # pragma: no cover
-    """Steps 3 of the module docstring for trial i at sample k (segment s); ``tau (n,)`` applied;
-    ``work``: :func:`sample_work` (allocated once per trial, not per sample)."""
-    n = cmd.shape[0]
-    sc, e, prev = work
-    bad = False
-    for j in range(n):
-        e[j] = rc.q_d[k, j] - ts.q[i, j]
-        if not np.isfinite(cmd[j]) or abs(e[j]) > rc.max_error:
-            bad = True
-    if bad:
-        cmd[:] = 0.0
-    mask = actuate_trial(cmd, io.lim, io.lsb, io.saturate, io.quantize_dac, tau)
-    if ts.failed[i]:
-        tau[:] = 0.0
-    keep = i < rec.q.shape[0]
-    for j in range(n):
-        prev[j] = ts.q[i, j]
-    if keep:
-        for j in range(n):
-            rec.q[i, k, j], rec.qd[i, k, j] = ts.q[i, j], ts.qd[i, j]
-    plant_step(ch, pl, i, s, ts.q[i], ts.qd[i], tau, rc.T, ts.stuck[i], sc)
-    ok = True
-    for j in range(n):
-        if not (np.isfinite(ts.q[i, j]) and abs(ts.qd[i, j]) < rc.max_speed):
-            ok = False
-    if bad or not ok or ts.failed[i]:
-        if not ts.failed[i]:
-            ts.failed_at[i] = k
-        ts.failed[i] = True
-        for j in range(n):
-            ts.q[i, j] = prev[j] if np.isfinite(prev[j]) else 0.0
-            ts.qd[i, j] = 0.0
-            ts.stuck[i, j] = True
-    _accumulate(rc, acc, i, s, k, e, tau, mask)
-    if keep:
-        for j in range(n):
-            rec.tau[i, k, j] = tau[j]
-            rec.saturated[i, k, j] = (mask >> j) & 1 == 1
+def law_work_of(law, n):  # pragma: no cover - replaced by the overloads
+    """Scratch of one trial's law, allocated once per trial."""
+    raise NotImplementedError("compiled only")
 
 
-@njit(cache=True)
-def record_estimate_trial(rc, rec, i, k, s, sigma):  # pragma: no cover - compiled
-    """Keep the estimate ``sigma (p,)`` at the segment's last sample, and for recorded trials."""
-    if k == rc.seg_end[s] - 1:
-        for c in range(sigma.shape[0]):
-            rec.sigma_end[i, s, c] = sigma[c]
-    if i < rec.sigma.shape[0]:
-        for c in range(sigma.shape[0]):
-            rec.sigma[i, k, c] = sigma[c]
+def law_command(law, ls, pl, i, s, T, q, qd, q_d, qd_d, qdd_d, lw, out):  # pragma: no cover
+    """Trial i's command ``out (n,)`` [N m] from its measured ``q, qd (n,)`` and the reference at
+    this sample; ``ls`` the law's per-trial state (updated in place when the law adapts), ``pl``
+    the plant (the oracles' true model of segment s)."""
+    raise NotImplementedError("compiled only")
 
 
-def estimator_work(ec, es):  # pragma: no cover - replaced by the overload
+def law_estimate(law, ls, i, lw, out):  # pragma: no cover - replaced by the overloads
+    """Trial i's estimate in base parameters (a view of the state, or written into ``out (p,)``)."""
+    raise NotImplementedError("compiled only")
+
+
+def estimator_work(ec, es):  # pragma: no cover - replaced by the overloads
     """Scratch of one trial's estimator, reused from sample to sample (an empty array without one)."""
     raise NotImplementedError("compiled only")
 
 
-def estimator_step(ec, es, i, q, qd, tau, ew):  # pragma: no cover - replaced by the overload
-    """One sample of trial i's estimator: 1 on an alarm. Chosen at compile time by the type of
-    ``ec``: an array means no estimator (never an alarm), an ``EstCfg`` the N-joint online
-    estimator (:func:`~adaptive_dd.identification.online.est_step_trial_in`)."""
+def estimator_sample(ec, es, ls, i, q, qd, tau, ew):  # pragma: no cover - replaced by the overloads
+    """One sample of trial i's estimator on the measured ``q, qd`` (NaN if lost) and the applied
+    ``tau``: 1 on an alarm, else 0; the law's model and its count of samples since the last alarm
+    updated. An array ``ec`` means no estimator; an ``EstCfg`` the N-joint online estimator
+    (:func:`~adaptive_dd.identification.online_kernel.est_step_trial_in`)."""
     raise NotImplementedError("compiled only")
 
 
-def estimator_model(ec, es, i, pi_out, ew):  # pragma: no cover - replaced by the overload
-    """The model control uses ``pi_out (13 n,)`` (left as it is without an estimator)."""
-    raise NotImplementedError("compiled only")
+def _is(typ, cls) -> bool:
+    return getattr(typ, "instance_class", None) is cls
+
+
+@overload(plant_work)
+def _plant_work(pl, n):
+    if _is(pl, Plant):
+        return lambda pl, n: plant_scratch(n)
+
+
+@overload(plant_joints, inline="always")
+def _plant_joints(pl, q):
+    if _is(pl, Plant):
+        return lambda pl, q: q.shape[1]
+
+
+@overload(plant_advance, inline="always")
+def _plant_advance(pl, i, s, q, qd, stuck, tau, T, pw):
+    if _is(pl, Plant):
+        return lambda pl, i, s, q, qd, stuck, tau, T, pw: plant_step(
+            pl, i, s, q[i], qd[i], tau, T, stuck[i], pw
+        )
+
+
+@overload(law_work_of)
+def _law_work_of(law, n):
+    if _is(law, ChainLaw):
+        return lambda law, n: law_work(n)
+
+
+@overload(law_command, inline="always")
+def _law_command(law, ls, pl, i, s, T, q, qd, q_d, qd_d, qdd_d, lw, out):
+    if _is(law, ChainLaw):
+
+        def impl(law, ls, pl, i, s, T, q, qd, q_d, qd_d, qdd_d, lw, out):  # pragma: no cover
+            law_trial_in(
+                pl.chain, law.cfg, law.pi_true[i, s], ls.pi_model[i], ls.theta[i], ls.since_alarm[i],
+                q, qd, q_d, qd_d, qdd_d, lw, out,
+            )  # fmt: skip
+
+        return impl
+
+
+@overload(law_estimate)
+def _law_estimate(law, ls, i, lw, out):
+    if _is(law, ChainLaw):
+
+        def impl(law, ls, i, lw, out):  # pragma: no cover - compiled
+            _sigma_of(law.B, law.cols, law.count, ls.pi_model[i], out)
+            return out
+
+        return impl
 
 
 @overload(estimator_work)
 def _estimator_work(ec, es):
     if isinstance(ec, types.Array):
         return lambda ec, es: np.empty(0)
-    return lambda ec, es: est_work(ec.w.shape[0], es.theta.shape[1])
+    if _is(ec, EstCfg):
+        return lambda ec, es: est_work(ec.w.shape[0], es.theta.shape[1])
 
 
-@overload(estimator_step)
-def _estimator_step(ec, es, i, q, qd, tau, ew):
+@overload(estimator_sample)  # not inlined: it writes through records (see _accumulate)
+def _estimator_sample(ec, es, ls, i, q, qd, tau, ew):
     if isinstance(ec, types.Array):
-        return lambda ec, es, i, q, qd, tau, ew: 0
-    return lambda ec, es, i, q, qd, tau, ew: est_step_trial_in(ec, es, i, q, qd, tau, ew)
 
+        def none(ec, es, ls, i, q, qd, tau, ew):  # pragma: no cover - compiled
+            ls.since_alarm[i] += 1
+            return 0
 
-@overload(estimator_model)
-def _estimator_model(ec, es, i, pi_out, ew):
-    if isinstance(ec, types.Array):
-        return lambda ec, es, i, pi_out, ew: None
-    return lambda ec, es, i, pi_out, ew: est_model_trial_in(ec, es, i, pi_out, ew)
+        return none
+    if _is(ec, EstCfg):
 
+        def online(ec, es, ls, i, q, qd, tau, ew):  # pragma: no cover - compiled
+            alarm = est_step_trial_in(ec, es, i, q, qd, tau, ew)
+            if alarm == 1:
+                ls.since_alarm[i] = 0
+            else:
+                ls.since_alarm[i] += 1
+            est_model_trial_in(ec, es, i, ls.pi_model[i], ew)
+            return alarm
 
-@njit(cache=True, inline="always")
-def estimator_trial_sample(ec, es, ls, i, qm_obs, qdm_obs, tau, ew):  # pragma: no cover - compiled
-    """The estimator's step on the applied torque, the alarm counter, the model for the next command;
-    ``ew`` the estimator's scratch (:func:`estimator_work`)."""
-    alarm = estimator_step(ec, es, i, qm_obs, qdm_obs, tau, ew)
-    if alarm == 1:
-        ls.since_alarm[i] = 0
-    else:
-        ls.since_alarm[i] += 1
-    estimator_model(ec, es, i, ls.pi_model[i], ew)
-    return alarm
+        return online
 
 
 @njit(cache=True)
@@ -233,6 +288,13 @@ def _nonzero_columns(B):  # pragma: no cover - compiled
                 cols[r, count[r]] = c
                 count[r] += 1
     return cols, count
+
+
+def chain_law(cfg: LawConfig, pi_true: Array, B: Array) -> ChainLaw:
+    """:class:`ChainLaw` of an N-joint law ``cfg``, the trials' true models and the arm's ``B``."""
+    B = np.ascontiguousarray(B, dtype=float)
+    cols, count = _nonzero_columns(B)
+    return ChainLaw(cfg, np.ascontiguousarray(pi_true, dtype=float), B, cols, count)
 
 
 @njit(cache=True)
@@ -256,51 +318,234 @@ def _sigma_of(B, cols, count, pi, out):  # pragma: no cover - compiled
         out[r] = acc
 
 
+# ------------------------------------------------------------------ the per-sample algorithm
+# The per-sample pieces take plain arrays, read out of the records once per trial block (or per
+# sample on the Python path): each read of an array out of a NamedTuple inside the sample loop
+# costs a reference-count update that numba does not prune (two-link pd: 0.64 -> 0.55 us per
+# trial-sample, benchmarks/two_link_speed_ab.py).
+
+
+@njit(cache=True, inline="always")
+def measure_sample(
+    q, qd, held_q, held_qd, n_dropped, res, std, quantize, i, noise, lost, qm, qdm, qm_obs, qdm_obs
+):  # pragma: no cover - compiled
+    """Trial i's measured ``qm, qdm (n,)`` for the law and ``qm_obs, qdm_obs`` for the estimator
+    from ``noise (2 n,)`` standard normal (``res, std, quantize`` of
+    :class:`~adaptive_dd.closed_loop.types.Io`); a ``lost`` measurement is the last good one
+    (``held_q, held_qd (S, n)``) for the law, NaN for the estimator, and counted in ``n_dropped``."""
+    measure_trial(q[i], qd[i], noise, res, std, quantize, qm, qdm)
+    if lost:
+        n_dropped[i] += 1
+        for j in range(qm.shape[0]):
+            qm_obs[j], qdm_obs[j] = np.nan, np.nan
+            qm[j], qdm[j] = held_q[i, j], held_qd[i, j]
+    else:
+        for j in range(qm.shape[0]):
+            qm_obs[j], qdm_obs[j] = qm[j], qdm[j]
+            held_q[i, j], held_qd[i, j] = qm[j], qdm[j]
+
+
+@njit(cache=True, inline="always")
+def accumulate_sample(
+    sum_e2, sum_e2_joint, max_e, sum_tau2, n_saturated, sum_e2_settled, e_norm, seg_settled,
+    i, s, k, e, tau, mask,
+):  # pragma: no cover - compiled  # fmt: skip
+    """Add sample k (segment s) of trial i, error ``e (n,)`` [rad] and applied ``tau (n,)``, to the
+    streamed sums (the fields of :class:`~adaptive_dd.closed_loop.types.StreamedSums`), ``mask``
+    the saturation mask of :func:`apply_sample`."""
+    en2 = 0.0
+    t2 = 0.0
+    for j in range(e.shape[0]):
+        en2 += e[j] * e[j]
+        t2 += tau[j] * tau[j]
+        sum_e2_joint[i, s, j] += e[j] * e[j]
+    en = np.sqrt(en2)
+    sum_e2[i, s] += en2
+    if en > max_e[i, s]:
+        max_e[i, s] = en
+    sum_tau2[i, s] += t2
+    if mask != 0:
+        n_saturated[i, s] += 1.0
+    if k >= seg_settled[s]:
+        sum_e2_settled[i, s] += en2
+    e_norm[i, k] = en
+
+
+@njit(cache=True, inline="always")
+def apply_sample(
+    T, max_error, max_speed, q_d, lim, lsb, saturate, quantize_dac, pl, pw,
+    q, qd, stuck, failed, failed_at, q_rec, qd_rec, tau_rec, sat_rec, i, k, cmd, tau, e, prev, s,
+):  # pragma: no cover - compiled  # fmt: skip
+    """Step 3 of the module docstring for trial i at sample k (segment s): ``cmd (n,)`` [N m]
+    (zeroed in place when the divergence rule applies), the applied torque into ``tau (n,)``.
+
+    Returns the saturation mask (bit j: joint j's command beyond its limit); the caller adds the
+    sample to the streamed sums next (:func:`accumulate_sample`, with the error ``e`` this
+    leaves). Not one function with it: a call of more than 30 arguments is compiled as a call
+    with ``*args``, which numba does not inline.
+
+    The arguments are the fields of :class:`~adaptive_dd.closed_loop.types.RunConstants`,
+    :class:`~adaptive_dd.closed_loop.types.Io` and :class:`~adaptive_dd.closed_loop.types.TrialState`
+    of the same names, the plant ``pl`` and its scratch ``pw`` (:func:`plant_advance`), and the
+    recording's ``q, qd, tau, saturated``
+    (``q_rec, qd_rec, tau_rec, sat_rec``: the first ``q_rec.shape[0]`` trials, the state before the step, the
+    applied torque and its saturation); ``e, prev (n,)`` scratch.
+    """
+    n = cmd.shape[0]
+    bad = False
+    for j in range(n):
+        e[j] = q_d[k, j] - q[i, j]
+        if not np.isfinite(cmd[j]) or abs(e[j]) > max_error:
+            bad = True
+    if bad:
+        for j in range(n):
+            cmd[j] = 0.0
+    mask = actuate_trial(cmd, lim, lsb, saturate, quantize_dac, tau)
+    if failed[i]:
+        for j in range(n):
+            tau[j] = 0.0
+    keep = i < q_rec.shape[0]
+    for j in range(n):
+        prev[j] = q[i, j]
+    if keep:
+        for j in range(n):
+            q_rec[i, k, j], qd_rec[i, k, j] = q[i, j], qd[i, j]
+    plant_advance(pl, i, s, q, qd, stuck, tau, T, pw)
+    ok = True
+    for j in range(n):
+        if not (np.isfinite(q[i, j]) and abs(qd[i, j]) < max_speed):
+            ok = False
+    if bad or not ok or failed[i]:
+        if not failed[i]:
+            failed_at[i] = k
+        failed[i] = True
+        for j in range(n):
+            q[i, j] = prev[j] if np.isfinite(prev[j]) else 0.0
+            qd[i, j] = 0.0
+            stuck[i, j] = True
+    if keep:
+        for j in range(n):
+            tau_rec[i, k, j] = tau[j]
+            sat_rec[i, k, j] = (mask >> j) & 1 == 1
+    return mask
+
+
+@njit(cache=True, inline="always")
+def record_estimate(seg_end, sigma_end, sigma_rec, i, k, s, sigma):  # pragma: no cover - compiled
+    """Trial i's estimate ``sigma (p,)`` after sample k (segment s): at the segment's last sample
+    (``seg_end``) into ``sigma_end (S, G, p)``, and into ``sigma_rec`` (the recording's ``sigma``)
+    for its first ``sigma_rec.shape[0]`` trials."""
+    if k == seg_end[s] - 1:
+        for c in range(sigma.shape[0]):  # a loop, not a slice assignment: numba would compile
+            sigma_end[i, s, c] = sigma[c]  # the slice assignment's shape-error message (string code)
+    if i < sigma_rec.shape[0]:
+        for c in range(sigma.shape[0]):
+            sigma_rec[i, k, c] = sigma[c]
+
+
+@njit(cache=True, parallel=COPY_PROPAGATE_ONLY)
+def trial_samples(
+    i, k0, k1, noise, drop, rc, io, pl, ts, acc, rec, alarms, law, ls, ec, es, estimates
+):  # pragma: no cover - compiled
+    """Samples ``k0`` to ``k1 - 1`` of trial i, state updated in place: the loop of the module
+    docstring's four steps, the one writing of the closed loop's per-sample algorithm.
+
+    ``noise (S, k1 - k0, 2 n)`` standard normal; ``drop (S, k1 - k0)`` lost measurements (or
+    ``(S, 0)``: none); ``rc, io, ts, acc, rec, alarms`` the run's records
+    (:mod:`adaptive_dd.closed_loop.types`, :class:`Alarms`); ``pl`` the plant, ``law, ls`` the
+    law and its per-trial state, ``ec, es`` the estimator (each chosen by its type);
+    ``estimates``: record the law's estimate (:func:`law_estimate`).
+
+    The records' fields are read out once, before the sample loop, and the per-sample pieces,
+    inlined into it (``inline="always"``), take them as plain arrays; compiled with
+    :data:`COPY_PROPAGATE_ONLY` so that the inlined calls' argument copies cost no
+    reference-count update per sample. A compiled kernel longer than 60 lines would be split
+    here only at a cost in speed; this one is not.
+    """
+    T, max_error, max_speed, q_d, qd_d, qdd_d = rc.T, rc.max_error, rc.max_speed, rc.q_d, rc.qd_d, rc.qdd_d
+    seg_start, seg_end, seg_settled = rc.seg_start, rc.seg_end, rc.seg_settled
+    lim, lsb, saturate, quantize_dac = io.lim, io.lsb, io.saturate, io.quantize_dac
+    res, std, quantize_encoder = io.res, io.std, io.quantize_encoder
+    q, qd, stuck, failed, failed_at = ts.q, ts.qd, ts.stuck, ts.failed, ts.failed_at
+    held_q, held_qd, n_dropped = ts.held_q, ts.held_qd, ts.n_dropped
+    sum_e2, sum_e2_joint, max_e, sum_tau2, n_saturated, sum_e2_settled, e_norm = acc
+    q_rec, qd_rec, tau_rec, sat_rec = rec.q, rec.qd, rec.tau, rec.saturated
+    sigma_rec, sigma_end = rec.sigma, rec.sigma_end
+    alarm_t, n_alarms = alarms.times, alarms.count
+    n = plant_joints(pl, q)
+    qm, qdm, qm_obs, qdm_obs = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
+    cmd, tau, e, prev = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
+    sig = np.empty(sigma_end.shape[2])
+    pw, lw, ew = plant_work(pl, n), law_work_of(law, n), estimator_work(ec, es)
+    has_drop = drop.shape[1] > 0
+    for k in range(k0, k1):
+        s = _segment(seg_start, k)
+        lost = has_drop and drop[i, k - k0]
+        measure_sample(
+            q, qd, held_q, held_qd, n_dropped, res, std, quantize_encoder, i, noise[i, k - k0], lost,
+            qm, qdm, qm_obs, qdm_obs,
+        )  # fmt: skip
+        law_command(law, ls, pl, i, s, T, qm, qdm, q_d[k], qd_d[k], qdd_d[k], lw, cmd)
+        mask = apply_sample(
+            T, max_error, max_speed, q_d, lim, lsb, saturate, quantize_dac, pl, pw,
+            q, qd, stuck, failed, failed_at, q_rec, qd_rec, tau_rec, sat_rec, i, k, cmd, tau, e, prev, s,
+        )  # fmt: skip
+        accumulate_sample(
+            sum_e2, sum_e2_joint, max_e, sum_tau2, n_saturated, sum_e2_settled, e_norm, seg_settled,
+            i, s, k, e, tau, mask,
+        )  # fmt: skip
+        if estimator_sample(ec, es, ls, i, qm_obs, qdm_obs, tau, ew) == 1:
+            if n_alarms[i] < alarm_t.shape[1]:
+                alarm_t[i, n_alarms[i]] = k * T
+            n_alarms[i] += 1
+        if estimates and (k == seg_end[s] - 1 or i < sigma_rec.shape[0]):
+            record_estimate(seg_end, sigma_end, sigma_rec, i, k, s, law_estimate(law, ls, i, lw, sig))
+
+
 @njit(cache=True, nogil=True)
 def closed_loop_block(
-    i0, i1, k0, k1, ch, rc, io, pl, ts, acc, rec, alarms, noise, drop, cfg, ls, pi_true, B, ec, es, estimates,
-):  # pragma: no cover - compiled  # fmt: skip
-    """Samples ``k0`` to ``k1 - 1`` of trials ``i0`` to ``i1 - 1``, state updated in place.
+    i0, i1, k0, k1, noise, drop, rc, io, pl, ts, acc, rec, alarms, law, ls, ec, es, estimates
+):  # pragma: no cover - compiled
+    """Samples ``k0`` to ``k1 - 1`` of trials ``i0`` to ``i1 - 1`` (:func:`trial_samples`).
 
-    ``noise (S, k1 - k0, 2 n)`` standard normal; ``drop (S, k1 - k0)`` lost measurements
-    (or ``(S, 0)``: none); ``cfg, ls`` the law; ``pi_true (S, G, 13 n)`` trial i's true model
-    per segment (its plant); ``B (p, 13 n)`` standard -> base parameters; ``ec, es`` the estimator's records
-    (arrays: none; see :func:`estimator_step`); ``estimates``: record ``B pi_model``.
-    The GIL is released: the runner runs disjoint ranges of trials in threads (numba's
-    ``prange`` cannot take the estimator's configuration, a NamedTuple holding a NamedTuple).
+    The GIL is released: :func:`in_threads` runs disjoint ranges of trials in threads (numba's
+    ``prange`` cannot take the N-joint estimator's configuration, a NamedTuple holding a
+    NamedTuple).
     """
-    n = ts.q.shape[1]
-    cols, count = _nonzero_columns(B)
     for i in range(i0, i1):
-        qm, qdm, qm_obs, qdm_obs = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
-        cmd, tau = np.empty(n), np.empty(n)
-        sig = np.empty(B.shape[0])
-        work = sample_work(n)
-        lw = law_work(n)
-        ew = estimator_work(ec, es)
-        for k in range(k0, k1):
-            s = segment_of(rc, k)
-            lost = drop.shape[1] > 0 and drop[i, k - k0]
-            measure_trial_sample(io, ts, i, noise[i, k - k0], lost, qm, qdm, qm_obs, qdm_obs)
-            law_trial_in(
-                ch, cfg, pi_true[i, s], ls.pi_model[i], ls.theta[i], ls.since_alarm[i],
-                qm, qdm, rc.q_d[k], rc.qd_d[k], rc.qdd_d[k], lw, cmd,
-            )  # fmt: skip
-            apply_trial_sample(ch, rc, io, pl, ts, acc, rec, i, k, s, cmd, tau, work)
-            if estimator_trial_sample(ec, es, ls, i, qm_obs, qdm_obs, tau, ew) == 1:
-                if alarms.count[i] < alarms.times.shape[1]:
-                    alarms.times[i, alarms.count[i]] = k * rc.T
-                alarms.count[i] += 1
-            if estimates and (k == rc.seg_end[s] - 1 or i < rec.sigma.shape[0]):
-                _sigma_of(B, cols, count, ls.pi_model[i], sig)
-                record_estimate_trial(rc, rec, i, k, s, sig)
+        trial_samples(i, k0, k1, noise, drop, rc, io, pl, ts, acc, rec, alarms, law, ls, ec, es, estimates)
+
+
+def in_threads(kernel, S: int, args: tuple) -> None:
+    """``kernel(i0, i1, *args)`` over disjoint ranges of the S trials, one per numba thread."""
+    import numba
+
+    m = max(1, min(S, numba.config.NUMBA_NUM_THREADS))
+    with warnings.catch_warnings():  # trial_samples asks for numba's parallel pipeline on purpose
+        warnings.filterwarnings(  # (COPY_PROPAGATE_ONLY); its compilation warns that nothing ran parallel
+            "ignore", message=r"\s*The keyword argument 'parallel=True' was specified",
+            category=NumbaPerformanceWarning,
+        )  # fmt: skip
+        # compile (or load) in this thread: numba's dispatch is not thread-safe
+        kernel(0, S if m == 1 else 0, *args)
+    if m == 1:
+        return
+    from concurrent.futures import ThreadPoolExecutor
+
+    edges = np.linspace(0, S, m + 1).astype(int)
+    with ThreadPoolExecutor(m) as pool:
+        for f in [pool.submit(kernel, int(a), int(b), *args) for a, b in itertools.pairwise(edges)]:
+            f.result()
 
 
 # ----------------------------------------------------------------------- Python path
 @njit(cache=True)
 def _measure_loop(io, ts, noise, lost, qm, qdm, qm_obs, qdm_obs):  # pragma: no cover - compiled
     for i in range(qm.shape[0]):
-        measure_trial_sample(io, ts, i, noise[i], lost[i], qm[i], qdm[i], qm_obs[i], qdm_obs[i])
+        measure_sample(
+            ts.q, ts.qd, ts.held_q, ts.held_qd, ts.n_dropped, io.res, io.std, io.quantize_encoder, i,
+            noise[i], lost[i], qm[i], qdm[i], qm_obs[i], qdm_obs[i],
+        )  # fmt: skip
 
 
 def measure_batch(io, ts, noise, lost) -> tuple:
@@ -312,31 +557,40 @@ def measure_batch(io, ts, noise, lost) -> tuple:
 
 
 @njit(cache=True)
-def _apply_loop(ch, rc, io, pl, ts, acc, rec, k, cmd, tau):  # pragma: no cover - compiled
+def _apply_loop(rc, io, pl, ts, acc, rec, k, cmd, tau):  # pragma: no cover - compiled
     s = segment_of(rc, k)
-    work = sample_work(cmd.shape[1])  # one per call: trials run one after the other here
+    n = cmd.shape[1]
+    pw, e, prev = plant_work(pl, n), np.empty(n), np.empty(n)  # one per call: trials one after another
     for i in range(cmd.shape[0]):
-        apply_trial_sample(ch, rc, io, pl, ts, acc, rec, i, k, s, cmd[i], tau[i], work)
+        mask = apply_sample(
+            rc.T, rc.max_error, rc.max_speed, rc.q_d, io.lim, io.lsb, io.saturate,
+            io.quantize_dac, pl, pw, ts.q, ts.qd, ts.stuck, ts.failed, ts.failed_at, rec.q, rec.qd,
+            rec.tau, rec.saturated, i, k, cmd[i], tau[i], e, prev, s,
+        )  # fmt: skip
+        accumulate_sample(
+            acc.sum_e2, acc.sum_e2_joint, acc.max_e, acc.sum_tau2, acc.n_saturated, acc.sum_e2_settled,
+            acc.e_norm, rc.seg_settled, i, s, k, e, tau[i], mask,
+        )  # fmt: skip
     return s
 
 
-def apply_batch(ch, rc, io, pl, ts, acc, rec, k: int, cmd) -> tuple[NDArray[np.float64], int]:
+def apply_batch(rc, io, pl, ts, acc, rec, k: int, cmd) -> tuple[NDArray[np.float64], int]:
     """Step 3 for every trial; ``cmd (S, n)`` (copied); returns the applied torque ``(S, n)`` and
     the segment of sample k."""
     cmd = np.array(cmd, dtype=float, order="C")
     tau = np.empty_like(cmd)
-    s = _apply_loop(ch, rc, io, pl, ts, acc, rec, k, cmd, tau)
+    s = _apply_loop(rc, io, pl, ts, acc, rec, k, cmd, tau)
     return tau, int(s)
 
 
 @njit(cache=True)
 def _sigma_loop(rc, rec, k, s, sigma):  # pragma: no cover - compiled
     for i in range(sigma.shape[0]):
-        record_estimate_trial(rc, rec, i, k, s, sigma[i])
+        record_estimate(rc.seg_end, rec.sigma_end, rec.sigma, i, k, s, sigma[i])
 
 
 def sigma_batch(rc, rec, k: int, s: int, sigma) -> None:
-    """Record every trial's estimate ``sigma (S, p)`` (see :func:`record_estimate_trial`)."""
+    """Record every trial's estimate ``sigma (S, p)`` (see :func:`record_estimate`)."""
     _sigma_loop(rc, rec, k, s, np.ascontiguousarray(sigma, dtype=float))
 
 
@@ -344,11 +598,11 @@ def sigma_batch(rc, rec, k: int, s: int, sigma) -> None:
 def _estimator_loop(ec, es, ls, qm_obs, qdm_obs, tau, alarm):  # pragma: no cover - compiled
     ew = estimator_work(ec, es)  # one per call: trials run one after the other here
     for i in range(tau.shape[0]):
-        alarm[i] = estimator_trial_sample(ec, es, ls, i, qm_obs[i], qdm_obs[i], tau[i], ew)
+        alarm[i] = estimator_sample(ec, es, ls, i, qm_obs[i], qdm_obs[i], tau[i], ew)
 
 
 def estimator_batch(ec, es, ls, qm_obs, qdm_obs, tau) -> NDArray[np.int64]:
-    """:func:`estimator_trial_sample` for every trial ``(S, n)``; returns the alarms ``(S,)`` (1: alarm)."""
+    """:func:`estimator_sample` for every trial ``(S, n)``; returns the alarms ``(S,)`` (1: alarm)."""
     alarm = np.zeros(tau.shape[0], dtype=np.int64)
     c = np.ascontiguousarray
     _estimator_loop(ec, es, ls, c(qm_obs), c(qdm_obs), c(tau), alarm)

@@ -15,13 +15,14 @@ __all__ = ["plant_scratch", "plant_step"]
 
 
 @njit(cache=True, inline="always")
-def plant_step(ch, pl, i, seg, q, qd, tau, T, stuck, sc):  # pragma: no cover - compiled
+def plant_step(pl, i, seg, q, qd, tau, T, stuck, sc):  # pragma: no cover - compiled
     """Advance trial i's ``q, qd (n,)`` over one sample under ``tau (n,)`` in segment ``seg``.
 
-    ``pl`` is the run's :class:`~adaptive_dd.closed_loop.types.Plant`; ``stuck (n,)`` receives
-    the joints held by Coulomb friction; ``sc`` is the trial's scratch (:func:`plant_scratch`,
-    allocated once). Returns False if the dynamics failed (a mass matrix
-    not positive definite, a non-finite state); the loop's runaway rule catches the state.
+    ``pl`` is the run's :class:`~adaptive_dd.closed_loop.types.Plant` (its ``chain`` the arm's
+    kinematics); ``stuck (n,)`` receives the joints held by Coulomb friction; ``sc`` is the
+    trial's scratch (:func:`plant_scratch`, allocated once). Returns False if the dynamics failed
+    (a mass matrix not positive definite, a non-finite state); the loop's runaway rule catches
+    the state.
     """
     pp = PlantParams(pl.pi_seg[i, seg], pl.fv[i], pl.fc[i], pl.armature[i], pl.friction_law, pl.fparams)
-    return plant_step_in(ch, pp, q, qd, tau, T, pl.substeps, stuck, sc)
+    return plant_step_in(pl.chain, pp, q, qd, tau, T, pl.substeps, stuck, sc)

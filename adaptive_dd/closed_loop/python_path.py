@@ -2,11 +2,12 @@
 
 A controller object with ``reset / command / observe`` (a plug-in, or a built-in run with
 ``engine="python"``) runs as one vectorised batch: one ``command`` and one ``observe`` per
-sample for all the trials, between the arm's batch wrappers of its compiled per-trial glue
-(:class:`PythonGlue`): the measurement with its dropouts, then the divergence rule, actuator,
-plant step, failure freeze, streamed sums and recordings, then the estimate's record. The
-two-link arm (:func:`adaptive_dd.benchmark.drivers.run_python`) and the N-joint arm
-(:func:`adaptive_dd.closed_loop.runner.run_closed_loop`) differ only in that glue and their records.
+sample for all the trials, between the batch wrappers of the closed loop's compiled per-trial
+glue (:class:`PythonGlue`, :mod:`adaptive_dd.closed_loop.glue`): the measurement with its
+dropouts, then the divergence rule, actuator, plant step, failure freeze, streamed sums and
+recordings, then the estimate's record. The two-link arm
+(:func:`adaptive_dd.benchmark.drivers.run_python`) and the N-joint arm
+(:func:`adaptive_dd.closed_loop.runner.run_closed_loop`) differ only in their records.
 
 A controller that raises (at reset, command or observe), or returns a command of the wrong
 shape, fails its own trials with the message in ``run.error``; the run goes on (the plant

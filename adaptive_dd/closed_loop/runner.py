@@ -13,7 +13,6 @@ one ``command`` per sample for the whole batch. Both call the same compiled glue
 
 from __future__ import annotations
 
-import itertools
 from collections.abc import Sequence
 from functools import partial
 
@@ -25,7 +24,9 @@ from adaptive_dd.closed_loop.glue import (
     Alarms,
     alarm_lists,
     apply_batch,
+    chain_law,
     closed_loop_block,
+    in_threads,
     measure_batch,
     segment_of,
     sigma_batch,
@@ -171,13 +172,27 @@ def _run_compiled(name, ctrl: Law, scenario, idx, rc, io, pl, keep, bar) -> Cont
     form = ctrl.compiled_form(S, rc.T)
     run, ts, acc, rec = _records(name, ctrl, scenario, rc, pl, S, keep, form.estimates, "compiled")
     alarms = Alarms(np.zeros((S, MAX_ALARMS)), np.zeros(S, dtype=np.int64))
-    pi_true, B = true_models(pl), np.ascontiguousarray(scenario.arm.base.B)
+    law = chain_law(form.cfg, true_models(pl), scenario.arm.base.B)
     for k0, k1, noise, drop in NoiseBlocks(scenario, idx, 2 * n).blocks(N):
         args = (
-            k0, k1, ctrl.ch, rc, io, pl, ts, acc, rec, alarms, noise, drop, form.cfg, form.state, pi_true, B,
-            form.ec, form.es, form.estimates,
-        )  # fmt: skip
-        _in_threads(closed_loop_block, S, args)
+            k0,
+            k1,
+            noise,
+            drop,
+            rc,
+            io,
+            pl,
+            ts,
+            acc,
+            rec,
+            alarms,
+            law,
+            form.state,
+            form.ec,
+            form.es,
+            form.estimates,
+        )
+        in_threads(closed_loop_block, S, args)
         if bar is not None:
             bar.update(k1 - k0)
     run.skipped = ctrl.skipped(form)
@@ -185,23 +200,6 @@ def _run_compiled(name, ctrl: Law, scenario, idx, rc, io, pl, keep, bar) -> Cont
         run.alarm_times = alarm_lists(alarms)
     run.explain_failures(rc.max_error, rc.max_speed)
     return run
-
-
-def _in_threads(kernel, S: int, args: tuple) -> None:
-    """``kernel(i0, i1, *args)`` over disjoint ranges of the S trials, one per numba thread."""
-    import numba
-
-    m = max(1, min(S, numba.config.NUMBA_NUM_THREADS))
-    edges = np.linspace(0, S, m + 1).astype(int)
-    if m == 1:
-        kernel(0, S, *args)
-        return
-    kernel(0, 0, *args)  # compile (or load) in this thread: numba's dispatch is not thread-safe
-    from concurrent.futures import ThreadPoolExecutor
-
-    with ThreadPoolExecutor(m) as pool:
-        for f in [pool.submit(kernel, int(a), int(b), *args) for a, b in itertools.pairwise(edges)]:
-            f.result()
 
 
 def _run_python(name, ctrl, scenario, idx, rc, io, pl, keep, bar) -> ControllerRun:
@@ -216,7 +214,7 @@ def _run_python(name, ctrl, scenario, idx, rc, io, pl, keep, bar) -> ControllerR
             measure=partial(measure_batch, io, ts),
             sigma_true=lambda k: sig_true[:, segment_of(rc, k)],
             pi_true=lambda k: pi_true[:, segment_of(rc, k)],
-            apply=partial(apply_batch, scenario.arm.chain, rc, io, pl, ts, acc, rec),
+            apply=partial(apply_batch, rc, io, pl, ts, acc, rec),
             record_estimate=partial(sigma_batch, rc, rec),
         )
         return run, glue

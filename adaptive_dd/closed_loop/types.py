@@ -8,7 +8,7 @@ segments, ``p`` base parameters, ``K`` trials whose trajectories are recorded.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, NamedTuple
+from typing import TYPE_CHECKING, Any, NamedTuple
 
 import numpy as np
 from numpy.typing import NDArray
@@ -106,6 +106,8 @@ class Plant(NamedTuple):
         Friction velocity, Stribeck ratio, Stribeck velocity.
     substeps : int
         RK4 substeps per sample.
+    chain : Chain
+        The arm's kinematics (:class:`~adaptive_dd.plant.chain.Chain`).
     """
 
     pi_seg: Array
@@ -115,6 +117,7 @@ class Plant(NamedTuple):
     friction_law: StickSlipLaw | SmoothLaw
     fparams: Array
     substeps: int
+    chain: Any
 
 
 class TrialState(NamedTuple):
@@ -256,6 +259,7 @@ def plant_of(scenario, seed_indices=(0,)) -> Plant:
         friction_law(arm.friction_code),
         np.array(arm.friction_params, dtype=float),
         int(scenario.substeps),
+        arm.chain,
     )
 
 

@@ -2,7 +2,8 @@
 
 Each built-in class owns its form (a ``compiled_spec(sample_period)`` method returning a
 :class:`CompiledSpec`); :func:`compiled_spec` asks the controller for it. The compiled loop
-(:mod:`adaptive_dd.benchmark.compiled`) runs the law ``TwoLinkGains.law`` names with those
+(:func:`~adaptive_dd.closed_loop.glue.trial_samples`, with the two-link choices of
+:mod:`adaptive_dd.benchmark.compiled`) runs the law ``TwoLinkGains.law`` names with those
 gains through :func:`command_trial`, the one dispatch on the law, kept here beside the codes
 and the gains (a new law: its class, and here its code, gains and branch). A controller
 without the method (a plug-in), or of a subclass that does not define it itself (its Python
@@ -10,7 +11,7 @@ form may differ), runs on the Python path.
 
 Why a branch here and not a law function that each class hands over: numba compiles a
 function that takes another jitted function (or a gains tuple of a type of its own) once per
-such argument, so the whole sample loop (``trial_block``; its compile time is printed by
+such argument, so the whole sample loop (``trial_samples``; its compile time is printed by
 ``benchmarks/two_link_compile_time.py``) would be compiled once per law; a first-class function
 type (a pointer) is never inlined into the sample loop, and numba's caching of functions that
 take one is an open problem (numba issues 9237, 10280).
