@@ -257,3 +257,13 @@ def test_large_run_prints_its_estimate_first(tiny, tmp_path, monkeypatch, capsys
     assert main(["benchmark", str(tiny), "--out", str(tmp_path / "o")]) == EXIT_INTERRUPTED
     assert "estimate: 300 samples x 1 trials: about" in capsys.readouterr().err
     assert list((tmp_path / "o").iterdir()) == []  # the staging folder is gone
+
+
+def test_figures_in_the_formats_asked_for(tiny, tmp_path):
+    """``--figure-formats svg pdf`` wrote svg and pdf files that were never announced to the output
+    set, so the run failed at its end ("output files announced but not written: ...png")."""
+    out = tmp_path / "o"
+    argv = ["benchmark", str(tiny), "--out", str(out), "--no-progress", "--figure-formats", "svg", "pdf"]
+    assert main(argv) == 0
+    assert {p.suffix for p in out.glob("tracking_error.*")} == {".svg", ".pdf"}
+    assert not list(out.glob("*.png"))

@@ -92,16 +92,21 @@ def _benchmark(args: argparse.Namespace, sc, outputs) -> list[Path]:
 def _figures(res, sc, outputs, out: Path, fmts: tuple) -> list[Path]:
     from adaptive_dd.plotting import plot_benchmark_estimates, plot_tracking_errors
 
-    plot_tracking_errors(res, outputs.path("tracking_error.png"), formats=fmts)
-    written = [out / f"tracking_error.{f}" for f in fmts]
+    def announce(stem: str) -> Path:
+        """Every format's file announced to ``outputs``; the path the plot is given (its suffix is
+        replaced per format)."""
+        staged = [outputs.path(f"{stem}.{f}") for f in fmts]
+        written.extend(out / f"{stem}.{f}" for f in fmts)
+        return staged[0]
+
+    written: list[Path] = []
+    plot_tracking_errors(res, announce("tracking_error"), formats=fmts)
     if any(r.sigma_hat is not None for r in res.runs.values()):
-        plot_benchmark_estimates(res, outputs.path("estimates.png"), formats=fmts)
-        written += [out / f"estimates.{f}" for f in fmts]
+        plot_benchmark_estimates(res, announce("estimates"), formats=fmts)
     if sc.n_joints != 2:  # N-joint arms: one panel per joint as well
         from adaptive_dd.plotting import plot_joint_errors
 
-        plot_joint_errors(res, outputs.path("joint_errors.png"), formats=fmts)
-        written += [out / f"joint_errors.{f}" for f in fmts]
+        plot_joint_errors(res, announce("joint_errors"), formats=fmts)
     return written
 
 
