@@ -123,14 +123,16 @@ def configure() -> str | None:
 
 
 # ------------------------------------------------------------ telling the user about compilation
-COMPILE_SECONDS = {"two-link": 35.0, "serial": 120.0}
+COMPILE_SECONDS = {"two-link": 25.0, "serial": 145.0}
 """One-time compilation of a benchmark's closed-loop kernels with a cold cache, on 2 cores: a guide
 for the message and ``validate``'s estimate, not a promise. Measured by
 ``benchmarks/compile_profile.py [SCENARIO] --seeds 2`` (an empty ``NUMBA_CACHE_DIR``, every
-built-in controller; CPU seconds inside numba's compilations): 31.6 s for the default two-link
-scenario (load average 15) and 121.5 s for ``ur5_tool_swap.toml`` (load average 14, 136.6 s before
-the friction law became a compile-time record; any N-joint arm compiles the same kernels) on a
-shared 2-core machine, where the wall time was 3-10x longer.
+built-in controller; CPU seconds inside numba's compilations): 20.4 s for the default two-link
+scenario and 145.4 s for ``ur5_tool_swap.toml`` (load average about 2; any N-joint arm compiles
+the same kernels). The UR5 was 121.5 s after the friction law became a compile-time record and
+before the one closed loop of both arms (``closed_loop.glue.trial_samples``), which added about
+24 s on N-joint arms (it is compiled with numba's parallel pipeline, for its copy propagation, and
+the plant's step is specialised more often) and saved the two-link arm about 11 s.
 Compilation runs in one thread before the trials start, so on a machine that is not shared its
 wall time is about its CPU time."""
 
