@@ -92,6 +92,8 @@ def _benchmark(args: argparse.Namespace, sc, outputs) -> list[Path]:
 def _figures(res, sc, outputs, out: Path, fmts: tuple) -> list[Path]:
     from adaptive_dd.plotting import plot_benchmark_estimates, plot_tracking_errors
 
+    written: list[Path] = []
+
     def announce(stem: str) -> Path:
         """Every format's file announced to ``outputs``; the path the plot is given (its suffix is
         replaced per format)."""
@@ -99,7 +101,6 @@ def _figures(res, sc, outputs, out: Path, fmts: tuple) -> list[Path]:
         written.extend(out / f"{stem}.{f}" for f in fmts)
         return staged[0]
 
-    written: list[Path] = []
     plot_tracking_errors(res, announce("tracking_error"), formats=fmts)
     if any(r.sigma_hat is not None for r in res.runs.values()):
         plot_benchmark_estimates(res, announce("estimates"), formats=fmts)
