@@ -112,6 +112,7 @@ def configure() -> str | None:
     import numba
 
     numba.config.CACHE_DIR = str(folder)
+    _lock_index_writes()
     try:
         old = sorted((p for p in base.iterdir() if p.is_dir()), key=lambda p: p.stat().st_mtime)
         for p in old[:-KEEP]:
@@ -120,6 +121,34 @@ def configure() -> str | None:
     except OSError:
         pass
     return str(folder)
+
+
+def _lock_index_writes() -> None:
+    """Make numba's cache writes safe between processes: each write of a kernel's index reads
+    the index, adds its entry and writes it back, so two processes adding different
+    specialisations of one kernel at once could lose one of them (or give both the same data
+    file). Each write is done holding an exclusive lock on ``.lock`` in the cache folder
+    (``fcntl.flock``; where it is missing, as on Windows, numba's own writes are left alone)."""
+    try:
+        import fcntl
+    except ImportError:  # pragma: no cover - Windows
+        return
+    from numba.core.caching import IndexDataCacheFile
+
+    save = IndexDataCacheFile.save
+    if getattr(save, "_adaptive_dd_locked", False):
+        return
+
+    def locked_save(self, key, data):
+        with open(os.path.join(self._cache_path, ".lock"), "a") as f:
+            fcntl.flock(f, fcntl.LOCK_EX)
+            try:
+                save(self, key, data)
+            finally:
+                fcntl.flock(f, fcntl.LOCK_UN)
+
+    locked_save._adaptive_dd_locked = True
+    IndexDataCacheFile.save = locked_save
 
 
 # ------------------------------------------------------------ telling the user about compilation
@@ -138,11 +167,12 @@ wall time is about its CPU time."""
 
 
 def _closed_loop_kernel(serial: bool):
-    """The closed loop's one kernel (each kind of arm compiles its own specialisation of it)."""
+    """The closed loop's kernel of a kind of arm: ``chain_loop_block`` (N joints) or
+    ``closed_loop_block`` (the two-link arm), each compiled once for every law."""
     import adaptive_dd.benchmark.compiled  # noqa: F401  (the two-link arm's choices)
-    from adaptive_dd.closed_loop.glue import closed_loop_block
+    from adaptive_dd.closed_loop.glue import chain_loop_block, closed_loop_block
 
-    return closed_loop_block
+    return chain_loop_block if serial else closed_loop_block
 
 
 def _holds(cache, serial: bool) -> bool:
@@ -198,15 +228,14 @@ def _arm_label(arm) -> str:
 
 
 def _kernel_label(dispatcher, args) -> str:
-    """What a kernel compiled from Python is, for the user: ``the N-joint closed loop with the
-    online estimator`` (or without), ``the two-link closed loop``, else ``module.function``."""
+    """What a kernel compiled from Python is, for the user: ``the N-joint closed loop``, ``the
+    two-link closed loop``, else ``module.function``."""
     f = dispatcher.py_func
+    if f.__name__ == "chain_loop_block":
+        return "the N-joint closed loop"
     if f.__name__ != "closed_loop_block":
         return f"{f.__module__.split('.')[-1]}.{f.__name__}"
-    if any(str(a).startswith("TwoLinkPlant(") for a in args):  # the one loop, on the two-link arm
-        return "the two-link closed loop"
-    est = any(str(a).startswith("EstCfg(") for a in args)
-    return "the N-joint closed loop " + ("with the online estimator" if est else "without an estimator")
+    return "the two-link closed loop"
 
 
 class _Progress(event.Listener):
@@ -230,14 +259,126 @@ class _Progress(event.Listener):
             print(f"{clear}  {label}: {spent:.0f} s", file=self.stream, flush=True)
 
 
+READY = "ready"
+"""What the second process prints when the plant's step and the law's pieces are in the cache."""
+
+
+def second_process(source: str) -> None:
+    """The second process of a cold-cache benchmark on the N-joint arm of scenario file
+    ``source`` (:class:`Compiling`): compiles into the cache the plant's step and the law's pieces
+    that the closed loop calls (then prints :data:`READY`), and the kernels that ``adaptive_ct``'s
+    set-up and the report call (its initial model, the information times, the detection limit).
+    Each through the function the closed loop or the report calls, with records built as the
+    run builds them, so with the same argument types; on a few samples of the reference."""
+    from types import SimpleNamespace
+
+    import numpy as np
+
+    from adaptive_dd.benchmark.scenario import load_scenario
+    from adaptive_dd.closed_loop.controllers import SlotineLi
+    from adaptive_dd.closed_loop.information import _chain
+    from adaptive_dd.closed_loop.laws import law_trial
+    from adaptive_dd.closed_loop.plant import plant_scratch, plant_step
+    from adaptive_dd.closed_loop.types import plant_of
+    from adaptive_dd.identification import online
+
+    sc = load_scenario(source)
+    T, n, arm = sc.sample_period, sc.n_joints, sc.arm
+    z = np.zeros((8, n))
+    plant_step(plant_of(sc, (0,)), 0, 0, z[0], z[1], z[2], T, np.zeros(n, bool), plant_scratch(n))
+    pi, theta, out = np.zeros((2, 13 * n)), np.zeros(10), np.empty(n)
+    law_trial(arm.chain, SlotineLi(arm).law_config(T), pi[0], pi[1], theta, 0, *z[3:], out)
+    print(READY, flush=True)
+    ec, es = online.est_init(online.OnlineConfig(sample_period=T), arm, 1)
+    online.est_model_trial(ec, es, 0, np.empty((1, 13 * n))[0])
+    if not sc.swap_masses:
+        return
+    q, qd, _ = sc.reference.sample(np.arange(8) * T)
+    ref = SimpleNamespace(q=q[None], qd=qd[None], tau=np.zeros((1, 8, n)), failed=np.zeros(1, bool), name="-")
+    _chain.information(sc, ref, 1, 1, 6)
+    _chain.detection_limit(sc, ref, 1, 1, 6)
+
+
+class Compiling:
+    """Two processes compiling at once on a cold cache (an N-joint arm read from a scenario file):
+    this one compiles the estimator's step (:func:`~adaptive_dd.closed_loop.glue.compile_estimator`)
+    while a second (:func:`second_process`) compiles the plant's step and the law's pieces; this
+    one then compiles the closed loop, loading those from the cache, while the second compiles
+    the report's kernels. numba's cache is shared by processes (each index write locked:
+    :func:`_lock_index_writes`). ``ADAPTIVE_DD_COMPILE_HELPER=0``: one process."""
+
+    def __init__(self, stream, helper=None) -> None:
+        self.stream, self.helper, self.start = stream, helper, time.perf_counter()
+
+    @classmethod
+    def begin(cls, arm, source, stream) -> Compiling:
+        import subprocess
+        import sys
+
+        from adaptive_dd.plant.kind import is_chain
+
+        ok = source and os.path.isfile(str(source)) and is_chain(arm)
+        if not ok or os.environ.get("ADAPTIVE_DD_COMPILE_HELPER", "1") == "0":
+            return cls(stream)
+        code = "import sys; from adaptive_dd._numba_cache import second_process as f; f(sys.argv[1])"
+        try:
+            helper = subprocess.Popen(
+                [sys.executable, "-c", code, str(source)],
+                stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True,
+            )  # fmt: skip
+        except OSError:
+            return cls(stream)
+        print(
+            f"  a second process (pid {helper.pid}) compiles the plant's step, the law's pieces and "
+            "the report's kernels meanwhile",
+            file=stream,
+            flush=True,
+        )
+        self = cls(stream, helper)
+        from adaptive_dd.closed_loop.glue import compile_estimator
+
+        compile_estimator(arm)
+        self._wait_ready()
+        return self
+
+    def _wait_ready(self, timeout: float = 600.0) -> None:
+        """Wait until the second process has the plant and the law in the cache (or has ended)."""
+        import select
+
+        if select.select([self.helper.stdout], [], [], timeout)[0]:
+            if self.helper.stdout.readline().strip() == READY:
+                spent = time.perf_counter() - self.start
+                msg = f"  the second process compiled the plant's step and the law's pieces ({spent:.0f} s)"
+                print(msg, file=self.stream, flush=True)
+
+    def join(self) -> None:
+        """Wait for the second process (the report's kernels are then in the cache), say how it ended."""
+        if self.helper is None:
+            return
+        rc, self.helper = self.helper.wait(), None
+        spent = time.perf_counter() - self.start
+        what = (
+            "compiled the report's kernels" if rc == 0 else f"failed (exit {rc}): what it left compiles here"
+        )
+        print(f"  the second process {what} ({spent:.0f} s after the start)", file=self.stream, flush=True)
+
+    def stop(self) -> None:
+        if self.helper is not None and self.helper.poll() is None:
+            self.helper.terminate()
+            self.helper.wait()
+        self.helper = None
+
+
 @contextmanager
-def announce_compilation(arm, stream=None):
+def announce_compilation(arm, stream=None, source=None):
     """Say before a run that numba compiles (cold cache), as it goes which kernels it compiled,
     and after it how long compilation took.
 
     Prints to ``stream`` (default ``sys.stderr``) a line before, when :func:`compile_estimate`
     finds the cache cold, a line per kernel compiled from Python that took over a second
-    (:class:`_Progress`) and a line after whenever compilation took more than a second.
+    (:class:`_Progress`) and a line after whenever compilation took more than a second. On a cold
+    cache with an N-joint arm read from the scenario file ``source``, two processes compile at
+    once (:class:`Compiling`, yielded: its ``join`` waits for the second before the report).
     """
     import sys
 
@@ -253,8 +394,18 @@ def announce_compilation(arm, stream=None):
             flush=True,
         )
     progress = _Progress(stream)
-    with event.install_recorder("numba:compile") as rec, event.install_listener("numba:compile", progress):
-        yield
+    compiling = Compiling(stream)
+    try:
+        with (
+            event.install_recorder("numba:compile") as rec,
+            event.install_listener("numba:compile", progress),
+        ):
+            if guess:
+                compiling = Compiling.begin(arm, source, stream)
+            yield compiling
+            compiling.join()
+    finally:
+        compiling.stop()
     spent = _compile_seconds(rec.buffer)
     if spent > 1.0:
         msg = f"compiled the kernels in {spent:.0f} s (cached: later runs skip this)"

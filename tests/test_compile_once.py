@@ -100,17 +100,18 @@ def test_the_two_link_sample_loop_compiles_once_for_every_law():
     assert len(loops) == 1, loops
 
 
-def test_a_short_run_compiles_the_loop_once_with_and_once_without_estimator():
-    """A short UR5 run of ``pd`` and ``adaptive_ct``: the loop once with and once without the
-    estimator (with the stick-slip ``_rk4`` on a constant law, ct_oracle ran at 98 simulated s per
-    CPU s against 78 with one loop for both), the stick-slip ``_rk4`` once."""
+def test_a_short_run_compiles_the_n_joint_loop_once_for_every_law():
+    """A short UR5 run of ``pd`` and ``adaptive_ct``: one loop for both (``pd`` carries an inactive
+    estimator, :class:`~adaptive_dd.closed_loop.glue.ChainEstimator`), the stick-slip ``_rk4``
+    once (on a constant law: with the law a runtime value ct_oracle ran at 78 simulated s per CPU s
+    against 98)."""
     from adaptive_dd.closed_loop import glue
     from adaptive_dd.closed_loop.runner import run_closed_loop
 
     res = run_closed_loop(_ur5(duration=0.01))
     assert list(res.runs) == ["pd", "adaptive_ct"]
-    loops = _of_arm(_specialisations(glue.closed_loop_block), two_link=False)
-    assert len(loops) == 2, loops
+    loops = _of_arm(_specialisations(glue.chain_loop_block), two_link=False)
+    assert len(loops) == 1, loops
     assert len([s for s in _specialisations(S._rk4) if "Literal[int](0)" in s]) == 1
 
 

@@ -132,20 +132,17 @@ def test_each_kernel_compiled_from_python_is_named_as_it_ends(monkeypatch):
     monkeypatch.setattr(_numba_cache.time, "perf_counter", lambda: next(clock))
     out = io.StringIO()
     progress = _numba_cache._Progress(out)
-    loop, callee = glue.closed_loop_block, glue.segment_of
+    chain, two_link, callee = glue.chain_loop_block, glue.closed_loop_block, glue.segment_of
 
     def ev(kernel, *args):
         return SimpleNamespace(data={"dispatcher": kernel, "args": args})
 
-    progress.on_start(ev(loop, Typ("int64"), Typ("EstCfg(Chain(...")))
+    progress.on_start(ev(chain, Typ("int64"), Typ("ChainEstimator(EstCfg(Chain(...")))
     progress.on_start(ev(callee))
     progress.on_end(ev(callee))  # nested: not a line of its own
-    progress.on_end(ev(loop, Typ("int64"), Typ("EstCfg(Chain(...")))
-    progress.on_start(ev(loop, Typ("array(float64, 1d, C)")))
-    progress.on_end(ev(loop, Typ("array(float64, 1d, C)")))
+    progress.on_end(ev(chain, Typ("int64"), Typ("ChainEstimator(EstCfg(Chain(...")))
+    progress.on_start(ev(two_link, Typ("TwoLinkPlant(...)")))
+    progress.on_end(ev(two_link, Typ("TwoLinkPlant(...)")))
     progress.on_start(ev(callee))
     progress.on_end(ev(callee))  # half a second: not worth a line
-    assert out.getvalue() == (
-        "  the N-joint closed loop with the online estimator: 40 s\n"
-        "  the N-joint closed loop without an estimator: 29 s\n"
-    )
+    assert out.getvalue() == ("  the N-joint closed loop: 40 s\n  the two-link closed loop: 29 s\n")

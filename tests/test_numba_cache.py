@@ -100,3 +100,33 @@ def test_the_package_keys_its_folder_also_inside_the_users(monkeypatch, tmp_path
         assert numba.config.CACHE_DIR == str(tmp_path / "mine" / "adaptive_dd" / expected)
     finally:
         numba.config.CACHE_DIR = before
+
+
+_SAVER = """
+import sys
+import adaptive_dd  # installs the lock on numba's cache writes
+from numba.core.caching import IndexDataCacheFile
+
+f = IndexDataCacheFile(sys.argv[1], "kernel", ("stamp", 1))
+for i in range(int(sys.argv[3])):
+    f.save((sys.argv[2], i), b"x")
+"""
+
+
+def test_two_processes_adding_specialisations_of_one_kernel_lose_none(tmp_path):
+    """numba's cache index is read, extended and written back on each save: two processes
+    compiling different specialisations of one kernel at once (the benchmark's second process)
+    would lose entries without the lock of :func:`_numba_cache._lock_index_writes`."""
+    import subprocess
+    import sys
+
+    from numba.core.caching import IndexDataCacheFile
+
+    n = 60
+    procs = [
+        subprocess.Popen([sys.executable, "-c", _SAVER, str(tmp_path), tag, str(n)]) for tag in ("a", "b")
+    ]
+    assert [p.wait(timeout=120) for p in procs] == [0, 0]
+    index = IndexDataCacheFile(str(tmp_path), "kernel", ("stamp", 1))._load_index()
+    assert len(index) == 2 * n, f"{2 * n - len(index)} entries lost"
+    assert len(set(index.values())) == 2 * n  # one data file per entry, none shared

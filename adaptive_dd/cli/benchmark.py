@@ -67,8 +67,9 @@ def _benchmark(args: argparse.Namespace, sc, outputs) -> list[Path]:
     from adaptive_dd.benchmark.report import format_report, write_csv, write_json
     from adaptive_dd.benchmark.runner import run_benchmark
 
-    with announce_compilation(sc.arm):  # a cold cache compiles first: say so, and for how long
+    with announce_compilation(sc.arm, source=sc.source) as compiling:  # a cold cache compiles first
         res = run_benchmark(sc, progress=not args.no_progress, on_run=release_error_norm)
+        compiling.join()  # the report's kernels, compiled meanwhile by a second process
         metrics = compute_metrics(res)
     print(format_report(metrics, res))
     if "excitation_report" in res.cache:  # [run] excite: what the identification found

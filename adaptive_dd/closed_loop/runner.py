@@ -4,7 +4,7 @@ Trial i of every controller uses the noise of seed ``(scenario.seed, seed_indice
 (common random numbers), drawn in blocks of :data:`CHUNK` samples
 (:class:`~adaptive_dd.closed_loop.noise.NoiseBlocks`: ``(CHUNK, 2 n)`` standard normals per
 trial, dropouts from a second generator ``(seed, i, 1)``). Built-in controllers run compiled
-(:func:`~adaptive_dd.closed_loop.glue.closed_loop_block`, a block of samples of a range of
+(:func:`~adaptive_dd.closed_loop.glue.chain_loop_block`, a block of samples of a range of
 trials in one call, ranges in parallel threads); any other controller object (a plug-in with
 ``reset / command / observe``) runs on the Python path
 (:func:`~adaptive_dd.closed_loop.python_path.run_python_batch`, shared with the two-link arm),
@@ -24,8 +24,9 @@ from adaptive_dd.closed_loop.glue import (
     Alarms,
     alarm_lists,
     apply_batch,
+    chain_estimator,
     chain_law,
-    closed_loop_block,
+    chain_loop_block,
     in_threads,
     measure_batch,
     segment_of,
@@ -173,6 +174,8 @@ def _run_compiled(name, ctrl: Law, scenario, idx, rc, io, pl, keep, bar) -> Cont
     run, ts, acc, rec = _records(name, ctrl, scenario, rc, pl, S, keep, form.estimates, "compiled")
     alarms = Alarms(np.zeros((S, MAX_ALARMS)), np.zeros(S, dtype=np.int64))
     law = chain_law(form.cfg, true_models(pl), scenario.arm.base.B)
+    # every law carries an estimator (inactive but for adaptive_ct): one compiled loop for all
+    ec, es = chain_estimator(form.ec, form.es, scenario.arm, rc.T)
     for k0, k1, noise, drop in NoiseBlocks(scenario, idx, 2 * n).blocks(N):
         args = (
             k0,
@@ -188,11 +191,11 @@ def _run_compiled(name, ctrl: Law, scenario, idx, rc, io, pl, keep, bar) -> Cont
             alarms,
             law,
             form.state,
-            form.ec,
-            form.es,
+            ec,
+            es,
             form.estimates,
         )
-        in_threads(closed_loop_block, S, args)
+        in_threads(chain_loop_block, S, args)
         if bar is not None:
             bar.update(k1 - k0)
     run.skipped = ctrl.skipped(form)
