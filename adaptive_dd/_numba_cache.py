@@ -321,9 +321,11 @@ class Compiling:
         if not ok or os.environ.get("ADAPTIVE_DD_COMPILE_HELPER", "1") == "0":
             return cls(stream)
         code = "import sys; from adaptive_dd._numba_cache import second_process as f; f(sys.argv[1])"
+        here = str(Path(__file__).resolve().parents[1])  # this copy of the package, not another
+        path = os.pathsep.join(p for p in (here, os.environ.get("PYTHONPATH")) if p)
         try:
             helper = subprocess.Popen(
-                [sys.executable, "-c", code, str(source)],
+                [sys.executable, "-c", code, str(source)], env={**os.environ, "PYTHONPATH": path},
                 stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True,
             )  # fmt: skip
         except OSError:

@@ -19,6 +19,11 @@ run of the same kernels after (``NUMBA_CACHE_DIR=FOLDER python benchmarks/speed_
 With ``--why``, every function compiled more than once is listed
 with the argument types that differ between its specialisations (int vs float, readonly vs
 writable, C vs A layout, ...). Asserts nothing: a measurement, to be read beside ``uptime``.
+
+On an N-joint arm the benchmark compiles in two processes on a cold cache
+(``adaptive_dd._numba_cache.Compiling``): the table is this process's (the critical path: the
+estimator's step and the closed loop); ``ADAPTIVE_DD_COMPILE_HELPER=0`` compiles everything here
+(the total CPU cost, each kernel in the table).
 """
 
 from __future__ import annotations
@@ -114,7 +119,10 @@ def main() -> None:
     import numba
 
     opt = f"LLVM -O{int(numba.config.OPT)}"
+    helper = os.environ.get("ADAPTIVE_DD_COMPILE_HELPER", "1") != "0"
+    procs = "two processes on an N-joint arm (this one's table)" if helper else "one process"
     print(f"adaptive-dd {cmd} (exit {rc}); {adaptive_dd.__file__}; cold cache; {opt}; load {load:.2f}")
+    print(f"compiled in {procs}")
     if a.keep_cache:
         print(f"cache kept: NUMBA_CACHE_DIR={os.environ['NUMBA_CACHE_DIR']}")
     print(f"{'count':>5} {'incl':>6} {'self':>6}  function (CPU seconds)")

@@ -146,3 +146,38 @@ def test_each_kernel_compiled_from_python_is_named_as_it_ends(monkeypatch):
     progress.on_start(ev(callee))
     progress.on_end(ev(callee))  # half a second: not worth a line
     assert out.getvalue() == ("  the N-joint closed loop: 40 s\n  the two-link closed loop: 29 s\n")
+
+
+def test_the_second_process_is_started_only_where_it_helps(monkeypatch, tmp_path):
+    """No second process for the two-link arm, a scenario not read from a file, or when turned off."""
+    import io
+
+    from adaptive_dd.benchmark.scenario import load_scenario as load
+
+    ur5 = load(str(ROOT / "adaptive_dd" / "scenarios" / "ur5_tool_swap.toml"))
+    out = io.StringIO()
+    assert _numba_cache.Compiling.begin(TwoLinkArm.sice(), str(ROOT / "README.md"), out).helper is None
+    assert _numba_cache.Compiling.begin(ur5.arm, "<memory>", out).helper is None
+    monkeypatch.setenv("ADAPTIVE_DD_COMPILE_HELPER", "0")
+    assert _numba_cache.Compiling.begin(ur5.arm, ur5.source, out).helper is None
+    assert out.getvalue() == ""
+
+
+def test_the_second_process_is_waited_for_and_its_end_told(capsys):
+    """It says when the plant and the law are ready, and how it ended (a failure: the first
+    process compiles what was left)."""
+    import subprocess
+    import sys
+
+    for code, end in (("", "compiled the report's kernels"), ("raise SystemExit(3)", "failed (exit 3)")):
+        helper = subprocess.Popen(
+            [sys.executable, "-c", f"print({_numba_cache.READY!r}, flush=True)\n{code}"],
+            stdout=subprocess.PIPE, text=True,
+        )  # fmt: skip
+        c = _numba_cache.Compiling(sys.stderr, helper)
+        c._wait_ready(timeout=60)
+        c.join()
+        err = capsys.readouterr().err
+        assert "the second process compiled the plant's step and the law's pieces" in err
+        assert f"the second process {end}" in err
+        assert c.helper is None
