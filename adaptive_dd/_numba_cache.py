@@ -152,18 +152,18 @@ def _lock_index_writes() -> None:
 
 
 # ------------------------------------------------------------ telling the user about compilation
-COMPILE_SECONDS = {"two-link": 25.0, "serial": 145.0}
+COMPILE_SECONDS = {"two-link": 25.0, "serial": 90.0}
 """One-time compilation of a benchmark's closed-loop kernels with a cold cache, on 2 cores: a guide
 for the message and ``validate``'s estimate, not a promise. Measured by
 ``benchmarks/compile_profile.py [SCENARIO] --seeds 2`` (an empty ``NUMBA_CACHE_DIR``, every
 built-in controller; CPU seconds inside numba's compilations): 20.4 s for the default two-link
-scenario and 145.4 s for ``ur5_tool_swap.toml`` (load average about 2; any N-joint arm compiles
-the same kernels). The UR5 was 121.5 s after the friction law became a compile-time record and
-before the one closed loop of both arms (``closed_loop.glue.trial_samples``), which added about
-24 s on N-joint arms (it is compiled with numba's parallel pipeline, for its copy propagation, and
-the plant's step is specialised more often) and saved the two-link arm about 11 s.
-Compilation runs in one thread before the trials start, so on a machine that is not shared its
-wall time is about its CPU time."""
+scenario; for ``ur5_tool_swap.toml`` (any N-joint arm compiles the same kernels) 88.0 s in the
+first of the two processes that compile on a cold cache (:class:`Compiling`: its estimator's
+step and the closed loop, which wait for nothing else when the second has the plant's step and
+the law's pieces ready in time), measured at a load average of 11 on 2 cores (CPU seconds
+stretch on a loaded machine; the second process's work, the plant, the law and the report's
+kernels, runs meanwhile). It was 145.4 s in one process (load 2) before the N-joint loop was
+compiled once for every law and the two processes."""
 
 
 def _closed_loop_kernel(serial: bool):
