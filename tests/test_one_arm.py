@@ -184,3 +184,14 @@ def test_a_closed_form_record_is_the_fast_path_of_its_arm(record, tmp_path, monk
     assert record.to_arm() == arm  # the same text, the same file
     with pytest.raises(ParameterError, match=r"to_arm: LuGre friction"):
         dataclasses.replace(record, friction="lugre").to_arm()
+
+
+def test_a_record_read_from_an_arm_gives_that_arm_back(sice, tmp_path, monkeypatch):
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path))
+    arm, view = sice
+    assert view.to_arm() is arm
+    sc = load_scenario("benchmarks/scenarios/sice_urdf.toml")
+    assert sc.arm.to_arm().urdf == robot_urdf("sice_arm") and closed_form_view(sc.arm.to_arm()) is sc.arm
+    other = dataclasses.replace(view, friction="tanh")  # no longer that arm's closed forms
+    assert other.to_arm() != arm and other.to_arm().friction == "tanh"
+    assert str(other.to_arm().urdf).startswith(str(tmp_path))

@@ -131,6 +131,8 @@ class ClosedFormTwoLink:
         Bristle stiffness sigma0 per joint [N m/rad] (lugre law).
     lugre_damping : (float, float) or None
         Bristle damping sigma1 per joint [N m s/rad]; None: ``sqrt(sigma0_i M_ii(q2 = 0))``.
+    source : Arm or None
+        The arm this record is the closed forms of, when it was read from one (:meth:`to_arm`).
 
     Raises
     ------
@@ -154,6 +156,9 @@ class ClosedFormTwoLink:
     stribeck_velocity: float = 0.1
     lugre_stiffness: tuple[float, float] = (1e5, 1e5)
     lugre_damping: tuple[float, float] | None = None
+    source: object = field(default=None, repr=False, compare=False)
+    """The :class:`~adaptive_dd.plant.arm.Arm` this record was read from (:func:`as_two_link`), or
+    None; :meth:`to_arm` returns it while the record is still its closed forms."""
     closed_form: ClassVar[bool] = True
     """True: the paper's closed forms (eqs. 3-9), the two-link fast path (False on the general
     :class:`~adaptive_dd.plant.arm.Arm`); what the command line asks to choose the paper's experiments."""
@@ -417,10 +422,12 @@ class ClosedFormTwoLink:
     def to_arm(self):
         """The :class:`~adaptive_dd.plant.arm.Arm` this record is the closed forms of.
 
-        Its URDF is written from :meth:`equivalent_physical` (joint axes along z, link 2 at ``l1``,
-        the payload frame ``tip`` at ``l2``; position limits +-pi, velocity limits 2 pi rad/s, as
-        the shipped ``sice_arm.urdf``) into the user's cache folder, named by a hash of its text;
-        actuator, sensor, payload radius and plant friction are the record's.
+        The arm it was read from (:attr:`source`, e.g. a scenario's ``[arm] robot = "sice_arm"``)
+        while this record is still that arm's closed forms; otherwise an arm whose URDF is written
+        from :meth:`equivalent_physical` (joint axes along z, link 2 at ``l1``, the payload frame
+        ``tip`` at ``l2``; position limits +-pi, velocity limits 2 pi rad/s, as the shipped
+        ``sice_arm.urdf``) into the user's cache folder, named by a hash of its text; actuator,
+        sensor, payload radius and plant friction are the record's.
         :func:`closed_form_view` of the result has this record's ``sigma`` to round-off.
 
         Raises
@@ -430,6 +437,8 @@ class ClosedFormTwoLink:
         """
         from adaptive_dd.plant.arm import Arm
 
+        if self.source is not None and as_two_link_cached(self.source) == self:
+            return self.source
         if self.friction == "lugre":
             raise ParameterError(
                 "ClosedFormTwoLink.to_arm: LuGre friction is a plant law of the closed forms only; an Arm "
@@ -582,6 +591,7 @@ def as_two_link(arm, atol: float = 1e-12) -> ClosedFormTwoLink | None:
         friction_velocity=arm.friction_velocity,
         stribeck_ratio=arm.stribeck_ratio,
         stribeck_velocity=arm.stribeck_velocity,
+        source=arm,
     )
 
 
