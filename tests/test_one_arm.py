@@ -195,3 +195,26 @@ def test_a_record_read_from_an_arm_gives_that_arm_back(sice, tmp_path, monkeypat
     other = dataclasses.replace(view, friction="tanh")  # no longer that arm's closed forms
     assert other.to_arm() != arm and other.to_arm().friction == "tanh"
     assert str(other.to_arm().urdf).startswith(str(tmp_path))
+
+
+def test_the_closed_form_slotine_li_regressor_is_the_general_one(sice):
+    """``Y_r(q, qd, qd_r, qdd_r) sigma = M qdd_r + C(q, qd) qd_r + B qd_r + D sgn(qd_r)`` with the
+    general mass matrix and Christoffel C of the chain: the factorisation the Slotine-Li argument
+    (``dM/dt - 2C`` skew) needs, on both paths."""
+    from adaptive_dd.plant.chain import coriolis_matrix_batch
+    from adaptive_dd.plant.dynamics import regressor_reference
+
+    arm, view = sice
+    rng = np.random.default_rng(3)
+    q, qd, qdd_r = _states(rng)
+    _, qd_r, _ = _states(rng)
+    closed = np.einsum("...ij,j->...i", regressor_reference(q, qd, qd_r, qdd_r), view.sigma)
+    m = arm.mass_matrix(q)
+    c = coriolis_matrix_batch(arm.chain, arm.pi_links, q, qd)
+    general = (
+        np.einsum("...ij,...j->...i", m, qdd_r)
+        + np.einsum("...ij,...j->...i", c, qd_r)
+        + arm.viscous * qd_r
+        + arm.coulomb * np.sign(qd_r)
+    )
+    np.testing.assert_allclose(closed, general, rtol=1e-12, atol=1e-12)
