@@ -93,7 +93,7 @@ def _model_file(tmp_path: Path, **changes) -> tuple[Path, object, np.ndarray]:
         identified=K.tolist(), covariance=cov.tolist(), used=[True] * n, residual_rms=[0.1] * n,
         noise_rms=[0.01] * n, viscous=list(arm.viscous), coulomb=list(arm.coulomb),
         armature=list(arm.armature), consistent_sigma=arm.sigma.tolist(), consistent_distance=1.0,
-        fitted_urdf="model.urdf", record={},
+        fitted_urdf="model.urdf", record={"model_error_var": (0.5 * np.diag(cov)).tolist()},
     )  # fmt: skip
     m = dataclasses.replace(m, **changes)
     return save_identified_model(tmp_path / "model.json", m), m, cov
@@ -113,7 +113,7 @@ def test_a_model_file_gives_adaptive_ct_the_same_prior_rule(tmp_path):
     _, ctrl = make_controller_of(sc, "adaptive_ct")
     stated = _stated_variance(sc, sc.arm)
     step = np.asarray(m.consistent_sigma) - np.asarray(m.sigma)
-    want = np.sqrt(np.diag(cov) + step**2)
+    want = np.sqrt(1.5 * np.diag(cov) + step**2)  # the sandwich, the step, the model error
     want[-1] = np.sqrt(stated[-1])
     assert ctrl.online.mode == "arm"
     np.testing.assert_allclose(ctrl.online.arm_prior_std, want, rtol=1e-12)
@@ -125,7 +125,7 @@ def test_a_model_file_gives_adaptive_ct_the_same_prior_rule(tmp_path):
 def test_a_model_file_of_other_base_parameters_is_refused(tmp_path):
     path, _, _ = _model_file(tmp_path, names=["a", "b"], sigma=[1.0, 1.0], sigma_urdf=[1.0, 1.0],
                              std=[0.1, 0.1], identified=[True, True], covariance=np.eye(2).tolist(),
-                             consistent_sigma=[1.0, 1.0])  # fmt: skip
+                             consistent_sigma=[1.0, 1.0], record={})  # fmt: skip
     data = read_toml(_shipped("vertical3_payload"))
     data["model"] = {"from": str(path)}
     with pytest.raises(ScenarioError, match=r"m\.toml.*model\.from.*model\.json.*2 base parameters are not"):
@@ -142,3 +142,7 @@ def test_the_prior_rule_refuses_bad_input():
         identified_prior_std(np.full((p, p), np.nan), np.zeros(p), np.ones(p))
     with pytest.raises(ParameterError, match="no stated uncertainty"):
         identified_prior_std(np.eye(p), np.zeros(p), np.ones(p), identified=[True, False, True])
+    with pytest.raises(ParameterError, match="model_error_var"):
+        identified_prior_std(np.eye(p), np.zeros(p), np.ones(p), model_error_var=[1.0, -1.0, 0.0])
+    more = identified_prior_std(np.eye(p), np.zeros(p), np.ones(p), model_error_var=[2.0, 0.0, 0.0])
+    np.testing.assert_allclose(more, [2.0, np.sqrt(2.0), np.sqrt(2.0)])

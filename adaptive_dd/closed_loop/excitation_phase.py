@@ -25,7 +25,6 @@ from __future__ import annotations
 import dataclasses
 import tempfile
 from pathlib import Path
-from typing import NamedTuple
 
 import numpy as np
 from numpy.typing import NDArray
@@ -174,7 +173,8 @@ def _excitation_scenario(scenario, reference):
     )
 
 
-class RecordFit(NamedTuple):
+@dataclasses.dataclass(frozen=True)
+class RecordFit:
     """One record's identification (:func:`identify_record`): the consistent standard parameters
     ``pi (13 n,)``; base parameters of the weighted least squares ``hat`` and of the consistent fit
     ``fit`` ``(p,)``; the residual rms per joint ``rstd (n,)`` [N m]; what it knows of each base
@@ -192,7 +192,8 @@ def identify_record(model, q: Array, qd: Array, tau: Array, sample_period: float
     weighted least squares with its Newey-West sandwich covariance
     (:func:`~adaptive_dd.identification.log_fit.fit_log`, every channel, every base parameter,
     ``tau_f =`` :data:`TAU_F`), the physically consistent fit nearest to it in that covariance's
-    metric, and the prior it implies (:func:`~adaptive_dd.identification.arm_prior.identified_prior_std`).
+    metric, and the prior it implies (:func:`~adaptive_dd.identification.arm_prior.identified_prior_std`,
+    with :func:`~adaptive_dd.identification.model_error.model_error_variance`).
 
     Raises
     ------
@@ -202,13 +203,15 @@ def identify_record(model, q: Array, qd: Array, tau: Array, sample_period: float
     from adaptive_dd.identification.arm_prior import identified_prior_std
     from adaptive_dd.identification.consistency import consistent_arm_fit
     from adaptive_dd.identification.log_fit import fit_log
+    from adaptive_dd.identification.model_error import model_error_variance
 
     n = model.n
     wls = fit_log(
         model, q, qd, tau, np.ones(n, bool), np.ones(model.p, bool), tau_f=TAU_F, sample_period=sample_period
     )
     fit = consistent_arm_fit(model, wls.sigma, np.linalg.pinv(wls.cov, rcond=1e-12, hermitian=True))
-    std = identified_prior_std(wls.cov, wls.sigma, fit.sigma)
+    extra = model_error_variance(model, wls, q, qd, tau)
+    std = identified_prior_std(wls.cov, wls.sigma, fit.sigma, model_error_var=extra)
     return RecordFit(fit.pi, wls.sigma, fit.sigma, wls.residual_rms, std)
 
 
@@ -337,8 +340,9 @@ def model_file_prior(scenario, path) -> tuple:
     """``[model] from = "model.json"``: the scenario's controller options with adaptive_ct's arm
     prior what that identification knows (:func:`identified_prior`), by the rule of the
     excitation phase (:func:`~adaptive_dd.identification.arm_prior.identified_prior_std`: the
-    file's sandwich covariance plus the consistent fit's step; the stated uncertainty for the
-    base parameters it held at the URDF's).
+    file's sandwich covariance, the consistent fit's step and the model error its ``record``
+    holds (``model_error_var``, written by ``identify`` since this rule; none in older files); the
+    stated uncertainty for the base parameters it held at the URDF's).
 
     Raises
     ------
@@ -364,10 +368,13 @@ def model_file_prior(scenario, path) -> tuple:
         )
     if m.consistent_sigma is None:
         raise ScenarioError(f"{where}: the model has no physically consistent fit to start from")
+    extra = m.record.get("model_error_var") if isinstance(m.record, dict) else None
+    if extra is not None and np.shape(extra) != (len(m.names),):
+        raise ScenarioError(f"{where}: key 'record.model_error_var' must have {len(m.names)} entries")
     try:
         std = identified_prior_std(
             np.asarray(m.covariance), np.asarray(m.sigma), np.asarray(m.consistent_sigma),
-            np.asarray(m.identified, dtype=bool), _stated_variance(scenario, scenario.arm),
+            np.asarray(m.identified, dtype=bool), _stated_variance(scenario, scenario.arm), extra,
         )  # fmt: skip
     except ParameterError as exc:
         raise ScenarioError(f"{where}: {exc}") from None
