@@ -178,13 +178,15 @@ class RecordFit:
     """One record's identification (:func:`identify_record`): the consistent standard parameters
     ``pi (13 n,)``; base parameters of the weighted least squares ``hat`` and of the consistent fit
     ``fit`` ``(p,)``; the residual rms per joint ``rstd (n,)`` [N m]; what it knows of each base
-    parameter ``std (p,)`` (:func:`~adaptive_dd.identification.arm_prior.identified_prior_std`)."""
+    parameter ``std (p,)`` (:func:`~adaptive_dd.identification.arm_prior.identified_prior_std`); the
+    weighted least squares' sandwich covariance ``cov (p, p)``."""
 
     pi: Array
     hat: Array
     fit: Array
     rstd: Array
     std: Array
+    cov: Array
 
 
 def identify_record(model, q: Array, qd: Array, tau: Array, sample_period: float) -> RecordFit:
@@ -212,7 +214,7 @@ def identify_record(model, q: Array, qd: Array, tau: Array, sample_period: float
     fit = consistent_arm_fit(model, wls.sigma, np.linalg.pinv(wls.cov, rcond=1e-12, hermitian=True))
     extra = model_error_variance(model, wls, q, qd, tau)
     std = identified_prior_std(wls.cov, wls.sigma, fit.sigma, model_error_var=extra)
-    return RecordFit(fit.pi, wls.sigma, fit.sigma, wls.residual_rms, std)
+    return RecordFit(fit.pi, wls.sigma, fit.sigma, wls.residual_rms, std, wls.cov)
 
 
 def identify_excitation(scenario, idx, run_closed_loop) -> tuple[list[Array], ExcitationReport]:
