@@ -298,15 +298,16 @@ def test_model_from_an_identified_model_json(tmp_path):
     from adaptive_dd.identification.identified_model import IdentifiedModel, save_identified_model
 
     base = load_scenario(_shipped("ur5_tool_swap_exact")).arm
-    n, p = base.n_joints, 3
+    n, p = base.n_joints, base.base.count
     _edited_ur5(tmp_path, name="model.urdf")  # the fit's links: the UR5 with link 2 at 9.5 kg
+    sig = base.sigma.tolist()
     m = IdentifiedModel(
         urdf=str(base.urdf), payload_frame=base.payload_frame, gravity=list(base.gravity),
         repair_inertia=False, joint_names=list(base.joint_names), friction_velocity=0.01,
-        names=["a", "b", "c"], sigma=[1.0] * p, sigma_urdf=[1.0] * p, std=[0.1] * p,
-        identified=[True] * p, covariance=np.eye(p).tolist(), used=[True] * n,
+        names=list(base.base.names), sigma=sig, sigma_urdf=sig, std=[0.1] * p,
+        identified=[True] * p, covariance=(0.01 * np.eye(p)).tolist(), used=[True] * n,
         residual_rms=[0.1] * n, noise_rms=[0.1] * n, viscous=[2.0] * n, coulomb=[3.0] * n,
-        armature=[0.25] * n, consistent_sigma=None, consistent_distance=None,
+        armature=[0.25] * n, consistent_sigma=sig, consistent_distance=0.0,
         fitted_urdf="model.urdf", record={},
     )  # fmt: skip
     save_identified_model(tmp_path / "model.json", m)

@@ -305,6 +305,9 @@ def test_cli_identify_and_predict_on_the_tiago_record(tmp_path, capsys):
     m = load_identified_model(out / "model.json")
     assert len(m.sigma) == len(m.names) == 66 and sum(m.identified) == 53
     assert m.used == [False, True, True, True, True, False, False, False]
+    extra = np.asarray(m.record["model_error_var"])  # for adaptive_ct's prior ([model] from)
+    assert extra.shape == (66,) and np.all(extra >= 0) and np.all(extra[~np.asarray(m.identified)] == 0)
+    assert np.any(extra > 0)
     pred = tmp_path / "pred"
     args = ["predict", "--arm", str(SCENARIO), "--model", str(out / "model.json"), "--window", "48", "58"]
     assert main([*args, "--out", str(pred)]) == 0

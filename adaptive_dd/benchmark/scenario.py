@@ -70,6 +70,7 @@ bypass them.
 
 from __future__ import annotations
 
+import dataclasses
 import itertools
 import math
 from dataclasses import dataclass, field, fields
@@ -321,7 +322,15 @@ def parse_scenario(data: dict, src: str = "<memory>", name: str = "scenario") ->
         errors += _controller_setting_errors(values)
     if errors:
         raise _scenario_error(src, errors)
-    return Scenario(**values)
+    sc = Scenario(**values)
+    model_file = (table.get("model") or {}).get("from")
+    if isinstance(model_file, str) and model_file.lower().endswith(".json") and not sc.excite:
+        # adaptive_ct's arm prior: what the file's identification knows (an excitation phase re-identifies)
+        from adaptive_dd.closed_loop.excitation_phase import model_file_prior
+        from adaptive_dd.plant.uncertainty import _scenario_path
+
+        sc = dataclasses.replace(sc, controller_options=model_file_prior(sc, _scenario_path(src, model_file)))
+    return sc
 
 
 def model_and_plant(src: str, arm, plant_table, model_table) -> tuple[Any, PlantSpec | None]:

@@ -218,6 +218,7 @@ def _write_estimates(path, model, fit) -> None:
 
 def _write_model(outputs, arm, model, rec, fit, cf, spec) -> list:
     from adaptive_dd.identification.identified_model import IdentifiedModel, save_identified_model
+    from adaptive_dd.identification.model_error import model_error_variance
     from adaptive_dd.plant.urdf_write import write_fitted_urdf
 
     n = arm.n_joints
@@ -260,6 +261,10 @@ def _write_model(outputs, arm, model, rec, fit, cf, spec) -> list:
             "sample_period": rec.sample_period,
             "tau_f": fit.tau_f,
             "newey_west_lag": fit.lag,
+            # what adaptive_ct's prior adds for model error ([model] from = "model.json")
+            "model_error_var": model_error_variance(
+                model, fit, rec.q, rec.qd, rec.tau, spec.torque_held
+            ).tolist(),
             "velocity": "measured" if rec.qd_measured else "derived",
             "scenario": str(spec.source),
         },

@@ -7,10 +7,11 @@ What a lab does before a task, on each seed's plant:
    within the arm's limits, from the controllers' model), tracked for ``excite`` seconds by
    ``ct_nominal`` on the model (the robot's own controller), not scored;
 2. the record, with sensor noise at the scenario's levels (generator ``(seed, i, 3)``), identified
-   as ``adaptive-dd identify`` does: the filtered regression and its two-pass weighted least
-   squares (:func:`~adaptive_dd.identification.regression.weighted_least_squares`), then the
-   physically consistent standard parameters nearest to it
-   (:func:`~adaptive_dd.identification.consistency.consistent_arm_fit`);
+   as ``adaptive-dd identify`` does: the filtered regression and its weighted least squares
+   with the Newey-West sandwich covariance (:func:`~adaptive_dd.identification.log_fit.fit_log`),
+   then the physically consistent standard parameters nearest to it
+   (:func:`~adaptive_dd.identification.consistency.consistent_arm_fit`), and what it knows of
+   each base parameter (:func:`~adaptive_dd.identification.arm_prior.identified_prior_std`);
 3. the task run with that identified model as every non-oracle controller's model (the
    oracles are given the plant, as always), one seed at a time (each seed has its own model),
    the results joined seed by seed (:func:`join_results`).
@@ -35,10 +36,13 @@ __all__ = [
     "START_ATTEMPTS",
     "TAU_F",
     "ExcitationReport",
+    "RecordFit",
     "excitation_reference",
     "identified_prior",
     "identify_excitation",
+    "identify_record",
     "join_results",
+    "model_file_prior",
     "run_with_excitation",
 ]
 
@@ -58,7 +62,8 @@ class ExcitationReport:
     plant, of the controllers' model before the phase, of the weighted least squares and of the
     consistent fit (the model after the phase); ``names (p,)``; ``rstd (S, n)`` the residual
     torque std per joint [N m]; ``sigma_std (S, p)`` what the identification knows of each base
-    parameter, ``sqrt(std_wls^2 + (fit - wls)^2)``: adaptive_ct's prior on the arm after the phase.
+    parameter (:func:`~adaptive_dd.identification.arm_prior.identified_prior_std`: the sandwich
+    variance plus the fit's step): adaptive_ct's prior on the arm after the phase.
     """
 
     duration: float
@@ -168,6 +173,50 @@ def _excitation_scenario(scenario, reference):
     )
 
 
+@dataclasses.dataclass(frozen=True)
+class RecordFit:
+    """One record's identification (:func:`identify_record`): the consistent standard parameters
+    ``pi (13 n,)``; base parameters of the weighted least squares ``hat`` and of the consistent fit
+    ``fit`` ``(p,)``; the residual rms per joint ``rstd (n,)`` [N m]; what it knows of each base
+    parameter ``std (p,)`` (:func:`~adaptive_dd.identification.arm_prior.identified_prior_std`); the
+    weighted least squares' sandwich covariance ``cov (p, p)``."""
+
+    pi: Array
+    hat: Array
+    fit: Array
+    rstd: Array
+    std: Array
+    cov: Array
+
+
+def identify_record(model, q: Array, qd: Array, tau: Array, sample_period: float) -> RecordFit:
+    """Identify one measured record ``q, qd, tau (N, n)`` as ``adaptive-dd identify`` does: the
+    weighted least squares with its Newey-West sandwich covariance
+    (:func:`~adaptive_dd.identification.log_fit.fit_log`, every channel, every base parameter,
+    ``tau_f =`` :data:`TAU_F`), the physically consistent fit nearest to it in that covariance's
+    metric, and the prior it implies (:func:`~adaptive_dd.identification.arm_prior.identified_prior_std`,
+    with :func:`~adaptive_dd.identification.model_error.model_error_variance`).
+
+    Raises
+    ------
+    DataError
+        The record does not excite some base parameter (named).
+    """
+    from adaptive_dd.identification.arm_prior import identified_prior_std
+    from adaptive_dd.identification.consistency import consistent_arm_fit
+    from adaptive_dd.identification.log_fit import fit_log
+    from adaptive_dd.identification.model_error import model_error_variance
+
+    n = model.n
+    wls = fit_log(
+        model, q, qd, tau, np.ones(n, bool), np.ones(model.p, bool), tau_f=TAU_F, sample_period=sample_period
+    )
+    fit = consistent_arm_fit(model, wls.sigma, np.linalg.pinv(wls.cov, rcond=1e-12, hermitian=True))
+    extra = model_error_variance(model, wls, q, qd, tau)
+    std = identified_prior_std(wls.cov, wls.sigma, fit.sigma, model_error_var=extra)
+    return RecordFit(fit.pi, wls.sigma, fit.sigma, wls.residual_rms, std, wls.cov)
+
+
 def identify_excitation(scenario, idx, run_closed_loop) -> tuple[list[Array], ExcitationReport]:
     """Run the excitation on each seed's plant (``run_closed_loop``: the closed loop's runner,
     :func:`~adaptive_dd.closed_loop.runner.run_closed_loop`) and identify; returns each seed's model
@@ -180,12 +229,7 @@ def identify_excitation(scenario, idx, run_closed_loop) -> tuple[list[Array], Ex
     """
     from adaptive_dd.closed_loop.types import io_of, plant_of, true_models
     from adaptive_dd.errors import DataError
-    from adaptive_dd.identification.consistency import consistent_arm_fit
     from adaptive_dd.identification.model import arm_model
-    from adaptive_dd.identification.regression import (
-        filtered_regression,
-        weighted_least_squares,
-    )
 
     exc = _excitation_scenario(scenario, excitation_reference(scenario))
     res = run_closed_loop(exc, seed_indices=idx, keep_trajectories=len(idx))
@@ -205,21 +249,15 @@ def identify_excitation(scenario, idx, run_closed_loop) -> tuple[list[Array], Ex
         rng = np.random.default_rng([int(scenario.seed), int(i), 3])
         qm = run.q[k] + std[:n] * rng.standard_normal(run.q[k].shape)
         qdm = run.qd[k] + std[n:] * rng.standard_normal(run.qd[k].shape)
-        reg = filtered_regression(model, qm, qdm, run.tau[k], tau_f=TAU_F, sample_period=T)
         try:
-            wls = weighted_least_squares(reg, model.names)
+            one = identify_record(model, qm, qdm, run.tau[k], T)
         except DataError as exc_:
             raise ScenarioError(
                 f"{scenario.source}: run.excite = {scenario.excite} s: {exc_}; excite longer"
             ) from None
-        fit = consistent_arm_fit(model, wls.sigma, np.diag(1.0 / np.maximum(wls.std, 1e-12) ** 2))
-        pis.append(fit.pi)
-        # what the identification knows of each base parameter: its WLS variance plus the square of
-        # the step the physically consistent fit took from it (the model's bias, seen)
-        rows["std"].append(np.sqrt(wls.std**2 + (fit.sigma - wls.sigma) ** 2))
-        rows["hat"].append(wls.sigma)
-        rows["fit"].append(fit.sigma)
-        rows["rstd"].append(wls.residual_std)
+        pis.append(one.pi)
+        for key in rows:
+            rows[key].append(getattr(one, key))
     report = ExcitationReport(
         float(scenario.excite), tuple(idx), tuple(model.names), sig_plant,
         np.broadcast_to(scenario.arm.sigma, sig_plant.shape).copy(), np.array(rows["hat"]),
@@ -282,6 +320,67 @@ def identified_prior(scenario, std: Array) -> tuple:
         if isinstance(est, dict) and not {"mode", "arm_uncertainty", "arm_prior_std"} & est.keys():
             ac["estimator"] = {**est, "arm_prior_std": [float(x) for x in std]}
     return tuple((n, freeze(o)) for n, o in opts.items())
+
+
+def _stated_variance(scenario, arm) -> Array:
+    """``diag(B C B^T)`` of the scenario's stated uncertainty (``[plant.uncertainty]``, normal levels
+    given the uniform levels of the same variance; the default levels without one) about ``arm``."""
+    from adaptive_dd.identification.arm_prior import ArmUncertainty, prior_covariance
+
+    unc = getattr(scenario.plant, "uncertainty", None)
+    keys = ("mass", "com", "inertia", "viscous", "coulomb", "armature")
+    if unc is None:
+        levels = ArmUncertainty()
+    else:
+        scale = np.sqrt(3.0) if unc.distribution == "normal" else 1.0
+        levels = ArmUncertainty(**{k: float(getattr(unc, k)) * scale for k in keys})
+    B = arm.base.B
+    return np.diag(B @ prior_covariance(arm, levels) @ B.T).copy()
+
+
+def model_file_prior(scenario, path) -> tuple:
+    """``[model] from = "model.json"``: the scenario's controller options with adaptive_ct's arm
+    prior what that identification knows (:func:`identified_prior`), by the rule of the
+    excitation phase (:func:`~adaptive_dd.identification.arm_prior.identified_prior_std`: the
+    file's sandwich covariance, the consistent fit's step and the model error its ``record``
+    holds (``model_error_var``, written by ``identify`` since this rule; none in older files); the
+    stated uncertainty for the base parameters it held at the URDF's).
+
+    Raises
+    ------
+    ScenarioError
+        Naming ``model.from``: the file's base parameters are not the [arm]'s, or it has no
+        consistent fit.
+    """
+    from adaptive_dd.errors import DataError, ParameterError
+    from adaptive_dd.identification.arm_prior import identified_prior_std
+    from adaptive_dd.identification.identified_model import load_identified_model
+
+    if "adaptive_ct" not in scenario.controllers:
+        return scenario.controller_options
+    where = f"{scenario.source}: key 'model.from' = {str(path)!r}"
+    try:
+        m = load_identified_model(path)
+    except DataError as exc:
+        raise ScenarioError(f"{where}: {exc}") from None
+    if list(m.names) != list(scenario.arm.base.names):
+        raise ScenarioError(
+            f"{where}: its {len(m.names)} base parameters are not the [arm]'s {len(scenario.arm.base.names)} "
+            "(identified on another arm or URDF)"
+        )
+    if m.consistent_sigma is None:
+        raise ScenarioError(f"{where}: the model has no physically consistent fit to start from")
+    extra = m.record.get("model_error_var") if isinstance(m.record, dict) else None
+    if extra is not None and np.shape(extra) != (len(m.names),):
+        raise ScenarioError(f"{where}: key 'record.model_error_var' must have {len(m.names)} entries")
+    try:
+        std = identified_prior_std(
+            np.asarray(m.covariance), np.asarray(m.sigma), np.asarray(m.consistent_sigma),
+            np.asarray(m.identified, dtype=bool), _stated_variance(scenario, scenario.arm), extra,
+        )  # fmt: skip
+    except ParameterError as exc:
+        raise ScenarioError(f"{where}: {exc}") from None
+    return identified_prior(scenario, std)
 
 
 _PER_TRIAL = (

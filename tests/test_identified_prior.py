@@ -1,0 +1,148 @@
+"""The prior an identification hands to adaptive_ct (``[run] excite``, ``[model] from = "model.json"``)
+must cover what the identification got wrong when the model is not the plant's law.
+
+A record of the vertical three-joint arm computed by inverse dynamics (no simulation: fast), the
+plant's parameters drawn around its URDF and its Coulomb friction with a Stribeck rise at low
+speed, which the model's ``fc tanh(qd / v_f)`` cannot fit; sensor noise at the scenario's levels.
+The identified base parameters' errors against the plant's, in units of the prior's standard
+deviations, must look like draws of that prior (the white-residual formula the excitation phase
+used before gave errors of 5-10 of its standard deviations in the median on the drawn iiwa).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from importlib import resources
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from adaptive_dd.benchmark.scenario import parse_scenario, read_toml
+from adaptive_dd.closed_loop.excitation_phase import identify_record
+from adaptive_dd.closed_loop.types import io_of
+from adaptive_dd.errors import ParameterError, ScenarioError
+from adaptive_dd.identification.arm_prior import ArmUncertainty, draw_parameters, identified_prior_std
+from adaptive_dd.identification.model import arm_model, base_regressor
+
+
+def _shipped(name: str) -> Path:
+    return Path(str(resources.files("adaptive_dd.scenarios").joinpath(f"{name}.toml")))
+
+
+def _record(seed: int, stribeck: float, duration: float = 8.0):
+    """(model, plant base parameters, q, qd, tau measured) of the vertical3 arm on a multi-sine."""
+    src = _shipped("vertical3_payload_exact")
+    sc = parse_scenario(read_toml(src), str(src), "v")
+    arm = sc.arm
+    rng = np.random.default_rng([2026, seed])
+    pi_true = draw_parameters(arm, ArmUncertainty(), rng)
+    model = arm_model(arm)
+    n, T = arm.n_joints, sc.sample_period
+    t = np.arange(0.0, duration, T)[:, None]
+    f = np.array([[0.3, 0.5, 0.4], [0.7, 1.1, 0.9], [1.3, 1.7, 1.9]])
+    a = np.array([[0.5, 0.4, 0.5], [0.2, 0.2, 0.3], [0.1, 0.1, 0.1]])
+    ph = rng.uniform(0, 2 * np.pi, (3, n))
+    w = 2 * np.pi * f
+    q = sum(a[k] * np.sin(w[k] * t + ph[k]) for k in range(3))
+    qd = sum(a[k] * w[k] * np.cos(w[k] * t + ph[k]) for k in range(3))
+    qdd = sum(-a[k] * w[k] ** 2 * np.sin(w[k] * t + ph[k]) for k in range(3))
+    sigma_true = model.B @ pi_true
+    fc = pi_true[11 * n : 12 * n]
+    # the plant's Coulomb law: a Stribeck rise at low speed on a sign, not the model's tanh
+    law = fc * np.sign(qd) * (1.0 + stribeck * np.exp(-((qd / 0.1) ** 2)))
+    tau = base_regressor(model, q, qd, qdd) @ sigma_true + law - fc * np.tanh(qd / model.friction_velocity)
+    std = io_of(sc).std  # the scenario's sensor noise (n positions, n velocities)
+    qm = q + std[:n] * rng.standard_normal(q.shape)
+    qdm = qd + std[n:] * rng.standard_normal(qd.shape)
+    return model, sigma_true, qm, qdm, tau, T
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_the_identified_prior_covers_the_error_of_a_misspecified_model(seed):
+    model, sigma_true, q, qd, tau, T = _record(seed, stribeck=1.0)
+    one = identify_record(model, q, qd, tau, T)
+    z = (one.fit - sigma_true) / one.std
+    assert np.all(np.isfinite(z))
+    # draws of the prior: about 0.67 in the median of |z|, rarely beyond 4
+    assert np.median(np.abs(z)) < 1.5, np.round(z, 1)
+    assert np.max(np.abs(z)) < 6.0, (model.names[int(np.argmax(np.abs(z)))], np.round(z, 1))
+
+
+def _model_file(tmp_path: Path, **changes) -> tuple[Path, object, np.ndarray]:
+    """A model.json (what ``identify --out`` writes) on the vertical3 arm: its estimate off the
+    consistent fit, a covariance, the last base parameter held at the URDF's."""
+    from adaptive_dd.identification.identified_model import IdentifiedModel, save_identified_model
+
+    src = _shipped("vertical3_payload")
+    arm = parse_scenario(read_toml(src), str(src), "v").arm
+    names, p, n = list(arm.base.names), arm.base.count, arm.n_joints
+    rng = np.random.default_rng(5)
+    L = rng.standard_normal((p, p)) * 1e-3
+    cov = L @ L.T
+    K = np.ones(p, bool)
+    K[-1] = False
+    cov[~K, :] = 0.0
+    cov[:, ~K] = 0.0
+    sigma = arm.sigma + np.sqrt(np.diag(cov)) * rng.standard_normal(p)
+    (tmp_path / "model.urdf").write_text(Path(arm.urdf).read_text())
+    m = IdentifiedModel(
+        urdf=str(arm.urdf), payload_frame=arm.payload_frame, gravity=list(arm.gravity),
+        repair_inertia=False, joint_names=list(arm.joint_names), friction_velocity=arm.friction_velocity,
+        names=names, sigma=sigma.tolist(), sigma_urdf=arm.sigma.tolist(), std=np.sqrt(np.diag(cov)).tolist(),
+        identified=K.tolist(), covariance=cov.tolist(), used=[True] * n, residual_rms=[0.1] * n,
+        noise_rms=[0.01] * n, viscous=list(arm.viscous), coulomb=list(arm.coulomb),
+        armature=list(arm.armature), consistent_sigma=arm.sigma.tolist(), consistent_distance=1.0,
+        fitted_urdf="model.urdf", record={"model_error_var": (0.5 * np.diag(cov)).tolist()},
+    )  # fmt: skip
+    m = dataclasses.replace(m, **changes)
+    return save_identified_model(tmp_path / "model.json", m), m, cov
+
+
+def test_a_model_file_gives_adaptive_ct_the_same_prior_rule(tmp_path):
+    """[model] from = "model.json": adaptive_ct's arm prior is the file's sandwich covariance plus
+    the consistent fit's step (the rule of the excitation phase), the stated uncertainty where the
+    file held a parameter at the URDF's; a table that states its own prior is left alone."""
+    from adaptive_dd.closed_loop.excitation_phase import _stated_variance
+    from adaptive_dd.closed_loop.runner import make_controller_of
+
+    path, m, cov = _model_file(tmp_path)
+    data = read_toml(_shipped("vertical3_payload"))
+    data["model"] = {"from": str(path)}
+    sc = parse_scenario(data, "m.toml")
+    _, ctrl = make_controller_of(sc, "adaptive_ct")
+    stated = _stated_variance(sc, sc.arm)
+    step = np.asarray(m.consistent_sigma) - np.asarray(m.sigma)
+    want = np.sqrt(1.5 * np.diag(cov) + step**2)  # the sandwich, the step, the model error
+    want[-1] = np.sqrt(stated[-1])
+    assert ctrl.online.mode == "arm"
+    np.testing.assert_allclose(ctrl.online.arm_prior_std, want, rtol=1e-12)
+    data["controllers"] = {"adaptive_ct": {"estimator": {"mode": "payload"}}}
+    _, ctrl = make_controller_of(parse_scenario(data, "m.toml"), "adaptive_ct")
+    assert ctrl.online.mode == "payload" and ctrl.online.arm_prior_std is None
+
+
+def test_a_model_file_of_other_base_parameters_is_refused(tmp_path):
+    path, _, _ = _model_file(tmp_path, names=["a", "b"], sigma=[1.0, 1.0], sigma_urdf=[1.0, 1.0],
+                             std=[0.1, 0.1], identified=[True, True], covariance=np.eye(2).tolist(),
+                             consistent_sigma=[1.0, 1.0], record={})  # fmt: skip
+    data = read_toml(_shipped("vertical3_payload"))
+    data["model"] = {"from": str(path)}
+    with pytest.raises(ScenarioError, match=r"m\.toml.*model\.from.*model\.json.*2 base parameters are not"):
+        parse_scenario(data, "m.toml")
+
+
+def test_the_prior_rule_refuses_bad_input():
+    p = 3
+    ok = identified_prior_std(np.eye(p), np.zeros(p), np.ones(p))
+    np.testing.assert_allclose(ok, np.sqrt(2.0))
+    with pytest.raises(ParameterError, match="covariance"):
+        identified_prior_std(np.eye(2), np.zeros(p), np.ones(p))
+    with pytest.raises(ParameterError, match="not finite"):
+        identified_prior_std(np.full((p, p), np.nan), np.zeros(p), np.ones(p))
+    with pytest.raises(ParameterError, match="no stated uncertainty"):
+        identified_prior_std(np.eye(p), np.zeros(p), np.ones(p), identified=[True, False, True])
+    with pytest.raises(ParameterError, match="model_error_var"):
+        identified_prior_std(np.eye(p), np.zeros(p), np.ones(p), model_error_var=[1.0, -1.0, 0.0])
+    more = identified_prior_std(np.eye(p), np.zeros(p), np.ones(p), model_error_var=[2.0, 0.0, 0.0])
+    np.testing.assert_allclose(more, [2.0, np.sqrt(2.0), np.sqrt(2.0)])
