@@ -9,9 +9,10 @@ ratio to ct_oracle over the first 50 ms after each swap (the transient itself).
     python studies/transient_ablation.py SCENARIO.toml [...] [--seeds 10] [--variants off on ...]
 
 Variants (``[controllers.adaptive_ct]`` settings): ``off`` (``observer = false``: the law before
-the observer), ``on`` (the default), ``bw50`` / ``bw200`` / ``bw400`` (``observer_bandwidth``),
+the observer), ``on`` (the default), ``bw50`` / ``bw200`` / ``bw400`` / ``bw800`` (``observer_bandwidth``),
 ``boost0.2`` (the observer with ``boost_duration = 0.2``), ``noboost`` (the observer, boost 0 s),
-``off_boost0.2``.
+``off_boost0.2``; ``order1``, ``order1_bw200``: De Luca's first-order observer (one stage; the
+default low-passes its output once more).
 """
 
 from __future__ import annotations
@@ -37,6 +38,9 @@ VARIANTS = {
     "boost0.2": {"boost_duration": 0.2},
     "noboost": {"boost_duration": 0.0},
     "off_boost0.2": {"observer": False, "boost_duration": 0.2},
+    "order1": {"_stages": 1},
+    "order1_bw200": {"_stages": 1, "observer_bandwidth": 200.0},
+    "bw800": {"observer_bandwidth": 800.0},
 }
 TRANSIENT = 0.05
 """[s] after each swap: the window of the transient's own RMS ratio."""
@@ -45,9 +49,16 @@ TRANSIENT = 0.05
 def variant_controller(base: dict, path: str, settings: dict):
     """adaptive_ct of the scenario ``base`` with ``settings`` added to its table."""
     d = copy.deepcopy(base)
+    settings = dict(settings)
+    law = {k[1:]: settings.pop(k) for k in ("_stages",) if k in settings}
     d.setdefault("controllers", {}).setdefault("adaptive_ct", {}).update(settings)
     d["run"]["controllers"] = ["adaptive_ct"]
-    return make_controllers(parse_scenario(d, path, Path(path).stem))["adaptive_ct"]
+    ctrl = make_controllers(parse_scenario(d, path, Path(path).stem))["adaptive_ct"]
+    if law:  # not settings: the law's configuration with the observer's order replaced
+        law_config = ctrl.law_config
+        fields = {f"obs_{k}": v for k, v in law.items()}
+        ctrl.law_config = lambda T: law_config(T)._replace(**fields)
+    return ctrl
 
 
 def transient_cells(res, names, sc) -> dict:

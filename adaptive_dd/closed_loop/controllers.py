@@ -151,7 +151,9 @@ class Law:
             pi_fixed=self.pi_nominal, boost_kp=z, boost_kd=z.copy(), boost_samples=0, adapt=False,
             gamma=np.zeros(10), lo=np.full(10, -np.inf), hi=np.full(10, np.inf), com_radius=np.inf,
             payload_joint=int(self.arm.payload_joint), payload_map=np.ascontiguousarray(self.arm.payload_map),
-            T=float(T), observer=False, obs_a=0.0, obs_kappa=OBSERVER_THRESHOLD, obs_alpha=1.0, obs_warmup=0,
+            T=float(T), observer=False, obs_a=0.0, obs_stages=2, obs_kappa=OBSERVER_THRESHOLD,
+            obs_alpha=1.0,
+            obs_warmup=0,
         )  # fmt: skip
         base.update(kw)
         return LawConfig(**base)

@@ -25,10 +25,13 @@ The residual observer (``observer``, adaptive_ct's; :func:`_observe`): De Luca's
 generalised-momentum observer of the torque the trial's model leaves unexplained,
 ``r = beta / (s + beta) (tau - d/dt p - wv)`` with ``p = M(q) qd`` and ``wv = g - C^T qd +
 friction`` of ``pi_model``, discrete and consistent under a changing model (the momentum at the
-last and at this measurement both with this sample's model); ``r`` soft-thresholded at
-``obs_kappa`` times its own learnt RMS level is added to the command. Noise stays below the
-threshold; a payload's torque passes from the samples after the swap, before the change is
-detected, and fades as the estimate learns it (``r`` is the residual of the current model).
+last and at this measurement both with this sample's model), here low-passed once more
+(``obs_stages = 2``: ``(beta / (s + beta))^2``, whose response to the measured velocity's white
+noise rolls off instead of passing it at the gain beta up to the Nyquist frequency); ``r``
+soft-thresholded at ``obs_kappa`` times its own learnt RMS level is added to the command. Noise
+stays below the threshold; a payload's torque passes from the samples after the swap, before the
+change is detected, and fades as the estimate learns it (``r`` is the residual of the current
+model).
 
 Slotine-Li's payload adaptation: with ``Y_p = Y_j(q, qd, qd_r, a) P`` (the link-j block of
 the Slotine-Li regressor times the payload map P of the payload frame),
@@ -77,12 +80,13 @@ KIND_PD, KIND_CT, KIND_SLOTINE = 0, 1, 2
 MODEL_NONE, MODEL_FIXED, MODEL_TRUE, MODEL_TRIAL = 0, 1, 2, 3
 
 # rows of the observer's per-trial state LawState.obs (S, OBS_ROWS, n)
-O_R = 0  # the observed residual torque r [N m]
+O_R = 0  # the observed residual torque r [N m] (the last stage's output)
 O_LEVEL = 1  # its learnt mean square (winsorised, not bias-corrected) [N^2 m^2]
 O_Q, O_QD = 2, 3  # the last fresh measurement
 O_TAU = 4  # the applied torques summed since that measurement [N m] (written by the closed loop)
 O_COUNT = 5  # [0]: observer updates so far, [1]: samples summed in O_TAU
-OBS_ROWS = 6
+O_R1 = 6  # the first stage's output (two stages)
+OBS_ROWS = 7
 
 
 class LawConfig(NamedTuple):
@@ -117,7 +121,10 @@ class LawConfig(NamedTuple):
     observer : bool
         The residual observer feeds the command (module docstring).
     obs_a : float
-        ``exp(-beta T)``, beta the observer's bandwidth [rad/s].
+        ``exp(-beta T)``, beta the observer's bandwidth [rad/s] (of each stage).
+    obs_stages : int
+        1: De Luca's first-order observer; 2: its output low-passed once more at beta (the
+        residual's noise, a differentiated momentum, then rolls off: module docstring).
     obs_kappa : float
         Soft threshold of ``r`` in units of its learnt RMS level.
     obs_alpha : float
@@ -146,6 +153,7 @@ class LawConfig(NamedTuple):
     T: float
     observer: bool
     obs_a: float
+    obs_stages: int
     obs_kappa: float
     obs_alpha: float
     obs_warmup: int
@@ -300,8 +308,12 @@ def _observe(ch, cfg, pi, q, qd, obs, work, out):  # pragma: no cover - compiled
         am = cfg.obs_a**m
         for j in range(n):
             rho = obs[O_TAU, j] / m - 0.5 * (pw[1, j] + pw[3, j]) - (pw[2, j] - pw[0, j]) / (m * cfg.T)
-            if np.isfinite(rho):
-                obs[O_R, j] = am * obs[O_R, j] + (1.0 - am) * rho
+            if not np.isfinite(rho):
+                continue
+            if cfg.obs_stages == 2:
+                obs[O_R1, j] = am * obs[O_R1, j] + (1.0 - am) * rho
+                rho = obs[O_R1, j]
+            obs[O_R, j] = am * obs[O_R, j] + (1.0 - am) * rho
     if not held:
         c = obs[O_COUNT, 0] + 1.0
         bias = 1.0 - (1.0 - cfg.obs_alpha) ** c
