@@ -345,9 +345,11 @@ def _estimator_table(name: str, settings: dict) -> dict:
     return est
 
 
-OBSERVER_SAMPLES = 10.0
-"""The residual observer's bandwidth is ``1 / (OBSERVER_SAMPLES T)``: the residual averaged over
-ten samples (100 rad/s at 1 kHz; docs/change_detection.md, "The residual observer")."""
+OBSERVER_POLE = 0.4
+"""The residual observer's bandwidth is ``OBSERVER_POLE / T`` (400 rad/s at 1 kHz): each of its two
+stages' pole at ``exp(-0.4)``, half a step passed after about four samples. One constant for every
+arm, measured at 0.1 / 0.2 / 0.4 / 0.8 on vertical3 and the iiwa (docs/change_detection.md, "The
+residual observer")."""
 OBSERVER_THRESHOLD = 3.0
 """The observer's output is soft-thresholded at this many times its own learnt RMS level."""
 OBSERVER_LEVEL_WINDOW = 1.0
@@ -357,8 +359,8 @@ OBSERVER_WARMUP = 0.5
 
 
 def observer_bandwidth(sample_period: float) -> float:
-    """The residual observer's bandwidth [rad/s] for a sample period [s]: ``1 / (10 T)``."""
-    return 1.0 / (OBSERVER_SAMPLES * sample_period)
+    """The residual observer's bandwidth [rad/s] for a sample period [s]: ``0.4 / T``."""
+    return OBSERVER_POLE / sample_period
 
 
 class AdaptiveCT(Law):
@@ -366,7 +368,7 @@ class AdaptiveCT(Law):
     (:mod:`adaptive_dd.identification.online`), the feedback raised to ``boost_bandwidth``
     (300 rad/s) through the nominal inertia for ``boost_duration`` (1 s) after an alarm, plus the
     residual observer's torque (``observer``, on by default; bandwidth ``observer_bandwidth``,
-    default ``1 / (10 T)``): the torque the current model leaves unexplained, beyond three times
+    default ``0.4 / T``): the torque the current model leaves unexplained, beyond three times
     its own noise level (:mod:`adaptive_dd.closed_loop.laws`). With the observer on,
     adaptive_ct is no longer only "computed torque given an estimated model": it also feeds the
     measured residual forward until the estimate explains it; ``observer = false`` is that law.
@@ -455,7 +457,7 @@ def _observer_settings(name: str, settings: dict) -> tuple[bool, float | None]:
     bw = settings.get("observer_bandwidth")
     if bw is not None and not (_is_number(bw) and bw > 0):
         raise ParameterError(
-            f"controllers.{name}.observer_bandwidth: a number > 0 [rad/s] (leave it out for 1 / (10 T)), "
+            f"controllers.{name}.observer_bandwidth: a number > 0 [rad/s] (leave it out for 0.4 / T), "
             f"got {bw!r}"
         )
     return bool(on), None if bw is None else float(bw)

@@ -254,7 +254,7 @@ _BOOST = {
         rule=_OBSERVER_RULE,
     ),
     "observer_bandwidth": Setting(
-        "bandwidth of the residual observer [rad/s]; default 1 / (10 T), T the sample period",
+        "bandwidth of the residual observer's two stages [rad/s]; default 0.4 / T, T the sample period",
         ABSENT,
         None,
         rule=_OBSERVER_RULE,
