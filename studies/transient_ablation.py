@@ -12,7 +12,8 @@ Variants (``[controllers.adaptive_ct]`` settings): ``off`` (``observer = false``
 the observer), ``on`` (the default), ``bw50`` / ``bw200`` / ``bw400`` / ``bw800`` (``observer_bandwidth``),
 ``boost0.2`` (the observer with ``boost_duration = 0.2``), ``noboost`` (the observer, boost 0 s),
 ``off_boost0.2``; ``order1``, ``order1_bw200``: De Luca's first-order observer (one stage; the
-default low-passes its output once more).
+default low-passes its output once more); ``kappa4``, ``kappa5``: the observer's threshold at 4 or
+5 times its learnt level (3 by default).
 """
 
 from __future__ import annotations
@@ -41,6 +42,8 @@ VARIANTS = {
     "order1": {"_stages": 1},
     "order1_bw200": {"_stages": 1, "observer_bandwidth": 200.0},
     "bw800": {"observer_bandwidth": 800.0},
+    "kappa4": {"_kappa": 4.0},
+    "kappa5": {"_kappa": 5.0},
 }
 TRANSIENT = 0.05
 """[s] after each swap: the window of the transient's own RMS ratio."""
@@ -50,11 +53,11 @@ def variant_controller(base: dict, path: str, settings: dict):
     """adaptive_ct of the scenario ``base`` with ``settings`` added to its table."""
     d = copy.deepcopy(base)
     settings = dict(settings)
-    law = {k[1:]: settings.pop(k) for k in ("_stages",) if k in settings}
+    law = {k[1:]: settings.pop(k) for k in ("_stages", "_kappa") if k in settings}
     d.setdefault("controllers", {}).setdefault("adaptive_ct", {}).update(settings)
     d["run"]["controllers"] = ["adaptive_ct"]
     ctrl = make_controllers(parse_scenario(d, path, Path(path).stem))["adaptive_ct"]
-    if law:  # not settings: the law's configuration with the observer's order replaced
+    if law:  # not settings: the law's configuration with the observer's order or threshold replaced
         law_config = ctrl.law_config
         fields = {f"obs_{k}": v for k, v in law.items()}
         ctrl.law_config = lambda T: law_config(T)._replace(**fields)
