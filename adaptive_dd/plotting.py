@@ -157,7 +157,7 @@ def plot_estimates(
 
 
 def plot_model_response(t, q_arm, models: dict, path: str | Path, title: str = "") -> Path:
-    """TwoLinkArm and identified model(s) driven by the same torque (Fig. 7); ``models`` maps label -> q."""
+    """The arm and identified model(s) driven by the same torque (Fig. 7); ``models`` maps label -> q."""
     fig, ax = plt.subplots(2, 1, figsize=(9, 5), sharex=True)
     for j in range(2):
         ax[j].plot(t, q_arm[:, j], "k", lw=2.0, label="arm")

@@ -13,11 +13,11 @@ import time
 import numpy as np
 
 from adaptive_dd.experiments import table2_torque
-from adaptive_dd.plant import TwoLinkArm
+from adaptive_dd.plant import ClosedFormTwoLink
 from adaptive_dd.plant.two_link_integrator import step_kernel
 
 
-def time_law(arm: TwoLinkArm, n_trials: int = 60, n_samples: int = 3000) -> float:
+def time_law(arm: ClosedFormTwoLink, n_trials: int = 60, n_samples: int = 3000) -> float:
     """Microseconds per trial and sample of one plant step under ``arm``'s friction law."""
     tau = np.ascontiguousarray(table2_torque(n_trials, n_samples).transpose(1, 0, 2))
     sig = np.ascontiguousarray(np.broadcast_to(arm.sigma, (n_trials, 7)))
@@ -33,9 +33,9 @@ def time_law(arm: TwoLinkArm, n_trials: int = 60, n_samples: int = 3000) -> floa
 
 if __name__ == "__main__":
     for label, arm in (
-        ("stick-slip", TwoLinkArm.sice()),
-        ("tanh, v = 0.02 rad/s", TwoLinkArm.sice(friction="tanh", friction_velocity=0.02)),
-        ("tanh, v = 0.005 rad/s", TwoLinkArm.sice(friction="tanh", friction_velocity=0.005)),
-        ("stribeck, v = 0.02, v_s = 0.1 rad/s", TwoLinkArm.sice(friction="stribeck")),
+        ("stick-slip", ClosedFormTwoLink.sice()),
+        ("tanh, v = 0.02 rad/s", ClosedFormTwoLink.sice(friction="tanh", friction_velocity=0.02)),
+        ("tanh, v = 0.005 rad/s", ClosedFormTwoLink.sice(friction="tanh", friction_velocity=0.005)),
+        ("stribeck, v = 0.02, v_s = 0.1 rad/s", ClosedFormTwoLink.sice(friction="stribeck")),
     ):
         print(f"{label:<38s} {time_law(arm):6.2f} us per trial-sample")

@@ -31,7 +31,7 @@ class AssumedPayload(Controller):
 
     Parameters
     ----------
-    arm : TwoLinkArm or Arm
+    arm : Arm or ClosedFormTwoLink
         Given by the runner: the arm of the scenario.
     scenario : Scenario or None
         Given by the runner (None outside a scenario).

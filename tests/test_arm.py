@@ -10,10 +10,10 @@ import pytest
 
 from adaptive_dd.benchmark.scenario import parse_scenario
 from adaptive_dd.errors import ScenarioError, UrdfError
-from adaptive_dd.plant import TwoLinkArm
+from adaptive_dd.plant import ClosedFormTwoLink
 from adaptive_dd.plant.arm import Arm, payload_parameters
 from adaptive_dd.plant.dynamics import regressor as paper_regressor
-from adaptive_dd.plant.two_link import as_two_link
+from adaptive_dd.plant.two_link import as_two_link, closed_form_view
 from adaptive_dd.plant.urdf import read_urdf
 from adaptive_dd.robots import ROBOTS, robot_urdf
 
@@ -92,7 +92,7 @@ def test_sice_urdf_spans_the_papers_regressor(arms):
     sigma = arm.sigma
     names = arm.sigma_names
     got = {n: v for n, v in zip(names, sigma, strict=True)}
-    sice = TwoLinkArm.sice().sigma
+    sice = ClosedFormTwoLink.sice().sigma
     assert got["Izz1 + 0.04*m2 + Ia1"] == pytest.approx(sice[0])
     assert got["Izz2"] == pytest.approx(sice[1])
     assert 0.2 * got["mx2"] == pytest.approx(sice[2])
@@ -101,14 +101,16 @@ def test_sice_urdf_spans_the_papers_regressor(arms):
 
 def test_sice_urdf_is_the_sice_arm_through_the_fast_path(arms):
     two = as_two_link(arms["sice_arm"])
-    assert isinstance(two, TwoLinkArm)
-    np.testing.assert_allclose(two.sigma, TwoLinkArm.sice().sigma, rtol=1e-14, atol=1e-15)
+    assert isinstance(two, ClosedFormTwoLink)
+    np.testing.assert_allclose(two.sigma, ClosedFormTwoLink.sice().sigma, rtol=1e-14, atol=1e-15)
     assert (two.l1, two.l2) == (0.2, 0.2)
-    np.testing.assert_allclose(as_two_link(Arm.sice()).sigma, TwoLinkArm.sice().sigma, rtol=1e-14, atol=1e-15)
+    np.testing.assert_allclose(
+        as_two_link(Arm.sice()).sigma, ClosedFormTwoLink.sice().sigma, rtol=1e-14, atol=1e-15
+    )
     assert Arm.sice().payload_frame == "tip" and Arm.sice().n_joints == 2
     assert as_two_link(arms["ur5"]) is None and as_two_link(arms["vertical3"]) is None
-    assert isinstance(TwoLinkArm.from_urdf(robot_urdf("sice_arm"), "tip"), TwoLinkArm)
-    assert isinstance(TwoLinkArm.from_urdf(robot_urdf("vertical3"), "tool"), Arm)
+    assert closed_form_view(Arm.from_urdf(robot_urdf("sice_arm"), "tip")) == two
+    assert closed_form_view(Arm.from_urdf(robot_urdf("vertical3"), "tool")) is None
     # the general kernels and the closed forms agree on the SICE arm, payload included
     rng = np.random.default_rng(3)
     q, qd, qdd = _states(arms["sice_arm"], rng)
@@ -327,7 +329,7 @@ def test_every_shipped_robot_passes_the_pinocchio_check(arms, name):
 
 
 def test_sice_from_urdf_gives_the_default_benchmark_numbers():
-    """Issue target: per-seed RMS within 1e-6 relative of TwoLinkArm.sice()'s (a short run, all
+    """Issue target: per-seed RMS within 1e-6 relative of ClosedFormTwoLink.sice()'s (a short run, all
     controllers)."""
     import dataclasses
     from pathlib import Path
@@ -338,7 +340,7 @@ def test_sice_from_urdf_gives_the_default_benchmark_numbers():
     here = Path(__file__).resolve().parents[1] / "benchmarks" / "scenarios" / "sice_urdf.toml"
     urdf = load_scenario(here)
     default = load_scenario()
-    assert isinstance(urdf.arm, TwoLinkArm) and not isinstance(default.arm, Arm)
+    assert isinstance(urdf.arm, ClosedFormTwoLink) and not isinstance(default.arm, Arm)
     short = {"duration": 6.0, "seeds": 2, "swap_times": (5.0,), "swap_masses": (3.0,)}
     a = run_benchmark(dataclasses.replace(urdf, **short), progress=False)
     b = run_benchmark(dataclasses.replace(default, **short), progress=False)

@@ -14,10 +14,10 @@ import adaptive_dd
 from adaptive_dd.errors import ParameterError
 from adaptive_dd.plant.arm import Arm
 from adaptive_dd.plant.kind import arm_kind, is_chain, is_two_link, require_two_link
-from adaptive_dd.plant.two_link import TwoLinkArm
+from adaptive_dd.plant.two_link import ClosedFormTwoLink, closed_form_view
 
 ROOT = Path(adaptive_dd.__file__).resolve().parent
-ARM_CLASSES = {"Arm", "TwoLinkArm"}
+ARM_CLASSES = {"Arm", "ClosedFormTwoLink", "TwoLinkArm"}
 ALLOWED = {"plant/arm.py": 1, "plant/two_link.py": 1}
 """Files allowed type tests on the arm's class, with how many: each class's own ``__eq__``."""
 
@@ -35,8 +35,8 @@ def _names(node: ast.AST) -> set[str]:
 
 
 def arm_type_tests(source: str) -> list[int]:
-    """Lines of ``isinstance(x, Arm)``, ``issubclass(c, TwoLinkArm)``, ``type(x) is Arm`` and
-    ``type(x) == TwoLinkArm`` (and the negations) in ``source``."""
+    """Lines of ``isinstance(x, Arm)``, ``issubclass(c, ClosedFormTwoLink)``, ``type(x) is Arm`` and
+    ``type(x) == ClosedFormTwoLink`` (and the negations) in ``source``."""
     out = []
     for node in ast.walk(ast.parse(source)):
         if isinstance(node, ast.Call) and getattr(node.func, "id", None) in ("isinstance", "issubclass"):
@@ -54,9 +54,9 @@ def test_the_scan_finds_planted_type_tests():
     src = (
         "if isinstance(a, Arm): pass\n"
         "ok = isinstance(u, ArmUncertainty)\n"
-        "b = isinstance(x, (int, plant.two_link.TwoLinkArm))\n"
+        "b = isinstance(x, (int, plant.two_link.ClosedFormTwoLink))\n"
         "c = type(x) is Arm\n"
-        "d = issubclass(k, Arm | TwoLinkArm)\n"
+        "d = issubclass(k, Arm | ClosedFormTwoLink)\n"
     )
     assert arm_type_tests(src) == [1, 3, 4, 5]
 
@@ -77,12 +77,15 @@ def test_no_type_test_on_the_arm_class_in_the_package():
 
 
 def test_kind_names_each_arm():
-    two, chain = TwoLinkArm.sice(), Arm.sice()
+    two, chain = ClosedFormTwoLink.sice(), Arm.sice()
     assert (is_two_link(two), is_chain(two), arm_kind(two)) == (True, False, "two_link")
     assert (is_two_link(chain), is_chain(chain), arm_kind(chain)) == (False, True, "chain")
     assert not is_two_link(None) and not is_chain(None)
     with pytest.raises(ParameterError, match="expected an arm"):
         arm_kind(np.zeros(7))
-    require_two_link(two, "here")
-    with pytest.raises(ParameterError, match=r"here: needs the two-link closed-form arm.*got Arm"):
-        require_two_link(chain, "here")
+    assert require_two_link(two, "here") is two
+    assert require_two_link(chain, "here") is closed_form_view(chain)  # the paper's geometry: its record
+    with pytest.raises(ParameterError, match=r"here: needs an arm of the paper's two-link geometry.*general"):
+        require_two_link(Arm.sice(general=True), "here")
+    with pytest.raises(ParameterError, match=r"here: needs an arm of the paper's two-link geometry"):
+        require_two_link(np.zeros(7), "here")

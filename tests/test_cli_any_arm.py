@@ -136,9 +136,9 @@ def test_identify_online_starts_from_the_scenario_arm(tmp_path, capsys, monkeypa
     """identify --online --arm TWO_LINK.toml started from the SICE arm whatever the scenario said."""
     import adaptive_dd.identification.two_link_online as online
     from adaptive_dd.cli._common import load_arm
-    from adaptive_dd.plant.two_link import TwoLinkArm
+    from adaptive_dd.plant.two_link import ClosedFormTwoLink
 
-    sice = TwoLinkArm.sice()
+    sice = ClosedFormTwoLink.sice()
     arm_toml = tmp_path / "arm.toml"
     sigma = ", ".join(repr(1.2 * float(v)) for v in sice.sigma)
     arm_toml.write_text(f"[arm]\nsigma = [{sigma}]\nl1 = {sice.l1}\nl2 = {sice.l2}\n")

@@ -15,9 +15,9 @@ from adaptive_dd.controllers.registry import ABSENT, Setting
 from adaptive_dd.controllers.slotine_li import default_bounds
 from adaptive_dd.errors import ParameterError
 from adaptive_dd.plant.arm import Arm
-from adaptive_dd.plant.two_link import TwoLinkArm
+from adaptive_dd.plant.two_link import ClosedFormTwoLink
 
-TWO, CHAIN = TwoLinkArm.sice(), Arm.sice()
+TWO, CHAIN = ClosedFormTwoLink.sice(), Arm.sice(general=True)  # general: the N-joint controllers
 
 
 def test_every_name_builds_on_the_arms_the_table_says():

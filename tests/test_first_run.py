@@ -13,7 +13,7 @@ from numba.core import event
 from adaptive_dd import _numba_cache
 from adaptive_dd.benchmark.scenario import load_scenario
 from adaptive_dd.benchmark.scenario_base import run_estimate
-from adaptive_dd.plant.two_link import TwoLinkArm
+from adaptive_dd.plant.two_link import ClosedFormTwoLink
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -25,7 +25,7 @@ def _fake_kernel(index: Path):
 def test_a_cold_cache_is_announced_and_counted_in_the_estimate(monkeypatch, tmp_path, capsys):
     index = tmp_path / "compiled.closed_loop_block-1.py311.nbi"
     monkeypatch.setattr(_numba_cache, "_closed_loop_kernel", lambda serial: _fake_kernel(index))
-    cold = _numba_cache.compile_estimate(TwoLinkArm.sice())
+    cold = _numba_cache.compile_estimate(ClosedFormTwoLink.sice())
     assert cold == _numba_cache.COMPILE_SECONDS["two-link"] > 0
     sc = load_scenario()
     est = sc.estimate()
@@ -37,7 +37,7 @@ def test_a_cold_cache_is_announced_and_counted_in_the_estimate(monkeypatch, tmp_
     assert err.startswith("compiling the closed-loop kernels for the two-link arm (once per source state;")
     assert str(numba.config.CACHE_DIR) in err
     index.write_bytes(b"")  # the kernel is in the cache now
-    assert _numba_cache.compile_estimate(TwoLinkArm.sice()) == 0.0
+    assert _numba_cache.compile_estimate(ClosedFormTwoLink.sice()) == 0.0
     assert sc.estimate().compile_seconds == 0.0 and "compiling" not in str(sc.estimate())
     with _numba_cache.announce_compilation(sc.arm):
         pass
@@ -60,7 +60,7 @@ def test_compile_time_is_the_wall_time_inside_any_compilation():
 def test_the_compile_time_is_printed_after_a_compilation(monkeypatch, capsys):
     monkeypatch.setattr(_numba_cache, "compile_estimate", lambda arm: 0.0)
     monkeypatch.setattr(_numba_cache, "_compile_seconds", lambda buffer: 42.4)
-    with _numba_cache.announce_compilation(TwoLinkArm.sice()):
+    with _numba_cache.announce_compilation(ClosedFormTwoLink.sice()):
         pass
     assert capsys.readouterr().err == "compiled the kernels in 42 s (cached: later runs skip this)\n"
 

@@ -9,7 +9,7 @@ from chain_models import random_chain_model
 
 from adaptive_dd.errors import ParameterError
 from adaptive_dd.experiments import table2_torque
-from adaptive_dd.plant import TwoLinkArm
+from adaptive_dd.plant import ClosedFormTwoLink
 from adaptive_dd.plant import chain as C
 from adaptive_dd.plant import integrator as S
 from adaptive_dd.plant.pinocchio_model import build_model
@@ -145,7 +145,7 @@ def test_reproduces_the_two_link_plant_on_the_sice_arm(law):
     The same modes are chosen by both stick-slip rules all along (module docstring
     of integrator), so the states agree to round-off.
     """
-    arm = TwoLinkArm.sice(friction=law)
+    arm = ClosedFormTwoLink.sice(friction=law)
     model = build_model(arm)
     ch, pi = C.chain_from_model(model), C.standard_parameters(model)
     sigma = np.asarray(arm.sigma)

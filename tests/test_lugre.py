@@ -12,12 +12,12 @@ import pytest
 from adaptive_dd.benchmark.runner import run_benchmark
 from adaptive_dd.benchmark.scenario import load_scenario
 from adaptive_dd.errors import ParameterError, ScenarioError
-from adaptive_dd.plant import TABLE1_SIGMA, TwoLinkArm
+from adaptive_dd.plant import TABLE1_SIGMA, ClosedFormTwoLink
 from adaptive_dd.plant.arm_tables import arm_from_tables
 from adaptive_dd.plant.simulator import ArmSimulator
 from adaptive_dd.plant.two_link_integrator import lugre_step, two_link_plant_step
 
-ARM = TwoLinkArm.sice(friction="lugre")
+ARM = ClosedFormTwoLink.sice(friction="lugre")
 FP = ARM.friction_params
 
 

@@ -1,5 +1,5 @@
 """The shipped URDF robots (adaptive_dd/robots): they load, are physically consistent, and match
-their published tables (SICE arm = TwoLinkArm.sice(); UR5 and Panda forward kinematics = their DH tables).
+their published tables (SICE arm = Arm.sice(); UR5 and Panda forward kinematics = their DH tables).
 """
 
 from __future__ import annotations
@@ -15,7 +15,7 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from adaptive_dd.plant import TwoLinkArm
+from adaptive_dd.plant import ClosedFormTwoLink
 from adaptive_dd.plant.dynamics import mass_matrix
 from adaptive_dd.plant.parameters import L1, L2, TORQUE_LIMITS
 from adaptive_dd.robots import ROBOTS, RobotInfo, UnknownRobotError, robot_urdf
@@ -116,7 +116,7 @@ def test_inertias_physically_consistent(name):
 
 
 def test_sice_mass_matrix_equals_arm_sice():
-    model, arm = _load("sice_arm"), TwoLinkArm.sice()
+    model, arm = _load("sice_arm"), ClosedFormTwoLink.sice()
     data = model.createData()
     rng = np.random.default_rng(20261124)
     for q in rng.uniform(-PI, PI, size=(20, 2)):
@@ -126,7 +126,7 @@ def test_sice_mass_matrix_equals_arm_sice():
 
 
 def test_sice_friction_limits_and_no_gravity():
-    model, arm = _load("sice_arm"), TwoLinkArm.sice()
+    model, arm = _load("sice_arm"), ClosedFormTwoLink.sice()
     np.testing.assert_array_equal(model.damping, arm.sigma[3:5])
     np.testing.assert_array_equal(model.friction, arm.sigma[5:7])
     np.testing.assert_array_equal(model.effortLimit, TORQUE_LIMITS)

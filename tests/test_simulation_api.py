@@ -100,8 +100,8 @@ def test_figures_are_returned_with_one_style_per_controller(short, tmp_path):
 
 
 def test_no_module_constant_outside_the_default_factory():
-    """Everything physical comes from a TwoLinkArm; only parameters.py defines and two_link.py's
-    TwoLinkArm.sice() reads the SICE constants (plant/__init__ re-exports them)."""
+    """Everything physical comes from a ClosedFormTwoLink; only parameters.py defines and two_link.py's
+    ClosedFormTwoLink.sice() reads the SICE constants (plant/__init__ re-exports them)."""
     import re
     from pathlib import Path
 
@@ -159,7 +159,7 @@ def ur5_short():
 
 
 def test_stepping_a_urdf_arm_by_hand_equals_its_benchmark_trial(ur5_short):
-    """Issue 27: Simulation(...).reset() raised 'arm must be a TwoLinkArm, got Arm' on a URDF arm."""
+    """Issue 27: Simulation(...).reset() raised 'arm must be a ClosedFormTwoLink, got Arm' on a URDF arm."""
     sc = ur5_short
     n = sc.n_joints
     sim = Simulation(sc, seed_index=1)

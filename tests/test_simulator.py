@@ -12,9 +12,9 @@ from adaptive_dd.plant import (
     TABLE1_SIGMA,
     ActuatorConfig,
     ArmSimulator,
+    ClosedFormTwoLink,
     PayloadSchedule,
     SensorConfig,
-    TwoLinkArm,
     simulate_open_loop,
     two_link_plant_step,
 )
@@ -105,7 +105,7 @@ def test_sensor_noise_and_quantization():
 
 
 def test_actuator_saturation_and_dac_quantization():
-    act = TwoLinkArm.sice().actuator
+    act = ClosedFormTwoLink.sice().actuator
     tau, sat = act.apply(np.array([[100.0, -20.0], [1.0001, 0.5]]))
     assert sat.tolist() == [[True, True], [False, False]]
     lsb = 2 * np.array([70.0, 15.0]) / 4096

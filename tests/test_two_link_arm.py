@@ -1,4 +1,4 @@
-"""The TwoLinkArm object, scenario [arm]/[plant] tables, smooth plant friction, chunked noise."""
+"""The ClosedFormTwoLink object, scenario [arm]/[plant] tables, smooth plant friction, chunked noise."""
 
 import dataclasses
 import hashlib
@@ -19,11 +19,11 @@ from adaptive_dd.plant import (
     TABLE1_SIGMA,
     ActuatorConfig,
     ArmSimulator,
+    ClosedFormTwoLink,
     Payload,
     PayloadSchedule,
     PhysicalParameters,
     SensorConfig,
-    TwoLinkArm,
     inverse_dynamics,
     mass_matrix,
     simulate_open_loop,
@@ -54,9 +54,9 @@ OTHER_TABLE = {
 }
 
 
-# ----------------------------------------------------------------------- TwoLinkArm
+# ----------------------------------------------------------------------- ClosedFormTwoLink
 def test_sice_arm_is_table_1():
-    arm = TwoLinkArm.sice()
+    arm = ClosedFormTwoLink.sice()
     np.testing.assert_array_equal(arm.sigma, TABLE1_SIGMA)
     assert (arm.l1, arm.l2, arm.payload_radius) == (0.2, 0.2, 0.05)
     assert arm.physical == TABLE1_PHYSICAL and arm.actuator.torque_limit == (70.0, 15.0)
@@ -68,7 +68,7 @@ def test_sice_arm_is_table_1():
 
 @pytest.mark.parametrize("mass, radius", [(0.0, None), (2.0, None), (3.5, 0.08), (1.0, 0.0)])
 def test_payload_effect_is_the_parallel_axis_result(mass, radius):
-    arm = TwoLinkArm.from_physical(OTHER, payload_radius=0.04)
+    arm = ClosedFormTwoLink.from_physical(OTHER, payload_radius=0.04)
     r = arm.payload_radius if radius is None else radius
     np.testing.assert_allclose(
         arm.sigma_with_payload(mass, radius), OTHER.with_payload(Payload(mass, r)).to_sigma(), rtol=1e-12
@@ -80,7 +80,7 @@ def test_payload_effect_is_the_parallel_axis_result(mass, radius):
 
 
 def test_payload_effect_broadcasts_over_trials():
-    arm = TwoLinkArm.from_physical(OTHER)
+    arm = ClosedFormTwoLink.from_physical(OTHER)
     m = np.array([[0.0, 1.0], [2.0, 3.0]])
     s = arm.sigma_with_payload(m)
     assert s.shape == (2, 2, 7)
@@ -89,13 +89,13 @@ def test_payload_effect_broadcasts_over_trials():
 
 @pytest.mark.parametrize("mass", [0.0, 2.0])
 def test_second_arm_agrees_with_pinocchio(mass):
-    arm = TwoLinkArm.from_physical(OTHER, payload_radius=0.06)
+    arm = ClosedFormTwoLink.from_physical(OTHER, payload_radius=0.06)
     results = two_link_cross_check(arm, Payload(mass, 0.06) if mass else None, n_states=30)
     assert all(r.passed for r in results), [str(r) for r in results if not r.passed]
 
 
 def test_sigma_only_arm_builds_an_equivalent_physical_set_for_pinocchio():
-    arm = TwoLinkArm.from_sigma(OTHER.to_sigma(), l1=0.3, l2=0.25)
+    arm = ClosedFormTwoLink.from_sigma(OTHER.to_sigma(), l1=0.3, l2=0.25)
     phys = arm.equivalent_physical()
     np.testing.assert_allclose(phys.to_sigma(), arm.sigma, rtol=1e-12)
     assert min(phys.I1, phys.I2, phys.m1, phys.m2) > 0
@@ -103,16 +103,16 @@ def test_sigma_only_arm_builds_an_equivalent_physical_set_for_pinocchio():
 
 
 def test_cross_check_catches_a_wrong_payload_effect(monkeypatch):
-    arm = TwoLinkArm.from_physical(OTHER)
+    arm = ClosedFormTwoLink.from_physical(OTHER)
     monkeypatch.setattr(
-        TwoLinkArm, "sigma_with_payload", lambda self, m, r=None, s0=None: self.sigma + 0.01 * m
+        ClosedFormTwoLink, "sigma_with_payload", lambda self, m, r=None, s0=None: self.sigma + 0.01 * m
     )
     assert not all(r.passed for r in two_link_cross_check(arm, Payload(2.0, 0.05), n_states=10))
 
 
 def test_arm_is_hashable_comparable_and_json_able():
-    a, b = TwoLinkArm.sice(), TwoLinkArm.sice()
-    assert a == b and hash(a) == hash(b) and a != TwoLinkArm.sice(friction="tanh")
+    a, b = ClosedFormTwoLink.sice(), ClosedFormTwoLink.sice()
+    assert a == b and hash(a) == hash(b) and a != ClosedFormTwoLink.sice(friction="tanh")
     d = json.loads(json.dumps(a.to_dict()))
     assert d["l1"] == 0.2 and d["sigma"] == TABLE1_SIGMA.tolist() and d["physical"]["m2"] == 10.125
     assert d["actuator"]["torque_limit"] == [70.0, 15.0] and d["friction"] == "stick-slip"
@@ -125,26 +125,47 @@ def _bad_physical(**kw):
 @pytest.mark.parametrize(
     "make, match",
     [
-        (lambda: TwoLinkArm.from_sigma([0.0, 0.09, 0.18, 4, 1, 2.5, 0.6], 0.3, 0.25), "J1 must be > 0"),
-        (lambda: TwoLinkArm.from_sigma([0.6, 0.09, 0.25, 4, 1, 2.5, 0.6], 0.3, 0.25), "J1\\*J2 - r\\^2"),
-        (lambda: TwoLinkArm.from_sigma([0.6, np.nan, 0.18, 4, 1, 2.5, 0.6], 0.3, 0.25), "non-finite"),
-        (lambda: TwoLinkArm.from_sigma(OTHER.to_sigma(), 0.0, 0.25), "TwoLinkArm.l1 must be > 0"),
-        (lambda: TwoLinkArm.from_sigma(OTHER.to_sigma(), 0.3, math.inf), "TwoLinkArm.l2 must be finite"),
-        (lambda: TwoLinkArm.from_sigma(OTHER.to_sigma(), 0.3, 0.25, payload_radius=-0.1), "payload_radius"),
-        (lambda: TwoLinkArm.from_physical(_bad_physical(a2=0.5)), "physical.a2 = 0.5"),
-        (lambda: TwoLinkArm.from_physical(_bad_physical(m2=-1.0)), "m2 must be > 0"),
-        (lambda: TwoLinkArm.from_physical(_bad_physical(I1=0.0)), "I1 must be > 0"),
         (
-            lambda: TwoLinkArm(sigma=OTHER.to_sigma(), l1=0.2, l2=0.25, physical=OTHER),
-            "TwoLinkArm.l1 = 0.2 differs",
+            lambda: ClosedFormTwoLink.from_sigma([0.0, 0.09, 0.18, 4, 1, 2.5, 0.6], 0.3, 0.25),
+            "J1 must be > 0",
         ),
-        (lambda: TwoLinkArm(sigma=TABLE1_SIGMA, l1=0.3, l2=0.25, physical=OTHER), "sigma\\[0\\] \\(J1\\)"),
-        (lambda: TwoLinkArm.sice(friction="coulomb"), "friction must be one of"),
-        (lambda: TwoLinkArm.sice(friction_velocity=0.0), "friction_velocity must be > 0"),
-        (lambda: TwoLinkArm.sice(stribeck_velocity=-1.0), "stribeck_velocity must be > 0"),
-        (lambda: TwoLinkArm.sice(stribeck_ratio=0.5), "stribeck_ratio"),
-        (lambda: TwoLinkArm.sice(friction_velocity="fast"), "friction_velocity must be a number"),
-        (lambda: TwoLinkArm.sice(actuator=(70, 15)), "TwoLinkArm.actuator must be an ActuatorConfig"),
+        (
+            lambda: ClosedFormTwoLink.from_sigma([0.6, 0.09, 0.25, 4, 1, 2.5, 0.6], 0.3, 0.25),
+            "J1\\*J2 - r\\^2",
+        ),
+        (lambda: ClosedFormTwoLink.from_sigma([0.6, np.nan, 0.18, 4, 1, 2.5, 0.6], 0.3, 0.25), "non-finite"),
+        (
+            lambda: ClosedFormTwoLink.from_sigma(OTHER.to_sigma(), 0.0, 0.25),
+            "ClosedFormTwoLink.l1 must be > 0",
+        ),
+        (
+            lambda: ClosedFormTwoLink.from_sigma(OTHER.to_sigma(), 0.3, math.inf),
+            "ClosedFormTwoLink.l2 must be finite",
+        ),
+        (
+            lambda: ClosedFormTwoLink.from_sigma(OTHER.to_sigma(), 0.3, 0.25, payload_radius=-0.1),
+            "payload_radius",
+        ),
+        (lambda: ClosedFormTwoLink.from_physical(_bad_physical(a2=0.5)), "physical.a2 = 0.5"),
+        (lambda: ClosedFormTwoLink.from_physical(_bad_physical(m2=-1.0)), "m2 must be > 0"),
+        (lambda: ClosedFormTwoLink.from_physical(_bad_physical(I1=0.0)), "I1 must be > 0"),
+        (
+            lambda: ClosedFormTwoLink(sigma=OTHER.to_sigma(), l1=0.2, l2=0.25, physical=OTHER),
+            "ClosedFormTwoLink.l1 = 0.2 differs",
+        ),
+        (
+            lambda: ClosedFormTwoLink(sigma=TABLE1_SIGMA, l1=0.3, l2=0.25, physical=OTHER),
+            "sigma\\[0\\] \\(J1\\)",
+        ),
+        (lambda: ClosedFormTwoLink.sice(friction="coulomb"), "friction must be one of"),
+        (lambda: ClosedFormTwoLink.sice(friction_velocity=0.0), "friction_velocity must be > 0"),
+        (lambda: ClosedFormTwoLink.sice(stribeck_velocity=-1.0), "stribeck_velocity must be > 0"),
+        (lambda: ClosedFormTwoLink.sice(stribeck_ratio=0.5), "stribeck_ratio"),
+        (lambda: ClosedFormTwoLink.sice(friction_velocity="fast"), "friction_velocity must be a number"),
+        (
+            lambda: ClosedFormTwoLink.sice(actuator=(70, 15)),
+            "ClosedFormTwoLink.actuator must be an ActuatorConfig",
+        ),
     ],
 )
 def test_arm_validation_names_field_and_value(make, match):
@@ -153,7 +174,7 @@ def test_arm_validation_names_field_and_value(make, match):
 
 
 def test_payload_arguments_are_checked():
-    arm = TwoLinkArm.sice()
+    arm = ClosedFormTwoLink.sice()
     with pytest.raises(ParameterError, match="payload mass"):
         arm.sigma_with_payload(-1.0)
     with pytest.raises(ParameterError, match="payload radius"):
@@ -163,7 +184,7 @@ def test_payload_arguments_are_checked():
 # ------------------------------------------------------------ scenario tables
 def test_arm_from_tables_physical_form():
     arm = arm_from_tables(OTHER_TABLE, None, "x.toml")
-    assert arm == TwoLinkArm.from_physical(OTHER, payload_radius=0.04)
+    assert arm == ClosedFormTwoLink.from_physical(OTHER, payload_radius=0.04)
 
 
 def test_arm_from_tables_sigma_form_and_plant():
@@ -175,8 +196,8 @@ def test_arm_from_tables_sigma_form_and_plant():
 
 
 def test_arm_from_tables_without_tables_is_the_sice_arm():
-    assert arm_from_tables(None, None) == TwoLinkArm.sice()
-    assert arm_from_tables(None, {"friction": "stribeck"}) == TwoLinkArm.sice(friction="stribeck")
+    assert arm_from_tables(None, None) == ClosedFormTwoLink.sice()
+    assert arm_from_tables(None, {"friction": "stribeck"}) == ClosedFormTwoLink.sice(friction="stribeck")
 
 
 @pytest.mark.parametrize(
@@ -209,12 +230,12 @@ def test_arm_from_tables_errors_name_file_key_and_reason(arm, plant, match):
 
 
 def test_scenarios_carry_their_arm(tmp_path):
-    assert load_scenario().arm == TwoLinkArm.sice()
+    assert load_scenario().arm == ClosedFormTwoLink.sice()
     other = load_scenario(SCENARIOS / "other_arm.toml")
-    assert other.arm == TwoLinkArm.from_physical(OTHER, payload_radius=0.05)
+    assert other.arm == ClosedFormTwoLink.from_physical(OTHER, payload_radius=0.05)
     assert other.payload_radius == 0.05 and 2.0 in other.swap_masses
     smooth = load_scenario(SCENARIOS / "smooth_friction.toml")
-    assert smooth.arm == TwoLinkArm.sice(friction="tanh", friction_velocity=0.02)
+    assert smooth.arm == ClosedFormTwoLink.sice(friction="tanh", friction_velocity=0.02)
     assert smooth.reference == load_scenario().reference
     p = tmp_path / "r.toml"
     p.write_text(
@@ -237,7 +258,7 @@ def test_other_arm_reference_is_within_the_actuator_limits():
 
 # ----------------------------------------------------------------- simulator
 def test_simulator_takes_payload_physics_from_the_arm():
-    arm = TwoLinkArm.from_physical(OTHER, payload_radius=0.04)
+    arm = ClosedFormTwoLink.from_physical(OTHER, payload_radius=0.04)
     sched = PayloadSchedule(times=(0.002,), masses=(2.0,))
     sim = ArmSimulator(2, 10, trial_rngs(0, 2), arm=arm, payload=sched)
     np.testing.assert_array_equal(sim.sigma, np.broadcast_to(arm.sigma, (2, 7)))
@@ -256,12 +277,12 @@ def test_simulator_takes_payload_physics_from_the_arm():
 
 
 def test_simulator_rejects_a_non_arm():
-    with pytest.raises(ParameterError, match="needs the two-link closed-form arm"):
+    with pytest.raises(ParameterError, match="needs an arm of the paper's two-link geometry"):
         ArmSimulator(1, 10, np.random.default_rng(0), arm=TABLE1_SIGMA)
 
 
 # Hashes of a stick-slip run (payload swap, sticking, both kinds of generator) made
-# with the code before the TwoLinkArm and the smooth friction laws (commit 3c9901b).
+# with the code before the ClosedFormTwoLink and the smooth friction laws (commit 3c9901b).
 STICK_SLIP_GOLDEN = [
     {
         "q": "456fbc2c2a2f1fcb",
@@ -325,9 +346,9 @@ def _hold(arm, tau, n, q0=(0.0, 0.0), qd0=(0.0, 0.0)):
 def test_tanh_plant_creeps_under_a_torque_below_coulomb_friction(v):
     d2, b2 = TABLE1_SIGMA[6], TABLE1_SIGMA[4]
     tau = [0.0, 0.5 * d2]
-    stuck = _hold(TwoLinkArm.sice(), tau, 2000)
+    stuck = _hold(ClosedFormTwoLink.sice(), tau, 2000)
     assert np.all(stuck.qd == 0.0)
-    smooth = _hold(TwoLinkArm.sice(friction="tanh", friction_velocity=v), tau, 2000)
+    smooth = _hold(ClosedFormTwoLink.sice(friction="tanh", friction_velocity=v), tau, 2000)
     # steady creep: d2 tanh(w / v) + b2 w = tau2 (joint 2 alone; joint 1 barely moves)
     w = v * np.arctanh(0.5)
     for _ in range(50):
@@ -339,7 +360,10 @@ def test_tanh_plant_creeps_under_a_torque_below_coulomb_friction(v):
 
 @pytest.mark.parametrize("law", ["tanh", "stribeck"])
 def test_smooth_plants_match_coulomb_far_from_zero_velocity(law):
-    a, b = TwoLinkArm.sice(), TwoLinkArm.sice(friction=law, friction_velocity=0.01, stribeck_velocity=0.05)
+    a, b = (
+        ClosedFormTwoLink.sice(),
+        ClosedFormTwoLink.sice(friction=law, friction_velocity=0.01, stribeck_velocity=0.05),
+    )
     kw = {"tau": [20.0, 5.0], "n": 300, "qd0": (2.0, 1.5)}
     ref, got = _hold(a, **kw), _hold(b, **kw)
     assert np.abs(ref.qd).min() > 20 * 0.05  # |qd| >> v and v_s throughout
@@ -351,8 +375,10 @@ def test_smooth_plants_match_coulomb_far_from_zero_velocity(law):
 def test_stribeck_plant_holds_near_rest_between_coulomb_and_static_friction():
     d2 = TABLE1_SIGMA[6]
     kw = {"tau": [0.0, 1.2 * d2], "n": 1000}
-    tanh = _hold(TwoLinkArm.sice(friction="tanh"), **kw)
-    strib = _hold(TwoLinkArm.sice(friction="stribeck", stribeck_ratio=1.5, stribeck_velocity=0.1), **kw)
+    tanh = _hold(ClosedFormTwoLink.sice(friction="tanh"), **kw)
+    strib = _hold(
+        ClosedFormTwoLink.sice(friction="stribeck", stribeck_ratio=1.5, stribeck_velocity=0.1), **kw
+    )
     assert tanh.qd[0, -1, 1] > 0.1  # above d: breaks away
     assert 0 < strib.qd[0, -1, 1] < 0.05  # below the static peak 1.5 d: slow creep
 
@@ -389,7 +415,7 @@ def test_stiff_tanh_plant_stays_stable_and_rejects_bad_codes():
     r = simulate_open_loop(
         table2_torque(2, 2000),
         trial_rngs(0, 2),
-        arm=TwoLinkArm.sice(friction="tanh", friction_velocity=0.001),
+        arm=ClosedFormTwoLink.sice(friction="tanh", friction_velocity=0.001),
     )
     assert not r.failed.any() and np.all(np.isfinite(r.q)) and np.abs(r.qd).max() < 5
     z = np.zeros((1, 2))

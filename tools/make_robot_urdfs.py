@@ -115,7 +115,7 @@ def sice_arm() -> str:
     from adaptive_dd.plant.parameters import TORQUE_LIMITS
 
     comment = """
-The SICE standard direct-drive arm SR-402DD, as adaptive_dd.plant.TwoLinkArm.sice().
+The SICE standard direct-drive arm SR-402DD, as adaptive_dd.plant.Arm.sice().
 Source: "Recursive simultaneous estimation of a two-link direct drive manipulator with
 great variation of payload", Table 1 (base parameters J1 J2 r b1 b2 d1 d2), torque limits
 70 and 15 N m (Section 1); the physical set is adaptive_dd.plant.parameters.TABLE1_PHYSICAL,

@@ -87,7 +87,7 @@ from adaptive_dd.plant.arm import Arm
 from adaptive_dd.plant.arm_tables import arm_from_tables
 from adaptive_dd.plant.kind import is_chain
 from adaptive_dd.plant.parameters import PAYLOAD_RADIUS
-from adaptive_dd.plant.two_link import TwoLinkArm
+from adaptive_dd.plant.two_link import ClosedFormTwoLink, closed_form_view
 from adaptive_dd.plant.uncertainty import PLANT_TRUTH_KEYS, PlantSpec, parse_model, parse_plant
 
 __all__ = [
@@ -135,6 +135,12 @@ class Scenario:
 
     Constructing one (also through ``dataclasses.replace``) checks every field and
     raises one :class:`ScenarioError` listing all problems.
+
+    ``arm`` is an :class:`~adaptive_dd.plant.arm.Arm` (default the paper's SICE arm). An arm of the
+    paper's geometry runs the closed forms, chosen here automatically
+    (:func:`~adaptive_dd.plant.two_link.closed_form_view`; ``Arm(general=True)`` keeps the general
+    kernels; a ``plant`` that differs from the arm keeps them too): the field then holds their
+    record, a :class:`~adaptive_dd.plant.two_link.ClosedFormTwoLink`.
     """
 
     name: str
@@ -156,7 +162,7 @@ class Scenario:
     source: str = "<memory>"
     controller_options: tuple[tuple[str, tuple[tuple[str, Any], ...]], ...] = ()
     defaulted: frozenset[str] = field(default=frozenset(), compare=False)
-    arm: TwoLinkArm | Arm = field(default_factory=TwoLinkArm.sice)
+    arm: Arm | ClosedFormTwoLink = field(default_factory=ClosedFormTwoLink.sice)
     swap_com: tuple = ()
     swap_inertia: tuple = ()
     excite: float = 0.0
@@ -167,6 +173,9 @@ class Scenario:
     ``arm`` is then the model the controllers are given. None: the plant is ``arm`` exactly."""
 
     def __post_init__(self) -> None:
+        fast = closed_form_view(self.arm) if self.plant is None else None
+        if fast is not None and fast is not self.arm:  # the paper's geometry: its closed forms
+            object.__setattr__(self, "arm", fast)
         errors = scenario_errors({f.name: getattr(self, f.name) for f in fields(self)})
         if errors:
             raise _scenario_error(str(self.source), errors)

@@ -89,13 +89,13 @@ def load_arm(path: str | None, repair_inertia: bool = False, *, general: str | N
 
     ``general``: the general :class:`~adaptive_dd.plant.arm.Arm` even where the URDF is the paper's
     kind of two-link arm (which otherwise loads as the closed forms'
-    :class:`~adaptive_dd.plant.two_link.TwoLinkArm`); the string names what needs it, for the
+    :class:`~adaptive_dd.plant.two_link.ClosedFormTwoLink`); the string names what needs it, for the
     :class:`ScenarioError` raised when the ``[arm]`` names no URDF.
     """
     from adaptive_dd.benchmark.scenario import model_and_plant, read_toml
     from adaptive_dd.errors import ScenarioError
     from adaptive_dd.plant.arm_tables import arm_from_tables
-    from adaptive_dd.plant.two_link import TwoLinkArm
+    from adaptive_dd.plant.two_link import ClosedFormTwoLink
     from adaptive_dd.plant.uncertainty import PLANT_TRUTH_KEYS
 
     if path is None:
@@ -103,7 +103,7 @@ def load_arm(path: str | None, repair_inertia: bool = False, *, general: str | N
             from adaptive_dd.plant.arm import Arm
 
             return Arm.sice()
-        return TwoLinkArm.sice()
+        return ClosedFormTwoLink.sice()
     if not Path(path).is_file():
         raise ScenarioError(f"{path}: no such scenario file")
     data = read_toml(Path(path))

@@ -72,6 +72,6 @@ def _check_two_link(args, arm, mass: float, radius: float, where: str, label: st
         f"Cross-check of adaptive_dd.plant against Pinocchio ({where}, {label}, {args.states} random states)"
     )
     if arm.physical is None:
-        print("  (sigma-only arm: Pinocchio model built from TwoLinkArm.equivalent_physical())")
+        print("  (sigma-only arm: Pinocchio model built from ClosedFormTwoLink.equivalent_physical())")
     payload = Payload(mass, radius) if mass else None
     return two_link_cross_check(arm, payload, n_states=args.states, rng=np.random.default_rng(args.seed))

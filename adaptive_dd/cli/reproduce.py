@@ -124,7 +124,7 @@ def _print_tables(args: argparse.Namespace, res) -> None:
 
 def _figures(res, tau_f: tuple, outputs) -> list:
     """Fig. 5-like estimate histories and the Fig. 7 model responses; prints Fig. 7's rms."""
-    from adaptive_dd.plant.two_link import TwoLinkArm
+    from adaptive_dd.plant.two_link import ClosedFormTwoLink
     from adaptive_dd.plotting import plot_estimates
 
     out = outputs.folder
@@ -139,7 +139,9 @@ def _figures(res, tau_f: tuple, outputs) -> list:
     for key, i, name, label, short in figures:
         if key in res.theta:
             title = f"Estimates, {label}, tau_f = {tau_f[i]}"
-            plot_estimates(res.sim.t, res.theta[key][i], TwoLinkArm.sice().sigma, outputs.path(name), title)
+            plot_estimates(
+                res.sim.t, res.theta[key][i], ClosedFormTwoLink.sice().sigma, outputs.path(name), title
+            )
             written.append(out / name)
             models[f"{short}, tau_f = {tau_f[i]}"] = res.theta[key][i][:, -1].mean(axis=0)
     if models:
@@ -159,7 +161,7 @@ def _fig7(res, models: dict, outputs) -> Path:
         arm_q,
         qs,
         outputs.path("fig7_model_response.png"),
-        "TwoLinkArm and identified models, same torque (Table 2)",
+        "ClosedFormTwoLink and identified models, same torque (Table 2)",
     )
     for k, q in qs.items():
         rms = np.sqrt(((q - arm_q) ** 2).mean(axis=0))

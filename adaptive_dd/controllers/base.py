@@ -67,9 +67,9 @@ class Gains:
     def nominal_inertia(self, sigma: Array | None = None) -> Array:
         """``diag M(q = 0)`` of the nominal model (default: the SICE arm), (2,) [kg m^2]."""
         if sigma is None:
-            from adaptive_dd.plant.two_link import TwoLinkArm
+            from adaptive_dd.plant.two_link import ClosedFormTwoLink
 
-            sigma = TwoLinkArm.sice().sigma
+            sigma = ClosedFormTwoLink.sice().sigma
         m11, _, m22 = _mass_entries(np.zeros(()), np.asarray(sigma, float))
         return np.array([float(m11), float(m22)])
 

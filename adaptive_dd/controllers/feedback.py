@@ -46,10 +46,10 @@ def computed_torque_law(
 
 
 def _sice_sigma():
-    """The default nominal model: the SICE arm's base parameters (``TwoLinkArm.sice()``)."""
-    from adaptive_dd.plant.two_link import TwoLinkArm
+    """The default nominal model: the SICE arm's base parameters (``ClosedFormTwoLink.sice()``)."""
+    from adaptive_dd.plant.two_link import ClosedFormTwoLink
 
-    return TwoLinkArm.sice().sigma
+    return ClosedFormTwoLink.sice().sigma
 
 
 class PD(Controller):

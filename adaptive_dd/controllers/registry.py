@@ -47,7 +47,7 @@ from adaptive_dd.controllers.slotine_li import COM_RADIUS, DEFAULT_GAMMA, MAX_MA
 from adaptive_dd.errors import ParameterError
 from adaptive_dd.identification.two_link_online import ChangeDetector, TwoLinkOnlineConfig
 from adaptive_dd.plant.kind import arm_kind, is_two_link
-from adaptive_dd.plant.two_link import TwoLinkArm
+from adaptive_dd.plant.two_link import ClosedFormTwoLink, closed_form_view
 
 __all__ = [
     "ABSENT",
@@ -367,7 +367,7 @@ def gains_for(arm, bandwidth=40.0, damping: float = 1.0):
     ParameterError
         A bandwidth or damping that is not > 0.
     """
-    if is_two_link(arm):
+    if is_two_link(closed_form_view(arm) or arm):  # the arm's fast path, as make_controller chooses
         return Gains(bandwidth, damping)
     from adaptive_dd.closed_loop.controllers import JointGains
 
@@ -435,8 +435,9 @@ def scenario_controller(scenario, spec: str) -> tuple[str, Controller]:
 
 
 def controllers_for(arm) -> tuple[str, ...]:
-    """The built-in names that run on ``arm`` (every name but the two-link-only ones on an N-joint arm)."""
-    kind = arm_kind(arm)
+    """The built-in names that run on ``arm`` (every name but the two-link-only ones on an N-joint arm;
+    an arm of the paper's geometry runs its closed forms, :func:`make_controller`)."""
+    kind = arm_kind(closed_form_view(arm) or arm)
     return tuple(n for n, e in CONTROLLERS.items() if e.applies_to(kind))
 
 
@@ -543,8 +544,11 @@ def make_controller(
         ``damping`` override them.
     options : dict, optional
         The ``[controllers.NAME]`` table.
-    arm : TwoLinkArm or Arm, optional
-        The arm it controls (default the SICE arm, two-link).
+    arm : Arm, optional
+        The arm it controls (default the SICE arm). An arm of the paper's geometry gets the
+        two-link class, as a :class:`~adaptive_dd.benchmark.scenario.Scenario` of it runs
+        (:func:`~adaptive_dd.plant.two_link.closed_form_view`; ``Arm(general=True)``: the N-joint
+        class); a plug-in is handed that arm.
     search : tuple
         Folders to import a plug-in from.
     scenario : Scenario, optional
@@ -558,7 +562,7 @@ def make_controller(
         the key and why).
     """
     options = dict(options or {})
-    arm = arm or TwoLinkArm.sice()
+    arm = ClosedFormTwoLink.sice() if arm is None else (closed_form_view(arm) or arm)
     base = gains or DEFAULT_GAINS
     if spec in CONTROLLERS:
         ctrl = _builtin(spec, base, options, arm)

@@ -58,9 +58,9 @@ def default_bounds(sigma0, arm=None, max_mass: float = MAX_MASS, com_radius: flo
     """A priori box for the estimates: half the nominal up to 1.5x nominal plus a payload of
     ``max_mass`` [kg] (5) as a disk of radius ``com_radius`` [m] (0.1) at the arm's tip (the SICE
     arm's geometry unless ``arm`` is given)."""
-    from adaptive_dd.plant.two_link import TwoLinkArm
+    from adaptive_dd.plant.two_link import ClosedFormTwoLink
 
-    arm = arm or TwoLinkArm.sice()
+    arm = arm or ClosedFormTwoLink.sice()
     s = np.asarray(sigma0, dtype=float)
     return 0.5 * s, 1.5 * s + arm.payload_direction(com_radius) * max_mass
 

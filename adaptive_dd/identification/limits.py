@@ -33,9 +33,9 @@ from adaptive_dd.experiments import TABLE2
 from adaptive_dd.identification.estimators import estimate
 from adaptive_dd.identification.fisher import FisherResult, fisher_information
 from adaptive_dd.plant.parameters import SIGMA_NAMES
-from adaptive_dd.plant.two_link import TwoLinkArm
+from adaptive_dd.plant.two_link import ClosedFormTwoLink
 
-SICE_SIGMA = TwoLinkArm.sice().sigma
+SICE_SIGMA = ClosedFormTwoLink.sice().sigma
 
 __all__ = [
     "LIMIT_ESTIMATORS",

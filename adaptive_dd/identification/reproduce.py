@@ -27,7 +27,7 @@ from adaptive_dd.identification.limits import (
 )
 from adaptive_dd.plant.parameters import SIGMA_NAMES, project_sigma
 from adaptive_dd.plant.simulator import simulate_open_loop
-from adaptive_dd.plant.two_link import TwoLinkArm
+from adaptive_dd.plant.two_link import ClosedFormTwoLink
 
 __all__ = [
     "EXTRA_ESTIMATORS",
@@ -174,7 +174,7 @@ def run_reproduce(
         Run these too on the measured data (see :mod:`adaptive_dd.identification.limits`).
     """
     _check_configurations(seeds, tau_f, estimators, extra_estimators)
-    arm = TwoLinkArm.sice()  # the paper's arm
+    arm = ClosedFormTwoLink.sice()  # the paper's arm
     sensor = replace(
         arm.sensor,
         position_variance=TABLE2["position_variance"] if noise else (0.0, 0.0),
@@ -252,7 +252,7 @@ def format_bounds(res: ReproduceResult, tau_f: float | None = None) -> str:
     estimates, kinds = {}, {}
     for (method, split, est), e in res.signed.items():
         label = f"{method} {est}" + (f" ({split})" if est == "paper" else "") + f" tau_f={tf:g}"
-        estimates[label] = TwoLinkArm.sice().sigma * (1 + e[i] / 100.0)
+        estimates[label] = ClosedFormTwoLink.sice().sigma * (1 + e[i] / 100.0)
         kinds[label] = est
     for name, est in res.extra.items():
         estimates[name], kinds[name] = est, name
@@ -334,7 +334,7 @@ def model_responses(models: dict, n_samples: int = TABLE2["n_samples"]) -> tuple
     q_models : dict
         Label -> ndarray (n_samples, 2).
     """
-    sice = TwoLinkArm.sice()
+    sice = ClosedFormTwoLink.sice()
     clean = replace(sice.sensor, quantize=False, position_variance=(0, 0), velocity_variance=(0, 0))
     tau = table2_torque(1, n_samples)
     rec = simulate_open_loop(tau, np.random.default_rng(0), arm=sice, sensor=clean)

@@ -1,6 +1,8 @@
-"""The arms: the paper's two-link direct-drive arm (:class:`TwoLinkArm`, default the SICE arm: parameters,
-closed-form dynamics, simulator, Pinocchio check) and any serial arm from a URDF
-(:class:`Arm`, imported on first use: it loads Pinocchio)."""
+"""The arm: :class:`Arm`, any serial arm from a URDF or the paper's (:meth:`Arm.sice`), imported on
+first use (it loads Pinocchio); the paper's closed forms (eqs. 3-9) as its fast path
+(:func:`closed_form_view`, whose record is :class:`ClosedFormTwoLink`, formerly ``TwoLinkArm``:
+parameters, closed-form dynamics, simulator, Pinocchio check) and the paper's sigma of an arm's
+base parameters (:func:`paper_sigma`)."""
 
 from adaptive_dd.plant.devices import ActuatorConfig, SensorConfig
 from adaptive_dd.plant.dynamics import (
@@ -34,7 +36,7 @@ from adaptive_dd.plant.simulator import (
     SimulationResult,
     simulate_open_loop,
 )
-from adaptive_dd.plant.two_link import FRICTION_LAWS, TwoLinkArm
+from adaptive_dd.plant.two_link import FRICTION_LAWS, ClosedFormTwoLink, closed_form_view, paper_sigma
 from adaptive_dd.plant.two_link_integrator import two_link_plant_step
 
 __all__ = [
@@ -48,12 +50,13 @@ __all__ = [
     "ActuatorConfig",
     "Arm",
     "ArmSimulator",
+    "ClosedFormTwoLink",
     "Payload",
     "PayloadSchedule",
     "PhysicalParameters",
     "SensorConfig",
     "SimulationResult",
-    "TwoLinkArm",
+    "closed_form_view",
     "coriolis_matrix",
     "coriolis_vector",
     "forward_dynamics",
@@ -61,6 +64,7 @@ __all__ = [
     "inverse_dynamics",
     "mass_matrix",
     "mass_matrix_entries",
+    "paper_sigma",
     "payload_mass_from_sigma",
     "payload_sigma_delta",
     "project_sigma",
@@ -73,9 +77,14 @@ __all__ = [
 
 
 def __getattr__(name: str):
-    """``Arm`` on first use (its module imports Pinocchio, which takes a second)."""
+    """``Arm`` on first use (its module imports Pinocchio, which takes a second); ``TwoLinkArm``, the
+    old name of :class:`ClosedFormTwoLink` (a FutureWarning)."""
     if name == "Arm":
         from adaptive_dd.plant.arm import Arm
 
         return Arm
+    if name == "TwoLinkArm":  # deprecated: a FutureWarning (adaptive_dd.plant.two_link.__getattr__)
+        from adaptive_dd.plant import two_link
+
+        return two_link.__getattr__(name)
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

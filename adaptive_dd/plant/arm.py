@@ -36,7 +36,7 @@ from numpy.typing import ArrayLike, NDArray
 from adaptive_dd.errors import ParameterError
 from adaptive_dd.errors import is_finite_number as _is_num
 from adaptive_dd.plant.base_parameters import BaseParameters, base_parameters, standard_names
-from adaptive_dd.plant.devices import ActuatorConfig, SensorConfig
+from adaptive_dd.plant.devices import SICE_SENSOR, ActuatorConfig, SensorConfig
 from adaptive_dd.plant.urdf import read_urdf
 
 __all__ = ["DEFAULT_GRAVITY", "Arm", "PayloadEstimate", "payload_parameters"]
@@ -152,13 +152,17 @@ class Arm:
     payload_radius : float
         Default disk radius [m] of a payload given by mass alone.
     friction, friction_velocity, stribeck_ratio, stribeck_velocity
-        The simulated plant's friction law, as on :class:`adaptive_dd.plant.two_link.TwoLinkArm`.
+        The simulated plant's friction law, as on :class:`adaptive_dd.plant.two_link.ClosedFormTwoLink`.
     payload_capacity : float or None
         Rated payload [kg] (``[arm] payload_capacity``); sizes the estimator's re-opening on a
         change alarm (None: the detector's generic size).
     repair_inertia : bool
         Repair chain links whose URDF inertia is not a rigid body's
         (:func:`adaptive_dd.plant.urdf.read_urdf`); see :attr:`urdf_notes`.
+    general : bool
+        Keep the general kernels even where the paper's closed forms apply (the arm's geometry is
+        the paper's: :func:`~adaptive_dd.plant.two_link.closed_form_view`); ``[arm] general = true``.
+        False (default): a scenario of such an arm runs the closed forms, its fast path.
     """
 
     urdf: Path
@@ -180,10 +184,12 @@ class Arm:
     stribeck_velocity: float = 0.1
     repair_inertia: bool = False
     payload_capacity: float | None = None
+    general: bool = False
     _cache: dict = field(default_factory=dict, repr=False, compare=False)
     closed_form: ClassVar[bool] = False
-    """False: the general kernels (True on :class:`~adaptive_dd.plant.two_link.TwoLinkArm`, the
-    paper's closed forms)."""
+    """False: an :class:`Arm` (True on the closed forms' record,
+    :class:`~adaptive_dd.plant.two_link.ClosedFormTwoLink`); whether an arm has the closed forms is
+    :func:`~adaptive_dd.plant.two_link.closed_form_view`'s to say."""
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "urdf", Path(self.urdf))
@@ -225,6 +231,8 @@ class Arm:
             v = getattr(self, name)
             if not (math.isfinite(v) and v > 0):
                 raise ParameterError(f"Arm.{name} must be > 0, got {v!r}")
+        if not isinstance(self.general, bool):
+            raise ParameterError(f"Arm.general must be True or False, got {self.general!r}")
         if not (math.isfinite(self.stribeck_ratio) and self.stribeck_ratio >= 1):
             raise ParameterError(f"Arm.stribeck_ratio must be >= 1, got {self.stribeck_ratio!r}")
         object.__setattr__(self, "_cache", {})
@@ -232,13 +240,22 @@ class Arm:
     # ----------------------------------------------------------------- factories
     @classmethod
     def sice(cls, **overrides) -> Arm:
-        """The paper's SICE two-link arm as an :class:`Arm` (the shipped ``sice_arm.urdf``, payload at
-        ``tip``). :func:`~adaptive_dd.plant.two_link.as_two_link` of it is
-        :meth:`TwoLinkArm.sice() <adaptive_dd.plant.two_link.TwoLinkArm.sice>`, the closed-form
-        fast path the benchmark chooses for it."""
+        """The paper's SICE two-link arm (the shipped ``sice_arm.urdf``, payload at ``tip``; the
+        paper's 12-bit D/A, (70, 15) N m and encoders and noise of its Tables 2 and 4, as
+        :meth:`ClosedFormTwoLink.sice() <adaptive_dd.plant.two_link.ClosedFormTwoLink.sice>`).
+
+        Its closed forms (eqs. 3-9) are its fast path:
+        :func:`~adaptive_dd.plant.two_link.closed_form_view` of it is
+        :meth:`ClosedFormTwoLink.sice() <adaptive_dd.plant.two_link.ClosedFormTwoLink.sice>` (to
+        1 ulp: the URDF's numbers read back through Pinocchio), chosen automatically by a
+        :class:`~adaptive_dd.benchmark.scenario.Scenario` of it; ``general=True`` keeps the general
+        kernels. :func:`~adaptive_dd.plant.two_link.paper_sigma` maps its base parameters onto the
+        paper's ``[J1 J2 r b1 b2 d1 d2]``."""
         from adaptive_dd.robots import robot_urdf
 
-        return cls.from_urdf(robot_urdf("sice_arm"), "tip", **overrides)
+        arm = cls.from_urdf(robot_urdf("sice_arm"), "tip")
+        kw = {"actuator": ActuatorConfig(arm.actuator.torque_limit, dac_bits=12), "sensor": SICE_SENSOR}
+        return replace(arm, **{**kw, **overrides})
 
     @classmethod
     def from_urdf(
@@ -562,6 +579,7 @@ class Arm:
             "stribeck_ratio": self.stribeck_ratio,
             "stribeck_velocity": self.stribeck_velocity,
             "repair_inertia": self.repair_inertia,
+            "general": self.general,
         }
 
     def _key(self) -> tuple:
@@ -582,6 +600,7 @@ class Arm:
             self.friction_params,
             self.payload_capacity,
             self.repair_inertia,
+            self.general,
         )
 
     def __eq__(self, other: object) -> bool:

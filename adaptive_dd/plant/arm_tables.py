@@ -2,10 +2,10 @@
 from a scenario.
 
 :func:`arm_from_tables` reads the tables: the paper's two-link arm from its physical or base
-parameters (:class:`~adaptive_dd.plant.two_link.TwoLinkArm`), or any arm from a URDF
+parameters (:class:`~adaptive_dd.plant.two_link.ClosedFormTwoLink`), or any arm from a URDF
 (:func:`urdf_arm_from_table`, an :class:`~adaptive_dd.plant.arm.Arm`), which becomes the
 two-link closed-form fast path when it is the paper's kind of arm
-(:func:`~adaptive_dd.plant.two_link.as_two_link`). Every error names the file, the key, the
+(:func:`~adaptive_dd.plant.two_link.closed_form_view`). Every error names the file, the key, the
 value and the bound.
 """
 
@@ -21,7 +21,7 @@ from numpy.typing import NDArray
 from adaptive_dd.errors import ParameterError, ScenarioError, UrdfError
 from adaptive_dd.errors import is_finite_number as _is_num
 from adaptive_dd.plant.parameters import PhysicalParameters
-from adaptive_dd.plant.two_link import FRICTION_LAWS, TwoLinkArm, as_two_link
+from adaptive_dd.plant.two_link import FRICTION_LAWS, ClosedFormTwoLink, closed_form_view
 
 __all__ = ["ARM_BOUNDS", "URDF_ARM_KEYS", "arm_from_tables", "urdf_arm_from_table"]
 
@@ -100,7 +100,7 @@ def _check_keys(src: str, table: str, data: dict, allowed: tuple[str, ...]) -> N
 
 
 def _arm_kwargs(src: str, arm: dict) -> dict:
-    """Geometry, parameters and actuator of an ``[arm]`` table as TwoLinkArm keyword arguments."""
+    """Geometry, parameters and actuator of an ``[arm]`` table as ClosedFormTwoLink keyword arguments."""
     _check_keys(src, "arm", arm, tuple(dict.fromkeys(_PHYSICAL_KEYS + _SIGMA_KEYS + _ARM_OPTIONAL)))
     physical_only = [k for k in _PHYSICAL_KEYS if k in arm and k not in _SIGMA_KEYS]
     if "sigma" in arm and physical_only:
@@ -113,7 +113,7 @@ def _arm_kwargs(src: str, arm: dict) -> dict:
         if key not in arm:
             raise ScenarioError(f"{src}: key 'arm.{key}' is missing (required: {list(required)})")
     kw: dict = {}
-    sice = TwoLinkArm.sice()
+    sice = ClosedFormTwoLink.sice()
     kw["payload_radius"] = _table_number(
         src, "arm.payload_radius", arm.get("payload_radius", sice.payload_radius), lower=0.0, strict=False
     )
@@ -161,12 +161,14 @@ def _plant_kwargs(src: str, plant: dict) -> dict:
     return kw
 
 
-def arm_from_tables(arm_table: dict | None, plant_table: dict | None, src: str = "<memory>") -> TwoLinkArm:
+def arm_from_tables(
+    arm_table: dict | None, plant_table: dict | None, src: str = "<memory>"
+) -> ClosedFormTwoLink:
     """The arm of a scenario's ``[arm]`` and ``[plant]`` tables.
 
     An ``[arm]`` table with ``urdf`` or ``robot`` describes any serial arm
     (:func:`adaptive_dd.plant.arm.urdf_arm_from_table`: a
-    :class:`~adaptive_dd.plant.arm.Arm`, or a :class:`TwoLinkArm` when the URDF
+    :class:`~adaptive_dd.plant.arm.Arm`, or a :class:`ClosedFormTwoLink` when the URDF
     is the paper's kind of two-link arm). Otherwise:
 
     ``[arm]`` gives either the physical parameters (eq. 10)
@@ -176,7 +178,7 @@ def arm_from_tables(arm_table: dict | None, plant_table: dict | None, src: str =
     the forms is an error. ``[plant]`` gives ``friction`` ("stick-slip", "tanh",
     "stribeck", "lugre"), ``friction_velocity``, ``stribeck_ratio``, ``stribeck_velocity``,
     ``lugre_stiffness = [s0_1, s0_2]``, ``lugre_damping = [s1_1, s1_2]``.
-    A missing table means the SICE arm's values (:meth:`TwoLinkArm.sice`, stick-slip).
+    A missing table means the SICE arm's values (:meth:`ClosedFormTwoLink.sice`, stick-slip).
 
     Raises
     ------
@@ -187,10 +189,10 @@ def arm_from_tables(arm_table: dict | None, plant_table: dict | None, src: str =
     plant_kw = _plant_kwargs(src, {} if plant_table is None else plant_table)
     if isinstance(arm_table, dict) and ("urdf" in arm_table or "robot" in arm_table):
         return _urdf_arm(src, arm_table, plant_kw)
-    kw = TwoLinkArm.sice().__dict__.copy() if arm_table is None else _arm_kwargs(src, arm_table)
+    kw = ClosedFormTwoLink.sice().__dict__.copy() if arm_table is None else _arm_kwargs(src, arm_table)
     kw.update(plant_kw)
     try:
-        return TwoLinkArm(**kw)
+        return ClosedFormTwoLink(**kw)
     except (ParameterError, ArithmeticError) as exc:
         raise ScenarioError(f"{src}: [arm]/[plant]: {type(exc).__name__}: {exc}") from None
 
@@ -198,18 +200,18 @@ def arm_from_tables(arm_table: dict | None, plant_table: dict | None, src: str =
 def _urdf_arm(src: str, table: dict, plant_kw: dict):
     """The arm of an ``[arm]`` table naming a URDF: the general
     :class:`~adaptive_dd.plant.arm.Arm`
-    (:func:`urdf_arm_from_table`), or the two-link :class:`TwoLinkArm`
-    when it is one (:func:`as_two_link`) and ``general = true`` is not set. LuGre friction is a
+    (:func:`urdf_arm_from_table`), or the two-link :class:`ClosedFormTwoLink`
+    when it is one (:func:`closed_form_view`) and ``general = true`` is not set. LuGre friction is a
     two-link plant law: kept aside until the fast path decides which plant runs."""
     kw = dict(plant_kw)
     lugre = {k: kw.pop(k) for k in ("lugre_stiffness", "lugre_damping") if k in kw}
     if kw.get("friction") == "lugre":
         lugre["friction"] = kw.pop("friction")
-    arm = urdf_arm_from_table(src, table, kw)
     general = table.get("general", False)
     if not isinstance(general, bool):
         raise ScenarioError(f"{src}: key 'arm.general' must be true or false, got {general!r}")
-    two = None if general else as_two_link(arm)
+    arm = replace(urdf_arm_from_table(src, table, kw), general=general)
+    two = closed_form_view(arm)
     if two is None and lugre:
         raise ScenarioError(
             f"{src}: [plant] LuGre friction is implemented for the two-link arm only; the plant of "
@@ -249,8 +251,8 @@ def urdf_arm_from_table(src: str, table: dict, plant_kw: dict):
     ``payload_capacity`` (the rated payload [kg]: the size of the estimator's re-opening,
     :mod:`adaptive_dd.identification.online`); ``general`` is read by
     :func:`adaptive_dd.plant.two_link.arm_from_tables`, which turns a URDF of the paper's kind of
-    two-link arm into a :class:`~adaptive_dd.plant.two_link.TwoLinkArm` (the closed-form fast path,
-    :func:`~adaptive_dd.plant.two_link.as_two_link`) unless ``general = true``. ``plant_kw``: the
+    two-link arm into a :class:`~adaptive_dd.plant.two_link.ClosedFormTwoLink` (the closed-form fast path,
+    :func:`~adaptive_dd.plant.two_link.closed_form_view`) unless ``general = true``. ``plant_kw``: the
     ``[plant]`` settings of the general model (LuGre's are the two-link arm's: not here).
 
     Raises

@@ -25,7 +25,7 @@ class ActuatorConfig:
     ----------
     torque_limit : (float, float)
         Saturation torques [N m] of joints 1, 2 (70, 15 for the SICE arm:
-        :meth:`adaptive_dd.plant.two_link.TwoLinkArm.sice`).
+        :meth:`adaptive_dd.plant.two_link.ClosedFormTwoLink.sice`).
     saturate : bool
         Clip commands to +-torque_limit.
     quantize : bool
@@ -132,3 +132,9 @@ class SensorConfig:
             qdm,
         )
         return qm, qdm
+
+
+SICE_SENSOR = SensorConfig(
+    encoder_counts=(614400, 507904), position_variance=(1e-8, 1e-7), velocity_variance=(5e-5, 1e-4)
+)
+"""The SICE arm's encoders (counts per revolution) and noise variances (Tables 2 and 4 of the paper)."""

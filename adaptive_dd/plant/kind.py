@@ -2,7 +2,7 @@
 
 Two arm types exist (issue 27 merges them step by step):
 
-- :class:`~adaptive_dd.plant.two_link.TwoLinkArm`, the paper's arm with its closed forms
+- :class:`~adaptive_dd.plant.two_link.ClosedFormTwoLink`, the paper's arm with its closed forms
   (eqs. 3-9): the benchmark's two-link loop (:mod:`adaptive_dd.benchmark`), the two-link
   controllers (:mod:`adaptive_dd.controllers`), the paper's estimator of sigma (seven base
   parameters, :mod:`adaptive_dd.identification.two_link_online`).
@@ -10,9 +10,12 @@ Two arm types exist (issue 27 merges them step by step):
   loop (:mod:`adaptive_dd.closed_loop`), the payload estimator
   (:mod:`adaptive_dd.identification.online`).
 
-Each class states its kind as the class attribute ``closed_form`` (True on ``TwoLinkArm``); every
-module that chooses between the two paths asks here (``is_two_link`` / ``is_chain``), so the day
-the closed forms become a fast path of :class:`Arm` the choice changes in one file.
+Each class states its kind as the class attribute ``closed_form`` (True on ``ClosedFormTwoLink``); every
+module that chooses between the two paths asks here (``is_two_link`` / ``is_chain``).
+Whether an :class:`Arm` has the closed forms at all is
+:func:`adaptive_dd.plant.two_link.closed_form_view`'s to say (the paper's geometry; a
+:class:`~adaptive_dd.benchmark.scenario.Scenario` takes them automatically, and
+:func:`require_two_link` returns them for an entry point that needs them).
 ``tests/test_arm_kind.py`` fails when a type test on the arm's class appears anywhere in the
 package (the classes' own ``__eq__`` aside); the command line asks here too (through
 ``adaptive_dd.cli._common``, which imports :func:`is_two_link`).
@@ -28,7 +31,7 @@ __all__ = ["arm_kind", "is_chain", "is_two_link", "require_two_link"]
 
 
 def is_two_link(arm: Any) -> bool:
-    """True for the paper's closed-form arm (:class:`~adaptive_dd.plant.two_link.TwoLinkArm`,
+    """True for the paper's closed-form arm (:class:`~adaptive_dd.plant.two_link.ClosedFormTwoLink`,
     ``closed_form`` True): it runs on the two-link path. False for an
     :class:`~adaptive_dd.plant.arm.Arm` and for anything that is not an arm."""
     return getattr(arm, "closed_form", None) is True
@@ -53,13 +56,25 @@ def arm_kind(arm: Any) -> str:
         return "two_link"
     if is_chain(arm):
         return "chain"
-    raise ParameterError(f"expected an arm (Arm or TwoLinkArm), got {type(arm).__name__}")
+    raise ParameterError(f"expected an arm (Arm or ClosedFormTwoLink), got {type(arm).__name__}")
 
 
-def require_two_link(arm: Any, what: str) -> None:
-    """Raise a :class:`ParameterError` naming ``what`` unless ``arm`` is the two-link closed-form arm."""
-    if not is_two_link(arm):
+def require_two_link(arm: Any, what: str):
+    """The closed forms' record of ``arm`` (:func:`~adaptive_dd.plant.two_link.closed_form_view`: an
+    :class:`~adaptive_dd.plant.arm.Arm` of the paper's geometry, or the record itself); a
+    :class:`ParameterError` naming ``what`` when the arm has none."""
+    from adaptive_dd.plant.two_link import closed_form_view
+
+    view = closed_form_view(arm)
+    if view is None:
         raise ParameterError(
-            f"{what}: needs the two-link closed-form arm (TwoLinkArm), got {type(arm).__name__}; "
-            "an Arm from a URDF runs on the N-joint path (adaptive_dd.closed_loop)"
+            f"{what}: needs an arm of the paper's two-link geometry (Arm.sice(), or a URDF like it), got "
+            f"{_describe(arm)}; any other arm runs on the N-joint path (adaptive_dd.closed_loop)"
         )
+    return view
+
+
+def _describe(arm: Any) -> str:
+    if is_chain(arm):
+        return f"{'the general kernels of ' if arm.general else ''}a {arm.n_joints}-joint Arm"
+    return type(arm).__name__

@@ -6,9 +6,10 @@ Pinocchio (``pin``) is the rigid-body reference: ``crba`` (mass matrix), ``rnea`
 uses sigma with ``b = d = 0``; gravity acts along -z and gives no torque about
 the vertical joint axes.
 
-Both functions take a :class:`~adaptive_dd.plant.two_link.TwoLinkArm` (default
-:meth:`TwoLinkArm.sice`) or its :class:`PhysicalParameters`. An arm known only by its
-base parameters is built from :meth:`TwoLinkArm.equivalent_physical`, a physical set
+Both functions take an :class:`~adaptive_dd.plant.arm.Arm` of the paper's geometry (its closed
+forms' record, :func:`~adaptive_dd.plant.two_link.closed_form_view`), that record (default
+:meth:`ClosedFormTwoLink.sice`) or its :class:`PhysicalParameters`. An arm known only by its
+base parameters is built from :meth:`ClosedFormTwoLink.equivalent_physical`, a physical set
 with the same sigma (rigid-body dynamics depend on sigma alone).
 """
 
@@ -28,9 +29,8 @@ from adaptive_dd.plant.dynamics import (
     mass_matrix,
     regressor,
 )
-from adaptive_dd.plant.kind import is_two_link
 from adaptive_dd.plant.parameters import Payload, PhysicalParameters
-from adaptive_dd.plant.two_link import TwoLinkArm
+from adaptive_dd.plant.two_link import ClosedFormTwoLink, closed_form_view
 
 __all__ = [
     "CheckResult",
@@ -50,19 +50,20 @@ def _link_inertia(mass: float, com_x: float, izz: float) -> pin.Inertia:
     return pin.Inertia(mass, np.array([com_x, 0.0, 0.0]), np.diag([ixx * 0.1, izz, izz]))
 
 
-def as_physical(arm: TwoLinkArm | PhysicalParameters | None) -> PhysicalParameters:
-    """Physical parameters of an arm (default :meth:`TwoLinkArm.sice`); see the module docstring."""
+def as_physical(arm: ClosedFormTwoLink | PhysicalParameters | None) -> PhysicalParameters:
+    """Physical parameters of an arm (default :meth:`ClosedFormTwoLink.sice`); see the module docstring."""
     if arm is None:
-        return TwoLinkArm.sice().equivalent_physical()
-    if is_two_link(arm):
-        return arm.equivalent_physical()
+        return ClosedFormTwoLink.sice().equivalent_physical()
+    view = closed_form_view(arm)  # an Arm of the paper's geometry: its closed forms' record
+    if view is not None:
+        return view.equivalent_physical()
     if isinstance(arm, PhysicalParameters):
         return arm
-    raise ParameterError(f"expected a TwoLinkArm or PhysicalParameters, got {type(arm).__name__}")
+    raise ParameterError(f"expected a ClosedFormTwoLink or PhysicalParameters, got {type(arm).__name__}")
 
 
 def build_model(
-    arm: TwoLinkArm | PhysicalParameters | None = None, payload: Payload | None = None
+    arm: ClosedFormTwoLink | PhysicalParameters | None = None, payload: Payload | None = None
 ) -> pin.Model:
     """Two revolute joints about z in the horizontal plane, as a ``pinocchio.Model``.
 
@@ -149,8 +150,9 @@ def positive_definite_check(M: NDArray) -> CheckResult:
 
 
 def _two_link_sigma(arm, params: PhysicalParameters, payload: Payload | None) -> NDArray[np.float64]:
-    """The sigma compared: a TwoLinkArm's own (with its payload effect), else from the physical set."""
-    if is_two_link(arm):  # its own sigma and payload effect, against a disk body in Pinocchio
+    """The sigma compared: a ClosedFormTwoLink's own (with its payload effect), else from the physical set."""
+    arm = closed_form_view(arm)
+    if arm is not None:  # its own sigma and payload effect, against a disk body in Pinocchio
         return arm.sigma if payload is None else arm.sigma_with_payload(payload.mass, payload.radius)
     return (params if payload is None else params.with_payload(payload)).to_sigma()
 
@@ -181,7 +183,7 @@ def _skew_check(q, qd, sigma, C) -> CheckResult:
 
 
 def two_link_cross_check(
-    arm: TwoLinkArm | PhysicalParameters | None = None,
+    arm: ClosedFormTwoLink | PhysicalParameters | None = None,
     payload: Payload | None = None,
     n_states: int = 200,
     rng: np.random.Generator | None = None,
@@ -191,8 +193,8 @@ def two_link_cross_check(
 
     Parameters
     ----------
-    arm : TwoLinkArm or PhysicalParameters, optional
-        The arm (default :meth:`TwoLinkArm.sice`). For a TwoLinkArm, the sigma compared is
+    arm : ClosedFormTwoLink or PhysicalParameters, optional
+        The arm (default :meth:`ClosedFormTwoLink.sice`). For a ClosedFormTwoLink, the sigma compared is
         ``arm.sigma`` or ``arm.sigma_with_payload(...)``, so the check covers the
         arm's payload effect too; Pinocchio gets the disk as a separate body.
     payload : Payload, optional

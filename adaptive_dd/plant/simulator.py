@@ -21,7 +21,7 @@ from adaptive_dd.plant.dynamics import as_joint_array
 from adaptive_dd.plant.kind import require_two_link
 from adaptive_dd.plant.parameters import validate_sigma
 from adaptive_dd.plant.sampling import first_sample
-from adaptive_dd.plant.two_link import TwoLinkArm
+from adaptive_dd.plant.two_link import ClosedFormTwoLink
 from adaptive_dd.plant.two_link_integrator import step_kernel
 
 __all__ = [
@@ -49,7 +49,7 @@ class PayloadSchedule:
 
     ``masses[k]`` [kg] holds from ``times[k]`` on; before ``times[0]`` the mass is
     ``initial_mass``. Masses may carry a trailing batch axis (one value per trial).
-    ``radius`` [m] of the disks; None means the arm's :attr:`TwoLinkArm.payload_radius`.
+    ``radius`` [m] of the disks; None means the arm's :attr:`ClosedFormTwoLink.payload_radius`.
     Where the disk mounts (``l1``, ``l2``) is the arm's.
 
     Raises
@@ -84,7 +84,7 @@ class PayloadSchedule:
         m = self.initial_mass if k == 0 else self.masses[k - 1]
         return np.asarray(m, dtype=float)
 
-    def sigma_at(self, t: float, arm: TwoLinkArm) -> Array:
+    def sigma_at(self, t: float, arm: ClosedFormTwoLink) -> Array:
         """Base parameters of ``arm`` at time t with the disk (``(..., 7)``)."""
         return arm.sigma_with_payload(self.mass_at(t), self.radius)
 
@@ -196,9 +196,9 @@ class ArmSimulator:
     rng : numpy.random.Generator or sequence of them
         One shared generator, or one per trial (reproducible trial by trial; the
         noise is then drawn in chunks of ``NOISE_CHUNK`` samples).
-    arm : TwoLinkArm, optional
+    arm : ClosedFormTwoLink, optional
         The plant: base parameters, payload geometry, actuator, sensors and
-        friction law (default :meth:`TwoLinkArm.sice`).
+        friction law (default :meth:`ClosedFormTwoLink.sice`).
     payload : PayloadSchedule, optional
         Payload disks over time (mounted at the arm's ``l2``).
     sample_period : float
@@ -218,7 +218,7 @@ class ArmSimulator:
         n_trials: int,
         n_samples: int,
         rng: np.random.Generator | Sequence[np.random.Generator],
-        arm: TwoLinkArm | None = None,
+        arm: ClosedFormTwoLink | None = None,
         payload: PayloadSchedule | None = None,
         sample_period: float = 0.001,
         substeps: int = 2,
@@ -235,9 +235,7 @@ class ArmSimulator:
             raise ParameterError(f"substeps must be >= 1, got {substeps}")
         if n_trials < 1 or n_samples < 1:
             raise ParameterError(f"n_trials and n_samples must be >= 1, got {n_trials}, {n_samples}")
-        if arm is not None:
-            require_two_link(arm, "ArmSimulator(arm=...)")
-        self.arm = TwoLinkArm.sice() if arm is None else arm
+        self.arm = ClosedFormTwoLink.sice() if arm is None else require_two_link(arm, "ArmSimulator(arm=...)")
         self.n_trials, self.n_samples = int(n_trials), int(n_samples)
         self.T, self.substeps = float(sample_period), int(substeps)
         s0 = self.arm.sigma if sigma0 is None else validate_sigma(sigma0, "sigma0")

@@ -1,11 +1,19 @@
-"""The :class:`TwoLinkArm`: everything physical about a two-link horizontal arm, in one object.
+"""The paper's closed forms as a fast path of :class:`~adaptive_dd.plant.arm.Arm` (issue 27: one arm type).
 
-A :class:`TwoLinkArm` holds the base parameters ``sigma`` (eq. 9, without payload), the
+The public arm is :class:`~adaptive_dd.plant.arm.Arm` (a URDF, or :meth:`Arm.sice()
+<adaptive_dd.plant.arm.Arm.sice>`). An arm of the paper's geometry (two revolute joints about
+parallel vertical axes, centres of mass on the links' axes, no armature: :func:`as_two_link`) also
+has the closed forms of eqs. (3-9); :func:`closed_form_view` is the one function that says whether
+an arm has them and returns their record, a :class:`ClosedFormTwoLink`; :func:`paper_sigma` maps the
+arm's base parameters onto the paper's ``sigma = [J1 J2 r b1 b2 d1 d2]``. ``ClosedFormTwoLink`` was
+called ``TwoLinkArm`` (deprecated, a FutureWarning).
+
+A :class:`ClosedFormTwoLink` holds the base parameters ``sigma`` (eq. 9, without payload), the
 physical parameters of eq. (10) when they are known, the link lengths (``l2`` is
 where the payload disk mounts), the default payload disk radius, the actuator and
 sensor models, and the friction law of the *simulated plant*. Controllers and
 estimators keep the paper's friction model (viscous plus Coulomb, eqs. 5-6);
-only the simulated plant changes with :attr:`TwoLinkArm.friction`.
+only the simulated plant changes with :attr:`ClosedFormTwoLink.friction`.
 
 What the rest of the package asks of an arm is kept small, so that an N-joint
 arm (a URDF through Pinocchio) can implement the same interface later:
@@ -57,7 +65,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from adaptive_dd.errors import ParameterError
 from adaptive_dd.plant import dynamics
-from adaptive_dd.plant.devices import ActuatorConfig, SensorConfig
+from adaptive_dd.plant.devices import SICE_SENSOR, ActuatorConfig, SensorConfig
 from adaptive_dd.plant.parameters import (
     PAYLOAD_RADIUS,
     SIGMA_NAMES,
@@ -68,7 +76,7 @@ from adaptive_dd.plant.parameters import (
     validate_sigma,
 )
 
-__all__ = ["FRICTION_LAWS", "TwoLinkArm", "as_two_link"]
+__all__ = ["FRICTION_LAWS", "ClosedFormTwoLink", "as_two_link", "closed_form_view", "paper_sigma"]
 
 Array = NDArray[np.float64]
 
@@ -81,14 +89,14 @@ GEOMETRY_FACTOR = 1.5
 
 def _finite(name: str, v) -> float:
     if isinstance(v, bool) or not isinstance(v, int | float | np.floating | np.integer):
-        raise ParameterError(f"TwoLinkArm.{name} must be a number, got {v!r}")
+        raise ParameterError(f"ClosedFormTwoLink.{name} must be a number, got {v!r}")
     if not math.isfinite(v):
-        raise ParameterError(f"TwoLinkArm.{name} must be finite, got {v!r}")
+        raise ParameterError(f"ClosedFormTwoLink.{name} must be finite, got {v!r}")
     return float(v)
 
 
 @dataclass(frozen=True, eq=False)
-class TwoLinkArm:
+class ClosedFormTwoLink:
     """A two-link horizontal arm: parameters, geometry, actuators, sensors, plant friction.
 
     Build it with :meth:`sice`, :meth:`from_physical` or :meth:`from_sigma`
@@ -123,6 +131,8 @@ class TwoLinkArm:
         Bristle stiffness sigma0 per joint [N m/rad] (lugre law).
     lugre_damping : (float, float) or None
         Bristle damping sigma1 per joint [N m s/rad]; None: ``sqrt(sigma0_i M_ii(q2 = 0))``.
+    source : Arm or None
+        The arm this record is the closed forms of, when it was read from one (:meth:`to_arm`).
 
     Raises
     ------
@@ -138,50 +148,57 @@ class TwoLinkArm:
     l2: float
     payload_radius: float = PAYLOAD_RADIUS
     physical: PhysicalParameters | None = None
-    actuator: ActuatorConfig = field(default_factory=lambda: TwoLinkArm.sice().actuator)
-    sensor: SensorConfig = field(default_factory=lambda: TwoLinkArm.sice().sensor)
+    actuator: ActuatorConfig = field(default_factory=lambda: ClosedFormTwoLink.sice().actuator)
+    sensor: SensorConfig = field(default_factory=lambda: ClosedFormTwoLink.sice().sensor)
     friction: str = "stick-slip"
     friction_velocity: float = 0.02
     stribeck_ratio: float = 1.5
     stribeck_velocity: float = 0.1
     lugre_stiffness: tuple[float, float] = (1e5, 1e5)
     lugre_damping: tuple[float, float] | None = None
+    source: object = field(default=None, repr=False, compare=False)
+    """The :class:`~adaptive_dd.plant.arm.Arm` this record was read from (:func:`as_two_link`), or
+    None; :meth:`to_arm` returns it while the record is still its closed forms."""
     closed_form: ClassVar[bool] = True
     """True: the paper's closed forms (eqs. 3-9), the two-link fast path (False on the general
     :class:`~adaptive_dd.plant.arm.Arm`); what the command line asks to choose the paper's experiments."""
 
     def __post_init__(self) -> None:
-        s = np.array(validate_sigma(self.sigma, "TwoLinkArm.sigma"), dtype=float, copy=True)
+        s = np.array(validate_sigma(self.sigma, "ClosedFormTwoLink.sigma"), dtype=float, copy=True)
         if s.shape != (7,):
-            raise ParameterError(f"TwoLinkArm.sigma must have shape (7,), got {s.shape}")
+            raise ParameterError(f"ClosedFormTwoLink.sigma must have shape (7,), got {s.shape}")
         s.setflags(write=False)
         object.__setattr__(self, "sigma", s)
         for name in ("l1", "l2"):
             v = _finite(name, getattr(self, name))
             if v <= 0:
-                raise ParameterError(f"TwoLinkArm.{name} must be > 0 m, got {v!r}")
+                raise ParameterError(f"ClosedFormTwoLink.{name} must be > 0 m, got {v!r}")
             object.__setattr__(self, name, v)
         rad = _finite("payload_radius", self.payload_radius)
         if rad < 0:
-            raise ParameterError(f"TwoLinkArm.payload_radius must be >= 0 m, got {rad!r}")
+            raise ParameterError(f"ClosedFormTwoLink.payload_radius must be >= 0 m, got {rad!r}")
         object.__setattr__(self, "payload_radius", rad)
         if self.physical is not None:
             self._check_physical()
         if not isinstance(self.actuator, ActuatorConfig):
-            raise ParameterError(f"TwoLinkArm.actuator must be an ActuatorConfig, got {self.actuator!r}")
+            raise ParameterError(
+                f"ClosedFormTwoLink.actuator must be an ActuatorConfig, got {self.actuator!r}"
+            )
         if not isinstance(self.sensor, SensorConfig):
-            raise ParameterError(f"TwoLinkArm.sensor must be a SensorConfig, got {self.sensor!r}")
+            raise ParameterError(f"ClosedFormTwoLink.sensor must be a SensorConfig, got {self.sensor!r}")
         if self.friction not in FRICTION_LAWS:
-            raise ParameterError(f"TwoLinkArm.friction must be one of {FRICTION_LAWS}, got {self.friction!r}")
+            raise ParameterError(
+                f"ClosedFormTwoLink.friction must be one of {FRICTION_LAWS}, got {self.friction!r}"
+            )
         for name in ("friction_velocity", "stribeck_velocity"):
             v = _finite(name, getattr(self, name))
             if v <= 0:
-                raise ParameterError(f"TwoLinkArm.{name} must be > 0 rad/s, got {v!r}")
+                raise ParameterError(f"ClosedFormTwoLink.{name} must be > 0 rad/s, got {v!r}")
             object.__setattr__(self, name, v)
         k = _finite("stribeck_ratio", self.stribeck_ratio)
         if k < 1:
             raise ParameterError(
-                f"TwoLinkArm.stribeck_ratio (static / Coulomb friction) must be >= 1, got {k!r}"
+                f"ClosedFormTwoLink.stribeck_ratio (static / Coulomb friction) must be >= 1, got {k!r}"
             )
         object.__setattr__(self, "stribeck_ratio", k)
         self._check_lugre()
@@ -192,40 +209,42 @@ class TwoLinkArm:
             if v is None and name == "lugre_damping":
                 continue
             if not isinstance(v, tuple | list | np.ndarray) or len(v) != 2:
-                raise ParameterError(f"TwoLinkArm.{name} must be two values (one per joint), got {v!r}")
+                raise ParameterError(
+                    f"ClosedFormTwoLink.{name} must be two values (one per joint), got {v!r}"
+                )
             vals = tuple(_finite(f"{name}[{i}]", x) for i, x in enumerate(v))
             if min(vals) <= 0:
-                raise ParameterError(f"TwoLinkArm.{name} must be > 0 per joint, got {v!r}")
+                raise ParameterError(f"ClosedFormTwoLink.{name} must be > 0 per joint, got {v!r}")
             object.__setattr__(self, name, vals)
 
     def _check_physical(self) -> None:
         p = self.physical
         if not isinstance(p, PhysicalParameters):
-            raise ParameterError(f"TwoLinkArm.physical must be PhysicalParameters or None, got {p!r}")
+            raise ParameterError(f"ClosedFormTwoLink.physical must be PhysicalParameters or None, got {p!r}")
         for name, a, length in (("a1", p.a1, p.l1), ("a2", p.a2, p.l2)):
             if not 0 <= a <= GEOMETRY_FACTOR * length:
                 raise ParameterError(
-                    f"TwoLinkArm.physical.{name} = {a!r} m: the centre of mass must lie within "
+                    f"ClosedFormTwoLink.physical.{name} = {a!r} m: the centre of mass must lie within "
                     f"[0, {GEOMETRY_FACTOR} * l{name[1]}] = [0, {GEOMETRY_FACTOR * length:g}] m"
                 )
         for name in ("l1", "l2"):
             mine, theirs = getattr(self, name), getattr(p, name)
             if mine != theirs:
                 raise ParameterError(
-                    f"TwoLinkArm.{name} = {mine!r} differs from physical.{name} = {theirs!r}"
+                    f"ClosedFormTwoLink.{name} = {mine!r} differs from physical.{name} = {theirs!r}"
                 )
         ref = p.to_sigma()
         bad = ~np.isclose(self.sigma, ref, rtol=1e-9, atol=1e-12)
         if bad.any():
             k = int(np.argmax(bad))
             raise ParameterError(
-                f"TwoLinkArm.sigma[{k}] ({SIGMA_NAMES[k]}) = {self.sigma[k]!r} differs from "
+                f"ClosedFormTwoLink.sigma[{k}] ({SIGMA_NAMES[k]}) = {self.sigma[k]!r} differs from "
                 f"physical.to_sigma() = {ref[k]!r}"
             )
 
     # ----------------------------------------------------------------- factories
     @classmethod
-    def sice(cls, **overrides) -> TwoLinkArm:
+    def sice(cls, **overrides) -> ClosedFormTwoLink:
         """The SICE arm of the paper: Table 1, l1 = l2 = 0.2 m, 0.05 m disk, (70, 15) N m, 12-bit D/A.
 
         ``overrides`` replace fields (e.g. ``friction="tanh"``).
@@ -239,30 +258,36 @@ class TwoLinkArm:
             payload_radius=PAYLOAD_RADIUS,
             physical=TABLE1_PHYSICAL,
             actuator=ActuatorConfig(TORQUE_LIMITS, dac_bits=12),
-            sensor=SensorConfig(
-                encoder_counts=(614400, 507904),
-                position_variance=(1e-8, 1e-7),
-                velocity_variance=(5e-5, 1e-4),
-            ),
+            sensor=SICE_SENSOR,
         )
         return replace(arm, **overrides) if overrides else arm
 
     @classmethod
     def from_urdf(cls, path, payload_frame: str | None = None, gravity=(0.0, 0.0, -9.81), **overrides):
-        """Any serial arm from a URDF (:meth:`adaptive_dd.plant.arm.Arm.from_urdf`).
+        """Deprecated: :meth:`Arm.from_urdf <adaptive_dd.plant.arm.Arm.from_urdf>` (the fast path
+        is then chosen where it runs, :func:`closed_form_view`).
 
-        Returns a :class:`TwoLinkArm` when the URDF is the paper's kind of two-link arm
+        Returns a :class:`ClosedFormTwoLink` when the URDF is the paper's kind of two-link arm
         (:func:`as_two_link`: the closed-form fast path),
         else the general :class:`~adaptive_dd.plant.arm.Arm`.
         """
+        import warnings
+
         from adaptive_dd.plant.arm import Arm
+
+        warnings.warn(
+            "ClosedFormTwoLink.from_urdf (was TwoLinkArm.from_urdf) is deprecated: use Arm.from_urdf; "
+            "the closed forms are chosen automatically where they apply (closed_form_view)",
+            FutureWarning,
+            stacklevel=2,
+        )
 
         general = Arm.from_urdf(path, payload_frame, gravity, **overrides)
         two = as_two_link(general)
         return general if two is None else two
 
     @classmethod
-    def from_physical(cls, physical: PhysicalParameters, **kwargs) -> TwoLinkArm:
+    def from_physical(cls, physical: PhysicalParameters, **kwargs) -> ClosedFormTwoLink:
         """An arm from the physical parameters of eq. (10) (link lengths included).
 
         ``kwargs``: the other fields (``payload_radius``, ``actuator``, ``friction``, ...).
@@ -272,7 +297,7 @@ class TwoLinkArm:
         return cls(sigma=physical.to_sigma(), l1=physical.l1, l2=physical.l2, physical=physical, **kwargs)
 
     @classmethod
-    def from_sigma(cls, sigma: ArrayLike, l1: float, l2: float, **kwargs) -> TwoLinkArm:
+    def from_sigma(cls, sigma: ArrayLike, l1: float, l2: float, **kwargs) -> ClosedFormTwoLink:
         """An arm known by its base parameters (eq. 9) and geometry only.
 
         ``kwargs``: the other fields (``payload_radius``, ``actuator``, ``friction``, ...).
@@ -394,6 +419,44 @@ class TwoLinkArm:
             l2=self.l2,
         )
 
+    def to_arm(self):
+        """The :class:`~adaptive_dd.plant.arm.Arm` this record is the closed forms of.
+
+        The arm it was read from (:attr:`source`, e.g. a scenario's ``[arm] robot = "sice_arm"``)
+        while this record is still that arm's closed forms; otherwise an arm whose URDF is written
+        from :meth:`equivalent_physical` (joint axes along z, link 2 at ``l1``, the payload frame
+        ``tip`` at ``l2``; position limits +-pi, velocity limits 2 pi rad/s, as the shipped
+        ``sice_arm.urdf``) into the user's cache folder, named by a hash of its text; actuator,
+        sensor, payload radius and plant friction are the record's.
+        :func:`closed_form_view` of the result has this record's ``sigma`` to round-off.
+
+        Raises
+        ------
+        ParameterError
+            LuGre plant friction (the closed forms' plant law only).
+        """
+        from adaptive_dd.plant.arm import Arm
+
+        if self.source is not None and as_two_link_cached(self.source) == self:
+            return self.source
+        if self.friction == "lugre":
+            raise ParameterError(
+                "ClosedFormTwoLink.to_arm: LuGre friction is a plant law of the closed forms only; an Arm "
+                "simulates stick-slip, tanh or stribeck friction"
+            )
+        path = _cached_urdf(two_link_urdf(self.equivalent_physical(), self.actuator.torque_limit))
+        return Arm.from_urdf(
+            path,
+            "tip",
+            actuator=self.actuator,
+            sensor=self.sensor,
+            payload_radius=self.payload_radius,
+            friction=self.friction,
+            friction_velocity=self.friction_velocity,
+            stribeck_ratio=self.stribeck_ratio,
+            stribeck_velocity=self.stribeck_velocity,
+        )
+
     def physical_with_payload(self, mass: float, radius: float | None = None) -> PhysicalParameters:
         """:meth:`equivalent_physical` with the disk added at ``l2`` (parallel-axis theorem)."""
         rad = self.payload_radius if radius is None else radius
@@ -432,10 +495,71 @@ class TwoLinkArm:
         )
 
     def __eq__(self, other: object) -> bool:
-        return isinstance(other, TwoLinkArm) and self._key() == other._key()
+        return isinstance(other, ClosedFormTwoLink) and self._key() == other._key()
 
     def __hash__(self) -> int:
         return hash(self._key())
+
+
+def two_link_urdf(p: PhysicalParameters, torque_limit=(70.0, 15.0)) -> str:
+    """The URDF text of a two-link arm of the paper's geometry with physical parameters ``p`` (eq. 10).
+
+    Each link's ``izz`` is its ``I_i`` about the centre of mass, ``ixx = iyy = izz`` (unseen by
+    planar motion; a rigid body's); ``<dynamics damping friction>`` are ``b_i``, ``d_i``.
+    """
+
+    def f(x) -> str:
+        return repr(float(x))
+
+    def joint(i, parent, xyz, b, d, effort) -> str:
+        return (
+            f'  <joint name="joint{i}" type="revolute">\n    <parent link="{parent}"/>\n'
+            f'    <child link="link{i}"/>\n    <origin xyz="{xyz} 0 0" rpy="0 0 0"/>\n'
+            '    <axis xyz="0 0 1.0"/>\n'
+            f'    <limit lower="{f(-math.pi)}" upper="{f(math.pi)}" effort="{f(effort)}" '
+            f'velocity="{f(2 * math.pi)}"/>\n'
+            f'    <dynamics damping="{f(b)}" friction="{f(d)}"/>\n  </joint>\n'
+        )
+
+    def link(i, m, a, inertia) -> str:
+        ii = f(inertia)
+        return (
+            f'  <link name="link{i}">\n    <inertial>\n      <origin xyz="{f(a)} 0 0" rpy="0 0 0"/>\n'
+            f'      <mass value="{f(m)}"/>\n'
+            f'      <inertia ixx="{ii}" ixy="0" ixz="0" iyy="{ii}" iyz="0" izz="{ii}"/>\n'
+            "    </inertial>\n  </link>\n"
+        )
+
+    return (
+        '<?xml version="1.0"?>\n<!-- A two-link arm of the paper\'s geometry '
+        "(adaptive_dd.plant.two_link.two_link_urdf) -->\n"
+        '<robot name="two_link">\n  <link name="base_link"/>\n'
+        + joint(1, "base_link", "0", p.b1, p.d1, torque_limit[0])
+        + link(1, p.m1, p.a1, p.I1)
+        + joint(2, "link1", f(p.l1), p.b2, p.d2, torque_limit[1])
+        + link(2, p.m2, p.a2, p.I2)
+        + '  <joint name="tip_joint" type="fixed">\n    <parent link="link2"/>\n    <child link="tip"/>\n'
+        f'    <origin xyz="{f(p.l2)} 0 0" rpy="0 0 0"/>\n  </joint>\n  <link name="tip"/>\n</robot>\n'
+    )
+
+
+def _cached_urdf(text: str):
+    """``text`` as a file in ``$XDG_CACHE_HOME/adaptive_dd/urdf`` (default ``~/.cache``), named by
+    its hash: the same arm, the same file (an :class:`~adaptive_dd.plant.arm.Arm` reads it again
+    in a worker process)."""
+    import hashlib
+    import os
+    from pathlib import Path
+
+    from adaptive_dd.outputs import atomic_write
+
+    root = Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "adaptive_dd" / "urdf"
+    path = root / f"two_link-{hashlib.sha256(text.encode()).hexdigest()[:16]}.urdf"
+    if not path.is_file():
+        root.mkdir(parents=True, exist_ok=True)
+        with atomic_write(path) as fh:
+            fh.write(text)
+    return path
 
 
 def _jsonable(d: dict) -> dict:
@@ -443,22 +567,22 @@ def _jsonable(d: dict) -> dict:
 
 
 # ------------------------------------------------------------------ the fast path
-def as_two_link(arm, atol: float = 1e-12) -> TwoLinkArm | None:
-    """The two-link :class:`TwoLinkArm` equal to ``arm`` (an :class:`~adaptive_dd.plant.arm.Arm`),
+def as_two_link(arm, atol: float = 1e-12) -> ClosedFormTwoLink | None:
+    """The two-link :class:`ClosedFormTwoLink` equal to ``arm`` (an :class:`~adaptive_dd.plant.arm.Arm`),
     or None if it is not one.
 
     The closed forms of the paper (eqs. 3-8) hold for two revolute joints about
     parallel z axes, joint 2 at ``(l1, 0, 0)`` of joint 1's frame, centres of mass
     on the links' x axes, gravity along z (no gravity torque), no armature, and the
     payload frame at ``(l2, 0, z)`` of link 2 with its axes aligned. Such an arm is
-    exactly a :class:`TwoLinkArm` (physical parameters of eq. 10); the benchmark then runs
+    exactly a :class:`ClosedFormTwoLink` (physical parameters of eq. 10); the benchmark then runs
     the two-link kernels, held equal to the general ones by a test.
     """
     if not _is_paper_geometry(arm, atol):
         return None
-    # the two-link TwoLinkArm has no position limits; the scenario's reference keeps within them
+    # the two-link ClosedFormTwoLink has no position limits; the scenario's reference keeps within them
     phys = _physical_parameters(arm)
-    return TwoLinkArm.from_physical(
+    return ClosedFormTwoLink.from_physical(
         phys,
         payload_radius=arm.payload_radius,
         actuator=arm.actuator,
@@ -467,6 +591,7 @@ def as_two_link(arm, atol: float = 1e-12) -> TwoLinkArm | None:
         friction_velocity=arm.friction_velocity,
         stribeck_ratio=arm.stribeck_ratio,
         stribeck_velocity=arm.stribeck_velocity,
+        source=arm,
     )
 
 
@@ -516,3 +641,102 @@ def _physical_parameters(arm) -> PhysicalParameters:
         l1=float(m.jointPlacements[2].translation[0]),
         l2=float(arm._payload_frame[1].translation[0]),
     )
+
+
+def closed_form_view(arm) -> ClosedFormTwoLink | None:
+    """The closed-form record the fast path runs for ``arm``, or None: the general kernels.
+
+    The one place that decides whether the paper's closed forms (eqs. 3-9) apply: an
+    :class:`~adaptive_dd.plant.arm.Arm` of the paper's geometry (:func:`as_two_link`) unless built
+    with ``general=True``; a :class:`ClosedFormTwoLink` is its own record. Cached on the arm (the
+    geometry test reads the Pinocchio model once). The record and the general kernels give the same
+    dynamics (``tests/test_one_arm.py``: mass matrix, torque, a closed-loop trial).
+    """
+    if getattr(arm, "closed_form", None) is True:
+        return arm
+    if getattr(arm, "closed_form", None) is not False or arm.general:
+        return None
+    return as_two_link_cached(arm)
+
+
+def _paper_map(arm) -> Array:
+    """``S (7, p)``: ``paper sigma = S @ sigma`` on an arm of the paper's geometry (:func:`paper_sigma`)."""
+
+    def make():
+        rng = np.random.default_rng(0)
+        q, qd, qdd = (rng.uniform(-2.0, 2.0, (40, 2)) for _ in range(3))
+        phi7 = dynamics.regressor(q, qd, qdd).reshape(-1, 7)
+        phi = arm.regressor(q, qd, qdd).reshape(-1, len(arm.sigma))
+        S, *_ = np.linalg.lstsq(phi7, phi, rcond=None)
+        scale = np.linalg.norm(phi, axis=0)
+        outside = np.linalg.norm(phi7 @ S - phi, axis=0) > 1e-9 * np.maximum(scale, 1.0)
+        S[:, outside] = 0.0  # a direction the closed forms have no term for (my2, Ia2): zero on them
+        S[np.abs(S) < 1e-12 * np.abs(S).max()] = 0.0
+        return S
+
+    return arm._cached("paper_map", make)
+
+
+def paper_sigma(arm, sigma: ArrayLike | None = None) -> Array:
+    """The paper's base parameters ``[J1 J2 r b1 b2 d1 d2]`` (eq. 9) of ``arm``'s base parameters.
+
+    A linear map ``S (7, p)``, the same for every value of the arm's parameters: the torque is
+    ``Phi(q, qd, qdd) @ S @ sigma`` with ``Phi`` the closed-form regressor of eq. (8), ``S`` found once
+    per arm by least squares on 40 sampled states (seed 0). On the SICE URDF's base parameters
+    ``('Izz1 + 0.04*m2 + Ia1', 'mx2', 'my2', 'Izz2', 'fv1', 'fv2', 'fc1', 'fc2', 'Ia2')`` it reads
+    ``J1 = Izz1 + l1^2 m2 + Ia1``, ``J2 = Izz2``, ``r = l1 mx2``, ``b = fv``, ``d = fc``. A base
+    parameter the closed forms have no term for (there ``my2``, a centre of mass off the link's
+    axis, and ``Ia2``, armature) maps to nothing: the map is exact where they are zero, as on every
+    arm of the paper's geometry.
+
+    Parameters
+    ----------
+    arm : Arm
+        An arm of the paper's geometry (:func:`closed_form_view` is not None for it, or would not be
+        without ``general=True``).
+    sigma : array_like (..., p), optional
+        Base parameters of ``arm`` (an estimate, a loaded arm's); default ``arm.sigma``.
+
+    Returns
+    -------
+    ndarray (..., 7)
+        On a :class:`ClosedFormTwoLink` (whose base parameters are the paper's) ``sigma`` itself.
+
+    Raises
+    ------
+    ParameterError
+        ``arm`` is not of the paper's geometry; ``sigma`` of the wrong length.
+    """
+    if getattr(arm, "closed_form", None) is True:
+        return np.asarray(arm.sigma if sigma is None else sigma, dtype=float)
+    if getattr(arm, "closed_form", None) is not False or as_two_link_cached(arm) is None:
+        raise ParameterError(
+            f"paper_sigma: the paper's sigma [J1 J2 r b1 b2 d1 d2] exists for an arm of its geometry "
+            f"(two parallel revolute joints, centres of mass on the link axes, no armature), not "
+            f"for this {getattr(arm, 'n_joints', '?')}-joint arm"
+        )
+    s = np.asarray(arm.sigma if sigma is None else sigma, dtype=float)
+    if s.shape[-1:] != arm.sigma.shape:
+        raise ParameterError(f"paper_sigma: sigma must have shape (..., {len(arm.sigma)}), got {s.shape}")
+    return s @ _paper_map(arm).T
+
+
+def as_two_link_cached(arm) -> ClosedFormTwoLink | None:
+    """:func:`as_two_link` of an :class:`~adaptive_dd.plant.arm.Arm`, cached, ``general`` ignored."""
+    return arm._cached("as_two_link", lambda: as_two_link(arm))
+
+
+def __getattr__(name: str):
+    """``TwoLinkArm``, the old name of :class:`ClosedFormTwoLink` (a FutureWarning)."""
+    if name == "TwoLinkArm":
+        import warnings
+
+        warnings.warn(
+            "adaptive_dd.plant.two_link.TwoLinkArm is deprecated: the one arm type is "
+            "adaptive_dd.plant.Arm (Arm.sice() for the paper's arm; its closed forms are chosen "
+            "automatically); the closed-form record is ClosedFormTwoLink",
+            FutureWarning,
+            stacklevel=2,
+        )
+        return ClosedFormTwoLink
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

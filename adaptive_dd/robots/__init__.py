@@ -42,7 +42,7 @@ ROBOTS: dict[str, RobotInfo] = {
     "sice_arm": RobotInfo(
         "sice_arm.urdf",
         "tip",
-        "SICE SR-402DD two-link direct-drive arm, horizontal (TwoLinkArm.sice()); Table 1 of 'Recursive "
+        "SICE SR-402DD two-link direct-drive arm, horizontal (Arm.sice()); Table 1 of 'Recursive "
         "simultaneous estimation of a two-link direct drive manipulator with great variation of payload'",
     ),
     "vertical3": RobotInfo(
