@@ -28,7 +28,7 @@ import numpy as np
 from numba import njit
 
 from adaptive_dd.closed_loop.glue import segment_of
-from adaptive_dd.closed_loop.laws import law_trial_in, law_work
+from adaptive_dd.closed_loop.laws import OBS_ROWS, law_trial_in, law_work, observe_applied
 from adaptive_dd.closed_loop.plant import plant_scratch, plant_step
 from adaptive_dd.identification import online_kernel as K
 from adaptive_dd.plant import integrator as SI
@@ -78,6 +78,7 @@ def _dynamics_loop(ch, pl, rc, q_rec, qd_rec, tau_rec, sc, solve):  # pragma: no
 def _law_loop(ch, cfg, pi_true, pi_model, theta, rc, qm, qdm, out):  # pragma: no cover - compiled
     big = 1 << 40
     work = law_work(qm.shape[1])
+    obs = np.zeros((OBS_ROWS, qm.shape[1]))
     for k in range(qm.shape[0]):
         s = segment_of(rc, k)
         law_trial_in(
@@ -87,6 +88,7 @@ def _law_loop(ch, cfg, pi_true, pi_model, theta, rc, qm, qdm, out):  # pragma: n
             pi_model,
             theta,
             big,
+            obs,
             qm[k],
             qdm[k],
             rc.q_d[k],
@@ -95,6 +97,7 @@ def _law_loop(ch, cfg, pi_true, pi_model, theta, rc, qm, qdm, out):  # pragma: n
             work,
             out,
         )
+        observe_applied(obs, out)  # the observer's applied torque, as the closed loop gives it
 
 
 @njit(cache=True)

@@ -281,15 +281,21 @@ def test_law_with_its_scratch_given_equals_the_allocating_law(rng):
         pi = form.state.pi_model[0] * (1.0 + 0.05 * rng.standard_normal(13 * n))  # a true model
         st_a = (form.state.pi_model[0].copy(), form.state.theta[0].copy())
         st_b = (form.state.pi_model[0].copy(), form.state.theta[0].copy())
+        obs_a, obs_b = form.state.obs[0].copy(), form.state.obs[0].copy()
         for k in range(4):
             q, qd, q_d, qd_d, qdd_d = (rng.uniform(-1, 1, n) for _ in range(5))
             since = k  # inside any boost window first, then later
             want, got = np.empty(n), np.empty(n)
-            law_trial(arm.chain, form.cfg, pi, *st_a, since, q, qd, q_d, qd_d, qdd_d, want)
-            law_trial_in(arm.chain, form.cfg, pi, *st_b, since, q, qd, q_d, qd_d, qdd_d, work, got)
+            law_trial(arm.chain, form.cfg, pi, *st_a, since, obs_a, q, qd, q_d, qd_d, qdd_d, want)
+            law_trial_in(arm.chain, form.cfg, pi, *st_b, since, obs_b, q, qd, q_d, qd_d, qdd_d, work, got)
             np.testing.assert_array_equal(got, want, err_msg=name)
             assert np.isfinite(got).all(), name
             np.testing.assert_array_equal(st_b[1], st_a[1], err_msg=name)
+            np.testing.assert_array_equal(obs_b, obs_a, err_msg=name)
+            obs_a[4] += want  # the applied torque, as the closed loop adds it (observe_applied)
+            obs_b[4] += got
+            obs_a[5, 1] += 1.0
+            obs_b[5, 1] += 1.0
 
 
 def test_arm_metrics_from_hand_made_sums():

@@ -48,6 +48,7 @@ __all__ = [
     "PDControl",
     "SlotineLi",
     "SlotineLiOracle",
+    "observer_bandwidth",
     "with_stated_uncertainty",
 ]
 
@@ -150,7 +151,9 @@ class Law:
             pi_fixed=self.pi_nominal, boost_kp=z, boost_kd=z.copy(), boost_samples=0, adapt=False,
             gamma=np.zeros(10), lo=np.full(10, -np.inf), hi=np.full(10, np.inf), com_radius=np.inf,
             payload_joint=int(self.arm.payload_joint), payload_map=np.ascontiguousarray(self.arm.payload_map),
-            T=float(T),
+            T=float(T), observer=False, obs_a=0.0, obs_stages=2, obs_kappa=OBSERVER_THRESHOLD,
+            obs_alpha=1.0,
+            obs_warmup=0,
         )  # fmt: skip
         base.update(kw)
         return LawConfig(**base)
@@ -342,10 +345,33 @@ def _estimator_table(name: str, settings: dict) -> dict:
     return est
 
 
+OBSERVER_POLE = 0.4
+"""The residual observer's bandwidth is ``OBSERVER_POLE / T`` (400 rad/s at 1 kHz): each of its two
+stages' pole at ``exp(-0.4)``, half a step passed after about four samples. One constant for every
+arm, measured at 0.1 / 0.2 / 0.4 / 0.8 on vertical3 and the iiwa (docs/change_detection.md, "The
+residual observer")."""
+OBSERVER_THRESHOLD = 3.0
+"""The observer's output is soft-thresholded at this many times its own learnt RMS level."""
+OBSERVER_LEVEL_WINDOW = 1.0
+"""[s] window of the observer's learnt level (the detector's long window)."""
+OBSERVER_WARMUP = 0.5
+"""[s] the observer learns its level this long before it feeds the command (the detector's warm-up)."""
+
+
+def observer_bandwidth(sample_period: float) -> float:
+    """The residual observer's bandwidth [rad/s] for a sample period [s]: ``0.4 / T``."""
+    return OBSERVER_POLE / sample_period
+
+
 class AdaptiveCT(Law):
     """Computed torque on the N-joint online estimator's projected model
     (:mod:`adaptive_dd.identification.online`), the feedback raised to ``boost_bandwidth``
-    (300 rad/s) through the nominal inertia for ``boost_duration`` (1 s) after an alarm.
+    (300 rad/s) through the nominal inertia for ``boost_duration`` (1 s) after an alarm, plus the
+    residual observer's torque (``observer``, on by default; bandwidth ``observer_bandwidth``,
+    default ``0.4 / T``): the torque the current model leaves unexplained, beyond three times
+    its own noise level (:mod:`adaptive_dd.closed_loop.laws`). With the observer on,
+    adaptive_ct is no longer only "computed torque given an estimated model": it also feeds the
+    measured residual forward until the estimate explains it; ``observer = false`` is that law.
 
     The boost holds the arm while the new payload is learnt: the mass is known within tens of
     ms after an alarm, its centre of mass and inertia over a few hundred. With 0.2 s the UR5
@@ -355,7 +381,9 @@ class AdaptiveCT(Law):
     (``studies/boost_ablation.py``)."""
 
     name = "adaptive_ct"
-    SETTINGS = frozenset({"boost_bandwidth", "boost_duration", "estimator", "detector"})
+    SETTINGS = frozenset(
+        {"boost_bandwidth", "boost_duration", "estimator", "detector", "observer", "observer_bandwidth"}
+    )
     BOOST_DURATION = 1.0
     """[s] default ``boost_duration``; the two-link ``adaptive_ct`` keeps 0.2 s on purpose (its
     estimator learns the paper's sigma within tens of ms; an N-joint payload's centre of mass
@@ -380,13 +408,18 @@ class AdaptiveCT(Law):
         self.boost_duration = float(self.settings.get("boost_duration", self.BOOST_DURATION))
         if not (self.boost_bandwidth > 0 and self.boost_duration >= 0):
             raise ParameterError(f"controllers.{self.name}: boost_bandwidth > 0 and boost_duration >= 0")
+        self.observer, self.observer_bw = _observer_settings(self.name, self.settings)
 
     def law_config(self, sample_period):
         w, wb, z = self.gains.bandwidth, self.boost_bandwidth, self.gains.damping
         wb = np.maximum(wb, w)
+        T = float(sample_period)
+        beta = self.observer_bw if self.observer_bw is not None else observer_bandwidth(T)
         return self._config(
             sample_period, KIND_CT, MODEL_TRIAL, boost_kp=wb**2 - w**2, boost_kd=2.0 * z * (wb - w),
-            boost_samples=round(self.boost_duration / sample_period),
+            boost_samples=round(self.boost_duration / sample_period), observer=self.observer,
+            obs_a=float(np.exp(-beta * T)), obs_alpha=min(1.0, T / OBSERVER_LEVEL_WINDOW),
+            obs_warmup=round(OBSERVER_WARMUP / T),
         )  # fmt: skip
 
     def compiled_form(self, n_trials, sample_period):
@@ -410,6 +443,24 @@ class AdaptiveCT(Law):
 
     def skipped(self, form: CompiledForm):
         return self._est.state_skipped(form.es)
+
+
+def _observer_settings(name: str, settings: dict) -> tuple[bool, float | None]:
+    """``observer`` (a boolean, default true) and ``observer_bandwidth`` (a number > 0 [rad/s], or
+    absent: derived from the sample period) of ``[controllers.NAME]``; a bad value is an error
+    naming the key."""
+    on = settings.get("observer", True)
+    if not isinstance(on, bool | np.bool_):
+        raise ParameterError(
+            f"controllers.{name}.observer: true or false (the residual observer fed forward), got {on!r}"
+        )
+    bw = settings.get("observer_bandwidth")
+    if bw is not None and not (_is_number(bw) and bw > 0):
+        raise ParameterError(
+            f"controllers.{name}.observer_bandwidth: a number > 0 [rad/s] (leave it out for 0.4 / T), "
+            f"got {bw!r}"
+        )
+    return bool(on), None if bw is None else float(bw)
 
 
 ARM_CONTROLLERS: dict[str, type[Law]] = {

@@ -40,7 +40,14 @@ from numba.core.errors import NumbaPerformanceWarning
 from numba.extending import overload
 from numpy.typing import NDArray
 
-from adaptive_dd.closed_loop.laws import LawConfig, LawState, law_trial_in, law_work
+from adaptive_dd.closed_loop.laws import (
+    OBS_ROWS,
+    LawConfig,
+    LawState,
+    law_trial_in,
+    law_work,
+    observe_applied,
+)
 from adaptive_dd.closed_loop.plant import plant_scratch, plant_step
 from adaptive_dd.closed_loop.types import Plant
 from adaptive_dd.identification.online_kernel import (
@@ -201,7 +208,8 @@ def estimator_work(ec, es):  # pragma: no cover - replaced by the overloads
 
 def estimator_sample(ec, es, ls, i, q, qd, tau, ew):  # pragma: no cover - replaced by the overloads
     """One sample of trial i's estimator on the measured ``q, qd`` (NaN if lost) and the applied
-    ``tau``: 1 on an alarm, else 0; the law's model and its count of samples since the last alarm
+    ``tau``: 1 on an alarm, else 0; the law's model, its count of samples since the last alarm and
+    its residual observer's applied torques (:func:`~adaptive_dd.closed_loop.laws.observe_applied`)
     updated. An array ``ec`` means no estimator; an ``EstCfg`` the N-joint online estimator
     (:func:`~adaptive_dd.identification.online_kernel.est_step_trial_in`)."""
     raise NotImplementedError("compiled only")
@@ -244,7 +252,7 @@ def _law_command(law, ls, pl, i, s, T, q, qd, q_d, qd_d, qdd_d, lw, out):
         def impl(law, ls, pl, i, s, T, q, qd, q_d, qd_d, qdd_d, lw, out):  # pragma: no cover
             law_trial_in(
                 pl.chain, law.cfg, law.pi_true[i, s], ls.pi_model[i], ls.theta[i], ls.since_alarm[i],
-                q, qd, q_d, qd_d, qdd_d, lw, out,
+                ls.obs[i], q, qd, q_d, qd_d, qdd_d, lw, out,
             )  # fmt: skip
 
         return impl
@@ -306,6 +314,7 @@ def online_sample(ec, es, ls, i, q, qd, tau, ew):  # pragma: no cover - compiled
     else:
         ls.since_alarm[i] += 1
     est_model_trial_in(ec, es, i, ls.pi_model[i], ew)
+    observe_applied(ls.obs[i], tau)
     return alarm
 
 
@@ -316,7 +325,9 @@ def compile_estimator(arm) -> None:
 
     ec, es = chain_estimator(np.zeros(1), np.zeros(1), arm, 1e-3)
     n = arm.n_joints
-    ls = LawState(np.zeros((1, 13 * n)), np.zeros((1, 10)), np.zeros(1, dtype=np.int64))
+    ls = LawState(
+        np.zeros((1, 13 * n)), np.zeros((1, 10)), np.zeros(1, dtype=np.int64), np.zeros((1, OBS_ROWS, n))
+    )
     v, ew = np.zeros(n), est_work(n, es.theta.shape[1])
     online_sample.compile(tuple(typeof(a) for a in (ec.cfg, es, ls, 0, v, v, v, ew)))
 

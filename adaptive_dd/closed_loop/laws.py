@@ -21,6 +21,18 @@ of the configuration (``MODEL_FIXED``), the true one of the current segment
 the nominal model plus the adapted payload). After an alarm, for ``boost_samples`` samples,
 ``M0(q) (dkp e + dkd e')`` is added (adaptive_ct's bandwidth boost).
 
+The residual observer (``observer``, adaptive_ct's; :func:`_observe`): De Luca's
+generalised-momentum observer of the torque the trial's model leaves unexplained,
+``r = beta / (s + beta) (tau - d/dt p - wv)`` with ``p = M(q) qd`` and ``wv = g - C^T qd +
+friction`` of ``pi_model``, discrete and consistent under a changing model (the momentum at the
+last and at this measurement both with this sample's model), here low-passed once more
+(``obs_stages = 2``: ``(beta / (s + beta))^2``, whose response to the measured velocity's white
+noise rolls off instead of passing it at the gain beta up to the Nyquist frequency); ``r``
+soft-thresholded at ``obs_kappa`` times its own learnt RMS level is added to the command. Noise
+stays below the threshold; a payload's torque passes from the samples after the swap, before the
+change is detected, and fades as the estimate learns it (``r`` is the residual of the current
+model).
+
 Slotine-Li's payload adaptation: with ``Y_p = Y_j(q, qd, qd_r, a) P`` (the link-j block of
 the Slotine-Li regressor times the payload map P of the payload frame),
 ``theta += T Gamma Y_p^T s``, then ``theta`` is clipped to ``[lo, hi]``; the mass kept
@@ -35,7 +47,13 @@ import numpy as np
 from numba import njit
 from numpy.typing import NDArray
 
-from adaptive_dd.plant.chain import body_slotine_li_regressor_in, mass_matrix_in, rnea_ref_in, workspace
+from adaptive_dd.plant.chain import (
+    body_slotine_li_regressor_in,
+    mass_matrix_in,
+    momentum_form_in,
+    rnea_ref_in,
+    workspace,
+)
 
 __all__ = [
     "KIND_CT",
@@ -45,6 +63,7 @@ __all__ = [
     "MODEL_NONE",
     "MODEL_TRIAL",
     "MODEL_TRUE",
+    "OBS_ROWS",
     "LawConfig",
     "LawState",
     "law_batch",
@@ -52,12 +71,22 @@ __all__ = [
     "law_trial_in",
     "law_work",
     "model_torque",
+    "observe_applied",
 ]
 
 Array = NDArray[np.float64]
 
 KIND_PD, KIND_CT, KIND_SLOTINE = 0, 1, 2
 MODEL_NONE, MODEL_FIXED, MODEL_TRUE, MODEL_TRIAL = 0, 1, 2, 3
+
+# rows of the observer's per-trial state LawState.obs (S, OBS_ROWS, n)
+O_R = 0  # the observed residual torque r [N m] (the last stage's output)
+O_LEVEL = 1  # its learnt mean square (winsorised, not bias-corrected) [N^2 m^2]
+O_Q, O_QD = 2, 3  # the last fresh measurement
+O_TAU = 4  # the applied torques summed since that measurement [N m] (written by the closed loop)
+O_COUNT = 5  # [0]: observer updates so far, [1]: samples summed in O_TAU
+O_R1 = 6  # the first stage's output (two stages)
+OBS_ROWS = 7
 
 
 class LawConfig(NamedTuple):
@@ -89,6 +118,19 @@ class LawConfig(NamedTuple):
         Payload parameters about the payload frame -> about the link's joint frame.
     T : float
         Sample period [s] (the adaptation step).
+    observer : bool
+        The residual observer feeds the command (module docstring).
+    obs_a : float
+        ``exp(-beta T)``, beta the observer's bandwidth [rad/s] (of each stage).
+    obs_stages : int
+        1: De Luca's first-order observer; 2: its output low-passed once more at beta (the
+        residual's noise, a differentiated momentum, then rolls off: module docstring).
+    obs_kappa : float
+        Soft threshold of ``r`` in units of its learnt RMS level.
+    obs_alpha : float
+        Weight of a sample in the level (``T`` over its 1 s window).
+    obs_warmup : int
+        Updates before ``r`` feeds the command (the level learnt meanwhile, not winsorised).
     """
 
     kind: int
@@ -109,29 +151,39 @@ class LawConfig(NamedTuple):
     payload_joint: int
     payload_map: Array
     T: float
+    observer: bool
+    obs_a: float
+    obs_stages: int
+    obs_kappa: float
+    obs_alpha: float
+    obs_warmup: int
 
 
 class LawState(NamedTuple):
     """Per-trial state of a law: ``pi_model (S, 13 n)`` (MODEL_TRIAL), ``theta (S, 10)``
-    adapted payload parameters, ``since_alarm (S,)`` samples since the last alarm."""
+    adapted payload parameters, ``since_alarm (S,)`` samples since the last alarm, ``obs (S,
+    OBS_ROWS, n)`` the residual observer's state (rows ``O_*`` of this module)."""
 
     pi_model: Array
     theta: Array
     since_alarm: NDArray[np.int64]
+    obs: Array
 
     @classmethod
     def start(cls, cfg: LawConfig, n_trials: int) -> LawState:
         """Every trial at the fixed model, no payload adapted, no recent alarm."""
         pi = np.broadcast_to(cfg.pi_fixed, (n_trials, cfg.pi_fixed.shape[0])).copy()
         big = np.full(n_trials, np.iinfo(np.int64).max // 2, dtype=np.int64)
-        return cls(pi, np.zeros((n_trials, 10)), big)
+        n = cfg.kp.shape[0]
+        return cls(pi, np.zeros((n_trials, 10)), big, np.zeros((n_trials, OBS_ROWS, n)))
 
 
 @njit(cache=True)
 def law_work(n):  # pragma: no cover - compiled
     """Scratch of one trial's :func:`law_trial_in` (allocated once per trial, not per sample):
     the chain workspace, ``(6, n)`` rows (e, e', qd_r, a, s, v), ``M (n, n)``, ``Y (n, 10)``,
-    ``(6, 10)``, ``(10,)``."""
+    ``(6, 10)``, ``(10,)``; the observer's ``(2, 6, 10)``, ``(4, n)`` (p, wv at the last and this
+    measurement), ``(2, n, 10)``."""
     return (
         workspace(n),
         np.empty((6, n)),
@@ -139,6 +191,9 @@ def law_work(n):  # pragma: no cover - compiled
         np.empty((n, 10)),
         np.empty((6, 10)),
         np.empty(10),
+        np.empty((2, 6, 10)),
+        np.empty((4, n)),
+        np.empty((2, n, 10)),
     )
 
 
@@ -209,23 +264,112 @@ def _adapt_payload(ch, cfg, q, qd, qdr, a, s, theta, pi_model, work):  # pragma:
 
 
 @njit(cache=True)
+def _momentum(ch, pi, q, qd, work, p, wv):  # pragma: no cover - compiled
+    """``p = M(q) qd + Ia qd`` and ``wv = g - C^T qd + fv qd + fc sgn(qd)`` of ``pi (13 n,)``."""
+    n = q.shape[0]
+    pyw = work[8]
+    momentum_form_in(ch, pi[: 10 * n], 0, q, qd, work[0], work[6], p, wv, pyw[0], pyw[1])
+    for j in range(n):
+        p[j] += pi[12 * n + j] * qd[j]
+        wv[j] += pi[10 * n + j] * qd[j] + pi[11 * n + j] * np.sign(qd[j])
+
+
+@njit(cache=True, inline="always")
+def observe_applied(obs, tau):  # pragma: no cover - compiled
+    """Add the torque ``tau (n,)`` applied over one sample to the residual observer's state
+    ``obs (OBS_ROWS, n)`` (the closed loop calls it after each sample's actuation)."""
+    for j in range(tau.shape[0]):
+        obs[O_TAU, j] += tau[j]
+    obs[O_COUNT, 1] += 1.0
+
+
+@njit(cache=True)
+def _observe(ch, cfg, pi, q, qd, obs, work, out):  # pragma: no cover - compiled
+    """One sample of the residual observer (module docstring) at a fresh measurement ``q, qd``;
+    its soft-thresholded output added to ``out``.
+
+    ``obs`` holds the last fresh measurement and the applied torques summed since (``O_TAU``,
+    ``O_COUNT[1]`` samples: the closed loop adds each sample's). Over those ``m`` samples the
+    mean residual is ``rho = sum tau / m - (wv_last + wv_now) / 2 - (p_now - p_last) / (m T)``,
+    both momenta with ``pi`` (consistent when the model changes), and ``r <- a^m r + (1 - a^m)
+    rho``. A measurement equal to the last one (a lost sample held) is not fresh: ``r`` is
+    kept and the torques go on being summed. The level learns ``min(r^2, kappa^2 level)``
+    (winsorised: a payload's residual raises it slowly, a higher noise still gets learnt).
+    """
+    n = q.shape[0]
+    held = obs[O_COUNT, 0] >= 1.0
+    for j in range(n):
+        held = held and q[j] == obs[O_Q, j] and qd[j] == obs[O_QD, j]
+    m = obs[O_COUNT, 1]
+    if obs[O_COUNT, 0] >= 1.0 and m >= 1.0 and not held:
+        pw = work[7]
+        _momentum(ch, pi, obs[O_Q], obs[O_QD], work, pw[0], pw[1])
+        _momentum(ch, pi, q, qd, work, pw[2], pw[3])
+        am = cfg.obs_a**m
+        for j in range(n):
+            rho = obs[O_TAU, j] / m - 0.5 * (pw[1, j] + pw[3, j]) - (pw[2, j] - pw[0, j]) / (m * cfg.T)
+            if not np.isfinite(rho):
+                continue
+            if cfg.obs_stages == 2:
+                obs[O_R1, j] = am * obs[O_R1, j] + (1.0 - am) * rho
+                rho = obs[O_R1, j]
+            obs[O_R, j] = am * obs[O_R, j] + (1.0 - am) * rho
+    if not held:
+        c = obs[O_COUNT, 0] + 1.0
+        bias = 1.0 - (1.0 - cfg.obs_alpha) ** c
+        for j in range(n):
+            r2 = obs[O_R, j] * obs[O_R, j]
+            if c > cfg.obs_warmup:
+                r2 = min(r2, cfg.obs_kappa**2 * obs[O_LEVEL, j] / bias)
+            obs[O_LEVEL, j] += cfg.obs_alpha * (r2 - obs[O_LEVEL, j])
+            obs[O_Q, j], obs[O_QD, j], obs[O_TAU, j] = q[j], qd[j], 0.0
+        obs[O_COUNT, 0] = c
+        obs[O_COUNT, 1] = 0.0
+    c = obs[O_COUNT, 0]
+    if c <= cfg.obs_warmup:
+        return
+    bias = 1.0 - (1.0 - cfg.obs_alpha) ** c
+    for j in range(n):
+        thr = cfg.obs_kappa * np.sqrt(obs[O_LEVEL, j] / bias)
+        r = obs[O_R, j]
+        if r > thr:
+            out[j] += r - thr
+        elif r < -thr:
+            out[j] += r + thr
+
+
+@njit(cache=True)
 def law_trial(
-    ch, cfg, pi_true, pi_model, theta, since_alarm, q, qd, q_d, qd_d, qdd_d, out
+    ch, cfg, pi_true, pi_model, theta, since_alarm, obs, q, qd, q_d, qd_d, qdd_d, out
 ):  # pragma: no cover
     """Torque command ``out (n,)`` [N m] of one trial from its measured ``q, qd (n,)``.
 
     ``pi_true (13 n,)`` the current true model (MODEL_TRUE), ``pi_model (13 n,)`` and
     ``theta (10,)`` the trial's model and adapted payload (updated in place when the law
-    adapts), ``since_alarm`` samples since its estimator's last alarm.
+    adapts), ``since_alarm`` samples since its estimator's last alarm, ``obs (OBS_ROWS, n)``
+    the residual observer's state (updated in place when ``cfg.observer``).
     """
     law_trial_in(
-        ch, cfg, pi_true, pi_model, theta, since_alarm, q, qd, q_d, qd_d, qdd_d, law_work(q.shape[0]), out
+        ch,
+        cfg,
+        pi_true,
+        pi_model,
+        theta,
+        since_alarm,
+        obs,
+        q,
+        qd,
+        q_d,
+        qd_d,
+        qdd_d,
+        law_work(q.shape[0]),
+        out,
     )
 
 
 @njit(cache=True, inline="always")
 def law_trial_in(
-    ch, cfg, pi_true, pi_model, theta, since_alarm, q, qd, q_d, qd_d, qdd_d, work, out
+    ch, cfg, pi_true, pi_model, theta, since_alarm, obs, q, qd, q_d, qd_d, qdd_d, work, out
 ):  # pragma: no cover
     """:func:`law_trial` with its scratch ``work`` (:func:`law_work`) given: no allocation per sample."""
     n = q.shape[0]
@@ -265,6 +409,8 @@ def law_trial_in(
         for j in range(n):
             v[j] = cfg.boost_kp[j] * e[j] + cfg.boost_kd[j] * ed[j]
         _add_nominal_inertia(ch, cfg, q, v, work, out)
+    if cfg.observer:
+        _observe(ch, cfg, pi_model, q, qd, obs, work, out)
 
 
 @njit(cache=True)
@@ -272,7 +418,7 @@ def _law_loop(ch, cfg, pi_true, st, q, qd, q_d, qd_d, qdd_d, out):  # pragma: no
     work = law_work(q.shape[1])  # one per call: trials run one after the other here
     for i in range(q.shape[0]):
         law_trial_in(
-            ch, cfg, pi_true[i], st.pi_model[i], st.theta[i], st.since_alarm[i],
+            ch, cfg, pi_true[i], st.pi_model[i], st.theta[i], st.since_alarm[i], st.obs[i],
             q[i], qd[i], q_d, qd_d, qdd_d, work, out[i],
         )  # fmt: skip
 

@@ -11,7 +11,8 @@ of your own classes (the protocol: ``docs/controllers.md``). Settings every cont
 Built-in settings:
 
 ``adaptive_ct``
-    ``boost_bandwidth``, ``boost_duration``, ``estimator = {...}`` (fields of
+    ``boost_bandwidth``, ``boost_duration``, ``observer``, ``observer_bandwidth`` (N-joint arms),
+    ``estimator = {...}`` (fields of
     :class:`~adaptive_dd.identification.two_link_online.TwoLinkOnlineConfig`: ``tau_f``, ``split``,
     ``construction``, ``p0_payload``, ``p0_j2``, ``project``, ``align``), ``detector = {...}``
     (fields of :class:`~adaptive_dd.identification.two_link_online.ChangeDetector`; also accepted inside
@@ -227,6 +228,10 @@ _SIGMA = Setting(
     chain=ABSENT,
     rule="on an N-joint arm the controllers' model is the scenario's [model] table (docs/plant_and_model.md)",
 )
+_OBSERVER_RULE = (
+    "the residual observer runs on an N-joint arm (the two-link adaptive_ct, on the paper's "
+    "estimator, has none yet)"
+)
 _BOOST = {
     "boost_bandwidth": Setting(
         "bandwidth [rad/s] of the feedback for boost_duration after each alarm (through the nominal inertia)",
@@ -240,6 +245,20 @@ _BOOST = {
         1.0,
         unit="s",
         rule=BOOST_RULE,
+    ),
+    "observer": Setting(
+        "feed forward the residual observer's torque (what the current model leaves unexplained, "
+        "beyond 3 times its own noise level; docs/change_detection.md)",
+        ABSENT,
+        True,
+        rule=_OBSERVER_RULE,
+    ),
+    "observer_bandwidth": Setting(
+        "bandwidth of the residual observer's two stages [rad/s]; default 0.4 / T, T the sample period",
+        ABSENT,
+        None,
+        rule=_OBSERVER_RULE,
+        unit="rad/s",
     ),
     "estimator": Setting(
         "the estimator's settings: TwoLinkOnlineConfig's fields on the two-link arm (tau_f, split, "

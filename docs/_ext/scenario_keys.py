@@ -85,6 +85,10 @@ MEANING = {
     " (two-link, 0.1), its centre of mass from the flange (N-joint, 0.3).",
     "setting.boost_bandwidth": "Bandwidth of the feedback boost after a change alarm [rad/s].",
     "setting.boost_duration": "How long the boost lasts after an alarm [s].",
+    "setting.observer": "`adaptive_ct` (N-joint arms): feed forward the residual observer's torque "
+    "(true by default; false is the law without it).",
+    "setting.observer_bandwidth": "`adaptive_ct` (N-joint arms): the residual observer's bandwidth "
+    "[rad/s]; default 0.4 / T.",
     "setting.estimator": "The online estimator's settings (a table; fields below).",
     "setting.detector": "`adaptive_ct`: the change detector's settings (a table at the top of"
     " `[controllers.adaptive_ct]`; fields below), or `false`.",

@@ -1,0 +1,124 @@
+"""adaptive_ct's transient after a payload change: the residual observer and its alternatives.
+
+For each scenario, one run of ct_oracle and of adaptive_ct under each variant of its settings
+(common random numbers: the same seeds, noise and drawn plants for every variant), and per
+variant: adaptive_ct / ct_oracle per segment (mean / p90 / max over seeds), the trials with a
+false alarm, the swaps missed, the median detection delay per swap [ms], and the mean RMS
+ratio to ct_oracle over the first 50 ms after each swap (the transient itself).
+
+    python studies/transient_ablation.py SCENARIO.toml [...] [--seeds 10] [--variants off on ...]
+
+Variants (``[controllers.adaptive_ct]`` settings): ``off`` (``observer = false``: the law before
+the observer), ``on`` (the default), ``bw50`` / ``bw200`` / ``bw400`` / ``bw800`` (``observer_bandwidth``),
+``boost0.2`` (the observer with ``boost_duration = 0.2``), ``noboost`` (the observer, boost 0 s),
+``off_boost0.2``; ``order1``, ``order1_bw200``: De Luca's first-order observer (one stage; the
+default low-passes its output once more); ``kappa4``, ``kappa5``: the observer's threshold at 4 or
+5 times its learnt level (3 by default).
+"""
+
+from __future__ import annotations
+
+import argparse
+import copy
+from pathlib import Path
+
+import numpy as np
+from _ablation import segment_cells
+
+from adaptive_dd.benchmark.metrics import FALSE_ALARM_WINDOW
+from adaptive_dd.benchmark.runner import run_benchmark
+from adaptive_dd.benchmark.scenario import parse_scenario, read_toml
+from adaptive_dd.closed_loop.runner import make_controllers
+
+VARIANTS = {
+    "off": {"observer": False},
+    "on": {},
+    "bw50": {"observer_bandwidth": 50.0},
+    "bw200": {"observer_bandwidth": 200.0},
+    "bw400": {"observer_bandwidth": 400.0},
+    "boost0.2": {"boost_duration": 0.2},
+    "noboost": {"boost_duration": 0.0},
+    "off_boost0.2": {"observer": False, "boost_duration": 0.2},
+    "order1": {"_stages": 1},
+    "order1_bw200": {"_stages": 1, "observer_bandwidth": 200.0},
+    "bw800": {"observer_bandwidth": 800.0},
+    "kappa4": {"_kappa": 4.0},
+    "kappa5": {"_kappa": 5.0},
+}
+TRANSIENT = 0.05
+"""[s] after each swap: the window of the transient's own RMS ratio."""
+
+
+def variant_controller(base: dict, path: str, settings: dict):
+    """adaptive_ct of the scenario ``base`` with ``settings`` added to its table."""
+    d = copy.deepcopy(base)
+    settings = dict(settings)
+    law = {k[1:]: settings.pop(k) for k in ("_stages", "_kappa") if k in settings}
+    d.setdefault("controllers", {}).setdefault("adaptive_ct", {}).update(settings)
+    d["run"]["controllers"] = ["adaptive_ct"]
+    ctrl = make_controllers(parse_scenario(d, path, Path(path).stem))["adaptive_ct"]
+    if law:  # not settings: the law's configuration with the observer's order or threshold replaced
+        law_config = ctrl.law_config
+        fields = {f"obs_{k}": v for k, v in law.items()}
+        ctrl.law_config = lambda T: law_config(T)._replace(**fields)
+    return ctrl
+
+
+def transient_cells(res, names, sc) -> dict:
+    """Per variant: the mean over seeds of the RMS ratio to ct_oracle in the first 50 ms after each swap."""
+    T = sc.sample_period
+    eo = res.runs["ct_oracle"].e_norm.astype(float) ** 2
+    out = {}
+    for nm in names:
+        ea = res.runs[nm].e_norm.astype(float) ** 2
+        cells = []
+        for swap in sc.swap_times:
+            i, j = round(swap / T), round((swap + TRANSIENT) / T)
+            cells.append(np.mean(np.sqrt(ea[:, i:j].mean(1) / eo[:, i:j].mean(1))))
+        out[nm] = "/".join(f"{c:.2f}" for c in cells)
+    return out
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser()
+    ap.add_argument("scenarios", nargs="+")
+    ap.add_argument("--seeds", type=int, default=10)
+    ap.add_argument("--variants", nargs="+", default=["off", "on"], choices=sorted(VARIANTS))
+    a = ap.parse_args()
+    for path in a.scenarios:
+        base = read_toml(Path(path))
+        d = copy.deepcopy(base)
+        d["run"]["seeds"] = a.seeds
+        d["run"]["controllers"] = ["ct_oracle", "adaptive_ct"]
+        sc = parse_scenario(d, path, Path(path).stem)
+        ctrls = {"ct_oracle": make_controllers(sc)["ct_oracle"]}
+        for v in a.variants:
+            ctrls[v] = variant_controller(d, path, VARIANTS[v])
+        res = run_benchmark(sc, controllers=ctrls, progress=False, keep_trajectories=0)
+        df = res.to_frame()
+        trans = transient_cells(res, a.variants, sc)
+        print(
+            f"{path}: {a.seeds} seeds; adaptive_ct / ct_oracle per segment (mean/p90/max); false-alarm "
+            "trials; missed; median delay [ms]; first 50 ms after each swap (mean ratio)"
+        )
+        for v in a.variants:
+            c = df[df.controller == v]
+            fa = int((c.groupby("seed").false_alarms.sum() > 0).sum())
+            missed = int(np.sum(c.detection_delay_s.isna() & (c.segment > 0)))
+            delays = []
+            for swap in sc.swap_times:
+                at = res.runs[v].alarm_times or []
+                dl = [
+                    min((x - swap for x in t if 0 <= x - swap < FALSE_ALARM_WINDOW), default=np.nan)
+                    for t in at
+                ]
+                delays.append(f"{1e3 * np.nanmedian(dl):.0f}" if np.isfinite(dl).any() else "-")
+            cells = "  ".join(segment_cells(c))
+            print(
+                f"  {v:13s} {cells}   fa {fa}  missed {missed}  delay {'/'.join(delays)}  50 ms {trans[v]}",
+                flush=True,
+            )
+
+
+if __name__ == "__main__":
+    main()
