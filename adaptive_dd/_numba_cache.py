@@ -263,49 +263,13 @@ READY = "ready"
 """What the second process prints when the plant's step and the law's pieces are in the cache."""
 
 
-def second_process(source: str) -> None:
-    """The second process of a cold-cache benchmark on the N-joint arm of scenario file
-    ``source`` (:class:`Compiling`): compiles into the cache the plant's step and the law's pieces
-    that the closed loop calls (then prints :data:`READY`), and the kernels that ``adaptive_ct``'s
-    set-up and the report call (its initial model, the information times, the detection limit).
-    Each through the function the closed loop or the report calls, with records built as the
-    run builds them, so with the same argument types; on a few samples of the reference."""
-    from types import SimpleNamespace
-
-    import numpy as np
-
-    from adaptive_dd.benchmark.scenario import load_scenario
-    from adaptive_dd.closed_loop.controllers import SlotineLi
-    from adaptive_dd.closed_loop.information import _chain
-    from adaptive_dd.closed_loop.laws import law_trial
-    from adaptive_dd.closed_loop.plant import plant_scratch, plant_step
-    from adaptive_dd.closed_loop.types import plant_of
-    from adaptive_dd.identification import online
-
-    sc = load_scenario(source)
-    T, n, arm = sc.sample_period, sc.n_joints, sc.arm
-    z = np.zeros((8, n))
-    plant_step(plant_of(sc, (0,)), 0, 0, z[0], z[1], z[2], T, np.zeros(n, bool), plant_scratch(n))
-    pi, theta, out = np.zeros((2, 13 * n)), np.zeros(10), np.empty(n)
-    law_trial(arm.chain, SlotineLi(arm).law_config(T), pi[0], pi[1], theta, 0, *z[3:], out)
-    print(READY, flush=True)
-    ec, es = online.est_init(online.OnlineConfig(sample_period=T), arm, 1)
-    online.est_model_trial(ec, es, 0, np.empty((1, 13 * n))[0])
-    if not sc.swap_masses:
-        return
-    q, qd, _ = sc.reference.sample(np.arange(8) * T)
-    ref = SimpleNamespace(q=q[None], qd=qd[None], tau=np.zeros((1, 8, n)), failed=np.zeros(1, bool), name="-")
-    _chain.information(sc, ref, 1, 1, 6)
-    _chain.detection_limit(sc, ref, 1, 1, 6)
-
-
 class Compiling:
     """Two processes compiling at once on a cold cache (an N-joint arm read from a scenario file):
     this one compiles the estimator's step (:func:`~adaptive_dd.closed_loop.glue.compile_estimator`)
-    while a second (:func:`second_process`) compiles the plant's step and the law's pieces; this
-    one then compiles the closed loop, loading those from the cache, while the second compiles
-    the report's kernels. numba's cache is shared by processes (each index write locked:
-    :func:`_lock_index_writes`). ``ADAPTIVE_DD_COMPILE_HELPER=0``: one process."""
+    while a second (:func:`adaptive_dd.closed_loop.precompile.second_process`) compiles the plant's
+    step and the law's pieces; this one then compiles the closed loop, loading those from the
+    cache, while the second compiles the report's kernels. numba's cache is shared by processes
+    (each index write locked: :func:`_lock_index_writes`). ``ADAPTIVE_DD_COMPILE_HELPER=0``: one process."""
 
     def __init__(self, stream, helper=None) -> None:
         self.stream, self.helper, self.start = stream, helper, time.perf_counter()
@@ -320,7 +284,9 @@ class Compiling:
         ok = source and os.path.isfile(str(source)) and is_chain(arm)
         if not ok or os.environ.get("ADAPTIVE_DD_COMPILE_HELPER", "1") == "0":
             return cls(stream)
-        code = "import sys; from adaptive_dd._numba_cache import second_process as f; f(sys.argv[1])"
+        code = (
+            "import sys; from adaptive_dd.closed_loop.precompile import second_process as f; f(sys.argv[1])"
+        )
         here = str(Path(__file__).resolve().parents[1])  # this copy of the package, not another
         path = os.pathsep.join(p for p in (here, os.environ.get("PYTHONPATH")) if p)
         try:

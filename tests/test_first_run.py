@@ -181,3 +181,14 @@ def test_the_second_process_is_waited_for_and_its_end_told(capsys):
         assert "the second process compiled the plant's step and the law's pieces" in err
         assert f"the second process {end}" in err
         assert c.helper is None
+
+
+def test_the_second_process_compiles_what_the_closed_loop_calls(capsys):
+    """The second process's own work, run here in this process on a shipped N-joint scenario: it
+    calls the plant's step, the law and the report's kernels with the closed loop's argument types,
+    and says it is ready. A law whose signature changed (a new state argument) fails it here, where
+    the benchmark would only have said that the second process failed."""
+    from adaptive_dd.closed_loop.precompile import second_process
+
+    second_process(str(ROOT / "adaptive_dd" / "scenarios" / "vertical3_payload_exact.toml"))
+    assert capsys.readouterr().out.splitlines()[0] == _numba_cache.READY

@@ -103,7 +103,7 @@ def test_a_model_file_gives_adaptive_ct_the_same_prior_rule(tmp_path):
     """[model] from = "model.json": adaptive_ct's arm prior is the file's sandwich covariance plus
     the consistent fit's step (the rule of the excitation phase), the stated uncertainty where the
     file held a parameter at the URDF's; a table that states its own prior is left alone."""
-    from adaptive_dd.closed_loop.excitation_phase import _stated_variance
+    from adaptive_dd.closed_loop.model_prior import _stated_variance
     from adaptive_dd.closed_loop.runner import make_controller_of
 
     path, m, cov = _model_file(tmp_path)

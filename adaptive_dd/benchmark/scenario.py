@@ -326,7 +326,7 @@ def parse_scenario(data: dict, src: str = "<memory>", name: str = "scenario") ->
     model_file = (table.get("model") or {}).get("from")
     if isinstance(model_file, str) and model_file.lower().endswith(".json") and not sc.excite:
         # adaptive_ct's arm prior: what the file's identification knows (an excitation phase re-identifies)
-        from adaptive_dd.closed_loop.excitation_phase import model_file_prior
+        from adaptive_dd.closed_loop.model_prior import model_file_prior
         from adaptive_dd.plant.uncertainty import _scenario_path
 
         sc = dataclasses.replace(sc, controller_options=model_file_prior(sc, _scenario_path(src, model_file)))

@@ -29,6 +29,7 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
+from adaptive_dd.closed_loop.model_prior import identified_prior, model_file_prior
 from adaptive_dd.errors import ScenarioError
 
 __all__ = [
@@ -301,86 +302,6 @@ def run_with_excitation(scenario, idx, run_closed_loop, keep: int = 3, engine: s
     res.excitation = report.to_dict()
     res.cache["excitation_report"] = report
     return res
-
-
-def identified_prior(scenario, std: Array) -> tuple:
-    """The scenario's controller options with adaptive_ct's estimator given ``arm_prior_std =
-    std`` (the identification's knowledge of the arm, :attr:`ExcitationReport.sigma_std`), unless
-    its table already says ``mode``, ``arm_uncertainty`` or ``arm_prior_std``: after an
-    excitation phase the model is the identified one, and what is left to learn of the arm is
-    what the identification did not know, not the URDF's stated uncertainty (vertical3, 2 seeds,
-    the URDF's prior about the identified model: adaptive_ct 8.7x its floor before the first swap,
-    ct_nominal 1.14x)."""
-    from adaptive_dd.benchmark.scenario_checks import freeze, thaw
-
-    opts = {n: thaw(o) for n, o in scenario.controller_options}
-    if "adaptive_ct" in scenario.controllers:
-        ac = opts.setdefault("adaptive_ct", {})
-        est = ac.get("estimator", {})
-        if isinstance(est, dict) and not {"mode", "arm_uncertainty", "arm_prior_std"} & est.keys():
-            ac["estimator"] = {**est, "arm_prior_std": [float(x) for x in std]}
-    return tuple((n, freeze(o)) for n, o in opts.items())
-
-
-def _stated_variance(scenario, arm) -> Array:
-    """``diag(B C B^T)`` of the scenario's stated uncertainty (``[plant.uncertainty]``, normal levels
-    given the uniform levels of the same variance; the default levels without one) about ``arm``."""
-    from adaptive_dd.identification.arm_prior import ArmUncertainty, prior_covariance
-
-    unc = getattr(scenario.plant, "uncertainty", None)
-    keys = ("mass", "com", "inertia", "viscous", "coulomb", "armature")
-    if unc is None:
-        levels = ArmUncertainty()
-    else:
-        scale = np.sqrt(3.0) if unc.distribution == "normal" else 1.0
-        levels = ArmUncertainty(**{k: float(getattr(unc, k)) * scale for k in keys})
-    B = arm.base.B
-    return np.diag(B @ prior_covariance(arm, levels) @ B.T).copy()
-
-
-def model_file_prior(scenario, path) -> tuple:
-    """``[model] from = "model.json"``: the scenario's controller options with adaptive_ct's arm
-    prior what that identification knows (:func:`identified_prior`), by the rule of the
-    excitation phase (:func:`~adaptive_dd.identification.arm_prior.identified_prior_std`: the
-    file's sandwich covariance, the consistent fit's step and the model error its ``record``
-    holds (``model_error_var``, written by ``identify`` since this rule; none in older files); the
-    stated uncertainty for the base parameters it held at the URDF's).
-
-    Raises
-    ------
-    ScenarioError
-        Naming ``model.from``: the file's base parameters are not the [arm]'s, or it has no
-        consistent fit.
-    """
-    from adaptive_dd.errors import DataError, ParameterError
-    from adaptive_dd.identification.arm_prior import identified_prior_std
-    from adaptive_dd.identification.identified_model import load_identified_model
-
-    if "adaptive_ct" not in scenario.controllers:
-        return scenario.controller_options
-    where = f"{scenario.source}: key 'model.from' = {str(path)!r}"
-    try:
-        m = load_identified_model(path)
-    except DataError as exc:
-        raise ScenarioError(f"{where}: {exc}") from None
-    if list(m.names) != list(scenario.arm.base.names):
-        raise ScenarioError(
-            f"{where}: its {len(m.names)} base parameters are not the [arm]'s {len(scenario.arm.base.names)} "
-            "(identified on another arm or URDF)"
-        )
-    if m.consistent_sigma is None:
-        raise ScenarioError(f"{where}: the model has no physically consistent fit to start from")
-    extra = m.record.get("model_error_var") if isinstance(m.record, dict) else None
-    if extra is not None and np.shape(extra) != (len(m.names),):
-        raise ScenarioError(f"{where}: key 'record.model_error_var' must have {len(m.names)} entries")
-    try:
-        std = identified_prior_std(
-            np.asarray(m.covariance), np.asarray(m.sigma), np.asarray(m.consistent_sigma),
-            np.asarray(m.identified, dtype=bool), _stated_variance(scenario, scenario.arm), extra,
-        )  # fmt: skip
-    except ParameterError as exc:
-        raise ScenarioError(f"{where}: {exc}") from None
-    return identified_prior(scenario, std)
 
 
 _PER_TRIAL = (

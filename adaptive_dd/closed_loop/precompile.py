@@ -1,0 +1,49 @@
+"""The second process of a cold-cache benchmark on an N-joint arm
+(:class:`adaptive_dd._numba_cache.Compiling`): it compiles into numba's cache the kernels the
+closed loop and the report call while the first process compiles the estimator's step. Apart
+from :mod:`adaptive_dd._numba_cache` so that the cache module does not import the scenario loader
+(which imports it: no import circle)."""
+
+from __future__ import annotations
+
+from adaptive_dd._numba_cache import READY
+
+__all__ = ["second_process"]
+
+
+def second_process(source: str) -> None:
+    """The second process of a cold-cache benchmark on the N-joint arm of scenario file
+    ``source`` (:class:`~adaptive_dd._numba_cache.Compiling`). It compiles into the cache the
+    plant's step and the law's pieces that the closed loop calls, then prints ``READY``; then the
+    kernels that ``adaptive_ct``'s set-up and the report call (its initial model, the information
+    times, the detection limit). Each through the function the closed loop or the report calls,
+    with records built as the run builds them, so with the same argument types; on a few samples
+    of the reference."""
+    from types import SimpleNamespace
+
+    import numpy as np
+
+    from adaptive_dd.benchmark.scenario import load_scenario
+    from adaptive_dd.closed_loop.controllers import SlotineLi
+    from adaptive_dd.closed_loop.information import _chain
+    from adaptive_dd.closed_loop.laws import OBS_ROWS, law_trial
+    from adaptive_dd.closed_loop.plant import plant_scratch, plant_step
+    from adaptive_dd.closed_loop.types import plant_of
+    from adaptive_dd.identification import online
+
+    sc = load_scenario(source)
+    T, n, arm = sc.sample_period, sc.n_joints, sc.arm
+    z = np.zeros((8, n))
+    plant_step(plant_of(sc, (0,)), 0, 0, z[0], z[1], z[2], T, np.zeros(n, bool), plant_scratch(n))
+    pi, theta, out = np.zeros((2, 13 * n)), np.zeros(10), np.empty(n)
+    obs = np.zeros((OBS_ROWS, n))
+    law_trial(arm.chain, SlotineLi(arm).law_config(T), pi[0], pi[1], theta, 0, obs, *z[3:], out)
+    print(READY, flush=True)
+    ec, es = online.est_init(online.OnlineConfig(sample_period=T), arm, 1)
+    online.est_model_trial(ec, es, 0, np.empty((1, 13 * n))[0])
+    if not sc.swap_masses:
+        return
+    q, qd, _ = sc.reference.sample(np.arange(8) * T)
+    ref = SimpleNamespace(q=q[None], qd=qd[None], tau=np.zeros((1, 8, n)), failed=np.zeros(1, bool), name="-")
+    _chain.information(sc, ref, 1, 1, 6)
+    _chain.detection_limit(sc, ref, 1, 1, 6)
