@@ -273,13 +273,15 @@ class Compiling:
     cache, while the second compiles the report's kernels. numba's cache is shared by processes
     (each index write locked: :func:`_lock_index_writes`). ``ADAPTIVE_DD_COMPILE_HELPER=0``: one process."""
 
-    def __init__(self, stream, helper=None) -> None:
+    def __init__(self, stream, helper=None, errors=None) -> None:
         self.stream, self.helper, self.start = stream, helper, time.perf_counter()
+        self.errors = errors  # the second process's stderr (a temporary file), told if it fails
 
     @classmethod
     def begin(cls, arm, source, stream) -> Compiling:
         import subprocess
         import sys
+        import tempfile
 
         from adaptive_dd.plant.kind import is_chain
 
@@ -291,12 +293,14 @@ class Compiling:
         )
         here = str(Path(__file__).resolve().parents[1])  # this copy of the package, not another
         path = os.pathsep.join(p for p in (here, os.environ.get("PYTHONPATH")) if p)
+        errors = tempfile.TemporaryFile(mode="w+")
         try:
             helper = subprocess.Popen(
                 [sys.executable, "-c", code, str(source)], env={**os.environ, "PYTHONPATH": path},
-                stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True,
+                stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=errors, text=True,
             )  # fmt: skip
         except OSError:
+            errors.close()
             return cls(stream)
         print(
             f"  a second process (pid {helper.pid}) compiles the plant's step, the law's pieces and "
@@ -304,7 +308,7 @@ class Compiling:
             file=stream,
             flush=True,
         )
-        self = cls(stream, helper)
+        self = cls(stream, helper, errors)
         from adaptive_dd.closed_loop.glue import compile_estimator
 
         compile_estimator(arm)
@@ -331,12 +335,24 @@ class Compiling:
             "compiled the report's kernels" if rc == 0 else f"failed (exit {rc}): what it left compiles here"
         )
         print(f"  the second process {what} ({spent:.0f} s after the start)", file=self.stream, flush=True)
+        if rc != 0 and self.errors is not None:
+            self.errors.seek(0)
+            last = [line for line in self.errors.read().splitlines() if line.strip()][-1:]
+            if last:
+                print(f"  its error: {last[0].strip()}", file=self.stream, flush=True)
+        self._close_errors()
+
+    def _close_errors(self) -> None:
+        if self.errors is not None:
+            self.errors.close()
+            self.errors = None
 
     def stop(self) -> None:
         if self.helper is not None and self.helper.poll() is None:
             self.helper.terminate()
             self.helper.wait()
         self.helper = None
+        self._close_errors()
 
 
 @contextmanager

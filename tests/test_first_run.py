@@ -165,22 +165,31 @@ def test_the_second_process_is_started_only_where_it_helps(monkeypatch, tmp_path
 
 def test_the_second_process_is_waited_for_and_its_end_told(capsys):
     """It says when the plant and the law are ready, and how it ended (a failure: the first
-    process compiles what was left)."""
+    process compiles what was left; the failure's last line, so that it is not silent)."""
     import subprocess
     import sys
+    import tempfile
 
-    for code, end in (("", "compiled the report's kernels"), ("raise SystemExit(3)", "failed (exit 3)")):
+    crash = "raise TypeError('law_trial: 14 arguments, got 13')"
+    told = "  its error: TypeError: law_trial: 14 arguments, got 13"
+    for code, end, error in (
+        ("", "compiled the report's kernels", None),
+        ("raise SystemExit(3)", "failed (exit 3)", None),
+        (crash, "failed (exit 1)", told),
+    ):
+        errors = tempfile.TemporaryFile(mode="w+")
         helper = subprocess.Popen(
             [sys.executable, "-c", f"print({_numba_cache.READY!r}, flush=True)\n{code}"],
-            stdout=subprocess.PIPE, text=True,
+            stdout=subprocess.PIPE, stderr=errors, text=True,
         )  # fmt: skip
-        c = _numba_cache.Compiling(sys.stderr, helper)
+        c = _numba_cache.Compiling(sys.stderr, helper, errors)
         c._wait_ready(timeout=60)
         c.join()
         err = capsys.readouterr().err
         assert "the second process compiled the plant's step and the law's pieces" in err
         assert f"the second process {end}" in err
-        assert c.helper is None
+        assert (error in err) if error else ("its error" not in err)
+        assert c.helper is None and c.errors is None
 
 
 def test_the_second_process_compiles_what_the_closed_loop_calls(capsys):
