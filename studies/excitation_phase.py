@@ -2,7 +2,7 @@
 excitation phase before it, on one scenario (ct_oracle, ct_nominal and adaptive_ct only).
 
     python studies/excitation_phase.py SCENARIO.toml [--seeds 20] [--excite 20] [--first-seed 0]
-        [--only with|without] [--urdf-prior]
+        [--only with|without] [--urdf-prior] [--handoff cov|std]
 
 Prints, for ``excite = 0`` and ``excite = SECONDS``, adaptive_ct / ct_oracle per segment (mean,
 p90, max over seeds), the first segment's time to come within 1.2x of the floor
@@ -10,7 +10,8 @@ p90, max over seeds), the first segment's time to come within 1.2x of the floor
 detection delay, ct_nominal / ct_oracle per segment, and the identification's errors.
 ``--urdf-prior``: adaptive_ct's arm prior after the phase is the scenario's stated uncertainty
 (``[plant.uncertainty]``) about the identified model, not what the identification knows (the
-default, :func:`adaptive_dd.closed_loop.excitation_phase.identified_prior`).
+default, :func:`adaptive_dd.closed_loop.excitation_phase.identified_prior`). ``--handoff std``:
+that prior's standard deviations only (the hand-off before the correlations were passed on).
 """
 
 from __future__ import annotations
@@ -42,6 +43,14 @@ def summary(d: dict, source: str, seeds: list[int]) -> list[str]:
         ]
         lines.append(f"  {name} / ct_oracle mean/p90/max per segment: " + "  ".join(cells))
     lines.append("  " + time_to_floor_line("adaptive_ct", a))
+    o = c["ct_oracle"]["segments"]
+    per_seed = [
+        "/".join(f"{x / y:.3f}" for x, y in zip(
+            (s["rms_error_per_seed"][k] for s in a["segments"]), (s["rms_error_per_seed"][k] for s in o),
+            strict=True))
+        for k in range(len(seeds))
+    ]  # fmt: skip
+    lines.append("  adaptive_ct / ct_oracle per seed: " + " ".join(per_seed))
     delays = [s.get("detection_delay_median") for s in a["segments"][1:]]
     limits = [s.get("detection_limit") for s in a["segments"][1:]]
     lines.append(
@@ -72,7 +81,14 @@ def main() -> None:
     ap.add_argument("--excite", type=float, default=20.0)
     ap.add_argument("--only", choices=("with", "without"), default=None)
     ap.add_argument("--urdf-prior", action="store_true")
+    ap.add_argument("--handoff", choices=("cov", "std"), default="cov")
     a = ap.parse_args()
+    if a.handoff == "std":  # the diagonal only: what the phase handed on before the correlations
+        from adaptive_dd.closed_loop import excitation_phase, model_prior
+
+        excitation_phase.identified_prior = lambda sc, P: model_prior.identified_prior(
+            sc, np.sqrt(np.diag(P))
+        )
     base = copy.deepcopy(read_toml(Path(a.scenario)))
     base["run"]["controllers"] = ["ct_oracle", "ct_nominal", "adaptive_ct"]
     if a.urdf_prior:

@@ -22,7 +22,12 @@ from adaptive_dd.benchmark.scenario import parse_scenario, read_toml
 from adaptive_dd.closed_loop.excitation_phase import identify_record
 from adaptive_dd.closed_loop.types import io_of
 from adaptive_dd.errors import ParameterError, ScenarioError
-from adaptive_dd.identification.arm_prior import ArmUncertainty, draw_parameters, identified_prior_std
+from adaptive_dd.identification.arm_prior import (
+    ArmUncertainty,
+    draw_parameters,
+    identified_prior_cov,
+    identified_prior_std,
+)
 from adaptive_dd.identification.model import arm_model, base_regressor
 
 
@@ -115,11 +120,16 @@ def test_a_model_file_gives_adaptive_ct_the_same_prior_rule(tmp_path):
     step = np.asarray(m.consistent_sigma) - np.asarray(m.sigma)
     want = np.sqrt(1.5 * np.diag(cov) + step**2)  # the sandwich, the step, the model error
     want[-1] = np.sqrt(stated[-1])
-    assert ctrl.online.mode == "arm"
-    np.testing.assert_allclose(ctrl.online.arm_prior_std, want, rtol=1e-12)
+    assert ctrl.online.mode == "arm" and ctrl.online.arm_prior_std is None
+    P = np.asarray(ctrl.online.arm_prior_cov)
+    np.testing.assert_allclose(np.sqrt(np.diag(P)), want, rtol=1e-12)
+    # the sandwich's correlations handed on; none for the parameter held at the URDF's
+    off = ~np.eye(len(want), dtype=bool)
+    np.testing.assert_allclose(P[:-1, :-1][off[:-1, :-1]], cov[:-1, :-1][off[:-1, :-1]], rtol=1e-12)
+    assert np.all(P[-1, :-1] == 0.0) and np.all(P[:-1, -1] == 0.0)
     data["controllers"] = {"adaptive_ct": {"estimator": {"mode": "payload"}}}
     _, ctrl = make_controller_of(parse_scenario(data, "m.toml"), "adaptive_ct")
-    assert ctrl.online.mode == "payload" and ctrl.online.arm_prior_std is None
+    assert ctrl.online.mode == "payload" and ctrl.online.arm_prior_cov is None
 
 
 def test_a_model_file_of_other_base_parameters_is_refused(tmp_path):
@@ -146,3 +156,42 @@ def test_the_prior_rule_refuses_bad_input():
         identified_prior_std(np.eye(p), np.zeros(p), np.ones(p), model_error_var=[1.0, -1.0, 0.0])
     more = identified_prior_std(np.eye(p), np.zeros(p), np.ones(p), model_error_var=[2.0, 0.0, 0.0])
     np.testing.assert_allclose(more, [2.0, np.sqrt(2.0), np.sqrt(2.0)])
+
+
+def test_the_prior_with_correlations_keeps_the_sandwich_and_the_diagonal_rule():
+    """identified_prior_cov: the sandwich's off-diagonal terms, the diagonal of identified_prior_std
+    (the step and the model error stay there), positive semidefinite."""
+    rng = np.random.default_rng(3)
+    p = 5
+    L = rng.standard_normal((p, p))
+    C = L @ L.T
+    wls, fit, extra = rng.standard_normal(p), rng.standard_normal(p), rng.uniform(0, 1, p)
+    P = identified_prior_cov(C, wls, fit, model_error_var=extra)
+    np.testing.assert_allclose(np.diag(P), identified_prior_std(C, wls, fit, model_error_var=extra) ** 2)
+    off = ~np.eye(p, dtype=bool)
+    np.testing.assert_allclose(P[off], C[off])
+    assert np.linalg.eigvalsh(P).min() >= -1e-12
+    K = np.array([True, True, False, True, True])
+    P = identified_prior_cov(C, wls, fit, identified=K, stated_var=np.full(p, 7.0))
+    assert np.isclose(P[2, 2], 7.0) and np.all(P[2, K] == 0.0) and np.all(P[K, 2] == 0.0)
+
+
+def test_the_estimator_starts_its_arm_block_at_the_given_covariance():
+    """OnlineConfig.arm_prior_cov is the arm block of P0 (plus p0_arm); bad tables are refused."""
+    from adaptive_dd.identification.online import OnlineConfig, _pack
+
+    src = _shipped("vertical3_payload")
+    arm = parse_scenario(read_toml(src), str(src), "v").arm
+    p = arm.base.count
+    L = np.random.default_rng(1).standard_normal((p, p)) * 1e-2
+    C = L @ L.T
+    cfg = OnlineConfig(arm_prior_cov=C.tolist())
+    assert cfg.mode == "arm"
+    _, P0 = _pack(cfg, arm)
+    np.testing.assert_allclose(P0[:p, :p], C + cfg.p0_arm * np.eye(p), rtol=1e-12, atol=1e-15)
+    with pytest.raises(ParameterError, match="arm_prior_cov must be a symmetric"):
+        OnlineConfig(arm_prior_cov=(C + np.triu(np.ones((p, p)), 1)).tolist())
+    with pytest.raises(ParameterError, match="one of arm_uncertainty, arm_prior_std, arm_prior_cov"):
+        OnlineConfig(arm_prior_cov=C.tolist(), arm_prior_std=[1.0] * p)
+    with pytest.raises(ParameterError, match=f"this arm has {p} base parameters"):
+        _pack(OnlineConfig(arm_prior_cov=np.eye(p + 1).tolist()), arm)

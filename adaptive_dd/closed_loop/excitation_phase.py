@@ -64,7 +64,9 @@ class ExcitationReport:
     consistent fit (the model after the phase); ``names (p,)``; ``rstd (S, n)`` the residual
     torque std per joint [N m]; ``sigma_std (S, p)`` what the identification knows of each base
     parameter (:func:`~adaptive_dd.identification.arm_prior.identified_prior_std`: the sandwich
-    variance plus the fit's step): adaptive_ct's prior on the arm after the phase.
+    variance plus the fit's step and the model error); ``sigma_cov (S, p, p)`` the same with the
+    sandwich's correlations (:func:`~adaptive_dd.identification.arm_prior.identified_prior_cov`):
+    adaptive_ct's prior on the arm after the phase.
     """
 
     duration: float
@@ -76,6 +78,7 @@ class ExcitationReport:
     sigma_fit: Array
     rstd: Array
     sigma_std: Array
+    sigma_cov: Array
 
     def errors(self) -> dict[str, Array]:
         """Per seed and base parameter ``(S, p)``, the error against the plant's,
@@ -179,8 +182,10 @@ class RecordFit:
     """One record's identification (:func:`identify_record`): the consistent standard parameters
     ``pi (13 n,)``; base parameters of the weighted least squares ``hat`` and of the consistent fit
     ``fit`` ``(p,)``; the residual rms per joint ``rstd (n,)`` [N m]; what it knows of each base
-    parameter ``std (p,)`` (:func:`~adaptive_dd.identification.arm_prior.identified_prior_std`); the
-    weighted least squares' sandwich covariance ``cov (p, p)``."""
+    parameter ``std (p,)`` (:func:`~adaptive_dd.identification.arm_prior.identified_prior_std`) and
+    with its correlations ``prior_cov (p, p)``
+    (:func:`~adaptive_dd.identification.arm_prior.identified_prior_cov`); the weighted least
+    squares' sandwich covariance ``cov (p, p)``."""
 
     pi: Array
     hat: Array
@@ -188,6 +193,7 @@ class RecordFit:
     rstd: Array
     std: Array
     cov: Array
+    prior_cov: Array
 
 
 def identify_record(model, q: Array, qd: Array, tau: Array, sample_period: float) -> RecordFit:
@@ -203,7 +209,7 @@ def identify_record(model, q: Array, qd: Array, tau: Array, sample_period: float
     DataError
         The record does not excite some base parameter (named).
     """
-    from adaptive_dd.identification.arm_prior import identified_prior_std
+    from adaptive_dd.identification.arm_prior import identified_prior_cov
     from adaptive_dd.identification.consistency import consistent_arm_fit
     from adaptive_dd.identification.log_fit import fit_log
     from adaptive_dd.identification.model_error import model_error_variance
@@ -214,8 +220,8 @@ def identify_record(model, q: Array, qd: Array, tau: Array, sample_period: float
     )
     fit = consistent_arm_fit(model, wls.sigma, np.linalg.pinv(wls.cov, rcond=1e-12, hermitian=True))
     extra = model_error_variance(model, wls, q, qd, tau)
-    std = identified_prior_std(wls.cov, wls.sigma, fit.sigma, model_error_var=extra)
-    return RecordFit(fit.pi, wls.sigma, fit.sigma, wls.residual_rms, std, wls.cov)
+    prior = identified_prior_cov(wls.cov, wls.sigma, fit.sigma, model_error_var=extra)
+    return RecordFit(fit.pi, wls.sigma, fit.sigma, wls.residual_rms, np.sqrt(np.diag(prior)), wls.cov, prior)
 
 
 def identify_excitation(scenario, idx, run_closed_loop) -> tuple[list[Array], ExcitationReport]:
@@ -245,7 +251,7 @@ def identify_excitation(scenario, idx, run_closed_loop) -> tuple[list[Array], Ex
     n, T = scenario.n_joints, scenario.sample_period
     B = scenario.arm.base.B
     sig_plant = true_models(plant_of(exc, idx))[:, 0] @ B.T
-    pis, rows = [], {"hat": [], "fit": [], "rstd": [], "std": []}
+    pis, rows = [], {"hat": [], "fit": [], "rstd": [], "std": [], "prior_cov": []}
     for k, i in enumerate(idx):
         rng = np.random.default_rng([int(scenario.seed), int(i), 3])
         qm = run.q[k] + std[:n] * rng.standard_normal(run.q[k].shape)
@@ -262,7 +268,7 @@ def identify_excitation(scenario, idx, run_closed_loop) -> tuple[list[Array], Ex
     report = ExcitationReport(
         float(scenario.excite), tuple(idx), tuple(model.names), sig_plant,
         np.broadcast_to(scenario.arm.sigma, sig_plant.shape).copy(), np.array(rows["hat"]),
-        np.array(rows["fit"]), np.array(rows["rstd"]), np.array(rows["std"]),
+        np.array(rows["fit"]), np.array(rows["rstd"]), np.array(rows["std"]), np.array(rows["prior_cov"]),
     )  # fmt: skip
     return pis, report
 
@@ -292,7 +298,7 @@ def run_with_excitation(scenario, idx, run_closed_loop, keep: int = 3, engine: s
                 arm=model,
                 plant=plant,
                 excite=0.0,
-                controller_options=identified_prior(scenario, report.sigma_std[k]),
+                controller_options=identified_prior(scenario, report.sigma_cov[k]),
             )
             parts.append(
                 run_closed_loop(one, seed_indices=(i,), keep_trajectories=1 if k < keep else 0, engine=engine)

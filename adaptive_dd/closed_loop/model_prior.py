@@ -15,10 +15,12 @@ Array = NDArray[np.float64]
 __all__ = ["identified_prior", "model_file_prior"]
 
 
-def identified_prior(scenario, std: Array) -> tuple:
-    """The scenario's controller options with adaptive_ct's estimator given ``arm_prior_std =
-    std`` (the identification's knowledge of the arm, :attr:`ExcitationReport.sigma_std`), unless
-    its table already says ``mode``, ``arm_uncertainty`` or ``arm_prior_std``: after an
+def identified_prior(scenario, prior: Array) -> tuple:
+    """The scenario's controller options with adaptive_ct's estimator given ``arm_prior_cov =
+    prior`` (a ``(p, p)`` covariance: the identification's knowledge of the arm with its
+    correlations, :attr:`ExcitationReport.sigma_cov`) or ``arm_prior_std = prior`` (``(p,)``),
+    unless its table already says ``mode``, ``arm_uncertainty``, ``arm_prior_std`` or
+    ``arm_prior_cov``: after an
     excitation phase the model is the identified one, and what is left to learn of the arm is
     what the identification did not know, not the URDF's stated uncertainty (vertical3, 2 seeds,
     the URDF's prior about the identified model: adaptive_ct 8.7x its floor before the first swap,
@@ -29,8 +31,13 @@ def identified_prior(scenario, std: Array) -> tuple:
     if "adaptive_ct" in scenario.controllers:
         ac = opts.setdefault("adaptive_ct", {})
         est = ac.get("estimator", {})
-        if isinstance(est, dict) and not {"mode", "arm_uncertainty", "arm_prior_std"} & est.keys():
-            ac["estimator"] = {**est, "arm_prior_std": [float(x) for x in std]}
+        keys = {"mode", "arm_uncertainty", "arm_prior_std", "arm_prior_cov"}
+        if isinstance(est, dict) and not keys & est.keys():
+            P = np.asarray(prior, dtype=float)
+            if P.ndim == 2:
+                ac["estimator"] = {**est, "arm_prior_cov": [[float(x) for x in row] for row in P]}
+            else:
+                ac["estimator"] = {**est, "arm_prior_std": [float(x) for x in P]}
     return tuple((n, freeze(o)) for n, o in opts.items())
 
 
@@ -65,7 +72,7 @@ def model_file_prior(scenario, path) -> tuple:
         consistent fit.
     """
     from adaptive_dd.errors import DataError, ParameterError
-    from adaptive_dd.identification.arm_prior import identified_prior_std
+    from adaptive_dd.identification.arm_prior import identified_prior_cov
     from adaptive_dd.identification.identified_model import load_identified_model
 
     if "adaptive_ct" not in scenario.controllers:
@@ -86,10 +93,10 @@ def model_file_prior(scenario, path) -> tuple:
     if extra is not None and np.shape(extra) != (len(m.names),):
         raise ScenarioError(f"{where}: key 'record.model_error_var' must have {len(m.names)} entries")
     try:
-        std = identified_prior_std(
+        prior = identified_prior_cov(
             np.asarray(m.covariance), np.asarray(m.sigma), np.asarray(m.consistent_sigma),
             np.asarray(m.identified, dtype=bool), _stated_variance(scenario, scenario.arm), extra,
         )  # fmt: skip
     except ParameterError as exc:
         raise ScenarioError(f"{where}: {exc}") from None
-    return identified_prior(scenario, std)
+    return identified_prior(scenario, prior)

@@ -30,6 +30,7 @@ from adaptive_dd.errors import ParameterError
 __all__ = [
     "ArmUncertainty",
     "draw_parameters",
+    "identified_prior_cov",
     "identified_prior_std",
     "perturbed_parameters",
     "prior_covariance",
@@ -184,3 +185,33 @@ def identified_prior_std(
             )
         var = np.where(K, var, np.asarray(stated_var, dtype=float))
     return np.sqrt(var)
+
+
+def identified_prior_cov(
+    cov: Array,
+    sigma_wls: Array,
+    sigma_fit: Array,
+    identified=None,
+    stated_var: Array | None = None,
+    model_error_var: Array | None = None,
+) -> Array:
+    """The prior of :func:`identified_prior_std` with the correlations the identification knows
+    ``(p, p)``: the sandwich covariance ``cov`` with its diagonal replaced by
+    ``identified_prior_std(...)**2`` (the fit's step and the model error, whose directions the
+    sandwich does not know, stay on the diagonal); rows and columns of the base parameters not
+    ``identified`` zero but for their stated variance. The hand-off of a diagonal prior forgets
+    which combinations of base parameters the excitation fixed, and the online estimator then
+    moves them on its own, noisier, data.
+
+    Raises
+    ------
+    ParameterError
+        As :func:`identified_prior_std`.
+    """
+    std = identified_prior_std(cov, sigma_wls, sigma_fit, identified, stated_var, model_error_var)
+    C = np.asarray(cov, dtype=float)
+    C = 0.5 * (C + C.T)
+    K = np.ones(len(std), dtype=bool) if identified is None else np.asarray(identified, dtype=bool)
+    C = np.where(np.outer(K, K), C, 0.0)
+    C[np.diag_indices_from(C)] = std**2
+    return C

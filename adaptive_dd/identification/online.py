@@ -338,6 +338,11 @@ class OnlineConfig:
         implies: what an identification knows (``[run] excite`` passes each seed's,
         :func:`~adaptive_dd.closed_loop.excitation_phase.identify_excitation`). Given, the mode
         defaults to ``"arm"``.
+    arm_prior_cov : tuple of tuples of float or None
+        Mode ``"arm"``: the whole covariance ``(p, p)`` of the arm's base parameters about the
+        model, in place of ``arm_prior_std`` (its diagonal): an identification's correlations
+        (:func:`~adaptive_dd.identification.arm_prior.identified_prior_cov`, what ``[run] excite``
+        passes). Given, the mode defaults to ``"arm"``.
     reset_payload : bool
         Mode ``"arm"``: an alarm also sets the payload block to zero (a new payload, nothing
         known of it but its prior). Off by default: it loses what the block had absorbed of
@@ -367,6 +372,7 @@ class OnlineConfig:
     arm_uncertainty: ArmUncertainty | None = None
     reset_payload: bool = False
     arm_prior_std: tuple[float, ...] | None = None
+    arm_prior_cov: tuple[tuple[float, ...], ...] | None = None
 
     def __post_init__(self) -> None:
         o = "OnlineConfig"
@@ -391,8 +397,23 @@ class OnlineConfig:
             object.__setattr__(self, "arm_prior_std", tuple(float(x) for x in v))
             if self.arm_uncertainty is not None:
                 raise ParameterError(f"{o}: give arm_uncertainty or arm_prior_std, not both")
+        if self.arm_prior_cov is not None:
+            C = np.asarray(self.arm_prior_cov, dtype=float)
+            ok = C.ndim == 2 and C.shape[0] == C.shape[1] and C.size > 0 and np.all(np.isfinite(C))
+            if not ok or not np.allclose(C, C.T, rtol=1e-9, atol=0.0) or np.any(np.diag(C) < 0):
+                raise ParameterError(
+                    f"{o}.arm_prior_cov must be a symmetric square table of finite values (one row "
+                    f"per base parameter), got shape {C.shape}"
+                )
+            object.__setattr__(self, "arm_prior_cov", tuple(tuple(float(x) for x in row) for row in C))
+            if self.arm_uncertainty is not None or self.arm_prior_std is not None:
+                raise ParameterError(f"{o}: give one of arm_uncertainty, arm_prior_std, arm_prior_cov")
         if self.mode is None:
-            learnt = self.arm_uncertainty is not None or self.arm_prior_std is not None
+            learnt = (
+                self.arm_uncertainty is not None
+                or self.arm_prior_std is not None
+                or self.arm_prior_cov is not None
+            )
             object.__setattr__(self, "mode", "arm" if learnt else "payload")
         arm_mode = self.mode == "arm"
         if self.project is None:  # the payload block also carries the arm's residual along the
@@ -562,7 +583,15 @@ def _pack(cfg: OnlineConfig, arm: Arm) -> tuple[EstCfg, Array]:
         pbasis_pinv = pbasis.T.copy()
         U = pbasis.copy()
         P0 = np.zeros((p, p))
-        if cfg.arm_prior_std is not None:  # what an identification knows of the arm
+        if cfg.arm_prior_cov is not None:  # what an identification knows, with its correlations
+            C = np.asarray(cfg.arm_prior_cov, dtype=float)
+            if C.shape != (pb, pb):
+                raise ParameterError(
+                    f"OnlineConfig.arm_prior_cov is {C.shape[0]} x {C.shape[1]}; this arm has {pb} "
+                    "base parameters"
+                )
+            P0[:pb, :pb] = cfg.p0_arm * np.eye(pb) + C
+        elif cfg.arm_prior_std is not None:  # what an identification knows of the arm
             if len(cfg.arm_prior_std) != pb:
                 raise ParameterError(
                     f"OnlineConfig.arm_prior_std has {len(cfg.arm_prior_std)} values; this arm has "
