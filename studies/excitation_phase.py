@@ -81,8 +81,23 @@ def main() -> None:
     ap.add_argument("--excite", type=float, default=20.0)
     ap.add_argument("--only", choices=("with", "without"), default=None)
     ap.add_argument("--urdf-prior", action="store_true")
-    ap.add_argument("--handoff", choices=("cov", "std"), default="cov")
+    ap.add_argument("--handoff", choices=("cov", "std", "noise"), default="cov")
     a = ap.parse_args()
+    if a.handoff == "noise":  # the covariance in the units of the estimator's rows (unit noise)
+        from adaptive_dd.closed_loop import excitation_phase
+        from adaptive_dd.identification.online import derived_row_weights
+
+        ident = excitation_phase.identify_excitation
+
+        def scaled(scenario, idx, run):
+            pis, rep = ident(scenario, idx, run)
+            w = derived_row_weights(scenario.arm)
+            s2 = np.mean((rep.rstd / w) ** 2, axis=1)  # (S,) the rows' noise variance
+            print(f"  handoff noise: rows' residual variance per seed {np.round(s2, 5).tolist()}", flush=True)
+            rep.sigma_cov = rep.sigma_cov / s2[:, None, None]
+            return pis, rep
+
+        excitation_phase.identify_excitation = scaled
     if a.handoff == "std":  # the diagonal only: what the phase handed on before the correlations
         from adaptive_dd.closed_loop import excitation_phase, model_prior
 

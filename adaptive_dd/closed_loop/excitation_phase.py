@@ -196,13 +196,17 @@ class RecordFit:
     prior_cov: Array
 
 
-def identify_record(model, q: Array, qd: Array, tau: Array, sample_period: float) -> RecordFit:
+def identify_record(
+    model, q: Array, qd: Array, tau: Array, sample_period: float, torque_held: bool = True
+) -> RecordFit:
     """Identify one measured record ``q, qd, tau (N, n)`` as ``adaptive-dd identify`` does: the
     weighted least squares with its Newey-West sandwich covariance
     (:func:`~adaptive_dd.identification.log_fit.fit_log`, every channel, every base parameter,
     ``tau_f =`` :data:`TAU_F`), the physically consistent fit nearest to it in that covariance's
     metric, and the prior it implies (:func:`~adaptive_dd.identification.arm_prior.identified_prior_std`,
-    with :func:`~adaptive_dd.identification.model_error.model_error_variance`).
+    with :func:`~adaptive_dd.identification.model_error.model_error_variance`). ``torque_held``: the
+    record's torque is a command held over each sample (the closed loop's), else a sampled
+    continuous torque (:func:`~adaptive_dd.identification.regression.filtered_regression`).
 
     Raises
     ------
@@ -216,10 +220,11 @@ def identify_record(model, q: Array, qd: Array, tau: Array, sample_period: float
 
     n = model.n
     wls = fit_log(
-        model, q, qd, tau, np.ones(n, bool), np.ones(model.p, bool), tau_f=TAU_F, sample_period=sample_period
-    )
+        model, q, qd, tau, np.ones(n, bool), np.ones(model.p, bool), tau_f=TAU_F,
+        sample_period=sample_period, torque_held=torque_held,
+    )  # fmt: skip
     fit = consistent_arm_fit(model, wls.sigma, np.linalg.pinv(wls.cov, rcond=1e-12, hermitian=True))
-    extra = model_error_variance(model, wls, q, qd, tau)
+    extra = model_error_variance(model, wls, q, qd, tau, torque_held)
     prior = identified_prior_cov(wls.cov, wls.sigma, fit.sigma, model_error_var=extra)
     return RecordFit(fit.pi, wls.sigma, fit.sigma, wls.residual_rms, np.sqrt(np.diag(prior)), wls.cov, prior)
 
