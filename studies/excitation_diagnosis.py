@@ -54,7 +54,7 @@ def main() -> None:
         d.setdefault("plant", {})["friction"] = a.law
     sc = parse_scenario(d, a.scenario, Path(a.scenario).stem)
     idx = tuple(range(a.seeds))
-    model = arm_model(sc.arm)
+    model = ep.identification_model(sc)
     n, T, std = sc.n_joints, sc.sample_period, io_of(sc).std
     if a.save and Path(a.save).exists():  # the records of an earlier run
         z = np.load(a.save)

@@ -30,7 +30,6 @@ from adaptive_dd.benchmark.scenario import parse_scenario, read_toml
 from adaptive_dd.closed_loop import excitation_phase as ep
 from adaptive_dd.closed_loop.runner import run_closed_loop
 from adaptive_dd.closed_loop.types import io_of, plant_of, true_models
-from adaptive_dd.identification.model import arm_model
 from adaptive_dd.identification.regression import filtered_regression, weighted_least_squares
 
 
@@ -46,7 +45,7 @@ def main() -> None:
     idx = tuple(range(a.seeds))
     exc = ep._excitation_scenario(sc, ep.excitation_reference(sc))
     run = run_closed_loop(exc, seed_indices=idx, keep_trajectories=len(idx)).runs[ep.EXCITATION_CONTROLLER]
-    model = arm_model(sc.arm)
+    model = ep.identification_model(sc)  # the phase's model: its Coulomb law's width
     n, T, std = sc.n_joints, sc.sample_period, io_of(sc).std
     plant = true_models(plant_of(exc, idx))[:, 0] @ sc.arm.base.B.T
     rules: dict[str, list] = {"white": [], "sandwich": [], "sandwich + model error": []}
