@@ -33,6 +33,7 @@ from adaptive_dd.closed_loop import excitation_phase as ep
 from adaptive_dd.closed_loop.runner import run_closed_loop
 from adaptive_dd.closed_loop.types import io_of, plant_of, true_models
 from adaptive_dd.identification.model import arm_model, base_regressor
+from adaptive_dd.identification.online import derived_row_weights
 
 
 def main() -> None:
@@ -92,6 +93,19 @@ def main() -> None:
         e = noisy.fit - plant[k]
         z = e / noisy.std
         zs = e / np.sqrt(np.diag(noisy.cov))
+        V = {  # the prior's torque std along the path: with its correlations, its diagonal only
+            key: np.sqrt(np.einsum("tjp,pq,tjq->tj", Y, P, Y).mean(axis=0))
+            for key, P in (("cov", noisy.prior_cov), ("diag", np.diag(np.diag(noisy.prior_cov))))
+        }
+        s2 = float(np.mean((noisy.rstd / derived_row_weights(sc.arm)) ** 2))
+        per_joint = np.sqrt(np.mean((Y @ (noisy.fit - plant[k])) ** 2, axis=0))
+        print(
+            f"seed {i}: torque error along the path per joint, rms [N m] {np.round(per_joint, 4).tolist()}; "
+            f"the prior's std there, with correlations {np.round(V['cov'], 4).tolist()}, diagonal only "
+            f"{np.round(V['diag'], 4).tolist()}; the estimator's rows' residual variance (unit in its RLS) "
+            f"{s2:.3g}",
+            flush=True,
+        )  # fmt: skip
         r = {
             "urdf": cost(sc.arm.sigma - plant[k]),
             "fit": cost(e),
