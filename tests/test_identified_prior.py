@@ -127,6 +127,10 @@ def test_a_model_file_gives_adaptive_ct_the_same_prior_rule(tmp_path):
     off = ~np.eye(len(want), dtype=bool)
     np.testing.assert_allclose(P[:-1, :-1][off[:-1, :-1]], cov[:-1, :-1][off[:-1, :-1]], rtol=1e-12)
     assert np.all(P[-1, :-1] == 0.0) and np.all(P[:-1, -1] == 0.0)
+    # the payload block starts with what the identification knows of a mass at the payload frame
+    b = sc.arm.payload_basis[:, 0]
+    known = 1.0 / np.sqrt(b @ np.linalg.pinv(P, rcond=1e-15) @ b)
+    assert ctrl.online.payload_mass_std == pytest.approx(known, rel=1e-6) and known < 5.0
     data["controllers"] = {"adaptive_ct": {"estimator": {"mode": "payload"}}}
     _, ctrl = make_controller_of(parse_scenario(data, "m.toml"), "adaptive_ct")
     assert ctrl.online.mode == "payload" and ctrl.online.arm_prior_cov is None
