@@ -175,17 +175,20 @@ def test_sweep_workers_with_a_scheduler_is_an_error(tmp_path, capsys):
 
 
 def test_the_arm_kind_is_asked_in_one_place():
-    """The CLI asks the arm's kind through :func:`adaptive_dd.plant.kind.is_two_link` (the package's one
-    place, imported by ``cli/_common.py``), never reads ``closed_form`` itself nor tests the arm's
-    class (issue 27: the type tests on the arm's class go)."""
+    """The CLI asks whether an arm has the paper's closed forms through
+    :func:`adaptive_dd.plant.two_link.closed_form_view` (the package's one place, imported by
+    ``cli/_common.py``), never reads ``closed_form`` itself nor tests the arm's class (issue 27: the
+    type tests on the arm's class go)."""
     import ast
 
     from adaptive_dd.cli import _common
-    from adaptive_dd.plant import kind
+    from adaptive_dd.plant import two_link
+    from adaptive_dd.plant.arm import Arm
 
-    assert _common.is_two_link is kind.is_two_link
-    assert _common.is_two_link(_common.load_arm(SICE_URDF))
-    assert not _common.is_two_link(_common.load_arm(SICE_URDF, general="test"))
+    assert _common.closed_form_view is two_link.closed_form_view
+    arm, general = _common.load_arm(SICE_URDF), _common.load_arm(SICE_URDF, general="test")
+    assert isinstance(arm, Arm) and isinstance(general, Arm)  # one arm type
+    assert _common.closed_form_view(arm) is not None and _common.closed_form_view(general) is None
     for f in sorted((ROOT / "adaptive_dd" / "cli").glob("*.py")):
         for node in ast.walk(ast.parse(f.read_text())):
             assert not (isinstance(node, ast.Attribute) and node.attr == "closed_form"), f.name

@@ -230,12 +230,13 @@ def test_arm_from_tables_errors_name_file_key_and_reason(arm, plant, match):
 
 
 def test_scenarios_carry_their_arm(tmp_path):
-    assert load_scenario().arm == ClosedFormTwoLink.sice()
+    assert load_scenario().closed_forms == ClosedFormTwoLink.sice()  # exactly (issue 27: arm is an Arm)
     other = load_scenario(SCENARIOS / "other_arm.toml")
-    assert other.arm == ClosedFormTwoLink.from_physical(OTHER, payload_radius=0.05)
+    assert other.closed_forms == ClosedFormTwoLink.from_physical(OTHER, payload_radius=0.05)
+    assert other.arm == other.closed_forms.to_arm() and other.arm.n_joints == 2
     assert other.payload_radius == 0.05 and 2.0 in other.swap_masses
     smooth = load_scenario(SCENARIOS / "smooth_friction.toml")
-    assert smooth.arm == ClosedFormTwoLink.sice(friction="tanh", friction_velocity=0.02)
+    assert smooth.closed_forms == ClosedFormTwoLink.sice(friction="tanh", friction_velocity=0.02)
     assert smooth.reference == load_scenario().reference
     p = tmp_path / "r.toml"
     p.write_text(
@@ -250,7 +251,7 @@ def test_scenarios_carry_their_arm(tmp_path):
 def test_other_arm_reference_is_within_the_actuator_limits():
     sc = load_scenario(SCENARIOS / "other_arm.toml")
     q, qd, qdd = sc.reference.sample(np.arange(sc.n_samples) * sc.sample_period)
-    tau = inverse_dynamics(q, qd, qdd, sc.arm.sigma_with_payload(max(sc.swap_masses)))
+    tau = inverse_dynamics(q, qd, qdd, sc.closed_forms.sigma_with_payload(max(sc.swap_masses)))
     peak = np.abs(tau).max(axis=0)
     np.testing.assert_allclose(peak, [27.4, 8.7], atol=0.05)  # the figures in the file's comment
     assert np.all(peak < 0.7 * np.array(sc.arm.actuator.torque_limit))

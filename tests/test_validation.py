@@ -239,7 +239,7 @@ d = [2.5, 0.6]
     ],
 )
 def test_arm_tables_have_physical_bounds(old, new, match):
-    assert parse(BASE + ARM).arm.l1 == 0.3
+    assert parse(BASE + ARM).closed_forms.l1 == 0.3
     with pytest.raises(ScenarioError, match=r"F.toml: .*" + match):
         parse(BASE + ARM.replace(old, new))
 

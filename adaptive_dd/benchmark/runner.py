@@ -39,7 +39,6 @@ from adaptive_dd.benchmark.types import (
 from adaptive_dd.controllers import Controller
 from adaptive_dd.controllers.compiled_form import compiled_spec
 from adaptive_dd.errors import ParameterError
-from adaptive_dd.plant.kind import is_chain
 
 __all__ = [
     "ENGINES",
@@ -89,7 +88,7 @@ def run_benchmark(
         raise ParameterError(f"engine must be one of {ENGINES}, got {engine!r}")
     t0 = time.perf_counter()
 
-    if is_chain(scenario.arm):  # any N-joint arm: adaptive_dd.closed_loop
+    if scenario.closed_forms is None:  # the general kernels: adaptive_dd.closed_loop
         from adaptive_dd.closed_loop.runner import run_closed_loop
 
         n = scenario.n_samples * len(controllers or scenario.controllers)

@@ -13,7 +13,6 @@ import numpy as np
 
 from adaptive_dd.benchmark.scenario_base import KEYS, LIMITS, Reference, run_estimate
 from adaptive_dd.controllers import CONTROLLERS
-from adaptive_dd.plant.kind import is_chain
 from adaptive_dd.plant.parameters import PAYLOAD_RADIUS
 from adaptive_dd.plant.sampling import first_sample
 
@@ -108,7 +107,7 @@ def scenario_errors(v: dict[str, Any]) -> list[str]:
                 f"run.excite: {v['excite']} s: the excitation phase needs an N-joint arm from a URDF "
                 '([arm] robot = ... or urdf = ...; the paper\'s arm: robot = "sice_arm", general = true)'
             )
-    c_ok = _check_controllers(e, v["controllers"], v.get("arm"))
+    c_ok = _check_controllers(e, v["controllers"], v.get("arm") if _serial(v) else None)
     bw = v["bandwidth"]
     if isinstance(bw, tuple) and _serial(v):  # one per joint, N-joint arms only
         bw_ok = _nums(e, "control.bandwidth", bw, 0, 1e5, n=_n_joints(v), lo_open=True)
@@ -155,6 +154,12 @@ def _label(name: str) -> str:
 def _check_plant(e: list, v: dict) -> None:
     """A plant (:class:`~adaptive_dd.plant.uncertainty.PlantSpec`) only on an N-joint arm, sized for it."""
     p = v.get("plant")
+    if getattr(v.get("arm"), "friction", None) == "lugre" and _serial(v):
+        e.append(
+            "plant.friction: LuGre friction is the paper's closed forms' plant law; this run takes the "
+            "general kernels (another geometry, general = true, or a plant apart from the arm), whose "
+            "plant has stick-slip, tanh and stribeck friction"
+        )
     if p is None:
         return
     if not _serial(v):
@@ -167,7 +172,17 @@ def _check_plant(e: list, v: dict) -> None:
 
 
 def _serial(v: dict) -> bool:
-    return is_chain(v.get("arm"))
+    """Whether the run takes the general kernels (no closed-form fast path: another geometry,
+    ``general = true``, or a plant apart from the arm)."""
+    return v.get("arm") is not None and (v.get("plant") is not None or _general(v.get("arm")))
+
+
+def _general(arm: Any) -> bool:
+    """An arm without the paper's closed forms (:func:`~adaptive_dd.plant.two_link.closed_form_view`
+    None); False for ``None`` (an ``[arm]`` table that was wrong)."""
+    from adaptive_dd.plant.two_link import closed_form_view
+
+    return arm is not None and closed_form_view(arm) is None
 
 
 def _check_controllers(e: list, c: Any, arm: Any = None) -> bool:
@@ -186,7 +201,7 @@ def _check_controllers(e: list, c: Any, arm: Any = None) -> bool:
             )
             ok = False
 
-    if is_chain(arm):
+    if arm is not None:  # the general kernels' run
         for x in c:
             if x in CONTROLLERS and not CONTROLLERS[x].applies_to("chain"):
                 e.append(
@@ -383,13 +398,13 @@ def scenario_fields(
 
 
 def _default_controllers(arm: Any) -> list:
-    kind = "chain" if is_chain(arm) else "two_link"
+    kind = "chain" if _general(arm) else "two_link"
     return [c for c, entry in CONTROLLERS.items() if entry.applies_to(kind)]
 
 
 def _default_noise(arm: Any, key: str) -> list:
 
-    if is_chain(arm):
+    if _general(arm):
         return list(getattr(arm.sensor, key))
     return [1e-8, 1e-7] if key == "position_variance" else [5e-5, 1e-4]
 
@@ -405,7 +420,7 @@ def _payload_fields(e: list, items: list, v: dict, defaulted: set, arm: Any = No
                 (coms if key == "com" else inertias).append(None)
                 continue
             x = p[key]
-            if arm is not None and not is_chain(arm):
+            if arm is not None and not _general(arm):
                 e.append(
                     f"payload[{i}].{key}: the two-link arm's payload is a disk at the tip (mass, radius); "
                     "a centre of mass or inertia needs a URDF arm ([arm] urdf = ... or robot = ...)"

@@ -46,7 +46,7 @@ from adaptive_dd.controllers.feedback import PD, ComputedTorque
 from adaptive_dd.controllers.slotine_li import COM_RADIUS, DEFAULT_GAMMA, MAX_MASS, SlotineLi, default_bounds
 from adaptive_dd.errors import ParameterError
 from adaptive_dd.identification.two_link_online import ChangeDetector, TwoLinkOnlineConfig
-from adaptive_dd.plant.kind import arm_kind, is_two_link
+from adaptive_dd.plant.kind import arm_kind
 from adaptive_dd.plant.two_link import ClosedFormTwoLink, closed_form_view
 
 __all__ = [
@@ -367,7 +367,7 @@ def gains_for(arm, bandwidth=40.0, damping: float = 1.0):
     ParameterError
         A bandwidth or damping that is not > 0.
     """
-    if is_two_link(closed_form_view(arm) or arm):  # the arm's fast path, as make_controller chooses
+    if closed_form_view(arm) is not None:  # the arm's fast path, as make_controller chooses
         return Gains(bandwidth, damping)
     from adaptive_dd.closed_loop.controllers import JointGains
 
@@ -430,14 +430,15 @@ def scenario_controller(scenario, spec: str) -> tuple[str, Controller]:
         opts = {**opts, "bandwidth": g.bandwidth}
     else:
         opts = with_stated_uncertainty(spec, opts, scenario)
-        g = gains_for(scenario.arm, scenario.bandwidth, scenario.damping)
-    return label, make_controller(spec, g, opts, arm=scenario.arm, search=search, scenario=scenario)
+        g = gains_for(scenario.closed_forms or scenario.arm, scenario.bandwidth, scenario.damping)
+    arm = scenario.closed_forms or scenario.arm  # the arm the run simulates: its closed forms or its own
+    return label, make_controller(spec, g, opts, arm=arm, search=search, scenario=scenario)
 
 
 def controllers_for(arm) -> tuple[str, ...]:
     """The built-in names that run on ``arm`` (every name but the two-link-only ones on an N-joint arm;
     an arm of the paper's geometry runs its closed forms, :func:`make_controller`)."""
-    kind = arm_kind(closed_form_view(arm) or arm)
+    kind = arm_kind(arm)
     return tuple(n for n, e in CONTROLLERS.items() if e.applies_to(kind))
 
 
@@ -473,7 +474,7 @@ def _detector_at_the_top(spec: str, o: dict) -> dict:
 
 
 def _arm_words(arm) -> str:
-    return "the two-link arm" if is_two_link(arm) else f"this {arm.n_joints}-joint arm"
+    return "the two-link arm" if arm_kind(arm) == "two_link" else f"this {arm.n_joints}-joint arm"
 
 
 def _chain_controller(spec: str, entry: Builtin, gains, options: dict, o: dict, arm) -> Controller:

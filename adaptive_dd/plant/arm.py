@@ -53,7 +53,9 @@ DEFAULT_VELOCITY_VARIANCE = 5e-5
 """(rad/s)^2, as the SICE arm's joint 1 (Table 4 of the paper)."""
 DEFAULT_DAC_BITS = 16
 """D/A resolution of a URDF arm's torque command unless given."""
-_FRICTION_LAWS = ("stick-slip", "tanh", "stribeck")
+_FRICTION_LAWS = ("stick-slip", "tanh", "stribeck", "lugre")
+"""Plant friction laws of an arm (the index is the integrator's code); ``"lugre"`` only on an arm with
+the paper's closed forms (:func:`~adaptive_dd.plant.two_link.closed_form_view`), whose plant runs it."""
 
 
 def payload_parameters(
@@ -153,6 +155,10 @@ class Arm:
         Default disk radius [m] of a payload given by mass alone.
     friction, friction_velocity, stribeck_ratio, stribeck_velocity
         The simulated plant's friction law, as on :class:`adaptive_dd.plant.two_link.ClosedFormTwoLink`.
+    lugre_stiffness, lugre_damping
+        The LuGre law's bristle stiffness and damping per joint (``friction = "lugre"``: a two-joint
+        arm of the paper's geometry only, whose closed-form plant runs it); as on
+        :class:`~adaptive_dd.plant.two_link.ClosedFormTwoLink`.
     payload_capacity : float or None
         Rated payload [kg] (``[arm] payload_capacity``); sizes the estimator's re-opening on a
         change alarm (None: the detector's generic size).
@@ -185,6 +191,8 @@ class Arm:
     repair_inertia: bool = False
     payload_capacity: float | None = None
     general: bool = False
+    lugre_stiffness: tuple[float, float] = (1e5, 1e5)
+    lugre_damping: tuple[float, float] | None = None
     _cache: dict = field(default_factory=dict, repr=False, compare=False)
     closed_form: ClassVar[bool] = False
     """False: an :class:`Arm` (True on the closed forms' record,
@@ -233,6 +241,11 @@ class Arm:
                 raise ParameterError(f"Arm.{name} must be > 0, got {v!r}")
         if not isinstance(self.general, bool):
             raise ParameterError(f"Arm.general must be True or False, got {self.general!r}")
+        if self.friction == "lugre" and n != 2:
+            raise ParameterError(
+                f"Arm.friction = 'lugre' is the paper's two-link plant law (its closed forms); this arm has "
+                f"{n} joints: use stick-slip, tanh or stribeck"
+            )
         if not (math.isfinite(self.stribeck_ratio) and self.stribeck_ratio >= 1):
             raise ParameterError(f"Arm.stribeck_ratio must be >= 1, got {self.stribeck_ratio!r}")
         object.__setattr__(self, "_cache", {})
@@ -302,7 +315,8 @@ class Arm:
 
     def __getstate__(self) -> dict:
         state = self.__dict__.copy()
-        state["_cache"] = {}
+        # the closed forms' record is kept: an arm made from one (ClosedFormTwoLink.to_arm) holds it exactly
+        state["_cache"] = {k: v for k, v in self._cache.items() if k == "as_two_link"}
         return state
 
     def __setstate__(self, state: dict) -> None:
@@ -580,6 +594,11 @@ class Arm:
             "stribeck_velocity": self.stribeck_velocity,
             "repair_inertia": self.repair_inertia,
             "general": self.general,
+            **(
+                {"lugre_stiffness": list(self.lugre_stiffness), "lugre_damping": self.lugre_damping}
+                if self.friction == "lugre"
+                else {}
+            ),
         }
 
     def _key(self) -> tuple:
@@ -601,6 +620,8 @@ class Arm:
             self.payload_capacity,
             self.repair_inertia,
             self.general,
+            tuple(self.lugre_stiffness),
+            None if self.lugre_damping is None else tuple(self.lugre_damping),
         )
 
     def __eq__(self, other: object) -> bool:
