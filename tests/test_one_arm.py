@@ -159,7 +159,7 @@ def test_simulation_takes_the_arm(sice):
 
     base = load_scenario("adaptive_dd/scenarios/payload_swap.toml")
     sim = Simulation(dataclasses.replace(base, arm=sice[0], controllers=("ct_oracle",)))
-    assert sim.arm is sice[1]
+    assert sim.arm is sice[0] and sim.scenario.closed_forms is sice[1]  # the arm, run on its closed forms
     sim.reset()
 
 

@@ -76,27 +76,11 @@ def _nums(errs: list, key: str, v: Any, lo: float, hi: float, *, n: int | None =
 def scenario_errors(v: dict[str, Any]) -> list[str]:
     """Every problem of the scenario fields ``v`` (a dict of Scenario's fields) as ``key: reason``."""
     L = LIMITS
-
     e: list[str] = []
     for k in ("name", "source"):
         if not isinstance(v[k], str):
             e.append(f"{k}: must be a string, got {_short(v[k])}")
-    d_ok = check_number(e, "run.duration", v["duration"], 0, math.inf, lo_open=True)
-    T_ok = check_number(
-        e, "run.sample_period", v["sample_period"], L["min_sample_period"], L["max_sample_period"]
-    )
-    if d_ok and T_ok and v["sample_period"] > v["duration"] / 10:
-        e.append(
-            f"run.sample_period: {v['sample_period']} s is more than a tenth of run.duration "
-            f"({v['duration']} s)"
-        )
-        T_ok = False
-    if d_ok and T_ok and v["duration"] / v["sample_period"] > 1e12:
-        e.append(
-            f"run: too large: {v['duration'] / v['sample_period']:.3g} samples per trial "
-            f"(run.duration / run.sample_period)"
-        )
-        d_ok = False
+    d_ok, T_ok = _check_timing(e, v)
     s_ok = check_number(e, "run.seeds", v["seeds"], 1, L["max_seeds"], integer=True)
     check_number(e, "run.seed", v["seed"], 0, L["seed_bound"] - 1, integer=True)
     check_number(e, "run.substeps", v["substeps"], 1, L["max_substeps"], integer=True)
@@ -108,19 +92,7 @@ def scenario_errors(v: dict[str, Any]) -> list[str]:
                 '([arm] robot = ... or urdf = ...; the paper\'s arm: robot = "sice_arm", general = true)'
             )
     c_ok = _check_controllers(e, v["controllers"], v.get("arm") if _serial(v) else None)
-    bw = v["bandwidth"]
-    if isinstance(bw, tuple) and _serial(v):  # one per joint, N-joint arms only
-        bw_ok = _nums(e, "control.bandwidth", bw, 0, 1e5, n=_n_joints(v), lo_open=True)
-        bw = max(bw) if bw_ok else bw
-    else:
-        bw_ok = check_number(e, "control.bandwidth", bw, 0, 1e5, lo_open=True)
-    if bw_ok and T_ok:
-        if bw * v["sample_period"] > L["max_bandwidth_T"]:
-            e.append(
-                f"control.bandwidth: {bw} rad/s at T = {v['sample_period']} s gives "
-                f"bandwidth * T = {bw * v['sample_period']:.3g} > {L['max_bandwidth_T']}"
-            )
-    check_number(e, "control.damping", v["damping"], 0, L["max_damping"], lo_open=True)
+    _check_control(e, v, T_ok)
     check_number(e, "payload.radius", v["payload_radius"], 0, L["max_radius"])
     n_joints = _n_joints(v)
     for k in ("position_variance", "velocity_variance"):
@@ -140,6 +112,47 @@ def scenario_errors(v: dict[str, Any]) -> list[str]:
                 f"{L['max_seconds'] / 3600:g} h (reduce run.duration, run.seeds or run.controllers)"
             )
     return e
+
+
+def _check_timing(e: list, v: dict) -> tuple[bool, bool]:
+    """``run.duration`` and ``run.sample_period``, each in range and the two together; whether each is
+    usable by the checks that need it."""
+    L = LIMITS
+    d_ok = check_number(e, "run.duration", v["duration"], 0, math.inf, lo_open=True)
+    T_ok = check_number(
+        e, "run.sample_period", v["sample_period"], L["min_sample_period"], L["max_sample_period"]
+    )
+    if d_ok and T_ok and v["sample_period"] > v["duration"] / 10:
+        e.append(
+            f"run.sample_period: {v['sample_period']} s is more than a tenth of run.duration "
+            f"({v['duration']} s)"
+        )
+        T_ok = False
+    if d_ok and T_ok and v["duration"] / v["sample_period"] > 1e12:
+        e.append(
+            f"run: too large: {v['duration'] / v['sample_period']:.3g} samples per trial "
+            f"(run.duration / run.sample_period)"
+        )
+        d_ok = False
+    return d_ok, T_ok
+
+
+def _check_control(e: list, v: dict, T_ok: bool) -> None:
+    """``[control]``: the bandwidth (one per joint on the general kernels' run) within what the
+    sample period carries, the damping."""
+    L = LIMITS
+    bw = v["bandwidth"]
+    if isinstance(bw, tuple) and _serial(v):  # one per joint, N-joint arms only
+        bw_ok = _nums(e, "control.bandwidth", bw, 0, 1e5, n=_n_joints(v), lo_open=True)
+        bw = max(bw) if bw_ok else bw
+    else:
+        bw_ok = check_number(e, "control.bandwidth", bw, 0, 1e5, lo_open=True)
+    if bw_ok and T_ok and bw * v["sample_period"] > L["max_bandwidth_T"]:
+        e.append(
+            f"control.bandwidth: {bw} rad/s at T = {v['sample_period']} s gives "
+            f"bandwidth * T = {bw * v['sample_period']:.3g} > {L['max_bandwidth_T']}"
+        )
+    check_number(e, "control.damping", v["damping"], 0, L["max_damping"], lo_open=True)
 
 
 def _n_joints(v: dict) -> int:
@@ -329,18 +342,9 @@ def _check_options(e: list, opts: Any, ctrls: tuple) -> None:
         _plain(e, f"controllers.{name}", table)
 
 
-def scenario_fields(
-    data: Any, is_default: bool, arm: Any = None, default_reference=None
-) -> tuple[dict[str, Any], list[str]]:
-    """Scenario fields from a parsed TOML dict (defaults filled in) and the structural errors.
-
-    ``arm`` (the scenario's arm, None if its tables were wrong) gives the number and
-    names of the joints and, for a URDF arm, the default noise variances; ``default_reference()``
-    gives the reference of a two-link scenario without a ``[reference]`` table (the default
-    scenario's)."""
-    e: list[str] = []
-    if not isinstance(data, dict):
-        return {}, ["<top>: must be a TOML document"]
+def _known_tables(e: list, data: dict) -> dict[str, Any]:
+    """The tables of a parsed scenario that have the right shape; unknown tables and keys, and
+    tables of the wrong shape, added to ``e``."""
     tables: dict[str, Any] = {}
     for t, val in data.items():
         if t not in KEYS:
@@ -361,6 +365,22 @@ def scenario_fields(
             for k in item:
                 if k not in allowed:
                     e.append(f"{t}.{k}: unknown key; allowed: {', '.join(sorted(allowed))}")
+    return tables
+
+
+def scenario_fields(
+    data: Any, is_default: bool, arm: Any = None, default_reference=None
+) -> tuple[dict[str, Any], list[str]]:
+    """Scenario fields from a parsed TOML dict (defaults filled in) and the structural errors.
+
+    ``arm`` (the scenario's arm, None if its tables were wrong) gives the number and
+    names of the joints and, for a URDF arm, the default noise variances; ``default_reference()``
+    gives the reference of a two-link scenario without a ``[reference]`` table (the default
+    scenario's)."""
+    e: list[str] = []
+    if not isinstance(data, dict):
+        return {}, ["<top>: must be a TOML document"]
+    tables = _known_tables(e, data)
     defaulted: set[str] = set()
 
     def get(table: str, key: str, default: Any) -> Any:

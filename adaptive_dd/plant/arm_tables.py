@@ -14,15 +14,18 @@ from __future__ import annotations
 import math
 from dataclasses import replace
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
 
 from adaptive_dd.errors import ParameterError, ScenarioError, UrdfError
 from adaptive_dd.errors import is_finite_number as _is_num
-from adaptive_dd.plant.arm import Arm
 from adaptive_dd.plant.parameters import PhysicalParameters
 from adaptive_dd.plant.two_link import FRICTION_LAWS, ClosedFormTwoLink, closed_form_view
+
+if TYPE_CHECKING:
+    from adaptive_dd.plant.arm import Arm  # imports Pinocchio: on first use only
 
 __all__ = ["ARM_BOUNDS", "URDF_ARM_KEYS", "arm_from_tables", "urdf_arm_from_table"]
 
