@@ -154,7 +154,9 @@ class Task:
 
 
 def _task_key(scenario: Scenario, controller: str, settings, seeds) -> str:
-    sc = dataclasses.asdict(scenario)
+    from adaptive_dd.benchmark.provenance import scenario_dict
+
+    sc = scenario_dict(scenario)  # every field, the arm by its own description (Arm.to_dict)
     for k in ("name", "source", "seeds", "controllers", "defaulted"):
         sc.pop(k, None)
     blob = {"v": CELL_VERSION, "scenario": sc, "controller": controller, "settings": settings, "seeds": seeds}

@@ -411,7 +411,7 @@ class ClosedFormTwoLink:
 
             path = robot_urdf("sice_arm")
         else:
-            from adaptive_dd.plant.urdf_write import cached_urdf, two_link_urdf
+            from adaptive_dd.plant.two_link_urdf import cached_urdf, two_link_urdf
 
             path = cached_urdf(two_link_urdf(self.equivalent_physical(), self.actuator.torque_limit))
         arm = Arm.from_urdf(
