@@ -224,3 +224,17 @@ def test_the_closed_form_slotine_li_regressor_is_the_general_one(sice):
         + arm.coulomb * np.sign(qd_r)
     )
     np.testing.assert_allclose(closed, general, rtol=1e-12, atol=1e-12)
+
+
+def test_an_unwritable_cache_does_not_stop_a_scenario_of_the_paper_numbers(tmp_path, monkeypatch):
+    """A scenario's [arm] of the paper's numbers becomes an Arm whose URDF goes to the user's cache;
+    a cache that cannot be written (here a file where the folder would be) falls back to the
+    temporary folder, so that the scenario still loads, with the same closed forms."""
+    blocker = tmp_path / "cache"
+    blocker.write_text("")
+    monkeypatch.setenv("XDG_CACHE_HOME", str(blocker))
+    monkeypatch.setattr("tempfile.tempdir", str(tmp_path / "tmp"))
+    (tmp_path / "tmp").mkdir()
+    record = ClosedFormTwoLink.from_sigma([0.5, 0.09, 0.12, 3.0, 1.0, 2.0, 0.5], l1=0.3, l2=0.25)
+    arm = record.to_arm()
+    assert str(arm.urdf).startswith(str(tmp_path / "tmp")) and closed_form_view(arm) == record

@@ -55,15 +55,26 @@ def two_link_urdf(p, torque_limit=(70.0, 15.0)) -> str:
 
 
 def cached_urdf(text: str) -> Path:
-    """``text`` as a file in ``$XDG_CACHE_HOME/adaptive_dd/urdf`` (default ``~/.cache``), named by
-    its hash: the same arm, the same file (an :class:`~adaptive_dd.plant.arm.Arm` reads it again
-    in a worker process)."""
+    """``text`` as a file in ``$XDG_CACHE_HOME/adaptive_dd/urdf`` (default ``~/.cache``; the
+    temporary folder when that cannot be written), named by its hash: the same arm, the same file
+    (an :class:`~adaptive_dd.plant.arm.Arm` reads it again in a worker process)."""
+    import tempfile
+
     from adaptive_dd.outputs import atomic_write
 
-    root = Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "adaptive_dd" / "urdf"
-    path = root / f"two_link-{hashlib.sha256(text.encode()).hexdigest()[:16]}.urdf"
-    if not path.is_file():
-        root.mkdir(parents=True, exist_ok=True)
-        with atomic_write(path) as fh:
-            fh.write(text)
-    return path
+    name = f"two_link-{hashlib.sha256(text.encode()).hexdigest()[:16]}.urdf"
+    cache = Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "adaptive_dd" / "urdf"
+    # a cache folder that cannot be written (a read-only home): the temporary folder instead, so
+    # that loading a scenario never fails on it
+    for root in (cache, Path(tempfile.gettempdir()) / f"adaptive_dd-urdf-{os.getuid()}"):
+        path = root / name
+        if path.is_file():
+            return path
+        try:
+            root.mkdir(parents=True, exist_ok=True)
+            with atomic_write(path) as fh:
+                fh.write(text)
+            return path
+        except OSError:
+            continue
+    raise OSError(f"cannot write the URDF of a two-link arm to {cache} nor to the temporary folder")
