@@ -15,9 +15,10 @@ sensor models, and the friction law of the *simulated plant*. Controllers and
 estimators keep the paper's friction model (viscous plus Coulomb, eqs. 5-6);
 only the simulated plant changes with :attr:`ClosedFormTwoLink.friction`.
 
-Plant friction laws (per joint i, ``b_i``, ``d_i`` from sigma; derivations and integration in
-:mod:`adaptive_dd.plant.two_link_integrator`)
---------------------------------------------------------------------------------
+Plant friction laws
+-------------------
+Per joint i, ``b_i``, ``d_i`` from sigma (integration: :mod:`adaptive_dd.plant.two_link_integrator`).
+
 ``"stick-slip"`` (default)
     ``b_i qd_i + d_i sgn(qd_i)`` with true sticking at rest (hybrid integrator).
 ``"tanh"``
@@ -91,9 +92,8 @@ def _finite(name: str, v) -> float:
 class ClosedFormTwoLink:
     """A two-link horizontal arm: parameters, geometry, actuators, sensors, plant friction.
 
-    Build it with :meth:`sice`, :meth:`from_physical` or :meth:`from_sigma`
-    rather than directly. Immutable; use :func:`dataclasses.replace` for variants
-    (validation runs again).
+    Build it with :meth:`sice`, :meth:`from_physical` or :meth:`from_sigma` rather than directly.
+    Immutable; :func:`dataclasses.replace` makes variants (validation runs again).
 
     Attributes
     ----------
