@@ -136,3 +136,35 @@ def test_the_friction_law_as_a_record_compiles_its_family_alone():
     assert {"_stick_slip", "_smooth"} <= set(both)
     with pytest.raises(ParameterError, match="friction law code"):
         S.friction_law(3)
+
+
+def test_the_n_joint_loop_calls_its_choices_by_name_not_through_overloads():
+    """numba compiles an ``@overload``'s implementation in full to type it, even one inlined where
+    it is called (then throws it away): on the UR5 about 15 CPU s of the closed loop's
+    compilation. The N-joint loop (``glue._chain_trial_samples``, inlined into
+    ``chain_loop_block``) calls every choice (the plant's step, the law, the estimator, their
+    scratch) by name: each global it calls, in its code and in the per-sample pieces it inlines,
+    is a compiled function (inlined before typing, or compiled and cached once), not one of the
+    stubs the overloads choose for."""
+    import inspect
+
+    from numba.core.registry import CPUDispatcher
+
+    from adaptive_dd.closed_loop import glue
+
+    stubs = {
+        name for name, f in vars(glue).items()
+        if inspect.isfunction(f) and "compiled only" in inspect.getsource(f)
+    }  # fmt: skip
+    assert {"plant_advance", "law_command", "estimator_sample", "law_estimate"} <= stubs
+    seen, todo = set(), [glue._chain_trial_samples]
+    while todo:
+        d = todo.pop()
+        f = d.py_func
+        for name in f.__code__.co_names:
+            g = f.__globals__.get(name)
+            if isinstance(g, CPUDispatcher) and g not in seen and g.targetoptions.get("inline") == "always":
+                seen.add(g)
+                todo.append(g)
+            assert not (inspect.isfunction(g) and name in stubs), (f.__qualname__, name)
+    assert {glue._chain_plant_advance, glue._chain_law_command, glue._chain_estimator_sample} <= seen
