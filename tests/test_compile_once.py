@@ -168,3 +168,17 @@ def test_the_n_joint_loop_calls_its_choices_by_name_not_through_overloads():
                 todo.append(g)
             assert not (inspect.isfunction(g) and name in stubs), (f.__qualname__, name)
     assert {glue._chain_plant_advance, glue._chain_law_command, glue._chain_estimator_sample} <= seen
+
+
+def test_the_second_process_compiles_the_integrator_the_loop_calls():
+    """The second process of a cold-cache run compiles the plant's integrator alone
+    (``precompile.plant_kernels``); the closed loop must call it with the same argument types,
+    or the loop compiles it again (about 20 CPU s) and the second process's work is lost: one
+    specialisation of ``_stick_slip`` for both."""
+    from adaptive_dd.closed_loop.precompile import plant_kernels
+    from adaptive_dd.closed_loop.runner import run_closed_loop
+
+    sc = _ur5(duration=0.01)
+    plant_kernels(sc)
+    run_closed_loop(sc)
+    assert len(_specialisations(S._stick_slip)) == 1, _specialisations(S._stick_slip)
