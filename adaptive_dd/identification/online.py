@@ -190,6 +190,13 @@ class Detector:
         An alarm also needs this many rows above half the threshold (RMS), >= 1. A payload
         change moves every joint the payload's weight and inertia load at once; friction the
         model lacks (Stribeck, soft friction) errs at one joint near rest. 1: any row alone.
+    speed : float
+        [rad/s] A row raises alarms (or counts towards ``min_rows``) only while its joint has
+        been faster than this for the data selection's memory (it still feeds the estimate and
+        its level from the selection's own threshold on). Friction the model lacks errs near
+        rest and as a joint comes back from it; a payload loads the joints that move. One
+        constant for every arm, the two-link detector's (``docs/change_detection.md``, "Speed
+        gate"); the measurements that chose it: "The N-joint speed gate". 0: the selection's.
     """
 
     short_window: float = 0.02
@@ -209,6 +216,7 @@ class Detector:
     min_rows: int = 1
     fast_window: float | None = 0.001
     fast_threshold: float = 7.0
+    speed: float = 0.25
 
     def __post_init__(self) -> None:
         o = "Detector"
@@ -240,6 +248,7 @@ class Detector:
                     f"{o} needs fast_window < short_window, got {self.fast_window}, {self.short_window}"
                 )
         _num(o, "fast_threshold", self.fast_threshold, 1.0)
+        _num(o, "speed", self.speed, 0.0, strict=False)
         _bool(o, "reopen_again", self.reopen_again)
 
 
@@ -638,6 +647,7 @@ def _pack(cfg: OnlineConfig, arm: Arm) -> tuple[EstCfg, Array]:
                 "carry the payload"
             )
         ints[K.I_MIN_ROWS] = det.min_rows
+        fl[K.F_DET_SPEED] = max(det.speed, fl[K.F_SEL_THRESHOLD])
         ints[K.I_RESET_PAYLOAD] = int(cfg.mode == "arm" and cfg.reset_payload)
     xs0 = np.linalg.solve(np.eye(b.order) - b.A, b.B[:, 0])
     Am, Bm, Cm, Dm = summing_realisation(b)
@@ -742,6 +752,7 @@ def est_init(
         ref=np.zeros((m, n)),
         eps=np.full((m, n), np.nan),
         fast=np.zeros((m, n)),
+        since_crawl=np.zeros((m, n), dtype=np.int64),
     )
     return c, state
 
