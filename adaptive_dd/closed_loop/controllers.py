@@ -382,7 +382,15 @@ class AdaptiveCT(Law):
 
     name = "adaptive_ct"
     SETTINGS = frozenset(
-        {"boost_bandwidth", "boost_duration", "boost_ramp", "estimator", "detector", "observer", "observer_bandwidth"}
+        {
+            "boost_bandwidth",
+            "boost_duration",
+            "boost_ramp",
+            "estimator",
+            "detector",
+            "observer",
+            "observer_bandwidth",
+        }
     )
     BOOST_RAMP = 0.0
     """[s] default ``boost_ramp``: after ``boost_duration`` the boost's added bandwidth falls

@@ -168,8 +168,9 @@ F_RADIUS = 11  # radius [m] of the ball about the payload frame the projected pa
 F_PRIOR_RADIUS = 12  # radius [m] of the compact-payload prior on the model control uses (0: none)
 F_ALPHA_FAST = 13  # the fast average's weight of a sample
 F_FAST2 = 14  # the fast average's threshold (squared RMS ratio)
-F_DET_SPEED = 15  # [rad/s] a row raises alarms only while its joint has been faster for the selection memory
-N_F = 16
+F_DET_SPEED = 15  # [rad/s] a joint no faster within the selection memory creeps
+F_CREEP_MARGIN = 16  # a creeping joint's row alarms only beyond this times its Coulomb friction
+N_F = 17
 
 
 class EstState(NamedTuple):
@@ -762,11 +763,13 @@ def _detect(c, s, i, eps, act):  # pragma: no cover - compiled
             thr = fl[F_THRESHOLD2] * fl[F_SLOW2]
         else:
             continue
+        # a joint at most the detector's speed within the selection memory creeps: friction the
+        # model lacks errs there (Stribeck, soft friction), by less than the joint's Coulomb
+        # friction; its row raises an alarm only beyond that (in the weighted equation's units)
+        creep2 = 0.0
         if ints[I_SELECT] == 1 and s.since_crawl[i, j] <= ints[I_SEL_MEMORY]:
-            # its joint was at most the detector's speed within the selection memory: friction
-            # the model lacks errs there (Stribeck, soft friction), a payload loads the others
-            continue
-        if s.short[i, j] > thr * level + 1e-300:
+            creep2 = (fl[F_CREEP_MARGIN] * c.pi0[11 * n + j] / c.w[j]) ** 2
+        if s.short[i, j] > thr * level + 1e-300 and s.short[i, j] > creep2:
             alarm = True
         if s.short[i, j] > 0.25 * thr * level + 1e-300:
             n_raised += 1
@@ -774,7 +777,7 @@ def _detect(c, s, i, eps, act):  # pragma: no cover - compiled
             # only against a level the row has learned itself over the long window: not the
             # level of before an alarm, nor one still learning a new payload or the arm
             thf = fl[F_FAST2] * thr / fl[F_THRESHOLD2]  # the same slow-row and re-learning factors
-            if s.fast[i, j] > thf * level + 1e-300:
+            if s.fast[i, j] > thf * level + 1e-300 and s.fast[i, j] > creep2:
                 fast = True
             if s.fast[i, j] > 0.25 * thf * level + 1e-300:
                 n_fast += 1
