@@ -54,7 +54,7 @@ def main() -> None:
             k0, k1 = round((w + 0.9) / T), round((w + a.duration + max(a.ramps) + 0.6) / T)
             k1 = min(k1, rc.q_d.shape[0])
 
-            def rms(r, k0=k0, k1=k1):
+            def rms(r, k0=k0, k1=k1, rc=rc):
                 e = rc.q_d[k0:k1] - r.q[:, k0:k1]
                 return np.sqrt(np.mean(e**2, axis=(1, 2)))
 

@@ -148,7 +148,8 @@ class Law:
         g = self.gains
         base = dict(
             kind=kind, model=model, reference_velocity=True, kp=g.kp, kd=g.kd, lam=g.roots()[0],
-            pi_fixed=self.pi_nominal, boost_kp=z, boost_kd=z.copy(), boost_samples=0, boost_ramp=0, adapt=False,
+            pi_fixed=self.pi_nominal, boost_kp=z, boost_kd=z.copy(), boost_samples=0, boost_ramp=0,
+            adapt=False,
             gamma=np.zeros(10), lo=np.full(10, -np.inf), hi=np.full(10, np.inf), com_radius=np.inf,
             payload_joint=int(self.arm.payload_joint), payload_map=np.ascontiguousarray(self.arm.payload_map),
             T=float(T), observer=False, obs_a=0.0, obs_stages=2, obs_kappa=OBSERVER_THRESHOLD,
