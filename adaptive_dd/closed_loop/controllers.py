@@ -393,9 +393,12 @@ class AdaptiveCT(Law):
             "observer_bandwidth",
         }
     )
-    BOOST_RAMP = 0.0
+    BOOST_RAMP = 1.0
     """[s] default ``boost_ramp``: after ``boost_duration`` the boost's added bandwidth falls
-    linearly to none over this long (0: it ends at once)."""
+    linearly to none over this long (0: it ends at once). An abrupt end left a bump in the
+    tracking error 1 s after each swap; ramped over 1 s, adaptive_ct / ct_oracle in the window
+    0.9-2.6 s after each swap fell from 1.08-1.14 to 0.89-0.91 on the UR5 and 1.36-1.75 to
+    0.98-1.37 on vertical3 (10 seeds, ``studies/boost_end.py``; docs/change_detection.md)."""
     BOOST_DURATION = 1.0
     """[s] default ``boost_duration``; the two-link ``adaptive_ct`` keeps 0.2 s on purpose (its
     estimator learns the paper's sigma within tens of ms; an N-joint payload's centre of mass
