@@ -152,7 +152,7 @@ def _lock_index_writes() -> None:
 
 
 # ------------------------------------------------------------ telling the user about compilation
-COMPILE_SECONDS = {"two-link": 25.0, "serial": 70.0}
+COMPILE_SECONDS = {"two-link": 25.0, "serial": 55.0}
 """One-time compilation of a benchmark's closed-loop kernels with a cold cache, on 2 cores: a guide
 for the message and ``validate``'s estimate, not a promise. Measured by
 ``benchmarks/compile_profile.py [SCENARIO] --seeds 2`` (an empty ``NUMBA_CACHE_DIR``, every
@@ -164,8 +164,11 @@ the law's pieces ready in time), measured at a load average of 10.7 on 2 cores (
 stretch on a loaded machine; the second process's work, the plant, the law and the report's
 kernels, runs meanwhile). On an idle machine a cold ``adaptive-dd benchmark
 adaptive_dd/scenarios/ur5_tool_swap.toml --seeds 10`` printed ``compiled the kernels in 66 s``
-(wall): hence 70. It was 145.4 s in one process (load 2) before the N-joint loop was compiled
-once for every law and the two processes."""
+(wall). Since, the closed loop calls its choices by name (no overload compiled to be thrown
+away) and the second process compiles the plant's integrator alone: ``benchmarks/compile_phases.py``
+(CPU s, load 12-13, the trees before and after at once) gave the loop 36.1 -> 21.7 s and the
+critical path 84.4 -> 65.4 s: scaled, about 55 s idle (hence 55). It was 145.4 s in one process
+(load 2) before the N-joint loop was compiled once for every law and the two processes."""
 
 
 def _closed_loop_kernel(serial: bool):
@@ -276,6 +279,7 @@ class Compiling:
     def __init__(self, stream, helper=None, errors=None) -> None:
         self.stream, self.helper, self.start = stream, helper, time.perf_counter()
         self.errors = errors  # the second process's stderr (a temporary file), told if it fails
+        self.waited = 0.0  # seconds this process waited for the second (counted as compiling)
 
     @classmethod
     def begin(cls, arm, source, stream) -> Compiling:
@@ -319,7 +323,10 @@ class Compiling:
         """Wait until the second process has the plant and the law in the cache (or has ended)."""
         import select
 
-        if select.select([self.helper.stdout], [], [], timeout)[0]:
+        t0 = time.perf_counter()
+        ready = select.select([self.helper.stdout], [], [], timeout)[0]
+        self.waited += time.perf_counter() - t0
+        if ready:
             if self.helper.stdout.readline().strip() == READY:
                 spent = time.perf_counter() - self.start
                 msg = f"  the second process compiled the plant's step and the law's pieces ({spent:.0f} s)"
@@ -329,7 +336,9 @@ class Compiling:
         """Wait for the second process (the report's kernels are then in the cache), say how it ended."""
         if self.helper is None:
             return
+        t0 = time.perf_counter()
         rc, self.helper = self.helper.wait(), None
+        self.waited += time.perf_counter() - t0
         spent = time.perf_counter() - self.start
         what = (
             "compiled the report's kernels" if rc == 0 else f"failed (exit {rc}): what it left compiles here"
@@ -358,7 +367,8 @@ class Compiling:
 @contextmanager
 def announce_compilation(arm, stream=None, source=None):
     """Say before a run that numba compiles (cold cache), as it goes which kernels it compiled,
-    and after it how long compilation took.
+    and after it how long compilation took (this process's time inside numba's compilations and
+    waiting for the second process, which held the run up as much).
 
     Prints to ``stream`` (default ``sys.stderr``) a line before, when :func:`compile_estimate`
     finds the cache cold, a line per kernel compiled from Python that took over a second
@@ -392,7 +402,12 @@ def announce_compilation(arm, stream=None, source=None):
             compiling.join()
     finally:
         compiling.stop()
-    spent = _compile_seconds(rec.buffer)
+    spent = _compile_seconds(rec.buffer) + compiling.waited  # the run held up either way
     if spent > 1.0:
-        msg = f"compiled the kernels in {spent:.0f} s (cached: later runs skip this)"
+        waited = (
+            f", {compiling.waited:.0f} s of it waiting for the second process"
+            if compiling.waited > 1.0
+            else ""
+        )
+        msg = f"compiled the kernels in {spent:.0f} s (cached: later runs skip this{waited})"
         print(msg, file=stream, flush=True)

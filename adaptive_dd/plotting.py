@@ -202,7 +202,8 @@ def plot_benchmark_estimates(res, path: str | Path | None = None, formats=("png"
 
     Returns the Figure; with ``path``, also writes it in each of ``formats`` (and closes it).
     """
-    if res.scenario.arm.n_joints != 2 or res.sigma_true.shape[-1] != 7:
+    paper = res.scenario.closed_forms  # the paper's sigma (J1 J2 r ...) on its closed forms' run
+    if paper is None or res.sigma_true.shape[-1] != 7:
         return plot_payload_estimates(res, path, formats)
     fig, axes = plt.subplots(2, 2, figsize=(11, 7), sharex=True)
     panels = [(0, "J1 [kg m²]"), (1, "J2 [kg m²]"), (2, "r [kg m²]")]
@@ -220,9 +221,7 @@ def plot_benchmark_estimates(res, path: str | Path | None = None, formats=("png"
         sh = run.sigma_hat[kept][:, s].mean(axis=0)
         for ax, (k, _) in zip(axes.flat[:3], panels, strict=True):
             ax.plot(t, sh[:, k], label=name, **controller_style(name))
-        axes.flat[3].plot(
-            t, res.scenario.arm.payload_mass_from_sigma(sh), label=name, **controller_style(name)
-        )
+        axes.flat[3].plot(t, paper.payload_mass_from_sigma(sh), label=name, **controller_style(name))
     for ax in axes.flat:
         ax.grid(alpha=0.3)
         _mark_swaps(ax, res.t, res.mass)

@@ -28,7 +28,6 @@ from adaptive_dd.benchmark.runner import run_benchmark
 from adaptive_dd.benchmark.scenario import Scenario, load_scenario
 from adaptive_dd.benchmark.trials import payload_schedule, sensor_of, trial_rngs
 from adaptive_dd.errors import SignalError
-from adaptive_dd.plant.kind import is_two_link
 from adaptive_dd.plant.simulator import ArmSimulator
 
 __all__ = ["Measurement", "Simulation", "run_trial"]
@@ -60,7 +59,7 @@ class _TwoLinkTrial:
             1,
             sc.n_samples + 1,
             trial_rngs(sc.seed, [seed_index]),
-            arm=sc.arm,
+            arm=sc.closed_forms,
             payload=payload_schedule(sc),
             sample_period=sc.sample_period,
             substeps=sc.substeps,
@@ -166,7 +165,7 @@ class Simulation:
         """Start (again) at t = 0, on the reference, at rest if it is; return the first measurement."""
         sc = self.scenario
         q_d, qd_d, _ = self._ref
-        if is_two_link(sc.arm):  # the paper's arm: its closed forms
+        if sc.closed_forms is not None:  # the paper's arm: its closed forms
             self._trial = _TwoLinkTrial(sc, self.seed_index, q_d[0], qd_d[0])
         else:
             self._trial = _ChainTrial(sc, self.seed_index)

@@ -154,7 +154,9 @@ class Task:
 
 
 def _task_key(scenario: Scenario, controller: str, settings, seeds) -> str:
-    sc = dataclasses.asdict(scenario)
+    from adaptive_dd.benchmark.provenance import scenario_dict
+
+    sc = scenario_dict(scenario)  # every field, the arm by its own description (Arm.to_dict)
     for k in ("name", "source", "seeds", "controllers", "defaulted"):
         sc.pop(k, None)
     blob = {"v": CELL_VERSION, "scenario": sc, "controller": controller, "settings": settings, "seeds": seeds}
@@ -349,29 +351,41 @@ def run_sweep(
         f"{sweep.seeds} seeds = {len(cells)} cells in {len(tasks)} distinct tasks; "
         f"{reused} reused from {cells_dir}, {len(todo)} to run"
     )
-    lost: dict[str, list] = {}
-    if todo:
-        made = client is None
-        cluster = None
-        if made:
-            client, cluster = _client(scheduler, workers)
-        try:
-            lost = _run_tasks(todo, cells_dir, ext, client, progress)
-        finally:
-            if made:
-                client.close()
-            if cluster is not None:
-                cluster.close()
+    lost = _run_on_dask(todo, cells_dir, ext, scheduler, workers, client, progress) if todo else {}
     table = _assemble(sweep, cells, cells_dir, ext, lost)
     path = _write_atomic(table, out / f"results.{ext}")
-    maps = []
-    if sweep.heatmap and not table["failed"].all():
-        from adaptive_dd.sweep_plot import plot_ratio_heatmaps
+    return SweepResult(
+        table, path, _heatmaps(sweep, table, out), reused, len(todo), int(table["failed"].sum())
+    )
 
-        ratios = ratio_medians(table, sweep.heatmap, [a for a, _ in sweep.axes])
-        if np.isfinite(ratios["ratio"]).any():  # never an empty heat map
-            maps = plot_ratio_heatmaps(ratios, sweep.heatmap, [a for a, _ in sweep.axes], out)
-    return SweepResult(table, path, maps, reused, len(todo), int(table["failed"].sum()))
+
+def _run_on_dask(todo, cells_dir: Path, ext: str, scheduler, workers, client, progress: bool) -> dict:
+    """Run the ``todo`` tasks on ``client`` (or a cluster made here and closed after); the lost
+    tasks' errors (:func:`_run_tasks`)."""
+    made = client is None
+    cluster = None
+    if made:
+        client, cluster = _client(scheduler, workers)
+    try:
+        return _run_tasks(todo, cells_dir, ext, client, progress)
+    finally:
+        if made:
+            client.close()
+        if cluster is not None:
+            cluster.close()
+
+
+def _heatmaps(sweep: Sweep, table: pd.DataFrame, out: Path) -> list:
+    """The ratio heat maps of ``[sweep] heatmap`` (none when every row failed or no ratio is finite:
+    never an empty heat map)."""
+    if not sweep.heatmap or table["failed"].all():
+        return []
+    from adaptive_dd.sweep_plot import plot_ratio_heatmaps
+
+    ratios = ratio_medians(table, sweep.heatmap, [a for a, _ in sweep.axes])
+    if not np.isfinite(ratios["ratio"]).any():
+        return []
+    return plot_ratio_heatmaps(ratios, sweep.heatmap, [a for a, _ in sweep.axes], out)
 
 
 def _assemble(sweep: Sweep, cells, cells_dir: Path, ext: str, lost: dict) -> pd.DataFrame:

@@ -45,7 +45,6 @@ from adaptive_dd.benchmark.scenario import Scenario, default_scenario_path, load
 from adaptive_dd.controllers import CONTROLLERS, controllers_for
 from adaptive_dd.errors import ScenarioError
 from adaptive_dd.io import read_toml
-from adaptive_dd.plant.kind import is_two_link
 
 __all__ = ["SCENARIO_AXES", "GridPoint", "Sweep", "SweepError", "load_sweep", "parse_sweep"]
 
@@ -155,10 +154,10 @@ def _controllers(src: str, sw: dict, base: Scenario) -> tuple[str, ...]:
     ctrls = sw.get("controllers", list(base.controllers))
     if not isinstance(ctrls, list) or not ctrls or not all(isinstance(c, str) for c in ctrls):
         raise SweepError(f"{src}: key 'sweep.controllers' must be a non-empty list of names, got {ctrls!r}")
-    known = controllers_for(base.arm)
+    known = controllers_for(base.closed_forms or base.arm)
     for c in ctrls:
         if c not in known:
-            kind = "the two-link arm" if is_two_link(base.arm) else f"this {base.n_joints}-joint arm"
+            kind = "the two-link arm" if base.closed_forms is not None else f"this {base.n_joints}-joint arm"
             if c not in CONTROLLERS:
                 raise SweepError(f"{src}: key 'sweep.controllers': unknown controller {c!r}; known: {known}")
             raise SweepError(

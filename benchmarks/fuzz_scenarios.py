@@ -181,7 +181,7 @@ def meaningless(sc) -> str | None:
         return "absurd mass or size"
     if sc.estimate().bytes > 8 * 2**30:
         return "run too large"
-    return _meaningless_arm(sc.arm) or _meaningless_controllers(sc)
+    return _meaningless_arm(sc.closed_forms or sc.arm) or _meaningless_controllers(sc)
 
 
 def _meaningless_arm(arm) -> str | None:

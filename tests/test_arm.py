@@ -340,7 +340,9 @@ def test_sice_from_urdf_gives_the_default_benchmark_numbers():
     here = Path(__file__).resolve().parents[1] / "benchmarks" / "scenarios" / "sice_urdf.toml"
     urdf = load_scenario(here)
     default = load_scenario()
-    assert isinstance(urdf.arm, ClosedFormTwoLink) and not isinstance(default.arm, Arm)
+    assert isinstance(urdf.arm, Arm) and isinstance(default.arm, Arm)  # one arm type (issue 27)
+    assert isinstance(urdf.closed_forms, ClosedFormTwoLink)
+    assert default.closed_forms == ClosedFormTwoLink.sice()
     short = {"duration": 6.0, "seeds": 2, "swap_times": (5.0,), "swap_masses": (3.0,)}
     a = run_benchmark(dataclasses.replace(urdf, **short), progress=False)
     b = run_benchmark(dataclasses.replace(default, **short), progress=False)

@@ -1,6 +1,7 @@
-"""One place decides an arm's path (issue 27): ``adaptive_dd/plant/kind.py`` asks the arm
-(``closed_form``), and no module tests the arm's class (the two arm classes' own ``__eq__``
-aside), found by an AST scan of the package as ``tests/test_import_graph.py`` does for imports."""
+"""One place decides an arm's path (issue 27): :func:`adaptive_dd.plant.two_link.closed_form_view`
+asks the arm (``closed_form``), and no other module tests the arm's class (the two arm classes'
+own ``__eq__`` aside) nor reads ``closed_form``, found by an AST scan of the package as
+``tests/test_import_graph.py`` does for imports."""
 
 from __future__ import annotations
 
@@ -47,6 +48,10 @@ def arm_type_tests(source: str) -> list[int]:
             is_type = any(isinstance(s, ast.Call) and getattr(s.func, "id", None) == "type" for s in sides)
             if is_type and any(_names(s) & ARM_CLASSES for s in sides):
                 out.append(node.lineno)
+            # the class by its name: type(x).__name__ != "Arm"
+            by_name = any(isinstance(s, ast.Attribute) and s.attr == "__name__" for s in sides)
+            if by_name and any(isinstance(s, ast.Constant) and s.value in ARM_CLASSES for s in sides):
+                out.append(node.lineno)
     return out
 
 
@@ -57,8 +62,10 @@ def test_the_scan_finds_planted_type_tests():
         "b = isinstance(x, (int, plant.two_link.ClosedFormTwoLink))\n"
         "c = type(x) is Arm\n"
         "d = issubclass(k, Arm | ClosedFormTwoLink)\n"
+        'e = type(v).__name__ != "Arm"\n'
+        'f = type(v).__name__ == "Reference"\n'
     )
-    assert arm_type_tests(src) == [1, 3, 4, 5]
+    assert arm_type_tests(src) == [1, 3, 4, 5, 6]
 
 
 def test_no_type_test_on_the_arm_class_in_the_package():
@@ -72,20 +79,72 @@ def test_no_type_test_on_the_arm_class_in_the_package():
     bad = {rel: lines for rel, lines in found.items() if len(lines) != ALLOWED.get(rel, 0)}
     assert not bad, (
         f"type tests on the arm's class: {bad}; ask adaptive_dd.plant.kind "
-        "(is_two_link, is_chain, arm_kind, require_two_link) instead"
+        "(arm_kind, require_two_link), closed_form_view(arm) or the scenario's closed_forms instead"
     )
 
 
 def test_kind_names_each_arm():
-    two, chain = ClosedFormTwoLink.sice(), Arm.sice()
+    two, sice, chain = ClosedFormTwoLink.sice(), Arm.sice(), Arm.sice(general=True)
     assert (is_two_link(two), is_chain(two), arm_kind(two)) == (True, False, "two_link")
+    # the paper's arm as an Arm has the closed forms too: the kind asks closed_form_view, not the class
+    assert (is_two_link(sice), is_chain(sice), arm_kind(sice)) == (True, False, "two_link")
     assert (is_two_link(chain), is_chain(chain), arm_kind(chain)) == (False, True, "chain")
     assert not is_two_link(None) and not is_chain(None)
     with pytest.raises(ParameterError, match="expected an arm"):
         arm_kind(np.zeros(7))
     assert require_two_link(two, "here") is two
-    assert require_two_link(chain, "here") is closed_form_view(chain)  # the paper's geometry: its record
+    assert require_two_link(sice, "here") is closed_form_view(sice)  # the paper's geometry: its record
     with pytest.raises(ParameterError, match=r"here: needs an arm of the paper's two-link geometry.*general"):
         require_two_link(Arm.sice(general=True), "here")
     with pytest.raises(ParameterError, match=r"here: needs an arm of the paper's two-link geometry"):
         require_two_link(np.zeros(7), "here")
+
+
+def closed_form_reads(source: str) -> list[int]:
+    """Lines that read an arm's ``closed_form`` class attribute (``x.closed_form``,
+    ``getattr(x, "closed_form", ...)``) or call the old kind tests ``is_two_link`` / ``is_chain``."""
+    out = []
+    for node in ast.walk(ast.parse(source)):
+        if isinstance(node, ast.Attribute) and node.attr == "closed_form":
+            out.append(node.lineno)
+        elif isinstance(node, ast.Call):
+            name = getattr(node.func, "id", getattr(node.func, "attr", None))
+            if (
+                name == "getattr"
+                and len(node.args) >= 2
+                and getattr(node.args[1], "value", None) == "closed_form"
+            ):
+                out.append(node.lineno)
+            elif name in ("is_two_link", "is_chain"):
+                out.append(node.lineno)
+    return out
+
+
+ONE_PLACE = {"plant/two_link.py", "plant/kind.py", "_numba_cache.py"}
+"""Where the arm's class is asked: the fast path's section of ``plant/two_link.py``
+(``closed_form_view``, ``as_arm``, ``paper_sigma``), ``plant/kind.py``'s old ``is_two_link`` /
+``is_chain`` (which ask ``closed_form_view``), and ``_numba_cache.py``'s callers of them (another
+helper's room; they ask ``closed_form_view`` through them)."""
+
+
+def test_the_scan_finds_planted_closed_form_reads():
+    src = (
+        "a = arm.closed_form\n"
+        'b = getattr(arm, "closed_form", None)\n'
+        "c = is_two_link(arm)\n"
+        "d = closed_form_view(arm)\n"
+    )
+    assert closed_form_reads(src) == [1, 2, 3]
+
+
+def test_only_the_one_place_asks_the_arm_its_class():
+    found = {}
+    for path in sorted(ROOT.rglob("*.py")):
+        rel = path.relative_to(ROOT).as_posix()
+        lines = closed_form_reads(path.read_text(encoding="utf-8"))
+        if lines and rel not in ONE_PLACE:
+            found[rel] = lines
+    assert not found, (
+        f"the arm's kind asked outside the one place: {found}; ask closed_form_view(arm) or the "
+        "scenario's closed_forms instead"
+    )

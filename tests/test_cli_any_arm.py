@@ -135,6 +135,7 @@ def _two_link_record(path, T: float, n: int):
 def test_identify_online_starts_from_the_scenario_arm(tmp_path, capsys, monkeypatch):
     """identify --online --arm TWO_LINK.toml started from the SICE arm whatever the scenario said."""
     import adaptive_dd.identification.two_link_online as online
+    from adaptive_dd.cli import _common
     from adaptive_dd.cli._common import load_arm
     from adaptive_dd.plant.two_link import ClosedFormTwoLink
 
@@ -146,7 +147,7 @@ def test_identify_online_starts_from_the_scenario_arm(tmp_path, capsys, monkeypa
     seen = _capture(monkeypatch, online, "run_two_link_online")
     argv = ["identify", str(rec), "--online", "--out", str(tmp_path / "id")]
     assert main([*argv, "--arm", str(arm_toml)]) == 3
-    np.testing.assert_array_equal(seen["args"][4], load_arm(str(arm_toml)).sigma)
+    np.testing.assert_array_equal(seen["args"][4], _common.closed_form_view(load_arm(str(arm_toml))).sigma)
     assert not np.allclose(seen["args"][4], sice.sigma)
     assert main(argv) == 3  # without --arm: the SICE arm (Table 1)
     np.testing.assert_array_equal(seen["args"][4], sice.sigma)
@@ -175,17 +176,20 @@ def test_sweep_workers_with_a_scheduler_is_an_error(tmp_path, capsys):
 
 
 def test_the_arm_kind_is_asked_in_one_place():
-    """The CLI asks the arm's kind through :func:`adaptive_dd.plant.kind.is_two_link` (the package's one
-    place, imported by ``cli/_common.py``), never reads ``closed_form`` itself nor tests the arm's
-    class (issue 27: the type tests on the arm's class go)."""
+    """The CLI asks whether an arm has the paper's closed forms through
+    :func:`adaptive_dd.plant.two_link.closed_form_view` (the package's one place, imported by
+    ``cli/_common.py``), never reads ``closed_form`` itself nor tests the arm's class (issue 27: the
+    type tests on the arm's class go)."""
     import ast
 
     from adaptive_dd.cli import _common
-    from adaptive_dd.plant import kind
+    from adaptive_dd.plant import two_link
+    from adaptive_dd.plant.arm import Arm
 
-    assert _common.is_two_link is kind.is_two_link
-    assert _common.is_two_link(_common.load_arm(SICE_URDF))
-    assert not _common.is_two_link(_common.load_arm(SICE_URDF, general="test"))
+    assert _common.closed_form_view is two_link.closed_form_view
+    arm, general = _common.load_arm(SICE_URDF), _common.load_arm(SICE_URDF, general="test")
+    assert isinstance(arm, Arm) and isinstance(general, Arm)  # one arm type
+    assert _common.closed_form_view(arm) is not None and _common.closed_form_view(general) is None
     for f in sorted((ROOT / "adaptive_dd" / "cli").glob("*.py")):
         for node in ast.walk(ast.parse(f.read_text())):
             assert not (isinstance(node, ast.Attribute) and node.attr == "closed_form"), f.name

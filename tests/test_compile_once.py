@@ -104,15 +104,22 @@ def test_a_short_run_compiles_the_n_joint_loop_once_for_every_law():
     """A short UR5 run of ``pd`` and ``adaptive_ct``: one loop for both (``pd`` carries an inactive
     estimator, :class:`~adaptive_dd.closed_loop.glue.ChainEstimator`), the stick-slip ``_rk4``
     once (on a constant law: with the law a runtime value ct_oracle ran at 78 simulated s per CPU s
-    against 98)."""
+    against 98). The second process of a cold-cache run compiles the plant's integrator alone
+    (``precompile.plant_kernels``, run here first): the loop calls it with the same argument
+    types (one ``_stick_slip``), or it would compile it again (about 20 CPU s) and the second
+    process's work would be lost."""
     from adaptive_dd.closed_loop import glue
+    from adaptive_dd.closed_loop.precompile import plant_kernels
     from adaptive_dd.closed_loop.runner import run_closed_loop
 
-    res = run_closed_loop(_ur5(duration=0.01))
+    sc = _ur5(duration=0.01)
+    plant_kernels(sc)
+    res = run_closed_loop(sc)
     assert list(res.runs) == ["pd", "adaptive_ct"]
     loops = _of_arm(_specialisations(glue.chain_loop_block), two_link=False)
     assert len(loops) == 1, loops
     assert len([s for s in _specialisations(S._rk4) if "Literal[int](0)" in s]) == 1
+    assert len(_specialisations(S._stick_slip)) == 1, _specialisations(S._stick_slip)
 
 
 def test_the_friction_law_as_a_record_compiles_its_family_alone():
@@ -136,3 +143,35 @@ def test_the_friction_law_as_a_record_compiles_its_family_alone():
     assert {"_stick_slip", "_smooth"} <= set(both)
     with pytest.raises(ParameterError, match="friction law code"):
         S.friction_law(3)
+
+
+def test_the_n_joint_loop_calls_its_choices_by_name_not_through_overloads():
+    """numba compiles an ``@overload``'s implementation in full to type it, even one inlined where
+    it is called (then throws it away): on the UR5 about 15 CPU s of the closed loop's
+    compilation. The N-joint loop (``glue._chain_trial_samples``, inlined into
+    ``chain_loop_block``) calls every choice (the plant's step, the law, the estimator, their
+    scratch) by name: each global it calls, in its code and in the per-sample pieces it inlines,
+    is a compiled function (inlined before typing, or compiled and cached once), not one of the
+    stubs the overloads choose for."""
+    import inspect
+
+    from numba.core.registry import CPUDispatcher
+
+    from adaptive_dd.closed_loop import glue
+
+    stubs = {
+        name for name, f in vars(glue).items()
+        if inspect.isfunction(f) and "compiled only" in inspect.getsource(f)
+    }  # fmt: skip
+    assert {"plant_advance", "law_command", "estimator_sample", "law_estimate"} <= stubs
+    seen, todo = set(), [glue._chain_trial_samples]
+    while todo:
+        d = todo.pop()
+        f = d.py_func
+        for name in f.__code__.co_names:
+            g = f.__globals__.get(name)
+            if isinstance(g, CPUDispatcher) and g not in seen and g.targetoptions.get("inline") == "always":
+                seen.add(g)
+                todo.append(g)
+            assert not (inspect.isfunction(g) and name in stubs), (f.__qualname__, name)
+    assert {glue._chain_plant_advance, glue._chain_law_command, glue._chain_estimator_sample} <= seen

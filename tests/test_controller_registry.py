@@ -133,3 +133,20 @@ def test_validate_says_each_arms_default_from_the_table():
     assert "controllers.adaptive_ct.boost_duration = 0.2 s   (default)" in two
     assert "controllers.adaptive_ct.boost_duration = 1.0 s   (default)" in chain
     assert not any("adaptive_ct_paper" in line for line in two + chain)
+
+
+def test_the_nominal_inertia_of_the_gains_is_any_arms():
+    """Issue 27: ``Gains.nominal_inertia`` was two-link only (the paper's sigma)."""
+    from adaptive_dd.controllers import Gains
+    from adaptive_dd.robots import ROBOTS, robot_urdf
+
+    ur5 = Arm.from_urdf(robot_urdf("ur5"), ROBOTS["ur5"].payload_frame)
+    m = Gains().nominal_inertia(arm=ur5)
+    assert m.shape == (6,)
+    np.testing.assert_allclose(m, np.diagonal(ur5.mass_matrix(np.zeros(6))), rtol=1e-12)
+    loaded = ur5.sigma_with_payload(2.0)
+    assert np.all(Gains().nominal_inertia(loaded, arm=ur5)[:3] > m[:3])  # a payload adds inertia
+    # the paper's arm, as an Arm (general kernels) and by its closed forms: the same numbers
+    np.testing.assert_allclose(
+        Gains().nominal_inertia(arm=Arm.sice(general=True)), Gains().nominal_inertia(), rtol=1e-12
+    )

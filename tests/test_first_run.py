@@ -31,7 +31,7 @@ def test_a_cold_cache_is_announced_and_counted_in_the_estimate(monkeypatch, tmp_
     est = sc.estimate()
     assert est.compile_seconds == cold and est.seconds > cold
     assert "compiling the kernels, once" in str(est)
-    with _numba_cache.announce_compilation(sc.arm):
+    with _numba_cache.announce_compilation(sc.closed_forms or sc.arm):  # as the CLI passes it
         pass
     err = capsys.readouterr().err
     assert err.startswith("compiling the closed-loop kernels for the two-link arm (once per source state;")
@@ -39,7 +39,7 @@ def test_a_cold_cache_is_announced_and_counted_in_the_estimate(monkeypatch, tmp_
     index.write_bytes(b"")  # the kernel is in the cache now
     assert _numba_cache.compile_estimate(ClosedFormTwoLink.sice()) == 0.0
     assert sc.estimate().compile_seconds == 0.0 and "compiling" not in str(sc.estimate())
-    with _numba_cache.announce_compilation(sc.arm):
+    with _numba_cache.announce_compilation(sc.closed_forms or sc.arm):  # as the CLI passes it
         pass
     assert capsys.readouterr().err == ""  # warm, nothing compiled: nothing said
 
@@ -172,6 +172,7 @@ def test_the_second_process_is_waited_for_and_its_end_told(capsys):
 
     crash = "raise TypeError('law_trial: 14 arguments, got 13')"
     told = "  its error: TypeError: law_trial: 14 arguments, got 13"
+    ready = _numba_cache.READY
     for code, end, error in (
         ("", "compiled the report's kernels", None),
         ("raise SystemExit(3)", "failed (exit 3)", None),
@@ -179,12 +180,16 @@ def test_the_second_process_is_waited_for_and_its_end_told(capsys):
     ):
         errors = tempfile.TemporaryFile(mode="w+")
         helper = subprocess.Popen(
-            [sys.executable, "-c", f"print({_numba_cache.READY!r}, flush=True)\n{code}"],
+            [sys.executable, "-c", f"import time\ntime.sleep(1.5)\nprint({ready!r}, flush=True)\n"
+             f"time.sleep(0.5)\n{code}"],
             stdout=subprocess.PIPE, stderr=errors, text=True,
         )  # fmt: skip
         c = _numba_cache.Compiling(sys.stderr, helper, errors)
         c._wait_ready(timeout=60)
+        assert c.waited >= 1.0  # the wait holds the run up: counted in "compiled the kernels in"
+        before = c.waited
         c.join()
+        assert c.waited >= before + 0.3  # and the wait at the end
         err = capsys.readouterr().err
         assert "the second process compiled the plant's step and the law's pieces" in err
         assert f"the second process {end}" in err

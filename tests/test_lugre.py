@@ -15,6 +15,7 @@ from adaptive_dd.errors import ParameterError, ScenarioError
 from adaptive_dd.plant import TABLE1_SIGMA, ClosedFormTwoLink
 from adaptive_dd.plant.arm_tables import arm_from_tables
 from adaptive_dd.plant.simulator import ArmSimulator
+from adaptive_dd.plant.two_link import closed_form_view
 from adaptive_dd.plant.two_link_integrator import lugre_step, two_link_plant_step
 
 ARM = ClosedFormTwoLink.sice(friction="lugre")
@@ -107,8 +108,9 @@ def test_lugre_parameters_from_a_scenario_table_and_their_errors():
     arm = arm_from_tables(
         None, {"friction": "lugre", "lugre_stiffness": [2e5, 5e4], "lugre_damping": [300, 60]}
     )
-    assert arm.friction_params[3:] == (2e5, 5e4, 300.0, 60.0)
-    default = arm_from_tables(None, {"friction": "lugre"})
+    assert arm.friction == "lugre"  # an Arm (issue 27), its closed forms' plant runs LuGre
+    assert closed_form_view(arm).friction_params[3:] == (2e5, 5e4, 300.0, 60.0)
+    default = closed_form_view(arm_from_tables(None, {"friction": "lugre"}))
     j = (TABLE1_SIGMA[0] + TABLE1_SIGMA[1] + 2 * TABLE1_SIGMA[2], TABLE1_SIGMA[1])
     np.testing.assert_allclose(default.lugre_sigma1, np.sqrt(1e5 * np.array(j)))
     with pytest.raises(ScenarioError, match=r"plant\.lugre_stiffness"):

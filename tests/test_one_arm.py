@@ -39,7 +39,7 @@ def _states(rng, m=8):
 
 def test_the_paper_arm_has_its_closed_forms_and_other_arms_none(sice):
     arm, view = sice
-    assert is_chain(arm) and is_two_link(view) and view.n_joints == 2
+    assert is_two_link(arm) and is_two_link(view) and view.n_joints == 2  # asks the view, not the class
     np.testing.assert_allclose(view.sigma, ClosedFormTwoLink.sice().sigma, rtol=1e-14, atol=0)
     assert (
         view.actuator == ClosedFormTwoLink.sice().actuator and view.sensor == ClosedFormTwoLink.sice().sensor
@@ -101,6 +101,7 @@ def test_a_scenario_of_the_arm_runs_the_closed_forms_and_equals_the_general_kern
     )
     fast = dataclasses.replace(base, arm=Arm.sice())
     general = dataclasses.replace(base, arm=Arm.sice(general=True))
+    assert fast.closed_forms is closed_form_view(fast.arm) and general.closed_forms is None
     assert is_two_link(fast.arm) and is_chain(general.arm)
     rf, rg = run_benchmark(fast), run_benchmark(general)
     assert list(rf.runs) == list(rg.runs)
@@ -158,7 +159,7 @@ def test_simulation_takes_the_arm(sice):
 
     base = load_scenario("adaptive_dd/scenarios/payload_swap.toml")
     sim = Simulation(dataclasses.replace(base, arm=sice[0], controllers=("ct_oracle",)))
-    assert sim.arm is sice[1]
+    assert sim.arm is sice[0] and sim.scenario.closed_forms is sice[1]  # the arm, run on its closed forms
     sim.reset()
 
 
@@ -174,16 +175,20 @@ def test_simulation_takes_the_arm(sice):
 def test_a_closed_form_record_is_the_fast_path_of_its_arm(record, tmp_path, monkeypatch):
     monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path))
     arm = record.to_arm()
-    assert arm.n_joints == 2 and arm.payload_frame == "tip" and str(arm.urdf).startswith(str(tmp_path))
+    written = str(arm.urdf).startswith(str(tmp_path))  # the paper's Table 1 arm: the shipped URDF
+    assert arm.n_joints == 2 and arm.payload_frame == "tip" and written == (record.physical is None)
     view = closed_form_view(arm)
-    np.testing.assert_allclose(view.sigma, record.sigma, rtol=1e-12, atol=1e-15)
+    assert view == record  # exactly the record (held on the arm): a scenario given one runs its numbers
+    np.testing.assert_array_equal(view.sigma, record.sigma)
+    fresh = dataclasses.replace(arm, general=False)  # read back from its URDF: to round-off
+    np.testing.assert_allclose(closed_form_view(fresh).sigma, record.sigma, rtol=1e-12, atol=1e-15)
     assert (view.l1, view.l2) == pytest.approx((record.l1, record.l2), rel=1e-15)
     assert (view.actuator, view.sensor, view.friction) == (record.actuator, record.sensor, record.friction)
     assert view.payload_radius == record.payload_radius
     np.testing.assert_allclose(paper_sigma(arm), record.sigma, rtol=1e-12, atol=1e-15)
     assert record.to_arm() == arm  # the same text, the same file
-    with pytest.raises(ParameterError, match=r"to_arm: LuGre friction"):
-        dataclasses.replace(record, friction="lugre").to_arm()
+    lugre = dataclasses.replace(record, friction="lugre", lugre_stiffness=(2e4, 3e4)).to_arm()
+    assert lugre.friction == "lugre" and closed_form_view(lugre).lugre_stiffness == (2e4, 3e4)
 
 
 def test_a_record_read_from_an_arm_gives_that_arm_back(sice, tmp_path, monkeypatch):
@@ -191,7 +196,8 @@ def test_a_record_read_from_an_arm_gives_that_arm_back(sice, tmp_path, monkeypat
     arm, view = sice
     assert view.to_arm() is arm
     sc = load_scenario("benchmarks/scenarios/sice_urdf.toml")
-    assert sc.arm.to_arm().urdf == robot_urdf("sice_arm") and closed_form_view(sc.arm.to_arm()) is sc.arm
+    assert sc.arm.urdf == robot_urdf("sice_arm") and sc.closed_forms is closed_form_view(sc.arm)
+    assert sc.closed_forms.to_arm() is sc.arm
     other = dataclasses.replace(view, friction="tanh")  # no longer that arm's closed forms
     assert other.to_arm() != arm and other.to_arm().friction == "tanh"
     assert str(other.to_arm().urdf).startswith(str(tmp_path))
@@ -218,3 +224,17 @@ def test_the_closed_form_slotine_li_regressor_is_the_general_one(sice):
         + arm.coulomb * np.sign(qd_r)
     )
     np.testing.assert_allclose(closed, general, rtol=1e-12, atol=1e-12)
+
+
+def test_an_unwritable_cache_does_not_stop_a_scenario_of_the_paper_numbers(tmp_path, monkeypatch):
+    """A scenario's [arm] of the paper's numbers becomes an Arm whose URDF goes to the user's cache;
+    a cache that cannot be written (here a file where the folder would be) falls back to the
+    temporary folder, so that the scenario still loads, with the same closed forms."""
+    blocker = tmp_path / "cache"
+    blocker.write_text("")
+    monkeypatch.setenv("XDG_CACHE_HOME", str(blocker))
+    monkeypatch.setattr("tempfile.tempdir", str(tmp_path / "tmp"))
+    (tmp_path / "tmp").mkdir()
+    record = ClosedFormTwoLink.from_sigma([0.5, 0.09, 0.12, 3.0, 1.0, 2.0, 0.5], l1=0.3, l2=0.25)
+    arm = record.to_arm()
+    assert str(arm.urdf).startswith(str(tmp_path / "tmp")) and closed_form_view(arm) == record

@@ -172,7 +172,7 @@ def test_an_estimate_set_after_the_first_sample_is_reported(arm_kind):
     sc = load_scenario() if arm_kind == "two_link" else load_scenario(EXAMPLES / "plugin_urdf.toml")
     sc = dataclasses.replace(sc, seeds=2, duration=0.2, swap_times=(0.1,), swap_masses=(1.0,), swap_com=())
     ctrl = LateEstimate()
-    ctrl.p = sc.arm.sigma.shape[0]
+    ctrl.p = (sc.closed_forms or sc.arm).sigma.shape[0]  # the run's parameters: the paper's sigma on its arm
     run = run_benchmark(sc, progress=False, controllers={"late": ctrl}).runs["late"]
     assert not run.error and run.sigma_end is not None
     assert np.all(run.sigma_end == 1.5)  # both segments' ends, both trials

@@ -184,3 +184,22 @@ def test_validate_says_the_boost_default_of_each_arm(capsys):
     ur5 = str(resources.files("adaptive_dd.scenarios").joinpath("ur5_tool_swap.toml"))
     assert main(["validate", ur5]) == 0
     assert "controllers.adaptive_ct.boost_duration = 1.0 s   (default)" in capsys.readouterr().out
+
+
+def test_validate_checks_the_paper_arm_against_its_limits_too(tmp_path, capsys):
+    """The paper's arm is an Arm in its scenario (issue 27), with the URDF's limits (+-pi rad,
+    2 pi rad/s): ``validate`` checks its reference as it checks any arm's (the closed-form record
+    had no limits, so a reference through them passed)."""
+    src = ROOT / "adaptive_dd" / "scenarios" / "payload_swap.toml"
+    bad = tmp_path / "s.toml"
+    bad.write_text(
+        src.read_text().replace(
+            "joint1 = { offset = 0.0, amplitude = [0.5, 0.2]",
+            "joint1 = { offset = 3.0, amplitude = [0.5, 0.2]",
+        )
+    )
+    assert main(["validate", str(src)]) == 0
+    capsys.readouterr()
+    assert main(["validate", str(bad)]) == 1
+    err = capsys.readouterr().err
+    assert "reference.joint1: q = " in err and "above the joint's upper limit 3.142 rad" in err, err

@@ -126,10 +126,10 @@ def test_one_trial_of_another_arm_uses_that_arm(tmp_path):
     sc = load_scenario(Path(__file__).resolve().parent.parent / "benchmarks" / "scenarios" / "other_arm.toml")
     sim = Simulation(dataclasses.replace(sc, duration=0.2, swap_times=(0.1,), swap_masses=(2.0,)))
     sim.reset()
-    np.testing.assert_allclose(sim.sigma_true, sc.arm.sigma)
+    np.testing.assert_allclose(sim.sigma_true, sc.closed_forms.sigma)  # the paper's sigma of its arm
     while not sim.done:
         sim.step(np.zeros(2))
-    np.testing.assert_allclose(sim.sigma_true, sc.arm.sigma_with_payload(2.0, sc.payload_radius))
+    np.testing.assert_allclose(sim.sigma_true, sc.closed_forms.sigma_with_payload(2.0, sc.payload_radius))
 
 
 class _PD:

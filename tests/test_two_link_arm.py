@@ -32,6 +32,7 @@ from adaptive_dd.plant import (
 from adaptive_dd.plant.arm_tables import arm_from_tables
 from adaptive_dd.plant.pinocchio_model import two_link_cross_check
 from adaptive_dd.plant.simulator import NOISE_CHUNK
+from adaptive_dd.plant.two_link import closed_form_view
 
 SCENARIOS = Path(__file__).resolve().parents[1] / "benchmarks" / "scenarios"
 CLEAN = SensorConfig(quantize=False, position_variance=(0, 0), velocity_variance=(0, 0))
@@ -183,21 +184,22 @@ def test_payload_arguments_are_checked():
 
 # ------------------------------------------------------------ scenario tables
 def test_arm_from_tables_physical_form():
-    arm = arm_from_tables(OTHER_TABLE, None, "x.toml")
+    arm = closed_form_view(arm_from_tables(OTHER_TABLE, None, "x.toml"))  # an Arm's closed forms (issue 27)
     assert arm == ClosedFormTwoLink.from_physical(OTHER, payload_radius=0.04)
 
 
 def test_arm_from_tables_sigma_form_and_plant():
     t = {"sigma": OTHER.to_sigma().tolist(), "l1": 0.3, "l2": 0.25, "torque_limit": [100, 20]}
-    arm = arm_from_tables(t, {"friction": "tanh", "friction_velocity": 0.03}, "x.toml")
+    arm = closed_form_view(arm_from_tables(t, {"friction": "tanh", "friction_velocity": 0.03}, "x.toml"))
     assert arm.physical is None and arm.payload_radius == 0.05 and arm.actuator.torque_limit == (100.0, 20.0)
     np.testing.assert_array_equal(arm.sigma, OTHER.to_sigma())
     assert (arm.friction, arm.friction_velocity, arm.friction_code) == ("tanh", 0.03, 1)
 
 
 def test_arm_from_tables_without_tables_is_the_sice_arm():
-    assert arm_from_tables(None, None) == ClosedFormTwoLink.sice()
-    assert arm_from_tables(None, {"friction": "stribeck"}) == ClosedFormTwoLink.sice(friction="stribeck")
+    assert closed_form_view(arm_from_tables(None, None)) == ClosedFormTwoLink.sice()
+    stribeck = arm_from_tables(None, {"friction": "stribeck"})
+    assert closed_form_view(stribeck) == ClosedFormTwoLink.sice(friction="stribeck")
 
 
 @pytest.mark.parametrize(
@@ -230,12 +232,13 @@ def test_arm_from_tables_errors_name_file_key_and_reason(arm, plant, match):
 
 
 def test_scenarios_carry_their_arm(tmp_path):
-    assert load_scenario().arm == ClosedFormTwoLink.sice()
+    assert load_scenario().closed_forms == ClosedFormTwoLink.sice()  # exactly (issue 27: arm is an Arm)
     other = load_scenario(SCENARIOS / "other_arm.toml")
-    assert other.arm == ClosedFormTwoLink.from_physical(OTHER, payload_radius=0.05)
+    assert other.closed_forms == ClosedFormTwoLink.from_physical(OTHER, payload_radius=0.05)
+    assert other.arm == other.closed_forms.to_arm() and other.arm.n_joints == 2
     assert other.payload_radius == 0.05 and 2.0 in other.swap_masses
     smooth = load_scenario(SCENARIOS / "smooth_friction.toml")
-    assert smooth.arm == ClosedFormTwoLink.sice(friction="tanh", friction_velocity=0.02)
+    assert smooth.closed_forms == ClosedFormTwoLink.sice(friction="tanh", friction_velocity=0.02)
     assert smooth.reference == load_scenario().reference
     p = tmp_path / "r.toml"
     p.write_text(
@@ -250,7 +253,7 @@ def test_scenarios_carry_their_arm(tmp_path):
 def test_other_arm_reference_is_within_the_actuator_limits():
     sc = load_scenario(SCENARIOS / "other_arm.toml")
     q, qd, qdd = sc.reference.sample(np.arange(sc.n_samples) * sc.sample_period)
-    tau = inverse_dynamics(q, qd, qdd, sc.arm.sigma_with_payload(max(sc.swap_masses)))
+    tau = inverse_dynamics(q, qd, qdd, sc.closed_forms.sigma_with_payload(max(sc.swap_masses)))
     peak = np.abs(tau).max(axis=0)
     np.testing.assert_allclose(peak, [27.4, 8.7], atol=0.05)  # the figures in the file's comment
     assert np.all(peak < 0.7 * np.array(sc.arm.actuator.torque_limit))

@@ -239,7 +239,7 @@ d = [2.5, 0.6]
     ],
 )
 def test_arm_tables_have_physical_bounds(old, new, match):
-    assert parse(BASE + ARM).arm.l1 == 0.3
+    assert parse(BASE + ARM).closed_forms.l1 == 0.3
     with pytest.raises(ScenarioError, match=r"F.toml: .*" + match):
         parse(BASE + ARM.replace(old, new))
 
@@ -269,12 +269,13 @@ def test_builtin_controller_settings_are_checked_on_reading(table, match):
 
 def test_sweep_and_arm_files_read_toml_like_scenarios(tmp_path):
     """One TOML reader: a BOM is accepted everywhere, errors name the file."""
+    from adaptive_dd.cli._common import closed_form_view as _closed_form_view
     from adaptive_dd.cli._common import load_arm
     from adaptive_dd.io import read_toml
 
     p = tmp_path / "arm.toml"
     p.write_bytes(b"\xef\xbb\xbf" + ARM.encode())
-    assert load_arm(str(p)).l1 == 0.3
+    assert _closed_form_view(load_arm(str(p))).l1 == 0.3
     p.write_bytes(b"[arm\n")
     with pytest.raises(ScenarioError, match=r"arm.toml: not valid TOML"):
         load_arm(str(p))

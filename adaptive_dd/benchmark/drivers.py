@@ -55,7 +55,7 @@ def _constants(scenario, reference) -> tuple[RunConstants, Io, np.ndarray]:
     rc = RunConstants(
         float(T), float(MAX_ERROR), float(MAX_SPEED), q_d, qd_d, qdd_d, seg_start, seg_end, seg_settled
     )
-    arm = scenario.arm
+    arm = scenario.closed_forms
     act, sens = arm.actuator, sensor_of(scenario)
     io = Io(
         c(act._lim, dtype=float), c(act._lsb, dtype=float), bool(act.saturate), bool(act.quantize),
@@ -76,7 +76,7 @@ def _records(
     q = np.broadcast_to(rc.q_d[0], (S, 2)).copy()
     qd = np.broadcast_to(rc.qd_d[0], (S, 2)).copy()
     run.dropped = np.zeros(S, dtype=np.int64)
-    arm = scenario.arm
+    arm = scenario.closed_forms
     pl = TwoLinkPlant(
         sigma_seg, int(scenario.substeps), int(arm.friction_code), friction_vector(arm.friction_params),
         np.ones((S, 2)), np.zeros((S, 2)),

@@ -105,7 +105,6 @@ import numpy as np
 from adaptive_dd.benchmark.provenance import provenance
 from adaptive_dd.benchmark.segments import moving_rms, segment_failed
 from adaptive_dd.benchmark.streaming import SETTLE, segment_bounds
-from adaptive_dd.plant.kind import is_chain
 
 if TYPE_CHECKING:  # annotations only: types imports this module for BenchmarkResult.metrics()
     from adaptive_dd.benchmark.types import BenchmarkResult
@@ -197,7 +196,7 @@ def per_seed_segment_metrics(res: BenchmarkResult, run, recovery: bool = True) -
     sc = res.scenario
     T = sc.sample_period
 
-    if is_chain(sc.arm):  # an N-joint run (adaptive_dd.closed_loop)
+    if sc.closed_forms is None:  # the general kernels' run (adaptive_dd.closed_loop)
         from adaptive_dd.closed_loop.metrics import segment_metrics
 
         out = segment_metrics(res, run)
@@ -220,7 +219,7 @@ def per_seed_segment_metrics(res: BenchmarkResult, run, recovery: bool = True) -
     if recovery:
         out["recovery_time"] = _recovery_times(run.e_norm, start, end, T)
     if run.sigma_end is not None:
-        out["mass_estimate"] = sc.arm.payload_mass_from_sigma(run.sigma_end)
+        out["mass_estimate"] = sc.closed_forms.payload_mass_from_sigma(run.sigma_end)
     return _blank_failed(res, run, out, end, key)
 
 
@@ -401,9 +400,9 @@ def _segment_entry(sc, m: dict, i: int, sigma_true: np.ndarray) -> dict:
 def _segment_sigmas(sc) -> np.ndarray:
     """True base parameters per segment ``(G, p)``."""
 
-    if is_chain(sc.arm):
+    if sc.closed_forms is None:
         return sc.segment_sigmas()
-    return np.array([sc.arm.sigma_with_payload(m, sc.payload_radius) for _, _, m in sc.segments()])
+    return np.array([sc.closed_forms.sigma_with_payload(m, sc.payload_radius) for _, _, m in sc.segments()])
 
 
 def _com_true(sc, i: int):

@@ -35,7 +35,7 @@ def torque_peaks(scenario) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     payload segment's parameters, the sample where it occurs and the segment, each ``(n,)``."""
     T, N = scenario.sample_period, scenario.n_samples
     q, qd, qdd = scenario.reference.sample(np.arange(N) * T)
-    Y = scenario.arm.regressor(q, qd, qdd)  # (N, n, p)
+    Y = (scenario.closed_forms or scenario.arm).regressor(q, qd, qdd)  # (N, n, p): segment_sigmas' p
     tau = np.abs(np.einsum("knp,sp->skn", Y, scenario.segment_sigmas()))  # (segments, N, n)
     flat = tau.reshape(-1, tau.shape[2])
     at = np.argmax(flat, axis=0)
@@ -117,9 +117,9 @@ def resolved_settings(scenario) -> list[str]:
     and box), ``(default)`` marked: what the run will use on this arm, said before it runs
     (several differ between the arms, by the rule the table states)."""
     from adaptive_dd.controllers.registry import ABSENT, CONTROLLERS, controller_label
-    from adaptive_dd.plant.kind import arm_kind
+    from adaptive_dd.plant.kind import run_kind
 
-    kind = arm_kind(scenario.arm)
+    kind = run_kind(scenario)
     out = []
     for spec in scenario.controllers:
         entry = CONTROLLERS.get(spec)

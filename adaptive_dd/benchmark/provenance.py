@@ -22,10 +22,10 @@ def scenario_dict(sc) -> dict:
             v = sorted(v)
         elif f.name == "controller_options":
             v = {n: sc.options(n) for n, _ in v}
-        elif dataclasses.is_dataclass(v) and type(v).__name__ != "Arm":  # Arm: to_dict
-            v = dataclasses.asdict(v)
-        elif hasattr(v, "to_dict"):
+        elif hasattr(v, "to_dict"):  # the arm, the closed forms' record: their own description
             v = v.to_dict()
+        elif dataclasses.is_dataclass(v):
+            v = dataclasses.asdict(v)
         out[f.name] = _jsonable(v)
     return out
 

@@ -288,11 +288,9 @@ def detection_limit_lines(c: dict) -> list[str]:
 
 def _targets(metrics: dict, res: BenchmarkResult) -> list[str]:
     """The report's target lines: each measured figure beside its target, met or not."""
-    from adaptive_dd.plant.kind import is_chain
-
     c = metrics["controllers"]
     out = _adaptive_ct_targets(c["adaptive_ct"]) if "adaptive_ct" in c else []
-    out += _information_lines(c, all_unknown=not is_chain(res.scenario.arm))
+    out += _information_lines(c, all_unknown=res.scenario.closed_forms is not None)
     out += detection_limit_lines(c)
     out += _nominal_target(c) + _mass_targets(c)
     if "ct_oracle" in c:

@@ -39,7 +39,6 @@ from adaptive_dd.benchmark.types import (
 from adaptive_dd.controllers import Controller
 from adaptive_dd.controllers.compiled_form import compiled_spec
 from adaptive_dd.errors import ParameterError
-from adaptive_dd.plant.kind import is_chain
 
 __all__ = [
     "ENGINES",
@@ -88,20 +87,30 @@ def run_benchmark(
     if engine not in ENGINES:
         raise ParameterError(f"engine must be one of {ENGINES}, got {engine!r}")
     t0 = time.perf_counter()
-
-    if is_chain(scenario.arm):  # any N-joint arm: adaptive_dd.closed_loop
+    if scenario.closed_forms is None:  # the general kernels: adaptive_dd.closed_loop
         from adaptive_dd.closed_loop.runner import run_closed_loop
 
-        n = scenario.n_samples * len(controllers or scenario.controllers)
-        bar = _progress(progress, n, scenario.name)
+        bar = _progress(
+            progress, scenario.n_samples * len(controllers or scenario.controllers), scenario.name
+        )
         res = run_closed_loop(
             scenario, controllers, seed_indices=seed_indices, keep_trajectories=keep_trajectories,
             engine=engine, bar=bar,
         )  # fmt: skip
         if bar is not None:
             bar.close()
-        res.wall_time = time.perf_counter() - t0
-        return res
+    else:  # the paper's closed forms
+        res = _run_two_link(scenario, progress, controllers, engine, keep_trajectories, seed_indices, on_run)
+    res.wall_time = time.perf_counter() - t0
+    return res
+
+
+def _run_two_link(
+    scenario: Scenario, progress: bool, controllers, engine: str, keep: int, seed_indices, on_run
+) -> BenchmarkResult:
+    """:func:`run_benchmark` on the closed forms (``scenario.closed_forms``): each controller
+    compiled (:func:`~adaptive_dd.benchmark.drivers.run_compiled`) or in Python
+    (:func:`~adaptive_dd.benchmark.drivers.run_python`), as ``engine`` says."""
     if controllers is None:
         ctrls = dict(scenario_controller(scenario, spec) for spec in scenario.controllers)
     else:
@@ -111,9 +120,9 @@ def run_benchmark(
         raise ParameterError(f"seed_indices must be a non-empty list of indices >= 0, got {seed_indices}")
     N, T = scenario.n_samples, scenario.sample_period
     t = np.arange(N) * T
-    q_d, qd_d, qdd_d = scenario.reference.sample(t)
+    ref = scenario.reference.sample(t)
     sigma_true, mass = true_sigma(scenario, t)
-    res = BenchmarkResult(scenario, t, q_d, sigma_true, mass, seed_indices=idx)
+    res = BenchmarkResult(scenario, t, ref[0], sigma_true, mass, seed_indices=idx)
     specs = {n: (compiled_spec(c, T) if engine != "python" else None) for n, c in ctrls.items()}
     if engine == "compiled" and any(s is None for s in specs.values()):
         names = [n for n, s in specs.items() if s is None]
@@ -121,17 +130,14 @@ def run_benchmark(
     bar = _progress(progress, len(ctrls) * N, scenario.name)
     for name, ctrl in ctrls.items():
         if specs[name] is not None:
-            run = run_compiled(
-                name, ctrl, specs[name], scenario, idx, (q_d, qd_d, qdd_d), keep_trajectories, bar
-            )
+            run = run_compiled(name, ctrl, specs[name], scenario, idx, ref, keep, bar)
         else:
-            run = run_python(name, ctrl, scenario, idx, (q_d, qd_d, qdd_d), keep_trajectories, bar)
+            run = run_python(name, ctrl, scenario, idx, ref, keep, bar)
         res.runs[name] = run
         if on_run is not None:
             on_run(res, run)
     if bar is not None:
         bar.close()
-    res.wall_time = time.perf_counter() - t0
     return res
 
 

@@ -86,9 +86,8 @@ from adaptive_dd.benchmark.scenario_checks import check_number, scenario_errors,
 from adaptive_dd.errors import ScenarioError
 from adaptive_dd.plant.arm import Arm
 from adaptive_dd.plant.arm_tables import arm_from_tables
-from adaptive_dd.plant.kind import is_chain
 from adaptive_dd.plant.parameters import PAYLOAD_RADIUS
-from adaptive_dd.plant.two_link import ClosedFormTwoLink, closed_form_view
+from adaptive_dd.plant.two_link import ClosedFormTwoLink, as_arm, closed_form_view
 from adaptive_dd.plant.uncertainty import PLANT_TRUTH_KEYS, PlantSpec, parse_model, parse_plant
 
 __all__ = [
@@ -103,6 +102,7 @@ __all__ = [
     "parse_scenario",
     "read_toml",
     "run_estimate",
+    "scenario_closed_forms",
 ]
 
 Array = NDArray[np.float64]
@@ -137,11 +137,12 @@ class Scenario:
     Constructing one (also through ``dataclasses.replace``) checks every field and
     raises one :class:`ScenarioError` listing all problems.
 
-    ``arm`` is an :class:`~adaptive_dd.plant.arm.Arm` (default the paper's SICE arm). An arm of the
-    paper's geometry runs the closed forms, chosen here automatically
-    (:func:`~adaptive_dd.plant.two_link.closed_form_view`; ``Arm(general=True)`` keeps the general
-    kernels; a ``plant`` that differs from the arm keeps them too): the field then holds their
-    record, a :class:`~adaptive_dd.plant.two_link.ClosedFormTwoLink`.
+    ``arm`` is an :class:`~adaptive_dd.plant.arm.Arm` (default the paper's SICE arm; a
+    :class:`~adaptive_dd.plant.two_link.ClosedFormTwoLink` given here becomes the arm it is the
+    closed forms of, :func:`~adaptive_dd.plant.two_link.as_arm`). An arm of the paper's geometry
+    runs the closed forms, chosen here automatically: :attr:`closed_forms` holds their record
+    (:func:`~adaptive_dd.plant.two_link.closed_form_view`), None where the general kernels run
+    (any other arm, ``Arm(general=True)``, a ``plant`` apart from the arm).
     """
 
     name: str
@@ -163,7 +164,7 @@ class Scenario:
     source: str = "<memory>"
     controller_options: tuple[tuple[str, tuple[tuple[str, Any], ...]], ...] = ()
     defaulted: frozenset[str] = field(default=frozenset(), compare=False)
-    arm: Arm | ClosedFormTwoLink = field(default_factory=ClosedFormTwoLink.sice)
+    arm: Arm = field(default_factory=lambda: ClosedFormTwoLink.sice().to_arm())
     swap_com: tuple = ()
     swap_inertia: tuple = ()
     excite: float = 0.0
@@ -172,12 +173,15 @@ class Scenario:
     plant: PlantSpec | None = None
     """What the simulated robot is when it is not ``arm`` (:mod:`adaptive_dd.plant.uncertainty`):
     ``arm`` is then the model the controllers are given. None: the plant is ``arm`` exactly."""
+    closed_forms: ClosedFormTwoLink | None = field(init=False, default=None, repr=False, compare=False)
+    """The paper's closed forms of ``arm`` (eqs. 3-9) when the run takes that fast path: the arm is
+    of the paper's geometry and ``plant`` is None (:func:`scenario_closed_forms`); None: the general
+    kernels (:mod:`adaptive_dd.closed_loop`)."""
 
     def __post_init__(self) -> None:
-        fast = closed_form_view(self.arm) if self.plant is None else None
-        if fast is not None and fast is not self.arm:  # the paper's geometry: its closed forms
-            object.__setattr__(self, "arm", fast)
-        errors = scenario_errors({f.name: getattr(self, f.name) for f in fields(self)})
+        object.__setattr__(self, "arm", as_arm(self.arm))  # a closed-form record: the arm it is of
+        object.__setattr__(self, "closed_forms", scenario_closed_forms(self.arm, self.plant))
+        errors = scenario_errors({f.name: getattr(self, f.name) for f in fields(self) if f.init})
         if errors:
             raise _scenario_error(str(self.source), errors)
 
@@ -196,8 +200,9 @@ class Scenario:
         return kw
 
     def segment_sigmas(self) -> NDArray[np.float64]:
-        """True base parameters of each constant-payload segment, ``(n_segments, p)``: the arm's, or
-        with a ``[plant]`` the plant's before any draw (each seed's own: the results' ``plant``)."""
+        """True base parameters of each constant-payload segment, ``(n_segments, p)``: the arm's (the
+        paper's sigma, p = 7, on the closed forms' fast path, :attr:`closed_forms`), or with a
+        ``[plant]`` the plant's before any draw (each seed's own: the results' ``plant``)."""
         if self.plant is not None:
             from adaptive_dd.closed_loop.types import pi_with_payload
 
@@ -208,8 +213,9 @@ class Scenario:
             return np.array(
                 [B @ np.concatenate([pi_with_payload(self.arm, x, p.pi_links), friction]) for x in payloads]
             )
-        rows = [self.arm.sigma_with_payload(0.0, radius=self.payload_radius)]
-        rows += [self.arm.sigma_with_payload(**self.payload_of(i)) for i in range(len(self.swap_times))]
+        arm = self.closed_forms or self.arm  # the run's parameters: the paper's sigma on its fast path
+        rows = [arm.sigma_with_payload(0.0, radius=self.payload_radius)]
+        rows += [arm.sigma_with_payload(**self.payload_of(i)) for i in range(len(self.swap_times))]
         return np.array(rows)
 
     @property
@@ -236,10 +242,10 @@ class Scenario:
         when numba's cache is cold."""
         from adaptive_dd._numba_cache import compile_estimate
 
-        serial = is_chain(self.arm)
+        general = self.closed_forms is None
         return run_estimate(
-            self.n_samples, self.seeds, len(self.controllers), self.n_joints if serial else None,
-            compile_seconds=compile_estimate(self.arm),
+            self.n_samples, self.seeds, len(self.controllers), self.n_joints if general else None,
+            compile_seconds=compile_estimate(self.closed_forms or self.arm),
         )  # fmt: skip
 
     def options(self, name: str) -> dict[str, Any]:
@@ -248,6 +254,13 @@ class Scenario:
             if n == name:
                 return thaw(opts)
         return {}
+
+
+def scenario_closed_forms(arm, plant: PlantSpec | None = None) -> ClosedFormTwoLink | None:
+    """The closed forms a run of ``arm`` takes (:func:`~adaptive_dd.plant.two_link.closed_form_view`),
+    or None: the general kernels. A ``plant`` apart from the arm runs the general kernels; so does
+    ``arm`` None (a scenario whose ``[arm]`` was wrong, while its other tables are checked)."""
+    return None if arm is None or plant is not None else closed_form_view(arm)
 
 
 def _scenario_error(src: str, errors: list[str]) -> ScenarioError:
@@ -336,7 +349,7 @@ def parse_scenario(data: dict, src: str = "<memory>", name: str = "scenario") ->
 def model_and_plant(src: str, arm, plant_table, model_table) -> tuple[Any, PlantSpec | None]:
     """The controllers' model (``[model]``) and the plant (``[plant]``'s truth keys) around ``arm`` (the
     ``[arm]``); raises :class:`ScenarioError` for these tables on the two-link closed-form arm."""
-    if not is_chain(arm):
+    if closed_form_view(arm) is not None:
         given = sorted(k for k in (plant_table or {}) if k in PLANT_TRUTH_KEYS)
         given = [f"plant.{k}" for k in given] + (["[model]"] if model_table is not None else [])
         if given:
@@ -449,7 +462,7 @@ def _plant_lines(sc: Scenario) -> list[str]:
 
     p = sc.plant
     if p is None:
-        return ["# plant: the [arm] itself (no [plant] table)"] if is_chain(sc.arm) else []
+        return ["# plant: the [arm] itself (no [plant] table)"] if sc.closed_forms is None else []
     out = [f"model.urdf = {str(sc.arm.urdf)!r}   (what every non-oracle controller is given)"]
     out.append(f"plant.urdf = {p.urdf!r}" if p.urdf else "# plant links: the [arm]'s URDF")
     for key in ("viscous", "coulomb", "armature"):

@@ -13,7 +13,6 @@ import numpy as np
 
 from adaptive_dd.benchmark.scenario_base import KEYS, LIMITS, Reference, run_estimate
 from adaptive_dd.controllers import CONTROLLERS
-from adaptive_dd.plant.kind import is_chain
 from adaptive_dd.plant.parameters import PAYLOAD_RADIUS
 from adaptive_dd.plant.sampling import first_sample
 
@@ -77,27 +76,11 @@ def _nums(errs: list, key: str, v: Any, lo: float, hi: float, *, n: int | None =
 def scenario_errors(v: dict[str, Any]) -> list[str]:
     """Every problem of the scenario fields ``v`` (a dict of Scenario's fields) as ``key: reason``."""
     L = LIMITS
-
     e: list[str] = []
     for k in ("name", "source"):
         if not isinstance(v[k], str):
             e.append(f"{k}: must be a string, got {_short(v[k])}")
-    d_ok = check_number(e, "run.duration", v["duration"], 0, math.inf, lo_open=True)
-    T_ok = check_number(
-        e, "run.sample_period", v["sample_period"], L["min_sample_period"], L["max_sample_period"]
-    )
-    if d_ok and T_ok and v["sample_period"] > v["duration"] / 10:
-        e.append(
-            f"run.sample_period: {v['sample_period']} s is more than a tenth of run.duration "
-            f"({v['duration']} s)"
-        )
-        T_ok = False
-    if d_ok and T_ok and v["duration"] / v["sample_period"] > 1e12:
-        e.append(
-            f"run: too large: {v['duration'] / v['sample_period']:.3g} samples per trial "
-            f"(run.duration / run.sample_period)"
-        )
-        d_ok = False
+    d_ok, T_ok = _check_timing(e, v)
     s_ok = check_number(e, "run.seeds", v["seeds"], 1, L["max_seeds"], integer=True)
     check_number(e, "run.seed", v["seed"], 0, L["seed_bound"] - 1, integer=True)
     check_number(e, "run.substeps", v["substeps"], 1, L["max_substeps"], integer=True)
@@ -108,20 +91,8 @@ def scenario_errors(v: dict[str, Any]) -> list[str]:
                 f"run.excite: {v['excite']} s: the excitation phase needs an N-joint arm from a URDF "
                 '([arm] robot = ... or urdf = ...; the paper\'s arm: robot = "sice_arm", general = true)'
             )
-    c_ok = _check_controllers(e, v["controllers"], v.get("arm"))
-    bw = v["bandwidth"]
-    if isinstance(bw, tuple) and _serial(v):  # one per joint, N-joint arms only
-        bw_ok = _nums(e, "control.bandwidth", bw, 0, 1e5, n=_n_joints(v), lo_open=True)
-        bw = max(bw) if bw_ok else bw
-    else:
-        bw_ok = check_number(e, "control.bandwidth", bw, 0, 1e5, lo_open=True)
-    if bw_ok and T_ok:
-        if bw * v["sample_period"] > L["max_bandwidth_T"]:
-            e.append(
-                f"control.bandwidth: {bw} rad/s at T = {v['sample_period']} s gives "
-                f"bandwidth * T = {bw * v['sample_period']:.3g} > {L['max_bandwidth_T']}"
-            )
-    check_number(e, "control.damping", v["damping"], 0, L["max_damping"], lo_open=True)
+    c_ok = _check_controllers(e, v["controllers"], v.get("arm") if _serial(v) else None)
+    _check_control(e, v, T_ok)
     check_number(e, "payload.radius", v["payload_radius"], 0, L["max_radius"])
     n_joints = _n_joints(v)
     for k in ("position_variance", "velocity_variance"):
@@ -143,6 +114,47 @@ def scenario_errors(v: dict[str, Any]) -> list[str]:
     return e
 
 
+def _check_timing(e: list, v: dict) -> tuple[bool, bool]:
+    """``run.duration`` and ``run.sample_period``, each in range and the two together; whether each is
+    usable by the checks that need it."""
+    L = LIMITS
+    d_ok = check_number(e, "run.duration", v["duration"], 0, math.inf, lo_open=True)
+    T_ok = check_number(
+        e, "run.sample_period", v["sample_period"], L["min_sample_period"], L["max_sample_period"]
+    )
+    if d_ok and T_ok and v["sample_period"] > v["duration"] / 10:
+        e.append(
+            f"run.sample_period: {v['sample_period']} s is more than a tenth of run.duration "
+            f"({v['duration']} s)"
+        )
+        T_ok = False
+    if d_ok and T_ok and v["duration"] / v["sample_period"] > 1e12:
+        e.append(
+            f"run: too large: {v['duration'] / v['sample_period']:.3g} samples per trial "
+            f"(run.duration / run.sample_period)"
+        )
+        d_ok = False
+    return d_ok, T_ok
+
+
+def _check_control(e: list, v: dict, T_ok: bool) -> None:
+    """``[control]``: the bandwidth (one per joint on the general kernels' run) within what the
+    sample period carries, the damping."""
+    L = LIMITS
+    bw = v["bandwidth"]
+    if isinstance(bw, tuple) and _serial(v):  # one per joint, N-joint arms only
+        bw_ok = _nums(e, "control.bandwidth", bw, 0, 1e5, n=_n_joints(v), lo_open=True)
+        bw = max(bw) if bw_ok else bw
+    else:
+        bw_ok = check_number(e, "control.bandwidth", bw, 0, 1e5, lo_open=True)
+    if bw_ok and T_ok and bw * v["sample_period"] > L["max_bandwidth_T"]:
+        e.append(
+            f"control.bandwidth: {bw} rad/s at T = {v['sample_period']} s gives "
+            f"bandwidth * T = {bw * v['sample_period']:.3g} > {L['max_bandwidth_T']}"
+        )
+    check_number(e, "control.damping", v["damping"], 0, L["max_damping"], lo_open=True)
+
+
 def _n_joints(v: dict) -> int:
     arm = v.get("arm")
     return arm.n_joints if arm is not None else 2
@@ -155,6 +167,12 @@ def _label(name: str) -> str:
 def _check_plant(e: list, v: dict) -> None:
     """A plant (:class:`~adaptive_dd.plant.uncertainty.PlantSpec`) only on an N-joint arm, sized for it."""
     p = v.get("plant")
+    if getattr(v.get("arm"), "friction", None) == "lugre" and _serial(v):
+        e.append(
+            "plant.friction: LuGre friction is the paper's closed forms' plant law; this run takes the "
+            "general kernels (another geometry, general = true, or a plant apart from the arm), whose "
+            "plant has stick-slip, tanh and stribeck friction"
+        )
     if p is None:
         return
     if not _serial(v):
@@ -167,7 +185,17 @@ def _check_plant(e: list, v: dict) -> None:
 
 
 def _serial(v: dict) -> bool:
-    return is_chain(v.get("arm"))
+    """Whether the run takes the general kernels (no closed-form fast path: another geometry,
+    ``general = true``, or a plant apart from the arm)."""
+    return v.get("arm") is not None and (v.get("plant") is not None or _general(v.get("arm")))
+
+
+def _general(arm: Any) -> bool:
+    """An arm without the paper's closed forms (:func:`~adaptive_dd.plant.two_link.closed_form_view`
+    None); False for ``None`` (an ``[arm]`` table that was wrong)."""
+    from adaptive_dd.plant.two_link import closed_form_view
+
+    return arm is not None and closed_form_view(arm) is None
 
 
 def _check_controllers(e: list, c: Any, arm: Any = None) -> bool:
@@ -186,7 +214,7 @@ def _check_controllers(e: list, c: Any, arm: Any = None) -> bool:
             )
             ok = False
 
-    if is_chain(arm):
+    if arm is not None:  # the general kernels' run
         for x in c:
             if x in CONTROLLERS and not CONTROLLERS[x].applies_to("chain"):
                 e.append(
@@ -314,18 +342,9 @@ def _check_options(e: list, opts: Any, ctrls: tuple) -> None:
         _plain(e, f"controllers.{name}", table)
 
 
-def scenario_fields(
-    data: Any, is_default: bool, arm: Any = None, default_reference=None
-) -> tuple[dict[str, Any], list[str]]:
-    """Scenario fields from a parsed TOML dict (defaults filled in) and the structural errors.
-
-    ``arm`` (the scenario's arm, None if its tables were wrong) gives the number and
-    names of the joints and, for a URDF arm, the default noise variances; ``default_reference()``
-    gives the reference of a two-link scenario without a ``[reference]`` table (the default
-    scenario's)."""
-    e: list[str] = []
-    if not isinstance(data, dict):
-        return {}, ["<top>: must be a TOML document"]
+def _known_tables(e: list, data: dict) -> dict[str, Any]:
+    """The tables of a parsed scenario that have the right shape; unknown tables and keys, and
+    tables of the wrong shape, added to ``e``."""
     tables: dict[str, Any] = {}
     for t, val in data.items():
         if t not in KEYS:
@@ -346,6 +365,22 @@ def scenario_fields(
             for k in item:
                 if k not in allowed:
                     e.append(f"{t}.{k}: unknown key; allowed: {', '.join(sorted(allowed))}")
+    return tables
+
+
+def scenario_fields(
+    data: Any, is_default: bool, arm: Any = None, default_reference=None
+) -> tuple[dict[str, Any], list[str]]:
+    """Scenario fields from a parsed TOML dict (defaults filled in) and the structural errors.
+
+    ``arm`` (the scenario's arm, None if its tables were wrong) gives the number and
+    names of the joints and, for a URDF arm, the default noise variances; ``default_reference()``
+    gives the reference of a two-link scenario without a ``[reference]`` table (the default
+    scenario's)."""
+    e: list[str] = []
+    if not isinstance(data, dict):
+        return {}, ["<top>: must be a TOML document"]
+    tables = _known_tables(e, data)
     defaulted: set[str] = set()
 
     def get(table: str, key: str, default: Any) -> Any:
@@ -383,13 +418,13 @@ def scenario_fields(
 
 
 def _default_controllers(arm: Any) -> list:
-    kind = "chain" if is_chain(arm) else "two_link"
+    kind = "chain" if _general(arm) else "two_link"
     return [c for c, entry in CONTROLLERS.items() if entry.applies_to(kind)]
 
 
 def _default_noise(arm: Any, key: str) -> list:
 
-    if is_chain(arm):
+    if _general(arm):
         return list(getattr(arm.sensor, key))
     return [1e-8, 1e-7] if key == "position_variance" else [5e-5, 1e-4]
 
@@ -405,7 +440,7 @@ def _payload_fields(e: list, items: list, v: dict, defaulted: set, arm: Any = No
                 (coms if key == "com" else inertias).append(None)
                 continue
             x = p[key]
-            if arm is not None and not is_chain(arm):
+            if arm is not None and not _general(arm):
                 e.append(
                     f"payload[{i}].{key}: the two-link arm's payload is a disk at the tip (mass, radius); "
                     "a centre of mass or inertia needs a URDF arm ([arm] urdf = ... or robot = ...)"

@@ -137,10 +137,8 @@ def first_segment_norm(res, run) -> np.ndarray | None:
 
 def _first_end(res) -> int:
     """The first segment's end sample (exclusive)."""
-    from adaptive_dd.plant.kind import is_chain
-
     sc = res.scenario
-    if is_chain(sc.arm):
+    if sc.closed_forms is None:
         from adaptive_dd.closed_loop.types import run_constants
 
         return int(run_constants(sc).seg_end[0])

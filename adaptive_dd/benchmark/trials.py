@@ -50,7 +50,7 @@ def true_sigma(scenario: Scenario, t: Array) -> tuple[Array, Array]:
     masses = np.array([0.0, *scenario.swap_masses])
     w = np.searchsorted(np.array(k_sw, dtype=np.int64), np.arange(t.size), side="right")
     mass = masses[w]
-    return scenario.arm.sigma_with_payload(mass, scenario.payload_radius), mass
+    return scenario.closed_forms.sigma_with_payload(mass, scenario.payload_radius), mass
 
 
 def new_run(

@@ -1,8 +1,8 @@
 """What the command modules share: checked option types, the refusal of an option that does
-not apply, the arm a command works on (:func:`load_arm`; the paper's closed-form arm is told from
-any other by :func:`adaptive_dd.plant.kind.is_two_link`, the package's one place, imported here
-for the commands), what ``validate`` prints of a URDF arm (:func:`describe_arm`) and a log read
-through a scenario's ``[record]`` (:func:`read_arm_log`)."""
+not apply, the arm a command works on (:func:`load_arm`, an :class:`~adaptive_dd.plant.arm.Arm`;
+whether it has the paper's closed forms is :func:`adaptive_dd.plant.two_link.closed_form_view`'s
+to say, the package's one place, imported here for the commands), what ``validate`` prints of a
+URDF arm (:func:`describe_arm`) and a log read through a scenario's ``[record]`` (:func:`read_arm_log`)."""
 
 from __future__ import annotations
 
@@ -11,7 +11,7 @@ import math
 from pathlib import Path
 
 from adaptive_dd.errors import ParameterError
-from adaptive_dd.plant.kind import is_two_link  # the one place the package asks an arm's kind
+from adaptive_dd.plant.two_link import closed_form_view  # the one place: has the arm the closed forms
 
 NAME_WIDTH = 44
 
@@ -78,7 +78,7 @@ def arm_label(args_arm: str | None, arm) -> str:
     """How messages name the arm: 'the SICE arm', 'the two-link arm of FILE', 'the N-joint arm of FILE'."""
     if args_arm is None:
         return "SICE arm"
-    kind = "two-link" if is_two_link(arm) else f"{arm.n_joints}-joint"
+    kind = "two-link" if closed_form_view(arm) is not None else f"{arm.n_joints}-joint"
     return f"{kind} arm of {args_arm}"
 
 
@@ -87,9 +87,9 @@ def load_arm(path: str | None, repair_inertia: bool = False, *, general: str | N
     the model its controllers are given (``[model] from`` when there is one); ``repair_inertia``
     sets ``arm.repair_inertia = true`` (identify's --repair-inertia).
 
-    ``general``: the general :class:`~adaptive_dd.plant.arm.Arm` even where the URDF is the paper's
-    kind of two-link arm (which otherwise loads as the closed forms'
-    :class:`~adaptive_dd.plant.two_link.ClosedFormTwoLink`); the string names what needs it, for the
+    An :class:`~adaptive_dd.plant.arm.Arm`; one of the paper's geometry has its closed forms
+    (:func:`closed_form_view`). ``general``: ``general = true`` (no closed forms) even where the URDF
+    is the paper's kind of two-link arm; the string names what needs it, for the
     :class:`ScenarioError` raised when the ``[arm]`` names no URDF.
     """
     from adaptive_dd.benchmark.scenario import model_and_plant, read_toml
@@ -103,7 +103,7 @@ def load_arm(path: str | None, repair_inertia: bool = False, *, general: str | N
             from adaptive_dd.plant.arm import Arm
 
             return Arm.sice()
-        return ClosedFormTwoLink.sice()
+        return ClosedFormTwoLink.sice().to_arm()
     if not Path(path).is_file():
         raise ScenarioError(f"{path}: no such scenario file")
     data = read_toml(Path(path))

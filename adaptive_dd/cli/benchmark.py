@@ -67,7 +67,8 @@ def _benchmark(args: argparse.Namespace, sc, outputs) -> list[Path]:
     from adaptive_dd.benchmark.report import format_report, write_csv, write_json
     from adaptive_dd.benchmark.runner import run_benchmark
 
-    with announce_compilation(sc.arm, source=sc.source) as compiling:  # a cold cache compiles first
+    # a cold cache compiles first (the kernels of the path the run takes: the closed forms' or the general)
+    with announce_compilation(sc.closed_forms or sc.arm, source=sc.source) as compiling:
         res = run_benchmark(sc, progress=not args.no_progress, on_run=release_error_norm)
         compiling.join()  # the report's kernels, compiled meanwhile by a second process
         metrics = compute_metrics(res)

@@ -11,7 +11,7 @@ import argparse
 
 import numpy as np
 
-from adaptive_dd.cli._common import MASS, RADIUS, SEED, add_command, is_two_link, load_arm, number
+from adaptive_dd.cli._common import MASS, RADIUS, SEED, add_command, closed_form_view, load_arm, number
 
 __all__ = ["add_parser", "run"]
 
@@ -39,8 +39,12 @@ def run(args: argparse.Namespace) -> int:
     for mass in masses:
         label = f"payload {mass} kg, radius {radius} m" if mass else "no payload"
         where = f"arm of {args.arm}" if args.arm else "the SICE arm"
-        check = _check_two_link if is_two_link(arm) else _check_arm
-        results = check(args, arm, mass, radius, where, label)
+        two = closed_form_view(arm)  # the paper's closed forms, checked through them
+        results = (
+            _check_arm(args, arm, mass, radius, where, label)
+            if two is None
+            else _check_two_link(args, two, mass, radius, where, label)
+        )
         for r in results:
             print("  " + str(r))
         bad = [r for r in results if not r.passed]

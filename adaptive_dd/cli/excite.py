@@ -13,7 +13,16 @@ from pathlib import Path
 
 import numpy as np
 
-from adaptive_dd.cli._common import NAME_WIDTH, POS, SEED, add_command, is_two_link, load_arm, number, short
+from adaptive_dd.cli._common import (
+    NAME_WIDTH,
+    POS,
+    SEED,
+    add_command,
+    closed_form_view,
+    load_arm,
+    number,
+    short,
+)
 
 __all__ = ["add_parser", "excitation_bounds", "run"]
 
@@ -46,7 +55,7 @@ def run(args: argparse.Namespace) -> int:
     from adaptive_dd.outputs import atomic_write, check_output_file
 
     arm = load_scenario(args.arm).arm
-    if is_two_link(arm):  # the paper's kind of URDF: its general model (the closed forms have no URDF)
+    if closed_form_view(arm) is not None:  # the paper's kind of arm: its general model
         arm = load_arm(args.arm, general="excite")
     out = check_output_file(args.out)  # before the design, not after it
     lim = ExcitationLimits.of_arm(arm, acceleration=args.acceleration, margin=args.margin)

@@ -16,7 +16,7 @@ from adaptive_dd.cli._common import (
     add_command,
     add_window_option,
     arm_label,
-    is_two_link,
+    closed_form_view,
     load_arm,
     number,
     refuse,
@@ -150,7 +150,8 @@ def run(args: argparse.Namespace) -> int:
     from adaptive_dd.errors import DataError
 
     arm = load_arm(args.arm, args.repair_inertia)
-    if is_two_link(arm):
+    two = closed_form_view(arm)  # the paper's closed forms, or None
+    if two is not None:
         from adaptive_dd.cli._identify_two_link import identify_two_link
 
         why = (
@@ -159,7 +160,7 @@ def run(args: argparse.Namespace) -> int:
             "takes a URDF of the paper's kind to the general path)"
         )
         refuse(args, ARM_OPTIONS, why, DataError)
-        return identify_two_link(args, arm)
+        return identify_two_link(args, two)
     from adaptive_dd.cli._identify_log import identify_log
     from adaptive_dd.outputs import OutputSet
 

@@ -34,7 +34,7 @@ from adaptive_dd.cli._common import (
     SUBSTEPS,
     add_command,
     arm_label,
-    is_two_link,
+    closed_form_view,
     load_arm,
     number,
     refuse,
@@ -126,11 +126,12 @@ def run(args: argparse.Namespace) -> int:
     if est.large:
         print(f"estimate: {est}", file=sys.stderr)
     arm = load_arm(args.arm)
-    experiment = args.experiment or ("table2" if is_two_link(arm) else "reference")
+    two = closed_form_view(arm)  # the paper's closed forms, or None
+    experiment = args.experiment or ("table2" if two is not None else "reference")
     if experiment == "reference":
         with OutputSet(args.out) as outputs:
             return simulate_arm(args, args.arm, outputs)
-    if not is_two_link(arm):
+    if two is None:
         raise ParameterError(
             f"--experiment table2: the paper's open-loop experiment (sine torques of the SICE arm's "
             f"amplitudes) is for the paper's two-link arm; the {arm_label(args.arm, arm)} tracks its "
@@ -144,7 +145,7 @@ def run(args: argparse.Namespace) -> int:
         "payload a disk centred on the tip)",
     )
     with OutputSet(args.out) as outputs:
-        return _table2(args, arm, n, outputs)
+        return _table2(args, two, n, outputs)
 
 
 def _table2(args: argparse.Namespace, arm, n: int, outputs) -> int:
@@ -255,7 +256,7 @@ def _record_arm(args: argparse.Namespace, sc, scenario_path: str, outputs):
     import dataclasses
 
     arm = sc.arm
-    if is_two_link(arm):  # the paper's kind: its general model (the closed forms track no reference)
+    if closed_form_view(arm) is not None:  # the paper's kind: its general model
         arm = load_arm(scenario_path, general="--experiment reference")
     if sc.plant is not None:  # the scenario's robot is not its [arm]: simulate the robot
         from adaptive_dd.plant.urdf_write import write_urdf_links

@@ -12,7 +12,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from adaptive_dd.cli._common import add_command, describe_arm, is_two_link, load_arm
+from adaptive_dd.cli._common import add_command, closed_form_view, describe_arm, load_arm
 
 __all__ = ["add_parser", "is_identification_scenario", "run", "validate_identification"]
 
@@ -36,7 +36,7 @@ def run(args: argparse.Namespace) -> int:
             return validate_identification(args.scenario)
     sc = load_scenario(args.scenario)
     print(format_scenario(sc))
-    if not is_two_link(sc.arm):
+    if sc.closed_forms is None:
         print(describe_arm(sc.arm))
     for line in resolved_settings(sc):
         print(line)
@@ -105,7 +105,7 @@ def validate_identification(path) -> int:
             f"{', '.join(f'[{t}]' for t in IDENTIFICATION_TABLES)}; keep benchmark tables in another file"
         )
     arm = load_arm(str(path))
-    if is_two_link(arm):
+    if closed_form_view(arm) is not None:
         raise ScenarioError(f"{path}: [record] needs an [arm] from a URDF (urdf = ... or robot = ...)")
     spec = record_spec(data["record"], arm.joint_names, arm.joint_kinds, str(path))
     print(

@@ -32,6 +32,7 @@ from __future__ import annotations
 
 import itertools
 import warnings
+from types import FunctionType
 from typing import NamedTuple
 
 import numpy as np
@@ -219,54 +220,90 @@ def _is(typ, cls) -> bool:
     return getattr(typ, "instance_class", None) is cls
 
 
+# The N-joint arm's choices, as functions inlined where they are called (the loop of an N-joint
+# arm calls them by name, :data:`_chain_trial_samples`); the overloads below give them to the
+# Python path's loops, which choose by type.
+@njit(cache=True, inline="always")
+def _chain_plant_work(pl, n):  # pragma: no cover - compiled
+    return plant_scratch(n)
+
+
+@njit(cache=True, inline="always")
+def _chain_plant_joints(pl, q):  # pragma: no cover - compiled
+    return q.shape[1]
+
+
+@njit(cache=True, inline="always")
+def _chain_plant_advance(pl, i, s, q, qd, stuck, tau, T, pw):  # pragma: no cover - compiled
+    return plant_step(pl, i, s, q[i], qd[i], tau, T, stuck[i], pw)
+
+
+@njit(cache=True, inline="always")
+def _chain_law_work(law, n):  # pragma: no cover - compiled
+    return law_work(n)
+
+
+@njit(cache=True, inline="always")
+def _chain_law_command(law, ls, pl, i, s, T, q, qd, q_d, qd_d, qdd_d, lw, out):  # pragma: no cover
+    law_trial_in(
+        pl.chain, law.cfg, law.pi_true[i, s], ls.pi_model[i], ls.theta[i], ls.since_alarm[i],
+        ls.obs[i], q, qd, q_d, qd_d, qdd_d, lw, out,
+    )  # fmt: skip
+
+
+@njit(cache=True, inline="always")
+def _chain_law_estimate(law, ls, i, lw, out):  # pragma: no cover - compiled
+    _sigma_of(law.B, law.cols, law.count, ls.pi_model[i], out)
+    return out
+
+
+@njit(cache=True, inline="always")
+def _chain_estimator_work(ec, es):  # pragma: no cover - compiled
+    return est_work(ec.cfg.w.shape[0], es.theta.shape[1])
+
+
+@njit(cache=True, inline="always")
+def _chain_estimator_sample(ec, es, ls, i, q, qd, tau, ew):  # pragma: no cover - compiled
+    if not ec.active:
+        ls.since_alarm[i] += 1
+        return 0
+    return online_sample(ec.cfg, es, ls, i, q, qd, tau, ew)
+
+
 @overload(plant_work)
 def _plant_work(pl, n):
     if _is(pl, Plant):
-        return lambda pl, n: plant_scratch(n)
+        return _chain_plant_work.py_func
 
 
 @overload(plant_joints, inline="always")
 def _plant_joints(pl, q):
     if _is(pl, Plant):
-        return lambda pl, q: q.shape[1]
+        return _chain_plant_joints.py_func
 
 
 @overload(plant_advance, inline="always")
 def _plant_advance(pl, i, s, q, qd, stuck, tau, T, pw):
     if _is(pl, Plant):
-        return lambda pl, i, s, q, qd, stuck, tau, T, pw: plant_step(
-            pl, i, s, q[i], qd[i], tau, T, stuck[i], pw
-        )
+        return _chain_plant_advance.py_func
 
 
 @overload(law_work_of)
 def _law_work_of(law, n):
     if _is(law, ChainLaw):
-        return lambda law, n: law_work(n)
+        return _chain_law_work.py_func
 
 
 @overload(law_command, inline="always")
 def _law_command(law, ls, pl, i, s, T, q, qd, q_d, qd_d, qdd_d, lw, out):
     if _is(law, ChainLaw):
-
-        def impl(law, ls, pl, i, s, T, q, qd, q_d, qd_d, qdd_d, lw, out):  # pragma: no cover
-            law_trial_in(
-                pl.chain, law.cfg, law.pi_true[i, s], ls.pi_model[i], ls.theta[i], ls.since_alarm[i],
-                ls.obs[i], q, qd, q_d, qd_d, qdd_d, lw, out,
-            )  # fmt: skip
-
-        return impl
+        return _chain_law_command.py_func
 
 
 @overload(law_estimate)
 def _law_estimate(law, ls, i, lw, out):
     if _is(law, ChainLaw):
-
-        def impl(law, ls, i, lw, out):  # pragma: no cover - compiled
-            _sigma_of(law.B, law.cols, law.count, ls.pi_model[i], out)
-            return out
-
-        return impl
+        return _chain_law_estimate.py_func
 
 
 @overload(estimator_work)
@@ -276,7 +313,7 @@ def _estimator_work(ec, es):
     if _is(ec, EstCfg):
         return lambda ec, es: est_work(ec.w.shape[0], es.theta.shape[1])
     if _is(ec, ChainEstimator):
-        return lambda ec, es: est_work(ec.cfg.w.shape[0], es.theta.shape[1])
+        return _chain_estimator_work.py_func
 
 
 @overload(estimator_sample, inline="always")
@@ -291,14 +328,7 @@ def _estimator_sample(ec, es, ls, i, q, qd, tau, ew):
     if _is(ec, EstCfg):
         return lambda ec, es, ls, i, q, qd, tau, ew: online_sample(ec, es, ls, i, q, qd, tau, ew)
     if _is(ec, ChainEstimator):
-
-        def maybe(ec, es, ls, i, q, qd, tau, ew):  # pragma: no cover - compiled
-            if not ec.active:
-                ls.since_alarm[i] += 1
-                return 0
-            return online_sample(ec.cfg, es, ls, i, q, qd, tau, ew)
-
-        return maybe
+        return _chain_estimator_sample.py_func
 
 
 @njit(cache=True)
@@ -570,11 +600,40 @@ def trial_samples(
             record_estimate(seg_end, sigma_end, sigma_rec, i, k, s, law_estimate(law, ls, i, lw, sig))
 
 
-_chain_trial_samples = njit(inline="always")(trial_samples.py_func)
-""":func:`trial_samples` for N-joint arms: the same Python function, inlined into
+def _bound(f, **names):
+    """Python function ``f`` with the global ``names`` bound to other functions (its code and its
+    module's other globals the same)."""
+    g = {**f.__globals__, **names}
+    bound = FunctionType(f.__code__, g, f.__name__, f.__defaults__, f.__closure__)
+    bound.__kwdefaults__, bound.__doc__ = f.__kwdefaults__, f.__doc__
+    return bound
+
+
+_chain_trial_samples = njit(inline="always")(
+    _bound(
+        trial_samples.py_func,
+        apply_sample=njit(inline="always")(_bound(apply_sample.py_func, plant_advance=_chain_plant_advance)),
+        plant_joints=_chain_plant_joints,
+        plant_work=_chain_plant_work,
+        law_work_of=_chain_law_work,
+        estimator_work=_chain_estimator_work,
+        law_command=_chain_law_command,
+        estimator_sample=_chain_estimator_sample,
+        law_estimate=_chain_law_estimate,
+    )
+)
+""":func:`trial_samples` for N-joint arms: the same code, its choices (:func:`plant_advance`,
+:func:`law_command`, ...) the N-joint arm's functions called by name (``_chain_*``), inlined into
 :func:`chain_loop_block` (numba optimises each compiled function again with everything it
 calls: one compiled function less), which is compiled with :data:`COPY_PROPAGATE_ONLY` as
-:func:`trial_samples` is (without it the UR5's laws ran 8-13 % slower per sample)."""
+:func:`trial_samples` is (without it the UR5's laws ran 8-13 % slower per sample).
+
+By name, not by type: numba compiles an ``@overload``'s implementation in full (with everything
+it calls) to type it, even one inlined where it is called, and then throws that compiled form
+away; a function compiled with ``inline="always"`` is inlined before typing, compiled only as
+part of its caller. On the UR5 the overloads cost the loop's compilation about 15 CPU s (the
+estimator's choice 4.8 with the estimator's step, the plant's 3.6, the law's 2.6, the plant's
+friction family once more, the scratch allocations)."""
 
 
 @njit(cache=True, nogil=True)

@@ -43,7 +43,6 @@ from __future__ import annotations
 import numpy as np
 
 from adaptive_dd.benchmark.streaming import SETTLE, segment_bounds
-from adaptive_dd.plant.kind import is_chain
 
 __all__ = [
     "COM_TOL",
@@ -151,7 +150,7 @@ def add_information_times(res, out: dict) -> None:
     start, end, _ = segment_bounds(segs, sc.sample_period, SETTLE)
     ref = _reference(res)
     w = round(INFO_WINDOW / sc.sample_period)
-    forms = _two_link if not is_chain(sc.arm) else _chain
+    forms = _chain if sc.closed_forms is None else _two_link
     for name in res.runs:
         out[name]["segments"][0].update(dict.fromkeys(LEARNING_KEYS) | {"learning_seeds": 0})
     for i in range(1, len(segs)):
@@ -191,7 +190,7 @@ class _two_link:
     @staticmethod
     def payload(sc, sigma_hat):
         """``(mass (n, N), None)``: the paper's sigma holds no payload centre of mass."""
-        return sc.arm.payload_mass_from_sigma(sigma_hat), None
+        return sc.closed_forms.payload_mass_from_sigma(sigma_hat), None
 
     @staticmethod
     def information(sc, ref, i: int, k0: int, k1: int) -> dict:
@@ -200,8 +199,8 @@ class _two_link:
         _, _, mass = sc.segments()[i]
         removed = sc.segments()[i - 1][2]
         kw = dict(
-            sigma_after=sc.arm.sigma_with_payload(mass, sc.payload_radius),
-            payload_direction=sc.arm.payload_direction(sc.payload_radius),
+            sigma_after=sc.closed_forms.sigma_with_payload(mass, sc.payload_radius),
+            payload_direction=sc.closed_forms.payload_direction(sc.payload_radius),
             position_variance=sc.position_variance, velocity_variance=sc.velocity_variance,
             rel=REL, mass=max(mass, removed), z=Z,
         )  # fmt: skip
@@ -240,8 +239,8 @@ class _two_link:
                 ref.tau[j, k0 - 1 : k1],
                 1,
                 sc.sample_period,
-                sc.arm.sigma_with_payload(mass, sc.payload_radius),
-                sc.arm.payload_direction(sc.payload_radius),
+                sc.closed_forms.sigma_with_payload(mass, sc.payload_radius),
+                sc.closed_forms.payload_direction(sc.payload_radius),
                 abs(mass - removed),
                 sc.position_variance,
                 sc.velocity_variance,

@@ -8,17 +8,18 @@ from __future__ import annotations
 
 from adaptive_dd._numba_cache import READY
 
-__all__ = ["second_process"]
+__all__ = ["plant_kernels", "second_process"]
 
 
 def second_process(source: str) -> None:
     """The second process of a cold-cache benchmark on the N-joint arm of scenario file
     ``source`` (:class:`~adaptive_dd._numba_cache.Compiling`). It compiles into the cache the
-    plant's step and the law's pieces that the closed loop calls, then prints ``READY``; then the
-    kernels that ``adaptive_ct``'s set-up and the report call (its initial model, the information
-    times, the detection limit). Each through the function the closed loop or the report calls,
-    with records built as the run builds them, so with the same argument types; on a few samples
-    of the reference."""
+    plant's integrator and the law's pieces that the closed loop calls, then prints ``READY``;
+    then the kernels that ``adaptive_ct``'s set-up and the report call (its initial model, the
+    information times, the detection limit). With records built as the run builds them, so with
+    the same argument types; on a few samples of the reference. The plant's integrator alone
+    (:func:`~adaptive_dd.plant.integrator.compile_family`): a step compiled around it would be
+    compiled again, inlined, in the closed loop (4 CPU s of the critical path)."""
     from types import SimpleNamespace
 
     import numpy as np
@@ -27,14 +28,12 @@ def second_process(source: str) -> None:
     from adaptive_dd.closed_loop.controllers import SlotineLi
     from adaptive_dd.closed_loop.information import _chain
     from adaptive_dd.closed_loop.laws import OBS_ROWS, law_trial
-    from adaptive_dd.closed_loop.plant import plant_scratch, plant_step
-    from adaptive_dd.closed_loop.types import plant_of
     from adaptive_dd.identification import online
 
     sc = load_scenario(source)
     T, n, arm = sc.sample_period, sc.n_joints, sc.arm
     z = np.zeros((8, n))
-    plant_step(plant_of(sc, (0,)), 0, 0, z[0], z[1], z[2], T, np.zeros(n, bool), plant_scratch(n))
+    plant_kernels(sc)
     pi, theta, out = np.zeros((2, 13 * n)), np.zeros(10), np.empty(n)
     obs = np.zeros((OBS_ROWS, n))
     law_trial(arm.chain, SlotineLi(arm).law_config(T), pi[0], pi[1], theta, 0, obs, *z[3:], out)
@@ -47,3 +46,19 @@ def second_process(source: str) -> None:
     ref = SimpleNamespace(q=q[None], qd=qd[None], tau=np.zeros((1, 8, n)), failed=np.zeros(1, bool), name="-")
     _chain.information(sc, ref, 1, 1, 6)
     _chain.detection_limit(sc, ref, 1, 1, 6)
+
+
+def plant_kernels(sc) -> None:
+    """Compile into the cache the plant's integrator that the closed loop of scenario ``sc`` calls
+    (:func:`~adaptive_dd.plant.integrator.compile_family`), with its arguments built as the loop
+    builds them: trial 0's :class:`~adaptive_dd.closed_loop.types.Plant` in its first segment."""
+    import numpy as np
+
+    from adaptive_dd.closed_loop.plant import plant_scratch
+    from adaptive_dd.closed_loop.types import plant_of
+    from adaptive_dd.plant.integrator import PlantParams, compile_family
+
+    n, pl = sc.n_joints, plant_of(sc, (0,))
+    pp = PlantParams(pl.pi_seg[0, 0], pl.fv[0], pl.fc[0], pl.armature[0], pl.friction_law, pl.fparams)
+    q, qd, tau, stuck = np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n, bool)
+    compile_family(pl.chain, pp, q, qd, tau, sc.sample_period, pl.substeps, stuck, plant_scratch(n))

@@ -90,7 +90,7 @@ def run_python_batch(
     ControllerRun
         ``run``, filled in; ``error``, ``alarm_times`` and ``skipped`` from the controller.
     """
-    S, (N, n), T = draws.n_trials, rc.q_d.shape, rc.T
+    S, N, T = draws.n_trials, rc.q_d.shape[0], rc.T
     error = ""
     try:
         ctrl.reset(S, T)
@@ -105,25 +105,8 @@ def run_python_batch(
     for k0, k1, noise, drop in draws.blocks(N):
         for k in range(k0, k1):
             lost = drop[:, k - k0] if drop.shape[1] else no_drop
-            qm, qdm, qm_obs, qdm_obs = glue.measure(noise[:, k - k0], lost)
-            cmd = np.full((S, n), np.nan)
-            if not error:
-                try:
-                    cmd = _command(ctrl, glue, rc, k, qm, qdm, truth)
-                except Exception as exc:
-                    error = f"{type(exc).__name__} in command at t = {k * T:.3f} s: {exc}"
-            before = run.failed.copy()
-            tau, s = glue.apply(k, cmd)
-            _say_why(run, before, cmd, k * T)
-            if not error:
-                try:
-                    ctrl.observe(qm_obs, qdm_obs, tau)
-                    est = declared(ctrl, "sigma_hat")
-                    if est is not None:
-                        estimated = True
-                        glue.record_estimate(k, s, _estimate(est, S, run.sigma_end.shape[2]))
-                except Exception as exc:
-                    error = f"{type(exc).__name__} in observe at t = {k * T:.3f} s: {exc}"
+            error, est = _sample(ctrl, glue, rc, run, k, noise[:, k - k0], lost, truth, error)
+            estimated = estimated or est
             if bar is not None and k % 1000 == 999:
                 bar.update(1000)
     if bar is not None:
@@ -137,6 +120,34 @@ def run_python_batch(
     run.alarm_times = None if error else declared(ctrl, "alarm_times")
     run.skipped = None if error else declared(ctrl, "skipped_samples")
     return run
+
+
+def _sample(ctrl, glue, rc: RunConstants, run: ControllerRun, k: int, noise, lost, truth: bool, error: str):
+    """Sample k of every trial on the Python path (the steps of :mod:`adaptive_dd.closed_loop.glue`
+    around the controller's ``command`` and ``observe``); ``(error, estimated)``: the controller's
+    first failure (its trials then run on with no command) and whether it reported an estimate."""
+    S, n, T = run.failed.shape[0], rc.q_d.shape[1], rc.T
+    qm, qdm, qm_obs, qdm_obs = glue.measure(noise, lost)
+    cmd = np.full((S, n), np.nan)
+    if not error:
+        try:
+            cmd = _command(ctrl, glue, rc, k, qm, qdm, truth)
+        except Exception as exc:  # contain any controller failure to its own trials
+            error = f"{type(exc).__name__} in command at t = {k * T:.3f} s: {exc}"
+    before = run.failed.copy()
+    tau, s = glue.apply(k, cmd)
+    _say_why(run, before, cmd, k * T)
+    estimated = False
+    if not error:
+        try:
+            ctrl.observe(qm_obs, qdm_obs, tau)
+            est = declared(ctrl, "sigma_hat")
+            if est is not None:
+                estimated = True
+                glue.record_estimate(k, s, _estimate(est, S, run.sigma_end.shape[2]))
+        except Exception as exc:
+            error = f"{type(exc).__name__} in observe at t = {k * T:.3f} s: {exc}"
+    return error, estimated
 
 
 def _say_why(run: ControllerRun, before, cmd: Array, t: float) -> None:

@@ -64,8 +64,12 @@ class Gains:
         w, z = self.bandwidth, max(self.damping, 1.0)
         return w * z - w * np.sqrt(z * z - 1.0)
 
-    def nominal_inertia(self, sigma: Array | None = None) -> Array:
-        """``diag M(q = 0)`` of the nominal model (default: the SICE arm), (2,) [kg m^2]."""
+    def nominal_inertia(self, sigma: Array | None = None, arm=None) -> Array:
+        """``diag M(q = 0)`` of the nominal model, ``(n,)`` [kg m^2]: of ``arm`` (any arm, an
+        :class:`~adaptive_dd.plant.arm.Arm` or the closed forms' record; default the SICE arm's
+        closed forms, eq. 3) with base parameters ``sigma`` (default the arm's, without payload)."""
+        if arm is not None:
+            return np.diagonal(arm.mass_matrix(np.zeros(arm.n_joints), sigma)).copy()
         if sigma is None:
             from adaptive_dd.plant.two_link import ClosedFormTwoLink
 

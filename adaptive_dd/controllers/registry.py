@@ -31,9 +31,6 @@ them. Unknown settings are errors naming the controller and the key.
 from __future__ import annotations
 
 import dataclasses
-import importlib
-import inspect
-import sys
 import warnings
 from collections.abc import Callable, Mapping
 from typing import Any
@@ -43,10 +40,17 @@ import numpy as np
 from adaptive_dd.controllers.adaptive import ADAPTIVE_ONLINE, BOOST_RULE, AdaptiveCT
 from adaptive_dd.controllers.base import DEFAULT_GAINS, Controller, Gains
 from adaptive_dd.controllers.feedback import PD, ComputedTorque
+from adaptive_dd.controllers.plugins import (
+    COMMON,
+    controller_label,
+    load_controller_class,
+    plugin_controller,
+)
+from adaptive_dd.controllers.plugins import unknown_settings as _unknown
 from adaptive_dd.controllers.slotine_li import COM_RADIUS, DEFAULT_GAMMA, MAX_MASS, SlotineLi, default_bounds
 from adaptive_dd.errors import ParameterError
 from adaptive_dd.identification.two_link_online import ChangeDetector, TwoLinkOnlineConfig
-from adaptive_dd.plant.kind import arm_kind, is_two_link
+from adaptive_dd.plant.kind import arm_kind
 from adaptive_dd.plant.two_link import ClosedFormTwoLink, closed_form_view
 
 __all__ = [
@@ -63,52 +67,7 @@ __all__ = [
     "scenario_controller",
 ]
 
-COMMON = {"bandwidth", "damping", "label"}
-
 ONLINE_KEYS = {"tau_f", "split", "construction", "p0_payload", "p0_j2", "project", "align"}
-
-
-def controller_label(spec: str, options: dict | None = None) -> str:
-    """The name results carry: the ``label`` setting, the built-in name, or the class name."""
-    if options and "label" in options:
-        return str(options["label"])
-    return spec.rsplit(":", 1)[-1].rsplit(".", 1)[-1] if ":" in spec else spec
-
-
-def load_controller_class(path: str, search: tuple = ()) -> type:
-    """Import ``"package.module:Class"``; clear errors for a missing module, class or protocol.
-
-    The module is looked up on the Python path, then in the folders ``search`` (the
-    scenario file's folder and the working directory, when a scenario names it).
-    """
-    if ":" not in path:
-        raise ParameterError(f"controller {path!r}: an import path is 'package.module:Class'")
-    mod_name, _, attr = path.partition(":")
-    extra = [str(p) for p in search if str(p) not in sys.path]
-    sys.path[len(sys.path) :] = extra
-    try:
-        obj = importlib.import_module(mod_name)
-    except ImportError as exc:
-        raise ParameterError(f"controller {path!r}: cannot import module {mod_name!r}: {exc}") from None
-    finally:
-        for p in extra:
-            sys.path.remove(p)
-    for part in attr.split("."):
-        if not hasattr(obj, part):
-            raise ParameterError(f"controller {path!r}: module {mod_name!r} has no {attr!r}")
-        obj = getattr(obj, part)
-    missing = [m for m in ("reset", "command", "observe") if not callable(getattr(obj, m, None))]
-    if not inspect.isclass(obj) or missing:
-        raise ParameterError(
-            f"controller {path!r}: not a controller class (needs reset, command, observe; missing {missing})"
-        )
-    return obj
-
-
-def _unknown(spec: str, options: dict, allowed: set) -> None:
-    bad = sorted(set(options) - allowed)
-    if bad:
-        raise ParameterError(f"controllers.{spec}: unknown setting(s) {bad}; allowed: {sorted(allowed)}")
 
 
 def _sigma(spec: str, options: dict) -> np.ndarray:
@@ -375,7 +334,7 @@ def gains_for(arm, bandwidth=40.0, damping: float = 1.0):
     ParameterError
         A bandwidth or damping that is not > 0.
     """
-    if is_two_link(closed_form_view(arm) or arm):  # the arm's fast path, as make_controller chooses
+    if closed_form_view(arm) is not None:  # the arm's fast path, as make_controller chooses
         return Gains(bandwidth, damping)
     from adaptive_dd.closed_loop.controllers import JointGains
 
@@ -438,14 +397,15 @@ def scenario_controller(scenario, spec: str) -> tuple[str, Controller]:
         opts = {**opts, "bandwidth": g.bandwidth}
     else:
         opts = with_stated_uncertainty(spec, opts, scenario)
-        g = gains_for(scenario.arm, scenario.bandwidth, scenario.damping)
-    return label, make_controller(spec, g, opts, arm=scenario.arm, search=search, scenario=scenario)
+        g = gains_for(scenario.closed_forms or scenario.arm, scenario.bandwidth, scenario.damping)
+    arm = scenario.closed_forms or scenario.arm  # the arm the run simulates: its closed forms or its own
+    return label, make_controller(spec, g, opts, arm=arm, search=search, scenario=scenario)
 
 
 def controllers_for(arm) -> tuple[str, ...]:
     """The built-in names that run on ``arm`` (every name but the two-link-only ones on an N-joint arm;
     an arm of the paper's geometry runs its closed forms, :func:`make_controller`)."""
-    kind = arm_kind(closed_form_view(arm) or arm)
+    kind = arm_kind(arm)
     return tuple(n for n, e in CONTROLLERS.items() if e.applies_to(kind))
 
 
@@ -481,7 +441,7 @@ def _detector_at_the_top(spec: str, o: dict) -> dict:
 
 
 def _arm_words(arm) -> str:
-    return "the two-link arm" if is_two_link(arm) else f"this {arm.n_joints}-joint arm"
+    return "the two-link arm" if arm_kind(arm) == "two_link" else f"this {arm.n_joints}-joint arm"
 
 
 def _chain_controller(spec: str, entry: Builtin, gains, options: dict, o: dict, arm) -> Controller:
@@ -575,12 +535,7 @@ def make_controller(
     if spec in CONTROLLERS:
         ctrl = _builtin(spec, base, options, arm)
     elif ":" in spec:
-        try:
-            g = Gains(options.get("bandwidth", base.bandwidth), options.get("damping", base.damping))
-        except ParameterError as exc:
-            raise ParameterError(f"controllers.{spec}: {exc}") from None
-        given = {"sigma_nominal": arm.sigma, "arm": arm, "scenario": scenario}
-        ctrl = _plugin(spec, g, options, given, search)
+        ctrl = plugin_controller(spec, base, options, arm, scenario, search)
     else:
         raise ParameterError(
             f"unknown controller {spec!r}; built-ins for {_arm_words(arm)}: {controllers_for(arm)}, "
@@ -588,35 +543,4 @@ def make_controller(
         )
     if "label" in options:
         ctrl.name = str(options["label"])
-    return ctrl
-
-
-PLUGIN_GIVEN = ("gains", "sigma_nominal", "arm", "scenario")
-"""What the runner hands a plug-in whose ``__init__`` names it: the gains, the arm's base
-parameters without payload, the arm itself, the scenario (None when run outside one)."""
-
-
-def _plugin(spec: str, g: Gains, options: dict, given: dict, search: tuple) -> Controller:
-    """A plug-in class called with its settings and the :data:`PLUGIN_GIVEN` it names
-    (``gains`` also to a ``**kwargs``)."""
-    cls = load_controller_class(spec, search)
-    kw = {k: v for k, v in options.items() if k not in COMMON}
-    params = inspect.signature(cls).parameters
-    takes_any = any(p.kind is inspect.Parameter.VAR_KEYWORD for p in params.values())
-    clash = sorted(set(kw) & set(PLUGIN_GIVEN))
-    if clash:
-        raise ParameterError(
-            f"controllers.{spec}: {clash} are given by the runner, not settings (remove them from the table)"
-        )
-    if not takes_any:
-        _unknown(spec, kw, set(params) - set(PLUGIN_GIVEN))
-    if "gains" in params or takes_any:
-        kw["gains"] = g
-    kw.update({k: v for k, v in given.items() if k in params})
-    try:
-        ctrl = cls(**kw)
-    except (TypeError, ValueError) as exc:
-        raise ParameterError(f"controllers.{spec}: {type(exc).__name__}: {exc}") from None
-    if not hasattr(ctrl, "name") or ctrl.name == Controller.name:
-        ctrl.name = controller_label(spec)
     return ctrl

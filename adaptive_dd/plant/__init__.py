@@ -77,11 +77,23 @@ __all__ = [
 
 
 def __getattr__(name: str):
-    """``Arm`` on first use (its module imports Pinocchio, which takes a second); ``TwoLinkArm``, the
-    old name of :class:`ClosedFormTwoLink` (a FutureWarning)."""
+    """``Arm`` on first use (its module imports Pinocchio, which takes a second); ``SerialArm``, its
+    old name, and ``TwoLinkArm``, the old name of :class:`ClosedFormTwoLink` (each a FutureWarning)."""
     if name == "Arm":
         from adaptive_dd.plant.arm import Arm
 
+        return Arm
+    if name == "SerialArm":  # its name before the serial_ prefix went (issue 27)
+        import warnings
+
+        from adaptive_dd.plant.arm import Arm
+
+        warnings.warn(
+            "adaptive_dd.plant.SerialArm is now adaptive_dd.plant.Arm, the one arm type (any serial arm; "
+            "Arm.sice() is the paper's)",
+            FutureWarning,
+            stacklevel=2,
+        )
         return Arm
     if name == "TwoLinkArm":  # deprecated: a FutureWarning (adaptive_dd.plant.two_link.__getattr__)
         from adaptive_dd.plant import two_link

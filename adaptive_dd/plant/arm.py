@@ -28,7 +28,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import ClassVar, NamedTuple
+from typing import ClassVar
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -37,6 +37,7 @@ from adaptive_dd.errors import ParameterError
 from adaptive_dd.errors import is_finite_number as _is_num
 from adaptive_dd.plant.base_parameters import BaseParameters, base_parameters, standard_names
 from adaptive_dd.plant.devices import SICE_SENSOR, ActuatorConfig, SensorConfig
+from adaptive_dd.plant.payload import PayloadEstimate, payload_parameters
 from adaptive_dd.plant.urdf import read_urdf
 
 __all__ = ["DEFAULT_GRAVITY", "Arm", "PayloadEstimate", "payload_parameters"]
@@ -53,66 +54,9 @@ DEFAULT_VELOCITY_VARIANCE = 5e-5
 """(rad/s)^2, as the SICE arm's joint 1 (Table 4 of the paper)."""
 DEFAULT_DAC_BITS = 16
 """D/A resolution of a URDF arm's torque command unless given."""
-_FRICTION_LAWS = ("stick-slip", "tanh", "stribeck")
-
-
-def payload_parameters(
-    mass: float, com: ArrayLike | None = None, inertia: ArrayLike | None = None, radius: float = 0.0
-) -> Array:
-    """The ten inertial parameters of a rigid body about its frame's origin, ``(10,)``.
-
-    Parameters
-    ----------
-    mass : float
-        [kg], >= 0.
-    com : array_like (3,), optional
-        Centre of mass in the body frame [m] (default the origin).
-    inertia : array_like (6,) or (3, 3), optional
-        Inertia about the centre of mass ``[ixx, iyy, izz, ixy, ixz, iyz]`` [kg m^2];
-        default a disk of ``radius`` about the frame's z axis.
-    radius : float
-        Disk radius [m] when ``inertia`` is not given.
-    """
-    m = float(mass)
-    if not math.isfinite(m) or m < 0:
-        raise ParameterError(f"payload mass must be finite and >= 0 kg, got {mass!r}")
-    c = np.zeros(3) if com is None else np.asarray(com, dtype=float)
-    if c.shape != (3,) or not np.all(np.isfinite(c)):
-        raise ParameterError(f"payload com must be 3 finite numbers [m], got {com!r}")
-    if inertia is None:
-        r2 = float(radius) ** 2
-        Ic = m * np.diag([r2 / 4, r2 / 4, r2 / 2])
-    else:
-        v = np.asarray(inertia, dtype=float)
-        if v.shape == (6,):
-            ixx, iyy, izz, ixy, ixz, iyz = v
-            Ic = np.array([[ixx, ixy, ixz], [ixy, iyy, iyz], [ixz, iyz, izz]])
-        elif v.shape == (3, 3):
-            Ic = v
-        else:
-            raise ParameterError(f"payload inertia must be [ixx, iyy, izz, ixy, ixz, iyz], got {inertia!r}")
-        lam = np.linalg.eigvalsh(0.5 * (Ic + Ic.T))
-        if not np.all(np.isfinite(lam)) or lam[0] < -1e-12 or lam[2] > lam[0] + lam[1] + 1e-12:
-            raise ParameterError(
-                f"payload inertia {v.tolist()} is not a rigid body's (principal moments {lam.tolist()}: "
-                "each must be >= 0 and at most the sum of the other two)"
-            )
-    Io = Ic + m * (c @ c * np.eye(3) - np.outer(c, c))
-    return np.array([m, *(m * c), Io[0, 0], Io[0, 1], Io[1, 1], Io[0, 2], Io[1, 2], Io[2, 2]])
-
-
-class PayloadEstimate(NamedTuple):
-    """A payload recovered from base parameters (:meth:`Arm.payload_from_sigma`).
-
-    ``mass`` [kg], ``com`` (3,) [m] in the payload frame (nan where not identifiable),
-    ``params`` (10,) least-squares parameters about the frame origin, ``identifiable``
-    (10,) bool: which of the ten are determined by the base parameters.
-    """
-
-    mass: Array
-    com: Array
-    params: Array
-    identifiable: NDArray[np.bool_]
+_FRICTION_LAWS = ("stick-slip", "tanh", "stribeck", "lugre")
+"""Plant friction laws of an arm (the index is the integrator's code); ``"lugre"`` only on an arm with
+the paper's closed forms (:func:`~adaptive_dd.plant.two_link.closed_form_view`), whose plant runs it."""
 
 
 def _vec(name: str, v, n: int, lo: float = 0.0) -> Array:
@@ -153,6 +97,10 @@ class Arm:
         Default disk radius [m] of a payload given by mass alone.
     friction, friction_velocity, stribeck_ratio, stribeck_velocity
         The simulated plant's friction law, as on :class:`adaptive_dd.plant.two_link.ClosedFormTwoLink`.
+    lugre_stiffness, lugre_damping
+        The LuGre law's bristle stiffness and damping per joint (``friction = "lugre"``: a two-joint
+        arm of the paper's geometry only, whose closed-form plant runs it); as on
+        :class:`~adaptive_dd.plant.two_link.ClosedFormTwoLink`.
     payload_capacity : float or None
         Rated payload [kg] (``[arm] payload_capacity``); sizes the estimator's re-opening on a
         change alarm (None: the detector's generic size).
@@ -185,6 +133,8 @@ class Arm:
     repair_inertia: bool = False
     payload_capacity: float | None = None
     general: bool = False
+    lugre_stiffness: tuple[float, float] = (1e5, 1e5)
+    lugre_damping: tuple[float, float] | None = None
     _cache: dict = field(default_factory=dict, repr=False, compare=False)
     closed_form: ClassVar[bool] = False
     """False: an :class:`Arm` (True on the closed forms' record,
@@ -233,6 +183,11 @@ class Arm:
                 raise ParameterError(f"Arm.{name} must be > 0, got {v!r}")
         if not isinstance(self.general, bool):
             raise ParameterError(f"Arm.general must be True or False, got {self.general!r}")
+        if self.friction == "lugre" and n != 2:
+            raise ParameterError(
+                f"Arm.friction = 'lugre' is the paper's two-link plant law (its closed forms); this arm has "
+                f"{n} joints: use stick-slip, tanh or stribeck"
+            )
         if not (math.isfinite(self.stribeck_ratio) and self.stribeck_ratio >= 1):
             raise ParameterError(f"Arm.stribeck_ratio must be >= 1, got {self.stribeck_ratio!r}")
         object.__setattr__(self, "_cache", {})
@@ -302,7 +257,8 @@ class Arm:
 
     def __getstate__(self) -> dict:
         state = self.__dict__.copy()
-        state["_cache"] = {}
+        # the closed forms' record is kept: an arm made from one (ClosedFormTwoLink.to_arm) holds it exactly
+        state["_cache"] = {k: v for k, v in self._cache.items() if k == "as_two_link"}
         return state
 
     def __setstate__(self, state: dict) -> None:
@@ -580,6 +536,11 @@ class Arm:
             "stribeck_velocity": self.stribeck_velocity,
             "repair_inertia": self.repair_inertia,
             "general": self.general,
+            **(
+                {"lugre_stiffness": list(self.lugre_stiffness), "lugre_damping": self.lugre_damping}
+                if self.friction == "lugre"
+                else {}
+            ),
         }
 
     def _key(self) -> tuple:
@@ -601,6 +562,8 @@ class Arm:
             self.payload_capacity,
             self.repair_inertia,
             self.general,
+            tuple(self.lugre_stiffness),
+            None if self.lugre_damping is None else tuple(self.lugre_damping),
         )
 
     def __eq__(self, other: object) -> bool:

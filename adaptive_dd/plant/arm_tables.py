@@ -1,11 +1,11 @@
 """The arm of a scenario's ``[arm]`` and ``[plant]`` tables: the one place that builds an arm
 from a scenario.
 
-:func:`arm_from_tables` reads the tables: the paper's two-link arm from its physical or base
-parameters (:class:`~adaptive_dd.plant.two_link.ClosedFormTwoLink`), or any arm from a URDF
-(:func:`urdf_arm_from_table`, an :class:`~adaptive_dd.plant.arm.Arm`), which becomes the
-two-link closed-form fast path when it is the paper's kind of arm
-(:func:`~adaptive_dd.plant.two_link.closed_form_view`). Every error names the file, the key, the
+:func:`arm_from_tables` reads the tables into an :class:`~adaptive_dd.plant.arm.Arm`: the paper's
+two-link arm from its physical or base parameters (through their record,
+:class:`~adaptive_dd.plant.two_link.ClosedFormTwoLink`), or any arm from a URDF
+(:func:`urdf_arm_from_table`). An arm of the paper's geometry has the closed forms as its fast
+path (:func:`~adaptive_dd.plant.two_link.closed_form_view`). Every error names the file, the key, the
 value and the bound.
 """
 
@@ -14,6 +14,7 @@ from __future__ import annotations
 import math
 from dataclasses import replace
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
@@ -22,6 +23,9 @@ from adaptive_dd.errors import ParameterError, ScenarioError, UrdfError
 from adaptive_dd.errors import is_finite_number as _is_num
 from adaptive_dd.plant.parameters import PhysicalParameters
 from adaptive_dd.plant.two_link import FRICTION_LAWS, ClosedFormTwoLink, closed_form_view
+
+if TYPE_CHECKING:
+    from adaptive_dd.plant.arm import Arm  # imports Pinocchio: on first use only
 
 __all__ = ["ARM_BOUNDS", "URDF_ARM_KEYS", "arm_from_tables", "urdf_arm_from_table"]
 
@@ -161,15 +165,14 @@ def _plant_kwargs(src: str, plant: dict) -> dict:
     return kw
 
 
-def arm_from_tables(
-    arm_table: dict | None, plant_table: dict | None, src: str = "<memory>"
-) -> ClosedFormTwoLink:
-    """The arm of a scenario's ``[arm]`` and ``[plant]`` tables.
+def arm_from_tables(arm_table: dict | None, plant_table: dict | None, src: str = "<memory>") -> Arm:
+    """The :class:`~adaptive_dd.plant.arm.Arm` of a scenario's ``[arm]`` and ``[plant]`` tables.
 
     An ``[arm]`` table with ``urdf`` or ``robot`` describes any serial arm
-    (:func:`adaptive_dd.plant.arm.urdf_arm_from_table`: a
-    :class:`~adaptive_dd.plant.arm.Arm`, or a :class:`ClosedFormTwoLink` when the URDF
-    is the paper's kind of two-link arm). Otherwise:
+    (:func:`urdf_arm_from_table`); on an arm of the paper's geometry the closed forms are its
+    fast path (:func:`closed_form_view`). Otherwise the paper's two-link arm by its numbers (an
+    :class:`~adaptive_dd.plant.arm.Arm` made by :meth:`ClosedFormTwoLink.to_arm`, whose
+    :func:`closed_form_view` is exactly those numbers' record):
 
     ``[arm]`` gives either the physical parameters (eq. 10)
     ``l1, l2, m1, m2, a1, a2, I1, I2, b = [b1, b2], d = [d1, d2]`` or the base
@@ -192,17 +195,16 @@ def arm_from_tables(
     kw = ClosedFormTwoLink.sice().__dict__.copy() if arm_table is None else _arm_kwargs(src, arm_table)
     kw.update(plant_kw)
     try:
-        return ClosedFormTwoLink(**kw)
+        return ClosedFormTwoLink(**kw).to_arm()  # an Arm whose closed forms are exactly these
     except (ParameterError, ArithmeticError) as exc:
         raise ScenarioError(f"{src}: [arm]/[plant]: {type(exc).__name__}: {exc}") from None
 
 
 def _urdf_arm(src: str, table: dict, plant_kw: dict):
-    """The arm of an ``[arm]`` table naming a URDF: the general
-    :class:`~adaptive_dd.plant.arm.Arm`
-    (:func:`urdf_arm_from_table`), or the two-link :class:`ClosedFormTwoLink`
-    when it is one (:func:`closed_form_view`) and ``general = true`` is not set. LuGre friction is a
-    two-link plant law: kept aside until the fast path decides which plant runs."""
+    """The :class:`~adaptive_dd.plant.arm.Arm` of an ``[arm]`` table naming a URDF
+    (:func:`urdf_arm_from_table`); ``general = true`` keeps the general kernels where the closed forms
+    would apply (:func:`closed_form_view`). LuGre friction is the closed forms' plant law: set once
+    the arm is known to have them."""
     kw = dict(plant_kw)
     lugre = {k: kw.pop(k) for k in ("lugre_stiffness", "lugre_damping") if k in kw}
     if kw.get("friction") == "lugre":
@@ -217,7 +219,7 @@ def _urdf_arm(src: str, table: dict, plant_kw: dict):
             f"{src}: [plant] LuGre friction is implemented for the two-link arm only; the plant of "
             f"this {arm.n_joints}-joint arm has stick-slip, tanh and stribeck friction"
         )
-    return arm if two is None else (replace(two, **lugre) if lugre else two)
+    return replace(arm, **lugre) if lugre else arm
 
 
 # ------------------------------------------------------------ any arm from a URDF
@@ -250,9 +252,9 @@ def urdf_arm_from_table(src: str, table: dict, plant_kw: dict):
     chain link's inertia that is not a rigid body's, reported: :func:`adaptive_dd.plant.urdf.read_urdf`),
     ``payload_capacity`` (the rated payload [kg]: the size of the estimator's re-opening,
     :mod:`adaptive_dd.identification.online`); ``general`` is read by
-    :func:`adaptive_dd.plant.two_link.arm_from_tables`, which turns a URDF of the paper's kind of
-    two-link arm into a :class:`~adaptive_dd.plant.two_link.ClosedFormTwoLink` (the closed-form fast path,
-    :func:`~adaptive_dd.plant.two_link.closed_form_view`) unless ``general = true``. ``plant_kw``: the
+    :func:`arm_from_tables` (``general = true``: no closed-form fast path,
+    :func:`~adaptive_dd.plant.two_link.closed_form_view`, on an arm of the paper's geometry).
+    ``plant_kw``: the
     ``[plant]`` settings of the general model (LuGre's are the two-link arm's: not here).
 
     Raises

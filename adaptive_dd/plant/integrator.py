@@ -526,6 +526,21 @@ def _by_law_typed(ch, pi, fv, fc, arm, law, fp, q, qd, tau, T, substeps, stuck, 
     return either
 
 
+def compile_family(ch, pp: PlantParams, q, qd, tau, T: float, substeps: int, stuck, sc) -> None:
+    """Compile (or load from numba's cache) the integrator that a compiled step on ``pp`` calls
+    (:func:`_stick_slip` or :func:`_smooth`, as :func:`_by_law` chooses), alone, by one step of
+    it with these arguments (updated in place), of the types the compiled step passes it: the
+    second process of a cold-cache benchmark (:func:`adaptive_dd.closed_loop.precompile.second_process`)
+    fills the cache with it without compiling a step around it (the closed loop's own
+    compilation inlines the step; numba does not cache :func:`_by_law`'s choice)."""
+    law = pp.law
+    args = (ch, pp.pi, pp.fv, pp.fc, pp.armature)
+    if not isinstance(law, SmoothLaw):  # the stick-slip record, or a code: both compiled then
+        _stick_slip(*args, pp.fparams, q, qd, tau, T, substeps, stuck, sc)
+    if not isinstance(law, StickSlipLaw):
+        _smooth(*args, int(getattr(law, "code", law)), pp.fparams, q, qd, tau, T, substeps, stuck, sc)
+
+
 @njit(cache=True, inline="always")
 def _step(ch, pi, fv, fc, arm, law, fp, q, qd, tau, T, substeps, stuck, sc):  # pragma: no cover
     ok = _by_law(ch, pi, fv, fc, arm, law, fp, q, qd, tau, T, substeps, stuck, sc)

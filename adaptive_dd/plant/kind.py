@@ -1,24 +1,14 @@
-"""Which path an arm runs on: the one place the package asks (the arm says it: ``closed_form``).
+"""Which path a run takes: the paper's closed forms, or the general kernels (issue 27: one arm type).
 
-Two arm types exist (issue 27 merges them step by step):
-
-- :class:`~adaptive_dd.plant.two_link.ClosedFormTwoLink`, the paper's arm with its closed forms
-  (eqs. 3-9): the benchmark's two-link loop (:mod:`adaptive_dd.benchmark`), the two-link
-  controllers (:mod:`adaptive_dd.controllers`), the paper's estimator of sigma (seven base
-  parameters, :mod:`adaptive_dd.identification.two_link_online`).
-- :class:`~adaptive_dd.plant.arm.Arm`, any serial arm (a URDF, or ``Arm.sice()``): the N-joint
-  loop (:mod:`adaptive_dd.closed_loop`), the payload estimator
-  (:mod:`adaptive_dd.identification.online`).
-
-Each class states its kind as the class attribute ``closed_form`` (True on ``ClosedFormTwoLink``); every
-module that chooses between the two paths asks here (``is_two_link`` / ``is_chain``).
-Whether an :class:`Arm` has the closed forms at all is
-:func:`adaptive_dd.plant.two_link.closed_form_view`'s to say (the paper's geometry; a
-:class:`~adaptive_dd.benchmark.scenario.Scenario` takes them automatically, and
-:func:`require_two_link` returns them for an entry point that needs them).
-``tests/test_arm_kind.py`` fails when a type test on the arm's class appears anywhere in the
-package (the classes' own ``__eq__`` aside); the command line asks here too (through
-``adaptive_dd.cli._common``, which imports :func:`is_two_link`).
+There is one arm type, :class:`~adaptive_dd.plant.arm.Arm`. An arm of the paper's geometry has the
+closed forms of eqs. (3-9) as its fast path; whether it has them is
+:func:`~adaptive_dd.plant.two_link.closed_form_view`'s alone to say (the one place that asks an
+arm's class, with :func:`~adaptive_dd.plant.two_link.as_arm`, which turns a closed-form record into
+its arm). A :class:`~adaptive_dd.benchmark.scenario.Scenario` holds the record it runs as
+``scenario.closed_forms`` (None: the general kernels). This module names the two paths for the
+tables that are keyed by them (the controller registry's ``"two_link"`` / ``"chain"``).
+``tests/test_arm_kind.py`` fails when a type test on the arm's class appears anywhere else in the
+package.
 """
 
 from __future__ import annotations
@@ -27,36 +17,45 @@ from typing import Any
 
 from adaptive_dd.errors import ParameterError
 
-__all__ = ["arm_kind", "is_chain", "is_two_link", "require_two_link"]
-
-
-def is_two_link(arm: Any) -> bool:
-    """True for the paper's closed-form arm (:class:`~adaptive_dd.plant.two_link.ClosedFormTwoLink`,
-    ``closed_form`` True): it runs on the two-link path. False for an
-    :class:`~adaptive_dd.plant.arm.Arm` and for anything that is not an arm."""
-    return getattr(arm, "closed_form", None) is True
-
-
-def is_chain(arm: Any) -> bool:
-    """True for any serial arm as an :class:`~adaptive_dd.plant.arm.Arm` (``closed_form`` False: a
-    URDF, or ``Arm.sice()``): it runs on the N-joint path (:mod:`adaptive_dd.closed_loop`). False for
-    the two-link closed-form arm and for anything that is not an arm (``None``)."""
-    return getattr(arm, "closed_form", None) is False
+__all__ = ["arm_kind", "is_chain", "is_two_link", "require_two_link", "run_kind"]
 
 
 def arm_kind(arm: Any) -> str:
-    """``"two_link"`` or ``"chain"`` (the path :func:`is_two_link` / :func:`is_chain` choose).
+    """``"two_link"`` for an arm with the paper's closed forms
+    (:func:`~adaptive_dd.plant.two_link.closed_form_view` not None), else ``"chain"``: the general
+    kernels (:mod:`adaptive_dd.closed_loop`).
 
     Raises
     ------
     ParameterError
-        ``arm`` is neither.
+        ``arm`` is not an arm (no ``n_joints``).
     """
-    if is_two_link(arm):
-        return "two_link"
-    if is_chain(arm):
-        return "chain"
-    raise ParameterError(f"expected an arm (Arm or ClosedFormTwoLink), got {type(arm).__name__}")
+    from adaptive_dd.plant.two_link import closed_form_view
+
+    if not hasattr(arm, "n_joints"):
+        raise ParameterError(f"expected an arm (adaptive_dd.plant.Arm), got {type(arm).__name__}")
+    return "chain" if closed_form_view(arm) is None else "two_link"
+
+
+def is_two_link(arm: Any) -> bool:
+    """True for an arm with the paper's closed forms (:func:`~adaptive_dd.plant.two_link.closed_form_view`
+    not None: ``Arm.sice()``, a URDF of the paper's geometry, a closed-form record). Kept for callers
+    of an earlier round; the package asks :func:`arm_kind` or a scenario's ``closed_forms``."""
+    from adaptive_dd.plant.two_link import closed_form_view
+
+    return closed_form_view(arm) is not None
+
+
+def is_chain(arm: Any) -> bool:
+    """True for an arm that runs the general kernels (:func:`~adaptive_dd.plant.two_link.closed_form_view`
+    None); False for one with the closed forms and for ``None``. Kept for callers of an earlier round."""
+    return arm is not None and hasattr(arm, "n_joints") and not is_two_link(arm)
+
+
+def run_kind(scenario: Any) -> str:
+    """``"two_link"`` when ``scenario`` runs the paper's closed forms (``scenario.closed_forms``),
+    else ``"chain"`` (an arm of another geometry, ``general = true``, or a plant apart from the arm)."""
+    return "chain" if scenario.closed_forms is None else "two_link"
 
 
 def require_two_link(arm: Any, what: str):
@@ -75,6 +74,6 @@ def require_two_link(arm: Any, what: str):
 
 
 def _describe(arm: Any) -> str:
-    if is_chain(arm):
+    if hasattr(arm, "general") and hasattr(arm, "n_joints"):
         return f"{'the general kernels of ' if arm.general else ''}a {arm.n_joints}-joint Arm"
     return type(arm).__name__

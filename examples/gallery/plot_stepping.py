@@ -25,7 +25,7 @@ data = tomllib.loads(path.read_text())
 data["run"]["duration"] = 3.0
 data["payload"] = [{"at": 1.5, "mass": 3.0}]
 sc = parse_scenario(data, str(path), name="short")
-sigma0 = sc.arm.sigma  # the arm's base parameters without payload (eq. 9)
+sigma0 = sc.closed_forms.sigma  # the paper's base parameters of the arm, without payload (eq. 9)
 w = 40.0  # closed-loop bandwidth [rad/s]
 
 sim = Simulation(sc, seed_index=0)
