@@ -141,3 +141,41 @@ def test_observer_settings_reach_the_law_and_the_bandwidth_is_derived():
 def test_the_observer_is_not_a_setting_of_the_two_link_arm():
     with pytest.raises(ParameterError, match="observer"):
         make_controller("adaptive_ct", options={"observer": False})
+
+
+def test_the_boost_ends_along_a_ramp_of_its_added_bandwidth():
+    """adaptive_ct's boost holds ``boost_duration`` and then its added bandwidth falls linearly to
+    none over ``boost_ramp`` (default 1 s): with the velocity error zero, the torque the boost adds
+    is ``M0 dkp(f) e`` with ``dkp(f) = f D (2 w + f D)``, ``D = wb - w``; it is whole before the
+    ramp, continuous at its start (no step: the bump the abrupt end left), ``f = 1/2`` halfway,
+    and gone after it; ``boost_ramp = 0`` ends it at once."""
+    from adaptive_dd.closed_loop.laws import LawState, law_batch
+
+    sc = load_scenario(_shipped("vertical3_payload_exact"))
+    arm, n, T = sc.arm, sc.arm.n_joints, sc.sample_period
+    cfg = make_controller("adaptive_ct", arm=arm).law_config(T)._replace(observer=False)
+    assert cfg.boost_ramp == round(1.0 / T) and cfg.boost_samples == round(1.0 / T)
+    q_d, qd_d, qdd_d = np.array([0.3, -0.6, 0.4]), np.array([0.2, -0.1, 0.3]), np.zeros(n)
+    q = (q_d - np.array([0.01, -0.02, 0.015]))[None]
+    qd = qd_d[None]  # velocity error zero
+
+    def added(since, c=cfg):
+        st = LawState.start(c, 1)
+        st.since_alarm[0] = since
+        off = LawState.start(c, 1)  # no recent alarm
+        return (law_batch(arm.chain, c, st, q, qd, q_d, qd_d, qdd_d) - law_batch(
+            arm.chain, c, off, q, qd, q_d, qd_d, qdd_d))[0]  # fmt: skip
+
+    w = np.sqrt(cfg.kp[0])
+    D = cfg.boost_kd[0] * w / cfg.kd[0]
+    full = added(0)
+    bs, br = cfg.boost_samples, cfg.boost_ramp
+    assert np.linalg.norm(full) > 1.0
+    for since in (bs - 1, bs, bs + (br - 1) // 2, bs + br - 1):
+        f = 1.0 if since < bs else 1.0 - (since - bs + 1) / (br + 1)
+        expect = full * (f * D * (2 * w + f * D)) / (D * (2 * w + D))
+        assert np.allclose(added(since), expect, rtol=1e-9, atol=1e-9), since
+    assert np.linalg.norm(added(bs) - added(bs - 1)) < 0.01 * np.linalg.norm(full)
+    assert np.allclose(added(bs + br), 0.0, atol=1e-12)
+    abrupt = cfg._replace(boost_ramp=0)
+    assert np.allclose(added(bs - 1, abrupt), full) and np.allclose(added(bs, abrupt), 0.0, atol=1e-12)

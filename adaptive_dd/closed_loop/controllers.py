@@ -148,7 +148,8 @@ class Law:
         g = self.gains
         base = dict(
             kind=kind, model=model, reference_velocity=True, kp=g.kp, kd=g.kd, lam=g.roots()[0],
-            pi_fixed=self.pi_nominal, boost_kp=z, boost_kd=z.copy(), boost_samples=0, adapt=False,
+            pi_fixed=self.pi_nominal, boost_kp=z, boost_kd=z.copy(), boost_samples=0, boost_ramp=0,
+            adapt=False,
             gamma=np.zeros(10), lo=np.full(10, -np.inf), hi=np.full(10, np.inf), com_radius=np.inf,
             payload_joint=int(self.arm.payload_joint), payload_map=np.ascontiguousarray(self.arm.payload_map),
             T=float(T), observer=False, obs_a=0.0, obs_stages=2, obs_kappa=OBSERVER_THRESHOLD,
@@ -382,8 +383,22 @@ class AdaptiveCT(Law):
 
     name = "adaptive_ct"
     SETTINGS = frozenset(
-        {"boost_bandwidth", "boost_duration", "estimator", "detector", "observer", "observer_bandwidth"}
+        {
+            "boost_bandwidth",
+            "boost_duration",
+            "boost_ramp",
+            "estimator",
+            "detector",
+            "observer",
+            "observer_bandwidth",
+        }
     )
+    BOOST_RAMP = 1.0
+    """[s] default ``boost_ramp``: after ``boost_duration`` the boost's added bandwidth falls
+    linearly to none over this long (0: it ends at once). An abrupt end left a bump in the
+    tracking error 1 s after each swap; ramped over 1 s, adaptive_ct / ct_oracle in the window
+    0.9-2.6 s after each swap fell from 1.08-1.14 to 0.89-0.91 on the UR5 and 1.36-1.75 to
+    0.98-1.37 on vertical3 (10 seeds, ``studies/boost_end.py``; docs/change_detection.md)."""
     BOOST_DURATION = 1.0
     """[s] default ``boost_duration``; the two-link ``adaptive_ct`` keeps 0.2 s on purpose (its
     estimator learns the paper's sigma within tens of ms; an N-joint payload's centre of mass
@@ -406,8 +421,12 @@ class AdaptiveCT(Law):
             raise ParameterError(f"controllers.{self.name}.estimator: {exc}") from None
         self.boost_bandwidth = float(self.settings.get("boost_bandwidth", 300.0))
         self.boost_duration = float(self.settings.get("boost_duration", self.BOOST_DURATION))
-        if not (self.boost_bandwidth > 0 and self.boost_duration >= 0):
-            raise ParameterError(f"controllers.{self.name}: boost_bandwidth > 0 and boost_duration >= 0")
+        self.boost_ramp = float(self.settings.get("boost_ramp", self.BOOST_RAMP))
+        if not (self.boost_bandwidth > 0 and self.boost_duration >= 0 and self.boost_ramp >= 0):
+            raise ParameterError(
+                f"controllers.{self.name}: boost_bandwidth > 0, boost_duration >= 0 and boost_ramp >= 0, got "
+                f"{self.boost_bandwidth!r}, {self.boost_duration!r}, {self.boost_ramp!r}"
+            )
         self.observer, self.observer_bw = _observer_settings(self.name, self.settings)
 
     def law_config(self, sample_period):
@@ -417,7 +436,8 @@ class AdaptiveCT(Law):
         beta = self.observer_bw if self.observer_bw is not None else observer_bandwidth(T)
         return self._config(
             sample_period, KIND_CT, MODEL_TRIAL, boost_kp=wb**2 - w**2, boost_kd=2.0 * z * (wb - w),
-            boost_samples=round(self.boost_duration / sample_period), observer=self.observer,
+            boost_samples=round(self.boost_duration / sample_period),
+            boost_ramp=round(self.boost_ramp / sample_period), observer=self.observer,
             obs_a=float(np.exp(-beta * T)), obs_alpha=min(1.0, T / OBSERVER_LEVEL_WINDOW),
             obs_warmup=round(OBSERVER_WARMUP / T),
         )  # fmt: skip

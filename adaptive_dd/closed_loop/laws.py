@@ -106,6 +106,10 @@ class LawConfig(NamedTuple):
         Added feedback during a boost (1/s^2, 1/s), through M0(q).
     boost_samples : int
         Samples after an alarm during which the boost acts (0: never).
+    boost_ramp : int
+        Samples after those over which the boost's added bandwidth falls linearly to none
+        (computed torque: ``w + f (wb - w)``, ``f`` from 1 to 0, with ``w = sqrt(kp)`` and ``wb``
+        the boost's; 0: the boost ends at once).
     adapt : bool
         Slotine-Li adapts the payload (``theta``) after the command.
     gamma, lo, hi : ndarray (10,)
@@ -143,6 +147,7 @@ class LawConfig(NamedTuple):
     boost_kp: Array
     boost_kd: Array
     boost_samples: int
+    boost_ramp: int
     adapt: bool
     gamma: Array
     lo: Array
@@ -407,9 +412,17 @@ def law_trial_in(
             for j in range(n):
                 s[j] = ed[j] + cfg.lam[j] * e[j]
             _adapt_payload(ch, cfg, q, qd, qdr, a, s, theta, pi_model, work)
-    if cfg.boost_samples > 0 and since_alarm < cfg.boost_samples:
+    if cfg.boost_samples > 0 and since_alarm < cfg.boost_samples + cfg.boost_ramp:
+        f = 1.0
+        if since_alarm >= cfg.boost_samples:  # the ramped end: f from 1 to 0
+            f = 1.0 - (since_alarm - cfg.boost_samples + 1) / (cfg.boost_ramp + 1)
         for j in range(n):
-            v[j] = cfg.boost_kp[j] * e[j] + cfg.boost_kd[j] * ed[j]
+            dkp, dkd = cfg.boost_kp[j], cfg.boost_kd[j]
+            if f < 1.0:  # the added bandwidth f (wb - w): kp = w^2, kd = 2 z w, boost_kd = 2 z (wb - w)
+                w0 = np.sqrt(max(cfg.kp[j], 0.0))
+                dw = f * dkd * w0 / cfg.kd[j] if cfg.kd[j] > 0.0 else 0.0
+                dkp, dkd = dw * (2.0 * w0 + dw), f * dkd
+            v[j] = dkp * e[j] + dkd * ed[j]
         _add_nominal_inertia(ch, cfg, q, v, work, out)
     if cfg.observer:
         _observe(ch, cfg, pi_model, q, qd, obs, work, out)

@@ -205,6 +205,14 @@ _BOOST = {
         unit="s",
         rule=BOOST_RULE,
     ),
+    "boost_ramp": Setting(
+        "after boost_duration, the boost's added bandwidth falls linearly to none over this long [s] "
+        "(0: it ends at once)",
+        ABSENT,
+        1.0,
+        unit="s",
+        rule="the ramped end is built for the N-joint adaptive_ct's law (docs/change_detection.md)",
+    ),
     "observer": Setting(
         "feed forward the residual observer's torque (what the current model leaves unexplained, "
         "beyond 3 times its own noise level; docs/change_detection.md)",

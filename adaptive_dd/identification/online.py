@@ -190,6 +190,17 @@ class Detector:
         An alarm also needs this many rows above half the threshold (RMS), >= 1. A payload
         change moves every joint the payload's weight and inertia load at once; friction the
         model lacks (Stribeck, soft friction) errs at one joint near rest. 1: any row alone.
+    speed : float
+        [rad/s] A joint no faster than this within the data selection's memory creeps: its row
+        raises an alarm only when its error (short or fast average, RMS, in N m) also exceeds
+        ``creep_margin`` times the joint's Coulomb friction in the model (it still feeds the
+        estimate, its level and ``min_rows``). Friction the model lacks (Stribeck, soft
+        friction, a wrong Coulomb level) errs near rest, and by about the friction itself; a
+        payload's weight does not care. One constant for every arm, the two-link detector's
+        speed gate; ``docs/change_detection.md`` ("Creeping joints"). 0: the selection's
+        threshold.
+    creep_margin : float
+        See ``speed``; >= 0 (0: a creeping row alarms as any other).
     """
 
     short_window: float = 0.02
@@ -209,6 +220,8 @@ class Detector:
     min_rows: int = 1
     fast_window: float | None = 0.001
     fast_threshold: float = 7.0
+    speed: float = 0.25
+    creep_margin: float = 0.5
 
     def __post_init__(self) -> None:
         o = "Detector"
@@ -240,6 +253,8 @@ class Detector:
                     f"{o} needs fast_window < short_window, got {self.fast_window}, {self.short_window}"
                 )
         _num(o, "fast_threshold", self.fast_threshold, 1.0)
+        _num(o, "speed", self.speed, 0.0, strict=False)
+        _num(o, "creep_margin", self.creep_margin, 0.0, strict=False)
         _bool(o, "reopen_again", self.reopen_again)
 
 
@@ -667,6 +682,8 @@ def _pack(cfg: OnlineConfig, arm: Arm) -> tuple[EstCfg, Array]:
                 "carry the payload"
             )
         ints[K.I_MIN_ROWS] = det.min_rows
+        fl[K.F_DET_SPEED] = max(det.speed, fl[K.F_SEL_THRESHOLD])
+        fl[K.F_CREEP_MARGIN] = det.creep_margin
         ints[K.I_RESET_PAYLOAD] = int(cfg.mode == "arm" and cfg.reset_payload)
     xs0 = np.linalg.solve(np.eye(b.order) - b.A, b.B[:, 0])
     Am, Bm, Cm, Dm = summing_realisation(b)
@@ -771,6 +788,7 @@ def est_init(
         ref=np.zeros((m, n)),
         eps=np.full((m, n), np.nan),
         fast=np.zeros((m, n)),
+        since_crawl=np.zeros((m, n), dtype=np.int64),
     )
     return c, state
 

@@ -168,7 +168,9 @@ F_RADIUS = 11  # radius [m] of the ball about the payload frame the projected pa
 F_PRIOR_RADIUS = 12  # radius [m] of the compact-payload prior on the model control uses (0: none)
 F_ALPHA_FAST = 13  # the fast average's weight of a sample
 F_FAST2 = 14  # the fast average's threshold (squared RMS ratio)
-N_F = 15
+F_DET_SPEED = 15  # [rad/s] a joint no faster within the selection memory creeps
+F_CREEP_MARGIN = 16  # a creeping joint's row alarms only beyond this times its Coulomb friction
+N_F = 17
 
 
 class EstState(NamedTuple):
@@ -204,6 +206,9 @@ class EstState(NamedTuple):
         Weighted prior errors of the last sample (NaN where a row was not used).
     fast : (m, n)
         Detector: the fast average of the squared weighted prior errors (``fast_window``).
+    since_crawl : (m, n) int64
+        Detector: samples since joint j was last no faster than the detector's speed
+        (``F_DET_SPEED``; its row raises alarms only past the selection memory).
     """
 
     xf: np.ndarray
@@ -221,6 +226,7 @@ class EstState(NamedTuple):
     ref: np.ndarray
     eps: np.ndarray
     fast: np.ndarray
+    since_crawl: np.ndarray
 
 
 class EstWork(NamedTuple):
@@ -757,7 +763,13 @@ def _detect(c, s, i, eps, act):  # pragma: no cover - compiled
             thr = fl[F_THRESHOLD2] * fl[F_SLOW2]
         else:
             continue
-        if s.short[i, j] > thr * level + 1e-300:
+        # a joint at most the detector's speed within the selection memory creeps: friction the
+        # model lacks errs there (Stribeck, soft friction), by less than the joint's Coulomb
+        # friction; its row raises an alarm only beyond that (in the weighted equation's units)
+        creep2 = 0.0
+        if ints[I_SELECT] == 1 and s.since_crawl[i, j] <= ints[I_SEL_MEMORY]:
+            creep2 = (fl[F_CREEP_MARGIN] * c.pi0[11 * n + j] / c.w[j]) ** 2
+        if s.short[i, j] > thr * level + 1e-300 and s.short[i, j] > creep2:
             alarm = True
         if s.short[i, j] > 0.25 * thr * level + 1e-300:
             n_raised += 1
@@ -765,7 +777,7 @@ def _detect(c, s, i, eps, act):  # pragma: no cover - compiled
             # only against a level the row has learned itself over the long window: not the
             # level of before an alarm, nor one still learning a new payload or the arm
             thf = fl[F_FAST2] * thr / fl[F_THRESHOLD2]  # the same slow-row and re-learning factors
-            if s.fast[i, j] > thf * level + 1e-300:
+            if s.fast[i, j] > thf * level + 1e-300 and s.fast[i, j] > creep2:
                 fast = True
             if s.fast[i, j] > 0.25 * thf * level + 1e-300:
                 n_fast += 1
@@ -780,8 +792,8 @@ def _alarm(c, s, i, k):  # pragma: no cover - compiled
     _reopen(c, s.P[i])
     if ints[I_RESET_PAYLOAD] == 1:  # a new payload: nothing known of it but its prior
         p = s.theta.shape[1]
-        for k in range(p - 10, p):
-            s.theta[i, k] = 0.0
+        for a in range(p - 10, p):  # (not k: the alarm's sample, recorded below)
+            s.theta[i, a] = 0.0
     cnt[C_ALARMS] += 1
     cnt[C_SINCE_ALARM] = 0
     cnt[C_LAST_ALARM] = k
@@ -853,6 +865,10 @@ def est_step_trial_in(c, s, i, q, qd, tau, w):  # pragma: no cover - compiled
             else:
                 s.since_slow[i, j] = min(s.since_slow[i, j] + 1, BIG)
             act[j] = s.since_slow[i, j] > ints[I_SEL_MEMORY]
+            if np.isfinite(qd[j]) and abs(qd[j]) <= fl[F_DET_SPEED]:
+                s.since_crawl[i, j] = 0
+            else:
+                s.since_crawl[i, j] = min(s.since_crawl[i, j] + 1, BIG)
             if s.since_slow[i, j] == ints[I_SEL_MEMORY] + 1 and s.learned[i, j] > 0:
                 # back in use after a slow phase: the short average restarts at the level
                 nl = s.learned[i, j]

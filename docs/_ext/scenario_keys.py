@@ -85,6 +85,8 @@ MEANING = {
     " (two-link, 0.1), its centre of mass from the flange (N-joint, 0.3).",
     "setting.boost_bandwidth": "Bandwidth of the feedback boost after a change alarm [rad/s].",
     "setting.boost_duration": "How long the boost lasts after an alarm [s].",
+    "setting.boost_ramp": "`adaptive_ct` (N-joint arms): after `boost_duration`, the boost's added "
+    "bandwidth falls linearly to none over this long [s] (default 1; 0: it ends at once).",
     "setting.observer": "`adaptive_ct` (N-joint arms): feed forward the residual observer's torque "
     "(true by default; false is the law without it).",
     "setting.observer_bandwidth": "`adaptive_ct` (N-joint arms): the residual observer's bandwidth "
