@@ -145,7 +145,7 @@ def test_the_observer_is_not_a_setting_of_the_two_link_arm():
 
 def test_the_boost_ends_along_a_ramp_of_its_added_bandwidth():
     """adaptive_ct's boost holds ``boost_duration`` and then its added bandwidth falls linearly to
-    none over ``boost_ramp`` (default 1 s): with the velocity error zero, the torque the boost adds
+    none over ``boost_ramp`` (default 0.25 s): with the velocity error zero, the torque the boost adds
     is ``M0 dkp(f) e`` with ``dkp(f) = f D (2 w + f D)``, ``D = wb - w``; it is whole before the
     ramp, continuous at its start (no step: the bump the abrupt end left), ``f = 1/2`` halfway,
     and gone after it; ``boost_ramp = 0`` ends it at once."""
@@ -154,7 +154,7 @@ def test_the_boost_ends_along_a_ramp_of_its_added_bandwidth():
     sc = load_scenario(_shipped("vertical3_payload_exact"))
     arm, n, T = sc.arm, sc.arm.n_joints, sc.sample_period
     cfg = make_controller("adaptive_ct", arm=arm).law_config(T)._replace(observer=False)
-    assert cfg.boost_ramp == round(1.0 / T) and cfg.boost_samples == round(1.0 / T)
+    assert cfg.boost_ramp == round(0.25 / T) and cfg.boost_samples == round(1.0 / T)
     q_d, qd_d, qdd_d = np.array([0.3, -0.6, 0.4]), np.array([0.2, -0.1, 0.3]), np.zeros(n)
     q = (q_d - np.array([0.01, -0.02, 0.015]))[None]
     qd = qd_d[None]  # velocity error zero

@@ -393,12 +393,14 @@ class AdaptiveCT(Law):
             "observer_bandwidth",
         }
     )
-    BOOST_RAMP = 1.0
+    BOOST_RAMP = 0.25
     """[s] default ``boost_ramp``: after ``boost_duration`` the boost's added bandwidth falls
     linearly to none over this long (0: it ends at once). An abrupt end left a bump in the
-    tracking error 1 s after each swap; ramped over 1 s, adaptive_ct / ct_oracle in the window
-    0.9-2.6 s after each swap fell from 1.08-1.14 to 0.89-0.91 on the UR5 and 1.36-1.75 to
-    0.98-1.37 on vertical3 (10 seeds, ``studies/boost_end.py``; docs/change_detection.md)."""
+    tracking error 1 s after each swap: adaptive_ct / ct_oracle in the window 0.9-2.6 s after
+    each swap 1.08-1.14 on the UR5 and 1.11-1.17 on the Panda; ramped over 0.25 s, 0.98-1.03
+    and 1.00-1.03 (10 seeds, ``studies/boost_end.py``; docs/change_detection.md). A longer ramp
+    lowers the ratios further (1 s: 0.87-0.93, below the floor), but only by running gains above
+    the oracle's for longer: the ramp is sized to remove the step, not to beat the floor."""
     BOOST_DURATION = 1.0
     """[s] default ``boost_duration``; the two-link ``adaptive_ct`` keeps 0.2 s on purpose (its
     estimator learns the paper's sigma within tens of ms; an N-joint payload's centre of mass

@@ -209,7 +209,7 @@ _BOOST = {
         "after boost_duration, the boost's added bandwidth falls linearly to none over this long [s] "
         "(0: it ends at once)",
         ABSENT,
-        1.0,
+        0.25,
         unit="s",
         rule="the ramped end is built for the N-joint adaptive_ct's law (docs/change_detection.md)",
     ),
