@@ -152,23 +152,15 @@ def _lock_index_writes() -> None:
 
 
 # ------------------------------------------------------------ telling the user about compilation
-COMPILE_SECONDS = {"two-link": 25.0, "serial": 55.0}
+COMPILE_SECONDS = {"two-link": 25.0, "serial": 65.0}
 """One-time compilation of a benchmark's closed-loop kernels with a cold cache, on 2 cores: a guide
-for the message and ``validate``'s estimate, not a promise. Measured by
-``benchmarks/compile_profile.py [SCENARIO] --seeds 2`` (an empty ``NUMBA_CACHE_DIR``, every
-built-in controller; CPU seconds inside numba's compilations): 20.4 s for the default two-link
-scenario; for ``ur5_tool_swap.toml`` (any N-joint arm compiles the same kernels) 94.5 s in the
-first of the two processes that compile on a cold cache (:class:`Compiling`: its estimator's
-step and the closed loop, which wait for nothing else when the second has the plant's step and
-the law's pieces ready in time), measured at a load average of 10.7 on 2 cores (CPU seconds
-stretch on a loaded machine; the second process's work, the plant, the law and the report's
-kernels, runs meanwhile). On an idle machine a cold ``adaptive-dd benchmark
-adaptive_dd/scenarios/ur5_tool_swap.toml --seeds 10`` printed ``compiled the kernels in 66 s``
-(wall). Since, the closed loop calls its choices by name (no overload compiled to be thrown
-away) and the second process compiles the plant's integrator alone: ``benchmarks/compile_phases.py``
-(CPU s, load 12-13, the trees before and after at once) gave the loop 36.1 -> 21.7 s and the
-critical path 84.4 -> 65.4 s: scaled, about 55 s idle (hence 55). It was 145.4 s in one process
-(load 2) before the N-joint loop was compiled once for every law and the two processes."""
+for the message and ``validate``'s estimate, not a promise. The two-link default scenario: 24.9
+CPU s inside numba's compilations (``benchmarks/compile_profile.py --seeds 2``, an empty
+``NUMBA_CACHE_DIR``). An N-joint arm (any compiles the same kernels), in two processes at once
+(:class:`Compiling`): a cold ``adaptive-dd benchmark adaptive_dd/scenarios/ur5_tool_swap.toml
+--seeds 10`` on a nearly idle machine printed ``compiled the kernels in 64 s`` (waits for the
+second process included); ``benchmarks/compile_phases.py`` gives the phases in CPU seconds. The
+history of these figures: ``docs/guide/first_run.md``."""
 
 
 def _closed_loop_kernel(serial: bool):
