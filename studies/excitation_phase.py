@@ -69,6 +69,12 @@ def summary(d: dict, source: str, seeds: list[int]) -> list[str]:
             f"parameters and seeds: model {np.median(err['model']):.3g} ({err['model'].max():.3g}), "
             f"identified {np.median(err['fit']):.3g} ({err['fit'].max():.3g})"
         )
+        if rep.estimator_scale is not None:
+            lines.append(
+                "  the identification's covariance against the online estimator's information from the "
+                "same record (estimator_scale, median generalised eigenvalue) per seed: "
+                + " ".join(f"{x:.3g}" for x in rep.estimator_scale)
+            )
     lines.append(f"  wall time {res.wall_time:.0f} s")
     return lines
 
@@ -82,7 +88,12 @@ def main() -> None:
     ap.add_argument("--only", choices=("with", "without"), default=None)
     ap.add_argument("--urdf-prior", action="store_true")
     ap.add_argument("--handoff", choices=("cov", "std", "noise"), default="cov")
+    ap.add_argument("--prior-scale", type=float, default=None, help="the handed-on covariance times S")
     a = ap.parse_args()
+    if a.prior_scale is not None:  # an ablation: the hand-off's covariance scaled by a constant
+        from adaptive_dd.closed_loop import excitation_phase, model_prior
+
+        excitation_phase.identified_prior = lambda sc, P: model_prior.identified_prior(sc, a.prior_scale * P)
     if a.handoff == "noise":  # the covariance in the units of the estimator's rows (unit noise)
         from adaptive_dd.closed_loop import excitation_phase
         from adaptive_dd.identification.online import derived_row_weights

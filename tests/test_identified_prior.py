@@ -265,3 +265,40 @@ def test_the_excitation_identifies_coulomb_friction_with_the_noise_width():
         )
         err[v] = np.abs(one.fit[fc] - sigma_true[fc]) / sigma_true[fc]
     assert err[quiet].max() < 0.002 and err[quiet].max() < 0.2 * err[model.friction_velocity].max(), err
+
+
+def test_the_identified_prior_is_in_the_online_estimators_units():
+    """The identification's covariance, handed to adaptive_ct, counts about as much as the record
+    it summarises would in the online estimator (estimator_scale: the median generalised eigenvalue
+    of the prior against the estimator's own information from that record; 1.4 on this record,
+    0.7 and 2.2 on the drawn iiwa's excitation). A prior in other units is caught: the rows'
+    white-noise variance would scale it by about 35 (the estimator's rows are correlated over
+    hundreds of samples, so it over-counts its data by about as much)."""
+    from adaptive_dd.closed_loop.model_prior import estimator_scale
+    from adaptive_dd.identification.online import OnlineConfig
+
+    model, _, q, qd, tau, T = _record(0, stribeck=1.0)
+    src = _shipped("vertical3_payload")
+    arm = parse_scenario(read_toml(src), str(src), "v").arm
+    one = identify_record(model, q, qd, tau, T)
+    kappa = estimator_scale(OnlineConfig(sample_period=T), arm, one.prior_cov, q, qd, tau)
+    assert 1.0 / 3.0 < kappa < 3.0, kappa
+
+
+def test_the_estimator_scale_follows_the_estimators_row_units():
+    """estimator_scale reads the information the estimator's rows carry: rows divided by twice the
+    weights carry a quarter of it, so the same prior is four times as tight in those units; the
+    scale is linear in the prior."""
+    from adaptive_dd.closed_loop.model_prior import estimator_scale
+    from adaptive_dd.identification.online import OnlineConfig
+
+    model, _, q, qd, tau, T = _record(1, stribeck=0.0, duration=4.0)
+    src = _shipped("vertical3_payload")
+    arm = parse_scenario(read_toml(src), str(src), "v").arm
+    P = identify_record(model, q, qd, tau, T).prior_cov
+    w = np.array([1.0, 0.4, 0.1])
+    one = estimator_scale(OnlineConfig(sample_period=T, row_weights=tuple(w)), arm, P, q, qd, tau)
+    two = estimator_scale(OnlineConfig(sample_period=T, row_weights=tuple(2 * w)), arm, P, q, qd, tau)
+    assert two / one == pytest.approx(0.25, rel=1e-6)
+    more = estimator_scale(OnlineConfig(sample_period=T, row_weights=tuple(w)), arm, 35.0 * P, q, qd, tau)
+    assert more / one == pytest.approx(35.0, rel=1e-6)

@@ -29,7 +29,7 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
-from adaptive_dd.closed_loop.model_prior import identified_prior, model_file_prior
+from adaptive_dd.closed_loop.model_prior import estimator_scale, identified_prior, model_file_prior
 from adaptive_dd.errors import ScenarioError
 
 __all__ = [
@@ -39,6 +39,7 @@ __all__ = [
     "ExcitationReport",
     "RecordFit",
     "coulomb_width",
+    "estimator_scale",
     "excitation_reference",
     "identified_prior",
     "identify_excitation",
@@ -67,8 +68,11 @@ class ExcitationReport:
     parameter (:func:`~adaptive_dd.identification.arm_prior.identified_prior_std`: the sandwich
     variance plus the fit's step and the model error); ``sigma_cov (S, p, p)`` the same with the
     sandwich's correlations (:func:`~adaptive_dd.identification.arm_prior.identified_prior_cov`):
-    adaptive_ct's prior on the arm after the phase; ``coulomb_width`` [rad/s] the width of the
-    identification's Coulomb law (:func:`coulomb_width`).
+    adaptive_ct's prior on the arm after the phase, in the parameters' units; ``estimator_scale
+    (S,)`` the same in the online estimator's units is ``sigma_cov / estimator_scale``
+    (:func:`~adaptive_dd.closed_loop.model_prior.estimator_scale`; ones when the scenario runs no
+    adaptive_ct); ``coulomb_width`` [rad/s] the width of the identification's Coulomb law
+    (:func:`coulomb_width`).
     """
 
     duration: float
@@ -82,6 +86,7 @@ class ExcitationReport:
     sigma_std: Array
     sigma_cov: Array
     coulomb_width: float
+    estimator_scale: Array | None = None
 
     def errors(self) -> dict[str, Array]:
         """Per seed and base parameter ``(S, p)``, the error against the plant's,
@@ -111,6 +116,8 @@ class ExcitationReport:
                 for key, e in err.items()
             }
             seeds[int(i)]["residual_std"] = self.rstd[k].tolist()
+            if self.estimator_scale is not None:
+                seeds[int(i)]["estimator_scale"] = float(self.estimator_scale[k])
         return {
             "duration": self.duration,
             "controller": EXCITATION_CONTROLLER,
@@ -279,11 +286,12 @@ def identify_excitation(scenario, idx, run_closed_loop) -> tuple[list[Array], Ex
             f"{[int(i) for i, f in zip(idx, run.failed, strict=True) if f]} (tracking lost)"
         )
     model = identification_model(scenario)
+    scale_cfg = _estimator_config(scenario)
     std = io_of(scenario).std
     n, T = scenario.n_joints, scenario.sample_period
     B = scenario.arm.base.B
     sig_plant = true_models(plant_of(exc, idx))[:, 0] @ B.T
-    pis, rows = [], {"hat": [], "fit": [], "rstd": [], "std": [], "prior_cov": []}
+    pis, kappa, rows = [], [], {"hat": [], "fit": [], "rstd": [], "std": [], "prior_cov": []}
     for k, i in enumerate(idx):
         rng = np.random.default_rng([int(scenario.seed), int(i), 3])
         qm = run.q[k] + std[:n] * rng.standard_normal(run.q[k].shape)
@@ -297,13 +305,31 @@ def identify_excitation(scenario, idx, run_closed_loop) -> tuple[list[Array], Ex
         pis.append(one.pi)
         for key in rows:
             rows[key].append(getattr(one, key))
+        if scale_cfg is None:
+            kappa.append(1.0)
+        else:
+            kappa.append(estimator_scale(scale_cfg, scenario.arm, one.prior_cov, qm, qdm, run.tau[k]))
     report = ExcitationReport(
         float(scenario.excite), tuple(idx), tuple(model.names), sig_plant,
         np.broadcast_to(scenario.arm.sigma, sig_plant.shape).copy(), np.array(rows["hat"]),
         np.array(rows["fit"]), np.array(rows["rstd"]), np.array(rows["std"]), np.array(rows["prior_cov"]),
-        float(model.friction_velocity),
+        float(model.friction_velocity), np.array(kappa),
     )  # fmt: skip
     return pis, report
+
+
+def _estimator_config(scenario):
+    """adaptive_ct's estimator settings in the scenario (None: it does not run one in mode "arm",
+    or its table states its own arm prior, so nothing is handed on)."""
+    from adaptive_dd.benchmark.scenario_checks import thaw
+    from adaptive_dd.closed_loop.runner import make_controller_of
+
+    if "adaptive_ct" not in scenario.controllers:
+        return None
+    est = (thaw(dict(scenario.controller_options).get("adaptive_ct")) or {}).get("estimator", {})
+    if isinstance(est, dict) and {"mode", "arm_uncertainty", "arm_prior_std", "arm_prior_cov"} & est.keys():
+        return None
+    return getattr(make_controller_of(scenario, "adaptive_ct")[1], "online", None)
 
 
 def run_with_excitation(scenario, idx, run_closed_loop, keep: int = 3, engine: str = "auto"):
@@ -326,12 +352,14 @@ def run_with_excitation(scenario, idx, run_closed_loop, keep: int = 3, engine: s
                 urdf=path, viscous=pi[10 * n : 11 * n], coulomb=pi[11 * n : 12 * n], armature=pi[12 * n :]
             )
             _ = model.pi_links, model.chain, model.base  # read while the file exists
+            kappa = 1.0 if report.estimator_scale is None else report.estimator_scale[k]
+            prior = report.sigma_cov[k] / kappa  # in the online estimator's units
             one = dataclasses.replace(
                 scenario,
                 arm=model,
                 plant=plant,
                 excite=0.0,
-                controller_options=identified_prior(scenario, report.sigma_cov[k]),
+                controller_options=identified_prior(scenario, prior),
             )
             parts.append(
                 run_closed_loop(one, seed_indices=(i,), keep_trajectories=1 if k < keep else 0, engine=engine)
