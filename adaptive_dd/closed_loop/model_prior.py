@@ -12,11 +12,18 @@ from adaptive_dd.errors import ScenarioError
 
 Array = NDArray[np.float64]
 
-__all__ = ["estimator_scale", "identified_prior", "known_payload_mass_std", "model_file_prior"]
+__all__ = [
+    "estimator_information",
+    "estimator_scale",
+    "identified_prior",
+    "known_payload_mass_std",
+    "model_file_prior",
+    "scale_to_information",
+]
 
 VAGUE = 1e4
-"""The estimator's start-up covariance in :func:`estimator_scale` is the identification's times
-this: its rows, not that start, make what it knows at the record's end."""
+"""[parameter units^2] The estimator's start-up variance in :func:`estimator_information`: its
+rows, not that start, make what it knows at the record's end."""
 
 
 def identified_prior(scenario, prior: Array) -> tuple:
@@ -61,34 +68,30 @@ def known_payload_mass_std(arm, prior: Array) -> float:
     return float(1.0 / np.sqrt(max(float(b @ x), 1e-300)))
 
 
-def estimator_scale(cfg, arm, prior: Array, q: Array, qd: Array, tau: Array) -> float:
-    """The identification's covariance ``prior (p, p)`` in the units of the online estimator's
-    own rows: ``kappa``, the median over directions of the generalised eigenvalues of ``prior``
-    against the inverse of the information the estimator (adaptive_ct's ``cfg``, mode "arm", its
-    data selection, row weights and forgetting; the detector off) takes from the record ``q, qd,
-    tau (N, n)`` the identification was made on. The hand-off is ``prior / kappa``: the
-    identified model then counts, in the median direction, as much as that record would have
-    had the estimator tracked it itself, while keeping what the identification knows of
-    each direction (its sandwich's correlations, the consistent fit's step, the model error).
+def estimator_information(cfg, arm, q: Array, qd: Array, tau: Array) -> Array:
+    """``(p, p)`` The information the online estimator's own rows take from the record ``q, qd,
+    tau (N, n)`` about the arm's base parameters: adaptive_ct's estimator ``cfg`` (mode "arm", its
+    data selection, row weights and forgetting; the detector off) run over it from a vague start,
+    ``P_end^-1 - lam^N P_0^-1``, the arm block. ``arm``: the arm whose kinematics the rows use
+    (the regressor is linear in the parameters: the URDF's or an identified model's give the
+    same rows).
 
-    The estimator's recursive least squares takes each row as one independent unit of noise
-    (rows divided by the torque-resolution weights), while ``prior`` is in the parameters' own
-    units; the rows' residual variance in those units (about 0.03 on the drawn iiwa) would say
-    the prior counts 35x its data, but the filtered rows are correlated over hundreds of samples,
-    so the estimator also over-counts its data; the two nearly cancel (``kappa`` 0.7 and 2.2 on the
-    iiwa's seeds 0 and 1) and only the comparison on the record itself says by how much.
-
-    ``arm``: the arm whose kinematics the rows use (the estimator's regressor is linear in the
-    parameters: the URDF's or the identified model's give the same rows)."""
+    Raises
+    ------
+    DataError
+        The record gives the estimator no information (every sample skipped).
+    """
     import dataclasses
 
+    from adaptive_dd.errors import DataError
     from adaptive_dd.identification import online
     from adaptive_dd.identification import online_kernel as K
 
-    C = np.asarray(prior, dtype=float)
+    pb = arm.base.count
+    start = (VAGUE * np.eye(pb)).tolist()
     cfg = dataclasses.replace(
-        cfg, mode="arm", arm_uncertainty=None, arm_prior_std=None, arm_prior_cov=(VAGUE * C).tolist(),
-        detector=None, max_trace=1e300,
+        cfg, mode="arm", arm_uncertainty=None, arm_prior_std=None, arm_prior_cov=start, detector=None,
+        max_trace=1e300,
     )  # fmt: skip
     q, qd, tau = (np.ascontiguousarray(np.asarray(x, dtype=float)) for x in (q, qd, tau))
     c, s = online.est_init(cfg, arm, 1)
@@ -100,17 +103,49 @@ def estimator_scale(cfg, arm, prior: Array, q: Array, qd: Array, tau: Array) -> 
         c, s, 0, q, qd, tau, np.empty((N, p)), np.empty((N, 10)), eps, np.zeros(N, np.int64), np.empty(N)
     )  # fmt: skip
     used = int(np.isfinite(eps).any(axis=1).sum())  # samples that forgot (the first row of each)
+    if used == 0:
+        raise DataError("the online estimator used no sample of the record")
     info = np.linalg.inv(s.P[0]) - cfg.lam0**used * np.linalg.inv(P0)
-    pb = C.shape[0]
+    return 0.5 * (info[:pb, :pb] + info[:pb, :pb].T)
+
+
+def scale_to_information(prior: Array, info: Array) -> float:
+    """``kappa``: the median over directions of the generalised eigenvalues of the covariance
+    ``prior (p, p)`` against the inverse of the information ``info (p, p)``.
+
+    Raises
+    ------
+    DataError
+        No positive median (the information is zero along most directions).
+    """
+    from adaptive_dd.errors import DataError
+
+    C = np.asarray(prior, dtype=float)
     d, V = np.linalg.eigh(0.5 * (C + C.T))
     S = V * np.sqrt(np.maximum(d, 0.0))
-    g = np.linalg.eigvalsh(S.T @ (0.5 * (info[:pb, :pb] + info[:pb, :pb].T)) @ S)
-    kappa = float(np.median(g))
+    kappa = float(np.median(np.linalg.eigvalsh(S.T @ np.asarray(info, dtype=float) @ S)))
     if not (np.isfinite(kappa) and kappa > 0.0):
-        from adaptive_dd.errors import DataError
-
         raise DataError(f"the record gives the online estimator no information to scale the prior ({kappa})")
     return kappa
+
+
+def estimator_scale(cfg, arm, prior: Array, q: Array, qd: Array, tau: Array) -> float:
+    """The identification's covariance ``prior (p, p)`` in the units of the online estimator's
+    own rows: ``kappa``, the median over directions of the generalised eigenvalues of ``prior``
+    against the inverse of the information the estimator takes from the record ``q, qd, tau (N,
+    n)`` the identification was made on (:func:`estimator_information`,
+    :func:`scale_to_information`). The hand-off is ``prior / kappa``: the identified model then
+    counts, in the median direction, as much as that record would have had the estimator tracked
+    it itself, while keeping what the identification knows of each direction (its sandwich's
+    correlations, the consistent fit's step, the model error).
+
+    The estimator's recursive least squares takes each row as one independent unit of noise
+    (rows divided by the torque-resolution weights), while ``prior`` is in the parameters' own
+    units; the rows' residual variance in those units (about 0.03 on the drawn iiwa) would say
+    the prior counts 35x its data, but the filtered rows are correlated over hundreds of samples,
+    so the estimator also over-counts its data; the two nearly cancel (``kappa`` 0.7 and 2.2 on the
+    iiwa's seeds 0 and 1) and only the comparison on the record itself says by how much."""
+    return scale_to_information(prior, estimator_information(cfg, arm, q, qd, tau))
 
 
 def _stated_variance(scenario, arm) -> Array:
@@ -135,13 +170,16 @@ def model_file_prior(scenario, path) -> tuple:
     excitation phase (:func:`~adaptive_dd.identification.arm_prior.identified_prior_std`: the
     file's sandwich covariance, the consistent fit's step and the model error its ``record``
     holds (``model_error_var``, written by ``identify`` since this rule; none in older files); the
-    stated uncertainty for the base parameters it held at the URDF's).
+    stated uncertainty for the base parameters it held at the URDF's), in the online estimator's
+    units as after an excitation phase: divided by :func:`scale_to_information` against the
+    file's ``record.estimator_information`` (what ``identify`` measured with the estimator's rows
+    on its record, :func:`estimator_information`); a file without it is handed on unscaled.
 
     Raises
     ------
     ScenarioError
         Naming ``model.from``: the file's base parameters are not the [arm]'s, or it has no
-        consistent fit.
+        consistent fit, or its ``record.estimator_information`` is not a finite ``p x p`` table.
     """
     from adaptive_dd.errors import DataError, ParameterError
     from adaptive_dd.identification.arm_prior import identified_prior_cov
@@ -164,11 +202,18 @@ def model_file_prior(scenario, path) -> tuple:
     extra = m.record.get("model_error_var") if isinstance(m.record, dict) else None
     if extra is not None and np.shape(extra) != (len(m.names),):
         raise ScenarioError(f"{where}: key 'record.model_error_var' must have {len(m.names)} entries")
+    info = m.record.get("estimator_information") if isinstance(m.record, dict) else None
+    p = len(m.names)
+    if info is not None and not (
+        np.shape(info) == (p, p) and np.all(np.isfinite(np.asarray(info, dtype=float)))
+    ):
+        raise ScenarioError(f"{where}: key 'record.estimator_information' must be a finite {p} x {p} table")
     try:
         prior = identified_prior_cov(
             np.asarray(m.covariance), np.asarray(m.sigma), np.asarray(m.consistent_sigma),
             np.asarray(m.identified, dtype=bool), _stated_variance(scenario, scenario.arm), extra,
         )  # fmt: skip
-    except ParameterError as exc:
+        kappa = 1.0 if info is None else scale_to_information(prior, np.asarray(info, dtype=float))
+    except (ParameterError, DataError) as exc:
         raise ScenarioError(f"{where}: {exc}") from None
-    return identified_prior(scenario, prior)
+    return identified_prior(scenario, prior / kappa)
