@@ -499,6 +499,42 @@ def test_the_excitation_phase_identifies_the_plant_and_feeds_the_controllers():
     assert m["plant"]["seeds"][1] == compute_metrics(base)["plant"]["seeds"][1]  # the same plants
 
 
+def test_the_excitation_phase_hands_on_its_prior_in_the_estimators_units(monkeypatch):
+    """run_with_excitation gives adaptive_ct each seed's identified covariance divided by its
+    estimator_scale (the prior in the online estimator's units, docs/learning_the_arm.md), not the
+    covariance in the parameters' units."""
+    from adaptive_dd.closed_loop import excitation_phase as ep
+
+    controllers = ["ct_oracle", "adaptive_ct"]
+    data = _data("vertical3_payload_exact", duration=2.0, swaps=(1.5,), controllers=controllers)
+    data["reference"]["ramp"] = 1.0
+    data["plant"] = {"uncertainty": LEVELS}
+    data["run"]["excite"] = 10.0
+    sc = parse_scenario(data, "v.toml")
+    seen = {}
+    real = ep.identify_excitation
+
+    class Stop(Exception):
+        pass
+
+    def identify(*args):
+        seen["pis"], seen["rep"] = real(*args)
+        return seen["pis"], seen["rep"]
+
+    def hand_on(scenario, prior):
+        seen["prior"] = prior
+        raise Stop
+
+    monkeypatch.setattr(ep, "identify_excitation", identify)
+    monkeypatch.setattr(ep, "identified_prior", hand_on)
+    with pytest.raises(Stop):
+        ep.run_with_excitation(sc, (0,), run_closed_loop)
+    rep = seen["rep"]
+    kappa = rep.estimator_scale[0]
+    assert np.isfinite(kappa) and abs(np.log(kappa)) > 1e-3, kappa  # not the identity
+    np.testing.assert_allclose(seen["prior"], rep.sigma_cov[0] / kappa, rtol=1e-12)
+
+
 def test_after_an_excitation_phase_adaptive_ct_starts_from_what_the_identification_knows():
     """[run] excite: adaptive_ct's arm prior is the identification's (``arm_prior_std``, each
     seed's), not the URDF's stated uncertainty about the identified model; a table that states
