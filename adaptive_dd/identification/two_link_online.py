@@ -678,7 +678,8 @@ def run_two_link_online(
     lam = np.empty((n, N))
     for i in range(n):
         K.online_run_trial(
-            i, *state.estimator, q[i], qd[i], tau[i], *cfg.packed, theta[i], model[i], eps[i], alarm[i], lam[i]
-        )
+            i, *state.estimator, q[i], qd[i], tau[i], *cfg.packed, theta[i], model[i], eps[i], alarm[i],
+            lam[i],
+        )  # fmt: skip
     t = np.arange(N) * cfg.sample_period
     return TwoLinkOnlineRecord(t, theta, model, alarm.astype(bool), eps, lam, state.n_skipped.copy())
