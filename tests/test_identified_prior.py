@@ -302,27 +302,3 @@ def test_the_estimator_scale_follows_the_estimators_row_units():
     assert two / one == pytest.approx(0.25, rel=1e-6)
     more = estimator_scale(OnlineConfig(sample_period=T, row_weights=tuple(w)), arm, 35.0 * P, q, qd, tau)
     assert more / one == pytest.approx(35.0, rel=1e-6)
-
-
-def test_a_model_file_hands_off_in_the_estimators_units_as_the_excitation_phase(tmp_path):
-    """[model] from = "model.json" with the estimator's information on the record identify read
-    (``record.estimator_information``): the prior handed to adaptive_ct is the rule's divided by
-    scale_to_information, as after an excitation phase; without it, unscaled; a bad table is
-    refused naming the key."""
-    from adaptive_dd.closed_loop.model_prior import scale_to_information
-    from adaptive_dd.closed_loop.runner import make_controller_of
-
-    path, m, _ = _model_file(tmp_path)
-    data = read_toml(_shipped("vertical3_payload"))
-    data["model"] = {"from": str(path)}
-    _, ctrl = make_controller_of(parse_scenario(data, "m.toml"), "adaptive_ct")
-    P = np.asarray(ctrl.online.arm_prior_cov)  # no estimator_information: unscaled
-    info = 0.1 * np.linalg.pinv(P, hermitian=True)  # the estimator would know a tenth of what the prior says
-    assert scale_to_information(P, info) == pytest.approx(0.1, rel=1e-9)
-    record = {**m.record, "estimator_information": info.tolist()}
-    path, _, _ = _model_file(tmp_path, record=record)
-    _, ctrl = make_controller_of(parse_scenario(data, "m.toml"), "adaptive_ct")
-    np.testing.assert_allclose(np.asarray(ctrl.online.arm_prior_cov), P / 0.1, rtol=1e-9)
-    _model_file(tmp_path, record={**m.record, "estimator_information": [[1.0]]})
-    with pytest.raises(ScenarioError, match=r"model\.from.*record\.estimator_information.*finite"):
-        parse_scenario(data, "m.toml")

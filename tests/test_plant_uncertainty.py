@@ -499,10 +499,10 @@ def test_the_excitation_phase_identifies_the_plant_and_feeds_the_controllers():
     assert m["plant"]["seeds"][1] == compute_metrics(base)["plant"]["seeds"][1]  # the same plants
 
 
-def test_the_excitation_phase_hands_on_its_prior_in_the_estimators_units(monkeypatch):
-    """run_with_excitation gives adaptive_ct each seed's identified covariance divided by its
-    estimator_scale (the prior in the online estimator's units, docs/learning_the_arm.md), not the
-    covariance in the parameters' units."""
+def test_the_excitation_phase_hands_on_its_prior_and_reports_its_scale(monkeypatch):
+    """run_with_excitation gives adaptive_ct each seed's identified covariance as it is, and reports
+    the consistency check estimator_scale (not applied: dividing by it measured worse on the
+    iiwa, docs/learning_the_arm.md)."""
     from adaptive_dd.closed_loop import excitation_phase as ep
 
     controllers = ["ct_oracle", "adaptive_ct"]
@@ -532,7 +532,7 @@ def test_the_excitation_phase_hands_on_its_prior_in_the_estimators_units(monkeyp
     rep = seen["rep"]
     kappa = rep.estimator_scale[0]
     assert np.isfinite(kappa) and abs(np.log(kappa)) > 1e-3, kappa  # not the identity
-    np.testing.assert_allclose(seen["prior"], rep.sigma_cov[0] / kappa, rtol=1e-12)
+    np.testing.assert_allclose(seen["prior"], rep.sigma_cov[0], rtol=1e-12)
 
 
 def test_after_an_excitation_phase_adaptive_ct_starts_from_what_the_identification_knows():

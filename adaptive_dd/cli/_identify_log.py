@@ -267,31 +267,10 @@ def _write_model(outputs, arm, model, rec, fit, cf, spec) -> list:
             ).tolist(),
             "velocity": "measured" if rec.qd_measured else "derived",
             "scenario": str(spec.source),
-            **_estimator_information(arm, rec),
         },
     )
     out = [save_identified_model(outputs.path("model.json"), m)]
     return out + ([fitted] if fitted is not None else [])
-
-
-def _estimator_information(arm, rec) -> dict:
-    """``{"estimator_information": (p, p)}``: what the online estimator's rows (its default
-    settings) take from the record, for adaptive_ct's prior in the estimator's units after
-    ``[model] from = "model.json"`` (:func:`~adaptive_dd.closed_loop.model_prior.model_file_prior`);
-    empty when a torque channel is left out or the estimator cannot run on the record (a note says so)."""
-    from adaptive_dd.closed_loop.model_prior import estimator_information
-    from adaptive_dd.identification.online import OnlineConfig
-
-    if not np.all(rec.used):
-        print("note: model.json has no estimator_information (a torque channel is left out)")
-        return {}
-    try:
-        cfg = OnlineConfig(sample_period=rec.sample_period)
-        info = estimator_information(cfg, arm, rec.q, rec.qd, rec.tau)
-    except (ParameterError, SignalError, DataError, np.linalg.LinAlgError) as exc:
-        print(f"note: model.json has no estimator_information ({exc})")
-        return {}
-    return {"estimator_information": info.tolist()}
 
 
 def _payload_only(args, arm, model, rec, tau_f) -> int:

@@ -68,11 +68,12 @@ class ExcitationReport:
     parameter (:func:`~adaptive_dd.identification.arm_prior.identified_prior_std`: the sandwich
     variance plus the fit's step and the model error); ``sigma_cov (S, p, p)`` the same with the
     sandwich's correlations (:func:`~adaptive_dd.identification.arm_prior.identified_prior_cov`):
-    adaptive_ct's prior on the arm after the phase, in the parameters' units; ``estimator_scale
-    (S,)`` the same in the online estimator's units is ``sigma_cov / estimator_scale``
-    (:func:`~adaptive_dd.closed_loop.model_prior.estimator_scale`; ones when the scenario runs no
-    adaptive_ct); ``coulomb_width`` [rad/s] the width of the identification's Coulomb law
-    (:func:`coulomb_width`).
+    adaptive_ct's prior on the arm after the phase; ``estimator_scale (S,)`` a consistency check,
+    reported and not applied: ``sigma_cov`` against the information adaptive_ct's estimator takes
+    from the same record (:func:`~adaptive_dd.closed_loop.model_prior.estimator_scale`; 1 means
+    the prior counts as much as its record would in the estimator; ones when the scenario runs no
+    adaptive_ct; dividing the hand-off by it measured worse, docs/learning_the_arm.md);
+    ``coulomb_width`` [rad/s] the width of the identification's Coulomb law (:func:`coulomb_width`).
     """
 
     duration: float
@@ -352,8 +353,7 @@ def run_with_excitation(scenario, idx, run_closed_loop, keep: int = 3, engine: s
                 urdf=path, viscous=pi[10 * n : 11 * n], coulomb=pi[11 * n : 12 * n], armature=pi[12 * n :]
             )
             _ = model.pi_links, model.chain, model.base  # read while the file exists
-            kappa = 1.0 if report.estimator_scale is None else report.estimator_scale[k]
-            prior = report.sigma_cov[k] / kappa  # in the online estimator's units
+            prior = report.sigma_cov[k]  # unscaled: estimator_scale is reported, not applied
             one = dataclasses.replace(
                 scenario,
                 arm=model,
