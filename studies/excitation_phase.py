@@ -2,7 +2,7 @@
 excitation phase before it, on one scenario (ct_oracle, ct_nominal and adaptive_ct only).
 
     python studies/excitation_phase.py SCENARIO.toml [--seeds 20] [--excite 20] [--first-seed 0]
-        [--only with|without] [--urdf-prior] [--handoff cov|std]
+        [--only with|without] [--urdf-prior] [--handoff cov|std|noise] [--prior-scale S]
 
 Prints, for ``excite = 0`` and ``excite = SECONDS``, adaptive_ct / ct_oracle per segment (mean,
 p90, max over seeds), the first segment's time to come within 1.2x of the floor
@@ -12,6 +12,10 @@ detection delay, ct_nominal / ct_oracle per segment, and the identification's er
 (``[plant.uncertainty]``) about the identified model, not what the identification knows (the
 default, :func:`adaptive_dd.closed_loop.excitation_phase.identified_prior`). ``--handoff std``:
 that prior's standard deviations only (the hand-off before the correlations were passed on).
+``--handoff noise``: the covariance divided by the rows' white-noise variance (about 35x wider on
+the iiwa); ``--prior-scale S``: the covariance handed on times ``S`` (ablations; both measured
+worse, docs/learning_the_arm.md). With the phase it also prints the consistency check
+``estimator_scale`` per seed (:func:`adaptive_dd.closed_loop.model_prior.estimator_scale`).
 """
 
 from __future__ import annotations
