@@ -13,7 +13,8 @@ detection delay, ct_nominal / ct_oracle per segment, and the identification's er
 default, :func:`adaptive_dd.closed_loop.excitation_phase.identified_prior`). ``--handoff std``:
 that prior's standard deviations only (the hand-off before the correlations were passed on).
 ``--handoff noise``: the covariance divided by the rows' white-noise variance (about 35x wider on
-the iiwa); ``--prior-scale S``: the covariance handed on times ``S`` (ablations; both measured
+the iiwa); ``--prior-scale S``: the covariance handed on times ``S`` (ablations; ``S = 35``, about
+what ``noise`` does, measured
 worse, docs/learning_the_arm.md). With the phase it also prints the consistency check
 ``estimator_scale`` per seed (:func:`adaptive_dd.closed_loop.model_prior.estimator_scale`).
 """
