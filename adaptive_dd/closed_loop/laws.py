@@ -86,7 +86,8 @@ O_Q, O_QD = 2, 3  # the last fresh measurement
 O_TAU = 4  # the applied torques summed since that measurement [N m] (written by the closed loop)
 O_COUNT = 5  # [0]: observer updates so far, [1]: samples summed in O_TAU
 O_R1 = 6  # the first stage's output (two stages)
-OBS_ROWS = 7
+O_TRIP = 7  # [0]: samples since the observer's residual last tripped the boost (obs_trip)
+OBS_ROWS = 8
 
 
 class LawConfig(NamedTuple):
@@ -135,6 +136,9 @@ class LawConfig(NamedTuple):
         Weight of a sample in the level (``T`` over its 1 s window).
     obs_warmup : int
         Updates before ``r`` feeds the command (the level learnt meanwhile, not winsorised).
+    obs_trip : float
+        A row's residual beyond this many times its learnt RMS level starts the boost as an
+        alarm would (the estimator's detector reads slower filters); 0: never.
     """
 
     kind: int
@@ -162,6 +166,7 @@ class LawConfig(NamedTuple):
     obs_kappa: float
     obs_alpha: float
     obs_warmup: int
+    obs_trip: float
 
 
 class LawState(NamedTuple):
@@ -180,7 +185,9 @@ class LawState(NamedTuple):
         pi = np.broadcast_to(cfg.pi_fixed, (n_trials, cfg.pi_fixed.shape[0])).copy()
         big = np.full(n_trials, np.iinfo(np.int64).max // 2, dtype=np.int64)
         n = cfg.kp.shape[0]
-        return cls(pi, np.zeros((n_trials, 10)), big, np.zeros((n_trials, OBS_ROWS, n)))
+        obs = np.zeros((n_trials, OBS_ROWS, n))
+        obs[:, O_TRIP, 0] = np.iinfo(np.int64).max // 2  # no trip yet
+        return cls(pi, np.zeros((n_trials, 10)), big, obs)
 
 
 @njit(cache=True)
@@ -291,9 +298,10 @@ def observe_applied(obs, tau):  # pragma: no cover - compiled
 
 
 @njit(cache=True)
-def _observe(ch, cfg, pi, q, qd, obs, work, out):  # pragma: no cover - compiled
+def _observe(ch, cfg, pi, q, qd, obs, boosting, work, out):  # pragma: no cover - compiled
     """One sample of the residual observer (module docstring) at a fresh measurement ``q, qd``;
-    its soft-thresholded output added to ``out``.
+    its soft-thresholded output added to ``out``; a residual beyond ``obs_trip`` times its level
+    trips the boost (``O_TRIP``) unless ``boosting``.
 
     ``obs`` holds the last fresh measurement and the applied torques summed since (``O_TAU``,
     ``O_COUNT[1]`` samples: the closed loop adds each sample's). Over those ``m`` samples the
@@ -336,9 +344,14 @@ def _observe(ch, cfg, pi, q, qd, obs, work, out):  # pragma: no cover - compiled
     if c <= cfg.obs_warmup:
         return
     bias = 1.0 - (1.0 - cfg.obs_alpha) ** c
+    # a trip starts a boost; it does not prolong one (nor restart it while it ramps down)
+    tripping = cfg.obs_trip > 0.0 and not boosting
     for j in range(n):
-        thr = cfg.obs_kappa * np.sqrt(obs[O_LEVEL, j] / bias)
+        rms = np.sqrt(obs[O_LEVEL, j] / bias)
+        thr = cfg.obs_kappa * rms
         r = obs[O_R, j]
+        if tripping and abs(r) > cfg.obs_trip * rms:
+            obs[O_TRIP, 0] = 0.0
         if r > thr:
             out[j] += r - thr
         elif r < -thr:
@@ -412,6 +425,10 @@ def law_trial_in(
             for j in range(n):
                 s[j] = ed[j] + cfg.lam[j] * e[j]
             _adapt_payload(ch, cfg, q, qd, qdr, a, s, theta, pi_model, work)
+    if cfg.observer and cfg.obs_trip > 0.0:  # samples since the observer last tripped the boost
+        obs[O_TRIP, 0] += 1.0
+        if obs[O_TRIP, 0] < since_alarm:
+            since_alarm = int(obs[O_TRIP, 0])
     if cfg.boost_samples > 0 and since_alarm < cfg.boost_samples + cfg.boost_ramp:
         f = 1.0
         if since_alarm >= cfg.boost_samples:  # the ramped end: f from 1 to 0
@@ -425,7 +442,8 @@ def law_trial_in(
             v[j] = dkp * e[j] + dkd * ed[j]
         _add_nominal_inertia(ch, cfg, q, v, work, out)
     if cfg.observer:
-        _observe(ch, cfg, pi_model, q, qd, obs, work, out)
+        boosting = cfg.boost_samples > 0 and since_alarm < cfg.boost_samples + cfg.boost_ramp
+        _observe(ch, cfg, pi_model, q, qd, obs, boosting, work, out)
 
 
 @njit(cache=True)
