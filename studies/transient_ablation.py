@@ -16,9 +16,12 @@ default low-passes its output once more); ``kappa4``, ``kappa5``: the observer's
 5 times its learnt level (3 by default); ``bb100`` / ``bb150`` / ``bb200``: the boost's
 bandwidth [rad/s] (300 by default); ``notrip``: the observer does not start the boost
 (``observer_trip = false``), ``trip3`` ... ``trip10``: its trip at that many times a row's level
-(derived by default: 5.4 for three joints at 1 kHz); ``nogate``: the detector's level learns while
-its short average is raised (``learn_below = 0``), ``gate0.75``: up to 0.75 of the threshold;
-``notrip_nogate``: the law and detector of before issue 28's transient round (their code path).
+(derived by default: 5.4 for three joints at 1 kHz); ``trip_anyspeed``: a row may trip at any speed
+of its joint beyond the trip alone (by default a joint at most the detector's creeping speed,
+0.25 rad/s, needs twice its Coulomb friction more); ``nogate``: the
+detector's level learns while its short average is raised (``learn_below = 0``), ``gate0.75``: up
+to 0.75 of the threshold; ``notrip_nogate``: the law and detector of before issue 28's transient
+round (their code path).
 """
 
 from __future__ import annotations
@@ -54,6 +57,7 @@ VARIANTS = {
     "gate0.75": {"detector": {"learn_below": 0.75}},
     "notrip": {"observer_trip": False},
     "notrip_nogate": {"observer_trip": False, "detector": {"learn_below": 0.0}},
+    "trip_anyspeed": {"_trip_speed": 0.0},
     "trip3": {"_trip": 3.0},
     "trip4": {"_trip": 4.0},
     "trip5": {"_trip": 5.0},

@@ -154,7 +154,7 @@ class Law:
             payload_joint=int(self.arm.payload_joint), payload_map=np.ascontiguousarray(self.arm.payload_map),
             T=float(T), observer=False, obs_a=0.0, obs_stages=2, obs_kappa=OBSERVER_THRESHOLD,
             obs_alpha=1.0,
-            obs_warmup=0, obs_trip=0.0,
+            obs_warmup=0, obs_trip=0.0, obs_trip_speed=0.0,
         )  # fmt: skip
         base.update(kw)
         return LawConfig(**base)
@@ -465,6 +465,7 @@ class AdaptiveCT(Law):
             obs_a=float(np.exp(-beta * T)), obs_alpha=min(1.0, T / OBSERVER_LEVEL_WINDOW),
             obs_warmup=round(OBSERVER_WARMUP / T),
             obs_trip=observer_trip(self.arm.n_joints, T) if self.observer_trip else 0.0,
+            obs_trip_speed=(self.online.detector or self._est.Detector()).speed,
         )  # fmt: skip
 
     def compiled_form(self, n_trials, sample_period):

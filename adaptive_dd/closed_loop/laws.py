@@ -139,6 +139,11 @@ class LawConfig(NamedTuple):
     obs_trip : float
         A row's residual beyond this many times its learnt RMS level starts the boost as an
         alarm would (the estimator's detector reads slower filters); 0: never.
+    obs_trip_speed : float
+        [rad/s] A row whose joint's measured speed is at most this (the detector's creeping
+        speed) trips only beyond its threshold plus twice the model's Coulomb friction: near rest
+        the measured speed's sign, hence the model's Coulomb torque, flips with the noise, and
+        the residual with it by up to ``2 fc``.
     """
 
     kind: int
@@ -167,6 +172,7 @@ class LawConfig(NamedTuple):
     obs_alpha: float
     obs_warmup: int
     obs_trip: float
+    obs_trip_speed: float
 
 
 class LawState(NamedTuple):
@@ -350,7 +356,8 @@ def _observe(ch, cfg, pi, q, qd, obs, boosting, work, out):  # pragma: no cover 
         rms = np.sqrt(obs[O_LEVEL, j] / bias)
         thr = cfg.obs_kappa * rms
         r = obs[O_R, j]
-        if tripping and abs(r) > cfg.obs_trip * rms:
+        flip = 0.0 if abs(qd[j]) > cfg.obs_trip_speed else 2.0 * abs(pi[11 * n + j])
+        if tripping and abs(r) > cfg.obs_trip * rms + flip:
             obs[O_TRIP, 0] = 0.0
         if r > thr:
             out[j] += r - thr
