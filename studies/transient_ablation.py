@@ -14,8 +14,9 @@ the observer), ``on`` (the default), ``bw50`` / ``bw200`` / ``bw400`` / ``bw800`
 ``off_boost0.2``; ``order1``, ``order1_bw200``: De Luca's first-order observer (one stage; the
 default low-passes its output once more); ``kappa4``, ``kappa5``: the observer's threshold at 4 or
 5 times its learnt level (3 by default); ``bb100`` / ``bb150`` / ``bb200``: the boost's
-bandwidth [rad/s] (300 by default); ``notrip``: the observer does not start the boost
-(``observer_trip = false``), ``trip3`` ... ``trip10``: its trip at that many times a row's level
+bandwidth [rad/s] (300 by default); ``trip``: the observer's residual starts the boost
+(``observer_trip = true``; off by default since it tripped on friction the model lacks), ``notrip``:
+it does not (the default), ``trip3`` ... ``trip10``: its trip at that many times a row's level
 (derived by default: 5.4 for three joints at 1 kHz); ``trip_anyspeed``: a row may trip at any speed
 of its joint beyond the trip alone (by default a joint at most the detector's creeping speed,
 0.25 rad/s, needs twice its Coulomb friction more); ``nogate``: the
@@ -57,7 +58,8 @@ VARIANTS = {
     "gate0.75": {"detector": {"learn_below": 0.75}},
     "notrip": {"observer_trip": False},
     "notrip_nogate": {"observer_trip": False, "detector": {"learn_below": 0.0}},
-    "trip_anyspeed": {"_trip_speed": 0.0},
+    "trip": {"observer_trip": True},
+    "trip_anyspeed": {"observer_trip": True, "_trip_speed": 0.0},
     "trip3": {"_trip": 3.0},
     "trip4": {"_trip": 4.0},
     "trip5": {"_trip": 5.0},

@@ -97,9 +97,11 @@ def test_the_level_does_not_learn_a_change_as_it_rises(sice):
     """The paper's arm puts 1 kg down at 4 s of a 6 s prescribed record (three records). The
     change's error rises over the filters' time in samples each below the learning gate (8x);
     without ``learn_below`` the rows' levels learnt it as it rose: the alarm came 35 and 85 ms
-    after the swap on two records and never on the third. With it (the default) the alarm is
+    after the swap on two records and never on the third. With it at 0.5 the alarm is
     sooner on every record, within 75 ms, and one alarm each (the fault this test catches: a level
-    that keeps learning while the short average is raised)."""
+    that keeps learning while the short average is raised). The gate is not the default (its
+    false alarms: ``Detector.learn_below``)."""
+    assert Detector().learn_below == 0.0
     ks = 4_000
     one = payload_parameters(1.0, [0.0, 0.0, 0.0], radius=0.05)
     for seed in (0, 2, 7):

@@ -446,7 +446,7 @@ class AdaptiveCT(Law):
                 f"{self.boost_bandwidth!r}, {self.boost_duration!r}, {self.boost_ramp!r}"
             )
         self.observer, self.observer_bw = _observer_settings(self.name, self.settings)
-        self.observer_trip = self.settings.get("observer_trip", True)
+        self.observer_trip = self.settings.get("observer_trip", False)
         if not isinstance(self.observer_trip, bool | np.bool_):
             raise ParameterError(
                 f"controllers.{self.name}.observer_trip: true or false (the observer's residual may "
