@@ -429,3 +429,31 @@ def test_the_delayed_oracle_is_the_textbook_oracle_at_zero_delay_and_pays_for_a_
     assert e2["d10"][0] == pytest.approx(base[0], rel=1e-9)  # before the swap: the same
     assert e2["d10"][1] > 1.2 * base[1], (e2["d10"], base)
     assert base[1] < e2["d10b"][1] < e2["d10"][1], (e2["d10b"], e2["d10"])
+
+
+def test_in_threads_runs_the_two_link_prange_kernel_once_over_every_trial(monkeypatch):
+    """The two-link loop runs its trials in a ``prange`` (its body receives the arrays without
+    reference counts: 5 atomic updates per ``pd`` sample instead of 40), so :func:`in_threads`
+    calls such a kernel once for all S trials; a plain kernel (the N-joint loop) gets a range of
+    trials per thread."""
+    import numba
+
+    from adaptive_dd.closed_loop import glue
+
+    calls = []
+
+    class Kernel:
+        def __init__(self, parallel):
+            self.targetoptions = {"nogil": True, "parallel": parallel}
+
+        def __call__(self, i0, i1, *args):
+            calls.append((i0, i1, args))
+
+    monkeypatch.setattr(numba.config, "NUMBA_NUM_THREADS", 2)
+    glue.in_threads(Kernel(True), 5, ("a",))
+    assert calls == [(0, 5, ("a",))]
+    calls.clear()
+    glue.in_threads(Kernel(glue.COPY_PROPAGATE_ONLY), 5, ("a",))
+    assert sorted(calls) == [(0, 0, ("a",)), (0, 2, ("a",)), (2, 5, ("a",))]
+    assert glue.closed_loop_block.targetoptions["parallel"] is True
+    assert glue.chain_loop_block.targetoptions["parallel"] is not True

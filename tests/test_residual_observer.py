@@ -139,9 +139,11 @@ def test_observer_settings_reach_the_law_and_the_bandwidth_is_derived():
         assert not make_controller(name, arm=sc.arm).law_config(T).observer
 
 
-def test_the_observer_is_not_a_setting_of_the_two_link_arm():
-    with pytest.raises(ParameterError, match="observer"):
-        make_controller("adaptive_ct", options={"observer": False})
+def test_the_observer_is_a_setting_of_the_two_link_arm_too():
+    """One observer on every arm (the two-link form: tests/test_two_link_observer.py)."""
+    assert not make_controller("adaptive_ct", options={"observer": False}).observer
+    with pytest.raises(ParameterError, match=r"controllers\.adaptive_ct\.observer"):
+        make_controller("adaptive_ct", options={"observer": 1})
 
 
 def test_the_boost_ends_along_a_ramp_of_its_added_bandwidth():

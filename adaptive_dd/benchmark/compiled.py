@@ -40,7 +40,8 @@ from adaptive_dd.closed_loop.glue import (
     plant_joints,
     plant_work,
 )
-from adaptive_dd.controllers.compiled_form import LAW_SLOTINE, TwoLinkGains, command_trial
+from adaptive_dd.closed_loop.laws import observe_applied
+from adaptive_dd.controllers.compiled_form import LAW_ADAPTIVE, LAW_SLOTINE, TwoLinkGains, command_trial
 from adaptive_dd.identification.two_link_online import OnlineState
 from adaptive_dd.identification.two_link_online_kernel import C_SINCE_ALARM, online_step_trial
 from adaptive_dd.plant.two_link_integrator import step_one
@@ -131,17 +132,22 @@ def _plant_advance(pl, i, s, q, qd, stuck, tau, T, pw):
 @overload(law_work_of)
 def _law_work_of(law, n):
     if _is(law, TwoLinkGains):
-        return lambda law, n: np.empty(0)
+        from adaptive_dd.controllers.two_link_observer import observer_work  # here: import cycle
+
+        return lambda law, n: observer_work()
 
 
 @overload(law_command, inline="always")
 def _law_command(law, ls, pl, i, s, T, q, qd, q_d, qd_d, qdd_d, lw, out):
     if _is(law, TwoLinkGains) and _is(ls, OnlineState):
+        from adaptive_dd.controllers.two_link_observer import observe_trial  # here: import cycle
 
         def impl(law, ls, pl, i, s, T, q, qd, q_d, qd_d, qdd_d, lw, out):  # pragma: no cover - compiled
             model = ls.theta[i] if law.law == LAW_SLOTINE else ls.sigma_model[i]
             since_alarm = ls.cnt[i, C_SINCE_ALARM]
             command_trial(law, T, pl.sigma_seg[s], model, since_alarm, q, qd, q_d, qd_d, qdd_d, out)
+            if law.observer and law.law == LAW_ADAPTIVE:  # the residual observer (two_link_observer)
+                observe_trial(0, law, model, q, qd, ls.obs[i], lw, out)
 
         return impl
 
@@ -165,10 +171,12 @@ def _estimator_sample(ec, es, ls, i, q, qd, tau, ew):
         def impl(ec, es, ls, i, q, qd, tau, ew):  # pragma: no cover - compiled
             if not ec.active:
                 return 0
-            return online_step_trial(
+            alarm = online_step_trial(
                 i, es.xf, es.u_last, es.cnt, es.tau_prev, es.theta, es.P, es.lam, es.short, es.long,
                 es.sigma_model, q, qd, tau, ec.ci, ec.cf, ec.A, ec.B, ec.C, ec.D, ec.d, ec.group,
                 ec.split_rows, ew,
             )  # fmt: skip
+            observe_applied(es.obs[i], tau)  # the residual observer's applied torque
+            return alarm
 
         return impl

@@ -36,7 +36,7 @@ from types import FunctionType
 from typing import NamedTuple
 
 import numpy as np
-from numba import njit, types
+from numba import njit, prange, types
 from numba.core.errors import NumbaPerformanceWarning
 from numba.extending import overload
 from numpy.typing import NDArray
@@ -636,19 +636,28 @@ estimator's choice 4.8 with the estimator's step, the plant's 3.6, the law's 2.6
 friction family once more, the scratch allocations)."""
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, parallel=True)
 def closed_loop_block(
     i0, i1, k0, k1, noise, drop, rc, io, pl, ts, acc, rec, alarms, law, ls, ec, es, estimates
 ):  # pragma: no cover - compiled
     """Samples ``k0`` to ``k1 - 1`` of trials ``i0`` to ``i1 - 1`` (:func:`trial_samples`) of the
-    two-link arm.
+    two-link arm, a ``prange`` over the trials (:func:`in_threads` calls it once for all of them).
 
-    The GIL is released: :func:`in_threads` runs disjoint ranges of trials in threads (numba's
-    ``prange`` cannot take the N-joint estimator's configuration, a NamedTuple holding a
-    NamedTuple).
+    A ``prange`` for speed, not only for threads: numba hands the arrays to the parallel loop's
+    body without their reference counts (null meminfos), so that the count updates of every
+    array that the sample loop and its callees pass along (about 35 per sample: each call's
+    arguments, each view such as ``q[i]``) cost a null test, not an atomic update. Without it the
+    two-link loop ran 8-19 % slower per sample (benchmarks/two_link_speed_ab.py). The N-joint loop
+    cannot use it: its estimator's configuration, a NamedTuple holding a NamedTuple, does not
+    pass into a ``prange`` (:func:`chain_loop_block`).
     """
-    for i in range(i0, i1):
-        trial_samples(i, k0, k1, noise, drop, rc, io, pl, ts, acc, rec, alarms, law, ls, ec, es, estimates)
+    for t in prange(i1 - i0):
+        # np.int64: the parallel loop's index is uint64 once lowered and int64 when typed; the
+        # same type in both compiles trial_samples once, not twice
+        trial_samples(
+            np.int64(i0 + t), k0, k1, noise, drop, rc, io, pl, ts, acc, rec, alarms, law, ls, ec, es,
+            estimates,
+        )  # fmt: skip
 
 
 @njit(cache=True, nogil=True, parallel=COPY_PROPAGATE_ONLY)
@@ -664,10 +673,11 @@ def chain_loop_block(
 
 
 def in_threads(kernel, S: int, args: tuple) -> None:
-    """``kernel(i0, i1, *args)`` over disjoint ranges of the S trials, one per numba thread."""
+    """``kernel(i0, i1, *args)`` over disjoint ranges of the S trials, one per numba thread (a
+    kernel with a ``prange`` over them, :func:`closed_loop_block`, once for all)."""
     import numba
 
-    m = max(1, min(S, numba.config.NUMBA_NUM_THREADS))
+    m = 1 if kernel.targetoptions.get("parallel") is True else max(1, min(S, numba.config.NUMBA_NUM_THREADS))
     with warnings.catch_warnings():  # trial_samples asks for numba's parallel pipeline on purpose
         warnings.filterwarnings(  # (COPY_PROPAGATE_ONLY); its compilation warns that nothing ran parallel
             "ignore", message=r"\s*The keyword argument 'parallel=True' was specified",

@@ -11,7 +11,9 @@ detection, re-opening, projection) with :func:`~adaptive_dd.controllers.feedback
     detector, re-opening along the payload direction, the control model projected; and
     for ``boost_duration`` after an alarm the feedback gains are raised to
     ``boost_bandwidth`` through the nominal inertia, which holds the arm while the
-    estimate converges.
+    estimate converges; plus the residual observer's torque (``observer``, on by default): what
+    the current model leaves unexplained beyond three times its own noise, the N-joint
+    ``adaptive_ct``'s observer itself (:mod:`~adaptive_dd.controllers.two_link_observer`).
 ``adaptive_ct_paper``
     The paper's online M2 estimator as the paper has it (construction of eq. 19,
     split (15), RLS of eq. 14 with the variable forgetting factor), started from the
@@ -26,7 +28,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from adaptive_dd.controllers.base import DEFAULT_GAINS, Controller, Gains
-from adaptive_dd.controllers.compiled_form import LAW_ADAPTIVE, CompiledSpec, two_link_gains
+from adaptive_dd.controllers.compiled_form import LAW_ADAPTIVE, CompiledSpec, TwoLinkGains, two_link_gains
 from adaptive_dd.controllers.feedback import _sice_sigma, computed_torque_law
 from adaptive_dd.controllers.laws import boost_batch
 from adaptive_dd.errors import ParameterError
@@ -85,6 +87,10 @@ class AdaptiveCT(Controller):
     boost_duration : float
         [s]; default 0.2 s: the boost lasts while the estimator learns the payload it models
         (:data:`BOOST_RULE`), here the paper's sigma, whose payload is its mass at the tip.
+    observer : bool
+        Feed forward the residual observer's torque (default true; ``adaptive_ct_paper``: false).
+    observer_bandwidth : float or None
+        [rad/s] of each of the observer's two stages; None: ``0.4 / T`` (the N-joint rule).
     name : str
     """
 
@@ -96,6 +102,8 @@ class AdaptiveCT(Controller):
         boost_bandwidth: float | None = 300.0,
         boost_duration: float = 0.2,
         name: str = "adaptive_ct",
+        observer: bool = True,
+        observer_bandwidth: float | None = None,
     ) -> None:
         if not isinstance(online, TwoLinkOnlineConfig):
             raise ParameterError(f"online must be an TwoLinkOnlineConfig, got {type(online).__name__}")
@@ -110,6 +118,13 @@ class AdaptiveCT(Controller):
             _sice_sigma() if sigma_nominal is None else sigma_nominal, "sigma_nominal"
         )
         self.boost_bandwidth, self.boost_duration = boost_bandwidth, boost_duration
+        if not isinstance(observer, bool | np.bool_):
+            raise ParameterError(f"observer must be true or false, got {observer!r}")
+        bw = observer_bandwidth
+        if bw is not None and not (isinstance(bw, int | float) and np.isfinite(bw) and bw > 0):
+            raise ParameterError(f"observer_bandwidth must be > 0 rad/s or None, got {observer_bandwidth!r}")
+        self.observer = bool(observer)
+        self.observer_bandwidth = None if observer_bandwidth is None else float(observer_bandwidth)
         self.estimator: OnlineEstimator | None = None
 
     def reset(self, n_trials: int, sample_period: float) -> None:
@@ -127,7 +142,31 @@ class AdaptiveCT(Controller):
             if boosted.any():
                 dkp, dkd = self.boost_gains
                 tau = boost_batch(tau, q, qd, q_d, qd_d, self.sigma_nominal, dkp, dkd, boosted)
+        if self.observer:
+            from adaptive_dd.controllers.two_link_observer import observe_batch
+
+            st = self.estimator.state
+            tau = observe_batch(self.observer_settings(self.T), st.sigma_model, q, qd, st.obs, tau)
         return tau
+
+    def observer_settings(self, sample_period: float) -> TwoLinkGains:
+        """The observer's settings at ``sample_period`` (in a :class:`TwoLinkGains`, as the
+        compiled loop has them): the N-joint ``adaptive_ct``'s defaults
+        (:mod:`adaptive_dd.closed_loop.controllers`: ``0.4 / T``, 3x, 1 s, 0.5 s)."""
+        from adaptive_dd.closed_loop.controllers import (
+            OBSERVER_LEVEL_WINDOW,
+            OBSERVER_THRESHOLD,
+            OBSERVER_WARMUP,
+            observer_bandwidth,
+        )
+
+        T = float(sample_period)
+        beta = self.observer_bandwidth if self.observer_bandwidth is not None else observer_bandwidth(T)
+        return two_link_gains(
+            LAW_ADAPTIVE, observer=self.observer, T=T, obs_a=float(np.exp(-beta * T)), obs_stages=2,
+            obs_kappa=float(OBSERVER_THRESHOLD), obs_alpha=min(1.0, T / OBSERVER_LEVEL_WINDOW),
+            obs_warmup=round(OBSERVER_WARMUP / T),
+        )  # fmt: skip
 
     @property
     def boost_gains(self) -> tuple[float, float]:
@@ -137,6 +176,10 @@ class AdaptiveCT(Controller):
 
     def observe(self, q, qd, tau):
         self.estimator.update(q, qd, tau)
+        if self.observer:
+            from adaptive_dd.controllers.two_link_observer import observe_applied_batch
+
+            observe_applied_batch(self.estimator.state.obs, tau)
 
     @property
     def sigma_hat(self) -> Array:
@@ -159,8 +202,10 @@ class AdaptiveCT(Controller):
             dkp, dkd = self.boost_gains
             boost = dict(boost_kp=float(dkp), boost_kd=float(dkd))
             boost["boost_samples"] = float(self.boost_duration / sample_period)
+        obs = self.observer_settings(sample_period)._asdict()
+        obs = {k: v for k, v in obs.items() if k == "observer" or k == "T" or k.startswith("obs_")}
         gains = two_link_gains(
-            LAW_ADAPTIVE, self.sigma_nominal, kp=float(g.kp), kd=float(g.kd), lam=float(g.lam), **boost
+            LAW_ADAPTIVE, self.sigma_nominal, kp=float(g.kp), kd=float(g.kd), lam=float(g.lam), **boost, **obs
         )
         online = self.online
         if online.sample_period != sample_period:
@@ -180,4 +225,6 @@ def adaptive_ct(
 
 def adaptive_ct_paper(gains: Gains = DEFAULT_GAINS, sigma_nominal: ArrayLike | None = None) -> AdaptiveCT:
     """Computed torque on the paper's online M2 estimator, as the paper has it."""
-    return AdaptiveCT(PAPER_ONLINE, gains, sigma_nominal, boost_bandwidth=None, name="adaptive_ct_paper")
+    return AdaptiveCT(
+        PAPER_ONLINE, gains, sigma_nominal, boost_bandwidth=None, name="adaptive_ct_paper", observer=False
+    )

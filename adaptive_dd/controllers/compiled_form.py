@@ -70,6 +70,15 @@ class TwoLinkGains(NamedTuple):
         Slotine-Li's adaptation gains and box.
     projection : ndarray (3,)
         Slotine-Li's projection constants (:data:`~adaptive_dd.controllers.slotine_li.PROJECTION`).
+    observer : bool
+        ``adaptive_ct`` adds its residual observer's torque
+        (:mod:`~adaptive_dd.controllers.two_link_observer`); the fields below are its settings,
+        named as :class:`~adaptive_dd.closed_loop.laws.LawConfig`'s (the observer reads them there).
+    T : float
+        Sample period [s].
+    obs_a, obs_stages, obs_kappa, obs_alpha, obs_warmup : float, int, float, float, int
+        ``exp(-beta T)``; stages; soft threshold in RMS levels; a sample's weight in the level;
+        updates before the observer feeds the command.
     """
 
     law: int
@@ -86,6 +95,13 @@ class TwoLinkGains(NamedTuple):
     lo: Array
     hi: Array
     projection: Array
+    observer: bool
+    T: float
+    obs_a: float
+    obs_stages: int
+    obs_kappa: float
+    obs_alpha: float
+    obs_warmup: int
 
 
 class CompiledSpec(NamedTuple):
@@ -111,7 +127,8 @@ def two_link_gains(law: int, sigma=None, **gains) -> TwoLinkGains:
     fields = dict(
         law=law, kp=0.0, kd=0.0, lam=0.0, pd_kp=z2, pd_kd=z2, boost_kp=0.0, boost_kd=0.0,
         boost_samples=0.0, sigma=z7 if sigma is None else np.array(sigma, dtype=float),
-        gamma=z7, lo=z7, hi=z7, projection=np.zeros(3),
+        gamma=z7, lo=z7, hi=z7, projection=np.zeros(3), observer=False, T=0.0, obs_a=0.0, obs_stages=2,
+        obs_kappa=0.0, obs_alpha=0.0, obs_warmup=0,
     )  # fmt: skip
     fields.update(gains)
     return TwoLinkGains(**fields)

@@ -11,8 +11,7 @@ of your own classes (the protocol: ``docs/controllers.md``). Settings every cont
 Built-in settings:
 
 ``adaptive_ct``
-    ``boost_bandwidth``, ``boost_duration``, ``observer``, ``observer_bandwidth``, ``observer_trip``
-    (N-joint arms),
+    ``boost_bandwidth``, ``boost_duration``, ``observer``, ``observer_bandwidth``, ``observer_trip``,
     ``estimator = {...}`` (fields of
     :class:`~adaptive_dd.identification.two_link_online.TwoLinkOnlineConfig`: ``tau_f``, ``split``,
     ``construction``, ``p0_payload``, ``p0_j2``, ``project``, ``align``), ``detector = {...}``
@@ -165,11 +164,14 @@ def _adaptive_ct_paper(g: Gains, o: dict, arm) -> Controller:
 
 
 def _adaptive_ct(g: Gains, o: dict, arm) -> Controller:
+    from adaptive_dd.closed_loop.controllers import _observer_settings  # the N-joint's checks and messages
+
     boost = {k: o[k] for k in ("boost_bandwidth", "boost_duration") if k in o}
+    observer, bw = _observer_settings("adaptive_ct", o)
     online = dataclasses.replace(
         _online("adaptive_ct", o), payload_direction=tuple(float(x) for x in arm.payload_direction(0.0))
     )
-    return AdaptiveCT(online, g, arm.sigma, **boost)
+    return AdaptiveCT(online, g, arm.sigma, **boost, observer=observer, observer_bandwidth=bw)
 
 
 def _slotine_li(g: Gains, o: dict, arm) -> Controller:
@@ -189,8 +191,8 @@ _SIGMA = Setting(
     rule="on an N-joint arm the controllers' model is the scenario's [model] table (docs/plant_and_model.md)",
 )
 _OBSERVER_RULE = (
-    "the residual observer runs on an N-joint arm (the two-link adaptive_ct, on the paper's "
-    "estimator, has none yet)"
+    "one observer on every arm (the N-joint code, on the two-link arm with the paper's closed-form "
+    "momentum: adaptive_dd.controllers.two_link_observer)"
 )
 _BOOST = {
     "boost_bandwidth": Setting(
@@ -217,13 +219,13 @@ _BOOST = {
     "observer": Setting(
         "feed forward the residual observer's torque (what the current model leaves unexplained, "
         "beyond 3 times its own noise level; docs/change_detection.md)",
-        ABSENT,
+        True,
         True,
         rule=_OBSERVER_RULE,
     ),
     "observer_bandwidth": Setting(
         "bandwidth of the residual observer's two stages [rad/s]; default 0.4 / T, T the sample period",
-        ABSENT,
+        None,
         None,
         rule=_OBSERVER_RULE,
         unit="rad/s",

@@ -464,7 +464,10 @@ class OnlineState(NamedTuple):
     tau_prev : (n, 2); theta : (n, 7) RLS estimate; P : (n, 7, 7); lam : (n, 2) forgetting
     factor per stage; short : (n, N_SHORT) detector statistics (``online_kernel.S_*``: short
     averages, payload-direction sums, persistence window, weights); long : (n, 2) long-run
-    levels; sigma_model : (n, 7) the model for control (projected).
+    levels; sigma_model : (n, 7) the model for control (projected); obs : (n, OBS_ROWS, 2) the
+    residual observer's state of the law that controls with ``sigma_model`` (``adaptive_ct``:
+    :mod:`adaptive_dd.controllers.two_link_observer`; rows ``O_*`` of
+    :mod:`adaptive_dd.closed_loop.laws`), not read by the estimator.
     """
 
     xf: Array
@@ -477,6 +480,7 @@ class OnlineState(NamedTuple):
     short: Array
     long: Array
     sigma_model: Array
+    obs: Array
 
     def copy(self) -> OnlineState:
         return OnlineState(*(a.copy() for a in self))
@@ -496,6 +500,11 @@ class OnlineState(NamedTuple):
         """Samples since the last alarm (large if none)."""
         return self.cnt[:, K.C_SINCE_ALARM]
 
+    @property
+    def estimator(self) -> tuple:
+        """The fields the estimator's kernel reads and writes (all but ``obs``), in order."""
+        return tuple(self)[:-1]
+
 
 class OnlineInfo(NamedTuple):
     """What one step did, per trial: ``alarm (n,)`` bool, prior errors ``eps (n, 2)``, ``lam (n,)``."""
@@ -507,6 +516,8 @@ class OnlineInfo(NamedTuple):
 
 def online_init(cfg: TwoLinkOnlineConfig, n_trials: int, theta0: ArrayLike) -> OnlineState:
     """Initial state: the estimate ``theta0 (7,) or (n, 7)``, the shaped start-up covariance."""
+    from adaptive_dd.closed_loop.laws import OBS_ROWS  # here: the closed-loop package imports this one
+
     if not isinstance(n_trials, int | np.integer) or n_trials < 1:
         raise ParameterError(f"n_trials must be an integer >= 1, got {n_trials!r}")
     th = np.broadcast_to(np.asarray(theta0, dtype=float), (n_trials, 7)).copy()
@@ -533,6 +544,7 @@ def online_init(cfg: TwoLinkOnlineConfig, n_trials: int, theta0: ArrayLike) -> O
         short=short,
         long=np.zeros((n_trials, 2)),
         sigma_model=model,
+        obs=np.zeros((n_trials, OBS_ROWS, 2)),
     )
 
 
@@ -548,7 +560,7 @@ def _step_in_place(state: OnlineState, q, qd, tau, cfg: TwoLinkOnlineConfig) -> 
     q, qd, tau = (_as_sample(x, n, name) for x, name in ((q, "q"), (qd, "qd"), (tau, "tau")))
     eps = np.empty((n, 2))
     alarm = np.zeros(n, dtype=np.int64)
-    K.online_step_batch(*state, q, qd, tau, *cfg.packed, eps, alarm)
+    K.online_step_batch(*state.estimator, q, qd, tau, *cfg.packed, eps, alarm)
     return OnlineInfo(alarm.astype(bool), eps, state.lam[:, 0].copy())
 
 
@@ -666,7 +678,8 @@ def run_two_link_online(
     lam = np.empty((n, N))
     for i in range(n):
         K.online_run_trial(
-            i, *state, q[i], qd[i], tau[i], *cfg.packed, theta[i], model[i], eps[i], alarm[i], lam[i]
-        )
+            i, *state.estimator, q[i], qd[i], tau[i], *cfg.packed, theta[i], model[i], eps[i], alarm[i],
+            lam[i],
+        )  # fmt: skip
     t = np.arange(N) * cfg.sample_period
     return TwoLinkOnlineRecord(t, theta, model, alarm.astype(bool), eps, lam, state.n_skipped.copy())
