@@ -304,10 +304,9 @@ def observe_applied(obs, tau):  # pragma: no cover - compiled
 
 
 @njit(cache=True)
-def _observe(ch, cfg, pi, q, qd, obs, boosting, work, out):  # pragma: no cover - compiled
+def _observe(ch, cfg, pi, q, qd, obs, work, out):  # pragma: no cover - compiled
     """One sample of the residual observer (module docstring) at a fresh measurement ``q, qd``;
-    its soft-thresholded output added to ``out``; a residual beyond ``obs_trip`` times its level
-    trips the boost (``O_TRIP``) unless ``boosting``.
+    its soft-thresholded output added to ``out``.
 
     ``obs`` holds the last fresh measurement and the applied torques summed since (``O_TAU``,
     ``O_COUNT[1]`` samples: the closed loop adds each sample's). Over those ``m`` samples the
@@ -350,19 +349,29 @@ def _observe(ch, cfg, pi, q, qd, obs, boosting, work, out):  # pragma: no cover 
     if c <= cfg.obs_warmup:
         return
     bias = 1.0 - (1.0 - cfg.obs_alpha) ** c
-    # a trip starts a boost; it does not prolong one (nor restart it while it ramps down)
-    tripping = cfg.obs_trip > 0.0 and not boosting
     for j in range(n):
-        rms = np.sqrt(obs[O_LEVEL, j] / bias)
-        thr = cfg.obs_kappa * rms
+        thr = cfg.obs_kappa * np.sqrt(obs[O_LEVEL, j] / bias)
         r = obs[O_R, j]
-        flip = 0.0 if abs(qd[j]) > cfg.obs_trip_speed else 2.0 * abs(pi[11 * n + j])
-        if tripping and abs(r) > cfg.obs_trip * rms + flip:
-            obs[O_TRIP, 0] = 0.0
         if r > thr:
             out[j] += r - thr
         elif r < -thr:
             out[j] += r + thr
+
+
+@njit(cache=True)
+def _trip(cfg, pi, qd, obs):  # pragma: no cover - compiled
+    """A row of the observer's output beyond ``obs_trip`` times its learnt level (plus twice its
+    Coulomb friction when its joint is at most ``obs_trip_speed``) sets ``O_TRIP`` to 0."""
+    n = qd.shape[0]
+    c = obs[O_COUNT, 0]
+    if c <= cfg.obs_warmup:
+        return
+    bias = 1.0 - (1.0 - cfg.obs_alpha) ** c
+    for j in range(n):
+        rms = np.sqrt(obs[O_LEVEL, j] / bias)
+        flip = 0.0 if abs(qd[j]) > cfg.obs_trip_speed else 2.0 * abs(pi[11 * n + j])
+        if abs(obs[O_R, j]) > cfg.obs_trip * rms + flip:
+            obs[O_TRIP, 0] = 0.0
 
 
 @njit(cache=True)
@@ -449,8 +458,11 @@ def law_trial_in(
             v[j] = dkp * e[j] + dkd * ed[j]
         _add_nominal_inertia(ch, cfg, q, v, work, out)
     if cfg.observer:
+        _observe(ch, cfg, pi_model, q, qd, obs, work, out)
+        # a trip starts a boost; it does not prolong one (nor restart it while it ramps down)
         boosting = cfg.boost_samples > 0 and since_alarm < cfg.boost_samples + cfg.boost_ramp
-        _observe(ch, cfg, pi_model, q, qd, obs, boosting, work, out)
+        if cfg.obs_trip > 0.0 and not boosting:
+            _trip(cfg, pi_model, qd, obs)
 
 
 @njit(cache=True)
