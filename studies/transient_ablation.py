@@ -13,7 +13,16 @@ the observer), ``on`` (the default), ``bw50`` / ``bw200`` / ``bw400`` / ``bw800`
 ``boost0.2`` (the observer with ``boost_duration = 0.2``), ``noboost`` (the observer, boost 0 s),
 ``off_boost0.2``; ``order1``, ``order1_bw200``: De Luca's first-order observer (one stage; the
 default low-passes its output once more); ``kappa4``, ``kappa5``: the observer's threshold at 4 or
-5 times its learnt level (3 by default).
+5 times its learnt level (3 by default); ``bb100`` / ``bb150`` / ``bb200``: the boost's
+bandwidth [rad/s] (300 by default); ``trip``: the observer's residual starts the boost
+(``observer_trip = true``; off by default since it tripped on friction the model lacks), ``notrip``:
+it does not (the default), ``trip3`` ... ``trip10``: its trip at that many times a row's level
+(derived by default: 5.4 for three joints at 1 kHz); ``trip_anyspeed``: a row may trip at any speed
+of its joint beyond the trip alone (by default a joint at most the detector's creeping speed,
+0.25 rad/s, needs twice its Coulomb friction more); ``nogate``: the
+detector's level learns while its short average is raised (``learn_below = 0``), ``gate0.75``: up
+to 0.75 of the threshold; ``notrip_nogate``: the law and detector of before issue 28's transient
+round (their code path).
 """
 
 from __future__ import annotations
@@ -44,6 +53,22 @@ VARIANTS = {
     "bw800": {"observer_bandwidth": 800.0},
     "kappa4": {"_kappa": 4.0},
     "kappa5": {"_kappa": 5.0},
+    "bb100": {"boost_bandwidth": 100.0},
+    "nogate": {"detector": {"learn_below": 0.0}},
+    "gate0.75": {"detector": {"learn_below": 0.75}},
+    "notrip": {"observer_trip": False},
+    "notrip_nogate": {"observer_trip": False, "detector": {"learn_below": 0.0}},
+    "trip": {"observer_trip": True},
+    "trip_anyspeed": {"observer_trip": True, "_trip_speed": 0.0},
+    "trip3": {"_trip": 3.0},
+    "trip4": {"_trip": 4.0},
+    "trip5": {"_trip": 5.0},
+    "trip6": {"_trip": 6.0},
+    "trip6_nogate": {"_trip": 6.0, "detector": {"learn_below": 0.0}},
+    "trip8": {"_trip": 8.0},
+    "trip10": {"_trip": 10.0},
+    "bb150": {"boost_bandwidth": 150.0},
+    "bb200": {"boost_bandwidth": 200.0},
 }
 TRANSIENT = 0.05
 """[s] after each swap: the window of the transient's own RMS ratio."""
@@ -53,7 +78,7 @@ def variant_controller(base: dict, path: str, settings: dict):
     """adaptive_ct of the scenario ``base`` with ``settings`` added to its table."""
     d = copy.deepcopy(base)
     settings = dict(settings)
-    law = {k[1:]: settings.pop(k) for k in ("_stages", "_kappa") if k in settings}
+    law = {k[1:]: settings.pop(k) for k in list(settings) if k.startswith("_")}
     d.setdefault("controllers", {}).setdefault("adaptive_ct", {}).update(settings)
     d["run"]["controllers"] = ["adaptive_ct"]
     ctrl = make_controllers(parse_scenario(d, path, Path(path).stem))["adaptive_ct"]

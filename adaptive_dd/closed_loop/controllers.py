@@ -154,7 +154,7 @@ class Law:
             payload_joint=int(self.arm.payload_joint), payload_map=np.ascontiguousarray(self.arm.payload_map),
             T=float(T), observer=False, obs_a=0.0, obs_stages=2, obs_kappa=OBSERVER_THRESHOLD,
             obs_alpha=1.0,
-            obs_warmup=0,
+            obs_warmup=0, obs_trip=0.0, obs_trip_speed=0.0,
         )  # fmt: skip
         base.update(kw)
         return LawConfig(**base)
@@ -359,6 +359,21 @@ OBSERVER_WARMUP = 0.5
 """[s] the observer learns its level this long before it feeds the command (the detector's warm-up)."""
 
 
+OBSERVER_TRIP_ALPHA = 0.01
+"""The observer's trip (``LawConfig.obs_trip``) is the two-sided Gaussian quantile at which a white
+residual at its learnt level would trip the boost with this probability per minute of motion,
+over the arm's rows and samples: ``z_(1 - alpha / (2 n 60 / T))`` (5.4 for 3 joints at 1 kHz, 5.6
+for 7). The residual is filtered (its samples correlated), so the bound is conservative for
+Gaussian noise; measured against 4, 5 and 6 (docs/change_detection.md, "The observer's trip")."""
+
+
+def observer_trip(n_joints: int, sample_period: float) -> float:
+    """The observer's trip threshold, in units of a row's learnt RMS level (:data:`OBSERVER_TRIP_ALPHA`)."""
+    from scipy.stats import norm
+
+    return float(norm.isf(OBSERVER_TRIP_ALPHA / (2.0 * n_joints * 60.0 / sample_period)))
+
+
 def observer_bandwidth(sample_period: float) -> float:
     """The residual observer's bandwidth [rad/s] for a sample period [s]: ``0.4 / T``."""
     return OBSERVER_POLE / sample_period
@@ -391,6 +406,7 @@ class AdaptiveCT(Law):
             "detector",
             "observer",
             "observer_bandwidth",
+            "observer_trip",
         }
     )
     BOOST_RAMP = 0.25
@@ -430,6 +446,12 @@ class AdaptiveCT(Law):
                 f"{self.boost_bandwidth!r}, {self.boost_duration!r}, {self.boost_ramp!r}"
             )
         self.observer, self.observer_bw = _observer_settings(self.name, self.settings)
+        self.observer_trip = self.settings.get("observer_trip", False)
+        if not isinstance(self.observer_trip, bool | np.bool_):
+            raise ParameterError(
+                f"controllers.{self.name}.observer_trip: true or false (the observer's residual may "
+                f"start the boost), got {self.observer_trip!r}"
+            )
 
     def law_config(self, sample_period):
         w, wb, z = self.gains.bandwidth, self.boost_bandwidth, self.gains.damping
@@ -442,6 +464,8 @@ class AdaptiveCT(Law):
             boost_ramp=round(self.boost_ramp / sample_period), observer=self.observer,
             obs_a=float(np.exp(-beta * T)), obs_alpha=min(1.0, T / OBSERVER_LEVEL_WINDOW),
             obs_warmup=round(OBSERVER_WARMUP / T),
+            obs_trip=observer_trip(self.arm.n_joints, T) if self.observer_trip else 0.0,
+            obs_trip_speed=(self.online.detector or self._est.Detector()).speed,
         )  # fmt: skip
 
     def compiled_form(self, n_trials, sample_period):

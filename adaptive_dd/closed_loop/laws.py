@@ -86,7 +86,8 @@ O_Q, O_QD = 2, 3  # the last fresh measurement
 O_TAU = 4  # the applied torques summed since that measurement [N m] (written by the closed loop)
 O_COUNT = 5  # [0]: observer updates so far, [1]: samples summed in O_TAU
 O_R1 = 6  # the first stage's output (two stages)
-OBS_ROWS = 7
+O_TRIP = 7  # [0]: samples since the observer's residual last tripped the boost (obs_trip)
+OBS_ROWS = 8
 
 
 class LawConfig(NamedTuple):
@@ -135,6 +136,14 @@ class LawConfig(NamedTuple):
         Weight of a sample in the level (``T`` over its 1 s window).
     obs_warmup : int
         Updates before ``r`` feeds the command (the level learnt meanwhile, not winsorised).
+    obs_trip : float
+        A row's residual beyond this many times its learnt RMS level starts the boost as an
+        alarm would (the estimator's detector reads slower filters); 0: never.
+    obs_trip_speed : float
+        [rad/s] A row whose joint's measured speed is at most this (the detector's creeping
+        speed) trips only beyond its threshold plus twice the model's Coulomb friction: near rest
+        the measured speed's sign, hence the model's Coulomb torque, flips with the noise, and
+        the residual with it by up to ``2 fc``.
     """
 
     kind: int
@@ -162,6 +171,8 @@ class LawConfig(NamedTuple):
     obs_kappa: float
     obs_alpha: float
     obs_warmup: int
+    obs_trip: float
+    obs_trip_speed: float
 
 
 class LawState(NamedTuple):
@@ -180,7 +191,9 @@ class LawState(NamedTuple):
         pi = np.broadcast_to(cfg.pi_fixed, (n_trials, cfg.pi_fixed.shape[0])).copy()
         big = np.full(n_trials, np.iinfo(np.int64).max // 2, dtype=np.int64)
         n = cfg.kp.shape[0]
-        return cls(pi, np.zeros((n_trials, 10)), big, np.zeros((n_trials, OBS_ROWS, n)))
+        obs = np.zeros((n_trials, OBS_ROWS, n))
+        obs[:, O_TRIP, 0] = np.iinfo(np.int64).max // 2  # no trip yet
+        return cls(pi, np.zeros((n_trials, 10)), big, obs)
 
 
 @njit(cache=True)
@@ -346,6 +359,22 @@ def _observe(ch, cfg, pi, q, qd, obs, work, out):  # pragma: no cover - compiled
 
 
 @njit(cache=True)
+def _trip(cfg, pi, qd, obs):  # pragma: no cover - compiled
+    """A row of the observer's output beyond ``obs_trip`` times its learnt level (plus twice its
+    Coulomb friction when its joint is at most ``obs_trip_speed``) sets ``O_TRIP`` to 0."""
+    n = qd.shape[0]
+    c = obs[O_COUNT, 0]
+    if c <= cfg.obs_warmup:
+        return
+    bias = 1.0 - (1.0 - cfg.obs_alpha) ** c
+    for j in range(n):
+        rms = np.sqrt(obs[O_LEVEL, j] / bias)
+        flip = 0.0 if abs(qd[j]) > cfg.obs_trip_speed else 2.0 * abs(pi[11 * n + j])
+        if abs(obs[O_R, j]) > cfg.obs_trip * rms + flip:
+            obs[O_TRIP, 0] = 0.0
+
+
+@njit(cache=True)
 def law_trial(
     ch, cfg, pi_true, pi_model, theta, since_alarm, obs, q, qd, q_d, qd_d, qdd_d, out
 ):  # pragma: no cover
@@ -412,6 +441,10 @@ def law_trial_in(
             for j in range(n):
                 s[j] = ed[j] + cfg.lam[j] * e[j]
             _adapt_payload(ch, cfg, q, qd, qdr, a, s, theta, pi_model, work)
+    if cfg.observer and cfg.obs_trip > 0.0:  # samples since the observer last tripped the boost
+        obs[O_TRIP, 0] += 1.0
+        if obs[O_TRIP, 0] < since_alarm:
+            since_alarm = int(obs[O_TRIP, 0])
     if cfg.boost_samples > 0 and since_alarm < cfg.boost_samples + cfg.boost_ramp:
         f = 1.0
         if since_alarm >= cfg.boost_samples:  # the ramped end: f from 1 to 0
@@ -426,6 +459,10 @@ def law_trial_in(
         _add_nominal_inertia(ch, cfg, q, v, work, out)
     if cfg.observer:
         _observe(ch, cfg, pi_model, q, qd, obs, work, out)
+        # a trip starts a boost; it does not prolong one (nor restart it while it ramps down)
+        boosting = cfg.boost_samples > 0 and since_alarm < cfg.boost_samples + cfg.boost_ramp
+        if cfg.obs_trip > 0.0 and not boosting:
+            _trip(cfg, pi_model, qd, obs)
 
 
 @njit(cache=True)

@@ -11,7 +11,7 @@ of your own classes (the protocol: ``docs/controllers.md``). Settings every cont
 Built-in settings:
 
 ``adaptive_ct``
-    ``boost_bandwidth``, ``boost_duration``, ``observer``, ``observer_bandwidth``,
+    ``boost_bandwidth``, ``boost_duration``, ``observer``, ``observer_bandwidth``, ``observer_trip``,
     ``estimator = {...}`` (fields of
     :class:`~adaptive_dd.identification.two_link_online.TwoLinkOnlineConfig`: ``tau_f``, ``split``,
     ``construction``, ``p0_payload``, ``p0_j2``, ``project``, ``align``), ``detector = {...}``
@@ -229,6 +229,14 @@ _BOOST = {
         None,
         rule=_OBSERVER_RULE,
         unit="rad/s",
+    ),
+    "observer_trip": Setting(
+        "a residual beyond the trip (the Gaussian bound of 1 % per minute over the rows' samples, "
+        "about 5.4 times its noise) starts the boost before the detector alarms "
+        "(docs/change_detection.md; off by default: it tripped on friction the model lacks)",
+        ABSENT,
+        False,
+        rule=_OBSERVER_RULE,
     ),
     "estimator": Setting(
         "the estimator's settings: TwoLinkOnlineConfig's fields on the two-link arm (tau_f, split, "

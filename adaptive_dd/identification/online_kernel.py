@@ -170,7 +170,8 @@ F_ALPHA_FAST = 13  # the fast average's weight of a sample
 F_FAST2 = 14  # the fast average's threshold (squared RMS ratio)
 F_DET_SPEED = 15  # [rad/s] a joint no faster within the selection memory creeps
 F_CREEP_MARGIN = 16  # a creeping joint's row alarms only beyond this times its Coulomb friction
-N_F = 17
+F_LEARN_BELOW2 = 17  # the level learns only while the short average is below this x the threshold (0: always)
+N_F = 18
 
 
 class EstState(NamedTuple):
@@ -731,6 +732,10 @@ def _detect(c, s, i, eps, act):  # pragma: no cover - compiled
             if nl >= ints[I_GATE_AFTER]:
                 level = max(s.long[i, j] / (1.0 - (1.0 - a_l) ** nl), fl[F_FLOOR2])
                 ok = e2 <= fl[F_GATE2] * level
+                # nor while the short average is raised: a change's error rises over the filters'
+                # time, each sample below the gate, and was learnt as it rose (issue 28, sice_drawn)
+                if fl[F_LEARN_BELOW2] > 0.0:
+                    ok = ok and s.short[i, j] <= fl[F_LEARN_BELOW2] * fl[F_THRESHOLD2] * level
             if ok:
                 s.long[i, j] += a_l * (e2 - s.long[i, j])
                 s.learned[i, j] = nl + 1
