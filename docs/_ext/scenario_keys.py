@@ -86,11 +86,13 @@ MEANING = {
     "setting.boost_bandwidth": "Bandwidth of the feedback boost after a change alarm [rad/s].",
     "setting.boost_duration": "How long the boost lasts after an alarm [s].",
     "setting.boost_ramp": "`adaptive_ct` (N-joint arms): after `boost_duration`, the boost's added "
-    "bandwidth falls linearly to none over this long [s] (default 1; 0: it ends at once).",
-    "setting.observer": "`adaptive_ct` (N-joint arms): feed forward the residual observer's torque "
+    "bandwidth falls linearly to none over this long [s] (default 0.25; 0: it ends at once).",
+    "setting.observer": "`adaptive_ct` (every arm): feed forward the residual observer's torque "
     "(true by default; false is the law without it).",
-    "setting.observer_bandwidth": "`adaptive_ct` (N-joint arms): the residual observer's bandwidth "
+    "setting.observer_bandwidth": "`adaptive_ct` (every arm): the residual observer's bandwidth "
     "[rad/s]; default 0.4 / T.",
+    "setting.observer_trip": "`adaptive_ct` (N-joint arms): a residual beyond the trip level starts "
+    "the boost before the detector alarms (default false: it tripped on friction the model lacks).",
     "setting.estimator": "The online estimator's settings (a table; fields below).",
     "setting.detector": "`adaptive_ct`: the change detector's settings (a table at the top of"
     " `[controllers.adaptive_ct]`; fields below), or `false`.",
