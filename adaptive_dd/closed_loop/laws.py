@@ -445,7 +445,8 @@ def law_trial_in(
         obs[O_TRIP, 0] += 1.0
         if obs[O_TRIP, 0] < since_alarm:
             since_alarm = int(obs[O_TRIP, 0])
-    if cfg.boost_samples > 0 and since_alarm < cfg.boost_samples + cfg.boost_ramp:
+    boosting = cfg.boost_samples > 0 and since_alarm < cfg.boost_samples + cfg.boost_ramp
+    if boosting:
         f = 1.0
         if since_alarm >= cfg.boost_samples:  # the ramped end: f from 1 to 0
             f = 1.0 - (since_alarm - cfg.boost_samples + 1) / (cfg.boost_ramp + 1)
@@ -460,7 +461,6 @@ def law_trial_in(
     if cfg.observer:
         _observe(ch, cfg, pi_model, q, qd, obs, work, out)
         # a trip starts a boost; it does not prolong one (nor restart it while it ramps down)
-        boosting = cfg.boost_samples > 0 and since_alarm < cfg.boost_samples + cfg.boost_ramp
         if cfg.obs_trip > 0.0 and not boosting:
             _trip(cfg, pi_model, qd, obs)
 
