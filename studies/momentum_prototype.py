@@ -29,7 +29,7 @@ from adaptive_dd.benchmark.metrics import FALSE_ALARM_WINDOW
 from adaptive_dd.benchmark.runner import run_benchmark
 from adaptive_dd.benchmark.scenario import parse_scenario, read_toml
 from adaptive_dd.closed_loop.runner import make_controllers
-from adaptive_dd.plant.chain import mass_matrix_in, momentum_form_in, workspace
+from adaptive_dd.plant.chain import body_slotine_li_regressor_in, mass_matrix_in, momentum_form_in, workspace
 
 
 @njit(cache=True)
@@ -49,6 +49,20 @@ def _mass(ch, pi, q, out):
         mass_matrix_in(ch, pi[i, : 10 * n], q[i], w, out[i])
         for j in range(n):
             out[i, j, j] += pi[i, 12 * n + j]
+
+
+@njit(cache=True)
+def _direction(ch, j, pmap, q, qd, qdd, out):
+    """Torque per kg of a point mass at the payload frame's origin: ``Y_j(q, qd, qd, qdd) P[:, 0]``."""
+    S, n = q.shape
+    w, a, yb = workspace(n), np.empty((6, 10)), np.empty((n, 10))
+    for i in range(S):
+        body_slotine_li_regressor_in(ch, j, q[i], qd[i], qd[i], qdd, w, a, yb)
+        for r in range(n):
+            acc = 0.0
+            for c in range(10):
+                acc += yb[r, c] * pmap[c, 0]
+            out[i, r] = acc
 
 
 @njit(cache=True)
@@ -86,6 +100,7 @@ class Recorded:
             self.speed = np.zeros((S, self.K, n))
             self.mass = np.zeros((S, self.K, n, n))
             self.fc = np.zeros((S, self.K, n))
+            self.dirs = np.zeros((S, self.K, n))
         pi = self.inner._form.state.pi_model
         if self.qp is not None and self.k < self.K:
             r = np.empty_like(q)
@@ -96,6 +111,10 @@ class Recorded:
             _mass(self.inner.ch, pi, q, mm)
             self.mass[:, self.k] = mm
             self.fc[:, self.k] = pi[:, 11 * q.shape[1] : 12 * q.shape[1]]
+            dr = np.empty_like(q)
+            arm = self.inner.arm
+            _direction(self.inner.ch, int(arm.payload_joint), np.ascontiguousarray(arm.payload_map), q, qd, np.asarray(qdd_d, float), dr)
+            self.dirs[:, self.k] = dr
         self.qp, self.qdp = q.copy(), qd.copy()
         self.k += 1
         return out
@@ -134,7 +153,7 @@ WARMUP_S = 1.0
 
 
 @njit(cache=True)
-def momentum_test(rho, mass, fc, speed, T, windows, zcap, alpha, warmup, whiten, combine, v_slow):
+def momentum_test(rho, mass, fc, speed, dirs, T, windows, zcap, alpha, warmup, whiten, combine, v_slow):
     """Per sample the test statistic (S, K): the largest over windows of ``|u_j| / rms_j`` (the
     largest row) or ``sqrt(sum_j u_j^2 / V_j)`` (``combine``), ``u = M^-1 S_m`` (``whiten``; else
     ``S_m``), ``S_m`` the window sum of rho less the learnt drift; a sample whose joint is at most
@@ -147,11 +166,13 @@ def momentum_test(rho, mass, fc, speed, T, windows, zcap, alpha, warmup, whiten,
     for s in range(S):
         E = np.zeros((K + 1, n))
         A = np.zeros((K + 1, n))  # the Coulomb allowance, integrated
+        D = np.zeros((K + 1, n))  # the payload's direction, integrated
         b = np.zeros(n)
         V = np.zeros((W, n))
         for k in range(K):
             for j in range(n):
                 E[k + 1, j] = E[k, j] + T * rho[s, k, j]
+                D[k + 1, j] = D[k, j] + T * dirs[s, k, j]
                 A[k + 1, j] = A[k, j] + (2.0 * abs(fc[s, k, j]) * T if speed[s, k, j] <= v_slow else 0.0)
             c = k + 1.0
             bias = 1.0 - (1.0 - alpha) ** c
@@ -187,15 +208,25 @@ def momentum_test(rho, mass, fc, speed, T, windows, zcap, alpha, warmup, whiten,
                     if c > warmup:
                         zz = u[j] * u[j] / (V[w, j] / bias)
                         tot += zz
-                        if not combine and zz > best:
+                        if combine == 0 and zz > best:
                             best = zz
                         s2 = min(u[j] * u[j], zcap * zcap * V[w, j] / bias)
                     else:
                         s2 = u[j] * u[j]
                     if clean or c <= warmup:
                         V[w, j] += alpha * (s2 - V[w, j])
-                if combine and tot > best:
+                if combine == 1 and tot > best:
                     best = tot
+                if combine == 2 and c > warmup:  # along the payload's mass direction
+                    for j in range(n):
+                        sm[j] = D[k + 1, j] - D[k + 1 - m, j]
+                    g = Minv @ sm
+                    num, den = 0.0, 0.0
+                    for j in range(n):
+                        num += g[j] * u[j] * bias / V[w, j]
+                        den += g[j] * g[j] * bias / V[w, j]
+                    if den > 0.0 and num * num / den > best:
+                        best = num * num / den
             if k >= mx:
                 for j in range(n):
                     b[j] += alpha * (rho[s, k, j] - b[j])
@@ -216,7 +247,7 @@ def delays(stat, z, swaps, T, alarm_times):
         inside = np.zeros(ts.shape, bool)
         for sw in swaps:
             inside |= (ts >= sw - 0.002) & (ts < sw + 1.0)
-        fa = ts[(~inside) & (ts > WARMUP_S + 0.5)]
+        fa = ts[(~inside) & (ts > WARMUP_S + 0.5) & (ts < (K - 3) * T)]  # the last rows: not recorded
         det = []
         for sw in swaps:
             t = [x - sw for x in alarm_times[s] if 0 <= x - sw < FALSE_ALARM_WINDOW]
@@ -242,7 +273,7 @@ def main() -> None:
     else:
         sc, rec, _ = record(a.scenario, a.seeds)
         f = dict(
-            rho=rec.rho, speed=rec.speed, mass=rec.mass, fc=rec.fc, T=sc.sample_period,
+            rho=rec.rho, speed=rec.speed, mass=rec.mass, fc=rec.fc, dirs=rec.dirs, T=sc.sample_period,
             swaps=np.array(sc.swap_times), alarms=rec.inner.alarm_times,
         )  # fmt: skip
         if a.save:
@@ -255,11 +286,12 @@ def main() -> None:
     alpha = T / LEVEL_S
     print(f"{a.scenario}: {S} seeds, n {n}; derived z {zd:.2f} (row), {cd:.2f} (chi, {n} dof)")
     for mode in a.modes:
-        whiten, combine = mode != "raw", mode.startswith("chi")
+        whiten = mode != "raw"
+        combine = 1 if mode.startswith("chi") else (2 if mode.startswith("dir") else 0)
         v_slow = a.v_slow if mode.endswith("slow") else -1.0
-        z0 = cd if combine else zd
+        z0 = cd if combine == 1 else (float(norm.isf(0.01 / (2 * tests))) if combine == 2 else zd)
         stat = momentum_test(
-            rho, f["mass"], f["fc"], f["speed"], T, np.array(WINDOWS), z0, alpha, round(WARMUP_S / T),
+            rho, f["mass"], f["fc"], f["speed"], f["dirs"], T, np.array(WINDOWS), z0, alpha, round(WARMUP_S / T),
             whiten, combine, v_slow,
         )  # fmt: skip
         for z in a.z or [z0]:

@@ -374,6 +374,24 @@ def observer_trip(n_joints: int, sample_period: float) -> float:
     return float(norm.isf(OBSERVER_TRIP_ALPHA / (2.0 * n_joints * 60.0 / sample_period)))
 
 
+MOMENTUM_SLOW_SIGMAS = 3.0
+"""The momentum test takes a joint measured within this many standard deviations of the stated
+velocity noise of rest as near rest (its Coulomb torque's sign unknown)."""
+
+
+def momentum_threshold(n_joints: int, sample_period: float) -> float:
+    """The momentum test's threshold (``LawConfig.obs_mtest``): the square root of the chi-square
+    quantile (``n`` degrees of freedom) at which white Gaussian noise at the learnt levels would
+    cross with probability :data:`OBSERVER_TRIP_ALPHA` per minute, over the test's windows
+    (``laws.M_WINDOWS``) and samples (6.25 for 3 joints at 1 kHz, 7.05 for 7)."""
+    from scipy.stats import chi2
+
+    from adaptive_dd.closed_loop.laws import M_WINDOWS
+
+    tests = len(M_WINDOWS) * 60.0 / sample_period
+    return float(np.sqrt(chi2.isf(OBSERVER_TRIP_ALPHA / tests, n_joints)))
+
+
 def observer_bandwidth(sample_period: float) -> float:
     """The residual observer's bandwidth [rad/s] for a sample period [s]: ``0.4 / T``."""
     return OBSERVER_POLE / sample_period
@@ -407,6 +425,7 @@ class AdaptiveCT(Law):
             "observer",
             "observer_bandwidth",
             "observer_trip",
+            "observer_momentum_test",
         }
     )
     BOOST_RAMP = 0.25
@@ -452,6 +471,17 @@ class AdaptiveCT(Law):
                 f"controllers.{self.name}.observer_trip: true or false (the observer's residual may "
                 f"start the boost), got {self.observer_trip!r}"
             )
+        self.momentum_test = self.settings.get("observer_momentum_test", False)
+        if not isinstance(self.momentum_test, bool | np.bool_):
+            raise ParameterError(
+                f"controllers.{self.name}.observer_momentum_test: true or false (the momentum test "
+                f"may start the boost), got {self.momentum_test!r}"
+            )
+        if self.momentum_test and not self.observer:
+            raise ParameterError(
+                f"controllers.{self.name}.observer_momentum_test: the momentum test runs in the "
+                "residual observer; it needs observer = true"
+            )
 
     def law_config(self, sample_period):
         w, wb, z = self.gains.bandwidth, self.boost_bandwidth, self.gains.damping
@@ -466,6 +496,8 @@ class AdaptiveCT(Law):
             obs_warmup=round(OBSERVER_WARMUP / T),
             obs_trip=observer_trip(self.arm.n_joints, T) if self.observer_trip else 0.0,
             obs_trip_speed=(self.online.detector or self._est.Detector()).speed,
+            obs_mtest=momentum_threshold(self.arm.n_joints, T) if self.momentum_test else 0.0,
+            obs_mslow=MOMENTUM_SLOW_SIGMAS * float(np.sqrt(np.max(self.arm.sensor.velocity_variance))),
         )  # fmt: skip
 
     def compiled_form(self, n_trials, sample_period):

@@ -87,7 +87,15 @@ O_TAU = 4  # the applied torques summed since that measurement [N m] (written by
 O_COUNT = 5  # [0]: observer updates so far, [1]: samples summed in O_TAU
 O_R1 = 6  # the first stage's output (two stages)
 O_TRIP = 7  # [0]: samples since the observer's residual last tripped the boost (obs_trip)
-OBS_ROWS = 8
+# the momentum test (obs_mtest; :func:`_momentum_test`)
+M_WINDOWS = (1, 2, 3, 4, 6, 8, 12, 16, 24, 32)  # its windows [fresh measurements]
+M_RING = 33  # the integrated error's ring: the longest window plus one
+O_MV = 8  # rows O_MV + w: the learnt mean square of window w's whitened sum [(rad/s)^2]
+O_MB = O_MV + len(M_WINDOWS)  # the learnt drift of rho (the model's own error) [N m]
+O_ME = O_MB + 1  # rows O_ME + i: the integrated error E, less the drift [N m s], a ring
+O_MA = O_ME + M_RING  # rows O_MA + i: the integrated Coulomb allowance [N m s], a ring
+O_MC = O_MA + M_RING  # [0]: updates of the test so far, [1]: 1 if it crossed at the last one
+OBS_ROWS = O_MC + 1
 
 
 class LawConfig(NamedTuple):
@@ -144,6 +152,13 @@ class LawConfig(NamedTuple):
         speed) trips only beyond its threshold plus twice the model's Coulomb friction: near rest
         the measured speed's sign, hence the model's Coulomb torque, flips with the noise, and
         the residual with it by up to ``2 fc``.
+    obs_mtest : float
+        The momentum test (:func:`_momentum_test`) starts the boost as an alarm would when its
+        statistic (the square root of a chi-square with ``n`` degrees of freedom) exceeds this;
+        0: never.
+    obs_mslow : float
+        [rad/s] The momentum test takes a joint measured at most this fast as near rest (its
+        Coulomb torque's sign unknown: an allowance of ``2 fc`` per sample).
     """
 
     kind: int
@@ -173,6 +188,8 @@ class LawConfig(NamedTuple):
     obs_warmup: int
     obs_trip: float
     obs_trip_speed: float
+    obs_mtest: float = 0.0
+    obs_mslow: float = 0.0
 
 
 class LawState(NamedTuple):
@@ -201,7 +218,8 @@ def law_work(n):  # pragma: no cover - compiled
     """Scratch of one trial's :func:`law_trial_in` (allocated once per trial, not per sample):
     the chain workspace, ``(6, n)`` rows (e, e', qd_r, a, s, v), ``M (n, n)``, ``Y (n, 10)``,
     ``(6, 10)``, ``(10,)``; the observer's ``(2, 6, 10)``, ``(4, n)`` (p, wv at the last and this
-    measurement), ``(2, n, 10)``."""
+    measurement), ``(2, n, 10)``; the momentum test's ``(n + 4, n)`` (``M^-1``, rho, the model's
+    Coulomb friction, the window's sum and its whitened form)."""
     return (
         workspace(n),
         np.empty((6, n)),
@@ -212,6 +230,7 @@ def law_work(n):  # pragma: no cover - compiled
         np.empty((2, 6, 10)),
         np.empty((4, n)),
         np.empty((2, n, 10)),
+        np.empty((n + 4, n)),
     )
 
 
@@ -294,6 +313,129 @@ def _momentum(ch, pi, q, qd, work, p, wv):  # pragma: no cover - compiled
         wv[j] += pi[10 * n + j] * qd[j] + pi[11 * n + j] * np.sign(qd[j])
 
 
+@njit(cache=True)
+def _mass(ch, pi, q, work, m):  # pragma: no cover - compiled
+    """``m = M(q) + diag(Ia)`` of ``pi (13 n,)`` (the momentum test's metric)."""
+    n = q.shape[0]
+    mass_matrix_in(ch, pi[: 10 * n], q, work[0], m)
+    for j in range(n):
+        m[j, j] += pi[12 * n + j]
+
+
+@njit(cache=True, inline="always")
+def _coulomb(pi, n, j):  # pragma: no cover - compiled
+    """The model's Coulomb friction of joint ``j`` [N m]."""
+    return abs(pi[11 * n + j])
+
+
+@njit(cache=True)
+def _spd_inverse(a, out):  # pragma: no cover - compiled
+    """``out = a^-1`` of a symmetric positive definite ``a (n, n)`` (Gauss-Jordan, no pivoting;
+    ``a`` destroyed). A non-positive pivot leaves ``out`` the identity."""
+    n = a.shape[0]
+    for r in range(n):
+        for c in range(n):
+            out[r, c] = 1.0 if r == c else 0.0
+    for k in range(n):
+        piv = a[k, k]
+        if not piv > 0.0:
+            for r in range(n):
+                for c in range(n):
+                    out[r, c] = 1.0 if r == c else 0.0
+            return
+        for c in range(n):
+            a[k, c] /= piv
+            out[k, c] /= piv
+        for r in range(n):
+            if r != k:
+                f = a[r, k]
+                if f != 0.0:
+                    for c in range(n):
+                        a[r, c] -= f * a[k, c]
+                        out[r, c] -= f * out[k, c]
+
+
+@njit(cache=True)
+def _momentum_test(cfg, obs, mt, qd, m):  # pragma: no cover - compiled
+    """One fresh update of the momentum test; ``obs[O_MC, 1]`` set to 1 if it crossed.
+
+    ``mt (n + 4, n)``: ``M^-1`` of this measurement (rows ``0..n-1``), the mean residual ``rho``
+    over the ``m`` samples since the last measurement (row ``n``), the model's Coulomb friction
+    (row ``n + 1``); rows ``n + 2, n + 3`` scratch. The integrated momentum error ``E_k = sum (rho - b) m T`` (``b`` the
+    row's drift, learnt over the level's window) telescopes: over a window of ``w`` updates its
+    sum ``S = E_k - E_(k-w)`` is the missing torque's integral plus the two end momenta's noise,
+    whatever ``w``; a step ``d`` of missing torque is a ramp ``d w T`` in it. ``u = M^-1 S`` (the
+    unexplained velocity change: the velocity noise, independent per joint, whitens it) per
+    window of :data:`M_WINDOWS`; a joint measured at most ``obs_mslow`` fast has its Coulomb
+    torque known only within ``+-fc`` (``2 fc`` per sample of allowance): the friction torques
+    within it that explain ``u`` best are removed from it first (three passes of coordinate
+    descent, metric ``1 / V``). Statistic: the largest over windows of ``sqrt(sum_j u_j^2 /
+    V_j)``, ``V`` each window's and row's learnt mean square (learnt freely for one level window,
+    then only on windows without allowance, winsorised at the threshold). Armed after one level
+    window."""
+    n = qd.shape[0]
+    rho, fc, sm, u = mt[n], mt[n + 1], mt[n + 2], mt[n + 3]
+    c = obs[O_MC, 0]
+    pos = int(c) % M_RING
+    prev = (int(c) + M_RING - 1) % M_RING
+    dt = m * cfg.T
+    for j in range(n):
+        obs[O_ME + pos, j] = obs[O_ME + prev, j] + (rho[j] - obs[O_MB, j]) * dt
+        slow = abs(qd[j]) <= cfg.obs_mslow
+        obs[O_MA + pos, j] = obs[O_MA + prev, j] + (2.0 * fc[j] * dt if slow else 0.0)
+    c += 1.0
+    obs[O_MC, 0] = c
+    alpha = cfg.obs_alpha
+    armed = c * alpha > 1.0
+    bias = 1.0 - (1.0 - alpha) ** c
+    z2 = cfg.obs_mtest * cfg.obs_mtest
+    best = 0.0
+    for w in range(len(M_WINDOWS)):
+        mw = M_WINDOWS[w]
+        if c <= mw:
+            continue
+        back = (pos + M_RING - mw) % M_RING
+        clean = True
+        for j in range(n):
+            sm[j] = obs[O_ME + pos, j] - obs[O_ME + back, j]
+            clean = clean and obs[O_MA + pos, j] == obs[O_MA + back, j]
+        for r in range(n):
+            acc = 0.0
+            for j in range(n):
+                acc += mt[r, j] * sm[j]
+            u[r] = acc
+        v = obs[O_MV + w]
+        if armed and not clean:
+            for _ in range(3):
+                for j in range(n):
+                    al = obs[O_MA + pos, j] - obs[O_MA + back, j]
+                    if al <= 0.0:
+                        continue
+                    num, den = 0.0, 0.0
+                    for r in range(n):
+                        wr = bias / v[r]
+                        num += mt[r, j] * wr * u[r]
+                        den += mt[r, j] * mt[r, j] * wr
+                    cj = min(max(num / den, -al), al) if den > 0.0 else 0.0
+                    for r in range(n):
+                        u[r] -= mt[r, j] * cj
+        tot = 0.0
+        for r in range(n):
+            u2 = u[r] * u[r]
+            if armed:
+                tot += u2 * bias / v[r]
+                if clean:
+                    v[r] += alpha * (min(u2, z2 * v[r] / bias) - v[r])
+            else:
+                v[r] += alpha * (u2 - v[r])
+        if tot > best:
+            best = tot
+    if c > M_RING:
+        for j in range(n):
+            obs[O_MB, j] += alpha * (rho[j] - obs[O_MB, j])
+    obs[O_MC, 1] = 1.0 if armed and np.isfinite(best) and best > z2 else 0.0
+
+
 @njit(cache=True, inline="always")
 def observe_applied(obs, tau):  # pragma: no cover - compiled
     """Add the torque ``tau (n,)`` applied over one sample to the residual observer's state
@@ -326,14 +468,28 @@ def _observe(ch, cfg, pi, q, qd, obs, work, out):  # pragma: no cover - compiled
         _momentum(ch, pi, obs[O_Q], obs[O_QD], work, pw[0], pw[1])
         _momentum(ch, pi, q, qd, work, pw[2], pw[3])
         am = cfg.obs_a**m
+        finite = True
         for j in range(n):
             rho = obs[O_TAU, j] / m - 0.5 * (pw[1, j] + pw[3, j]) - (pw[2, j] - pw[0, j]) / (m * cfg.T)
+            if cfg.obs_mtest > 0.0:
+                work[9][n, j] = rho
             if not np.isfinite(rho):
+                finite = False
                 continue
             if cfg.obs_stages == 2:
                 obs[O_R1, j] = am * obs[O_R1, j] + (1.0 - am) * rho
                 rho = obs[O_R1, j]
             obs[O_R, j] = am * obs[O_R, j] + (1.0 - am) * rho
+        if cfg.obs_mtest > 0.0:
+            obs[O_MC, 1] = 0.0
+            if finite:
+                mt = work[9]
+                _mass(ch, pi, q, work, work[2])
+                _spd_inverse(work[2], mt[:n])
+                fc = mt[n + 1]
+                for j in range(n):
+                    fc[j] = _coulomb(pi, n, j)
+                _momentum_test(cfg, obs, mt, qd, m)
     if not held:
         c = obs[O_COUNT, 0] + 1.0
         bias = 1.0 - (1.0 - cfg.obs_alpha) ** c
@@ -441,7 +597,7 @@ def law_trial_in(
             for j in range(n):
                 s[j] = ed[j] + cfg.lam[j] * e[j]
             _adapt_payload(ch, cfg, q, qd, qdr, a, s, theta, pi_model, work)
-    if cfg.observer and cfg.obs_trip > 0.0:  # samples since the observer last tripped the boost
+    if cfg.observer and (cfg.obs_trip > 0.0 or cfg.obs_mtest > 0.0):  # samples since the observer last tripped the boost
         obs[O_TRIP, 0] += 1.0
         if obs[O_TRIP, 0] < since_alarm:
             since_alarm = int(obs[O_TRIP, 0])
@@ -463,6 +619,8 @@ def law_trial_in(
         # a trip starts a boost; it does not prolong one (nor restart it while it ramps down)
         if cfg.obs_trip > 0.0 and not boosting:
             _trip(cfg, pi_model, qd, obs)
+        if cfg.obs_mtest > 0.0 and not boosting and obs[O_MC, 1] > 0.0:
+            obs[O_TRIP, 0] = 0.0
 
 
 @njit(cache=True)

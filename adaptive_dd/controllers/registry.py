@@ -238,6 +238,14 @@ _BOOST = {
         False,
         rule=_OBSERVER_RULE,
     ),
+    "observer_momentum_test": Setting(
+        "a matched test on the integrated momentum error (whitened by the model's inertia, the "
+        "noise learnt online, the threshold from 1 % per minute) starts the boost before the "
+        "detector alarms (docs/change_detection.md, \"The momentum test\"; off by default)",
+        ABSENT,
+        False,
+        rule="built for the N-joint adaptive_ct's law; the two-link loop's boost reads the detector alone",
+    ),
     "estimator": Setting(
         "the estimator's settings: TwoLinkOnlineConfig's fields on the two-link arm (tau_f, split, "
         "construction, p0_payload, p0_j2, project, align), OnlineConfig's on an N-joint arm; "
