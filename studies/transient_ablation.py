@@ -23,7 +23,8 @@ of its joint beyond the trip alone (by default a joint at most the detector's cr
 detector's level learns while its short average is raised (``learn_below = 0``), ``gate0.75``: up
 to 0.75 of the threshold; ``notrip_nogate``: the law and detector of before issue 28's transient
 round (their code path); ``mtest``: the momentum test starts the boost (``observer_momentum_test =
-true``; docs/change_detection.md, "The momentum test").
+true``; docs/change_detection.md, "The momentum test"), ``mreopen``: and it re-opens the estimator
+as an alarm (``observer_momentum_test = "reopen"``).
 """
 
 from __future__ import annotations
@@ -69,6 +70,7 @@ VARIANTS = {
     "trip8": {"_trip": 8.0},
     "trip10": {"_trip": 10.0},
     "mtest": {"observer_momentum_test": True},
+    "mreopen": {"observer_momentum_test": "reopen"},
     "bb150": {"boost_bandwidth": 150.0},
     "bb200": {"boost_bandwidth": 200.0},
 }

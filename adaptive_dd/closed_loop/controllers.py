@@ -472,10 +472,11 @@ class AdaptiveCT(Law):
                 f"start the boost), got {self.observer_trip!r}"
             )
         self.momentum_test = self.settings.get("observer_momentum_test", False)
-        if not isinstance(self.momentum_test, bool | np.bool_):
+        if not (isinstance(self.momentum_test, bool | np.bool_) or self.momentum_test == "reopen"):
             raise ParameterError(
-                f"controllers.{self.name}.observer_momentum_test: true or false (the momentum test "
-                f"may start the boost), got {self.momentum_test!r}"
+                f"controllers.{self.name}.observer_momentum_test: true (the momentum test may start "
+                f'the boost), "reopen" (and re-open the estimator, as an alarm) or false, got '
+                f"{self.momentum_test!r}"
             )
         if self.momentum_test and not self.observer:
             raise ParameterError(
@@ -497,6 +498,7 @@ class AdaptiveCT(Law):
             obs_trip=observer_trip(self.arm.n_joints, T) if self.observer_trip else 0.0,
             obs_trip_speed=(self.online.detector or self._est.Detector()).speed,
             obs_mtest=momentum_threshold(self.arm.n_joints, T) if self.momentum_test else 0.0,
+            obs_mreopen=self.momentum_test == "reopen",
             obs_mslow=MOMENTUM_SLOW_SIGMAS * float(np.sqrt(np.max(self.arm.sensor.velocity_variance))),
         )  # fmt: skip
 

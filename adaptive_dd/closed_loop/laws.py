@@ -63,6 +63,7 @@ __all__ = [
     "MODEL_NONE",
     "MODEL_TRIAL",
     "MODEL_TRUE",
+    "O_MC",
     "OBS_ROWS",
     "LawConfig",
     "LawState",
@@ -94,7 +95,8 @@ O_MV = 8  # rows O_MV + w: the learnt mean square of window w's whitened sum [(r
 O_MB = O_MV + len(M_WINDOWS)  # the learnt drift of rho (the model's own error) [N m]
 O_ME = O_MB + 1  # rows O_ME + i: the integrated error E, less the drift [N m s], a ring
 O_MA = O_ME + M_RING  # rows O_MA + i: the integrated Coulomb allowance [N m s], a ring
-O_MC = O_MA + M_RING  # [0]: updates of the test so far, [1]: 1 if it crossed at the last one
+O_MC = O_MA + M_RING  # [0]: updates of the test so far, [1]: 1 if it crossed at the last one (2: and
+# started the boost asking the estimator to re-open: obs_mreopen)
 OBS_ROWS = O_MC + 1
 
 
@@ -159,6 +161,9 @@ class LawConfig(NamedTuple):
     obs_mslow : float
         [rad/s] The momentum test takes a joint measured at most this fast as near rest (its
         Coulomb torque's sign unknown: an allowance of ``2 fc`` per sample).
+    obs_mreopen : bool
+        A start of the boost by the momentum test also asks the estimator to re-open, as its
+        detector's alarm does (``obs[O_MC, 1] = 2``, read by the closed loop's estimator sample).
     """
 
     kind: int
@@ -190,6 +195,7 @@ class LawConfig(NamedTuple):
     obs_trip_speed: float
     obs_mtest: float = 0.0
     obs_mslow: float = 0.0
+    obs_mreopen: bool = False
 
 
 class LawState(NamedTuple):
@@ -621,6 +627,8 @@ def law_trial_in(
             _trip(cfg, pi_model, qd, obs)
         if cfg.obs_mtest > 0.0 and not boosting and obs[O_MC, 1] > 0.0:
             obs[O_TRIP, 0] = 0.0
+            if cfg.obs_mreopen:
+                obs[O_MC, 1] = 2.0
 
 
 @njit(cache=True)
