@@ -149,7 +149,8 @@ def record(path: str, seeds: int):
 
 WINDOWS = (1, 2, 3, 4, 6, 8, 12, 16, 24, 32)
 LEVEL_S = 1.0
-WARMUP_S = 1.0
+WARMUP_S = 2.0
+FA_AFTER = 0.0  # [s] after the warm-up: crossings counted as false from then
 
 
 @njit(cache=True)
@@ -247,7 +248,7 @@ def delays(stat, z, swaps, T, alarm_times):
         inside = np.zeros(ts.shape, bool)
         for sw in swaps:
             inside |= (ts >= sw - 0.002) & (ts < sw + 1.0)
-        fa = ts[(~inside) & (ts > WARMUP_S + 0.5) & (ts < (K - 3) * T)]  # the last rows: not recorded
+        fa = ts[(~inside) & (ts > WARMUP_S + FA_AFTER) & (ts < (K - 3) * T)]  # the last rows: not recorded
         det = []
         for sw in swaps:
             t = [x - sw for x in alarm_times[s] if 0 <= x - sw < FALSE_ALARM_WINDOW]

@@ -14,7 +14,7 @@ from adaptive_dd.closed_loop.laws import O_TRIP, LawState, law_trial, model_torq
 from adaptive_dd.controllers import make_controller
 from adaptive_dd.errors import ParameterError
 
-K_SWAP, N = 1600, 1700  # the change 1.6 s into a 1.7 s record at 1 kHz (the test armed after 1 s)
+K_SWAP, N = 2600, 2700  # the change 2.6 s into a 2.7 s record at 1 kHz (the test armed after 2 s)
 
 
 def _arm():
@@ -23,7 +23,7 @@ def _arm():
 
 
 def _run(cfg, arm, seed, T, sigma_v, step=None, payload=0.0):
-    """The law on a record of the vertical arm (sinusoids; joint 3 reverses at 1.21 s), the
+    """The law on a record of the vertical arm (sinusoids; joint 3 reverses at 2.24 s), the
     torque the arm's inverse dynamics (Coulomb friction at the true speed's sign), the measured
     velocity with white noise ``sigma_v``; from ``K_SWAP`` on the torque lacks ``step (n,)`` [N m]
     or the arm carries ``payload`` kg at 3 cm (the law's model without). Per sample: whether the
@@ -37,7 +37,7 @@ def _run(cfg, arm, seed, T, sigma_v, step=None, payload=0.0):
         j = arm.payload_joint
         pi_pay[10 * j : 10 * j + 10] += arm.payload_map @ pay
     t = np.arange(N + 1) * T
-    w = np.array([0.8, 1.1, 1.3])
+    w = np.array([0.8, 1.1, 0.7])
     q = np.array([0.3, -0.6, 0.4]) + 0.4 * np.sin(np.outer(t, w))
     qd = 0.4 * w * np.cos(np.outer(t, w))
     qdd = -0.4 * w**2 * np.sin(np.outer(t, w))
@@ -79,9 +79,9 @@ def test_the_threshold_is_the_derived_one_and_off_by_default():
 
 @pytest.mark.parametrize("seed", [0, 1])
 def test_a_payload_starts_the_boost_within_a_few_samples_and_noise_does_not(seed):
-    """1 kg appearing at 1.6 s (the vertical arm's 1 kg pick-up; its detection limit on the shipped
+    """1 kg appearing at 2.6 s (the vertical arm's 1 kg pick-up; its detection limit on the shipped
     scenario is 2 ms): the test crosses within 5 samples of it and never before, through joint 3's
-    reversal at 1.21 s (its Coulomb torque's sign flipping with the noise). With the threshold a
+    reversal at 2.24 s (its Coulomb torque's sign flipping with the noise). With the threshold a
     third of the derived one, or without the near-rest allowance (planted faults), it crosses
     before the change."""
     sc, arm, T = _arm()
@@ -112,3 +112,35 @@ def test_bad_settings_are_errors_naming_the_key():
         make_controller("adaptive_ct", options={"observer_momentum_test": 1}, arm=arm)
     with pytest.raises(ParameterError, match="observer_momentum_test.*observer = true"):
         make_controller("adaptive_ct", options={"observer_momentum_test": True, "observer": False}, arm=arm)
+
+
+def _short(mode, seeds=3):
+    import tomllib
+
+    from adaptive_dd.benchmark.scenario import parse_scenario
+
+    path = resources.files("adaptive_dd.scenarios") / "vertical3_payload_exact.toml"
+    data = tomllib.loads(path.read_text(encoding="utf-8"))
+    data["run"] = {**data["run"], "duration": 2.7, "seeds": seeds, "controllers": ["adaptive_ct"]}
+    data["payload"] = [{**data["payload"][0], "at": 2.5}]
+    data["reference"]["ramp"] = 0.2
+    data["controllers"] = {"adaptive_ct": {"observer_momentum_test": mode}}
+    return parse_scenario(data, "test.toml", name="vertical3_short")
+
+
+def test_reopen_makes_the_test_s_start_the_estimator_s_alarm():
+    """The closed loop, the vertical arm picking up 1 kg at 2.5 s (three seeds): with ``"reopen"``
+    the estimator's alarm comes within 4 ms of the swap (twice the shipped scenario's detection
+    limit of 2 ms) and there is none before it; with the test only starting the boost (``true``)
+    the estimator alarms later, at its own detector's time."""
+    from adaptive_dd.closed_loop.runner import make_controllers, run_closed_loop
+
+    first = {}
+    for mode in ("reopen", True):
+        sc = _short(mode)
+        res = run_closed_loop(sc, make_controllers(sc), keep_trajectories=0)
+        at = res.runs["adaptive_ct"].alarm_times
+        assert all(len(a) and min(a) >= 2.5 for a in at), at  # nothing before the swap
+        first[mode] = np.array([min(a) - 2.5 for a in at])
+    assert np.all(first["reopen"] <= 0.004), first
+    assert np.all(first[True] > first["reopen"]), first
