@@ -113,7 +113,8 @@ class Recorded:
             self.fc[:, self.k] = pi[:, 11 * q.shape[1] : 12 * q.shape[1]]
             dr = np.empty_like(q)
             arm = self.inner.arm
-            _direction(self.inner.ch, int(arm.payload_joint), np.ascontiguousarray(arm.payload_map), q, qd, np.asarray(qdd_d, float), dr)
+            pmap = np.ascontiguousarray(arm.payload_map)
+            _direction(self.inner.ch, int(arm.payload_joint), pmap, q, qd, np.asarray(qdd_d, float), dr)
             self.dirs[:, self.k] = dr
         self.qp, self.qdp = q.copy(), qd.copy()
         self.k += 1
@@ -280,7 +281,7 @@ def main() -> None:
         if a.save:
             np.savez(a.save, **{k: (np.array(v, dtype=object) if k == "alarms" else v) for k, v in f.items()})
     rho, T, swaps, at = f["rho"], float(f["T"]), list(f["swaps"]), f["alarms"]
-    S, K, n = rho.shape
+    S, _, n = rho.shape
     tests = len(WINDOWS) * 60 / T
     zd = norm.ppf(1 - 0.01 / (2 * n * tests))
     cd = float(np.sqrt(chi2.ppf(1 - 0.01 / tests, n)))
@@ -292,7 +293,8 @@ def main() -> None:
         v_slow = a.v_slow if mode.endswith("slow") else -1.0
         z0 = cd if combine == 1 else (float(norm.isf(0.01 / (2 * tests))) if combine == 2 else zd)
         stat = momentum_test(
-            rho, f["mass"], f["fc"], f["speed"], f["dirs"], T, np.array(WINDOWS), z0, alpha, round(WARMUP_S / T),
+            rho, f["mass"], f["fc"], f["speed"], f["dirs"], T, np.array(WINDOWS), z0, alpha,
+            round(WARMUP_S / T),
             whiten, combine, v_slow,
         )  # fmt: skip
         for z in a.z or [z0]:
@@ -302,7 +304,8 @@ def main() -> None:
             nfa = sum(len(x[1]) > 0 for x in r)
             print(
                 f"{mode:11s} z {z:.2f}: delay median {np.nanmedian(dl, 0)} max {np.nanmax(dl, 0)} "
-                f"missed {int(np.isnan(dl).sum())}; detector {np.nanmedian(det, 0)}; false-alarm trials {nfa}",
+                f"missed {int(np.isnan(dl).sum())}; detector {np.nanmedian(det, 0)}; "
+                f"false-alarm trials {nfa}",
                 flush=True,
             )
             for s, x in enumerate(r[: a.diag]):

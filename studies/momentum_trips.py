@@ -92,13 +92,18 @@ def main() -> None:
                 inside |= (st >= sw) & (st < sw + 1.0)
             if (~inside).any():
                 false.append((s, np.round(st[~inside][:4], 3).tolist()))
-        print(f"{path}: {a.seeds} seeds; the momentum test's first start after each swap, median (max) [ms]; "
-              "the estimator's alarm (median); trials with a start outside the swaps' first second")
+        print(
+            f"{path}: {a.seeds} seeds; the momentum test's first start after each swap, median (max) [ms]; "
+            "the estimator's alarm (median); trials with a start outside the swaps' first second"
+        )
         cells = [f"{1e3 * np.nanmedian(delay[:, i]):.0f} ({1e3 * np.nanmax(delay[:, i]):.0f})"
                  if np.isfinite(delay[:, i]).any() else "-" for i in range(len(swaps))]  # fmt: skip
-        print(f"  starts {' / '.join(cells)}; none after {int(np.isnan(delay).sum())} swaps; "
-              f"alarm {' / '.join(f'{1e3 * np.nanmedian(alarm[:, i]):.0f}' for i in range(len(swaps)))}; "
-              f"false starts in {len(false)} of {a.seeds} trials {false}", flush=True)
+        print(
+            f"  starts {' / '.join(cells)}; none after {int(np.isnan(delay).sum())} swaps; "
+            f"alarm {' / '.join(f'{1e3 * np.nanmedian(alarm[:, i]):.0f}' for i in range(len(swaps)))}; "
+            f"false starts in {len(false)} of {a.seeds} trials {false}",
+            flush=True,
+        )
 
 
 if __name__ == "__main__":

@@ -24,7 +24,8 @@ detector's level learns while its short average is raised (``learn_below = 0``),
 to 0.75 of the threshold; ``notrip_nogate``: the law and detector of before issue 28's transient
 round (their code path); ``mtest``: the momentum test starts the boost (``observer_momentum_test =
 true``; docs/change_detection.md, "The momentum test"), ``mreopen``: and it re-opens the estimator
-as an alarm (``observer_momentum_test = "reopen"``).
+as an alarm (``observer_momentum_test = "reopen"``); ``mreopen_slow0.25``: with every joint slower than
+the detector's creeping speed (0.25 rad/s) near rest (3 sigma_v by default).
 """
 
 from __future__ import annotations
@@ -71,6 +72,7 @@ VARIANTS = {
     "trip10": {"_trip": 10.0},
     "mtest": {"observer_momentum_test": True},
     "mreopen": {"observer_momentum_test": "reopen"},
+    "mreopen_slow0.25": {"observer_momentum_test": "reopen", "_mslow": 0.25},
     "bb150": {"boost_bandwidth": 150.0},
     "bb200": {"boost_bandwidth": 200.0},
 }

@@ -89,7 +89,9 @@ def test_a_payload_starts_the_boost_within_a_few_samples_and_noise_does_not(seed
     sigma_v = float(np.sqrt(max(sc.velocity_variance)))
     got = np.flatnonzero(_run(cfg, arm, seed, T, sigma_v, payload=1.0))
     assert got.size and got[0] >= K_SWAP and got[0] - K_SWAP <= 5, got[:5]
-    low = np.flatnonzero(_run(cfg._replace(obs_mtest=cfg.obs_mtest / 3.0), arm, seed, T, sigma_v, payload=1.0))
+    low = np.flatnonzero(
+        _run(cfg._replace(obs_mtest=cfg.obs_mtest / 3.0), arm, seed, T, sigma_v, payload=1.0)
+    )
     assert low.size and low[0] < K_SWAP
     bare = np.flatnonzero(_run(cfg._replace(obs_mslow=-1.0), arm, seed, T, sigma_v, payload=1.0))
     assert bare.size and bare[0] < K_SWAP, bare[:5]
@@ -107,10 +109,10 @@ def test_a_step_the_model_lacks_is_found_and_its_absence_is_not():
 
 
 def test_bad_settings_are_errors_naming_the_key():
-    sc, arm, T = _arm()
+    _, arm, _ = _arm()
     with pytest.raises(ParameterError, match="observer_momentum_test"):
         make_controller("adaptive_ct", options={"observer_momentum_test": 1}, arm=arm)
-    with pytest.raises(ParameterError, match="observer_momentum_test.*observer = true"):
+    with pytest.raises(ParameterError, match=r"observer_momentum_test.*observer = true"):
         make_controller("adaptive_ct", options={"observer_momentum_test": True, "observer": False}, arm=arm)
 
 

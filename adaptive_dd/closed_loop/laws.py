@@ -63,8 +63,8 @@ __all__ = [
     "MODEL_NONE",
     "MODEL_TRIAL",
     "MODEL_TRUE",
-    "O_MC",
     "OBS_ROWS",
+    "O_MC",
     "LawConfig",
     "LawState",
     "law_batch",
@@ -368,10 +368,10 @@ def _momentum_test(cfg, obs, mt, qd, m):  # pragma: no cover - compiled
 
     ``mt (n + 4, n)``: ``M^-1`` of this measurement (rows ``0..n-1``), the mean residual ``rho``
     over the ``m`` samples since the last measurement (row ``n``), the model's Coulomb friction
-    (row ``n + 1``); rows ``n + 2, n + 3`` scratch. The integrated momentum error ``E_k = sum (rho - b) m T`` (``b`` the
-    row's drift, learnt over the level's window) telescopes: over a window of ``w`` updates its
-    sum ``S = E_k - E_(k-w)`` is the missing torque's integral plus the two end momenta's noise,
-    whatever ``w``; a step ``d`` of missing torque is a ramp ``d w T`` in it. ``u = M^-1 S`` (the
+    (row ``n + 1``); rows ``n + 2, n + 3`` scratch. The integrated momentum error
+    ``E_k = sum (rho - b) m T`` (``b`` the row's drift, learnt over the level's window)
+    telescopes: over a window of ``w`` updates its sum ``S = E_k - E_(k-w)`` is the missing
+    torque's integral plus the two end momenta's noise, whatever ``w``; a step ``d`` of missing torque is a ramp ``d w T`` in it. ``u = M^-1 S`` (the
     unexplained velocity change: the velocity noise, independent per joint, whitens it) per
     window of :data:`M_WINDOWS`; a joint measured at most ``obs_mslow`` fast has its Coulomb
     torque known only within ``+-fc`` (``2 fc`` per sample of allowance): the friction torques
@@ -606,7 +606,8 @@ def law_trial_in(
             for j in range(n):
                 s[j] = ed[j] + cfg.lam[j] * e[j]
             _adapt_payload(ch, cfg, q, qd, qdr, a, s, theta, pi_model, work)
-    if cfg.observer and (cfg.obs_trip > 0.0 or cfg.obs_mtest > 0.0):  # samples since the observer last tripped the boost
+    trips = cfg.obs_trip > 0.0 or cfg.obs_mtest > 0.0
+    if cfg.observer and trips:  # samples since the observer last tripped the boost
         obs[O_TRIP, 0] += 1.0
         if obs[O_TRIP, 0] < since_alarm:
             since_alarm = int(obs[O_TRIP, 0])

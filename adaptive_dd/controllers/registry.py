@@ -12,6 +12,7 @@ Built-in settings:
 
 ``adaptive_ct``
     ``boost_bandwidth``, ``boost_duration``, ``observer``, ``observer_bandwidth``, ``observer_trip``,
+    ``observer_momentum_test`` (N-joint arms),
     ``estimator = {...}`` (fields of
     :class:`~adaptive_dd.identification.two_link_online.TwoLinkOnlineConfig`: ``tau_f``, ``split``,
     ``construction``, ``p0_payload``, ``p0_j2``, ``project``, ``align``), ``detector = {...}``
@@ -239,9 +240,10 @@ _BOOST = {
         rule=_OBSERVER_RULE,
     ),
     "observer_momentum_test": Setting(
-        "a matched test on the integrated momentum error (whitened by the model's inertia, the "
-        "noise learnt online, the threshold from 1 % per minute) starts the boost before the "
-        "detector alarms (docs/change_detection.md, \"The momentum test\"; off by default)",
+        "true: a matched test on the integrated momentum error (whitened by the model's inertia, "
+        "its noise learnt online, its threshold 1 % per minute) starts the boost before the "
+        'detector alarms; "reopen": and re-opens the estimator as an alarm; false: neither '
+        '(docs/change_detection.md, "The momentum test")',
         ABSENT,
         False,
         rule="built for the N-joint adaptive_ct's law; the two-link loop's boost reads the detector alone",
