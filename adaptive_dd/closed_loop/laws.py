@@ -373,10 +373,10 @@ def _momentum_test(cfg, obs, mt, qd, m):  # pragma: no cover - compiled
     telescopes: over a window of ``w`` updates its sum ``S = E_k - E_(k-w)`` is the missing
     torque's integral plus the two end momenta's noise, whatever ``w``; a step ``d`` of missing
     torque is a ramp ``d w T`` in it. ``u = M^-1 S`` (the unexplained velocity change: the
-    velocity noise, independent per joint, whitens it) per window of :data:`M_WINDOWS`; a joint measured at most ``obs_mslow`` fast has its Coulomb
-    torque known only within ``+-fc`` (``2 fc`` per sample of allowance): the friction torques
-    within it that explain ``u`` best are removed from it first (three passes of coordinate
-    descent, metric ``1 / V``). Statistic: the largest over windows of ``sqrt(sum_j u_j^2 /
+    velocity noise, independent per joint, whitens it) per window of :data:`M_WINDOWS`; a joint
+    measured at most ``obs_mslow`` fast has its Coulomb torque known only within ``+-fc`` (``2 fc``
+    per sample of allowance): the friction torques within it that explain ``u`` best are removed
+    from it first (three passes of coordinate descent, metric ``1 / V``). Statistic: the largest over windows of ``sqrt(sum_j u_j^2 /
     V_j)``, ``V`` each window's and row's learnt mean square (learnt freely for :data:`M_ARM`
     level windows, then only on windows without allowance, winsorised at the threshold). Armed
     after those: learnt over the first second alone, on a reference that ramps up over it, the
