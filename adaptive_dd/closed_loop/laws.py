@@ -376,8 +376,8 @@ def _momentum_test(cfg, obs, mt, qd, m):  # pragma: no cover - compiled
     velocity noise, independent per joint, whitens it) per window of :data:`M_WINDOWS`; a joint
     measured at most ``obs_mslow`` fast has its Coulomb torque known only within ``+-fc`` (``2 fc``
     per sample of allowance): the friction torques within it that explain ``u`` best are removed
-    from it first (three passes of coordinate descent, metric ``1 / V``). Statistic: the largest over windows of ``sqrt(sum_j u_j^2 /
-    V_j)``, ``V`` each window's and row's learnt mean square (learnt freely for :data:`M_ARM`
+    from it first (three passes of coordinate descent, metric ``1 / V``). Statistic: the largest
+    over windows of ``sqrt(sum_j u_j^2 / V_j)``, ``V`` each window's and row's learnt mean square (learnt freely for :data:`M_ARM`
     level windows, then only on windows without allowance, winsorised at the threshold). Armed
     after those: learnt over the first second alone, on a reference that ramps up over it, the
     levels were too low for the full motion (vertical3 drawn: starts at 1.18-1.19 s in 2 of 10
