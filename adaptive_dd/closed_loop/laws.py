@@ -368,20 +368,20 @@ def _momentum_test(cfg, obs, mt, qd, m):  # pragma: no cover - compiled
 
     ``mt (n + 4, n)``: ``M^-1`` of this measurement (rows ``0..n-1``), the mean residual ``rho``
     over the ``m`` samples since the last measurement (row ``n``), the model's Coulomb friction
-    (row ``n + 1``); rows ``n + 2, n + 3`` scratch. The integrated momentum error
-    ``E_k = sum (rho - b) m T`` (``b`` the row's drift, learnt over the level's window)
-    telescopes: over a window of ``w`` updates its sum ``S = E_k - E_(k-w)`` is the missing
-    torque's integral plus the two end momenta's noise, whatever ``w``; a step ``d`` of missing
-    torque is a ramp ``d w T`` in it. ``u = M^-1 S`` (the unexplained velocity change: the
-    velocity noise, independent per joint, whitens it) per window of :data:`M_WINDOWS`; a joint
-    measured at most ``obs_mslow`` fast has its Coulomb torque known only within ``+-fc`` (``2 fc``
-    per sample of allowance): the friction torques within it that explain ``u`` best are removed
-    from it first (three passes of coordinate descent, metric ``1 / V``). Statistic: the largest
-    over windows of ``sqrt(sum_j u_j^2 / V_j)``, ``V`` each window's and row's learnt mean square (learnt freely for :data:`M_ARM`
-    level windows, then only on windows without allowance, winsorised at the threshold). Armed
-    after those: learnt over the first second alone, on a reference that ramps up over it, the
-    levels were too low for the full motion (vertical3 drawn: starts at 1.18-1.19 s in 2 of 10
-    trials, none from 2 s on)."""
+    (row ``n + 1``); rows ``n + 2, n + 3`` scratch. The integrated momentum error ``E_k = sum (rho
+    - b) m T`` (``b`` the row's drift, learnt over the level's window) telescopes: over a window
+    of ``w`` updates its sum ``S = E_k - E_(k-w)`` is the missing torque's integral plus the two
+    end momenta's noise, whatever ``w``; a step ``d`` of missing torque is a ramp ``d w T`` in it.
+    ``u = M^-1 S`` (the unexplained velocity change: the velocity noise, independent per joint,
+    whitens it) per window of :data:`M_WINDOWS`; a joint measured at most ``obs_mslow`` fast has
+    its Coulomb torque known only within ``+-fc`` (``2 fc`` per sample of allowance): the friction
+    torques within it that explain ``u`` best are removed from it first (three passes of
+    coordinate descent, metric ``1 / V``). Statistic: the largest over windows of ``sqrt(sum_j
+    u_j^2 / V_j)``, ``V`` each window's and row's learnt mean square (learnt freely for
+    :data:`M_ARM` level windows, then only on windows without allowance, winsorised at the
+    threshold). Armed after those: learnt over the first second alone, on a reference that ramps
+    up over it, the levels were too low for the full motion (vertical3 drawn: starts at 1.18-1.19
+    s in 2 of 10 trials, none from 2 s on)."""
     n = qd.shape[0]
     rho, fc, sm, u = mt[n], mt[n + 1], mt[n + 2], mt[n + 3]
     c = obs[O_MC, 0]
