@@ -945,12 +945,29 @@ def est_step_trial_in(c, s, i, q, qd, tau, w):  # pragma: no cover - compiled
     if ints[I_DETECT] == 1:
         if cnt[C_REOPEN_AT] == cnt[C_K]:
             _reopen(c, Pi)
-        if _detect(c, s, i, s.eps[i], act):
-            alarm = 1
-            _alarm(c, s, i, cnt[C_K])
-        else:
-            cnt[C_SINCE_ALARM] = min(cnt[C_SINCE_ALARM] + 1, BIG)
+        alarm = _detect_step(c, s, i, s.eps[i], act)
     cnt[C_K] += 1
+    return alarm
+
+
+@njit(cache=True, inline="always")
+def _detect_step(c, s, i, eps, act):  # pragma: no cover - compiled
+    """The detector's part of a sample: :func:`_detect`, then the alarm or the count since it."""
+    cnt = s.cnt[i]
+    if _detect(c, s, i, eps, act):
+        _alarm(c, s, i, cnt[C_K])
+        return 1
+    cnt[C_SINCE_ALARM] = min(cnt[C_SINCE_ALARM] + 1, BIG)
+    return 0
+
+
+@njit(cache=True)
+def est_detect_trial(c, s, i, eps, act):  # pragma: no cover - compiled
+    """One sample of trial i's detector alone on given weighted prior errors ``eps (n,)`` of the
+    rows in use ``act (n,)`` (bool): 1 on an alarm, else 0. The estimate is not stepped (an alarm
+    still re-opens its covariance). For tests and replays of the detector on synthetic errors."""
+    alarm = _detect_step(c, s, i, eps, act)
+    s.cnt[i, C_K] += 1
     return alarm
 
 
