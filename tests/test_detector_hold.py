@@ -20,6 +20,9 @@ from adaptive_dd.plant.arm import Arm
 from adaptive_dd.robots import ROBOTS, robot_urdf
 
 
+UNHELD = Detector(hold_above=0.0, learn_below=0.0)  # the detector of before the hold
+
+
 @pytest.fixture(scope="module")
 def ur5():
     return Arm.from_urdf(robot_urdf("ur5"), ROBOTS["ur5"].payload_frame)
@@ -59,7 +62,8 @@ def test_the_hold_time_is_derived_from_the_filters_and_the_short_window(ur5):
     """94 samples at 1 kHz with tau_f = 10 ms and the 20 ms short average (the step's squared
     error at 95 % of its final value in the short average); half as many samples at 2 ms; a
     stated hold_time replaces it; bad values are named."""
-    hold = Detector(hold_above=0.5)
+    hold = Detector()
+    assert hold.hold_above == 0.5 and hold.hold_time is None and hold.learn_below == 0.0
     assert OnlineConfig(detector=hold).rise_samples == 94
     assert OnlineConfig(sample_period=2e-3, detector=hold).rise_samples == 47
     assert 94 < OnlineConfig(tau_f=0.02, detector=hold).rise_samples < 2 * 94
@@ -78,8 +82,8 @@ def test_an_established_level_is_held_while_a_change_rises(ur5):
     held (or frozen), the row alarms as the error passes the threshold (4x), within the rise."""
     n, start = 3_000, 2_000
     added = _ramp(n, start, 150, 6.0)
-    assert _replay(ur5, Detector(), added)[0] == []
-    for det in (Detector(hold_above=0.5), Detector(learn_below=0.5)):
+    assert _replay(ur5, UNHELD, added)[0] == []
+    for det in (Detector(hold_above=0.5), Detector(hold_above=0.0, learn_below=0.5)):
         alarms = _replay(ur5, det, added)[0]
         assert len(alarms) == 1 and start + 60 <= alarms[0] <= start + 150, (det, alarms)
 
@@ -93,10 +97,10 @@ def test_a_relearning_level_is_neither_held_nor_frozen(ur5):
     samples seen; the paper's arm, seed 2: a level frozen from its 20th sample after an alarm
     raised a false one)."""
     n, alarm_at = 3_000, 1_200
-    c, _ = est_init(OnlineConfig(detector=Detector()), ur5, 1)
+    c, _ = est_init(OnlineConfig(detector=UNHELD), ur5, 1)
     learn_from = alarm_at + 1 + c.ints[K.I_RESUME]
     added = _ramp(n, learn_from + 150, 20, 6.0)
-    for det in (Detector(), Detector(hold_above=0.5), Detector(learn_below=0.5)):
+    for det in (UNHELD, Detector(hold_above=0.5), Detector(hold_above=0.0, learn_below=0.5)):
         alarms, ratio, learned = _replay(ur5, det, added, alarm_at=alarm_at)
         assert alarms == [], det
     # the record tests it: row 0 rose above half the threshold (RMS) over a level not established
@@ -111,6 +115,6 @@ def test_a_hold_runs_out(ur5):
     it learned meanwhile, as without a hold: no alarm. Held for 1 s, the row alarms."""
     n, start = 3_000, 2_000
     added = _ramp(n, start, 400, 5.0)
-    assert _replay(ur5, Detector(), added)[0] == []
-    assert _replay(ur5, Detector(hold_above=0.5), added)[0] == []
+    assert _replay(ur5, UNHELD, added)[0] == []
+    assert _replay(ur5, Detector(), added)[0] == []  # the default: the derived hold
     assert len(_replay(ur5, Detector(hold_above=0.5, hold_time=1.0), added)[0]) == 1
