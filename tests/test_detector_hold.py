@@ -19,7 +19,6 @@ from adaptive_dd.identification.online import (
 from adaptive_dd.plant.arm import Arm
 from adaptive_dd.robots import ROBOTS, robot_urdf
 
-
 UNHELD = Detector(hold_above=0.0, learn_below=0.0)  # the detector of before the hold
 
 

@@ -171,7 +171,7 @@ F_ALPHA_FAST = 13  # the fast average's weight of a sample
 F_FAST2 = 14  # the fast average's threshold (squared RMS ratio)
 F_DET_SPEED = 15  # [rad/s] a joint no faster within the selection memory creeps
 F_CREEP_MARGIN = 16  # a creeping joint's row alarms only beyond this times its Coulomb friction
-F_LEARN_BELOW2 = 17  # an established level learns only while the short average is below this x the threshold (0: always)
+F_LEARN_BELOW2 = 17  # an established level learns only while short <= this x threshold x level (0: always)
 F_HOLD_ABOVE2 = 18  # a row rises when its short average exceeds this x the threshold x its level
 N_F = 19
 
