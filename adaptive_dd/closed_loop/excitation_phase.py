@@ -4,7 +4,10 @@ What a lab does before a task, on each seed's plant:
 
 1. the designed excitation of ``adaptive-dd excite`` (:func:`excitation_reference`: the
    D-optimal Fourier trajectory of :func:`~adaptive_dd.identification.excitation.design_excitation`
-   within the arm's limits, from the controllers' model), tracked for ``excite`` seconds by
+   within the arm's limits narrowed to the task's region, the range of positions the scenario's
+   ``[reference]`` visits widened by
+   :data:`~adaptive_dd.identification.excitation.TASK_MARGIN`, from the controllers' model; its
+   coverage of the task's poses reported), tracked for ``excite`` seconds by
    ``ct_nominal`` on the model (the robot's own controller), not scored;
 2. the record, with sensor noise at the scenario's levels (generator ``(seed, i, 3)``), identified
    as ``adaptive-dd identify`` does: the filtered regression and its weighted least squares
@@ -40,6 +43,7 @@ __all__ = [
     "RecordFit",
     "coulomb_width",
     "estimator_scale",
+    "excitation_coverage",
     "excitation_reference",
     "identified_prior",
     "identify_excitation",
@@ -88,6 +92,7 @@ class ExcitationReport:
     sigma_cov: Array
     coulomb_width: float
     estimator_scale: Array | None = None
+    coverage: object = None
 
     def errors(self) -> dict[str, Array]:
         """Per seed and base parameter ``(S, p)``, the error against the plant's,
@@ -119,13 +124,24 @@ class ExcitationReport:
             seeds[int(i)]["residual_std"] = self.rstd[k].tolist()
             if self.estimator_scale is not None:
                 seeds[int(i)]["estimator_scale"] = float(self.estimator_scale[k])
-        return {
+        out = {
             "duration": self.duration,
             "controller": EXCITATION_CONTROLLER,
             "tau_f": TAU_F,
             "coulomb_width": self.coulomb_width,
             "seeds": seeds,
         }
+        if self.coverage is not None:
+            cov = self.coverage
+            out["coverage"] = {
+                "span": cov.span.tolist(),
+                "speed": cov.speed.tolist(),
+                "distance_median_p90_max": cov.distance.tolist(),
+                "radius": cov.radius,
+                "inside": cov.inside,
+                "covered": cov.ok,
+            }
+        return out
 
     def summary(self) -> str:
         """One line per quantity: median over seeds of each seed's median and max relative error."""
@@ -135,35 +151,59 @@ class ExcitationReport:
             f"worst {100 * np.median(e.max(axis=1)):.3g} %"
             for key, e in err.items()
         ]
-        return (
+        line = (
             f"excitation {self.duration:g} s, base parameters vs the plant's (median over seeds) - "
             + "; ".join(parts)
         )
+        return line if self.coverage is None else line + "\n" + self.coverage.line()
 
 
 START_ATTEMPTS = 5
 """Random starts tried by :func:`excitation_reference` (the optimum of one may graze a limit)."""
 
 
-def excitation_reference(scenario):
-    """The designed excitation of the scenario's model (``adaptive-dd excite``'s defaults) as a
-    reference with a 1 s ramp: the first of :data:`START_ATTEMPTS` random starts (generators
-    ``(seed, 4, attempt)``) whose optimum keeps within the limits.
+REGIONS = ("task", "arm")
+"""Where :func:`excitation_reference` designs: the task's region (the default) or the arm's whole
+limits (``adaptive-dd excite``'s design on an arm alone; the comparison of docs/learning_the_arm.md)."""
+
+
+def _task_path(scenario, duration: float | None = None) -> tuple[Array, Array]:
+    """The scenario's reference ``q_d, qd_d (m, n)`` over ``duration`` (default the task's) at 20 ms."""
+    t = np.arange(0.0, float(duration or scenario.duration), 0.02)
+    q, qd, _ = scenario.reference.sample(t)
+    return q, qd
+
+
+def excitation_reference(scenario, region: str = "task"):
+    """The designed excitation of the scenario's model as a reference with a 1 s ramp: the first of
+    :data:`START_ATTEMPTS` random starts (generators ``(seed, 4, attempt)``) whose optimum keeps
+    within the limits. ``region="task"``: the arm's limits narrowed to the task's region
+    (:meth:`~adaptive_dd.identification.excitation.ExcitationLimits.of_task` on the scenario's
+    ``[reference]`` over its duration); ``"arm"``: the arm's whole limits.
 
     Raises
     ------
     ScenarioError
-        No start gave a trajectory within the arm's limits (naming ``run.excite``).
+        No start gave a trajectory within the limits (naming ``run.excite``), or the task's
+        positions lie outside the arm's limits.
     """
     from adaptive_dd.errors import ParameterError
     from adaptive_dd.identification.excitation import ExcitationLimits, design_excitation
 
     arm = scenario.arm
+    try:
+        lim = (
+            ExcitationLimits.of_task(arm, _task_path(scenario)[0])
+            if region == "task"
+            else ExcitationLimits.of_arm(arm)
+        )
+    except ParameterError as exc:
+        raise ScenarioError(f"{scenario.source}: run.excite: reference: {exc}") from None
     last = None
     for attempt in range(START_ATTEMPTS):
         rng = np.random.default_rng([int(scenario.seed), 4, attempt])
         try:
-            best, _ = design_excitation(arm, ExcitationLimits.of_arm(arm), rng=rng)
+            best, _ = design_excitation(arm, lim, rng=rng)
         except ParameterError as exc:
             last = exc
             continue
@@ -172,6 +212,16 @@ def excitation_reference(scenario):
         f"{scenario.source}: run.excite: no designed excitation within the arm's limits after "
         f"{START_ATTEMPTS} starts ({last})"
     )
+
+
+def excitation_coverage(scenario, reference, duration: float):
+    """How the excitation ``reference`` tracked for ``duration`` [s] covers the task's poses
+    (:func:`~adaptive_dd.identification.excitation.coverage`, the references sampled at 20 ms)."""
+    from adaptive_dd.identification.excitation import coverage
+
+    t = np.arange(0.0, float(duration), 0.02)
+    q, qd, _ = reference.sample(t)
+    return coverage(_task_path(scenario), (q, qd))
 
 
 def _excitation_scenario(scenario, reference):
@@ -278,7 +328,8 @@ def identify_excitation(scenario, idx, run_closed_loop) -> tuple[list[Array], Ex
     from adaptive_dd.closed_loop.types import io_of, plant_of, true_models
     from adaptive_dd.errors import DataError
 
-    exc = _excitation_scenario(scenario, excitation_reference(scenario))
+    reference = excitation_reference(scenario)
+    exc = _excitation_scenario(scenario, reference)
     res = run_closed_loop(exc, seed_indices=idx, keep_trajectories=len(idx))
     run = res.runs[EXCITATION_CONTROLLER]
     if run.failed.any():
@@ -315,6 +366,7 @@ def identify_excitation(scenario, idx, run_closed_loop) -> tuple[list[Array], Ex
         np.broadcast_to(scenario.arm.sigma, sig_plant.shape).copy(), np.array(rows["hat"]),
         np.array(rows["fit"]), np.array(rows["rstd"]), np.array(rows["std"]), np.array(rows["prior_cov"]),
         float(model.friction_velocity), np.array(kappa),
+        excitation_coverage(scenario, reference, scenario.excite),
     )  # fmt: skip
     return pis, report
 

@@ -28,6 +28,7 @@ inertia, viscous, Coulomb) so that parameters near zero are compared on their ki
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
@@ -39,8 +40,11 @@ from adaptive_dd.errors import ParameterError
 from adaptive_dd.identification.model import Model, arm_model, base_regressor
 
 __all__ = [
+    "TASK_MARGIN",
+    "Coverage",
     "ExcitationLimits",
     "FourierTrajectory",
+    "coverage",
     "design_excitation",
     "multisine",
     "reference_toml",
@@ -86,6 +90,33 @@ class ExcitationLimits:
             np.full(n, float(acceleration)),
             fraction * np.asarray(arm.actuator.torque_limit, float),
         )
+
+    @classmethod
+    def of_task(
+        cls, arm, task_q: Array, margin: float | None = None, acceleration: float = 5.0, fraction: float = 0.8
+    ) -> ExcitationLimits:
+        """The arm's limits (:meth:`of_arm`) with the positions narrowed to the task's region: per
+        joint the range the task's poses ``task_q (m, n)`` [rad] visit, widened by ``margin`` [rad]
+        (default :data:`TASK_MARGIN`) on each side, within the arm's limits less their margin.
+
+        Raises
+        ------
+        ParameterError
+            The task's range lies outside the arm's limits on some joint (named).
+        """
+        arm_lim = cls.of_arm(arm, acceleration=acceleration, fraction=fraction)
+        m = TASK_MARGIN if margin is None else float(margin)
+        task_q = np.asarray(task_q, float)
+        lo = np.maximum(arm_lim.lower, task_q.min(axis=0) - m)
+        hi = np.minimum(arm_lim.upper, task_q.max(axis=0) + m)
+        if np.any(hi <= lo):
+            j = int(np.argmax(hi <= lo))
+            raise ParameterError(
+                f"joint {j + 1}: the task's positions {task_q[:, j].min():.3g}..{task_q[:, j].max():.3g} rad "
+                "lie outside the arm's limits less their margin "
+                f"({arm_lim.lower[j]:.3g}..{arm_lim.upper[j]:.3g})"
+            )
+        return dataclasses.replace(arm_lim, lower=lo, upper=hi)
 
 
 @dataclass(frozen=True)
@@ -299,6 +330,67 @@ def _within_limits(
     if slack(alpha) < 0:  # the slack need not be monotone in alpha (torques): the checked factor
         alpha = MIN_SHRINK
     return FourierTrajectory(tr.q0, alpha * tr.a, alpha * tr.b, tr.f0)
+
+
+TASK_MARGIN = 0.2
+"""[rad] How far beyond the task's range of positions (per joint) a task-region excitation may go
+(:meth:`ExcitationLimits.of_task`; docs/learning_the_arm.md, "An excitation on the task's region")."""
+
+
+@dataclass(frozen=True)
+class Coverage:
+    """How well an excitation's record covers a task's poses (:func:`coverage`).
+
+    ``span (n,)``: per joint the fraction of the task's range of positions the excitation visits;
+    ``speed (n,)``: per joint the excitation's largest ``|qd|`` over the task's (1 or more: the
+    task's speeds are visited); ``distance (3,)`` [rad]: median, p90 and max over the task's poses
+    of the distance (largest joint difference) to the excitation's nearest pose; ``radius`` [rad]
+    the distance a pose is judged covered within (:data:`TASK_MARGIN`); ``inside`` the share of the
+    task's poses covered.
+    """
+
+    span: Array
+    speed: Array
+    distance: Array
+    radius: float
+    inside: float
+
+    @property
+    def ok(self) -> bool:
+        """The task's region is covered: every joint's range visited (``span >= 0.95``) and the
+        median task pose within ``radius`` of an excitation pose."""
+        return bool(np.all(self.span >= 0.95) and self.distance[0] <= self.radius)
+
+    def line(self) -> str:
+        """One printed line: the figures and the verdict."""
+        verdict = "covered" if self.ok else "NOT covered: the task leaves the excitation's region"
+        return (
+            f"coverage of the task's poses by the excitation: range visited per joint min "
+            f"{self.span.min():.0%}, speed reached per joint min {self.speed.min():.2f}x the task's; "
+            f"distance to the nearest excitation pose median {self.distance[0]:.3f} / p90 "
+            f"{self.distance[1]:.3f} / max {self.distance[2]:.3f} rad, {self.inside:.0%} within "
+            f"{self.radius:g} rad ({verdict})"
+        )
+
+
+def coverage(
+    task: tuple[Array, Array], excitation: tuple[Array, Array], radius: float = TASK_MARGIN
+) -> Coverage:
+    """How well the excitation's poses and speeds ``excitation = (q, qd)`` (each ``(m, n)``) cover
+    the task's ``task = (q, qd)`` (``(k, n)``): see :class:`Coverage`. Distances in the largest
+    joint difference [rad], task poses against every excitation pose (sample both at tens of
+    milliseconds: ``k m n`` numbers are held at once)."""
+    tq, tqd = (np.asarray(x, float) for x in task)
+    eq, eqd = (np.asarray(x, float) for x in excitation)
+    lo, hi = tq.min(axis=0), tq.max(axis=0)
+    seen = np.clip(np.minimum(hi, eq.max(axis=0)) - np.maximum(lo, eq.min(axis=0)), 0.0, None)
+    span = np.where(hi > lo, seen / np.maximum(hi - lo, 1e-300), 1.0)
+    speed = np.abs(eqd).max(axis=0) / np.maximum(np.abs(tqd).max(axis=0), 1e-300)
+    d = np.empty(len(tq))
+    for s in range(0, len(tq), 256):  # blocks: at most 256 m n numbers at once
+        d[s : s + 256] = np.abs(tq[s : s + 256, None, :] - eq[None]).max(axis=2).min(axis=1)
+    dist = np.array([np.median(d), np.quantile(d, 0.9), d.max()])
+    return Coverage(span, speed, dist, float(radius), float(np.mean(d <= radius)))
 
 
 def relative_bounds(crb: Array, sigma: Array, names: tuple[str, ...]) -> Array:
