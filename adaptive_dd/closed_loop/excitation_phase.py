@@ -41,7 +41,6 @@ __all__ = [
     "TAU_F",
     "ExcitationReport",
     "RecordFit",
-    "coulomb_width",
     "estimator_scale",
     "excitation_coverage",
     "excitation_reference",
@@ -77,7 +76,8 @@ class ExcitationReport:
     from the same record (:func:`~adaptive_dd.closed_loop.model_prior.estimator_scale`; 1 means
     the prior counts as much as its record would in the estimator; ones when the scenario runs no
     adaptive_ct; dividing the hand-off by it measured worse, docs/learning_the_arm.md);
-    ``coulomb_width`` [rad/s] the width of the identification's Coulomb law (:func:`coulomb_width`).
+    ``coulomb_width (S,)`` [rad/s] per seed the width of the identification's Coulomb law, from
+    the record (:func:`~adaptive_dd.identification.friction_width.coulomb_width`).
     """
 
     duration: float
@@ -90,7 +90,7 @@ class ExcitationReport:
     rstd: Array
     sigma_std: Array
     sigma_cov: Array
-    coulomb_width: float
+    coulomb_width: Array
     estimator_scale: Array | None = None
     coverage: object = None
 
@@ -128,7 +128,7 @@ class ExcitationReport:
             "duration": self.duration,
             "controller": EXCITATION_CONTROLLER,
             "tau_f": TAU_F,
-            "coulomb_width": self.coulomb_width,
+            "coulomb_width": self.coulomb_width.tolist(),
             "seeds": seeds,
         }
         if self.coverage is not None:
@@ -217,11 +217,14 @@ def excitation_reference(scenario, region: str = "task"):
 def excitation_coverage(scenario, reference, duration: float):
     """How the excitation ``reference`` tracked for ``duration`` [s] covers the task's poses
     (:func:`~adaptive_dd.identification.excitation.coverage`, the references sampled at 20 ms)."""
-    from adaptive_dd.identification.excitation import coverage
+    from adaptive_dd.identification.excitation import coverage, moving_joints
+    from adaptive_dd.identification.model import arm_model
 
     t = np.arange(0.0, float(duration), 0.02)
     q, qd, _ = reference.sample(t)
-    return coverage(_task_path(scenario), (q, qd))
+    task = _task_path(scenario)
+    moves = moving_joints(arm_model(scenario.arm), task[0][::10], np.random.default_rng(0))
+    return coverage(task, (q, qd), moves)
 
 
 def _excitation_scenario(scenario, reference):
@@ -291,30 +294,6 @@ def identify_record(
     return RecordFit(fit.pi, wls.sigma, fit.sigma, wls.residual_rms, np.sqrt(np.diag(prior)), wls.cov, prior)
 
 
-def coulomb_width(scenario) -> float:
-    """[rad/s] The width ``v`` of the identification's Coulomb law ``fc tanh(qd / v)`` on the
-    excitation's record: the arm's ``friction_velocity`` when the plant's law is that ``tanh``;
-    for a law with a sign (stick-slip, Stribeck) the measured velocity's noise, rms over the joints
-    (the scenario's ``velocity_variance``). The plant's friction is ``fc sgn(qd)``; of a measured
-    velocity with noise of std ``s`` what can be said is ``E[sgn(qd) | qd_measured] = erf(qd /
-    (sqrt(2) s))``, about ``tanh(qd / s)``. A wider law (the arm's default 0.02 rad/s against the
-    shipped noise's 0.007) is model error: on the drawn iiwa's noise-free excitation record
-    (``studies/excitation_diagnosis.py``) it made three fifths of the identified model's torque
-    error along the task's path."""
-    if getattr(scenario.arm, "friction", "stick-slip") == "tanh":
-        return float(scenario.arm.friction_velocity)
-    s = float(np.sqrt(np.mean(np.asarray(scenario.velocity_variance, dtype=float))))
-    return max(s, 1e-9)  # noise-free: the sign itself
-
-
-def identification_model(scenario):
-    """The model the excitation's record is identified with: the arm's, with the Coulomb law's
-    width :func:`coulomb_width`."""
-    from adaptive_dd.identification.model import arm_model
-
-    return dataclasses.replace(arm_model(scenario.arm), friction_velocity=coulomb_width(scenario))
-
-
 def identify_excitation(scenario, idx, run_closed_loop) -> tuple[list[Array], ExcitationReport]:
     """Run the excitation on each seed's plant (``run_closed_loop``: the closed loop's runner,
     :func:`~adaptive_dd.closed_loop.runner.run_closed_loop`) and identify; returns each seed's model
@@ -337,17 +316,21 @@ def identify_excitation(scenario, idx, run_closed_loop) -> tuple[list[Array], Ex
             f"{scenario.source}: run.excite: the excitation failed on seed(s) "
             f"{[int(i) for i, f in zip(idx, run.failed, strict=True) if f]} (tracking lost)"
         )
-    model = identification_model(scenario)
+    from adaptive_dd.identification.friction_width import identification_model
+
     scale_cfg = _estimator_config(scenario)
     std = io_of(scenario).std
     n, T = scenario.n_joints, scenario.sample_period
     B = scenario.arm.base.B
     sig_plant = true_models(plant_of(exc, idx))[:, 0] @ B.T
-    pis, kappa, rows = [], [], {"hat": [], "fit": [], "rstd": [], "std": [], "prior_cov": []}
+    pis, kappa, widths = [], [], []
+    rows = {"hat": [], "fit": [], "rstd": [], "std": [], "prior_cov": []}
     for k, i in enumerate(idx):
         rng = np.random.default_rng([int(scenario.seed), int(i), 3])
         qm = run.q[k] + std[:n] * rng.standard_normal(run.q[k].shape)
         qdm = run.qd[k] + std[n:] * rng.standard_normal(run.qd[k].shape)
+        model = identification_model(scenario.arm, qdm)  # the Coulomb law's width from the record
+        widths.append(model.friction_velocity)
         try:
             one = identify_record(model, qm, qdm, run.tau[k], T)
         except DataError as exc_:
@@ -365,7 +348,7 @@ def identify_excitation(scenario, idx, run_closed_loop) -> tuple[list[Array], Ex
         float(scenario.excite), tuple(idx), tuple(model.names), sig_plant,
         np.broadcast_to(scenario.arm.sigma, sig_plant.shape).copy(), np.array(rows["hat"]),
         np.array(rows["fit"]), np.array(rows["rstd"]), np.array(rows["std"]), np.array(rows["prior_cov"]),
-        float(model.friction_velocity), np.array(kappa),
+        np.array(widths), np.array(kappa),
         excitation_coverage(scenario, reference, scenario.excite),
     )  # fmt: skip
     return pis, report
