@@ -19,8 +19,9 @@ what ``noise`` does, measured
 worse, docs/learning_the_arm.md). With the phase it also prints the consistency check
 ``estimator_scale`` per seed (:func:`adaptive_dd.closed_loop.model_prior.estimator_scale`) and
 the excitation's coverage of the task's region (:class:`adaptive_dd.identification.excitation.Coverage`).
-``--region arm``: the excitation designed over the arm's whole limits (the design before the
-task's region, :func:`adaptive_dd.closed_loop.excitation_phase.excitation_reference`).
+``--region task``: the excitation designed on the task's region (the arm's limits narrowed to the
+reference's positions +- ``TASK_MARGIN``), not over the arm's whole limits (the default,
+:func:`adaptive_dd.closed_loop.excitation_phase.excitation_reference`; measured worse).
 ``--targets``: also the benchmark report's "Targets" section of each run (what ``adaptive-dd
 benchmark`` prints for the scenario with ``[run] excite`` set).
 """
@@ -113,11 +114,11 @@ def main() -> None:
     ap.add_argument("--handoff", choices=("cov", "std", "noise"), default="cov")
     ap.add_argument("--prior-scale", type=float, default=None, help="the handed-on covariance times S")
     ap.add_argument(
-        "--region", choices=("task", "arm"), default="task", help="where the excitation is designed"
+        "--region", choices=("arm", "task"), default="arm", help="where the excitation is designed"
     )
     ap.add_argument("--targets", action="store_true", help="also print the report's Targets section")
     a = ap.parse_args()
-    if a.region != "task":  # the design over the arm's whole limits (before the task's region)
+    if a.region != "arm":  # the design on the task's region (an ablation: measured worse)
         from adaptive_dd.closed_loop import excitation_phase
 
         design = excitation_phase.excitation_reference

@@ -367,7 +367,7 @@ class Coverage:
 
     def line(self) -> str:
         """One printed line: the figures and the verdict."""
-        verdict = "covered" if self.ok else "NOT covered: the excitation is not on the task's region"
+        verdict = "covered" if self.ok else "NOT covered: the excitation lies mostly off the task's region"
         judged = self.span[self.moves] if self.moves.any() else self.span
         return (
             f"coverage of the task's region (its positions +- {self.radius:g} rad) by the excitation: "
