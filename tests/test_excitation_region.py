@@ -1,6 +1,8 @@
-"""The excitation phase's design on the task's region (``[run] excite``) and the coverage check it
-prints: the excitation keeps within the arm's limits and the task's range widened by TASK_MARGIN,
-covers the task's region, and an excitation off that region is caught."""
+"""The excitation phase's coverage check of the task's region (``[run] excite`` prints it) and the
+design on that region (``region="task"``, an option: measured worse than the arm's whole limits,
+docs/learning_the_arm.md): the region's design keeps within the arm's limits and the task's range
+widened by TASK_MARGIN and is covered; an excitation off that region is caught, the default
+design over the arm's whole limits among them."""
 
 from __future__ import annotations
 
@@ -37,7 +39,7 @@ def vertical3():
 
 @pytest.fixture(scope="module")
 def designed(vertical3):
-    return excitation_reference(vertical3)
+    return excitation_reference(vertical3, "task")
 
 
 def test_the_task_region_limits_hold_the_task_and_keep_within_the_arms(vertical3):
@@ -64,6 +66,13 @@ def test_the_designed_excitation_covers_the_task_and_keeps_its_region(vertical3,
     moved = dataclasses.replace(designed, offset=tuple(x + 3 * TASK_MARGIN for x in designed.offset))
     off = excitation_coverage(vertical3, moved, 20.0)
     assert not off.ok and "NOT covered" in off.line(), off.line()
+
+
+def test_the_default_design_over_the_arms_limits_is_reported_off_the_tasks_region(vertical3):
+    """vertical3: the phase's default excitation (the arm's whole limits) visits the task's range on
+    every joint but spends 14 % of its time in the task's region: reported, not covered."""
+    cov = excitation_coverage(vertical3, excitation_reference(vertical3), 20.0)
+    assert cov.span.min() >= 0.9 and cov.inside < 0.3 and not cov.ok, cov.line()
 
 
 def test_an_excitation_over_the_arms_whole_limits_is_not_on_the_tasks_region():
@@ -97,4 +106,4 @@ def test_a_task_outside_the_arms_limits_is_a_scenario_error(vertical3):
     ref = vertical3.reference
     far = dataclasses.replace(ref, offset=(float(lim.upper[0]) + 2.0, *ref.offset[1:]))
     with pytest.raises(ScenarioError, match=r"run.excite: reference: joint 1"):
-        excitation_reference(dataclasses.replace(vertical3, reference=far))
+        excitation_reference(dataclasses.replace(vertical3, reference=far), "task")
