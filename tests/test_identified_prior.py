@@ -290,10 +290,10 @@ def test_identify_and_the_excitation_phase_fit_one_friction_on_one_record(tmp_pa
     out = tmp_path / "id"
     assert main(["identify", "--arm", str(scen), str(path), "--out", str(out), "--output-error", "off"]) == 0
     m = json.loads((out / "model.json").read_text())
-    assert m["friction_velocity"] == pytest.approx(model.friction_velocity, rel=1e-9)
+    assert m["friction_velocity"] == pytest.approx(model.friction_velocity, rel=1e-6)  # the CSV's digits
     names = list(m["names"])
     fr = [k for k, nm in enumerate(names) if nm.startswith(("fc", "fv"))]
-    assert np.allclose(np.asarray(m["sigma"])[fr], phase.hat[fr], rtol=1e-6, atol=1e-9)
+    assert np.allclose(np.asarray(m["sigma"])[fr], phase.hat[fr], rtol=1e-5, atol=1e-9)
 
 
 def test_the_identified_prior_is_in_the_online_estimators_units():
