@@ -3,7 +3,7 @@ excitation phase before it, on one scenario (ct_oracle, ct_nominal and adaptive_
 
     python studies/excitation_phase.py SCENARIO.toml [--seeds 20] [--excite 20] [--first-seed 0]
         [--only with|without] [--urdf-prior] [--handoff cov|std|noise] [--prior-scale S]
-        [--region task|arm] [--targets]
+        [--region task|arm] [--targets] [--coverage-only]
 
 Prints, for ``excite = 0`` and ``excite = SECONDS``, adaptive_ct / ct_oracle per segment (mean,
 p90, max over seeds), the first segment's time to come within 1.2x of the floor
@@ -23,7 +23,8 @@ the excitation's coverage of the task's region (:class:`adaptive_dd.identificati
 reference's positions +- ``TASK_MARGIN``), not over the arm's whole limits (the default,
 :func:`adaptive_dd.closed_loop.excitation_phase.excitation_reference`; measured worse).
 ``--targets``: also the benchmark report's "Targets" section of each run (what ``adaptive-dd
-benchmark`` prints for the scenario with ``[run] excite`` set).
+benchmark`` prints for the scenario with ``[run] excite`` set). ``--coverage-only``: the designed
+excitation's coverage of the task's region alone (no run).
 """
 
 from __future__ import annotations
@@ -117,7 +118,16 @@ def main() -> None:
         "--region", choices=("arm", "task"), default="arm", help="where the excitation is designed"
     )
     ap.add_argument("--targets", action="store_true", help="also print the report's Targets section")
+    ap.add_argument("--coverage-only", action="store_true", help="the excitation's coverage alone, no run")
     a = ap.parse_args()
+    if a.coverage_only:
+        from adaptive_dd.closed_loop.excitation_phase import excitation_coverage, excitation_reference
+
+        sc = parse_scenario(read_toml(Path(a.scenario)), a.scenario, Path(a.scenario).stem)
+        ref = excitation_reference(sc, a.region)
+        cov = excitation_coverage(sc, ref, a.excite)
+        print(f"{a.scenario}, {a.region} design, {a.excite:g} s: {cov.line()}")
+        return
     if a.region != "arm":  # the design on the task's region (an ablation: measured worse)
         from adaptive_dd.closed_loop import excitation_phase
 

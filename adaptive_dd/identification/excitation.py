@@ -361,13 +361,18 @@ class Coverage:
 
     @property
     def ok(self) -> bool:
-        """Covered: every judged joint's range visited to :data:`MIN_SPAN` and at least
-        :data:`MIN_INSIDE` of the excitation within the task's region."""
-        return bool(np.all(self.span[self.moves] >= MIN_SPAN) and self.inside >= MIN_INSIDE)
+        """Covered: every judged joint's range visited to :data:`MIN_SPAN`, and either at least
+        :data:`MIN_INSIDE` of the excitation within the task's region or the median task pose within
+        ``radius`` of an excitation pose (an excitation wider than the region that still passes
+        near the task's poses, as on a two-joint arm)."""
+        near = self.inside >= MIN_INSIDE or self.distance[0] <= self.radius
+        return bool(np.all(self.span[self.moves] >= MIN_SPAN) and near)
 
     def line(self) -> str:
         """One printed line: the figures and the verdict."""
         verdict = "covered" if self.ok else "NOT covered: the excitation lies mostly off the task's region"
+        if self.ok and self.inside < MIN_INSIDE:
+            verdict = "covered: the task's poses lie near the excitation's"
         judged = self.span[self.moves] if self.moves.any() else self.span
         return (
             f"coverage of the task's region (its positions +- {self.radius:g} rad) by the excitation: "
