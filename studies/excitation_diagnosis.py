@@ -55,7 +55,13 @@ def main() -> None:
         d.setdefault("plant", {})["friction"] = a.law
     sc = parse_scenario(d, a.scenario, Path(a.scenario).stem)
     idx = tuple(range(a.seeds))
-    model = ep.identification_model(sc)
+    # the phase's Coulomb width is the record's velocity noise (friction_width); here, before the
+    # records are drawn, the stated noise's std, which that measures (to a fraction of a per cent)
+    s = float(np.sqrt(np.mean(sc.velocity_variance)))
+    law = getattr(sc.arm, "friction", "stick-slip")
+    model = dataclasses.replace(
+        arm_model(sc.arm), friction_velocity=sc.arm.friction_velocity if law == "tanh" else max(s, 1e-9)
+    )
     n, T, std = sc.n_joints, sc.sample_period, io_of(sc).std
     if a.save and Path(a.save).exists():  # the records of an earlier run
         z = np.load(a.save)

@@ -3,6 +3,7 @@ excitation phase before it, on one scenario (ct_oracle, ct_nominal and adaptive_
 
     python studies/excitation_phase.py SCENARIO.toml [--seeds 20] [--excite 20] [--first-seed 0]
         [--only with|without] [--urdf-prior] [--handoff cov|std|noise] [--prior-scale S]
+        [--region task|arm] [--targets] [--coverage-only]
 
 Prints, for ``excite = 0`` and ``excite = SECONDS``, adaptive_ct / ct_oracle per segment (mean,
 p90, max over seeds), the first segment's time to come within 1.2x of the floor
@@ -16,7 +17,14 @@ that prior's standard deviations only (the hand-off before the correlations were
 the iiwa); ``--prior-scale S``: the covariance handed on times ``S`` (ablations; ``S = 35``, about
 what ``noise`` does, measured
 worse, docs/learning_the_arm.md). With the phase it also prints the consistency check
-``estimator_scale`` per seed (:func:`adaptive_dd.closed_loop.model_prior.estimator_scale`).
+``estimator_scale`` per seed (:func:`adaptive_dd.closed_loop.model_prior.estimator_scale`) and
+the excitation's coverage of the task's region (:class:`adaptive_dd.identification.excitation.Coverage`).
+``--region task``: the excitation designed on the task's region (the arm's limits narrowed to the
+reference's positions +- ``TASK_MARGIN``), not over the arm's whole limits (the default,
+:func:`adaptive_dd.closed_loop.excitation_phase.excitation_reference`; measured worse).
+``--targets``: also the benchmark report's "Targets" section of each run (what ``adaptive-dd
+benchmark`` prints for the scenario with ``[run] excite`` set). ``--coverage-only``: the designed
+excitation's coverage of the task's region alone (no run).
 """
 
 from __future__ import annotations
@@ -33,8 +41,9 @@ from adaptive_dd.benchmark.runner import run_benchmark
 from adaptive_dd.benchmark.scenario import parse_scenario, read_toml
 
 
-def summary(d: dict, source: str, seeds: list[int]) -> list[str]:
-    """The figures of one run of the scenario ``d`` over ``seeds``."""
+def summary(d: dict, source: str, seeds: list[int], targets: bool = False) -> list[str]:
+    """The figures of one run of the scenario ``d`` over ``seeds`` (``targets``: and the report's
+    "Targets" section)."""
     sc = parse_scenario(d, source, Path(source).stem)
     res = run_benchmark(sc, progress=False, seed_indices=seeds)
     m = compute_metrics(res)
@@ -74,12 +83,23 @@ def summary(d: dict, source: str, seeds: list[int]) -> list[str]:
             f"parameters and seeds: model {np.median(err['model']):.3g} ({err['model'].max():.3g}), "
             f"identified {np.median(err['fit']):.3g} ({err['fit'].max():.3g})"
         )
+        if rep.coverage is not None:
+            lines.append("  " + rep.coverage.line())
+        lines.append(
+            "  Coulomb law's width per seed [rad/s] (the record's velocity noise): "
+            + " ".join(f"{x:.4g}" for x in rep.coulomb_width)
+        )
         if rep.estimator_scale is not None:
             lines.append(
                 "  the identification's covariance against the online estimator's information from the "
                 "same record (estimator_scale, median generalised eigenvalue) per seed: "
                 + " ".join(f"{x:.3g}" for x in rep.estimator_scale)
             )
+    if targets:
+        from adaptive_dd.benchmark.report import format_report
+
+        text = format_report(m, res)
+        lines += ["  " + x for x in text[text.index("Targets") :].splitlines()]
     lines.append(f"  wall time {res.wall_time:.0f} s")
     return lines
 
@@ -94,7 +114,25 @@ def main() -> None:
     ap.add_argument("--urdf-prior", action="store_true")
     ap.add_argument("--handoff", choices=("cov", "std", "noise"), default="cov")
     ap.add_argument("--prior-scale", type=float, default=None, help="the handed-on covariance times S")
+    ap.add_argument(
+        "--region", choices=("arm", "task"), default="arm", help="where the excitation is designed"
+    )
+    ap.add_argument("--targets", action="store_true", help="also print the report's Targets section")
+    ap.add_argument("--coverage-only", action="store_true", help="the excitation's coverage alone, no run")
     a = ap.parse_args()
+    if a.coverage_only:
+        from adaptive_dd.closed_loop.excitation_phase import excitation_coverage, excitation_reference
+
+        sc = parse_scenario(read_toml(Path(a.scenario)), a.scenario, Path(a.scenario).stem)
+        ref = excitation_reference(sc, a.region)
+        cov = excitation_coverage(sc, ref, a.excite)
+        print(f"{a.scenario}, {a.region} design, {a.excite:g} s: {cov.line()}")
+        return
+    if a.region != "arm":  # the design on the task's region (an ablation: measured worse)
+        from adaptive_dd.closed_loop import excitation_phase
+
+        design = excitation_phase.excitation_reference
+        excitation_phase.excitation_reference = lambda sc: design(sc, a.region)
     if a.prior_scale is not None:  # an ablation: the hand-off's covariance scaled by a constant
         from adaptive_dd.closed_loop import excitation_phase, model_prior
 
@@ -134,7 +172,7 @@ def main() -> None:
         d = copy.deepcopy(base)
         d["run"]["excite"] = excite
         print(f"{a.scenario}, seeds {seeds[0]}..{seeds[-1]}, excite = {excite:g} s:", flush=True)
-        print("\n".join(summary(d, a.scenario, seeds)), flush=True)
+        print("\n".join(summary(d, a.scenario, seeds, a.targets)), flush=True)
 
 
 if __name__ == "__main__":

@@ -30,6 +30,7 @@ from adaptive_dd.benchmark.scenario import parse_scenario, read_toml
 from adaptive_dd.closed_loop import excitation_phase as ep
 from adaptive_dd.closed_loop.runner import run_closed_loop
 from adaptive_dd.closed_loop.types import io_of, plant_of, true_models
+from adaptive_dd.identification.friction_width import identification_model
 from adaptive_dd.identification.regression import filtered_regression, weighted_least_squares
 
 
@@ -45,7 +46,6 @@ def main() -> None:
     idx = tuple(range(a.seeds))
     exc = ep._excitation_scenario(sc, ep.excitation_reference(sc))
     run = run_closed_loop(exc, seed_indices=idx, keep_trajectories=len(idx)).runs[ep.EXCITATION_CONTROLLER]
-    model = ep.identification_model(sc)  # the phase's model: its Coulomb law's width
     n, T, std = sc.n_joints, sc.sample_period, io_of(sc).std
     plant = true_models(plant_of(exc, idx))[:, 0] @ sc.arm.base.B.T
     rules: dict[str, list] = {"white": [], "sandwich": [], "sandwich + model error": []}
@@ -53,6 +53,7 @@ def main() -> None:
         rng = np.random.default_rng([int(sc.seed), int(i), 3])
         qm = run.q[k] + std[:n] * rng.standard_normal(run.q[k].shape)
         qdm = run.qd[k] + std[n:] * rng.standard_normal(run.qd[k].shape)
+        model = identification_model(sc.arm, qdm)  # the phase's model: its Coulomb law's width
         one = ep.identify_record(model, qm, qdm, run.tau[k], T)
         white = weighted_least_squares(
             filtered_regression(model, qm, qdm, run.tau[k], tau_f=ep.TAU_F, sample_period=T)

@@ -497,6 +497,13 @@ def test_the_excitation_phase_identifies_the_plant_and_feeds_the_controllers():
     assert rep.sigma_std.shape == rep.sigma_fit.shape and np.all(rep.sigma_std >= step)
     assert np.all(rep.sigma_std > 0)
     assert m["plant"]["seeds"][1] == compute_metrics(base)["plant"]["seeds"][1]  # the same plants
+    # the coverage of the task's region printed and in the metrics; the Coulomb width the record's noise
+    cov = m["excitation"]["coverage"]
+    assert 0.0 <= cov["inside"] <= 1.0 and "coverage of the task's region" in rep.summary()
+    np.testing.assert_allclose(rep.coulomb_width, np.sqrt(np.mean(sc.velocity_variance)), rtol=0.03)
+    from adaptive_dd.benchmark.report import format_report
+
+    assert "Targets, after an excitation phase of 10 s ([run] excite)" in format_report(m, res)
 
 
 def test_the_excitation_phase_hands_on_its_prior_and_reports_its_scale(monkeypatch):

@@ -58,7 +58,8 @@ def format_report(metrics: dict, res: BenchmarkResult) -> str:
     lines += _payload_tables(ctrls, head)
     lines += _seed_tables(ctrls, head)
     lines += _failure_lines(ctrls)
-    lines += ["", "Targets (measured, not asserted):"]
+    phase = f", after an excitation phase of {sc.excite:g} s ([run] excite)" if sc.excite else ""
+    lines += ["", f"Targets{phase} (measured, not asserted):"]
     lines += _targets(metrics, res)
     return "\n".join(lines)
 

@@ -160,14 +160,14 @@ def _consistent(model, fit):
 
 def identify_log(args: argparse.Namespace, arm, outputs) -> int:
     """``adaptive-dd identify --arm SCENARIO [FILES]`` for an arm from a URDF."""
+    from adaptive_dd.identification.friction_width import identification_model
     from adaptive_dd.identification.log_fit import filter_time_constant, identifiable_subset
-    from adaptive_dd.identification.model import arm_model
     from adaptive_dd.identification_plots import plot_torque_fit
 
     for note in arm.urdf_notes:
         print(f"note: {note}")
     spec, rec = read_arm_log(args.arm, arm, args.data, args.window)
-    model = arm_model(arm)
+    model = identification_model(arm, rec.qd)  # the Coulomb law's width from the record's noise
     names = arm.joint_names
     tau_f = args.tau_f or filter_time_constant(rec.sample_period)
     print(
@@ -177,6 +177,14 @@ def identify_log(args: argparse.Namespace, arm, outputs) -> int:
     )
     for note in rec.notes:
         print(f"  {note}")
+    print(
+        f"Coulomb friction fitted as fc tanh(qd / {model.friction_velocity:.3g} rad/s): "
+        + (
+            "the arm's friction_velocity (its law is tanh)"
+            if getattr(arm, "friction", "") == "tanh"
+            else "the width of the record's velocity noise (adaptive_dd.identification.friction_width)"
+        )
+    )
     if args.payload_only:
         return _payload_only(args, arm, model, rec, tau_f)
     lim = arm.position_limits
@@ -239,7 +247,7 @@ def _write_model(outputs, arm, model, rec, fit, cf, spec) -> list:
         gravity=arm.gravity.tolist(),
         repair_inertia=arm.repair_inertia,
         joint_names=list(arm.joint_names),
-        friction_velocity=float(arm.friction_velocity),
+        friction_velocity=float(model.friction_velocity),
         names=list(model.names),
         sigma=fit.sigma.tolist(),
         sigma_urdf=model.sigma_ref.tolist(),

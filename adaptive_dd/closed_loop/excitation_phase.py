@@ -4,7 +4,9 @@ What a lab does before a task, on each seed's plant:
 
 1. the designed excitation of ``adaptive-dd excite`` (:func:`excitation_reference`: the
    D-optimal Fourier trajectory of :func:`~adaptive_dd.identification.excitation.design_excitation`
-   within the arm's limits, from the controllers' model), tracked for ``excite`` seconds by
+   within the arm's limits, from the controllers' model; its coverage of the task's region, the
+   positions the scenario's ``[reference]`` visits widened by
+   :data:`~adaptive_dd.identification.excitation.TASK_MARGIN`, reported), tracked for ``excite`` seconds by
    ``ct_nominal`` on the model (the robot's own controller), not scored;
 2. the record, with sensor noise at the scenario's levels (generator ``(seed, i, 3)``), identified
    as ``adaptive-dd identify`` does: the filtered regression and its weighted least squares
@@ -38,8 +40,8 @@ __all__ = [
     "TAU_F",
     "ExcitationReport",
     "RecordFit",
-    "coulomb_width",
     "estimator_scale",
+    "excitation_coverage",
     "excitation_reference",
     "identified_prior",
     "identify_excitation",
@@ -73,7 +75,8 @@ class ExcitationReport:
     from the same record (:func:`~adaptive_dd.closed_loop.model_prior.estimator_scale`; 1 means
     the prior counts as much as its record would in the estimator; ones when the scenario runs no
     adaptive_ct; dividing the hand-off by it measured worse, docs/learning_the_arm.md);
-    ``coulomb_width`` [rad/s] the width of the identification's Coulomb law (:func:`coulomb_width`).
+    ``coulomb_width (S,)`` [rad/s] per seed the width of the identification's Coulomb law, from
+    the record (:func:`~adaptive_dd.identification.friction_width.coulomb_width`).
     """
 
     duration: float
@@ -86,8 +89,9 @@ class ExcitationReport:
     rstd: Array
     sigma_std: Array
     sigma_cov: Array
-    coulomb_width: float
+    coulomb_width: Array
     estimator_scale: Array | None = None
+    coverage: object = None
 
     def errors(self) -> dict[str, Array]:
         """Per seed and base parameter ``(S, p)``, the error against the plant's,
@@ -119,13 +123,24 @@ class ExcitationReport:
             seeds[int(i)]["residual_std"] = self.rstd[k].tolist()
             if self.estimator_scale is not None:
                 seeds[int(i)]["estimator_scale"] = float(self.estimator_scale[k])
-        return {
+        out = {
             "duration": self.duration,
             "controller": EXCITATION_CONTROLLER,
             "tau_f": TAU_F,
-            "coulomb_width": self.coulomb_width,
+            "coulomb_width": self.coulomb_width.tolist(),
             "seeds": seeds,
         }
+        if self.coverage is not None:
+            cov = self.coverage
+            out["coverage"] = {
+                "span": cov.span.tolist(),
+                "speed": cov.speed.tolist(),
+                "distance_median_p90_max": cov.distance.tolist(),
+                "radius": cov.radius,
+                "inside": cov.inside,
+                "covered": cov.ok,
+            }
+        return out
 
     def summary(self) -> str:
         """One line per quantity: median over seeds of each seed's median and max relative error."""
@@ -135,35 +150,61 @@ class ExcitationReport:
             f"worst {100 * np.median(e.max(axis=1)):.3g} %"
             for key, e in err.items()
         ]
-        return (
+        line = (
             f"excitation {self.duration:g} s, base parameters vs the plant's (median over seeds) - "
             + "; ".join(parts)
         )
+        return line if self.coverage is None else line + "\n" + self.coverage.line()
 
 
 START_ATTEMPTS = 5
 """Random starts tried by :func:`excitation_reference` (the optimum of one may graze a limit)."""
 
 
-def excitation_reference(scenario):
-    """The designed excitation of the scenario's model (``adaptive-dd excite``'s defaults) as a
-    reference with a 1 s ramp: the first of :data:`START_ATTEMPTS` random starts (generators
-    ``(seed, 4, attempt)``) whose optimum keeps within the limits.
+REGIONS = ("arm", "task")
+"""Where :func:`excitation_reference` designs: the arm's whole limits (the default, ``adaptive-dd
+excite``'s design) or the task's region (measured worse on the iiwa, vertical3 and the paper's arm:
+less information, docs/learning_the_arm.md, "The excitation on the task's region")."""
+
+
+def _task_path(scenario, duration: float | None = None) -> tuple[Array, Array]:
+    """The scenario's reference ``q_d, qd_d (m, n)`` over ``duration`` (default the task's) at 20 ms."""
+    t = np.arange(0.0, float(duration or scenario.duration), 0.02)
+    q, qd, _ = scenario.reference.sample(t)
+    return q, qd
+
+
+def excitation_reference(scenario, region: str = "arm"):
+    """The designed excitation of the scenario's model as a reference with a 1 s ramp: the first of
+    :data:`START_ATTEMPTS` random starts (generators ``(seed, 4, attempt)``) whose optimum keeps
+    within the limits. ``region="arm"``: the arm's whole limits (:data:`REGIONS`); ``"task"``: the
+    arm's limits narrowed to the task's region
+    (:meth:`~adaptive_dd.identification.excitation.ExcitationLimits.of_task` on the scenario's
+    ``[reference]`` over its duration).
 
     Raises
     ------
     ScenarioError
-        No start gave a trajectory within the arm's limits (naming ``run.excite``).
+        No start gave a trajectory within the limits (naming ``run.excite``), or the task's
+        positions lie outside the arm's limits.
     """
     from adaptive_dd.errors import ParameterError
     from adaptive_dd.identification.excitation import ExcitationLimits, design_excitation
 
     arm = scenario.arm
+    try:
+        lim = (
+            ExcitationLimits.of_task(arm, _task_path(scenario)[0])
+            if region == "task"
+            else ExcitationLimits.of_arm(arm)
+        )
+    except ParameterError as exc:
+        raise ScenarioError(f"{scenario.source}: run.excite: reference: {exc}") from None
     last = None
     for attempt in range(START_ATTEMPTS):
         rng = np.random.default_rng([int(scenario.seed), 4, attempt])
         try:
-            best, _ = design_excitation(arm, ExcitationLimits.of_arm(arm), rng=rng)
+            best, _ = design_excitation(arm, lim, rng=rng)
         except ParameterError as exc:
             last = exc
             continue
@@ -172,6 +213,19 @@ def excitation_reference(scenario):
         f"{scenario.source}: run.excite: no designed excitation within the arm's limits after "
         f"{START_ATTEMPTS} starts ({last})"
     )
+
+
+def excitation_coverage(scenario, reference, duration: float):
+    """How the excitation ``reference`` tracked for ``duration`` [s] covers the task's poses
+    (:func:`~adaptive_dd.identification.excitation.coverage`, the references sampled at 20 ms)."""
+    from adaptive_dd.identification.excitation import coverage, moving_joints
+    from adaptive_dd.identification.model import arm_model
+
+    t = np.arange(0.0, float(duration), 0.02)
+    q, qd, _ = reference.sample(t)
+    task = _task_path(scenario)
+    moves = moving_joints(arm_model(scenario.arm), task[0][::10], np.random.default_rng(0))
+    return coverage(task, (q, qd), moves)
 
 
 def _excitation_scenario(scenario, reference):
@@ -241,30 +295,6 @@ def identify_record(
     return RecordFit(fit.pi, wls.sigma, fit.sigma, wls.residual_rms, np.sqrt(np.diag(prior)), wls.cov, prior)
 
 
-def coulomb_width(scenario) -> float:
-    """[rad/s] The width ``v`` of the identification's Coulomb law ``fc tanh(qd / v)`` on the
-    excitation's record: the arm's ``friction_velocity`` when the plant's law is that ``tanh``;
-    for a law with a sign (stick-slip, Stribeck) the measured velocity's noise, rms over the joints
-    (the scenario's ``velocity_variance``). The plant's friction is ``fc sgn(qd)``; of a measured
-    velocity with noise of std ``s`` what can be said is ``E[sgn(qd) | qd_measured] = erf(qd /
-    (sqrt(2) s))``, about ``tanh(qd / s)``. A wider law (the arm's default 0.02 rad/s against the
-    shipped noise's 0.007) is model error: on the drawn iiwa's noise-free excitation record
-    (``studies/excitation_diagnosis.py``) it made three fifths of the identified model's torque
-    error along the task's path."""
-    if getattr(scenario.arm, "friction", "stick-slip") == "tanh":
-        return float(scenario.arm.friction_velocity)
-    s = float(np.sqrt(np.mean(np.asarray(scenario.velocity_variance, dtype=float))))
-    return max(s, 1e-9)  # noise-free: the sign itself
-
-
-def identification_model(scenario):
-    """The model the excitation's record is identified with: the arm's, with the Coulomb law's
-    width :func:`coulomb_width`."""
-    from adaptive_dd.identification.model import arm_model
-
-    return dataclasses.replace(arm_model(scenario.arm), friction_velocity=coulomb_width(scenario))
-
-
 def identify_excitation(scenario, idx, run_closed_loop) -> tuple[list[Array], ExcitationReport]:
     """Run the excitation on each seed's plant (``run_closed_loop``: the closed loop's runner,
     :func:`~adaptive_dd.closed_loop.runner.run_closed_loop`) and identify; returns each seed's model
@@ -278,7 +308,8 @@ def identify_excitation(scenario, idx, run_closed_loop) -> tuple[list[Array], Ex
     from adaptive_dd.closed_loop.types import io_of, plant_of, true_models
     from adaptive_dd.errors import DataError
 
-    exc = _excitation_scenario(scenario, excitation_reference(scenario))
+    reference = excitation_reference(scenario)
+    exc = _excitation_scenario(scenario, reference)
     res = run_closed_loop(exc, seed_indices=idx, keep_trajectories=len(idx))
     run = res.runs[EXCITATION_CONTROLLER]
     if run.failed.any():
@@ -286,17 +317,21 @@ def identify_excitation(scenario, idx, run_closed_loop) -> tuple[list[Array], Ex
             f"{scenario.source}: run.excite: the excitation failed on seed(s) "
             f"{[int(i) for i, f in zip(idx, run.failed, strict=True) if f]} (tracking lost)"
         )
-    model = identification_model(scenario)
+    from adaptive_dd.identification.friction_width import identification_model
+
     scale_cfg = _estimator_config(scenario)
     std = io_of(scenario).std
     n, T = scenario.n_joints, scenario.sample_period
     B = scenario.arm.base.B
     sig_plant = true_models(plant_of(exc, idx))[:, 0] @ B.T
-    pis, kappa, rows = [], [], {"hat": [], "fit": [], "rstd": [], "std": [], "prior_cov": []}
+    pis, kappa, widths = [], [], []
+    rows = {"hat": [], "fit": [], "rstd": [], "std": [], "prior_cov": []}
     for k, i in enumerate(idx):
         rng = np.random.default_rng([int(scenario.seed), int(i), 3])
         qm = run.q[k] + std[:n] * rng.standard_normal(run.q[k].shape)
         qdm = run.qd[k] + std[n:] * rng.standard_normal(run.qd[k].shape)
+        model = identification_model(scenario.arm, qdm)  # the Coulomb law's width from the record
+        widths.append(model.friction_velocity)
         try:
             one = identify_record(model, qm, qdm, run.tau[k], T)
         except DataError as exc_:
@@ -314,7 +349,8 @@ def identify_excitation(scenario, idx, run_closed_loop) -> tuple[list[Array], Ex
         float(scenario.excite), tuple(idx), tuple(model.names), sig_plant,
         np.broadcast_to(scenario.arm.sigma, sig_plant.shape).copy(), np.array(rows["hat"]),
         np.array(rows["fit"]), np.array(rows["rstd"]), np.array(rows["std"]), np.array(rows["prior_cov"]),
-        float(model.friction_velocity), np.array(kappa),
+        np.array(widths), np.array(kappa),
+        excitation_coverage(scenario, reference, scenario.excite),
     )  # fmt: skip
     return pis, report
 

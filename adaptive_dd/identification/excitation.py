@@ -28,6 +28,7 @@ inertia, viscous, Coulomb) so that parameters near zero are compared on their ki
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
@@ -39,9 +40,13 @@ from adaptive_dd.errors import ParameterError
 from adaptive_dd.identification.model import Model, arm_model, base_regressor
 
 __all__ = [
+    "TASK_MARGIN",
+    "Coverage",
     "ExcitationLimits",
     "FourierTrajectory",
+    "coverage",
     "design_excitation",
+    "moving_joints",
     "multisine",
     "reference_toml",
     "relative_bounds",
@@ -86,6 +91,33 @@ class ExcitationLimits:
             np.full(n, float(acceleration)),
             fraction * np.asarray(arm.actuator.torque_limit, float),
         )
+
+    @classmethod
+    def of_task(
+        cls, arm, task_q: Array, margin: float | None = None, acceleration: float = 5.0, fraction: float = 0.8
+    ) -> ExcitationLimits:
+        """The arm's limits (:meth:`of_arm`) with the positions narrowed to the task's region: per
+        joint the range the task's poses ``task_q (m, n)`` [rad] visit, widened by ``margin`` [rad]
+        (default :data:`TASK_MARGIN`) on each side, within the arm's limits less their margin.
+
+        Raises
+        ------
+        ParameterError
+            The task's range lies outside the arm's limits on some joint (named).
+        """
+        arm_lim = cls.of_arm(arm, acceleration=acceleration, fraction=fraction)
+        m = TASK_MARGIN if margin is None else float(margin)
+        task_q = np.asarray(task_q, float)
+        lo = np.maximum(arm_lim.lower, task_q.min(axis=0) - m)
+        hi = np.minimum(arm_lim.upper, task_q.max(axis=0) + m)
+        if np.any(hi <= lo):
+            j = int(np.argmax(hi <= lo))
+            raise ParameterError(
+                f"joint {j + 1}: the task's positions {task_q[:, j].min():.3g}..{task_q[:, j].max():.3g} rad "
+                "lie outside the arm's limits less their margin "
+                f"({arm_lim.lower[j]:.3g}..{arm_lim.upper[j]:.3g})"
+            )
+        return dataclasses.replace(arm_lim, lower=lo, upper=hi)
 
 
 @dataclass(frozen=True)
@@ -299,6 +331,103 @@ def _within_limits(
     if slack(alpha) < 0:  # the slack need not be monotone in alpha (torques): the checked factor
         alpha = MIN_SHRINK
     return FourierTrajectory(tr.q0, alpha * tr.a, alpha * tr.b, tr.f0)
+
+
+TASK_MARGIN = 0.2
+"""[rad] How far beyond the task's range of positions (per joint) a task-region excitation may go
+(:meth:`ExcitationLimits.of_task`; docs/learning_the_arm.md, "An excitation on the task's region")."""
+
+
+@dataclass(frozen=True)
+class Coverage:
+    """How an excitation's record covers a task's region (:func:`coverage`).
+
+    The task's region: per joint the range of positions the task visits widened by ``radius`` [rad]
+    (:data:`TASK_MARGIN`: what :meth:`ExcitationLimits.of_task` designs within). ``moves (n,)``: the
+    joints whose position enters the dynamics (a base joint about the vertical does not: its
+    position is not judged). ``span (n,)``: per joint the fraction of the task's range the
+    excitation visits; ``speed (n,)``: the excitation's largest ``|qd|`` over the task's;
+    ``inside``: the share of the excitation's poses within the task's region (every judged joint);
+    ``distance (3,)`` [rad]: median, p90 and max over the task's poses of the distance (largest
+    judged joint difference) to the excitation's nearest pose.
+    """
+
+    moves: NDArray[np.bool_]
+    span: Array
+    speed: Array
+    inside: float
+    distance: Array
+    radius: float
+
+    @property
+    def ok(self) -> bool:
+        """Covered: every judged joint's range visited to :data:`MIN_SPAN`, and either at least
+        :data:`MIN_INSIDE` of the excitation within the task's region or the median task pose within
+        ``radius`` of an excitation pose (an excitation wider than the region that still passes
+        near the task's poses, as on a two-joint arm)."""
+        near = self.inside >= MIN_INSIDE or self.distance[0] <= self.radius
+        return bool(np.all(self.span[self.moves] >= MIN_SPAN) and near)
+
+    def line(self) -> str:
+        """One printed line: the figures and the verdict."""
+        verdict = "covered" if self.ok else "NOT covered: the excitation lies mostly off the task's region"
+        if self.ok and self.inside < MIN_INSIDE:
+            verdict = "covered: the task's poses lie near the excitation's"
+        judged = self.span[self.moves] if self.moves.any() else self.span
+        return (
+            f"coverage of the task's region (its positions +- {self.radius:g} rad) by the excitation: "
+            f"{self.inside:.0%} of the excitation inside it, the task's range visited per joint min "
+            f"{judged.min():.0%}, speed reached min {self.speed.min():.2f}x the task's; distance from a "
+            f"task pose to the nearest excitation pose median {self.distance[0]:.3f} / p90 "
+            f"{self.distance[1]:.3f} / max {self.distance[2]:.3f} rad ({verdict})"
+        )
+
+
+MIN_SPAN = 0.9
+"""The share of the task's range of each judged joint an excitation must visit (:class:`Coverage`)."""
+MIN_INSIDE = 0.5
+"""The share of an excitation's poses that must lie within the task's region (:class:`Coverage`)."""
+
+
+def moving_joints(model: Model, q: Array, rng: np.random.Generator) -> NDArray[np.bool_]:
+    """``(n,)`` the joints whose position enters the base regressor at the poses ``q (m, n)`` (a
+    shift of 0.5 rad, random velocities and accelerations, relative change above 1e-9)."""
+    q = np.asarray(q, float)
+    qd, qdd = rng.standard_normal(q.shape), rng.standard_normal(q.shape)
+    Y = base_regressor(model, q, qd, qdd)
+    scale = np.abs(Y).max()
+    out = np.zeros(model.n, bool)
+    for j in range(model.n):
+        qs = q.copy()
+        qs[:, j] += 0.5
+        out[j] = np.abs(base_regressor(model, qs, qd, qdd) - Y).max() > 1e-9 * scale
+    return out
+
+
+def coverage(
+    task: tuple[Array, Array],
+    excitation: tuple[Array, Array],
+    moves: NDArray[np.bool_] | None = None,
+    radius: float = TASK_MARGIN,
+) -> Coverage:
+    """How the excitation's poses and speeds ``excitation = (q, qd)`` (each ``(m, n)``) cover the
+    task's ``task = (q, qd)`` (``(k, n)``): :class:`Coverage`; ``moves`` the judged joints (default
+    all, :func:`moving_joints`). Sample both at tens of milliseconds (the distances hold blocks of
+    ``256 m n`` numbers)."""
+    tq, tqd = (np.asarray(x, float) for x in task)
+    eq, eqd = (np.asarray(x, float) for x in excitation)
+    moves = np.ones(tq.shape[1], bool) if moves is None else np.asarray(moves, bool)
+    lo, hi = tq.min(axis=0), tq.max(axis=0)
+    seen = np.clip(np.minimum(hi, eq.max(axis=0)) - np.maximum(lo, eq.min(axis=0)), 0.0, None)
+    span = np.where(hi > lo, seen / np.maximum(hi - lo, 1e-300), 1.0)
+    speed = np.abs(eqd).max(axis=0) / np.maximum(np.abs(tqd).max(axis=0), 1e-300)
+    within = (eq >= lo - radius - 1e-9) & (eq <= hi + radius + 1e-9)
+    inside = float(np.mean(within[:, moves].all(axis=1)))
+    d = np.empty(len(tq))
+    for s in range(0, len(tq), 256):
+        d[s : s + 256] = np.abs(tq[s : s + 256, None, moves] - eq[None, :, moves]).max(axis=2).min(axis=1)
+    dist = np.array([np.median(d), np.quantile(d, 0.9), d.max()])
+    return Coverage(moves, span, speed, inside, dist, float(radius))
 
 
 def relative_bounds(crb: Array, sigma: Array, names: tuple[str, ...]) -> Array:
