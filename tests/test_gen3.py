@@ -88,7 +88,8 @@ def test_validate_says_what_the_estimator_derives_and_from_what(drawn):
     from adaptive_dd.benchmark.preflight import derived_estimator_settings, resolved_settings
 
     lines = derived_estimator_settings(drawn)
-    assert lines == [line for line in resolved_settings(drawn) if ".estimator." in line or ".detector." in line]
+    printed = resolved_settings(drawn)
+    assert lines == [line for line in printed if ".estimator." in line or ".detector." in line]
     assert "estimator.mode = 'arm'   (derived: [plant.uncertainty]" in lines[0]
     assert f"row_weights = [1.0, 1.0, 1.0, 1.0, {round(9 / 39, 4)}, " in lines[1]
     assert "reopen_mass_std = 2.4 kg   (derived: 0.6 x arm.payload_capacity 4 kg)" in lines[2]
@@ -103,3 +104,18 @@ def test_validate_says_what_the_estimator_derives_and_from_what(drawn):
     del data["controllers"]
     unstated = derived_estimator_settings(parse_scenario(data, "x.toml"))
     assert "reopen_mass_std = 10 kg   (default: no [arm] payload_capacity stated" in unstated[2]
+
+
+def test_excitation_limits_of_continuous_joints_raise_no_warning(drawn):
+    """``adaptive-dd excite`` on the Gen3 printed numpy's "invalid value encountered in reduce" (the
+    mean of a continuous joint's [-inf, inf]); its joints are centred on 0 within +-pi, quietly."""
+    import warnings
+
+    from adaptive_dd.identification.excitation import ExcitationLimits
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        lim = ExcitationLimits.of_arm(drawn.arm, margin=0.1)
+    np.testing.assert_allclose(lim.lower[[0, 2, 4, 6]], -np.pi)
+    np.testing.assert_allclose(lim.upper[[0, 2, 4, 6]], np.pi)
+    np.testing.assert_allclose(lim.upper[[1, 3, 5]], [2.31, 2.56, 2.13])
