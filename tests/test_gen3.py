@@ -119,3 +119,34 @@ def test_excitation_limits_of_continuous_joints_raise_no_warning(drawn):
     np.testing.assert_allclose(lim.lower[[0, 2, 4, 6]], -np.pi)
     np.testing.assert_allclose(lim.upper[[0, 2, 4, 6]], np.pi)
     np.testing.assert_allclose(lim.upper[[1, 3, 5]], [2.31, 2.56, 2.13])
+
+
+def test_excite_lengthens_a_ramp_that_would_leave_the_velocity_limits(drawn):
+    """``adaptive-dd excite`` wrote its design with a 0.5 s ramp, and the ramp into it took the
+    Gen3's joint 7 to 4.9 times its velocity limit (the design keeps to the limits only once under
+    way). The ramp is now doubled until the whole reference keeps to them."""
+    import dataclasses
+
+    from adaptive_dd.benchmark.scenario import Reference
+    from adaptive_dd.cli.excite import ramp_within_limits
+
+    n = drawn.arm.n_joints
+    ref = Reference(
+        offset=(0.0,) * n,
+        amplitude=((1.0, 0.3),) * n,  # starts 1.0 rad from the offset: a 0.5 s ramp is fast
+        frequency=((0.1, 0.2),) * n,
+        phase=((np.pi / 2, 0.0),) * n,
+        ramp=0.5,
+    )
+    vmax = drawn.arm.velocity_limits
+
+    def peak(r):
+        _, qd, _ = dataclasses.replace(ref, ramp=r).sample(np.arange(0.0, r + 10.0, 1e-3))
+        return np.abs(qd).max(axis=0) / vmax
+
+    assert peak(0.5).max() > 1.0  # the case: beyond the limit during the ramp
+    ramp = ramp_within_limits(ref, drawn.arm, 10.0)
+    assert ramp > 0.5 and peak(ramp).max() <= 1.0
+    assert peak(ramp / 2).max() > 1.0  # the shortest doubling that keeps to the limits
+    slow = dataclasses.replace(ref, amplitude=((0.05, 0.0),) * n)
+    assert ramp_within_limits(slow, drawn.arm, 10.0) == 0.5  # within already: kept
