@@ -5,7 +5,9 @@ on every shipped scenario (``adaptive_dd/scenarios/payload_swap.toml``,
 ``benchmarks/scenarios/*.toml``), each with its own plant and with the plant's friction
 replaced by stick-slip, tanh (v = 0.02 and 0.1 rad/s: the second creeps about 0.1 rad/s at
 80 % of d, as the soft-constraint engine of issue 19 does), stribeck and LuGre (the
-detector's settings are the same everywhere). Per scenario and plant it prints, per segment,
+detector's settings are the same everywhere). A plant an arm cannot take (LuGre on an arm that
+is not the paper's kind of two-link arm) is skipped and said so; a run that fails is printed as
+failed and the others go on (the exit status is then non-zero). Per scenario and plant it prints, per segment,
 the per-seed ratio adaptive_ct / ct_oracle (mean, p90, max and worst seed), the trials with a
 false alarm, the swaps missed (no alarm within 0.3 s after the swap), the median detection
 delay and the detection limit (:mod:`adaptive_dd.identification.two_link_detection_limit`) beside it.
@@ -27,6 +29,7 @@ from adaptive_dd.benchmark.metrics import compute_metrics, missed_swap_counts
 from adaptive_dd.benchmark.runner import run_benchmark
 from adaptive_dd.benchmark.scenario import default_scenario_path, load_scenario
 from adaptive_dd.benchmark.scenario_checks import freeze
+from adaptive_dd.errors import ParameterError
 from adaptive_dd.identification.two_link_online import ChangeDetector
 
 ROOT = Path(__file__).resolve().parent
@@ -114,21 +117,33 @@ def main() -> None:
         "p90": 0.0,
         "max": 0.0,
         "delay_ratio": 0.0,
+        "skipped": 0,
+        "failed": 0,
     }
     seen: dict = {}
     for path in paths:
         sc = load_scenario(path)
         for plant in args.plants:
             spec = PLANTS[plant]
-            arm = sc.arm if spec is None else dataclasses.replace(sc.arm, **spec)
             label = sc.arm.friction if spec is None else plant
             name = f"{os.path.relpath(path)} [plant {label}]"
+            try:
+                arm = sc.arm if spec is None else dataclasses.replace(sc.arm, **spec)
+            except ParameterError as exc:  # e.g. LuGre on an arm that is not the paper's kind
+                print(f"{name}: skipped, the arm cannot take this plant ({exc})", flush=True)
+                tot["skipped"] += 1
+                continue
             key = dataclasses.replace(sc, arm=arm, source="", name="", defaulted=frozenset())
             if key in seen:  # the same run under another name
                 print(f"{name}: the same run as {seen[key]}", flush=True)
                 continue
             seen[key] = name
-            lines, s = evaluate(sc, spec, args.seeds, detector)
+            try:
+                lines, s = evaluate(sc, spec, args.seeds, detector)
+            except Exception as exc:  # one run's failure does not take the table down
+                print(f"{name}: FAILED ({type(exc).__name__}: {exc})", flush=True)
+                tot["failed"] += 1
+                continue
             print(name, flush=True)
             print("\n".join(lines), flush=True)
             tot["fa"] += s["fa"]
@@ -143,8 +158,11 @@ def main() -> None:
         f"(at most {tot['fa_max']} = {100 * tot['fa_max'] / n:.1f} % in one run; target <= 1 %), "
         f"missed swaps {tot['missed']} (target 0); worst segment mean {tot['mean']:.3f} (target <= 1.1), "
         f"p90 {tot['p90']:.3f} (<= 1.3), max {tot['max']:.2f} (<= 3); worst median delay / detection limit "
-        f"{tot['delay_ratio']:.2f} (target <= 2); wall {time.perf_counter() - t0:.0f} s"
+        f"{tot['delay_ratio']:.2f} (target <= 2); {tot['skipped']} skipped (a plant the arm cannot take), "
+        f"{tot['failed']} failed; wall {time.perf_counter() - t0:.0f} s"
     )
+    if tot["failed"]:
+        raise SystemExit(f"{tot['failed']} run(s) failed (above)")
 
 
 if __name__ == "__main__":
