@@ -150,3 +150,22 @@ def test_excite_lengthens_a_ramp_that_would_leave_the_velocity_limits(drawn):
     assert peak(ramp / 2).max() > 1.0  # the shortest doubling that keeps to the limits
     slow = dataclasses.replace(ref, amplitude=((0.05, 0.0),) * n)
     assert ramp_within_limits(slow, drawn.arm, 10.0) == 0.5  # within already: kept
+
+
+def test_validate_shows_a_handed_on_covariance_by_its_shape():
+    """``[model] from = "model.json"`` hands adaptive_ct a 65 x 65 prior covariance on the Gen3;
+    ``validate`` printed it whole, 80 000 characters on one line. It prints its shape."""
+    import dataclasses
+
+    from adaptive_dd.benchmark.scenario import _brief, format_scenario
+    from adaptive_dd.benchmark.scenario_checks import freeze
+
+    cov = np.eye(65).tolist()
+    shown = repr(_brief({"estimator": {"arm_prior_cov": cov, "row_weights": [1.0, 0.5], "x": 3}}))
+    assert shown == "{'estimator': {'arm_prior_cov': <65 x 65 matrix>, 'row_weights': [1.0, 0.5], 'x': 3}}"
+    assert repr(_brief(list(range(20)))) == "<20 numbers>"
+    sc = load_scenario(SCENARIOS / "gen3_exact.toml")
+    opts = (("adaptive_ct", freeze({"estimator": {"arm_prior_cov": cov}})),)
+    text = format_scenario(dataclasses.replace(sc, controller_options=opts))
+    line = next(x for x in text.splitlines() if x.startswith("controllers.adaptive_ct"))
+    assert line == "controllers.adaptive_ct = {'estimator': {'arm_prior_cov': <65 x 65 matrix>}}"
