@@ -22,7 +22,11 @@ of its joint beyond the trip alone (by default a joint at most the detector's cr
 0.25 rad/s, needs twice its Coulomb friction more); ``nogate``: the
 detector's level learns while its short average is raised (``learn_below = 0``), ``gate0.75``: up
 to 0.75 of the threshold; ``notrip_nogate``: the law and detector of before issue 28's transient
-round (their code path).
+round (their code path: no trip, no gate, no hold); ``gate``: the detector's level does not learn
+while its short average exceeds half the threshold (``learn_below = 0.5``, established levels
+only), without the hold; ``hold``: the hold (``hold_above = 0.5``, the default since issue 28's
+gate round), ``hold50`` / ``hold200``: held for 50 / 200 ms instead of the derived rise time (94
+ms at 1 kHz), ``nohold``: no hold (``hold_above = 0``, the detector of before that round).
 """
 
 from __future__ import annotations
@@ -56,8 +60,13 @@ VARIANTS = {
     "bb100": {"boost_bandwidth": 100.0},
     "nogate": {"detector": {"learn_below": 0.0}},
     "gate0.75": {"detector": {"learn_below": 0.75}},
+    "gate": {"detector": {"learn_below": 0.5, "hold_above": 0.0}},
+    "hold": {"detector": {"hold_above": 0.5}},
+    "hold50": {"detector": {"hold_above": 0.5, "hold_time": 0.05}},
+    "hold200": {"detector": {"hold_above": 0.5, "hold_time": 0.2}},
+    "nohold": {"detector": {"hold_above": 0.0}},
     "notrip": {"observer_trip": False},
-    "notrip_nogate": {"observer_trip": False, "detector": {"learn_below": 0.0}},
+    "notrip_nogate": {"observer_trip": False, "detector": {"learn_below": 0.0, "hold_above": 0.0}},
     "trip": {"observer_trip": True},
     "trip_anyspeed": {"observer_trip": True, "_trip_speed": 0.0},
     "trip3": {"_trip": 3.0},

@@ -150,7 +150,8 @@ I_MIN_ROWS = 15  # rows whose short average must exceed (threshold / 2)^2 times 
 I_FAST = 16  # 1: the fast average may also raise an alarm
 I_RESET_PAYLOAD = 17  # mode "arm": an alarm sets the payload block (theta's last ten) to zero
 I_FAST_LEARNED = 18  # samples a row's own level must have learned before its fast average may alarm
-N_I = 19
+I_HOLD = 19  # samples a risen row is judged against the level it had when it rose (0: no hold)
+N_I = 20
 
 # float slots of EstCfg.floats
 F_LAM0 = 0
@@ -170,8 +171,9 @@ F_ALPHA_FAST = 13  # the fast average's weight of a sample
 F_FAST2 = 14  # the fast average's threshold (squared RMS ratio)
 F_DET_SPEED = 15  # [rad/s] a joint no faster within the selection memory creeps
 F_CREEP_MARGIN = 16  # a creeping joint's row alarms only beyond this times its Coulomb friction
-F_LEARN_BELOW2 = 17  # the level learns only while the short average is below this x the threshold (0: always)
-N_F = 18
+F_LEARN_BELOW2 = 17  # an established level learns only while short <= this x threshold x level (0: always)
+F_HOLD_ABOVE2 = 18  # a row rises when its short average exceeds this x the threshold x its level
+N_F = 19
 
 
 class EstState(NamedTuple):
@@ -210,6 +212,11 @@ class EstState(NamedTuple):
     since_crawl : (m, n) int64
         Detector: samples since joint j was last no faster than the detector's speed
         (``F_DET_SPEED``; its row raises alarms only past the selection memory).
+    hold : (m, n)
+        Detector: the level row j had when its short average rose (> 0: judged against it),
+        -1 once the hold has run out while the row is still raised, 0: no hold.
+    held : (m, n) int64
+        Detector: samples since row j's hold began.
     """
 
     xf: np.ndarray
@@ -228,6 +235,8 @@ class EstState(NamedTuple):
     eps: np.ndarray
     fast: np.ndarray
     since_crawl: np.ndarray
+    hold: np.ndarray
+    held: np.ndarray
 
 
 class EstWork(NamedTuple):
@@ -718,7 +727,12 @@ def _detect(c, s, i, eps, act):  # pragma: no cover - compiled
     a_s, a_l = fl[F_ALPHA_SHORT], fl[F_ALPHA_LONG]
     cnt = s.cnt[i]
     learn = cnt[C_SINCE_ALARM] >= ints[I_RESUME]
+    rise2 = fl[F_HOLD_ABOVE2] * fl[F_THRESHOLD2]
     for j in range(n):
+        if s.hold[i, j] > 0.0:  # a hold runs out I_HOLD samples after the rise, in use or not
+            s.held[i, j] += 1
+            if s.held[i, j] > ints[I_HOLD]:
+                s.hold[i, j] = -1.0
         e = eps[j]
         if not (act[j] and np.isfinite(e)):
             continue
@@ -728,14 +742,27 @@ def _detect(c, s, i, eps, act):  # pragma: no cover - compiled
         if learn:
             s.seen[i, j] += 1
             nl = s.learned[i, j]
+            # a level learned over min_learned samples since the last alarm is established
+            est = nl >= ints[I_MIN_LEARNED]
+            level = fl[F_FLOOR2]
+            if nl >= 1:
+                level = max(s.long[i, j] / (1.0 - (1.0 - a_l) ** nl), fl[F_FLOOR2])
             ok = True
             if nl >= ints[I_GATE_AFTER]:
-                level = max(s.long[i, j] / (1.0 - (1.0 - a_l) ** nl), fl[F_FLOOR2])
                 ok = e2 <= fl[F_GATE2] * level
-                # nor while the short average is raised: a change's error rises over the filters'
-                # time, each sample below the gate, and was learnt as it rose (issue 28, sice_drawn)
-                if fl[F_LEARN_BELOW2] > 0.0:
+                # nor, an established level, while the short average is raised: a change's error
+                # rises over the filters' time, each sample below the gate (issue 28, sice_drawn)
+                if fl[F_LEARN_BELOW2] > 0.0 and est:
                     ok = ok and s.short[i, j] <= fl[F_LEARN_BELOW2] * fl[F_THRESHOLD2] * level
+            if ints[I_HOLD] > 0 and est:
+                # a row whose short average rises is judged against the level it had then, for
+                # I_HOLD samples (a change's rise); the level itself learns on
+                if s.hold[i, j] == 0.0:
+                    if s.short[i, j] > rise2 * level:
+                        s.hold[i, j] = level
+                        s.held[i, j] = 0
+                elif s.short[i, j] <= rise2 * (s.hold[i, j] if s.hold[i, j] > 0.0 else level):
+                    s.hold[i, j] = 0.0  # back below: the next rise holds again
             if ok:
                 s.long[i, j] += a_l * (e2 - s.long[i, j])
                 s.learned[i, j] = nl + 1
@@ -757,6 +784,8 @@ def _detect(c, s, i, eps, act):  # pragma: no cover - compiled
         own = s.seen[i, j] >= ints[I_MIN_LEARNED] and nl >= 1
         if own:
             level = max(s.long[i, j] / (1.0 - (1.0 - a_l) ** nl), fl[F_FLOOR2])
+            if s.hold[i, j] > 0.0:  # risen within the hold: the level it had before
+                level = s.hold[i, j]
         elif s.ref[i, j] > 0.0 and cnt[C_SINCE_ALARM] < ints[I_RESUME] + ints[I_MIN_LEARNED]:
             # still re-learning, within the re-arm bound: the level established before the last
             # alarm, with the stricter threshold (the estimate may still converge)
@@ -812,6 +841,8 @@ def _alarm(c, s, i, k):  # pragma: no cover - compiled
         s.seen[i, j] = 0
         s.learned[i, j] = 0
         s.long[i, j] = 0.0
+        s.hold[i, j] = 0.0
+        s.held[i, j] = 0
     if ints[I_REOPEN_AGAIN] == 1:
         cnt[C_REOPEN_AT] = k + ints[I_FREEZE]
     if ints[I_MOMENTUM] == 1:
@@ -914,12 +945,29 @@ def est_step_trial_in(c, s, i, q, qd, tau, w):  # pragma: no cover - compiled
     if ints[I_DETECT] == 1:
         if cnt[C_REOPEN_AT] == cnt[C_K]:
             _reopen(c, Pi)
-        if _detect(c, s, i, s.eps[i], act):
-            alarm = 1
-            _alarm(c, s, i, cnt[C_K])
-        else:
-            cnt[C_SINCE_ALARM] = min(cnt[C_SINCE_ALARM] + 1, BIG)
+        alarm = _detect_step(c, s, i, s.eps[i], act)
     cnt[C_K] += 1
+    return alarm
+
+
+@njit(cache=True, inline="always")
+def _detect_step(c, s, i, eps, act):  # pragma: no cover - compiled
+    """The detector's part of a sample: :func:`_detect`, then the alarm or the count since it."""
+    cnt = s.cnt[i]
+    if _detect(c, s, i, eps, act):
+        _alarm(c, s, i, cnt[C_K])
+        return 1
+    cnt[C_SINCE_ALARM] = min(cnt[C_SINCE_ALARM] + 1, BIG)
+    return 0
+
+
+@njit(cache=True)
+def est_detect_trial(c, s, i, eps, act):  # pragma: no cover - compiled
+    """One sample of trial i's detector alone on given weighted prior errors ``eps (n,)`` of the
+    rows in use ``act (n,)`` (bool): 1 on an alarm, else 0. The estimate is not stepped (an alarm
+    still re-opens its covariance). For tests and replays of the detector on synthetic errors."""
+    alarm = _detect_step(c, s, i, eps, act)
+    s.cnt[i, C_K] += 1
     return alarm
 
 
