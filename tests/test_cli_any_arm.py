@@ -230,3 +230,22 @@ def test_plant_serial_is_read_as_benchmark_with_a_warning(capsys):
     with pytest.raises(SystemExit):
         build_parser().parse_args(["simulate", "--plant", "rk4"])
     assert "invalid choice: 'rk4'" in capsys.readouterr().err
+
+
+def test_benchmark_warns_of_a_reference_beyond_the_joint_limits(tmp_path, capsys, monkeypatch):
+    """A reference that leaves a joint's position limit is said before the run (``validate``
+    alone used to say it: a user who ran ``benchmark`` first learnt nothing), and the run goes on."""
+    import adaptive_dd.cli.benchmark as cli_benchmark
+
+    ran = []
+    monkeypatch.setattr(cli_benchmark, "_benchmark", lambda args, sc, outputs: ran.append(sc) or [])
+    assert main(["benchmark", UR5, "--out", str(tmp_path / "ok"), "--no-progress"]) == 0
+    assert "warning:" not in capsys.readouterr().err  # a shipped scenario: within its limits
+    text = (ROOT / "adaptive_dd" / "scenarios" / "vertical3_payload_exact.toml").read_text()
+    bad = tmp_path / "beyond.toml"
+    bad.write_text(text.replace("joint2 = { offset = -0.6,", "joint2 = { offset = -2.9,"))
+    assert main(["benchmark", str(bad), "--out", str(tmp_path / "bad"), "--no-progress"]) == 0
+    err = capsys.readouterr().err
+    assert f"warning: {bad}: reference.joint2: q = -3.542 rad" in err, err
+    assert "below the joint's lower limit -3.142 rad" in err
+    assert len(ran) == 2  # warned, and ran

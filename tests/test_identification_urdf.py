@@ -288,6 +288,9 @@ def test_cli_simulate_and_identify_end_to_end(tmp_path, capsys):
     assert main(["identify", "--arm", str(scen), str(csv), "--out", str(tmp_path / "id")]) == 0
     out = capsys.readouterr().out
     assert "output error:" in out and "converged" in out and "CRB std" in out
+    # announced before it runs (minutes on a 7-joint arm's long record), not only reported after
+    announced = out.index("output error: maximum likelihood from the WLS estimate, up to 30 iterations")
+    assert announced < out.index("converged")
     assert (tmp_path / "id" / "torque_fit.png").is_file()
     # positions only: output error fits q alone
     lines = csv.read_text().splitlines()

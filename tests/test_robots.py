@@ -20,7 +20,8 @@ from adaptive_dd.plant.parameters import L1, L2, TORQUE_LIMITS
 from adaptive_dd.robots import ROBOTS, RobotInfo, UnknownRobotError, robot_urdf
 
 ROOT = Path(__file__).resolve().parents[1]
-N_JOINTS = {"sice_arm": 2, "vertical3": 3, "ur5": 6, "panda": 7, "iiwa14": 7}
+N_JOINTS = {"sice_arm": 2, "vertical3": 3, "ur5": 6, "panda": 7, "iiwa14": 7, "gen3": 7}
+CONTINUOUS = {"gen3": 4}  # joints of type "continuous": (cos, sin) in Pinocchio's q
 PI = math.pi
 
 
@@ -85,7 +86,8 @@ def test_loads_without_warnings(name, capfd):
         model = _load(name)
     out, err = capfd.readouterr()
     assert out == "" and err == ""
-    assert model.nq == model.nv == N_JOINTS[name]
+    assert model.nv == N_JOINTS[name]
+    assert model.nq == N_JOINTS[name] + CONTINUOUS.get(name, 0)
     assert model.njoints == N_JOINTS[name] + 1  # + the universe
     assert all(j.shortname().startswith("JointModelR") for j in model.joints[1:])  # revolute
     assert model.existFrame(ROBOTS[name].payload_frame)
@@ -94,8 +96,10 @@ def test_loads_without_warnings(name, capfd):
 @pytest.mark.parametrize("name", sorted(N_JOINTS))
 def test_limits_present_and_positive(name):
     model = _load(name)
-    for arr in (model.effortLimit, model.velocityLimit, model.lowerPositionLimit, model.upperPositionLimit):
+    for arr in (model.effortLimit, model.velocityLimit):
         assert arr.shape == (model.nv,) and np.all(np.isfinite(arr))
+    for arr in (model.lowerPositionLimit, model.upperPositionLimit):
+        assert arr.shape == (model.nq,) and np.all(np.isfinite(arr))
     assert np.all(model.effortLimit > 0)
     assert np.all(model.velocityLimit > 0)
     assert np.all(model.upperPositionLimit > model.lowerPositionLimit)
@@ -332,3 +336,33 @@ def test_panda_gravity_near_gaz_symbolic_model():
     np.testing.assert_allclose(
         pin.computeGeneralizedGravity(model, data, q)[1], -4.7533522 * 9.80665, rtol=0.02
     )
+
+
+# ---------------------------------------------------------------------------- Kinova Gen3
+
+
+def test_gen3_published_masses_limits_and_joint_types():
+    """Kinova's ros_kortex gen3_macro.xacro (dof 7, no vision): masses, limits, continuous joints."""
+    model = _load("gen3")
+    masses = [model.inertias[i].mass for i in range(1, 8)]
+    np.testing.assert_array_equal(masses, [1.3773, 1.1636, 1.1636, 0.9302, 0.6781, 0.6781, 0.364])
+    np.testing.assert_array_equal(model.effortLimit, [39] * 4 + [9] * 3)
+    np.testing.assert_array_equal(model.velocityLimit, [1.3963] * 4 + [1.2218] * 3)
+    kinds = [j.shortname() for j in model.joints[1:]]
+    assert kinds == ["JointModelRUBZ", "JointModelRZ"] * 3 + ["JointModelRUBZ"]
+    # the revolute joints 2, 4, 6: Kinova's position limits (idx_q of each)
+    rev = [model.joints[k].idx_q for k in (2, 4, 6)]
+    np.testing.assert_array_equal(model.upperPositionLimit[rev], [2.41, 2.66, 2.23])
+    np.testing.assert_array_equal(model.lowerPositionLimit[rev], [-2.41, -2.66, -2.23])
+
+
+def test_gen3_stretched_upright_height():
+    """At q = 0 the Gen3 stands straight up: the flange's height is the sum of the macro's joint
+    offsets along the chain (0.15643 + 0.12838 + 0.21038 + 0.21038 + 0.20843 + 0.10593 + 0.10593
+    + 0.061525 = 1.187385 m), off the base's axis by the sideways offsets (0.005375 + 3 x 0.006375
+    + 2 x 0.00017505 = 0.02485 m); Kinova writes 3.1416 and 1.5708 for pi and pi/2, which moves
+    the flange by some micrometres."""
+    model = _load("gen3")
+    flange = _frame(model, pin.neutral(model), "end_effector_link").translation
+    np.testing.assert_allclose(flange[2], 1.187385, atol=2e-5)
+    np.testing.assert_allclose(np.hypot(flange[0], flange[1]), 0.0248501, atol=2e-5)

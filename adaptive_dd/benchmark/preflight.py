@@ -136,6 +136,41 @@ def resolved_settings(scenario) -> list[str]:
                 v = list(v)
             mark = "" if key in given else "   (default)"
             out.append(f"controllers.{label}.{key} = {v!r}{' ' + st.unit if st.unit else ''}{mark}")
+    if "adaptive_ct" in scenario.controllers and scenario.closed_forms is None:
+        out += derived_estimator_settings(scenario)
+    return out
+
+
+def derived_estimator_settings(scenario) -> list[str]:
+    """``adaptive_ct``'s estimator settings on an arm from a URDF that the scenario need not state,
+    as the run derives them, each with its rule: the mode (``"arm"`` when ``[plant.uncertainty]``
+    states how far the robot may be from its URDF), the row weights (the torque limits) and the
+    payload mass re-opened at an alarm (``[arm] payload_capacity``, 10 kg when it is not stated)."""
+    from adaptive_dd.controllers.registry import scenario_controller
+    from adaptive_dd.identification.online import REOPEN_CAPACITY, derived_row_weights, reopen_mass_std
+
+    online = getattr(scenario_controller(scenario, "adaptive_ct")[1], "online", None)
+    if online is None or not hasattr(online, "mode"):
+        return []
+    est = scenario.options("adaptive_ct").get("estimator", {})
+    arm, pre = scenario.arm, "controllers.adaptive_ct.estimator"
+    why = "given" if "mode" in est else "derived: [plant.uncertainty] states the arm's uncertainty"
+    if why != "given" and online.mode != "arm":
+        why = "default: no [plant.uncertainty], the arm taken as exact"
+    out = [f"{pre}.mode = {online.mode!r}   ({why})"]
+    w = online.row_weights if online.row_weights is not None else derived_row_weights(arm)
+    why = "given" if "row_weights" in est else "derived: torque limit / largest torque limit"
+    out.append(f"{pre}.row_weights = {[round(float(x), 4) for x in w]}   ({why})")
+    if online.detector is not None:
+        cap = arm.payload_capacity
+        if "reopen_mass_std" in scenario.options("adaptive_ct").get("detector", {}):
+            why = "given"
+        elif cap is None:
+            why = "default: no [arm] payload_capacity stated; state the rated payload [kg] to size it"
+        else:
+            why = f"derived: {REOPEN_CAPACITY:g} x arm.payload_capacity {cap:g} kg"
+        std = reopen_mass_std(online.detector, arm)
+        out.append(f"controllers.adaptive_ct.detector.reopen_mass_std = {std:.4g} kg   ({why})")
     return out
 
 

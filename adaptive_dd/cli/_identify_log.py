@@ -110,6 +110,11 @@ def _output_error(args, arm, model, rec, fit) -> None:
     std = measurement_std(arm).copy()
     if not rec.qd_measured:
         std[arm.n_joints :] = np.inf
+    print(  # it runs for minutes on a long record of a 7-joint arm: say so before, not after
+        f"output error: maximum likelihood from the WLS estimate, up to {args.max_iter} iterations over "
+        f"segments of {args.segment_length} samples (--output-error off skips it) ...",
+        flush=True,
+    )
     try:
         oe = fit_output_error(
             model,

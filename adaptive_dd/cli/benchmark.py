@@ -54,6 +54,8 @@ def run(args: argparse.Namespace) -> int:
         sc = dataclasses.replace(sc, controllers=only_controllers(sc, args.controllers))
     if sc.estimate().large:
         print(f"estimate: {sc.estimate()}", file=sys.stderr)
+    for line in limit_warnings(sc):
+        print(line, file=sys.stderr)
     outputs = OutputSet(args.out, extras=(args.json,) if args.json else ())
     with outputs:
         written = _benchmark(args, sc, outputs)
@@ -111,6 +113,15 @@ def _figures(res, sc, outputs, out: Path, fmts: tuple) -> list[Path]:
 
         plot_joint_errors(res, announce("joint_errors"), formats=fmts)
     return written
+
+
+def limit_warnings(sc) -> list[str]:
+    """One ``warning:`` line per place the reference leaves a joint's position or velocity limits
+    (``adaptive-dd validate`` reports them as problems, exit 1; the benchmark runs them, as the
+    simulated arm has no stops, but says so first rather than leave a user to find it later)."""
+    from adaptive_dd.benchmark.preflight import reference_problems
+
+    return [f"warning: {sc.source or 'scenario'}: {p}" for p in reference_problems(sc)]
 
 
 def only_controllers(sc, names: list[str]) -> tuple[str, ...]:

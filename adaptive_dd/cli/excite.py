@@ -24,7 +24,7 @@ from adaptive_dd.cli._common import (
     short,
 )
 
-__all__ = ["add_parser", "excitation_bounds", "run"]
+__all__ = ["add_parser", "excitation_bounds", "ramp_within_limits", "run"]
 
 
 def add_parser(sub) -> None:
@@ -70,11 +70,34 @@ def run(args: argparse.Namespace) -> int:
     )
     rows = excitation_bounds(arm, {"plain multi-sine": plain, "designed": best}, args.duration)
     _print_bounds(args, arm, res, rows)
-    text = reference_toml(best.reference(ramp=args.ramp), f"designed by adaptive-dd excite --arm {args.arm}")
+    ramp = ramp_within_limits(best.reference(ramp=args.ramp), arm, 1.0 / args.f0)
+    if ramp != args.ramp:
+        print(
+            f"--ramp {args.ramp:g} s lengthened to {ramp:g} s: the ramp into the designed trajectory "
+            "took a joint beyond its velocity limit (the design keeps to the limits once under way)"
+        )
+    text = reference_toml(best.reference(ramp=ramp), f"designed by adaptive-dd excite --arm {args.arm}")
     with atomic_write(out) as fh:
         fh.write(_replace_reference(Path(args.arm).read_text(), text))
     print(f"wrote {out} (the scenario with the designed [reference])")
     return 0
+
+
+def ramp_within_limits(ref, arm, period: float, tries: int = 8) -> float:
+    """The reference's ramp [s], doubled until the ramp and one ``period`` after it keep every
+    joint within its velocity limit (the design keeps to the limits once the ramp is over, not
+    during it: the Kinova Gen3's design with the default 0.5 s reached 4.9 times joint 7's limit);
+    the last doubling if none does."""
+    import dataclasses
+
+    vmax = np.asarray(arm.velocity_limits, dtype=float)
+    ramp = float(ref.ramp)
+    for _ in range(tries):
+        _, qd, _ = dataclasses.replace(ref, ramp=ramp).sample(np.arange(0.0, ramp + period, 1e-3))
+        if np.all(np.abs(qd) <= vmax):
+            return ramp
+        ramp = max(2.0 * ramp, 0.5)
+    return ramp
 
 
 def _print_bounds(args: argparse.Namespace, arm, res, rows: dict) -> None:

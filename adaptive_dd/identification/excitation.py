@@ -76,7 +76,9 @@ class ExcitationLimits:
         """The arm's limits: positions less ``margin`` [rad] (and within ``+-span`` of the middle for
         unbounded joints), velocities and torques times ``fraction``, one acceleration limit."""
         lim = np.asarray(arm.position_limits, float)
-        mid = np.where(np.isfinite(lim).all(axis=1), lim.mean(axis=1), 0.0)
+        bounded = np.isfinite(lim).all(axis=1)  # a continuous joint's [-inf, inf]: centred on 0
+        mid = np.zeros(lim.shape[0])
+        mid[bounded] = lim[bounded].mean(axis=1)
         lo = np.maximum(lim[:, 0] + margin, mid - span)
         hi = np.minimum(lim[:, 1] - margin, mid + span)
         if np.any(hi <= lo):

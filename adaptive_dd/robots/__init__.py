@@ -69,6 +69,12 @@ ROBOTS: dict[str, RobotInfo] = {
         "KUKA LBR iiwa 14 R820 (7 joints): kinematics, limits and inertials of Drake's "
         "iiwa14_no_collision.urdf (BSD-3-Clause)",
     ),
+    "gen3": RobotInfo(
+        "gen3.urdf",
+        "end_effector_link",
+        "Kinova Gen3 (7 joints, four continuous; no vision module): kinematics, limits and inertials "
+        "of Kinova's ros_kortex gen3_macro.xacro (BSD-3-Clause); friction assumed",
+    ),
 }
 """Name -> :class:`RobotInfo` of every robot shipped in ``adaptive_dd/robots/``."""
 
@@ -86,7 +92,8 @@ def robot_urdf(name: str) -> Path:
     Parameters
     ----------
     name : str
-        A key of :data:`ROBOTS` (``"sice_arm"``, ``"vertical3"``, ``"ur5"``, ``"panda"``, ``"iiwa14"``).
+        A key of :data:`ROBOTS` (``"sice_arm"``, ``"vertical3"``, ``"ur5"``, ``"panda"``,
+        ``"iiwa14"``, ``"gen3"``).
 
     Returns
     -------
