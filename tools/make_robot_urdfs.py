@@ -588,10 +588,9 @@ writes them), no meshes; `end_effector_link` is the flange (the payload frame). 
 number but the friction:
 {GEN3_SOURCE},
 the `load_arm` macro with dof = 7, vision = false, no prefix: the joints' origins (rpy as Kinova
-writes them: 3.1416 and 1.5708, not pi and pi/2; the rounding tilts the axes by up to 7e-6 rad,
-which makes columns of the regressor at 3e-6 of the largest: Arm.base's threshold,
-adaptive_dd.plant.base_parameters.RTOL = 1e-4, folds them, giving the 62 base parameters of exact
-right angles; docs/any_arm.md), axes (z) and <limit>
+writes them: 3.1416 and 1.5708, not pi and pi/2; the rounding tilts the axes by up to 7e-6 rad, which
+leaves 65 base parameters where exact right angles give 62: mx1, my1's group and Ia2 are seen
+only through it, and a record cannot identify them; docs/any_arm.md), axes (z) and <limit>
 (position +-2.41 / +-2.66 / +-2.23 rad on joints 2 / 4 / 6, effort 39 N m on joints 1-4 and
 9 N m on 5-7, velocity 1.3963 and 1.2218 rad/s), the links' <inertial> (masses, centres of
 mass, inertias about them; the bracelet without the vision module, 0.364 kg) and the fixed

@@ -85,17 +85,6 @@ def _term(c: float, name: str) -> str:
     return f"{c:.6g}*{name}"
 
 
-RTOL = 1e-4
-"""Relative size below which a regressor column counts as zero or as dependent on the columns
-before it. Not round-off's 1e-9: a URDF writes its angles to a few decimals (Kinova's Gen3 writes
-3.1416 and 1.5708), which tilts joint axes by about 1e-5 rad and makes columns that are zero or
-dependent for the exact robot come out at 2e-7 to 6e-6 of the largest; kept, they are base
-parameters no record can identify (the Gen3's ``Ia2`` at 1672 +- 2200 from a 20 s excitation).
-Every genuine column of the shipped arms is above 2e-3 (the Gen3's smallest; 0.06 on the UR5,
-the Panda and the iiwa) and every genuine ``|R_jj| / sqrt(rows)`` above 0.018
-(``tests/test_base_parameters.py``)."""
-
-
 def base_parameters(
     regressor: Callable[[Array, Array, Array], Array],
     n: int,
@@ -103,7 +92,7 @@ def base_parameters(
     upper: Array,
     rng: np.random.Generator,
     n_samples: int = 60,
-    rtol: float = RTOL,
+    rtol: float = 1e-9,
 ) -> BaseParameters:
     """Base parameters from the standard regressor sampled at random states.
 
@@ -120,10 +109,7 @@ def base_parameters(
     n_samples : int
         Number of random states (each gives n rows).
     rtol : float
-        A column whose norm is below ``rtol`` times the largest is not identifiable, and a
-        column whose part independent of the kept ones before it (``|R_jj|`` of the unit
-        columns, over ``sqrt(rows)``) is below ``rtol`` is grouped onto them. Default
-        :data:`RTOL`.
+        A diagonal entry of R below ``rtol * |R[0, 0]|`` ends the rank.
     """
     lo = np.where(np.isfinite(lower), lower, -np.pi)
     hi = np.where(np.isfinite(upper), upper, np.pi)
