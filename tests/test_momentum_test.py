@@ -77,6 +77,7 @@ def test_the_threshold_is_the_derived_one_and_off_by_default():
     assert cfg.obs_mslow == pytest.approx(3.0 * np.sqrt(max(sc.velocity_variance)))
 
 
+@pytest.mark.slow  # compiles the law alone, called from Python (a cold cache: about 2 min)
 @pytest.mark.parametrize("seed", [0, 1])
 def test_a_payload_starts_the_boost_within_a_few_samples_and_noise_does_not(seed):
     """1 kg appearing at 2.6 s (the vertical arm's 1 kg pick-up; its detection limit on the shipped
@@ -97,6 +98,7 @@ def test_a_payload_starts_the_boost_within_a_few_samples_and_noise_does_not(seed
     assert bare.size and bare[0] < K_SWAP, bare[:5]
 
 
+@pytest.mark.slow  # the law alone, as above
 def test_a_step_the_model_lacks_is_found_and_its_absence_is_not():
     """A step of 0.3 N m on joint 3 alone (a tenth of the payload's torque there) the observer is
     not told of: found within 20 samples; the same record without it: no crossing at all."""
@@ -130,6 +132,7 @@ def _short(mode, seeds=3):
     return parse_scenario(data, "test.toml", name="vertical3_short")
 
 
+@pytest.mark.slow  # two closed-loop runs of the vertical arm
 def test_reopen_makes_the_test_s_start_the_estimator_s_alarm():
     """The closed loop, the vertical arm picking up 1 kg at 2.5 s (three seeds): with ``"reopen"``
     the estimator's alarm comes within 4 ms of the swap (twice the shipped scenario's detection
