@@ -152,7 +152,7 @@ def _lock_index_writes() -> None:
 
 
 # ------------------------------------------------------------ telling the user about compilation
-COMPILE_SECONDS = {"two-link": 42.0, "serial": 65.0}
+COMPILE_SECONDS = {"two-link": 49.0, "serial": 71.0}
 """One-time compilation of a benchmark's closed-loop kernels with a cold cache, on 2 cores: a guide
 for the message and ``validate``'s estimate, not a promise. The two-link default scenario:
 ``compiled the kernels in 42 s``, 39.9 CPU s inside numba's compilations
