@@ -63,3 +63,20 @@ def segment_cells(c) -> list[str]:
         r = s.ratio_to_floor.to_numpy(dtype=float)
         cells.append(f"{np.nanmean(r):.3f}/{np.nanpercentile(r, 90):.3f}/{np.nanmax(r):.2f}")
     return cells
+
+
+class Delegating:
+    """A study's wrapper of a built-in controller ``self.inner``: what the benchmark reads after a
+    run (the estimate, the alarms, the skipped samples) is the inner controller's."""
+
+    @property
+    def sigma_hat(self):
+        return self.inner.sigma_hat
+
+    @property
+    def alarm_times(self):
+        return self.inner.alarm_times
+
+    @property
+    def skipped_samples(self):
+        return self.inner.skipped_samples

@@ -22,6 +22,7 @@ import copy
 from pathlib import Path
 
 import numpy as np
+from _ablation import Delegating
 from numba import njit
 from scipy.stats import chi2, norm
 
@@ -78,7 +79,7 @@ def _rho(ch, pi, qp, qdp, q, qd, taup, T, rho):
             rho[i, j] = taup[i, j] - 0.5 * (w0[j] + w1[j]) - (p1[j] - p0[j]) / T
 
 
-class Recorded:
+class Recorded(Delegating):
     """adaptive_ct, its command unchanged, recording rho (S, K, n) and |qd| (S, K, n)."""
 
     def __init__(self, inner, K):
@@ -123,18 +124,6 @@ class Recorded:
     def observe(self, q, qd, tau):
         self.inner.observe(q, qd, tau)
         self.taup = np.array(tau, dtype=float)
-
-    @property
-    def sigma_hat(self):
-        return self.inner.sigma_hat
-
-    @property
-    def alarm_times(self):
-        return self.inner.alarm_times
-
-    @property
-    def skipped_samples(self):
-        return self.inner.skipped_samples
 
 
 def record(path: str, seeds: int):

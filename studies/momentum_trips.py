@@ -16,6 +16,7 @@ import json
 from pathlib import Path
 
 import numpy as np
+from _ablation import Delegating
 
 from adaptive_dd.benchmark.metrics import FALSE_ALARM_WINDOW
 from adaptive_dd.benchmark.runner import run_benchmark
@@ -24,7 +25,7 @@ from adaptive_dd.closed_loop.laws import O_TRIP
 from adaptive_dd.closed_loop.runner import make_controllers
 
 
-class Starts:
+class Starts(Delegating):
     """adaptive_ct (its command unchanged) recording the samples at which the boost was started
     by the momentum test."""
 
@@ -44,18 +45,6 @@ class Starts:
 
     def observe(self, q, qd, tau):
         self.inner.observe(q, qd, tau)
-
-    @property
-    def sigma_hat(self):
-        return self.inner.sigma_hat
-
-    @property
-    def alarm_times(self):
-        return self.inner.alarm_times
-
-    @property
-    def skipped_samples(self):
-        return self.inner.skipped_samples
 
 
 def main() -> None:

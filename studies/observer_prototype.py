@@ -17,7 +17,7 @@ import copy
 from pathlib import Path
 
 import numpy as np
-from _ablation import segment_cells
+from _ablation import Delegating, segment_cells
 from numba import njit
 
 from adaptive_dd.benchmark.runner import run_benchmark
@@ -49,7 +49,7 @@ def _observe(ch, pi, qp, qdp, q, qd, taup, r, a, T, rho):
             r[i, j] = a * r[i, j] + (1.0 - a) * rho[i, j]
 
 
-class ObservedCT:
+class ObservedCT(Delegating):
     """adaptive_ct plus the observer (a plug-in: Python path)."""
 
     def __init__(self, inner, beta: float, gate: str, kappa: float, name: str, hold: float = 1.0) -> None:
@@ -101,18 +101,6 @@ class ObservedCT:
     def observe(self, q, qd, tau):
         self.inner.observe(q, qd, tau)
         self.taup = np.array(tau, dtype=float)
-
-    @property
-    def sigma_hat(self):
-        return self.inner.sigma_hat
-
-    @property
-    def alarm_times(self):
-        return self.inner.alarm_times
-
-    @property
-    def skipped_samples(self):
-        return self.inner.skipped_samples
 
 
 def main() -> None:
