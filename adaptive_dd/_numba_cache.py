@@ -113,6 +113,7 @@ def configure() -> str | None:
 
     numba.config.CACHE_DIR = str(folder)
     _lock_index_writes()
+    _lock_compilations()
     try:
         old = sorted((p for p in base.iterdir() if p.is_dir()), key=lambda p: p.stat().st_mtime)
         for p in old[:-KEEP]:
@@ -149,6 +150,64 @@ def _lock_index_writes() -> None:
 
     locked_save._adaptive_dd_locked = True
     IndexDataCacheFile.save = locked_save
+
+
+COMPILE_WAIT = 900.0
+"""[s] The longest a process waits for another's compilation of a kernel before compiling it itself."""
+
+_held: dict[str, int] = {}  # compile locks this process holds (index path -> depth)
+
+
+def _lock_compilations() -> None:
+    """One compilation of a cached kernel at a time across processes: a process about to compile
+    a kernel (numba's cache missed) takes an exclusive lock on ``<its index>.compiling`` in the
+    cache folder, then asks the cache again, so that a second process asking for the same kernel
+    meanwhile (the test run's workers, the benchmark's second process) waits for the first and
+    loads its result instead of compiling it too: the cold default test run compiled about 45
+    CPU s of kernels twice, once per worker, without it. Locks follow the call graph (a kernel
+    is compiled before its callers finish), which has no cycle; a lock this process holds
+    already is not taken again, and a wait gives up after :data:`COMPILE_WAIT` (the kernel is
+    then compiled here). Where ``fcntl`` is missing (Windows), compilation is left alone."""
+    try:
+        import fcntl
+    except ImportError:  # pragma: no cover - Windows
+        return
+    from numba.core.dispatcher import Dispatcher
+
+    compile_ = Dispatcher.compile
+    if getattr(compile_, "_adaptive_dd_locked", False):
+        return
+    from numba.core import sigutils
+
+    def locked_compile(self, sig):
+        index = getattr(getattr(self._cache, "_cache_file", None), "_index_path", None)
+        if index is None or _held.get(index) or tuple(sigutils.normalize_signature(sig)[0]) in self.overloads:
+            return compile_(self, sig)
+        try:
+            f = open(index + ".compiling", "a")
+        except OSError:
+            return compile_(self, sig)
+        with f:
+            deadline = time.monotonic() + COMPILE_WAIT
+            locked = False
+            while not locked:
+                try:
+                    fcntl.flock(f, fcntl.LOCK_EX | fcntl.LOCK_NB)
+                    locked = True
+                except OSError:
+                    if time.monotonic() > deadline:
+                        break
+                    time.sleep(0.05)
+            _held[index] = _held.get(index, 0) + 1
+            try:
+                return compile_(self, sig)  # loads the kernel if another process compiled it
+            finally:
+                _held[index] -= 1
+                if locked:
+                    fcntl.flock(f, fcntl.LOCK_UN)
+
+    locked_compile._adaptive_dd_locked = True
+    Dispatcher.compile = locked_compile
 
 
 # ------------------------------------------------------------ telling the user about compilation

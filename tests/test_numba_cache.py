@@ -130,3 +130,58 @@ def test_two_processes_adding_specialisations_of_one_kernel_lose_none(tmp_path):
     index = IndexDataCacheFile(str(tmp_path), "kernel", ("stamp", 1))._load_index()
     assert len(index) == 2 * n, f"{2 * n - len(index)} entries lost"
     assert len(set(index.values())) == 2 * n  # one data file per entry, none shared
+
+
+_KERNEL = """
+import numba
+import numpy as np
+
+
+@numba.njit(cache=True)
+def f(x):
+    a = np.arange(20.0) * x
+    m = np.outer(a, np.sort(a)[::-1]) + np.eye(20)
+    return np.linalg.solve(m, a).sum() + np.median(a) + np.percentile(a, 30.0)
+"""
+
+_COMPILER = """
+import os
+import sys
+import time
+
+import adaptive_dd  # installs the lock on numba's compilations
+import numba
+
+numba.config.CACHE_DIR = sys.argv[1]
+sys.path.insert(0, sys.argv[2])
+import kernel
+
+open(os.path.join(sys.argv[2], sys.argv[3]), "w").close()
+while not all(os.path.exists(os.path.join(sys.argv[2], t)) for t in ("a", "b")):
+    time.sleep(0.01)  # both processes ask for the kernel at the same moment
+kernel.f(1.0)
+print(sum(kernel.f.stats.cache_misses.values()))
+"""
+
+
+def test_two_processes_asking_for_one_kernel_compile_it_once(tmp_path):
+    """Two processes asking at once for a kernel the cache lacks (the test run's two workers):
+    one compiles it, the other waits for it and loads it from the cache
+    (:func:`_numba_cache._lock_compilations`); without the lock both compiled it."""
+    import subprocess
+    import sys
+
+    (tmp_path / "kernel.py").write_text(_KERNEL)
+    cache = tmp_path / "cache"
+    cache.mkdir()
+    procs = [
+        subprocess.Popen(
+            [sys.executable, "-c", _COMPILER, str(cache), str(tmp_path), tag],
+            stdout=subprocess.PIPE,
+            text=True,
+        )
+        for tag in ("a", "b")
+    ]
+    misses = sorted(int(p.communicate(timeout=300)[0].split()[-1]) for p in procs)
+    assert [p.returncode for p in procs] == [0, 0]
+    assert misses == [0, 1], f"cache misses per process {misses}: the kernel was compiled twice"

@@ -74,7 +74,9 @@ def _compiled_outputs(arm: Arm, pi, q, qd, qdd, tau) -> dict[str, np.ndarray]:
     the last link)."""
     from adaptive_dd.plant import chain as ck
 
-    n, ch, ia = arm.n_joints, arm.chain, arm.armature
+    # a writable copy of the armature: the arm's own is read-only, and forward_dynamics compiled
+    # for a read-only array is another specialisation than everyone else's (5.5 CPU s once more)
+    n, ch, ia = arm.n_joints, arm.chain, np.array(arm.armature, dtype=float)
 
     def one(i):
         out_n, out_nn, out_y, out_b = np.empty(n), np.empty((n, n)), np.empty((n, 10 * n)), np.empty((n, 10))
