@@ -138,10 +138,9 @@ import numpy as np
 
 
 @numba.njit(cache=True)
-def f(x):
+def f(x):  # compiles in a few tenths of a second: both processes are inside numba meanwhile
     a = np.arange(20.0) * x
-    m = np.outer(a, np.sort(a)[::-1]) + np.eye(20)
-    return np.linalg.solve(m, a).sum() + np.median(a) + np.percentile(a, 30.0)
+    return np.sort(a)[::-1].sum()
 """
 
 _COMPILER = """
