@@ -150,8 +150,8 @@ def _short(mode, seeds=3):
 def test_reopen_makes_the_test_s_start_the_estimator_s_alarm():
     """The closed loop, the vertical arm picking up 1 kg at 2.5 s (three seeds): with ``"reopen"``
     the estimator's median alarm comes within 4 ms of the swap (twice the shipped scenario's
-    detection limit of 2 ms), each within 6 ms, and there is none before it; with the test only starting the boost (``true``)
-    the estimator alarms later, at its own detector's time."""
+    detection limit of 2 ms), each within 6 ms, and there is none before it; with the test only
+    starting the boost (``true``) the estimator alarms later, at its own detector's time."""
     from adaptive_dd.closed_loop.runner import make_controllers, run_closed_loop
 
     first = {}
