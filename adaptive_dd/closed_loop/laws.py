@@ -384,9 +384,10 @@ def _friction_allowance(cfg, qd_last, qd_now, fc):  # pragma: no cover - compile
     ``2 fc`` where the sign of the true speed is not known over the sample (an end within
     ``obs_mslow``, the stated velocity noise's quantile, or the two ends of opposite signs: the
     joint may reverse or stick within it, its friction then anything within ``+-fc``); else
-    ``obs_mcreep_margin fc`` where an end is at most ``obs_mcreep`` fast (friction the model lacks,
-    a Stribeck bump or a soft law, errs near rest by a fraction of the Coulomb level: the
-    detector's creeping rule); else none."""
+    ``obs_mcreep_margin fc`` where the slower end is just above ``obs_mslow``, falling linearly to
+    none at ``obs_mcreep`` (friction the model lacks, a Stribeck bump or a soft law, errs near
+    rest by a fraction of the Coulomb level: the detector's creeping rule; a flat allowance up to
+    ``obs_mcreep`` cost vertical3 its gain); else none."""
     if _sign_unknown(cfg, qd_last, qd_now):
         return 2.0 * fc
     slow = min(abs(qd_last), abs(qd_now))
