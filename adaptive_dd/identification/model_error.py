@@ -29,7 +29,8 @@ def model_error_variance(model, fit, q: Array, qd: Array, tau: Array, torque_hel
     """``(p,)`` sum of the squared differences from ``fit.sigma`` (a
     :class:`~adaptive_dd.identification.log_fit.LogFit` of the record ``q, qd, tau (N, n)``) of the
     unweighted estimate and of the weighted ones at ``tau_f`` times :data:`FILTER_FACTORS`, on the
-    same channels and base parameters (zero for those held at the URDF's)."""
+    same channels and base parameters (zero for those held at the URDF's), each held along the
+    fit's held directions (:attr:`~adaptive_dd.identification.log_fit.LogFit.held`)."""
     from adaptive_dd.identification.log_fit import _identified_regression, _reweighted_fit, _solve
     from adaptive_dd.identification.regression import filtered_regression
 
@@ -44,5 +45,10 @@ def model_error_variance(model, fit, q: Array, qd: Array, tau: Array, torque_hel
         phi, y = _identified_regression(model, reg, used, K)
         alts.append(_reweighted_fit(phi, y, ones)[0])
     var = np.zeros(model.p)
-    var[K] = sum((a - fit.sigma[K]) ** 2 for a in alts)
+    for a in alts:
+        full = fit.sigma.copy()
+        full[K] = a
+        if fit.held is not None:  # the same directions held: what the record cannot see is not error
+            full = fit.held.apply(full, model.sigma_ref)
+        var[K] += (full[K] - fit.sigma[K]) ** 2
     return var
