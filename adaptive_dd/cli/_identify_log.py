@@ -70,6 +70,11 @@ def _print_held(model, fit) -> None:
         "along each above the prior's, the stated uncertainty about the URDF; their std is the prior's, "
         "'held' above: adaptive_dd.identification.held_directions):"
     )
+    if held.scale2 > 1.0:
+        print(
+            f"  the prior widened {np.sqrt(held.scale2):.3g}x: along the directions the record sees best the "
+            "URDF is that much further from the estimate than the stated uncertainty allows"
+        )
     for line in held.describe(model.names, short):
         print(f"  {line}")
 

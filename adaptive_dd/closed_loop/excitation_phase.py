@@ -184,13 +184,13 @@ def _task_path(scenario, duration: float | None = None) -> tuple[Array, Array]:
     return q, qd
 
 
-def excitation_reference(scenario, region: str = "arm"):
+def excitation_reference(scenario, region: str = "arm", progress: bool = False):
     """The designed excitation of the scenario's model as a reference with a 1 s ramp: the first of
     :data:`START_ATTEMPTS` random starts (generators ``(seed, 4, attempt)``) whose optimum keeps
     within the limits. ``region="arm"``: the arm's whole limits (:data:`REGIONS`); ``"task"``: the
     arm's limits narrowed to the task's region
     (:meth:`~adaptive_dd.identification.excitation.ExcitationLimits.of_task` on the scenario's
-    ``[reference]`` over its duration).
+    ``[reference]`` over its duration). ``progress``: the design's bar on stderr.
 
     Raises
     ------
@@ -214,7 +214,7 @@ def excitation_reference(scenario, region: str = "arm"):
     for attempt in range(START_ATTEMPTS):
         rng = np.random.default_rng([int(scenario.seed), 4, attempt])
         try:
-            best, _ = design_excitation(arm, lim, rng=rng)
+            best, _ = design_excitation(arm, lim, rng=rng, progress=progress)
         except ParameterError as exc:
             last = exc
             continue
@@ -315,10 +315,13 @@ def identify_record(
     )
 
 
-def identify_excitation(scenario, idx, run_closed_loop) -> tuple[list[Array], ExcitationReport]:
+def identify_excitation(
+    scenario, idx, run_closed_loop, progress: bool = False
+) -> tuple[list[Array], ExcitationReport]:
     """Run the excitation on each seed's plant (``run_closed_loop``: the closed loop's runner,
     :func:`~adaptive_dd.closed_loop.runner.run_closed_loop`) and identify; returns each seed's model
-    ``pi (13 n,)`` (consistent) and the report.
+    ``pi (13 n,)`` (consistent) and the report. ``progress``: what it is doing, on stderr (a bar
+    per stage: the design, the excitation's closed loop, the identification of each seed).
 
     Raises
     ------
@@ -328,9 +331,14 @@ def identify_excitation(scenario, idx, run_closed_loop) -> tuple[list[Array], Ex
     from adaptive_dd.closed_loop.types import io_of, plant_of, true_models
     from adaptive_dd.errors import DataError
 
-    reference = excitation_reference(scenario)
+    _stage(progress, f"run.excite: designing the excitation of the {scenario.n_joints}-joint arm (once)")
+    reference = excitation_reference(scenario, progress=progress)
     exc = _excitation_scenario(scenario, reference)
-    res = run_closed_loop(exc, seed_indices=idx, keep_trajectories=len(idx))
+    _stage(progress, f"run.excite: tracking it for {exc.duration:g} s on {len(idx)} seed(s)' plants")
+    bar = _bar(progress, exc.n_samples, "run.excite: excitation", "sample")
+    res = run_closed_loop(exc, seed_indices=idx, keep_trajectories=len(idx), bar=bar)
+    if bar is not None:
+        bar.close()
     run = res.runs[EXCITATION_CONTROLLER]
     if run.failed.any():
         raise ScenarioError(
@@ -348,7 +356,10 @@ def identify_excitation(scenario, idx, run_closed_loop) -> tuple[list[Array], Ex
     pis, kappa, widths = [], [], []
     rows = {"hat": [], "fit": [], "rstd": [], "std": [], "prior_cov": [], "held": []}
     levels = stated_levels(getattr(scenario.plant, "uncertainty", None))
+    bar = _bar(progress, len(idx), "run.excite: identifying", "seed")
     for k, i in enumerate(idx):
+        if bar is not None:
+            bar.update(1)
         rng = np.random.default_rng([int(scenario.seed), int(i), 3])
         qm = run.q[k] + std[:n] * rng.standard_normal(run.q[k].shape)
         qdm = run.qd[k] + std[n:] * rng.standard_normal(run.qd[k].shape)
@@ -367,6 +378,8 @@ def identify_excitation(scenario, idx, run_closed_loop) -> tuple[list[Array], Ex
             kappa.append(1.0)
         else:
             kappa.append(estimator_scale(scale_cfg, scenario.arm, one.prior_cov, qm, qdm, run.tau[k]))
+    if bar is not None:
+        bar.close()
     report = ExcitationReport(
         float(scenario.excite), tuple(idx), tuple(model.names), sig_plant,
         np.broadcast_to(scenario.arm.sigma, sig_plant.shape).copy(), np.array(rows["hat"]),
@@ -375,6 +388,23 @@ def identify_excitation(scenario, idx, run_closed_loop) -> tuple[list[Array], Ex
         excitation_coverage(scenario, reference, scenario.excite), np.array(rows["held"]),
     )  # fmt: skip
     return pis, report
+
+
+def _stage(show: bool, text: str) -> None:
+    """What the phase is doing now, on stderr."""
+    if show:
+        import sys
+
+        print(text, file=sys.stderr, flush=True)
+
+
+def _bar(show: bool, total: int, desc: str, unit: str):
+    """A progress bar on stderr, or None."""
+    if not show:
+        return None
+    from tqdm.auto import tqdm
+
+    return tqdm(total=total, desc=desc, unit=unit, mininterval=0.5, unit_scale=True, leave=False)
 
 
 def _estimator_config(scenario):
@@ -391,16 +421,18 @@ def _estimator_config(scenario):
     return getattr(scenario_controller(scenario, "adaptive_ct")[1], "online", None)
 
 
-def run_with_excitation(scenario, idx, run_closed_loop, keep: int = 3, engine: str = "auto"):
+def run_with_excitation(scenario, idx, run_closed_loop, keep: int = 3, engine: str = "auto", bar=None):
     """The excitation phase, then the task with each seed's identified model (module docstring);
     ``run_closed_loop`` runs the closed loop (:func:`~adaptive_dd.closed_loop.runner.run_closed_loop`, which
-    calls this function: passed in, the two modules do not import each other)."""
+    calls this function: passed in, the two modules do not import each other). ``bar``: the task's
+    progress (samples, tqdm-like), advanced seed by seed; with one, the phase says what it is doing
+    on stderr."""
     from adaptive_dd.closed_loop.types import plant_record
     from adaptive_dd.plant.uncertainty import exact_plant
     from adaptive_dd.plant.urdf_write import write_urdf_links
 
     idx = tuple(idx)
-    pis, report = identify_excitation(scenario, idx, run_closed_loop)
+    pis, report = identify_excitation(scenario, idx, run_closed_loop, progress=bar is not None)
     arm, n = scenario.arm, scenario.n_joints
     plant = scenario.plant if scenario.plant is not None else exact_plant(arm)
     parts = []
@@ -422,6 +454,8 @@ def run_with_excitation(scenario, idx, run_closed_loop, keep: int = 3, engine: s
             parts.append(
                 run_closed_loop(one, seed_indices=(i,), keep_trajectories=1 if k < keep else 0, engine=engine)
             )
+            if bar is not None:
+                bar.update(scenario.n_samples * len(parts[-1].runs) / len(idx))  # the trials of one seed
     res = join_results(parts, scenario, idx)
     res.plant = plant_record(dataclasses.replace(scenario, plant=plant), idx)
     res.excitation = report.to_dict()

@@ -35,11 +35,24 @@ from numpy.typing import NDArray
 
 from adaptive_dd.errors import ParameterError
 
-__all__ = ["HOLD_RATIO", "Held", "base_prior_std", "hold_unseen", "stated_levels", "unit_class"]
+__all__ = [
+    "HOLD_RATIO",
+    "Held",
+    "base_prior_std",
+    "hold_unseen",
+    "prior_scale",
+    "stated_levels",
+    "unit_class",
+]
 
 Array = NDArray[np.float64]
 HOLD_RATIO = 1.0
 """A direction is held when the estimate's variance along it exceeds this many times the prior's."""
+SEEN_RATIO = 0.1
+"""Directions whose estimate's variance is below this fraction of the prior's are those the record
+sees well: the URDF's distance from the estimate there checks the prior's scale (:func:`prior_scale`)."""
+MIN_SEEN = 3
+"""At least this many well-seen directions for :func:`prior_scale` to widen the prior."""
 NO_PRIOR = 1e6
 """A parameter without a prior (its class has no stated uncertainty: friction a URDF leaves at 0)
 takes this many times its estimate's std as its prior's: never held."""
@@ -125,6 +138,8 @@ class Held:
     share : ndarray (p,)
         The part of each parameter's variance (after holding) that is the prior's along the held
         directions, in [0, 1].
+    scale2 : float
+        ``kappa^2``, the prior's variance over the stated one (:func:`prior_scale`; 1: as stated).
     """
 
     prior_std: Array
@@ -132,6 +147,7 @@ class Held:
     ratio: Array
     projector: Array
     share: Array
+    scale2: float = 1.0
 
     @property
     def count(self) -> int:
@@ -160,6 +176,10 @@ def hold_unseen(sigma, cov, ref, prior_std, identified=None) -> tuple[Array, Arr
     ``prior_std (p,)`` (module docstring). Only the ``identified`` parameters (default all) take
     part; the others keep their values and covariance.
 
+    The prior's scale is checked on the record first: where the URDF is further from the estimate
+    along the directions the record sees well than the stated uncertainty allows, the prior is
+    widened to match (:func:`prior_scale`), so a URDF far from a real robot is held less.
+
     Returns
     -------
     sigma, cov : ndarray (p,), (p, p)
@@ -187,8 +207,9 @@ def hold_unseen(sigma, cov, ref, prior_std, identified=None) -> tuple[Array, Arr
     sk = np.where(np.isfinite(s0[K]) & (s0[K] > 0), s0[K], NO_PRIOR * data_std + 1e-300)
     Z = Ck / np.outer(sk, sk)
     mu, V = np.linalg.eigh(Z)
-    hold = mu > HOLD_RATIO
-    Vk, Vh = V[:, ~hold], V[:, hold]
+    kappa2 = prior_scale(mu, V.T @ ((x[K] - r0[K]) / sk))
+    hold = mu > HOLD_RATIO * kappa2
+    Vk, Vh = V[:, ~hold], V[:, hold] * np.sqrt(kappa2)
     Pk = (sk[:, None] * (Vk @ Vk.T)) / sk[None, :]
     proj = np.eye(p)
     proj[np.ix_(K, K)] = Pk
@@ -203,5 +224,19 @@ def hold_unseen(sigma, cov, ref, prior_std, identified=None) -> tuple[Array, Arr
     dirs = np.zeros((int(hold.sum()), p))
     dirs[:, K] = Vh.T
     order = np.argsort(-mu[hold])
-    held = Held(s0.copy(), dirs[order], mu[hold][order], proj, share)
+    held = Held(s0.copy(), dirs[order] / np.sqrt(kappa2), mu[hold][order] / kappa2, proj, share, kappa2)
     return out, out_cov, held
+
+
+def prior_scale(mu: Array, z: Array) -> float:
+    """``kappa^2 >= 1``: how much wider the prior must be than stated for the URDF's distance from
+    the record along the directions the record sees well (``mu <`` :data:`SEEN_RATIO`, in the
+    prior's units: the estimate's components ``z`` and their variances ``mu``): the mean of
+    ``z^2 - mu`` over them (each ``E z^2 = kappa^2 + mu`` when the URDF's error is a draw of the
+    prior scaled by ``kappa``), 1 with fewer than :data:`MIN_SEEN` such directions. A simulated
+    robot drawn from the stated uncertainty gives about 1; the TIAGo's real log about 140 (its URDF
+    is about 12 times further from the robot than issue 28's levels say)."""
+    seen = mu < SEEN_RATIO
+    if seen.sum() < MIN_SEEN:
+        return 1.0
+    return float(max(1.0, np.mean(z[seen] ** 2 - mu[seen])))
