@@ -40,6 +40,30 @@ def _cli(*args: str) -> None:
     subprocess.run(cmd, check=True)
 
 
+def print_errors(sc, draw, model_json) -> None:
+    """The identified base parameters against the robot's, ``|x - robot| / max(|robot|, 1 % of the
+    largest)`` (the excitation phase's report's measure): median and worst."""
+    import json
+
+    import numpy as np
+
+    B = sc.arm.base.B
+    robot = B @ np.concatenate([draw.pi_links, draw.viscous, draw.coulomb, draw.armature])
+    scale = np.maximum(np.abs(robot), 0.01 * np.abs(robot).max())
+    m = json.loads(Path(model_json).read_text())
+    for label, key in (
+        ("URDF", "sigma_urdf"),
+        ("weighted least squares", "sigma"),
+        ("consistent fit", "consistent_sigma"),
+    ):
+        e = np.abs(np.asarray(m[key]) - robot) / scale
+        worst = sc.arm.base.names[int(e.argmax())]
+        print(
+            f"{label}: base parameters vs the robot's, median {100 * np.median(e):.3g} %, "
+            f"worst {100 * e.max():.3g} % ({worst[:30]})"
+        )
+
+
 def main(argv=None) -> int:
     from adaptive_dd.benchmark.scenario import load_scenario
     from adaptive_dd.plant.uncertainty import plant_draws
@@ -77,6 +101,7 @@ def main(argv=None) -> int:
         "--output-error", "off", "--out", str(out / "ident"),
     )  # fmt: skip
     (out / "task.toml").write_text(text + '\n[model]\nfrom = "ident/model.json"\n')
+    print_errors(sc, d, out / "ident" / "model.json")
     print(f"wrote {out / 'task.toml'}: adaptive-dd benchmark {out / 'task.toml'} --seeds 10 ...")
     return 0
 

@@ -239,7 +239,7 @@ def identify_log(args: argparse.Namespace, arm, outputs) -> int:
         return _payload_only(args, arm, model, rec, tau_f)
     lim = arm.position_limits
     K = identifiable_subset(model, rec.used, lim[:, 0], lim[:, 1], np.random.default_rng(0))
-    prior_std = _prior_std(args.arm, model)
+    prior_std = _prior_std(args.arm, model) if args.hold_unseen == "on" else None
     fit = _fit_record(model, rec, K, tau_f, spec.torque_held, prior_std)
     _print_fit(model, fit, names)
     _output_error(args, arm, model, rec, fit)
@@ -379,7 +379,8 @@ def _prior_std(scenario: str, model):
 
 
 def _fit_record(model, rec, K, tau_f: float, torque_held: bool, prior_std=None):
-    """:func:`~adaptive_dd.identification.log_fit.fit_log` on a read record; its errors name the record."""
+    """:func:`~adaptive_dd.identification.log_fit.fit_log` on a read record, the directions it cannot
+    see held at the URDF's values with ``prior_std`` (None: none held); its errors name the record."""
     from adaptive_dd.identification.log_fit import fit_log
 
     try:
@@ -395,6 +396,7 @@ def _fit_record(model, rec, K, tau_f: float, torque_held: bool, prior_std=None):
             channel_weight=rec.weight,
             torque_held=torque_held,
             prior_std=prior_std,
+            hold=prior_std is not None,
         )
     except DataError as exc:
         raise DataError(f"{rec.source}: {exc}") from None
@@ -409,7 +411,8 @@ def _payload_pair(args, arm, model, fit, tau_f, K) -> None:
     from adaptive_dd.identification.payload_pair import payload_from_pair
 
     spec, base = read_arm_log(args.arm, arm, args.baseline, args.window)
-    other = _fit_record(model, base, K, tau_f, spec.torque_held, _prior_std(args.arm, model))
+    prior_std = _prior_std(args.arm, model) if args.hold_unseen == "on" else None
+    other = _fit_record(model, base, K, tau_f, spec.torque_held, prior_std)
     pr = payload_from_pair(arm, fit.sigma, fit.cov, other.sigma, other.cov)
     loaded = ", ".join(args.data) if args.data else "the scenario's record"
     _print_payload(f"payload (loaded {loaded} - unloaded {', '.join(args.baseline)})", pr)
