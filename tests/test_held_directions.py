@@ -135,7 +135,11 @@ def test_identify_cli_reports_the_held_direction_and_hands_on_the_prior(still_jo
     m = json.loads((out / "model.json").read_text())
     k = m["names"].index("fv3")
     s0 = base_prior_std(arm_model(sc.arm))
-    assert m["std"][k] == pytest.approx(s0[k], rel=0.05)
+    held = m["record"]["held_directions"]
+    assert held and held[0].startswith("fv3 (")
+    kappa = m["record"]["prior_scale"]  # the prior widened by what the well-seen directions show
+    assert 1.0 <= kappa < 1.5
+    assert m["std"][k] == pytest.approx(kappa * s0[k], rel=0.05)
     assert abs(m["sigma"][k] - sigma[k]) < 2 * s0[k]
 
 

@@ -325,6 +325,9 @@ def _write_model(outputs, arm, model, rec, fit, cf, spec) -> list:
                 model, fit, rec.q, rec.qd, rec.tau, spec.torque_held
             ).tolist(),
             "velocity": "measured" if rec.qd_measured else "derived",
+            # the directions the record could not see, held at the URDF's values (held_directions)
+            "held_directions": [] if fit.held is None else fit.held.describe(model.names),
+            "prior_scale": 1.0 if fit.held is None else float(np.sqrt(fit.held.scale2)),
             "scenario": str(spec.source),
         },
     )
