@@ -358,8 +358,6 @@ def identify_excitation(
     levels = stated_levels(getattr(scenario.plant, "uncertainty", None))
     bar = _bar(progress, len(idx), "run.excite: identifying", "seed")
     for k, i in enumerate(idx):
-        if bar is not None:
-            bar.update(1)
         rng = np.random.default_rng([int(scenario.seed), int(i), 3])
         qm = run.q[k] + std[:n] * rng.standard_normal(run.q[k].shape)
         qdm = run.qd[k] + std[n:] * rng.standard_normal(run.qd[k].shape)
@@ -378,6 +376,8 @@ def identify_excitation(
             kappa.append(1.0)
         else:
             kappa.append(estimator_scale(scale_cfg, scenario.arm, one.prior_cov, qm, qdm, run.tau[k]))
+        if bar is not None:
+            bar.update(1)
     if bar is not None:
         bar.close()
     report = ExcitationReport(
