@@ -179,7 +179,7 @@ def _newey_west(phi: Array, res: Array, w: Array, scale: Array) -> tuple[Array, 
     # direction (the Gen3's rounded angles: A's condition number 1e10) the product of a
     # pseudo-inverse left it asymmetric by 1e-4 and with a negative eigenvalue along that direction
     d, U = np.linalg.eigh(0.5 * (A + A.T))
-    d_inv = np.where(d > d.max() * 1e-15, 1.0 / np.where(d > 0, d, 1.0), 0.0)
+    d_inv = 1.0 / np.maximum(d, d.max() * 1e-15)  # an unseen direction: a huge variance, not none
     M = U.T @ (0.5 * (S + S.T)) @ U
     cov = U @ (d_inv[:, None] * M * d_inv[None, :]) @ U.T
     cov = 0.5 * (cov + cov.T)
@@ -241,14 +241,15 @@ def fit_log(
     Raises
     ------
     DataError
-        The log does not excite some base parameter (named), or is too short.
+        The log does not excite some base parameter (named; with ``hold``, only a parameter whose
+        column is zero: the directions it barely sees are held), or is too short.
     """
     used = np.asarray(used, dtype=bool)
     K = np.asarray(identified, dtype=bool)
     reg = filtered_regression(
         model, q, qd, tau, tau_f=tau_f, sample_period=sample_period, torque_held=torque_held
     )
-    phi, y = _identified_regression(model, reg, used, K)
+    phi, y = _identified_regression(model, reg, used, K, weak_ok=hold)
     cw = np.ones(model.n) if channel_weight is None else np.asarray(channel_weight, dtype=float)
     x, res, w, scale = _reweighted_fit(phi, y, cw[used])
     cov_k, lag = _newey_west(phi, res, w, scale)
@@ -275,10 +276,12 @@ def fit_log(
     )
 
 
-def _identified_regression(model: Model, reg, used: NDArray[np.bool_], K: NDArray[np.bool_]):
+def _identified_regression(
+    model: Model, reg, used: NDArray[np.bool_], K: NDArray[np.bool_], weak_ok: bool = False
+):
     """``phi (N, m, k)`` and ``y (N, m)`` of the used channels and the identified parameters, the
     torque of the parameters held at the URDF's values moved to ``y``; checked: enough samples,
-    every identified parameter excited."""
+    every identified parameter excited (``weak_ok``: but for directions the fit holds)."""
     names = tuple(nm for nm, k in zip(model.names, K, strict=True) if k)
     phi_all = reg.phi[:, used, :]
     y = reg.y[:, used] - phi_all[:, :, ~K] @ model.sigma_ref[~K]
@@ -288,7 +291,7 @@ def _identified_regression(model: Model, reg, used: NDArray[np.bool_], K: NDArra
             f"{y.shape[0]} samples of {used.sum()} channels for {K.sum()} parameters: a longer window "
             "is needed"
         )
-    check_excitation(phi, names)
+    check_excitation(phi, names, weak_ok=weak_ok)
     return phi, y
 
 

@@ -36,13 +36,14 @@ def model_error_variance(model, fit, q: Array, qd: Array, tau: Array, torque_hel
 
     K, used = fit.identified, fit.used
     ones = np.ones(int(used.sum()))
-    phi, y = _identified_regression(model, fit.regression, used, K)
+    weak_ok = fit.held is not None
+    phi, y = _identified_regression(model, fit.regression, used, K, weak_ok)
     alts = [_solve(phi, y, ones)[0]]
     for f in FILTER_FACTORS:
         reg = filtered_regression(
             model, q, qd, tau, tau_f=f * fit.tau_f, sample_period=fit.sample_period, torque_held=torque_held
         )
-        phi, y = _identified_regression(model, reg, used, K)
+        phi, y = _identified_regression(model, reg, used, K, weak_ok)
         alts.append(_reweighted_fit(phi, y, ones)[0])
     var = np.zeros(model.p)
     for a in alts:
