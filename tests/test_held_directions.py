@@ -141,6 +141,15 @@ def test_identify_cli_reports_the_held_direction_and_hands_on_the_prior(still_jo
     assert 1.0 <= kappa < 1.5
     assert m["std"][k] == pytest.approx(kappa * s0[k], rel=0.05)
     assert abs(m["sigma"][k] - sigma[k]) < 2 * s0[k]
+    # output error moves the other directions only; its Cramér-Rao column says 'held' for fv3
+    argv = ["identify", "--arm", str(scen), str(path), "--out", str(tmp_path / "oe"), "--max-iter", "1"]
+    assert main([*argv, "--output-error", "on"]) == 0
+    text = capsys.readouterr().out
+    rows = [x for x in text.splitlines() if x.startswith("fv3 ")]
+    assert len(rows) == 2 and rows[1].split()[3:] == ["held", "-"], rows
+    wls, oe = (float(x) for x in rows[1].split()[1:3])
+    assert oe == pytest.approx(wls, rel=0.01)  # not moved off the URDF's value (a fault: by 190 %)
+    assert "output error kept the" in text
 
 
 def test_the_excitation_phase_holds_too(still_joint):
@@ -168,7 +177,7 @@ def test_a_hold_ratio_of_infinity_is_the_plain_fit(monkeypatch):
 @pytest.mark.slow
 def test_the_gen3s_rounded_angles_are_held():
     """The Gen3's URDF writes its right angles rounded: ``mx1``, ``my1``'s group and ``Ia2`` are seen
-    only through the rounding. On a 5 s multi-sine the plain fit puts some base parameter thousands of
+    only through the rounding. On a 12 s multi-sine the plain fit puts some base parameter thousands of
     prior std off; held, every one is within 3, and those three are among the held directions."""
     from adaptive_dd.identification.log_fit import predict_torque
     from adaptive_dd.plant.arm import Arm
@@ -178,7 +187,7 @@ def test_the_gen3s_rounded_angles_are_held():
     arm = Arm.from_urdf(robot_urdf("gen3"), "end_effector_link", armature=[0.2] * 4 + [0.05] * 3)
     model = arm_model(arm)
     n, T = model.n, 0.002
-    t = np.arange(2500) * T
+    t = np.arange(6000) * T
     rng = np.random.default_rng(1)
     w, ph = rng.uniform(0.5, 2.5, (n, 3)), rng.uniform(0, 6, (n, 3))
     home = np.array([0.0, 0.15, 3.14, -2.25, 0.0, 1.0, 1.57])
