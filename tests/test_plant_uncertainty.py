@@ -468,10 +468,11 @@ def test_a_model_from_the_plants_own_urdf_tracks_as_the_oracle(tmp_path):
     assert np.all(e["w"] > 1.5 * oracle), (e["w"], oracle)  # squared sums: 1.1 kg off on one link
 
 
-def test_the_excitation_phase_identifies_the_plant_and_feeds_the_controllers():
+def test_the_excitation_phase_identifies_the_plant_and_feeds_the_controllers(capsys):
     """[run] excite on vertical3 with a drawn plant: the identified model is nearer each seed's
     plant than the URDF, ct_nominal on it tracks better than on the URDF, the oracle is untouched
-    (seeds joined in order), the identification is in the metrics."""
+    (seeds joined in order), the identification is in the metrics; with a progress bar, the phase
+    says on stderr what it is doing and the task's bar reaches its total."""
     from adaptive_dd.benchmark.metrics import compute_metrics
 
     data = _data(
@@ -481,7 +482,19 @@ def test_the_excitation_phase_identifies_the_plant_and_feeds_the_controllers():
     data["plant"] = {"uncertainty": LEVELS}
     data["run"]["excite"] = 10.0
     sc = parse_scenario(data, "v.toml")
-    res = run_closed_loop(sc)
+
+    class Bar:
+        n = 0.0
+
+        def update(self, k):
+            self.n += k
+
+    bar = Bar()
+    res = run_closed_loop(sc, bar=bar)
+    err_text = capsys.readouterr().err
+    for stage in ("run.excite: designing the excitation", "run.excite: tracking it for 10 s on 2 seed(s)"):
+        assert stage in err_text, err_text
+    assert bar.n == pytest.approx(sc.n_samples * len(res.runs))
     base = run_closed_loop(dataclasses.replace(sc, excite=0.0))
     rep = res.cache["excitation_report"]
     err = rep.errors()
@@ -524,8 +537,8 @@ def test_the_excitation_phase_hands_on_its_prior_and_reports_its_scale(monkeypat
     class Stop(Exception):
         pass
 
-    def identify(*args):
-        seen["pis"], seen["rep"] = real(*args)
+    def identify(*args, **kw):
+        seen["pis"], seen["rep"] = real(*args, **kw)
         return seen["pis"], seen["rep"]
 
     def hand_on(scenario, prior):

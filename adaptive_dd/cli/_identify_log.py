@@ -35,16 +35,19 @@ def _print_fit(model, fit, names: tuple[str, ...]) -> None:
         f"{fit.lag} samples = {fit.lag * fit.sample_period:.3g} s)"
     )
     print(f"{'base parameter':<{NAME_WIDTH}} {'estimate':>11} {'std':>9} {'std/|est| %':>11} {'URDF':>11}")
+    share = fit.held.share if fit.held is not None else np.zeros(model.p)
     for k, name in enumerate(model.names):
         if fit.identified[k]:
             rel = 100 * fit.std[k] / max(abs(fit.sigma[k]), 1e-300)
+            note = f"{rel:11.3g}" if share[k] <= 0.5 else f"{'held':>11}"
             print(
-                f"{short(name):<{NAME_WIDTH}} {fit.sigma[k]:11.5g} {fit.std[k]:9.2g} {rel:11.3g} "
+                f"{short(name):<{NAME_WIDTH}} {fit.sigma[k]:11.5g} {fit.std[k]:9.2g} {note} "
                 f"{model.sigma_ref[k]:11.5g}"
             )
     fixed = [model.names[k] for k in np.flatnonzero(~fit.identified)]
     if fixed:
         print(f"held at the URDF's values: {', '.join(short(f) for f in fixed)}")
+    _print_held(model, fit)
     print(
         "per channel [N m rms], filtered: residual "
         + ", ".join(f"{names[j]} {fit.residual_rms[j]:.3g}" for j in np.flatnonzero(fit.used))
@@ -55,6 +58,25 @@ def _print_fit(model, fit, names: tuple[str, ...]) -> None:
             "after the filter): the model explains this channel far worse than the sensor allows (friction "
             "law, unmodelled dynamics, conversion constants); the std above account for it"
         )
+
+
+def _print_held(model, fit) -> None:
+    """The directions the record cannot see, held at the URDF's values, and why."""
+    held = fit.held
+    if held is None or held.count == 0:
+        return
+    print(
+        f"held at the URDF's values, {held.count} direction(s) the record cannot see (the estimate's std "
+        "along each above the prior's, the stated uncertainty about the URDF; their std is the prior's, "
+        "'held' above: adaptive_dd.identification.held_directions):"
+    )
+    if held.scale2 > 1.0:
+        print(
+            f"  the prior widened {np.sqrt(held.scale2):.3g}x: along the directions the record sees best the "
+            "URDF is that much further from the estimate than the stated uncertainty allows"
+        )
+    for line in held.describe(model.names, short):
+        print(f"  {line}")
 
 
 def _print_payload(label: str, pr) -> None:
@@ -115,6 +137,7 @@ def _output_error(args, arm, model, rec, fit) -> None:
         f"segments of {args.segment_length} samples (--output-error off skips it) ...",
         flush=True,
     )
+    E = _free_directions(fit)
     try:
         oe = fit_output_error(
             model,
@@ -126,6 +149,7 @@ def _output_error(args, arm, model, rec, fit) -> None:
             sample_period=rec.sample_period,
             segment_length=args.segment_length,
             max_iter=args.max_iter,
+            E=E,
         )
     except (SignalError, ParameterError, np.linalg.LinAlgError) as exc:
         print(f"output error: skipped, the record cannot be simulated from the WLS estimate ({exc})")
@@ -137,15 +161,36 @@ def _output_error(args, arm, model, rec, fit) -> None:
     print(
         f"{'base parameter':<{NAME_WIDTH}} {'WLS':>11} {'output err':>11} {'CRB std':>9} {'|WLS-OE|/CRB':>12}"
     )
+    crb = np.sqrt(np.abs(np.diag(E @ np.linalg.pinv(oe.information, hermitian=True) @ E.T)))
+    share = fit.held.share if fit.held is not None else np.zeros(model.p)
     for k, name in enumerate(model.names):
+        if share[k] > 0.5:  # no estimate there, so no bound on one: the prior's std is in the WLS table
+            row = f"{short(name):<{NAME_WIDTH}} {fit.sigma[k]:11.5g} {oe.sigma[k]:11.5g}"
+            print(f"{row} {'held':>9} {'-':>12}")
+            continue
         print(
-            f"{short(name):<{NAME_WIDTH}} {fit.sigma[k]:11.5g} {oe.sigma[k]:11.5g} {oe.std[k]:9.2g} "
-            f"{abs(fit.sigma[k] - oe.sigma[k]) / oe.std[k]:12.1f}"
+            f"{short(name):<{NAME_WIDTH}} {fit.sigma[k]:11.5g} {oe.sigma[k]:11.5g} {crb[k]:9.2g} "
+            f"{abs(fit.sigma[k] - oe.sigma[k]) / crb[k]:12.1f}"
+        )
+    if fit.held is not None and fit.held.count:
+        print(
+            f"output error kept the {fit.held.count} held direction(s) at the URDF's values; 'held': no "
+            "estimate, so no Cramér-Rao bound (the prior's std is in the table above)"
         )
     print(
         "CRB: Cramér-Rao std at the estimate for this record, q and qd measured with the arm's sensor "
         f"noise, torque known, segments of {oe.segment_length} samples with unknown initial states"
     )
+
+
+def _free_directions(fit):
+    """``E (p, r)``: the base parameters' directions output error may move, all but those the
+    weighted least squares held (an orthonormal basis of its projector's range)."""
+    p = fit.sigma.shape[0]
+    if fit.held is None or fit.held.count == 0:
+        return np.eye(p)
+    U = np.linalg.svd(fit.held.projector)[0]
+    return U[:, : p - fit.held.count]
 
 
 def _consistent(model, fit):
@@ -194,7 +239,8 @@ def identify_log(args: argparse.Namespace, arm, outputs) -> int:
         return _payload_only(args, arm, model, rec, tau_f)
     lim = arm.position_limits
     K = identifiable_subset(model, rec.used, lim[:, 0], lim[:, 1], np.random.default_rng(0))
-    fit = _fit_record(model, rec, K, tau_f, spec.torque_held)
+    prior_std = _prior_std(args.arm, model) if args.hold_unseen == "on" else None
+    fit = _fit_record(model, rec, K, tau_f, spec.torque_held, prior_std)
     _print_fit(model, fit, names)
     _output_error(args, arm, model, rec, fit)
     cf = _consistent(model, fit)
@@ -279,6 +325,9 @@ def _write_model(outputs, arm, model, rec, fit, cf, spec) -> list:
                 model, fit, rec.q, rec.qd, rec.tau, spec.torque_held
             ).tolist(),
             "velocity": "measured" if rec.qd_measured else "derived",
+            # the directions the record could not see, held at the URDF's values (held_directions)
+            "held_directions": [] if fit.held is None else fit.held.describe(model.names),
+            "prior_scale": 1.0 if fit.held is None else float(np.sqrt(fit.held.scale2)),
             "scenario": str(spec.source),
         },
     )
@@ -319,8 +368,22 @@ def _payload_only(args, arm, model, rec, tau_f) -> int:
     return 0
 
 
-def _fit_record(model, rec, K, tau_f: float, torque_held: bool):
-    """:func:`~adaptive_dd.identification.log_fit.fit_log` on a read record; its errors name the record."""
+def _prior_std(scenario: str, model):
+    """Each base parameter's prior std about the URDF's value: the scenario's ``[plant.uncertainty]``
+    levels, else issue 28's defaults (:func:`~adaptive_dd.identification.held_directions.base_prior_std`)."""
+    from adaptive_dd.errors import ScenarioError
+    from adaptive_dd.identification.held_directions import base_prior_std, stated_levels
+    from adaptive_dd.io import read_toml
+    from adaptive_dd.plant.uncertainty import _uncertainty
+
+    table = (read_toml(Path(scenario), ScenarioError).get("plant") or {}).get("uncertainty")
+    unc = None if table is None else _uncertainty(str(scenario), table)
+    return base_prior_std(model, stated_levels(unc))
+
+
+def _fit_record(model, rec, K, tau_f: float, torque_held: bool, prior_std=None):
+    """:func:`~adaptive_dd.identification.log_fit.fit_log` on a read record, the directions it cannot
+    see held at the URDF's values with ``prior_std`` (None: none held); its errors name the record."""
     from adaptive_dd.identification.log_fit import fit_log
 
     try:
@@ -335,6 +398,8 @@ def _fit_record(model, rec, K, tau_f: float, torque_held: bool):
             sample_period=rec.sample_period,
             channel_weight=rec.weight,
             torque_held=torque_held,
+            prior_std=prior_std,
+            hold=prior_std is not None,
         )
     except DataError as exc:
         raise DataError(f"{rec.source}: {exc}") from None
@@ -349,7 +414,8 @@ def _payload_pair(args, arm, model, fit, tau_f, K) -> None:
     from adaptive_dd.identification.payload_pair import payload_from_pair
 
     spec, base = read_arm_log(args.arm, arm, args.baseline, args.window)
-    other = _fit_record(model, base, K, tau_f, spec.torque_held)
+    prior_std = _prior_std(args.arm, model) if args.hold_unseen == "on" else None
+    other = _fit_record(model, base, K, tau_f, spec.torque_held, prior_std)
     pr = payload_from_pair(arm, fit.sigma, fit.cov, other.sigma, other.cov)
     loaded = ", ".join(args.data) if args.data else "the scenario's record"
     _print_payload(f"payload (loaded {loaded} - unloaded {', '.join(args.baseline)})", pr)

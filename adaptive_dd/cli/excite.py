@@ -60,6 +60,10 @@ def run(args: argparse.Namespace) -> int:
     out = check_output_file(args.out)  # before the design, not after it
     lim = ExcitationLimits.of_arm(arm, acceleration=args.acceleration, margin=args.margin)
     plain = multisine(arm, lim, args.harmonics, args.f0)
+    _stage(
+        f"designing the excitation of the {arm.n_joints}-joint arm: SLSQP, up to {args.maxiter} iterations "
+        "(the first run compiles the kernels; minutes on a 7-joint arm)"
+    )
     best, res = design_excitation(
         arm,
         lim,
@@ -67,6 +71,11 @@ def run(args: argparse.Namespace) -> int:
         f0=args.f0,
         maxiter=args.maxiter,
         rng=np.random.default_rng(args.seed),
+        progress=True,
+    )
+    _stage(
+        f"bounding the designed and a plain multi-sine trajectory: each tracked for {args.duration:g} s "
+        "and the Cramér-Rao bound of its record ..."
     )
     rows = excitation_bounds(arm, {"plain multi-sine": plain, "designed": best}, args.duration)
     _print_bounds(args, arm, res, rows)
@@ -81,6 +90,11 @@ def run(args: argparse.Namespace) -> int:
         fh.write(_replace_reference(Path(args.arm).read_text(), text))
     print(f"wrote {out} (the scenario with the designed [reference])")
     return 0
+
+
+def _stage(text: str) -> None:
+    """What ``excite`` is doing now, on stderr (the result goes to stdout)."""
+    print(text, file=sys.stderr, flush=True)
 
 
 def ramp_within_limits(ref, arm, period: float, tries: int = 8) -> float:

@@ -114,6 +114,13 @@ def _add_arm_options(i: argparse.ArgumentParser) -> None:
         help="with --arm: repair chain links whose URDF inertia is not a rigid body's (reported)",
     )
     i.add_argument(
+        "--hold-unseen",
+        choices=("on", "off"),
+        default="on",
+        help="with --arm: hold at the URDF's values the directions of the base parameters the record cannot "
+        "see (the estimate's std along them above the prior's; default on; off: every direction estimated)",
+    )
+    i.add_argument(
         "--output-error",
         choices=("auto", "on", "off"),
         default="auto",
@@ -140,6 +147,7 @@ ARM_OPTIONS = (
     "--output-error",
     "--segment-length",
     "--max-iter",
+    "--hold-unseen",
 )
 """Options of the identification of any arm from a log (:mod:`adaptive_dd.cli._identify_log`),
 refused on the paper's arm."""

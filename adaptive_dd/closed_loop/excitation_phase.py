@@ -76,7 +76,9 @@ class ExcitationReport:
     the prior counts as much as its record would in the estimator; ones when the scenario runs no
     adaptive_ct; dividing the hand-off by it measured worse, docs/learning_the_arm.md);
     ``coulomb_width (S,)`` [rad/s] per seed the width of the identification's Coulomb law, from
-    the record (:func:`~adaptive_dd.identification.friction_width.coulomb_width`).
+    the record (:func:`~adaptive_dd.identification.friction_width.coulomb_width`); ``held (S,)`` per
+    seed the number of directions of the base parameters the record could not see, held at the
+    URDF's values (:mod:`~adaptive_dd.identification.held_directions`).
     """
 
     duration: float
@@ -92,6 +94,7 @@ class ExcitationReport:
     coulomb_width: Array
     estimator_scale: Array | None = None
     coverage: object = None
+    held: Array | None = None
 
     def errors(self) -> dict[str, Array]:
         """Per seed and base parameter ``(S, p)``, the error against the plant's,
@@ -123,6 +126,8 @@ class ExcitationReport:
             seeds[int(i)]["residual_std"] = self.rstd[k].tolist()
             if self.estimator_scale is not None:
                 seeds[int(i)]["estimator_scale"] = float(self.estimator_scale[k])
+            if self.held is not None:
+                seeds[int(i)]["held_directions"] = int(self.held[k])
         out = {
             "duration": self.duration,
             "controller": EXCITATION_CONTROLLER,
@@ -154,6 +159,11 @@ class ExcitationReport:
             f"excitation {self.duration:g} s, base parameters vs the plant's (median over seeds) - "
             + "; ".join(parts)
         )
+        if self.held is not None and np.any(self.held):
+            line += (
+                f"; held at the URDF's values (the record cannot see them): {int(np.min(self.held))}-"
+                f"{int(np.max(self.held))} direction(s) per seed"
+            )
         return line if self.coverage is None else line + "\n" + self.coverage.line()
 
 
@@ -174,13 +184,13 @@ def _task_path(scenario, duration: float | None = None) -> tuple[Array, Array]:
     return q, qd
 
 
-def excitation_reference(scenario, region: str = "arm"):
+def excitation_reference(scenario, region: str = "arm", progress: bool = False):
     """The designed excitation of the scenario's model as a reference with a 1 s ramp: the first of
     :data:`START_ATTEMPTS` random starts (generators ``(seed, 4, attempt)``) whose optimum keeps
     within the limits. ``region="arm"``: the arm's whole limits (:data:`REGIONS`); ``"task"``: the
     arm's limits narrowed to the task's region
     (:meth:`~adaptive_dd.identification.excitation.ExcitationLimits.of_task` on the scenario's
-    ``[reference]`` over its duration).
+    ``[reference]`` over its duration). ``progress``: the design's bar on stderr.
 
     Raises
     ------
@@ -204,7 +214,7 @@ def excitation_reference(scenario, region: str = "arm"):
     for attempt in range(START_ATTEMPTS):
         rng = np.random.default_rng([int(scenario.seed), 4, attempt])
         try:
-            best, _ = design_excitation(arm, lim, rng=rng)
+            best, _ = design_excitation(arm, lim, rng=rng, progress=progress)
         except ParameterError as exc:
             last = exc
             continue
@@ -251,7 +261,8 @@ class RecordFit:
     parameter ``std (p,)`` (:func:`~adaptive_dd.identification.arm_prior.identified_prior_std`) and
     with its correlations ``prior_cov (p, p)``
     (:func:`~adaptive_dd.identification.arm_prior.identified_prior_cov`); the weighted least
-    squares' sandwich covariance ``cov (p, p)``."""
+    squares' sandwich covariance ``cov (p, p)`` (along the ``held`` directions the record cannot
+    see, the prior's: :mod:`~adaptive_dd.identification.held_directions`)."""
 
     pi: Array
     hat: Array
@@ -260,10 +271,11 @@ class RecordFit:
     std: Array
     cov: Array
     prior_cov: Array
+    held: int = 0
 
 
 def identify_record(
-    model, q: Array, qd: Array, tau: Array, sample_period: float, torque_held: bool = True
+    model, q: Array, qd: Array, tau: Array, sample_period: float, torque_held: bool = True, levels=None
 ) -> RecordFit:
     """Identify one measured record ``q, qd, tau (N, n)`` as ``adaptive-dd identify`` does: the
     weighted least squares with its Newey-West sandwich covariance
@@ -273,6 +285,10 @@ def identify_record(
     with :func:`~adaptive_dd.identification.model_error.model_error_variance`). ``torque_held``: the
     record's torque is a command held over each sample (the closed loop's), else a sampled
     continuous torque (:func:`~adaptive_dd.identification.regression.filtered_regression`).
+    ``levels``: the stated uncertainty about the URDF
+    (:class:`~adaptive_dd.identification.arm_prior.ArmUncertainty`, default issue 28's), the prior
+    along the directions the record cannot see, which are held there
+    (:mod:`~adaptive_dd.identification.held_directions`).
 
     Raises
     ------
@@ -281,24 +297,31 @@ def identify_record(
     """
     from adaptive_dd.identification.arm_prior import identified_prior_cov
     from adaptive_dd.identification.consistency import consistent_arm_fit
+    from adaptive_dd.identification.held_directions import base_prior_std
     from adaptive_dd.identification.log_fit import fit_log
     from adaptive_dd.identification.model_error import model_error_variance
 
     n = model.n
     wls = fit_log(
         model, q, qd, tau, np.ones(n, bool), np.ones(model.p, bool), tau_f=TAU_F,
-        sample_period=sample_period, torque_held=torque_held,
+        sample_period=sample_period, torque_held=torque_held, prior_std=base_prior_std(model, levels),
     )  # fmt: skip
     fit = consistent_arm_fit(model, wls.sigma, np.linalg.pinv(wls.cov, rcond=1e-12, hermitian=True))
     extra = model_error_variance(model, wls, q, qd, tau, torque_held)
     prior = identified_prior_cov(wls.cov, wls.sigma, fit.sigma, model_error_var=extra)
-    return RecordFit(fit.pi, wls.sigma, fit.sigma, wls.residual_rms, np.sqrt(np.diag(prior)), wls.cov, prior)
+    held = wls.held.count if wls.held is not None else 0
+    return RecordFit(
+        fit.pi, wls.sigma, fit.sigma, wls.residual_rms, np.sqrt(np.diag(prior)), wls.cov, prior, held
+    )
 
 
-def identify_excitation(scenario, idx, run_closed_loop) -> tuple[list[Array], ExcitationReport]:
+def identify_excitation(
+    scenario, idx, run_closed_loop, progress: bool = False
+) -> tuple[list[Array], ExcitationReport]:
     """Run the excitation on each seed's plant (``run_closed_loop``: the closed loop's runner,
     :func:`~adaptive_dd.closed_loop.runner.run_closed_loop`) and identify; returns each seed's model
-    ``pi (13 n,)`` (consistent) and the report.
+    ``pi (13 n,)`` (consistent) and the report. ``progress``: what it is doing, on stderr (a bar
+    per stage: the design, the excitation's closed loop, the identification of each seed).
 
     Raises
     ------
@@ -308,9 +331,14 @@ def identify_excitation(scenario, idx, run_closed_loop) -> tuple[list[Array], Ex
     from adaptive_dd.closed_loop.types import io_of, plant_of, true_models
     from adaptive_dd.errors import DataError
 
-    reference = excitation_reference(scenario)
+    _stage(progress, f"run.excite: designing the excitation of the {scenario.n_joints}-joint arm (once)")
+    reference = excitation_reference(scenario, progress=progress)
     exc = _excitation_scenario(scenario, reference)
-    res = run_closed_loop(exc, seed_indices=idx, keep_trajectories=len(idx))
+    _stage(progress, f"run.excite: tracking it for {exc.duration:g} s on {len(idx)} seed(s)' plants")
+    bar = _bar(progress, exc.n_samples, "run.excite: excitation", "sample")
+    res = run_closed_loop(exc, seed_indices=idx, keep_trajectories=len(idx), bar=bar)
+    if bar is not None:
+        bar.close()
     run = res.runs[EXCITATION_CONTROLLER]
     if run.failed.any():
         raise ScenarioError(
@@ -318,6 +346,7 @@ def identify_excitation(scenario, idx, run_closed_loop) -> tuple[list[Array], Ex
             f"{[int(i) for i, f in zip(idx, run.failed, strict=True) if f]} (tracking lost)"
         )
     from adaptive_dd.identification.friction_width import identification_model
+    from adaptive_dd.identification.held_directions import stated_levels
 
     scale_cfg = _estimator_config(scenario)
     std = io_of(scenario).std
@@ -325,7 +354,9 @@ def identify_excitation(scenario, idx, run_closed_loop) -> tuple[list[Array], Ex
     B = scenario.arm.base.B
     sig_plant = true_models(plant_of(exc, idx))[:, 0] @ B.T
     pis, kappa, widths = [], [], []
-    rows = {"hat": [], "fit": [], "rstd": [], "std": [], "prior_cov": []}
+    rows = {"hat": [], "fit": [], "rstd": [], "std": [], "prior_cov": [], "held": []}
+    levels = stated_levels(getattr(scenario.plant, "uncertainty", None))
+    bar = _bar(progress, len(idx), "run.excite: identifying", "seed")
     for k, i in enumerate(idx):
         rng = np.random.default_rng([int(scenario.seed), int(i), 3])
         qm = run.q[k] + std[:n] * rng.standard_normal(run.q[k].shape)
@@ -333,7 +364,7 @@ def identify_excitation(scenario, idx, run_closed_loop) -> tuple[list[Array], Ex
         model = identification_model(scenario.arm, qdm)  # the Coulomb law's width from the record
         widths.append(model.friction_velocity)
         try:
-            one = identify_record(model, qm, qdm, run.tau[k], T)
+            one = identify_record(model, qm, qdm, run.tau[k], T, levels=levels)
         except DataError as exc_:
             raise ScenarioError(
                 f"{scenario.source}: run.excite = {scenario.excite} s: {exc_}; excite longer"
@@ -345,14 +376,35 @@ def identify_excitation(scenario, idx, run_closed_loop) -> tuple[list[Array], Ex
             kappa.append(1.0)
         else:
             kappa.append(estimator_scale(scale_cfg, scenario.arm, one.prior_cov, qm, qdm, run.tau[k]))
+        if bar is not None:
+            bar.update(1)
+    if bar is not None:
+        bar.close()
     report = ExcitationReport(
         float(scenario.excite), tuple(idx), tuple(model.names), sig_plant,
         np.broadcast_to(scenario.arm.sigma, sig_plant.shape).copy(), np.array(rows["hat"]),
         np.array(rows["fit"]), np.array(rows["rstd"]), np.array(rows["std"]), np.array(rows["prior_cov"]),
         np.array(widths), np.array(kappa),
-        excitation_coverage(scenario, reference, scenario.excite),
+        excitation_coverage(scenario, reference, scenario.excite), np.array(rows["held"]),
     )  # fmt: skip
     return pis, report
+
+
+def _stage(show: bool, text: str) -> None:
+    """What the phase is doing now, on stderr."""
+    if show:
+        import sys
+
+        print(text, file=sys.stderr, flush=True)
+
+
+def _bar(show: bool, total: int, desc: str, unit: str):
+    """A progress bar on stderr, or None."""
+    if not show:
+        return None
+    from tqdm.auto import tqdm
+
+    return tqdm(total=total, desc=desc, unit=unit, mininterval=0.5, unit_scale=True, leave=False)
 
 
 def _estimator_config(scenario):
@@ -369,16 +421,18 @@ def _estimator_config(scenario):
     return getattr(scenario_controller(scenario, "adaptive_ct")[1], "online", None)
 
 
-def run_with_excitation(scenario, idx, run_closed_loop, keep: int = 3, engine: str = "auto"):
+def run_with_excitation(scenario, idx, run_closed_loop, keep: int = 3, engine: str = "auto", bar=None):
     """The excitation phase, then the task with each seed's identified model (module docstring);
     ``run_closed_loop`` runs the closed loop (:func:`~adaptive_dd.closed_loop.runner.run_closed_loop`, which
-    calls this function: passed in, the two modules do not import each other)."""
+    calls this function: passed in, the two modules do not import each other). ``bar``: the task's
+    progress (samples, tqdm-like), advanced seed by seed; with one, the phase says what it is doing
+    on stderr."""
     from adaptive_dd.closed_loop.types import plant_record
     from adaptive_dd.plant.uncertainty import exact_plant
     from adaptive_dd.plant.urdf_write import write_urdf_links
 
     idx = tuple(idx)
-    pis, report = identify_excitation(scenario, idx, run_closed_loop)
+    pis, report = identify_excitation(scenario, idx, run_closed_loop, progress=bar is not None)
     arm, n = scenario.arm, scenario.n_joints
     plant = scenario.plant if scenario.plant is not None else exact_plant(arm)
     parts = []
@@ -400,6 +454,8 @@ def run_with_excitation(scenario, idx, run_closed_loop, keep: int = 3, engine: s
             parts.append(
                 run_closed_loop(one, seed_indices=(i,), keep_trajectories=1 if k < keep else 0, engine=engine)
             )
+            if bar is not None:
+                bar.update(scenario.n_samples * len(parts[-1].runs) / len(idx))  # the trials of one seed
     res = join_results(parts, scenario, idx)
     res.plant = plant_record(dataclasses.replace(scenario, plant=plant), idx)
     res.excitation = report.to_dict()

@@ -120,10 +120,7 @@ def run_closed_loop(
             )
         from adaptive_dd.closed_loop.excitation_phase import run_with_excitation
 
-        res = run_with_excitation(scenario, idx, run_closed_loop, keep_trajectories, engine)
-        if bar is not None:
-            bar.update(scenario.n_samples * len(res.runs))
-        return res
+        return run_with_excitation(scenario, idx, run_closed_loop, keep_trajectories, engine, bar=bar)
     ctrls = make_controllers(scenario) if controllers is None else controllers
     rc, io, pl = run_constants(scenario), io_of(scenario), plant_of(scenario, idx)
     _, sigma_true, mass = true_parameters(scenario)

@@ -44,6 +44,7 @@ from numpy.typing import NDArray
 
 from adaptive_dd.errors import DataError
 from adaptive_dd.identification.filters import design_filter_bank, filter_record
+from adaptive_dd.identification.held_directions import Held, base_prior_std, hold_unseen
 from adaptive_dd.identification.model import Model, base_regressor
 from adaptive_dd.identification.regression import (
     Regression,
@@ -89,6 +90,9 @@ class LogFit:
     tau_f, sample_period : float
     regression : Regression
     used : ndarray of bool (n,)
+    held : Held or None
+        The directions the record cannot see, held at the URDF's values
+        (:func:`~adaptive_dd.identification.held_directions.hold_unseen`); None when not asked.
     """
 
     sigma: Array
@@ -103,6 +107,7 @@ class LogFit:
     sample_period: float
     regression: Regression
     used: NDArray[np.bool_]
+    held: Held | None = None
 
     def model_error_channels(self) -> list[tuple[int, float]]:
         """``(joint, residual / noise)`` of the kept channels above :data:`MODEL_ERROR_RATIO`."""
@@ -170,8 +175,14 @@ def _newey_west(phi: Array, res: Array, w: Array, scale: Array) -> tuple[Array, 
     for m in range(1, lag + 1):
         G = g[m:].T @ g[:-m]
         S += (1.0 - m / (lag + 1)) * (G + G.T)
-    Ainv = np.linalg.pinv(A)
-    cov = Ainv @ S @ Ainv
+    # A^-1 S A^-1 in A's eigenbasis, symmetric by construction: on a record that barely sees a
+    # direction (the Gen3's rounded angles: A's condition number 1e10) the product of a
+    # pseudo-inverse left it asymmetric by 1e-4 and with a negative eigenvalue along that direction
+    d, U = np.linalg.eigh(0.5 * (A + A.T))
+    d_inv = 1.0 / np.maximum(d, d.max() * 1e-15)  # an unseen direction: a huge variance, not none
+    M = U.T @ (0.5 * (S + S.T)) @ U
+    cov = U @ (d_inv[:, None] * M * d_inv[None, :]) @ U.T
+    cov = 0.5 * (cov + cov.T)
     return cov / np.outer(scale, scale), lag
 
 
@@ -198,6 +209,8 @@ def fit_log(
     sample_period: float,
     channel_weight=None,
     torque_held: bool = True,
+    prior_std=None,
+    hold: bool = True,
 ) -> LogFit:
     """Weighted least squares of one log (module docstring).
 
@@ -217,22 +230,35 @@ def fit_log(
         The torque is held over each sample (a command, as a simulator's or a drive's current
         loop applies it: the default) rather than sampled from a continuous signal (a joint
         torque sensor): :func:`~adaptive_dd.identification.regression.filtered_regression`.
+    prior_std : array_like (p,), optional
+        The prior's standard deviation of each base parameter about the URDF's value (default:
+        :func:`~adaptive_dd.identification.held_directions.base_prior_std` at issue 28's levels).
+    hold : bool
+        Hold at the URDF's values the directions the record cannot see (module docstring of
+        :mod:`~adaptive_dd.identification.held_directions`; ``False``: the plain weighted least
+        squares, every direction estimated).
 
     Raises
     ------
     DataError
-        The log does not excite some base parameter (named), or is too short.
+        The log does not excite some base parameter (named; with ``hold``, only a parameter whose
+        column is zero: the directions it barely sees are held), or is too short.
     """
     used = np.asarray(used, dtype=bool)
     K = np.asarray(identified, dtype=bool)
     reg = filtered_regression(
         model, q, qd, tau, tau_f=tau_f, sample_period=sample_period, torque_held=torque_held
     )
-    phi, y = _identified_regression(model, reg, used, K)
+    phi, y = _identified_regression(model, reg, used, K, weak_ok=hold)
     cw = np.ones(model.n) if channel_weight is None else np.asarray(channel_weight, dtype=float)
     x, res, w, scale = _reweighted_fit(phi, y, cw[used])
     cov_k, lag = _newey_west(phi, res, w, scale)
     sigma, cov, residual, weights = _in_full(model, K, used, x, cov_k, res, w)
+    held = None
+    if hold:
+        s0 = base_prior_std(model) if prior_std is None else np.asarray(prior_std, dtype=float)
+        sigma, cov, held = hold_unseen(sigma, cov, model.sigma_ref, s0, K)
+        residual[used] = np.sqrt(np.mean((y - phi @ sigma[K]) ** 2, axis=0))
     return LogFit(
         sigma=sigma,
         identified=K,
@@ -246,13 +272,16 @@ def fit_log(
         sample_period=float(sample_period),
         regression=reg,
         used=used,
+        held=held,
     )
 
 
-def _identified_regression(model: Model, reg, used: NDArray[np.bool_], K: NDArray[np.bool_]):
+def _identified_regression(
+    model: Model, reg, used: NDArray[np.bool_], K: NDArray[np.bool_], weak_ok: bool = False
+):
     """``phi (N, m, k)`` and ``y (N, m)`` of the used channels and the identified parameters, the
     torque of the parameters held at the URDF's values moved to ``y``; checked: enough samples,
-    every identified parameter excited."""
+    every identified parameter excited (``weak_ok``: but for directions the fit holds)."""
     names = tuple(nm for nm, k in zip(model.names, K, strict=True) if k)
     phi_all = reg.phi[:, used, :]
     y = reg.y[:, used] - phi_all[:, :, ~K] @ model.sigma_ref[~K]
@@ -262,7 +291,7 @@ def _identified_regression(model: Model, reg, used: NDArray[np.bool_], K: NDArra
             f"{y.shape[0]} samples of {used.sum()} channels for {K.sum()} parameters: a longer window "
             "is needed"
         )
-    check_excitation(phi, names)
+    check_excitation(phi, names, weak_ok=weak_ok)
     return phi, y
 
 

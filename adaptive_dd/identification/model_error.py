@@ -29,20 +29,27 @@ def model_error_variance(model, fit, q: Array, qd: Array, tau: Array, torque_hel
     """``(p,)`` sum of the squared differences from ``fit.sigma`` (a
     :class:`~adaptive_dd.identification.log_fit.LogFit` of the record ``q, qd, tau (N, n)``) of the
     unweighted estimate and of the weighted ones at ``tau_f`` times :data:`FILTER_FACTORS`, on the
-    same channels and base parameters (zero for those held at the URDF's)."""
+    same channels and base parameters (zero for those held at the URDF's), each held along the
+    fit's held directions (:attr:`~adaptive_dd.identification.log_fit.LogFit.held`)."""
     from adaptive_dd.identification.log_fit import _identified_regression, _reweighted_fit, _solve
     from adaptive_dd.identification.regression import filtered_regression
 
     K, used = fit.identified, fit.used
     ones = np.ones(int(used.sum()))
-    phi, y = _identified_regression(model, fit.regression, used, K)
+    weak_ok = fit.held is not None
+    phi, y = _identified_regression(model, fit.regression, used, K, weak_ok)
     alts = [_solve(phi, y, ones)[0]]
     for f in FILTER_FACTORS:
         reg = filtered_regression(
             model, q, qd, tau, tau_f=f * fit.tau_f, sample_period=fit.sample_period, torque_held=torque_held
         )
-        phi, y = _identified_regression(model, reg, used, K)
+        phi, y = _identified_regression(model, reg, used, K, weak_ok)
         alts.append(_reweighted_fit(phi, y, ones)[0])
     var = np.zeros(model.p)
-    var[K] = sum((a - fit.sigma[K]) ** 2 for a in alts)
+    for a in alts:
+        full = fit.sigma.copy()
+        full[K] = a
+        if fit.held is not None:  # the same directions held: what the record cannot see is not error
+            full = fit.held.apply(full, model.sigma_ref)
+        var[K] += (full[K] - fit.sigma[K]) ** 2
     return var

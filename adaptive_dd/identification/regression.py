@@ -203,12 +203,16 @@ def check_motion(q: Array, names: tuple[str, ...]) -> None:
         )
 
 
-def check_excitation(phi: Array, names: tuple[str, ...] = (), rtol: float = 1e-7) -> None:
+def check_excitation(
+    phi: Array, names: tuple[str, ...] = (), rtol: float = 1e-7, weak_ok: bool = False
+) -> None:
     """Refuse a regression in which some base parameter is not excited.
 
     The columns of ``phi (N, n, p)`` are scaled to unit norm; a singular value below
     ``rtol`` times the largest marks a direction the record does not see, and the
-    parameters with the largest components in it are named.
+    parameters with the largest components in it are named. ``weak_ok``: only a zero column is
+    refused (the caller holds the directions the record cannot see at a prior,
+    :mod:`~adaptive_dd.identification.held_directions`).
 
     Raises
     ------
@@ -226,6 +230,8 @@ def check_excitation(phi: Array, names: tuple[str, ...] = (), rtol: float = 1e-7
             + ", ".join(repr(label[k]) for k in dead[:5])
             + ": their regressor columns are zero (a joint that does not move?)"
         )
+    if weak_ok:
+        return
     _, s, vt = np.linalg.svd(A / norms, full_matrices=False)
     weak = np.flatnonzero(s < rtol * s[0])
     if weak.size:
