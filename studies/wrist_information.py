@@ -43,9 +43,8 @@ def main() -> None:
         velocity_variance=np.asarray(sc.velocity_variance),
     )  # fmt: skip
     R = R * sub  # one sample in `sub`, the filtered noise correlated over about that many
-    print(
-        f"row noise std [N m] (mean over the path): {np.round(np.sqrt(np.diagonal(R / sub, 0, 1, 2)).mean(0), 4)}"
-    )
+    std = np.sqrt(np.diagonal(R / sub, 0, 1, 2)).mean(0)
+    print(f"row noise std [N m] (mean over the path): {np.round(std, 4)}")
     wl = derived_row_weights(arm)
     wn = np.sqrt(np.diagonal(R, 0, 1, 2)).mean(0)
     wn = wn / wn.max()
@@ -67,9 +66,8 @@ def main() -> None:
             C = Ai @ B[i] @ Ai
             nxt = Phi[i : i + round(0.5 / (T * sub))]
             s = np.sqrt(np.einsum("kja,ab,kjb->kj", nxt, C, nxt)).mean(0)
-            print(
-                f"  +{t:.1f} s: torque std at the wrist [N m] {np.round(s[wrist], 4)}; m c_y std {np.sqrt(C[2, 2]):.4f}"
-            )
+            sy = np.sqrt(C[2, 2])
+            print(f"  +{t:.1f} s: torque std at the wrist [N m] {np.round(s[wrist], 4)}; m c_y std {sy:.4f}")
 
 
 if __name__ == "__main__":
