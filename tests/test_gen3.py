@@ -175,7 +175,7 @@ def test_whitened_rows_learn_the_first_moment_the_wrist_alone_sees_sooner():
     """The 2 kg body of the scenarios picked up along their reference (open loop, the sensor's
     noise): the payload's first moment along the flange's y axis (true 0), which the wrist's
     rows separate from the x axis's only as joint 7 turns, 1.5 s after the pick-up. Rows
-    whitened by the noise they share through the inertia (the default): about 0.6 of the error
+    whitened by the noise they share through the inertia (``whiten = true``): about 0.6 of the error
     with independent rows weighted by the torque limits (``docs/any_arm.md``, "The Gen3's
     wrist")."""
     from adaptive_dd.identification.online import OnlineConfig, run_online

@@ -3,8 +3,8 @@
 
 One sample's whitened updates equal the batch Kalman update of the rows in use with the error
 covariance ``M diag(vn^2) M^T`` over them (a row out of use contributes nothing, whatever its
-value); the detector's errors are each row's own prior error over its weight; hand-given row
-weights keep the independent rows they meant.
+value); the detector's errors are each row's own prior error over its weight. Whitening is an
+option, off by default (``docs/any_arm.md``, "The Gen3's wrist").
 """
 
 from __future__ import annotations
@@ -29,13 +29,12 @@ def ur5():
     return Arm.from_urdf(robot_urdf("ur5"), ROBOTS["ur5"].payload_frame)
 
 
-def test_whitening_is_the_default_unless_row_weights_are_given(ur5):
-    assert OnlineConfig().whiten is True
-    assert OnlineConfig(row_weights=(1.0,) * 6).whiten is False
+def test_whitening_is_an_option_off_by_default(ur5):
+    assert OnlineConfig().whiten is False
     assert OnlineConfig(row_weights=(1.0,) * 6, whiten=True).whiten is True
-    c, _ = est_init(OnlineConfig(), ur5, 1)
+    c, _ = est_init(OnlineConfig(whiten=True), ur5, 1)
     assert c.vn.shape == (6,) and np.all(c.vn > 0)
-    c, _ = est_init(OnlineConfig(whiten=False), ur5, 1)
+    c, _ = est_init(OnlineConfig(), ur5, 1)
     assert c.vn.shape == (0,)
     with pytest.raises(Exception, match="whiten"):
         OnlineConfig(whiten="yes")
@@ -50,7 +49,7 @@ def test_the_whitening_scale_keeps_the_heaviest_row_in_newton_metres(ur5):
 @pytest.mark.parametrize("out_of_use", [None, 2])
 def test_one_sample_of_whitened_rows_is_the_batch_update_with_their_joint_covariance(ur5, mode, out_of_use):
     rng = np.random.default_rng(5)
-    cfg = OnlineConfig(mode=mode, lam0=1.0, detector=None)
+    cfg = OnlineConfig(mode=mode, lam0=1.0, detector=None, whiten=True)
     c, s = est_init(cfg, ur5, 1)
     n, p = 6, s.theta.shape[1]
     s.theta[0] = rng.normal(size=p) * 0.1
@@ -85,7 +84,7 @@ def test_one_sample_of_whitened_rows_is_the_batch_update_with_their_joint_covari
 
 
 def test_no_row_in_use_changes_nothing(ur5):
-    c, s = est_init(OnlineConfig(lam0=0.999), ur5, 1)
+    c, s = est_init(OnlineConfig(lam0=0.999, whiten=True), ur5, 1)
     th0, P0, lam0 = s.theta[0].copy(), s.P[0].copy(), s.lam[0]
     w = est_work(6, 10)
     assert K._whitened_update(c, s, 0, np.zeros(6), np.ones((6, 10)), np.ones(6), np.zeros(6, np.bool_), 6, w)
