@@ -30,7 +30,8 @@ ms at 1 kHz), ``nohold``: no hold (``hold_above = 0``, the detector of before th
 ``mtest``: the momentum test starts the boost (``observer_momentum_test =
 true``; docs/change_detection.md, "The momentum test"), ``mreopen``: and it re-opens the estimator
 as an alarm (``observer_momentum_test = "reopen"``); ``mreopen_slow0.25``: with every joint slower than
-the detector's creeping speed (0.25 rad/s) near rest (3 sigma_v by default).
+the detector's creeping speed (0.25 rad/s) near rest (by default the stated velocity noise's 1 %/min
+quantile, about 5 sigma_v), ``mreopen_nocreep``: without the creeping joints' allowance.
 """
 
 from __future__ import annotations
@@ -83,6 +84,7 @@ VARIANTS = {
     "mtest": {"observer_momentum_test": True},
     "mreopen": {"observer_momentum_test": "reopen"},
     "mreopen_slow0.25": {"observer_momentum_test": "reopen", "_mslow": 0.25},
+    "mreopen_nocreep": {"observer_momentum_test": "reopen", "_mcreep": 0.0},
     "bb150": {"boost_bandwidth": 150.0},
     "bb200": {"boost_bandwidth": 200.0},
 }

@@ -1,5 +1,7 @@
 """Scenario files: the shipped default, the reference, and every error naming file and key."""
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -91,3 +93,27 @@ def test_scenario_errors_name_file_and_key(tmp_path, edit, match):
 def test_missing_scenario_file(tmp_path):
     with pytest.raises(ScenarioError, match="no such scenario file"):
         load_scenario(tmp_path / "none.toml")
+
+
+def test_a_urdf_arm_s_sensors_carry_the_scenario_s_noise():
+    """What reads ``arm.sensor`` (the momentum test's near-rest speed, identification on the arm)
+    reads the ``[noise]`` the run draws, not the URDF arm's defaults (5e-5 (rad/s)^2): the paper's
+    arm drawn states 1e-4 for joint 2. Fails if parse_scenario keeps the URDF's sensors."""
+    from adaptive_dd.benchmark.scenario import parse_scenario, read_toml
+    from adaptive_dd.closed_loop.controllers import momentum_slow_speed
+    from adaptive_dd.controllers.registry import scenario_controller
+
+    src = default_scenario_path().parent / "ur5_tool_swap.toml"
+    data = read_toml(src)
+    data["run"]["controllers"] = ["adaptive_ct"]
+    vv = [5e-5, 4e-4, 5e-5, 5e-5, 5e-5, 5e-5]
+    data["noise"] = {"position_variance": [1e-7] * 6, "velocity_variance": vv}
+    sc = parse_scenario(data, str(src))
+    assert sc.arm.sensor.velocity_variance == (5e-5, 4e-4, 5e-5, 5e-5, 5e-5, 5e-5)
+    assert sc.arm.sensor.position_variance == (1e-7,) * 6
+    _, ctrl = scenario_controller(sc, "adaptive_ct")
+    cfg = ctrl.law_config(sc.sample_period)
+    assert cfg.obs_mslow == pytest.approx(momentum_slow_speed(6, sc.sample_period, 0.02))
+    root = Path(__file__).resolve().parents[1]
+    drawn = load_scenario(root / "benchmarks" / "scenarios" / "sice_drawn.toml")
+    assert drawn.arm.sensor.velocity_variance == tuple(drawn.velocity_variance) == (5e-5, 1e-4)

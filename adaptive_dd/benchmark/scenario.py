@@ -305,6 +305,20 @@ def load_scenario(path: str | Path | None = None) -> Scenario:
     return parse_scenario(data, str(path), name=path.stem)
 
 
+def _with_stated_noise(arm, position_variance, velocity_variance):
+    """The arm with the scenario's ``[noise]`` as its sensors' variances, so that whatever reads
+    ``arm.sensor`` (the momentum test's near-rest speed, identification on the arm) reads the
+    noise the run draws, not the URDF arm's defaults."""
+    if not isinstance(arm, Arm):
+        return arm
+    pv = tuple(float(x) for x in position_variance)
+    vv = tuple(float(x) for x in velocity_variance)
+    s = arm.sensor
+    if (pv, vv) == (tuple(s.position_variance), tuple(s.velocity_variance)):
+        return arm
+    return arm.with_(sensor=dataclasses.replace(s, position_variance=pv, velocity_variance=vv))
+
+
 def parse_scenario(data: dict, src: str = "<memory>", name: str = "scenario") -> Scenario:
     """Check a scenario given as a dict (the parsed TOML); all problems are raised at once."""
     arm, errors, plant = None, [], None
@@ -335,6 +349,8 @@ def parse_scenario(data: dict, src: str = "<memory>", name: str = "scenario") ->
         errors += _controller_setting_errors(values)
     if errors:
         raise _scenario_error(src, errors)
+    noise = values["position_variance"], values["velocity_variance"]
+    values["arm"] = _with_stated_noise(values["arm"], *noise)
     sc = Scenario(**values)
     model_file = (table.get("model") or {}).get("from")
     if isinstance(model_file, str) and model_file.lower().endswith(".json") and not sc.excite:

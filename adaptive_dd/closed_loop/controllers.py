@@ -374,9 +374,19 @@ def observer_trip(n_joints: int, sample_period: float) -> float:
     return float(norm.isf(OBSERVER_TRIP_ALPHA / (2.0 * n_joints * 60.0 / sample_period)))
 
 
-MOMENTUM_SLOW_SIGMAS = 3.0
-"""The momentum test takes a joint measured within this many standard deviations of the stated
-velocity noise of rest as near rest (its Coulomb torque's sign unknown)."""
+def momentum_slow_speed(n_joints: int, sample_period: float, velocity_sigma: float) -> float:
+    """[rad/s] The momentum test's near-rest speed (``LawConfig.obs_mslow``): the one-sided
+    Gaussian quantile of the stated velocity noise ``velocity_sigma`` [rad/s] at which a measured
+    speed has the true speed's sign wrong with probability :data:`OBSERVER_TRIP_ALPHA` per minute
+    over the arm's joints and samples, ``z_(1 - alpha / (n 60 / T)) sigma_v`` (5.2 sigma_v for two
+    joints at 1 kHz, 5.5 for seven). Below it a joint's Coulomb torque over a sample is not known
+    (``laws._friction_allowance``); a single such sample is worth tens of the test's noise on an arm
+    whose inertia is nearly singular (the paper's arm: ``(M^-1)_21`` = -55 kg^-1 m^-2 at ``q2`` = 0).
+    At 3 sigma_v the paper's arm crossed at joint 1's reversals in 7 of 10 trials
+    (docs/change_detection.md, "Why the momentum test crossed without a swap")."""
+    from scipy.stats import norm
+
+    return float(norm.isf(OBSERVER_TRIP_ALPHA / (n_joints * 60.0 / sample_period)) * velocity_sigma)
 
 
 def momentum_threshold(n_joints: int, sample_period: float) -> float:
@@ -489,6 +499,8 @@ class AdaptiveCT(Law):
         wb = np.maximum(wb, w)
         T = float(sample_period)
         beta = self.observer_bw if self.observer_bw is not None else observer_bandwidth(T)
+        det = self.online.detector or self._est.Detector()
+        sigma_v = float(np.sqrt(np.max(self.arm.sensor.velocity_variance)))
         return self._config(
             sample_period, KIND_CT, MODEL_TRIAL, boost_kp=wb**2 - w**2, boost_kd=2.0 * z * (wb - w),
             boost_samples=round(self.boost_duration / sample_period),
@@ -496,10 +508,11 @@ class AdaptiveCT(Law):
             obs_a=float(np.exp(-beta * T)), obs_alpha=min(1.0, T / OBSERVER_LEVEL_WINDOW),
             obs_warmup=round(OBSERVER_WARMUP / T),
             obs_trip=observer_trip(self.arm.n_joints, T) if self.observer_trip else 0.0,
-            obs_trip_speed=(self.online.detector or self._est.Detector()).speed,
+            obs_trip_speed=det.speed,
             obs_mtest=momentum_threshold(self.arm.n_joints, T) if self.momentum_test else 0.0,
             obs_mreopen=self.momentum_test == "reopen",
-            obs_mslow=MOMENTUM_SLOW_SIGMAS * float(np.sqrt(np.max(self.arm.sensor.velocity_variance))),
+            obs_mslow=momentum_slow_speed(self.arm.n_joints, T, sigma_v),
+            obs_mcreep=det.speed, obs_mcreep_margin=det.creep_margin,
         )  # fmt: skip
 
     def compiled_form(self, n_trials, sample_period):

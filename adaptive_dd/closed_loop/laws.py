@@ -160,8 +160,14 @@ class LawConfig(NamedTuple):
         statistic (the square root of a chi-square with ``n`` degrees of freedom) exceeds this;
         0: never.
     obs_mslow : float
-        [rad/s] The momentum test takes a joint measured at most this fast as near rest (its
-        Coulomb torque's sign unknown: an allowance of ``2 fc`` per sample).
+        [rad/s] The momentum test takes a joint measured at most this fast at either end of a
+        sample, or whose two ends differ in sign, as of unknown direction over it (its Coulomb
+        torque anything within ``+-fc``: an allowance of ``2 fc`` per sample;
+        :func:`_friction_allowance`).
+    obs_mcreep, obs_mcreep_margin : float
+        [rad/s], [-] A joint otherwise at most ``obs_mcreep`` fast gets an allowance of
+        ``obs_mcreep_margin fc`` per sample (friction the model lacks near rest; the detector's
+        ``speed`` and ``creep_margin``).
     obs_mreopen : bool
         A start of the boost by the momentum test also asks the estimator to re-open, as its
         detector's alarm does (``obs[O_MC, 1] = 2``, read by the closed loop's estimator sample).
@@ -197,6 +203,8 @@ class LawConfig(NamedTuple):
     obs_mtest: float = 0.0
     obs_mslow: float = 0.0
     obs_mreopen: bool = False
+    obs_mcreep: float = 0.0
+    obs_mcreep_margin: float = 0.0
 
 
 class LawState(NamedTuple):
@@ -362,6 +370,32 @@ def _spd_inverse(a, out):  # pragma: no cover - compiled
                         out[r, c] -= f * out[k, c]
 
 
+@njit(cache=True, inline="always")
+def _sign_unknown(cfg, qd_last, qd_now):  # pragma: no cover - compiled
+    """Whether the true speed's sign over a sample is not known from its two measured ends: one at
+    most ``obs_mslow`` fast, or the two of opposite signs."""
+    return min(abs(qd_last), abs(qd_now)) <= cfg.obs_mslow or qd_last * qd_now <= 0.0
+
+
+@njit(cache=True, inline="always")
+def _friction_allowance(cfg, qd_last, qd_now, fc):  # pragma: no cover - compiled
+    """[N m] How far the model's Coulomb torque over one sample (the trapezoid of ``fc sgn(qd)`` at
+    its two measured ends) may be from the plant's, for a joint measured ``qd_last``, ``qd_now``:
+    ``2 fc`` where the sign of the true speed is not known over the sample (an end within
+    ``obs_mslow``, the stated velocity noise's quantile, or the two ends of opposite signs: the
+    joint may reverse or stick within it, its friction then anything within ``+-fc``); else
+    ``obs_mcreep_margin fc`` where the slower end is just above ``obs_mslow``, falling linearly to
+    none at ``obs_mcreep`` (friction the model lacks, a Stribeck bump or a soft law, errs near
+    rest by a fraction of the Coulomb level: the detector's creeping rule; a flat allowance up to
+    ``obs_mcreep`` cost vertical3 its gain); else none."""
+    if _sign_unknown(cfg, qd_last, qd_now):
+        return 2.0 * fc
+    slow = min(abs(qd_last), abs(qd_now))
+    if slow <= cfg.obs_mcreep:
+        return cfg.obs_mcreep_margin * fc * (cfg.obs_mcreep - slow) / (cfg.obs_mcreep - cfg.obs_mslow)
+    return 0.0
+
+
 @njit(cache=True)
 def _momentum_test(cfg, obs, mt, qd, m):  # pragma: no cover - compiled
     """One fresh update of the momentum test; ``obs[O_MC, 1]`` set to 1 if it crossed.
@@ -373,15 +407,19 @@ def _momentum_test(cfg, obs, mt, qd, m):  # pragma: no cover - compiled
     of ``w`` updates its sum ``S = E_k - E_(k-w)`` is the missing torque's integral plus the two
     end momenta's noise, whatever ``w``; a step ``d`` of missing torque is a ramp ``d w T`` in it.
     ``u = M^-1 S`` (the unexplained velocity change: the velocity noise, independent per joint,
-    whitens it) per window of :data:`M_WINDOWS`; a joint measured at most ``obs_mslow`` fast has
-    its Coulomb torque known only within ``+-fc`` (``2 fc`` per sample of allowance): the friction
+    whitens it) per window of :data:`M_WINDOWS`; a joint whose friction over a sample is not
+    known (:func:`_friction_allowance`: near rest or reversing, ``2 fc``; creeping, a fraction of
+    ``fc``) has that allowance, summed over the window: once the test is armed, the friction
     torques within it that explain ``u`` best are removed from it first (three passes of
     coordinate descent, metric ``1 / V``). Statistic: the largest over windows of ``sqrt(sum_j
-    u_j^2 / V_j)``, ``V`` each window's and row's learnt mean square (learnt freely for
-    :data:`M_ARM` level windows, then only on windows without allowance, winsorised at the
-    threshold). Armed after those: learnt over the first second alone, on a reference that ramps
-    up over it, the levels were too low for the full motion (vertical3 drawn: starts at 1.18-1.19
-    s in 2 of 10 trials, none from 2 s on)."""
+    u_j^2 / V_j)``, ``V`` each window's and row's learnt mean square of ``u``, learnt only on
+    windows without allowance (elsewhere it keeps its bias-corrected value; a window whose level
+    has learnt nothing is not tested): freely for :data:`M_ARM` level windows, then winsorised at
+    the threshold. Learnt on every window before it armed, the first seconds' reversals raised
+    the levels and the test was blind for a second or more after it armed. Armed
+    after those: learnt over the first second alone, on a reference that ramps up over it, the
+    levels were too low for the full motion (vertical3 drawn: starts at 1.18-1.19 s in 2 of 10
+    trials, none from 2 s on)."""
     n = qd.shape[0]
     rho, fc, sm, u = mt[n], mt[n + 1], mt[n + 2], mt[n + 3]
     c = obs[O_MC, 0]
@@ -390,13 +428,13 @@ def _momentum_test(cfg, obs, mt, qd, m):  # pragma: no cover - compiled
     dt = m * cfg.T
     for j in range(n):
         obs[O_ME + pos, j] = obs[O_ME + prev, j] + (rho[j] - obs[O_MB, j]) * dt
-        slow = abs(qd[j]) <= cfg.obs_mslow
-        obs[O_MA + pos, j] = obs[O_MA + prev, j] + (2.0 * fc[j] * dt if slow else 0.0)
+        obs[O_MA + pos, j] = obs[O_MA + prev, j] + _friction_allowance(cfg, obs[O_QD, j], qd[j], fc[j]) * dt
     c += 1.0
     obs[O_MC, 0] = c
     alpha = cfg.obs_alpha
     armed = c * alpha > M_ARM
     bias = 1.0 - (1.0 - alpha) ** c
+    bias0 = 1.0 - (1.0 - alpha) ** (c - 1.0)
     z2 = cfg.obs_mtest * cfg.obs_mtest
     best = 0.0
     for w in range(len(M_WINDOWS)):
@@ -414,7 +452,11 @@ def _momentum_test(cfg, obs, mt, qd, m):  # pragma: no cover - compiled
                 acc += mt[r, j] * sm[j]
             u[r] = acc
         v = obs[O_MV + w]
-        if armed and not clean:
+        learnt = True
+        for r in range(n):
+            sm[r] = u[r] * u[r]  # before the allowance (the levels learn it where there is none)
+            learnt = learnt and v[r] > 0.0
+        if armed and learnt and not clean:
             for _ in range(3):
                 for j in range(n):
                     al = obs[O_MA + pos, j] - obs[O_MA + back, j]
@@ -430,13 +472,13 @@ def _momentum_test(cfg, obs, mt, qd, m):  # pragma: no cover - compiled
                         u[r] -= mt[r, j] * cj
         tot = 0.0
         for r in range(n):
-            u2 = u[r] * u[r]
-            if armed:
-                tot += u2 * bias / v[r]
-                if clean:
-                    v[r] += alpha * (min(u2, z2 * v[r] / bias) - v[r])
-            else:
-                v[r] += alpha * (u2 - v[r])
+            if armed and learnt:
+                tot += u[r] * u[r] * bias / v[r]
+            if clean:
+                x = min(sm[r], z2 * v[r] / bias) if armed and learnt else sm[r]
+            else:  # the level's own estimate: its bias-corrected value unchanged
+                x = v[r] / bias0 if bias0 > 0.0 else 0.0
+            v[r] += alpha * (x - v[r])
         if tot > best:
             best = tot
     if c > M_RING:

@@ -509,8 +509,12 @@ class Arm:
         return (self.friction_velocity, self.stribeck_ratio, self.stribeck_velocity)
 
     def with_(self, **changes) -> Arm:
-        """:func:`dataclasses.replace`, keeping nothing cached that depends on what changed."""
-        return replace(self, **changes)
+        """:func:`dataclasses.replace`, keeping nothing cached that depends on what changed (a new
+        ``sensor`` alone keeps the dynamics: model, chain, payload maps)."""
+        out = replace(self, **changes)
+        if set(changes) == {"sensor"}:
+            out._cache.update({k: v for k, v in self._cache.items() if k != "as_two_link"})
+        return out
 
     def to_dict(self) -> dict:
         """JSON-able description (for results metadata)."""
