@@ -36,7 +36,14 @@ import numpy as np
 from numba import njit
 
 from adaptive_dd.identification.pseudo_inertia import project_payload
-from adaptive_dd.plant.chain import Chain, momentum_form_in, regressor, rnea_body_regressor_in, workspace
+from adaptive_dd.plant.chain import (
+    Chain,
+    mass_matrix_in,
+    momentum_form_in,
+    regressor,
+    rnea_body_regressor_in,
+    workspace,
+)
 
 # columns of the per-trial integer state `cnt`
 C_K = 0  # samples stepped
@@ -98,9 +105,16 @@ class EstCfg(NamedTuple):
     xm1 : (order,)
         Its state of a unit constant ``u1`` and ``u0 = 0``.
     w : (n,)
-        Row weights: equation j is divided by ``w[j]``.
+        Row weights: equation j is divided by ``w[j]`` (the rows' updates when ``vn`` is empty;
+        the detector's prior errors always).
     ints : (N_I,) int64, floats : (N_F,) float64
         Scalar settings, slots ``I_*`` and ``F_*`` of this module.
+    vn : (n,) or (0,)
+        Whitening of the rows (:func:`_whitened_update`): the rows in use are updated as
+        ``L^-1 (y, phi)`` with ``L L^T = (M diag(vn^2) M^T)`` over those rows, ``M`` the model's
+        inertia (armature included) at the measured q: the covariance that velocity noise of
+        standard deviation proportional to ``vn`` gives the rows through the momentum (or the
+        acceleration). Empty: no whitening, each row divided by ``w``.
     """
 
     ch: Chain
@@ -128,6 +142,7 @@ class EstCfg(NamedTuple):
     w: np.ndarray
     ints: np.ndarray
     floats: np.ndarray
+    vn: np.ndarray
 
 
 # integer slots of EstCfg.ints
@@ -267,6 +282,8 @@ class EstWork(NamedTuple):
         Scratch of the signals form's regression.
     raw, raw_est, pay : (10,); Pc : (10, 10); d : (p,)
         Scratch of the model control uses.
+    Mw, L : (n, n); yt : (n,); phit : (n, p); idx : (n,) int64
+        Scratch of the whitened update (:func:`_whitened_update`).
     """
 
     chain: tuple
@@ -301,6 +318,11 @@ class EstWork(NamedTuple):
     pay: np.ndarray
     Pc: np.ndarray
     d: np.ndarray
+    Mw: np.ndarray
+    L: np.ndarray
+    yt: np.ndarray
+    phit: np.ndarray
+    idx: np.ndarray
 
 
 @njit(cache=True)
@@ -317,6 +339,7 @@ def est_work(n, p):  # pragma: no cover - compiled
         u1[2 * n :].reshape((n, 10)), u0[2 * n :].reshape((n, 10)),
         np.empty(n), np.empty((n, 10)), np.empty((n, 10 * n)),
         np.empty(10), np.empty(10), np.empty(10), np.empty((10, 10)), np.empty(p),
+        np.empty((n, n)), np.empty((n, n)), np.empty(n), np.empty((n, p)), np.empty(n, dtype=np.int64),
     )  # fmt: skip
 
 
@@ -658,6 +681,73 @@ def _rls_row(theta, P, phi, y, lam_eff, pphi, nz):  # pragma: no cover - compile
 
 
 @njit(cache=True)
+def _whitened_update(c, s, i, q, phi, y, act, n_rows, w):  # pragma: no cover - compiled
+    """The rows in use at this sample, whitened, into trial i's estimate; returns False if any
+    row was used (the forgetting factor advanced once), else True.
+
+    Velocity noise enters every joint's equation through the inertia (``G1 (M qd)`` in
+    momentum form, ``M qdd`` at the filtered signals), so the rows' errors are correlated, with
+    covariance about ``M diag(vn^2) M^T`` over the rows in use. The rows are whitened by its
+    Cholesky factor ``L`` (``L^-1 (y, phi)``) and fed to the scalar updates one by one: the
+    weighted least squares of the rows' joint error (Gen3: the payload's first moment along the
+    flange's y axis known within 2 mm a second after a pick-up against 8 mm with independent
+    rows, ``docs/any_arm.md``). The detector's errors ``eps`` are each row's own prior error
+    (before this sample's updates) divided by ``w``.
+    """
+    n = q.shape[0]
+    p = phi.shape[1]
+    th, Pi = s.theta[i], s.P[i]
+    idx, M, L, yt, phit = w.idx, w.Mw, w.L, w.yt, w.phit
+    m = 0
+    for j in range(n_rows):
+        if act[j]:
+            idx[m] = j
+            m += 1
+            e = y[j]
+            for k in range(p):
+                e -= phi[j, k] * th[k]
+            s.eps[i, j] = e / c.w[j]
+    if m == 0:
+        return True
+    mass_matrix_in(c.ch, c.pi0[: 10 * n], q, w.chain, M)
+    for j in range(n):
+        M[j, j] += c.pi0[12 * n + j]
+    # L: Cholesky factor of (M V M^T) over the rows in use
+    for a in range(m):
+        for b in range(a + 1):
+            acc = 0.0
+            for k in range(n):
+                acc += M[idx[a], k] * c.vn[k] * c.vn[k] * M[idx[b], k]
+            L[a, b] = acc
+    for a in range(m):
+        for b in range(a + 1):
+            acc = L[a, b]
+            for k in range(b):
+                acc -= L[a, k] * L[b, k]
+            if a == b:
+                if not (np.isfinite(acc) and acc > 0.0):
+                    return True  # no finite metric at this q: the sample is not learnt
+                L[a, a] = np.sqrt(acc)
+            else:
+                L[a, b] = acc / L[b, b]
+    for a in range(m):
+        ya = y[idx[a]]
+        for b in range(a):
+            ya -= L[a, b] * yt[b]
+        yt[a] = ya / L[a, a]
+        for k in range(p):
+            v = phi[idx[a], k]
+            for b in range(a):
+                v -= L[a, b] * phit[b, k]
+            phit[a, k] = v / L[a, a]
+    for a in range(m):
+        if a == 0:
+            s.lam[i] = (1.0 - c.floats[F_MU]) * s.lam[i] + c.floats[F_MU]
+        _rls_row(th, Pi, phit[a], yt[a], s.lam[i] if a == 0 else 1.0, w.pphi, w.nz)
+    return False
+
+
+@njit(cache=True)
 def _reopen(c, P):  # pragma: no cover - compiled
     """``P <- (I - U U^T) P (I - U U^T) + P_reopen``: forget what was known along the payload subspace."""
     U = c.U
@@ -930,7 +1020,9 @@ def est_step_trial_in(c, s, i, q, qd, tau, w):  # pragma: no cover - compiled
         _regression(c, w.qf, w.qdf, w.qddf, w.sf, w.tf, w.ym, w.phim, phi, y, w)
         pphi, row, nz = w.pphi, w.row, w.nz
         first = True
-        for j in range(n_rows):
+        if c.vn.shape[0] > 0:
+            first = _whitened_update(c, s, i, q, phi, y, act, n_rows, w)
+        for j in range(n_rows if c.vn.shape[0] == 0 else 0):
             if not act[j]:
                 continue
             if first:
