@@ -106,6 +106,15 @@ def add_parser(sub) -> None:
         "benchmark's compiled plant with the arm's friction law (stick-slip); 'serial', its old name, "
         "is read as 'benchmark' with a warning",
     )
+    s.add_argument(
+        "--plant-seed",
+        type=SEED,
+        metavar="K",
+        help="--experiment reference on a scenario with [plant.uncertainty]: simulate the robot the "
+        "benchmark meets at seed index K (the same draw and seed stream, numpy default_rng([[run] seed, K, "
+        "2])), written to OUT/plant.urdf with its parameters in OUT/plant.json (default: the [plant] before "
+        "any draw); the sensor noise stays --seed's",
+    )
     s.add_argument("--out", default="results/simulate", help="output folder")
     s.set_defaults(func=run)
 
@@ -139,7 +148,7 @@ def run(args: argparse.Namespace) -> int:
         )
     refuse(
         args,
-        ("--com", "--plant"),
+        ("--com", "--plant", "--plant-seed"),
         "options of --experiment reference (an arm from a URDF tracking its scenario's [reference]); "
         f"the {arm_label(args.arm, arm)} runs the paper's Table 2 experiment on its own plant (the "
         "payload a disk centred on the tip)",
@@ -261,18 +270,70 @@ def _record_arm(args: argparse.Namespace, sc, scenario_path: str, outputs):
     if sc.plant is not None:  # the scenario's robot is not its [arm]: simulate the robot
         from adaptive_dd.plant.urdf_write import write_urdf_links
 
-        p = sc.plant
+        p = _drawn_plant(args, sc, scenario_path, outputs)
         path = write_urdf_links(arm, p.pi_links, outputs.path("plant.urdf"), f"the plant of {scenario_path}")
-        arm = arm.with_(urdf=path, viscous=p.viscous, coulomb=p.coulomb, armature=p.armature)
-        print(
-            f"the plant: the scenario's [plant] before any draw, written to {Path(args.out) / 'plant.urdf'}"
-            + (" ([plant.uncertainty] draws a plant per benchmark seed; not here)" if p.uncertainty else "")
+        t = lambda x: tuple(float(v) for v in x)  # noqa: E731
+        arm = arm.with_(urdf=path, viscous=t(p.viscous), coulomb=t(p.coulomb), armature=t(p.armature))
+    elif getattr(args, "plant_seed", None) is not None:
+        raise ParameterError(
+            f"--plant-seed {args.plant_seed}: {scenario_path or 'the SICE arm'} draws no plant (no "
+            "[plant.uncertainty]): every benchmark seed meets the [arm] itself; drop --plant-seed"
         )
     if arm.sensor.quantize == args.no_quantize:
         arm = arm.with_(sensor=dataclasses.replace(arm.sensor, quantize=not args.no_quantize))
     if arm.actuator.saturate == args.no_saturate:
         arm = arm.with_(actuator=dataclasses.replace(arm.actuator, saturate=not args.no_saturate))
     return arm
+
+
+def _drawn_plant(args: argparse.Namespace, sc, scenario_path: str, outputs):
+    """The plant simulated (a :class:`~adaptive_dd.plant.uncertainty.PlantDraw`): the scenario's
+    ``[plant]`` before any draw, or with ``--plant-seed K`` the robot the benchmark meets at seed
+    index K (:func:`~adaptive_dd.plant.uncertainty.plant_draws`, the benchmark's own draw), its
+    parameters written to OUT/plant.json; says which on stdout."""
+    import json
+
+    from adaptive_dd.plant.uncertainty import plant_draws
+
+    spec, out, k = sc.plant, Path(args.out), getattr(args, "plant_seed", None)
+    if k is None:
+        print(
+            f"the plant: the scenario's [plant] before any draw, written to {out / 'plant.urdf'}"
+            + (
+                " ([plant.uncertainty] draws a plant per benchmark seed: --plant-seed K simulates seed K's)"
+                if spec.uncertainty
+                else ""
+            )
+        )
+        return spec.nominal()
+    if spec.uncertainty is None:
+        raise ParameterError(
+            f"--plant-seed {k}: {scenario_path} draws no plant (no [plant.uncertainty]): every benchmark "
+            "seed meets the [plant] itself; drop --plant-seed"
+        )
+    nominal, drawn = spec.nominal(), plant_draws(sc, [k])[0]
+    masses = zip(drawn.pi_links[0::10], nominal.pi_links[0::10], strict=True)  # each link's mass first
+    mass_error = [float(m / m0 - 1.0) if m0 > 0 else 0.0 for m, m0 in masses]
+    with open(outputs.path("plant.json"), "w", encoding="utf-8") as f:
+        json.dump(
+            {
+                "scenario": str(scenario_path),
+                "seed_index": int(k),
+                "seed_rule": f"numpy.random.default_rng([{int(sc.seed)}, {int(k)}, 2]): [run] seed, K, 2",
+                "mass_relative_error": mass_error,
+                "drawn": drawn.to_dict(),
+                "nominal": nominal.to_dict(),
+            },
+            f,
+            indent=2,
+        )
+    print(
+        f"the plant: the robot of the benchmark's seed index {k} (drawn from [plant.uncertainty] as the "
+        f"benchmark draws it), written to {out / 'plant.urdf'}, its parameters and the [plant]'s in "
+        f"{out / 'plant.json'}; link masses against the [plant]'s [%]: "
+        f"{np.round(100 * np.array(mass_error), 2).tolist()}"
+    )
+    return drawn
 
 
 def _print_record(args: argparse.Namespace, arm, sc, rec, where: str) -> None:
