@@ -54,3 +54,20 @@ def test_plant_seed_without_a_draw_is_refused(tmp_path, capsys):
     argv = ["simulate", "--experiment", "table2", "--plant-seed", "1"]  # the SICE arm's Table 2
     assert main([*argv, "--out", str(tmp_path / "t")]) == 2
     assert "--plant-seed: options of --experiment reference" in capsys.readouterr().err
+
+
+def test_the_estimate_includes_the_excitation_phase(tmp_path, capsys):
+    sc = load_scenario(DRAWN)
+    est = [dataclasses.replace(sc, excite=e).estimate() for e in (0.0, 10.0, 20.0)]
+    assert est[0].excite_seconds == 0 and "excitation phase" not in str(est[0])
+    assert 0 < est[1].excite_seconds < est[2].excite_seconds
+    assert est[0].seconds < est[1].seconds < est[2].seconds
+    assert est[2].seconds - est[0].seconds == pytest.approx(est[2].excite_seconds)
+    more = dataclasses.replace(sc, excite=10.0, seeds=2 * sc.seeds).estimate()
+    assert more.excite_seconds > est[1].excite_seconds  # an excitation and an identification per seed
+    # validate says so, on a scenario with [run] excite
+    excite = tmp_path / "excite.toml"
+    excite.write_text(DRAWN.read_text().replace("[run]\n", "[run]\nexcite = 10.0\n", 1))
+    assert main(["validate", str(excite)]) == 0
+    said = capsys.readouterr().out
+    assert f"excitation phase included: about {est[1].excite_seconds:.3g} s" in said, said[:400]

@@ -239,13 +239,14 @@ class Scenario:
 
     def estimate(self) -> RunEstimate:
         """Memory and time estimate of this run (:func:`run_estimate`), one-time compilation included
-        when numba's cache is cold."""
+        when numba's cache is cold, the excitation phase (``[run] excite``) when it has one."""
         from adaptive_dd._numba_cache import compile_estimate
 
         general = self.closed_forms is None
         return run_estimate(
             self.n_samples, self.seeds, len(self.controllers), self.n_joints if general else None,
             compile_seconds=compile_estimate(self.closed_forms or self.arm),
+            excite_samples=round(self.excite / self.sample_period),
         )  # fmt: skip
 
     def options(self, name: str) -> dict[str, Any]:

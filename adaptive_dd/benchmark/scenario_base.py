@@ -64,6 +64,14 @@ _SECONDS_PER_SAMPLE_TRIAL = 1.5e-6
 # N-joint (URDF) arms: per trial-sample, times n_joints^2 (the UR5 scenario's 7 controllers,
 # adaptive_dd.closed_loop, about 9 us per trial-sample on one core of the development machine).
 _SECONDS_PER_SAMPLE_TRIAL_JOINT2 = 2.5e-7
+# The excitation phase ([run] excite, adaptive_dd.closed_loop.excitation_phase): its closed loop at
+# the rates above (one controller, every seed), plus the excitation's design (once) and one
+# identification per seed, per sample of the record times n_joints^2; measured on
+# gen3_excite.toml (7 joints, 20 s at 1 ms, one seed) on the development machine
+# (`python studies/excite_cost.py benchmarks/scenarios/gen3_excite.toml`: design 33.1 s,
+# identification 13.2 s = 1.34e-5 s per sample per joint^2; 37 s in a run under load).
+_EXCITE_DESIGN_SECONDS = 33.0
+_IDENTIFY_SECONDS_PER_SAMPLE_JOINT2 = 1.3e-5
 
 
 @dataclass(frozen=True)
@@ -119,6 +127,7 @@ class RunEstimate:
     bytes: float
     seconds: float
     compile_seconds: float = 0.0
+    excite_seconds: float = 0.0
 
     @property
     def large(self) -> bool:
@@ -133,6 +142,12 @@ class RunEstimate:
                 f" (of which about {_duration(self.compile_seconds)} compiling the kernels, once: "
                 "numba's cache is cold)"
                 if self.compile_seconds
+                else ""
+            )
+            + (
+                f" (excitation phase included: about {_duration(self.excite_seconds)} for its closed loop "
+                "on every seed, its design and one identification per seed)"
+                if self.excite_seconds
                 else ""
             )
         )
@@ -150,12 +165,25 @@ def run_estimate(
     n_controllers: int,
     n_joints: int | None = None,
     compile_seconds: float = 0.0,
+    excite_samples: int = 0,
 ) -> RunEstimate:
     """Rough memory and wall time of a closed-loop run (a guide, not a promise); ``n_joints``
     for an N-joint (URDF) arm, None for the two-link arm's closed forms; ``compile_seconds``
-    of one-time compilation added to the time."""
+    of one-time compilation added to the time. ``excite_samples``: the samples of an excitation
+    phase (``[run] excite`` / T, an N-joint arm's): its closed loop (one controller, every seed) at
+    the task's rates, the design once and an identification per seed
+    (``_IDENTIFY_SECONDS_PER_SAMPLE_JOINT2`` x samples x n_joints^2) added to the time
+    (``excite_seconds`` of it); the memory is the task's (the excitation's records are freed before
+    the task runs)."""
     trials = n_seeds * n_controllers
     nbytes = float(n_samples) * trials * _BYTES_PER_SAMPLE_TRIAL
     per = _SECONDS_PER_SAMPLE_TRIAL if n_joints is None else _SECONDS_PER_SAMPLE_TRIAL_JOINT2 * n_joints**2
     secs = float(n_samples) * (n_controllers * _SECONDS_PER_SAMPLE_CONTROLLER + trials * per)
-    return RunEstimate(int(n_samples), int(trials), nbytes, secs + compile_seconds, float(compile_seconds))
+    excite = 0.0
+    if excite_samples > 0:
+        n2 = (n_joints or 2) ** 2
+        loop = float(excite_samples) * (_SECONDS_PER_SAMPLE_CONTROLLER + n_seeds * per)
+        ident = n_seeds * float(excite_samples) * n2 * _IDENTIFY_SECONDS_PER_SAMPLE_JOINT2
+        excite = loop + _EXCITE_DESIGN_SECONDS + ident
+    total = secs + excite + compile_seconds
+    return RunEstimate(int(n_samples), int(trials), nbytes, total, float(compile_seconds), excite)

@@ -1,7 +1,9 @@
 """``adaptive-dd validate [SCENARIO]``: a scenario checked and printed resolved (defaults marked).
 
-A benchmark scenario: its tables, the resolved controller settings, the peak torque along the
-reference and what the run would meet (:func:`adaptive_dd.benchmark.preflight.preflight`), on
+A benchmark scenario: its tables with the estimate of the run's size
+(:meth:`~adaptive_dd.benchmark.scenario.Scenario.estimate`: the excitation phase of ``[run] excite``
+included), the resolved controller settings, the peak torque along the reference and what the run
+would meet (:func:`adaptive_dd.benchmark.preflight.preflight`), on
 every arm; an arm from a URDF also prints its joints, base parameters and payload subspace. An
 identification scenario (with ``[record]``): its ``[arm]`` and ``[record]``, resolved.
 """
@@ -21,7 +23,12 @@ IDENTIFICATION_TABLES = ("arm", "plant", "record")
 
 def add_parser(sub) -> None:
     """The options of ``validate``."""
-    v = add_command(sub, "validate", help="check a scenario and print it resolved (defaults marked)")
+    v = add_command(
+        sub,
+        "validate",
+        help="check a scenario and print it resolved (defaults marked), with an estimate of the run's "
+        "time (the kernels' compilation on a cold cache and a [run] excite phase included, each said)",
+    )
     v.add_argument("scenario", nargs="?", help="scenario TOML (default: the shipped payload_swap)")
     v.set_defaults(func=run)
 
