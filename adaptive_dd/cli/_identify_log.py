@@ -63,6 +63,14 @@ def _print_fit(model, fit, names: tuple[str, ...]) -> None:
 def _print_held(model, fit) -> None:
     """The directions the record cannot see, held at the URDF's values, and why."""
     held = fit.held
+    if held is not None and held.conflict:
+        print(
+            f"nothing held at the URDF's values: along the directions the record sees best the URDF is "
+            f"{np.sqrt(held.scale2):.3g}x further from the estimate than the stated uncertainty allows (a "
+            "prior the record contradicts: adaptive_dd.identification.held_directions.prior_conflict), so "
+            "every direction is estimated; state the URDF's uncertainty ([plant.uncertainty]) to hold"
+        )
+        return
     if held is None or held.count == 0:
         return
     print(
@@ -328,6 +336,7 @@ def _write_model(outputs, arm, model, rec, fit, cf, spec) -> list:
             # the directions the record could not see, held at the URDF's values (held_directions)
             "held_directions": [] if fit.held is None else fit.held.describe(model.names),
             "prior_scale": 1.0 if fit.held is None else float(np.sqrt(fit.held.scale2)),
+            "prior_conflict": fit.held is not None and fit.held.conflict,
             "scenario": str(spec.source),
         },
     )
