@@ -13,7 +13,10 @@ Two experiments (``--experiment``), each with one meaning on every arm it applie
 The default is the paper's experiment on the paper's arm and the reference on any other.
 ``--duration``, ``--sample-period``, ``--substeps``, ``--seeds``, ``--seed``, ``--payload``,
 ``--radius``, ``--no-noise``, ``--no-quantize``, ``--no-saturate`` and ``--out`` mean the same in
-both; ``--com`` and ``--plant`` are options of the reference experiment, refused with ``table2``.
+both; ``--com``, ``--plant`` and ``--plant-seed`` are options of the reference experiment, refused
+with ``table2``. ``--plant-seed K`` runs the robot the benchmark meets at seed index K (a scenario
+with ``[plant.uncertainty]``: :func:`~adaptive_dd.plant.uncertainty.plant_draws`, the benchmark's
+own draw), its parameters written to ``OUT/plant.json``.
 """
 
 from __future__ import annotations
