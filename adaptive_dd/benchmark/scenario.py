@@ -310,8 +310,7 @@ def _with_stated_noise(arm, position_variance, velocity_variance):
     """The arm with the scenario's ``[noise]`` as its sensors' variances, so that whatever reads
     ``arm.sensor`` (the momentum test's near-rest speed, identification on the arm) reads the
     noise the run draws, not the URDF arm's defaults."""
-    if not isinstance(arm, Arm):
-        return arm
+    arm = as_arm(arm)  # a closed-form record: the arm it is of (as Scenario does)
     pv = tuple(float(x) for x in position_variance)
     vv = tuple(float(x) for x in velocity_variance)
     s = arm.sensor
