@@ -18,34 +18,19 @@ from pathlib import Path
 
 import numpy as np
 from _ablation import Delegating, segment_cells
+from momentum_prototype import _rho
 from numba import njit
 
 from adaptive_dd.benchmark.runner import run_benchmark
 from adaptive_dd.benchmark.scenario import parse_scenario, read_toml
 from adaptive_dd.closed_loop.runner import make_controllers
-from adaptive_dd.plant.chain import momentum_form_in, workspace
-
-
-@njit(cache=True)
-def _momentum(ch, pi, q, qd, w, a, p, wv, py, wy):
-    n = q.shape[0]
-    momentum_form_in(ch, pi[: 10 * n], 0, q, qd, w, a, p, wv, py, wy)
-    for j in range(n):
-        p[j] += pi[12 * n + j] * qd[j]
-        wv[j] += pi[10 * n + j] * qd[j] + pi[11 * n + j] * np.sign(qd[j])
 
 
 @njit(cache=True)
 def _observe(ch, pi, qp, qdp, q, qd, taup, r, a, T, rho):
-    S, n = q.shape
-    w, aa = workspace(n), np.empty((2, 6, 10))
-    p0, w0, p1, w1 = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
-    py, wy = np.empty((n, 10)), np.empty((n, 10))
-    for i in range(S):
-        _momentum(ch, pi[i], qp[i], qdp[i], w, aa, p0, w0, py, wy)
-        _momentum(ch, pi[i], q[i], qd[i], w, aa, p1, w1, py, wy)
-        for j in range(n):
-            rho[i, j] = taup[i, j] - 0.5 * (w0[j] + w1[j]) - (p1[j] - p0[j]) / T
+    _rho(ch, pi, qp, qdp, q, qd, taup, T, rho)
+    for i in range(q.shape[0]):
+        for j in range(q.shape[1]):
             r[i, j] = a * r[i, j] + (1.0 - a) * rho[i, j]
 
 

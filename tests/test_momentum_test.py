@@ -8,9 +8,9 @@ from importlib import resources
 
 import numpy as np
 import pytest
+from law_records import law_on_sines
 
 from adaptive_dd.benchmark.scenario import load_scenario
-from adaptive_dd.closed_loop.laws import O_TRIP, LawState, law_trial, model_torque, observe_applied
 from adaptive_dd.controllers import make_controller
 from adaptive_dd.errors import ParameterError
 
@@ -28,35 +28,13 @@ def _run(cfg, arm, seed, T, sigma_v, step=None, payload=0.0):
     velocity with white noise ``sigma_v``; from ``K_SWAP`` on the torque lacks ``step (n,)`` [N m]
     or the arm carries ``payload`` kg at 3 cm (the law's model without). Per sample: whether the
     observer's test started the boost (no alarm from any detector)."""
-    n = arm.n_joints
-    rng = np.random.default_rng(seed)
     pi_pay = arm.pi.copy()
     if payload:
         c = np.array([0.03, 0.0, 0.0])
         pay = np.array([payload, *(payload * c), 0, 0, 0, 0, 0, 0])
         j = arm.payload_joint
         pi_pay[10 * j : 10 * j + 10] += arm.payload_map @ pay
-    t = np.arange(N + 1) * T
-    w = np.array([0.8, 1.1, 0.7])
-    q = np.array([0.3, -0.6, 0.4]) + 0.4 * np.sin(np.outer(t, w))
-    qd = 0.4 * w * np.cos(np.outer(t, w))
-    qdd = -0.4 * w**2 * np.sin(np.outer(t, w))
-    st = LawState.start(cfg, 1)
-    obs, pi_model, theta = st.obs[0], arm.pi.copy(), np.zeros(10)
-    z, out, tau = np.zeros(n), np.empty(n), np.empty((2, n))
-    tripped = np.zeros(N, dtype=bool)
-    for k in range(N):
-        qd_m = qd[k] + sigma_v * rng.standard_normal(n)
-        law_trial(arm.chain, cfg, pi_model, pi_model, theta, 1 << 40, obs, q[k], qd_m, q[k], qd[k], z, out)
-        tripped[k] = obs[O_TRIP, 0] == 0.0
-        for i in (0, 1):  # the torque over the sample: the mean of its ends' inverse dynamics
-            pi = pi_pay if k + i >= K_SWAP else arm.pi
-            model_torque(arm.chain, pi, q[k + i], qd[k + i], qd[k + i], qd[k + i], qdd[k + i], tau[i])
-        told = tau.mean(0)
-        if step is not None and k >= K_SWAP:
-            told = told - step  # the arm gets step more than the observer is told
-        observe_applied(obs, told)
-    return tripped
+    return law_on_sines(cfg, arm, seed, N, T, sigma_v, (0.8, 1.1, 0.7), K_SWAP, pi_pay, step) == 0
 
 
 def _config(arm, T, **kw):

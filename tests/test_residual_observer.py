@@ -8,6 +8,7 @@ from importlib import resources
 
 import numpy as np
 import pytest
+from law_records import law_on_sines
 
 from adaptive_dd.benchmark.scenario import load_scenario, parse_scenario
 from adaptive_dd.closed_loop.laws import O_R, OBS_ROWS, law_trial, model_torque, observe_applied
@@ -188,29 +189,8 @@ def _trip_run(cfg, arm, seed, k_swap, N, T, sigma_v):
     """The law on a record of the vertical arm (1 kg appearing at sample ``k_swap``; the law's model
     the arm without it), the measured velocity with white noise ``sigma_v``, the torque the true
     arm's inverse dynamics; per sample the observer's samples since a trip."""
-    from adaptive_dd.closed_loop.laws import O_TRIP, LawState
-
-    n = arm.n_joints
-    rng = np.random.default_rng(seed)
     pi_pay = _with_payload(arm, 1.0, (0.03, 0.0, 0.0))
-    t = np.arange(N + 1) * T
-    w = np.array([0.8, 1.1, 1.3])
-    q = np.array([0.3, -0.6, 0.4]) + 0.4 * np.sin(np.outer(t, w))
-    qd = 0.4 * w * np.cos(np.outer(t, w))
-    qdd = -0.4 * w**2 * np.sin(np.outer(t, w))
-    st = LawState.start(cfg, 1)
-    obs, pi_model, theta = st.obs[0], arm.pi.copy(), np.zeros(10)
-    z, out, tau = np.zeros(n), np.empty(n), np.empty((2, n))
-    since = np.empty(N, dtype=np.int64)
-    for k in range(N):
-        qd_m = qd[k] + sigma_v * rng.standard_normal(n)
-        law_trial(arm.chain, cfg, pi_model, pi_model, theta, 1 << 40, obs, q[k], qd_m, q[k], qd[k], z, out)
-        since[k] = min(obs[O_TRIP, 0], 1 << 40)
-        for i in (0, 1):
-            pi = pi_pay if k + i >= k_swap else arm.pi
-            model_torque(arm.chain, pi, q[k + i], qd[k + i], qd[k + i], qd[k + i], qdd[k + i], tau[i])
-        observe_applied(obs, tau.mean(0))
-    return since
+    return law_on_sines(cfg, arm, seed, N, T, sigma_v, (0.8, 1.1, 1.3), k_swap, pi_pay)
 
 
 def test_the_observer_trips_the_boost_on_a_payload_not_on_noise():
