@@ -116,7 +116,8 @@ def main() -> None:
     T = sc.sample_period
     cfg = inner.online
     if a.detector:
-        det = dataclasses.replace(cfg.detector, **{k: json.loads(v) for k, v in (x.split("=", 1) for x in a.detector)})
+        kv = (x.split("=", 1) for x in a.detector)
+        det = dataclasses.replace(cfg.detector, **{k: json.loads(v) for k, v in kv})
         cfg = dataclasses.replace(cfg, detector=det)
     if getattr(cfg, "sample_period", T) != T:
         cfg = dataclasses.replace(cfg, sample_period=T)
@@ -132,7 +133,8 @@ def main() -> None:
     pay_at_alarm[:] = online.est_model(c, s)
     nfa = 0
     print(
-        f"{a.scenario}: seeds {a.first_seed}..{a.first_seed + S - 1}; threshold {np.sqrt(fl[K.F_THRESHOLD2]):.1f}x, "
+        f"{a.scenario}: seeds {a.first_seed}..{a.first_seed + S - 1}; "
+        f"threshold {np.sqrt(fl[K.F_THRESHOLD2]):.1f}x, "
         f"slow {np.sqrt(fl[K.F_SLOW2]):.2f}, fast {np.sqrt(fl[K.F_FAST2]):.1f}x, resume {ints[K.I_RESUME]}, "
         f"min_learned {ints[K.I_MIN_LEARNED]}, holdoff {ints[K.I_HOLDOFF]} samples"
     )
@@ -146,12 +148,12 @@ def main() -> None:
         for i in np.flatnonzero(info.alarm):
             t = k * T
             alarms[i].append(t)
-            false = not any(0 <= t - w < FALSE_ALARM_WINDOW for w in swaps)
+            false = bool(_false([t], swaps))
             pi_now = online.est_model(c, s)[i]
             if false:
                 nfa += 1
                 since = pre["cnt"][i, K.C_SINCE_ALARM]
-                print(f"seed {a.first_seed + i}: FALSE alarm at {t:.3f} s, {since * T:.3f} s after the last alarm")
+                print(f"seed {a.first_seed + i}: FALSE alarm at {t:.3f} s, {since * T:.3f} s after the last")
                 V1 = _noise(c.ch, pi_now, q[i], vn)
                 V0 = _noise(c.ch, pay_at_alarm[i], q[i], vn)
                 for j in range(n):
@@ -168,18 +170,27 @@ def main() -> None:
                     else:
                         kind, level = "-", np.nan
                     use = bool(np.isfinite(info.eps[i, j]))
+                    sh, fa = np.sqrt(s.short[i, j] / level), np.sqrt(s.fast[i, j] / level)
                     print(
-                        f"   row {j + 1}: {'in use' if use else 'out   '} |qd| {abs(qd[i, j]):5.2f}  short/level "
-                        f"{np.sqrt(s.short[i, j] / level):5.2f}  fast/level {np.sqrt(s.fast[i, j] / level):5.2f} "
-                        f"(RMS)  judged on {kind:4s} {np.sqrt(level):.3f}  ref {np.sqrt(pre['ref'][i, j]):.3f}  "
-                        f"learned {nl:3d}  noise rise {np.sqrt(V1[j, j] / V0[j, j]):.2f} "
+                        f"   row {j + 1}: {'in use' if use else 'out   '} |qd| {abs(qd[i, j]):5.2f}  "
+                        f"short/level {sh:5.2f}  fast/level {fa:5.2f} (RMS)  judged on {kind:4s} "
+                        f"{np.sqrt(level):.3f}  ref {np.sqrt(pre['ref'][i, j]):.3f}  learned {nl:3d}  "
+                        f"noise rise {np.sqrt(V1[j, j] / V0[j, j]):.2f} "
                         f"(the detector's {np.sqrt(s.ref_rise[i, j]):.2f})"
                     )
             pay_at_alarm[i] = pi_before[i]
-    print(f"trials with a false alarm: {sum(1 for x in alarms if any(not any(0 <= t - w < FALSE_ALARM_WINDOW for w in swaps) for t in x))} of {S}")
-    same = all(np.allclose(x, y) for x, y in zip(alarms, loop_alarms, strict=True)) if not a.detector else None
-    if same is not None:
+    print(f"trials with a false alarm (replay): {sum(1 for x in alarms if _false(x, swaps))} of {S}")
+    loop_false = [(a.first_seed + i, _false(x, swaps)) for i, x in enumerate(loop_alarms)]
+    loop_false = [x for x in loop_false if x[1]]
+    print(f"the closed loop's false alarms (seed, times [s]): {loop_false} ({len(loop_false)} of {S} trials)")
+    if not a.detector:
+        same = all(np.allclose(x, y) for x, y in zip(alarms, loop_alarms, strict=True))
         print(f"replay's alarms equal the closed loop's: {same}")
+
+
+def _false(times, swaps):
+    """The alarm times [s] outside the benchmark's window after every swap."""
+    return [round(float(t), 3) for t in times if not any(0 <= t - w < FALSE_ALARM_WINDOW for w in swaps)]
 
 
 if __name__ == "__main__":

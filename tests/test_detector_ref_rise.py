@@ -44,8 +44,8 @@ def _holding(c, s, pay):
 def test_the_rise_is_the_payloads_noise_through_the_inertia_and_only_in_the_window(ur5):
     """Within the window in which the kept level serves, the factor per row is the ratio of the
     velocity noise's variance through the inertia with and without the payload the model holds
-    (as control uses it; the arm's own mass matrix: an independent computation); 1 before the hold-off's end, past the re-arm
-    bound, and where no row kept a level."""
+    (as control uses it; the arm's own mass matrix: an independent computation); 1 before the
+    hold-off's end, past the re-arm bound, and where no row kept a level."""
     c, s = est_init(OnlineConfig(), ur5, 1)
     n, p = ur5.n_joints, s.theta.shape[1]
     w = K.est_work(n, p)
