@@ -223,7 +223,8 @@ class EstState(NamedTuple):
     short, long : (m, n)
         Detector averages of the squared weighted prior errors.
     ref : (m, n)
-        Level each row had established before the last alarm (0: none).
+        Level each row had established before the last alarm (0: none), without the floor
+        (applied where it serves, after :func:`_ref_rise`'s factor).
     eps : (m, n)
         Weighted prior errors of the last sample (NaN where a row was not used).
     fast : (m, n)
@@ -863,7 +864,8 @@ def _detect(c, s, i, eps, act):  # pragma: no cover - compiled
     the warm-up and the hold-off. Until then, and for at most ``resume + min_learned``
     samples after the alarm (the re-arm bound of a row in use throughout), a row that had
     established its level
-    before the last alarm is compared with that level (``ref``, with the threshold
+    before the last alarm is compared with that level (``ref``, raised by the noise the
+    estimate's new payload adds to the row, :func:`_ref_rise`, with the threshold
     times ``slow``, as the estimate may still be converging): a change that
     follows a false alarm within the re-learning time is detected after the hold-off.
     Past that bound such a row, not yet seen ``min_learned`` times (it was out of use), is
