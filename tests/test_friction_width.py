@@ -122,3 +122,40 @@ def test_the_swapped_coulomb_columns_are_the_regressions():
     assert len(index) == model.n
     for j, k in index.items():
         np.testing.assert_array_equal(reg.phi[:, j, k], cols[:, j])
+
+
+def test_identify_coulomb_width_option(tmp_path, capsys):
+    """``identify --arm --coulomb-width``: a bad value is refused naming it; a number is every
+    joint's width in model.json; ``profile`` prints each joint's width and interval, writes them
+    (``coulomb_width``, the profile in ``record``) and ``predict``'s model uses them."""
+    import json
+
+    from adaptive_dd.cli import main
+    from adaptive_dd.identification.identified_model import load_identified_model
+    from adaptive_dd.io import write_recording
+
+    model, q, qd, tau, T = _record(lambda v: np.tanh(v / 0.05), duration=4.0)
+    path = write_recording(tmp_path / "r.csv", T * np.arange(len(q)), q, qd, tau)
+    scen = tmp_path / "v3.toml"
+    scen.write_text('[arm]\nrobot = "vertical3"\n')
+    base = ["identify", "--arm", str(scen), str(path), "--output-error", "off", "--hold-unseen", "off"]
+    for bad in ("wide", "0", "-0.01", "nan"):
+        capsys.readouterr()
+        with pytest.raises(SystemExit):
+            main([*base, "--coulomb-width", bad, "--out", str(tmp_path / "x")])
+        err = capsys.readouterr().err
+        assert f"'{bad}' is not 'noise', 'profile' or a width in (0, 10] rad/s" in err, err
+    assert main([*base, "--coulomb-width", "0.03", "--out", str(tmp_path / "v")]) == 0
+    m = json.loads((tmp_path / "v" / "model.json").read_text())
+    assert m["friction_velocity"] == 0.03 and m["coulomb_width"] == [0.03] * 3
+    capsys.readouterr()
+    assert main([*base, "--coulomb-width", "profile", "--out", str(tmp_path / "p")]) == 0
+    out = capsys.readouterr().out
+    assert "v per joint from the record's profile likelihood" in out and "(95 % " in out
+    m = json.loads((tmp_path / "p" / "model.json").read_text())
+    width = np.asarray(m["coulomb_width"])
+    assert np.all(np.abs(np.log(width / 0.05)) < np.log(1.6)), width
+    assert m["record"]["coulomb_width_profile"]["profiled"] == [True] * 3
+    np.testing.assert_array_equal(
+        load_identified_model(tmp_path / "p" / "model.json").arm_model().friction_velocity, width
+    )
