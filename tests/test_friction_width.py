@@ -134,7 +134,7 @@ def test_identify_coulomb_width_option(tmp_path, capsys):
     from adaptive_dd.identification.identified_model import load_identified_model
     from adaptive_dd.io import write_recording
 
-    model, q, qd, tau, T = _record(lambda v: np.tanh(v / 0.05), duration=4.0)
+    _, q, qd, tau, T = _record(lambda v: np.tanh(v / 0.05), duration=4.0)
     path = write_recording(tmp_path / "r.csv", T * np.arange(len(q)), q, qd, tau)
     scen = tmp_path / "v3.toml"
     scen.write_text('[arm]\nrobot = "vertical3"\n')

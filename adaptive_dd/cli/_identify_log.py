@@ -242,7 +242,8 @@ def identify_log(args: argparse.Namespace, arm, outputs) -> int:
     K = identifiable_subset(model, rec.used, lim[:, 0], lim[:, 1], np.random.default_rng(0))
     model, profile = _coulomb_width(args, arm, model, rec, K, tau_f, spec.torque_held)
     prior_std = _prior_std(args.arm, model) if args.hold_unseen == "on" else None
-    fit = _fit_record(model, rec, K, tau_f, spec.torque_held, prior_std)
+    free = None if profile is None else profile.profiled
+    fit = _fit_record(model, rec, K, tau_f, spec.torque_held, prior_std, free)
     _print_fit(model, fit, names)
     _output_error(args, arm, model, rec, fit)
     cf = _consistent(model, fit)
@@ -451,9 +452,10 @@ def _prior_std(scenario: str, model):
     return base_prior_std(model, stated_levels(unc))
 
 
-def _fit_record(model, rec, K, tau_f: float, torque_held: bool, prior_std=None):
+def _fit_record(model, rec, K, tau_f: float, torque_held: bool, prior_std=None, width_estimated=None):
     """:func:`~adaptive_dd.identification.log_fit.fit_log` on a read record, the directions it cannot
-    see held at the URDF's values with ``prior_std`` (None: none held); its errors name the record."""
+    see held at the URDF's values with ``prior_std`` (None: none held), the Coulomb widths of the
+    joints ``width_estimated`` counted as estimated; its errors name the record."""
     from adaptive_dd.identification.log_fit import fit_log
 
     try:
@@ -470,6 +472,7 @@ def _fit_record(model, rec, K, tau_f: float, torque_held: bool, prior_std=None):
             torque_held=torque_held,
             prior_std=prior_std,
             hold=prior_std is not None,
+            width_estimated=width_estimated,
         )
     except DataError as exc:
         raise DataError(f"{rec.source}: {exc}") from None
