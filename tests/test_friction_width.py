@@ -159,3 +159,20 @@ def test_identify_coulomb_width_option(tmp_path, capsys):
     np.testing.assert_array_equal(
         load_identified_model(tmp_path / "p" / "model.json").arm_model().friction_velocity, width
     )
+
+
+def test_an_estimated_width_widens_its_coulomb_levels_std():
+    """fit_log(width_estimated=): the covariance of the fit with the profiled widths free too. Each
+    joint's Coulomb level trades with its width, so its std grows; the estimate is unchanged."""
+    from adaptive_dd.identification.log_fit import fit_log
+
+    model, q, qd, tau, T = _record(lambda v: np.tanh(v / 0.05), duration=4.0)
+    pr = _profile(model, q, qd, tau, T)
+    m = dataclasses.replace(model, friction_velocity=pr.width)
+    kw = dict(tau_f=filter_time_constant(T), sample_period=T, torque_held=False, hold=False)
+    used, K = np.ones(model.n, bool), np.ones(model.p, bool)
+    fixed = fit_log(m, q, qd, tau, used, K, **kw)
+    free = fit_log(m, q, qd, tau, used, K, width_estimated=pr.profiled, **kw)
+    fc = list(coulomb_index(model).values())
+    np.testing.assert_array_equal(free.sigma, fixed.sigma)
+    assert np.all(free.std[fc] > 1.05 * fixed.std[fc]), (free.std[fc], fixed.std[fc])
