@@ -165,7 +165,7 @@ def main() -> None:
     # the bounds against disjoint windows
     _, whole = read_arm_log(args.scenario, arm)
     edges = np.linspace(whole.t[0], whole.t[-1], args.windows + 1)
-    est, std, shares = [], [], []
+    est, std, shares, widths = [], [], [], []
     for a, b in itertools.pairwise(edges):
         _, w = read_arm_log(args.scenario, arm, window=(a, b))
         wm, wfree = with_width(identification_model(arm, w.qd), w, K, args.coulomb_width, held)
@@ -181,6 +181,7 @@ def main() -> None:
             torque_held=held,
             width_estimated=wfree,
         )
+        widths.append(np.broadcast_to(wm.friction_velocity, (wm.n,))[used])
         est.append(f.sigma[K])
         std.append(f.std[K])
         shares.append(f.held.share[K] if f.held is not None else np.zeros(K.sum()))
@@ -199,6 +200,11 @@ def main() -> None:
         f"min {ratio.min():.2f}, max "
         f"{ratio.max():.2f}); within a factor 3: {100 * inside:.0f} %"
     )
+    if args.coulomb_width == "profile":
+        print(
+            "  Coulomb widths per window [rad/s]: "
+            + "; ".join(" / ".join(f"{v:.2g}" for v in wd) for wd in widths)
+        )
     worst = np.argsort(-np.abs(np.log(ratio)))[:3]
     names_k = [nm for nm, k in zip(model.names, K, strict=True) if k]
     names_k = [nm for nm, e in zip(names_k, est_k, strict=True) if e]
