@@ -131,6 +131,7 @@ def test_identify_coulomb_width_option(tmp_path, capsys):
     import json
 
     from adaptive_dd.cli import main
+    from adaptive_dd.errors import DataError
     from adaptive_dd.identification.identified_model import load_identified_model
     from adaptive_dd.io import write_recording
 
@@ -148,6 +149,18 @@ def test_identify_coulomb_width_option(tmp_path, capsys):
     assert main([*base, "--coulomb-width", "0.03", "--out", str(tmp_path / "v")]) == 0
     m = json.loads((tmp_path / "v" / "model.json").read_text())
     assert m["friction_velocity"] == 0.03 and m["coulomb_width"] == [0.03] * 3
+    assert load_identified_model(tmp_path / "v" / "model.json").arm_model().friction_velocity == 0.03
+    for value, ok in ((None, True), ([0.03, -1.0, 0.03], False)):  # a file from before the key; a bad one
+        if value is None:
+            del m["coulomb_width"]
+        else:
+            m["coulomb_width"] = value
+        (tmp_path / "v" / "old.json").write_text(json.dumps(m))
+        if ok:
+            assert load_identified_model(tmp_path / "v" / "old.json").coulomb_width is None
+        else:
+            with pytest.raises(DataError, match="key 'coulomb_width' must be 3 widths > 0"):
+                load_identified_model(tmp_path / "v" / "old.json")
     capsys.readouterr()
     assert main([*base, "--coulomb-width", "profile", "--out", str(tmp_path / "p")]) == 0
     out = capsys.readouterr().out

@@ -133,9 +133,10 @@ class IdentifiedModel:
                 f"{self.urdf}: its base parameters ({model.p}) are not those of the model file "
                 f"({len(self.names)}): the URDF changed since the identification"
             )
-        if self.coulomb_width is None:
-            return model
-        return dataclasses.replace(model, friction_velocity=np.asarray(self.coulomb_width, dtype=float))
+        width = np.asarray(self.coulomb_width if self.coulomb_width is not None else [], dtype=float)
+        if width.size == 0 or np.all(width == model.friction_velocity):
+            return model  # one width for every joint: the arm's, a float
+        return dataclasses.replace(model, friction_velocity=width)
 
 
 def save_identified_model(path, model: IdentifiedModel) -> Path:
