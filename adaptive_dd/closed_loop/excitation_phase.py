@@ -184,6 +184,38 @@ def _task_path(scenario, duration: float | None = None) -> tuple[Array, Array]:
     return q, qd
 
 
+def _task_acceleration(scenario) -> Array:
+    """The scenario's reference accelerations ``qdd_d (m, n)`` [rad/s^2] over the task at 5 ms."""
+    return scenario.reference.sample(np.arange(0.0, float(scenario.duration), 0.005))[2]
+
+
+def excitation_limits(scenario, region: str = "arm", reach: bool = True):
+    """The limits the phase's excitation is designed within: the arm's
+    (:meth:`~adaptive_dd.identification.excitation.ExcitationLimits.of_arm`) or, ``region="task"``,
+    those narrowed to the task's region; ``reach``: each joint's acceleration limit raised to the
+    largest the task's ``[reference]`` reaches
+    (:meth:`~adaptive_dd.identification.excitation.ExcitationLimits.reaching`).
+
+    Raises
+    ------
+    ScenarioError
+        The task's positions lie outside the arm's limits (``region="task"``).
+    """
+    from adaptive_dd.errors import ParameterError
+    from adaptive_dd.identification.excitation import ExcitationLimits
+
+    arm = scenario.arm
+    try:
+        lim = (
+            ExcitationLimits.of_task(arm, _task_path(scenario)[0])
+            if region == "task"
+            else ExcitationLimits.of_arm(arm)
+        )
+    except ParameterError as exc:
+        raise ScenarioError(f"{scenario.source}: run.excite: reference: {exc}") from None
+    return lim.reaching(_task_acceleration(scenario)) if reach else lim
+
+
 def excitation_reference(scenario, region: str = "arm", progress: bool = False):
     """The designed excitation of the scenario's model as a reference with a 1 s ramp: the first of
     :data:`START_ATTEMPTS` random starts (generators ``(seed, 4, attempt)``) whose optimum keeps
@@ -199,17 +231,10 @@ def excitation_reference(scenario, region: str = "arm", progress: bool = False):
         positions lie outside the arm's limits.
     """
     from adaptive_dd.errors import ParameterError
-    from adaptive_dd.identification.excitation import ExcitationLimits, design_excitation
+    from adaptive_dd.identification.excitation import design_excitation
 
     arm = scenario.arm
-    try:
-        lim = (
-            ExcitationLimits.of_task(arm, _task_path(scenario)[0])
-            if region == "task"
-            else ExcitationLimits.of_arm(arm)
-        )
-    except ParameterError as exc:
-        raise ScenarioError(f"{scenario.source}: run.excite: reference: {exc}") from None
+    lim = excitation_limits(scenario, region)
     last = None
     for attempt in range(START_ATTEMPTS):
         rng = np.random.default_rng([int(scenario.seed), 4, attempt])
