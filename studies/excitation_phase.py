@@ -22,11 +22,12 @@ the excitation's coverage of the task's region (:class:`adaptive_dd.identificati
 ``--region task``: the excitation designed on the task's region (the arm's limits narrowed to the
 reference's positions +- ``TASK_MARGIN``), not over the arm's whole limits (the default,
 :func:`adaptive_dd.closed_loop.excitation_phase.excitation_reference`; measured worse).
-``--reach off``: the design's one acceleration limit of the arm (5 rad/s^2) kept, not raised per
-joint to the task's largest (:func:`adaptive_dd.closed_loop.excitation_phase.excitation_limits`;
-the design before round 31, an ablation). ``--targets``: also the benchmark report's "Targets"
-section of each run (what ``adaptive-dd benchmark`` prints for the scenario with ``[run] excite``
-set). ``--coverage-only``: the designed excitation's coverage of the task's region alone (no run).
+``--reach on``: the design's acceleration limit raised per joint to the largest the task's
+reference reaches (:data:`adaptive_dd.closed_loop.excitation_phase.REACH_TASK`, an option: round
+31, docs/learning_the_arm.md); ``off`` (the default) keeps the arm's one 5 rad/s^2.
+``--targets``: also the benchmark report's "Targets" section of each run (what ``adaptive-dd
+benchmark`` prints for the scenario with ``[run] excite`` set). ``--coverage-only``: the designed
+excitation's coverage of the task's region alone (no run).
 """
 
 from __future__ import annotations
@@ -120,16 +121,15 @@ def main() -> None:
         "--region", choices=("arm", "task"), default="arm", help="where the excitation is designed"
     )
     ap.add_argument(
-        "--reach", choices=("on", "off"), default="on", help="the design's accelerations raised to the task's"
+        "--reach", choices=("on", "off"), default="off", help="the design's accelerations up to the task's"
     )
     ap.add_argument("--targets", action="store_true", help="also print the report's Targets section")
     ap.add_argument("--coverage-only", action="store_true", help="the excitation's coverage alone, no run")
     a = ap.parse_args()
-    if a.reach == "off":  # the arm's one acceleration limit (the design before round 31)
+    if a.reach == "on":  # the acceleration limits raised to the task's (an option, round 31)
         from adaptive_dd.closed_loop import excitation_phase
 
-        limits = excitation_phase.excitation_limits
-        excitation_phase.excitation_limits = lambda sc, region="arm", reach=True: limits(sc, region, False)
+        excitation_phase.REACH_TASK = True
     if a.coverage_only:
         from adaptive_dd.closed_loop.excitation_phase import excitation_coverage, excitation_reference
 

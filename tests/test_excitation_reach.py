@@ -1,6 +1,6 @@
-"""The excitation phase's design reaches the task's accelerations: each joint's acceleration limit
-is raised to the largest the scenario's ``[reference]`` asks (never lowered below the arm's 5
-rad/s^2), so the record informs the inertia and armature the task's fast joints need
+"""The excitation phase's option ``reach`` (``REACH_TASK``, off by default): each joint's
+acceleration limit raised to the largest the scenario's ``[reference]`` asks (never lowered below
+the arm's 5 rad/s^2), so the record informs the inertia and armature the task's fast joints need
 (docs/learning_the_arm.md, "The excitation reaches the task's accelerations")."""
 
 from __future__ import annotations
@@ -38,22 +38,23 @@ def test_the_acceleration_limit_reaches_the_tasks_per_joint(vertical3):
     first joint keeps the arm's 5); positions, speeds and torques keep the arm's limits."""
     peak = _task_peak(vertical3)
     arm = ExcitationLimits.of_arm(vertical3.arm)
-    lim = excitation_limits(vertical3)
+    lim = excitation_limits(vertical3, reach=True)
     assert peak[0] < 5.0 < peak[1] < peak[2]
     assert lim.acceleration[0] == pytest.approx(arm.acceleration[0])
     assert np.allclose(lim.acceleration[1:], peak[1:], rtol=2e-3)
     for key in ("lower", "upper", "velocity", "torque"):
         assert np.array_equal(getattr(lim, key), getattr(arm, key)), key
     assert np.array_equal(excitation_limits(vertical3, reach=False).acceleration, arm.acceleration)
-    task = excitation_limits(vertical3, "task")
+    assert np.array_equal(excitation_limits(vertical3).acceleration, arm.acceleration)  # the default
+    task = excitation_limits(vertical3, "task", reach=True)
     assert np.allclose(task.acceleration, lim.acceleration) and np.all(task.upper <= arm.upper)
 
 
 def test_the_phases_design_moves_faster_than_the_arms_one_limit_and_within_the_raised_ones(vertical3):
-    """The phase's design uses the raised limits: some joint accelerates beyond the arm's 5 rad/s^2
-    (after the 1 s ramp, on a fine grid) and none beyond its raised limit."""
-    lim = excitation_limits(vertical3)
-    _, qd, qdd = excitation_reference(vertical3).sample(np.arange(1.0, 20.0, 0.002))
+    """The phase's design with ``reach`` uses the raised limits: some joint accelerates beyond the
+    arm's 5 rad/s^2 (after the 1 s ramp, on a fine grid) and none beyond its raised limit."""
+    lim = excitation_limits(vertical3, reach=True)
+    _, qd, qdd = excitation_reference(vertical3, reach=True).sample(np.arange(1.0, 20.0, 0.002))
     top = np.abs(qdd).max(axis=0)
     assert top.max() > 1.2 * 5.0, top
     assert np.all(top <= lim.acceleration * 1.01), (top, lim.acceleration)
