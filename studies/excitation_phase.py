@@ -3,7 +3,7 @@ excitation phase before it, on one scenario (ct_oracle, ct_nominal and adaptive_
 
     python studies/excitation_phase.py SCENARIO.toml [--seeds 20] [--excite 20] [--first-seed 0]
         [--only with|without] [--urdf-prior] [--handoff cov|std|noise] [--prior-scale S]
-        [--region task|arm] [--targets] [--coverage-only]
+        [--region task|arm] [--reach on|off] [--targets] [--coverage-only]
 
 Prints, for ``excite = 0`` and ``excite = SECONDS``, adaptive_ct / ct_oracle per segment (mean,
 p90, max over seeds), the first segment's time to come within 1.2x of the floor
@@ -22,6 +22,9 @@ the excitation's coverage of the task's region (:class:`adaptive_dd.identificati
 ``--region task``: the excitation designed on the task's region (the arm's limits narrowed to the
 reference's positions +- ``TASK_MARGIN``), not over the arm's whole limits (the default,
 :func:`adaptive_dd.closed_loop.excitation_phase.excitation_reference`; measured worse).
+``--reach on``: the design's acceleration limit raised per joint to the largest the task's
+reference reaches (:data:`adaptive_dd.closed_loop.excitation_phase.REACH_TASK`, an option: round
+31, docs/learning_the_arm.md); ``off`` (the default) keeps the arm's one 5 rad/s^2.
 ``--targets``: also the benchmark report's "Targets" section of each run (what ``adaptive-dd
 benchmark`` prints for the scenario with ``[run] excite`` set). ``--coverage-only``: the designed
 excitation's coverage of the task's region alone (no run).
@@ -117,9 +120,16 @@ def main() -> None:
     ap.add_argument(
         "--region", choices=("arm", "task"), default="arm", help="where the excitation is designed"
     )
+    ap.add_argument(
+        "--reach", choices=("on", "off"), default="off", help="the design's accelerations up to the task's"
+    )
     ap.add_argument("--targets", action="store_true", help="also print the report's Targets section")
     ap.add_argument("--coverage-only", action="store_true", help="the excitation's coverage alone, no run")
     a = ap.parse_args()
+    if a.reach == "on":  # the acceleration limits raised to the task's (an option, round 31)
+        from adaptive_dd.closed_loop import excitation_phase
+
+        excitation_phase.REACH_TASK = True
     if a.coverage_only:
         from adaptive_dd.closed_loop.excitation_phase import excitation_coverage, excitation_reference
 
