@@ -56,6 +56,7 @@ from typing import NamedTuple
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
+from scipy.linalg import solve_discrete_lyapunov
 
 from adaptive_dd.errors import ParameterError, SignalError
 from adaptive_dd.identification import online_kernel as K
@@ -105,15 +106,18 @@ __all__ = [
     "payload_prior",
     "project_payload",
     "reopen_mass_std",
+    "row_floors",
     "run_online",
     "state_alarms",
     "state_skipped",
     "whitening_noise",
+    "whitening_scale",
 ]
 
 Array = NDArray[np.float64]
 MODES = ("payload", "full", "arm")
 REGRESSIONS = ("signals", "momentum")
+ROW_FLOORS = ("level", "stated", "none")
 
 
 def _num(owner: str, name: str, v, lo=None, hi=None, strict=True) -> None:
@@ -349,6 +353,15 @@ class OnlineConfig:
         beyond their equation error (UR5, a creeping wrist, 1 -> 2.5 kg: the centre of mass
         15 cm off 0.25 s after the swap and a second alarm; ``docs/any_arm.md``, "The Gen3's
         wrist"): not the default until the rows' own equation error bounds that trust.
+    row_floor : {"level", "stated", "none"} or None
+        Whitened rows: what bounds the trust in a row beyond its sensor noise (the equation's own
+        error: the arm's unlearnt errors, friction, the filters' discretisation), a variance added
+        to the row's (:func:`row_floors`; :func:`~adaptive_dd.identification.online_kernel.
+        _row_floor`). ``"level"`` (default): each row's variance is at least the detector's learnt
+        level of its squared prior error (what the row's equation error is, estimated online; with
+        no detector, ``"stated"``). ``"stated"``: the detector's ``floor`` in the row's units
+        (``floor * row_weights[j]`` N m, RMS), a constant. ``"none"``: the noise alone.
+        ``docs/any_arm.md``, "A floor on each row's error".
     detector : Detector or None
     project : bool or None
         Project the model control uses onto physically consistent payloads (the
@@ -431,6 +444,7 @@ class OnlineConfig:
     taint: float = 10.0
     row_weights: tuple[float, ...] | None = None
     whiten: bool | None = None
+    row_floor: str | None = None
     detector: Detector | None = field(default_factory=Detector)
     project: bool | None = None
     eig_min: float = 0.0
@@ -488,6 +502,15 @@ class OnlineConfig:
             object.__setattr__(self, "project", not arm_mode)  # payload's directions: not a payload
         if self.whiten is None:  # off by default (see the attribute's description)
             object.__setattr__(self, "whiten", False)
+        if self.row_floor is None:
+            object.__setattr__(self, "row_floor", "level" if self.detector is not None else "stated")
+        if self.row_floor not in ROW_FLOORS:
+            raise ParameterError(f"{o}.row_floor must be one of {ROW_FLOORS}, got {self.row_floor!r}")
+        if self.row_floor == "level" and self.detector is None:
+            raise ParameterError(
+                f"{o}.row_floor = 'level' reads the detector's levels; with detector = None give "
+                "'stated' or 'none'"
+            )
         if isinstance(self.prior_radius, str) and self.prior_radius == "auto":
             object.__setattr__(self, "prior_radius", None if arm_mode else DEFAULT_PRIOR_RADIUS)
         _num(o, "sample_period", self.sample_period, 0.0)
@@ -634,6 +657,41 @@ def whitening_noise(arm: Arm) -> Array:
     with np.errstate(invalid="ignore"):  # continuous joints: no middle (nominal_inertia takes 0)
         m0 = arm.nominal_inertia()
     return sv / float(np.max(m0))
+
+
+def whitening_scale(cfg: OnlineConfig, arm: Arm) -> float:
+    """[N^2 m^2] The whitened rows' covariance ``M diag(vn^2) M^T`` (:func:`whitening_noise`) times
+    this is the covariance the sensor's velocity noise gives the rows in N m: the largest
+    velocity noise variance, times the power gain of the filters' ``G1`` on white noise (the
+    momentum's derivative, ``sum_k h1[k]^2``), times the largest nominal inertia squared. With no
+    velocity noise stated the noise is taken as 1 rad/s (the whitening's own assumption)."""
+    vv = np.asarray(arm.sensor.velocity_variance, dtype=float)
+    var = float(vv.max()) if np.all(np.isfinite(vv)) and vv.max() > 0.0 else 1.0
+    b = cfg.bank
+    X = solve_discrete_lyapunov(b.A, np.outer(b.B[:, 0], b.B[:, 0]))
+    g1 = float(b.D[1, 0] ** 2 + b.C[1] @ X @ b.C[1])
+    with np.errstate(invalid="ignore"):
+        m0 = float(np.max(arm.nominal_inertia()))
+    return var * g1 * m0 * m0
+
+
+def row_floors(cfg: OnlineConfig, arm: Arm, w: Array | None = None) -> tuple[Array, Array]:
+    """The whitened rows' floors ``(vfloor, vlevel)`` (n,) each (``OnlineConfig.row_floor``), in the
+    units of the whitening's covariance: a row's error in N m^2 over :func:`whitening_scale`.
+
+    ``"stated"``: ``vfloor = (floor w_j)^2 / scale`` (the detector's ``floor``, weighted by the
+    rows' weights ``w``, as the detector reads it). ``"level"``: ``vlevel = w_j^2 / scale`` (the
+    detector's level is of the weighted error ``e_j / w_j``). ``"none"``: zeros."""
+    n = arm.n_joints
+    w = derived_row_weights(arm) if w is None else np.asarray(w, dtype=float)
+    zero = np.zeros(n)
+    if cfg.row_floor == "none":
+        return zero, zero
+    scale = whitening_scale(cfg, arm)
+    if cfg.row_floor == "level":
+        return zero, w * w / scale
+    floor = cfg.detector.floor if cfg.detector is not None else Detector().floor
+    return (floor * w) ** 2 / scale, zero
 
 
 @lru_cache(maxsize=32)
@@ -809,7 +867,16 @@ def _pack(cfg: OnlineConfig, arm: Arm) -> tuple[EstCfg, Array]:
         ints=ints,
         floats=fl,
         vn=c(whitening_noise(arm) if cfg.whiten else np.zeros(0)),
+        **_floors(cfg, arm, w, n),
     ), P0
+
+
+def _floors(cfg: OnlineConfig, arm: Arm, w: Array, n: int) -> dict[str, Array]:
+    """``vfloor``, ``vlevel`` of :class:`EstCfg` (empty without whitening)."""
+    if not cfg.whiten:
+        return {"vfloor": np.zeros(0), "vlevel": np.zeros(0)}
+    vfloor, vlevel = row_floors(cfg, arm, w)
+    return {"vfloor": np.ascontiguousarray(vfloor), "vlevel": np.ascontiguousarray(vlevel)}
 
 
 def _channels(cfg: OnlineConfig, n: int) -> int:
