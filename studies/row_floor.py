@@ -3,7 +3,10 @@
 record (1 kg -> 2.5 kg at 1.5 s, three seeds) the centre of mass's error [mm] 100 ms after the
 swap and the alarms, and on the record whose wrist creeps (a swap at 3 s) the alarms. Also the
 rows' noise and floors in N m (RMS) on the UR5 and the Gen3 (``docs/any_arm.md``, "A floor on each
-row's error").
+row's error"). Then, on the closed-loop stick-slip records of ``tests/test_online.py`` (unloaded,
+6 s, seeds 21 and 22): the payload mass each setting estimates, and the rows' noise in N m that
+:func:`~adaptive_dd.identification.online.whitening_scale` predicts at the last posture against the
+detector's learnt level of the same rows.
 
     python studies/row_floor.py
 """
@@ -17,11 +20,14 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 
-from test_online import PAY_A, PAY_B, POSTURE, T, _com, _slow_wrist_record
+from test_online import PAY_A, PAY_B, POSTURE, T, _closed_loop, _com, _slow_wrist_record
 
+from adaptive_dd.identification import online_kernel as K
 from adaptive_dd.identification.online import (
     OnlineConfig,
     derived_row_weights,
+    est_init,
+    est_step,
     row_floors,
     run_online,
     whitening_noise,
@@ -77,6 +83,30 @@ def main() -> None:
             f"{[round(a, 3) for a in rec.alarm_times()[0]]}, com error 250 ms after the swap "
             f"{1e3 * np.linalg.norm(rec.com[0, k] - _com(PAY_B)):.1f} mm"
         )
+    closed_loop_levels(ur5)
+
+
+def closed_loop_levels(ur5: Arm) -> None:
+    """Unloaded closed-loop records: each setting's payload mass, and noise against level."""
+    n = 6_000
+    for seed in (21, 22):
+        qm, qdm, tau = _closed_loop(ur5, seed, n, [np.zeros(10), PAY_A], n + 1)
+        for name, kw in SETTINGS.items():
+            m = run_online(ur5, OnlineConfig(**kw), qm, qdm, tau).mass[0]
+            print(
+                f"seed {seed} {name:24s} mass at 1 / 2 / 6 s {np.round(m[[999, 1_999, 5_999]], 4)} kg, "
+                f"largest after 0.5 s {np.abs(m[500:]).max():.4f} kg"
+            )
+        cfg = OnlineConfig(whiten=True)
+        c, s = est_init(cfg, ur5, 1)
+        for k in range(n):
+            est_step(c, s, qm[k : k + 1], qdm[k : k + 1], tau[k : k + 1])
+        nl = np.maximum(s.learned[0], 1)
+        level = np.sqrt(s.long[0] / (1.0 - (1.0 - c.floats[K.F_ALPHA_LONG]) ** nl)) * derived_row_weights(ur5)
+        M = ur5.mass_matrix(qm[-1]) + np.diag(ur5.armature)
+        noise = np.sqrt(np.diag((M * whitening_noise(ur5) ** 2) @ M.T) * whitening_scale(cfg, ur5))
+        print(f"seed {seed} rows' noise predicted [N m RMS] {np.round(noise, 5)}")
+        print(f"seed {seed} detector's learnt level   [N m RMS] {np.round(level, 5)}")
 
 
 if __name__ == "__main__":

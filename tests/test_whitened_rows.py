@@ -157,7 +157,7 @@ def test_the_whitening_scale_is_the_noise_the_momentum_form_sees(ur5):
         OnlineConfig(row_floor="max")
     with pytest.raises(Exception, match="row_floor = 'level' reads the detector"):
         OnlineConfig(row_floor="level", detector=None)
-    assert OnlineConfig(detector=None).row_floor == "stated"
+    assert OnlineConfig().row_floor == OnlineConfig(detector=None).row_floor == "stated"
 
 
 def test_the_floor_bounds_the_trust_in_a_nearly_noise_free_wrist(ur5):

@@ -503,7 +503,7 @@ class OnlineConfig:
         if self.whiten is None:  # off by default (see the attribute's description)
             object.__setattr__(self, "whiten", False)
         if self.row_floor is None:
-            object.__setattr__(self, "row_floor", "level" if self.detector is not None else "stated")
+            object.__setattr__(self, "row_floor", "stated")
         if self.row_floor not in ROW_FLOORS:
             raise ParameterError(f"{o}.row_floor must be one of {ROW_FLOORS}, got {self.row_floor!r}")
         if self.row_floor == "level" and self.detector is None:
