@@ -348,20 +348,24 @@ class OnlineConfig:
         divided by its weight. The rows of a light wrist carry little noise (its inertia is
         small) and errors correlated with the shoulder's: weighted as independent rows, the
         payload's parameters the wrist alone sees settle over seconds. None (default): off.
-        On, every shipped arm's loaded segments came nearer their floor in closed loop (20
-        seeds), but on open-loop records the estimate after a swap trusted the wrist's rows
+        Each row's variance also carries a floor for the equation's own error (``row_floor``):
+        without it, on open-loop records the estimate after a swap trusted the wrist's rows
         beyond their equation error (UR5, a creeping wrist, 1 -> 2.5 kg: the centre of mass
-        15 cm off 0.25 s after the swap and a second alarm; ``docs/any_arm.md``, "The Gen3's
-        wrist"): not the default until the rows' own equation error bounds that trust.
-    row_floor : {"level", "stated", "none"} or None
+        15 cm off 0.25 s after the swap and a second alarm). On, with the floor, vertical3's and
+        the Gen3's loaded segments come nearer their floor in closed loop, but the exact UR5's and
+        Panda's unloaded first segment is worse (20 seeds: 1.059 against 1.019, 1.100 against
+        1.033): not the default (``docs/any_arm.md``, "A floor on each row's error").
+    row_floor : {"stated", "level", "none"} or None
         Whitened rows: what bounds the trust in a row beyond its sensor noise (the equation's own
         error: the arm's unlearnt errors, friction, the filters' discretisation), a variance added
         to the row's (:func:`row_floors`; :func:`~adaptive_dd.identification.online_kernel.
-        _row_floor`). ``"level"`` (default): each row's variance is at least the detector's learnt
-        level of its squared prior error (what the row's equation error is, estimated online; with
-        no detector, ``"stated"``). ``"stated"``: the detector's ``floor`` in the row's units
-        (``floor * row_weights[j]`` N m, RMS), a constant. ``"none"``: the noise alone.
-        ``docs/any_arm.md``, "A floor on each row's error".
+        _row_floor`). ``"stated"`` (None, the default): the detector's ``floor`` in the row's
+        units, ``(floor * row_weights[j])^2`` N m^2, the error below which the detector already
+        takes a nearly noise-free row's error for the regression's own. ``"level"``: each row's
+        variance at least the detector's learnt level of its squared prior error (estimated
+        online; it also counts the estimate's own error and the arm's learnable error as noise:
+        vertical3's 0.5 kg segment 4.87x its floor against 1.88x stated, 20 seeds; needs a
+        detector). ``"none"``: the noise alone. ``docs/any_arm.md``, "A floor on each row's error".
     detector : Detector or None
     project : bool or None
         Project the model control uses onto physically consistent payloads (the
