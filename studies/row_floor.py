@@ -9,6 +9,7 @@ row's error"). Then, on the closed-loop stick-slip records of ``tests/test_onlin
 detector's learnt level of the same rows.
 
     python studies/row_floor.py
+    python studies/row_floor.py --dac   # the D/A step against the rows' noise, the UR5 scenario
 """
 
 from __future__ import annotations
@@ -23,6 +24,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 from test_online import PAY_A, PAY_B, POSTURE, T, _closed_loop, _com, _slow_wrist_record
 
 from adaptive_dd.identification import online_kernel as K
+from adaptive_dd.identification.filters import filter_record
 from adaptive_dd.identification.online import (
     OnlineConfig,
     derived_row_weights,
@@ -109,5 +111,26 @@ def closed_loop_levels(ur5: Arm) -> None:
         print(f"seed {seed} detector's learnt level   [N m RMS] {np.round(level, 5)}")
 
 
+def dac_against_noise(path: str = "adaptive_dd/scenarios/ur5_tool_swap_exact.toml") -> None:
+    """The D/A step (uniform, ``2 limit / 2^bits``) through ``G0`` against the velocity noise through
+    the nominal inertia's diagonal and ``G1``, per row [N m RMS]."""
+    from adaptive_dd.benchmark.scenario import load_scenario
+
+    arm = load_scenario(path).arm
+    bank = OnlineConfig().bank
+    imp = np.zeros(4_000)
+    imp[0] = 1.0
+    h = filter_record(bank, imp)
+    g0, g1 = np.sum(h[:, 0] ** 2), np.sum(h[:, 1] ** 2)
+    lim = np.asarray(arm.actuator.torque_limit, dtype=float)
+    dac = 2.0 * lim / 2**arm.actuator.dac_bits / np.sqrt(12.0) * np.sqrt(g0)
+    noise = np.sqrt(g1 * np.asarray(arm.sensor.velocity_variance)) * arm.nominal_inertia()
+    print(f"{path}: D/A step through G0 [N m RMS] {np.round(dac, 6)}")
+    print(f"{path}: velocity noise through M and G1 [N m RMS] {np.round(noise, 4)}")
+
+
 if __name__ == "__main__":
-    main()
+    if sys.argv[1:] == ["--dac"]:
+        dac_against_noise()
+    else:
+        main()
