@@ -118,6 +118,13 @@ class EstCfg(NamedTuple):
     vdet : (n,)
         The sensor's velocity noise variance per joint [(rad/s)^2] (the detector's
         :func:`_ref_rise`: how much a payload raises each row's noise).
+    vfloor : (n,) or (0,)
+        Whitened rows: a variance added to each row's (in the units of ``vn``'s covariance), the
+        equation error the scenario states (:func:`_row_floor`).
+    vlevel : (n,) or (0,)
+        Whitened rows: each row's variance is at least ``vlevel[j]`` times the detector's learnt
+        level of its squared prior error (the equation error the rows show, :func:`_row_floor`;
+        zeros: not read).
     """
 
     ch: Chain
@@ -147,6 +154,8 @@ class EstCfg(NamedTuple):
     floats: np.ndarray
     vn: np.ndarray
     vdet: np.ndarray
+    vfloor: np.ndarray
+    vlevel: np.ndarray
 
 
 # integer slots of EstCfg.ints
@@ -699,6 +708,28 @@ def _rls_row(theta, P, phi, y, lam_eff, pphi, nz):  # pragma: no cover - compile
     return eps
 
 
+@njit(cache=True, inline="always")
+def _row_floor(c, s, i, j, var):  # pragma: no cover - compiled
+    """What row j's variance ``var`` (whitened units, the sensor noise through the inertia) is
+    raised by: ``c.vfloor[j]``, and up to ``c.vlevel[j]`` times the detector's learnt level of the
+    row's squared prior error, the equation error the row shows beyond the noise (the arm's
+    unlearnt errors, friction, the filters' discretisation). The level read is the detector's own:
+    its long-run average once it has learnt ``gate_after`` samples since the last alarm (bias
+    corrected, at least its floor), else the level established before the alarm (``ref``), else
+    its floor. Read, not written: the detector is stepped after the update, on the prior errors."""
+    add = c.vfloor[j]
+    if c.vlevel[j] > 0.0:
+        fl = c.floats
+        nl = s.learned[i, j]
+        level = fl[F_FLOOR2]
+        if nl >= c.ints[I_GATE_AFTER]:
+            level = max(s.long[i, j] / (1.0 - (1.0 - fl[F_ALPHA_LONG]) ** nl), level)
+        elif s.ref[i, j] > 0.0:
+            level = s.ref[i, j]
+        add += max(0.0, c.vlevel[j] * level - var - add)
+    return add
+
+
 @njit(cache=True)
 def _whitened_update(c, s, i, q, phi, y, act, n_rows, w):  # pragma: no cover - compiled
     """The rows in use at this sample, whitened, into trial i's estimate; returns False if any
@@ -731,12 +762,14 @@ def _whitened_update(c, s, i, q, phi, y, act, n_rows, w):  # pragma: no cover - 
     mass_matrix_in(c.ch, c.pi0[: 10 * n], q, w.chain, M)
     for j in range(n):
         M[j, j] += c.pi0[12 * n + j]
-    # L: Cholesky factor of (M V M^T) over the rows in use
+    # L: Cholesky factor of (M V M^T + the rows' floors) over the rows in use
     for a in range(m):
         for b in range(a + 1):
             acc = 0.0
             for k in range(n):
                 acc += M[idx[a], k] * c.vn[k] * c.vn[k] * M[idx[b], k]
+            if a == b:
+                acc += _row_floor(c, s, i, idx[a], acc)
             L[a, b] = acc
     for a in range(m):
         for b in range(a + 1):
