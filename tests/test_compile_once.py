@@ -18,6 +18,8 @@ import pytest
 
 from adaptive_dd.benchmark.scenario import load_scenario, parse_scenario
 from adaptive_dd.plant import chain as C
+from adaptive_dd.plant import chain_dynamics as CD
+from adaptive_dd.plant import chain_regressor as CR
 from adaptive_dd.plant import integrator as S
 
 
@@ -74,8 +76,8 @@ def test_the_chain_kernels_compile_once_for_every_caller(rng):
     C.rnea_body_regressor_in(ch, pi, 2, q[0].copy(), qd[0], qdd[0], w, a, np.empty(n), out)
     C.mass_matrix_in(ch, pi, q[0].copy(), w, np.empty((n, n)))
     for kernel in (
-        C._torque, C._body_force, C._ref_motion, C._local_regressor, C._columns_from_motion,
-        C._regressor_blocks, C._regressor_blocks_in,
+        CD._torque, CD._body_force, CD._ref_motion, CR._local_regressor, CR._columns_from_motion,
+        CR._regressor_blocks, CR._regressor_blocks_in,
     ):  # fmt: skip
         assert len(_specialisations(kernel)) == 1, (kernel.__name__, _specialisations(kernel))
 
