@@ -20,6 +20,7 @@ from adaptive_dd.benchmark.scenario import load_scenario, parse_scenario
 from adaptive_dd.plant import chain as C
 from adaptive_dd.plant import chain_dynamics as CD
 from adaptive_dd.plant import chain_regressor as CR
+from adaptive_dd.plant import chain_rk4 as RK
 from adaptive_dd.plant import integrator as S
 
 
@@ -56,7 +57,7 @@ def test_the_integrator_step_compiles_once_per_friction_law_family():
         q, qd, stuck = np.full(n, 0.3), np.zeros(n), np.zeros(n, dtype=bool)
         for _ in range(3):  # from rest: the stick-slip law decides modes and steps to crossings
             assert S.plant_step(ch, pp, q, qd, np.ones(n), 1e-3, 2, stuck)
-    assert len(_specialisations(S._rk4)) == 2, _specialisations(S._rk4)
+    assert len(_specialisations(RK._rk4)) == 2, _specialisations(RK._rk4)
 
 
 def test_the_chain_kernels_compile_once_for_every_caller(rng):
@@ -120,8 +121,8 @@ def test_a_short_run_compiles_the_n_joint_loop_once_for_every_law():
     assert list(res.runs) == ["pd", "adaptive_ct"]
     loops = _of_arm(_specialisations(glue.chain_loop_block), two_link=False)
     assert len(loops) == 1, loops
-    assert len([s for s in _specialisations(S._rk4) if "Literal[int](0)" in s]) == 1
-    assert len(_specialisations(S._stick_slip)) == 1, _specialisations(S._stick_slip)
+    assert len([s for s in _specialisations(RK._rk4) if "Literal[int](0)" in s]) == 1
+    assert len(_specialisations(RK._stick_slip)) == 1, _specialisations(RK._stick_slip)
 
 
 def test_the_friction_law_as_a_record_compiles_its_family_alone():
