@@ -320,6 +320,23 @@ def law_trial(
 
 
 @njit(cache=True, inline="always")
+def _boost_feedback(cfg, since_alarm, e, ed, v):  # pragma: no cover - compiled
+    """The boost's added feedback ``v = dkp e + dkd e'`` (n,) ``since_alarm`` samples after an
+    alarm (the law adds ``M0(q) v``): the boost's gains for ``boost_samples``, then its added
+    bandwidth ramped down to none over ``boost_ramp`` samples (:class:`LawConfig`)."""
+    f = 1.0
+    if since_alarm >= cfg.boost_samples:  # the ramped end: f from 1 to 0
+        f = 1.0 - (since_alarm - cfg.boost_samples + 1) / (cfg.boost_ramp + 1)
+    for j in range(e.shape[0]):
+        dkp, dkd = cfg.boost_kp[j], cfg.boost_kd[j]
+        if f < 1.0:  # the added bandwidth f (wb - w): kp = w^2, kd = 2 z w, boost_kd = 2 z (wb - w)
+            w0 = np.sqrt(max(cfg.kp[j], 0.0))
+            dw = f * dkd * w0 / cfg.kd[j] if cfg.kd[j] > 0.0 else 0.0
+            dkp, dkd = dw * (2.0 * w0 + dw), f * dkd
+        v[j] = dkp * e[j] + dkd * ed[j]
+
+
+@njit(cache=True, inline="always")
 def law_trial_in(
     ch, cfg, pi_true, pi_model, theta, since_alarm, obs, q, qd, q_d, qd_d, qdd_d, work, out
 ):  # pragma: no cover
@@ -364,16 +381,7 @@ def law_trial_in(
             since_alarm = int(obs[O_TRIP, 0])
     boosting = cfg.boost_samples > 0 and since_alarm < cfg.boost_samples + cfg.boost_ramp
     if boosting:
-        f = 1.0
-        if since_alarm >= cfg.boost_samples:  # the ramped end: f from 1 to 0
-            f = 1.0 - (since_alarm - cfg.boost_samples + 1) / (cfg.boost_ramp + 1)
-        for j in range(n):
-            dkp, dkd = cfg.boost_kp[j], cfg.boost_kd[j]
-            if f < 1.0:  # the added bandwidth f (wb - w): kp = w^2, kd = 2 z w, boost_kd = 2 z (wb - w)
-                w0 = np.sqrt(max(cfg.kp[j], 0.0))
-                dw = f * dkd * w0 / cfg.kd[j] if cfg.kd[j] > 0.0 else 0.0
-                dkp, dkd = dw * (2.0 * w0 + dw), f * dkd
-            v[j] = dkp * e[j] + dkd * ed[j]
+        _boost_feedback(cfg, since_alarm, e, ed, v)
         _add_nominal_inertia(ch, cfg, q, v, work, out)
     if cfg.observer:
         _observe(ch, cfg, pi_model, q, qd, obs, work, out)

@@ -142,6 +142,29 @@ def _friction_allowance(cfg, qd_last, qd_now, fc):  # pragma: no cover - compile
     return 0.0
 
 
+@njit(cache=True, inline="always")
+def _remove_friction(obs, mt, u, v, bias, pos, back):  # pragma: no cover - compiled
+    """Remove from a window's unexplained velocity change ``u (n,)`` the friction torques within
+    its allowances that explain it best (:func:`_momentum_test`): three passes of coordinate
+    descent over the joints with an allowance ``al`` (ring slots ``pos``, ``back``), metric
+    ``bias / v`` (``v (n,)`` the window's learnt levels), each torque ``c_j`` within ``+-al`` and
+    its effect ``M^-1 e_j c_j`` (``mt[:n]`` is ``M^-1``) taken from ``u``."""
+    n = u.shape[0]
+    for _ in range(3):
+        for j in range(n):
+            al = obs[O_MA + pos, j] - obs[O_MA + back, j]
+            if al <= 0.0:
+                continue
+            num, den = 0.0, 0.0
+            for r in range(n):
+                wr = bias / v[r]
+                num += mt[r, j] * wr * u[r]
+                den += mt[r, j] * mt[r, j] * wr
+            cj = min(max(num / den, -al), al) if den > 0.0 else 0.0
+            for r in range(n):
+                u[r] -= mt[r, j] * cj
+
+
 @njit(cache=True)
 def _momentum_test(cfg, obs, mt, qd, m):  # pragma: no cover - compiled
     """One fresh update of the momentum test; ``obs[O_MC, 1]`` set to 1 if it crossed.
@@ -203,19 +226,7 @@ def _momentum_test(cfg, obs, mt, qd, m):  # pragma: no cover - compiled
             sm[r] = u[r] * u[r]  # before the allowance (the levels learn it where there is none)
             learnt = learnt and v[r] > 0.0
         if armed and learnt and not clean:
-            for _ in range(3):
-                for j in range(n):
-                    al = obs[O_MA + pos, j] - obs[O_MA + back, j]
-                    if al <= 0.0:
-                        continue
-                    num, den = 0.0, 0.0
-                    for r in range(n):
-                        wr = bias / v[r]
-                        num += mt[r, j] * wr * u[r]
-                        den += mt[r, j] * mt[r, j] * wr
-                    cj = min(max(num / den, -al), al) if den > 0.0 else 0.0
-                    for r in range(n):
-                        u[r] -= mt[r, j] * cj
+            _remove_friction(obs, mt, u, v, bias, pos, back)
         tot = 0.0
         for r in range(n):
             if armed and learnt:
