@@ -105,7 +105,7 @@ def test_the_two_link_sample_loop_compiles_once_for_every_law():
 
 def test_a_short_run_compiles_the_n_joint_loop_once_for_every_law():
     """A short UR5 run of ``pd`` and ``adaptive_ct``: one loop for both (``pd`` carries an inactive
-    estimator, :class:`~adaptive_dd.closed_loop.glue.ChainEstimator`), the stick-slip ``_rk4``
+    estimator, :class:`~adaptive_dd.closed_loop.chain_choices.ChainEstimator`), the stick-slip ``_rk4``
     once (on a constant law: with the law a runtime value ct_oracle ran at 78 simulated s per CPU s
     against 98). The second process of a cold-cache run compiles the plant's integrator alone
     (``precompile.plant_kernels``, run here first): the loop calls it with the same argument

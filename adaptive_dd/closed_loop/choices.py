@@ -64,8 +64,9 @@ def estimator_work(ec, es):  # pragma: no cover - replaced by the overloads
 def estimator_sample(ec, es, ls, i, q, qd, tau, ew):  # pragma: no cover - replaced by the overloads
     """One sample of trial i's estimator on the measured ``q, qd`` (NaN if lost) and the applied
     ``tau``: 1 on an alarm, else 0; the law's model, its count of samples since the last alarm and
-    its residual observer's applied torques (:func:`~adaptive_dd.closed_loop.laws.observe_applied`)
-    updated. An array ``ec`` means no estimator; an ``EstCfg`` the N-joint online estimator
+    its residual observer's applied torques
+    (:func:`~adaptive_dd.closed_loop.residual_observer.observe_applied`) updated. An array ``ec``
+    means no estimator; an ``EstCfg`` the N-joint online estimator
     (:func:`~adaptive_dd.identification.online_kernel.est_step_trial_in`)."""
     raise NotImplementedError("compiled only")
 

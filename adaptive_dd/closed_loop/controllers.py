@@ -94,7 +94,7 @@ class JointGains:
 class CompiledForm(NamedTuple):
     """What the compiled loop runs for one controller: the law, its per-trial state, the
     estimator's records ``ec, es`` (two arrays when it has none:
-    :func:`~adaptive_dd.closed_loop.glue.estimator_step` is chosen by their type) and whether
+    :func:`~adaptive_dd.closed_loop.choices.estimator_sample` is chosen by their type) and whether
     the trial's model is an estimate to record (``estimates``)."""
 
     cfg: LawConfig
