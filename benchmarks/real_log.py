@@ -3,6 +3,7 @@
 Run from the repository root::
 
     python benchmarks/real_log.py            # the shipped record, examples/tiago/tiago.toml
+    python benchmarks/real_log.py --coulomb-width profile   # identify's --coulomb-width profile
 
 1. Trained on 9.21-48 s, predicting 48-67.9 s (arm_1 ... arm_4, the channels that carry
    torque): adaptive_dd's weighted least squares on the exact filtered regression
@@ -21,6 +22,7 @@ Run from the repository root::
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import itertools
 import time
 from pathlib import Path
@@ -28,8 +30,9 @@ from pathlib import Path
 import numpy as np
 
 from adaptive_dd.cli._common import load_arm, read_arm_log
+from adaptive_dd.cli.identify import coulomb_width_option
 from adaptive_dd.cli.predict import lowpass
-from adaptive_dd.identification.friction_width import identification_model
+from adaptive_dd.identification.friction_width import identification_model, profile_coulomb_width
 from adaptive_dd.identification.log_fit import (
     filter_time_constant,
     fit_log,
@@ -62,6 +65,28 @@ def plain_least_squares(arm, q, qd, qdd, tau, used):
     return lambda q, qd, qdd: regressor(q, qd, qdd) @ theta
 
 
+def with_width(model, rec, K, choice, torque_held: bool):
+    """``model`` with the Coulomb width ``identify --coulomb-width choice`` gives on ``rec``, and the
+    joints whose width was estimated (None: none)."""
+    if choice == "noise":
+        return model, None
+    if choice != "profile":
+        return dataclasses.replace(model, friction_velocity=float(choice)), None
+    T = rec.sample_period
+    pr = profile_coulomb_width(
+        model,
+        rec.q,
+        rec.qd,
+        rec.tau,
+        rec.used,
+        K,
+        tau_f=filter_time_constant(T),
+        sample_period=T,
+        torque_held=torque_held,
+    )
+    return dataclasses.replace(model, friction_velocity=pr.width), pr.profiled
+
+
 def rms(e):
     return np.sqrt(np.mean(e**2, axis=0))
 
@@ -73,6 +98,12 @@ def main() -> None:
     ap.add_argument("--test", type=float, nargs=2, default=[48.0, 67.9])
     ap.add_argument("--windows", type=int, default=3, help="disjoint windows of the excitation (default 3)")
     ap.add_argument("--lowpass", type=float, default=2.0)
+    ap.add_argument(
+        "--coulomb-width",
+        type=coulomb_width_option,
+        default="noise",
+        help="as identify's: noise (default), profile or a width [rad/s], for the fit and each window",
+    )
     ap.add_argument(
         "--torque-sampled", action="store_true", help="torque_held = false: the efforts as samples, not held"
     )
@@ -88,8 +119,23 @@ def main() -> None:
     K = identifiable_subset(model, used, lim[:, 0], lim[:, 1], np.random.default_rng(0))
     T = tr.sample_period
     held = not args.torque_sampled
+    rule = model  # the URDF alone: its Coulomb law as identify's default
+    model, free = with_width(model, tr, K, args.coulomb_width, held)
+    print(
+        f"Coulomb width (--coulomb-width {args.coulomb_width}) [rad/s]: "
+        + " / ".join(f"{v:.3g}" for v in np.broadcast_to(model.friction_velocity, (model.n,))[used])
+    )
     fit = fit_log(
-        model, tr.q, tr.qd, tr.tau, used, K, tau_f=filter_time_constant(T), sample_period=T, torque_held=held
+        model,
+        tr.q,
+        tr.qd,
+        tr.tau,
+        used,
+        K,
+        tau_f=filter_time_constant(T),
+        sample_period=T,
+        torque_held=held,
+        width_estimated=free,
     )
     qd_te, qdd_te = derivatives(te.q, te.sample_period)
     qd_tr, qdd_tr = derivatives(tr.q, T)
@@ -97,7 +143,7 @@ def main() -> None:
     preds = {
         "adaptive_dd WLS (identify)": predict_torque(model, fit.sigma, te.q, qd_te, qdd_te),
         "plain LS (Pinocchio + fv, fc sign, Ia)": plain(te.q, qd_te, qdd_te),
-        "URDF alone": predict_torque(model, model.sigma_ref, te.q, qd_te, qdd_te),
+        "URDF alone": predict_torque(rule, rule.sigma_ref, te.q, qd_te, qdd_te),
     }
     meas_lp = lowpass(te.tau, args.lowpass, te.sample_period)
     print(
@@ -119,11 +165,12 @@ def main() -> None:
     # the bounds against disjoint windows
     _, whole = read_arm_log(args.scenario, arm)
     edges = np.linspace(whole.t[0], whole.t[-1], args.windows + 1)
-    est, std, shares = [], [], []
+    est, std, shares, widths = [], [], [], []
     for a, b in itertools.pairwise(edges):
         _, w = read_arm_log(args.scenario, arm, window=(a, b))
+        wm, wfree = with_width(identification_model(arm, w.qd), w, K, args.coulomb_width, held)
         f = fit_log(
-            identification_model(arm, w.qd),
+            wm,
             w.q,
             w.qd,
             w.tau,
@@ -132,7 +179,9 @@ def main() -> None:
             tau_f=filter_time_constant(w.sample_period),
             sample_period=w.sample_period,
             torque_held=held,
+            width_estimated=wfree,
         )
+        widths.append(np.broadcast_to(wm.friction_velocity, (wm.n,))[used])
         est.append(f.sigma[K])
         std.append(f.std[K])
         shares.append(f.held.share[K] if f.held is not None else np.zeros(K.sum()))
@@ -151,6 +200,11 @@ def main() -> None:
         f"min {ratio.min():.2f}, max "
         f"{ratio.max():.2f}); within a factor 3: {100 * inside:.0f} %"
     )
+    if args.coulomb_width == "profile":
+        print(
+            "  Coulomb widths per window [rad/s]: "
+            + "; ".join(" / ".join(f"{v:.2g}" for v in wd) for wd in widths)
+        )
     worst = np.argsort(-np.abs(np.log(ratio)))[:3]
     names_k = [nm for nm, k in zip(model.names, K, strict=True) if k]
     names_k = [nm for nm, e in zip(names_k, est_k, strict=True) if e]

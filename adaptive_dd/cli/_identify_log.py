@@ -235,20 +235,15 @@ def identify_log(args: argparse.Namespace, arm, outputs) -> int:
     )
     for note in rec.notes:
         print(f"  {note}")
-    print(
-        f"Coulomb friction fitted as fc tanh(qd / {model.friction_velocity:.3g} rad/s): "
-        + (
-            "the arm's friction_velocity (its law is tanh)"
-            if getattr(arm, "friction", "") == "tanh"
-            else "the width of the record's velocity noise (adaptive_dd.identification.friction_width)"
-        )
-    )
     if args.payload_only:
+        model, _ = _coulomb_width(args, arm, model, rec, None, tau_f, spec.torque_held)
         return _payload_only(args, arm, model, rec, tau_f)
     lim = arm.position_limits
     K = identifiable_subset(model, rec.used, lim[:, 0], lim[:, 1], np.random.default_rng(0))
+    model, profile = _coulomb_width(args, arm, model, rec, K, tau_f, spec.torque_held)
     prior_std = _prior_std(args.arm, model) if args.hold_unseen == "on" else None
-    fit = _fit_record(model, rec, K, tau_f, spec.torque_held, prior_std)
+    free = None if profile is None else profile.profiled
+    fit = _fit_record(model, rec, K, tau_f, spec.torque_held, prior_std, free)
     _print_fit(model, fit, names)
     _output_error(args, arm, model, rec, fit)
     cf = _consistent(model, fit)
@@ -265,11 +260,75 @@ def identify_log(args: argparse.Namespace, arm, outputs) -> int:
     )
     _write_estimates(outputs.path("estimates.csv"), model, fit)
     written = [outputs.path("estimates.csv"), outputs.path("torque_fit.png")]
-    written += _write_model(outputs, arm, model, rec, fit, cf, spec)
+    written += _write_model(outputs, arm, model, rec, fit, cf, spec, profile)
     if args.baseline:
         _payload_pair(args, arm, model, fit, tau_f, K)
     print("wrote " + ", ".join(str(Path(args.out) / Path(p).name) for p in written))
     return 0
+
+
+def _coulomb_width(args, arm, model, rec, K, tau_f: float, torque_held: bool):
+    """The identification model with the Coulomb width ``--coulomb-width`` asks for, printed, and the
+    :class:`~adaptive_dd.identification.friction_width.WidthProfile` when profiled (else None);
+    ``K`` None (``--payload-only``: no least squares to profile) refuses ``profile``."""
+    import dataclasses
+
+    from adaptive_dd.identification.friction_width import profile_coulomb_width
+
+    choice = args.coulomb_width
+    head = "Coulomb friction fitted as fc tanh(qd / v)"
+    if choice == "noise":
+        why = (
+            "the arm's friction_velocity (its law is tanh)"
+            if getattr(arm, "friction", "") == "tanh"
+            else "the width of the record's velocity noise (adaptive_dd.identification.friction_width)"
+        )
+        print(f"{head}, v = {model.friction_velocity:.3g} rad/s: {why}; --coulomb-width profile estimates it")
+        return model, None
+    if choice != "profile":
+        print(f"{head}, v = {choice:.3g} rad/s (--coulomb-width)")
+        return dataclasses.replace(model, friction_velocity=float(choice)), None
+    if K is None:
+        raise DataError(
+            "--coulomb-width profile: with --payload-only there is no least squares to profile; give a "
+            "width (--coulomb-width V) or leave the default (noise)"
+        )
+    try:
+        pr = profile_coulomb_width(
+            model,
+            rec.q,
+            rec.qd,
+            rec.tau,
+            rec.used,
+            K,
+            tau_f=tau_f,
+            sample_period=rec.sample_period,
+            channel_weight=rec.weight,
+            torque_held=torque_held,
+        )
+    except DataError as exc:
+        raise DataError(f"{rec.source}: {exc}") from None
+    names = arm.joint_names
+    print(
+        f"{head}, v per joint from the record's profile likelihood over {pr.grid.size} widths "
+        f"{pr.grid[0]:.2g}-{pr.grid[-1]:.2g} rad/s (95 % interval, N_eff {pr.n_eff:.0f}): "
+        + ", ".join(pr.describe(names))
+    )
+    rest = [names[j] for j in np.flatnonzero(~pr.profiled)]
+    if rest:
+        print(
+            f"  not profiled (Coulomb not fitted on their channel): {', '.join(rest)} at the record's "
+            f"velocity noise, {model.friction_velocity:.3g} rad/s"
+        )
+    return dataclasses.replace(model, friction_velocity=pr.width), pr
+
+
+def _arm_width(model, profile) -> float:
+    """[rad/s] The one width the identified arm is handed (``model.json``'s ``friction_velocity``,
+    :meth:`IdentifiedModel.arm`): the model's, or the median of the profiled joints' widths."""
+    if profile is None or not profile.profiled.any():
+        return float(np.median(model.friction_velocity))
+    return float(np.median(profile.width[profile.profiled]))
 
 
 def _write_estimates(path, model, fit) -> None:
@@ -283,7 +342,7 @@ def _write_estimates(path, model, fit) -> None:
             )
 
 
-def _write_model(outputs, arm, model, rec, fit, cf, spec) -> list:
+def _write_model(outputs, arm, model, rec, fit, cf, spec, profile=None) -> list:
     from adaptive_dd.identification.identified_model import IdentifiedModel, save_identified_model
     from adaptive_dd.identification.model_error import model_error_variance
     from adaptive_dd.plant.urdf_write import write_fitted_urdf
@@ -306,7 +365,7 @@ def _write_model(outputs, arm, model, rec, fit, cf, spec) -> list:
         gravity=arm.gravity.tolist(),
         repair_inertia=arm.repair_inertia,
         joint_names=list(arm.joint_names),
-        friction_velocity=float(model.friction_velocity),
+        friction_velocity=_arm_width(model, profile),
         names=list(model.names),
         sigma=fit.sigma.tolist(),
         sigma_urdf=model.sigma_ref.tolist(),
@@ -338,7 +397,10 @@ def _write_model(outputs, arm, model, rec, fit, cf, spec) -> list:
             "prior_scale": 1.0 if fit.held is None else float(np.sqrt(fit.held.scale2)),
             "prior_conflict": fit.held is not None and fit.held.conflict,
             "scenario": str(spec.source),
+            # the Coulomb widths' profile likelihood (identify --coulomb-width profile)
+            "coulomb_width_profile": None if profile is None else profile.as_dict(),
         },
+        coulomb_width=np.broadcast_to(model.friction_velocity, (n,)).tolist(),
     )
     out = [save_identified_model(outputs.path("model.json"), m)]
     return out + ([fitted] if fitted is not None else [])
@@ -390,9 +452,10 @@ def _prior_std(scenario: str, model):
     return base_prior_std(model, stated_levels(unc))
 
 
-def _fit_record(model, rec, K, tau_f: float, torque_held: bool, prior_std=None):
+def _fit_record(model, rec, K, tau_f: float, torque_held: bool, prior_std=None, width_estimated=None):
     """:func:`~adaptive_dd.identification.log_fit.fit_log` on a read record, the directions it cannot
-    see held at the URDF's values with ``prior_std`` (None: none held); its errors name the record."""
+    see held at the URDF's values with ``prior_std`` (None: none held), the Coulomb widths of the
+    joints ``width_estimated`` counted as estimated; its errors name the record."""
     from adaptive_dd.identification.log_fit import fit_log
 
     try:
@@ -409,6 +472,7 @@ def _fit_record(model, rec, K, tau_f: float, torque_held: bool, prior_std=None):
             torque_held=torque_held,
             prior_std=prior_std,
             hold=prior_std is not None,
+            width_estimated=width_estimated,
         )
     except DataError as exc:
         raise DataError(f"{rec.source}: {exc}") from None

@@ -121,11 +121,34 @@ def _add_arm_options(i: argparse.ArgumentParser) -> None:
         "see (the estimate's std along them above the prior's; default on; off: every direction estimated)",
     )
     i.add_argument(
+        "--coulomb-width",
+        type=coulomb_width_option,
+        default="noise",
+        metavar="noise|profile|V",
+        help="with --arm: the width v of the Coulomb law fc tanh(qd / v) [rad/s]. noise (default): the "
+        "record's velocity noise (the arm's friction_velocity if its law is tanh); profile: per fitted "
+        "joint, the width of the record's profile likelihood over a grid (printed with its 95 %% interval; "
+        "docs/real_log.md); V > 0: that width for every joint",
+    )
+    i.add_argument(
         "--output-error",
         choices=("auto", "on", "off"),
         default="auto",
         help="with --arm: refine by output error (auto: for records in the simulator's format only)",
     )
+
+
+def coulomb_width_option(text: str):
+    """``--coulomb-width``: ``"noise"``, ``"profile"`` or a width in (0, 10] rad/s (a float)."""
+    if text in ("noise", "profile"):
+        return text
+    try:
+        v = float(text)
+    except ValueError:
+        v = float("nan")
+    if not (0.0 < v <= 10.0):  # NaN and inf fail too
+        raise argparse.ArgumentTypeError(f"{text!r} is not 'noise', 'profile' or a width in (0, 10] rad/s")
+    return v
 
 
 TWO_LINK_OPTIONS = (
@@ -148,6 +171,7 @@ ARM_OPTIONS = (
     "--segment-length",
     "--max-iter",
     "--hold-unseen",
+    "--coulomb-width",
 )
 """Options of the identification of any arm from a log (:mod:`adaptive_dd.cli._identify_log`),
 refused on the paper's arm."""

@@ -46,7 +46,7 @@ class IdentifiedModel:
     repair_inertia : bool
     joint_names : list of str
     friction_velocity : float
-        ``v_f`` of the Coulomb law ``fc tanh(qd / v_f)`` [rad/s].
+        ``v_f`` of the Coulomb law ``fc tanh(qd / v_f)`` [rad/s] the arm is handed (:meth:`arm`).
     names : list of str
         Base parameter names.
     sigma, sigma_urdf, std : list of float
@@ -66,6 +66,10 @@ class IdentifiedModel:
         ``model.urdf`` beside the file.
     record : dict
         Source, window, sample period, tau_f, Newey-West lag.
+    coulomb_width : list of float or None
+        Per joint, the widths ``v_j`` of ``fc_j tanh(qd_j / v_j)`` the base parameters were
+        identified with [rad/s] (``identify --coulomb-width profile``: one per joint; None in files
+        written before it: ``friction_velocity`` for every joint). :meth:`predict` uses them.
     """
 
     urdf: str
@@ -90,6 +94,7 @@ class IdentifiedModel:
     consistent_distance: float | None
     fitted_urdf: str | None
     record: dict
+    coulomb_width: list | None = None
 
     def arm(self, fitted: bool = False):
         """The :class:`~adaptive_dd.plant.arm.Arm` (``fitted``: from ``model.urdf``)."""
@@ -118,6 +123,8 @@ class IdentifiedModel:
     def arm_model(self):
         """The :class:`~adaptive_dd.identification.model.Model` of :meth:`arm`, checked
         against the stored base parameter names."""
+        import dataclasses
+
         from adaptive_dd.identification.model import arm_model
 
         model = arm_model(self.arm())
@@ -126,7 +133,10 @@ class IdentifiedModel:
                 f"{self.urdf}: its base parameters ({model.p}) are not those of the model file "
                 f"({len(self.names)}): the URDF changed since the identification"
             )
-        return model
+        width = np.asarray(self.coulomb_width if self.coulomb_width is not None else [], dtype=float)
+        if width.size == 0 or np.all(width == model.friction_velocity):
+            return model  # one width for every joint: the arm's, a float
+        return dataclasses.replace(model, friction_velocity=width)
 
 
 def save_identified_model(path, model: IdentifiedModel) -> Path:
@@ -167,14 +177,15 @@ def load_identified_model(path) -> IdentifiedModel:
     if not isinstance(data, dict) or data.get("format") != FORMAT:
         raise DataError(f"{path}: key 'format' is not {FORMAT!r}: not a model written by identify --out")
     fields = IdentifiedModel.__dataclass_fields__
-    missing = [k for k in fields if k not in data]
+    optional = ("coulomb_width",)  # absent from files written before it
+    missing = [k for k in fields if k not in data and k not in optional]
     if missing:
         raise DataError(f"{path}: missing key(s) {missing}")
 
     def nan(x):
         return [np.nan if v is None else v for v in x]
 
-    kw = {k: data[k] for k in fields}
+    kw = {k: data[k] for k in fields if k in data}
     for k in ("residual_rms", "noise_rms"):
         kw[k] = nan(kw[k])
     p, n = len(kw["names"]), len(kw["joint_names"])
@@ -183,6 +194,11 @@ def load_identified_model(path) -> IdentifiedModel:
             raise DataError(f"{path}: key '{k}' has {len(kw[k])} entries, 'names' {p}")
     if np.shape(kw["covariance"]) != (p, p):
         raise DataError(f"{path}: key 'covariance' must be {p} x {p}")
+    width = kw.get("coulomb_width")
+    if width is not None and (
+        len(width) != n or not all(isinstance(v, (int, float)) and 0 < v < float("inf") for v in width)
+    ):
+        raise DataError(f"{path}: key 'coulomb_width' must be {n} widths > 0 [rad/s], got {width!r}")
     for k in ("used", "residual_rms", "noise_rms", "viscous", "coulomb", "armature"):
         if len(kw[k]) != n:
             raise DataError(f"{path}: key '{k}' has {len(kw[k])} entries, 'joint_names' {n}")

@@ -211,6 +211,7 @@ def fit_log(
     torque_held: bool = True,
     prior_std=None,
     hold: bool = True,
+    width_estimated=None,
 ) -> LogFit:
     """Weighted least squares of one log (module docstring).
 
@@ -237,6 +238,11 @@ def fit_log(
         Hold at the URDF's values the directions the record cannot see (module docstring of
         :mod:`~adaptive_dd.identification.held_directions`; ``False``: the plain weighted least
         squares, every direction estimated).
+    width_estimated : array_like of bool (n,), optional
+        Joints whose Coulomb width was estimated on this record
+        (:func:`~adaptive_dd.identification.friction_width.profile_coulomb_width`): the covariance
+        is that of the fit with those widths free too (:func:`_width_columns`), so the std of the
+        parameters that trade with a width (its joint's Coulomb level first) carries its uncertainty.
 
     Raises
     ------
@@ -252,7 +258,17 @@ def fit_log(
     phi, y = _identified_regression(model, reg, used, K, weak_ok=hold)
     cw = np.ones(model.n) if channel_weight is None else np.asarray(channel_weight, dtype=float)
     x, res, w, scale = _reweighted_fit(phi, y, cw[used])
-    cov_k, lag = _newey_west(phi, res, w, scale)
+    if width_estimated is not None and np.any(width_estimated):
+        extra = _width_columns(
+            model, qd, reg, sample_period, used, K, x, np.asarray(width_estimated, dtype=bool)
+        )
+        aug = np.concatenate([phi, extra], axis=2)
+        scale_aug = np.linalg.norm((aug * w[None, :, None]).reshape(-1, aug.shape[2]), axis=0)
+        scale_aug = np.where(scale_aug > 0, scale_aug, 1.0)
+        cov_aug, lag = _newey_west(aug, res, w, scale_aug)
+        cov_k = cov_aug[: phi.shape[2], : phi.shape[2]]
+    else:
+        cov_k, lag = _newey_west(phi, res, w, scale)
     sigma, cov, residual, weights = _in_full(model, K, used, x, cov_k, res, w)
     held = None
     if hold:
@@ -293,6 +309,28 @@ def _identified_regression(
         )
     check_excitation(phi, names, weak_ok=weak_ok)
     return phi, y
+
+
+def _width_columns(model: Model, qd: Array, reg, sample_period: float, used, K, x: Array, free) -> Array:
+    """``(N', m, e)``: the regression's columns of the log-widths of the joints ``free`` at the
+    estimate ``x``, ``fc_j d tanh(qd_j / v_j) / d log v_j = -fc_j (qd_j / v_j) sech^2(qd_j / v_j)``
+    filtered by ``G0`` in joint j's channel (zero where the joint's Coulomb is not fitted)."""
+    from adaptive_dd.identification.friction_width import coulomb_index
+
+    n = model.n
+    v = np.broadcast_to(np.asarray(model.friction_velocity, dtype=float), (n,))
+    u = np.asarray(qd, dtype=float) / v
+    d = -u / np.cosh(np.clip(u, -350, 350)) ** 2
+    bank = design_filter_bank("M2", reg.tau_f, sample_period)
+    fd = filter_record(bank, d, axis=0, initial=d[0])[..., 0][reg.start :]
+    col = np.cumsum(K) - 1
+    kept = np.flatnonzero(used)
+    index = coulomb_index(model)
+    joints = [j for j in np.flatnonzero(free) if j in index and used[j] and K[index[j]]]
+    out = np.zeros((fd.shape[0], kept.size, len(joints)))
+    for e, j in enumerate(joints):
+        out[:, int(np.flatnonzero(kept == j)[0]), e] = x[col[index[j]]] * fd[:, j]
+    return out
 
 
 def _in_full(model: Model, K, used, x: Array, cov_k: Array, res: Array, w: Array):
