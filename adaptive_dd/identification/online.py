@@ -636,6 +636,15 @@ def whitening_noise(arm: Arm) -> Array:
     return sv / float(np.max(m0))
 
 
+def _detector_velocity_variance(arm: Arm) -> Array:
+    """The sensor's velocity noise variance per joint [(rad/s)^2] the detector weighs the rows'
+    noise by (``EstCfg.vdet``); all equal when the arm states none."""
+    v = np.asarray(arm.sensor.velocity_variance, dtype=float) * np.ones(arm.n_joints)
+    if not (np.all(np.isfinite(v)) and v.max() > 0.0):
+        v = np.ones(arm.n_joints)
+    return np.maximum(v, 1e-6 * v.max())
+
+
 @lru_cache(maxsize=32)
 def _bank(tau_f: float, sample_period: float) -> FilterBank:
     return design_filter_bank("M2", tau_f, sample_period)
@@ -809,6 +818,7 @@ def _pack(cfg: OnlineConfig, arm: Arm) -> tuple[EstCfg, Array]:
         ints=ints,
         floats=fl,
         vn=c(whitening_noise(arm) if cfg.whiten else np.zeros(0)),
+        vdet=c(_detector_velocity_variance(arm)),
     ), P0
 
 
@@ -885,6 +895,8 @@ def est_init(
         since_crawl=np.zeros((m, n), dtype=np.int64),
         hold=np.zeros((m, n)),
         held=np.zeros((m, n), dtype=np.int64),
+        ref_pay=np.zeros((m, 10)),
+        ref_rise=np.ones((m, n)),
     )
     return c, state
 
