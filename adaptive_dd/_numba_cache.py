@@ -322,7 +322,7 @@ READY = "ready"
 
 class Compiling:
     """Two processes compiling at once on a cold cache (an N-joint arm read from a scenario file):
-    this one compiles the estimator's step (:func:`~adaptive_dd.closed_loop.glue.compile_estimator`)
+    this one compiles the estimator's step (:func:`~adaptive_dd.closed_loop.chain_choices.compile_estimator`)
     while a second (:func:`adaptive_dd.closed_loop.precompile.second_process`) compiles the plant's
     step and the law's pieces; this one then compiles the closed loop, loading those from the
     cache, while the second compiles the report's kernels. numba's cache is shared by processes

@@ -13,8 +13,8 @@ On a cold cache ``adaptive-dd benchmark`` on an N-joint arm compiles in two proc
   the cache, ``P2READY``; its imports and its loading of the scenario included, which here
   compiles the scenario's kernels too: the benchmark's own second process finds them cached,
   its first process having loaded the scenario before starting it) and at its end (``P2END``);
-* ``P1a``: the first process's estimator step (:func:`~adaptive_dd.closed_loop.glue.compile_estimator`),
-  run meanwhile;
+* ``P1a``: the first process's estimator step
+  (:func:`~adaptive_dd.closed_loop.chain_choices.compile_estimator`), run meanwhile;
 * ``P1b``: after both, the benchmark itself in this process (``--seeds 2``): the closed loop's
   compilation and any kernel it compiled that the phases before did not leave in the cache
   (nested compilations over 0.3 CPU s listed), then numba's pass times (wall s) of the loop.

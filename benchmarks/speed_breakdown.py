@@ -31,7 +31,7 @@ from adaptive_dd.closed_loop.glue import segment_of
 from adaptive_dd.closed_loop.laws import OBS_ROWS, law_trial_in, law_work, observe_applied
 from adaptive_dd.closed_loop.plant import plant_scratch, plant_step
 from adaptive_dd.identification import online_kernel as K
-from adaptive_dd.plant import integrator as SI
+from adaptive_dd.plant import chain_rk4 as SI
 
 
 def _scenario():

@@ -1,7 +1,7 @@
 """Prototype (offline): the momentum test against the residual's own recent rate instead of its
 1 s mean. Replays records saved by ``studies/momentum_fa_trace.py --save`` (adaptive_ct's own
 closed loop: ``rho``, ``M``, the model's Coulomb friction, the measured speeds) through the shipped
-test's arithmetic (windows, whitening, the friction allowances of ``laws._friction_allowance``,
+test's arithmetic (windows, whitening, the friction allowances of ``residual_observer._friction_allowance``,
 levels learnt on windows without allowance) with one change: a window's sum ``S_w = E_k -
 E_(k-w)`` less ``w / L`` times the sum over the ``L`` samples before it (``--ref L``; 0: less ``w``
 times the 1 s mean, the shipped test). A payload's step is the same in both; a friction error that
@@ -18,7 +18,7 @@ import numpy as np
 from numba import njit
 from scipy.stats import chi2, norm
 
-from adaptive_dd.closed_loop.laws import M_WINDOWS
+from adaptive_dd.closed_loop.residual_observer import M_WINDOWS
 
 
 @njit(cache=True)

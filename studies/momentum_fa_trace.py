@@ -6,7 +6,7 @@ crossing, so the first false crossing is the one ``"reopen"`` would raise) on th
 sample the observer's residual ``rho`` of the model the law uses, the same with each trial's true
 plant (``rho_true``: what the plant's own model error leaves out of it), ``M(q)``, the model's and
 the plant's Coulomb friction, the measured and the reference velocity. Then replays the shipped
-:func:`adaptive_dd.closed_loop.laws._momentum_test` sample by sample (its compiled form, the
+:func:`adaptive_dd.closed_loop.residual_observer._momentum_test` sample by sample (its compiled form, the
 law's own settings) and, at each crossing outside the swaps' first second, prints the window
 that crossed, each row's share of the statistic, each joint's measured / reference speed, and
 the window's mean of ``rho - rho_true`` per row (the model's error) against the model's Coulomb
@@ -30,6 +30,7 @@ from momentum_prototype import _mass, _rho
 from adaptive_dd.benchmark.runner import run_benchmark
 from adaptive_dd.benchmark.scenario import parse_scenario, read_toml
 from adaptive_dd.closed_loop import laws
+from adaptive_dd.closed_loop import residual_observer as ro
 from adaptive_dd.closed_loop.runner import make_controllers
 
 
@@ -103,32 +104,32 @@ def replay(cfg, rho, mass, fc, qd, on_cross, last=True):
     """The shipped test over one trial's record; ``on_cross(k, obs, mt)`` at each crossing (the
     state after the update)."""
     K, n = rho.shape
-    obs = np.zeros((laws.OBS_ROWS, n))
+    obs = np.zeros((ro.OBS_ROWS, n))
     mt = np.zeros((n + 4, n))
     for k in range(K):
         if not np.isfinite(mass[k, 0, 0]) or mass[k, 0, 0] == 0.0:
             continue
         mt[:n] = np.linalg.inv(mass[k])
         mt[n], mt[n + 1] = rho[k], np.abs(fc[k])
-        obs[laws.O_QD] = qd[k - 1] if k and last else qd[k]  # the last measurement (the allowance reads both)
+        obs[ro.O_QD] = qd[k - 1] if k and last else qd[k]  # the last measurement (the allowance reads both)
         pre = obs.copy()
-        laws._momentum_test(cfg, obs, mt, np.ascontiguousarray(qd[k]), 1.0)
-        if obs[laws.O_MC, 1] > 0.0:
+        ro._momentum_test(cfg, obs, mt, np.ascontiguousarray(qd[k]), 1.0)
+        if obs[ro.O_MC, 1] > 0.0:
             on_cross(k, pre, obs, mt.copy())
 
 
 def explain(cfg, k, pre, obs, mt, r, s, T, n):
     """The window that crossed, each row's share, speeds, the model's error per row."""
-    c = obs[laws.O_MC, 0]
-    pos = int(c - 1) % laws.M_RING
+    c = obs[ro.O_MC, 0]
+    pos = int(c - 1) % ro.M_RING
     bias = 1.0 - (1.0 - cfg.obs_alpha) ** c
     best, bw, bu = 0.0, 0, None
-    for w, mw in enumerate(laws.M_WINDOWS):
-        back = (pos + laws.M_RING - mw) % laws.M_RING
-        sm = obs[laws.O_ME + pos] - obs[laws.O_ME + back]
+    for w, mw in enumerate(ro.M_WINDOWS):
+        back = (pos + ro.M_RING - mw) % ro.M_RING
+        sm = obs[ro.O_ME + pos] - obs[ro.O_ME + back]
         u = mt[:n] @ sm
-        al = obs[laws.O_MA + pos] - obs[laws.O_MA + back]
-        v = pre[laws.O_MV + w]
+        al = obs[ro.O_MA + pos] - obs[ro.O_MA + back]
+        v = pre[ro.O_MV + w]
         tot = np.sum(u * u * bias / v)
         if tot > best:
             best, bw, bu, bal = tot, mw, u * u * bias / v, al

@@ -2,7 +2,7 @@
 
 Records adaptive_ct's closed loop (Python path, its command unchanged) with, per sample and trial,
 the observer's per-sample residual ``rho = tau - (p_now - p_last) / T - (wv_last + wv_now) / 2``
-of the model the law uses at that sample (``laws._observe``'s ``rho``, one sample summed), then
+of the model the law uses at that sample (``residual_observer._observe``'s ``rho``, one sample summed), then
 replays tests on it offline and prints each test's delay after every swap against the alarm of
 adaptive_ct's detector, and its alarms outside the swaps' windows (false alarms).
 

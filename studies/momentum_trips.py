@@ -21,7 +21,7 @@ from _ablation import Delegating
 from adaptive_dd.benchmark.metrics import FALSE_ALARM_WINDOW
 from adaptive_dd.benchmark.runner import run_benchmark
 from adaptive_dd.benchmark.scenario import parse_scenario, read_toml
-from adaptive_dd.closed_loop.laws import O_TRIP
+from adaptive_dd.closed_loop.residual_observer import O_TRIP
 from adaptive_dd.closed_loop.runner import make_controllers
 
 

@@ -18,7 +18,7 @@ import numpy as np
 
 from adaptive_dd.benchmark.runner import run_benchmark
 from adaptive_dd.benchmark.scenario import parse_scenario, read_toml
-from adaptive_dd.closed_loop.laws import O_COUNT, O_LEVEL, O_R
+from adaptive_dd.closed_loop.residual_observer import O_COUNT, O_LEVEL, O_R
 from adaptive_dd.controllers.adaptive import AdaptiveCT
 
 

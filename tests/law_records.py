@@ -7,7 +7,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from adaptive_dd.closed_loop.laws import O_TRIP, LawState, law_trial, model_torque, observe_applied
+from adaptive_dd.closed_loop.laws import LawState, law_trial, model_torque, observe_applied
+from adaptive_dd.closed_loop.residual_observer import O_TRIP
 
 
 def law_on_sines(cfg, arm, seed, N, T, sigma_v, w, k_swap, pi_after, step=None) -> np.ndarray:

@@ -18,6 +18,9 @@ import pytest
 
 from adaptive_dd.benchmark.scenario import load_scenario, parse_scenario
 from adaptive_dd.plant import chain as C
+from adaptive_dd.plant import chain_dynamics as CD
+from adaptive_dd.plant import chain_regressor as CR
+from adaptive_dd.plant import chain_rk4 as RK
 from adaptive_dd.plant import integrator as S
 
 
@@ -54,7 +57,7 @@ def test_the_integrator_step_compiles_once_per_friction_law_family():
         q, qd, stuck = np.full(n, 0.3), np.zeros(n), np.zeros(n, dtype=bool)
         for _ in range(3):  # from rest: the stick-slip law decides modes and steps to crossings
             assert S.plant_step(ch, pp, q, qd, np.ones(n), 1e-3, 2, stuck)
-    assert len(_specialisations(S._rk4)) == 2, _specialisations(S._rk4)
+    assert len(_specialisations(RK._rk4)) == 2, _specialisations(RK._rk4)
 
 
 def test_the_chain_kernels_compile_once_for_every_caller(rng):
@@ -74,8 +77,8 @@ def test_the_chain_kernels_compile_once_for_every_caller(rng):
     C.rnea_body_regressor_in(ch, pi, 2, q[0].copy(), qd[0], qdd[0], w, a, np.empty(n), out)
     C.mass_matrix_in(ch, pi, q[0].copy(), w, np.empty((n, n)))
     for kernel in (
-        C._torque, C._body_force, C._ref_motion, C._local_regressor, C._columns_from_motion,
-        C._regressor_blocks, C._regressor_blocks_in,
+        CD._torque, CD._body_force, CD._ref_motion, CR._local_regressor, CR._columns_from_motion,
+        CR._regressor_blocks, CR._regressor_blocks_in,
     ):  # fmt: skip
         assert len(_specialisations(kernel)) == 1, (kernel.__name__, _specialisations(kernel))
 
@@ -102,7 +105,7 @@ def test_the_two_link_sample_loop_compiles_once_for_every_law():
 
 def test_a_short_run_compiles_the_n_joint_loop_once_for_every_law():
     """A short UR5 run of ``pd`` and ``adaptive_ct``: one loop for both (``pd`` carries an inactive
-    estimator, :class:`~adaptive_dd.closed_loop.glue.ChainEstimator`), the stick-slip ``_rk4``
+    estimator, :class:`~adaptive_dd.closed_loop.chain_choices.ChainEstimator`), the stick-slip ``_rk4``
     once (on a constant law: with the law a runtime value ct_oracle ran at 78 simulated s per CPU s
     against 98). The second process of a cold-cache run compiles the plant's integrator alone
     (``precompile.plant_kernels``, run here first): the loop calls it with the same argument
@@ -118,8 +121,8 @@ def test_a_short_run_compiles_the_n_joint_loop_once_for_every_law():
     assert list(res.runs) == ["pd", "adaptive_ct"]
     loops = _of_arm(_specialisations(glue.chain_loop_block), two_link=False)
     assert len(loops) == 1, loops
-    assert len([s for s in _specialisations(S._rk4) if "Literal[int](0)" in s]) == 1
-    assert len(_specialisations(S._stick_slip)) == 1, _specialisations(S._stick_slip)
+    assert len([s for s in _specialisations(RK._rk4) if "Literal[int](0)" in s]) == 1
+    assert len(_specialisations(RK._stick_slip)) == 1, _specialisations(RK._stick_slip)
 
 
 def test_the_friction_law_as_a_record_compiles_its_family_alone():

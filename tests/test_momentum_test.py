@@ -1,4 +1,4 @@
-"""adaptive_ct's momentum test (:func:`adaptive_dd.closed_loop.laws._momentum_test`, the option
+"""adaptive_ct's momentum test (:func:`adaptive_dd.closed_loop.residual_observer._momentum_test`, the option
 ``observer_momentum_test``): on records with a planted change it starts the boost within a few
 samples, on records without one it does not, and its threshold is the derived one."""
 
@@ -151,7 +151,7 @@ SICE_FC = np.array([3.208, 0.743])  # [N m] Coulomb friction, Table 1
 
 
 def _reversing(cfg, seed, told_last=True, step=None, k_step=3202, N=4000, stribeck=False):
-    """The test alone (:func:`laws._momentum_test`) on the residual of the paper's arm whose joint 1
+    """The test alone (``residual_observer._momentum_test``) on the residual of the paper's arm whose joint 1
     reverses every 0.5 s and sticks near each reversal (true speed below 0.1 rad/s held at 0,
     its friction then a holding torque drawn within +-fc: it stops from and breaks away to 0.1
     rad/s within a sample), joint 2 moving at 0.5 rad/s; the model
@@ -163,7 +163,7 @@ def _reversing(cfg, seed, told_last=True, step=None, k_step=3202, N=4000, stribe
     ``told_last``:
     the test is given the sample's start (``obs[O_QD]``, as ``_observe`` gives it); False is a
     planted fault (it sees the sample's end alone). Per sample: whether it crossed."""
-    from adaptive_dd.closed_loop import laws
+    from adaptive_dd.closed_loop import residual_observer as ro
 
     rng = np.random.default_rng(seed)
     T, n, sig = 1e-3, 2, float(np.sqrt(5e-5))
@@ -184,7 +184,7 @@ def _reversing(cfg, seed, told_last=True, step=None, k_step=3202, N=4000, stribe
     qdm = v + noise
     f_model = SICE_FC * np.sign(qdm)
     minv = np.linalg.inv(SICE_M)
-    obs = np.zeros((laws.OBS_ROWS, n))
+    obs = np.zeros((ro.OBS_ROWS, n))
     mt = np.zeros((n + 4, n))
     crossed = np.zeros(N, dtype=bool)
     for k in range(1, N + 1):
@@ -193,9 +193,9 @@ def _reversing(cfg, seed, told_last=True, step=None, k_step=3202, N=4000, stribe
         if step is not None and k >= k_step:
             rho = rho + step
         mt[:n], mt[n], mt[n + 1] = minv, rho, SICE_FC
-        obs[laws.O_QD] = qdm[k - 1] if told_last else qdm[k]
-        laws._momentum_test(cfg, obs, mt, np.ascontiguousarray(qdm[k]), 1.0)
-        crossed[k - 1] = obs[laws.O_MC, 1] > 0.0
+        obs[ro.O_QD] = qdm[k - 1] if told_last else qdm[k]
+        ro._momentum_test(cfg, obs, mt, np.ascontiguousarray(qdm[k]), 1.0)
+        crossed[k - 1] = obs[ro.O_MC, 1] > 0.0
     return crossed
 
 

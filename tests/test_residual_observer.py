@@ -1,4 +1,4 @@
-"""adaptive_ct's residual observer (:mod:`adaptive_dd.closed_loop.laws`, ``_observe``): what it
+"""adaptive_ct's residual observer (:func:`adaptive_dd.closed_loop.residual_observer._observe`): what it
 estimates, what it feeds the command, what it buys after a payload change, and its settings."""
 
 from __future__ import annotations
@@ -11,7 +11,8 @@ import pytest
 from law_records import law_on_sines
 
 from adaptive_dd.benchmark.scenario import load_scenario, parse_scenario
-from adaptive_dd.closed_loop.laws import O_R, OBS_ROWS, law_trial, model_torque, observe_applied
+from adaptive_dd.closed_loop.laws import OBS_ROWS, law_trial, model_torque, observe_applied
+from adaptive_dd.closed_loop.residual_observer import O_R
 from adaptive_dd.closed_loop.runner import make_controllers, run_closed_loop
 from adaptive_dd.controllers import make_controller
 from adaptive_dd.errors import ParameterError
@@ -220,7 +221,8 @@ def test_the_observer_trips_the_boost_on_a_payload_not_on_noise():
 def test_a_trip_starts_the_boost_and_does_not_prolong_it():
     """With no alarm, a trip at this sample makes the next command carry the boost (the same as
     an alarm one sample ago); during a boost a residual beyond the trip does not restart it."""
-    from adaptive_dd.closed_loop.laws import O_COUNT, O_LEVEL, O_R, O_TRIP, LawState, law_batch
+    from adaptive_dd.closed_loop.laws import LawState, law_batch
+    from adaptive_dd.closed_loop.residual_observer import O_COUNT, O_LEVEL, O_TRIP
 
     sc = load_scenario(_shipped("vertical3_payload_exact"))
     arm, n, T = sc.arm, sc.arm.n_joints, sc.sample_period

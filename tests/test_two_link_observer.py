@@ -11,7 +11,7 @@ import pytest
 
 from adaptive_dd.benchmark.runner import run_benchmark
 from adaptive_dd.benchmark.scenario import load_scenario
-from adaptive_dd.closed_loop.laws import O_R, OBS_ROWS, observe_applied
+from adaptive_dd.closed_loop.residual_observer import O_R, OBS_ROWS, observe_applied
 from adaptive_dd.controllers import make_controller
 from adaptive_dd.controllers.two_link_observer import momentum_two_link, observe_batch
 from adaptive_dd.errors import ParameterError

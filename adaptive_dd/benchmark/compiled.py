@@ -53,7 +53,7 @@ Array = NDArray[np.float64]
 
 class OnlineKernelConfig(NamedTuple):
     """:attr:`TwoLinkOnlineConfig.packed
-    <adaptive_dd.identification.two_link_online.TwoLinkOnlineConfig.packed>` by name: ``ci, cf``
+    <adaptive_dd.identification.two_link_online_config.TwoLinkOnlineConfig.packed>` by name: ``ci, cf``
     integer and float settings, ``A, B, C, D`` the derivative filters' state space,
     ``d`` payload direction, ``group`` parameter groups, ``split_rows (2,)``; ``active``: the
     estimator runs (``adaptive_ct``; the other laws carry an unused one, so that the sample loop

@@ -94,7 +94,7 @@ class JointGains:
 class CompiledForm(NamedTuple):
     """What the compiled loop runs for one controller: the law, its per-trial state, the
     estimator's records ``ec, es`` (two arrays when it has none:
-    :func:`~adaptive_dd.closed_loop.glue.estimator_step` is chosen by their type) and whether
+    :func:`~adaptive_dd.closed_loop.choices.estimator_sample` is chosen by their type) and whether
     the trial's model is an estimate to record (``estimates``)."""
 
     cfg: LawConfig
@@ -393,10 +393,10 @@ def momentum_threshold(n_joints: int, sample_period: float) -> float:
     """The momentum test's threshold (``LawConfig.obs_mtest``): the square root of the chi-square
     quantile (``n`` degrees of freedom) at which white Gaussian noise at the learnt levels would
     cross with probability :data:`OBSERVER_TRIP_ALPHA` per minute, over the test's windows
-    (``laws.M_WINDOWS``) and samples (6.25 for 3 joints at 1 kHz, 7.05 for 7)."""
+    (``residual_observer.M_WINDOWS``) and samples (6.25 for 3 joints at 1 kHz, 7.05 for 7)."""
     from scipy.stats import chi2
 
-    from adaptive_dd.closed_loop.laws import M_WINDOWS
+    from adaptive_dd.closed_loop.residual_observer import M_WINDOWS
 
     tests = len(M_WINDOWS) * 60.0 / sample_period
     return float(np.sqrt(chi2.isf(OBSERVER_TRIP_ALPHA / tests, n_joints)))

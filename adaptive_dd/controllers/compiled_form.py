@@ -114,7 +114,7 @@ class TwoLinkGains(NamedTuple):
 
 class CompiledSpec(NamedTuple):
     """What the compiled loop needs of a controller: its law and gains, its estimator
-    (an :class:`~adaptive_dd.identification.two_link_online.TwoLinkOnlineConfig` at the run's
+    (an :class:`~adaptive_dd.identification.two_link_online_config.TwoLinkOnlineConfig` at the run's
     sample period, or None)."""
 
     gains: TwoLinkGains

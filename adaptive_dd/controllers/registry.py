@@ -14,10 +14,10 @@ Built-in settings:
     ``boost_bandwidth``, ``boost_duration``, ``observer``, ``observer_bandwidth``, ``observer_trip``,
     ``observer_momentum_test`` (N-joint arms),
     ``estimator = {...}`` (fields of
-    :class:`~adaptive_dd.identification.two_link_online.TwoLinkOnlineConfig`: ``tau_f``, ``split``,
+    :class:`~adaptive_dd.identification.two_link_online_config.TwoLinkOnlineConfig`: ``tau_f``, ``split``,
     ``construction``, ``p0_payload``, ``p0_j2``, ``project``, ``align``), ``detector = {...}``
-    (fields of :class:`~adaptive_dd.identification.two_link_online.ChangeDetector`; also accepted inside
-    ``estimator``, as on an N-joint arm), or ``detector = false`` for none.
+    (fields of :class:`~adaptive_dd.identification.two_link_online_config.ChangeDetector`; also
+    accepted inside ``estimator``, as on an N-joint arm), or ``detector = false`` for none.
 ``slotine_li``
     ``gamma`` (seven adaptation gains).
 ``ct_nominal``, ``pd``

@@ -1,13 +1,13 @@
 """The two-link ``adaptive_ct``'s residual observer: the N-joint observer's own code, on the paper's sigma.
 
 One definition for every arm (issue 27: the same controller name means the same thing on every
-arm): :func:`observe_trial` is :func:`adaptive_dd.closed_loop.laws._observe` itself (De Luca's
+arm): :func:`observe_trial` is :func:`adaptive_dd.closed_loop.residual_observer._observe` itself (De Luca's
 generalised-momentum observer in two stages, its output soft-thresholded at ``obs_kappa`` times
 its own learnt RMS level and added to the command; ``docs/change_detection.md``, "The residual
 observer"), compiled with the momentum of the paper's closed forms (:func:`momentum_two_link`) in
 place of the chain's. The settings are the N-joint defaults (``0.4 / T``, 3x, a 1 s level, 0.5 s
 of learning: :mod:`adaptive_dd.closed_loop.controllers`); the applied torques are summed by
-:func:`~adaptive_dd.closed_loop.laws.observe_applied`, as on an N-joint arm.
+:func:`~adaptive_dd.closed_loop.residual_observer.observe_applied`, as on an N-joint arm.
 
 The state is :attr:`OnlineState.obs <adaptive_dd.identification.two_link_online.OnlineState>`
 ``(S, OBS_ROWS, 2)``: the law's model is the estimator's ``sigma_model``, so the residual is
@@ -20,7 +20,7 @@ import numpy as np
 from numba import njit
 
 from adaptive_dd.closed_loop.glue import _bound
-from adaptive_dd.closed_loop.laws import _observe, observe_applied
+from adaptive_dd.closed_loop.residual_observer import _observe, observe_applied
 
 __all__ = [
     "momentum_two_link",
@@ -69,7 +69,7 @@ observe_trial = njit(inline="always")(
     _bound(_observe.py_func, _momentum=momentum_two_link, _mass=mass_two_link, _coulomb=coulomb_two_link)
 )
 """``observe_trial(0, cfg, sigma (7,), q, qd, obs (OBS_ROWS, 2), work, out (2,))``: one sample of
-the N-joint residual observer (:func:`adaptive_dd.closed_loop.laws._observe`, its code unchanged)
+the N-joint residual observer (:func:`adaptive_dd.closed_loop.residual_observer._observe`, its code unchanged)
 on the two-link model; ``cfg`` has the fields ``T, obs_a, obs_stages, obs_kappa, obs_alpha,
 obs_warmup`` (:class:`~adaptive_dd.controllers.compiled_form.TwoLinkGains`), ``work``
 :func:`observer_work`."""
@@ -108,6 +108,6 @@ def _applied_loop(obs, tau):  # pragma: no cover - compiled
 
 
 def observe_applied_batch(obs, tau) -> None:
-    """:func:`~adaptive_dd.closed_loop.laws.observe_applied` for every trial: ``tau (S, 2)`` applied
-    over the last sample added to ``obs (S, OBS_ROWS, 2)``."""
+    """:func:`~adaptive_dd.closed_loop.residual_observer.observe_applied` for every trial: ``tau (S, 2)``
+    applied over the last sample added to ``obs (S, OBS_ROWS, 2)``."""
     _applied_loop(obs, np.ascontiguousarray(tau, dtype=float))

@@ -15,7 +15,7 @@ the discrete dynamics linearised along the recorded trajectory::
     S_{k+1} = F_k S_k + G_k,    F_k = d Phi / d x,  G_k = d Phi / d s,  S_{k_s} = 0,
 
 with ``Phi`` one sample of the arm's dynamics under the recorded torque (RK4 substeps over
-:func:`~adaptive_dd.plant.chain.forward_dynamics`, armature and viscous and Coulomb friction,
+:func:`~adaptive_dd.plant.chain_dynamics.forward_dynamics`, armature and viscous and Coulomb friction,
 the sign of each joint's speed held over the sample), ``F, G`` by central differences. The GLR
 detects with probability ``prob`` once ``sqrt(lambda) >= z_(1 - alpha / 2) + z_prob``,
 ``alpha = rate / n_tests`` (:func:`~adaptive_dd.identification.two_link_detection_limit.detection_threshold`).

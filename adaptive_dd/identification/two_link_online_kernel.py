@@ -410,7 +410,7 @@ def _detect(i, eps, act, rest, phi_d, u, th, short, long, cnt, ci, cf, A, B, C, 
        explained fraction, with ``psi = phi d`` (long after a change the post-onset regressor
        is the whole one), after ``persist_min`` samples. A model left wrong along d (a swap
        masked by an alarm, levels learned on a wrong model) raises an alarm within
-       :func:`~adaptive_dd.identification.two_link_online.rearm_time` of motion.
+       :func:`~adaptive_dd.identification.two_link_online_config.rearm_time` of motion.
     3. The paper's construction (no GLR): the short average of ``e_j^2`` above ``threshold^2``
        times the level (``slow_factor`` more while the other joint is slow), after
        ``min_learned`` learned samples, gated as 2. over the direction window.

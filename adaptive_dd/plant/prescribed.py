@@ -1,7 +1,7 @@
 """Records of a serial arm on a prescribed motion (torques by inverse dynamics), for estimator tests.
 
 The joints follow a smooth sum of sines; the torque that produces that motion is
-computed exactly by the compiled RNEA (:func:`adaptive_dd.plant.chain.rnea_batch`)
+computed exactly by the compiled RNEA (:func:`adaptive_dd.plant.chain_batch.rnea_batch`)
 with friction ``fv qd + fc sgn(qd)``, armature and the payload of each segment; the
 measurements ``q, qd`` get the sensor's white noise. No integration is involved, so
 the record is exactly consistent with the model (the estimator's errors are its own).

@@ -1,0 +1,232 @@
+"""Compiled regressors of a serial chain: torques linear in the standard link parameters.
+
+The regressors write each body force (:func:`~adaptive_dd.plant.chain_dynamics.rnea`'s, or the
+Slotine-Li one of :func:`~adaptive_dd.plant.chain_dynamics.rnea_ref`) in its own joint frame,
+where it is linear in that link's ``pi`` (10 per link, :func:`~adaptive_dd.plant.chain.standard_parameters`),
+and project it on the joint axes of the links before it: :func:`regressor` and
+:func:`slotine_li_regressor` give all links' columns, ``body_*`` one link's in O(n) work, and
+:func:`momentum_form` the dynamics in momentum form ``tau = d/dt p + wv`` (no acceleration).
+A kernel ``*_in`` takes its scratch (``w = workspace(n)`` and a small array); the batch forms
+are in :mod:`adaptive_dd.plant.chain_batch`.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from adaptive_dd.plant.chain_dynamics import _body_force, _ref_motion, _torque, workspace
+from adaptive_dd.plant.spatial import apply_inertia, kinematics, motion_cross, to_local, world_inertia
+
+__all__ = [
+    "body_regressor",
+    "body_regressor_in",
+    "body_slotine_li_regressor",
+    "body_slotine_li_regressor_in",
+    "momentum_form",
+    "momentum_form_in",
+    "regressor",
+    "rnea_body_regressor_in",
+    "slotine_li_regressor",
+]
+
+
+@njit(cache=True)
+def _local_regressor(v, vr, ar, same, a, y, f, t1, t2):  # pragma: no cover - compiled
+    """a (6, 10): the body force of :func:`_body_force` per unit standard parameter (local frame)."""
+    for k in range(10):
+        y[k] = 0.0
+    for k in range(10):
+        y[k] = 1.0
+        _body_force(y, v, vr, ar, same, f, t1, t2)
+        for c in range(6):
+            a[c, k] = f[c]
+        y[k] = 0.0
+
+
+@njit(cache=True)
+def _regressor_blocks(ch, q, qd, qdr, qddr, same, j0, j1, out, col0):  # pragma: no cover - compiled
+    """Columns of links j0..j1-1 of the (Slotine-Li) regressor into out[:, col0 + 10 (j - j0) ...]."""
+    _regressor_blocks_in(
+        ch, q, qd, qdr, qddr, same, j0, j1, workspace(q.shape[0]), np.empty((6, 10)), out, col0
+    )
+
+
+@njit(cache=True)
+def _regressor_blocks_in(ch, q, qd, qdr, qddr, same, j0, j1, w, a, out, col0):  # pragma: no cover
+    """:func:`_regressor_blocks` with its scratch given: ``w = workspace(n)``, ``a (6, 10)``."""
+    rw, pw, s, v, _, vr, ar, _, small, _ = w
+    kinematics(ch, q, qd, rw, pw, s, v)
+    _ref_motion(ch, s, v, qdr, qddr, 1.0, vr, ar, small[0])
+    _columns_from_motion(same, j0, j1, w, a, out, col0)
+
+
+@njit(cache=True)
+def _columns_from_motion(same, j0, j1, w, a, out, col0):  # pragma: no cover - compiled
+    """The per-link part of :func:`_regressor_blocks_in`, its kinematics and reference motion
+    (``vr, ar``) already in the workspace ``w``."""
+    rw, pw, s, v, _, vr, ar, f, small, vec = w
+    n = s.shape[0]
+    y = vec[:10]
+    vl, vrl, arl = small[0], small[1], small[2]
+    sl = small[3]
+    for j in range(j0, j1):
+        to_local(rw[j], pw[j], v[j], vl)
+        to_local(rw[j], pw[j], vr[j], vrl)
+        to_local(rw[j], pw[j], ar[j], arl)
+        _local_regressor(vl, vrl, arl, same, a, y, f[0], small[4], small[5])
+        c0 = col0 + 10 * (j - j0)
+        for i in range(n):
+            if i > j:
+                for k in range(10):
+                    out[i, c0 + k] = 0.0
+                continue
+            to_local(rw[j], pw[j], s[i], sl)
+            for k in range(10):
+                acc = 0.0
+                for c in range(6):
+                    acc += sl[c] * a[c, k]
+                out[i, c0 + k] = acc
+
+
+@njit(cache=True)
+def regressor(ch, q, qd, qdd, out):  # pragma: no cover - compiled
+    """Joint torque regressor Y (n, 10 n) into out, ``Y @ pi == rnea``; == pin.computeJointTorqueRegressor."""
+    n = q.shape[0]
+    _regressor_blocks(ch, q, qd, qd, qdd, np.bool_(True), np.int64(0), n, out, 0)
+
+
+@njit(cache=True)
+def slotine_li_regressor(ch, q, qd, qdr, qddr, out):  # pragma: no cover - compiled
+    """Slotine-Li regressor (n, 10 n) into out, ``@ pi == rnea_ref(q, qd, qdr, qddr)``."""
+    n = q.shape[0]
+    _regressor_blocks(ch, q, qd, qdr, qddr, np.bool_(False), np.int64(0), n, out, 0)
+
+
+@njit(cache=True)
+def body_regressor(ch, j, q, qd, qdd, out):  # pragma: no cover - compiled
+    """Columns of link j (0-based) of :func:`regressor`, out (n, 10), O(n) work."""
+    _regressor_blocks(ch, q, qd, qd, qdd, np.bool_(True), j, j + 1, out, 0)
+
+
+@njit(cache=True)
+def body_slotine_li_regressor(ch, j, q, qd, qdr, qddr, out):  # pragma: no cover - compiled
+    """Columns of link j (0-based) of :func:`slotine_li_regressor`, out (n, 10), O(n) work."""
+    _regressor_blocks(ch, q, qd, qdr, qddr, np.bool_(False), j, j + 1, out, 0)
+
+
+@njit(cache=True)
+def body_regressor_in(ch, j, q, qd, qdd, w, a, out):  # pragma: no cover - compiled
+    """:func:`body_regressor` with its scratch given: ``w = workspace(n)``, ``a (6, 10)`` (no allocation)."""
+    _regressor_blocks_in(ch, q, qd, qd, qdd, np.bool_(True), j, j + 1, w, a, out, 0)
+
+
+@njit(cache=True)
+def rnea_body_regressor_in(ch, pi, j, q, qd, qdd, w, a, tau, y):  # pragma: no cover - compiled
+    """:func:`rnea_in` into ``tau (n,)`` and :func:`body_regressor_in` of link ``j`` into ``y (n, 10)``
+    at the same state, with the kinematics and the reference motion computed once (the same
+    numbers as the two calls); scratch as :func:`body_regressor_in`."""
+    kinematics(ch, q, qd, w[0], w[1], w[2], w[3])
+    world_inertia(pi, w[0], w[1], w[4])
+    _torque(ch, pi, q, qd, qd, qdd, 1.0, np.bool_(True), w, tau)  # leaves vr, ar at (qd, qdd) in w[5], w[6]
+    _columns_from_motion(np.bool_(True), j, j + 1, w, a, y, 0)
+
+
+@njit(cache=True)
+def body_slotine_li_regressor_in(ch, j, q, qd, qdr, qddr, w, a, out):  # pragma: no cover - compiled
+    """:func:`body_slotine_li_regressor` with its scratch given (as :func:`body_regressor_in`)."""
+    _regressor_blocks_in(ch, q, qd, qdr, qddr, np.bool_(False), j, j + 1, w, a, out, 0)
+
+
+@njit(cache=True)
+def momentum_form(ch, pi, j, q, qd, p, wv, py, wy):  # pragma: no cover - compiled
+    """The dynamics in momentum form, ``tau = d/dt p + wv``, without the acceleration.
+
+    ``p = M(q) qd`` (generalised momentum) and ``wv = g(q) - C(q, qd)^T qd`` (Pinocchio's
+    C, ``dM/dt = C + C^T``) of the links' standard parameters ``pi``, and the same two per
+    unit standard parameter of link ``j`` (about its joint frame, as
+    :func:`body_regressor`): ``py @ pi_j`` and ``wy @ pi_j``. Filtering both sides of
+    ``tau = d/dt p + wv`` with a filter F gives ``F tau = (s F) p + F wv`` exactly, the
+    regressor included: no acceleration and no equation error from evaluating the
+    regressor at filtered signals.
+
+    Parameters
+    ----------
+    ch : Chain
+    pi : ndarray, shape (10 n,)
+    j : int
+        Link (0-based) whose columns go to ``py, wy``.
+    q, qd : ndarray, shape (n,)
+    p, wv : ndarray, shape (n,)
+        Out [N m s], [N m].
+    py, wy : ndarray, shape (n, 10)
+        Out; rows after ``j`` are zero.
+    """
+    momentum_form_in(ch, pi, j, q, qd, workspace(q.shape[0]), np.empty((2, 6, 10)), p, wv, py, wy)
+
+
+@njit(cache=True)
+def momentum_form_in(ch, pi, j, q, qd, w, a, p, wv, py, wy):  # pragma: no cover - compiled
+    """:func:`momentum_form` with its scratch given: ``w = workspace(n)``, ``a (2, 6, 10)``."""
+    # world frame: S_i fixed in link i moves as dS_i/dt = v_i x S_i; the subtree momentum
+    # H_i = sum_{k>=i} I_k v_k has dH_i/dt = sum of the subtree's forces, so
+    # tau_i = S_i . (dH_i/dt + I_sub a_0) = d/dt (S_i . H_i) - (v_i x S_i) . H_i + S_i . I_sub a_0,
+    # a_0 = [-g; 0] the base acceleration that stands for gravity.
+    rw, pw, s, v, iw, _, _, _, small, vec = w
+    n = q.shape[0]
+    kinematics(ch, q, qd, rw, pw, s, v)
+    world_inertia(pi, rw, pw, iw)
+    ag, hs, gs, t, sl, tl = small[0], small[1], small[2], small[3], small[4], small[5]
+    for c in range(6):
+        hs[c] = 0.0
+        gs[c] = 0.0
+        ag[c] = 0.0
+    for c in range(3):
+        ag[c] = -ch.gravity[c]
+    for b in range(n - 1, -1, -1):
+        apply_inertia(iw[b], v[b], t)
+        for c in range(6):
+            hs[c] += t[c]
+        apply_inertia(iw[b], ag, t)
+        for c in range(6):
+            gs[c] += t[c]
+        motion_cross(v[b], s[b], t)
+        pb = 0.0
+        wb = 0.0
+        for c in range(6):
+            pb += s[b, c] * hs[c]
+            wb += s[b, c] * gs[c] - t[c] * hs[c]
+        p[b] = pb
+        wv[b] = wb
+    # link j per unit parameter, in its own frame: I v_j and I a_0 as (6, 10) maps
+    y = vec[:10]
+    to_local(rw[j], pw[j], v[j], sl)
+    to_local(rw[j], pw[j], ag, tl)
+    for k in range(10):
+        y[k] = 0.0
+    for k in range(10):
+        y[k] = 1.0
+        apply_inertia(y, sl, t)
+        for c in range(6):
+            a[0, c, k] = t[c]
+        apply_inertia(y, tl, t)
+        for c in range(6):
+            a[1, c, k] = t[c]
+        y[k] = 0.0
+    for i in range(n):
+        if i > j:
+            for k in range(10):
+                py[i, k] = 0.0
+                wy[i, k] = 0.0
+            continue
+        to_local(rw[j], pw[j], s[i], sl)
+        motion_cross(v[i], s[i], t)
+        to_local(rw[j], pw[j], t, tl)
+        for k in range(10):
+            acc_p = 0.0
+            acc_w = 0.0
+            for c in range(6):
+                acc_p += sl[c] * a[0, c, k]
+                acc_w += sl[c] * a[1, c, k] - tl[c] * a[0, c, k]
+            py[i, k] = acc_p
+            wy[i, k] = acc_w
