@@ -28,6 +28,8 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from adaptive_dd.identification.log_fit import coulomb_index
+
 __all__ = [
     "MIN_WIDTH",
     "WidthProfile",
@@ -78,8 +80,6 @@ def identification_model(arm, qd: Array):
     return dataclasses.replace(arm_model(arm), friction_velocity=v)
 
 
-COULOMB_STD_COLUMN = 11
-"""The Coulomb columns of the standard regressor start at ``11 n`` (links ``10 n``, viscous ``n``)."""
 PROFILE_GRID = np.geomspace(1e-4, 0.5, 38)
 """[rad/s] The widths the profile tries: ten a decade (26 % apart) from 1e-4 to 0.5 rad/s."""
 CHI2_95 = 3.841
@@ -131,13 +131,6 @@ class WidthProfile:
             "profiled": self.profiled.tolist(),
             "n_eff": self.n_eff,
         }
-
-
-def coulomb_index(model) -> dict[int, int]:
-    """``{joint: base column}`` of the joints whose Coulomb parameter is a base parameter alone."""
-    n = model.n
-    ind = [int(i) for i in np.asarray(model.independent)]
-    return {j: ind.index(COULOMB_STD_COLUMN * n + j) for j in range(n) if COULOMB_STD_COLUMN * n + j in ind}
 
 
 def coulomb_columns(qd: Array, width, tau_f: float, sample_period: float, start: int) -> Array:

@@ -61,6 +61,8 @@ __all__ = [
 ]
 
 Array = NDArray[np.float64]
+COULOMB_STD_COLUMN = 11
+"""The Coulomb columns of the standard regressor start at ``11 n`` (links ``10 n``, viscous ``n``)."""
 WEIGHT_FLOOR = 0.1
 """``s_j`` is at least this fraction of the median residual rms of the kept channels."""
 MODEL_ERROR_RATIO = 10.0
@@ -113,6 +115,13 @@ class LogFit:
         """``(joint, residual / noise)`` of the kept channels above :data:`MODEL_ERROR_RATIO`."""
         ratio = self.residual_rms / np.maximum(self.noise_rms, 1e-300)
         return [(int(j), float(ratio[j])) for j in np.flatnonzero(self.used) if ratio[j] > MODEL_ERROR_RATIO]
+
+
+def coulomb_index(model) -> dict[int, int]:
+    """``{joint: base column}`` of the joints whose Coulomb parameter is a base parameter alone."""
+    n = model.n
+    ind = [int(i) for i in np.asarray(model.independent)]
+    return {j: ind.index(COULOMB_STD_COLUMN * n + j) for j in range(n) if COULOMB_STD_COLUMN * n + j in ind}
 
 
 def filter_time_constant(sample_period: float) -> float:
@@ -315,8 +324,6 @@ def _width_columns(model: Model, qd: Array, reg, sample_period: float, used, K, 
     """``(N', m, e)``: the regression's columns of the log-widths of the joints ``free`` at the
     estimate ``x``, ``fc_j d tanh(qd_j / v_j) / d log v_j = -fc_j (qd_j / v_j) sech^2(qd_j / v_j)``
     filtered by ``G0`` in joint j's channel (zero where the joint's Coulomb is not fitted)."""
-    from adaptive_dd.identification.friction_width import coulomb_index
-
     n = model.n
     v = np.broadcast_to(np.asarray(model.friction_velocity, dtype=float), (n,))
     u = np.asarray(qd, dtype=float) / v
