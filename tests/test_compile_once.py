@@ -47,6 +47,7 @@ def _ur5(duration: float | None = None):
     return parse_scenario(data, "test.toml", name="ur5_tool_swap")
 
 
+@pytest.mark.slow  # compiles the smooth friction family's step: 26 s in a cold run
 def test_the_integrator_step_compiles_once_per_friction_law_family():
     """``_rk4`` (the integrator's largest kernel): one copy for the stick-slip law (its law a
     compile-time constant: faster), one for the smooth laws; not one more per call site."""

@@ -171,6 +171,7 @@ def test_validate_shows_a_handed_on_covariance_by_its_shape():
     assert line == "controllers.adaptive_ct = {'estimator': {'arm_prior_cov': <65 x 65 matrix>}}"
 
 
+@pytest.mark.slow  # the whitened rows (an option) on the 7-joint arm: 34 s in a cold run
 def test_whitened_rows_learn_the_first_moment_the_wrist_alone_sees_sooner():
     """The 2 kg body of the scenarios picked up along their reference (open loop, the sensor's
     noise): the payload's first moment along the flange's y axis (true 0), which the wrist's

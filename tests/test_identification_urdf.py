@@ -153,6 +153,7 @@ def test_sensitivities_match_finite_differences(arm3):
         np.testing.assert_allclose(Z[0, -1, :, col], fd, rtol=1e-2, atol=1e-2 * np.abs(fd).max())
 
 
+@pytest.mark.slow  # 10 s in a cold run
 def test_output_error_is_held_to_the_bound(arm3, model3):
     """Three seeds of a 2.5 s record: every parameter's error within 4 bounds; the bound's scale is right
     (the normalised errors' RMS is between 0.5 and 2)."""

@@ -176,6 +176,7 @@ def test_reproduces_the_two_link_plant_on_the_sice_arm(law):
         assert n_stuck > 50  # the torques do make joints stick: the mode logic was exercised
 
 
+@pytest.mark.slow  # compiles the batch plant step: 19 s in a cold run
 def test_batch_and_run_agree_with_the_step(rng):
     n, n_trials, n_samples = 3, 4, 50
     model = random_chain_model(n, rng)
