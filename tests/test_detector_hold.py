@@ -1,8 +1,8 @@
-"""The N-joint detector's hold (``Detector.hold_above``, ``hold_time``) and its learning gate
-(``learn_below``): an established level is held while a change rises, a level re-learning after
-an alarm is neither held nor frozen, and a hold runs out after the derived rise time
-(``docs/change_detection.md``, "Issue 28's gate round"). The detector alone on synthetic prior
-errors (``est_detect_trial``): a row's noise of unit RMS, then an error added to it."""
+"""The N-joint detector's hold (``Detector.hold_above``, ``hold_time``): an established level is
+held while a change rises, a level re-learning after an alarm is not held, and a hold runs out
+after the derived rise time (``docs/change_detection.md``, "Issue 28's gate round"). The detector
+alone on synthetic prior errors (``est_detect_trial``): a row's noise of unit RMS, then an error
+added to it."""
 
 import numpy as np
 import pytest
@@ -19,7 +19,7 @@ from adaptive_dd.identification.online import (
 from adaptive_dd.plant.arm import Arm
 from adaptive_dd.robots import ROBOTS, robot_urdf
 
-UNHELD = Detector(hold_above=0.0, learn_below=0.0)  # the detector of before the hold
+UNHELD = Detector(hold_above=0.0)  # the detector of before the hold
 
 
 @pytest.fixture(scope="module")
@@ -62,7 +62,7 @@ def test_the_hold_time_is_derived_from_the_filters_and_the_short_window(ur5):
     error at 95 % of its final value in the short average); half as many samples at 2 ms; a
     stated hold_time replaces it; bad values are named."""
     hold = Detector()
-    assert hold.hold_above == 0.5 and hold.hold_time is None and hold.learn_below == 0.0
+    assert hold.hold_above == 0.5 and hold.hold_time is None
     assert OnlineConfig(detector=hold).rise_samples == 94
     assert OnlineConfig(sample_period=2e-3, detector=hold).rise_samples == 47
     assert 94 < OnlineConfig(tau_f=0.02, detector=hold).rise_samples < 2 * 94
@@ -77,21 +77,20 @@ def test_the_hold_time_is_derived_from_the_filters_and_the_short_window(ur5):
 
 def test_an_established_level_is_held_while_a_change_rises(ur5):
     """An error rising over 150 ms to 6x a row's RMS level, after 2 s of its noise: the level
-    without hold or gate learns it as it rises (no alarm: the paper's arm's put-down at 15 s);
-    held (or frozen), the row alarms as the error passes the threshold (4x), within the rise."""
+    without a hold learns it as it rises (no alarm: the paper's arm's put-down at 15 s);
+    held, the row alarms as the error passes the threshold (4x), within the rise."""
     n, start = 3_000, 2_000
     added = _ramp(n, start, 150, 6.0)
     assert _replay(ur5, UNHELD, added)[0] == []
-    for det in (Detector(hold_above=0.5), Detector(hold_above=0.0, learn_below=0.5)):
-        alarms = _replay(ur5, det, added)[0]
-        assert len(alarms) == 1 and start + 60 <= alarms[0] <= start + 150, (det, alarms)
+    alarms = _replay(ur5, Detector(hold_above=0.5), added)[0]
+    assert len(alarms) == 1 and start + 60 <= alarms[0] <= start + 150, alarms
 
 
-def test_a_relearning_level_is_neither_held_nor_frozen(ur5):
+def test_a_relearning_level_is_not_held(ur5):
     """After an alarm a row's level re-learns from nothing. An error rising over 20 samples to 6x
     the noise from its 150th learned sample on: the level learns it (its short average over the
     level peaks above half the threshold, RMS, while the level has learned fewer than min_learned
-    samples) and no alarm follows. A hold or gate on that level, not yet established, would
+    samples) and no alarm follows. A hold on that level, not yet established, would
     judge the row against the level of before the error: an alarm once the row may alarm (200
     samples seen; the paper's arm, seed 2: a level frozen from its 20th sample after an alarm
     raised a false one)."""
@@ -99,7 +98,7 @@ def test_a_relearning_level_is_neither_held_nor_frozen(ur5):
     c, _ = est_init(OnlineConfig(detector=UNHELD), ur5, 1)
     learn_from = alarm_at + 1 + c.ints[K.I_RESUME]
     added = _ramp(n, learn_from + 150, 20, 6.0)
-    for det in (UNHELD, Detector(hold_above=0.5), Detector(hold_above=0.0, learn_below=0.5)):
+    for det in (UNHELD, Detector(hold_above=0.5)):
         alarms, ratio, learned = _replay(ur5, det, added, alarm_at=alarm_at)
         assert alarms == [], det
     # the record tests it: row 0 rose above half the threshold (RMS) over a level not established

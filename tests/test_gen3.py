@@ -169,34 +169,3 @@ def test_validate_shows_a_handed_on_covariance_by_its_shape():
     text = format_scenario(dataclasses.replace(sc, controller_options=opts))
     line = next(x for x in text.splitlines() if x.startswith("controllers.adaptive_ct"))
     assert line == "controllers.adaptive_ct = {'estimator': {'arm_prior_cov': <65 x 65 matrix>}}"
-
-
-@pytest.mark.slow  # the whitened rows (an option) on the 7-joint arm: 34 s in a cold run
-def test_whitened_rows_learn_the_first_moment_the_wrist_alone_sees_sooner():
-    """The 2 kg body of the scenarios picked up along their reference (open loop, the sensor's
-    noise): the payload's first moment along the flange's y axis (true 0), which the wrist's
-    rows separate from the x axis's only as joint 7 turns, 1.5 s after the pick-up. Rows
-    whitened by the noise they share through the inertia (``whiten = true``, the noise alone:
-    ``row_floor = "none"``): about 0.6 of the error with independent rows weighted by the torque
-    limits (``docs/any_arm.md``, "The Gen3's wrist"; the stated floor, the option's default, gives
-    back part of that gain: 0.83 on seed 0, "A floor on each row's error")."""
-    from adaptive_dd.identification.online import OnlineConfig, run_online
-    from adaptive_dd.plant.arm import payload_parameters
-    from adaptive_dd.plant.prescribed import prescribed_record
-
-    sc = load_scenario(SCENARIOS / "gen3_exact.toml")
-    T, N, S = sc.sample_period, 2_000, 500
-    t = 4.0 - S * T + np.arange(N) * T  # around the scenarios' pick-up at 4 s
-    pay = payload_parameters(2.0, [0.02, 0.0, 0.06], [0.004, 0.004, 0.0033, 0, 0, 0])
-    for seed in range(3):
-        rec = prescribed_record(
-            sc.arm, t, sc.reference.sample(t), [np.zeros(10), pay], [S], rng=np.random.default_rng(seed)
-        )
-        err = {}
-        for whiten in (False, True):
-            # the record's torques are at the samples
-            cfg = OnlineConfig(whiten=whiten, row_floor="none", align=False)
-            r = run_online(sc.arm, cfg, rec.q_meas, rec.qd_meas, rec.tau)
-            assert r.alarm_times()[0] and abs(r.alarm_times()[0][0] - S * T) < 0.02  # the pick-up
-            err[whiten] = abs(r.payload[0, S + 1_499, 2] - pay[2])
-        assert err[True] < 0.75 * err[False], (seed, err)

@@ -99,13 +99,15 @@ def test_a_planted_friction_error_is_learnt(arm):
 
 
 def test_without_the_prior_the_arm_is_not_learnt(arm):
-    """The same record, full mode with its default prior (1e-6 on every base parameter): the planted
-    friction stays mostly unlearnt (the prior is what lets the arm be learnt)."""
+    """The same record, mode "arm" with no stated uncertainty (only ``p0_arm``, 1e-6 on every base
+    parameter): the planted friction stays mostly unlearnt (the prior is what lets the arm be
+    learnt)."""
     n = arm.n_joints
     pi_plant = arm.pi.copy()
     pi_plant[10 * n] *= 1.5
     _, qm, qdm, tau = _record(arm, pi_plant, 3)
-    rec = run_online(arm, OnlineConfig(mode="full", detector=None), qm, qdm, tau)
+    none = ArmUncertainty(0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+    rec = run_online(arm, OnlineConfig(mode="arm", arm_uncertainty=none, detector=None), qm, qdm, tau)
     col = list(arm.base.independent).index(10 * n)
     assert abs(rec.theta[0, -1, col] - pi_plant[10 * n]) > 0.2 * (pi_plant[10 * n] - arm.pi[10 * n])
 
@@ -147,7 +149,7 @@ def test_prior_covariance_matches_the_draws(arm):
         ({"arm_uncertainty": {"com": -0.01}}, "ArmUncertainty.com"),
         ({"arm_uncertainty": {"masses": 0.1}}, "arm_uncertainty"),
         ({"arm_uncertainty": 0.1}, "arm_uncertainty must be a table"),
-        ({"mode": "full", "regression": "momentum"}, "regression"),
+        ({"mode": "arm", "regression": "exact"}, "regression"),
         ({"mode": "arm", "reset_payload": 1}, "reset_payload"),
     ],
 )
@@ -160,19 +162,20 @@ def test_the_arms_momentum_regression_is_exact(arm):
     """Noise-free record of the URDF's own arm (torques exact at the samples), the estimate held at
     the truth: mode "arm" (momentum form of every link, friction and armature columns) predicts
     the filtered torque to 1e-4 of the torque (the filters' discretisation; 0.0026 N m of 68 on
-    this record); the regressor at the filtered signals ("full" mode's) errs 37x more."""
+    this record); the regressor at the filtered signals (``regression = "signals"``) errs more
+    than 10x more."""
     (q, qd, _), _, _, tau = _record(arm, arm.pi, 4, n=3000)
     worst = {}
     frozen = ArmUncertainty(0.0, 0.0, 0.0, 0.0, 0.0, 0.0)  # the estimate held at the truth
-    for mode in ("arm", "full"):
+    for form in ("momentum", "signals"):
         cfg = OnlineConfig(
-            mode=mode, detector=None, selection=None, align=False, arm_uncertainty=frozen,
+            mode="arm", regression=form, detector=None, selection=None, align=False, arm_uncertainty=frozen,
             payload_mass_std=1e-9, row_weights=(1.0,) * arm.n_joints,
         )  # fmt: skip
         rec = run_online(arm, cfg, q, qd, tau)
-        worst[mode] = np.nanmax(np.abs(rec.eps[0, 300:]))  # after the filters' start-up
-    assert worst["arm"] < 1e-4 * np.max(np.abs(tau)), worst
-    assert worst["full"] > 10 * worst["arm"], worst
+        worst[form] = np.nanmax(np.abs(rec.eps[0, 300:]))  # after the filters' start-up
+    assert worst["momentum"] < 1e-4 * np.max(np.abs(tau)), worst
+    assert worst["signals"] > 10 * worst["momentum"], worst
 
 
 # ------------------------------------------------------------------ settings derived from the scenario

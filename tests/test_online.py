@@ -1,6 +1,6 @@
 """The N-joint online estimator (online): agreement with a numpy/Pinocchio pipeline,
 stepping vs whole record, payload identification across a swap on a UR5, detection once,
-no alarm at constant payload, re-arming after a false alarm, dropouts, projection, full mode."""
+no alarm at constant payload, re-arming after a false alarm, dropouts, projection."""
 
 import numpy as np
 import pinocchio as pin
@@ -75,7 +75,7 @@ def _com(p):
         ({"bound_radius": 0.0}, "bound_radius.*0.0"),
         ({"prior_radius": -0.05}, "prior_radius.*-0.05"),
         ({"regression": "exact"}, "regression.*'exact'"),
-        ({"mode": "full", "regression": "momentum"}, "'momentum' is implemented for mode 'payload' only"),
+        ({"mode": "full"}, "mode must be one of \\('payload', 'arm'\\), got 'full'"),
     ],
 )
 def test_bad_settings_name_the_field_and_value(kw, match):
@@ -236,7 +236,7 @@ def test_the_momentum_form_is_exact_and_forgets_the_old_payload_at_an_alarm(ur5,
     at the level of an estimate still converging (the signals form's equation error is 10-50x
     larger), and after a swap its filters restart, so the centre of mass is within 1 cm 100 ms
     after the swap (signals form: 6-68 mm on these seeds; with noise and more seeds:
-    ``studies/payload_settling.py``)."""
+    ``studies/payload_settling.py`` of commit d41702f)."""
     t = np.arange(2_000) * T
     rng = np.random.default_rng(seed)
     r = prescribed_record(ur5, t, exciting_motion(ur5, t, rng, offset=POSTURE), [PAY_A, PAY_B], [1_500])
@@ -253,12 +253,11 @@ def test_the_momentum_form_is_exact_and_forgets_the_old_payload_at_an_alarm(ur5,
     assert abs(rec.mass[0, 1_600] - PAY_B[0]) < 0.01 * PAY_B[0], rec.mass[0, 1_600]
 
 
-@pytest.mark.parametrize("mode", ["payload", "full"])
-def test_compiled_step_equals_a_numpy_pinocchio_pipeline(ur5, swap_record, mode):
+def test_compiled_step_equals_a_numpy_pinocchio_pipeline(ur5, swap_record):
     """Filters by scipy's lfilter, regressor by Pinocchio, RLS by rls_step: same estimate."""
     n = 400
     r = swap_record
-    cfg = OnlineConfig(mode=mode, align=False, selection=None, detector=None, max_trace=1e12,
+    cfg = OnlineConfig(align=False, selection=None, detector=None, max_trace=1e12,
                              lam0=0.999, mu=0.01, regression="signals", row_weights=(1.0,) * 6)  # fmt: skip
     rec = run_online(ur5, cfg, r.q_meas[:n], r.qd_meas[:n], r.tau[:n])
     bank = design_filter_bank("M2", cfg.tau_f, T)
@@ -267,15 +266,10 @@ def test_compiled_step_equals_a_numpy_pinocchio_pipeline(ur5, swap_record, mode)
     qf, qdf, qddf, tf, sf = f[0, ..., 0], f[1, ..., 0], f[1, ..., 1], f[2, ..., 0], f[3, ..., 0]
     W = ur5.standard_regressor(qf, qdf, qddf)  # (N, 6, 78), friction columns at G0 qd, G0 sgn(qd):
     W[..., 66:72] = np.eye(6) * sf[:, None, :]
-    if mode == "payload":
-        j = ur5.payload_joint
-        phi = W[..., 10 * j : 10 * j + 10] @ ur5.payload_map
-        y = tf - W @ ur5.pi
-        theta0 = np.zeros(10)
-    else:
-        phi = W[..., ur5.base.independent]
-        y = tf
-        theta0 = ur5.sigma
+    j = ur5.payload_joint
+    phi = W[..., 10 * j : 10 * j + 10] @ ur5.payload_map
+    y = tf - W @ ur5.pi
+    theta0 = np.zeros(10)
     _, s0 = est_init(cfg, ur5, 1)
     theta = _rls_rows(phi, y, theta0, s0.P[0], cfg)
     scale = np.maximum(np.abs(theta), 1e-3)
@@ -283,7 +277,7 @@ def test_compiled_step_equals_a_numpy_pinocchio_pipeline(ur5, swap_record, mode)
     assert np.max(np.abs(rec.theta[0, -1] - theta0) / scale) > 1e-3  # it did move
 
 
-@pytest.mark.parametrize("mode", ["payload", "full"])
+@pytest.mark.parametrize("mode", ["payload", "arm"])
 def test_stepping_equals_the_whole_record_bit_for_bit(ur5, mode):
     """Two trials, 1.6 s, a swap at 1.0 s (an alarm inside), a dropout: every output identical."""
     n = 1600
@@ -693,38 +687,6 @@ def test_the_prior_is_on_the_control_model_only_and_off_when_asked(ur5, swap_rec
     err_on = np.abs(runs[0.05, True][1][4:] - PAY_B[4:]).max()
     err_off = np.abs(runs[None, True][1][4:] - PAY_B[4:]).max()
     assert err_on < 0.5 * err_off, (err_on, err_off)
-
-
-# ------------------------------------------------------------------------------------ full mode
-def test_full_mode_recovers_the_base_parameters(ur5):
-    """From base parameters 30 % off, an exciting 20 s record: torques within 1 %, payload mass within 5 %."""
-    n = 20_000
-    t = np.arange(n) * T
-    rng = np.random.default_rng(3)
-    motion = exciting_motion(ur5, t, rng, offset=POSTURE, speed=0.6, frequency=(0.3, 1.5), n_terms=3)
-    pay = payload_parameters(1.5, [0.02, 0.0, 0.05], radius=0.05)
-    r = prescribed_record(ur5, t, motion, [pay], rng=rng)
-    truth = ur5.sigma + ur5.payload_basis @ pay
-    s0 = ur5.sigma * (1 + 0.3 * rng.standard_normal(ur5.base.count))
-    cfg = OnlineConfig(mode="full", p0_arm=1.0, detector=None, lam0=1.0)
-    rec = run_online(ur5, cfg, r.q_meas, r.qd_meas, r.tau, sigma_nominal=s0)
-    k = np.arange(0, n, 37)
-    W = ur5.regressor(r.q[k], r.qd[k], r.qdd[k]).reshape(-1, ur5.base.count)
-
-    def rel(x):
-        return np.linalg.norm(W @ (x - truth)) / np.linalg.norm(W @ truth)
-
-    assert rel(s0) > 0.1
-    assert rel(rec.theta[0, -1]) < 0.01, rel(rec.theta[0, -1])
-    assert abs(rec.mass[0, -1] - 1.5) < 0.05 * 1.5
-    # the control model: B pi_out equals theta with its payload part projected
-    c, s = est_init(cfg, ur5, 1, sigma_nominal=rec.theta[0, -1])
-    pi = np.empty(78)
-    est_model_trial(c, s, 0, pi)
-    p = np.empty(10)
-    est_payload_trial(c, s, 0, p)
-    raw = c.pbasis_pinv @ (s.theta[0] - c.sigma0)
-    assert np.allclose(ur5.base.B @ pi, s.theta[0] + c.pbasis @ (p - raw), rtol=0, atol=1e-9)
 
 
 # ------------------------------------------------------------------------ against the plant

@@ -96,12 +96,11 @@ def test_missing_scenario_file(tmp_path):
 
 
 def test_a_urdf_arm_s_sensors_carry_the_scenario_s_noise():
-    """What reads ``arm.sensor`` (the momentum test's near-rest speed, identification on the arm)
-    reads the ``[noise]`` the run draws, not the URDF arm's defaults (5e-5 (rad/s)^2): the paper's
+    """What reads ``arm.sensor`` (the detector's noise rise, identification on the arm) reads the
+    ``[noise]`` the run draws, not the URDF arm's defaults (5e-5 (rad/s)^2): the paper's
     arm drawn states 1e-4 for joint 2. Fails if parse_scenario keeps the URDF's sensors."""
     from adaptive_dd.benchmark.scenario import parse_scenario, read_toml
-    from adaptive_dd.closed_loop.controllers import momentum_slow_speed
-    from adaptive_dd.controllers.registry import scenario_controller
+    from adaptive_dd.identification.online import OnlineConfig, est_init
 
     src = default_scenario_path().parent / "ur5_tool_swap.toml"
     data = read_toml(src)
@@ -111,9 +110,8 @@ def test_a_urdf_arm_s_sensors_carry_the_scenario_s_noise():
     sc = parse_scenario(data, str(src))
     assert sc.arm.sensor.velocity_variance == (5e-5, 4e-4, 5e-5, 5e-5, 5e-5, 5e-5)
     assert sc.arm.sensor.position_variance == (1e-7,) * 6
-    _, ctrl = scenario_controller(sc, "adaptive_ct")
-    cfg = ctrl.law_config(sc.sample_period)
-    assert cfg.obs_mslow == pytest.approx(momentum_slow_speed(6, sc.sample_period, 0.02))
+    c, _ = est_init(OnlineConfig(sample_period=sc.sample_period), sc.arm, 1)
+    assert np.array_equal(c.vdet, vv)  # the detector's noise rise reads the stated noise
     root = Path(__file__).resolve().parents[1]
     drawn = load_scenario(root / "benchmarks" / "scenarios" / "sice_drawn.toml")
     assert drawn.arm.sensor.velocity_variance == tuple(drawn.velocity_variance) == (5e-5, 1e-4)

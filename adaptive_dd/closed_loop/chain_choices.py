@@ -30,7 +30,6 @@ from adaptive_dd.closed_loop.choices import (
     plant_work,
 )
 from adaptive_dd.closed_loop.laws import (
-    O_MC,
     OBS_ROWS,
     LawConfig,
     LawState,
@@ -42,7 +41,6 @@ from adaptive_dd.closed_loop.plant import plant_scratch, plant_step
 from adaptive_dd.closed_loop.types import Plant
 from adaptive_dd.identification.online_kernel import (
     EstCfg,
-    est_force_alarm_trial,
     est_model_trial_in,
     est_step_trial_in,
     est_work,
@@ -204,11 +202,6 @@ def online_sample(ec, es, ls, i, q, qd, tau, ew):  # pragma: no cover - compiled
     updated. A compiled function of its own, called by both paths: a cold-cache benchmark compiles
     it first, while a second process compiles the plant and the law (:func:`compile_estimator`)."""
     alarm = est_step_trial_in(ec, es, i, q, qd, tau, ew)
-    if ls.obs[i, O_MC, 1] >= 2.0:  # the law's momentum test started the boost and asks to re-open
-        ls.obs[i, O_MC, 1] = 1.0
-        if alarm == 0:
-            est_force_alarm_trial(ec, es, i)
-            alarm = 1
     if alarm == 1:
         ls.since_alarm[i] = 0
     else:

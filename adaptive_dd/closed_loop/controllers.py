@@ -154,7 +154,7 @@ class Law:
             payload_joint=int(self.arm.payload_joint), payload_map=np.ascontiguousarray(self.arm.payload_map),
             T=float(T), observer=False, obs_a=0.0, obs_stages=2, obs_kappa=OBSERVER_THRESHOLD,
             obs_alpha=1.0,
-            obs_warmup=0, obs_trip=0.0, obs_trip_speed=0.0,
+            obs_warmup=0,
         )  # fmt: skip
         base.update(kw)
         return LawConfig(**base)
@@ -359,49 +359,6 @@ OBSERVER_WARMUP = 0.5
 """[s] the observer learns its level this long before it feeds the command (the detector's warm-up)."""
 
 
-OBSERVER_TRIP_ALPHA = 0.01
-"""The observer's trip (``LawConfig.obs_trip``) is the two-sided Gaussian quantile at which a white
-residual at its learnt level would trip the boost with this probability per minute of motion,
-over the arm's rows and samples: ``z_(1 - alpha / (2 n 60 / T))`` (5.4 for 3 joints at 1 kHz, 5.6
-for 7). The residual is filtered (its samples correlated), so the bound is conservative for
-Gaussian noise; measured against 4, 5 and 6 (docs/change_detection.md, "The observer's trip")."""
-
-
-def observer_trip(n_joints: int, sample_period: float) -> float:
-    """The observer's trip threshold, in units of a row's learnt RMS level (:data:`OBSERVER_TRIP_ALPHA`)."""
-    from scipy.stats import norm
-
-    return float(norm.isf(OBSERVER_TRIP_ALPHA / (2.0 * n_joints * 60.0 / sample_period)))
-
-
-def momentum_slow_speed(n_joints: int, sample_period: float, velocity_sigma: float) -> float:
-    """[rad/s] The momentum test's near-rest speed (``LawConfig.obs_mslow``): the one-sided
-    Gaussian quantile of the stated velocity noise ``velocity_sigma`` [rad/s] at which a measured
-    speed has the true speed's sign wrong with probability :data:`OBSERVER_TRIP_ALPHA` per minute
-    over the arm's joints and samples, ``z_(1 - alpha / (n 60 / T)) sigma_v`` (5.2 sigma_v for two
-    joints at 1 kHz, 5.5 for seven). Below it a joint's Coulomb torque over a sample is not known
-    (``laws._friction_allowance``); a single such sample is worth tens of the test's noise on an arm
-    whose inertia is nearly singular (the paper's arm: ``(M^-1)_21`` = -55 kg^-1 m^-2 at ``q2`` = 0).
-    At 3 sigma_v the paper's arm crossed at joint 1's reversals in 7 of 10 trials
-    (docs/change_detection.md, "Why the momentum test crossed without a swap")."""
-    from scipy.stats import norm
-
-    return float(norm.isf(OBSERVER_TRIP_ALPHA / (n_joints * 60.0 / sample_period)) * velocity_sigma)
-
-
-def momentum_threshold(n_joints: int, sample_period: float) -> float:
-    """The momentum test's threshold (``LawConfig.obs_mtest``): the square root of the chi-square
-    quantile (``n`` degrees of freedom) at which white Gaussian noise at the learnt levels would
-    cross with probability :data:`OBSERVER_TRIP_ALPHA` per minute, over the test's windows
-    (``residual_observer.M_WINDOWS``) and samples (6.25 for 3 joints at 1 kHz, 7.05 for 7)."""
-    from scipy.stats import chi2
-
-    from adaptive_dd.closed_loop.residual_observer import M_WINDOWS
-
-    tests = len(M_WINDOWS) * 60.0 / sample_period
-    return float(np.sqrt(chi2.isf(OBSERVER_TRIP_ALPHA / tests, n_joints)))
-
-
 def observer_bandwidth(sample_period: float) -> float:
     """The residual observer's bandwidth [rad/s] for a sample period [s]: ``0.4 / T``."""
     return OBSERVER_POLE / sample_period
@@ -422,7 +379,7 @@ class AdaptiveCT(Law):
     and Panda scenarios' loaded segments were 1.09-1.16x their floor, with 1 s 1.03-1.07 (20
     seeds); the same boost on the true model (``ct_oracle_textbook`` told 1 ms late) stays at
     1.00-1.01x: high gains alone do not beat the floor, they pass more sensor noise
-    (``studies/boost_ablation.py``)."""
+    (``studies/boost_ablation.py`` of commit d41702f)."""
 
     name = "adaptive_ct"
     SETTINGS = frozenset(
@@ -434,8 +391,6 @@ class AdaptiveCT(Law):
             "detector",
             "observer",
             "observer_bandwidth",
-            "observer_trip",
-            "observer_momentum_test",
         }
     )
     BOOST_RAMP = 0.25
@@ -443,8 +398,8 @@ class AdaptiveCT(Law):
     linearly to none over this long (0: it ends at once). An abrupt end left a bump in the
     tracking error 1 s after each swap: adaptive_ct / ct_oracle in the window 0.9-2.6 s after
     each swap 1.08-1.14 on the UR5 and 1.11-1.17 on the Panda; ramped over 0.25 s, 0.98-1.03
-    and 1.00-1.03 (10 seeds, ``studies/boost_end.py``; docs/change_detection.md). A longer ramp
-    lowers the ratios further (1 s: 0.87-0.93, below the floor), but only by running gains above
+    and 1.00-1.03 (10 seeds, ``studies/boost_end.py`` of commit d41702f; docs/change_detection.md).
+    A longer ramp lowers the ratios further (1 s: 0.87-0.93, below the floor), but only by running gains above
     the oracle's for longer: the ramp is sized to remove the step, not to beat the floor."""
     BOOST_DURATION = 1.0
     """[s] default ``boost_duration``; the two-link ``adaptive_ct`` keeps 0.2 s on purpose (its
@@ -475,44 +430,18 @@ class AdaptiveCT(Law):
                 f"{self.boost_bandwidth!r}, {self.boost_duration!r}, {self.boost_ramp!r}"
             )
         self.observer, self.observer_bw = _observer_settings(self.name, self.settings)
-        self.observer_trip = self.settings.get("observer_trip", False)
-        if not isinstance(self.observer_trip, bool | np.bool_):
-            raise ParameterError(
-                f"controllers.{self.name}.observer_trip: true or false (the observer's residual may "
-                f"start the boost), got {self.observer_trip!r}"
-            )
-        self.momentum_test = self.settings.get("observer_momentum_test", False)
-        if not (isinstance(self.momentum_test, bool | np.bool_) or self.momentum_test == "reopen"):
-            raise ParameterError(
-                f"controllers.{self.name}.observer_momentum_test: true (the momentum test may start "
-                f'the boost), "reopen" (and re-open the estimator, as an alarm) or false, got '
-                f"{self.momentum_test!r}"
-            )
-        if self.momentum_test and not self.observer:
-            raise ParameterError(
-                f"controllers.{self.name}.observer_momentum_test: the momentum test runs in the "
-                "residual observer; it needs observer = true"
-            )
 
     def law_config(self, sample_period):
         w, wb, z = self.gains.bandwidth, self.boost_bandwidth, self.gains.damping
         wb = np.maximum(wb, w)
         T = float(sample_period)
         beta = self.observer_bw if self.observer_bw is not None else observer_bandwidth(T)
-        det = self.online.detector or self._est.Detector()
-        sigma_v = float(np.sqrt(np.max(self.arm.sensor.velocity_variance)))
         return self._config(
             sample_period, KIND_CT, MODEL_TRIAL, boost_kp=wb**2 - w**2, boost_kd=2.0 * z * (wb - w),
             boost_samples=round(self.boost_duration / sample_period),
             boost_ramp=round(self.boost_ramp / sample_period), observer=self.observer,
             obs_a=float(np.exp(-beta * T)), obs_alpha=min(1.0, T / OBSERVER_LEVEL_WINDOW),
             obs_warmup=round(OBSERVER_WARMUP / T),
-            obs_trip=observer_trip(self.arm.n_joints, T) if self.observer_trip else 0.0,
-            obs_trip_speed=det.speed,
-            obs_mtest=momentum_threshold(self.arm.n_joints, T) if self.momentum_test else 0.0,
-            obs_mreopen=self.momentum_test == "reopen",
-            obs_mslow=momentum_slow_speed(self.arm.n_joints, T, sigma_v),
-            obs_mcreep=det.speed, obs_mcreep_margin=det.creep_margin,
         )  # fmt: skip
 
     def compiled_form(self, n_trials, sample_period):

@@ -36,7 +36,6 @@ from adaptive_dd.errors import ScenarioError
 
 __all__ = [
     "EXCITATION_CONTROLLER",
-    "REACH_TASK",
     "START_ATTEMPTS",
     "TAU_F",
     "ExcitationReport",
@@ -186,25 +185,10 @@ def _task_path(scenario, duration: float | None = None) -> tuple[Array, Array]:
     return q, qd
 
 
-def _task_acceleration(scenario) -> Array:
-    """The scenario's reference accelerations ``qdd_d (m, n)`` [rad/s^2] over the task at 5 ms."""
-    return scenario.reference.sample(np.arange(0.0, float(scenario.duration), 0.005))[2]
-
-
-REACH_TASK = False
-"""Whether :func:`excitation_limits` raises each joint's acceleration limit to the largest the
-task's ``[reference]`` reaches (an option, off by default: measured better identified models on
-every arm tried and a better first segment on the paper's arm, 0.90 against 1.03, but adaptive_ct
-0.02 worse in two of vertical3's segments, docs/learning_the_arm.md, "The excitation reaches the
-task's accelerations"; ``studies/excitation_phase.py --reach on``)."""
-
-
-def excitation_limits(scenario, region: str = "arm", reach: bool | None = None):
+def excitation_limits(scenario, region: str = "arm"):
     """The limits the phase's excitation is designed within: the arm's
     (:meth:`~adaptive_dd.identification.excitation.ExcitationLimits.of_arm`) or, ``region="task"``,
-    those narrowed to the task's region; ``reach`` (default :data:`REACH_TASK`): each joint's
-    acceleration limit raised to the largest the task's ``[reference]`` reaches
-    (:meth:`~adaptive_dd.identification.excitation.ExcitationLimits.reaching`).
+    those narrowed to the task's region.
 
     Raises
     ------
@@ -216,25 +200,20 @@ def excitation_limits(scenario, region: str = "arm", reach: bool | None = None):
 
     arm = scenario.arm
     try:
-        lim = (
-            ExcitationLimits.of_task(arm, _task_path(scenario)[0])
-            if region == "task"
-            else ExcitationLimits.of_arm(arm)
-        )
+        if region == "task":
+            return ExcitationLimits.of_task(arm, _task_path(scenario)[0])
+        return ExcitationLimits.of_arm(arm)
     except ParameterError as exc:
         raise ScenarioError(f"{scenario.source}: run.excite: reference: {exc}") from None
-    reach = REACH_TASK if reach is None else reach
-    return lim.reaching(_task_acceleration(scenario)) if reach else lim
 
 
-def excitation_reference(scenario, region: str = "arm", progress: bool = False, reach: bool | None = None):
+def excitation_reference(scenario, region: str = "arm", progress: bool = False):
     """The designed excitation of the scenario's model as a reference with a 1 s ramp: the first of
     :data:`START_ATTEMPTS` random starts (generators ``(seed, 4, attempt)``) whose optimum keeps
     within the limits. ``region="arm"``: the arm's whole limits (:data:`REGIONS`); ``"task"``: the
     arm's limits narrowed to the task's region
     (:meth:`~adaptive_dd.identification.excitation.ExcitationLimits.of_task` on the scenario's
-    ``[reference]`` over its duration); ``reach``: the acceleration limits raised to the task's
-    (:func:`excitation_limits`, default :data:`REACH_TASK`). ``progress``: the design's bar on stderr.
+    ``[reference]`` over its duration). ``progress``: the design's bar on stderr.
 
     Raises
     ------
@@ -246,7 +225,7 @@ def excitation_reference(scenario, region: str = "arm", progress: bool = False, 
     from adaptive_dd.identification.excitation import design_excitation
 
     arm = scenario.arm
-    lim = excitation_limits(scenario, region, reach)
+    lim = excitation_limits(scenario, region)
     last = None
     for attempt in range(START_ATTEMPTS):
         rng = np.random.default_rng([int(scenario.seed), 4, attempt])

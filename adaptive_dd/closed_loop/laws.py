@@ -23,7 +23,7 @@ the nominal model plus the adapted payload). After an alarm, for ``boost_samples
 
 The residual observer (``observer``, adaptive_ct's; :mod:`adaptive_dd.closed_loop.residual_observer`)
 adds to the command the torque the trial's model leaves unexplained, soft-thresholded at its own
-learnt noise level; its momentum test and its trip start the boost as an alarm would.
+learnt noise level.
 
 Slotine-Li's payload adaptation: with ``Y_p = Y_j(q, qd, qd_r, a) P`` (the link-j block of
 the Slotine-Li regressor times the payload map P of the payload frame),
@@ -39,14 +39,7 @@ import numpy as np
 from numba import njit
 from numpy.typing import NDArray
 
-from adaptive_dd.closed_loop.residual_observer import (
-    O_MC,
-    O_TRIP,
-    OBS_ROWS,
-    _observe,
-    _trip,
-    observe_applied,
-)
+from adaptive_dd.closed_loop.residual_observer import OBS_ROWS, _observe, observe_applied
 from adaptive_dd.plant.chain import body_slotine_li_regressor_in, mass_matrix_in, rnea_ref_in, workspace
 
 __all__ = [
@@ -58,7 +51,6 @@ __all__ = [
     "MODEL_TRIAL",
     "MODEL_TRUE",
     "OBS_ROWS",
-    "O_MC",
     "LawConfig",
     "LawState",
     "law_batch",
@@ -121,30 +113,6 @@ class LawConfig(NamedTuple):
         Weight of a sample in the level (``T`` over its 1 s window).
     obs_warmup : int
         Updates before ``r`` feeds the command (the level learnt meanwhile, not winsorised).
-    obs_trip : float
-        A row's residual beyond this many times its learnt RMS level starts the boost as an
-        alarm would (the estimator's detector reads slower filters); 0: never.
-    obs_trip_speed : float
-        [rad/s] A row whose joint's measured speed is at most this (the detector's creeping
-        speed) trips only beyond its threshold plus twice the model's Coulomb friction: near rest
-        the measured speed's sign, hence the model's Coulomb torque, flips with the noise, and
-        the residual with it by up to ``2 fc``.
-    obs_mtest : float
-        The momentum test (:func:`~adaptive_dd.closed_loop.residual_observer._momentum_test`)
-        starts the boost as an alarm would when its statistic (the square root of a chi-square
-        with ``n`` degrees of freedom) exceeds this; 0: never.
-    obs_mslow : float
-        [rad/s] The momentum test takes a joint measured at most this fast at either end of a
-        sample, or whose two ends differ in sign, as of unknown direction over it (its Coulomb
-        torque anything within ``+-fc``: an allowance of ``2 fc`` per sample;
-        :func:`~adaptive_dd.closed_loop.residual_observer._friction_allowance`).
-    obs_mcreep, obs_mcreep_margin : float
-        [rad/s], [-] A joint otherwise at most ``obs_mcreep`` fast gets an allowance of
-        ``obs_mcreep_margin fc`` per sample (friction the model lacks near rest; the detector's
-        ``speed`` and ``creep_margin``).
-    obs_mreopen : bool
-        A start of the boost by the momentum test also asks the estimator to re-open, as its
-        detector's alarm does (``obs[O_MC, 1] = 2``, read by the closed loop's estimator sample).
     """
 
     kind: int
@@ -172,13 +140,6 @@ class LawConfig(NamedTuple):
     obs_kappa: float
     obs_alpha: float
     obs_warmup: int
-    obs_trip: float
-    obs_trip_speed: float
-    obs_mtest: float = 0.0
-    obs_mslow: float = 0.0
-    obs_mreopen: bool = False
-    obs_mcreep: float = 0.0
-    obs_mcreep_margin: float = 0.0
 
 
 class LawState(NamedTuple):
@@ -198,9 +159,7 @@ class LawState(NamedTuple):
         pi = np.broadcast_to(cfg.pi_fixed, (n_trials, cfg.pi_fixed.shape[0])).copy()
         big = np.full(n_trials, np.iinfo(np.int64).max // 2, dtype=np.int64)
         n = cfg.kp.shape[0]
-        obs = np.zeros((n_trials, OBS_ROWS, n))
-        obs[:, O_TRIP, 0] = np.iinfo(np.int64).max // 2  # no trip yet
-        return cls(pi, np.zeros((n_trials, 10)), big, obs)
+        return cls(pi, np.zeros((n_trials, 10)), big, np.zeros((n_trials, OBS_ROWS, n)))
 
 
 @njit(cache=True)
@@ -208,8 +167,7 @@ def law_work(n):  # pragma: no cover - compiled
     """Scratch of one trial's :func:`law_trial_in` (allocated once per trial, not per sample):
     the chain workspace, ``(6, n)`` rows (e, e', qd_r, a, s, v), ``M (n, n)``, ``Y (n, 10)``,
     ``(6, 10)``, ``(10,)``; the observer's ``(2, 6, 10)``, ``(4, n)`` (p, wv at the last and this
-    measurement), ``(2, n, 10)``; the momentum test's ``(n + 4, n)`` (``M^-1``, rho, the model's
-    Coulomb friction, the window's sum and its whitened form)."""
+    measurement), ``(2, n, 10)``."""
     return (
         workspace(n),
         np.empty((6, n)),
@@ -220,7 +178,6 @@ def law_work(n):  # pragma: no cover - compiled
         np.empty((2, 6, 10)),
         np.empty((4, n)),
         np.empty((2, n, 10)),
-        np.empty((n + 4, n)),
     )
 
 
@@ -374,24 +331,12 @@ def law_trial_in(
             for j in range(n):
                 s[j] = ed[j] + cfg.lam[j] * e[j]
             _adapt_payload(ch, cfg, q, qd, qdr, a, s, theta, pi_model, work)
-    trips = cfg.obs_trip > 0.0 or cfg.obs_mtest > 0.0
-    if cfg.observer and trips:  # samples since the observer last tripped the boost
-        obs[O_TRIP, 0] += 1.0
-        if obs[O_TRIP, 0] < since_alarm:
-            since_alarm = int(obs[O_TRIP, 0])
     boosting = cfg.boost_samples > 0 and since_alarm < cfg.boost_samples + cfg.boost_ramp
     if boosting:
         _boost_feedback(cfg, since_alarm, e, ed, v)
         _add_nominal_inertia(ch, cfg, q, v, work, out)
     if cfg.observer:
         _observe(ch, cfg, pi_model, q, qd, obs, work, out)
-        # a trip starts a boost; it does not prolong one (nor restart it while it ramps down)
-        if cfg.obs_trip > 0.0 and not boosting:
-            _trip(cfg, pi_model, qd, obs)
-        if cfg.obs_mtest > 0.0 and not boosting and obs[O_MC, 1] > 0.0:
-            obs[O_TRIP, 0] = 0.0
-            if cfg.obs_mreopen:
-                obs[O_MC, 1] = 2.0
 
 
 @njit(cache=True)

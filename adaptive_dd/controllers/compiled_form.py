@@ -79,10 +79,6 @@ class TwoLinkGains(NamedTuple):
     obs_a, obs_stages, obs_kappa, obs_alpha, obs_warmup : float, int, float, float, int
         ``exp(-beta T)``; stages; soft threshold in RMS levels; a sample's weight in the level;
         updates before the observer feeds the command.
-    obs_mtest, obs_mslow, obs_mcreep, obs_mcreep_margin : float
-        The momentum test's threshold (0: off), near-rest and creeping speeds [rad/s] and the
-        creeping joints' allowance [Coulomb levels]
-        (:class:`~adaptive_dd.closed_loop.laws.LawConfig`).
     """
 
     law: int
@@ -106,10 +102,6 @@ class TwoLinkGains(NamedTuple):
     obs_kappa: float
     obs_alpha: float
     obs_warmup: int
-    obs_mtest: float = 0.0
-    obs_mslow: float = 0.0
-    obs_mcreep: float = 0.0
-    obs_mcreep_margin: float = 0.0
 
 
 class CompiledSpec(NamedTuple):
@@ -136,8 +128,7 @@ def two_link_gains(law: int, sigma=None, **gains) -> TwoLinkGains:
         law=law, kp=0.0, kd=0.0, lam=0.0, pd_kp=z2, pd_kd=z2, boost_kp=0.0, boost_kd=0.0,
         boost_samples=0.0, sigma=z7 if sigma is None else np.array(sigma, dtype=float),
         gamma=z7, lo=z7, hi=z7, projection=np.zeros(3), observer=False, T=0.0, obs_a=0.0, obs_stages=2,
-        obs_kappa=0.0, obs_alpha=0.0, obs_warmup=0, obs_mtest=0.0, obs_mslow=0.0,
-        obs_mcreep=0.0, obs_mcreep_margin=0.0,
+        obs_kappa=0.0, obs_alpha=0.0, obs_warmup=0,
     )  # fmt: skip
     fields.update(gains)
     return TwoLinkGains(**fields)

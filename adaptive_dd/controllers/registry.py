@@ -11,8 +11,7 @@ of your own classes (the protocol: ``docs/controllers.md``). Settings every cont
 Built-in settings:
 
 ``adaptive_ct``
-    ``boost_bandwidth``, ``boost_duration``, ``observer``, ``observer_bandwidth``, ``observer_trip``,
-    ``observer_momentum_test`` (N-joint arms),
+    ``boost_bandwidth``, ``boost_duration``, ``observer``, ``observer_bandwidth``,
     ``estimator = {...}`` (fields of
     :class:`~adaptive_dd.identification.two_link_online_config.TwoLinkOnlineConfig`: ``tau_f``, ``split``,
     ``construction``, ``p0_payload``, ``p0_j2``, ``project``, ``align``), ``detector = {...}``
@@ -66,6 +65,7 @@ __all__ = [
     "load_controller_class",
     "make_controller",
     "scenario_controller",
+    "scenario_controllers",
 ]
 
 ONLINE_KEYS = {"tau_f", "split", "construction", "p0_payload", "p0_j2", "project", "align"}
@@ -230,23 +230,6 @@ _BOOST = {
         None,
         rule=_OBSERVER_RULE,
         unit="rad/s",
-    ),
-    "observer_trip": Setting(
-        "a residual beyond the trip (the Gaussian bound of 1 % per minute over the rows' samples, "
-        "about 5.4 times its noise) starts the boost before the detector alarms "
-        "(docs/change_detection.md; off by default: it tripped on friction the model lacks)",
-        ABSENT,
-        False,
-        rule=_OBSERVER_RULE,
-    ),
-    "observer_momentum_test": Setting(
-        "true: a matched test on the integrated momentum error (whitened by the model's inertia, "
-        "its noise learnt online, its threshold 1 % per minute) starts the boost before the "
-        'detector alarms; "reopen": and re-opens the estimator as an alarm; false: neither '
-        '(docs/change_detection.md, "The momentum test")',
-        ABSENT,
-        False,
-        rule="built for the N-joint adaptive_ct's law; the two-link loop's boost reads the detector alone",
     ),
     "estimator": Setting(
         "the estimator's settings: TwoLinkOnlineConfig's fields on the two-link arm (tau_f, split, "
@@ -420,7 +403,33 @@ def scenario_controller(scenario, spec: str) -> tuple[str, Controller]:
         opts = with_stated_uncertainty(spec, opts, scenario)
         g = gains_for(scenario.closed_forms or scenario.arm, scenario.bandwidth, scenario.damping)
     arm = scenario.closed_forms or scenario.arm  # the arm the run simulates: its closed forms or its own
-    return label, make_controller(spec, g, opts, arm=arm, search=search, scenario=scenario)
+    ctrl = make_controller(spec, g, opts, arm=arm, search=search, scenario=scenario)
+    if ":" in spec and "label" not in opts:
+        label = str(ctrl.name)  # what the plug-in declares (its class name if nothing)
+    return label, ctrl
+
+
+def scenario_controllers(scenario, specs=None) -> dict[str, Controller]:
+    """The controllers of ``specs`` (default the scenario's list) by the name their results carry
+    (:func:`scenario_controller`).
+
+    Raises
+    ------
+    ParameterError
+        Two controllers whose results would carry the same name (a plug-in's ``name`` or a
+        ``label`` equal to another's), naming both.
+    """
+    out: dict[str, Controller] = {}
+    spec_of: dict[str, str] = {}
+    for spec in scenario.controllers if specs is None else specs:
+        label, ctrl = scenario_controller(scenario, spec)
+        if label in out:
+            raise ParameterError(
+                f"{scenario.source}: controllers {spec_of[label]!r} and {spec!r} both carry the name "
+                f'{label!r} in the results; give one a label = "..." in its [controllers.NAME] table'
+            )
+        out[label], spec_of[label] = ctrl, spec
+    return out
 
 
 def controllers_for(arm) -> tuple[str, ...]:

@@ -49,25 +49,7 @@ def momentum_two_link(ch, sg, q, qd, work, p, wv):  # pragma: no cover - compile
     wv[1] = r * s2 * qd[0] * (qd[0] + qd[1]) + sg[4] * qd[1] + sg[6] * np.sign(qd[1])
 
 
-@njit(cache=True, inline="always")
-def mass_two_link(ch, sg, q, work, m):  # pragma: no cover - compiled
-    """``m = M(q)`` of the paper's sigma ``sg (7,)`` into ``m (2, 2)`` (the chain's ``_mass``
-    signature; ``ch`` and ``work`` unused)."""
-    rc = sg[2] * np.cos(q[1])
-    m[0, 0] = sg[0] + sg[1] + 2.0 * rc
-    m[0, 1] = m[1, 0] = sg[1] + rc
-    m[1, 1] = sg[1]
-
-
-@njit(cache=True, inline="always")
-def coulomb_two_link(sg, n, j):  # pragma: no cover - compiled
-    """The model's Coulomb friction of joint ``j`` (``d1 d2``: ``sg[5 + j]``) [N m]."""
-    return abs(sg[5 + j])
-
-
-observe_trial = njit(inline="always")(
-    _bound(_observe.py_func, _momentum=momentum_two_link, _mass=mass_two_link, _coulomb=coulomb_two_link)
-)
+observe_trial = njit(inline="always")(_bound(_observe.py_func, _momentum=momentum_two_link))
 """``observe_trial(0, cfg, sigma (7,), q, qd, obs (OBS_ROWS, 2), work, out (2,))``: one sample of
 the N-joint residual observer (:func:`adaptive_dd.closed_loop.residual_observer._observe`, its code unchanged)
 on the two-link model; ``cfg`` has the fields ``T, obs_a, obs_stages, obs_kappa, obs_alpha,
@@ -78,10 +60,9 @@ obs_warmup`` (:class:`~adaptive_dd.controllers.compiled_form.TwoLinkGains`), ``w
 @njit(cache=True)
 def observer_work():  # pragma: no cover - compiled
     """Scratch of :func:`observe_trial`: the chain law's work tuple, of which the observer reads
-    only ``[7]`` (the momenta and ``wv`` at the last and this measurement, ``(4, 2)``) and, for
-    its momentum test, ``[2]`` (the mass matrix) and ``[9]`` (``(6, 2)``)."""
+    only ``[7]`` (the momenta and ``wv`` at the last and this measurement, ``(4, 2)``)."""
     e = np.empty(0)
-    return (e, e, np.empty((2, 2)), e, e, e, e, np.empty((4, 2)), e, np.empty((6, 2)))
+    return (e, e, e, e, e, e, e, np.empty((4, 2)))
 
 
 @njit(cache=True)

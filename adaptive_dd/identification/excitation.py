@@ -121,16 +121,6 @@ class ExcitationLimits:
             )
         return dataclasses.replace(arm_lim, lower=lo, upper=hi)
 
-    def reaching(self, task_qdd: Array) -> ExcitationLimits:
-        """These limits with each joint's acceleration limit raised to the largest acceleration the
-        task's reference reaches, ``max |task_qdd (m, n)|`` [rad/s^2] per joint (never lowered).
-        The one acceleration limit of :meth:`of_arm` (5 rad/s^2) is below what the tasks of the
-        shipped arms ask at their wrists (the iiwa's up to 8.9 rad/s^2): an excitation slower than
-        the task leaves the inertia and armature the task's fast joints need to the least squares'
-        extrapolation. Positions, velocities and torques keep the arm's limits."""
-        peak = np.abs(np.asarray(task_qdd, float)).max(axis=0)
-        return dataclasses.replace(self, acceleration=np.maximum(self.acceleration, peak))
-
 
 @dataclass(frozen=True)
 class FourierTrajectory:

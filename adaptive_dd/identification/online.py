@@ -17,11 +17,6 @@ Two modes (:class:`OnlineConfig`):
     payload about its frame are estimated, as industrial payload identification does.
     Equation: ``y = G0 tau - tau_arm(qf, qdf, qddf) = phi theta`` with
     ``phi = body_regressor(link jp) @ payload_map`` (n x 10).
-``"full"``
-    All base parameters ``sigma = B pi`` (p of them): ``phi`` is the base regressor
-    (rigid columns of :func:`~adaptive_dd.plant.chain.regressor` plus friction and
-    armature columns, selected by ``arm.base.independent``).
-
 ``"arm"``
     The arm's base parameters (prior covariance from the URDF's stated uncertainty,
     :mod:`~adaptive_dd.identification.arm_prior`; never re-opened) and the payload's ten
@@ -29,7 +24,7 @@ Two modes (:class:`OnlineConfig`):
     an alarm). Equation: the momentum form of every link plus friction and armature columns
     (``docs/learning_the_arm.md``).
 
-Payload and full modes can evaluate the regressor at the filtered signals of the M2 method (eq. 20, Tustin):
+Payload mode can evaluate the regressor at the filtered signals of the M2 method (eq. 20, Tustin):
 ``qf = G0 q``, ``qdf = G0 qd``, ``qddf = G1 qd``, Coulomb column ``G0 sgn(qd)``, and
 ``y = G0 tau``. The estimator is RLS with the variable forgetting factor of eq. (14),
 one scalar update per joint equation (the paper's splits generalised: each row is a
@@ -56,7 +51,6 @@ from typing import NamedTuple
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.linalg import solve_discrete_lyapunov
 
 from adaptive_dd.errors import ParameterError, SignalError
 from adaptive_dd.identification import online_kernel as K
@@ -106,18 +100,14 @@ __all__ = [
     "payload_prior",
     "project_payload",
     "reopen_mass_std",
-    "row_floors",
     "run_online",
     "state_alarms",
     "state_skipped",
-    "whitening_noise",
-    "whitening_scale",
 ]
 
 Array = NDArray[np.float64]
-MODES = ("payload", "full", "arm")
+MODES = ("payload", "arm")
 REGRESSIONS = ("signals", "momentum")
-ROW_FLOORS = ("level", "stated", "none")
 
 
 def _num(owner: str, name: str, v, lo=None, hi=None, strict=True) -> None:
@@ -158,9 +148,9 @@ class Detector:
     slow_factor : float
         The threshold is this many times higher while another row is out of use.
     warmup : float or None
-        No alarm before this time [s]. None (default): :data:`WARMUP` in payload and full
-        modes, :data:`WARMUP_ARM` in mode ``"arm"``, whose residual while the arm's error is
-        learnt is no level yet (Panda, uncertain arm, 20 seeds: 1 trial with a false alarm at
+        No alarm before this time [s]. None (default): :data:`WARMUP` in payload mode,
+        :data:`WARMUP_ARM` in mode ``"arm"``, whose residual while the arm's error is learnt is
+        no level yet (Panda, uncertain arm, 20 seeds: 1 trial with a false alarm at
         0.89 s with 0.5 s, none with 1 s, the same ratios to 0.003).
     min_learned : int
         Samples a row must have been seen since the last alarm before it may alarm.
@@ -213,15 +203,6 @@ class Detector:
         threshold.
     creep_margin : float
         See ``speed``; >= 0 (0: a creeping row alarms as any other).
-    learn_below : float
-        The level does not learn while the row's short average exceeds this fraction of the
-        threshold (RMS), nor, as always, from a sample above ``gate``; only a level established
-        over ``min_learned`` learned samples since the last alarm. 0 (default): no such gate. It
-        fixed the paper's arm's late put-down as the hold does, but with no bound on the time it
-        holds a level it also held the levels through the estimate's own transient after an
-        error of one joint (a torque burst; friction the model lacks near rest): the UR5 drawn
-        on Stribeck / soft tanh friction 4 / 3 trials of 10 with a false alarm (1 / 0 without).
-        ``docs/change_detection.md``, "Issue 28's gate round".
     hold_above : float
         A row whose short average rises above this fraction of the threshold (RMS; 0.5, the
         half-threshold at which ``min_rows`` counts a row as raised) is judged, for
@@ -258,7 +239,6 @@ class Detector:
     fast_threshold: float = 7.0
     speed: float = 0.25
     creep_margin: float = 0.5
-    learn_below: float = 0.0
     hold_above: float = 0.5
     hold_time: float | None = None
 
@@ -294,7 +274,6 @@ class Detector:
         _num(o, "fast_threshold", self.fast_threshold, 1.0)
         _num(o, "speed", self.speed, 0.0, strict=False)
         _num(o, "creep_margin", self.creep_margin, 0.0, strict=False)
-        _num(o, "learn_below", self.learn_below, 0.0, strict=False)
         _num(o, "hold_above", self.hold_above, 0.0, strict=False)
         if self.hold_time is not None:
             _num(o, "hold_time", self.hold_time, 0.0)
@@ -315,9 +294,9 @@ class OnlineConfig:
         T [s].
     tau_f : float
         Time constant of the M2 filters [s] (eq. 20).
-    mode : {"payload", "full", "arm"} or None
-        Estimate the payload's ten parameters (arm known), all base parameters, or the arm's
-        base parameters and the payload's ten apart (``"arm"``: the arm learnt from its stated
+    mode : {"payload", "arm"} or None
+        Estimate the payload's ten parameters (arm known), or the arm's base parameters and the
+        payload's ten apart (``"arm"``: the arm learnt from its stated
         uncertainty and kept across swaps, the payload re-opened at each; ``docs/learning_the_arm.md``).
         None (default): ``"arm"`` when ``arm_uncertainty`` is given, else ``"payload"``.
     lam0, mu : float
@@ -328,7 +307,8 @@ class OnlineConfig:
         Length scale r [m] of the payload prior: first moments ``m c`` have standard
         deviation ``payload_mass_std r``, inertias ``payload_mass_std r^2``.
     p0_arm : float
-        Full mode: start-up variance of every base parameter (isotropic part of P0), >= 0.
+        Mode ``"arm"``: start-up variance of every base parameter added to the prior (isotropic
+        part of P0), >= 0.
     max_trace : float or None
         Cap on trace(P); None: the trace of the start-up or re-opened covariance, whichever is larger.
     align : bool
@@ -339,33 +319,7 @@ class OnlineConfig:
         Filter memory [units of tau_f] during which a non-finite sample keeps the equations out of use.
     row_weights : tuple of float or None
         Equation j is divided by ``row_weights[j]``. None (default): derived from the arm's
-        torque resolution (:func:`derived_row_weights`). With ``whiten`` the weights scale only
-        the detector's prior errors.
-    whiten : bool or None
-        Update the estimate with the rows whitened by the covariance that the sensor's velocity
-        noise gives them through the model's inertia (:func:`whitening_noise`;
-        :func:`~adaptive_dd.identification.online_kernel._whitened_update`), in place of each row
-        divided by its weight. The rows of a light wrist carry little noise (its inertia is
-        small) and errors correlated with the shoulder's: weighted as independent rows, the
-        payload's parameters the wrist alone sees settle over seconds. None (default): off.
-        Each row's variance also carries a floor for the equation's own error (``row_floor``):
-        without it, on open-loop records the estimate after a swap trusted the wrist's rows
-        beyond their equation error (UR5, a creeping wrist, 1 -> 2.5 kg: the centre of mass
-        15 cm off 0.25 s after the swap and a second alarm). On, with the floor, vertical3's and
-        the Gen3's loaded segments come nearer their floor in closed loop, but the exact UR5's and
-        Panda's unloaded first segment is worse (20 seeds: 1.059 against 1.019, 1.100 against
-        1.033): not the default (``docs/any_arm.md``, "A floor on each row's error").
-    row_floor : {"stated", "level", "none"} or None
-        Whitened rows: what bounds the trust in a row beyond its sensor noise (the equation's own
-        error: the arm's unlearnt errors, friction, the filters' discretisation), a variance added
-        to the row's (:func:`row_floors`; :func:`~adaptive_dd.identification.online_kernel.
-        _row_floor`). ``"stated"`` (None, the default): the detector's ``floor`` in the row's
-        units, ``(floor * row_weights[j])^2`` N m^2, the error below which the detector already
-        takes a nearly noise-free row's error for the regression's own. ``"level"``: each row's
-        variance at least the detector's learnt level of its squared prior error (estimated
-        online; it also counts the estimate's own error and the arm's learnable error as noise:
-        vertical3's 0.5 kg segment 4.87x its floor against 1.88x stated, 20 seeds; needs a
-        detector). ``"none"``: the noise alone. ``docs/any_arm.md``, "A floor on each row's error".
+        torque resolution (:func:`derived_row_weights`).
     detector : Detector or None
     project : bool or None
         Project the model control uses onto physically consistent payloads (the
@@ -381,8 +335,7 @@ class OnlineConfig:
         second-moment block), so a vanishing mass carries vanishing first moments and
         inertia. None: no bound (positive semidefiniteness only).
     regression : {"momentum", "signals"} or None
-        How the filtered equation is built; None (default): ``"momentum"`` in payload and arm
-        modes, ``"signals"`` in full mode (the only one implemented there). In mode ``"arm"``
+        How the filtered equation is built; None (default): ``"momentum"``. In mode ``"arm"``
         the momentum form is written for every link (and friction, armature columns).
         ``"signals"``: the regressor evaluated at the filtered signals (the paper's M2
         construction). It is not the filtered torque: ``Y(G0 q, G0 qd, G1 qd) != G0 Y(q,
@@ -396,7 +349,7 @@ class OnlineConfig:
         detection). UR5 tool-swap scenario, 20 seeds, adaptive_ct / ct_oracle
         means per segment 1.009 / 1.033 / 1.065 / 1.032 against 1.009 / 1.038 / 1.068 /
         1.074 with ``"signals"``; Panda 1.031 / 1.051 / 1.052 / 1.047 against 1.031 /
-        1.051 / 1.070 / 1.055 (``studies/regression_ablation.py [SCENARIO]``; with
+        1.051 / 1.070 / 1.055 (``studies/regression_ablation.py [SCENARIO]`` of commit d41702f; with
         adaptive_ct's boost of 0.2 s the UR5's were 1.089 / 1.158 / 1.075 against 1.130 /
         1.351 / 1.172).
     prior_radius : float or None
@@ -415,7 +368,7 @@ class OnlineConfig:
         the arm's base parameters start with the covariance ``B C B^T`` those levels imply
         (:func:`~adaptive_dd.identification.arm_prior.prior_covariance`). None in mode
         ``"arm"``: the default levels (masses 10 %, com 1 cm, inertias 20 %, friction 50 %,
-        armature 30 %). In mode ``"full"``, added to ``p0_arm``.
+        armature 30 %).
     arm_prior_std : tuple of float or None
         Mode ``"arm"``: the standard deviations ``(p,)`` of the arm's base parameters (in the
         order of ``arm.base``) about the model, in place of the covariance ``arm_uncertainty``
@@ -447,8 +400,6 @@ class OnlineConfig:
     selection: tuple[float, float] | None = (0.05, 6.0)
     taint: float = 10.0
     row_weights: tuple[float, ...] | None = None
-    whiten: bool | None = None
-    row_floor: str | None = None
     detector: Detector | None = field(default_factory=Detector)
     project: bool | None = None
     eig_min: float = 0.0
@@ -504,17 +455,6 @@ class OnlineConfig:
         arm_mode = self.mode == "arm"
         if self.project is None:  # the payload block also carries the arm's residual along the
             object.__setattr__(self, "project", not arm_mode)  # payload's directions: not a payload
-        if self.whiten is None:  # off by default (see the attribute's description)
-            object.__setattr__(self, "whiten", False)
-        if self.row_floor is None:
-            object.__setattr__(self, "row_floor", "stated")
-        if self.row_floor not in ROW_FLOORS:
-            raise ParameterError(f"{o}.row_floor must be one of {ROW_FLOORS}, got {self.row_floor!r}")
-        if self.row_floor == "level" and self.detector is None:
-            raise ParameterError(
-                f"{o}.row_floor = 'level' reads the detector's levels; with detector = None give "
-                "'stated' or 'none'"
-            )
         if isinstance(self.prior_radius, str) and self.prior_radius == "auto":
             object.__setattr__(self, "prior_radius", None if arm_mode else DEFAULT_PRIOR_RADIUS)
         _num(o, "sample_period", self.sample_period, 0.0)
@@ -530,11 +470,6 @@ class OnlineConfig:
             raise ParameterError(
                 f"{o}.regression must be one of {REGRESSIONS} or None, got {self.regression!r}"
             )
-        if self.mode == "full" and self.regression == "momentum":
-            raise ParameterError(
-                f"{o}.regression = {self.regression!r} is implemented for mode 'payload' only; "
-                "mode 'full' takes 'signals'"
-            )
         _num(o, "lam0", self.lam0, 0.0, 1.0)
         _num(o, "mu", self.mu, 0.0, 1.0, strict=False)
         _num(o, "payload_mass_std", self.payload_mass_std, 0.0, strict=False)
@@ -545,7 +480,6 @@ class OnlineConfig:
         _bool(o, "align", self.align)
         _bool(o, "project", self.project)
         _bool(o, "reset_payload", self.reset_payload)
-        _bool(o, "whiten", self.whiten)
         _num(o, "taint", self.taint, 0.0, strict=False)
         _num(o, "eig_min", self.eig_min, 0.0, strict=False)
         if self.bound_radius is not None:
@@ -567,15 +501,13 @@ class OnlineConfig:
             raise ParameterError(
                 f"{o}.detector must be a Detector or None, got {type(self.detector).__name__}"
             )
-        if self.mode != "full" and self.payload_mass_std == 0:
-            raise ParameterError(f"{o}.payload_mass_std must be > 0 in payload mode, got 0")
+        if self.payload_mass_std == 0:
+            raise ParameterError(f"{o}.payload_mass_std must be > 0, got 0")
 
     @property
     def regression_form(self) -> str:
         """The regression used: ``regression``, or the mode's default when it is None."""
-        if self.regression is not None:
-            return self.regression
-        return "signals" if self.mode == "full" else "momentum"
+        return self.regression if self.regression is not None else "momentum"
 
     @property
     def bank(self) -> FilterBank:
@@ -617,7 +549,7 @@ class OnlineConfig:
 
 
 WARMUP = 0.5
-"""[s] No alarm before this time (``Detector.warmup`` None, payload and full modes)."""
+"""[s] No alarm before this time (``Detector.warmup`` None, payload mode)."""
 WARMUP_ARM = 1.0
 """[s] The same in mode ``"arm"``."""
 REOPEN_CAPACITY = 0.6
@@ -648,21 +580,6 @@ def derived_row_weights(arm: Arm) -> Array:
     return lim / lim.max()
 
 
-def whitening_noise(arm: Arm) -> Array:
-    """The velocity noise ``vn (n,)`` the rows are whitened by (``OnlineConfig.whiten``): each
-    joint's velocity noise standard deviation (``arm.sensor``; all equal when none is stated),
-    over the largest, over the largest diagonal entry of the inertia at the middle of the joint
-    ranges (:meth:`~adaptive_dd.plant.arm.Arm.nominal_inertia`). The scale keeps the heaviest
-    joint's whitened row about its own equation in N m, as its weight 1 did."""
-    sv = np.sqrt(np.asarray(arm.sensor.velocity_variance, dtype=float))
-    if not (np.all(np.isfinite(sv)) and sv.max() > 0.0):
-        sv = np.ones(arm.n_joints)
-    sv = np.maximum(sv / sv.max(), 1e-3)  # a joint without noise: whitening stays finite
-    with np.errstate(invalid="ignore"):  # continuous joints: no middle (nominal_inertia takes 0)
-        m0 = arm.nominal_inertia()
-    return sv / float(np.max(m0))
-
-
 def _detector_velocity_variance(arm: Arm) -> Array:
     """The sensor's velocity noise variance per joint [(rad/s)^2] the detector weighs the rows'
     noise by (``EstCfg.vdet``); all equal when the arm states none."""
@@ -670,41 +587,6 @@ def _detector_velocity_variance(arm: Arm) -> Array:
     if not (np.all(np.isfinite(v)) and v.max() > 0.0):
         v = np.ones(arm.n_joints)
     return np.maximum(v, 1e-6 * v.max())
-
-
-def whitening_scale(cfg: OnlineConfig, arm: Arm) -> float:
-    """[N^2 m^2] The whitened rows' covariance ``M diag(vn^2) M^T`` (:func:`whitening_noise`) times
-    this is the covariance the sensor's velocity noise gives the rows in N m: the largest
-    velocity noise variance, times the power gain of the filters' ``G1`` on white noise (the
-    momentum's derivative, ``sum_k h1[k]^2``), times the largest nominal inertia squared. With no
-    velocity noise stated the noise is taken as 1 rad/s (the whitening's own assumption)."""
-    vv = np.asarray(arm.sensor.velocity_variance, dtype=float)
-    var = float(vv.max()) if np.all(np.isfinite(vv)) and vv.max() > 0.0 else 1.0
-    b = cfg.bank
-    X = solve_discrete_lyapunov(b.A, np.outer(b.B[:, 0], b.B[:, 0]))
-    g1 = float(b.D[1, 0] ** 2 + b.C[1] @ X @ b.C[1])
-    with np.errstate(invalid="ignore"):
-        m0 = float(np.max(arm.nominal_inertia()))
-    return var * g1 * m0 * m0
-
-
-def row_floors(cfg: OnlineConfig, arm: Arm, w: Array | None = None) -> tuple[Array, Array]:
-    """The whitened rows' floors ``(vfloor, vlevel)`` (n,) each (``OnlineConfig.row_floor``), in the
-    units of the whitening's covariance: a row's error in N m^2 over :func:`whitening_scale`.
-
-    ``"stated"``: ``vfloor = (floor w_j)^2 / scale`` (the detector's ``floor``, weighted by the
-    rows' weights ``w``, as the detector reads it). ``"level"``: ``vlevel = w_j^2 / scale`` (the
-    detector's level is of the weighted error ``e_j / w_j``). ``"none"``: zeros."""
-    n = arm.n_joints
-    w = derived_row_weights(arm) if w is None else np.asarray(w, dtype=float)
-    zero = np.zeros(n)
-    if cfg.row_floor == "none":
-        return zero, zero
-    scale = whitening_scale(cfg, arm)
-    if cfg.row_floor == "level":
-        return zero, w * w / scale
-    floor = cfg.detector.floor if cfg.detector is not None else Detector().floor
-    return (floor * w) ** 2 / scale, zero
 
 
 @lru_cache(maxsize=32)
@@ -720,11 +602,6 @@ def payload_prior(mass_std: float, size: float) -> Array:
     """
     s, r = float(mass_std), float(size)
     return np.diag([s**2] + [(s * r) ** 2] * 3 + [(s * r * r) ** 2] * 6)
-
-
-def _orth(M: Array, rtol: float = 1e-9) -> Array:
-    u, sv, _ = np.linalg.svd(M, full_matrices=False)
-    return np.ascontiguousarray(u[:, sv > rtol * max(sv[0], 1e-300)])
 
 
 def _pack(cfg: OnlineConfig, arm: Arm) -> tuple[EstCfg, Array]:
@@ -745,7 +622,7 @@ def _pack(cfg: OnlineConfig, arm: Arm) -> tuple[EstCfg, Array]:
         U = np.eye(10)
         P0, Pr = S0, S1
         n_rows = jp + 1  # joints after the payload's link do not feel it
-    elif cfg.mode == "arm":
+    else:
         B = arm.base.B
         pb = B.shape[0]
         p = pb + 10
@@ -778,20 +655,6 @@ def _pack(cfg: OnlineConfig, arm: Arm) -> tuple[EstCfg, Array]:
         P0[pb:, pb:] = S0
         Pr = np.zeros((p, p))
         Pr[pb:, pb:] = S1
-        n_rows = n
-    else:
-        B = arm.base.B
-        p = B.shape[0]
-        indep = np.asarray(arm.base.independent, dtype=np.int64)
-        Bpinv = np.linalg.pinv(B)
-        sigma0 = B @ pi0
-        pbasis = arm.payload_basis
-        pbasis_pinv = np.linalg.pinv(pbasis, rcond=1e-9)
-        U = _orth(pbasis)
-        P0 = cfg.p0_arm * np.eye(p) + pbasis @ S0 @ pbasis.T
-        if cfg.arm_uncertainty is not None:
-            P0 = P0 + B @ prior_covariance(arm, cfg.arm_uncertainty) @ B.T
-        Pr = pbasis @ S1 @ pbasis.T
         n_rows = n
     cap = cfg.max_trace if cfg.max_trace is not None else max(np.trace(P0), np.trace(Pr))
     w = derived_row_weights(arm) if cfg.row_weights is None else np.asarray(cfg.row_weights, dtype=float)
@@ -843,7 +706,6 @@ def _pack(cfg: OnlineConfig, arm: Arm) -> tuple[EstCfg, Array]:
         ints[K.I_MIN_ROWS] = det.min_rows
         fl[K.F_DET_SPEED] = max(det.speed, fl[K.F_SEL_THRESHOLD])
         fl[K.F_CREEP_MARGIN] = det.creep_margin
-        fl[K.F_LEARN_BELOW2] = det.learn_below**2
         if det.hold_above > 0.0:
             fl[K.F_HOLD_ABOVE2] = det.hold_above**2
             hold = cfg.rise_samples if det.hold_time is None else cfg.seconds(det.hold_time)
@@ -855,7 +717,7 @@ def _pack(cfg: OnlineConfig, arm: Arm) -> tuple[EstCfg, Array]:
     c = np.ascontiguousarray
     return EstCfg(
         ch=arm.chain,
-        mode=K.MODE_PAYLOAD if cfg.mode == "payload" else K.MODE_FULL,
+        mode=K.MODE_PAYLOAD if cfg.mode == "payload" else K.MODE_ARM,
         pi0=pi0,
         jp=int(jp),
         pmap=pmap,
@@ -879,18 +741,8 @@ def _pack(cfg: OnlineConfig, arm: Arm) -> tuple[EstCfg, Array]:
         w=c(w),
         ints=ints,
         floats=fl,
-        vn=c(whitening_noise(arm) if cfg.whiten else np.zeros(0)),
         vdet=c(_detector_velocity_variance(arm)),
-        **_floors(cfg, arm, w, n),
     ), P0
-
-
-def _floors(cfg: OnlineConfig, arm: Arm, w: Array, n: int) -> dict[str, Array]:
-    """``vfloor``, ``vlevel`` of :class:`EstCfg` (empty without whitening)."""
-    if not cfg.whiten:
-        return {"vfloor": np.zeros(0), "vlevel": np.zeros(0)}
-    vfloor, vlevel = row_floors(cfg, arm, w)
-    return {"vfloor": np.ascontiguousarray(vfloor), "vlevel": np.ascontiguousarray(vlevel)}
 
 
 def _channels(cfg: OnlineConfig, n: int) -> int:
@@ -912,8 +764,8 @@ def est_init(
         The arm (its standard parameters ``arm.pi`` are the known part in payload mode).
     n_trials : int
     sigma_nominal : array_like (p,) or (n_trials, p), optional
-        Nominal base parameters: the initial estimate in full mode (default ``arm.sigma``);
-        in payload mode the initial payload is the one it implies
+        Nominal base parameters: in mode ``"arm"`` the initial estimate (default ``arm.sigma``,
+        its payload in the payload block); in payload mode the initial payload is the one it implies
         (``arm.payload_from_sigma``; default no payload).
 
     Returns
@@ -928,19 +780,16 @@ def est_init(
     n = arm.n_joints
     p = P0.shape[0]
     if sigma_nominal is None:
-        th0 = np.zeros(10) if cfg.mode == "payload" else arm.sigma
-        if cfg.mode == "arm":
-            th0 = np.concatenate((arm.sigma, np.zeros(10)))
+        th0 = np.zeros(10) if cfg.mode == "payload" else np.concatenate((arm.sigma, np.zeros(10)))
     else:
         s = np.asarray(sigma_nominal, dtype=float)
         if s.shape[-1] != arm.base.count or not np.all(np.isfinite(s)):
             raise ParameterError(
                 f"sigma_nominal must be {arm.base.count} finite base parameters, got shape {s.shape}"
             )
-        th0 = arm.payload_from_sigma(s).params if cfg.mode == "payload" else s
-        if cfg.mode == "arm":  # the nominal arm known to the prior, its payload in the payload block
-            pay = arm.payload_from_sigma(s).params
-            th0 = np.concatenate((s - pay @ arm.payload_basis.T, pay))
+        pay = arm.payload_from_sigma(s).params
+        # mode "arm": the nominal arm known to the prior, its payload in the payload block
+        th0 = pay if cfg.mode == "payload" else np.concatenate((s - pay @ arm.payload_basis.T, pay))
     theta = np.broadcast_to(th0, (n_trials, p)).copy()
     cnt = np.zeros((n_trials, K.N_CNT), dtype=np.int64)
     cnt[:, K.C_SINCE_ALARM] = K.BIG

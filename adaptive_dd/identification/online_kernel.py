@@ -61,7 +61,7 @@ BIG = 1 << 40
 SIGNAL_CHANNELS = 4  # per joint: q, qd, tau, sgn(qd) (the signals form)
 MOMENTUM_CHANNELS = 12  # per joint: G0 tau, G1 p + G0 wv and the payload link's G1 py + G0 wy (10)
 MODE_PAYLOAD = 0
-MODE_FULL = 1
+MODE_ARM = 1
 
 
 class EstCfg(NamedTuple):
@@ -72,8 +72,8 @@ class EstCfg(NamedTuple):
     ch : Chain
         Kinematics of the arm.
     mode : int
-        0 payload (10 parameters of the payload, arm known), 1 full (base parameters) and
-        mode "arm" (base parameters, then the payload's ten: ``p = indep.size + 10``; the
+        0 payload (10 parameters of the payload, arm known), 1 mode "arm" (the arm's base
+        parameters, then the payload's ten: ``p = indep.size + 10``; the
         payload's columns are link ``jp``'s through ``pmap``, ``pbasis`` selects the last ten).
     pi0 : (13 n,)
         Standard parameters of the known (nominal) arm, without payload.
@@ -82,12 +82,12 @@ class EstCfg(NamedTuple):
     pmap : (10, 10)
         Payload parameters about the payload frame -> about link jp's joint frame.
     indep : (p,) int64
-        Base columns of the standard regressor (full mode).
+        Base columns of the standard regressor (mode "arm").
     Bpinv : (13 n, p)
-        Pseudo-inverse of the base map B (full mode; ``B @ Bpinv == I``); mode "arm": followed
+        Mode "arm": the pseudo-inverse of the base map B (``B @ Bpinv == I``) followed
         by ``pinv(B) @ payload_basis``, so the payload block enters the model through B.
     sigma0 : (p,)
-        ``B pi0`` (full mode; zeros(10) in payload mode).
+        ``B pi0`` and ten zeros (mode "arm"; zeros(10) in payload mode).
     pbasis : (p, 10)
         How the payload's ten parameters move theta (identity in payload mode).
     pbasis_pinv : (10, p)
@@ -105,26 +105,13 @@ class EstCfg(NamedTuple):
     xm1 : (order,)
         Its state of a unit constant ``u1`` and ``u0 = 0``.
     w : (n,)
-        Row weights: equation j is divided by ``w[j]`` (the rows' updates when ``vn`` is empty;
-        the detector's prior errors always).
+        Row weights: equation j is divided by ``w[j]`` (the rows' updates and the detector's
+        prior errors).
     ints : (N_I,) int64, floats : (N_F,) float64
         Scalar settings, slots ``I_*`` and ``F_*`` of this module.
-    vn : (n,) or (0,)
-        Whitening of the rows (:func:`_whitened_update`): the rows in use are updated as
-        ``L^-1 (y, phi)`` with ``L L^T = (M diag(vn^2) M^T)`` over those rows, ``M`` the model's
-        inertia (armature included) at the measured q: the covariance that velocity noise of
-        standard deviation proportional to ``vn`` gives the rows through the momentum (or the
-        acceleration). Empty: no whitening, each row divided by ``w``.
     vdet : (n,)
         The sensor's velocity noise variance per joint [(rad/s)^2] (the detector's
         :func:`_ref_rise`: how much a payload raises each row's noise).
-    vfloor : (n,) or (0,)
-        Whitened rows: a variance added to each row's (in the units of ``vn``'s covariance), the
-        equation error the scenario states (:func:`_row_floor`).
-    vlevel : (n,) or (0,)
-        Whitened rows: each row's variance is at least ``vlevel[j]`` times the detector's learnt
-        level of its squared prior error (the equation error the rows show, :func:`_row_floor`;
-        zeros: not read).
     """
 
     ch: Chain
@@ -152,10 +139,7 @@ class EstCfg(NamedTuple):
     w: np.ndarray
     ints: np.ndarray
     floats: np.ndarray
-    vn: np.ndarray
     vdet: np.ndarray
-    vfloor: np.ndarray
-    vlevel: np.ndarray
 
 
 # integer slots of EstCfg.ints
@@ -199,9 +183,8 @@ F_ALPHA_FAST = 13  # the fast average's weight of a sample
 F_FAST2 = 14  # the fast average's threshold (squared RMS ratio)
 F_DET_SPEED = 15  # [rad/s] a joint no faster within the selection memory creeps
 F_CREEP_MARGIN = 16  # a creeping joint's row alarms only beyond this times its Coulomb friction
-F_LEARN_BELOW2 = 17  # an established level learns only while short <= this x threshold x level (0: always)
-F_HOLD_ABOVE2 = 18  # a row rises when its short average exceeds this x the threshold x its level
-N_F = 19
+F_HOLD_ABOVE2 = 17  # a row rises when its short average exceeds this x the threshold x its level
+N_F = 18
 
 
 class EstState(NamedTuple):
@@ -304,8 +287,6 @@ class EstWork(NamedTuple):
         Scratch of the signals form's regression.
     raw, raw_est, pay : (10,); Pc : (10, 10); d : (p,)
         Scratch of the model control uses.
-    Mw, L : (n, n); yt : (n,); phit : (n, p); idx : (n,) int64
-        Scratch of the whitened update (:func:`_whitened_update`).
     Mr, Mr0 : (n, n); pir : (10 n,)
         Scratch of the detector's :func:`_ref_rise`.
     """
@@ -342,11 +323,6 @@ class EstWork(NamedTuple):
     pay: np.ndarray
     Pc: np.ndarray
     d: np.ndarray
-    Mw: np.ndarray
-    L: np.ndarray
-    yt: np.ndarray
-    phit: np.ndarray
-    idx: np.ndarray
     Mr: np.ndarray
     Mr0: np.ndarray
     pir: np.ndarray
@@ -366,7 +342,6 @@ def est_work(n, p):  # pragma: no cover - compiled
         u1[2 * n :].reshape((n, 10)), u0[2 * n :].reshape((n, 10)),
         np.empty(n), np.empty((n, 10)), np.empty((n, 10 * n)),
         np.empty(10), np.empty(10), np.empty(10), np.empty((10, 10)), np.empty(p),
-        np.empty((n, n)), np.empty((n, n)), np.empty(n), np.empty((n, p)), np.empty(n, dtype=np.int64),
         np.empty((n, n)), np.empty((n, n)), np.empty(10 * n),
     )  # fmt: skip
 
@@ -440,7 +415,7 @@ def _filtered_signals(c, s, i, q, qd, tau, w):  # pragma: no cover - compiled
         for k in range(4 * n):
             s.u_last[i, k] = u[k]
         cnt[C_SINCE_BAD] = min(cnt[C_SINCE_BAD] + 1, BIG)
-    if c.ints[I_MOMENTUM] == 1 and c.mode == MODE_FULL:
+    if c.ints[I_MOMENTUM] == 1 and c.mode == MODE_ARM:
         _arm_momentum_channels(c, s, i, start or cnt[C_RESTART] == 1, w)
         cnt[C_RESTART] = 0
         return cnt[C_SINCE_BAD] > c.ints[I_TAINT]
@@ -616,7 +591,7 @@ def _regression(c, qf, qdf, qddf, sf, tf, ym, phim, phi, y, w):  # pragma: no co
     ``w`` (:class:`EstWork`) its scratch."""
     n = qf.shape[0]
     p = phi.shape[1]
-    if c.mode == MODE_FULL and c.ints[I_MOMENTUM] == 1:  # written by _arm_momentum_channels
+    if c.mode == MODE_ARM and c.ints[I_MOMENTUM] == 1:  # written by _arm_momentum_channels
         return
     if c.mode == MODE_PAYLOAD and c.ints[I_MOMENTUM] == 1:
         for r in range(n):
@@ -706,97 +681,6 @@ def _rls_row(theta, P, phi, y, lam_eff, pphi, nz):  # pragma: no cover - compile
             for b in range(p):
                 P[a, b] *= il
     return eps
-
-
-@njit(cache=True, inline="always")
-def _row_floor(c, s, i, j, var):  # pragma: no cover - compiled
-    """What row j's variance ``var`` (whitened units, the sensor noise through the inertia) is
-    raised by: ``c.vfloor[j]``, and up to ``c.vlevel[j]`` times the detector's learnt level of the
-    row's squared prior error, the equation error the row shows beyond the noise (the arm's
-    unlearnt errors, friction, the filters' discretisation). The level read is the detector's own:
-    its long-run average once it has learnt ``gate_after`` samples since the last alarm (bias
-    corrected, at least its floor), else the level established before the alarm (``ref``), else
-    its floor. Read, not written: the detector is stepped after the update, on the prior errors."""
-    add = c.vfloor[j]
-    if c.vlevel[j] > 0.0:
-        fl = c.floats
-        nl = s.learned[i, j]
-        level = fl[F_FLOOR2]
-        if nl >= c.ints[I_GATE_AFTER]:
-            level = max(s.long[i, j] / (1.0 - (1.0 - fl[F_ALPHA_LONG]) ** nl), level)
-        elif s.ref[i, j] > 0.0:
-            level = s.ref[i, j]
-        add += max(0.0, c.vlevel[j] * level - var - add)
-    return add
-
-
-@njit(cache=True)
-def _whitened_update(c, s, i, q, phi, y, act, n_rows, w):  # pragma: no cover - compiled
-    """The rows in use at this sample, whitened, into trial i's estimate; returns False if any
-    row was used (the forgetting factor advanced once), else True.
-
-    Velocity noise enters every joint's equation through the inertia (``G1 (M qd)`` in
-    momentum form, ``M qdd`` at the filtered signals), so the rows' errors are correlated, with
-    covariance about ``M diag(vn^2) M^T`` over the rows in use. The rows are whitened by its
-    Cholesky factor ``L`` (``L^-1 (y, phi)``) and fed to the scalar updates one by one: the
-    weighted least squares of the rows' joint error (Gen3: the payload's first moment along the
-    flange's y axis known within 2 mm a second after a pick-up against 8 mm with independent
-    rows, ``docs/any_arm.md``). The detector's errors ``eps`` are each row's own prior error
-    (before this sample's updates) divided by ``w``.
-    """
-    n = q.shape[0]
-    p = phi.shape[1]
-    th, Pi = s.theta[i], s.P[i]
-    idx, M, L, yt, phit = w.idx, w.Mw, w.L, w.yt, w.phit
-    m = 0
-    for j in range(n_rows):
-        if act[j]:
-            idx[m] = j
-            m += 1
-            e = y[j]
-            for k in range(p):
-                e -= phi[j, k] * th[k]
-            s.eps[i, j] = e / c.w[j]
-    if m == 0:
-        return True
-    mass_matrix_in(c.ch, c.pi0[: 10 * n], q, w.chain, M)
-    for j in range(n):
-        M[j, j] += c.pi0[12 * n + j]
-    # L: Cholesky factor of (M V M^T + the rows' floors) over the rows in use
-    for a in range(m):
-        for b in range(a + 1):
-            acc = 0.0
-            for k in range(n):
-                acc += M[idx[a], k] * c.vn[k] * c.vn[k] * M[idx[b], k]
-            if a == b:
-                acc += _row_floor(c, s, i, idx[a], acc)
-            L[a, b] = acc
-    for a in range(m):
-        for b in range(a + 1):
-            acc = L[a, b]
-            for k in range(b):
-                acc -= L[a, k] * L[b, k]
-            if a == b:
-                if not (np.isfinite(acc) and acc > 0.0):
-                    return True  # no finite metric at this q: the sample is not learnt
-                L[a, a] = np.sqrt(acc)
-            else:
-                L[a, b] = acc / L[b, b]
-    for a in range(m):
-        ya = y[idx[a]]
-        for b in range(a):
-            ya -= L[a, b] * yt[b]
-        yt[a] = ya / L[a, a]
-        for k in range(p):
-            v = phi[idx[a], k]
-            for b in range(a):
-                v -= L[a, b] * phit[b, k]
-            phit[a, k] = v / L[a, a]
-    for a in range(m):
-        if a == 0:
-            s.lam[i] = (1.0 - c.floats[F_MU]) * s.lam[i] + c.floats[F_MU]
-        _rls_row(th, Pi, phit[a], yt[a], s.lam[i] if a == 0 else 1.0, w.pphi, w.nz)
-    return False
 
 
 @njit(cache=True)
@@ -946,10 +830,6 @@ def _detect(c, s, i, eps, act):  # pragma: no cover - compiled
             ok = True
             if nl >= ints[I_GATE_AFTER]:
                 ok = e2 <= fl[F_GATE2] * level
-                # nor, an established level, while the short average is raised: a change's error
-                # rises over the filters' time, each sample below the gate (issue 28, sice_drawn)
-                if fl[F_LEARN_BELOW2] > 0.0 and est:
-                    ok = ok and s.short[i, j] <= fl[F_LEARN_BELOW2] * fl[F_THRESHOLD2] * level
             if ints[I_HOLD] > 0 and est:
                 # a row whose short average rises is judged against the level it had then, for
                 # I_HOLD samples (a change's rise); the level itself learns on
@@ -1132,9 +1012,7 @@ def est_step_trial_in(c, s, i, q, qd, tau, w):  # pragma: no cover - compiled
         _regression(c, w.qf, w.qdf, w.qddf, w.sf, w.tf, w.ym, w.phim, phi, y, w)
         pphi, row, nz = w.pphi, w.row, w.nz
         first = True
-        if c.vn.shape[0] > 0:
-            first = _whitened_update(c, s, i, q, phi, y, act, n_rows, w)
-        for j in range(n_rows if c.vn.shape[0] == 0 else 0):
+        for j in range(n_rows):
             if not act[j]:
                 continue
             if first:
@@ -1187,7 +1065,7 @@ def est_detect_trial(c, s, i, eps, act):  # pragma: no cover - compiled
 
 @njit(cache=True, inline="always")
 def _payload_raw(c, th, raw):  # pragma: no cover - compiled
-    """The payload (10,) implied by an estimate theta, unprojected (full mode: least squares on pbasis)."""
+    """The payload (10,) implied by an estimate theta, unprojected (mode "arm": least squares on pbasis)."""
     p = th.shape[0]
     if c.mode == MODE_PAYLOAD:
         for k in range(10):
@@ -1324,7 +1202,7 @@ def est_model_trial_in(c, s, i, pi_out, w):  # pragma: no cover - compiled
     raw, pay = w.raw, w.pay
     _payload_raw(c, th, raw)
     raw_est = raw
-    if c.mode != MODE_PAYLOAD:  # full mode: theta's own payload
+    if c.mode != MODE_PAYLOAD:  # mode "arm": theta's own payload
         raw_est = w.raw_est
         for k in range(10):
             raw_est[k] = raw[k]

@@ -91,11 +91,6 @@ MEANING = {
     "(true by default; false is the law without it).",
     "setting.observer_bandwidth": "`adaptive_ct` (every arm): the residual observer's bandwidth "
     "[rad/s]; default 0.4 / T.",
-    "setting.observer_trip": "`adaptive_ct` (N-joint arms): a residual beyond the trip level starts "
-    "the boost before the detector alarms (default false: it tripped on friction the model lacks).",
-    "setting.observer_momentum_test": "`adaptive_ct` (N-joint arms): `true`, a matched test on the "
-    'integrated momentum error starts the boost before the detector alarms; `"reopen"`, and re-opens '
-    'the estimator as an alarm (default false; docs/change_detection.md, "The momentum test").',
     "setting.estimator": "The online estimator's settings (a table; fields below).",
     "setting.detector": "`adaptive_ct`: the change detector's settings (a table at the top of"
     " `[controllers.adaptive_ct]`; fields below), or `false`.",
