@@ -407,7 +407,7 @@ def test_cli_benchmark_of_an_n_joint_scenario_writes_every_output(tmp_path, caps
 
 
 def test_the_delayed_oracle_is_the_textbook_oracle_at_zero_delay_and_pays_for_a_delay():
-    """The plug-in behind studies/delayed_oracle.py: at zero delay the same law as the
+    """The plug-in behind studies/delayed_oracle.py (commit d41702f): at zero delay the same law as the
     compiled ct_oracle_textbook (Python path against compiled, to rounding); told of the 2 kg
     pickup 10 ms late it tracks worse in the segment after it, and its boost takes part of that back."""
     from adaptive_dd.closed_loop.controllers import JointGains

@@ -242,7 +242,7 @@ def test_the_excitation_identifies_coulomb_friction_with_the_noise_width():
     tanh plant. On a noise-free record of a sign law (width: the sign itself) it finds the Coulomb
     levels where the arm's 0.02 rad/s did not (with the shipped noise both are within 3 % on this
     record; on the drawn iiwa's excitation the noise's width halved the identified model's torque
-    error along the task's path, ``studies/excitation_diagnosis.py``)."""
+    error along the task's path, ``studies/excitation_diagnosis.py`` of commit d41702f)."""
     from adaptive_dd.identification.friction_width import coulomb_width, velocity_noise_std
 
     src = _shipped("vertical3_payload")

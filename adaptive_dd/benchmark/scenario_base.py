@@ -68,8 +68,9 @@ _SECONDS_PER_SAMPLE_TRIAL_JOINT2 = 2.5e-7
 # the rates above (one controller, every seed), plus the excitation's design (once) and one
 # identification per seed, per sample of the record times n_joints^2; measured on
 # gen3_excite.toml (7 joints, 20 s at 1 ms, one seed) on the development machine
-# (`python studies/excite_cost.py benchmarks/scenarios/gen3_excite.toml`: design 33.1 s,
-# identification 13.2 s = 1.34e-5 s per sample per joint^2; 37 s in a run under load).
+# (`python studies/excite_cost.py benchmarks/scenarios/gen3_excite.toml`, that script of
+# commit d41702f: design 33.1 s, identification 13.2 s = 1.34e-5 s per sample per joint^2;
+# 37 s in a run under load).
 _EXCITE_DESIGN_SECONDS = 33.0
 _IDENTIFY_SECONDS_PER_SAMPLE_JOINT2 = 1.3e-5
 

@@ -1,5 +1,5 @@
 """``DelayedOracle``: the floor that detection delay alone puts under adaptive control of an
-N-joint arm (a plug-in controller, run by ``studies/delayed_oracle.py``).
+N-joint arm (a plug-in controller, measured by ``studies/delayed_oracle.py`` of commit d41702f).
 
 It is computed torque with the textbook law of ``ct_oracle_textbook`` and the TRUE model,
 except that it learns of each payload change only ``delay`` seconds after it: what an estimator
