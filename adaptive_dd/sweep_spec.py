@@ -289,7 +289,7 @@ def parse_sweep(data: dict, src: str = "<memory>", base_dir: str | Path = ".") -
     seeds = _int(src, "sweep.seeds", sw.get("seeds", base.seeds), 1)
     block = _int(src, "sweep.block", sw.get("block", seeds), 1)
     ctrls = _controllers(src, sw, base)
-    base = dataclasses.replace(base, seeds=seeds, controllers=ctrls)
+    base = dataclasses.replace(base.with_controllers(ctrls), seeds=seeds)
     axes = _axes(src, data.get("grid", {}), ctrls)
     swap = _int(src, "sweep.swap", sw.get("swap", 0), 0)
     if any(a in ("payload_mass", "swap_time") for a, _ in axes) and swap >= len(base.swap_times):

@@ -32,7 +32,8 @@ def test_the_example_plugin_runs_from_a_scenario_with_its_settings():
 
     other = dataclasses.replace(sc, controller_options=(("PayloadGradient", freeze({"gamma": 1.0})),))
     res2 = run_benchmark(dataclasses.replace(other, controllers=sc.controllers[2:3]), progress=False)
-    assert not np.allclose(res2.runs["PayloadGradient"].acc.sum_e2, run.acc.sum_e2)
+    # without a label the results carry the class's declared name (docs/controllers.md)
+    assert not np.allclose(res2.runs["payload_gradient"].acc.sum_e2, run.acc.sum_e2)
 
 
 def test_builtin_settings_reach_the_controller():
@@ -180,3 +181,81 @@ def test_an_estimate_set_after_the_first_sample_is_reported(arm_kind):
     # a controller that never estimates reports none
     run = run_benchmark(sc, progress=False, controllers={"bare": BarePD()}).runs["bare"]
     assert run.sigma_end is None and run.sigma_hat is None
+
+
+# ---- a plug-in's name; settings tables of controllers left out by --controllers --------------
+
+NAMED_PD = (
+    "class NamedPD:\n"
+    "    name = 'gravity_pd'\n"
+    "    def reset(self, n, T):\n        pass\n"
+    "    def command(self, q, qd, q_d, qd_d, qdd_d):\n"
+    "        return 100.0 * (q_d - q) + 10.0 * (qd_d - qd)\n"
+    "    def observe(self, q, qd, tau):\n        pass\n"
+    "class Unnamed(NamedPD):\n"
+    "    name = None\n"
+)
+
+
+def _named_scenario(tmp_path, tables: str = "", controllers: str = '"named_mod:NamedPD"'):
+    (tmp_path / "named_mod.py").write_text(NAMED_PD)
+    path = tmp_path / "named.toml"
+    path.write_text(f"[run]\nduration = 0.4\nseeds = 1\ncontrollers = [{controllers}]\n{tables}")
+    return load_scenario(path)
+
+
+def test_a_plugins_declared_name_is_the_name_its_results_carry(tmp_path):
+    """docs/controllers.md: a controller's ``name`` is the name its results carry, a ``label``
+    setting overrides it; without either, the class name. Two controllers that would carry the
+    same name are an error naming both (a dict of runs would keep one silently)."""
+    from adaptive_dd.controllers.registry import scenario_controller, scenario_controllers
+
+    sc = _named_scenario(tmp_path)
+    assert scenario_controller(sc, "named_mod:NamedPD")[0] == "gravity_pd"
+    res = run_benchmark(dataclasses.replace(sc, swap_times=(), swap_masses=()), progress=False)
+    assert list(res.runs) == ["gravity_pd"] and not res.runs["gravity_pd"].error
+    labelled = _named_scenario(tmp_path, '[controllers.NamedPD]\nlabel = "mine"\n')
+    assert scenario_controller(labelled, "named_mod:NamedPD")[0] == "mine"
+    unnamed = _named_scenario(tmp_path, controllers='"named_mod:Unnamed"')
+    assert scenario_controller(unnamed, "named_mod:Unnamed")[0] == "Unnamed"
+    clash = _named_scenario(tmp_path, '[controllers.NamedPD]\nlabel = "ct_oracle"\n',
+                            '"named_mod:NamedPD", "ct_oracle"')  # fmt: skip
+    with pytest.raises(
+        ParameterError, match="'named_mod:NamedPD' and 'ct_oracle' both carry the name 'ct_oracle'"
+    ):
+        scenario_controllers(clash)
+
+
+def test_controllers_picked_on_the_command_line_drop_the_others_tables(tmp_path):
+    """``benchmark --controllers ct_oracle`` on a scenario with a plug-in's settings table runs
+    (it failed: ``controllers.PayloadGradient: not a controller of run.controllers``); the tables
+    of the controllers kept stay; a table for a controller the file never lists is still an error."""
+    from adaptive_dd.benchmark.scenario_checks import freeze
+    from adaptive_dd.cli.benchmark import only_controllers
+    from adaptive_dd.errors import ScenarioError
+
+    sc = load_scenario(EXAMPLES / "plugin.toml")
+    with pytest.raises(
+        ScenarioError, match=r"controllers\.PayloadGradient: not a controller of run\.controllers"
+    ):
+        dataclasses.replace(sc, controllers=("ct_oracle",))  # the selection as the CLI made it before
+    picked = sc.with_controllers(only_controllers(sc, ["ct_oracle"]))
+    assert picked.controllers == ("ct_oracle",) and picked.controller_options == ()
+    kept = sc.with_controllers(only_controllers(sc, ["adaptive_ct"]))  # its floor ct_oracle added
+    assert kept.controllers == ("adaptive_ct", "ct_oracle")
+    assert kept.controller_options == (
+        ("adaptive_ct", freeze({"boost_duration": 0.2, "detector": {"threshold": 4.0}})),
+    )
+    plug = sc.with_controllers(("payload_gradient:PayloadGradient",))
+    assert plug.options("PayloadGradient") == {"gamma": 200.0, "label": "payload_gradient"}
+    text = (EXAMPLES / "plugin.toml").read_text().replace('"payload_gradient:PayloadGradient", ', "")
+    (tmp_path / "unlisted.toml").write_text(text)
+    with pytest.raises(
+        ScenarioError, match=r"controllers\.PayloadGradient: not a controller of run\.controllers"
+    ):
+        load_scenario(tmp_path / "unlisted.toml")
+    # through the CLI, as the user ran it
+    out = tmp_path / "out"
+    argv = ["benchmark", str(EXAMPLES / "plugin.toml"), "--controllers", "ct_oracle", "--seeds", "1"]
+    assert main([*argv, "--out", str(out), "--no-progress"]) == 0
+    assert (out / "per_seed.csv").exists()

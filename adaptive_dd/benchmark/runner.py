@@ -112,7 +112,9 @@ def _run_two_link(
     compiled (:func:`~adaptive_dd.benchmark.drivers.run_compiled`) or in Python
     (:func:`~adaptive_dd.benchmark.drivers.run_python`), as ``engine`` says."""
     if controllers is None:
-        ctrls = dict(scenario_controller(scenario, spec) for spec in scenario.controllers)
+        from adaptive_dd.controllers.registry import scenario_controllers
+
+        ctrls = scenario_controllers(scenario)
     else:
         ctrls = controllers
     idx = tuple(range(scenario.seeds)) if seed_indices is None else tuple(int(i) for i in seed_indices)

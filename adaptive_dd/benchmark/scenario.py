@@ -82,7 +82,13 @@ import numpy as np
 from numpy.typing import NDArray
 
 from adaptive_dd.benchmark.scenario_base import LIMITS, Reference, RunEstimate, run_estimate
-from adaptive_dd.benchmark.scenario_checks import check_number, scenario_errors, scenario_fields, thaw
+from adaptive_dd.benchmark.scenario_checks import (
+    check_number,
+    scenario_errors,
+    scenario_fields,
+    table_name,
+    thaw,
+)
 from adaptive_dd.errors import ScenarioError
 from adaptive_dd.plant.arm import Arm
 from adaptive_dd.plant.arm_tables import arm_from_tables
@@ -255,6 +261,16 @@ class Scenario:
             if n == name:
                 return thaw(opts)
         return {}
+
+    def with_controllers(self, names) -> Scenario:
+        """This scenario running only ``names`` (some of its ``run.controllers``), the settings
+        tables of the others dropped with them: a table for a controller left out of a selection
+        made after the scenario was written (``benchmark --controllers``, a sweep's
+        ``controllers``) is not an error, as one for a controller never listed is."""
+        names = tuple(names)
+        keep = set(names) | {table_name(n) for n in names}
+        opts = tuple(o for o in self.controller_options if o[0] in keep)
+        return dataclasses.replace(self, controllers=names, controller_options=opts)
 
 
 def scenario_closed_forms(arm, plant: PlantSpec | None = None) -> ClosedFormTwoLink | None:

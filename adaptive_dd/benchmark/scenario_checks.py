@@ -16,7 +16,7 @@ from adaptive_dd.controllers import CONTROLLERS
 from adaptive_dd.plant.parameters import PAYLOAD_RADIUS
 from adaptive_dd.plant.sampling import first_sample
 
-__all__ = ["first_sample", "freeze", "scenario_errors", "scenario_fields", "thaw"]
+__all__ = ["first_sample", "freeze", "scenario_errors", "scenario_fields", "table_name", "thaw"]
 
 _NUM = (int, float, np.integer, np.floating)
 
@@ -160,7 +160,9 @@ def _n_joints(v: dict) -> int:
     return arm.n_joints if arm is not None else 2
 
 
-def _label(name: str) -> str:
+def table_name(name: str) -> str:
+    """The ``[controllers.NAME]`` a controller's settings table is named by: a built-in's name, a
+    plug-in's class name (``"package.module:Class"`` -> ``"Class"``)."""
     return name.rsplit(":", 1)[-1].rsplit(".", 1)[-1] if ":" in name else name
 
 
@@ -222,7 +224,7 @@ def _check_controllers(e: list, c: Any, arm: Any = None) -> bool:
                     f"{arm.n_joints}-joint arm: {CONTROLLERS[x].only}"
                 )
                 ok = False
-    if len(set(c)) != len(c) or len({_label(x) for x in c}) != len(c):
+    if len(set(c)) != len(c) or len({table_name(x) for x in c}) != len(c):
         e.append(f"run.controllers: a controller (or label) is listed twice: {list(c)}")
         ok = False
     return ok
@@ -331,7 +333,7 @@ def _check_options(e: list, opts: Any, ctrls: tuple) -> None:
     if not isinstance(opts, tuple):
         e.append(f"controllers: options must be a tuple of (name, settings), got {_short(opts)}")
         return
-    names = set(ctrls) | {_label(c) for c in ctrls}
+    names = set(ctrls) | {table_name(c) for c in ctrls}
     for item in opts:
         if not (isinstance(item, tuple) and len(item) == 2 and isinstance(item[1], _Table)):
             e.append(f"controllers: each entry must be (name, frozen table), got {_short(item)}")

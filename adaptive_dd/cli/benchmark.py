@@ -51,7 +51,7 @@ def run(args: argparse.Namespace) -> int:
     if args.seeds is not None:
         sc = dataclasses.replace(sc, seeds=args.seeds)
     if args.controllers:
-        sc = dataclasses.replace(sc, controllers=only_controllers(sc, args.controllers))
+        sc = sc.with_controllers(only_controllers(sc, args.controllers))
     if sc.estimate().large:
         print(f"estimate: {sc.estimate()}", file=sys.stderr)
     for line in limit_warnings(sc):

@@ -63,7 +63,9 @@ __all__ = [
 def make_controllers(scenario) -> dict:
     """The scenario's controllers by label: built-ins and plug-ins by path
     (:func:`adaptive_dd.controllers.make_controller`)."""
-    return dict(make_controller_of(scenario, spec) for spec in scenario.controllers)
+    from adaptive_dd.controllers.registry import scenario_controllers
+
+    return scenario_controllers(scenario)
 
 
 def make_controller_of(scenario, spec: str) -> tuple[str, object]:
