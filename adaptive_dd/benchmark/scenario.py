@@ -324,7 +324,7 @@ def load_scenario(path: str | Path | None = None) -> Scenario:
 
 def _with_stated_noise(arm, position_variance, velocity_variance):
     """The arm with the scenario's ``[noise]`` as its sensors' variances, so that whatever reads
-    ``arm.sensor`` (the momentum test's near-rest speed, identification on the arm) reads the
+    ``arm.sensor`` (the detector's noise rise, identification on the arm) reads the
     noise the run draws, not the URDF arm's defaults."""
     arm = as_arm(arm)  # a closed-form record: the arm it is of (as Scenario does)
     pv = tuple(float(x) for x in position_variance)
