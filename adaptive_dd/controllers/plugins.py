@@ -118,6 +118,6 @@ def _plugin(spec: str, g: Gains, options: dict, given: dict, search: tuple) -> C
         ctrl = cls(**kw)
     except (TypeError, ValueError) as exc:
         raise ParameterError(f"controllers.{spec}: {type(exc).__name__}: {exc}") from None
-    if not hasattr(ctrl, "name") or ctrl.name == Controller.name:
+    if not getattr(ctrl, "name", None) or ctrl.name == Controller.name:  # none declared: the class name
         ctrl.name = controller_label(spec)
     return ctrl
