@@ -115,3 +115,28 @@ def test_a_urdf_arm_s_sensors_carry_the_scenario_s_noise():
     root = Path(__file__).resolve().parents[1]
     drawn = load_scenario(root / "benchmarks" / "scenarios" / "sice_drawn.toml")
     assert drawn.arm.sensor.velocity_variance == tuple(drawn.velocity_variance) == (5e-5, 1e-4)
+
+
+@pytest.mark.parametrize(
+    ("setting", "named"),
+    [
+        ({"estimator": {"whiten": True}}, "controllers.adaptive_ct.estimator: .*'whiten'"),
+        ({"estimator": {"row_floor": "stated"}}, "controllers.adaptive_ct.estimator: .*'row_floor'"),
+        ({"estimator": {"mode": "full"}}, r"mode must be one of \('payload', 'arm'\), got 'full'"),
+        ({"detector": {"learn_below": 0.5}}, "controllers.adaptive_ct.estimator: .*'learn_below'"),
+        ({"observer_trip": True}, r"controllers.adaptive_ct: unknown setting\(s\) \['observer_trip'\]"),
+        ({"observer_momentum_test": "reopen"}, r"unknown setting\(s\) \['observer_momentum_test'\]"),
+    ],
+)
+def test_a_removed_option_in_a_scenario_is_an_error_naming_file_and_key(setting, named):
+    """The options measured and removed (docs/changelog.md) are not silently ignored when an older
+    scenario still sets them: building adaptive_ct names the file and the key."""
+    from adaptive_dd.benchmark.scenario import parse_scenario, read_toml
+    from adaptive_dd.controllers.registry import scenario_controller
+
+    src = default_scenario_path().parent / "ur5_tool_swap.toml"
+    data = read_toml(src)
+    data.setdefault("controllers", {}).setdefault("adaptive_ct", {}).update(setting)
+    with pytest.raises(ScenarioError, match=named) as err:
+        scenario_controller(parse_scenario(data, str(src)), "adaptive_ct")
+    assert str(err.value).startswith(f"{src}: controllers.adaptive_ct"), err.value
