@@ -13,7 +13,15 @@ with ``e = q_d - q``, ``e' = qd_d - qd`` and, per :class:`LawConfig`:
   the two-link ``ct_oracle_textbook``: the sign of a noisy measured speed would chatter);
   no other feedback;
 * ``KIND_SLOTINE``: Slotine-Li, ``qd_r = qd_d + lam e``, ``a = qdd_d + lam e'``, feedback
-  ``kd M0(q) s`` with ``s = e' + lam e`` and M0 the nominal inertia (armature included).
+  ``kd M0(q) s`` with ``s = e' + lam e`` and M0 the nominal inertia (armature included), or
+  ``kd s`` (``kd`` in N m s/rad) when ``feedback_inertia`` is false (the textbook form);
+  with ``robust`` (sliding mode, Slotine 1985), plus ``rho sat(s / phi)`` per joint, ``rho`` the
+  bound of the model's torque error ``|Y(q, qd, qd_r, a)| dpi`` (dpi the bound of each standard
+  parameter's error, ``rho_pi``, and of the payload's, ``rho_payload``) and the boundary layer
+  ``phi = rho / (lam M0_jj)`` (the balance condition ``k = lam phi`` of Slotine and Li, *Applied
+  Nonlinear Control*, sec. 7.2: inside the layer the term is the feedback ``lam M0_jj s``);
+* ``KIND_PD_GRAVITY``: PD plus gravity compensation (Takegaki and Arimoto 1981),
+  ``tau = kp e + kd e' + g(q)`` with ``g`` the model's gravity torque.
 
 The model ``pi_model`` (13 n standard parameters ``[links, fv, fc, Ia]``) is the fixed one
 of the configuration (``MODEL_FIXED``), the true one of the current segment
@@ -52,6 +60,7 @@ from adaptive_dd.plant.chain import body_slotine_li_regressor_in, mass_matrix_in
 __all__ = [
     "KIND_CT",
     "KIND_PD",
+    "KIND_PD_GRAVITY",
     "KIND_SLOTINE",
     "MODEL_FIXED",
     "MODEL_NONE",
@@ -71,7 +80,7 @@ __all__ = [
 
 Array = NDArray[np.float64]
 
-KIND_PD, KIND_CT, KIND_SLOTINE = 0, 1, 2
+KIND_PD, KIND_CT, KIND_SLOTINE, KIND_PD_GRAVITY = 0, 1, 2, 3
 MODEL_NONE, MODEL_FIXED, MODEL_TRUE, MODEL_TRIAL = 0, 1, 2, 3
 
 
@@ -145,6 +154,14 @@ class LawConfig(NamedTuple):
     obs_mreopen : bool
         A start of the boost by the momentum test also asks the estimator to re-open, as its
         detector's alarm does (``obs[O_MC, 1] = 2``, read by the closed loop's estimator sample).
+    feedback_inertia : bool
+        Slotine-Li's feedback is ``kd M0(q) s`` (true) or ``kd s`` with ``kd`` in N m s/rad.
+    robust : bool
+        Slotine-Li plus the sliding-mode term ``rho sat(s / phi)`` (module docstring).
+    rho_pi : ndarray (13 n,)
+        Bound of the error of each standard parameter of ``pi_fixed`` (units of the parameter).
+    rho_payload : ndarray (10,)
+        Bound of each payload parameter (about the payload frame), the model having none.
     """
 
     kind: int
@@ -179,6 +196,10 @@ class LawConfig(NamedTuple):
     obs_mreopen: bool = False
     obs_mcreep: float = 0.0
     obs_mcreep_margin: float = 0.0
+    feedback_inertia: bool = True
+    robust: bool = False
+    rho_pi: Array = np.zeros(1)
+    rho_payload: Array = np.zeros(10)
 
 
 class LawState(NamedTuple):
@@ -291,6 +312,39 @@ def _adapt_payload(ch, cfg, q, qd, qdr, a, s, theta, pi_model, work):  # pragma:
 
 
 @njit(cache=True)
+def _sliding_term(ch, cfg, q, qd, qdr, a, s, work, out):  # pragma: no cover - compiled
+    """``out += rho sat(s / phi)`` (module docstring): ``rho_r = sum_c |Y[r, c]| rho_pi[c]`` over
+    the links' Slotine-Li regressor blocks, the payload's (``|Y_j P|``) and friction and armature
+    (``|qd_r| dfv + dfc + |a| dIa``); ``phi = rho / (lam M0_jj)``."""
+    n = q.shape[0]
+    rho, yb, m = work[7][0], work[3], work[2]
+    d = cfg.rho_pi
+    for r in range(n):
+        rho[r] = abs(qdr[r]) * d[10 * n + r] + d[11 * n + r] + abs(a[r]) * d[12 * n + r]
+    for j in range(n):
+        body_slotine_li_regressor_in(ch, j, q, qd, qdr, a, work[0], work[4], yb)
+        for r in range(n):
+            acc = 0.0
+            for c in range(10):
+                acc += abs(yb[r, c]) * cfg.rho_pi[10 * j + c]
+            rho[r] += acc
+        if j == cfg.payload_joint:
+            for r in range(n):
+                acc = 0.0
+                for k in range(10):
+                    yp = 0.0
+                    for c in range(10):
+                        yp += yb[r, c] * cfg.payload_map[c, k]
+                    acc += abs(yp) * cfg.rho_payload[k]
+                rho[r] += acc
+    mass_matrix_in(ch, cfg.pi_fixed[: 10 * n], q, work[0], m)
+    for j in range(n):
+        u = (m[j, j] + cfg.pi_fixed[12 * n + j]) * cfg.lam[j] * s[j]
+        if np.isfinite(rho[j]) and np.isfinite(u):
+            out[j] += min(max(u, -rho[j]), rho[j])
+
+
+@njit(cache=True)
 def law_trial(
     ch, cfg, pi_true, pi_model, theta, since_alarm, obs, q, qd, q_d, qd_d, qdd_d, out
 ):  # pragma: no cover
@@ -351,6 +405,13 @@ def law_trial_in(
         for j in range(n):
             out[j] = cfg.kp[j] * e[j] + cfg.kd[j] * ed[j]
         return
+    if cfg.kind == KIND_PD_GRAVITY:
+        for j in range(n):
+            v[j] = 0.0
+        _model_torque(ch, pi_true if cfg.model == MODEL_TRUE else cfg.pi_fixed, q, v, v, v, v, work[0], out)
+        for j in range(n):
+            out[j] += cfg.kp[j] * e[j] + cfg.kd[j] * ed[j]
+        return
     for j in range(n):
         if cfg.kind == KIND_CT:
             a[j] = qdd_d[j] + cfg.kd[j] * ed[j] + cfg.kp[j] * e[j]
@@ -369,7 +430,15 @@ def law_trial_in(
     if cfg.kind == KIND_SLOTINE:
         for j in range(n):
             s[j] = cfg.kd[j] * (ed[j] + cfg.lam[j] * e[j])
-        _add_nominal_inertia(ch, cfg, q, s, work, out)
+        if cfg.feedback_inertia:
+            _add_nominal_inertia(ch, cfg, q, s, work, out)
+        else:
+            for j in range(n):
+                out[j] += s[j]
+        if cfg.robust:
+            for j in range(n):
+                s[j] = ed[j] + cfg.lam[j] * e[j]
+            _sliding_term(ch, cfg, q, qd, qdr, a, s, work, out)
         if cfg.adapt:
             for j in range(n):
                 s[j] = ed[j] + cfg.lam[j] * e[j]
