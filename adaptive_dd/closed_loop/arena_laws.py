@@ -16,6 +16,7 @@ from adaptive_dd.closed_loop.controllers import (
     OBSERVER_LEVEL_WINDOW,
     OBSERVER_WARMUP,
     Law,
+    SlotineLi,
     observer_bandwidth,
 )
 from adaptive_dd.closed_loop.laws import KIND_CT, KIND_PD_GRAVITY, KIND_SLOTINE, MODEL_FIXED, MODEL_TRUE
@@ -25,6 +26,7 @@ from adaptive_dd.errors import is_finite_number as _is_number
 __all__ = [
     "ARENA_CONTROLLERS",
     "ARM_LAWS",
+    "Composite",
     "MomentumObserverCT",
     "PDGravity",
     "PDGravityOracle",
@@ -173,11 +175,37 @@ class MomentumObserverCT(Law):
         )  # fmt: skip
 
 
+class Composite(SlotineLi):
+    """Composite adaptive control (Slotine and Li, "Composite Adaptive Control of Robot
+    Manipulators", Automatica 25(4), 1989) on the payload's ten parameters as ``slotine_li`` adapts
+    them (the same gains, box and feedback): ``theta' = Gamma (Y_p^T s + W^T R eps)``, ``W`` the
+    payload's regressor and ``eps`` the applied torque's prediction error, both through the
+    first-order filter ``lam / (s + lam)`` of the dynamics in momentum form (no acceleration:
+    :mod:`adaptive_dd.closed_loop.composite`). Derived settings: the filter's rate the tracking
+    bandwidth ``min(lam)``; ``R = diag(1 / (k m0))`` (``k m0``, the feedback's gain at the middle of
+    the joint ranges, turns a torque error into the ``s`` it leaves: both terms in the same units
+    and weight). A constant ``Gamma`` (the paper's time-varying gain is not used). Signals:
+    measured ``q, qd``, the applied torque of the samples before, ``qdd_d``."""
+
+    name = "composite"
+    floor = "slotine_li_oracle"
+
+    def law_config(self, sample_period):
+        cfg = super().law_config(sample_period)
+        m0 = self.arm.nominal_inertia()  # armature included
+        return cfg._replace(
+            composite=True,
+            comp_rate=float(np.min(cfg.lam)),
+            comp_weight=1.0 / (cfg.kd * np.maximum(m0, 1e-9)),
+        )
+
+
 ARENA_CONTROLLERS: dict[str, type[Law]] = {
     "pd_gravity": PDGravity,
     "pd_gravity_oracle": PDGravityOracle,
     "sliding_mode": SlidingMode,
     "momentum_observer_ct": MomentumObserverCT,
+    "composite": Composite,
 }
 """The arena's N-joint built-ins, name -> class."""
 

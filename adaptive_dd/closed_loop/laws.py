@@ -33,6 +33,9 @@ The residual observer (``observer``, adaptive_ct's; :mod:`adaptive_dd.closed_loo
 adds to the command the torque the trial's model leaves unexplained, soft-thresholded at its own
 learnt noise level; its momentum test and its trip start the boost as an alarm would.
 
+Composite adaptation (``composite``, Slotine and Li 1989) adds to Slotine-Li's step the filtered
+torque's prediction error (:mod:`adaptive_dd.closed_loop.composite`).
+
 Slotine-Li's payload adaptation: with ``Y_p = Y_j(q, qd, qd_r, a) P`` (the link-j block of
 the Slotine-Li regressor times the payload map P of the payload frame),
 ``theta += T Gamma Y_p^T s``, then ``theta`` is clipped to ``[lo, hi]``; the mass kept
@@ -47,6 +50,7 @@ import numpy as np
 from numba import njit
 from numpy.typing import NDArray
 
+from adaptive_dd.closed_loop.composite import composite_term
 from adaptive_dd.closed_loop.residual_observer import (
     O_MC,
     O_TRIP,
@@ -162,6 +166,13 @@ class LawConfig(NamedTuple):
         Bound of the error of each standard parameter of ``pi_fixed`` (units of the parameter).
     rho_payload : ndarray (10,)
         Bound of each payload parameter (about the payload frame), the model having none.
+    composite : bool
+        Slotine-Li's adaptation adds the filtered-torque prediction error's term ``W^T R eps``
+        (:mod:`adaptive_dd.closed_loop.composite`; its state in ``obs``, the observer off).
+    comp_rate : float
+        [rad/s] Rate of the composite term's first-order filter.
+    comp_weight : ndarray (n,)
+        Diagonal of its weight R [1/(N m s)].
     """
 
     kind: int
@@ -200,6 +211,9 @@ class LawConfig(NamedTuple):
     robust: bool = False
     rho_pi: Array = np.zeros(1)
     rho_payload: Array = np.zeros(10)
+    composite: bool = False
+    comp_rate: float = 0.0
+    comp_weight: Array = np.zeros(1)
 
 
 class LawState(NamedTuple):
@@ -230,7 +244,7 @@ def law_work(n):  # pragma: no cover - compiled
     the chain workspace, ``(6, n)`` rows (e, e', qd_r, a, s, v), ``M (n, n)``, ``Y (n, 10)``,
     ``(6, 10)``, ``(10,)``; the observer's ``(2, 6, 10)``, ``(4, n)`` (p, wv at the last and this
     measurement), ``(2, n, 10)``; the momentum test's ``(n + 4, n)`` (``M^-1``, rho, the model's
-    Coulomb friction, the window's sum and its whitened form)."""
+    Coulomb friction, the window's sum and its whitened form); the composite term ``(10,)``."""
     return (
         workspace(n),
         np.empty((6, n)),
@@ -242,6 +256,7 @@ def law_work(n):  # pragma: no cover - compiled
         np.empty((4, n)),
         np.empty((2, n, 10)),
         np.empty((n + 4, n)),
+        np.empty(10),
     )
 
 
@@ -278,7 +293,8 @@ def _add_nominal_inertia(ch, cfg, q, v, work, out):  # pragma: no cover - compil
 
 @njit(cache=True)
 def _adapt_payload(ch, cfg, q, qd, qdr, a, s, theta, pi_model, work):  # pragma: no cover - compiled
-    """One gradient step of the payload parameters, projected; pi_model rebuilt from them."""
+    """One gradient step of the payload parameters, projected; pi_model rebuilt from them (with
+    ``cfg.composite`` the step adds ``work[10]``, the composite term ``W^T R eps``)."""
     n = q.shape[0]
     j = cfg.payload_joint
     yb = work[3]
@@ -293,6 +309,8 @@ def _adapt_payload(ch, cfg, q, qd, qdr, a, s, theta, pi_model, work):  # pragma:
         upd = 0.0
         for c in range(10):
             upd += cfg.payload_map[c, k] * g[c]
+        if cfg.composite:
+            upd += work[10][k]
         upd *= cfg.T * cfg.gamma[k]
         th = theta[k] + (upd if np.isfinite(upd) else 0.0)
         theta[k] = min(max(th, cfg.lo[k]), cfg.hi[k])
@@ -442,6 +460,8 @@ def law_trial_in(
         if cfg.adapt:
             for j in range(n):
                 s[j] = ed[j] + cfg.lam[j] * e[j]
+            if cfg.composite:
+                composite_term(ch, cfg, q, qd, theta, obs, work, work[10])
             _adapt_payload(ch, cfg, q, qd, qdr, a, s, theta, pi_model, work)
     trips = cfg.obs_trip > 0.0 or cfg.obs_mtest > 0.0
     if cfg.observer and trips:  # samples since the observer last tripped the boost

@@ -390,6 +390,14 @@ CONTROLLERS: dict[str, Builtin] = {
         _SLIDING,
         only=_N_JOINT_ONLY,
     ),
+    "composite": Builtin(
+        "estimator (gradient adaptation and the filtered torque's prediction error)",
+        "Slotine and Li's composite adaptive control on the payload (Automatica 1989), slotine_li's box",
+        None,
+        "composite",
+        {k: dataclasses.replace(v, two_link=ABSENT, rule=_NOT_TWO_LINK) for k, v in _SLOTINE.items()},
+        only=_N_JOINT_ONLY,
+    ),
     "momentum_observer_ct": Builtin(
         "nominal model and the applied torque",
         "computed torque on the nominal model plus the generalized-momentum observer's residual "
