@@ -157,13 +157,15 @@ class SlidingMode(Law):
 
 class MomentumObserverCT(Law):
     """Computed torque on the nominal model plus the generalized-momentum observer's estimate of
-    the torque the model leaves unexplained (De Luca, Albu-Schaeffer, Haddadin and Hirzinger,
-    "Collision Detection and Safe Reaction with the DLR-III Lightweight Manipulator Arm", IROS
-    2006; De Luca and Mattone, ICRA 2005): ``tau = tau_ct(pi0) + r``, ``r`` the residual of
-    :mod:`adaptive_dd.closed_loop.residual_observer` (adaptive_ct's observer, its settings derived
-    from the sample period: two stages at ``0.4 / T``, soft-thresholded at 3 times its own learnt
-    level). Signals: measured ``q, qd``, the applied torque of the samples before. Its floor is
-    ``ct_oracle``; the observer never learns: the payload's torque is fed back through ``r``'s lag."""
+    the torque the model leaves unexplained (De Luca and Mattone, "Sensorless Robot Collision
+    Detection and Hybrid Force/Motion Control", ICRA 2005; De Luca, Albu-Schaeffer, Haddadin and
+    Hirzinger, IROS 2006): ``tau = tau_ct(pi0) + r``, ``r`` the residual of
+    :mod:`adaptive_dd.closed_loop.residual_observer` (adaptive_ct's observer, its bandwidth derived
+    from the sample period: two stages at ``0.4 / T``), fed back in full after its 0.5 s warm-up
+    (no soft threshold: adaptive_ct's threshold follows a learnt level that a lasting payload torque
+    raises until it passes nothing, while here the observer is the only thing that ever learns the
+    payload). Signals: measured ``q, qd``, the applied torque of the samples before. Its floor is
+    ``ct_oracle``."""
 
     name = "momentum_observer_ct"
 
@@ -172,6 +174,7 @@ class MomentumObserverCT(Law):
         return self._config(
             T, KIND_CT, MODEL_FIXED, observer=True, obs_a=float(np.exp(-observer_bandwidth(T) * T)),
             obs_alpha=min(1.0, T / OBSERVER_LEVEL_WINDOW), obs_warmup=round(OBSERVER_WARMUP / T),
+            obs_kappa=0.0,
         )  # fmt: skip
 
 
