@@ -108,8 +108,9 @@ def _scenario(spec):
 
 
 def _with_floors(sc, names: Sequence[str]) -> tuple[tuple[str, ...], dict, dict]:
-    """The names to run (each asked-for one and its floor), each one's floor, and why a floor that
-    does not build is missing (its row then has no ratio and says so)."""
+    """The names to run (each asked-for one and its floor), each one's floor by the label its
+    results carry, and why a floor that does not build is missing (its row then has no ratio and
+    says so)."""
     from adaptive_dd.controllers.registry import scenario_controller
 
     floors: dict[str, str | None] = {}
@@ -117,10 +118,10 @@ def _with_floors(sc, names: Sequence[str]) -> tuple[tuple[str, ...], dict, dict]
     run: list[str] = []
     for name in names:
         try:
-            floors[name] = getattr(scenario_controller(sc, name)[1], "floor", "ct_oracle")
+            label, ctrl = scenario_controller(sc, name)  # results carry the label (a plug-in's class)
         except ParameterError as exc:
             raise ParameterError(f"leaderboard: {sc.source}: {exc}") from None
-        floor = floors[name]
+        floor = floors[label] = getattr(ctrl, "floor", "ct_oracle")
         if floor is not None and floor not in run and floor not in missing:
             try:
                 scenario_controller(sc, floor)
@@ -224,5 +225,5 @@ def leaderboard(
             sc = dataclasses.replace(sc, seeds=seeds)
         names, floors, missing = _with_floors(sc, controllers)
         res = run_benchmark(dataclasses.replace(sc, controllers=names), progress=progress)
-        rows += _rows(res, {n: floors.get(n, res.runs[n].floor) for n in names}, missing, rng)
+        rows += _rows(res, {n: floors.get(n, r.floor) for n, r in res.runs.items()}, missing, rng)
     return pd.DataFrame(rows, columns=list(COLUMNS))
