@@ -171,7 +171,6 @@ def test_composite_prediction_error_vanishes_at_the_true_payload(rng):
     )
 
 
-@pytest.mark.slow
 def test_compiled_and_python_paths_agree_for_the_laws_that_read_the_applied_torque():
     """The observer's and the composite term's applied torque reaches them on both paths alike (a
     dropout holds a measurement: the held-sample rule too)."""
