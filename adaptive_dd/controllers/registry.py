@@ -22,6 +22,11 @@ Built-in settings:
     ``gamma`` (seven adaptation gains).
 ``ct_nominal``, ``pd``
     ``sigma`` (the fixed model, seven base parameters).
+``sliding_mode`` (N-joint arms)
+    ``uncertainty`` (the levels of ``[plant.uncertainty]``, by default the scenario's), ``max_mass``,
+    ``com_radius`` (the payload's bound).
+``composite`` (N-joint arms)
+    ``slotine_li``'s ``gamma``, ``max_mass``, ``com_radius``.
 
 A plug-in class is called with its table's settings as keyword arguments, plus ``gains``
 (:class:`Gains`), ``sigma_nominal`` (the arm's base parameters), ``arm`` (the arm, two-link
