@@ -1,4 +1,4 @@
-"""Command-line interface: ``adaptive-dd {check,simulate,reproduce,identify,benchmark,sweep,validate}``.
+"""Command-line interface: ``adaptive-dd {check,simulate,reproduce,identify,benchmark,sweep,validate,...}``.
 
 Exit codes: 0 success, 1 a check or an estimate failed, 2 a user error (bad option,
 scenario, record or output path; one line naming the problem), 3 an internal error
@@ -34,6 +34,7 @@ COMMANDS = (
     "benchmark",
     "validate",
     "sweep",
+    "leaderboard",
 )
 
 

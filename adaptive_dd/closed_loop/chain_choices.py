@@ -129,6 +129,7 @@ def _chain_estimator_work(ec, es):  # pragma: no cover - compiled
 def _chain_estimator_sample(ec, es, ls, i, q, qd, tau, ew):  # pragma: no cover - compiled
     if not ec.active:
         ls.since_alarm[i] += 1
+        observe_applied(ls.obs[i], tau)  # the residual observer of a law without an estimator
         return 0
     return online_sample(ec.cfg, es, ls, i, q, qd, tau, ew)
 
@@ -185,6 +186,7 @@ def _estimator_sample(ec, es, ls, i, q, qd, tau, ew):
 
         def none(ec, es, ls, i, q, qd, tau, ew):  # pragma: no cover - compiled
             ls.since_alarm[i] += 1
+            observe_applied(ls.obs[i], tau)  # as the compiled loop's inactive estimator
             return 0
 
         return none

@@ -506,8 +506,12 @@ def with_stated_uncertainty(name: str, options: dict, scenario) -> dict:
     ``arm_uncertainty`` nor ``mode``: a user who states how far the robot may be from its URDF
     gets an estimator that learns the arm (``docs/learning_the_arm.md``). Normal draws (clipped
     at 3) are given the uniform levels of the same variance (``level * sqrt(3)``). Other
-    controllers' options, and scenarios that state no uncertainty, are returned as they are."""
+    controllers' options, and scenarios that state no uncertainty, are returned as they are, but for
+    ``sliding_mode``'s, given the levels as its ``uncertainty`` (the bound of its model error)."""
     unc = getattr(getattr(scenario, "plant", None), "uncertainty", None)
+    if name == "sliding_mode" and unc is not None and "uncertainty" not in (options or {}):
+        keys = ("mass", "com", "inertia", "viscous", "coulomb", "armature", "distribution")
+        return {**(options or {}), "uncertainty": {k: getattr(unc, k) for k in keys if hasattr(unc, k)}}
     est = (options or {}).get("estimator", {})
     if name != "adaptive_ct" or unc is None or not isinstance(est, dict):
         return options

@@ -13,7 +13,15 @@ with ``e = q_d - q``, ``e' = qd_d - qd`` and, per :class:`LawConfig`:
   the two-link ``ct_oracle_textbook``: the sign of a noisy measured speed would chatter);
   no other feedback;
 * ``KIND_SLOTINE``: Slotine-Li, ``qd_r = qd_d + lam e``, ``a = qdd_d + lam e'``, feedback
-  ``kd M0(q) s`` with ``s = e' + lam e`` and M0 the nominal inertia (armature included).
+  ``kd M0(q) s`` with ``s = e' + lam e`` and M0 the nominal inertia (armature included), or
+  ``kd s`` (``kd`` in N m s/rad) when ``feedback_inertia`` is false (the textbook form);
+  with ``robust`` (sliding mode, Slotine 1985), plus ``rho sat(s / phi)`` per joint, ``rho`` the
+  bound of the model's torque error ``|Y(q, qd, qd_r, a)| dpi`` (dpi the bound of each standard
+  parameter's error, ``rho_pi``, and of the payload's, ``rho_payload``) and the boundary layer
+  ``phi = rho / (lam M0_jj)`` (the balance condition ``k = lam phi`` of Slotine and Li, *Applied
+  Nonlinear Control*, sec. 7.2: inside the layer the term is the feedback ``lam M0_jj s``);
+* ``KIND_PD_GRAVITY``: PD plus gravity compensation (Takegaki and Arimoto 1981),
+  ``tau = kp e + kd e' + g(q)`` with ``g`` the model's gravity torque.
 
 The model ``pi_model`` (13 n standard parameters ``[links, fv, fc, Ia]``) is the fixed one
 of the configuration (``MODEL_FIXED``), the true one of the current segment
@@ -24,6 +32,9 @@ the nominal model plus the adapted payload). After an alarm, for ``boost_samples
 The residual observer (``observer``, adaptive_ct's; :mod:`adaptive_dd.closed_loop.residual_observer`)
 adds to the command the torque the trial's model leaves unexplained, soft-thresholded at its own
 learnt noise level.
+
+Composite adaptation (``composite``, Slotine and Li 1989) adds to Slotine-Li's step the filtered
+torque's prediction error (:mod:`adaptive_dd.closed_loop.composite`).
 
 Slotine-Li's payload adaptation: with ``Y_p = Y_j(q, qd, qd_r, a) P`` (the link-j block of
 the Slotine-Li regressor times the payload map P of the payload frame),
@@ -39,12 +50,14 @@ import numpy as np
 from numba import njit
 from numpy.typing import NDArray
 
+from adaptive_dd.closed_loop.composite import composite_term
 from adaptive_dd.closed_loop.residual_observer import OBS_ROWS, _observe, observe_applied
 from adaptive_dd.plant.chain import body_slotine_li_regressor_in, mass_matrix_in, rnea_ref_in, workspace
 
 __all__ = [
     "KIND_CT",
     "KIND_PD",
+    "KIND_PD_GRAVITY",
     "KIND_SLOTINE",
     "MODEL_FIXED",
     "MODEL_NONE",
@@ -63,7 +76,7 @@ __all__ = [
 
 Array = NDArray[np.float64]
 
-KIND_PD, KIND_CT, KIND_SLOTINE = 0, 1, 2
+KIND_PD, KIND_CT, KIND_SLOTINE, KIND_PD_GRAVITY = 0, 1, 2, 3
 MODEL_NONE, MODEL_FIXED, MODEL_TRUE, MODEL_TRIAL = 0, 1, 2, 3
 
 
@@ -113,6 +126,21 @@ class LawConfig(NamedTuple):
         Weight of a sample in the level (``T`` over its 1 s window).
     obs_warmup : int
         Updates before ``r`` feeds the command (the level learnt meanwhile, not winsorised).
+    feedback_inertia : bool
+        Slotine-Li's feedback is ``kd M0(q) s`` (true) or ``kd s`` with ``kd`` in N m s/rad.
+    robust : bool
+        Slotine-Li plus the sliding-mode term ``rho sat(s / phi)`` (module docstring).
+    rho_pi : ndarray (13 n,)
+        Bound of the error of each standard parameter of ``pi_fixed`` (units of the parameter).
+    rho_payload : ndarray (10,)
+        Bound of each payload parameter (about the payload frame), the model having none.
+    composite : bool
+        Slotine-Li's adaptation adds the filtered-torque prediction error's term ``W^T R eps``
+        (:mod:`adaptive_dd.closed_loop.composite`; its state in ``obs``, the observer off).
+    comp_rate : float
+        [rad/s] Rate of the composite term's first-order filter.
+    comp_weight : ndarray (n,)
+        Diagonal of its weight R [1/(N m s)].
     """
 
     kind: int
@@ -140,6 +168,13 @@ class LawConfig(NamedTuple):
     obs_kappa: float
     obs_alpha: float
     obs_warmup: int
+    feedback_inertia: bool = True
+    robust: bool = False
+    rho_pi: Array = np.zeros(1)
+    rho_payload: Array = np.zeros(10)
+    composite: bool = False
+    comp_rate: float = 0.0
+    comp_weight: Array = np.zeros(1)
 
 
 class LawState(NamedTuple):
@@ -167,7 +202,7 @@ def law_work(n):  # pragma: no cover - compiled
     """Scratch of one trial's :func:`law_trial_in` (allocated once per trial, not per sample):
     the chain workspace, ``(6, n)`` rows (e, e', qd_r, a, s, v), ``M (n, n)``, ``Y (n, 10)``,
     ``(6, 10)``, ``(10,)``; the observer's ``(2, 6, 10)``, ``(4, n)`` (p, wv at the last and this
-    measurement), ``(2, n, 10)``."""
+    measurement), ``(2, n, 10)``; the composite term ``(10,)``."""
     return (
         workspace(n),
         np.empty((6, n)),
@@ -178,6 +213,7 @@ def law_work(n):  # pragma: no cover - compiled
         np.empty((2, 6, 10)),
         np.empty((4, n)),
         np.empty((2, n, 10)),
+        np.empty(10),
     )
 
 
@@ -214,7 +250,8 @@ def _add_nominal_inertia(ch, cfg, q, v, work, out):  # pragma: no cover - compil
 
 @njit(cache=True)
 def _adapt_payload(ch, cfg, q, qd, qdr, a, s, theta, pi_model, work):  # pragma: no cover - compiled
-    """One gradient step of the payload parameters, projected; pi_model rebuilt from them."""
+    """One gradient step of the payload parameters, projected; pi_model rebuilt from them (with
+    ``cfg.composite`` the step adds ``work[9]``, the composite term ``W^T R eps``)."""
     n = q.shape[0]
     j = cfg.payload_joint
     yb = work[3]
@@ -229,6 +266,8 @@ def _adapt_payload(ch, cfg, q, qd, qdr, a, s, theta, pi_model, work):  # pragma:
         upd = 0.0
         for c in range(10):
             upd += cfg.payload_map[c, k] * g[c]
+        if cfg.composite:
+            upd += work[9][k]
         upd *= cfg.T * cfg.gamma[k]
         th = theta[k] + (upd if np.isfinite(upd) else 0.0)
         theta[k] = min(max(th, cfg.lo[k]), cfg.hi[k])
@@ -245,6 +284,39 @@ def _adapt_payload(ch, cfg, q, qd, qdr, a, s, theta, pi_model, work):  # pragma:
         for k in range(10):
             acc += cfg.payload_map[c, k] * theta[k]
         pi_model[10 * j + c] += acc
+
+
+@njit(cache=True)
+def _sliding_term(ch, cfg, q, qd, qdr, a, s, work, out):  # pragma: no cover - compiled
+    """``out += rho sat(s / phi)`` (module docstring): ``rho_r = sum_c |Y[r, c]| rho_pi[c]`` over
+    the links' Slotine-Li regressor blocks, the payload's (``|Y_j P|``) and friction and armature
+    (``|qd_r| dfv + dfc + |a| dIa``); ``phi = rho / (lam M0_jj)``."""
+    n = q.shape[0]
+    rho, yb, m = work[7][0], work[3], work[2]
+    d = cfg.rho_pi
+    for r in range(n):
+        rho[r] = abs(qdr[r]) * d[10 * n + r] + d[11 * n + r] + abs(a[r]) * d[12 * n + r]
+    for j in range(n):
+        body_slotine_li_regressor_in(ch, j, q, qd, qdr, a, work[0], work[4], yb)
+        for r in range(n):
+            acc = 0.0
+            for c in range(10):
+                acc += abs(yb[r, c]) * cfg.rho_pi[10 * j + c]
+            rho[r] += acc
+        if j == cfg.payload_joint:
+            for r in range(n):
+                acc = 0.0
+                for k in range(10):
+                    yp = 0.0
+                    for c in range(10):
+                        yp += yb[r, c] * cfg.payload_map[c, k]
+                    acc += abs(yp) * cfg.rho_payload[k]
+                rho[r] += acc
+    mass_matrix_in(ch, cfg.pi_fixed[: 10 * n], q, work[0], m)
+    for j in range(n):
+        u = (m[j, j] + cfg.pi_fixed[12 * n + j]) * cfg.lam[j] * s[j]
+        if np.isfinite(rho[j]) and np.isfinite(u):
+            out[j] += min(max(u, -rho[j]), rho[j])
 
 
 @njit(cache=True)
@@ -308,6 +380,13 @@ def law_trial_in(
         for j in range(n):
             out[j] = cfg.kp[j] * e[j] + cfg.kd[j] * ed[j]
         return
+    if cfg.kind == KIND_PD_GRAVITY:
+        for j in range(n):
+            v[j] = 0.0
+        _model_torque(ch, pi_true if cfg.model == MODEL_TRUE else cfg.pi_fixed, q, v, v, v, v, work[0], out)
+        for j in range(n):
+            out[j] += cfg.kp[j] * e[j] + cfg.kd[j] * ed[j]
+        return
     for j in range(n):
         if cfg.kind == KIND_CT:
             a[j] = qdd_d[j] + cfg.kd[j] * ed[j] + cfg.kp[j] * e[j]
@@ -326,10 +405,20 @@ def law_trial_in(
     if cfg.kind == KIND_SLOTINE:
         for j in range(n):
             s[j] = cfg.kd[j] * (ed[j] + cfg.lam[j] * e[j])
-        _add_nominal_inertia(ch, cfg, q, s, work, out)
+        if cfg.feedback_inertia:
+            _add_nominal_inertia(ch, cfg, q, s, work, out)
+        else:
+            for j in range(n):
+                out[j] += s[j]
+        if cfg.robust:
+            for j in range(n):
+                s[j] = ed[j] + cfg.lam[j] * e[j]
+            _sliding_term(ch, cfg, q, qd, qdr, a, s, work, out)
         if cfg.adapt:
             for j in range(n):
                 s[j] = ed[j] + cfg.lam[j] * e[j]
+            if cfg.composite:
+                composite_term(ch, cfg, q, qd, theta, obs, work, work[9])
             _adapt_payload(ch, cfg, q, qd, qdr, a, s, theta, pi_model, work)
     boosting = cfg.boost_samples > 0 and since_alarm < cfg.boost_samples + cfg.boost_ramp
     if boosting:

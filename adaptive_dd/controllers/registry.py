@@ -21,6 +21,11 @@ Built-in settings:
     ``gamma`` (seven adaptation gains).
 ``ct_nominal``, ``pd``
     ``sigma`` (the fixed model, seven base parameters).
+``sliding_mode`` (N-joint arms)
+    ``uncertainty`` (the levels of ``[plant.uncertainty]``, by default the scenario's), ``max_mass``,
+    ``com_radius`` (the payload's bound).
+``composite`` (N-joint arms)
+    ``slotine_li``'s ``gamma``, ``max_mass``, ``com_radius``.
 
 A plug-in class is called with its table's settings as keyword arguments, plus ``gains``
 (:class:`Gains`), ``sigma_nominal`` (the arm's base parameters), ``arm`` (the arm, two-link
@@ -130,7 +135,7 @@ class Builtin:
     """A built-in controller name: what it knows, its settings, and its form on each kind of arm.
 
     ``make(gains, settings, arm)`` builds the two-link form (None: N-joint only); ``chain`` names
-    the N-joint class in :data:`~adaptive_dd.closed_loop.controllers.ARM_CONTROLLERS` (None:
+    the N-joint class in :data:`~adaptive_dd.closed_loop.arena_laws.ARM_LAWS` (None:
     two-link only, ``only`` says why)."""
 
     knows: str
@@ -262,6 +267,34 @@ _SLOTINE = {
     "max_mass": Setting("the heaviest payload the a-priori box admits [kg]", 5.0, 20.0, _BOX_RULE, "kg"),
     "com_radius": Setting("the payload's size in the a-priori box [m]", 0.1, 0.3, _BOX_RULE, "m"),
 }
+_N_JOINT_ONLY = (
+    "built on the N-joint law kernel; the paper's two-link arm runs its own closed-form runtime: "
+    "run the paper's arm from its URDF (benchmarks/scenarios/sice_drawn.toml)"
+)
+_NOT_TWO_LINK = "N-joint arms only: " + _N_JOINT_ONLY
+_SLIDING = {
+    "uncertainty": Setting(
+        "the arm's parameter error levels bounding the model error (the keys of [plant.uncertainty]); "
+        "default: the scenario's [plant.uncertainty], none when it states none",
+        ABSENT,
+        None,
+        rule=_NOT_TWO_LINK,
+    ),
+    "max_mass": Setting(
+        "the heaviest payload the bound admits [kg]; default: [arm] payload_capacity, else 20",
+        ABSENT,
+        None,
+        rule=_NOT_TWO_LINK,
+        unit="kg",
+    ),
+    "com_radius": Setting(
+        "the payload's centre of mass within this of the payload frame, per axis [m]",
+        ABSENT,
+        0.1,
+        rule=_NOT_TWO_LINK,
+        unit="m",
+    ),
+}
 _TWO_LINK_ONLY = (
     "the paper's estimator (eq. 19, split 15) of the two-link arm's seven base parameters; "
     "on an N-joint arm use 'adaptive_ct'"
@@ -322,6 +355,45 @@ CONTROLLERS: dict[str, Builtin] = {
         lambda g, o, arm: SlotineLi(g, theta0=arm.sigma, bounds=slotine_bounds(arm), oracle=True),
         "slotine_li_oracle",
     ),
+    "pd_gravity": Builtin(
+        "nominal model (gravity, and the inertia to scale the gains)",
+        "PD plus the nominal model's gravity torque (Takegaki and Arimoto 1981)",
+        None,
+        "pd_gravity",
+        only=_N_JOINT_ONLY,
+    ),
+    "pd_gravity_oracle": Builtin(
+        "true model (gravity)",
+        "PD plus the true gravity torque (the floor of pd_gravity)",
+        None,
+        "pd_gravity_oracle",
+        only=_N_JOINT_ONLY,
+    ),
+    "sliding_mode": Builtin(
+        "nominal model and a bound of its error",
+        "robust computed torque with a boundary layer, the bound from the stated uncertainty "
+        "(Slotine 1985; Spong 1992)",
+        None,
+        "sliding_mode",
+        _SLIDING,
+        only=_N_JOINT_ONLY,
+    ),
+    "composite": Builtin(
+        "estimator (gradient adaptation and the filtered torque's prediction error)",
+        "Slotine and Li's composite adaptive control on the payload (Automatica 1989), slotine_li's box",
+        None,
+        "composite",
+        {k: dataclasses.replace(v, two_link=ABSENT, rule=_NOT_TWO_LINK) for k, v in _SLOTINE.items()},
+        only=_N_JOINT_ONLY,
+    ),
+    "momentum_observer_ct": Builtin(
+        "nominal model and the applied torque",
+        "computed torque on the nominal model plus the generalized-momentum observer's residual "
+        "(De Luca et al. 2005)",
+        None,
+        "momentum_observer_ct",
+        only=_N_JOINT_ONLY,
+    ),
 }
 """Every built-in controller name, on every arm: what it knows, its law, its settings with their
 default on each arm (and the rule where they differ), and its two forms. A new built-in: one
@@ -364,7 +436,12 @@ def inventory() -> str:
         "|---|---|---|---|---|---|---|",
     ]
     for name, e in CONTROLLERS.items():
-        arms = "both" if e.applies_to("chain") else f"two-link only ({e.only})"
+        if e.applies_to("chain") and e.applies_to("two_link"):
+            arms = "both"
+        elif e.applies_to("chain"):
+            arms = "N-joint only (the paper's arm: from its URDF, benchmarks/scenarios/sice_drawn.toml)"
+        else:
+            arms = f"two-link only ({e.only})"
         first = f"| `{name}` | {e.knows} | {arms} |"
         if not e.settings:
             rows.append(f"{first} none | | | |")
@@ -476,13 +553,13 @@ def _arm_words(arm) -> str:
 
 def _chain_controller(spec: str, entry: Builtin, gains, options: dict, o: dict, arm) -> Controller:
     """The N-joint form (:mod:`adaptive_dd.closed_loop.controllers`), the table's defaults filled in."""
-    from adaptive_dd.closed_loop.controllers import ARM_CONTROLLERS
+    from adaptive_dd.closed_loop.arena_laws import ARM_LAWS
 
     filled = {k: v for k, v in entry.settings_on("chain").items() if v is not None}
     bw = options.get("bandwidth", gains.bandwidth)
     dmp = options.get("damping", gains.damping)
     try:
-        return ARM_CONTROLLERS[entry.chain](arm, bw, dmp, **{**filled, **o})
+        return ARM_LAWS[entry.chain](arm, bw, dmp, **{**filled, **o})
     except ParameterError:
         raise
     except (TypeError, ValueError) as exc:
@@ -492,6 +569,11 @@ def _chain_controller(spec: str, entry: Builtin, gains, options: dict, o: dict, 
 def _builtin(spec: str, gains, options: dict, arm) -> Controller:
     entry = CONTROLLERS[spec]
     kind = arm_kind(arm)
+    if not entry.applies_to(kind) and kind == "two_link":
+        raise ParameterError(
+            f"controller {spec!r} runs on N-joint arms only, not on the two-link arm's closed-form "
+            f"runtime: it is {entry.only}"
+        )
     if not entry.applies_to(kind):
         raise ParameterError(
             f"controller {spec!r} is for the two-link arm only, not for {_arm_words(arm)}: {entry.only}"

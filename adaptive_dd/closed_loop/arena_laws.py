@@ -1,0 +1,216 @@
+"""The arena's built-in laws for N-joint arms: the field's robust and observer-based laws on the
+compiled law kernel (:mod:`adaptive_dd.closed_loop.laws`), beside the built-ins of
+:mod:`adaptive_dd.closed_loop.controllers` (whose :class:`~adaptive_dd.closed_loop.controllers.Law`
+they subclass). Each says its primary reference, the signals it uses and how its settings follow
+from the arm and the scenario's stated uncertainty; ``docs/controllers.md`` gives each equation.
+:data:`ARM_LAWS` is every N-joint built-in, name -> class.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import NDArray
+
+from adaptive_dd.closed_loop.controllers import (
+    ARM_CONTROLLERS,
+    OBSERVER_LEVEL_WINDOW,
+    OBSERVER_WARMUP,
+    Law,
+    SlotineLi,
+    observer_bandwidth,
+)
+from adaptive_dd.closed_loop.laws import KIND_CT, KIND_PD_GRAVITY, KIND_SLOTINE, MODEL_FIXED, MODEL_TRUE
+from adaptive_dd.errors import ParameterError
+from adaptive_dd.errors import is_finite_number as _is_number
+
+__all__ = [
+    "ARENA_CONTROLLERS",
+    "ARM_LAWS",
+    "Composite",
+    "MomentumObserverCT",
+    "PDGravity",
+    "PDGravityOracle",
+    "SlidingMode",
+    "parameter_error_bound",
+    "payload_bound",
+]
+
+Array = NDArray[np.float64]
+
+
+class PDGravity(Law):
+    """PD plus gravity compensation (Takegaki and Arimoto, "A New Feedback Method for Dynamic
+    Control of Manipulators", J. Dyn. Sys., Meas., Control 103, 1981):
+    ``tau = Kp e + Kd e' + g0(q)``, ``g0`` the nominal model's gravity torque; gains as
+    :class:`PDControl` (``Kp = omega^2 M0``, ``Kd = 2 zeta omega M0``, M0 the diagonal of the
+    nominal inertia at the middle of the joint ranges). Signals: measured ``q, qd``; the reference
+    ``q_d, qd_d``. Asymptotically stable for a constant reference with exact gravity; with a moving
+    reference and no inertial feedforward it lags by about ``M qdd_d / Kp``."""
+
+    name = "pd_gravity"
+    floor = "pd_gravity_oracle"
+
+    def _pd_gravity(self, sample_period, model):
+        m0 = self.arm.nominal_inertia()
+        return self._config(
+            sample_period, KIND_PD_GRAVITY, model, kp=self.gains.kp * m0, kd=self.gains.kd * m0
+        )
+
+    def law_config(self, sample_period):
+        return self._pd_gravity(sample_period, MODEL_FIXED)
+
+
+class PDGravityOracle(PDGravity):
+    """:class:`PDGravity` with the true gravity torque at every sample (the floor of ``pd_gravity``)."""
+
+    name = "pd_gravity_oracle"
+    floor = None
+    needs_true_model = True
+
+    def law_config(self, sample_period):
+        return self._pd_gravity(sample_period, MODEL_TRUE)
+
+
+SLIDING_COM_RADIUS = 0.1
+"""[m] ``sliding_mode``'s default bound of the payload's centre of mass about the payload frame
+(the shipped scenarios' tools: at most 0.08 m)."""
+SLIDING_MAX_MASS = 20.0
+"""[kg] ``sliding_mode``'s payload bound when the arm states no ``payload_capacity``."""
+
+
+def parameter_error_bound(arm, levels: dict | None) -> Array:
+    """Bound ``(13 n,)`` of the error of each standard parameter of ``arm`` under the stated
+    uncertainty ``levels`` (the keys of ``[plant.uncertainty]``; None or empty: an exact arm):
+    ``sum_k |d pi / d u_k| u_max``, linearised about the URDF
+    (:func:`~adaptive_dd.identification.arm_prior.perturbed_parameters`), ``u_max`` 1 for uniform
+    draws and 3 for normal ones (clipped there)."""
+    from adaptive_dd.identification.arm_prior import ArmUncertainty, perturbed_parameters
+
+    n = arm.n_joints
+    levels = dict(levels or {})
+    u_max = 3.0 if levels.pop("distribution", "uniform") == "normal" else 1.0
+    keys = ("mass", "com", "inertia", "viscous", "coulomb", "armature")
+    lv = ArmUncertainty(**{k: float(levels.get(k, 0.0)) for k in keys})
+    h = 1e-3
+    out = np.zeros(13 * n)
+    for k in range(8 * n):
+        e = np.zeros(8 * n)
+        e[k] = h
+        d = (perturbed_parameters(arm, e, lv) - perturbed_parameters(arm, -e, lv)) / (2 * h)
+        out += np.abs(d)
+    return out * u_max
+
+
+def payload_bound(max_mass: float, com_radius: float) -> Array:
+    """Bound ``(10,)`` of the payload's parameters about its frame (``m, m c, I``): a mass up to
+    ``max_mass`` [kg] with its centre within ``com_radius`` [m] per axis; the inertia about the frame
+    that of the mass spread over that radius (``2 m r^2`` on the diagonal, ``m r^2`` off it)."""
+    m, r = float(max_mass), float(com_radius)
+    i = m * r * r
+    return np.array([m, m * r, m * r, m * r, 2 * i, i, i, 2 * i, i, 2 * i])
+
+
+class SlidingMode(Law):
+    """Robust computed torque with a boundary layer (Slotine, "The Robust Control of Robot
+    Manipulators", IJRR 4(2), 1985; Spong, "On the Robust Control of Robot Manipulators", IEEE TAC
+    37(11), 1992): Slotine-Li's structure on the nominal model (no payload) plus ``rho sat(s /
+    phi)`` per joint, ``rho`` the bound of the model's torque error at this sample,
+    ``|Y(q, qd, qd_r, a)| dpi`` (the Slotine-Li regressor's magnitudes times the bound of each
+    parameter's error), ``phi = rho / (lam M0_jj)`` (the balance condition ``k = lam phi``,
+    Slotine and Li 1991, sec. 7.2). The parameter bound is derived, not tuned: the arm's from the
+    scenario's ``[plant.uncertainty]`` (``uncertainty``: :func:`parameter_error_bound`), the
+    payload's from ``max_mass`` (default the arm's ``payload_capacity``) and ``com_radius``
+    (:func:`payload_bound`). Signals: measured ``q, qd``; the reference with ``qdd_d``."""
+
+    name = "sliding_mode"
+    floor = "slotine_li_oracle"
+    SETTINGS = frozenset({"uncertainty", "max_mass", "com_radius"})
+
+    def __init__(self, arm, bandwidth=40.0, damping: float = 1.0, **settings) -> None:
+        super().__init__(arm, bandwidth, damping, **settings)
+        where = f"controllers.{self.name}"
+        cap = getattr(arm, "payload_capacity", None)
+        self.max_mass = self.settings.get("max_mass", cap if cap is not None else SLIDING_MAX_MASS)
+        self.com_radius = self.settings.get("com_radius", SLIDING_COM_RADIUS)
+        for key, v in (("max_mass", self.max_mass), ("com_radius", self.com_radius)):
+            if not (_is_number(v) and v >= 0):
+                raise ParameterError(f"{where}.{key}: a number >= 0, got {v!r}")
+        unc = self.settings.get("uncertainty", {})
+        if not isinstance(unc, dict):
+            raise ParameterError(
+                f"{where}.uncertainty: a table of levels (mass, com, inertia, viscous, coulomb, "
+                f"armature, distribution), got {unc!r}"
+            )
+        try:
+            self.rho_pi = parameter_error_bound(arm, unc)
+        except (TypeError, ValueError) as exc:
+            raise ParameterError(f"{where}.uncertainty: {exc}") from None
+        self.rho_payload = payload_bound(self.max_mass, self.com_radius)
+
+    def law_config(self, sample_period):
+        lam, k = self.gains.roots()
+        return self._config(
+            sample_period, KIND_SLOTINE, MODEL_FIXED, lam=lam, kd=k, robust=True,
+            rho_pi=np.ascontiguousarray(self.rho_pi), rho_payload=self.rho_payload,
+        )  # fmt: skip
+
+
+class MomentumObserverCT(Law):
+    """Computed torque on the nominal model plus the generalized-momentum observer's estimate of
+    the torque the model leaves unexplained (De Luca and Mattone, "Sensorless Robot Collision
+    Detection and Hybrid Force/Motion Control", ICRA 2005; De Luca, Albu-Schaeffer, Haddadin and
+    Hirzinger, IROS 2006): ``tau = tau_ct(pi0) + r``, ``r`` the residual of
+    :mod:`adaptive_dd.closed_loop.residual_observer` (adaptive_ct's observer, its bandwidth derived
+    from the sample period: two stages at ``0.4 / T``), fed back in full after its 0.5 s warm-up
+    (no soft threshold: adaptive_ct's threshold follows a learnt level that a lasting payload torque
+    raises until it passes nothing, while here the observer is the only thing that ever learns the
+    payload). Signals: measured ``q, qd``, the applied torque of the samples before. Its floor is
+    ``ct_oracle``."""
+
+    name = "momentum_observer_ct"
+
+    def law_config(self, sample_period):
+        T = float(sample_period)
+        return self._config(
+            T, KIND_CT, MODEL_FIXED, observer=True, obs_a=float(np.exp(-observer_bandwidth(T) * T)),
+            obs_alpha=min(1.0, T / OBSERVER_LEVEL_WINDOW), obs_warmup=round(OBSERVER_WARMUP / T),
+            obs_kappa=0.0,
+        )  # fmt: skip
+
+
+class Composite(SlotineLi):
+    """Composite adaptive control (Slotine and Li, "Composite Adaptive Control of Robot
+    Manipulators", Automatica 25(4), 1989) on the payload's ten parameters as ``slotine_li`` adapts
+    them (the same gains, box and feedback): ``theta' = Gamma (Y_p^T s + W^T R eps)``, ``W`` the
+    payload's regressor and ``eps`` the applied torque's prediction error, both through the
+    first-order filter ``lam / (s + lam)`` of the dynamics in momentum form (no acceleration:
+    :mod:`adaptive_dd.closed_loop.composite`). Derived settings: the filter's rate the tracking
+    bandwidth ``min(lam)``; ``R = diag(1 / (k m0))`` (``k m0``, the feedback's gain at the middle of
+    the joint ranges, turns a torque error into the ``s`` it leaves: both terms in the same units
+    and weight). A constant ``Gamma`` (the paper's time-varying gain is not used). Signals:
+    measured ``q, qd``, the applied torque of the samples before, ``qdd_d``."""
+
+    name = "composite"
+    floor = "slotine_li_oracle"
+
+    def law_config(self, sample_period):
+        cfg = super().law_config(sample_period)
+        m0 = self.arm.nominal_inertia()  # armature included
+        return cfg._replace(
+            composite=True,
+            comp_rate=float(np.min(cfg.lam)),
+            comp_weight=1.0 / (cfg.kd * np.maximum(m0, 1e-9)),
+        )
+
+
+ARENA_CONTROLLERS: dict[str, type[Law]] = {
+    "pd_gravity": PDGravity,
+    "pd_gravity_oracle": PDGravityOracle,
+    "sliding_mode": SlidingMode,
+    "momentum_observer_ct": MomentumObserverCT,
+    "composite": Composite,
+}
+"""The arena's N-joint built-ins, name -> class."""
+
+ARM_LAWS: dict[str, type[Law]] = {**ARM_CONTROLLERS, **ARENA_CONTROLLERS}
+"""Every N-joint built-in, name -> class (what :func:`adaptive_dd.controllers.make_controller` builds)."""

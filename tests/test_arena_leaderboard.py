@@ -1,0 +1,108 @@
+"""The leaderboard (adaptive_dd.arena): its statistics, and the command on one short scenario."""
+
+from __future__ import annotations
+
+import json
+import tomllib
+from importlib import resources
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from adaptive_dd.arena.leaderboard import COLUMNS, leaderboard, ratio_columns
+from adaptive_dd.cli import main
+from adaptive_dd.errors import ParameterError
+
+
+def test_ratio_columns_by_hand():
+    r = np.array([1.0, 2.0, 3.0, 4.0, 10.0, np.nan])  # the NaN (a failed trial) is left out
+    c = ratio_columns(r, np.random.default_rng(1))
+    assert c["ratio_mean"] == pytest.approx(4.0)
+    assert c["ratio_max"] == 10.0
+    assert c["ratio_cvar10"] == 10.0  # ceil(0.1 * 5) = 1 worst seed
+    assert c["ratio_p90"] == pytest.approx(np.percentile([1, 2, 3, 4, 10], 90))
+    assert 1.0 <= c["ratio_ci95_low"] < 4.0 < c["ratio_ci95_high"] <= 10.0
+    twenty = ratio_columns(np.arange(1.0, 21.0), np.random.default_rng(1))
+    assert twenty["ratio_cvar10"] == pytest.approx(19.5)  # the two worst of twenty
+    assert np.isnan(ratio_columns(np.full(3, np.nan), np.random.default_rng(1))["ratio_mean"])
+
+
+def test_the_two_link_closed_form_runtime_is_refused_with_the_route_that_works():
+    with pytest.raises(ParameterError, match=r"sice_drawn\.toml"):
+        leaderboard([None], ["pd_gravity"])
+
+
+PLUGIN = '''
+import numpy as np
+
+
+class FloorlessPD:
+    """PD with a floor nobody ships: the leaderboard must say why its row has no ratio."""
+
+    floor = "no_such_law"
+
+    def __init__(self, arm, gains):
+        self.n, self.kp, self.kd = arm.n_joints, gains.kp * 5.0, gains.kd * 5.0
+
+    def reset(self, n_trials, sample_period):
+        pass
+
+    def command(self, q, qd, q_d, qd_d, qdd_d):
+        return self.kp * (q_d - q) + self.kd * (qd_d - qd)
+
+    def observe(self, q, qd, tau):
+        pass
+'''
+
+
+def _short_vertical3(tmp_path):
+    src = resources.files("adaptive_dd.scenarios").joinpath("vertical3_payload.toml")
+    text = src.read_text(encoding="utf-8")
+    text = text.replace("duration = 16.0", "duration = 1.6").replace("ramp = 1.0", "ramp = 0.2")
+    head, _, _ = text.partition("[[payload]]")
+    p = tmp_path / "v3short.toml"
+    p.write_text(head + "[[payload]]\nat = 0.8\nmass = 1.0\n", encoding="utf-8")
+    (tmp_path / "floorless.py").write_text(PLUGIN, encoding="utf-8")
+    assert tomllib.loads(p.read_text(encoding="utf-8"))["run"]["duration"] == 1.6  # the edit took
+    return p
+
+
+def test_leaderboard_command_writes_the_table_the_json_and_the_figure(tmp_path, capsys):
+    sc = _short_vertical3(tmp_path)
+    out = tmp_path / "out"
+    argv = ["leaderboard", str(sc), "--seeds", "2", "--controllers", "pd_gravity", "sliding_mode"]
+    argv += ["--plugin", "floorless:FloorlessPD", "--out", str(out), "--no-progress"]
+    assert main(argv) == 0
+    df = pd.read_csv(out / "leaderboard.csv", keep_default_na=False, na_values=[""])
+    assert list(df.columns) == list(COLUMNS)
+    runs = ["pd_gravity", "sliding_mode", "FloorlessPD", "pd_gravity_oracle", "slotine_li_oracle"]
+    assert set(df["controller"]) == set(runs)
+    assert len(df) == len(runs) * 2  # two segments: 0 kg, then 1 kg
+    ranked = df[df["controller"].isin(["pd_gravity", "sliding_mode"])]
+    assert set(ranked["floor"]) == {"pd_gravity_oracle", "slotine_li_oracle"}
+    assert np.all(np.isfinite(ranked["ratio_mean"])) and np.all(ranked["ratio_mean"] > 0)
+    assert np.all(ranked["ratio_ci95_low"] <= ranked["ratio_mean"])
+    assert np.all(ranked["ratio_mean"] <= ranked["ratio_ci95_high"])
+    assert np.all(ranked["ratio_p90"] <= ranked["ratio_max"] + 1e-12)
+    assert np.all(ranked["seeds"] + ranked["failures"] == 2)
+    # the ratio is the law's mean error over the floor's only when both have the same seeds: check
+    # it against the two error columns within the seeds' spread
+    assert np.all(ranked["rms_error_mrad"] > 0) and np.all(ranked["floor_rms_error_mrad"] > 0)
+    oracle = df[df["controller"] == "pd_gravity_oracle"]
+    assert np.all(oracle["floor_note"].str.contains("oracle")) and np.all(np.isnan(oracle["ratio_mean"]))
+    mine = df[df["controller"] == "FloorlessPD"]
+    assert np.all(mine["floor_note"].str.contains("no_such_law cannot run here"))
+    assert np.all(np.isnan(mine["ratio_mean"])) and np.all(mine["rms_error_mrad"] > 0)
+    doc = json.loads((out / "leaderboard.json").read_text(encoding="utf-8"))
+    assert doc["columns"]["rms_torque_Nm"]["unit"] == "N m" and len(doc["rows"]) == len(df)
+    assert (out / "leaderboard.png").stat().st_size > 1000
+    assert "pd_gravity_oracle" in capsys.readouterr().out
+
+
+def test_every_column_and_its_unit_is_on_the_docs_page():
+    from pathlib import Path
+
+    page = (Path(__file__).resolve().parents[1] / "docs" / "leaderboard.md").read_text(encoding="utf-8")
+    for name, (unit, meaning) in COLUMNS.items():
+        assert f"| `{name}` | {unit} | {meaning} |" in page, name
