@@ -290,11 +290,20 @@ def _urdf_source(src: str, table: dict) -> tuple[Path, str | None]:
         raise ScenarioError(f"{src}: key 'arm.payload_frame' must be a link name, got {frame!r}")
     if "robot" in table:
         from adaptive_dd.robots import ROBOTS, robot_urdf
+        from adaptive_dd.robots.random_arm import parse_random_robot, random_arm
 
         name = table["robot"]
+        try:
+            seed = parse_random_robot(name)
+        except ParameterError as exc:
+            raise ScenarioError(f"{src}: key 'arm.robot': {exc}") from None
+        if seed is not None:  # a drawn arm (adaptive_dd.robots.random_arm)
+            drawn = random_arm(seed)
+            return drawn.path(), frame or drawn.payload_frame
         if not isinstance(name, str) or name not in ROBOTS:
             raise ScenarioError(
-                f"{src}: key 'arm.robot' = {name!r} is not a shipped robot; known: {sorted(ROBOTS)}"
+                f"{src}: key 'arm.robot' = {name!r} is not a shipped robot; known: {sorted(ROBOTS)}, "
+                "or 'random:SEED' (an arm drawn from SEED)"
             )
         return robot_urdf(name), frame or ROBOTS[name].payload_frame
     if not isinstance(table["urdf"], str) or not table["urdf"]:
