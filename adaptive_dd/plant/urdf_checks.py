@@ -82,10 +82,10 @@ def _origin(path: Path, where: str, el: ET.Element | None, what: str) -> None:
     if o is None:
         return
     xyz = _numbers(path, f"{where} <origin>", o, "xyz", 3)
-    if xyz is not None and np.linalg.norm(xyz) > MAX_OFFSET:
+    if xyz is not None and (np.abs(xyz).max() > MAX_OFFSET or np.linalg.norm(xyz) > MAX_OFFSET):
         raise UrdfError(
-            f"{path}: {where} <origin>: xyz = {o.get('xyz')!r} puts the {what} "
-            f"{np.linalg.norm(xyz):.3g} m away (> {MAX_OFFSET:g} m): a unit error (mm for m?)"
+            f"{path}: {where} <origin>: xyz = {o.get('xyz')!r} puts the {what} more than {MAX_OFFSET:g} m "
+            "away: a unit error (mm for m?)"
         )
     rpy = _numbers(path, f"{where} <origin>", o, "rpy", 3)
     if rpy is not None and np.abs(rpy).max() > 100.0:
@@ -143,20 +143,21 @@ def _check_link(path: Path, link: ET.Element, notes: list[str]) -> None:
     where = f"link '{name}' <inertial>"
     _origin(path, where, inertial, "centre of mass")
     mass = _scalar(path, f"{where} <mass>", inertial.find("mass"), "value")
+    raw = inertial.find("mass").get("value") if mass is not None else None
     if mass is None:
         raise UrdfError(f"{path}: {where} <mass>: attribute 'value' is missing")
     if mass <= 0:
         raise UrdfError(
-            f"{path}: {where} <mass>: value = {mass!r} kg must be > 0 "
+            f"{path}: {where} <mass>: value = {raw!r} kg must be > 0 "
             "(leave <inertial> out for a massless frame)"
         )
     if mass > MAX_LINK_MASS:
         raise UrdfError(
-            f"{path}: {where} <mass>: value = {mass!r} kg is above {MAX_LINK_MASS:g} kg: "
+            f"{path}: {where} <mass>: value = {raw!r} kg is above {MAX_LINK_MASS:g} kg: "
             "a unit error (g for kg?)"
         )
     if mass < TINY_MASS:
-        notes.append(f"link '{name}': mass {mass!r} kg is below {TINY_MASS:g} kg (kept)")
+        notes.append(f"link '{name}': mass {raw!r} kg is below {TINY_MASS:g} kg (kept)")
     el = inertial.find("inertia")
     if el is None:
         return  # read_urdf names it
@@ -181,7 +182,10 @@ def _check_axis(path: Path, where: str, joint: ET.Element, notes: list[str]) -> 
         return False
     ax = _numbers(path, f"{where} <axis>", ax_el, "xyz", 3)
     if ax is None:
-        return False
+        raise UrdfError(
+            f"{path}: {where} <axis>: attribute 'xyz' is missing (give the axis, or leave <axis> out for "
+            "the default 1 0 0)"
+        )
     big = float(np.abs(ax).max())
     norm = big * float(np.linalg.norm(ax / big)) if big > 0 else 0.0  # no overflow at 1e300
     if not norm > 1e-9:
@@ -216,6 +220,13 @@ def _check_joint(path: Path, joint: ET.Element, on_chain: bool, notes: list[str]
                 f"{path}: {where} <dynamics>: {k} = {dyn.get(k)!r} must be in [0, {MAX_FRICTION:g}] "
                 f"({'N m s/rad' if k == 'damping' else 'N m'})"
             )
+    if lim is not None and kind in ("revolute", "prismatic"):
+        for k in ("effort", "velocity"):  # urdfdom refuses a limit without them
+            if values[k] is None:
+                raise UrdfError(
+                    f"{path}: {where} <limit>: attribute '{k}' is missing (URDF requires it; "
+                    f"{'the torque limit' if k == 'effort' else 'the speed limit, rad/s or m/s'})"
+                )
     if not on_chain or kind == "fixed":
         return changed
     effort, vel = values["effort"], values["velocity"]

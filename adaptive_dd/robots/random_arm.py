@@ -19,6 +19,8 @@ reference are the defaults of ``[arm] payload_capacity``, ``[arm] armature`` and
 
 from __future__ import annotations
 
+import copy
+import functools
 import hashlib
 import os
 from dataclasses import dataclass
@@ -179,10 +181,18 @@ def random_arm(seed: int, joints: int | None = None) -> RandomArm:
     """
     if isinstance(seed, bool) or not isinstance(seed, int | np.integer) or seed < 0:
         raise ParameterError(f"random_arm: seed must be an integer >= 0, got {seed!r}")
-    if joints is not None and (isinstance(joints, bool) or joints not in range(3, 8)):
+    if joints is not None and (
+        isinstance(joints, bool) or not isinstance(joints, int | np.integer) or joints not in range(3, 8)
+    ):
         raise ParameterError(f"random_arm: joints must be an integer in 3 .. 7, got {joints!r}")
-    rng = np.random.default_rng([int(seed), 42])
-    n = int(joints) if joints is not None else int(rng.integers(3, 8))
+    return _draw(int(seed), None if joints is None else int(joints))
+
+
+@functools.lru_cache(maxsize=256)
+def _draw(seed: int, joints: int | None) -> RandomArm:
+    """:func:`random_arm` after its checks (cached: a population reads each arm several times)."""
+    rng = np.random.default_rng([seed, 42])
+    n = joints if joints is not None else int(rng.integers(3, 8))
     kinds = sorted(k for k, ns in _KIND_JOINTS.items() if n in ns)
     kind = kinds[int(rng.integers(len(kinds)))]
     layout = _KINDS[kind][:n]
@@ -201,7 +211,7 @@ def random_arm(seed: int, joints: int | None = None) -> RandomArm:
     effort = np.round(rng.uniform(1.6, 2.5, n) * peak, 2)
     text = _urdf(seed, kind, geo, layout, lower, upper, vel, effort, viscous, coulomb)
     return RandomArm(
-        seed=int(seed),
+        seed=seed,
         kind=kind,
         urdf=text,
         payload_frame="tool",
@@ -320,7 +330,7 @@ def _limits(rng, ref: dict):
 
 
 def _task_torque(text: str, ref: dict, capacity: float, armature, viscous, coulomb) -> np.ndarray:
-    """Peak |tau| per joint along one minute of the reference (the ramp left out: sums of sines
+    """Peak |tau| per joint along 40 s of the reference (the ramp left out: sums of sines
     repeat their peaks), with the rated payload at the flange, its centre of mass
     :data:`PAYLOAD_COM_REACH` out, and the friction."""
     import pinocchio as pin
@@ -337,7 +347,7 @@ def _task_torque(text: str, ref: dict, capacity: float, armature, viscous, coulo
     off, amp, w, ph = _ref_arrays(ref)
     peak = np.zeros(off.size)
     arm = np.asarray(armature)
-    for t in np.arange(0.0, 60.0, 0.01):
+    for t in np.arange(0.0, 40.0, 0.02):
         s = np.sin(w * t + ph)
         c = np.cos(w * t + ph)
         q = off + (amp * s).sum(axis=1)
@@ -451,5 +461,5 @@ def with_random_arm(data: dict, src: str = "<memory>") -> dict:
     drawn = random_arm(seed)
     out = dict(data)
     out["arm"] = {**{k: v for k, v in drawn.arm_table().items() if k != "robot"}, **arm}
-    out.setdefault("reference", drawn.reference)
+    out.setdefault("reference", copy.deepcopy(drawn.reference))
     return out
