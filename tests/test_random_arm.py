@@ -232,3 +232,36 @@ def test_pooled_leaves_out_saturated_floor_segments():
     p = pooled(pop)
     assert p[1]["n"] == 2 and p[1]["max"] == 1.1
     assert "1 arm segment(s) where ct_oracle saturates" in format_population(pop)
+
+
+def test_cli_arms_usage_errors(capsys):
+    from adaptive_dd.cli import main
+
+    assert main(["benchmark", "--arms", "2"]) == 2  # no template
+    assert "--arms needs a template scenario FILE" in capsys.readouterr().err
+    assert main(["benchmark", "--draw-swaps"]) == 2
+    assert "give --arms N too" in capsys.readouterr().err
+    two_link = ROOT / "benchmarks" / "scenarios" / "other_arm.toml"
+    assert main(["benchmark", str(two_link), "--arms", "2"]) == 2
+    assert "two-link" in capsys.readouterr().err
+
+
+@pytest.mark.slow
+def test_population_run_end_to_end():
+    """Two arms, one seed each, a short schedule: the per-seed table carries each arm's seed and the
+    per-arm summaries agree with it."""
+    from adaptive_dd.benchmark.population import run_population
+
+    data = read_toml(TEMPLATE)
+    data["run"]["duration"] = 3.0
+    data["payload"] = [{"at": 1.0, "mass": 0.8}, {"at": 2.0, "mass": 0.0}]
+    pop = run_population(data, str(TEMPLATE), [0, 1], seeds=1)
+    assert sorted(set(pop.frame["arm_seed"])) == [0, 1]
+    for a in pop.arms:
+        rows = pop.frame[
+            (pop.frame["arm_seed"] == a["arm_seed"]) & (pop.frame["controller"] == "adaptive_ct")
+        ]
+        np.testing.assert_allclose(
+            rows.sort_values("segment")["ratio_to_floor"], [s["mean"] for s in a["segments"]]
+        )
+    assert [p["n"] for p in pooled(pop)] == [2, 2, 2]

@@ -148,7 +148,7 @@ def _check_link(path: Path, link: ET.Element, notes: list[str]) -> None:
         raise UrdfError(f"{path}: {where} <mass>: attribute 'value' is missing")
     if mass <= 0:
         raise UrdfError(
-            f"{path}: {where} <mass>: value = {raw!r} kg must be > 0 "
+            f"{path}: {where} <mass>: value = {raw!r}: mass {mass} kg must be > 0 "
             "(leave <inertial> out for a massless frame)"
         )
     if mass > MAX_LINK_MASS:
