@@ -337,7 +337,10 @@ def _with_stated_noise(arm, position_variance, velocity_variance):
 
 def parse_scenario(data: dict, src: str = "<memory>", name: str = "scenario") -> Scenario:
     """Check a scenario given as a dict (the parsed TOML); all problems are raised at once."""
+    from adaptive_dd.robots.random_arm import with_random_arm
+
     arm, errors, plant = None, [], None
+    data = with_random_arm(data, src)  # robot = "random:SEED": its capacity, armature, reference
     table = data if isinstance(data, dict) else {}
     plant_table = table.get("plant")
     law_table = plant_table

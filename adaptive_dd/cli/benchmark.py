@@ -11,7 +11,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from adaptive_dd.cli._common import SEEDS, add_command
+from adaptive_dd.cli._common import SEEDS, add_command, number
 
 __all__ = ["add_parser", "run"]
 
@@ -36,6 +36,17 @@ def add_parser(sub) -> None:
         choices=("png", "pdf", "svg"),
         help="formats of the figures (default png)",
     )
+    b.add_argument(
+        "--arms",
+        type=number(int, 1, 10_000),
+        metavar="N",
+        help="run the scenario's payload schedule over N drawn arms (random:SEED, SEED from --first-arm; "
+        "masses scaled to each arm's capacity): per arm and pooled",
+    )
+    b.add_argument(
+        "--first-arm", type=number(int, 0, 2**62), default=0, metavar="SEED", help="seed of the first arm"
+    )
+    b.add_argument("--draw-swaps", action="store_true", help="with --arms: draw each arm's swap times too")
     b.add_argument("--no-progress", action="store_true")
     b.set_defaults(func=run)
 
@@ -47,6 +58,14 @@ def run(args: argparse.Namespace) -> int:
     from adaptive_dd.benchmark.scenario import load_scenario
     from adaptive_dd.outputs import OutputSet
 
+    if args.arms is not None:
+        from adaptive_dd.cli._population import run_arms
+
+        return run_arms(args)
+    if args.draw_swaps:
+        from adaptive_dd.errors import ParameterError
+
+        raise ParameterError("--draw-swaps: draws the swap times of --arms' arms; give --arms N too")
     sc = load_scenario(args.scenario)
     if args.seeds is not None:
         sc = dataclasses.replace(sc, seeds=args.seeds)

@@ -213,7 +213,13 @@ def _urdf_arm(src: str, table: dict, plant_kw: dict):
     if not isinstance(general, bool):
         raise ScenarioError(f"{src}: key 'arm.general' must be true or false, got {general!r}")
     arm = replace(urdf_arm_from_table(src, table, kw), general=general)
-    two = closed_form_view(arm)
+    try:
+        two = closed_form_view(arm)
+    except (ParameterError, ArithmeticError) as exc:  # the paper's geometry, parameters it cannot hold
+        raise ScenarioError(
+            f"{src}: [arm] urdf {arm.urdf}: as the paper's two-link arm: {exc} (`general = true` in [arm] "
+            "runs it on the N-joint path)"
+        ) from None
     if two is None and lugre:
         raise ScenarioError(
             f"{src}: [plant] LuGre friction is implemented for the two-link arm only; the plant of "
@@ -268,7 +274,7 @@ def urdf_arm_from_table(src: str, table: dict, plant_kw: dict):
     try:
         arm = replace(arm, **kw)
         _ = arm.sigma  # base parameters now, so that a singular model is reported here
-    except ParameterError as exc:
+    except (ParameterError, UrdfError) as exc:
         raise ScenarioError(f"{src}: [arm]/[plant]: {exc}") from None
     return arm
 
@@ -290,11 +296,20 @@ def _urdf_source(src: str, table: dict) -> tuple[Path, str | None]:
         raise ScenarioError(f"{src}: key 'arm.payload_frame' must be a link name, got {frame!r}")
     if "robot" in table:
         from adaptive_dd.robots import ROBOTS, robot_urdf
+        from adaptive_dd.robots.random_arm import parse_random_robot, random_arm
 
         name = table["robot"]
+        try:
+            seed = parse_random_robot(name)
+        except ParameterError as exc:
+            raise ScenarioError(f"{src}: key 'arm.robot': {exc}") from None
+        if seed is not None:  # a drawn arm (adaptive_dd.robots.random_arm)
+            drawn = random_arm(seed)
+            return drawn.path(), frame or drawn.payload_frame
         if not isinstance(name, str) or name not in ROBOTS:
             raise ScenarioError(
-                f"{src}: key 'arm.robot' = {name!r} is not a shipped robot; known: {sorted(ROBOTS)}"
+                f"{src}: key 'arm.robot' = {name!r} is not a shipped robot; known: {sorted(ROBOTS)}, "
+                "or 'random:SEED' (an arm drawn from SEED)"
             )
         return robot_urdf(name), frame or ROBOTS[name].payload_frame
     if not isinstance(table["urdf"], str) or not table["urdf"]:

@@ -17,6 +17,14 @@ bodies are merged into the link they hang from and reported in
 :attr:`UrdfRobot.locked`. A link with two parents (a closed chain), a floating or
 planar joint, or a chain with no movable joint are errors.
 
+Which values are checked
+------------------------
+Every number of the file, for physical sense (:mod:`adaptive_dd.plant.urdf_checks`): finite,
+masses and inertias of a plausible size, axes of non-zero length (normalised when not of unit
+length, noted), origins within 10 m, the chain joints' limits (effort and velocity > 0, lower
+< upper), damping and friction >= 0; an error names the file, the element, the attribute and
+the value.
+
 Which inertias are checked
 --------------------------
 Only the links of the chain (from the first movable joint to the payload frame) must be
@@ -43,6 +51,7 @@ from pathlib import Path
 import numpy as np
 
 from adaptive_dd.errors import UrdfError
+from adaptive_dd.plant.urdf_checks import check_values
 
 __all__ = ["JointInfo", "UrdfRobot", "read_urdf", "repair_inertia"]
 
@@ -288,18 +297,20 @@ def read_urdf(path: str | Path, payload_frame: str | None = None, repair: bool =
         name = j.find("parent").get("link")
     chain.reverse()
     on_chain = {j.get("name") for j in chain}
+    value_notes, changed = check_values(path, root, on_chain)  # every number's physical sense
     joints = tuple(_joint_info(path, j) for j in chain if j.get("type") in _MOVABLE)
     if not joints:
         raise UrdfError(f"{path}: no movable joint between the root and the payload frame '{payload_frame}'")
     first = next(i for i, j in enumerate(chain) if j.get("type") in _MOVABLE)
     chain_links = [j.find("child").get("link") for j in chain[first:]]
-    notes = _check_inertias(path, links, chain_links, parent_of, repair)
+    notes = value_notes + _check_inertias(path, links, chain_links, parent_of, repair)
     locked = tuple(
         j.get("name")
         for j in root.findall("joint")
         if j.get("type") in _MOVABLE and j.get("name") not in on_chain
     )
-    xml = ET.tostring(root, encoding="unicode") if any(n.startswith("repaired") for n in notes) else None
+    changed = changed or any(n.startswith("repaired") for n in notes)
+    xml = ET.tostring(root, encoding="unicode") if changed else None
     return UrdfRobot(path, joints, payload_frame, locked, notes, xml)
 
 

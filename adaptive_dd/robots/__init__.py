@@ -1,4 +1,5 @@
-"""The robots adaptive_dd ships, as URDF files written from published parameter tables.
+"""The robots adaptive_dd ships, as URDF files written from published parameter tables, and
+arms drawn from a seed (:func:`random_arm`: ``robot = "random:SEED"`` in a scenario).
 
 Each file has no meshes; its header comment names the source of every number.
 The files are the output of ``tools/make_robot_urdfs.py`` (``--check`` compares).
@@ -14,7 +15,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
-__all__ = ["ROBOTS", "RobotInfo", "UnknownRobotError", "robot_urdf"]
+from adaptive_dd.robots.random_arm import RandomArm, random_arm
+
+__all__ = ["ROBOTS", "RandomArm", "RobotInfo", "UnknownRobotError", "random_arm", "robot_urdf"]
 
 _HERE = Path(__file__).resolve().parent
 

@@ -1,0 +1,79 @@
+"""``adaptive-dd benchmark FILE --arms N``: one scenario's payload schedule over N drawn arms
+(:mod:`adaptive_dd.benchmark.population`)."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+__all__ = ["run_arms"]
+
+
+def run_arms(args: argparse.Namespace) -> int:
+    """Run the population, print per arm and pooled, write ``per_seed.csv`` (an ``arm_seed``
+    column first), ``arms.csv`` and ``population.json``."""
+    import json
+
+    from adaptive_dd._numba_cache import announce_compilation
+    from adaptive_dd.benchmark.population import (
+        arms_frame,
+        format_population,
+        pooled,
+        population_scenario,
+        run_population,
+    )
+    from adaptive_dd.benchmark.scenario import read_toml
+    from adaptive_dd.cli.benchmark import only_controllers
+    from adaptive_dd.errors import ScenarioError
+    from adaptive_dd.outputs import OutputSet
+
+    if args.scenario is None:
+        raise ScenarioError(
+            "--arms needs a template scenario FILE (its payload schedule, run and controllers), e.g. "
+            "benchmarks/scenarios/population.toml"
+        )
+    path = Path(args.scenario)
+    if not path.is_file():
+        raise ScenarioError(f"{path}: no such scenario file")
+    data, src = read_toml(path), str(path)
+    seeds = range(args.first_arm, args.first_arm + args.arms)
+    first = population_scenario(data, src, seeds[0], draw_swaps=args.draw_swaps)  # checks the template
+    names = only_controllers(first, args.controllers) if args.controllers else None
+    n_seeds = args.seeds if args.seeds is not None else first.seeds
+    print(
+        f"population: {args.arms} arms (random:{seeds[0]} .. random:{seeds[-1]}) x {n_seeds} seeds of {src}",
+        file=sys.stderr,
+    )
+
+    def controllers(sc):
+        return tuple(c for c in sc.controllers if names is None or c in names)
+
+    def on_arm(a: dict) -> None:
+        means = " / ".join(f"{s['mean']:.3f}" for s in a["segments"])
+        print(f"  random:{a['arm_seed']} ({a['joints']} joints): {means}", file=sys.stderr, flush=True)
+
+    with announce_compilation(first.arm, source=src) as compiling:
+        pop = run_population(
+            data,
+            src,
+            seeds,
+            seeds=args.seeds,
+            controllers=controllers,
+            progress=not args.no_progress,
+            draw_swaps=args.draw_swaps,
+            on_arm=on_arm,
+        )
+        compiling.join()
+    print(format_population(pop))
+    out = Path(args.out)
+    outputs = OutputSet(args.out, extras=(args.json,) if args.json else ())
+    with outputs:
+        pop.frame.to_csv(outputs.path("per_seed.csv"), index=False)
+        arms_frame(pop).to_csv(outputs.path("arms.csv"), index=False)
+        summary = {"template": src, "arms": pop.arms, "pooled": pooled(pop)}
+        target = outputs.extra(args.json) if args.json else outputs.path("population.json")
+        target.write_text(json.dumps(summary, indent=1, default=float))
+    written = [out / "per_seed.csv", out / "arms.csv", Path(args.json or out / "population.json")]
+    print("wrote " + ", ".join(str(w) for w in written))
+    return 0

@@ -1,0 +1,267 @@
+"""Drawn arms (adaptive_dd.robots.random_arm), ``robot = "random:SEED"`` in a scenario, and the
+population's report (adaptive_dd.benchmark.population) on known numbers."""
+
+from __future__ import annotations
+
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from adaptive_dd.benchmark.population import PopulationResult, format_population, pooled, population_scenario
+from adaptive_dd.benchmark.scenario import parse_scenario, read_toml
+from adaptive_dd.errors import ParameterError, ScenarioError
+from adaptive_dd.robots import random_arm
+
+ROOT = Path(__file__).resolve().parent.parent
+TEMPLATE = ROOT / "benchmarks" / "scenarios" / "population.toml"
+SEEDS = range(12)
+
+
+def _links(text: str) -> list[tuple[float, np.ndarray]]:
+    """(mass, inertia) of every link with an <inertial>, read from the XML (not through the package)."""
+    out = []
+    for link in ET.fromstring(text).findall("link"):
+        inertial = link.find("inertial")
+        if inertial is None:
+            continue
+        m = float(inertial.find("mass").get("value"))
+        e = {k: float(v) for k, v in inertial.find("inertia").attrib.items()}
+        inertia = np.array(
+            [[e["ixx"], e["ixy"], e["ixz"]], [e["ixy"], e["iyy"], e["iyz"]], [e["ixz"], e["iyz"], e["izz"]]]
+        )
+        out.append((m, inertia))
+    return out
+
+
+def test_same_seed_same_arm_and_seeds_differ():
+    from adaptive_dd.robots.random_arm import _draw
+
+    a = random_arm(4)
+    _draw.cache_clear()  # drawn again, not read from the cache
+    b = random_arm(4)
+    assert a is not b
+    assert a.urdf == b.urdf and a.reference == b.reference and a.task_torque == b.task_torque
+    assert len({random_arm(s).urdf for s in range(6)}) == 6
+
+
+@pytest.mark.parametrize("joints", [3, 4, 5, 6, 7])
+def test_joint_count_as_asked(joints):
+    arm = random_arm(11, joints=joints)
+    assert arm.n_joints == joints
+    kinds = [j.get("type") for j in ET.fromstring(arm.urdf).findall("joint")]
+    assert kinds.count("revolute") == joints and kinds.count("fixed") == 1
+
+
+@pytest.mark.parametrize("bad", [-1, 1.5, "3", True])
+def test_bad_seed_is_an_error(bad):
+    with pytest.raises(ParameterError, match="seed"):
+        random_arm(bad)
+
+
+@pytest.mark.parametrize("bad", [2, 8, 4.0])
+def test_bad_joint_count_is_an_error(bad):
+    with pytest.raises(ParameterError, match="joints"):
+        random_arm(0, joints=bad)
+
+
+def test_drawn_joint_counts_cover_three_to_seven():
+    assert {random_arm(s).n_joints for s in range(40)} == {3, 4, 5, 6, 7}
+
+
+@pytest.mark.parametrize("seed", SEEDS)
+def test_links_are_rigid_bodies(seed):
+    """Every link: mass > 0, inertia positive definite and within the triangle inequality."""
+    links = _links(random_arm(seed).urdf)
+    assert len(links) == random_arm(seed).n_joints
+    for m, inertia in links:
+        assert m > 0
+        np.testing.assert_allclose(inertia, inertia.T)
+        a, b, c = np.linalg.eigvalsh(inertia)
+        assert a > 0
+        assert c <= a + b + 1e-12
+
+
+@pytest.mark.parametrize("seed", SEEDS)
+def test_reference_within_limits_and_torque_within_effort(seed):
+    """The reference stays inside the position and velocity limits, and inverse dynamics along it
+    with the rated payload at the flange (Pinocchio, the URDF read back) within the effort limits."""
+    import pinocchio as pin
+
+    arm = random_arm(seed)
+    model = pin.buildModelFromXML(arm.urdf)
+    frame = model.frames[model.getFrameId("tool")]
+    load = pin.Inertia(arm.payload_capacity, np.array([0.0, 0.0, 0.05]), np.eye(3) * 1e-3)
+    model.inertias[frame.parentJoint] += frame.placement.act(load)
+    data = model.createData()
+    rows = [arm.reference[f"joint{j + 1}"] for j in range(arm.n_joints)]
+    off = np.array([r["offset"] for r in rows])
+    amp, ph = np.array([r["amplitude"] for r in rows]), np.array([r["phase"] for r in rows])
+    w = 2 * np.pi * np.array([r["frequency"] for r in rows])
+    for t in np.linspace(0.0, 30.0, 301):
+        s, c = np.sin(w * t + ph), np.cos(w * t + ph)
+        q, v, a = off + (amp * s).sum(1), (amp * w * c).sum(1), -(amp * w**2 * s).sum(1)
+        assert np.all(q > model.lowerPositionLimit) and np.all(q < model.upperPositionLimit)
+        assert np.all(np.abs(v) < model.velocityLimit)
+        tau = pin.rnea(model, data, q, v, a) + np.asarray(arm.armature) * a
+        tau += model.damping * v + model.friction * np.sign(v)
+        assert np.all(np.abs(tau) < model.effortLimit / 1.5)
+    assert 0 < arm.payload_capacity < sum(m for m, _ in _links(arm.urdf))
+
+
+def _scenario(robot, **extra) -> dict:
+    return {
+        "arm": {"robot": robot, **extra},
+        "run": {"duration": 3.0, "seeds": 1, "controllers": ["ct_oracle", "adaptive_ct"]},
+        "payload": [{"at": 1.0, "mass": 0.5}],
+    }
+
+
+def test_scenario_robot_random_brings_capacity_armature_reference():
+    sc = parse_scenario(_scenario("random:5"), "mem.toml")
+    drawn = random_arm(5)
+    assert sc.n_joints == drawn.n_joints
+    assert sc.arm.payload_capacity == drawn.payload_capacity
+    np.testing.assert_allclose(sc.arm.armature, drawn.armature)
+    assert sc.reference.offset == tuple(
+        drawn.reference[f"joint{j + 1}"]["offset"] for j in range(sc.n_joints)
+    )
+    # what the file states wins
+    sc = parse_scenario(_scenario("random:5", payload_capacity=9.0), "mem.toml")
+    assert sc.arm.payload_capacity == 9.0
+
+
+@pytest.mark.parametrize("robot", ["random:x", "random:-1", "random:", "random:1e3"])
+def test_scenario_bad_random_seed_names_key_and_value(robot):
+    with pytest.raises(ScenarioError, match=r"mem\.toml: key 'arm\.robot'.*" + robot):
+        parse_scenario(_scenario(robot), "mem.toml")
+
+
+def test_unknown_robot_mentions_random():
+    with pytest.raises(ScenarioError, match="random:SEED"):
+        parse_scenario(_scenario("ur6"), "mem.toml")
+
+
+def test_population_masses_are_shares_of_each_capacity():
+    data = read_toml(TEMPLATE)
+    shares = [p["mass"] for p in data["payload"]]
+    for seed in (0, 3):
+        sc = population_scenario(data, str(TEMPLATE), seed)
+        cap = random_arm(seed).payload_capacity
+        np.testing.assert_allclose(sc.swap_masses, np.array(shares) * cap, rtol=1e-6)
+        assert sc.n_joints == random_arm(seed).n_joints
+    data["arm"]["payload_capacity"] = 2.0  # the template's masses read against 2 kg
+    sc = population_scenario(data, str(TEMPLATE), 3)
+    np.testing.assert_allclose(
+        sc.swap_masses, np.array(shares) / 2 * random_arm(3).payload_capacity, rtol=1e-6
+    )
+
+
+def test_population_drawn_swaps_in_order_and_seeded():
+    data = read_toml(TEMPLATE)
+    a = population_scenario(data, str(TEMPLATE), 2, draw_swaps=True).swap_times
+    assert a == population_scenario(data, str(TEMPLATE), 2, draw_swaps=True).swap_times
+    assert list(a) == sorted(a) and a != (4.0, 8.0, 12.0)
+
+
+def test_population_refuses_a_two_link_template():
+    with pytest.raises(ScenarioError, match="two-link"):
+        population_scenario({"arm": {"l1": 0.2}, "payload": [{"at": 1.0, "mass": 1.0}]}, "t.toml", 0)
+
+
+def _fake_population() -> PopulationResult:
+    """Two arms x two seeds x two segments with known ratios."""
+    arms = []
+    rows = []
+    ratios = {(7, 0): [1.0, 1.2], (7, 1): [1.1, 3.5], (9, 0): [0.9, 1.0], (9, 1): [1.05, 1.1]}
+    for arm_seed in (7, 9):
+        segs = [
+            {"start": 0.0, "end": 2.0, "mass": 0.0, "floor_saturated": False},
+            {"start": 2.0, "end": 4.0, "mass": 1.0, "floor_saturated": False},
+        ]
+        for i, s in enumerate(segs):
+            r = ratios[(arm_seed, i)]
+            s.update(mean=float(np.mean(r)), p90=float(np.quantile(r, 0.9)), max=float(max(r)))
+            for seed, x in enumerate(r):
+                for ctrl in ("adaptive_ct", "ct_oracle"):
+                    rows.append(
+                        {
+                            "arm_seed": arm_seed,
+                            "controller": ctrl,
+                            "seed": seed,
+                            "segment": i,
+                            "mass_kg": s["mass"],
+                            "ratio_to_floor": x if ctrl == "adaptive_ct" else np.nan,
+                        }
+                    )
+        arms.append(
+            {
+                "arm_seed": arm_seed,
+                "joints": 4,
+                "kind": "palletizer",
+                "capacity_kg": 2.0,
+                "segments": segs,
+                "false_alarm_trials": 1 if arm_seed == 9 else 0,
+                "trials": 2,
+                "missed_swaps": 0,
+                "swaps": 2,
+            }
+        )
+    return PopulationResult(arms, pd.DataFrame(rows))
+
+
+def test_pooled_figures_and_worst_arm():
+    pop = _fake_population()
+    p = pooled(pop)
+    assert [x["n"] for x in p] == [4, 4]
+    np.testing.assert_allclose(p[0]["mean"], np.mean([1.0, 1.2, 0.9, 1.0]))
+    np.testing.assert_allclose(p[1]["p90"], np.quantile([1.1, 3.5, 1.05, 1.1], 0.9))
+    assert p[1]["max"] == 3.5 and p[1]["worst"] == (7, 1)
+    np.testing.assert_allclose(p[1]["capacity_share"], 0.5)
+    text = format_population(pop)
+    assert "segment 2 (0.50 x capacity), 4 trials" in text and "NOT met" in text
+    assert "trials with a false alarm: 1 of 4 (25.0 %)" in text
+    assert text.split("worst arms: ")[1].startswith("random:7")
+
+
+def test_pooled_leaves_out_saturated_floor_segments():
+    pop = _fake_population()
+    pop.arms[0]["segments"][1]["floor_saturated"] = True
+    p = pooled(pop)
+    assert p[1]["n"] == 2 and p[1]["max"] == 1.1
+    assert "1 arm segment(s) where ct_oracle saturates" in format_population(pop)
+
+
+def test_cli_arms_usage_errors(capsys):
+    from adaptive_dd.cli import main
+
+    assert main(["benchmark", "--arms", "2"]) == 2  # no template
+    assert "--arms needs a template scenario FILE" in capsys.readouterr().err
+    assert main(["benchmark", "--draw-swaps"]) == 2
+    assert "give --arms N too" in capsys.readouterr().err
+    two_link = ROOT / "benchmarks" / "scenarios" / "other_arm.toml"
+    assert main(["benchmark", str(two_link), "--arms", "2"]) == 2
+    assert "two-link" in capsys.readouterr().err
+
+
+@pytest.mark.slow
+def test_population_run_end_to_end():
+    """Two arms, one seed each, a short schedule: the per-seed table carries each arm's seed and the
+    per-arm summaries agree with it."""
+    from adaptive_dd.benchmark.population import run_population
+
+    data = read_toml(TEMPLATE)
+    data["run"]["duration"] = 3.0
+    data["payload"] = [{"at": 1.0, "mass": 0.8}, {"at": 2.0, "mass": 0.0}]
+    pop = run_population(data, str(TEMPLATE), [0, 1], seeds=1)
+    assert sorted(set(pop.frame["arm_seed"])) == [0, 1]
+    for a in pop.arms:
+        rows = pop.frame[
+            (pop.frame["arm_seed"] == a["arm_seed"]) & (pop.frame["controller"] == "adaptive_ct")
+        ]
+        np.testing.assert_allclose(
+            rows.sort_values("segment")["ratio_to_floor"], [s["mean"] for s in a["segments"]]
+        )
+    assert [p["n"] for p in pooled(pop)] == [2, 2, 2]

@@ -1,0 +1,173 @@
+"""A URDF's values checked for physical sense (adaptive_dd.plant.urdf_checks), through read_urdf
+and through a scenario, and the fuzzer over robot descriptions on planted mutations."""
+
+from __future__ import annotations
+
+import re
+import sys
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from adaptive_dd.errors import ScenarioError, UrdfError
+from adaptive_dd.plant.urdf import read_urdf
+from adaptive_dd.plant.urdf_checks import UrdfWarning
+from adaptive_dd.robots import ROBOTS, robot_urdf
+
+ROOT = Path(__file__).resolve().parent.parent
+UR5 = robot_urdf("ur5").read_text()
+
+
+def _mutant(tmp_path, old: str, new: str, text: str = UR5) -> Path:
+    assert text.count(old) >= 1, old
+    path = tmp_path / "mutant.urdf"
+    path.write_text(text.replace(old, new, 1))
+    return path
+
+
+def _first(pattern: str, text: str = UR5) -> str:
+    return re.search(pattern, text).group(0)
+
+
+@pytest.mark.parametrize("name", sorted(ROBOTS))
+def test_shipped_robots_load_without_a_note(name):
+    assert read_urdf(robot_urdf(name), ROBOTS[name].payload_frame).notes == ()
+
+
+def test_tiago_vendor_file_still_loads():
+    robot = read_urdf(ROOT / "examples" / "tiago" / "tiago_48_hey5.urdf", "arm_tool_link", repair=True)
+    assert len(robot.joints) == 8
+
+
+# (what is planted, the text replaced by, what the error must name: element, attribute, value)
+PLANTED = [
+    ('<axis xyz="0 0 1.0"', '<axis xyz="0 0 0"', ("joint 'shoulder_pan_joint'", "xyz", "'0 0 0'")),
+    ('<axis xyz="0 0 1.0"', '<axis xyz="0 nan 1"', ("joint 'shoulder_pan_joint'", "xyz", "nan")),
+    ('<axis xyz="0 0 1.0"', "<axis", ("joint 'shoulder_pan_joint'", "xyz", "missing")),
+    ("MASS", "1e300", ("link", "value", "1e300")),
+    ("MASS", "-2", ("link", "value", "-2")),
+    ("EFFORT", "0", ("joint 'shoulder_pan_joint'", "effort", "'0'")),
+    ("EFFORT", "1e300", ("joint 'shoulder_pan_joint'", "effort", "1e300")),
+    ("VELOCITY", "0", ("joint 'shoulder_pan_joint'", "velocity", "'0'")),
+    ("VELOCITY", "-1", ("joint 'shoulder_pan_joint'", "velocity", "'-1'")),
+    ("ORIGIN", "0 0 inf", ("joint 'shoulder_pan_joint'", "xyz", "inf")),
+    ("ORIGIN", "0 0 1e300", ("joint 'shoulder_pan_joint'", "xyz", "1e300")),
+    ("ORIGIN", "0 0", ("joint 'shoulder_pan_joint'", "xyz", "3 numbers")),
+    ("IXX", "1e300", ("link", "ixx", "1e300")),
+    ("FRICTION", "-1", ("joint 'shoulder_pan_joint'", "friction", "'-1'")),
+    ("LOWER", "1e300", ("joint 'shoulder_pan_joint'", "lower", "1e300")),
+]
+
+
+def _planted(old: str, new: str) -> tuple[str, str]:
+    """The literal text of a planted mutation in the UR5's file."""
+    patterns = {
+        "MASS": (r'<mass value="[^"]*"', lambda m: f'<mass value="{new}"'),
+        "EFFORT": (r'effort="[^"]*"', lambda m: f'effort="{new}"'),
+        "VELOCITY": (r'velocity="[^"]*"', lambda m: f'velocity="{new}"'),
+        "LOWER": (r'lower="[^"]*"', lambda m: f'lower="{new}"'),
+        "FRICTION": (r'friction="[^"]*"', lambda m: f'friction="{new}"'),
+        "IXX": (r'ixx="[^"]*"', lambda m: f'ixx="{new}"'),
+        "ORIGIN": (
+            r'<joint name="shoulder_pan_joint"[^>]*>\s*<parent[^>]*>\s*<child[^>]*>\s*<origin xyz="[^"]*"',
+            None,
+        ),
+    }
+    if old not in patterns:
+        return old, new
+    pattern, repl = patterns[old]
+    found = _first(pattern)
+    if repl is None:
+        return found, re.sub(r'xyz="[^"]*"$', f'xyz="{new}"', found)
+    return found, repl(found)
+
+
+@pytest.mark.parametrize(("old", "new", "named"), PLANTED)
+def test_planted_fault_is_an_error_naming_element_attribute_value(tmp_path, old, new, named):
+    old, new = _planted(old, new)
+    path = _mutant(tmp_path, old, new)
+    with pytest.raises(UrdfError) as err:
+        read_urdf(path, "tool0")
+    msg = str(err.value)
+    assert str(path) in msg
+    for part in named:
+        assert part in msg, (part, msg)
+
+
+def test_planted_fault_through_a_scenario_names_file_and_key(tmp_path):
+    from adaptive_dd.benchmark.scenario import parse_scenario
+
+    path = _mutant(tmp_path, '<axis xyz="0 0 1.0"', '<axis xyz="0 0 0"')
+    data = {
+        "arm": {"urdf": str(path), "payload_frame": "tool0"},
+        "reference": {
+            f"joint{j + 1}": {"offset": 0.0, "amplitude": [0.01], "frequency": [0.5]} for j in range(6)
+        },
+        "payload": [{"at": 1.0, "mass": 1.0}],
+    }
+    with pytest.raises(
+        ScenarioError, match=r"s\.toml: \[arm\] urdf: .*mutant\.urdf: joint 'shoulder_pan_joint'"
+    ):
+        parse_scenario(data, "s.toml")
+
+
+def test_axis_not_of_unit_length_is_normalised_with_a_note(tmp_path):
+    path = _mutant(tmp_path, '<axis xyz="0 0 1.0"', '<axis xyz="0 0 2.5"')
+    with pytest.warns(UrdfWarning, match="shoulder_pan_joint.*2.5"):
+        robot = read_urdf(path, "tool0")
+    assert any("normalised joint 'shoulder_pan_joint'" in n for n in robot.notes)
+    model = robot.model()
+    axis = model.joints[1].extract()
+    # Pinocchio reads the normalised file: the joint is the same as the original's
+    ref = read_urdf(robot_urdf("ur5"), "tool0").model()
+    q = np.linspace(-0.3, 0.4, model.nq)
+    import pinocchio as pin
+
+    d1, d2 = model.createData(), ref.createData()
+    pin.forwardKinematics(model, d1, q)
+    pin.forwardKinematics(ref, d2, q)
+    np.testing.assert_allclose(d1.oMi[-1].translation, d2.oMi[-1].translation, atol=1e-12)
+    assert axis is not None
+
+
+def test_geometry_size_nan_is_an_error_negative_a_note(tmp_path):
+    text = robot_urdf("vertical3").read_text()
+    box = _first(r'<box size="[^"]*"', text)
+    path = _mutant(tmp_path, box, '<box size="0.3 nan 0.06"', text)
+    with pytest.raises(UrdfError, match="<visual> <box>: attribute 'size'"):
+        read_urdf(path, "tool")
+    path = _mutant(tmp_path, box, '<box size="0.3 -0.06 0.06"', text)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        robot = read_urdf(path, "tool")
+    assert any("is negative (not used)" in n for n in robot.notes)
+
+
+def test_fuzzer_regressions():
+    """The fuzzer's judgement on mutations it once found unjudged (internal errors, silence)."""
+    sys.path.insert(0, str(ROOT / "benchmarks"))
+    try:
+        import fuzz_urdf
+    finally:
+        sys.path.pop(0)
+    import tempfile
+
+    cases = [
+        ("sice_arm", "tip", 2, '<inertia ixx="', '<inertia iyz="0.3" ixx="'),  # not a rigid body's
+        ("iiwa14", "iiwa_link_ee_kuka", 7, '<axis xyz="0 0 1.0"/>', "<axis/>"),  # axis without xyz
+        ("sice_arm", "tip", 2, 'velocity="', 'velocityx="'),  # urdfdom requires velocity
+        ("vertical3", "tool", 3, '<box size="', '<box size="-inf '),  # a visual's size
+    ]
+    with tempfile.TemporaryDirectory() as tmp:
+        for name, frame, n, old, new in cases:
+            text = robot_urdf(name).read_text()
+            assert old in text, old
+            got = fuzz_urdf.load(text.replace(old, new, 1), Path(tmp) / f"{name}.urdf", frame, n)
+            assert isinstance(got, ScenarioError), (name, new, got)
+            assert str(Path(tmp) / f"{name}.urdf") in str(got)
+        # a legal mutation is accepted and judged sane
+        text = robot_urdf("ur5").read_text()
+        got = fuzz_urdf.load(text, Path(tmp) / "ur5.urdf", "tool0", 6)
+        assert fuzz_urdf.meaningless(got) is None
