@@ -100,7 +100,8 @@ class _ChainTrial:
         _, self.ts, self.acc, self.rec = _records("trial", None, sc, self.rc, self.pl, 1, 1, False, "python")
         self.seg, _, self.masses = true_parameters(sc)
         # the trial's true base parameters per segment (its plant's draw, if the scenario has one)
-        self.sigmas = (true_models(self.pl)[0] @ sc.arm.base.B.T)[self.seg]
+        self.pis = true_models(self.pl)[0]  # (G, 13 n): the trial's standard parameters per segment
+        self.sigmas = (self.pis @ sc.arm.base.B.T)[self.seg]
         self.noise = NoiseBlocks(sc, [seed_index], 2 * sc.n_joints)
         self.k, self._buf, self._at = 0, None, 0
 
@@ -222,6 +223,16 @@ class Simulation:
     @property
     def payload_mass(self) -> float:
         return self._truth()[3]
+
+    @property
+    def pi_true(self) -> Array | None:
+        """The trial's true standard parameters now, payload included ``(13 n,)`` (each seed's drawn
+        plant when the scenario draws one); None on the paper's closed forms (``sigma_true``)."""
+        tr = self._trial
+        if not isinstance(tr, _ChainTrial):
+            return None
+        k = min(tr.k, self.scenario.n_samples - 1)
+        return tr.pis[tr.seg[k]].copy()
 
 
 def run_trial(controller, scenario: Scenario | None = None, seed_index: int = 0, name: str | None = None):

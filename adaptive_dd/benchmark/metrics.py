@@ -44,6 +44,11 @@ com_estimate [m]
     The payload's centre of mass (x, y, z, payload frame) implied by the estimates at the end
     of the segment (None below 0.1 kg); N-joint arms only: None on the two-link arm, whose
     paper's sigma holds the payload at the tip (eq. 9) and no centre of mass.
+ee_position_rms, ee_position_max [mm], ee_orientation_rms [deg], ee_seeds
+    The tool frame's error (the arm's ``payload_frame``, placed by forward kinematics at the true
+    q and at the reference): position RMS and peak, orientation RMS, on every arm
+    (:mod:`~adaptive_dd.benchmark.end_effector`), over the ``ee_seeds`` seeds whose trajectory
+    the run recorded (``keep_trajectories``, the first 3 by default); None when none was.
 com_true [m]
     The centre of mass of the segment's payload in the payload frame; None without payload.
 sigma_true
@@ -153,7 +158,7 @@ SEGMENT_KEYS = (
     "sigma_true", "rms_error_per_seed", "ratio_to_floor", "floor_saturation", "floor_saturated",
     "detection_delay", "detection_delay_per_seed", "detection_delay_median", "detected", "missed",
     "time_to_floor", "information_time", "detection_limit", "mass_learning_time", "com_learning_time",
-    "learning_seeds",
+    "learning_seeds", "ee_position_rms", "ee_position_max", "ee_orientation_rms", "ee_seeds",
 )  # fmt: skip
 """The keys of each segment, on every arm (module docstring;
 :data:`~adaptive_dd.closed_loop.information.LEARNING_KEYS` among them)."""
@@ -201,6 +206,7 @@ def per_seed_segment_metrics(res: BenchmarkResult, run, recovery: bool = True) -
 
         out = segment_metrics(res, run)
         start, end = _bounds(sc)
+        out.update(_end_effector(res, run, start, end))
         if recovery:
             out["recovery_time"] = _recovery_times(run.e_norm, start, end, T)
         return _blank_failed(res, run, out, end, key)
@@ -216,11 +222,27 @@ def per_seed_segment_metrics(res: BenchmarkResult, run, recovery: bool = True) -
         "saturation_fraction": acc.n_saturated / n,
         "rms_error_settled": segment_rms(acc.sum_e2_settled, n_set),
     }
+    out.update(_end_effector(res, run, start, end))
     if recovery:
         out["recovery_time"] = _recovery_times(run.e_norm, start, end, T)
     if run.sigma_end is not None:
         out["mass_estimate"] = sc.closed_forms.payload_mass_from_sigma(run.sigma_end)
     return _blank_failed(res, run, out, end, key)
+
+
+def _end_effector(res: BenchmarkResult, run, start, end) -> dict[str, np.ndarray]:
+    """The tool frame's error per seed and segment (:mod:`~adaptive_dd.benchmark.end_effector`)
+    of the recorded trials, NaN for the seeds whose trajectory was not recorded."""
+    from adaptive_dd.benchmark.end_effector import EE_KEYS, end_effector_errors
+
+    S = run.failed.shape[0]
+    out = {k: np.full((S, len(start)), np.nan) for k in EE_KEYS}
+    if run.q is not None and run.q.shape[0]:
+        K = run.q.shape[0]
+        part = end_effector_errors(res.scenario.arm, run.q, res.q_d[: run.q.shape[1]], start, end)
+        for k in EE_KEYS:
+            out[k][:K] = part[k]
+    return out
 
 
 def _blank_failed(res: BenchmarkResult, run, out: dict, end: np.ndarray, key) -> dict:
@@ -392,6 +414,10 @@ def _segment_entry(sc, m: dict, i: int, sigma_true: np.ndarray) -> dict:
         detected=None,
         missed=None,
     )
+    ee = m["ee_position_rms"][:, i]
+    seg["ee_seeds"] = int(np.isfinite(ee).sum())
+    for k in ("ee_position_rms", "ee_position_max", "ee_orientation_rms"):
+        seg[k] = _mean(m[k][:, i])
     if "com_estimate_x" in m:
         seg["com_estimate"] = [_mean(m[f"com_estimate_{a}"][:, i]) for a in "xyz"]
     return seg

@@ -24,7 +24,8 @@ UNITS = {
     "start": "s", "end": "s", "mass": "kg", "rms_error": "rad", "rms_error_settled": "rad",
     "max_error": "rad", "rms_torque": "Nm", "saturation_fraction": "", "recovery_time": "s",
     "mass_estimate": "kg", "com_estimate_x": "m", "com_estimate_y": "m", "com_estimate_z": "m",
-    "time_to_floor": "s", "detection_delay": "s", "failed_at": "s",
+    "time_to_floor": "s", "detection_delay": "s", "failed_at": "s", "ee_position_rms": "mm",
+    "ee_position_max": "mm", "ee_orientation_rms": "deg",
 }  # fmt: skip
 """The unit of each quantity of :func:`to_frame` (its column is ``NAME_UNIT``; ``""``: none)."""
 
@@ -45,7 +46,8 @@ def frame_columns(n_joints: int) -> list[str]:
         *(f"rms_error_joint{j}" for j in range(1, n_joints + 1)),
         "max_error", "rms_torque", "saturation_fraction", "rms_error_settled", "recovery_time",
         *_ESTIMATES, "floor", "ratio_to_floor", "time_to_floor", "detection_delay", "false_alarms",
-        "failed", "failed_at", "failure", "engine",
+        "failed", "failed_at", "failure", "engine", "ee_position_rms", "ee_position_max",
+        "ee_orientation_rms",
     ]  # fmt: skip
     return [column(n) for n in names]
 
@@ -58,8 +60,10 @@ def to_frame(res):
     rms_error_joint1_rad .. rms_error_jointN_rad, max_error_rad, rms_torque_Nm,
     saturation_fraction, rms_error_settled_rad, recovery_time_s, mass_estimate_kg,
     com_estimate_x_m, com_estimate_y_m, com_estimate_z_m, floor, ratio_to_floor,
-    time_to_floor_s, detection_delay_s, false_alarms, failed, failed_at_s, failure, engine``
-    (metrics: :mod:`~adaptive_dd.benchmark.metrics`). NaN where a figure does not apply: the
+    time_to_floor_s, detection_delay_s, false_alarms, failed, failed_at_s, failure, engine,
+    ee_position_rms_mm, ee_position_max_mm, ee_orientation_rms_deg`` (the tool frame's error,
+    :mod:`~adaptive_dd.benchmark.end_effector`: NaN for the seeds whose trajectory the run did
+    not record; metrics: :mod:`~adaptive_dd.benchmark.metrics`). NaN where a figure does not apply: the
     estimates for a fixed model (the centre of mass on the two-link arm, whose paper's sigma holds
     none), ``time_to_floor_s`` outside the first segment, without a floor or for a failed trial
     (``inf`` when never, :mod:`~adaptive_dd.benchmark.time_to_floor`), the metrics of a failed

@@ -1,0 +1,86 @@
+"""Gymnasium environments over the benchmark's scenarios (``pip install -e ".[gym]"``).
+
+Importing this package registers one environment id per shipped scenario (:data:`SCENARIO_IDS`):
+
+========================================  ==============================================
+id                                        scenario
+========================================  ==============================================
+``adaptive_dd/PayloadSwap-SICE-v0``       ``payload_swap.toml`` (the paper's two-link arm)
+``adaptive_dd/PayloadSwap-UR5-v0``        ``ur5_tool_swap.toml`` (robot drawn per seed)
+``adaptive_dd/PayloadSwap-UR5Exact-v0``   ``ur5_tool_swap_exact.toml``
+``adaptive_dd/PayloadSwap-Panda-v0``      ``panda_payload.toml``
+``adaptive_dd/PayloadSwap-PandaExact-v0`` ``panda_payload_exact.toml``
+``adaptive_dd/PayloadSwap-iiwa14-v0``     ``iiwa14_payload.toml``
+``adaptive_dd/PayloadSwap-iiwa14Exact-v0`` ``iiwa14_payload_exact.toml``
+``adaptive_dd/PayloadSwap-Vertical3-v0``  ``vertical3_payload.toml``
+``adaptive_dd/PayloadSwap-Vertical3Exact-v0`` ``vertical3_payload_exact.toml``
+========================================  ==============================================
+
+:func:`make_env` builds the environment of any scenario (a user's URDF arm too);
+:class:`~adaptive_dd.gym.wrappers.ResidualTorque` makes the action a residual on a base
+controller; :func:`~adaptive_dd.gym.evaluate.evaluate` scores a policy against the floor, seed by
+seed, on the benchmark's scale.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+try:
+    import gymnasium
+except ImportError as exc:  # pragma: no cover - the optional extra is missing
+    raise ImportError(
+        'adaptive_dd.gym needs gymnasium: pip install -e ".[gym]" (or pip install gymnasium)'
+    ) from exc
+
+from adaptive_dd.gym.env import PayloadSwapEnv, observation_of
+from adaptive_dd.gym.evaluate import Evaluation, evaluate, run_episode
+from adaptive_dd.gym.wrappers import ResidualTorque
+
+__all__ = [
+    "SCENARIO_IDS",
+    "Evaluation",
+    "PayloadSwapEnv",
+    "ResidualTorque",
+    "evaluate",
+    "make_env",
+    "observation_of",
+    "run_episode",
+]
+
+_SCENARIOS = Path(__file__).resolve().parent.parent / "scenarios"
+
+SCENARIO_IDS = {
+    "adaptive_dd/PayloadSwap-SICE-v0": "payload_swap.toml",
+    "adaptive_dd/PayloadSwap-UR5-v0": "ur5_tool_swap.toml",
+    "adaptive_dd/PayloadSwap-UR5Exact-v0": "ur5_tool_swap_exact.toml",
+    "adaptive_dd/PayloadSwap-Panda-v0": "panda_payload.toml",
+    "adaptive_dd/PayloadSwap-PandaExact-v0": "panda_payload_exact.toml",
+    "adaptive_dd/PayloadSwap-iiwa14-v0": "iiwa14_payload.toml",
+    "adaptive_dd/PayloadSwap-iiwa14Exact-v0": "iiwa14_payload_exact.toml",
+    "adaptive_dd/PayloadSwap-Vertical3-v0": "vertical3_payload.toml",
+    "adaptive_dd/PayloadSwap-Vertical3Exact-v0": "vertical3_payload_exact.toml",
+}
+"""Registered id -> the shipped scenario file (``adaptive_dd/scenarios/``)."""
+
+
+def make_env(scenario=None, floor: str | None = "ct_oracle") -> PayloadSwapEnv:
+    """The environment of a scenario: a :class:`~adaptive_dd.benchmark.scenario.Scenario`, a
+    scenario file (any arm, a user's URDF too), a registered id, or None (the paper's arm)."""
+    if isinstance(scenario, str) and scenario in SCENARIO_IDS:
+        scenario = _SCENARIOS / SCENARIO_IDS[scenario]
+    return PayloadSwapEnv(scenario, floor=floor)
+
+
+def _register() -> None:
+    for env_id, file in SCENARIO_IDS.items():
+        if env_id not in gymnasium.registry:
+            gymnasium.register(
+                id=env_id,
+                entry_point="adaptive_dd.gym.env:PayloadSwapEnv",
+                kwargs={"scenario": str(_SCENARIOS / file)},
+                disable_env_checker=False,
+            )
+
+
+_register()

@@ -1,0 +1,177 @@
+"""A policy's score on the benchmark's scale: its trials, the floor's, the ratio per seed.
+
+:func:`evaluate` runs a policy (any callable from the observation to the action) through the
+environment's episodes, trial ``i`` of the scenario for each seed index ``i`` (the benchmark's
+noise, drawn plant and payload schedule), and sets each trial's RMS tracking error per payload
+segment beside the floor's on the same seed: the scenario's ``ct_oracle`` run by the benchmark
+(:func:`~adaptive_dd.benchmark.runner.run_benchmark`, compiled). The error is the benchmark's:
+``e = q_d - q`` of the true joint angles at every sample the policy commanded, so a policy that
+commands what a built-in law commands has the benchmark's figures (``tests/test_gym.py`` holds the
+``pd`` law written as a policy to the benchmark's ``pd`` trial). The tool frame's error
+(:mod:`~adaptive_dd.benchmark.end_effector`) is computed on every trial.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+import gymnasium
+import numpy as np
+
+from adaptive_dd.benchmark.scenario import Scenario
+from adaptive_dd.errors import ParameterError
+
+__all__ = ["Evaluation", "evaluate", "run_episode"]
+
+FLOOR = "ct_oracle"
+
+
+@dataclass
+class Evaluation:
+    """A policy's trials beside the floor's.
+
+    Attributes
+    ----------
+    name : str
+    seeds : tuple of int
+        The seed indices, one trial each.
+    segments : list of (start [s], end [s], mass [kg])
+    rms_error, floor_rms_error : ndarray (n_seeds, n_segments)
+        RMS of ``|q_d - q|`` [rad] per trial and segment (NaN for segments that end after a
+        failure: the benchmark's rule).
+    ee_position_rms, ee_position_max, ee_orientation_rms : ndarray (n_seeds, n_segments)
+        The tool frame's error [mm, mm, deg] of the policy's trials.
+    failed : ndarray of bool (n_seeds,)
+    """
+
+    name: str
+    seeds: tuple
+    segments: list
+    rms_error: np.ndarray
+    floor_rms_error: np.ndarray
+    ee_position_rms: np.ndarray
+    ee_position_max: np.ndarray
+    ee_orientation_rms: np.ndarray
+    failed: np.ndarray
+
+    @property
+    def ratio_to_floor(self) -> np.ndarray:
+        """``(n_seeds, n_segments)``: the per-seed ratio of RMS errors to the floor's."""
+        with np.errstate(divide="ignore", invalid="ignore"):
+            return self.rms_error / self.floor_rms_error
+
+    def summary(self) -> list[dict]:
+        """Per segment: ``start, end, mass``, the mean RMS error [rad], the tool frame's mean
+        errors and the ratio's statistics (:func:`~adaptive_dd.benchmark.metrics.ratio_statistics`:
+        mean, median, p90, max, ci95, worst_seed, n)."""
+        from adaptive_dd.benchmark.metrics import ratio_statistics
+
+        out = []
+        r = self.ratio_to_floor
+        for s, (a, b, m) in enumerate(self.segments):
+            out.append({
+                "start": a, "end": b, "mass": m,
+                "rms_error": float(np.nanmean(self.rms_error[:, s])),
+                "ee_position_rms": float(np.nanmean(self.ee_position_rms[:, s])),
+                "ee_orientation_rms": float(np.nanmean(self.ee_orientation_rms[:, s])),
+                "ratio_to_floor": ratio_statistics(r[:, s], self.seeds),
+            })  # fmt: skip
+        return out
+
+    def to_frame(self):
+        """One row per seed x segment (pandas DataFrame), the benchmark's column names."""
+        import pandas as pd
+
+        rows = []
+        r = self.ratio_to_floor
+        for i, seed in enumerate(self.seeds):
+            for s, (a, b, m) in enumerate(self.segments):
+                rows.append({
+                    "controller": self.name, "seed": seed, "segment": s, "start_s": a, "end_s": b,
+                    "mass_kg": m, "rms_error_rad": self.rms_error[i, s], "floor": FLOOR,
+                    "ratio_to_floor": r[i, s], "failed": bool(self.failed[i]),
+                    "ee_position_rms_mm": self.ee_position_rms[i, s],
+                    "ee_position_max_mm": self.ee_position_max[i, s],
+                    "ee_orientation_rms_deg": self.ee_orientation_rms[i, s],
+                })  # fmt: skip
+        return pd.DataFrame(rows)
+
+
+def run_episode(policy: Callable, env: gymnasium.Env, seed: int) -> tuple[np.ndarray, bool, int]:
+    """One episode of ``policy`` on ``env`` from ``reset(seed=seed)``.
+
+    Returns the true joint angles ``(N, n)`` at the samples the policy commanded (the state each
+    action was applied to; NaN after a failure), whether the trial failed, and the sample it
+    failed at (-1: none). ``policy.reset()`` is called first if the policy has one."""
+    sc = env.unwrapped.scenario
+    if hasattr(policy, "reset"):
+        policy.reset()
+    obs, info = env.reset(seed=int(seed))
+    q = np.full((sc.n_samples, sc.n_joints), np.nan)
+    for k in range(sc.n_samples):
+        q[k] = info["q_true"]
+        obs, _, terminated, truncated, info = env.step(policy(obs))
+        if terminated:
+            return q, True, k
+        if truncated:
+            break
+    return q, False, -1
+
+
+def evaluate(
+    policy: Callable,
+    scenario: Scenario | str | Path | gymnasium.Env,
+    seeds: Sequence[int] | int = 5,
+    name: str = "policy",
+) -> Evaluation:
+    """Run ``policy`` on trials ``seeds`` of ``scenario`` and set it beside the floor, seed by seed.
+
+    Parameters
+    ----------
+    policy : callable
+        ``policy(observation (5 n,)) -> torques (n,)`` [N m] (:mod:`adaptive_dd.gym.env`); with a
+        ``reset()`` it is called before each episode.
+    scenario : Scenario, path, or gymnasium.Env
+        The scenario, or an environment over one (e.g. a
+        :class:`~adaptive_dd.gym.wrappers.ResidualTorque`: the policy then gives the residual).
+    seeds : sequence of int or int
+        The trials' seed indices (an int ``m``: ``0 .. m - 1``).
+    name : str
+        The policy's name in the tables.
+    """
+    from adaptive_dd.benchmark.end_effector import end_effector_errors
+    from adaptive_dd.benchmark.metrics import per_seed_segment_metrics
+    from adaptive_dd.benchmark.runner import run_benchmark, scenario_controller
+    from adaptive_dd.closed_loop.types import run_constants
+    from adaptive_dd.gym.env import PayloadSwapEnv
+
+    env = scenario if isinstance(scenario, gymnasium.Env) else PayloadSwapEnv(scenario, floor=None)
+    sc = env.unwrapped.scenario
+    idx = tuple(range(seeds)) if isinstance(seeds, (int, np.integer)) else tuple(int(s) for s in seeds)
+    if not idx or min(idx) < 0:
+        raise ParameterError(f"evaluate: seeds must be a count >= 1 or seed indices >= 0, got {seeds!r}")
+    rc = run_constants(sc)
+    start, end = rc.seg_start, rc.seg_end
+    G = start.size
+    rms = np.full((len(idx), G), np.nan)
+    failed = np.zeros(len(idx), dtype=bool)
+    qs = np.full((len(idx), sc.n_samples, sc.n_joints), np.nan)
+    for i, seed in enumerate(idx):
+        q, failed[i], at = run_episode(policy, env, seed)
+        qs[i] = q
+        e2 = np.sum((rc.q_d - q) ** 2, axis=1)
+        for s in range(G):
+            if not failed[i] or end[s] <= at:  # the benchmark's rule: segments ending after it
+                rms[i, s] = np.sqrt(np.sum(e2[start[s] : end[s]]) / (end[s] - start[s]))
+    ee = end_effector_errors(sc.arm, qs, rc.q_d, start, end)
+    floor = run_benchmark(
+        sc, progress=False, controllers=dict([scenario_controller(sc, FLOOR)]), seed_indices=idx,
+        keep_trajectories=0,
+    )  # fmt: skip
+    floor_rms = per_seed_segment_metrics(floor, floor.runs[FLOOR], recovery=False)["rms_error"]
+    return Evaluation(
+        name, idx, list(sc.segments()), rms, floor_rms, ee["ee_position_rms"], ee["ee_position_max"],
+        ee["ee_orientation_rms"], failed,
+    )  # fmt: skip

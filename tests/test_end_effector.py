@@ -1,0 +1,109 @@
+"""The tool frame's error: forward kinematics held to Pinocchio, the per-segment figures to a
+hand computation, and the benchmark's results carrying them."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+from adaptive_dd.benchmark.end_effector import end_effector_errors, frame_placements, rotation_angle
+from adaptive_dd.errors import ParameterError
+from adaptive_dd.plant.arm import Arm
+
+ROOT = Path(__file__).resolve().parent.parent
+ROBOTS = ROOT / "adaptive_dd" / "robots"
+ARMS = {
+    "ur5": ("ur5.urdf", "tool0"),
+    "panda": ("panda.urdf", "panda_link8"),
+    "gen3": ("gen3.urdf", "end_effector_link"),  # continuous joints: Pinocchio's (cos, sin)
+    "vertical3": ("vertical3.urdf", "tool"),
+}
+
+
+def _arm(name: str) -> Arm:
+    urdf, frame = ARMS[name]
+    return Arm.from_urdf(ROBOTS / urdf, payload_frame=frame)
+
+
+@pytest.mark.parametrize("name", [*ARMS, "sice"])
+def test_forward_kinematics_is_pinocchios(name):
+    """The vectorised product of joint placements equals Pinocchio's framePlacement on 20 random
+    configurations, for the tool frame and for every other frame of the model."""
+    arm = Arm.sice() if name == "sice" else _arm(name)
+    model = arm.model
+    data = model.createData()
+    rng = np.random.default_rng(44)
+    q = rng.uniform(-np.pi, np.pi, (20, arm.n_joints))
+    names = [f.name for f in model.frames][1:]
+    for frame in [arm.payload_frame, *names[::3]]:
+        p, r = frame_placements(arm, q, frame)
+        fid = model.getFrameId(frame)
+        for k in range(q.shape[0]):
+            pin.forwardKinematics(model, data, arm.pin_configuration(q[k]))
+            m = pin.updateFramePlacement(model, data, fid)
+            np.testing.assert_allclose(p[k], m.translation, atol=1e-12, err_msg=f"{name} {frame}")
+            np.testing.assert_allclose(r[k], m.rotation, atol=1e-12, err_msg=f"{name} {frame}")
+
+
+def test_unknown_frame_and_bad_shape_are_named():
+    arm = _arm("ur5")
+    with pytest.raises(ParameterError, match="'nowhere'"):
+        frame_placements(arm, np.zeros(6), "nowhere")
+    with pytest.raises(ParameterError, match=r"\(\.\.\., 6\)"):
+        frame_placements(arm, np.zeros(5))
+
+
+def test_rotation_angle_small_and_large():
+    """The geodesic angle is exact near 0 (where arccos of the trace loses it) and near pi."""
+    axis = np.array([1.0, 2.0, -0.5]) / np.linalg.norm([1.0, 2.0, -0.5])
+    for th in (1e-9, 1e-4, 0.3, 3.1):
+        r = pin.exp3(axis * th)
+        assert rotation_angle(np.eye(3), r) == pytest.approx(th, rel=1e-9)
+        assert rotation_angle(r, np.eye(3)) == pytest.approx(th, rel=1e-9)
+
+
+def test_planar_two_link_tip():
+    """The paper's arm: the tip lies at (l1 c1 + l2 c12, l1 s1 + l2 s12) and turns by q1 + q2."""
+    arm = Arm.sice()
+    q = np.array([[0.3, -0.7], [1.2, 0.4]])
+    p, r = frame_placements(arm, q)
+    p0, _ = frame_placements(arm, np.zeros(2))
+    l_tot = np.linalg.norm(p0[:2])
+    # the two links' lengths from two configurations: elbow at 0 and at pi/2
+    p90, _ = frame_placements(arm, np.array([0.0, np.pi / 2]))
+    l1 = p90[0]
+    l2 = l_tot - l1
+    for k in range(2):
+        c1, s1 = np.cos(q[k, 0]), np.sin(q[k, 0])
+        c12, s12 = np.cos(q[k].sum()), np.sin(q[k].sum())
+        np.testing.assert_allclose(p[k, :2], [l1 * c1 + l2 * c12, l1 * s1 + l2 * s12], atol=1e-12)
+    assert rotation_angle(r[0], r[1]) == pytest.approx(abs(q[1].sum() - q[0].sum()), rel=1e-12)
+
+
+def test_segment_figures_by_hand():
+    """A trial off the reference by a constant offset on one joint: the RMS, peak and angle are
+    those of that offset, segment by segment, and a non-finite sample blanks its segment."""
+    arm = _arm("ur5")
+    N = 40
+    q_d = np.tile([0.1, -1.3, 1.5, -1.8, -1.57, 0.0], (N, 1))
+    q = np.repeat(q_d[None], 2, axis=0).copy()
+    q[0, 20:, 5] += 0.01  # the last joint turns the flange about its axis: no position error
+    q[1, 20:, 0] += 0.02  # the base joint swings the tool
+    q[1, 35, 2] = np.nan
+    out = end_effector_errors(arm, q, q_d, [0, 20], [20, 40])
+    assert out["ee_position_rms"][:, 0] == pytest.approx([0, 0], abs=1e-9)
+    assert out["ee_orientation_rms"][0, 1] == pytest.approx(np.degrees(0.01), rel=1e-9)
+    assert out["ee_position_rms"][0, 1] == pytest.approx(0.0, abs=1e-9)
+    p, _ = frame_placements(arm, q_d[0])
+    radius = np.hypot(p[0], p[1]) * 1e3
+    assert out["ee_position_max"][1, 0] == pytest.approx(0.0, abs=1e-9)
+    assert np.isnan(out["ee_position_rms"][1, 1])  # the NaN sample's segment
+    q[1, 35, 2] = q_d[35, 2]
+    out = end_effector_errors(arm, q, q_d, [0, 20], [20, 40])
+    chord = 2 * radius * np.sin(0.01)
+    assert out["ee_position_rms"][1, 1] == pytest.approx(chord, rel=1e-9)
+    assert out["ee_position_max"][1, 1] == pytest.approx(chord, rel=1e-9)
+    assert out["ee_orientation_rms"][1, 1] == pytest.approx(np.degrees(0.02), rel=1e-9)

@@ -1,0 +1,193 @@
+"""The Gymnasium face: the environment checker, the truth kept out of the observation, and the
+benchmark's own figures reproduced by a built-in law written as a policy."""
+
+from __future__ import annotations
+
+import dataclasses
+import itertools
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+gymnasium = pytest.importorskip("gymnasium")
+
+from gymnasium.utils.env_checker import check_env  # noqa: E402
+
+from adaptive_dd.benchmark.metrics import per_seed_segment_metrics  # noqa: E402
+from adaptive_dd.benchmark.runner import run_benchmark, scenario_controller  # noqa: E402
+from adaptive_dd.benchmark.scenario import load_scenario  # noqa: E402
+from adaptive_dd.errors import ParameterError  # noqa: E402
+from adaptive_dd.gym import SCENARIO_IDS, ResidualTorque, evaluate, make_env  # noqa: E402
+
+ROOT = Path(__file__).resolve().parent.parent
+USER_ARM = ROOT / "benchmarks" / "scenarios" / "gen3_exact.toml"  # a user's URDF (continuous joints)
+ARMS = {"ur5": ROOT / "adaptive_dd" / "scenarios" / "ur5_tool_swap.toml", "sice": None}
+
+
+def _short(arm: str, duration: float = 1.0):
+    """The arm's scenario cut to ``duration`` s with swaps at 30 % (1 kg) and 70 % of it (off)."""
+    sc = load_scenario(ARMS[arm])
+    return dataclasses.replace(
+        sc, duration=duration, swap_times=(0.3 * duration, 0.7 * duration), swap_masses=(1.0, 0.0), swap_com=(), swap_inertia=(),
+    )  # fmt: skip
+
+
+class LawPolicy:
+    """A built-in law of the scenario as a policy: observation -> torques."""
+
+    def __init__(self, sc, name: str) -> None:
+        self.sc, self.law = sc, scenario_controller(sc, name)[1]
+
+    def reset(self) -> None:
+        self.law.reset(1, self.sc.sample_period)
+
+    def __call__(self, obs):
+        n = self.sc.n_joints
+        q, qd, q_d, qd_d, qdd_d = (obs[i * n : (i + 1) * n] for i in range(5))
+        return self.law.command(q[None], qd[None], q_d, qd_d, qdd_d)[0]
+
+
+@pytest.mark.parametrize("env_id", ["adaptive_dd/PayloadSwap-UR5-v0", "adaptive_dd/PayloadSwap-SICE-v0"])
+def test_check_env_on_registered_ids(env_id):
+    env = gymnasium.make(env_id)
+    check_env(env.unwrapped, skip_render_check=True)
+    assert env.unwrapped.scenario.source.endswith(SCENARIO_IDS[env_id])
+
+
+def test_check_env_on_a_user_urdf_scenario():
+    env = make_env(USER_ARM)
+    check_env(env, skip_render_check=True)
+    assert env.action_space.shape == (7,) and env.observation_space.shape == (35,)
+    np.testing.assert_array_equal(env.action_space.high, env.scenario.arm.actuator.torque_limit)
+
+
+def test_observation_is_measured_not_true_and_seed_is_the_trial():
+    """The observation's q is the noisy measurement (never the true q of ``info``); the same seed
+    gives the same trial (noise, drawn plant), another seed another one."""
+    env = make_env(_short("ur5"), floor=None)
+    obs, info = env.reset(seed=4)
+    n = 6
+    assert not np.array_equal(obs[:n], info["q_true"])
+    assert np.max(np.abs(obs[:n] - info["q_true"])) < 1e-3  # encoder and noise, not a different state
+    np.testing.assert_array_equal(obs[2 * n : 3 * n], env.scenario.reference.sample(np.zeros(1))[0][0])
+    act = np.full(n, 1.0)
+    a = [env.step(act)[0] for _ in range(3)]
+    env.reset(seed=4)
+    b = [env.step(act)[0] for _ in range(3)]
+    env.reset(seed=5)
+    c = [env.step(act)[0] for _ in range(3)]
+    np.testing.assert_array_equal(a, b)
+    assert not np.array_equal(a[-1], c[-1])
+    with pytest.raises(ParameterError, match="seed"):
+        env.reset(options={"seed_index": -1})
+    with pytest.raises(ParameterError, match="unknown option"):
+        env.reset(options={"sede": 1})
+
+
+def test_info_holds_the_truth_swaps_and_floor():
+    """``info``: the payload and its segment change at the scenario's swaps; ``floor_torque`` is
+    ct_oracle's command with the trial's true (drawn) robot: applying it is the benchmark's
+    ct_oracle trial to 1e-9 in RMS error."""
+    sc = _short("ur5")
+    env = make_env(sc)
+    _, info = env.reset(seed=1)
+    swaps, masses, q = [], [], []
+    while True:
+        q.append(info["q_true"])
+        _obs, _, term, trunc, info = env.step(info["floor_torque"])
+        if info["swap"]:
+            swaps.append(info["t"])
+            masses.append(info["payload_mass"])
+        if term or trunc:
+            break
+    assert trunc and not term and "floor_torque" not in info  # the last sample: nothing to command
+    assert swaps == pytest.approx([0.3, 0.7]) and masses == [1.0, 0.0]
+    res = run_benchmark(
+        sc, progress=False, controllers=dict([scenario_controller(sc, "ct_oracle")]), seed_indices=[1]
+    )
+    ref = per_seed_segment_metrics(res, res.runs["ct_oracle"], recovery=False)["rms_error"][0]
+    e2 = np.sum(
+        (env.unwrapped.scenario.reference.sample(np.arange(sc.n_samples) * sc.sample_period)[0] - q) ** 2, 1
+    )
+    starts = [0, 300, 700, 1000]
+    rms = [np.sqrt(e2[a:b].mean()) for a, b in itertools.pairwise(starts)]
+    np.testing.assert_allclose(rms, ref, rtol=1e-9)
+
+
+@pytest.mark.parametrize("arm", list(ARMS))
+def test_pd_as_a_policy_reproduces_the_benchmark(arm):
+    """The ``pd`` law written as a policy and run through the environment gives the benchmark's
+    ``pd`` trial, seed by seed and segment by segment, to 1e-9 in RMS error; its ratio to the
+    floor is the benchmark's too."""
+    sc = _short(arm)
+    seeds = [0, 3]
+    ctrls = dict(scenario_controller(sc, name) for name in ("pd", "ct_oracle"))
+    res = run_benchmark(sc, progress=False, controllers=ctrls, seed_indices=seeds)
+    ref = per_seed_segment_metrics(res, res.runs["pd"], recovery=False)
+    ev = evaluate(LawPolicy(sc, "pd"), sc, seeds, name="pd_policy")
+    np.testing.assert_allclose(ev.rms_error, ref["rms_error"], rtol=1e-9, atol=0)
+    floor = per_seed_segment_metrics(res, res.runs["ct_oracle"], recovery=False)["rms_error"]
+    np.testing.assert_allclose(ev.ratio_to_floor, ref["rms_error"] / floor, rtol=1e-9)
+    # the tool frame's error of the benchmark's recorded trials, recomputed on the policy's
+    np.testing.assert_allclose(ev.ee_position_rms, ref["ee_position_rms"], rtol=1e-7)
+    assert ev.summary()[1]["ratio_to_floor"]["n"] == 2
+
+
+def test_residual_zero_is_the_base_controller():
+    """A zero residual on ``pd`` is the benchmark's ``pd``; an oracle cannot be the base."""
+    sc = _short("ur5")
+    pd = dict([scenario_controller(sc, "pd")])
+    res = run_benchmark(sc, progress=False, controllers=pd, seed_indices=[2])
+    ref = per_seed_segment_metrics(res, res.runs["pd"], recovery=False)["rms_error"]
+    env = ResidualTorque(make_env(sc, floor=None), base="pd")
+    ev = evaluate(lambda obs: np.zeros(6), env, [2])
+    np.testing.assert_allclose(ev.rms_error, ref, rtol=1e-9)
+    kick = evaluate(lambda obs: np.full(6, 5.0), env, [2])
+    assert np.all(kick.rms_error[:, 0] > 1.01 * ref[:, 0])  # the residual is applied
+    with pytest.raises(ParameterError, match="oracle"):
+        ResidualTorque(make_env(sc, floor=None), base="ct_oracle")
+
+
+@pytest.mark.parametrize("arm", list(ARMS))
+def test_vector_env_trials_are_the_single_envs(arm):
+    """Trial i of the vector environment is ``reset(seed=i)`` of the single one: the same
+    observations and rewards under the same actions (the batch glue does each trial's
+    arithmetic); all trials end together and the next step starts the next ones."""
+    from adaptive_dd.gym.vector import PayloadSwapVectorEnv
+
+    sc = _short(arm, duration=0.2)
+    n = sc.n_joints
+    venv = PayloadSwapVectorEnv(sc, num_envs=3)
+    env = make_env(sc, floor=None)
+    kp = np.full(n, 400.0 if arm == "sice" else 2000.0)
+
+    def policy(obs):
+        return kp * (obs[..., 2 * n : 3 * n] - obs[..., :n]) + 0.1 * kp * (
+            obs[..., 3 * n : 4 * n] - obs[..., n : 2 * n]
+        )
+
+    vo, _ = venv.reset(seed=5)
+    single = []
+    for i in range(3):
+        o, _ = env.reset(seed=5 + i)
+        obs, rew = [o], []
+        for _ in range(sc.n_samples):
+            o, r, _, trunc, _ = env.step(policy(o))
+            obs.append(o)
+            rew.append(r)
+        single.append((np.array(obs), np.array(rew)))
+    vobs, vrew = [vo], []
+    for _ in range(sc.n_samples):
+        vo, r, term, trunc, info = venv.step(policy(vo))
+        vobs.append(vo)
+        vrew.append(r)
+    assert trunc.all() and not term.any()
+    vobs, vrew = np.array(vobs), np.array(vrew)
+    for i in range(3):
+        np.testing.assert_allclose(vobs[:, i], single[i][0], rtol=0, atol=1e-12)
+        np.testing.assert_allclose(vrew[:, i], single[i][1], rtol=0, atol=1e-15)
+    vo, r, term, trunc, info = venv.step(np.zeros((3, n)))  # next-step autoreset: trials 8, 9, 10
+    assert not trunc.any() and list(info["seed_index"]) == [8, 9, 10]
+    o, _ = env.reset(seed=8)
+    np.testing.assert_array_equal(vo[0], o)
