@@ -174,13 +174,10 @@ def same_arm(m, arm, model_path, scenario):
     from adaptive_dd.identification.identified_model import arm_identity, identity_differences
     from adaptive_dd.identification.model import arm_model
 
-    mine = m.identity
-    if mine is None:  # a file written before identities: the arm at its URDF path
-        mine = arm_identity(m.arm(), arm_model(m.arm()), m.identified)
     if list(arm.joint_names) != list(m.joint_names):
         raise DataError(
-            f"{model_path}: identified on joints {m.joint_names}, but the arm of {scenario} has "
-            f"{list(arm.joint_names)}: use the scenario the model was identified with"
+            f"{model_path}: identified on an arm of joints {m.joint_names} ({Path(m.urdf).name}), but the arm "
+            f"of {scenario} has {list(arm.joint_names)}: use the scenario the model was identified with"
         )
     model = arm_model(arm)
     if list(model.names) != list(m.names):
@@ -188,6 +185,9 @@ def same_arm(m, arm, model_path, scenario):
             f"{model_path}: its {len(m.names)} base parameters are not those of the arm of {scenario} "
             f"({model.p}): another arm (or the URDF changed since the identification)"
         )
+    mine = m.identity
+    if mine is None:  # a file written before identities: the arm at its URDF path
+        mine = arm_identity(m.arm(), arm_model(m.arm()), m.identified)
     diff = identity_differences(mine, arm_identity(arm, model, m.identified))
     if diff:
         more = f" (and {len(diff) - 6} more)" if len(diff) > 6 else ""
