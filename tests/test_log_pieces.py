@@ -191,3 +191,66 @@ def test_model_names_its_arm_by_content(tmp_path):
     assert diff and any("translation" in d for d in diff), diff
     d = dict(ia, hash="x", fixed={k: v + 1.0 for k, v in ia["fixed"].items()})
     assert any(s.startswith(f"fixed parameter {ma.names[-1]}") for s in identity_differences(d, ia))
+
+
+@pytest.mark.slow
+def test_cli_identify_several_records_with_gaps_and_predict_on_a_copy(tmp_path, capsys, vertical3):
+    """``identify --arm`` on two records, one with a gap, then ``predict`` on two held-out records
+    through a scenario whose URDF is a copy (the same arm), and refused on a moved joint."""
+    from adaptive_dd.cli import main
+
+    arm, _ = vertical3
+    logs = [synthetic_log(arm, 8.0, T, np.random.default_rng([7, s]), noise=0.01) for s in range(4)]
+    files = [
+        str(_write(tmp_path / f"r{s}.csv", g, range(700, 720) if s == 0 else ())) for s, g in enumerate(logs)
+    ]
+    scen = tmp_path / "v3.toml"
+    scen.write_text('[arm]\nrobot = "vertical3"\n')
+    out = tmp_path / "id"
+    assert main(["identify", "--arm", str(scen), *files[:2], "--out", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert "2 records fitted together, 3 continuous pieces in all" in text
+    assert "a gap of 0.105 s at 3.495-3.6 s" in text
+    assert "what a std means" in text
+    import json
+
+    saved = json.loads((out / "model.json").read_text())
+    assert len(saved["record"]["pieces"]) == 3 and len(saved["record"]["records"]) == 2
+    copy = tmp_path / "copy.urdf"
+    shutil.copy(robot_urdf("vertical3"), copy)
+    scen2 = tmp_path / "copy.toml"
+    scen2.write_text('[arm]\nurdf = "copy.urdf"\npayload_frame = "tool"\n')
+    pred = tmp_path / "pred"
+    assert (
+        main(
+            [
+                "predict",
+                "--arm",
+                str(scen2),
+                "--model",
+                str(out / "model.json"),
+                *files[2:],
+                "--out",
+                str(pred),
+            ]
+        )
+        == 0
+    )
+    text = capsys.readouterr().out
+    assert text.count("record ") >= 2 and "all 2 records:" in text
+    pooled = [float(x.split(":")[1].split()[0]) for x in text.splitlines() if "pooled over the fitted" in x]
+    rms = np.sqrt(np.mean(logs[2].tau ** 2))
+    assert len(pooled) == 6 and max(pooled) < 0.1 * rms
+    moved = copy.read_text()
+    at = moved.index('<origin xyz="0.4 0 0"', moved.index('<joint name="joint2"'))
+    copy.write_text(moved[:at] + '<origin xyz="0.42 0 0"' + moved[at + len('<origin xyz="0.4 0 0"') :])
+    assert (
+        main(
+            ["predict", "--arm", str(scen2), "--model", str(out / "model.json"), files[2], "--out", str(pred)]
+        )
+        == 2
+    )
+    err = capsys.readouterr().err
+    assert (
+        "identified on another arm" in err and "joint 'joint2' translation: 0.4,0,0 against 0.42,0,0" in err
+    )

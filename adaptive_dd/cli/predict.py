@@ -180,19 +180,20 @@ def same_arm(m, arm, model_path, scenario):
             f"of {scenario} has {list(arm.joint_names)}: use the scenario the model was identified with"
         )
     model = arm_model(arm)
-    if list(model.names) != list(m.names):
-        raise DataError(
-            f"{model_path}: its {len(m.names)} base parameters are not those of the arm of {scenario} "
-            f"({model.p}): another arm (or the URDF changed since the identification)"
-        )
     mine = m.identity
     if mine is None:  # a file written before identities: the arm at its URDF path
         mine = arm_identity(m.arm(), arm_model(m.arm()), m.identified)
-    diff = identity_differences(mine, arm_identity(arm, model, m.identified))
+    held = m.identified if model.p == len(m.identified) else np.ones(model.p, bool)
+    diff = identity_differences(mine, arm_identity(arm, model, held))
     if diff:
         more = f" (and {len(diff) - 6} more)" if len(diff) > 6 else ""
         raise DataError(
             f"{model_path}: identified on another arm than the one of {scenario} ({arm.urdf}); what differs "
             f"(the model's, then this arm's): {'; '.join(diff[:6])}{more}"
+        )
+    if list(model.names) != list(m.names):
+        raise DataError(
+            f"{model_path}: its {len(m.names)} base parameters are not those of the arm of {scenario} "
+            f"({model.p}): another arm (or the URDF changed since the identification)"
         )
     return m.arm_model(arm)
