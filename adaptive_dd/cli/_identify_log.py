@@ -33,7 +33,9 @@ def _print_fit(model, fit, names: tuple[str, ...]) -> None:
     pieces = "" if fit.regression.pieces is None else f", within each of {len(fit.regression.pieces)} pieces"
     print(
         "std: Newey-West sandwich on the residual (model error included, correlated over "
-        f"{fit.lag} samples = {fit.lag * fit.sample_period:.3g} s{pieces})"
+        f"{fit.lag} samples = {fit.lag * fit.sample_period:.3g} s{pieces}), its variance times "
+        f"{fit.dof_factor:.3g} for the {int(fit.identified.sum())} parameters fitted to about "
+        f"{fit.n_eff:.0f} independent samples (n_eff / (n_eff - k))"
     )
     print(
         "  what a std means: the spread this estimate would have over records like this one (another "

@@ -176,8 +176,8 @@ def same_arm(m, arm, model_path, scenario):
 
     if list(arm.joint_names) != list(m.joint_names):
         raise DataError(
-            f"{model_path}: identified on an arm of joints {m.joint_names} ({Path(m.urdf).name}), but the arm "
-            f"of {scenario} has {list(arm.joint_names)}: use the scenario the model was identified with"
+            f"{model_path}: identified on an arm of joints {m.joint_names} ({Path(m.urdf).name}), but the "
+            f"arm of {scenario} has {list(arm.joint_names)}: use the scenario the model was identified with"
         )
     model = arm_model(arm)
     mine = m.identity
