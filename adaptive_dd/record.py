@@ -36,11 +36,14 @@ the window's first logged time): positions by a cubic spline through the logged 
 (``scipy.interpolate.CubicSpline``, not-a-knot), measured velocities and torques by linear
 interpolation (they are held values). Each file is resampled from its own time column.
 Derived velocities (and accelerations, for prediction) are Savitzky-Golay derivatives of the
-resampled positions (cubic, window about 0.1 s: :func:`derivatives`).
+resampled positions (cubic, window about 0.1 s: :func:`derivatives`). A log with gaps (the
+logger's flushes, dropped packets) is split at them into continuous pieces, each resampled and
+differentiated on its own (:mod:`adaptive_dd.record_pieces`: how a gap is told from jitter, what
+is left out beside it).
 
 What is refused, with the file, line or column and the remedy: a missing column, a
 non-numeric or non-finite value (a NaN run: its lines), a time that does not increase (a
-duplicated stamp), a gap longer than five median steps inside the window, a torque channel
+duplicated stamp), a torque channel
 stuck at one value on more than half the window (exclude it), a revolute position whose
 range does not fit the URDF's limits in radians but does in degrees (set ``position_unit``).
 """
@@ -48,6 +51,7 @@ range does not fit the URDF's limits in radians but does in degrees (set ``posit
 from __future__ import annotations
 
 import difflib
+import itertools
 import math
 from dataclasses import dataclass
 from pathlib import Path
@@ -56,6 +60,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from adaptive_dd.errors import DataError, ScenarioError
+from adaptive_dd.record_pieces import MIN_PIECE_SAMPLES, find_gaps, piece_spans, resampler, trim_gap_edges
 
 __all__ = ["LogRecord", "RecordSpec", "derivatives", "read_log", "record_spec"]
 
@@ -82,8 +87,6 @@ RECORD_KEYS = (
 UNITS = {"rad": 1.0, "deg": math.pi / 180.0, "m": 1.0, "mm": 1e-3}
 STUCK_FRACTION = 0.5
 """A torque channel holding one value on more than this fraction of the window is refused."""
-MAX_GAP_STEPS = 5.0
-"""A step longer than this many median steps inside the window is a gap."""
 DERIVATIVE_WINDOW = 0.1
 """Savitzky-Golay window [s] of derived velocities and accelerations."""
 
@@ -162,6 +165,13 @@ class LogRecord:
         How it was read (resampling, jitter), for the report.
     simulator_format : bool
         Read as the simulator writes records (no ``[record]`` table).
+    pieces : tuple of (int, int)
+        The continuous pieces ``[a, b)`` of the arrays, each on its own uniform grid (a log split at
+        its gaps, several records end to end: :mod:`adaptive_dd.record_pieces`); empty: one piece.
+    piece_record : tuple of int
+        The record each piece comes from (an index into ``record_names``); empty: one record.
+    record_names : tuple of str
+        The records' names (their files), when several.
     """
 
     t: Array
@@ -175,6 +185,18 @@ class LogRecord:
     source: str
     notes: tuple[str, ...] = ()
     simulator_format: bool = False
+    pieces: tuple[tuple[int, int], ...] = ()
+    piece_record: tuple[int, ...] = ()
+    record_names: tuple[str, ...] = ()
+
+    @property
+    def spans(self) -> tuple[tuple[int, int], ...]:
+        """The continuous pieces ``[a, b)`` (one, the whole record, when it has no gap)."""
+        return self.pieces or ((0, self.t.size),)
+
+    def piece_label(self, i: int) -> str:
+        """The record piece ``i`` comes from (its files)."""
+        return self.record_names[self.piece_record[i]] if self.piece_record else self.source
 
 
 def _err(src: str, key: str, why: str) -> ScenarioError:
@@ -453,8 +475,13 @@ def read_log(spec: RecordSpec, window: tuple[float, float] | None = None, arm=No
     t0, T = _first_clock(spec, clocks, rows)
     lo = max(clocks[p][rows[p]][0] for p in frames)
     hi = min(clocks[p][rows[p]][-1] for p in frames)
-    grid = lo + T * np.arange(int(np.floor((hi - lo) / T + 1e-9)) + 1)
-    column = _resampler(frames, where, clocks, rows, grid)
+    spans, gap_lines = piece_spans({p: clocks[p][rows[p]] for p in frames}, lo, hi)
+    grids = [a + T * np.arange(int(np.floor((b - a) / T + 1e-9)) + 1) for a, b in spans]
+    short = [(a, b) for (a, b), g in zip(spans, grids, strict=True) if g.size < MIN_PIECE_SAMPLES]
+    grids = [g for g in grids if g.size >= MIN_PIECE_SAMPLES]
+    if not grids:
+        raise DataError(f"{spec.files[0]}: no piece between the log's gaps holds {MIN_PIECE_SAMPLES} samples")
+    column = resampler(frames, where, clocks, rows, grids, _numeric)
     q = np.column_stack([column(c, True) for c in spec.position])
     raw_tau = np.column_stack([column(c, False) for c in spec.torque])
     _check_stuck(spec, where, raw_tau)
@@ -463,14 +490,22 @@ def read_log(spec: RecordSpec, window: tuple[float, float] | None = None, arm=No
     q = q * spec.position_scale
     tau = spec.torque_gain * raw_tau + spec.torque_offset
     qd_measured = velocity is not None and not spec.derive_velocity
-    qd = derivatives(q, T)[0]
+    bounds = np.cumsum([0] + [g.size for g in grids])
+    pieces = list(itertools.pairwise(bounds.tolist()))
+    qd = np.concatenate([derivatives(q[a:b], T)[0] for a, b in pieces])
     lag_note = ()
     if velocity is not None:
         logged = np.column_stack([column(c, False) for c in velocity]) * spec.position_scale
-        lag_note = (_velocity_lag(logged, qd, T, spec.joint_names, qd_measured),)
+        a, b = max(pieces, key=lambda ab: ab[1] - ab[0])
+        lag_note = (_velocity_lag(logged[a:b], qd[a:b], T, spec.joint_names, qd_measured),)
         if qd_measured:
             qd = logged
-    notes = (_resampling_note(t0, T, qd_measured), *lag_note)
+    grid = np.concatenate(grids)
+    notes = (_resampling_note(t0, T, qd_measured), *lag_note, *gap_lines)
+    if len(pieces) > 1 or short:
+        keep, pieces, more = trim_gap_edges(pieces, qd_measured, T, short)
+        grid, q, qd, tau = grid[keep], q[keep], qd[keep], tau[keep]
+        notes += more
     names = ", ".join(str(p) for p in spec.files)
     return LogRecord(
         grid,
@@ -484,38 +519,20 @@ def read_log(spec: RecordSpec, window: tuple[float, float] | None = None, arm=No
         names,
         notes,
         spec.simulator_format,
+        pieces=tuple(pieces) if len(pieces) > 1 else (),
     )
 
 
 def _first_clock(spec: RecordSpec, clocks: dict, rows: dict) -> tuple[Array, float]:
-    """The first file's times in the window and the sample period (given, else the mean step),
-    with no gap of more than ``MAX_GAP_STEPS`` median steps."""
+    """The first file's times in the window and the sample period: given, else the mean step
+    between its gaps (:func:`~adaptive_dd.record_pieces.find_gaps`; jitter averages out)."""
     first = spec.files[0]
     t0 = clocks[first][rows[first]]
     steps = np.diff(t0)
-    T = spec.sample_period or float((t0[-1] - t0[0]) / (t0.size - 1))  # the mean step: jitter averages out
-    gap = np.flatnonzero(steps > MAX_GAP_STEPS * np.median(steps))
-    if gap.size:
-        i = int(gap[0]) + rows[first].start
-        raise DataError(
-            f"{first}: line {i + 3}, column {spec.time!r}: a gap of {steps[gap[0]]:.4g} s (median step "
-            f"{np.median(steps):.4g} s) at {t0[gap[0]]:.4g} s: cut the window before or after it"
-        )
-    return t0, T
-
-
-def _resampler(frames: dict, where: dict, clocks: dict, rows: dict, grid: Array):
-    """``column(name, spline)``: a logged column in the window, checked, on ``grid`` (spline or linear)."""
-    from scipy.interpolate import CubicSpline
-
-    def column(col: str, spline: bool) -> Array:
-        p = where[col]
-        r = rows[p]
-        v = _numeric(p, frames[p], col, r)[r]
-        tt = clocks[p][r]
-        return CubicSpline(tt, v)(grid) if spline else np.interp(grid, tt, v)
-
-    return column
+    gaps, _ = find_gaps(t0)
+    ok = np.ones(steps.size, dtype=bool)
+    ok[gaps] = False
+    return t0, spec.sample_period or float(np.mean(steps[ok]))
 
 
 def _resampling_note(t0: Array, T: float, qd_measured: bool) -> str:

@@ -4,6 +4,7 @@ Run from the repository root::
 
     python benchmarks/real_log.py            # the shipped record, examples/tiago/tiago.toml
     python benchmarks/real_log.py --coulomb-width profile   # identify's --coulomb-width profile
+    python benchmarks/real_log.py --drop 28.0 10   # 10 rows dropped at 28 s, as a logger drops packets
 
 1. Trained on 9.21-48 s, predicting 48-67.9 s (arm_1 ... arm_4, the channels that carry
    torque): adaptive_dd's weighted least squares on the exact filtered regression
@@ -83,12 +84,41 @@ def with_width(model, rec, K, choice, torque_held: bool):
         tau_f=filter_time_constant(T),
         sample_period=T,
         torque_held=torque_held,
+        pieces=rec.pieces or None,
     )
     return dataclasses.replace(model, friction_velocity=pr.width), pr.profiled
 
 
 def rms(e):
     return np.sqrt(np.mean(e**2, axis=0))
+
+
+def piecewise(rec, f):
+    """``f(a, b)`` on each continuous piece ``[a, b)`` of ``rec``, the results end to end."""
+    return np.concatenate([f(a, b) for a, b in rec.spans])
+
+
+def drop_rows(scenario: str, at: float, rows: int) -> str:
+    """A copy of the scenario and its record in a temporary folder, ``rows`` rows dropped from every
+    file at ``at`` s (a logger's gap); returns the copy's scenario."""
+    import shutil
+    import tempfile
+
+    import pandas as pd
+
+    from adaptive_dd.io import read_toml
+
+    src = Path(scenario)
+    dst = Path(tempfile.mkdtemp(prefix="real_log_gap_"))
+    table = read_toml(src)
+    for f in table["record"]["files"]:
+        frame = pd.read_csv(src.parent / f)
+        i = int(np.searchsorted(frame[table["record"].get("time", "t")].to_numpy(), at))
+        frame.drop(index=range(i, i + rows)).to_csv(dst / f, index=False)
+    shutil.copy(src.parent / table["arm"]["urdf"], dst)
+    shutil.copy(src, dst)
+    print(f"{rows} rows dropped at {at} s from every file of the record (copies in {dst})")
+    return str(dst / src.name)
 
 
 def main() -> None:
@@ -107,8 +137,13 @@ def main() -> None:
     ap.add_argument(
         "--torque-sampled", action="store_true", help="torque_held = false: the efforts as samples, not held"
     )
+    ap.add_argument(
+        "--drop", type=float, nargs=2, metavar=("AT", "ROWS"), help="drop ROWS rows at AT s (a gap) first"
+    )
     args = ap.parse_args()
     t0 = time.perf_counter()
+    if args.drop:
+        args.scenario = drop_rows(args.scenario, args.drop[0], int(args.drop[1]))
     arm = load_arm(args.scenario)
     _, tr = read_arm_log(args.scenario, arm, window=args.train)
     model = identification_model(arm, tr.qd)  # as identify: the Coulomb width from the record's noise
@@ -136,16 +171,23 @@ def main() -> None:
         sample_period=T,
         torque_held=held,
         width_estimated=free,
+        pieces=tr.pieces or None,
     )
-    qd_te, qdd_te = derivatives(te.q, te.sample_period)
-    qd_tr, qdd_tr = derivatives(tr.q, T)
+    qd_te, qdd_te = (
+        piecewise(te, lambda a, b, k=k: derivatives(te.q[a:b], te.sample_period)[k]) for k in (0, 1)
+    )
+    qd_tr, qdd_tr = (piecewise(tr, lambda a, b, k=k: derivatives(tr.q[a:b], T)[k]) for k in (0, 1))
     plain = plain_least_squares(arm, tr.q, qd_tr, qdd_tr, tr.tau, used)
     preds = {
         "adaptive_dd WLS (identify)": predict_torque(model, fit.sigma, te.q, qd_te, qdd_te),
         "plain LS (Pinocchio + fv, fc sign, Ia)": plain(te.q, qd_te, qdd_te),
         "URDF alone": predict_torque(rule, rule.sigma_ref, te.q, qd_te, qdd_te),
     }
-    meas_lp = lowpass(te.tau, args.lowpass, te.sample_period)
+
+    def lp(x):
+        return piecewise(te, lambda a, b: lowpass(x[a:b], args.lowpass, te.sample_period))
+
+    meas_lp = lp(te.tau)
     print(
         f"{args.scenario}: trained on {args.train[0]}-{args.train[1]} s, predicting "
         f"{args.test[0]}-{args.test[1]} s; channels {', '.join(names)}"
@@ -158,7 +200,7 @@ def main() -> None:
         "   unfiltered pooled"
     )
     for label, th in preds.items():
-        e_lp = meas_lp[:, used] - lowpass(th, args.lowpass, te.sample_period)[:, used]
+        e_lp = meas_lp[:, used] - lp(th)[:, used]
         e = te.tau[:, used] - th[:, used]
         per = " / ".join(f"{x:.5f}" for x in rms(e_lp))
         print(f"{label:<40} {per:<36} {np.sqrt(np.mean(e_lp**2)):7.3f}   {np.sqrt(np.mean(e**2)):.3f}")
@@ -180,6 +222,7 @@ def main() -> None:
             sample_period=w.sample_period,
             torque_held=held,
             width_estimated=wfree,
+            pieces=w.pieces or None,
         )
         widths.append(np.broadcast_to(wm.friction_velocity, (wm.n,))[used])
         est.append(f.sigma[K])

@@ -384,13 +384,15 @@ def test_model_file_round_trip_and_errors(tmp_path, capsys):
     )
     path = save_identified_model(tmp_path / "model.json", m)
     back = load_identified_model(path)
-    # predict with a scenario of another arm: refused, naming both URDFs
+    # predict with a scenario of another arm: refused, naming the model's arm and what differs
     from adaptive_dd.cli import main
 
     scen = tmp_path / "ur5.toml"
     scen.write_text('[arm]\nrobot = "ur5"\n\n[record]\nfiles = ["log.csv"]\n')
     assert main(["predict", "--arm", str(scen), "--model", str(path), "--out", str(tmp_path / "p")]) == 2
-    assert "vertical3.urdf, but the scenario's [arm] is" in capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert "identified on an arm of joints ['joint1', 'joint2', 'joint3'] (vertical3.urdf)" in err
+    assert "ur5.toml has ['shoulder_pan_joint'" in err
     assert back.sigma == m.sigma and np.isnan(back.residual_rms[2]) and len(back.covariance) == p
     text = path.read_text()
     (tmp_path / "short.json").write_text(

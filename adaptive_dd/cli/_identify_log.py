@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
-from adaptive_dd.cli._common import NAME_WIDTH, read_arm_log, short
+from adaptive_dd.cli._common import NAME_WIDTH, short
 from adaptive_dd.errors import DataError, ParameterError, SignalError
 
 Array = NDArray[np.float64]
@@ -30,9 +30,18 @@ def _print_fit(model, fit, names: tuple[str, ...]) -> None:
         "identified, "
         f"{int((~fit.identified).sum())} held at the URDF's values (the fitted channels do not see them)"
     )
+    pieces = "" if fit.regression.pieces is None else f", within each of {len(fit.regression.pieces)} pieces"
     print(
         "std: Newey-West sandwich on the residual (model error included, correlated over "
-        f"{fit.lag} samples = {fit.lag * fit.sample_period:.3g} s)"
+        f"{fit.lag} samples = {fit.lag * fit.sample_period:.3g} s{pieces}), its variance times "
+        f"{fit.dof_factor:.3g} for the {int(fit.identified.sum())} parameters fitted to about "
+        f"{fit.n_eff:.0f} independent samples (n_eff / (n_eff - k))"
+    )
+    print(
+        "  what a std means: the spread this estimate would have over records like this one (another "
+        "take of the same excitation, another stretch of it), its residual's colour and changing level "
+        "included; estimate +- 2 std holds the parameters the model fits best on such records about 95 % "
+        "of the time. It does not hold the choice of model (friction law, tau_f, the channels fitted)"
     )
     print(f"{'base parameter':<{NAME_WIDTH}} {'estimate':>11} {'std':>9} {'std/|est| %':>11} {'URDF':>11}")
     share = fit.held.share if fit.held is not None else np.zeros(model.p)
@@ -137,6 +146,9 @@ def _output_error(args, arm, model, rec, fit) -> None:
     if not rec.used.all():
         print("output error: skipped (it simulates every joint; the record leaves torque channels out)")
         return
+    if len(rec.spans) > 1:
+        print("output error: skipped (it simulates one continuous record; this one has several pieces)")
+        return
     std = measurement_std(arm).copy()
     if not rec.qd_measured:
         std[arm.n_joints :] = np.inf
@@ -219,22 +231,14 @@ def _consistent(model, fit):
 def identify_log(args: argparse.Namespace, arm, outputs) -> int:
     """``adaptive-dd identify --arm SCENARIO [FILES]`` for an arm from a URDF."""
     from adaptive_dd.identification.friction_width import identification_model
-    from adaptive_dd.identification.log_fit import filter_time_constant, identifiable_subset
+    from adaptive_dd.identification.log_fit import identifiable_subset
     from adaptive_dd.identification_plots import plot_torque_fit
 
     for note in arm.urdf_notes:
         print(f"note: {note}")
-    spec, rec = read_arm_log(args.arm, arm, args.data, args.window)
+    spec, rec, tau_f = _read(args, arm, args.data)
     model = identification_model(arm, rec.qd)  # the Coulomb law's width from the record's noise
     names = arm.joint_names
-    tau_f = args.tau_f or filter_time_constant(rec.sample_period)
-    print(
-        f"{rec.source}: {rec.t.size} samples at T = {rec.sample_period:.6g} s "
-        f"({rec.t[0]:.4g}-{rec.t[-1]:.4g} s), {arm.n_joints} joints, {model.p} base parameters; velocities "
-        f"{'measured' if rec.qd_measured else 'derived from the positions'}"
-    )
-    for note in rec.notes:
-        print(f"  {note}")
     if args.payload_only:
         model, _ = _coulomb_width(args, arm, model, rec, None, tau_f, spec.torque_held)
         return _payload_only(args, arm, model, rec, tau_f)
@@ -251,7 +255,7 @@ def identify_log(args: argparse.Namespace, arm, outputs) -> int:
     pred = reg.phi @ fit.sigma
     u = fit.used
     plot_torque_fit(
-        rec.t[reg.start :],
+        rec.t[reg.samples()],
         reg.y[:, u],
         pred[:, u],
         outputs.path("torque_fit.png"),
@@ -265,6 +269,36 @@ def identify_log(args: argparse.Namespace, arm, outputs) -> int:
         _payload_pair(args, arm, model, fit, tau_f, K)
     print("wrote " + ", ".join(str(Path(args.out) / Path(p).name) for p in written))
     return 0
+
+
+def _read(args, arm, files):
+    """The records ``files`` (grouped, :mod:`adaptive_dd.cli._records`) read and merged, the pieces too
+    short to use left out, what was read printed; ``(spec, record, tau_f)``."""
+    from adaptive_dd.cli._records import read_records
+    from adaptive_dd.identification.log_fit import filter_time_constant
+    from adaptive_dd.record_pieces import drop_short
+
+    spec, rec, recs = read_records(args.arm, arm, files, args.window)
+    tau_f = args.tau_f or filter_time_constant(rec.sample_period)
+    print(
+        f"{rec.source}: {rec.t.size} samples at T = {rec.sample_period:.6g} s "
+        f"({rec.t[0]:.4g}-{rec.t[-1]:.4g} s), {arm.n_joints} joints, {len(arm.sigma)} base parameters; "
+        f"velocities {'measured' if rec.qd_measured else 'derived from the positions'}"
+    )
+    if len(recs) > 1:
+        print(f"  {len(recs)} records fitted together, {len(rec.spans)} continuous pieces in all")
+    for note in rec.notes:
+        print(f"  {note}")
+    rec, lines = drop_short(rec, int(np.ceil(10 * tau_f / rec.sample_period)))
+    for line in lines:
+        print(f"  {line}")
+    if len(rec.spans) > 1:
+        cut = int(np.ceil(10 * tau_f / rec.sample_period))
+        print(
+            f"  each of the {len(rec.spans)} pieces filtered on its own, its first {cut} samples "
+            f"({cut * rec.sample_period:.3g} s = 10 tau_f, the filters' settling) left out"
+        )
+    return spec, rec, tau_f
 
 
 def _coulomb_width(args, arm, model, rec, K, tau_f: float, torque_held: bool):
@@ -305,6 +339,7 @@ def _coulomb_width(args, arm, model, rec, K, tau_f: float, torque_held: bool):
             sample_period=rec.sample_period,
             channel_weight=rec.weight,
             torque_held=torque_held,
+            pieces=rec.pieces or None,
         )
     except DataError as exc:
         raise DataError(f"{rec.source}: {exc}") from None
@@ -343,7 +378,11 @@ def _write_estimates(path, model, fit) -> None:
 
 
 def _write_model(outputs, arm, model, rec, fit, cf, spec, profile=None) -> list:
-    from adaptive_dd.identification.identified_model import IdentifiedModel, save_identified_model
+    from adaptive_dd.identification.identified_model import (
+        IdentifiedModel,
+        arm_identity,
+        save_identified_model,
+    )
     from adaptive_dd.identification.model_error import model_error_variance
     from adaptive_dd.plant.urdf_write import write_fitted_urdf
 
@@ -384,6 +423,9 @@ def _write_model(outputs, arm, model, rec, fit, cf, spec, profile=None) -> list:
         record={
             "source": rec.source,
             "window": [float(rec.t[0]), float(rec.t[-1])],
+            # the continuous pieces fitted [s] (a log's gaps, several records) and their records
+            "pieces": [[float(rec.t[a]), float(rec.t[b - 1])] for a, b in rec.spans],
+            "records": list(rec.record_names) or [rec.source],
             "sample_period": rec.sample_period,
             "tau_f": fit.tau_f,
             "newey_west_lag": fit.lag,
@@ -401,6 +443,7 @@ def _write_model(outputs, arm, model, rec, fit, cf, spec, profile=None) -> list:
             "coulomb_width_profile": None if profile is None else profile.as_dict(),
         },
         coulomb_width=np.broadcast_to(model.friction_velocity, (n,)).tolist(),
+        identity=arm_identity(arm, model, fit.identified),
     )
     out = [save_identified_model(outputs.path("model.json"), m)]
     return out + ([fitted] if fitted is not None else [])
@@ -410,6 +453,12 @@ def _payload_only(args, arm, model, rec, tau_f) -> int:
     from adaptive_dd.identification.output_error import measurement_std
     from adaptive_dd.identification.payload_pair import payload_from_record
 
+    if len(rec.spans) > 1:
+        raise DataError(
+            f"{rec.source}: --payload-only fits by output error, which simulates one continuous record; this "
+            f"one has {len(rec.spans)} pieces (gaps or several records): identify a loaded and an unloaded "
+            "record instead (--baseline)"
+        )
     if not rec.used.all():
         raise DataError(
             f"{rec.source}: --payload-only fits by output error, which simulates every joint; the record "
@@ -473,6 +522,7 @@ def _fit_record(model, rec, K, tau_f: float, torque_held: bool, prior_std=None, 
             prior_std=prior_std,
             hold=prior_std is not None,
             width_estimated=width_estimated,
+            pieces=rec.pieces or None,
         )
     except DataError as exc:
         raise DataError(f"{rec.source}: {exc}") from None
@@ -486,7 +536,8 @@ def _fit_record(model, rec, K, tau_f: float, torque_held: bool, prior_std=None, 
 def _payload_pair(args, arm, model, fit, tau_f, K) -> None:
     from adaptive_dd.identification.payload_pair import payload_from_pair
 
-    spec, base = read_arm_log(args.arm, arm, args.baseline, args.window)
+    print("unloaded record(s):")
+    spec, base, _ = _read(args, arm, args.baseline)
     prior_std = _prior_std(args.arm, model) if args.hold_unseen == "on" else None
     other = _fit_record(model, base, K, tau_f, spec.torque_held, prior_std)
     pr = payload_from_pair(arm, fit.sigma, fit.cov, other.sigma, other.cov)

@@ -13,10 +13,10 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
-from adaptive_dd.cli._common import POS, add_command, add_window_option, read_arm_log
+from adaptive_dd.cli._common import POS, add_command, add_window_option
 from adaptive_dd.errors import DataError, ParameterError
 
-__all__ = ["add_parser", "lowpass", "run"]
+__all__ = ["add_parser", "lowpass", "run", "same_arm"]
 
 Array = NDArray[np.float64]
 LOWPASS_ORDER = 4
@@ -43,39 +43,71 @@ def add_parser(sub) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    """Predict the record's torque; print the error per joint, unfiltered and low-passed; write both."""
+    """Predict each record's torque; print the error per joint, unfiltered and low-passed, per record
+    when several and pooled; write both."""
+    from adaptive_dd.cli._common import load_arm
+    from adaptive_dd.cli._records import read_records
     from adaptive_dd.identification.identified_model import load_identified_model
-    from adaptive_dd.record import derivatives
 
-    m = load_identified_model(args.model)
-    _check_same_urdf(args.arm, m, args.model)
-    arm = m.arm()
-    model = m.arm_model()
-    _, rec = read_arm_log(args.arm, arm, args.data, args.window)
-    qd, qdd = derivatives(rec.q, rec.sample_period)
-    if rec.qd_measured:
-        qd = rec.qd
-    tau_hat = m.predict(rec.q, qd, qdd, model)
+    m = load_identified_model(args.model, need_urdf=False)
+    arm = load_arm(args.arm, m.repair_inertia)
+    model = same_arm(m, arm, args.model, args.arm)
+    _, rec, recs = read_records(args.arm, arm, args.data, args.window)
+    used = np.asarray(m.used, dtype=bool)
+    parts = [_predict(r, m, model, args.lowpass) for r in recs]
     print(
         f"{rec.source}: {rec.t.size} samples at T = {rec.sample_period:.6g} s "
         f"({rec.t[0]:.4g}-{rec.t[-1]:.4g} s); model {args.model}; accelerations by Savitzky-Golay "
         "(cubic, ~0.1 s)"
+        + (
+            f"; {len(rec.spans)} continuous pieces, each differentiated and low-passed on its own"
+            if len(rec.spans) > 1
+            else ""
+        )
     )
-    rows = [("unfiltered", rec.tau, tau_hat)]
+    labels = ["unfiltered"] + ([f"low-passed {args.lowpass:g} Hz"] * bool(args.lowpass))
+    if len(recs) > 1:
+        for r, (tau, th, lp) in zip(recs, parts, strict=True):
+            print(f"record {r.source}:")
+            for label, (a, b) in zip(labels, [(tau, th), *lp], strict=False):
+                _print_errors(label, a, b, arm.joint_names, used)
+        print(f"all {len(recs)} records:")
+    tau = np.concatenate([p[0] for p in parts])
+    th = np.concatenate([p[1] for p in parts])
+    rows = [("unfiltered", tau, th)]
     if args.lowpass:
         rows.append(
             (
-                f"low-passed {args.lowpass:g} Hz",
-                lowpass(rec.tau, args.lowpass, rec.sample_period),
-                lowpass(tau_hat, args.lowpass, rec.sample_period),
+                labels[1],
+                np.concatenate([p[2][0][0] for p in parts]),
+                np.concatenate([p[2][0][1] for p in parts]),
             )
         )
-    used = np.asarray(m.used, dtype=bool)
-    for label, tau, th in rows:
-        _print_errors(label, tau, th, arm.joint_names, used)
-    _write(args, rec, tau_hat, rows[-1], arm.joint_names, used)
+    for label, a, b in rows:
+        _print_errors(label, a, b, arm.joint_names, used)
+    _write(args, rec, th, rows[-1], arm.joint_names, used)
     print(f"wrote {Path(args.out) / 'prediction.csv'}, {Path(args.out) / 'prediction.png'}")
     return 0
+
+
+def _predict(rec, m, model, cutoff):
+    """``(tau, tau_hat, [(tau_lp, tau_hat_lp)])`` of one record, each piece differentiated (and
+    low-passed, ``cutoff`` [Hz], None: not) on its own."""
+    from adaptive_dd.record import derivatives
+
+    th = np.empty_like(rec.tau)
+    for a, b in rec.spans:
+        qd, qdd = derivatives(rec.q[a:b], rec.sample_period)
+        if rec.qd_measured:
+            qd = rec.qd[a:b]
+        th[a:b] = m.predict(rec.q[a:b], qd, qdd, model)
+    if not cutoff:
+        return rec.tau, th, []
+    lp = [
+        np.concatenate([lowpass(x[a:b], cutoff, rec.sample_period) for a, b in rec.spans])
+        for x in (rec.tau, th)
+    ]
+    return rec.tau, th, [tuple(lp)]
 
 
 def _print_errors(label: str, tau: Array, th: Array, names, used) -> None:
@@ -127,26 +159,41 @@ def lowpass(x: Array, cutoff: float, T: float) -> Array:
     if not 0 < cutoff < 0.5 / T:
         raise ParameterError(f"--lowpass {cutoff} Hz must be in (0, {0.5 / T:.4g}) (the Nyquist frequency)")
     b, a = butter(LOWPASS_ORDER, cutoff, fs=1.0 / T)
-    return filtfilt(b, a, x, axis=0)
+    return filtfilt(b, a, x, axis=0, padlen=min(3 * max(len(a), len(b)), x.shape[0] - 1))
 
 
-def _check_same_urdf(scenario: str, m, model_path) -> None:
-    """The scenario's ``[arm]`` names the URDF the model was identified on (the model's arm is used)."""
-    from adaptive_dd.errors import ScenarioError
-    from adaptive_dd.io import read_toml
+def same_arm(m, arm, model_path, scenario):
+    """The identification model of ``arm`` (the scenario's) when it is the arm ``m`` was identified on,
+    by content (:func:`~adaptive_dd.identification.identified_model.arm_identity`), whatever its path.
 
-    table = read_toml(Path(scenario), ScenarioError).get("arm") or {}
-    if "robot" in table:
-        from adaptive_dd.robots import robot_urdf
+    Raises
+    ------
+    DataError
+        Another arm, naming what differs (joints, axes, placements, the parameters the model fixed).
+    """
+    from adaptive_dd.identification.identified_model import arm_identity, identity_differences
+    from adaptive_dd.identification.model import arm_model
 
-        path = robot_urdf(table["robot"])
-    elif isinstance(table.get("urdf"), str):
-        path = Path(table["urdf"])
-        path = path if path.is_absolute() else Path(scenario).parent / path
-    else:
-        raise ScenarioError(f"{scenario}: predict needs an [arm] with urdf = ... or robot = ...")
-    if Path(path).resolve() != Path(m.urdf).resolve():
+    if list(arm.joint_names) != list(m.joint_names):
         raise DataError(
-            f"{model_path}: identified on {m.urdf}, but the scenario's [arm] is {path}: use the scenario "
-            "the model was identified with"
+            f"{model_path}: identified on an arm of joints {m.joint_names} ({Path(m.urdf).name}), but the "
+            f"arm of {scenario} has {list(arm.joint_names)}: use the scenario the model was identified with"
         )
+    model = arm_model(arm)
+    mine = m.identity
+    if mine is None:  # a file written before identities: the arm at its URDF path
+        mine = arm_identity(m.arm(), arm_model(m.arm()), m.identified)
+    held = m.identified if model.p == len(m.identified) else np.ones(model.p, bool)
+    diff = identity_differences(mine, arm_identity(arm, model, held))
+    if diff:
+        more = f" (and {len(diff) - 6} more)" if len(diff) > 6 else ""
+        raise DataError(
+            f"{model_path}: identified on another arm than the one of {scenario} ({arm.urdf}); what differs "
+            f"(the model's, then this arm's): {'; '.join(diff[:6])}{more}"
+        )
+    if list(model.names) != list(m.names):
+        raise DataError(
+            f"{model_path}: its {len(m.names)} base parameters are not those of the arm of {scenario} "
+            f"({model.p}): another arm (or the URDF changed since the identification)"
+        )
+    return m.arm_model(arm)

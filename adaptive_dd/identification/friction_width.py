@@ -133,15 +133,17 @@ class WidthProfile:
         }
 
 
-def coulomb_columns(qd: Array, width, tau_f: float, sample_period: float, start: int) -> Array:
+def coulomb_columns(qd: Array, width, tau_f: float, sample_period: float, start: int, pieces=None) -> Array:
     """``(N', n)``: the filtered regression's Coulomb columns ``G0 tanh(qd / width)`` of the velocities
     ``qd (N, n)`` (:func:`~adaptive_dd.identification.regression.filtered_regression`'s, transient
-    ``start`` cut): joint j's enters its own channel only."""
-    from adaptive_dd.identification.filters import design_filter_bank, filter_record
+    ``start`` cut from each of the record's ``pieces``, default one): joint j's enters its own
+    channel only."""
+    from adaptive_dd.identification.filters import design_filter_bank
+    from adaptive_dd.identification.regression import filter_pieces
 
     c = np.tanh(np.asarray(qd, dtype=float) / np.asarray(width, dtype=float))
     bank = design_filter_bank("M2", tau_f, sample_period)
-    return filter_record(bank, c, axis=0, initial=c[0])[..., 0][start:]
+    return filter_pieces(bank, c, pieces, start, 0)
 
 
 def profile_coulomb_width(
@@ -158,6 +160,7 @@ def profile_coulomb_width(
     torque_held: bool = True,
     grid: Array = PROFILE_GRID,
     sweeps: int = 3,
+    pieces=None,
 ) -> WidthProfile:
     """Each joint's width of the Coulomb law ``fc_j tanh(qd_j / v_j)`` that explains the record best.
 
@@ -172,6 +175,7 @@ def profile_coulomb_width(
     (``N_eff``); it is approximate: the residual of a real log is model error, not noise.
 
     Only joints whose Coulomb parameter is identified and fitted on a kept channel are profiled.
+    ``pieces``: the record's continuous pieces, as :func:`~adaptive_dd.identification.log_fit.fit_log`'s.
     """
     from adaptive_dd.identification.log_fit import _identified_regression, _reweighted_fit
     from adaptive_dd.identification.regression import filtered_regression
@@ -181,7 +185,7 @@ def profile_coulomb_width(
     n = model.n
     width = np.broadcast_to(np.asarray(model.friction_velocity, dtype=float), (n,)).copy()
     reg = filtered_regression(
-        model, q, qd, tau, tau_f=tau_f, sample_period=sample_period, torque_held=torque_held
+        model, q, qd, tau, tau_f=tau_f, sample_period=sample_period, torque_held=torque_held, pieces=pieces
     )
     phi, y = _identified_regression(model, reg, used, K, weak_ok=True)
     cw = np.ones(n) if channel_weight is None else np.asarray(channel_weight, dtype=float)
@@ -197,7 +201,8 @@ def profile_coulomb_width(
     grid = np.asarray(grid, dtype=float)
     crit = np.full((n, grid.size), np.nan)
     cols = {  # joint j's candidate columns (N', G)
-        j: coulomb_columns(qd[:, j : j + 1] / grid, 1.0, tau_f, sample_period, reg.start) for j in joints
+        j: coulomb_columns(qd[:, j : j + 1] / grid, 1.0, tau_f, sample_period, reg.start, reg.pieces)
+        for j in joints
     }
     at = {}
     for j, (r, c) in joints.items():  # start from the grid's nearest to the model's width

@@ -8,6 +8,12 @@ held at the URDF's value), the noise levels, friction and armature, and where it
 estimate, ``model.urdf`` is the URDF with those inertias, friction and damping written in
 (the armature, which URDF cannot hold, stays in ``model.json``).
 
+The model names the arm it belongs to by content, not by path (:func:`arm_identity`): a hash of
+the chain's kinematics (joint names, types, axes, placements, gravity, payload frame) and of the
+parameters the identification fixed (the URDF's values of the base parameters it held), with
+those values beside it, so that a byte-identical copy of the URDF is the same arm and another
+arm is told apart with what differs (:func:`identity_differences`).
+
 Load it with :func:`load_identified_model`::
 
     from adaptive_dd.identification.identified_model import load_identified_model
@@ -27,7 +33,14 @@ from numpy.typing import NDArray
 
 from adaptive_dd.errors import DataError
 
-__all__ = ["FORMAT", "IdentifiedModel", "load_identified_model", "save_identified_model"]
+__all__ = [
+    "FORMAT",
+    "IdentifiedModel",
+    "arm_identity",
+    "identity_differences",
+    "load_identified_model",
+    "save_identified_model",
+]
 
 Array = NDArray[np.float64]
 FORMAT = "adaptive_dd identified model 1"
@@ -70,6 +83,8 @@ class IdentifiedModel:
         Per joint, the widths ``v_j`` of ``fc_j tanh(qd_j / v_j)`` the base parameters were
         identified with [rad/s] (``identify --coulomb-width profile``: one per joint; None in files
         written before it: ``friction_velocity`` for every joint). :meth:`predict` uses them.
+    identity : dict or None
+        :func:`arm_identity` of the arm identified on (None in files written before it).
     """
 
     urdf: str
@@ -95,6 +110,7 @@ class IdentifiedModel:
     fitted_urdf: str | None
     record: dict
     coulomb_width: list | None = None
+    identity: dict | None = None
 
     def arm(self, fitted: bool = False):
         """The :class:`~adaptive_dd.plant.arm.Arm` (``fitted``: from ``model.urdf``)."""
@@ -120,23 +136,89 @@ class IdentifiedModel:
 
         return predict_torque(model or self.arm_model(), np.asarray(self.sigma), q, qd, qdd)
 
-    def arm_model(self):
-        """The :class:`~adaptive_dd.identification.model.Model` of :meth:`arm`, checked
-        against the stored base parameter names."""
+    def arm_model(self, arm=None):
+        """The :class:`~adaptive_dd.identification.model.Model` of :meth:`arm` (or of ``arm``, the
+        same arm by :func:`arm_identity`, e.g. from a copy of the URDF), checked against the stored
+        base parameter names."""
         import dataclasses
 
         from adaptive_dd.identification.model import arm_model
 
-        model = arm_model(self.arm())
+        model = arm_model(self.arm() if arm is None else arm)
         if list(model.names) != list(self.names):
             raise DataError(
                 f"{self.urdf}: its base parameters ({model.p}) are not those of the model file "
                 f"({len(self.names)}): the URDF changed since the identification"
             )
-        width = np.asarray(self.coulomb_width if self.coulomb_width is not None else [], dtype=float)
-        if width.size == 0 or np.all(width == model.friction_velocity):
+        width = np.asarray(
+            self.coulomb_width if self.coulomb_width is not None else [self.friction_velocity], dtype=float
+        )
+        if np.all(width == model.friction_velocity):
             return model  # one width for every joint: the arm's, a float
+        if np.all(width == width[0]):
+            return dataclasses.replace(model, friction_velocity=float(width[0]))
         return dataclasses.replace(model, friction_velocity=width)
+
+
+def _numbers(a) -> str:
+    """Numbers as text: 10 significant digits of values rounded to 1e-10 (the round-off of a
+    product that should be 0, 1e-16, is 0)."""
+    return ",".join(f"{x:.10g}" for x in np.round(np.asarray(a, dtype=float).ravel(), 10) + 0.0)
+
+
+def arm_identity(arm, model, identified) -> dict:
+    """What names an arm by content (module docstring): ``{"hash", "kinematics", "fixed"}``.
+
+    ``kinematics`` lists per joint its name, type, axis and placement (rotation, translation) and
+    the gravity and payload frame; ``fixed`` maps each base parameter the identification held
+    (``identified`` False) to the URDF's value. The hash is SHA-256 of both, numbers printed to 10
+    significant digits (a copy of the URDF, or the same URDF re-read, gives the same hash).
+    """
+    import hashlib
+
+    c = model.chain
+    joints = [
+        {
+            "name": str(nm),
+            "type": "prismatic" if int(c.jtype[j]) == 1 else "revolute",
+            "axis": _numbers(c.axis[j]),
+            "rotation": _numbers(c.rot[j]),
+            "translation": _numbers(c.trans[j]),
+        }
+        for j, nm in enumerate(arm.joint_names)
+    ]
+    kin = {"joints": joints, "gravity": _numbers(c.gravity), "payload_frame": str(arm.payload_frame)}
+    K = np.asarray(identified, dtype=bool)
+    fixed = {
+        str(nm): float(_numbers(v)) for nm, v, k in zip(model.names, model.sigma_ref, K, strict=True) if not k
+    }
+    text = json.dumps({"kinematics": kin, "fixed": fixed}, sort_keys=True)
+    return {"hash": hashlib.sha256(text.encode()).hexdigest(), "kinematics": kin, "fixed": fixed}
+
+
+def identity_differences(a: dict, b: dict) -> list[str]:
+    """What differs between two :func:`arm_identity` (``a`` the model's, ``b`` the other arm's),
+    one line each (empty: the same arm)."""
+    if a["hash"] == b["hash"]:
+        return []
+    out = []
+    ka, kb = a["kinematics"], b["kinematics"]
+    na, nb = [j["name"] for j in ka["joints"]], [j["name"] for j in kb["joints"]]
+    if na != nb:
+        out.append(f"joints: {na} against {nb}")
+    else:
+        for ja, jb in zip(ka["joints"], kb["joints"], strict=True):
+            for key in ("type", "axis", "rotation", "translation"):
+                if ja[key] != jb[key]:
+                    out.append(f"joint '{ja['name']}' {key}: {ja[key]} against {jb[key]}")
+    for key in ("gravity", "payload_frame"):
+        if ka[key] != kb[key]:
+            out.append(f"{key}: {ka[key]} against {kb[key]}")
+    fa, fb = a["fixed"], b["fixed"]
+    for nm in sorted(set(fa) | set(fb)):
+        if fa.get(nm) != fb.get(nm):
+            out.append(f"fixed parameter {nm}: {fa.get(nm)} against {fb.get(nm)}")
+    return out or ["the hashes differ"]
 
 
 def save_identified_model(path, model: IdentifiedModel) -> Path:
@@ -158,14 +240,15 @@ def save_identified_model(path, model: IdentifiedModel) -> Path:
     return path
 
 
-def load_identified_model(path) -> IdentifiedModel:
+def load_identified_model(path, need_urdf: bool = True) -> IdentifiedModel:
     """Read a ``model.json`` written by ``adaptive-dd identify --out``.
 
     Raises
     ------
     DataError
         Naming the file and the key: not JSON, another format, a missing key, lengths that
-        do not agree, a URDF that is gone.
+        do not agree, a URDF that is gone (``need_urdf``; False: the caller brings the arm, checked
+        by :func:`arm_identity`).
     """
     path = Path(path)
     if not path.is_file():
@@ -177,7 +260,7 @@ def load_identified_model(path) -> IdentifiedModel:
     if not isinstance(data, dict) or data.get("format") != FORMAT:
         raise DataError(f"{path}: key 'format' is not {FORMAT!r}: not a model written by identify --out")
     fields = IdentifiedModel.__dataclass_fields__
-    optional = ("coulomb_width",)  # absent from files written before it
+    optional = ("coulomb_width", "identity")  # absent from files written before them
     missing = [k for k in fields if k not in data and k not in optional]
     if missing:
         raise DataError(f"{path}: missing key(s) {missing}")
@@ -206,7 +289,7 @@ def load_identified_model(path) -> IdentifiedModel:
         if kw[k] is not None:
             u = Path(kw[k])
             u = u if u.is_absolute() else path.parent / u
-            if not u.is_file():
+            if not u.is_file() and need_urdf:
                 raise DataError(f"{path}: key '{k}': the URDF {u} is not there")
             kw[k] = str(u)
     return IdentifiedModel(**kw)

@@ -41,7 +41,14 @@ def model_error_variance(model, fit, q: Array, qd: Array, tau: Array, torque_hel
     alts = [_solve(phi, y, ones)[0]]
     for f in FILTER_FACTORS:
         reg = filtered_regression(
-            model, q, qd, tau, tau_f=f * fit.tau_f, sample_period=fit.sample_period, torque_held=torque_held
+            model,
+            q,
+            qd,
+            tau,
+            tau_f=f * fit.tau_f,
+            sample_period=fit.sample_period,
+            torque_held=torque_held,
+            pieces=fit.regression.pieces,
         )
         phi, y = _identified_regression(model, reg, used, K, weak_ok)
         alts.append(_reweighted_fit(phi, y, ones)[0])

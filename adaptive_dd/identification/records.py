@@ -38,7 +38,7 @@ from adaptive_dd.errors import ParameterError, SignalError
 from adaptive_dd.identification.model import Model, arm_model, pi_with_payload, rk4_step
 from adaptive_dd.plant.chain import rnea_batch
 
-__all__ = ["Record", "inverse_dynamics_pi", "simulate_record"]
+__all__ = ["Record", "SyntheticLog", "inverse_dynamics_pi", "simulate_record", "synthetic_log"]
 
 Array = NDArray[np.float64]
 
@@ -258,3 +258,86 @@ def _stepper(arm, model: Model, pi: Array, S: int, T: float, substeps: int):
         return q, qd
 
     return step
+
+
+@dataclass(frozen=True)
+class SyntheticLog:
+    """A log computed by inverse dynamics along a multi-sine (:func:`synthetic_log`).
+
+    Attributes
+    ----------
+    t : ndarray (N,)
+        [s].
+    q, qd, tau : ndarray (N, n)
+        Exact positions and velocities; torque with coloured, heteroscedastic noise [N m].
+    sigma_true : ndarray (p,)
+        Base parameters of the arm (payload included) in the identification model's Coulomb law.
+    payload : ndarray (10,)
+    """
+
+    t: Array
+    q: Array
+    qd: Array
+    tau: Array
+    sigma_true: Array
+    payload: Array
+
+
+def synthetic_log(
+    arm,
+    duration: float,
+    sample_period: float,
+    rng: np.random.Generator,
+    *,
+    payload: ArrayLike | None = None,
+    noise: float = 0.02,
+    correlation: float = 0.05,
+    heteroscedastic: float = 1.0,
+    amplitude: float = 0.6,
+) -> SyntheticLog:
+    """A log of ``arm`` whose model is the identification's, with noise like a real log's residual.
+
+    Each joint follows three sines (0.1-0.6 Hz, random phases from ``rng``) of total amplitude
+    ``amplitude`` [rad, m x 0.1 for a prismatic joint] about the middle of its limits; the torque is
+    the model's (:func:`~adaptive_dd.identification.model.arm_model`, ``fc tanh(qd / v_f)``, payload
+    ``payload`` on the payload frame) plus noise: per channel ``noise`` times the channel's torque
+    rms, an AR(1) of time constant ``correlation`` [s] (coloured), scaled by ``1 + heteroscedastic
+    |qd_j| / max |qd_j|`` (its level changes with the motion). Positions and velocities are exact,
+    so that the estimate's error is the torque noise's alone and its bound can be checked.
+
+    Raises
+    ------
+    ParameterError
+        A duration under 10 samples or a non-positive period, noise or correlation.
+    """
+    from adaptive_dd.identification.model import base_regressor
+
+    if not (sample_period > 0 and duration >= 10 * sample_period and noise >= 0 and correlation > 0):
+        raise ParameterError(
+            f"synthetic_log: need T > 0, duration >= 10 T, noise >= 0, correlation > 0; got T = "
+            f"{sample_period}, duration = {duration}, noise = {noise}, correlation = {correlation}"
+        )
+    model = arm_model(arm)
+    n = model.n
+    t = np.arange(round(duration / sample_period)) * sample_period
+    lim = np.asarray(arm.position_limits, dtype=float)
+    mid = np.where(np.isfinite(lim).all(axis=1), lim.mean(axis=1), 0.0)
+    scale = np.where(np.asarray(arm.joint_kinds) == "prismatic", 0.1, 1.0) * amplitude / 3.0
+    w = 2 * np.pi * rng.uniform(0.1, 0.6, (3, n))
+    ph = rng.uniform(0, 2 * np.pi, (3, n))
+    arg = w[:, None, :] * t[None, :, None] + ph[:, None, :]  # (3, N, n)
+    q = mid + scale * np.sin(arg).sum(axis=0)
+    qd = scale * (w[:, None, :] * np.cos(arg)).sum(axis=0)
+    qdd = -scale * (w[:, None, :] ** 2 * np.sin(arg)).sum(axis=0)
+    pp = np.zeros(10) if payload is None else np.asarray(payload, dtype=float).reshape(10)
+    sigma = model.B @ pi_with_payload(arm, model.pi_ref, pp)
+    tau = base_regressor(model, q, qd, qdd) @ sigma
+    a = np.exp(-sample_period / correlation)
+    z = rng.standard_normal(tau.shape) * np.sqrt(1 - a * a)
+    e = np.empty_like(z)
+    e[0] = rng.standard_normal(n)
+    for k in range(1, t.size):
+        e[k] = a * e[k - 1] + z[k]
+    level = noise * np.sqrt(np.mean(tau**2, axis=0))
+    speed = np.abs(qd) / np.maximum(np.abs(qd).max(axis=0), 1e-300)
+    return SyntheticLog(t, q, qd, tau + level * (1 + heteroscedastic * speed) * e, sigma, pp)

@@ -39,6 +39,7 @@ __all__ = [
     "WlsResult",
     "check_excitation",
     "check_motion",
+    "filter_pieces",
     "filtered_regression",
     "momentum_regressors",
     "weighted_least_squares",
@@ -59,14 +60,35 @@ class Regression:
     y : ndarray (N', n)
         ``G0 tau`` [N m].
     start : int
-        First sample kept (the filters' transient of 10 tau_f is cut).
+        First sample kept of each piece (the filters' transient of 10 tau_f is cut).
     tau_f : float
+    pieces : tuple of (int, int) or None
+        The record's continuous pieces ``[a, b)`` (sample indices) the rows come from, in order,
+        each filtered on its own and its first ``start`` samples cut; None: one piece, the record.
     """
 
     phi: Array
     y: Array
     start: int
     tau_f: float
+    pieces: tuple[tuple[int, int], ...] | None = None
+
+    def row_bounds(self) -> list[tuple[int, int]]:
+        """``[(r0, r1), ...]``: the rows of ``phi`` and ``y`` of each piece."""
+        if self.pieces is None:
+            return [(0, self.y.shape[0])]
+        out, r = [], 0
+        for a, b in self.pieces:
+            m = b - a - min(self.start, b - a - 1)
+            out.append((r, r + m))
+            r += m
+        return out
+
+    def samples(self) -> NDArray[np.int64]:
+        """``(N',)``: the record's sample index of each row."""
+        if self.pieces is None:
+            return np.arange(self.start, self.start + self.y.shape[0])
+        return np.concatenate([np.arange(a + min(self.start, b - a - 1), b) for a, b in self.pieces])
 
 
 def momentum_regressors(model: Model, q: ArrayLike, qd: ArrayLike) -> tuple[Array, Array]:
@@ -84,6 +106,19 @@ def momentum_regressors(model: Model, q: ArrayLike, qd: ArrayLike) -> tuple[Arra
     return Yp, Yr
 
 
+def filter_pieces(bank, x: Array, pieces, start: int, output: int) -> Array:
+    """Output ``output`` of ``bank`` on each continuous piece ``[a, b)`` of ``x (N, ...)`` on its own
+    (each from the steady state of its first sample), each piece's first ``start`` samples cut (at
+    most all but one), the pieces concatenated; ``pieces`` None: one piece, the whole of ``x``."""
+    if pieces is None:
+        pieces = ((0, x.shape[0]),)
+    parts = []
+    for a, b in pieces:
+        seg = x[a:b]
+        parts.append(filter_record(bank, seg, axis=0, initial=seg[0])[..., output][min(start, b - a - 1) :])
+    return np.concatenate(parts, axis=0)
+
+
 def filtered_regression(
     model: Model,
     q: ArrayLike,
@@ -93,6 +128,7 @@ def filtered_regression(
     tau_f: float = 0.02,
     sample_period: float = 1e-3,
     torque_held: bool = True,
+    pieces=None,
 ) -> Regression:
     """The exact filtered regression of one record (module docstring).
 
@@ -124,14 +160,21 @@ def filtered_regression(
     check_motion(q, model.names)
     bank = design_filter_bank("M2", tau_f, sample_period)
     Yp, Yr = momentum_regressors(model, q, qd)
-    fp = filter_record(bank, Yp, axis=0, initial=Yp[0])[..., 1]
-    fr = filter_record(bank, Yr, axis=0, initial=Yr[0])[..., 0]
+    start = int(np.ceil(10 * tau_f / sample_period))
+    fp = filter_pieces(bank, Yp, pieces, start, 1)
+    fr = filter_pieces(bank, Yr, pieces, start, 0)
     # the torque is held over each sample (zero-order hold); the Tustin filters integrate
-    # trapezoidally between samples, so they see the held torque as the mean of neighbours
-    tau_mid = np.concatenate((tau[:1], 0.5 * (tau[1:] + tau[:-1]))) if torque_held else tau
-    y = filter_record(bank, tau_mid, axis=0, initial=tau[0])[..., 0]
-    start = min(int(np.ceil(10 * tau_f / sample_period)), q.shape[0] - 1)
-    return Regression((fp + fr)[start:], y[start:], start, float(tau_f))
+    # trapezoidally between samples, so they see the held torque as the mean of neighbours (the
+    # filter starts from the steady state of the first value: the mean of the first with itself)
+    tau_mid = np.concatenate((tau[:1], 0.5 * (tau[1:] + tau[:-1]))) if torque_held else tau.copy()
+    for a, _ in pieces or ():
+        tau_mid[a] = tau[a]  # each piece starts on its own first sample
+    y = filter_pieces(bank, tau_mid, pieces, start, 0)
+    if pieces is None:
+        start = min(start, q.shape[0] - 1)
+        return Regression(fp + fr, y, start, float(tau_f))
+    pieces = tuple((int(a), int(b)) for a, b in pieces)
+    return Regression(fp + fr, y, start, float(tau_f), pieces)
 
 
 @dataclass(frozen=True)

@@ -1,0 +1,256 @@
+"""Real logs as they come: gaps, several records, a model named by its arm's content.
+
+The records are made here (:func:`adaptive_dd.identification.records.synthetic_log`: inverse
+dynamics of the identification's own model along a multi-sine, torque noise coloured and
+heteroscedastic), so the truth is known.
+"""
+
+from __future__ import annotations
+
+import itertools
+import shutil
+
+import numpy as np
+import pytest
+
+from adaptive_dd.errors import DataError
+from adaptive_dd.identification.log_fit import fit_log
+from adaptive_dd.identification.model import arm_model
+from adaptive_dd.identification.records import synthetic_log
+from adaptive_dd.io import write_recording
+from adaptive_dd.plant.arm import Arm
+from adaptive_dd.record import read_log, record_spec
+from adaptive_dd.record_pieces import find_gaps, gap_threshold, merge_records
+from adaptive_dd.robots import robot_urdf
+
+T = 0.005
+
+
+@pytest.fixture(scope="module")
+def vertical3():
+    arm = Arm.from_urdf(robot_urdf("vertical3"))
+    return arm, arm_model(arm)
+
+
+def _fit(model, q, qd, tau, pieces=None):
+    n = model.n
+    return fit_log(
+        model,
+        q,
+        qd,
+        tau,
+        np.ones(n, bool),
+        np.ones(model.p, bool),
+        tau_f=0.02,
+        sample_period=T,
+        hold=False,
+        torque_held=False,
+        pieces=pieces,
+    )
+
+
+def test_a_gap_is_a_step_beyond_the_logs_own_spread():
+    """Jittered steps (+-20 %) have no gap; a planted 3-step hole is one; on a clean clock a single
+    missed sample is one, and the jitter of the float stamps is not."""
+    rng = np.random.default_rng(0)
+    steps = 0.01 * (1 + rng.uniform(-0.2, 0.2, 2000))
+    t = np.concatenate([[0.0], np.cumsum(steps)])
+    assert find_gaps(t)[0].size == 0
+    t_gap = np.delete(t, [700, 701])  # two rows dropped: a step of about three
+    idx, limit = find_gaps(t_gap)
+    assert idx.tolist() == [699] and 0.012 < limit < 0.02
+    clean = np.arange(3000) * 1e-3
+    assert find_gaps(clean)[0].size == 0
+    assert find_gaps(np.delete(clean, 1500))[0].tolist() == [1499]
+    assert gap_threshold(np.diff(clean)) == pytest.approx(1.5e-3)
+
+
+def _write(path, log, drop=()):
+    keep = np.setdiff1d(np.arange(log.t.size), np.asarray(drop, dtype=int))
+    return write_recording(path, log.t[keep], log.q[keep], log.qd[keep], log.tau[keep])
+
+
+def test_read_log_splits_at_gaps_and_names_what_it_left_out(tmp_path, vertical3):
+    arm, _ = vertical3
+    log = synthetic_log(arm, 6.0, T, np.random.default_rng(1))
+    drop = [*range(400, 410), *range(800, 803), *range(1080, 1084)]
+    path = _write(tmp_path / "gaps.csv", log, drop)
+    spec = record_spec(None, arm.joint_names, arm.joint_kinds, str(tmp_path / "s.toml"), files=[str(path)])
+    rec = read_log(spec)
+    assert rec.sample_period == pytest.approx(T, rel=1e-9)
+    assert len(rec.spans) == 4
+    gaps = [nt for nt in rec.notes if nt.startswith("a gap of")]
+    assert len(gaps) == 3 and "at 1.995-2.05 s" in gaps[0]
+    # measured velocities: nothing cut beside the gaps; every sample kept is a logged one
+    assert rec.t.size == log.t.size - len(drop)
+    np.testing.assert_allclose(rec.q, np.delete(log.q, drop, axis=0), atol=1e-9)
+    # velocities derived from the positions: half the derivative's window cut beside each gap
+    spec_d = record_spec(
+        {"files": [str(path)], "velocity_source": "derived"}, arm.joint_names, arm.joint_kinds, "s.toml"
+    )
+    rec_d = read_log(spec_d)
+    h = 10  # 0.1 s at 5 ms: a window of 21 samples, half of it 10
+    assert rec_d.t.size == rec.t.size - 2 * 3 * h
+    assert any("left out: 10 samples (0.05 s" in nt for nt in rec_d.notes)
+    a, b = rec_d.spans[1]
+    np.testing.assert_allclose(rec_d.qd[a:b], log.qd[410 + h : 800 - h], rtol=0, atol=2e-3)
+
+
+def test_estimate_with_gaps_within_its_bound_of_the_estimate_without(vertical3):
+    """Four gaps planted in a 24 s record: the estimate from its pieces is within two of its std of
+    the whole record's; the pieces run as one record (the filters across the gaps) are not."""
+    arm, model = vertical3
+    log = synthetic_log(arm, 24.0, T, np.random.default_rng(2))
+    whole = _fit(model, log.q, log.qd, log.tau)
+    holes = [(900, 912), (1900, 1960), (2900, 2902), (3900, 3917)]
+    keep = np.setdiff1d(np.arange(log.t.size), np.concatenate([np.arange(a, b) for a, b in holes]))
+    cuts = np.flatnonzero(np.diff(keep) > 1) + 1
+    bounds = [0, *cuts.tolist(), keep.size]
+    pieces = list(itertools.pairwise(bounds))
+    q, qd, tau = log.q[keep], log.qd[keep], log.tau[keep]
+    split = _fit(model, q, qd, tau, pieces)
+    assert split.regression.pieces == tuple(pieces)
+    z = np.abs(split.sigma - whole.sigma) / split.std
+    assert z.max() < 2.0, z
+    joined = _fit(model, q, qd, tau)  # the fault: the gaps taken as continuous
+    assert (np.abs(joined.sigma - whole.sigma) / split.std).max() > 3.0
+
+
+def test_several_records_fit_jointly(vertical3):
+    """Two records of one arm, fitted together as the pieces of one: the truth within three std, the
+    std smaller than either record's alone, both records' rows in the fit."""
+    arm, model = vertical3
+    logs = [synthetic_log(arm, 12.0, T, np.random.default_rng(10 + s)) for s in range(2)]
+    alone = [_fit(model, g.q, g.qd, g.tau) for g in logs]
+    N = logs[0].t.size
+    both = _fit(
+        model,
+        np.concatenate([g.q for g in logs]),
+        np.concatenate([g.qd for g in logs]),
+        np.concatenate([g.tau for g in logs]),
+        [(0, N), (N, 2 * N)],
+    )
+    assert both.regression.y.shape[0] == sum(f.regression.y.shape[0] for f in alone)
+    assert np.all(np.abs(both.sigma - logs[0].sigma_true) < 3 * both.std)
+    assert np.median(both.std / np.minimum(alone[0].std, alone[1].std)) < 0.95
+
+
+def test_merge_records_refuses_another_period(tmp_path, vertical3):
+    arm, _ = vertical3
+    log = synthetic_log(arm, 2.0, T, np.random.default_rng(3))
+    p1 = _write(tmp_path / "a.csv", log)
+    p2 = write_recording(tmp_path / "b.csv", log.t[::2], log.q[::2], log.qd[::2], log.tau[::2])
+    recs = [
+        read_log(record_spec(None, arm.joint_names, arm.joint_kinds, "s.toml", files=[str(p)]))
+        for p in (p1, p2)
+    ]
+    with pytest.raises(DataError, match=r"b.csv: sample period 0.01 s, the first record's 0.005 s"):
+        merge_records(recs, [str(p1), str(p2)])
+    rec = merge_records([recs[0], recs[0]], ["a", "a again"])
+    assert rec.spans == ((0, log.t.size), (log.t.size, 2 * log.t.size)) and rec.piece_label(1) == "a again"
+
+
+def test_command_line_files_are_grouped_into_records(tmp_path):
+    from adaptive_dd.cli._records import group_records
+
+    scen = tmp_path / "s.toml"
+    scen.write_text('[arm]\nrobot = "vertical3"\n\n[record]\nfiles = ["p.csv", "e.csv"]\n')
+    assert group_records(str(scen), ["p1", "e1", "p2", "e2"]) == [
+        (str(scen), ["p1", "e1"]),
+        (str(scen), ["p2", "e2"]),
+    ]
+    assert group_records(str(scen), ["other.toml", "p1", "e1"]) == [
+        ("other.toml", None),
+        (str(scen), ["p1", "e1"]),
+    ]
+    with pytest.raises(DataError, match=r"3 file\(s\) on the command line .* each record is 2 file\(s\)"):
+        group_records(str(scen), ["p1", "e1", "p2"])
+
+
+def test_model_names_its_arm_by_content(tmp_path):
+    """A byte-identical copy of the URDF is the same arm; a moved joint or another fixed parameter is
+    named."""
+    from adaptive_dd.identification.identified_model import arm_identity, identity_differences
+
+    src = robot_urdf("vertical3")
+    copy = tmp_path / "copy.urdf"
+    shutil.copy(src, copy)
+    a, b = Arm.from_urdf(src), Arm.from_urdf(copy)
+    ma = arm_model(a)
+    K = np.ones(ma.p, bool)
+    K[-1] = False  # one base parameter held at the URDF's value
+    ia, ib = arm_identity(a, ma, K), arm_identity(b, arm_model(b), K)
+    assert ia["hash"] == ib["hash"] and identity_differences(ia, ib) == []
+    text = copy.read_text()
+    at = text.index('<joint name="joint2"')
+    at = text.index('<origin xyz="0.4 0 0"', at)
+    moved = text[:at] + '<origin xyz="0.41 0 0"' + text[at + len('<origin xyz="0.4 0 0"') :]
+    (tmp_path / "moved.urdf").write_text(moved)
+    c = Arm.from_urdf(tmp_path / "moved.urdf")
+    diff = identity_differences(ia, arm_identity(c, arm_model(c), K))
+    assert diff and any("translation" in d for d in diff), diff
+    d = dict(ia, hash="x", fixed={k: v + 1.0 for k, v in ia["fixed"].items()})
+    assert any(s.startswith(f"fixed parameter {ma.names[-1]}") for s in identity_differences(d, ia))
+
+
+@pytest.mark.slow
+def test_cli_identify_several_records_with_gaps_and_predict_on_a_copy(tmp_path, capsys, vertical3):
+    """``identify --arm`` on two records, one with a gap, then ``predict`` on two held-out records
+    through a scenario whose URDF is a copy (the same arm), and refused on a moved joint."""
+    from adaptive_dd.cli import main
+
+    arm, _ = vertical3
+    logs = [synthetic_log(arm, 8.0, T, np.random.default_rng([7, s]), noise=0.01) for s in range(4)]
+    files = [
+        str(_write(tmp_path / f"r{s}.csv", g, range(700, 720) if s == 0 else ())) for s, g in enumerate(logs)
+    ]
+    scen = tmp_path / "v3.toml"
+    scen.write_text('[arm]\nrobot = "vertical3"\n')
+    out = tmp_path / "id"
+    assert main(["identify", "--arm", str(scen), *files[:2], "--out", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert "2 records fitted together, 3 continuous pieces in all" in text
+    assert "a gap of 0.105 s at 3.495-3.6 s" in text
+    assert "what a std means" in text
+    import json
+
+    saved = json.loads((out / "model.json").read_text())
+    assert len(saved["record"]["pieces"]) == 3 and len(saved["record"]["records"]) == 2
+    copy = tmp_path / "copy.urdf"
+    shutil.copy(robot_urdf("vertical3"), copy)
+    scen2 = tmp_path / "copy.toml"
+    scen2.write_text('[arm]\nurdf = "copy.urdf"\npayload_frame = "tool"\n')
+    pred = tmp_path / "pred"
+    assert (
+        main(
+            [
+                "predict",
+                "--arm",
+                str(scen2),
+                "--model",
+                str(out / "model.json"),
+                *files[2:],
+                "--out",
+                str(pred),
+            ]
+        )
+        == 0
+    )
+    text = capsys.readouterr().out
+    assert text.count("record ") >= 2 and "all 2 records:" in text
+    pooled = [float(x.split(":")[1].split()[0]) for x in text.splitlines() if "pooled over the fitted" in x]
+    rms = np.sqrt(np.mean(logs[2].tau ** 2))
+    assert len(pooled) == 6 and max(pooled) < 0.1 * rms
+    moved = copy.read_text()
+    at = moved.index('<origin xyz="0.4 0 0"', moved.index('<joint name="joint2"'))
+    copy.write_text(moved[:at] + '<origin xyz="0.42 0 0"' + moved[at + len('<origin xyz="0.4 0 0"') :])
+    assert (
+        main(
+            ["predict", "--arm", str(scen2), "--model", str(out / "model.json"), files[2], "--out", str(pred)]
+        )
+        == 2
+    )
+    err = capsys.readouterr().err
+    assert (
+        "identified on another arm" in err and "joint 'joint2' translation: 0.4,0,0 against 0.42,0,0" in err
+    )
