@@ -10,9 +10,10 @@ from pathlib import Path
 __all__ = ["run_arms"]
 
 
-def run_arms(args: argparse.Namespace) -> int:
+def run_arms(args: argparse.Namespace, only_controllers) -> int:
     """Run the population, print per arm and pooled, write ``per_seed.csv`` (an ``arm_seed``
-    column first), ``arms.csv`` and ``population.json``."""
+    column first), ``arms.csv`` and ``population.json``. ``only_controllers(scenario, names)``:
+    ``benchmark``'s ``--controllers`` rule (the floors added)."""
     import json
 
     from adaptive_dd._numba_cache import announce_compilation
@@ -24,7 +25,6 @@ def run_arms(args: argparse.Namespace) -> int:
         run_population,
     )
     from adaptive_dd.benchmark.scenario import read_toml
-    from adaptive_dd.cli.benchmark import only_controllers
     from adaptive_dd.errors import ScenarioError
     from adaptive_dd.outputs import OutputSet
 

@@ -61,7 +61,7 @@ def run(args: argparse.Namespace) -> int:
     if args.arms is not None:
         from adaptive_dd.cli._population import run_arms
 
-        return run_arms(args)
+        return run_arms(args, only_controllers)
     if args.draw_swaps:
         from adaptive_dd.errors import ParameterError
 
