@@ -29,7 +29,8 @@ def _short(arm: str, duration: float = 1.0):
     """The arm's scenario cut to ``duration`` s with swaps at 30 % (1 kg) and 70 % of it (off)."""
     sc = load_scenario(ARMS[arm])
     return dataclasses.replace(
-        sc, duration=duration, swap_times=(0.3 * duration, 0.7 * duration), swap_masses=(1.0, 0.0), swap_com=(), swap_inertia=(),
+        sc, duration=duration, swap_times=(0.3 * duration, 0.7 * duration), swap_masses=(1.0, 0.0),
+        swap_com=(), swap_inertia=(),
     )  # fmt: skip
 
 

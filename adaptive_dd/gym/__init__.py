@@ -2,23 +2,19 @@
 
 Importing this package registers one environment id per shipped scenario (:data:`SCENARIO_IDS`):
 
-========================================  ==============================================
-id                                        scenario
-========================================  ==============================================
-``adaptive_dd/PayloadSwap-SICE-v0``       ``payload_swap.toml`` (the paper's two-link arm)
-``adaptive_dd/PayloadSwap-UR5-v0``        ``ur5_tool_swap.toml`` (robot drawn per seed)
-``adaptive_dd/PayloadSwap-UR5Exact-v0``   ``ur5_tool_swap_exact.toml``
-``adaptive_dd/PayloadSwap-Panda-v0``      ``panda_payload.toml``
-``adaptive_dd/PayloadSwap-PandaExact-v0`` ``panda_payload_exact.toml``
-``adaptive_dd/PayloadSwap-iiwa14-v0``     ``iiwa14_payload.toml``
-``adaptive_dd/PayloadSwap-iiwa14Exact-v0`` ``iiwa14_payload_exact.toml``
-``adaptive_dd/PayloadSwap-Vertical3-v0``  ``vertical3_payload.toml``
-``adaptive_dd/PayloadSwap-Vertical3Exact-v0`` ``vertical3_payload_exact.toml``
-========================================  ==============================================
+- ``adaptive_dd/PayloadSwap-SICE-v0``: ``payload_swap.toml`` (the paper's two-link arm);
+- ``adaptive_dd/PayloadSwap-UR5-v0``, ``-UR5Exact-v0``: ``ur5_tool_swap.toml``,
+  ``ur5_tool_swap_exact.toml``;
+- ``adaptive_dd/PayloadSwap-Panda-v0``, ``-PandaExact-v0``: ``panda_payload.toml``,
+  ``panda_payload_exact.toml``;
+- ``adaptive_dd/PayloadSwap-iiwa14-v0``, ``-iiwa14Exact-v0``: ``iiwa14_payload.toml``,
+  ``iiwa14_payload_exact.toml``;
+- ``adaptive_dd/PayloadSwap-Vertical3-v0``, ``-Vertical3Exact-v0``: ``vertical3_payload.toml``,
+  ``vertical3_payload_exact.toml``.
 
 :func:`make_env` builds the environment of any scenario (a user's URDF arm too);
 :class:`~adaptive_dd.gym.wrappers.ResidualTorque` makes the action a residual on a base
-controller; :func:`~adaptive_dd.gym.evaluate.evaluate` scores a policy against the floor, seed by
+controller; :func:`~adaptive_dd.gym.score.evaluate` scores a policy against the floor, seed by
 seed, on the benchmark's scale.
 """
 
@@ -34,7 +30,7 @@ except ImportError as exc:  # pragma: no cover - the optional extra is missing
     ) from exc
 
 from adaptive_dd.gym.env import PayloadSwapEnv, observation_of
-from adaptive_dd.gym.evaluate import Evaluation, evaluate, run_episode
+from adaptive_dd.gym.score import Evaluation, evaluate, run_episode
 from adaptive_dd.gym.wrappers import ResidualTorque
 
 __all__ = [

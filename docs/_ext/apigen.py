@@ -25,6 +25,7 @@ GROUPS = {
     "adaptive_dd.closed_loop": "The N-joint closed loop",
     "adaptive_dd.benchmark": "The benchmark",
     "adaptive_dd.robots": "Shipped robots",
+    "adaptive_dd.gym": "Gymnasium environments (the [gym] extra)",
     "adaptive_dd.cli": "The command line (one module per command: its options and its run)",
 }
 

@@ -64,8 +64,9 @@ class Evaluation:
 
     def summary(self) -> list[dict]:
         """Per segment: ``start, end, mass``, the mean RMS error [rad], the tool frame's mean
-        errors and the ratio's statistics (:func:`~adaptive_dd.benchmark.metrics.ratio_statistics`:
-        mean, median, p90, max, ci95, worst_seed, n)."""
+        errors (None where every trial failed) and the ratio's statistics
+        (:func:`~adaptive_dd.benchmark.metrics.ratio_statistics`: mean, median, p90, max, ci95,
+        worst_seed, n)."""
         from adaptive_dd.benchmark.metrics import ratio_statistics
 
         out = []
@@ -73,9 +74,9 @@ class Evaluation:
         for s, (a, b, m) in enumerate(self.segments):
             out.append({
                 "start": a, "end": b, "mass": m,
-                "rms_error": float(np.nanmean(self.rms_error[:, s])),
-                "ee_position_rms": float(np.nanmean(self.ee_position_rms[:, s])),
-                "ee_orientation_rms": float(np.nanmean(self.ee_orientation_rms[:, s])),
+                "rms_error": _mean(self.rms_error[:, s]),
+                "ee_position_rms": _mean(self.ee_position_rms[:, s]),
+                "ee_orientation_rms": _mean(self.ee_orientation_rms[:, s]),
                 "ratio_to_floor": ratio_statistics(r[:, s], self.seeds),
             })  # fmt: skip
         return out
@@ -97,6 +98,13 @@ class Evaluation:
                     "ee_orientation_rms_deg": self.ee_orientation_rms[i, s],
                 })  # fmt: skip
         return pd.DataFrame(rows)
+
+
+def _mean(x) -> float | None:
+    """Mean of the finite entries (None if there is none: every trial failed)."""
+    v = np.asarray(x, float)
+    v = v[np.isfinite(v)]
+    return float(v.mean()) if v.size else None
 
 
 def run_episode(policy: Callable, env: gymnasium.Env, seed: int) -> tuple[np.ndarray, bool, int]:
