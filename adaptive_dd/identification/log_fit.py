@@ -122,12 +122,12 @@ class LogFit:
     weights: Array
     lag: int
     tau_f: float
-    n_eff: float = float("nan")
-    dof_factor: float = 1.0
     sample_period: float
     regression: Regression
     used: NDArray[np.bool_]
     held: Held | None = None
+    n_eff: float = float("nan")
+    dof_factor: float = 1.0
 
     def model_error_channels(self) -> list[tuple[int, float]]:
         """``(joint, residual / noise)`` of the kept channels above :data:`MODEL_ERROR_RATIO`."""
