@@ -109,8 +109,6 @@ def merge_records(records: list, names: list[str] | None = None):
     DataError
         Naming the record whose sample period or velocity source differs.
     """
-    from adaptive_dd.record import LogRecord
-
     first = records[0]
     if len(records) == 1:
         return first
@@ -145,15 +143,14 @@ def merge_records(records: list, names: list[str] | None = None):
             pieces.append((a + offset, b + offset))
             owner.append(i)
         offset += r.t.size
-    return LogRecord(
+    return dataclasses.replace(  # a LogRecord like the first (no import of adaptive_dd.record: a circle)
+        first,
         t=np.concatenate([r.t for r in records]),
         q=np.concatenate([r.q for r in records]),
         qd=np.concatenate([r.qd for r in records]),
         tau=np.concatenate([r.tau for r in records]),
-        qd_measured=first.qd_measured,
         used=used,
         weight=first.weight.copy(),
-        sample_period=first.sample_period,
         source="; ".join(names),
         notes=tuple(notes),
         simulator_format=all(r.simulator_format for r in records),

@@ -254,3 +254,23 @@ def test_cli_identify_several_records_with_gaps_and_predict_on_a_copy(tmp_path, 
     assert (
         "identified on another arm" in err and "joint 'joint2' translation: 0.4,0,0 against 0.42,0,0" in err
     )
+
+
+def test_long_run_factor_counts_independent_samples():
+    """White noise: each sample is one; AR(1) with coefficient a: (1 + a) / (1 - a) samples are one
+    (less the Bartlett weights' shrinkage at a finite lag); two pieces pooled are as one."""
+    from adaptive_dd.identification.log_fit import long_run_factor
+
+    rng = np.random.default_rng(5)
+    assert long_run_factor(rng.standard_normal(20000), 30) == pytest.approx(1.0, abs=0.1)
+    a, N = 0.8, 40000
+    e = np.empty(N)
+    e[0] = 0.0
+    z = rng.standard_normal(N)
+    for k in range(1, N):
+        e[k] = a * e[k - 1] + z[k]
+    lag = 200
+    m = np.arange(1, lag + 1)
+    expected = 1 + 2 * np.sum((1 - m / (lag + 1)) * a**m)  # 8.8, against (1 + a) / (1 - a) = 9
+    assert long_run_factor(e, lag) == pytest.approx(expected, rel=0.1)
+    assert long_run_factor(e, lag, [(0, N // 2), (N // 2, N)]) == pytest.approx(expected, rel=0.1)

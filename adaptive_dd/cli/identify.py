@@ -32,7 +32,9 @@ def add_parser(sub) -> None:
         "data",
         nargs="*",
         help="CSV with header t,q1,q2,qd1,qd2,tau1,tau2 (qd optional for M1); with --arm: the log's file(s), "
-        "read as the scenario's [record] says (default: its record.files; see docs/real_log.md)",
+        "read as the scenario's [record] says (default: its record.files); several records are fitted "
+        "jointly, each as many files as record.files names, or a TOML with its own [record]; gaps are split "
+        "into continuous pieces (docs/real_log.md)",
     )
     _add_two_link_options(i)
     i.add_argument(
@@ -93,7 +95,8 @@ def _add_arm_options(i: argparse.ArgumentParser) -> None:
         "--baseline",
         nargs="+",
         metavar="CSV",
-        help="with --arm: the unloaded record's file(s), read through the same [record]; prints the payload",
+        help="with --arm: the unloaded record(s)' file(s), read through the same [record] (several records "
+        "fitted jointly); prints the payload",
     )
     i.add_argument(
         "--payload-only", action="store_true", help="with --arm: the arm known (URDF), fit the payload alone"

@@ -25,7 +25,13 @@ LOWPASS_ORDER = 4
 def add_parser(sub) -> None:
     """The options of ``predict``."""
     r = add_command(sub, "predict", help="torque prediction error of an identified model on another record")
-    r.add_argument("data", nargs="*", help="the record's file(s) (default: the scenario's record.files)")
+    r.add_argument(
+        "data",
+        nargs="*",
+        help="the record(s)' file(s) (default: the scenario's record.files); several records as for "
+        "identify: "
+        "each as many files as record.files names, or a TOML with its own [record]",
+    )
     r.add_argument("--arm", required=True, metavar="SCENARIO", help="scenario TOML with [arm] and [record]")
     r.add_argument(
         "--model", required=True, metavar="JSON", help="model.json written by identify --arm --out"

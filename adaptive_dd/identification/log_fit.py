@@ -31,7 +31,8 @@ Standard deviations
     from the residual, which shrinks the scores' variance as ordinary least squares' ``N / (N -
     k)`` says for white residuals (MacKinnon and White, J. Econometrics 29, 1985: HC1), the
     samples counted here as independent ones, ``n_eff`` = rows over the residual's long-run factor
-    (:func:`long_run_factor`, the Bartlett weights and lag of the covariance). Without it the truth
+    (:func:`long_run_factor`, the Bartlett weights and lag of the covariance), at most 2
+    (:data:`MAX_DOF_FACTOR`). Without it the truth
     fell within +- 1.96 std in 89 % of simulated cases (benchmarks/log_bounds_coverage.py).
     Checked on the TIAGo record against the spread of estimates over disjoint windows
     (benchmarks/real_log.py).
@@ -75,6 +76,10 @@ COULOMB_STD_COLUMN = 11
 """The Coulomb columns of the standard regressor start at ``11 n`` (links ``10 n``, viscous ``n``)."""
 WEIGHT_FLOOR = 0.1
 """``s_j`` is at least this fraction of the median residual rms of the kept channels."""
+MAX_DOF_FACTOR = 2.0
+"""The degrees-of-freedom factor's cap, reached at ``k = n_eff / 2``: beyond it a record holds too few
+independent samples for its parameters for a first-order correction (the TIAGo's 20 s windows:
+``n_eff`` 64-91 for 53 parameters)."""
 MODEL_ERROR_RATIO = 10.0
 """A filtered residual this many times the filtered sensor noise is reported as model error."""
 
@@ -122,12 +127,12 @@ class LogFit:
     weights: Array
     lag: int
     tau_f: float
-    n_eff: float = float("nan")
-    dof_factor: float = 1.0
     sample_period: float
     regression: Regression
     used: NDArray[np.bool_]
     held: Held | None = None
+    n_eff: float = float("nan")
+    dof_factor: float = 1.0
 
     def model_error_channels(self) -> list[tuple[int, float]]:
         """``(joint, residual / noise)`` of the kept channels above :data:`MODEL_ERROR_RATIO`."""
@@ -201,11 +206,12 @@ def long_run_factor(u: Array, lag: int, bounds=None) -> float:
 
 
 def _dof_factor(res: Array, w: Array, lag: int, bounds, k: int) -> tuple[float, float]:
-    """``(n_eff, n_eff / (n_eff - k))``: the residual's independent samples and the variance's
-    degrees-of-freedom factor (module docstring); at most ``n_eff`` when ``k >= n_eff - 1``."""
+    """``(n_eff, n_eff / (n_eff - min(k, n_eff / 2)))``: the residual's independent samples and the
+    variance's degrees-of-freedom factor (module docstring), at most 2: the factor is a first-order
+    correction in ``k / n_eff`` (:data:`MAX_DOF_FACTOR`)."""
     u = (res * w).sum(axis=1)
     n_eff = u.size / long_run_factor(u, lag, bounds)
-    return n_eff, n_eff / max(n_eff - k, 1.0)
+    return n_eff, n_eff / (n_eff - min(k, n_eff * (1.0 - 1.0 / MAX_DOF_FACTOR)))
 
 
 def _newey_west(phi: Array, res: Array, w: Array, scale: Array, bounds=None) -> tuple[Array, int]:
