@@ -56,7 +56,16 @@ _HEATMAP_KEYS = {"x", "y", "adaptive", "floor", "segment"}
 
 
 class SweepError(ScenarioError):
-    """A sweep file is invalid; names the file, the key and the reason."""
+    """A sweep file is invalid; names the file, the key and the reason.
+
+    Examples
+    --------
+    >>> from adaptive_dd.sweep_spec import parse_sweep
+    >>> parse_sweep({"grid": 3}, src="mine.toml")
+    Traceback (most recent call last):
+    ...
+    adaptive_dd.sweep_spec.SweepError: mine.toml: [grid] must be a table
+    """
 
 
 @dataclass(frozen=True)

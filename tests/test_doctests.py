@@ -29,7 +29,6 @@ NO_EXAMPLE = {
     "adaptive_dd.benchmark.runner.run_benchmark": CLOSED_LOOP,
     "adaptive_dd.benchmark.types.BenchmarkResult": CLOSED_LOOP,
     "adaptive_dd.benchmark.types.ControllerRun": CLOSED_LOOP,
-    "adaptive_dd.simulation.Simulation": CLOSED_LOOP,
     "adaptive_dd.simulation.run_trial": CLOSED_LOOP,
     "adaptive_dd.plotting.plot_tracking_errors": "takes a BenchmarkResult: " + CLOSED_LOOP,
     "adaptive_dd.plotting.plot_joint_errors": "takes a BenchmarkResult: " + CLOSED_LOOP,

@@ -31,6 +31,14 @@ class RobotInfo:
         Name of the frame where a payload is attached (a fixed frame at the flange or tip).
     description : str
         One line: what it is and where its numbers come from.
+
+    Examples
+    --------
+    >>> from adaptive_dd.robots import ROBOTS
+    >>> sorted(ROBOTS)
+    ['gen3', 'iiwa14', 'panda', 'sice_arm', 'ur5', 'vertical3']
+    >>> ROBOTS["ur5"].file
+    'ur5.urdf'
     """
 
     file: str
@@ -80,7 +88,16 @@ ROBOTS: dict[str, RobotInfo] = {
 
 
 class UnknownRobotError(KeyError):
-    """A robot name that is not in :data:`ROBOTS`; the message lists the known names."""
+    """A robot name that is not in :data:`ROBOTS`; the message lists the known names.
+
+    Examples
+    --------
+    >>> from adaptive_dd.robots import robot_urdf
+    >>> robot_urdf("r2d2")
+    Traceback (most recent call last):
+    ...
+    adaptive_dd.robots.UnknownRobotError: unknown robot 'r2d2'; known robots: gen3, iiwa14, ...
+    """
 
     def __str__(self) -> str:  # KeyError's str() would quote the whole message
         return str(self.args[0]) if self.args else ""
@@ -106,6 +123,13 @@ def robot_urdf(name: str) -> Path:
         ``name`` is not a known robot (a ``KeyError``); the message lists the known ones.
     FileNotFoundError
         The package was installed without its ``*.urdf`` data files.
+
+    Examples
+    --------
+    >>> from adaptive_dd.robots import robot_urdf
+    >>> path = robot_urdf("panda")
+    >>> path.name, path.is_file()
+    ('panda.urdf', True)
     """
     try:
         info = ROBOTS[name]
