@@ -220,6 +220,12 @@ def record_spec(table: dict | None, joint_names, kinds, src: str, files=None) ->
     files : sequence of str, optional
         Files given on the command line: they replace ``files``.
 
+
+    Returns
+    -------
+    RecordSpec
+        Files, columns, conversions, excluded channels and window, checked.
+
     Raises
     ------
     ScenarioError
@@ -435,6 +441,13 @@ def read_log(spec: RecordSpec, window: tuple[float, float] | None = None, arm=No
         Replaces ``spec.window`` [s].
     arm : Arm, optional
         For the unit check against the URDF's position limits.
+
+
+    Returns
+    -------
+    LogRecord
+        The log on a uniform grid of the spec's period: positions, velocities, torques and what
+        was done to them (``notes``).
 
     Raises
     ------

@@ -337,6 +337,11 @@ def run_sweep(
         Use this client instead (tests).
     progress : bool
         Show a progress bar over completed tasks.
+
+    Returns
+    -------
+    SweepResult
+        The tidy table's path, the per-cell rows, the heatmaps written and the failed cells.
     """
     from adaptive_dd.outputs import check_output_dir
 

@@ -116,6 +116,17 @@ class Sweep:
 def load_sweep(path: str | Path) -> Sweep:
     """Read and check a sweep file (see the module docstring).
 
+
+    Parameters
+    ----------
+    path : str or Path
+        A sweep TOML file (``[sweep]``, ``[grid]``, ``[heatmap]``).
+
+    Returns
+    -------
+    Sweep
+        The checked sweep with its grid expanded.
+
     Raises
     ------
     SweepError
@@ -282,7 +293,22 @@ def _heatmap(src: str, hm: Any, axes, ctrls, swap: int, n_segments: int) -> dict
 
 
 def parse_sweep(data: dict, src: str = "<memory>", base_dir: str | Path = ".") -> Sweep:
-    """Check a sweep given as a dict (the parsed TOML) and expand its grid."""
+    """Check a sweep given as a dict (the parsed TOML) and expand its grid.
+
+    Parameters
+    ----------
+    data : dict
+        The sweep's tables, as :func:`load_sweep` reads them from TOML.
+    src : str
+        Where the data came from, named in error messages.
+    base_dir : str or Path
+        The folder a relative ``scenario`` path is read from.
+
+    Returns
+    -------
+    Sweep
+        The checked sweep with its grid expanded.
+    """
     for table in data:
         if table not in ("sweep", "grid", "heatmap"):
             raise SweepError(f"{src}: unknown table [{table}]; allowed: ['grid', 'heatmap', 'sweep']")

@@ -140,7 +140,20 @@ class IdentifiedModel:
 
 
 def save_identified_model(path, model: IdentifiedModel) -> Path:
-    """Write ``model`` as JSON (NaN as null)."""
+    """Write ``model`` as JSON (NaN as null).
+
+    Parameters
+    ----------
+    path : str or Path
+        The JSON file to write.
+    model : IdentifiedModel
+        What ``adaptive-dd identify`` found.
+
+    Returns
+    -------
+    Path
+        The file written.
+    """
     from adaptive_dd.outputs import atomic_write
 
     def clean(x):
@@ -160,6 +173,17 @@ def save_identified_model(path, model: IdentifiedModel) -> Path:
 
 def load_identified_model(path) -> IdentifiedModel:
     """Read a ``model.json`` written by ``adaptive-dd identify --out``.
+
+
+    Parameters
+    ----------
+    path : str or Path
+        A ``model.json``.
+
+    Returns
+    -------
+    IdentifiedModel
+        The model, checked against the URDF it names.
 
     Raises
     ------

@@ -253,6 +253,13 @@ def fit_log(
         is that of the fit with those widths free too (:func:`_width_columns`), so the std of the
         parameters that trade with a width (its joint's Coulomb level first) carries its uncertainty.
 
+
+    Returns
+    -------
+    LogFit
+        The estimate, its sandwich covariance, the per-channel residual and weights, and the held
+        directions.
+
     Raises
     ------
     DataError
@@ -372,5 +379,20 @@ def _reweighted_fit(phi: Array, y: Array, cw: Array) -> tuple[Array, Array, Arra
 
 
 def predict_torque(model: Model, sigma: Array, q: Array, qd: Array, qdd: Array) -> Array:
-    """Joint torques ``(N, n)`` [N m] of base parameters ``sigma`` along a motion."""
+    """Joint torques ``(N, n)`` [N m] of base parameters ``sigma`` along a motion.
+
+    Parameters
+    ----------
+    model : Model
+        The arm's identification model (:func:`~adaptive_dd.identification.model.arm_model`).
+    sigma : ndarray, shape (p,)
+        Base parameters, in ``model.names``' order.
+    q, qd, qdd : ndarray, shape (N, n)
+        Positions [rad], velocities [rad/s] and accelerations [rad/s^2].
+
+    Returns
+    -------
+    ndarray, shape (N, n)
+        The joint torques [N m] the base parameters give along the motion.
+    """
     return base_regressor(model, q, qd, qdd) @ np.asarray(sigma, dtype=float)

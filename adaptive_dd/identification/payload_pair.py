@@ -88,6 +88,22 @@ def payload_from_pair(
 ) -> PayloadResult:
     """The payload from a loaded and an unloaded identification (module docstring).
 
+
+    Parameters
+    ----------
+    arm : Arm
+        The arm both identifications are of.
+    sigma_loaded, sigma_unloaded : array_like, shape (p,)
+        Base parameters identified with and without the payload.
+    cov_loaded, cov_unloaded : array_like, shape (p, p)
+        Their covariances.
+
+    Returns
+    -------
+    PayloadResult
+        The payload's ten parameters about the payload frame, unconstrained and physically
+        consistent, with their standard deviations.
+
     Raises
     ------
     ParameterError

@@ -87,7 +87,24 @@ def rls_init(
     batch_shape: tuple = (),
     theta0: ArrayLike | None = None,
 ) -> RLSState:
-    """Initial state: ``theta0`` (default 0), ``P = p0 I``, ``lambda = lam0``."""
+    """Initial state: ``theta0`` (default 0), ``P = p0 I``, ``lambda = lam0``.
+
+    Parameters
+    ----------
+    n_params : int
+        Parameters estimated.
+    cfg : RLSConfig
+        Forgetting and start-up covariance.
+    batch_shape : tuple of int
+        Leading axes (trials), broadcast over.
+    theta0 : array_like, shape (..., n_params), optional
+        The start estimate.
+
+    Returns
+    -------
+    RLSState
+        ``theta``, ``P`` and ``lam`` with the batch axes first.
+    """
     th = np.zeros((*batch_shape, n_params)) if theta0 is None else np.asarray(theta0, dtype=float)
     th = np.broadcast_to(th, (*batch_shape, n_params)).copy()
     if not np.all(np.isfinite(th)):
