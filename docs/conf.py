@@ -4,8 +4,8 @@ Build (from the repository's root, with ``pip install -e ".[docs]"``)::
 
     python -m sphinx -W --keep-going -b html docs docs/_build/html
 
-Generated at build time (and ignored by git): ``docs/api/`` (one page per public module,
-from each module's ``__all__``), ``docs/guide/scenario_keys.md`` (every scenario key, from
+Generated at build time (and ignored by git): ``docs/api/`` (the curated reference of
+``docs/_ext/api_list.py``, one page per object, and the list of internal modules), ``docs/guide/scenario_keys.md`` (every scenario key, from
 the tables the scenario checks use) and ``docs/auto_examples/`` (the gallery, run by
 sphinx-gallery).
 """
@@ -41,7 +41,7 @@ extensions = [
     "numpydoc",
     "myst_parser",
     "sphinx_gallery.gen_gallery",
-    "apigen",  # docs/_ext/apigen.py: docs/api/*.rst from each module's __all__
+    "apigen",  # docs/_ext/apigen.py: docs/api/ from the curated list docs/_ext/api_list.py
     "scenario_keys",  # docs/_ext/scenario_keys.py: docs/guide/scenario_keys.md from the checks' tables
 ]
 
@@ -91,7 +91,7 @@ REAL_LOG_TEXT = "The guide's pages on identification list the\ncommands for reco
 
 
 def _list_real_log(app, docname, source):
-    """Link ``real_log`` (identification from a real arm's log, issue 29) from the identification
+    """Link ``real_log`` (identification from a real arm's log) from the identification
     guide's contents and from Getting started once the page exists; until then it is left out
     rather than broken."""
     if not (DOCS / "real_log.md").exists():

@@ -105,6 +105,14 @@ def design_filter_bank(method: str, tau_f: float, sample_period: float = 1e-3) -
     FilterBank
         The continuous and discrete state-space forms of ``G0`` and ``G1``.
 
+
+    Examples
+    --------
+    >>> from adaptive_dd.identification.filters import design_filter_bank
+    >>> bank = design_filter_bank("M2", tau_f=0.01, sample_period=1e-3)
+    >>> bank.method, bank.A.shape  # G0 = 1 / (1 + tau_f s)^2 and G1 = s G0, as one state-space
+    ('M2', (2, 2))
+
     Raises
     ------
     ParameterError

@@ -154,6 +154,15 @@ def online_init(cfg: TwoLinkOnlineConfig, n_trials: int, theta0: ArrayLike) -> O
     -------
     OnlineState
         The estimator's state, trial axis first.
+
+    Examples
+    --------
+    >>> from adaptive_dd.identification.two_link_online import online_init
+    >>> from adaptive_dd.identification.two_link_online_config import TwoLinkOnlineConfig
+    >>> from adaptive_dd.plant import TABLE1_SIGMA
+    >>> state = online_init(TwoLinkOnlineConfig(sample_period=1e-3), n_trials=4, theta0=TABLE1_SIGMA)
+    >>> state.theta.shape  # trial axis first, the paper's seven base parameters
+    (4, 7)
     """
     from adaptive_dd.closed_loop.laws import OBS_ROWS  # here: the closed-loop package imports this one
 
