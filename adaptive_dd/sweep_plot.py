@@ -85,9 +85,7 @@ def _plot_one(ratios: pd.DataFrame, heatmap: Mapping[str, Any], title: str, path
     ax.set_yticks(range(len(ys)), [f"{v:g}" if isinstance(v, float) else str(v) for v in ys])
     ax.set_xlabel(axis_label(x))
     ax.set_ylabel(axis_label(y))
-    fig.colorbar(
-        im, ax=ax, label=f"median RMS error ratio {heatmap['adaptive']} / {heatmap['floor']} [-]"
-    )
+    fig.colorbar(im, ax=ax, label=f"median RMS error ratio {heatmap['adaptive']} / {heatmap['floor']} [-]")
     ax.set_title(title, fontsize=9)
     fig.savefig(path, dpi=110)
     return path

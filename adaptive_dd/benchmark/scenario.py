@@ -134,8 +134,9 @@ _FIELD_KEY = {
 class Scenario:
     """A checked benchmark scenario (see the module docstring for the file format).
 
-    Made by :func:`load_scenario` or :func:`parse_scenario`. Constructing one (also through ``dataclasses.replace``) checks every field and
-    raises one :class:`ScenarioError` listing all problems.
+    Made by :func:`load_scenario` or :func:`parse_scenario`. Constructing one (also through
+    ``dataclasses.replace``) checks every field and raises one :class:`ScenarioError` listing
+    all problems.
 
     ``arm`` is an :class:`~adaptive_dd.plant.arm.Arm` (default the paper's SICE arm; a
     :class:`~adaptive_dd.plant.two_link.ClosedFormTwoLink` given here becomes the arm it is the

@@ -38,6 +38,13 @@ class Gains:
         omega [rad/s].
     damping : float
         zeta.
+
+    Examples
+    --------
+    >>> from adaptive_dd.controllers import Gains
+    >>> g = Gains(bandwidth=40.0, damping=1.0)
+    >>> g.bandwidth**2, 2 * g.damping * g.bandwidth  # computed torque's Kp [1/s^2], Kd [1/s]
+    (1600.0, 80.0)
     """
 
     bandwidth: float = 40.0

@@ -185,6 +185,15 @@ def load_identified_model(path) -> IdentifiedModel:
     IdentifiedModel
         The model, checked against the URDF it names.
 
+
+    Examples
+    --------
+    >>> from adaptive_dd.identification.identified_model import load_identified_model
+    >>> load_identified_model("results/none/model.json")
+    Traceback (most recent call last):
+    ...
+    adaptive_dd.errors.DataError: results/none/model.json: no such model file (written by ...)
+
     Raises
     ------
     DataError
