@@ -315,6 +315,12 @@ def plot_tracking_errors(res, path: str | Path | None = None, window: float = 0.
     ax.set_ylabel(f"tracking error |q_d - q|, {window * 1e3:.0f} ms RMS [mrad]")
     ax.grid(alpha=0.3, which="both")
     ax.legend(fontsize=8, ncol=3)
+    fig.suptitle(
+        f"Tracking error of every controller on {res.scenario.name}: {window * 1e3:.0f} ms moving RMS "
+        "[mrad] against time [s], mean over seeds, payload [kg] above each segment",
+        fontsize=8,
+        y=1.0,
+    )
     if path is not None:
         save_figure(fig, path, formats)
     return fig
