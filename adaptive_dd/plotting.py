@@ -151,6 +151,16 @@ def _mark_swaps(axes, t, mass) -> None:
             a.axvline(t[i], color="k", ls=":", lw=1)
 
 
+def _mark_alarms(ax, run, name: str, most: int = 50) -> None:
+    """The change alarms of a controller's first trial as ticks at the panel's foot, in its colour."""
+    alarms = getattr(run, "alarm_times", None)
+    if not alarms or alarms[0] is None:
+        return
+    color = controller_style(name)["color"]
+    for t in list(np.asarray(alarms[0], dtype=float).ravel())[:most]:
+        ax.axvline(t, ymin=0.0, ymax=0.06, color=color, lw=1.5)
+
+
 def plot_estimates(
     t,
     theta,
@@ -329,7 +339,8 @@ def plot_tracking_errors(res, path: str | Path | None = None, window: float = 0.
 def plot_benchmark_estimates(res, path: str | Path | None = None, formats=("png",)):
     """J1, J2, r and the payload mass estimated by the adaptive controllers, against the truth.
 
-    On an N-joint arm, :func:`plot_payload_estimates`.
+    Each estimating controller's change alarms (its first trial's) are ticks at the foot of the
+    mass panel. On an N-joint arm, :func:`plot_payload_estimates`.
 
     Parameters
     ----------
@@ -365,6 +376,7 @@ def plot_benchmark_estimates(res, path: str | Path | None = None, formats=("png"
         for ax, (k, _) in zip(axes.flat[:3], panels, strict=True):
             ax.plot(t, sh[:, k], label=name, **controller_style(name))
         axes.flat[3].plot(t, paper.payload_mass_from_sigma(sh), label=name, **controller_style(name))
+        _mark_alarms(axes.flat[3], run, name)
     for ax in axes.flat:
         ax.grid(alpha=0.3)
         _mark_swaps(ax, res.t, res.mass)
@@ -372,7 +384,11 @@ def plot_benchmark_estimates(res, path: str | Path | None = None, formats=("png"
     axes.flat[0].legend(fontsize=8)
     for ax in axes[-1]:
         ax.set_xlabel("t [s]")
-    fig.suptitle("Estimates of the adaptive controllers (mean over the seeds with kept trajectories)")
+    fig.suptitle(
+        "Estimates of the adaptive controllers against the truth (mean over the seeds with kept "
+        "trajectories; ticks: change alarms of the first seed)",
+        fontsize=9,
+    )
     if path is not None:
         save_figure(fig, path, formats)
     return fig
@@ -418,6 +434,7 @@ def plot_payload_estimates(res, path: str | Path | None = None, formats=("png",)
             est = arm.payload_from_sigma(run.sigma_hat[kept].mean(axis=0))
         style = controller_style(name)
         axes.flat[0].plot(res.t, est.mass, label=name, **style)
+        _mark_alarms(axes.flat[0], run, name)
         com = np.where(np.abs(est.mass)[:, None] >= 0.1, est.com, np.nan)
         for c, ax in enumerate(axes.flat[1:]):
             ax.plot(res.t, 1e3 * com[:, c], label=name, **style)
@@ -431,7 +448,11 @@ def plot_payload_estimates(res, path: str | Path | None = None, formats=("png",)
     axes.flat[0].legend(fontsize=8)
     for ax in axes[-1]:
         ax.set_xlabel("t [s]")
-    fig.suptitle("Payload held by the estimating controllers (mean over the seeds with kept trajectories)")
+    fig.suptitle(
+        "Payload held by the estimating controllers (mean over the seeds with kept trajectories; "
+        "ticks: change alarms of the first seed)",
+        fontsize=9,
+    )
     if path is not None:
         save_figure(fig, path, formats)
     return fig
