@@ -205,13 +205,14 @@ def plot_estimates(
     --------
     >>> import tempfile
     >>> import numpy as np
-    >>> from adaptive_dd.plant import TABLE1_SIGMA
+    >>> from adaptive_dd.plant import ClosedFormTwoLink
     >>> from adaptive_dd.plotting import plot_estimates
     >>> t = np.arange(0, 2, 1e-3)
     >>> rng = np.random.default_rng(0)
     >>> settle = (1 - np.exp(-t / 0.2))[None, :, None]
-    >>> theta = TABLE1_SIGMA * settle + 0.01 * rng.standard_normal((3, t.size, 7))
-    >>> plot_estimates(t, theta, TABLE1_SIGMA, f"{tempfile.mkdtemp()}/estimates.png",
+    >>> sigma = ClosedFormTwoLink.sice().sigma  # the paper's Table 1
+    >>> theta = sigma * settle + 0.01 * rng.standard_normal((3, t.size, 7))
+    >>> plot_estimates(t, theta, sigma, f"{tempfile.mkdtemp()}/estimates.png",
     ...                alarms=[1.0]).name
     'estimates.png'
     """

@@ -159,8 +159,9 @@ def online_init(cfg: TwoLinkOnlineConfig, n_trials: int, theta0: ArrayLike) -> O
     --------
     >>> from adaptive_dd.identification.two_link_online import online_init
     >>> from adaptive_dd.identification.two_link_online_config import TwoLinkOnlineConfig
-    >>> from adaptive_dd.plant import TABLE1_SIGMA
-    >>> state = online_init(TwoLinkOnlineConfig(sample_period=1e-3), n_trials=4, theta0=TABLE1_SIGMA)
+    >>> from adaptive_dd.plant import ClosedFormTwoLink
+    >>> sigma = ClosedFormTwoLink.sice().sigma  # Table 1 of the paper
+    >>> state = online_init(TwoLinkOnlineConfig(sample_period=1e-3), n_trials=4, theta0=sigma)
     >>> state.theta.shape  # trial axis first, the paper's seven base parameters
     (4, 7)
     """
