@@ -20,6 +20,7 @@ __all__ = [
     "plot_joint_errors",
     "plot_model_response",
     "plot_payload_estimates",
+    "plot_ratios",
     "plot_tracking_errors",
     "plot_trajectory",
     "save_figure",
@@ -515,6 +516,79 @@ def plot_joint_errors(res, path: str | Path | None = None, window: float = 0.05,
     fig.legend(handles, labels, loc="lower center", ncol=min(len(labels), 4), fontsize=8)
     fig.suptitle(f"Tracking error per joint (seed {res.seed_indices[0]})")
     fig.tight_layout(rect=(0, 0.06, 1, 0.97))
+    if path is not None:
+        save_figure(fig, path, formats)
+    return fig
+
+
+def plot_ratios(frame, path: str | Path | None = None, formats=("png",)):
+    """Per controller and segment: the mean per-seed ratio to the floor with its 95 % interval.
+
+    The benchmark's leaderboard as a figure: one group of markers per payload segment, one marker
+    per controller (its colour of :data:`STYLES`), the ratio of its RMS tracking error to its
+    floor's on a log scale (1: as good as the same law given the true model).
+
+    Parameters
+    ----------
+    frame : pandas.DataFrame
+        ``per_seed.csv`` or :meth:`BenchmarkResult.to_frame`: the columns ``controller``,
+        ``segment``, ``start_s``, ``end_s``, ``mass_kg`` and ``ratio_to_floor`` (rows without a
+        ratio, the floors', are left out).
+    path : str or Path, optional
+        Where to write the figure (its suffix replaced by each of ``formats``); None: not written.
+    formats : tuple of str
+        File types to write.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure (closed if it was written).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import pandas as pd
+    >>> from adaptive_dd.plotting import plot_ratios
+    >>> rng = np.random.default_rng(0)
+    >>> rows = [{"controller": c, "seed": k, "segment": s, "start_s": 5.0 * s, "end_s": 5.0 * s + 5,
+    ...          "mass_kg": m, "ratio_to_floor": r * rng.lognormal(0.0, 0.05)}
+    ...         for c, r in (("adaptive_ct", 1.05), ("ct_nominal", 40.0))
+    ...         for s, m in enumerate((0.0, 3.0)) for k in range(10)]
+    >>> fig = plot_ratios(pd.DataFrame(rows))
+    >>> fig.axes[0].get_ylabel()
+    'RMS error / floor RMS error, per seed [-]'
+    """
+    import pandas as pd
+
+    df = pd.DataFrame(frame)
+    df = df[np.isfinite(pd.to_numeric(df["ratio_to_floor"], errors="coerce"))]
+    segments = df.drop_duplicates("segment").sort_values("segment")
+    names = list(dict.fromkeys(df["controller"]))
+    fig, ax = plt.subplots(figsize=(max(7.5, 1.6 * len(segments) + 4.0), 4.5))
+    width = 0.8 / max(len(names), 1)
+    for i, name in enumerate(names):
+        sub = df[df["controller"] == name]
+        stats = sub.groupby("segment")["ratio_to_floor"].agg(["mean", "std", "count"])
+        x = np.arange(len(segments)) + (i - (len(names) - 1) / 2) * width
+        mean = stats["mean"].reindex(segments["segment"]).to_numpy(dtype=float)
+        half = 1.96 * (stats["std"] / np.sqrt(stats["count"])).reindex(segments["segment"])
+        half = np.nan_to_num(half.to_numpy(dtype=float))
+        style = controller_style(name)
+        ax.errorbar(x, mean, yerr=half, fmt="o", ms=4, capsize=3, color=style["color"], label=name)
+    ax.axhline(1.0, color="k", lw=0.8)
+    ax.set_yscale("log")
+    labels = [f"{a:g}-{b:g} s\n{m:g} kg" for a, b, m in segments[["start_s", "end_s", "mass_kg"]].to_numpy()]
+    ax.set_xticks(np.arange(len(segments)), labels)
+    ax.set_xlabel("payload segment [s, kg]")
+    ax.set_ylabel("RMS error / floor RMS error, per seed [-]")
+    ax.grid(alpha=0.3, which="both", axis="y")
+    ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0))
+    fig.suptitle(
+        "Ratio of each controller's RMS tracking error to its floor's per payload segment: mean over "
+        "seeds with its 95 % interval",
+        fontsize=8,
+    )
+    fig.tight_layout()
     if path is not None:
         save_figure(fig, path, formats)
     return fig

@@ -127,6 +127,7 @@ GROUPS: list[tuple[str, str, list[str]]] = [
         "matplotlib figures of a result, with units on every axis; none of them shows a window.",
         [
             "adaptive_dd.plotting.plot_tracking_errors",
+            "adaptive_dd.plotting.plot_ratios",
             "adaptive_dd.plotting.plot_joint_errors",
             "adaptive_dd.plotting.plot_estimates",
             "adaptive_dd.plotting.plot_payload_estimates",
