@@ -18,10 +18,39 @@ def plot_torque_fit(
     title: str = "",
     labels=None,
 ):
-    """Measured against predicted (filtered) torque per joint, with the residual; returns the Figure.
+    """Measured against predicted (filtered) torque per joint, with the residual.
 
-    ``t (N,)`` [s], ``measured, predicted (N, n)`` [N m]; ``labels`` names the n channels
-    (default ``tau1 .. taun``).
+    One panel per channel: torque [N m] against time [s].
+
+    Parameters
+    ----------
+    t : ndarray, shape (N,)
+        Sample instants [s].
+    measured, predicted : ndarray, shape (N, n)
+        The measured (filtered) and the model's torques [N m].
+    path : str or Path
+        The PNG to write.
+    title : str
+        The figure's title.
+    labels : sequence of str, optional
+        The n channels' names (default ``tau1 .. taun``).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure, written and closed.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> import numpy as np
+    >>> from adaptive_dd.identification_plots import plot_torque_fit
+    >>> t = np.linspace(0, 2, 200)
+    >>> measured = np.column_stack([np.sin(t), np.cos(t)])
+    >>> fig = plot_torque_fit(t, measured, 0.98 * measured, f"{tempfile.mkdtemp()}/fit.png",
+    ...                       labels=["shoulder", "elbow"])
+    >>> [ax.get_ylabel() for ax in fig.axes]
+    ['shoulder [N m]', 'elbow [N m]']
     """
     import matplotlib
 

@@ -20,6 +20,7 @@ __all__ = [
     "plot_joint_errors",
     "plot_model_response",
     "plot_payload_estimates",
+    "plot_ratios",
     "plot_tracking_errors",
     "plot_trajectory",
     "save_figure",
@@ -63,7 +64,31 @@ def controller_style(name: str) -> dict:
 
 
 def save_figure(fig, path: str | Path, formats: tuple[str, ...] = ("png",)) -> list[Path]:
-    """Write ``fig`` as ``path`` with each suffix of ``formats`` (png, pdf, svg); close it."""
+    """Write ``fig`` as ``path`` with each suffix of ``formats`` (png, pdf, svg); close it.
+
+    Parameters
+    ----------
+    fig : matplotlib.figure.Figure
+        The figure to write.
+    path : str or Path
+        The file's path; its suffix is replaced by each of ``formats``. Missing folders are made.
+    formats : tuple of str
+        File types matplotlib can write, without the dot.
+
+    Returns
+    -------
+    list of Path
+        The files written, one per format.
+
+    Examples
+    --------
+    >>> import tempfile, matplotlib.pyplot as plt
+    >>> from adaptive_dd.plotting import save_figure
+    >>> fig, ax = plt.subplots()
+    >>> folder = tempfile.mkdtemp()
+    >>> [p.name for p in save_figure(fig, f"{folder}/error", ("png", "svg"))]
+    ['error.png', 'error.svg']
+    """
     path = Path(path)
     out = []
     for f in formats:
@@ -76,7 +101,23 @@ def save_figure(fig, path: str | Path, formats: tuple[str, ...] = ("png",)) -> l
 
 
 def plot_trajectory(result, path: str | Path, trial: int = 0) -> Path:
-    """q, qd (true and measured) and torque of one trial of a SimulationResult."""
+    """Joint angles, velocities (true and measured) and torques of one trial of a simulation.
+
+    Parameters
+    ----------
+    result : SimulationResult
+        What :meth:`adaptive_dd.plant.ArmSimulator.run` returns (``t (N,)`` [s], ``q``, ``qd``,
+        ``qd_meas``, ``tau (n_trials, N, 2)``, ``mass (n_trials, N)`` [kg]).
+    path : str or Path
+        The PNG to write.
+    trial : int
+        Which trial to draw.
+
+    Returns
+    -------
+    Path
+        The file written.
+    """
     t = result.t
     fig, ax = plt.subplots(3, 1, figsize=(9, 7), sharex=True)
     for j, c in enumerate(("C0", "C1")):
@@ -111,6 +152,16 @@ def _mark_swaps(axes, t, mass) -> None:
             a.axvline(t[i], color="k", ls=":", lw=1)
 
 
+def _mark_alarms(ax, run, name: str, most: int = 50) -> None:
+    """The change alarms of a controller's first trial as ticks at the panel's foot, in its colour."""
+    alarms = getattr(run, "alarm_times", None)
+    if not alarms or alarms[0] is None:
+        return
+    color = controller_style(name)["color"]
+    for t in list(np.asarray(alarms[0], dtype=float).ravel())[:most]:
+        ax.axvline(t, ymin=0.0, ymax=0.06, color=color, lw=1.5)
+
+
 def plot_estimates(
     t,
     theta,
@@ -123,9 +174,48 @@ def plot_estimates(
 ) -> Path:
     """Estimates over time (mean over trials, band of +-1 std), a reference dashed (Fig. 5).
 
-    ``theta`` has shape (n_trials, n_samples, 7); ``sigma_true`` (7,) or (n_samples, 7) is
-    drawn dashed and named ``reference_label`` (the true value, or the final estimate when
-    the truth is unknown); ``alarms``: times [s] marked by vertical lines.
+    One panel per base parameter of the paper's arm, each with its unit; the change detector's
+    alarms as vertical red lines.
+
+    Parameters
+    ----------
+    t : array_like, shape (n_samples,)
+        Sample instants [s].
+    theta : array_like, shape (n_trials, n_samples, 7)
+        The estimates, in the order of ``names`` (the paper's J1 J2 r b1 b2 d1 d2).
+    sigma_true : array_like, shape (7,) or (n_samples, 7)
+        The reference drawn dashed: the true value, or the final estimate when the truth is
+        unknown.
+    path : str or Path
+        The PNG to write.
+    title : str
+        The figure's title.
+    names : sequence of str
+        The seven parameters' names, for the axis labels.
+    reference_label : str
+        What the dashed line is, for the legend.
+    alarms : sequence of float
+        Alarm times [s], marked by vertical lines.
+
+    Returns
+    -------
+    Path
+        The file written.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> import numpy as np
+    >>> from adaptive_dd.plant import ClosedFormTwoLink
+    >>> from adaptive_dd.plotting import plot_estimates
+    >>> t = np.arange(0, 2, 1e-3)
+    >>> rng = np.random.default_rng(0)
+    >>> settle = (1 - np.exp(-t / 0.2))[None, :, None]
+    >>> sigma = ClosedFormTwoLink.sice().sigma  # the paper's Table 1
+    >>> theta = sigma * settle + 0.01 * rng.standard_normal((3, t.size, 7))
+    >>> plot_estimates(t, theta, sigma, f"{tempfile.mkdtemp()}/estimates.png",
+    ...                alarms=[1.0]).name
+    'estimates.png'
     """
     theta = np.asarray(theta)
     st = np.broadcast_to(np.asarray(sigma_true), (theta.shape[1], 7))
@@ -157,7 +247,36 @@ def plot_estimates(
 
 
 def plot_model_response(t, q_arm, models: dict, path: str | Path, title: str = "") -> Path:
-    """The arm and identified model(s) driven by the same torque (Fig. 7); ``models`` maps label -> q."""
+    """The arm and identified model(s) driven by the same torque (Fig. 7 of the paper).
+
+    Parameters
+    ----------
+    t : array_like, shape (n_samples,)
+        Sample instants [s].
+    q_arm : array_like, shape (n_samples, 2)
+        The arm's joint angles [rad].
+    models : dict of str to array_like, shape (n_samples, 2)
+        Each model's joint angles [rad] under the same torque, by label.
+    path : str or Path
+        The PNG to write.
+    title : str
+        The figure's title.
+
+    Returns
+    -------
+    Path
+        The file written.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> import numpy as np
+    >>> from adaptive_dd.plotting import plot_model_response
+    >>> t = np.linspace(0, 1, 100)
+    >>> q = np.column_stack([np.sin(t), np.cos(t)])
+    >>> plot_model_response(t, q, {"M2": 1.01 * q}, f"{tempfile.mkdtemp()}/response.png").name
+    'response.png'
+    """
     fig, ax = plt.subplots(2, 1, figsize=(9, 5), sharex=True)
     for j in range(2):
         ax[j].plot(t, q_arm[:, j], "k", lw=2.0, label="arm")
@@ -174,7 +293,23 @@ def plot_model_response(t, q_arm, models: dict, path: str | Path, title: str = "
 def plot_tracking_errors(res, path: str | Path | None = None, window: float = 0.05, formats=("png",)):
     """50 ms moving RMS of ``|e|`` (mean over seeds) for every controller, swaps marked, log scale.
 
-    Returns the Figure; with ``path``, also writes it in each of ``formats`` (and closes it).
+    The tracking error in mrad against time in s, each segment's payload [kg] written above it.
+
+    Parameters
+    ----------
+    res : BenchmarkResult
+        What :func:`~adaptive_dd.benchmark.runner.run_benchmark` returns.
+    path : str or Path, optional
+        Where to write the figure (its suffix replaced by each of ``formats``); None: not written.
+    window : float
+        The moving RMS's window [s].
+    formats : tuple of str
+        File types to write.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure (closed if it was written).
     """
     from adaptive_dd.benchmark.metrics import error_trace
 
@@ -192,6 +327,12 @@ def plot_tracking_errors(res, path: str | Path | None = None, window: float = 0.
     ax.set_ylabel(f"tracking error |q_d - q|, {window * 1e3:.0f} ms RMS [mrad]")
     ax.grid(alpha=0.3, which="both")
     ax.legend(fontsize=8, ncol=3)
+    fig.suptitle(
+        f"Tracking error of every controller on {res.scenario.name}: {window * 1e3:.0f} ms moving RMS "
+        "[mrad] against time [s], mean over seeds, payload [kg] above each segment",
+        fontsize=8,
+        y=1.0,
+    )
     if path is not None:
         save_figure(fig, path, formats)
     return fig
@@ -200,7 +341,22 @@ def plot_tracking_errors(res, path: str | Path | None = None, window: float = 0.
 def plot_benchmark_estimates(res, path: str | Path | None = None, formats=("png",)):
     """J1, J2, r and the payload mass estimated by the adaptive controllers, against the truth.
 
-    Returns the Figure; with ``path``, also writes it in each of ``formats`` (and closes it).
+    Each estimating controller's change alarms (its first trial's) are ticks at the foot of the
+    mass panel. On an N-joint arm, :func:`plot_payload_estimates`.
+
+    Parameters
+    ----------
+    res : BenchmarkResult
+        What :func:`~adaptive_dd.benchmark.runner.run_benchmark` returns.
+    path : str or Path, optional
+        Where to write the figure (its suffix replaced by each of ``formats``); None: not written.
+    formats : tuple of str
+        File types to write.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure (closed if it was written).
     """
     paper = res.scenario.closed_forms  # the paper's sigma (J1 J2 r ...) on its closed forms' run
     if paper is None or res.sigma_true.shape[-1] != 7:
@@ -222,6 +378,7 @@ def plot_benchmark_estimates(res, path: str | Path | None = None, formats=("png"
         for ax, (k, _) in zip(axes.flat[:3], panels, strict=True):
             ax.plot(t, sh[:, k], label=name, **controller_style(name))
         axes.flat[3].plot(t, paper.payload_mass_from_sigma(sh), label=name, **controller_style(name))
+        _mark_alarms(axes.flat[3], run, name)
     for ax in axes.flat:
         ax.grid(alpha=0.3)
         _mark_swaps(ax, res.t, res.mass)
@@ -229,17 +386,33 @@ def plot_benchmark_estimates(res, path: str | Path | None = None, formats=("png"
     axes.flat[0].legend(fontsize=8)
     for ax in axes[-1]:
         ax.set_xlabel("t [s]")
-    fig.suptitle("Estimates of the adaptive controllers (mean over the seeds with kept trajectories)")
+    fig.suptitle(
+        "Estimates of the adaptive controllers against the truth (mean over the seeds with kept "
+        "trajectories; ticks: change alarms of the first seed)",
+        fontsize=9,
+    )
     if path is not None:
         save_figure(fig, path, formats)
     return fig
 
 
 def plot_payload_estimates(res, path: str | Path | None = None, formats=("png",)):
-    """N-joint arms: the payload mass and centre of mass (x, y, z in the payload frame) that
-    each estimating controller holds (mean over the kept seeds), against the truth.
+    """N-joint arms: the payload mass [kg] and centre of mass [mm] (x, y, z in the payload frame)
+    that each estimating controller holds (mean over the kept seeds), against the truth.
 
-    Returns the Figure; with ``path``, also writes it in each of ``formats`` (and closes it).
+    Parameters
+    ----------
+    res : BenchmarkResult
+        What :func:`~adaptive_dd.benchmark.runner.run_benchmark` returns.
+    path : str or Path, optional
+        Where to write the figure (its suffix replaced by each of ``formats``); None: not written.
+    formats : tuple of str
+        File types to write.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure (closed if it was written).
     """
     arm, sc = res.scenario.arm, res.scenario
     fig, axes = plt.subplots(2, 2, figsize=(11, 7), sharex=True)
@@ -263,6 +436,7 @@ def plot_payload_estimates(res, path: str | Path | None = None, formats=("png",)
             est = arm.payload_from_sigma(run.sigma_hat[kept].mean(axis=0))
         style = controller_style(name)
         axes.flat[0].plot(res.t, est.mass, label=name, **style)
+        _mark_alarms(axes.flat[0], run, name)
         com = np.where(np.abs(est.mass)[:, None] >= 0.1, est.com, np.nan)
         for c, ax in enumerate(axes.flat[1:]):
             ax.plot(res.t, 1e3 * com[:, c], label=name, **style)
@@ -276,17 +450,36 @@ def plot_payload_estimates(res, path: str | Path | None = None, formats=("png",)
     axes.flat[0].legend(fontsize=8)
     for ax in axes[-1]:
         ax.set_xlabel("t [s]")
-    fig.suptitle("Payload held by the estimating controllers (mean over the seeds with kept trajectories)")
+    fig.suptitle(
+        "Payload held by the estimating controllers (mean over the seeds with kept trajectories; "
+        "ticks: change alarms of the first seed)",
+        fontsize=9,
+    )
     if path is not None:
         save_figure(fig, path, formats)
     return fig
 
 
 def plot_joint_errors(res, path: str | Path | None = None, window: float = 0.05, formats=("png",)):
-    """Small multiples, one panel per joint: the 50 ms moving RMS of ``q_d - q`` of the first kept
-    seed of every controller (log scale, swaps marked); readable for 7 joints.
+    """Small multiples, one panel per joint: the 50 ms moving RMS of ``q_d - q`` [mrad] against
+    time [s] of the first kept seed of every controller (log scale, swaps marked); readable for 7
+    joints.
 
-    Returns the Figure; with ``path``, also writes it in each of ``formats`` (and closes it).
+    Parameters
+    ----------
+    res : BenchmarkResult
+        What :func:`~adaptive_dd.benchmark.runner.run_benchmark` returns.
+    path : str or Path, optional
+        Where to write the figure (its suffix replaced by each of ``formats``); None: not written.
+    window : float
+        The moving RMS's window [s].
+    formats : tuple of str
+        File types to write.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure (closed if it was written).
     """
     from adaptive_dd.benchmark.metrics import moving_rms
 
@@ -312,11 +505,90 @@ def plot_joint_errors(res, path: str | Path | None = None, window: float = 0.05,
         ax.set_title(f"joint {j + 1}", fontsize=9)
         ax.grid(alpha=0.3, which="both")
         _mark_swaps(ax, res.t, res.mass)
-    axes.flat[0].set_ylabel(f"|e_j|, {window * 1e3:.0f} ms RMS [mrad]")
+    for r in range(rows):
+        axes[r, 0].set_ylabel(f"|e_j|, {window * 1e3:.0f} ms RMS [mrad]")
+    for c in range(cols):  # the lowest panel drawn in each column carries the time axis
+        last = max(j for j in range(c, n, cols)) if c < n else None
+        if last is not None:
+            axes.flat[last].set_xlabel("t [s]")
+            axes.flat[last].xaxis.set_tick_params(labelbottom=True)
     handles, labels = axes.flat[0].get_legend_handles_labels()
     fig.legend(handles, labels, loc="lower center", ncol=min(len(labels), 4), fontsize=8)
     fig.suptitle(f"Tracking error per joint (seed {res.seed_indices[0]})")
     fig.tight_layout(rect=(0, 0.06, 1, 0.97))
+    if path is not None:
+        save_figure(fig, path, formats)
+    return fig
+
+
+def plot_ratios(frame, path: str | Path | None = None, formats=("png",)):
+    """Per controller and segment: the mean per-seed ratio to the floor with its 95 % interval.
+
+    The benchmark's leaderboard as a figure: one group of markers per payload segment, one marker
+    per controller (its colour of :data:`STYLES`), the ratio of its RMS tracking error to its
+    floor's on a log scale (1: as good as the same law given the true model).
+
+    Parameters
+    ----------
+    frame : pandas.DataFrame
+        ``per_seed.csv`` or :meth:`BenchmarkResult.to_frame`: the columns ``controller``,
+        ``segment``, ``start_s``, ``end_s``, ``mass_kg`` and ``ratio_to_floor`` (rows without a
+        ratio, the floors', are left out).
+    path : str or Path, optional
+        Where to write the figure (its suffix replaced by each of ``formats``); None: not written.
+    formats : tuple of str
+        File types to write.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure (closed if it was written).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import pandas as pd
+    >>> from adaptive_dd.plotting import plot_ratios
+    >>> rng = np.random.default_rng(0)
+    >>> rows = [{"controller": c, "seed": k, "segment": s, "start_s": 5.0 * s, "end_s": 5.0 * s + 5,
+    ...          "mass_kg": m, "ratio_to_floor": r * rng.lognormal(0.0, 0.05)}
+    ...         for c, r in (("adaptive_ct", 1.05), ("ct_nominal", 40.0))
+    ...         for s, m in enumerate((0.0, 3.0)) for k in range(10)]
+    >>> fig = plot_ratios(pd.DataFrame(rows))
+    >>> fig.axes[0].get_ylabel()
+    'RMS error / floor RMS error, per seed [-]'
+    """
+    import pandas as pd
+
+    df = pd.DataFrame(frame)
+    df = df[np.isfinite(pd.to_numeric(df["ratio_to_floor"], errors="coerce"))]
+    segments = df.drop_duplicates("segment").sort_values("segment")
+    names = list(dict.fromkeys(df["controller"]))
+    fig, ax = plt.subplots(figsize=(max(7.5, 1.6 * len(segments) + 4.0), 4.5))
+    width = 0.8 / max(len(names), 1)
+    for i, name in enumerate(names):
+        sub = df[df["controller"] == name]
+        stats = sub.groupby("segment")["ratio_to_floor"].agg(["mean", "std", "count"])
+        x = np.arange(len(segments)) + (i - (len(names) - 1) / 2) * width
+        mean = stats["mean"].reindex(segments["segment"]).to_numpy(dtype=float)
+        half = 1.96 * (stats["std"] / np.sqrt(stats["count"])).reindex(segments["segment"])
+        half = np.nan_to_num(half.to_numpy(dtype=float))
+        style = controller_style(name)
+        ax.errorbar(x, mean, yerr=half, fmt="o", ms=4, capsize=3, color=style["color"], label=name)
+    ax.axhline(1.0, color="k", lw=0.8)
+    ax.set_yscale("log")
+    labels = [f"{a:g}-{b:g} s\n{m:g} kg" for a, b, m in segments[["start_s", "end_s", "mass_kg"]].to_numpy()]
+    ax.set_xticks(np.arange(len(segments)), labels)
+    ax.set_xlabel("payload segment [s, kg]")
+    ax.set_ylabel("RMS error / floor RMS error, per seed [-]")
+    ax.grid(alpha=0.3, which="both", axis="y")
+    ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0))
+    fig.suptitle(
+        "Ratio of each controller's RMS tracking error to its floor's per payload segment: mean over "
+        "seeds with its 95 % interval",
+        fontsize=8,
+    )
+    fig.tight_layout()
     if path is not None:
         save_figure(fig, path, formats)
     return fig

@@ -242,6 +242,30 @@ def record_spec(table: dict | None, joint_names, kinds, src: str, files=None) ->
     files : sequence of str, optional
         Files given on the command line: they replace ``files``.
 
+
+    Returns
+    -------
+    RecordSpec
+        Files, columns, conversions, excluded channels and window, checked.
+
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> from pathlib import Path
+    >>> import numpy as np
+    >>> from adaptive_dd.record import read_log, record_spec
+    >>> folder = Path(tempfile.mkdtemp())
+    >>> t = np.arange(0.0, 2.0, 0.01)
+    >>> np.savetxt(folder / "log.csv", np.column_stack([t, np.sin(t), np.cos(t), 3 * np.sin(t), np.cos(t)]),
+    ...            delimiter=",", header="t,q1,q2,tau1,tau2", comments="")
+    >>> spec = record_spec({"files": [str(folder / "log.csv")], "time": "t", "position": "q{i}",
+    ...                     "torque": "tau{i}", "velocity_source": "derived"},
+    ...                    joint_names=["joint1", "joint2"], kinds=["revolute", "revolute"],
+    ...                    src="arm.toml")
+    >>> spec.position, spec.torque, spec.derive_velocity
+    (('q1', 'q2'), ('tau1', 'tau2'), True)
+
     Raises
     ------
     ScenarioError
@@ -457,6 +481,32 @@ def read_log(spec: RecordSpec, window: tuple[float, float] | None = None, arm=No
         Replaces ``spec.window`` [s].
     arm : Arm, optional
         For the unit check against the URDF's position limits.
+
+
+    Returns
+    -------
+    LogRecord
+        The log on a uniform grid of the spec's period: positions, velocities, torques and what
+        was done to them (``notes``).
+
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> from pathlib import Path
+    >>> import numpy as np
+    >>> from adaptive_dd.record import read_log, record_spec
+    >>> folder = Path(tempfile.mkdtemp())
+    >>> t = np.arange(0.0, 2.0, 0.01)
+    >>> np.savetxt(folder / "log.csv", np.column_stack([t, np.sin(t), np.cos(t), 3 * np.sin(t), np.cos(t)]),
+    ...            delimiter=",", header="t,q1,q2,tau1,tau2", comments="")
+    >>> spec = record_spec({"files": [str(folder / "log.csv")], "time": "t", "position": "q{i}",
+    ...                     "torque": "tau{i}", "velocity_source": "derived"},
+    ...                    joint_names=["joint1", "joint2"], kinds=["revolute", "revolute"],
+    ...                    src="arm.toml")
+    >>> log = read_log(spec)
+    >>> log.q.shape, log.qd.shape, log.sample_period  # velocities derived from the positions
+    ((200, 2), (200, 2), 0.01)
 
     Raises
     ------

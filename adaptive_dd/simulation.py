@@ -36,9 +36,31 @@ Array = NDArray[np.float64]
 
 
 class Measurement(NamedTuple):
-    """What a controller sees at sample k: time [s], measured ``q, qd (n,)`` and the reference
-    ``q_d, qd_d, qdd_d (n,)`` (``n`` joints). After the last sample (``k == n_samples``) it is the
-    measurement of the final state and the reference continued to that time."""
+    """What a controller sees at sample k (``n`` joints).
+
+    After the last sample (``k == n_samples``) it is the measurement of the final state and the
+    reference continued to that time.
+
+    Attributes
+    ----------
+    k : int
+        The sample's index.
+    t : float
+        Its time [s].
+    q, qd : ndarray, shape (n,)
+        The measured joint positions [rad] and velocities [rad/s] (noise and encoder included).
+    q_d, qd_d, qdd_d : ndarray, shape (n,)
+        The reference's position [rad], velocity [rad/s] and acceleration [rad/s^2].
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from adaptive_dd.simulation import Measurement
+    >>> m = Measurement(k=0, t=0.0, q=np.zeros(2), qd=np.zeros(2), q_d=np.full(2, 0.1),
+    ...                 qd_d=np.zeros(2), qdd_d=np.zeros(2))
+    >>> m.q_d - m.q  # the tracking error a law acts on [rad]
+    array([0.1, 0.1])
+    """
 
     k: int
     t: float
@@ -141,6 +163,37 @@ class Simulation:
         Default: the shipped payload-swap scenario.
     seed_index : int
         Noise of seed ``(scenario.seed, seed_index)``, as in the benchmark.
+
+    Attributes
+    ----------
+    scenario : Scenario
+        The scenario stepped.
+    applied_torque : ndarray, shape (n,)
+        The torque the actuators applied at the last step [N m] (saturated, quantised).
+    saturated : ndarray of bool, shape (n,)
+        Which joints' commands were at a torque limit at the last step.
+
+    Examples
+    --------
+    The loop, with your own law (``reset`` compiles the arm's step on its first call)::
+
+        sim = Simulation(load_scenario(), seed_index=0)
+        meas = sim.reset()
+        while not sim.done:
+            meas = sim.step(my_law(meas.q, meas.qd, meas.q_d, meas.qd_d, meas.qdd_d))
+        sim.q_true, sim.sigma_true, sim.payload_mass  # the truth, for analysis
+
+    A step before ``reset`` is an error that says what to do:
+
+    >>> import numpy as np
+    >>> from adaptive_dd import Simulation, load_scenario
+    >>> sim = Simulation(load_scenario())
+    >>> sim.n_joints, sim.done
+    (2, False)
+    >>> sim.step(np.zeros(2))
+    Traceback (most recent call last):
+    ...
+    adaptive_dd.errors.SignalError: call reset() before step()
     """
 
     def __init__(self, scenario: Scenario | None = None, seed_index: int = 0) -> None:
@@ -160,6 +213,7 @@ class Simulation:
 
     @property
     def n_joints(self) -> int:
+        """The arm's joints ``n``."""
         return self.scenario.n_joints
 
     def reset(self) -> Measurement:
@@ -200,6 +254,7 @@ class Simulation:
 
     @property
     def done(self) -> bool:
+        """All the scenario's samples have been stepped (``reset`` starts again)."""
         return self._trial is not None and self._trial.k >= self.scenario.n_samples
 
     @property
@@ -209,10 +264,12 @@ class Simulation:
 
     @property
     def q_true(self) -> Array:
+        """The true joint positions now ``(n,)`` [rad], without sensor noise."""
         return self._truth()[0]
 
     @property
     def qd_true(self) -> Array:
+        """The true joint velocities now ``(n,)`` [rad/s], without sensor noise."""
         return self._truth()[1]
 
     @property
@@ -222,6 +279,7 @@ class Simulation:
 
     @property
     def payload_mass(self) -> float:
+        """The payload carried now [kg]."""
         return self._truth()[3]
 
     @property
@@ -236,7 +294,25 @@ class Simulation:
 
 
 def run_trial(controller, scenario: Scenario | None = None, seed_index: int = 0, name: str | None = None):
-    """Run one controller object on trial ``seed_index`` of a scenario; a benchmark result."""
+    """Run one controller object on trial ``seed_index`` of a scenario.
+
+    Parameters
+    ----------
+    controller : Controller
+        A controller object (a built-in from :func:`~adaptive_dd.controllers.make_controller`,
+        or your own class with ``reset``, ``command`` and ``observe``).
+    scenario : Scenario, optional
+        Default: the shipped ``payload_swap``.
+    seed_index : int
+        Which of the benchmark's trials: the same noise and drawn robot as that seed there.
+    name : str, optional
+        The label in the result (default the controller's ``name``).
+
+    Returns
+    -------
+    BenchmarkResult
+        A benchmark result of one controller and one trial.
+    """
     sc = scenario or load_scenario()
     label = name or getattr(controller, "name", type(controller).__name__)
     return run_benchmark(sc, progress=False, controllers={label: controller}, seed_indices=[seed_index])

@@ -267,6 +267,14 @@ class SweepResult:
         Tasks read back from ``OUT/cells`` and tasks run now.
     failed_rows : int
         Rows with ``failed`` set.
+
+    Examples
+    --------
+    Made by :func:`run_sweep` (``adaptive-dd sweep FILE --out DIR`` prints where it wrote it):
+
+    >>> from adaptive_dd.sweep import SweepResult
+    >>> sorted(SweepResult.__dataclass_fields__)
+    ['failed_rows', 'heatmaps', 'ran', 'reused', 'table', 'table_path']
     """
 
     table: pd.DataFrame
@@ -337,6 +345,11 @@ def run_sweep(
         Use this client instead (tests).
     progress : bool
         Show a progress bar over completed tasks.
+
+    Returns
+    -------
+    SweepResult
+        The tidy table's path, the per-cell rows, the heatmaps written and the failed cells.
     """
     from adaptive_dd.outputs import check_output_dir
 
@@ -425,6 +438,18 @@ def ratio_medians(table: pd.DataFrame, heatmap: Mapping[str, Any], axes: Sequenc
     DataFrame
         One row per grid point: ``point``, the axes, ``ratio`` (NaN if no seed
         finished), ``n_seeds`` (seeds in the median).
+
+    Examples
+    --------
+    >>> import pandas as pd
+    >>> from adaptive_dd.sweep import ratio_medians
+    >>> table = pd.DataFrame({
+    ...     "point": [0, 0, 0, 0], "payload_mass": [3.0] * 4, "segment": [1] * 4, "seed": [0, 0, 1, 1],
+    ...     "controller": ["adaptive_ct", "ct_oracle"] * 2, "rms_error": [1.2e-4, 1e-4, 1.1e-4, 1e-4]})
+    >>> heatmap = {"adaptive": "adaptive_ct", "floor": "ct_oracle", "segment": 1}
+    >>> ratio_medians(table, heatmap, ["payload_mass"])
+       point  payload_mass  ratio  n_seeds
+    0      0           3.0   1.15        2
     """
     seg = table[table["segment"] == heatmap["segment"]]
     cols = ["point", "seed"]

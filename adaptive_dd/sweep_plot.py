@@ -14,7 +14,41 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-__all__ = ["plot_ratio_heatmaps"]
+__all__ = ["AXIS_UNITS", "axis_label", "plot_ratio_heatmaps"]
+
+
+AXIS_UNITS = {
+    "payload_mass": "payload mass [kg]",
+    "swap_time": "swap time [s]",
+    "bandwidth": "bandwidth [rad/s]",
+    "noise_scale": "sensor noise scale [-]",
+    "controller": "controller",
+    "seed": "seed",
+}
+"""Axis labels, with units, of the grid fields a sweep may vary."""
+
+
+def axis_label(field: str) -> str:
+    """The axis label of a sweep's grid field, with its unit.
+
+    Parameters
+    ----------
+    field : str
+        A grid axis (``payload_mass``, ``swap_time``, ``bandwidth``, ``noise_scale``, ...).
+
+    Returns
+    -------
+    str
+        The label from :data:`AXIS_UNITS`, or the field's name with ``_`` as spaces when it has
+        none.
+
+    Examples
+    --------
+    >>> from adaptive_dd.sweep_plot import axis_label
+    >>> axis_label("payload_mass"), axis_label("swap_time")
+    ('payload mass [kg]', 'swap time [s]')
+    """
+    return AXIS_UNITS.get(field, field.replace("_", " "))
 
 
 def _grid(ratios: pd.DataFrame, x: str, y: str) -> tuple[list, list, np.ndarray, np.ndarray]:
@@ -49,9 +83,9 @@ def _plot_one(ratios: pd.DataFrame, heatmap: Mapping[str, Any], title: str, path
         ax.text(j, i, label, ha="center", va="center", fontsize=8, color=color)
     ax.set_xticks(range(len(xs)), [f"{v:g}" if isinstance(v, float) else str(v) for v in xs])
     ax.set_yticks(range(len(ys)), [f"{v:g}" if isinstance(v, float) else str(v) for v in ys])
-    ax.set_xlabel(x)
-    ax.set_ylabel(y)
-    fig.colorbar(im, ax=ax, label=f"median rms {heatmap['adaptive']} / rms {heatmap['floor']}")
+    ax.set_xlabel(axis_label(x))
+    ax.set_ylabel(axis_label(y))
+    fig.colorbar(im, ax=ax, label=f"median RMS error ratio {heatmap['adaptive']} / {heatmap['floor']} [-]")
     ax.set_title(title, fontsize=9)
     fig.savefig(path, dpi=110)
     return path
@@ -76,6 +110,20 @@ def plot_ratio_heatmaps(
     Returns
     -------
     list of Path
+        The PNG files written.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> import pandas as pd
+    >>> from adaptive_dd.sweep_plot import plot_ratio_heatmaps
+    >>> ratios = pd.DataFrame({"payload_mass": [1.0, 3.0, 1.0, 3.0], "swap_time": [5.0, 5.0, 7.5, 7.5],
+    ...                        "ratio": [1.02, 1.21, 1.03, 1.25], "n_seeds": [4, 4, 4, 4]})
+    >>> heatmap = {"x": "payload_mass", "y": "swap_time", "adaptive": "adaptive_ct",
+    ...            "floor": "ct_oracle", "segment": 1}
+    >>> [p.name for p in plot_ratio_heatmaps(ratios, heatmap, ["payload_mass", "swap_time"],
+    ...                                      tempfile.mkdtemp())]
+    ['heatmap.png']
     """
     out = Path(out)
     others = [a for a in axes if a not in (heatmap["x"], heatmap["y"])]

@@ -56,7 +56,16 @@ _HEATMAP_KEYS = {"x", "y", "adaptive", "floor", "segment"}
 
 
 class SweepError(ScenarioError):
-    """A sweep file is invalid; names the file, the key and the reason."""
+    """A sweep file is invalid; names the file, the key and the reason.
+
+    Examples
+    --------
+    >>> from adaptive_dd.sweep_spec import parse_sweep
+    >>> parse_sweep({"grid": 3}, src="mine.toml")
+    Traceback (most recent call last):
+    ...
+    adaptive_dd.sweep_spec.SweepError: mine.toml: [grid] must be a table
+    """
 
 
 @dataclass(frozen=True)
@@ -106,6 +115,43 @@ class Sweep:
 
 def load_sweep(path: str | Path) -> Sweep:
     """Read and check a sweep file (see the module docstring).
+
+
+    Parameters
+    ----------
+    path : str or Path
+        A sweep TOML file (``[sweep]``, ``[grid]``, ``[heatmap]``).
+
+    Returns
+    -------
+    Sweep
+        The checked sweep with its grid expanded.
+
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> from pathlib import Path
+    >>> from adaptive_dd.benchmark.scenario import default_scenario_path
+    >>> from adaptive_dd.sweep_spec import load_sweep
+    >>> path = Path(tempfile.mkdtemp()) / "sweep.toml"
+    >>> _ = path.write_text(f'''
+    ... [sweep]
+    ... scenario = "{default_scenario_path().as_posix()}"
+    ... seeds = 2
+    ... controllers = ["ct_oracle", "adaptive_ct"]
+    ... [grid]
+    ... payload_mass = [0.5, 2.5]
+    ... swap_time = [5.0, 7.5]
+    ... [heatmap]
+    ... x = "payload_mass"
+    ... y = "swap_time"
+    ... adaptive = "adaptive_ct"
+    ... floor = "ct_oracle"
+    ... segment = 1
+    ... ''')
+    >>> [dict(p.values) for p in load_sweep(path).points][:2]
+    [{'payload_mass': 0.5, 'swap_time': 5.0}, {'payload_mass': 0.5, 'swap_time': 7.5}]
 
     Raises
     ------
@@ -273,7 +319,37 @@ def _heatmap(src: str, hm: Any, axes, ctrls, swap: int, n_segments: int) -> dict
 
 
 def parse_sweep(data: dict, src: str = "<memory>", base_dir: str | Path = ".") -> Sweep:
-    """Check a sweep given as a dict (the parsed TOML) and expand its grid."""
+    """Check a sweep given as a dict (the parsed TOML) and expand its grid.
+
+    Parameters
+    ----------
+    data : dict
+        The sweep's tables, as :func:`load_sweep` reads them from TOML.
+    src : str
+        Where the data came from, named in error messages.
+    base_dir : str or Path
+        The folder a relative ``scenario`` path is read from.
+
+    Returns
+    -------
+    Sweep
+        The checked sweep with its grid expanded.
+
+    Examples
+    --------
+    >>> from adaptive_dd.benchmark.scenario import default_scenario_path
+    >>> table = {"sweep": {"scenario": str(default_scenario_path()), "seeds": 2,
+    ...                    "controllers": ["ct_oracle", "adaptive_ct"]},
+    ...          "grid": {"payload_mass": [1.0, 3.0], "bandwidth": [20.0, 40.0]},
+    ...          "heatmap": {"x": "payload_mass", "y": "bandwidth", "adaptive": "adaptive_ct",
+    ...                      "floor": "ct_oracle", "segment": 1}}
+    >>> from adaptive_dd.sweep_spec import parse_sweep
+    >>> sweep = parse_sweep(table)
+    >>> len(sweep.points), sweep.points[0].values
+    (4, (('payload_mass', 1.0), ('bandwidth', 20.0)))
+    >>> sweep.points[3].scenario.swap_masses[0], sweep.points[3].scenario.bandwidth
+    (3.0, 40.0)
+    """
     for table in data:
         if table not in ("sweep", "grid", "heatmap"):
             raise SweepError(f"{src}: unknown table [{table}]; allowed: ['grid', 'heatmap', 'sweep']")

@@ -4,10 +4,10 @@ Build (from the repository's root, with ``pip install -e ".[docs]"``)::
 
     python -m sphinx -W --keep-going -b html docs docs/_build/html
 
-Generated at build time (and ignored by git): ``docs/api/`` (one page per public module,
-from each module's ``__all__``), ``docs/guide/scenario_keys.md`` (every scenario key, from
-the tables the scenario checks use) and ``docs/auto_examples/`` (the gallery, run by
-sphinx-gallery).
+Generated at build time (and ignored by git): ``docs/api/`` (the curated reference of
+``docs/_ext/api_list.py``, one page per object, and the list of internal modules),
+``docs/guide/scenario_keys.md`` (every scenario key, from the tables the scenario checks use)
+and ``docs/auto_examples/`` (the gallery, run by sphinx-gallery).
 """
 
 from __future__ import annotations
@@ -41,7 +41,7 @@ extensions = [
     "numpydoc",
     "myst_parser",
     "sphinx_gallery.gen_gallery",
-    "apigen",  # docs/_ext/apigen.py: docs/api/*.rst from each module's __all__
+    "apigen",  # docs/_ext/apigen.py: docs/api/ from the curated list docs/_ext/api_list.py
     "scenario_keys",  # docs/_ext/scenario_keys.py: docs/guide/scenario_keys.md from the checks' tables
 ]
 
@@ -77,6 +77,7 @@ sphinx_gallery_conf = {
 html_theme = "pydata_sphinx_theme"
 html_title = f"adaptive_dd {release}"
 html_theme_options = {
+    "header_links_before_dropdown": 7,
     "navigation_depth": 2,
     "show_toc_level": 2,
     "secondary_sidebar_items": ["page-toc"],
@@ -87,45 +88,37 @@ html_static_path: list[str] = []
 html_show_sourcelink = False
 
 
-REAL_LOG_TEXT = "The guide's pages on identification list the\ncommands for records of a real arm."
+LANDING = ("tutorials", "howto", "reference", "background")
+"""The four sections of the site: each lists its pages in a toctree."""
 
 
-def _list_real_log(app, docname, source):
-    """Link ``real_log`` (identification from a real arm's log, issue 29) from the identification
-    guide's contents and from Getting started once the page exists; until then it is left out
-    rather than broken."""
-    if not (DOCS / "real_log.md").exists():
-        return
-    if docname == "guide/identification":
-        entry = "../identification_urdf\n"
-        source[0] = source[0].replace(entry, entry + "../real_log\n", 1)
-    elif docname == "getting_started":
-        source[0] = source[0].replace(REAL_LOG_TEXT, "Records of a real arm, step by step: {doc}`real_log`.")
-
-
-def _reread_on_real_log(app, env, added, changed, removed):
-    """Read the pages that link ``real_log`` or the other pages again when a page appears or goes
-    (incremental builds)."""
-    if not any("/" not in d for d in added | removed):
-        return []
-    return ["guide/identification", "getting_started", "guide/index"]
-
-
-LISTED = {"index", "getting_started", "results", "limits", "changelog", "real_log"}
+def _toctree_entries() -> set[str]:
+    """Every document some toctree of the hand-written pages names (as a path from docs/)."""
+    found = set()
+    for page in DOCS.rglob("*.md"):
+        if "_build" in page.parts:
+            continue
+        text = page.read_text(encoding="utf-8")
+        for block in text.split("```{toctree}")[1:]:
+            for line in block.split("```")[0].splitlines():
+                line = line.strip()
+                if line and not line.startswith(":"):
+                    target = (page.parent / line).resolve()
+                    found.add(target.relative_to(DOCS.resolve()).as_posix())
+    return found
 
 
 def _other_pages() -> list[str]:
-    """Top-level pages of docs/ that no contents list names (a page another branch adds): the
-    user guide lists them under its own, so a new page is never left out of the site."""
-    guide = ("index.md", "estimators.md", "identification.md")
-    text = "".join((DOCS / "guide" / f).read_text() for f in guide)
-    return sorted(p.stem for p in DOCS.glob("*.md") if p.stem not in LISTED and f"../{p.stem}\n" not in text)
+    """Top-level pages of docs/ that no toctree names (a page another branch adds): the how-to
+    section lists them at its end, so a new page is never left out of the site."""
+    listed = _toctree_entries() | {"index"}
+    return sorted(p.stem for p in DOCS.glob("*.md") if p.stem not in listed)
 
 
 def _list_other_pages(app, docname, source):
-    if docname == "guide/index" and _other_pages():
-        extra = "".join(f"../{name}\n" for name in _other_pages())
-        source[0] = source[0].replace("library\n```", "library\n" + extra + "```", 1)
+    if docname == "howto" and _other_pages():
+        extra = "".join(f"{name}\n" for name in _other_pages())
+        source[0] = source[0].replace("controllers\n```", "controllers\n" + extra + "```", 1)
 
 
 def _skip_borrowed_docs(app, what, name, obj, skip, options):
@@ -141,6 +134,4 @@ def _skip_borrowed_docs(app, what, name, obj, skip, options):
 
 def setup(app):
     app.connect("autodoc-skip-member", _skip_borrowed_docs)
-    app.connect("source-read", _list_real_log)
     app.connect("source-read", _list_other_pages)
-    app.connect("env-get-outdated", _reread_on_real_log)

@@ -39,8 +39,31 @@ def column(name: str) -> str:
 
 
 def frame_columns(n_joints: int) -> list[str]:
-    """The columns of :func:`to_frame`, in order, for an arm of ``n_joints``: the same on every arm
-    but the per-joint RMS errors."""
+    """The columns of :func:`to_frame` and ``per_seed.csv``, in order, each unit in its name.
+
+    The same on every arm but the per-joint RMS errors.
+
+    Parameters
+    ----------
+    n_joints : int
+        The arm's joints.
+
+    Returns
+    -------
+    list of str
+        The column names.
+
+    Examples
+    --------
+    >>> from adaptive_dd.benchmark.results import frame_columns
+    >>> cols = frame_columns(2)
+    >>> cols[:7]
+    ['controller', 'seed', 'segment', 'start_s', 'end_s', 'mass_kg', 'rms_error_rad']
+    >>> [c for c in cols if c.startswith("rms_error_joint")]
+    ['rms_error_joint1_rad', 'rms_error_joint2_rad']
+    >>> "ratio_to_floor" in cols
+    True
+    """
     names = [
         "controller", "seed", "segment", "start", "end", "mass", "rms_error",
         *(f"rms_error_joint{j}" for j in range(1, n_joints + 1)),

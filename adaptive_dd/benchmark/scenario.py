@@ -140,8 +140,9 @@ _FIELD_KEY = {
 class Scenario:
     """A checked benchmark scenario (see the module docstring for the file format).
 
-    Constructing one (also through ``dataclasses.replace``) checks every field and
-    raises one :class:`ScenarioError` listing all problems.
+    Made by :func:`load_scenario` or :func:`parse_scenario`. Constructing one (also through
+    ``dataclasses.replace``) checks every field and raises one :class:`ScenarioError` listing
+    all problems.
 
     ``arm`` is an :class:`~adaptive_dd.plant.arm.Arm` (default the paper's SICE arm; a
     :class:`~adaptive_dd.plant.two_link.ClosedFormTwoLink` given here becomes the arm it is the
@@ -149,6 +150,44 @@ class Scenario:
     runs the closed forms, chosen here automatically: :attr:`closed_forms` holds their record
     (:func:`~adaptive_dd.plant.two_link.closed_form_view`), None where the general kernels run
     (any other arm, ``Arm(general=True)``, a ``plant`` apart from the arm).
+
+    Attributes
+    ----------
+    name : str
+        The scenario's name (its file's stem).
+    duration : float
+        Length of a trial [s].
+    sample_period : float
+        The control and sensor period T [s].
+    seeds : int
+        Trials per controller.
+    controllers : tuple of str
+        The controllers run, by name or import path.
+    reference : Reference
+        The desired joint trajectory (sums of sines per joint).
+    swap_times, swap_masses : tuple of float
+        When the payload changes [s] and its mass after each change [kg].
+    position_variance, velocity_variance : tuple of float
+        The sensors' noise per joint [rad^2], [(rad/s)^2].
+    bandwidth : float or tuple of float
+        Every controller's closed-loop bandwidth [rad/s] (one per joint, or one for all).
+    arm : Arm
+        The arm the controllers are given.
+    plant : PlantSpec or None
+        The simulated robot when it is not ``arm`` (drawn around it per seed); None: ``arm``.
+    excite : float
+        Seconds of designed excitation before the task; 0: none.
+    closed_forms : ClosedFormTwoLink or None
+        The paper's closed forms when they run this scenario.
+
+    Examples
+    --------
+    >>> from adaptive_dd import load_scenario
+    >>> sc = load_scenario()
+    >>> sc.duration, sc.sample_period, sc.n_samples
+    (20.0, 0.001, 20000)
+    >>> sc.swap_times, sc.swap_masses
+    ((5.0, 10.0, 15.0), (3.0, 1.0, 0.0))
     """
 
     name: str
@@ -288,7 +327,19 @@ def _scenario_error(src: str, errors: list[str]) -> ScenarioError:
 
 
 def default_scenario_path() -> Path:
-    """The ``payload_swap`` scenario shipped with the package."""
+    """The ``payload_swap`` scenario shipped with the package.
+
+    Returns
+    -------
+    Path
+        The TOML file inside the installed package.
+
+    Examples
+    --------
+    >>> from adaptive_dd.benchmark.scenario import default_scenario_path
+    >>> default_scenario_path().name
+    'payload_swap.toml'
+    """
     return Path(str(resources.files("adaptive_dd.scenarios").joinpath("payload_swap.toml")))
 
 
@@ -303,12 +354,36 @@ def read_toml(path: Path) -> dict:
 def load_scenario(path: str | Path | None = None) -> Scenario:
     """Read and check a scenario file (default: the shipped ``payload_swap``).
 
+    Parameters
+    ----------
+    path : str or Path, optional
+        A scenario TOML file (every key: the guide's *Scenario keys*); None: the shipped
+        default, the paper's arm with payloads 0 -> 3 -> 1 -> 0 kg.
+
+    Returns
+    -------
+    Scenario
+        The checked scenario.
+
     Raises
     ------
     ScenarioError
         Listing every problem as ``file: key: reason``: unknown table or key, wrong
         type, non-finite or out-of-range value, unknown controller, frequency above
         ``0.1 / T``, a payload segment without samples, a run too large, ...
+
+    Examples
+    --------
+    >>> from adaptive_dd import load_scenario
+    >>> sc = load_scenario()
+    >>> sc.name, sc.n_joints, sc.seeds
+    ('payload_swap', 2, 10)
+    >>> sc.segments()  # (start [s], end [s], payload [kg])
+    [(0.0, 5.0, 0.0), (5.0, 10.0, 3.0), (10.0, 15.0, 1.0), (15.0, 20.0, 0.0)]
+    >>> load_scenario("no_such_file.toml")
+    Traceback (most recent call last):
+    ...
+    adaptive_dd.errors.ScenarioError: no_such_file.toml: no such scenario file
     """
     path = Path(path) if path is not None else default_scenario_path()
     if not path.is_file():
@@ -336,7 +411,40 @@ def _with_stated_noise(arm, position_variance, velocity_variance):
 
 
 def parse_scenario(data: dict, src: str = "<memory>", name: str = "scenario") -> Scenario:
-    """Check a scenario given as a dict (the parsed TOML); all problems are raised at once."""
+    """Check a scenario given as a dict (the parsed TOML); all problems are raised at once.
+
+    Parameters
+    ----------
+    data : dict
+        The scenario's tables and keys, as :func:`load_scenario` reads them from TOML; a key left
+        out takes its default.
+    src : str
+        Where the data came from, named in error messages.
+    name : str
+        The scenario's name (a file's stem).
+
+    Returns
+    -------
+    Scenario
+        The checked scenario.
+
+    Raises
+    ------
+    ScenarioError
+        Listing every problem as ``src: key: reason``.
+
+    Examples
+    --------
+    >>> from adaptive_dd.benchmark.scenario import parse_scenario
+    >>> sc = parse_scenario({"run": {"duration": 4.0, "seeds": 2},
+    ...                      "payload": [{"at": 2.0, "mass": 1.5}]})
+    >>> sc.segments()
+    [(0.0, 2.0, 0.0), (2.0, 4.0, 1.5)]
+    >>> parse_scenario({"run": {"seeds": 0}}, src="mine.toml")
+    Traceback (most recent call last):
+    ...
+    adaptive_dd.errors.ScenarioError: mine.toml: run.seeds: ...
+    """
     from adaptive_dd.robots.random_arm import with_random_arm
 
     arm, errors, plant = None, [], None

@@ -168,14 +168,41 @@ def run_estimate(
     compile_seconds: float = 0.0,
     excite_samples: int = 0,
 ) -> RunEstimate:
-    """Rough memory and wall time of a closed-loop run (a guide, not a promise); ``n_joints``
-    for an N-joint (URDF) arm, None for the two-link arm's closed forms; ``compile_seconds``
-    of one-time compilation added to the time. ``excite_samples``: the samples of an excitation
-    phase (``[run] excite`` / T, an N-joint arm's): its closed loop (one controller, every seed) at
-    the task's rates, the design once and an identification per seed
-    (``_IDENTIFY_SECONDS_PER_SAMPLE_JOINT2`` x samples x n_joints^2) added to the time
-    (``excite_seconds`` of it); the memory is the task's (the excitation's records are freed before
-    the task runs)."""
+    """Rough memory and wall time of a closed-loop run (a guide, not a promise).
+
+    Parameters
+    ----------
+    n_samples : int
+        Samples per trial.
+    n_seeds : int
+        Trials per controller.
+    n_controllers : int
+        Controllers run.
+    n_joints : int, optional
+        The joints of an N-joint (URDF) arm; None for the two-link arm's closed forms.
+    compile_seconds : float
+        One-time compilation [s] added to the time.
+    excite_samples : int
+        The samples of an excitation phase (``[run] excite`` / T, an N-joint arm's): its closed
+        loop (one controller, every seed) at the task's rates, the design once and an
+        identification per seed (``_IDENTIFY_SECONDS_PER_SAMPLE_JOINT2`` x samples x n_joints^2)
+        are added to the time (``excite_seconds`` of it); the memory is the task's (the
+        excitation's records are freed before the task runs).
+
+    Returns
+    -------
+    RunEstimate
+        Samples, trials, bytes and seconds; its ``str`` is the line ``validate`` prints.
+
+    Examples
+    --------
+    >>> from adaptive_dd.benchmark.scenario import run_estimate
+    >>> est = run_estimate(n_samples=20_000, n_seeds=10, n_controllers=7)
+    >>> est.trials
+    70
+    >>> est.seconds > 0 and est.bytes > 0
+    True
+    """
     trials = n_seeds * n_controllers
     nbytes = float(n_samples) * trials * _BYTES_PER_SAMPLE_TRIAL
     per = _SECONDS_PER_SAMPLE_TRIAL if n_joints is None else _SECONDS_PER_SAMPLE_TRIAL_JOINT2 * n_joints**2

@@ -119,7 +119,31 @@ class ControllerRun:
 
 @dataclass
 class BenchmarkResult:
-    """Everything a benchmark run produced; see :mod:`adaptive_dd.benchmark.metrics`."""
+    """Everything a benchmark run produced; see :mod:`adaptive_dd.benchmark.metrics`.
+
+    Attributes
+    ----------
+    scenario : Scenario
+        What was run.
+    t : ndarray, shape (N,)
+        Sample instants [s].
+    q_d : ndarray, shape (N, n)
+        The reference [rad].
+    sigma_true : ndarray, shape (N, p)
+        The true base parameters over time, payload included (7 on the two-link arm).
+    mass : ndarray, shape (N,)
+        The payload carried [kg].
+    runs : dict of str to ControllerRun
+        Each controller's trials, by label.
+    wall_time : float
+        Seconds the runs took.
+    seed_indices : tuple of int
+        The seeds run.
+    plant : dict or None
+        The plants the trials met when the plant is not the model; None: the plant is the arm.
+    excitation : dict or None
+        The excitation phase's identification (``[run] excite``); None without.
+    """
 
     scenario: Scenario
     t: Array

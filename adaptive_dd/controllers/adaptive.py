@@ -92,6 +92,13 @@ class AdaptiveCT(Controller):
     observer_bandwidth : float or None
         [rad/s] of each of the observer's two stages; None: ``0.4 / T`` (the N-joint rule).
     name : str
+
+    Examples
+    --------
+    >>> from adaptive_dd.controllers import AdaptiveCT
+    >>> law = AdaptiveCT()  # the two-link arm's; make_controller builds either arm's
+    >>> law.name, law.floor, law.online.tau_f
+    ('adaptive_ct', 'ct_oracle', 0.01)
     """
 
     def __init__(

@@ -25,7 +25,7 @@ Array = NDArray[np.float64]
 
 @dataclass(frozen=True)
 class Gains:
-    """Closed-loop bandwidth shared by all controllers.
+    """Closed-loop bandwidth shared by all controllers (the scenario's ``[control]`` table).
 
     Computed torque uses ``Kp = omega^2``, ``Kd = 2 zeta omega`` on the error
     dynamics (a double pole at ``-omega`` for ``zeta = 1``). PD scales these by the
@@ -38,6 +38,13 @@ class Gains:
         omega [rad/s].
     damping : float
         zeta.
+
+    Examples
+    --------
+    >>> from adaptive_dd.controllers import Gains
+    >>> g = Gains(bandwidth=40.0, damping=1.0)
+    >>> g.bandwidth**2, 2 * g.damping * g.bandwidth  # computed torque's Kp [1/s^2], Kd [1/s]
+    (1600.0, 80.0)
     """
 
     bandwidth: float = 40.0
@@ -92,8 +99,26 @@ class Controller:
     Attributes
     ----------
     name : str
+        The label in reports.
     needs_true_model : bool
         Receives ``sigma_true`` in :meth:`command` (oracles only).
+
+    Examples
+    --------
+    A plug-in subclasses it (or only has the same methods) and is named in a scenario by import
+    path, ``controllers = ["my_package.laws:Damped"]``:
+
+    >>> import numpy as np
+    >>> from adaptive_dd.controllers import Controller
+    >>> class Damped(Controller):
+    ...     name = "damped"
+    ...     def command(self, q, qd, q_d, qd_d, qdd_d, sigma_true=None):
+    ...         return 50.0 * (q_d - q) + 5.0 * (qd_d - qd)  # (n_trials, 2) [N m]
+    >>> law = Damped()
+    >>> law.reset(n_trials=1, sample_period=1e-3)
+    >>> z = np.zeros((1, 2))
+    >>> law.command(z, z, np.full((1, 2), 0.01), z, z)
+    array([[0.5, 0.5]])
     """
 
     name = "controller"

@@ -53,7 +53,25 @@ def _sice_sigma():
 
 
 class PD(Controller):
-    """``tau = Kp' e + Kd' e_dot`` with ``Kp' = diag(M0) omega^2``, ``Kd' = diag(M0) 2 zeta omega``."""
+    """``tau = Kp' e + Kd' e_dot`` with ``Kp' = diag(M0) omega^2``, ``Kd' = diag(M0) 2 zeta omega``.
+
+    Parameters
+    ----------
+    gains : Gains
+        Bandwidth omega [rad/s] and damping zeta.
+    sigma_nominal : array_like, shape (7,), optional
+        The nominal model whose inertia ``M0 = M(q = 0)`` scales the gains; default Table 1.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from adaptive_dd.controllers import PD, Gains
+    >>> pd = PD(Gains(bandwidth=40.0))
+    >>> pd.reset(n_trials=1, sample_period=1e-3)
+    >>> z = np.zeros((1, 2))
+    >>> pd.command(z, z, np.full((1, 2), 0.01), z, z).round(3)  # [N m] for 10 mrad of error
+    array([[13.184,  1.136]])
+    """
 
     name = "pd"
 
@@ -85,6 +103,18 @@ class ComputedTorque(Controller):
     reference_velocity : bool
         Velocity terms at ``qd_r = qd_d + lam e`` (default) or the textbook law
         (see :func:`computed_torque_law`).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from adaptive_dd.controllers import ComputedTorque
+    >>> ct = ComputedTorque()  # ct_nominal: Table 1's model, no payload
+    >>> ct.reset(n_trials=1, sample_period=1e-3)
+    >>> z = np.zeros((1, 2))
+    >>> ct.name, ct.command(z, z, np.full((1, 2), 0.01), z, z).round(3)
+    ('ct_nominal', array([[22.214,  6.053]]))
+    >>> ComputedTorque(oracle=True).needs_true_model  # ct_oracle: the floor
+    True
     """
 
     def __init__(

@@ -401,14 +401,35 @@ entry here (and its N-joint class in :mod:`adaptive_dd.closed_loop.controllers`)
 
 
 def gains_for(arm, bandwidth=40.0, damping: float = 1.0):
-    """The ``[control]`` gains in the form ``arm``'s controllers take: :class:`Gains` on the two-link
-    arm, :class:`~adaptive_dd.closed_loop.controllers.JointGains` (one bandwidth per joint, a single
-    value broadcast) on an N-joint arm.
+    """The ``[control]`` gains in the form ``arm``'s controllers take.
+
+    Parameters
+    ----------
+    arm : Arm
+        The arm controlled.
+    bandwidth : float or sequence of float
+        Closed-loop bandwidth [rad/s]: one for every joint, or one per joint (N-joint arms).
+    damping : float
+        Damping ratio, > 0.
+
+    Returns
+    -------
+    Gains or JointGains
+        :class:`Gains` on the two-link arm, :class:`~adaptive_dd.closed_loop.controllers.JointGains`
+        (one bandwidth per joint, a single value broadcast) on an N-joint arm.
 
     Raises
     ------
     ParameterError
         A bandwidth or damping that is not > 0.
+
+    Examples
+    --------
+    >>> from adaptive_dd.controllers import gains_for
+    >>> from adaptive_dd.plant import Arm
+    >>> from adaptive_dd.robots import robot_urdf
+    >>> gains_for(Arm.from_urdf(robot_urdf("ur5")), 40.0).bandwidth
+    array([40., 40., 40., 40., 40., 40.])
     """
     if closed_form_view(arm) is not None:  # the arm's fast path, as make_controller chooses
         return Gains(bandwidth, damping)
@@ -428,8 +449,22 @@ def _show(v: Any) -> str:
 
 
 def inventory() -> str:
-    """The table of every built-in name and setting on both arms, as Markdown (``docs/controllers.md``
-    holds it; ``tests/test_controller_registry.py`` checks the page against this)."""
+    """The table of every built-in name and setting on both arms, as Markdown.
+
+    ``docs/controllers.md`` holds it; ``tests/test_controller_registry.py`` checks the page
+    against this.
+
+    Returns
+    -------
+    str
+        A Markdown table: controller, what it knows, arms, setting, defaults on each arm, rule.
+
+    Examples
+    --------
+    >>> from adaptive_dd.controllers.registry import inventory
+    >>> print(inventory().splitlines()[0])
+    | controller | knows | arms | setting | two-link default | N-joint default | rule where they differ |
+    """
     rows = [
         "| controller | knows | arms | setting | two-link default | N-joint default | rule where they differ"
         " |",
@@ -510,8 +545,28 @@ def scenario_controllers(scenario, specs=None) -> dict[str, Controller]:
 
 
 def controllers_for(arm) -> tuple[str, ...]:
-    """The built-in names that run on ``arm`` (every name but the two-link-only ones on an N-joint arm;
-    an arm of the paper's geometry runs its closed forms, :func:`make_controller`)."""
+    """The built-in names that run on ``arm``.
+
+    Parameters
+    ----------
+    arm : Arm
+        The arm.
+
+    Returns
+    -------
+    tuple of str
+        Every built-in name but the two-link-only ones on an N-joint arm (an arm of the paper's
+        geometry runs its closed forms, :func:`make_controller`).
+
+    Examples
+    --------
+    >>> from adaptive_dd.controllers import controllers_for
+    >>> from adaptive_dd.plant import Arm
+    >>> from adaptive_dd.robots import robot_urdf
+    >>> names = controllers_for(Arm.from_urdf(robot_urdf("ur5")))
+    >>> "adaptive_ct" in names, "adaptive_ct_paper" in names  # the paper's estimator: two-link only
+    (True, False)
+    """
     kind = arm_kind(arm)
     return tuple(n for n, e in CONTROLLERS.items() if e.applies_to(kind))
 
@@ -634,12 +689,32 @@ def make_controller(
     scenario : Scenario, optional
         Handed to a plug-in that asks for it (see :func:`_plugin`).
 
+    Returns
+    -------
+    Controller
+        The controller object, reset by the run before its first trial.
+
     Raises
     ------
     ParameterError
         Unknown name, a two-link-only name on an N-joint arm, an import path that does not load,
         an unknown or invalid setting, or a setting of the other arm only (naming the controller,
         the key and why).
+
+    Examples
+    --------
+    >>> from adaptive_dd.controllers import make_controller
+    >>> from adaptive_dd.plant import Arm
+    >>> from adaptive_dd.robots import robot_urdf
+    >>> oracle = make_controller("ct_oracle", arm=Arm.from_urdf(robot_urdf("ur5")))
+    >>> oracle.name, oracle.needs_true_model
+    ('ct_oracle', True)
+    >>> make_controller("adaptive_ct", options={"boost_duration": 0.5}).boost_duration
+    0.5
+    >>> make_controller("nope")
+    Traceback (most recent call last):
+    ...
+    adaptive_dd.errors.ParameterError: unknown controller 'nope'; ...
     """
     options = dict(options or {})
     arm = ClosedFormTwoLink.sice() if arm is None else (closed_form_view(arm) or arm)

@@ -81,6 +81,15 @@ class SlotineLi(Controller):
     oracle : bool
         The same law with the true model at every sample and no adaptation
         (``slotine_li_oracle``): the floor Slotine-Li is measured against.
+
+    Examples
+    --------
+    >>> from adaptive_dd.controllers import SlotineLi
+    >>> law = SlotineLi()
+    >>> law.name, law.floor  # measured against the same law given the true model
+    ('slotine_li', 'slotine_li_oracle')
+    >>> SlotineLi(oracle=True).needs_true_model
+    True
     """
 
     name = "slotine_li"

@@ -265,6 +265,35 @@ def design_excitation(
     ``q0`` shrunk by the smallest factor that keeps it within the limits there (an optimum sits on
     a limit at the optimiser's grid points and may cross it between them).
 
+
+    Parameters
+    ----------
+    arm : Arm
+        The arm to excite.
+    lim : ExcitationLimits, optional
+        Position, velocity, acceleration and torque limits (default: the arm's, with margins).
+    harmonics : int
+        Harmonics of the Fourier series per joint.
+    f0 : float
+        The fundamental frequency [Hz]: the trajectory repeats every ``1 / f0`` s.
+    grid : int
+        Samples per period at which the limits and the information are evaluated.
+    maxiter : int
+        SLSQP's iterations at most.
+    start : FourierTrajectory, optional
+        A start for the optimiser.
+    rng : numpy.random.Generator, optional
+        For the random start (default seed 0).
+    progress : bool
+        A bar of SLSQP's iterations on stderr (minutes on a 7-joint arm).
+
+    Returns
+    -------
+    trajectory : FourierTrajectory
+        The designed excitation, within the limits.
+    result : scipy.optimize.OptimizeResult
+        The optimiser's result.
+
     Raises
     ------
     ParameterError

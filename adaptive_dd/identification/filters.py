@@ -89,6 +89,30 @@ class FilterBank:
 def design_filter_bank(method: str, tau_f: float, sample_period: float = 1e-3) -> FilterBank:
     """Design the bank of method M1 or M2 (eqs. 18, 20) and discretize it (eq. 21).
 
+
+    Parameters
+    ----------
+    method : {"M1", "M2"}
+        The paper's method: M1 differentiates the position (eq. 18), M2 filters the measured
+        velocity (eq. 20).
+    tau_f : float
+        The filters' time constant [s], > 0.
+    sample_period : float
+        T [s], > 0 (Tustin discretisation).
+
+    Returns
+    -------
+    FilterBank
+        The continuous and discrete state-space forms of ``G0`` and ``G1``.
+
+
+    Examples
+    --------
+    >>> from adaptive_dd.identification.filters import design_filter_bank
+    >>> bank = design_filter_bank("M2", tau_f=0.01, sample_period=1e-3)
+    >>> bank.method, bank.A.shape  # G0 = 1 / (1 + tau_f s)^2 and G1 = s G0, as one state-space
+    ('M2', (2, 2))
+
     Raises
     ------
     ParameterError

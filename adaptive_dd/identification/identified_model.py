@@ -222,7 +222,20 @@ def identity_differences(a: dict, b: dict) -> list[str]:
 
 
 def save_identified_model(path, model: IdentifiedModel) -> Path:
-    """Write ``model`` as JSON (NaN as null)."""
+    """Write ``model`` as JSON (NaN as null).
+
+    Parameters
+    ----------
+    path : str or Path
+        The JSON file to write.
+    model : IdentifiedModel
+        What ``adaptive-dd identify`` found.
+
+    Returns
+    -------
+    Path
+        The file written.
+    """
     from adaptive_dd.outputs import atomic_write
 
     def clean(x):
@@ -242,6 +255,26 @@ def save_identified_model(path, model: IdentifiedModel) -> Path:
 
 def load_identified_model(path, need_urdf: bool = True) -> IdentifiedModel:
     """Read a ``model.json`` written by ``adaptive-dd identify --out``.
+
+
+    Parameters
+    ----------
+    path : str or Path
+        A ``model.json``.
+
+    Returns
+    -------
+    IdentifiedModel
+        The model, checked against the URDF it names.
+
+
+    Examples
+    --------
+    >>> from adaptive_dd.identification.identified_model import load_identified_model
+    >>> load_identified_model("results/none/model.json")
+    Traceback (most recent call last):
+    ...
+    adaptive_dd.errors.DataError: results/none/model.json: no such model file (written by ...)
 
     Raises
     ------

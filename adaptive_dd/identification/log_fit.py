@@ -116,6 +116,16 @@ class LogFit:
     held : Held or None
         The directions the record cannot see, held at the URDF's values
         (:func:`~adaptive_dd.identification.held_directions.hold_unseen`); None when not asked.
+
+    Examples
+    --------
+    Made by :func:`fit_log` (whose example makes one): ``fit.sigma`` and ``fit.std`` are the
+    estimate and its standard deviation per base parameter, in ``model.names``' order, and
+    ``fit.held`` names the directions the record could not see.
+
+    >>> from adaptive_dd.identification.log_fit import LogFit
+    >>> "cov" in LogFit.__dataclass_fields__ and "held" in LogFit.__dataclass_fields__
+    True
     """
 
     sigma: Array
@@ -318,6 +328,35 @@ def fit_log(
         settling cut, the pieces fitted together, the covariance's autocovariances within each
         piece only; default one piece.
 
+
+    Returns
+    -------
+    LogFit
+        The estimate, its sandwich covariance, the per-channel residual and weights, and the held
+        directions.
+
+
+    Examples
+    --------
+    A noise-free record made from the URDF's own parameters gives them back:
+
+    >>> import numpy as np
+    >>> from adaptive_dd.identification.log_fit import fit_log, predict_torque
+    >>> from adaptive_dd.identification.model import arm_model
+    >>> from adaptive_dd.plant import Arm
+    >>> from adaptive_dd.robots import robot_urdf
+    >>> arm = Arm.from_urdf(robot_urdf("vertical3"))
+    >>> model = arm_model(arm)
+    >>> T = 1e-3
+    >>> t = np.arange(0.0, 3.0, T)[:, None]
+    >>> q = 0.8 * np.sin([1.1, 1.7, 2.3] * t) + 0.4 * np.sin([3.1, 4.3, 5.9] * t)
+    >>> qd, qdd = np.gradient(q, T, axis=0), np.gradient(np.gradient(q, T, axis=0), T, axis=0)
+    >>> tau = predict_torque(model, arm.sigma, q, qd, qdd)  # the URDF's torques along the motion [N m]
+    >>> fit = fit_log(model, q, qd, tau, np.ones(3, bool), np.ones(arm.base.count, bool),
+    ...               tau_f=0.01, sample_period=T)
+    >>> bool(np.allclose(fit.sigma, arm.sigma, atol=0.05)), fit.sigma.shape
+    (True, (17,))
+
     Raises
     ------
     DataError
@@ -444,5 +483,37 @@ def _reweighted_fit(phi: Array, y: Array, cw: Array) -> tuple[Array, Array, Arra
 
 
 def predict_torque(model: Model, sigma: Array, q: Array, qd: Array, qdd: Array) -> Array:
-    """Joint torques ``(N, n)`` [N m] of base parameters ``sigma`` along a motion."""
+    """Joint torques ``(N, n)`` [N m] of base parameters ``sigma`` along a motion.
+
+    Parameters
+    ----------
+    model : Model
+        The arm's identification model (:func:`~adaptive_dd.identification.model.arm_model`).
+    sigma : ndarray, shape (p,)
+        Base parameters, in ``model.names``' order.
+    q, qd, qdd : ndarray, shape (N, n)
+        Positions [rad], velocities [rad/s] and accelerations [rad/s^2].
+
+    Returns
+    -------
+    ndarray, shape (N, n)
+        The joint torques [N m] the base parameters give along the motion.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from adaptive_dd.identification.log_fit import fit_log, predict_torque
+    >>> from adaptive_dd.identification.model import arm_model
+    >>> from adaptive_dd.plant import Arm
+    >>> from adaptive_dd.robots import robot_urdf
+    >>> arm = Arm.from_urdf(robot_urdf("vertical3"))
+    >>> model = arm_model(arm)
+    >>> T = 1e-3
+    >>> t = np.arange(0.0, 3.0, T)[:, None]
+    >>> q = 0.8 * np.sin([1.1, 1.7, 2.3] * t) + 0.4 * np.sin([3.1, 4.3, 5.9] * t)
+    >>> qd, qdd = np.gradient(q, T, axis=0), np.gradient(np.gradient(q, T, axis=0), T, axis=0)
+    >>> tau = predict_torque(model, arm.sigma, q, qd, qdd)  # the URDF's torques along the motion [N m]
+    >>> tau.shape
+    (3000, 3)
+    """
     return base_regressor(model, q, qd, qdd) @ np.asarray(sigma, dtype=float)

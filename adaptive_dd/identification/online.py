@@ -218,6 +218,13 @@ class Detector:
         derived, :attr:`OnlineConfig.rise_samples` (the samples a step change's error takes to
         reach 95 % of its final value in the short average of its square through the filters'
         ``G0``: 94 at 1 kHz, ``tau_f`` 10 ms and the 20 ms short window).
+
+    Examples
+    --------
+    >>> from adaptive_dd.identification.online import Detector
+    >>> d = Detector()
+    >>> d.short_window, d.fast_window, d.fast_threshold, d.slow_factor  # [s], [s], x, x
+    (0.02, 0.001, 7.0, 1.5)
     """
 
     short_window: float = 0.02
@@ -385,6 +392,13 @@ class OnlineConfig:
         known of it but its prior). Off by default: it loses what the block had absorbed of
         the arm's residual (UR5, uncertain arm, 10 seeds: 1.06 / 1.08 / 1.40 -> 1.10 / 1.25 /
         8.5x the floor, signals form).
+
+    Examples
+    --------
+    >>> from adaptive_dd.identification.online import OnlineConfig
+    >>> cfg = OnlineConfig()
+    >>> cfg.mode  # the arm known, the payload's ten parameters estimated
+    'payload'
     """
 
     sample_period: float = 1e-3

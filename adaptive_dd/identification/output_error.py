@@ -305,6 +305,11 @@ def fit_output_error(
         Most Levenberg-Marquardt iterations.
     rtol : float
         Stop when the cost decreases by less than this fraction.
+
+    Returns
+    -------
+    OutputErrorResult
+        The estimate, its Cramér-Rao bound, the fit's residuals and whether it converged.
     """
     q, qd, tau = (np.asarray(a, dtype=float) for a in (q, qd, tau))
     if not (q.shape == qd.shape == tau.shape and q.ndim == 2 and q.shape[1] == model.n):

@@ -360,6 +360,11 @@ def payload_information_time(
         Noise model (module docstring).
     window : int
         Samples after the swap the colored model considers (its cost grows as ``window^3``).
+
+    Returns
+    -------
+    float
+        Seconds after the swap; ``inf`` if not reached.
     """
     pay = _check(payload, tol, model, window)
     if not 0 < tol < 1:

@@ -47,6 +47,16 @@ class PayloadResult:
     inertia_com : ndarray (3, 3)
         Inertia about the centre of mass [kg m^2] (constrained fit).
     consistent : ConsistentFit
+
+    Examples
+    --------
+    Made by :func:`payload_from_pair` (whose example makes one) and
+    :func:`payload_from_record`; ``mass``, ``com`` and their standard deviations are what
+    ``adaptive-dd identify --payload`` prints.
+
+    >>> from adaptive_dd.identification.payload_pair import PayloadResult
+    >>> {"mass", "com", "mass_std", "com_std"} <= set(PayloadResult.__dataclass_fields__)
+    True
     """
 
     params: Array
@@ -87,6 +97,39 @@ def payload_from_pair(
     arm, sigma_loaded: ArrayLike, cov_loaded: ArrayLike, sigma_unloaded: ArrayLike, cov_unloaded: ArrayLike
 ) -> PayloadResult:
     """The payload from a loaded and an unloaded identification (module docstring).
+
+
+    Parameters
+    ----------
+    arm : Arm
+        The arm both identifications are of.
+    sigma_loaded, sigma_unloaded : array_like, shape (p,)
+        Base parameters identified with and without the payload.
+    cov_loaded, cov_unloaded : array_like, shape (p, p)
+        Their covariances.
+
+    Returns
+    -------
+    PayloadResult
+        The payload's ten parameters about the payload frame, unconstrained and physically
+        consistent, with their standard deviations.
+
+
+    Examples
+    --------
+    Base parameters of a UR5 with and without a 2 kg tool 4 cm off the flange's axis give the
+    tool back:
+
+    >>> import numpy as np
+    >>> from adaptive_dd.identification.payload_pair import payload_from_pair
+    >>> from adaptive_dd.plant import Arm
+    >>> from adaptive_dd.robots import robot_urdf
+    >>> ur5 = Arm.from_urdf(robot_urdf("ur5"))
+    >>> cov = 1e-10 * np.eye(ur5.base.count)
+    >>> tool = payload_from_pair(ur5, ur5.sigma_with_payload(2.0, com=[0.0, 0.04, 0.0]), cov,
+    ...                          ur5.sigma, cov)
+    >>> round(tool.mass, 6), (tool.com.round(6) + 0.0).tolist()
+    (2.0, [0.0, 0.04, 0.0])
 
     Raises
     ------

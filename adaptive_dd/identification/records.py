@@ -129,6 +129,12 @@ def simulate_record(
         The identification model's RK4 (default) or the benchmark's compiled plant with the arm's
         friction law (module docstring; ``"serial"``, its old name, warns and is read as it).
 
+
+    Returns
+    -------
+    Record
+        One trial per generator, trial axis first.
+
     Raises
     ------
     ParameterError

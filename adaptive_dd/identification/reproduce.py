@@ -172,6 +172,11 @@ def run_reproduce(
         experiment is computed too (``res.crb``).
     extra_estimators : tuple of {"output_error", "akf"}
         Run these too on the measured data (see :mod:`adaptive_dd.identification.limits`).
+
+    Returns
+    -------
+    ReproduceResult
+        Every configuration's estimates and errors per seed, and the bounds.
     """
     _check_configurations(seeds, tau_f, estimators, extra_estimators)
     arm = ClosedFormTwoLink.sice()  # the paper's arm
@@ -262,7 +267,20 @@ def format_bounds(res: ReproduceResult, tau_f: float | None = None) -> str:
 def paper_comparison(res: ReproduceResult, method: str) -> list[dict]:
     """Ours against the paper (estimator ``paper``, split 15) per tau_f of the paper's grid and
     parameter: ``tau_f, param, ours_pct`` (mean ``|error|`` over seeds), ``paper_pct`` and
-    ``ratio = ours / paper``."""
+    ``ratio = ours / paper``.
+
+    Parameters
+    ----------
+    res : ReproduceResult
+        What :func:`run_reproduce` returned.
+    method : {"M1", "M2"}
+        Table 3 (M1) or Table 5 (M2).
+
+    Returns
+    -------
+    list of dict
+        One row per tau_f and parameter: ``tau_f, param, ours_pct, paper_pct, ratio``.
+    """
     err = res.errors.get((method, "15", "paper"))
     if err is None:
         return []

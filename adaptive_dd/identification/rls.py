@@ -51,6 +51,12 @@ class RLSConfig:
         Initial covariance ``P(0) = p0 I``, > 0.
     max_trace : float or None
         Cap on ``trace(P)``; ``None`` means ``n * p0`` (never above its start).
+
+    Examples
+    --------
+    >>> from adaptive_dd.identification.rls import RLSConfig
+    >>> RLSConfig(lam0=0.995, mu=0.0)
+    RLSConfig(lam0=0.995, mu=0.0, p0=100.0, max_trace=None)
     """
 
     lam0: float = 0.99
@@ -87,7 +93,31 @@ def rls_init(
     batch_shape: tuple = (),
     theta0: ArrayLike | None = None,
 ) -> RLSState:
-    """Initial state: ``theta0`` (default 0), ``P = p0 I``, ``lambda = lam0``."""
+    """Initial state: ``theta0`` (default 0), ``P = p0 I``, ``lambda = lam0``.
+
+    Parameters
+    ----------
+    n_params : int
+        Parameters estimated.
+    cfg : RLSConfig
+        Forgetting and start-up covariance.
+    batch_shape : tuple of int
+        Leading axes (trials), broadcast over.
+    theta0 : array_like, shape (..., n_params), optional
+        The start estimate.
+
+    Returns
+    -------
+    RLSState
+        ``theta``, ``P`` and ``lam`` with the batch axes first.
+
+    Examples
+    --------
+    >>> from adaptive_dd.identification.rls import RLSConfig, rls_init
+    >>> state = rls_init(2, RLSConfig(p0=100.0), batch_shape=(3,))  # 3 trials, 2 parameters
+    >>> state.theta.shape, state.P.shape, float(state.lam[0])
+    ((3, 2), (3, 2, 2), 0.99)
+    """
     th = np.zeros((*batch_shape, n_params)) if theta0 is None else np.asarray(theta0, dtype=float)
     th = np.broadcast_to(th, (*batch_shape, n_params)).copy()
     if not np.all(np.isfinite(th)):
@@ -125,6 +155,22 @@ def rls_step(
     state : RLSState
     info : dict
         ``eps`` (prior error), ``gain`` (K), ``skipped`` (non-finite sample).
+
+    Examples
+    --------
+    With no forgetting, recursive least squares converges to the batch solution:
+
+    >>> import numpy as np
+    >>> from adaptive_dd.identification.rls import RLSConfig, batch_least_squares, rls_init, rls_step
+    >>> rng = np.random.default_rng(0)
+    >>> phi = rng.standard_normal((200, 2))
+    >>> y = phi @ np.array([2.0, -1.0])
+    >>> cfg = RLSConfig(lam0=1.0, mu=0.0, p0=1e6)
+    >>> state = rls_init(2, cfg)
+    >>> for k in range(200):
+    ...     state, info = rls_step(state, phi[k], y[k], cfg)
+    >>> state.theta.round(6), batch_least_squares(phi, y).round(6)
+    (array([ 2., -1.]), array([ 2., -1.]))
     """
     theta, P, lam_prev, n_skipped = state
     finite = np.isfinite(y) & np.isfinite(phi).all(axis=-1)
@@ -224,6 +270,14 @@ def batch_least_squares(
     Returns
     -------
     ndarray, shape (..., n)
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from adaptive_dd.identification.rls import batch_least_squares
+    >>> phi = np.array([[1.0, 0.0], [0.0, 1.0], [1.0, 1.0]])
+    >>> batch_least_squares(phi, np.array([1.0, 2.0, 3.0])).round(6)
+    array([1., 2.])
     """
     phi = np.asarray(phi, dtype=float)
     y = np.asarray(y, dtype=float)

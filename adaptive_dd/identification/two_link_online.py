@@ -139,7 +139,32 @@ class OnlineInfo(NamedTuple):
 
 
 def online_init(cfg: TwoLinkOnlineConfig, n_trials: int, theta0: ArrayLike) -> OnlineState:
-    """Initial state: the estimate ``theta0 (7,) or (n, 7)``, the shaped start-up covariance."""
+    """Initial state: the estimate ``theta0 (7,) or (n, 7)``, the shaped start-up covariance.
+
+    Parameters
+    ----------
+    cfg : TwoLinkOnlineConfig
+        The estimator's settings.
+    n_trials : int
+        Trials estimated at once (the leading axis).
+    theta0 : array_like, shape (7,) or (n_trials, 7)
+        The start estimate (the paper's J1 J2 r b1 b2 d1 d2).
+
+    Returns
+    -------
+    OnlineState
+        The estimator's state, trial axis first.
+
+    Examples
+    --------
+    >>> from adaptive_dd.identification.two_link_online import online_init
+    >>> from adaptive_dd.identification.two_link_online_config import TwoLinkOnlineConfig
+    >>> from adaptive_dd.plant import ClosedFormTwoLink
+    >>> sigma = ClosedFormTwoLink.sice().sigma  # Table 1 of the paper
+    >>> state = online_init(TwoLinkOnlineConfig(sample_period=1e-3), n_trials=4, theta0=sigma)
+    >>> state.theta.shape  # trial axis first, the paper's seven base parameters
+    (4, 7)
+    """
     from adaptive_dd.closed_loop.laws import OBS_ROWS  # here: the closed-loop package imports this one
 
     if not isinstance(n_trials, int | np.integer) or n_trials < 1:
@@ -284,6 +309,20 @@ def run_two_link_online(
     """Run the online estimator over whole records ``q, qd, tau (n_trials, n_samples, 2)``.
 
     Equals :func:`online_step` sample by sample (one compiled loop per trial).
+
+    Parameters
+    ----------
+    q, qd, tau : array_like, shape (n_trials, n_samples, 2)
+        Measured positions [rad], velocities [rad/s] and applied torques [N m].
+    cfg : TwoLinkOnlineConfig
+        The estimator's settings.
+    theta0 : array_like, shape (7,)
+        The start estimate.
+
+    Returns
+    -------
+    TwoLinkOnlineRecord
+        The estimates, forgetting factors, prior errors and alarms over time.
     """
     q, qd, tau = (np.ascontiguousarray(np.asarray(x, dtype=float)) for x in (q, qd, tau))
     if q.ndim == 2:

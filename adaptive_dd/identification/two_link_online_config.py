@@ -251,6 +251,13 @@ class TwoLinkOnlineConfig:
         Project the control model only, also the estimator's state, or nothing.
     payload_direction : tuple of 7 floats
         d sigma / d m of a tip payload (from the arm; the re-opening direction).
+
+    Examples
+    --------
+    >>> from adaptive_dd.identification.two_link_online_config import TwoLinkOnlineConfig
+    >>> cfg = TwoLinkOnlineConfig(sample_period=1e-3)
+    >>> cfg.tau_f, cfg.construction
+    (0.01, 'exact')
     """
 
     sample_period: float = 1e-3

@@ -111,6 +111,19 @@ class Arm:
         Keep the general kernels even where the paper's closed forms apply (the arm's geometry is
         the paper's: :func:`~adaptive_dd.plant.two_link.closed_form_view`); ``[arm] general = true``.
         False (default): a scenario of such an arm runs the closed forms, its fast path.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from adaptive_dd.plant import Arm
+    >>> from adaptive_dd.robots import robot_urdf
+    >>> ur5 = Arm.from_urdf(robot_urdf("ur5"))
+    >>> ur5.n_joints, ur5.base.count  # joints, base parameters
+    (6, 52)
+    >>> ur5.mass_matrix(np.zeros(6)).shape
+    (6, 6)
+    >>> ur5.with_(payload_capacity=5.0).payload_capacity
+    5.0
     """
 
     urdf: Path

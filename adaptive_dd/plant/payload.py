@@ -38,6 +38,18 @@ def payload_parameters(
         default a disk of ``radius`` about the frame's z axis.
     radius : float
         Disk radius [m] when ``inertia`` is not given.
+
+    Returns
+    -------
+    ndarray, shape (10,)
+        ``[m, m cx, m cy, m cz, Ixx, Ixy, Iyy, Ixz, Iyz, Izz]`` about the frame's origin
+        (Pinocchio's order) [kg, kg m, kg m^2].
+
+    Examples
+    --------
+    >>> from adaptive_dd.plant.payload import payload_parameters
+    >>> payload_parameters(2.0, com=[0.0, 0.0, 0.05]).round(4)
+    array([2.   , 0.   , 0.   , 0.1  , 0.005, 0.   , 0.005, 0.   , 0.   , 0.   ])
     """
     m = float(mass)
     if not math.isfinite(m) or m < 0:
@@ -70,9 +82,26 @@ def payload_parameters(
 class PayloadEstimate(NamedTuple):
     """A payload recovered from base parameters (:meth:`Arm.payload_from_sigma`).
 
-    ``mass`` [kg], ``com`` (3,) [m] in the payload frame (nan where not identifiable),
-    ``params`` (10,) least-squares parameters about the frame origin, ``identifiable``
-    (10,) bool: which of the ten are determined by the base parameters.
+    Attributes
+    ----------
+    mass : ndarray
+        [kg].
+    com : ndarray, shape (..., 3)
+        Centre of mass [m] in the payload frame (nan where not identifiable).
+    params : ndarray, shape (..., 10)
+        Least-squares parameters about the frame origin.
+    identifiable : ndarray of bool, shape (10,)
+        Which of the ten the base parameters determine.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from adaptive_dd.plant import Arm
+    >>> from adaptive_dd.robots import robot_urdf
+    >>> ur5 = Arm.from_urdf(robot_urdf("ur5"))
+    >>> est = ur5.payload_from_sigma(ur5.sigma_with_payload(2.0, com=[0.0, 0.04, 0.0]))
+    >>> float(est.mass.round(6)), (est.com.round(6) + 0.0).tolist()
+    (2.0, [0.0, 0.04, 0.0])
     """
 
     mass: Array

@@ -133,6 +133,18 @@ class ClosedFormTwoLink:
         inertias, masses or lengths, ``J1 J2 <= r^2``, a centre of mass outside
         ``[0, 1.5 l_i]``, physical and base parameters that disagree, an unknown
         friction law, non-positive friction velocities.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from adaptive_dd.plant import ClosedFormTwoLink
+    >>> sice = ClosedFormTwoLink.sice()  # Table 1 of the paper
+    >>> sice.sigma.round(4)  # J1 J2 r b1 b2 d1 d2
+    array([0.429, 0.071, 0.162, 5.236, 1.116, 3.208, 0.743])
+    >>> ClosedFormTwoLink.from_sigma([0.1, 0.07, 0.2, 5, 1, 3, 0.7], 0.2, 0.2)
+    Traceback (most recent call last):
+    ...
+    adaptive_dd.errors.ParameterError: ClosedFormTwoLink.sigma: J1*J2 - r^2 = ... must be > 0, ...
     """
 
     sigma: Array

@@ -34,6 +34,14 @@ class RobotInfo:
         Name of the frame where a payload is attached (a fixed frame at the flange or tip).
     description : str
         One line: what it is and where its numbers come from.
+
+    Examples
+    --------
+    >>> from adaptive_dd.robots import ROBOTS
+    >>> {"sice_arm", "ur5", "panda", "iiwa14"} <= set(ROBOTS)
+    True
+    >>> ROBOTS["ur5"].file
+    'ur5.urdf'
     """
 
     file: str
@@ -83,7 +91,16 @@ ROBOTS: dict[str, RobotInfo] = {
 
 
 class UnknownRobotError(KeyError):
-    """A robot name that is not in :data:`ROBOTS`; the message lists the known names."""
+    """A robot name that is not in :data:`ROBOTS`; the message lists the known names.
+
+    Examples
+    --------
+    >>> from adaptive_dd.robots import robot_urdf
+    >>> robot_urdf("r2d2")
+    Traceback (most recent call last):
+    ...
+    adaptive_dd.robots.UnknownRobotError: unknown robot 'r2d2'; known robots: ...
+    """
 
     def __str__(self) -> str:  # KeyError's str() would quote the whole message
         return str(self.args[0]) if self.args else ""
@@ -109,6 +126,13 @@ def robot_urdf(name: str) -> Path:
         ``name`` is not a known robot (a ``KeyError``); the message lists the known ones.
     FileNotFoundError
         The package was installed without its ``*.urdf`` data files.
+
+    Examples
+    --------
+    >>> from adaptive_dd.robots import robot_urdf
+    >>> path = robot_urdf("panda")
+    >>> path.name, path.is_file()
+    ('panda.urdf', True)
     """
     try:
         info = ROBOTS[name]

@@ -1,33 +1,23 @@
-"""Write the API reference's pages from the package's own ``__all__`` lists.
+"""Write the API reference: the curated objects by task, and the internals apart.
 
-One page per public module (``docs/api/<module>.rst``): the module's docstring, then an
-autosummary table of the functions, classes and exceptions it defines (each with its own
-page, rendered by numpydoc), then the names it re-exports from elsewhere, linked to the
-module that defines them (so no object is documented twice). Modules whose name starts
-with ``_`` are private and skipped. The pages are rewritten at every build, so a new
-public name appears without editing the docs.
+``docs/api/index.rst`` lists the objects of :mod:`api_list` (``docs/_ext/api_list.py``) grouped
+by task, each with its one-line summary (autosummary) and its own page rendered by numpydoc.
+``docs/api/internals.rst`` names every other public module with the first line of its
+docstring, without pages: they are importable and documented in their source, but not part of
+what a user needs. The pages are rewritten at every build, so the reference follows the list.
 """
 
 from __future__ import annotations
 
 import importlib
-import inspect
 import pkgutil
 import shutil
 from pathlib import Path
 
+from api_list import GROUPS, listed
+
 PACKAGE = "adaptive_dd"
-GROUPS = {
-    "adaptive_dd": "The package and its command line",
-    "adaptive_dd.plant": "Arms and plants",
-    "adaptive_dd.identification": "Identification and estimation",
-    "adaptive_dd.controllers": "Controllers",
-    "adaptive_dd.closed_loop": "The N-joint closed loop",
-    "adaptive_dd.benchmark": "The benchmark",
-    "adaptive_dd.robots": "Shipped robots",
-    "adaptive_dd.gym": "Gymnasium environments (the [gym] extra)",
-    "adaptive_dd.cli": "The command line (one module per command: its options and its run)",
-}
+TOP_LEVEL = ("Simulation", "run_trial", "load_scenario", "run_benchmark", "make_controller")
 
 
 def public_modules() -> list[str]:
@@ -40,116 +30,58 @@ def public_modules() -> list[str]:
     return sorted(names)
 
 
-def _home(obj) -> str | None:
-    mod = getattr(obj, "__module__", None)
-    if mod is None and hasattr(obj, "py_func"):  # a numba dispatcher
-        mod = obj.py_func.__module__
-    return mod
+def _summary(module: str) -> str:
+    doc = importlib.import_module(module).__doc__ or ""
+    first = doc.strip().split("\n\n")[0].replace("\n", " ").strip()
+    return first.replace("`", "'") or "(no docstring)"
 
 
-def _attribute_docs(name: str) -> set[str]:
-    """Module-level names with a docstring or ``#:`` comment of their own."""
-    from sphinx.pycode import ModuleAnalyzer
-
-    try:
-        docs = ModuleAnalyzer.for_module(name).find_attr_docs()
-    except Exception:  # no source: document the names without their docstrings
-        return set()
-    return {attr for (scope, attr) in docs if scope == ""}
-
-
-def _describe(obj) -> str:
-    shape = getattr(obj, "shape", None)
-    if shape is not None:
-        return f"{type(obj).__name__} of shape {tuple(shape)}"
-    if isinstance(obj, dict | tuple | list | frozenset | set):
-        return f"{type(obj).__name__} of {len(obj)} items"
-    return type(obj).__name__
-
-
-def _kind(obj) -> str:
-    if inspect.isclass(obj):
-        return "exceptions" if issubclass(obj, BaseException) else "classes"
-    if callable(obj):
-        return "functions"
-    return "data"
-
-
-def module_page(name: str) -> str:
-    mod = importlib.import_module(name)
-    exported = list(getattr(mod, "__all__", []))
-    own: dict[str, list[str]] = {"classes": [], "exceptions": [], "functions": [], "data": []}
-    reexported: list[tuple[str, str]] = []
-    for item in exported:
-        if item.startswith("__"):
-            continue
-        obj = getattr(mod, item)
-        home = _home(obj)
-        kind = _kind(obj)
-        if kind != "data" and home is not None and home != name:
-            reexported.append((item, f"{home}.{getattr(obj, '__name__', item)}"))
-        else:
-            own[kind].append(item)
-    title = f"``{name}``"
-    lines = [title, "=" * len(title), "", f".. automodule:: {name}", "   :no-members:", ""]
-    lines += [f".. currentmodule:: {name}", ""]
-    for kind, heading in (
-        ("classes", "Classes"),
-        ("exceptions", "Exceptions"),
-        ("functions", "Functions"),
-    ):
-        if own[kind]:
-            lines += [
-                f".. rubric:: {heading}",
-                "",
-                ".. autosummary::",
-                "   :toctree: generated",
-                "   :nosignatures:",
-                "",
-            ]
-            lines += [f"   {x}" for x in own[kind]] + [""]
-    if own["data"]:
-        documented = _attribute_docs(name)
-        lines += [".. rubric:: Data", ""]
-        for x in own["data"]:
-            if x in documented:  # a docstring after the assignment: autodoc renders it
-                lines += [f".. autodata:: {x}", "   :no-value:", ""]
-            else:  # no docstring of its own: say what it is rather than show its type's docstring
-                lines += [f".. py:data:: {x}", f"   :type: {_describe(getattr(mod, x))}", ""]
-    if reexported:
-        lines += [
-            ".. rubric:: Re-exported here",
-            "",
-            "Importable from this module, documented where they are defined:",
-            "",
-        ]
-        lines += [f"- ``{name}.{x}``: :py:obj:`{target}`" for x, target in reexported] + [""]
-    return "\n".join(lines)
-
-
-def index_page(modules: list[str]) -> str:
+def index_page() -> str:
+    """The reference's index: one section per task, an autosummary table of its objects."""
     lines = [
         "API reference",
         "=============",
         "",
-        "Generated from the docstrings of every public module (its ``__all__``). Each function",
-        "and class has its own page with its numpydoc sections (parameters with shapes and units,",
-        "returns, raises, and the paper's equation it implements where it implements one).",
+        "The objects a user needs, by task, each with its own page (parameters with shapes and",
+        "units, what it returns, the errors it raises and an example that runs). The most used",
+        "are importable from the package itself: "
+        + ", ".join(f"``adaptive_dd.{n}``" for n in TOP_LEVEL)
+        + ", and the errors.",
         "",
-        "What a plug-in controller receives is documented on",
-        ":py:class:`adaptive_dd.controllers.base.Controller` (two-link arms) and in the",
-        ":doc:`controllers guide <../controllers>` (both kinds of arm).",
+        "What a plug-in controller receives: :doc:`../controllers`. Every other module is an",
+        "internal, listed in :doc:`internals`.",
         "",
     ]
-    for group, heading in GROUPS.items():
-        members = [m for m in modules if m == group or (group != PACKAGE and m.startswith(group + "."))]
-        if group == PACKAGE:
-            members = [m for m in modules if m == PACKAGE or (m.count(".") == 1 and m not in GROUPS)]
-        if not members:
-            continue
-        lines += [heading, "-" * len(heading), "", ".. toctree::", "   :maxdepth: 1", ""]
-        lines += [f"   {m}" for m in members] + [""]
+    for title, summary, names in GROUPS:
+        lines += [title, "-" * len(title), "", summary, "", ".. autosummary::"]
+        lines += ["   :toctree: generated", "   :nosignatures:", ""]
+        lines += [f"   {n}" for n in names] + [""]
+    lines += [".. toctree::", "   :hidden:", "", "   internals", ""]
     return "\n".join(lines)
+
+
+def internals_page(modules: list[str]) -> str:
+    """Every public module, with the first paragraph of its docstring; no pages of their own."""
+    homes = {n.rpartition(".")[0] for n in listed()}
+    lines = [
+        "Internals",
+        "=========",
+        "",
+        "The package's other modules: importable, each with its docstrings in the source, but",
+        "not part of the reference (their names may change between versions). Modules that hold",
+        "a listed object are marked with a star.",
+        "",
+        ".. list-table::",
+        "   :header-rows: 1",
+        "   :widths: 35 65",
+        "",
+        "   * - module",
+        "     - what it holds",
+    ]
+    for m in modules:
+        star = " (*)" if m in homes else ""
+        lines += [f"   * - ``{m}``{star}", f"     - {_summary(m)}"]
+    return "\n".join(lines) + "\n"
 
 
 def _write(path: Path, text: str) -> None:
@@ -160,17 +92,15 @@ def _write(path: Path, text: str) -> None:
 def generate(app) -> None:
     out = Path(app.srcdir) / "api"
     out.mkdir(exist_ok=True)
-    modules = public_modules()
-    for m in modules:
-        _write(out / f"{m}.rst", module_page(m))
-    _write(out / "index.rst", index_page(modules))
-    for page in out.glob("adaptive_dd*.rst"):  # a renamed or removed module's page goes with it
-        if page.stem not in modules:
+    for page in out.glob("*.rst"):  # the pages of another layout go
+        if page.stem not in {"index", "internals"}:
             page.unlink()
-    # autosummary's pages of each object: written afresh, so a removed function's page goes too
+    _write(out / "index.rst", index_page())
+    _write(out / "internals.rst", internals_page(public_modules()))
+    # autosummary's pages of each object: written afresh, so a removed object's page goes too
     shutil.rmtree(out / "generated", ignore_errors=True)
 
 
 def setup(app):
     generate(app)  # at setup, before Sphinx lists the source files (autosummary reads them then)
-    return {"parallel_read_safe": True, "version": "1"}
+    return {"parallel_read_safe": True, "version": "2"}

@@ -37,7 +37,8 @@ MEANING = {
     "payload.radius": "Two-link arm: radius of the tip disk [m] (its inertia).",
     "payload.com": "URDF arm: payload centre of mass in the payload frame [m], 3 numbers.",
     "payload.inertia": "URDF arm: payload inertia about its centre of mass, `[Ixx,"
-    " Ixy, Iyy, Ixz, Iyz, Izz]` [kg m^2].",
+    " Iyy, Izz, Ixy, Ixz, Iyz]` or a 3 x 3 matrix [kg m^2] (a rigid body's: principal moments"
+    " >= 0, each at most the sum of the other two).",
     "noise.position_variance": "Per joint, variance of the measured position's noise [rad^2].",
     "noise.velocity_variance": "Per joint, variance of the measured velocity's noise [(rad/s)^2].",
     "noise.dropout": "Probability that a sample is lost (NaN): the law holds, the estimator skips it.",

@@ -40,10 +40,13 @@ for name, est, std, true in zip(arm.sigma_names, wls.sigma, wls.std, rec.sigma_t
 # of a few of them are expected; ``adaptive-dd identify`` prints the Cramér-Rao bound beside it.
 z = (wls.sigma - rec.sigma_true) / wls.std
 print(f"largest |error| / std: {np.abs(z).max():.1f}")
-fig, ax = plt.subplots(figsize=(8, 3.5))
-ax.bar(np.arange(z.size), z)
-ax.axhline(2, color="k", lw=0.5)
-ax.axhline(-2, color="k", lw=0.5)
-ax.set_xlabel("base parameter")
-ax.set_ylabel("(estimate - true) / std")
+labels = [n if len(n) <= 22 else n[:21] + "…" for n in arm.sigma_names]  # a base parameter's leading terms
+fig, ax = plt.subplots(figsize=(7, 0.22 * z.size + 1.2))
+ax.barh(np.arange(z.size), z, color=np.where(np.abs(z) > 2, "tab:red", "tab:blue"))
+ax.axvline(2, color="k", lw=0.5)
+ax.axvline(-2, color="k", lw=0.5)
+ax.set_yticks(np.arange(z.size), labels, fontsize=7)
+ax.invert_yaxis()
+ax.set_xlabel("(estimate - true) / std [standard deviations]")
+ax.set_title("Error of each identified base parameter (red: beyond 2 std)", fontsize=9)
 fig.tight_layout()

@@ -37,6 +37,11 @@ for ax, (m, df) in zip(axes, tables.items(), strict=True):
     ax.set_xticks(x, sub["param"])
     ax.set_yscale("log")
     ax.set_title(f"{m}, tau_f = 0.01 s")
+    ax.set_xlabel("base parameter")
 axes[0].set_ylabel("mean |error| [%]")
+fig.suptitle(
+    "Mean estimation error [%] per base parameter, ours against the paper's Tables 3 (M1) and 5 (M2)",
+    fontsize=9,
+)
 axes[0].legend()
 fig.tight_layout()

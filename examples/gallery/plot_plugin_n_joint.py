@@ -44,8 +44,12 @@ class GravityPD:
 
 
 # %%
-# The shipped scenario, made short: 6 s, 1 kg picked up at 2 s and put down at 4 s, 2 seeds.
-path = Path(adaptive_dd.__file__).parent / "scenarios" / "vertical3_payload.toml"
+# The shipped scenario with the exact arm (every controller is given the URDF the plant is), made
+# short: 6 s, 1 kg picked up at 2 s and put down at 4 s, 2 seeds. On the exact arm every ratio
+# measures the payload alone; on ``vertical3_payload.toml``, whose plant is drawn around the URDF
+# per seed, ``adaptive_ct``'s first seconds also carry the arm's own error being learnt (tens of
+# times the floor before the first swap: :doc:`/learning_the_arm`).
+path = Path(adaptive_dd.__file__).parent / "scenarios" / "vertical3_payload_exact.toml"
 data = tomllib.loads(path.read_text())
 data["run"].update(duration=6.0, seeds=2, controllers=["ct_nominal", "ct_oracle", "adaptive_ct"])
 data["payload"] = [{"at": 2.0, "mass": 1.0, "com": [0.03, 0.0, 0.0]}, {"at": 4.0, "mass": 0.0}]
@@ -62,6 +66,10 @@ columns = ["controller", "segment", "mass_kg", "rms_error_mean_rad", "ratio_mean
 print(summary[columns].to_string(index=False))
 
 # %%
-# The built-ins run compiled; the plug-in runs on the Python path (one ``command`` per sample for
-# the whole batch of trials), on the same plant, sensors and noise.
+# ``ratio_mean`` is each controller's RMS error over ``ct_oracle``'s on the same seed: the cost of
+# what it does not know. ``gravity_pd`` knows the nominal gravity but not the payload; it is far
+# from the floor in every segment (high gains alone do not make a model). The built-ins run
+# compiled; the plug-in runs on the Python path (one ``command`` per sample for the whole batch of
+# trials), on the same plant, sensors and noise. The figure: each controller's 50 ms moving RMS
+# tracking error [mrad] against time [s], log scale, the payload [kg] above each segment.
 fig = plot_tracking_errors(res)

@@ -53,3 +53,9 @@ print(ratios.to_string(index=False))
 fig, ax = plt.subplots(figsize=(6, 4.5))
 ax.imshow(image)
 ax.set_axis_off()
+fig.suptitle(
+    "Heat map of the sweep: median ratio of adaptive_ct's RMS error to ct_oracle's\n"
+    "per payload mass [kg] and swap time [s]",
+    fontsize=8,
+    wrap=True,
+)
