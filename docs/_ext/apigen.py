@@ -24,6 +24,7 @@ GROUPS = {
     "adaptive_dd.controllers": "Controllers",
     "adaptive_dd.closed_loop": "The N-joint closed loop",
     "adaptive_dd.benchmark": "The benchmark",
+    "adaptive_dd.arena": "The leaderboard",
     "adaptive_dd.robots": "Shipped robots",
     "adaptive_dd.cli": "The command line (one module per command: its options and its run)",
 }
