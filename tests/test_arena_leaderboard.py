@@ -106,3 +106,10 @@ def test_every_column_and_its_unit_is_on_the_docs_page():
     page = (Path(__file__).resolve().parents[1] / "docs" / "leaderboard.md").read_text(encoding="utf-8")
     for name, (unit, meaning) in COLUMNS.items():
         assert f"| `{name}` | {unit} | {meaning} |" in page, name
+
+
+def test_an_unknown_controller_is_a_user_error_naming_it(tmp_path, capsys):
+    sc = _short_vertical3(tmp_path)
+    assert main(["leaderboard", str(sc), "--controllers", "no_such_law", "--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err
+    assert "no_such_law" in err and "v3short.toml" in err

@@ -84,6 +84,8 @@ MEANING = {
     "setting.max_mass": "Largest payload mass Slotine-Li's box admits [kg] (5 two-link, 20 N-joint).",
     "setting.com_radius": "The payload's size in Slotine-Li's box [m]: the disk's radius at the tip"
     " (two-link, 0.1), its centre of mass from the flange (N-joint, 0.3).",
+    "setting.uncertainty": "`sliding_mode` (N-joint arms): the arm's error levels that bound its model "
+    "error (the keys of `[plant.uncertainty]`; default: the scenario's).",
     "setting.boost_bandwidth": "Bandwidth of the feedback boost after a change alarm [rad/s].",
     "setting.boost_duration": "How long the boost lasts after an alarm [s].",
     "setting.boost_ramp": "`adaptive_ct` (N-joint arms): after `boost_duration`, the boost's added "
