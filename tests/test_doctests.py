@@ -52,6 +52,10 @@ NO_EXAMPLE = {
     "adaptive_dd.identification.detection_limit.detection_limit": "needs an oracle's trajectory: "
     + CLOSED_LOOP,
     "adaptive_dd.sweep.run_sweep": CLOSED_LOOP + " on Dask",
+    "adaptive_dd.arena.leaderboard.leaderboard": CLOSED_LOOP,
+    "adaptive_dd.gym.make_env": "steps the compiled plant: " + RK4,
+    "adaptive_dd.gym.env.PayloadSwapEnv": "steps the compiled plant: " + RK4,
+    "adaptive_dd.gym.score.evaluate": CLOSED_LOOP,
     "adaptive_dd.identification.reproduce.run_reproduce": "simulates the paper's experiments: " + RK4,
     "adaptive_dd.identification.reproduce.paper_comparison": "takes run_reproduce's result",
 }

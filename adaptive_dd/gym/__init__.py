@@ -62,7 +62,21 @@ SCENARIO_IDS = {
 
 def make_env(scenario=None, floor: str | None = "ct_oracle") -> PayloadSwapEnv:
     """The environment of a scenario: a :class:`~adaptive_dd.benchmark.scenario.Scenario`, a
-    scenario file (any arm, a user's URDF too), a registered id, or None (the paper's arm)."""
+    scenario file (any arm, a user's URDF too), a registered id, or None (the paper's arm).
+
+    Parameters
+    ----------
+    scenario : Scenario, str, Path or None
+        The scenario, its file, a registered id (:data:`SCENARIO_IDS`), or None.
+    floor : str or None
+        The controller whose command ``info["floor_torque"]`` holds (default ``ct_oracle``);
+        None leaves it out.
+
+    Returns
+    -------
+    PayloadSwapEnv
+        One trial of the scenario per episode; ``reset(seed=i)`` is the benchmark's trial ``i``.
+    """
     if isinstance(scenario, str) and scenario in SCENARIO_IDS:
         scenario = _SCENARIOS / SCENARIO_IDS[scenario]
     return PayloadSwapEnv(scenario, floor=floor)

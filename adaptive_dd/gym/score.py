@@ -148,6 +148,12 @@ def evaluate(
         The trials' seed indices (an int ``m``: ``0 .. m - 1``).
     name : str
         The policy's name in the tables.
+
+    Returns
+    -------
+    Evaluation
+        Per seed and segment: the policy's RMS error, the floor's on the same seed, their ratio and
+        the tool frame's error (``summary()``, ``to_frame()``).
     """
     from adaptive_dd.benchmark.end_effector import end_effector_errors
     from adaptive_dd.benchmark.metrics import per_seed_segment_metrics

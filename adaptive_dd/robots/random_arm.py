@@ -173,11 +173,25 @@ def random_arm(seed: int, joints: int | None = None) -> RandomArm:
     Returns
     -------
     RandomArm
+        The drawn arm: its URDF, payload capacity and reference; the same seed gives the same arm.
 
     Raises
     ------
     ParameterError
         ``seed`` negative or not an integer; ``joints`` not in 3 .. 7.
+
+    Examples
+    --------
+    >>> from adaptive_dd.robots.random_arm import random_arm
+    >>> arm = random_arm(7, joints=5)
+    >>> arm.n_joints
+    5
+    >>> random_arm(7, joints=5) is arm
+    True
+    >>> random_arm(-1)
+    Traceback (most recent call last):
+    ...
+    adaptive_dd.errors.ParameterError: random_arm: seed must be an integer >= 0, got -1
     """
     if isinstance(seed, bool) or not isinstance(seed, int | np.integer) or seed < 0:
         raise ParameterError(f"random_arm: seed must be an integer >= 0, got {seed!r}")

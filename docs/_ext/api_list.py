@@ -148,6 +148,18 @@ GROUPS: list[tuple[str, str, list[str]]] = [
         ],
     ),
     (
+        "Arms nobody tuned for, other contenders, learned policies",
+        "Draw a population of arms, rank every controller against its floor, run a policy through "
+        "the Gymnasium environment.",
+        [
+            "adaptive_dd.robots.random_arm.random_arm",
+            "adaptive_dd.arena.leaderboard.leaderboard",
+            "adaptive_dd.gym.make_env",
+            "adaptive_dd.gym.env.PayloadSwapEnv",
+            "adaptive_dd.gym.score.evaluate",
+        ],
+    ),
+    (
         "Errors",
         "Every error the package raises on bad input; each names what was wrong and where.",
         [
