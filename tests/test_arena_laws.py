@@ -131,8 +131,8 @@ def test_composite_prediction_error_vanishes_at_the_true_payload(rng):
     zero at the true payload and about ``W theta_true`` at none."""
     from adaptive_dd.closed_loop.arena_laws import Composite
     from adaptive_dd.closed_loop.composite import C_TF, C_W, composite_term
-    from adaptive_dd.closed_loop.laws import law_work
-    from adaptive_dd.closed_loop.residual_observer import O_COUNT, O_TAU, OBS_ROWS
+    from adaptive_dd.closed_loop.laws import OBS_ROWS, law_work
+    from adaptive_dd.closed_loop.residual_observer import O_COUNT, O_TAU
     from adaptive_dd.plant.chain_batch import rnea_batch
     from adaptive_dd.plant.payload import payload_parameters
 

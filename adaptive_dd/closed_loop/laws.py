@@ -50,8 +50,9 @@ import numpy as np
 from numba import njit
 from numpy.typing import NDArray
 
-from adaptive_dd.closed_loop.composite import composite_term
-from adaptive_dd.closed_loop.residual_observer import OBS_ROWS, _observe, observe_applied
+from adaptive_dd.closed_loop.composite import C_ROWS, composite_term
+from adaptive_dd.closed_loop.residual_observer import OBS_ROWS as O_ROWS
+from adaptive_dd.closed_loop.residual_observer import _observe, observe_applied
 from adaptive_dd.plant.chain import body_slotine_li_regressor_in, mass_matrix_in, rnea_ref_in, workspace
 
 __all__ = [
@@ -78,6 +79,10 @@ Array = NDArray[np.float64]
 
 KIND_PD, KIND_CT, KIND_SLOTINE, KIND_PD_GRAVITY = 0, 1, 2, 3
 MODEL_NONE, MODEL_FIXED, MODEL_TRUE, MODEL_TRIAL = 0, 1, 2, 3
+
+OBS_ROWS = max(O_ROWS, C_ROWS)
+"""Rows of a law's per-trial state ``LawState.obs``: the residual observer's (``O_*``) or, the
+observer off, the composite term's (``C_*``, :mod:`adaptive_dd.closed_loop.composite`)."""
 
 
 class LawConfig(NamedTuple):
