@@ -45,6 +45,7 @@ def vertical3_run():
     return {n: (r, np.sqrt(r.acc.sum_e2 / seg)) for n, r in res.runs.items()}
 
 
+@pytest.mark.slow  # the closed loop of every arena law on a drawn arm: minutes of compiling, cold
 def test_every_arena_law_runs_on_a_drawn_arm_without_failure_or_nan(vertical3_run):
     assert set(ARENA_CONTROLLERS) <= set(vertical3_run)
     for name, (run, rms) in vertical3_run.items():
@@ -52,6 +53,7 @@ def test_every_arena_law_runs_on_a_drawn_arm_without_failure_or_nan(vertical3_ru
         assert np.all(np.isfinite(rms)) and np.all(rms > 0), (name, rms)
 
 
+@pytest.mark.slow  # the closed loop of every arena law on a drawn arm: minutes of compiling, cold
 def test_gravity_compensation_the_observer_the_robust_term_and_composite_each_help(vertical3_run):
     """On the drawn vertical3 (2 seeds; 1 kg from 1.2 s): each law's added term does what it is for."""
     rms = {n: r for n, (_, r) in vertical3_run.items()}
@@ -171,6 +173,7 @@ def test_composite_prediction_error_vanishes_at_the_true_payload(rng):
     )
 
 
+@pytest.mark.slow  # the closed loop of every arena law on a drawn arm: minutes of compiling, cold
 def test_compiled_and_python_paths_agree_for_the_laws_that_read_the_applied_torque():
     """The observer's and the composite term's applied torque reaches them on both paths alike (a
     dropout holds a measurement: the held-sample rule too)."""

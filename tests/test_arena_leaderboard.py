@@ -68,6 +68,7 @@ def _short_vertical3(tmp_path):
     return p
 
 
+@pytest.mark.slow  # runs six controllers' closed loops: minutes of compiling, cold
 def test_leaderboard_command_writes_the_table_the_json_and_the_figure(tmp_path, capsys):
     sc = _short_vertical3(tmp_path)
     out = tmp_path / "out"
