@@ -54,15 +54,16 @@ def two_link_urdf(p, torque_limit=(70.0, 15.0)) -> str:
     )
 
 
-def cached_urdf(text: str) -> Path:
+def cached_urdf(text: str, stem: str = "two_link") -> Path:
     """``text`` as a file in ``$XDG_CACHE_HOME/adaptive_dd/urdf`` (default ``~/.cache``; the
-    temporary folder when that cannot be written), named by its hash: the same arm, the same file
-    (an :class:`~adaptive_dd.plant.arm.Arm` reads it again in a worker process)."""
+    temporary folder when that cannot be written), named ``STEM-HASH.urdf`` by its hash: the same
+    arm, the same file (an :class:`~adaptive_dd.plant.arm.Arm` reads it again in a worker
+    process). Generated arms (the two-link arm's, a random arm's) are written here."""
     import tempfile
 
     from adaptive_dd.outputs import atomic_write
 
-    name = f"two_link-{hashlib.sha256(text.encode()).hexdigest()[:16]}.urdf"
+    name = f"{stem}-{hashlib.sha256(text.encode()).hexdigest()[:16]}.urdf"
     cache = Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "adaptive_dd" / "urdf"
     # a cache folder that cannot be written (a read-only home): the temporary folder instead, so
     # that loading a scenario never fails on it
@@ -77,4 +78,4 @@ def cached_urdf(text: str) -> Path:
             return path
         except OSError:
             continue
-    raise OSError(f"cannot write the URDF of a two-link arm to {cache} nor to the temporary folder")
+    raise OSError(f"cannot write the URDF {name} to {cache} nor to the temporary folder")

@@ -51,7 +51,7 @@ from pathlib import Path
 import numpy as np
 
 from adaptive_dd.errors import UrdfError
-from adaptive_dd.plant.urdf_checks import check_values
+from adaptive_dd.plant.urdf_checks import check_values, scalar
 
 __all__ = ["JointInfo", "UrdfRobot", "read_urdf", "repair_inertia"]
 
@@ -160,17 +160,13 @@ def _quiet():
 
 
 def _num(path, where: str, el, attr: str, default: float | None = None) -> float:
-    raw = el.get(attr) if el is not None else None
-    if raw is None:
+    """The attribute as a finite number (:func:`~adaptive_dd.plant.urdf_checks.scalar`); missing:
+    ``default``, or an error naming it when there is none."""
+    v = scalar(path, where, el, attr)
+    if v is None:
         if default is None:
             raise UrdfError(f"{path}: {where}: attribute '{attr}' is missing")
         return default
-    try:
-        v = float(raw)
-    except ValueError:
-        raise UrdfError(f"{path}: {where}: attribute '{attr}' = {raw!r} is not a number") from None
-    if not math.isfinite(v):
-        raise UrdfError(f"{path}: {where}: attribute '{attr}' = {raw!r} must be finite")
     return v
 
 

@@ -43,6 +43,7 @@ __all__ = [
     "TINY_MASS",
     "UrdfWarning",
     "check_values",
+    "scalar",
 ]
 
 MAX_LINK_MASS = 1e4  # kg: ten tonnes, beyond the heaviest industrial robot's heaviest link
@@ -94,7 +95,9 @@ def _origin(path: Path, where: str, el: ET.Element | None, what: str) -> None:
         )
 
 
-def _scalar(path: Path, where: str, el: ET.Element | None, attr: str) -> float | None:
+def scalar(path: Path, where: str, el: ET.Element | None, attr: str) -> float | None:
+    """Attribute ``attr`` of ``el`` as a finite float, None when absent; an error naming file,
+    element, attribute and value when it is not a finite number."""
     raw = el.get(attr) if el is not None else None
     if raw is None:
         return None
@@ -142,7 +145,7 @@ def _check_link(path: Path, link: ET.Element, notes: list[str]) -> None:
         return
     where = f"link '{name}' <inertial>"
     _origin(path, where, inertial, "centre of mass")
-    mass = _scalar(path, f"{where} <mass>", inertial.find("mass"), "value")
+    mass = scalar(path, f"{where} <mass>", inertial.find("mass"), "value")
     raw = inertial.find("mass").get("value") if mass is not None else None
     if mass is None:
         raise UrdfError(f"{path}: {where} <mass>: attribute 'value' is missing")
@@ -162,7 +165,7 @@ def _check_link(path: Path, link: ET.Element, notes: list[str]) -> None:
     if el is None:
         return  # read_urdf names it
     moments = {
-        k: _scalar(path, f"{where} <inertia>", el, k) for k in ("ixx", "iyy", "izz", "ixy", "ixz", "iyz")
+        k: scalar(path, f"{where} <inertia>", el, k) for k in ("ixx", "iyy", "izz", "ixy", "ixz", "iyz")
     }
     biggest = max(abs(v) for v in moments.values() if v is not None) if any(moments.values()) else 0.0
     if biggest > mass * MAX_OFFSET**2:
@@ -211,8 +214,8 @@ def _check_joint(path: Path, joint: ET.Element, on_chain: bool, notes: list[str]
     _origin(path, where, joint, "joint")
     changed = _check_axis(path, where, joint, notes) if kind != "fixed" else False
     lim, dyn = joint.find("limit"), joint.find("dynamics")
-    values = {k: _scalar(path, f"{where} <limit>", lim, k) for k in ("effort", "velocity", "lower", "upper")}
-    values |= {k: _scalar(path, f"{where} <dynamics>", dyn, k) for k in ("damping", "friction")}
+    values = {k: scalar(path, f"{where} <limit>", lim, k) for k in ("effort", "velocity", "lower", "upper")}
+    values |= {k: scalar(path, f"{where} <dynamics>", dyn, k) for k in ("damping", "friction")}
     for k in ("damping", "friction"):
         v = values[k]
         if v is not None and not 0 <= v <= MAX_FRICTION:

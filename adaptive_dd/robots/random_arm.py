@@ -21,14 +21,13 @@ from __future__ import annotations
 
 import copy
 import functools
-import hashlib
-import os
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from adaptive_dd.errors import ParameterError
+from adaptive_dd.plant.two_link_urdf import cached_urdf
 
 __all__ = [
     "PAYLOAD_COM_REACH",
@@ -131,7 +130,7 @@ class RandomArm:
 
     def path(self) -> Path:
         """The URDF as a file in the user's cache folder, named by seed and content hash."""
-        return _cached(f"random_arm-{self.seed}", self.urdf)
+        return cached_urdf(self.urdf, f"random_arm-{self.seed}")
 
     def arm_table(self) -> dict:
         """The ``[arm]`` keys this arm brings to a scenario (robot, capacity, armature)."""
@@ -423,29 +422,6 @@ def _urdf(seed, kind, geo, layout, lower, upper, vel, effort, viscous, coulomb) 
         "</robot>",
     ]
     return "\n".join(out) + "\n"
-
-
-def _cached(stem: str, text: str) -> Path:
-    """``text`` as ``$XDG_CACHE_HOME/adaptive_dd/urdf/STEM-HASH.urdf`` (the temporary folder when
-    the cache cannot be written): a worker process reads the same file."""
-    import tempfile
-
-    from adaptive_dd.outputs import atomic_write
-
-    name = f"{stem}-{hashlib.sha256(text.encode()).hexdigest()[:16]}.urdf"
-    cache = Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "adaptive_dd" / "urdf"
-    for root in (cache, Path(tempfile.gettempdir()) / f"adaptive_dd-urdf-{os.getuid()}"):
-        path = root / name
-        if path.is_file():
-            return path
-        try:
-            root.mkdir(parents=True, exist_ok=True)
-            with atomic_write(path) as fh:
-                fh.write(text)
-            return path
-        except OSError:
-            continue
-    raise OSError(f"cannot write the URDF of a random arm to {cache} nor to the temporary folder")
 
 
 def with_random_arm(data: dict, src: str = "<memory>") -> dict:
