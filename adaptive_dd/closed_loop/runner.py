@@ -5,14 +5,19 @@ Trial i of every controller uses the noise of seed ``(scenario.seed, seed_indice
 (:class:`~adaptive_dd.closed_loop.noise.NoiseBlocks`: ``(CHUNK, 2 n)`` standard normals per
 trial, dropouts from a second generator ``(seed, i, 1)``). Built-in controllers run compiled
 (:func:`~adaptive_dd.closed_loop.glue.chain_loop_block`, a block of samples of a range of
-trials in one call, ranges in parallel threads); any other controller object (a plug-in with
-``reset / command / observe``) runs on the Python path
+trials in one call, ranges in parallel threads); a compiled plug-in (``reset / command /
+observe`` as ``numba.njit`` functions: :func:`~adaptive_dd.controllers.plugins.is_compiled`) runs
+the same way in its own specialisation of the loop
+(:func:`~adaptive_dd.closed_loop.plugin_loop.plugin_block`); any other controller object (a
+plain-Python plug-in) runs on the Python path
 (:func:`~adaptive_dd.closed_loop.python_path.run_python_batch`, shared with the two-link arm),
-one ``command`` per sample for the whole batch. Both call the same compiled glue.
+one ``command`` per sample for the whole batch, and the run says so once. All three call the same
+compiled glue.
 """
 
 from __future__ import annotations
 
+import time
 from collections.abc import Sequence
 from functools import partial
 
@@ -47,6 +52,7 @@ from adaptive_dd.closed_loop.types import (
     true_models,
 )
 from adaptive_dd.controllers.base import declared
+from adaptive_dd.controllers.plugins import compiled_form, is_compiled, slow_path_note
 
 __all__ = [
     "CHUNK",
@@ -131,10 +137,23 @@ def run_closed_loop(
     if scenario.plant is not None:
         res.plant = plant_record(scenario, idx)
     for name, ctrl in ctrls.items():
-        compiled = isinstance(ctrl, Law) and engine != "python"
-        if engine == "compiled" and not compiled:
+        builtin = isinstance(ctrl, Law)
+        plugin = not builtin and is_compiled(ctrl)
+        if plugin and engine == "python":
+            raise ParameterError(
+                f"engine='python': {name!r} is a compiled plug-in (numba.njit reset, command, observe), "
+                "which runs in the compiled loop only; use engine='auto'"
+            )
+        if engine == "compiled" and not (builtin or plugin):
             raise ParameterError(f"engine='compiled': no compiled path for {name!r}; use engine='auto'")
-        runner = _run_compiled if compiled else _run_python
+        if builtin and engine != "python":
+            runner = _run_compiled
+        elif plugin:
+            runner = _run_plugin
+        else:
+            runner = _run_python
+            if not builtin:  # a user's plain-Python controller: say once why it is slow
+                print(slow_path_note(name, ctrl), flush=True)
         res.runs[name] = runner(name, ctrl, scenario, idx, rc, io, pl, keep_trajectories, bar)
     return res
 
@@ -199,6 +218,41 @@ def _run_compiled(name, ctrl: Law, scenario, idx, rc, io, pl, keep, bar) -> Cont
             bar.update(k1 - k0)
     run.skipped = ctrl.skipped(form)
     if ctrl.has_detector:
+        run.alarm_times = alarm_lists(alarms)
+    run.explain_failures(rc.max_error, rc.max_speed)
+    return run
+
+
+def _run_plugin(name, ctrl, scenario, idx, rc, io, pl, keep, bar) -> ControllerRun:
+    """A compiled plug-in's trials in its specialisation of the compiled loop
+    (:func:`~adaptive_dd.closed_loop.plugin_loop.plugin_block`), blocks and threads as
+    :func:`_run_compiled`. The loop is compiled on its first call (timed and printed apart from
+    the run); an exception raised inside it fails the plug-in's trials with the message in
+    ``run.error``, as on the Python path."""
+    from adaptive_dd.closed_loop.plugin_loop import plugin_block
+
+    S, N, n = len(idx), scenario.n_samples, scenario.n_joints
+    form = compiled_form(name, ctrl, S, rc.T)
+    run, ts, acc, rec = _records(name, ctrl, scenario, rc, pl, S, keep, form.estimates, "compiled")
+    alarms = Alarms(np.zeros((S, MAX_ALARMS)), np.zeros(S, dtype=np.int64))
+    pis = true_models(pl) if form.true_model else np.ascontiguousarray(scenario.arm.pi, dtype=float)[None, None]
+    fns = (form.reset, form.command, form.observe, form.estimate)
+    tail = (pl.chain, pis, form.need, form.params, form.state, *fns, form.estimates)
+    try:
+        for k0, k1, noise, drop in NoiseBlocks(scenario, idx, 2 * n).blocks(N):
+            args = (k0, k1, noise, drop, rc, io, pl, ts, acc, rec, alarms, *tail)
+            if k0 == 0:  # compile (or find) this plug-in's loop first: no trial, timed apart
+                t0, known = time.perf_counter(), len(plugin_block.overloads)
+                in_threads(plugin_block, 0, args)
+                if len(plugin_block.overloads) > known:
+                    print(f"{name}: compiled the plug-in into the closed loop in {time.perf_counter() - t0:.1f} s")
+            in_threads(plugin_block, S, args)
+            if bar is not None:
+                bar.update(k1 - k0)
+    except Exception as exc:  # contain any plug-in failure to its own trials
+        run.error = f"{type(exc).__name__} in the compiled plug-in: {exc}"
+        run.failed[:] = True
+    if getattr(ctrl, "has_detector", False):
         run.alarm_times = alarm_lists(alarms)
     run.explain_failures(rc.max_error, rc.max_speed)
     return run

@@ -4,6 +4,11 @@
 The protocol (``reset``, ``command``, ``observe``) and a worked example on each kind of arm:
 ``docs/controllers.md``. :func:`~adaptive_dd.controllers.registry.make_controller` calls
 :func:`plugin_controller` for any name with a ``:``.
+
+A plug-in whose ``reset``, ``command`` and ``observe`` are ``numba.njit`` functions is a compiled
+plug-in (:func:`is_compiled`): on an N-joint arm it runs inside the compiled closed loop
+(:mod:`adaptive_dd.closed_loop.plugin_loop`; what the loop hands it: :func:`compiled_form`). Any
+other runs on the Python path, and the run says so once (:func:`slow_path_note`).
 """
 
 from __future__ import annotations
@@ -12,15 +17,21 @@ import importlib
 import inspect
 import sys
 
+import numpy as np
+
 from adaptive_dd.controllers.base import Controller, Gains
 from adaptive_dd.errors import ParameterError
 
 __all__ = [
     "COMMON",
     "PLUGIN_GIVEN",
+    "PluginForm",
+    "compiled_form",
     "controller_label",
+    "is_compiled",
     "load_controller_class",
     "plugin_controller",
+    "slow_path_note",
     "unknown_settings",
 ]
 
@@ -120,4 +131,109 @@ def _plugin(spec: str, g: Gains, options: dict, given: dict, search: tuple) -> C
         raise ParameterError(f"controllers.{spec}: {type(exc).__name__}: {exc}") from None
     if not getattr(ctrl, "name", None) or ctrl.name == Controller.name:  # none declared: the class name
         ctrl.name = controller_label(spec)
+    if given.get("arm") is not None and is_compiled(ctrl):
+        if getattr(given["arm"], "chain", None) is None:  # the closed forms' record: no kinematic chain
+            raise ParameterError(
+                f"controllers.{spec}: a compiled plug-in runs in the N-joint arm's compiled loop, not on "
+                "the paper's closed-form two-link runtime: run the paper's arm from its URDF "
+                "(benchmarks/scenarios/sice_drawn.toml)"
+            )
     return ctrl
+
+
+# ------------------------------------------------------------------ the compiled protocol
+_PER_SAMPLE = ("reset", "command", "observe")
+
+
+def is_compiled(ctrl) -> bool:
+    """Whether ``ctrl`` is a compiled plug-in: its ``reset``, ``command`` and ``observe`` are all
+    ``numba.njit`` functions (a :class:`ParameterError` when only some are: say which)."""
+    from numba.core.dispatcher import Dispatcher
+
+    jitted = [m for m in _PER_SAMPLE if isinstance(getattr(ctrl, m, None), Dispatcher)]
+    if jitted and len(jitted) < len(_PER_SAMPLE):
+        plain = [m for m in _PER_SAMPLE if m not in jitted]
+        raise ParameterError(
+            f"controller {type(ctrl).__name__}: {jitted} are numba.njit functions but {plain} are not; "
+            "a compiled plug-in compiles all three (docs/own_controller.md), a plain one none"
+        )
+    return bool(jitted)
+
+
+class PluginForm:
+    """What the compiled loop runs for a compiled plug-in (:func:`compiled_form`).
+
+    Attributes
+    ----------
+    params : object
+        The plug-in's ``parameters(sample_period)`` (any value numba compiles).
+    need : int
+        Bits of :data:`~adaptive_dd.closed_loop.plugin_loop.NEEDS`: the model terms the loop computes.
+    state : ndarray (S, m)
+        Per-trial state, ``m = max(state_size, 1)``, zeros (``reset`` fills trial i's row).
+    reset, command, observe, estimate : numba dispatchers
+        The per-sample functions (``estimate`` a no-op when the plug-in reports no estimate).
+    estimates : bool
+        Whether the loop records ``estimate``'s base parameters.
+    true_model : bool
+        The terms are of each trial's true model (``needs_true_model``), else of the controllers'.
+    """
+
+    def __init__(self, params, need, state, functions, estimates, true_model) -> None:
+        self.params, self.need, self.state = params, need, state
+        self.reset, self.command, self.observe, self.estimate = functions
+        self.estimates, self.true_model = estimates, true_model
+
+
+def compiled_form(name: str, ctrl, n_trials: int, sample_period: float) -> PluginForm:
+    """The :class:`PluginForm` of compiled plug-in ``ctrl`` (results name ``name``) for ``n_trials``.
+
+    Reads its declarations: ``needs`` (names of
+    :data:`~adaptive_dd.closed_loop.plugin_loop.NEEDS`, default none), ``state_size`` (floats per
+    trial, default 0), ``parameters(sample_period)`` (default ``()``), ``estimate`` (an ``njit``
+    function ``estimate(p, x, out)``, or none) and ``needs_true_model``.
+
+    Raises
+    ------
+    ParameterError
+        An unknown need, a ``state_size`` that is not an integer >= 0, an ``estimate`` that is
+        not compiled, ``parameters`` that raise.
+    """
+    from numba.core.dispatcher import Dispatcher
+
+    from adaptive_dd.closed_loop.plugin_loop import NEEDS, no_estimate
+
+    where = f"controllers.{name}"
+    needs = getattr(ctrl, "needs", ())
+    needs = (needs,) if isinstance(needs, str) else tuple(needs)
+    bad = [x for x in needs if x not in NEEDS]
+    if bad:
+        raise ParameterError(
+            f"{where}: needs {bad} are not terms the compiled loop hands over; allowed: {sorted(NEEDS)}"
+        )
+    size = getattr(ctrl, "state_size", 0)
+    if isinstance(size, bool) or not isinstance(size, int | np.integer) or size < 0:
+        raise ParameterError(f"{where}: state_size must be an integer >= 0 (floats per trial), got {size!r}")
+    est = getattr(ctrl, "estimate", None)
+    if est is not None and not isinstance(est, Dispatcher):
+        raise ParameterError(f"{where}: estimate must be a numba.njit function estimate(p, x, out), got {est!r}")
+    make = getattr(ctrl, "parameters", None)
+    try:
+        params = () if make is None else make(float(sample_period))
+    except Exception as exc:
+        raise ParameterError(f"{where}: parameters({sample_period}) raised {type(exc).__name__}: {exc}") from None
+    need = 0
+    for x in needs:
+        need |= NEEDS[x]
+    state = np.zeros((int(n_trials), max(int(size), 1)))
+    functions = (ctrl.reset, ctrl.command, ctrl.observe, est if est is not None else no_estimate)
+    return PluginForm(params, need, state, functions, est is not None, bool(getattr(ctrl, "needs_true_model", False)))
+
+
+def slow_path_note(name: str, ctrl) -> str:
+    """The one line a run prints for a controller on the Python path: that it is slow, and why."""
+    return (
+        f"{name}: a plain-Python controller ({type(ctrl).__module__}.{type(ctrl).__qualname__}) runs on the slow "
+        "Python path, one command per sample for the batch of trials; write its reset, command and "
+        "observe as numba.njit functions to run it in the compiled loop (docs/own_controller.md)"
+    )

@@ -1,0 +1,159 @@
+"""The compiled closed loop of a plug-in controller on an N-joint arm.
+
+A compiled plug-in (the protocol: ``docs/controllers.md``, "Compiled plug-ins") gives four
+``numba.njit`` functions, ``reset``, ``command``, ``observe`` and optionally ``estimate``, and a
+value of its parameters (anything numba compiles: a tuple of arrays and floats). The loop here is
+:func:`adaptive_dd.closed_loop.glue.trial_samples` with the built-in law and estimator replaced by
+those functions, handed to it as arguments: numba compiles one specialisation of the loop per
+plug-in, with the plug-in's functions inlined or called directly, no Python between samples. The
+per-sample glue (measurement and dropouts, divergence rule, actuator, plant step, failure freeze,
+streamed sums, recordings, alarms, the estimate's record) is the built-ins' own
+(:func:`~adaptive_dd.closed_loop.glue.measure_sample`, :func:`~adaptive_dd.closed_loop.glue.apply_sample`,
+:func:`~adaptive_dd.closed_loop.glue.accumulate_sample`, :func:`~adaptive_dd.closed_loop.glue.record_estimate`),
+so results, failures and metrics follow the same rules.
+
+Before ``command`` the loop computes the model terms the plug-in declares (``needs``, bits
+:data:`NEED_GRAVITY`, :data:`NEED_MASS_MATRIX`, :data:`NEED_BIAS`) at the measured state, of the
+controllers' model or, for a plug-in that needs the true model, of the trial's plant in the current
+segment (the model of the built-in oracles).
+
+Nothing in this module is cached: numba keys a function-typed argument by the function object, so
+a cached specialisation would never be found again in a new process (each run compiles the loop
+for its plug-in; the plant's integrator and the arm's dynamics it calls come from the cache). The
+module is therefore not one of the cache's kernel sources (:func:`adaptive_dd._numba_cache.kernel_sources`
+finds those by their decorators: the functions here are compiled by calls, not decorators).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from adaptive_dd.closed_loop.chain_choices import _chain_plant_advance
+from adaptive_dd.closed_loop.glue import (
+    COPY_PROPAGATE_ONLY,
+    _bound,
+    _segment,
+    accumulate_sample,
+    apply_sample,
+    measure_sample,
+    record_estimate,
+)
+from adaptive_dd.plant.chain_dynamics import mass_matrix_in, rnea_ref_in, workspace
+from adaptive_dd.plant.integrator import plant_scratch
+
+__all__ = ["NEED_BIAS", "NEED_GRAVITY", "NEED_MASS_MATRIX", "NEEDS", "no_estimate", "plugin_block"]
+
+NEED_GRAVITY, NEED_MASS_MATRIX, NEED_BIAS = 1, 2, 4
+NEEDS = {"gravity": NEED_GRAVITY, "mass_matrix": NEED_MASS_MATRIX, "bias": NEED_BIAS}
+"""The model terms a compiled plug-in may declare (``needs``), name -> bit: ``gravity`` g(q) (n,),
+``mass_matrix`` M(q) with the armature (n, n), ``bias`` the torque at zero acceleration
+C(q, qd) qd + g(q) + fv qd + fc sgn(qd) (n,) [N m, kg m^2]; each at the measured q, qd."""
+
+
+def _model_terms(ch, pi, need, q, qd, zero, w, g, m, c):  # pragma: no cover - compiled
+    """The declared terms of the model ``pi (13 n,)`` at ``q, qd (n,)`` into ``g, m, c``."""
+    n = q.shape[0]
+    links = pi[: 10 * n]
+    if need & 1:
+        rnea_ref_in(ch, links, q, zero, zero, zero, w, g)  # friction and armature: none at rest
+    if need & 2:
+        mass_matrix_in(ch, links, q, w, m)
+        for j in range(n):
+            m[j, j] += pi[12 * n + j]
+    if need & 4:
+        rnea_ref_in(ch, links, q, qd, qd, zero, w, c)
+        for j in range(n):
+            c[j] += pi[10 * n + j] * qd[j] + pi[11 * n + j] * np.sign(qd[j])
+
+
+_model_terms_c = njit(inline="always")(_model_terms)
+_apply_chain = njit(inline="always")(_bound(apply_sample.py_func, plant_advance=_chain_plant_advance))
+
+
+def _no_estimate(p, x, out):  # pragma: no cover - compiled
+    """The ``estimate`` of a plug-in that reports none (never called: ``estimates`` is false)."""
+    return None
+
+
+no_estimate = njit(_no_estimate)
+
+
+def _plugin_trial(
+    i, k0, k1, noise, drop, rc, io, pl, ts, acc, rec, alarms, ch, pis, need, p, x,
+    reset, command, observe, estimate, estimates,
+):  # pragma: no cover - compiled  # fmt: skip
+    """Samples ``k0`` to ``k1 - 1`` of trial i: :func:`~adaptive_dd.closed_loop.glue.trial_samples`
+    with the plug-in's ``command``, ``observe`` and ``estimate`` in place of the built-in law and
+    estimator; ``reset`` of trial i's state row ``x[i]`` at sample 0. ``pis (S or 1, G or 1,
+    13 n)`` the model whose terms ``need`` asks for (``ch`` its kinematics), ``p`` the plug-in's
+    parameters."""
+    T, max_error, max_speed, q_d, qd_d, qdd_d = rc.T, rc.max_error, rc.max_speed, rc.q_d, rc.qd_d, rc.qdd_d
+    seg_start, seg_end, seg_settled = rc.seg_start, rc.seg_end, rc.seg_settled
+    lim, lsb, saturate, quantize_dac = io.lim, io.lsb, io.saturate, io.quantize_dac
+    res, std, quantize_encoder = io.res, io.std, io.quantize_encoder
+    q, qd, stuck, failed, failed_at = ts.q, ts.qd, ts.stuck, ts.failed, ts.failed_at
+    held_q, held_qd, n_dropped = ts.held_q, ts.held_qd, ts.n_dropped
+    sum_e2, sum_e2_joint, max_e, sum_tau2, n_saturated, sum_e2_settled, e_norm = acc
+    q_rec, qd_rec, tau_rec, sat_rec = rec.q, rec.qd, rec.tau, rec.saturated
+    sigma_rec, sigma_end = rec.sigma, rec.sigma_end
+    alarm_t, n_alarms = alarms.times, alarms.count
+    n = q.shape[1]
+    qm, qdm, qm_obs, qdm_obs = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
+    cmd, tau, e, prev = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
+    sig = np.full(sigma_end.shape[2], np.nan)
+    pw, w, zero = plant_scratch(n), workspace(n), np.zeros(n)
+    g, m, c = np.full(n, np.nan), np.full((n, n), np.nan), np.full(n, np.nan)  # NaN unless declared
+    terms = (g, m, c)
+    xi = x[i]
+    ip = i if pis.shape[0] > 1 else 0
+    if k0 == 0:
+        reset(p, xi)
+    has_drop = drop.shape[1] > 0
+    for k in range(k0, k1):
+        s = _segment(seg_start, k)
+        lost = has_drop and drop[i, k - k0]
+        measure_sample(
+            q, qd, held_q, held_qd, n_dropped, res, std, quantize_encoder, i, noise[i, k - k0], lost,
+            qm, qdm, qm_obs, qdm_obs,
+        )  # fmt: skip
+        if need != 0:
+            _model_terms_c(ch, pis[ip, s if pis.shape[1] > 1 else 0], need, qm, qdm, zero, w, g, m, c)
+        command(p, xi, qm, qdm, q_d[k], qd_d[k], qdd_d[k], terms, cmd)
+        mask = _apply_chain(
+            T, max_error, max_speed, q_d, lim, lsb, saturate, quantize_dac, pl, pw,
+            q, qd, stuck, failed, failed_at, q_rec, qd_rec, tau_rec, sat_rec, i, k, cmd, tau, e, prev, s,
+        )  # fmt: skip
+        accumulate_sample(
+            sum_e2, sum_e2_joint, max_e, sum_tau2, n_saturated, sum_e2_settled, e_norm, seg_settled,
+            i, s, k, e, tau, mask,
+        )  # fmt: skip
+        if observe(p, xi, qm_obs, qdm_obs, tau) == 1:
+            if n_alarms[i] < alarm_t.shape[1]:
+                alarm_t[i, n_alarms[i]] = k * T
+            n_alarms[i] += 1
+        if estimates and (k == seg_end[s] - 1 or i < sigma_rec.shape[0]):
+            estimate(p, xi, sig)
+            record_estimate(seg_end, sigma_end, sigma_rec, i, k, s, sig)
+
+
+_plugin_trial_c = njit(inline="always")(_plugin_trial)
+
+
+def _plugin_block(
+    i0, i1, k0, k1, noise, drop, rc, io, pl, ts, acc, rec, alarms, ch, pis, need, p, x,
+    reset, command, observe, estimate, estimates,
+):  # pragma: no cover - compiled  # fmt: skip
+    """Samples ``k0`` to ``k1 - 1`` of trials ``i0`` to ``i1 - 1`` (:func:`_plugin_trial`)."""
+    for i in range(i0, i1):
+        _plugin_trial_c(
+            i, k0, k1, noise, drop, rc, io, pl, ts, acc, rec, alarms, ch, pis, need, p, x,
+            reset, command, observe, estimate, estimates,
+        )  # fmt: skip
+
+
+plugin_block = njit(nogil=True, parallel=COPY_PROPAGATE_ONLY)(_plugin_block)
+"""A block of samples of a range of trials of a compiled plug-in (:func:`_plugin_trial`); called
+as :func:`~adaptive_dd.closed_loop.glue.chain_loop_block` is (:func:`~adaptive_dd.closed_loop.glue.in_threads`),
+compiled with the same options (:data:`~adaptive_dd.closed_loop.glue.COPY_PROPAGATE_ONLY`), once
+per plug-in and process."""

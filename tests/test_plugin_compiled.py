@@ -1,0 +1,141 @@
+"""Compiled plug-ins: a user's law in the compiled closed loop, held to the built-in it reproduces.
+
+The shipped example ``examples/plugins/pd_gravity_plugin.py`` (PD plus gravity compensation,
+written against the public protocol only) against the built-in ``pd_gravity`` on the same
+scenario and seeds; faults planted through its parameters (one compiled specialisation serves
+them all); the declarations' errors; the slow path's note for a plain-Python plug-in.
+"""
+
+import sys
+import tomllib
+from pathlib import Path
+
+import numpy as np
+import pytest
+from numba import njit
+
+from adaptive_dd.benchmark.runner import run_benchmark
+from adaptive_dd.benchmark.scenario import parse_scenario
+from adaptive_dd.closed_loop.runner import run_closed_loop
+from adaptive_dd.controllers import Gains
+from adaptive_dd.controllers.plugins import compiled_form, is_compiled
+from adaptive_dd.errors import ParameterError
+
+PLUGINS = Path(__file__).resolve().parent.parent / "examples" / "plugins"
+SCENARIO = PLUGINS / "pd_gravity.toml"
+
+
+@pytest.fixture(scope="module")
+def example():
+    """The example plug-in's module, imported as the runner imports it (the scenario's folder)."""
+    sys.path.insert(0, str(PLUGINS))
+    try:
+        import pd_gravity_plugin
+    finally:
+        sys.path.remove(str(PLUGINS))
+    return pd_gravity_plugin
+
+
+def _scenario(controllers, seeds=2, duration=3.0, keep_table=True):
+    data = tomllib.loads(SCENARIO.read_text())
+    data["run"].update(controllers=controllers, seeds=seeds, duration=duration)
+    if not keep_table:
+        data.pop("controllers")
+    return parse_scenario(data, str(SCENARIO), name="plugin_test")
+
+
+def _rms(run):
+    """RMS tracking error per trial and segment [rad]."""
+    return np.sqrt(run.acc.sum_e2 / run.acc.e_norm.shape[1])
+
+
+def _planted(example, fault):
+    """The example plug-in with a fault planted in its parameters (same compiled functions)."""
+
+    class Faulty(example.PDGravityPlugin):
+        name = "faulty"
+
+        def parameters(self, sample_period):
+            kp, kd = super().parameters(sample_period)
+            return fault(kp, kd)
+
+    return Faulty
+
+
+def test_the_example_reproduces_the_builtin_pd_gravity(example):
+    sc = _scenario(["pd_gravity", "pd_gravity_plugin:PDGravityPlugin", "pd_gravity_oracle"])
+    res = run_benchmark(sc, progress=False)
+    ours, builtin = res.runs["pd_gravity_plugin"], res.runs["pd_gravity"]
+    assert ours.engine == "compiled" and not ours.error and not ours.failed.any()
+    assert ours.floor == "pd_gravity_oracle"
+    assert np.max(np.abs(_rms(ours) - _rms(builtin))) < 1e-9
+    np.testing.assert_allclose(ours.q, builtin.q, rtol=0, atol=1e-9)
+    np.testing.assert_allclose(ours.tau, builtin.tau, rtol=0, atol=1e-6)
+    # results, labels and the per-seed table as for a built-in: the same ratios to the same floor
+    table = res.summary().set_index(["controller", "segment"])["ratio_mean"]
+    np.testing.assert_allclose(table["pd_gravity_plugin"].to_numpy(), table["pd_gravity"].to_numpy(), rtol=1e-9)
+    per_seed = res.to_frame()
+    assert set(per_seed["controller"]) >= {"pd_gravity_plugin", "pd_gravity"}
+
+
+@pytest.mark.parametrize(
+    "fault",
+    [
+        lambda kp, kd: (kp, -kd),  # the damping's sign flipped
+        lambda kp, kd: (kp * 1.001, kd),  # the stiffness 0.1 % off
+    ],
+)
+def test_a_planted_fault_is_caught(example, fault):
+    sc = _scenario(["pd_gravity"], keep_table=False)
+    builtin = run_closed_loop(sc).runs["pd_gravity"]
+    ctrl = _planted(example, fault)(sc.arm, Gains(sc.bandwidth, sc.damping))
+    ours = run_closed_loop(sc, {"faulty": ctrl}).runs["faulty"]
+    assert ours.engine == "compiled"
+    assert np.max(np.abs(_rms(ours) - _rms(builtin))) > 1e-9  # the comparison above would fail
+
+
+def test_a_non_finite_command_fails_its_trials_not_the_run(example):
+    sc = _scenario(["pd_gravity"], keep_table=False)
+    ctrl = _planted(example, lambda kp, kd: (kp * np.nan, kd))(sc.arm, Gains(sc.bandwidth, sc.damping))
+    run = run_closed_loop(sc, {"faulty": ctrl}).runs["faulty"]
+    assert run.failed.all() and (run.failed_at == 0).all() and not run.error
+    assert np.all(np.isfinite(run.acc.sum_e2))  # the trial froze at rest: no NaN in the metrics
+
+
+def test_the_plain_python_plugin_runs_on_the_slow_path_and_says_so_once(capsys):
+    sc = _scenario(["pd_gravity_python:PDGravityPython"], seeds=2, duration=0.05, keep_table=False)
+    run = run_closed_loop(sc).runs["pd_gravity_python"]
+    out = capsys.readouterr().out
+    assert run.engine == "python" and not run.failed.any()
+    assert out.count("slow Python path") == 1 and "pd_gravity_python" in out and "numba.njit" in out
+
+
+class _Declares:
+    """A compiled plug-in's shape with its declarations set per test."""
+
+    reset = command = observe = staticmethod(njit(lambda p, x: None))
+
+
+@pytest.mark.parametrize(
+    ("attrs", "match"),
+    [
+        ({"needs": ("gravity", "jacobian")}, r"needs \['jacobian'\].*allowed"),
+        ({"state_size": -1}, "state_size"),
+        ({"state_size": 2.5}, "state_size"),
+        ({"estimate": lambda p, x, out: None}, "estimate must be a numba.njit"),
+    ],
+)
+def test_bad_declarations_are_errors_naming_the_key(attrs, match):
+    ctrl = type("Bad", (_Declares,), attrs)()
+    with pytest.raises(ParameterError, match=match):
+        compiled_form("bad", ctrl, 2, 1e-3)
+
+
+def test_a_half_compiled_plugin_is_an_error_naming_what_is_not_compiled():
+    class Half(_Declares):
+        def observe(self, q, qd, tau):
+            pass
+
+    with pytest.raises(ParameterError, match=r"\['observe'\] are not"):
+        is_compiled(Half())
+    assert not is_compiled(object()) and is_compiled(_Declares())
