@@ -8,9 +8,11 @@ those functions, handed to it as arguments: numba compiles one specialisation of
 plug-in, with the plug-in's functions inlined or called directly, no Python between samples. The
 per-sample glue (measurement and dropouts, divergence rule, actuator, plant step, failure freeze,
 streamed sums, recordings, alarms, the estimate's record) is the built-ins' own
-(:func:`~adaptive_dd.closed_loop.glue.measure_sample`, :func:`~adaptive_dd.closed_loop.glue.apply_sample`,
-:func:`~adaptive_dd.closed_loop.glue.accumulate_sample`, :func:`~adaptive_dd.closed_loop.glue.record_estimate`),
-so results, failures and metrics follow the same rules.
+(:func:`~adaptive_dd.closed_loop.glue.measure_sample`,
+:func:`~adaptive_dd.closed_loop.glue.apply_sample`,
+:func:`~adaptive_dd.closed_loop.glue.accumulate_sample`,
+:func:`~adaptive_dd.closed_loop.glue.record_estimate`), so results, failures and metrics follow
+the same rules.
 
 Before ``command`` the loop computes the model terms the plug-in declares (``needs``, bits
 :data:`NEED_GRAVITY`, :data:`NEED_MASS_MATRIX`, :data:`NEED_BIAS`) at the measured state, of the
@@ -42,7 +44,7 @@ from adaptive_dd.closed_loop.glue import (
 from adaptive_dd.plant.chain_dynamics import mass_matrix_in, rnea_ref_in, workspace
 from adaptive_dd.plant.integrator import plant_scratch
 
-__all__ = ["NEED_BIAS", "NEED_GRAVITY", "NEED_MASS_MATRIX", "NEEDS", "no_estimate", "plugin_block"]
+__all__ = ["NEEDS", "NEED_BIAS", "NEED_GRAVITY", "NEED_MASS_MATRIX", "no_estimate", "plugin_block"]
 
 NEED_GRAVITY, NEED_MASS_MATRIX, NEED_BIAS = 1, 2, 4
 NEEDS = {"gravity": NEED_GRAVITY, "mass_matrix": NEED_MASS_MATRIX, "bias": NEED_BIAS}
@@ -154,6 +156,6 @@ def _plugin_block(
 
 plugin_block = njit(nogil=True, parallel=COPY_PROPAGATE_ONLY)(_plugin_block)
 """A block of samples of a range of trials of a compiled plug-in (:func:`_plugin_trial`); called
-as :func:`~adaptive_dd.closed_loop.glue.chain_loop_block` is (:func:`~adaptive_dd.closed_loop.glue.in_threads`),
-compiled with the same options (:data:`~adaptive_dd.closed_loop.glue.COPY_PROPAGATE_ONLY`), once
-per plug-in and process."""
+as :func:`~adaptive_dd.closed_loop.glue.chain_loop_block` is
+(:func:`~adaptive_dd.closed_loop.glue.in_threads`), compiled with the same options
+(:data:`~adaptive_dd.closed_loop.glue.COPY_PROPAGATE_ONLY`), once per plug-in and process."""

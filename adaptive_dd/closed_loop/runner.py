@@ -235,7 +235,9 @@ def _run_plugin(name, ctrl, scenario, idx, rc, io, pl, keep, bar) -> ControllerR
     form = compiled_form(name, ctrl, S, rc.T)
     run, ts, acc, rec = _records(name, ctrl, scenario, rc, pl, S, keep, form.estimates, "compiled")
     alarms = Alarms(np.zeros((S, MAX_ALARMS)), np.zeros(S, dtype=np.int64))
-    pis = true_models(pl) if form.true_model else np.ascontiguousarray(scenario.arm.pi, dtype=float)[None, None]
+    pis = (
+        true_models(pl) if form.true_model else np.ascontiguousarray(scenario.arm.pi, dtype=float)[None, None]
+    )
     fns = (form.reset, form.command, form.observe, form.estimate)
     tail = (pl.chain, pis, form.need, form.params, form.state, *fns, form.estimates)
     try:
@@ -245,7 +247,8 @@ def _run_plugin(name, ctrl, scenario, idx, rc, io, pl, keep, bar) -> ControllerR
                 t0, known = time.perf_counter(), len(plugin_block.overloads)
                 in_threads(plugin_block, 0, args)
                 if len(plugin_block.overloads) > known:
-                    print(f"{name}: compiled the plug-in into the closed loop in {time.perf_counter() - t0:.1f} s")
+                    spent = time.perf_counter() - t0
+                    print(f"{name}: compiled the plug-in into the closed loop in {spent:.1f} s")
             in_threads(plugin_block, S, args)
             if bar is not None:
                 bar.update(k1 - k0)

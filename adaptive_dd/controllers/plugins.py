@@ -216,24 +216,30 @@ def compiled_form(name: str, ctrl, n_trials: int, sample_period: float) -> Plugi
         raise ParameterError(f"{where}: state_size must be an integer >= 0 (floats per trial), got {size!r}")
     est = getattr(ctrl, "estimate", None)
     if est is not None and not isinstance(est, Dispatcher):
-        raise ParameterError(f"{where}: estimate must be a numba.njit function estimate(p, x, out), got {est!r}")
+        raise ParameterError(
+            f"{where}: estimate must be a numba.njit function estimate(p, x, out), got {est!r}"
+        )
     make = getattr(ctrl, "parameters", None)
     try:
         params = () if make is None else make(float(sample_period))
     except Exception as exc:
-        raise ParameterError(f"{where}: parameters({sample_period}) raised {type(exc).__name__}: {exc}") from None
+        raise ParameterError(
+            f"{where}: parameters({sample_period}) raised {type(exc).__name__}: {exc}"
+        ) from None
     need = 0
     for x in needs:
         need |= NEEDS[x]
     state = np.zeros((int(n_trials), max(int(size), 1)))
     functions = (ctrl.reset, ctrl.command, ctrl.observe, est if est is not None else no_estimate)
-    return PluginForm(params, need, state, functions, est is not None, bool(getattr(ctrl, "needs_true_model", False)))
+    return PluginForm(
+        params, need, state, functions, est is not None, bool(getattr(ctrl, "needs_true_model", False))
+    )
 
 
 def slow_path_note(name: str, ctrl) -> str:
     """The one line a run prints for a controller on the Python path: that it is slow, and why."""
     return (
-        f"{name}: a plain-Python controller ({type(ctrl).__module__}.{type(ctrl).__qualname__}) runs on the slow "
-        "Python path, one command per sample for the batch of trials; write its reset, command and "
+        f"{name}: a plain-Python controller ({type(ctrl).__module__}.{type(ctrl).__qualname__}) runs on "
+        "the slow Python path, one command per sample for the batch of trials; write its reset, command and "
         "observe as numba.njit functions to run it in the compiled loop (docs/own_controller.md)"
     )
