@@ -148,3 +148,54 @@ def test_a_half_compiled_plugin_is_an_error_naming_what_is_not_compiled():
     with pytest.raises(ParameterError, match=r"\['observe'\] are not"):
         is_compiled(Half())
     assert not is_compiled(object()) and is_compiled(_Declares())
+
+
+class _Counter:
+    """A compiled plug-in with state, alarms and an estimate: PD on the reference, a count of the
+    samples observed as its 'estimate', an alarm at the 500th sample."""
+
+    has_detector = True
+    state_size = 1
+
+    def __init__(self, kp, kd):
+        self.kp, self.kd = kp, kd
+
+    def parameters(self, sample_period):
+        return (self.kp, self.kd, 500.0)
+
+    @staticmethod
+    @njit
+    def reset(p, x):
+        x[0] = 0.0
+
+    @staticmethod
+    @njit
+    def command(p, x, q, qd, q_d, qd_d, qdd_d, terms, tau):
+        for j in range(q.shape[0]):
+            tau[j] = p[0][j] * (q_d[j] - q[j]) + p[1][j] * (qd_d[j] - qd[j])
+
+    @staticmethod
+    @njit
+    def observe(p, x, q, qd, tau):
+        x[0] += 1.0
+        return 1 if x[0] == p[2] else 0
+
+    @staticmethod
+    @njit
+    def estimate(p, x, out):
+        for c in range(out.shape[0]):
+            out[c] = x[0]
+
+
+@pytest.mark.slow
+def test_state_alarms_and_estimates_reach_the_results():
+    sc = _scenario(["pd_gravity"], seeds=3, duration=2.5, keep_table=False)
+    m0 = sc.arm.nominal_inertia()
+    ctrl = _Counter(1600.0 * m0, 80.0 * m0)
+    run = run_closed_loop(sc, {"counter": ctrl}, keep_trajectories=2).runs["counter"]
+    assert not run.error and run.engine == "compiled"
+    assert run.alarm_times == [[pytest.approx(0.499)]] * 3  # the 500th sample, k = 499
+    ends = [2000, 2500]  # samples observed at each segment's end (swap at 2 s, T = 1 ms)
+    np.testing.assert_array_equal(run.sigma_end[:, :, 0], [ends] * 3)
+    assert run.sigma_hat.shape[0] == 2
+    np.testing.assert_array_equal(run.sigma_hat[:, :, 0], np.tile(np.arange(1, 2501), (2, 1)))
