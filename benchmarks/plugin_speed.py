@@ -74,7 +74,7 @@ def _cpu_per_sample(sc) -> tuple[float, float, float]:
 
     _IN_LOOP[0] = 0.0
     w0, c0 = time.perf_counter(), time.process_time()
-    with contextlib.redirect_stdout(io.StringIO()):  # the slow-path note, once per run
+    with contextlib.redirect_stderr(io.StringIO()):  # the slow-path note, once per run
         run_closed_loop(sc, keep_trajectories=0)
     c1, w1 = time.process_time(), time.perf_counter()
     per = 1e6 / (sc.seeds * sc.n_samples)

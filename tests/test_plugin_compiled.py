@@ -114,7 +114,7 @@ def test_a_non_finite_command_fails_its_trials_not_the_run(example):
 def test_the_plain_python_plugin_runs_on_the_slow_path_and_says_so_once(capsys):
     sc = _scenario(["pd_gravity_python:PDGravityPython"], seeds=2, duration=0.05, keep_table=False)
     run = run_closed_loop(sc).runs["pd_gravity_python"]
-    out = capsys.readouterr().out
+    out = capsys.readouterr().err  # beside the compilation messages, apart from the report
     assert run.engine == "python" and not run.failed.any()
     assert out.count("slow Python path") == 1 and "pd_gravity_python" in out and "numba.njit" in out
 

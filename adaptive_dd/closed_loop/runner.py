@@ -17,6 +17,7 @@ compiled glue.
 
 from __future__ import annotations
 
+import sys
 import time
 from collections.abc import Sequence
 from functools import partial
@@ -153,7 +154,7 @@ def run_closed_loop(
         else:
             runner = _run_python
             if not builtin:  # a user's plain-Python controller: say once why it is slow
-                print(slow_path_note(name, ctrl), flush=True)
+                print(slow_path_note(name, ctrl), file=sys.stderr, flush=True)
         res.runs[name] = runner(name, ctrl, scenario, idx, rc, io, pl, keep_trajectories, bar)
     return res
 
@@ -248,7 +249,9 @@ def _run_plugin(name, ctrl, scenario, idx, rc, io, pl, keep, bar) -> ControllerR
                 in_threads(plugin_block, 0, args)
                 if len(plugin_block.overloads) > known:
                     spent = time.perf_counter() - t0
-                    print(f"{name}: compiled the plug-in into the closed loop in {spent:.1f} s")
+                    print(
+                        f"{name}: compiled the plug-in into the closed loop in {spent:.1f} s", file=sys.stderr
+                    )
             in_threads(plugin_block, S, args)
             if bar is not None:
                 bar.update(k1 - k0)
