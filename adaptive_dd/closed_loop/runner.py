@@ -53,7 +53,7 @@ from adaptive_dd.closed_loop.types import (
     true_models,
 )
 from adaptive_dd.controllers.base import declared
-from adaptive_dd.controllers.plugins import compiled_form, is_compiled, slow_path_note
+from adaptive_dd.controllers.plugins import PythonForm, compiled_form, is_compiled, slow_path_note
 
 __all__ = [
     "CHUNK",
@@ -140,11 +140,8 @@ def run_closed_loop(
     for name, ctrl in ctrls.items():
         builtin = isinstance(ctrl, Law)
         plugin = not builtin and is_compiled(ctrl)
-        if plugin and engine == "python":
-            raise ParameterError(
-                f"engine='python': {name!r} is a compiled plug-in (numba.njit reset, command, observe), "
-                "which runs in the compiled loop only; use engine='auto'"
-            )
+        if plugin and engine == "python":  # its njit functions trial by trial, as asked
+            ctrl, plugin = PythonForm(name, ctrl, scenario.arm, "engine='python'"), False
         if engine == "compiled" and not (builtin or plugin):
             raise ParameterError(f"engine='compiled': no compiled path for {name!r}; use engine='auto'")
         if builtin and engine != "python":
@@ -153,7 +150,7 @@ def run_closed_loop(
             runner = _run_plugin
         else:
             runner = _run_python
-            if not builtin:  # a user's plain-Python controller: say once why it is slow
+            if not (builtin or isinstance(ctrl, PythonForm)):  # a plain-Python one: say once why it is slow
                 print(slow_path_note(name, ctrl), file=sys.stderr, flush=True)
         res.runs[name] = runner(name, ctrl, scenario, idx, rc, io, pl, keep_trajectories, bar)
     return res

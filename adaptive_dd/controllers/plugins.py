@@ -26,6 +26,7 @@ __all__ = [
     "COMMON",
     "PLUGIN_GIVEN",
     "PluginForm",
+    "PythonForm",
     "compiled_form",
     "controller_label",
     "is_compiled",
@@ -132,12 +133,8 @@ def _plugin(spec: str, g: Gains, options: dict, given: dict, search: tuple) -> C
     if not getattr(ctrl, "name", None) or ctrl.name == Controller.name:  # none declared: the class name
         ctrl.name = controller_label(spec)
     if given.get("arm") is not None and is_compiled(ctrl):
-        if getattr(given["arm"], "chain", None) is None:  # the closed forms' record: no kinematic chain
-            raise ParameterError(
-                f"controllers.{spec}: a compiled plug-in runs in the N-joint arm's compiled loop, not on "
-                "the paper's closed-form two-link runtime: run the paper's arm from its URDF "
-                "(benchmarks/scenarios/sice_drawn.toml)"
-            )
+        if getattr(given["arm"], "chain", None) is None:  # the closed forms' record: no compiled loop for it
+            return PythonForm(ctrl.name, ctrl, given["arm"], "the paper's closed-form two-link runtime")
     return ctrl
 
 
@@ -243,3 +240,91 @@ def slow_path_note(name: str, ctrl) -> str:
         "the slow Python path, one command per sample for the batch of trials; write its reset, command and "
         "observe as numba.njit functions to run it in the compiled loop (docs/own_controller.md)"
     )
+
+
+class PythonForm:
+    """A compiled plug-in on the Python path (``engine="python"``, or the paper's closed-form
+    two-link runtime, which has no compiled loop for plug-ins): its ``njit`` functions called
+    trial by trial, the model terms it declares from the arm's regressor and mass matrix (of the
+    true model given to an oracle, ``sigma_true``). Says once per run that it is on the slow path.
+
+    Parameters
+    ----------
+    name : str
+        The name its results carry.
+    ctrl : object
+        The compiled plug-in (:func:`is_compiled`).
+    arm : Arm or closed forms' record
+        ``regressor(q, qd, qdd)``, ``mass_matrix(q, sigma)``, ``sigma``.
+    why : str
+        Why it is not in the compiled loop (printed).
+    """
+
+    def __init__(self, name: str, ctrl, arm, why: str) -> None:
+        self.name, self.ctrl, self.arm, self.why = name, ctrl, arm, why
+        self.floor = getattr(ctrl, "floor", "ct_oracle")
+        self.needs_true_model = bool(getattr(ctrl, "needs_true_model", False))
+        self.form: PluginForm | None = None
+
+    def reset(self, n_trials: int, sample_period: float) -> None:
+        print(
+            f"{self.name}: a compiled plug-in on the slow Python path ({self.why}): its functions are "
+            "called trial by trial, sample by sample",
+            file=sys.stderr,
+            flush=True,
+        )
+        f = self.form = compiled_form(self.name, self.ctrl, n_trials, sample_period)
+        self.T, self._k = float(sample_period), 0
+        self._alarms: list[list[float]] = [[] for _ in range(int(n_trials))]
+        for i in range(int(n_trials)):
+            f.reset(f.params, f.state[i])
+
+    def _terms(self, q, qd, sigma):
+        """``(g, M, bias)`` per trial as the compiled loop gives them (NaN where not declared)."""
+        from adaptive_dd.closed_loop.plugin_loop import NEED_BIAS, NEED_GRAVITY, NEED_MASS_MATRIX
+
+        S, n = q.shape
+        need, zero = self.form.need, np.zeros_like(q)
+        g, m, c = np.full((S, n), np.nan), np.full((S, n, n), np.nan), np.full((S, n), np.nan)
+        if need & NEED_GRAVITY:
+            g = np.einsum("tip,tp->ti", self.arm.regressor(q, zero, zero), sigma)
+        if need & NEED_MASS_MATRIX:
+            m = np.stack([self.arm.mass_matrix(q[i], sigma[i]) for i in range(S)])
+        if need & NEED_BIAS:
+            c = np.einsum("tip,tp->ti", self.arm.regressor(q, qd, zero), sigma)
+        return np.ascontiguousarray(g), np.ascontiguousarray(m), np.ascontiguousarray(c)
+
+    def command(self, q, qd, q_d, qd_d, qdd_d, sigma_true=None):
+        f = self.form
+        q, qd = np.ascontiguousarray(q, dtype=float), np.ascontiguousarray(qd, dtype=float)
+        sigma = sigma_true if self.needs_true_model and sigma_true is not None else self.arm.sigma
+        sigma = np.broadcast_to(np.asarray(sigma, dtype=float), (q.shape[0], np.shape(sigma)[-1]))
+        g, m, c = self._terms(q, qd, sigma)
+        ref = [np.ascontiguousarray(r, dtype=float) for r in (q_d, qd_d, qdd_d)]
+        out = np.empty_like(q)
+        for i in range(q.shape[0]):
+            f.command(f.params, f.state[i], q[i], qd[i], *ref, (g[i], m[i], c[i]), out[i])
+        return out
+
+    def observe(self, q, qd, tau) -> None:
+        f = self.form
+        q, qd = np.ascontiguousarray(q, dtype=float), np.ascontiguousarray(qd, dtype=float)
+        tau = np.ascontiguousarray(tau, dtype=float)
+        for i in range(q.shape[0]):
+            if f.observe(f.params, f.state[i], q[i], qd[i], tau[i]) == 1:
+                self._alarms[i].append(self._k * self.T)
+        self._k += 1
+
+    @property
+    def sigma_hat(self):
+        f = self.form
+        if f is None or not f.estimates:
+            return None
+        out = np.empty((f.state.shape[0], np.shape(self.arm.sigma)[-1]))
+        for i in range(out.shape[0]):
+            f.estimate(f.params, f.state[i], out[i])
+        return out
+
+    @property
+    def alarm_times(self):
+        return self._alarms if getattr(self.ctrl, "has_detector", False) and self.form is not None else None
