@@ -187,12 +187,31 @@ class _Counter:
             out[c] = x[0]
 
 
+class _Bar:
+    """A progress bar's calls, in order."""
+
+    def __init__(self):
+        self.calls, self.done = [], 0
+
+    def clear(self):
+        self.calls.append("clear")
+
+    def refresh(self):
+        self.calls.append("refresh")
+
+    def update(self, n):
+        self.calls.append("update")
+        self.done += n
+
+
 @pytest.mark.slow
 def test_state_alarms_and_estimates_reach_the_results():
     sc = _scenario(["pd_gravity"], seeds=3, duration=2.5, keep_table=False)
     m0 = sc.arm.nominal_inertia()
     ctrl = _Counter(1600.0 * m0, 80.0 * m0)
-    run = run_closed_loop(sc, {"counter": ctrl}, keep_trajectories=2).runs["counter"]
+    bar = _Bar()
+    run = run_closed_loop(sc, {"counter": ctrl}, keep_trajectories=2, bar=bar).runs["counter"]
+    assert bar.calls[:2] == ["clear", "refresh"] and bar.done == 2500  # hidden while compiling
     assert not run.error and run.engine == "compiled"
     assert run.alarm_times == [[pytest.approx(0.499)]] * 3  # the 500th sample, k = 499
     ends = [2000, 2500]  # samples observed at each segment's end (swap at 2 s, T = 1 ms)

@@ -243,7 +243,11 @@ def _run_plugin(name, ctrl, scenario, idx, rc, io, pl, keep, bar) -> ControllerR
             args = (k0, k1, noise, drop, rc, io, pl, ts, acc, rec, alarms, *tail)
             if k0 == 0:  # compile (or find) this plug-in's loop first: no trial, timed apart
                 t0, known = time.perf_counter(), len(plugin_block.overloads)
+                if bar is not None:  # no progress bar (nor its estimate) while it compiles
+                    bar.clear()
                 in_threads(plugin_block, 0, args)
+                if bar is not None:
+                    bar.refresh()
                 if len(plugin_block.overloads) > known:
                     spent = time.perf_counter() - t0
                     print(
