@@ -148,7 +148,7 @@ def test_icl_stack_holds_the_integrated_dynamics_and_pulls_towards_the_payload(a
     ``(1 / N) sum Ybar^T R (Ubar - Ybar theta)`` over the stack (second writing in numpy)."""
     from adaptive_dd.closed_loop.composite import I_N, I_S, ICL_SLOTS, composite_term
 
-    n, j, T = arm.n_joints, arm.payload_joint, 1e-3
+    n, T = arm.n_joints, 1e-3
     cfg = IntegralConcurrentLearning(arm).law_config(T)
     assert cfg.icl_window == pytest.approx(2.0 / np.min(cfg.lam))
     theta = payload_parameters(1.0, [0.03, 0.0, 0.02], radius=0.05)
