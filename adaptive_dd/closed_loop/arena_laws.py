@@ -287,11 +287,11 @@ class NaturalAdaptive(Law):
     pseudo-inertia, ``J(phi)' = gamma J G J`` with ``G`` the 4x4 form of ``Y_j^T s``
     (:func:`~adaptive_dd.closed_loop.adaptation.natural_step`), stepped so that ``J`` stays
     positive definite: the estimate is physically consistent at every sample, with no box. The
-    one gain is derived: ``gamma = gamma_m / (m_j + m_cap)^2``, ``gamma_m`` ``slotine_li``'s mass
-    gain, ``m_j`` the nominal link's mass, ``m_cap`` the arm's ``payload_capacity`` (else
-    ``max_mass``): with the full payload the mass adapts as fast as ``slotine_li``'s, slower below
-    (the natural gradient scales a parameter's rate with its square). ``max_mass`` also bounds the
-    mass added. Signals: measured ``q, qd``; the reference with ``qdd_d``."""
+    one gain is derived: ``gamma = gamma_m / (m_j + m_cap / 2)^2``, ``gamma_m`` ``slotine_li``'s
+    mass gain, ``m_j`` the nominal link's mass, ``m_cap`` the arm's ``payload_capacity`` (else
+    ``max_mass``): with half the rated payload the mass adapts as fast as ``slotine_li``'s, slower
+    below and faster above (the natural gradient scales a parameter's rate with its square).
+    ``max_mass`` also bounds the mass added. Signals: measured ``q, qd``; the reference with ``qdd_d``."""
 
     name = "natural_adaptive"
     floor = "slotine_li_oracle"
@@ -305,7 +305,7 @@ class NaturalAdaptive(Law):
         if not (_is_number(self.max_mass) and self.max_mass > 0):
             raise ParameterError(f"{where}.max_mass: a number > 0 [kg], got {self.max_mass!r}")
         m_j = float(arm.pi[10 * int(arm.payload_joint)])
-        derived = DEFAULT_PAYLOAD_GAMMA[0] / (m_j + float(self.max_mass)) ** 2
+        derived = DEFAULT_PAYLOAD_GAMMA[0] / (m_j + 0.5 * float(self.max_mass)) ** 2
         self.gain = self.settings.get("gain", derived)
         if not (_is_number(self.gain) and self.gain > 0):
             raise ParameterError(f"{where}.gain: a number > 0, got {self.gain!r}")

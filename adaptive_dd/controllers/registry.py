@@ -413,7 +413,8 @@ CONTROLLERS: dict[str, Builtin] = {
         "natural_adaptive",
         {
             "gain": Setting(
-                "the natural law's one gain gamma; default slotine_li's mass gain / (link mass + max_mass)^2",
+                "the natural law's one gain gamma; default slotine_li's mass gain / "
+                "(link mass + max_mass / 2)^2",
                 ABSENT,
                 None,
                 rule=_NOT_TWO_LINK,
