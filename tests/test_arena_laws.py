@@ -23,6 +23,7 @@ from adaptive_dd.errors import ParameterError
 
 NEW = ["pd", "pd_gravity", "pd_gravity_oracle", "ct_nominal", "momentum_observer_ct", "sliding_mode"]
 NEW += ["slotine_li", "composite", "slotine_li_oracle", "ct_oracle"]
+NEW += ["icl", "natural_adaptive", "craig_hsu_sastry", "ct_oracle_textbook"]
 
 
 def _vertical3(duration: float, swap: float, controllers: list, seeds: int = 2):

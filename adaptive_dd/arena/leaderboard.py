@@ -6,8 +6,17 @@ each (a floor that cannot run says why in the row), and returns one row per scen
 controller and payload segment (:data:`COLUMNS` names every column with its unit). The
 scenarios are an argument: paths, :class:`~adaptive_dd.benchmark.scenario.Scenario` objects or
 anything :func:`~adaptive_dd.benchmark.scenario.load_scenario` reads; the default is the shipped
-N-joint ones (:func:`shipped_scenarios`). ``adaptive-dd leaderboard`` writes the table as CSV and
+N-joint ones (:func:`shipped_scenarios`). ``arms = N`` adds a population of drawn arms nobody tuned
+for (the template's payload schedule on ``random:FIRST`` .. ``random:FIRST+N-1``,
+:mod:`adaptive_dd.benchmark.population`): one row per arm and, pooled over the arms' seeds, the
+population's rows (``kind`` says which). ``adaptive-dd leaderboard`` writes the table as CSV and
 JSON and draws it (:mod:`adaptive_dd.cli.leaderboard`).
+
+**Recovery time.** Per seed and segment, the time from the segment's start (a swap; ``t = 0`` for
+the first segment) after which the causal 0.25 s moving RMS of the tracking error stays within
+1.2 times its floor's (the same seed) to the segment's end
+(:func:`~adaptive_dd.benchmark.time_to_floor.time_to_floor`); "never" when the segment's last window
+is still above.
 """
 
 from __future__ import annotations
@@ -25,6 +34,7 @@ __all__ = [
     "BOOTSTRAP_RESAMPLES",
     "COLUMNS",
     "DEFAULT_CONTROLLERS",
+    "POPULATION_TEMPLATE",
     "leaderboard",
     "ratio_columns",
     "shipped_scenarios",
@@ -38,21 +48,25 @@ DEFAULT_CONTROLLERS = (
     "sliding_mode",
     "slotine_li",
     "composite",
+    "icl",
+    "natural_adaptive",
+    "craig_hsu_sastry",
     "adaptive_ct",
 )
-"""The controllers ranked by default (their floors are added: ``ct_oracle``,
+"""The controllers ranked by default (their floors are added: ``ct_oracle``, ``ct_oracle_textbook``,
 ``pd_gravity_oracle``, ``slotine_li_oracle``)."""
 
 BOOTSTRAP_RESAMPLES = 2000
 """Resamples of the seeds for the 95 % interval of the mean ratio (percentile bootstrap)."""
 
 COLUMNS: dict[str, tuple[str, str]] = {
-    "scenario": ("-", "the scenario's name"),
+    "scenario": ("-", "the scenario's name (a drawn arm: TEMPLATE_armSEED; pooled: population(N arms))"),
+    "kind": ("-", "scenario (shipped or given), arm (one drawn arm), population (pooled over the arms)"),
     "controller": ("-", "the controller ranked"),
     "floor": ("-", "the controller it is divided by, seed by seed (the same law with the true robot)"),
     "floor_note": ("-", "empty, or why the row has no ratio"),
     "segment": ("-", "payload segment, 0-based"),
-    "payload_kg": ("kg", "the payload carried in the segment"),
+    "payload_kg": ("kg", "the payload carried in the segment (population: the mean over the arms)"),
     "seeds": ("-", "seeds whose trial did not fail before the segment's end"),
     "ratio_mean": ("-", "mean over seeds of RMS error / the floor's RMS error (same seed, same segment)"),
     "ratio_ci95_low": ("-", "percentile-bootstrap 95 % interval of ratio_mean, low end"),
@@ -66,8 +80,16 @@ COLUMNS: dict[str, tuple[str, str]] = {
     "rms_torque_Nm": ("N m", "mean over seeds of the RMS applied torque (norm over joints)"),
     "saturation_pct": ("%", "mean over seeds of the samples with a joint's command beyond its limit"),
     "floor_saturation_pct": ("%", "the same of the floor (a saturated floor makes the ratio optimistic)"),
+    "recovery_median_s": ("s", "median over seeds of the recovery time (a never counts as the latest)"),
+    "recovery_p90_s": ("s", "90th percentile of the recovery time (inf: reaches a never)"),
+    "recovery_never": ("-", "seeds still above 1.2x the floor's moving RMS error at the segment's end"),
 }
 """Every column of the table: ``name -> (unit, meaning)``."""
+
+
+POPULATION_TEMPLATE = "benchmarks/scenarios/population.toml"
+"""The default template of ``arms``: a pick-up of 80 % of each arm's capacity, a swap to 30 %, a
+put-down (relative to the source tree)."""
 
 
 def shipped_scenarios() -> list[Path]:
@@ -133,35 +155,101 @@ def _with_floors(sc, names: Sequence[str]) -> tuple[tuple[str, ...], dict, dict]
     return tuple(run), floors, missing
 
 
-def _rows(res, floors: dict, missing: dict, rng: np.random.Generator) -> list[dict]:
+def _per_seed(res, names) -> dict[str, dict[str, np.ndarray]]:
+    """Per controller of ``names``, ``(n_seeds, n_segments)`` arrays: ``rms_error`` [rad],
+    ``rms_torque``, ``saturation_fraction`` (NaN where the trial failed) and its error norm's
+    segments (``e_norm``, a list per segment of ``(n_seeds, samples)``) for the recovery times."""
     from adaptive_dd.benchmark.metrics import per_seed_segment_metrics
+    from adaptive_dd.closed_loop.types import run_constants
 
-    sc = res.scenario
-    masses = [m for (_, _, m) in sc.segments()]
+    rc = run_constants(res.scenario)
+    out = {}
     with np.errstate(invalid="ignore", divide="ignore"):  # failed trials' NaN, estimates of no payload
-        per = {n: per_seed_segment_metrics(res, r, recovery=False) for n, r in res.runs.items()}
-    rows = []
-    for name, floor in floors.items():
-        m = per[name]
+        for n in names:
+            run = res.runs[n]
+            m = per_seed_segment_metrics(res, run, recovery=False)
+            keep = {k: m[k] for k in ("rms_error", "rms_torque", "saturation_fraction")}
+            e = np.asarray(run.e_norm, float) if run.e_norm is not None else None
+            bounds = zip(rc.seg_start, rc.seg_end, strict=True)
+            keep["e_norm"] = [None if e is None else e[:, a:b] for a, b in bounds]
+            keep["failed"] = ~np.isfinite(m["rms_error"])
+            out[n] = keep
+    return out
+
+
+def _recovery(mine: dict, floor: dict, i: int, T: float) -> np.ndarray:
+    """Per seed, the recovery time [s] in segment ``i`` (module docstring; inf never, NaN failed)."""
+    from adaptive_dd.benchmark.time_to_floor import time_to_floor
+
+    e, f = mine["e_norm"][i], floor["e_norm"][i]
+    if e is None or f is None or e.shape[1] == 0:
+        return np.full(mine["rms_error"].shape[0], np.nan)
+    t = time_to_floor(e, f, T)
+    return np.where(mine["failed"][:, i] | floor["failed"][:, i], np.nan, t)
+
+
+def _cells(name, kind, per, floors, missing, masses, T) -> list[dict]:
+    """One scenario's cells, with the per-seed arrays a row is computed from (``_row``)."""
+    cells = []
+    for ctrl, floor in floors.items():
+        m = per[ctrl]
         fm = per.get(floor) if floor is not None else None
         note = "" if fm is not None else ("an oracle: its own floor" if floor is None else missing[floor])
         for i, mass in enumerate(masses):
-            e = m["rms_error"][:, i]  # NaN: the trial failed before the segment's end
+            e = m["rms_error"][:, i]
             with np.errstate(divide="ignore", invalid="ignore"):
-                ratio = e / fm["rms_error"][:, i] if fm is not None else np.full(1, np.nan)
-            rows.append(
+                ratio = e / fm["rms_error"][:, i] if fm is not None else np.full(e.shape, np.nan)
+            cells.append(
                 {
-                    "scenario": sc.name, "controller": name, "floor": floor or "", "floor_note": note,
-                    "segment": i, "payload_kg": float(mass), "seeds": int(np.sum(np.isfinite(e))),
-                    **ratio_columns(ratio, rng), "failures": int(np.sum(~np.isfinite(e))),
-                    "rms_error_mrad": 1e3 * _mean(e),
-                    "floor_rms_error_mrad": 1e3 * _mean(fm["rms_error"][:, i]) if fm else np.nan,
-                    "rms_torque_Nm": _mean(m["rms_torque"][:, i]),
-                    "saturation_pct": 100 * _mean(m["saturation_fraction"][:, i]),
-                    "floor_saturation_pct": 100 * _mean(fm["saturation_fraction"][:, i]) if fm else np.nan,
+                    "scenario": name, "kind": kind, "controller": ctrl, "floor": floor or "",
+                    "floor_note": note, "segment": i, "payload_kg": float(mass), "e": e, "ratio": ratio,
+                    "fe": fm["rms_error"][:, i] if fm else np.full(e.shape, np.nan),
+                    "torque": m["rms_torque"][:, i], "sat": m["saturation_fraction"][:, i],
+                    "fsat": fm["saturation_fraction"][:, i] if fm else np.full(e.shape, np.nan),
+                    "recovery": _recovery(m, fm, i, T) if fm else np.full(e.shape, np.nan),
                 }
             )  # fmt: skip
-    return rows
+    return cells
+
+
+_KEYS = ("scenario", "kind", "controller", "floor", "floor_note", "segment", "payload_kg")
+_ARRAYS = ("e", "ratio", "fe", "torque", "sat", "fsat", "recovery")
+
+
+def _row(c: dict, rng: np.random.Generator) -> dict:
+    """A table row (:data:`COLUMNS`) from a cell's per-seed arrays."""
+    from adaptive_dd.benchmark.time_to_floor import quantile_never
+
+    e, rec = c["e"], c["recovery"]
+    return {
+        **{k: c[k] for k in _KEYS},
+        "seeds": int(np.sum(np.isfinite(e))), **ratio_columns(c["ratio"], rng),
+        "failures": int(np.sum(~np.isfinite(e))), "rms_error_mrad": 1e3 * _mean(e),
+        "floor_rms_error_mrad": 1e3 * _mean(c["fe"]), "rms_torque_Nm": _mean(c["torque"]),
+        "saturation_pct": 100 * _mean(c["sat"]), "floor_saturation_pct": 100 * _mean(c["fsat"]),
+        "recovery_median_s": quantile_never(rec, 50.0), "recovery_p90_s": quantile_never(rec, 90.0),
+        "recovery_never": int(np.sum(np.isinf(rec))),
+    }  # fmt: skip
+
+
+def _pooled(cells: list[dict], n_arms: int) -> list[dict]:
+    """The population's cells: each controller's and segment's per-seed arrays over every arm."""
+    groups: dict = {}
+    for c in cells:
+        groups.setdefault((c["controller"], c["segment"]), []).append(c)
+    out = []
+    for (_, seg), cs in groups.items():
+        first = cs[0]
+        pooled = {k: np.concatenate([c[k] for c in cs]) for k in _ARRAYS}
+        notes = sorted({c["floor_note"] for c in cs if c["floor_note"]})
+        out.append(
+            {
+                **first, **pooled, "scenario": f"population({n_arms} arms)", "kind": "population",
+                "floor_note": "; ".join(notes[:1]), "segment": seg,
+                "payload_kg": float(np.mean([c["payload_kg"] for c in cs])),
+            }
+        )  # fmt: skip
+    return out
 
 
 def _mean(x) -> float:
@@ -177,53 +265,101 @@ def leaderboard(
     seeds: int | None = 3,
     rng: np.random.Generator | None = None,
     progress: bool = False,
+    arms: int = 0,
+    template=None,
+    first_arm: int = 0,
 ):
-    """Rank ``controllers`` on ``scenarios`` against each one's floor, seed by seed.
+    """Rank ``controllers`` on ``scenarios`` (and ``arms`` drawn arms) against each one's floor, seed by seed.
 
     Parameters
     ----------
     scenarios : sequence, optional
         Scenario files, :class:`~adaptive_dd.benchmark.scenario.Scenario` objects, or any other
         source :func:`~adaptive_dd.benchmark.scenario.load_scenario` takes (default
-        :func:`shipped_scenarios`). N-joint arms only.
+        :func:`shipped_scenarios`; an empty list: none, the arms alone). N-joint arms only.
     controllers : sequence of str
         Built-in names or plug-ins ``"package.module:Class"``; each one's floor (its ``floor``
         attribute) runs beside it and is ranked too.
     seeds : int or None
-        Seeds per scenario (None: each scenario's own).
+        Seeds per scenario and per arm (None: each scenario's own).
     rng : numpy.random.Generator, optional
         For the bootstrap intervals (default ``numpy.random.default_rng(0)``); the trials' noise
         and plants come from each scenario's own seeds (common random numbers: every controller of
         a seed meets the same robot and noise).
     progress : bool
         Show the benchmark's progress bars.
+    arms : int
+        Drawn arms ``random:first_arm`` .. (0: none): ``template``'s payload schedule on each
+        (:func:`~adaptive_dd.benchmark.population.population_scenario`), a row per arm and the
+        population's rows pooled over their seeds.
+    template : path, optional
+        The population's template (default :data:`POPULATION_TEMPLATE` in the source tree).
+    first_arm : int
+        Seed of the first drawn arm.
 
     Returns
     -------
     pandas.DataFrame
-        One row per scenario, controller and segment; the columns of :data:`COLUMNS`.
+        One row per scenario (or arm, or the population), controller and segment; the columns of
+        :data:`COLUMNS`.
 
     Raises
     ------
     ParameterError
-        No controller, fewer than one seed, a two-link closed-form scenario, an unknown controller.
+        No controller, fewer than one seed, a negative ``arms``, a missing template, a two-link
+        closed-form scenario, an unknown controller.
     """
     import pandas as pd
-
-    from adaptive_dd.benchmark.runner import run_benchmark
 
     controllers = list(dict.fromkeys(controllers))
     if not controllers:
         raise ParameterError("leaderboard: controllers: name at least one controller")
     if seeds is not None and (isinstance(seeds, bool) or not isinstance(seeds, int) or seeds < 1):
         raise ParameterError(f"leaderboard: seeds must be an integer >= 1, got {seeds!r}")
+    if isinstance(arms, bool) or not isinstance(arms, int) or arms < 0:
+        raise ParameterError(f"leaderboard: arms must be an integer >= 0, got {arms!r}")
     rng = np.random.default_rng(0) if rng is None else rng
     rows: list[dict] = []
     for spec in shipped_scenarios() if scenarios is None else scenarios:
-        sc = _scenario(spec)
-        if seeds is not None:
-            sc = dataclasses.replace(sc, seeds=seeds)
-        names, floors, missing = _with_floors(sc, controllers)
-        res = run_benchmark(dataclasses.replace(sc, controllers=names), progress=progress)
-        rows += _rows(res, {n: floors.get(n, r.floor) for n, r in res.runs.items()}, missing, rng)
+        cells = _run_cells(_scenario(spec), "scenario", controllers, seeds, progress)
+        rows += [_row(c, rng) for c in cells]
+    if arms:
+        data, src = _template(template)
+        from adaptive_dd.benchmark.population import population_scenario
+
+        arm_cells: list[dict] = []
+        for k in range(first_arm, first_arm + arms):
+            sc = population_scenario(data, src, k)
+            cells = _run_cells(sc, "arm", controllers, seeds, progress)
+            rows += [_row(c, rng) for c in cells]
+            arm_cells += cells
+        rows += [_row(c, rng) for c in _pooled(arm_cells, arms)]
     return pd.DataFrame(rows, columns=list(COLUMNS))
+
+
+def _run_cells(sc, kind: str, controllers, seeds, progress) -> list[dict]:
+    """Run one scenario's controllers and floors; its cells (:func:`_cells`)."""
+    from adaptive_dd.benchmark.runner import run_benchmark
+
+    if seeds is not None:
+        sc = dataclasses.replace(sc, seeds=seeds)
+    names, floors, missing = _with_floors(sc, controllers)
+    res = run_benchmark(dataclasses.replace(sc, controllers=names), progress=progress)
+    floors = {n: floors.get(n, r.floor) for n, r in res.runs.items()}
+    per = _per_seed(res, list(res.runs))
+    masses = [m for (_, _, m) in sc.segments()]
+    return _cells(sc.name, kind, per, floors, missing, masses, sc.sample_period)
+
+
+def _template(template) -> tuple[dict, str]:
+    """The population's template, parsed, and its path."""
+    from adaptive_dd.benchmark.scenario import read_toml
+
+    root = Path(__file__).resolve().parents[2]
+    path = Path(template) if template is not None else root / POPULATION_TEMPLATE
+    if not path.is_file():
+        raise ParameterError(
+            f"leaderboard: --template {path}: no such file; give a template scenario with a [[payload]] "
+            f"schedule (the source tree's {POPULATION_TEMPLATE})"
+        )
+    return read_toml(path), str(path)

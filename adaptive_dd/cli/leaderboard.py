@@ -2,8 +2,9 @@
 
 Writes ``leaderboard.csv`` (one row per scenario, controller and segment), ``leaderboard.json``
 (the rows and every column's unit and meaning) and ``leaderboard.png`` (the mean ratio to the
-floor per controller and scenario segment) into ``--out``
-(:func:`adaptive_dd.arena.leaderboard`).
+floor per controller and scenario segment; the population pooled, not each arm) into ``--out``
+(:func:`adaptive_dd.arena.leaderboard`), and prints per scenario segment the controller with the
+lowest RMS error (every controller of a seed meets the same robot and noise).
 """
 
 from __future__ import annotations
@@ -12,9 +13,12 @@ import argparse
 import json
 from pathlib import Path
 
-from adaptive_dd.cli._common import SEED, SEEDS, add_command
+from adaptive_dd.cli._common import SEED, SEEDS, add_command, number
+from adaptive_dd.errors import ParameterError
 
 __all__ = ["add_parser", "run"]
+
+ARMS = number(int, 0, 10_000)
 
 
 def add_parser(sub) -> None:
@@ -36,7 +40,26 @@ def add_parser(sub) -> None:
         metavar="MODULE:CLASS",
         help="a controller of your own to rank with the others (repeatable); its floor runs beside it",
     )
-    p.add_argument("--seeds", type=SEEDS, default=3, help="seeds per scenario (default 3)")
+    p.add_argument("--seeds", type=SEEDS, default=3, help="seeds per scenario and per drawn arm (default 3)")
+    p.add_argument(
+        "--arms",
+        type=ARMS,
+        default=0,
+        metavar="N",
+        help="also N drawn arms nobody tuned for (random:FIRST ..), each a row, pooled as the population",
+    )
+    p.add_argument("--first-arm", type=SEED, default=0, metavar="SEED", help="seed of the first drawn arm")
+    p.add_argument(
+        "--template",
+        default=None,
+        metavar="FILE",
+        help="the drawn arms' scenario template (default benchmarks/scenarios/population.toml)",
+    )
+    p.add_argument(
+        "--no-scenarios",
+        action="store_true",
+        help="the drawn arms alone (with --arms), not the shipped scenarios",
+    )
     p.add_argument("--bootstrap-seed", type=SEED, default=0, help="seed of the bootstrap intervals")
     p.add_argument("--out", default="results/leaderboard", help="folder for the CSV, JSON and figure")
     p.add_argument("--no-progress", action="store_true")
@@ -51,24 +74,31 @@ def run(args: argparse.Namespace) -> int:
     from adaptive_dd.outputs import check_output_dir
 
     scenarios = [*args.scenarios, *(args.scenario_list or [])] or None
+    if args.no_scenarios:
+        if scenarios or not args.arms:
+            raise ParameterError("--no-scenarios: runs the drawn arms alone; give --arms N and no SCENARIO")
+        scenarios = []
     controllers = [*(args.controllers or DEFAULT_CONTROLLERS), *args.plugin]
     out = check_output_dir(Path(args.out))
     df = leaderboard(
         scenarios, controllers, seeds=args.seeds, rng=np.random.default_rng(args.bootstrap_seed),
-        progress=not args.no_progress,
+        progress=not args.no_progress, arms=args.arms, template=args.template, first_arm=args.first_arm,
     )  # fmt: skip
     csv, js, png = out / "leaderboard.csv", out / "leaderboard.json", out / "leaderboard.png"
     df.to_csv(csv, index=False, float_format="%.6g")
     doc = {
         "columns": {k: {"unit": u, "meaning": m} for k, (u, m) in COLUMNS.items()},
         "seeds": args.seeds,
+        "arms": args.arms,
+        "first_arm": args.first_arm,
         "rows": json.loads(df.to_json(orient="records")),
     }
     js.write_text(json.dumps(doc, indent=1), encoding="utf-8")
     from adaptive_dd.arena.plot import plot_leaderboard
 
-    plot_leaderboard(df).savefig(png, dpi=120)
-    _print(df)
+    plot_leaderboard(df[df["kind"] != "arm"]).savefig(png, dpi=120)
+    _print(df[df["kind"] != "arm"])
+    _print_winners(df[df["kind"] != "arm"])
     for p in (csv, js, png):
         print(f"wrote {p}")
     return 0
@@ -77,6 +107,18 @@ def run(args: argparse.Namespace) -> int:
 def _print(df) -> None:
     """The ratio columns per scenario, controller and segment, as a plain table."""
     cols = ["scenario", "controller", "floor", "segment", "payload_kg", "ratio_mean", "ratio_ci95_low",
-            "ratio_ci95_high", "ratio_p90", "ratio_max", "failures", "saturation_pct"]  # fmt: skip
+            "ratio_ci95_high", "ratio_p90", "ratio_max", "failures", "saturation_pct", "rms_error_mrad",
+            "recovery_median_s", "recovery_never"]  # fmt: skip
     with __import__("pandas").option_context("display.width", 200, "display.max_rows", 1000):
         print(df[cols].to_string(index=False, float_format=lambda x: f"{x:.3f}"))
+
+
+def _print_winners(df) -> None:
+    """Per scenario segment, the law with the lowest mean RMS error among those with a floor (the
+    oracles left out), and the runner-up."""
+    ranked = df[(df["floor"] != "") & (df["failures"] == 0)]
+    print("lowest RMS error per segment (oracles left out; laws with a failed trial left out):")
+    for (sc, seg), g in ranked.groupby(["scenario", "segment"], sort=False):
+        g = g.sort_values("rms_error_mrad")
+        best = [f"{r.controller} {r.rms_error_mrad:.3g} mrad" for r in g.head(2).itertuples()]
+        print(f"  {sc}:{seg} ({g['payload_kg'].iloc[0]:.3g} kg): " + ", then ".join(best))

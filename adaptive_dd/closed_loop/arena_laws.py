@@ -11,15 +11,24 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
+from adaptive_dd.closed_loop.adaptation import ADAPT_CHS, ADAPT_ICL, ADAPT_NATURAL
 from adaptive_dd.closed_loop.controllers import (
     ARM_CONTROLLERS,
+    DEFAULT_PAYLOAD_GAMMA,
     OBSERVER_LEVEL_WINDOW,
     OBSERVER_WARMUP,
     Law,
     SlotineLi,
     observer_bandwidth,
 )
-from adaptive_dd.closed_loop.laws import KIND_CT, KIND_PD_GRAVITY, KIND_SLOTINE, MODEL_FIXED, MODEL_TRUE
+from adaptive_dd.closed_loop.laws import (
+    KIND_CT,
+    KIND_PD_GRAVITY,
+    KIND_SLOTINE,
+    MODEL_FIXED,
+    MODEL_TRIAL,
+    MODEL_TRUE,
+)
 from adaptive_dd.errors import ParameterError
 from adaptive_dd.errors import is_finite_number as _is_number
 
@@ -27,7 +36,10 @@ __all__ = [
     "ARENA_CONTROLLERS",
     "ARM_LAWS",
     "Composite",
+    "CraigHsuSastry",
+    "IntegralConcurrentLearning",
     "MomentumObserverCT",
+    "NaturalAdaptive",
     "PDGravity",
     "PDGravityOracle",
     "SlidingMode",
@@ -203,12 +215,120 @@ class Composite(SlotineLi):
         )
 
 
+class CraigHsuSastry(SlotineLi):
+    """Adaptive computed torque (Craig, Hsu and Sastry, "Adaptive Control of Mechanical
+    Manipulators", IJRR 6(2), 1987) on the payload's ten parameters: the textbook computed torque
+    on the estimated model, ``tau = M_hat(q) (qdd_d + Kv e' + Kp e) + n_hat(q, qd)``, whose error
+    obeys ``e'' + Kv e' + Kp e = M_hat^-1 W (theta - theta_hat)``, and the adaptation
+    ``theta_hat' = Gamma W^T M_hat^-1 E1``, ``E1 = e' + lam e`` (``lam`` the smaller root of the
+    gains: ``(s + lam) / (s^2 + Kv s + Kp)`` strictly positive real), ``W`` the payload's regressor
+    at the measured velocity and acceleration (the acceleration differentiated from the measured
+    velocity and low-passed at the tracking bandwidth ``min(lam)``: the law needs it, the paper
+    assumes it measured). The estimate is projected on ``slotine_li``'s box and onto a
+    positive semi-definite pseudo-inertia (a physically consistent payload), so that ``M_hat``
+    stays positive definite and its inverse exists
+    (:func:`~adaptive_dd.closed_loop.adaptation.project_payload`). Derived gain: ``slotine_li``'s
+    ``gamma`` times the geometric mean of the nominal inertia's diagonal at the middle of the
+    joint ranges (``M_hat^-1`` divides by an inertia that ``Y^T s`` does not). Signals: measured
+    ``q, qd`` (and ``qdd`` from them); the reference with ``qdd_d``. Its floor is
+    ``ct_oracle_textbook`` (the same law given the true model)."""
+
+    name = "craig_hsu_sastry"
+    floor = "ct_oracle_textbook"
+
+    def law_config(self, sample_period):
+        box = super().law_config(sample_period)
+        m0 = np.maximum(self.arm.nominal_inertia(), 1e-9)  # armature included
+        g = self.gains
+        return self._config(
+            sample_period, KIND_CT, MODEL_TRIAL, reference_velocity=False, adapt=True,
+            adapt_kind=ADAPT_CHS, gamma=box.gamma * float(np.exp(np.mean(np.log(m0)))), lo=box.lo,
+            hi=box.hi, com_radius=box.com_radius, kp=g.kp, kd=g.kd, lam=g.roots()[0],
+            comp_rate=float(np.min(g.roots()[0])),
+        )  # fmt: skip
+
+
+ICL_WINDOW_CYCLES = 2.0
+"""Integral concurrent learning's window is ``ICL_WINDOW_CYCLES / min(lam)`` [s] (0.05 s at
+40 rad/s): long enough for the momentum's change to stand above the measured velocity's noise,
+short beside a payload segment."""
+
+
+class IntegralConcurrentLearning(Composite):
+    """Integral concurrent learning (Parikh, Kamalapurkar and Dixon, "Integral concurrent learning:
+    Adaptive control with parameter convergence using finite excitation", Int. J. Adapt. Control
+    Signal Process. 33(12), 2019) on the payload's ten parameters as ``slotine_li`` adapts them:
+    ``theta' = Gamma (Y_p^T s + (1 / N) sum_i Ybar_i^T R (Ubar_i - Ybar_i theta))``, the sum over a
+    history stack of windows of the dynamics integrated in momentum form (no acceleration:
+    :mod:`adaptive_dd.closed_loop.composite`), the stack's data-selection rule recency (a closed
+    window replaces the oldest, so that a swapped payload's data leaves the stack). Derived
+    settings: the window ``2 / min(lam)`` (:data:`ICL_WINDOW_CYCLES`), ten windows, ``R`` as
+    ``composite``'s. Signals: measured ``q, qd``, the applied torque of the samples before,
+    ``qdd_d``."""
+
+    name = "icl"
+
+    def law_config(self, sample_period):
+        cfg = super().law_config(sample_period)
+        return cfg._replace(
+            composite=False, adapt_kind=ADAPT_ICL, icl_window=ICL_WINDOW_CYCLES / float(np.min(cfg.lam))
+        )
+
+
+NATURAL_MAX_MASS = 20.0
+"""[kg] ``natural_adaptive``'s bound of the adapted mass when the arm states no ``payload_capacity``."""
+
+
+class NaturalAdaptive(Law):
+    """The natural adaptive law (Lee, Kwon and Park, "A Natural Adaptive Control Law for Robot
+    Manipulators", IROS 2018) on Slotine-Li's structure: the inertial parameters ``phi`` of the
+    link that carries the payload (link and payload about its joint frame, as the authors' code
+    adapts the last link) move along the natural gradient of the log-det divergence of their
+    pseudo-inertia, ``J(phi)' = gamma J G J`` with ``G`` the 4x4 form of ``Y_j^T s``
+    (:func:`~adaptive_dd.closed_loop.adaptation.natural_step`), stepped so that ``J`` stays
+    positive definite: the estimate is physically consistent at every sample, with no box. The
+    one gain is derived: ``gamma = gamma_m / (m_j + m_cap / 2)^2``, ``gamma_m`` ``slotine_li``'s
+    mass gain, ``m_j`` the nominal link's mass, ``m_cap`` the arm's ``payload_capacity`` (else
+    ``max_mass``): with half the rated payload the mass adapts as fast as ``slotine_li``'s, slower
+    below and faster above (the natural gradient scales a parameter's rate with its square).
+    ``max_mass`` also bounds the mass added. Signals: measured ``q, qd``; the reference with ``qdd_d``."""
+
+    name = "natural_adaptive"
+    floor = "slotine_li_oracle"
+    SETTINGS = frozenset({"gain", "max_mass"})
+
+    def __init__(self, arm, bandwidth=40.0, damping: float = 1.0, **settings) -> None:
+        super().__init__(arm, bandwidth, damping, **settings)
+        where = f"controllers.{self.name}"
+        cap = getattr(arm, "payload_capacity", None)
+        self.max_mass = self.settings.get("max_mass", cap if cap is not None else NATURAL_MAX_MASS)
+        if not (_is_number(self.max_mass) and self.max_mass > 0):
+            raise ParameterError(f"{where}.max_mass: a number > 0 [kg], got {self.max_mass!r}")
+        m_j = float(arm.pi[10 * int(arm.payload_joint)])
+        derived = DEFAULT_PAYLOAD_GAMMA[0] / (m_j + 0.5 * float(self.max_mass)) ** 2
+        self.gain = self.settings.get("gain", derived)
+        if not (_is_number(self.gain) and self.gain > 0):
+            raise ParameterError(f"{where}.gain: a number > 0, got {self.gain!r}")
+
+    def law_config(self, sample_period):
+        lam, k = self.gains.roots()
+        hi = np.full(10, np.inf)
+        hi[0] = float(self.max_mass)
+        return self._config(
+            sample_period, KIND_SLOTINE, MODEL_TRIAL, lam=lam, kd=k, adapt=True,
+            adapt_kind=ADAPT_NATURAL, nat_gain=float(self.gain), hi=hi,
+        )  # fmt: skip
+
+
 ARENA_CONTROLLERS: dict[str, type[Law]] = {
     "pd_gravity": PDGravity,
     "pd_gravity_oracle": PDGravityOracle,
     "sliding_mode": SlidingMode,
     "momentum_observer_ct": MomentumObserverCT,
     "composite": Composite,
+    "craig_hsu_sastry": CraigHsuSastry,
+    "icl": IntegralConcurrentLearning,
+    "natural_adaptive": NaturalAdaptive,
 }
 """The arena's N-joint built-ins, name -> class."""
 

@@ -36,6 +36,10 @@ learnt noise level.
 Composite adaptation (``composite``, Slotine and Li 1989) adds to Slotine-Li's step the filtered
 torque's prediction error (:mod:`adaptive_dd.closed_loop.composite`).
 
+Other adaptation laws (``adapt_kind``, :mod:`adaptive_dd.closed_loop.adaptation`): Craig, Hsu and
+Sastry's on computed torque (``KIND_CT``), integral concurrent learning's stack term and Lee, Kwon and
+Park's natural gradient on Slotine-Li's structure.
+
 Slotine-Li's payload adaptation: with ``Y_p = Y_j(q, qd, qd_r, a) P`` (the link-j block of
 the Slotine-Li regressor times the payload map P of the payload frame),
 ``theta += T Gamma Y_p^T s``, then ``theta`` is clipped to ``[lo, hi]``; the mass kept
@@ -50,7 +54,16 @@ import numpy as np
 from numba import njit
 from numpy.typing import NDArray
 
-from adaptive_dd.closed_loop.composite import C_ROWS, composite_term
+from adaptive_dd.closed_loop.adaptation import (
+    ADAPT_CHS,
+    ADAPT_ICL,
+    ADAPT_NATURAL,
+    chs_step,
+    natural_step,
+    project_payload,
+    rebuild_payload_model,
+)
+from adaptive_dd.closed_loop.composite import ICL_ROWS, composite_term
 from adaptive_dd.closed_loop.residual_observer import OBS_ROWS as O_ROWS
 from adaptive_dd.closed_loop.residual_observer import _observe, observe_applied
 from adaptive_dd.plant.chain import body_slotine_li_regressor_in, mass_matrix_in, rnea_ref_in, workspace
@@ -80,9 +93,11 @@ Array = NDArray[np.float64]
 KIND_PD, KIND_CT, KIND_SLOTINE, KIND_PD_GRAVITY = 0, 1, 2, 3
 MODEL_NONE, MODEL_FIXED, MODEL_TRUE, MODEL_TRIAL = 0, 1, 2, 3
 
-OBS_ROWS = max(O_ROWS, C_ROWS)
+OBS_ROWS = max(O_ROWS, ICL_ROWS)
 """Rows of a law's per-trial state ``LawState.obs``: the residual observer's (``O_*``) or, the
-observer off, the composite term's (``C_*``, :mod:`adaptive_dd.closed_loop.composite`)."""
+observer off, the composite and ICL terms' (``C_*``, ``I_*``,
+:mod:`adaptive_dd.closed_loop.composite`) or Craig-Hsu-Sastry's
+(:mod:`adaptive_dd.closed_loop.adaptation`)."""
 
 
 class LawConfig(NamedTuple):
@@ -145,7 +160,15 @@ class LawConfig(NamedTuple):
     comp_rate : float
         [rad/s] Rate of the composite term's first-order filter.
     comp_weight : ndarray (n,)
-        Diagonal of its weight R [1/(N m s)].
+        Diagonal of its weight R [1/(N m s)] (also integral concurrent learning's).
+    adapt_kind : int
+        ``ADAPT_*`` of :mod:`adaptive_dd.closed_loop.adaptation`: Slotine-Li's gradient (0),
+        Craig-Hsu-Sastry's (``KIND_CT``; ``comp_rate`` the rate [rad/s] of its acceleration's
+        filter), integral concurrent learning's, Lee-Kwon-Park's natural gradient.
+    icl_window : float
+        [s] Integral concurrent learning's integration window.
+    nat_gain : float
+        The natural law's scalar gain ``gamma``.
     """
 
     kind: int
@@ -180,6 +203,9 @@ class LawConfig(NamedTuple):
     composite: bool = False
     comp_rate: float = 0.0
     comp_weight: Array = np.zeros(1)
+    adapt_kind: int = 0
+    icl_window: float = 0.0
+    nat_gain: float = 0.0
 
 
 class LawState(NamedTuple):
@@ -256,7 +282,7 @@ def _add_nominal_inertia(ch, cfg, q, v, work, out):  # pragma: no cover - compil
 @njit(cache=True)
 def _adapt_payload(ch, cfg, q, qd, qdr, a, s, theta, pi_model, work):  # pragma: no cover - compiled
     """One gradient step of the payload parameters, projected; pi_model rebuilt from them (with
-    ``cfg.composite`` the step adds ``work[9]``, the composite term ``W^T R eps``)."""
+    ``cfg.composite`` or ICL the step adds ``work[9]``, the composite or ICL term)."""
     n = q.shape[0]
     j = cfg.payload_joint
     yb = work[3]
@@ -271,24 +297,12 @@ def _adapt_payload(ch, cfg, q, qd, qdr, a, s, theta, pi_model, work):  # pragma:
         upd = 0.0
         for c in range(10):
             upd += cfg.payload_map[c, k] * g[c]
-        if cfg.composite:
+        if cfg.composite or cfg.adapt_kind == ADAPT_ICL:
             upd += work[9][k]
         upd *= cfg.T * cfg.gamma[k]
-        th = theta[k] + (upd if np.isfinite(upd) else 0.0)
-        theta[k] = min(max(th, cfg.lo[k]), cfg.hi[k])
-    theta[0] = max(theta[0], 0.0)
-    mc = np.sqrt(theta[1] ** 2 + theta[2] ** 2 + theta[3] ** 2)
-    lim = cfg.com_radius * theta[0]
-    if mc > lim:
-        f = lim / mc
-        theta[1], theta[2], theta[3] = f * theta[1], f * theta[2], f * theta[3]
-    for c in range(pi_model.shape[0]):
-        pi_model[c] = cfg.pi_fixed[c]
-    for c in range(10):
-        acc = 0.0
-        for k in range(10):
-            acc += cfg.payload_map[c, k] * theta[k]
-        pi_model[10 * j + c] += acc
+        theta[k] += upd if np.isfinite(upd) else 0.0
+    project_payload(cfg, theta)
+    rebuild_payload_model(cfg, theta, pi_model)
 
 
 @njit(cache=True)
@@ -422,9 +436,14 @@ def law_trial_in(
         if cfg.adapt:
             for j in range(n):
                 s[j] = ed[j] + cfg.lam[j] * e[j]
-            if cfg.composite:
-                composite_term(ch, cfg, q, qd, theta, obs, work, work[9])
-            _adapt_payload(ch, cfg, q, qd, qdr, a, s, theta, pi_model, work)
+            if cfg.adapt_kind == ADAPT_NATURAL:
+                natural_step(ch, cfg, q, qd, qdr, a, s, theta, pi_model, work)
+            else:
+                if cfg.composite or cfg.adapt_kind == ADAPT_ICL:
+                    composite_term(ch, cfg, q, qd, theta, obs, work, work[9])
+                _adapt_payload(ch, cfg, q, qd, qdr, a, s, theta, pi_model, work)
+    elif cfg.adapt and cfg.adapt_kind == ADAPT_CHS:
+        chs_step(ch, cfg, q, qd, e, ed, theta, pi_model, obs, work)
     boosting = cfg.boost_samples > 0 and since_alarm < cfg.boost_samples + cfg.boost_ramp
     if boosting:
         _boost_feedback(cfg, since_alarm, e, ed, v)

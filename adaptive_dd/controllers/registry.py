@@ -24,8 +24,10 @@ Built-in settings:
 ``sliding_mode`` (N-joint arms)
     ``uncertainty`` (the levels of ``[plant.uncertainty]``, by default the scenario's), ``max_mass``,
     ``com_radius`` (the payload's bound).
-``composite`` (N-joint arms)
+``composite``, ``icl``, ``craig_hsu_sastry`` (N-joint arms)
     ``slotine_li``'s ``gamma``, ``max_mass``, ``com_radius``.
+``natural_adaptive`` (N-joint arms)
+    ``gain`` (the natural law's one gain, derived by default), ``max_mass``.
 
 A plug-in class is called with its table's settings as keyword arguments, plus ``gains``
 (:class:`Gains`), ``sigma_nominal`` (the arm's base parameters), ``arm`` (the arm, two-link
@@ -384,6 +386,47 @@ CONTROLLERS: dict[str, Builtin] = {
         None,
         "composite",
         {k: dataclasses.replace(v, two_link=ABSENT, rule=_NOT_TWO_LINK) for k, v in _SLOTINE.items()},
+        only=_N_JOINT_ONLY,
+    ),
+    "craig_hsu_sastry": Builtin(
+        "estimator (adaptation through the inverse of the estimated inertia; measured acceleration)",
+        "Craig, Hsu and Sastry's adaptive computed torque on the payload (IJRR 1987), slotine_li's box "
+        "and a physically consistent payload",
+        None,
+        "craig_hsu_sastry",
+        {k: dataclasses.replace(v, two_link=ABSENT, rule=_NOT_TWO_LINK) for k, v in _SLOTINE.items()},
+        only=_N_JOINT_ONLY,
+    ),
+    "icl": Builtin(
+        "estimator (gradient adaptation and a history stack of integrated torque and regressor)",
+        "integral concurrent learning on the payload (Parikh, Kamalapurkar and Dixon 2019), slotine_li's box",
+        None,
+        "icl",
+        {k: dataclasses.replace(v, two_link=ABSENT, rule=_NOT_TWO_LINK) for k, v in _SLOTINE.items()},
+        only=_N_JOINT_ONLY,
+    ),
+    "natural_adaptive": Builtin(
+        "estimator (natural gradient on the payload link's pseudo-inertia)",
+        "the natural adaptive law on the payload's link (Lee, Kwon and Park 2018), physically "
+        "consistent at every sample",
+        None,
+        "natural_adaptive",
+        {
+            "gain": Setting(
+                "the natural law's one gain gamma; default slotine_li's mass gain / "
+                "(link mass + max_mass / 2)^2",
+                ABSENT,
+                None,
+                rule=_NOT_TWO_LINK,
+            ),
+            "max_mass": Setting(
+                "the heaviest payload the law adapts to [kg]; default: [arm] payload_capacity, else 20",
+                ABSENT,
+                None,
+                rule=_NOT_TWO_LINK,
+                unit="kg",
+            ),
+        },
         only=_N_JOINT_ONLY,
     ),
     "momentum_observer_ct": Builtin(

@@ -1,0 +1,279 @@
+"""The payload adaptation laws of the arena beyond Slotine-Li's gradient, compiled: one sample per
+call, after the command (the estimate serves the next sample).
+
+* :func:`project_payload`: the a-priori box, the centre of mass in a ball and the payload's
+  pseudo-inertia kept positive semi-definite (a physically consistent payload: the estimated
+  inertia ``M0(q) + M_payload(q)`` stays positive definite, Craig, Hsu and Sastry's condition for
+  the inverse they use); :func:`rebuild_payload_model` the trial's model from the payload.
+* :func:`chs_step`: Craig, Hsu and Sastry ("Adaptive Control of Mechanical Manipulators", IJRR
+  6(2), 1987): ``theta' = Gamma W^T M_hat^-1 E1``, ``E1 = e' + lam e``, ``W = Y_j(q, qd, qd,
+  qdd_f) P`` the payload's regressor at the measured velocity and the filtered measured
+  acceleration ``qdd_f = rate / (s + rate) d/dt qd``.
+* :func:`natural_step`: Lee, Kwon and Park ("A Natural Adaptive Control Law for Robot
+  Manipulators", IROS 2018): the payload link's inertial parameters ``phi`` (link and payload
+  about the joint frame) adapted along the natural gradient of the log-det divergence of their
+  pseudo-inertia ``J(phi)``, ``J' = gamma J G J`` with ``G`` the 4x4 dual of ``Y_j^T s``
+  (``tr(G J(x)) = (Y_j^T s) . x``), stepped on the manifold of positive definite ``J``:
+  ``J+ = J^1/2 expm(T gamma J^1/2 G J^1/2) J^1/2``.
+
+The state of :func:`chs_step` is in rows of the law's ``obs (OBS_ROWS, n)`` (the residual observer
+is off for these laws): the last fresh measurement (``O_Q``, ``O_QD``), the count of fresh ones
+(``O_COUNT``) and the filtered acceleration (:data:`CH_QDD`).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from adaptive_dd.closed_loop.residual_observer import O_COUNT, O_Q, O_QD, O_TAU
+from adaptive_dd.plant.chain import body_slotine_li_regressor_in, mass_matrix_in
+
+__all__ = [
+    "ADAPT_CHS",
+    "ADAPT_GRADIENT",
+    "ADAPT_ICL",
+    "ADAPT_NATURAL",
+    "CH_QDD",
+    "NATURAL_STEP_MAX",
+    "chs_step",
+    "dual_pseudo_inertia",
+    "natural_step",
+    "parameters_of",
+    "project_payload",
+    "pseudo_inertia",
+    "rebuild_payload_model",
+]
+
+ADAPT_GRADIENT, ADAPT_CHS, ADAPT_ICL, ADAPT_NATURAL = 0, 1, 2, 3
+"""``LawConfig.adapt_kind``: Slotine-Li's gradient (and composite's), Craig-Hsu-Sastry's, integral
+concurrent learning's (the gradient plus :func:`~adaptive_dd.closed_loop.composite.icl_term`),
+Lee-Kwon-Park's natural gradient."""
+
+CH_QDD = 0
+"""Row of ``obs`` holding Craig-Hsu-Sastry's filtered measured acceleration [rad/s^2]."""
+
+NATURAL_STEP_MAX = 0.05
+"""The natural law's step ``expm(X)`` with the eigenvalues of ``X`` clipped to +-this: the
+pseudo-inertia changes by at most ``e^0.05 - 1 = 5 %`` in any direction per sample (a guard
+against one wild sample; the law's own steps are far smaller)."""
+
+
+@njit(cache=True)
+def pseudo_inertia(phi, J):  # pragma: no cover - compiled
+    """``J (4, 4)``, the pseudo-inertia of ``phi = [m, m cx, m cy, m cz, Ixx, Ixy, Iyy, Ixz, Iyz,
+    Izz]`` (about one frame): ``[[tr(I)/2 1 - I, h], [h^T, m]]``."""
+    half = 0.5 * (phi[4] + phi[6] + phi[9])
+    J[0, 0], J[1, 1], J[2, 2] = half - phi[4], half - phi[6], half - phi[9]
+    J[0, 1] = J[1, 0] = -phi[5]
+    J[0, 2] = J[2, 0] = -phi[7]
+    J[1, 2] = J[2, 1] = -phi[8]
+    for r in range(3):
+        J[r, 3] = J[3, r] = phi[1 + r]
+    J[3, 3] = phi[0]
+
+
+@njit(cache=True)
+def parameters_of(J, phi):  # pragma: no cover - compiled
+    """The inverse of :func:`pseudo_inertia`: ``phi (10,)`` of ``J (4, 4)`` (``I = tr(S) 1 - S``)."""
+    tr = J[0, 0] + J[1, 1] + J[2, 2]
+    phi[0] = J[3, 3]
+    for r in range(3):
+        phi[1 + r] = 0.5 * (J[r, 3] + J[3, r])
+    phi[4], phi[6], phi[9] = tr - J[0, 0], tr - J[1, 1], tr - J[2, 2]
+    phi[5] = -0.5 * (J[0, 1] + J[1, 0])
+    phi[7] = -0.5 * (J[0, 2] + J[2, 0])
+    phi[8] = -0.5 * (J[1, 2] + J[2, 1])
+
+
+@njit(cache=True)
+def dual_pseudo_inertia(g, G):  # pragma: no cover - compiled
+    """``G (4, 4)`` symmetric with ``tr(G J(x)) = g . x`` for every ``x (10,)`` (``J`` of
+    :func:`pseudo_inertia`): the gradient ``g`` over the parameters as a 4x4 matrix."""
+    G[0, 0], G[1, 1], G[2, 2] = g[6] + g[9], g[4] + g[9], g[4] + g[6]
+    G[0, 1] = G[1, 0] = -0.5 * g[5]
+    G[0, 2] = G[2, 0] = -0.5 * g[7]
+    G[1, 2] = G[2, 1] = -0.5 * g[8]
+    for r in range(3):
+        G[r, 3] = G[3, r] = 0.5 * g[1 + r]
+    G[3, 3] = g[0]
+
+
+@njit(cache=True)
+def _sym_fn(A, f_sqrt, clip):  # pragma: no cover - compiled
+    """``V diag(f(d)) V^T`` of the symmetric ``A = V diag(d) V^T``: ``sqrt(max(d, clip))`` when
+    ``f_sqrt``, else ``exp(clip(d, -clip, clip))``."""
+    d, V = np.linalg.eigh(A)
+    out = np.zeros_like(A)
+    for k in range(d.shape[0]):
+        f = np.sqrt(max(d[k], clip)) if f_sqrt else np.exp(min(max(d[k], -clip), clip))
+        for r in range(A.shape[0]):
+            for c in range(A.shape[0]):
+                out[r, c] += V[r, k] * f * V[c, k]
+    return out
+
+
+@njit(cache=True)
+def project_payload(cfg, theta):  # pragma: no cover - compiled
+    """``theta (10,)`` clipped to ``[cfg.lo, cfg.hi]``, ``m >= 0``, ``|c| <= cfg.com_radius``, then
+    (``cfg.adapt_kind == ADAPT_CHS``) its pseudo-inertia's negative eigenvalues set to zero."""
+    for k in range(10):
+        theta[k] = min(max(theta[k], cfg.lo[k]), cfg.hi[k])
+    theta[0] = max(theta[0], 0.0)
+    mc = np.sqrt(theta[1] ** 2 + theta[2] ** 2 + theta[3] ** 2)
+    lim = cfg.com_radius * theta[0]
+    if mc > lim:
+        f = lim / mc
+        theta[1], theta[2], theta[3] = f * theta[1], f * theta[2], f * theta[3]
+    if cfg.adapt_kind != ADAPT_CHS:
+        return
+    J = np.empty((4, 4))
+    pseudo_inertia(theta, J)
+    d, V = np.linalg.eigh(J)
+    if d[0] >= 0.0:
+        return
+    P = np.zeros((4, 4))
+    for k in range(4):
+        dk = max(d[k], 0.0)
+        for r in range(4):
+            for c in range(4):
+                P[r, c] += V[r, k] * dk * V[c, k]
+    parameters_of(P, theta)
+
+
+@njit(cache=True)
+def rebuild_payload_model(cfg, theta, pi_model):  # pragma: no cover - compiled
+    """``pi_model = pi_fixed`` plus the payload ``theta`` (about its frame) on the payload's link."""
+    j = cfg.payload_joint
+    for c in range(pi_model.shape[0]):
+        pi_model[c] = cfg.pi_fixed[c]
+    for c in range(10):
+        acc = 0.0
+        for k in range(10):
+            acc += cfg.payload_map[c, k] * theta[k]
+        pi_model[10 * j + c] += acc
+
+
+@njit(cache=True)
+def _chs_acceleration(cfg, q, qd, obs):  # pragma: no cover - compiled
+    """Update the filtered measured acceleration at a fresh measurement; False at a held one
+    (a lost sample: nothing new to learn from)."""
+    n = q.shape[0]
+    held = obs[O_COUNT, 0] >= 1.0
+    for r in range(n):
+        held = held and q[r] == obs[O_Q, r] and qd[r] == obs[O_QD, r]
+    if held:
+        return False
+    m = obs[O_COUNT, 1]
+    if obs[O_COUNT, 0] >= 1.0 and m >= 1.0:
+        dt = m * cfg.T
+        a = np.exp(-cfg.comp_rate * dt)
+        for r in range(n):
+            raw = (qd[r] - obs[O_QD, r]) / dt
+            if np.isfinite(raw):
+                obs[CH_QDD, r] = a * obs[CH_QDD, r] + (1.0 - a) * raw
+    for r in range(n):
+        obs[O_Q, r], obs[O_QD, r], obs[O_TAU, r] = q[r], qd[r], 0.0
+    obs[O_COUNT, 0] += 1.0
+    obs[O_COUNT, 1] = 0.0
+    return True
+
+
+@njit(cache=True)
+def _cholesky_solve(A, b, x):  # pragma: no cover - compiled
+    """``x = A^-1 b`` for a symmetric positive definite ``A (n, n)`` (overwritten by its Cholesky
+    factor); False if ``A`` is not positive definite."""
+    n = b.shape[0]
+    for c in range(n):
+        d = A[c, c]
+        for k in range(c):
+            d -= A[c, k] * A[c, k]
+        if not d > 0.0:
+            return False
+        A[c, c] = np.sqrt(d)
+        for r in range(c + 1, n):
+            v = A[r, c]
+            for k in range(c):
+                v -= A[r, k] * A[c, k]
+            A[r, c] = v / A[c, c]
+    for r in range(n):
+        v = b[r]
+        for k in range(r):
+            v -= A[r, k] * x[k]
+        x[r] = v / A[r, r]
+    for r in range(n - 1, -1, -1):
+        v = x[r]
+        for k in range(r + 1, n):
+            v -= A[k, r] * x[k]
+        x[r] = v / A[r, r]
+    return True
+
+
+@njit(cache=True)
+def chs_step(ch, cfg, q, qd, e, ed, theta, pi_model, obs, work):  # pragma: no cover - compiled
+    """One step of Craig, Hsu and Sastry's law (module docstring) on the payload ``theta (10,)``,
+    then :func:`project_payload` and the trial's model rebuilt. ``e, ed (n,)`` the tracking error
+    and its rate; scratch ``work`` of :func:`~adaptive_dd.closed_loop.laws.law_work`."""
+    n = q.shape[0]
+    if not _chs_acceleration(cfg, q, qd, obs) or obs[O_COUNT, 0] < 3.0:
+        return  # held, or no filtered acceleration yet
+    m, x, e1 = work[2], work[7][0], work[7][1]
+    mass_matrix_in(ch, pi_model[: 10 * n], q, work[0], m)
+    for r in range(n):
+        m[r, r] += pi_model[12 * n + r]
+        e1[r] = ed[r] + cfg.lam[r] * e[r]
+    if not _cholesky_solve(m, e1, x):
+        return
+    yb = work[3]
+    body_slotine_li_regressor_in(ch, cfg.payload_joint, q, qd, qd, obs[CH_QDD], work[0], work[4], yb)
+    g = work[5]
+    for c in range(10):
+        acc = 0.0
+        for r in range(n):
+            acc += yb[r, c] * x[r]
+        g[c] = acc
+    for k in range(10):
+        upd = 0.0
+        for c in range(10):
+            upd += cfg.payload_map[c, k] * g[c]
+        upd *= cfg.T * cfg.gamma[k]
+        theta[k] += upd if np.isfinite(upd) else 0.0
+    project_payload(cfg, theta)
+    rebuild_payload_model(cfg, theta, pi_model)
+
+
+@njit(cache=True)
+def natural_step(ch, cfg, q, qd, qdr, a, s, theta, pi_model, work):  # pragma: no cover - compiled
+    """One step of Lee, Kwon and Park's law (module docstring). Here ``theta (10,)`` is the change
+    of the payload link's parameters about its joint frame (``phi = phi0 + theta``, ``phi0`` the
+    nominal link's, its pseudo-inertia floored at ``1e-9 tr`` if singular); ``s = e' + lam e``;
+    the mass added kept within ``cfg.hi[0]`` (the pseudo-inertia scaled down: still definite)."""
+    n = q.shape[0]
+    j = cfg.payload_joint
+    yb = work[3]
+    body_slotine_li_regressor_in(ch, j, q, qd, qdr, a, work[0], work[4], yb)
+    g, phi = work[5], work[9]
+    for c in range(10):
+        acc = 0.0
+        for r in range(n):
+            acc += yb[r, c] * s[r]
+        g[c] = acc
+        phi[c] = cfg.pi_fixed[10 * j + c] + theta[c]
+    J, G = np.empty((4, 4)), np.empty((4, 4))
+    pseudo_inertia(phi, J)
+    dual_pseudo_inertia(g, G)
+    S = _sym_fn(J, True, 1e-9 * max(J[0, 0] + J[1, 1] + J[2, 2] + J[3, 3], 1e-12))
+    X = cfg.T * cfg.nat_gain * (S @ G @ S)
+    if not np.all(np.isfinite(X)):
+        return
+    Jn = S @ _sym_fn(0.5 * (X + X.T), False, NATURAL_STEP_MAX) @ S
+    m_max = cfg.pi_fixed[10 * j] + cfg.hi[0]
+    if Jn[3, 3] > m_max:
+        Jn *= m_max / Jn[3, 3]
+    parameters_of(Jn, phi)
+    for c in range(10):
+        theta[c] = phi[c] - cfg.pi_fixed[10 * j + c]
+    for c in range(pi_model.shape[0]):
+        pi_model[c] = cfg.pi_fixed[c]
+    for c in range(10):
+        pi_model[10 * j + c] += theta[c]
