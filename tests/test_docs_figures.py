@@ -91,7 +91,8 @@ def test_the_site_count_reads_images_once_each_and_skips_thumbnails_and_the_chan
         {
             "results.html": f'<img src="_images/a.png" alt="{GOOD}"><img src="_images/b.png" alt="short">',
             "per_seed.html": f'<img src="_images/a.png" alt="{GOOD}">',
-            "auto_examples/index.html": '<img src="../_images/thumb/sphx_glr_x_thumb.png" alt="x">',
+            "auto_examples/index.html": '<img src="../_images/thumb/sphx_glr_x_thumb.png" alt="x">'
+            '<img src="../_images/sphx_glr_plot_y_thumb.png" alt="">',
             "changelog.html": f'<img src="_images/old.png" alt="{GOOD}">',
             "_static/logo.html": '<img src="logo.png" alt="logo">',
         },

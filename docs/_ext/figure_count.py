@@ -29,6 +29,8 @@ UNIT = re.compile(
     r"|\bstandard deviations?\b",
 )
 """A unit, or a quantity without one, in an alt text."""
+THUMBNAIL = re.compile(r"/thumb/|_thumb\.\w+$")
+"""The gallery's thumbnails: links to its pages, not figures."""
 
 
 class _Images(HTMLParser):
@@ -53,12 +55,12 @@ def page_images(html: str) -> list[tuple[str, str]]:
     Returns
     -------
     list of tuple of str
-        One pair per ``<img>``, the gallery's thumbnails (``/thumb/`` in their path) and inline
-        data left out.
+        One pair per ``<img>``, the gallery's thumbnails (``/thumb/`` in their path, or a name
+        ending ``_thumb``) and inline data left out.
     """
     parser = _Images()
     parser.feed(html)
-    return [(s, a) for s, a in parser.found if s and "/thumb/" not in s and not s.startswith("data:")]
+    return [(s, a) for s, a in parser.found if s and not THUMBNAIL.search(s) and not s.startswith("data:")]
 
 
 def site_figures(html_dir: str | Path) -> dict[str, tuple[str, str]]:

@@ -81,7 +81,8 @@ def draw(frames: dict[str, pd.DataFrame], path: Path) -> None:
         ax.set_ylabel("adaptive_ct / ct_oracle RMS error [-]")
     for ax in axes[-1]:
         ax.set_xlabel("payload segment [s, kg]")
-    axes.flat[-1].axis("off")
+    for ax in axes.flat[len(frames) :]:
+        ax.axis("off")
     axes.flat[-1].text(
         0.0, 0.5,
         "dots: one seed each\nblack bar: mean with its 95 % interval\n"
@@ -95,7 +96,7 @@ def draw(frames: dict[str, pd.DataFrame], path: Path) -> None:
     )
     fig.tight_layout()
     fig.savefig(path, dpi=110)
-    print(f"wrote {path.relative_to(ROOT)}")
+    print(f"wrote {path}")
 
 
 def draw_time_to_floor(frames: dict[str, pd.DataFrame], path: Path) -> None:
@@ -123,7 +124,7 @@ def draw_time_to_floor(frames: dict[str, pd.DataFrame], path: Path) -> None:
     )
     fig.tight_layout()
     fig.savefig(path, dpi=110)
-    print(f"wrote {path.relative_to(ROOT)}")
+    print(f"wrote {path}")
 
 
 def main(argv: list[str] | None = None) -> None:
@@ -131,8 +132,14 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--seeds", type=int, default=50)
     ap.add_argument("--out", type=Path, default=ROOT / "results" / "shipped_ratios")
     ap.add_argument("--figure", type=Path, default=ROOT / "docs" / "shipped_ratios.png")
+    ap.add_argument("--available", action="store_true", help="draw only the runs already in --out")
     args = ap.parse_args(argv)
-    frames = {label: run(file, args.seeds, args.out / Path(file).stem) for label, file in SCENARIOS.items()}
+    chosen = {
+        label: file
+        for label, file in SCENARIOS.items()
+        if not args.available or (args.out / Path(file).stem / "per_seed.csv").is_file()
+    }
+    frames = {label: run(file, args.seeds, args.out / Path(file).stem) for label, file in chosen.items()}
     draw(frames, args.figure)
     draw_time_to_floor(frames, args.figure.with_name("shipped_time_to_floor.png"))
 
