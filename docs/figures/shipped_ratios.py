@@ -9,7 +9,7 @@ every seed a dot, the mean with its 95 % interval a bar; and the first segment's
 ``adaptive_ct``'s error comes to stay within 1.2x the floor's, per seed (the report's ``time to
 1.2x floor``; "never" drawn above the segment's end). From the repository's root::
 
-    python docs/figures/shipped_ratios.py --seeds 50
+    python docs/figures/shipped_ratios.py --seeds 50 [--scenarios ur5_tool_swap ...]
 
 prints, per scenario and segment, the mean ratio and its interval, per scenario the time to the
 floor's median and its count of "never", and writes the two figures.
@@ -55,7 +55,9 @@ def run(file: str, seeds: int, out: Path) -> pd.DataFrame:
 
 def draw(frames: dict[str, pd.DataFrame], path: Path) -> None:
     """One panel per scenario: adaptive_ct's per-seed ratio to the floor per payload segment."""
-    fig, axes = plt.subplots(2, 4, figsize=(13, 6.2), sharey=True)
+    cols = min(4, len(frames) + 1)  # a panel per scenario and one for the legend
+    rows = -(-(len(frames) + 1) // cols)
+    fig, axes = plt.subplots(rows, cols, figsize=(3.3 * cols, 3.1 * rows + 0.4), sharey=True, squeeze=False)
     for ax, (label, df) in zip(axes.flat, frames.items(), strict=False):
         sub = df[df["controller"] == "adaptive_ct"]
         segs = sub.drop_duplicates("segment").sort_values("segment")
@@ -90,8 +92,10 @@ def draw(frames: dict[str, pd.DataFrame], path: Path) -> None:
         transform=axes.flat[-1].transAxes, fontsize=9,
     )  # fmt: skip
     fig.suptitle(
-        "Ratio of adaptive_ct's RMS tracking error to ct_oracle's, per seed and payload segment "
-        "[-], on every shipped N-joint scenario (log scale)",
+        "Ratio of adaptive_ct's RMS tracking error to ct_oracle's, per seed and payload segment [-], "
+        + ("every shipped N-joint scenario, " if len(frames) == len(SCENARIOS) else "")
+        + f"{next(iter(frames.values()))['seed'].nunique()} seeds"
+        + " (log scale)",
         fontsize=9,
     )
     fig.tight_layout()
@@ -132,12 +136,18 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--seeds", type=int, default=50)
     ap.add_argument("--out", type=Path, default=ROOT / "results" / "shipped_ratios")
     ap.add_argument("--figure", type=Path, default=ROOT / "docs" / "shipped_ratios.png")
-    ap.add_argument("--available", action="store_true", help="draw only the runs already in --out")
+    ap.add_argument(
+        "--scenarios", nargs="+", metavar="STEM", help="only these scenarios, by file stem (default: all)"
+    )
     args = ap.parse_args(argv)
+    stems = {Path(file).stem: label for label, file in SCENARIOS.items()}
+    unknown = sorted(set(args.scenarios or ()) - set(stems))
+    if unknown:
+        ap.error(f"--scenarios: no shipped scenario {', '.join(unknown)}; choose from {', '.join(stems)}")
     chosen = {
         label: file
         for label, file in SCENARIOS.items()
-        if not args.available or (args.out / Path(file).stem / "per_seed.csv").is_file()
+        if not args.scenarios or Path(file).stem in args.scenarios
     }
     frames = {label: run(file, args.seeds, args.out / Path(file).stem) for label, file in chosen.items()}
     draw(frames, args.figure)
