@@ -117,7 +117,8 @@ def draw_time_to_floor(frames: dict[str, pd.DataFrame], path: Path) -> None:
         ax.plot(x + jitter[never], shown[never], "x", color="tab:red", ms=4, alpha=0.6)
         ax.plot([x - 0.3, x + 0.3], [end, end], color="k", lw=1)
         med = np.median(np.where(never, np.inf, t))
-        print(f"{label:24s} time to 1.2x floor: median {med:.2f} s, never in {never.sum()} of {t.size}")
+        med_s = "never" if not np.isfinite(med) else f"{med:.2f} s"
+        print(f"{label:24s} time to 1.2x floor: median {med_s}, never in {never.sum()} of {t.size}")
     ax.set_xticks(range(len(frames)), list(frames), rotation=20, ha="right", fontsize=8)
     ax.set_ylabel("time to stay within 1.2x the floor [s]")
     ax.grid(alpha=0.3, axis="y")
