@@ -43,6 +43,7 @@ extensions = [
     "sphinx_gallery.gen_gallery",
     "apigen",  # docs/_ext/apigen.py: docs/api/ from the curated list docs/_ext/api_list.py
     "scenario_keys",  # docs/_ext/scenario_keys.py: docs/guide/scenario_keys.md from the checks' tables
+    "figure_count",  # docs/_ext/figure_count.py: the built site's figures counted, alt text checked
 ]
 
 source_suffix = {".rst": "restructuredtext", ".md": "markdown"}

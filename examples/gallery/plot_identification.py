@@ -26,6 +26,22 @@ rec = simulate_record(arm, sc.reference, 10.0, [np.random.default_rng(1)])
 print(f"{rec.t.size} samples, {arm.n_joints} joints, {arm.base.count} base parameters")
 
 # %%
+# The record: the scenario's reference tracked for 10 s, the measured joint angles and the
+# applied torques (what a real arm's CSV holds, with its velocities).
+fig, (ax1, ax2) = plt.subplots(2, 1, sharex=True, figsize=(7, 4.5))
+for j in range(arm.n_joints):
+    ax1.plot(rec.t, rec.q[0, :, j], lw=1, label=f"joint {j + 1}")
+    ax2.plot(rec.t, rec.tau[0, :, j], lw=1)
+ax1.set_ylabel("q [rad]")
+ax2.set_ylabel("tau [N m]")
+ax2.set_xlabel("t [s]")
+ax1.legend(fontsize=8, ncol=3)
+fig.suptitle(
+    "The record identified: joint angles [rad] and applied torques [N m] against time [s]", fontsize=9
+)
+fig.tight_layout()
+
+# %%
 # The regression filters both sides of the momentum form of the dynamics (no acceleration
 # needed), then weights each joint's equation by its residual variance.
 model = arm_model(arm)
@@ -48,5 +64,5 @@ ax.axvline(-2, color="k", lw=0.5)
 ax.set_yticks(np.arange(z.size), labels, fontsize=7)
 ax.invert_yaxis()
 ax.set_xlabel("(estimate - true) / std [standard deviations]")
-ax.set_title("Error of each identified base parameter (red: beyond 2 std)", fontsize=9)
+ax.set_title("Error of each named base parameter in standard deviations (red: beyond 2)", fontsize=9)
 fig.tight_layout()

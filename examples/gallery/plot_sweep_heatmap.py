@@ -12,6 +12,7 @@ import tempfile
 from pathlib import Path
 
 import matplotlib.pyplot as plt
+import numpy as np
 from distributed import Client
 
 import adaptive_dd
@@ -44,18 +45,29 @@ with (
 ):
     res = run_sweep(sweep, out, client=client, progress=False)
     ratios = ratio_medians(res.table, sweep.heatmap, [a for a, _ in sweep.axes])
-    image = plt.imread(res.heatmaps[0])
 
 # %%
-# One row per grid point x controller x seed x segment in ``res.table``; the heat map's cells:
+# One row per grid point x controller x seed x segment in ``res.table``; the heat map's cells,
+# the median over the seeds of ``adaptive_ct``'s RMS error over ``ct_oracle``'s after the swap:
 print(ratios.to_string(index=False))
 
-fig, ax = plt.subplots(figsize=(6, 4.5))
-ax.imshow(image)
-ax.set_axis_off()
-fig.suptitle(
-    "Heat map of the sweep: median ratio of adaptive_ct's RMS error to ct_oracle's\n"
-    "per payload mass [kg] and swap time [s]",
+# %%
+# The same cells drawn with their axes' units (``adaptive-dd sweep`` writes this figure as
+# ``heatmap.png``, one per combination of the grid's other axes):
+grid = ratios.pivot(index="swap_time", columns="payload_mass", values="ratio")
+fig, ax = plt.subplots(figsize=(5.5, 4))
+mesh = ax.imshow(grid.to_numpy(), origin="lower", cmap="viridis", aspect="auto")
+ax.set_xticks(range(grid.shape[1]), [f"{m:g}" for m in grid.columns])
+ax.set_yticks(range(grid.shape[0]), [f"{t:g}" for t in grid.index])
+middle = np.nanmean([np.nanmin(grid.to_numpy()), np.nanmax(grid.to_numpy())])
+for (i, j), r in np.ndenumerate(grid.to_numpy()):
+    ax.text(j, i, f"{r:.3f}", ha="center", va="center", color="k" if r > middle else "w", fontsize=9)
+ax.set_xlabel("payload mass [kg]")
+ax.set_ylabel("swap time [s]")
+fig.colorbar(mesh, label="median RMS error ratio, adaptive_ct / ct_oracle [-]")
+ax.set_title(
+    "Median ratio of adaptive_ct's RMS tracking error to ct_oracle's [-]\n"
+    "per payload mass [kg] and swap time [s], 2 seeds",
     fontsize=8,
-    wrap=True,
 )
+fig.tight_layout()
