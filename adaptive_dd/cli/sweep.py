@@ -105,8 +105,22 @@ def _print_marks(r, hm) -> None:
         f"{int(m.sum())} of {len(r)} cells marked ({hm['floor']} saturated or far from its own error "
         f"before the swap: its ratio is not against a floor; the why per cell in ratios.csv)"
     )
-    for text, count in r.loc[m, "marked"].str.replace(r"[\d.]+", "#", regex=True).value_counts().items():
-        print(f"  {count} cells: {text}")
+    from adaptive_dd.benchmark.metrics import SATURATION_LIMIT
+    from adaptive_dd.sweep import FLOOR_FAR
+
+    sat = r.loc[m & (r["floor_saturation"] > SATURATION_LIMIT), "floor_saturation"] * 100
+    if len(sat):
+        print(
+            f"  {len(sat)} cells: {hm['floor']} saturated in {sat.min():.3g} .. {sat.max():.3g} % of the "
+            f"segment's samples (limit {100 * SATURATION_LIMIT:g} %)"
+        )
+    far = (r["floor_rms"] / r["floor_nominal_rms"])[m]
+    far = far[far > FLOOR_FAR] if hm["segment"] != 0 else far[:0]
+    if len(far):
+        print(
+            f"  {len(far)} cells: {hm['floor']} at {far.min():.3g} .. {far.max():.3g} x its own RMS error "
+            f"before the swap (limit {FLOOR_FAR:g} x)"
+        )
     for name, sel in (("marked", m), ("not marked", ~m)):
         x = r.loc[sel, "ratio"].dropna()
         if len(x):
