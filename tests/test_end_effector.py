@@ -107,3 +107,42 @@ def test_segment_figures_by_hand():
     assert out["ee_position_rms"][1, 1] == pytest.approx(chord, rel=1e-9)
     assert out["ee_position_max"][1, 1] == pytest.approx(chord, rel=1e-9)
     assert out["ee_orientation_rms"][1, 1] == pytest.approx(np.degrees(0.02), rel=1e-9)
+
+
+def _short(arm: str, seeds: int):
+    """The arm's shipped scenario cut to 1.5 s, swaps at 0.5 s (2 kg) and 1.0 s (off)."""
+    import dataclasses
+
+    from adaptive_dd.benchmark.scenario import load_scenario
+
+    file = {"ur5": ROOT / "adaptive_dd" / "scenarios" / "ur5_tool_swap.toml", "sice": None}[arm]
+    sc = load_scenario(file)
+    return dataclasses.replace(
+        sc, seeds=seeds, duration=1.5, swap_times=(0.5, 1.0), swap_masses=(2.0, 0.0), swap_com=(),
+        swap_inertia=(),
+    )  # fmt: skip
+
+
+@pytest.mark.parametrize(("arm", "engine"), [("ur5", "auto"), ("ur5", "python"), ("sice", "auto")])
+def test_streamed_figures_equal_a_kept_trajectorys(arm, engine):
+    """The tool frame's error the loop streams for every seed (no trajectory kept) equals
+    :func:`end_effector_errors` on the trajectory of the same trial kept in full, seed by seed and
+    segment by segment, on the compiled and the Python path and on the paper's arm; the seeds past
+    ``keep_trajectories`` have it too."""
+    from adaptive_dd.benchmark.metrics import per_seed_segment_metrics
+    from adaptive_dd.benchmark.runner import run_benchmark, scenario_controller
+    from adaptive_dd.closed_loop.types import run_constants
+
+    sc = _short(arm, seeds=3)
+    ctrls = dict(scenario_controller(sc, name) for name in ("pd", "ct_oracle"))
+    kept = run_benchmark(sc, progress=False, controllers=ctrls, engine=engine, keep_trajectories=3)
+    streamed = run_benchmark(sc, progress=False, controllers=ctrls, engine=engine, keep_trajectories=1)
+    rc = run_constants(sc)
+    for name in ctrls:
+        run = kept.runs[name]
+        ref = end_effector_errors(sc.arm, run.q, kept.q_d, rc.seg_start, rc.seg_end)
+        got = per_seed_segment_metrics(streamed, streamed.runs[name], recovery=False)
+        for k in ref:
+            assert np.all(np.isfinite(got[k])), (name, k)
+            np.testing.assert_allclose(got[k], ref[k], rtol=1e-9, atol=1e-12, err_msg=f"{name} {k}")
+        assert np.all(got["ee_position_rms"] > 0) and np.all(got["ee_orientation_rms"] > 0)

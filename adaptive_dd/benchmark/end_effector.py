@@ -15,9 +15,10 @@ ee_orientation_rms [deg]
     distance on SO(3)). On a planar arm (the paper's two-link arm) it is the error of the tip's
     angle about the plane's normal, ``|e1 + e2|``.
 
-The trajectories are those the run recorded: the first ``keep_trajectories`` seeds of
-:func:`~adaptive_dd.benchmark.runner.run_benchmark` (3 by default); the other seeds' entries are
-NaN (the compiled loop streams the joint error's sums, not the tool frame's).
+In a benchmark run the closed loop streams these figures for every seed, keeping no trajectory
+(:mod:`~adaptive_dd.closed_loop.tool_frame`: the same product of placements, sample by sample);
+:func:`end_effector_errors` computes them from trajectories (a policy's episodes, a recorded
+trial), and ``tests/test_end_effector.py`` holds the two to each other.
 
 :func:`frame_placements` is a vectorised product of the joints' placements (Pinocchio's
 ``jointPlacements`` and joint axes), held to Pinocchio's ``framePlacement`` by
