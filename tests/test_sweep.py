@@ -507,8 +507,8 @@ def _marks_table(floor_sat: float, floor_seg1: float) -> pd.DataFrame:
                     f, sat = floor_seg1, floor_sat
                 for c, v, s in (("adaptive_ct", a, 0.0), ("ct_oracle", f, sat)):
                     rows.append(
-                        {"point": p, "m": [1.0, 10.0][p], "w": 0.0, "controller": c, "seed": seed, "segment": seg,
-                         "rms_error": v, "saturation_fraction": s}
+                        {"point": p, "m": [1.0, 10.0][p], "w": 0.0, "controller": c, "seed": seed,
+                         "segment": seg, "rms_error": v, "saturation_fraction": s}
                     )  # fmt: skip
     return pd.DataFrame(rows)
 
