@@ -146,3 +146,36 @@ def test_streamed_figures_equal_a_kept_trajectorys(arm, engine):
             assert np.all(np.isfinite(got[k])), (name, k)
             np.testing.assert_allclose(got[k], ref[k], rtol=1e-9, atol=1e-12, err_msg=f"{name} {k}")
         assert np.all(got["ee_position_rms"] > 0) and np.all(got["ee_orientation_rms"] > 0)
+
+
+@pytest.mark.parametrize("name", [*ARMS, "sice"])
+def test_streamed_kinematics_are_pinocchios(name):
+    """The loop's per-sample kernel (:func:`~adaptive_dd.closed_loop.tool_frame.accumulate_tool`,
+    run here as Python on its tables) adds, for 20 random pairs of configurations, the squared
+    distance and the squared angle between the tool frame's placements by Pinocchio's
+    ``framePlacement`` (``log3`` for the angle), and keeps the peak distance."""
+    from adaptive_dd.closed_loop.tool_frame import accumulate_tool, tool_tables
+
+    arm = Arm.sice() if name == "sice" else _arm(name)
+    model, data = arm.model, arm.model.createData()
+    fid = model.getFrameId(arm.payload_frame)
+    rng = np.random.default_rng(7)
+    q_d = rng.uniform(-np.pi, np.pi, (20, arm.n_joints))
+    q = q_d + rng.normal(0.0, 0.05, q_d.shape)
+    tab = tool_tables(arm, q_d)
+    sums = np.zeros((3, 1, 20))
+    w, r0 = np.zeros((tab.index.shape[0], 12)), np.zeros(9)
+    for k in range(20):
+        accumulate_tool(*tab, sums[0], sums[1], sums[2], 0, k, k, q[k], w, r0)
+
+    def place(x):
+        pin.forwardKinematics(model, data, arm.pin_configuration(x))
+        return pin.updateFramePlacement(model, data, fid).copy()
+
+    for k in range(20):
+        a, b = place(q_d[k]), place(q[k])
+        d2 = np.sum((a.translation - b.translation) ** 2)
+        th = np.linalg.norm(pin.log3(a.rotation.T @ b.rotation))
+        assert sums[0, 0, k] == pytest.approx(d2, rel=1e-9, abs=1e-18), (name, k)
+        assert sums[1, 0, k] == pytest.approx(np.sqrt(d2), rel=1e-9, abs=1e-12)
+        assert sums[2, 0, k] == pytest.approx(th**2, rel=1e-8, abs=1e-18), (name, k)
