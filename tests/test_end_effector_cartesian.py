@@ -101,12 +101,27 @@ def test_waypoints_on_a_redundant_arm_and_position_only_on_three_joints(tmp_path
         (f"{{ period = 4.0, q0 = {UR5_Q0} }}", "exactly one of circle"),
         ("{ circle = 0.1, period = 4.0, q0 = [0.0, 1.0] }", "reference.cartesian.q0: must be a list of 6"),
         (f"{{ waypoints = [[0, 0, 0], [0.1, 0]], period = 4.0, q0 = {UR5_Q0} }}", "waypoints[2]"),
+        (f"{{ waypoints = [[0, 0, 0], [true, 0, 0]], period = 4.0, q0 = {UR5_Q0} }}", "waypoints[2]"),
+        (f"{{ circle = inf, period = 4.0, q0 = {UR5_Q0} }}", "cartesian.circle: must be a number"),
+        (f"{{ circle = 0.1, period = 4.0, q0 = {UR5_Q0}, normal = [0, 0, 0] }}", "normal: must not be zero"),
+        (f"{{ circle = 0.1, period = 4.0, q0 = {UR5_Q0}, tolerance = 1e-14 }}", "beyond tolerance"),
+        ("[1, 2]", "must be an inline table"),
     ],
 )
 def test_a_bad_path_names_the_key(tmp_path, cartesian, needle):
     with pytest.raises(ScenarioError, match=r"reference\.cartesian") as exc:
         _scenario(tmp_path, "ur5", cartesian)
     assert needle in str(exc.value)
+
+
+def test_joints_beside_a_path_and_a_bad_ramp_are_named(tmp_path):
+    """Joints given beside the path are refused; a bad ramp is named as the ramp, not the path."""
+    both = f"{{ circle = 0.1, period = 4.0, q0 = {UR5_Q0} }}\njoint1 = {{ offset = 0.0 }}"
+    with pytest.raises(ScenarioError, match="give the path or the joints, not both"):
+        _scenario(tmp_path, "ur5", both)
+    with pytest.raises(ScenarioError) as exc:
+        _scenario(tmp_path, "ur5", f"{{ circle = 0.1, period = 4.0, q0 = {UR5_Q0} }}", ramp=-1.0)
+    assert "reference.ramp" in str(exc.value) and "reference.cartesian" not in str(exc.value)
 
 
 def test_validate_names_the_waypoint_and_the_joint_beyond_a_limit(tmp_path):

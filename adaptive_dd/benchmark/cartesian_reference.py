@@ -287,13 +287,17 @@ def parse_cartesian(e: list, spec: Any, arm, ramp: float, sample_period: float |
         else:
             for i, p in enumerate(w):
                 ok = isinstance(p, list | tuple) and len(p) == 3
-                ok = ok and all(isinstance(v, int | float) and math.isfinite(v) for v in p)
+                ok = ok and all(
+                    isinstance(v, int | float) and not isinstance(v, bool) and math.isfinite(v) for v in p
+                )
                 if not ok:
                     e.append(f"{key}.waypoints[{i + 1}]: must be [x, y, z] in m (finite), got {p!r}")
             points = tuple(tuple(float(v) for v in p) for p in w)
     if len(e) > n0 or sample_period is None:
         return None
     path = CartesianPath(period, q0, circle, points, center, normal, samples, tol)
+    ok = isinstance(ramp, int | float) and not isinstance(ramp, bool) and math.isfinite(ramp)
+    ramp = float(ramp) if ok else 0.0  # a bad ramp is reported as reference.ramp
     try:
         return cartesian_reference(arm, path, ramp, sample_period)
     except ValueError as exc:
