@@ -123,8 +123,10 @@ def path_points(path: CartesianPath, p0: Array, t: Array) -> Array:
 
 
 def solve_path(arm, path: CartesianPath) -> tuple[Array, Array, Array]:
-    """Joint positions along one period of ``path``: ``(t (M,), q (M, n), err (M,))``, ``err``
-    the pose error [m, rad] left at each sample (damped least squares, module docstring)."""
+    """Joint positions along one period of ``path`` and the last sample again (closing the loop):
+    ``(t (M + 1,), q (M + 1, n), err (M + 1,))``, ``err`` the pose error [m, rad] left at each
+    sample (damped least squares, module docstring); cut after the first sample out of reach
+    (``err > REACHED``)."""
     import pinocchio as pin
 
     from adaptive_dd.benchmark.end_effector import frame_placements
@@ -163,8 +165,13 @@ def solve_path(arm, path: CartesianPath) -> tuple[Array, Array, Array]:
             if np.linalg.norm(err) < CONVERGED and np.linalg.norm(pull) < CONVERGED:
                 break
             A = J @ J.T + DAMPING**2 * np.eye(J.shape[0])
-            q = q + J.T @ np.linalg.solve(A, rhs) + 0.5 * pull
+            dq = J.T @ np.linalg.solve(A, rhs) + 0.5 * pull
+            q = q + dq
+            if np.linalg.norm(dq) < CONVERGED:  # at the closest pose it can reach
+                break
         qs[m], errs[m] = q, np.linalg.norm(err)
+        if errs[m] > REACHED:  # out of reach: the samples so far, this one last
+            return t[: m + 1], qs[: m + 1], errs[: m + 1]
     return t, qs, errs
 
 
