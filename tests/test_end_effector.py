@@ -23,16 +23,41 @@ ARMS = {
 }
 
 
-def _arm(name: str) -> Arm:
+UNALIGNED = """<robot name="unaligned">
+  <link name="base"/>
+  <joint name="j1" type="continuous"><parent link="base"/><child link="l1"/>
+    <origin xyz="0 0 0.1" rpy="0.1 0.2 0.3"/><axis xyz="0 0.6 0.8"/><limit effort="20" velocity="3"/></joint>
+  <link name="l1"><inertial><mass value="1"/><origin xyz="0.1 0 0"/>
+    <inertia ixx="0.01" iyy="0.01" izz="0.01" ixy="0" ixz="0" iyz="0"/></inertial></link>
+  <joint name="j2" type="revolute"><parent link="l1"/><child link="l2"/><origin xyz="0.2 0 0"/>
+    <axis xyz="0.8 0 0.6"/><limit effort="10" velocity="3" lower="-3" upper="3"/></joint>
+  <link name="l2"><inertial><mass value="0.5"/><origin xyz="0.05 0 0"/>
+    <inertia ixx="0.001" iyy="0.001" izz="0.001" ixy="0" ixz="0" iyz="0"/></inertial></link>
+  <joint name="j3" type="prismatic"><parent link="l2"/><child link="tool"/><origin xyz="0.1 0 0"/>
+    <axis xyz="0.6 0 0.8"/><limit effort="10" velocity="1" lower="-0.1" upper="0.1"/></joint>
+  <link name="tool"><inertial><mass value="0.2"/><origin xyz="0.02 0 0"/>
+    <inertia ixx="0.001" iyy="0.001" izz="0.001" ixy="0" ixz="0" iyz="0"/></inertial></link>
+</robot>
+"""
+"""An arm of the joint types no shipped robot has: an unaligned continuous joint (Pinocchio's
+RevoluteUnboundedUnaligned, whose model has no ``axis`` attribute), an unaligned revolute and an
+unaligned prismatic one."""
+
+
+def _arm(name: str, tmp_path: Path | None = None) -> Arm:
+    if name == "unaligned":
+        path = (tmp_path or Path(".")) / "unaligned.urdf"
+        path.write_text(UNALIGNED)
+        return Arm.from_urdf(path, payload_frame="tool")
     urdf, frame = ARMS[name]
     return Arm.from_urdf(ROBOTS / urdf, payload_frame=frame)
 
 
-@pytest.mark.parametrize("name", [*ARMS, "sice"])
-def test_forward_kinematics_is_pinocchios(name):
+@pytest.mark.parametrize("name", [*ARMS, "sice", "unaligned"])
+def test_forward_kinematics_is_pinocchios(name, tmp_path):
     """The vectorised product of joint placements equals Pinocchio's framePlacement on 20 random
     configurations, for the tool frame and for every other frame of the model."""
-    arm = Arm.sice() if name == "sice" else _arm(name)
+    arm = Arm.sice() if name == "sice" else _arm(name, tmp_path)
     model = arm.model
     data = model.createData()
     rng = np.random.default_rng(44)
@@ -148,15 +173,15 @@ def test_streamed_figures_equal_a_kept_trajectorys(arm, engine):
         assert np.all(got["ee_position_rms"] > 0) and np.all(got["ee_orientation_rms"] > 0)
 
 
-@pytest.mark.parametrize("name", [*ARMS, "sice"])
-def test_streamed_kinematics_are_pinocchios(name):
+@pytest.mark.parametrize("name", [*ARMS, "sice", "unaligned"])
+def test_streamed_kinematics_are_pinocchios(name, tmp_path):
     """The loop's per-sample kernel (:func:`~adaptive_dd.closed_loop.tool_frame.accumulate_tool`,
     run here as Python on its tables) adds, for 20 random pairs of configurations, the squared
     distance and the squared angle between the tool frame's placements by Pinocchio's
     ``framePlacement`` (``log3`` for the angle), and keeps the peak distance."""
     from adaptive_dd.closed_loop.tool_frame import accumulate_tool, tool_tables
 
-    arm = Arm.sice() if name == "sice" else _arm(name)
+    arm = Arm.sice() if name == "sice" else _arm(name, tmp_path)
     model, data = arm.model, arm.model.createData()
     fid = model.getFrameId(arm.payload_frame)
     rng = np.random.default_rng(7)

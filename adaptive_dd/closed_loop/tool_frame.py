@@ -80,7 +80,7 @@ def tool_tables(arm, q_d: NDArray[np.float64]) -> ToolTables:
     links = np.zeros((J + 1, 15))
     links[0, [0, 4, 8]] = 1.0
     for r in range(1, J):
-        kind, axis = _joint_motion(model.joints[r].shortname(), model.joints[r].extract())
+        kind, axis = _joint_motion(arm, r)
         place = model.jointPlacements[r]
         index[r] = (model.parents[r], REVOLUTE if kind == "R" else PRISMATIC, model.joints[r].idx_v)
         links[r] = np.concatenate((place.rotation.ravel(), place.translation, axis))
