@@ -48,8 +48,9 @@ __all__ = [
     "run_sweep",
 ]
 
-CELL_VERSION = 1
-"""Part of every task key: bump it when the rows a task returns change meaning."""
+CELL_VERSION = 2
+"""Part of every task key: bump it when the rows a task returns change meaning (2: the
+``saturation_fraction`` column)."""
 
 WORKER_ENV = {
     "NUMBA_NUM_THREADS": "1",
@@ -67,6 +68,7 @@ ROW_COLUMNS = {
     "mass": "float64",
     "rms_error": "float64",
     "max_error": "float64",
+    "saturation_fraction": "float64",
     "failed": "bool",
     "error": "object",
 }
@@ -108,7 +110,8 @@ def run_cell(
     -------
     list of dict
         One row per seed and segment with :data:`ROW_COLUMNS`: ``rms_error`` and
-        ``max_error`` of ``|q_d - q|`` [rad] over the segment; ``failed`` when the
+        ``max_error`` of ``|q_d - q|`` [rad] over the segment, ``saturation_fraction`` the
+        fraction of its samples with a command beyond a torque limit; ``failed`` when the
         trial diverged (or its controller raised) before the segment's end, then the
         metrics are NaN and ``error`` says why.
     """
@@ -135,6 +138,7 @@ def run_cell(
                     "mass": mass,
                     "rms_error": float(per["rms_error"][i, j]),
                     "max_error": float(per["max_error"][i, j]),
+                    "saturation_fraction": float(per["saturation_fraction"][i, j]),
                     "failed": bad,
                     "error": why if bad else "",
                 }
@@ -197,6 +201,7 @@ def failed_rows(task: Task, message: str) -> list[dict]:
             "mass": mass,
             "rms_error": np.nan,
             "max_error": np.nan,
+            "saturation_fraction": np.nan,
             "failed": True,
             "error": message,
         }
@@ -246,7 +251,7 @@ def _write_atomic(df: pd.DataFrame, path: Path) -> Path:
 def _read(path: Path) -> pd.DataFrame:
     df = pd.read_parquet(path) if path.suffix == ".parquet" else pd.read_csv(path, keep_default_na=False)
     if path.suffix == ".csv":
-        for col in ("rms_error", "max_error"):
+        for col in ("rms_error", "max_error", "saturation_fraction"):
             df[col] = pd.to_numeric(df[col].replace("", np.nan))
     return _typed(df)
 
@@ -263,6 +268,9 @@ class SweepResult:
     heatmaps : list of Path
         Empty when no grid point has a ratio (every row failed, or no seed where both the
         adaptive controller and the floor finished the heat map's segment).
+    ratios : DataFrame or None
+        Per grid point, the heat map's ratio and its marks (:func:`ratio_medians`), also written
+        to ``OUT/ratios.csv``; None without a heat map.
     reused, ran : int
         Tasks read back from ``OUT/cells`` and tasks run now.
     failed_rows : int
@@ -274,7 +282,7 @@ class SweepResult:
 
     >>> from adaptive_dd.sweep import SweepResult
     >>> sorted(SweepResult.__dataclass_fields__)
-    ['failed_rows', 'heatmaps', 'ran', 'reused', 'table', 'table_path']
+    ['failed_rows', 'heatmaps', 'ran', 'ratios', 'reused', 'table', 'table_path']
     """
 
     table: pd.DataFrame
@@ -283,6 +291,7 @@ class SweepResult:
     reused: int
     ran: int
     failed_rows: int
+    ratios: pd.DataFrame | None = None
 
 
 def _client(scheduler: str | None, workers: int | None):
@@ -367,9 +376,8 @@ def run_sweep(
     lost = _run_on_dask(todo, cells_dir, ext, scheduler, workers, client, progress) if todo else {}
     table = _assemble(sweep, cells, cells_dir, ext, lost)
     path = _write_atomic(table, out / f"results.{ext}")
-    return SweepResult(
-        table, path, _heatmaps(sweep, table, out), reused, len(todo), int(table["failed"].sum())
-    )
+    ratios, maps = _heatmaps(sweep, table, out)
+    return SweepResult(table, path, maps, reused, len(todo), int(table["failed"].sum()), ratios)
 
 
 def _run_on_dask(todo, cells_dir: Path, ext: str, scheduler, workers, client, progress: bool) -> dict:
@@ -388,17 +396,19 @@ def _run_on_dask(todo, cells_dir: Path, ext: str, scheduler, workers, client, pr
             cluster.close()
 
 
-def _heatmaps(sweep: Sweep, table: pd.DataFrame, out: Path) -> list:
-    """The ratio heat maps of ``[sweep] heatmap`` (none when every row failed or no ratio is finite:
-    never an empty heat map)."""
+def _heatmaps(sweep: Sweep, table: pd.DataFrame, out: Path) -> tuple[pd.DataFrame | None, list]:
+    """The per-cell ratios and marks (written to ``OUT/ratios.csv``) and the heat maps of
+    ``[sweep] heatmap`` (none when every row failed or no ratio is finite: never an empty heat
+    map)."""
     if not sweep.heatmap or table["failed"].all():
-        return []
+        return None, []
     from adaptive_dd.sweep_plot import plot_ratio_heatmaps
 
     ratios = ratio_medians(table, sweep.heatmap, [a for a, _ in sweep.axes])
+    _write_atomic(ratios, out / "ratios.csv")
     if not np.isfinite(ratios["ratio"]).any():
-        return []
-    return plot_ratio_heatmaps(ratios, sweep.heatmap, [a for a, _ in sweep.axes], out)
+        return ratios, []
+    return ratios, plot_ratio_heatmaps(ratios, sweep.heatmap, [a for a, _ in sweep.axes], out)
 
 
 def _assemble(sweep: Sweep, cells, cells_dir: Path, ext: str, lost: dict) -> pd.DataFrame:
@@ -418,11 +428,22 @@ def _assemble(sweep: Sweep, cells, cells_dir: Path, ext: str, lost: dict) -> pd.
     return pd.concat(parts, ignore_index=True)
 
 
+FLOOR_FAR = 5.0
+"""A cell whose floor's median RMS error in the heat map's segment exceeds this many times its own
+in the first segment (before any swap, the same grid point and seeds) is marked: the floor is
+not tracking as the law with the true model does, and a ratio to it says little."""
+
+
 def ratio_medians(table: pd.DataFrame, heatmap: Mapping[str, Any], axes: Sequence[str]) -> pd.DataFrame:
-    """Per grid point: the median over seeds of ``rms(adaptive) / rms(floor)`` in one segment.
+    """Per grid point: the median over seeds of ``rms(adaptive) / rms(floor)`` in one segment,
+    and whether the floor there is a floor.
 
     The ratio is formed per seed (both controllers ran on that seed's noise), then the
-    median is taken over the seeds where both trials finished the segment.
+    median is taken over the seeds where both trials finished the segment. A cell is marked
+    (``marked`` says why; empty when not) when its floor saturates (its median saturation
+    fraction in the segment beyond :data:`~adaptive_dd.benchmark.metrics.SATURATION_LIMIT`, the
+    benchmark's rule) or is far from its own nominal error (its median RMS error more than
+    :data:`FLOOR_FAR` times its median in the first segment, before any swap).
 
     Parameters
     ----------
@@ -437,20 +458,25 @@ def ratio_medians(table: pd.DataFrame, heatmap: Mapping[str, Any], axes: Sequenc
     -------
     DataFrame
         One row per grid point: ``point``, the axes, ``ratio`` (NaN if no seed
-        finished), ``n_seeds`` (seeds in the median).
+        finished), ``n_seeds`` (seeds in the median), the floor's median ``floor_rms`` [rad] in
+        the segment, ``floor_nominal_rms`` [rad] in the first segment, ``floor_saturation``
+        [fraction of samples] in the segment (NaN where the table has none) and ``marked``.
 
     Examples
     --------
     >>> import pandas as pd
     >>> from adaptive_dd.sweep import ratio_medians
     >>> table = pd.DataFrame({
-    ...     "point": [0, 0, 0, 0], "payload_mass": [3.0] * 4, "segment": [1] * 4, "seed": [0, 0, 1, 1],
-    ...     "controller": ["adaptive_ct", "ct_oracle"] * 2, "rms_error": [1.2e-4, 1e-4, 1.1e-4, 1e-4]})
+    ...     "point": [0] * 6, "payload_mass": [3.0] * 6, "segment": [1, 1, 1, 1, 0, 0],
+    ...     "seed": [0, 0, 1, 1, 0, 1], "controller": ["adaptive_ct", "ct_oracle"] * 2 + ["ct_oracle"] * 2,
+    ...     "rms_error": [1.2e-4, 1e-4, 1.1e-4, 1e-4, 1e-4, 1e-4]})
     >>> heatmap = {"adaptive": "adaptive_ct", "floor": "ct_oracle", "segment": 1}
-    >>> ratio_medians(table, heatmap, ["payload_mass"])
-       point  payload_mass  ratio  n_seeds
-    0      0           3.0   1.15        2
+    >>> ratio_medians(table, heatmap, ["payload_mass"])[["payload_mass", "ratio", "n_seeds", "marked"]]
+       payload_mass  ratio  n_seeds marked
+    0           3.0   1.15        2
     """
+    from adaptive_dd.benchmark.metrics import SATURATION_LIMIT
+
     seg = table[table["segment"] == heatmap["segment"]]
     cols = ["point", "seed"]
     a = seg[seg["controller"] == heatmap["adaptive"]].set_index(cols)["rms_error"]
@@ -461,4 +487,32 @@ def ratio_medians(table: pd.DataFrame, heatmap: Mapping[str, Any], axes: Sequenc
     points = table.drop_duplicates("point").set_index("point")[list(axes)]
     out = points.join(med).rename(columns={"median": "ratio", "count": "n_seeds"})
     out["n_seeds"] = out["n_seeds"].fillna(0).astype(int)
+    floor = table[table["controller"] == heatmap["floor"]]
+    here = floor[floor["segment"] == heatmap["segment"]].groupby("point")
+    out["floor_rms"] = here["rms_error"].median()
+    out["floor_nominal_rms"] = floor[floor["segment"] == 0].groupby("point")["rms_error"].median()
+    if "saturation_fraction" in floor:
+        out["floor_saturation"] = here["saturation_fraction"].median()
+    else:
+        out["floor_saturation"] = np.nan
+    out["marked"] = [
+        _mark(r, heatmap["floor"], heatmap["segment"], SATURATION_LIMIT) for _, r in out.iterrows()
+    ]
     return out.reset_index()
+
+
+def _mark(r, floor: str, segment: int, sat_limit: float) -> str:
+    """Why a cell's ratio is not against a floor (:func:`ratio_medians`); empty when it is."""
+    why = []
+    if r["floor_saturation"] > sat_limit:
+        why.append(
+            f"{floor} saturated in {100 * r['floor_saturation']:.3g} % of the segment's samples "
+            f"(limit {100 * sat_limit:g} %)"
+        )
+    far = r["floor_rms"] / r["floor_nominal_rms"]
+    if segment != 0 and far > FLOOR_FAR:
+        why.append(
+            f"{floor} at {1e3 * r['floor_rms']:.3g} mrad, {far:.3g} x its {1e3 * r['floor_nominal_rms']:.3g} "
+            f"mrad before the swap (limit {FLOOR_FAR:g} x)"
+        )
+    return "; ".join(why)

@@ -51,23 +51,33 @@ def axis_label(field: str) -> str:
     return AXIS_UNITS.get(field, field.replace("_", " "))
 
 
-def _grid(ratios: pd.DataFrame, x: str, y: str) -> tuple[list, list, np.ndarray, np.ndarray]:
+def _grid(ratios: pd.DataFrame, x: str, y: str) -> tuple[list, list, np.ndarray, np.ndarray, np.ndarray]:
     xs = list(dict.fromkeys(ratios[x]))
     ys = list(dict.fromkeys(ratios[y]))
     z = np.full((len(ys), len(xs)), np.nan)
     n = np.zeros((len(ys), len(xs)), dtype=int)
+    marked = np.zeros((len(ys), len(xs)), dtype=bool)
     for _, r in ratios.iterrows():
         i, j = ys.index(r[y]), xs.index(r[x])
         z[i, j], n[i, j] = r["ratio"], r["n_seeds"]
-    return xs, ys, z, n
+        marked[i, j] = bool(r.get("marked", ""))
+    return xs, ys, z, n, marked
 
 
 def _plot_one(ratios: pd.DataFrame, heatmap: Mapping[str, Any], title: str, path: Path) -> Path:
+    _figure(ratios, heatmap, title).savefig(path, dpi=110)
+    return path
+
+
+def _figure(ratios: pd.DataFrame, heatmap: Mapping[str, Any], title: str):
+    """The heat map of one combination of the other axes (a ``matplotlib.figure.Figure``); the
+    marked cells carry a hatched patch whose ``gid`` is ``"marked"``."""
     from matplotlib.colors import LogNorm
     from matplotlib.figure import Figure
+    from matplotlib.patches import Rectangle
 
     x, y = heatmap["x"], heatmap["y"]
-    xs, ys, z, n = _grid(ratios, x, y)
+    xs, ys, z, n, marked = _grid(ratios, x, y)
     fig = Figure(figsize=(1.2 * len(xs) + 3, 0.8 * len(ys) + 2.5), layout="constrained")
     ax = fig.subplots()
     finite = z[np.isfinite(z)]
@@ -81,14 +91,22 @@ def _plot_one(ratios: pd.DataFrame, heatmap: Mapping[str, Any], title: str, path
         label = f"{z[i, j]:.3g}\n({n[i, j]})" if ok else "n/a"
         color = "k" if ok and z[i, j] > mid else "w" if ok else "k"
         ax.text(j, i, label, ha="center", va="center", fontsize=8, color=color)
+    for i, j in zip(*np.nonzero(marked), strict=True):  # the floor is no floor there: hatched
+        ax.add_patch(
+            Rectangle((j - 0.5, i - 0.5), 1, 1, fill=False, hatch="///", edgecolor="r", lw=0, gid="marked")
+        )
+    if marked.any():
+        title += (
+            f"\nhatched ({int(marked.sum())}): {heatmap['floor']} saturated "
+            "or far from its own error before the swap"
+        )
     ax.set_xticks(range(len(xs)), [f"{v:g}" if isinstance(v, float) else str(v) for v in xs])
     ax.set_yticks(range(len(ys)), [f"{v:g}" if isinstance(v, float) else str(v) for v in ys])
     ax.set_xlabel(axis_label(x))
     ax.set_ylabel(axis_label(y))
     fig.colorbar(im, ax=ax, label=f"median RMS error ratio {heatmap['adaptive']} / {heatmap['floor']} [-]")
     ax.set_title(title, fontsize=9)
-    fig.savefig(path, dpi=110)
-    return path
+    return fig
 
 
 def plot_ratio_heatmaps(
@@ -99,7 +117,8 @@ def plot_ratio_heatmaps(
     Parameters
     ----------
     ratios : DataFrame
-        From :func:`adaptive_dd.sweep.ratio_medians`.
+        From :func:`adaptive_dd.sweep.ratio_medians`; its cells with a non-empty ``marked`` (the
+        floor saturated or far from its own nominal error) are hatched.
     heatmap : mapping
         ``x``, ``y``, ``adaptive``, ``floor``, ``segment``.
     axes : sequence of str

@@ -225,6 +225,7 @@ def test_sweep_table_columns_and_order(tmp_path, client):
         "mass",
         "rms_error",
         "max_error",
+        "saturation_fraction",
         "failed",
         "error",
         "task",
@@ -493,3 +494,67 @@ def test_cli_a_sweep_whose_rows_all_fail_exits_1_without_a_heat_map(tmp_path, ca
     assert main(["sweep", str(_write(tmp_path, text)), "--out", str(out), "--no-progress"]) == 0
     cap = capsys.readouterr()
     assert "warning: 3 of 6 rows failed (in 1 task(s)); why:" in cap.err and "bogus" in cap.err
+
+
+def _marks_table(floor_sat: float, floor_seg1: float) -> pd.DataFrame:
+    """Two grid points, 3 seeds: point 0 a plain cell; point 1 whose floor has ``floor_sat``
+    saturation and ``floor_seg1`` RMS error [rad] after the swap (1e-4 before it)."""
+    rows = []
+    for p in (0, 1):
+        for seed in range(3):
+            for seg, (a, f, sat) in enumerate([(1e-4, 1e-4, 0.0), (2e-4, 1e-4, 0.0)]):
+                if p == 1 and seg == 1:
+                    f, sat = floor_seg1, floor_sat
+                for c, v, s in (("adaptive_ct", a, 0.0), ("ct_oracle", f, sat)):
+                    rows.append(
+                        {"point": p, "m": [1.0, 10.0][p], "w": 0.0, "controller": c, "seed": seed,
+                         "segment": seg, "rms_error": v, "saturation_fraction": s}
+                    )  # fmt: skip
+    return pd.DataFrame(rows)
+
+
+@pytest.mark.parametrize(
+    ("floor_sat", "floor_seg1", "why"),
+    [(0.3, 1e-4, "saturated in 30 %"), (0.0, 4.2e-2, "420 x its 0.1 mrad"), (0.005, 4.9e-4, "")],
+)
+def test_a_cell_whose_floor_is_no_floor_is_marked(floor_sat, floor_seg1, why, tmp_path):
+    """A cell whose floor saturates beyond the benchmark's limit (1 %), or sits far from its own
+    error before the swap (more than FLOOR_FAR = 5 times), is marked with the reason; below both
+    limits (0.5 %, 4.9 x) it is not; the heat map hatches exactly the marked cells."""
+    from adaptive_dd.sweep_plot import _figure
+
+    hm = {"x": "m", "y": "w", "adaptive": "adaptive_ct", "floor": "ct_oracle", "segment": 1}
+    r = ratio_medians(_marks_table(floor_sat, floor_seg1), hm, ["m", "w"])
+    assert r.loc[0, "marked"] == ""
+    assert r.loc[0, "floor_rms"] == pytest.approx(1e-4) and r.loc[0, "floor_nominal_rms"] == pytest.approx(
+        1e-4
+    )
+    if why:
+        assert why in r.loc[1, "marked"] and "ct_oracle" in r.loc[1, "marked"]
+    else:
+        assert r.loc[1, "marked"] == ""
+    fig = _figure(r, hm, "t")
+    hatched = [p for p in fig.axes[0].patches if p.get_gid() == "marked"]
+    assert len(hatched) == (1 if why else 0)
+    if why:
+        assert hatched[0].get_xy() == (0.5, -0.5)  # the 10 kg column's cell
+
+
+def test_the_ratios_csv_and_the_cli_count_the_marked_cells(tmp_path, capsys):
+    """``OUT/ratios.csv`` holds every cell with its mark; the command says how many are marked,
+    why, and the median ratio of the marked and the other cells."""
+    import types
+
+    from adaptive_dd.cli.sweep import _print_heatmap
+    from adaptive_dd.sweep import _heatmaps
+
+    t = _marks_table(0.3, 4.2e-2).assign(failed=False)
+    hm = {"x": "m", "y": "w", "adaptive": "adaptive_ct", "floor": "ct_oracle", "segment": 1}
+    sw = types.SimpleNamespace(heatmap=hm, axes=[("m", [1.0, 10.0]), ("w", [0.0])])
+    ratios, maps = _heatmaps(sw, t, tmp_path)
+    on_disk = pd.read_csv(tmp_path / "ratios.csv", keep_default_na=False)
+    assert list(on_disk["marked"] != "") == [False, True] and len(maps) == 1
+    _print_heatmap(types.SimpleNamespace(ratios=ratios, heatmaps=maps), sw)
+    out = capsys.readouterr().out
+    assert "1 of 2 cells marked" in out
+    assert "marked: median ratio per cell 0.0" in out and "not marked: median ratio per cell 2 .. 2" in out

@@ -35,6 +35,7 @@ from adaptive_dd.closed_loop.glue import (
 )
 from adaptive_dd.closed_loop.noise import NoiseBlocks
 from adaptive_dd.closed_loop.python_path import PythonGlue, run_python_batch
+from adaptive_dd.closed_loop.tool_frame import tool_tables
 from adaptive_dd.closed_loop.types import Io, Recording, RunConstants, TrialState
 from adaptive_dd.controllers.compiled_form import LAW_ADAPTIVE, LAW_SLOTINE, CompiledSpec
 from adaptive_dd.identification.two_link_online import TwoLinkOnlineConfig, online_init
@@ -52,9 +53,11 @@ def _constants(scenario, reference) -> tuple[RunConstants, Io, np.ndarray]:
     seg_start, seg_end, seg_settled = segment_bounds(scenario.segments(), T, SETTLE)
     c = np.ascontiguousarray
     q_d, qd_d, qdd_d = (c(x, dtype=float) for x in reference)
+    tool = tool_tables(scenario.arm, q_d)
     rc = RunConstants(
-        float(T), float(MAX_ERROR), float(MAX_SPEED), q_d, qd_d, qdd_d, seg_start, seg_end, seg_settled
-    )
+        float(T), float(MAX_ERROR), float(MAX_SPEED), q_d, qd_d, qdd_d, seg_start, seg_end, seg_settled,
+        *tool,
+    )  # fmt: skip
     arm = scenario.closed_forms
     act, sens = arm.actuator, sensor_of(scenario)
     io = Io(

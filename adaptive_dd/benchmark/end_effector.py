@@ -15,9 +15,10 @@ ee_orientation_rms [deg]
     distance on SO(3)). On a planar arm (the paper's two-link arm) it is the error of the tip's
     angle about the plane's normal, ``|e1 + e2|``.
 
-The trajectories are those the run recorded: the first ``keep_trajectories`` seeds of
-:func:`~adaptive_dd.benchmark.runner.run_benchmark` (3 by default); the other seeds' entries are
-NaN (the compiled loop streams the joint error's sums, not the tool frame's).
+In a benchmark run the closed loop streams these figures for every seed, keeping no trajectory
+(:mod:`~adaptive_dd.closed_loop.tool_frame`: the same product of placements, sample by sample);
+:func:`end_effector_errors` computes them from trajectories (a policy's episodes, a recorded
+trial), and ``tests/test_end_effector.py`` holds the two to each other.
 
 :func:`frame_placements` is a vectorised product of the joints' placements (Pinocchio's
 ``jointPlacements`` and joint axes), held to Pinocchio's ``framePlacement`` by
@@ -38,28 +39,15 @@ Array = NDArray[np.float64]
 EE_KEYS = ("ee_position_rms", "ee_position_max", "ee_orientation_rms")
 """The per-seed, per-segment keys this module adds (units: mm, mm, deg)."""
 
-_AXES = {"X": 0, "Y": 1, "Z": 2}
 
+def _joint_motion(arm, i: int) -> tuple[str, Array]:
+    """``("R" or "P", unit axis (3,))`` of joint ``i`` (Pinocchio's index, 1-based) of ``arm``, from
+    the arm's :class:`~adaptive_dd.plant.chain.Chain` (its motion subspace, for every joint type
+    the chain accepts: aligned, unaligned, continuous, prismatic)."""
+    from adaptive_dd.plant.chain import REVOLUTE
 
-def _joint_motion(shortname: str, joint):
-    """``("R" or "P", axis (3,))`` of a one-degree-of-freedom Pinocchio joint model."""
-    name = shortname.removeprefix("JointModel")
-    if name in ("RX", "RY", "RZ", "RUBX", "RUBY", "RUBZ"):
-        axis = np.zeros(3)
-        axis[_AXES[name[-1]]] = 1.0
-        return "R", axis
-    if name in ("PX", "PY", "PZ"):
-        axis = np.zeros(3)
-        axis[_AXES[name[-1]]] = 1.0
-        return "P", axis
-    if name == "RevoluteUnaligned":
-        return "R", np.asarray(joint.axis, float)
-    if name == "PrismaticUnaligned":
-        return "P", np.asarray(joint.axis, float)
-    raise ParameterError(
-        f"end-effector error: joint model {shortname} is not a one-axis revolute or prismatic joint; "
-        "the tool frame's error is computed for serial arms of such joints only"
-    )
+    ch = arm.chain
+    return ("R" if ch.jtype[i - 1] == REVOLUTE else "P"), np.asarray(ch.axis[i - 1], dtype=float)
 
 
 def _axis_rotation(axis: Array, angle: Array) -> Array:
@@ -100,7 +88,7 @@ def frame_placements(arm, q: ArrayLike, frame: str | None = None) -> tuple[Array
     rot = [np.broadcast_to(np.eye(3), (*batch, 3, 3))]
     pos = [np.zeros((*batch, 3))]
     for i in range(1, model.njoints):
-        kind, axis = _joint_motion(model.joints[i].shortname(), model.joints[i].extract())
+        kind, axis = _joint_motion(arm, i)
         place = model.jointPlacements[i]
         parent = model.parents[i]
         r0 = rot[parent] @ place.rotation  # the joint's frame at q = 0

@@ -47,8 +47,9 @@ com_estimate [m]
 ee_position_rms, ee_position_max [mm], ee_orientation_rms [deg], ee_seeds
     The tool frame's error (the arm's ``payload_frame``, placed by forward kinematics at the true
     q and at the reference): position RMS and peak, orientation RMS, on every arm
-    (:mod:`~adaptive_dd.benchmark.end_effector`), over the ``ee_seeds`` seeds whose trajectory
-    the run recorded (``keep_trajectories``, the first 3 by default); None when none was.
+    (:mod:`~adaptive_dd.benchmark.end_effector`), streamed by the loop for every trial
+    (:mod:`~adaptive_dd.closed_loop.tool_frame`); the mean over the ``ee_seeds`` seeds that did
+    not fail before the segment's end.
 com_true [m]
     The centre of mass of the segment's payload in the payload frame; None without payload.
 sigma_true
@@ -232,17 +233,20 @@ def per_seed_segment_metrics(res: BenchmarkResult, run, recovery: bool = True) -
 
 def _end_effector(res: BenchmarkResult, run, start, end) -> dict[str, np.ndarray]:
     """The tool frame's error per seed and segment (:mod:`~adaptive_dd.benchmark.end_effector`)
-    of the recorded trials, NaN for the seeds whose trajectory was not recorded."""
-    from adaptive_dd.benchmark.end_effector import EE_KEYS, end_effector_errors
+    from the sums the loop streamed for every trial (:mod:`~adaptive_dd.closed_loop.tool_frame`):
+    position RMS and peak [mm], orientation RMS [deg]; NaN where no sums were streamed."""
+    from adaptive_dd.benchmark.end_effector import EE_KEYS
 
+    acc = run.acc
     S = run.failed.shape[0]
-    out = {k: np.full((S, len(start)), np.nan) for k in EE_KEYS}
-    if run.q is not None and run.q.shape[0]:
-        K = run.q.shape[0]
-        part = end_effector_errors(res.scenario.arm, run.q, res.q_d[: run.q.shape[1]], start, end)
-        for k in EE_KEYS:
-            out[k][:K] = part[k]
-    return out
+    if acc is None or acc.ee_sum_p2 is None:
+        return {k: np.full((S, len(start)), np.nan) for k in EE_KEYS}
+    n = (np.asarray(end) - np.asarray(start)).astype(float)
+    return {
+        "ee_position_rms": 1e3 * segment_rms(acc.ee_sum_p2, n),
+        "ee_position_max": 1e3 * acc.ee_max_p,
+        "ee_orientation_rms": np.degrees(segment_rms(acc.ee_sum_th2, n)),
+    }
 
 
 def _blank_failed(res: BenchmarkResult, run, out: dict, end: np.ndarray, key) -> dict:

@@ -49,6 +49,15 @@ def reference_problems(scenario) -> list[str]:
     t = np.arange(scenario.n_samples) * T
     q, qd, _ = scenario.reference.sample(t)
     out = []
+    path = getattr(scenario.reference, "path", None)  # a path of the tool frame, solved to joints
+    names = tuple(getattr(arm, "joint_names", ()))
+
+    def key(j: int, k: int) -> str:
+        if path is None:
+            return f"reference.joint{j + 1}"
+        name = f"{names[j]!r} (joint{j + 1})" if len(names) > j else f"joint{j + 1}"
+        return f"reference.cartesian: at {path.where(t[k])}, joint {name}"
+
     lim = getattr(arm, "position_limits", None)  # an arm from a URDF
     if lim is not None:
         for j in range(q.shape[1]):
@@ -56,12 +65,12 @@ def reference_problems(scenario) -> list[str]:
             k_lo, k_hi = int(np.argmin(q[:, j])), int(np.argmax(q[:, j]))
             if q[k_lo, j] < lo - TOL * max(1.0, abs(lo)):
                 out.append(
-                    f"reference.joint{j + 1}: q = {q[k_lo, j]:.4g} rad at t = {t[k_lo]:.3f} s is below the "
+                    f"{key(j, k_lo)}: q = {q[k_lo, j]:.4g} rad at t = {t[k_lo]:.3f} s is below the "
                     f"joint's lower limit {lo:.4g} rad (by {lo - q[k_lo, j]:.3g} rad)"
                 )
             if q[k_hi, j] > hi + TOL * max(1.0, abs(hi)):
                 out.append(
-                    f"reference.joint{j + 1}: q = {q[k_hi, j]:.4g} rad at t = {t[k_hi]:.3f} s is above the "
+                    f"{key(j, k_hi)}: q = {q[k_hi, j]:.4g} rad at t = {t[k_hi]:.3f} s is above the "
                     f"joint's upper limit {hi:.4g} rad (by {q[k_hi, j] - hi:.3g} rad)"
                 )
     vlim = getattr(arm, "velocity_limits", None)
@@ -71,8 +80,9 @@ def reference_problems(scenario) -> list[str]:
             v = abs(qd[k, j])
             if np.isfinite(vlim[j]) and vlim[j] > 0 and v > vlim[j] * (1 + TOL):
                 out.append(
-                    f"reference.joint{j + 1}: |qd| = {v:.4g} rad/s at t = {t[k]:.3f} s is beyond the joint's "
+                    f"{key(j, k)}: |qd| = {v:.4g} rad/s at t = {t[k]:.3f} s is beyond the joint's "
                     f"velocity limit {vlim[j]:.4g} rad/s ({v / vlim[j]:.2f} times)"
+                    + (": slow the path (a longer period)" if path is not None else "")
                 )
     return out
 

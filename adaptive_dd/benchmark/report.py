@@ -33,9 +33,9 @@ TABLES = (
     ("RMS torque [N m]", "rms_torque", 1.0, "{:16.2f}"),
     ("saturated fraction [%]", "saturation_fraction", 100.0, "{:16.2f}"),
     ("payload mass estimated at the end of the segment [kg]", "mass_estimate", 1.0, "{:16.3f}"),
-    ("tool frame: RMS position error [mm] (recorded seeds)", "ee_position_rms", 1.0, "{:16.3f}"),
-    ("tool frame: peak position error [mm] (recorded seeds)", "ee_position_max", 1.0, "{:16.3f}"),
-    ("tool frame: RMS orientation error [deg] (recorded seeds)", "ee_orientation_rms", 1.0, "{:16.4f}"),
+    ("tool frame: RMS position error [mm]", "ee_position_rms", 1.0, "{:16.3f}"),
+    ("tool frame: peak position error [mm]", "ee_position_max", 1.0, "{:16.3f}"),
+    ("tool frame: RMS orientation error [deg]", "ee_orientation_rms", 1.0, "{:16.4f}"),
 )
 """The report's per-segment tables: title, metric key, scale to the printed unit, cell format."""
 

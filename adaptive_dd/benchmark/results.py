@@ -85,8 +85,8 @@ def to_frame(res):
     com_estimate_x_m, com_estimate_y_m, com_estimate_z_m, floor, ratio_to_floor,
     time_to_floor_s, detection_delay_s, false_alarms, failed, failed_at_s, failure, engine,
     ee_position_rms_mm, ee_position_max_mm, ee_orientation_rms_deg`` (the tool frame's error,
-    :mod:`~adaptive_dd.benchmark.end_effector`: NaN for the seeds whose trajectory the run did
-    not record; metrics: :mod:`~adaptive_dd.benchmark.metrics`). NaN where a figure does not apply: the
+    :mod:`~adaptive_dd.benchmark.end_effector`, streamed for every seed; metrics:
+    :mod:`~adaptive_dd.benchmark.metrics`). NaN where a figure does not apply: the
     estimates for a fixed model (the centre of mass on the two-link arm, whose paper's sigma holds
     none), ``time_to_floor_s`` outside the first segment, without a floor or for a failed trial
     (``inf`` when never, :mod:`~adaptive_dd.benchmark.time_to_floor`), the metrics of a failed

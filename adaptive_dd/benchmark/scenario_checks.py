@@ -407,7 +407,9 @@ def scenario_fields(
         "excite": get("run", "excite", 0.0),
     }
     _payload_fields(e, tables.get("payload", []), v, defaulted, arm)
-    v["reference"] = _reference_field(e, tables, is_default, defaulted, arm, default_reference)
+    T = v["sample_period"]
+    T = float(T) if isinstance(T, int | float) and not isinstance(T, bool) and T > 0 else None
+    v["reference"] = _reference_field(e, tables, is_default, defaulted, arm, default_reference, T)
     v["controller_options"] = tuple(
         (str(n), freeze(o) if isinstance(o, dict) else o) for n, o in tables.get("controllers", {}).items()
     )
@@ -484,7 +486,13 @@ def _payload_fields(e: list, items: list, v: dict, defaulted: set, arm: Any = No
 
 
 def _reference_field(
-    e: list, tables: dict, is_default: bool, defaulted: set, arm: Any = None, default_reference=None
+    e: list,
+    tables: dict,
+    is_default: bool,
+    defaulted: set,
+    arm: Any = None,
+    default_reference=None,
+    sample_period: float | None = None,
 ) -> Any:
 
     n = arm.n_joints if arm is not None else 2
@@ -502,6 +510,14 @@ def _reference_field(
             raise ValueError("scenario_fields: no [reference] table and no default_reference given")
         return default_reference()
     ref = tables["reference"]
+    if isinstance(ref, dict) and "cartesian" in ref:  # a path of the tool frame, solved to joints
+        from adaptive_dd.benchmark.cartesian_reference import parse_cartesian
+
+        other = sorted(k for k in ref if k not in ("cartesian", "ramp"))
+        if other:
+            e.append(f"reference: cartesian is given with {other}; give the path or the joints, not both")
+        out = parse_cartesian(e, ref["cartesian"], arm, freeze(ref.get("ramp", 0.0)), sample_period)
+        return out if out is not None else Reference((0.0,) * n, ((),) * n, ((),) * n, ((),) * n)
     keys = [f"joint{j + 1}" for j in range(n)]
     for k in ref:
         if k == "ramp" or k in keys:

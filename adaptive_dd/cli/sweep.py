@@ -85,11 +85,46 @@ def _print_heatmap(res, sweep) -> None:
             file=sys.stderr,
         )
     elif hm:
-        from adaptive_dd.sweep import ratio_medians
-
-        r = ratio_medians(res.table, hm, [a for a, _ in sweep.axes])
+        r = res.ratios
         print(
             f"median over seeds of rms {hm['adaptive']} / rms {hm['floor']}, segment {hm['segment']}"
-            f" (rows {hm['y']}, columns {hm['x']}; median over any other axes):"
+            f" (rows {hm['y']}, columns {hm['x']}; median over any other axes; * marked):"
         )
-        print(r.pivot_table(index=hm["y"], columns=hm["x"], values="ratio", aggfunc="median").round(3))
+        table = r.pivot_table(index=hm["y"], columns=hm["x"], values="ratio", aggfunc="median").round(3)
+        marks = r.assign(is_marked=r["marked"] != "").pivot_table(
+            index=hm["y"], columns=hm["x"], values="is_marked", aggfunc="any"
+        )
+        print(table.astype(str) + marks.reindex_like(table).replace({True: " *", False: ""}).fillna(""))
+        _print_marks(r, hm)
+
+
+def _print_marks(r, hm) -> None:
+    """How many cells are marked and why, and the median ratio of the marked and the other cells."""
+    m = r["marked"] != ""
+    print(
+        f"{int(m.sum())} of {len(r)} cells marked ({hm['floor']} saturated or far from its own error "
+        f"before the swap: its ratio is not against a floor; the why per cell in ratios.csv)"
+    )
+    from adaptive_dd.benchmark.metrics import SATURATION_LIMIT
+    from adaptive_dd.sweep import FLOOR_FAR
+
+    sat = r.loc[m & (r["floor_saturation"] > SATURATION_LIMIT), "floor_saturation"] * 100
+    if len(sat):
+        print(
+            f"  {len(sat)} cells: {hm['floor']} saturated in {sat.min():.3g} .. {sat.max():.3g} % of the "
+            f"segment's samples (limit {100 * SATURATION_LIMIT:g} %)"
+        )
+    far = (r["floor_rms"] / r["floor_nominal_rms"])[m]
+    far = far[far > FLOOR_FAR] if hm["segment"] != 0 else far[:0]
+    if len(far):
+        print(
+            f"  {len(far)} cells: {hm['floor']} at {far.min():.3g} .. {far.max():.3g} x its own RMS error "
+            f"before the swap (limit {FLOOR_FAR:g} x)"
+        )
+    for name, sel in (("marked", m), ("not marked", ~m)):
+        x = r.loc[sel, "ratio"].dropna()
+        if len(x):
+            print(
+                f"  {name}: median ratio per cell {x.min():.3g} .. {x.max():.3g} (median of the cells "
+                f"{x.median():.3g}, {len(x)} cells)"
+            )

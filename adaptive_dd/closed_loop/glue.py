@@ -11,7 +11,7 @@ One sample of one trial is:
    saturation and D/A, the plant step (:func:`plant_advance`), the runaway rule (non-finite
    state or ``|qd| >= max_speed``), the failure freeze (a failed trial stays at its last
    finite position, at rest, with zero torque), the recorded trajectories and the streamed
-   metrics;
+   metrics (the tool frame's error among them: :func:`~adaptive_dd.closed_loop.tool_frame.accumulate_tool`);
 4. the estimator: compiled (:func:`estimator_sample`) or the controller's ``observe``, its
    alarms counted; then :func:`record_estimate` keeps the estimate (:func:`law_estimate`) at
    each segment's end and for the recorded trials.
@@ -67,6 +67,7 @@ from adaptive_dd.closed_loop.choices import (
     plant_joints,
     plant_work,
 )
+from adaptive_dd.closed_loop.tool_frame import accumulate_tool
 from adaptive_dd.plant.sampling import actuate_trial, measure_trial
 
 __all__ = [
@@ -302,7 +303,10 @@ def trial_samples(
     res, std, quantize_encoder = io.res, io.std, io.quantize_encoder
     q, qd, stuck, failed, failed_at = ts.q, ts.qd, ts.stuck, ts.failed, ts.failed_at
     held_q, held_qd, n_dropped = ts.held_q, ts.held_qd, ts.n_dropped
-    sum_e2, sum_e2_joint, max_e, sum_tau2, n_saturated, sum_e2_settled, e_norm = acc
+    sum_e2, sum_e2_joint, max_e, sum_tau2 = acc.sum_e2, acc.sum_e2_joint, acc.max_e, acc.sum_tau2
+    n_saturated, sum_e2_settled, e_norm = acc.n_saturated, acc.sum_e2_settled, acc.e_norm
+    ee_sum_p2, ee_max_p, ee_sum_th2 = acc.ee_sum_p2, acc.ee_max_p, acc.ee_sum_th2
+    ee_index, ee_links, ee_ref = rc.ee_index, rc.ee_links, rc.ee_ref
     q_rec, qd_rec, tau_rec, sat_rec = rec.q, rec.qd, rec.tau, rec.saturated
     sigma_rec, sigma_end = rec.sigma, rec.sigma_end
     alarm_t, n_alarms = alarms.times, alarms.count
@@ -310,6 +314,7 @@ def trial_samples(
     qm, qdm, qm_obs, qdm_obs = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
     cmd, tau, e, prev = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
     sig = np.empty(sigma_end.shape[2])
+    tw, tr = np.zeros((max(ee_index.shape[0], 1), 12)), np.zeros(9)
     pw, lw, ew = plant_work(pl, n), law_work_of(law, n), estimator_work(ec, es)
     has_drop = drop.shape[1] > 0
     for k in range(k0, k1):
@@ -328,6 +333,7 @@ def trial_samples(
             sum_e2, sum_e2_joint, max_e, sum_tau2, n_saturated, sum_e2_settled, e_norm, seg_settled,
             i, s, k, e, tau, mask,
         )  # fmt: skip
+        accumulate_tool(ee_index, ee_links, ee_ref, ee_sum_p2, ee_max_p, ee_sum_th2, i, s, k, prev, tw, tr)
         if estimator_sample(ec, es, ls, i, qm_obs, qdm_obs, tau, ew) == 1:
             if n_alarms[i] < alarm_t.shape[1]:
                 alarm_t[i, n_alarms[i]] = k * T
@@ -454,6 +460,7 @@ def _apply_loop(rc, io, pl, ts, acc, rec, k, cmd, tau):  # pragma: no cover - co
     s = segment_of(rc, k)
     n = cmd.shape[1]
     pw, e, prev = plant_work(pl, n), np.empty(n), np.empty(n)  # one per call: trials one after another
+    tw, tr = np.zeros((max(rc.ee_index.shape[0], 1), 12)), np.zeros(9)
     for i in range(cmd.shape[0]):
         mask = apply_sample(
             rc.T, rc.max_error, rc.max_speed, rc.q_d, io.lim, io.lsb, io.saturate,
@@ -463,6 +470,10 @@ def _apply_loop(rc, io, pl, ts, acc, rec, k, cmd, tau):  # pragma: no cover - co
         accumulate_sample(
             acc.sum_e2, acc.sum_e2_joint, acc.max_e, acc.sum_tau2, acc.n_saturated, acc.sum_e2_settled,
             acc.e_norm, rc.seg_settled, i, s, k, e, tau[i], mask,
+        )  # fmt: skip
+        accumulate_tool(
+            rc.ee_index, rc.ee_links, rc.ee_ref, acc.ee_sum_p2, acc.ee_max_p, acc.ee_sum_th2, i, s, k, prev,
+            tw, tr,
         )  # fmt: skip
     return s
 

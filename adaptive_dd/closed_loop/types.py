@@ -61,6 +61,10 @@ class RunConstants(NamedTuple):
     seg_start, seg_end, seg_settled : ndarray of int64 (G,)
         First sample of each segment (:func:`~adaptive_dd.benchmark.scenario_checks.first_sample`
         of the swap time), one past its last, first sample counted in the settled RMS.
+    ee_index, ee_links, ee_ref : ndarray
+        The tool frame's kinematics and the reference's placements
+        (:class:`~adaptive_dd.closed_loop.tool_frame.ToolTables`: ``index``, ``links``, ``ref``),
+        from which the loop streams the tool frame's error.
     """
 
     T: float
@@ -72,6 +76,9 @@ class RunConstants(NamedTuple):
     seg_start: NDArray[np.int64]
     seg_end: NDArray[np.int64]
     seg_settled: NDArray[np.int64]
+    ee_index: NDArray[np.int64]
+    ee_links: Array
+    ee_ref: Array
 
 
 class Io(NamedTuple):
@@ -157,6 +164,14 @@ class StreamedSums(NamedTuple):
         Sum of ``|e|^2`` from ``seg_settled`` on.
     e_norm : float32 (S, N)
         ``|e|`` at every sample (recovery times).
+    ee_sum_p2 : (S, G)
+        Sum of the tool frame's squared position error ``|p(q_d) - p(q)|^2`` [m^2]
+        (:mod:`~adaptive_dd.closed_loop.tool_frame`).
+    ee_max_p : (S, G)
+        Its peak ``max |p(q_d) - p(q)|`` [m].
+    ee_sum_th2 : (S, G)
+        Sum of the squared angle of ``R(q_d)^T R(q)`` [rad^2]. The three None: not streamed
+        (sums built by hand); the loops always stream them (:meth:`zeros`).
     """
 
     sum_e2: Array
@@ -166,13 +181,17 @@ class StreamedSums(NamedTuple):
     n_saturated: Array
     sum_e2_settled: Array
     e_norm: NDArray[np.float32]
+    ee_sum_p2: Array | None = None
+    ee_max_p: Array | None = None
+    ee_sum_th2: Array | None = None
 
     @classmethod
     def zeros(cls, S: int, G: int, n: int, N: int) -> StreamedSums:
         z = np.zeros((S, G))
         return cls(
-            z, np.zeros((S, G, n)), z.copy(), z.copy(), z.copy(), z.copy(), np.zeros((S, N), np.float32)
-        )
+            z, np.zeros((S, G, n)), z.copy(), z.copy(), z.copy(), z.copy(), np.zeros((S, N), np.float32),
+            z.copy(), z.copy(), z.copy(),
+        )  # fmt: skip
 
 
 class Recording(NamedTuple):
@@ -206,7 +225,10 @@ def run_constants(scenario) -> RunConstants:
     end = np.append(start[1:], N).astype(np.int64)
     settled = np.minimum(end - 1, start + round(SETTLE / T)).astype(np.int64)
     c = np.ascontiguousarray
-    return RunConstants(float(T), MAX_ERROR, MAX_SPEED, c(q_d), c(qd_d), c(qdd_d), start, end, settled)
+    from adaptive_dd.closed_loop.tool_frame import tool_tables
+
+    tool = tool_tables(scenario.arm, q_d)
+    return RunConstants(float(T), MAX_ERROR, MAX_SPEED, c(q_d), c(qd_d), c(qdd_d), start, end, settled, *tool)
 
 
 def io_of(scenario) -> Io:

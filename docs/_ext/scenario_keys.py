@@ -32,6 +32,11 @@ MEANING = {
     "reference.ramp": "Length of the C^2 ramp that fades the sines in [s] (0: none).",
     "reference.jointN": "Per joint (`joint1`, `joint2`, ...): `offset` [rad], and lists `amplitude` [rad], "
     "`frequency` [Hz] and `phase` [rad] of a sum of sines.",
+    "reference.cartesian": "In place of `jointN`, a closed path of the tool frame solved to joints by "
+    "inverse kinematics: `{ circle = RADIUS, normal = [x, y, z], center = [...] }` or "
+    "`{ waypoints = [[x, y, z], ...] }` (offsets [m] from the tool at `q0`), with `period` [s], "
+    "`q0` [rad] (default zeros), `samples` (256), `tolerance` [m] (1e-4); see "
+    "`adaptive_dd.benchmark.cartesian_reference`.",
     "payload.at": "Time of the swap [s] (one `[[payload]]` table per swap).",
     "payload.mass": "Payload mass carried from then on [kg].",
     "payload.radius": "Two-link arm: radius of the tip disk [m] (its inertia).",
@@ -252,7 +257,7 @@ def page() -> str:
             )
         lines += table(rows)
     lines += ["## `[reference]`", ""]
-    used |= {"reference.ramp", "reference.jointN"}
+    used |= {"reference.ramp", "reference.jointN", "reference.cartesian"}
     lines += table(
         [
             (
@@ -262,6 +267,7 @@ def page() -> str:
                 MEANING["reference.ramp"],
             ),
             ("`jointN`", "the paper's two-sine reference", "(required)", MEANING["reference.jointN"]),
+            ("`cartesian`", "(none)", "(none)", MEANING["reference.cartesian"]),
         ]
     )
 
