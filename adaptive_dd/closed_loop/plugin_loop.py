@@ -41,6 +41,7 @@ from adaptive_dd.closed_loop.glue import (
     measure_sample,
     record_estimate,
 )
+from adaptive_dd.closed_loop.tool_frame import accumulate_tool
 from adaptive_dd.plant.chain_dynamics import mass_matrix_in, rnea_ref_in, workspace
 from adaptive_dd.plant.integrator import plant_scratch
 
@@ -96,7 +97,10 @@ def _plugin_trial(
     res, std, quantize_encoder = io.res, io.std, io.quantize_encoder
     q, qd, stuck, failed, failed_at = ts.q, ts.qd, ts.stuck, ts.failed, ts.failed_at
     held_q, held_qd, n_dropped = ts.held_q, ts.held_qd, ts.n_dropped
-    sum_e2, sum_e2_joint, max_e, sum_tau2, n_saturated, sum_e2_settled, e_norm = acc
+    sum_e2, sum_e2_joint, max_e, sum_tau2 = acc.sum_e2, acc.sum_e2_joint, acc.max_e, acc.sum_tau2
+    n_saturated, sum_e2_settled, e_norm = acc.n_saturated, acc.sum_e2_settled, acc.e_norm
+    ee_sum_p2, ee_max_p, ee_sum_th2 = acc.ee_sum_p2, acc.ee_max_p, acc.ee_sum_th2
+    ee_index, ee_links, ee_ref = rc.ee_index, rc.ee_links, rc.ee_ref
     q_rec, qd_rec, tau_rec, sat_rec = rec.q, rec.qd, rec.tau, rec.saturated
     sigma_rec, sigma_end = rec.sigma, rec.sigma_end
     alarm_t, n_alarms = alarms.times, alarms.count
@@ -105,6 +109,7 @@ def _plugin_trial(
     cmd, tau, e, prev = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
     sig = np.full(sigma_end.shape[2], np.nan)
     pw, w, zero = plant_scratch(n), workspace(n), np.zeros(n)
+    tw, tr = np.zeros((max(ee_index.shape[0], 1), 12)), np.zeros(9)
     g, m, c = np.full(n, np.nan), np.full((n, n), np.nan), np.full(n, np.nan)  # NaN unless declared
     terms = (g, m, c)
     xi = x[i]
@@ -130,6 +135,7 @@ def _plugin_trial(
             sum_e2, sum_e2_joint, max_e, sum_tau2, n_saturated, sum_e2_settled, e_norm, seg_settled,
             i, s, k, e, tau, mask,
         )  # fmt: skip
+        accumulate_tool(ee_index, ee_links, ee_ref, ee_sum_p2, ee_max_p, ee_sum_th2, i, s, k, prev, tw, tr)
         if observe(p, xi, qm_obs, qdm_obs, tau) == 1:
             if n_alarms[i] < alarm_t.shape[1]:
                 alarm_t[i, n_alarms[i]] = k * T
