@@ -540,6 +540,6 @@ def _payload_pair(args, arm, model, fit, tau_f, K) -> None:
     spec, base, _ = _read(args, arm, args.baseline)
     prior_std = _prior_std(args.arm, model) if args.hold_unseen == "on" else None
     other = _fit_record(model, base, K, tau_f, spec.torque_held, prior_std)
-    pr = payload_from_pair(arm, fit.sigma, fit.cov, other.sigma, other.cov)
+    pr = payload_from_pair(arm, fit.sigma, fit.cov, other.sigma, other.cov, weighting="diagonal")
     loaded = ", ".join(args.data) if args.data else "the scenario's record"
     _print_payload(f"payload (loaded {loaded} - unloaded {', '.join(args.baseline)})", pr)

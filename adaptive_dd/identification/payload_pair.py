@@ -94,9 +94,24 @@ def payload_from_params(params: ArrayLike, cov: ArrayLike) -> PayloadResult:
 
 
 def payload_from_pair(
-    arm, sigma_loaded: ArrayLike, cov_loaded: ArrayLike, sigma_unloaded: ArrayLike, cov_unloaded: ArrayLike
+    arm,
+    sigma_loaded: ArrayLike,
+    cov_loaded: ArrayLike,
+    sigma_unloaded: ArrayLike,
+    cov_unloaded: ArrayLike,
+    *,
+    weighting: str = "gls",
 ) -> PayloadResult:
     """The payload from a loaded and an unloaded identification (module docstring).
+
+    ``weighting="gls"`` weights the difference ``d`` by ``C^-1``, the efficient choice when ``C`` is
+    known (a Cramér-Rao covariance). When ``C`` is itself estimated from the records' residuals (the
+    Newey-West sandwich of :func:`~adaptive_dd.identification.log_fit.fit_log`, from a few hundred
+    independent samples for tens of parameters), ``C^-1`` picks the combinations whose estimated
+    variance happens to be low, and the GLS variance ``(P^T C^-1 P)^-1`` is then far too small (on
+    simulated UR5 pairs the truth fell within +- 1.96 std in 76 % of cases): ``"diagonal"`` weights
+    each base parameter by ``1 / C_kk`` alone and gives the covariance as the sandwich
+    ``B C B^T``, ``B = (P^T W P)^-1 P^T W``, which holds whatever the weighting.
 
 
     Parameters
@@ -148,7 +163,13 @@ def payload_from_pair(
     C = np.asarray(cov_loaded, float) + np.asarray(cov_unloaded, float)
     if not (np.all(np.isfinite(d)) and np.all(np.isfinite(C))):
         raise ParameterError("the loaded or unloaded estimate or its covariance is not finite")
-    Ci = np.linalg.pinv(C, rcond=1e-14, hermitian=True)
+    if weighting == "gls":
+        Ci = np.linalg.pinv(C, rcond=1e-14, hermitian=True)
+    elif weighting == "diagonal":  # the held parameters (variance 0) carry no weight, as in C's pinv
+        c = np.diag(C)
+        Ci = np.diag(np.where(c > 1e-14 * max(c.max(), 1e-300), 1.0 / np.maximum(c, 1e-300), 0.0))
+    else:
+        raise ParameterError(f"payload_from_pair: weighting {weighting!r} is not 'gls' or 'diagonal'")
     info = 0.5 * (P.T @ Ci @ P + (P.T @ Ci @ P).T)
     lam, V = np.linalg.eigh(info)
     weak = lam <= 1e-10 * max(lam.max(), 1e-300)
@@ -162,8 +183,9 @@ def payload_from_pair(
             "parameters that would carry them are not seen by the fitted torque channels (or not excited); "
             "fit more channels or move the joints near the payload more"
         )
-    cov = (V / lam) @ V.T
-    return payload_from_params(cov @ P.T @ Ci @ d, cov)
+    B = (V / lam) @ V.T @ P.T @ Ci  # (10, p): the payload from the difference
+    cov = B @ C @ B.T if weighting == "diagonal" else (V / lam) @ V.T
+    return payload_from_params(B @ d, 0.5 * (cov + cov.T))
 
 
 def payload_from_record(
