@@ -25,7 +25,13 @@ from numpy.typing import ArrayLike, NDArray
 from adaptive_dd.errors import ParameterError
 from adaptive_dd.identification.consistency import ConsistentFit, consistent_fit
 
-__all__ = ["PayloadResult", "payload_from_pair", "payload_from_params", "payload_from_record"]
+__all__ = [
+    "PayloadResult",
+    "pair_difference",
+    "payload_from_pair",
+    "payload_from_params",
+    "payload_from_record",
+]
 
 Array = NDArray[np.float64]
 
@@ -163,6 +169,21 @@ def payload_from_pair(
     C = np.asarray(cov_loaded, float) + np.asarray(cov_unloaded, float)
     if not (np.all(np.isfinite(d)) and np.all(np.isfinite(C))):
         raise ParameterError("the loaded or unloaded estimate or its covariance is not finite")
+    pi, cov = pair_difference(P, d, C, weighting)
+    return payload_from_params(pi, cov)
+
+
+def pair_difference(P: ArrayLike, d: ArrayLike, C: ArrayLike, weighting: str = "gls") -> tuple[Array, Array]:
+    """The ten payload parameters ``(10,)`` and their covariance ``(10, 10)`` from the difference
+    ``d (p,)`` of a loaded and an unloaded estimate with covariance ``C (p, p)``, ``d = P pi + e``
+    (:func:`payload_from_pair`'s linear step; ``weighting`` as there).
+
+    Raises
+    ------
+    ParameterError
+        A payload direction the difference does not see (named), or an unknown ``weighting``.
+    """
+    P, d, C = (np.asarray(x, dtype=float) for x in (P, d, C))
     if weighting == "gls":
         Ci = np.linalg.pinv(C, rcond=1e-14, hermitian=True)
     elif weighting == "diagonal":  # the held parameters (variance 0) carry no weight, as in C's pinv
@@ -185,7 +206,7 @@ def payload_from_pair(
         )
     B = (V / lam) @ V.T @ P.T @ Ci  # (10, p): the payload from the difference
     cov = B @ C @ B.T if weighting == "diagonal" else (V / lam) @ V.T
-    return payload_from_params(B @ d, 0.5 * (cov + cov.T))
+    return B @ d, 0.5 * (cov + cov.T)
 
 
 def payload_from_record(
