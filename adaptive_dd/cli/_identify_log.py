@@ -543,3 +543,8 @@ def _payload_pair(args, arm, model, fit, tau_f, K) -> None:
     pr = payload_from_pair(arm, fit.sigma, fit.cov, other.sigma, other.cov, weighting="diagonal")
     loaded = ", ".join(args.data) if args.data else "the scenario's record"
     _print_payload(f"payload (loaded {loaded} - unloaded {', '.join(args.baseline)})", pr)
+    print(
+        "  +- is one std: the spread of this payload over pairs of records like these (each side's "
+        "Newey-West covariance; the base parameters weighted by their own variance, the covariance a "
+        "sandwich); +- 2 std holds the payload about 95 % of the time. Not the choice of model"
+    )

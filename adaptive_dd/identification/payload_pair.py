@@ -5,7 +5,9 @@ A rigid body on the payload frame moves the base parameters along
 
 * **From a pair** of records (loaded, unloaded), each identified with its covariance:
   generalised least squares ``pi_p = (P^T C^-1 P)^-1 P^T C^-1 (sigma_L - sigma_U)``,
-  ``C = C_L + C_U``, covariance ``(P^T C^-1 P)^-1``.
+  ``C = C_L + C_U``, covariance ``(P^T C^-1 P)^-1``, when ``C`` is known (Cramér-Rao); when it
+  is estimated from the records' residuals, ``C^-1`` replaced by ``diag(C)^-1`` and the
+  covariance the sandwich ``B C B^T`` (:func:`pair_difference`).
 * **From one record with the arm known**: output error on the ten payload parameters
   alone (:func:`~adaptive_dd.identification.output_error.fit_output_error`
   with ``E = P``), covariance the inverse of their Fisher information.
