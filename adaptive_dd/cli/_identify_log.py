@@ -34,8 +34,9 @@ def _print_fit(model, fit, names: tuple[str, ...]) -> None:
     print(
         "std: Newey-West sandwich on the residual (model error included, correlated over "
         f"{fit.lag} samples = {fit.lag * fit.sample_period:.3g} s{pieces}), its variance times "
-        f"{fit.dof_factor:.3g} for the {int(fit.identified.sum())} parameters fitted to about "
-        f"{fit.n_eff:.0f} independent samples (n_eff / (n_eff - k))"
+        f"{fit.kernel_factor:.3g} for the Bartlett weights' shrinkage and {fit.dof_factor:.3g} for the "
+        f"{int(fit.identified.sum())} parameters fitted to about {fit.n_eff:.0f} independent samples "
+        "(n_eff / (n_eff - k))"
     )
     print(
         "  what a std means: the spread this estimate would have over records like this one (another "

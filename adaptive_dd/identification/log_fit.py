@@ -27,10 +27,12 @@ Standard deviations
     residual's correlation time (the first lag at which the autocorrelation of the weighted
     residual, pooled over channels, falls below 0.05, times 3), the autocovariances summed
     within each continuous piece of the record (between a log's gaps, several records). Scaled
-    by the degrees-of-freedom factor ``n_eff / (n_eff - k)``: the fit removes ``k`` directions
-    from the residual, which shrinks the scores' variance as ordinary least squares' ``N / (N -
-    k)`` says for white residuals (MacKinnon and White, J. Econometrics 29, 1985: HC1), the
-    samples counted here as independent ones, ``n_eff`` = rows over the residual's long-run factor
+    by the Bartlett weights' shrinkage undone (:func:`_kernel_bias`, from the residual's
+    autocorrelation over the lags where it is well estimated) and by the degrees-of-freedom
+    factor ``n_eff / (n_eff - k)``: the fit removes ``k`` directions from the residual, which
+    shrinks the scores' variance as ordinary least squares' ``N / (N - k)`` says for white
+    residuals (MacKinnon and White, J. Econometrics 29, 1985: HC1), the samples counted here as
+    independent ones, ``n_eff`` = rows over the residual's long-run factor
     (:func:`long_run_factor`, the Bartlett weights and lag of the covariance), at most 2
     (:data:`MAX_DOF_FACTOR`). Without it the truth
     fell within +- 1.96 std in 89 % of simulated cases (benchmarks/log_bounds_coverage.py).
@@ -110,6 +112,8 @@ class LogFit:
     dof_factor : float
         The variance's small-sample factor ``n_eff / (n_eff - k)``, ``k`` the columns fitted
         (module docstring), already in ``cov``.
+    kernel_factor : float
+        The Bartlett weights' shrinkage undone (:func:`_kernel_bias`), already in ``cov``.
     tau_f, sample_period : float
     regression : Regression
     used : ndarray of bool (n,)
@@ -143,6 +147,7 @@ class LogFit:
     held: Held | None = None
     n_eff: float = float("nan")
     dof_factor: float = 1.0
+    kernel_factor: float = 1.0
 
     def model_error_channels(self) -> list[tuple[int, float]]:
         """``(joint, residual / noise)`` of the kept channels above :data:`MODEL_ERROR_RATIO`."""
@@ -216,6 +221,26 @@ def long_run_factor(u: Array, lag: int, bounds=None) -> float:
     ac = ac / max(ac[0], 1e-300)
     m = np.arange(1, lag + 1)
     return float(max(1.0, 1.0 + 2.0 * np.sum((1.0 - m / (lag + 1)) * ac[1:])))
+
+
+def _kernel_bias(u: Array, lag: int, bounds) -> float:
+    """The Bartlett weights' shrinkage of the long-run variance of ``u (N,)``, undone:
+    ``1 + 2 sum_{m <= m0} (m / (lag + 1)) rho_m / F``, ``F`` the Bartlett long-run factor
+    (:func:`long_run_factor`) and ``rho`` the autocorrelation pooled over the pieces ``bounds``, over
+    the lags before it falls below 0.05 (``m0 = lag / 3``, :func:`_newey_west`'s rule), where it is
+    well estimated (beyond, the estimated autocorrelation of a fit's residual is biased low and
+    noisy). The weights ``1 - m / (lag + 1)`` discount autocovariances the residual does have: on an
+    AR(1) of coefficient ``a`` by about ``2 a / ((1 - a^2)(lag + 1))`` of the variance."""
+    m0 = max(1, lag // 3)
+    ac = np.zeros(m0 + 1)
+    for a, b in bounds:
+        seg = u[a:b] - u[a:b].mean()
+        f = np.fft.rfft(seg, 2 * (b - a))
+        c = np.fft.irfft(f * np.conj(f))[: min(b - a, m0 + 1)]
+        ac[: c.size] += c
+    ac = ac / max(ac[0], 1e-300)
+    m = np.arange(1, m0 + 1)
+    return float(max(1.0, 1.0 + 2.0 * np.sum(m / (lag + 1) * ac[1:]) / long_run_factor(u, lag, bounds)))
 
 
 def _dof_factor(res: Array, w: Array, lag: int, bounds, k: int) -> tuple[float, float]:
@@ -399,8 +424,9 @@ def fit_log(
     else:
         cov_k, lag = _newey_west(phi, res, w, scale, bounds)
         k = phi.shape[2]
+    kernel = _kernel_bias((res * w).sum(axis=1), lag, bounds)
     n_eff, dof = _dof_factor(res, w, lag, bounds, k)
-    cov_k = dof * cov_k
+    cov_k = kernel * dof * cov_k
     sigma, cov, residual, weights = _in_full(model, K, used, x, cov_k, res, w)
     held = None
     if hold:
@@ -419,6 +445,7 @@ def fit_log(
         tau_f=float(tau_f),
         n_eff=float(n_eff),
         dof_factor=float(dof),
+        kernel_factor=float(kernel),
         sample_period=float(sample_period),
         regression=reg,
         used=used,
