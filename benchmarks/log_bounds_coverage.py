@@ -4,6 +4,11 @@ Run from the repository root::
 
     python benchmarks/log_bounds_coverage.py --seeds 20            # vertical3: gaps, two records
     python benchmarks/log_bounds_coverage.py --seeds 10 --pair     # and a loaded/unloaded UR5 pair
+    # 200 seeds in parts (with OPENBLAS_NUM_THREADS=1 on a shared machine), then merged:
+    python benchmarks/log_bounds_coverage.py --seeds 200 --save gr.npz
+    python benchmarks/log_bounds_coverage.py --cases pair --first 0 --seeds 100 --save p0.npz
+    python benchmarks/log_bounds_coverage.py --cases pair --first 100 --seeds 100 --save p1.npz
+    python benchmarks/log_bounds_coverage.py --load gr.npz p0.npz p1.npz
 
 Each seed makes records of the arm by inverse dynamics of the identification's own model
 (:func:`adaptive_dd.identification.records.synthetic_log`: a multi-sine, the torque noise 2 % of
@@ -16,18 +21,22 @@ model is exact and the truth known, and identifies them as ``identify --arm`` do
 - ``records``: two 12 s records fitted together;
 - ``pair`` (``--pair``): two loaded and two unloaded 12 s records of the UR5 (a 2 kg payload,
   its centre of mass 3 / -2 / 5 cm from the flange), each side fitted jointly, the payload from
-  the pair (:func:`adaptive_dd.identification.payload_pair.payload_from_pair`).
+  the pair (:func:`adaptive_dd.identification.payload_pair.payload_from_pair`, as ``identify
+  --baseline``: ``weighting="diagonal"``).
 
 Printed per case: the fraction of (seed, parameter) with the truth within the printed 95 %
 bound, estimate +- 1.96 std (for the pair: the mass and the three centre-of-mass coordinates),
-and the median over parameters of the spread of the estimates over the seeds against the mean
-reported std (1: the std is the spread).
+with the interval of that mean from the spread of the seeds' own coverages (the seeds are
+independent, the parameters of one seed are not), the median over parameters of the spread of
+the estimates over the seeds against the mean reported std (1: the std is the spread), and the
+three least covered parameters.
 """
 
 from __future__ import annotations
 
 import argparse
 import itertools
+import os
 import time
 
 import numpy as np
@@ -68,44 +77,96 @@ def fit(model, logs, holes=()):
     )
 
 
-def summary(label: str, z: list, est: list, std: list) -> None:
-    z, est, std = np.abs(np.array(z)), np.array(est), np.array(std)
+def summary(label: str, z, est, std, names=None) -> None:
+    """Print the coverage of one case: ``z``, ``est``, ``std`` are (seeds, parameters)."""
+    z, est, std = np.abs(np.asarray(z)), np.asarray(est), np.asarray(std)
     ratio = np.std(est, axis=0, ddof=1) / np.mean(std, axis=0)
+    inside = z < 1.96
+    per_seed = inside.mean(axis=1)
+    # the seeds are independent, the parameters of one seed are not: the interval of the mean
+    # coverage from the spread of the seeds' own coverages (normal approximation)
+    half = 1.96 * np.std(per_seed, ddof=1) / np.sqrt(per_seed.size) if per_seed.size > 1 else np.nan
     print(
-        f"{label:<8} truth within +-1.96 std: {100 * np.mean(z < 1.96):5.1f} % of {z.size} "
-        f"(seed, parameter); spread over the seeds / mean std: median {np.median(ratio):.2f} "
+        f"{label:<8} truth within +-1.96 std: {100 * inside.mean():5.1f} % of {z.size} "
+        f"({z.shape[0]} seeds x {z.shape[1]}; +-{100 * half:.1f} % over the seeds); "
+        f"spread over the seeds / mean std: median {np.median(ratio):.2f} "
         f"(min {ratio.min():.2f}, max {ratio.max():.2f})"
+    )
+    cover = inside.mean(axis=0)
+    worst = np.argsort(cover)[:3]
+    names = names or [f"#{k}" for k in range(z.shape[1])]
+    print(
+        "         least covered: "
+        + "; ".join(f"{names[k][:32]} {100 * cover[k]:.0f} % (spread / std {ratio[k]:.2f})" for k in worst)
     )
 
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--seeds", type=int, default=20)
+    ap.add_argument("--first", type=int, default=0, help="first seed (to split a long run)")
     ap.add_argument("--pair", action="store_true", help="also a loaded/unloaded pair of the UR5")
+    ap.add_argument("--cases", default="gaps,records", help="comma-separated: gaps, records, pair")
+    ap.add_argument("--save", help="write the per-seed results to this .npz")
+    ap.add_argument("--load", nargs="+", help="summarise saved .npz files (merged) instead of running")
     args = ap.parse_args()
+    cases = [c for c in args.cases.split(",") if c] + (
+        ["pair"] if args.pair and "pair" not in args.cases else []
+    )
+    if args.load:
+        merged = {}
+        for f in args.load:
+            with np.load(f, allow_pickle=False) as d:
+                for key in d.files:
+                    merged.setdefault(key, []).append(d[key])
+        out = {k: np.concatenate(v) for k, v in merged.items() if not k.endswith("_names")}
+        for c in ("gaps", "records", "pair"):
+            if f"{c}_z" in out:
+                names = [str(x) for x in merged[f"{c}_names"][0]] if f"{c}_names" in merged else None
+                summary(c, out[f"{c}_z"], out[f"{c}_est"], out[f"{c}_std"], names)
+        return
     t0 = time.perf_counter()
     arm = Arm.from_urdf(robot_urdf("vertical3"))
     model = arm_model(arm)
-    out = {k: ([], [], []) for k in ("gaps", "records", "pair")}
-    for s in range(args.seeds):
-        rng = np.random.default_rng([45, s])
-        one = synthetic_log(arm, 24.0, T, rng)
-        f = fit(model, [one], HOLES)
-        for lst, v in zip(out["gaps"], ((f.sigma - one.sigma_true) / f.std, f.sigma, f.std), strict=True):
-            lst.append(v)
-        two = [synthetic_log(arm, 12.0, T, rng) for _ in range(2)]
-        f = fit(model, two)
-        for lst, v in zip(
-            out["records"], ((f.sigma - two[0].sigma_true) / f.std, f.sigma, f.std), strict=True
-        ):
-            lst.append(v)
-        if args.pair:
-            _pair(rng, out["pair"])
-    summary("gaps", *out["gaps"])
-    summary("records", *out["records"])
-    if args.pair:
-        summary("pair", *out["pair"])
-    print(f"({args.seeds} seeds, {time.perf_counter() - t0:.0f} s)")
+    names = {
+        "gaps": list(model.names),
+        "records": list(model.names),
+        "pair": ["mass", "com x", "com y", "com z"],
+    }
+    out = {k: ([], [], []) for k in cases}
+    for s in range(args.first, args.first + args.seeds):
+        if "gaps" in out or "records" in out:
+            rng = np.random.default_rng([45, s])
+            one = synthetic_log(arm, 24.0, T, rng)
+            two = [synthetic_log(arm, 12.0, T, rng) for _ in range(2)]
+        if "gaps" in out:
+            f = fit(model, [one], HOLES)
+            for lst, v in zip(out["gaps"], ((f.sigma - one.sigma_true) / f.std, f.sigma, f.std), strict=True):
+                lst.append(v)
+        if "records" in out:
+            f = fit(model, two)
+            for lst, v in zip(
+                out["records"], ((f.sigma - two[0].sigma_true) / f.std, f.sigma, f.std), strict=True
+            ):
+                lst.append(v)
+        if "pair" in out:
+            _pair(np.random.default_rng([45, s, 1]), out["pair"])
+        # saved after every seed, so that a long run can be read while it goes on
+        if args.save:
+            tmp = f"{args.save}.part.npz"
+            np.savez(
+                tmp,
+                **{
+                    f"{c}_{k}": np.array(v)
+                    for c in cases
+                    for k, v in zip(("z", "est", "std"), out[c], strict=True)
+                },
+                **{f"{c}_names": np.array(names[c]) for c in cases},
+            )
+            os.replace(tmp, args.save)
+    for c in cases:
+        summary(c, *out[c], names[c])
+    print(f"({args.seeds} seeds from {args.first}, {time.perf_counter() - t0:.0f} s)")
 
 
 _UR5 = {}
@@ -123,7 +184,7 @@ def _pair(rng, acc) -> None:
     pp = payload_parameters(2.0, com, np.diag([4e-3, 5e-3, 3e-3]))
     loaded = fit(model, [synthetic_log(arm, 12.0, T, rng, payload=pp) for _ in range(2)])
     empty = fit(model, [synthetic_log(arm, 12.0, T, rng) for _ in range(2)])
-    pr = payload_from_pair(arm, loaded.sigma, loaded.cov, empty.sigma, empty.cov)
+    pr = payload_from_pair(arm, loaded.sigma, loaded.cov, empty.sigma, empty.cov, weighting="diagonal")
     est = np.array([pr.mass, *pr.com])
     std = np.array([pr.mass_std, *pr.com_std])
     truth = np.array([2.0, *com])

@@ -243,6 +243,15 @@ def main() -> None:
         f"min {ratio.min():.2f}, max "
         f"{ratio.max():.2f}); within a factor 3: {100 * inside:.0f} %"
     )
+    # what an exact std would give: the spread of W estimates is sigma sqrt(chi2(W - 1) / (W - 1))
+    from scipy.stats import chi2
+
+    dof = args.windows - 1
+    honest = chi2.cdf(9 * dof, dof) - chi2.cdf(dof / 9, dof)
+    print(
+        f"  an exact std would put {100 * honest:.1f} % within a factor 3 with {args.windows} windows (the "
+        f"spread of {args.windows} estimates is itself a chi-square({dof}) draw)"
+    )
     if args.coulomb_width == "profile":
         print(
             "  Coulomb widths per window [rad/s]: "

@@ -274,3 +274,25 @@ def test_long_run_factor_counts_independent_samples():
     expected = 1 + 2 * np.sum((1 - m / (lag + 1)) * a**m)  # 8.8, against (1 + a) / (1 - a) = 9
     assert long_run_factor(e, lag) == pytest.approx(expected, rel=0.1)
     assert long_run_factor(e, lag, [(0, N // 2), (N // 2, N)]) == pytest.approx(expected, rel=0.1)
+
+
+def test_kernel_bias_undoes_the_bartlett_shrinkage():
+    """AR(1) with coefficient a: the Bartlett weights discount 2 sum (m / (lag + 1)) a^m of the long-run
+    factor; the correction restores it (from the lags before the autocorrelation falls below 0.05);
+    on white noise it is 1."""
+    from adaptive_dd.identification.log_fit import _kernel_bias, long_run_factor
+
+    rng = np.random.default_rng(7)
+    assert _kernel_bias(rng.standard_normal(20000), 30, [(0, 20000)]) == pytest.approx(1.0, abs=0.03)
+    a, N, lag = 0.9, 60000, 90
+    e = np.empty(N)
+    e[0] = 0.0
+    z = rng.standard_normal(N)
+    for k in range(1, N):
+        e[k] = a * e[k - 1] + z[k]
+    m = np.arange(1, lag // 3 + 1)
+    bartlett = long_run_factor(e, lag)
+    expected = 1 + 2 * np.sum(m / (lag + 1) * a**m) / bartlett  # 1.09
+    assert expected > 1.05
+    assert _kernel_bias(e, lag, [(0, N)]) == pytest.approx(expected, rel=0.03)
+    assert _kernel_bias(e, lag, [(0, N // 2), (N // 2, N)]) == pytest.approx(expected, rel=0.03)

@@ -34,8 +34,9 @@ def _print_fit(model, fit, names: tuple[str, ...]) -> None:
     print(
         "std: Newey-West sandwich on the residual (model error included, correlated over "
         f"{fit.lag} samples = {fit.lag * fit.sample_period:.3g} s{pieces}), its variance times "
-        f"{fit.dof_factor:.3g} for the {int(fit.identified.sum())} parameters fitted to about "
-        f"{fit.n_eff:.0f} independent samples (n_eff / (n_eff - k))"
+        f"{fit.kernel_factor:.3g} for the Bartlett weights' shrinkage and {fit.dof_factor:.3g} for the "
+        f"{int(fit.identified.sum())} parameters fitted to about {fit.n_eff:.0f} independent samples "
+        "(n_eff / (n_eff - k))"
     )
     print(
         "  what a std means: the spread this estimate would have over records like this one (another "
@@ -540,6 +541,11 @@ def _payload_pair(args, arm, model, fit, tau_f, K) -> None:
     spec, base, _ = _read(args, arm, args.baseline)
     prior_std = _prior_std(args.arm, model) if args.hold_unseen == "on" else None
     other = _fit_record(model, base, K, tau_f, spec.torque_held, prior_std)
-    pr = payload_from_pair(arm, fit.sigma, fit.cov, other.sigma, other.cov)
+    pr = payload_from_pair(arm, fit.sigma, fit.cov, other.sigma, other.cov, weighting="diagonal")
     loaded = ", ".join(args.data) if args.data else "the scenario's record"
     _print_payload(f"payload (loaded {loaded} - unloaded {', '.join(args.baseline)})", pr)
+    print(
+        "  +- is one std: the spread of this payload over pairs of records like these (each side's "
+        "Newey-West covariance; the base parameters weighted by their own variance, the covariance a "
+        "sandwich); +- 2 std holds the payload about 95 % of the time. Not the choice of model"
+    )

@@ -275,7 +275,8 @@ def check_excitation(
         )
     if weak_ok:
         return
-    _, s, vt = np.linalg.svd(A / norms, full_matrices=False)
+    # the SVD of the triangular factor: A's singular values and right vectors, at a QR's cost
+    _, s, vt = np.linalg.svd(np.linalg.qr(A / norms, mode="r"), full_matrices=False)
     weak = np.flatnonzero(s < rtol * s[0])
     if weak.size:
         v = vt[weak[-1]]
