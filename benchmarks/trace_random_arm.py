@@ -3,7 +3,8 @@
 Runs ``benchmarks/scenarios/population.toml`` on ``random:ARM`` (as ``benchmark --arms`` does) and
 prints, per 0.5 s window of trial ``SEED``, the RMS and peak error norms of ``adaptive_ct`` and
 ``ct_oracle``, adaptive_ct's saturated fraction, its alarm times, and how far its estimate is from
-the true base parameters at a few instants of the first segment.
+the true base parameters (and the payload mass its control model carries) at a few instants of the
+first segment.
 
 Run: ``PYTHONPATH=. python benchmarks/trace_random_arm.py ARM SEED``.
 """
@@ -47,11 +48,16 @@ def main() -> None:
             f"saturated {sat:.3f}"
         )
     if a.sigma_hat is not None:
-        d = np.asarray(a.sigma_hat)[args.seed] - res.sigma_true
-        for at in (0.1, 0.25, 0.5, 1.0, 2.0, 3.0):
+        sh = np.asarray(a.sigma_hat)[args.seed]
+        d = sh - res.sigma_true
+        mass = sc.arm.payload_from_sigma(sh).params[:, 0]  # the control model's payload mass
+        for at in (0.1, 0.15, 0.2, 0.25, 0.5, 1.0, 2.0, 3.0):
             k = int(np.searchsorted(t, at))
             j = int(np.abs(d[k]).argmax())
-            print(f"t = {at} s: largest |sigma_hat - sigma_true| {abs(d[k, j]):.3g} (base parameter {j})")
+            print(
+                f"t = {at} s: largest |sigma_hat - sigma_true| {abs(d[k, j]):.3g} (base parameter {j}); "
+                f"the control model's payload mass {mass[k]:.4f} kg"
+            )
 
 
 if __name__ == "__main__":

@@ -184,7 +184,8 @@ F_FAST2 = 14  # the fast average's threshold (squared RMS ratio)
 F_DET_SPEED = 15  # [rad/s] a joint no faster within the selection memory creeps
 F_CREEP_MARGIN = 16  # a creeping joint's row alarms only beyond this times its Coulomb friction
 F_HOLD_ABOVE2 = 17  # a row rises when its short average exceeds this x the threshold x its level
-N_F = 18
+F_PRESENT2 = 18  # payload mode: the variance [kg^2] of a payload's mass when one is carried (0: no weight)
+N_F = 19
 
 
 class EstState(NamedTuple):
@@ -1153,16 +1154,45 @@ def compact_prior(raw, Pc, rho):  # pragma: no cover - compiled
                 Pc[a, b] -= g[a] * row[b]
 
 
+@njit(cache=True)
+def presence_weight(m, var, present_var):  # pragma: no cover - compiled
+    """Posterior probability that a payload is carried, given a mass estimate ``m`` [kg] of
+    variance ``var`` [kg^2] and the variance ``present_var`` [kg^2] of a carried payload's mass.
+
+    The prior is even odds between no payload (mass exactly 0: the unloaded arm, the state at the
+    start and after every put-down) and a payload whose mass is normal about 0 with variance
+    ``present_var``. With ``m`` normal about the true mass, the likelihood ratio of the two is
+    ``sqrt(1 + present_var / var) exp(-m^2 present_var / (2 var (var + present_var)))``, and the
+    weight is ``1 / (1 + ratio)``: about ``sqrt(var / present_var)`` for an estimate that is noise
+    about 0, 1 once the mass is a few of its standard deviations away from 0, 0.5 with no data
+    (``var >> present_var``). 1 when either variance is not > 0 (no weighting).
+    """
+    if not (var > 0.0 and present_var > 0.0 and np.isfinite(m) and np.isfinite(var)):
+        return 1.0
+    a = m * m * present_var / (2.0 * var * (var + present_var))
+    if a > 700.0:
+        return 1.0
+    return 1.0 / (1.0 + np.sqrt(1.0 + present_var / var) * np.exp(-a))
+
+
 @njit(cache=True, inline="always")
 def _control_payload(c, s, i, raw, pay, Pc):  # pragma: no cover - compiled
-    """The payload the model control uses: ``raw`` with the compact prior (if set), projected (if set);
-    ``Pc (10, 10)`` scratch."""
+    """The payload the model control uses: ``raw`` with the compact prior (if set); projected (if set)
+    and then, in payload mode, scaled by :func:`presence_weight` of the raw mass (its variance
+    ``P[0, 0]``, a carried payload's ``F_PRESENT2``): the posterior mean of a payload that may be
+    absent. A scaled consistent body stays consistent (its pseudo-inertia scaled by a factor in
+    [0, 1], within the same ball). ``Pc (10, 10)`` scratch."""
+    m_raw = raw[0]
     rho = c.floats[F_PRIOR_RADIUS]
     if rho > 0.0:
         _inertia_cov(c, s.P[i], Pc)
         compact_prior(raw, Pc, rho)
     if c.ints[I_PROJECT] == 1:
         project_payload(raw, pay, c.floats[F_EIG_MIN], c.floats[F_RADIUS])
+        if c.mode == MODE_PAYLOAD and c.floats[F_PRESENT2] > 0.0:
+            wp = presence_weight(m_raw, s.P[i][0, 0], c.floats[F_PRESENT2])
+            for k in range(10):
+                pay[k] *= wp
     else:
         for k in range(10):
             pay[k] = raw[k]
