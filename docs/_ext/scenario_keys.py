@@ -86,6 +86,8 @@ MEANING = {
     "setting.label": "The name the controller's results carry.",
     "setting.sigma": "The fixed model's base parameters (seven, two-link arm).",
     "setting.gamma": "Adaptation gains of Slotine-Li.",
+    "setting.gain": "`natural_adaptive` (N-joint arms): the natural law's one gain; default derived "
+    "from Slotine-Li's mass gain, the payload link's mass and `max_mass`.",
     "setting.max_mass": "Largest payload mass Slotine-Li's box admits [kg] (5 two-link, 20 N-joint).",
     "setting.com_radius": "The payload's size in Slotine-Li's box [m]: the disk's radius at the tip"
     " (two-link, 0.1), its centre of mass from the flange (N-joint, 0.3).",
