@@ -28,6 +28,7 @@ from numba import njit
 
 from adaptive_dd.closed_loop.residual_observer import O_COUNT, O_Q, O_QD, O_TAU
 from adaptive_dd.plant.chain import body_slotine_li_regressor_in, mass_matrix_in
+from adaptive_dd.plant.chain_dynamics import _cholesky_solve
 
 __all__ = [
     "ADAPT_CHS",
@@ -180,36 +181,6 @@ def _chs_acceleration(cfg, q, qd, obs):  # pragma: no cover - compiled
 
 
 @njit(cache=True)
-def _cholesky_solve(A, b, x):  # pragma: no cover - compiled
-    """``x = A^-1 b`` for a symmetric positive definite ``A (n, n)`` (overwritten by its Cholesky
-    factor); False if ``A`` is not positive definite."""
-    n = b.shape[0]
-    for c in range(n):
-        d = A[c, c]
-        for k in range(c):
-            d -= A[c, k] * A[c, k]
-        if not d > 0.0:
-            return False
-        A[c, c] = np.sqrt(d)
-        for r in range(c + 1, n):
-            v = A[r, c]
-            for k in range(c):
-                v -= A[r, k] * A[c, k]
-            A[r, c] = v / A[c, c]
-    for r in range(n):
-        v = b[r]
-        for k in range(r):
-            v -= A[r, k] * x[k]
-        x[r] = v / A[r, r]
-    for r in range(n - 1, -1, -1):
-        v = x[r]
-        for k in range(r + 1, n):
-            v -= A[k, r] * x[k]
-        x[r] = v / A[r, r]
-    return True
-
-
-@njit(cache=True)
 def chs_step(ch, cfg, q, qd, e, ed, theta, pi_model, obs, work):  # pragma: no cover - compiled
     """One step of Craig, Hsu and Sastry's law (module docstring) on the payload ``theta (10,)``,
     then :func:`project_payload` and the trial's model rebuilt. ``e, ed (n,)`` the tracking error
@@ -217,12 +188,12 @@ def chs_step(ch, cfg, q, qd, e, ed, theta, pi_model, obs, work):  # pragma: no c
     n = q.shape[0]
     if not _chs_acceleration(cfg, q, qd, obs) or obs[O_COUNT, 0] < 3.0:
         return  # held, or no filtered acceleration yet
-    m, x, e1 = work[2], work[7][0], work[7][1]
+    m, x = work[2], work[7][0]
     mass_matrix_in(ch, pi_model[: 10 * n], q, work[0], m)
     for r in range(n):
         m[r, r] += pi_model[12 * n + r]
-        e1[r] = ed[r] + cfg.lam[r] * e[r]
-    if not _cholesky_solve(m, e1, x):
+        x[r] = ed[r] + cfg.lam[r] * e[r]
+    if not _cholesky_solve(m, x):  # x = M^-1 (e' + lam e) in place
         return
     yb = work[3]
     body_slotine_li_regressor_in(ch, cfg.payload_joint, q, qd, qd, obs[CH_QDD], work[0], work[4], yb)
