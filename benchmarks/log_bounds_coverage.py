@@ -25,7 +25,9 @@ model is exact and the truth known, and identifies them as ``identify --arm`` do
   --baseline``: ``weighting="diagonal"``).
 
 Printed per case: the fraction of (seed, parameter) with the truth within the printed 95 %
-bound, estimate +- 1.96 std (for the pair: the mass and the three centre-of-mass coordinates),
+bound, estimate +- c std with ``c`` the fit's fixed-b quantile (:attr:`LogFit.quantile`, 1.96 and
+a little more; for the pair, as ``identify --baseline`` prints it, +- 1.96 std of the mass and the
+three centre-of-mass coordinates),
 with the interval of that mean from the spread of the seeds' own coverages (the seeds are
 independent, the parameters of one seed are not), the median over parameters of the spread of
 the estimates over the seeds against the mean reported std (1: the std is the spread), and the
@@ -77,17 +79,20 @@ def fit(model, logs, holes=()):
     )
 
 
-def summary(label: str, z, est, std, names=None) -> None:
-    """Print the coverage of one case: ``z``, ``est``, ``std`` are (seeds, parameters)."""
+def summary(label: str, z, est, std, names=None, quantile=None) -> None:
+    """Print the coverage of one case: ``z``, ``est``, ``std`` are (seeds, parameters), ``quantile``
+    (seeds,) the bound's half-width in std (default 1.96)."""
     z, est, std = np.abs(np.asarray(z)), np.asarray(est), np.asarray(std)
+    c = np.full(z.shape[0], 1.96) if quantile is None else np.asarray(quantile, dtype=float)
     ratio = np.std(est, axis=0, ddof=1) / np.mean(std, axis=0)
-    inside = z < 1.96
+    inside = z < c[:, None]
     per_seed = inside.mean(axis=1)
     # the seeds are independent, the parameters of one seed are not: the interval of the mean
     # coverage from the spread of the seeds' own coverages (normal approximation)
     half = 1.96 * np.std(per_seed, ddof=1) / np.sqrt(per_seed.size) if per_seed.size > 1 else np.nan
     print(
-        f"{label:<8} truth within +-1.96 std: {100 * inside.mean():5.1f} % of {z.size} "
+        f"{label:<8} truth within +-c std (c median {np.median(c):.3f}): {100 * inside.mean():5.1f} % "
+        f"of {z.size} "
         f"({z.shape[0]} seeds x {z.shape[1]}; +-{100 * half:.1f} % over the seeds); "
         f"spread over the seeds / mean std: median {np.median(ratio):.2f} "
         f"(min {ratio.min():.2f}, max {ratio.max():.2f})"
@@ -123,7 +128,7 @@ def main() -> None:
         for c in ("gaps", "records", "pair"):
             if f"{c}_z" in out:
                 names = [str(x) for x in merged[f"{c}_names"][0]] if f"{c}_names" in merged else None
-                summary(c, out[f"{c}_z"], out[f"{c}_est"], out[f"{c}_std"], names)
+                summary(c, out[f"{c}_z"], out[f"{c}_est"], out[f"{c}_std"], names, out.get(f"{c}_q"))
         return
     t0 = time.perf_counter()
     arm = Arm.from_urdf(robot_urdf("vertical3"))
@@ -133,7 +138,7 @@ def main() -> None:
         "records": list(model.names),
         "pair": ["mass", "com x", "com y", "com z"],
     }
-    out = {k: ([], [], []) for k in cases}
+    out = {k: ([], [], [], []) for k in cases}
     for s in range(args.first, args.first + args.seeds):
         if "gaps" in out or "records" in out:
             rng = np.random.default_rng([45, s])
@@ -141,12 +146,16 @@ def main() -> None:
             two = [synthetic_log(arm, 12.0, T, rng) for _ in range(2)]
         if "gaps" in out:
             f = fit(model, [one], HOLES)
-            for lst, v in zip(out["gaps"], ((f.sigma - one.sigma_true) / f.std, f.sigma, f.std), strict=True):
+            for lst, v in zip(
+                out["gaps"], ((f.sigma - one.sigma_true) / f.std, f.sigma, f.std, f.quantile), strict=True
+            ):
                 lst.append(v)
         if "records" in out:
             f = fit(model, two)
             for lst, v in zip(
-                out["records"], ((f.sigma - two[0].sigma_true) / f.std, f.sigma, f.std), strict=True
+                out["records"],
+                ((f.sigma - two[0].sigma_true) / f.std, f.sigma, f.std, f.quantile),
+                strict=True,
             ):
                 lst.append(v)
         if "pair" in out:
@@ -159,7 +168,7 @@ def main() -> None:
                 **{
                     f"{c}_{k}": np.array(v)
                     for c in cases
-                    for k, v in zip(("z", "est", "std"), out[c], strict=True)
+                    for k, v in zip(("z", "est", "std", "q"), out[c], strict=True)
                 },
                 **{f"{c}_names": np.array(names[c]) for c in cases},
             )
@@ -188,7 +197,7 @@ def _pair(rng, acc) -> None:
     est = np.array([pr.mass, *pr.com])
     std = np.array([pr.mass_std, *pr.com_std])
     truth = np.array([2.0, *com])
-    for lst, v in zip(acc, ((est - truth) / std, est, std), strict=True):
+    for lst, v in zip(acc, ((est - truth) / std, est, std, 1.96), strict=True):
         lst.append(v)
 
 

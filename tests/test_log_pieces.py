@@ -118,7 +118,8 @@ def test_estimate_with_gaps_within_its_bound_of_the_estimate_without(vertical3):
 
 def test_several_records_fit_jointly(vertical3):
     """Two records of one arm, fitted together as the pieces of one: the truth within three std, the
-    std smaller than either record's alone, both records' rows in the fit."""
+    std smaller than either record's alone, both records' rows in the fit, and the bound's quantile
+    (fixed-b) from the rows of both: nearer the normal's 1.96 than either record's alone."""
     arm, model = vertical3
     logs = [synthetic_log(arm, 12.0, T, np.random.default_rng(10 + s)) for s in range(2)]
     alone = [_fit(model, g.q, g.qd, g.tau) for g in logs]
@@ -133,6 +134,12 @@ def test_several_records_fit_jointly(vertical3):
     assert both.regression.y.shape[0] == sum(f.regression.y.shape[0] for f in alone)
     assert np.all(np.abs(both.sigma - logs[0].sigma_true) < 3 * both.std)
     assert np.median(both.std / np.minimum(alone[0].std, alone[1].std)) < 0.95
+    # the bound's quantile from the rows of both records: nearer the normal's than either record's
+    from adaptive_dd.identification.log_fit import fixed_b_quantile
+
+    rows = both.regression.y.shape[0]
+    assert both.quantile == pytest.approx(fixed_b_quantile((both.lag + 1) / rows))
+    assert 1.96 < both.quantile < min(f.quantile for f in alone), [both.quantile, [f.quantile for f in alone]]
 
 
 def test_merge_records_refuses_another_period(tmp_path, vertical3):
@@ -212,6 +219,11 @@ def test_cli_identify_several_records_with_gaps_and_predict_on_a_copy(tmp_path, 
     assert "2 records fitted together, 3 continuous pieces in all" in text
     assert "a gap of 0.105 s at 3.495-3.6 s" in text
     assert "what a std means" in text
+    # the bound's half-width: the fixed-b quantile of the fit, above the normal's
+    import re
+
+    c = float(re.search(r"estimate \+- (\d\.\d+) std \(not 1\.96", text).group(1))
+    assert 1.97 < c < 2.6, c
     import json
 
     saved = json.loads((out / "model.json").read_text())
@@ -296,3 +308,27 @@ def test_kernel_bias_undoes_the_bartlett_shrinkage():
     assert expected > 1.05
     assert _kernel_bias(e, lag, [(0, N)]) == pytest.approx(expected, rel=0.03)
     assert _kernel_bias(e, lag, [(0, N // 2), (N // 2, N)]) == pytest.approx(expected, rel=0.03)
+
+
+def test_fixed_b_quantile_is_the_studentised_mean_s_under_a_bartlett_std():
+    """The mean of white noise studentised by its Bartlett (Newey-West) std of bandwidth b T: the 95th
+    percentile of |t| over many draws is Kiefer and Vogelsang's cubic (2.26 at b = 0.1, not the
+    normal's 1.96: the std's own uncertainty and its bias from the estimated mean); b out of [0, 1]
+    is refused."""
+    from adaptive_dd.identification.log_fit import NORMAL_975, fixed_b_quantile
+
+    rng = np.random.default_rng(11)
+    T, b, draws = 500, 0.1, 6000
+    M = round(b * T)
+    u = rng.standard_normal((draws, T))
+    e = u - u.mean(axis=1, keepdims=True)
+    f = np.fft.rfft(e, 2 * T, axis=1)
+    ac = np.fft.irfft(f * np.conj(f), axis=1)[:, :M] / T
+    s2 = ac[:, 0] + 2 * np.sum((1 - np.arange(1, M) / M) * ac[:, 1:], axis=1)
+    t = np.abs(np.sqrt(T) * u.mean(axis=1) / np.sqrt(s2))
+    # the percentile's sampling error over 6000 draws is about 0.02
+    assert np.quantile(t, 0.95) == pytest.approx(fixed_b_quantile(b), abs=0.06)
+    assert np.quantile(t, 0.95) > NORMAL_975 + 0.15
+    assert fixed_b_quantile(0.0) == pytest.approx(1.96, abs=1e-3)
+    with pytest.raises(ValueError, match=r"b = 1\.5"):
+        fixed_b_quantile(1.5)

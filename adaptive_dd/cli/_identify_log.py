@@ -41,8 +41,10 @@ def _print_fit(model, fit, names: tuple[str, ...]) -> None:
     print(
         "  what a std means: the spread this estimate would have over records like this one (another "
         "take of the same excitation, another stretch of it), its residual's colour and changing level "
-        "included; estimate +- 2 std holds the parameters the model fits best on such records about 95 % "
-        "of the time. It does not hold the choice of model (friction law, tau_f, the channels fitted)"
+        f"included; estimate +- {fit.quantile:.3g} std (not 1.96: the std is estimated from the record, "
+        "the quantile is Kiefer and Vogelsang's fixed-b one of the Newey-West t) holds the parameters the "
+        "model fits best on such records about 95 % of the time. It does not hold the choice of model "
+        "(friction law, tau_f, the channels fitted)"
     )
     print(f"{'base parameter':<{NAME_WIDTH}} {'estimate':>11} {'std':>9} {'std/|est| %':>11} {'URDF':>11}")
     share = fit.held.share if fit.held is not None else np.zeros(model.p)

@@ -36,8 +36,22 @@ Standard deviations
     (:func:`long_run_factor`, the Bartlett weights and lag of the covariance), at most 2
     (:data:`MAX_DOF_FACTOR`). Without it the truth
     fell within +- 1.96 std in 89 % of simulated cases (benchmarks/log_bounds_coverage.py).
-    Checked on the TIAGo record against the spread of estimates over disjoint windows
-    (benchmarks/real_log.py).
+    These make the variance's estimate right on average (the std is the spread the estimate
+    would have over records like this one).
+
+Bounds
+    The std is itself an estimate, from a record worth a few hundred independent samples, so
+    ``t = (estimate - truth) / std`` has wider tails than a normal variable, as Student's
+    ``t`` has. The 95 % bound is ``estimate +- c std`` with ``c`` (:attr:`LogFit.quantile`)
+    the fixed-b quantile of the Newey-West ``t`` (Kiefer and Vogelsang, "A new asymptotic
+    theory for heteroskedasticity-autocorrelation robust tests", Econometric Theory 21, 2005):
+    with the Bartlett bandwidth a fraction ``b = (lag + 1) / N`` of the ``N`` rows fitted,
+    ``c(b) = 1.96 + 2.9694 b + 0.4160 b^2 - 0.5324 b^3`` (their cubic for the Bartlett kernel,
+    :func:`fixed_b_quantile`). Over the pieces of a log the Bartlett estimate's variance is that
+    of one record of all their rows (each piece adds its own, in proportion to its length),
+    hence ``N`` the rows of all pieces. With ``c = 1.96`` the truth fell within the bound in
+    94 % of simulated cases (benchmarks/log_bounds_coverage.py). The std is checked on the
+    TIAGo record against the spread of estimates over disjoint windows (benchmarks/real_log.py).
 
 Noise levels
     Each channel's sensor noise is estimated from the logged torque's second difference
@@ -68,6 +82,7 @@ __all__ = [
     "LogFit",
     "filter_time_constant",
     "fit_log",
+    "fixed_b_quantile",
     "identifiable_subset",
     "long_run_factor",
     "predict_torque",
@@ -82,6 +97,8 @@ MAX_DOF_FACTOR = 2.0
 """The degrees-of-freedom factor's cap, reached at ``k = n_eff / 2``: beyond it a record holds too few
 independent samples for its parameters for a first-order correction (the TIAGo's 20 s windows:
 ``n_eff`` 64-91 for 53 parameters)."""
+NORMAL_975 = 1.959963984540054
+"""The standard normal's 97.5 % quantile: estimate +- this many std is the 95 % interval."""
 MODEL_ERROR_RATIO = 10.0
 """A filtered residual this many times the filtered sensor noise is reported as model error."""
 
@@ -114,6 +131,9 @@ class LogFit:
         (module docstring), already in ``cov``.
     kernel_factor : float
         The Bartlett weights' shrinkage undone (:func:`_kernel_bias`), already in ``cov``.
+    quantile : float
+        ``c``: ``sigma +- c std`` is the 95 % bound, ``c`` the fixed-b quantile of the Newey-West
+        ``t`` (:func:`fixed_b_quantile`, module docstring), 1.96 and a little more.
     tau_f, sample_period : float
     regression : Regression
     used : ndarray of bool (n,)
@@ -148,6 +168,7 @@ class LogFit:
     n_eff: float = float("nan")
     dof_factor: float = 1.0
     kernel_factor: float = 1.0
+    quantile: float = NORMAL_975
 
     def model_error_channels(self) -> list[tuple[int, float]]:
         """``(joint, residual / noise)`` of the kept channels above :data:`MODEL_ERROR_RATIO`."""
@@ -170,6 +191,24 @@ def filter_time_constant(sample_period: float) -> float:
     samples) predicted the held-out torque slightly worse (benchmarks/real_log.py).
     """
     return max(0.02, 2.0 * float(sample_period))
+
+
+def fixed_b_quantile(b: float) -> float:
+    """The 97.5 % quantile of ``|t|``, ``t`` an estimate studentised by its Bartlett (Newey-West)
+    standard deviation of bandwidth a fraction ``b`` of the sample, under fixed-b asymptotics.
+
+    Kiefer and Vogelsang (Econometric Theory 21, 2005), the cubic fitted to their simulated
+    critical values for the Bartlett kernel: ``1.96 + 2.9694 b + 0.4160 b^2 - 0.5324 b^3``, for
+    ``0 <= b <= 1`` (1.96 at ``b = 0``, the normal's; 2.26 at ``b = 0.1``).
+
+    Raises
+    ------
+    ValueError
+        ``b`` outside [0, 1].
+    """
+    if not 0.0 <= b <= 1.0:
+        raise ValueError(f"fixed_b_quantile: b = {b} is the bandwidth's fraction of the sample, in [0, 1]")
+    return NORMAL_975 + b * (2.9694 + b * (0.4160 - 0.5324 * b))
 
 
 def identifiable_subset(
@@ -446,6 +485,7 @@ def fit_log(
         n_eff=float(n_eff),
         dof_factor=float(dof),
         kernel_factor=float(kernel),
+        quantile=fixed_b_quantile((lag + 1) / res.shape[0]),
         sample_period=float(sample_period),
         regression=reg,
         used=used,
