@@ -174,7 +174,8 @@ def main() -> None:
             )
             os.replace(tmp, args.save)
     for c in cases:
-        summary(c, *out[c], names[c])
+        z, est, std, q = out[c]
+        summary(c, z, est, std, names[c], q)
     print(f"({args.seeds} seeds from {args.first}, {time.perf_counter() - t0:.0f} s)")
 
 
