@@ -8,6 +8,10 @@ Runs ``examples/plugins/pd_gravity.toml`` (the three-joint vertical arm, a 1 kg 
   specialisation of the loop),
 * ``pd_gravity_python:PDGravityPython`` (the same law as a plain-Python plug-in, the Python path),
 
+or, with ``--law slotine_li``, ``examples/plugins/slotine_li.toml`` (the same arm and payload)
+with the built-in ``slotine_li`` and ``slotine_li_plugin:SlotineLiPlugin`` (the adaptive law as a
+compiled plug-in over the arm's regressor, :mod:`adaptive_dd.controllers.kernels`),
+
 alone, one after the other, ``--repeat`` times each in rotation, and prints for each the best
 CPU time per trial-sample [us] over the calls (process CPU time, one numba thread: less
 sensitive to other work on the machine than wall time) and its ratio to the built-in: of the
@@ -19,7 +23,7 @@ within 1.5x of the built-in.
 
 Usage::
 
-    python benchmarks/plugin_speed.py [--seeds N] [--duration S] [--repeat N]
+    python benchmarks/plugin_speed.py [--law pd_gravity|slotine_li] [--seeds N] [--duration S] [--repeat N]
 
 Asserts nothing; speed is never asserted in tests.
 """
@@ -36,21 +40,28 @@ from pathlib import Path
 from numba.core import event
 
 ROOT = Path(__file__).resolve().parent.parent
-SCENARIO = ROOT / "examples" / "plugins" / "pd_gravity.toml"
 LAWS = {
-    "built-in pd_gravity": "pd_gravity",
-    "compiled plug-in": "pd_gravity_plugin:PDGravityPlugin",
-    "plain-Python plug-in": "pd_gravity_python:PDGravityPython",
+    "pd_gravity": {
+        "built-in pd_gravity": "pd_gravity",
+        "compiled plug-in": "pd_gravity_plugin:PDGravityPlugin",
+        "plain-Python plug-in": "pd_gravity_python:PDGravityPython",
+    },
+    "slotine_li": {
+        "built-in slotine_li": "slotine_li",
+        "compiled plug-in": "slotine_li_plugin:SlotineLiPlugin",
+    },
 }
+"""Per law: the controllers timed (the built-in first), by the name the table prints."""
 
 
-def _scenario(spec: str, seeds: int, duration: float):
+def _scenario(law: str, spec: str, seeds: int, duration: float):
     from adaptive_dd.benchmark.scenario import parse_scenario
 
-    data = tomllib.loads(SCENARIO.read_text())
+    scenario = ROOT / "examples" / "plugins" / f"{law}.toml"
+    data = tomllib.loads(scenario.read_text())
     data["run"].update(controllers=[spec], seeds=seeds, duration=duration)
     data.pop("controllers", None)  # the plug-in's label table: not needed here
-    return parse_scenario(data, str(SCENARIO), name="plugin_speed")
+    return parse_scenario(data, str(scenario), name="plugin_speed")
 
 
 class _Compilations(event.Listener):
@@ -104,6 +115,7 @@ def _cpu_per_sample(sc) -> tuple[float, float, float]:
 
 def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--law", choices=sorted(LAWS), default="pd_gravity", help="the law (default pd_gravity)")
     ap.add_argument("--seeds", type=int, default=8, help="trials per run (default 8)")
     ap.add_argument("--duration", type=float, default=4.0, help="simulated s per trial, > 2 (default 4)")
     ap.add_argument("--repeat", type=int, default=3, help="timed runs of each, the best counted (default 3)")
@@ -112,7 +124,7 @@ def main(argv=None) -> None:
 
     numba.set_num_threads(1)
     _timed_in_threads()
-    scs = {k: _scenario(v, a.seeds, a.duration) for k, v in LAWS.items()}
+    scs = {k: _scenario(a.law, v, a.seeds, a.duration) for k, v in LAWS[a.law].items()}
     for k, sc in scs.items():
         t0, listener = time.perf_counter(), _Compilations()
         with event.install_listener("numba:compile", listener):
@@ -126,7 +138,7 @@ def main(argv=None) -> None:
         for k, sc in scs.items():
             run_us, loop_us, _ = _cpu_per_sample(sc)
             best[k] = [min(best[k][0], run_us), min(best[k][1], loop_us if loop_us > 0 else float("inf"))]
-    ref = best["built-in pd_gravity"]
+    ref = best[next(iter(scs))]
     print(f"\n{a.seeds} trials of {a.duration} s, one numba thread, best of {a.repeat}; CPU us per sample")
     print(f"{'controller':<24}{'whole run':>11}{'x built-in':>11}{'in the loop':>13}{'x built-in':>11}")
     for k, (run_us, loop_us) in best.items():

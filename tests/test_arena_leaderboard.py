@@ -114,3 +114,26 @@ def test_an_unknown_controller_is_a_user_error_naming_it(tmp_path, capsys):
     assert main(["leaderboard", str(sc), "--controllers", "no_such_law", "--out", str(tmp_path / "o")]) == 2
     err = capsys.readouterr().err
     assert "no_such_law" in err and "v3short.toml" in err
+
+
+def test_a_scenario_with_a_table_for_a_controller_not_ranked_runs(tmp_path, monkeypatch):
+    """A scenario with a plug-in's settings table, ranked on built-ins only: its run drops that
+    table (it failed: ``controllers.PayloadGradient: not a controller of run.controllers``)."""
+    import adaptive_dd.benchmark.runner as runner
+    from adaptive_dd.arena.leaderboard import _run_cells
+    from adaptive_dd.benchmark.scenario import load_scenario
+
+    sc = load_scenario(resources.files("adaptive_dd").parent / "examples" / "plugin.toml")
+    ran = []
+
+    class Ran(Exception):
+        pass
+
+    def run_benchmark(scenario, **kw):
+        ran.append(scenario)
+        raise Ran
+
+    monkeypatch.setattr(runner, "run_benchmark", run_benchmark)
+    with pytest.raises(Ran):
+        _run_cells(sc, "two_link", ["ct_nominal"], 1, False)
+    assert ran[0].controllers == ("ct_nominal", "ct_oracle") and ran[0].controller_options == ()

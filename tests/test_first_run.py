@@ -206,3 +206,29 @@ def test_the_second_process_compiles_what_the_closed_loop_calls(capsys):
 
     second_process(str(ROOT / "adaptive_dd" / "scenarios" / "vertical3_payload_exact.toml"))
     assert capsys.readouterr().out.splitlines()[0] == _numba_cache.READY
+
+
+def test_the_key_count_counts_every_key_the_page_documents_and_no_other():
+    """``python docs/_ext/scenario_keys.py`` counts the keys a scenario may set: each counted key is
+    on the generated page, and each key the page gives a meaning is counted."""
+    import sys
+
+    import pytest
+
+    pytest.importorskip("sphinx")
+    sys.path.insert(0, str(ROOT / "docs" / "_ext"))
+    try:
+        import scenario_keys
+    finally:
+        sys.path.remove(str(ROOT / "docs" / "_ext"))
+    keys = scenario_keys.every_key()
+    page = scenario_keys.page()
+    for where, names in keys.items():
+        for k in names:
+            assert f"`{k}`" in page, f"{where}.{k} counted, not on the page"
+    for key in [*scenario_keys.MEANING, *scenario_keys.ARRIVING]:
+        where, _, k = key.rpartition(".")
+        where = {"setting": "controllers.NAME"}.get(where, where)
+        if where in ("arm", "plant") or where in keys:
+            assert k in keys[where], f"{key} has a meaning on the page but is not counted"
+    assert sum(len(v) for v in keys.values()) == len({(w, k) for w, v in keys.items() for k in v})

@@ -265,3 +265,35 @@ def test_population_run_end_to_end():
             rows.sort_values("segment")["ratio_to_floor"], [s["mean"] for s in a["segments"]]
         )
     assert [p["n"] for p in pooled(pop)] == [2, 2, 2]
+
+
+def test_a_population_narrowed_by_controllers_drops_the_others_tables(monkeypatch):
+    """``benchmark TEMPLATE --arms N --controllers ct_nominal`` on a template with a plug-in's
+    settings table runs each arm without that table (it failed: ``controllers.PayloadGradient: not
+    a controller of run.controllers``); the tables of the controllers kept go with them."""
+    import adaptive_dd.benchmark.runner as runner
+    from adaptive_dd.benchmark.population import run_population
+
+    data = read_toml(TEMPLATE)
+    data["run"]["controllers"] = [
+        "ct_nominal",
+        "payload_gradient:PayloadGradient",
+        "adaptive_ct",
+        "ct_oracle",
+    ]
+    data["controllers"] = {"PayloadGradient": {"gamma": 200.0}, "adaptive_ct": {"boost_duration": 0.5}}
+    ran = []
+
+    class Ran(Exception):
+        pass
+
+    def run_benchmark(sc, **kw):
+        ran.append(sc)
+        raise Ran  # the scenario each arm runs is all this test needs
+
+    monkeypatch.setattr(runner, "run_benchmark", run_benchmark)
+    for names, tables in [(("ct_nominal", "ct_oracle"), []), (("adaptive_ct", "ct_oracle"), ["adaptive_ct"])]:
+        with pytest.raises(Ran):
+            run_population(data, str(TEMPLATE), [3], controllers=lambda sc, names=names: names)
+        assert ran[-1].controllers == names
+        assert [n for n, _ in ran[-1].controller_options] == tables

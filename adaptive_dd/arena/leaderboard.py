@@ -344,7 +344,7 @@ def _run_cells(sc, kind: str, controllers, seeds, progress) -> list[dict]:
     if seeds is not None:
         sc = dataclasses.replace(sc, seeds=seeds)
     names, floors, missing = _with_floors(sc, controllers)
-    res = run_benchmark(dataclasses.replace(sc, controllers=names), progress=progress)
+    res = run_benchmark(sc.with_controllers(names), progress=progress)
     floors = {n: floors.get(n, r.floor) for n, r in res.runs.items()}
     per = _per_seed(res, list(res.runs))
     masses = [m for (_, _, m) in sc.segments()]

@@ -97,7 +97,8 @@ information_time, detection_limit, mass_learning_time, com_learning_time, learni
     Per swap, the information limit and each controller's time to learn the payload
     (:mod:`~adaptive_dd.closed_loop.information`, its keys and units); None in the first segment.
 
-Top level: ``scenario`` (its file), ``seeds``, ``wall_time_s`` [s], ``provenance``, ``plant``
+Top level: ``scenario`` (its file), ``seeds``, ``wall_time_s`` [s] (the runs, numba's compilation left
+out), ``provenance``, ``plant``
 (the plants the trials met when the plant is not the model; None: the plant is the arm),
 ``excitation`` (the ``[run] excite`` phase's identification; None without), ``controllers``.
 """

@@ -134,8 +134,8 @@ def run_population(data: dict, src: str, arm_seeds, *, seeds=None, controllers=N
         sc = population_scenario(data, src, int(arm_seed), draw_swaps=draw_swaps)
         if seeds is not None:
             sc = dataclasses.replace(sc, seeds=seeds)
-        if controllers is not None:
-            sc = dataclasses.replace(sc, controllers=controllers(sc))
+        if controllers is not None:  # the tables of the controllers left out go with them
+            sc = sc.with_controllers(controllers(sc))
         res = run_benchmark(sc, progress=progress, on_run=release_error_norm)
         metrics = compute_metrics(res)
         drawn = random_arm(int(arm_seed))

@@ -27,6 +27,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from adaptive_dd.benchmark.drivers import run_compiled, run_python
+from adaptive_dd.benchmark.progress import RunClock
 from adaptive_dd.benchmark.scenario import Scenario
 from adaptive_dd.benchmark.trials import true_sigma
 from adaptive_dd.benchmark.types import (
@@ -107,26 +108,24 @@ def run_benchmark(
     if engine not in ENGINES:
         raise ParameterError(f"engine must be one of {ENGINES}, got {engine!r}")
     t0 = time.perf_counter()
-    if scenario.closed_forms is None:  # the general kernels: adaptive_dd.closed_loop
-        from adaptive_dd.closed_loop.runner import run_closed_loop
+    total = scenario.n_samples * len(controllers or scenario.controllers)
+    with RunClock(total, f"benchmark {scenario.name}", show=progress) as clock:
+        if scenario.closed_forms is None:  # the general kernels: adaptive_dd.closed_loop
+            from adaptive_dd.closed_loop.runner import run_closed_loop
 
-        bar = _progress(
-            progress, scenario.n_samples * len(controllers or scenario.controllers), scenario.name
-        )
-        res = run_closed_loop(
-            scenario, controllers, seed_indices=seed_indices, keep_trajectories=keep_trajectories,
-            engine=engine, bar=bar,
-        )  # fmt: skip
-        if bar is not None:
-            bar.close()
-    else:  # the paper's closed forms
-        res = _run_two_link(scenario, progress, controllers, engine, keep_trajectories, seed_indices, on_run)
-    res.wall_time = time.perf_counter() - t0
+            res = run_closed_loop(
+                scenario, controllers, seed_indices=seed_indices, keep_trajectories=keep_trajectories,
+                engine=engine, bar=clock,
+            )  # fmt: skip
+        else:  # the paper's closed forms
+            res = _run_two_link(scenario, clock, controllers, engine, keep_trajectories, seed_indices, on_run)
+    res.compile_time = clock.compile_seconds
+    res.wall_time = time.perf_counter() - t0 - res.compile_time
     return res
 
 
 def _run_two_link(
-    scenario: Scenario, progress: bool, controllers, engine: str, keep: int, seed_indices, on_run
+    scenario: Scenario, bar: RunClock, controllers, engine: str, keep: int, seed_indices, on_run
 ) -> BenchmarkResult:
     """:func:`run_benchmark` on the closed forms (``scenario.closed_forms``): each controller
     compiled (:func:`~adaptive_dd.benchmark.drivers.run_compiled`) or in Python
@@ -149,7 +148,7 @@ def _run_two_link(
     if engine == "compiled" and any(s is None for s in specs.values()):
         names = [n for n, s in specs.items() if s is None]
         raise ParameterError(f"engine='compiled': no compiled path for {names}; use engine='auto'")
-    bar = _progress(progress, len(ctrls) * N, scenario.name)
+    bar.total = len(ctrls) * N
     for name, ctrl in ctrls.items():
         if specs[name] is not None:
             run = run_compiled(name, ctrl, specs[name], scenario, idx, ref, keep, bar)
@@ -158,8 +157,6 @@ def _run_two_link(
         res.runs[name] = run
         if on_run is not None:
             on_run(res, run)
-    if bar is not None:
-        bar.close()
     return res
 
 
@@ -169,11 +166,3 @@ def scenario_controller(scenario: Scenario, spec: str) -> tuple[str, Controller]
     from adaptive_dd.controllers.registry import scenario_controller as build
 
     return build(scenario, spec)
-
-
-def _progress(show: bool, total: int, name: str):
-    if not show:
-        return None
-    from tqdm.auto import tqdm
-
-    return tqdm(total=total, desc=f"benchmark {name}", unit="sample", mininterval=0.5, unit_scale=True)

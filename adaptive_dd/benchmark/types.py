@@ -136,7 +136,10 @@ class BenchmarkResult:
     runs : dict of str to ControllerRun
         Each controller's trials, by label.
     wall_time : float
-        Seconds the runs took.
+        Seconds the runs took, numba's compilation during them left out (``compile_time``).
+    compile_time : float
+        Seconds numba spent compiling kernels during the runs (0 when every kernel came from
+        its cache).
     seed_indices : tuple of int
         The seeds run.
     plant : dict or None
@@ -152,6 +155,7 @@ class BenchmarkResult:
     mass: Array  # (n_samples,)
     runs: dict = field(default_factory=dict)
     wall_time: float = 0.0
+    compile_time: float = 0.0
     seed_indices: tuple = ()
     plant: dict | None = None
     excitation: dict | None = None

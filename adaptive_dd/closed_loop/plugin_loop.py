@@ -17,7 +17,9 @@ the same rules.
 Before ``command`` the loop computes the model terms the plug-in declares (``needs``, bits
 :data:`NEED_GRAVITY`, :data:`NEED_MASS_MATRIX`, :data:`NEED_BIAS`) at the measured state, of the
 controllers' model or, for a plug-in that needs the true model, of the trial's plant in the current
-segment (the model of the built-in oracles).
+segment (the model of the built-in oracles), and hands it the arm's kernels of that model
+(:data:`NEED_REGRESSOR`: :mod:`adaptive_dd.controllers.kernels`, which the plug-in calls at the
+reference velocity and acceleration of its law).
 
 Nothing in this module is cached: numba keys a function-typed argument by the function object, so
 a cached specialisation would never be found again in a new process (each run compiles the loop
@@ -42,16 +44,32 @@ from adaptive_dd.closed_loop.glue import (
     record_estimate,
 )
 from adaptive_dd.closed_loop.tool_frame import accumulate_tool
+from adaptive_dd.controllers.kernels import arm_kernels, with_model
 from adaptive_dd.plant.chain_dynamics import mass_matrix_in, rnea_ref_in, workspace
 from adaptive_dd.plant.integrator import plant_scratch
 
-__all__ = ["NEEDS", "NEED_BIAS", "NEED_GRAVITY", "NEED_MASS_MATRIX", "no_estimate", "plugin_block"]
+__all__ = [
+    "NEEDS",
+    "NEED_BIAS",
+    "NEED_GRAVITY",
+    "NEED_MASS_MATRIX",
+    "NEED_REGRESSOR",
+    "no_estimate",
+    "plugin_block",
+]
 
-NEED_GRAVITY, NEED_MASS_MATRIX, NEED_BIAS = 1, 2, 4
-NEEDS = {"gravity": NEED_GRAVITY, "mass_matrix": NEED_MASS_MATRIX, "bias": NEED_BIAS}
-"""The model terms a compiled plug-in may declare (``needs``), name -> bit: ``gravity`` g(q) (n,),
+NEED_GRAVITY, NEED_MASS_MATRIX, NEED_BIAS, NEED_REGRESSOR = 1, 2, 4, 8
+NEEDS = {
+    "gravity": NEED_GRAVITY,
+    "mass_matrix": NEED_MASS_MATRIX,
+    "bias": NEED_BIAS,
+    "regressor": NEED_REGRESSOR,
+}
+"""What a compiled plug-in may declare (``needs``), name -> bit: ``gravity`` g(q) (n,),
 ``mass_matrix`` M(q) with the armature (n, n), ``bias`` the torque at zero acceleration
-C(q, qd) qd + g(q) + fv qd + fc sgn(qd) (n,) [N m, kg m^2]; each at the measured q, qd."""
+C(q, qd) qd + g(q) + fv qd + fc sgn(qd) (n,) [N m, kg m^2], each at the measured q, qd; ``regressor``
+the arm's kernels (``terms[3]``) to call :func:`~adaptive_dd.controllers.kernels.reference_torque`
+and :func:`~adaptive_dd.controllers.kernels.payload_regressor` with."""
 
 
 def _model_terms(ch, pi, need, q, qd, zero, w, g, m, c):  # pragma: no cover - compiled
@@ -83,14 +101,14 @@ no_estimate = njit(_no_estimate)
 
 
 def _plugin_trial(
-    i, k0, k1, noise, drop, rc, io, pl, ts, acc, rec, alarms, ch, pis, need, p, x,
+    i, k0, k1, noise, drop, rc, io, pl, ts, acc, rec, alarms, ch, pis, pj, pmap, need, p, x,
     reset, command, observe, estimate, estimates,
 ):  # pragma: no cover - compiled  # fmt: skip
     """Samples ``k0`` to ``k1 - 1`` of trial i: :func:`~adaptive_dd.closed_loop.glue.trial_samples`
     with the plug-in's ``command``, ``observe`` and ``estimate`` in place of the built-in law and
     estimator; ``reset`` of trial i's state row ``x[i]`` at sample 0. ``pis (S or 1, G or 1,
-    13 n)`` the model whose terms ``need`` asks for (``ch`` its kinematics), ``p`` the plug-in's
-    parameters."""
+    13 n)`` the model whose terms ``need`` asks for (``ch`` its kinematics, ``pj`` the payload's
+    link, ``pmap (10, 10)`` its payload map), ``p`` the plug-in's parameters."""
     T, max_error, max_speed, q_d, qd_d, qdd_d = rc.T, rc.max_error, rc.max_speed, rc.q_d, rc.qd_d, rc.qdd_d
     seg_start, seg_end, seg_settled = rc.seg_start, rc.seg_end, rc.seg_settled
     lim, lsb, saturate, quantize_dac = io.lim, io.lsb, io.saturate, io.quantize_dac
@@ -111,9 +129,9 @@ def _plugin_trial(
     pw, w, zero = plant_scratch(n), workspace(n), np.zeros(n)
     tw, tr = np.zeros((max(ee_index.shape[0], 1), 12)), np.zeros(9)
     g, m, c = np.full(n, np.nan), np.full((n, n), np.nan), np.full(n, np.nan)  # NaN unless declared
-    terms = (g, m, c)
     xi = x[i]
     ip = i if pis.shape[0] > 1 else 0
+    kin = arm_kernels(ch, pis[ip, 0], pj, pmap)  # its scratch: once per trial
     if k0 == 0:
         reset(p, xi)
     has_drop = drop.shape[1] > 0
@@ -124,9 +142,10 @@ def _plugin_trial(
             q, qd, held_q, held_qd, n_dropped, res, std, quantize_encoder, i, noise[i, k - k0], lost,
             qm, qdm, qm_obs, qdm_obs,
         )  # fmt: skip
-        if need != 0:
-            _model_terms_c(ch, pis[ip, s if pis.shape[1] > 1 else 0], need, qm, qdm, zero, w, g, m, c)
-        command(p, xi, qm, qdm, q_d[k], qd_d[k], qdd_d[k], terms, cmd)
+        pi = pis[ip, s if pis.shape[1] > 1 else 0]
+        if need & 7:
+            _model_terms_c(ch, pi, need, qm, qdm, zero, w, g, m, c)
+        command(p, xi, qm, qdm, q_d[k], qd_d[k], qdd_d[k], (g, m, c, with_model(kin, pi)), cmd)
         mask = _apply_chain(
             T, max_error, max_speed, q_d, lim, lsb, saturate, quantize_dac, pl, pw,
             q, qd, stuck, failed, failed_at, q_rec, qd_rec, tau_rec, sat_rec, i, k, cmd, tau, e, prev, s,
@@ -149,13 +168,13 @@ _plugin_trial_c = njit(inline="always")(_plugin_trial)
 
 
 def _plugin_block(
-    i0, i1, k0, k1, noise, drop, rc, io, pl, ts, acc, rec, alarms, ch, pis, need, p, x,
+    i0, i1, k0, k1, noise, drop, rc, io, pl, ts, acc, rec, alarms, ch, pis, pj, pmap, need, p, x,
     reset, command, observe, estimate, estimates,
 ):  # pragma: no cover - compiled  # fmt: skip
     """Samples ``k0`` to ``k1 - 1`` of trials ``i0`` to ``i1 - 1`` (:func:`_plugin_trial`)."""
     for i in range(i0, i1):
         _plugin_trial_c(
-            i, k0, k1, noise, drop, rc, io, pl, ts, acc, rec, alarms, ch, pis, need, p, x,
+            i, k0, k1, noise, drop, rc, io, pl, ts, acc, rec, alarms, ch, pis, pj, pmap, need, p, x,
             reset, command, observe, estimate, estimates,
         )  # fmt: skip
 

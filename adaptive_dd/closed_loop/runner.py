@@ -237,7 +237,9 @@ def _run_plugin(name, ctrl, scenario, idx, rc, io, pl, keep, bar) -> ControllerR
         true_models(pl) if form.true_model else np.ascontiguousarray(scenario.arm.pi, dtype=float)[None, None]
     )
     fns = (form.reset, form.command, form.observe, form.estimate)
-    tail = (pl.chain, pis, form.need, form.params, form.state, *fns, form.estimates)
+    arm = scenario.arm
+    kin = (int(arm.payload_joint), np.ascontiguousarray(arm.payload_map, dtype=float))
+    tail = (pl.chain, pis, *kin, form.need, form.params, form.state, *fns, form.estimates)
     try:
         for k0, k1, noise, drop in NoiseBlocks(scenario, idx, 2 * n).blocks(N):
             args = (k0, k1, noise, drop, rc, io, pl, ts, acc, rec, alarms, *tail)

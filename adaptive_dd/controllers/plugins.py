@@ -266,14 +266,32 @@ class PythonForm:
         self.needs_true_model = bool(getattr(ctrl, "needs_true_model", False))
         self.form: PluginForm | None = None
 
+    takes_pi_true = True
+    """The Python path gives ``pi_true`` (each trial's plant): the arm's kernels of an oracle's model."""
+
     def reset(self, n_trials: int, sample_period: float) -> None:
+        from adaptive_dd.closed_loop.plugin_loop import NEED_REGRESSOR
+
+        f = compiled_form(self.name, self.ctrl, n_trials, sample_period)
+        self.kin = None
+        if getattr(self.arm, "chain", None) is not None:
+            from adaptive_dd.controllers.kernels import arm_kernels
+
+            pj, pmap = int(self.arm.payload_joint), np.ascontiguousarray(self.arm.payload_map, dtype=float)
+            self.kin = arm_kernels(self.arm.chain, np.ascontiguousarray(self.arm.pi, dtype=float), pj, pmap)
+        elif f.need & NEED_REGRESSOR:
+            raise ParameterError(
+                f"controllers.{self.name}: needs 'regressor', the kernels of an arm from a URDF; "
+                f"{self.why} has none: run the paper's arm from its URDF "
+                "(benchmarks/scenarios/sice_drawn.toml)"
+            )
         print(
             f"{self.name}: a compiled plug-in on the slow Python path ({self.why}): its functions are "
             "called trial by trial, sample by sample",
             file=sys.stderr,
             flush=True,
         )
-        f = self.form = compiled_form(self.name, self.ctrl, n_trials, sample_period)
+        self.form = f
         self.T, self._k = float(sample_period), 0
         self._alarms: list[list[float]] = [[] for _ in range(int(n_trials))]
         for i in range(int(n_trials)):
@@ -294,7 +312,9 @@ class PythonForm:
             c = np.einsum("tip,tp->ti", self.arm.regressor(q, qd, zero), sigma)
         return np.ascontiguousarray(g), np.ascontiguousarray(m), np.ascontiguousarray(c)
 
-    def command(self, q, qd, q_d, qd_d, qdd_d, sigma_true=None):
+    def command(self, q, qd, q_d, qd_d, qdd_d, sigma_true=None, pi_true=None):
+        from adaptive_dd.controllers.kernels import with_model
+
         f = self.form
         q, qd = np.ascontiguousarray(q, dtype=float), np.ascontiguousarray(qd, dtype=float)
         sigma = sigma_true if self.needs_true_model and sigma_true is not None else self.arm.sigma
@@ -302,8 +322,11 @@ class PythonForm:
         g, m, c = self._terms(q, qd, sigma)
         ref = [np.ascontiguousarray(r, dtype=float) for r in (q_d, qd_d, qdd_d)]
         out = np.empty_like(q)
+        kin = self.kin
         for i in range(q.shape[0]):
-            f.command(f.params, f.state[i], q[i], qd[i], *ref, (g[i], m[i], c[i]), out[i])
+            if kin is not None and self.needs_true_model and pi_true is not None:
+                kin = with_model(kin, np.ascontiguousarray(pi_true[i], dtype=float))
+            f.command(f.params, f.state[i], q[i], qd[i], *ref, (g[i], m[i], c[i], kin), out[i])
         return out
 
     def observe(self, q, qd, tau) -> None:

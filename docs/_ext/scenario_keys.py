@@ -3,7 +3,7 @@
 The keys come from the tables the scenario checks themselves use
 (:data:`adaptive_dd.benchmark.scenario_base.KEYS`, the ``[arm]`` and ``[plant]`` key lists of
 :mod:`adaptive_dd.plant.two_link` and :mod:`adaptive_dd.plant.arm`, the controllers'
-settings in :data:`adaptive_dd.controllers.registry.CONTROLLERS` (both arms), the estimator and detector
+settings in :data:`adaptive_dd.controllers.builtins.CONTROLLERS` (both arms), the estimator and detector
 dataclasses); the defaults come from resolving minimal scenarios with
 :func:`~adaptive_dd.benchmark.scenario.load_scenario` (what ``adaptive-dd validate`` prints).
 Only the one-line meanings below are written by hand, and the build stops when a key of the
@@ -399,6 +399,49 @@ def page() -> str:
     return "\n".join(lines)
 
 
+def every_key() -> dict[str, tuple[str, ...]]:
+    """Every key and nested field a scenario may set, by where it is set: the scenario tables'
+    keys (``[reference]``'s ``jointN`` counted once), the ``[arm]`` keys of both forms, ``[plant]``,
+    ``[plant.uncertainty]`` and ``[model]``, the controllers' settings (each name once: the
+    common ones and every built-in's, on either arm) and the estimator's and detector's fields
+    on either arm. ``python docs/_ext/scenario_keys.py`` prints the count."""
+    from adaptive_dd.benchmark import scenario_base
+    from adaptive_dd.controllers import registry
+    from adaptive_dd.identification.online import Detector, OnlineConfig
+    from adaptive_dd.identification.two_link_online import ChangeDetector
+    from adaptive_dd.plant import arm_tables
+
+    out: dict[str, tuple[str, ...]] = {}
+    for t, keys in scenario_base.KEYS.items():
+        if keys is not None:
+            out[t] = tuple(sorted(keys))
+    out["reference"] = ("cartesian", "jointN", "ramp")
+    arm = (
+        arm_tables._PHYSICAL_KEYS
+        + arm_tables._SIGMA_KEYS
+        + arm_tables._ARM_OPTIONAL
+        + arm_tables.URDF_ARM_KEYS
+    )
+    out["arm"] = tuple(sorted(set(arm)))
+    uncertainty = _uncertainty_module()
+    plant = arm_tables._PLANT_KEYS + (uncertainty.PLANT_TRUTH_KEYS if uncertainty else ())
+    out["plant"] = tuple(sorted(set(plant)))
+    if uncertainty is not None:
+        out["plant.uncertainty"] = tuple(uncertainty.UNCERTAINTY_KEYS)
+        out["model"] = tuple(uncertainty.MODEL_KEYS)
+    settings = set(registry.COMMON)
+    for entry in registry.CONTROLLERS.values():
+        settings |= set(entry.settings)
+    out["controllers.NAME"] = tuple(sorted(settings))
+    est = {f.name for f in dataclasses.fields(OnlineConfig)} | set(registry.ONLINE_KEYS)
+    out["controllers.adaptive_ct.estimator"] = tuple(sorted(est - {"detector"}))
+    det = {f.name for f in dataclasses.fields(Detector)} | {
+        f.name for f in dataclasses.fields(ChangeDetector)
+    }
+    out["controllers.adaptive_ct.detector"] = tuple(sorted(det))
+    return out
+
+
 def generate(app) -> None:
     out = Path(app.srcdir) / "guide" / "scenario_keys.md"
     out.parent.mkdir(exist_ok=True)
@@ -410,3 +453,10 @@ def generate(app) -> None:
 def setup(app):
     generate(app)  # at setup, before Sphinx lists the source files (autosummary reads them then)
     return {"parallel_read_safe": True, "version": "1"}
+
+
+if __name__ == "__main__":
+    keys = every_key()
+    for where, names in keys.items():
+        print(f"{where} ({len(names)}): {', '.join(names)}")
+    print(f"every key and nested field a scenario may set: {sum(len(v) for v in keys.values())}")
