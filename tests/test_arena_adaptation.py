@@ -15,6 +15,7 @@ from adaptive_dd.closed_loop.adaptation import (
     CH_QDD,
     chs_step,
     dual_pseudo_inertia,
+    natural_link_step,
     natural_step,
     parameters_of,
     project_payload,
@@ -140,6 +141,33 @@ def test_natural_step_is_the_log_det_natural_gradient_and_stays_definite(arm, rn
     for _ in range(200):
         natural_step(arm.chain, wild, q, qd, qdr, a, -s, th, pi, law_work(n))
     assert np.linalg.eigvalsh(_J(cfg.pi_fixed[10 * j : 10 * j + 10] + th)).min() > 0
+
+
+def test_the_natural_step_on_any_link_is_the_natural_gradient_and_keeps_it_consistent(arm, rng):
+    """:func:`natural_link_step`, the step ``natural_step`` takes on the payload's link, on every
+    link of the arm (the authors' whole-arm adaptation): a small step is ``step J G J``, a huge one
+    keeps ``J`` positive definite, the mass bound holds, and a non-finite gradient changes nothing."""
+    n = arm.n_joints
+    for j in range(n):
+        phi0 = np.array(arm.pi[10 * j : 10 * j + 10])
+        g, G = rng.normal(size=10), np.empty((4, 4))
+        dual_pseudo_inertia(g, G)
+        J0, want = _J(phi0), np.empty(10)
+        parameters_of(1e-6 * J0 @ G @ J0, want)
+        phi = phi0.copy()
+        assert natural_link_step(phi, g, 1e-6, np.inf)
+        np.testing.assert_allclose(phi - phi0, want, rtol=1e-3, atol=1e-6 * np.abs(want).max())
+        assert (phi - phi0) @ g > 0  # an ascent of g
+        for _ in range(200):
+            natural_link_step(phi, -g, 1e3, np.inf)
+        assert np.linalg.eigvalsh(_J(phi)).min() > 0
+        capped = phi0.copy()
+        for _ in range(200):
+            natural_link_step(capped, np.eye(10)[0], 10.0, 1.1 * phi0[0])  # pushes the mass up
+        assert capped[0] == pytest.approx(1.1 * phi0[0]) and np.linalg.eigvalsh(_J(capped)).min() > 0
+        same = phi0.copy()
+        assert not natural_link_step(same, np.full(10, np.nan), 1e-3, np.inf)
+        np.testing.assert_array_equal(same, phi0)
 
 
 def test_icl_stack_holds_the_integrated_dynamics_and_pulls_towards_the_payload(arm, rng):

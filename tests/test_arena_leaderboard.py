@@ -137,3 +137,49 @@ def test_a_scenario_with_a_table_for_a_controller_not_ranked_runs(tmp_path, monk
     with pytest.raises(Ran):
         _run_cells(sc, "two_link", ["ct_nominal"], 1, False)
     assert ran[0].controllers == ("ct_nominal", "ct_oracle") and ran[0].controller_options == ()
+
+
+def _ee_agrees(board: pd.DataFrame, per_seed: pd.DataFrame) -> bool:
+    """Every scenario row's ``ee_*`` columns are the aggregate of ``per_seed.csv``'s figures of
+    its controller and segment: the mean over the seeds (the peak's largest too)."""
+    cols = {
+        "ee_position_rms_mm": ("ee_position_rms_mm", "mean"),
+        "ee_position_peak_mm": ("ee_position_max_mm", "mean"),
+        "ee_position_peak_max_mm": ("ee_position_max_mm", "max"),
+        "ee_orientation_rms_deg": ("ee_orientation_rms_deg", "mean"),
+    }
+    checked = 0
+    for r in board[board["kind"] == "scenario"].itertuples():
+        seeds = per_seed[(per_seed["controller"] == r.controller) & (per_seed["segment"] == r.segment)]
+        if seeds.empty:
+            continue
+        for col, (src, how) in cols.items():
+            want = getattr(seeds[src].dropna(), how)()
+            if not np.isclose(getattr(r, col), want, rtol=1e-5, atol=0.0):
+                return False
+            checked += 1
+    return checked > 0
+
+
+@pytest.mark.slow  # two runs of a short scenario's closed loops: minutes of compiling, cold
+def test_the_end_effector_columns_are_the_per_seed_figures_they_aggregate(tmp_path):
+    """The leaderboard's tool-frame columns against ``adaptive-dd benchmark``'s ``per_seed.csv`` of
+    the same scenario, seeds and law (common random numbers: the same trials); an off-by-one
+    segment (the per-seed figures moved to the next segment) fails the check."""
+    sc = _short_vertical3(tmp_path)
+    args = [str(sc), "--seeds", "2", "--controllers", "slotine_li", "--no-progress"]
+    assert main(["benchmark", *args, "--out", str(tmp_path / "b")]) == 0
+    assert main(["leaderboard", *args, "--out", str(tmp_path / "l")]) == 0
+    per_seed = pd.read_csv(tmp_path / "b" / "per_seed.csv")
+    board = pd.read_csv(tmp_path / "l" / "leaderboard.csv", keep_default_na=False, na_values=[""])
+    assert set(board["controller"]) == {"slotine_li", "slotine_li_oracle"}
+    mine = board[board["controller"] == "slotine_li"]
+    assert len(mine) == 2 and np.all(mine["ee_position_rms_mm"] > 0)
+    assert np.all(mine["ee_position_rms_mm"] <= mine["ee_position_peak_mm"])
+    assert np.all(mine["ee_position_peak_mm"] <= mine["ee_position_peak_max_mm"])
+    assert _ee_agrees(board, per_seed)
+    n_seg = int(per_seed["segment"].max()) + 1
+    assert not _ee_agrees(board, per_seed.assign(segment=(per_seed["segment"] + 1) % n_seg))
+    doc = json.loads((tmp_path / "l" / "leaderboard.json").read_text(encoding="utf-8"))
+    assert doc["columns"]["ee_position_rms_mm"]["unit"] == "mm"
+    assert doc["columns"]["ee_orientation_rms_deg"]["unit"] == "deg"

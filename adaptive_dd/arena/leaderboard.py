@@ -17,6 +17,12 @@ the first segment) after which the causal 0.25 s moving RMS of the tracking erro
 1.2 times its floor's (the same seed) to the segment's end
 (:func:`~adaptive_dd.benchmark.time_to_floor.time_to_floor`); "never" when the segment's last window
 is still above.
+
+**End-effector error.** The tool frame's (the arm's payload frame) RMS and peak position error
+[mm] and RMS orientation error [deg] against the frame the reference puts it in, per seed and
+segment as the benchmark's ``per_seed.csv`` has them (``ee_position_rms_mm``,
+``ee_position_max_mm``, ``ee_orientation_rms_deg``; :mod:`~adaptive_dd.benchmark.end_effector`),
+aggregated over the seeds whose trial did not fail.
 """
 
 from __future__ import annotations
@@ -28,6 +34,7 @@ from pathlib import Path
 
 import numpy as np
 
+from adaptive_dd.benchmark.end_effector import EE_KEYS
 from adaptive_dd.errors import ParameterError
 
 __all__ = [
@@ -83,6 +90,10 @@ COLUMNS: dict[str, tuple[str, str]] = {
     "recovery_median_s": ("s", "median over seeds of the recovery time (a never counts as the latest)"),
     "recovery_p90_s": ("s", "90th percentile of the recovery time (inf: reaches a never)"),
     "recovery_never": ("-", "seeds still above 1.2x the floor's moving RMS error at the segment's end"),
+    "ee_position_rms_mm": ("mm", "mean over seeds of the tool frame's RMS position error |p_d - p|"),
+    "ee_position_peak_mm": ("mm", "mean over seeds of the tool frame's peak position error"),
+    "ee_position_peak_max_mm": ("mm", "largest over seeds of the tool frame's peak position error"),
+    "ee_orientation_rms_deg": ("deg", "mean over seeds of the tool frame's RMS orientation error"),
 }
 """Every column of the table: ``name -> (unit, meaning)``."""
 
@@ -157,7 +168,8 @@ def _with_floors(sc, names: Sequence[str]) -> tuple[tuple[str, ...], dict, dict]
 
 def _per_seed(res, names) -> dict[str, dict[str, np.ndarray]]:
     """Per controller of ``names``, ``(n_seeds, n_segments)`` arrays: ``rms_error`` [rad],
-    ``rms_torque``, ``saturation_fraction`` (NaN where the trial failed) and its error norm's
+    ``rms_torque``, ``saturation_fraction``, the tool frame's ``ee_*`` (:data:`_EE`; NaN where the
+    trial failed) and its error norm's
     segments (``e_norm``, a list per segment of ``(n_seeds, samples)``) for the recovery times."""
     from adaptive_dd.benchmark.metrics import per_seed_segment_metrics
     from adaptive_dd.closed_loop.types import run_constants
@@ -168,7 +180,7 @@ def _per_seed(res, names) -> dict[str, dict[str, np.ndarray]]:
         for n in names:
             run = res.runs[n]
             m = per_seed_segment_metrics(res, run, recovery=False)
-            keep = {k: m[k] for k in ("rms_error", "rms_torque", "saturation_fraction")}
+            keep = {k: m[k] for k in ("rms_error", "rms_torque", "saturation_fraction", *_EE)}
             e = np.asarray(run.e_norm, float) if run.e_norm is not None else None
             bounds = zip(rc.seg_start, rc.seg_end, strict=True)
             keep["e_norm"] = [None if e is None else e[:, a:b] for a, b in bounds]
@@ -207,13 +219,15 @@ def _cells(name, kind, per, floors, missing, masses, T) -> list[dict]:
                     "torque": m["rms_torque"][:, i], "sat": m["saturation_fraction"][:, i],
                     "fsat": fm["saturation_fraction"][:, i] if fm else np.full(e.shape, np.nan),
                     "recovery": _recovery(m, fm, i, T) if fm else np.full(e.shape, np.nan),
+                    **{k: m[k][:, i] for k in _EE},
                 }
             )  # fmt: skip
     return cells
 
 
 _KEYS = ("scenario", "kind", "controller", "floor", "floor_note", "segment", "payload_kg")
-_ARRAYS = ("e", "ratio", "fe", "torque", "sat", "fsat", "recovery")
+_EE = EE_KEYS  # the tool frame's per-seed figures [mm], [mm], [deg] (per_seed.csv's ee_* columns)
+_ARRAYS = ("e", "ratio", "fe", "torque", "sat", "fsat", "recovery", *_EE)
 
 
 def _row(c: dict, rng: np.random.Generator) -> dict:
@@ -229,6 +243,9 @@ def _row(c: dict, rng: np.random.Generator) -> dict:
         "saturation_pct": 100 * _mean(c["sat"]), "floor_saturation_pct": 100 * _mean(c["fsat"]),
         "recovery_median_s": quantile_never(rec, 50.0), "recovery_p90_s": quantile_never(rec, 90.0),
         "recovery_never": int(np.sum(np.isinf(rec))),
+        "ee_position_rms_mm": _mean(c["ee_position_rms"]), "ee_position_peak_mm": _mean(c["ee_position_max"]),
+        "ee_position_peak_max_mm": _max(c["ee_position_max"]),
+        "ee_orientation_rms_deg": _mean(c["ee_orientation_rms"]),
     }  # fmt: skip
 
 
@@ -257,6 +274,13 @@ def _mean(x) -> float:
     x = np.asarray(x, float)
     x = x[np.isfinite(x)]
     return float(x.mean()) if x.size else float("nan")
+
+
+def _max(x) -> float:
+    """Largest of the finite entries (NaN if none)."""
+    x = np.asarray(x, float)
+    x = x[np.isfinite(x)]
+    return float(x.max()) if x.size else float("nan")
 
 
 def leaderboard(

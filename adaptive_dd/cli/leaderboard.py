@@ -108,7 +108,7 @@ def _print(df) -> None:
     """The ratio columns per scenario, controller and segment, as a plain table."""
     cols = ["scenario", "controller", "floor", "segment", "payload_kg", "ratio_mean", "ratio_ci95_low",
             "ratio_ci95_high", "ratio_p90", "ratio_max", "failures", "saturation_pct", "rms_error_mrad",
-            "recovery_median_s", "recovery_never"]  # fmt: skip
+            "recovery_median_s", "recovery_never", "ee_position_rms_mm"]  # fmt: skip
     with __import__("pandas").option_context("display.width", 200, "display.max_rows", 1000):
         print(df[cols].to_string(index=False, float_format=lambda x: f"{x:.3f}"))
 

@@ -39,6 +39,7 @@ __all__ = [
     "NATURAL_STEP_MAX",
     "chs_step",
     "dual_pseudo_inertia",
+    "natural_link_step",
     "natural_step",
     "parameters_of",
     "project_payload",
@@ -214,11 +215,35 @@ def chs_step(ch, cfg, q, qd, e, ed, theta, pi_model, obs, work):  # pragma: no c
 
 
 @njit(cache=True)
+def natural_link_step(phi, g, step, m_max):  # pragma: no cover - compiled
+    """One link's step of Lee, Kwon and Park's law (their eq. for the discrete update, ``J+ =
+    J^1/2 expm(step J^1/2 G J^1/2) J^1/2``) on its parameters ``phi (10,)`` about its joint frame,
+    in place; ``g (10,)`` the gradient ``Y_j^T s`` [N m s / unit], ``step`` the sample period
+    times the gain ``gamma`` [s], ``m_max`` [kg] the largest mass (the pseudo-inertia scaled down
+    to it: still definite). A singular ``J`` is floored at ``1e-9 tr``; the eigenvalues of the
+    exponent clipped to :data:`NATURAL_STEP_MAX`. False (``phi`` untouched) if the step is not
+    finite. :func:`natural_step` applies it to the payload's link; the same step on every link is
+    the authors' whole-arm adaptation (``benchmarks/natural_adaptive_reproduction.py``)."""
+    J, G = np.empty((4, 4)), np.empty((4, 4))
+    pseudo_inertia(phi, J)
+    dual_pseudo_inertia(g, G)
+    S = _sym_fn(J, True, 1e-9 * max(J[0, 0] + J[1, 1] + J[2, 2] + J[3, 3], 1e-12))
+    X = step * (S @ G @ S)
+    if not np.all(np.isfinite(X)):
+        return False
+    Jn = S @ _sym_fn(0.5 * (X + X.T), False, NATURAL_STEP_MAX) @ S
+    if Jn[3, 3] > m_max:
+        Jn *= m_max / Jn[3, 3]
+    parameters_of(Jn, phi)
+    return True
+
+
+@njit(cache=True)
 def natural_step(ch, cfg, q, qd, qdr, a, s, theta, pi_model, work):  # pragma: no cover - compiled
     """One step of Lee, Kwon and Park's law (module docstring). Here ``theta (10,)`` is the change
     of the payload link's parameters about its joint frame (``phi = phi0 + theta``, ``phi0`` the
     nominal link's, its pseudo-inertia floored at ``1e-9 tr`` if singular); ``s = e' + lam e``;
-    the mass added kept within ``cfg.hi[0]`` (the pseudo-inertia scaled down: still definite)."""
+    the mass added kept within ``cfg.hi[0]``: :func:`natural_link_step` on that link."""
     n = q.shape[0]
     j = cfg.payload_joint
     yb = work[3]
@@ -230,18 +255,8 @@ def natural_step(ch, cfg, q, qd, qdr, a, s, theta, pi_model, work):  # pragma: n
             acc += yb[r, c] * s[r]
         g[c] = acc
         phi[c] = cfg.pi_fixed[10 * j + c] + theta[c]
-    J, G = np.empty((4, 4)), np.empty((4, 4))
-    pseudo_inertia(phi, J)
-    dual_pseudo_inertia(g, G)
-    S = _sym_fn(J, True, 1e-9 * max(J[0, 0] + J[1, 1] + J[2, 2] + J[3, 3], 1e-12))
-    X = cfg.T * cfg.nat_gain * (S @ G @ S)
-    if not np.all(np.isfinite(X)):
+    if not natural_link_step(phi, g, cfg.T * cfg.nat_gain, cfg.pi_fixed[10 * j] + cfg.hi[0]):
         return
-    Jn = S @ _sym_fn(0.5 * (X + X.T), False, NATURAL_STEP_MAX) @ S
-    m_max = cfg.pi_fixed[10 * j] + cfg.hi[0]
-    if Jn[3, 3] > m_max:
-        Jn *= m_max / Jn[3, 3]
-    parameters_of(Jn, phi)
     for c in range(10):
         theta[c] = phi[c] - cfg.pi_fixed[10 * j + c]
     for c in range(pi_model.shape[0]):
