@@ -32,8 +32,6 @@ NO_EXAMPLE = {
     "adaptive_dd.benchmark.types.BenchmarkResult": CLOSED_LOOP,
     "adaptive_dd.benchmark.types.ControllerRun": CLOSED_LOOP,
     "adaptive_dd.simulation.run_trial": CLOSED_LOOP,
-    "adaptive_dd.plotting.plot_tracking_errors": "takes a BenchmarkResult: " + CLOSED_LOOP,
-    "adaptive_dd.plotting.plot_joint_errors": "takes a BenchmarkResult: " + CLOSED_LOOP,
     "adaptive_dd.plotting.plot_payload_estimates": "takes a BenchmarkResult: " + CLOSED_LOOP,
     "adaptive_dd.plotting.plot_benchmark_estimates": "takes a BenchmarkResult: " + CLOSED_LOOP,
     "adaptive_dd.plotting.plot_trajectory": "takes a simulation's result: " + CLOSED_LOOP,
