@@ -27,14 +27,11 @@ FLAGS = doctest.ELLIPSIS | doctest.NORMALIZE_WHITESPACE
 CLOSED_LOOP = "runs the compiled closed loop (minutes to compile on a cold cache)"
 RK4 = "simulates the arm with its compiled RK4 step (about a minute to compile on a cold cache)"
 ESTIMATOR = "steps the compiled estimator (about a minute to compile on a cold cache)"
-IDENTIFY = "needs a model.json, which adaptive-dd identify writes from a record"
 NO_EXAMPLE = {
     "adaptive_dd.benchmark.runner.run_benchmark": CLOSED_LOOP,
     "adaptive_dd.benchmark.types.BenchmarkResult": CLOSED_LOOP,
     "adaptive_dd.benchmark.types.ControllerRun": CLOSED_LOOP,
     "adaptive_dd.simulation.run_trial": CLOSED_LOOP,
-    "adaptive_dd.plotting.plot_tracking_errors": "takes a BenchmarkResult: " + CLOSED_LOOP,
-    "adaptive_dd.plotting.plot_joint_errors": "takes a BenchmarkResult: " + CLOSED_LOOP,
     "adaptive_dd.plotting.plot_payload_estimates": "takes a BenchmarkResult: " + CLOSED_LOOP,
     "adaptive_dd.plotting.plot_benchmark_estimates": "takes a BenchmarkResult: " + CLOSED_LOOP,
     "adaptive_dd.plotting.plot_trajectory": "takes a simulation's result: " + CLOSED_LOOP,
@@ -43,12 +40,8 @@ NO_EXAMPLE = {
     "adaptive_dd.identification.output_error.fit_output_error": RK4,
     "adaptive_dd.identification.output_error.OutputErrorResult": "made by fit_output_error: " + RK4,
     "adaptive_dd.identification.excitation.design_excitation": "an optimisation of minutes",
-    "adaptive_dd.identification.identified_model.IdentifiedModel": IDENTIFY,
-    "adaptive_dd.identification.identified_model.save_identified_model": IDENTIFY,
     "adaptive_dd.identification.two_link_online.online_step": ESTIMATOR,
     "adaptive_dd.identification.two_link_online.run_two_link_online": ESTIMATOR,
-    "adaptive_dd.identification.payload_information.payload_information_time": "needs an oracle's "
-    "trajectory: " + CLOSED_LOOP,
     "adaptive_dd.identification.detection_limit.detection_limit": "needs an oracle's trajectory: "
     + CLOSED_LOOP,
     "adaptive_dd.sweep.run_sweep": CLOSED_LOOP + " on Dask",
@@ -57,7 +50,6 @@ NO_EXAMPLE = {
     "adaptive_dd.gym.env.PayloadSwapEnv": "steps the compiled plant: " + RK4,
     "adaptive_dd.gym.score.evaluate": CLOSED_LOOP,
     "adaptive_dd.identification.reproduce.run_reproduce": "simulates the paper's experiments: " + RK4,
-    "adaptive_dd.identification.reproduce.paper_comparison": "takes run_reproduce's result",
 }
 
 

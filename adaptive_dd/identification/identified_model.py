@@ -85,6 +85,44 @@ class IdentifiedModel:
         written before it: ``friction_velocity`` for every joint). :meth:`predict` uses them.
     identity : dict or None
         :func:`arm_identity` of the arm identified on (None in files written before it).
+
+    Examples
+    --------
+    What ``identify --out`` writes, from a weighted least squares of a record (here the
+    vertical three-joint arm's URDF torques along a sine, so the fit gives the URDF back):
+
+    >>> import numpy as np
+    >>> from adaptive_dd.identification.identified_model import IdentifiedModel
+    >>> from adaptive_dd.identification.log_fit import fit_log, predict_torque
+    >>> from adaptive_dd.identification.model import arm_model
+    >>> from adaptive_dd.plant import Arm
+    >>> from adaptive_dd.robots import robot_urdf
+    >>> arm = Arm.from_urdf(robot_urdf("vertical3"))
+    >>> model = arm_model(arm)
+    >>> T = 1e-3
+    >>> t = np.arange(0.0, 3.0, T)[:, None]
+    >>> q = 0.8 * np.sin([1.1, 1.7, 2.3] * t) + 0.4 * np.sin([3.1, 4.3, 5.9] * t)
+    >>> qd = np.gradient(q, T, axis=0)
+    >>> qdd = np.gradient(qd, T, axis=0)
+    >>> tau = predict_torque(model, arm.sigma, q, qd, qdd)  # [N m]
+    >>> fit = fit_log(model, q, qd, tau, np.ones(3, bool), np.ones(model.p, bool),
+    ...               tau_f=0.01, sample_period=T)
+    >>> m = IdentifiedModel(
+    ...     urdf=str(arm.urdf), payload_frame=arm.payload_frame, gravity=arm.gravity.tolist(),
+    ...     repair_inertia=False, joint_names=list(arm.joint_names),
+    ...     friction_velocity=float(model.friction_velocity), names=list(model.names),
+    ...     sigma=fit.sigma.tolist(), sigma_urdf=model.sigma_ref.tolist(), std=fit.std.tolist(),
+    ...     identified=fit.identified.tolist(), covariance=fit.cov.tolist(),
+    ...     used=fit.used.tolist(), residual_rms=fit.residual_rms.tolist(),
+    ...     noise_rms=fit.noise_rms.tolist(), viscous=arm.viscous.tolist(),
+    ...     coulomb=arm.coulomb.tolist(), armature=arm.armature.tolist(),
+    ...     consistent_sigma=None, consistent_distance=None, fitted_urdf=None,
+    ...     record={"source": "sine", "sample_period": T, "tau_f": 0.01})
+    >>> m.names[0]  # a base parameter: a combination of the links' standard parameters
+    'mx1 + 0.4*m2 + 0.4*m3'
+    >>> err = np.abs(m.predict(q, qd, qdd) - tau).max(axis=0)  # its torques against the record's [N m]
+    >>> bool(np.all(err < 0.01 * np.abs(tau).max(axis=0)))
+    True
     """
 
     urdf: str
@@ -235,6 +273,36 @@ def save_identified_model(path, model: IdentifiedModel) -> Path:
     -------
     Path
         The file written.
+
+    Examples
+    --------
+    The UR5's URDF as a model file (its own base parameters, none identified), written and
+    read back:
+
+    >>> import tempfile
+    >>> import numpy as np
+    >>> from adaptive_dd.identification.identified_model import (
+    ...     IdentifiedModel, load_identified_model, save_identified_model)
+    >>> from adaptive_dd.identification.model import arm_model
+    >>> from adaptive_dd.plant import Arm
+    >>> from adaptive_dd.robots import robot_urdf
+    >>> arm = Arm.from_urdf(robot_urdf("ur5"))
+    >>> model = arm_model(arm)
+    >>> n, p = arm.n_joints, model.p
+    >>> m = IdentifiedModel(
+    ...     urdf=str(arm.urdf), payload_frame=arm.payload_frame, gravity=arm.gravity.tolist(),
+    ...     repair_inertia=False, joint_names=list(arm.joint_names),
+    ...     friction_velocity=float(model.friction_velocity), names=list(model.names),
+    ...     sigma=model.sigma_ref.tolist(), sigma_urdf=model.sigma_ref.tolist(), std=[0.0] * p,
+    ...     identified=[False] * p, covariance=np.zeros((p, p)).tolist(), used=[True] * n,
+    ...     residual_rms=[float("nan")] * n, noise_rms=[float("nan")] * n,
+    ...     viscous=arm.viscous.tolist(), coulomb=arm.coulomb.tolist(),
+    ...     armature=arm.armature.tolist(), consistent_sigma=None, consistent_distance=None,
+    ...     fitted_urdf=None, record={"source": "the URDF"})
+    >>> path = save_identified_model(f"{tempfile.mkdtemp()}/model.json", m)
+    >>> back = load_identified_model(path)
+    >>> back.sigma == m.sigma, back.residual_rms[0]  # NaN is written as null and read back
+    (True, nan)
     """
     from adaptive_dd.outputs import atomic_write
 

@@ -280,6 +280,21 @@ def paper_comparison(res: ReproduceResult, method: str) -> list[dict]:
     -------
     list of dict
         One row per tau_f and parameter: ``tau_f, param, ours_pct, paper_pct, ratio``.
+
+    Examples
+    --------
+    A result whose errors are half the paper's Table 5 on each of 3 seeds:
+
+    >>> import numpy as np
+    >>> from adaptive_dd.identification.reproduce import (
+    ...     PAPER_TABLES, TAU_F_GRID, ReproduceResult, paper_comparison)
+    >>> err = np.repeat(0.5 * PAPER_TABLES["M2"][:, None, :], 3, axis=1)  # (tau_f, seed, 7) [%]
+    >>> res = ReproduceResult(tau_f=TAU_F_GRID, seeds=3, errors={("M2", "15", "paper"): err})
+    >>> rows = paper_comparison(res, "M2")
+    >>> len(rows), rows[0]["tau_f"], rows[0]["param"], round(rows[0]["ratio"], 3)
+    (42, 0.002, 'J1', 0.5)
+    >>> paper_comparison(res, "M1")  # no Table 3 run
+    []
     """
     err = res.errors.get((method, "15", "paper"))
     if err is None:
