@@ -1,7 +1,7 @@
 """The model's uncertainty belongs to the model (``[model] uncertainty``,
-adaptive_dd.plant.uncertainty.model_uncertainty): checked like every key, CAD level by default, the
-plant's draw levels when the scenario draws one, and adaptive_ct's arm prior follows it whatever
-the plant is (drawn, a URDF of its own, the [arm] itself)."""
+adaptive_dd.plant.uncertainty.model_uncertainty): checked like every key, the plant's draw levels
+when the scenario states none and draws one, exact otherwise, and adaptive_ct's arm prior follows
+it whatever the plant is (drawn, a URDF of its own, the [arm] itself)."""
 
 from __future__ import annotations
 
@@ -19,7 +19,7 @@ from adaptive_dd.closed_loop.runner import make_controller_of
 from adaptive_dd.errors import ScenarioError
 from adaptive_dd.identification.arm_prior import ArmUncertainty, draw_parameters, prior_covariance
 from adaptive_dd.identification.online import est_init
-from adaptive_dd.plant.uncertainty import CAD_LEVELS, Uncertainty
+from adaptive_dd.plant.uncertainty import Uncertainty
 from adaptive_dd.plant.urdf_write import write_urdf_links
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -75,37 +75,34 @@ def test_model_uncertainty_is_checked(model, match):
         parse_scenario(_data(model=model), "u.toml")
 
 
-def test_the_model_uncertainty_defaults_to_the_draw_then_to_cad_level():
-    assert parse_scenario(_data(), "u.toml").model_uncertainty == CAD_LEVELS
-    assert CAD_LEVELS == Uncertainty(**LEVELS)
-    assert all(getattr(CAD_LEVELS, k) == getattr(ArmUncertainty(), k) for k in LEVELS)
+def test_the_model_uncertainty_defaults_to_the_draw_then_to_exact():
+    assert parse_scenario(_data(), "u.toml").model_uncertainty is None
     drawn = {"mass": 0.05, "com": 0.02, "distribution": "normal"}
     sc = parse_scenario(_data(plant={"uncertainty": drawn}), "u.toml")
     assert sc.model_uncertainty == Uncertainty(**drawn) == sc.plant.uncertainty
     stated = {"mass": 0.02, "inertia": 0.05}
     sc = parse_scenario(_data(plant={"uncertainty": drawn}, model={"uncertainty": stated}), "u.toml")
     assert sc.model_uncertainty == Uncertainty(**stated) and sc.plant.uncertainty == Uncertainty(**drawn)
-    # the paper's closed forms state none (their estimator has no arm block)
-    assert parse_scenario({}, "u.toml").model_uncertainty is None
 
 
 def test_a_model_stated_exact_keeps_the_payload_estimator():
-    sc = parse_scenario(_data(model={"uncertainty": {}}), "u.toml")
+    drawn = parse_scenario(_data(plant={"uncertainty": LEVELS}), "u.toml")
+    assert make_controller_of(drawn, "adaptive_ct")[1].online.mode == "arm"
+    sc = parse_scenario(_data(plant={"uncertainty": LEVELS}, model={"uncertainty": {}}), "u.toml")
     assert sc.model_uncertainty == Uncertainty()
     assert make_controller_of(sc, "adaptive_ct")[1].online.mode == "payload"
-    default = parse_scenario(_data(), "u.toml")
-    assert make_controller_of(default, "adaptive_ct")[1].online.mode == "arm"
+    assert make_controller_of(parse_scenario(_data(), "u.toml"), "adaptive_ct")[1].online.mode == "payload"
 
 
 def test_the_arm_prior_follows_the_stated_uncertainty_when_the_plant_is_a_urdf_of_its_own(tmp_path):
     """The plant a URDF of its own (no draw): adaptive_ct's arm prior is the covariance of the
-    model's stated levels (CAD level when none are stated), not the draw's (there is none)."""
+    model's stated levels, whichever they are."""
     sc = parse_scenario(_data(), "u.toml")
     arm, n = sc.arm, sc.arm.n_joints
     pi = draw_parameters(arm, ArmUncertainty(), np.random.default_rng(3))
     urdf = write_urdf_links(arm, pi[: 10 * n], tmp_path / "plant.urdf")
     plant = {"urdf": str(urdf), "armature": [float(x) for x in pi[12 * n :]]}
-    cad = parse_scenario(_data(plant=plant), "u.toml")
+    cad = parse_scenario(_data(plant=plant, model={"uncertainty": LEVELS}), "u.toml")
     assert cad.plant is not None and cad.plant.uncertainty is None and cad.plant.urdf == str(urdf)
     np.testing.assert_allclose(_arm_prior(cad), _stated_prior(arm, LEVELS), rtol=1e-9, atol=1e-15)
     stated = {"mass": 0.03, "com": 0.002, "inertia": 0.05, "viscous": 0.2, "coulomb": 0.1, "armature": 0.1}
@@ -129,6 +126,6 @@ def test_the_shipped_cad_error_scenarios_are_the_generators_output():
             str(ROOT / "benchmarks/scenarios/cad_error" / f"{robot}_cad_error.toml"),
         )
         assert sc.plant.urdf.endswith(f"{robot}_plant.urdf") and sc.plant.uncertainty is None
-        assert sc.model_uncertainty == CAD_LEVELS and sc.excite == 0.0
+        assert sc.model_uncertainty == Uncertainty(**LEVELS) and sc.excite == 0.0
         rel = np.abs(np.asarray(sc.plant.pi_links) - sc.arm.pi_links)[::10] / sc.arm.pi_links[::10]
         assert 0.0 < rel.max() <= 0.1 + 1e-9  # the link masses off, within 10 %

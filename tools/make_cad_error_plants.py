@@ -14,7 +14,8 @@ viscous and Coulomb friction within 50 %, armature within 30 %; uniform), genera
 ``NAME_plant.urdf`` (:func:`~adaptive_dd.plant.urdf_write.write_urdf_links`); the joints' friction
 and armature to the scenario's ``[plant]`` table (``[plant] urdf`` takes the links only). The
 scenario ``NAME_cad_error.toml`` is the shipped exact scenario with that ``[plant]`` table and no
-excitation phase: every controller but the oracles is given the vendor's URDF.
+excitation phase, and ``[model] uncertainty`` at the CAD levels: every controller but the oracles
+is given the vendor's URDF and told how far it may be from the robot.
 """
 
 from __future__ import annotations
@@ -38,8 +39,8 @@ HEADER = """\
 # that URDF off by CAD-level errors, given as a URDF of its own ({robot}_plant.urdf: per link the
 # mass within 10 %, the centre of mass within 1 cm per axis, the inertia about it within 20 %) with
 # its joints' friction within 50 % and armature within 30 % ([plant] below); one draw, seed {seed}.
-# No excitation phase. Nothing here tells the controllers how far their model is from the robot:
-# they take the [model]'s default stated uncertainty (CAD level, docs/reference/scenario_keys.md).
+# No excitation phase. The controllers are told how far their model may be from the robot as a
+# user of a vendor's URDF would state it: CAD level ([model] uncertainty below).
 #
 #     adaptive-dd benchmark benchmarks/scenarios/cad_error/{robot}_cad_error.toml \\
 #         --controllers ct_oracle adaptive_ct
@@ -76,6 +77,9 @@ def plant_files(name: str, k: int) -> dict[str, str]:
         f"viscous = {_floats(pi[10 * n : 11 * n])}\n"
         f"coulomb = {_floats(pi[11 * n : 12 * n])}\n"
         f"armature = {_floats(pi[12 * n :])}\n"
+        "\n# What the controllers are told of their model: a URDF from CAD and data sheets.\n"
+        "[model]\nuncertainty = { mass = 0.1, com = 0.01, inertia = 0.2, viscous = 0.5, coulomb = 0.5, "
+        "armature = 0.3 }\n"
     )
     lines = text.splitlines()
     body = "\n".join(lines[next(i for i, x in enumerate(lines) if not x.startswith("#")) :])

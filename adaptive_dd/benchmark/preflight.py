@@ -154,9 +154,9 @@ def resolved_settings(scenario) -> list[str]:
 def derived_estimator_settings(scenario) -> list[str]:
     """``adaptive_ct``'s estimator settings on an arm from a URDF that the scenario need not state,
     as the run derives them, each with its rule: the mode (``"arm"`` when the model's stated
-    uncertainty, ``[model] uncertainty`` or its default, is not exact), the row weights (the torque
-    limits) and the payload mass re-opened at an alarm (``[arm] payload_capacity``, 10 kg when it
-    is not stated)."""
+    uncertainty, ``[model] uncertainty`` or the ``[plant.uncertainty]`` levels, is not exact), the
+    row weights (the torque limits) and the payload mass re-opened at an alarm (``[arm]
+    payload_capacity``, 10 kg when it is not stated)."""
     from adaptive_dd.controllers.registry import scenario_controller
     from adaptive_dd.identification.online import REOPEN_CAPACITY, derived_row_weights, reopen_mass_std
 
@@ -167,7 +167,7 @@ def derived_estimator_settings(scenario) -> list[str]:
     arm, pre = scenario.arm, "controllers.adaptive_ct.estimator"
     why = "given" if "mode" in est else "derived: the model's stated uncertainty ([model] uncertainty)"
     if why != "given" and online.mode != "arm":
-        why = "derived: [model] uncertainty states the arm exact"
+        why = "default: no [model] uncertainty or [plant.uncertainty], the arm taken as exact"
     out = [f"{pre}.mode = {online.mode!r}   ({why})"]
     w = online.row_weights if online.row_weights is not None else derived_row_weights(arm)
     why = "given" if "row_weights" in est else "derived: torque limit / largest torque limit"

@@ -46,7 +46,7 @@ Every key is optional; the value after ``=`` below is the default that is used
     [model]
     from = "FILE.urdf"         # the controllers' model: these link inertials (N-joint arms)
     uncertainty = {mass = 0.1} # how far it may be from the robot (levels as [plant.uncertainty];
-                               # default: the plant's draw levels, else CAD level)
+                               # default: the plant's draw levels, else exact)
 
     [noise]                    # Tables 2 and 4 of the paper
     position_variance = [1e-8, 1e-7]   # rad^2, each in [0, 1]
@@ -229,9 +229,8 @@ class Scenario:
     ``arm`` is then the model the controllers are given. None: the plant is ``arm`` exactly."""
     model_uncertainty: Uncertainty | None = None
     """How far ``arm`` may be from the robot (``[model] uncertainty``, by default the plant's draw
-    levels, else CAD level: :func:`~adaptive_dd.plant.uncertainty.model_uncertainty`); the
-    controllers' settings follow from it. None (the paper's closed forms, a scenario built in
-    code): the plant's draw levels, the model exact without a draw."""
+    levels: :func:`~adaptive_dd.plant.uncertainty.model_uncertainty`); the controllers' settings
+    follow from it. None: the plant's draw levels, the model exact without a draw."""
     closed_forms: ClosedFormTwoLink | None = field(init=False, default=None, repr=False, compare=False)
     """The paper's closed forms of ``arm`` (eqs. 3-9) when the run takes that fast path: the arm is
     of the paper's geometry and ``plant`` is None (:func:`scenario_closed_forms`); None: the general

@@ -503,7 +503,7 @@ on each arm, and which arms it runs on)."""
 def with_stated_uncertainty(name: str, options: dict, scenario) -> dict:
     """``adaptive_ct``'s options with its estimator's ``arm_uncertainty`` the model's stated
     uncertainty (:func:`~adaptive_dd.plant.uncertainty.stated_uncertainty`: ``[model] uncertainty``,
-    by default the plant's draw levels, else CAD level) when its own table says neither
+    by default the plant's draw levels) when its own table says neither
     ``arm_uncertainty`` nor ``mode``: an estimator told how far its model may be from the robot
     learns the arm, whatever the plant is (``docs/learning_the_arm.md``). Normal levels (clipped
     at 3) are given the uniform levels of the same variance (``level * sqrt(3)``). Other

@@ -14,10 +14,9 @@ declares ``needs_true_model``) get the plant of their trial; the others get the 
 
 How far the model may be from the robot is the model's, not the plant's
 (:func:`model_uncertainty`): ``[model] uncertainty = {...}`` (the levels of
-``[plant.uncertainty]``), by default the levels the plant is drawn with, and without a draw
-:data:`CAD_LEVELS` (a vendor's URDF is never exact), whatever the plant is: drawn, a URDF of its
-own, the ``[arm]`` itself, a real robot. The controllers' settings follow from it
-(:func:`stated_uncertainty`).
+``[plant.uncertainty]``), by default the levels the plant is drawn with, and without either the
+model taken as exact, whatever the plant is: drawn, a URDF of its own, the ``[arm]`` itself, a
+real robot. The controllers' settings follow from it (:func:`stated_uncertainty`).
 
 The draw (:func:`draw_plant`), per link, with the link's mass ``m``, centre of mass ``c``
 and rotational inertia about it ``I_c`` (from its ten parameters about the joint frame)::
@@ -50,7 +49,6 @@ from numpy.typing import NDArray
 from adaptive_dd.errors import ParameterError, ScenarioError
 
 __all__ = [
-    "CAD_LEVELS",
     "DISTRIBUTIONS",
     "MODEL_KEYS",
     "PLANT_TRUTH_KEYS",
@@ -380,17 +378,13 @@ MODEL_KEYS = ("from", "uncertainty")
 """Keys of ``[model]``: ``from``, a file the controllers' model is read from; ``uncertainty``, how
 far that model may be from the robot (:func:`model_uncertainty`)."""
 
-CAD_LEVELS = Uncertainty(mass=0.1, com=0.01, inertia=0.2, viscous=0.5, coulomb=0.5, armature=0.3)
-"""The model's stated uncertainty when a scenario states none and draws no plant: a URDF from CAD
-and data sheets (link masses within about 10 %, centres of mass about 1 cm, inertias 20 %,
-friction 50 %, armature 30 %; the defaults of
-:class:`~adaptive_dd.identification.arm_prior.ArmUncertainty`)."""
 
-
-def model_uncertainty(src: str, table, plant: PlantSpec | None) -> Uncertainty:
+def model_uncertainty(src: str, table, plant: PlantSpec | None) -> Uncertainty | None:
     """How far the controllers' model may be from the robot: ``[model] uncertainty`` (a table of
     the keys of ``[plant.uncertainty]``, a level left out 0; every level 0: the model is exact),
-    else the levels ``plant`` is drawn with (``[plant.uncertainty]``), else :data:`CAD_LEVELS`.
+    else the levels ``plant`` is drawn with (``[plant.uncertainty]``), else None (exact). A
+    CAD-level default was measured and not kept: on exact URDFs it costs the unloaded first
+    segment (``docs/plant_and_model.md``).
 
     Raises
     ------
@@ -400,8 +394,7 @@ def model_uncertainty(src: str, table, plant: PlantSpec | None) -> Uncertainty:
     """
     if isinstance(table, dict) and "uncertainty" in table:
         return _uncertainty(src, table["uncertainty"], "model.uncertainty")
-    drawn = plant.uncertainty if plant is not None else None
-    return drawn if drawn is not None else CAD_LEVELS
+    return plant.uncertainty if plant is not None else None
 
 
 def stated_uncertainty(scenario) -> Uncertainty | None:
