@@ -112,6 +112,7 @@ def test_the_arm_prior_follows_the_stated_uncertainty_when_the_plant_is_a_urdf_o
     assert np.trace(P) < 0.5 * np.trace(_arm_prior(cad))
 
 
+@pytest.mark.slow  # a subprocess that loads two arms and writes their URDFs
 def test_the_shipped_cad_error_scenarios_are_the_generators_output():
     out = subprocess.run(
         [sys.executable, str(ROOT / "tools" / "make_cad_error_plants.py"), "--check"],
