@@ -153,9 +153,10 @@ def resolved_settings(scenario) -> list[str]:
 
 def derived_estimator_settings(scenario) -> list[str]:
     """``adaptive_ct``'s estimator settings on an arm from a URDF that the scenario need not state,
-    as the run derives them, each with its rule: the mode (``"arm"`` when ``[plant.uncertainty]``
-    states how far the robot may be from its URDF), the row weights (the torque limits) and the
-    payload mass re-opened at an alarm (``[arm] payload_capacity``, 10 kg when it is not stated)."""
+    as the run derives them, each with its rule: the mode (``"arm"`` when the model's stated
+    uncertainty, ``[model] uncertainty`` or the ``[plant.uncertainty]`` levels, is not exact), the
+    row weights (the torque limits) and the payload mass re-opened at an alarm (``[arm]
+    payload_capacity``, 10 kg when it is not stated)."""
     from adaptive_dd.controllers.registry import scenario_controller
     from adaptive_dd.identification.online import REOPEN_CAPACITY, derived_row_weights, reopen_mass_std
 
@@ -164,9 +165,9 @@ def derived_estimator_settings(scenario) -> list[str]:
         return []
     est = scenario.options("adaptive_ct").get("estimator", {})
     arm, pre = scenario.arm, "controllers.adaptive_ct.estimator"
-    why = "given" if "mode" in est else "derived: [plant.uncertainty] states the arm's uncertainty"
+    why = "given" if "mode" in est else "derived: the model's stated uncertainty ([model] uncertainty)"
     if why != "given" and online.mode != "arm":
-        why = "default: no [plant.uncertainty], the arm taken as exact"
+        why = "default: no [model] uncertainty or [plant.uncertainty], the arm taken as exact"
     out = [f"{pre}.mode = {online.mode!r}   ({why})"]
     w = online.row_weights if online.row_weights is not None else derived_row_weights(arm)
     why = "given" if "row_weights" in est else "derived: torque limit / largest torque limit"

@@ -45,6 +45,8 @@ Every key is optional; the value after ``=`` below is the default that is used
 
     [model]
     from = "FILE.urdf"         # the controllers' model: these link inertials (N-joint arms)
+    uncertainty = {mass = 0.1} # how far it may be from the robot (levels as [plant.uncertainty];
+                               # default: the plant's draw levels, else exact)
 
     [noise]                    # Tables 2 and 4 of the paper
     position_variance = [1e-8, 1e-7]   # rad^2, each in [0, 1]
@@ -94,7 +96,14 @@ from adaptive_dd.plant.arm import Arm
 from adaptive_dd.plant.arm_tables import arm_from_tables
 from adaptive_dd.plant.parameters import PAYLOAD_RADIUS
 from adaptive_dd.plant.two_link import ClosedFormTwoLink, as_arm, closed_form_view
-from adaptive_dd.plant.uncertainty import PLANT_TRUTH_KEYS, PlantSpec, parse_model, parse_plant
+from adaptive_dd.plant.uncertainty import (
+    PLANT_TRUTH_KEYS,
+    PlantSpec,
+    Uncertainty,
+    model_uncertainty,
+    parse_model,
+    parse_plant,
+)
 
 __all__ = [
     "LIMITS",
@@ -218,6 +227,10 @@ class Scenario:
     plant: PlantSpec | None = None
     """What the simulated robot is when it is not ``arm`` (:mod:`adaptive_dd.plant.uncertainty`):
     ``arm`` is then the model the controllers are given. None: the plant is ``arm`` exactly."""
+    model_uncertainty: Uncertainty | None = None
+    """How far ``arm`` may be from the robot (``[model] uncertainty``, by default the plant's draw
+    levels: :func:`~adaptive_dd.plant.uncertainty.model_uncertainty`); the controllers' settings
+    follow from it. None: the plant's draw levels, the model exact without a draw."""
     closed_forms: ClosedFormTwoLink | None = field(init=False, default=None, repr=False, compare=False)
     """The paper's closed forms of ``arm`` (eqs. 3-9) when the run takes that fast path: the arm is
     of the paper's geometry and ``plant`` is None (:func:`scenario_closed_forms`); None: the general
@@ -447,7 +460,7 @@ def parse_scenario(data: dict, src: str = "<memory>", name: str = "scenario") ->
     """
     from adaptive_dd.robots.random_arm import with_random_arm
 
-    arm, errors, plant = None, [], None
+    arm, errors, plant, stated = None, [], None, None
     data = with_random_arm(data, src)  # robot = "random:SEED": its capacity, armature, reference
     table = data if isinstance(data, dict) else {}
     plant_table = table.get("plant")
@@ -457,6 +470,8 @@ def parse_scenario(data: dict, src: str = "<memory>", name: str = "scenario") ->
     try:
         arm = arm_from_tables(table.get("arm"), law_table, src)
         arm, plant = model_and_plant(src, arm, plant_table, table.get("model"))
+        if closed_form_view(arm) is None:  # the model's stated uncertainty (URDF arms)
+            stated = model_uncertainty(src, table.get("model"), plant)
     except ScenarioError as exc:
         errors.append(str(exc).removeprefix(f"{src}: "))
     values, more = scenario_fields(
@@ -469,6 +484,7 @@ def parse_scenario(data: dict, src: str = "<memory>", name: str = "scenario") ->
     if arm is not None:
         values["arm"] = arm
         values["plant"] = plant
+        values["model_uncertainty"] = stated
         if "payload.radius" in values.get("defaulted", ()):
             values["payload_radius"] = arm.payload_radius
     errors += [e for e in scenario_errors(values) if e.split(":")[0] not in _bad_keys(errors)]
@@ -603,10 +619,11 @@ def _plant_lines(sc: Scenario) -> list[str]:
     """What the plant is when it is not the model (``[plant]``, ``[model]``), for ``validate``."""
     import dataclasses
 
-    p = sc.plant
+    p, u = sc.plant, sc.model_uncertainty
+    stated = [] if u is None else [f"model.uncertainty = {dataclasses.asdict(u)!r}"]
     if p is None:
-        return ["# plant: the [arm] itself (no [plant] table)"] if sc.closed_forms is None else []
-    out = [f"model.urdf = {str(sc.arm.urdf)!r}   (what every non-oracle controller is given)"]
+        return ["# plant: the [arm] itself (no [plant] table)", *stated] if sc.closed_forms is None else []
+    out = [f"model.urdf = {str(sc.arm.urdf)!r}   (what every non-oracle controller is given)", *stated]
     out.append(f"plant.urdf = {p.urdf!r}" if p.urdf else "# plant links: the [arm]'s URDF")
     for key in ("viscous", "coulomb", "armature"):
         out.append(f"plant.{key} = {_show(getattr(p, key))}")

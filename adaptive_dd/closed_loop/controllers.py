@@ -501,17 +501,22 @@ on each arm, and which arms it runs on)."""
 
 
 def with_stated_uncertainty(name: str, options: dict, scenario) -> dict:
-    """``adaptive_ct``'s options with its estimator's ``arm_uncertainty`` taken from the scenario's
-    ``[plant.uncertainty]`` (``scenario.plant.uncertainty``) when its own table says neither
-    ``arm_uncertainty`` nor ``mode``: a user who states how far the robot may be from its URDF
-    gets an estimator that learns the arm (``docs/learning_the_arm.md``). Normal draws (clipped
+    """``adaptive_ct``'s options with its estimator's ``arm_uncertainty`` the model's stated
+    uncertainty (:func:`~adaptive_dd.plant.uncertainty.stated_uncertainty`: ``[model] uncertainty``,
+    by default the plant's draw levels) when its own table says neither
+    ``arm_uncertainty`` nor ``mode``: an estimator told how far its model may be from the robot
+    learns the arm, whatever the plant is (``docs/learning_the_arm.md``). Normal levels (clipped
     at 3) are given the uniform levels of the same variance (``level * sqrt(3)``). Other
-    controllers' options, and scenarios that state no uncertainty, are returned as they are, but for
-    ``sliding_mode``'s, given the levels as its ``uncertainty`` (the bound of its model error)."""
-    unc = getattr(getattr(scenario, "plant", None), "uncertainty", None)
-    if name == "sliding_mode" and unc is not None and "uncertainty" not in (options or {}):
+    controllers' options, and a model stated exact, are returned as they are, but for
+    ``sliding_mode``'s, given the levels of ``[plant.uncertainty]`` as its ``uncertainty`` (the
+    bound of its model error)."""
+    from adaptive_dd.plant.uncertainty import stated_uncertainty
+
+    drawn = getattr(getattr(scenario, "plant", None), "uncertainty", None)
+    if name == "sliding_mode" and drawn is not None and "uncertainty" not in (options or {}):
         keys = ("mass", "com", "inertia", "viscous", "coulomb", "armature", "distribution")
-        return {**(options or {}), "uncertainty": {k: getattr(unc, k) for k in keys if hasattr(unc, k)}}
+        return {**(options or {}), "uncertainty": {k: getattr(drawn, k) for k in keys if hasattr(drawn, k)}}
+    unc = stated_uncertainty(scenario)
     est = (options or {}).get("estimator", {})
     if name != "adaptive_ct" or unc is None or not isinstance(est, dict):
         return options

@@ -363,6 +363,7 @@ def identify_excitation(
         )
     from adaptive_dd.identification.friction_width import identification_model
     from adaptive_dd.identification.held_directions import stated_levels
+    from adaptive_dd.plant.uncertainty import stated_uncertainty
 
     scale_cfg = _estimator_config(scenario)
     std = io_of(scenario).std
@@ -371,7 +372,7 @@ def identify_excitation(
     sig_plant = true_models(plant_of(exc, idx))[:, 0] @ B.T
     pis, kappa, widths = [], [], []
     rows = {"hat": [], "fit": [], "rstd": [], "std": [], "prior_cov": [], "held": []}
-    levels = stated_levels(getattr(scenario.plant, "uncertainty", None))
+    levels = stated_levels(stated_uncertainty(scenario))
     bar = _bar(progress, len(idx), "run.excite: identifying", "seed")
     for k, i in enumerate(idx):
         rng = np.random.default_rng([int(scenario.seed), int(i), 3])

@@ -151,11 +151,14 @@ def estimator_scale(cfg, arm, prior: Array, q: Array, qd: Array, tau: Array) -> 
 
 
 def _stated_variance(scenario, arm) -> Array:
-    """``diag(B C B^T)`` of the scenario's stated uncertainty (``[plant.uncertainty]``, normal levels
-    given the uniform levels of the same variance; the default levels without one) about ``arm``."""
+    """``diag(B C B^T)`` of the model's stated uncertainty (``[model] uncertainty``, by default the
+    plant's draw levels: :func:`~adaptive_dd.plant.uncertainty.stated_uncertainty`; normal levels
+    given the uniform levels of the same variance; the default levels when stated exact) about
+    ``arm``."""
     from adaptive_dd.identification.arm_prior import ArmUncertainty, prior_covariance
+    from adaptive_dd.plant.uncertainty import stated_uncertainty
 
-    unc = getattr(scenario.plant, "uncertainty", None)
+    unc = stated_uncertainty(scenario)
     keys = ("mass", "com", "inertia", "viscous", "coulomb", "armature")
     if unc is None:
         levels = ArmUncertainty()

@@ -125,6 +125,9 @@ ARRIVING = {
     "plant.uncertainty.armature": "Relative spread of each joint's armature.",
     "plant.uncertainty.distribution": "`uniform` or `normal`.",
     "model.from": "The controllers' model: a URDF whose link inertials replace the `[arm]`'s.",
+    "model.uncertainty": "How far the controllers' model may be from the robot: a table of the keys "
+    "of `[plant.uncertainty]` (a level left out is 0; `{}`: exact); adaptive_ct learns the arm from it. "
+    "Default: the `[plant.uncertainty]` levels, else exact.",
     # issue 29 (identification from real logs) and issue 28 part 2/4 (derived settings)
     "arm.repair_inertia": "`true`: repair chain links whose URDF inertia is not a rigid body's "
     "(each repair is reported).",
