@@ -271,6 +271,13 @@ _TWO_LINK_ONLY = (
     "on an N-joint arm use 'adaptive_ct'"
 )
 
+
+def _slotine_n_joint() -> dict:
+    """slotine_li's settings for the payload-adaptive laws that run on N-joint arms only
+    (composite, craig_hsu_sastry, icl): the same box, no two-link default."""
+    return {k: dataclasses.replace(v, two_link=ABSENT, rule=_NOT_TWO_LINK) for k, v in _SLOTINE.items()}
+
+
 CONTROLLERS: dict[str, Builtin] = {
     "pd": Builtin(
         "nominal model (inertia, to scale the gains)",
@@ -354,7 +361,7 @@ CONTROLLERS: dict[str, Builtin] = {
         "Slotine and Li's composite adaptive control on the payload (Automatica 1989), slotine_li's box",
         None,
         "composite",
-        {k: dataclasses.replace(v, two_link=ABSENT, rule=_NOT_TWO_LINK) for k, v in _SLOTINE.items()},
+        _slotine_n_joint(),
         only=_N_JOINT_ONLY,
     ),
     "craig_hsu_sastry": Builtin(
@@ -363,7 +370,7 @@ CONTROLLERS: dict[str, Builtin] = {
         "and a physically consistent payload",
         None,
         "craig_hsu_sastry",
-        {k: dataclasses.replace(v, two_link=ABSENT, rule=_NOT_TWO_LINK) for k, v in _SLOTINE.items()},
+        _slotine_n_joint(),
         only=_N_JOINT_ONLY,
     ),
     "icl": Builtin(
@@ -371,7 +378,7 @@ CONTROLLERS: dict[str, Builtin] = {
         "integral concurrent learning on the payload (Parikh, Kamalapurkar and Dixon 2019), slotine_li's box",
         None,
         "icl",
-        {k: dataclasses.replace(v, two_link=ABSENT, rule=_NOT_TWO_LINK) for k, v in _SLOTINE.items()},
+        _slotine_n_joint(),
         only=_N_JOINT_ONLY,
     ),
     "natural_adaptive": Builtin(
