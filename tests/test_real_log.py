@@ -182,7 +182,8 @@ def test_vendor_urdf_checks_only_the_chain_and_repairs_on_request():
 def test_newey_west_std_matches_the_spread_under_correlated_residuals():
     """On a regression with AR(1) residuals the sandwich std matches the Monte-Carlo spread of the
     estimates (the white-residual formula is several times too small)."""
-    from adaptive_dd.identification.log_fit import _newey_west, _solve
+    from adaptive_dd.identification.log_covariance import newey_west as _newey_west
+    from adaptive_dd.identification.log_fit import _solve
 
     rng = np.random.default_rng(0)
     N, _r = 3000, 3

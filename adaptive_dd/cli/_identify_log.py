@@ -240,6 +240,7 @@ def identify_log(args: argparse.Namespace, arm, outputs) -> int:
     for note in arm.urdf_notes:
         print(f"note: {note}")
     spec, rec, tau_f = _read(args, arm, args.data)
+    offset = _offset_choice(args, rec)
     model = identification_model(arm, rec.qd)  # the Coulomb law's width from the record's noise
     names = arm.joint_names
     if args.payload_only:
@@ -247,11 +248,12 @@ def identify_log(args: argparse.Namespace, arm, outputs) -> int:
         return _payload_only(args, arm, model, rec, tau_f)
     lim = arm.position_limits
     K = identifiable_subset(model, rec.used, lim[:, 0], lim[:, 1], np.random.default_rng(0))
-    model, profile = _coulomb_width(args, arm, model, rec, K, tau_f, spec.torque_held)
+    model, profile = _coulomb_width(args, arm, model, rec, K, tau_f, spec.torque_held, offset)
     prior_std = _prior_std(args.arm, model) if args.hold_unseen == "on" else None
     free = None if profile is None else profile.profiled
-    fit = _fit_record(model, rec, K, tau_f, spec.torque_held, prior_std, free)
+    fit = _fit_record(model, rec, K, tau_f, spec.torque_held, prior_std, free, offset)
     _print_fit(model, fit, names)
+    _print_offset(args, fit, names)
     _output_error(args, arm, model, rec, fit)
     cf = _consistent(model, fit)
     reg = fit.regression
@@ -269,7 +271,7 @@ def identify_log(args: argparse.Namespace, arm, outputs) -> int:
     written = [outputs.path("estimates.csv"), outputs.path("torque_fit.png")]
     written += _write_model(outputs, arm, model, rec, fit, cf, spec, profile)
     if args.baseline:
-        _payload_pair(args, arm, model, fit, tau_f, K)
+        _payload_pair(args, arm, model, fit, tau_f, K, offset)
     print("wrote " + ", ".join(str(Path(args.out) / Path(p).name) for p in written))
     return 0
 
@@ -304,7 +306,30 @@ def _read(args, arm, files):
     return spec, rec, tau_f
 
 
-def _coulomb_width(args, arm, model, rec, K, tau_f: float, torque_held: bool):
+def _offset_choice(args, rec) -> bool:
+    """``--torque-offset``: auto is on for a record read through a ``[record]`` table (a real sensor's
+    zero), off for the simulator's records (their torques have none)."""
+    if args.torque_offset == "auto":
+        return not rec.simulator_format
+    return args.torque_offset == "on"
+
+
+def _print_offset(args, fit, names) -> None:
+    """The channels' torque offsets fitted (``--torque-offset``), or that none was."""
+    if fit.offset is None:
+        why = "--torque-offset off" if args.torque_offset == "off" else "auto: the simulator's record"
+        print(f"torque offsets: none fitted ({why})")
+        return
+    why = "--torque-offset on" if args.torque_offset == "on" else "auto: a record read through [record]"
+    print(
+        f"torque offset per channel, fitted with the parameters ({why}; added by predict) [N m]: "
+        + ", ".join(
+            f"{names[j]} {fit.offset[j]:.3g} +- {fit.offset_std[j]:.2g}" for j in np.flatnonzero(fit.used)
+        )
+    )
+
+
+def _coulomb_width(args, arm, model, rec, K, tau_f: float, torque_held: bool, offset: bool = False):
     """The identification model with the Coulomb width ``--coulomb-width`` asks for, printed, and the
     :class:`~adaptive_dd.identification.friction_width.WidthProfile` when profiled (else None);
     ``K`` None (``--payload-only``: no least squares to profile) refuses ``profile``."""
@@ -314,6 +339,8 @@ def _coulomb_width(args, arm, model, rec, K, tau_f: float, torque_held: bool):
 
     choice = args.coulomb_width
     head = "Coulomb friction fitted as fc tanh(qd / v)"
+    if choice == "auto":  # profile on a real log (measured to predict better on the TIAGo's)
+        choice = "profile" if not rec.simulator_format and K is not None else "noise"
     if choice == "noise":
         why = (
             "the arm's friction_velocity (its law is tanh)"
@@ -343,6 +370,7 @@ def _coulomb_width(args, arm, model, rec, K, tau_f: float, torque_held: bool):
             channel_weight=rec.weight,
             torque_held=torque_held,
             pieces=rec.pieces or None,
+            offset=offset,
         )
     except DataError as exc:
         raise DataError(f"{rec.source}: {exc}") from None
@@ -444,9 +472,11 @@ def _write_model(outputs, arm, model, rec, fit, cf, spec, profile=None) -> list:
             "scenario": str(spec.source),
             # the Coulomb widths' profile likelihood (identify --coulomb-width profile)
             "coulomb_width_profile": None if profile is None else profile.as_dict(),
+            "torque_offset_std": None if fit.offset_std is None else fit.offset_std.tolist(),
         },
         coulomb_width=np.broadcast_to(model.friction_velocity, (n,)).tolist(),
         identity=arm_identity(arm, model, fit.identified),
+        torque_offset=None if fit.offset is None else fit.offset.tolist(),
     )
     out = [save_identified_model(outputs.path("model.json"), m)]
     return out + ([fitted] if fitted is not None else [])
@@ -504,10 +534,13 @@ def _prior_std(scenario: str, model):
     return base_prior_std(model, stated_levels(unc))
 
 
-def _fit_record(model, rec, K, tau_f: float, torque_held: bool, prior_std=None, width_estimated=None):
+def _fit_record(
+    model, rec, K, tau_f: float, torque_held: bool, prior_std=None, width_estimated=None, offset=False
+):
     """:func:`~adaptive_dd.identification.log_fit.fit_log` on a read record, the directions it cannot
     see held at the URDF's values with ``prior_std`` (None: none held), the Coulomb widths of the
-    joints ``width_estimated`` counted as estimated; its errors name the record."""
+    joints ``width_estimated`` counted as estimated, a torque offset per channel with ``offset``; its
+    errors name the record."""
     from adaptive_dd.identification.log_fit import fit_log
 
     try:
@@ -526,6 +559,7 @@ def _fit_record(model, rec, K, tau_f: float, torque_held: bool, prior_std=None, 
             hold=prior_std is not None,
             width_estimated=width_estimated,
             pieces=rec.pieces or None,
+            offset=offset,
         )
     except DataError as exc:
         raise DataError(f"{rec.source}: {exc}") from None
@@ -536,13 +570,13 @@ def _fit_record(model, rec, K, tau_f: float, torque_held: bool, prior_std=None, 
         ) from None
 
 
-def _payload_pair(args, arm, model, fit, tau_f, K) -> None:
+def _payload_pair(args, arm, model, fit, tau_f, K, offset=False) -> None:
     from adaptive_dd.identification.payload_pair import payload_from_pair
 
     print("unloaded record(s):")
     spec, base, _ = _read(args, arm, args.baseline)
     prior_std = _prior_std(args.arm, model) if args.hold_unseen == "on" else None
-    other = _fit_record(model, base, K, tau_f, spec.torque_held, prior_std)
+    other = _fit_record(model, base, K, tau_f, spec.torque_held, prior_std, offset=offset)
     pr = payload_from_pair(arm, fit.sigma, fit.cov, other.sigma, other.cov, weighting="diagonal")
     loaded = ", ".join(args.data) if args.data else "the scenario's record"
     _print_payload(f"payload (loaded {loaded} - unloaded {', '.join(args.baseline)})", pr)

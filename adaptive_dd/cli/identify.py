@@ -126,12 +126,21 @@ def _add_arm_options(i: argparse.ArgumentParser) -> None:
     i.add_argument(
         "--coulomb-width",
         type=coulomb_width_option,
-        default="noise",
-        metavar="noise|profile|V",
-        help="with --arm: the width v of the Coulomb law fc tanh(qd / v) [rad/s]. noise (default): the "
+        default="auto",
+        metavar="auto|noise|profile|V",
+        help="with --arm: the width v of the Coulomb law fc tanh(qd / v) [rad/s]. auto (default): profile "
+        "for a record read through a [record] table, noise for the simulator's records; noise: the "
         "record's velocity noise (the arm's friction_velocity if its law is tanh); profile: per fitted "
         "joint, the width of the record's profile likelihood over a grid (printed with its 95 %% interval; "
         "docs/real_log.md); V > 0: that width for every joint",
+    )
+    i.add_argument(
+        "--torque-offset",
+        choices=("auto", "on", "off"),
+        default="auto",
+        help="with --arm: fit a constant offset per torque channel with the parameters (a sensor's zero; "
+        "stored in model.json, added by predict). auto (default): on for a record read through a [record] "
+        "table, off for the simulator's records",
     )
     i.add_argument(
         "--output-error",
@@ -142,15 +151,17 @@ def _add_arm_options(i: argparse.ArgumentParser) -> None:
 
 
 def coulomb_width_option(text: str):
-    """``--coulomb-width``: ``"noise"``, ``"profile"`` or a width in (0, 10] rad/s (a float)."""
-    if text in ("noise", "profile"):
+    """``--coulomb-width``: ``"auto"``, ``"noise"``, ``"profile"`` or a width in (0, 10] rad/s (a float)."""
+    if text in ("auto", "noise", "profile"):
         return text
     try:
         v = float(text)
     except ValueError:
         v = float("nan")
     if not (0.0 < v <= 10.0):  # NaN and inf fail too
-        raise argparse.ArgumentTypeError(f"{text!r} is not 'noise', 'profile' or a width in (0, 10] rad/s")
+        raise argparse.ArgumentTypeError(
+            f"{text!r} is not 'auto', 'noise', 'profile' or a width in (0, 10] rad/s"
+        )
     return v
 
 
@@ -175,6 +186,7 @@ ARM_OPTIONS = (
     "--max-iter",
     "--hold-unseen",
     "--coulomb-width",
+    "--torque-offset",
 )
 """Options of the identification of any arm from a log (:mod:`adaptive_dd.cli._identify_log`),
 refused on the paper's arm."""

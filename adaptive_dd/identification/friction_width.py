@@ -161,6 +161,7 @@ def profile_coulomb_width(
     grid: Array = PROFILE_GRID,
     sweeps: int = 3,
     pieces=None,
+    offset: bool = False,
 ) -> WidthProfile:
     """Each joint's width of the Coulomb law ``fc_j tanh(qd_j / v_j)`` that explains the record best.
 
@@ -175,7 +176,8 @@ def profile_coulomb_width(
     (``N_eff``); it is approximate: the residual of a real log is model error, not noise.
 
     Only joints whose Coulomb parameter is identified and fitted on a kept channel are profiled.
-    ``pieces``: the record's continuous pieces, as :func:`~adaptive_dd.identification.log_fit.fit_log`'s.
+    ``pieces``: the record's continuous pieces, ``offset``: a torque offset per channel fitted too, as
+    :func:`~adaptive_dd.identification.log_fit.fit_log`'s.
     """
     from adaptive_dd.identification.log_fit import _identified_regression, _reweighted_fit
     from adaptive_dd.identification.regression import filtered_regression
@@ -188,6 +190,8 @@ def profile_coulomb_width(
         model, q, qd, tau, tau_f=tau_f, sample_period=sample_period, torque_held=torque_held, pieces=pieces
     )
     phi, y = _identified_regression(model, reg, used, K, weak_ok=True)
+    if offset:  # the offsets profiled out, as fit_log does: each channel's rows about their mean
+        phi, y = phi - phi.mean(axis=0), y - y.mean(axis=0)
     cw = np.ones(n) if channel_weight is None else np.asarray(channel_weight, dtype=float)
     _, res, w, _ = _reweighted_fit(phi, y, cw[used])
     n_eff = y.shape[0] / _long_run_factor((res * w).sum(axis=1))
@@ -204,6 +208,8 @@ def profile_coulomb_width(
         j: coulomb_columns(qd[:, j : j + 1] / grid, 1.0, tau_f, sample_period, reg.start, reg.pieces)
         for j in joints
     }
+    if offset:
+        cols = {j: c - c.mean(axis=0) for j, c in cols.items()}
     at = {}
     for j, (r, c) in joints.items():  # start from the grid's nearest to the model's width
         at[j] = int(np.argmin(np.abs(np.log(grid / width[j]))))
@@ -249,7 +255,8 @@ def _profile(phi: Array, y: Array, w: Array, r: int, c: int, columns: Array) -> 
 
 def _long_run_factor(u: Array) -> float:
     """``1 + 2 sum (1 - m/(L+1)) rho_m``: how many samples one independent one is worth in ``u``
-    (Bartlett weights, lag ``L`` as :func:`~adaptive_dd.identification.log_fit._newey_west`'s), at least 1."""
+    (Bartlett weights, lag ``L`` as :func:`~adaptive_dd.identification.log_covariance.newey_west`'s),
+    at least 1."""
     u = u - u.mean()
     N = u.size
     f = np.fft.rfft(u, 2 * N)

@@ -85,6 +85,9 @@ class IdentifiedModel:
         written before it: ``friction_velocity`` for every joint). :meth:`predict` uses them.
     identity : dict or None
         :func:`arm_identity` of the arm identified on (None in files written before it).
+    torque_offset : list of float or None
+        Per joint, the constant torque offset of each channel fitted with the parameters
+        (``identify --torque-offset``) [N m]; :meth:`predict` adds it. None: none fitted.
 
     Examples
     --------
@@ -149,6 +152,7 @@ class IdentifiedModel:
     record: dict
     coulomb_width: list | None = None
     identity: dict | None = None
+    torque_offset: list | None = None
 
     def arm(self, fitted: bool = False):
         """The :class:`~adaptive_dd.plant.arm.Arm` (``fitted``: from ``model.urdf``)."""
@@ -169,10 +173,14 @@ class IdentifiedModel:
         )
 
     def predict(self, q, qd, qdd, model=None) -> Array:
-        """Joint torques ``(N, n)`` [N m] of the identified base parameters."""
+        """Joint torques ``(N, n)`` [N m] of the identified base parameters (and the channels' torque
+        offsets, when fitted: what the record's torque channels read)."""
         from adaptive_dd.identification.log_fit import predict_torque
 
-        return predict_torque(model or self.arm_model(), np.asarray(self.sigma), q, qd, qdd)
+        tau = predict_torque(model or self.arm_model(), np.asarray(self.sigma), q, qd, qdd)
+        if self.torque_offset is not None:
+            tau = tau + np.asarray(self.torque_offset, dtype=float)
+        return tau
 
     def arm_model(self, arm=None):
         """The :class:`~adaptive_dd.identification.model.Model` of :meth:`arm` (or of ``arm``, the
@@ -361,7 +369,7 @@ def load_identified_model(path, need_urdf: bool = True) -> IdentifiedModel:
     if not isinstance(data, dict) or data.get("format") != FORMAT:
         raise DataError(f"{path}: key 'format' is not {FORMAT!r}: not a model written by identify --out")
     fields = IdentifiedModel.__dataclass_fields__
-    optional = ("coulomb_width", "identity")  # absent from files written before them
+    optional = ("coulomb_width", "identity", "torque_offset")  # absent from files written before them
     missing = [k for k in fields if k not in data and k not in optional]
     if missing:
         raise DataError(f"{path}: missing key(s) {missing}")
@@ -383,6 +391,11 @@ def load_identified_model(path, need_urdf: bool = True) -> IdentifiedModel:
         len(width) != n or not all(isinstance(v, (int, float)) and 0 < v < float("inf") for v in width)
     ):
         raise DataError(f"{path}: key 'coulomb_width' must be {n} widths > 0 [rad/s], got {width!r}")
+    offset = kw.get("torque_offset")
+    if offset is not None and (
+        len(offset) != n or not all(isinstance(v, (int, float)) and np.isfinite(v) for v in offset)
+    ):
+        raise DataError(f"{path}: key 'torque_offset' must be {n} finite offsets [N m], got {offset!r}")
     for k in ("used", "residual_rms", "noise_rms", "viscous", "coulomb", "armature"):
         if len(kw[k]) != n:
             raise DataError(f"{path}: key '{k}' has {len(kw[k])} entries, 'joint_names' {n}")

@@ -19,40 +19,20 @@ Weights (the stated rule)
     channels (so a channel the model fits suspiciously well, a near-constant one, cannot take
     all the weight); three passes.
 
-Standard deviations
-    On real data the residual is model error more than sensor noise: correlated over time
-    and far larger than the sensors' noise. The covariance is the sandwich
-    ``A^-1 S A^-1`` with ``A = sum_k Phi_k^T W Phi_k`` and ``S`` the Newey-West (Bartlett)
-    estimate of the long-run covariance of the scores ``g_k = Phi_k^T W r_k``, lag ``L`` the
-    residual's correlation time (the first lag at which the autocorrelation of the weighted
-    residual, pooled over channels, falls below 0.05, times 3), the autocovariances summed
-    within each continuous piece of the record (between a log's gaps, several records). Scaled
-    by the Bartlett weights' shrinkage undone (:func:`_kernel_bias`, from the residual's
-    autocorrelation over the lags where it is well estimated) and by the degrees-of-freedom
-    factor ``n_eff / (n_eff - k)``: the fit removes ``k`` directions from the residual, which
-    shrinks the scores' variance as ordinary least squares' ``N / (N - k)`` says for white
-    residuals (MacKinnon and White, J. Econometrics 29, 1985: HC1), the samples counted here as
-    independent ones, ``n_eff`` = rows over the residual's long-run factor
-    (:func:`long_run_factor`, the Bartlett weights and lag of the covariance), at most 2
-    (:data:`MAX_DOF_FACTOR`). Without it the truth
-    fell within +- 1.96 std in 89 % of simulated cases (benchmarks/log_bounds_coverage.py).
-    These make the variance's estimate right on average (the std is the spread the estimate
-    would have over records like this one).
+Torque offsets
+    A real torque channel reads ``tau + b_j`` with ``b_j`` a constant (a strain gauge's zero, a
+    current loop's bias, a conversion's offset). With ``offset`` each kept channel's ``b_j`` is
+    fitted too: ``G0`` passes a constant unchanged, so it is a column of ones in that channel's
+    rows, profiled out by fitting each channel's rows about their mean (exact for the per-channel
+    weights; the sandwich is that of the fit with the offset columns, so the std of the
+    parameters that trade with an offset, a gravity term that hardly changes over the record,
+    carry it). ``identify --torque-offset`` (default: on for a record read through a ``[record]``
+    table, off for the simulator's records, whose torques have none).
 
-Bounds
-    The std is itself an estimate, from a record worth a few hundred independent samples, so
-    ``t = (estimate - truth) / std`` has wider tails than a normal variable, as Student's
-    ``t`` has. The 95 % bound is ``estimate +- c std`` with ``c`` (:attr:`LogFit.quantile`)
-    the fixed-b quantile of the Newey-West ``t`` (Kiefer and Vogelsang, "A new asymptotic
-    theory for heteroskedasticity-autocorrelation robust tests", Econometric Theory 21, 2005):
-    with the Bartlett bandwidth a fraction ``b = (lag + 1) / N`` of the ``N`` rows fitted,
-    ``c(b) = 1.96 + 2.9694 b + 0.4160 b^2 - 0.5324 b^3`` (their cubic for the Bartlett kernel,
-    :func:`fixed_b_quantile`). Over the pieces of a log the Bartlett estimate's variance is that
-    of one record of all their rows (each piece adds its own, in proportion to its length),
-    hence ``N`` the rows of all pieces. On simulated records (benchmarks/log_bounds_coverage.py,
-    200 seeds) the truth fell within the bound in 94.8 % (gaps) and 94.5 % (two records) of
-    cases, 93.9 and 93.7 % with 1.96 in place of ``c``. The std is checked on the TIAGo record
-    against the spread of estimates over disjoint windows (benchmarks/real_log.py).
+Standard deviations and bounds
+    The Newey-West sandwich within each continuous piece, scaled for the Bartlett weights' shrinkage
+    and the degrees of freedom, and the fixed-b quantile ``c`` of the 95 % bound
+    ``estimate +- c std``: :mod:`adaptive_dd.identification.log_covariance`.
 
 Noise levels
     Each channel's sensor noise is estimated from the logged torque's second difference
@@ -71,6 +51,16 @@ from numpy.typing import NDArray
 from adaptive_dd.errors import DataError
 from adaptive_dd.identification.filters import design_filter_bank, filter_record
 from adaptive_dd.identification.held_directions import Held, base_prior_std, hold_unseen
+from adaptive_dd.identification.log_covariance import (  # noqa: F401  (re-exported: tests import them here)
+    MAX_DOF_FACTOR,
+    NORMAL_975,
+    _bartlett_sum,
+    _dof_factor,
+    _kernel_bias,
+    fixed_b_quantile,
+    long_run_factor,
+    newey_west,
+)
 from adaptive_dd.identification.model import Model, base_regressor
 from adaptive_dd.identification.regression import (
     Regression,
@@ -94,12 +84,6 @@ COULOMB_STD_COLUMN = 11
 """The Coulomb columns of the standard regressor start at ``11 n`` (links ``10 n``, viscous ``n``)."""
 WEIGHT_FLOOR = 0.1
 """``s_j`` is at least this fraction of the median residual rms of the kept channels."""
-MAX_DOF_FACTOR = 2.0
-"""The degrees-of-freedom factor's cap, reached at ``k = n_eff / 2``: beyond it a record holds too few
-independent samples for its parameters for a first-order correction (the TIAGo's 20 s windows:
-``n_eff`` 64-91 for 53 parameters)."""
-NORMAL_975 = 1.959963984540054
-"""The standard normal's 97.5 % quantile: estimate +- this many std is the 95 % interval."""
 MODEL_ERROR_RATIO = 10.0
 """A filtered residual this many times the filtered sensor noise is reported as model error."""
 
@@ -138,6 +122,11 @@ class LogFit:
     tau_f, sample_period : float
     regression : Regression
     used : ndarray of bool (n,)
+    offset : ndarray (n,) or None
+        Each channel's constant torque offset [N m] (the sensor's zero, fitted with ``offset``: 0 on
+        the channels left out), None when not fitted; a prediction adds it.
+    offset_std : ndarray (n,) or None
+        Its standard deviation, from the same sandwich as ``cov`` [N m].
     held : Held or None
         The directions the record cannot see, held at the URDF's values
         (:func:`~adaptive_dd.identification.held_directions.hold_unseen`); None when not asked.
@@ -170,6 +159,8 @@ class LogFit:
     dof_factor: float = 1.0
     kernel_factor: float = 1.0
     quantile: float = NORMAL_975
+    offset: Array | None = None
+    offset_std: Array | None = None
 
     def model_error_channels(self) -> list[tuple[int, float]]:
         """``(joint, residual / noise)`` of the kept channels above :data:`MODEL_ERROR_RATIO`."""
@@ -192,24 +183,6 @@ def filter_time_constant(sample_period: float) -> float:
     samples) predicted the held-out torque slightly worse (benchmarks/real_log.py).
     """
     return max(0.02, 2.0 * float(sample_period))
-
-
-def fixed_b_quantile(b: float) -> float:
-    """The 97.5 % quantile of ``|t|``, ``t`` an estimate studentised by its Bartlett (Newey-West)
-    standard deviation of bandwidth a fraction ``b`` of the sample, under fixed-b asymptotics.
-
-    Kiefer and Vogelsang (Econometric Theory 21, 2005), the cubic fitted to their simulated
-    critical values for the Bartlett kernel: ``1.96 + 2.9694 b + 0.4160 b^2 - 0.5324 b^3``, for
-    ``0 <= b <= 1`` (1.96 at ``b = 0``, the normal's; 2.26 at ``b = 0.1``).
-
-    Raises
-    ------
-    ValueError
-        ``b`` outside [0, 1].
-    """
-    if not 0.0 <= b <= 1.0:
-        raise ValueError(f"fixed_b_quantile: b = {b} is the bandwidth's fraction of the sample, in [0, 1]")
-    return NORMAL_975 + b * (2.9694 + b * (0.4160 - 0.5324 * b))
 
 
 def identifiable_subset(
@@ -248,99 +221,6 @@ def _solve(phi: Array, y: Array, w: Array) -> tuple[Array, Array]:
     return sol / scale, scale
 
 
-def long_run_factor(u: Array, lag: int, bounds=None) -> float:
-    """``1 + 2 sum_m (1 - m / (lag + 1)) rho_m``, ``rho`` the autocorrelation of ``u (N,)`` pooled over
-    its pieces ``bounds`` (default one): how many samples one independent sample is worth, at least 1."""
-    bounds = [(0, u.size)] if bounds is None else list(bounds)
-    ac = np.zeros(lag + 1)
-    for a, b in bounds:
-        seg = u[a:b] - u[a:b].mean()
-        f = np.fft.rfft(seg, 2 * (b - a))
-        c = np.fft.irfft(f * np.conj(f))[: min(b - a, lag + 1)]
-        ac[: c.size] += c
-    ac = ac / max(ac[0], 1e-300)
-    m = np.arange(1, lag + 1)
-    return float(max(1.0, 1.0 + 2.0 * np.sum((1.0 - m / (lag + 1)) * ac[1:])))
-
-
-def _kernel_bias(u: Array, lag: int, bounds) -> float:
-    """The Bartlett weights' shrinkage of the long-run variance of ``u (N,)``, undone:
-    ``1 + 2 sum_{m <= m0} (m / (lag + 1)) rho_m / F``, ``F`` the Bartlett long-run factor
-    (:func:`long_run_factor`) and ``rho`` the autocorrelation pooled over the pieces ``bounds``, over
-    the lags before it falls below 0.05 (``m0 = lag / 3``, :func:`_newey_west`'s rule), where it is
-    well estimated (beyond, the estimated autocorrelation of a fit's residual is biased low and
-    noisy). The weights ``1 - m / (lag + 1)`` discount autocovariances the residual does have: on an
-    AR(1) of coefficient ``a`` by about ``2 a / ((1 - a^2)(lag + 1))`` of the variance."""
-    m0 = max(1, lag // 3)
-    ac = np.zeros(m0 + 1)
-    for a, b in bounds:
-        seg = u[a:b] - u[a:b].mean()
-        f = np.fft.rfft(seg, 2 * (b - a))
-        c = np.fft.irfft(f * np.conj(f))[: min(b - a, m0 + 1)]
-        ac[: c.size] += c
-    ac = ac / max(ac[0], 1e-300)
-    m = np.arange(1, m0 + 1)
-    return float(max(1.0, 1.0 + 2.0 * np.sum(m / (lag + 1) * ac[1:]) / long_run_factor(u, lag, bounds)))
-
-
-def _dof_factor(res: Array, w: Array, lag: int, bounds, k: int) -> tuple[float, float]:
-    """``(n_eff, n_eff / (n_eff - min(k, n_eff / 2)))``: the residual's independent samples and the
-    variance's degrees-of-freedom factor (module docstring), at most 2: the factor is a first-order
-    correction in ``k / n_eff`` (:data:`MAX_DOF_FACTOR`)."""
-    u = (res * w).sum(axis=1)
-    n_eff = u.size / long_run_factor(u, lag, bounds)
-    return n_eff, n_eff / (n_eff - min(k, n_eff * (1.0 - 1.0 / MAX_DOF_FACTOR)))
-
-
-def _bartlett_sum(g: Array, lag: int, bounds) -> Array:
-    """``sum_k sum_{|m| <= lag} (1 - |m| / (lag + 1)) g_{k+m} g_k^T`` within each piece ``(r0, r1)``.
-
-    Computed as ``h^T g`` with ``h`` each column of ``g (N, r)`` convolved with the Bartlett
-    window inside its piece (zero beyond the piece's ends): ``O(N r log N + N r^2)`` where the sum
-    over lags is ``O(lag N r^2)``; the same numbers (a test holds them to the lag-by-lag sum)."""
-    import scipy.signal
-
-    kernel = 1.0 - np.abs(np.arange(-lag, lag + 1)) / (lag + 1)
-    h = np.zeros_like(g)
-    for a, b in bounds:
-        h[a:b] = scipy.signal.oaconvolve(g[a:b], kernel[:, None], mode="same", axes=0)
-    return h.T @ g
-
-
-def _newey_west(phi: Array, res: Array, w: Array, scale: Array, bounds=None) -> tuple[Array, int]:
-    """Sandwich covariance ``(r, r)`` of the weighted fit and the lag used (module docstring).
-
-    ``bounds``: the rows ``[(r0, r1), ...]`` of each continuous piece (a log's pieces between its
-    gaps, or several records): the scores' autocovariances are summed within each piece only (the
-    pieces are taken as independent of each other), the lag from their autocorrelation pooled
-    over the pieces; default one piece."""
-    N, _, _r = phi.shape
-    bounds = [(0, N)] if bounds is None else list(bounds)
-    P = phi / scale
-    g = np.einsum("kjr,kj->kr", P, (w**2) * res)  # scores (N, r)
-    A = np.einsum("kjr,kjs,j->rs", P, P, w**2)
-    u = (res * w).sum(axis=1)
-    longest = max(b - a for a, b in bounds)
-    ac = np.zeros(longest)
-    for a, b in bounds:
-        seg = u[a:b] - u[a:b].mean()
-        f = np.fft.rfft(seg, 2 * (b - a))
-        ac[: b - a] += np.fft.irfft(f * np.conj(f))[: b - a]
-    ac = ac / max(ac[0], 1e-300)
-    below = np.flatnonzero(ac < 0.05)
-    lag = int(min(3 * (below[0] if below.size else longest), longest // 4))
-    S = _bartlett_sum(g, lag, bounds)
-    # A^-1 S A^-1 in A's eigenbasis, symmetric by construction: on a record that barely sees a
-    # direction (the Gen3's rounded angles: A's condition number 1e10) the product of a
-    # pseudo-inverse left it asymmetric by 1e-4 and with a negative eigenvalue along that direction
-    d, U = np.linalg.eigh(0.5 * (A + A.T))
-    d_inv = 1.0 / np.maximum(d, d.max() * 1e-15)  # an unseen direction: a huge variance, not none
-    M = U.T @ (0.5 * (S + S.T)) @ U
-    cov = U @ (d_inv[:, None] * M * d_inv[None, :]) @ U.T
-    cov = 0.5 * (cov + cov.T)
-    return cov / np.outer(scale, scale), lag
-
-
 def _noise_rms(tau: Array, tau_f: float, T: float, pieces=None) -> Array:
     """Each channel's white-noise std from its second difference (within each piece), after ``G0`` [N m]."""
     pieces = ((0, tau.shape[0]),) if pieces is None else pieces
@@ -370,6 +250,7 @@ def fit_log(
     hold: bool = True,
     width_estimated=None,
     pieces=None,
+    offset: bool = False,
 ) -> LogFit:
     """Weighted least squares of one log (module docstring).
 
@@ -406,6 +287,9 @@ def fit_log(
         end, :attr:`adaptive_dd.record.LogRecord.pieces`): each filtered on its own, its filters'
         settling cut, the pieces fitted together, the covariance's autocovariances within each
         piece only; default one piece.
+    offset : bool
+        Fit a constant torque offset per kept channel too (a torque sensor's or a current loop's
+        zero: module docstring), :attr:`LogFit.offset`.
 
 
     Returns
@@ -450,29 +334,43 @@ def fit_log(
     bounds = reg.row_bounds()
     phi, y = _identified_regression(model, reg, used, K, weak_ok=hold)
     cw = np.ones(model.n) if channel_weight is None else np.asarray(channel_weight, dtype=float)
-    x, res, w, scale = _reweighted_fit(phi, y, cw[used])
+    ones = _offset_columns(y.shape[0], int(used.sum())) if offset else None
+    if offset:  # the offsets profiled out (Frisch-Waugh): each channel's rows about their mean
+        phi_fit, y_fit = phi - phi.mean(axis=0), y - y.mean(axis=0)
+    else:
+        phi_fit, y_fit = phi, y
+    x, res, w, scale = _reweighted_fit(phi_fit, y_fit, cw[used])
+    extra = [] if ones is None else [ones]
     if width_estimated is not None and np.any(width_estimated):
-        extra = _width_columns(
-            model, qd, reg, sample_period, used, K, x, np.asarray(width_estimated, dtype=bool)
+        extra.append(
+            _width_columns(model, qd, reg, sample_period, used, K, x, np.asarray(width_estimated, dtype=bool))
         )
-        aug = np.concatenate([phi, extra], axis=2)
+    r = phi.shape[2]
+    if extra:  # the sandwich of the fit with the offsets and widths free too; sigma's block
+        aug = np.concatenate([phi, *extra], axis=2)
         scale_aug = np.linalg.norm((aug * w[None, :, None]).reshape(-1, aug.shape[2]), axis=0)
         scale_aug = np.where(scale_aug > 0, scale_aug, 1.0)
-        cov_aug, lag = _newey_west(aug, res, w, scale_aug, bounds)
-        cov_k = cov_aug[: phi.shape[2], : phi.shape[2]]
+        cov_aug, lag = newey_west(aug, res, w, scale_aug, bounds)
         k = aug.shape[2]
     else:
-        cov_k, lag = _newey_west(phi, res, w, scale, bounds)
-        k = phi.shape[2]
+        cov_aug, lag = newey_west(phi, res, w, scale, bounds)
+        k = r
     kernel = _kernel_bias((res * w).sum(axis=1), lag, bounds)
     n_eff, dof = _dof_factor(res, w, lag, bounds, k)
-    cov_k = kernel * dof * cov_k
+    cov_aug = kernel * dof * cov_aug
+    cov_k = cov_aug[:r, :r]
     sigma, cov, residual, weights = _in_full(model, K, used, x, cov_k, res, w)
     held = None
     if hold:
         s0 = base_prior_std(model) if prior_std is None else np.asarray(prior_std, dtype=float)
         sigma, cov, held = hold_unseen(sigma, cov, model.sigma_ref, s0, K)
-        residual[used] = np.sqrt(np.mean((y - phi @ sigma[K]) ** 2, axis=0))
+        residual[used] = np.sqrt(np.mean((y_fit - phi_fit @ sigma[K]) ** 2, axis=0))
+    b = b_std = None
+    if offset:  # each channel's mean residual of the final estimate, held directions included
+        b, b_std = np.zeros(model.n), np.zeros(model.n)
+        b[used] = np.mean(y - phi @ sigma[K], axis=0)
+        m = int(used.sum())
+        b_std[used] = np.sqrt(np.abs(np.diag(cov_aug[r : r + m, r : r + m])))
     return LogFit(
         sigma=sigma,
         identified=K,
@@ -491,7 +389,15 @@ def fit_log(
         regression=reg,
         used=used,
         held=held,
+        offset=b,
+        offset_std=b_std,
     )
+
+
+def _offset_columns(rows: int, m: int) -> Array:
+    """``(rows, m, m)``: the regression's columns of a constant offset in each of ``m`` channels (the
+    filter ``G0`` passes a constant unchanged)."""
+    return np.broadcast_to(np.eye(m), (rows, m, m)).copy()
 
 
 def _identified_regression(

@@ -37,7 +37,7 @@ def model_error_variance(model, fit, q: Array, qd: Array, tau: Array, torque_hel
     K, used = fit.identified, fit.used
     ones = np.ones(int(used.sum()))
     weak_ok = fit.held is not None
-    phi, y = _identified_regression(model, fit.regression, used, K, weak_ok)
+    phi, y = _centred(fit, *_identified_regression(model, fit.regression, used, K, weak_ok))
     alts = [_solve(phi, y, ones)[0]]
     for f in FILTER_FACTORS:
         reg = filtered_regression(
@@ -50,7 +50,7 @@ def model_error_variance(model, fit, q: Array, qd: Array, tau: Array, torque_hel
             torque_held=torque_held,
             pieces=fit.regression.pieces,
         )
-        phi, y = _identified_regression(model, reg, used, K, weak_ok)
+        phi, y = _centred(fit, *_identified_regression(model, reg, used, K, weak_ok))
         alts.append(_reweighted_fit(phi, y, ones)[0])
     var = np.zeros(model.p)
     for a in alts:
@@ -60,3 +60,10 @@ def model_error_variance(model, fit, q: Array, qd: Array, tau: Array, torque_hel
             full = fit.held.apply(full, model.sigma_ref)
         var[K] += (full[K] - fit.sigma[K]) ** 2
     return var
+
+
+def _centred(fit, phi: Array, y: Array) -> tuple[Array, Array]:
+    """``phi, y`` about each channel's mean when the fit has torque offsets (as it was fitted)."""
+    if fit.offset is None:
+        return phi, y
+    return phi - phi.mean(axis=0), y - y.mean(axis=0)
