@@ -3,7 +3,7 @@
 Run from the repository root::
 
     python benchmarks/real_log.py            # the shipped record, examples/tiago/tiago.toml
-    python benchmarks/real_log.py --coulomb-width profile   # identify's --coulomb-width profile
+    python benchmarks/real_log.py --coulomb-width noise --torque-offset off   # the other choices
     python benchmarks/real_log.py --drop 28.0 10   # 10 rows dropped at 28 s, as a logger drops packets
 
 1. Trained on 9.21-48 s, predicting 48-67.9 s (arm_1 ... arm_4, the channels that carry
@@ -69,9 +69,11 @@ def plain_least_squares(arm, q, qd, qdd, tau, used):
     return lambda q, qd, qdd: regressor(q, qd, qdd) @ theta
 
 
-def with_width(model, rec, K, choice, torque_held: bool):
+def with_width(model, rec, K, choice, torque_held: bool, offset: bool = False):
     """``model`` with the Coulomb width ``identify --coulomb-width choice`` gives on ``rec``, and the
     joints whose width was estimated (None: none)."""
+    if choice == "auto":
+        choice = "noise" if rec.simulator_format else "profile"
     if choice == "noise":
         return model, None
     if choice != "profile":
@@ -88,6 +90,7 @@ def with_width(model, rec, K, choice, torque_held: bool):
         sample_period=T,
         torque_held=torque_held,
         pieces=rec.pieces or None,
+        offset=offset,
     )
     return dataclasses.replace(model, friction_velocity=pr.width), pr.profiled
 
@@ -162,8 +165,15 @@ def main() -> None:
     ap.add_argument(
         "--coulomb-width",
         type=coulomb_width_option,
-        default="noise",
-        help="as identify's: noise (default), profile or a width [rad/s], for the fit and each window",
+        default="auto",
+        help="as identify's: auto (default: profile on a [record] log), noise, profile or a width [rad/s], "
+        "for the fit and each window",
+    )
+    ap.add_argument(
+        "--torque-offset",
+        choices=("auto", "on", "off"),
+        default="auto",
+        help="as identify's: a torque offset per channel (auto, the default: on for a [record] log)",
     )
     ap.add_argument(
         "--torque-sampled", action="store_true", help="torque_held = false: the efforts as samples, not held"
@@ -186,7 +196,8 @@ def main() -> None:
     T = tr.sample_period
     held = not args.torque_sampled
     rule = model  # the URDF alone: its Coulomb law as identify's default
-    model, free = with_width(model, tr, K, args.coulomb_width, held)
+    offset = not tr.simulator_format if args.torque_offset == "auto" else args.torque_offset == "on"
+    model, free = with_width(model, tr, K, args.coulomb_width, held, offset)
     print(
         f"Coulomb width (--coulomb-width {args.coulomb_width}) [rad/s]: "
         + " / ".join(f"{v:.3g}" for v in np.broadcast_to(model.friction_velocity, (model.n,))[used])
@@ -203,6 +214,7 @@ def main() -> None:
         torque_held=held,
         width_estimated=free,
         pieces=tr.pieces or None,
+        offset=offset,
     )
     qd_te, qdd_te = (
         piecewise(te, lambda a, b, k=k: derivatives(te.q[a:b], te.sample_period)[k]) for k in (0, 1)
@@ -210,7 +222,8 @@ def main() -> None:
     qd_tr, qdd_tr = (piecewise(tr, lambda a, b, k=k: derivatives(tr.q[a:b], T)[k]) for k in (0, 1))
     plain = plain_least_squares(arm, tr.q, qd_tr, qdd_tr, tr.tau, used)
     preds = {
-        "adaptive_dd WLS (identify)": predict_torque(model, fit.sigma, te.q, qd_te, qdd_te),
+        "adaptive_dd WLS (identify)": predict_torque(model, fit.sigma, te.q, qd_te, qdd_te)
+        + (0.0 if fit.offset is None else fit.offset),
         "plain LS (Pinocchio + fv, fc sign, Ia)": plain(te.q, qd_te, qdd_te),
         "URDF alone": predict_torque(rule, rule.sigma_ref, te.q, qd_te, qdd_te),
     }
@@ -241,7 +254,7 @@ def main() -> None:
     est, std, shares, widths = [], [], [], []
     for a, b in itertools.pairwise(edges):
         _, w = read_arm_log(args.scenario, arm, window=(a, b))
-        wm, wfree = with_width(identification_model(arm, w.qd), w, K, args.coulomb_width, held)
+        wm, wfree = with_width(identification_model(arm, w.qd), w, K, args.coulomb_width, held, offset)
         f = fit_log(
             wm,
             w.q,
@@ -254,6 +267,7 @@ def main() -> None:
             torque_held=held,
             width_estimated=wfree,
             pieces=w.pieces or None,
+            offset=offset,
         )
         widths.append(np.broadcast_to(wm.friction_velocity, (wm.n,))[used])
         est.append(f.sigma[K])
@@ -275,7 +289,7 @@ def main() -> None:
         f"{ratio.max():.2f}); within a factor 3: {100 * inside:.0f} %"
     )
     print(honesty(ratio, args.windows))
-    if args.coulomb_width == "profile":
+    if free is not None:
         print(
             "  Coulomb widths per window [rad/s]: "
             + "; ".join(" / ".join(f"{v:.2g}" for v in wd) for wd in widths)
