@@ -53,6 +53,10 @@ T = 0.005
 HOLES = [(900, 912), (1900, 1960), (2900, 2902), (3900, 3917)]
 
 
+OFFSET = {"on": False}
+"""Fit a torque offset per channel too (``--torque-offset``; ``identify``'s default on a [record] log)."""
+
+
 def fit(model, logs, holes=()):
     """``fit_log`` of ``logs`` end to end, each record cut at ``holes`` (sample ranges), as pieces."""
     q, qd, tau, pieces, at = [], [], [], [], 0
@@ -76,6 +80,7 @@ def fit(model, logs, holes=()):
         hold=False,
         torque_held=False,
         pieces=pieces,
+        offset=OFFSET["on"],
     )
 
 
@@ -112,6 +117,12 @@ def main() -> None:
     ap.add_argument("--first", type=int, default=0, help="first seed (to split a long run)")
     ap.add_argument("--pair", action="store_true", help="also a loaded/unloaded pair of the UR5")
     ap.add_argument("--cases", default="gaps,records", help="comma-separated: gaps, records, pair")
+    ap.add_argument(
+        "--torque-offset",
+        choices=("on", "off"),
+        default="on",
+        help="fit a torque offset per channel, as identify does on a [record] log (default on)",
+    )
     ap.add_argument("--save", help="write the per-seed results to this .npz")
     ap.add_argument("--load", nargs="+", help="summarise saved .npz files (merged) instead of running")
     args = ap.parse_args()
@@ -131,6 +142,7 @@ def main() -> None:
                 summary(c, out[f"{c}_z"], out[f"{c}_est"], out[f"{c}_std"], names, out.get(f"{c}_q"))
         return
     t0 = time.perf_counter()
+    OFFSET["on"] = args.torque_offset == "on"
     arm = Arm.from_urdf(robot_urdf("vertical3"))
     model = arm_model(arm)
     names = {

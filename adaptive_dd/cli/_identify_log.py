@@ -35,7 +35,7 @@ def _print_fit(model, fit, names: tuple[str, ...]) -> None:
         "std: Newey-West sandwich on the residual (model error included, correlated over "
         f"{fit.lag} samples = {fit.lag * fit.sample_period:.3g} s{pieces}), its variance times "
         f"{fit.kernel_factor:.3g} for the Bartlett weights' shrinkage and {fit.dof_factor:.3g} for the "
-        f"{int(fit.identified.sum())} parameters fitted to about {fit.n_eff:.0f} independent samples "
+        f"{fit.columns} columns fitted ({_columns(fit)}) to about {fit.n_eff:.0f} independent samples "
         "(n_eff / (n_eff - k))"
     )
     print(
@@ -70,6 +70,16 @@ def _print_fit(model, fit, names: tuple[str, ...]) -> None:
             "after the filter): the model explains this channel far worse than the sensor allows (friction "
             "law, unmodelled dynamics, conversion constants); the std above account for it"
         )
+
+
+def _columns(fit) -> str:
+    """What the fit's ``k`` columns are: parameters, offsets, Coulomb widths."""
+    k = int(fit.identified.sum())
+    m = 0 if fit.offset is None else int(fit.used.sum())
+    parts = [f"{k} parameters"] + [f"{m} torque offsets"] * bool(m)
+    if fit.columns > k + m:
+        parts.append(f"{fit.columns - k - m} Coulomb widths")
+    return ", ".join(parts)
 
 
 def _print_held(model, fit) -> None:

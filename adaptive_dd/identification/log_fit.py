@@ -127,6 +127,9 @@ class LogFit:
         the channels left out), None when not fitted; a prediction adds it.
     offset_std : ndarray (n,) or None
         Its standard deviation, from the same sandwich as ``cov`` [N m].
+    columns : int
+        ``k``, the columns fitted: the identified parameters, the offsets and the Coulomb widths
+        counted as estimated (``dof_factor``'s ``k``).
     held : Held or None
         The directions the record cannot see, held at the URDF's values
         (:func:`~adaptive_dd.identification.held_directions.hold_unseen`); None when not asked.
@@ -161,6 +164,7 @@ class LogFit:
     quantile: float = NORMAL_975
     offset: Array | None = None
     offset_std: Array | None = None
+    columns: int = 0
 
     def model_error_channels(self) -> list[tuple[int, float]]:
         """``(joint, residual / noise)`` of the kept channels above :data:`MODEL_ERROR_RATIO`."""
@@ -391,6 +395,7 @@ def fit_log(
         held=held,
         offset=b,
         offset_std=b_std,
+        columns=int(k),
     )
 
 
