@@ -145,7 +145,7 @@ def test_identify_coulomb_width_option(tmp_path, capsys):
         with pytest.raises(SystemExit):
             main([*base, "--coulomb-width", bad, "--out", str(tmp_path / "x")])
         err = capsys.readouterr().err
-        assert f"'{bad}' is not 'noise', 'profile' or a width in (0, 10] rad/s" in err, err
+        assert f"'{bad}' is not 'auto', 'noise', 'profile' or a width in (0, 10] rad/s" in err, err
     assert main([*base, "--coulomb-width", "0.03", "--out", str(tmp_path / "v")]) == 0
     m = json.loads((tmp_path / "v" / "model.json").read_text())
     assert m["friction_velocity"] == 0.03 and m["coulomb_width"] == [0.03] * 3

@@ -15,9 +15,9 @@ excite`` hand on the same friction).
 
 A real arm's law is neither: :func:`profile_coulomb_width` estimates each joint's width from the
 record itself, the profile likelihood of the identification over a grid of widths, with an
-interval (``adaptive-dd identify --coulomb-width profile``, an option: on the TIAGo log it
-predicts the held-out torque 4 % better but its widths move between disjoint windows,
-``docs/real_log.md``).
+interval (``adaptive-dd identify --coulomb-width profile``, the default on a log read through a
+``[record]`` table: on the TIAGo log it predicts the held-out torque better than the noise's width,
+though its widths move between disjoint windows, ``docs/real_log.md``).
 """
 
 from __future__ import annotations
