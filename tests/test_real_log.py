@@ -306,6 +306,10 @@ def test_cli_identify_and_predict_on_the_tiago_record(tmp_path, capsys):
     m = load_identified_model(out / "model.json")
     assert len(m.sigma) == len(m.names) == 66 and sum(m.identified) == 53
     assert m.used == [False, True, True, True, True, False, False, False]
+    # a [record] log: a torque offset per fitted channel by default, 0 on those left out
+    assert "torque offset per channel, fitted with the parameters (auto" in text
+    assert m.torque_offset is not None and m.torque_offset[0] == 0.0 and m.torque_offset[5:] == [0.0] * 3
+    assert "Coulomb friction fitted as fc tanh(qd / v), v per joint from the record's profile" in text
     extra = np.asarray(m.record["model_error_var"])  # for adaptive_ct's prior ([model] from)
     assert extra.shape == (66,) and np.all(extra >= 0) and np.all(extra[~np.asarray(m.identified)] == 0)
     assert np.any(extra > 0)
