@@ -9,6 +9,8 @@ Run from the repository root::
     python benchmarks/log_bounds_coverage.py --cases pair --first 0 --seeds 100 --save p0.npz
     python benchmarks/log_bounds_coverage.py --cases pair --first 100 --seeds 100 --save p1.npz
     python benchmarks/log_bounds_coverage.py --load gr.npz p0.npz p1.npz
+    # per parameter, against the same seeds run with --torque-offset off (saved as off.npz):
+    python benchmarks/log_bounds_coverage.py --load gr.npz --versus off.npz
 
 Each seed makes records of the arm by inverse dynamics of the identification's own model
 (:func:`adaptive_dd.identification.records.synthetic_log`: a multi-sine, the torque noise 2 % of
@@ -125,21 +127,23 @@ def main() -> None:
     )
     ap.add_argument("--save", help="write the per-seed results to this .npz")
     ap.add_argument("--load", nargs="+", help="summarise saved .npz files (merged) instead of running")
+    ap.add_argument(
+        "--versus",
+        nargs="+",
+        help="with --load: saved .npz files of the same seeds run otherwise (e.g. --torque-offset off); "
+        "prints per parameter the coverage, spread / std and the ratio of the mean std of both",
+    )
     args = ap.parse_args()
     cases = [c for c in args.cases.split(",") if c] + (
         ["pair"] if args.pair and "pair" not in args.cases else []
     )
     if args.load:
-        merged = {}
-        for f in args.load:
-            with np.load(f, allow_pickle=False) as d:
-                for key in d.files:
-                    merged.setdefault(key, []).append(d[key])
-        out = {k: np.concatenate(v) for k, v in merged.items() if not k.endswith("_names")}
+        out, names = _load(args.load)
         for c in ("gaps", "records", "pair"):
             if f"{c}_z" in out:
-                names = [str(x) for x in merged[f"{c}_names"][0]] if f"{c}_names" in merged else None
-                summary(c, out[f"{c}_z"], out[f"{c}_est"], out[f"{c}_std"], names, out.get(f"{c}_q"))
+                summary(c, out[f"{c}_z"], out[f"{c}_est"], out[f"{c}_std"], names.get(c), out.get(f"{c}_q"))
+        if args.versus:
+            _versus(out, _load(args.versus)[0], names)
         return
     t0 = time.perf_counter()
     OFFSET["on"] = args.torque_offset == "on"
@@ -189,6 +193,40 @@ def main() -> None:
         z, est, std, q = out[c]
         summary(c, z, est, std, names[c], q)
     print(f"({args.seeds} seeds from {args.first}, {time.perf_counter() - t0:.0f} s)")
+
+
+def _load(files):
+    """The saved runs ``files`` merged: ``({key: array}, {case: parameter names})``."""
+    merged = {}
+    for f in files:
+        with np.load(f, allow_pickle=False) as d:
+            for key in d.files:
+                merged.setdefault(key, []).append(d[key])
+    out = {k: np.concatenate(v) for k, v in merged.items() if not k.endswith("_names")}
+    names = {k[: -len("_names")]: [str(x) for x in v[0]] for k, v in merged.items() if k.endswith("_names")}
+    return out, names
+
+
+def _versus(a: dict, b: dict, names: dict) -> None:
+    """Per parameter of each case in both runs: coverage, spread / mean std, and the mean std of ``a``
+    over ``b``'s (the same seeds run otherwise)."""
+
+    def per(d, c):
+        z, q = np.abs(d[f"{c}_z"]), np.asarray(d[f"{c}_q"], dtype=float)
+        est, std = d[f"{c}_est"], d[f"{c}_std"]
+        return (z < q[:, None]).mean(0), np.std(est, axis=0, ddof=1) / std.mean(0), std.mean(0), z.shape[0]
+
+    for c in ("gaps", "records", "pair"):
+        if f"{c}_z" not in a or f"{c}_z" not in b:
+            continue
+        (ca, ra, sa, na), (cb, rb, sb, nb) = per(a, c), per(b, c)
+        print(f"{c}: per parameter, --load ({na} seeds) against --versus ({nb} seeds)")
+        for k in np.argsort(ca):
+            nm = (names.get(c) or [f"#{i}" for i in range(ca.size)])[k]
+            print(
+                f"  {nm[:30]:<30} covered {100 * ca[k]:5.1f} / {100 * cb[k]:5.1f} %, spread / std "
+                f"{ra[k]:.2f} / {rb[k]:.2f}, mean std ratio {sa[k] / sb[k]:.2f}"
+            )
 
 
 _UR5 = {}
