@@ -254,6 +254,11 @@ def identify_log(args: argparse.Namespace, arm, outputs) -> int:
     model = identification_model(arm, rec.qd)  # the Coulomb law's width from the record's noise
     names = arm.joint_names
     if args.payload_only:
+        if args.torque_offset == "on":
+            raise DataError(
+                "--torque-offset on: --payload-only fits by output error, which has no offsets; leave it "
+                "out, or identify a loaded and an unloaded record instead (--baseline)"
+            )
         model, _ = _coulomb_width(args, arm, model, rec, None, tau_f, spec.torque_held)
         return _payload_only(args, arm, model, rec, tau_f)
     lim = arm.position_limits
@@ -319,9 +324,7 @@ def _read(args, arm, files):
 def _offset_choice(args, rec) -> bool:
     """``--torque-offset``: auto is on for a record read through a ``[record]`` table (a real sensor's
     zero), off for the simulator's records (their torques have none)."""
-    if args.torque_offset == "auto":
-        return not rec.simulator_format
-    return args.torque_offset == "on"
+    return not rec.simulator_format if args.torque_offset == "auto" else args.torque_offset == "on"
 
 
 def _print_offset(args, fit, names) -> None:
@@ -331,12 +334,9 @@ def _print_offset(args, fit, names) -> None:
         print(f"torque offsets: none fitted ({why})")
         return
     why = "--torque-offset on" if args.torque_offset == "on" else "auto: a record read through [record]"
-    print(
-        f"torque offset per channel, fitted with the parameters ({why}; added by predict) [N m]: "
-        + ", ".join(
-            f"{names[j]} {fit.offset[j]:.3g} +- {fit.offset_std[j]:.2g}" for j in np.flatnonzero(fit.used)
-        )
-    )
+    each = [f"{names[j]} {fit.offset[j]:.3g} +- {fit.offset_std[j]:.2g}" for j in np.flatnonzero(fit.used)]
+    head = f"torque offset per channel, fitted with the parameters ({why}; added by predict) [N m]"
+    print(f"{head}: {', '.join(each)}")
 
 
 def _coulomb_width(args, arm, model, rec, K, tau_f: float, torque_held: bool, offset: bool = False):
