@@ -727,6 +727,9 @@ def _pack(cfg: OnlineConfig, arm: Arm) -> tuple[EstCfg, Array]:
             hold = cfg.rise_samples if det.hold_time is None else cfg.seconds(det.hold_time)
             ints[K.I_HOLD] = max(hold, 1)
         ints[K.I_RESET_PAYLOAD] = int(cfg.mode == "arm" and cfg.reset_payload)
+        # payload mode: control keeps the starting payload until the first alarm (the kernel's
+        # _keep_start); in mode "arm" the payload block also takes up the arm's error meanwhile
+        ints[K.I_KEEP_START] = int(cfg.mode == "payload")
     xs0 = np.linalg.solve(np.eye(b.order) - b.A, b.B[:, 0])
     Am, Bm, Cm, Dm = summing_realisation(b)
     xm1 = np.linalg.solve(np.eye(b.order) - Am, Bm[:, 1])
@@ -833,7 +836,11 @@ def est_init(
         held=np.zeros((m, n), dtype=np.int64),
         ref_pay=np.zeros((m, 10)),
         ref_rise=np.ones((m, n)),
+        start_pay=np.zeros((m, 10)),
+        start_mass=theta[:, p - 10].copy(),
     )
+    for i in range(m):  # the payload the model control uses at the start
+        K.est_payload_trial(c, state, i, state.start_pay[i])
     return c, state
 
 

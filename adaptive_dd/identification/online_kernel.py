@@ -55,7 +55,8 @@ C_SINCE_ALARM = 5
 C_LAST_ALARM = 6  # sample index of the last alarm (-1: none)
 C_REOPEN_AT = 7  # sample at which the covariance is re-opened again (-1: none)
 C_RESTART = 8  # 1: the momentum channels restart at the next sample (set by an alarm)
-N_CNT = 9
+C_FOLLOWS = 9  # 1: the model control uses follows the estimate (0: it keeps the starting payload)
+N_CNT = 10
 
 BIG = 1 << 40
 SIGNAL_CHANNELS = 4  # per joint: q, qd, tau, sgn(qd) (the signals form)
@@ -163,7 +164,8 @@ I_FAST = 16  # 1: the fast average may also raise an alarm
 I_RESET_PAYLOAD = 17  # mode "arm": an alarm sets the payload block (theta's last ten) to zero
 I_FAST_LEARNED = 18  # samples a row's own level must have learned before its fast average may alarm
 I_HOLD = 19  # samples a risen row is judged against the level it had when it rose (0: no hold)
-N_I = 20
+I_KEEP_START = 20  # 1: control keeps the starting payload until the first alarm (_keep_start)
+N_I = 21
 
 # float slots of EstCfg.floats
 F_LAM0 = 0
@@ -236,6 +238,11 @@ class EstState(NamedTuple):
     ref_rise : (m, n)
         Detector: how much the payload the estimate holds raises row j's noise variance over
         ``ref_pay`` (at least 1; 1 where ``ref`` does not serve), :func:`_ref_rise`.
+    start_pay : (m, 10)
+        The payload the model control uses at the start (kept until the estimate follows:
+        :func:`_keep_start`).
+    start_mass : (m,)
+        The estimate's payload mass at the start [kg].
     """
 
     xf: np.ndarray
@@ -258,6 +265,8 @@ class EstState(NamedTuple):
     held: np.ndarray
     ref_pay: np.ndarray
     ref_rise: np.ndarray
+    start_pay: np.ndarray
+    start_mass: np.ndarray
 
 
 class EstWork(NamedTuple):
@@ -905,6 +914,10 @@ def _alarm(c, s, i, k):  # pragma: no cover - compiled
     raw = np.empty(10)
     _payload_raw(c, s.theta[i], raw)
     _control_payload(c, s, i, raw, s.ref_pay[i], np.empty((10, 10)))
+    if _keeps_start(c, s, i):
+        for a in range(10):
+            s.ref_pay[i, a] = s.start_pay[i, a]
+    cnt[C_FOLLOWS] = 1
     _reopen(c, s.P[i])
     if ints[I_RESET_PAYLOAD] == 1:  # a new payload: nothing known of it but its prior
         p = s.theta.shape[1]
@@ -1039,8 +1052,36 @@ def est_step_trial_in(c, s, i, q, qd, tau, w):  # pragma: no cover - compiled
             _reopen(c, Pi)
         _ref_rise(c, s, i, q, w)
         alarm = _detect_step(c, s, i, s.eps[i], act)
+        _keep_start(c, s, i)
     cnt[C_K] += 1
     return alarm
+
+
+@njit(cache=True, inline="always")
+def _keeps_start(c, s, i):  # pragma: no cover - compiled
+    """Whether the model control uses still holds the starting payload (``s.start_pay[i]``)."""
+    return c.ints[I_KEEP_START] == 1 and s.cnt[i, C_FOLLOWS] == 0
+
+
+@njit(cache=True, inline="always")
+def _keep_start(c, s, i):  # pragma: no cover - compiled
+    """Let the model control uses follow the estimate once the payload has changed: at the first
+    alarm (:func:`_alarm`), or once the estimated mass has moved from its start by more than the
+    detector's threshold times its standard deviation ``sqrt(P_mm)`` after the detector's warm-up.
+
+    Before that the model keeps the starting payload: with the arm exact nothing is left to learn,
+    and the estimate's wander on the unloaded arm (the regression's noise and the filters'
+    start-up) only moved the model away from the exact one (drawn arms, exact URDF: the first
+    segment's adaptive_ct / ct_oracle up to 3.5x; docs/changelog.md). A payload carried from the
+    start, or one the detector misses, still moves the mass beyond the bound."""
+    cnt = s.cnt[i]
+    if c.ints[I_KEEP_START] != 1 or cnt[C_FOLLOWS] == 1 or cnt[C_K] < c.ints[I_WARMUP]:
+        return
+    a = s.theta.shape[1] - 10  # the payload's mass (the payload block's first parameter)
+    var = s.P[i, a, a]
+    dm = s.theta[i, a] - s.start_mass[i]
+    if not (dm * dm <= c.floats[F_THRESHOLD2] * var):  # (a non-finite estimate follows too)
+        cnt[C_FOLLOWS] = 1
 
 
 @njit(cache=True, inline="always")
@@ -1237,6 +1278,9 @@ def est_model_trial_in(c, s, i, pi_out, w):  # pragma: no cover - compiled
         for k in range(10):
             raw_est[k] = raw[k]
     _control_payload(c, s, i, raw, pay, w.Pc)
+    if _keeps_start(c, s, i):
+        for k in range(10):
+            pay[k] = s.start_pay[i, k]
     if c.mode == MODE_PAYLOAD:
         base = 10 * c.jp
         for a in range(10):
