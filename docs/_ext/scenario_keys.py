@@ -5,7 +5,8 @@ The keys come from the tables the scenario checks themselves use
 :mod:`adaptive_dd.plant.two_link` and :mod:`adaptive_dd.plant.arm`, the controllers'
 settings in :data:`adaptive_dd.controllers.builtins.CONTROLLERS` (both arms) less those the run
 derives from the scenario, :data:`adaptive_dd.benchmark.scenario_settings.DERIVED`); the defaults
-come from resolving minimal scenarios with :func:`~adaptive_dd.benchmark.scenario.load_scenario` (what ``adaptive-dd validate`` prints).
+come from resolving minimal scenarios with :func:`~adaptive_dd.benchmark.scenario.load_scenario`
+(what ``adaptive-dd validate`` prints).
 Only the one-line meanings below are written by hand, and the build stops when a key of the
 code has no meaning here or a meaning names a key the code no longer has: the page cannot
 drift from the checks.
