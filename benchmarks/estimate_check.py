@@ -1,0 +1,77 @@
+"""``validate``'s time estimate against the run it estimates: one line per scenario and size.
+
+Usage::
+
+    PYTHONPATH=. python benchmarks/estimate_check.py [--repeat 3] [--seeds 1 10] [--duration 2 20]
+        [SCENARIO ...]
+
+For each scenario (default: the shipped ``payload_swap`` and ``ur5_tool_swap``), each seed count
+and each duration, it prints what :meth:`~adaptive_dd.benchmark.scenario.Scenario.estimate` says
+(the run and, on a cold cache, the one-time compilation) beside the wall time
+:func:`~adaptive_dd.benchmark.runner.run_benchmark` takes in this process, with the compilation
+it measured (``res.compile_time``), and the ratio measured / estimated; ``--repeat`` runs each
+size that many times (the first run of a scenario compiles when the cache is cold: give a fresh
+``NUMBA_CACHE_DIR`` to measure the compilation). The load average is printed with each line:
+the figures are of a shared machine when it is not near 0.
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import os
+import time
+from pathlib import Path
+
+from adaptive_dd.benchmark import load_scenario, run_benchmark
+
+SHIPPED = Path(__file__).resolve().parents[1] / "adaptive_dd" / "scenarios"
+
+
+def check(path: Path, seeds: int, duration: float) -> tuple[float, float, float, float]:
+    """``(estimated s, of which compiling, measured s, of which compiling)`` of one run."""
+    sc = load_scenario(path)
+    keep = [(t, m) for t, m in zip(sc.swap_times, sc.swap_masses, strict=True) if t < duration - 0.25]
+    sc = dataclasses.replace(
+        sc,
+        seeds=seeds,
+        duration=duration,
+        swap_times=tuple(t for t, _ in keep),
+        swap_masses=tuple(m for _, m in keep),
+        swap_com=sc.swap_com[: len(keep)],
+        swap_inertia=sc.swap_inertia[: len(keep)],
+    )
+    est = sc.estimate()
+    t = time.perf_counter()
+    res = run_benchmark(sc, progress=False)
+    wall = time.perf_counter() - t
+    return est.seconds, est.compile_seconds, wall, res.compile_time
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0], allow_abbrev=False)
+    ap.add_argument("scenarios", nargs="*", type=Path)
+    ap.add_argument("--seeds", type=int, nargs="+", default=[1, 10])
+    ap.add_argument("--duration", type=float, nargs="+", default=[2.0, 20.0])
+    ap.add_argument("--repeat", type=int, default=1)
+    args = ap.parse_args()
+    paths = args.scenarios or [SHIPPED / "payload_swap.toml", SHIPPED / "ur5_tool_swap.toml"]
+    print("scenario | seeds | duration [s] | estimated [s] (compiling) | measured [s] (compiling) | "
+          "measured / estimated | load")  # fmt: skip
+    ratios = []
+    for path in paths:
+        for seeds in args.seeds:
+            for duration in args.duration:
+                for _ in range(args.repeat):
+                    est, est_c, wall, wall_c = check(path, seeds, duration)
+                    ratios.append(wall / est)
+                    print(
+                        f"{path.stem} | {seeds} | {duration:g} | {est:.1f} ({est_c:.0f}) | "
+                        f"{wall:.1f} ({wall_c:.0f}) | {wall / est:.2f} | {os.getloadavg()[0]:.1f}",
+                        flush=True,
+                    )
+    print(f"measured / estimated: min {min(ratios):.2f}, max {max(ratios):.2f} over {len(ratios)} runs")
+
+
+if __name__ == "__main__":
+    main()
