@@ -71,6 +71,14 @@ from numpy.typing import NDArray
 from adaptive_dd.errors import DataError
 from adaptive_dd.identification.filters import design_filter_bank, filter_record
 from adaptive_dd.identification.held_directions import Held, base_prior_std, hold_unseen
+from adaptive_dd.identification.long_run_variance import (
+    NORMAL_975,
+    _dof_factor,
+    _kernel_bias,
+    _newey_west,
+    fixed_b_quantile,
+    long_run_factor,
+)
 from adaptive_dd.identification.model import Model, base_regressor
 from adaptive_dd.identification.regression import (
     Regression,
@@ -94,12 +102,6 @@ COULOMB_STD_COLUMN = 11
 """The Coulomb columns of the standard regressor start at ``11 n`` (links ``10 n``, viscous ``n``)."""
 WEIGHT_FLOOR = 0.1
 """``s_j`` is at least this fraction of the median residual rms of the kept channels."""
-MAX_DOF_FACTOR = 2.0
-"""The degrees-of-freedom factor's cap, reached at ``k = n_eff / 2``: beyond it a record holds too few
-independent samples for its parameters for a first-order correction (the TIAGo's 20 s windows:
-``n_eff`` 64-91 for 53 parameters)."""
-NORMAL_975 = 1.959963984540054
-"""The standard normal's 97.5 % quantile: estimate +- this many std is the 95 % interval."""
 MODEL_ERROR_RATIO = 10.0
 """A filtered residual this many times the filtered sensor noise is reported as model error."""
 
@@ -194,24 +196,6 @@ def filter_time_constant(sample_period: float) -> float:
     return max(0.02, 2.0 * float(sample_period))
 
 
-def fixed_b_quantile(b: float) -> float:
-    """The 97.5 % quantile of ``|t|``, ``t`` an estimate studentised by its Bartlett (Newey-West)
-    standard deviation of bandwidth a fraction ``b`` of the sample, under fixed-b asymptotics.
-
-    Kiefer and Vogelsang (Econometric Theory 21, 2005), the cubic fitted to their simulated
-    critical values for the Bartlett kernel: ``1.96 + 2.9694 b + 0.4160 b^2 - 0.5324 b^3``, for
-    ``0 <= b <= 1`` (1.96 at ``b = 0``, the normal's; 2.26 at ``b = 0.1``).
-
-    Raises
-    ------
-    ValueError
-        ``b`` outside [0, 1].
-    """
-    if not 0.0 <= b <= 1.0:
-        raise ValueError(f"fixed_b_quantile: b = {b} is the bandwidth's fraction of the sample, in [0, 1]")
-    return NORMAL_975 + b * (2.9694 + b * (0.4160 - 0.5324 * b))
-
-
 def identifiable_subset(
     model: Model, used, lower, upper, rng: np.random.Generator, n_samples: int = 80
 ) -> NDArray[np.bool_]:
@@ -246,99 +230,6 @@ def _solve(phi: Array, y: Array, w: Array) -> tuple[Array, Array]:
     R = np.linalg.qr(np.column_stack([A / scale, (y * w).reshape(-1)]), mode="r")
     sol, *_ = np.linalg.lstsq(R[:r, :r], R[:r, r], rcond=A.shape[0] * np.finfo(float).eps)
     return sol / scale, scale
-
-
-def long_run_factor(u: Array, lag: int, bounds=None) -> float:
-    """``1 + 2 sum_m (1 - m / (lag + 1)) rho_m``, ``rho`` the autocorrelation of ``u (N,)`` pooled over
-    its pieces ``bounds`` (default one): how many samples one independent sample is worth, at least 1."""
-    bounds = [(0, u.size)] if bounds is None else list(bounds)
-    ac = np.zeros(lag + 1)
-    for a, b in bounds:
-        seg = u[a:b] - u[a:b].mean()
-        f = np.fft.rfft(seg, 2 * (b - a))
-        c = np.fft.irfft(f * np.conj(f))[: min(b - a, lag + 1)]
-        ac[: c.size] += c
-    ac = ac / max(ac[0], 1e-300)
-    m = np.arange(1, lag + 1)
-    return float(max(1.0, 1.0 + 2.0 * np.sum((1.0 - m / (lag + 1)) * ac[1:])))
-
-
-def _kernel_bias(u: Array, lag: int, bounds) -> float:
-    """The Bartlett weights' shrinkage of the long-run variance of ``u (N,)``, undone:
-    ``1 + 2 sum_{m <= m0} (m / (lag + 1)) rho_m / F``, ``F`` the Bartlett long-run factor
-    (:func:`long_run_factor`) and ``rho`` the autocorrelation pooled over the pieces ``bounds``, over
-    the lags before it falls below 0.05 (``m0 = lag / 3``, :func:`_newey_west`'s rule), where it is
-    well estimated (beyond, the estimated autocorrelation of a fit's residual is biased low and
-    noisy). The weights ``1 - m / (lag + 1)`` discount autocovariances the residual does have: on an
-    AR(1) of coefficient ``a`` by about ``2 a / ((1 - a^2)(lag + 1))`` of the variance."""
-    m0 = max(1, lag // 3)
-    ac = np.zeros(m0 + 1)
-    for a, b in bounds:
-        seg = u[a:b] - u[a:b].mean()
-        f = np.fft.rfft(seg, 2 * (b - a))
-        c = np.fft.irfft(f * np.conj(f))[: min(b - a, m0 + 1)]
-        ac[: c.size] += c
-    ac = ac / max(ac[0], 1e-300)
-    m = np.arange(1, m0 + 1)
-    return float(max(1.0, 1.0 + 2.0 * np.sum(m / (lag + 1) * ac[1:]) / long_run_factor(u, lag, bounds)))
-
-
-def _dof_factor(res: Array, w: Array, lag: int, bounds, k: int) -> tuple[float, float]:
-    """``(n_eff, n_eff / (n_eff - min(k, n_eff / 2)))``: the residual's independent samples and the
-    variance's degrees-of-freedom factor (module docstring), at most 2: the factor is a first-order
-    correction in ``k / n_eff`` (:data:`MAX_DOF_FACTOR`)."""
-    u = (res * w).sum(axis=1)
-    n_eff = u.size / long_run_factor(u, lag, bounds)
-    return n_eff, n_eff / (n_eff - min(k, n_eff * (1.0 - 1.0 / MAX_DOF_FACTOR)))
-
-
-def _bartlett_sum(g: Array, lag: int, bounds) -> Array:
-    """``sum_k sum_{|m| <= lag} (1 - |m| / (lag + 1)) g_{k+m} g_k^T`` within each piece ``(r0, r1)``.
-
-    Computed as ``h^T g`` with ``h`` each column of ``g (N, r)`` convolved with the Bartlett
-    window inside its piece (zero beyond the piece's ends): ``O(N r log N + N r^2)`` where the sum
-    over lags is ``O(lag N r^2)``; the same numbers (a test holds them to the lag-by-lag sum)."""
-    import scipy.signal
-
-    kernel = 1.0 - np.abs(np.arange(-lag, lag + 1)) / (lag + 1)
-    h = np.zeros_like(g)
-    for a, b in bounds:
-        h[a:b] = scipy.signal.oaconvolve(g[a:b], kernel[:, None], mode="same", axes=0)
-    return h.T @ g
-
-
-def _newey_west(phi: Array, res: Array, w: Array, scale: Array, bounds=None) -> tuple[Array, int]:
-    """Sandwich covariance ``(r, r)`` of the weighted fit and the lag used (module docstring).
-
-    ``bounds``: the rows ``[(r0, r1), ...]`` of each continuous piece (a log's pieces between its
-    gaps, or several records): the scores' autocovariances are summed within each piece only (the
-    pieces are taken as independent of each other), the lag from their autocorrelation pooled
-    over the pieces; default one piece."""
-    N, _, _r = phi.shape
-    bounds = [(0, N)] if bounds is None else list(bounds)
-    P = phi / scale
-    g = np.einsum("kjr,kj->kr", P, (w**2) * res)  # scores (N, r)
-    A = np.einsum("kjr,kjs,j->rs", P, P, w**2)
-    u = (res * w).sum(axis=1)
-    longest = max(b - a for a, b in bounds)
-    ac = np.zeros(longest)
-    for a, b in bounds:
-        seg = u[a:b] - u[a:b].mean()
-        f = np.fft.rfft(seg, 2 * (b - a))
-        ac[: b - a] += np.fft.irfft(f * np.conj(f))[: b - a]
-    ac = ac / max(ac[0], 1e-300)
-    below = np.flatnonzero(ac < 0.05)
-    lag = int(min(3 * (below[0] if below.size else longest), longest // 4))
-    S = _bartlett_sum(g, lag, bounds)
-    # A^-1 S A^-1 in A's eigenbasis, symmetric by construction: on a record that barely sees a
-    # direction (the Gen3's rounded angles: A's condition number 1e10) the product of a
-    # pseudo-inverse left it asymmetric by 1e-4 and with a negative eigenvalue along that direction
-    d, U = np.linalg.eigh(0.5 * (A + A.T))
-    d_inv = 1.0 / np.maximum(d, d.max() * 1e-15)  # an unseen direction: a huge variance, not none
-    M = U.T @ (0.5 * (S + S.T)) @ U
-    cov = U @ (d_inv[:, None] * M * d_inv[None, :]) @ U.T
-    cov = 0.5 * (cov + cov.T)
-    return cov / np.outer(scale, scale), lag
 
 
 def _noise_rms(tau: Array, tau_f: float, T: float, pieces=None) -> Array:
