@@ -9,7 +9,8 @@ For each scenario (default: the shipped ``payload_swap`` and ``ur5_tool_swap``),
 and each duration, it prints what :meth:`~adaptive_dd.benchmark.scenario.Scenario.estimate` says
 (the run and, on a cold cache, the one-time compilation) beside the wall time
 :func:`~adaptive_dd.benchmark.runner.run_benchmark` takes in this process, with the compilation
-it measured (``res.compile_time``), and the ratio measured / estimated; ``--repeat`` runs each
+it measured (``res.compile_time``), the ratio measured / estimated and the CPU seconds of the
+process and its children (on a busy machine the wall time stretches, the CPU time much less); ``--repeat`` runs each
 size that many times (the first run of a scenario compiles when the cache is cold: give a fresh
 ``NUMBA_CACHE_DIR`` to measure the compilation). The load average is printed with each line:
 the figures are of a shared machine when it is not near 0.
@@ -28,8 +29,14 @@ from adaptive_dd.benchmark import load_scenario, run_benchmark
 SHIPPED = Path(__file__).resolve().parents[1] / "adaptive_dd" / "scenarios"
 
 
-def check(path: Path, seeds: int, duration: float) -> tuple[float, float, float, float]:
-    """``(estimated s, of which compiling, measured s, of which compiling)`` of one run."""
+def _cpu() -> float:
+    """CPU seconds of this process and its waited-for children (the second compiling process)."""
+    t = os.times()
+    return t.user + t.system + t.children_user + t.children_system
+
+
+def check(path: Path, seeds: int, duration: float) -> tuple[float, float, float, float, float]:
+    """``(estimated s, of which compiling, measured s, of which compiling, CPU s)`` of one run."""
     sc = load_scenario(path)
     keep = [(t, m) for t, m in zip(sc.swap_times, sc.swap_masses, strict=True) if t < duration - 0.25]
     sc = dataclasses.replace(
@@ -42,10 +49,10 @@ def check(path: Path, seeds: int, duration: float) -> tuple[float, float, float,
         swap_inertia=sc.swap_inertia[: len(keep)],
     )
     est = sc.estimate()
-    t = time.perf_counter()
+    t, cpu = time.perf_counter(), _cpu()
     res = run_benchmark(sc, progress=False)
     wall = time.perf_counter() - t
-    return est.seconds, est.compile_seconds, wall, res.compile_time
+    return est.seconds, est.compile_seconds, wall, res.compile_time, _cpu() - cpu
 
 
 def main() -> None:
@@ -57,17 +64,17 @@ def main() -> None:
     args = ap.parse_args()
     paths = args.scenarios or [SHIPPED / "payload_swap.toml", SHIPPED / "ur5_tool_swap.toml"]
     print("scenario | seeds | duration [s] | estimated [s] (compiling) | measured [s] (compiling) | "
-          "measured / estimated | load")  # fmt: skip
+          "measured / estimated | CPU [s] | load")  # fmt: skip
     ratios = []
     for path in paths:
         for seeds in args.seeds:
             for duration in args.duration:
                 for _ in range(args.repeat):
-                    est, est_c, wall, wall_c = check(path, seeds, duration)
+                    est, est_c, wall, wall_c, cpu = check(path, seeds, duration)
                     ratios.append(wall / est)
                     print(
                         f"{path.stem} | {seeds} | {duration:g} | {est:.1f} ({est_c:.0f}) | "
-                        f"{wall:.1f} ({wall_c:.0f}) | {wall / est:.2f} | {os.getloadavg()[0]:.1f}",
+                        f"{wall:.1f} ({wall_c:.0f}) | {wall / est:.2f} | {cpu:.1f} | {os.getloadavg()[0]:.1f}",
                         flush=True,
                     )
     print(f"measured / estimated: min {min(ratios):.2f}, max {max(ratios):.2f} over {len(ratios)} runs")
