@@ -10,10 +10,10 @@ and each duration, it prints what :meth:`~adaptive_dd.benchmark.scenario.Scenari
 (the run and, on a cold cache, the one-time compilation) beside the wall time
 :func:`~adaptive_dd.benchmark.runner.run_benchmark` takes in this process, with the compilation
 it measured (``res.compile_time``), the ratio measured / estimated and the CPU seconds of the
-process and its children (on a busy machine the wall time stretches, the CPU time much less); ``--repeat`` runs each
-size that many times (the first run of a scenario compiles when the cache is cold: give a fresh
-``NUMBA_CACHE_DIR`` to measure the compilation). The load average is printed with each line:
-the figures are of a shared machine when it is not near 0.
+process and its children (on a busy machine the wall time stretches, the CPU time much less);
+``--repeat`` runs each size that many times (the first run of a scenario compiles when the
+cache is cold: give a fresh ``NUMBA_CACHE_DIR`` to measure the compilation). The load average
+is printed with each line: the figures are of a shared machine when it is not near 0.
 """
 
 from __future__ import annotations
@@ -74,7 +74,8 @@ def main() -> None:
                     ratios.append(wall / est)
                     print(
                         f"{path.stem} | {seeds} | {duration:g} | {est:.1f} ({est_c:.0f}) | "
-                        f"{wall:.1f} ({wall_c:.0f}) | {wall / est:.2f} | {cpu:.1f} | {os.getloadavg()[0]:.1f}",
+                        f"{wall:.1f} ({wall_c:.0f}) | {wall / est:.2f} | {cpu:.1f} | "
+                        f"{os.getloadavg()[0]:.1f}",
                         flush=True,
                     )
     print(f"measured / estimated: min {min(ratios):.2f}, max {max(ratios):.2f} over {len(ratios)} runs")
