@@ -21,7 +21,9 @@ Every key is optional; the value after ``=`` below is the default that is used
     damping = 1.0              # in (0, 10]
 
     [controllers.NAME]         # settings of one listed controller (NAME: its name, or the
-    key = value                # class name of an import path); plain TOML values, kept as given
+    key = value                # class name of an import path); plain TOML values, kept as given;
+                               # adaptive_ct's estimator and detector settings are derived from
+                               # the arm and the scenario, not keys (scenario_settings.DERIVED)
 
     [reference]                # q_d(t) = offset + w(t) sum_k a_k sin(2 pi f_k t + phase_k);
                                # default: the shipped payload_swap scenario's reference
