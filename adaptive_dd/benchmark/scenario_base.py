@@ -74,11 +74,13 @@ _SECONDS_PER_SAMPLE_TRIAL_JOINT2 = 2.5e-7
 _EXCITE_DESIGN_SECONDS = 33.0
 _IDENTIFY_SECONDS_PER_SAMPLE_JOINT2 = 1.3e-5
 # What a warm `adaptive-dd benchmark` spends around the closed loop, once per run: imports,
-# loading the cached kernels, the report and its figures. The paper's default scenario, warm:
-# 5.3 CPU s in all with --seeds 1 against 1.1 for the closed loop alone, 6.8 against 2.1 with
-# --seeds 10 (`python benchmarks/estimate_check.py --cli --seeds 1 10` and the same without
-# `--cli` at `--duration 20`, CPU seconds, the machine at load 11-14).
+# loading the cached kernels, the arm, the report and its figures. The paper's default scenario,
+# warm: 5.3 CPU s in all with --seeds 1 against 1.1 for the closed loop alone, 6.8 against 2.1
+# with --seeds 10; the UR5's (the general kernels) 13.9 against 3.2 with --seeds 1
+# (`python benchmarks/estimate_check.py --cli --seeds 1 10 SCENARIO` and the same without `--cli`
+# at `--duration 20`, CPU seconds, the machine at load 7-14).
 _SETUP_SECONDS = 4.5
+_SETUP_SECONDS_GENERAL = 10.5
 
 
 @dataclass(frozen=True)
@@ -187,8 +189,9 @@ def run_estimate(
     n_joints : int, optional
         The joints of an N-joint (URDF) arm; None for the two-link arm's closed forms.
     compile_seconds : float
-        One-time compilation [s] added to the time (as is ``_SETUP_SECONDS``, what a run spends
-        around the closed loop: imports, loading the kernels, the report).
+        One-time compilation [s] added to the time (as is what a run spends around the closed
+        loop: imports, loading the kernels, the report; ``_SETUP_SECONDS``, on the general
+        kernels ``_SETUP_SECONDS_GENERAL``).
     excite_samples : int
         The samples of an excitation phase (``[run] excite`` / T, an N-joint arm's): its closed
         loop (one controller, every seed) at the task's rates, the design once and an
@@ -220,5 +223,6 @@ def run_estimate(
         loop = float(excite_samples) * (_SECONDS_PER_SAMPLE_CONTROLLER + n_seeds * per)
         ident = n_seeds * float(excite_samples) * n2 * _IDENTIFY_SECONDS_PER_SAMPLE_JOINT2
         excite = loop + _EXCITE_DESIGN_SECONDS + ident
-    total = _SETUP_SECONDS + secs + excite + compile_seconds
+    setup = _SETUP_SECONDS if n_joints is None else _SETUP_SECONDS_GENERAL
+    total = setup + secs + excite + compile_seconds
     return RunEstimate(int(n_samples), int(trials), nbytes, total, float(compile_seconds), excite)
