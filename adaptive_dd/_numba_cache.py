@@ -211,16 +211,19 @@ def _lock_compilations() -> None:
 
 
 # ------------------------------------------------------------ telling the user about compilation
-COMPILE_SECONDS = {"two-link": 49.0, "serial": 71.0}
-"""One-time compilation of a benchmark's closed-loop kernels with a cold cache, on 2 cores: a guide
-for the message and ``validate``'s estimate, not a promise. The two-link default scenario:
-``compiled the kernels in 42 s``, 39.9 CPU s inside numba's compilations
-(``benchmarks/compile_profile.py --seeds 2``, a fresh ``XDG_CACHE_HOME``, load 0.8). An N-joint
-arm (any compiles the same kernels), in two processes at once (:class:`Compiling`): a cold
-``adaptive-dd benchmark adaptive_dd/scenarios/ur5_tool_swap.toml --seeds 10`` on a nearly idle
-machine printed ``compiled the kernels in 59 s`` and, on the previous state of the code, 64 s
-(waits for the second process included); ``benchmarks/compile_phases.py`` gives the phases in CPU seconds. The
-history of these figures: ``docs/guide/first_run.md``."""
+COMPILE_SECONDS = {"two-link": 62.0, "serial": 140.0}
+"""One-time compilation of a benchmark's kernels with a cold cache, on 2 cores: a guide for the
+message and ``validate``'s estimate, not a promise. Numba's compilation runs on one core, so its
+CPU seconds are about what it takes on an idle machine (a busy one stretches the wall time: the
+figures below took 468 s and 942 s at load 8-14). The two-link default scenario: 53.8 CPU s for
+the closed loop (``python benchmarks/estimate_check.py --seeds 1 --duration 2
+adaptive_dd/scenarios/payload_swap.toml`` with a fresh ``NUMBA_CACHE_DIR``) and about 9 more for
+the report's kernels on the first ``adaptive-dd benchmark`` (its ``--cli`` form after that: 14.0
+CPU s against 5.3 warm). An N-joint arm (any compiles the same kernels) compiles in two processes
+at once (:class:`Compiling`): 166.5 CPU s of both for the UR5 (the same command on
+``ur5_tool_swap.toml``); a user's cold UR5 run on a quiet 2-core machine printed ``compiled the
+kernels in 157 s`` (issue 41). ``benchmarks/compile_phases.py`` gives the phases in CPU seconds.
+The history of these figures: ``docs/guide/first_run.md``."""
 
 
 def _closed_loop_kernel(serial: bool):

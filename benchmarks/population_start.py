@@ -34,8 +34,7 @@ def main() -> None:
     data["run"]["duration"] = args.duration
     data["payload"] = [p for p in data["payload"] if p["at"] < args.duration - 0.25]
     est = json.loads(args.estimator)
-    if est:
-        data["controllers"] = {"adaptive_ct": {"estimator": est}}
+    settings = {"adaptive_ct": {"estimator": est}} if est else None  # no scenario key: set on the scenario
 
     def on_arm(s: dict) -> None:
         segs = " / ".join(f"{g['mean']:.3f} ({g['max']:.2f})" for g in s["segments"])
@@ -43,7 +42,7 @@ def main() -> None:
         print(f"{arm}: {segs}", flush=True)
 
     arms = range(args.first, args.first + args.n)
-    pop = run_population(data, str(TEMPLATE), arms, seeds=args.seeds, on_arm=on_arm)
+    pop = run_population(data, str(TEMPLATE), arms, seeds=args.seeds, on_arm=on_arm, settings=settings)
     for p in pooled(pop):
         print(
             f"segment {p['segment'] + 1}: mean {p['mean']:.3f}, p90 {p['p90']:.3f}, max {p['max']:.2f} "

@@ -13,6 +13,7 @@ import numpy as np
 import pytest
 
 from adaptive_dd.benchmark.scenario import load_scenario, parse_scenario
+from adaptive_dd.benchmark.scenario_settings import with_settings
 from adaptive_dd.closed_loop.controllers import ARM_CONTROLLERS
 from adaptive_dd.closed_loop.metrics import segment_metrics
 from adaptive_dd.closed_loop.runner import run_closed_loop
@@ -362,13 +363,18 @@ def test_scenario_checks_for_n_joint_arms():
 def test_an_n_joint_scenario_takes_the_n_joint_estimators_settings():
     data = tomllib.loads(open(_shipped("ur5_tool_swap_exact"), encoding="utf-8").read())
     est = {"row_weights": [1.0, 1.0, 1.0, 0.5, 0.5, 0.5], "bound_radius": 0.2}
-    data["controllers"] = {"adaptive_ct": {"estimator": est, "detector": {"floor": 0.1}}}
-    sc = parse_scenario(data, "x.toml")
+    sc = with_settings(
+        parse_scenario(data, "x.toml"), "adaptive_ct", {"estimator": est, "detector": {"floor": 0.1}}
+    )
     online = make_controller("adaptive_ct", options=sc.options("adaptive_ct"), arm=sc.arm).online
     assert list(online.row_weights) == est["row_weights"]
     assert online.bound_radius == 0.2 and online.detector.floor == 0.1
-    data["controllers"] = {"adaptive_ct": {"estimator": {"row_weightz": 1.0}}}
-    with pytest.raises(ScenarioError, match=r"controllers\.adaptive_ct\.estimator.*row_weightz"):
+    with pytest.raises(ParameterError, match=r"controllers\.adaptive_ct\.estimator.*row_weightz"):
+        make_controller("adaptive_ct", options={"estimator": {"row_weightz": 1.0}}, arm=sc.arm)
+    data["controllers"] = {"adaptive_ct": {"estimator": est}}  # derived from the scenario, not a key
+    with pytest.raises(
+        ScenarioError, match=r"x\.toml: controllers\.adaptive_ct\.estimator: not a scenario key"
+    ):
         parse_scenario(data, "x.toml")
 
 

@@ -20,6 +20,7 @@ import pytest
 from adaptive_dd.benchmark.metrics import FALSE_ALARM_WINDOW
 from adaptive_dd.benchmark.preflight import reference_problems, torque_problems
 from adaptive_dd.benchmark.scenario import load_scenario, parse_scenario
+from adaptive_dd.benchmark.scenario_settings import with_settings
 from adaptive_dd.plant.pinocchio_check import cross_check
 from adaptive_dd.robots import robot_urdf
 
@@ -98,10 +99,10 @@ def test_validate_says_what_the_estimator_derives_and_from_what(drawn):
     data = tomllib.loads((SCENARIOS / "gen3_drawn.toml").read_text())
     del data["arm"]["payload_capacity"]
     data["arm"]["urdf"] = str(robot_urdf("gen3"))
-    data["controllers"] = {"adaptive_ct": {"detector": {"reopen_mass_std": 1.5}}}
-    given = derived_estimator_settings(parse_scenario(data, "x.toml"))
-    assert "reopen_mass_std = 1.5 kg   (given)" in given[2]
-    del data["controllers"]
+    given = with_settings(
+        parse_scenario(data, "x.toml"), "adaptive_ct", {"detector": {"reopen_mass_std": 1.5}}
+    )
+    assert "reopen_mass_std = 1.5 kg   (given)" in derived_estimator_settings(given)[2]
     unstated = derived_estimator_settings(parse_scenario(data, "x.toml"))
     assert "reopen_mass_std = 10 kg   (default: no [arm] payload_capacity stated" in unstated[2]
 
@@ -157,8 +158,9 @@ def test_validate_shows_a_handed_on_covariance_by_its_shape():
     ``validate`` printed it whole, 80 000 characters on one line. It prints its shape."""
     import dataclasses
 
-    from adaptive_dd.benchmark.scenario import _brief, format_scenario
+    from adaptive_dd.benchmark.scenario import format_scenario
     from adaptive_dd.benchmark.scenario_checks import freeze
+    from adaptive_dd.benchmark.scenario_format import _brief
 
     cov = np.eye(65).tolist()
     shown = repr(_brief({"estimator": {"arm_prior_cov": cov, "row_weights": [1.0, 0.5], "x": 3}}))

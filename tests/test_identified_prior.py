@@ -131,9 +131,11 @@ def test_a_model_file_gives_adaptive_ct_the_same_prior_rule(tmp_path):
     b = sc.arm.payload_basis[:, 0]
     known = 1.0 / np.sqrt(b @ np.linalg.pinv(P, rcond=1e-15) @ b)
     assert ctrl.online.payload_mass_std == pytest.approx(known, rel=1e-6) and known < 5.0
-    data["controllers"] = {"adaptive_ct": {"estimator": {"mode": "payload"}}}
-    _, ctrl = make_controller_of(parse_scenario(data, "m.toml"), "adaptive_ct")
-    assert ctrl.online.mode == "payload" and ctrl.online.arm_prior_cov is None
+    data["controllers"] = {"adaptive_ct": {"estimator": {"mode": "payload"}}}  # derived, not a key
+    with pytest.raises(
+        ScenarioError, match=r"m\.toml: controllers\.adaptive_ct\.estimator: .*\[model\] from"
+    ):
+        parse_scenario(data, "m.toml")
 
 
 def test_a_model_file_of_other_base_parameters_is_refused(tmp_path):

@@ -269,8 +269,12 @@ def test_a_scenario_without_estimator_settings_runs_as_the_tuned_one():
     }
     out = {}
     for name, est in (("derived", None), ("tuned", tuned)):
-        d = {**base, "controllers": {"adaptive_ct": est} if est else {}}
-        df = run_benchmark(parse_scenario(d, "panda.toml", "panda"), progress=False).to_frame()
+        sc = parse_scenario({**base, "controllers": {}}, "panda.toml", "panda")
+        if est:  # not scenario keys (derived from the scenario): research code sets them
+            from adaptive_dd.benchmark.scenario_settings import with_settings
+
+            sc = with_settings(sc, "adaptive_ct", est)
+        df = run_benchmark(sc, progress=False).to_frame()
         c = df[df.controller == "adaptive_ct"].sort_values(["seed", "segment"])
         out[name] = (c.ratio_to_floor.to_numpy(float), c.detection_delay_s.to_numpy(float))
     np.testing.assert_allclose(out["derived"][0], out["tuned"][0], rtol=0.02)

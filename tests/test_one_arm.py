@@ -18,7 +18,8 @@ from adaptive_dd.plant import ArmSimulator, PayloadSchedule
 from adaptive_dd.plant.arm import Arm
 from adaptive_dd.plant.dynamics import regressor as paper_regressor
 from adaptive_dd.plant.kind import is_chain, is_two_link
-from adaptive_dd.plant.two_link import ClosedFormTwoLink, closed_form_view, paper_sigma
+from adaptive_dd.plant.two_link import ClosedFormTwoLink, closed_form_view
+from adaptive_dd.plant.two_link_view import paper_sigma
 from adaptive_dd.robots import ROBOTS, robot_urdf
 
 MASSES = np.array([0.0, 1.5, 4.0])

@@ -18,6 +18,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from adaptive_dd.benchmark.scenario import load_scenario, parse_scenario
+from adaptive_dd.benchmark.scenario_settings import with_settings
 from adaptive_dd.closed_loop.runner import run_closed_loop, true_models
 from adaptive_dd.closed_loop.types import pi_with_payload, plant_of
 from adaptive_dd.controllers import make_controller
@@ -577,8 +578,7 @@ def test_after_an_excitation_phase_adaptive_ct_starts_from_what_the_identificati
     np.testing.assert_allclose(np.diag(s.P[0])[:pb], ctrl.online.p0_arm + std**2, rtol=1e-12)
     _, urdf = make_controller_of(sc, "adaptive_ct")  # without the phase: the stated uncertainty
     assert urdf.online.arm_uncertainty is not None and urdf.online.arm_prior_std is None
-    data["controllers"] = {"adaptive_ct": {"estimator": {"mode": "payload"}}}
-    own = parse_scenario(data, "v.toml")
+    own = with_settings(parse_scenario(data, "v.toml"), "adaptive_ct", {"estimator": {"mode": "payload"}})
     kept = dataclasses.replace(own, controller_options=identified_prior(own, std))
     assert make_controller_of(kept, "adaptive_ct")[1].online.mode == "payload"
     with pytest.raises(ParameterError, match="3 values; this arm has"):

@@ -243,9 +243,7 @@ def test_controllers_picked_on_the_command_line_drop_the_others_tables(tmp_path)
     assert picked.controllers == ("ct_oracle",) and picked.controller_options == ()
     kept = sc.with_controllers(only_controllers(sc, ["adaptive_ct"]))  # its floor ct_oracle added
     assert kept.controllers == ("adaptive_ct", "ct_oracle")
-    assert kept.controller_options == (
-        ("adaptive_ct", freeze({"boost_duration": 0.2, "detector": {"threshold": 4.0}})),
-    )
+    assert kept.controller_options == (("adaptive_ct", freeze({"boost_duration": 0.2})),)
     plug = sc.with_controllers(("payload_gradient:PayloadGradient",))
     assert plug.options("PayloadGradient") == {"gamma": 200.0, "label": "payload_gradient"}
     text = (EXAMPLES / "plugin.toml").read_text().replace('"payload_gradient:PayloadGradient", ', "")

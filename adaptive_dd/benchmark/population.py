@@ -105,7 +105,7 @@ class PopulationResult:
 
 
 def run_population(data: dict, src: str, arm_seeds, *, seeds=None, controllers=None, progress=False,
-                   draw_swaps=False, on_arm=None) -> PopulationResult:  # fmt: skip
+                   draw_swaps=False, on_arm=None, settings=None) -> PopulationResult:  # fmt: skip
     """Run the template over the arms ``arm_seeds`` (:func:`population_scenario`).
 
     Parameters
@@ -119,6 +119,10 @@ def run_population(data: dict, src: str, arm_seeds, *, seeds=None, controllers=N
         ``controllers(scenario) -> tuple of names``, to narrow the template's list.
     on_arm : callable, optional
         ``on_arm(summary)`` after each arm (the CLI prints a line).
+    settings : dict, optional
+        ``{controller: settings table}`` set on every arm's scenario
+        (:func:`~adaptive_dd.benchmark.scenario_settings.with_settings`): settings no scenario file
+        sets, such as ``adaptive_ct``'s estimator table, for measurements.
     """
     import dataclasses
 
@@ -126,6 +130,7 @@ def run_population(data: dict, src: str, arm_seeds, *, seeds=None, controllers=N
 
     from adaptive_dd.benchmark.metrics import compute_metrics, release_error_norm
     from adaptive_dd.benchmark.runner import run_benchmark
+    from adaptive_dd.benchmark.scenario_settings import with_settings
     from adaptive_dd.robots.random_arm import random_arm
 
     out = PopulationResult()
@@ -134,6 +139,8 @@ def run_population(data: dict, src: str, arm_seeds, *, seeds=None, controllers=N
         sc = population_scenario(data, src, int(arm_seed), draw_swaps=draw_swaps)
         if seeds is not None:
             sc = dataclasses.replace(sc, seeds=seeds)
+        for name, table in (settings or {}).items():
+            sc = with_settings(sc, name, table)
         if controllers is not None:  # the tables of the controllers left out go with them
             sc = sc.with_controllers(controllers(sc))
         res = run_benchmark(sc, progress=progress, on_run=release_error_norm)

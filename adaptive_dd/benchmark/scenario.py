@@ -21,7 +21,9 @@ Every key is optional; the value after ``=`` below is the default that is used
     damping = 1.0              # in (0, 10]
 
     [controllers.NAME]         # settings of one listed controller (NAME: its name, or the
-    key = value                # class name of an import path); plain TOML values, kept as given
+    key = value                # class name of an import path); plain TOML values, kept as given;
+                               # adaptive_ct's estimator and detector settings are derived from
+                               # the arm and the scenario, not keys (scenario_settings.DERIVED)
 
     [reference]                # q_d(t) = offset + w(t) sum_k a_k sin(2 pi f_k t + phase_k);
                                # default: the shipped payload_swap scenario's reference
@@ -74,7 +76,6 @@ from __future__ import annotations
 
 import dataclasses
 import itertools
-import math
 from dataclasses import dataclass, field, fields
 from importlib import resources
 from pathlib import Path
@@ -85,12 +86,13 @@ from numpy.typing import NDArray
 
 from adaptive_dd.benchmark.scenario_base import LIMITS, Reference, RunEstimate, run_estimate
 from adaptive_dd.benchmark.scenario_checks import (
-    check_number,
     scenario_errors,
     scenario_fields,
     table_name,
     thaw,
 )
+from adaptive_dd.benchmark.scenario_format import format_scenario
+from adaptive_dd.benchmark.scenario_settings import controller_setting_errors, derived_setting_errors
 from adaptive_dd.errors import ScenarioError
 from adaptive_dd.plant.arm import Arm
 from adaptive_dd.plant.arm_tables import arm_from_tables
@@ -121,28 +123,6 @@ __all__ = [
 ]
 
 Array = NDArray[np.float64]
-
-_FIELD_KEY = {
-    "name": "name",
-    "duration": "run.duration",
-    "sample_period": "run.sample_period",
-    "seeds": "run.seeds",
-    "seed": "run.seed",
-    "substeps": "run.substeps",
-    "controllers": "run.controllers",
-    "bandwidth": "control.bandwidth",
-    "damping": "control.damping",
-    "reference": "reference",
-    "swap_times": "payload.at",
-    "swap_masses": "payload.mass",
-    "payload_radius": "payload.radius",
-    "position_variance": "noise.position_variance",
-    "velocity_variance": "noise.velocity_variance",
-    "dropout": "noise.dropout",
-    "controller_options": "controllers",
-    "source": "source",
-    "excite": "run.excite",
-}
 
 
 @dataclass(frozen=True)
@@ -462,6 +442,7 @@ def parse_scenario(data: dict, src: str = "<memory>", name: str = "scenario") ->
 
     arm, errors, plant, stated = None, [], None, None
     data = with_random_arm(data, src)  # robot = "random:SEED": its capacity, armature, reference
+    errors += derived_setting_errors(data)  # adaptive_ct's estimator and detector: from the scenario
     table = data if isinstance(data, dict) else {}
     plant_table = table.get("plant")
     law_table = plant_table
@@ -489,7 +470,7 @@ def parse_scenario(data: dict, src: str = "<memory>", name: str = "scenario") ->
             values["payload_radius"] = arm.payload_radius
     errors += [e for e in scenario_errors(values) if e.split(":")[0] not in _bad_keys(errors)]
     if not errors:
-        errors += _controller_setting_errors(values)
+        errors += controller_setting_errors(values)
     if errors:
         raise _scenario_error(src, errors)
     noise = values["position_variance"], values["velocity_variance"]
@@ -523,136 +504,5 @@ def model_and_plant(src: str, arm, plant_table, model_table) -> tuple[Any, Plant
     return model, parse_plant(src, plant_table, arm, model_from=model is not arm)
 
 
-def _numbers(x: Any, key: str):
-    """Every number in a (nested) setting as ``(key, value)``."""
-    if isinstance(x, dict):
-        for k, y in x.items():
-            yield from _numbers(y, f"{key}.{k}")
-    elif isinstance(x, list | tuple):
-        for y in x:
-            yield from _numbers(y, key)
-    elif isinstance(x, int | float) and not isinstance(x, bool):
-        yield key, float(x)
-
-
-def _controller_setting_errors(v: dict) -> list[str]:
-    """Each built-in controller with a ``[controllers.NAME]`` table built once, so a bad setting
-    (a negative gain, a bandwidth the sample period cannot carry, an unknown key) is an error of
-    the file, not of the run. ``bandwidth``, ``boost_bandwidth`` and ``damping`` have the bounds
-    of ``[control]``; ``boost_duration`` is at most the run; every number is finite and within
-    ``LIMITS["max_setting"]``."""
-    from adaptive_dd.controllers import CONTROLLERS, gains_for, make_controller
-
-    errs: list[str] = []
-    opts = {n: thaw(o) for n, o in v["controller_options"]}
-    T = v["sample_period"]
-    for name in v["controllers"]:
-        if name not in CONTROLLERS or name not in opts:
-            continue
-        o, n0 = opts[name], len(errs)
-        for bw in ("bandwidth", "boost_bandwidth"):
-            key = f"controllers.{name}.{bw}"
-            if (
-                bw in o
-                and check_number(errs, key, o[bw], 0, 1e5, lo_open=True)
-                and o[bw] * T > LIMITS["max_bandwidth_T"]
-            ):
-                errs.append(
-                    f"{key}: {o[bw]} rad/s at T = {T} s gives "
-                    f"bandwidth * T = {o[bw] * T:.3g} > {LIMITS['max_bandwidth_T']}"
-                )
-        if "boost_duration" in o:
-            check_number(errs, f"controllers.{name}.boost_duration", o["boost_duration"], 0, v["duration"])
-        if "damping" in o:
-            check_number(
-                errs, f"controllers.{name}.damping", o["damping"], 0, LIMITS["max_damping"], lo_open=True
-            )
-        for key, x in _numbers(o, f"controllers.{name}"):
-            if not math.isfinite(x) or abs(x) > LIMITS["max_setting"]:
-                errs.append(f"{key}: must be finite and within +-{LIMITS['max_setting']:g}, got {x!r}")
-        if len(errs) > n0:
-            continue
-        try:
-            make_controller(name, gains_for(v["arm"], v["bandwidth"], v["damping"]), o, arm=v["arm"])
-        except (ValueError, TypeError, ArithmeticError) as exc:
-            msg = str(exc)
-            while msg.startswith(f"controllers.{name}"):  # the registry names the controller too
-                msg = msg.removeprefix(f"controllers.{name}").removeprefix(": ")
-            errs.append(f"controllers.{name}{'' if msg.startswith('.') else ': '}{msg}")
-    return errs
-
-
 def _bad_keys(errors: list[str]) -> set[str]:
     return {e.split(":")[0] for e in errors}
-
-
-def format_scenario(sc: Scenario) -> str:
-    """Every field of a scenario as ``key = value``, defaults marked ``(default)``."""
-    lines = [f"# {sc.source}: valid; {sc.estimate()}"]
-    order = ("duration", "sample_period", "seeds", "seed", "substeps", "controllers", "bandwidth")
-    order += ("damping", "swap_times", "swap_masses", "payload_radius", "position_variance")
-    for name in (*order, "velocity_variance", "dropout", "excite"):
-        key = _FIELD_KEY[name]
-        mark = "   (default)" if key in sc.defaulted else ""
-        lines.append(f"{key} = {_show(getattr(sc, name))}{mark}")
-    ref = sc.reference
-    mark = "   (default)" if "reference" in sc.defaulted else ""
-    lines.append(f"reference.ramp = {ref.ramp!r}{mark}")
-    for j in range(ref.n_joints):
-        lines.append(
-            f"reference.joint{j + 1} = {{ offset = {ref.offset[j]!r}, amplitude = "
-            f"{_show(ref.amplitude[j])}, frequency = {_show(ref.frequency[j])}, phase = "
-            f"{_show(ref.phase[j])} }}{mark}"
-        )
-    for n, _ in sc.controller_options:
-        lines.append(f"controllers.{n} = {_brief(sc.options(n))!r}")
-    lines += _plant_lines(sc)
-    segs = ", ".join(
-        f"{a:g}-{b:g} s: {m:g} kg ({k} samples)"
-        for (a, b, m), k in zip(sc.segments(), sc.segment_samples(), strict=True)
-    )
-    lines.append(f"# segments: {segs}")
-    return "\n".join(lines)
-
-
-def _plant_lines(sc: Scenario) -> list[str]:
-    """What the plant is when it is not the model (``[plant]``, ``[model]``), for ``validate``."""
-    import dataclasses
-
-    p, u = sc.plant, sc.model_uncertainty
-    stated = [] if u is None else [f"model.uncertainty = {dataclasses.asdict(u)!r}"]
-    if p is None:
-        return ["# plant: the [arm] itself (no [plant] table)", *stated] if sc.closed_forms is None else []
-    out = [f"model.urdf = {str(sc.arm.urdf)!r}   (what every non-oracle controller is given)", *stated]
-    out.append(f"plant.urdf = {p.urdf!r}" if p.urdf else "# plant links: the [arm]'s URDF")
-    for key in ("viscous", "coulomb", "armature"):
-        out.append(f"plant.{key} = {_show(getattr(p, key))}")
-    if p.uncertainty is not None:
-        out.append(f"plant.uncertainty = {dataclasses.asdict(p.uncertainty)!r}")
-    return out
-
-
-class _Summary(str):
-    """A stand-in shown bare by ``repr`` (``<65 x 65 matrix>``)."""
-
-    def __repr__(self) -> str:
-        return str(self)
-
-
-def _brief(v: Any, most: int = 12) -> Any:
-    """``v`` with every list of more than ``most`` numbers, or of rows, replaced by its shape: a
-    covariance handed on by ``[model] from`` is 65 x 65 on a 7-joint arm, 80 000 characters of
-    ``validate``'s output on one line."""
-    if isinstance(v, dict):
-        return {k: _brief(x, most) for k, x in v.items()}
-    if isinstance(v, list | tuple) and v and all(isinstance(x, list | tuple) for x in v):
-        return _Summary(f"<{len(v)} x {len(v[0])} matrix>")
-    if isinstance(v, list | tuple) and len(v) > most:
-        return _Summary(f"<{len(v)} numbers>")
-    return v
-
-
-def _show(v: Any) -> str:
-    if isinstance(v, tuple):
-        return "[" + ", ".join(_show(x) for x in v) + "]"
-    return repr(v)

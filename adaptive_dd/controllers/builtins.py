@@ -210,13 +210,15 @@ _BOOST = {
     "estimator": Setting(
         "the estimator's settings: TwoLinkOnlineConfig's fields on the two-link arm (tau_f, split, "
         "construction, p0_payload, p0_j2, project, align), OnlineConfig's on an N-joint arm; "
-        "default: the estimator's own",
+        "not a scenario key (derived from the arm and the scenario: "
+        "adaptive_dd.benchmark.scenario_settings), an option of make_controller",
         rule="two estimators: the paper's sigma with its splits; the payload's ten parameters",
     ),
     "detector": Setting(
         "the change detector's settings (ChangeDetector on the two-link arm, Detector on an N-joint "
-        "arm), or false for none; written at the top of [controllers.adaptive_ct] (inside `estimator` "
-        "is accepted with a FutureWarning)",
+        "arm), or false for none, at the top of the options (inside `estimator` with a FutureWarning); "
+        "not a scenario key (derived from the arm and the scenario: "
+        "adaptive_dd.benchmark.scenario_settings), an option of make_controller",
         rule="two detectors: GLR with persistence on sigma; a gate with a fast window on the payload",
     ),
 }

@@ -9,7 +9,8 @@ model used for control. The Python path (:func:`~adaptive_dd.identification.two_
 and the compiled closed loop call this same function; nothing here is duplicated.
 
 Configuration travels as two flat arrays (``cf`` floats, ``ci`` integers) whose
-slots are the module constants below, plus the filter matrices, the payload
+slots are the constants of :mod:`adaptive_dd.identification.two_link_online_slots` (read
+here as this module's too), plus the filter matrices, the payload
 direction and the parameter groups of the split. This keeps the kernel a plain
 numba function of arrays (cacheable, callable from other compiled code).
 """
@@ -19,89 +20,83 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from adaptive_dd.identification.two_link_detector_kernel import _detect
+from adaptive_dd.identification.two_link_online_slots import (  # noqa: F401 (read as K.NAME by the estimator)
+    BIG,
+    C_ALARMS,
+    C_K,
+    C_LEARNED1,
+    C_LEARNED2,
+    C_REOPEN_AT,
+    C_SINCE_ALARM,
+    C_SINCE_BAD,
+    C_SINCE_SLOW1,
+    C_SINCE_SLOW2,
+    C_SINCE_SLOW_DET1,
+    C_SKIPPED,
+    C_STARTED,
+    F_ALPHA_DIR,
+    F_ALPHA_LONG,
+    F_ALPHA_PERSIST,
+    F_ALPHA_SHORT,
+    F_CAP0,
+    F_CAP1,
+    F_DET_SPEED,
+    F_GLR_THRESHOLD,
+    F_HETERO,
+    F_J_MIN,
+    F_LAM0,
+    F_MARGIN,
+    F_MIN_EXPLAINED,
+    F_MIN_MASS,
+    F_MU,
+    F_P_J2,
+    F_P_MASS,
+    F_R_MIN,
+    F_REMOVAL,
+    F_SEL_THRESHOLD,
+    F_SLOW_FACTOR,
+    F_THRESHOLD2,
+    F_XS0,
+    G_A,
+    G_AGE,
+    G_E,
+    G_OFF,
+    G_X,
+    GLR_CANDIDATES,
+    GLR_CHANNELS,
+    GLR_STRIDE,
+    I_ALIGN,
+    I_CONSTRUCTION,
+    I_DETECT,
+    I_FREEZE,
+    I_GLR_MIN_AGE,
+    I_GLR_SPACING,
+    I_HOLDOFF,
+    I_MIN_LEARNED,
+    I_PERSIST_MIN,
+    I_PROJECT,
+    I_REOPEN_AGAIN,
+    I_RESUME,
+    I_SEL_MEMORY,
+    I_SELECT,
+    I_SPEED_MEMORY,
+    I_SPLIT,
+    I_TAINT,
+    I_WARMUP,
+    N_CF,
+    N_CI,
+    N_CNT,
+    N_SHORT,
+    S_DIR,
+    S_E2,
+    S_GLR,
+    S_LREF,
+    S_M0,
+    S_PER,
+    S_PER_N,
+)
 from adaptive_dd.plant.sampling import project_trial
-
-# integer slots of ci
-I_CONSTRUCTION = 0  # 0 paper, 1 exact
-I_SPLIT = 1  # 0 full, 1 "15", 2 "16"
-I_ALIGN = 2
-I_SELECT = 3  # data selection on/off
-I_SEL_MEMORY = 4  # samples
-I_TAINT = 5  # samples a non-finite input taints the filtered equations
-I_DETECT = 6
-I_WARMUP = 7  # samples
-I_MIN_LEARNED = 8
-I_HOLDOFF = 9
-I_RESUME = 10
-I_FREEZE = 11
-I_REOPEN_AGAIN = 12
-I_PROJECT = 13  # 0 none, 1 the control model only, 2 the estimator state too
-I_PERSIST_MIN = 14  # samples the persistence test needs since it restarted
-I_GLR_SPACING = 15  # samples between the onsets of two GLR candidates
-I_GLR_MIN_AGE = 16  # samples a candidate must have run before it may alarm
-I_SPEED_MEMORY = 17  # samples a joint must have been faster than F_DET_SPEED
-N_CI = 18
-
-# float slots of cf
-F_LAM0 = 0
-F_MU = 1
-F_CAP0 = 2  # trace cap of the covariance block of group 0 (F_CAP1: group 1); <= 0: none
-F_SEL_THRESHOLD = 3
-F_ALPHA_SHORT = 4
-F_ALPHA_LONG = 5
-F_THRESHOLD2 = 6
-F_P_MASS = 7
-F_P_J2 = 8
-F_J_MIN = 9
-F_MARGIN = 10
-F_R_MIN = 11
-F_CAP1 = 12
-F_SLOW_FACTOR = 13  # threshold2 multiplier while the other joint is slow
-F_ALPHA_DIR = 14  # EWMA weight of the payload-direction test (short window)
-F_ALPHA_PERSIST = 15  # EWMA weight of the persistence test
-F_MIN_MASS = 16  # [kg] smallest payload change an alarm may claim
-F_MIN_EXPLAINED = 17  # fraction of the weighted error energy the payload direction must explain
-F_GLR_THRESHOLD = 18  # threshold on A^2 / B of a GLR candidate
-F_HETERO = 19  # a candidate's score is A^2 / B - heterogeneity / F_HETERO
-F_DET_SPEED = 20  # [rad/s] an equation feeds the payload tests only while its joint is faster
-F_REMOVAL = 21  # a GLR alarm may claim removing at most this many times the mass carried (+ min_mass)
-N_CF = 22
-F_XS0 = N_CF  # cf[F_XS0:]: the filters' state under a unit constant input, (I - A)^-1 B (order,)
-
-# columns of the detector statistics `short` (n, N_SHORT)
-S_E2 = 0  # 0, 1: short average of the squared prior error per equation
-S_DIR = 2  # 2, 3, 4: short averages of sum_j w_j phi_d,j e_j, w_j phi_d,j^2, w_j e_j^2
-S_PER = 5  # 5, 6, 7: the same over the persistence window (restarted at each alarm)
-S_PER_N = 8  # samples in the persistence window
-S_LREF = 9  # 9, 10: last long-run level per equation that was learned in full (the weights w_j)
-S_M0 = 11  # d . theta0 / (d . d) of the start estimate (the arm without payload): the mass origin
-S_GLR = 12  # GLR candidates, GLR_STRIDE columns each (see _glr_update)
-GLR_CANDIDATES = 16
-GLR_CHANNELS = 5  # exact-construction channels of the inertial columns (J1, J2, r)
-G_X = 0  # filter state, GLR_CHANNELS x 2
-G_OFF = 10  # channel values at the onset (channels 0..3, those filtered by G1)
-G_A = 14  # per equation j: sum of w_j psi_j e_j (G_A + j), w_j psi_j^2 (G_A + 2 + j)
-G_E = 18  # sum of w_j e_j^2 over both equations
-G_AGE = 19
-GLR_STRIDE = 20
-N_SHORT = S_GLR + GLR_CANDIDATES * GLR_STRIDE
-
-# columns of the per-trial integer state `cnt`
-C_STARTED = 0
-C_SINCE_BAD = 1
-C_SINCE_SLOW1 = 2
-C_SINCE_SLOW2 = 3
-C_SKIPPED = 4
-C_LEARNED1 = 5
-C_LEARNED2 = 6
-C_SINCE_ALARM = 7
-C_REOPEN_AT = 8
-C_ALARMS = 9
-C_K = 10
-C_SINCE_SLOW_DET1 = 11  # samples since joint 1 was slower than the detector's speed (12: joint 2)
-N_CNT = 13
-
-BIG = 1 << 40
 
 
 @njit(cache=True)
@@ -303,177 +298,6 @@ def _regress(i, xf, u_last, cnt, tau_prev, q, qd, tau, ci, cf, A, B, C, D, phi, 
     if cnt[i, C_SINCE_BAD] <= ci[I_TAINT]:
         phi[:, :] = np.nan
         y[:] = np.nan
-
-
-@njit(cache=True)
-def _direction(sh, k, a, b, e, alpha):  # pragma: no cover - compiled
-    """EWMA of the three payload-direction sums into columns k, k + 1, k + 2 of ``sh``."""
-    sh[k] += alpha * (a - sh[k])
-    sh[k + 1] += alpha * (b - sh[k + 1])
-    sh[k + 2] += alpha * (e - sh[k + 2])
-
-
-@njit(cache=True)
-def _explained(sh, k, cf):  # pragma: no cover - compiled
-    """True when the sums at column k say: a payload change of at least ``min_mass`` explains
-    at least ``min_explained`` of the weighted error energy (``A^2 / (B E)``, ``|A / B|``)."""
-    a, b, e = sh[k], sh[k + 1], sh[k + 2]
-    if not (b > 0.0 and e > 0.0):
-        return False
-    return abs(a) >= cf[F_MIN_MASS] * b and a * a >= cf[F_MIN_EXPLAINED] * b * e
-
-
-@njit(cache=True)
-def _glr_update(sh, u, k, eps, act, w, ci, cf, A, B, C, D, d):  # pragma: no cover - compiled
-    """Advance every GLR candidate by one sample; return ``(best A^2 / B, its A, B, E)``.
-
-    Candidate c models a payload change at its onset ``k_c``: the prior errors it predicts are
-    ``dm psi_c(k)``, with ``psi_c`` the regressor along the payload direction d of the motion
-    *after* the onset only. By linearity of the filters, ``psi_c`` is the exact construction's
-    J1, J2, r columns computed by a filter bank started from rest at ``k_c`` on the channels
-    ``u - u(k_c)`` (those the derivative filter G1 reads: a jump of the parameters at ``k_c``
-    leaves ``G0 (M qdd)`` = ``G1 (qd - qd(k_c))`` on the post-swap part) and ``u`` (the one G0
-    reads). A new candidate starts every ``glr_spacing`` samples, replacing the oldest, so the
-    onsets of the last ``GLR_CANDIDATES * spacing`` samples are covered.
-    """
-    spacing = ci[I_GLR_SPACING]
-    if k % spacing == 0:  # restart the oldest candidate at this sample
-        c0 = S_GLR + ((k // spacing) % GLR_CANDIDATES) * GLR_STRIDE
-        for m in range(GLR_STRIDE):
-            sh[c0 + m] = 0.0
-        for ch in range(4):
-            sh[c0 + G_OFF + ch] = u[ch]
-    best, ba, bb, be = 0.0, 0.0, 0.0, 0.0
-    f = np.empty((GLR_CHANNELS, 2))
-    for c in range(GLR_CANDIDATES):
-        c0 = S_GLR + c * GLR_STRIDE
-        if k - c * spacing < 0 and k < GLR_CANDIDATES * spacing:
-            continue  # not started yet
-        for ch in range(GLR_CHANNELS):
-            x = c0 + G_X + 2 * ch
-            v = u[ch] - sh[c0 + G_OFF + ch] if ch < 4 else u[ch]
-            for o in range(2):
-                f[ch, o] = D[o] * v + C[o, 0] * sh[x] + C[o, 1] * sh[x + 1]
-            x0 = A[0, 0] * sh[x] + A[0, 1] * sh[x + 1] + B[0] * v
-            x1 = A[1, 0] * sh[x] + A[1, 1] * sh[x + 1] + B[1] * v
-            sh[x], sh[x + 1] = x0, x1
-        psi0 = d[0] * f[0, 1] + d[1] * (f[0, 1] + f[1, 1]) + d[2] * f[2, 1]
-        psi1 = d[1] * (f[0, 1] + f[1, 1]) + d[2] * (f[3, 1] + f[4, 0])
-        for j in range(2):
-            e = eps[j]
-            if act[j] and np.isfinite(e) and w[j] > 0.0:
-                psi = psi0 if j == 0 else psi1
-                sh[c0 + G_A + j] += w[j] * psi * e
-                sh[c0 + G_A + 2 + j] += w[j] * psi * psi
-                sh[c0 + G_E] += w[j] * e * e
-        sh[c0 + G_AGE] += 1.0
-        a0, a1, b0, b1 = sh[c0 + G_A], sh[c0 + G_A + 1], sh[c0 + G_A + 2], sh[c0 + G_A + 3]
-        a, b = a0 + a1, b0 + b1
-        if sh[c0 + G_AGE] < ci[I_GLR_MIN_AGE] or not b > 0.0:
-            continue
-        glr = a * a / b
-        # heterogeneity: what one payload change per equation explains beyond a common one;
-        # friction at one joint's reversal is explained by one equation, a payload by both
-        het = (a0 * a0 / b0 if b0 > 0.0 else 0.0) + (a1 * a1 / b1 if b1 > 0.0 else 0.0) - glr
-        score = glr - het / cf[F_HETERO]
-        if score > best:
-            best, ba, bb, be = score, a, b, sh[c0 + G_E]
-    return best, ba, bb, be
-
-
-@njit(cache=True)
-def _detect(i, eps, act, rest, phi_d, u, th, short, long, cnt, ci, cf, A, B, C, D, d):  # pragma: no cover
-    """Update the detector statistics of trial i; return True on an alarm.
-
-    Every test asks that a change of the tip mass explain the prior errors: a change ``dm``
-    makes ``e_j = psi_j dm`` in both equations at once, ``psi`` the regressor along the payload
-    direction d; friction the model lacks makes errors of another shape, at low speed. Errors
-    are weighted by ``w_j = 1 / level_j`` (the long-run level of equation j: learned only
-    while both joints are faster than ``speed``, from ``resume`` samples after the last alarm
-    on, bias-corrected; the weight keeps the last level learned in full and may only fall
-    while a new one is learned), and an equation feeds the tests only while its joint has
-    been faster than ``speed`` for the selection memory.
-
-    1. **GLR** (exact construction): the generalized likelihood ratio ``A^2 / B`` of a mass
-       change at each of the last ``GLR_CANDIDATES`` onsets (:func:`_glr_update`), less the
-       heterogeneity over the two equations / ``hetero``, above ``glr_threshold``, with
-       ``|A / B| >= min_mass`` [kg] and ``A^2 / (B E) >= min_explained``; the threshold is
-       ``slow_factor`` times higher while a joint was at rest within the selection memory; and
-       the change must leave a payload that can exist: ``dm_hat >= -(removal m_hat + min_mass)``,
-       ``m_hat = d . (theta - theta0) / (d . d)`` the mass the estimate carries over the start
-       estimate (the arm without payload). A stick event of one joint disturbs the other
-       joint's equation like a payload change of either sign; at no payload only the sign
-       that adds mass can be a swap (the false alarms of ``alternating.toml`` at 1.85 s claimed
-       -0.7 to -1.3 kg at 0 kg).
-    2. **Persistence** (cannot lock up): over the persistence window (restarted at each alarm,
-       filled from ``resume`` samples after it) the same ``|dm_hat| >= min_mass`` and
-       explained fraction, with ``psi = phi d`` (long after a change the post-onset regressor
-       is the whole one), after ``persist_min`` samples. A model left wrong along d (a swap
-       masked by an alarm, levels learned on a wrong model) raises an alarm within
-       :func:`~adaptive_dd.identification.two_link_online_config.rearm_time` of motion.
-    3. The paper's construction (no GLR): the short average of ``e_j^2`` above ``threshold^2``
-       times the level (``slow_factor`` more while the other joint is slow), after
-       ``min_learned`` learned samples, gated as 2. over the direction window.
-    """
-    a_s, a_l = cf[F_ALPHA_SHORT], cf[F_ALPHA_LONG]
-    sh = short[i]
-    learn = cnt[i, C_SINCE_ALARM] >= ci[I_RESUME]
-    a_sum, b_sum, e_sum = 0.0, 0.0, 0.0
-    w = np.zeros(2)
-    for j in range(2):
-        e = eps[j]
-        if not (act[j] and np.isfinite(e)):
-            continue
-        e2 = e * e
-        sh[S_E2 + j] += a_s * (e2 - sh[S_E2 + j])
-        if learn and act[1 - j]:
-            long[i, j] += a_l * (e2 - long[i, j])
-            cnt[i, C_LEARNED1 + j] += 1
-        n_l = cnt[i, C_LEARNED1 + j]
-        if n_l >= ci[I_MIN_LEARNED]:
-            sh[S_LREF + j] = long[i, j] / (1.0 - (1.0 - a_l) ** n_l)
-        elif n_l >= ci[I_MIN_LEARNED] // 8:  # relearning: the weight may only fall meanwhile
-            sh[S_LREF + j] = max(sh[S_LREF + j], long[i, j] / (1.0 - (1.0 - a_l) ** n_l))
-        w[j] = 1.0 / sh[S_LREF + j] if sh[S_LREF + j] > 0.0 else 0.0
-        if np.isfinite(phi_d[j]):
-            a_sum += w[j] * phi_d[j] * e
-            b_sum += w[j] * phi_d[j] * phi_d[j]
-            e_sum += w[j] * e2
-    _direction(sh, S_DIR, a_sum, b_sum, e_sum, cf[F_ALPHA_DIR])
-    if learn:
-        _direction(sh, S_PER, a_sum, b_sum, e_sum, cf[F_ALPHA_PERSIST])
-        sh[S_PER_N] += 1.0
-    glr, ga, gb, ge = 0.0, 0.0, 0.0, 0.0
-    if ci[I_CONSTRUCTION] == 1:
-        glr, ga, gb, ge = _glr_update(sh, u, cnt[i, C_K], eps, act, w, ci, cf, A, B, C, D, d)
-    if cnt[i, C_K] < ci[I_WARMUP] or cnt[i, C_SINCE_ALARM] <= ci[I_HOLDOFF]:
-        return False
-    if sh[S_PER_N] >= ci[I_PERSIST_MIN] and _explained(sh, S_PER, cf):
-        return True
-    if ci[I_CONSTRUCTION] == 1:  # the GLR on the payload direction
-        gate = abs(ga) >= cf[F_MIN_MASS] * gb and ga * ga >= cf[F_MIN_EXPLAINED] * gb * ge
-        dd = d[0] * d[0] + d[1] * d[1] + d[2] * d[2]
-        if gate and dd > 0.0:  # the payload left after the change must be able to exist
-            m_hat = (d[0] * th[0] + d[1] * th[1] + d[2] * th[2]) / dd - sh[S_M0]
-            gate = ga >= -(cf[F_REMOVAL] * max(m_hat, 0.0) + cf[F_MIN_MASS]) * gb
-        # a joint that stops or sticks disturbs the other joint's equation for the filters'
-        # memory (the sampled filters meet an acceleration jump): while a joint has been at
-        # rest within the selection memory (rest False), ask slow_factor (RMS) times more
-        thr = cf[F_GLR_THRESHOLD] if rest[0] and rest[1] else cf[F_GLR_THRESHOLD] * np.sqrt(cf[F_SLOW_FACTOR])
-        return glr >= thr and gate
-    # the paper's construction has no GLR: the energy test, gated over the direction window
-    energy = False
-    for j in range(2):
-        n_l = cnt[i, C_LEARNED1 + j]
-        if n_l < ci[I_MIN_LEARNED] or not act[j]:  # only an equation in use may alarm
-            continue
-        level = long[i, j] / (1.0 - (1.0 - a_l) ** n_l)
-        # a joint that stops or reverses (stick-slip) disturbs the other joint's equation
-        # through the coupling for about the filters' memory: ask more of the evidence then
-        thr = cf[F_THRESHOLD2] if act[1 - j] else cf[F_THRESHOLD2] * cf[F_SLOW_FACTOR]
-        if sh[S_E2 + j] > thr * level + 1e-300:
-            energy = True
-    return energy and _explained(sh, S_DIR, cf)
 
 
 @njit(cache=True)

@@ -36,8 +36,9 @@ from adaptive_dd.plant.simulator import (
     SimulationResult,
     simulate_open_loop,
 )
-from adaptive_dd.plant.two_link import FRICTION_LAWS, ClosedFormTwoLink, closed_form_view, paper_sigma
+from adaptive_dd.plant.two_link import FRICTION_LAWS, ClosedFormTwoLink, closed_form_view
 from adaptive_dd.plant.two_link_integrator import two_link_plant_step
+from adaptive_dd.plant.two_link_view import paper_sigma
 
 __all__ = [
     "FRICTION_LAWS",

@@ -217,7 +217,7 @@ class Arm:
         :meth:`ClosedFormTwoLink.sice() <adaptive_dd.plant.two_link.ClosedFormTwoLink.sice>` (to
         1 ulp: the URDF's numbers read back through Pinocchio), chosen automatically by a
         :class:`~adaptive_dd.benchmark.scenario.Scenario` of it; ``general=True`` keeps the general
-        kernels. :func:`~adaptive_dd.plant.two_link.paper_sigma` maps its base parameters onto the
+        kernels. :func:`~adaptive_dd.plant.two_link_view.paper_sigma` maps its base parameters onto the
         paper's ``[J1 J2 r b1 b2 d1 d2]``."""
         from adaptive_dd.robots import robot_urdf
 

@@ -5,7 +5,7 @@ x axis), its physical parameters of eq. (10) (:func:`physical_parameters`), and 
 from its base parameters onto the paper's ``sigma = [J1 J2 r b1 b2 d1 d2]`` (:func:`paper_map`).
 
 What :func:`~adaptive_dd.plant.two_link.closed_form_view` and
-:func:`~adaptive_dd.plant.two_link.paper_sigma` build on; reads the arm, never its class.
+:func:`~adaptive_dd.plant.two_link_view.paper_sigma` build on; reads the arm, never its class.
 """
 
 from __future__ import annotations
@@ -74,7 +74,7 @@ def physical_parameters(arm) -> PhysicalParameters:
 
 def paper_map(arm) -> Array:
     """``S (7, p)``: ``paper sigma = S @ sigma`` on an arm of the paper's geometry
-    (:func:`~adaptive_dd.plant.two_link.paper_sigma`)."""
+    (:func:`~adaptive_dd.plant.two_link_view.paper_sigma`)."""
 
     def make():
         rng = np.random.default_rng(0)

@@ -4,9 +4,10 @@ The public arm is :class:`~adaptive_dd.plant.arm.Arm` (a URDF, or :meth:`Arm.sic
 <adaptive_dd.plant.arm.Arm.sice>`). An arm of the paper's geometry (two revolute joints about
 parallel vertical axes, centres of mass on the links' axes, no armature: :func:`as_two_link`) also
 has the closed forms of eqs. (3-9); :func:`closed_form_view` is the one function that says whether
-an arm has them and returns their record, a :class:`ClosedFormTwoLink`; :func:`paper_sigma` maps the
-arm's base parameters onto the paper's ``sigma = [J1 J2 r b1 b2 d1 d2]``. ``ClosedFormTwoLink`` was
-called ``TwoLinkArm`` (deprecated, a FutureWarning).
+an arm has them and returns their record, a :class:`ClosedFormTwoLink`;
+:func:`~adaptive_dd.plant.two_link_view.paper_sigma` maps the arm's base parameters onto the
+paper's ``sigma = [J1 J2 r b1 b2 d1 d2]``. ``ClosedFormTwoLink`` was called
+``TwoLinkArm`` (deprecated, a FutureWarning).
 
 A :class:`ClosedFormTwoLink` holds the base parameters ``sigma`` (eq. 9, without payload), the
 physical parameters of eq. (10) when they are known, the link lengths (``l2`` is
@@ -56,7 +57,6 @@ from adaptive_dd.plant.devices import SICE_SENSOR, ActuatorConfig, SensorConfig
 from adaptive_dd.plant.paper_geometry import (
     equivalent_physical,
     is_paper_geometry,
-    paper_map,
     physical_parameters,
 )
 from adaptive_dd.plant.parameters import (
@@ -69,7 +69,7 @@ from adaptive_dd.plant.parameters import (
     validate_sigma,
 )
 
-__all__ = ["FRICTION_LAWS", "ClosedFormTwoLink", "as_arm", "as_two_link", "closed_form_view", "paper_sigma"]
+__all__ = ["FRICTION_LAWS", "ClosedFormTwoLink", "as_arm", "as_two_link", "closed_form_view"]
 
 Array = NDArray[np.float64]
 
@@ -545,50 +545,6 @@ def as_arm(arm):
     :class:`~adaptive_dd.benchmark.scenario.Scenario` holds ``as_arm`` of what it is given, and code
     that needs the closed forms asks :func:`closed_form_view`."""
     return arm.to_arm() if getattr(arm, "closed_form", None) is True else arm
-
-
-def paper_sigma(arm, sigma: ArrayLike | None = None) -> Array:
-    """The paper's base parameters ``[J1 J2 r b1 b2 d1 d2]`` (eq. 9) of ``arm``'s base parameters.
-
-    A linear map ``S (7, p)``, the same for every value of the arm's parameters: the torque is
-    ``Phi(q, qd, qdd) @ S @ sigma`` with ``Phi`` the closed-form regressor of eq. (8), ``S`` found once
-    per arm by least squares on 40 sampled states (seed 0). On the SICE URDF's base parameters
-    ``('Izz1 + 0.04*m2 + Ia1', 'mx2', 'my2', 'Izz2', 'fv1', 'fv2', 'fc1', 'fc2', 'Ia2')`` it reads
-    ``J1 = Izz1 + l1^2 m2 + Ia1``, ``J2 = Izz2``, ``r = l1 mx2``, ``b = fv``, ``d = fc``. A base
-    parameter the closed forms have no term for (there ``my2``, a centre of mass off the link's
-    axis, and ``Ia2``, armature) maps to nothing: the map is exact where they are zero, as on every
-    arm of the paper's geometry.
-
-    Parameters
-    ----------
-    arm : Arm
-        An arm of the paper's geometry (:func:`closed_form_view` is not None for it, or would not be
-        without ``general=True``).
-    sigma : array_like (..., p), optional
-        Base parameters of ``arm`` (an estimate, a loaded arm's); default ``arm.sigma``.
-
-    Returns
-    -------
-    ndarray (..., 7)
-        On a :class:`ClosedFormTwoLink` (whose base parameters are the paper's) ``sigma`` itself.
-
-    Raises
-    ------
-    ParameterError
-        ``arm`` is not of the paper's geometry; ``sigma`` of the wrong length.
-    """
-    if getattr(arm, "closed_form", None) is True:
-        return np.asarray(arm.sigma if sigma is None else sigma, dtype=float)
-    if getattr(arm, "closed_form", None) is not False or as_two_link_cached(arm) is None:
-        raise ParameterError(
-            f"paper_sigma: the paper's sigma [J1 J2 r b1 b2 d1 d2] exists for an arm of its geometry "
-            f"(two parallel revolute joints, centres of mass on the link axes, no armature), not "
-            f"for this {getattr(arm, 'n_joints', '?')}-joint arm"
-        )
-    s = np.asarray(arm.sigma if sigma is None else sigma, dtype=float)
-    if s.shape[-1:] != arm.sigma.shape:
-        raise ParameterError(f"paper_sigma: sigma must have shape (..., {len(arm.sigma)}), got {s.shape}")
-    return s @ paper_map(arm).T
 
 
 def as_two_link_cached(arm) -> ClosedFormTwoLink | None:

@@ -3,9 +3,10 @@
 The keys come from the tables the scenario checks themselves use
 (:data:`adaptive_dd.benchmark.scenario_base.KEYS`, the ``[arm]`` and ``[plant]`` key lists of
 :mod:`adaptive_dd.plant.two_link` and :mod:`adaptive_dd.plant.arm`, the controllers'
-settings in :data:`adaptive_dd.controllers.builtins.CONTROLLERS` (both arms), the estimator and detector
-dataclasses); the defaults come from resolving minimal scenarios with
-:func:`~adaptive_dd.benchmark.scenario.load_scenario` (what ``adaptive-dd validate`` prints).
+settings in :data:`adaptive_dd.controllers.builtins.CONTROLLERS` (both arms) less those the run
+derives from the scenario, :data:`adaptive_dd.benchmark.scenario_settings.DERIVED`); the defaults
+come from resolving minimal scenarios with :func:`~adaptive_dd.benchmark.scenario.load_scenario`
+(what ``adaptive-dd validate`` prints).
 Only the one-line meanings below are written by hand, and the build stops when a key of the
 code has no meaning here or a meaning names a key the code no longer has: the page cannot
 drift from the checks.
@@ -101,9 +102,6 @@ MEANING = {
     "(true by default; false is the law without it).",
     "setting.observer_bandwidth": "`adaptive_ct` (every arm): the residual observer's bandwidth "
     "[rad/s]; default 0.4 / T.",
-    "setting.estimator": "The online estimator's settings (a table; fields below).",
-    "setting.detector": "`adaptive_ct`: the change detector's settings (a table at the top of"
-    " `[controllers.adaptive_ct]`; fields below), or `false`.",
 }
 
 # Keys that arrive with branches not merged yet (issues 28 and 29): written here so the
@@ -162,19 +160,6 @@ def _code(v: str) -> str:
     return f"`{v}`" if v else ""
 
 
-def _fields(cls) -> list[tuple[str, str]]:
-    out = []
-    for f in dataclasses.fields(cls):
-        if f.default is not dataclasses.MISSING:
-            d = repr(f.default)
-        elif f.default_factory is not dataclasses.MISSING:
-            d = repr(f.default_factory())
-        else:
-            d = "(required)"
-        out.append((f.name, d))
-    return out
-
-
 def _ramp_default(scenario_base) -> float:
     """The ramp of a ``[reference]`` table that gives none (the field's default)."""
     return {f.name: f.default for f in dataclasses.fields(scenario_base.Reference)}["ramp"]
@@ -206,9 +191,8 @@ def _check(used: set[str]) -> None:
 
 def page() -> str:
     from adaptive_dd.benchmark import scenario_base
+    from adaptive_dd.benchmark.scenario_settings import DERIVED
     from adaptive_dd.controllers import registry
-    from adaptive_dd.identification.online import Detector, OnlineConfig
-    from adaptive_dd.identification.two_link_online import ChangeDetector, TwoLinkOnlineConfig
     from adaptive_dd.plant import arm_tables
 
     two, urdf = _defaults(TWO_LINK_SCENARIO), _defaults(URDF_SCENARIO)
@@ -345,8 +329,14 @@ def page() -> str:
     rows = []
     common = sorted(registry.COMMON)
     for name, entry in registry.CONTROLLERS.items():
-        two_set = sorted(entry.settings_on("two_link")) if entry.applies_to("two_link") else None
-        serial_set = sorted(entry.settings_on("chain")) if entry.applies_to("chain") else None
+        derived = DERIVED.get(name, {})
+
+        def keys_on(kind, entry=entry, derived=derived):
+            if not entry.applies_to(kind):
+                return None
+            return sorted(k for k in entry.settings_on(kind) if k not in derived)
+
+        two_set, serial_set = keys_on("two_link"), keys_on("chain")
         used |= {f"setting.{k}" for k in (*common, *(two_set or ()), *(serial_set or ()))}
 
         def cell(keys, other):
@@ -363,41 +353,17 @@ def page() -> str:
         heads=("setting", "meaning"),
     )
 
-    for title, cls, mod in (
-        (
-            "Two-link `adaptive_ct`: `estimator = {...}`",
-            TwoLinkOnlineConfig,
-            "adaptive_dd.identification.two_link_online",
-        ),
-        (
-            "Two-link `adaptive_ct`: `detector = {...}`",
-            ChangeDetector,
-            "adaptive_dd.identification.two_link_online",
-        ),
-        (
-            "URDF arm `adaptive_ct`: `estimator = {...}`",
-            OnlineConfig,
-            "adaptive_dd.identification.online",
-        ),
-        (
-            "URDF arm `adaptive_ct`: `estimator = { detector = {...} }`",
-            Detector,
-            "adaptive_dd.identification.online",
-        ),
-    ):
-        fields = [
-            (n, "see the next table" if n == "detector" and cls is OnlineConfig else d)
-            for n, d in _fields(cls)
-        ]
-        if cls is TwoLinkOnlineConfig:
-            fields = [f for f in fields if f[0] in registry.ONLINE_KEYS]
-        lines += [
-            f"### {title}",
-            "",
-            f"Fields of {{py:class}}`{mod}.{cls.__name__}` (their meaning: its docstring):",
-            "",
-        ]
-        lines += table([(f"`{n}`", f"`{d}`") for n, d in fields], heads=("field", "default"))
+    lines += [
+        "### Derived, not keys",
+        "",
+        "A scenario that sets one of these is refused, the error naming the file, the key and what",
+        "the setting is derived from (`adaptive-dd validate FILE` prints the derived values):",
+        "",
+    ]
+    lines += table(
+        [(f"`{name}.{k}`", why) for name, keys in DERIVED.items() for k, why in keys.items()],
+        heads=("setting", "derived from"),
+    )
     _check(used)
     return "\n".join(lines)
 
@@ -407,11 +373,11 @@ def every_key() -> dict[str, tuple[str, ...]]:
     keys (``[reference]``'s ``jointN`` counted once), the ``[arm]`` keys of both forms, ``[plant]``,
     ``[plant.uncertainty]`` and ``[model]``, the controllers' settings (each name once: the
     common ones and every built-in's, on either arm) and the estimator's and detector's fields
-    on either arm. ``python docs/_ext/scenario_keys.py`` prints the count."""
+    on either arm (less the settings the run derives from the scenario, :data:`DERIVED`, which a
+    scenario cannot set). ``python docs/_ext/scenario_keys.py`` prints the count."""
     from adaptive_dd.benchmark import scenario_base
+    from adaptive_dd.benchmark.scenario_settings import DERIVED
     from adaptive_dd.controllers import registry
-    from adaptive_dd.identification.online import Detector, OnlineConfig
-    from adaptive_dd.identification.two_link_online import ChangeDetector
     from adaptive_dd.plant import arm_tables
 
     out: dict[str, tuple[str, ...]] = {}
@@ -433,15 +399,9 @@ def every_key() -> dict[str, tuple[str, ...]]:
         out["plant.uncertainty"] = tuple(uncertainty.UNCERTAINTY_KEYS)
         out["model"] = tuple(uncertainty.MODEL_KEYS)
     settings = set(registry.COMMON)
-    for entry in registry.CONTROLLERS.values():
-        settings |= set(entry.settings)
+    for name, entry in registry.CONTROLLERS.items():
+        settings |= set(entry.settings) - set(DERIVED.get(name, ()))
     out["controllers.NAME"] = tuple(sorted(settings))
-    est = {f.name for f in dataclasses.fields(OnlineConfig)} | set(registry.ONLINE_KEYS)
-    out["controllers.adaptive_ct.estimator"] = tuple(sorted(est - {"detector"}))
-    det = {f.name for f in dataclasses.fields(Detector)} | {
-        f.name for f in dataclasses.fields(ChangeDetector)
-    }
-    out["controllers.adaptive_ct.detector"] = tuple(sorted(det))
     return out
 
 

@@ -1,0 +1,143 @@
+"""The ``[controllers.NAME]`` tables of a scenario: each built-in's settings checked once when
+the file is read (:func:`controller_setting_errors`), and the settings that are not scenario
+keys because the run derives them from the arm and the scenario (:data:`DERIVED`,
+:func:`derived_setting_errors`).
+
+``adaptive_ct``'s estimator and change detector take no settings from a scenario file: on an arm
+from a URDF the estimator's mode follows from the model's stated uncertainty (``[model]
+uncertainty``, by default the ``[plant.uncertainty]`` levels:
+:func:`~adaptive_dd.closed_loop.controllers.with_stated_uncertainty`), its prior from ``[model]
+from`` (:mod:`adaptive_dd.closed_loop.model_prior`), its row weights from ``[arm] torque_limit``
+and the payload mass it re-opens at an alarm from ``[arm] payload_capacity``
+(:func:`~adaptive_dd.benchmark.preflight.derived_estimator_settings`, what ``adaptive-dd
+validate`` prints); every other field is the estimator's and the detector's default, the same in
+every scenario. Research code that wants other values builds the controller in Python
+(``make_controller("adaptive_ct", options={"estimator": {...}})``) or sets ``controller_options``
+on a loaded :class:`~adaptive_dd.benchmark.scenario.Scenario`.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+from adaptive_dd.benchmark.scenario_base import LIMITS
+from adaptive_dd.benchmark.scenario_checks import check_number, thaw
+
+__all__ = ["DERIVED", "controller_setting_errors", "derived_setting_errors", "with_settings"]
+
+_FROM_THE_SCENARIO = (
+    "its mode from [model] uncertainty (else the [plant.uncertainty] levels), its prior from "
+    "[model] from, its row weights from [arm] torque_limit, its re-opening at an alarm from [arm] "
+    "payload_capacity; every other field is the default"
+)
+DERIVED: dict[str, dict[str, str]] = {
+    "adaptive_ct": {
+        "estimator": "adaptive_ct's estimator settings are derived from the arm and the scenario ("
+        + _FROM_THE_SCENARIO
+        + ")",
+        "detector": "adaptive_ct's change detector settings are derived from the arm and the scenario "
+        "(the payload mass it re-opens at an alarm from [arm] payload_capacity; every other field is "
+        "the default)",
+    },
+}
+"""Settings of built-in controllers that are not scenario keys: ``{controller: {setting: what it
+is derived from}}``. A scenario file that sets one is refused (:func:`derived_setting_errors`)."""
+
+
+def with_settings(scenario, name: str, settings: dict):
+    """``scenario`` with controller ``name``'s settings table replaced by ``settings`` (the other
+    controllers' kept): the way to give ``adaptive_ct`` estimator or detector settings, which no
+    scenario file sets (:data:`DERIVED`), in research code and measurements.
+
+    Examples
+    --------
+    >>> from adaptive_dd import load_scenario
+    >>> sc = with_settings(load_scenario(), "adaptive_ct", {"detector": {"threshold": 7.0}})
+    >>> sc.options("adaptive_ct")
+    {'detector': {'threshold': 7.0}}
+    """
+    import dataclasses
+
+    from adaptive_dd.benchmark.scenario_checks import freeze
+
+    kept = tuple(o for o in scenario.controller_options if o[0] != name)
+    return dataclasses.replace(scenario, controller_options=(*kept, (name, freeze(dict(settings)))))
+
+
+def derived_setting_errors(data: Any) -> list[str]:
+    """``key: reason`` for each setting of :data:`DERIVED` a scenario's tables (the parsed TOML)
+    set, naming what the setting is derived from and what to do."""
+    tables = data.get("controllers") if isinstance(data, dict) else None
+    if not isinstance(tables, dict):
+        return []
+    errs = []
+    for name, derived in DERIVED.items():
+        table = tables.get(name)
+        if not isinstance(table, dict):
+            continue
+        for key in sorted(derived.keys() & table.keys()):
+            errs.append(
+                f"controllers.{name}.{key}: not a scenario key: {derived[key]}; remove it "
+                "(`adaptive-dd validate FILE` prints the derived values)"
+            )
+    return errs
+
+
+def _numbers(x: Any, key: str):
+    """Every number in a (nested) setting as ``(key, value)``."""
+    if isinstance(x, dict):
+        for k, y in x.items():
+            yield from _numbers(y, f"{key}.{k}")
+    elif isinstance(x, list | tuple):
+        for y in x:
+            yield from _numbers(y, key)
+    elif isinstance(x, int | float) and not isinstance(x, bool):
+        yield key, float(x)
+
+
+def controller_setting_errors(v: dict) -> list[str]:
+    """Each built-in controller with a ``[controllers.NAME]`` table built once, so a bad setting
+    (a negative gain, a bandwidth the sample period cannot carry, an unknown key) is an error of
+    the file, not of the run. ``bandwidth``, ``boost_bandwidth`` and ``damping`` have the bounds
+    of ``[control]``; ``boost_duration`` is at most the run; every number is finite and within
+    ``LIMITS["max_setting"]``."""
+    from adaptive_dd.controllers import CONTROLLERS, gains_for, make_controller
+
+    errs: list[str] = []
+    opts = {n: thaw(o) for n, o in v["controller_options"]}
+    T = v["sample_period"]
+    for name in v["controllers"]:
+        if name not in CONTROLLERS or name not in opts:
+            continue
+        o, n0 = opts[name], len(errs)
+        for bw in ("bandwidth", "boost_bandwidth"):
+            key = f"controllers.{name}.{bw}"
+            if (
+                bw in o
+                and check_number(errs, key, o[bw], 0, 1e5, lo_open=True)
+                and o[bw] * T > LIMITS["max_bandwidth_T"]
+            ):
+                errs.append(
+                    f"{key}: {o[bw]} rad/s at T = {T} s gives "
+                    f"bandwidth * T = {o[bw] * T:.3g} > {LIMITS['max_bandwidth_T']}"
+                )
+        if "boost_duration" in o:
+            check_number(errs, f"controllers.{name}.boost_duration", o["boost_duration"], 0, v["duration"])
+        if "damping" in o:
+            check_number(
+                errs, f"controllers.{name}.damping", o["damping"], 0, LIMITS["max_damping"], lo_open=True
+            )
+        for key, x in _numbers(o, f"controllers.{name}"):
+            if not math.isfinite(x) or abs(x) > LIMITS["max_setting"]:
+                errs.append(f"{key}: must be finite and within +-{LIMITS['max_setting']:g}, got {x!r}")
+        if len(errs) > n0:
+            continue
+        try:
+            make_controller(name, gains_for(v["arm"], v["bandwidth"], v["damping"]), o, arm=v["arm"])
+        except (ValueError, TypeError, ArithmeticError) as exc:
+            msg = str(exc)
+            while msg.startswith(f"controllers.{name}"):  # the registry names the controller too
+                msg = msg.removeprefix(f"controllers.{name}").removeprefix(": ")
+            errs.append(f"controllers.{name}{'' if msg.startswith('.') else ': '}{msg}")
+    return errs
