@@ -65,7 +65,14 @@ def main(argv: list[str] | None = None) -> int:
         code = timed([*(rest or RUN_ARGS), "--out", str(ROOT / "docs" / "leaderboard")])
         if code:
             return code
-    for path in render():
+    from adaptive_dd.errors import ParameterError
+
+    try:
+        written = render()
+    except ParameterError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    for path in written:
         print(f"wrote {path.relative_to(ROOT)}")
     return 0
 

@@ -316,18 +316,17 @@ def plot_ratios(df):
         x = np.arange(len(laws)) - 0.4 + width * (k + 0.5)
         m = rows["ratio_mean"].to_numpy(float)
         err = np.abs(np.vstack([m - rows["ratio_ci95_low"], rows["ratio_ci95_high"] - m]))
-        bar = ax.errorbar(x, m, yerr=err, fmt="o", ms=4, capsize=2, label=f"segment {seg} ({kg:.3g} kg)")
+        bar = ax.errorbar(x, m, yerr=err, fmt="o", ms=4, capsize=2, label=f"{seg} ({kg:.3g} kg)")
         ax.plot(x, rows["ratio_p90"], "x", ms=4, color=bar[0].get_color())
     ax.axhline(1.0, color="0.5", lw=0.8)
     ax.set_yscale("log")
     floors = pooled.drop_duplicates("controller").set_index("controller")["floor"]
-    ax.set_xticks(
-        range(len(laws)), [f"{c}\n/ {floors[c]}" for c in laws], rotation=60, ha="right", fontsize=7
-    )
+    names = [f"{c} / {floors[c]}" for c in laws]
+    ax.set_xticks(range(len(laws)), names, rotation=40, ha="right", rotation_mode="anchor", fontsize=7)
     ax.set_ylabel("RMS error / floor's RMS error, per seed [-]")
     ax.set_title(
         f"{pooled['scenario'].iloc[0]}: mean ratio to the floor, its 95 % bootstrap interval (dot), p90 (x)",
         fontsize=9,
     )
-    ax.legend(fontsize=7)
+    ax.legend(title="segment (mean payload of the arms)", fontsize=7, title_fontsize=7)
     return fig
