@@ -12,6 +12,7 @@ Usage::
     python tools/leaderboard_page.py                 # re-render from the committed table
     python tools/leaderboard_page.py --run           # run the docs' leaderboard, then render
     python tools/leaderboard_page.py --run --arms 10 --seeds 3   # another run's arguments
+    python tools/leaderboard_page.py --print results/leaderboard/leaderboard.csv  # print, write nothing
 """
 
 from __future__ import annotations
@@ -55,9 +56,12 @@ def main(argv: list[str] | None = None) -> int:
     """Parse the options, run the leaderboard if asked, render."""
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--run", action="store_true", help="run the leaderboard into docs/leaderboard first")
+    p.add_argument("--print", dest="table", metavar="CSV", help="print the blocks another table renders")
     args, rest = p.parse_known_args(argv)
     if rest and not args.run:
         p.error(f"{' '.join(rest)}: leaderboard arguments need --run")
+    if args.table and args.run:
+        p.error("--print: prints a table's blocks; --run writes the docs' table: give one")
     if args.run:
         sys.path.insert(0, str(ROOT / "benchmarks"))
         from leaderboard_time import main as timed
@@ -65,9 +69,14 @@ def main(argv: list[str] | None = None) -> int:
         code = timed([*(rest or RUN_ARGS), "--out", str(ROOT / "docs" / "leaderboard")])
         if code:
             return code
+    from adaptive_dd.arena.page import read_table, render_blocks
     from adaptive_dd.errors import ParameterError
 
     try:
+        if args.table:
+            for name, text in render_blocks(read_table(args.table)).items():
+                print(f"== {name}\n{text}\n")
+            return 0
         written = render()
     except ParameterError as exc:
         print(f"error: {exc}", file=sys.stderr)
