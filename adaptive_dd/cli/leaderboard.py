@@ -103,7 +103,7 @@ def run(args: argparse.Namespace) -> int:
     for p in (csv, js, png):
         print(f"wrote {p}")
     print(
-        f"time: {df.attrs['compile_seconds']:.1f} s compiling (numba, cold cache), "
+        f"time: {df.attrs['compile_seconds']:.1f} s compiling (numba; 0 when its cache is warm), "
         f"{df.attrs['run_seconds']:.1f} s running"
     )
     return 0
