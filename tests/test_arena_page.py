@@ -126,3 +126,22 @@ def test_the_figure_draws_a_point_and_interval_per_law_and_segment():
     assert labels == ["adaptive_ct / ct_oracle", "sliding_mode / ct_oracle"]
     with pytest.raises(ParameterError, match="--arms"):
         plot_ratios(df[df["kind"] != "population"])
+
+
+def test_the_nominal_inertia_of_an_arm_with_an_unbounded_joint_warns_nothing():
+    """The Gen3's continuous joints have limits (-inf, inf): their middle is 0 without an inf - inf
+    (the leaderboard's laws take their gains from it; RuntimeWarning is an error under pytest)."""
+    import dataclasses
+
+    from adaptive_dd.plant.arm import Arm
+    from adaptive_dd.robots import robot_urdf
+
+    arm = Arm.from_urdf(robot_urdf("gen3"))
+    lim = arm.position_limits
+    unbounded = ~np.isfinite(lim).all(axis=1)
+    assert unbounded.any() and not unbounded.all()
+    mid = np.where(unbounded, 0.0, np.where(unbounded[:, None], 0.0, lim).sum(axis=1) / 2)
+    np.testing.assert_allclose(arm.nominal_inertia(), np.diag(arm.mass_matrix(mid)), rtol=1e-9)
+    bounded = dataclasses.replace(arm, position_limits=np.where(unbounded[:, None], [-1.0, 3.0], lim))
+    mid[unbounded] = 1.0  # the middle of (-1, 3)
+    np.testing.assert_allclose(bounded.nominal_inertia(), np.diag(arm.mass_matrix(mid)), rtol=1e-9)
