@@ -44,6 +44,7 @@ __all__ = [
     "POPULATION_TEMPLATE",
     "leaderboard",
     "ratio_columns",
+    "rms_rank",
     "shipped_scenarios",
 ]
 
@@ -84,6 +85,11 @@ COLUMNS: dict[str, tuple[str, str]] = {
     "failures": ("-", "trials that failed (diverged, ran away or raised) before the segment's end"),
     "rms_error_mrad": ("mrad", "mean over seeds of the joint-space RMS tracking error |q_d - q|"),
     "floor_rms_error_mrad": ("mrad", "the same of the floor"),
+    "rms_rank": (
+        "-",
+        "rank of rms_error_mrad in the scenario's segment among the laws with a floor (1: lowest; "
+        "a law with a failed trial after those without; empty: an oracle)",
+    ),
     "rms_torque_Nm": ("N m", "mean over seeds of the RMS applied torque (norm over joints)"),
     "saturation_pct": ("%", "mean over seeds of the samples with a joint's command beyond its limit"),
     "floor_saturation_pct": ("%", "the same of the floor (a saturated floor makes the ratio optimistic)"),
@@ -325,7 +331,8 @@ def leaderboard(
     -------
     pandas.DataFrame
         One row per scenario (or arm, or the population), controller and segment; the columns of
-        :data:`COLUMNS`.
+        :data:`COLUMNS`. ``attrs["compile_seconds"]``: numba's compile time of the runs [s];
+        ``attrs["run_seconds"]``: the rest of their wall time [s].
 
     Raises
     ------
@@ -343,9 +350,10 @@ def leaderboard(
     if isinstance(arms, bool) or not isinstance(arms, int) or arms < 0:
         raise ParameterError(f"leaderboard: arms must be an integer >= 0, got {arms!r}")
     rng = np.random.default_rng(0) if rng is None else rng
+    times = {"compile": 0.0, "run": 0.0}
     rows: list[dict] = []
     for spec in shipped_scenarios() if scenarios is None else scenarios:
-        cells = _run_cells(_scenario(spec), "scenario", controllers, seeds, progress)
+        cells = _run_cells(_scenario(spec), "scenario", controllers, seeds, progress, times)
         rows += [_row(c, rng) for c in cells]
     if arms:
         data, src = _template(template)
@@ -354,21 +362,44 @@ def leaderboard(
         arm_cells: list[dict] = []
         for k in range(first_arm, first_arm + arms):
             sc = population_scenario(data, src, k)
-            cells = _run_cells(sc, "arm", controllers, seeds, progress)
+            cells = _run_cells(sc, "arm", controllers, seeds, progress, times)
             rows += [_row(c, rng) for c in cells]
             arm_cells += cells
         rows += [_row(c, rng) for c in _pooled(arm_cells, arms)]
-    return pd.DataFrame(rows, columns=list(COLUMNS))
+    df = pd.DataFrame(rows, columns=list(COLUMNS))
+    df["rms_rank"] = rms_rank(df)
+    df.attrs["compile_seconds"], df.attrs["run_seconds"] = times["compile"], times["run"]
+    return df
 
 
-def _run_cells(sc, kind: str, controllers, seeds, progress) -> list[dict]:
-    """Run one scenario's controllers and floors; its cells (:func:`_cells`)."""
+def rms_rank(df):
+    """The ``rms_rank`` column of ``df`` (:data:`COLUMNS`): per scenario and segment, the rank of
+    the mean RMS error among the rows with a floor, those with a failed trial after the others;
+    NaN for an oracle's row. Every controller of a scenario's seed meets the same robot, noise and
+    swaps, so the RMS errors of one segment compare where the ratios (different floors) do not."""
+    import pandas as pd
+
+    out = pd.Series(np.nan, index=df.index, dtype=float)
+    ranked = df[df["floor"] != ""]
+    for _, g in ranked.groupby(["scenario", "segment"], sort=False):
+        key = g["rms_error_mrad"].where(np.isfinite(g["rms_error_mrad"]), np.inf)
+        order = sorted(g.index, key=lambda i: (g.at[i, "failures"] > 0, key[i]))
+        out[order] = np.arange(1, len(order) + 1, dtype=float)
+    return out
+
+
+def _run_cells(sc, kind: str, controllers, seeds, progress, times=None) -> list[dict]:
+    """Run one scenario's controllers and floors; its cells (:func:`_cells`). ``times``: a dict
+    whose ``compile`` and ``run`` [s] the run's compile and other wall time are added to."""
     from adaptive_dd.benchmark.runner import run_benchmark
 
     if seeds is not None:
         sc = dataclasses.replace(sc, seeds=seeds)
     names, floors, missing = _with_floors(sc, controllers)
     res = run_benchmark(sc.with_controllers(names), progress=progress)
+    if times is not None:
+        times["compile"] += float(res.compile_time or 0.0)
+        times["run"] += float(res.wall_time or 0.0)
     floors = {n: floors.get(n, r.floor) for n, r in res.runs.items()}
     per = _per_seed(res, list(res.runs))
     masses = [m for (_, _, m) in sc.segments()]

@@ -4,7 +4,8 @@ Writes ``leaderboard.csv`` (one row per scenario, controller and segment), ``lea
 (the rows and every column's unit and meaning) and ``leaderboard.png`` (the mean ratio to the
 floor per controller and scenario segment; the population pooled, not each arm) into ``--out``
 (:func:`adaptive_dd.arena.leaderboard`), and prints per scenario segment the controller with the
-lowest RMS error (every controller of a seed meets the same robot and noise).
+lowest RMS error (every controller of a seed meets the same robot and noise), and the seconds
+its runs spent compiling (numba, cold cache) apart from those spent running.
 """
 
 from __future__ import annotations
@@ -101,6 +102,10 @@ def run(args: argparse.Namespace) -> int:
     _print_winners(df[df["kind"] != "arm"])
     for p in (csv, js, png):
         print(f"wrote {p}")
+    print(
+        f"time: {df.attrs['compile_seconds']:.1f} s compiling (numba; 0 when its cache is warm), "
+        f"{df.attrs['run_seconds']:.1f} s running"
+    )
     return 0
 
 

@@ -440,7 +440,8 @@ class Arm:
     def nominal_inertia(self) -> Array:
         """Diagonal of M at the middle of the position limits (0 for unbounded joints), ``(n,)``."""
         lim = self.position_limits
-        mid = np.where(np.isfinite(lim).all(axis=1), lim.mean(axis=1), 0.0)
+        bounded = np.isfinite(lim).all(axis=1)
+        mid = np.where(bounded, np.where(bounded[:, None], lim, 0.0).mean(axis=1), 0.0)  # no inf - inf
         return np.diag(self.mass_matrix(mid)).copy()
 
     # ------------------------------------------------------------------- payload
