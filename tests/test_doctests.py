@@ -2,8 +2,9 @@
 
 The list is ``docs/_ext/api_list.py`` (the reference's index is written from it). Each object
 needs numpydoc Parameters (a class: Parameters or Attributes) and, where it returns something,
-Returns; and an Examples section whose doctests pass here, every one of them. The examples that compile kernels (the closed loop takes minutes
-to compile on a cold cache) are in :data:`SLOW` and run under the slow marker.
+Returns; and an Examples section whose doctests pass here, every one of them. The examples that
+compile kernels (the closed loop takes minutes to compile on a cold cache) are in :data:`SLOW` and
+run under the slow marker.
 """
 
 from __future__ import annotations
