@@ -374,7 +374,8 @@ def run_sweep(
     ...                      "grid": {"payload_mass": [1.0, 3.0]}})
     >>> with distributed.Client(processes=False, n_workers=1, dashboard_address=None) as client:
     ...     res = run_sweep(sweep, tempfile.mkdtemp(), client=client, progress=False)
-    sweep <memory>: 2 grid points x 2 controllers x 1 seeds = 4 cells in 4 distinct tasks; 0 reused from ..., 4 to run
+    sweep <memory>: 2 grid points x 2 controllers x 1 seeds = 4 cells in 4 distinct tasks;
+    0 reused from ..., 4 to run
     >>> len(res.table), res.ran  # grid points x controllers x seeds x 4 segments; tasks run
     (16, 4)
     """
