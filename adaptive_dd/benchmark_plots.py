@@ -114,6 +114,18 @@ def plot_benchmark_estimates(res, path: str | Path | None = None, formats=("png"
     -------
     matplotlib.figure.Figure
         The figure (closed if it was written).
+
+    Examples
+    --------
+    >>> from adaptive_dd import run_benchmark
+    >>> from adaptive_dd.benchmark.scenario import parse_scenario
+    >>> from adaptive_dd.plotting import plot_benchmark_estimates
+    >>> sc = parse_scenario({"run": {"duration": 1.0, "seeds": 1,
+    ...                              "controllers": ["ct_oracle", "adaptive_ct"]},
+    ...                      "payload": [{"at": 0.5, "mass": 2.0}]})
+    >>> fig = plot_benchmark_estimates(run_benchmark(sc, progress=False))  # compiles on a cold cache
+    >>> [ax.get_ylabel() for ax in fig.axes]
+    ['J1 [kg m²]', 'J2 [kg m²]', 'r [kg m²]', 'payload mass [kg]']
     """
     paper = res.scenario.closed_forms  # the paper's sigma (J1 J2 r ...) on its closed forms' run
     if paper is None or res.sigma_true.shape[-1] != 7:
@@ -170,6 +182,24 @@ def plot_payload_estimates(res, path: str | Path | None = None, formats=("png",)
     -------
     matplotlib.figure.Figure
         The figure (closed if it was written).
+
+    Examples
+    --------
+    On the three-joint arm (the first run compiles its closed loop: minutes on a cold cache):
+
+    >>> from adaptive_dd import run_benchmark
+    >>> from adaptive_dd.benchmark.scenario import parse_scenario
+    >>> from adaptive_dd.plotting import plot_payload_estimates
+    >>> ref = {"joint1": {"offset": 0.3, "amplitude": [0.4], "frequency": [0.3]},
+    ...        "joint2": {"offset": -0.6, "amplitude": [0.5], "frequency": [0.4]},
+    ...        "joint3": {"offset": 0.4, "amplitude": [0.6], "frequency": [0.5]}}
+    >>> sc = parse_scenario({"arm": {"robot": "vertical3", "payload_capacity": 1.5},
+    ...                      "reference": ref, "payload": [{"at": 0.5, "mass": 1.0}],
+    ...                      "run": {"duration": 1.0, "seeds": 1,
+    ...                              "controllers": ["ct_oracle", "adaptive_ct"]}})
+    >>> fig = plot_payload_estimates(run_benchmark(sc, progress=False))
+    >>> [ax.get_ylabel() for ax in fig.axes]
+    ['payload mass [kg]', 'centre of mass x [mm]', 'centre of mass y [mm]', 'centre of mass z [mm]']
     """
     arm, sc = res.scenario.arm, res.scenario
     fig, axes = plt.subplots(2, 2, figsize=(11, 7), sharex=True)

@@ -57,6 +57,20 @@ def plot_trajectory(result, path: str | Path, trial: int = 0) -> Path:
     -------
     Path
         The file written.
+
+    Examples
+    --------
+    The two-link arm driven by no torque for 0.2 s, drawn to a file:
+
+    >>> import tempfile
+    >>> from pathlib import Path
+    >>> import numpy as np
+    >>> from adaptive_dd.plant.simulator import simulate_open_loop
+    >>> from adaptive_dd.plotting import plot_trajectory
+    >>> result = simulate_open_loop(np.zeros((1, 200, 2)), np.random.default_rng(0))
+    >>> path = plot_trajectory(result, Path(tempfile.mkdtemp()) / "trajectory.png")
+    >>> path.name, path.is_file()
+    ('trajectory.png', True)
     """
     t = result.t
     fig, ax = plt.subplots(3, 1, figsize=(9, 7), sharex=True)

@@ -312,6 +312,21 @@ def run_trial(controller, scenario: Scenario | None = None, seed_index: int = 0,
     -------
     BenchmarkResult
         A benchmark result of one controller and one trial.
+
+    Examples
+    --------
+    One trial of a controller object, the same noise as seed 1 of the benchmark (compiles the closed
+    loop on a cold cache):
+
+    >>> from adaptive_dd import make_controller, run_trial
+    >>> from adaptive_dd.benchmark.scenario import parse_scenario
+    >>> sc = parse_scenario({"run": {"duration": 1.0, "seeds": 2},
+    ...                      "payload": [{"at": 0.5, "mass": 2.0}]})
+    >>> res = run_trial(make_controller("ct_oracle"), sc, seed_index=1)
+    >>> list(res.runs), res.seed_indices
+    (['ct_oracle'], (1,))
+    >>> res.runs["ct_oracle"].e_norm.shape  # one trial x 1000 samples
+    (1, 1000)
     """
     sc = scenario or load_scenario()
     label = name or getattr(controller, "name", type(controller).__name__)

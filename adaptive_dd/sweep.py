@@ -359,6 +359,25 @@ def run_sweep(
     -------
     SweepResult
         The tidy table's path, the per-cell rows, the heatmaps written and the failed cells.
+
+    Examples
+    --------
+    Two payload masses on the paper's arm, one seed, on an in-process Dask cluster:
+
+    >>> import tempfile
+    >>> import distributed
+    >>> from adaptive_dd.benchmark.scenario import default_scenario_path
+    >>> from adaptive_dd.sweep import run_sweep
+    >>> from adaptive_dd.sweep_spec import parse_sweep
+    >>> sweep = parse_sweep({"sweep": {"scenario": str(default_scenario_path()), "seeds": 1,
+    ...                                "controllers": ["ct_oracle", "ct_nominal"]},
+    ...                      "grid": {"payload_mass": [1.0, 3.0]}})
+    >>> with distributed.Client(processes=False, n_workers=1, dashboard_address=None) as client:
+    ...     res = run_sweep(sweep, tempfile.mkdtemp(), client=client, progress=False)
+    sweep <memory>: 2 grid points x 2 controllers x 1 seeds = 4 cells in 4 distinct tasks;
+    0 reused from ..., 4 to run
+    >>> len(res.table), res.ran  # grid points x controllers x seeds x 4 segments; tasks run
+    (16, 4)
     """
     from adaptive_dd.outputs import check_output_dir
 

@@ -118,8 +118,10 @@ def _other_pages() -> list[str]:
 
 def _list_other_pages(app, docname, source):
     if docname == "howto" and _other_pages():
-        extra = "".join(f"{name}\n" for name in _other_pages())
-        source[0] = source[0].replace("controllers\n```", "controllers\n" + extra + "```", 1)
+        head, sep, tree = source[0].partition("```{toctree}")
+        body, fence, tail = tree.partition("\n```")  # the toctree's closing fence
+        extra = "".join(f"\n{name}" for name in _other_pages())
+        source[0] = head + sep + body + extra + fence + tail
 
 
 def _skip_borrowed_docs(app, what, name, obj, skip, options):

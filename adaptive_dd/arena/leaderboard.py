@@ -339,6 +339,22 @@ def leaderboard(
     ParameterError
         No controller, fewer than one seed, a negative ``arms``, a missing template, a two-link
         closed-form scenario, an unknown controller.
+
+    Examples
+    --------
+    One controller and its floor on a one-second run of the three-joint arm (compiles the N-joint
+    closed loop on a cold cache):
+
+    >>> from adaptive_dd.arena.leaderboard import leaderboard
+    >>> from adaptive_dd.benchmark.scenario import parse_scenario
+    >>> ref = {"joint1": {"offset": 0.3, "amplitude": [0.4], "frequency": [0.3]},
+    ...        "joint2": {"offset": -0.6, "amplitude": [0.5], "frequency": [0.4]},
+    ...        "joint3": {"offset": 0.4, "amplitude": [0.6], "frequency": [0.5]}}
+    >>> sc = parse_scenario({"arm": {"robot": "vertical3"}, "reference": ref,
+    ...                      "payload": [{"at": 0.5, "mass": 1.0}], "run": {"duration": 1.0}})
+    >>> table = leaderboard([sc], controllers=["ct_nominal"], seeds=2)
+    >>> sorted(set(table["controller"]))
+    ['ct_nominal', 'ct_oracle']
     """
     import pandas as pd
 

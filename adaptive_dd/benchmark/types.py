@@ -62,6 +62,19 @@ class ControllerRun:
         Samples the controller's estimator skipped as non-finite.
     failed_why : dict
         Why each failed trial (by index) failed (:meth:`explain_failures`).
+
+    Examples
+    --------
+    >>> from adaptive_dd import run_benchmark
+    >>> from adaptive_dd.benchmark.scenario import parse_scenario
+    >>> sc = parse_scenario({"run": {"duration": 1.0, "seeds": 2,
+    ...                              "controllers": ["ct_nominal", "ct_oracle"]},
+    ...                      "payload": [{"at": 0.5, "mass": 2.0}]})
+    >>> run = run_benchmark(sc, progress=False).runs["ct_nominal"]  # compiles on a cold cache
+    >>> run.floor, run.engine, run.e_norm.shape  # 2 seeds x 1000 samples
+    ('ct_oracle', 'compiled', (2, 1000))
+    >>> run.failed
+    array([False, False])
     """
 
     name: str
@@ -146,6 +159,21 @@ class BenchmarkResult:
         The plants the trials met when the plant is not the model; None: the plant is the arm.
     excitation : dict or None
         The excitation phase's identification (``[run] excite``); None without.
+
+    Examples
+    --------
+    >>> from adaptive_dd import run_benchmark
+    >>> from adaptive_dd.benchmark.scenario import parse_scenario
+    >>> sc = parse_scenario({"run": {"duration": 1.0, "seeds": 2,
+    ...                              "controllers": ["ct_nominal", "ct_oracle"]},
+    ...                      "payload": [{"at": 0.5, "mass": 2.0}]})
+    >>> res = run_benchmark(sc, progress=False)  # compiles the closed loop on a cold cache
+    >>> res.t.shape, res.q_d.shape, res.sigma_true.shape  # 1000 samples of the two-link arm
+    ((1000,), (1000, 2), (1000, 7))
+    >>> float(res.mass[0]), float(res.mass[-1])  # the payload carried [kg]
+    (0.0, 2.0)
+    >>> len(res.to_frame())  # 2 controllers x 2 seeds x 2 segments
+    8
     """
 
     scenario: Scenario

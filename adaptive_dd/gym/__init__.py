@@ -76,6 +76,18 @@ def make_env(scenario=None, floor: str | None = "ct_oracle") -> PayloadSwapEnv:
     -------
     PayloadSwapEnv
         One trial of the scenario per episode; ``reset(seed=i)`` is the benchmark's trial ``i``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from adaptive_dd.gym import make_env
+    >>> env = make_env()  # the paper's arm (the first step compiles its plant on a cold cache)
+    >>> obs, info = env.reset(seed=0)  # the benchmark's trial 0
+    >>> obs.shape  # measured q, qd and the reference q_d, qd_d, qdd_d
+    (10,)
+    >>> obs, reward, terminated, truncated, info = env.step(np.zeros(2))
+    >>> terminated, truncated, info["k"]
+    (False, False, 1)
     """
     if isinstance(scenario, str) and scenario in SCENARIO_IDS:
         scenario = _SCENARIOS / SCENARIO_IDS[scenario]

@@ -84,6 +84,18 @@ class PayloadSwapEnv(gymnasium.Env):
     floor : str or None
         The controller whose command on each observation ``info["floor_torque"]`` holds (default
         ``ct_oracle``, the floor of ``adaptive_ct``); None leaves it out (faster steps).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from adaptive_dd.gym.env import PayloadSwapEnv
+    >>> env = PayloadSwapEnv()  # the paper's arm (the first step compiles its plant on a cold cache)
+    >>> obs, info = env.reset(seed=0)  # the benchmark's trial 0
+    >>> obs.shape  # measured q, qd and the reference q_d, qd_d, qdd_d
+    (10,)
+    >>> obs, reward, terminated, truncated, info = env.step(np.zeros(2))
+    >>> terminated, truncated, info["k"]
+    (False, False, 1)
     """
 
     metadata: ClassVar[dict] = {"render_modes": []}

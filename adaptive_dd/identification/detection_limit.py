@@ -226,6 +226,25 @@ def detection_limit(
     -------
     float or None
         Seconds after the swap, None if the record ends first.
+
+    Examples
+    --------
+    The three-joint arm held still by its gravity torque when a 1 kg payload appears at its tip:
+
+    >>> import numpy as np
+    >>> from adaptive_dd.benchmark.scenario import parse_scenario
+    >>> from adaptive_dd.identification.detection_limit import detection_limit
+    >>> from adaptive_dd.plant.arm import payload_parameters
+    >>> ref = {"joint1": {"offset": 0.3, "amplitude": [0.4], "frequency": [0.3]},
+    ...        "joint2": {"offset": -0.6, "amplitude": [0.5], "frequency": [0.4]},
+    ...        "joint3": {"offset": 0.4, "amplitude": [0.6], "frequency": [0.5]}}
+    >>> arm = parse_scenario({"arm": {"robot": "vertical3"}, "reference": ref}).arm
+    >>> q, qd = np.tile([0.3, -0.6, 0.4], (300, 1)), np.zeros((300, 3))
+    >>> tau = arm.regressor(q, qd, np.zeros((300, 3))) @ arm.sigma  # holds the unloaded arm
+    >>> t = detection_limit(arm, q, qd, tau, 0, 1e-3, np.zeros(10), payload_parameters(1.0),
+    ...                     n_tests=1000)  # compiles on a cold cache
+    >>> 0 < t < 0.3  # [s] after the swap
+    True
     """
     q, qd, tau, pi_b, dpi, arm_f, wq, wv = _inputs(
         arm, q, qd, tau, k_swap, before, after, position_variance, velocity_variance

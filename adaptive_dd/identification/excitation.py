@@ -299,6 +299,20 @@ def design_excitation(
     ParameterError
         If the optimum crosses a limit on a grid :data:`FINE` times finer and shrinking its
         oscillation to :data:`MIN_SHRINK` does not bring it within (:func:`_within_limits`).
+
+    Examples
+    --------
+    A short optimisation (one harmonic, three iterations) on the three-joint arm:
+
+    >>> from adaptive_dd.benchmark.scenario import parse_scenario
+    >>> from adaptive_dd.identification.excitation import design_excitation
+    >>> ref = {"joint1": {"offset": 0.3, "amplitude": [0.4], "frequency": [0.3]},
+    ...        "joint2": {"offset": -0.6, "amplitude": [0.5], "frequency": [0.4]},
+    ...        "joint3": {"offset": 0.4, "amplitude": [0.6], "frequency": [0.5]}}
+    >>> arm = parse_scenario({"arm": {"robot": "vertical3"}, "reference": ref}).arm
+    >>> traj, opt = design_excitation(arm, harmonics=1, grid=20, maxiter=3)
+    >>> traj.a.shape, traj.f0  # sine coefficients per joint and harmonic; [Hz]
+    ((3, 1), 0.1)
     """
     lim = lim or ExcitationLimits.of_arm(arm)
     model = arm_model(arm)
