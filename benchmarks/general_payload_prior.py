@@ -41,7 +41,7 @@ import numpy as np
 from adaptive_dd.benchmark import load_scenario, run_benchmark
 from adaptive_dd.benchmark.metrics import per_seed_segment_metrics, ratio_statistics
 from adaptive_dd.closed_loop.runner import make_controller_of
-from adaptive_dd.identification import online
+from adaptive_dd.identification import online_init
 from adaptive_dd.identification import online_kernel as K
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -62,7 +62,7 @@ def _paper_prior(mass_var: float, izz_var: float) -> np.ndarray:
 
 
 def _patched_pack(paper: bool, no_presence: bool):
-    pack = online._pack
+    pack = online_init._pack
 
     def _pack(cfg, arm):
         c, P0 = pack(cfg, arm)
@@ -112,9 +112,9 @@ def main() -> None:
     seeds = list(range(a.first, a.first + a.seeds))
     head = "adaptive_ct / ct_oracle per segment, mean / p90 / max"
     print(f"{a.scenario}, seeds {seeds[0]}-{seeds[-1]}: {head}")
-    pack = online._pack
+    pack = online_init._pack
     for label, (paper, no_presence) in VARIANTS.items():
-        online._pack = _patched_pack(paper, no_presence)
+        online_init._pack = _patched_pack(paper, no_presence)
         try:
             t0 = time.perf_counter()
             ctrls = dict(make_controller_of(sc, s) for s in ("ct_oracle", "adaptive_ct"))
@@ -123,7 +123,7 @@ def main() -> None:
             )
             print(f"{label:>26}: {_row(sc, res)} ({time.perf_counter() - t0:.0f} s)", flush=True)
         finally:
-            online._pack = pack
+            online_init._pack = pack
 
 
 if __name__ == "__main__":

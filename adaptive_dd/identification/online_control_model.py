@@ -1,0 +1,252 @@
+"""The model control uses, from the compiled online estimator's state.
+
+The payload an estimate implies (:func:`_payload_raw`), its projection with the compact-payload
+prior (:func:`compact_prior`) and the presence weight (:func:`presence_weight`), the starting
+payload kept until the payload changes (:func:`_keep_start`), and the standard parameters control
+uses (:func:`est_model_trial`, :func:`est_model_trial_in`).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from adaptive_dd.identification.online_slots import (
+    C_FOLLOWS,
+    C_K,
+    F_EIG_MIN,
+    F_PRESENT2,
+    F_PRIOR_RADIUS,
+    F_RADIUS,
+    F_THRESHOLD2,
+    I_KEEP_START,
+    I_PROJECT,
+    I_WARMUP,
+    MODE_PAYLOAD,
+    est_work,
+)
+from adaptive_dd.identification.pseudo_inertia import project_payload
+
+
+@njit(cache=True, inline="always")
+def _keeps_start(c, s, i):  # pragma: no cover - compiled
+    """Whether the model control uses still holds the starting payload (``s.start_pay[i]``)."""
+    return c.ints[I_KEEP_START] == 1 and s.cnt[i, C_FOLLOWS] == 0
+
+
+@njit(cache=True, inline="always")
+def _keep_start(c, s, i):  # pragma: no cover - compiled
+    """Let the model control uses follow the estimate once the payload has changed: at the first
+    alarm (:func:`_alarm`), or once the estimated mass has moved from its start by more than the
+    detector's threshold times its standard deviation ``sqrt(P_mm)`` after the detector's warm-up.
+
+    Before that the model keeps the starting payload: with the arm exact nothing is left to learn,
+    and the estimate's wander on the unloaded arm (the regression's noise and the filters'
+    start-up) only moved the model away from the exact one (drawn arms, exact URDF: the first
+    segment's adaptive_ct / ct_oracle up to 3.5x; docs/changelog.md). A payload carried from the
+    start, or one the detector misses, still moves the mass beyond the bound."""
+    cnt = s.cnt[i]
+    if c.ints[I_KEEP_START] != 1 or cnt[C_FOLLOWS] == 1 or cnt[C_K] < c.ints[I_WARMUP]:
+        return
+    a = s.theta.shape[1] - 10  # the payload's mass (the payload block's first parameter)
+    var = s.P[i, a, a]
+    dm = s.theta[i, a] - s.start_mass[i]
+    if not (dm * dm <= c.floats[F_THRESHOLD2] * var):  # (a non-finite estimate follows too)
+        cnt[C_FOLLOWS] = 1
+
+
+@njit(cache=True, inline="always")
+def _payload_raw(c, th, raw):  # pragma: no cover - compiled
+    """The payload (10,) implied by an estimate theta, unprojected (mode "arm": least squares on pbasis)."""
+    p = th.shape[0]
+    if c.mode == MODE_PAYLOAD:
+        for k in range(10):
+            raw[k] = th[k]
+        return
+    for k in range(10):
+        acc = 0.0
+        for a in range(p):
+            acc += c.pbasis_pinv[k, a] * (th[a] - c.sigma0[a])
+        raw[k] = acc
+
+
+@njit(cache=True, inline="always")
+def _inertia_cov(c, P, out):  # pragma: no cover - compiled
+    """The inertia block ``out[4:, 4:]`` of the payload parameters' covariance (the part
+    :func:`compact_prior` reads; the rest of ``out (10, 10)`` is left as it is): P's own block in
+    payload mode, else that block of ``pbasis_pinv P pbasis_pinv^T``."""
+    if c.mode == MODE_PAYLOAD:
+        for a in range(4, 10):
+            for b in range(4, 10):
+                out[a, b] = P[a, b]
+        return
+    p = P.shape[0]
+    tmp = np.zeros((10, p))
+    for a in range(4, 10):
+        for b in range(p):
+            acc = 0.0
+            for k in range(p):
+                acc += c.pbasis_pinv[a, k] * P[k, b]
+            tmp[a, b] = acc
+    for a in range(4, 10):
+        for b in range(4, 10):
+            acc = 0.0
+            for k in range(p):
+                acc += tmp[a, k] * c.pbasis_pinv[b, k]
+            out[a, b] = acc
+
+
+@njit(cache=True)
+def compact_prior(raw, Pc, rho):  # pragma: no cover - compiled
+    """Combine ``raw (10,)`` (covariance ``Pc (10, 10)``, of which only the inertia block
+    ``Pc[4:, 4:]`` is read, and overwritten) with a prior that the
+    payload is compact: its inertia about the frame ``I = m S(c)^T S(c) + 0.4 m rho^2 1``
+    (a solid sphere of radius ``rho`` [m] at the estimated centre of mass ``c`` with the
+    estimated mass ``m``), each of the six inertia components with standard deviation
+    ``m rho^2 + 1e-6`` [kg m^2]. Six scalar Kalman updates (pseudo-measurements of the
+    inertia) on the inertia block of ``Pc``, given the mass and first moments: those are left
+    as they are (they are the well-determined part; moving them through their correlation
+    with the inertia corrupted the unloaded arm's model, where the prior pins the inertia).
+
+    Right after a swap the data determine the payload's mass and first moments within
+    tens of milliseconds but its inertia only over a second (the inertia's columns are
+    weakly excited); the prior keeps the model control uses at a plausible inertia
+    meanwhile, and the data override it as P shrinks (no effect once the inertia is known).
+    """
+    m = max(raw[0], 0.0)
+    hx, hy, hz = raw[1], raw[2], raw[3]
+    mean = np.zeros(6)
+    if m > 1e-9:
+        h2 = hx * hx + hy * hy + hz * hz
+        sph = 0.4 * m * rho * rho
+        # (|h|^2 1 - h h^T) / m + sphere; order Ixx, Ixy, Iyy, Ixz, Iyz, Izz
+        mean[0] = (h2 - hx * hx) / m + sph
+        mean[1] = -hx * hy / m
+        mean[2] = (h2 - hy * hy) / m + sph
+        mean[3] = -hx * hz / m
+        mean[4] = -hy * hz / m
+        mean[5] = (h2 - hz * hz) / m + sph
+    std = m * rho * rho + 1e-6
+    R = std * std
+    g = np.empty(10)
+    row = np.empty(10)
+    for t in range(6):
+        r = 4 + t
+        S = Pc[r, r] + R
+        if not (np.isfinite(S) and S > 0.0):
+            return
+        innov = mean[t] - raw[r]
+        for a in range(4, 10):
+            g[a] = Pc[a, r] / S
+            row[a] = Pc[r, a]
+        for a in range(4, 10):
+            raw[a] += g[a] * innov
+            for b in range(4, 10):
+                Pc[a, b] -= g[a] * row[b]
+
+
+@njit(cache=True)
+def presence_weight(m, var, present_var):  # pragma: no cover - compiled
+    """Posterior probability that a payload is carried, given a mass estimate ``m`` [kg] of
+    variance ``var`` [kg^2] and the variance ``present_var`` [kg^2] of a carried payload's mass.
+
+    The prior is even odds between no payload (mass exactly 0: the unloaded arm, the state at the
+    start and after every put-down) and a payload whose mass is normal about 0 with variance
+    ``present_var``. With ``m`` normal about the true mass, the likelihood ratio of the two is
+    ``sqrt(1 + present_var / var) exp(-m^2 present_var / (2 var (var + present_var)))``, and the
+    weight is ``1 / (1 + ratio)``: about ``sqrt(var / present_var)`` for an estimate that is noise
+    about 0, 1 once the mass is a few of its standard deviations away from 0, 0.5 with no data
+    (``var >> present_var``). 1 when either variance is not > 0 (no weighting).
+    """
+    if not (var > 0.0 and present_var > 0.0 and np.isfinite(m) and np.isfinite(var)):
+        return 1.0
+    a = m * m * present_var / (2.0 * var * (var + present_var))
+    if a > 700.0:
+        return 1.0
+    return 1.0 / (1.0 + np.sqrt(1.0 + present_var / var) * np.exp(-a))
+
+
+@njit(cache=True, inline="always")
+def _control_payload(c, s, i, raw, pay, Pc):  # pragma: no cover - compiled
+    """The payload the model control uses: ``raw`` with the compact prior (if set); projected (if set)
+    and then, in payload mode, scaled by :func:`presence_weight` of the raw mass (its variance
+    ``P[0, 0]``, a carried payload's ``F_PRESENT2``): the posterior mean of a payload that may be
+    absent. A scaled consistent body stays consistent (its pseudo-inertia scaled by a factor in
+    [0, 1], within the same ball). ``Pc (10, 10)`` scratch."""
+    m_raw = raw[0]
+    rho = c.floats[F_PRIOR_RADIUS]
+    if rho > 0.0:
+        _inertia_cov(c, s.P[i], Pc)
+        compact_prior(raw, Pc, rho)
+    if c.ints[I_PROJECT] == 1:
+        project_payload(raw, pay, c.floats[F_EIG_MIN], c.floats[F_RADIUS])
+        if c.mode == MODE_PAYLOAD and c.floats[F_PRESENT2] > 0.0:
+            wp = presence_weight(m_raw, s.P[i][0, 0], c.floats[F_PRESENT2])
+            for k in range(10):
+                pay[k] *= wp
+    else:
+        for k in range(10):
+            pay[k] = raw[k]
+
+
+@njit(cache=True)
+def est_payload_trial(c, s, i, out):  # pragma: no cover - compiled
+    """The payload (10,) about its frame implied by trial i's estimate, projected if set to."""
+    raw = np.empty(10)
+    _payload_raw(c, s.theta[i], raw)
+    _control_payload(c, s, i, raw, out, np.empty((10, 10)))
+
+
+@njit(cache=True)
+def est_model_trial(c, s, i, pi_out):  # pragma: no cover - compiled
+    """The model control uses for trial i, as standard parameters ``pi_out (13 n,)``
+    (:func:`est_model_trial_in` with its scratch allocated for this call)."""
+    est_model_trial_in(c, s, i, pi_out, est_work(c.w.shape[0], s.theta.shape[1]))
+
+
+@njit(cache=True, inline="always")
+def est_model_trial_in(c, s, i, pi_out, w):  # pragma: no cover - compiled
+    """The model control uses for trial i, as standard parameters ``pi_out (13 n,)``; ``w``
+    (:class:`EstWork`) scratch.
+
+    Payload mode: the arm's ``pi0`` with the (projected) payload folded into link ``jp``
+    through ``pmap``. Full mode: ``pi0 + Bpinv (theta_p - B pi0)``, where ``theta_p`` is
+    theta with its payload part replaced by the projected one
+    (``theta_p = theta + pbasis (payload_projected - payload_raw)``), so that
+    ``B pi_out == theta_p``.
+    """
+    m = pi_out.shape[0]
+    for k in range(m):
+        pi_out[k] = c.pi0[k]
+    th = s.theta[i]
+    p = th.shape[0]
+    raw, pay = w.raw, w.pay
+    _payload_raw(c, th, raw)
+    raw_est = raw
+    if c.mode != MODE_PAYLOAD:  # mode "arm": theta's own payload
+        raw_est = w.raw_est
+        for k in range(10):
+            raw_est[k] = raw[k]
+    _control_payload(c, s, i, raw, pay, w.Pc)
+    if _keeps_start(c, s, i):
+        for k in range(10):
+            pay[k] = s.start_pay[i, k]
+    if c.mode == MODE_PAYLOAD:
+        base = 10 * c.jp
+        for a in range(10):
+            acc = 0.0
+            for b in range(10):
+                acc += c.pmap[a, b] * pay[b]
+            pi_out[base + a] += acc
+        return
+    d = w.d
+    for a in range(p):
+        acc = th[a] - c.sigma0[a]
+        for k in range(10):
+            acc += c.pbasis[a, k] * (pay[k] - raw_est[k])
+        d[a] = acc
+    for k in range(m):
+        acc = 0.0
+        for a in range(p):
+            acc += c.Bpinv[k, a] * d[a]
+        pi_out[k] += acc

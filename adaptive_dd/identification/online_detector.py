@@ -1,0 +1,341 @@
+"""The compiled online estimator's change detector and what an alarm does.
+
+Per row, short and long averages of the weighted prior errors against a learned level
+(:func:`_detect`, the level's rise at an alarm :func:`_ref_rise`); an alarm re-opens the
+covariance along the payload subspace (:func:`_reopen`) and restarts the levels (:func:`_alarm`).
+``docs/change_detection.md`` states the rules.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from adaptive_dd.identification.online_control_model import (
+    _control_payload,
+    _keeps_start,
+    _payload_raw,
+)
+from adaptive_dd.identification.online_slots import (
+    BIG,
+    C_ALARMS,
+    C_FOLLOWS,
+    C_K,
+    C_LAST_ALARM,
+    C_REOPEN_AT,
+    C_RESTART,
+    C_SINCE_ALARM,
+    F_ALPHA_FAST,
+    F_ALPHA_LONG,
+    F_ALPHA_SHORT,
+    F_CREEP_MARGIN,
+    F_FAST2,
+    F_FLOOR2,
+    F_GATE2,
+    F_HOLD_ABOVE2,
+    F_SLOW2,
+    F_THRESHOLD2,
+    I_FAST,
+    I_FAST_LEARNED,
+    I_FREEZE,
+    I_GATE_AFTER,
+    I_HOLD,
+    I_HOLDOFF,
+    I_MIN_LEARNED,
+    I_MIN_ROWS,
+    I_MOMENTUM,
+    I_N_ROWS,
+    I_REOPEN_AGAIN,
+    I_RESET_PAYLOAD,
+    I_RESUME,
+    I_SEL_MEMORY,
+    I_SELECT,
+    I_WARMUP,
+)
+from adaptive_dd.plant.chain import (
+    mass_matrix_in,
+)
+
+
+@njit(cache=True)
+def _reopen(c, P):  # pragma: no cover - compiled
+    """``P <- (I - U U^T) P (I - U U^T) + P_reopen``: forget what was known along the payload subspace."""
+    U = c.U
+    p, r = U.shape
+    # Q = P U (p x r), S = U^T P U (r x r)
+    Q = np.zeros((p, r))
+    for a in range(p):
+        for k in range(r):
+            acc = 0.0
+            for b in range(p):
+                acc += P[a, b] * U[b, k]
+            Q[a, k] = acc
+    S = np.zeros((r, r))
+    for k in range(r):
+        for m in range(r):
+            acc = 0.0
+            for a in range(p):
+                acc += U[a, k] * Q[a, m]
+            S[k, m] = acc
+    # (I-UU^T)P(I-UU^T) = P - U Q^T - Q U^T + U S U^T
+    for a in range(p):
+        for b in range(p):
+            acc = P[a, b]
+            for k in range(r):
+                acc -= U[a, k] * Q[b, k] + Q[a, k] * U[b, k]
+                for m in range(r):
+                    acc += U[a, k] * S[k, m] * U[b, m]
+            P[a, b] = acc + c.P_reopen[a, b]
+
+
+@njit(cache=True)
+def _ref_rise(c, s, i, q, w):  # pragma: no cover - compiled
+    """``s.ref_rise[i]``: per row, how much the payload the estimate now holds raises the row's
+    noise variance over the payload it held at the last alarm (``s.ref_pay[i]``), at least 1;
+    1 outside the window in which a row is judged against its level of before that alarm.
+
+    The rows' noise is the measured velocity's through the inertia (``G1 (M qd)`` in momentum
+    form, ``M qdd`` at the filtered signals): row j's variance ``(M diag(vn^2) M^T)_jj``, ``M``
+    the model's inertia (armature included) at the measured q with the payload folded into its
+    link, ``vn^2`` the sensor's velocity noise (``c.vdet``). A payload picked up raises it, and
+    the level kept from before the pick-up (``ref``) is then too low for the re-learning window:
+    the Kinova Gen3 with 2 kg, the wrist rows' noise 5x, a second alarm 0.3-0.45 s after the
+    pick-up in 5 of 50 trials (``docs/change_detection.md``, "The level kept over a pick-up").
+    Computed only in that window (two inertia matrices a sample).
+    """
+    n = q.shape[0]
+    ints = c.ints
+    k = s.cnt[i, C_SINCE_ALARM]
+    live = ints[I_HOLDOFF] <= k < ints[I_RESUME] + ints[I_MIN_LEARNED]
+    if live:
+        live = False
+        for j in range(n):
+            live = live or s.ref[i, j] > 0.0
+    for j in range(n):
+        s.ref_rise[i, j] = 1.0
+    if not live:
+        return
+    raw, pay, pi = w.raw, w.pay, w.pir
+    _payload_raw(c, s.theta[i], raw)
+    _control_payload(c, s, i, raw, pay, w.Pc)
+    for t in range(2):
+        M = w.Mr if t == 0 else w.Mr0
+        src = pay if t == 0 else s.ref_pay[i]
+        for a in range(10 * n):
+            pi[a] = c.pi0[a]
+        base = 10 * c.jp
+        for a in range(10):
+            acc = 0.0
+            for b in range(10):
+                acc += c.pmap[a, b] * src[b]
+            pi[base + a] += acc
+        mass_matrix_in(c.ch, pi, q, w.chain, M)
+        for j in range(n):
+            M[j, j] += c.pi0[12 * n + j]
+    for j in range(n):
+        v1, v0 = 0.0, 0.0
+        for k2 in range(n):
+            v1 += w.Mr[j, k2] * w.Mr[j, k2] * c.vdet[k2]
+            v0 += w.Mr0[j, k2] * w.Mr0[j, k2] * c.vdet[k2]
+        if v0 > 0.0 and v1 > v0 and np.isfinite(v1):
+            s.ref_rise[i, j] = v1 / v0
+
+
+@njit(cache=True, inline="always")
+def _detect(c, s, i, eps, act):  # pragma: no cover - compiled
+    """Update the detector of trial i with the rows' prior errors; return True on an alarm.
+
+    Per row j: a short average of ``eps_j^2`` against a long-run level, the
+    bias-corrected average ``long / (1 - (1 - a)^learned)`` of what it learned. The
+    level learns from ``resume`` samples after the last alarm on, and not from a
+    sample whose ``eps^2`` exceeds ``gate^2`` times the level (once ``gate_after``
+    samples are learned), so that a change during the learning is not absorbed.
+    A row may alarm once it has been *seen* ``min_learned`` times since the last alarm
+    (seen, not learned: gated samples count, so the re-arm time is bounded), outside
+    the warm-up and the hold-off. Until then, and for at most ``resume + min_learned``
+    samples after the alarm (the re-arm bound of a row in use throughout), a row that had
+    established its level
+    before the last alarm is compared with that level (``ref``, raised by the noise the
+    estimate's new payload adds to the row, :func:`_ref_rise`, with the threshold
+    times ``slow``, as the estimate may still be converging): a change that
+    follows a false alarm within the re-learning time is detected after the hold-off.
+    Past that bound such a row, not yet seen ``min_learned`` times (it was out of use), is
+    compared with what it has learned since, once that is ``gate_after`` samples (the count
+    after which the level is trusted to gate its own learning), with the same stricter
+    threshold.
+    ``ref`` is set only from an established level, so this adds at most one alarm
+    (a swap that raises the noise level cannot chain alarms through it). Its time is bounded
+    because a swap changes the noise level itself (the measured velocity's noise enters the
+    regression times the inertia each row carries): a row out of use after a swap's alarm
+    (slow, reversing) saw nothing of the new noise, and kept comparing it with the stale
+    level for as long as it stayed out of use (iiwa 14, 3 kg picked up: joint 6's prior error
+    0.09 -> 0.5 RMS, 0.03 of it without sensor noise; 17 of 50 trials with a false alarm 0.5-0.8 s
+    after the swap before the bound, 1 of 50 after it, ``docs/learning_the_arm.md``). The level is at
+    least ``floor^2``: a row that is nearly noise-free (a wrist joint) would otherwise
+    alarm on the regression's own modelling error, which varies with the motion. The
+    threshold is ``slow^2`` times higher while another row is out of use (a joint that
+    is slow or reversing disturbs the others).
+    """
+    n = eps.shape[0]
+    ints, fl = c.ints, c.floats
+    a_s, a_l = fl[F_ALPHA_SHORT], fl[F_ALPHA_LONG]
+    cnt = s.cnt[i]
+    learn = cnt[C_SINCE_ALARM] >= ints[I_RESUME]
+    rise2 = fl[F_HOLD_ABOVE2] * fl[F_THRESHOLD2]
+    for j in range(n):
+        if s.hold[i, j] > 0.0:  # a hold runs out I_HOLD samples after the rise, in use or not
+            s.held[i, j] += 1
+            if s.held[i, j] > ints[I_HOLD]:
+                s.hold[i, j] = -1.0
+        e = eps[j]
+        if not (act[j] and np.isfinite(e)):
+            continue
+        e2 = e * e
+        s.short[i, j] += a_s * (e2 - s.short[i, j])
+        s.fast[i, j] += fl[F_ALPHA_FAST] * (e2 - s.fast[i, j])
+        if learn:
+            s.seen[i, j] += 1
+            nl = s.learned[i, j]
+            # a level learned over min_learned samples since the last alarm is established
+            est = nl >= ints[I_MIN_LEARNED]
+            level = fl[F_FLOOR2]
+            if nl >= 1:
+                level = max(s.long[i, j] / (1.0 - (1.0 - a_l) ** nl), fl[F_FLOOR2])
+            ok = True
+            if nl >= ints[I_GATE_AFTER]:
+                ok = e2 <= fl[F_GATE2] * level
+            if ints[I_HOLD] > 0 and est:
+                # a row whose short average rises is judged against the level it had then, for
+                # I_HOLD samples (a change's rise); the level itself learns on
+                if s.hold[i, j] == 0.0:
+                    if s.short[i, j] > rise2 * level:
+                        s.hold[i, j] = level
+                        s.held[i, j] = 0
+                elif s.short[i, j] <= rise2 * (s.hold[i, j] if s.hold[i, j] > 0.0 else level):
+                    s.hold[i, j] = 0.0  # back below: the next rise holds again
+            if ok:
+                s.long[i, j] += a_l * (e2 - s.long[i, j])
+                s.learned[i, j] = nl + 1
+    if cnt[C_K] < ints[I_WARMUP] or cnt[C_SINCE_ALARM] <= ints[I_HOLDOFF]:
+        return False
+    n_act = 0
+    for j in range(n):
+        if act[j]:
+            n_act += 1
+    alarm = False
+    n_raised = 0  # rows above a quarter of the threshold (half of it in RMS)
+    fast = False
+    n_fast = 0  # the same for the fast average and its threshold
+    for j in range(n):
+        if not act[j]:
+            continue
+        nl = s.learned[i, j]
+        thr = fl[F_THRESHOLD2] if n_act == ints[I_N_ROWS] else fl[F_THRESHOLD2] * fl[F_SLOW2]
+        own = s.seen[i, j] >= ints[I_MIN_LEARNED] and nl >= 1
+        if own:
+            level = max(s.long[i, j] / (1.0 - (1.0 - a_l) ** nl), fl[F_FLOOR2])
+            if s.hold[i, j] > 0.0:  # risen within the hold: the level it had before
+                level = s.hold[i, j]
+        elif s.ref[i, j] > 0.0 and cnt[C_SINCE_ALARM] < ints[I_RESUME] + ints[I_MIN_LEARNED]:
+            # still re-learning, within the re-arm bound: the level established before the last
+            # alarm, raised by what the new payload adds to the row's noise (_ref_rise), with the
+            # stricter threshold (the estimate may still converge)
+            level = max(s.ref[i, j] * s.ref_rise[i, j], fl[F_FLOOR2])
+            thr = fl[F_THRESHOLD2] * fl[F_SLOW2]
+        elif s.ref[i, j] > 0.0 and nl >= ints[I_GATE_AFTER]:
+            # past the bound, not yet seen enough: what it learned since (trusted as for the gate)
+            level = max(s.long[i, j] / (1.0 - (1.0 - a_l) ** nl), fl[F_FLOOR2])
+            thr = fl[F_THRESHOLD2] * fl[F_SLOW2]
+        else:
+            continue
+        # a joint at most the detector's speed within the selection memory creeps: friction the
+        # model lacks errs there (Stribeck, soft friction), by less than the joint's Coulomb
+        # friction; its row raises an alarm only beyond that (in the weighted equation's units)
+        creep2 = 0.0
+        if ints[I_SELECT] == 1 and s.since_crawl[i, j] <= ints[I_SEL_MEMORY]:
+            creep2 = (fl[F_CREEP_MARGIN] * c.pi0[11 * n + j] / c.w[j]) ** 2
+        if s.short[i, j] > thr * level + 1e-300 and s.short[i, j] > creep2:
+            alarm = True
+        if s.short[i, j] > 0.25 * thr * level + 1e-300:
+            n_raised += 1
+        if ints[I_FAST] == 1 and own and nl >= ints[I_FAST_LEARNED]:
+            # only against a level the row has learned itself over the long window: not the
+            # level of before an alarm, nor one still learning a new payload or the arm
+            thf = fl[F_FAST2] * thr / fl[F_THRESHOLD2]  # the same slow-row and re-learning factors
+            if s.fast[i, j] > thf * level + 1e-300 and s.fast[i, j] > creep2:
+                fast = True
+            if s.fast[i, j] > 0.25 * thf * level + 1e-300:
+                n_fast += 1
+    return (alarm and n_raised >= ints[I_MIN_ROWS]) or (fast and n_fast >= ints[I_MIN_ROWS])
+
+
+@njit(cache=True)
+def _alarm(c, s, i, k):  # pragma: no cover - compiled
+    """What an alarm at sample k does: re-open P, count, restart the level (keeping it as ``ref``)."""
+    ints, fl = c.ints, c.floats
+    cnt = s.cnt[i]
+    # the payload the model holds now, with which the levels kept as ref were learnt
+    raw = np.empty(10)
+    _payload_raw(c, s.theta[i], raw)
+    _control_payload(c, s, i, raw, s.ref_pay[i], np.empty((10, 10)))
+    if _keeps_start(c, s, i):
+        for a in range(10):
+            s.ref_pay[i, a] = s.start_pay[i, a]
+    cnt[C_FOLLOWS] = 1
+    _reopen(c, s.P[i])
+    if ints[I_RESET_PAYLOAD] == 1:  # a new payload: nothing known of it but its prior
+        p = s.theta.shape[1]
+        for a in range(p - 10, p):  # (not k: the alarm's sample, recorded below)
+            s.theta[i, a] = 0.0
+    cnt[C_ALARMS] += 1
+    cnt[C_SINCE_ALARM] = 0
+    cnt[C_LAST_ALARM] = k
+    a_l = fl[F_ALPHA_LONG]
+    for j in range(s.seen.shape[1]):
+        nl = s.learned[i, j]
+        # the level this row had established (0: none) serves until it re-learns; kept without
+        # the floor (applied where it serves), so that a noise rise scales what was learnt
+        s.ref[i, j] = 0.0
+        if s.seen[i, j] >= ints[I_MIN_LEARNED] and nl >= 1:
+            s.ref[i, j] = max(s.long[i, j] / (1.0 - (1.0 - a_l) ** nl), 1e-300)
+        s.seen[i, j] = 0
+        s.learned[i, j] = 0
+        s.long[i, j] = 0.0
+        s.hold[i, j] = 0.0
+        s.held[i, j] = 0
+    if ints[I_REOPEN_AGAIN] == 1:
+        cnt[C_REOPEN_AT] = k + ints[I_FREEZE]
+    if ints[I_MOMENTUM] == 1:
+        cnt[C_RESTART] = 1
+
+
+@njit(cache=True, inline="always")
+def _detect_step(c, s, i, eps, act):  # pragma: no cover - compiled
+    """The detector's part of a sample: :func:`_detect`, then the alarm or the count since it."""
+    cnt = s.cnt[i]
+    if _detect(c, s, i, eps, act):
+        _alarm(c, s, i, cnt[C_K])
+        return 1
+    cnt[C_SINCE_ALARM] = min(cnt[C_SINCE_ALARM] + 1, BIG)
+    return 0
+
+
+@njit(cache=True)
+def est_detect_trial(c, s, i, eps, act):  # pragma: no cover - compiled
+    """One sample of trial i's detector alone on given weighted prior errors ``eps (n,)`` of the
+    rows in use ``act (n,)`` (bool): 1 on an alarm, else 0. The estimate is not stepped (an alarm
+    still re-opens its covariance). For tests and replays of the detector on synthetic errors."""
+    alarm = _detect_step(c, s, i, eps, act)
+    s.cnt[i, C_K] += 1
+    return alarm
+
+
+@njit(cache=True)
+def est_force_alarm_trial(c, s, i):  # pragma: no cover - compiled
+    """Raise an alarm on trial i at its last stepped sample, as if the detector had.
+
+    For a caller that knows of a change (a tool changer's signal) and for tests of what
+    follows an alarm. Does nothing before the first sample.
+    """
+    if s.cnt[i, C_K] > 0:
+        _alarm(c, s, i, s.cnt[i, C_K] - 1)

@@ -1,0 +1,263 @@
+"""Packing of the N-joint online estimator's settings into its compiled form.
+
+:func:`est_init` turns an :class:`~adaptive_dd.identification.online_config.OnlineConfig` and an
+arm into the read-only :class:`~adaptive_dd.identification.online_slots.EstCfg` (``_pack``: the
+slot arrays, the prior covariances, the filter realisations) and the initial per-trial
+:class:`~adaptive_dd.identification.online_slots.EstState`.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from adaptive_dd.errors import ParameterError
+from adaptive_dd.identification import online_kernel as K
+from adaptive_dd.identification.arm_prior import ArmUncertainty, prior_covariance
+from adaptive_dd.identification.filters import summing_realisation
+from adaptive_dd.identification.online_config import (
+    WARMUP,
+    WARMUP_ARM,
+    Array,
+    OnlineConfig,
+    derived_row_weights,
+    payload_prior,
+    reopen_mass_std,
+)
+from adaptive_dd.identification.online_slots import EstCfg, EstState
+from adaptive_dd.plant.arm import Arm
+
+
+def _detector_velocity_variance(arm: Arm) -> Array:
+    """The sensor's velocity noise variance per joint [(rad/s)^2] the detector weighs the rows'
+    noise by (``EstCfg.vdet``); all equal when the arm states none."""
+    v = np.asarray(arm.sensor.velocity_variance, dtype=float) * np.ones(arm.n_joints)
+    if not (np.all(np.isfinite(v)) and v.max() > 0.0):
+        v = np.ones(arm.n_joints)
+    return np.maximum(v, 1e-6 * v.max())
+
+
+def _pack(cfg: OnlineConfig, arm: Arm) -> tuple[EstCfg, Array]:
+    n = arm.n_joints
+    pi0 = np.ascontiguousarray(arm.pi, dtype=float)
+    pmap = np.ascontiguousarray(arm.payload_map)
+    jp = arm.payload_joint
+    S0 = payload_prior(cfg.payload_mass_std, cfg.payload_size)
+    det = cfg.detector
+    S1 = payload_prior(reopen_mass_std(det, arm) if det else 0.0, cfg.payload_size)
+    if cfg.mode == "payload":
+        p = 10
+        indep = np.arange(10, dtype=np.int64)
+        Bpinv = np.zeros((13 * n, 10))
+        sigma0 = np.zeros(10)
+        pbasis = np.eye(10)
+        pbasis_pinv = np.eye(10)
+        U = np.eye(10)
+        P0, Pr = S0, S1
+        n_rows = jp + 1  # joints after the payload's link do not feel it
+    else:
+        B = arm.base.B
+        pb = B.shape[0]
+        p = pb + 10
+        indep = np.asarray(arm.base.independent, dtype=np.int64)
+        Bb = np.linalg.pinv(B)
+        Bpinv = np.hstack((Bb, Bb @ arm.payload_basis))  # the payload block enters through B
+        sigma0 = np.concatenate((B @ pi0, np.zeros(10)))
+        pbasis = np.vstack((np.zeros((pb, 10)), np.eye(10)))
+        pbasis_pinv = pbasis.T.copy()
+        U = pbasis.copy()
+        P0 = np.zeros((p, p))
+        if cfg.arm_prior_cov is not None:  # what an identification knows, with its correlations
+            C = np.asarray(cfg.arm_prior_cov, dtype=float)
+            if C.shape != (pb, pb):
+                raise ParameterError(
+                    f"OnlineConfig.arm_prior_cov is {C.shape[0]} x {C.shape[1]}; this arm has {pb} "
+                    "base parameters"
+                )
+            P0[:pb, :pb] = cfg.p0_arm * np.eye(pb) + C
+        elif cfg.arm_prior_std is not None:  # what an identification knows of the arm
+            if len(cfg.arm_prior_std) != pb:
+                raise ParameterError(
+                    f"OnlineConfig.arm_prior_std has {len(cfg.arm_prior_std)} values; this arm has "
+                    f"{pb} base parameters"
+                )
+            P0[:pb, :pb] = cfg.p0_arm * np.eye(pb) + np.diag(np.square(cfg.arm_prior_std))
+        else:
+            levels = cfg.arm_uncertainty if cfg.arm_uncertainty is not None else ArmUncertainty()
+            P0[:pb, :pb] = cfg.p0_arm * np.eye(pb) + B @ prior_covariance(arm, levels) @ B.T
+        P0[pb:, pb:] = S0
+        Pr = np.zeros((p, p))
+        Pr[pb:, pb:] = S1
+        n_rows = n
+    cap = cfg.max_trace if cfg.max_trace is not None else max(np.trace(P0), np.trace(Pr))
+    w = derived_row_weights(arm) if cfg.row_weights is None else np.asarray(cfg.row_weights, dtype=float)
+    if w.shape != (n,):
+        raise ParameterError(f"OnlineConfig.row_weights must have {n} values (joints), got {w.shape[0]}")
+    b = cfg.bank
+    ints = np.zeros(K.N_I, dtype=np.int64)
+    fl = np.zeros(K.N_F)
+    T = cfg.sample_period
+    ints[K.I_ALIGN] = int(cfg.align)
+    ints[K.I_SELECT] = int(cfg.selection is not None)
+    ints[K.I_SEL_MEMORY] = 0 if cfg.selection is None else cfg.samples(cfg.selection[1])
+    ints[K.I_TAINT] = cfg.samples(cfg.taint)
+    ints[K.I_PROJECT] = int(cfg.project)
+    ints[K.I_N_ROWS] = n_rows
+    ints[K.I_MOMENTUM] = int(cfg.regression_form == "momentum")
+    fl[K.F_LAM0], fl[K.F_MU], fl[K.F_CAP] = cfg.lam0, cfg.mu, cap
+    fl[K.F_SEL_THRESHOLD] = 0.0 if cfg.selection is None else cfg.selection[0]
+    fl[K.F_EIG_MIN] = cfg.eig_min
+    fl[K.F_RADIUS] = 0.0 if cfg.bound_radius is None else cfg.bound_radius
+    fl[K.F_PRIOR_RADIUS] = 0.0 if cfg.prior_radius is None else cfg.prior_radius
+    if cfg.mode == "payload":  # a carried payload's mass: the re-opened prior's (sized by the capacity)
+        fl[K.F_PRESENT2] = (reopen_mass_std(det, arm) if det else cfg.payload_mass_std) ** 2
+    if det is not None:
+        ints[K.I_DETECT] = 1
+        warm = det.warmup if det.warmup is not None else (WARMUP_ARM if cfg.mode == "arm" else WARMUP)
+        ints[K.I_WARMUP] = cfg.seconds(warm)
+        ints[K.I_MIN_LEARNED] = det.min_learned
+        ints[K.I_HOLDOFF] = cfg.seconds(det.holdoff)
+        ints[K.I_FREEZE] = cfg.samples(det.freeze)
+        ints[K.I_RESUME] = int(np.ceil(ints[K.I_FREEZE] * det.resume))
+        # the momentum form restarts its filters on an alarm: no memory to wait for
+        ints[K.I_REOPEN_AGAIN] = int(det.reopen_again)
+        ints[K.I_GATE_AFTER] = det.gate_after
+        fl[K.F_ALPHA_SHORT] = min(1.0, T / det.short_window)
+        fl[K.F_ALPHA_LONG] = min(1.0, T / det.long_window)
+        fl[K.F_THRESHOLD2] = det.threshold**2
+        fl[K.F_SLOW2] = det.slow_factor**2
+        fl[K.F_GATE2] = det.gate**2
+        fl[K.F_FLOOR2] = det.floor**2
+        if det.fast_window is not None:
+            ints[K.I_FAST] = 1
+            fl[K.F_ALPHA_FAST] = min(1.0, T / det.fast_window)
+            fl[K.F_FAST2] = det.fast_threshold**2
+            ints[K.I_FAST_LEARNED] = cfg.seconds(det.long_window)
+        if det.min_rows > n_rows:
+            raise ParameterError(
+                f"Detector.min_rows = {det.min_rows} exceeds the {n_rows} joint equations that "
+                "carry the payload"
+            )
+        ints[K.I_MIN_ROWS] = det.min_rows
+        fl[K.F_DET_SPEED] = max(det.speed, fl[K.F_SEL_THRESHOLD])
+        fl[K.F_CREEP_MARGIN] = det.creep_margin
+        if det.hold_above > 0.0:
+            fl[K.F_HOLD_ABOVE2] = det.hold_above**2
+            hold = cfg.rise_samples if det.hold_time is None else cfg.seconds(det.hold_time)
+            ints[K.I_HOLD] = max(hold, 1)
+        ints[K.I_RESET_PAYLOAD] = int(cfg.mode == "arm" and cfg.reset_payload)
+        # payload mode: control keeps the starting payload until the first alarm (the kernel's
+        # _keep_start); in mode "arm" the payload block also takes up the arm's error meanwhile
+        ints[K.I_KEEP_START] = int(cfg.mode == "payload")
+    xs0 = np.linalg.solve(np.eye(b.order) - b.A, b.B[:, 0])
+    Am, Bm, Cm, Dm = summing_realisation(b)
+    xm1 = np.linalg.solve(np.eye(b.order) - Am, Bm[:, 1])
+    c = np.ascontiguousarray
+    return EstCfg(
+        ch=arm.chain,
+        mode=K.MODE_PAYLOAD if cfg.mode == "payload" else K.MODE_ARM,
+        pi0=pi0,
+        jp=int(jp),
+        pmap=pmap,
+        indep=indep,
+        Bpinv=c(Bpinv),
+        sigma0=c(sigma0),
+        pbasis=c(pbasis),
+        pbasis_pinv=c(pbasis_pinv),
+        U=U,
+        P_reopen=c(Pr),
+        A=c(b.A),
+        Bf=c(b.B[:, 0]),
+        C=c(b.C),
+        D=c(b.D[:, 0]),
+        xs0=xs0,
+        Am=Am,
+        Bm=Bm,
+        Cm=Cm,
+        Dm=Dm,
+        xm1=xm1,
+        w=c(w),
+        ints=ints,
+        floats=fl,
+        vdet=c(_detector_velocity_variance(arm)),
+    ), P0
+
+
+def _channels(cfg: OnlineConfig, n: int) -> int:
+    """Filter channels of the configured regression form, n joints."""
+    if cfg.regression_form != "momentum":
+        return K.SIGNAL_CHANNELS * n
+    return K.arm_momentum_channels(n) if cfg.mode == "arm" else K.MOMENTUM_CHANNELS * n
+
+
+def est_init(
+    cfg: OnlineConfig, arm: Arm, n_trials: int, sigma_nominal: ArrayLike | None = None
+) -> tuple[EstCfg, EstState]:
+    """Compiled configuration and initial state of ``n_trials`` estimators.
+
+    Parameters
+    ----------
+    cfg : OnlineConfig
+    arm : Arm
+        The arm (its standard parameters ``arm.pi`` are the known part in payload mode).
+    n_trials : int
+    sigma_nominal : array_like (p,) or (n_trials, p), optional
+        Nominal base parameters: in mode ``"arm"`` the initial estimate (default ``arm.sigma``,
+        its payload in the payload block); in payload mode the initial payload is the one it implies
+        (``arm.payload_from_sigma``; default no payload).
+
+    Returns
+    -------
+    EstCfg, EstState
+    """
+    if not isinstance(cfg, OnlineConfig):
+        raise ParameterError(f"cfg must be a OnlineConfig, got {type(cfg).__name__}")
+    if not isinstance(n_trials, int | np.integer) or isinstance(n_trials, bool) or n_trials < 1:
+        raise ParameterError(f"n_trials must be an integer >= 1, got {n_trials!r}")
+    c, P0 = _pack(cfg, arm)
+    n = arm.n_joints
+    p = P0.shape[0]
+    if sigma_nominal is None:
+        th0 = np.zeros(10) if cfg.mode == "payload" else np.concatenate((arm.sigma, np.zeros(10)))
+    else:
+        s = np.asarray(sigma_nominal, dtype=float)
+        if s.shape[-1] != arm.base.count or not np.all(np.isfinite(s)):
+            raise ParameterError(
+                f"sigma_nominal must be {arm.base.count} finite base parameters, got shape {s.shape}"
+            )
+        pay = arm.payload_from_sigma(s).params
+        # mode "arm": the nominal arm known to the prior, its payload in the payload block
+        th0 = pay if cfg.mode == "payload" else np.concatenate((s - pay @ arm.payload_basis.T, pay))
+    theta = np.broadcast_to(th0, (n_trials, p)).copy()
+    cnt = np.zeros((n_trials, K.N_CNT), dtype=np.int64)
+    cnt[:, K.C_SINCE_ALARM] = K.BIG
+    cnt[:, K.C_LAST_ALARM] = -1
+    cnt[:, K.C_REOPEN_AT] = -1
+    m = n_trials
+    state = EstState(
+        xf=np.zeros((m, _channels(cfg, n), cfg.bank.order)),
+        u_last=np.zeros((m, 4 * n)),
+        tau_prev=np.zeros((m, n)),
+        cnt=cnt,
+        since_slow=np.zeros((m, n), dtype=np.int64),
+        seen=np.zeros((m, n), dtype=np.int64),
+        learned=np.zeros((m, n), dtype=np.int64),
+        theta=theta,
+        P=np.broadcast_to(P0, (m, p, p)).copy(),
+        lam=np.full(m, cfg.lam0),
+        short=np.zeros((m, n)),
+        long=np.zeros((m, n)),
+        ref=np.zeros((m, n)),
+        eps=np.full((m, n), np.nan),
+        fast=np.zeros((m, n)),
+        since_crawl=np.zeros((m, n), dtype=np.int64),
+        hold=np.zeros((m, n)),
+        held=np.zeros((m, n), dtype=np.int64),
+        ref_pay=np.zeros((m, 10)),
+        ref_rise=np.ones((m, n)),
+        start_pay=np.zeros((m, 10)),
+        start_mass=theta[:, p - 10].copy(),
+    )
+    for i in range(m):  # the payload the model control uses at the start
+        K.est_payload_trial(c, state, i, state.start_pay[i])
+    return c, state

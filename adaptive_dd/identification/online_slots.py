@@ -1,0 +1,330 @@
+"""Layout of the N-joint online estimator's compiled configuration and state.
+
+The slot constants that index :class:`EstCfg`'s ``ints`` (``I_*``) and ``floats`` (``F_*``) and
+the per-trial counters ``EstState.cnt`` (``C_*``), the NamedTuples :class:`EstCfg` (read-only
+configuration, built by :func:`~adaptive_dd.identification.online.est_init`), :class:`EstState`
+(per-trial state, stepped in place) and :class:`EstWork` (a trial's scratch, :func:`est_work`).
+The step itself is :mod:`~adaptive_dd.identification.online_kernel`.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+from numba import njit
+
+from adaptive_dd.plant.chain import (
+    Chain,
+    workspace,
+)
+
+# columns of the per-trial integer state `cnt`
+C_K = 0  # samples stepped
+C_STARTED = 1
+C_SINCE_BAD = 2  # samples since the last non-finite input
+C_SKIPPED = 3  # samples with a non-finite input
+C_ALARMS = 4
+C_SINCE_ALARM = 5
+C_LAST_ALARM = 6  # sample index of the last alarm (-1: none)
+C_REOPEN_AT = 7  # sample at which the covariance is re-opened again (-1: none)
+C_RESTART = 8  # 1: the momentum channels restart at the next sample (set by an alarm)
+C_FOLLOWS = 9  # 1: the model control uses follows the estimate (0: it keeps the starting payload)
+N_CNT = 10
+
+BIG = 1 << 40
+SIGNAL_CHANNELS = 4  # per joint: q, qd, tau, sgn(qd) (the signals form)
+MOMENTUM_CHANNELS = 12  # per joint: G0 tau, G1 p + G0 wv and the payload link's G1 py + G0 wy (10)
+MODE_PAYLOAD = 0
+MODE_ARM = 1
+
+
+class EstCfg(NamedTuple):
+    """Everything the compiled step needs (built by ``est_init``; read-only).
+
+    Attributes
+    ----------
+    ch : Chain
+        Kinematics of the arm.
+    mode : int
+        0 payload (10 parameters of the payload, arm known), 1 mode "arm" (the arm's base
+        parameters, then the payload's ten: ``p = indep.size + 10``; the
+        payload's columns are link ``jp``'s through ``pmap``, ``pbasis`` selects the last ten).
+    pi0 : (13 n,)
+        Standard parameters of the known (nominal) arm, without payload.
+    jp : int
+        Link (0-based) that carries the payload frame.
+    pmap : (10, 10)
+        Payload parameters about the payload frame -> about link jp's joint frame.
+    indep : (p,) int64
+        Base columns of the standard regressor (mode "arm").
+    Bpinv : (13 n, p)
+        Mode "arm": the pseudo-inverse of the base map B (``B @ Bpinv == I``) followed
+        by ``pinv(B) @ payload_basis``, so the payload block enters the model through B.
+    sigma0 : (p,)
+        ``B pi0`` and ten zeros (mode "arm"; zeros(10) in payload mode).
+    pbasis : (p, 10)
+        How the payload's ten parameters move theta (identity in payload mode).
+    pbasis_pinv : (10, p)
+        Pseudo-inverse of ``pbasis``.
+    U : (p, r)
+        Orthonormal basis of the payload subspace of theta (re-opened on an alarm).
+    P_reopen : (p, p)
+        Covariance put along U on an alarm.
+    A, Bf, C, D : filter bank matrices (order x order, order, 2 x order, 2)
+    xs0 : (order,)
+        Filter state of a unit constant input.
+    Am, Bm, Cm, Dm : the bank's summing realisation (order x order, order x 2, order, 2)
+        One state, inputs ``u0, u1``, output ``G0 u0 + G1 u1``
+        (:func:`~adaptive_dd.identification.filters.summing_realisation`; the momentum form).
+    xm1 : (order,)
+        Its state of a unit constant ``u1`` and ``u0 = 0``.
+    w : (n,)
+        Row weights: equation j is divided by ``w[j]`` (the rows' updates and the detector's
+        prior errors).
+    ints : (N_I,) int64, floats : (N_F,) float64
+        Scalar settings, slots ``I_*`` and ``F_*`` of this module.
+    vdet : (n,)
+        The sensor's velocity noise variance per joint [(rad/s)^2] (the detector's
+        :func:`_ref_rise`: how much a payload raises each row's noise).
+    """
+
+    ch: Chain
+    mode: int
+    pi0: np.ndarray
+    jp: int
+    pmap: np.ndarray
+    indep: np.ndarray
+    Bpinv: np.ndarray
+    sigma0: np.ndarray
+    pbasis: np.ndarray
+    pbasis_pinv: np.ndarray
+    U: np.ndarray
+    P_reopen: np.ndarray
+    A: np.ndarray
+    Bf: np.ndarray
+    C: np.ndarray
+    D: np.ndarray
+    xs0: np.ndarray
+    Am: np.ndarray
+    Bm: np.ndarray
+    Cm: np.ndarray
+    Dm: np.ndarray
+    xm1: np.ndarray
+    w: np.ndarray
+    ints: np.ndarray
+    floats: np.ndarray
+    vdet: np.ndarray
+
+
+# integer slots of EstCfg.ints
+I_ALIGN = 0
+I_SELECT = 1
+I_SEL_MEMORY = 2  # samples
+I_TAINT = 3  # samples
+I_DETECT = 4
+I_WARMUP = 5  # samples
+I_MIN_LEARNED = 6
+I_HOLDOFF = 7
+I_RESUME = 8
+I_FREEZE = 9
+I_REOPEN_AGAIN = 10
+I_PROJECT = 11
+I_GATE_AFTER = 12  # learned samples before the learning gate applies
+I_N_ROWS = 13  # rows (joints 0 .. n_rows-1) that carry information
+I_MOMENTUM = 14  # 1: the regression in momentum form (payload mode)
+I_MIN_ROWS = 15  # rows whose short average must exceed (threshold / 2)^2 times their level for an alarm
+I_FAST = 16  # 1: the fast average may also raise an alarm
+I_RESET_PAYLOAD = 17  # mode "arm": an alarm sets the payload block (theta's last ten) to zero
+I_FAST_LEARNED = 18  # samples a row's own level must have learned before its fast average may alarm
+I_HOLD = 19  # samples a risen row is judged against the level it had when it rose (0: no hold)
+I_KEEP_START = 20  # 1: control keeps the starting payload until the first alarm (_keep_start)
+N_I = 21
+
+# float slots of EstCfg.floats
+F_LAM0 = 0
+F_MU = 1
+F_CAP = 2  # trace cap of P (<= 0: none)
+F_SEL_THRESHOLD = 3
+F_ALPHA_SHORT = 4
+F_ALPHA_LONG = 5
+F_THRESHOLD2 = 6
+F_SLOW2 = 7
+F_GATE2 = 8
+F_EIG_MIN = 9  # smallest eigenvalue kept in the projected pseudo-inertia
+F_FLOOR2 = 10  # floor of the detector's level (squared weighted error)
+F_RADIUS = 11  # radius [m] of the ball about the payload frame the projected payload lies in (0: none)
+F_PRIOR_RADIUS = 12  # radius [m] of the compact-payload prior on the model control uses (0: none)
+F_ALPHA_FAST = 13  # the fast average's weight of a sample
+F_FAST2 = 14  # the fast average's threshold (squared RMS ratio)
+F_DET_SPEED = 15  # [rad/s] a joint no faster within the selection memory creeps
+F_CREEP_MARGIN = 16  # a creeping joint's row alarms only beyond this times its Coulomb friction
+F_HOLD_ABOVE2 = 17  # a row rises when its short average exceeds this x the threshold x its level
+F_PRESENT2 = 18  # payload mode: the variance [kg^2] of a payload's mass when one is carried (0: no weight)
+N_F = 19
+
+
+class EstState(NamedTuple):
+    """State of a batch of estimators; every array has the trial axis first.
+
+    Attributes
+    ----------
+    xf : (m, SIGNAL_CHANNELS n, order) or (m, MOMENTUM_CHANNELS n, order)
+        Filter states: signals form, of the channels ``q, qd, tau, sgn(qd)`` (n each);
+        momentum form, of ``G0 tau``, ``G1 p + G0 wv`` (n each) and ``G1 py + G0 wy`` (10 n,
+        row-major (n, 10)).
+    u_last : (m, 4 n)
+        Last finite channel sample (held over a dropout).
+    tau_prev : (m, n)
+        Torque of the previous sample (alignment).
+    cnt : (m, N_CNT) int64
+        Counters, columns ``C_*`` (samples, skipped, alarms, last alarm, ...).
+    since_slow : (m, n) int64
+        Samples since joint j was last slow (data selection).
+    seen, learned : (m, n) int64
+        Detector: rows seen and rows learned by the long-run level since the last alarm.
+    theta : (m, p)
+        The estimator's estimate (unprojected).
+    P : (m, p, p)
+        Its covariance.
+    lam : (m,)
+        Forgetting factor.
+    short, long : (m, n)
+        Detector averages of the squared weighted prior errors.
+    ref : (m, n)
+        Level each row had established before the last alarm (0: none), without the floor
+        (applied where it serves, after :func:`_ref_rise`'s factor).
+    eps : (m, n)
+        Weighted prior errors of the last sample (NaN where a row was not used).
+    fast : (m, n)
+        Detector: the fast average of the squared weighted prior errors (``fast_window``).
+    since_crawl : (m, n) int64
+        Detector: samples since joint j was last no faster than the detector's speed
+        (``F_DET_SPEED``; its row raises alarms only past the selection memory).
+    hold : (m, n)
+        Detector: the level row j had when its short average rose (> 0: judged against it),
+        -1 once the hold has run out while the row is still raised, 0: no hold.
+    held : (m, n) int64
+        Detector: samples since row j's hold began.
+    ref_pay : (m, 10)
+        Detector: the payload the model held (as control uses it) when ``ref`` was set, at the
+        last alarm (:func:`_ref_rise`).
+    ref_rise : (m, n)
+        Detector: how much the payload the estimate holds raises row j's noise variance over
+        ``ref_pay`` (at least 1; 1 where ``ref`` does not serve), :func:`_ref_rise`.
+    start_pay : (m, 10)
+        The payload the model control uses at the start (kept until the estimate follows:
+        :func:`_keep_start`).
+    start_mass : (m,)
+        The estimate's payload mass at the start [kg].
+    """
+
+    xf: np.ndarray
+    u_last: np.ndarray
+    tau_prev: np.ndarray
+    cnt: np.ndarray
+    since_slow: np.ndarray
+    seen: np.ndarray
+    learned: np.ndarray
+    theta: np.ndarray
+    P: np.ndarray
+    lam: np.ndarray
+    short: np.ndarray
+    long: np.ndarray
+    ref: np.ndarray
+    eps: np.ndarray
+    fast: np.ndarray
+    since_crawl: np.ndarray
+    hold: np.ndarray
+    held: np.ndarray
+    ref_pay: np.ndarray
+    ref_rise: np.ndarray
+    start_pay: np.ndarray
+    start_mass: np.ndarray
+
+
+class EstWork(NamedTuple):
+    """Scratch of one trial's step and model (:func:`est_work`): allocated once per run of
+    trials, not at every sample (:func:`est_step_trial_in`, :func:`est_model_trial_in`).
+
+    Attributes
+    ----------
+    chain : tuple
+        ``workspace(n)`` of :mod:`adaptive_dd.plant.chain`.
+    a2 : (2, 6, 10); a1 : (6, 10)
+        Scratch of ``momentum_form_in`` and ``rnea_body_regressor_in``.
+    u : (4 n,)
+        The channels ``q, qd, tau, sgn(qd)`` of this sample.
+    qf, qdf, qddf, sf, tf, ym : (n,)
+        Filtered signals (see :func:`_filtered_signals`).
+    phim : (n, 10)
+    act : (n,) bool
+        Rows used at this sample.
+    phi : (n, p); y : (n,)
+        The regression.
+    pphi, row : (p,); nz : (p,) int64
+        Scratch of :func:`_rls_row`.
+    u1, u0, yf : (MOMENTUM_CHANNELS n,)
+        The momentum form's inputs (G1, G0) and outputs; ``p, wv (n,)`` and ``py, wy (n, 10)``
+        are views into ``u1, u0``.
+    known : (n,); yb : (n, 10); W : (n, 10 n)
+        Scratch of the signals form's regression.
+    raw, raw_est, pay : (10,); Pc : (10, 10); d : (p,)
+        Scratch of the model control uses.
+    Mr, Mr0 : (n, n); pir : (10 n,)
+        Scratch of the detector's :func:`_ref_rise`.
+    """
+
+    chain: tuple
+    a2: np.ndarray
+    a1: np.ndarray
+    u: np.ndarray
+    qf: np.ndarray
+    qdf: np.ndarray
+    qddf: np.ndarray
+    sf: np.ndarray
+    tf: np.ndarray
+    ym: np.ndarray
+    phim: np.ndarray
+    act: np.ndarray
+    phi: np.ndarray
+    y: np.ndarray
+    pphi: np.ndarray
+    row: np.ndarray
+    nz: np.ndarray
+    u1: np.ndarray
+    u0: np.ndarray
+    yf: np.ndarray
+    p: np.ndarray
+    wv: np.ndarray
+    py: np.ndarray
+    wy: np.ndarray
+    known: np.ndarray
+    yb: np.ndarray
+    W: np.ndarray
+    raw: np.ndarray
+    raw_est: np.ndarray
+    pay: np.ndarray
+    Pc: np.ndarray
+    d: np.ndarray
+    Mr: np.ndarray
+    Mr0: np.ndarray
+    pir: np.ndarray
+
+
+@njit(cache=True)
+def est_work(n, p):  # pragma: no cover - compiled
+    """Scratch (:class:`EstWork`) of a trial's step and model, n joints, p parameters."""
+    nch = MOMENTUM_CHANNELS * n
+    u1, u0 = np.zeros(nch), np.zeros(nch)
+    return EstWork(
+        workspace(n), np.empty((2, 6, 10)), np.empty((6, 10)), np.empty(4 * n),
+        np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty((n, 10)),
+        np.zeros(n, dtype=np.bool_), np.empty((n, p)), np.empty(n),
+        np.empty(p), np.empty(p), np.empty(p, dtype=np.int64),
+        u1, u0, np.empty(nch), u1[n : 2 * n], u0[n : 2 * n],
+        u1[2 * n :].reshape((n, 10)), u0[2 * n :].reshape((n, 10)),
+        np.empty(n), np.empty((n, 10)), np.empty((n, 10 * n)),
+        np.empty(10), np.empty(10), np.empty(10), np.empty((10, 10)), np.empty(p),
+        np.empty((n, n)), np.empty((n, n)), np.empty(10 * n),
+    )  # fmt: skip
