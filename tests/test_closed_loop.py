@@ -264,6 +264,7 @@ def test_laws_are_the_arms_inverse_dynamics_on_the_reference(rng):
     np.testing.assert_allclose(got, arm.inverse_dynamics(q, qd, qdd), rtol=1e-9, atol=1e-9)
 
 
+@pytest.mark.slow  # a kernel no other default test compiles (about 20-60 CPU-s cold)
 def test_law_with_its_scratch_given_equals_the_allocating_law(rng):
     """``law_trial_in`` with one scratch (``law_work``) reused over samples, NaN-filled at the
     start, gives bit for bit what ``law_trial`` gives with fresh scratch, for every built-in

@@ -308,6 +308,7 @@ def test_cli_simulate_and_identify_end_to_end(tmp_path, capsys):
     )
 
 
+@pytest.mark.slow  # a kernel no other default test compiles (about 20-60 CPU-s cold)
 def test_benchmark_plant_with_smooth_friction_is_the_model(arm3):
     """plant="benchmark" (the compiled benchmark plant) under the tanh law equals the identification model."""
     a = simulate_record(

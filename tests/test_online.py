@@ -724,6 +724,7 @@ def _closed_loop(arm, seed, n, payloads, swap):
     return out
 
 
+@pytest.mark.slow  # a kernel no other default test compiles (about 20-60 CPU-s cold)
 def test_payload_mode_on_the_stick_slip_plant_in_closed_loop(ur5):
     """The simulated plant (stick-slip friction, zero-order hold, RK4), 12 s, swap at 6 s."""
     qm, qdm, tau = _closed_loop(ur5, 21, 12_000, [PAY_A, PAY_B], 6_000)

@@ -127,6 +127,7 @@ def _control_mass(arm, rec, present):
     return payload[:, 0], alarm
 
 
+@pytest.mark.slow  # a kernel no other default test compiles (about 20-60 CPU-s cold)
 def test_the_unloaded_arm_carries_less_phantom_payload(ur5):
     """An unloaded UR5 for 2 s with the shipped sensor noise: the control model's payload mass stays
     below 10 g with the weight, and is at least halved against the projection alone over the first
