@@ -434,6 +434,32 @@ def test_payload_pair_names_what_the_pair_does_not_see():
         payload_from_pair(arm, s0 + P @ load, blind, s0, blind)
 
 
+def test_a_massless_pair_prints_its_centre_of_mass_as_undefined(capsys):
+    """A record against itself: a zero payload, whose centre of mass is undefined, said so (no NaN
+    printed, no division by zero)."""
+    import warnings
+
+    from adaptive_dd.cli._identify_log import _print_payload
+    from adaptive_dd.identification.payload_pair import payload_from_pair
+    from adaptive_dd.plant.arm import Arm, payload_parameters
+    from adaptive_dd.robots import ROBOTS, robot_urdf
+
+    arm = Arm.from_urdf(robot_urdf("ur5"), ROBOTS["ur5"].payload_frame)
+    s0, cov = arm.sigma, 1e-8 * np.eye(arm.sigma.size)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # a RuntimeWarning (0 / 0) fails the test
+        pr = payload_from_pair(arm, s0, cov, s0, cov)
+    assert pr.mass == 0.0 and not pr.com_defined and np.isnan(pr.com).all()
+    _print_payload("payload", pr)
+    out = capsys.readouterr().out
+    assert "centre of mass undefined" in out and "nan" not in out.lower(), out
+    load = payload_parameters(2.0, [0.01, 0.02, 0.05], radius=0.05)
+    pr = payload_from_pair(arm, s0 + arm.payload_basis @ load, cov, s0, cov)
+    _print_payload("payload", pr)
+    out = capsys.readouterr().out
+    assert pr.com_defined and "centre of mass [10.00, 20.00, 50.00] +- " in out, out
+
+
 def test_validate_an_identification_scenario(tmp_path, capsys):
     """A scenario with [arm] and [record] validates without a [reference]; a benchmark table is refused."""
     from adaptive_dd.cli import main

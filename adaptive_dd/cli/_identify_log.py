@@ -111,12 +111,17 @@ def _print_held(model, fit) -> None:
 
 def _print_payload(label: str, pr) -> None:
     c = pr.consistent
-    print(
-        f"{label}: mass {pr.mass:.5g} +- {pr.mass_std:.2g} kg; centre of mass "
-        f"[{', '.join(f'{x * 1e3:.2f}' for x in pr.com)}] +- "
-        f"[{', '.join(f'{x * 1e3:.2g}' for x in pr.com_std)}]"
-        " mm in the payload frame"
-    )
+    if pr.com_defined:
+        com = (
+            f"centre of mass [{', '.join(f'{x * 1e3:.2f}' for x in pr.com)}] +- "
+            f"[{', '.join(f'{x * 1e3:.2g}' for x in pr.com_std)}] mm in the payload frame"
+        )
+    else:
+        com = (
+            "centre of mass undefined (the payload fitted has no mass: none seen, or one too light for "
+            "these records to tell from none)"
+        )
+    print(f"{label}: mass {pr.mass:.5g} +- {pr.mass_std:.2g} kg; {com}")
     ic = pr.inertia_com
     print(
         f"  inertia about the centre of mass [kg m^2]: Ixx {ic[0, 0]:.4g}, Iyy {ic[1, 1]:.4g}, Izz "

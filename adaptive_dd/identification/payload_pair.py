@@ -51,7 +51,8 @@ class PayloadResult:
     mass, mass_std : float
         [kg].
     com, com_std : ndarray (3,)
-        Centre of mass in the payload frame [m] (constrained fit) and its std.
+        Centre of mass in the payload frame [m] (constrained fit) and its std; NaN when the mass is
+        not positive (``com_defined`` False: a massless body has no centre of mass).
     inertia_com : ndarray (3, 3)
         Inertia about the centre of mass [kg m^2] (constrained fit).
     consistent : ConsistentFit
@@ -75,6 +76,9 @@ class PayloadResult:
     com_std: Array
     inertia_com: Array
     consistent: ConsistentFit
+    com_defined: bool = True
+    """False when the constrained fit's mass is not positive: ``com`` and ``com_std`` are then NaN, and
+    ``identify`` prints the centre of mass as undefined."""
 
 
 def _inertia_about_com(p: Array) -> Array:
@@ -91,14 +95,18 @@ def payload_from_params(params: ArrayLike, cov: ArrayLike) -> PayloadResult:
     fit = consistent_fit(p, np.linalg.pinv(C, rcond=1e-12, hermitian=True))
     q = fit.params
     m = q[0]
-    com = q[1:4] / m if m > 0 else np.full(3, np.nan)
-    # d c / d [m, h] = [-h/m^2, 1/m]
-    com_std = np.empty(3)
-    for k in range(3):
-        g = np.zeros(10)
-        g[0], g[1 + k] = -q[1 + k] / m**2, 1.0 / m
-        com_std[k] = np.sqrt(max(g @ C @ g, 0.0))
-    return PayloadResult(p, C, float(m), float(np.sqrt(C[0, 0])), com, com_std, _inertia_about_com(q), fit)
+    defined = bool(m > 0)
+    com, com_std = np.full(3, np.nan), np.full(3, np.nan)  # a massless body has no centre of mass
+    if defined:
+        com = q[1:4] / m
+        # d c / d [m, h] = [-h/m^2, 1/m]
+        for k in range(3):
+            g = np.zeros(10)
+            g[0], g[1 + k] = -q[1 + k] / m**2, 1.0 / m
+            com_std[k] = np.sqrt(max(g @ C @ g, 0.0))
+    return PayloadResult(
+        p, C, float(m), float(np.sqrt(C[0, 0])), com, com_std, _inertia_about_com(q), fit, com_defined=defined
+    )
 
 
 def payload_from_pair(
