@@ -162,3 +162,124 @@ def newey_west(phi: Array, res: Array, w: Array, scale: Array, bounds=None) -> t
     cov = U @ (d_inv[:, None] * M * d_inv[None, :]) @ U.T
     cov = 0.5 * (cov + cov.T)
     return cov / np.outer(scale, scale), lag
+
+
+def _windowed(x: Array, kernel: Array, bounds) -> Array:
+    """Each column of ``x (N, c)`` convolved with the symmetric ``kernel (2 L + 1,)`` inside each piece."""
+    import scipy.signal
+
+    h = np.zeros_like(x)
+    for a, b in bounds:
+        h[a:b] = scipy.signal.oaconvolve(x[a:b], kernel[:, None], mode="same", axes=0)
+    return h
+
+
+AR_ORDER = 4
+"""The order of the autoregression that models the residual's correlation (:func:`_ar_correlation`)."""
+
+
+def _ar_correlation(res_w: Array, bounds, order: int, longest: int) -> Array:
+    """The autocorrelation ``rho_0..rho_M`` of an AR(``order``) fitted (Yule-Walker) to the residual
+    ``res_w (N, m)`` pooled over channels and pieces, run out to where it falls below 1e-3 (at most
+    ``longest`` lags). The residual's own autocorrelation beyond the first lags is biased low (the
+    fit took each piece's mean and more out of it); the autoregression's first lags are not, and it
+    carries them on."""
+    import scipy.linalg
+
+    ac = np.zeros(order + 1)
+    for a, b in bounds:
+        seg = res_w[a:b] - res_w[a:b].mean(axis=0)
+        for k in range(min(order + 1, b - a)):
+            ac[k] += np.sum(seg[k:] * seg[: b - a - k])
+    ac = ac / max(ac[0], 1e-300)
+    try:
+        phi = scipy.linalg.solve_toeplitz(ac[:order], ac[1 : order + 1])
+    except np.linalg.LinAlgError:
+        return np.ones(1)
+    rho = list(ac)
+    while len(rho) <= longest and (len(rho) <= order + 1 or abs(rho[-1]) > 1e-3 or abs(rho[-2]) > 1e-3):
+        rho.append(float(np.dot(phi, rho[-1 : -order - 1 : -1])))
+    return np.asarray(rho)
+
+
+def _inv_sym(A: Array) -> Array:
+    d, U = np.linalg.eigh(0.5 * (A + A.T))
+    return (U / np.maximum(d, d.max() * 1e-15)) @ U.T
+
+
+def expected_sandwich(
+    xf: Array, xa: Array, res_w: Array, lag: int, bounds, hetero: bool = False
+) -> tuple[Array, Array]:
+    """``(D, E)``: under a working model of the residual the true covariance ``D (kf, kf)`` of the
+    estimate of the fitted columns ``xf (N, m, kf)`` (weighted and scaled) and the expectation ``E``
+    of the Newey-West sandwich of those columns (their block of the sandwich of ``xa (N, m, ka)``,
+    whose first ``kf`` columns are ``xf``) computed from the fit's residual.
+
+    The working model: each channel's error stationary within each piece, of variance that of its
+    weighted residual ``res_w (N, m)`` and autocorrelation that pooled over the channels up to
+    ``lag``, independent between channels and pieces. The residual is ``(I - H) e`` (``H`` the fit's
+    hat matrix), so ``E[S] = X^T (((I - H) Sigma (I - H)) o K) X`` with ``K`` the Bartlett weights;
+    ``H`` of rank ``kf`` makes it a sum of ``kf`` Bartlett sums."""
+    N, m, kf = xf.shape
+    L = max(int(lag), 1)
+    rho = _ar_correlation(res_w, bounds, AR_ORDER, max(10 * L, 50))
+    M = rho.size - 1
+    corr = rho[np.abs(np.arange(-M, M + 1))]
+    lags = np.abs(np.arange(-L, L + 1))
+    bart = 1.0 - lags / (L + 1)
+    bart_rho = bart * np.concatenate([rho, np.zeros(max(0, L - M))])[lags]
+    ka = xa.shape[2]
+    if hetero:  # each sample's level: the squared residual smoothed over the lag
+        box = np.ones(2 * L + 1)
+        sm = _windowed(res_w**2, box, bounds) / np.maximum(_windowed(np.ones_like(res_w), box, bounds), 1.0)
+        sd = np.sqrt(np.maximum(sm, 1e-300))
+    else:
+        sd = np.broadcast_to(np.sqrt(np.mean(res_w**2, axis=0)), res_w.shape)
+    # Sigma xf per channel, the true covariance D = Af^-1 xf^T Sigma xf Af^-1
+    sx = np.empty_like(xf)
+    t1 = np.zeros((ka, ka))
+    for j in range(m):
+        sx[:, j] = sd[:, j, None] * _windowed(sd[:, j, None] * xf[:, j], corr, bounds)
+        xs = sd[:, j, None] * xa[:, j]
+        t1 += _windowed(xs, bart_rho, bounds).T @ xs
+    Af_inv = _inv_sym(np.einsum("njr,njs->rs", xf, xf))
+    G = np.einsum("njr,njs->rs", xf, sx)
+    D = Af_inv @ G @ Af_inv
+    C = sx @ Af_inv  # (N, m, kf): Sigma xf Af^-1, H Sigma = xf C^T
+    t2 = np.zeros((ka, ka))
+    for c in range(kf):
+        gu = np.einsum("nj,njr->nr", xf[:, :, c], xa)
+        gv = np.einsum("nj,njr->nr", C[:, :, c], xa)
+        t2 += _windowed(gu, bart, bounds).T @ gv
+    lam, V = np.linalg.eigh(0.5 * (D + D.T))
+    t3 = np.zeros((ka, ka))
+    for e in range(kf):
+        if lam[e] <= 0:
+            continue
+        ge = np.einsum("nj,njr->nr", xf @ (np.sqrt(lam[e]) * V[:, e]), xa)
+        t3 += _windowed(ge, bart, bounds).T @ ge
+    S = t1 - t2 - t2.T + t3
+    Aa_inv = _inv_sym(np.einsum("njr,njs->rs", xa, xa))
+    E = (Aa_inv @ S @ Aa_inv)[:kf, :kf]
+    return D, 0.5 * (E + E.T)
+
+
+def direction_correction(D: Array, E: Array, cap: float = 4.0, matrix: bool = True) -> Array:
+    """``M (k, k)`` with ``M E M^T = D`` (the variance along every direction made right on
+    average), the generalised eigenvalues of ``(D, E)`` held in ``[1, cap]``; ``matrix=False``: the
+    diagonal ``sqrt(D_ii / E_ii)``."""
+    if not matrix:
+        return np.diag(np.sqrt(np.clip(np.diag(D) / np.maximum(np.diag(E), 1e-300), 1.0, cap)))
+    import scipy.linalg
+
+    d, U = np.linalg.eigh(E)
+    keep = d > d.max() * 1e-12
+    W = U[:, keep] / np.sqrt(d[keep])  # W^T E W = I on E's range
+    lam, Q = np.linalg.eigh(W.T @ D @ W)
+    lam = np.clip(lam, 1.0, cap)
+    V = W @ Q  # V^T E V = I
+    M = E @ V @ np.diag(np.sqrt(lam)) @ V.T
+    # directions outside E's range unchanged
+    Pn = U[:, ~keep] @ U[:, ~keep].T
+    del scipy
+    return M + Pn
