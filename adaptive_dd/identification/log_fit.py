@@ -85,7 +85,6 @@ COULOMB_STD_COLUMN = 11
 WEIGHT_FLOOR = 0.1
 """``s_j`` is at least this fraction of the median residual rms of the kept channels."""
 MODEL_ERROR_RATIO = 10.0
-CORRECTION = {"mode": "global"}
 """A filtered residual this many times the filtered sensor noise is reported as model error."""
 
 
@@ -358,24 +357,11 @@ def fit_log(
         cov_aug, lag = newey_west(aug, res, w, scale_aug, bounds)
         k = aug.shape[2]
     else:
-        aug, scale_aug = phi, scale
         cov_aug, lag = newey_west(phi, res, w, scale, bounds)
         k = r
     kernel = _kernel_bias((res * w).sum(axis=1), lag, bounds)
     n_eff, dof = _dof_factor(res, w, lag, bounds, k)
-    mode = CORRECTION["mode"]
-    if mode == "global":
-        cov_aug = kernel * dof * cov_aug
-    elif mode != "none":
-        from adaptive_dd.identification.log_covariance import direction_correction, expected_sandwich
-
-        kf = r + (int(used.sum()) if offset else 0)
-        xa = aug * w[None, :, None] / scale_aug
-        D, E = expected_sandwich(xa[:, :, :kf], xa, res * w, lag, bounds, hetero=mode.startswith("h"))
-        M = np.eye(aug.shape[2])
-        M[:kf, :kf] = direction_correction(D, E, matrix=mode.endswith("matrix"))
-        cs = M @ (cov_aug * np.outer(scale_aug, scale_aug)) @ M.T
-        cov_aug = 0.5 * (cs + cs.T) / np.outer(scale_aug, scale_aug)
+    cov_aug = kernel * dof * cov_aug
     cov_k = cov_aug[:r, :r]
     sigma, cov, residual, weights = _in_full(model, K, used, x, cov_k, res, w)
     held = None
