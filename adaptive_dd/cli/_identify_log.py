@@ -111,16 +111,13 @@ def _print_held(model, fit) -> None:
 
 def _print_payload(label: str, pr) -> None:
     c = pr.consistent
-    if pr.com_defined:
-        com = (
-            f"centre of mass [{', '.join(f'{x * 1e3:.2f}' for x in pr.com)}] +- "
-            f"[{', '.join(f'{x * 1e3:.2g}' for x in pr.com_std)}] mm in the payload frame"
-        )
-    else:
-        com = (
-            "centre of mass undefined (the payload fitted has no mass: none seen, or one too light for "
-            "these records to tell from none)"
-        )
+    com = (  # a massless body has none
+        f"centre of mass [{', '.join(f'{x * 1e3:.2f}' for x in pr.com)}] +- "
+        f"[{', '.join(f'{x * 1e3:.2g}' for x in pr.com_std)}] mm in the payload frame"
+        if pr.com_defined
+        else "centre of mass undefined (the payload fitted has no mass: none seen, or one too light for "
+        "these records to tell from none)"
+    )
     print(f"{label}: mass {pr.mass:.5g} +- {pr.mass_std:.2g} kg; {com}")
     ic = pr.inertia_com
     print(
