@@ -11,6 +11,8 @@ Run from the repository root::
     python benchmarks/log_bounds_coverage.py --load gr.npz p0.npz p1.npz
     # per parameter, against the same seeds run with --torque-offset off (saved as off.npz):
     python benchmarks/log_bounds_coverage.py --load gr.npz --versus off.npz
+    # one motion (that of seed 3), the noise drawn again for each of 60 seeds:
+    python benchmarks/log_bounds_coverage.py --cases records --same-motion 3 --seeds 60
 
 Each seed makes records of the arm by inverse dynamics of the identification's own model
 (:func:`adaptive_dd.identification.records.synthetic_log`: a multi-sine, the torque noise 2 % of
@@ -133,6 +135,13 @@ def main() -> None:
         default="on",
         help="fit a torque offset per channel, as identify does on a [record] log (default on)",
     )
+    ap.add_argument(
+        "--same-motion",
+        type=int,
+        metavar="S",
+        help="gaps and records: every seed the motion of seed S, only the noise drawn again (does the std "
+        "hold for one motion?)",
+    )
     ap.add_argument("--save", help="write the per-seed results to this .npz")
     ap.add_argument("--load", nargs="+", help="summarise saved .npz files (merged) instead of running")
     ap.add_argument(
@@ -164,10 +173,14 @@ def main() -> None:
     }
     out = {k: ([], [], [], []) for k in cases}
     for s in range(args.first, args.first + args.seeds):
-        if "gaps" in out or "records" in out:
+        if ("gaps" in out or "records" in out) and args.same_motion is None:
             rng = np.random.default_rng([45, s])
             one = synthetic_log(arm, 24.0, T, rng)
             two = [synthetic_log(arm, 12.0, T, rng) for _ in range(2)]
+        elif "gaps" in out or "records" in out:  # the motions of seed S, the noise of seed s
+            rng, noise = np.random.default_rng([45, args.same_motion]), np.random.default_rng([45, s, 2])
+            one = synthetic_log(arm, 24.0, T, rng, noise_rng=noise)
+            two = [synthetic_log(arm, 12.0, T, rng, noise_rng=noise) for _ in range(2)]
         if "gaps" in out:
             f = fit(model, [one], HOLES)
             for lst, v in zip(

@@ -70,6 +70,22 @@ def _write(path, log, drop=()):
     return write_recording(path, log.t[keep], log.q[keep], log.qd[keep], log.tau[keep])
 
 
+def test_synthetic_log_draws_its_noise_from_noise_rng(vertical3):
+    """``noise_rng``: the same motion (and clean torque) from the same ``rng``, the noise drawn from
+    ``noise_rng`` alone; without it both come from ``rng``."""
+    arm, _ = vertical3
+    a = synthetic_log(arm, 2.0, T, np.random.default_rng(4), noise_rng=np.random.default_rng(5))
+    b = synthetic_log(arm, 2.0, T, np.random.default_rng(4), noise_rng=np.random.default_rng(6))
+    c = synthetic_log(arm, 2.0, T, np.random.default_rng(4), noise=0.0)
+    np.testing.assert_array_equal(a.q, b.q)
+    assert not np.allclose(a.tau, b.tau)
+    np.testing.assert_array_equal(a.q, c.q)
+    noise = a.tau - c.tau
+    assert 0.005 < np.std(noise) / np.sqrt(np.mean(c.tau**2)) < 0.1  # 2 % of the rms, at most doubled
+    d = synthetic_log(arm, 2.0, T, np.random.default_rng(4), noise_rng=np.random.default_rng(5))
+    np.testing.assert_array_equal(a.tau, d.tau)
+
+
 def test_read_log_splits_at_gaps_and_names_what_it_left_out(tmp_path, vertical3):
     arm, _ = vertical3
     log = synthetic_log(arm, 6.0, T, np.random.default_rng(1))

@@ -336,6 +336,7 @@ def synthetic_log(
     correlation: float = 0.05,
     heteroscedastic: float = 1.0,
     amplitude: float = 0.6,
+    noise_rng: np.random.Generator | None = None,
 ) -> SyntheticLog:
     """A log of ``arm`` whose model is the identification's, with noise like a real log's residual.
 
@@ -345,7 +346,8 @@ def synthetic_log(
     ``payload`` on the payload frame) plus noise: per channel ``noise`` times the channel's torque
     rms, an AR(1) of time constant ``correlation`` [s] (coloured), scaled by ``1 + heteroscedastic
     |qd_j| / max |qd_j|`` (its level changes with the motion). Positions and velocities are exact,
-    so that the estimate's error is the torque noise's alone and its bound can be checked.
+    so that the estimate's error is the torque noise's alone and its bound can be checked. The noise
+    is drawn from ``noise_rng`` when given (default ``rng``): one motion with noise drawn again.
 
     Raises
     ------
@@ -375,9 +377,10 @@ def synthetic_log(
     sigma = model.B @ pi_with_payload(arm, model.pi_ref, pp)
     tau = base_regressor(model, q, qd, qdd) @ sigma
     a = np.exp(-sample_period / correlation)
-    z = rng.standard_normal(tau.shape) * np.sqrt(1 - a * a)
+    nr = rng if noise_rng is None else noise_rng
+    z = nr.standard_normal(tau.shape) * np.sqrt(1 - a * a)
     e = np.empty_like(z)
-    e[0] = rng.standard_normal(n)
+    e[0] = nr.standard_normal(n)
     for k in range(1, t.size):
         e[k] = a * e[k - 1] + z[k]
     level = noise * np.sqrt(np.mean(tau**2, axis=0))
