@@ -72,71 +72,28 @@ def _payload_raw(c, th, raw):  # pragma: no cover - compiled
 
 @njit(cache=True, inline="always")
 def _inertia_cov(c, P, out):  # pragma: no cover - compiled
-    """The inertia block ``out[4:, 4:]`` of the payload parameters' covariance given the mass and
-    first moments (the part :func:`compact_prior` reads; ``out (10, 10)`` is used as scratch).
-
-    The payload's covariance ``C`` is P's own in payload mode, else ``pbasis_pinv P
-    pbasis_pinv^T``; the block returned is the Schur complement ``C_II - C_Ih C_hh^-1 C_hI``
-    (``h`` the mass and first moments, ``I`` the inertia): the inertia's uncertainty once the mass
-    and first moments are taken as the model keeps them. Where the data determine only a
-    combination of the three (a planar arm: the payload's mass, its first moment along the link
-    and its inertia about the joint axis enter the base parameters together), the inertia given
-    the other two is known, and the prior does not move it off that combination."""
+    """The inertia block ``out[4:, 4:]`` of the payload parameters' covariance (the part
+    :func:`compact_prior` reads; the rest of ``out (10, 10)`` is left as it is): P's own block in
+    payload mode, else that block of ``pbasis_pinv P pbasis_pinv^T``."""
     if c.mode == MODE_PAYLOAD:
-        for a in range(10):
-            for b in range(10):
+        for a in range(4, 10):
+            for b in range(4, 10):
                 out[a, b] = P[a, b]
-    else:
-        p = P.shape[0]
-        tmp = np.zeros((10, p))
-        for a in range(10):
-            for b in range(p):
-                acc = 0.0
-                for k in range(p):
-                    acc += c.pbasis_pinv[a, k] * P[k, b]
-                tmp[a, b] = acc
-        for a in range(10):
-            for b in range(10):
-                acc = 0.0
-                for k in range(p):
-                    acc += tmp[a, k] * c.pbasis_pinv[b, k]
-                out[a, b] = acc
-    _condition_inertia(out)
-
-
-@njit(cache=True, inline="always")
-def _condition_inertia(C):  # pragma: no cover - compiled
-    """``C[4:, 4:] <- C_II - C_Ih C_hh^-1 C_hI`` in place (``C (10, 10)``, ``h`` = 0..3), by a
-    Cholesky factor of ``C_hh``; a direction of ``C_hh`` with no variance left conditions nothing."""
-    L = np.zeros((4, 4))
-    for j in range(4):
-        d = C[j, j]
-        for k in range(j):
-            d -= L[j, k] * L[j, k]
-        if not (d > 1e-14 * (abs(C[j, j]) + 1e-300)):
-            continue  # L[:, j] stays 0
-        L[j, j] = np.sqrt(d)
-        for i in range(j + 1, 4):
-            acc = C[i, j]
-            for k in range(j):
-                acc -= L[i, k] * L[j, k]
-            L[i, j] = acc / L[j, j]
-    Z = np.zeros((4, 6))  # L^-1 C_hI
-    for t in range(6):
-        for j in range(4):
-            if L[j, j] == 0.0:
-                continue
-            acc = C[j, 4 + t]
-            for k in range(j):
-                acc -= L[j, k] * Z[k, t]
-            Z[j, t] = acc / L[j, j]
-    for a in range(6):
-        for b in range(6):
+        return
+    p = P.shape[0]
+    tmp = np.zeros((10, p))
+    for a in range(4, 10):
+        for b in range(p):
             acc = 0.0
-            for j in range(4):
-                acc += Z[j, a] * Z[j, b]
-            C[4 + a, 4 + b] -= acc
-        C[4 + a, 4 + a] = max(C[4 + a, 4 + a], 0.0)
+            for k in range(p):
+                acc += c.pbasis_pinv[a, k] * P[k, b]
+            tmp[a, b] = acc
+    for a in range(4, 10):
+        for b in range(4, 10):
+            acc = 0.0
+            for k in range(p):
+                acc += tmp[a, k] * c.pbasis_pinv[b, k]
+            out[a, b] = acc
 
 
 @njit(cache=True)
@@ -148,9 +105,8 @@ def compact_prior(raw, Pc, rho):  # pragma: no cover - compiled
     estimated mass ``m``), each of the six inertia components with standard deviation
     ``m rho^2 + 1e-6`` [kg m^2]. Six scalar Kalman updates (pseudo-measurements of the
     inertia) on the inertia block of ``Pc``, given the mass and first moments: those are left
-    as they are (moving them through their correlation with the inertia corrupted the unloaded
-    arm's model, where the prior pins the inertia), and ``Pc[4:, 4:]`` is the inertia's
-    covariance given them (:func:`_inertia_cov`).
+    as they are (they are the well-determined part; moving them through their correlation
+    with the inertia corrupted the unloaded arm's model, where the prior pins the inertia).
 
     Right after a swap the data determine the payload's mass and first moments within
     tens of milliseconds but its inertia only over a second (the inertia's columns are
