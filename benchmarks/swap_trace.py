@@ -17,7 +17,9 @@ seeds:
   at the segment's end) as a share of ``ct_oracle``'s over the whole segment, ``adaptive_ct`` /
   ``ct_oracle``, mean over the seeds: where the segment's ratio comes from.
 
-The ``--show`` worst seeds of each swap (by the segment's RMS ratio) are printed one by one.
+The ``--show`` worst seeds of each swap (by the segment's RMS ratio) are printed one by one, with
+the model's base parameters minus the plant's (``sigma_hat - sigma_true``, in the order of
+``arm.base.names`` or the paper's ``J1 J2 r b1 b2 d1 d2``) 1, 2 and 4.9 s after the swap.
 Asserts nothing.
 """
 
@@ -34,6 +36,7 @@ from adaptive_dd.closed_loop.runner import make_controller_of
 
 ROOT = Path(__file__).resolve().parents[1]
 DELAYS = (0.02, 0.05, 0.1, 0.2, 0.5, 1.0, 2.0, 4.9)
+SIGMA_AT = (1.0, 2.0, 4.9)
 WINDOWS = ((0.0, 0.1), (0.1, 0.3), (0.3, 1.0), (1.0, 2.0), (2.0, 5.0))
 
 
@@ -63,6 +66,10 @@ def _swap_rows(sc, res, k: int, ts: float, end: float) -> dict:
         "delay": 1e3 * (hit[0] - ts) if hit.size else np.nan,
         "mass": [float(m[min(i0 + round(d / T), sc.n_samples - 1)]) for d in DELAYS],
         "windows": win,
+        "sigma_error": [
+            ad.sigma_hat[k][j] - res.sigma_true[j]
+            for j in (min(i0 + round(d / T), sc.n_samples - 1) for d in SIGMA_AT)
+        ],
     }
 
 
@@ -101,6 +108,9 @@ def main() -> None:
                 f"{' '.join(f'{x:.2f}' for x in r['mass'])}, windows "
                 f"{'  '.join(f'{x:.3f}/{y:.3f}' for x, y in r['windows'])}"
             )
+            for d, err in zip(SIGMA_AT, r["sigma_error"], strict=True):
+                txt = np.array2string(err, precision=4, suppress_small=True)
+                print(f"      model - plant at +{d:g} s: {txt}")
     print(f"({time.perf_counter() - t0:.0f} s wall, {time.process_time() - c0:.0f} s CPU)")
 
 
