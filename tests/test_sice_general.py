@@ -46,4 +46,3 @@ def test_the_rated_payload_is_what_the_closed_forms_box_assumes():
 
     general = load_scenario(ROOT / "benchmarks" / "scenarios" / "sice_general.toml")
     assert general.arm.payload_capacity == MAX_MASS
-    assert load_scenario().arm.payload_capacity is None  # the closed forms' arm does not state it
