@@ -1,7 +1,9 @@
 """``benchmarks/scenarios/sice_general.toml`` is the default scenario on the general kernels:
 the same arm (``general = true``), reference, payloads, noise and run, so that its
 ``adaptive_ct / ct_oracle`` ratios compare the general estimator with the closed forms' on the
-paper's arm (``benchmarks/general_payload_prior.py``)."""
+paper's arm (``benchmarks/general_payload_prior.py``, ``benchmarks/swap_trace.py``). The arm
+also states its rated payload (``payload_capacity``, 5 kg: the closed forms' Slotine-Li box),
+which only the general kernels read."""
 
 from __future__ import annotations
 
@@ -27,7 +29,7 @@ def test_sice_general_is_the_default_scenario_on_the_general_kernels():
     default = load_scenario()
     general = load_scenario(ROOT / "benchmarks" / "scenarios" / "sice_general.toml")
     assert default.closed_forms is not None and general.closed_forms is None
-    assert general.arm == dataclasses.replace(default.arm, general=True)
+    assert general.arm == dataclasses.replace(default.arm, general=True, payload_capacity=5.0)
     assert set(general.controllers) <= set(default.controllers)
     differ = [
         f.name
@@ -35,3 +37,12 @@ def test_sice_general_is_the_default_scenario_on_the_general_kernels():
         if f.name not in OWN and not _same(getattr(default, f.name), getattr(general, f.name))
     ]
     assert differ == []
+
+
+def test_the_rated_payload_is_what_the_closed_forms_box_assumes():
+    """The general scenario's ``payload_capacity`` is the closed forms' Slotine-Li box (5 kg): one
+    rated payload for the arm on either runtime, read by the general estimator only."""
+    from adaptive_dd.controllers.slotine_li import MAX_MASS
+
+    general = load_scenario(ROOT / "benchmarks" / "scenarios" / "sice_general.toml")
+    assert general.arm.payload_capacity == MAX_MASS
