@@ -45,6 +45,7 @@ __all__ = [
     "leaderboard",
     "ratio_columns",
     "rms_rank",
+    "run_unit",
     "shipped_scenarios",
 ]
 
@@ -298,6 +299,7 @@ def leaderboard(
     arms: int = 0,
     template=None,
     first_arm: int = 0,
+    workers: int = 1,
 ):
     """Rank ``controllers`` on ``scenarios`` (and ``arms`` drawn arms) against each one's floor, seed by seed.
 
@@ -326,19 +328,22 @@ def leaderboard(
         The population's template (default :data:`POPULATION_TEMPLATE` in the source tree).
     first_arm : int
         Seed of the first drawn arm.
+    workers : int
+        Processes that run the scenarios and arms (:mod:`adaptive_dd.arena.pool`; 1: this one);
+        the table is the same for any number.
 
     Returns
     -------
     pandas.DataFrame
         One row per scenario (or arm, or the population), controller and segment; the columns of
         :data:`COLUMNS`. ``attrs["compile_seconds"]``: numba's compile time of the runs [s];
-        ``attrs["run_seconds"]``: the rest of their wall time [s].
+        ``attrs["run_seconds"]``: the rest of their wall time [s] (both summed over the workers).
 
     Raises
     ------
     ParameterError
-        No controller, fewer than one seed, a negative ``arms``, a missing template, a two-link
-        closed-form scenario, an unknown controller.
+        No controller, fewer than one seed, a negative ``arms``, fewer than one worker, a missing
+        template, a two-link closed-form scenario, an unknown controller.
 
     Examples
     --------
@@ -365,26 +370,31 @@ def leaderboard(
         raise ParameterError(f"leaderboard: seeds must be an integer >= 1, got {seeds!r}")
     if isinstance(arms, bool) or not isinstance(arms, int) or arms < 0:
         raise ParameterError(f"leaderboard: arms must be an integer >= 0, got {arms!r}")
+    if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
+        raise ParameterError(f"leaderboard: workers must be an integer >= 1, got {workers!r}")
     rng = np.random.default_rng(0) if rng is None else rng
-    times = {"compile": 0.0, "run": 0.0}
-    rows: list[dict] = []
-    for spec in shipped_scenarios() if scenarios is None else scenarios:
-        cells = _run_cells(_scenario(spec), "scenario", controllers, seeds, progress, times)
-        rows += [_row(c, rng) for c in cells]
+    specs = shipped_scenarios() if scenarios is None else scenarios
+    units = [("scenario", _scenario(spec)) for spec in specs]
     if arms:
         data, src = _template(template)
-        from adaptive_dd.benchmark.population import population_scenario
+        units += [("arm", (data, src, k)) for k in range(first_arm, first_arm + arms)]
+    from adaptive_dd._blas import single_thread_blas
+    from adaptive_dd.arena.pool import run_units
 
-        arm_cells: list[dict] = []
-        for k in range(first_arm, first_arm + arms):
-            sc = population_scenario(data, src, k)
-            cells = _run_cells(sc, "arm", controllers, seeds, progress, times)
-            rows += [_row(c, rng) for c in cells]
+    with single_thread_blas():
+        done = run_units(units, controllers, seeds, progress, workers)
+    rows: list[dict] = []
+    arm_cells: list[dict] = []
+    for (kind, _), (cells, _, _) in zip(units, done, strict=True):
+        rows += [_row(c, rng) for c in cells]
+        if kind == "arm":
             arm_cells += cells
+    if arms:
         rows += [_row(c, rng) for c in _pooled(arm_cells, arms)]
     df = pd.DataFrame(rows, columns=list(COLUMNS))
     df["rms_rank"] = rms_rank(df)
-    df.attrs["compile_seconds"], df.attrs["run_seconds"] = times["compile"], times["run"]
+    df.attrs["compile_seconds"] = sum(d[1] for d in done)
+    df.attrs["run_seconds"] = sum(d[2] for d in done)
     return df
 
 
@@ -402,6 +412,20 @@ def rms_rank(df):
         order = sorted(g.index, key=lambda i: (g.at[i, "failures"] > 0, key[i]))
         out[order] = np.arange(1, len(order) + 1, dtype=float)
     return out
+
+
+def run_unit(unit, controllers, seeds, progress: bool = False) -> tuple[list[dict], float, float]:
+    """One unit of the leaderboard (:mod:`adaptive_dd.arena.pool`): ``("scenario", Scenario)`` or
+    ``("arm", (template data, template path, arm seed))``; returns its cells (:func:`_cells`) and
+    the seconds its runs spent compiling and running."""
+    kind, what = unit
+    if kind == "arm":
+        from adaptive_dd.benchmark.population import population_scenario
+
+        what = population_scenario(*what)
+    times = {"compile": 0.0, "run": 0.0}
+    cells = _run_cells(what, kind, controllers, seeds, progress, times)
+    return cells, times["compile"], times["run"]
 
 
 def _run_cells(sc, kind: str, controllers, seeds, progress, times=None) -> list[dict]:

@@ -20,6 +20,7 @@ from adaptive_dd.errors import ParameterError
 __all__ = ["add_parser", "run"]
 
 ARMS = number(int, 0, 10_000)
+WORKERS = number(int, 1, 256)
 
 
 def add_parser(sub) -> None:
@@ -61,6 +62,13 @@ def add_parser(sub) -> None:
         action="store_true",
         help="the drawn arms alone (with --arms), not the shipped scenarios",
     )
+    p.add_argument(
+        "--workers",
+        type=WORKERS,
+        default=1,
+        metavar="N",
+        help="processes that run the scenarios and drawn arms (one per core; the table is the same)",
+    )
     p.add_argument("--bootstrap-seed", type=SEED, default=0, help="seed of the bootstrap intervals")
     p.add_argument("--out", default="results/leaderboard", help="folder for the CSV, JSON and figure")
     p.add_argument("--no-progress", action="store_true")
@@ -84,6 +92,7 @@ def run(args: argparse.Namespace) -> int:
     df = leaderboard(
         scenarios, controllers, seeds=args.seeds, rng=np.random.default_rng(args.bootstrap_seed),
         progress=not args.no_progress, arms=args.arms, template=args.template, first_arm=args.first_arm,
+        workers=args.workers,
     )  # fmt: skip
     csv, js, png = out / "leaderboard.csv", out / "leaderboard.json", out / "leaderboard.png"
     df.to_csv(csv, index=False, float_format="%.6g")
