@@ -12,7 +12,8 @@ from adaptive_dd.arena.flags import LOST_ERROR, lost_times, trial_flags
 def _cell(segment, t0, sat, lost_t, fail_t=(np.nan, np.nan), why=("", "")):
     return {
         "scenario": "z1", "controller": "slotine_li", "segment": segment, "t0": t0, "seed": np.array([0, 1]),
-        "sat": np.asarray(sat, float), "lost_t": np.asarray(lost_t, float), "fail_t": np.asarray(fail_t, float),
+        "sat": np.asarray(sat, float), "lost_t": np.asarray(lost_t, float),
+        "fail_t": np.asarray(fail_t, float),
         "why": list(why),
     }  # fmt: skip
 
