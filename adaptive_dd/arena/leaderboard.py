@@ -87,7 +87,7 @@ COLUMNS: dict[str, tuple[str, str]] = {
     "saturated_seeds": ("-", "seeds whose command saturated on more than 1 % of the segment's samples"),
     "lost_seeds": (
         "-",
-        "seeds whose tracking error |q_d - q| exceeded 0.2 rad in the segment (failed or not)",
+        "seeds whose tracking error |q_d - q| exceeded 0.2 rad in the segment",
     ),
     "rms_error_mrad": ("mrad", "mean over seeds of the joint-space RMS tracking error |q_d - q|"),
     "floor_rms_error_mrad": ("mrad", "the same of the floor"),
