@@ -3,9 +3,9 @@
 The leaderboard's identification and excitation design call BLAS on small matrices (a few
 hundred rows by ~60 columns in the design's cost, a record's ~10^5 rows in its least squares)
 many thousands of times. On a shared machine OpenBLAS's worker threads then spin waiting for a
-core: measured on 2 cores at a load of ~10, the design's information matrix took 23.7 CPU ms per
-call with 2 threads against 0.71 with one, a (140 000 x 60) QR 2.1 CPU s against 0.54
-(``benchmarks/leaderboard_time.py`` and docs/changelog.md). :func:`single_thread_blas` holds
+core: timed by hand (``time.process_time`` around the calls) on 2 cores at a load of ~10, the
+design's information matrix of a 6-joint drawn arm took 23.7 CPU ms per call with 2 threads
+against 0.71 with one, a (140 000 x 60) QR 2.1 CPU s against 0.54. :func:`single_thread_blas` holds
 every OpenBLAS found loaded to one thread for the block (what ``OPENBLAS_NUM_THREADS=1`` does at
 start-up) and restores the count after; where none is found (another BLAS), it does nothing.
 """
