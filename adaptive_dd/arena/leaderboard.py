@@ -398,7 +398,7 @@ def leaderboard(
     from adaptive_dd.arena.pool import run_units
 
     with single_thread_blas():
-        done = run_units(units, controllers, seeds, progress, workers)
+        done = run_units(run_unit, units, controllers, seeds, progress, workers)
     rows: list[dict] = []
     arm_cells: list[dict] = []
     flags: list[dict] = []

@@ -44,12 +44,11 @@ def _picklable(unit) -> bool:
     return True
 
 
-def run_units(units: list, controllers, seeds, progress: bool, workers: int) -> list:
-    """``[(cells, compile_seconds, run_seconds), ...]`` of
-    :func:`~adaptive_dd.arena.leaderboard.run_unit` for each unit, in order; ``workers > 1``: in
-    that many processes (a unit that cannot be sent to one runs in this process)."""
-    from adaptive_dd.arena.leaderboard import run_unit
-
+def run_units(run_unit, units: list, controllers, seeds, progress: bool, workers: int) -> list:
+    """``[(cells, compile_seconds, run_seconds), ...]`` of ``run_unit(unit, controllers, seeds,
+    progress)`` (:func:`~adaptive_dd.arena.leaderboard.run_unit`, passed in: a module-level function
+    the workers import by name) for each unit, in order; ``workers > 1``: in that many processes (a
+    unit that cannot be sent to one runs in this process)."""
     if workers <= 1 or len(units) <= 1:
         return [run_unit(u, controllers, seeds, progress) for u in units]
     import multiprocessing
