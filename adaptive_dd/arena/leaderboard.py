@@ -45,6 +45,7 @@ __all__ = [
     "leaderboard",
     "ratio_columns",
     "rms_rank",
+    "run_unit",
     "shipped_scenarios",
 ]
 
@@ -83,6 +84,11 @@ COLUMNS: dict[str, tuple[str, str]] = {
     "ratio_cvar10": ("-", "CVaR of the worst 10 %: mean of the ceil(0.1 n) largest per-seed ratios"),
     "ratio_max": ("-", "largest per-seed ratio"),
     "failures": ("-", "trials that failed (diverged, ran away or raised) before the segment's end"),
+    "saturated_seeds": ("-", "seeds whose command saturated on more than 1 % of the segment's samples"),
+    "lost_seeds": (
+        "-",
+        "seeds whose tracking error |q_d - q| exceeded 0.2 rad in the segment",
+    ),
     "rms_error_mrad": ("mrad", "mean over seeds of the joint-space RMS tracking error |q_d - q|"),
     "floor_rms_error_mrad": ("mrad", "the same of the floor"),
     "rms_rank": (
@@ -177,6 +183,7 @@ def _per_seed(res, names) -> dict[str, dict[str, np.ndarray]]:
     ``rms_torque``, ``saturation_fraction``, the tool frame's ``ee_*`` (:data:`_EE`; NaN where the
     trial failed) and its error norm's
     segments (``e_norm``, a list per segment of ``(n_seeds, samples)``) for the recovery times."""
+    from adaptive_dd.arena.flags import lost_times
     from adaptive_dd.benchmark.metrics import per_seed_segment_metrics
     from adaptive_dd.closed_loop.types import run_constants
 
@@ -191,6 +198,9 @@ def _per_seed(res, names) -> dict[str, dict[str, np.ndarray]]:
             bounds = zip(rc.seg_start, rc.seg_end, strict=True)
             keep["e_norm"] = [None if e is None else e[:, a:b] for a, b in bounds]
             keep["failed"] = ~np.isfinite(m["rms_error"])
+            keep["lost_t"] = lost_times(keep["e_norm"], list(rc.seg_start * rc.T), rc.T, len(run.failed))
+            keep["fail_t"] = np.where(run.failed, np.maximum(run.failed_at, 0) * rc.T, np.nan)
+            keep["why"] = [run.failed_why.get(i, run.error or "") for i in range(len(run.failed))]
             out[n] = keep
     return out
 
@@ -206,7 +216,7 @@ def _recovery(mine: dict, floor: dict, i: int, T: float) -> np.ndarray:
     return np.where(mine["failed"][:, i] | floor["failed"][:, i], np.nan, t)
 
 
-def _cells(name, kind, per, floors, missing, masses, T) -> list[dict]:
+def _cells(name, kind, per, floors, missing, masses, T, seeds, t0) -> list[dict]:
     """One scenario's cells, with the per-seed arrays a row is computed from (``_row``)."""
     cells = []
     for ctrl, floor in floors.items():
@@ -225,7 +235,8 @@ def _cells(name, kind, per, floors, missing, masses, T) -> list[dict]:
                     "torque": m["rms_torque"][:, i], "sat": m["saturation_fraction"][:, i],
                     "fsat": fm["saturation_fraction"][:, i] if fm else np.full(e.shape, np.nan),
                     "recovery": _recovery(m, fm, i, T) if fm else np.full(e.shape, np.nan),
-                    **{k: m[k][:, i] for k in _EE},
+                    **{k: m[k][:, i] for k in _EE}, "lost_t": m["lost_t"][:, i], "fail_t": m["fail_t"],
+                    "why": m["why"], "seed": seeds, "t0": float(t0[i]),
                 }
             )  # fmt: skip
     return cells
@@ -233,18 +244,21 @@ def _cells(name, kind, per, floors, missing, masses, T) -> list[dict]:
 
 _KEYS = ("scenario", "kind", "controller", "floor", "floor_note", "segment", "payload_kg")
 _EE = EE_KEYS  # the tool frame's per-seed figures [mm], [mm], [deg] (per_seed.csv's ee_* columns)
-_ARRAYS = ("e", "ratio", "fe", "torque", "sat", "fsat", "recovery", *_EE)
+_ARRAYS = ("e", "ratio", "fe", "torque", "sat", "fsat", "recovery", "lost_t", *_EE)
 
 
 def _row(c: dict, rng: np.random.Generator) -> dict:
     """A table row (:data:`COLUMNS`) from a cell's per-seed arrays."""
+    from adaptive_dd.benchmark.metrics import SATURATION_LIMIT
     from adaptive_dd.benchmark.time_to_floor import quantile_never
 
     e, rec = c["e"], c["recovery"]
     return {
         **{k: c[k] for k in _KEYS},
         "seeds": int(np.sum(np.isfinite(e))), **ratio_columns(c["ratio"], rng),
-        "failures": int(np.sum(~np.isfinite(e))), "rms_error_mrad": 1e3 * _mean(e),
+        "failures": int(np.sum(~np.isfinite(e))),
+        "saturated_seeds": int(np.sum(c["sat"] > SATURATION_LIMIT)),
+        "lost_seeds": int(np.sum(np.isfinite(c["lost_t"]))), "rms_error_mrad": 1e3 * _mean(e),
         "floor_rms_error_mrad": 1e3 * _mean(c["fe"]), "rms_torque_Nm": _mean(c["torque"]),
         "saturation_pct": 100 * _mean(c["sat"]), "floor_saturation_pct": 100 * _mean(c["fsat"]),
         "recovery_median_s": quantile_never(rec, 50.0), "recovery_p90_s": quantile_never(rec, 90.0),
@@ -298,6 +312,7 @@ def leaderboard(
     arms: int = 0,
     template=None,
     first_arm: int = 0,
+    workers: int = 1,
 ):
     """Rank ``controllers`` on ``scenarios`` (and ``arms`` drawn arms) against each one's floor, seed by seed.
 
@@ -326,19 +341,24 @@ def leaderboard(
         The population's template (default :data:`POPULATION_TEMPLATE` in the source tree).
     first_arm : int
         Seed of the first drawn arm.
+    workers : int
+        Processes that run the scenarios and arms (:mod:`adaptive_dd.arena.pool`; 1: this one);
+        the table is the same for any number.
 
     Returns
     -------
     pandas.DataFrame
         One row per scenario (or arm, or the population), controller and segment; the columns of
-        :data:`COLUMNS`. ``attrs["compile_seconds"]``: numba's compile time of the runs [s];
-        ``attrs["run_seconds"]``: the rest of their wall time [s].
+        :data:`COLUMNS`. ``attrs["flags"]``: every trial that saturated, lost tracking or failed,
+        from when and why (:func:`~adaptive_dd.arena.flags.trial_flags`).
+        ``attrs["compile_seconds"]``: numba's compile time of the runs [s];
+        ``attrs["run_seconds"]``: the rest of their wall time [s] (both summed over the workers).
 
     Raises
     ------
     ParameterError
-        No controller, fewer than one seed, a negative ``arms``, a missing template, a two-link
-        closed-form scenario, an unknown controller.
+        No controller, fewer than one seed, a negative ``arms``, fewer than one worker, a missing
+        template, a two-link closed-form scenario, an unknown controller.
 
     Examples
     --------
@@ -365,26 +385,35 @@ def leaderboard(
         raise ParameterError(f"leaderboard: seeds must be an integer >= 1, got {seeds!r}")
     if isinstance(arms, bool) or not isinstance(arms, int) or arms < 0:
         raise ParameterError(f"leaderboard: arms must be an integer >= 0, got {arms!r}")
+    if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
+        raise ParameterError(f"leaderboard: workers must be an integer >= 1, got {workers!r}")
     rng = np.random.default_rng(0) if rng is None else rng
-    times = {"compile": 0.0, "run": 0.0}
-    rows: list[dict] = []
-    for spec in shipped_scenarios() if scenarios is None else scenarios:
-        cells = _run_cells(_scenario(spec), "scenario", controllers, seeds, progress, times)
-        rows += [_row(c, rng) for c in cells]
+    specs = shipped_scenarios() if scenarios is None else scenarios
+    units = [("scenario", _scenario(spec)) for spec in specs]
     if arms:
         data, src = _template(template)
-        from adaptive_dd.benchmark.population import population_scenario
+        units += [("arm", (data, src, k)) for k in range(first_arm, first_arm + arms)]
+    from adaptive_dd._blas import single_thread_blas
+    from adaptive_dd.arena.flags import trial_flags
+    from adaptive_dd.arena.pool import run_units
 
-        arm_cells: list[dict] = []
-        for k in range(first_arm, first_arm + arms):
-            sc = population_scenario(data, src, k)
-            cells = _run_cells(sc, "arm", controllers, seeds, progress, times)
-            rows += [_row(c, rng) for c in cells]
+    with single_thread_blas():
+        done = run_units(run_unit, units, controllers, seeds, progress, workers)
+    rows: list[dict] = []
+    arm_cells: list[dict] = []
+    flags: list[dict] = []
+    for (kind, _), (cells, _, _) in zip(units, done, strict=True):
+        rows += [_row(c, rng) for c in cells]
+        flags += trial_flags(cells)
+        if kind == "arm":
             arm_cells += cells
+    if arms:
         rows += [_row(c, rng) for c in _pooled(arm_cells, arms)]
     df = pd.DataFrame(rows, columns=list(COLUMNS))
     df["rms_rank"] = rms_rank(df)
-    df.attrs["compile_seconds"], df.attrs["run_seconds"] = times["compile"], times["run"]
+    df.attrs["flags"] = flags
+    df.attrs["compile_seconds"] = sum(d[1] for d in done)
+    df.attrs["run_seconds"] = sum(d[2] for d in done)
     return df
 
 
@@ -404,6 +433,20 @@ def rms_rank(df):
     return out
 
 
+def run_unit(unit, controllers, seeds, progress: bool = False) -> tuple[list[dict], float, float]:
+    """One unit of the leaderboard (:mod:`adaptive_dd.arena.pool`): ``("scenario", Scenario)`` or
+    ``("arm", (template data, template path, arm seed))``; returns its cells (:func:`_cells`) and
+    the seconds its runs spent compiling and running."""
+    kind, what = unit
+    if kind == "arm":
+        from adaptive_dd.benchmark.population import population_scenario
+
+        what = population_scenario(*what)
+    times = {"compile": 0.0, "run": 0.0}
+    cells = _run_cells(what, kind, controllers, seeds, progress, times)
+    return cells, times["compile"], times["run"]
+
+
 def _run_cells(sc, kind: str, controllers, seeds, progress, times=None) -> list[dict]:
     """Run one scenario's controllers and floors; its cells (:func:`_cells`). ``times``: a dict
     whose ``compile`` and ``run`` [s] the run's compile and other wall time are added to."""
@@ -418,8 +461,9 @@ def _run_cells(sc, kind: str, controllers, seeds, progress, times=None) -> list[
         times["run"] += float(res.wall_time or 0.0)
     floors = {n: floors.get(n, r.floor) for n, r in res.runs.items()}
     per = _per_seed(res, list(res.runs))
-    masses = [m for (_, _, m) in sc.segments()]
-    return _cells(sc.name, kind, per, floors, missing, masses, sc.sample_period)
+    segs = sc.segments()
+    masses, t0 = [m for (_, _, m) in segs], [a for (a, _, _) in segs]
+    return _cells(sc.name, kind, per, floors, missing, masses, sc.sample_period, res.seed_indices, t0)
 
 
 def _template(template) -> tuple[dict, str]:

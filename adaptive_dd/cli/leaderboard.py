@@ -20,6 +20,7 @@ from adaptive_dd.errors import ParameterError
 __all__ = ["add_parser", "run"]
 
 ARMS = number(int, 0, 10_000)
+WORKERS = number(int, 1, 256)
 
 
 def add_parser(sub) -> None:
@@ -61,6 +62,13 @@ def add_parser(sub) -> None:
         action="store_true",
         help="the drawn arms alone (with --arms), not the shipped scenarios",
     )
+    p.add_argument(
+        "--workers",
+        type=WORKERS,
+        default=1,
+        metavar="N",
+        help="processes that run the scenarios and drawn arms (one per core; the table is the same)",
+    )
     p.add_argument("--bootstrap-seed", type=SEED, default=0, help="seed of the bootstrap intervals")
     p.add_argument("--out", default="results/leaderboard", help="folder for the CSV, JSON and figure")
     p.add_argument("--no-progress", action="store_true")
@@ -84,6 +92,7 @@ def run(args: argparse.Namespace) -> int:
     df = leaderboard(
         scenarios, controllers, seeds=args.seeds, rng=np.random.default_rng(args.bootstrap_seed),
         progress=not args.no_progress, arms=args.arms, template=args.template, first_arm=args.first_arm,
+        workers=args.workers,
     )  # fmt: skip
     csv, js, png = out / "leaderboard.csv", out / "leaderboard.json", out / "leaderboard.png"
     df.to_csv(csv, index=False, float_format="%.6g")
@@ -93,6 +102,7 @@ def run(args: argparse.Namespace) -> int:
         "arms": args.arms,
         "first_arm": args.first_arm,
         "rows": json.loads(df.to_json(orient="records")),
+        "flags": df.attrs.get("flags", []),
     }
     js.write_text(json.dumps(doc, indent=1), encoding="utf-8")
     from adaptive_dd.arena.plot import plot_leaderboard
@@ -100,6 +110,7 @@ def run(args: argparse.Namespace) -> int:
     plot_leaderboard(df[df["kind"] != "arm"]).savefig(png, dpi=120)
     _print(df[df["kind"] != "arm"])
     _print_winners(df[df["kind"] != "arm"])
+    _print_flags(df.attrs.get("flags", []))
     for p in (csv, js, png):
         print(f"wrote {p}")
     print(
@@ -112,7 +123,8 @@ def run(args: argparse.Namespace) -> int:
 def _print(df) -> None:
     """The ratio columns per scenario, controller and segment, as a plain table."""
     cols = ["scenario", "controller", "floor", "segment", "payload_kg", "ratio_mean", "ratio_ci95_low",
-            "ratio_ci95_high", "ratio_p90", "ratio_max", "failures", "saturation_pct", "rms_error_mrad",
+            "ratio_ci95_high", "ratio_p90", "ratio_max", "failures", "saturated_seeds", "lost_seeds",
+            "saturation_pct", "rms_error_mrad",
             "recovery_median_s", "recovery_never", "ee_position_rms_mm"]  # fmt: skip
     with __import__("pandas").option_context("display.width", 200, "display.max_rows", 1000):
         print(df[cols].to_string(index=False, float_format=lambda x: f"{x:.3f}"))
@@ -127,3 +139,21 @@ def _print_winners(df) -> None:
         g = g.sort_values("rms_error_mrad")
         best = [f"{r.controller} {r.rms_error_mrad:.3g} mrad" for r in g.head(2).itertuples()]
         print(f"  {sc}:{seg} ({g['payload_kg'].iloc[0]:.3g} kg): " + ", then ".join(best))
+
+
+def _print_flags(flags: list[dict], shown: int = 10) -> None:
+    """How many trials were flagged, by first flag, and the first ``shown`` of them with their
+    reasons (every one in leaderboard.json's ``flags``)."""
+    if not flags:
+        print(
+            "flagged trials: none (no saturation beyond 1 % of a segment, no error beyond 0.2 rad, "
+            "no failure)"
+        )
+        return
+    from collections import Counter
+
+    count = Counter(f["flag"] for f in flags)
+    print(f"flagged trials: {len(flags)} (" + ", ".join(f"{k}: {v}" for k, v in sorted(count.items()))
+          + "; every one with its reasons in leaderboard.json's flags)")  # fmt: skip
+    for f in flags[:shown]:
+        print(f"  {f['scenario']} {f['controller']} seed {f['seed']}: " + "; ".join(f["reasons"]))

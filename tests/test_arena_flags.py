@@ -1,0 +1,98 @@
+"""The leaderboard's honesty flags (adaptive_dd.arena.flags), its worker processes
+(adaptive_dd.arena.pool) and the BLAS thread switch it runs under (adaptive_dd._blas)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from adaptive_dd.arena.flags import LOST_ERROR, lost_times, trial_flags
+
+
+def _cell(segment, t0, sat, lost_t, fail_t=(np.nan, np.nan), why=("", "")):
+    return {
+        "scenario": "z1", "controller": "slotine_li", "segment": segment, "t0": t0, "seed": np.array([0, 1]),
+        "sat": np.asarray(sat, float), "lost_t": np.asarray(lost_t, float),
+        "fail_t": np.asarray(fail_t, float),
+        "why": list(why),
+    }  # fmt: skip
+
+
+def test_lost_times_is_the_first_sample_beyond_the_limit_per_segment():
+    T = 0.01
+    e0 = np.array([[0.0, 0.1, 0.3, 0.5], [0.0, 0.0, 0.0, 0.0]])
+    e1 = np.array([[0.1, 0.1], [0.1, LOST_ERROR + 1e-9]])
+    t = lost_times([e0, e1, None], [0.0, 2.0, 4.0], T, 2)
+    assert t[0, 0] == pytest.approx(0.02) and np.isnan(t[1, 0])
+    assert np.isnan(t[0, 1]) and t[1, 1] == pytest.approx(2.01)
+    assert np.all(np.isnan(t[:, 2]))
+
+
+def test_a_trial_saturated_from_the_start_is_flagged_from_the_start_not_at_its_failure():
+    """The issue's Z1 trial: 94 % saturated from t = 0, failed at 7.632 s; the other seed reached
+    0.54 rad in its last segment without failing. Both flagged from when it began, with reasons."""
+    why = ("tracking error |e| = 3.1 rad, beyond max_error = 3 rad", "")
+    cells = [
+        _cell(0, 0.0, [0.94, 0.0], [np.nan, np.nan], (7.632, np.nan), why),
+        _cell(1, 4.0, [0.97, 0.0], [5.5, np.nan], (7.632, np.nan), why),
+        _cell(2, 8.0, [np.nan, 0.005], [np.nan, 9.25], (7.632, np.nan), why),  # 0.5 %: not saturated
+    ]
+    flags = {f["seed"]: f for f in trial_flags(cells)}
+    assert set(flags) == {0, 1}
+    first = flags[0]
+    assert first["flag"] == "saturated" and first["t_s"] == 0.0
+    assert "94.0 %" in first["reasons"][0] and "segment 0" in first["reasons"][0]
+    assert any("failed at t = 7.632 s" in r and "max_error" in r for r in first["reasons"])
+    assert [r.split()[0] for r in first["reasons"]] == ["command", "command", "|q_d", "failed"]  # time order
+    second = flags[1]
+    assert second["flag"] == "lost tracking" and second["t_s"] == pytest.approx(9.25)
+    assert len(second["reasons"]) == 1 and "segment 2" in second["reasons"][0]
+
+
+def test_a_clean_trial_has_no_flag():
+    assert trial_flags([_cell(0, 0.0, [0.0, 0.01], [np.nan, np.nan])]) == []
+
+
+def test_single_thread_blas_sets_one_thread_and_restores_the_count():
+    from adaptive_dd._blas import blas_libraries, single_thread_blas
+
+    libs = blas_libraries()
+    if not libs:
+        pytest.skip("no OpenBLAS found in numpy's or scipy's wheel")
+    before = [get() for get, _ in libs]
+    with single_thread_blas():
+        assert [get() for get, _ in libs] == [1] * len(libs)
+    assert [get() for get, _ in libs] == before
+
+
+def test_workers_must_be_a_positive_integer():
+    from adaptive_dd.arena.leaderboard import leaderboard
+    from adaptive_dd.errors import ParameterError
+
+    for bad in (0, -1, 1.5, True):
+        with pytest.raises(ParameterError, match="workers"):
+            leaderboard([], ["pd"], workers=bad)
+
+
+@pytest.mark.slow  # two worker processes load the closed loop's kernels (compiles them on a cold cache)
+def test_two_workers_give_the_same_table_and_flags_as_one(tmp_path):
+    from importlib import resources
+
+    from adaptive_dd.arena.leaderboard import leaderboard
+    from adaptive_dd.benchmark.scenario import load_scenario
+
+    text = resources.files("adaptive_dd.scenarios").joinpath("vertical3_payload.toml").read_text("utf-8")
+    text = text.replace("duration = 16.0", "duration = 1.6").replace("ramp = 1.0", "ramp = 0.2")
+    head, _, _ = text.partition("[[payload]]")
+    paths = []
+    for k, mass in enumerate((1.0, 30.0)):  # 30 kg on the 3-joint arm: its laws saturate
+        p = tmp_path / f"v3_{k}.toml"
+        p.write_text(head + f"[[payload]]\nat = 0.8\nmass = {mass}\n", encoding="utf-8")
+        paths.append(load_scenario(p))
+    one = leaderboard(paths, ["pd_gravity"], seeds=2, workers=1)
+    two = leaderboard(paths, ["pd_gravity"], seeds=2, workers=2)
+    assert one.equals(two)
+    assert one.attrs["flags"] == two.attrs["flags"]
+    heavy = one[(one["scenario"] == paths[1].name) & (one["segment"] == 1)]
+    assert heavy["saturated_seeds"].sum() + heavy["lost_seeds"].sum() + heavy["failures"].sum() > 0
+    assert any(f["scenario"] == paths[1].name for f in one.attrs["flags"])
