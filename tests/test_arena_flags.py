@@ -1,5 +1,5 @@
 """The leaderboard's honesty flags (adaptive_dd.arena.flags), its worker processes
-(adaptive_dd.arena.pool) and the BLAS thread switch it runs under (adaptive_dd._blas)."""
+(adaptive_dd.arena.pool) and the one BLAS thread it runs under (threadpoolctl)."""
 
 from __future__ import annotations
 
@@ -53,16 +53,30 @@ def test_a_clean_trial_has_no_flag():
     assert trial_flags([_cell(0, 0.0, [0.0, 0.01], [np.nan, np.nan])]) == []
 
 
-def test_single_thread_blas_sets_one_thread_and_restores_the_count():
-    from adaptive_dd._blas import blas_libraries, single_thread_blas
+def test_the_leaderboard_runs_its_units_with_blas_on_one_thread(monkeypatch):
+    """The leaderboard's units run under one BLAS thread (threadpoolctl), and the count is restored."""
+    import importlib
 
-    libs = blas_libraries()
-    if not libs:
-        pytest.skip("no OpenBLAS found in numpy's or scipy's wheel")
-    before = [get() for get, _ in libs]
-    with single_thread_blas():
-        assert [get() for get, _ in libs] == [1] * len(libs)
-    assert [get() for get, _ in libs] == before
+    from threadpoolctl import threadpool_info
+
+    from adaptive_dd.arena import pool
+
+    lb = importlib.import_module("adaptive_dd.arena.leaderboard")  # the module, not the function
+
+    blas = [i for i in threadpool_info() if i["user_api"] == "blas"]
+    if not blas:
+        pytest.skip("no BLAS that threadpoolctl can control is loaded")
+    before = [i["num_threads"] for i in blas]
+    seen = []
+
+    def run_units(run_unit, units, controllers, seeds, progress, workers):
+        seen.append([i["num_threads"] for i in threadpool_info() if i["user_api"] == "blas"])
+        return []
+
+    monkeypatch.setattr(pool, "run_units", run_units)
+    lb.leaderboard([], ["ct_oracle"], seeds=1, arms=0)
+    assert seen == [[1] * len(blas)]
+    assert [i["num_threads"] for i in threadpool_info() if i["user_api"] == "blas"] == before
 
 
 def test_workers_must_be_a_positive_integer():

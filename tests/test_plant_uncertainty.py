@@ -623,3 +623,25 @@ def test_a_plant_for_another_arm_is_refused():
     other = load_scenario(_shipped("vertical3_payload_exact"))
     with pytest.raises(ScenarioError, match=r"plant: sized \(60, 6, 6, 6\).*3 joints"):
         dataclasses.replace(other, plant=ur5.plant)
+
+
+def test_the_excitation_phase_shows_no_bars_when_the_runs_bar_is_hidden(monkeypatch):
+    """``benchmark --no-progress`` hands the phase a hidden clock (``show`` false): the phase's own
+    bars stay hidden too; a shown clock (or any bar without ``show``) shows them."""
+    from adaptive_dd.benchmark.progress import RunClock
+    from adaptive_dd.closed_loop import excitation_phase as ep
+
+    seen = []
+
+    class Stop(Exception):
+        pass
+
+    def identify(*args, progress=False, **kw):
+        seen.append(progress)
+        raise Stop
+
+    monkeypatch.setattr(ep, "identify_excitation", identify)
+    for bar in (RunClock(1, "t", show=False), RunClock(1, "t", show=True), object()):
+        with pytest.raises(Stop):
+            ep.run_with_excitation(None, (0,), run_closed_loop, bar=bar)
+    assert seen == [False, True, True]

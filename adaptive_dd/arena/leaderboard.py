@@ -393,11 +393,14 @@ def leaderboard(
     if arms:
         data, src = _template(template)
         units += [("arm", (data, src, k)) for k in range(first_arm, first_arm + arms)]
-    from adaptive_dd._blas import single_thread_blas
+    from threadpoolctl import threadpool_limits
+
     from adaptive_dd.arena.flags import trial_flags
     from adaptive_dd.arena.pool import run_units
 
-    with single_thread_blas():
+    # BLAS on one thread: the identification's and the design's small products otherwise spin
+    # OpenBLAS's worker threads for a core (CPU s per call 4-30x on a shared 2-core machine)
+    with threadpool_limits(limits=1, user_api="blas"):
         done = run_units(run_unit, units, controllers, seeds, progress, workers)
     rows: list[dict] = []
     arm_cells: list[dict] = []

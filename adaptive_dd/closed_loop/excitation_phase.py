@@ -442,14 +442,15 @@ def run_with_excitation(scenario, idx, run_closed_loop, keep: int = 3, engine: s
     """The excitation phase, then the task with each seed's identified model (module docstring);
     ``run_closed_loop`` runs the closed loop (:func:`~adaptive_dd.closed_loop.runner.run_closed_loop`, which
     calls this function: passed in, the two modules do not import each other). ``bar``: the task's
-    progress (samples, tqdm-like), advanced seed by seed; with one, the phase says what it is doing
-    on stderr."""
+    progress (samples, tqdm-like), advanced seed by seed; with one that shows (a ``show`` attribute
+    true, or none), the phase says what it is doing on stderr."""
     from adaptive_dd.closed_loop.types import plant_record
     from adaptive_dd.plant.uncertainty import exact_plant
     from adaptive_dd.plant.urdf_write import write_urdf_links
 
     idx = tuple(idx)
-    pis, report = identify_excitation(scenario, idx, run_closed_loop, progress=bar is not None)
+    shown = bar is not None and bool(getattr(bar, "show", True))  # --no-progress: no phase bars either
+    pis, report = identify_excitation(scenario, idx, run_closed_loop, progress=shown)
     arm, n = scenario.arm, scenario.n_joints
     plant = scenario.plant if scenario.plant is not None else exact_plant(arm)
     parts = []
