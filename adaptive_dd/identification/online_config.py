@@ -337,6 +337,7 @@ class OnlineConfig:
     eig_min: float = 0.0
     bound_radius: float | None = 0.25
     prior_radius: float | str | None = "auto"
+    prior_noise: float = 0.0
     regression: str | None = None
     arm_uncertainty: ArmUncertainty | None = None
     reset_payload: bool = False
@@ -418,6 +419,7 @@ class OnlineConfig:
             _num(o, "bound_radius", self.bound_radius, 0.0)
         if self.prior_radius is not None:
             _num(o, "prior_radius", self.prior_radius, 0.0, strict=False)
+        _num(o, "prior_noise", self.prior_noise, 0.0, strict=False)
         if self.selection is not None:
             if not isinstance(self.selection, tuple | list) or len(self.selection) != 2:
                 raise ParameterError(
