@@ -4,8 +4,8 @@ Runs ``benchmarks/scenarios/population.toml`` on ``random:ARM`` (as ``benchmark 
 prints, per 0.5 s window of trial ``SEED``, the RMS and peak error norms of ``adaptive_ct`` and
 ``ct_oracle``, adaptive_ct's saturated fraction, its alarm times, and how far its estimate is from
 the true base parameters (and the payload mass its control model carries) at a few instants of the
-first segment, and the payload inertia its control model carries against the truth after the first
-swap.
+first segment, and the payload mass and inertia its control model carries against the truth after
+the first swap.
 
 Run: ``PYTHONPATH=. python benchmarks/trace_random_arm.py ARM SEED [--prior-noise X]`` (``X``:
 adaptive_ct's ``OnlineConfig.prior_noise``; 0 weighs the compact payload prior against the
@@ -67,8 +67,8 @@ def main() -> None:
                 f"t = {at} s: largest |sigma_hat - sigma_true| {abs(d[k, j]):.3g} (base parameter {j}); "
                 f"the control model's payload mass {mass[k]:.4f} kg"
             )
-        # the payload's inertia about its frame (Ixx, Ixy, Iyy, Ixz, Iyz, Izz) in the model control
-        # uses, against the truth, after the first swap
+        # the payload's mass and inertia about its frame (Ixx, Ixy, Iyy, Ixz, Iyz, Izz) in the model
+        # control uses, against the truth, after the first swap
         pay_hat = sc.arm.payload_from_sigma(sh).params
         pay_true = sc.arm.payload_from_sigma(np.broadcast_to(res.sigma_true, sh.shape)).params
         t0 = sc.swap_times[0] if sc.swap_times else 0.0
@@ -76,7 +76,8 @@ def main() -> None:
             k = int(np.searchsorted(t, t0 + dt))
             if k < len(t):
                 print(
-                    f"t = {t0 + dt:.2f} s: the control model's payload inertia "
+                    f"t = {t0 + dt:.2f} s: the control model's payload mass {pay_hat[k, 0]:.4f} kg "
+                    f"(true {pay_true[k, 0]:.4f}), inertia "
                     f"{np.array2string(pay_hat[k, 4:], precision=4, suppress_small=True)} kg m^2, "
                     f"true {np.array2string(pay_true[k, 4:], precision=4, suppress_small=True)}"
                 )
