@@ -287,6 +287,18 @@ class OnlineConfig:
         inertia only over about a second; the prior holds the model at a plausible inertia
         until then. None or 0: no prior. ``"auto"`` (default): :data:`DEFAULT_PRIOR_RADIUS`,
         none in mode ``"arm"``.
+    prior_noise : float, "auto" or None
+        How the compact-payload prior is weighed against the estimate: the recursive least
+        squares take each weighted equation's error as of variance 1 and the equations as
+        independent, so their ``P`` is the covariance only up to a factor. The prior is combined
+        with ``P`` times ``prior_noise`` times the rows' noise level (the mean over the joint
+        equations of the squared prior error the change detector has learned, else the level it
+        had before the last alarm; 1 while none has one). ``"auto"`` (default): ``tau_f /
+        sample_period``, the filters' memory in samples, which successive equations share; 0 in
+        mode ``"arm"``. None or 0: ``P`` as it is. On an arm whose equations' noise is far above 1
+        (in their weighted units), ``P`` claimed the inertia known within tens of milliseconds
+        of a swap while it was off by several times itself (a drawn palletizer's 80 % segment
+        4.4x its floor, ``docs/random_arms.md``).
     arm_uncertainty : ArmUncertainty, dict or None
         Mode ``"arm"``: how far the arm may be from its URDF
         (:class:`~adaptive_dd.identification.arm_prior.ArmUncertainty`; a table of its levels);
@@ -337,6 +349,7 @@ class OnlineConfig:
     eig_min: float = 0.0
     bound_radius: float | None = 0.25
     prior_radius: float | str | None = "auto"
+    prior_noise: float | str | None = "auto"
     regression: str | None = None
     arm_uncertainty: ArmUncertainty | None = None
     reset_payload: bool = False
@@ -418,6 +431,12 @@ class OnlineConfig:
             _num(o, "bound_radius", self.bound_radius, 0.0)
         if self.prior_radius is not None:
             _num(o, "prior_radius", self.prior_radius, 0.0, strict=False)
+        if isinstance(self.prior_noise, str) and self.prior_noise == "auto":
+            # the filters' memory in samples (successive equations share it); none in mode "arm"
+            object.__setattr__(self, "prior_noise", 0.0 if arm_mode else self.tau_f / self.sample_period)
+        if self.prior_noise is None:
+            object.__setattr__(self, "prior_noise", 0.0)
+        _num(o, "prior_noise", self.prior_noise, 0.0, strict=False)
         if self.selection is not None:
             if not isinstance(self.selection, tuple | list) or len(self.selection) != 2:
                 raise ParameterError(

@@ -14,12 +14,15 @@ from numba import njit
 from adaptive_dd.identification.online_slots import (
     C_FOLLOWS,
     C_K,
+    F_ALPHA_LONG,
     F_EIG_MIN,
     F_PRESENT2,
+    F_PRIOR_NOISE,
     F_PRIOR_RADIUS,
     F_RADIUS,
     F_THRESHOLD2,
     I_KEEP_START,
+    I_MIN_LEARNED,
     I_PROJECT,
     I_WARMUP,
     MODE_PAYLOAD,
@@ -145,6 +148,27 @@ def compact_prior(raw, Pc, rho):  # pragma: no cover - compiled
                 Pc[a, b] -= g[a] * row[b]
 
 
+@njit(cache=True, inline="always")
+def _noise_level(c, s, i):  # pragma: no cover - compiled
+    """The mean over rows of the detector's noise level (the squared weighted prior error it has
+    learned since the last alarm, bias-corrected, once ``min_learned`` samples; before that the
+    level established before the alarm, ``ref``): what one weighted equation's error variance is
+    in fact, where the recursive least squares take it as 1. 1 where no row has a level."""
+    a_l = c.floats[F_ALPHA_LONG]
+    acc, cnt = 0.0, 0
+    for j in range(s.learned.shape[1]):
+        nl = s.learned[i, j]
+        if nl >= c.ints[I_MIN_LEARNED] and a_l > 0.0:
+            acc += s.long[i, j] / (1.0 - (1.0 - a_l) ** nl)
+            cnt += 1
+        elif s.ref[i, j] > 0.0:
+            acc += s.ref[i, j]
+            cnt += 1
+    if cnt == 0 or not (acc > 0.0 and np.isfinite(acc)):
+        return 1.0
+    return acc / cnt
+
+
 @njit(cache=True)
 def presence_weight(m, var, present_var):  # pragma: no cover - compiled
     """Posterior probability that a payload is carried, given a mass estimate ``m`` [kg] of
@@ -177,6 +201,11 @@ def _control_payload(c, s, i, raw, pay, Pc):  # pragma: no cover - compiled
     rho = c.floats[F_PRIOR_RADIUS]
     if rho > 0.0:
         _inertia_cov(c, s.P[i], Pc)
+        if c.floats[F_PRIOR_NOISE] > 0.0:  # P in the units of the equations' actual noise
+            kappa = c.floats[F_PRIOR_NOISE] * _noise_level(c, s, i)
+            for a in range(4, 10):
+                for b in range(4, 10):
+                    Pc[a, b] *= kappa
         compact_prior(raw, Pc, rho)
     if c.ints[I_PROJECT] == 1:
         project_payload(raw, pay, c.floats[F_EIG_MIN], c.floats[F_RADIUS])

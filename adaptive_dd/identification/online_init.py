@@ -109,6 +109,7 @@ def _pack(cfg: OnlineConfig, arm: Arm) -> tuple[EstCfg, Array]:
     fl[K.F_EIG_MIN] = cfg.eig_min
     fl[K.F_RADIUS] = 0.0 if cfg.bound_radius is None else cfg.bound_radius
     fl[K.F_PRIOR_RADIUS] = 0.0 if cfg.prior_radius is None else cfg.prior_radius
+    fl[K.F_PRIOR_NOISE] = cfg.prior_noise
     if cfg.mode == "payload":  # a carried payload's mass: the re-opened prior's (sized by the capacity)
         fl[K.F_PRESENT2] = (reopen_mass_std(det, arm) if det else cfg.payload_mass_std) ** 2
     if det is not None:

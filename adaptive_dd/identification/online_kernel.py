@@ -91,6 +91,7 @@ from adaptive_dd.identification.online_slots import (  # noqa: F401 (re-exported
     F_LAM0,
     F_MU,
     F_PRESENT2,
+    F_PRIOR_NOISE,
     F_PRIOR_RADIUS,
     F_RADIUS,
     F_SEL_THRESHOLD,

@@ -161,7 +161,8 @@ F_DET_SPEED = 15  # [rad/s] a joint no faster within the selection memory creeps
 F_CREEP_MARGIN = 16  # a creeping joint's row alarms only beyond this times its Coulomb friction
 F_HOLD_ABOVE2 = 17  # a row rises when its short average exceeds this x the threshold x its level
 F_PRESENT2 = 18  # payload mode: the variance [kg^2] of a payload's mass when one is carried (0: no weight)
-N_F = 19
+F_PRIOR_NOISE = 19  # > 0: the compact prior weighed against P scaled by this x the rows' learned noise level
+N_F = 20
 
 
 class EstState(NamedTuple):
