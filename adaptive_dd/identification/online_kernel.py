@@ -144,9 +144,8 @@ def est_step_trial(c, s, i, q, qd, tau):  # pragma: no cover - compiled
 def est_step_trial_w(c, s, i, q, qd, tau, w):  # pragma: no cover - compiled
     """:func:`est_step_trial_in` as a compiled function of its own (not inlined where it is
     called): the estimator's step, the largest of its kernels, is then compiled once for
-    :func:`est_step_trial`, :func:`est_step_batch`, :func:`est_run_trial` and the closed loop's
-    :func:`~adaptive_dd.closed_loop.chain_choices.online_sample` (each inlining it cost a full
-    compilation of the step: about 25 CPU s on the UR5)."""
+    :func:`est_step_trial`, :func:`est_step_batch` and :func:`est_run_trial` (each inlining it
+    cost a full compilation of the step: about 25 CPU s on the UR5)."""
     return est_step_trial_in(c, s, i, q, qd, tau, w)
 
 
