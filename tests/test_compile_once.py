@@ -149,14 +149,23 @@ def test_the_friction_law_as_a_record_compiles_its_family_alone():
         S.friction_law(3)
 
 
-def test_the_n_joint_loop_calls_its_choices_by_name_not_through_overloads():
+@pytest.mark.parametrize(
+    ("root", "chosen"),
+    [
+        ("_chain_trial_samples", ("_chain_plant_advance", "_chain_law_command", "_chain_estimator_sample")),
+        ("_chain_apply_loop", ("_chain_plant_advance", "_chain_plant_work")),
+        ("_chain_estimator_loop", ("_chain_estimator_sample", "_chain_estimator_work")),
+    ],
+)
+def test_the_n_joint_loop_calls_its_choices_by_name_not_through_overloads(root, chosen):
     """numba compiles an ``@overload``'s implementation in full to type it, even one inlined where
     it is called (then throws it away): on the UR5 about 15 CPU s of the closed loop's
     compilation. The N-joint loop (``glue._chain_trial_samples``, inlined into
-    ``chain_loop_block``) calls every choice (the plant's step, the law, the estimator, their
-    scratch) by name: each global it calls, in its code and in the per-sample pieces it inlines,
-    is a compiled function (inlined before typing, or compiled and cached once), not one of the
-    stubs the overloads choose for."""
+    ``chain_loop_block``) and the Python path's N-joint loops (the applied sample and the
+    estimator: the overloads cost them about 11 CPU s) call every choice (the plant's step, the
+    law, the estimator, their scratch) by name: each global they call, in their code and in the
+    per-sample pieces they inline, is a compiled function (inlined before typing, or compiled and
+    cached once), not one of the stubs the overloads choose for."""
     import inspect
 
     from numba.core.registry import CPUDispatcher
@@ -167,8 +176,8 @@ def test_the_n_joint_loop_calls_its_choices_by_name_not_through_overloads():
         name for name, f in vars(glue).items()
         if inspect.isfunction(f) and "compiled only" in inspect.getsource(f)
     }  # fmt: skip
-    assert {"plant_advance", "law_command", "estimator_sample", "law_estimate"} <= stubs
-    seen, todo = set(), [glue._chain_trial_samples]
+    assert {"plant_advance", "law_command", "estimator_sample", "law_estimate", "plant_work"} <= stubs
+    seen, todo = set(), [getattr(glue, root)]
     while todo:
         d = todo.pop()
         f = d.py_func
@@ -178,4 +187,4 @@ def test_the_n_joint_loop_calls_its_choices_by_name_not_through_overloads():
                 seen.add(g)
                 todo.append(g)
             assert not (inspect.isfunction(g) and name in stubs), (f.__qualname__, name)
-    assert {glue._chain_plant_advance, glue._chain_law_command, glue._chain_estimator_sample} <= seen
+    assert {getattr(glue, c) for c in chosen} <= seen

@@ -250,8 +250,13 @@ def est_run_trial(
     w = est_work(q.shape[1], s.theta.shape[1])
     for k in range(q.shape[0]):
         alarm_rec[k] = est_step_trial_w(c, s, i, q[k], qd[k], tau[k], w)
-        theta_rec[k] = s.theta[i]
+        # loops, not slice assignments: numba would compile the slice assignment's shape-error
+        # message (string code, about 2 CPU s); the records are (N, p), (N, 10), (N, n)
+        for a in range(s.theta.shape[1]):
+            theta_rec[k, a] = s.theta[i, a]
         est_payload_trial(c, s, i, pay)
-        payload_rec[k] = pay
-        eps_rec[k] = s.eps[i]
+        for a in range(10):
+            payload_rec[k, a] = pay[a]
+        for a in range(s.eps.shape[1]):
+            eps_rec[k, a] = s.eps[i, a]
         lam_rec[k] = s.lam[i]
