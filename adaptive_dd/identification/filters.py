@@ -207,7 +207,9 @@ def filter_step(bank: FilterBank, x: Array, u: Array) -> tuple[Array, Array]:
     return x_next, y
 
 
-def filter_record(bank: FilterBank, u: ArrayLike, axis: int = -1, initial: ArrayLike | None = None) -> Array:
+def filter_record(
+    bank: FilterBank, u: ArrayLike, axis: int = -1, initial: ArrayLike | None = None, outputs=None
+) -> Array:
     """Filter a whole record with ``scipy.signal.lfilter``.
 
     Parameters
@@ -219,18 +221,22 @@ def filter_record(bank: FilterBank, u: ArrayLike, axis: int = -1, initial: Array
     initial : array_like, optional
         Start from the steady state of this constant input (shape of ``u``
         without the time axis); default: zero state.
+    outputs : sequence of int, optional
+        The outputs to compute, in this order (default all): a caller that needs one of them does
+        not filter the record through the others.
 
     Returns
     -------
     ndarray, shape ``u.shape + (n_outputs,)``
-        The outputs ``G0 u, G1 u, (G2 u)`` on a new last axis.
+        The outputs ``G0 u, G1 u, (G2 u)`` (or those of ``outputs``) on a new last axis.
     """
     u = np.asarray(u, dtype=float)
     if u.ndim == 0:
         raise SignalError("filter_record needs at least one time axis")
     u_t = np.moveaxis(u, axis, -1)
     outs = []
-    for num, den in zip(bank.num, bank.den, strict=True):
+    chosen = range(len(bank.num)) if outputs is None else outputs
+    for num, den in ((bank.num[k], bank.den[k]) for k in chosen):
         if initial is None:
             y = signal.lfilter(num, den, u_t, axis=-1)
         else:

@@ -213,16 +213,29 @@ def identifiable_subset(
     return keep
 
 
-def _solve(phi: Array, y: Array, w: Array) -> tuple[Array, Array]:
-    """Weighted least squares of ``y (N, m) ~ phi (N, m, r) x``; returns ``x`` and the column scale."""
+def _solve(phi: Array, y: Array, w: Array, factors=None) -> tuple[Array, Array]:
+    """Weighted least squares of ``y (N, m) ~ phi (N, m, r) x``; returns ``x`` and the column scale.
+    ``factors``: :func:`_channel_factors` of ``phi, y`` (computed when None)."""
+    Rc, col2 = _channel_factors(phi, y) if factors is None else factors
     r = phi.shape[-1]
-    A = (phi * w[None, :, None]).reshape(-1, r)
-    scale = np.linalg.norm(A, axis=0)
-    # the least squares of the triangular factor of [A | y]: the same (min-norm) solution as of A,
-    # whose singular values R shares, at a QR's cost instead of an SVD of the tall A
-    R = np.linalg.qr(np.column_stack([A / scale, (y * w).reshape(-1)]), mode="r")
-    sol, *_ = np.linalg.lstsq(R[:r, :r], R[:r, r], rcond=A.shape[0] * np.finfo(float).eps)
+    scale = np.sqrt(np.einsum("j,jr->r", w**2, col2))
+    scale = np.where(scale > 0, scale, 1.0)
+    # the least squares of the triangular factor of [A | y], A the weighted regressor: the same
+    # (min-norm) solution as of A, whose singular values R shares. [A | y]'s rows of channel j are
+    # w_j [phi_j | y_j] = w_j Q_j R_j (Q_j orthonormal columns), so R is the triangular factor of the
+    # stacked w_j R_j (m (r + 1) rows): a QR per channel once for any weights, not one of the tall A
+    # per weighting; the same numbers to round-off
+    stacked = (w[:, None, None] * Rc) * np.append(1.0 / scale, 1.0)
+    R = np.linalg.qr(stacked.reshape(-1, r + 1), mode="r")
+    sol, *_ = np.linalg.lstsq(R[:r, :r], R[:r, r], rcond=phi.shape[0] * phi.shape[1] * np.finfo(float).eps)
     return sol / scale, scale
+
+
+def _channel_factors(phi: Array, y: Array) -> tuple[Array, Array]:
+    """Per channel ``j`` the triangular factor ``R_j`` of ``[phi_j | y_j]`` ``(m, <= r + 1, r + 1)``
+    and the squared column norms of ``phi_j`` ``(m, r)`` (:func:`_solve`)."""
+    Rc = np.linalg.qr(np.concatenate([phi, y[:, :, None]], axis=2).transpose(1, 0, 2), mode="r")
+    return Rc, np.einsum("kjr,kjr->jr", phi, phi)
 
 
 def _noise_rms(tau: Array, tau_f: float, T: float, pieces=None) -> Array:
@@ -465,13 +478,14 @@ def _reweighted_fit(phi: Array, y: Array, cw: Array) -> tuple[Array, Array, Arra
     estimate, its residuals ``(N, m)``, the channel weights ``cw / rms`` used and the column
     scale of the weighted regressor (:func:`_solve`)."""
     w = cw.copy()
+    factors = _channel_factors(phi, y)  # one QR per channel for the four weightings
     for _ in range(3):
-        x, _ = _solve(phi, y, w)
+        x, _ = _solve(phi, y, w, factors)
         res = y - phi @ x
         rms = np.sqrt(np.mean(res**2, axis=0))
         s = np.maximum(rms, WEIGHT_FLOOR * np.median(rms))
         w = cw / np.maximum(s, 1e-300)
-    x, scale = _solve(phi, y, w)
+    x, scale = _solve(phi, y, w, factors)
     return x, y - phi @ x, w, scale
 
 

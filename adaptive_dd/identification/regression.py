@@ -140,7 +140,8 @@ def filter_pieces(bank, x: Array, pieces, start: int, output: int) -> Array:
     parts = []
     for a, b in pieces:
         seg = x[a:b]
-        parts.append(filter_record(bank, seg, axis=0, initial=seg[0])[..., output][min(start, b - a - 1) :])
+        y = filter_record(bank, seg, axis=0, initial=seg[0], outputs=(output,))[..., 0]
+        parts.append(y[min(start, b - a - 1) :])
     return np.concatenate(parts, axis=0)
 
 
