@@ -2,7 +2,7 @@
 
 UR5 (the shipped URDF), a prescribed exciting motion with the shipped sensor noise,
 20 s at 1 kHz, no payload swap. Prints, per mode (``payload``: 10 parameters,
-``full``: all base parameters), the microseconds per sample of
+``arm``: the arm's base parameters and the payload's ten), the microseconds per sample of
 
 * ``est_step_trial`` alone, timed inside a numba loop (Python overhead excluded);
 * ``est_step_trial`` + ``est_model_trial`` (what a closed loop calls every sample);
@@ -97,7 +97,7 @@ def main() -> None:
     ):
         fn()
         print(f"  {label:36s} {_best(fn) / N * 1e6:8.2f}")
-    for mode in ("payload", "full"):
+    for mode in ("payload", "arm"):
         cfg = OnlineConfig(mode=mode)
 
         def step(cfg=cfg):
