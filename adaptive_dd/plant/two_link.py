@@ -62,7 +62,6 @@ from adaptive_dd.plant.paper_geometry import (
 from adaptive_dd.plant.parameters import (
     PAYLOAD_RADIUS,
     SIGMA_NAMES,
-    Payload,
     PhysicalParameters,
     payload_mass_from_sigma,
     payload_sigma_delta,
@@ -441,11 +440,6 @@ class ClosedFormTwoLink:
         )
         arm._cache["as_two_link"] = replace(self, source=arm)  # exactly this record, not read back
         return arm
-
-    def physical_with_payload(self, mass: float, radius: float | None = None) -> PhysicalParameters:
-        """:meth:`equivalent_physical` with the disk added at ``l2`` (parallel-axis theorem)."""
-        rad = self.payload_radius if radius is None else radius
-        return self.equivalent_physical().with_payload(Payload(mass, rad))
 
     def to_dict(self) -> dict:
         """JSON-able description (for results metadata)."""
