@@ -150,7 +150,6 @@ def test_prior_covariance_matches_the_draws(arm):
         ({"arm_uncertainty": {"masses": 0.1}}, "arm_uncertainty"),
         ({"arm_uncertainty": 0.1}, "arm_uncertainty must be a table"),
         ({"mode": "arm", "regression": "exact"}, "regression"),
-        ({"mode": "arm", "reset_payload": 1}, "reset_payload"),
     ],
 )
 def test_bad_settings_are_named(kw, match):

@@ -157,8 +157,7 @@ def test_adaptive_ct_takes_its_detector_table_at_the_top_on_every_arm_and_inside
     from adaptive_dd.errors import ParameterError
 
     base = load_scenario() if arm == "two_link" else load_scenario(ROOT / "examples" / "plugin_urdf.toml")
-    key = "threshold" if arm == "two_link" else "min_rows"
-    value = 7.0 if arm == "two_link" else 4
+    key, value = "threshold", 7.0
 
     def built(opts):
         sc = dataclasses.replace(

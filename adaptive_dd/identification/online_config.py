@@ -94,7 +94,7 @@ class Detector:
         an error below ``threshold * floor`` never alarms.
     fast_window : float or None
         Time constant [s] of a second, faster average of the squared errors, which alarms
-        above ``fast_threshold`` (the same rows, levels and ``min_rows``): a large change is
+        above ``fast_threshold`` (the same rows and levels): a large change is
         detected before the short average has risen. A window of one sample period or less is
         the error of the sample itself (default 1 ms: one sample at 1 kHz). None or 0: no fast
         average. It is armed only on a row whose level it has learnt itself over one
@@ -106,15 +106,11 @@ class Detector:
         RMS ratio fast / level that raises an alarm, > 1. Default 7: one constant for every
         arm, the lowest at which the one-sample test raised no more false alarms than the 4 ms
         average did (Panda, drawn plant, 50 seeds: 4 trials at 6x, 1 at 7x and at 8x, 1 before).
-    min_rows : int
-        An alarm also needs this many rows above half the threshold (RMS), >= 1. A payload
-        change moves every joint the payload's weight and inertia load at once; friction the
-        model lacks (Stribeck, soft friction) errs at one joint near rest. 1: any row alone.
     speed : float
         [rad/s] A joint no faster than this within the data selection's memory creeps: its row
         raises an alarm only when its error (short or fast average, RMS, in N m) also exceeds
         ``creep_margin`` times the joint's Coulomb friction in the model (it still feeds the
-        estimate, its level and ``min_rows``). Friction the model lacks (Stribeck, soft
+        estimate and its level). Friction the model lacks (Stribeck, soft
         friction, a wrong Coulomb level) errs near rest, and by about the friction itself; a
         payload's weight does not care. One constant for every arm, the two-link detector's
         speed gate; ``docs/change_detection.md`` ("Creeping joints"). 0: the selection's
@@ -122,8 +118,8 @@ class Detector:
     creep_margin : float
         See ``speed``; >= 0 (0: a creeping row alarms as any other).
     hold_above : float
-        A row whose short average rises above this fraction of the threshold (RMS; 0.5, the
-        half-threshold at which ``min_rows`` counts a row as raised) is judged, for
+        A row whose short average rises above this fraction of the threshold (RMS; 0.5) is
+        judged, for
         ``hold_time`` after that, against the level it had when it rose; its level learns on.
         Only a level established over ``min_learned`` learned samples since the last alarm is
         held. A change's error rises over the filters' time in samples each below ``gate``, and
@@ -159,7 +155,6 @@ class Detector:
     reopen_again: bool = True
     reopen_mass_std: float | None = None
     floor: float = 0.05
-    min_rows: int = 1
     fast_window: float | None = 0.001
     fast_threshold: float = 7.0
     speed: float = 0.25
@@ -187,7 +182,6 @@ class Detector:
         _num(o, "floor", self.floor, 0.0, strict=False)
         _int(o, "min_learned", self.min_learned, 1)
         _int(o, "gate_after", self.gate_after, 1)
-        _int(o, "min_rows", self.min_rows, 1)
         if self.fast_window == 0 and not isinstance(self.fast_window, bool):
             object.__setattr__(self, "fast_window", None)  # 0: off (TOML has no None)
         if self.fast_window is not None:
@@ -317,11 +311,6 @@ class OnlineConfig:
         model, in place of ``arm_prior_std`` (its diagonal): an identification's correlations
         (:func:`~adaptive_dd.identification.arm_prior.identified_prior_cov`, what ``[run] excite``
         passes). Given, the mode defaults to ``"arm"``.
-    reset_payload : bool
-        Mode ``"arm"``: an alarm also sets the payload block to zero (a new payload, nothing
-        known of it but its prior). Off by default: it loses what the block had absorbed of
-        the arm's residual (UR5, uncertain arm, 10 seeds: 1.06 / 1.08 / 1.40 -> 1.10 / 1.25 /
-        8.5x the floor, signals form).
 
     Examples
     --------
@@ -352,7 +341,6 @@ class OnlineConfig:
     prior_noise: float | str | None = "auto"
     regression: str | None = None
     arm_uncertainty: ArmUncertainty | None = None
-    reset_payload: bool = False
     arm_prior_std: tuple[float, ...] | None = None
     arm_prior_cov: tuple[tuple[float, ...], ...] | None = None
 
@@ -424,7 +412,6 @@ class OnlineConfig:
             _num(o, "max_trace", self.max_trace, 0.0)
         _bool(o, "align", self.align)
         _bool(o, "project", self.project)
-        _bool(o, "reset_payload", self.reset_payload)
         _num(o, "taint", self.taint, 0.0, strict=False)
         _num(o, "eig_min", self.eig_min, 0.0, strict=False)
         if self.bound_radius is not None:

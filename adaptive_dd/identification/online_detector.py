@@ -42,11 +42,9 @@ from adaptive_dd.identification.online_slots import (
     I_HOLD,
     I_HOLDOFF,
     I_MIN_LEARNED,
-    I_MIN_ROWS,
     I_MOMENTUM,
     I_N_ROWS,
     I_REOPEN_AGAIN,
-    I_RESET_PAYLOAD,
     I_RESUME,
     I_SEL_MEMORY,
     I_SELECT,
@@ -223,9 +221,7 @@ def _detect(c, s, i, eps, act):  # pragma: no cover - compiled
         if act[j]:
             n_act += 1
     alarm = False
-    n_raised = 0  # rows above a quarter of the threshold (half of it in RMS)
     fast = False
-    n_fast = 0  # the same for the fast average and its threshold
     for j in range(n):
         if not act[j]:
             continue
@@ -256,17 +252,13 @@ def _detect(c, s, i, eps, act):  # pragma: no cover - compiled
             creep2 = (fl[F_CREEP_MARGIN] * c.pi0[11 * n + j] / c.w[j]) ** 2
         if s.short[i, j] > thr * level + 1e-300 and s.short[i, j] > creep2:
             alarm = True
-        if s.short[i, j] > 0.25 * thr * level + 1e-300:
-            n_raised += 1
         if ints[I_FAST] == 1 and own and nl >= ints[I_FAST_LEARNED]:
             # only against a level the row has learned itself over the long window: not the
             # level of before an alarm, nor one still learning a new payload or the arm
             thf = fl[F_FAST2] * thr / fl[F_THRESHOLD2]  # the same slow-row and re-learning factors
             if s.fast[i, j] > thf * level + 1e-300 and s.fast[i, j] > creep2:
                 fast = True
-            if s.fast[i, j] > 0.25 * thf * level + 1e-300:
-                n_fast += 1
-    return (alarm and n_raised >= ints[I_MIN_ROWS]) or (fast and n_fast >= ints[I_MIN_ROWS])
+    return alarm or fast
 
 
 @njit(cache=True)
@@ -283,10 +275,6 @@ def _alarm(c, s, i, k):  # pragma: no cover - compiled
             s.ref_pay[i, a] = s.start_pay[i, a]
     cnt[C_FOLLOWS] = 1
     _reopen(c, s.P[i])
-    if ints[I_RESET_PAYLOAD] == 1:  # a new payload: nothing known of it but its prior
-        p = s.theta.shape[1]
-        for a in range(p - 10, p):  # (not k: the alarm's sample, recorded below)
-            s.theta[i, a] = 0.0
     cnt[C_ALARMS] += 1
     cnt[C_SINCE_ALARM] = 0
     cnt[C_LAST_ALARM] = k

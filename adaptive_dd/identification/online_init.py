@@ -134,19 +134,12 @@ def _pack(cfg: OnlineConfig, arm: Arm) -> tuple[EstCfg, Array]:
             fl[K.F_ALPHA_FAST] = min(1.0, T / det.fast_window)
             fl[K.F_FAST2] = det.fast_threshold**2
             ints[K.I_FAST_LEARNED] = cfg.seconds(det.long_window)
-        if det.min_rows > n_rows:
-            raise ParameterError(
-                f"Detector.min_rows = {det.min_rows} exceeds the {n_rows} joint equations that "
-                "carry the payload"
-            )
-        ints[K.I_MIN_ROWS] = det.min_rows
         fl[K.F_DET_SPEED] = max(det.speed, fl[K.F_SEL_THRESHOLD])
         fl[K.F_CREEP_MARGIN] = det.creep_margin
         if det.hold_above > 0.0:
             fl[K.F_HOLD_ABOVE2] = det.hold_above**2
             hold = cfg.rise_samples if det.hold_time is None else cfg.seconds(det.hold_time)
             ints[K.I_HOLD] = max(hold, 1)
-        ints[K.I_RESET_PAYLOAD] = int(cfg.mode == "arm" and cfg.reset_payload)
         # payload mode: control keeps the starting payload until the first alarm (the kernel's
         # _keep_start); in mode "arm" the payload block also takes up the arm's error meanwhile
         ints[K.I_KEEP_START] = int(cfg.mode == "payload")

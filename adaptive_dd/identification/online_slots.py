@@ -133,13 +133,11 @@ I_PROJECT = 11
 I_GATE_AFTER = 12  # learned samples before the learning gate applies
 I_N_ROWS = 13  # rows (joints 0 .. n_rows-1) that carry information
 I_MOMENTUM = 14  # 1: the regression in momentum form (payload mode)
-I_MIN_ROWS = 15  # rows whose short average must exceed (threshold / 2)^2 times their level for an alarm
-I_FAST = 16  # 1: the fast average may also raise an alarm
-I_RESET_PAYLOAD = 17  # mode "arm": an alarm sets the payload block (theta's last ten) to zero
-I_FAST_LEARNED = 18  # samples a row's own level must have learned before its fast average may alarm
-I_HOLD = 19  # samples a risen row is judged against the level it had when it rose (0: no hold)
-I_KEEP_START = 20  # 1: control keeps the starting payload until the first alarm (_keep_start)
-N_I = 21
+I_FAST = 15  # 1: the fast average may also raise an alarm
+I_FAST_LEARNED = 16  # samples a row's own level must have learned before its fast average may alarm
+I_HOLD = 17  # samples a risen row is judged against the level it had when it rose (0: no hold)
+I_KEEP_START = 18  # 1: control keeps the starting payload until the first alarm (_keep_start)
+N_I = 19
 
 # float slots of EstCfg.floats
 F_LAM0 = 0
