@@ -1,12 +1,8 @@
-"""The excitation phase's coverage check of the task's region (``[run] excite`` prints it) and the
-design on that region (``region="task"``, an option: measured worse than the arm's whole limits,
-docs/learning_the_arm.md): the region's design keeps within the arm's limits and the task's range
-widened by TASK_MARGIN and is covered; an excitation off that region is caught, the default
-design over the arm's whole limits among them."""
+"""The excitation phase's coverage check of the task's region (``[run] excite`` prints it): an
+excitation off that region is caught, the default design over the arm's whole limits among them."""
 
 from __future__ import annotations
 
-import dataclasses
 from importlib import resources
 from pathlib import Path
 
@@ -15,13 +11,7 @@ import pytest
 
 from adaptive_dd.benchmark.scenario import parse_scenario, read_toml
 from adaptive_dd.closed_loop.excitation_phase import _task_path, excitation_coverage, excitation_reference
-from adaptive_dd.errors import ParameterError, ScenarioError
-from adaptive_dd.identification.excitation import (
-    TASK_MARGIN,
-    ExcitationLimits,
-    coverage,
-    moving_joints,
-)
+from adaptive_dd.identification.excitation import coverage, moving_joints
 from adaptive_dd.identification.model import arm_model
 
 
@@ -35,37 +25,6 @@ def _scenario(name: str, **run):
 @pytest.fixture(scope="module")
 def vertical3():
     return _scenario("vertical3_payload_exact", excite=20.0)
-
-
-@pytest.fixture(scope="module")
-def designed(vertical3):
-    return excitation_reference(vertical3, "task")
-
-
-def test_the_task_region_limits_hold_the_task_and_keep_within_the_arms(vertical3):
-    tq = _task_path(vertical3)[0]
-    arm_lim = ExcitationLimits.of_arm(vertical3.arm)
-    lim = ExcitationLimits.of_task(vertical3.arm, tq)
-    assert np.all(lim.lower >= arm_lim.lower) and np.all(lim.upper <= arm_lim.upper)
-    inner = np.maximum(arm_lim.lower, tq.min(axis=0) - TASK_MARGIN)
-    assert np.allclose(lim.lower, inner) and np.all(lim.upper - lim.lower < arm_lim.upper - arm_lim.lower)
-    with pytest.raises(ParameterError, match="joint 1: the task's positions"):
-        ExcitationLimits.of_task(vertical3.arm, tq + np.array([arm_lim.upper[0] + 1.0, 0.0, 0.0]))
-
-
-def test_the_designed_excitation_covers_the_task_and_keeps_its_region(vertical3, designed):
-    """The phase's design lies within the task's region and the limits, and the check says
-    covered; the same excitation moved off the task's region by three margins is caught."""
-    q, qd, _ = designed.sample(np.arange(0.0, 20.0, 0.02))
-    lim = ExcitationLimits.of_task(vertical3.arm, _task_path(vertical3)[0])
-    assert np.all(q >= lim.lower - 1e-6) and np.all(q <= lim.upper + 1e-6)
-    assert np.all(np.abs(qd) <= lim.velocity + 1e-6)
-    cov = excitation_coverage(vertical3, designed, 20.0)
-    assert cov.ok and cov.inside == pytest.approx(1.0) and cov.span.min() >= 0.9, cov.line()
-    assert "(covered)" in cov.line()
-    moved = dataclasses.replace(designed, offset=tuple(x + 3 * TASK_MARGIN for x in designed.offset))
-    off = excitation_coverage(vertical3, moved, 20.0)
-    assert not off.ok and "NOT covered" in off.line(), off.line()
 
 
 def test_the_default_design_over_the_arms_limits_is_reported_off_the_tasks_region(vertical3):
@@ -103,11 +62,3 @@ def test_a_base_joint_about_the_vertical_is_not_judged():
     tq = _task_path(sc)[0][::25]
     moves = moving_joints(arm_model(sc.arm), tq, np.random.default_rng(0))
     assert not moves[0] and moves[1:].all()
-
-
-def test_a_task_outside_the_arms_limits_is_a_scenario_error(vertical3):
-    lim = ExcitationLimits.of_arm(vertical3.arm)
-    ref = vertical3.reference
-    far = dataclasses.replace(ref, offset=(float(lim.upper[0]) + 2.0, *ref.offset[1:]))
-    with pytest.raises(ScenarioError, match=r"run.excite: reference: joint 1"):
-        excitation_reference(dataclasses.replace(vertical3, reference=far), "task")

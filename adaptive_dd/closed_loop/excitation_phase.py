@@ -42,7 +42,6 @@ __all__ = [
     "RecordFit",
     "estimator_scale",
     "excitation_coverage",
-    "excitation_limits",
     "excitation_reference",
     "identified_prior",
     "identify_excitation",
@@ -172,12 +171,6 @@ START_ATTEMPTS = 5
 """Random starts tried by :func:`excitation_reference` (the optimum of one may graze a limit)."""
 
 
-REGIONS = ("arm", "task")
-"""Where :func:`excitation_reference` designs: the arm's whole limits (the default, ``adaptive-dd
-excite``'s design) or the task's region (measured worse on the iiwa, vertical3 and the paper's arm:
-less information, docs/learning_the_arm.md, "The excitation on the task's region")."""
-
-
 def _task_path(scenario, duration: float | None = None) -> tuple[Array, Array]:
     """The scenario's reference ``q_d, qd_d (m, n)`` over ``duration`` (default the task's) at 20 ms."""
     t = np.arange(0.0, float(duration or scenario.duration), 0.02)
@@ -185,47 +178,23 @@ def _task_path(scenario, duration: float | None = None) -> tuple[Array, Array]:
     return q, qd
 
 
-def excitation_limits(scenario, region: str = "arm"):
-    """The limits the phase's excitation is designed within: the arm's
-    (:meth:`~adaptive_dd.identification.excitation.ExcitationLimits.of_arm`) or, ``region="task"``,
-    those narrowed to the task's region.
-
-    Raises
-    ------
-    ScenarioError
-        The task's positions lie outside the arm's limits (``region="task"``).
-    """
-    from adaptive_dd.errors import ParameterError
-    from adaptive_dd.identification.excitation import ExcitationLimits
-
-    arm = scenario.arm
-    try:
-        if region == "task":
-            return ExcitationLimits.of_task(arm, _task_path(scenario)[0])
-        return ExcitationLimits.of_arm(arm)
-    except ParameterError as exc:
-        raise ScenarioError(f"{scenario.source}: run.excite: reference: {exc}") from None
-
-
-def excitation_reference(scenario, region: str = "arm", progress: bool = False):
+def excitation_reference(scenario, progress: bool = False):
     """The designed excitation of the scenario's model as a reference with a 1 s ramp: the first of
     :data:`START_ATTEMPTS` random starts (generators ``(seed, 4, attempt)``) whose optimum keeps
-    within the limits. ``region="arm"``: the arm's whole limits (:data:`REGIONS`); ``"task"``: the
-    arm's limits narrowed to the task's region
-    (:meth:`~adaptive_dd.identification.excitation.ExcitationLimits.of_task` on the scenario's
-    ``[reference]`` over its duration). ``progress``: the design's bar on stderr.
+    within the arm's whole limits
+    (:meth:`~adaptive_dd.identification.excitation.ExcitationLimits.of_arm`; ``adaptive-dd
+    excite``'s design). ``progress``: the design's bar on stderr.
 
     Raises
     ------
     ScenarioError
-        No start gave a trajectory within the limits (naming ``run.excite``), or the task's
-        positions lie outside the arm's limits.
+        No start gave a trajectory within the limits (naming ``run.excite``).
     """
     from adaptive_dd.errors import ParameterError
-    from adaptive_dd.identification.excitation import design_excitation
+    from adaptive_dd.identification.excitation import ExcitationLimits, design_excitation
 
     arm = scenario.arm
-    lim = excitation_limits(scenario, region)
+    lim = ExcitationLimits.of_arm(arm)
     last = None
     for attempt in range(START_ATTEMPTS):
         rng = np.random.default_rng([int(scenario.seed), 4, attempt])

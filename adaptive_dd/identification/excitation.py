@@ -28,7 +28,6 @@ inertia, viscous, Coulomb) so that parameters near zero are compared on their ki
 
 from __future__ import annotations
 
-import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
@@ -93,33 +92,6 @@ class ExcitationLimits:
             np.full(n, float(acceleration)),
             fraction * np.asarray(arm.actuator.torque_limit, float),
         )
-
-    @classmethod
-    def of_task(
-        cls, arm, task_q: Array, margin: float | None = None, acceleration: float = 5.0, fraction: float = 0.8
-    ) -> ExcitationLimits:
-        """The arm's limits (:meth:`of_arm`) with the positions narrowed to the task's region: per
-        joint the range the task's poses ``task_q (m, n)`` [rad] visit, widened by ``margin`` [rad]
-        (default :data:`TASK_MARGIN`) on each side, within the arm's limits less their margin.
-
-        Raises
-        ------
-        ParameterError
-            The task's range lies outside the arm's limits on some joint (named).
-        """
-        arm_lim = cls.of_arm(arm, acceleration=acceleration, fraction=fraction)
-        m = TASK_MARGIN if margin is None else float(margin)
-        task_q = np.asarray(task_q, float)
-        lo = np.maximum(arm_lim.lower, task_q.min(axis=0) - m)
-        hi = np.minimum(arm_lim.upper, task_q.max(axis=0) + m)
-        if np.any(hi <= lo):
-            j = int(np.argmax(hi <= lo))
-            raise ParameterError(
-                f"joint {j + 1}: the task's positions {task_q[:, j].min():.3g}..{task_q[:, j].max():.3g} rad "
-                "lie outside the arm's limits less their margin "
-                f"({arm_lim.lower[j]:.3g}..{arm_lim.upper[j]:.3g})"
-            )
-        return dataclasses.replace(arm_lim, lower=lo, upper=hi)
 
 
 @dataclass(frozen=True)
@@ -397,8 +369,8 @@ def _within_limits(
 
 
 TASK_MARGIN = 0.2
-"""[rad] How far beyond the task's range of positions (per joint) a task-region excitation may go
-(:meth:`ExcitationLimits.of_task`; docs/learning_the_arm.md, "An excitation on the task's region")."""
+"""[rad] How far beyond the task's range of positions (per joint) the task's region reaches
+(:class:`Coverage`)."""
 
 
 @dataclass(frozen=True)
@@ -406,9 +378,8 @@ class Coverage:
     """How an excitation's record covers a task's region (:func:`coverage`).
 
     The task's region: per joint the range of positions the task visits widened by ``radius`` [rad]
-    (:data:`TASK_MARGIN`: what :meth:`ExcitationLimits.of_task` designs within). ``moves (n,)``: the
-    joints whose position enters the dynamics (a base joint about the vertical does not: its
-    position is not judged). ``span (n,)``: per joint the fraction of the task's range the
+    (:data:`TASK_MARGIN`). ``moves (n,)``: the joints whose position enters the dynamics (a base
+    joint about the vertical does not: its position is not judged). ``span (n,)``: per joint the fraction of the task's range the
     excitation visits; ``speed (n,)``: the excitation's largest ``|qd|`` over the task's;
     ``inside``: the share of the excitation's poses within the task's region (every judged joint);
     ``distance (3,)`` [rad]: median, p90 and max over the task's poses of the distance (largest
