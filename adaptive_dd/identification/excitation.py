@@ -379,11 +379,11 @@ class Coverage:
 
     The task's region: per joint the range of positions the task visits widened by ``radius`` [rad]
     (:data:`TASK_MARGIN`). ``moves (n,)``: the joints whose position enters the dynamics (a base
-    joint about the vertical does not: its position is not judged). ``span (n,)``: per joint the fraction of the task's range the
-    excitation visits; ``speed (n,)``: the excitation's largest ``|qd|`` over the task's;
-    ``inside``: the share of the excitation's poses within the task's region (every judged joint);
-    ``distance (3,)`` [rad]: median, p90 and max over the task's poses of the distance (largest
-    judged joint difference) to the excitation's nearest pose.
+    joint about the vertical does not: its position is not judged). ``span (n,)``: per joint the
+    fraction of the task's range the excitation visits; ``speed (n,)``: the excitation's largest
+    ``|qd|`` over the task's; ``inside``: the share of the excitation's poses within the task's
+    region (every judged joint); ``distance (3,)`` [rad]: median, p90 and max over the task's poses
+    of the distance (largest judged joint difference) to the excitation's nearest pose.
     """
 
     moves: NDArray[np.bool_]
