@@ -120,7 +120,7 @@ def test_a_model_file_gives_adaptive_ct_the_same_prior_rule(tmp_path):
     step = np.asarray(m.consistent_sigma) - np.asarray(m.sigma)
     want = np.sqrt(1.5 * np.diag(cov) + step**2)  # the sandwich, the step, the model error
     want[-1] = np.sqrt(stated[-1])
-    assert ctrl.online.mode == "arm" and ctrl.online.arm_prior_std is None
+    assert ctrl.online.mode == "arm" and ctrl.online.arm_uncertainty is None
     P = np.asarray(ctrl.online.arm_prior_cov)
     np.testing.assert_allclose(np.sqrt(np.diag(P)), want, rtol=1e-12)
     # the sandwich's correlations handed on; none for the parameter held at the URDF's
@@ -197,8 +197,8 @@ def test_the_estimator_starts_its_arm_block_at_the_given_covariance():
     np.testing.assert_allclose(P0[:p, :p], C + cfg.p0_arm * np.eye(p), rtol=1e-12, atol=1e-15)
     with pytest.raises(ParameterError, match="arm_prior_cov must be a symmetric"):
         OnlineConfig(arm_prior_cov=(C + np.triu(np.ones((p, p)), 1)).tolist())
-    with pytest.raises(ParameterError, match="one of arm_uncertainty, arm_prior_std, arm_prior_cov"):
-        OnlineConfig(arm_prior_cov=C.tolist(), arm_prior_std=[1.0] * p)
+    with pytest.raises(ParameterError, match="give arm_uncertainty or arm_prior_cov, not both"):
+        OnlineConfig(arm_prior_cov=C.tolist(), arm_uncertainty={})
     with pytest.raises(ParameterError, match=f"this arm has {p} base parameters"):
         _pack(OnlineConfig(arm_prior_cov=np.eye(p + 1).tolist()), arm)
 

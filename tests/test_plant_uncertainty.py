@@ -557,9 +557,9 @@ def test_the_excitation_phase_hands_on_its_prior_and_reports_its_scale(monkeypat
 
 
 def test_after_an_excitation_phase_adaptive_ct_starts_from_what_the_identification_knows():
-    """[run] excite: adaptive_ct's arm prior is the identification's (``arm_prior_std``, each
+    """[run] excite: adaptive_ct's arm prior is the identification's (``arm_prior_cov``, each
     seed's), not the URDF's stated uncertainty about the identified model; a table that states
-    its own mode is left alone; the std reaches the estimator's start-up covariance."""
+    its own mode is left alone; the covariance reaches the estimator's start-up covariance."""
     from adaptive_dd.closed_loop.excitation_phase import identified_prior
     from adaptive_dd.closed_loop.runner import make_controller_of
     from adaptive_dd.errors import ParameterError
@@ -570,21 +570,21 @@ def test_after_an_excitation_phase_adaptive_ct_starts_from_what_the_identificati
     sc = parse_scenario(data, "v.toml")
     pb = sc.arm.base.B.shape[0]
     std = np.linspace(1e-3, 2e-2, pb)
-    one = dataclasses.replace(sc, controller_options=identified_prior(sc, std))
+    one = dataclasses.replace(sc, controller_options=identified_prior(sc, np.diag(std**2)))
     _, ctrl = make_controller_of(one, "adaptive_ct")
     assert ctrl.online.mode == "arm" and ctrl.online.arm_uncertainty is None
-    np.testing.assert_allclose(ctrl.online.arm_prior_std, std)
+    np.testing.assert_allclose(ctrl.online.arm_prior_cov, np.diag(std**2))
     _, s = est_init(ctrl.online, sc.arm, 1)
     np.testing.assert_allclose(np.diag(s.P[0])[:pb], ctrl.online.p0_arm + std**2, rtol=1e-12)
     _, urdf = make_controller_of(sc, "adaptive_ct")  # without the phase: the stated uncertainty
-    assert urdf.online.arm_uncertainty is not None and urdf.online.arm_prior_std is None
+    assert urdf.online.arm_uncertainty is not None and urdf.online.arm_prior_cov is None
     own = with_settings(parse_scenario(data, "v.toml"), "adaptive_ct", {"estimator": {"mode": "payload"}})
-    kept = dataclasses.replace(own, controller_options=identified_prior(own, std))
+    kept = dataclasses.replace(own, controller_options=identified_prior(own, np.diag(std**2)))
     assert make_controller_of(kept, "adaptive_ct")[1].online.mode == "payload"
-    with pytest.raises(ParameterError, match="3 values; this arm has"):
-        est_init(OnlineConfig(arm_prior_std=(1.0, 1.0, 1.0)), sc.arm, 1)
+    with pytest.raises(ParameterError, match="this arm has"):
+        est_init(OnlineConfig(arm_prior_cov=np.eye(3).tolist()), sc.arm, 1)
     with pytest.raises(ParameterError, match="not both"):
-        OnlineConfig(arm_prior_std=(1.0,), arm_uncertainty={})
+        OnlineConfig(arm_prior_cov=[[1.0]], arm_uncertainty={})
 
 
 def test_simulate_arm_simulates_the_plant(tmp_path):

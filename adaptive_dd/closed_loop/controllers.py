@@ -520,7 +520,7 @@ def with_stated_uncertainty(name: str, options: dict, scenario) -> dict:
     est = (options or {}).get("estimator", {})
     if name != "adaptive_ct" or unc is None or not isinstance(est, dict):
         return options
-    if {"arm_uncertainty", "mode", "arm_prior_std", "arm_prior_cov"} & est.keys():
+    if {"arm_uncertainty", "mode", "arm_prior_cov"} & est.keys():
         return options
     scale = np.sqrt(3.0) if getattr(unc, "distribution", "uniform") == "normal" else 1.0
     keys = ("mass", "com", "inertia", "viscous", "coulomb", "armature")

@@ -402,7 +402,7 @@ def _estimator_config(scenario):
     if "adaptive_ct" not in scenario.controllers:
         return None
     est = (thaw(dict(scenario.controller_options).get("adaptive_ct")) or {}).get("estimator", {})
-    if isinstance(est, dict) and {"mode", "arm_uncertainty", "arm_prior_std", "arm_prior_cov"} & est.keys():
+    if isinstance(est, dict) and {"mode", "arm_uncertainty", "arm_prior_cov"} & est.keys():
         return None
     return getattr(scenario_controller(scenario, "adaptive_ct")[1], "online", None)
 

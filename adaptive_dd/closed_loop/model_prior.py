@@ -29,9 +29,8 @@ rows, not that start, make what it knows at the record's end."""
 def identified_prior(scenario, prior: Array) -> tuple:
     """The scenario's controller options with adaptive_ct's estimator given ``arm_prior_cov =
     prior`` (a ``(p, p)`` covariance: the identification's knowledge of the arm with its
-    correlations, :attr:`ExcitationReport.sigma_cov`) or ``arm_prior_std = prior`` (``(p,)``),
-    unless its table already says ``mode``, ``arm_uncertainty``, ``arm_prior_std`` or
-    ``arm_prior_cov``; with a covariance, the payload block's start-up ``payload_mass_std`` is
+    correlations, :attr:`ExcitationReport.sigma_cov`), unless its table already says ``mode``,
+    ``arm_uncertainty`` or ``arm_prior_cov``; the payload block's start-up ``payload_mass_std`` is
     :func:`known_payload_mass_std` unless the table states it. After an
     excitation phase the model is the identified one, and what is left to learn of the arm is
     what the identification did not know, not the URDF's stated uncertainty (vertical3, 2 seeds,
@@ -43,15 +42,12 @@ def identified_prior(scenario, prior: Array) -> tuple:
     if "adaptive_ct" in scenario.controllers:
         ac = opts.setdefault("adaptive_ct", {})
         est = ac.get("estimator", {})
-        keys = {"mode", "arm_uncertainty", "arm_prior_std", "arm_prior_cov"}
+        keys = {"mode", "arm_uncertainty", "arm_prior_cov"}
         if isinstance(est, dict) and not keys & est.keys():
             P = np.asarray(prior, dtype=float)
-            if P.ndim == 2:
-                ac["estimator"] = {**est, "arm_prior_cov": [[float(x) for x in row] for row in P]}
-                if "payload_mass_std" not in est:
-                    ac["estimator"]["payload_mass_std"] = known_payload_mass_std(scenario.arm, P)
-            else:
-                ac["estimator"] = {**est, "arm_prior_std": [float(x) for x in P]}
+            ac["estimator"] = {**est, "arm_prior_cov": [[float(x) for x in row] for row in P]}
+            if "payload_mass_std" not in est:
+                ac["estimator"]["payload_mass_std"] = known_payload_mass_std(scenario.arm, P)
     return tuple((n, freeze(o)) for n, o in opts.items())
 
 
@@ -90,7 +86,7 @@ def estimator_information(cfg, arm, q: Array, qd: Array, tau: Array) -> Array:
     pb = arm.base.count
     start = (VAGUE * np.eye(pb)).tolist()
     cfg = dataclasses.replace(
-        cfg, mode="arm", arm_uncertainty=None, arm_prior_std=None, arm_prior_cov=start, detector=None,
+        cfg, mode="arm", arm_uncertainty=None, arm_prior_cov=start, detector=None,
         max_trace=1e300,
     )  # fmt: skip
     q, qd, tau = (np.ascontiguousarray(np.asarray(x, dtype=float)) for x in (q, qd, tau))

@@ -300,17 +300,12 @@ class OnlineConfig:
         (:func:`~adaptive_dd.identification.arm_prior.prior_covariance`). None in mode
         ``"arm"``: the default levels (masses 10 %, com 1 cm, inertias 20 %, friction 50 %,
         armature 30 %).
-    arm_prior_std : tuple of float or None
-        Mode ``"arm"``: the standard deviations ``(p,)`` of the arm's base parameters (in the
-        order of ``arm.base``) about the model, in place of the covariance ``arm_uncertainty``
-        implies: what an identification knows (``[run] excite`` passes each seed's,
-        :func:`~adaptive_dd.closed_loop.excitation_phase.identify_excitation`). Given, the mode
-        defaults to ``"arm"``.
     arm_prior_cov : tuple of tuples of float or None
-        Mode ``"arm"``: the whole covariance ``(p, p)`` of the arm's base parameters about the
-        model, in place of ``arm_prior_std`` (its diagonal): an identification's correlations
+        Mode ``"arm"``: the covariance ``(p, p)`` of the arm's base parameters (in the order of
+        ``arm.base``) about the model, in place of the covariance ``arm_uncertainty`` implies:
+        what an identification knows, with its correlations
         (:func:`~adaptive_dd.identification.arm_prior.identified_prior_cov`, what ``[run] excite``
-        passes). Given, the mode defaults to ``"arm"``.
+        passes for each seed). Given, the mode defaults to ``"arm"``.
 
     Examples
     --------
@@ -341,7 +336,6 @@ class OnlineConfig:
     prior_noise: float | str | None = "auto"
     regression: str | None = None
     arm_uncertainty: ArmUncertainty | None = None
-    arm_prior_std: tuple[float, ...] | None = None
     arm_prior_cov: tuple[tuple[float, ...], ...] | None = None
 
     def __post_init__(self) -> None:
@@ -357,16 +351,6 @@ class OnlineConfig:
                 f"armature) or None, got {self.arm_uncertainty!r}"
             )
         # what the scenario states decides: an arm known only to its stated uncertainty is learnt
-        if self.arm_prior_std is not None:
-            v = np.asarray(self.arm_prior_std, dtype=float)
-            if v.ndim != 1 or v.size == 0 or not np.all(np.isfinite(v) & (v >= 0)):
-                raise ParameterError(
-                    f"{o}.arm_prior_std must be a list of finite values >= 0 (one per base parameter), "
-                    f"got {self.arm_prior_std!r}"
-                )
-            object.__setattr__(self, "arm_prior_std", tuple(float(x) for x in v))
-            if self.arm_uncertainty is not None:
-                raise ParameterError(f"{o}: give arm_uncertainty or arm_prior_std, not both")
         if self.arm_prior_cov is not None:
             C = np.asarray(self.arm_prior_cov, dtype=float)
             ok = C.ndim == 2 and C.shape[0] == C.shape[1] and C.size > 0 and np.all(np.isfinite(C))
@@ -376,14 +360,10 @@ class OnlineConfig:
                     f"per base parameter), got shape {C.shape}"
                 )
             object.__setattr__(self, "arm_prior_cov", tuple(tuple(float(x) for x in row) for row in C))
-            if self.arm_uncertainty is not None or self.arm_prior_std is not None:
-                raise ParameterError(f"{o}: give one of arm_uncertainty, arm_prior_std, arm_prior_cov")
+            if self.arm_uncertainty is not None:
+                raise ParameterError(f"{o}: give arm_uncertainty or arm_prior_cov, not both")
         if self.mode is None:
-            learnt = (
-                self.arm_uncertainty is not None
-                or self.arm_prior_std is not None
-                or self.arm_prior_cov is not None
-            )
+            learnt = self.arm_uncertainty is not None or self.arm_prior_cov is not None
             object.__setattr__(self, "mode", "arm" if learnt else "payload")
         arm_mode = self.mode == "arm"
         if self.project is None:  # the payload block also carries the arm's residual along the

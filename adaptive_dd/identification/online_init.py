@@ -75,13 +75,6 @@ def _pack(cfg: OnlineConfig, arm: Arm) -> tuple[EstCfg, Array]:
                     "base parameters"
                 )
             P0[:pb, :pb] = cfg.p0_arm * np.eye(pb) + C
-        elif cfg.arm_prior_std is not None:  # what an identification knows of the arm
-            if len(cfg.arm_prior_std) != pb:
-                raise ParameterError(
-                    f"OnlineConfig.arm_prior_std has {len(cfg.arm_prior_std)} values; this arm has "
-                    f"{pb} base parameters"
-                )
-            P0[:pb, :pb] = cfg.p0_arm * np.eye(pb) + np.diag(np.square(cfg.arm_prior_std))
         else:
             levels = cfg.arm_uncertainty if cfg.arm_uncertainty is not None else ArmUncertainty()
             P0[:pb, :pb] = cfg.p0_arm * np.eye(pb) + B @ prior_covariance(arm, levels) @ B.T
