@@ -176,22 +176,19 @@ def test_reproduces_the_two_link_plant_on_the_sice_arm(law):
         assert n_stuck > 50  # the torques do make joints stick: the mode logic was exercised
 
 
-@pytest.mark.slow  # compiles the batch plant step: 19 s in a cold run
-def test_batch_and_run_agree_with_the_step(rng):
+def test_run_agrees_with_the_step(rng):
     n, n_trials, n_samples = 3, 4, 50
     model = random_chain_model(n, rng)
     ch = C.chain_from_model(model)
     pi = np.stack([C.standard_parameters(model) * rng.uniform(0.8, 1.2) for _ in range(n_trials)])
     fv, fc = rng.uniform(0, 0.5, size=(n_trials, n)), rng.uniform(0, 1.0, size=(n_trials, n))
-    arm = np.zeros((n_trials, n))
-    fparams = np.array([0.02, 1.5, 0.1])
     tau = rng.uniform(-3, 3, size=(n_samples, n_trials, n))
     q, qd = np.zeros((n_trials, n)), np.zeros((n_trials, n))
     stuck = np.zeros((n_trials, n), dtype=bool)
-    for k in range(n_samples):
-        assert S.plant_batch(ch, pi, fv, fc, arm, 0, fparams, q, qd, tau[k], T, 2, stuck).all()
     for t in range(n_trials):
-        pp = S.plant_params(ch, pi[t], fv[t], fc[t])
+        pp = S.plant_params(ch, pi[t], fv[t], fc[t])  # law 0 (stick-slip), the default friction parameters
+        for k in range(n_samples):
+            assert S.plant_step(ch, pp, q[t], qd[t], tau[k, t], T, 2, stuck[t])
         q1, qd1 = np.zeros(n), np.zeros(n)
         q_out, qd_out = np.empty((n_samples, n)), np.empty((n_samples, n))
         assert S.plant_run(ch, pp, q1, qd1, np.ascontiguousarray(tau[:, t]), T, 2, q_out, qd_out) == n_samples

@@ -17,7 +17,7 @@ from __future__ import annotations
 from typing import NamedTuple
 
 import numpy as np
-from numba import njit, prange
+from numba import njit
 from numba.extending import overload
 from numpy.typing import NDArray
 
@@ -31,7 +31,6 @@ __all__ = [
     "SmoothLaw",
     "StickSlipLaw",
     "friction_law",
-    "plant_batch",
     "plant_params",
     "plant_run",
     "plant_step",
@@ -252,32 +251,3 @@ def plant_run(ch, pp, q, qd, tau, T, substeps, q_out, qd_out):  # pragma: no cov
             q_out[k, i] = q[i]
             qd_out[k, i] = qd[i]
     return tau.shape[0]
-
-
-@njit(cache=True, parallel=True)
-def plant_batch(ch, pi, fv, fc, armature, law, fparams, q, qd, tau, T, substeps, stuck):  # pragma: no cover
-    """One sample of many trials of the same chain (prange over trials), in place.
-
-    Parameters
-    ----------
-    pi : ndarray, shape (n_trials, 10 n)
-    fv, fc, armature : ndarray, shape (n_trials, n)
-    law : int
-    fparams : ndarray, shape (3,)
-    q, qd, tau : ndarray, shape (n_trials, n)
-    stuck : ndarray of bool, shape (n_trials, n)
-        Output, as in :func:`plant_step`.
-
-    Returns
-    -------
-    ndarray of bool, shape (n_trials,)
-        False for trials whose step failed (see :func:`plant_step`).
-    """
-    n_trials, n = q.shape
-    ok = np.empty(n_trials, dtype=np.bool_)
-    for t in prange(n_trials):
-        sc = _scratch(n)
-        ok[t] = _step(
-            ch, pi[t], fv[t], fc[t], armature[t], law, fparams, q[t], qd[t], tau[t], T, substeps, stuck[t], sc
-        )
-    return ok
