@@ -32,7 +32,6 @@ from adaptive_dd.identification.model import (
     arm_model,
     base_regressor,
     pi_from_sigma,
-    standard_from_base,
 )
 from adaptive_dd.identification.output_error import (
     cramer_rao_bound,
@@ -171,15 +170,6 @@ def test_output_error_is_held_to_the_bound(arm3, model3):
     z = np.array(z)
     assert np.abs(z).max() < 4.0
     assert 0.5 < np.sqrt(np.mean(z**2)) < 2.0
-
-
-def test_standard_parameters_identifiable(arm3, model3):
-    vals, _std, ok = standard_from_base(model3, arm3.sigma, np.eye(model3.p) * 1e-6)
-    names = arm3.standard_names
-    for k in np.flatnonzero(ok):
-        assert vals[k] == pytest.approx(arm3.pi[k], abs=1e-9)
-    assert ok[names.index("fv2")] and ok[names.index("Iyy3")]
-    assert not ok[names.index("m1")] and np.isnan(vals[names.index("m1")])
 
 
 def test_pseudo_inertia_roundtrip_and_constrained_fit():

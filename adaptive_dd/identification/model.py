@@ -41,7 +41,6 @@ __all__ = [
     "pi_from_sigma",
     "pi_with_payload",
     "rk4_step",
-    "standard_from_base",
     "standard_regressor",
     "state_jacobian",
 ]
@@ -222,27 +221,3 @@ def state_jacobian(
     G = np.zeros((b, 2 * n, model.p))
     G[:, n:] = -np.linalg.solve(M, Y)
     return F, G, qdd
-
-
-def standard_from_base(
-    model: Model, sigma: ArrayLike, cov: ArrayLike
-) -> tuple[Array, Array, NDArray[np.bool_]]:
-    """The standard parameters that the base parameters determine, with their std.
-
-    A standard parameter ``pi_k`` is identifiable iff the unit vector ``e_k`` is a
-    combination ``B^T c`` of the rows of B; then ``pi_k = c . sigma``.
-
-    Returns
-    -------
-    values, std : ndarray (13 n,)
-        nan where not identifiable.
-    identifiable : ndarray of bool (13 n,)
-    """
-    s = np.asarray(sigma, float)
-    C = np.asarray(cov, float)
-    m = model.B.shape[1]
-    coef, *_ = np.linalg.lstsq(model.B.T, np.eye(m), rcond=None)  # (p, 13n): c_k per column
-    ok = np.linalg.norm(model.B.T @ coef - np.eye(m), axis=0) < 1e-9
-    vals = np.where(ok, coef.T @ s, np.nan)
-    std = np.where(ok, np.sqrt(np.abs(np.einsum("pk,pq,qk->k", coef, C, coef))), np.nan)
-    return vals, std, ok
