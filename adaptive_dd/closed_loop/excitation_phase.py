@@ -188,13 +188,17 @@ def excitation_reference(scenario, progress: bool = False):
     Raises
     ------
     ScenarioError
-        No start gave a trajectory within the limits (naming ``run.excite``).
+        The arm's position limits leave no room, or no start gave a trajectory within the limits
+        (naming ``run.excite``).
     """
     from adaptive_dd.errors import ParameterError
     from adaptive_dd.identification.excitation import ExcitationLimits, design_excitation
 
     arm = scenario.arm
-    lim = ExcitationLimits.of_arm(arm)
+    try:
+        lim = ExcitationLimits.of_arm(arm)
+    except ParameterError as exc:
+        raise ScenarioError(f"{scenario.source}: run.excite: {exc}") from None
     last = None
     for attempt in range(START_ATTEMPTS):
         rng = np.random.default_rng([int(scenario.seed), 4, attempt])
