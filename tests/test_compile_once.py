@@ -126,6 +126,36 @@ def test_a_short_run_compiles_the_n_joint_loop_once_for_every_law():
     assert len(_specialisations(RK._stick_slip)) == 1, _specialisations(RK._stick_slip)
 
 
+def test_the_estimator_step_compiles_once_for_the_loop_and_the_estimator_alone():
+    """The estimator's step (its largest kernel) is one compiled function, ``est_step_model``,
+    called by the closed loop (its model written) and by the estimator run alone (``run_online``,
+    ``est_step``: no model): one specialisation for both, not a second inlined copy (about 25 CPU s
+    of a cold test run). The argument types a cold benchmark compiles it for
+    (``compile_estimator``) are those of both callers."""
+    from numba.core.registry import CPUDispatcher
+
+    from adaptive_dd.closed_loop import chain_choices, glue
+    from adaptive_dd.closed_loop.runner import run_closed_loop
+    from adaptive_dd.identification import online
+    from adaptive_dd.identification import online_kernel as K
+
+    sc = _ur5(duration=0.01)
+    chain_choices.compile_estimator(sc.arm)
+    run_closed_loop(dataclasses.replace(sc, controllers=("adaptive_ct",)))
+    z = np.zeros((4, sc.n_joints))
+    cfg = online.OnlineConfig(sample_period=sc.sample_period)
+    online.run_online(sc.arm, cfg, z, z, z)
+    c, s = online.est_init(cfg, sc.arm, 2)
+    online.est_step(c, s, z[:2], z[:2], z[:2])
+    steps = _specialisations(K.est_step_model)
+    assert len(steps) == 1, steps
+    # the step is inlined nowhere: every caller reaches it through est_step_model
+    for mod in (K, chain_choices, glue):
+        for name, f in vars(mod).items():
+            if isinstance(f, CPUDispatcher) and name != "est_step_model":
+                assert "est_step_trial_in" not in f.py_func.__code__.co_names, (mod.__name__, name)
+
+
 def test_the_friction_law_as_a_record_compiles_its_family_alone():
     """The closed loop's plant holds the law as a record (:func:`friction_law`): the step it
     compiles calls one family's integrator (a stick-slip arm does not compile ``_smooth`` and its

@@ -41,8 +41,7 @@ from adaptive_dd.closed_loop.plant import plant_scratch, plant_step
 from adaptive_dd.closed_loop.types import Plant
 from adaptive_dd.identification.online_kernel import (
     EstCfg,
-    est_model_trial_in,
-    est_step_trial_in,
+    est_step_model,
     est_work,
 )
 
@@ -196,30 +195,27 @@ def _estimator_sample(ec, es, ls, i, q, qd, tau, ew):
         return _chain_estimator_sample.py_func
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def online_sample(ec, es, ls, i, q, qd, tau, ew):  # pragma: no cover - compiled
     """One sample of trial i of the N-joint online estimator ``ec, es``
     (:func:`~adaptive_dd.identification.online_kernel.est_step_trial_in`): 1 on an alarm, else
     0; the law's model (``ls.pi_model[i]``) and its count of samples since the last alarm
-    updated. A compiled function of its own, called by both paths: a cold-cache benchmark compiles
-    it first, while a second process compiles the plant and the law (:func:`compile_estimator`).
-    The step is inlined, not called as the compiled ``est_step_trial_w`` that ``online.est_step``
-    and ``online.run_online`` call: called, it is compiled once less (about 22 CPU s less in the
-    cold default test run) but the UR5's ``adaptive_ct`` ran about 4 % slower per sample (the
-    records passed at every call)."""
-    alarm = est_step_trial_in(ec, es, i, q, qd, tau, ew)
+    updated. Inlined where it is called (both paths); the step and the model are one compiled
+    function, :func:`~adaptive_dd.identification.online_kernel.est_step_model`, the same that the
+    estimator run alone calls (one compilation of the step for both), which a cold-cache benchmark
+    compiles first while a second process compiles the plant and the law (:func:`compile_estimator`)."""
+    alarm = est_step_model(ec, es, i, q, qd, tau, ew, ls.pi_model[i])
     if alarm == 1:
         ls.since_alarm[i] = 0
     else:
         ls.since_alarm[i] += 1
-    est_model_trial_in(ec, es, i, ls.pi_model[i], ew)
     observe_applied(ls.obs[i], tau)
     return alarm
 
 
 def compile_estimator(arm) -> None:
-    """Compile :func:`online_sample` for the records of ``arm`` (the argument types the closed loop
-    calls it with), without running it."""
+    """Compile the estimator's step (:func:`~adaptive_dd.identification.online_kernel.est_step_model`)
+    for the records of ``arm`` (the argument types the closed loop calls it with), without running it."""
     from numba import typeof
 
     ec, es = chain_estimator(np.zeros(1), np.zeros(1), arm, 1e-3)
@@ -228,7 +224,8 @@ def compile_estimator(arm) -> None:
         np.zeros((1, 13 * n)), np.zeros((1, 10)), np.zeros(1, dtype=np.int64), np.zeros((1, OBS_ROWS, n))
     )
     v, ew = np.zeros(n), est_work(n, es.theta.shape[1])
-    online_sample.compile(tuple(typeof(a) for a in (ec.cfg, es, ls, 0, v, v, v, ew)))
+    args = (ec.cfg, es, 0, v, v, v, ew, ls.pi_model[0])
+    est_step_model.compile(tuple(typeof(a) for a in args))
 
 
 def chain_estimator(ec, es, arm, sample_period: float) -> tuple[ChainEstimator, object]:

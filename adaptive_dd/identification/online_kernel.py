@@ -139,13 +139,28 @@ def est_step_trial(c, s, i, q, qd, tau):  # pragma: no cover - compiled
     return est_step_trial_w(c, s, i, q, qd, tau, est_work(q.shape[0], s.theta.shape[1]))
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def est_step_trial_w(c, s, i, q, qd, tau, w):  # pragma: no cover - compiled
-    """:func:`est_step_trial_in` as a compiled function of its own (not inlined where it is
-    called): the estimator's step, the largest of its kernels, is then compiled once for
-    :func:`est_step_trial`, :func:`est_step_batch` and :func:`est_run_trial` (each inlining it
-    cost a full compilation of the step: about 25 CPU s on the UR5)."""
-    return est_step_trial_in(c, s, i, q, qd, tau, w)
+    """:func:`est_step_trial_in` through the one compiled copy of the step (:func:`est_step_model`,
+    the model left alone), inlined where it is called: :func:`est_step_trial`,
+    :func:`est_step_batch`, :func:`est_run_trial` and the closed loop's estimator all call that copy
+    (each inlining the step cost a full compilation of it: about 25 CPU s on the UR5)."""
+    return est_step_model(c, s, i, q, qd, tau, w, s.lam[:0])
+
+
+@njit(cache=True)
+def est_step_model(c, s, i, q, qd, tau, w, pi_model):  # pragma: no cover - compiled
+    """:func:`est_step_trial_in`, then the model control uses into ``pi_model (13 n,)``
+    (:func:`est_model_trial_in`) unless ``pi_model`` is empty: the estimator's step compiled once,
+    a function of its own, for the closed loop and for the estimator run alone (an empty
+    ``pi_model``, :func:`est_step_trial_w`; a flag would be typed by its literal value: two
+    copies). One call per sample: the closed loop passes its records once, as to the compiled
+    sample that inlined the step before (a compiled sample calling a compiled step, two calls,
+    ran the UR5's ``adaptive_ct`` about 4 % slower per sample)."""
+    alarm = est_step_trial_in(c, s, i, q, qd, tau, w)
+    if pi_model.shape[0] > 0:
+        est_model_trial_in(c, s, i, pi_model, w)
+    return alarm
 
 
 @njit(cache=True, inline="always")
