@@ -2,7 +2,8 @@
 
 Usage::
 
-    python benchmarks/general_payload_prior.py [--seeds 20] [--first 0] [SCENARIO]
+    python benchmarks/general_payload_prior.py [--seeds 20] [--first 0] [--sizes R ...]
+        [--only LABEL ...] [SCENARIO]
 
 Runs ``ct_oracle`` and ``adaptive_ct`` on ``SCENARIO`` (default
 ``benchmarks/scenarios/sice_general.toml``: the default payload-swap benchmark on the general
@@ -23,6 +24,11 @@ kernels) four times, changing only the N-joint estimator's packed configuration 
     paper's eq. (9).
 ``paper prior, no presence``
     Both.
+``size R`` (one per ``--sizes R``)
+    Today's settings with the prior's length scale ``OnlineConfig.payload_size`` = R [m] (first
+    moments ``s R``, inertias ``s R^2``, at the start and at every re-opening).
+
+``--only LABEL ...`` runs only the variants of those labels (e.g. ``--only today "size 0.05"``).
 
 Prints per segment the mean / p90 / max of the per-seed ``adaptive_ct / ct_oracle`` RMS ratio
 (with the worst seed), the median / max detection delay per swap and the false alarms. Asserts
@@ -33,6 +39,7 @@ configuration is data).
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import time
 from pathlib import Path
 
@@ -61,10 +68,12 @@ def _paper_prior(mass_var: float, izz_var: float) -> np.ndarray:
     return P
 
 
-def _patched_pack(paper: bool, no_presence: bool):
+def _patched_pack(paper: bool, no_presence: bool, size: float | None = None):
     pack = online_init._pack
 
     def _pack(cfg, arm):
+        if size is not None:
+            cfg = dataclasses.replace(cfg, payload_size=size)
         c, P0 = pack(cfg, arm)
         if cfg.mode != "payload":
             raise SystemExit("general_payload_prior: the scenario's adaptive_ct must be in payload mode")
@@ -107,14 +116,23 @@ def main() -> None:
     ap.add_argument("scenario", nargs="?", default=str(ROOT / "benchmarks/scenarios/sice_general.toml"))
     ap.add_argument("--seeds", type=int, default=20)
     ap.add_argument("--first", type=int, default=0)
+    ap.add_argument("--sizes", type=float, nargs="*", default=[], help="payload_size variants [m]")
+    ap.add_argument("--only", nargs="*", default=None, help="run only the variants of these labels")
     a = ap.parse_args()
     sc = load_scenario(a.scenario)
     seeds = list(range(a.first, a.first + a.seeds))
     head = "adaptive_ct / ct_oracle per segment, mean / p90 / max"
     print(f"{a.scenario}, seeds {seeds[0]}-{seeds[-1]}: {head}")
     pack = online_init._pack
-    for label, (paper, no_presence) in VARIANTS.items():
-        online_init._pack = _patched_pack(paper, no_presence)
+    variants = {k: (*v, None) for k, v in VARIANTS.items()}
+    variants.update({f"size {r:g}": (False, False, r) for r in a.sizes})
+    if a.only is not None:
+        unknown = sorted(set(a.only) - set(variants))
+        if unknown:
+            raise SystemExit(f"general_payload_prior: --only {unknown}: not among {list(variants)}")
+        variants = {k: v for k, v in variants.items() if k in a.only}
+    for label, (paper, no_presence, size) in variants.items():
+        online_init._pack = _patched_pack(paper, no_presence, size)
         try:
             t0 = time.perf_counter()
             ctrls = dict(make_controller_of(sc, s) for s in ("ct_oracle", "adaptive_ct"))
