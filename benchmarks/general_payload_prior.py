@@ -3,7 +3,7 @@
 Usage::
 
     python benchmarks/general_payload_prior.py [--seeds 20] [--first 0] [--sizes R ...]
-        [--only LABEL ...] [SCENARIO]
+        [--only LABEL ...] [--arms N [--first-arm 0]] [SCENARIO]
 
 Runs ``ct_oracle`` and ``adaptive_ct`` on ``SCENARIO`` (default
 ``benchmarks/scenarios/sice_general.toml``: the default payload-swap benchmark on the general
@@ -33,6 +33,9 @@ kernels) once per variant, changing only the N-joint estimator's packed configur
     moments ``s R``, inertias ``s R^2``, at the start and at every re-opening).
 
 ``--only LABEL ...`` runs only the variants of those labels (e.g. ``--only today "size 0.05"``).
+``--arms N``: SCENARIO is a template (e.g. ``benchmarks/scenarios/population.toml``) run over N
+drawn arms as ``adaptive-dd benchmark SCENARIO --arms N`` does, with ``--seeds`` trials per arm;
+each variant prints the pooled table of ``adaptive-dd benchmark --arms``.
 
 Prints per segment the mean / p90 / max of the per-seed ``adaptive_ct / ct_oracle`` RMS ratio
 (with the worst seed), the median / max detection delay per swap and the false alarms. Asserts
@@ -118,6 +121,25 @@ def _row(sc, res) -> str:
     return "   ".join(cells) + f" | delay [ms] {dtxt} | false alarms {false}"
 
 
+def _population(a, label: str) -> None:
+    """One variant over drawn arms (``--arms``): the pooled table of ``adaptive-dd benchmark --arms``."""
+    import tomllib
+
+    from adaptive_dd.benchmark.population import format_population, run_population
+
+    with open(a.scenario, "rb") as f:
+        data = tomllib.load(f)
+    t0 = time.perf_counter()
+    pop = run_population(
+        data,
+        a.scenario,
+        range(a.first_arm, a.first_arm + a.arms),
+        seeds=a.seeds,
+        controllers=lambda sc: ("ct_oracle", "adaptive_ct"),
+    )
+    print(f"{label} ({time.perf_counter() - t0:.0f} s):\n{format_population(pop)}", flush=True)
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("scenario", nargs="?", default=str(ROOT / "benchmarks/scenarios/sice_general.toml"))
@@ -125,6 +147,8 @@ def main() -> None:
     ap.add_argument("--first", type=int, default=0)
     ap.add_argument("--sizes", type=float, nargs="*", default=[], help="payload_size variants [m]")
     ap.add_argument("--only", nargs="*", default=None, help="run only the variants of these labels")
+    ap.add_argument("--arms", type=int, default=0, help="run the template SCENARIO over N drawn arms")
+    ap.add_argument("--first-arm", type=int, default=0)
     a = ap.parse_args()
     sc = load_scenario(a.scenario)
     seeds = list(range(a.first, a.first + a.seeds))
@@ -140,6 +164,12 @@ def main() -> None:
         variants = {k: v for k, v in variants.items() if k in a.only}
     for label, (paper, no_presence, reset, size) in variants.items():
         online_init._pack = _patched_pack(paper, no_presence, reset, size)
+        if a.arms:
+            try:
+                _population(a, label)
+            finally:
+                online_init._pack = pack
+            continue
         try:
             t0 = time.perf_counter()
             ctrls = dict(make_controller_of(sc, s) for s in ("ct_oracle", "adaptive_ct"))
