@@ -2,11 +2,12 @@
 
 Usage::
 
-    python benchmarks/general_payload_prior.py [--seeds 20] [--first 0] [SCENARIO]
+    python benchmarks/general_payload_prior.py [--seeds 20] [--first 0] [--sizes R ...]
+        [--only LABEL ...] [--arms N [--first-arm 0]] [SCENARIO]
 
 Runs ``ct_oracle`` and ``adaptive_ct`` on ``SCENARIO`` (default
 ``benchmarks/scenarios/sice_general.toml``: the default payload-swap benchmark on the general
-kernels) four times, changing only the N-joint estimator's packed configuration (payload mode):
+kernels) once per variant, changing only the N-joint estimator's packed configuration (payload mode):
 
 ``today``
     The shipped settings: the payload's ten parameters re-opened at an alarm with mass standard
@@ -23,6 +24,18 @@ kernels) four times, changing only the N-joint estimator's packed configuration 
     paper's eq. (9).
 ``paper prior, no presence``
     Both.
+``reset payload``
+    Today's settings, and an alarm also sets the payload estimate to zero (the re-opened prior's
+    mean: a new payload, nothing known of it but its prior; ``ints[I_RESET_PAYLOAD]``, mode
+    ``"arm"``'s ``OnlineConfig.reset_payload``) where today it keeps the old payload's estimate.
+``size R`` (one per ``--sizes R``)
+    Today's settings with the prior's length scale ``OnlineConfig.payload_size`` = R [m] (first
+    moments ``s R``, inertias ``s R^2``, at the start and at every re-opening).
+
+``--only LABEL ...`` runs only the variants of those labels (e.g. ``--only today "size 0.05"``).
+``--arms N``: SCENARIO is a template (e.g. ``benchmarks/scenarios/population.toml``) run over N
+drawn arms as ``adaptive-dd benchmark SCENARIO --arms N`` does, with ``--seeds`` trials per arm;
+each variant prints the pooled table of ``adaptive-dd benchmark --arms``.
 
 Prints per segment the mean / p90 / max of the per-seed ``adaptive_ct / ct_oracle`` RMS ratio
 (with the worst seed), the median / max detection delay per swap and the false alarms. Asserts
@@ -33,6 +46,7 @@ configuration is data).
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import time
 from pathlib import Path
 
@@ -46,11 +60,12 @@ from adaptive_dd.identification import online_kernel as K
 
 ROOT = Path(__file__).resolve().parents[1]
 PINNED = 1e-8
-VARIANTS = {
-    "today": (False, False),
-    "no presence": (False, True),
-    "paper prior": (True, False),
-    "paper prior, no presence": (True, True),
+VARIANTS = {  # (paper prior, no presence weight, reset the payload at an alarm)
+    "today": (False, False, False),
+    "no presence": (False, True, False),
+    "paper prior": (True, False, False),
+    "paper prior, no presence": (True, True, False),
+    "reset payload": (False, False, True),
 }
 
 
@@ -61,15 +76,19 @@ def _paper_prior(mass_var: float, izz_var: float) -> np.ndarray:
     return P
 
 
-def _patched_pack(paper: bool, no_presence: bool):
+def _patched_pack(paper: bool, no_presence: bool, reset: bool, size: float | None = None):
     pack = online_init._pack
 
     def _pack(cfg, arm):
+        if size is not None:
+            cfg = dataclasses.replace(cfg, payload_size=size)
         c, P0 = pack(cfg, arm)
         if cfg.mode != "payload":
             raise SystemExit("general_payload_prior: the scenario's adaptive_ct must be in payload mode")
         if no_presence:
             c.floats[K.F_PRESENT2] = 0.0
+        if reset:
+            c.ints[K.I_RESET_PAYLOAD] = 1
         if paper:
             c.P_reopen[:] = _paper_prior(100.0, 1e-3)
             P0 = _paper_prior(25.0, 1e-4)
@@ -102,19 +121,55 @@ def _row(sc, res) -> str:
     return "   ".join(cells) + f" | delay [ms] {dtxt} | false alarms {false}"
 
 
+def _population(a, label: str) -> None:
+    """One variant over drawn arms (``--arms``): the pooled table of ``adaptive-dd benchmark --arms``."""
+    import tomllib
+
+    from adaptive_dd.benchmark.population import format_population, run_population
+
+    with open(a.scenario, "rb") as f:
+        data = tomllib.load(f)
+    t0 = time.perf_counter()
+    pop = run_population(
+        data,
+        a.scenario,
+        range(a.first_arm, a.first_arm + a.arms),
+        seeds=a.seeds,
+        controllers=lambda sc: ("ct_oracle", "adaptive_ct"),
+    )
+    print(f"{label} ({time.perf_counter() - t0:.0f} s):\n{format_population(pop)}", flush=True)
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("scenario", nargs="?", default=str(ROOT / "benchmarks/scenarios/sice_general.toml"))
     ap.add_argument("--seeds", type=int, default=20)
     ap.add_argument("--first", type=int, default=0)
+    ap.add_argument("--sizes", type=float, nargs="*", default=[], help="payload_size variants [m]")
+    ap.add_argument("--only", nargs="*", default=None, help="run only the variants of these labels")
+    ap.add_argument("--arms", type=int, default=0, help="run the template SCENARIO over N drawn arms")
+    ap.add_argument("--first-arm", type=int, default=0)
     a = ap.parse_args()
     sc = load_scenario(a.scenario)
     seeds = list(range(a.first, a.first + a.seeds))
     head = "adaptive_ct / ct_oracle per segment, mean / p90 / max"
     print(f"{a.scenario}, seeds {seeds[0]}-{seeds[-1]}: {head}")
     pack = online_init._pack
-    for label, (paper, no_presence) in VARIANTS.items():
-        online_init._pack = _patched_pack(paper, no_presence)
+    variants = {k: (*v, None) for k, v in VARIANTS.items()}
+    variants.update({f"size {r:g}": (False, False, False, r) for r in a.sizes})
+    if a.only is not None:
+        unknown = sorted(set(a.only) - set(variants))
+        if unknown:
+            raise SystemExit(f"general_payload_prior: --only {unknown}: not among {list(variants)}")
+        variants = {k: v for k, v in variants.items() if k in a.only}
+    for label, (paper, no_presence, reset, size) in variants.items():
+        online_init._pack = _patched_pack(paper, no_presence, reset, size)
+        if a.arms:
+            try:
+                _population(a, label)
+            finally:
+                online_init._pack = pack
+            continue
         try:
             t0 = time.perf_counter()
             ctrls = dict(make_controller_of(sc, s) for s in ("ct_oracle", "adaptive_ct"))

@@ -1,6 +1,7 @@
 """Where one UR5 closed-loop sample's time goes: ``python benchmarks/speed_breakdown.py``.
 
-Runs one trial of ``adaptive_ct`` and one of ``ct_oracle`` on the UR5 tool-swap scenario
+Runs one trial of ``adaptive_ct`` and one of ``ct_oracle`` on the UR5 tool-swap scenario (or the
+scenario file given as the one argument, e.g. ``benchmarks/scenarios/sice_general.toml``)
 (recording its trajectories), then replays the recorded states through each compiled kernel
 of the loop, timed inside numba loops (Python call overhead excluded, compilation excluded):
 
@@ -21,6 +22,7 @@ CPU time of this thread, best of 3, microseconds per sample; nothing is asserted
 from __future__ import annotations
 
 import dataclasses
+import sys
 import time
 from importlib import resources
 
@@ -34,10 +36,12 @@ from adaptive_dd.identification import online_kernel as K
 from adaptive_dd.plant import chain_rk4 as SI
 
 
-def _scenario():
+def _scenario(path: str | None = None):
     from adaptive_dd.benchmark.scenario import load_scenario
 
-    return load_scenario(str(resources.files("adaptive_dd.scenarios").joinpath("ur5_tool_swap_exact.toml")))
+    if path is None:
+        path = str(resources.files("adaptive_dd.scenarios").joinpath("ur5_tool_swap_exact.toml"))
+    return load_scenario(path)
 
 
 @njit(cache=True)
@@ -179,10 +183,11 @@ def main() -> None:
     from adaptive_dd.closed_loop.types import io_of, plant_of, run_constants
     from adaptive_dd.controllers import gains_for, make_controller
 
-    sc = _scenario()
+    path = sys.argv[1] if len(sys.argv) > 1 else None
+    sc = _scenario(path)
     N, n = sc.n_samples, sc.n_joints
     rc, pl, io = run_constants(sc), plant_of(sc), io_of(sc)
-    print(f"UR5 tool swap, {N} samples of one trial; CPU microseconds per sample (best of 3)")
+    print(f"{path or 'UR5 tool swap'}, {N} samples of one trial; CPU microseconds per sample (best of 3)")
     whole = {}
     recs = {}
     for name in ("ct_oracle", "adaptive_ct"):
