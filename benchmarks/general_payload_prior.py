@@ -24,10 +24,6 @@ kernels) once per variant, changing only the N-joint estimator's packed configur
     paper's eq. (9).
 ``paper prior, no presence``
     Both.
-``reset payload``
-    Today's settings, and an alarm also sets the payload estimate to zero (the re-opened prior's
-    mean: a new payload, nothing known of it but its prior; ``ints[I_RESET_PAYLOAD]``, mode
-    ``"arm"``'s ``OnlineConfig.reset_payload``) where today it keeps the old payload's estimate.
 ``size R`` (one per ``--sizes R``)
     Today's settings with the prior's length scale ``OnlineConfig.payload_size`` = R [m] (first
     moments ``s R``, inertias ``s R^2``, at the start and at every re-opening).
@@ -60,12 +56,11 @@ from adaptive_dd.identification import online_kernel as K
 
 ROOT = Path(__file__).resolve().parents[1]
 PINNED = 1e-8
-VARIANTS = {  # (paper prior, no presence weight, reset the payload at an alarm)
-    "today": (False, False, False),
-    "no presence": (False, True, False),
-    "paper prior": (True, False, False),
-    "paper prior, no presence": (True, True, False),
-    "reset payload": (False, False, True),
+VARIANTS = {  # (paper prior, no presence weight)
+    "today": (False, False),
+    "no presence": (False, True),
+    "paper prior": (True, False),
+    "paper prior, no presence": (True, True),
 }
 
 
@@ -76,7 +71,7 @@ def _paper_prior(mass_var: float, izz_var: float) -> np.ndarray:
     return P
 
 
-def _patched_pack(paper: bool, no_presence: bool, reset: bool, size: float | None = None):
+def _patched_pack(paper: bool, no_presence: bool, size: float | None = None):
     pack = online_init._pack
 
     def _pack(cfg, arm):
@@ -87,8 +82,6 @@ def _patched_pack(paper: bool, no_presence: bool, reset: bool, size: float | Non
             raise SystemExit("general_payload_prior: the scenario's adaptive_ct must be in payload mode")
         if no_presence:
             c.floats[K.F_PRESENT2] = 0.0
-        if reset:
-            c.ints[K.I_RESET_PAYLOAD] = 1
         if paper:
             c.P_reopen[:] = _paper_prior(100.0, 1e-3)
             P0 = _paper_prior(25.0, 1e-4)
@@ -156,14 +149,14 @@ def main() -> None:
     print(f"{a.scenario}, seeds {seeds[0]}-{seeds[-1]}: {head}")
     pack = online_init._pack
     variants = {k: (*v, None) for k, v in VARIANTS.items()}
-    variants.update({f"size {r:g}": (False, False, False, r) for r in a.sizes})
+    variants.update({f"size {r:g}": (False, False, r) for r in a.sizes})
     if a.only is not None:
         unknown = sorted(set(a.only) - set(variants))
         if unknown:
             raise SystemExit(f"general_payload_prior: --only {unknown}: not among {list(variants)}")
         variants = {k: v for k, v in variants.items() if k in a.only}
-    for label, (paper, no_presence, reset, size) in variants.items():
-        online_init._pack = _patched_pack(paper, no_presence, reset, size)
+    for label, (paper, no_presence, size) in variants.items():
+        online_init._pack = _patched_pack(paper, no_presence, size)
         if a.arms:
             try:
                 _population(a, label)
