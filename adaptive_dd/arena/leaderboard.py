@@ -181,7 +181,7 @@ def _with_floors(sc, names: Sequence[str]) -> tuple[tuple[str, ...], dict, dict]
 def _per_seed(res, names) -> dict[str, dict[str, np.ndarray]]:
     """Per controller of ``names``, ``(n_seeds, n_segments)`` arrays: ``rms_error`` [rad],
     ``rms_torque``, ``saturation_fraction``, the tool frame's ``ee_*`` (:data:`_EE`; NaN where the
-    trial failed) and its error norm's
+    trial failed), the time of each segment's first saturated sample (``sat_t``), and its error norm's
     segments (``e_norm``, a list per segment of ``(n_seeds, samples)``) for the recovery times."""
     from adaptive_dd.arena.flags import lost_times
     from adaptive_dd.benchmark.metrics import per_seed_segment_metrics
@@ -200,9 +200,18 @@ def _per_seed(res, names) -> dict[str, dict[str, np.ndarray]]:
             keep["failed"] = ~np.isfinite(m["rms_error"])
             keep["lost_t"] = lost_times(keep["e_norm"], list(rc.seg_start * rc.T), rc.T, len(run.failed))
             keep["fail_t"] = np.where(run.failed, np.maximum(run.failed_at, 0) * rc.T, np.nan)
+            keep["sat_t"] = _first_saturated(run, rc.T)
             keep["why"] = [run.failed_why.get(i, run.error or "") for i in range(len(run.failed))]
             out[n] = keep
     return out
+
+
+def _first_saturated(run, T: float) -> np.ndarray:
+    """``(n_seeds, n_segments)``: the time [s] of each segment's first saturated sample (NaN: none)."""
+    first = run.acc.first_saturated
+    if first is None:
+        return np.full(run.acc.n_saturated.shape, np.nan)
+    return np.asarray(first, float) * T
 
 
 def _recovery(mine: dict, floor: dict, i: int, T: float) -> np.ndarray:
@@ -235,7 +244,8 @@ def _cells(name, kind, per, floors, missing, masses, T, seeds, t0) -> list[dict]
                     "torque": m["rms_torque"][:, i], "sat": m["saturation_fraction"][:, i],
                     "fsat": fm["saturation_fraction"][:, i] if fm else np.full(e.shape, np.nan),
                     "recovery": _recovery(m, fm, i, T) if fm else np.full(e.shape, np.nan),
-                    **{k: m[k][:, i] for k in _EE}, "lost_t": m["lost_t"][:, i], "fail_t": m["fail_t"],
+                    **{k: m[k][:, i] for k in _EE}, "lost_t": m["lost_t"][:, i], "sat_t": m["sat_t"][:, i],
+                    "fail_t": m["fail_t"],
                     "why": m["why"], "seed": seeds, "t0": float(t0[i]),
                 }
             )  # fmt: skip
