@@ -185,9 +185,10 @@ def _per_seed(res, names) -> dict[str, dict[str, np.ndarray]]:
     segments (``e_norm``, a list per segment of ``(n_seeds, samples)``) for the recovery times."""
     from adaptive_dd.arena.flags import lost_times
     from adaptive_dd.benchmark.metrics import per_seed_segment_metrics
-    from adaptive_dd.closed_loop.types import run_constants
+    from adaptive_dd.closed_loop.metrics import sample_bounds
 
-    rc = run_constants(res.scenario)
+    seg_start, seg_end, _ = sample_bounds(res.scenario)
+    T = res.scenario.sample_period
     out = {}
     with np.errstate(invalid="ignore", divide="ignore"):  # failed trials' NaN, estimates of no payload
         for n in names:
@@ -195,12 +196,12 @@ def _per_seed(res, names) -> dict[str, dict[str, np.ndarray]]:
             m = per_seed_segment_metrics(res, run, recovery=False)
             keep = {k: m[k] for k in ("rms_error", "rms_torque", "saturation_fraction", *_EE)}
             e = np.asarray(run.e_norm, float) if run.e_norm is not None else None
-            bounds = zip(rc.seg_start, rc.seg_end, strict=True)
+            bounds = zip(seg_start, seg_end, strict=True)
             keep["e_norm"] = [None if e is None else e[:, a:b] for a, b in bounds]
             keep["failed"] = ~np.isfinite(m["rms_error"])
-            keep["lost_t"] = lost_times(keep["e_norm"], list(rc.seg_start * rc.T), rc.T, len(run.failed))
-            keep["fail_t"] = np.where(run.failed, np.maximum(run.failed_at, 0) * rc.T, np.nan)
-            keep["sat_t"] = _first_saturated(run, rc.T)
+            keep["lost_t"] = lost_times(keep["e_norm"], list(seg_start * T), T, len(run.failed))
+            keep["fail_t"] = np.where(run.failed, np.maximum(run.failed_at, 0) * T, np.nan)
+            keep["sat_t"] = _first_saturated(run, T)
             keep["why"] = [run.failed_why.get(i, run.error or "") for i in range(len(run.failed))]
             out[n] = keep
     return out
@@ -468,7 +469,8 @@ def _run_cells(sc, kind: str, controllers, seeds, progress, times=None) -> list[
     if seeds is not None:
         sc = dataclasses.replace(sc, seeds=seeds)
     names, floors, missing = _with_floors(sc, controllers)
-    res = run_benchmark(sc.with_controllers(names), progress=progress)
+    # no trajectories kept and no excitation report's scale check: the table reads neither
+    res = run_benchmark(sc.with_controllers(names), progress=progress, keep_trajectories=0, scale_check=False)
     if times is not None:
         times["compile"] += float(res.compile_time or 0.0)
         times["run"] += float(res.wall_time or 0.0)
