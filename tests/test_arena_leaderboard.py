@@ -215,3 +215,21 @@ def test_the_leaderboards_lean_run_streams_the_same_sums_as_a_full_run():
     for f in ("sigma_fit", "sigma_cov"):
         np.testing.assert_array_equal(getattr(rep_full, f), getattr(rep_lean, f))
     assert "estimator_scale" not in json.dumps(lean.excitation)
+
+
+def test_the_metrics_segment_bounds_are_the_loops():
+    """The metrics count each segment's samples with :func:`sample_bounds` (no reference sampled,
+    no tool frame's table): the bounds the closed loop ran with (``run_constants``)."""
+    from adaptive_dd.benchmark.scenario import parse_scenario
+    from adaptive_dd.closed_loop.metrics import sample_bounds
+    from adaptive_dd.closed_loop.types import run_constants
+
+    text = resources.files("adaptive_dd.scenarios").joinpath("vertical3_payload.toml").read_text("utf-8")
+    data = tomllib.loads(text)
+    data["run"]["duration"] = 3.0
+    data["payload"] = [{"at": 1.2, "mass": 1.0}, {"at": 1.6, "mass": 0.0}, {"at": 2.5, "mass": 0.5}]
+    rc = run_constants(parse_scenario(data, "test.toml", name="v3"))
+    got = sample_bounds(parse_scenario(data, "test.toml", name="v3"))
+    for a, b in zip(got, (rc.seg_start, rc.seg_end, rc.seg_settled), strict=True):
+        np.testing.assert_array_equal(a, b)
+    assert list(rc.seg_start) == [0, 1200, 1600, 2500] and list(rc.seg_settled) == [500, 1599, 2100, 2999]
