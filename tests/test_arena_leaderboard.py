@@ -185,6 +185,7 @@ def test_the_end_effector_columns_are_the_per_seed_figures_they_aggregate(tmp_pa
     assert doc["columns"]["ee_orientation_rms_deg"]["unit"] == "deg"
 
 
+@pytest.mark.slow  # two runs of a 10 s excitation phase, its design and identification (about a minute)
 def test_the_leaderboards_lean_run_streams_the_same_sums_as_a_full_run():
     """The leaderboard runs its units keeping no trajectory and without the excitation report's
     scale check (it reads neither): every streamed sum, failure and end-of-segment estimate is
