@@ -80,7 +80,7 @@ def test_the_leaderboard_runs_its_units_with_blas_on_one_thread(monkeypatch):
     before = [i["num_threads"] for i in blas]
     seen = []
 
-    def run_units(run_unit, units, controllers, seeds, progress, workers):
+    def run_units(run_unit, units, controllers, seeds, progress, workers, costs=None):
         seen.append([i["num_threads"] for i in threadpool_info() if i["user_api"] == "blas"])
         return []
 
@@ -88,6 +88,29 @@ def test_the_leaderboard_runs_its_units_with_blas_on_one_thread(monkeypatch):
     lb.leaderboard([], ["ct_oracle"], seeds=1, arms=0)
     assert seen == [[1] * len(blas)]
     assert [i["num_threads"] for i in threadpool_info() if i["user_api"] == "blas"] == before
+
+
+def test_the_workers_take_the_largest_units_first():
+    """Drawn arms with an excitation phase before scenarios without, more joints first, ties in
+    order; the cost is each unit's joints squared, tripled by an excitation phase."""
+    from types import SimpleNamespace
+
+    from adaptive_dd.arena.leaderboard import unit_costs
+    from adaptive_dd.arena.pool import largest_first
+    from adaptive_dd.robots.random_arm import random_arm
+
+    template = {"run": {"excite": 20.0}}
+    units = [
+        ("scenario", SimpleNamespace(n_joints=7, excite=0.0)),
+        ("arm", (template, "t.toml", 0)),
+        ("arm", (template, "t.toml", 3)),
+        ("scenario", SimpleNamespace(n_joints=3, excite=0.0)),
+        ("arm", ({"run": {}}, "t.toml", 3)),
+    ]
+    n0, n3 = random_arm(0).n_joints, random_arm(3).n_joints
+    assert (n0, n3) == (3, 7)  # the drawn arms' joints this test is written for
+    assert unit_costs(units) == [49.0, 27.0, 147.0, 9.0, 49.0]
+    assert largest_first(unit_costs(units)) == [2, 0, 4, 1, 3]
 
 
 def test_workers_must_be_a_positive_integer():

@@ -47,6 +47,7 @@ __all__ = [
     "rms_rank",
     "run_unit",
     "shipped_scenarios",
+    "unit_costs",
 ]
 
 DEFAULT_CONTROLLERS = (
@@ -412,7 +413,8 @@ def leaderboard(
     # BLAS on one thread: the identification's and the design's small products otherwise spin
     # OpenBLAS's worker threads for a core (CPU s per call 4-30x on a shared 2-core machine)
     with threadpool_limits(limits=1, user_api="blas"):
-        done = run_units(run_unit, units, controllers, seeds, progress, workers)
+        costs = unit_costs(units) if workers > 1 else None
+        done = run_units(run_unit, units, controllers, seeds, progress, workers, costs)
     rows: list[dict] = []
     arm_cells: list[dict] = []
     flags: list[dict] = []
@@ -444,6 +446,24 @@ def rms_rank(df):
         key = g["rms_error_mrad"].where(np.isfinite(g["rms_error_mrad"]), np.inf)
         order = sorted(g.index, key=lambda i: (g.at[i, "failures"] > 0, key[i]))
         out[order] = np.arange(1, len(order) + 1, dtype=float)
+    return out
+
+
+def unit_costs(units: list) -> list[float]:
+    """Each unit's expected CPU time, in any unit, for the order the workers take them in
+    (:func:`~adaptive_dd.arena.pool.largest_first`): the joints squared (the closed loops' and the
+    identification's cost per sample grows about so), times 3 with an excitation phase (its
+    design, its closed loop and each seed's identification: about twice the task's closed loops)."""
+    out = []
+    for kind, what in units:
+        if kind == "arm":
+            from adaptive_dd.robots.random_arm import random_arm
+
+            data, _, seed = what
+            n, excite = random_arm(int(seed)).n_joints, float(data.get("run", {}).get("excite", 0.0))
+        else:
+            n, excite = what.n_joints, float(what.excite)
+        out.append(float(n * n * (3.0 if excite > 0 else 1.0)))
     return out
 
 
