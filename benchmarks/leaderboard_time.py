@@ -16,9 +16,13 @@ compiling, the metrics, the recovery times, the rows (bootstraps), the figure an
 (imports, the command line, glue). The profiler slows Python-heavy parts (the compiled loops
 and BLAS not): the parts' total exceeds the unprofiled run's.
 
+``--timers`` (the same place; ``--workers 1``) times the parts unprofiled instead: the CPU seconds
+(this process's) spent in each of :data:`TIMED` and in each controller's closed loops, with the
+number of calls, a clock read around each call and nothing else.
+
 Usage::
 
-    python benchmarks/leaderboard_time.py [--parts] [LEADERBOARD ARGS ...]
+    python benchmarks/leaderboard_time.py [--parts | --timers] [LEADERBOARD ARGS ...]
     python benchmarks/leaderboard_time.py --arms 3 --seeds 2 \\
         --template benchmarks/scenarios/population_drawn.toml --out docs/leaderboard
 
@@ -46,6 +50,48 @@ PARTS = (  # (part, function names (file suffix, name) whose cumulative CPU time
 )
 
 
+TIMED = (  # (module, function) timed by --timers; a name imported elsewhere is replaced there too
+    ("adaptive_dd.benchmark.population", "population_scenario"),
+    ("adaptive_dd.identification.excitation", "design_excitation"),
+    ("adaptive_dd.closed_loop.excitation_phase", "identify_record"),
+    ("adaptive_dd.identification.log_fit", "fit_log"),
+    ("adaptive_dd.identification.consistency", "consistent_arm_fit"),
+    ("adaptive_dd.identification.model_error", "model_error_variance"),
+    ("adaptive_dd.closed_loop.model_prior", "estimator_scale"),
+    ("adaptive_dd.closed_loop.types", "run_constants"),
+    ("adaptive_dd.closed_loop.excitation_phase", "join_results"),
+    ("adaptive_dd.arena.leaderboard", "_per_seed"),
+    ("adaptive_dd.closed_loop.runner", "_run_compiled"),
+)
+
+
+def install_timers(seconds: dict, calls: dict) -> None:
+    """Wrap each function of :data:`TIMED` (and each controller's closed loops, ``loop NAME``) so
+    that its CPU seconds and calls add to ``seconds`` and ``calls``."""
+    import functools
+    import importlib
+
+    def timed(f, label):
+        @functools.wraps(f)
+        def g(*args, **kw):
+            key = f"loop {args[0]}" if label == "_run_compiled" else label
+            t = time.process_time()
+            try:
+                return f(*args, **kw)
+            finally:
+                seconds[key] = seconds.get(key, 0.0) + time.process_time() - t
+                calls[key] = calls.get(key, 0) + 1
+
+        return g
+
+    for mod, name in TIMED:
+        f = getattr(importlib.import_module(mod), name)
+        g = timed(f, name)
+        for m in list(sys.modules.values()):  # the module and every one that imported the name
+            if getattr(m, "__name__", "").startswith("adaptive_dd") and getattr(m, name, None) is f:
+                setattr(m, name, g)
+
+
 def _cumulative(stats, where: str, name: str) -> float:
     """Cumulative time of the functions ``name`` in a file ending ``where`` (recursion counted once)."""
     return sum(v[3] for (f, _, fn), v in stats.stats.items() if fn == name and f.endswith(where))
@@ -69,9 +115,18 @@ def print_parts(stats, total: float) -> None:
 
 def main(argv: list[str]) -> int:
     """Run the leaderboard with ``argv`` and print its times."""
-    parts = argv[:1] == ["--parts"]
-    argv = argv[1:] if parts else argv
+    parts, timers = argv[:1] == ["--parts"], argv[:1] == ["--timers"]
+    argv = argv[1:] if parts or timers else argv
     from adaptive_dd.cli import main as cli
+
+    seconds: dict = {}
+    calls: dict = {}
+    if timers:
+        import adaptive_dd.arena.leaderboard  # the modules whose names the timers replace
+        import adaptive_dd.closed_loop.excitation_phase
+        import adaptive_dd.closed_loop.runner  # noqa: F401
+
+        install_timers(seconds, calls)
 
     def cpu() -> float:
         own = resource.getrusage(resource.RUSAGE_SELF)
@@ -94,6 +149,8 @@ def main(argv: list[str]) -> int:
     print(f"wall time {wall:.1f} s ({wall / 60:.1f} min), CPU time {used:.1f} s on {os.cpu_count()} cores")
     if parts:
         print_parts(pstats.Stats(prof), profiled)
+    for key, s in seconds.items():
+        print(f"{key:38s} {s:8.2f} CPU s  {calls[key]:5d} calls")
     return code
 
 

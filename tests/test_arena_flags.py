@@ -9,10 +9,11 @@ import pytest
 from adaptive_dd.arena.flags import LOST_ERROR, lost_times, trial_flags
 
 
-def _cell(segment, t0, sat, lost_t, fail_t=(np.nan, np.nan), why=("", "")):
+def _cell(segment, t0, sat, lost_t, fail_t=(np.nan, np.nan), why=("", ""), sat_t=None):
+    sat_t = np.where(np.asarray(sat, float) > 0, t0, np.nan) if sat_t is None else sat_t
     return {
         "scenario": "z1", "controller": "slotine_li", "segment": segment, "t0": t0, "seed": np.array([0, 1]),
-        "sat": np.asarray(sat, float), "lost_t": np.asarray(lost_t, float),
+        "sat": np.asarray(sat, float), "lost_t": np.asarray(lost_t, float), "sat_t": np.asarray(sat_t, float),
         "fail_t": np.asarray(fail_t, float),
         "why": list(why),
     }  # fmt: skip
@@ -49,6 +50,16 @@ def test_a_trial_saturated_from_the_start_is_flagged_from_the_start_not_at_its_f
     assert len(second["reasons"]) == 1 and "segment 2" in second["reasons"][0]
 
 
+def test_a_saturation_flag_is_dated_to_its_first_saturated_sample_not_the_segments_start():
+    cells = [
+        _cell(0, 0.0, [0.0, 0.0], [np.nan, np.nan]),
+        _cell(1, 4.0, [0.3, 0.005], [np.nan, np.nan], sat_t=[5.25, 4.5]),  # seed 1: 0.5 %, not flagged
+    ]
+    flags = trial_flags(cells)
+    assert [(f["seed"], f["flag"], f["t_s"]) for f in flags] == [(0, "saturated", 5.25)]
+    assert "from t = 5.250 s" in flags[0]["reasons"][0]
+
+
 def test_a_clean_trial_has_no_flag():
     assert trial_flags([_cell(0, 0.0, [0.0, 0.01], [np.nan, np.nan])]) == []
 
@@ -69,7 +80,7 @@ def test_the_leaderboard_runs_its_units_with_blas_on_one_thread(monkeypatch):
     before = [i["num_threads"] for i in blas]
     seen = []
 
-    def run_units(run_unit, units, controllers, seeds, progress, workers):
+    def run_units(run_unit, units, controllers, seeds, progress, workers, costs=None):
         seen.append([i["num_threads"] for i in threadpool_info() if i["user_api"] == "blas"])
         return []
 
@@ -77,6 +88,29 @@ def test_the_leaderboard_runs_its_units_with_blas_on_one_thread(monkeypatch):
     lb.leaderboard([], ["ct_oracle"], seeds=1, arms=0)
     assert seen == [[1] * len(blas)]
     assert [i["num_threads"] for i in threadpool_info() if i["user_api"] == "blas"] == before
+
+
+def test_the_workers_take_the_largest_units_first():
+    """Drawn arms with an excitation phase before scenarios without, more joints first, ties in
+    order; the cost is each unit's joints squared, tripled by an excitation phase."""
+    from types import SimpleNamespace
+
+    from adaptive_dd.arena.leaderboard import unit_costs
+    from adaptive_dd.arena.pool import largest_first
+    from adaptive_dd.robots.random_arm import random_arm
+
+    template = {"run": {"excite": 20.0}}
+    units = [
+        ("scenario", SimpleNamespace(n_joints=7, excite=0.0)),
+        ("arm", (template, "t.toml", 0)),
+        ("arm", (template, "t.toml", 3)),
+        ("scenario", SimpleNamespace(n_joints=3, excite=0.0)),
+        ("arm", ({"run": {}}, "t.toml", 3)),
+    ]
+    n0, n3 = random_arm(0).n_joints, random_arm(3).n_joints
+    assert (n0, n3) == (3, 7)  # the drawn arms' joints this test is written for
+    assert unit_costs(units) == [49.0, 27.0, 147.0, 9.0, 49.0]
+    assert largest_first(unit_costs(units)) == [2, 0, 4, 1, 3]
 
 
 def test_workers_must_be_a_positive_integer():
@@ -110,3 +144,33 @@ def test_two_workers_give_the_same_table_and_flags_as_one(tmp_path):
     heavy = one[(one["scenario"] == paths[1].name) & (one["segment"] == 1)]
     assert heavy["saturated_seeds"].sum() + heavy["lost_seeds"].sum() + heavy["failures"].sum() > 0
     assert any(f["scenario"] == paths[1].name for f in one.attrs["flags"])
+
+
+def test_the_loop_streams_each_segments_first_saturated_sample():
+    """Per trial and segment, ``first_saturated`` is the first sample whose command saturated (as
+    the recording has it), on the compiled and the Python path alike; NaN in a segment with none."""
+    import tomllib
+    from importlib import resources
+
+    from adaptive_dd.benchmark.scenario import parse_scenario
+    from adaptive_dd.closed_loop.runner import run_closed_loop
+    from adaptive_dd.closed_loop.types import run_constants
+
+    text = resources.files("adaptive_dd.scenarios").joinpath("vertical3_payload.toml").read_text("utf-8")
+    data = tomllib.loads(text)
+    data["run"] = {**data["run"], "duration": 1.2, "seeds": 2, "controllers": ["pd_gravity"]}
+    data["reference"]["ramp"] = 0.2
+    data["payload"] = [{"at": 0.4, "mass": 30.0}, {"at": 0.8, "mass": 0.0}]  # 30 kg: it saturates
+    data.pop("controllers", None)
+    sc = parse_scenario(data, "test.toml", name="v3_heavy")
+    rc = run_constants(sc)
+    runs = [run_closed_loop(sc, engine=e, keep_trajectories=2).runs["pd_gravity"] for e in ("auto", "python")]
+    want = np.full((2, 3), np.nan)
+    for i in range(2):
+        hit = runs[0].saturated[i].any(axis=1)
+        for s, (a, b) in enumerate(zip(rc.seg_start, rc.seg_end, strict=True)):
+            if hit[a:b].any():
+                want[i, s] = a + np.argmax(hit[a:b])
+    np.testing.assert_array_equal(runs[0].acc.first_saturated, want)
+    np.testing.assert_array_equal(runs[1].acc.first_saturated, want)
+    assert np.isfinite(want[:, 1]).all() and (want[:, 1] > rc.seg_start[1]).any()  # not the segment's start

@@ -183,3 +183,54 @@ def test_the_end_effector_columns_are_the_per_seed_figures_they_aggregate(tmp_pa
     doc = json.loads((tmp_path / "l" / "leaderboard.json").read_text(encoding="utf-8"))
     assert doc["columns"]["ee_position_rms_mm"]["unit"] == "mm"
     assert doc["columns"]["ee_orientation_rms_deg"]["unit"] == "deg"
+
+
+@pytest.mark.slow  # two runs of a 10 s excitation phase, its design and identification (about a minute)
+def test_the_leaderboards_lean_run_streams_the_same_sums_as_a_full_run():
+    """The leaderboard runs its units keeping no trajectory and without the excitation report's
+    scale check (it reads neither): every streamed sum, failure and end-of-segment estimate is
+    the same as a default run's, bit for bit; only the report's ``estimator_scale`` is left out."""
+    from adaptive_dd.benchmark.runner import run_benchmark
+    from adaptive_dd.benchmark.scenario import parse_scenario
+    from adaptive_dd.closed_loop.types import StreamedSums
+
+    text = resources.files("adaptive_dd.scenarios").joinpath("vertical3_payload.toml").read_text("utf-8")
+    data = tomllib.loads(text)
+    names = ["ct_oracle", "adaptive_ct", "slotine_li", "slotine_li_oracle"]
+    data["run"] = {**data["run"], "duration": 2.0, "seeds": 2, "excite": 10.0, "controllers": names}
+    data["payload"] = [{"at": 1.0, "mass": 1.0}]
+    data.pop("controllers", None)
+    sc = parse_scenario(data, "test.toml", name="v3_excite")
+    full = run_benchmark(sc, progress=False)
+    lean = run_benchmark(sc, progress=False, keep_trajectories=0, scale_check=False)
+    assert full.runs["adaptive_ct"].q.shape[0] == 2 and lean.runs["adaptive_ct"].q.shape[0] == 0
+    for name, a in full.runs.items():
+        b = lean.runs[name]
+        for f in StreamedSums._fields:
+            np.testing.assert_array_equal(getattr(a.acc, f), getattr(b.acc, f), err_msg=f"{name} {f}")
+        np.testing.assert_array_equal(a.failed, b.failed)
+        if a.sigma_end is not None:
+            np.testing.assert_array_equal(a.sigma_end, b.sigma_end)
+    rep_full, rep_lean = full.cache["excitation_report"], lean.cache["excitation_report"]
+    assert rep_lean.estimator_scale is None and np.all(np.isfinite(rep_full.estimator_scale))
+    for f in ("sigma_fit", "sigma_cov"):
+        np.testing.assert_array_equal(getattr(rep_full, f), getattr(rep_lean, f))
+    assert "estimator_scale" not in json.dumps(lean.excitation)
+
+
+def test_the_metrics_segment_bounds_are_the_loops():
+    """The metrics count each segment's samples with :func:`sample_bounds` (no reference sampled,
+    no tool frame's table): the bounds the closed loop ran with (``run_constants``)."""
+    from adaptive_dd.benchmark.scenario import parse_scenario
+    from adaptive_dd.closed_loop.metrics import sample_bounds
+    from adaptive_dd.closed_loop.types import run_constants
+
+    text = resources.files("adaptive_dd.scenarios").joinpath("vertical3_payload.toml").read_text("utf-8")
+    data = tomllib.loads(text)
+    data["run"]["duration"] = 3.0
+    data["payload"] = [{"at": 1.2, "mass": 1.0}, {"at": 1.6, "mass": 0.0}, {"at": 2.5, "mass": 0.5}]
+    rc = run_constants(parse_scenario(data, "test.toml", name="v3"))
+    got = sample_bounds(parse_scenario(data, "test.toml", name="v3"))
+    for a, b in zip(got, (rc.seg_start, rc.seg_end, rc.seg_settled), strict=True):
+        np.testing.assert_array_equal(a, b)
+    assert list(rc.seg_start) == [0, 1200, 1600, 2500] and list(rc.seg_settled) == [500, 1599, 2100, 2999]

@@ -297,3 +297,42 @@ def test_a_population_narrowed_by_controllers_drops_the_others_tables(monkeypatc
             run_population(data, str(TEMPLATE), [3], controllers=lambda sc, names=names: names)
         assert ran[-1].controllers == names
         assert [n for n, _ in ran[-1].controller_options] == tables
+
+
+def test_benchmark_arms_runs_the_population_with_blas_on_one_thread(monkeypatch):
+    """``benchmark FILE --arms N`` runs its arms under one BLAS thread (threadpoolctl), as the
+    leaderboard does, and gives the count back after."""
+    from contextlib import contextmanager
+
+    from threadpoolctl import threadpool_info, threadpool_limits
+
+    import adaptive_dd._numba_cache as cache
+    import adaptive_dd.benchmark.population as population
+    from adaptive_dd.cli import main
+
+    def blas_threads():
+        return [i["num_threads"] for i in threadpool_info() if i["user_api"] == "blas"]
+
+    if not blas_threads():
+        pytest.skip("no BLAS that threadpoolctl can control is loaded")
+    seen = []
+
+    def run_population(*args, **kw):
+        seen.append(blas_threads())
+        raise ParameterError("stopped here: the thread count is all this test needs")
+
+    class Compiling:
+        def join(self):
+            pass
+
+    @contextmanager
+    def announce_compilation(arm, stream=None, source=None):
+        yield Compiling()  # no compile estimate, no second process
+
+    monkeypatch.setattr(population, "run_population", run_population)
+    monkeypatch.setattr(cache, "announce_compilation", announce_compilation)
+    with threadpool_limits(limits=2, user_api="blas"):
+        before = blas_threads()
+        assert main(["benchmark", str(TEMPLATE), "--arms", "1", "--no-progress"]) == 2
+        assert blas_threads() == before
+    assert seen == [[1] * len(before)]

@@ -6,7 +6,7 @@ failure rule's ``max_error``. Per trial (scenario, controller, seed) the flags s
 
 - **saturated**: in a segment, the command beyond a joint's torque limit on more than
   :data:`~adaptive_dd.benchmark.metrics.SATURATION_LIMIT` of the samples (the benchmark's limit
-  for a floor); from the segment's start (the run streams a count per segment, not a time);
+  for a floor); from the segment's first saturated sample (the run streams it per segment);
 - **lost tracking**: the joint-space error ``|q_d - q|`` beyond :data:`LOST_ERROR`, from the first
   sample it is;
 - **failed**: the run's failure rule (non-finite, ``max_error``, runaway speed, the controller
@@ -53,9 +53,14 @@ def trial_flags(cells: list[dict]) -> list[dict]:
         for j, seed in enumerate(c["seed"]):
             ev = events.setdefault((c["scenario"], c["controller"], int(seed)), [])
             if c["sat"][j] > SATURATION_LIMIT:
+                known = np.isfinite(c["sat_t"][j])  # not when the sums were built by hand
+                t = float(c["sat_t"][j]) if known else c["t0"]
+                when = (
+                    "its first saturated sample" if known else "the segment's start: no sample time streamed"
+                )
                 ev.append(
-                    (c["t0"], "saturated", f"command saturated on {100 * c['sat'][j]:.1f} % of segment "
-                     f"{c['segment']}'s samples (from t = {c['t0']:g} s, the segment's start)")
+                    (t, "saturated", f"command saturated on {100 * c['sat'][j]:.1f} % of segment "
+                     f"{c['segment']}'s samples (from t = {t:.3f} s, {when})")
                 )  # fmt: skip
             if np.isfinite(c["lost_t"][j]):
                 ev.append((float(c["lost_t"][j]), "lost tracking", f"|q_d - q| beyond {LOST_ERROR:g} rad "

@@ -47,6 +47,7 @@ __all__ = [
     "rms_rank",
     "run_unit",
     "shipped_scenarios",
+    "unit_costs",
 ]
 
 DEFAULT_CONTROLLERS = (
@@ -181,13 +182,14 @@ def _with_floors(sc, names: Sequence[str]) -> tuple[tuple[str, ...], dict, dict]
 def _per_seed(res, names) -> dict[str, dict[str, np.ndarray]]:
     """Per controller of ``names``, ``(n_seeds, n_segments)`` arrays: ``rms_error`` [rad],
     ``rms_torque``, ``saturation_fraction``, the tool frame's ``ee_*`` (:data:`_EE`; NaN where the
-    trial failed) and its error norm's
+    trial failed), the time of each segment's first saturated sample (``sat_t``), and its error norm's
     segments (``e_norm``, a list per segment of ``(n_seeds, samples)``) for the recovery times."""
     from adaptive_dd.arena.flags import lost_times
     from adaptive_dd.benchmark.metrics import per_seed_segment_metrics
-    from adaptive_dd.closed_loop.types import run_constants
+    from adaptive_dd.closed_loop.metrics import sample_bounds
 
-    rc = run_constants(res.scenario)
+    seg_start, seg_end, _ = sample_bounds(res.scenario)
+    T = res.scenario.sample_period
     out = {}
     with np.errstate(invalid="ignore", divide="ignore"):  # failed trials' NaN, estimates of no payload
         for n in names:
@@ -195,14 +197,23 @@ def _per_seed(res, names) -> dict[str, dict[str, np.ndarray]]:
             m = per_seed_segment_metrics(res, run, recovery=False)
             keep = {k: m[k] for k in ("rms_error", "rms_torque", "saturation_fraction", *_EE)}
             e = np.asarray(run.e_norm, float) if run.e_norm is not None else None
-            bounds = zip(rc.seg_start, rc.seg_end, strict=True)
+            bounds = zip(seg_start, seg_end, strict=True)
             keep["e_norm"] = [None if e is None else e[:, a:b] for a, b in bounds]
             keep["failed"] = ~np.isfinite(m["rms_error"])
-            keep["lost_t"] = lost_times(keep["e_norm"], list(rc.seg_start * rc.T), rc.T, len(run.failed))
-            keep["fail_t"] = np.where(run.failed, np.maximum(run.failed_at, 0) * rc.T, np.nan)
+            keep["lost_t"] = lost_times(keep["e_norm"], list(seg_start * T), T, len(run.failed))
+            keep["fail_t"] = np.where(run.failed, np.maximum(run.failed_at, 0) * T, np.nan)
+            keep["sat_t"] = _first_saturated(run, T)
             keep["why"] = [run.failed_why.get(i, run.error or "") for i in range(len(run.failed))]
             out[n] = keep
     return out
+
+
+def _first_saturated(run, T: float) -> np.ndarray:
+    """``(n_seeds, n_segments)``: the time [s] of each segment's first saturated sample (NaN: none)."""
+    first = run.acc.first_saturated
+    if first is None:
+        return np.full(run.acc.n_saturated.shape, np.nan)
+    return np.asarray(first, float) * T
 
 
 def _recovery(mine: dict, floor: dict, i: int, T: float) -> np.ndarray:
@@ -235,7 +246,8 @@ def _cells(name, kind, per, floors, missing, masses, T, seeds, t0) -> list[dict]
                     "torque": m["rms_torque"][:, i], "sat": m["saturation_fraction"][:, i],
                     "fsat": fm["saturation_fraction"][:, i] if fm else np.full(e.shape, np.nan),
                     "recovery": _recovery(m, fm, i, T) if fm else np.full(e.shape, np.nan),
-                    **{k: m[k][:, i] for k in _EE}, "lost_t": m["lost_t"][:, i], "fail_t": m["fail_t"],
+                    **{k: m[k][:, i] for k in _EE}, "lost_t": m["lost_t"][:, i], "sat_t": m["sat_t"][:, i],
+                    "fail_t": m["fail_t"],
                     "why": m["why"], "seed": seeds, "t0": float(t0[i]),
                 }
             )  # fmt: skip
@@ -401,7 +413,8 @@ def leaderboard(
     # BLAS on one thread: the identification's and the design's small products otherwise spin
     # OpenBLAS's worker threads for a core (CPU s per call 4-30x on a shared 2-core machine)
     with threadpool_limits(limits=1, user_api="blas"):
-        done = run_units(run_unit, units, controllers, seeds, progress, workers)
+        costs = unit_costs(units) if workers > 1 else None
+        done = run_units(run_unit, units, controllers, seeds, progress, workers, costs)
     rows: list[dict] = []
     arm_cells: list[dict] = []
     flags: list[dict] = []
@@ -436,6 +449,24 @@ def rms_rank(df):
     return out
 
 
+def unit_costs(units: list) -> list[float]:
+    """Each unit's expected CPU time, in any unit, for the order the workers take them in
+    (:func:`~adaptive_dd.arena.pool.largest_first`): the joints squared (the closed loops' and the
+    identification's cost per sample grows about so), times 3 with an excitation phase (its
+    design, its closed loop and each seed's identification: about twice the task's closed loops)."""
+    out = []
+    for kind, what in units:
+        if kind == "arm":
+            from adaptive_dd.robots.random_arm import random_arm
+
+            data, _, seed = what
+            n, excite = random_arm(int(seed)).n_joints, float(data.get("run", {}).get("excite", 0.0))
+        else:
+            n, excite = what.n_joints, float(what.excite)
+        out.append(float(n * n * (3.0 if excite > 0 else 1.0)))
+    return out
+
+
 def run_unit(unit, controllers, seeds, progress: bool = False) -> tuple[list[dict], float, float]:
     """One unit of the leaderboard (:mod:`adaptive_dd.arena.pool`): ``("scenario", Scenario)`` or
     ``("arm", (template data, template path, arm seed))``; returns its cells (:func:`_cells`) and
@@ -458,7 +489,8 @@ def _run_cells(sc, kind: str, controllers, seeds, progress, times=None) -> list[
     if seeds is not None:
         sc = dataclasses.replace(sc, seeds=seeds)
     names, floors, missing = _with_floors(sc, controllers)
-    res = run_benchmark(sc.with_controllers(names), progress=progress)
+    # no trajectories kept and no excitation report's scale check: the table reads neither
+    res = run_benchmark(sc.with_controllers(names), progress=progress, keep_trajectories=0, scale_check=False)
     if times is not None:
         times["compile"] += float(res.compile_time or 0.0)
         times["run"] += float(res.wall_time or 0.0)

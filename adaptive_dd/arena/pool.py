@@ -6,8 +6,11 @@ and every controller's trials (:func:`~adaptive_dd.arena.leaderboard.run_unit`).
 nothing, so ``workers = N`` runs them in N processes (``spawn``: each a fresh interpreter; numba's
 cache is shared and its compile lock, :mod:`adaptive_dd._numba_cache`, keeps two processes from
 compiling the same kernel), each on one numba thread and one BLAS thread so that N workers use N
-cores. The cells come back in the units' order and the rows (and their bootstrap draws) are made
-in the parent, so the table does not depend on ``workers``.
+cores. The units are handed out largest first (:func:`largest_first`: a drawn arm with an
+excitation phase before a scenario without, more joints first), so that the last units to finish
+are short and no core idles long at the end. The cells come back in the units' order and the rows
+(and their bootstrap draws) are made in the parent, so the table depends neither on ``workers``
+nor on that order.
 """
 
 from __future__ import annotations
@@ -16,7 +19,7 @@ import os
 import pickle
 from contextlib import contextmanager
 
-__all__ = ["run_units"]
+__all__ = ["largest_first", "run_units"]
 
 _ONE_THREAD = {"NUMBA_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "OMP_NUM_THREADS": "1"}
 
@@ -44,11 +47,18 @@ def _picklable(unit) -> bool:
     return True
 
 
-def run_units(run_unit, units: list, controllers, seeds, progress: bool, workers: int) -> list:
+def largest_first(costs: list[float]) -> list[int]:
+    """The units' indices by decreasing ``costs`` (ties in the units' order): the order in which
+    :func:`run_units` hands them to its workers (longest processing time first)."""
+    return sorted(range(len(costs)), key=lambda i: (-costs[i], i))
+
+
+def run_units(run_unit, units: list, controllers, seeds, progress: bool, workers: int, costs=None) -> list:
     """``[(cells, compile_seconds, run_seconds), ...]`` of ``run_unit(unit, controllers, seeds,
     progress)`` (:func:`~adaptive_dd.arena.leaderboard.run_unit`, passed in: a module-level function
     the workers import by name) for each unit, in order; ``workers > 1``: in that many processes (a
-    unit that cannot be sent to one runs in this process)."""
+    unit that cannot be sent to one runs in this process), handed out by :func:`largest_first` of
+    ``costs`` (each unit's expected CPU time in any unit; default: in order)."""
     if workers <= 1 or len(units) <= 1:
         return [run_unit(u, controllers, seeds, progress) for u in units]
     import multiprocessing
@@ -56,7 +66,7 @@ def run_units(run_unit, units: list, controllers, seeds, progress: bool, workers
 
     out: list = [None] * len(units)
     here = [i for i, u in enumerate(units) if not _picklable(u)]
-    sent = [i for i in range(len(units)) if i not in here]
+    sent = [i for i in largest_first(costs or [0.0] * len(units)) if i not in here]
     ctx = multiprocessing.get_context("spawn")
     with _environment(_ONE_THREAD), ProcessPoolExecutor(min(workers, len(sent)), mp_context=ctx) as pool:
         futures = {i: pool.submit(run_unit, units[i], controllers, seeds, False) for i in sent}

@@ -262,10 +262,9 @@ def _blank_failed(res: BenchmarkResult, run, out: dict, end: np.ndarray, key) ->
 
 
 def _bounds(sc):
-    from adaptive_dd.closed_loop.types import run_constants
+    from adaptive_dd.closed_loop.metrics import sample_bounds
 
-    rc = run_constants(sc)
-    return rc.seg_start, rc.seg_end
+    return sample_bounds(sc)[:2]
 
 
 def _recovery_times(e_norm: np.ndarray, start, end, T: float) -> np.ndarray:

@@ -61,6 +61,7 @@ def run_benchmark(
     keep_trajectories: int = 3,
     seed_indices: Sequence[int] | None = None,
     on_run=None,
+    scale_check: bool = True,
 ) -> BenchmarkResult:
     """Run every controller of the scenario over all seeds.
 
@@ -84,6 +85,9 @@ def run_benchmark(
         ``on_run(result, run)`` after each controller's trials (the CLI passes
         :func:`~adaptive_dd.benchmark.metrics.release_error_norm`, which derives what needs the
         per-sample error norm and frees it, so memory holds one controller's norm at a time).
+    scale_check : bool
+        With an excitation phase, compute its report's ``estimator_scale`` (a check, reported and
+        not applied; the leaderboard, which reads no report, leaves it out).
 
     Returns
     -------
@@ -124,7 +128,7 @@ def run_benchmark(
 
             res = run_closed_loop(
                 scenario, controllers, seed_indices=seed_indices, keep_trajectories=keep_trajectories,
-                engine=engine, bar=clock,
+                engine=engine, bar=clock, scale_check=scale_check,
             )  # fmt: skip
         else:  # the paper's closed forms
             res = _run_two_link(scenario, clock, controllers, engine, keep_trajectories, seed_indices, on_run)

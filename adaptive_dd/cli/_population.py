@@ -1,5 +1,7 @@
 """``adaptive-dd benchmark FILE --arms N``: one scenario's payload schedule over N drawn arms
-(:mod:`adaptive_dd.benchmark.population`)."""
+(:mod:`adaptive_dd.benchmark.population`), BLAS held to one thread as the leaderboard holds it
+(the excitation's design and each seed's identification make many small products, whose BLAS
+threads otherwise spin waiting for a core on a shared machine)."""
 
 from __future__ import annotations
 
@@ -53,7 +55,12 @@ def run_arms(args: argparse.Namespace, only_controllers) -> int:
         means = " / ".join(f"{s['mean']:.3f}" for s in a["segments"])
         print(f"  random:{a['arm_seed']} ({a['joints']} joints): {means}", file=sys.stderr, flush=True)
 
-    with announce_compilation(first.arm, source=src) as compiling:
+    from threadpoolctl import threadpool_limits
+
+    with (
+        announce_compilation(first.arm, source=src) as compiling,
+        threadpool_limits(limits=1, user_api="blas"),
+    ):
         pop = run_population(
             data,
             src,

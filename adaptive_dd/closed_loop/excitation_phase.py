@@ -305,12 +305,15 @@ def identify_record(
 
 
 def identify_excitation(
-    scenario, idx, run_closed_loop, progress: bool = False
+    scenario, idx, run_closed_loop, progress: bool = False, scale_check: bool = True
 ) -> tuple[list[Array], ExcitationReport]:
     """Run the excitation on each seed's plant (``run_closed_loop``: the closed loop's runner,
     :func:`~adaptive_dd.closed_loop.runner.run_closed_loop`) and identify; returns each seed's model
     ``pi (13 n,)`` (consistent) and the report. ``progress``: what it is doing, on stderr (a bar
     per stage: the design, the excitation's closed loop, the identification of each seed).
+    ``scale_check=False``: the report's ``estimator_scale`` (a check, reported and not applied) is
+    not computed (None), for a caller that reads no report (the leaderboard: a tenth of each
+    seed's identification).
 
     Raises
     ------
@@ -338,7 +341,7 @@ def identify_excitation(
     from adaptive_dd.identification.held_directions import stated_levels
     from adaptive_dd.plant.uncertainty import stated_uncertainty
 
-    scale_cfg = _estimator_config(scenario)
+    scale_cfg = _estimator_config(scenario) if scale_check else None
     std = io_of(scenario).std
     n, T = scenario.n_joints, scenario.sample_period
     B = scenario.arm.base.B
@@ -374,7 +377,7 @@ def identify_excitation(
         float(scenario.excite), tuple(idx), tuple(model.names), sig_plant,
         np.broadcast_to(scenario.arm.sigma, sig_plant.shape).copy(), np.array(rows["hat"]),
         np.array(rows["fit"]), np.array(rows["rstd"]), np.array(rows["std"]), np.array(rows["prior_cov"]),
-        np.array(widths), np.array(kappa),
+        np.array(widths), np.array(kappa) if scale_check else None,
         excitation_coverage(scenario, reference, scenario.excite), np.array(rows["held"]),
     )  # fmt: skip
     return pis, report
@@ -411,19 +414,22 @@ def _estimator_config(scenario):
     return getattr(scenario_controller(scenario, "adaptive_ct")[1], "online", None)
 
 
-def run_with_excitation(scenario, idx, run_closed_loop, keep: int = 3, engine: str = "auto", bar=None):
+def run_with_excitation(
+    scenario, idx, run_closed_loop, keep: int = 3, engine: str = "auto", bar=None, scale_check: bool = True
+):
     """The excitation phase, then the task with each seed's identified model (module docstring);
     ``run_closed_loop`` runs the closed loop (:func:`~adaptive_dd.closed_loop.runner.run_closed_loop`, which
     calls this function: passed in, the two modules do not import each other). ``bar``: the task's
     progress (samples, tqdm-like), advanced seed by seed; with one that shows (a ``show`` attribute
-    true, or none), the phase says what it is doing on stderr."""
+    true, or none), the phase says what it is doing on stderr. ``scale_check``: as
+    :func:`identify_excitation`."""
     from adaptive_dd.closed_loop.types import plant_record
     from adaptive_dd.plant.uncertainty import exact_plant
     from adaptive_dd.plant.urdf_write import write_urdf_links
 
     idx = tuple(idx)
     shown = bar is not None and bool(getattr(bar, "show", True))  # --no-progress: no phase bars either
-    pis, report = identify_excitation(scenario, idx, run_closed_loop, progress=shown)
+    pis, report = identify_excitation(scenario, idx, run_closed_loop, progress=shown, scale_check=scale_check)
     arm, n = scenario.arm, scenario.n_joints
     plant = scenario.plant if scenario.plant is not None else exact_plant(arm)
     parts = []

@@ -184,8 +184,8 @@ def measure_sample(
 
 @njit(cache=True, inline="always")
 def accumulate_sample(
-    sum_e2, sum_e2_joint, max_e, sum_tau2, n_saturated, sum_e2_settled, e_norm, seg_settled,
-    i, s, k, e, tau, mask,
+    sum_e2, sum_e2_joint, max_e, sum_tau2, n_saturated, first_saturated, sum_e2_settled, e_norm,
+    seg_settled, i, s, k, e, tau, mask,
 ):  # pragma: no cover - compiled  # fmt: skip
     """Add sample k (segment s) of trial i, error ``e (n,)`` [rad] and applied ``tau (n,)``, to the
     streamed sums (the fields of :class:`~adaptive_dd.closed_loop.types.StreamedSums`), ``mask``
@@ -202,6 +202,8 @@ def accumulate_sample(
         max_e[i, s] = en
     sum_tau2[i, s] += t2
     if mask != 0:
+        if n_saturated[i, s] == 0.0:
+            first_saturated[i, s] = k
         n_saturated[i, s] += 1.0
     if k >= seg_settled[s]:
         sum_e2_settled[i, s] += en2
@@ -307,6 +309,7 @@ def trial_samples(
     held_q, held_qd, n_dropped = ts.held_q, ts.held_qd, ts.n_dropped
     sum_e2, sum_e2_joint, max_e, sum_tau2 = acc.sum_e2, acc.sum_e2_joint, acc.max_e, acc.sum_tau2
     n_saturated, sum_e2_settled, e_norm = acc.n_saturated, acc.sum_e2_settled, acc.e_norm
+    first_saturated = acc.first_saturated
     ee_sum_p2, ee_max_p, ee_sum_th2 = acc.ee_sum_p2, acc.ee_max_p, acc.ee_sum_th2
     ee_index, ee_links, ee_ref = rc.ee_index, rc.ee_links, rc.ee_ref
     q_rec, qd_rec, tau_rec, sat_rec = rec.q, rec.qd, rec.tau, rec.saturated
@@ -332,8 +335,8 @@ def trial_samples(
             q, qd, stuck, failed, failed_at, q_rec, qd_rec, tau_rec, sat_rec, i, k, cmd, tau, e, prev, s,
         )  # fmt: skip
         accumulate_sample(
-            sum_e2, sum_e2_joint, max_e, sum_tau2, n_saturated, sum_e2_settled, e_norm, seg_settled,
-            i, s, k, e, tau, mask,
+            sum_e2, sum_e2_joint, max_e, sum_tau2, n_saturated, first_saturated, sum_e2_settled, e_norm,
+            seg_settled, i, s, k, e, tau, mask,
         )  # fmt: skip
         accumulate_tool(ee_index, ee_links, ee_ref, ee_sum_p2, ee_max_p, ee_sum_th2, i, s, k, prev, tw, tr)
         if estimator_sample(ec, es, ls, i, qm_obs, qdm_obs, tau, ew) == 1:
@@ -481,8 +484,8 @@ def _apply_loop(rc, io, pl, ts, acc, rec, k, cmd, tau):  # pragma: no cover - co
             rec.tau, rec.saturated, i, k, cmd[i], tau[i], e, prev, s,
         )  # fmt: skip
         accumulate_sample(
-            acc.sum_e2, acc.sum_e2_joint, acc.max_e, acc.sum_tau2, acc.n_saturated, acc.sum_e2_settled,
-            acc.e_norm, rc.seg_settled, i, s, k, e, tau[i], mask,
+            acc.sum_e2, acc.sum_e2_joint, acc.max_e, acc.sum_tau2, acc.n_saturated, acc.first_saturated,
+            acc.sum_e2_settled, acc.e_norm, rc.seg_settled, i, s, k, e, tau[i], mask,
         )  # fmt: skip
         accumulate_tool(
             rc.ee_index, rc.ee_links, rc.ee_ref, acc.ee_sum_p2, acc.ee_max_p, acc.ee_sum_th2, i, s, k, prev,

@@ -117,6 +117,7 @@ def _plugin_trial(
     held_q, held_qd, n_dropped = ts.held_q, ts.held_qd, ts.n_dropped
     sum_e2, sum_e2_joint, max_e, sum_tau2 = acc.sum_e2, acc.sum_e2_joint, acc.max_e, acc.sum_tau2
     n_saturated, sum_e2_settled, e_norm = acc.n_saturated, acc.sum_e2_settled, acc.e_norm
+    first_saturated = acc.first_saturated
     ee_sum_p2, ee_max_p, ee_sum_th2 = acc.ee_sum_p2, acc.ee_max_p, acc.ee_sum_th2
     ee_index, ee_links, ee_ref = rc.ee_index, rc.ee_links, rc.ee_ref
     q_rec, qd_rec, tau_rec, sat_rec = rec.q, rec.qd, rec.tau, rec.saturated
@@ -151,8 +152,8 @@ def _plugin_trial(
             q, qd, stuck, failed, failed_at, q_rec, qd_rec, tau_rec, sat_rec, i, k, cmd, tau, e, prev, s,
         )  # fmt: skip
         accumulate_sample(
-            sum_e2, sum_e2_joint, max_e, sum_tau2, n_saturated, sum_e2_settled, e_norm, seg_settled,
-            i, s, k, e, tau, mask,
+            sum_e2, sum_e2_joint, max_e, sum_tau2, n_saturated, first_saturated, sum_e2_settled, e_norm,
+            seg_settled, i, s, k, e, tau, mask,
         )  # fmt: skip
         accumulate_tool(ee_index, ee_links, ee_ref, ee_sum_p2, ee_max_p, ee_sum_th2, i, s, k, prev, tw, tr)
         if observe(p, xi, qm_obs, qdm_obs, tau) == 1:

@@ -100,6 +100,7 @@ def run_closed_loop(
     keep_trajectories: int = 3,
     engine: str = "auto",
     bar=None,
+    scale_check: bool = True,
 ) -> BenchmarkResult:
     """Run every controller of ``scenario`` (an N-joint arm) over its seeds.
 
@@ -117,6 +118,10 @@ def run_closed_loop(
         ``python`` runs the built-ins through their Python form too.
     bar : tqdm-like or None
         Progress (samples).
+    scale_check : bool
+        With an excitation phase (``[run] excite``), compute its report's ``estimator_scale`` (a
+        check, reported and not applied:
+        :func:`~adaptive_dd.closed_loop.excitation_phase.identify_excitation`).
     """
     from adaptive_dd.errors import ParameterError
 
@@ -129,7 +134,9 @@ def run_closed_loop(
             )
         from adaptive_dd.closed_loop.excitation_phase import run_with_excitation
 
-        return run_with_excitation(scenario, idx, run_closed_loop, keep_trajectories, engine, bar=bar)
+        return run_with_excitation(
+            scenario, idx, run_closed_loop, keep_trajectories, engine, bar=bar, scale_check=scale_check
+        )
     ctrls = make_controllers(scenario) if controllers is None else controllers
     rc, io, pl = run_constants(scenario), io_of(scenario), plant_of(scenario, idx)
     _, sigma_true, mass = true_parameters(scenario)

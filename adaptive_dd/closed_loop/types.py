@@ -172,6 +172,9 @@ class StreamedSums(NamedTuple):
     ee_sum_th2 : (S, G)
         Sum of the squared angle of ``R(q_d)^T R(q)`` [rad^2]. The three None: not streamed
         (sums built by hand); the loops always stream them (:meth:`zeros`).
+    first_saturated : (S, G)
+        The sample index of the segment's first sample with a joint's command beyond its limit
+        (NaN: none; None: not streamed, as the three above).
     """
 
     sum_e2: Array
@@ -184,13 +187,14 @@ class StreamedSums(NamedTuple):
     ee_sum_p2: Array | None = None
     ee_max_p: Array | None = None
     ee_sum_th2: Array | None = None
+    first_saturated: Array | None = None
 
     @classmethod
     def zeros(cls, S: int, G: int, n: int, N: int) -> StreamedSums:
         z = np.zeros((S, G))
         return cls(
             z, np.zeros((S, G, n)), z.copy(), z.copy(), z.copy(), z.copy(), np.zeros((S, N), np.float32),
-            z.copy(), z.copy(), z.copy(),
+            z.copy(), z.copy(), z.copy(), np.full((S, G), np.nan),
         )  # fmt: skip
 
 
