@@ -430,10 +430,34 @@ class AdaptiveCT(Law):
                 f"{self.boost_bandwidth!r}, {self.boost_duration!r}, {self.boost_ramp!r}"
             )
         self.observer, self.observer_bw = _observer_settings(self.name, self.settings)
+        self.task: tuple[Array, Array] | None = None
+
+    def state_task(self, scenario) -> None:
+        """Take the task's torque room from ``scenario`` (:func:`~adaptive_dd.closed_loop.boost.task_room`):
+        the boost's bandwidth per joint follows from it and the sensors' noise (:meth:`boost_bandwidths`)."""
+        from adaptive_dd.closed_loop.boost import task_room
+
+        self.task = task_room(scenario)
+
+    def boost_bandwidths(self) -> Array:
+        """The boost's bandwidth per joint [rad/s]: ``boost_bandwidth`` on every joint without a
+        task; with one, the largest up to it whose noise torque stays inside the room the torque
+        limit leaves beside the reference's (:mod:`adaptive_dd.closed_loop.boost`)."""
+        w = np.asarray(self.gains.bandwidth, dtype=float)
+        if self.task is None:
+            return np.maximum(self.boost_bandwidth, w)
+        from adaptive_dd.closed_loop.boost import boost_bandwidths
+
+        q, room = self.task
+        sensor = self.arm.sensor
+        return boost_bandwidths(
+            self.boost_bandwidth, w, self.gains.damping, self.arm.mass_matrix(q), room,
+            np.broadcast_to(sensor.position_variance, w.shape), np.broadcast_to(sensor.velocity_variance, w.shape),
+        )  # fmt: skip
 
     def law_config(self, sample_period):
-        w, wb, z = self.gains.bandwidth, self.boost_bandwidth, self.gains.damping
-        wb = np.maximum(wb, w)
+        w, z = self.gains.bandwidth, self.gains.damping
+        wb = self.boost_bandwidths()
         T = float(sample_period)
         beta = self.observer_bw if self.observer_bw is not None else observer_bandwidth(T)
         return self._config(
