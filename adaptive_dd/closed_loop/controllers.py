@@ -449,11 +449,9 @@ class AdaptiveCT(Law):
         from adaptive_dd.closed_loop.boost import boost_bandwidths
 
         q, room = self.task
-        sensor = self.arm.sensor
-        return boost_bandwidths(
-            self.boost_bandwidth, w, self.gains.damping, self.arm.mass_matrix(q), room,
-            np.broadcast_to(sensor.position_variance, w.shape), np.broadcast_to(sensor.velocity_variance, w.shape),
-        )  # fmt: skip
+        var_q = np.broadcast_to(self.arm.sensor.position_variance, w.shape)
+        var_qd = np.broadcast_to(self.arm.sensor.velocity_variance, w.shape)
+        return boost_bandwidths(self.boost_bandwidth, w, self.gains.damping, self.arm.mass_matrix(q), room, var_q, var_qd)
 
     def law_config(self, sample_period):
         w, z = self.gains.bandwidth, self.gains.damping
