@@ -451,7 +451,8 @@ class AdaptiveCT(Law):
         q, room = self.task
         var_q = np.broadcast_to(self.arm.sensor.position_variance, w.shape)
         var_qd = np.broadcast_to(self.arm.sensor.velocity_variance, w.shape)
-        return boost_bandwidths(self.boost_bandwidth, w, self.gains.damping, self.arm.mass_matrix(q), room, var_q, var_qd)
+        inertia = self.arm.mass_matrix(q)
+        return boost_bandwidths(self.boost_bandwidth, w, self.gains.damping, inertia, room, var_q, var_qd)
 
     def law_config(self, sample_period):
         w, z = self.gains.bandwidth, self.gains.damping
