@@ -61,26 +61,28 @@ def boost_bandwidths(
     law's ``bandwidth (n,)``; ``inertia (K, n, n)`` the nominal ``M0`` at the task's instants and
     ``room (K, n)`` the torque left there [N m]; the sensors' variances ``(n,)``.
 
-    Columns that feed a row whose noise is beyond its room are lowered together, 2 % a step, until
-    every row is inside (or the column has no boost left).
+    Columns that feed a row whose noise is beyond its room are lowered together, 2 % of their
+    added bandwidth a step, until every row is inside; a column feeding a row with no room at all
+    (the reference alone needs the limit) gets no boost.
     """
     w = np.broadcast_to(np.asarray(bandwidth, dtype=float), room.shape[1:]).copy()
     wb = np.maximum(np.full_like(w, float(cap)), w)
     vq, vv = np.asarray(position_variance, dtype=float), np.asarray(velocity_variance, dtype=float)
     M2 = np.asarray(inertia, dtype=float) ** 2
     room = np.asarray(room, dtype=float)
-    for _ in range(400):
+    for _ in range(1000):
         dkp, dkd = wb**2 - w**2, 2.0 * damping * (wb - w)
         part = M2 * (dkp**2 * vq + dkd**2 * vv)[None, None, :]  # (K, n rows, n columns)
-        std = np.sqrt(part.sum(axis=2))
-        over = NOISE_SIGMAS * std > room  # (K, n): rows beyond their room
+        over = NOISE_SIGMAS * np.sqrt(part.sum(axis=2)) > room  # (K, n): rows beyond their room
         if not over.any():
             break
         # the columns that carry at least a tenth of an offending row's noise variance
-        share = np.where(over[:, :, None], part / np.maximum(part.sum(axis=2, keepdims=True), 1e-300), 0.0)
-        lower = (share.max(axis=(0, 1)) >= 0.1) & (wb > w)
+        share = part / np.maximum(part.sum(axis=2, keepdims=True), 1e-300)
+        feeds = (share >= 0.1) & over[:, :, None]
+        lower = feeds.any(axis=(0, 1)) & (wb > w)
         if not lower.any():
             break
-        wb = np.where(lower, np.maximum(w, w + 0.98 * (wb - w)), wb)
-        wb[lower & (wb - w < 1e-3 * w)] = w[lower & (wb - w < 1e-3 * w)]
+        none_left = (feeds & (room <= 0.0)[:, :, None]).any(axis=(0, 1))
+        wb = np.where(lower, w + 0.98 * (wb - w), wb)
+        wb = np.where(none_left | (wb - w < 1e-3 * w), w, wb)
     return wb
