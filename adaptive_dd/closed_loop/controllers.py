@@ -367,12 +367,15 @@ def observer_bandwidth(sample_period: float) -> float:
 class AdaptiveCT(Law):
     """Computed torque on the N-joint online estimator's projected model
     (:mod:`adaptive_dd.identification.online`), the feedback raised to ``boost_bandwidth``
-    (300 rad/s) through the nominal inertia for ``boost_duration`` (1 s) after an alarm, plus the
-    residual observer's torque (``observer``, on by default; bandwidth ``observer_bandwidth``,
-    default ``0.4 / T``): the torque the current model leaves unexplained, beyond three times
-    its own noise level (:mod:`adaptive_dd.closed_loop.laws`). With the observer on,
-    adaptive_ct is no longer only "computed torque given an estimated model": it also feeds the
-    measured residual forward until the estimate explains it; ``observer = false`` is that law.
+    (300 rad/s at most; per joint the largest whose noise torque stays inside the room the torque
+    limit leaves beside the reference's: :mod:`~adaptive_dd.closed_loop.boost`, once a scenario
+    states the task, :meth:`state_task`) through the nominal inertia for ``boost_duration`` (1 s)
+    after an alarm, plus the residual observer's torque (``observer``, on by default; bandwidth
+    ``observer_bandwidth``, default ``0.4 / T``): the torque the current model leaves
+    unexplained, beyond three times its own noise level (:mod:`adaptive_dd.closed_loop.laws`).
+    With the observer on, adaptive_ct is no longer only "computed torque given an estimated
+    model": it also feeds the measured residual forward until the estimate explains it;
+    ``observer = false`` is that law.
 
     The boost holds the arm while the new payload is learnt: the mass is known within tens of
     ms after an alarm, its centre of mass and inertia over a few hundred. With 0.2 s the UR5
