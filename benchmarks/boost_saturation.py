@@ -9,7 +9,8 @@ not within 0.3 s after a swap; a swap with none).
 
 Run: ``PYTHONPATH=. python benchmarks/boost_saturation.py --first-arm 100 --arms 30 --seeds 3``;
 ``--cap`` runs the boost at ``boost_bandwidth`` on every joint (no task room:
-``adaptive_dd.closed_loop.boost``), as before the room was derived.
+``adaptive_dd.closed_loop.boost``), as before the room was derived; ``--no-boost`` runs
+adaptive_ct without it (``boost_duration`` and ``boost_ramp`` 0).
 """
 
 from __future__ import annotations
@@ -24,6 +25,7 @@ import numpy as np
 from adaptive_dd.benchmark.population import population_scenario
 from adaptive_dd.benchmark.runner import run_benchmark
 from adaptive_dd.benchmark.scenario import read_toml
+from adaptive_dd.benchmark.scenario_settings import with_settings
 
 TEMPLATE = Path(__file__).resolve().parent / "scenarios" / "population.toml"
 BOOST = 1.25  # [s] boost_duration + boost_ramp, the N-joint defaults
@@ -62,6 +64,7 @@ def main() -> None:
     ap.add_argument("--arms", type=int, default=20)
     ap.add_argument("--seeds", type=int, default=3)
     ap.add_argument("--cap", action="store_true", help="the boost at boost_bandwidth on every joint")
+    ap.add_argument("--no-boost", action="store_true", help="adaptive_ct without the boost")
     args = ap.parse_args()
     if args.cap:
         from adaptive_dd.closed_loop.controllers import AdaptiveCT
@@ -71,6 +74,8 @@ def main() -> None:
     for arm in range(args.first_arm, args.first_arm + args.arms):
         sc = population_scenario(read_toml(TEMPLATE), str(TEMPLATE), arm)
         sc = dataclasses.replace(sc, seeds=args.seeds, controllers=("ct_oracle", "adaptive_ct"))
+        if args.no_boost:
+            sc = with_settings(sc, "adaptive_ct", {"boost_duration": 0.0, "boost_ramp": 0.0})
         res = run_benchmark(sc, progress=False, keep_trajectories=args.seeds)
         edges = [0.0, *sc.swap_times, sc.duration]
         for s in range(args.seeds):
