@@ -99,7 +99,10 @@ def main() -> None:
         k = int(r[:, i].argmax())
         print(
             f"  segment {i}: mean {r[:, i].mean():.3f}, p90 {np.percentile(r[:, i], 90):.3f}, "
-            f"max {r[k, i]:.2f} ({names[k]}); saturated beyond 1 % in {(sat[:, i] > 0.01).sum()} trials"
+            f"max {r[k, i]:.2f} ({names[k]}); saturated on {100 * sat[:, i].mean():.2f} % of it on average, "
+            f"beyond 1 % in {(sat[:, i] > 0.01).sum()} trials, the most {100 * sat[:, i].max():.1f} %; "
+            f"ratio^2 - 1 on average {np.mean([row[4][i]['excess_sat'] for row in rows]):+.4f} from "
+            f"saturated samples, {np.mean([row[4][i]['excess_other'] for row in rows]):+.4f} from the others"
         )
     n_sat = int((sat > 0.01).any(axis=1).sum())
     print(f"trials saturated beyond 1 % in some segment: {n_sat} of {len(rows)}")
