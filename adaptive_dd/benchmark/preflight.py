@@ -147,22 +147,36 @@ def resolved_settings(scenario) -> list[str]:
             mark = "" if key in given else "   (default)"
             out.append(f"controllers.{label}.{key} = {v!r}{' ' + st.unit if st.unit else ''}{mark}")
     if "adaptive_ct" in scenario.controllers and scenario.closed_forms is None:
-        out += derived_estimator_settings(scenario)
+        out += derived_estimator_settings(scenario) + derived_boost(scenario)
     return out
+
+
+def derived_boost(scenario) -> list[str]:
+    """``adaptive_ct``'s boost bandwidth per joint on an N-joint arm, as the run derives it from the
+    task's torque room and the sensors' noise (:mod:`adaptive_dd.closed_loop.boost`)."""
+    from adaptive_dd.controllers.registry import scenario_controller
+
+    law = scenario_controller(scenario, "adaptive_ct")[1]
+    if not hasattr(law, "boost_bandwidths"):
+        return []
+    wb = [round(float(x), 1) for x in law.boost_bandwidths()]
+    return [
+        f"controllers.adaptive_ct boost bandwidth per joint = {wb} rad/s   (derived: at most "
+        "boost_bandwidth, its noise torque 3 std inside the room the torque limit leaves beside the "
+        "reference's)"
+    ]
 
 
 def derived_estimator_settings(scenario) -> list[str]:
     """``adaptive_ct``'s estimator settings on an arm from a URDF that the scenario need not state,
     as the run derives them, each with its rule: the mode (``"arm"`` when the model's stated
     uncertainty, ``[model] uncertainty`` or the ``[plant.uncertainty]`` levels, is not exact), the
-    row weights (the torque limits), the payload mass re-opened at an alarm (``[arm]
-    payload_capacity``, 10 kg when it is not stated) and the boost's bandwidth per joint
-    (:mod:`adaptive_dd.closed_loop.boost`)."""
+    row weights (the torque limits) and the payload mass re-opened at an alarm (``[arm]
+    payload_capacity``, 10 kg when it is not stated)."""
     from adaptive_dd.controllers.registry import scenario_controller
     from adaptive_dd.identification.online import REOPEN_CAPACITY, derived_row_weights, reopen_mass_std
 
-    law = scenario_controller(scenario, "adaptive_ct")[1]
-    online = getattr(law, "online", None)
+    online = getattr(scenario_controller(scenario, "adaptive_ct")[1], "online", None)
     if online is None or not hasattr(online, "mode"):
         return []
     est = scenario.options("adaptive_ct").get("estimator", {})
@@ -184,13 +198,6 @@ def derived_estimator_settings(scenario) -> list[str]:
             why = f"derived: {REOPEN_CAPACITY:g} x arm.payload_capacity {cap:g} kg"
         std = reopen_mass_std(online.detector, arm)
         out.append(f"controllers.adaptive_ct.detector.reopen_mass_std = {std:.4g} kg   ({why})")
-    if hasattr(law, "boost_bandwidths"):
-        wb = [round(float(x), 1) for x in law.boost_bandwidths()]
-        out.append(
-            f"controllers.adaptive_ct boost bandwidth per joint = {wb} rad/s   (derived: at most "
-            "boost_bandwidth, its noise torque 3 std inside the room the torque limit leaves beside "
-            "the reference's)"
-        )
     return out
 
 
