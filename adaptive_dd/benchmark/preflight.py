@@ -147,8 +147,24 @@ def resolved_settings(scenario) -> list[str]:
             mark = "" if key in given else "   (default)"
             out.append(f"controllers.{label}.{key} = {v!r}{' ' + st.unit if st.unit else ''}{mark}")
     if "adaptive_ct" in scenario.controllers and scenario.closed_forms is None:
-        out += derived_estimator_settings(scenario)
+        out += derived_estimator_settings(scenario) + derived_boost(scenario)
     return out
+
+
+def derived_boost(scenario) -> list[str]:
+    """``adaptive_ct``'s boost bandwidth per joint on an N-joint arm, as the run derives it from the
+    task's torque room and the sensors' noise (:mod:`adaptive_dd.closed_loop.boost`)."""
+    from adaptive_dd.controllers.registry import scenario_controller
+
+    law = scenario_controller(scenario, "adaptive_ct")[1]
+    if not hasattr(law, "boost_bandwidths"):
+        return []
+    wb = [round(float(x), 1) for x in law.boost_bandwidths()]
+    return [
+        f"controllers.adaptive_ct boost bandwidth per joint = {wb} rad/s   (derived: at most "
+        "boost_bandwidth, its noise torque 3 std inside the room the torque limit leaves beside the "
+        "reference's)"
+    ]
 
 
 def derived_estimator_settings(scenario) -> list[str]:

@@ -367,12 +367,15 @@ def observer_bandwidth(sample_period: float) -> float:
 class AdaptiveCT(Law):
     """Computed torque on the N-joint online estimator's projected model
     (:mod:`adaptive_dd.identification.online`), the feedback raised to ``boost_bandwidth``
-    (300 rad/s) through the nominal inertia for ``boost_duration`` (1 s) after an alarm, plus the
-    residual observer's torque (``observer``, on by default; bandwidth ``observer_bandwidth``,
-    default ``0.4 / T``): the torque the current model leaves unexplained, beyond three times
-    its own noise level (:mod:`adaptive_dd.closed_loop.laws`). With the observer on,
-    adaptive_ct is no longer only "computed torque given an estimated model": it also feeds the
-    measured residual forward until the estimate explains it; ``observer = false`` is that law.
+    (300 rad/s at most; per joint the largest whose noise torque stays inside the room the torque
+    limit leaves beside the reference's: :mod:`~adaptive_dd.closed_loop.boost`, once a scenario
+    states the task, :meth:`state_task`) through the nominal inertia for ``boost_duration`` (1 s)
+    after an alarm, plus the residual observer's torque (``observer``, on by default; bandwidth
+    ``observer_bandwidth``, default ``0.4 / T``): the torque the current model leaves
+    unexplained, beyond three times its own noise level (:mod:`adaptive_dd.closed_loop.laws`).
+    With the observer on, adaptive_ct is no longer only "computed torque given an estimated
+    model": it also feeds the measured residual forward until the estimate explains it;
+    ``observer = false`` is that law.
 
     The boost holds the arm while the new payload is learnt: the mass is known within tens of
     ms after an alarm, its centre of mass and inertia over a few hundred. With 0.2 s the UR5
@@ -430,10 +433,33 @@ class AdaptiveCT(Law):
                 f"{self.boost_bandwidth!r}, {self.boost_duration!r}, {self.boost_ramp!r}"
             )
         self.observer, self.observer_bw = _observer_settings(self.name, self.settings)
+        self.task: tuple[Array, Array] | None = None
+
+    def state_task(self, scenario) -> None:
+        """Take the task's torque room from ``scenario`` (:func:`~adaptive_dd.closed_loop.boost.task_room`):
+        the boost's bandwidth per joint follows from it and the sensors' noise (:meth:`boost_bandwidths`)."""
+        from adaptive_dd.closed_loop.boost import task_room
+
+        self.task = task_room(scenario)
+
+    def boost_bandwidths(self) -> Array:
+        """The boost's bandwidth per joint [rad/s]: ``boost_bandwidth`` on every joint without a
+        task; with one, the largest up to it whose noise torque stays inside the room the torque
+        limit leaves beside the reference's (:mod:`adaptive_dd.closed_loop.boost`)."""
+        w = np.asarray(self.gains.bandwidth, dtype=float)
+        if self.task is None:
+            return np.maximum(self.boost_bandwidth, w)
+        from adaptive_dd.closed_loop.boost import boost_bandwidths
+
+        q, room = self.task
+        var_q = np.broadcast_to(self.arm.sensor.position_variance, w.shape)
+        var_qd = np.broadcast_to(self.arm.sensor.velocity_variance, w.shape)
+        inertia = self.arm.mass_matrix(q)
+        return boost_bandwidths(self.boost_bandwidth, w, self.gains.damping, inertia, room, var_q, var_qd)
 
     def law_config(self, sample_period):
-        w, wb, z = self.gains.bandwidth, self.boost_bandwidth, self.gains.damping
-        wb = np.maximum(wb, w)
+        w, z = self.gains.bandwidth, self.gains.damping
+        wb = self.boost_bandwidths()
         T = float(sample_period)
         beta = self.observer_bw if self.observer_bw is not None else observer_bandwidth(T)
         return self._config(

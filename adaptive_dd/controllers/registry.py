@@ -129,6 +129,8 @@ def scenario_controller(scenario, spec: str) -> tuple[str, Controller]:
         g = gains_for(scenario.closed_forms or scenario.arm, scenario.bandwidth, scenario.damping)
     arm = scenario.closed_forms or scenario.arm  # the arm the run simulates: its closed forms or its own
     ctrl = make_controller(spec, g, opts, arm=arm, search=search, scenario=scenario)
+    if scenario.closed_forms is None and hasattr(ctrl, "state_task"):  # adaptive_ct's boost: the task's room
+        ctrl.state_task(scenario)
     if ":" in spec and "label" not in opts:
         label = str(ctrl.name)  # what the plug-in declares (its class name if nothing)
     return label, ctrl
