@@ -268,6 +268,7 @@ def fit_log(
     width_estimated=None,
     pieces=None,
     offset: bool = False,
+    momentum=None,
 ) -> LogFit:
     """Weighted least squares of one log (module docstring).
 
@@ -307,7 +308,10 @@ def fit_log(
     offset : bool
         Fit a constant torque offset per kept channel too (a torque sensor's or a current loop's
         zero: module docstring), :attr:`LogFit.offset`.
-
+    momentum : (ndarray, ndarray), optional
+        The record's :func:`~adaptive_dd.identification.regression.momentum_regressors`, when the
+        caller computed them (to hand the same to
+        :func:`~adaptive_dd.identification.model_error.model_error_variance`); default computed here.
 
     Returns
     -------
@@ -346,7 +350,15 @@ def fit_log(
     used = np.asarray(used, dtype=bool)
     K = np.asarray(identified, dtype=bool)
     reg = filtered_regression(
-        model, q, qd, tau, tau_f=tau_f, sample_period=sample_period, torque_held=torque_held, pieces=pieces
+        model,
+        q,
+        qd,
+        tau,
+        tau_f=tau_f,
+        sample_period=sample_period,
+        torque_held=torque_held,
+        pieces=pieces,
+        momentum=momentum,
     )
     bounds = reg.row_bounds()
     phi, y = _identified_regression(model, reg, used, K, weak_ok=hold)
