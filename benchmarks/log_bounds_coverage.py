@@ -256,9 +256,10 @@ def main() -> None:
             rng, noise = np.random.default_rng([45, args.same_motion]), np.random.default_rng([45, s, 2])
             one = synthetic_log(arm, 24.0, T, rng, noise_rng=noise)
             two = [synthetic_log(arm, 12.0, T, rng, noise_rng=noise) for _ in range(2)]
-        for c, logs, holes in (("gaps", [one], HOLES), ("records", two, ())):
+        for c in ("gaps", "records"):
             if c not in out:
                 continue
+            logs, holes = ([one], HOLES) if c == "gaps" else (two, ())
             f = fit(model, logs, holes)
             for lst, v in zip(
                 out[c], ((f.sigma - logs[0].sigma_true) / f.std, f.sigma, f.std, f.quantile), strict=True

@@ -34,7 +34,8 @@ def _print_fit(model, fit, names: tuple[str, ...]) -> None:
     print(
         "std: Newey-West sandwich on the residual (model error included, correlated over "
         f"{fit.lag} samples = {fit.lag * fit.sample_period:.3g} s{pieces}), its variance times "
-        f"{fit.kernel_factor:.3g} for the Bartlett weights' shrinkage and {fit.dof_factor:.3g} for the "
+        f"{fit.kernel_factor:.3g} for what the Bartlett sum leaves out (its weights, the lags beyond) "
+        f"and {fit.dof_factor:.3g} for the "
         f"{fit.columns} columns fitted ({_columns(fit)}) to about {fit.n_eff:.0f} independent samples "
         "(n_eff / (n_eff - k))"
     )

@@ -9,8 +9,9 @@ Standard deviations
     residual's correlation time (the first lag at which the autocorrelation of the weighted
     residual, pooled over channels, falls below 0.05, times 3), the autocovariances summed
     within each continuous piece of the record (between a log's gaps, several records). Scaled
-    by the Bartlett weights' shrinkage undone (:func:`_kernel_bias`, from the residual's
-    autocorrelation over the lags where it is well estimated) and by the degrees-of-freedom
+    by what the Bartlett sum lacks of the long-run variance (:func:`_kernel_bias`: its weights'
+    shrinkage and the lags beyond ``L``, from the residual's autocorrelation over the lags where
+    it is well estimated, run out beyond them as a geometric tail) and by the degrees-of-freedom
     factor ``n_eff / (n_eff - k)``: the fit removes ``k`` directions from the residual, which
     shrinks the scores' variance as ordinary least squares' ``N / (N - k)`` says for white
     residuals (MacKinnon and White, J. Econometrics 29, 1985: HC1), the samples counted here as

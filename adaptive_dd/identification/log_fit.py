@@ -30,8 +30,8 @@ Torque offsets
     table, off for the simulator's records, whose torques have none).
 
 Standard deviations and bounds
-    The Newey-West sandwich within each continuous piece, scaled for the Bartlett weights' shrinkage
-    and the degrees of freedom, and the fixed-b quantile ``c`` of the 95 % bound
+    The Newey-West sandwich within each continuous piece, scaled for what the Bartlett sum leaves
+    out and the degrees of freedom, and the fixed-b quantile ``c`` of the 95 % bound
     ``estimate +- c std``: :mod:`adaptive_dd.identification.log_covariance`.
 
 Noise levels
@@ -115,7 +115,8 @@ class LogFit:
         The variance's small-sample factor ``n_eff / (n_eff - k)``, ``k`` the columns fitted
         (module docstring), already in ``cov``.
     kernel_factor : float
-        The Bartlett weights' shrinkage undone (:func:`_kernel_bias`), already in ``cov``.
+        What the Bartlett sum lacks of the long-run variance, undone (its weights' shrinkage and the
+        lags beyond the lag: :func:`_kernel_bias`), already in ``cov``.
     quantile : float
         ``c``: ``sigma +- c std`` is the 95 % bound, ``c`` the fixed-b quantile of the Newey-West
         ``t`` (:func:`fixed_b_quantile`, module docstring), 1.96 and a little more.
