@@ -13,6 +13,8 @@ Run from the repository root::
     python benchmarks/log_bounds_coverage.py --load gr.npz --versus off.npz
     # one motion (that of seed 3), the noise drawn again for each of 60 seeds:
     python benchmarks/log_bounds_coverage.py --cases records --same-motion 3 --seeds 60
+    # each seed's std against the exact std of its motion (300 noise draws each):
+    python benchmarks/log_bounds_coverage.py --cases gaps,records --seeds 40 --exact 300
 
 Each seed makes records of the arm by inverse dynamics of the identification's own model
 (:func:`adaptive_dd.identification.records.synthetic_log`: a multi-sine, the torque noise 2 % of
@@ -38,20 +40,31 @@ and per parameter (1 for a std right on average; a little above 1 from the std's
 the spread of the estimates over the seeds against the mean reported std (each seed draws its own
 motion, so its std differs: this ratio exceeds 1 by the std's variation over the seeds even when
 every std is right, about ``sqrt(1 + CV^2)``); and the three least covered parameters.
+
+``--exact M`` (gaps and records): each seed's fit against the exact std of its own estimate on its
+own motion, by Monte Carlo over ``M`` draws of the log's noise (:func:`synthetic_log`'s AR(1),
+heteroscedastic law) through the fit's filters, pieces, offsets and final channel weights (held:
+the estimate is then linear in the noise). Printed: the coverage and rms of error / std with the
+exact std (95 % and 1 but for the seeds' sampling), the mean over the seeds of the fit's variance
+over the exact one (1 for a variance right on average), per parameter, the least ones named, and
+its correlation over the seeds with the Newey-West lag the fit chose.
 """
 
 from __future__ import annotations
 
 import argparse
+import inspect
 import itertools
 import os
 import time
 
 import numpy as np
 
+from adaptive_dd.identification.filters import design_filter_bank
 from adaptive_dd.identification.log_fit import fit_log
-from adaptive_dd.identification.model import arm_model
+from adaptive_dd.identification.model import arm_model, base_regressor
 from adaptive_dd.identification.records import synthetic_log
+from adaptive_dd.identification.regression import filter_pieces
 from adaptive_dd.plant.arm import Arm
 from adaptive_dd.robots import robot_urdf
 
@@ -88,6 +101,58 @@ def fit(model, logs, holes=()):
         pieces=pieces,
         offset=OFFSET["on"],
     )
+
+
+def _kept(g, holes):
+    """The samples of log ``g`` left after cutting ``holes``."""
+    return np.setdiff1d(np.arange(g.t.size), np.concatenate([np.arange(a, b) for a, b in holes] or [[]]))
+
+
+def exact_std(model, logs, holes, f, draws: int, rng) -> np.ndarray:
+    """``(p,)`` the std of ``f``'s estimate (``fit(model, logs, holes)``) over ``draws`` draws of the
+    logs' noise on their motion, as :func:`synthetic_log` draws it, through the fit's filters, pieces
+    and offsets, its final channel weights held (module docstring, ``--exact``)."""
+    law = inspect.signature(synthetic_log).parameters
+    noise, corr, het = (law[k].default for k in ("noise", "correlation", "heteroscedastic"))
+    a = np.exp(-T / corr)
+    parts = []
+    for g in logs:  # the noise of each log: AR(1), its level the channel's torque rms times (1 + het speed)
+        qdd = np.gradient(g.qd, T, axis=0)
+        level = noise * np.sqrt(np.mean((base_regressor(model, g.q, g.qd, qdd) @ g.sigma_true) ** 2, axis=0))
+        speed = np.abs(g.qd) / np.maximum(np.abs(g.qd).max(axis=0), 1e-300)
+        e = np.empty((g.t.size, model.n, draws))
+        e[0] = rng.standard_normal((model.n, draws))
+        z = rng.standard_normal(e.shape) * np.sqrt(1 - a * a)
+        for k in range(1, g.t.size):
+            e[k] = a * e[k - 1] + z[k]
+        parts.append((e * (level * (1 + het * speed))[:, :, None])[_kept(g, holes)])
+    reg = f.regression
+    yn = filter_pieces(
+        design_filter_bank("M2", reg.tau_f, T), np.concatenate(parts), reg.pieces, reg.start, 0
+    )
+    phi, w = reg.phi, f.weights
+    if OFFSET["on"]:  # the offsets profiled out as the fit does: each channel's rows about their mean
+        phi, yn = phi - phi.mean(axis=0), yn - yn.mean(axis=0)
+    A = np.einsum("kjr,kjs,j->rs", phi, phi, w**2)
+    err = np.linalg.solve(A, np.einsum("kjr,kjm,j->rm", phi, yn, w**2))  # (p, draws)
+    return np.std(err, axis=1, ddof=1)
+
+
+def exact_summary(label: str, z, std, xstd, lag, names) -> None:
+    """Print the fit's std against the exact std of each seed's motion (``--exact``)."""
+    err = np.asarray(z) * np.asarray(std)
+    zx = err / xstd
+    ratio = (np.asarray(std) / xstd) ** 2  # (seeds, p)
+    per = ratio.mean(axis=0)
+    seed = ratio.mean(axis=1)
+    low = np.argsort(per)[:4]
+    print(
+        f"{label:<8} exact std of each seed's motion: truth within +-1.96 exact std "
+        f"{100 * np.mean(np.abs(zx) < 1.96):.1f} %, rms of error / exact std {np.sqrt(np.mean(zx**2)):.3f}; "
+        f"fit's variance / exact: mean {ratio.mean():.3f} (per parameter {per.min():.2f}-{per.max():.2f}; "
+        f"per seed sd {seed.std(ddof=1):.3f}, correlation with the lag {np.corrcoef(seed, lag)[0, 1]:+.2f})"
+    )
+    print("         narrowest: " + "; ".join(f"{names[k][:32]} {per[k]:.2f}" for k in low))
 
 
 def summary(label: str, z, est, std, names=None, quantile=None) -> None:
@@ -142,6 +207,13 @@ def main() -> None:
         help="gaps and records: every seed the motion of seed S, only the noise drawn again (does the std "
         "hold for one motion?)",
     )
+    ap.add_argument(
+        "--exact",
+        type=int,
+        default=0,
+        metavar="M",
+        help="gaps and records: each seed's std against the exact std of its motion, M noise draws",
+    )
     ap.add_argument("--save", help="write the per-seed results to this .npz")
     ap.add_argument("--load", nargs="+", help="summarise saved .npz files (merged) instead of running")
     ap.add_argument(
@@ -159,6 +231,8 @@ def main() -> None:
         for c in ("gaps", "records", "pair"):
             if f"{c}_z" in out:
                 summary(c, out[f"{c}_z"], out[f"{c}_est"], out[f"{c}_std"], names.get(c), out.get(f"{c}_q"))
+            if f"{c}_xstd" in out:
+                exact_summary(c, out[f"{c}_z"], out[f"{c}_std"], out[f"{c}_xstd"], out[f"{c}_lag"], names[c])
         if args.versus:
             _versus(out, _load(args.versus)[0], names)
         return
@@ -172,6 +246,7 @@ def main() -> None:
         "pair": ["mass", "com x", "com y", "com z"],
     }
     out = {k: ([], [], [], []) for k in cases}
+    exact = {k: ([], []) for k in cases}  # --exact: each seed's exact std and the fit's lag
     for s in range(args.first, args.first + args.seeds):
         if ("gaps" in out or "records" in out) and args.same_motion is None:
             rng = np.random.default_rng([45, s])
@@ -181,20 +256,20 @@ def main() -> None:
             rng, noise = np.random.default_rng([45, args.same_motion]), np.random.default_rng([45, s, 2])
             one = synthetic_log(arm, 24.0, T, rng, noise_rng=noise)
             two = [synthetic_log(arm, 12.0, T, rng, noise_rng=noise) for _ in range(2)]
-        if "gaps" in out:
-            f = fit(model, [one], HOLES)
+        for c in ("gaps", "records"):
+            if c not in out:
+                continue
+            logs, holes = ([one], HOLES) if c == "gaps" else (two, ())
+            f = fit(model, logs, holes)
             for lst, v in zip(
-                out["gaps"], ((f.sigma - one.sigma_true) / f.std, f.sigma, f.std, f.quantile), strict=True
+                out[c], ((f.sigma - logs[0].sigma_true) / f.std, f.sigma, f.std, f.quantile), strict=True
             ):
                 lst.append(v)
-        if "records" in out:
-            f = fit(model, two)
-            for lst, v in zip(
-                out["records"],
-                ((f.sigma - two[0].sigma_true) / f.std, f.sigma, f.std, f.quantile),
-                strict=True,
-            ):
-                lst.append(v)
+            if args.exact:
+                exact[c][0].append(
+                    exact_std(model, logs, holes, f, args.exact, np.random.default_rng([45, s, 3]))
+                )
+                exact[c][1].append(f.lag)
         if "pair" in out:
             _pair(np.random.default_rng([45, s, 1]), out["pair"])
         # saved after every seed, so that a long run can be read while it goes on
@@ -208,11 +283,19 @@ def main() -> None:
                     for k, v in zip(("z", "est", "std", "q"), out[c], strict=True)
                 },
                 **{f"{c}_names": np.array(names[c]) for c in cases},
+                **{
+                    f"{c}_{k}": np.array(v)
+                    for c in cases
+                    if exact[c][0]
+                    for k, v in zip(("xstd", "lag"), exact[c], strict=True)
+                },
             )
             os.replace(tmp, args.save)
     for c in cases:
         z, est, std, q = out[c]
         summary(c, z, est, std, names[c], q)
+        if exact[c][0]:
+            exact_summary(c, z, std, np.array(exact[c][0]), np.array(exact[c][1]), names[c])
     print(f"({args.seeds} seeds from {args.first}, {time.perf_counter() - t0:.0f} s)")
 
 

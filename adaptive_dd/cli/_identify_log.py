@@ -34,7 +34,8 @@ def _print_fit(model, fit, names: tuple[str, ...]) -> None:
     print(
         "std: Newey-West sandwich on the residual (model error included, correlated over "
         f"{fit.lag} samples = {fit.lag * fit.sample_period:.3g} s{pieces}), its variance times "
-        f"{fit.kernel_factor:.3g} for the Bartlett weights' shrinkage and {fit.dof_factor:.3g} for the "
+        f"{fit.kernel_factor:.3g} for what the Bartlett sum leaves out (its weights, the lags beyond) "
+        f"and {fit.dof_factor:.3g} for the "
         f"{fit.columns} columns fitted ({_columns(fit)}) to about {fit.n_eff:.0f} independent samples "
         "(n_eff / (n_eff - k))"
     )
@@ -247,6 +248,7 @@ def identify_log(args: argparse.Namespace, arm, outputs) -> int:
     """``adaptive-dd identify --arm SCENARIO [FILES]`` for an arm from a URDF."""
     from adaptive_dd.identification.friction_width import identification_model
     from adaptive_dd.identification.log_fit import identifiable_subset
+    from adaptive_dd.identification.regression import momentum_regressors
     from adaptive_dd.identification_plots import plot_torque_fit
 
     for note in arm.urdf_notes:
@@ -268,7 +270,9 @@ def identify_log(args: argparse.Namespace, arm, outputs) -> int:
     model, profile = _coulomb_width(args, arm, model, rec, K, tau_f, spec.torque_held, offset)
     prior_std = _prior_std(args.arm, model) if args.hold_unseen == "on" else None
     free = None if profile is None else profile.profiled
-    fit = _fit_record(model, rec, K, tau_f, spec.torque_held, prior_std, free, offset)
+    # the momentum regressors once, for the fit and the model error's other filters (_write_model)
+    mom = momentum_regressors(model, rec.q, rec.qd)
+    fit = _fit_record(model, rec, K, tau_f, spec.torque_held, prior_std, free, offset, mom)
     _print_fit(model, fit, names)
     _print_offset(args, fit, names)
     _output_error(args, arm, model, rec, fit)
@@ -286,7 +290,8 @@ def identify_log(args: argparse.Namespace, arm, outputs) -> int:
     )
     _write_estimates(outputs.path("estimates.csv"), model, fit)
     written = [outputs.path("estimates.csv"), outputs.path("torque_fit.png")]
-    written += _write_model(outputs, arm, model, rec, fit, cf, spec, profile)
+    written += _write_model(outputs, arm, model, rec, fit, cf, spec, profile, mom)
+    del mom
     if args.baseline:
         _payload_pair(args, arm, model, fit, tau_f, K, offset)
     print("wrote " + ", ".join(str(Path(args.out) / Path(p).name) for p in written))
@@ -420,7 +425,7 @@ def _write_estimates(path, model, fit) -> None:
             )
 
 
-def _write_model(outputs, arm, model, rec, fit, cf, spec, profile=None) -> list:
+def _write_model(outputs, arm, model, rec, fit, cf, spec, profile=None, momentum=None) -> list:
     from adaptive_dd.identification.identified_model import (
         IdentifiedModel,
         arm_identity,
@@ -474,7 +479,7 @@ def _write_model(outputs, arm, model, rec, fit, cf, spec, profile=None) -> list:
             "newey_west_lag": fit.lag,
             # what adaptive_ct's prior adds for model error ([model] from = "model.json")
             "model_error_var": model_error_variance(
-                model, fit, rec.q, rec.qd, rec.tau, spec.torque_held
+                model, fit, rec.q, rec.qd, rec.tau, spec.torque_held, momentum
             ).tolist(),
             "velocity": "measured" if rec.qd_measured else "derived",
             # the directions the record could not see, held at the URDF's values (held_directions)
@@ -547,32 +552,22 @@ def _prior_std(scenario: str, model):
 
 
 def _fit_record(
-    model, rec, K, tau_f: float, torque_held: bool, prior_std=None, width_estimated=None, offset=False
-):
+    model, rec, K, tau_f: float, torque_held: bool, prior_std=None, width_estimated=None, offset=False,
+    momentum=None,
+):  # fmt: skip
     """:func:`~adaptive_dd.identification.log_fit.fit_log` on a read record, the directions it cannot
     see held at the URDF's values with ``prior_std`` (None: none held), the Coulomb widths of the
-    joints ``width_estimated`` counted as estimated, a torque offset per channel with ``offset``; its
-    errors name the record."""
+    joints ``width_estimated`` counted as estimated, a torque offset per channel with ``offset``,
+    ``momentum`` the record's momentum regressors when computed already; its errors name the record."""
     from adaptive_dd.identification.log_fit import fit_log
 
     try:
         return fit_log(
-            model,
-            rec.q,
-            rec.qd,
-            rec.tau,
-            rec.used,
-            K,
-            tau_f=tau_f,
-            sample_period=rec.sample_period,
-            channel_weight=rec.weight,
-            torque_held=torque_held,
-            prior_std=prior_std,
-            hold=prior_std is not None,
-            width_estimated=width_estimated,
-            pieces=rec.pieces or None,
-            offset=offset,
-        )
+            model, rec.q, rec.qd, rec.tau, rec.used, K, tau_f=tau_f, sample_period=rec.sample_period,
+            channel_weight=rec.weight, torque_held=torque_held, prior_std=prior_std,
+            hold=prior_std is not None, width_estimated=width_estimated, pieces=rec.pieces or None,
+            offset=offset, momentum=momentum,
+        )  # fmt: skip
     except DataError as exc:
         raise DataError(f"{rec.source}: {exc}") from None
     except np.linalg.LinAlgError as exc:  # not met so far: the record's checks come first

@@ -289,14 +289,18 @@ def identify_record(
     from adaptive_dd.identification.held_directions import base_prior_std
     from adaptive_dd.identification.log_fit import fit_log
     from adaptive_dd.identification.model_error import model_error_variance
+    from adaptive_dd.identification.regression import momentum_regressors
 
     n = model.n
+    mom = momentum_regressors(model, q, qd)  # once, for the fit and the model error's other filters
     wls = fit_log(
         model, q, qd, tau, np.ones(n, bool), np.ones(model.p, bool), tau_f=TAU_F,
         sample_period=sample_period, torque_held=torque_held, prior_std=base_prior_std(model, levels),
+        momentum=mom,
     )  # fmt: skip
     fit = consistent_arm_fit(model, wls.sigma, np.linalg.pinv(wls.cov, rcond=1e-12, hermitian=True))
-    extra = model_error_variance(model, wls, q, qd, tau, torque_held)
+    extra = model_error_variance(model, wls, q, qd, tau, torque_held, momentum=mom)
+    del mom
     prior = identified_prior_cov(wls.cov, wls.sigma, fit.sigma, model_error_var=extra)
     held = wls.held.count if wls.held is not None else 0
     return RecordFit(

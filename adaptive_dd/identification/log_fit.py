@@ -30,8 +30,8 @@ Torque offsets
     table, off for the simulator's records, whose torques have none).
 
 Standard deviations and bounds
-    The Newey-West sandwich within each continuous piece, scaled for the Bartlett weights' shrinkage
-    and the degrees of freedom, and the fixed-b quantile ``c`` of the 95 % bound
+    The Newey-West sandwich within each continuous piece, scaled for what the Bartlett sum leaves
+    out and the degrees of freedom, and the fixed-b quantile ``c`` of the 95 % bound
     ``estimate +- c std``: :mod:`adaptive_dd.identification.log_covariance`.
 
 Noise levels
@@ -115,7 +115,8 @@ class LogFit:
         The variance's small-sample factor ``n_eff / (n_eff - k)``, ``k`` the columns fitted
         (module docstring), already in ``cov``.
     kernel_factor : float
-        The Bartlett weights' shrinkage undone (:func:`_kernel_bias`), already in ``cov``.
+        What the Bartlett sum lacks of the long-run variance, undone (its weights' shrinkage and the
+        lags beyond the lag: :func:`_kernel_bias`), already in ``cov``.
     quantile : float
         ``c``: ``sigma +- c std`` is the 95 % bound, ``c`` the fixed-b quantile of the Newey-West
         ``t`` (:func:`fixed_b_quantile`, module docstring), 1.96 and a little more.
@@ -268,6 +269,7 @@ def fit_log(
     width_estimated=None,
     pieces=None,
     offset: bool = False,
+    momentum=None,
 ) -> LogFit:
     """Weighted least squares of one log (module docstring).
 
@@ -307,7 +309,10 @@ def fit_log(
     offset : bool
         Fit a constant torque offset per kept channel too (a torque sensor's or a current loop's
         zero: module docstring), :attr:`LogFit.offset`.
-
+    momentum : (ndarray, ndarray), optional
+        The record's :func:`~adaptive_dd.identification.regression.momentum_regressors`, when the
+        caller computed them (to hand the same to
+        :func:`~adaptive_dd.identification.model_error.model_error_variance`); default computed here.
 
     Returns
     -------
@@ -346,7 +351,15 @@ def fit_log(
     used = np.asarray(used, dtype=bool)
     K = np.asarray(identified, dtype=bool)
     reg = filtered_regression(
-        model, q, qd, tau, tau_f=tau_f, sample_period=sample_period, torque_held=torque_held, pieces=pieces
+        model,
+        q,
+        qd,
+        tau,
+        tau_f=tau_f,
+        sample_period=sample_period,
+        torque_held=torque_held,
+        pieces=pieces,
+        momentum=momentum,
     )
     bounds = reg.row_bounds()
     phi, y = _identified_regression(model, reg, used, K, weak_ok=hold)

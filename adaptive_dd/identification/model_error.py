@@ -25,12 +25,16 @@ FILTER_FACTORS = (0.5, 2.0)
 """The other filter time constants, as multiples of the fit's ``tau_f``."""
 
 
-def model_error_variance(model, fit, q: Array, qd: Array, tau: Array, torque_held: bool = True) -> Array:
+def model_error_variance(
+    model, fit, q: Array, qd: Array, tau: Array, torque_held: bool = True, momentum=None
+) -> Array:
     """``(p,)`` sum of the squared differences from ``fit.sigma`` (a
     :class:`~adaptive_dd.identification.log_fit.LogFit` of the record ``q, qd, tau (N, n)``) of the
     unweighted estimate and of the weighted ones at ``tau_f`` times :data:`FILTER_FACTORS`, on the
     same channels and base parameters (zero for those held at the URDF's), each held along the
-    fit's held directions (:attr:`~adaptive_dd.identification.log_fit.LogFit.held`)."""
+    fit's held directions (:attr:`~adaptive_dd.identification.log_fit.LogFit.held`). ``momentum``: the
+    record's :func:`~adaptive_dd.identification.regression.momentum_regressors` (the fit's, which do not
+    depend on the filter), computed here when None."""
     from adaptive_dd.identification.log_fit import _identified_regression, _reweighted_fit, _solve
     from adaptive_dd.identification.regression import filtered_regression
 
@@ -49,6 +53,7 @@ def model_error_variance(model, fit, q: Array, qd: Array, tau: Array, torque_hel
             sample_period=fit.sample_period,
             torque_held=torque_held,
             pieces=fit.regression.pieces,
+            momentum=momentum,
         )
         phi, y = _centred(fit, *_identified_regression(model, reg, used, K, weak_ok))
         alts.append(_reweighted_fit(phi, y, ones)[0])

@@ -106,31 +106,6 @@ def momentum_regressors(model: Model, q: ArrayLike, qd: ArrayLike) -> tuple[Arra
     return Yp, Yr
 
 
-_LAST: list = []
-"""The last record's ``[model, digest of q and qd, Yp, Yr]`` (:func:`_momentum_of`)."""
-
-
-def _momentum_of(model: Model, q: Array, qd: Array) -> tuple[Array, Array]:
-    """:func:`momentum_regressors` of the record, kept for the next call with the same model and
-    the same ``q, qd`` (by content): an identification filters one record at three time constants
-    (:func:`~adaptive_dd.identification.model_error.model_error_variance`), and the regressors, which
-    do not depend on the filter, were 2/3 of its cost. Returned read-only."""
-    import hashlib
-
-    h = hashlib.blake2b(digest_size=16)
-    for a in (q, qd):
-        h.update(repr(a.shape).encode())
-        h.update(np.ascontiguousarray(a).tobytes())
-    key = h.digest()
-    if _LAST and _LAST[0] is model and _LAST[1] == key:
-        return _LAST[2], _LAST[3]
-    Yp, Yr = momentum_regressors(model, q, qd)
-    Yp.setflags(write=False)
-    Yr.setflags(write=False)
-    _LAST[:] = [model, key, Yp, Yr]
-    return Yp, Yr
-
-
 def filter_pieces(bank, x: Array, pieces, start: int, output: int) -> Array:
     """Output ``output`` of ``bank`` on each continuous piece ``[a, b)`` of ``x (N, ...)`` on its own
     (each from the steady state of its first sample), each piece's first ``start`` samples cut (at
@@ -155,6 +130,7 @@ def filtered_regression(
     sample_period: float = 1e-3,
     torque_held: bool = True,
     pieces=None,
+    momentum: tuple[Array, Array] | None = None,
 ) -> Regression:
     """The exact filtered regression of one record (module docstring).
 
@@ -170,11 +146,18 @@ def filtered_regression(
         The torque is held over each sample (a simulator's or a drive's applied command: the
         filter is fed the mean of neighbouring samples, see the module docstring); False for a
         sampled measurement of a continuous torque (a real log's effort), fed as it is.
+    pieces : sequence of (int, int), optional
+        The record's continuous pieces ``[a, b)``, each filtered on its own (:class:`Regression`).
+    momentum : (ndarray, ndarray), optional
+        :func:`momentum_regressors` ``(model, q, qd)``, when the caller has them: they do not depend
+        on the filter, so a caller that filters one record at several time constants (an
+        identification and its :func:`~adaptive_dd.identification.model_error.model_error_variance`)
+        computes them once; default computed here.
 
     Raises
     ------
     SignalError
-        Shapes differ or values are not finite.
+        Shapes differ, values are not finite, or ``momentum`` is not ``(N, n, p)`` twice.
     """
     q, qd, tau = (np.asarray(a, dtype=float) for a in (q, qd, tau))
     if not (q.shape == qd.shape == tau.shape and q.ndim == 2 and q.shape[1] == model.n):
@@ -185,7 +168,16 @@ def filtered_regression(
         raise SignalError("q, qd, tau must be finite")
     check_motion(q, model.names)
     bank = design_filter_bank("M2", tau_f, sample_period)
-    Yp, Yr = _momentum_of(model, q, qd)
+    if momentum is None:
+        Yp, Yr = momentum_regressors(model, q, qd)
+    else:
+        Yp, Yr = momentum
+        shape = (q.shape[0], model.n, model.p)
+        if np.shape(Yp) != shape or np.shape(Yr) != shape:
+            raise SignalError(
+                f"momentum must be momentum_regressors(model, q, qd), two {shape} arrays, got "
+                f"{np.shape(Yp)} and {np.shape(Yr)}"
+            )
     start = int(np.ceil(10 * tau_f / sample_period))
     fp = filter_pieces(bank, Yp, pieces, start, 1)
     fr = filter_pieces(bank, Yr, pieces, start, 0)
