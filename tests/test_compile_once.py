@@ -131,7 +131,8 @@ def test_the_estimator_step_compiles_once_for_the_loop_and_the_estimator_alone()
     called by the closed loop (its model written) and by the estimator run alone (``run_online``,
     ``est_step``: no model): one specialisation for both, not a second inlined copy (about 25 CPU s
     of a cold test run). The argument types a cold benchmark compiles it for
-    (``compile_estimator``) are those of both callers."""
+    (``compile_estimator``) are those of both callers. The estimator alone reaches it through one
+    compiled driver, ``est_run``, with one specialisation whoever calls it."""
     from numba.core.registry import CPUDispatcher
 
     from adaptive_dd.closed_loop import chain_choices, glue
@@ -149,6 +150,18 @@ def test_the_estimator_step_compiles_once_for_the_loop_and_the_estimator_alone()
     online.est_step(c, s, z[:2], z[:2], z[:2])
     steps = _specialisations(K.est_step_model)
     assert len(steps) == 1, steps
+    # the estimator alone has one compiled driver (each compiled caller links and optimises the
+    # step again): run_online, est_step and est_run_trial call est_run with the same argument types
+    N = 3
+    rec = (np.empty((N, s.theta.shape[1])), np.empty((N, 10)), np.empty((N, sc.n_joints)))
+    K.est_run_trial(c, s, 1, z[:N], z[:N], z[:N], *rec, np.zeros(N, np.int64), np.empty(N))
+    runs = _specialisations(K.est_run)
+    assert len(runs) == 1, runs
+    drivers = {
+        name for name, f in vars(K).items()
+        if isinstance(f, CPUDispatcher) and "est_step_trial_w" in f.py_func.__code__.co_names
+    }  # fmt: skip
+    assert drivers == {"est_run", "est_step_trial"}, drivers  # est_step_trial: timed by benchmarks
     # the step is inlined nowhere: every caller reaches it through est_step_model
     for mod in (K, chain_choices, glue):
         for name, f in vars(mod).items():

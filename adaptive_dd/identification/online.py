@@ -147,9 +147,10 @@ def est_step(c: EstCfg, s: EstState, q: ArrayLike, qd: ArrayLike, tau: ArrayLike
     """
     shape = s.eps.shape
     q, qd, tau = (_sample(x, shape, nm) for x, nm in ((q, "q"), (qd, "qd"), (tau, "tau")))
-    alarm = np.zeros(shape[0], dtype=np.int64)
-    K.est_step_batch(c, s, q, qd, tau, alarm)
-    return EstInfo(alarm.astype(bool), s.eps.copy(), s.lam.copy())
+    alarm = np.zeros((shape[0], 1), dtype=np.int64)
+    none = np.empty((0, 1, 0))  # no record (no trial): alarms alone
+    K.est_run(c, s, 0, q[:, None], qd[:, None], tau[:, None], none, none, none, alarm, np.empty((0, 1)))
+    return EstInfo(alarm[:, 0].astype(bool), s.eps.copy(), s.lam.copy())
 
 
 def est_model(c: EstCfg, s: EstState) -> Array:
@@ -240,7 +241,6 @@ def run_online(
     eps = np.empty((m, N, n))
     alarm = np.zeros((m, N), dtype=np.int64)
     lam = np.empty((m, N))
-    for i in range(m):
-        K.est_run_trial(c, s, i, q[i], qd[i], tau[i], theta[i], payload[i], eps[i], alarm[i], lam[i])
+    K.est_run(c, s, 0, q, qd, tau, theta, payload, eps, alarm, lam)
     t = np.arange(N) * cfg.sample_period
     return OnlineRecord(t, theta, payload, alarm.astype(bool), eps, lam, state_skipped(s))

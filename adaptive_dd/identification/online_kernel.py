@@ -143,7 +143,7 @@ def est_step_trial(c, s, i, q, qd, tau):  # pragma: no cover - compiled
 def est_step_trial_w(c, s, i, q, qd, tau, w):  # pragma: no cover - compiled
     """:func:`est_step_trial_in` through the one compiled copy of the step (:func:`est_step_model`,
     the model left alone), inlined where it is called: :func:`est_step_trial`,
-    :func:`est_step_batch`, :func:`est_run_trial` and the closed loop's estimator all call that copy
+    :func:`est_run` (the estimator run alone) and the closed loop's estimator all call that copy
     (each inlining the step cost a full compilation of it: about 25 CPU s on the UR5)."""
     return est_step_model(c, s, i, q, qd, tau, w, s.lam[:0])
 
@@ -247,29 +247,42 @@ def est_step_trial_in(c, s, i, q, qd, tau, w):  # pragma: no cover - compiled
 
 
 @njit(cache=True)
-def est_step_batch(c, s, q, qd, tau, alarm):  # pragma: no cover - compiled
-    """:func:`est_step_trial` over every trial (``q, qd, tau (m, n)``), alarms into ``alarm (m,)``."""
-    w = est_work(q.shape[1], s.theta.shape[1])
-    for i in range(q.shape[0]):
-        alarm[i] = est_step_trial_w(c, s, i, q[i], qd[i], tau[i], w)
-
-
-@njit(cache=True)
-def est_run_trial(
-    c, s, i, q, qd, tau, theta_rec, payload_rec, eps_rec, alarm_rec, lam_rec
-):  # pragma: no cover
-    """Step trial i through a record ``(N, n)``, recording after every sample."""
+def est_run(
+    c, s, i0, q, qd, tau, theta_rec, payload_rec, eps_rec, alarm_rec, lam_rec
+):  # pragma: no cover - compiled
+    """Step trials ``i0 .. i0 + m - 1`` of ``s`` through records ``q, qd, tau (m, N, n)``, alarms
+    into ``alarm_rec (m, N)``; after every sample the estimate, the payload it implies, the prior
+    errors and the forgetting factor into ``theta_rec (m, N, p)``, ``payload_rec (m, N, 10)``,
+    ``eps_rec (m, N, n)`` and ``lam_rec (m, N)``, unless ``theta_rec`` has no trial (then
+    alarms alone). The one compiled driver of the estimator run alone (:func:`est_run_trial`,
+    ``online.est_step``, ``online.run_online``): each compiled caller of the step links and
+    optimises it again (about 8 CPU s on the UR5), so its callers share this one, with one
+    specialisation (the same argument types from every caller)."""
+    record = theta_rec.shape[0] > 0
     pay = np.empty(10)
-    w = est_work(q.shape[1], s.theta.shape[1])
-    for k in range(q.shape[0]):
-        alarm_rec[k] = est_step_trial_w(c, s, i, q[k], qd[k], tau[k], w)
-        # loops, not slice assignments: numba would compile the slice assignment's shape-error
-        # message (string code, about 2 CPU s); the records are (N, p), (N, 10), (N, n)
-        for a in range(s.theta.shape[1]):
-            theta_rec[k, a] = s.theta[i, a]
-        est_payload_trial(c, s, i, pay)
-        for a in range(10):
-            payload_rec[k, a] = pay[a]
-        for a in range(s.eps.shape[1]):
-            eps_rec[k, a] = s.eps[i, a]
-        lam_rec[k] = s.lam[i]
+    w = est_work(q.shape[2], s.theta.shape[1])
+    for t in range(q.shape[0]):
+        i = i0 + t
+        for k in range(q.shape[1]):
+            alarm_rec[t, k] = est_step_trial_w(c, s, i, q[t, k], qd[t, k], tau[t, k], w)
+            if not record:
+                continue
+            # loops, not slice assignments: numba would compile the slice assignment's shape-error
+            # message (string code, about 2 CPU s)
+            for a in range(s.theta.shape[1]):
+                theta_rec[t, k, a] = s.theta[i, a]
+            est_payload_trial(c, s, i, pay)
+            for a in range(10):
+                payload_rec[t, k, a] = pay[a]
+            for a in range(s.eps.shape[1]):
+                eps_rec[t, k, a] = s.eps[i, a]
+            lam_rec[t, k] = s.lam[i]
+
+
+def est_run_trial(c, s, i, q, qd, tau, theta_rec, payload_rec, eps_rec, alarm_rec, lam_rec) -> None:
+    """Step trial i through a record ``q, qd, tau (N, n)``, recording after every sample into
+    ``theta_rec (N, p)``, ``payload_rec (N, 10)``, ``eps_rec (N, n)``, ``alarm_rec (N,)`` (int64)
+    and ``lam_rec (N,)``: :func:`est_run` on one trial."""
+    q, qd, tau = (np.ascontiguousarray(x, dtype=np.float64)[None] for x in (q, qd, tau))
+    recs = (theta_rec, payload_rec, eps_rec, alarm_rec, lam_rec)
+    est_run(c, s, i, q, qd, tau, *(r[None] for r in recs))
