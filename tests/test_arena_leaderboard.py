@@ -222,8 +222,7 @@ def test_the_metrics_segment_bounds_are_the_loops():
     """The metrics count each segment's samples with :func:`sample_bounds` (no reference sampled,
     no tool frame's table): the bounds the closed loop ran with (``run_constants``)."""
     from adaptive_dd.benchmark.scenario import parse_scenario
-    from adaptive_dd.closed_loop.metrics import sample_bounds
-    from adaptive_dd.closed_loop.types import run_constants
+    from adaptive_dd.closed_loop.types import run_constants, sample_bounds
 
     text = resources.files("adaptive_dd.scenarios").joinpath("vertical3_payload.toml").read_text("utf-8")
     data = tomllib.loads(text)

@@ -186,7 +186,7 @@ def _per_seed(res, names) -> dict[str, dict[str, np.ndarray]]:
     segments (``e_norm``, a list per segment of ``(n_seeds, samples)``) for the recovery times."""
     from adaptive_dd.arena.flags import lost_times
     from adaptive_dd.benchmark.metrics import per_seed_segment_metrics
-    from adaptive_dd.closed_loop.metrics import sample_bounds
+    from adaptive_dd.closed_loop.types import sample_bounds
 
     seg_start, seg_end, _ = sample_bounds(res.scenario)
     T = res.scenario.sample_period

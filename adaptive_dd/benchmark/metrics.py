@@ -262,7 +262,7 @@ def _blank_failed(res: BenchmarkResult, run, out: dict, end: np.ndarray, key) ->
 
 
 def _bounds(sc):
-    from adaptive_dd.closed_loop.metrics import sample_bounds
+    from adaptive_dd.closed_loop.types import sample_bounds
 
     return sample_bounds(sc)[:2]
 

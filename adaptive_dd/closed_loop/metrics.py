@@ -5,25 +5,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from adaptive_dd.closed_loop.types import StreamedSums
+from adaptive_dd.closed_loop.types import StreamedSums, sample_bounds
 
-__all__ = ["MIN_COM_MASS", "payload_at_segment_ends", "sample_bounds", "segment_metrics"]
+__all__ = ["MIN_COM_MASS", "payload_at_segment_ends", "segment_metrics"]
 
 MIN_COM_MASS = 0.1
 """[kg]: below this estimated mass the centre of mass (first moment / mass) is not reported."""
-
-
-def sample_bounds(scenario) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Per payload segment ``(G,)`` each: its first sample, its end (exclusive) and its first settled
-    sample, as :func:`~adaptive_dd.closed_loop.types.run_constants` has them (``seg_start``,
-    ``seg_end``, ``seg_settled``) without sampling the reference and the tool frame along it."""
-    from adaptive_dd.closed_loop.types import SETTLE, segment_starts
-
-    N, T = scenario.n_samples, scenario.sample_period
-    start = segment_starts(scenario)
-    end = np.append(start[1:], N).astype(np.int64)
-    settled = np.minimum(end - 1, start + round(SETTLE / T)).astype(np.int64)
-    return start, end, settled
 
 
 def _counts(res) -> tuple[np.ndarray, np.ndarray]:

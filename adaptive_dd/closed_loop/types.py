@@ -33,6 +33,7 @@ __all__ = [
     "plant_of",
     "plant_record",
     "run_constants",
+    "sample_bounds",
     "segment_starts",
     "true_models",
 ]
@@ -221,13 +222,22 @@ def segment_starts(scenario) -> NDArray[np.int64]:
     return np.array([0, *(first_sample(t, T) for t in scenario.swap_times)], dtype=np.int64)
 
 
+def sample_bounds(scenario) -> tuple[NDArray[np.int64], NDArray[np.int64], NDArray[np.int64]]:
+    """Per payload segment ``(G,)`` each: its first sample, its end (exclusive) and its first settled
+    sample (``seg_start``, ``seg_end``, ``seg_settled`` of :func:`run_constants`, which takes them
+    from here), without sampling the reference and the tool frame along it."""
+    N, T = scenario.n_samples, scenario.sample_period
+    start = segment_starts(scenario)
+    end = np.append(start[1:], N).astype(np.int64)
+    settled = np.minimum(end - 1, start + round(SETTLE / T)).astype(np.int64)
+    return start, end, settled
+
+
 def run_constants(scenario) -> RunConstants:
     """Timing, reference and segment bounds of a scenario."""
     N, T = scenario.n_samples, scenario.sample_period
     q_d, qd_d, qdd_d = scenario.reference.sample(np.arange(N) * T)
-    start = segment_starts(scenario)
-    end = np.append(start[1:], N).astype(np.int64)
-    settled = np.minimum(end - 1, start + round(SETTLE / T)).astype(np.int64)
+    start, end, settled = sample_bounds(scenario)
     c = np.ascontiguousarray
     from adaptive_dd.closed_loop.tool_frame import tool_tables
 
