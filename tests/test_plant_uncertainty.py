@@ -559,7 +559,9 @@ def test_the_excitation_phase_hands_on_its_prior_and_reports_its_scale(monkeypat
 def test_after_an_excitation_phase_adaptive_ct_starts_from_what_the_identification_knows():
     """[run] excite: adaptive_ct's arm prior is the identification's (``arm_prior_cov``, each
     seed's), not the URDF's stated uncertainty about the identified model; a table that states
-    its own mode is left alone; the covariance reaches the estimator's start-up covariance."""
+    its own mode is left alone; the covariance reaches the estimator's start-up covariance as it
+    is, without ``p0_arm``'s isotropic 1e-6 (a variance above the identification's for most of a
+    drawn arm's base parameters)."""
     from adaptive_dd.closed_loop.excitation_phase import identified_prior
     from adaptive_dd.closed_loop.runner import make_controller_of
     from adaptive_dd.errors import ParameterError
@@ -575,7 +577,8 @@ def test_after_an_excitation_phase_adaptive_ct_starts_from_what_the_identificati
     assert ctrl.online.mode == "arm" and ctrl.online.arm_uncertainty is None
     np.testing.assert_allclose(ctrl.online.arm_prior_cov, np.diag(std**2))
     _, s = est_init(ctrl.online, sc.arm, 1)
-    np.testing.assert_allclose(np.diag(s.P[0])[:pb], ctrl.online.p0_arm + std**2, rtol=1e-12)
+    assert ctrl.online.p0_arm == 0.0
+    np.testing.assert_allclose(s.P[0][:pb, :pb], np.diag(std**2), rtol=1e-12, atol=0.0)
     _, urdf = make_controller_of(sc, "adaptive_ct")  # without the phase: the stated uncertainty
     assert urdf.online.arm_uncertainty is not None and urdf.online.arm_prior_cov is None
     own = with_settings(parse_scenario(data, "v.toml"), "adaptive_ct", {"estimator": {"mode": "payload"}})

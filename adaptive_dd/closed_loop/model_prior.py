@@ -46,6 +46,8 @@ def identified_prior(scenario, prior: Array) -> tuple:
         if isinstance(est, dict) and not keys & est.keys():
             P = np.asarray(prior, dtype=float)
             ac["estimator"] = {**est, "arm_prior_cov": [[float(x) for x in row] for row in P]}
+            if "p0_arm" not in est:  # the identification's covariance as it is: nothing added
+                ac["estimator"]["p0_arm"] = 0.0
             if "payload_mass_std" not in est:
                 ac["estimator"]["payload_mass_std"] = known_payload_mass_std(scenario.arm, P)
     return tuple((n, freeze(o)) for n, o in opts.items())
