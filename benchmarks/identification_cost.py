@@ -3,7 +3,10 @@
 Usage::
 
     python benchmarks/identification_cost.py [--template benchmarks/scenarios/population_drawn.toml]
-        [--arms 10] [--first-arm 0] [--seeds 2] [--only LABEL ...] [--cache DIR]
+        [--arms 10] [--first-arm 0] [--seeds 2] [--only LABEL ...] [--cache DIR] [--csv FILE]
+    python benchmarks/identification_cost.py --scenario FILE [--seeds 2] [--only LABEL ...]
+
+(``--scenario``: one scenario with ``[run] excite`` in place of the drawn arms).
 
 Per drawn arm and seed, the excitation phase and its identification run once
 (:func:`~adaptive_dd.closed_loop.excitation_phase.identify_excitation`; ``--cache DIR`` keeps them
@@ -30,9 +33,13 @@ variant on the same plants, noise and swaps (``ct_oracle``, the floor, once):
     The seed's true robot as the model, mode ``"payload"``: what a URDF exact to the plant gives
     (``population.toml``'s estimator on these plants).
 
-Prints per variant and segment the mean / p90 / max of the per-seed ``adaptive_ct / ct_oracle``
-RMS ratio (the worst arm and seed), and the same over each segment less its first 0.5 s
-(``rms_error_settled``: the swap's transient left out). Asserts nothing.
+Prints per arm and seed what the identification states against what it got wrong (the share of
+base parameters whose identified variance is below ``OnlineConfig.p0_arm``'s 1e-6; the identified
+model's base parameters' errors against the plant's in the standard deviations it states: rms,
+max; ``--prior-only``: these lines alone), then per variant and segment the mean / p90 / max of
+the per-seed ``adaptive_ct / ct_oracle`` RMS ratio (the worst arm and seed), and the same over
+each segment less its first 0.5 s (``rms_error_settled``: the swap's transient left out).
+Asserts nothing.
 """
 
 from __future__ import annotations
@@ -92,6 +99,23 @@ def _options(sc, variant: str, prior):
     return identified_prior(sc, prior)
 
 
+def prior_line(sc, pis, covs, truth) -> str:
+    """Per seed: the share of base parameters whose identified variance is below ``p0_arm``'s
+    1e-6, and the identified model's errors against the plant in its stated standard deviations
+    (rms, max and where)."""
+    B = sc.arm.base.B
+    parts = []
+    for k, (pi, C, tr) in enumerate(zip(pis, covs, truth, strict=True)):
+        var = np.diag(C)
+        z = B @ (pi - tr) / np.sqrt(np.maximum(var, 1e-300))
+        j = int(np.argmax(np.abs(z)))
+        parts.append(
+            f"seed {k}: {100 * np.mean(var < 1e-6):.0f} % of {var.size} below 1e-6, error / std rms "
+            f"{np.sqrt(np.mean(z**2)):.2f} max {abs(z[j]):.1f} ({sc.arm.base.names[j]})"
+        )
+    return f"{sc.name}: the identification's variance; " + "; ".join(parts)
+
+
 def run_arm(sc, idx, variants, cache, tmp: Path) -> dict:
     """Per variant the frame rows of adaptive_ct (and ct_oracle once, as ``floor``)."""
     from adaptive_dd.closed_loop.excitation_phase import join_results
@@ -103,7 +127,10 @@ def run_arm(sc, idx, variants, cache, tmp: Path) -> dict:
     print(f"{sc.name}: estimator_scale per seed {np.round(kappa, 3).tolist()}", flush=True)
     plant = sc.plant if sc.plant is not None else exact_plant(sc.arm)
     truth = true_models(plant_of(sc, idx))[:, 0]  # (S, 13 n): each seed's robot, no payload
+    print(prior_line(sc, pis, covs, truth), flush=True)
     out = {}
+    if not variants:
+        return out
     for v in ("floor", *variants):
         parts = []
         for k, i in enumerate(idx):
@@ -125,6 +152,7 @@ def main(argv=None) -> int:
 
     import pandas as pd
 
+    from adaptive_dd import load_scenario
     from adaptive_dd.benchmark.population import population_scenario
     from adaptive_dd.robots.random_arm import random_arm
 
@@ -136,9 +164,13 @@ def main(argv=None) -> int:
     ap.add_argument("--arm-list", type=int, nargs="+", default=None, help="these arm seeds instead")
     ap.add_argument("--only", nargs="+", default=None, choices=VARIANTS)
     ap.add_argument("--cache", type=Path, default=None)
+    ap.add_argument("--prior-only", action="store_true", help="the identification's lines alone, no task")
     ap.add_argument("--csv", type=Path, default=None, help="write the per-seed rows here")
+    ap.add_argument(
+        "--scenario", default=None, help="this scenario (with [run] excite) instead of drawn arms"
+    )
     a = ap.parse_args(argv)
-    variants = tuple(a.only or VARIANTS)
+    variants = () if a.prior_only else tuple(a.only or VARIANTS)
     data = tomllib.loads(Path(a.template).read_text())
     if a.cache is not None:
         a.cache.mkdir(parents=True, exist_ok=True)
@@ -147,11 +179,18 @@ def main(argv=None) -> int:
     from threadpoolctl import threadpool_limits
 
     with tempfile.TemporaryDirectory() as tmp, threadpool_limits(1):
-        for arm_seed in a.arm_list or range(a.first_arm, a.first_arm + a.arms):
-            sc = population_scenario(data, a.template, arm_seed)
-            sc = dataclasses.replace(sc, seeds=a.seeds)
-            cap = random_arm(arm_seed).payload_capacity
+        arms = [None] if a.scenario else a.arm_list or range(a.first_arm, a.first_arm + a.arms)
+        for arm_seed in arms:
+            if arm_seed is None:
+                sc = load_scenario(a.scenario)
+                cap = sc.arm.payload_capacity
+            else:
+                sc = population_scenario(data, a.template, arm_seed)
+                cap = random_arm(arm_seed).payload_capacity
+            sc = dataclasses.replace(sc, seeds=a.seeds).with_controllers(("ct_oracle", "adaptive_ct"))
             frames = run_arm(sc, idx, variants, a.cache, Path(tmp))
+            if not frames:
+                continue
             fl = frames["floor"].set_index(["seed", "segment"])
             for v in variants:
                 f = frames[v]
@@ -162,11 +201,13 @@ def main(argv=None) -> int:
                     f["rms_error_settled_rad"].to_numpy() / at["rms_error_settled_rad"].to_numpy()
                 )
                 f["variant"] = v
-                f["arm_seed"] = arm_seed
+                f["arm_seed"] = -1 if arm_seed is None else arm_seed
                 f["capacity_kg"] = cap
                 rows.append(f)
                 line = " / ".join(f"{g['ratio'].mean():.3f}" for _, g in f.groupby("segment"))
-                print(f"random:{arm_seed} {v:20s} {line}", flush=True)
+                print(f"{sc.name if arm_seed is None else f'random:{arm_seed}'} {v:20s} {line}", flush=True)
+    if not rows:
+        return 0
     df = pd.concat(rows, ignore_index=True)
     if a.csv is not None:
         df.to_csv(a.csv, index=False)

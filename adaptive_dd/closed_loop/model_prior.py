@@ -30,7 +30,11 @@ def identified_prior(scenario, prior: Array) -> tuple:
     """The scenario's controller options with adaptive_ct's estimator given ``arm_prior_cov =
     prior`` (a ``(p, p)`` covariance: the identification's knowledge of the arm with its
     correlations, :attr:`ExcitationReport.sigma_cov`), unless its table already says ``mode``,
-    ``arm_uncertainty`` or ``arm_prior_cov``; the payload block's start-up ``payload_mass_std`` is
+    ``arm_uncertainty`` or ``arm_prior_cov``; ``p0_arm`` is 0 unless the table states it (the
+    arm block starts at ``prior`` as it is: the isotropic 1e-6 of the stated-uncertainty prior is
+    above the identification's variance for many of a drawn arm's base parameters,
+    docs/learning_the_arm.md); the
+    payload block's start-up ``payload_mass_std`` is
     :func:`known_payload_mass_std` unless the table states it. After an
     excitation phase the model is the identified one, and what is left to learn of the arm is
     what the identification did not know, not the URDF's stated uncertainty (vertical3, 2 seeds,

@@ -227,7 +227,8 @@ class OnlineConfig:
         deviation ``payload_mass_std r``, inertias ``payload_mass_std r^2``.
     p0_arm : float
         Mode ``"arm"``: start-up variance of every base parameter added to the prior (isotropic
-        part of P0), >= 0.
+        part of P0), >= 0. The hand-off of an identification sets it to 0
+        (:func:`~adaptive_dd.closed_loop.model_prior.identified_prior`: its covariance as it is).
     max_trace : float or None
         Cap on trace(P); None: the trace of the start-up or re-opened covariance, whichever is larger.
     align : bool
