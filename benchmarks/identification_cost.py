@@ -215,6 +215,10 @@ def main(argv=None) -> int:
     return 0
 
 
+def _where(arm_seed, seed) -> str:
+    return f"seed {seed}" if arm_seed < 0 else f"random:{arm_seed}:{seed}"
+
+
 def summary(df, variants) -> str:
     lines = ["adaptive_ct / ct_oracle per seed, per segment: mean / p90 / max (worst arm:seed)"]
     for v in variants:
@@ -225,7 +229,7 @@ def summary(df, variants) -> str:
             rs = g["ratio_settled"].to_numpy(float)
             lines.append(
                 f"  segment {s + 1}: {np.nanmean(r):.3f} / {np.nanquantile(r, 0.9):.3f} / {r[k]:.3f} "
-                f"(random:{g['arm_seed'].iloc[k]}:{g['seed'].iloc[k]}); after its first 0.5 s "
+                f"({_where(g['arm_seed'].iloc[k], g['seed'].iloc[k])}); after its first 0.5 s "
                 f"{np.nanmean(rs):.3f} / {np.nanquantile(rs, 0.9):.3f} / {np.nanmax(rs):.3f}"
             )
     return "\n".join(lines)
