@@ -26,6 +26,10 @@ variant on the same plants, noise and swaps (``ct_oracle``, the floor, once):
     :func:`~adaptive_dd.closed_loop.model_prior.estimator_scale`).
 ``identified, payload``
     The identified model held fixed: the estimator in mode ``"payload"`` (the arm not learnt).
+``identified, physical``
+    ``identified`` with payload mode's treatment of the payload block in the model control uses:
+    projected onto physical payloads, with the compact-payload prior weighed by the rows' noise
+    (``OnlineConfig.project``, ``prior_radius``, ``prior_noise`` as payload mode's defaults).
 ``true, arm``
     The seed's true robot as the model, the estimator as in ``identified`` (the identification's
     prior): what the model's error costs, the estimator's mode the same.
@@ -55,7 +59,7 @@ import numpy as np
 
 VARIANTS = (
     "identified", "identified, p0_arm", "identified, scaled", "identified, payload",
-    "true, arm", "true, arm, p0_arm", "true, payload",
+    "identified, physical", "true, arm", "true, arm, p0_arm", "true, payload",
 )  # fmt: skip
 
 
@@ -89,6 +93,9 @@ def _model(arm, pi, tmp: Path, tag: str):
 
 
 def _options(sc, variant: str, prior):
+    from adaptive_dd.identification.online_config import DEFAULT_PRIOR_RADIUS, OnlineConfig
+
+    memory = OnlineConfig().tau_f / OnlineConfig().sample_period  # payload mode's "auto"
     from adaptive_dd.benchmark.scenario_settings import with_settings
     from adaptive_dd.closed_loop.model_prior import identified_prior
 
@@ -96,6 +103,9 @@ def _options(sc, variant: str, prior):
         return with_settings(sc, "adaptive_ct", {"estimator": {"mode": "payload"}}).controller_options
     if "p0_arm" in variant:  # the isotropic start-up variance added to the prior as before
         sc = with_settings(sc, "adaptive_ct", {"estimator": {"p0_arm": 1e-6}})
+    if "physical" in variant:  # payload mode's projection and compact prior on the payload block
+        est = {"project": True, "prior_radius": DEFAULT_PRIOR_RADIUS, "prior_noise": memory}
+        sc = with_settings(sc, "adaptive_ct", {"estimator": est})
     return identified_prior(sc, prior)
 
 
