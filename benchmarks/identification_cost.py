@@ -30,6 +30,9 @@ variant on the same plants, noise and swaps (``ct_oracle``, the floor, once):
     ``identified`` with payload mode's treatment of the payload block in the model control uses:
     projected onto physical payloads, with the compact-payload prior weighed by the rows' noise
     (``OnlineConfig.project``, ``prior_radius``, ``prior_noise`` as payload mode's defaults).
+``identified, arm held``
+    ``identified`` with the arm block's prior 1e-12 times the identification's (the arm not
+    learnt; the payload block started as in ``identified``).
 ``true, arm``
     The seed's true robot as the model, the estimator as in ``identified`` (the identification's
     prior): what the model's error costs, the estimator's mode the same.
@@ -59,7 +62,7 @@ import numpy as np
 
 VARIANTS = (
     "identified", "identified, p0_arm", "identified, scaled", "identified, payload",
-    "identified, physical", "true, arm", "true, arm, p0_arm", "true, payload",
+    "identified, physical", "identified, arm held", "true, arm", "true, arm, p0_arm", "true, payload",
 )  # fmt: skip
 
 
@@ -97,12 +100,16 @@ def _options(sc, variant: str, prior):
 
     memory = OnlineConfig().tau_f / OnlineConfig().sample_period  # payload mode's "auto"
     from adaptive_dd.benchmark.scenario_settings import with_settings
-    from adaptive_dd.closed_loop.model_prior import identified_prior
+    from adaptive_dd.closed_loop.model_prior import identified_prior, known_payload_mass_std
 
     if variant.endswith("payload"):
         return with_settings(sc, "adaptive_ct", {"estimator": {"mode": "payload"}}).controller_options
     if "p0_arm" in variant:  # the isotropic start-up variance added to the prior as before
         sc = with_settings(sc, "adaptive_ct", {"estimator": {"p0_arm": 1e-6}})
+    if "held" in variant:  # the arm block held; the payload block's start from the prior as it is
+        est = {"payload_mass_std": known_payload_mass_std(sc.arm, prior)}
+        sc = with_settings(sc, "adaptive_ct", {"estimator": est})
+        prior = np.asarray(prior) * 1e-12
     if "physical" in variant:  # payload mode's projection and compact prior on the payload block
         est = {"project": True, "prior_radius": DEFAULT_PRIOR_RADIUS, "prior_noise": memory}
         sc = with_settings(sc, "adaptive_ct", {"estimator": est})
