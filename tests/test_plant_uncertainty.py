@@ -560,7 +560,7 @@ def test_after_an_excitation_phase_adaptive_ct_starts_from_what_the_identificati
     """[run] excite: adaptive_ct's arm prior is the identification's (``arm_prior_cov``, each
     seed's), not the URDF's stated uncertainty about the identified model; a table that states
     its own mode is left alone; the covariance reaches the estimator's start-up covariance as it
-    is, without ``p0_arm``'s isotropic 1e-6 (a variance above the identification's for most of a
+    is, without ``p0_arm``'s isotropic 1e-6 (a variance above the identification's for many of a
     drawn arm's base parameters)."""
     from adaptive_dd.closed_loop.excitation_phase import identified_prior
     from adaptive_dd.closed_loop.runner import make_controller_of
