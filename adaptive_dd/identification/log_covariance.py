@@ -36,15 +36,21 @@ Bounds
     ``t`` has. The 95 % bound is ``estimate +- c std`` with ``c`` (:attr:`LogFit.quantile`)
     the fixed-b quantile of the Newey-West ``t`` (Kiefer and Vogelsang, "A new asymptotic
     theory for heteroskedasticity-autocorrelation robust tests", Econometric Theory 21, 2005):
-    with the Bartlett bandwidth a fraction ``b = (lag + 1) / N`` of the ``N`` rows fitted,
     ``c(b) = 1.96 + 2.9694 b + 0.4160 b^2 - 0.5324 b^3`` (their cubic for the Bartlett kernel,
-    :func:`fixed_b_quantile`). Over the pieces of a log the Bartlett estimate's variance is that
-    of one record of all their rows (each piece adds its own, in proportion to its length),
-    hence ``N`` the rows of all pieces. On simulated records (benchmarks/log_bounds_coverage.py,
-    200 seeds, the torque offsets fitted) the truth falls within the bound in 94.9 % (gaps) and
-    94.1 % (two records) of cases, +- 1.0 % over the seeds. The std is checked
-    on the TIAGo record against the spread of estimates over disjoint windows
-    (benchmarks/real_log.py).
+    :func:`fixed_b_quantile`), ``b`` the bandwidth's fraction of the sample. For stationary scores
+    that is the lag plus one over the ``N`` rows of all pieces (each piece adds to the Bartlett
+    estimate's variance in proportion to its length), and ``(4 / 3) b`` the Bartlett variance's
+    relative variance. A log's scores are not stationary: their level follows the regressors and
+    a noise that grows with speed, so a few stretches carry most of a parameter's variance, and
+    the residual's correlation reaches over the lag; both make each std more variable than ``N``
+    rows would. ``b`` is therefore taken from that relative variance
+    (:func:`bandwidth_fraction`: each parameter's influence series, its level's effective rows,
+    the Bartlett window convolved with the residual's autocorrelation), averaged over the
+    parameters. On simulated records (benchmarks/log_bounds_coverage.py, 200 seeds, the torque
+    offsets fitted) the truth falls within the bound in 95.8 % (gaps) and 95.1 % (two records) of
+    cases, +- 0.9 % over the seeds; ``--exact`` prints the spread of each seed's variance against
+    what ``b`` says of it. The std is checked on the TIAGo record against the spread of estimates over
+    disjoint windows (benchmarks/real_log.py).
 """
 
 from __future__ import annotations
