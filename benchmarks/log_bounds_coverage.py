@@ -47,7 +47,11 @@ heteroscedastic law) through the fit's filters, pieces, offsets and final channe
 the estimate is then linear in the noise). Printed: the coverage and rms of error / std with the
 exact std (95 % and 1 but for the seeds' sampling), the mean over the seeds of the fit's variance
 over the exact one (1 for a variance right on average), per parameter, the least ones named, and
-its correlation over the seeds with the Newey-West lag the fit chose.
+its correlation over the seeds with the Newey-West lag the fit chose; and how much each
+parameter's variance varies over the seeds (the relative variance of its ratio to the exact one,
+less the Monte Carlo's own ``2 / (M - 1)``) against ``(4 / 3) b``, ``b`` the bound's bandwidth
+fraction (:attr:`LogFit.bandwidth`) and the lag's ``(lag + 1) / rows`` (``--load`` with ``--draws
+M``).
 """
 
 from __future__ import annotations
@@ -138,8 +142,9 @@ def exact_std(model, logs, holes, f, draws: int, rng) -> np.ndarray:
     return np.std(err, axis=1, ddof=1)
 
 
-def exact_summary(label: str, z, std, xstd, lag, names) -> None:
-    """Print the fit's std against the exact std of each seed's motion (``--exact``)."""
+def exact_summary(label: str, z, std, xstd, lag, names, draws=None, b=None, rows=None) -> None:
+    """Print the fit's std against the exact std of each seed's motion (``--exact``); with the fit's
+    bandwidth fractions ``b`` and ``rows`` (seeds,), the variance's spread against what ``b`` says."""
     err = np.asarray(z) * np.asarray(std)
     zx = err / xstd
     ratio = (np.asarray(std) / xstd) ** 2  # (seeds, p)
@@ -153,6 +158,16 @@ def exact_summary(label: str, z, std, xstd, lag, names) -> None:
         f"per seed sd {seed.std(ddof=1):.3f}, correlation with the lag {np.corrcoef(seed, lag)[0, 1]:+.2f})"
     )
     print("         narrowest: " + "; ".join(f"{names[k][:32]} {per[k]:.2f}" for k in low))
+    if b is not None and draws:
+        # each parameter's log variance ratio about its mean over the seeds, less the Monte Carlo's own
+        # 2 / (M - 1): the relative variance of the fit's variance, against the Bartlett one's 4/3 b
+        lr = np.log(ratio)
+        spread = np.var(lr - lr.mean(axis=0)) - 2.0 / (draws - 1)
+        print(
+            f"         the fit's variance's relative variance over the seeds {spread:.3f}; (4/3) b of the "
+            f"bound's bandwidth fraction {4 / 3 * np.mean(b):.3f}, of the lag's (lag + 1) / rows "
+            f"{4 / 3 * np.mean((np.asarray(lag) + 1) / np.asarray(rows)):.3f}"
+        )
 
 
 def summary(label: str, z, est, std, names=None, quantile=None) -> None:
@@ -215,6 +230,7 @@ def main() -> None:
         help="gaps and records: each seed's std against the exact std of its motion, M noise draws",
     )
     ap.add_argument("--save", help="write the per-seed results to this .npz")
+    ap.add_argument("--draws", type=int, help="with --load: the --exact M of the saved runs")
     ap.add_argument("--load", nargs="+", help="summarise saved .npz files (merged) instead of running")
     ap.add_argument(
         "--versus",
@@ -232,7 +248,17 @@ def main() -> None:
             if f"{c}_z" in out:
                 summary(c, out[f"{c}_z"], out[f"{c}_est"], out[f"{c}_std"], names.get(c), out.get(f"{c}_q"))
             if f"{c}_xstd" in out:
-                exact_summary(c, out[f"{c}_z"], out[f"{c}_std"], out[f"{c}_xstd"], out[f"{c}_lag"], names[c])
+                exact_summary(
+                    c,
+                    out[f"{c}_z"],
+                    out[f"{c}_std"],
+                    out[f"{c}_xstd"],
+                    out[f"{c}_lag"],
+                    names[c],
+                    args.draws,
+                    out.get(f"{c}_b"),
+                    out.get(f"{c}_rows"),
+                )
         if args.versus:
             _versus(out, _load(args.versus)[0], names)
         return
@@ -246,7 +272,7 @@ def main() -> None:
         "pair": ["mass", "com x", "com y", "com z"],
     }
     out = {k: ([], [], [], []) for k in cases}
-    exact = {k: ([], []) for k in cases}  # --exact: each seed's exact std and the fit's lag
+    exact = {k: ([], [], [], []) for k in cases}  # --exact: each seed's exact std, the fit's lag, b, rows
     for s in range(args.first, args.first + args.seeds):
         if ("gaps" in out or "records" in out) and args.same_motion is None:
             rng = np.random.default_rng([45, s])
@@ -270,6 +296,8 @@ def main() -> None:
                     exact_std(model, logs, holes, f, args.exact, np.random.default_rng([45, s, 3]))
                 )
                 exact[c][1].append(f.lag)
+                exact[c][2].append(f.bandwidth)
+                exact[c][3].append(f.regression.y.shape[0])
         if "pair" in out:
             _pair(np.random.default_rng([45, s, 1]), out["pair"])
         # saved after every seed, so that a long run can be read while it goes on
@@ -287,7 +315,7 @@ def main() -> None:
                     f"{c}_{k}": np.array(v)
                     for c in cases
                     if exact[c][0]
-                    for k, v in zip(("xstd", "lag"), exact[c], strict=True)
+                    for k, v in zip(("xstd", "lag", "b", "rows"), exact[c], strict=True)
                 },
             )
             os.replace(tmp, args.save)
@@ -295,7 +323,8 @@ def main() -> None:
         z, est, std, q = out[c]
         summary(c, z, est, std, names[c], q)
         if exact[c][0]:
-            exact_summary(c, z, std, np.array(exact[c][0]), np.array(exact[c][1]), names[c])
+            xstd, lag, b, rows = exact[c]
+            exact_summary(c, z, std, np.array(xstd), lag, names[c], args.exact, b, rows)
     print(f"({args.seeds} seeds from {args.first}, {time.perf_counter() - t0:.0f} s)")
 
 

@@ -154,7 +154,8 @@ def test_several_records_fit_jointly(vertical3):
     from adaptive_dd.identification.log_fit import fixed_b_quantile
 
     rows = both.regression.y.shape[0]
-    assert both.quantile == pytest.approx(fixed_b_quantile((both.lag + 1) / rows))
+    assert both.quantile == pytest.approx(fixed_b_quantile(both.bandwidth))
+    assert both.bandwidth >= 0.95 * (both.lag + 1) / rows
     assert 1.96 < both.quantile < min(f.quantile for f in alone), [both.quantile, [f.quantile for f in alone]]
 
 

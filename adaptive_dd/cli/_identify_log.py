@@ -43,7 +43,9 @@ def _print_fit(model, fit, names: tuple[str, ...]) -> None:
         "  what a std means: the spread this estimate would have over records like this one (another "
         "take of the same excitation, another stretch of it), its residual's colour and changing level "
         f"included; estimate +- {fit.quantile:.3g} std (not 1.96: the std is estimated from the record, "
-        "the quantile is Kiefer and Vogelsang's fixed-b one of the Newey-West t) holds the parameters the "
+        "the quantile is Kiefer and Vogelsang's fixed-b one of the Newey-West t, its bandwidth fraction "
+        f"b = {fit.bandwidth:.3g} from how much the std itself varies over such records) holds the "
+        "parameters the "
         "model fits best on such records about 95 % of the time. It does not hold the choice of model "
         "(friction law, tau_f, the channels fitted)"
     )

@@ -36,15 +36,21 @@ Bounds
     ``t`` has. The 95 % bound is ``estimate +- c std`` with ``c`` (:attr:`LogFit.quantile`)
     the fixed-b quantile of the Newey-West ``t`` (Kiefer and Vogelsang, "A new asymptotic
     theory for heteroskedasticity-autocorrelation robust tests", Econometric Theory 21, 2005):
-    with the Bartlett bandwidth a fraction ``b = (lag + 1) / N`` of the ``N`` rows fitted,
     ``c(b) = 1.96 + 2.9694 b + 0.4160 b^2 - 0.5324 b^3`` (their cubic for the Bartlett kernel,
-    :func:`fixed_b_quantile`). Over the pieces of a log the Bartlett estimate's variance is that
-    of one record of all their rows (each piece adds its own, in proportion to its length),
-    hence ``N`` the rows of all pieces. On simulated records (benchmarks/log_bounds_coverage.py,
-    200 seeds, the torque offsets fitted) the truth falls within the bound in 94.9 % (gaps) and
-    94.1 % (two records) of cases, +- 1.0 % over the seeds. The std is checked
-    on the TIAGo record against the spread of estimates over disjoint windows
-    (benchmarks/real_log.py).
+    :func:`fixed_b_quantile`), ``b`` the bandwidth's fraction of the sample. For stationary scores
+    that is the lag plus one over the ``N`` rows of all pieces (each piece adds to the Bartlett
+    estimate's variance in proportion to its length), and ``(4 / 3) b`` the Bartlett variance's
+    relative variance. A log's scores are not stationary: their level follows the regressors and
+    a noise that grows with speed, so a few stretches carry most of a parameter's variance, and
+    the residual's correlation reaches over the lag; both make each std more variable than ``N``
+    rows would. ``b`` is therefore taken from that relative variance
+    (:func:`bandwidth_fraction`: each parameter's influence series, its level's effective rows,
+    the Bartlett window convolved with the residual's autocorrelation), averaged over the
+    parameters. On simulated records (benchmarks/log_bounds_coverage.py, 200 seeds, the torque
+    offsets fitted) the truth falls within the bound in 95.8 % (gaps) and 95.1 % (two records) of
+    cases, +- 0.9 % over the seeds; ``--exact`` prints the spread of each seed's variance against
+    what ``b`` says of it. The std is checked on the TIAGo record against the spread of estimates over
+    disjoint windows (benchmarks/real_log.py).
 """
 
 from __future__ import annotations
@@ -52,7 +58,16 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["MAX_DOF_FACTOR", "NORMAL_975", "TAIL_RATIO", "fixed_b_quantile", "long_run_factor", "newey_west"]
+__all__ = [
+    "MAX_DOF_FACTOR",
+    "NORMAL_975",
+    "TAIL_RATIO",
+    "bandwidth_fraction",
+    "fixed_b_quantile",
+    "long_run_factor",
+    "newey_west",
+    "newey_west_parts",
+]
 
 Array = NDArray[np.float64]
 MAX_DOF_FACTOR = 2.0
@@ -112,6 +127,20 @@ def _kernel_bias(u: Array, lag: int, bounds) -> float:
     its 0.05 crossing the two leave out about 6 % of the variance (benchmarks/log_bounds_coverage.py's
     residual). At least 1."""
     m0 = max(1, lag // 3)
+    ac = _autocorrelation(u, lag, bounds, m0)
+    h = max(1, m0 // 2)
+    r = 0.0
+    if ac[m0] > 0.0 and ac[m0 - h] > 0.0:
+        r = float(min((ac[m0] / ac[m0 - h]) ** (1.0 / h), TAIL_RATIO))
+    whole = 1.0 + 2.0 * np.sum(ac[1:]) + 2.0 * max(ac[m0], 0.0) * r / (1.0 - r)
+    return float(max(1.0, whole / long_run_factor(u, lag, bounds)))
+
+
+def _autocorrelation(u: Array, lag: int, bounds, upto: int) -> Array:
+    """``rho_0 .. rho_upto`` of ``u (N,)``, pooled over the pieces ``bounds``: as estimated up to its
+    0.05 crossing ``m0 = lag / 3`` (:func:`newey_west`'s rule) and run out beyond it as
+    :func:`_kernel_bias`'s geometric tail."""
+    m0 = max(1, lag // 3)
     ac = np.zeros(m0 + 1)
     for a, b in bounds:
         seg = u[a:b] - u[a:b].mean()
@@ -119,12 +148,13 @@ def _kernel_bias(u: Array, lag: int, bounds) -> float:
         c = np.fft.irfft(f * np.conj(f))[: min(b - a, m0 + 1)]
         ac[: c.size] += c
     ac = ac / max(ac[0], 1e-300)
+    if upto <= m0:
+        return ac[: upto + 1]
     h = max(1, m0 // 2)
     r = 0.0
     if ac[m0] > 0.0 and ac[m0 - h] > 0.0:
         r = float(min((ac[m0] / ac[m0 - h]) ** (1.0 / h), TAIL_RATIO))
-    whole = 1.0 + 2.0 * np.sum(ac[1:]) + 2.0 * max(ac[m0], 0.0) * r / (1.0 - r)
-    return float(max(1.0, whole / long_run_factor(u, lag, bounds)))
+    return np.concatenate([ac, max(ac[m0], 0.0) * r ** np.arange(1, upto - m0 + 1)])
 
 
 def _dof_factor(res: Array, w: Array, lag: int, bounds, k: int) -> tuple[float, float]:
@@ -158,6 +188,14 @@ def newey_west(phi: Array, res: Array, w: Array, scale: Array, bounds=None) -> t
     gaps, or several records): the scores' autocovariances are summed within each piece only (the
     pieces are taken as independent of each other), the lag from their autocorrelation pooled
     over the pieces; default one piece."""
+    cov, lag, _ = newey_west_parts(phi, res, w, scale, bounds)
+    return cov, lag
+
+
+def newey_west_parts(phi: Array, res: Array, w: Array, scale: Array, bounds=None) -> tuple[Array, int, Array]:
+    """:func:`newey_west`'s covariance and lag, and the estimate's influence series ``(N, r)``: row
+    ``k`` is what row ``k``'s score adds to the estimate, ``A^-1 g_k`` (in ``phi``'s units), the
+    series whose Bartlett sum is each parameter's variance (:func:`bandwidth_fraction`)."""
     N, _, _r = phi.shape
     bounds = [(0, N)] if bounds is None else list(bounds)
     P = phi / scale
@@ -182,4 +220,42 @@ def newey_west(phi: Array, res: Array, w: Array, scale: Array, bounds=None) -> t
     M = U.T @ (0.5 * (S + S.T)) @ U
     cov = U @ (d_inv[:, None] * M * d_inv[None, :]) @ U.T
     cov = 0.5 * (cov + cov.T)
-    return cov / np.outer(scale, scale), lag
+    influence = ((g @ U) * d_inv) @ U.T / scale
+    return cov / np.outer(scale, scale), lag, influence
+
+
+def bandwidth_fraction(influence: Array, u: Array, lag: int, bounds=None) -> float:
+    """The fixed-b bandwidth fraction ``b`` of the bound's quantile (:func:`fixed_b_quantile`): the
+    Bartlett variance's own relative variance over ``4 / 3``, averaged over the parameters (the
+    columns of ``influence (N, r)``, :func:`newey_west_parts`), ``u (N,)`` the weighted residual
+    pooled over channels, ``lag`` the Newey-West lag, ``bounds`` the pieces.
+
+    For a stationary score series and a lag long against its correlation the Bartlett variance of
+    bandwidth ``L`` over ``N`` rows has relative variance ``(4 / 3) (L + 1) / N`` and ``b`` is the
+    bandwidth's fraction ``(L + 1) / N``. Two things make it larger on a real log. The scores'
+    level changes over the record (the regressors' size, a noise that grows with speed): a series
+    of level ``a_t`` is worth ``N_a = (sum a^2)^2 / sum a^4`` rows of a constant level; ``a_t^2``
+    is each parameter's influence squared smoothed by the Bartlett window, ``N_a`` raised by
+    ``1 + 2 F2 / W`` for that smoothing's own noise (``F2 = sum_m rho_m^2``, ``W = 1.5 (L + 1)``
+    the window's effective length, Gaussian scores). And the residual's correlation reaches over
+    the lag: the relative variance is ``2 sum_m f_m^2 / (N_a f_0^2)``, ``f`` the Bartlett window
+    convolved with the autocorrelation ``rho`` (pooled over the pieces, run out beyond its 0.05
+    crossing as :func:`_kernel_bias` does), ``(4 / 3) (L + 1)`` for a white one. At most 1."""
+    import scipy.signal
+
+    N = u.size
+    bounds = [(0, N)] if bounds is None else list(bounds)
+    rho = _autocorrelation(u, lag, bounds, 8 * lag)
+    sym = np.concatenate([rho[:0:-1], rho])
+    kernel = 1.0 - np.abs(np.arange(-lag, lag + 1)) / (lag + 1)
+    f = np.convolve(kernel, sym)
+    rel = 2.0 * np.sum(f**2) / f[f.size // 2] ** 2  # times 1 / N_a: the Bartlett variance's relative variance
+    window = kernel / kernel.sum()
+    level = np.zeros_like(influence)
+    for a, b in bounds:
+        mass = scipy.signal.oaconvolve(np.ones(b - a), window, mode="same")
+        level[a:b] = scipy.signal.oaconvolve(influence[a:b] ** 2, window[:, None], mode="same", axes=0)
+        level[a:b] /= np.maximum(mass, 1e-300)[:, None]
+    n_a = level.sum(axis=0) ** 2 / np.maximum((level**2).sum(axis=0), 1e-300)
+    n_a = np.minimum(n_a * (1.0 + 2.0 * np.sum(sym**2) / (1.5 * (lag + 1))), N)
+    return float(min(1.0, np.mean(0.75 * rel / n_a)))

@@ -57,9 +57,11 @@ from adaptive_dd.identification.log_covariance import (  # noqa: F401  (re-expor
     _bartlett_sum,
     _dof_factor,
     _kernel_bias,
+    bandwidth_fraction,
     fixed_b_quantile,
     long_run_factor,
     newey_west,
+    newey_west_parts,
 )
 from adaptive_dd.identification.model import Model, base_regressor
 from adaptive_dd.identification.regression import (
@@ -119,7 +121,12 @@ class LogFit:
         lags beyond the lag: :func:`_kernel_bias`), already in ``cov``.
     quantile : float
         ``c``: ``sigma +- c std`` is the 95 % bound, ``c`` the fixed-b quantile of the Newey-West
-        ``t`` (:func:`fixed_b_quantile`, module docstring), 1.96 and a little more.
+        ``t`` (:func:`fixed_b_quantile` of ``bandwidth``, module docstring), 1.96 and a little more.
+    bandwidth : float
+        ``b``, the fixed-b bandwidth fraction of ``quantile``: the Bartlett variance's relative variance
+        over 4/3, from the scores' changing level and the residual's correlation
+        (:func:`~adaptive_dd.identification.log_covariance.bandwidth_fraction`); about the lag plus
+        one over the rows for stationary scores.
     tau_f, sample_period : float
     regression : Regression
     used : ndarray of bool (n,)
@@ -163,6 +170,7 @@ class LogFit:
     dof_factor: float = 1.0
     kernel_factor: float = 1.0
     quantile: float = NORMAL_975
+    bandwidth: float = 0.0
     offset: Array | None = None
     offset_std: Array | None = None
     columns: int = 0
@@ -380,11 +388,12 @@ def fit_log(
         aug = np.concatenate([phi, *extra], axis=2)
         scale_aug = np.linalg.norm((aug * w[None, :, None]).reshape(-1, aug.shape[2]), axis=0)
         scale_aug = np.where(scale_aug > 0, scale_aug, 1.0)
-        cov_aug, lag = newey_west(aug, res, w, scale_aug, bounds)
+        cov_aug, lag, influence = newey_west_parts(aug, res, w, scale_aug, bounds)
         k = aug.shape[2]
     else:
-        cov_aug, lag = newey_west(phi, res, w, scale, bounds)
+        cov_aug, lag, influence = newey_west_parts(phi, res, w, scale, bounds)
         k = r
+    b_frac = bandwidth_fraction(influence[:, :r], (res * w).sum(axis=1), lag, bounds)
     kernel = _kernel_bias((res * w).sum(axis=1), lag, bounds)
     n_eff, dof = _dof_factor(res, w, lag, bounds, k)
     cov_aug = kernel * dof * cov_aug
@@ -414,7 +423,8 @@ def fit_log(
         n_eff=float(n_eff),
         dof_factor=float(dof),
         kernel_factor=float(kernel),
-        quantile=fixed_b_quantile((lag + 1) / res.shape[0]),
+        quantile=fixed_b_quantile(b_frac),
+        bandwidth=b_frac,
         sample_period=float(sample_period),
         regression=reg,
         used=used,
