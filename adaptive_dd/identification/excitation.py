@@ -13,7 +13,8 @@ regression along one period (D-optimal), ``sum_i Y_i^T diag(1/tau_max^2) Y_i`` o
 of ``m`` points (rows weighted by each joint's torque limit), subject to, at every grid
 point, positions within the limits less a margin, ``|qd| <= velocity limit``,
 ``|qdd| <= acceleration limit`` and ``|tau| <= torque limit`` (the URDF's model, less a
-margin), by ``scipy.optimize.minimize(method="SLSQP")``.
+margin), by ``scipy.optimize.minimize(method="SLSQP")`` with the objective's gradient and the
+limits' Jacobian by the chain rule (:mod:`~adaptive_dd.identification.excitation_gradient`).
 
 The comparison
 --------------
