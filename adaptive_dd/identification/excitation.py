@@ -13,7 +13,8 @@ regression along one period (D-optimal), ``sum_i Y_i^T diag(1/tau_max^2) Y_i`` o
 of ``m`` points (rows weighted by each joint's torque limit), subject to, at every grid
 point, positions within the limits less a margin, ``|qd| <= velocity limit``,
 ``|qdd| <= acceleration limit`` and ``|tau| <= torque limit`` (the URDF's model, less a
-margin), by ``scipy.optimize.minimize(method="SLSQP")``.
+margin), by ``scipy.optimize.minimize(method="SLSQP")`` with the objective's gradient and the
+limits' Jacobian by the chain rule (:mod:`~adaptive_dd.identification.excitation_gradient`).
 
 The comparison
 --------------
@@ -36,6 +37,7 @@ from scipy.optimize import brentq, minimize
 
 from adaptive_dd.benchmark.scenario import Reference
 from adaptive_dd.errors import ParameterError
+from adaptive_dd.identification.excitation_gradient import DesignProblem
 from adaptive_dd.identification.model import Model, arm_model, base_regressor
 
 __all__ = [
@@ -291,12 +293,8 @@ def design_excitation(
     n, K = arm.n_joints, harmonics
     t = np.linspace(0, 1 / f0, grid, endpoint=False)
     x0 = _pack(start or _random_start(model, lim, n, K, f0, t, rng or np.random.default_rng(0)))
-    d = np.sqrt(np.maximum(np.diag(_information(model, _unpack(x0, n, K, f0), t, lim)), 1e-12))
-
-    def cost(x):
-        return -_logdet(_information(model, _unpack(x, n, K, f0), t, lim), d) / model.p
-
-    cons = {"type": "ineq", "fun": lambda x: _constraints(model, _unpack(x, n, K, f0), t, lim)}
+    problem = DesignProblem(model, lim, n, K, f0, t)
+    problem.set_scaling(x0)
     # a box every coefficient must lie in for the limits to hold on its own
     w = 2 * np.pi * f0 * np.arange(1, K + 1)
     amax = np.minimum.reduce(
@@ -308,19 +306,33 @@ def design_excitation(
     ).ravel()
     bounds = list(zip(lim.lower, lim.upper, strict=True)) + [(-a, a) for a in np.concatenate([amax, amax])]
     bar = _design_bar(progress, maxiter, len(x0))
-    res = minimize(
-        cost,
-        np.clip(x0, [b[0] for b in bounds], [b[1] for b in bounds]),
-        method="SLSQP",
-        bounds=bounds,
-        constraints=[cons],
-        options={"maxiter": maxiter, "ftol": 1e-6},
-        callback=None if bar is None else (lambda _x: bar.update(1)),
-    )
+    res = _optimise(problem, x0, bounds, maxiter, None if bar is None else (lambda _x: bar.update(1)))
     if bar is not None:
         bar.close()
     fine = np.linspace(0, 1 / f0, FINE * grid, endpoint=False)
     return _within_limits(model, _unpack(res.x, n, K, f0), fine, lim), res
+
+
+def _optimise(
+    problem: DesignProblem, x0: Array, bounds: list, maxiter: int, callback=None, exact: bool = True
+):
+    """SLSQP on ``problem`` from ``x0`` (clipped into ``bounds``) with the exact derivatives
+    (:mod:`~adaptive_dd.identification.excitation_gradient`); ``exact=False``: scipy's forward
+    differences instead (the design before, kept to compare against)."""
+    lo, hi = (np.array([b[i] for b in bounds]) for i in (0, 1))
+    cons = {"type": "ineq", "fun": problem.constraints}
+    if exact:
+        cons["jac"] = problem.constraints_jacobian
+    return minimize(
+        problem.cost,
+        np.clip(x0, lo, hi),
+        jac=problem.cost_gradient if exact else None,
+        method="SLSQP",
+        bounds=bounds,
+        constraints=[cons],
+        options={"maxiter": maxiter, "ftol": 1e-6},
+        callback=callback,
+    )
 
 
 def _design_bar(show: bool, maxiter: int, size: int):

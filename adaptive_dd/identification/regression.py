@@ -32,7 +32,8 @@ from numpy.typing import ArrayLike, NDArray
 
 from adaptive_dd.errors import DataError, SignalError
 from adaptive_dd.identification.filters import design_filter_bank, filter_record
-from adaptive_dd.identification.model import Model, base_regressor
+from adaptive_dd.identification.model import Model
+from adaptive_dd.plant.chain import regressor_batch
 
 __all__ = [
     "Regression",
@@ -92,17 +93,36 @@ class Regression:
 
 
 def momentum_regressors(model: Model, q: ArrayLike, qd: ArrayLike) -> tuple[Array, Array]:
-    """``Y_p(q, qd)`` and ``Y_r(q, qd)``, each ``(..., n, p)`` (module docstring)."""
+    """``Y_p(q, qd)`` and ``Y_r(q, qd)``, each ``(..., n, p)`` (module docstring).
+
+    ``Y_p(x, qd) = W(x, 0, qd) - W(x, 0, 0)`` is the links' regressor under no gravity (it enters
+    as the base's acceleration, linearly with ``qdd``), one evaluation of the compiled regressor
+    at each of ``q`` and ``q +- e qd``, plus the armature's column ``qd`` (the friction's are 0);
+    ``Y_r``'s friction columns are ``qd`` and ``tanh(qd / v_f)`` (those of ``dY_p/dq qd`` are 0)."""
     q, qd = np.asarray(q, dtype=float), np.asarray(qd, dtype=float)
+    q, qd = np.broadcast_arrays(q, qd)
+    n, ind = model.n, model.independent
+    links = ind < 10 * n  # the links' base columns, then friction and armature (ind is sorted)
+    cols, r = ind[links], int(links.sum())
+    free = model.chain._replace(gravity=np.zeros(3))
     zero = np.zeros_like(q)
 
     def yp(x):
-        return base_regressor(model, x, zero, qd) - base_regressor(model, x, zero, zero)
+        return regressor_batch(free, x, zero, qd)[..., cols]
 
     e = DIRECTION_STEP
-    Yp = yp(q)
-    dYp = (yp(q + e * qd) - yp(q - e * qd)) / (2.0 * e)
-    Yr = base_regressor(model, q, qd, zero) - dYp
+    Yp = np.zeros((*q.shape, model.p))
+    Yr = np.zeros((*q.shape, model.p))
+    Yp[..., :r] = yp(q)
+    Yr[..., :r] = regressor_batch(model.chain, q, qd, zero)[..., cols]
+    Yr[..., :r] -= (yp(q + e * qd) - yp(q - e * qd)) / (2.0 * e)
+    coul = np.tanh(qd / model.friction_velocity)
+    for col, k in zip(range(r, model.p), ind[~links] - 10 * n, strict=True):
+        kind, j = divmod(int(k), n)  # viscous fv_j qd_j, Coulomb fc_j tanh(qd_j / v_f), armature
+        if kind == 2:
+            Yp[..., j, col] = qd[..., j]
+        else:
+            Yr[..., j, col] = (qd if kind == 0 else coul)[..., j]
     return Yp, Yr
 
 
