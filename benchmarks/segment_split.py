@@ -88,7 +88,7 @@ def main() -> None:
                         kk = int(np.searchsorted(t, t0 + lo + 0.01)) - 1
                         ra, ro = (1e3 * np.sqrt(np.mean(x[w] ** 2)) for x in (ea, eo))
                         print(
-                            f"      +{1e3 * lo:3.0f}-{1e3 * (lo + 0.01):3.0f} ms: RMS {ra:.3f} / {ro:.3f} mrad,"
+                            f"      +{1e3 * lo:3.0f}-{1e3 * (lo + 0.01):3.0f} ms: {ra:.3f} / {ro:.3f} mrad,"
                             f" model mass {pay_hat[kk, 0]:.3f} kg"
                         )
 
