@@ -246,6 +246,7 @@ def _detect(c, s, i, eps, act):  # pragma: no cover - compiled
                     s.hold[i, j] = 0.0  # back below: the next rise holds again
             if ok:
                 s.long[i, j] += a_l * (e2 - s.long[i, j])
+                s.plong[i, j] += a_l * (s.pvar[i, j] - s.plong[i, j])
                 s.learned[i, j] = nl + 1
     if cnt[C_K] < ints[I_WARMUP] or cnt[C_SINCE_ALARM] <= ints[I_HOLDOFF]:
         return False
@@ -261,6 +262,8 @@ def _detect(c, s, i, eps, act):  # pragma: no cover - compiled
         nl = s.learned[i, j]
         thr = fl[F_THRESHOLD2] if n_act == ints[I_N_ROWS] else fl[F_THRESHOLD2] * fl[F_SLOW2]
         own = s.seen[i, j] >= ints[I_MIN_LEARNED] and nl >= 1
+        # the share of the level that is the estimate's uncertainty (learnt with it)
+        plev = s.plong[i, j] / (1.0 - (1.0 - a_l) ** nl) if nl >= 1 else 0.0
         if own:
             level = max(s.long[i, j] / (1.0 - (1.0 - a_l) ** nl), fl[F_FLOOR2])
             if s.hold[i, j] > 0.0:  # risen within the hold: the level it had before
@@ -270,6 +273,7 @@ def _detect(c, s, i, eps, act):  # pragma: no cover - compiled
             # alarm, raised by what the new payload adds to the row's noise (_ref_rise), with the
             # stricter threshold (the estimate may still converge)
             level = max(s.ref[i, j] * s.ref_rise[i, j], fl[F_FLOOR2])
+            plev = s.pref[i, j]
             thr = fl[F_THRESHOLD2] * fl[F_SLOW2]
         elif s.ref[i, j] > 0.0 and nl >= ints[I_GATE_AFTER]:
             # past the bound, not yet seen enough: what it learned since (trusted as for the gate)
@@ -283,15 +287,17 @@ def _detect(c, s, i, eps, act):  # pragma: no cover - compiled
         creep2 = 0.0
         if ints[I_SELECT] == 1 and s.since_crawl[i, j] <= ints[I_SEL_MEMORY]:
             creep2 = (fl[F_CREEP_MARGIN] * c.pi0[11 * n + j] / c.w[j]) ** 2
-        # the level plus what the estimate's uncertainty along the row adds (the innovation's
-        # predicted variance), averaged as the squared errors are
-        if s.short[i, j] > thr * (level + s.pshort[i, j]) + 1e-300 and s.short[i, j] > creep2:
+        # the level plus what the estimate's uncertainty along the row (the innovation's predicted
+        # variance, averaged as the squared errors are) exceeds the share the level learnt of it
+        more = max(s.pshort[i, j] - plev, 0.0)
+        if s.short[i, j] > thr * (level + more) + 1e-300 and s.short[i, j] > creep2:
             alarm = True
         if ints[I_FAST] == 1 and own and nl >= ints[I_FAST_LEARNED]:
             # only against a level the row has learned itself over the long window: not the
             # level of before an alarm, nor one still learning a new payload or the arm
             thf = fl[F_FAST2] * thr / fl[F_THRESHOLD2]  # the same slow-row and re-learning factors
-            if s.fast[i, j] > thf * (level + s.pfast[i, j]) + 1e-300 and s.fast[i, j] > creep2:
+            more = max(s.pfast[i, j] - plev, 0.0)
+            if s.fast[i, j] > thf * (level + more) + 1e-300 and s.fast[i, j] > creep2:
                 fast = True
     return alarm or fast
 
@@ -319,11 +325,14 @@ def _alarm(c, s, i, k):  # pragma: no cover - compiled
         # the level this row had established (0: none) serves until it re-learns; kept without
         # the floor (applied where it serves), so that a noise rise scales what was learnt
         s.ref[i, j] = 0.0
+        s.pref[i, j] = 0.0
         if s.seen[i, j] >= ints[I_MIN_LEARNED] and nl >= 1:
             s.ref[i, j] = max(s.long[i, j] / (1.0 - (1.0 - a_l) ** nl), 1e-300)
+            s.pref[i, j] = s.plong[i, j] / (1.0 - (1.0 - a_l) ** nl)
         s.seen[i, j] = 0
         s.learned[i, j] = 0
         s.long[i, j] = 0.0
+        s.plong[i, j] = 0.0
         s.hold[i, j] = 0.0
         s.held[i, j] = 0
     if ints[I_REOPEN_AGAIN] == 1:

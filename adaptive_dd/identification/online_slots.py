@@ -221,8 +221,14 @@ class EstState(NamedTuple):
         sample, ``phi_j^T P phi_j`` in the recursive least squares' own scaling (0 where a row
         was not used): what the estimate's uncertainty adds to the row's noise.
     pshort, pfast : (m, n)
-        Detector: ``pvar`` averaged by the short and the fast average (added to the level the
-        squared errors' averages are judged against, :func:`_detect`).
+        Detector: ``pvar`` averaged by the short and the fast average (what they exceed the
+        level's own share of it by is added to the level the squared errors' averages are
+        judged against, :func:`_detect`).
+    plong : (m, n)
+        Detector: ``pvar`` averaged as the level learns (the share of the level that is the
+        estimate's uncertainty).
+    pref : (m, n)
+        Detector: ``plong`` (bias-corrected) when ``ref`` was set, kept with it.
     """
 
     xf: np.ndarray
@@ -250,6 +256,8 @@ class EstState(NamedTuple):
     pvar: np.ndarray
     pshort: np.ndarray
     pfast: np.ndarray
+    plong: np.ndarray
+    pref: np.ndarray
 
 
 class EstWork(NamedTuple):
