@@ -92,3 +92,20 @@ def test_a_change_along_the_row_back_in_use_is_still_detected(ur5):
     eps[start:, 3] += 8.0
     alarms = _replay(ur5, eps, act, pvar, alarm_at)
     assert len(alarms) >= 1 and start <= alarms[0] <= start + 40, alarms
+
+
+def test_a_steady_predicted_variance_leaves_the_detector_as_it_was(ur5):
+    """The level learns the squared errors, which hold the predicted variance of their time: a
+    row's predicted variance that stays where it was while the level learnt adds nothing. The same
+    errors (unit noise, then a step of 6x on row 0 at 2.5 s) with a steady 3 on every row alarm at
+    the same sample as with none; a predicted variance that rises to 3 with the step (not learnt
+    by the level) raises the threshold: a later alarm, or none."""
+    n, N, start = ur5.n_joints, 3_000, 2_500
+    eps = np.random.default_rng(1).standard_normal((N, n))
+    eps[start:, 0] += 6.0
+    act = np.ones((N, n), dtype=np.bool_)
+    none = _replay(ur5, eps, act, np.zeros((N, n)), alarm_at=None)
+    assert len(none) == 1 and start <= none[0] <= start + 40, none
+    assert _replay(ur5, eps, act, np.full((N, n), 3.0), alarm_at=None) == none
+    late = _replay(ur5, eps, act, np.concatenate((np.zeros((start, n)), np.full((N - start, n), 3.0))), None)
+    assert late == [] or late[0] > none[0], late
