@@ -200,9 +200,10 @@ def _detect(c, s, i, eps, act):  # pragma: no cover - compiled
     The averages are judged against the level plus what the same average of the variance the
     estimate's covariance predicts for the row's prior error (``s.pvar``, ``phi_j^T P phi_j``:
     ``s.pshort``, ``s.pfast``) exceeds the share of it the level learnt (``s.plong``, kept with
-    ``ref`` as ``s.pref``; the level is a mean of ``eps^2``, which holds it): a row whose regressor the estimate has not yet learnt along (the
-    payload re-opened at an alarm and learnt from the other rows while this one was out of use)
-    carries that uncertainty in its prior error, which its noise level does not (random:108:
+    ``ref`` as ``s.pref``; the level is a mean of ``eps^2``, which holds it): a row whose
+    regressor the estimate has not yet learnt along (the payload re-opened at an alarm and learnt
+    from the other rows while this one was out of use) carries that uncertainty in its prior
+    error, which its noise level does not (random:108:
     ``phi_j^T P phi_j`` 90-254 at a row's first sample back in use 0.3 s after the swap's alarm,
     against its level of 0.6; about 0.003 in steady state).
     """
