@@ -1,8 +1,9 @@
 """The compiled online estimator's change detector and what an alarm does.
 
-Per row, short and long averages of the weighted prior errors against a learned level
-(:func:`_detect`, the level's rise at an alarm :func:`_ref_rise`); an alarm re-opens the
-covariance along the payload subspace (:func:`_reopen`) and restarts the levels (:func:`_alarm`).
+Per row, short and long averages of the weighted prior errors against a learned level plus the
+variance the estimate's covariance predicts for them (:func:`_detect`, :func:`_prior_variance`;
+the level's rise at an alarm :func:`_ref_rise`); an alarm re-opens the covariance along the
+payload subspace (:func:`_reopen`) and restarts the levels (:func:`_alarm`).
 ``docs/change_detection.md`` states the rules.
 """
 
@@ -140,6 +141,28 @@ def _ref_rise(c, s, i, q, w):  # pragma: no cover - compiled
 
 
 @njit(cache=True, inline="always")
+def _prior_variance(phi, g, lam):  # pragma: no cover - compiled
+    """``phi^T P phi`` of the covariance ``P`` before :func:`_rls_row`'s update, from what that
+    update leaves in its scratch, ``g = P phi / sqrt(lam + phi^T P phi)``: with
+    ``x = phi . g = v / sqrt(lam + v)``, ``v`` is the positive root of ``v^2 - x^2 v - x^2 lam``,
+    ``(x^2 + x sqrt(x^2 + 4 lam)) / 2`` (O(p), where ``phi^T P phi`` itself costs O(p^2)).
+
+    The prior error of the row is ``eps = e + phi^T (theta* - theta)``, noise ``e`` and the
+    estimate's error: its variance is the noise's plus ``phi^T P phi`` in the recursive least
+    squares' own scaling (each weighted equation's noise taken as of variance 1), the innovation's
+    predicted variance of a Kalman filter on a constant parameter (Gustafsson, "Adaptive Filtering
+    and Change Detection", 2000, ch. 5).
+    """
+    x = 0.0
+    for a in range(phi.shape[0]):
+        x += phi[a] * g[a]
+    if not (x > 0.0 and np.isfinite(x)):
+        return 0.0
+    x2 = x * x
+    return 0.5 * (x2 + x * np.sqrt(x2 + 4.0 * lam))
+
+
+@njit(cache=True, inline="always")
 def _detect(c, s, i, eps, act):  # pragma: no cover - compiled
     """Update the detector of trial i with the rows' prior errors; return True on an alarm.
 
@@ -173,6 +196,16 @@ def _detect(c, s, i, eps, act):  # pragma: no cover - compiled
     alarm on the regression's own modelling error, which varies with the motion. The
     threshold is ``slow^2`` times higher while another row is out of use (a joint that
     is slow or reversing disturbs the others).
+
+    The averages are judged against the level plus what the same average of the variance the
+    estimate's covariance predicts for the row's prior error (``s.pvar``, ``phi_j^T P phi_j``:
+    ``s.pshort``, ``s.pfast``) exceeds the share of it the level learnt (``s.plong``, kept with
+    ``ref`` as ``s.pref``; the level is a mean of ``eps^2``, which holds it): a row whose
+    regressor the estimate has not yet learnt along (the payload re-opened at an alarm and learnt
+    from the other rows while this one was out of use) carries that uncertainty in its prior
+    error, which its noise level does not (random:108:
+    ``phi_j^T P phi_j`` 90-254 at a row's first sample back in use 0.3 s after the swap's alarm,
+    against its level of 0.6; about 0.003 in steady state).
     """
     n = eps.shape[0]
     ints, fl = c.ints, c.floats
@@ -191,6 +224,8 @@ def _detect(c, s, i, eps, act):  # pragma: no cover - compiled
         e2 = e * e
         s.short[i, j] += a_s * (e2 - s.short[i, j])
         s.fast[i, j] += fl[F_ALPHA_FAST] * (e2 - s.fast[i, j])
+        s.pshort[i, j] += a_s * (s.pvar[i, j] - s.pshort[i, j])
+        s.pfast[i, j] += fl[F_ALPHA_FAST] * (s.pvar[i, j] - s.pfast[i, j])
         if learn:
             s.seen[i, j] += 1
             nl = s.learned[i, j]
@@ -213,6 +248,7 @@ def _detect(c, s, i, eps, act):  # pragma: no cover - compiled
                     s.hold[i, j] = 0.0  # back below: the next rise holds again
             if ok:
                 s.long[i, j] += a_l * (e2 - s.long[i, j])
+                s.plong[i, j] += a_l * (s.pvar[i, j] - s.plong[i, j])
                 s.learned[i, j] = nl + 1
     if cnt[C_K] < ints[I_WARMUP] or cnt[C_SINCE_ALARM] <= ints[I_HOLDOFF]:
         return False
@@ -228,6 +264,8 @@ def _detect(c, s, i, eps, act):  # pragma: no cover - compiled
         nl = s.learned[i, j]
         thr = fl[F_THRESHOLD2] if n_act == ints[I_N_ROWS] else fl[F_THRESHOLD2] * fl[F_SLOW2]
         own = s.seen[i, j] >= ints[I_MIN_LEARNED] and nl >= 1
+        # the share of the level that is the estimate's uncertainty (learnt with it)
+        plev = s.plong[i, j] / (1.0 - (1.0 - a_l) ** nl) if nl >= 1 else 0.0
         if own:
             level = max(s.long[i, j] / (1.0 - (1.0 - a_l) ** nl), fl[F_FLOOR2])
             if s.hold[i, j] > 0.0:  # risen within the hold: the level it had before
@@ -237,6 +275,7 @@ def _detect(c, s, i, eps, act):  # pragma: no cover - compiled
             # alarm, raised by what the new payload adds to the row's noise (_ref_rise), with the
             # stricter threshold (the estimate may still converge)
             level = max(s.ref[i, j] * s.ref_rise[i, j], fl[F_FLOOR2])
+            plev = s.pref[i, j]
             thr = fl[F_THRESHOLD2] * fl[F_SLOW2]
         elif s.ref[i, j] > 0.0 and nl >= ints[I_GATE_AFTER]:
             # past the bound, not yet seen enough: what it learned since (trusted as for the gate)
@@ -250,13 +289,17 @@ def _detect(c, s, i, eps, act):  # pragma: no cover - compiled
         creep2 = 0.0
         if ints[I_SELECT] == 1 and s.since_crawl[i, j] <= ints[I_SEL_MEMORY]:
             creep2 = (fl[F_CREEP_MARGIN] * c.pi0[11 * n + j] / c.w[j]) ** 2
-        if s.short[i, j] > thr * level + 1e-300 and s.short[i, j] > creep2:
+        # the level plus what the estimate's uncertainty along the row (the innovation's predicted
+        # variance, averaged as the squared errors are) exceeds the share the level learnt of it
+        more = max(s.pshort[i, j] - plev, 0.0)
+        if s.short[i, j] > thr * (level + more) + 1e-300 and s.short[i, j] > creep2:
             alarm = True
         if ints[I_FAST] == 1 and own and nl >= ints[I_FAST_LEARNED]:
             # only against a level the row has learned itself over the long window: not the
             # level of before an alarm, nor one still learning a new payload or the arm
             thf = fl[F_FAST2] * thr / fl[F_THRESHOLD2]  # the same slow-row and re-learning factors
-            if s.fast[i, j] > thf * level + 1e-300 and s.fast[i, j] > creep2:
+            more = max(s.pfast[i, j] - plev, 0.0)
+            if s.fast[i, j] > thf * (level + more) + 1e-300 and s.fast[i, j] > creep2:
                 fast = True
     return alarm or fast
 
@@ -284,11 +327,14 @@ def _alarm(c, s, i, k):  # pragma: no cover - compiled
         # the level this row had established (0: none) serves until it re-learns; kept without
         # the floor (applied where it serves), so that a noise rise scales what was learnt
         s.ref[i, j] = 0.0
+        s.pref[i, j] = 0.0
         if s.seen[i, j] >= ints[I_MIN_LEARNED] and nl >= 1:
             s.ref[i, j] = max(s.long[i, j] / (1.0 - (1.0 - a_l) ** nl), 1e-300)
+            s.pref[i, j] = s.plong[i, j] / (1.0 - (1.0 - a_l) ** nl)
         s.seen[i, j] = 0
         s.learned[i, j] = 0
         s.long[i, j] = 0.0
+        s.plong[i, j] = 0.0
         s.hold[i, j] = 0.0
         s.held[i, j] = 0
     if ints[I_REOPEN_AGAIN] == 1:

@@ -244,6 +244,11 @@ def est_init(
         ref_rise=np.ones((m, n)),
         start_pay=np.zeros((m, 10)),
         start_mass=theta[:, p - 10].copy(),
+        pvar=np.zeros((m, n)),
+        pshort=np.zeros((m, n)),
+        pfast=np.zeros((m, n)),
+        plong=np.zeros((m, n)),
+        pref=np.zeros((m, n)),
     )
     for i in range(m):  # the payload the model control uses at the start
         K.est_payload_trial(c, state, i, state.start_pay[i])

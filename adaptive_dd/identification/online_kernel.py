@@ -23,7 +23,8 @@ One sample, per trial:
    threshold for the filters' memory;
 4. RLS of eq. (14), one scalar update per used joint equation (row weights ``w``);
    the forgetting factor advances once per sample, at the first used row;
-5. the change detector on the rows' prior errors (:func:`_detect`); on an alarm the
+5. the change detector on the rows' prior errors and the variances the covariance predicts for
+   them (:func:`_prior_variance`, :func:`_detect`); on an alarm the
    covariance is re-opened along the payload subspace (and once more when the
    filters' memory has passed the alarm).
 """
@@ -49,6 +50,7 @@ from adaptive_dd.identification.online_detector import (  # noqa: F401 (re-expor
     _alarm,
     _detect,
     _detect_step,
+    _prior_variance,
     _ref_rise,
     _reopen,
     est_detect_trial,
@@ -204,11 +206,14 @@ def est_step_trial_in(c, s, i, q, qd, tau, w):  # pragma: no cover - compiled
                 nl = s.learned[i, j]
                 s.short[i, j] = s.long[i, j] / (1.0 - (1.0 - fl[F_ALPHA_LONG]) ** nl)
                 s.fast[i, j] = s.short[i, j]
+                s.pshort[i, j] = 0.0  # the level holds what the estimate's uncertainty adds in use
+                s.pfast[i, j] = 0.0
         else:
             act[j] = True
         act[j] = act[j] and usable and j < n_rows
     for j in range(n):
         s.eps[i, j] = np.nan
+        s.pvar[i, j] = 0.0
     th, Pi = s.theta[i], s.P[i]
     if usable:
         phi, y = w.phi, w.y
@@ -226,6 +231,7 @@ def est_step_trial_in(c, s, i, q, qd, tau, w):  # pragma: no cover - compiled
             for k in range(p):
                 row[k] = phi[j, k] / wj
             s.eps[i, j] = _rls_row(th, Pi, row, y[j] / wj, lam_eff, pphi, nz)
+            s.pvar[i, j] = _prior_variance(row, pphi, lam_eff) if np.isfinite(s.eps[i, j]) else 0.0
         if not first and fl[F_CAP] > 0.0:
             tr = 0.0
             for k in range(p):

@@ -216,6 +216,19 @@ class EstState(NamedTuple):
         :func:`_keep_start`).
     start_mass : (m,)
         The estimate's payload mass at the start [kg].
+    pvar : (m, n)
+        The variance the estimate's covariance predicts for each row's prior error at the last
+        sample, ``phi_j^T P phi_j`` in the recursive least squares' own scaling (0 where a row
+        was not used): what the estimate's uncertainty adds to the row's noise.
+    pshort, pfast : (m, n)
+        Detector: ``pvar`` averaged by the short and the fast average (what they exceed the
+        level's own share of it by is added to the level the squared errors' averages are
+        judged against, :func:`_detect`).
+    plong : (m, n)
+        Detector: ``pvar`` averaged as the level learns (the share of the level that is the
+        estimate's uncertainty).
+    pref : (m, n)
+        Detector: ``plong`` (bias-corrected) when ``ref`` was set, kept with it.
     """
 
     xf: np.ndarray
@@ -240,6 +253,11 @@ class EstState(NamedTuple):
     ref_rise: np.ndarray
     start_pay: np.ndarray
     start_mass: np.ndarray
+    pvar: np.ndarray
+    pshort: np.ndarray
+    pfast: np.ndarray
+    plong: np.ndarray
+    pref: np.ndarray
 
 
 class EstWork(NamedTuple):
