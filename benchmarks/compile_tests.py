@@ -12,7 +12,10 @@ in every process (``-p compile_tests``, xdist's workers included): a listener on
 argument types, the CPU seconds inside it with its callees (``incl``) and without them
 (``self``), and the test that was running. Prints, over all processes: the run's wall time, the
 CPU seconds of the processes and of compilation, one row per compiled function (count,
-signatures, incl, self; largest self first) and the tests whose compilations took the most CPU.
+signatures, incl, self; largest self first), the tests whose compilations took the most CPU and
+the tests and test files whose own CPU apart from those compilations (each test's process CPU
+from its set-up to its tear-down, less the compilations it started) is the largest; a test run
+in a subprocess (the CLI's, a script's) is not counted there.
 CPU seconds (``time.process_time``), not wall time: other work on a shared machine stretches the
 wall clock far more; read them beside the load printed. Asserts nothing: a measurement.
 """
@@ -25,6 +28,7 @@ import time
 
 _OUT = os.environ.get("ADAPTIVE_DD_COMPILE_RECORD")
 _test = ["(collection)"]
+_cpu: list = []  # (test, CPU s of this process from its set-up to its tear-down)
 
 
 def _listener():
@@ -56,26 +60,38 @@ def _listener():
 _rec = _listener() if _OUT else None
 
 
-def pytest_runtest_protocol(item, nextitem):
+def _protocol(item, nextitem):
     _test[0] = item.nodeid
+    t0 = time.process_time()
+    yield
+    _cpu.append((item.nodeid, time.process_time() - t0))
+
+
+try:  # a hook wrapper: pytest is importable wherever this plug-in is loaded
+    import pytest
+
+    pytest_runtest_protocol = pytest.hookimpl(hookwrapper=True)(_protocol)
+except ImportError:  # pragma: no cover - the report alone
+    pass
 
 
 def pytest_sessionfinish(session):
     if _rec is not None:
         name = f"{os.environ.get('PYTEST_XDIST_WORKER', 'main')}-{os.getpid()}.json"
         with open(os.path.join(_OUT, name), "w") as f:
-            json.dump({"done": _rec.done, "cpu": time.process_time()}, f)
+            json.dump({"done": _rec.done, "cpu": time.process_time(), "tests": _cpu}, f)
 
 
 def _report(folder: str, top: int) -> None:
     from collections import defaultdict
 
-    done, cpu = [], 0.0
+    done, cpu, tests = [], 0.0, []
     for name in sorted(os.listdir(folder)):
         with open(os.path.join(folder, name)) as f:
             j = json.load(f)
         cpu += j["cpu"]
         done += j["done"]
+        tests += j.get("tests", [])
     outer = [e for e in done if e["depth"] == 0]
     print(f"test processes' CPU {cpu:.1f} s, of which compiling {sum(e['incl'] for e in outer):.1f} s "
           f"({len(done)} compilations)")  # fmt: skip
@@ -94,6 +110,16 @@ def _report(folder: str, top: int) -> None:
         per_test[e["test"]] += e["incl"]
     print("\ntests by the CPU seconds of the compilations they started")
     for t, v in sorted(per_test.items(), key=lambda kv: -kv[1])[:top]:
+        print(f"{v:6.1f}  {t}")
+    own = [(t, c - per_test.get(t, 0.0)) for t, c in tests]
+    print(f"\ntests by their own CPU seconds apart from compilation ({sum(v for _, v in own):.1f} s in all)")
+    for t, v in sorted(own, key=lambda kv: -kv[1])[:top]:
+        print(f"{v:6.1f}  {t}")
+    per_file: dict = defaultdict(float)
+    for t, v in own:
+        per_file[t.split("::")[0]] += v
+    print("\ntest files by their tests' own CPU seconds apart from compilation")
+    for t, v in sorted(per_file.items(), key=lambda kv: -kv[1])[:top]:
         print(f"{v:6.1f}  {t}")
 
 

@@ -169,6 +169,27 @@ def test_the_estimator_step_compiles_once_for_the_loop_and_the_estimator_alone()
                 assert "est_step_trial_in" not in f.py_func.__code__.co_names, (mod.__name__, name)
 
 
+def test_the_n_joint_law_compiles_once_for_the_batch_and_the_second_process():
+    """``law_trial`` (one trial, as a cold benchmark's second process and the tests call it) and
+    ``law_batch``'s loop (the Python path's controllers) share one compiled law: the loop calls
+    ``law_trial``, it does not inline the law a second time."""
+    from adaptive_dd.closed_loop import laws as L
+    from adaptive_dd.closed_loop.controllers import SlotineLi
+
+    sc = _ur5()
+    T, n, arm = sc.sample_period, sc.n_joints, sc.arm
+    cfg = SlotineLi(arm).law_config(T)
+    q, qd, ref, out = np.full(n, 0.1), np.zeros(n), np.zeros((3, n)), np.empty(n)
+    one = L.LawState.start(cfg, 1)  # as the second process calls it (precompile.second_process)
+    pi_true = np.zeros(13 * n)
+    L.law_trial(arm.chain, cfg, pi_true, one.pi_model[0], one.theta[0], 0, one.obs[0], q, qd, *ref, out)
+    tau = L.law_batch(arm.chain, cfg, L.LawState.start(cfg, 2), np.stack([q, q]), np.stack([qd, qd]), *ref)
+    assert np.all(np.isfinite(out)) and np.any(out != 0.0)
+    np.testing.assert_array_equal(tau, np.stack([out, out]))  # the batch is the one-trial law
+    assert len(_specialisations(L.law_trial)) == 1, _specialisations(L.law_trial)
+    assert "law_trial_in" not in L._law_loop.py_func.__code__.co_names
+
+
 def test_the_friction_law_as_a_record_compiles_its_family_alone():
     """The closed loop's plant holds the law as a record (:func:`friction_law`): the step it
     compiles calls one family's integrator (a stick-slip arm does not compile ``_smooth`` and its

@@ -467,11 +467,12 @@ def law_trial_in(
 
 @njit(cache=True)
 def _law_loop(ch, cfg, pi_true, st, q, qd, q_d, qd_d, qdd_d, out):  # pragma: no cover - compiled
-    work = law_work(q.shape[1])  # one per call: trials run one after the other here
+    """:func:`law_trial` for every trial: one compiled law for this loop and :func:`law_trial`'s
+    other callers (inlining the law here compiled it a second time)."""
     for i in range(q.shape[0]):
-        law_trial_in(
+        law_trial(
             ch, cfg, pi_true[i], st.pi_model[i], st.theta[i], st.since_alarm[i], st.obs[i],
-            q[i], qd[i], q_d, qd_d, qdd_d, work, out[i],
+            q[i], qd[i], q_d, qd_d, qdd_d, out[i],
         )  # fmt: skip
 
 
