@@ -22,15 +22,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = [
-    "NOISE_SIGMAS",
-    "boost_bandwidths",
-    "detection_horizon",
-    "observer_bandwidth_for",
-    "observer_noise_gain",
-    "observer_task",
-    "task_room",
-]
+__all__ = ["NOISE_SIGMAS", "boost_bandwidths", "task_room"]
 
 Array = NDArray[np.float64]
 
@@ -94,101 +86,3 @@ def boost_bandwidths(
         wb = np.where(lower, w + 0.98 * (wb - w), wb)
         wb = np.where(none_left | (wb - w < 1e-3 * w), w, wb)
     return wb
-
-
-def observer_noise_gain(beta: float, sample_period: float) -> float:
-    """``sum_k h_k^2 / T^2`` of the residual observer's path from the measured velocity to ``r``:
-    the momentum's difference over a sample ``(1 - z^-1) / T`` through its two stages
-    ``((1 - a) / (1 - a z^-1))^2``, ``a = exp(-beta T)``. Times ``sum_l M_jl^2 var_qd,l`` it is
-    the variance of joint j's ``r`` from the velocity noise (the level the observer learns)."""
-    T = float(sample_period)
-    a = float(np.exp(-beta * T))
-    k = np.arange(int(np.ceil(60.0 / max(beta * T, 1e-9))) + 2)
-    s = (1.0 - a) ** 2 * (k + 1) * a**k  # the two stages' impulse response
-    h = s - np.concatenate([[0.0], s[:-1]])  # times (1 - z^-1)
-    return float(np.sum(h**2) / T**2)
-
-
-def observer_bandwidth_for(
-    cap: float,
-    bandwidth: Array,
-    damping: float,
-    inertia: Array,
-    load: Array,
-    velocity_variance: Array,
-    horizon: int,
-    sample_period: float,
-) -> float:
-    """The residual observer's bandwidth [rad/s] (module :func:`observer_bandwidth_for` docstring
-    in ``docs/change_detection.md``): the one of ``OBSERVER_GRID`` bandwidths from the law's own
-    bandwidth up to ``cap`` that minimises the tracking error a step of the rated payload's torque
-    leaves over the ``horizon`` samples before the detector can see it.
-
-    At each of the task's instants (``inertia (K, n, n)``, ``load (K, n)`` the rated payload's
-    gravity torque there) the step ``d`` is passed by the observer as ``soft(d s(t), 3 sigma)``
-    (``s`` its two stages' step response, ``sigma`` the velocity noise's RMS in ``r``,
-    :func:`observer_noise_gain`: the threshold the observer learns); what it does not pass drives
-    the law's error dynamics ``e'' + 2 zeta w e' + w^2 e = M^-1 u``. A higher bandwidth passes the
-    step sooner but holds back more of it behind its threshold, which grows as ``bandwidth^1.5``.
-    """
-    T = float(sample_period)
-    w = np.broadcast_to(np.asarray(bandwidth, dtype=float), load.shape[1:])
-    M = np.asarray(inertia, dtype=float)
-    Minv = np.linalg.inv(M)
-    noise = np.sqrt(np.einsum("kjl,l->kj", M**2, np.asarray(velocity_variance, dtype=float)))
-    # swaps of every size up to the rated payload, equally likely: its torque times SIZES
-    d = np.asarray(load, dtype=float)[None] * ((np.arange(SIZES) + 0.5) / SIZES)[:, None, None]
-    M, Minv, noise = (np.broadcast_to(x[None], d.shape[:1] + x.shape) for x in (M, Minv, noise))
-    H = max(int(horizon), 1)
-    grid = np.geomspace(max(float(np.max(w)), 1.0), float(cap), OBSERVER_GRID)
-    cost = np.empty(grid.shape)
-    for g, beta in enumerate(grid):
-        a = np.exp(-beta * T)
-        k = np.arange(1, H + 1)
-        s = 1.0 - a**k - k * (1.0 - a) * a**k  # the two stages' step response (k samples)
-        thr = 3.0 * noise * np.sqrt(observer_noise_gain(beta, T))  # (K, n)
-        passed = np.sign(d)[None] * np.maximum(np.abs(d)[None] * s[:, None, None, None] - thr[None], 0.0)
-        u = d[None] - passed  # (H, K, n) the torque left to the feedback
-        acc = np.einsum("mkjl,hmkl->hmkj", Minv, u)
-        e = np.zeros(d.shape)
-        ed = np.zeros(d.shape)
-        total = 0.0
-        for h in range(H):  # the error dynamics, semi-implicit Euler at the sample period
-            ed += T * (acc[h] - 2.0 * damping * w * ed - w**2 * e)
-            e += T * ed
-            total += float(np.sum(e**2))
-        cost[g] = total
-    return float(grid[int(np.argmin(cost))])
-
-
-SIZES = 8
-"""Swap sizes (shares of the rated payload, evenly spaced) over which the error is summed."""
-OBSERVER_GRID = 24
-"""Bandwidths tried by :func:`observer_bandwidth_for`, spaced evenly in log between the law's
-bandwidth and the cap."""
-
-
-def observer_task(scenario, step: float = 0.05) -> tuple[Array, Array] | None:
-    """``(inertia (K, n, n), load (K, n))`` for :func:`observer_bandwidth_for`: the arm's inertia
-    carrying its rated payload (the observer's noise is highest then) and that payload's gravity
-    torque (at the flange's frame) at the reference's instants every ``step`` s; None when the arm
-    states no payload capacity."""
-    arm = scenario.arm
-    cap = getattr(arm, "payload_capacity", None)
-    if cap is None or not cap > 0:
-        return None
-    t = np.arange(0.0, scenario.duration, step)
-    q, _, _ = scenario.reference.sample(t)
-    q = np.asarray(q, dtype=float)
-    inertia = arm.mass_matrix(q, arm.sigma_with_payload(cap))
-    dsig = arm.sigma_with_payload(cap) - arm.sigma_with_payload(0.0)
-    zero = np.zeros_like(q)
-    return inertia, arm.regressor(q, zero, zero) @ dsig
-
-
-def detection_horizon(online, sample_period: float) -> int:
-    """Samples a row out of use through a swap may take to come back (the data selection's
-    memory; the filters' taint without a selection): how long the detector may not see a swap,
-    the horizon of :func:`observer_bandwidth_for`."""
-    memory = online.selection[1] if online.selection is not None else online.taint
-    return int(np.ceil(memory * online.tau_f / sample_period - 1e-9))

@@ -434,17 +434,13 @@ class AdaptiveCT(Law):
             )
         self.observer, self.observer_bw = _observer_settings(self.name, self.settings)
         self.task: tuple[Array, Array] | None = None
-        self.obs_task: tuple[Array, Array] | None = None
-        self._obs_slow: dict[float, float] = {}
 
     def state_task(self, scenario) -> None:
         """Take the task's torque room from ``scenario`` (:func:`~adaptive_dd.closed_loop.boost.task_room`):
         the boost's bandwidth per joint follows from it and the sensors' noise (:meth:`boost_bandwidths`)."""
-        from adaptive_dd.closed_loop.boost import observer_task, task_room
+        from adaptive_dd.closed_loop.boost import task_room
 
         self.task = task_room(scenario)
-        self.obs_task = observer_task(scenario)
-        self._obs_slow = {}
 
     def boost_bandwidths(self) -> Array:
         """The boost's bandwidth per joint [rad/s]: ``boost_bandwidth`` on every joint without a
@@ -471,26 +467,8 @@ class AdaptiveCT(Law):
             boost_samples=round(self.boost_duration / sample_period),
             boost_ramp=round(self.boost_ramp / sample_period), observer=self.observer,
             obs_a=float(np.exp(-beta * T)), obs_alpha=min(1.0, T / OBSERVER_LEVEL_WINDOW),
-            obs_warmup=round(OBSERVER_WARMUP / T), obs_a_slow=float(np.exp(-self.slow_observer(T) * T)),
+            obs_warmup=round(OBSERVER_WARMUP / T),
         )  # fmt: skip
-
-    def slow_observer(self, sample_period: float) -> float:
-        """The residual observer's slow bandwidth [rad/s] (inf: no slow chain): derived from the
-        task (:func:`~adaptive_dd.closed_loop.boost.observer_bandwidth_for`) when the observer's
-        bandwidth is not set and the arm states its payload capacity."""
-        T = float(sample_period)
-        if not self.observer or self.observer_bw is not None or self.obs_task is None:
-            return np.inf
-        if T not in self._obs_slow:
-            from adaptive_dd.closed_loop.boost import detection_horizon, observer_bandwidth_for
-
-            M, load = self.obs_task
-            var_qd = np.broadcast_to(self.arm.sensor.velocity_variance, load.shape[1:])
-            H = detection_horizon(self.online, T)
-            w = np.asarray(self.gains.bandwidth, dtype=float)
-            beta = observer_bandwidth_for(observer_bandwidth(T), w, self.gains.damping, M, load, var_qd, H, T)
-            self._obs_slow[T] = np.inf if beta >= observer_bandwidth(T) else beta
-        return self._obs_slow[T]
 
     def compiled_form(self, n_trials, sample_period):
         cfg = self.law_config(sample_period)

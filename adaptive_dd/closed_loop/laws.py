@@ -65,7 +65,7 @@ from adaptive_dd.closed_loop.adaptation import (
 )
 from adaptive_dd.closed_loop.composite import ICL_ROWS, composite_term
 from adaptive_dd.closed_loop.residual_observer import OBS_ROWS as O_ROWS
-from adaptive_dd.closed_loop.residual_observer import _observe, observe_applied, observe_slow
+from adaptive_dd.closed_loop.residual_observer import _observe, observe_applied
 from adaptive_dd.plant.chain import body_slotine_li_regressor_in, mass_matrix_in, rnea_ref_in, workspace
 
 __all__ = [
@@ -169,10 +169,6 @@ class LawConfig(NamedTuple):
         [s] Integral concurrent learning's integration window.
     nat_gain : float
         The natural law's scalar gain ``gamma``.
-    obs_a_slow : float
-        ``exp(-beta_slow T)`` of the residual observer's slow chain (0: none). With it the
-        observer's output is its slow chain's, but within a boost, where its fast chain's
-        (``obs_a``) is (:func:`~adaptive_dd.closed_loop.residual_observer.observe_slow`).
     """
 
     kind: int
@@ -210,7 +206,6 @@ class LawConfig(NamedTuple):
     adapt_kind: int = 0
     icl_window: float = 0.0
     nat_gain: float = 0.0
-    obs_a_slow: float = 0.0
 
 
 class LawState(NamedTuple):
@@ -453,15 +448,7 @@ def law_trial_in(
     if boosting:
         _boost_feedback(cfg, since_alarm, e, ed, v)
         _add_nominal_inertia(ch, cfg, q, v, work, out)
-    if cfg.observer and cfg.obs_a_slow > 0.0:  # two chains: the fast one's output in v, the slow one's in s
-        for j in range(n):
-            v[j] = 0.0
-        _observe(ch, cfg, pi_model, q, qd, obs, work, v)
-        observe_slow(cfg, obs, s)
-        src = v if boosting else s
-        for j in range(n):
-            out[j] += src[j]
-    elif cfg.observer:
+    if cfg.observer:
         _observe(ch, cfg, pi_model, q, qd, obs, work, out)
 
 

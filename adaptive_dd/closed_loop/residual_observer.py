@@ -33,7 +33,6 @@ __all__ = [
     "O_LEVEL",
     "O_R",
     "observe_applied",
-    "observe_slow",
 ]
 
 # rows of the observer's per-trial state LawState.obs (S, OBS_ROWS, n)
@@ -43,10 +42,7 @@ O_Q, O_QD = 2, 3  # the last fresh measurement
 O_TAU = 4  # the applied torques summed since that measurement [N m] (written by the closed loop)
 O_COUNT = 5  # [0]: observer updates so far, [1]: samples summed in O_TAU
 O_R1 = 6  # the first stage's output (two stages)
-O_RHO = 7  # this sample's mean residual rho (the stages' input), for the slow chain
-O_M = 8  # [0]: samples in this update's rho (0: no update), [1]: 1 if the level stepped
-O_S, O_S1, O_SLEVEL = 9, 10, 11  # the slow chain's output, first stage and level (observe_slow)
-OBS_ROWS = O_SLEVEL + 1
+OBS_ROWS = O_R1 + 1
 
 
 @njit(cache=True)
@@ -89,9 +85,7 @@ def _observe(ch, cfg, pi, q, qd, obs, work, out):  # pragma: no cover - compiled
     for j in range(n):
         held = held and q[j] == obs[O_Q, j] and qd[j] == obs[O_QD, j]
     m = obs[O_COUNT, 1]
-    obs[O_M, 0], obs[O_M, 1] = 0.0, 0.0
     if obs[O_COUNT, 0] >= 1.0 and m >= 1.0 and not held:
-        obs[O_M, 0] = m
         pw = work[7]
         _momentum(ch, pi, obs[O_Q], obs[O_QD], work, pw[0], pw[1])
         _momentum(ch, pi, q, qd, work, pw[2], pw[3])
@@ -100,13 +94,11 @@ def _observe(ch, cfg, pi, q, qd, obs, work, out):  # pragma: no cover - compiled
             rho = obs[O_TAU, j] / m - 0.5 * (pw[1, j] + pw[3, j]) - (pw[2, j] - pw[0, j]) / (m * cfg.T)
             if not np.isfinite(rho):
                 continue
-            obs[O_RHO, j] = rho
             if cfg.obs_stages == 2:
                 obs[O_R1, j] = am * obs[O_R1, j] + (1.0 - am) * rho
                 rho = obs[O_R1, j]
             obs[O_R, j] = am * obs[O_R, j] + (1.0 - am) * rho
     if not held:
-        obs[O_M, 1] = 1.0
         c = obs[O_COUNT, 0] + 1.0
         bias = 1.0 - (1.0 - cfg.obs_alpha) ** c
         for j in range(n):
@@ -128,42 +120,3 @@ def _observe(ch, cfg, pi, q, qd, obs, work, out):  # pragma: no cover - compiled
             out[j] += r - thr
         elif r < -thr:
             out[j] += r + thr
-
-
-@njit(cache=True, inline="always")
-def observe_slow(cfg, obs, out):  # pragma: no cover - compiled
-    """The slow chain (``cfg.obs_a_slow``): the mean residual :func:`_observe` took this sample
-    (``O_RHO``, over ``O_M[0]`` samples) through two stages at the slow bandwidth, its own level
-    learnt as :func:`_observe` learns its own (the same count, window and winsorising), its
-    output soft-thresholded at ``obs_kappa`` times that level written to ``out`` (n,). Call it
-    after :func:`_observe` at each sample."""
-    n = out.shape[0]
-    m = obs[O_M, 0]
-    if m >= 1.0:
-        am = cfg.obs_a_slow**m
-        for j in range(n):
-            rho = obs[O_RHO, j]
-            if cfg.obs_stages == 2:
-                obs[O_S1, j] = am * obs[O_S1, j] + (1.0 - am) * rho
-                rho = obs[O_S1, j]
-            obs[O_S, j] = am * obs[O_S, j] + (1.0 - am) * rho
-    c = obs[O_COUNT, 0]
-    if obs[O_M, 1] == 1.0 and c >= 1.0:
-        bias = 1.0 - (1.0 - cfg.obs_alpha) ** c
-        for j in range(n):
-            r2 = obs[O_S, j] * obs[O_S, j]
-            if c > cfg.obs_warmup:
-                r2 = min(r2, cfg.obs_kappa**2 * obs[O_SLEVEL, j] / bias)
-            obs[O_SLEVEL, j] += cfg.obs_alpha * (r2 - obs[O_SLEVEL, j])
-    for j in range(n):
-        out[j] = 0.0
-    if c <= cfg.obs_warmup:
-        return
-    bias = 1.0 - (1.0 - cfg.obs_alpha) ** c
-    for j in range(n):
-        thr = cfg.obs_kappa * np.sqrt(obs[O_SLEVEL, j] / bias)
-        r = obs[O_S, j]
-        if r > thr:
-            out[j] = r - thr
-        elif r < -thr:
-            out[j] = r + thr
