@@ -1,0 +1,102 @@
+"""Where a drawn arm's loaded segments lose to their floor: adaptive_ct's excess squared error split
+at the alarm and at the payload's convergence.
+
+Runs ``benchmarks/scenarios/population.toml`` on ``random:ARM`` for each ARM given (as ``benchmark
+--arms`` does; ``ct_oracle`` and ``adaptive_ct``) and prints, per seed and per segment after a
+swap, the segment's ratio (adaptive_ct / ct_oracle RMS), the alarm's delay, the time after which
+the control model's payload mass stays within 5 % of the truth, and the excess squared error
+``sum(e_a^2 - e_o^2)`` over the segment as a share of the floor's ``sum(e_o^2)``, split into
+before the first alarm in the segment, from it to that convergence, and after (the three add to
+``ratio^2 - 1``). Each arm's first line is adaptive_ct's slow observer chain's bandwidth
+(``docs/change_detection.md``). ``--detail`` adds the first 0.3 s in 10 ms windows and the model's payload
+at a few instants. Asserts nothing.
+
+Run: ``PYTHONPATH=. python benchmarks/segment_split.py ARM [ARM ...] [--seeds 3] [--observer-bandwidth B]``
+(``B``: adaptive_ct's ``observer_bandwidth``, one chain at B rad/s).
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+from pathlib import Path
+
+import numpy as np
+
+from adaptive_dd.benchmark.population import population_scenario
+from adaptive_dd.benchmark.runner import run_benchmark, scenario_controller
+from adaptive_dd.benchmark.scenario import read_toml
+from adaptive_dd.benchmark.scenario_settings import with_settings
+
+TEMPLATE = Path(__file__).resolve().parent / "scenarios" / "population.toml"
+
+
+def _segment(t, ea, eo, pay_hat, pay_true, alarms, t0, t1):
+    m = (t >= t0) & (t < t1)
+    floor = np.sum(eo[m] ** 2)
+    ratio = np.sqrt(np.sum(ea[m] ** 2) / floor)
+    inside = [x for x in alarms if t0 <= x < t1]
+    ta = inside[0] if inside else t1
+    mt, mh, tt = pay_true[m, 0], pay_hat[m, 0], t[m]
+    ok = np.abs(mh - mt) <= 0.05 * max(float(np.max(mt)), 1e-9) + 1e-12
+    bad = np.flatnonzero(~ok)
+    if not len(bad):
+        tc = tt[0]
+    else:
+        tc = tt[bad[-1] + 1] if bad[-1] + 1 < len(tt) else t1
+    tc = max(tc, ta)
+    ex = ea**2 - eo**2
+    parts = [ex[m & (t < ta)].sum(), ex[m & (t >= ta) & (t < tc)].sum(), ex[m & (t >= tc)].sum()]
+    return ratio, ta - t0, tc - t0, [p / floor for p in parts], inside[1:]
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(allow_abbrev=False)
+    ap.add_argument("arms", type=int, nargs="+", help="the arms' seeds (random:ARM)")
+    ap.add_argument("--seeds", type=int, default=3)
+    ap.add_argument("--observer-bandwidth", type=float, default=None)
+    ap.add_argument("--detail", action="store_true")
+    args = ap.parse_args()
+    for arm in args.arms:
+        sc = population_scenario(read_toml(TEMPLATE), str(TEMPLATE), arm)
+        sc = dataclasses.replace(sc, seeds=args.seeds, controllers=("ct_oracle", "adaptive_ct"))
+        if args.observer_bandwidth is not None:
+            sc = with_settings(sc, "adaptive_ct", {"observer_bandwidth": args.observer_bandwidth})
+        _, law = scenario_controller(sc, "adaptive_ct")
+        slow = law.slow_observer(sc.sample_period)
+        slow = "none" if np.isinf(slow) else f"{slow:.0f} rad/s"
+        print(f"random:{arm}: adaptive_ct's slow observer chain {slow}")
+        res = run_benchmark(sc, progress=False, keep_trajectories=args.seeds)
+        t = res.t
+        a, o = res.runs["adaptive_ct"], res.runs["ct_oracle"]
+        sh = np.asarray(a.sigma_hat)
+        masses = [round(float(x), 3) for x in sc.swap_masses]
+        print(f"random:{arm} ({sc.arm.n_joints} joints): swaps at {sc.swap_times} s of {masses} kg")
+        for s in range(args.seeds):
+            ea, eo = a.e_norm[s].astype(float), o.e_norm[s].astype(float)
+            alarms = [float(x) for x in (a.alarm_times or [[]] * args.seeds)[s]]
+            pay_hat = sc.arm.payload_from_sigma(sh[s]).params
+            pay_true = sc.arm.payload_from_sigma(np.broadcast_to(res.sigma_true, sh[s].shape)).params
+            print(f"  seed {s}: alarms {[round(x, 3) for x in alarms]} s")
+            for k, t0 in enumerate(sc.swap_times):
+                t1 = sc.swap_times[k + 1] if k + 1 < len(sc.swap_times) else sc.duration
+                ratio, da, dc, p, extra = _segment(t, ea, eo, pay_hat, pay_true, alarms, t0, t1)
+                print(
+                    f"    segment {k + 2} ({t0:g}-{t1:g} s): ratio {ratio:.3f}, alarm +{1e3 * da:.0f} ms, "
+                    f"mass within 5 % from +{1e3 * dc:.0f} ms; excess / floor: before the alarm "
+                    f"{p[0]:+.3f}, alarm to convergence {p[1]:+.3f}, after {p[2]:+.3f}"
+                    + (f"; more alarms {[round(x, 3) for x in extra]}" if extra else "")
+                )
+                if args.detail:
+                    for lo in np.arange(0.0, 0.3, 0.01):
+                        w = (t >= t0 + lo) & (t < t0 + lo + 0.01)
+                        kk = int(np.searchsorted(t, t0 + lo + 0.01)) - 1
+                        ra, ro = (1e3 * np.sqrt(np.mean(x[w] ** 2)) for x in (ea, eo))
+                        print(
+                            f"      +{1e3 * lo:3.0f}-{1e3 * (lo + 0.01):3.0f} ms: {ra:.3f} / {ro:.3f} mrad,"
+                            f" model mass {pay_hat[kk, 0]:.3f} kg"
+                        )
+
+
+if __name__ == "__main__":
+    main()
