@@ -7,8 +7,7 @@ swap, the segment's ratio (adaptive_ct / ct_oracle RMS), the alarm's delay, the 
 the control model's payload mass stays within 5 % of the truth, and the excess squared error
 ``sum(e_a^2 - e_o^2)`` over the segment as a share of the floor's ``sum(e_o^2)``, split into
 before the first alarm in the segment, from it to that convergence, and after (the three add to
-``ratio^2 - 1``). Each arm's first line is adaptive_ct's slow observer chain's bandwidth
-(``docs/change_detection.md``). ``--detail`` adds the first 0.3 s in 10 ms windows and the model's payload
+``ratio^2 - 1``). ``--detail`` adds the first 0.3 s in 10 ms windows and the model's payload
 at a few instants. Asserts nothing.
 
 Run: ``PYTHONPATH=. python benchmarks/segment_split.py ARM [ARM ...] [--seeds 3] [--observer-bandwidth B]``
@@ -24,7 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from adaptive_dd.benchmark.population import population_scenario
-from adaptive_dd.benchmark.runner import run_benchmark, scenario_controller
+from adaptive_dd.benchmark.runner import run_benchmark
 from adaptive_dd.benchmark.scenario import read_toml
 from adaptive_dd.benchmark.scenario_settings import with_settings
 
@@ -62,10 +61,7 @@ def main() -> None:
         sc = dataclasses.replace(sc, seeds=args.seeds, controllers=("ct_oracle", "adaptive_ct"))
         if args.observer_bandwidth is not None:
             sc = with_settings(sc, "adaptive_ct", {"observer_bandwidth": args.observer_bandwidth})
-        _, law = scenario_controller(sc, "adaptive_ct")
-        slow = law.slow_observer(sc.sample_period)
-        slow = "none" if np.isinf(slow) else f"{slow:.0f} rad/s"
-        print(f"random:{arm}: adaptive_ct's slow observer chain {slow}")
+        print(f"random:{arm}")
         res = run_benchmark(sc, progress=False, keep_trajectories=args.seeds)
         t = res.t
         a, o = res.runs["adaptive_ct"], res.runs["ct_oracle"]
