@@ -37,7 +37,7 @@ from scipy.optimize import brentq, minimize
 
 from adaptive_dd.benchmark.scenario import Reference
 from adaptive_dd.errors import ParameterError
-from adaptive_dd.identification.excitation_gradient import DesignProblem
+from adaptive_dd.identification.excitation_gradient import DesignProblem, limit_slack
 from adaptive_dd.identification.model import Model, arm_model, base_regressor
 
 __all__ = [
@@ -141,17 +141,7 @@ def _unpack(x: Array, n: int, K: int, f0: float) -> FourierTrajectory:
 def _constraints(model: Model, tr: FourierTrajectory, t: Array, lim: ExcitationLimits) -> Array:
     """Slack of every limit at every grid point (>= 0 when met), normalised by the limit."""
     q, qd, qdd = tr.sample(t)
-    tau = base_regressor(model, q, qd, qdd) @ model.sigma_ref
-    span = lim.upper - lim.lower
-    return np.concatenate(
-        [
-            ((q - lim.lower) / span).ravel(),
-            ((lim.upper - q) / span).ravel(),
-            (1 - np.abs(qd) / lim.velocity).ravel(),
-            (1 - np.abs(qdd) / lim.acceleration).ravel(),
-            (1 - np.abs(tau) / lim.torque).ravel(),
-        ]
-    )
+    return limit_slack(q, qd, qdd, base_regressor(model, q, qd, qdd) @ model.sigma_ref, lim)
 
 
 def _information(model: Model, tr: FourierTrajectory, t: Array, lim: ExcitationLimits) -> Array:

@@ -34,7 +34,7 @@ from numpy.typing import NDArray
 from adaptive_dd.identification.model import Model, base_regressor
 from adaptive_dd.plant.chain import regressor_batch
 
-__all__ = ["STEP_Q", "DesignProblem"]
+__all__ = ["STEP_Q", "DesignProblem", "limit_slack"]
 
 Array = NDArray[np.float64]
 
@@ -44,6 +44,22 @@ relative, rounding about ``1e-16 / STEP_Q``)."""
 
 SINGULAR_COST = 1e3
 """The objective where the scaled information is not positive definite (its gradient there 0)."""
+
+
+def limit_slack(q: Array, qd: Array, qdd: Array, tau: Array, lim) -> Array:
+    """Slack of every limit at every grid point (>= 0 when met), normalised by the limit: the
+    positions above the lower and below the upper limit, then ``|qd|``, ``|qdd|``, ``|tau|``, each
+    ``(m, n)`` raveled (``lim``: :class:`~adaptive_dd.identification.excitation.ExcitationLimits`)."""
+    span = lim.upper - lim.lower
+    return np.concatenate(
+        [
+            ((q - lim.lower) / span).ravel(),
+            ((lim.upper - q) / span).ravel(),
+            (1 - np.abs(qd) / lim.velocity).ravel(),
+            (1 - np.abs(qdd) / lim.acceleration).ravel(),
+            (1 - np.abs(tau) / lim.torque).ravel(),
+        ]
+    )
 
 
 class DesignProblem:
@@ -173,19 +189,8 @@ class DesignProblem:
         """Slack of every limit at every grid point (>= 0 when met), normalised by the limit: the
         positions above the lower and below the upper limit, then ``|qd|``, ``|qdd|``, ``|tau|``
         (the URDF's model), each ``(m, n)`` raveled."""
-        at, lim = self._point(x), self.lim
-        q, qd, qdd = at["q"], at["qd"], at["qdd"]
-        tau = at["Y"] @ self.model.sigma_ref
-        span = lim.upper - lim.lower
-        return np.concatenate(
-            [
-                ((q - lim.lower) / span).ravel(),
-                ((lim.upper - q) / span).ravel(),
-                (1 - np.abs(qd) / lim.velocity).ravel(),
-                (1 - np.abs(qdd) / lim.acceleration).ravel(),
-                (1 - np.abs(tau) / lim.torque).ravel(),
-            ]
-        )
+        at = self._point(x)
+        return limit_slack(at["q"], at["qd"], at["qdd"], at["Y"] @ self.model.sigma_ref, self.lim)
 
     def constraints_jacobian(self, x: Array) -> Array:
         """``(5 m n, N)``: the Jacobian of :meth:`constraints` (``d|y| = sign(y) dy``)."""
