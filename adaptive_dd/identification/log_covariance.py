@@ -56,6 +56,7 @@ Bounds
 from __future__ import annotations
 
 import numpy as np
+import scipy.signal
 from numpy.typing import NDArray
 
 __all__ = [
@@ -128,10 +129,7 @@ def _kernel_bias(u: Array, lag: int, bounds) -> float:
     residual). At least 1."""
     m0 = max(1, lag // 3)
     ac = _autocorrelation(u, lag, bounds, m0)
-    h = max(1, m0 // 2)
-    r = 0.0
-    if ac[m0] > 0.0 and ac[m0 - h] > 0.0:
-        r = float(min((ac[m0] / ac[m0 - h]) ** (1.0 / h), TAIL_RATIO))
+    r = _tail_ratio(ac, m0)
     whole = 1.0 + 2.0 * np.sum(ac[1:]) + 2.0 * max(ac[m0], 0.0) * r / (1.0 - r)
     return float(max(1.0, whole / long_run_factor(u, lag, bounds)))
 
@@ -150,11 +148,16 @@ def _autocorrelation(u: Array, lag: int, bounds, upto: int) -> Array:
     ac = ac / max(ac[0], 1e-300)
     if upto <= m0:
         return ac[: upto + 1]
+    return np.concatenate([ac, max(ac[m0], 0.0) * _tail_ratio(ac, m0) ** np.arange(1, upto - m0 + 1)])
+
+
+def _tail_ratio(ac: Array, m0: int) -> float:
+    """The geometric tail's ratio beyond the crossing ``m0``: the autocorrelation's decay per lag
+    over the last half before it, at most :data:`TAIL_RATIO` (0 where it is not positive)."""
     h = max(1, m0 // 2)
-    r = 0.0
     if ac[m0] > 0.0 and ac[m0 - h] > 0.0:
-        r = float(min((ac[m0] / ac[m0 - h]) ** (1.0 / h), TAIL_RATIO))
-    return np.concatenate([ac, max(ac[m0], 0.0) * r ** np.arange(1, upto - m0 + 1)])
+        return float(min((ac[m0] / ac[m0 - h]) ** (1.0 / h), TAIL_RATIO))
+    return 0.0
 
 
 def _dof_factor(res: Array, w: Array, lag: int, bounds, k: int) -> tuple[float, float]:
@@ -166,15 +169,18 @@ def _dof_factor(res: Array, w: Array, lag: int, bounds, k: int) -> tuple[float, 
     return n_eff, n_eff / (n_eff - min(k, n_eff * (1.0 - 1.0 / MAX_DOF_FACTOR)))
 
 
+def _bartlett_window(lag: int) -> Array:
+    """The Bartlett weights ``1 - |m| / (lag + 1)`` for ``m = -lag .. lag``."""
+    return 1.0 - np.abs(np.arange(-lag, lag + 1)) / (lag + 1)
+
+
 def _bartlett_sum(g: Array, lag: int, bounds) -> Array:
     """``sum_k sum_{|m| <= lag} (1 - |m| / (lag + 1)) g_{k+m} g_k^T`` within each piece ``(r0, r1)``.
 
     Computed as ``h^T g`` with ``h`` each column of ``g (N, r)`` convolved with the Bartlett
     window inside its piece (zero beyond the piece's ends): ``O(N r log N + N r^2)`` where the sum
     over lags is ``O(lag N r^2)``; the same numbers (a test holds them to the lag-by-lag sum)."""
-    import scipy.signal
-
-    kernel = 1.0 - np.abs(np.arange(-lag, lag + 1)) / (lag + 1)
+    kernel = _bartlett_window(lag)
     h = np.zeros_like(g)
     for a, b in bounds:
         h[a:b] = scipy.signal.oaconvolve(g[a:b], kernel[:, None], mode="same", axes=0)
@@ -241,13 +247,11 @@ def bandwidth_fraction(influence: Array, u: Array, lag: int, bounds=None) -> flo
     the lag: the relative variance is ``2 sum_m f_m^2 / (N_a f_0^2)``, ``f`` the Bartlett window
     convolved with the autocorrelation ``rho`` (pooled over the pieces, run out beyond its 0.05
     crossing as :func:`_kernel_bias` does), ``(4 / 3) (L + 1)`` for a white one. At most 1."""
-    import scipy.signal
-
     N = u.size
     bounds = [(0, N)] if bounds is None else list(bounds)
     rho = _autocorrelation(u, lag, bounds, 8 * lag)
     sym = np.concatenate([rho[:0:-1], rho])
-    kernel = 1.0 - np.abs(np.arange(-lag, lag + 1)) / (lag + 1)
+    kernel = _bartlett_window(lag)
     f = np.convolve(kernel, sym)
     rel = 2.0 * np.sum(f**2) / f[f.size // 2] ** 2  # times 1 / N_a: the Bartlett variance's relative variance
     window = kernel / kernel.sum()

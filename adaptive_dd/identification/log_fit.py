@@ -393,8 +393,9 @@ def fit_log(
     else:
         cov_aug, lag, influence = newey_west_parts(phi, res, w, scale, bounds)
         k = r
-    b_frac = bandwidth_fraction(influence[:, :r], (res * w).sum(axis=1), lag, bounds)
-    kernel = _kernel_bias((res * w).sum(axis=1), lag, bounds)
+    u = (res * w).sum(axis=1)  # the weighted residual pooled over the channels
+    b_frac = bandwidth_fraction(influence[:, :r], u, lag, bounds)
+    kernel = _kernel_bias(u, lag, bounds)
     n_eff, dof = _dof_factor(res, w, lag, bounds, k)
     cov_aug = kernel * dof * cov_aug
     cov_k = cov_aug[:r, :r]

@@ -264,10 +264,11 @@ def _detect(c, s, i, eps, act):  # pragma: no cover - compiled
         nl = s.learned[i, j]
         thr = fl[F_THRESHOLD2] if n_act == ints[I_N_ROWS] else fl[F_THRESHOLD2] * fl[F_SLOW2]
         own = s.seen[i, j] >= ints[I_MIN_LEARNED] and nl >= 1
+        den = 1.0 - (1.0 - a_l) ** nl  # the long averages' bias correction after nl samples
         # the share of the level that is the estimate's uncertainty (learnt with it)
-        plev = s.plong[i, j] / (1.0 - (1.0 - a_l) ** nl) if nl >= 1 else 0.0
+        plev = s.plong[i, j] / den if nl >= 1 else 0.0
         if own:
-            level = max(s.long[i, j] / (1.0 - (1.0 - a_l) ** nl), fl[F_FLOOR2])
+            level = max(s.long[i, j] / den, fl[F_FLOOR2])
             if s.hold[i, j] > 0.0:  # risen within the hold: the level it had before
                 level = s.hold[i, j]
         elif s.ref[i, j] > 0.0 and cnt[C_SINCE_ALARM] < ints[I_RESUME] + ints[I_MIN_LEARNED]:
@@ -279,7 +280,7 @@ def _detect(c, s, i, eps, act):  # pragma: no cover - compiled
             thr = fl[F_THRESHOLD2] * fl[F_SLOW2]
         elif s.ref[i, j] > 0.0 and nl >= ints[I_GATE_AFTER]:
             # past the bound, not yet seen enough: what it learned since (trusted as for the gate)
-            level = max(s.long[i, j] / (1.0 - (1.0 - a_l) ** nl), fl[F_FLOOR2])
+            level = max(s.long[i, j] / den, fl[F_FLOOR2])
             thr = fl[F_THRESHOLD2] * fl[F_SLOW2]
         else:
             continue
@@ -329,8 +330,9 @@ def _alarm(c, s, i, k):  # pragma: no cover - compiled
         s.ref[i, j] = 0.0
         s.pref[i, j] = 0.0
         if s.seen[i, j] >= ints[I_MIN_LEARNED] and nl >= 1:
-            s.ref[i, j] = max(s.long[i, j] / (1.0 - (1.0 - a_l) ** nl), 1e-300)
-            s.pref[i, j] = s.plong[i, j] / (1.0 - (1.0 - a_l) ** nl)
+            den = 1.0 - (1.0 - a_l) ** nl  # the long averages' bias correction
+            s.ref[i, j] = max(s.long[i, j] / den, 1e-300)
+            s.pref[i, j] = s.plong[i, j] / den
         s.seen[i, j] = 0
         s.learned[i, j] = 0
         s.long[i, j] = 0.0

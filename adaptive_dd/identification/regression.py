@@ -32,7 +32,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from adaptive_dd.errors import DataError, SignalError
 from adaptive_dd.identification.filters import design_filter_bank, filter_record
-from adaptive_dd.identification.model import Model
+from adaptive_dd.identification.model import Model, _friction_columns
 from adaptive_dd.plant.chain import regressor_batch
 
 __all__ = [
@@ -116,13 +116,9 @@ def momentum_regressors(model: Model, q: ArrayLike, qd: ArrayLike) -> tuple[Arra
     Yp[..., :r] = yp(q)
     Yr[..., :r] = regressor_batch(model.chain, q, qd, zero)[..., cols]
     Yr[..., :r] -= (yp(q + e * qd) - yp(q - e * qd)) / (2.0 * e)
-    coul = np.tanh(qd / model.friction_velocity)
-    for col, k in zip(range(r, model.p), ind[~links] - 10 * n, strict=True):
-        kind, j = divmod(int(k), n)  # viscous fv_j qd_j, Coulomb fc_j tanh(qd_j / v_f), armature
-        if kind == 2:
-            Yp[..., j, col] = qd[..., j]
-        else:
-            Yr[..., j, col] = (qd if kind == 0 else coul)[..., j]
+    extra = ind[~links] - 10 * n  # the friction and armature columns kept in the base
+    Yp[..., r:] = _friction_columns(model, zero, qd)[..., extra]  # the armature's qd
+    Yr[..., r:] = _friction_columns(model, qd, zero)[..., extra]  # qd, tanh(qd / v_f)
     return Yp, Yr
 
 
