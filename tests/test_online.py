@@ -9,7 +9,6 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from adaptive_dd.errors import ParameterError, SignalError
-from adaptive_dd.identification import online_kernel as K
 from adaptive_dd.identification.filters import design_filter_bank, filter_record
 from adaptive_dd.identification.online import (
     Detector,
@@ -186,6 +185,7 @@ def test_momentum_channels_equal_the_banks_filters_one_per_signal(ur5, swap_reco
     ``G0 tau``, ``G1 p + G0 wv`` and ``G1 py + G0 wy`` of the bank run on each of the 23 n
     signals apart (momentum signals started in their steady state, the others at rest), to
     round-off, also across a restart after an alarm (which the signals form does not have)."""
+    from adaptive_dd.identification import online_kernel as K
     from adaptive_dd.identification.filters import filter_step
     from adaptive_dd.plant.chain import momentum_form
 
@@ -600,7 +600,6 @@ def test_the_control_model_is_projected_but_the_state_is_not(ur5):
     assert s.theta[0, 0] == -2.0
     assert pay[0] >= 0 and np.linalg.eigvalsh(_pseudo_inertia(pay)).min() >= -1e-12
     c2, s2 = est_init(OnlineConfig(project=False, prior_radius=None), ur5, 1)
-    c2.floats[K.F_COM_SIZE] = 0.0  # and no centred prior (tests/test_centred_prior.py)
     s2.theta[0] = s.theta[0]
     est_payload_trial(c2, s2, 0, pay)
     assert np.array_equal(pay, s.theta[0])
@@ -640,7 +639,6 @@ def test_the_prior_is_on_the_control_model_only_and_off_when_asked(ur5, swap_rec
     for rho in (0.05, None):
         for project in (True, False):
             c, s = est_init(OnlineConfig(prior_radius=rho, project=project), ur5, 1)
-            c.floats[K.F_COM_SIZE] = 0.0  # the compact prior alone (tests/test_centred_prior.py)
             for k in range(10_150):
                 est_step(c, s, r.q_meas[k : k + 1], r.qd_meas[k : k + 1], r.tau[k : k + 1])
             pay = np.empty(10)
@@ -705,6 +703,7 @@ def _drive_detector(c, s, eps_of, act_of, k0, k1):
     """Feed the detector of trial 0 alone (``_detect``, then what the step does with its answer)
     over samples ``k0 .. k1 - 1``; ``eps_of(k)``, ``act_of(k)``: the rows' prior errors and use
     at sample k. The alarm samples."""
+    from adaptive_dd.identification import online_kernel as K
 
     hits = []
     s.since_crawl[0, :] = K.BIG  # every joint moving faster than the detector's speed
@@ -723,6 +722,7 @@ def test_the_level_before_an_alarm_serves_no_longer_than_the_rearm_bound(ur5):
     resume + min_learned samples: a swap raises the residual's noise (the velocity's noise times
     the inertia a row carries), and a row back in use after the bound with 10x its old noise
     raises no alarm; the same row back within the bound does (the pre-alarm level still serves)."""
+    from adaptive_dd.identification import online_kernel as K
 
     cfg = OnlineConfig(detector=Detector(fast_window=None))
     n = ur5.n_joints
