@@ -66,7 +66,8 @@ def reused_memory():
     """Within the block, glibc's ``malloc`` serves large arrays from its heap and keeps what is
     freed for the next one (no ``mmap`` per array, no trimming), instead of mapping each array of
     more than its threshold afresh (zero pages faulted in one by one, system CPU time); after it,
-    glibc's defaults again and the heap's free memory returned (``malloc_trim``). Results do not
+    glibc's default values again (its mmap threshold then fixed at them, no longer adapting to
+    the sizes freed) and the heap's free memory returned (``malloc_trim``). Results do not
     change (the same arithmetic on memory from another place); elsewhere than glibc, nothing."""
     libc = _libc()
     if libc is None:
