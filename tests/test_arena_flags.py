@@ -174,3 +174,44 @@ def test_the_loop_streams_each_segments_first_saturated_sample():
     np.testing.assert_array_equal(runs[0].acc.first_saturated, want)
     np.testing.assert_array_equal(runs[1].acc.first_saturated, want)
     assert np.isfinite(want[:, 1]).all() and (want[:, 1] > rc.seg_start[1]).any()  # not the segment's start
+
+
+def _mapped_bytes_of_an_array(libc) -> int:
+    """Bytes glibc holds in separately mapped blocks (``mallinfo2().hblkhd``) that a 64 MB array
+    adds while it lives."""
+    import ctypes
+
+    class Info(ctypes.Structure):
+        names = ("arena", "ordblks", "smblks", "hblks", "hblkhd", "usmblks", "fsmblks", "uordblks")
+        _fields_ = [(f, ctypes.c_size_t) for f in (*names, "fordblks", "keepcost")]
+
+    libc.mallinfo2.restype = Info
+    before = libc.mallinfo2().hblkhd
+    a = np.ones(8 * 2**20)
+    added = libc.mallinfo2().hblkhd - before
+    del a
+    return added
+
+
+def test_the_units_reuse_freed_memory_and_the_defaults_come_back():
+    """Within ``reused_memory`` a large array comes from the heap (what a freed one left is reused),
+    where glibc's default maps each one afresh from the kernel (its zero pages faulted in); after
+    the block the default is back. ``run_units`` runs each unit inside it, with its arguments."""
+    from adaptive_dd.arena import pool
+
+    libc = pool._libc()
+    if libc is None or not hasattr(libc, "mallinfo2"):
+        pytest.skip("not glibc >= 2.33: reused_memory does nothing here, or cannot be observed")
+    size = 8 * 2**20 * 8
+    assert _mapped_bytes_of_an_array(libc) >= size  # the default: mapped afresh
+    with pool.reused_memory():
+        assert _mapped_bytes_of_an_array(libc) == 0
+    assert _mapped_bytes_of_an_array(libc) >= size
+    seen = []
+
+    def unit(u, controllers, seeds, progress):
+        seen.append((u, controllers, seeds, progress, _mapped_bytes_of_an_array(libc)))
+        return ([u], 0.0, 0.0)
+
+    assert pool.run_units(unit, ["a", "b"], ("pd",), 2, False, 1) == [(["a"], 0.0, 0.0), (["b"], 0.0, 0.0)]
+    assert seen == [("a", ("pd",), 2, False, 0), ("b", ("pd",), 2, False, 0)]

@@ -233,3 +233,26 @@ def test_the_metrics_segment_bounds_are_the_loops():
     for a, b in zip(got, (rc.seg_start, rc.seg_end, rc.seg_settled), strict=True):
         np.testing.assert_array_equal(a, b)
     assert list(rc.seg_start) == [0, 1200, 1600, 2500] and list(rc.seg_settled) == [500, 1599, 2100, 2999]
+
+
+def test_unit_costs_order_the_drawn_arms_by_joints_without_drawing_them(monkeypatch):
+    """A drawn arm's cost is its joints squared, three times with an excitation phase; counted
+    without drawing the arm (``random_arm`` is not called: the parent would draw every arm once
+    more before the workers start)."""
+    import importlib
+
+    from adaptive_dd.arena.leaderboard import unit_costs
+
+    ra = importlib.import_module(
+        "adaptive_dd.robots.random_arm"
+    )  # the module (the package exports the function)
+
+    joints = {s: ra.random_arm(s).n_joints for s in (0, 1, 2)}
+
+    def refuse(*_):
+        raise AssertionError("unit_costs drew an arm")
+
+    monkeypatch.setattr(ra, "random_arm", refuse)
+    units = [("arm", ({"run": {"excite": 20.0}}, "t.toml", 0)), ("arm", ({}, "t.toml", 1)),
+             ("arm", ({"run": {"excite": 0.0}}, "t.toml", 2))]  # fmt: skip
+    assert unit_costs(units) == [3.0 * joints[0] ** 2, float(joints[1] ** 2), float(joints[2] ** 2)]

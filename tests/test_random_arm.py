@@ -336,3 +336,16 @@ def test_benchmark_arms_runs_the_population_with_blas_on_one_thread(monkeypatch)
         assert main(["benchmark", str(TEMPLATE), "--arms", "1", "--no-progress"]) == 2
         assert blas_threads() == before
     assert seen == [[1] * len(before)]
+
+
+def test_the_joints_alone_are_the_drawn_arms_joints():
+    """``random_arm_joints`` (the leaderboard's scheduler reads it) is the arm's first draw: the
+    same number of joints as the whole arm's, on seeds of every size; a bad seed is refused."""
+    from adaptive_dd.robots.random_arm import random_arm_joints
+
+    seeds = range(40)
+    got = [random_arm_joints(s) for s in seeds]
+    assert got == [random_arm(s).n_joints for s in seeds]
+    assert set(got) == {3, 4, 5, 6, 7}
+    with pytest.raises(ParameterError, match="seed must be an integer >= 0, got -1"):
+        random_arm_joints(-1)

@@ -11,6 +11,12 @@ excitation phase before a scenario without, more joints first), so that the last
 are short and no core idles long at the end. The cells come back in the units' order and the rows
 (and their bootstrap draws) are made in the parent, so the table depends neither on ``workers``
 nor on that order.
+
+Every unit runs with the C library's allocator keeping freed memory for reuse
+(:func:`reused_memory`): a drawn arm's identification makes and frees arrays of tens of MB
+(a 20 s record's regressors, ``(samples, joints, base parameters)``), each of which the
+allocator would otherwise map afresh from the kernel and fault in page by page (system CPU
+time, more of it the busier the machine).
 """
 
 from __future__ import annotations
@@ -19,7 +25,7 @@ import os
 import pickle
 from contextlib import contextmanager
 
-__all__ = ["largest_first", "run_units"]
+__all__ = ["largest_first", "reused_memory", "run_units"]
 
 _ONE_THREAD = {"NUMBA_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "OMP_NUM_THREADS": "1"}
 
@@ -37,6 +43,50 @@ def _environment(values: dict[str, str]):
                 os.environ.pop(k, None)
             else:
                 os.environ[k] = v
+
+
+_M_TRIM_THRESHOLD, _M_MMAP_MAX = -1, -4  # mallopt's parameters (glibc's malloc.h)
+_DEFAULT_TRIM, _DEFAULT_MMAP_MAX = 128 * 1024, 65536  # glibc's defaults
+
+
+def _libc():
+    """glibc through ctypes, or None (another C library: :func:`reused_memory` does nothing)."""
+    import ctypes
+    import ctypes.util
+
+    try:
+        libc = ctypes.CDLL(ctypes.util.find_library("c") or "libc.so.6")
+        return libc if hasattr(libc, "mallopt") and hasattr(libc, "malloc_trim") else None
+    except OSError:
+        return None
+
+
+@contextmanager
+def reused_memory():
+    """Within the block, glibc's ``malloc`` serves large arrays from its heap and keeps what is
+    freed for the next one (no ``mmap`` per array, no trimming), instead of mapping each array of
+    more than its threshold afresh (zero pages faulted in one by one, system CPU time); after it,
+    glibc's default values again (its mmap threshold then fixed at them, no longer adapting to
+    the sizes freed) and the heap's free memory returned (``malloc_trim``). Results do not
+    change (the same arithmetic on memory from another place); elsewhere than glibc, nothing."""
+    libc = _libc()
+    if libc is None:
+        yield
+        return
+    libc.mallopt(_M_MMAP_MAX, 0)
+    libc.mallopt(_M_TRIM_THRESHOLD, 2**30)
+    try:
+        yield
+    finally:
+        libc.mallopt(_M_MMAP_MAX, _DEFAULT_MMAP_MAX)
+        libc.mallopt(_M_TRIM_THRESHOLD, _DEFAULT_TRIM)
+        libc.malloc_trim(0)
+
+
+def _run_reused(run_unit, unit, controllers, seeds, progress):
+    """``run_unit(unit, controllers, seeds, progress)`` within :func:`reused_memory`."""
+    with reused_memory():
+        return run_unit(unit, controllers, seeds, progress)
 
 
 def _picklable(unit) -> bool:
@@ -60,7 +110,7 @@ def run_units(run_unit, units: list, controllers, seeds, progress: bool, workers
     unit that cannot be sent to one runs in this process), handed out by :func:`largest_first` of
     ``costs`` (each unit's expected CPU time in any unit; default: in order)."""
     if workers <= 1 or len(units) <= 1:
-        return [run_unit(u, controllers, seeds, progress) for u in units]
+        return [_run_reused(run_unit, u, controllers, seeds, progress) for u in units]
     import multiprocessing
     from concurrent.futures import ProcessPoolExecutor
 
@@ -69,9 +119,9 @@ def run_units(run_unit, units: list, controllers, seeds, progress: bool, workers
     sent = [i for i in largest_first(costs or [0.0] * len(units)) if i not in here]
     ctx = multiprocessing.get_context("spawn")
     with _environment(_ONE_THREAD), ProcessPoolExecutor(min(workers, len(sent)), mp_context=ctx) as pool:
-        futures = {i: pool.submit(run_unit, units[i], controllers, seeds, False) for i in sent}
+        futures = {i: pool.submit(_run_reused, run_unit, units[i], controllers, seeds, False) for i in sent}
         for i in here:
-            out[i] = run_unit(units[i], controllers, seeds, progress)
+            out[i] = _run_reused(run_unit, units[i], controllers, seeds, progress)
         for i, f in futures.items():
             out[i] = f.result()
     return out
