@@ -55,6 +55,23 @@ def _segment(t, ea, eo, pay_hat, pay_true, alarms, t0, t1):
     return ratio, ta - t0, tc - t0, [p / floor for p in parts], inside[1:], early
 
 
+def _presence_weight_off() -> None:
+    """A measurement only: adaptive_ct's control model takes the raw payload, not scaled by
+    :func:`~adaptive_dd.identification.online_control_model.presence_weight` (its carried-payload
+    variance set to 0, which the compiled model reads as "no weighting")."""
+    from adaptive_dd.identification import online
+    from adaptive_dd.identification.online_slots import F_PRESENT2
+
+    est_init = online.est_init
+
+    def without(cfg, arm, n_trials):
+        c, st = est_init(cfg, arm, n_trials)
+        c.floats[F_PRESENT2] = 0.0
+        return c, st
+
+    online.est_init = without
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(allow_abbrev=False)
     ap.add_argument("arms", type=int, nargs="*", help="the arms' seeds (random:ARM)")
@@ -64,7 +81,12 @@ def main() -> None:
     ap.add_argument("--detail", action="store_true")
     ap.add_argument("--window", type=float, default=10.0, help="--detail's window [ms]")
     ap.add_argument("--span", type=float, default=300.0, help="--detail's span after each swap [ms]")
+    ap.add_argument(
+        "--no-presence-weight", action="store_true", help="adaptive_ct's model without the presence weight"
+    )
     args = ap.parse_args()
+    if args.no_presence_weight:
+        _presence_weight_off()
     if not args.arms and args.scenario is None:
         ap.error("give arms' seeds or --scenario FILE")
     for arm in [args.scenario] if args.scenario is not None else args.arms:
@@ -83,6 +105,8 @@ def main() -> None:
         sh = np.asarray(a.sigma_hat)
         masses = [round(float(x), 3) for x in sc.swap_masses]
         print(f"{arm} ({sc.arm.n_joints} joints): swaps at {sc.swap_times} s of {masses} kg")
+        q_d = sc.reference.sample(t)[0]
+        pooled = {k: [] for k in range(len(sc.swap_times))}
         for s in range(args.seeds):
             ea, eo = a.e_norm[s].astype(float), o.e_norm[s].astype(float)
             alarms = [float(x) for x in (a.alarm_times or [[]] * args.seeds)[s]]
@@ -92,11 +116,15 @@ def main() -> None:
             for k, t0 in enumerate(sc.swap_times):
                 t1 = sc.swap_times[k + 1] if k + 1 < len(sc.swap_times) else sc.duration
                 ratio, da, dc, p, extra, early = _segment(t, ea, eo, pay_hat, pay_true, alarms, t0, t1)
+                w0 = (t >= t0) & (t < t0 + EARLY)
+                sat_a, sat_o = (np.asarray(r.saturated[s][w0]).sum(axis=0) for r in (a, o))
+                pooled[k].append((ratio, *p, early, bool(sat_a.any())))
                 print(
                     f"    segment {k + 2} ({t0:g}-{t1:g} s): ratio {ratio:.3f}, alarm +{1e3 * da:.0f} ms, "
                     f"mass within 5 % from +{1e3 * dc:.0f} ms; excess / floor: before the alarm "
                     f"{p[0]:+.3f}, alarm to convergence {p[1]:+.3f}, after {p[2]:+.3f}; in the first "
-                    f"{1e3 * EARLY:.0f} ms {early:+.3f}"
+                    f"{1e3 * EARLY:.0f} ms {early:+.3f}, saturated samples per joint there {sat_a.tolist()} "
+                    f"(ct_oracle {sat_o.tolist()})"
                     + (f"; more alarms {[round(x, 3) for x in extra]}" if extra else "")
                 )
                 if args.detail:
@@ -105,12 +133,24 @@ def main() -> None:
                         w = (t >= t0 + lo) & (t < t0 + lo + dw)
                         kk = int(np.searchsorted(t, t0 + lo + dw)) - 1
                         ra, ro = (1e3 * np.sqrt(np.mean(x[w] ** 2)) for x in (ea, eo))
+                        ej = 1e3 * (q_d[kk] - a.q[s, kk])
                         print(
-                            f"      +{1e3 * lo:3.0f}-{1e3 * (lo + dw):3.0f} ms: {ra:.3f} / {ro:.3f} mrad,"
+                            f"      +{1e3 * lo:3.0f}-{1e3 * (lo + dw):3.0f} ms: {ra:.3f} / {ro:.3f} mrad"
+                            f" (per joint at the end {np.round(ej, 3)}), saturated samples per joint "
+                            f"{np.asarray(a.saturated[s][w]).sum(axis=0).tolist()},"
                             f" model mass {pay_hat[kk, 0]:.3f} kg,"
                             f" first moments {np.round(pay_hat[kk, 1:4], 4)}"
                             f" (true {np.round(pay_true[kk, 1:4], 4)}) kg m"
                         )
+        for k, rows in pooled.items():
+            r = np.asarray(rows, dtype=float)
+            print(
+                f"  segment {k + 2}, {len(rows)} seeds: ratio mean {r[:, 0].mean():.3f} (p90 "
+                f"{np.quantile(r[:, 0], 0.9):.3f}, max {r[:, 0].max():.3f}); excess / floor, means: before "
+                f"the alarm {r[:, 1].mean():+.3f}, alarm to convergence {r[:, 2].mean():+.3f}, after "
+                f"{r[:, 3].mean():+.3f}; in the first {1e3 * EARLY:.0f} ms {r[:, 4].mean():+.3f}; "
+                f"adaptive_ct saturated there in {int(r[:, 5].sum())} of {len(rows)} trials"
+            )
 
 
 if __name__ == "__main__":
