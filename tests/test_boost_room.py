@@ -100,3 +100,53 @@ def test_boost_inside_the_room_does_not_saturate_after_the_pick_up(monkeypatch):
     sat_cap, _ = loaded(res.runs["adaptive_ct"])
     assert sat_cap > 0.01 > sat
     assert err < 1.2 * floor
+
+
+def test_boost_inside_scales_the_added_torque_to_the_first_limit_it_meets():
+    from adaptive_dd.closed_loop.laws import boost_inside
+
+    lim = np.array([10.0, 5.0, np.inf])
+    tau = np.array([2.0, -1.0, 3.0])
+    assert boost_inside(lim, tau, np.array([1.0, 1.0, 1e6])) == 1.0  # inside: whole
+    b = np.array([16.0, -2.0, 1e6])  # joint 1 meets its limit at f = 0.5; joint 3 has none
+    f = boost_inside(lim, tau, b)
+    assert f == pytest.approx(0.5)
+    out = tau + f * b
+    assert np.all(np.abs(out[:2]) <= lim[:2] + 1e-12) and out[0] == pytest.approx(10.0)
+    assert boost_inside(lim, np.array([10.0, 0.0, 0.0]), b) == 0.0  # already at its limit that way
+    assert boost_inside(lim, np.array([10.0, 0.0, 0.0]), -b) > 0.0  # away from it: allowed
+    assert boost_inside(np.array([np.inf, 0.0, -1.0]), tau, b) == 1.0  # no finite limit > 0: whole
+
+
+def test_adaptive_ct_boost_keeps_its_direction_inside_the_limits():
+    """The vertical arm's law right after an alarm, a 20 mrad error: the boost's added torque is
+    the unscaled one times one factor, and the command stays inside every torque limit with one
+    joint at it (clipped joint by joint, the wrist's clip would leave the shoulder's share)."""
+    from adaptive_dd.benchmark.scenario import load_scenario
+    from adaptive_dd.closed_loop.laws import LawState, law_batch
+    from adaptive_dd.controllers import make_controller
+
+    sc = load_scenario(
+        Path(__file__).resolve().parents[1] / "adaptive_dd/scenarios/vertical3_payload_exact.toml"
+    )
+    arm, T = sc.arm, sc.sample_period
+    cfg = make_controller("adaptive_ct", arm=arm).law_config(T)._replace(observer=False)
+    lim = np.asarray(arm.actuator.torque_limit, dtype=float)
+    np.testing.assert_array_equal(cfg.boost_limit, lim)
+    q_d, qd_d, qdd_d = np.array([0.3, -0.6, 0.4]), np.array([0.2, -0.1, 0.3]), np.zeros(3)
+    q, qd = (q_d - np.array([0.0, 0.0, 0.02]))[None], qd_d[None]
+
+    def command(c, since):
+        st = LawState.start(c, 1)
+        st.since_alarm[0] = since
+        return law_batch(arm.chain, c, st, q, qd, q_d, qd_d, qdd_d)[0]
+
+    base = command(cfg, 10**9)  # no recent alarm: no boost
+    scaled = command(cfg, 0) - base
+    whole = command(cfg._replace(boost_limit=np.zeros(0)), 0) - base
+    assert np.any(np.abs(base + whole) > lim)  # unscaled, the wrist's limit is exceeded
+    f = scaled @ whole / (whole @ whole)
+    assert 0.0 < f < 1.0
+    np.testing.assert_allclose(scaled, f * whole, rtol=1e-9, atol=1e-9)
+    out = base + scaled
+    assert np.all(np.abs(out) <= lim + 1e-9) and np.isclose(np.max(np.abs(out) / lim), 1.0)
