@@ -118,12 +118,17 @@ def main() -> None:
                 ratio, da, dc, p, extra, early = _segment(t, ea, eo, pay_hat, pay_true, alarms, t0, t1)
                 w0 = (t >= t0) & (t < t0 + EARLY)
                 sat_a, sat_o = (np.asarray(r.saturated[s][w0]).sum(axis=0) for r in (a, o))
-                pooled[k].append((ratio, *p, early, bool(sat_a.any())))
+                m_seg = (t >= t0) & (t < t1)
+                per_joint = np.sum(
+                    (q_d[w0] - a.q[s][w0]) ** 2 - (q_d[w0] - o.q[s][w0]) ** 2, axis=0
+                ) / np.sum(eo[m_seg] ** 2)
+                pooled[k].append((ratio, *p, early, bool(sat_a.any()), *per_joint))
                 print(
                     f"    segment {k + 2} ({t0:g}-{t1:g} s): ratio {ratio:.3f}, alarm +{1e3 * da:.0f} ms, "
                     f"mass within 5 % from +{1e3 * dc:.0f} ms; excess / floor: before the alarm "
                     f"{p[0]:+.3f}, alarm to convergence {p[1]:+.3f}, after {p[2]:+.3f}; in the first "
-                    f"{1e3 * EARLY:.0f} ms {early:+.3f}, saturated samples per joint there {sat_a.tolist()} "
+                    f"{1e3 * EARLY:.0f} ms {early:+.3f} (per joint {np.round(per_joint, 3).tolist()}), "
+                    f"saturated samples per joint there {sat_a.tolist()} "
                     f"(ct_oracle {sat_o.tolist()})"
                     + (f"; more alarms {[round(x, 3) for x in extra]}" if extra else "")
                 )
@@ -149,6 +154,7 @@ def main() -> None:
                 f"{np.quantile(r[:, 0], 0.9):.3f}, max {r[:, 0].max():.3f}); excess / floor, means: before "
                 f"the alarm {r[:, 1].mean():+.3f}, alarm to convergence {r[:, 2].mean():+.3f}, after "
                 f"{r[:, 3].mean():+.3f}; in the first {1e3 * EARLY:.0f} ms {r[:, 4].mean():+.3f}; "
+                f"(per joint {np.round(r[:, 6:].mean(axis=0), 3).tolist()}); "
                 f"adaptive_ct saturated there in {int(r[:, 5].sum())} of {len(rows)} trials"
             )
 
