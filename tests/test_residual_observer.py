@@ -156,12 +156,7 @@ def test_the_boost_ends_along_a_ramp_of_its_added_bandwidth():
 
     sc = load_scenario(_shipped("vertical3_payload_exact"))
     arm, n, T = sc.arm, sc.arm.n_joints, sc.sample_period
-    # the boost unscaled by the torque limits (tests/test_boost_room.py tests that scaling)
-    cfg = (
-        make_controller("adaptive_ct", arm=arm)
-        .law_config(T)
-        ._replace(observer=False, boost_limit=np.zeros(0))
-    )
+    cfg = make_controller("adaptive_ct", arm=arm).law_config(T)._replace(observer=False)
     assert cfg.boost_ramp == round(0.25 / T) and cfg.boost_samples == round(1.0 / T)
     q_d, qd_d, qdd_d = np.array([0.3, -0.6, 0.4]), np.array([0.2, -0.1, 0.3]), np.zeros(n)
     q = (q_d - np.array([0.01, -0.02, 0.015]))[None]

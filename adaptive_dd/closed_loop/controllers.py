@@ -457,14 +457,6 @@ class AdaptiveCT(Law):
         inertia = self.arm.mass_matrix(q)
         return boost_bandwidths(self.boost_bandwidth, w, self.gains.damping, inertia, room, var_q, var_qd)
 
-    def _boost_limit(self) -> Array:
-        """The torque limits the boost's added torque stays inside (``laws.boost_inside``): the
-        actuators' where they saturate, else none (empty)."""
-        act = self.arm.actuator
-        if not getattr(act, "saturate", True):
-            return np.zeros(0)
-        return np.asarray(act.torque_limit, dtype=float).reshape(-1)
-
     def law_config(self, sample_period):
         w, z = self.gains.bandwidth, self.gains.damping
         wb = self.boost_bandwidths()
@@ -476,7 +468,6 @@ class AdaptiveCT(Law):
             boost_ramp=round(self.boost_ramp / sample_period), observer=self.observer,
             obs_a=float(np.exp(-beta * T)), obs_alpha=min(1.0, T / OBSERVER_LEVEL_WINDOW),
             obs_warmup=round(OBSERVER_WARMUP / T),
-            boost_limit=self._boost_limit(),
         )  # fmt: skip
 
     def compiled_form(self, n_trials, sample_period):

@@ -80,7 +80,6 @@ __all__ = [
     "OBS_ROWS",
     "LawConfig",
     "LawState",
-    "boost_inside",
     "law_batch",
     "law_trial",
     "law_trial_in",
@@ -170,10 +169,6 @@ class LawConfig(NamedTuple):
         [s] Integral concurrent learning's integration window.
     nat_gain : float
         The natural law's scalar gain ``gamma``.
-    boost_limit : ndarray (n,)
-        [N m] The joints' torque limits: the boost's added torque is scaled by one factor so that
-        it takes no joint beyond its limit (:func:`boost_inside`); of another size (default
-        empty): added as it is.
     """
 
     kind: int
@@ -211,7 +206,6 @@ class LawConfig(NamedTuple):
     adapt_kind: int = 0
     icl_window: float = 0.0
     nat_gain: float = 0.0
-    boost_limit: Array = np.zeros(0)
 
 
 class LawState(NamedTuple):
@@ -390,28 +384,6 @@ def _boost_feedback(cfg, since_alarm, e, ed, v):  # pragma: no cover - compiled
         v[j] = dkp * e[j] + dkd * ed[j]
 
 
-@njit(cache=True)
-def boost_inside(limit, tau, b):  # pragma: no cover - compiled
-    """The largest ``f`` in [0, 1] with ``|tau_j + f b_j| <= limit_j`` on every joint whose
-    ``limit_j`` is finite and > 0: the boost's added torque ``b (n,)`` scaled by one factor, so that
-    it takes no joint beyond its limit and keeps the direction of the acceleration it adds
-    (``tau (n,)`` the command without it). A joint already at its limit in ``b``'s direction gives 0.
-
-    Clipped joint by joint (as the actuators do) a boost that saturates one joint still drives the
-    others with the torque that was to cancel that joint's coupling: on the vertical arm the wrist
-    saturated in every trial after the 1 kg pick-up and joints 1-2 drifted by up to 1 mrad
-    (``benchmarks/segment_split.py --scenario adaptive_dd/scenarios/vertical3_payload_exact.toml
-    --detail``; docs/limits.md)."""
-    f = 1.0
-    for j in range(b.shape[0]):
-        lim, bj = limit[j], b[j]
-        if not (lim > 0.0 and np.isfinite(lim)) or bj == 0.0:
-            continue
-        g = (lim - tau[j]) / bj if bj > 0.0 else (-lim - tau[j]) / bj
-        f = min(f, g)
-    return max(f, 0.0)
-
-
 @njit(cache=True, inline="always")
 def law_trial_in(
     ch, cfg, pi_true, pi_model, theta, since_alarm, obs, q, qd, q_d, qd_d, qdd_d, work, out
@@ -475,15 +447,7 @@ def law_trial_in(
     boosting = cfg.boost_samples > 0 and since_alarm < cfg.boost_samples + cfg.boost_ramp
     if boosting:
         _boost_feedback(cfg, since_alarm, e, ed, v)
-        if cfg.boost_limit.shape[0] == n:  # the added torque scaled inside the limits
-            for j in range(n):
-                s[j] = 0.0
-            _add_nominal_inertia(ch, cfg, q, v, work, s)
-            f = boost_inside(cfg.boost_limit, out, s)
-            for j in range(n):
-                out[j] += f * s[j]
-        else:
-            _add_nominal_inertia(ch, cfg, q, v, work, out)
+        _add_nominal_inertia(ch, cfg, q, v, work, out)
     if cfg.observer:
         _observe(ch, cfg, pi_model, q, qd, obs, work, out)
 
