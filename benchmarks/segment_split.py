@@ -84,18 +84,9 @@ def main() -> None:
     ap.add_argument(
         "--no-presence-weight", action="store_true", help="adaptive_ct's model without the presence weight"
     )
-    ap.add_argument(
-        "--boost-unscaled",
-        action="store_true",
-        help="adaptive_ct's boost added as it is, the actuators clipping each joint (not laws.boost_inside)",
-    )
     args = ap.parse_args()
     if args.no_presence_weight:
         _presence_weight_off()
-    if args.boost_unscaled:
-        from adaptive_dd.closed_loop.controllers import AdaptiveCT
-
-        AdaptiveCT._boost_limit = lambda self: np.zeros(0)
     if not args.arms and args.scenario is None:
         ap.error("give arms' seeds or --scenario FILE")
     for arm in [args.scenario] if args.scenario is not None else args.arms:
