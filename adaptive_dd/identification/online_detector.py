@@ -219,6 +219,13 @@ def _detect(c, s, i, eps, act):  # pragma: no cover - compiled
             if s.held[i, j] > ints[I_HOLD]:
                 s.hold[i, j] = -1.0
         e = eps[j]
+        if not act[j] and np.isfinite(s.eout[i, j]):
+            e = s.eout[i, j]  # out of use (slow): its averages only, at the estimate it leaves
+            s.short[i, j] += a_s * (e * e - s.short[i, j])
+            s.fast[i, j] += fl[F_ALPHA_FAST] * (e * e - s.fast[i, j])
+            s.pshort[i, j] += a_s * (s.pvar[i, j] - s.pshort[i, j])
+            s.pfast[i, j] += fl[F_ALPHA_FAST] * (s.pvar[i, j] - s.pfast[i, j])
+            continue
         if not (act[j] and np.isfinite(e)):
             continue
         e2 = e * e
@@ -259,7 +266,8 @@ def _detect(c, s, i, eps, act):  # pragma: no cover - compiled
     alarm = False
     fast = False
     for j in range(n):
-        if not act[j]:
+        slow = not act[j] and np.isfinite(s.eout[i, j])
+        if not (act[j] or slow):
             continue
         nl = s.learned[i, j]
         thr = fl[F_THRESHOLD2] if n_act == ints[I_N_ROWS] else fl[F_THRESHOLD2] * fl[F_SLOW2]
@@ -271,6 +279,8 @@ def _detect(c, s, i, eps, act):  # pragma: no cover - compiled
             level = max(s.long[i, j] / den, fl[F_FLOOR2])
             if s.hold[i, j] > 0.0:  # risen within the hold: the level it had before
                 level = s.hold[i, j]
+        elif slow:  # out of use: only against a level it learnt itself since the last alarm
+            continue
         elif s.ref[i, j] > 0.0 and cnt[C_SINCE_ALARM] < ints[I_RESUME] + ints[I_MIN_LEARNED]:
             # still re-learning, within the re-arm bound: the level established before the last
             # alarm, raised by what the new payload adds to the row's noise (_ref_rise), with the
@@ -292,15 +302,20 @@ def _detect(c, s, i, eps, act):  # pragma: no cover - compiled
             creep2 = (fl[F_CREEP_MARGIN] * c.pi0[11 * n + j] / c.w[j]) ** 2
         # the level plus what the estimate's uncertainty along the row (the innovation's predicted
         # variance, averaged as the squared errors are) exceeds the share the level learnt of it
+        # a row out of use errs, besides its level, by the model's Coulomb friction turned over
+        # (the measured speed's sign near zero: 2 fc) and what the model lacks near rest
+        flip2 = 0.0
+        if slow:
+            flip2 = ((2.0 + fl[F_CREEP_MARGIN]) * c.pi0[11 * n + j] / c.w[j]) ** 2
         more = max(s.pshort[i, j] - plev, 0.0)
-        if s.short[i, j] > thr * (level + more) + 1e-300 and s.short[i, j] > creep2:
+        if s.short[i, j] > thr * (level + more) + flip2 + 1e-300 and s.short[i, j] > creep2:
             alarm = True
         if ints[I_FAST] == 1 and own and nl >= ints[I_FAST_LEARNED]:
             # only against a level the row has learned itself over the long window: not the
             # level of before an alarm, nor one still learning a new payload or the arm
             thf = fl[F_FAST2] * thr / fl[F_THRESHOLD2]  # the same slow-row and re-learning factors
             more = max(s.pfast[i, j] - plev, 0.0)
-            if s.fast[i, j] > thf * (level + more) + 1e-300 and s.fast[i, j] > creep2:
+            if s.fast[i, j] > thf * (level + more) + flip2 + 1e-300 and s.fast[i, j] > creep2:
                 fast = True
     return alarm or fast
 

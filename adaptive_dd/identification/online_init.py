@@ -249,6 +249,7 @@ def est_init(
         pfast=np.zeros((m, n)),
         plong=np.zeros((m, n)),
         pref=np.zeros((m, n)),
+        eout=np.full((m, n), np.nan),
     )
     for i in range(m):  # the payload the model control uses at the start
         K.est_payload_trial(c, state, i, state.start_pay[i])

@@ -213,6 +213,7 @@ def est_step_trial_in(c, s, i, q, qd, tau, w):  # pragma: no cover - compiled
         act[j] = act[j] and usable and j < n_rows
     for j in range(n):
         s.eps[i, j] = np.nan
+        s.eout[i, j] = np.nan
         s.pvar[i, j] = 0.0
     th, Pi = s.theta[i], s.P[i]
     if usable:
@@ -241,6 +242,8 @@ def est_step_trial_in(c, s, i, q, qd, tau, w):  # pragma: no cover - compiled
                 for a in range(p):
                     for b in range(p):
                         Pi[a, b] *= scale
+        if ints[I_SELECT] == 1 and ints[I_DETECT] == 1:
+            _slow_rows(c, s, i, act, th, Pi, phi, y, row)
     alarm = 0
     if ints[I_DETECT] == 1:
         if cnt[C_REOPEN_AT] == cnt[C_K]:
@@ -250,6 +253,35 @@ def est_step_trial_in(c, s, i, q, qd, tau, w):  # pragma: no cover - compiled
         _keep_start(c, s, i)
     cnt[C_K] += 1
     return alarm
+
+
+@njit(cache=True, inline="always")
+def _slow_rows(c, s, i, act, th, P, phi, y, row):  # pragma: no cover - compiled
+    """The rows out of use because their joint is slow (a reversal; the data selection): each one's
+    prior error at the estimate, which it does not update, into ``s.eout[i]``, and the variance
+    the covariance predicts for it, ``phi_j^T P phi_j``, into ``s.pvar[i]``, for the detector
+    (:func:`_detect`: a payload swapped while the joints carrying it reverse shows first in
+    their rows)."""
+    p = th.shape[0]
+    for j in range(c.ints[I_N_ROWS]):
+        if act[j] or s.since_slow[i, j] > c.ints[I_SEL_MEMORY]:
+            continue
+        wj = c.w[j]
+        e = y[j] / wj
+        for a in range(p):
+            row[a] = phi[j, a] / wj
+            e -= row[a] * th[a]
+        v = 0.0
+        for a in range(p):
+            if row[a] == 0.0:
+                continue
+            acc = 0.0
+            for b in range(p):
+                acc += P[a, b] * row[b]
+            v += row[a] * acc
+        if np.isfinite(e) and np.isfinite(v):
+            s.eout[i, j] = e
+            s.pvar[i, j] = max(v, 0.0)
 
 
 @njit(cache=True)

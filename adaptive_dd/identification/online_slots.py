@@ -229,6 +229,9 @@ class EstState(NamedTuple):
         estimate's uncertainty).
     pref : (m, n)
         Detector: ``plong`` (bias-corrected) when ``ref`` was set, kept with it.
+    eout : (m, n)
+        Detector: the prior error at the last sample of each row out of use because its joint is
+        slow (a reversal), at the estimate it does not update; NaN for the others.
     """
 
     xf: np.ndarray
@@ -258,6 +261,7 @@ class EstState(NamedTuple):
     pfast: np.ndarray
     plong: np.ndarray
     pref: np.ndarray
+    eout: np.ndarray
 
 
 class EstWork(NamedTuple):
