@@ -206,6 +206,14 @@ def _detect(c, s, i, eps, act):  # pragma: no cover - compiled
     error, which its noise level does not (random:108:
     ``phi_j^T P phi_j`` 90-254 at a row's first sample back in use 0.3 s after the swap's alarm,
     against its level of 0.6; about 0.003 in steady state).
+
+    A row out of use because its joint is slow (``s.eout[i, j]`` finite: its prior error at the
+    estimate it does not update, :func:`~adaptive_dd.identification.online_kernel._slow_rows`)
+    feeds its short and fast averages but not its level, and alarms only against a level it learnt
+    itself since the last alarm, plus ``((2 + creep_margin) fc_j / w_j)^2``: the model's Coulomb
+    friction turned over by the measured speed's sign near a reversal, and friction the model
+    lacks near rest. A payload swapped while the joints carrying it reverse shows first in their
+    rows (random:111's swap to 30 % at 8 s: 57 ms to the alarm while they were not read, 15 ms).
     """
     n = eps.shape[0]
     ints, fl = c.ints, c.floats
