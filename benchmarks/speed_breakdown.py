@@ -123,14 +123,13 @@ def _model_loop(c, s, n_calls, pi_out):  # pragma: no cover - compiled
 
 
 @njit(cache=True)
-def _filter_loop(c, s, qm, qdm, tau, parts, ym, phim):  # pragma: no cover - compiled
+def _filter_loop(c, s, qm, qdm, tau, tf, ym, phim):  # pragma: no cover - compiled
     n = qm.shape[1]
     w = K.est_work(n, s.theta.shape[1])
     for k in range(qm.shape[0]):
         K._filtered_signals(c, s, 0, qm[k], qdm[k], tau[k], w)
-        pk = parts[k]
         for j in range(n):
-            pk[0, j], pk[1, j], pk[2, j], pk[3, j], pk[4, j] = w.qf[j], w.qdf[j], w.qddf[j], w.sf[j], w.tf[j]
+            tf[k, j] = w.tf[j]
             ym[k, j] = w.ym[j]
             for m in range(10):
                 phim[k, j, m] = w.phim[j, m]
@@ -138,29 +137,25 @@ def _filter_loop(c, s, qm, qdm, tau, parts, ym, phim):  # pragma: no cover - com
 
 
 @njit(cache=True)
-def _regression_loop(c, parts, ym, phim, p):  # pragma: no cover - compiled
-    n = parts.shape[2]
+def _regression_loop(c, tf, ym, phim, p):  # pragma: no cover - compiled
+    n = tf.shape[1]
     phi, y = np.empty((n, p)), np.empty(n)
-    w = K.est_work(n, p)
     a = 0.0
-    for k in range(parts.shape[0]):
-        pk = parts[k]
-        K._regression(c, pk[0], pk[1], pk[2], pk[3], pk[4], ym[k], phim[k], phi, y, w)
+    for k in range(tf.shape[0]):
+        K._regression(c, tf[k], ym[k], phim[k], phi, y)
         a += y[0]
     return a
 
 
 @njit(cache=True)
-def _rls_loop(c, parts, ym, phim, theta, P, w):  # pragma: no cover - compiled
-    n, p = parts.shape[2], theta.shape[0]
+def _rls_loop(c, tf, ym, phim, theta, P, w):  # pragma: no cover - compiled
+    n, p = tf.shape[1], theta.shape[0]
     phi, y = np.empty((n, p)), np.empty(n)
     pphi, row, nz = np.empty(p), np.empty(p), np.empty(p, dtype=np.int64)
-    ew = K.est_work(n, p)
     # regressions first (not timed separately here: subtract _regression_loop)
     a = 0.0
-    for k in range(parts.shape[0]):
-        pk = parts[k]
-        K._regression(c, pk[0], pk[1], pk[2], pk[3], pk[4], ym[k], phim[k], phi, y, ew)
+    for k in range(tf.shape[0]):
+        K._regression(c, tf[k], ym[k], phim[k], phi, y)
         for j in range(n):
             for m in range(p):
                 row[m] = phi[j, m] / w[j]
@@ -258,11 +253,11 @@ def main() -> None:
     f = fresh()
     _est_loop(f.ec, f.es, qm, qdm, tau, False, pi_out)
     t_model_end = _best(lambda: _model_loop(f.ec, f.es, N, pi_out))
-    parts, ym, phim = np.empty((N, 5, n)), np.empty((N, n)), np.empty((N, n, 10))
-    t_filter = _best(lambda: _filter_loop(fresh().ec, fresh().es, qm, qdm, tau, parts, ym, phim))
-    t_reg = _best(lambda: _regression_loop(f.ec, parts, ym, phim, p))
+    tf, ym, phim = np.empty((N, n)), np.empty((N, n)), np.empty((N, n, 10))
+    t_filter = _best(lambda: _filter_loop(fresh().ec, fresh().es, qm, qdm, tau, tf, ym, phim))
+    t_reg = _best(lambda: _regression_loop(f.ec, tf, ym, phim, p))
     theta0, P0 = f.es.theta[0].copy(), f.es.P[0].copy()
-    t_rls = _best(lambda: _rls_loop(f.ec, parts, ym, phim, theta0.copy(), P0.copy(), f.ec.w)) - t_reg
+    t_rls = _best(lambda: _rls_loop(f.ec, tf, ym, phim, theta0.copy(), P0.copy(), f.ec.w)) - t_reg
     rows += [
         (f"est_step_trial (p = {p})", t_step),
         (f"  of which filters (+ momentum form: {K.MOMENTUM_CHANNELS} n channels)", t_filter),

@@ -74,7 +74,6 @@ def _com(p):
         ({"max_trace": float("nan")}, "max_trace.*nan"),
         ({"bound_radius": 0.0}, "bound_radius.*0.0"),
         ({"prior_radius": -0.05}, "prior_radius.*-0.05"),
-        ({"regression": "exact"}, "regression.*'exact'"),
         ({"mode": "full"}, "mode must be one of \\('payload', 'arm'\\), got 'full'"),
     ],
 )
@@ -99,6 +98,14 @@ def test_bad_settings_name_the_field_and_value(kw, match):
 def test_bad_detector_settings_name_the_field_and_value(kw, match):
     with pytest.raises(ParameterError, match=match):
         Detector(**kw)
+
+
+def test_removed_options_are_unknown_settings(ur5):
+    """``regression`` (the signals form, measured and removed: docs/changelog.md) is no setting."""
+    from adaptive_dd.controllers import make_controller
+
+    with pytest.raises(ParameterError, match=r"adaptive_ct\.estimator: .*'regression'"):
+        make_controller("adaptive_ct", options={"estimator": {"regression": "signals"}}, arm=ur5)
 
 
 def test_wrong_shapes_are_refused(ur5):
@@ -163,7 +170,7 @@ def test_momentum_form_equals_a_numpy_pinocchio_pipeline(ur5, swap_record):
     n = 300
     r = swap_record
     cfg = OnlineConfig(align=False, selection=None, detector=None, max_trace=1e12, lam0=0.999,
-                             mu=0.01, regression="momentum", row_weights=(1.0,) * 6)  # fmt: skip
+                             mu=0.01, row_weights=(1.0,) * 6)  # fmt: skip
     rec = run_online(ur5, cfg, r.q_meas[:n], r.qd_meas[:n], r.tau[:n])
     p, w, py, wy = _pin_momentum(ur5, r.q_meas[:n], r.qd_meas[:n])
     bank = design_filter_bank("M2", cfg.tau_f, T)
@@ -184,7 +191,7 @@ def test_momentum_channels_equal_the_banks_filters_one_per_signal(ur5, swap_reco
     """The compiled momentum form (one summing state per equation entry, 12 n channels) gives
     ``G0 tau``, ``G1 p + G0 wv`` and ``G1 py + G0 wy`` of the bank run on each of the 23 n
     signals apart (momentum signals started in their steady state, the others at rest), to
-    round-off, also across a restart after an alarm (which the signals form does not have)."""
+    round-off, also across a restart after an alarm."""
     from adaptive_dd.identification import online_kernel as K
     from adaptive_dd.identification.filters import filter_step
     from adaptive_dd.plant.chain import momentum_form
@@ -192,7 +199,7 @@ def test_momentum_channels_equal_the_banks_filters_one_per_signal(ur5, swap_reco
     N, restart_at = 400, 250
     r = swap_record
     q, qd, tau = (np.ascontiguousarray(x[:N]) for x in (r.q_meas, r.qd_meas, r.tau))
-    cfg = OnlineConfig(align=False, selection=None, detector=None, regression="momentum")
+    cfg = OnlineConfig(align=False, selection=None, detector=None)
     c, s = est_init(cfg, ur5, 1)
     n = ur5.n_joints
     assert s.xf.shape == (1, K.MOMENTUM_CHANNELS * n, cfg.bank.order) == (1, 12 * n, 2)
@@ -230,48 +237,18 @@ def test_momentum_channels_equal_the_banks_filters_one_per_signal(ur5, swap_reco
 @pytest.mark.parametrize("seed", [0, 1, 2])
 def test_the_momentum_form_is_exact_and_forgets_the_old_payload_at_an_alarm(ur5, seed):
     """Noise-free record (torques exact at the samples): the momentum form's prior errors stay
-    at the level of an estimate still converging (the signals form's equation error is 10-50x
-    larger), and after a swap its filters restart, so the centre of mass is within 1 cm 100 ms
-    after the swap (signals form: 6-68 mm on these seeds; with noise and more seeds:
-    ``studies/payload_settling.py`` of commit d41702f)."""
+    at the level of an estimate still converging, and after a swap its filters restart, so the
+    centre of mass is within 1 cm 100 ms after the swap."""
     t = np.arange(2_000) * T
     rng = np.random.default_rng(seed)
     r = prescribed_record(ur5, t, exciting_motion(ur5, t, rng, offset=POSTURE), [PAY_A, PAY_B], [1_500])
-    out = {}
-    for form in ("signals", "momentum"):
-        cfg = OnlineConfig(align=False, regression=form)
-        out[form] = run_online(ur5, cfg, r.q_meas, r.qd_meas, r.tau)
-    eps = {f: np.nanmax(np.abs(rec.eps[0, 1_000:1_500])) for f, rec in out.items()}
-    assert eps["momentum"] < 5e-3 < eps["signals"], eps
-    rec = out["momentum"]
+    rec = run_online(ur5, OnlineConfig(align=False), r.q_meas, r.qd_meas, r.tau)
+    eps = np.nanmax(np.abs(rec.eps[0, 1_000:1_500]))
+    assert eps < 5e-3, eps
     (alarms,) = rec.alarm_times()
     assert len(alarms) == 1 and 1.5 <= alarms[0] < 1.53, alarms
     assert np.linalg.norm(rec.com[0, 1_600] - _com(PAY_B)) < 0.01, rec.com[0, 1_600]
     assert abs(rec.mass[0, 1_600] - PAY_B[0]) < 0.01 * PAY_B[0], rec.mass[0, 1_600]
-
-
-def test_compiled_step_equals_a_numpy_pinocchio_pipeline(ur5, swap_record):
-    """Filters by scipy's lfilter, regressor by Pinocchio, RLS by rls_step: same estimate."""
-    n = 400
-    r = swap_record
-    cfg = OnlineConfig(align=False, selection=None, detector=None, max_trace=1e12,
-                             lam0=0.999, mu=0.01, regression="signals", row_weights=(1.0,) * 6)  # fmt: skip
-    rec = run_online(ur5, cfg, r.q_meas[:n], r.qd_meas[:n], r.tau[:n])
-    bank = design_filter_bank("M2", cfg.tau_f, T)
-    chans = np.stack([r.q_meas[:n], r.qd_meas[:n], r.tau[:n], np.sign(r.qd_meas[:n])])  # (4, N, 6)
-    f = filter_record(bank, chans, axis=1, initial=chans[:, 0])  # (4, N, 6, 2)
-    qf, qdf, qddf, tf, sf = f[0, ..., 0], f[1, ..., 0], f[1, ..., 1], f[2, ..., 0], f[3, ..., 0]
-    W = ur5.standard_regressor(qf, qdf, qddf)  # (N, 6, 78), friction columns at G0 qd, G0 sgn(qd):
-    W[..., 66:72] = np.eye(6) * sf[:, None, :]
-    j = ur5.payload_joint
-    phi = W[..., 10 * j : 10 * j + 10] @ ur5.payload_map
-    y = tf - W @ ur5.pi
-    theta0 = np.zeros(10)
-    _, s0 = est_init(cfg, ur5, 1)
-    theta = _rls_rows(phi, y, theta0, s0.P[0], cfg)
-    scale = np.maximum(np.abs(theta), 1e-3)
-    assert np.max(np.abs(rec.theta[0, -1] - theta) / scale) < 1e-6
-    assert np.max(np.abs(rec.theta[0, -1] - theta0) / scale) > 1e-3  # it did move
 
 
 @pytest.mark.parametrize("mode", ["payload", "arm"])

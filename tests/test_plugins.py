@@ -50,6 +50,7 @@ def test_builtin_settings_reach_the_controller():
     [
         ("adaptive_ct", {"tauf": 0.02}, "unknown setting"),
         ("adaptive_ct", {"estimator": {"tau": 1}}, "unknown setting"),
+        ("adaptive_ct", {"detector": {"slow_factor": 1.5}}, r"unknown setting\(s\) \['slow_factor'\]"),
         ("adaptive_ct", {"detector": {"threshold": 0.5}}, "threshold"),
         ("slotine_li", {"gamma": [1.0, 2.0]}, "gamma"),
         ("ct_oracle", {"bandwidth": -1.0}, "bandwidth"),

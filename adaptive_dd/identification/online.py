@@ -15,8 +15,8 @@ Two modes (:class:`OnlineConfig`):
 ``"payload"`` (default)
     The arm is known (its standard parameters ``arm.pi``); the ten parameters of the
     payload about its frame are estimated, as industrial payload identification does.
-    Equation: ``y = G0 tau - tau_arm(qf, qdf, qddf) = phi theta`` with
-    ``phi = body_regressor(link jp) @ payload_map`` (n x 10).
+    Equation: ``y = G0 tau - (G1 p + G0 wv) = phi theta`` with ``phi = (G1 py + G0 wy) @
+    payload_map`` (n x 10): the known arm's momentum form and the payload link's columns.
 ``"arm"``
     The arm's base parameters (prior covariance from the URDF's stated uncertainty,
     :mod:`~adaptive_dd.identification.arm_prior`; never re-opened) and the payload's ten
@@ -24,15 +24,15 @@ Two modes (:class:`OnlineConfig`):
     an alarm). Equation: the momentum form of every link plus friction and armature columns
     (``docs/learning_the_arm.md``).
 
-Payload mode can evaluate the regressor at the filtered signals of the M2 method (eq. 20, Tustin):
-``qf = G0 q``, ``qdf = G0 qd``, ``qddf = G1 qd``, Coulomb column ``G0 sgn(qd)``, and
-``y = G0 tau``. The estimator is RLS with the variable forgetting factor of eq. (14),
-one scalar update per joint equation (the paper's splits generalised: each row is a
-split; the forgetting factor advances once per sample). The change detector, the
-re-opening along the payload subspace, the start-up covariance shaped along the payload
-subspace and the projection of the control model (not of the estimator's state) follow
-the lessons of ``payload-swap-adaptation.md`` (see :func:`~adaptive_dd.identification.
-online_detector._detect`).
+In payload mode the equation is the momentum form of the known arm and the payload's link,
+filtered by the M2 bank (eq. 20, Tustin): ``G0 tau = G1 p + G0 wv`` (no acceleration, exact for
+any filter; :mod:`~adaptive_dd.identification.online_kernel`). The estimator is RLS with the
+variable forgetting factor of eq. (14), one scalar update per joint equation (the paper's
+splits generalised: each row is a split; the forgetting factor advances once per sample).
+The change detector, the re-opening along the payload subspace, the start-up covariance
+shaped along the payload subspace and the projection of the control model (not of the
+estimator's state) follow the lessons of ``payload-swap-adaptation.md`` (see
+:func:`~adaptive_dd.identification.online_detector._detect`).
 
 **Re-arm bound.** After any alarm, the next alarm is possible as soon as
 ``since_alarm > holdoff`` and one used row has been seen ``min_learned`` times from
@@ -56,7 +56,6 @@ from adaptive_dd.identification import online_kernel as K
 from adaptive_dd.identification.online_config import (  # noqa: F401 (re-exported)
     DEFAULT_PRIOR_RADIUS,
     MODES,
-    REGRESSIONS,
     REOPEN_CAPACITY,
     REOPEN_GENERIC,
     WARMUP,

@@ -25,7 +25,6 @@ from adaptive_dd.plant.arm import Arm
 
 Array = NDArray[np.float64]
 MODES = ("payload", "arm")
-REGRESSIONS = ("signals", "momentum")
 
 
 def _num(owner: str, name: str, v, lo=None, hi=None, strict=True) -> None:
@@ -254,24 +253,6 @@ class OnlineConfig:
         model also has ``|c| <= R`` and ``tr(Sigma) <= m R^2`` (Sigma: the pseudo-inertia's
         second-moment block), so a vanishing mass carries vanishing first moments and
         inertia. None: no bound (positive semidefiniteness only).
-    regression : {"momentum", "signals"} or None
-        How the filtered equation is built; None (default): ``"momentum"``. In mode ``"arm"``
-        the momentum form is written for every link (and friction, armature columns).
-        ``"signals"``: the regressor evaluated at the filtered signals (the paper's M2
-        construction). It is not the filtered torque: ``Y(G0 q, G0 qd, G1 qd) != G0 Y(q,
-        qd, qdd)`` for a nonlinear Y, an equation error that grows with speed and with 1/tau_f.
-        ``"momentum"``: the dynamics in momentum form ``tau = d/dt (M qd) + g - C^T qd``
-        (:func:`~adaptive_dd.plant.chain.momentum_form`), both sides filtered:
-        ``G0 tau = G1 (M qd) + G0 (g - C^T qd)``, exact for any tau_f, no acceleration. Its
-        filters restart on an alarm (momentum held, the rest from zero), which keeps the
-        equation exact from the sample after an alarm on (the filters keep no memory of
-        the old payload; the re-openings forget what was learnt between the change and its
-        detection). UR5 tool-swap scenario, 20 seeds, adaptive_ct / ct_oracle
-        means per segment 1.009 / 1.033 / 1.065 / 1.032 against 1.009 / 1.038 / 1.068 /
-        1.074 with ``"signals"``; Panda 1.031 / 1.051 / 1.052 / 1.047 against 1.031 /
-        1.051 / 1.070 / 1.055 (``studies/regression_ablation.py [SCENARIO]`` of commit d41702f; with
-        adaptive_ct's boost of 0.2 s the UR5's were 1.089 / 1.158 / 1.075 against 1.130 /
-        1.351 / 1.172).
     prior_radius : float or None
         Radius rho [m] of a compact-payload prior on the model control uses (not on the
         estimator's state): the payload's inertia about its frame is taken, a priori, as a
@@ -335,7 +316,6 @@ class OnlineConfig:
     bound_radius: float | None = 0.25
     prior_radius: float | str | None = "auto"
     prior_noise: float | str | None = "auto"
-    regression: str | None = None
     arm_uncertainty: ArmUncertainty | None = None
     arm_prior_cov: tuple[tuple[float, ...], ...] | None = None
 
@@ -380,10 +360,6 @@ class OnlineConfig:
             )
         if self.mode not in MODES:
             raise ParameterError(f"{o}.mode must be one of {MODES}, got {self.mode!r}")
-        if self.regression is not None and self.regression not in REGRESSIONS:
-            raise ParameterError(
-                f"{o}.regression must be one of {REGRESSIONS} or None, got {self.regression!r}"
-            )
         _num(o, "lam0", self.lam0, 0.0, 1.0)
         _num(o, "mu", self.mu, 0.0, 1.0, strict=False)
         _num(o, "payload_mass_std", self.payload_mass_std, 0.0, strict=False)
@@ -422,11 +398,6 @@ class OnlineConfig:
             )
         if self.payload_mass_std == 0:
             raise ParameterError(f"{o}.payload_mass_std must be > 0, got 0")
-
-    @property
-    def regression_form(self) -> str:
-        """The regression used: ``regression``, or the mode's default when it is None."""
-        return self.regression if self.regression is not None else "momentum"
 
     @property
     def bank(self) -> FilterBank:

@@ -43,7 +43,6 @@ from adaptive_dd.identification.online_slots import (
     I_HOLD,
     I_HOLDOFF,
     I_MIN_LEARNED,
-    I_MOMENTUM,
     I_N_ROWS,
     I_REOPEN_AGAIN,
     I_RESUME,
@@ -364,8 +363,7 @@ def _alarm(c, s, i, k):  # pragma: no cover - compiled
         s.held[i, j] = 0
     if ints[I_REOPEN_AGAIN] == 1:
         cnt[C_REOPEN_AT] = k + ints[I_FREEZE]
-    if ints[I_MOMENTUM] == 1:
-        cnt[C_RESTART] = 1
+    cnt[C_RESTART] = 1
 
 
 @njit(cache=True, inline="always")

@@ -96,7 +96,6 @@ def _pack(cfg: OnlineConfig, arm: Arm) -> tuple[EstCfg, Array]:
     ints[K.I_TAINT] = cfg.samples(cfg.taint)
     ints[K.I_PROJECT] = int(cfg.project)
     ints[K.I_N_ROWS] = n_rows
-    ints[K.I_MOMENTUM] = int(cfg.regression_form == "momentum")
     fl[K.F_LAM0], fl[K.F_MU], fl[K.F_CAP] = cfg.lam0, cfg.mu, cap
     fl[K.F_SEL_THRESHOLD] = 0.0 if cfg.selection is None else cfg.selection[0]
     fl[K.F_EIG_MIN] = cfg.eig_min
@@ -136,7 +135,6 @@ def _pack(cfg: OnlineConfig, arm: Arm) -> tuple[EstCfg, Array]:
         # payload mode: control keeps the starting payload until the first alarm (the kernel's
         # _keep_start); in mode "arm" the payload block also takes up the arm's error meanwhile
         ints[K.I_KEEP_START] = int(cfg.mode == "payload")
-    xs0 = np.linalg.solve(np.eye(b.order) - b.A, b.B[:, 0])
     Am, Bm, Cm, Dm = summing_realisation(b)
     xm1 = np.linalg.solve(np.eye(b.order) - Am, Bm[:, 1])
     c = np.ascontiguousarray
@@ -153,11 +151,6 @@ def _pack(cfg: OnlineConfig, arm: Arm) -> tuple[EstCfg, Array]:
         pbasis_pinv=c(pbasis_pinv),
         U=U,
         P_reopen=c(Pr),
-        A=c(b.A),
-        Bf=c(b.B[:, 0]),
-        C=c(b.C),
-        D=c(b.D[:, 0]),
-        xs0=xs0,
         Am=Am,
         Bm=Bm,
         Cm=Cm,
@@ -171,9 +164,7 @@ def _pack(cfg: OnlineConfig, arm: Arm) -> tuple[EstCfg, Array]:
 
 
 def _channels(cfg: OnlineConfig, n: int) -> int:
-    """Filter channels of the configured regression form, n joints."""
-    if cfg.regression_form != "momentum":
-        return K.SIGNAL_CHANNELS * n
+    """Filter channels of the momentum form, n joints."""
     return K.arm_momentum_channels(n) if cfg.mode == "arm" else K.MOMENTUM_CHANNELS * n
 
 

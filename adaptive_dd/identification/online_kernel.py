@@ -12,13 +12,11 @@ One sample, per trial:
    skipped, and the filtered equations are not used for ``taint`` samples (the
    filters' memory);
 2. M2 filter bank (eq. 20, Tustin; the same matrices as
-   :func:`~adaptive_dd.identification.filters.design_filter_bank`) on the channels
-   ``q, qd, tau, sgn(qd)`` (outputs G0, G1); the regressor is evaluated at the filtered
-   signals ``qf = G0 q, qdf = G0 qd, qddf = G1 qd``, friction columns at ``G0 qd``,
-   ``G0 sgn(qd)`` (the paper's M2 construction generalised to n joints). The momentum
-   form filters ``G0 tau``, ``G1 p + G0 wv`` and ``G1 py + G0 wy`` instead, each sum as
-   one state of the bank's transposed realisation
-   (:func:`~adaptive_dd.identification.filters.summing_realisation`);
+   :func:`~adaptive_dd.identification.filters.design_filter_bank`) on the momentum form
+   ``tau = d/dt p + wv``: ``G0 tau``, ``G1 p + G0 wv`` and ``G1 py + G0 wy`` (the payload
+   link's columns; every link's in mode "arm"), each sum as one state of the bank's
+   transposed realisation (:func:`~adaptive_dd.identification.filters.summing_realisation`),
+   restarted after an alarm;
 3. data selection: equation j is used once joint j has been faster than the
    threshold for the filters' memory;
 4. RLS of eq. (14), one scalar update per used joint equation (row weights ``w``);
@@ -58,7 +56,6 @@ from adaptive_dd.identification.online_detector import (  # noqa: F401 (re-expor
 )
 from adaptive_dd.identification.online_regression import (  # noqa: F401 (re-exported)
     _arm_momentum_channels,
-    _filter_channels,
     _filtered_signals,
     _momentum_channels,
     _payload_rows,
@@ -109,7 +106,6 @@ from adaptive_dd.identification.online_slots import (  # noqa: F401 (re-exported
     I_HOLDOFF,
     I_KEEP_START,
     I_MIN_LEARNED,
-    I_MOMENTUM,
     I_N_ROWS,
     I_PROJECT,
     I_REOPEN_AGAIN,
@@ -124,7 +120,6 @@ from adaptive_dd.identification.online_slots import (  # noqa: F401 (re-exported
     N_CNT,
     N_F,
     N_I,
-    SIGNAL_CHANNELS,
     EstCfg,
     EstState,
     EstWork,
@@ -218,7 +213,7 @@ def est_step_trial_in(c, s, i, q, qd, tau, w):  # pragma: no cover - compiled
     th, Pi = s.theta[i], s.P[i]
     if usable:
         phi, y = w.phi, w.y
-        _regression(c, w.qf, w.qdf, w.qddf, w.sf, w.tf, w.ym, w.phim, phi, y, w)
+        _regression(c, w.tf, w.ym, w.phim, phi, y)
         pphi, row, nz = w.pphi, w.row, w.nz
         first = True
         for j in range(n_rows):

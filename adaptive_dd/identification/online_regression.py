@@ -1,8 +1,8 @@
 """The compiled online estimator's filters, regression and RLS row update.
 
-The M2 filter bank on the channels ``q, qd, tau, sgn(qd)`` (signals form) or on the momentum
-form's sums (:func:`_filtered_signals`, :func:`_momentum_channels`), the regression rows at the
-filtered signals (:func:`_regression`) and eq. (14) for one scalar equation (:func:`_rls_row`).
+The M2 filter bank on the momentum form's sums (:func:`_filtered_signals`,
+:func:`_momentum_channels`, :func:`_arm_momentum_channels`), the regression rows of payload mode
+(:func:`_regression`) and eq. (14) for one scalar equation (:func:`_rls_row`).
 Called by the per-sample step :func:`~adaptive_dd.identification.online_kernel.est_step_trial_in`.
 """
 
@@ -18,39 +18,11 @@ from adaptive_dd.identification.online_slots import (
     C_SKIPPED,
     C_STARTED,
     I_ALIGN,
-    I_MOMENTUM,
     I_TAINT,
     MODE_ARM,
-    MODE_PAYLOAD,
     MOMENTUM_CHANNELS,
 )
-from adaptive_dd.plant.chain import (
-    momentum_form_in,
-    regressor,
-    rnea_body_regressor_in,
-)
-
-
-@njit(cache=True)
-def _filter_channels(c, s, i, u, f, ch0):  # pragma: no cover - compiled
-    """One sample of the bank on channels ``ch0 ...`` of trial i: ``f[ch] = [G0 u, G1 u]``."""
-    A, Bf, C, D = c.A, c.Bf, c.C, c.D
-    order = A.shape[0]
-    xf = s.xf[i, ch0:]
-    tmp = np.empty(order)
-    for ch in range(u.shape[0]):
-        for o in range(2):
-            acc = D[o] * u[ch]
-            for m in range(order):
-                acc += C[o, m] * xf[ch, m]
-            f[ch, o] = acc
-        for m in range(order):
-            acc = Bf[m] * u[ch]
-            for k in range(order):
-                acc += A[m, k] * xf[ch, k]
-            tmp[m] = acc
-        for m in range(order):
-            xf[ch, m] = tmp[m]
+from adaptive_dd.plant.chain import momentum_form_in
 
 
 @njit(cache=True, inline="always")
@@ -58,9 +30,11 @@ def _filtered_signals(c, s, i, q, qd, tau, w):  # pragma: no cover - compiled
     """Filter sample (q, qd, tau) of trial i into ``w`` (:class:`EstWork`); return True if the
     filtered equations are usable.
 
-    Signals form: ``w.qf, w.qdf, w.qddf, w.sf, w.tf``. Momentum form (``I_MOMENTUM``): ``w.tf``,
-    ``w.ym = G1 p + G0 wv`` (n,) of the known links and ``w.phim = G1 py + G0 wy`` (n, 10) of
-    the payload's link (:func:`momentum_form_in`), at the held channels.
+    Payload mode: ``w.tf = G0 tau``, ``w.ym = G1 p + G0 wv`` (n,) of the known links and
+    ``w.phim = G1 py + G0 wy`` (n, 10) of the payload's link (:func:`momentum_form_in`), at the
+    held channels; mode "arm": the whole regression ``w.phi, w.y``
+    (:func:`_arm_momentum_channels`). The filters (re)start on the first sample and on the
+    sample after an alarm (``C_RESTART``).
     """
     n = q.shape[0]
     cnt = s.cnt[i]
@@ -86,9 +60,6 @@ def _filtered_signals(c, s, i, q, qd, tau, w):  # pragma: no cover - compiled
     if cnt[C_STARTED] == 0:  # the filters start in the steady state of the first sample
         for k in range(4 * n):
             s.u_last[i, k] = u[k] if np.isfinite(u[k]) else 0.0
-            if c.ints[I_MOMENTUM] == 0:  # (the momentum form starts its own, _momentum_channels)
-                for m in range(c.xs0.shape[0]):
-                    s.xf[i, k, m] = s.u_last[i, k] * c.xs0[m]
         cnt[C_SINCE_BAD] = BIG
         cnt[C_STARTED] = 1
     if bad:  # hold the last finite sample of every channel
@@ -100,23 +71,11 @@ def _filtered_signals(c, s, i, q, qd, tau, w):  # pragma: no cover - compiled
         for k in range(4 * n):
             s.u_last[i, k] = u[k]
         cnt[C_SINCE_BAD] = min(cnt[C_SINCE_BAD] + 1, BIG)
-    if c.ints[I_MOMENTUM] == 1 and c.mode == MODE_ARM:
+    if c.mode == MODE_ARM:
         _arm_momentum_channels(c, s, i, start or cnt[C_RESTART] == 1, w)
-        cnt[C_RESTART] = 0
-        return cnt[C_SINCE_BAD] > c.ints[I_TAINT]
-    if c.ints[I_MOMENTUM] == 1:
+    else:
         _momentum_channels(c, s, i, start or cnt[C_RESTART] == 1, w)
-        cnt[C_RESTART] = 0
-        return cnt[C_SINCE_BAD] > c.ints[I_TAINT]
-    f = np.empty((4 * n, 2))
-    _filter_channels(c, s, i, u, f, 0)
-    qf, qdf, qddf, tf, sf = w.qf, w.qdf, w.qddf, w.tf, w.sf
-    for j in range(n):
-        qf[j] = f[j, 0]
-        qdf[j] = f[n + j, 0]
-        qddf[j] = f[n + j, 1]
-        tf[j] = f[2 * n + j, 0]
-        sf[j] = f[3 * n + j, 0]
+    cnt[C_RESTART] = 0
     return cnt[C_SINCE_BAD] > c.ints[I_TAINT]
 
 
@@ -271,56 +230,14 @@ def _payload_rows(c, link, known, phi, y):  # pragma: no cover - compiled
 
 
 @njit(cache=True, inline="always")
-def _regression(c, qf, qdf, qddf, sf, tf, ym, phim, phi, y, w):  # pragma: no cover - compiled
-    """The regression ``y = phi theta`` (n x p) at the filtered signals (or in momentum form);
-    ``w`` (:class:`EstWork`) its scratch."""
-    n = qf.shape[0]
-    p = phi.shape[1]
-    if c.mode == MODE_ARM and c.ints[I_MOMENTUM] == 1:  # written by _arm_momentum_channels
+def _regression(c, tf, ym, phim, phi, y):  # pragma: no cover - compiled
+    """Payload mode: the regression ``y = phi theta`` (n x p) of the filtered momentum form
+    (:func:`_momentum_channels`); mode "arm" has it already (:func:`_arm_momentum_channels`)."""
+    if c.mode == MODE_ARM:
         return
-    if c.mode == MODE_PAYLOAD and c.ints[I_MOMENTUM] == 1:
-        for r in range(n):
-            y[r] = tf[r]
-        _payload_rows(c, phim, ym, phi, y)
-        return
-    if c.mode == MODE_PAYLOAD:
-        known, yb = w.known, w.yb
-        # rnea and the payload link's regressor at one state: its kinematics computed once
-        rnea_body_regressor_in(c.ch, c.pi0[: 10 * n], c.jp, qf, qdf, qddf, w.chain, w.a1, known, yb)
-        for r in range(n):
-            fv, fc, ia = c.pi0[10 * n + r], c.pi0[11 * n + r], c.pi0[12 * n + r]
-            y[r] = tf[r]
-            known[r] += fv * qdf[r] + fc * sf[r] + ia * qddf[r]
-        _payload_rows(c, yb, known, phi, y)
-        return
-    W = w.W
-    regressor(c.ch, qf, qdf, qddf, W)
-    pb = c.indep.shape[0]
-    base = 10 * c.jp
-    for r in range(n):
+    for r in range(tf.shape[0]):
         y[r] = tf[r]
-        for k in range(pb):
-            col = c.indep[k]
-            if col < 10 * n:
-                phi[r, k] = W[r, col]
-            else:
-                kind = (col - 10 * n) // n
-                jj = (col - 10 * n) % n
-                if jj != r:
-                    phi[r, k] = 0.0
-                elif kind == 0:
-                    phi[r, k] = qdf[r]
-                elif kind == 1:
-                    phi[r, k] = sf[r]
-                else:
-                    phi[r, k] = qddf[r]
-        # mode "arm": the payload's ten columns after the arm's base ones (the payload link's
-        # columns through pmap, as in payload mode)
-        for k in range(p - pb):
-            acc = 0.0
-            for m in range(10):
-                acc += W[r, base + m] * c.pmap[m, k]
-            phi[r, pb + k] = acc
+    _payload_rows(c, phim, ym, phi, y)
 
 
 @njit(cache=True)

@@ -33,7 +33,6 @@ C_FOLLOWS = 9  # 1: the model control uses follows the estimate (0: it keeps the
 N_CNT = 10
 
 BIG = 1 << 40
-SIGNAL_CHANNELS = 4  # per joint: q, qd, tau, sgn(qd) (the signals form)
 MOMENTUM_CHANNELS = 12  # per joint: G0 tau, G1 p + G0 wv and the payload link's G1 py + G0 wy (10)
 MODE_PAYLOAD = 0
 MODE_ARM = 1
@@ -71,9 +70,6 @@ class EstCfg(NamedTuple):
         Orthonormal basis of the payload subspace of theta (re-opened on an alarm).
     P_reopen : (p, p)
         Covariance put along U on an alarm.
-    A, Bf, C, D : filter bank matrices (order x order, order, 2 x order, 2)
-    xs0 : (order,)
-        Filter state of a unit constant input.
     Am, Bm, Cm, Dm : the bank's summing realisation (order x order, order x 2, order, 2)
         One state, inputs ``u0, u1``, output ``G0 u0 + G1 u1``
         (:func:`~adaptive_dd.identification.filters.summing_realisation`; the momentum form).
@@ -101,11 +97,6 @@ class EstCfg(NamedTuple):
     pbasis_pinv: np.ndarray
     U: np.ndarray
     P_reopen: np.ndarray
-    A: np.ndarray
-    Bf: np.ndarray
-    C: np.ndarray
-    D: np.ndarray
-    xs0: np.ndarray
     Am: np.ndarray
     Bm: np.ndarray
     Cm: np.ndarray
@@ -132,7 +123,7 @@ I_REOPEN_AGAIN = 10
 I_PROJECT = 11
 I_GATE_AFTER = 12  # learned samples before the learning gate applies
 I_N_ROWS = 13  # rows (joints 0 .. n_rows-1) that carry information
-I_MOMENTUM = 14  # 1: the regression in momentum form (payload mode)
+# 14: unused
 I_FAST = 15  # 1: the fast average may also raise an alarm
 I_FAST_LEARNED = 16  # samples a row's own level must have learned before its fast average may alarm
 I_HOLD = 17  # samples a risen row is judged against the level it had when it rose (0: no hold)
@@ -168,10 +159,9 @@ class EstState(NamedTuple):
 
     Attributes
     ----------
-    xf : (m, SIGNAL_CHANNELS n, order) or (m, MOMENTUM_CHANNELS n, order)
-        Filter states: signals form, of the channels ``q, qd, tau, sgn(qd)`` (n each);
-        momentum form, of ``G0 tau``, ``G1 p + G0 wv`` (n each) and ``G1 py + G0 wy`` (10 n,
-        row-major (n, 10)).
+    xf : (m, MOMENTUM_CHANNELS n, order) (payload mode) or (m, arm_momentum_channels(n), order)
+        Filter states of the momentum form: ``G0 tau``, ``G1 p + G0 wv`` (n each) and
+        ``G1 py + G0 wy`` (10 n, row-major (n, 10)); mode "arm": every link's.
     u_last : (m, 4 n)
         Last finite channel sample (held over a dropout).
     tau_prev : (m, n)
@@ -272,13 +262,12 @@ class EstWork(NamedTuple):
     ----------
     chain : tuple
         ``workspace(n)`` of :mod:`adaptive_dd.plant.chain`.
-    a2 : (2, 6, 10); a1 : (6, 10)
-        Scratch of ``momentum_form_in`` and ``rnea_body_regressor_in``.
+    a2 : (2, 6, 10)
+        Scratch of ``momentum_form_in``.
     u : (4 n,)
         The channels ``q, qd, tau, sgn(qd)`` of this sample.
-    qf, qdf, qddf, sf, tf, ym : (n,)
-        Filtered signals (see :func:`_filtered_signals`).
-    phim : (n, 10)
+    tf, ym : (n,); phim : (n, 10)
+        Payload mode's filtered equation ``tf - ym = phim pmap theta`` (:func:`_filtered_signals`).
     act : (n,) bool
         Rows used at this sample.
     phi : (n, p); y : (n,)
@@ -288,8 +277,6 @@ class EstWork(NamedTuple):
     u1, u0, yf : (MOMENTUM_CHANNELS n,)
         The momentum form's inputs (G1, G0) and outputs; ``p, wv (n,)`` and ``py, wy (n, 10)``
         are views into ``u1, u0``.
-    known : (n,); yb : (n, 10); W : (n, 10 n)
-        Scratch of the signals form's regression.
     raw, raw_est, pay : (10,); Pc : (10, 10); d : (p,)
         Scratch of the model control uses.
     Mr, Mr0 : (n, n); pir : (10 n,)
@@ -298,12 +285,7 @@ class EstWork(NamedTuple):
 
     chain: tuple
     a2: np.ndarray
-    a1: np.ndarray
     u: np.ndarray
-    qf: np.ndarray
-    qdf: np.ndarray
-    qddf: np.ndarray
-    sf: np.ndarray
     tf: np.ndarray
     ym: np.ndarray
     phim: np.ndarray
@@ -320,9 +302,6 @@ class EstWork(NamedTuple):
     wv: np.ndarray
     py: np.ndarray
     wy: np.ndarray
-    known: np.ndarray
-    yb: np.ndarray
-    W: np.ndarray
     raw: np.ndarray
     raw_est: np.ndarray
     pay: np.ndarray
@@ -339,13 +318,11 @@ def est_work(n, p):  # pragma: no cover - compiled
     nch = MOMENTUM_CHANNELS * n
     u1, u0 = np.zeros(nch), np.zeros(nch)
     return EstWork(
-        workspace(n), np.empty((2, 6, 10)), np.empty((6, 10)), np.empty(4 * n),
-        np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty((n, 10)),
+        workspace(n), np.empty((2, 6, 10)), np.empty(4 * n), np.empty(n), np.empty(n), np.empty((n, 10)),
         np.zeros(n, dtype=np.bool_), np.empty((n, p)), np.empty(n),
         np.empty(p), np.empty(p), np.empty(p, dtype=np.int64),
         u1, u0, np.empty(nch), u1[n : 2 * n], u0[n : 2 * n],
         u1[2 * n :].reshape((n, 10)), u0[2 * n :].reshape((n, 10)),
-        np.empty(n), np.empty((n, 10)), np.empty((n, 10 * n)),
         np.empty(10), np.empty(10), np.empty(10), np.empty((10, 10)), np.empty(p),
         np.empty((n, n)), np.empty((n, n)), np.empty(10 * n),
     )  # fmt: skip

@@ -20,7 +20,6 @@ from adaptive_dd.identification.two_link_online_slots import (
     F_MIN_EXPLAINED,
     F_MIN_MASS,
     F_REMOVAL,
-    F_SLOW_FACTOR,
     F_THRESHOLD2,
     G_A,
     G_AGE,
@@ -125,7 +124,7 @@ def _glr_update(sh, u, k, eps, act, w, ci, cf, A, B, C, D, d):  # pragma: no cov
 
 
 @njit(cache=True)
-def _detect(i, eps, act, rest, phi_d, u, th, short, long, cnt, ci, cf, A, B, C, D, d):  # pragma: no cover
+def _detect(i, eps, act, phi_d, u, th, short, long, cnt, ci, cf, A, B, C, D, d):  # pragma: no cover
     """Update the detector statistics of trial i; return True on an alarm.
 
     Every test asks that a change of the tip mass explain the prior errors: a change ``dm``
@@ -140,9 +139,8 @@ def _detect(i, eps, act, rest, phi_d, u, th, short, long, cnt, ci, cf, A, B, C, 
     1. **GLR** (exact construction): the generalized likelihood ratio ``A^2 / B`` of a mass
        change at each of the last ``GLR_CANDIDATES`` onsets (:func:`_glr_update`), less the
        heterogeneity over the two equations / ``hetero``, above ``glr_threshold``, with
-       ``|A / B| >= min_mass`` [kg] and ``A^2 / (B E) >= min_explained``; the threshold is
-       ``slow_factor`` times higher while a joint was at rest within the selection memory; and
-       the change must leave a payload that can exist: ``dm_hat >= -(removal m_hat + min_mass)``,
+       ``|A / B| >= min_mass`` [kg] and ``A^2 / (B E) >= min_explained``; and the change
+       must leave a payload that can exist: ``dm_hat >= -(removal m_hat + min_mass)``,
        ``m_hat = d . (theta - theta0) / (d . d)`` the mass the estimate carries over the start
        estimate (the arm without payload). A stick event of one joint disturbs the other
        joint's equation like a payload change of either sign; at no payload only the sign
@@ -155,7 +153,7 @@ def _detect(i, eps, act, rest, phi_d, u, th, short, long, cnt, ci, cf, A, B, C, 
        masked by an alarm, levels learned on a wrong model) raises an alarm within
        :func:`~adaptive_dd.identification.two_link_online_config.rearm_time` of motion.
     3. The paper's construction (no GLR): the short average of ``e_j^2`` above ``threshold^2``
-       times the level (``slow_factor`` more while the other joint is slow), after
+       times the level, after
        ``min_learned`` learned samples, gated as 2. over the direction window.
     """
     a_s, a_l = cf[F_ALPHA_SHORT], cf[F_ALPHA_LONG]
@@ -199,11 +197,7 @@ def _detect(i, eps, act, rest, phi_d, u, th, short, long, cnt, ci, cf, A, B, C, 
         if gate and dd > 0.0:  # the payload left after the change must be able to exist
             m_hat = (d[0] * th[0] + d[1] * th[1] + d[2] * th[2]) / dd - sh[S_M0]
             gate = ga >= -(cf[F_REMOVAL] * max(m_hat, 0.0) + cf[F_MIN_MASS]) * gb
-        # a joint that stops or sticks disturbs the other joint's equation for the filters'
-        # memory (the sampled filters meet an acceleration jump): while a joint has been at
-        # rest within the selection memory (rest False), ask slow_factor (RMS) times more
-        thr = cf[F_GLR_THRESHOLD] if rest[0] and rest[1] else cf[F_GLR_THRESHOLD] * np.sqrt(cf[F_SLOW_FACTOR])
-        return glr >= thr and gate
+        return glr >= cf[F_GLR_THRESHOLD] and gate
     # the paper's construction has no GLR: the energy test, gated over the direction window
     energy = False
     for j in range(2):
@@ -211,9 +205,6 @@ def _detect(i, eps, act, rest, phi_d, u, th, short, long, cnt, ci, cf, A, B, C, 
         if n_l < ci[I_MIN_LEARNED] or not act[j]:  # only an equation in use may alarm
             continue
         level = long[i, j] / (1.0 - (1.0 - a_l) ** n_l)
-        # a joint that stops or reverses (stick-slip) disturbs the other joint's equation
-        # through the coupling for about the filters' memory: ask more of the evidence then
-        thr = cf[F_THRESHOLD2] if act[1 - j] else cf[F_THRESHOLD2] * cf[F_SLOW_FACTOR]
-        if sh[S_E2 + j] > thr * level + 1e-300:
+        if sh[S_E2 + j] > cf[F_THRESHOLD2] * level + 1e-300:
             energy = True
     return energy and _explained(sh, S_DIR, cf)

@@ -82,13 +82,6 @@ class ChangeDetector:
         No alarm before this time [s] from the start.
     min_learned : int
         Learned samples an equation needs before it may alarm.
-    slow_factor : float
-        The threshold is this many times higher (in RMS) for an equation while the
-        other joint is slow (stopped, reversing, sticking): stick-slip at one joint
-        disturbs the other joint's filtered equation for about the filters' memory.
-        1 (off) by default: the ``removal`` gate rejects the stick events that raised false
-        alarms, and a higher threshold there delayed the swaps that come at a reversal
-        (``alternating.toml`` 3 kg: 52 -> 40 ms, ``other_arm.toml`` 2 kg: 45 -> 36 ms at 50 seeds).
     holdoff : float
         No new alarm for this long after one [s].
     freeze : float
@@ -149,7 +142,6 @@ class ChangeDetector:
     threshold: float = 4.0
     warmup: float = 0.5
     min_learned: int = 200
-    slow_factor: float = 1.0
     holdoff: float = 0.2
     freeze: float = 3.0
     resume: float = 3.0
@@ -178,7 +170,6 @@ class ChangeDetector:
                 f"{self.short_window}, {self.long_window}"
             )
         _finite("ChangeDetector.threshold", self.threshold, 1.0)
-        _finite("ChangeDetector.slow_factor", self.slow_factor, 1.0, strict=False)
         for name in ("warmup", "holdoff", "freeze", "resume", "p_j2"):
             _finite(f"ChangeDetector.{name}", getattr(self, name), 0.0, strict=False)
         _finite("ChangeDetector.p_mass", self.p_mass, 0.0)
@@ -364,7 +355,6 @@ class TwoLinkOnlineConfig:
             cf[K.F_ALPHA_SHORT] = min(1.0, T / det.short_window)
             cf[K.F_ALPHA_LONG] = min(1.0, T / det.long_window)
             cf[K.F_THRESHOLD2] = det.threshold**2
-            cf[K.F_SLOW_FACTOR] = det.slow_factor**2
             cf[K.F_P_MASS], cf[K.F_P_J2] = det.p_mass, det.p_j2
             cf[K.F_ALPHA_DIR] = min(1.0, T / det.direction_window)
             cf[K.F_ALPHA_PERSIST] = min(1.0, T / det.persist_window)

@@ -55,7 +55,6 @@ from adaptive_dd.identification.two_link_online_slots import (  # noqa: F401 (re
     F_R_MIN,
     F_REMOVAL,
     F_SEL_THRESHOLD,
-    F_SLOW_FACTOR,
     F_THRESHOLD2,
     F_XS0,
     G_A,
@@ -347,7 +346,6 @@ def online_step_trial(
                 a_l = cf[F_ALPHA_LONG]
                 short[i, S_E2 + j] = long[i, j] / (1.0 - (1.0 - a_l) ** n_l) if n_l > 0 else 0.0
     det_act = act.copy()
-    sel_act = act.copy()  # False while a joint was at rest within the selection memory
     if ci[I_DETECT] == 1:
         for j in range(2):  # friction the model lacks lives at low speed: the tests skip it
             c = C_SINCE_SLOW_DET1 + j
@@ -388,9 +386,7 @@ def online_step_trial(
         for r in range(2):
             for j in range(7):
                 phi_d[r] += phi[r, j] * d[j]
-        if _detect(
-            i, eps_out, det_act, sel_act, phi_d, u_last[i], th, short, long, cnt, ci, cf, A, B, C, D, d
-        ):
+        if _detect(i, eps_out, det_act, phi_d, u_last[i], th, short, long, cnt, ci, cf, A, B, C, D, d):
             alarm = 1
             on_alarm(i, P, cnt, long, short, group, d, ci, cf)
         else:

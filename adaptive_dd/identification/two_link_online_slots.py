@@ -40,7 +40,7 @@ F_J_MIN = 9
 F_MARGIN = 10
 F_R_MIN = 11
 F_CAP1 = 12
-F_SLOW_FACTOR = 13  # threshold2 multiplier while the other joint is slow
+# 13: unused
 F_ALPHA_DIR = 14  # EWMA weight of the payload-direction test (short window)
 F_ALPHA_PERSIST = 15  # EWMA weight of the persistence test
 F_MIN_MASS = 16  # [kg] smallest payload change an alarm may claim
