@@ -86,3 +86,21 @@ def test_a_row_out_of_use_within_its_friction_allowance_raises_no_alarm(ur5, see
         assert flip > 0.0
         assert _drive(c, s, noise, LEARN, LEARN + 300, slow_row=j, slow_error=0.9 * flip) == [], j
         s.short[0, j] = s.fast[0, j] = 1.0  # back in use: the kernel restarts them at the level
+
+
+def test_a_row_out_of_use_before_it_learnt_a_level_keeps_its_averages(ur5):
+    """Right after an alarm no row has a level of its own (``learned`` 0), so a row out of use
+    cannot alarm, and it must not fill its averages with the reversal's errors either: back in use
+    the kernel restarts a row's averages only if it has learnt a level, and a row without would
+    carry them into use (random:14 alarmed 0.44 s after its put-down with them)."""
+    c, s = est_init(OnlineConfig(), ur5, 1)
+    n = ur5.n_joints
+    rng = np.random.default_rng(2)
+    noise = rng.standard_normal((LEARN + 300, n))
+    assert _drive(c, s, noise, 0, LEARN) == []
+    K._alarm(c, s, 0, s.cnt[0, K.C_K])
+    j = 1
+    s.learned[0, j] = 0
+    before = (s.short[0, j], s.fast[0, j], s.pshort[0, j], s.pfast[0, j])
+    _drive(c, s, noise, LEARN, LEARN + 100, slow_row=j, slow_error=5.0 * _flip(c, j, n))
+    assert (s.short[0, j], s.fast[0, j], s.pshort[0, j], s.pfast[0, j]) == before

@@ -227,11 +227,15 @@ def _detect(c, s, i, eps, act):  # pragma: no cover - compiled
                 s.hold[i, j] = -1.0
         e = eps[j]
         if not act[j] and np.isfinite(s.eout[i, j]):
-            e = s.eout[i, j]  # out of use (slow): its averages only, at the estimate it leaves
-            s.short[i, j] += a_s * (e * e - s.short[i, j])
-            s.fast[i, j] += fl[F_ALPHA_FAST] * (e * e - s.fast[i, j])
-            s.pshort[i, j] += a_s * (s.pvar[i, j] - s.pshort[i, j])
-            s.pfast[i, j] += fl[F_ALPHA_FAST] * (s.pvar[i, j] - s.pfast[i, j])
+            if s.learned[i, j] > 0:
+                # out of use (slow): its averages only, at the estimate it leaves; only with a
+                # level learnt since the last alarm (back in use, such a row's averages restart
+                # at its level; one without would carry the reversal's errors into use)
+                e = s.eout[i, j]
+                s.short[i, j] += a_s * (e * e - s.short[i, j])
+                s.fast[i, j] += fl[F_ALPHA_FAST] * (e * e - s.fast[i, j])
+                s.pshort[i, j] += a_s * (s.pvar[i, j] - s.pshort[i, j])
+                s.pfast[i, j] += fl[F_ALPHA_FAST] * (s.pvar[i, j] - s.pfast[i, j])
             continue
         if not (act[j] and np.isfinite(e)):
             continue
