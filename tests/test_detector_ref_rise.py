@@ -12,6 +12,7 @@ same with the payload of the alarm before.
 
 import numpy as np
 import pytest
+from detector_steps import detector_sample
 
 from adaptive_dd.identification import online_kernel as K
 from adaptive_dd.identification.online import OnlineConfig, est_init, est_step
@@ -80,12 +81,8 @@ def _drive(c, s, w, eps_of, k0, k1):
     hits = []
     for k in range(k0, k1):
         K._ref_rise(c, s, 0, POSTURE, w)
-        if K._detect(c, s, 0, eps_of(k), act):
-            K._alarm(c, s, 0, s.cnt[0, K.C_K])
+        if detector_sample(c, s, eps_of(k), act):
             hits.append(k)
-        else:
-            s.cnt[0, K.C_SINCE_ALARM] += 1
-        s.cnt[0, K.C_K] += 1
     return hits
 
 

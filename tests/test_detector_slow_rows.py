@@ -10,6 +10,7 @@ what the model's Coulomb friction turned over can err by, ``((2 + creep_margin) 
 
 import numpy as np
 import pytest
+from detector_steps import detector_sample
 
 from adaptive_dd.identification import online_kernel as K
 from adaptive_dd.identification.online import OnlineConfig, est_init
@@ -40,12 +41,8 @@ def _drive(c, s, noise, k0, k1, slow_row=None, slow_error=0.0):
             s.eout[0, slow_row] = slow_error + noise[k, slow_row]
             s.since_crawl[0, slow_row] = 0
             eps[slow_row] = np.nan
-        if K._detect(c, s, 0, eps, act):
-            K._alarm(c, s, 0, s.cnt[0, K.C_K])
+        if detector_sample(c, s, eps, act):
             hits.append(k)
-        else:
-            s.cnt[0, K.C_SINCE_ALARM] += 1
-        s.cnt[0, K.C_K] += 1
     return hits
 
 
