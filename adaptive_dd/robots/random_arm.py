@@ -193,8 +193,7 @@ def random_arm(seed: int, joints: int | None = None) -> RandomArm:
     ...
     adaptive_dd.errors.ParameterError: random_arm: seed must be an integer >= 0, got -1
     """
-    if isinstance(seed, bool) or not isinstance(seed, int | np.integer) or seed < 0:
-        raise ParameterError(f"random_arm: seed must be an integer >= 0, got {seed!r}")
+    _check_seed(seed)
     if joints is not None and (
         isinstance(joints, bool) or not isinstance(joints, int | np.integer) or joints not in range(3, 8)
     ):
@@ -212,9 +211,14 @@ def random_arm_joints(seed: int) -> int:
     >>> random_arm_joints(1) == random_arm(1).n_joints
     True
     """
+    _check_seed(seed)
+    return _joints(np.random.default_rng([int(seed), 42]))
+
+
+def _check_seed(seed) -> None:
+    """A drawn arm's seed: an integer >= 0 (a ``ParameterError`` naming it otherwise)."""
     if isinstance(seed, bool) or not isinstance(seed, int | np.integer) or seed < 0:
         raise ParameterError(f"random_arm: seed must be an integer >= 0, got {seed!r}")
-    return _joints(np.random.default_rng([int(seed), 42]))
 
 
 def _joints(rng: np.random.Generator) -> int:
