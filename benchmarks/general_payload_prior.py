@@ -12,10 +12,14 @@ kernels) once per variant, changing only the N-joint estimator's packed configur
 ``today``
     The shipped settings: the payload's ten parameters re-opened at an alarm with mass standard
     deviation ``s`` (``Detector.reopen_mass_std``, derived), first moments ``s r`` and inertias
-    ``s r^2`` (``OnlineConfig.payload_size`` r); the control model's payload scaled by
+    ``s r^2`` (``OnlineConfig.payload_size`` r); the control model's first moments combined with
+    ``m c ~ 0 +- r sqrt(E[m^2])`` (the centred prior) and its payload scaled by
     :func:`~adaptive_dd.identification.online_kernel.presence_weight` of the mass's variance.
 ``no presence``
     The same without the presence weight (``floats[F_PRESENT2] = 0``).
+``no centred``
+    The same without the centred prior on the control model's first moments given the mass
+    (``floats[F_COM_SIZE] = 0``; :func:`~adaptive_dd.identification.online_control_model.centred_prior`).
 ``paper prior``
     The closed forms' prior in payload coordinates: the mass (variance 25 kg^2 at the start, 100
     at a re-opening: ``TwoLinkOnlineConfig.p0_payload``, ``ChangeDetector.p_mass``) and the
@@ -62,6 +66,7 @@ VARIANTS = {  # (paper prior, no presence weight)
     "paper prior": (True, False),
     "paper prior, no presence": (True, True),
 }
+NO_CENTRED = "no centred"  # today's settings without the centred prior (F_COM_SIZE = 0)
 
 
 def _paper_prior(mass_var: float, izz_var: float) -> np.ndarray:
@@ -71,7 +76,7 @@ def _paper_prior(mass_var: float, izz_var: float) -> np.ndarray:
     return P
 
 
-def _patched_pack(paper: bool, no_presence: bool, size: float | None = None):
+def _patched_pack(paper: bool, no_presence: bool, size: float | None = None, centred: bool = True):
     pack = online_init._pack
 
     def _pack(cfg, arm):
@@ -82,6 +87,8 @@ def _patched_pack(paper: bool, no_presence: bool, size: float | None = None):
             raise SystemExit("general_payload_prior: the scenario's adaptive_ct must be in payload mode")
         if no_presence:
             c.floats[K.F_PRESENT2] = 0.0
+        if not centred:
+            c.floats[K.F_COM_SIZE] = 0.0
         if paper:
             c.P_reopen[:] = _paper_prior(100.0, 1e-3)
             P0 = _paper_prior(25.0, 1e-4)
@@ -148,15 +155,16 @@ def main() -> None:
     head = "adaptive_ct / ct_oracle per segment, mean / p90 / max"
     print(f"{a.scenario}, seeds {seeds[0]}-{seeds[-1]}: {head}")
     pack = online_init._pack
-    variants = {k: (*v, None) for k, v in VARIANTS.items()}
-    variants.update({f"size {r:g}": (False, False, r) for r in a.sizes})
+    variants = {k: (*v, None, True) for k, v in VARIANTS.items()}
+    variants[NO_CENTRED] = (False, False, None, False)
+    variants.update({f"size {r:g}": (False, False, r, True) for r in a.sizes})
     if a.only is not None:
         unknown = sorted(set(a.only) - set(variants))
         if unknown:
             raise SystemExit(f"general_payload_prior: --only {unknown}: not among {list(variants)}")
         variants = {k: v for k, v in variants.items() if k in a.only}
-    for label, (paper, no_presence, size) in variants.items():
-        online_init._pack = _patched_pack(paper, no_presence, size)
+    for label, (paper, no_presence, size, centred) in variants.items():
+        online_init._pack = _patched_pack(paper, no_presence, size, centred)
         if a.arms:
             try:
                 _population(a, label)

@@ -55,6 +55,7 @@ def test_the_weight_limits():
 
 def _state(arm, pay, mass_std, cfg=None):
     c, s = est_init(cfg or OnlineConfig(), arm, 1)
+    c.floats[K.F_COM_SIZE] = 0.0  # the weight alone (the centred prior: tests/test_centred_prior.py)
     s.theta[0] = pay
     s.P[0] *= (mass_std / s.P[0, 0, 0] ** 0.5) ** 2  # the estimate's covariance, mass std as given
     return c, s

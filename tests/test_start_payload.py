@@ -45,7 +45,9 @@ def _run(arm, rec, n, hold=True):
     if not hold:  # the planted fault: control follows the estimate from the first sample
         ints = c.ints.copy()
         ints[K.I_KEEP_START] = 0
-        c = c._replace(ints=ints)
+        fl = c.floats.copy()  # and without the centred prior, which alone keeps most of the wander out
+        fl[K.F_COM_SIZE] = 0.0
+        c = c._replace(ints=ints, floats=fl)
     j = 10 * arm.payload_joint
     model = np.empty((n, 13 * arm.n_joints))
     est = np.empty(n)

@@ -223,7 +223,9 @@ class OnlineConfig:
         Start-up standard deviation [kg] of the payload mass (shapes P0 along the payload).
     payload_size : float
         Length scale r [m] of the payload prior: first moments ``m c`` have standard
-        deviation ``payload_mass_std r``, inertias ``payload_mass_std r^2``.
+        deviation ``payload_mass_std r``, inertias ``payload_mass_std r^2``. In payload mode
+        also the centred prior on the model control uses, ``m c ~ 0 +- r sqrt(E[m^2])``
+        (:func:`~adaptive_dd.identification.online_control_model.centred_prior`).
     p0_arm : float
         Mode ``"arm"``: start-up variance of every base parameter added to the prior (isotropic
         part of P0), >= 0. The hand-off of an identification sets it to 0

@@ -1,9 +1,10 @@
 """The model control uses, from the compiled online estimator's state.
 
-The payload an estimate implies (:func:`_payload_raw`), its projection with the compact-payload
-prior (:func:`compact_prior`) and the presence weight (:func:`presence_weight`), the starting
-payload kept until the payload changes (:func:`_keep_start`), and the standard parameters control
-uses (:func:`est_model_trial`, :func:`est_model_trial_in`).
+The payload an estimate implies (:func:`_payload_raw`), with the centred prior on its first moments
+(:func:`centred_prior`) and the compact-payload prior on its inertia (:func:`compact_prior`),
+projected and scaled by the presence weight (:func:`presence_weight`), the starting payload kept
+until the payload changes (:func:`_keep_start`), and the standard parameters control uses
+(:func:`est_model_trial`, :func:`est_model_trial_in`).
 """
 
 from __future__ import annotations
@@ -15,6 +16,7 @@ from adaptive_dd.identification.online_slots import (
     C_FOLLOWS,
     C_K,
     F_ALPHA_LONG,
+    F_COM_SIZE,
     F_EIG_MIN,
     F_PRESENT2,
     F_PRIOR_NOISE,
@@ -190,14 +192,59 @@ def presence_weight(m, var, present_var):  # pragma: no cover - compiled
     return 1.0 / (1.0 + np.sqrt(1.0 + present_var / var) * np.exp(-a))
 
 
+@njit(cache=True)
+def centred_prior(raw, Pc, r):  # pragma: no cover - compiled
+    """Combine the mass and first moments ``raw[:4]`` (covariance ``Pc[:4, :4]``, overwritten)
+    with the prior that the payload's centre of mass lies within about ``r`` [m] of its frame
+    given its mass: each first moment ``m c_k`` is 0 with variance ``r^2 E[m^2]``, ``E[m^2] =
+    max(m, 0)^2 + Pc[0, 0]``. Three scalar Kalman updates (pseudo-measurements ``m c_k = 0``) on
+    the 4 x 4 block; the inertias are left as they are (:func:`compact_prior` takes them from the
+    result)."""
+    if not (r > 0.0):
+        return
+    m = max(raw[0], 0.0)
+    R = r * r * (m * m + max(Pc[0, 0], 0.0))
+    g = np.empty(4)
+    row = np.empty(4)
+    for t in range(1, 4):
+        S = Pc[t, t] + R
+        if not (np.isfinite(S) and S > 0.0):
+            return
+        innov = -raw[t]
+        for a in range(4):
+            g[a] = Pc[a, t] / S
+            row[a] = Pc[t, a]
+        for a in range(4):
+            raw[a] += g[a] * innov
+            for b in range(4):
+                Pc[a, b] -= g[a] * row[b]
+
+
 @njit(cache=True, inline="always")
 def _control_payload(c, s, i, raw, pay, Pc):  # pragma: no cover - compiled
-    """The payload the model control uses: ``raw`` with the compact prior (if set); projected (if set)
-    and then, in payload mode, scaled by :func:`presence_weight` of the raw mass (its variance
-    ``P[0, 0]``, a carried payload's ``F_PRESENT2``): the posterior mean of a payload that may be
-    absent. A scaled consistent body stays consistent (its pseudo-inertia scaled by a factor in
-    [0, 1], within the same ball). ``Pc (10, 10)`` scratch."""
+    """The payload the model control uses: ``raw`` with, in payload mode, the centred prior
+    (:func:`centred_prior`, if ``F_COM_SIZE`` is set) and the compact prior (if set); projected
+    (if set) and then, in payload mode, scaled by :func:`presence_weight` of the mass (its
+    variance ``P[0, 0]``, both after the centred prior, a carried payload's ``F_PRESENT2``): the
+    posterior mean of a payload that may be absent. A scaled consistent body stays consistent
+    (its pseudo-inertia scaled by a factor in [0, 1], within the same ball). ``Pc (10, 10)``
+    scratch.
+
+    The centred prior is weighed against ``P`` as the recursive least squares state it, the
+    compact prior against ``P`` in the units of the equations' learned noise (``F_PRIOR_NOISE``):
+    scaled, the centred prior overrode first moments the data know on an arm whose rows are far
+    noisier than 1 (random:19's 30 % segment, docs/changelog.md), and gained less on the paper's
+    arm."""
     m_raw = raw[0]
+    var_m = s.P[i][0, 0]
+    if c.mode == MODE_PAYLOAD and c.floats[F_COM_SIZE] > 0.0:
+        P = s.P[i]
+        for a in range(4):
+            for b in range(4):
+                Pc[a, b] = P[a, b]
+        centred_prior(raw, Pc, c.floats[F_COM_SIZE])
+        m_raw = raw[0]
+        var_m = Pc[0, 0]
     rho = c.floats[F_PRIOR_RADIUS]
     if rho > 0.0:
         _inertia_cov(c, s.P[i], Pc)
@@ -210,7 +257,7 @@ def _control_payload(c, s, i, raw, pay, Pc):  # pragma: no cover - compiled
     if c.ints[I_PROJECT] == 1:
         project_payload(raw, pay, c.floats[F_EIG_MIN], c.floats[F_RADIUS])
         if c.mode == MODE_PAYLOAD and c.floats[F_PRESENT2] > 0.0:
-            wp = presence_weight(m_raw, s.P[i][0, 0], c.floats[F_PRESENT2])
+            wp = presence_weight(m_raw, var_m, c.floats[F_PRESENT2])
             for k in range(10):
                 pay[k] *= wp
     else:

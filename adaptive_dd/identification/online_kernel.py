@@ -80,6 +80,7 @@ from adaptive_dd.identification.online_slots import (  # noqa: F401 (re-exported
     F_ALPHA_LONG,
     F_ALPHA_SHORT,
     F_CAP,
+    F_COM_SIZE,
     F_CREEP_MARGIN,
     F_DET_SPEED,
     F_EIG_MIN,
