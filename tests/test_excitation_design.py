@@ -71,9 +71,12 @@ def test_the_exact_derivatives_match_central_differences(six):
 @pytest.mark.parametrize("arm_seed", [0, pytest.param(2, marks=pytest.mark.slow)])
 def test_the_exact_design_reaches_the_finite_difference_designs_optimum(arm_seed):
     """On drawn arms (3 and 5 joints, the leaderboard's first start): the design with exact
-    derivatives ends within 0.01 of the one on finite differences in ``log det`` per base
-    parameter (the information's geometric mean eigenvalue within 1 %; a start moved by 1e-12
-    moves the finite differences' optimum about as much) and within the limits."""
+    derivatives ends within 0.03 of the one on finite differences in ``log det`` per base
+    parameter (the information's geometric mean eigenvalue within 3 %) and within the limits.
+    The two are local optima of SLSQP from the same start, and where they end depends on the
+    machine's rounding: on random:0 over starts ``[seed, 4, k]``, k = 0..5, exact minus finite
+    differences was -0.013 .. +0.020 (0.011 at k = 0), and a gradient with every other entry
+    zeroed ends 0.083 worse (the derivatives' own check is the central differences' test)."""
     sc = _drawn(arm_seed)
     lim = ex.ExcitationLimits.of_arm(sc.arm)
     out = {}
@@ -85,7 +88,7 @@ def test_the_exact_design_reaches_the_finite_difference_designs_optimum(arm_seed
             tr, res = ex.design_excitation(sc.arm, lim, rng=rng)
         assert res.success, res.message
         out[exact] = (tr, res.fun)
-    assert abs(out[True][1] - out[False][1]) <= 0.01, (out[True][1], out[False][1])
+    assert abs(out[True][1] - out[False][1]) <= 0.03, (out[True][1], out[False][1])
     model = arm_model(sc.arm)
     fine = np.linspace(0, 10, 800, endpoint=False)
     assert ex._constraints(model, out[True][0], fine, lim).min() >= 0
