@@ -23,8 +23,8 @@ def _whole_suite_in_parallel(config) -> bool:
 
 
 def pytest_configure(config):
-    """Start ``tests/precompile_n_joint_loop.py`` (it does nothing on a warm cache): no worker
-    then waits idle for the N-joint closed loop's compilation (its docstring)."""
+    """Start ``tests/precompile_n_joint_loop.py`` (it does nothing on a warm cache): the workers
+    wait less for the N-joint closed loop's compilation (its docstring)."""
     if not _whole_suite_in_parallel(config):
         return
     import os
@@ -51,5 +51,8 @@ def pytest_unconfigure(config):
     p = getattr(config, "_precompile", None)
     if p is not None:
         if p.poll() is None:  # the run ended first (an error, -x, an interrupt)
-            os.killpg(p.pid, signal.SIGTERM)
+            if hasattr(os, "killpg"):
+                os.killpg(p.pid, signal.SIGTERM)
+            else:  # pragma: no cover - Windows: no process groups
+                p.terminate()
         p.wait()

@@ -7,7 +7,9 @@ and a process that asks meanwhile waits for it. On a cold cache the N-joint clos
 first minute or two: two of the three workers waited while the third compiled it, one core idle.
 Here it is compiled from the run's start in processes that wait for nothing, in two of them as
 the command line compiles it (:class:`~adaptive_dd._numba_cache.Compiling`: the estimator's step
-in one, the plant's step, the law's pieces and the report's kernels in the other, then the loop).
+in one, the plant's step, the law's pieces and the report's kernels in the other, then the loop
+around them). Whichever process asks for the loop first compiles it: a worker that gets there
+before this one compiles the loop alone (about 50 CPU s), its pieces already in the cache.
 A short run of the shipped UR5 scenario gives the loop the argument types every run gives it
 (one specialisation for every law and arm: ``tests/test_compile_once.py``). Nothing is done when
 the cache holds the loop already. The two-link loop (about 60 CPU s) is left to the tests: no
