@@ -34,7 +34,6 @@ from adaptive_dd.identification.online_slots import (
     F_FLOOR2,
     F_GATE2,
     F_HOLD_ABOVE2,
-    F_NOISE_GAIN,
     F_SLOW2,
     F_THRESHOLD2,
     I_FAST,
@@ -140,59 +139,6 @@ def _ref_rise(c, s, i, q, w):  # pragma: no cover - compiled
             s.ref_rise[i, j] = v1 / v0
 
 
-NOISE_EVERY = 10
-"""Samples between two computations of the rows' noise variance at the arm's posture
-(:func:`_noise_variance`; the posture moves little in 10 ms, the level averages over 1 s)."""
-
-
-@njit(cache=True)
-def _noise_variance(c, s, i, q, w):  # pragma: no cover - compiled
-    """``s.nvar[i]``: per row, the variance the sensors' velocity noise gives its weighted prior
-    error at the measured posture, ``g (M V M^T)_jj / w_j^2``: ``M`` the model's inertia (armature
-    included) at ``q`` with the payload the estimate holds, ``V`` the stated velocity noise
-    (``c.vdet``), ``g`` the white noise's variance gain through ``G1`` (``F_NOISE_GAIN``). The
-    momentum ``M qd`` carries the velocity's noise into the equation through ``G1``; its variance
-    follows the posture (a base row's swings about 60x over a drawn arm's trial) faster than the
-    1 s level does, and :func:`_detect` scales the level's noise share with it.
-    """
-    n = q.shape[0]
-    raw, pay, pi = w.raw, w.pay, w.pir
-    _payload_raw(c, s.theta[i], raw)
-    _control_payload(c, s, i, raw, pay, w.Pc)
-    for a in range(10 * n):
-        pi[a] = c.pi0[a]
-    base = 10 * c.jp
-    for a in range(10):
-        acc = 0.0
-        for b in range(10):
-            acc += c.pmap[a, b] * pay[b]
-        pi[base + a] += acc
-    M = w.Mr
-    mass_matrix_in(c.ch, pi, q, w.chain, M)
-    for j in range(n):
-        M[j, j] += c.pi0[12 * n + j]
-    g = c.floats[F_NOISE_GAIN]
-    for j in range(n):
-        v = 0.0
-        for k in range(n):
-            v += M[j, k] * M[j, k] * c.vdet[k]
-        v *= g / (c.w[j] * c.w[j])
-        s.nvar[i, j] = v if np.isfinite(v) else 0.0
-
-
-@njit(cache=True, inline="always")
-def _noise_rise(s, i, j, level, den):  # pragma: no cover - compiled
-    """What the posture adds to row j's ``level`` (learnt over ``den``'s samples): its noise share,
-    the mean of ``nvar`` over those samples (``s.nlong``) and at most the level itself, scaled up to
-    the noise's variance now (``s.nvar``); 0 where the noise is now no higher. The rest of the level
-    (the model's error on a drawn plant, the estimate's) does not follow the noise and is not
-    scaled."""
-    nbar = s.nlong[i, j] / den
-    if not (nbar > 0.0 and s.nvar[i, j] > nbar):
-        return 0.0
-    return min(nbar, level) * (s.nvar[i, j] / nbar - 1.0)
-
-
 @njit(cache=True, inline="always")
 def _prior_variance(phi, g, lam):  # pragma: no cover - compiled
     """``phi^T P phi`` of the covariance ``P`` before :func:`_rls_row`'s update, from what that
@@ -272,10 +218,6 @@ def _detect(c, s, i, eps, act):  # pragma: no cover - compiled
     re-learnt from the other rows, errs by along it, which that sample's update takes out
     (random:14 seed 3: 900, 17 times the standard deviation ``phi_j^T P phi_j`` predicted, the next
     ones below 12; read, its 20 ms average raised a second alarm as the re-arm window opened).
-
-    A level learnt by a row itself is raised by what the posture adds to its noise share
-    (:func:`_noise_rise`, :func:`_noise_variance`): the noise follows the posture faster than the
-    1 s level does (random:101 seed 0 at 7.003 s, random:4 seed 2 at 6.0 s: a base row's noise).
     """
     n = eps.shape[0]
     ints, fl = c.ints, c.floats
@@ -335,7 +277,6 @@ def _detect(c, s, i, eps, act):  # pragma: no cover - compiled
             if ok:
                 s.long[i, j] += a_l * (e2 - s.long[i, j])
                 s.plong[i, j] += a_l * (s.pvar[i, j] - s.plong[i, j])
-                s.nlong[i, j] += a_l * (s.nvar[i, j] - s.nlong[i, j])
                 s.learned[i, j] = nl + 1
     if cnt[C_K] < ints[I_WARMUP] or cnt[C_SINCE_ALARM] <= ints[I_HOLDOFF]:
         return False
@@ -359,8 +300,6 @@ def _detect(c, s, i, eps, act):  # pragma: no cover - compiled
             level = max(s.long[i, j] / den, fl[F_FLOOR2])
             if s.hold[i, j] > 0.0:  # risen within the hold: the level it had before
                 level = s.hold[i, j]
-            # its noise share at the posture now (the rest of it does not follow the noise)
-            level += _noise_rise(s, i, j, s.long[i, j] / den, den)
         elif slow:  # out of use: only against a level it learnt itself since the last alarm
             continue
         elif s.ref[i, j] > 0.0 and cnt[C_SINCE_ALARM] < ints[I_RESUME] + ints[I_MIN_LEARNED]:
@@ -434,7 +373,6 @@ def _alarm(c, s, i, k):  # pragma: no cover - compiled
         s.learned[i, j] = 0
         s.long[i, j] = 0.0
         s.plong[i, j] = 0.0
-        s.nlong[i, j] = 0.0
         s.hold[i, j] = 0.0
         s.held[i, j] = 0
     if ints[I_REOPEN_AGAIN] == 1:

@@ -37,25 +37,6 @@ def _detector_velocity_variance(arm: Arm) -> Array:
     return np.maximum(v, 1e-6 * v.max())
 
 
-def _noise_gain(cfg: OnlineConfig, arm: Arm) -> float:
-    """``sum_k h_k^2`` of the impulse response ``h`` of the bank's ``G1``: the variance a row's
-    prior error gets from a unit white velocity noise through the momentum ``M qd`` (about ``T / (4
-    tau_f^3)``: 227 at 1 kHz with ``tau_f`` = 10 ms); 0 when the arm states no velocity noise (the
-    noise share of the detector's level is then unknown, :func:`~.online_detector._noise_variance`)."""
-    v = np.asarray(arm.sensor.velocity_variance, dtype=float)
-    if not (np.all(np.isfinite(v)) and v.max() > 0.0):
-        return 0.0
-    b = cfg.bank
-    x = np.zeros(b.order)
-    g, u = 0.0, 1.0
-    for _ in range(round(20 * b.tau_f / b.sample_period) + 10):  # e^-20 of the tail left
-        y = float(b.C[1] @ x + b.D[1, 0] * u)
-        g += y * y
-        x = b.A @ x + b.B[:, 0] * u
-        u = 0.0
-    return g
-
-
 def _pack(cfg: OnlineConfig, arm: Arm) -> tuple[EstCfg, Array]:
     n = arm.n_joints
     pi0 = np.ascontiguousarray(arm.pi, dtype=float)
@@ -147,7 +128,6 @@ def _pack(cfg: OnlineConfig, arm: Arm) -> tuple[EstCfg, Array]:
             ints[K.I_FAST_LEARNED] = cfg.seconds(det.long_window)
         fl[K.F_DET_SPEED] = max(det.speed, fl[K.F_SEL_THRESHOLD])
         fl[K.F_CREEP_MARGIN] = det.creep_margin
-        fl[K.F_NOISE_GAIN] = _noise_gain(cfg, arm)
         if det.hold_above > 0.0:
             fl[K.F_HOLD_ABOVE2] = det.hold_above**2
             hold = cfg.rise_samples if det.hold_time is None else cfg.seconds(det.hold_time)
@@ -261,8 +241,6 @@ def est_init(
         plong=np.zeros((m, n)),
         pref=np.zeros((m, n)),
         eout=np.full((m, n), np.nan),
-        nvar=np.zeros((m, n)),
-        nlong=np.zeros((m, n)),
     )
     for i in range(m):  # the payload the model control uses at the start
         K.est_payload_trial(c, state, i, state.start_pay[i])

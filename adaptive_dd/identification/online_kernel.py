@@ -45,11 +45,9 @@ from adaptive_dd.identification.online_control_model import (  # noqa: F401 (re-
     presence_weight,
 )
 from adaptive_dd.identification.online_detector import (  # noqa: F401 (re-exported)
-    NOISE_EVERY,
     _alarm,
     _detect,
     _detect_step,
-    _noise_variance,
     _prior_variance,
     _ref_rise,
     _reopen,
@@ -91,7 +89,6 @@ from adaptive_dd.identification.online_slots import (  # noqa: F401 (re-exported
     F_HOLD_ABOVE2,
     F_LAM0,
     F_MU,
-    F_NOISE_GAIN,
     F_PRESENT2,
     F_PRIOR_NOISE,
     F_PRIOR_RADIUS,
@@ -247,8 +244,6 @@ def est_step_trial_in(c, s, i, q, qd, tau, w):  # pragma: no cover - compiled
         if cnt[C_REOPEN_AT] == cnt[C_K]:
             _reopen(c, Pi)
         _ref_rise(c, s, i, q, w)
-        if fl[F_NOISE_GAIN] > 0.0 and cnt[C_K] % NOISE_EVERY == 0:
-            _noise_variance(c, s, i, q, w)
         alarm = _detect_step(c, s, i, s.eps[i], act)
         _keep_start(c, s, i)
     cnt[C_K] += 1

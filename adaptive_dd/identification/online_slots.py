@@ -151,8 +151,7 @@ F_CREEP_MARGIN = 16  # a creeping joint's row alarms only beyond this times its 
 F_HOLD_ABOVE2 = 17  # a row rises when its short average exceeds this x the threshold x its level
 F_PRESENT2 = 18  # payload mode: the variance [kg^2] of a payload's mass when one is carried (0: no weight)
 F_PRIOR_NOISE = 19  # > 0: the compact prior weighed against P scaled by this x the rows' learned noise level
-F_NOISE_GAIN = 20  # > 0: the velocity noise's variance gain through G1 (the rows' noise share of the level)
-N_F = 21
+N_F = 20
 
 
 class EstState(NamedTuple):
@@ -223,12 +222,6 @@ class EstState(NamedTuple):
     eout : (m, n)
         Detector: the prior error at the last sample of each row out of use because its joint is
         slow (a reversal), at the estimate it does not update; NaN for the others.
-    nvar : (m, n)
-        Detector: the variance the sensors' velocity noise gives each row's prior error at the
-        arm's posture (:func:`~adaptive_dd.identification.online_detector._noise_variance`; 0 when
-        the arm states no noise).
-    nlong : (m, n)
-        Detector: ``nvar`` averaged as the level learns (the share of the level that is the noise).
     """
 
     xf: np.ndarray
@@ -259,8 +252,6 @@ class EstState(NamedTuple):
     plong: np.ndarray
     pref: np.ndarray
     eout: np.ndarray
-    nvar: np.ndarray
-    nlong: np.ndarray
 
 
 class EstWork(NamedTuple):
