@@ -213,11 +213,6 @@ def _detect(c, s, i, eps, act):  # pragma: no cover - compiled
     friction turned over by the measured speed's sign near a reversal, and friction the model
     lacks near rest. A payload swapped while the joints carrying it reverse shows first in their
     rows (random:111's swap to 30 % at 8 s: 57 ms to the alarm while they were not read, 15 ms).
-    A row without a level of its own since the last alarm leaves its averages alone while it is out,
-    and its first sample back in use is not read: its prior error there is what the estimate,
-    re-learnt from the other rows, errs by along it, which that sample's update takes out
-    (random:14 seed 3: 900, 17 times the standard deviation ``phi_j^T P phi_j`` predicted, the next
-    ones below 12; read, its 20 ms average raised a second alarm as the re-arm window opened).
     """
     n = eps.shape[0]
     ints, fl = c.ints, c.floats
@@ -243,11 +238,6 @@ def _detect(c, s, i, eps, act):  # pragma: no cover - compiled
                 s.pfast[i, j] += fl[F_ALPHA_FAST] * (s.pvar[i, j] - s.pfast[i, j])
             continue
         if not (act[j] and np.isfinite(e)):
-            continue
-        if ints[I_SELECT] == 1 and s.learned[i, j] == 0 and s.since_slow[i, j] == ints[I_SEL_MEMORY] + 1:
-            # back in use with no level of its own since the last alarm (its averages were left
-            # alone while it was out): its first prior error is the error the estimate, re-learnt
-            # from the other rows, has along it, which this sample's update takes out; not a change
             continue
         e2 = e * e
         s.short[i, j] += a_s * (e2 - s.short[i, j])
