@@ -5,3 +5,54 @@ import pytest
 @pytest.fixture
 def rng():
     return np.random.default_rng(12345)
+
+
+# ---- a parallel run of the whole suite compiles the N-joint closed loop at its start ---------
+
+
+def _whole_suite_in_parallel(config) -> bool:
+    """The xdist controller of a run of the default test paths (no file, node or ``-k`` given, not
+    ``--collect-only``)."""
+    return (
+        not hasattr(config, "workerinput")
+        and bool(getattr(config.option, "numprocesses", None))
+        and config.args_source == pytest.Config.ArgsSource.TESTPATHS
+        and not config.option.keyword
+        and not config.option.collectonly
+    )
+
+
+def pytest_configure(config):
+    """Start ``tests/precompile_n_joint_loop.py`` (it does nothing on a warm cache): the workers
+    wait less for the N-joint closed loop's compilation (its docstring)."""
+    if not _whole_suite_in_parallel(config):
+        return
+    import os
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[1]
+    path = os.pathsep.join(p for p in (str(root), os.environ.get("PYTHONPATH")) if p)
+    quiet = {"stdin": subprocess.DEVNULL, "stdout": subprocess.DEVNULL, "stderr": subprocess.DEVNULL}
+    config._precompile = subprocess.Popen(
+        [sys.executable, str(root / "tests" / "precompile_n_joint_loop.py")],
+        env={**os.environ, "PYTHONPATH": path},  # this copy of the package, not an installed one
+        cwd=root,
+        start_new_session=True,  # its own process group: stopped with the second process it starts
+        **quiet,
+    )
+
+
+def pytest_unconfigure(config):
+    import os
+    import signal
+
+    p = getattr(config, "_precompile", None)
+    if p is not None:
+        if p.poll() is None:  # the run ended first (an error, -x, an interrupt)
+            if hasattr(os, "killpg"):
+                os.killpg(p.pid, signal.SIGTERM)
+            else:  # pragma: no cover - Windows: no process groups
+                p.terminate()
+        p.wait()
