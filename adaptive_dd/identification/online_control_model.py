@@ -101,6 +101,25 @@ def _inertia_cov(c, P, out):  # pragma: no cover - compiled
             out[a, b] = acc
 
 
+@njit(cache=True, inline="always")
+def _pseudo_measure(raw, Pc, r, value, R, lo, hi, g, row):  # pragma: no cover - compiled
+    """One scalar Kalman update of ``raw[lo:hi]`` (covariance ``Pc[lo:hi, lo:hi]``, overwritten)
+    with the pseudo-measurement ``raw[r] = value`` of variance ``R``; ``g``, ``row`` scratch.
+    False (nothing changed) when the innovation's variance is not finite and positive."""
+    S = Pc[r, r] + R
+    if not (np.isfinite(S) and S > 0.0):
+        return False
+    innov = value - raw[r]
+    for a in range(lo, hi):
+        g[a] = Pc[a, r] / S
+        row[a] = Pc[r, a]
+    for a in range(lo, hi):
+        raw[a] += g[a] * innov
+        for b in range(lo, hi):
+            Pc[a, b] -= g[a] * row[b]
+    return True
+
+
 @njit(cache=True)
 def compact_prior(raw, Pc, rho):  # pragma: no cover - compiled
     """Combine ``raw (10,)`` (covariance ``Pc (10, 10)``, of which only the inertia block
@@ -136,18 +155,8 @@ def compact_prior(raw, Pc, rho):  # pragma: no cover - compiled
     g = np.empty(10)
     row = np.empty(10)
     for t in range(6):
-        r = 4 + t
-        S = Pc[r, r] + R
-        if not (np.isfinite(S) and S > 0.0):
+        if not _pseudo_measure(raw, Pc, 4 + t, mean[t], R, 4, 10, g, row):
             return
-        innov = mean[t] - raw[r]
-        for a in range(4, 10):
-            g[a] = Pc[a, r] / S
-            row[a] = Pc[r, a]
-        for a in range(4, 10):
-            raw[a] += g[a] * innov
-            for b in range(4, 10):
-                Pc[a, b] -= g[a] * row[b]
 
 
 @njit(cache=True, inline="always")
@@ -207,17 +216,8 @@ def centred_prior(raw, Pc, r):  # pragma: no cover - compiled
     g = np.empty(4)
     row = np.empty(4)
     for t in range(1, 4):
-        S = Pc[t, t] + R
-        if not (np.isfinite(S) and S > 0.0):
+        if not _pseudo_measure(raw, Pc, t, 0.0, R, 0, 4, g, row):
             return
-        innov = -raw[t]
-        for a in range(4):
-            g[a] = Pc[a, t] / S
-            row[a] = Pc[t, a]
-        for a in range(4):
-            raw[a] += g[a] * innov
-            for b in range(4):
-                Pc[a, b] -= g[a] * row[b]
 
 
 @njit(cache=True, inline="always")
