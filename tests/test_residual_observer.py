@@ -182,34 +182,3 @@ def test_the_boost_ends_along_a_ramp_of_its_added_bandwidth():
     assert np.allclose(added(bs + br), 0.0, atol=1e-12)
     abrupt = cfg._replace(boost_ramp=0)
     assert np.allclose(added(bs - 1, abrupt), full) and np.allclose(added(bs, abrupt), 0.0, atol=1e-12)
-
-
-def test_the_boost_is_held_on_the_joints_whose_predicted_payload_torque_still_matters():
-    """With ``boost_hold`` (``adaptive_ct`` given a task), a joint's boost lasts past
-    ``boost_duration`` while ``boost_hold u > 1`` (``u`` the estimate's predicted payload-torque
-    variance per joint, row ``B_UNC`` of the state), up to ``boost_max`` samples after the alarm,
-    and each joint's added bandwidth then ramps down from its own release; the other joints' end
-    as without the hold."""
-    from adaptive_dd.closed_loop.laws import B_LEVEL, B_UNC, LawState, law_batch
-
-    sc = load_scenario(_shipped("vertical3_payload_exact"))
-    arm, n, T = sc.arm, sc.arm.n_joints, sc.sample_period
-    base = make_controller("adaptive_ct", arm=arm).law_config(T)._replace(observer=False)
-    bs, br = base.boost_samples, base.boost_ramp
-    cfg = base._replace(boost_hold=np.eye(n), boost_max=bs + 3 * br)
-    q_d, qd_d, qdd_d = np.array([0.3, -0.6, 0.4]), np.array([0.2, -0.1, 0.3]), np.zeros(n)
-    q, qd = (q_d - np.array([0.01, -0.02, 0.015]))[None], qd_d[None]
-    st = LawState.start(cfg, 1)
-    levels = {}
-    for since in range(bs - 2, bs + 4 * br + 1):
-        st.since_alarm[0] = since
-        st.obs[0, B_UNC] = [2.0, 0.5, 2.0] if since < bs + br else [2.0, 0.5, 0.5]  # joint 2 settles
-        law_batch(arm.chain, cfg, st, q, qd, q_d, qd_d, qdd_d)
-        levels[since] = st.obs[0, B_LEVEL].copy()
-    f = [1.0 - (k + 1) / (br + 1) for k in range(br + 1)]
-    for k in (0, br // 2, br - 1):
-        assert np.allclose(levels[bs + k], [1.0, f[k], 1.0]), k  # joint 1 as without the hold
-    for k in (0, br // 2, br):
-        assert np.allclose(levels[bs + br + k], [1.0, 0.0, f[k]]), k  # joint 2 from its release
-    assert levels[bs + 3 * br - 1][0] == 1.0 and np.isclose(levels[bs + 3 * br][0], f[0])  # boost_max
-    assert np.allclose(levels[bs + 4 * br], 0.0)

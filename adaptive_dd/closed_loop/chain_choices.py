@@ -30,7 +30,6 @@ from adaptive_dd.closed_loop.choices import (
     plant_work,
 )
 from adaptive_dd.closed_loop.laws import (
-    B_UNC,
     OBS_ROWS,
     LawConfig,
     LawState,
@@ -40,9 +39,7 @@ from adaptive_dd.closed_loop.laws import (
 )
 from adaptive_dd.closed_loop.plant import plant_scratch, plant_step
 from adaptive_dd.closed_loop.types import Plant
-from adaptive_dd.identification.online_control_model import _noise_level
 from adaptive_dd.identification.online_kernel import (
-    I_N_ROWS,
     EstCfg,
     est_step_model,
     est_work,
@@ -212,44 +209,8 @@ def online_sample(ec, es, ls, i, q, qd, tau, ew):  # pragma: no cover - compiled
         ls.since_alarm[i] = 0
     else:
         ls.since_alarm[i] += 1
-    _payload_torque_variance(ec, es, i, ew, alarm, ls.obs[i][B_UNC])
     observe_applied(ls.obs[i], tau)
     return alarm
-
-
-@njit(cache=True, inline="always")
-def _payload_torque_variance(ec, es, i, ew, alarm, u):  # pragma: no cover - compiled
-    """``u (n,)``: per joint, the variance [N^2 m^2] of the payload torque the estimate predicts
-    at this sample, ``phi_j^T P phi_j`` over the payload's ten columns of this sample's filtered
-    regression (``ew.phi``) times the rows' learned noise level (the recursive least squares take
-    each weighted equation's error as of variance 1; :func:`_noise_level`); for ``adaptive_ct``'s
-    boost (:func:`~adaptive_dd.closed_loop.laws._boost_level`). Kept from the last sample whose
-    regression was formed (a row in use); very large from an alarm until then."""
-    n = u.shape[0]
-    if alarm == 1:
-        for j in range(n):
-            u[j] = 1e300
-    used = False
-    for j in range(n):
-        if np.isfinite(es.eps[i, j]):
-            used = True
-    if not used:
-        return
-    P = es.P[i]
-    p = P.shape[0]
-    k0 = p - 10
-    level = _noise_level(ec, es, i)
-    for j in range(min(n, ec.ints[I_N_ROWS])):
-        phi = ew.phi[j]
-        acc = 0.0
-        for a in range(k0, p):
-            if phi[a] == 0.0:
-                continue
-            pa = 0.0
-            for b in range(k0, p):
-                pa += P[a, b] * phi[b]
-            acc += phi[a] * pa
-        u[j] = max(acc, 0.0) * level
 
 
 def compile_estimator(arm) -> None:

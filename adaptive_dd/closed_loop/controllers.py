@@ -370,9 +370,7 @@ class AdaptiveCT(Law):
     (300 rad/s at most; per joint the largest whose noise torque stays inside the room the torque
     limit leaves beside the reference's: :mod:`~adaptive_dd.closed_loop.boost`, once a scenario
     states the task, :meth:`state_task`) through the nominal inertia for ``boost_duration`` (1 s)
-    after an alarm, and past it, up to :attr:`BOOST_HOLD_MAX`, on each joint whose payload torque
-    the estimate still predicts too loosely to cost less than the sensors' noise
-    (:meth:`boost_hold`), plus the residual observer's torque (``observer``, on by default; bandwidth
+    after an alarm, plus the residual observer's torque (``observer``, on by default; bandwidth
     ``observer_bandwidth``, default ``0.4 / T``): the torque the current model leaves
     unexplained, beyond three times its own noise level (:mod:`adaptive_dd.closed_loop.laws`).
     With the observer on, adaptive_ct is no longer only "computed torque given an estimated
@@ -406,10 +404,6 @@ class AdaptiveCT(Law):
     and 1.00-1.03 (10 seeds, ``studies/boost_end.py`` of commit d41702f; docs/change_detection.md).
     A longer ramp lowers the ratios further (1 s: 0.87-0.93, below the floor), but only by running gains above
     the oracle's for longer: the ramp is sized to remove the step, not to beat the floor."""
-    BOOST_HOLD_MAX = 3.0
-    """[s] after an alarm, the longest a joint's boost is held while the estimate's predicted
-    payload torque still matters there (:meth:`boost_hold`); then it ramps down as after
-    ``boost_duration``."""
     BOOST_DURATION = 1.0
     """[s] default ``boost_duration``; the two-link ``adaptive_ct`` keeps 0.2 s on purpose (its
     estimator learns the paper's sigma within tens of ms; an N-joint payload's centre of mass
@@ -463,32 +457,6 @@ class AdaptiveCT(Law):
         inertia = self.arm.mass_matrix(q)
         return boost_bandwidths(self.boost_bandwidth, w, self.gains.damping, inertia, room, var_q, var_qd)
 
-    def boost_hold(self, sample_period: float) -> Array:
-        """``(n, n)`` matrix ``G`` of the boost's hold (:func:`~adaptive_dd.closed_loop.laws._boost_level`):
-        past ``boost_duration``, joint j's boost is held (up to :attr:`BOOST_HOLD_MAX` after the
-        alarm) while ``sum_l G[j, l] u_l > 1``, ``u`` the variance of the payload torque the
-        estimate predicts per joint [N^2 m^2] (its covariance in the rows' learned noise,
-        :func:`~adaptive_dd.closed_loop.chain_choices._payload_torque_variance`). A torque error
-        ``d`` of the model leaves the law a tracking error ``M0^-1 d / kp`` (``d`` slow against the
-        bandwidth); the sensors' noise leaves the floor its own, of variance ``T / 2 (var_q kp / kd +
-        var_qd kd / kp)`` per joint (white noise through ``kp / (s^2 + kd s + kp)`` and ``kd /
-        (...)``); so ``G[j, l] = E[(M0^-1)_jl^2] / (kp_j^2 floor_j)``, the mean over the task's
-        instants: the boost lasts while the model's error would cost more than the noise does.
-        ``(0, 0)`` without a task (the boost then lasts ``boost_duration``)."""
-        n = self.arm.n_joints
-        if self.task is None:
-            return np.zeros((0, 0))
-        T = float(sample_period)
-        w = np.broadcast_to(np.asarray(self.gains.bandwidth, dtype=float), (n,))
-        kp, kd = w**2, 2.0 * self.gains.damping * w
-        var_q = np.broadcast_to(np.asarray(self.arm.sensor.position_variance, dtype=float), (n,))
-        var_qd = np.broadcast_to(np.asarray(self.arm.sensor.velocity_variance, dtype=float), (n,))
-        floor = 0.5 * T * (var_q * kp / kd + var_qd * kd / kp)
-        if not np.all(floor > 0):
-            return np.zeros((0, 0))
-        minv2 = np.mean(np.linalg.inv(self.arm.mass_matrix(self.task[0])) ** 2, axis=0)
-        return np.ascontiguousarray(minv2 / (kp**2 * floor)[:, None])
-
     def law_config(self, sample_period):
         w, z = self.gains.bandwidth, self.gains.damping
         wb = self.boost_bandwidths()
@@ -499,8 +467,7 @@ class AdaptiveCT(Law):
             boost_samples=round(self.boost_duration / sample_period),
             boost_ramp=round(self.boost_ramp / sample_period), observer=self.observer,
             obs_a=float(np.exp(-beta * T)), obs_alpha=min(1.0, T / OBSERVER_LEVEL_WINDOW),
-            obs_warmup=round(OBSERVER_WARMUP / T), boost_hold=self.boost_hold(T),
-            boost_max=round(self.BOOST_HOLD_MAX / T),
+            obs_warmup=round(OBSERVER_WARMUP / T),
         )  # fmt: skip
 
     def compiled_form(self, n_trials, sample_period):

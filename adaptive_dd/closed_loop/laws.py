@@ -93,21 +93,11 @@ Array = NDArray[np.float64]
 KIND_PD, KIND_CT, KIND_SLOTINE, KIND_PD_GRAVITY = 0, 1, 2, 3
 MODEL_NONE, MODEL_FIXED, MODEL_TRUE, MODEL_TRIAL = 0, 1, 2, 3
 
-B_UNC = max(O_ROWS, ICL_ROWS)
-"""Row of ``LawState.obs``: per joint, the variance [N^2 m^2] of the payload torque the estimate
-predicts, ``phi_j^T P phi_j`` (its payload columns) times the rows' learned noise level, written
-by the closed loop's estimator after each sample (``adaptive_ct``'s boost, :func:`_boost_level`)."""
-B_LEVEL = B_UNC + 1
-"""Row of ``LawState.obs``: per joint, the boost's share of its added bandwidth this sample, 1
-while held, then falling linearly to 0 over ``boost_ramp`` samples (:func:`_boost_level`)."""
-B_RELEASE = B_LEVEL + 1
-"""Row of ``LawState.obs``: per joint, the count of samples since the alarm at which its boost was
-last released (-1 while held)."""
-OBS_ROWS = B_RELEASE + 1
+OBS_ROWS = max(O_ROWS, ICL_ROWS)
 """Rows of a law's per-trial state ``LawState.obs``: the residual observer's (``O_*``) or, the
 observer off, the composite and ICL terms' (``C_*``, ``I_*``,
 :mod:`adaptive_dd.closed_loop.composite`) or Craig-Hsu-Sastry's
-(:mod:`adaptive_dd.closed_loop.adaptation`); then the boost's (``B_UNC``, ``B_LEVEL``, ``B_RELEASE``)."""
+(:mod:`adaptive_dd.closed_loop.adaptation`)."""
 
 
 class LawConfig(NamedTuple):
@@ -131,13 +121,6 @@ class LawConfig(NamedTuple):
         Samples after those over which the boost's added bandwidth falls linearly to none
         (computed torque: ``w + f (wb - w)``, ``f`` from 1 to 0, with ``w = sqrt(kp)`` and ``wb``
         the boost's; 0: the boost ends at once).
-    boost_hold : ndarray (n, n) or (0, 0)
-        With ``(n, n)``: joint j's boost is held past ``boost_samples`` (up to ``boost_max``)
-        while ``sum_l boost_hold[j, l] u_l > 1``, ``u`` the estimate's predicted payload-torque
-        variance per joint (row ``B_UNC`` of the state), then ramped down alone
-        (:func:`_boost_level`); ``(0, 0)``: every joint's boost ends at ``boost_samples``.
-    boost_max : int
-        Samples after an alarm beyond which no boost is held.
     adapt : bool
         Slotine-Li adapts the payload (``theta``) after the command.
     gamma, lo, hi : ndarray (10,)
@@ -223,8 +206,6 @@ class LawConfig(NamedTuple):
     adapt_kind: int = 0
     icl_window: float = 0.0
     nat_gain: float = 0.0
-    boost_hold: Array = np.zeros((0, 0))
-    boost_max: int = 0
 
 
 class LawState(NamedTuple):
@@ -387,44 +368,15 @@ def law_trial(
 
 
 @njit(cache=True, inline="always")
-def _boost_level(cfg, since_alarm, obs):  # pragma: no cover - compiled
-    """Each joint's boost share ``obs[B_LEVEL]`` (n,) ``since_alarm`` samples after an alarm: 1 while
-    held, i.e. for ``boost_samples`` and, with ``cfg.boost_hold``, while the estimate's predicted
-    payload torque still matters on that joint (``boost_hold u > 1``, up to ``boost_max`` samples
-    after the alarm); from its release on ``1 - (k + 1) / (boost_ramp + 1)`` at the ``k``-th
-    sample after it. Returns whether any joint is boosted."""
-    n = obs.shape[1]
-    lev, u, rel = obs[B_LEVEL], obs[B_UNC], obs[B_RELEASE]
-    hold = cfg.boost_hold.shape[0] == n
-    on = False
-    for j in range(n):
-        held = since_alarm < cfg.boost_samples
-        if not held and hold and since_alarm < cfg.boost_max:
-            r = 0.0
-            for m in range(n):
-                r += cfg.boost_hold[j, m] * u[m]
-            held = r > 1.0
-        if held:
-            rel[j] = -1.0
-            lev[j] = 1.0
-        else:
-            if not hold:
-                rel[j] = cfg.boost_samples
-            elif rel[j] < 0.0 or rel[j] > since_alarm:
-                rel[j] = since_alarm
-            lev[j] = max(1.0 - (since_alarm - rel[j] + 1.0) / (cfg.boost_ramp + 1.0), 0.0)
-        on = on or lev[j] > 0.0
-    return on
-
-
-@njit(cache=True, inline="always")
-def _boost_feedback(cfg, lev, e, ed, v):  # pragma: no cover - compiled
-    """The boost's added feedback ``v = dkp e + dkd e'`` (n,) at each joint's share ``lev`` of its
-    added bandwidth (the law adds ``M0(q) v``): the boost's gains at 1, the added bandwidth
-    ``lev (wb - w)`` below (:class:`LawConfig`)."""
+def _boost_feedback(cfg, since_alarm, e, ed, v):  # pragma: no cover - compiled
+    """The boost's added feedback ``v = dkp e + dkd e'`` (n,) ``since_alarm`` samples after an
+    alarm (the law adds ``M0(q) v``): the boost's gains for ``boost_samples``, then its added
+    bandwidth ramped down to none over ``boost_ramp`` samples (:class:`LawConfig`)."""
+    f = 1.0
+    if since_alarm >= cfg.boost_samples:  # the ramped end: f from 1 to 0
+        f = 1.0 - (since_alarm - cfg.boost_samples + 1) / (cfg.boost_ramp + 1)
     for j in range(e.shape[0]):
         dkp, dkd = cfg.boost_kp[j], cfg.boost_kd[j]
-        f = lev[j]
         if f < 1.0:  # the added bandwidth f (wb - w): kp = w^2, kd = 2 z w, boost_kd = 2 z (wb - w)
             w0 = np.sqrt(max(cfg.kp[j], 0.0))
             dw = f * dkd * w0 / cfg.kd[j] if cfg.kd[j] > 0.0 else 0.0
@@ -492,8 +444,9 @@ def law_trial_in(
                 _adapt_payload(ch, cfg, q, qd, qdr, a, s, theta, pi_model, work)
     elif cfg.adapt and cfg.adapt_kind == ADAPT_CHS:
         chs_step(ch, cfg, q, qd, e, ed, theta, pi_model, obs, work)
-    if cfg.boost_samples > 0 and _boost_level(cfg, since_alarm, obs):
-        _boost_feedback(cfg, obs[B_LEVEL], e, ed, v)
+    boosting = cfg.boost_samples > 0 and since_alarm < cfg.boost_samples + cfg.boost_ramp
+    if boosting:
+        _boost_feedback(cfg, since_alarm, e, ed, v)
         _add_nominal_inertia(ch, cfg, q, v, work, out)
     if cfg.observer:
         _observe(ch, cfg, pi_model, q, qd, obs, work, out)
