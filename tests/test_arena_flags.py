@@ -80,7 +80,7 @@ def test_the_leaderboard_runs_its_units_with_blas_on_one_thread(monkeypatch):
     before = [i["num_threads"] for i in blas]
     seen = []
 
-    def run_units(run_unit, units, controllers, seeds, progress, workers, costs=None):
+    def run_units(run_unit, units, controllers, seeds, progress, workers, costs=None, design=None):
         seen.append([i["num_threads"] for i in threadpool_info() if i["user_api"] == "blas"])
         return []
 
@@ -111,6 +111,41 @@ def test_the_workers_take_the_largest_units_first():
     assert (n0, n3) == (3, 7)  # the drawn arms' joints this test is written for
     assert unit_costs(units) == [49.0, 27.0, 147.0, 9.0, 49.0]
     assert largest_first(unit_costs(units)) == [2, 0, 4, 1, 3]
+
+
+def _fake_unit(u, controllers, seeds, progress, design=None):
+    return ([u, design], 0.0, 0.0)
+
+
+def _fake_design(u):
+    return f"design of {u}"
+
+
+def test_the_workers_design_the_other_units_while_the_first_runs():
+    """With workers, the largest unit goes first, alone; every other one gets what ``design`` made of
+    it in a task of its own (a drawn arm's excitation design, made while the first unit compiles
+    the closed loop); with one worker, each unit designs its own."""
+    from adaptive_dd.arena import pool
+
+    units, costs = ["a", "b", "c"], [2.0, 3.0, 1.0]
+    two = pool.run_units(_fake_unit, units, ("pd",), 1, False, 2, costs, _fake_design)
+    assert [cells for cells, _, _ in two] == [["a", "design of a"], ["b", None], ["c", "design of c"]]
+    one = pool.run_units(_fake_unit, units, ("pd",), 1, False, 1, costs, _fake_design)
+    assert [cells for cells, _, _ in one] == [["a", None], ["b", None], ["c", None]]
+
+
+def test_an_excitation_designed_beforehand_is_the_one_its_scenario_tracks():
+    """``designed_excitation(name, reference)``: within the block, the scenario named so tracks that
+    reference (no design of its own); after it, its own design again."""
+    from types import SimpleNamespace
+
+    from adaptive_dd.closed_loop import excitation_phase
+
+    sc = SimpleNamespace(name="arm7", arm=None, source="arm7.toml", seed=0)
+    ref = object()
+    with excitation_phase.designed_excitation("arm7", ref):
+        assert excitation_phase.excitation_reference(sc) is ref
+    assert "arm7" not in excitation_phase._DESIGNED
 
 
 def test_workers_must_be_a_positive_integer():

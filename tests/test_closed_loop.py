@@ -120,6 +120,31 @@ def test_noise_blocks_are_each_trials_generator_in_order():
     assert none.shape == (2, 0)
 
 
+def test_run_noise_draws_once_for_every_controller(monkeypatch):
+    """A run's noise is drawn once and the same arrays handed to each controller when it fits in
+    SHARED_BYTES (the numbers NoiseBlocks draws); above it, drawn afresh each time (the same numbers)."""
+    import adaptive_dd.closed_loop.noise as noise_module
+    from adaptive_dd.benchmark.types import CHUNK
+    from adaptive_dd.closed_loop.noise import NoiseBlocks, RunNoise
+
+    sc = SimpleNamespace(seed=7, dropout=0.3)
+    N = 2 * CHUNK + 17
+    want = list(NoiseBlocks(sc, [3, 5], 6).blocks(N))
+    run = RunNoise(sc, [3, 5], 6, N)
+    first, second = list(run.blocks()), list(run.blocks())
+    for a, b, w in zip(first, second, want, strict=True):
+        assert a[:2] == w[:2] and a[2] is b[2] and a[3] is b[3]  # one draw, the same arrays
+        np.testing.assert_array_equal(a[2], w[2])
+        np.testing.assert_array_equal(a[3], w[3])
+    monkeypatch.setattr(noise_module, "SHARED_BYTES", 8 * 2 * N * 6)  # below the run's 8 * 2 * N * 7
+    run = RunNoise(sc, [3, 5], 6, N)
+    first, second = list(run.blocks()), list(run.blocks())
+    for a, b, w in zip(first, second, want, strict=True):
+        assert a[2] is not b[2]
+        np.testing.assert_array_equal(b[2], w[2])
+        np.testing.assert_array_equal(b[3], w[3])
+
+
 class OneRowEstimate(Wrapped):
     """A plug-in whose ``sigma_hat`` is one row ``(p,)``: it stands for every trial
     (docs/controllers.md), as on the two-link arm."""

@@ -48,6 +48,7 @@ __all__ = [
     "run_unit",
     "shipped_scenarios",
     "unit_costs",
+    "unit_design",
 ]
 
 DEFAULT_CONTROLLERS = (
@@ -414,7 +415,7 @@ def leaderboard(
     # OpenBLAS's worker threads for a core (CPU s per call 4-30x on a shared 2-core machine)
     with threadpool_limits(limits=1, user_api="blas"):
         costs = unit_costs(units) if workers > 1 else None
-        done = run_units(run_unit, units, controllers, seeds, progress, workers, costs)
+        done = run_units(run_unit, units, controllers, seeds, progress, workers, costs, unit_design)
     rows: list[dict] = []
     arm_cells: list[dict] = []
     flags: list[dict] = []
@@ -467,17 +468,39 @@ def unit_costs(units: list) -> list[float]:
     return out
 
 
-def run_unit(unit, controllers, seeds, progress: bool = False) -> tuple[list[dict], float, float]:
+def unit_design(unit):
+    """A drawn arm's excitation (:func:`~adaptive_dd.closed_loop.excitation_phase.excitation_reference`,
+    the design every seed of the arm tracks), made apart from its unit so that a worker can make it
+    while another compiles the closed loop (:func:`~adaptive_dd.arena.pool.run_units`); None for a
+    unit with no excitation phase."""
+    kind, what = unit
+    if kind != "arm" or not float(what[0].get("run", {}).get("excite", 0.0)) > 0:
+        return None
+    from adaptive_dd.benchmark.population import population_scenario
+    from adaptive_dd.closed_loop.excitation_phase import excitation_reference
+
+    return excitation_reference(population_scenario(*what))
+
+
+def run_unit(
+    unit, controllers, seeds, progress: bool = False, design=None
+) -> tuple[list[dict], float, float]:
     """One unit of the leaderboard (:mod:`adaptive_dd.arena.pool`): ``("scenario", Scenario)`` or
     ``("arm", (template data, template path, arm seed))``; returns its cells (:func:`_cells`) and
-    the seconds its runs spent compiling and running."""
+    the seconds its runs spent compiling and running. ``design``: the arm's excitation made
+    beforehand (:func:`unit_design`; None: designed here)."""
+    from contextlib import nullcontext
+
+    from adaptive_dd.closed_loop.excitation_phase import designed_excitation
+
     kind, what = unit
     if kind == "arm":
         from adaptive_dd.benchmark.population import population_scenario
 
         what = population_scenario(*what)
     times = {"compile": 0.0, "run": 0.0}
-    cells = _run_cells(what, kind, controllers, seeds, progress, times)
+    with nullcontext() if design is None else designed_excitation(what.name, design):
+        cells = _run_cells(what, kind, controllers, seeds, progress, times)
     return cells, times["compile"], times["run"]
 
 

@@ -83,10 +83,22 @@ def reused_memory():
         libc.malloc_trim(0)
 
 
-def _run_reused(run_unit, unit, controllers, seeds, progress):
-    """``run_unit(unit, controllers, seeds, progress)`` within :func:`reused_memory`."""
+def _run_reused(run_unit, unit, controllers, seeds, progress, design=None):
+    """``run_unit(unit, controllers, seeds, progress)`` (and ``design=`` when given) within
+    :func:`reused_memory`."""
     with reused_memory():
-        return run_unit(unit, controllers, seeds, progress)
+        if design is None:
+            return run_unit(unit, controllers, seeds, progress)
+        return run_unit(unit, controllers, seeds, progress, design=design)
+
+
+def _result_or_none(future):
+    """The future's result, or None if it raised (the unit then does that part itself, and raises
+    there as it would have)."""
+    try:
+        return future.result()
+    except Exception:
+        return None
 
 
 def _picklable(unit) -> bool:
@@ -103,12 +115,21 @@ def largest_first(costs: list[float]) -> list[int]:
     return sorted(range(len(costs)), key=lambda i: (-costs[i], i))
 
 
-def run_units(run_unit, units: list, controllers, seeds, progress: bool, workers: int, costs=None) -> list:
+def run_units(
+    run_unit, units: list, controllers, seeds, progress: bool, workers: int, costs=None, design=None
+) -> list:
     """``[(cells, compile_seconds, run_seconds), ...]`` of ``run_unit(unit, controllers, seeds,
     progress)`` (:func:`~adaptive_dd.arena.leaderboard.run_unit`, passed in: a module-level function
     the workers import by name) for each unit, in order; ``workers > 1``: in that many processes (a
     unit that cannot be sent to one runs in this process), handed out by :func:`largest_first` of
-    ``costs`` (each unit's expected CPU time in any unit; default: in order)."""
+    ``costs`` (each unit's expected CPU time in any unit; default: in order).
+
+    ``design`` (:func:`~adaptive_dd.arena.leaderboard.unit_design`, module-level): with workers, the
+    part of each unit after the first that needs no compiled closed loop (a drawn arm's excitation
+    design), run as tasks of their own queued right after the first unit and handed to their units
+    (``run_unit(..., design=...)``). On a cold cache the first unit compiles the closed loop (minutes,
+    one process) while the other workers would wait for it: they make the designs meanwhile. The
+    same function on the same arm: the table is the same."""
     if workers <= 1 or len(units) <= 1:
         return [_run_reused(run_unit, u, controllers, seeds, progress) for u in units]
     import multiprocessing
@@ -119,7 +140,17 @@ def run_units(run_unit, units: list, controllers, seeds, progress: bool, workers
     sent = [i for i in largest_first(costs or [0.0] * len(units)) if i not in here]
     ctx = multiprocessing.get_context("spawn")
     with _environment(_ONE_THREAD), ProcessPoolExecutor(min(workers, len(sent)), mp_context=ctx) as pool:
-        futures = {i: pool.submit(_run_reused, run_unit, units[i], controllers, seeds, False) for i in sent}
+
+        def submit(i, d=None):
+            return pool.submit(_run_reused, run_unit, units[i], controllers, seeds, False, d)
+
+        if design is None or len(sent) < 2:
+            futures = {i: submit(i) for i in sent}
+        else:
+            futures = {sent[0]: submit(sent[0])}
+            made = {i: pool.submit(design, units[i]) for i in sent[1:]}
+            for i in sent[1:]:  # each unit queued once its design is back (in order: largest first)
+                futures[i] = submit(i, _result_or_none(made[i]))
         for i in here:
             out[i] = _run_reused(run_unit, units[i], controllers, seeds, progress)
         for i, f in futures.items():

@@ -5,6 +5,8 @@ generator ``(seed, idx[i])`` and its measurement dropouts from ``(seed, idx[i], 
 controllers are compared on the same numbers (common random numbers) and a block of seeds run
 alone gives the numbers it gives inside a full run. Blocks of :data:`CHUNK` samples bound the
 memory: a generator fills arrays in order, so the numbers do not depend on the block size.
+Every controller of a run meets the same numbers: :class:`RunNoise` draws them once for all of
+them when they fit in :data:`SHARED_BYTES`.
 """
 
 from __future__ import annotations
@@ -16,7 +18,12 @@ from numpy.typing import NDArray
 
 from adaptive_dd.benchmark.types import CHUNK
 
-__all__ = ["NoiseBlocks", "trial_rngs"]
+__all__ = ["SHARED_BYTES", "NoiseBlocks", "RunNoise", "trial_rngs"]
+
+SHARED_BYTES = 32 * 2**20
+"""Largest noise of a run (every trial's normals and dropouts over every sample) that
+:class:`RunNoise` draws once and hands to each of the run's controllers (a drawn arm's task,
+one seed: 1.5 MB; a shipped scenario at ten seeds: up to 24 MB)."""
 
 
 def trial_rngs(seed: int, indices: Sequence[int]) -> list[np.random.Generator]:
@@ -63,3 +70,25 @@ class NoiseBlocks:
         for k0 in range(0, n_samples, CHUNK):
             k1 = min(n_samples, k0 + CHUNK)
             yield (k0, k1, *self.block(k1 - k0))
+
+
+class RunNoise:
+    """The blocks of :class:`NoiseBlocks` of a run's trials (``scenario, indices, width`` as
+    there) over ``n_samples``, for each of the run's controllers in turn: drawn once and the
+    same arrays handed to every controller (the closed loops read them, never write) when they
+    take at most :data:`SHARED_BYTES`, else drawn afresh for each controller (the same numbers;
+    the memory of one block at a time)."""
+
+    def __init__(self, scenario, indices: Sequence[int], width: int, n_samples: int) -> None:
+        self.draws = (scenario, tuple(indices), int(width))
+        self.n_samples = int(n_samples)
+        size = 8 * len(self.draws[1]) * self.n_samples * (self.draws[2] + 1)
+        self.kept: list | None = [] if size <= SHARED_BYTES else None
+
+    def blocks(self) -> Iterator[tuple[int, int, NDArray[np.float64], NDArray[np.bool_]]]:
+        """``(k0, k1, noise, drop)`` of each block, as :meth:`NoiseBlocks.blocks`."""
+        if self.kept is None:
+            return NoiseBlocks(*self.draws).blocks(self.n_samples)
+        if not self.kept:
+            self.kept = list(NoiseBlocks(*self.draws).blocks(self.n_samples))
+        return iter(self.kept)

@@ -3,7 +3,9 @@
 Trial i of every controller uses the noise of seed ``(scenario.seed, seed_indices[i])``
 (common random numbers), drawn in blocks of :data:`CHUNK` samples
 (:class:`~adaptive_dd.closed_loop.noise.NoiseBlocks`: ``(CHUNK, 2 n)`` standard normals per
-trial, dropouts from a second generator ``(seed, i, 1)``). Built-in controllers run compiled
+trial, dropouts from a second generator ``(seed, i, 1)``), once for all the run's controllers
+when they fit in :data:`~adaptive_dd.closed_loop.noise.SHARED_BYTES`
+(:class:`~adaptive_dd.closed_loop.noise.RunNoise`). Built-in controllers run compiled
 (:func:`~adaptive_dd.closed_loop.glue.chain_loop_block`, a block of samples of a range of
 trials in one call, ranges in parallel threads); a compiled plug-in (``reset / command /
 observe`` as ``numba.njit`` functions: :func:`~adaptive_dd.controllers.plugins.is_compiled`) runs
@@ -38,7 +40,7 @@ from adaptive_dd.closed_loop.glue import (
     segment_of,
     sigma_batch,
 )
-from adaptive_dd.closed_loop.noise import NoiseBlocks
+from adaptive_dd.closed_loop.noise import NoiseBlocks, RunNoise
 from adaptive_dd.closed_loop.python_path import PythonGlue, run_python_batch
 from adaptive_dd.closed_loop.types import (
     Plant,
@@ -144,6 +146,7 @@ def run_closed_loop(
     res = BenchmarkResult(scenario, t, rc.q_d, sigma_true, mass, seed_indices=idx)
     if scenario.plant is not None:
         res.plant = plant_record(scenario, idx)
+    noise = RunNoise(scenario, idx, 2 * scenario.n_joints, scenario.n_samples)  # one draw for all
     for name, ctrl in ctrls.items():
         builtin = isinstance(ctrl, Law)
         plugin = not builtin and is_compiled(ctrl)
@@ -159,7 +162,10 @@ def run_closed_loop(
             runner = _run_python
             if not (builtin or isinstance(ctrl, PythonForm)):  # a plain-Python one: say once why it is slow
                 print(slow_path_note(name, ctrl), file=sys.stderr, flush=True)
-        res.runs[name] = runner(name, ctrl, scenario, idx, rc, io, pl, keep_trajectories, bar)
+        if runner is _run_python:
+            res.runs[name] = runner(name, ctrl, scenario, idx, rc, io, pl, keep_trajectories, bar)
+        else:
+            res.runs[name] = runner(name, ctrl, scenario, idx, rc, io, pl, keep_trajectories, bar, noise)
     return res
 
 
@@ -191,7 +197,9 @@ def _records(
 
 
 # ------------------------------------------------------------------------ the two paths
-def _run_compiled(name, ctrl: Law, scenario, idx, rc, io, pl, keep, bar) -> ControllerRun:
+def _run_compiled(name, ctrl: Law, scenario, idx, rc, io, pl, keep, bar, noise=None) -> ControllerRun:
+    """One built-in controller's trials on the compiled loop; ``noise``: the run's
+    :class:`~adaptive_dd.closed_loop.noise.RunNoise` (default: drawn for this controller)."""
     S, N, n = len(idx), scenario.n_samples, scenario.n_joints
     form = ctrl.compiled_form(S, rc.T)
     run, ts, acc, rec = _records(name, ctrl, scenario, rc, pl, S, keep, form.estimates, "compiled")
@@ -199,11 +207,12 @@ def _run_compiled(name, ctrl: Law, scenario, idx, rc, io, pl, keep, bar) -> Cont
     law = chain_law(form.cfg, true_models(pl), scenario.arm.base.B)
     # every law carries an estimator (inactive but for adaptive_ct): one compiled loop for all
     ec, es = chain_estimator(form.ec, form.es, scenario.arm, rc.T)
-    for k0, k1, noise, drop in NoiseBlocks(scenario, idx, 2 * n).blocks(N):
+    noise = RunNoise(scenario, idx, 2 * n, N) if noise is None else noise
+    for k0, k1, block, drop in noise.blocks():
         args = (
             k0,
             k1,
-            noise,
+            block,
             drop,
             rc,
             io,
@@ -228,12 +237,12 @@ def _run_compiled(name, ctrl: Law, scenario, idx, rc, io, pl, keep, bar) -> Cont
     return run
 
 
-def _run_plugin(name, ctrl, scenario, idx, rc, io, pl, keep, bar) -> ControllerRun:
+def _run_plugin(name, ctrl, scenario, idx, rc, io, pl, keep, bar, noise=None) -> ControllerRun:
     """A compiled plug-in's trials in its specialisation of the compiled loop
     (:func:`~adaptive_dd.closed_loop.plugin_loop.plugin_block`), blocks and threads as
     :func:`_run_compiled`. The loop is compiled on its first call (timed and printed apart from
     the run); an exception raised inside it fails the plug-in's trials with the message in
-    ``run.error``, as on the Python path."""
+    ``run.error``, as on the Python path; ``noise`` as :func:`_run_compiled`'s."""
     from adaptive_dd.closed_loop.plugin_loop import plugin_block
 
     S, N, n = len(idx), scenario.n_samples, scenario.n_joints
@@ -248,8 +257,9 @@ def _run_plugin(name, ctrl, scenario, idx, rc, io, pl, keep, bar) -> ControllerR
     kin = (int(arm.payload_joint), np.ascontiguousarray(arm.payload_map, dtype=float))
     tail = (pl.chain, pis, *kin, form.need, form.params, form.state, *fns, form.estimates)
     try:
-        for k0, k1, noise, drop in NoiseBlocks(scenario, idx, 2 * n).blocks(N):
-            args = (k0, k1, noise, drop, rc, io, pl, ts, acc, rec, alarms, *tail)
+        draws = RunNoise(scenario, idx, 2 * n, N) if noise is None else noise
+        for k0, k1, block, drop in draws.blocks():
+            args = (k0, k1, block, drop, rc, io, pl, ts, acc, rec, alarms, *tail)
             if k0 == 0:  # compile (or find) this plug-in's loop first: no trial, timed apart
                 t0, known = time.perf_counter(), len(plugin_block.overloads)
                 if bar is not None:  # no progress bar (nor its estimate) while it compiles
