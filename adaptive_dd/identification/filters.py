@@ -21,10 +21,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 from math import comb
 
-import control
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy import signal
 
 from adaptive_dd.errors import ParameterError, SignalError
 
@@ -124,6 +122,8 @@ def design_filter_bank(method: str, tau_f: float, sample_period: float = 1e-3) -
         raise ParameterError(f"filter time constant tau_f must be > 0, got {tau_f}")
     if not np.isfinite(sample_period) or sample_period <= 0:
         raise ParameterError(f"sample_period T must be > 0, got {sample_period}")
+    import control  # here: it imports matplotlib and SciPy's statistics (2 CPU s per process)
+
     n = ORDERS[method]
     # (1 + tau s)^n = sum_k comb(n, k) tau^k s^k; chain state z = [w, w', ..., w^(n-1)]
     coeff = np.array([comb(n, k) * tau_f**k for k in range(n + 1)])
@@ -230,6 +230,8 @@ def filter_record(
     ndarray, shape ``u.shape + (n_outputs,)``
         The outputs ``G0 u, G1 u, (G2 u)`` (or those of ``outputs``) on a new last axis.
     """
+    from scipy import signal  # here: SciPy's signal imports its statistics (2 CPU s per process)
+
     u = np.asarray(u, dtype=float)
     if u.ndim == 0:
         raise SignalError("filter_record needs at least one time axis")

@@ -11,7 +11,6 @@ track slowly changing parameters without forgetting everything.
 from __future__ import annotations
 
 import numpy as np
-from filterpy.kalman import KalmanFilter
 from numpy.typing import ArrayLike, NDArray
 
 from adaptive_dd.errors import ParameterError
@@ -53,6 +52,8 @@ class KalmanParameterEstimator:
             raise ParameterError(f"p0 must be > 0, got {p0}")
         if alpha < 1:
             raise ParameterError(f"fading-memory alpha must be >= 1, got {alpha}")
+        from filterpy.kalman import KalmanFilter  # here: it imports SciPy's statistics (1 CPU s)
+
         kf = KalmanFilter(dim_x=n_params, dim_z=n_outputs)
         kf.F = np.eye(n_params)
         kf.Q = q * np.eye(n_params)
