@@ -222,8 +222,9 @@ def centred_prior(raw, Pc, r):  # pragma: no cover - compiled
 
 @njit(cache=True, inline="always")
 def _control_payload(c, s, i, raw, pay, Pc):  # pragma: no cover - compiled
-    """The payload the model control uses: ``raw`` with, in payload mode, the centred prior
-    (:func:`centred_prior`, if ``F_COM_SIZE`` is set) and the compact prior (if set); projected
+    """The payload the model control uses: ``raw`` with the centred prior (:func:`centred_prior`,
+    if ``F_COM_SIZE`` is set: :attr:`~adaptive_dd.identification.online_config.OnlineConfig.payload_priors`,
+    the payload block's own covariance) and the compact prior (if set); projected
     (if set) and then, in payload mode, scaled by :func:`presence_weight` of the mass (its
     variance ``P[0, 0]``, both after the centred prior, a carried payload's ``F_PRESENT2``): the
     posterior mean of a payload that may be absent. A scaled consistent body stays consistent
@@ -237,11 +238,12 @@ def _control_payload(c, s, i, raw, pay, Pc):  # pragma: no cover - compiled
     arm."""
     m_raw = raw[0]
     var_m = s.P[i][0, 0]
-    if c.mode == MODE_PAYLOAD and c.floats[F_COM_SIZE] > 0.0:
+    if c.floats[F_COM_SIZE] > 0.0:
         P = s.P[i]
+        o = P.shape[0] - 10  # the payload block (mode "arm": after the arm's base parameters)
         for a in range(4):
             for b in range(4):
-                Pc[a, b] = P[a, b]
+                Pc[a, b] = P[o + a, o + b]
         centred_prior(raw, Pc, c.floats[F_COM_SIZE])
         m_raw = raw[0]
         var_m = Pc[0, 0]

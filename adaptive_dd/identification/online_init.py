@@ -104,6 +104,7 @@ def _pack(cfg: OnlineConfig, arm: Arm) -> tuple[EstCfg, Array]:
     fl[K.F_PRIOR_NOISE] = cfg.prior_noise
     if cfg.mode == "payload":  # a carried payload's mass: the re-opened prior's (sized by the capacity)
         fl[K.F_PRESENT2] = (reopen_mass_std(det, arm) if det else cfg.payload_mass_std) ** 2
+    if cfg.payload_priors:
         fl[K.F_COM_SIZE] = cfg.payload_size  # the centred prior on the model's first moments
     if det is not None:
         ints[K.I_DETECT] = 1

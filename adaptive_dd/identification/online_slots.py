@@ -151,7 +151,7 @@ F_CREEP_MARGIN = 16  # a creeping joint's row alarms only beyond this times its 
 F_HOLD_ABOVE2 = 17  # a row rises when its short average exceeds this x the threshold x its level
 F_PRESENT2 = 18  # payload mode: the variance [kg^2] of a payload's mass when one is carried (0: no weight)
 F_PRIOR_NOISE = 19  # > 0: the compact prior weighed against P scaled by this x the rows' learned noise level
-F_COM_SIZE = 20  # payload mode: r [m] of the model's first moments' prior m c ~ 0 +- r sqrt(E[m^2])
+F_COM_SIZE = 20  # payload priors: r [m] of the model's first moments' prior m c ~ 0 +- r sqrt(E[m^2])
 N_F = 21
 
 
