@@ -79,7 +79,10 @@ def test_compiled_and_python_paths_agree_with_two_swaps_and_alarms(name):
 
     comp = run_closed_loop(sc, ctrls(), engine="compiled")
     py = run_closed_loop(sc, ctrls(), engine="python")
-    wrapped = run_closed_loop(sc, {"w": Wrapped(make_controller("slotine_li", arm=arm))})
+    # a plain-Python plug-in first, then a compiled built-in, in one run: both read the run's one
+    # draw of the noise (RunNoise), so the built-in after it must still equal its own run's
+    mixed = ctrls()
+    wrapped = run_closed_loop(sc, {"w": Wrapped(make_controller("slotine_li", arm=arm)), **mixed})
     assert comp.runs["adaptive_ct"].engine.startswith("compiled")
     assert py.runs["adaptive_ct"].engine.startswith("python") and wrapped.runs["w"].engine.startswith(
         "python"
@@ -91,6 +94,8 @@ def test_compiled_and_python_paths_agree_with_two_swaps_and_alarms(name):
         np.testing.assert_array_equal(a.dropped, b.dropped)
         assert a.dropped.sum() > 0
     _same(comp.runs["slotine_li"], wrapped.runs["w"])
+    for name in sc.controllers:
+        _same(comp.runs[name], wrapped.runs[name], rtol=0.0)
     alarms_c, alarms_p = comp.runs["adaptive_ct"].alarm_times, py.runs["adaptive_ct"].alarm_times
     assert alarms_c == alarms_p
     if sc.plant is not None:  # the estimator does not learn the arm's own errors (yet): no claim
@@ -131,7 +136,10 @@ def test_run_noise_draws_once_for_every_controller(monkeypatch):
     N = 2 * CHUNK + 17
     want = list(NoiseBlocks(sc, [3, 5], 6).blocks(N))
     run = RunNoise(sc, [3, 5], 6, N)
-    first, second = list(run.blocks()), list(run.blocks())
+    assert run.n_trials == 2
+    first, second = list(run.blocks()), list(run.blocks(N))  # the Python path names the samples
+    with pytest.raises(ValueError, match="holds"):
+        run.blocks(N + 1)
     for a, b, w in zip(first, second, want, strict=True):
         assert a[:2] == w[:2] and a[2] is b[2] and a[3] is b[3]  # one draw, the same arrays
         np.testing.assert_array_equal(a[2], w[2])

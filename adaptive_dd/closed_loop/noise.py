@@ -85,8 +85,18 @@ class RunNoise:
         size = 8 * len(self.draws[1]) * self.n_samples * (self.draws[2] + 1)
         self.kept: list | None = [] if size <= SHARED_BYTES else None
 
-    def blocks(self) -> Iterator[tuple[int, int, NDArray[np.float64], NDArray[np.bool_]]]:
-        """``(k0, k1, noise, drop)`` of each block, as :meth:`NoiseBlocks.blocks`."""
+    @property
+    def n_trials(self) -> int:
+        """The number of trials (seeds) the blocks cover."""
+        return len(self.draws[1])
+
+    def blocks(
+        self, n_samples: int | None = None
+    ) -> Iterator[tuple[int, int, NDArray[np.float64], NDArray[np.bool_]]]:
+        """``(k0, k1, noise, drop)`` of each block, as :meth:`NoiseBlocks.blocks` (``n_samples``, if
+        given, must be the run's)."""
+        if n_samples is not None and int(n_samples) != self.n_samples:
+            raise ValueError(f"RunNoise holds {self.n_samples} samples, asked for {n_samples}")
         if self.kept is None:
             return NoiseBlocks(*self.draws).blocks(self.n_samples)
         if not self.kept:

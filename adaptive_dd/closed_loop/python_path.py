@@ -23,7 +23,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from adaptive_dd.benchmark.types import ControllerRun
-from adaptive_dd.closed_loop.noise import NoiseBlocks
+from adaptive_dd.closed_loop.noise import NoiseBlocks, RunNoise
 from adaptive_dd.closed_loop.types import RunConstants
 from adaptive_dd.controllers.base import declared
 from adaptive_dd.errors import SignalError
@@ -63,7 +63,7 @@ class PythonGlue(NamedTuple):
 
 
 def run_python_batch(
-    ctrl, rc: RunConstants, draws: NoiseBlocks, records: Callable, bar=None
+    ctrl, rc: RunConstants, draws: NoiseBlocks | RunNoise, records: Callable, bar=None
 ) -> ControllerRun:
     """One controller object's trials on the Python path.
 
@@ -76,7 +76,7 @@ def run_python_batch(
         :func:`~adaptive_dd.controllers.base.declared`).
     rc : RunConstants
         Sample period and the reference ``q_d, qd_d, qdd_d (N, n)``.
-    draws : NoiseBlocks
+    draws : NoiseBlocks or RunNoise
         The trials' sensor noise and dropouts (S trials).
     records : callable
         ``records(estimates) -> (run, glue)`` after ``reset``: the empty

@@ -40,7 +40,7 @@ from adaptive_dd.closed_loop.glue import (
     segment_of,
     sigma_batch,
 )
-from adaptive_dd.closed_loop.noise import NoiseBlocks, RunNoise
+from adaptive_dd.closed_loop.noise import RunNoise
 from adaptive_dd.closed_loop.python_path import PythonGlue, run_python_batch
 from adaptive_dd.closed_loop.types import (
     Plant,
@@ -162,10 +162,7 @@ def run_closed_loop(
             runner = _run_python
             if not (builtin or isinstance(ctrl, PythonForm)):  # a plain-Python one: say once why it is slow
                 print(slow_path_note(name, ctrl), file=sys.stderr, flush=True)
-        if runner is _run_python:
-            res.runs[name] = runner(name, ctrl, scenario, idx, rc, io, pl, keep_trajectories, bar)
-        else:
-            res.runs[name] = runner(name, ctrl, scenario, idx, rc, io, pl, keep_trajectories, bar, noise)
+        res.runs[name] = runner(name, ctrl, scenario, idx, rc, io, pl, keep_trajectories, bar, noise)
     return res
 
 
@@ -284,9 +281,11 @@ def _run_plugin(name, ctrl, scenario, idx, rc, io, pl, keep, bar, noise=None) ->
     return run
 
 
-def _run_python(name, ctrl, scenario, idx, rc, io, pl, keep, bar) -> ControllerRun:
+def _run_python(name, ctrl, scenario, idx, rc, io, pl, keep, bar, noise=None) -> ControllerRun:
     """One controller's trials on the Python path
-    (:func:`~adaptive_dd.closed_loop.python_path.run_python_batch`)."""
+    (:func:`~adaptive_dd.closed_loop.python_path.run_python_batch`); ``noise`` a
+    :class:`~adaptive_dd.closed_loop.noise.RunNoise` (default: drawn for this controller), which
+    the path only reads (each sample's column is copied before it is measured)."""
     pi_true = true_models(pl)
     sig_true = pi_true @ scenario.arm.base.B.T  # (S, G, p)
 
@@ -301,4 +300,5 @@ def _run_python(name, ctrl, scenario, idx, rc, io, pl, keep, bar) -> ControllerR
         )
         return run, glue
 
-    return run_python_batch(ctrl, rc, NoiseBlocks(scenario, idx, 2 * scenario.n_joints), records, bar)
+    draws = RunNoise(scenario, idx, 2 * scenario.n_joints, scenario.n_samples) if noise is None else noise
+    return run_python_batch(ctrl, rc, draws, records, bar)
