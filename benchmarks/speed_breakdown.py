@@ -64,17 +64,32 @@ def _dynamics_loop(ch, pl, rc, q_rec, qd_rec, tau_rec, sc, solve):  # pragma: no
     Cholesky solve for the accelerations if ``solve``."""
     n = q_rec.shape[1]
     stuck = np.zeros(n, dtype=np.bool_)
-    sdir, acc, hold = np.ones(n), np.zeros(n), np.empty(n)
-    bias, m = sc[3][0], sc[1]
+    sdir = np.ones(n)
+    rows, bias, m = sc[3], sc[3][0], sc[1]
+    rows[2, :] = 0.0
     t = 0.0
     for k in range(q_rec.shape[0]):
         s = segment_of(rc, k)
         SI._dynamics(ch, pl.pi_seg[0, s], pl.armature[0], q_rec[k], qd_rec[k], sc[0], bias, m)
-        if solve:
+        if solve:  # the accelerations into rows[2], the holding torques into rows[3]
             SI._solve(
-                pl.fv[0], pl.fc[0], 0, pl.fparams, qd_rec[k], tau_rec[k], stuck, sdir, bias, m, sc, acc, hold
+                pl.fv[0],
+                pl.fc[0],
+                0,
+                pl.fparams,
+                qd_rec[k],
+                tau_rec[k],
+                stuck,
+                sdir,
+                rows,
+                0,
+                m,
+                sc[2],
+                sc[4],
+                2,
+                3,
             )
-        t += bias[0] + acc[0]
+        t += bias[0] + rows[2, 0]
     return t
 
 

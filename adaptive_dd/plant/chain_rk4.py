@@ -88,14 +88,18 @@ def _dynamics(ch, pi, arm, q, v, w, bias, m):  # pragma: no cover - compiled
 
 
 @njit(cache=True, fastmath={"contract", "reassoc"}, inline="always")
-def _solve(fv, fc, law, fp, v, tau, stuck, sdir, bias, m, sc, acc, hold):  # pragma: no cover - compiled
-    """Accelerations ``acc`` (n,) with the stuck joints held; ``hold`` (n,) torque to hold each stuck joint.
+def _solve(
+    fv, fc, law, fp, v, tau, stuck, sdir, rows, ib, m, lf, ints, ia, ih
+):  # pragma: no cover - compiled
+    """Accelerations ``acc = rows[ia]`` (n,) with the stuck joints held; ``hold = rows[ih]`` (n,)
+    torque to hold each stuck joint.
 
-    Uses the terms ``bias, m`` of :func:`_dynamics`. Friction: law 0 ``fc sgn(v)``
-    (``sdir`` at v == 0), else the smooth law. Returns False if ``M + diag(armature)``
-    restricted to the free joints is not positive definite.
+    Uses the terms ``bias = rows[ib], m`` of :func:`_dynamics`; ``rows, lf, ints`` the scratch's
+    float rows, factor and integer rows (:func:`_scratch`), read by index, no view taken (each view
+    is a reference-count update). Friction: law 0 ``fc sgn(v)`` (``sdir`` at v == 0), else the
+    smooth law. Returns False if ``M + diag(armature)`` restricted to the free joints is not
+    positive definite.
     """
-    lf, rhs, idx = sc[2], sc[3][1], sc[4][0]
     n = v.shape[0]
     vc, ratio, vs = fp[0], fp[1], fp[2]
     nf = 0
@@ -110,14 +114,13 @@ def _solve(fv, fc, law, fp, v, tau, stuck, sdir, bias, m, sc, acc, hold):  # pra
             if law == 2:
                 g = fc[i] * (1.0 + (ratio - 1.0) * np.exp(-((v[i] / vs) ** 2)))
             coul = g * np.tanh(v[i] / vc)
-        idx[nf] = i
-        rhs[nf] = tau[i] - bias[i] - fv[i] * v[i] - coul
+        ints[0, nf] = i
+        rows[1, nf] = tau[i] - rows[ib, i] - fv[i] * v[i] - coul
         nf += 1
     # Cholesky of the free block (reciprocal diagonal kept: no division in the loops),
     # then the two triangular solves
-    inv = sc[3][19]
     for jj in range(nf):
-        j = idx[jj]
+        j = ints[0, jj]
         d = m[j, j]
         for kk in range(jj):
             d -= lf[jj, kk] * lf[jj, kk]
@@ -126,36 +129,36 @@ def _solve(fv, fc, law, fp, v, tau, stuck, sdir, bias, m, sc, acc, hold):  # pra
         d = np.sqrt(d)
         lf[jj, jj] = d
         r = 1.0 / d
-        inv[jj] = r
+        rows[19, jj] = r
         for ii in range(jj + 1, nf):
-            x = m[idx[ii], j]
+            x = m[ints[0, ii], j]
             for kk in range(jj):
                 x -= lf[ii, kk] * lf[jj, kk]
             lf[ii, jj] = x * r
     for ii in range(nf):
-        x = rhs[ii]
+        x = rows[1, ii]
         for kk in range(ii):
-            x -= lf[ii, kk] * rhs[kk]
-        rhs[ii] = x * inv[ii]
+            x -= lf[ii, kk] * rows[1, kk]
+        rows[1, ii] = x * rows[19, ii]
     for ii in range(nf - 1, -1, -1):
-        x = rhs[ii]
+        x = rows[1, ii]
         for kk in range(ii + 1, nf):
-            x -= lf[kk, ii] * rhs[kk]
-        rhs[ii] = x * inv[ii]
+            x -= lf[kk, ii] * rows[1, kk]
+        rows[1, ii] = x * rows[19, ii]
     for i in range(n):
-        acc[i] = 0.0
+        rows[ia, i] = 0.0
     for ii in range(nf):
-        acc[idx[ii]] = rhs[ii]
+        rows[ia, ints[0, ii]] = rows[1, ii]
     if nf == n:
         return True
     for i in range(n):
         if stuck[i]:
-            x = tau[i] - bias[i]
+            x = tau[i] - rows[ib, i]
             for j in range(n):
-                x -= m[i, j] * acc[j]
-            hold[i] = x
+                x -= m[i, j] * rows[ia, j]
+            rows[ih, i] = x
         else:
-            hold[i] = 0.0
+            rows[ih, i] = 0.0
     return True
 
 
@@ -179,7 +182,7 @@ def _resolve(ch, pi, fv, fc, arm, fp, q, v, tau, rest, stuck, sdir, sc):  # prag
     bias0, m0 = sc[3][18], sc[6]
     _dynamics(ch, pi, arm, q, v, sc[0], bias0, m0)
     for _ in range(n + 1):
-        if not _solve(fv, fc, 0, fp, v, tau, stuck, sdir, bias0, m0, sc, acc, hold):
+        if not _solve(fv, fc, 0, fp, v, tau, stuck, sdir, sc[3], 18, m0, sc[2], sc[4], 2, 3):
             return False
         worst, excess = -1, 0.0
         for i in range(n):
@@ -198,7 +201,7 @@ def _resolve(ch, pi, fv, fc, arm, fp, q, v, tau, rest, stuck, sdir, sc):  # prag
     for k in range(n_rel):
         r = order[k]
         stuck[r] = True
-        if not _solve(fv, fc, 0, fp, v, tau, stuck, sdir, bias0, m0, sc, acc, hold):
+        if not _solve(fv, fc, 0, fp, v, tau, stuck, sdir, sc[3], 18, m0, sc[2], sc[4], 2, 3):
             return False
         if not _consistent(rest, stuck, acc, hold, sdir, fc):
             stuck[r] = False
@@ -221,20 +224,10 @@ def _rk4(
     positive definite.
     """
     n = q.shape[0]
-    rows = sc[3]
-    a1, a2, a3, a4, qs, wv, xv, yv, hd, vcur = (
-        rows[4],
-        rows[5],
-        rows[6],
-        rows[7],
-        rows[8],
-        rows[9],
-        rows[10],
-        rows[11],
-        rows[14],
-        rows[20],
-    )
-    w, bias0, m0, bias, m = sc[0], sc[3][18], sc[6], sc[3][0], sc[1]
+    # the stages' rows read by index (rows 4-7 the accelerations, 9-11 the stages' velocities,
+    # 14 the holding torques): each view of a row would be a reference-count update
+    w, lf, rows, ints, m0, m = sc[0], sc[2], sc[3], sc[4], sc[6], sc[1]
+    qs, vcur, bias0, bias = rows[8], rows[20], rows[18], rows[0]
     ok = True
     # one call site for the four stages (the dynamics are inlined: one copy of the code)
     for st in range(4):
@@ -253,14 +246,17 @@ def _rk4(
         mm = m0 if st == 0 else m
         if st > 0 or not reuse:
             _dynamics(ch, pi, arm, qs, vcur, w, bb, mm)
-        ok &= _solve(fv, fc, law, fp, vcur, tau, stuck, sdir, bb, mm, sc, rows[4 + st], hd)
+        ib = 18 if st == 0 else 0
+        ok &= _solve(fv, fc, law, fp, vcur, tau, stuck, sdir, rows, ib, mm, lf, ints, 4 + st, 14)
     for i in range(n):
-        qn[i] = q[i] + (dt / 6.0) * (v[i] + 2.0 * wv[i] + 2.0 * xv[i] + yv[i])
-        vn[i] = 0.0 if stuck[i] else v[i] + (dt / 6.0) * (a1[i] + 2.0 * a2[i] + 2.0 * a3[i] + a4[i])
+        wv, xv, yv = rows[9, i], rows[10, i], rows[11, i]
+        qn[i] = q[i] + (dt / 6.0) * (v[i] + 2.0 * wv + 2.0 * xv + yv)
+        acc = rows[4, i] + 2.0 * rows[5, i] + 2.0 * rows[6, i] + rows[7, i]
+        vn[i] = 0.0 if stuck[i] else v[i] + (dt / 6.0) * acc
         cross[i] = False
         if law == 0 and not stuck[i]:
             s = np.sign(v[i]) if v[i] != 0.0 else sdir[i]
-            cross[i] = min(wv[i] * s, xv[i] * s, yv[i] * s, vn[i] * s) <= 0.0
+            cross[i] = min(wv * s, xv * s, yv * s, vn[i] * s) <= 0.0
     return ok
 
 
@@ -303,13 +299,12 @@ def _stick_slip(ch, pi, fv, fc, arm, fp, q, qd, tau, T, substeps, stuck, sc):  #
         ok &= _rk4(ch, pi, fv, fc, arm, law0, fp, q, qd, tau, h, stuck, sdir, sc, have, qn, vn, cross)
         f = 1.0
         any_cross = False
-        a1 = rows[4]
         for i in range(n):
             cross[i] = cross[i] and fc[i] > 0.0
             if cross[i]:
                 any_cross = True
-                if qd[i] * a1[i] < 0.0:
-                    frac[i] = min(1.0, abs(qd[i]) / (h * abs(a1[i])))
+                if qd[i] * rows[4, i] < 0.0:
+                    frac[i] = min(1.0, abs(qd[i]) / (h * abs(rows[4, i])))
                 else:
                     frac[i] = 0.0
             else:
@@ -358,7 +353,7 @@ def _smooth(ch, pi, fv, fc, arm, law, fp, q, qd, tau, T, substeps, stuck, sc):  
     for _ in range(substeps):
         # factor M + diag(armature) (all joints free) and rho = sum_i K_i (M^-1)_ii
         _dynamics(ch, pi, arm, q, qd, sc[0], rows[18], sc[6])
-        ok &= _solve(fv, fc, law, fp, qd, tau, stuck, sdir, rows[18], sc[6], sc, rows[4], rows[14])
+        ok &= _solve(fv, fc, law, fp, qd, tau, stuck, sdir, rows, 18, sc[6], lf, sc[4], 4, 14)
         rho = 0.0
         for i in range(n):
             # column i of L^-1 by forward substitution; (M^-1)_ii is its squared norm
