@@ -159,7 +159,8 @@ def test_sensor_dropouts_are_held_skipped_and_counted_not_divergence(swap_scenar
     run = rc.runs["adaptive_ct"]
     assert (run.skipped > run.dropped).all()  # each loss taints the filters for 10 tau_f
     np.testing.assert_array_equal(run.skipped, rp.runs["adaptive_ct"].skipped)
-    assert all(len(tr) == 2 for tr in run.alarm_times)  # both swaps still found
+    for tr in run.alarm_times:  # both swaps still found within 0.3 s, nothing before the first
+        assert min(tr) > 2.5 and all(any(t < a < t + 0.3 for a in tr) for t in (2.5, 4.0)), tr
     m = compute_metrics(rc)["controllers"]["adaptive_ct"]
     assert m["dropped_samples"] == int(run.dropped.sum()) and m["failed_trials"] == 0
     with pytest.raises(Exception, match="dropout"):

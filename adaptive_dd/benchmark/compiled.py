@@ -41,7 +41,13 @@ from adaptive_dd.closed_loop.glue import (
     plant_work,
 )
 from adaptive_dd.closed_loop.laws import observe_applied
-from adaptive_dd.controllers.compiled_form import LAW_ADAPTIVE, LAW_SLOTINE, TwoLinkGains, command_trial
+from adaptive_dd.controllers.compiled_form import (
+    LAW_ADAPTIVE,
+    LAW_SLOTINE,
+    TwoLinkGains,
+    boost_command,
+    command_trial,
+)
 from adaptive_dd.identification.two_link_online import OnlineState
 from adaptive_dd.identification.two_link_online_kernel import C_SINCE_ALARM, online_step_trial
 from adaptive_dd.plant.two_link_integrator import step_one
@@ -148,6 +154,7 @@ def _law_command(law, ls, pl, i, s, T, q, qd, q_d, qd_d, qdd_d, lw, out):
             command_trial(law, T, pl.sigma_seg[s], model, since_alarm, q, qd, q_d, qd_d, qdd_d, out)
             if law.observer and law.law == LAW_ADAPTIVE:  # the residual observer (two_link_observer)
                 observe_trial(0, law, model, q, qd, ls.obs[i], lw, out)
+            boost_command(law, since_alarm, q, qd, q_d, qd_d, out)  # adaptive_ct's, within the limits
 
         return impl
 

@@ -11,7 +11,9 @@ detection, re-opening, projection) with :func:`~adaptive_dd.controllers.feedback
     detector, re-opening along the payload direction, the control model projected; and
     for ``boost_duration`` after an alarm the feedback gains are raised to
     ``boost_bandwidth`` through the nominal inertia, which holds the arm while the
-    estimate converges; plus the residual observer's torque (``observer``, on by default): what
+    estimate converges (at each sample the largest bandwidth up to it that keeps the command
+    within the arm's torque limits: :func:`~adaptive_dd.controllers.laws.boost_within_trial`);
+    plus the residual observer's torque (``observer``, on by default): what
     the current model leaves unexplained beyond three times its own noise, the N-joint
     ``adaptive_ct``'s observer itself (:mod:`~adaptive_dd.controllers.two_link_observer`).
 ``adaptive_ct_paper``
@@ -91,6 +93,9 @@ class AdaptiveCT(Controller):
         Feed forward the residual observer's torque (default true; ``adaptive_ct_paper``: false).
     observer_bandwidth : float or None
         [rad/s] of each of the observer's two stages; None: ``0.4 / T`` (the N-joint rule).
+    torque_limit : array_like (2,) or None
+        The arm's torque limits [N m]: the boost's bandwidth is lowered, sample by sample, so
+        that it does not drive the command beyond them; None: no limit (the whole boost).
     name : str
 
     Examples
@@ -111,6 +116,7 @@ class AdaptiveCT(Controller):
         name: str = "adaptive_ct",
         observer: bool = True,
         observer_bandwidth: float | None = None,
+        torque_limit: ArrayLike | None = None,
     ) -> None:
         if not isinstance(online, TwoLinkOnlineConfig):
             raise ParameterError(f"online must be an TwoLinkOnlineConfig, got {type(online).__name__}")
@@ -132,6 +138,10 @@ class AdaptiveCT(Controller):
             raise ParameterError(f"observer_bandwidth must be > 0 rad/s or None, got {observer_bandwidth!r}")
         self.observer = bool(observer)
         self.observer_bandwidth = None if observer_bandwidth is None else float(observer_bandwidth)
+        lim = np.full(2, np.inf) if torque_limit is None else np.array(torque_limit, dtype=float).reshape(-1)
+        if lim.shape != (2,) or not np.all(lim > 0):
+            raise ParameterError(f"torque_limit must be two limits > 0 N m or None, got {torque_limit!r}")
+        self.torque_limit = lim
         self.estimator: OnlineEstimator | None = None
 
     def reset(self, n_trials: int, sample_period: float) -> None:
@@ -144,16 +154,17 @@ class AdaptiveCT(Controller):
     def command(self, q, qd, q_d, qd_d, qdd_d, sigma_true=None):
         g = self.gains
         tau = computed_torque_law(q, qd, q_d, qd_d, qdd_d, self.estimator.sigma_model, g.kp, g.kd, g.lam)
-        if self.boost_bandwidth is not None and self.boost_duration > 0:
-            boosted = self.estimator.state.since_alarm * self.T < self.boost_duration
-            if boosted.any():
-                dkp, dkd = self.boost_gains
-                tau = boost_batch(tau, q, qd, q_d, qd_d, self.sigma_nominal, dkp, dkd, boosted)
         if self.observer:
             from adaptive_dd.controllers.two_link_observer import observe_batch
 
             st = self.estimator.state
             tau = observe_batch(self.observer_settings(self.T), st.sigma_model, q, qd, st.obs, tau)
+        if self.boost_bandwidth is not None and self.boost_duration > 0:  # on the whole command
+            boosted = self.estimator.state.since_alarm * self.T < self.boost_duration
+            if boosted.any():
+                dkp, dkd = self.boost_gains
+                sg0, lim = self.sigma_nominal, self.torque_limit
+                tau = boost_batch(tau, q, qd, q_d, qd_d, sg0, dkp, dkd, boosted, g.kp, g.kd, lim)
         return tau
 
     def observer_settings(self, sample_period: float) -> TwoLinkGains:
@@ -207,7 +218,7 @@ class AdaptiveCT(Controller):
         boost = {}
         if self.boost_bandwidth is not None:
             dkp, dkd = self.boost_gains
-            boost = dict(boost_kp=float(dkp), boost_kd=float(dkd))
+            boost = dict(boost_kp=float(dkp), boost_kd=float(dkd), boost_lim=self.torque_limit.copy())
             boost["boost_samples"] = float(self.boost_duration / sample_period)
         obs = self.observer_settings(sample_period)._asdict()
         obs = {k: v for k, v in obs.items() if k == "observer" or k == "T" or k.startswith("obs_")}

@@ -148,7 +148,11 @@ def _adaptive_ct(g: Gains, o: dict, arm) -> Controller:
     online = dataclasses.replace(
         _online("adaptive_ct", o), payload_direction=tuple(float(x) for x in arm.payload_direction(0.0))
     )
-    return AdaptiveCT(online, g, arm.sigma, **boost, observer=observer, observer_bandwidth=bw)
+    act = arm.actuator  # the boost keeps the command within the arm's torque limits
+    lim = act.torque_limit if act.saturate else None
+    return AdaptiveCT(
+        online, g, arm.sigma, **boost, observer=observer, observer_bandwidth=bw, torque_limit=lim
+    )
 
 
 def _slotine_li(g: Gains, o: dict, arm) -> Controller:

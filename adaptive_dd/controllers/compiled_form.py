@@ -25,7 +25,7 @@ import numpy as np
 from numba import njit
 from numpy.typing import NDArray
 
-from adaptive_dd.controllers.laws import boost_trial, ct_trial, pd_trial, slotine_li_trial
+from adaptive_dd.controllers.laws import boost_within_trial, ct_trial, pd_trial, slotine_li_trial
 
 __all__ = [
     "LAW_ADAPTIVE",
@@ -36,6 +36,7 @@ __all__ = [
     "LAW_SLOTINE_ORACLE",
     "CompiledSpec",
     "TwoLinkGains",
+    "boost_command",
     "command_trial",
     "compiled_spec",
     "two_link_gains",
@@ -63,6 +64,9 @@ class TwoLinkGains(NamedTuple):
         Feedback added during a boost after an alarm (``adaptive_ct``), through M0(q).
     boost_samples : float
         Samples a boost lasts after an alarm (0: no boost).
+    boost_lim : ndarray (2,)
+        The arm's torque limits [N m] the boost keeps the command within (inf: none;
+        :func:`~adaptive_dd.controllers.laws.boost_within_trial`).
     sigma : ndarray (7,)
         The fixed model (computed torque), the nominal one (``adaptive_ct``: start and boost),
         the start of the estimate and the model of M0 (Slotine-Li).
@@ -90,6 +94,7 @@ class TwoLinkGains(NamedTuple):
     boost_kp: float
     boost_kd: float
     boost_samples: float
+    boost_lim: Array
     sigma: Array
     gamma: Array
     lo: Array
@@ -126,7 +131,8 @@ def two_link_gains(law: int, sigma=None, **gains) -> TwoLinkGains:
     z2, z7 = np.zeros(2), np.zeros(7)
     fields = dict(
         law=law, kp=0.0, kd=0.0, lam=0.0, pd_kp=z2, pd_kd=z2, boost_kp=0.0, boost_kd=0.0,
-        boost_samples=0.0, sigma=z7 if sigma is None else np.array(sigma, dtype=float),
+        boost_samples=0.0, boost_lim=np.full(2, np.inf),
+        sigma=z7 if sigma is None else np.array(sigma, dtype=float),
         gamma=z7, lo=z7, hi=z7, projection=np.zeros(3), observer=False, T=0.0, obs_a=0.0, obs_stages=2,
         obs_kappa=0.0, obs_alpha=0.0, obs_warmup=0,
     )  # fmt: skip
@@ -150,7 +156,8 @@ def command_trial(g, T, sg_true, sg_model, since_alarm, q, qd, q_d, qd_d, qdd_d,
     ``T`` sample period [s]; ``sg_true (7,)`` the true base parameters over the sample (oracles);
     ``sg_model (7,)`` the trial's estimate (``adaptive_ct``: the estimator's model; Slotine-Li:
     its ``theta``, adapted in place); ``since_alarm`` samples since the detector's last alarm
-    (``adaptive_ct``'s boost); ``q, qd (2,)`` measured; ``q_d, qd_d, qdd_d (2,)`` the reference.
+    (unused here: ``adaptive_ct``'s boost is :func:`boost_command`, added after its residual
+    observer's torque); ``q, qd (2,)`` measured; ``q_d, qd_d, qdd_d (2,)`` the reference.
     A new law is a ``LAW_*`` code, its gains in :class:`TwoLinkGains` and its branch here.
     """
     law = g.law
@@ -171,5 +178,11 @@ def command_trial(g, T, sg_true, sg_model, since_alarm, q, qd, q_d, qd_d, qdd_d,
         ct_trial(q, qd, q_d, qd_d, qdd_d, sg_true, g.kp, g.kd, g.lam, out)
     else:
         ct_trial(q, qd, q_d, qd_d, qdd_d, sg_model, g.kp, g.kd, g.lam, out)
-        if g.boost_samples > 0 and since_alarm < g.boost_samples:
-            boost_trial(q, qd, q_d, qd_d, g.sigma, g.boost_kp, g.boost_kd, out)
+
+
+@njit(cache=True, inline="always")
+def boost_command(g, since_alarm, q, qd, q_d, qd_d, out):  # pragma: no cover - compiled
+    """``adaptive_ct``'s boost for ``boost_samples`` after an alarm, added to its whole command
+    ``out (2,)`` (computed torque and the residual observer's torque) within ``g.boost_lim``."""
+    if g.law == LAW_ADAPTIVE and g.boost_samples > 0 and since_alarm < g.boost_samples:
+        boost_within_trial(q, qd, q_d, qd_d, g.sigma, g.boost_kp, g.boost_kd, g.kp, g.kd, g.boost_lim, out)

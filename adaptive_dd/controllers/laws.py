@@ -16,6 +16,7 @@ from adaptive_dd.plant.sampling import project_trial
 __all__ = [
     "boost_batch",
     "boost_trial",
+    "boost_within_trial",
     "ct_batch",
     "ct_trial",
     "pd_batch",
@@ -69,6 +70,80 @@ def boost_trial(q, qd, q_d, qd_d, sg0, dkp, dkd, out):  # pragma: no cover - com
     m11, m12, m22 = sg0[0] + sg0[1] + 2.0 * rc, sg0[1] + rc, sg0[1]
     out[0] += m11 * v1 + m12 * v2
     out[1] += m12 * v1 + m22 * v2
+
+
+@njit(cache=True)
+def _roots(a, b, c, x_max, xs, n):  # pragma: no cover - compiled
+    """Append to ``xs`` (from index ``n``) the roots of ``a x^2 + b x = c`` in ``(0, x_max)``;
+    return the new count."""
+    if a == 0.0:
+        if b != 0.0 and 0.0 < c / b < x_max:
+            xs[n] = c / b
+            n += 1
+        return n
+    disc = b * b + 4.0 * a * c
+    if disc < 0.0:
+        return n
+    h = -0.5 * (b + np.copysign(np.sqrt(disc), b))  # the roots h / a and -c / h, stably
+    if h == 0.0:
+        return n
+    for x in (h / a, -c / h):
+        if 0.0 < x < x_max:
+            xs[n] = x
+            n += 1
+    return n
+
+
+@njit(cache=True)
+def boost_within_trial(q, qd, q_d, qd_d, sg0, dkp, dkd, kp, kd, lim, out):  # pragma: no cover
+    """Add the boost of :func:`boost_trial` at the largest bandwidth that keeps ``out (2,)`` within
+    the torque limits ``lim (2,)`` [N m] (a command already beyond its limit: not further).
+
+    The boost raises the law's bandwidth ``w`` (``kp = w^2``, ``kd = 2 zeta w``) by ``x`` in
+    ``[0, X]`` (``X`` gives ``dkp, dkd``): it adds ``M0(q) [((w + x)^2 - w^2) e + 2 zeta x e']``
+    = ``x^2 M0 e + x M0 (2 w e + 2 zeta e')``, and ``x`` is the largest whose command is within
+    the limits (0 always is). The error keeps a double pole at ``-(w + x)`` (damping ``zeta``)
+    whatever the room: a boost scaled as a whole (``alpha (dkp, dkd)``) lowers the damping, and a
+    clipped command loses it, and either drives a saturated arm past its reference.
+    """
+    w = np.sqrt(kp)
+    z = 0.5 * kd / w
+    x_max = 0.5 * dkd / z
+    e1, e2 = q_d[0] - q[0], q_d[1] - q[1]
+    p1, p2 = 2.0 * (w * e1 + z * (qd_d[0] - qd[0])), 2.0 * (w * e2 + z * (qd_d[1] - qd[1]))
+    rc = sg0[2] * np.cos(q[1])
+    m11, m12, m22 = sg0[0] + sg0[1] + 2.0 * rc, sg0[1] + rc, sg0[1]
+    a = (m11 * e1 + m12 * e2, m12 * e1 + m22 * e2)
+    b = (m11 * p1 + m12 * p2, m12 * p1 + m22 * p2)
+    hi, lo = np.empty(2), np.empty(2)
+    for j in range(2):  # up to its limit, or a command already beyond it not further
+        room = max(lim[j], abs(out[j])) if np.isfinite(lim[j]) else np.inf
+        hi[j], lo[j] = room - out[j], -room - out[j]
+    xs = np.empty(9)
+    xs[0] = x_max
+    n = 1
+    for j in range(2):
+        if np.isfinite(hi[j]):
+            n = _roots(a[j], b[j], hi[j], x_max, xs, n)
+            n = _roots(a[j], b[j], lo[j], x_max, xs, n)
+    best = 0.0
+    for k in range(n):  # the largest candidate (x_max or a crossing) within both limits
+        x = xs[k]
+        if x <= best:
+            continue
+        ok = True
+        for j in range(2):
+            f = a[j] * x * x + b[j] * x
+            tol = 1e-9 * (1.0 + abs(hi[j] - lo[j])) if np.isfinite(hi[j]) else 0.0
+            if f > hi[j] + tol or f < lo[j] - tol:
+                ok = False
+        if ok:
+            best = x
+    if best >= x_max:
+        boost_trial(q, qd, q_d, qd_d, sg0, dkp, dkd, out)
+        return
+    for j in range(2):
+        out[j] += a[j] * best * best + b[j] * best
 
 
 @njit(cache=True)
@@ -146,10 +221,10 @@ def _pd_loop(q, qd, q_d, qd_d, kp, kd, out):  # pragma: no cover - compiled
 
 
 @njit(cache=True)
-def _boost_loop(q, qd, q_d, qd_d, sg0, dkp, dkd, on, out):  # pragma: no cover - compiled
+def _boost_loop(q, qd, q_d, qd_d, sg0, dkp, dkd, kp, kd, lim, on, out):  # pragma: no cover - compiled
     for i in range(q.shape[0]):
         if on[i]:
-            boost_trial(q[i], qd[i], q_d[i], qd_d[i], sg0, dkp, dkd, out[i])
+            boost_within_trial(q[i], qd[i], q_d[i], qd_d[i], sg0, dkp, dkd, kp, kd, lim, out[i])
 
 
 def _flat(*arrays, width=(2, 2, 2, 2, 2, 7)):
@@ -178,10 +253,13 @@ def pd_batch(q, qd, q_d, qd_d, kp, kd):
     return out.reshape(*shape, 2)
 
 
-def boost_batch(tau, q, qd, q_d, qd_d, sigma0, dkp: float, dkd: float, on):
-    """``tau`` plus :func:`boost_trial` where ``on (n,)``; ``tau``, ``q`` and the other arrays ``(n, 2)``."""
+def boost_batch(tau, q, qd, q_d, qd_d, sigma0, dkp: float, dkd: float, on, kp=1.0, kd=2.0, lim=None):
+    """``tau`` plus :func:`boost_within_trial` where ``on (n,)``; ``tau``, ``q`` and the other arrays
+    ``(n, 2)``; ``kp, kd`` the law's gains, ``lim (2,)`` the torque limits (None: none, the whole boost)."""
     shape, (a, b, c, d, t) = _flat(q, qd, q_d, qd_d, tau)
     out = t.copy()
     on = np.ascontiguousarray(np.broadcast_to(np.asarray(on, dtype=np.bool_), (a.shape[0],)))
-    _boost_loop(a, b, c, d, np.asarray(sigma0, dtype=float), float(dkp), float(dkd), on, out)
+    lim = np.full(2, np.inf) if lim is None else np.asarray(lim, dtype=float)
+    sg0 = np.asarray(sigma0, dtype=float)
+    _boost_loop(a, b, c, d, sg0, float(dkp), float(dkd), float(kp), float(kd), lim, on, out)
     return out.reshape(*shape, 2)

@@ -120,7 +120,9 @@ class ChangeDetector:
     speed : float
         [rad/s] an equation feeds the tests (and the levels) only while its joint is faster ...
     speed_memory : float
-        ... and has been for this many tau_f.
+        ... and has been for this many tau_f (the filters' memory of the slow phase: 2 tau_f).
+        This gate is the detector's own, apart from the RLS's data selection: an equation the
+        RLS skips feeds the tests its prior error ``y - phi theta``.
     removal : float
         A GLR alarm may claim removing at most ``removal`` times the payload mass the estimate
         carries (over the start estimate, taken as the arm without payload), plus ``min_mass``:
@@ -158,7 +160,7 @@ class ChangeDetector:
     glr_min_age: float = 0.005
     hetero: float = 1.0
     speed: float = 0.25
-    speed_memory: float = 6.0
+    speed_memory: float = 2.0
     removal: float = 2.0
 
     def __post_init__(self) -> None:

@@ -339,22 +339,27 @@ def online_step_trial(
             else:
                 cnt[i, C_SINCE_SLOW1 + j] = min(cnt[i, C_SINCE_SLOW1 + j] + 1, BIG)
             act[j] = cnt[i, C_SINCE_SLOW1 + j] > ci[I_SEL_MEMORY]
-            if cnt[i, C_SINCE_SLOW1 + j] == ci[I_SEL_MEMORY] + 1:
+    # the detector's own gate, read apart from the selection: friction the model lacks lives at
+    # low speed, so the tests skip an equation while its joint is slower than ``speed`` and for
+    # ``speed_memory`` after; an equation the RLS does not use gives the tests its prior error
+    det_act = np.zeros(2, dtype=np.bool_)
+    if ci[I_DETECT] == 1:
+        for j in range(2):
+            c = C_SINCE_SLOW_DET1 + j
+            cnt[i, c] = 0 if abs(qd[j]) <= cf[F_DET_SPEED] else min(cnt[i, c] + 1, BIG)
+            det_act[j] = cnt[i, c] > ci[I_SPEED_MEMORY]
+            if cnt[i, c] == ci[I_SPEED_MEMORY] + 1:
                 # back in use after a slow phase: the short average must not carry the
                 # errors of the approach to it (it restarts at the long-run level)
                 n_l = cnt[i, C_LEARNED1 + j]
                 a_l = cf[F_ALPHA_LONG]
                 short[i, S_E2 + j] = long[i, j] / (1.0 - (1.0 - a_l) ** n_l) if n_l > 0 else 0.0
-    det_act = act.copy()
-    if ci[I_DETECT] == 1:
-        for j in range(2):  # friction the model lacks lives at low speed: the tests skip it
-            c = C_SINCE_SLOW_DET1 + j
-            cnt[i, c] = 0 if abs(qd[j]) <= cf[F_DET_SPEED] else min(cnt[i, c] + 1, BIG)
-            det_act[j] = det_act[j] and cnt[i, c] > ci[I_SPEED_MEMORY]
-    if ci[I_DETECT] == 1 and ci[I_REOPEN_AGAIN] == 0 and cnt[i, C_SINCE_ALARM] < ci[I_FREEZE]:
-        act[:] = False  # frozen after an alarm
+    frozen = ci[I_DETECT] == 1 and ci[I_REOPEN_AGAIN] == 0 and cnt[i, C_SINCE_ALARM] < ci[I_FREEZE]
+    if frozen:
+        act[:] = False  # frozen after an alarm (the tests too)
     th, Pi, li = theta[i], P[i], lam[i]
     eps_out[:] = np.nan
+    det_eps = np.full(2, np.nan)
     skipped = False
     split = ci[I_SPLIT]
     for stage in range(2):
@@ -365,15 +370,21 @@ def online_step_trial(
             for j in range(7):
                 if group[j] != g:
                     yr -= phi[r, j] * th[j]
-        if not act[r]:
-            continue
         ph = np.zeros(7)
         for j in range(7):
             if group[j] == g:
                 ph[j] = phi[r, j]
+        if not act[r]:
+            if det_act[r] and not frozen:  # the detector's prior error of an equation the RLS skips
+                e = yr
+                for j in range(7):
+                    e -= ph[j] * th[j]
+                det_eps[r] = e
+            continue
         forget = split != 0 or stage == 0
         e = _rls_update(th, Pi, li, stage if split != 0 else 0, ph, yr, group, g, cf, forget)
         eps_out[r] = e
+        det_eps[r] = e
         if not np.isfinite(e):
             skipped = True
     if skipped:
@@ -386,7 +397,7 @@ def online_step_trial(
         for r in range(2):
             for j in range(7):
                 phi_d[r] += phi[r, j] * d[j]
-        if _detect(i, eps_out, det_act, phi_d, u_last[i], th, short, long, cnt, ci, cf, A, B, C, D, d):
+        if _detect(i, det_eps, det_act, phi_d, u_last[i], th, short, long, cnt, ci, cf, A, B, C, D, d):
             alarm = 1
             on_alarm(i, P, cnt, long, short, group, d, ci, cf)
         else:
