@@ -7,10 +7,12 @@ to ratio^2 - 1). Then pooled per segment: mean, p90, max (the worst trial), tria
 the benchmark's 1 %, false-alarm trials and missed swaps (as the benchmark counts them: an alarm
 not within 0.3 s after a swap; a swap with none).
 
-Run: ``PYTHONPATH=. python benchmarks/boost_saturation.py --first-arm 100 --arms 30 --seeds 3``;
+Run: ``PYTHONPATH=. python benchmarks/boost_saturation.py --first-arm 100 --arms 30 --seeds 3``
+(``--template FILE`` another population template, e.g. ``population_drawn.toml``;
+``--scenario FILE --seeds 50`` a scenario's own arm instead of drawn ones);
 ``--cap`` runs the boost at ``boost_bandwidth`` on every joint (no task room:
-``adaptive_dd.closed_loop.boost``), as before the room was derived; ``--no-boost`` runs
-adaptive_ct without it (``boost_duration`` and ``boost_ramp`` 0).
+``adaptive_dd.closed_loop.boost``); ``--no-boost`` runs adaptive_ct without it (``boost_duration``
+and ``boost_ramp`` 0).
 """
 
 from __future__ import annotations
@@ -24,7 +26,7 @@ import numpy as np
 
 from adaptive_dd.benchmark.population import population_scenario
 from adaptive_dd.benchmark.runner import run_benchmark
-from adaptive_dd.benchmark.scenario import read_toml
+from adaptive_dd.benchmark.scenario import load_scenario, read_toml
 from adaptive_dd.benchmark.scenario_settings import with_settings
 
 TEMPLATE = Path(__file__).resolve().parent / "scenarios" / "population.toml"
@@ -65,14 +67,21 @@ def main() -> None:
     ap.add_argument("--seeds", type=int, default=3)
     ap.add_argument("--cap", action="store_true", help="the boost at boost_bandwidth on every joint")
     ap.add_argument("--no-boost", action="store_true", help="adaptive_ct without the boost")
+    ap.add_argument("--template", default=str(TEMPLATE), help="population template")
+    ap.add_argument("--scenario", help="a scenario file: its own arm, not drawn ones")
     args = ap.parse_args()
     if args.cap:
         from adaptive_dd.closed_loop.controllers import AdaptiveCT
 
         AdaptiveCT.state_task = lambda self, scenario: None
     rows = []
-    for arm in range(args.first_arm, args.first_arm + args.arms):
-        sc = population_scenario(read_toml(TEMPLATE), str(TEMPLATE), arm)
+    arms = [None] if args.scenario else range(args.first_arm, args.first_arm + args.arms)
+    for arm in arms:
+        where = args.scenario or f"random:{arm}"
+        if arm is None:
+            sc = load_scenario(args.scenario)
+        else:
+            sc = population_scenario(read_toml(args.template), args.template, arm)
         sc = dataclasses.replace(sc, seeds=args.seeds, controllers=("ct_oracle", "adaptive_ct"))
         if args.no_boost:
             sc = with_settings(sc, "adaptive_ct", {"boost_duration": 0.0, "boost_ramp": 0.0})
@@ -83,7 +92,7 @@ def main() -> None:
             false = [x for x in alarms if not any(0.0 <= x - w < DETECTED for w in sc.swap_times)]
             missed = sum(not any(0.0 <= x - w < DETECTED for x in alarms) for w in sc.swap_times)
             rows.append((arm, s, false, missed, segs))
-            print(f"random:{arm} seed {s}: alarms {[round(x, 3) for x in alarms]}", flush=True)
+            print(f"{where} seed {s}: alarms {[round(x, 3) for x in alarms]}", flush=True)
             for i, g in enumerate(segs):
                 print(
                     f"  segment {i}: ratio {g['ratio']:.3f}, saturated {100 * g['sat']:.2f} % "
@@ -93,7 +102,7 @@ def main() -> None:
                 )
     r = np.array([[g["ratio"] for g in row[4]] for row in rows])
     sat = np.array([[g["sat"] for g in row[4]] for row in rows])
-    names = [f"random:{row[0]} seed {row[1]}" for row in rows]
+    names = [f"{args.scenario or f'random:{row[0]}'} seed {row[1]}" for row in rows]
     print(f"pooled over {len(rows)} trials, adaptive_ct / ct_oracle per segment:")
     for i in range(r.shape[1]):
         k = int(r[:, i].argmax())
