@@ -148,21 +148,9 @@ def plot_benchmark_estimates(res, path: str | Path | None = None, formats=("png"
             ax.plot(t, sh[:, k], label=name, **controller_style(name))
         axes.flat[3].plot(t, paper.payload_mass_from_sigma(sh), label=name, **controller_style(name))
         _mark_alarms(axes.flat[3], run, name)
-    for ax in axes.flat:
-        ax.grid(alpha=0.3)
-        _mark_swaps(ax, res.t, res.mass)
     axes.flat[3].set_ylim(-1, 5)
-    axes.flat[0].legend(fontsize=8)
-    for ax in axes[-1]:
-        ax.set_xlabel("t [s]")
-    fig.suptitle(
-        "Estimates of the adaptive controllers against the truth (mean over the seeds with kept "
-        "trajectories; ticks: change alarms of the first seed)",
-        fontsize=9,
-    )
-    if path is not None:
-        save_figure(fig, path, formats)
-    return fig
+    title = "Estimates of the adaptive controllers against the truth"
+    return _finish_estimates(fig, axes, res, title, path, formats)
 
 
 def plot_payload_estimates(res, path: str | Path | None = None, formats=("png",)):
@@ -231,6 +219,12 @@ def plot_payload_estimates(res, path: str | Path | None = None, formats=("png",)
     axes.flat[0].set_ylim(-0.2 * top - 0.1, 1.4 * top + 0.1)
     for ax in axes.flat[1:]:
         ax.set_ylim(-250, 250)
+    return _finish_estimates(fig, axes, res, "Payload held by the estimating controllers", path, formats)
+
+
+def _finish_estimates(fig, axes, res, title: str, path, formats):
+    """The estimates' panels finished: grid and swaps on each, the legend on the first, time under
+    the lowest row, ``title`` with what is drawn; written to ``path`` (if given)."""
     for ax in axes.flat:
         ax.grid(alpha=0.3)
         _mark_swaps(ax, res.t, res.mass)
@@ -238,8 +232,7 @@ def plot_payload_estimates(res, path: str | Path | None = None, formats=("png",)
     for ax in axes[-1]:
         ax.set_xlabel("t [s]")
     fig.suptitle(
-        "Payload held by the estimating controllers (mean over the seeds with kept trajectories; "
-        "ticks: change alarms of the first seed)",
+        f"{title} (mean over the seeds with kept trajectories; ticks: change alarms of the first seed)",
         fontsize=9,
     )
     if path is not None:

@@ -27,6 +27,7 @@ import numpy as np
 from numba import njit
 
 from adaptive_dd.closed_loop.residual_observer import O_COUNT, O_Q, O_QD, O_TAU
+from adaptive_dd.identification.pseudo_inertia import parameters_of, pseudo_inertia
 from adaptive_dd.plant.chain import body_slotine_li_regressor_in, mass_matrix_in
 from adaptive_dd.plant.chain_dynamics import _cholesky_solve
 
@@ -42,6 +43,7 @@ __all__ = [
     "natural_link_step",
     "natural_step",
     "parameters_of",
+    "payload_gradient_step",
     "project_payload",
     "pseudo_inertia",
     "rebuild_payload_model",
@@ -59,33 +61,6 @@ NATURAL_STEP_MAX = 0.05
 """The natural law's step ``expm(X)`` with the eigenvalues of ``X`` clipped to +-this: the
 pseudo-inertia changes by at most ``e^0.05 - 1 = 5 %`` in any direction per sample (a guard
 against one wild sample; the law's own steps are far smaller)."""
-
-
-@njit(cache=True)
-def pseudo_inertia(phi, J):  # pragma: no cover - compiled
-    """``J (4, 4)``, the pseudo-inertia of ``phi = [m, m cx, m cy, m cz, Ixx, Ixy, Iyy, Ixz, Iyz,
-    Izz]`` (about one frame): ``[[tr(I)/2 1 - I, h], [h^T, m]]``."""
-    half = 0.5 * (phi[4] + phi[6] + phi[9])
-    J[0, 0], J[1, 1], J[2, 2] = half - phi[4], half - phi[6], half - phi[9]
-    J[0, 1] = J[1, 0] = -phi[5]
-    J[0, 2] = J[2, 0] = -phi[7]
-    J[1, 2] = J[2, 1] = -phi[8]
-    for r in range(3):
-        J[r, 3] = J[3, r] = phi[1 + r]
-    J[3, 3] = phi[0]
-
-
-@njit(cache=True)
-def parameters_of(J, phi):  # pragma: no cover - compiled
-    """The inverse of :func:`pseudo_inertia`: ``phi (10,)`` of ``J (4, 4)`` (``I = tr(S) 1 - S``)."""
-    tr = J[0, 0] + J[1, 1] + J[2, 2]
-    phi[0] = J[3, 3]
-    for r in range(3):
-        phi[1 + r] = 0.5 * (J[r, 3] + J[3, r])
-    phi[4], phi[6], phi[9] = tr - J[0, 0], tr - J[1, 1], tr - J[2, 2]
-    phi[5] = -0.5 * (J[0, 1] + J[1, 0])
-    phi[7] = -0.5 * (J[0, 2] + J[2, 0])
-    phi[8] = -0.5 * (J[1, 2] + J[2, 1])
 
 
 @njit(cache=True)
@@ -196,18 +171,28 @@ def chs_step(ch, cfg, q, qd, e, ed, theta, pi_model, obs, work):  # pragma: no c
         x[r] = ed[r] + cfg.lam[r] * e[r]
     if not _cholesky_solve(m, x):  # x = M^-1 (e' + lam e) in place
         return
-    yb = work[3]
-    body_slotine_li_regressor_in(ch, cfg.payload_joint, q, qd, qd, obs[CH_QDD], work[0], work[4], yb)
-    g = work[5]
-    for c in range(10):
+    body_slotine_li_regressor_in(ch, cfg.payload_joint, q, qd, qd, obs[CH_QDD], work[0], work[4], work[3])
+    payload_gradient_step(cfg, work[3], x, work[5], work[9], False, theta, pi_model)
+
+
+@njit(cache=True)
+def payload_gradient_step(cfg, yb, v, g, extra, with_extra, theta, pi_model):  # pragma: no cover - compiled
+    """``theta += T gamma (P^T Y_j^T v [+ extra])`` per parameter (a non-finite step skipped), then
+    :func:`project_payload` and the trial's model rebuilt: the payload step of every gradient law.
+    ``yb (n, 10)`` the payload link's regressor ``Y_j``, ``v (n,)`` the vector it is driven by,
+    ``g (10,)`` scratch; ``extra (10,)`` added when ``with_extra`` (the composite or ICL term)."""
+    n = v.shape[0]
+    for c in range(10):  # g = Y_j^T v
         acc = 0.0
         for r in range(n):
-            acc += yb[r, c] * x[r]
+            acc += yb[r, c] * v[r]
         g[c] = acc
     for k in range(10):
         upd = 0.0
         for c in range(10):
             upd += cfg.payload_map[c, k] * g[c]
+        if with_extra:
+            upd += extra[k]
         upd *= cfg.T * cfg.gamma[k]
         theta[k] += upd if np.isfinite(upd) else 0.0
     project_payload(cfg, theta)

@@ -60,8 +60,7 @@ from adaptive_dd.closed_loop.adaptation import (
     ADAPT_NATURAL,
     chs_step,
     natural_step,
-    project_payload,
-    rebuild_payload_model,
+    payload_gradient_step,
 )
 from adaptive_dd.closed_loop.composite import ICL_ROWS, composite_term
 from adaptive_dd.closed_loop.residual_observer import OBS_ROWS as O_ROWS
@@ -283,26 +282,9 @@ def _add_nominal_inertia(ch, cfg, q, v, work, out):  # pragma: no cover - compil
 def _adapt_payload(ch, cfg, q, qd, qdr, a, s, theta, pi_model, work):  # pragma: no cover - compiled
     """One gradient step of the payload parameters, projected; pi_model rebuilt from them (with
     ``cfg.composite`` or ICL the step adds ``work[9]``, the composite or ICL term)."""
-    n = q.shape[0]
-    j = cfg.payload_joint
-    yb = work[3]
-    body_slotine_li_regressor_in(ch, j, q, qd, qdr, a, work[0], work[4], yb)
-    g = work[5]  # Y_p^T s = P^T (Y_j^T s)
-    for c in range(10):
-        acc = 0.0
-        for r in range(n):
-            acc += yb[r, c] * s[r]
-        g[c] = acc
-    for k in range(10):
-        upd = 0.0
-        for c in range(10):
-            upd += cfg.payload_map[c, k] * g[c]
-        if cfg.composite or cfg.adapt_kind == ADAPT_ICL:
-            upd += work[9][k]
-        upd *= cfg.T * cfg.gamma[k]
-        theta[k] += upd if np.isfinite(upd) else 0.0
-    project_payload(cfg, theta)
-    rebuild_payload_model(cfg, theta, pi_model)
+    body_slotine_li_regressor_in(ch, cfg.payload_joint, q, qd, qdr, a, work[0], work[4], work[3])
+    extra = cfg.composite or cfg.adapt_kind == ADAPT_ICL
+    payload_gradient_step(cfg, work[3], s, work[5], work[9], extra, theta, pi_model)  # Y_p^T s = P^T Y_j^T s
 
 
 @njit(cache=True)

@@ -144,21 +144,6 @@ def _constraints(model: Model, tr: FourierTrajectory, t: Array, lim: ExcitationL
     return limit_slack(q, qd, qdd, base_regressor(model, q, qd, qdd) @ model.sigma_ref, lim)
 
 
-def _information(model: Model, tr: FourierTrajectory, t: Array, lim: ExcitationLimits) -> Array:
-    q, qd, qdd = tr.sample(t)
-    Y = base_regressor(model, q, qd, qdd) / lim.torque[None, :, None]
-    A = Y.reshape(-1, model.p)
-    return A.T @ A
-
-
-def _logdet(F: Array, d: Array) -> float:
-    """``log det(D^-1 F D^-1 + 1e-9 I)`` with a fixed scaling ``D = diag(d)`` (a constant shift of
-    ``log det F`` that keeps the optimiser's numbers O(1); the 1e-9 keeps singular starts finite)."""
-    Fn = F / np.outer(d, d) + 1e-9 * np.eye(len(d))
-    sign, val = np.linalg.slogdet(Fn)
-    return float(val) if sign > 0 else -1e3 * len(d)
-
-
 def multisine(
     arm, lim: ExcitationLimits, harmonics: int = 5, f0: float = 0.1, grid: int = 200
 ) -> FourierTrajectory:

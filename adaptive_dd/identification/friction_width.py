@@ -28,6 +28,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from adaptive_dd.identification.log_covariance import long_run_factor, newey_west_lag, pooled_autocorrelation
 from adaptive_dd.identification.log_fit import coulomb_index
 
 __all__ = [
@@ -194,7 +195,8 @@ def profile_coulomb_width(
         phi, y = phi - phi.mean(axis=0), y - y.mean(axis=0)
     cw = np.ones(n) if channel_weight is None else np.asarray(channel_weight, dtype=float)
     _, res, w, _ = _reweighted_fit(phi, y, cw[used])
-    n_eff = y.shape[0] / _long_run_factor((res * w).sum(axis=1))
+    u = (res * w).sum(axis=1)  # the Bartlett factor at newey_west's lag
+    n_eff = y.shape[0] / long_run_factor(u, newey_west_lag(pooled_autocorrelation(u, u.size - 1), u.size))
     col = np.cumsum(K) - 1  # base column -> column of phi
     kept = np.flatnonzero(used)
     joints = {  # joint -> (its channel among the kept, its Coulomb column in phi)
@@ -251,18 +253,3 @@ def _profile(phi: Array, y: Array, w: Array, r: int, c: int, columns: Array) -> 
     beta = (ra.T @ ry) / np.maximum(np.sum(ra**2, axis=0), 1e-300)
     res = (ry[:, None] - ra * beta).reshape(N, m, -1) / w[None, :, None]
     return np.sum(np.log(np.mean(res**2, axis=0)), axis=0)
-
-
-def _long_run_factor(u: Array) -> float:
-    """``1 + 2 sum (1 - m/(L+1)) rho_m``: how many samples one independent one is worth in ``u``
-    (Bartlett weights, lag ``L`` as :func:`~adaptive_dd.identification.log_covariance.newey_west`'s),
-    at least 1."""
-    u = u - u.mean()
-    N = u.size
-    f = np.fft.rfft(u, 2 * N)
-    ac = np.fft.irfft(f * np.conj(f))[:N]
-    ac = ac / max(ac[0], 1e-300)
-    below = np.flatnonzero(ac < 0.05)
-    lag = int(min(3 * (below[0] if below.size else N), N // 4))
-    m = np.arange(1, lag + 1)
-    return float(max(1.0, 1.0 + 2.0 * np.sum((1.0 - m / (lag + 1)) * ac[1 : lag + 1])))

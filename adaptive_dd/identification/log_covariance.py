@@ -67,7 +67,9 @@ __all__ = [
     "fixed_b_quantile",
     "long_run_factor",
     "newey_west",
+    "newey_west_lag",
     "newey_west_parts",
+    "pooled_autocorrelation",
 ]
 
 Array = NDArray[np.float64]
@@ -99,17 +101,31 @@ def fixed_b_quantile(b: float) -> float:
     return NORMAL_975 + b * (2.9694 + b * (0.4160 - 0.5324 * b))
 
 
-def long_run_factor(u: Array, lag: int, bounds=None) -> float:
-    """``1 + 2 sum_m (1 - m / (lag + 1)) rho_m``, ``rho`` the autocorrelation of ``u (N,)`` pooled over
-    its pieces ``bounds`` (default one): how many samples one independent sample is worth, at least 1."""
+def pooled_autocorrelation(u: Array, upto: int, bounds=None) -> Array:
+    """``rho_0 .. rho_upto`` of ``u (N,)`` pooled over its pieces ``bounds`` (default one): each
+    piece's mean removed, the autocovariances of the lags it has summed over the pieces (by FFT,
+    zero-padded to twice the piece), divided by the pooled variance."""
     bounds = [(0, u.size)] if bounds is None else list(bounds)
-    ac = np.zeros(lag + 1)
+    ac = np.zeros(upto + 1)
     for a, b in bounds:
         seg = u[a:b] - u[a:b].mean()
         f = np.fft.rfft(seg, 2 * (b - a))
-        c = np.fft.irfft(f * np.conj(f))[: min(b - a, lag + 1)]
+        c = np.fft.irfft(f * np.conj(f))[: min(b - a, upto + 1)]
         ac[: c.size] += c
-    ac = ac / max(ac[0], 1e-300)
+    return ac / max(ac[0], 1e-300)
+
+
+def newey_west_lag(ac: Array, longest: int) -> int:
+    """The Bartlett lag of an autocorrelation ``ac``: three times its first lag below 0.05 (all of
+    ``longest``, the longest piece, if it never falls below), at most ``longest / 4``."""
+    below = np.flatnonzero(ac < 0.05)
+    return int(min(3 * (below[0] if below.size else longest), longest // 4))
+
+
+def long_run_factor(u: Array, lag: int, bounds=None) -> float:
+    """``1 + 2 sum_m (1 - m / (lag + 1)) rho_m``, ``rho`` the autocorrelation of ``u (N,)`` pooled over
+    its pieces ``bounds`` (default one): how many samples one independent sample is worth, at least 1."""
+    ac = pooled_autocorrelation(u, lag, bounds)
     m = np.arange(1, lag + 1)
     return float(max(1.0, 1.0 + 2.0 * np.sum((1.0 - m / (lag + 1)) * ac[1:])))
 
@@ -139,13 +155,7 @@ def _autocorrelation(u: Array, lag: int, bounds, upto: int) -> Array:
     0.05 crossing ``m0 = lag / 3`` (:func:`newey_west`'s rule) and run out beyond it as
     :func:`_kernel_bias`'s geometric tail."""
     m0 = max(1, lag // 3)
-    ac = np.zeros(m0 + 1)
-    for a, b in bounds:
-        seg = u[a:b] - u[a:b].mean()
-        f = np.fft.rfft(seg, 2 * (b - a))
-        c = np.fft.irfft(f * np.conj(f))[: min(b - a, m0 + 1)]
-        ac[: c.size] += c
-    ac = ac / max(ac[0], 1e-300)
+    ac = pooled_autocorrelation(u, m0, bounds)
     if upto <= m0:
         return ac[: upto + 1]
     return np.concatenate([ac, max(ac[m0], 0.0) * _tail_ratio(ac, m0) ** np.arange(1, upto - m0 + 1)])
@@ -209,14 +219,7 @@ def newey_west_parts(phi: Array, res: Array, w: Array, scale: Array, bounds=None
     A = np.einsum("kjr,kjs,j->rs", P, P, w**2)
     u = (res * w).sum(axis=1)
     longest = max(b - a for a, b in bounds)
-    ac = np.zeros(longest)
-    for a, b in bounds:
-        seg = u[a:b] - u[a:b].mean()
-        f = np.fft.rfft(seg, 2 * (b - a))
-        ac[: b - a] += np.fft.irfft(f * np.conj(f))[: b - a]
-    ac = ac / max(ac[0], 1e-300)
-    below = np.flatnonzero(ac < 0.05)
-    lag = int(min(3 * (below[0] if below.size else longest), longest // 4))
+    lag = newey_west_lag(pooled_autocorrelation(u, longest - 1, bounds), longest)
     S = _bartlett_sum(g, lag, bounds)
     # A^-1 S A^-1 in A's eigenbasis, symmetric by construction: on a record that barely sees a
     # direction (the Gen3's rounded angles: A's condition number 1e10) the product of a

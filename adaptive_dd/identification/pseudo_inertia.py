@@ -16,7 +16,34 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-__all__ = ["project_payload"]
+__all__ = ["parameters_of", "project_payload", "pseudo_inertia"]
+
+
+@njit(cache=True)
+def pseudo_inertia(phi, J):  # pragma: no cover - compiled
+    """``J (4, 4)``, the pseudo-inertia of ``phi = [m, m cx, m cy, m cz, Ixx, Ixy, Iyy, Ixz, Iyz,
+    Izz]`` (about one frame): ``[[tr(I)/2 1 - I, h], [h^T, m]]``."""
+    half = 0.5 * (phi[4] + phi[6] + phi[9])
+    J[0, 0], J[1, 1], J[2, 2] = half - phi[4], half - phi[6], half - phi[9]
+    J[0, 1] = J[1, 0] = -phi[5]
+    J[0, 2] = J[2, 0] = -phi[7]
+    J[1, 2] = J[2, 1] = -phi[8]
+    for r in range(3):
+        J[r, 3] = J[3, r] = phi[1 + r]
+    J[3, 3] = phi[0]
+
+
+@njit(cache=True)
+def parameters_of(J, phi):  # pragma: no cover - compiled
+    """The inverse of :func:`pseudo_inertia`: ``phi (10,)`` of ``J (4, 4)`` (``I = tr(S) 1 - S``)."""
+    tr = J[0, 0] + J[1, 1] + J[2, 2]
+    phi[0] = J[3, 3]
+    for r in range(3):
+        phi[1 + r] = 0.5 * (J[r, 3] + J[3, r])
+    phi[4], phi[6], phi[9] = tr - J[0, 0], tr - J[1, 1], tr - J[2, 2]
+    phi[5] = -0.5 * (J[0, 1] + J[1, 0])
+    phi[7] = -0.5 * (J[0, 2] + J[2, 0])
+    phi[8] = -0.5 * (J[1, 2] + J[2, 1])
 
 
 @njit(cache=True)
@@ -158,15 +185,7 @@ def project_payload(src, dst, eig_min, radius=0.0):  # pragma: no cover - compil
 def _project_psd(src, dst, eig_min):  # pragma: no cover - compiled
     """Eigenvalue clipping of :func:`project_payload` (without the ball)."""
     J = np.empty((4, 4))
-    ixx, ixy, iyy, ixz, iyz, izz = src[4], src[5], src[6], src[7], src[8], src[9]
-    half = 0.5 * (ixx + iyy + izz)
-    J[0, 0], J[1, 1], J[2, 2] = half - ixx, half - iyy, half - izz
-    J[0, 1] = J[1, 0] = -ixy
-    J[0, 2] = J[2, 0] = -ixz
-    J[1, 2] = J[2, 1] = -iyz
-    for k in range(3):
-        J[k, 3] = J[3, k] = src[1 + k]
-    J[3, 3] = src[0]
+    pseudo_inertia(src, J)
     ok = True
     for a in range(4):
         for b in range(4):
@@ -185,25 +204,12 @@ def _project_psd(src, dst, eig_min):  # pragma: no cover - compiled
         for k in range(10):
             dst[k] = src[k]
         return
-    if True:
-        for k in range(4):
-            lam[k] = max(lam[k], eig_min)
-        for a in range(4):
-            for b in range(4):
-                acc = 0.0
-                for k in range(4):
-                    acc += V[a, k] * lam[k] * V[b, k]
-                J[a, b] = acc
-        for a in range(4):  # symmetric to the last bit
-            for b in range(a + 1, 4):
-                J[a, b] = J[b, a] = 0.5 * (J[a, b] + J[b, a])
-    tr = J[0, 0] + J[1, 1] + J[2, 2]
-    dst[0] = J[3, 3]
-    for k in range(3):
-        dst[1 + k] = J[k, 3]
-    dst[4] = tr - J[0, 0]
-    dst[5] = -J[0, 1]
-    dst[6] = tr - J[1, 1]
-    dst[7] = -J[0, 2]
-    dst[8] = -J[1, 2]
-    dst[9] = tr - J[2, 2]
+    for k in range(4):
+        lam[k] = max(lam[k], eig_min)
+    for a in range(4):
+        for b in range(4):
+            acc = 0.0
+            for k in range(4):
+                acc += V[a, k] * lam[k] * V[b, k]
+            J[a, b] = acc
+    parameters_of(J, dst)  # its off-diagonal terms the mean of J's two (symmetric to the last bit)

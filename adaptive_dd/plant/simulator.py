@@ -84,10 +84,6 @@ class PayloadSchedule:
         m = self.initial_mass if k == 0 else self.masses[k - 1]
         return np.asarray(m, dtype=float)
 
-    def sigma_at(self, t: float, arm: ClosedFormTwoLink) -> Array:
-        """Base parameters of ``arm`` at time t with the disk (``(..., 7)``)."""
-        return arm.sigma_with_payload(self.mass_at(t), self.radius)
-
 
 # ------------------------------------------------------------- stateful wrapper
 @dataclass
