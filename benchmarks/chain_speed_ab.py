@@ -13,7 +13,9 @@ alternating which tree goes first, and prints each run's CPU seconds (of the thr
 per simulated second of one trial, then the mean, median and best of each tree and B / A. CPU
 seconds, not wall: read them beside the load printed. Then compares the two trees' results: the
 largest relative difference over every per-seed, per-segment sum of the run (the squared joint
-error, per joint, its peak, the squared torque, the tool frame's sums), 0 when bit-identical.
+error, per joint, its peak, the squared torque, the tool frame's sums) and the estimate at the end
+of each segment (a controller with one), 0 when bit-identical; and whether every sample's tracking
+error norm and the detector's alarm times are equal (one digest of each run).
 Asserts nothing: a measurement.
 """
 
@@ -60,6 +62,7 @@ def worker(name: str, robot: str | None, seeds: int) -> None:
     """One run of controller ``name`` per line on stdin; prints CPU s per simulated s of one trial,
     then the run's sums (``float.hex``, one line)."""
     import dataclasses
+    import hashlib
     import time
 
     import numpy as np
@@ -77,8 +80,15 @@ def worker(name: str, robot: str | None, seeds: int) -> None:
         cpu = time.thread_time() - c0
         run = res.runs[name]
         assert not run.failed.any(), f"{name} failed"
-        sums = np.concatenate([np.ravel(getattr(run.acc, k)) for k in SUMS])
-        print(f"{cpu / sc.duration / seeds:.6f} " + ",".join(float(x).hex() for x in sums), flush=True)
+        sums = [np.ravel(getattr(run.acc, k)) for k in SUMS]
+        if run.sigma_end is not None:  # the estimate at the end of each segment
+            sums.append(np.ravel(run.sigma_end))
+        sums = np.concatenate(sums)
+        # every sample's tracking error and the alarm times, as one digest
+        h = hashlib.sha256(np.ascontiguousarray(run.e_norm).tobytes())
+        h.update(repr(run.alarm_times).encode())
+        hexes = ",".join(float(x).hex() for x in sums)
+        print(f"{cpu / sc.duration / seeds:.6f} {hexes} {h.hexdigest()}", flush=True)
 
 
 def main() -> None:
@@ -103,11 +113,12 @@ def main() -> None:
             sys.exit("a worker failed before its first trial")
     res: list[list[float]] = [[], []]
     sums: list[list[float]] = [[], []]
+    digests: list[str] = ["", ""]
     for r in range(a.trials):
         for j in (0, 1) if r % 2 == 0 else (1, 0):
             procs[j].stdin.write("go\n")
             procs[j].stdin.flush()
-            cpu, hexes = procs[j].stdout.readline().split()
+            cpu, hexes, digests[j] = procs[j].stdout.readline().split()
             res[j].append(float(cpu))
             sums[j] = [float.fromhex(x) for x in hexes.split(",")]
         print(
@@ -129,7 +140,8 @@ def main() -> None:
     rel = max(abs(x - y) / max(abs(x), abs(y)) if x != y else 0.0 for x, y in zip(*sums, strict=True))
     print(
         f"results: {sum(x == y for x, y in zip(*sums, strict=True))} of {len(sums[0])} sums equal, "
-        f"largest relative difference {rel:.3g}"
+        f"largest relative difference {rel:.3g}; every sample's tracking error and the alarm times "
+        + ("equal" if digests[0] == digests[1] else "DIFFER")
     )
 
 
