@@ -47,5 +47,5 @@ def test_priors_and_projection_with_dirty_scratch_equal_the_allocating_forms(fil
         for radius in (0.0, 0.1):
             want, got = np.empty(10), np.empty(10)
             project_payload(raw, want, 1e-8, radius)
-            project_payload_in(raw, got, 1e-8, radius, np.full((4, 4), fill), np.full((4, 4), fill))
+            project_payload_in(raw, got, 1e-8, radius, np.full((10, 10), fill))
             assert np.array_equal(got, want, equal_nan=True)

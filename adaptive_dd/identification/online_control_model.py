@@ -232,13 +232,11 @@ def centred_prior_in(raw, Pc, r, g, row):  # pragma: no cover - compiled
 @njit(cache=True, inline="always")
 def _control_payload(c, s, i, raw, pay, Pc):  # pragma: no cover - compiled
     """:func:`_control_payload_in` with its scratch allocated for this call."""
-    _control_payload_in(
-        c, s, i, raw, pay, Pc, np.empty(10), np.empty(10), np.empty(6), np.empty((4, 4)), np.empty((4, 4))
-    )
+    _control_payload_in(c, s, i, raw, pay, Pc, np.empty(10), np.empty(10), np.empty(6))
 
 
 @njit(cache=True, inline="always")
-def _control_payload_in(c, s, i, raw, pay, Pc, g, row, mean, J, L):  # pragma: no cover - compiled
+def _control_payload_in(c, s, i, raw, pay, Pc, g, row, mean):  # pragma: no cover - compiled
     """The payload the model control uses: ``raw`` with the centred prior (:func:`centred_prior`,
     if ``F_COM_SIZE`` is set: :attr:`~adaptive_dd.identification.online_config.OnlineConfig.payload_priors`,
     the payload block's own covariance) and the compact prior (if set); projected
@@ -274,7 +272,7 @@ def _control_payload_in(c, s, i, raw, pay, Pc, g, row, mean, J, L):  # pragma: n
                     Pc[a, b] *= kappa
         compact_prior_in(raw, Pc, rho, mean, g, row)
     if c.ints[I_PROJECT] == 1:
-        project_payload_in(raw, pay, c.floats[F_EIG_MIN], c.floats[F_RADIUS], J, L)
+        project_payload_in(raw, pay, c.floats[F_EIG_MIN], c.floats[F_RADIUS], Pc)  # Pc read no more
         if c.mode == MODE_PAYLOAD and c.floats[F_PRESENT2] > 0.0:
             wp = presence_weight(m_raw, var_m, c.floats[F_PRESENT2])
             for k in range(10):
@@ -322,7 +320,7 @@ def est_model_trial_in(c, s, i, pi_out, w):  # pragma: no cover - compiled
         raw_est = w.raw_est
         for k in range(10):
             raw_est[k] = raw[k]
-    _control_payload_in(c, s, i, raw, pay, w.Pc, w.pg, w.prow, w.pmean, w.pJ, w.pL)
+    _control_payload_in(c, s, i, raw, pay, w.Pc, w.pphi, w.row, w.d)  # (the RLS's scratch is free)
     if _keeps_start(c, s, i):
         for k in range(10):
             pay[k] = s.start_pay[i, k]

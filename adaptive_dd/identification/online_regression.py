@@ -131,8 +131,8 @@ def _momentum_channels(c, s, i, restart, w):  # pragma: no cover - compiled
     n = ym.shape[0]
     nch = MOMENTUM_CHANNELS * n
     u1, u0, y, p, wv, py, wy = w.u1, w.u0, w.yf, w.p, w.wv, w.py, w.wy  # inputs (G1, G0), outputs
-    # the whole pi0 and the views of u cut once (est_work): a view per sample is a reference count
-    momentum_form_in(c.ch, c.pi0, c.jp, w.uq, w.uqd, w.chain, w.a2, p, wv, py, wy)
+    # the whole pi0 (its first 10 n entries are read), not a view of it
+    momentum_form_in(c.ch, c.pi0, c.jp, u[:n], u[n : 2 * n], w.chain, w.a2, p, wv, py, wy)
     for r in range(n):
         qd = u[n + r]
         u1[r] = 0.0
@@ -176,7 +176,7 @@ def _arm_momentum_channels(c, s, i, restart, w):  # pragma: no cover - compiled
     y = np.empty(nch)
     pm, wv = np.empty(n), np.empty(n)
     py, wy = np.empty((n, 10)), np.empty((n, 10))
-    q, qd = w.uq, w.uqd
+    q, qd = u[:n], u[n : 2 * n]
     for r in range(n):
         u0[r] = u[2 * n + r]
     for j in range(n):

@@ -279,15 +279,10 @@ class EstWork(NamedTuple):
         The momentum form's inputs (G1, G0) and outputs; ``p, wv (n,)`` and ``py, wy (n, 10)``
         are views into ``u1, u0``.
     raw, raw_est, pay : (10,); Pc : (10, 10); d : (p,)
-        Scratch of the model control uses.
+        Scratch of the model control uses (``pphi, row, d`` and ``Pc`` also serve its priors and
+        projection, after the step's own use of them).
     Mr, Mr0 : (n, n); pir : (10 n,)
         Scratch of the detector's :func:`_ref_rise`.
-    uq, uqd : (n,)
-        Views of ``u``'s first two channels (q, qd), cut once here, not at every sample.
-    pg, prow : (10,); pmean : (6,); pJ, pL : (4, 4)
-        Scratch of the priors (:func:`~adaptive_dd.identification.online_control_model.centred_prior_in`,
-        :func:`~adaptive_dd.identification.online_control_model.compact_prior_in`) and of the
-        projection (:func:`~adaptive_dd.identification.pseudo_inertia.project_payload_in`).
     """
 
     chain: tuple
@@ -317,13 +312,6 @@ class EstWork(NamedTuple):
     Mr: np.ndarray
     Mr0: np.ndarray
     pir: np.ndarray
-    uq: np.ndarray
-    uqd: np.ndarray
-    pg: np.ndarray
-    prow: np.ndarray
-    pmean: np.ndarray
-    pJ: np.ndarray
-    pL: np.ndarray
 
 
 @njit(cache=True)
@@ -331,14 +319,12 @@ def est_work(n, p):  # pragma: no cover - compiled
     """Scratch (:class:`EstWork`) of a trial's step and model, n joints, p parameters."""
     nch = MOMENTUM_CHANNELS * n
     u1, u0 = np.zeros(nch), np.zeros(nch)
-    u = np.empty(4 * n)
     return EstWork(
-        workspace(n), np.empty((2, 6, 10)), u, np.empty(n), np.empty(n), np.empty((n, 10)),
+        workspace(n), np.empty((2, 6, 10)), np.empty(4 * n), np.empty(n), np.empty(n), np.empty((n, 10)),
         np.zeros(n, dtype=np.bool_), np.empty((n, p)), np.empty(n),
         np.empty(p), np.empty(p), np.empty(p, dtype=np.int64),
         u1, u0, np.empty(nch), u1[n : 2 * n], u0[n : 2 * n],
         u1[2 * n :].reshape((n, 10)), u0[2 * n :].reshape((n, 10)),
         np.empty(10), np.empty(10), np.empty(10), np.empty((10, 10)), np.empty(p),
         np.empty((n, n)), np.empty((n, n)), np.empty(10 * n),
-        u[:n], u[n : 2 * n], np.empty(10), np.empty(10), np.empty(6), np.empty((4, 4)), np.empty((4, 4)),
     )  # fmt: skip

@@ -64,20 +64,20 @@ def _eigh4(J):  # pragma: no cover - compiled
 
 
 @njit(cache=True)
-def _positive_definite(J, shift, L):  # pragma: no cover - compiled
-    """True if ``J - shift I`` (4 x 4) is positive definite (a Cholesky factorisation succeeds);
-    ``L (4, 4)`` scratch for the factor (each entry read only after it is written)."""
+def _positive_definite(J, shift):  # pragma: no cover - compiled
+    """True if ``J[:4, :4] - shift I`` is positive definite (a Cholesky factorisation succeeds);
+    the factor is written into ``J[4:8, :4]`` (scratch; each entry read only after it is written)."""
     for a in range(4):
         for b in range(a + 1):
             acc = J[a, b] - (shift if a == b else 0.0)
             for k in range(b):
-                acc -= L[a, k] * L[b, k]
+                acc -= J[4 + a, k] * J[4 + b, k]
             if a == b:
                 if not acc > 0.0:
                     return False
-                L[a, a] = np.sqrt(acc)
+                J[4 + a, a] = np.sqrt(acc)
             else:
-                L[a, b] = acc / L[b, b]
+                J[4 + a, b] = acc / J[4 + b, b]
     return True
 
 
@@ -149,21 +149,23 @@ def project_payload(src, dst, eig_min, radius=0.0):  # pragma: no cover - compil
     the result is then bounded to a ball of that radius about the payload frame
     (:func:`_bound_ball`): ``|c| <= radius`` and ``tr(Sigma) <= m radius^2``.
     """
-    project_payload_in(src, dst, eig_min, radius, np.empty((4, 4)), np.empty((4, 4)))
+    project_payload_in(src, dst, eig_min, radius, np.empty((8, 4)))
 
 
 @njit(cache=True)
-def project_payload_in(src, dst, eig_min, radius, J, L):  # pragma: no cover - compiled
-    """:func:`project_payload` with its scratch given, ``J, L (4, 4)`` (no allocation in the
-    common case, a payload already consistent and within the ball: a per-sample step calls it)."""
-    _project_psd(src, dst, eig_min, J, L)
+def project_payload_in(src, dst, eig_min, radius, J):  # pragma: no cover - compiled
+    """:func:`project_payload` with its scratch given, ``J`` (at least 8 x 4: the pseudo-inertia in
+    its first four rows, a Cholesky factor in the next four; no allocation in the common case, a
+    payload already consistent and within the ball: a per-sample step calls it)."""
+    _project_psd(src, dst, eig_min, J)
     if radius > 0.0 and np.isfinite(dst[0]):
         _bound_ball(dst, radius)
 
 
 @njit(cache=True)
-def _project_psd(src, dst, eig_min, J, L):  # pragma: no cover - compiled
-    """Eigenvalue clipping of :func:`project_payload` (without the ball); ``J, L (4, 4)`` scratch."""
+def _project_psd(src, dst, eig_min, J):  # pragma: no cover - compiled
+    """Eigenvalue clipping of :func:`project_payload` (without the ball); ``J`` scratch as
+    :func:`project_payload_in`'s."""
     ixx, ixy, iyy, ixz, iyz, izz = src[4], src[5], src[6], src[7], src[8], src[9]
     half = 0.5 * (ixx + iyy + izz)
     J[0, 0], J[1, 1], J[2, 2] = half - ixx, half - iyy, half - izz
@@ -182,7 +184,7 @@ def _project_psd(src, dst, eig_min, J, L):  # pragma: no cover - compiled
         for k in range(10):
             dst[k] = np.nan
         return
-    if _positive_definite(J, eig_min, L):  # already consistent (the common case): unchanged
+    if _positive_definite(J, eig_min):  # already consistent (the common case): unchanged
         for k in range(10):
             dst[k] = src[k]
         return
