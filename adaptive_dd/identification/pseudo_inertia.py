@@ -21,12 +21,16 @@ __all__ = ["project_payload", "project_payload_in"]
 
 @njit(cache=True)
 def _eigh4(J):  # pragma: no cover - compiled
-    """Eigenvalues and eigenvectors (columns) of a symmetric 4 x 4 matrix by cyclic Jacobi rotations.
+    """Eigenvalues and eigenvectors (columns) of a symmetric 4 x 4 matrix (``J``'s leading block) by
+    cyclic Jacobi rotations.
 
     Cheaper than LAPACK through numba for this size; converges quadratically (a handful of
     sweeps to the last bits).
     """
-    A = J.copy()
+    A = np.empty((4, 4))  # J's leading 4 x 4 block (J may be a larger scratch)
+    for a in range(4):
+        for b in range(4):
+            A[a, b] = J[a, b]
     V = np.eye(4)
     for _ in range(30):
         off = 0.0
