@@ -106,6 +106,27 @@ def test_momentum_form_matches_pinocchio(n, seed):
     np.testing.assert_allclose((pp - pm) / (2 * h) + wv, tau, rtol=0, atol=1e-6 * (1.0 + np.abs(tau).max()))
 
 
+@settings(max_examples=10, deadline=None)
+@given(n=st.integers(1, 7), seed=st.integers(0, 2**32 - 1))
+def test_momentum_columns_reuse_the_kinematics_bit_for_bit(n, seed):
+    """Link j's columns from the kinematics a call for link 0 left in the workspace are those of a
+    call for link j itself, to the last bit (the estimator of mode "arm" reads every link's so)."""
+    from adaptive_dd.plant.chain_regressor import momentum_columns_in
+
+    rng = np.random.default_rng(seed)
+    model = random_chain_model(n, rng)
+    ch, pi = C.chain_from_model(model), C.standard_parameters(model)
+    q, qd = _state(n, rng, 2)
+    w, a = C.workspace(n), np.empty((2, 6, 10))
+    p, wv, py, wy = np.empty(n), np.empty(n), np.empty((n, 10)), np.empty((n, 10))
+    ref = [np.empty((n, 10)) for _ in range(2)]
+    for j in range(n):
+        C.momentum_form(ch, pi, j, q, qd, p, wv, *ref)
+        C.momentum_form_in(ch, pi, 0, q, qd, w, a, p, wv, py, wy)
+        momentum_columns_in(j, w, a, py, wy)
+        assert np.array_equal(py, ref[0]) and np.array_equal(wy, ref[1]), j
+
+
 @settings(max_examples=8, deadline=None)
 @given(n=st.integers(1, 5), seed=st.integers(0, 2**32 - 1))
 def test_slotine_li_regressor_column_by_column(n, seed):

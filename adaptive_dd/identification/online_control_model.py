@@ -30,7 +30,7 @@ from adaptive_dd.identification.online_slots import (
     MODE_PAYLOAD,
     est_work,
 )
-from adaptive_dd.identification.pseudo_inertia import project_payload
+from adaptive_dd.identification.pseudo_inertia import project_payload_in
 
 
 @njit(cache=True, inline="always")
@@ -137,9 +137,16 @@ def compact_prior(raw, Pc, rho):  # pragma: no cover - compiled
     weakly excited); the prior keeps the model control uses at a plausible inertia
     meanwhile, and the data override it as P shrinks (no effect once the inertia is known).
     """
+    compact_prior_in(raw, Pc, rho, np.empty(6), np.empty(10), np.empty(10))
+
+
+@njit(cache=True)
+def compact_prior_in(raw, Pc, rho, mean, g, row):  # pragma: no cover - compiled
+    """:func:`compact_prior` with its scratch given: ``mean (6,)``, ``g, row (10,)``."""
     m = max(raw[0], 0.0)
     hx, hy, hz = raw[1], raw[2], raw[3]
-    mean = np.zeros(6)
+    for t in range(6):
+        mean[t] = 0.0
     if m > 1e-9:
         h2 = hx * hx + hy * hy + hz * hz
         sph = 0.4 * m * rho * rho
@@ -152,8 +159,6 @@ def compact_prior(raw, Pc, rho):  # pragma: no cover - compiled
         mean[5] = (h2 - hz * hz) / m + sph
     std = m * rho * rho + 1e-6
     R = std * std
-    g = np.empty(10)
-    row = np.empty(10)
     for t in range(6):
         if not _pseudo_measure(raw, Pc, 4 + t, mean[t], R, 4, 10, g, row):
             return
@@ -209,12 +214,16 @@ def centred_prior(raw, Pc, r):  # pragma: no cover - compiled
     max(m, 0)^2 + Pc[0, 0]``. Three scalar Kalman updates (pseudo-measurements ``m c_k = 0``) on
     the 4 x 4 block; the inertias are left as they are (:func:`compact_prior` takes them from the
     result)."""
+    centred_prior_in(raw, Pc, r, np.empty(4), np.empty(4))
+
+
+@njit(cache=True)
+def centred_prior_in(raw, Pc, r, g, row):  # pragma: no cover - compiled
+    """:func:`centred_prior` with its scratch given: ``g, row`` (at least 4,)."""
     if not (r > 0.0):
         return
     m = max(raw[0], 0.0)
     R = r * r * (m * m + max(Pc[0, 0], 0.0))
-    g = np.empty(4)
-    row = np.empty(4)
     for t in range(1, 4):
         if not _pseudo_measure(raw, Pc, t, 0.0, R, 0, 4, g, row):
             return
@@ -222,6 +231,12 @@ def centred_prior(raw, Pc, r):  # pragma: no cover - compiled
 
 @njit(cache=True, inline="always")
 def _control_payload(c, s, i, raw, pay, Pc):  # pragma: no cover - compiled
+    """:func:`_control_payload_in` with its scratch allocated for this call."""
+    _control_payload_in(c, s, i, raw, pay, Pc, np.empty(10), np.empty(10), np.empty(6))
+
+
+@njit(cache=True, inline="always")
+def _control_payload_in(c, s, i, raw, pay, Pc, g, row, mean):  # pragma: no cover - compiled
     """The payload the model control uses: ``raw`` with the centred prior (:func:`centred_prior`,
     if ``F_COM_SIZE`` is set: :attr:`~adaptive_dd.identification.online_config.OnlineConfig.payload_priors`,
     the payload block's own covariance) and the compact prior (if set); projected
@@ -244,7 +259,7 @@ def _control_payload(c, s, i, raw, pay, Pc):  # pragma: no cover - compiled
         for a in range(4):
             for b in range(4):
                 Pc[a, b] = P[o + a, o + b]
-        centred_prior(raw, Pc, c.floats[F_COM_SIZE])
+        centred_prior_in(raw, Pc, c.floats[F_COM_SIZE], g, row)
         m_raw = raw[0]
         var_m = Pc[0, 0]
     rho = c.floats[F_PRIOR_RADIUS]
@@ -255,9 +270,9 @@ def _control_payload(c, s, i, raw, pay, Pc):  # pragma: no cover - compiled
             for a in range(4, 10):
                 for b in range(4, 10):
                     Pc[a, b] *= kappa
-        compact_prior(raw, Pc, rho)
+        compact_prior_in(raw, Pc, rho, mean, g, row)
     if c.ints[I_PROJECT] == 1:
-        project_payload(raw, pay, c.floats[F_EIG_MIN], c.floats[F_RADIUS])
+        project_payload_in(raw, pay, c.floats[F_EIG_MIN], c.floats[F_RADIUS], Pc)  # Pc read no more
         if c.mode == MODE_PAYLOAD and c.floats[F_PRESENT2] > 0.0:
             wp = presence_weight(m_raw, var_m, c.floats[F_PRESENT2])
             for k in range(10):
@@ -305,7 +320,7 @@ def est_model_trial_in(c, s, i, pi_out, w):  # pragma: no cover - compiled
         raw_est = w.raw_est
         for k in range(10):
             raw_est[k] = raw[k]
-    _control_payload(c, s, i, raw, pay, w.Pc)
+    _control_payload_in(c, s, i, raw, pay, w.Pc, w.pphi, w.row, w.d)  # (the RLS's scratch is free)
     if _keeps_start(c, s, i):
         for k in range(10):
             pay[k] = s.start_pay[i, k]

@@ -14,6 +14,7 @@ from numba import njit
 
 from adaptive_dd.identification.online_control_model import (
     _control_payload,
+    _control_payload_in,
     _keeps_start,
     _payload_raw,
 )
@@ -115,7 +116,7 @@ def _ref_rise(c, s, i, q, w):  # pragma: no cover - compiled
         return
     raw, pay, pi = w.raw, w.pay, w.pir
     _payload_raw(c, s.theta[i], raw)
-    _control_payload(c, s, i, raw, pay, w.Pc)
+    _control_payload_in(c, s, i, raw, pay, w.Pc, w.pphi, w.row, w.d)  # (the RLS's scratch is free)
     for t in range(2):
         M = w.Mr if t == 0 else w.Mr0
         src = pay if t == 0 else s.ref_pay[i]

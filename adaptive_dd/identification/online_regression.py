@@ -22,7 +22,7 @@ from adaptive_dd.identification.online_slots import (
     MODE_ARM,
     MOMENTUM_CHANNELS,
 )
-from adaptive_dd.plant.chain import momentum_form_in
+from adaptive_dd.plant.chain_regressor import momentum_columns_in, momentum_form_in
 
 
 @njit(cache=True, inline="always")
@@ -131,7 +131,8 @@ def _momentum_channels(c, s, i, restart, w):  # pragma: no cover - compiled
     n = ym.shape[0]
     nch = MOMENTUM_CHANNELS * n
     u1, u0, y, p, wv, py, wy = w.u1, w.u0, w.yf, w.p, w.wv, w.py, w.wy  # inputs (G1, G0), outputs
-    momentum_form_in(c.ch, c.pi0[: 10 * n], c.jp, u[:n], u[n : 2 * n], w.chain, w.a2, p, wv, py, wy)
+    # the whole pi0 (its first 10 n entries are read), not a view of it
+    momentum_form_in(c.ch, c.pi0, c.jp, u[:n], u[n : 2 * n], w.chain, w.a2, p, wv, py, wy)
     for r in range(n):
         qd = u[n + r]
         u1[r] = 0.0
@@ -179,7 +180,10 @@ def _arm_momentum_channels(c, s, i, restart, w):  # pragma: no cover - compiled
     for r in range(n):
         u0[r] = u[2 * n + r]
     for j in range(n):
-        momentum_form_in(c.ch, c.pi0[: 10 * n], j, q, qd, w.chain, w.a2, pm, wv, py, wy)
+        if j == 0:  # the kinematics once; every link's columns from them (the same numbers)
+            momentum_form_in(c.ch, c.pi0, j, q, qd, w.chain, w.a2, pm, wv, py, wy)
+        else:
+            momentum_columns_in(j, w.chain, w.a2, py, wy)
         for r in range(n):
             for k in range(10):
                 ch = n + (j * n + r) * 10 + k
@@ -273,13 +277,15 @@ def _rls_row(theta, P, phi, y, lam_eff, pphi, nz):  # pragma: no cover - compile
     for a in range(p):
         theta[a] += pphi[a] * inv * eps
         pphi[a] *= root
+    if lam_eff != 1.0:  # the forgetting's division in the same pass (the same two roundings)
+        il = 1.0 / lam_eff
+        for a in range(p):
+            ga = pphi[a]
+            for b in range(p):
+                P[a, b] = (P[a, b] - ga * pphi[b]) * il
+        return eps
     for a in range(p):
         ga = pphi[a]
         for b in range(p):
             P[a, b] -= ga * pphi[b]
-    if lam_eff != 1.0:
-        il = 1.0 / lam_eff
-        for a in range(p):
-            for b in range(p):
-                P[a, b] *= il
     return eps

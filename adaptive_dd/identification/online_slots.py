@@ -279,7 +279,8 @@ class EstWork(NamedTuple):
         The momentum form's inputs (G1, G0) and outputs; ``p, wv (n,)`` and ``py, wy (n, 10)``
         are views into ``u1, u0``.
     raw, raw_est, pay : (10,); Pc : (10, 10); d : (p,)
-        Scratch of the model control uses.
+        Scratch of the model control uses (``pphi, row, d`` and ``Pc`` also serve its priors and
+        projection, after the step's own use of them).
     Mr, Mr0 : (n, n); pir : (10 n,)
         Scratch of the detector's :func:`_ref_rise`.
     """

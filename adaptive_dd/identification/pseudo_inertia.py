@@ -16,7 +16,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-__all__ = ["parameters_of", "project_payload", "pseudo_inertia"]
+__all__ = ["parameters_of", "project_payload", "project_payload_in", "pseudo_inertia"]
 
 
 @njit(cache=True)
@@ -48,12 +48,16 @@ def parameters_of(J, phi):  # pragma: no cover - compiled
 
 @njit(cache=True)
 def _eigh4(J):  # pragma: no cover - compiled
-    """Eigenvalues and eigenvectors (columns) of a symmetric 4 x 4 matrix by cyclic Jacobi rotations.
+    """Eigenvalues and eigenvectors (columns) of a symmetric 4 x 4 matrix (``J``'s leading block) by
+    cyclic Jacobi rotations.
 
     Cheaper than LAPACK through numba for this size; converges quadratically (a handful of
     sweeps to the last bits).
     """
-    A = J.copy()
+    A = np.empty((4, 4))  # J's leading 4 x 4 block (J may be a larger scratch)
+    for a in range(4):
+        for b in range(4):
+            A[a, b] = J[a, b]
     V = np.eye(4)
     for _ in range(30):
         off = 0.0
@@ -92,19 +96,19 @@ def _eigh4(J):  # pragma: no cover - compiled
 
 @njit(cache=True)
 def _positive_definite(J, shift):  # pragma: no cover - compiled
-    """True if ``J - shift I`` (4 x 4) is positive definite (a Cholesky factorisation succeeds)."""
-    L = np.zeros((4, 4))
+    """True if ``J[:4, :4] - shift I`` is positive definite (a Cholesky factorisation succeeds);
+    the factor is written into ``J[4:8, :4]`` (scratch; each entry read only after it is written)."""
     for a in range(4):
         for b in range(a + 1):
             acc = J[a, b] - (shift if a == b else 0.0)
             for k in range(b):
-                acc -= L[a, k] * L[b, k]
+                acc -= J[4 + a, k] * J[4 + b, k]
             if a == b:
                 if not acc > 0.0:
                     return False
-                L[a, a] = np.sqrt(acc)
+                J[4 + a, a] = np.sqrt(acc)
             else:
-                L[a, b] = acc / L[b, b]
+                J[4 + a, b] = acc / J[4 + b, b]
     return True
 
 
@@ -176,15 +180,23 @@ def project_payload(src, dst, eig_min, radius=0.0):  # pragma: no cover - compil
     the result is then bounded to a ball of that radius about the payload frame
     (:func:`_bound_ball`): ``|c| <= radius`` and ``tr(Sigma) <= m radius^2``.
     """
-    _project_psd(src, dst, eig_min)
+    project_payload_in(src, dst, eig_min, radius, np.empty((8, 4)))
+
+
+@njit(cache=True)
+def project_payload_in(src, dst, eig_min, radius, J):  # pragma: no cover - compiled
+    """:func:`project_payload` with its scratch given, ``J`` (at least 8 x 4: the pseudo-inertia in
+    its first four rows, a Cholesky factor in the next four; no allocation in the common case, a
+    payload already consistent and within the ball: a per-sample step calls it)."""
+    _project_psd(src, dst, eig_min, J)
     if radius > 0.0 and np.isfinite(dst[0]):
         _bound_ball(dst, radius)
 
 
 @njit(cache=True)
-def _project_psd(src, dst, eig_min):  # pragma: no cover - compiled
-    """Eigenvalue clipping of :func:`project_payload` (without the ball)."""
-    J = np.empty((4, 4))
+def _project_psd(src, dst, eig_min, J):  # pragma: no cover - compiled
+    """Eigenvalue clipping of :func:`project_payload` (without the ball); ``J`` scratch as
+    :func:`project_payload_in`'s."""
     pseudo_inertia(src, J)
     ok = True
     for a in range(4):

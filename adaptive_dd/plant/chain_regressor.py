@@ -16,13 +16,14 @@ import numpy as np
 from numba import njit
 
 from adaptive_dd.plant.chain_dynamics import _body_force, _ref_motion, _torque, workspace
-from adaptive_dd.plant.spatial import apply_inertia, kinematics, motion_cross, to_local, world_inertia
+from adaptive_dd.plant.spatial import apply_inertia, cross3, kinematics, to_local, world_inertia
 
 __all__ = [
     "body_regressor",
     "body_regressor_in",
     "body_slotine_li_regressor",
     "body_slotine_li_regressor_in",
+    "momentum_columns_in",
     "momentum_form",
     "momentum_form_in",
     "regressor",
@@ -165,18 +166,56 @@ def momentum_form(ch, pi, j, q, qd, p, wv, py, wy):  # pragma: no cover - compil
     momentum_form_in(ch, pi, j, q, qd, workspace(q.shape[0]), np.empty((2, 6, 10)), p, wv, py, wy)
 
 
+@njit(cache=True, inline="always")
+def _inertia_row(Y, yb, X, xb, out):  # pragma: no cover - compiled
+    """:func:`~adaptive_dd.plant.spatial.apply_inertia` of rows ``Y[yb]``, ``X[xb]`` read by index
+    (the same arithmetic; no array view, each of which costs a reference count)."""
+    m, h0, h1, h2 = Y[yb, 0], Y[yb, 1], Y[yb, 2], Y[yb, 3]
+    l0, l1, l2 = cross3(X[xb, 3], X[xb, 4], X[xb, 5], h0, h1, h2)
+    a0, a1, a2 = cross3(h0, h1, h2, X[xb, 0], X[xb, 1], X[xb, 2])
+    out[0] = m * X[xb, 0] + l0
+    out[1] = m * X[xb, 1] + l1
+    out[2] = m * X[xb, 2] + l2
+    out[3] = a0 + Y[yb, 4] * X[xb, 3] + Y[yb, 5] * X[xb, 4] + Y[yb, 7] * X[xb, 5]
+    out[4] = a1 + Y[yb, 5] * X[xb, 3] + Y[yb, 6] * X[xb, 4] + Y[yb, 8] * X[xb, 5]
+    out[5] = a2 + Y[yb, 7] * X[xb, 3] + Y[yb, 8] * X[xb, 4] + Y[yb, 9] * X[xb, 5]
+
+
+@njit(cache=True, inline="always")
+def _cross_row(V, vb, X, xb, out):  # pragma: no cover - compiled
+    """:func:`~adaptive_dd.plant.spatial.motion_cross` of rows ``V[vb]``, ``X[xb]`` read by index."""
+    a0, a1, a2 = cross3(V[vb, 3], V[vb, 4], V[vb, 5], X[xb, 0], X[xb, 1], X[xb, 2])
+    b0, b1, b2 = cross3(V[vb, 0], V[vb, 1], V[vb, 2], X[xb, 3], X[xb, 4], X[xb, 5])
+    c0, c1, c2 = cross3(V[vb, 3], V[vb, 4], V[vb, 5], X[xb, 3], X[xb, 4], X[xb, 5])
+    out[0], out[1], out[2] = a0 + b0, a1 + b1, a2 + b2
+    out[3], out[4], out[5] = c0, c1, c2
+
+
+@njit(cache=True, inline="always")
+def _local_row(R, Pw, j, X, xb, out):  # pragma: no cover - compiled
+    """:func:`~adaptive_dd.plant.spatial.to_local` in link j's frame (``R[j], Pw[j]``) of row
+    ``X[xb]``, read by index."""
+    c0, c1, c2 = cross3(X[xb, 3], X[xb, 4], X[xb, 5], Pw[j, 0], Pw[j, 1], Pw[j, 2])
+    l0, l1, l2 = X[xb, 0] + c0, X[xb, 1] + c1, X[xb, 2] + c2
+    for k in range(3):
+        out[k] = R[j, 0, k] * l0 + R[j, 1, k] * l1 + R[j, 2, k] * l2
+        out[3 + k] = R[j, 0, k] * X[xb, 3] + R[j, 1, k] * X[xb, 4] + R[j, 2, k] * X[xb, 5]
+
+
 @njit(cache=True)
 def momentum_form_in(ch, pi, j, q, qd, w, a, p, wv, py, wy):  # pragma: no cover - compiled
-    """:func:`momentum_form` with its scratch given: ``w = workspace(n)``, ``a (2, 6, 10)``."""
+    """:func:`momentum_form` with its scratch given: ``w = workspace(n)``, ``a (2, 6, 10)``.
+    Rows of the workspace are read by index (:func:`_inertia_row`, :func:`_cross_row`,
+    :func:`_local_row`), not through views."""
     # world frame: S_i fixed in link i moves as dS_i/dt = v_i x S_i; the subtree momentum
     # H_i = sum_{k>=i} I_k v_k has dH_i/dt = sum of the subtree's forces, so
     # tau_i = S_i . (dH_i/dt + I_sub a_0) = d/dt (S_i . H_i) - (v_i x S_i) . H_i + S_i . I_sub a_0,
     # a_0 = [-g; 0] the base acceleration that stands for gravity.
-    rw, pw, s, v, iw, _, _, _, small, vec = w
+    rw, pw, s, v, iw, _, _, _, small, _ = w
     n = q.shape[0]
     kinematics(ch, q, qd, rw, pw, s, v)
     world_inertia(pi, rw, pw, iw)
-    ag, hs, gs, t, sl, tl = small[0], small[1], small[2], small[3], small[4], small[5]
+    ag, hs, gs, t = small[0], small[1], small[2], small[3]
     for c in range(6):
         hs[c] = 0.0
         gs[c] = 0.0
@@ -184,13 +223,13 @@ def momentum_form_in(ch, pi, j, q, qd, w, a, p, wv, py, wy):  # pragma: no cover
     for c in range(3):
         ag[c] = -ch.gravity[c]
     for b in range(n - 1, -1, -1):
-        apply_inertia(iw[b], v[b], t)
+        _inertia_row(iw, b, v, b, t)
         for c in range(6):
             hs[c] += t[c]
-        apply_inertia(iw[b], ag, t)
+        _inertia_row(iw, b, small, 0, t)  # small[0]: ag
         for c in range(6):
             gs[c] += t[c]
-        motion_cross(v[b], s[b], t)
+        _cross_row(v, b, s, b, t)
         pb = 0.0
         wb = 0.0
         for c in range(6):
@@ -198,10 +237,22 @@ def momentum_form_in(ch, pi, j, q, qd, w, a, p, wv, py, wy):  # pragma: no cover
             wb += s[b, c] * gs[c] - t[c] * hs[c]
         p[b] = pb
         wv[b] = wb
+    momentum_columns_in(j, w, a, py, wy)
+
+
+@njit(cache=True, inline="always")
+def momentum_columns_in(j, w, a, py, wy):  # pragma: no cover - compiled
+    """Link j's part of :func:`momentum_form_in` (``py, wy``) from the kinematics that a call of
+    :func:`momentum_form_in` at the same state left in ``w`` (the base acceleration in ``w``'s
+    ``small[0]``): the same numbers as that call with link j, for another link without the
+    kinematics and the momentum again."""
+    rw, pw, s, v, _, _, _, _, small, vec = w
+    n = s.shape[0]
+    t, sl, tl = small[3], small[4], small[5]
     # link j per unit parameter, in its own frame: I v_j and I a_0 as (6, 10) maps
     y = vec[:10]
-    to_local(rw[j], pw[j], v[j], sl)
-    to_local(rw[j], pw[j], ag, tl)
+    _local_row(rw, pw, j, v, j, sl)
+    _local_row(rw, pw, j, small, 0, tl)  # ag
     for k in range(10):
         y[k] = 0.0
     for k in range(10):
@@ -219,9 +270,9 @@ def momentum_form_in(ch, pi, j, q, qd, w, a, p, wv, py, wy):  # pragma: no cover
                 py[i, k] = 0.0
                 wy[i, k] = 0.0
             continue
-        to_local(rw[j], pw[j], s[i], sl)
-        motion_cross(v[i], s[i], t)
-        to_local(rw[j], pw[j], t, tl)
+        _local_row(rw, pw, j, s, i, sl)
+        _cross_row(v, i, s, i, t)
+        _local_row(rw, pw, j, small, 3, tl)  # small[3]: t
         for k in range(10):
             acc_p = 0.0
             acc_w = 0.0
