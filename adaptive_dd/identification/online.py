@@ -68,6 +68,8 @@ from adaptive_dd.identification.online_config import (  # noqa: F401 (re-exporte
     _int,
     _num,
     derived_row_weights,
+    noise_gains,
+    noise_row_weights,
     payload_prior,
     reopen_mass_std,
 )
@@ -113,6 +115,8 @@ __all__ = [
     "est_step_trial",
     "est_step_trial_in",
     "est_work",
+    "noise_gains",
+    "noise_row_weights",
     "payload_prior",
     "project_payload",
     "reopen_mass_std",
