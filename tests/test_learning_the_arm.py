@@ -319,6 +319,8 @@ def test_noise_row_weights_are_each_equations_noise(arm):
     both = arm.with_(sensor=dataclasses.replace(arm.sensor, velocity_variance=tuple(vv)))
     var = np.asarray(arm.actuator._lsb) ** 2 / 12 * s0 + (M**2 * vv).sum(axis=1) * s1
     np.testing.assert_allclose(noise_row_weights(both, cfg.bank), np.sqrt(var / var.max()), rtol=1e-12)
-    c, _ = est_init(cfg, arm, 1)
+    c, _ = est_init(cfg, arm, 1)  # mode "payload": the noise's weights
     np.testing.assert_array_equal(c.w, noise_row_weights(arm, cfg.bank))
     assert not np.allclose(c.w, derived_row_weights(arm))  # the shipped velocity noise counts
+    c, _ = est_init(OnlineConfig(sample_period=T, mode="arm"), arm, 1)  # the torque limits'
+    np.testing.assert_array_equal(c.w, derived_row_weights(arm))
