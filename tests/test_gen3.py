@@ -92,7 +92,7 @@ def test_validate_says_what_the_estimator_derives_and_from_what(drawn):
     printed = resolved_settings(drawn)
     assert lines == [line for line in printed if ".estimator." in line or ".detector." in line]
     assert "estimator.mode = 'arm'   (derived: the model's stated uncertainty" in lines[0]
-    assert f"row_weights = [1.0, 1.0, 1.0, 1.0, {round(9 / 39, 4)}, " in lines[1]  # mode "arm"
+    assert f"row_weights = [1.0, 1.0, 1.0, 1.0, {round(9 / 39, 4)}, " in lines[1]
     assert "reopen_mass_std = 2.4 kg   (derived: 0.6 x arm.payload_capacity 4 kg)" in lines[2]
     exact = derived_estimator_settings(load_scenario(SCENARIOS / "gen3_exact.toml"))
     assert "estimator.mode = 'payload'   (default: no [model] uncertainty or [plant.uncertainty]" in exact[0]

@@ -3,8 +3,6 @@
 
 from __future__ import annotations
 
-import dataclasses
-
 import numpy as np
 import pytest
 
@@ -21,8 +19,6 @@ from adaptive_dd.identification.online import (
     OnlineConfig,
     derived_row_weights,
     est_init,
-    noise_gains,
-    noise_row_weights,
     reopen_mass_std,
     run_online,
 )
@@ -288,39 +284,3 @@ def test_the_warm_up_is_longer_while_the_arm_is_learnt(arm):
     c_arm, _ = est_init(OnlineConfig(mode="arm"), arm, 1)
     c_set, _ = est_init(OnlineConfig(mode="arm", detector=Detector(warmup=0.2)), arm, 1)
     assert (c_pay.ints[K.I_WARMUP], c_arm.ints[K.I_WARMUP], c_set.ints[K.I_WARMUP]) == (500, 1000, 200)
-
-
-def test_noise_gains_are_the_m2_filters_white_noise_variances():
-    """``sum g^2`` of M2's ``G0 = 1 / (1 + tau s)^2`` and ``G1 = s G0``: ``T / (4 tau)`` and
-    ``T / (4 tau^3)`` in continuous time (Tustin's ``G1`` has 9 % less at ``tau / T`` = 10)."""
-    bank = OnlineConfig(sample_period=T, tau_f=0.01).bank
-    s0, s1 = noise_gains(bank)
-    assert s0 == pytest.approx(T / (4 * 0.01), rel=0.03)
-    assert s1 == pytest.approx(T / (4 * 0.01**3), rel=0.12)
-
-
-def test_noise_row_weights_are_each_equations_noise(arm):
-    """The D/A step's share alone (no velocity noise) gives the torque limits' weights; the
-    velocity noise's alone (no D/A quantization) the rows of ``M`` weighted by the variances;
-    the estimator divides its equations by them."""
-    cfg = OnlineConfig(sample_period=T)
-    quiet = arm.with_(sensor=dataclasses.replace(arm.sensor, velocity_variance=(0.0,) * 3))
-    np.testing.assert_allclose(noise_row_weights(quiet, cfg.bank), derived_row_weights(arm), rtol=1e-12)
-    vv = np.array([1e-4, 4e-4, 2e-4])
-    exact = arm.with_(
-        actuator=dataclasses.replace(arm.actuator, quantize=False),
-        sensor=dataclasses.replace(arm.sensor, velocity_variance=tuple(vv)),
-    )
-    M = arm.mass_matrix(arm.position_limits.mean(axis=1))
-    sd = np.sqrt((M**2 * vv).sum(axis=1))
-    np.testing.assert_allclose(noise_row_weights(exact, cfg.bank), sd / sd.max(), rtol=1e-12)
-    # both: the D/A step's variance through G0, the velocities' through G1 (the shipped noise)
-    s0, s1 = noise_gains(cfg.bank)
-    both = arm.with_(sensor=dataclasses.replace(arm.sensor, velocity_variance=tuple(vv)))
-    var = np.asarray(arm.actuator._lsb) ** 2 / 12 * s0 + (M**2 * vv).sum(axis=1) * s1
-    np.testing.assert_allclose(noise_row_weights(both, cfg.bank), np.sqrt(var / var.max()), rtol=1e-12)
-    c, _ = est_init(cfg, arm, 1)  # mode "payload": the noise's weights
-    np.testing.assert_array_equal(c.w, noise_row_weights(arm, cfg.bank))
-    assert not np.allclose(c.w, derived_row_weights(arm))  # the shipped velocity noise counts
-    c, _ = est_init(OnlineConfig(sample_period=T, mode="arm"), arm, 1)  # the torque limits'
-    np.testing.assert_array_equal(c.w, derived_row_weights(arm))

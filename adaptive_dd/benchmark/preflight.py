@@ -171,10 +171,10 @@ def derived_estimator_settings(scenario) -> list[str]:
     """``adaptive_ct``'s estimator settings on an arm from a URDF that the scenario need not state,
     as the run derives them, each with its rule: the mode (``"arm"`` when the model's stated
     uncertainty, ``[model] uncertainty`` or the ``[plant.uncertainty]`` levels, is not exact), the
-    row weights (the D/A steps and the stated velocity noise) and the payload mass re-opened at an
-    alarm (``[arm] payload_capacity``, 10 kg when it is not stated)."""
+    row weights (the torque limits) and the payload mass re-opened at an alarm (``[arm]
+    payload_capacity``, 10 kg when it is not stated)."""
     from adaptive_dd.controllers.registry import scenario_controller
-    from adaptive_dd.identification.online import REOPEN_CAPACITY, default_row_weights, reopen_mass_std
+    from adaptive_dd.identification.online import REOPEN_CAPACITY, derived_row_weights, reopen_mass_std
 
     online = getattr(scenario_controller(scenario, "adaptive_ct")[1], "online", None)
     if online is None or not hasattr(online, "mode"):
@@ -185,13 +185,8 @@ def derived_estimator_settings(scenario) -> list[str]:
     if why != "given" and online.mode != "arm":
         why = "default: no [model] uncertainty or [plant.uncertainty], the arm taken as exact"
     out = [f"{pre}.mode = {online.mode!r}   ({why})"]
-    w = online.row_weights if online.row_weights is not None else default_row_weights(arm, online)
-    rule = (
-        "torque limit / largest torque limit"
-        if online.mode == "arm"
-        else "each equation's noise / the largest"
-    )
-    why = "given" if "row_weights" in est else f"derived: {rule}"
+    w = online.row_weights if online.row_weights is not None else derived_row_weights(arm)
+    why = "given" if "row_weights" in est else "derived: torque limit / largest torque limit"
     out.append(f"{pre}.row_weights = {[round(float(x), 4) for x in w]}   ({why})")
     if online.detector is not None:
         cap = arm.payload_capacity

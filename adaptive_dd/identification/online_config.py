@@ -3,7 +3,7 @@
 :class:`Detector` and :class:`OnlineConfig` (frozen, checked on construction), and the defaults
 derived from them and from the arm: the warm-up (:data:`WARMUP`, :data:`WARMUP_ARM`), the
 re-opened payload prior (:func:`reopen_mass_std`, :func:`payload_prior`) and the row weights
-(:func:`default_row_weights`).
+(:func:`derived_row_weights`).
 """
 
 from __future__ import annotations
@@ -239,8 +239,8 @@ class OnlineConfig:
     taint : float
         Filter memory [units of tau_f] during which a non-finite sample keeps the equations out of use.
     row_weights : tuple of float or None
-        Equation j is divided by ``row_weights[j]``. None (default): :func:`default_row_weights`
-        (each equation's noise in mode "payload", the torque limits in mode "arm").
+        Equation j is divided by ``row_weights[j]``. None (default): derived from the arm's
+        torque resolution (:func:`derived_row_weights`).
     detector : Detector or None
     project : bool or None
         Project the model control uses onto physically consistent payloads (the
@@ -476,57 +476,6 @@ def reopen_mass_std(det: Detector, arm: Arm) -> float:
         return float(det.reopen_mass_std)
     cap = getattr(arm, "payload_capacity", None)
     return REOPEN_CAPACITY * cap if cap is not None else REOPEN_GENERIC
-
-
-def noise_gains(bank: FilterBank) -> tuple[float, float]:
-    """``(sum g0^2, sum g1^2)``: the variance a unit white noise has through the bank's ``G0`` and
-    ``G1`` (the sums of their impulse responses' squares; about ``T / (4 tau_f)`` and
-    ``T / (4 tau_f^3)`` for M2 at ``T << tau_f``)."""
-    from scipy.signal import lfilter
-
-    imp = np.zeros(max(64, int(np.ceil(200.0 * bank.tau_f / bank.sample_period))))
-    imp[0] = 1.0
-    return tuple(float(np.sum(lfilter(bank.num[k], bank.den[k], imp) ** 2)) for k in (0, 1))
-
-
-def noise_row_weights(arm: Arm, bank: FilterBank) -> Array:
-    """Row weights ``(n,)``: the standard deviation of each filtered equation's noise over the
-    largest, the weighted least squares of Gautier and Poignet (2001, "Extended Kalman filtering and
-    weighted least squares dynamic identification of robot", Control Eng. Pract. 9(12)).
-
-    Equation j (``G0 tau_j = G1 p_j + G0 wv_j``) carries joint j's D/A step (``lsb_j^2 / 12``
-    through ``G0``, when the actuator quantizes) and the measured velocities' noise through the
-    momentum ``p = M qd``: ``sum_k M_jk^2 var_k`` through ``G1`` (``M`` the arm's, unloaded, at the
-    middle of its position limits, 0 on a joint without; ``var`` the sensor's stated velocity
-    variance). The rest ``wv`` and the positions' noise add far less (``G0``, not ``G1``): in a
-    replay of a drawn arm's pick-up the momentum's velocity noise alone moved the payload's first
-    moments, the rest's and the positions' noise did not (``benchmarks/velocity_noise_replay.py``).
-    Without any noise, :func:`derived_row_weights`.
-    """
-    n = arm.n_joints
-    s0, s1 = noise_gains(bank)
-    act = arm.actuator
-    dac = np.asarray(act._lsb, dtype=float) ** 2 / 12.0 if act.quantize else np.zeros(n)
-    vv = np.asarray(arm.sensor.velocity_variance, dtype=float)
-    vv = vv if vv.size == n else np.full(n, float(vv.max()))
-    lim = np.asarray(arm.position_limits, dtype=float)
-    q, ok = np.zeros(n), np.isfinite(lim).all(axis=1)  # 0 on a joint without limits
-    q[ok] = lim[ok].mean(axis=1)
-    M = arm.mass_matrix(q)
-    var = dac * s0 + (M**2 * vv[None, :]).sum(axis=1) * s1
-    if not np.all(np.isfinite(var)) or var.max() <= 0.0:
-        return derived_row_weights(arm)
-    sd = np.sqrt(var)
-    return sd / sd.max()
-
-
-def default_row_weights(arm: Arm, cfg: OnlineConfig) -> Array:
-    """The row weights the estimator takes when ``cfg.row_weights`` is None: each equation's noise
-    (:func:`noise_row_weights`) in mode "payload"; the torque limits (:func:`derived_row_weights`)
-    in mode "arm", where the rows' errors while the arm is learnt are its model's, not the sensors'
-    (the noise's weights there: the Panda's unloaded first segment, 10 seeds, adaptive_ct /
-    ct_oracle 3.07 -> 3.43, max 4.19 -> 6.03)."""
-    return derived_row_weights(arm) if cfg.mode == "arm" else noise_row_weights(arm, cfg.bank)
 
 
 def derived_row_weights(arm: Arm) -> Array:

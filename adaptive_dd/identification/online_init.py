@@ -20,7 +20,7 @@ from adaptive_dd.identification.online_config import (
     WARMUP_ARM,
     Array,
     OnlineConfig,
-    default_row_weights,
+    derived_row_weights,
     payload_prior,
     reopen_mass_std,
 )
@@ -83,7 +83,7 @@ def _pack(cfg: OnlineConfig, arm: Arm) -> tuple[EstCfg, Array]:
         Pr[pb:, pb:] = S1
         n_rows = n
     cap = cfg.max_trace if cfg.max_trace is not None else max(np.trace(P0), np.trace(Pr))
-    w = default_row_weights(arm, cfg) if cfg.row_weights is None else np.asarray(cfg.row_weights, dtype=float)
+    w = derived_row_weights(arm) if cfg.row_weights is None else np.asarray(cfg.row_weights, dtype=float)
     if w.shape != (n,):
         raise ParameterError(f"OnlineConfig.row_weights must have {n} values (joints), got {w.shape[0]}")
     b = cfg.bank
