@@ -1,10 +1,13 @@
 """Derivative filter banks (eqs. 17-21) and the filtered regressions."""
 
+import sys
+
 import numpy as np
 import pytest
 
 from adaptive_dd.errors import ParameterError, SignalError
 from adaptive_dd.experiments import table2_torque
+from adaptive_dd.identification import filters
 from adaptive_dd.identification.estimators import align_torque
 from adaptive_dd.identification.filters import (
     StreamingFilter,
@@ -143,3 +146,61 @@ def test_regression_input_errors():
         two_link_filtered_regression(q, q[:50], q)
     with pytest.raises(ParameterError, match="construction"):
         two_link_filtered_regression(q, q, q, construction="magic")
+
+
+# ------------------------------------------------------------------- the designs kept on disk
+def _same_bank(a, b):
+    assert (a.method, a.tau_f, a.sample_period) == (b.method, b.tau_f, b.sample_period)
+    for k in ("A", "B", "C", "D"):
+        assert np.array_equal(getattr(a, k), getattr(b, k)), k
+    assert len(a.num) == len(b.num) and len(a.den) == len(b.den)
+    for x, y in zip(a.num + a.den, b.num + b.den, strict=True):
+        assert np.array_equal(x, y)
+
+
+@pytest.mark.parametrize("method", ["M1", "M2"])
+def test_a_design_read_back_from_the_cache_is_the_design_bit_for_bit(method, tmp_path, monkeypatch):
+    """The first design writes its file; a later one reads it without python-control (an import of
+    ``control`` made to fail), equal to the design to the last bit."""
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path))
+    fresh = filters._design(method, 0.0123, 1e-3)
+    first = design_filter_bank(method, 0.0123, 1e-3)
+    _same_bank(first, fresh)
+    (path,) = (tmp_path / "adaptive_dd" / "filters").glob(f"{method}-*.npz")
+    monkeypatch.setitem(sys.modules, "control", None)  # `import control` raises ImportError
+    _same_bank(design_filter_bank(method, 0.0123, 1e-3), fresh)
+    with pytest.raises(ImportError):
+        design_filter_bank(method, 0.0124, 1e-3)  # not in the cache: designed, so control is needed
+    assert path.exists()
+
+
+def test_a_damaged_cache_file_is_designed_again_and_rewritten(tmp_path, monkeypatch):
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path))
+    fresh = design_filter_bank("M2", 0.02, 1e-3)
+    (path,) = (tmp_path / "adaptive_dd" / "filters").glob("M2-*.npz")
+    for bad in (b"", b"not a zip file", path.read_bytes()[:40]):
+        path.write_bytes(bad)
+        _same_bank(design_filter_bank("M2", 0.02, 1e-3), fresh)
+        _same_bank(filters._read_cached_bank("M2", 0.02, 1e-3), fresh)  # the file written whole again
+    # a file whose numbers are not finite is not used
+    np.savez(
+        path,
+        n_out=2,
+        A=np.full((2, 2), np.nan),
+        B=fresh.B,
+        C=fresh.C,
+        D=fresh.D,
+        num0=fresh.num[0],
+        num1=fresh.num[1],
+        den0=fresh.den[0],
+        den1=fresh.den[1],
+    )
+    assert filters._read_cached_bank("M2", 0.02, 1e-3) is None
+    _same_bank(design_filter_bank("M2", 0.02, 1e-3), fresh)
+
+
+def test_an_unwritable_cache_folder_leaves_the_design_uncached(tmp_path, monkeypatch):
+    blocked = tmp_path / "file"
+    blocked.write_text("a file where the cache folder would be")
+    monkeypatch.setenv("XDG_CACHE_HOME", str(blocked))
+    _same_bank(design_filter_bank("M2", 0.03, 1e-3), filters._design("M2", 0.03, 1e-3))

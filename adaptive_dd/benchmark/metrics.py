@@ -464,7 +464,7 @@ def ratio_statistics(ratio: np.ndarray, seeds=None) -> dict | None:
         default), ``max``, ``ci95`` (Student-t interval of the mean; None for one seed),
         ``worst_seed`` and ``n`` (seeds counted); None when no entry is finite.
     """
-    from scipy import stats
+    from scipy.special import stdtrit  # Student t's quantile (scipy.stats.t.ppf's), without importing stats
 
     ratio = np.asarray(ratio, float)
     seeds = np.arange(ratio.size) if seeds is None else np.asarray(seeds)
@@ -473,7 +473,7 @@ def ratio_statistics(ratio: np.ndarray, seeds=None) -> dict | None:
         return None
     r = ratio[idx]
     mean = float(r.mean())
-    half = float(stats.t.ppf(0.975, r.size - 1) * r.std(ddof=1) / np.sqrt(r.size)) if r.size > 1 else np.nan
+    half = float(stdtrit(r.size - 1, 0.975) * r.std(ddof=1) / np.sqrt(r.size)) if r.size > 1 else np.nan
     return {
         "mean": mean,
         "median": float(np.median(r)),

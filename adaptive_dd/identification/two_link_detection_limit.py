@@ -25,7 +25,7 @@ from __future__ import annotations
 
 import numpy as np
 from numpy.typing import ArrayLike
-from scipy import stats
+from scipy.special import ndtri  # the normal quantile (scipy.stats.norm.ppf's), without importing stats
 
 from adaptive_dd.errors import ParameterError
 from adaptive_dd.experiments import TABLE2
@@ -42,7 +42,7 @@ def detection_threshold(n_tests: int, rate: float = 0.01, prob: float = 0.5) -> 
     if not (n_tests >= 1 and 0 < rate < 1 and 0 < prob < 1):
         raise ParameterError(f"need n_tests >= 1, 0 < rate < 1, 0 < prob < 1; got {n_tests}, {rate}, {prob}")
     alpha = rate / n_tests
-    return float(stats.norm.isf(alpha / 2) + stats.norm.ppf(prob))
+    return float(-ndtri(alpha / 2) + ndtri(prob))  # norm.isf(alpha / 2) + norm.ppf(prob)
 
 
 def two_link_detection_limit(
