@@ -15,21 +15,13 @@ import hashlib
 import time
 
 import numpy as np
+from speed_online import ur5_record  # the same record (this script's folder is on sys.path)
 
 from adaptive_dd.identification.online import OnlineConfig, run_online
-from adaptive_dd.plant.arm import Arm, payload_parameters
-from adaptive_dd.plant.prescribed import exciting_motion, prescribed_record
-from adaptive_dd.robots import ROBOTS, robot_urdf
 
 
 def main() -> None:
-    arm = Arm.from_urdf(robot_urdf("ur5"), ROBOTS["ur5"].payload_frame)
-    N = 20_000
-    t = np.arange(N) * 1e-3
-    rng = np.random.default_rng(0)
-    motion = exciting_motion(arm, t, rng, offset=[0, -1.2, 1.2, -1.5, -1.5, 0], speed=0.5)
-    rec = prescribed_record(arm, t, motion, [payload_parameters(1.0, [0, 0, 0.05])], rng=rng)
-    q, qd, tau = rec.q_meas, rec.qd_meas, rec.tau
+    arm, q, qd, tau = ur5_record()
     for mode in ("payload", "arm"):
         cfg = OnlineConfig(mode=mode)
         r = run_online(arm, cfg, q, qd, tau)
@@ -43,7 +35,10 @@ def main() -> None:
             c0 = time.thread_time()
             run_online(arm, cfg, q, qd, tau)
             best = min(best, time.thread_time() - c0)
-        print(f"{mode:8s} digest {h.hexdigest()[:16]}  {best / N * 1e6:8.2f} CPU us per sample", flush=True)
+        print(
+            f"{mode:8s} digest {h.hexdigest()[:16]}  {best / q.shape[0] * 1e6:8.2f} CPU us per sample",
+            flush=True,
+        )
 
 
 if __name__ == "__main__":

@@ -78,14 +78,20 @@ def _best(fn, repeat: int = 3) -> float:
     return best
 
 
-def main() -> None:
+def ur5_record(n_samples: int = 20_000):
+    """The UR5 and its measured record (1 kHz, seed 0, a 1 kg payload): ``arm, q, qd, tau``
+    (``online_digest.py`` digests the estimator over the same record)."""
     arm = Arm.from_urdf(robot_urdf("ur5"), ROBOTS["ur5"].payload_frame)
-    N = 20_000
-    t = np.arange(N) * 1e-3
+    t = np.arange(n_samples) * 1e-3
     rng = np.random.default_rng(0)
     motion = exciting_motion(arm, t, rng, offset=[0, -1.2, 1.2, -1.5, -1.5, 0], speed=0.5)
     rec = prescribed_record(arm, t, motion, [payload_parameters(1.0, [0, 0, 0.05])], rng=rng)
-    q, qd, tau = rec.q_meas, rec.qd_meas, rec.tau
+    return arm, rec.q_meas, rec.qd_meas, rec.tau
+
+
+def main() -> None:
+    N = 20_000
+    arm, q, qd, tau = ur5_record(N)
     n = arm.n_joints
     print(f"UR5, {N} samples, base parameters p = {arm.base.count}; CPU microseconds per sample (best of 3)")
     ch, pi = arm.chain, np.ascontiguousarray(arm.pi_links)
