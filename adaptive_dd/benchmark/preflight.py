@@ -171,7 +171,8 @@ def derived_estimator_settings(scenario) -> list[str]:
     """``adaptive_ct``'s estimator settings on an arm from a URDF that the scenario need not state,
     as the run derives them, each with its rule: the mode (``"arm"`` when the model's stated
     uncertainty, ``[model] uncertainty`` or the ``[plant.uncertainty]`` levels, is not exact), the
-    row weights (the torque limits) and the payload mass re-opened at an alarm (``[arm]
+    row weights (in mode "payload" each equation's error in a first pass over the reference, in
+    mode "arm" the torque limits) and the payload mass re-opened at an alarm (``[arm]
     payload_capacity``, 10 kg when it is not stated)."""
     from adaptive_dd.controllers.registry import scenario_controller
     from adaptive_dd.identification.online import REOPEN_CAPACITY, derived_row_weights, reopen_mass_std
@@ -186,7 +187,12 @@ def derived_estimator_settings(scenario) -> list[str]:
         why = "default: no [model] uncertainty or [plant.uncertainty], the arm taken as exact"
     out = [f"{pre}.mode = {online.mode!r}   ({why})"]
     w = online.row_weights if online.row_weights is not None else derived_row_weights(arm)
-    why = "given" if "row_weights" in est else "derived: torque limit / largest torque limit"
+    if "row_weights" in est:
+        why = "given"
+    elif online.mode == "payload":
+        why = "derived: each equation's RMS error on the unloaded arm along the reference / the largest"
+    else:
+        why = "derived: torque limit / largest torque limit"
     out.append(f"{pre}.row_weights = {[round(float(x), 4) for x in w]}   ({why})")
     if online.detector is not None:
         cap = arm.payload_capacity

@@ -436,11 +436,19 @@ class AdaptiveCT(Law):
         self.task: tuple[Array, Array] | None = None
 
     def state_task(self, scenario) -> None:
-        """Take the task's torque room from ``scenario`` (:func:`~adaptive_dd.closed_loop.boost.task_room`):
-        the boost's bandwidth per joint follows from it and the sensors' noise (:meth:`boost_bandwidths`)."""
+        """Take the task from ``scenario``: its torque room
+        (:func:`~adaptive_dd.closed_loop.boost.task_room`), from which with the sensors' noise the
+        boost's bandwidth per joint follows (:meth:`boost_bandwidths`), and in payload mode, unless
+        given, the estimator's row weights from a first pass over its reference
+        (:func:`~adaptive_dd.identification.row_weights.task_row_weights`)."""
         from adaptive_dd.closed_loop.boost import task_room
 
         self.task = task_room(scenario)
+        if self.online.mode == "payload" and self.online.row_weights is None:
+            from adaptive_dd.identification.row_weights import task_row_weights
+
+            w = task_row_weights(self.arm, self.online, scenario)
+            self.online = dataclasses.replace(self.online, row_weights=tuple(float(x) for x in w))
 
     def boost_bandwidths(self) -> Array:
         """The boost's bandwidth per joint [rad/s]: ``boost_bandwidth`` on every joint without a

@@ -1,0 +1,143 @@
+"""Row weights of the N-joint estimator from a first pass over the task: weighted least squares with
+each equation weighted by its own error, estimated (Gautier and Poignet 2001, "Extended Kalman
+filtering and weighted least squares dynamic identification of robot", Control Eng. Pract. 9(12):
+a first least-squares pass, each joint's residual standard deviation its weight).
+
+The first pass is a record of the unloaded arm following the task's reference for
+:data:`FIRST_PASS` seconds, with the sensor noise and the D/A steps the arm states, through the
+estimator's equations in payload mode at the payload the arm carries there (none): each row's
+momentum-form error ``G0 tau - G1 p - G0 wv`` (``p = M qd``, ``wv = g + f - C^T qd`` of the known
+arm at the measured ``q, qd``), on the samples the data selection keeps (the joint faster than
+its threshold). That is what each equation carries besides a payload: the measured velocity's
+noise through the momentum, the D/A step, and what the momentum form leaves on the arm's own
+motion (its discretisation, the friction's sign), which the sensors' noise alone does not predict
+(the UR5's wrist rows: about 0.002 N m on a noise-free record, against 3e-5 N m of velocity
+noise; weights from the noise alone learnt its payload's centre of mass twice as slowly). Each
+row's RMS over the pass's last two thirds (after the reference's ramp), over the largest, is its
+weight.
+
+Measured (``benchmarks/residual_row_weights.py``; adaptive_ct / ct_oracle per segment; the
+changelog has the figures of this implementation): on drawn arms with their URDF exact the
+population's loaded segments come closer to the floor than with the torque limits' weights
+(:func:`~adaptive_dd.identification.online_config.derived_row_weights`), which mode "arm" keeps.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import NDArray
+
+__all__ = ["FIRST_PASS", "first_pass_row_weights", "momentum_form_error", "task_row_weights"]
+
+MDOT_STEP = 1e-6
+"""[s] The central difference of ``M(q + h qd) qd`` in ``h`` that gives ``Mdot qd``."""
+
+FIRST_PASS = 6.0
+"""[s] The first pass's length: a few periods of a scenario's reference (0.1-1 Hz components) after
+its ramp."""
+
+
+def first_pass_row_weights(arm, cfg, motion, seed: int = 0) -> NDArray[np.float64]:
+    """Row weights ``(n,)``: each equation's RMS momentum-form error [N m] on a noisy record of the
+    unloaded ``arm`` along ``motion``, over the largest (module docstring).
+
+    Parameters
+    ----------
+    arm : Arm
+        The arm the estimator knows, with its stated sensor noise and actuator.
+    cfg : OnlineConfig
+        The estimator's settings: its filter bank (``tau_f``, ``sample_period``) and its data
+        selection's threshold.
+    motion : tuple of three (N, n) arrays
+        ``q, qd, qdd`` of the task at ``cfg.sample_period`` (e.g. ``scenario.reference.sample(t)``).
+    seed : int
+        Seed of the record's sensor noise.
+
+    Returns
+    -------
+    ndarray (n,)
+        In (0, 1]; the torque limits' weights if a row has no kept sample or its error is not
+        finite or is 0.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from adaptive_dd.identification.online import OnlineConfig
+    >>> from adaptive_dd.identification.row_weights import first_pass_row_weights
+    >>> from adaptive_dd.plant.arm import Arm
+    >>> from adaptive_dd.robots import ROBOTS, robot_urdf
+    >>> arm = Arm.from_urdf(robot_urdf("vertical3"), ROBOTS["vertical3"].payload_frame)
+    >>> t = np.arange(3000) * 1e-3
+    >>> q = 0.3 * np.sin(2 * np.pi * 0.5 * t)[:, None] * np.ones(3)
+    >>> motion = (q, np.gradient(q, t, axis=0), np.gradient(np.gradient(q, t, axis=0), t, axis=0))
+    >>> w = first_pass_row_weights(arm, OnlineConfig(sample_period=1e-3), motion)
+    >>> w.shape, float(w.max())
+    ((3,), 1.0)
+    """
+    from adaptive_dd.identification.online_config import derived_row_weights
+    from adaptive_dd.plant.prescribed import prescribed_record
+
+    w0 = derived_row_weights(arm)
+    q, qd, qdd = (np.asarray(x, dtype=float) for x in motion)
+    t = np.arange(q.shape[0]) * cfg.sample_period
+    rec = prescribed_record(arm, t, (q, qd, qdd), [np.zeros(10)], rng=np.random.default_rng(seed))
+    qm, vm = rec.q_meas, rec.qd_meas
+    err = momentum_form_error(arm, cfg.bank, qm, vm, rec.tau)[q.shape[0] // 3 :]
+    kept = _selected(cfg, vm)[q.shape[0] // 3 :]
+    if not kept.any(axis=0).all():
+        return w0
+    sd = np.sqrt(np.array([np.mean(err[kept[:, j], j] ** 2) for j in range(err.shape[1])]))
+    if not (np.all(np.isfinite(sd)) and np.all(sd > 0.0)):
+        return w0
+    return sd / sd.max()
+
+
+def _selected(cfg, qd) -> NDArray[np.bool_]:
+    """``(N, n)``: the samples the estimator's data selection keeps for each row, the joint no
+    slower than its threshold over the selection's memory (``cfg.selection``: a reversal's Coulomb
+    step stays in the filtered equation that long); all of them without a selection."""
+    if cfg.selection is None:
+        return np.ones(qd.shape, dtype=bool)
+    gate, memory = cfg.selection
+    slow = np.cumsum(np.abs(qd) < gate, axis=0)
+    m = max(cfg.samples(memory), 1)
+    recent = slow - np.concatenate([np.zeros((m, qd.shape[1])), slow[:-m]])[: qd.shape[0]]
+    return recent == 0
+
+
+def momentum_form_error(arm, bank, q, qd, tau) -> NDArray[np.float64]:
+    """``G0 tau - G1 p - G0 wv`` ``(N, n)`` of the known ``arm`` over a record ``q, qd, tau (N, n)``:
+    the momentum form's equation error with no payload (``p = M(q) qd``, ``wv = g + f - C^T qd``,
+    ``C^T qd = Mdot qd - C qd`` from a central difference of ``M(q + h qd) qd``), each filter
+    started in the steady state of its input's first sample. On an exact record it is the
+    filters' discretisation only.
+
+    ``bank`` is the estimator's filter bank (``OnlineConfig.bank``)."""
+    from adaptive_dd.identification.filters import filter_record
+
+    q, qd, tau = (np.asarray(x, dtype=float) for x in (q, qd, tau))
+    zero = np.zeros_like(q)
+
+    def momentum(x):  # M(x) qd: the torque of the acceleration qd without velocity or gravity
+        return arm.inverse_dynamics(x, zero, qd) - arm.inverse_dynamics(x, zero, zero)
+
+    p = momentum(q)
+    mdot_qd = (momentum(q + MDOT_STEP * qd) - momentum(q - MDOT_STEP * qd)) / (2.0 * MDOT_STEP)
+    wv = arm.inverse_dynamics(q, qd, zero) - mdot_qd  # g + f + C qd - (C + C^T) qd
+
+    def filtered(u, k):
+        return filter_record(bank, u, axis=0, initial=u[0], outputs=(k,))[..., 0]
+
+    return filtered(tau, 0) - filtered(p, 1) - filtered(wv, 0)
+
+
+def task_row_weights(arm, cfg, scenario) -> NDArray[np.float64]:
+    """:func:`first_pass_row_weights` over ``scenario``'s reference, its first :data:`FIRST_PASS`
+    seconds at its sample period."""
+    import dataclasses
+
+    T = float(scenario.sample_period)
+    t = np.arange(round(min(FIRST_PASS, scenario.duration) / T)) * T
+    return first_pass_row_weights(
+        arm, dataclasses.replace(cfg, sample_period=T), scenario.reference.sample(t)
+    )

@@ -1,0 +1,104 @@
+"""The N-joint estimator's row weights in payload mode: each equation's error in a first pass over
+the task (identification/row_weights.py)."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from adaptive_dd.benchmark.scenario import default_scenario_path, load_scenario
+from adaptive_dd.benchmark.scenario_settings import with_settings
+from adaptive_dd.controllers.registry import scenario_controller
+from adaptive_dd.identification.online import OnlineConfig, derived_row_weights, run_online
+from adaptive_dd.identification.row_weights import (
+    first_pass_row_weights,
+    momentum_form_error,
+    task_row_weights,
+)
+from adaptive_dd.plant.arm import Arm
+from adaptive_dd.plant.prescribed import exciting_motion, prescribed_record
+from adaptive_dd.robots import ROBOTS, robot_urdf
+
+T = 1e-3
+SCENARIOS = default_scenario_path().parent
+POSTURE = [0.0, -1.2, 1.2, -1.5, -1.5, 0.0]  # UR5: elbow up, wrist down
+
+
+@pytest.fixture(scope="module")
+def ur5():
+    return Arm.from_urdf(robot_urdf("ur5"), ROBOTS["ur5"].payload_frame)
+
+
+def _motion(arm, n, seed=0):
+    t = np.arange(n) * T
+    return exciting_motion(arm, t, np.random.default_rng(seed), offset=POSTURE, speed=0.5)
+
+
+def test_the_momentum_form_error_is_the_filters_discretisation_on_an_exact_record(ur5):
+    """No noise, no D/A step: the error is a small fraction of the filtered torque on every row
+    (a sign slip in ``Mdot qd`` or a missing armature would leave the Coriolis or inertial torque)."""
+    exact = ur5.with_(actuator=dataclasses.replace(ur5.actuator, quantize=False))
+    motion = _motion(exact, 4000)
+    rec = prescribed_record(exact, np.arange(4000) * T, motion, [np.zeros(10)])
+    err = momentum_form_error(exact, OnlineConfig(sample_period=T).bank, rec.q_meas, rec.qd_meas, rec.tau)
+    scale = np.sqrt(np.mean(rec.tau[1000:] ** 2, axis=0))
+    assert np.all(np.sqrt(np.mean(err[1000:] ** 2, axis=0)) < 2e-3 * scale)
+
+
+def test_the_first_pass_weights_are_the_errors_the_estimator_sees():
+    """The estimator itself over the same noisy record of the exact UR5's reference, with the torque
+    limits' weights: its prior errors' RMS per row [N m] after the first third is within 10 % of
+    the first pass's (its data selection, its momentum form)."""
+    sc = load_scenario(SCENARIOS / "ur5_tool_swap_exact.toml")
+    arm, cfg = sc.arm, OnlineConfig(sample_period=sc.sample_period)
+    t = np.arange(6000) * sc.sample_period
+    motion = sc.reference.sample(t)
+    w = first_pass_row_weights(arm, cfg, motion)
+    rec = prescribed_record(arm, t, motion, [np.zeros(10)], rng=np.random.default_rng(0))
+    w0 = derived_row_weights(arm)
+    out = run_online(arm, dataclasses.replace(cfg, row_weights=tuple(w0)), rec.q_meas, rec.qd_meas, rec.tau)
+    sd = np.sqrt(np.nanmean((out.eps[0, 2000:] * w0) ** 2, axis=0))
+    np.testing.assert_allclose(w, sd / sd.max(), rtol=0.1)
+    assert w.max() == 1.0 and np.all(w > 0)
+    assert np.all(w[3:] < 0.5 * w0[3:])  # the wrist's rows carry less error than their torque limits say
+
+
+def test_a_noisier_sensor_raises_its_rows_weight(ur5):
+    """Ten times the velocity noise on the last joint: its row's error, hence its weight, grows;
+    no sensor noise at all: the weights still follow (the D/A step and the form's own error)."""
+    cfg = OnlineConfig(sample_period=T)
+    motion = _motion(ur5, 6000)
+    base = first_pass_row_weights(ur5, cfg, motion)
+    vv = np.asarray(ur5.sensor.velocity_variance, dtype=float) * np.ones(6)
+    vv[-1] *= 100.0
+    loud = ur5.with_(sensor=dataclasses.replace(ur5.sensor, velocity_variance=tuple(vv)))
+    assert first_pass_row_weights(loud, cfg, motion)[-1] > 3.0 * base[-1]
+    quiet = ur5.with_(sensor=dataclasses.replace(ur5.sensor, velocity_variance=(0.0,) * 6))
+    w = first_pass_row_weights(quiet, cfg, motion)
+    assert np.all(np.isfinite(w)) and w.max() == 1.0
+
+
+def test_a_joint_that_never_moves_leaves_the_torque_limits_weights(ur5):
+    motion = tuple(np.array(x) for x in _motion(ur5, 3000))
+    for x, v in zip(motion, (POSTURE[-1], 0.0, 0.0), strict=True):
+        x[:, -1] = v
+    np.testing.assert_array_equal(
+        first_pass_row_weights(ur5, OnlineConfig(sample_period=T), motion), derived_row_weights(ur5)
+    )
+
+
+def test_a_scenario_in_payload_mode_gives_adaptive_ct_the_first_pass_weights():
+    """The exact UR5: the weights of the reference's first pass; given ones are kept; the drawn UR5
+    (mode "arm") keeps the torque limits' (``row_weights`` left None)."""
+    sc = load_scenario(SCENARIOS / "ur5_tool_swap_exact.toml")
+    ctrl = scenario_controller(sc, "adaptive_ct")[1]
+    assert ctrl.online.mode == "payload"
+    expect = task_row_weights(sc.arm, OnlineConfig(sample_period=sc.sample_period), sc)
+    np.testing.assert_array_equal(ctrl.online.row_weights, expect)
+    given = (1.0, 1.0, 1.0, 0.5, 0.5, 0.5)
+    mine = with_settings(sc, "adaptive_ct", {"estimator": {"row_weights": given}})
+    assert tuple(scenario_controller(mine, "adaptive_ct")[1].online.row_weights) == given
+    drawn = scenario_controller(load_scenario(SCENARIOS / "ur5_tool_swap.toml"), "adaptive_ct")[1]
+    assert drawn.online.mode == "arm" and drawn.online.row_weights is None
