@@ -1,19 +1,18 @@
-"""Row weights from a first pass's residuals (Gautier and Poignet 2001's weighted least squares),
-against the torque limits' weights the N-joint estimator takes: adaptive_ct / ct_oracle per segment,
-false alarms and missed swaps, both in one run.
+"""The estimator's row weights from a first pass over the task (``identification/row_weights.py``,
+the default in payload mode) against the torque limits' (``derived_row_weights``, mode "arm"'s
+default): adaptive_ct / ct_oracle per segment, false alarms and missed swaps, both given as the
+estimator's ``row_weights`` in one run (common random numbers: the same seeds), so that either mode
+compares them.
 
-The first pass: the estimator alone (``run_online``, mode "payload", the default weights) over a
-prescribed exciting motion of the unloaded arm (``EXCITE`` s at the scenario's sample period, the
-arm's stated sensor noise, the arm's own posture: the middle of its position limits); the weights
-are each row's RMS prior error [N m] over the record's last two thirds, over the largest. Then
-``ct_oracle`` and ``adaptive_ct`` on the scenario twice, the second time with those weights given as
-the estimator's ``row_weights`` (common random numbers: the same seeds). Prints per arm the
-weights, both runs' segment means, then pooled mean / p90 / max per segment, false alarms (an
-alarm more than 0.5 s after every swap) and missed swaps (none within 0.5 s). Asserts nothing.
+The first pass runs over the scenario's reference (``--first-pass reference``, the library's rule)
+or over an exciting motion about the middle of the position limits (``--first-pass limits``).
+Prints per arm the weights and both runs' segment means, then pooled mean / p90 / max per segment,
+trials with a false alarm (an alarm more than 0.5 s after every swap) and missed swaps (none within
+0.5 s). Asserts nothing.
 
 Run: ``PYTHONPATH=. python benchmarks/residual_row_weights.py ARM [ARM ...]`` (drawn arms of
-``benchmarks/scenarios/population.toml``), ``--first-arm K --arms N``, or ``--scenario FILE``;
-``--seeds 3``.
+``benchmarks/scenarios/population.toml``, or ``--template FILE``), ``--first-arm K --arms N``, or
+``--scenario FILE``; ``--seeds 3``.
 """
 
 from __future__ import annotations
@@ -29,33 +28,26 @@ from adaptive_dd.benchmark.population import population_scenario
 from adaptive_dd.benchmark.runner import run_benchmark
 from adaptive_dd.benchmark.scenario import load_scenario, read_toml
 from adaptive_dd.benchmark.scenario_settings import with_settings
-from adaptive_dd.identification.online import OnlineConfig, derived_row_weights, run_online
-from adaptive_dd.plant.prescribed import exciting_motion, prescribed_record
+from adaptive_dd.identification.online import OnlineConfig, derived_row_weights
+from adaptive_dd.identification.row_weights import first_pass_row_weights
+from adaptive_dd.plant.prescribed import exciting_motion
 
 TEMPLATE = Path(__file__).resolve().parent / "scenarios" / "population.toml"
 EXCITE = 6.0
 
 
 def first_pass_weights(arm, sample_period: float, reference=None, seed: int = 0) -> np.ndarray:
-    """Each row's RMS prior error [N m] over the last two thirds of an unloaded record, over the
-    largest: the scenario's reference (``reference.sample``) when given, else an exciting motion
-    about the middle of the position limits."""
+    """The library's first-pass weights over ``reference`` (``EXCITE`` s of it), or over an exciting
+    motion about the middle of the position limits when ``reference`` is None."""
     t = np.arange(round(EXCITE / sample_period)) * sample_period
-    rng = np.random.default_rng(seed)
     if reference is not None:
         motion = reference.sample(t)
     else:
         lim = np.asarray(arm.position_limits, dtype=float)
         ok = np.isfinite(lim).all(axis=1)
         offset = np.where(ok, np.where(ok[:, None], lim, 0.0).mean(axis=1), 0.0)
-        motion = exciting_motion(arm, t, rng, offset=list(offset), speed=0.5)
-    rec = prescribed_record(arm, t, motion, [np.zeros(10)], rng=rng)
-    w0 = derived_row_weights(arm)
-    cfg = OnlineConfig(sample_period=sample_period, row_weights=tuple(w0))
-    out = run_online(arm, cfg, rec.q_meas, rec.qd_meas, rec.tau)
-    e = out.eps[0, t.size // 3 :] * w0
-    sd = np.sqrt(np.nanmean(e**2, axis=0))
-    return sd / sd.max()
+        motion = exciting_motion(arm, t, np.random.default_rng(seed), offset=list(offset), speed=0.5)
+    return first_pass_row_weights(arm, OnlineConfig(sample_period=sample_period), motion, seed=seed)
 
 
 def _ratios(sc, res):
@@ -78,6 +70,7 @@ def main() -> None:
     ap.add_argument("--first-arm", type=int, default=0)
     ap.add_argument("--arms", type=int, default=None)
     ap.add_argument("--scenario", type=Path, action="append", default=[], help="a scenario file")
+    ap.add_argument("--template", type=Path, default=TEMPLATE, help="the drawn arms' template scenario")
     ap.add_argument("--seeds", type=int, default=3)
     ap.add_argument(
         "--first-pass",
@@ -96,7 +89,7 @@ def main() -> None:
     pooled = {"torque limits": ([], 0, 0), "first pass": ([], 0, 0)}
     for name, what in cases:
         if isinstance(what, int):
-            sc = population_scenario(read_toml(TEMPLATE), str(TEMPLATE), what)
+            sc = population_scenario(read_toml(args.template), str(args.template), what)
         else:
             sc = load_scenario(what)
         sc = dataclasses.replace(sc, seeds=args.seeds, controllers=("ct_oracle", "adaptive_ct"))
@@ -106,8 +99,9 @@ def main() -> None:
             f"{name}: first-pass weights {np.round(w, 4).tolist()} (torque limits' "
             f"{np.round(derived_row_weights(sc.arm), 4).tolist()})"
         ]
+        w0 = tuple(float(x) for x in derived_row_weights(sc.arm))
         variants = {
-            "torque limits": sc,
+            "torque limits": with_settings(sc, "adaptive_ct", {"estimator": {"row_weights": w0}}),
             "first pass": with_settings(
                 sc, "adaptive_ct", {"estimator": {"row_weights": tuple(float(x) for x in w)}}
             ),
