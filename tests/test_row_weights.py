@@ -102,3 +102,18 @@ def test_a_scenario_in_payload_mode_gives_adaptive_ct_the_first_pass_weights():
     assert tuple(scenario_controller(mine, "adaptive_ct")[1].online.row_weights) == given
     drawn = scenario_controller(load_scenario(SCENARIOS / "ur5_tool_swap.toml"), "adaptive_ct")[1]
     assert drawn.online.mode == "arm" and drawn.online.row_weights is None
+
+
+def test_the_first_pass_kept_with_the_arm_is_the_one_of_these_settings():
+    """task_row_weights keeps its pass with the arm: asked again with another filter or data
+    selection it runs that pass, not the kept one (each equal to the pass run directly)."""
+    sc = load_scenario(SCENARIOS / "ur5_tool_swap_exact.toml")
+    motion = sc.reference.sample(np.arange(6000) * sc.sample_period)
+    for cfg in (
+        OnlineConfig(sample_period=sc.sample_period),
+        OnlineConfig(sample_period=sc.sample_period, tau_f=0.02),
+        OnlineConfig(sample_period=sc.sample_period, selection=(0.2, 6.0)),
+    ):
+        np.testing.assert_array_equal(
+            task_row_weights(sc.arm, cfg, sc), first_pass_row_weights(sc.arm, cfg, motion)
+        )

@@ -113,7 +113,7 @@ def momentum_form_error(arm, bank, q, qd, tau) -> NDArray[np.float64]:
     filters' discretisation only.
 
     ``bank`` is the estimator's filter bank (``OnlineConfig.bank``)."""
-    from adaptive_dd.identification.filters import filter_record
+    from adaptive_dd.identification.regression import filter_pieces
 
     q, qd, tau = (np.asarray(x, dtype=float) for x in (q, qd, tau))
     zero = np.zeros_like(q)
@@ -125,19 +125,24 @@ def momentum_form_error(arm, bank, q, qd, tau) -> NDArray[np.float64]:
     mdot_qd = (momentum(q + MDOT_STEP * qd) - momentum(q - MDOT_STEP * qd)) / (2.0 * MDOT_STEP)
     wv = arm.inverse_dynamics(q, qd, zero) - mdot_qd  # g + f + C qd - (C + C^T) qd
 
-    def filtered(u, k):
-        return filter_record(bank, u, axis=0, initial=u[0], outputs=(k,))[..., 0]
+    def filtered(u, k):  # one piece, from the steady state of its first sample
+        return filter_pieces(bank, u, None, 0, k)
 
     return filtered(tau, 0) - filtered(p, 1) - filtered(wv, 0)
 
 
 def task_row_weights(arm, cfg, scenario) -> NDArray[np.float64]:
     """:func:`first_pass_row_weights` over ``scenario``'s reference, its first :data:`FIRST_PASS`
-    seconds at its sample period."""
+    seconds at its sample period; kept with ``arm`` (a scenario's controllers are built more than
+    once: ``validate``, the runner, ``--controllers``), named by the filter, the data selection and
+    the motion's bytes."""
     import dataclasses
+    import hashlib
 
     T = float(scenario.sample_period)
     t = np.arange(round(min(FIRST_PASS, scenario.duration) / T)) * T
-    return first_pass_row_weights(
-        arm, dataclasses.replace(cfg, sample_period=T), scenario.reference.sample(t)
-    )
+    first = dataclasses.replace(cfg, sample_period=T)
+    motion = tuple(np.ascontiguousarray(x, dtype=float) for x in scenario.reference.sample(t))
+    digest = hashlib.sha1(b"".join(x.tobytes() for x in motion)).hexdigest()
+    key = f"first_pass_row_weights:{first.tau_f!r}:{T!r}:{first.selection!r}:{digest}"
+    return arm._cached(key, lambda: first_pass_row_weights(arm, first, motion)).copy()
