@@ -171,9 +171,10 @@ def derived_estimator_settings(scenario) -> list[str]:
     """``adaptive_ct``'s estimator settings on an arm from a URDF that the scenario need not state,
     as the run derives them, each with its rule: the mode (``"arm"`` when the model's stated
     uncertainty, ``[model] uncertainty`` or the ``[plant.uncertainty]`` levels, is not exact), the
-    row weights (in mode "payload" each equation's error in a first pass over the reference, in
-    mode "arm" the torque limits) and the payload mass re-opened at an alarm (``[arm]
-    payload_capacity``, 10 kg when it is not stated)."""
+    row weights (each equation's error in a first pass over the reference, over the largest in
+    payload mode, on its own scale after an identification; the torque limits in mode "arm" from a
+    stated uncertainty) and the payload mass
+    re-opened at an alarm (``[arm] payload_capacity``, 10 kg when it is not stated)."""
     from adaptive_dd.controllers.registry import scenario_controller
     from adaptive_dd.identification.online import REOPEN_CAPACITY, derived_row_weights, reopen_mass_std
 
@@ -191,9 +192,11 @@ def derived_estimator_settings(scenario) -> list[str]:
         why = "given"
     elif online.mode == "payload":
         why = "derived: each equation's RMS error on the unloaded arm along the reference / the largest"
+    elif online.arm_prior_cov is not None:
+        why = "derived: each equation's RMS error [N m] along the reference x sqrt(tau_f / T)"
     else:
         why = "derived: torque limit / largest torque limit"
-    out.append(f"{pre}.row_weights = {[round(float(x), 4) for x in w]}   ({why})")
+    out.append(f"{pre}.row_weights = {[float(f'{x:.4g}') for x in w]}   ({why})")
     if online.detector is not None:
         cap = arm.payload_capacity
         if "reopen_mass_std" in scenario.options("adaptive_ct").get("detector", {}):

@@ -438,17 +438,22 @@ class AdaptiveCT(Law):
     def state_task(self, scenario) -> None:
         """Take the task from ``scenario``: its torque room
         (:func:`~adaptive_dd.closed_loop.boost.task_room`), from which with the sensors' noise the
-        boost's bandwidth per joint follows (:meth:`boost_bandwidths`), and in payload mode, unless
-        given, the estimator's row weights from a first pass over its reference
-        (:func:`~adaptive_dd.identification.row_weights.task_row_weights`)."""
+        boost's bandwidth per joint follows (:meth:`boost_bandwidths`), and, unless given, the
+        estimator's row weights from a first pass over its reference
+        (:func:`~adaptive_dd.identification.row_weights.task_row_weights`): each row's noise after
+        an identification (``arm_prior_cov``), over the largest in payload mode; in mode "arm"
+        from a stated uncertainty the torque limits'."""
         from adaptive_dd.closed_loop.boost import task_room
 
         self.task = task_room(scenario)
-        if self.online.mode == "payload" and self.online.row_weights is None:
+        if self.online.row_weights is None:
             from adaptive_dd.identification.row_weights import task_row_weights
 
-            w = task_row_weights(self.arm, self.online, scenario)
-            self.online = dataclasses.replace(self.online, row_weights=tuple(float(x) for x in w))
+            # on the noise's scale after an identification; payload mode over the largest; mode
+            # "arm" from a stated uncertainty keeps the torque limits' (row_weights module docstring)
+            if self.online.mode == "payload" or self.online.arm_prior_cov is not None:
+                w = task_row_weights(self.arm, self.online, scenario, relative=self.online.mode == "payload")
+                self.online = dataclasses.replace(self.online, row_weights=tuple(float(x) for x in w))
 
     def boost_bandwidths(self) -> Array:
         """The boost's bandwidth per joint [rad/s]: ``boost_bandwidth`` on every joint without a

@@ -89,8 +89,8 @@ class Detector:
         :data:`REOPEN_CAPACITY` times the arm's rated payload (``arm.payload_capacity``), or
         :data:`REOPEN_GENERIC` kg when the arm does not state one.
     floor : float
-        Floor [N m, RMS, in the units of the weighted equation] of the long-run level:
-        an error below ``threshold * floor`` never alarms.
+        Floor [N m, RMS] of the long-run level on the row of the largest weight, the other rows'
+        in proportion to their weights: an error below ``threshold * floor`` never alarms.
     fast_window : float or None
         Time constant [s] of a second, faster average of the squared errors, which alarms
         above ``fast_threshold`` (the same rows and levels): a large change is
@@ -239,8 +239,12 @@ class OnlineConfig:
     taint : float
         Filter memory [units of tau_f] during which a non-finite sample keeps the equations out of use.
     row_weights : tuple of float or None
-        Equation j is divided by ``row_weights[j]``. None (default): derived from the arm's
-        torque resolution (:func:`derived_row_weights`).
+        Equation j is divided by ``row_weights[j]`` [N m]: the recursive least squares take each
+        weighted equation as one unit of noise, so weights on the scale of the equations' noise
+        keep ``P`` on the scale of the priors. None: derived from the arm's torque resolution
+        (:func:`derived_row_weights`, the largest 1); ``adaptive_ct`` in a scenario sets each
+        row's noise from a first pass over the task
+        (:func:`~adaptive_dd.identification.row_weights.task_row_weights`).
     detector : Detector or None
     project : bool or None
         Project the model control uses onto physically consistent payloads (the

@@ -122,7 +122,7 @@ def _pack(cfg: OnlineConfig, arm: Arm) -> tuple[EstCfg, Array]:
         fl[K.F_THRESHOLD2] = det.threshold**2
         fl[K.F_SLOW2] = det.slow_factor**2
         fl[K.F_GATE2] = det.gate**2
-        fl[K.F_FLOOR2] = det.floor**2
+        fl[K.F_FLOOR2] = (det.floor / w.max()) ** 2  # [N m] on the row of the largest weight
         if det.fast_window is not None:
             ints[K.I_FAST] = 1
             fl[K.F_ALPHA_FAST] = min(1.0, T / det.fast_window)
