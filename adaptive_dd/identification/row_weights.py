@@ -22,17 +22,18 @@ of the estimate's error. ``adaptive_ct`` uses them so in mode "arm" after an ide
 (``[run] excite``, ``[model] from``), whose covariance, the arm's prior, is in the parameters' own
 units: neither the data nor the prior then counts many times what it knows. With the rows on the
 torque limits' scale (the largest 1), a drawn palletizer whose shoulder equation carries 0.6 N m
-of noise took its data for 13 times what they knew, and its payload's centre of mass ran 0.2 m off
-in the first second after a pick-up; fifty drawn arms identified from a 20 s excitation phase,
-10 seeds each, came to meet every target in every segment (changelog).
+of noise takes its data for 13 times what they know, and its payload's centre of mass runs 0.2 m
+off in the first second after a pick-up; on the noise's scale fifty drawn arms identified from a
+20 s excitation phase, 10 seeds each, meet every target in every segment (docs/leaderboard.md).
 
 Elsewhere the scale stays where it was measured best. Payload mode takes the weights over the
 largest: its priors on the model control uses (the centred first moments, a payload's presence)
-are weighed against ``P`` on that scale, and on the noise's scale the paper's arm's 3 kg segment
-was 1.423 -> 1.503 its floor (20 seeds). Mode "arm" from a stated uncertainty (no identification)
+are weighed against ``P`` on that scale (on the noise's scale the paper's arm's 3 kg segment is
+1.503 its floor against 1.423, 20 seeds). Mode "arm" from a stated uncertainty (no identification)
 keeps the torque limits' weights: there the rows' error is the model's while the arm is learnt,
-not the first pass's noise, and on the noise's scale the paper's arm drawn around its URDF had
-trials at 6.1x its floor in the 3 kg segment (1.95x before) and the Panda a false alarm (50 seeds).
+not the first pass's noise (on the noise's scale the paper's arm drawn around its URDF has trials
+at 6.1x its floor in the 3 kg segment against 1.95x, and the Panda a false alarm; 50 seeds). The
+changelog has the figures.
 """
 
 from __future__ import annotations
