@@ -11,7 +11,15 @@ import pytest
 from adaptive_dd.benchmark.scenario import default_scenario_path, load_scenario
 from adaptive_dd.benchmark.scenario_settings import with_settings
 from adaptive_dd.controllers.registry import scenario_controller
-from adaptive_dd.identification.online import OnlineConfig, derived_row_weights, run_online
+from adaptive_dd.identification import online_kernel as K
+from adaptive_dd.identification.online import (
+    Detector,
+    OnlineConfig,
+    derived_row_weights,
+    est_detect_trial,
+    est_init,
+    run_online,
+)
 from adaptive_dd.identification.row_weights import (
     first_pass_row_weights,
     momentum_form_error,
@@ -128,3 +136,26 @@ def test_the_first_pass_kept_with_the_arm_is_the_one_of_these_settings():
         np.testing.assert_array_equal(
             task_row_weights(sc.arm, cfg, sc), first_pass_row_weights(sc.arm, cfg, motion)
         )
+
+
+def _alarms(arm, w, err):
+    """The detector alone (``est_detect_trial``) over the rows' errors ``err (N, n)`` [N m] weighted
+    by ``w``, every row in use and moving: the samples at which it alarms."""
+    c, s = est_init(OnlineConfig(row_weights=tuple(float(x) for x in w), detector=Detector()), arm, 1)
+    s.since_crawl[:] = K.BIG
+    act = np.ones(arm.n_joints, dtype=np.bool_)
+    return [k for k in range(err.shape[0]) if est_detect_trial(c, s, 0, err[k] / w, act)]
+
+
+def test_the_detectors_floor_is_in_newton_metres_whatever_the_weights_scale(ur5):
+    """Rows far quieter than the floor (0.05 N m on the row of the largest weight, alarm at 4x), then
+    a step on that row: 0.15 N m raises no alarm and 0.3 N m does, with the torque limits' weights
+    and with ten times them (a floor read in the weighted units would stand at 0.5 N m there)."""
+    w = derived_row_weights(ur5)
+    j = int(np.argmax(w))
+    err = 1e-4 * np.random.default_rng(0).standard_normal((3000, ur5.n_joints))
+    for step, alarm in ((0.15, False), (0.3, True)):
+        e = err.copy()
+        e[2000:, j] += step
+        for scale in (1.0, 10.0):
+            assert bool(_alarms(ur5, scale * w, e)) == alarm, (step, scale)

@@ -173,8 +173,8 @@ def derived_estimator_settings(scenario) -> list[str]:
     uncertainty, ``[model] uncertainty`` or the ``[plant.uncertainty]`` levels, is not exact), the
     row weights (each equation's error in a first pass over the reference, over the largest in
     payload mode, on its own scale after an identification; the torque limits in mode "arm" from a
-    stated uncertainty) and the payload mass
-    re-opened at an alarm (``[arm] payload_capacity``, 10 kg when it is not stated)."""
+    stated uncertainty) and the payload mass re-opened at an alarm (``[arm] payload_capacity``, 10
+    kg when it is not stated)."""
     from adaptive_dd.controllers.registry import scenario_controller
     from adaptive_dd.identification.online import REOPEN_CAPACITY, derived_row_weights, reopen_mass_std
 

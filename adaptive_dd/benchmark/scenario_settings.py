@@ -30,8 +30,8 @@ __all__ = ["DERIVED", "controller_setting_errors", "derived_setting_errors", "wi
 _FROM_THE_SCENARIO = (
     "its mode from [model] uncertainty (else the [plant.uncertainty] levels), its prior from "
     "[model] from, its row weights from each equation's error along the reference or [arm] "
-    "torque_limit, its re-opening "
-    "at an alarm from [arm] payload_capacity; every other field is the default"
+    "torque_limit, its re-opening at an alarm from [arm] payload_capacity; every other field is "
+    "the default"
 )
 DERIVED: dict[str, dict[str, str]] = {
     "adaptive_ct": {

@@ -446,14 +446,14 @@ class AdaptiveCT(Law):
         from adaptive_dd.closed_loop.boost import task_room
 
         self.task = task_room(scenario)
-        if self.online.row_weights is None:
+        o = self.online
+        # on the noise's scale after an identification; payload mode over the largest; mode "arm"
+        # from a stated uncertainty keeps the torque limits' (row_weights module docstring)
+        if o.row_weights is None and (o.mode == "payload" or o.arm_prior_cov is not None):
             from adaptive_dd.identification.row_weights import task_row_weights
 
-            # on the noise's scale after an identification; payload mode over the largest; mode
-            # "arm" from a stated uncertainty keeps the torque limits' (row_weights module docstring)
-            if self.online.mode == "payload" or self.online.arm_prior_cov is not None:
-                w = task_row_weights(self.arm, self.online, scenario, relative=self.online.mode == "payload")
-                self.online = dataclasses.replace(self.online, row_weights=tuple(float(x) for x in w))
+            w = task_row_weights(self.arm, o, scenario, relative=o.mode == "payload")
+            self.online = dataclasses.replace(o, row_weights=tuple(float(x) for x in w))
 
     def boost_bandwidths(self) -> Array:
         """The boost's bandwidth per joint [rad/s]: ``boost_bandwidth`` on every joint without a

@@ -182,4 +182,4 @@ def task_row_weights(arm, cfg, scenario, relative: bool = False) -> NDArray[np.f
     digest = hashlib.sha1(b"".join(x.tobytes() for x in motion)).hexdigest()
     key = f"first_pass_row_noise:{first.tau_f!r}:{T!r}:{first.selection!r}:{digest}"
     sd = arm._cached(key, lambda: _row_noise(arm, first, motion, 0))
-    return _scaled(arm, first, None if sd is None else sd.copy(), relative)
+    return _scaled(arm, first, sd, relative)  # the kept pass is read, never written
