@@ -256,3 +256,49 @@ def test_unit_costs_order_the_drawn_arms_by_joints_without_drawing_them(monkeypa
     units = [("arm", ({"run": {"excite": 20.0}}, "t.toml", 0)), ("arm", ({}, "t.toml", 1)),
              ("arm", ({"run": {"excite": 0.0}}, "t.toml", 2))]  # fmt: skip
     assert unit_costs(units) == [3.0 * joints[0] ** 2, float(joints[1] ** 2), float(joints[2] ** 2)]
+
+
+def _run_with_alarms(alarm_times, failed_at=None):
+    from types import SimpleNamespace
+
+    n = len(alarm_times)
+    fa = np.full(n, -1) if failed_at is None else np.asarray(failed_at)
+    return SimpleNamespace(alarm_times=alarm_times, failed=fa >= 0, failed_at=fa)
+
+
+def test_the_alarm_columns_by_hand():
+    """Swaps at 1 and 3 s of a 4-s run at 1 kHz: an alarm with no swap in the 0.3 s before counts
+    in the segment it falls in, a swap with no alarm in the 0.3 s after is missed (not by a trial
+    that failed before that window ended), and a law without a detector has no count."""
+    from types import SimpleNamespace
+
+    from adaptive_dd.arena.leaderboard import _alarms
+
+    sc = SimpleNamespace(swap_times=(1.0, 3.0), sample_period=1e-3)
+    t0 = np.array([0.0, 1.0, 3.0])
+    run = _run_with_alarms([[0.05, 1.02, 2.5], [1.29, 3.1], [1.01]], failed_at=[-1, -1, 2000])
+    fa, missed = _alarms(run, sc, t0)
+    np.testing.assert_array_equal(fa, [[1, 1, 0], [0, 0, 0], [0, 0, 0]])
+    np.testing.assert_array_equal(missed, [[0, 0, 1], [0, 0, 0], [0, 0, 0]])
+    fa, missed = _alarms(SimpleNamespace(alarm_times=None, failed=np.zeros(2, bool)), sc, t0)
+    assert fa.shape == missed.shape == (2, 3) and np.all(np.isnan(fa)) and np.all(np.isnan(missed))
+
+
+def test_the_alarm_columns_agree_with_the_benchmark_reports_counts():
+    """Over random alarms, the per-segment columns say what the benchmark's report counts per
+    trial (:func:`false_alarm_counts`, :func:`missed_swap_counts`): a trial has a false alarm in
+    some segment exactly when it has one, and its missed swaps are the segments' sum."""
+    from types import SimpleNamespace
+
+    from adaptive_dd.arena.leaderboard import _alarms
+    from adaptive_dd.benchmark.metrics import false_alarm_counts, missed_swap_counts
+
+    rng = np.random.default_rng(3)
+    swaps = (2.0, 4.5, 7.0)
+    sc = SimpleNamespace(swap_times=swaps, sample_period=1e-3)
+    times = [sorted(rng.uniform(0.0, 9.0, rng.integers(0, 5)).tolist()) for _ in range(300)]
+    times += [[s + rng.uniform(0, 0.35) for s in swaps if rng.random() < 0.8] for _ in range(300)]
+    fa, missed = _alarms(_run_with_alarms(times), sc, np.array([0.0, *swaps]))
+    np.testing.assert_array_equal(fa.max(axis=1) > 0, np.asarray(false_alarm_counts(times, swaps)) > 0)
+    np.testing.assert_array_equal(missed.sum(axis=1), missed_swap_counts(times, swaps, np.zeros(600, bool)))
+    assert 0 < fa.sum() < fa.size and 0 < missed.sum() < missed.size  # both kinds were drawn

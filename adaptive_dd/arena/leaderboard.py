@@ -101,6 +101,16 @@ COLUMNS: dict[str, tuple[str, str]] = {
     "rms_torque_Nm": ("N m", "mean over seeds of the RMS applied torque (norm over joints)"),
     "saturation_pct": ("%", "mean over seeds of the samples with a joint's command beyond its limit"),
     "floor_saturation_pct": ("%", "the same of the floor (a saturated floor makes the ratio optimistic)"),
+    "false_alarm_seeds": (
+        "-",
+        "seeds whose change detector alarmed in the segment with no swap in the 0.3 s before "
+        "(empty: a law without a detector)",
+    ),
+    "missed_swaps": (
+        "-",
+        "seeds whose change detector did not alarm within 0.3 s after the swap that starts the "
+        "segment (0 in the first segment; empty: a law without a detector)",
+    ),
     "recovery_median_s": ("s", "median over seeds of the recovery time (a never counts as the latest)"),
     "recovery_p90_s": ("s", "90th percentile of the recovery time (inf: reaches a never)"),
     "recovery_never": ("-", "seeds still above 1.2x the floor's moving RMS error at the segment's end"),
@@ -191,6 +201,7 @@ def _per_seed(res, names) -> dict[str, dict[str, np.ndarray]]:
 
     seg_start, seg_end, _ = sample_bounds(res.scenario)
     T = res.scenario.sample_period
+    starts = np.array([a for (a, _, _) in res.scenario.segments()], float)
     out = {}
     with np.errstate(invalid="ignore", divide="ignore"):  # failed trials' NaN, estimates of no payload
         for n in names:
@@ -205,8 +216,32 @@ def _per_seed(res, names) -> dict[str, dict[str, np.ndarray]]:
             keep["fail_t"] = np.where(run.failed, np.maximum(run.failed_at, 0) * T, np.nan)
             keep["sat_t"] = _first_saturated(run, T)
             keep["why"] = [run.failed_why.get(i, run.error or "") for i in range(len(run.failed))]
+            keep["fa"], keep["missed"] = _alarms(run, res.scenario, starts)
             out[n] = keep
     return out
+
+
+def _alarms(run, sc, t0: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``(n_seeds, n_segments)`` each, 1.0 or 0.0: a false alarm in the segment (an alarm that
+    follows no swap by less than ``FALSE_ALARM_WINDOW``, counted in the segment it falls in) and
+    the segment's swap missed (no alarm within that window after it; 0 in the first segment and
+    for a trial that failed before the window's end). NaN for a law without a detector."""
+    from adaptive_dd.benchmark.metrics import FALSE_ALARM_WINDOW as W
+
+    n, n_seg = len(run.failed), len(t0)
+    if run.alarm_times is None:
+        return np.full((n, n_seg), np.nan), np.full((n, n_seg), np.nan)
+    swaps = list(sc.swap_times)
+    fa, missed = np.zeros((n, n_seg)), np.zeros((n, n_seg))
+    for s, times in enumerate(run.alarm_times):
+        for x in times:
+            if not any(0.0 <= x - w < W for w in swaps):
+                fa[s, max(int(np.searchsorted(t0, x, side="right")) - 1, 0)] = 1.0
+        end = run.failed_at[s] * sc.sample_period if run.failed[s] else np.inf
+        for i in range(1, n_seg):
+            seen = any(0.0 <= x - t0[i] < W for x in times)
+            missed[s, i] = float(not seen and t0[i] + W <= end)
+    return fa, missed
 
 
 def _first_saturated(run, T: float) -> np.ndarray:
@@ -248,7 +283,7 @@ def _cells(name, kind, per, floors, missing, masses, T, seeds, t0) -> list[dict]
                     "fsat": fm["saturation_fraction"][:, i] if fm else np.full(e.shape, np.nan),
                     "recovery": _recovery(m, fm, i, T) if fm else np.full(e.shape, np.nan),
                     **{k: m[k][:, i] for k in _EE}, "lost_t": m["lost_t"][:, i], "sat_t": m["sat_t"][:, i],
-                    "fail_t": m["fail_t"],
+                    "fail_t": m["fail_t"], "fa": m["fa"][:, i], "missed": m["missed"][:, i],
                     "why": m["why"], "seed": seeds, "t0": float(t0[i]),
                 }
             )  # fmt: skip
@@ -257,7 +292,7 @@ def _cells(name, kind, per, floors, missing, masses, T, seeds, t0) -> list[dict]
 
 _KEYS = ("scenario", "kind", "controller", "floor", "floor_note", "segment", "payload_kg")
 _EE = EE_KEYS  # the tool frame's per-seed figures [mm], [mm], [deg] (per_seed.csv's ee_* columns)
-_ARRAYS = ("e", "ratio", "fe", "torque", "sat", "fsat", "recovery", "lost_t", *_EE)
+_ARRAYS = ("e", "ratio", "fe", "torque", "sat", "fsat", "recovery", "lost_t", "fa", "missed", *_EE)
 
 
 def _row(c: dict, rng: np.random.Generator) -> dict:
@@ -274,6 +309,7 @@ def _row(c: dict, rng: np.random.Generator) -> dict:
         "lost_seeds": int(np.sum(np.isfinite(c["lost_t"]))), "rms_error_mrad": 1e3 * _mean(e),
         "floor_rms_error_mrad": 1e3 * _mean(c["fe"]), "rms_torque_Nm": _mean(c["torque"]),
         "saturation_pct": 100 * _mean(c["sat"]), "floor_saturation_pct": 100 * _mean(c["fsat"]),
+        "false_alarm_seeds": _count(c["fa"]), "missed_swaps": _count(c["missed"]),
         "recovery_median_s": quantile_never(rec, 50.0), "recovery_p90_s": quantile_never(rec, 90.0),
         "recovery_never": int(np.sum(np.isinf(rec))),
         "ee_position_rms_mm": _mean(c["ee_position_rms"]), "ee_position_peak_mm": _mean(c["ee_position_max"]),
@@ -307,6 +343,13 @@ def _mean(x) -> float:
     x = np.asarray(x, float)
     x = x[np.isfinite(x)]
     return float(x.mean()) if x.size else float("nan")
+
+
+def _count(x) -> float:
+    """Sum of the finite entries (NaN if none: a law without a detector)."""
+    x = np.asarray(x, float)
+    x = x[np.isfinite(x)]
+    return float(x.sum()) if x.size else float("nan")
 
 
 def _max(x) -> float:

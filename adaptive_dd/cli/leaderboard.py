@@ -110,6 +110,7 @@ def run(args: argparse.Namespace) -> int:
     plot_leaderboard(df[df["kind"] != "arm"]).savefig(png, dpi=120)
     _print(df[df["kind"] != "arm"])
     _print_winners(df[df["kind"] != "arm"])
+    _print_alarms(df[df["kind"] != "arm"])
     _print_flags(df.attrs.get("flags", []))
     for p in (csv, js, png):
         print(f"wrote {p}")
@@ -124,7 +125,7 @@ def _print(df) -> None:
     """The ratio columns per scenario, controller and segment, as a plain table."""
     cols = ["scenario", "controller", "floor", "segment", "payload_kg", "ratio_mean", "ratio_ci95_low",
             "ratio_ci95_high", "ratio_p90", "ratio_max", "failures", "saturated_seeds", "lost_seeds",
-            "saturation_pct", "rms_error_mrad",
+            "saturation_pct", "rms_error_mrad", "false_alarm_seeds", "missed_swaps",
             "recovery_median_s", "recovery_never", "ee_position_rms_mm"]  # fmt: skip
     with __import__("pandas").option_context("display.width", 200, "display.max_rows", 1000):
         print(df[cols].to_string(index=False, float_format=lambda x: f"{x:.3f}"))
@@ -139,6 +140,27 @@ def _print_winners(df) -> None:
         g = g.sort_values("rms_error_mrad")
         best = [f"{r.controller} {r.rms_error_mrad:.3g} mrad" for r in g.head(2).itertuples()]
         print(f"  {sc}:{seg} ({g['payload_kg'].iloc[0]:.3g} kg): " + ", then ".join(best))
+
+
+def _print_alarms(df) -> None:
+    """Per scenario and law with a change detector: its false alarms and missed swaps over the
+    segments (a trial with false alarms in two segments counts in both, so the trials with one
+    are at most the sum)."""
+    det = df[df["false_alarm_seeds"].notna()]
+    if det.empty:
+        return
+    print(
+        "change detectors (an alarm with no swap in the 0.3 s before is false; a swap with no alarm "
+        "in the 0.3 s after, missed):"
+    )
+    for (sc, ctrl), g in det.groupby(["scenario", "controller"], sort=False):
+        trials = int(g["seeds"].iloc[0] + g["failures"].iloc[0])
+        fa, missed = int(g["false_alarm_seeds"].sum()), int(g["missed_swaps"].sum())
+        swaps = trials * (len(g) - 1)
+        print(
+            f"  {sc} {ctrl}: false alarms in {fa} of {trials * len(g)} seed-segments (trials with one: at "
+            f"most {fa} of {trials}, {100 * fa / max(trials, 1):.1f} %); missed swaps {missed} of {swaps}"
+        )
 
 
 def _print_flags(flags: list[dict], shown: int = 10) -> None:
