@@ -110,6 +110,26 @@ def test_the_results_block_judges_the_targets():
     assert "| met |" in render_blocks(df)["results-arena"]
 
 
+def test_the_results_block_counts_the_detectors_false_alarms_over_the_trials():
+    """Two segments of 200 trials (seeds 199 and one failed): 3 + 1 false alarms are at most 4 of
+    the 200 trials, 2.0 %, and the one swap (the second segment's) is missed by 1 of 200; a law
+    without a detector has no count (NaN), and the block then says nothing of alarms."""
+    df = _table({"ct_oracle": 0.1, "adaptive_ct": 0.105})
+    second = df.assign(segment=1)
+    df = pd.concat([df, second], ignore_index=True)
+    ours = (df["controller"] == "adaptive_ct") & (df["kind"] == "population")
+    df.loc[ours, ["seeds", "failures"]] = [199, 1]
+    df.loc[ours, "false_alarm_seeds"] = [3.0, 1.0]
+    df.loc[ours, "missed_swaps"] = [0.0, 1.0]
+    text = render_blocks(df)["results-arena"]
+    assert "| 0 | 3 | 0 |" not in text and "| 1 | 3 | 0 |" in text and "| 1 | 1 | 1 |" in text
+    assert "False alarms in at most 4 of the 200 trials (2.0 %" in text
+    assert "missed swaps 1 of 200 (target 0)" in text
+    df.loc[ours, ["false_alarm_seeds", "missed_swaps"]] = np.nan
+    text = render_blocks(df)["results-arena"]
+    assert "| - | - |" in text and "False alarms" not in text
+
+
 def test_the_command_is_read_back_from_the_rows():
     df = _table({"ct_oracle": 0.1, "adaptive_ct": 0.12})
     assert command_of(df) == (

@@ -229,12 +229,13 @@ def _results_block(df) -> str:
     lines = [
         f"`{command_of(df)}` ({{doc}}`leaderboard`), `{OURS} / {pooled['floor'].iloc[0]}` per seed on the "
         f"drawn arms pooled ({n}), per segment: mean with its 95 % bootstrap interval, p90, CVaR of the "
-        "worst 10 %, max (targets: mean <= 1.1, p90 <= 1.3, max <= 3), failed trials, and the law with the "
-        "lowest RMS error:",
+        "worst 10 %, max (targets: mean <= 1.1, p90 <= 1.3, max <= 3), failed trials, the seeds whose "
+        "change detector alarmed with no swap in the 0.3 s before and those whose swap it missed, and the "
+        "law with the lowest RMS error:",
         "",
         "| segment | seeds | mean [95 % interval] | p90 | CVaR 10 % | max | targets | failed "
-        "| lowest RMS error |",
-        "|---|---|---|---|---|---|---|---|---|",
+        "| false alarms | missed | lowest RMS error |",
+        "|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     firsts = {(w["scenario"], w["segment"]): w["first"] for w in _winners(df)}
     for r in pooled.itertuples():
@@ -244,10 +245,25 @@ def _results_block(df) -> str:
             f"| {r.segment} ({r.payload_kg:.3g} kg) | {r.seeds} | "
             f"{_r(r.ratio_mean)} [{_r(r.ratio_ci95_low)}, "
             f"{_r(r.ratio_ci95_high)}] | {_r(r.ratio_p90)} | {_r(r.ratio_cvar10)} | {_r(r.ratio_max)} | "
-            f"{'met' if met else 'NOT met'} | {r.failures} | `{first['controller']}` "
-            f"{_mrad(first['rms_error_mrad'])} mrad |"
+            f"{'met' if met else 'NOT met'} | {r.failures} | {_n(r.false_alarm_seeds)} | "
+            f"{_n(r.missed_swaps)} | `{first['controller']}` {_mrad(first['rms_error_mrad'])} mrad |"
         )
+    trials = int(pooled["seeds"].iloc[0] + pooled["failures"].iloc[0])
+    fa = pooled["false_alarm_seeds"].sum(min_count=1)  # NaN when no row has a count
+    missed = pooled["missed_swaps"].sum(min_count=1)
+    if np.isfinite(fa):
+        lines += [
+            "",
+            f"False alarms in at most {int(fa)} of the {trials} trials ({100 * fa / trials:.1f} %; target "
+            f"<= 1 %: a trial with two counts twice), missed swaps {int(missed)} of "
+            f"{trials * (len(pooled) - 1)} (target 0).",
+        ]
     return "\n".join(lines)
+
+
+def _n(x) -> str:
+    """A count, or "-" (a law without a detector)."""
+    return "-" if not np.isfinite(x) else str(int(x))
 
 
 def render_blocks(df) -> dict[str, str]:
