@@ -128,14 +128,14 @@ put-down (relative to the source tree)."""
 
 
 def shipped_scenarios() -> list[Path]:
-    """The shipped N-joint scenarios with a drawn plant: ur5, panda, iiwa14, vertical3
-    (``adaptive_dd/scenarios``) and the Kinova Gen3 (``benchmarks/scenarios``, when the source
-    tree is at hand)."""
+    """The shipped arms' scenarios with a drawn plant: ur5, panda, iiwa14, vertical3
+    (``adaptive_dd/scenarios``), and the Kinova Gen3 and the paper's arm from its URDF
+    (``benchmarks/scenarios``: ``gen3_drawn``, ``sice_drawn``; when the source tree is at hand)."""
     pkg = resources.files("adaptive_dd.scenarios")
     names = ("ur5_tool_swap", "panda_payload", "iiwa14_payload", "vertical3_payload")
     out = [Path(str(pkg.joinpath(f"{n}.toml"))) for n in names]
-    gen3 = Path(__file__).resolve().parents[2] / "benchmarks" / "scenarios" / "gen3_drawn.toml"
-    return out + ([gen3] if gen3.is_file() else [])
+    bench = Path(__file__).resolve().parents[2] / "benchmarks" / "scenarios"
+    return out + [p for p in (bench / "gen3_drawn.toml", bench / "sice_drawn.toml") if p.is_file()]
 
 
 def ratio_columns(ratio: np.ndarray, rng: np.random.Generator) -> dict[str, float]:
