@@ -225,23 +225,24 @@ def _alarms(run, sc, t0: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """``(n_seeds, n_segments)`` each, 1.0 or 0.0: a false alarm in the segment (an alarm that
     follows no swap by less than ``FALSE_ALARM_WINDOW``, counted in the segment it falls in) and
     the segment's swap missed (no alarm within that window after it; 0 in the first segment and
-    for a trial that failed before the window's end). NaN for a law without a detector."""
-    from adaptive_dd.benchmark.metrics import FALSE_ALARM_WINDOW as W
+    for a trial that failed before the window's end). NaN for a law without a detector. The
+    benchmark report's rules (:func:`~adaptive_dd.benchmark.metrics.false_alarm_counts`,
+    :func:`~adaptive_dd.benchmark.metrics.missed_swap_counts`), segment by segment."""
+    from adaptive_dd.benchmark.metrics import FALSE_ALARM_WINDOW, false_alarm_counts, missed_swap_counts
 
     n, n_seg = len(run.failed), len(t0)
     if run.alarm_times is None:
         return np.full((n, n_seg), np.nan), np.full((n, n_seg), np.nan)
-    swaps = list(sc.swap_times)
-    fa, missed = np.zeros((n, n_seg)), np.zeros((n, n_seg))
-    for s, times in enumerate(run.alarm_times):
-        for x in times:
-            if not any(0.0 <= x - w < W for w in swaps):
-                fa[s, max(int(np.searchsorted(t0, x, side="right")) - 1, 0)] = 1.0
-        end = run.failed_at[s] * sc.sample_period if run.failed[s] else np.inf
-        for i in range(1, n_seg):
-            seen = any(0.0 <= x - t0[i] < W for x in times)
-            missed[s, i] = float(not seen and t0[i] + W <= end)
-    return fa, missed
+    ends = [*t0[1:], np.inf]
+    fa = np.array(
+        [false_alarm_counts([[x for x in tr if a <= x < b] for tr in run.alarm_times], sc.swap_times)
+         for a, b in zip(t0, ends, strict=True)]
+    ).T > 0  # fmt: skip
+    failed_at = np.where(run.failed, np.asarray(run.failed_at) * sc.sample_period, np.inf)
+    missed = np.zeros((n, n_seg))
+    for i in range(1, n_seg):
+        missed[:, i] = missed_swap_counts(run.alarm_times, [t0[i]], failed_at < t0[i] + FALSE_ALARM_WINDOW)
+    return fa.astype(float), missed
 
 
 def _first_saturated(run, T: float) -> np.ndarray:
@@ -343,6 +344,17 @@ def _mean(x) -> float:
     x = np.asarray(x, float)
     x = x[np.isfinite(x)]
     return float(x.mean()) if x.size else float("nan")
+
+
+def alarm_totals(rows) -> tuple[int, int, int, int] | None:
+    """Over one scenario's (or the population's) rows of one law, every segment: ``(false alarms,
+    trials, missed swaps, swaps)``, a trial with false alarms in two segments counted twice (the
+    trials with one are at most the first); None for a law without a detector."""
+    fa = rows["false_alarm_seeds"].sum(min_count=1)  # NaN when no row has a count
+    if not np.isfinite(fa):
+        return None
+    trials = int(rows["seeds"].iloc[0] + rows["failures"].iloc[0])
+    return int(fa), trials, int(rows["missed_swaps"].sum()), trials * (len(rows) - 1)
 
 
 def _count(x) -> float:

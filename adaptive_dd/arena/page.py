@@ -222,6 +222,8 @@ def _winners_block(df) -> str:
 
 def _results_block(df) -> str:
     """Ours on the drawn arms pooled against the targets, per segment."""
+    from adaptive_dd.arena.leaderboard import alarm_totals
+
     pooled = df[(df["kind"] == "population") & (df["controller"] == OURS)]
     if pooled.empty:
         return f"The table has no drawn arms (`--arms`): no population rows of `{OURS}`."
@@ -248,15 +250,13 @@ def _results_block(df) -> str:
             f"{'met' if met else 'NOT met'} | {r.failures} | {_n(r.false_alarm_seeds)} | "
             f"{_n(r.missed_swaps)} | `{first['controller']}` {_mrad(first['rms_error_mrad'])} mrad |"
         )
-    trials = int(pooled["seeds"].iloc[0] + pooled["failures"].iloc[0])
-    fa = pooled["false_alarm_seeds"].sum(min_count=1)  # NaN when no row has a count
-    missed = pooled["missed_swaps"].sum(min_count=1)
-    if np.isfinite(fa):
+    totals = alarm_totals(pooled)
+    if totals is not None:
+        fa, trials, missed, swaps = totals
         lines += [
             "",
-            f"False alarms in at most {int(fa)} of the {trials} trials ({100 * fa / trials:.1f} %; target "
-            f"<= 1 %: a trial with two counts twice), missed swaps {int(missed)} of "
-            f"{trials * (len(pooled) - 1)} (target 0).",
+            f"False alarms in at most {fa} of the {trials} trials ({100 * fa / trials:.1f} %; target "
+            f"<= 1 %: a trial with two counts twice), missed swaps {missed} of {swaps} (target 0).",
         ]
     return "\n".join(lines)
 

@@ -146,6 +146,8 @@ def _print_alarms(df) -> None:
     """Per scenario and law with a change detector: its false alarms and missed swaps over the
     segments (a trial with false alarms in two segments counts in both, so the trials with one
     are at most the sum)."""
+    from adaptive_dd.arena.leaderboard import alarm_totals
+
     det = df[df["false_alarm_seeds"].notna()]
     if det.empty:
         return
@@ -154,9 +156,7 @@ def _print_alarms(df) -> None:
         "in the 0.3 s after, missed):"
     )
     for (sc, ctrl), g in det.groupby(["scenario", "controller"], sort=False):
-        trials = int(g["seeds"].iloc[0] + g["failures"].iloc[0])
-        fa, missed = int(g["false_alarm_seeds"].sum()), int(g["missed_swaps"].sum())
-        swaps = trials * (len(g) - 1)
+        fa, trials, missed, swaps = alarm_totals(g)
         print(
             f"  {sc} {ctrl}: false alarms in {fa} of {trials * len(g)} seed-segments (trials with one: at "
             f"most {fa} of {trials}, {100 * fa / max(trials, 1):.1f} %); missed swaps {missed} of {swaps}"
