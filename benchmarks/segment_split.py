@@ -92,6 +92,11 @@ def main() -> None:
     for arm in [args.scenario] if args.scenario is not None else args.arms:
         if args.scenario is not None:
             sc = load_scenario(args.scenario)
+            if sc.closed_forms is not None:  # its sigma_hat is the paper's 7, not the arm's base parameters
+                ap.error(
+                    f"{args.scenario}: the paper's arm on its closed forms; this split reads the N-joint "
+                    "estimate: set [arm] general = true (e.g. benchmarks/scenarios/sice_general.toml)"
+                )
         else:
             sc = population_scenario(read_toml(TEMPLATE), str(TEMPLATE), arm)
             arm = f"random:{arm}"
