@@ -21,6 +21,8 @@ from adaptive_dd.benchmark.metrics import FALSE_ALARM_WINDOW
 from adaptive_dd.benchmark.preflight import reference_problems, torque_problems
 from adaptive_dd.benchmark.scenario import load_scenario, parse_scenario
 from adaptive_dd.benchmark.scenario_settings import with_settings
+from adaptive_dd.identification.online import OnlineConfig
+from adaptive_dd.identification.row_weights import task_row_weights
 from adaptive_dd.plant.pinocchio_check import cross_check
 from adaptive_dd.robots import robot_urdf
 
@@ -92,7 +94,9 @@ def test_validate_says_what_the_estimator_derives_and_from_what(drawn):
     printed = resolved_settings(drawn)
     assert lines == [line for line in printed if ".estimator." in line or ".detector." in line]
     assert "estimator.mode = 'arm'   (derived: the model's stated uncertainty" in lines[0]
-    assert f"row_weights = [1.0, 1.0, 1.0, 1.0, {round(9 / 39, 4)}, " in lines[1]
+    w = task_row_weights(drawn.arm, OnlineConfig(sample_period=drawn.sample_period), drawn)  # noise's scale
+    assert f"row_weights = {[float(f'{x:.4g}') for x in w]}   (derived: each equation's RMS error" in lines[1]
+    assert "carrying 4 kg x sqrt(tau_f / T)" in lines[1]
     assert "reopen_mass_std = 2.4 kg   (derived: 0.6 x arm.payload_capacity 4 kg)" in lines[2]
     exact = derived_estimator_settings(load_scenario(SCENARIOS / "gen3_exact.toml"))
     assert "estimator.mode = 'payload'   (default: no [model] uncertainty or [plant.uncertainty]" in exact[0]

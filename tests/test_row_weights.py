@@ -23,9 +23,10 @@ from adaptive_dd.identification.online import (
 from adaptive_dd.identification.row_weights import (
     first_pass_row_weights,
     momentum_form_error,
+    pass_mass,
     task_row_weights,
 )
-from adaptive_dd.plant.arm import Arm
+from adaptive_dd.plant.arm import Arm, payload_parameters
 from adaptive_dd.plant.prescribed import exciting_motion, prescribed_record
 from adaptive_dd.robots import ROBOTS, robot_urdf
 
@@ -44,15 +45,43 @@ def _motion(arm, n, seed=0):
     return exciting_motion(arm, t, np.random.default_rng(seed), offset=POSTURE, speed=0.5)
 
 
-def test_the_momentum_form_error_is_the_filters_discretisation_on_an_exact_record(ur5):
+@pytest.mark.parametrize("mass", [0.0, 5.0])
+def test_the_momentum_form_error_is_the_filters_discretisation_on_an_exact_record(ur5, mass):
     """No noise, no D/A step: the error is a small fraction of the filtered torque on every row
-    (a sign slip in ``Mdot qd`` or a missing armature would leave the Coriolis or inertial torque)."""
+    (a sign slip in ``Mdot qd`` or a missing armature would leave the Coriolis or inertial torque);
+    with a 5 kg payload in the record and in the equations' ``sigma`` the same (the payload's
+    parameters left out of ``sigma`` would leave its torque)."""
     exact = ur5.with_(actuator=dataclasses.replace(ur5.actuator, quantize=False))
     motion = _motion(exact, 4000)
-    rec = prescribed_record(exact, np.arange(4000) * T, motion, [np.zeros(10)])
-    err = momentum_form_error(exact, OnlineConfig(sample_period=T).bank, rec.q_meas, rec.qd_meas, rec.tau)
+    pay = payload_parameters(mass, None, radius=exact.payload_radius) if mass else np.zeros(10)
+    rec = prescribed_record(exact, np.arange(4000) * T, motion, [pay])
+    sigma = exact.sigma_with_payload(mass) if mass else None
+    bank = OnlineConfig(sample_period=T).bank
+    err = momentum_form_error(exact, bank, rec.q_meas, rec.qd_meas, rec.tau, sigma)
     scale = np.sqrt(np.mean(rec.tau[1000:] ** 2, axis=0))
     assert np.all(np.sqrt(np.mean(err[1000:] ** 2, axis=0)) < 2e-3 * scale)
+    if mass:
+        unknown = momentum_form_error(exact, bank, rec.q_meas, rec.qd_meas, rec.tau)
+        assert np.sqrt(np.mean(unknown[1000:, 1] ** 2)) > 0.05 * scale[1]
+
+
+def test_a_payload_raises_the_rows_noise_and_the_task_pass_carries_the_capacity(ur5):
+    """The measured velocity's noise enters each row through the momentum ``M qd``, which a payload
+    makes larger: at 5 kg the shoulder and elbow rows' errors grow; the scenario's pass carries
+    the arm's ``payload_capacity``, else the scenario's heaviest payload."""
+    cfg = OnlineConfig(sample_period=T)
+    motion = _motion(ur5, 6000)
+    light = first_pass_row_weights(ur5, cfg, motion)
+    heavy = first_pass_row_weights(ur5, cfg, motion, mass=5.0)
+    assert np.all(heavy[1:3] > 1.2 * light[1:3])
+    sc = load_scenario(SCENARIOS / "ur5_tool_swap.toml")
+    assert sc.arm.payload_capacity == 5.0 and pass_mass(sc.arm, sc) == 5.0
+    assert pass_mass(sc.arm.with_(payload_capacity=None), sc) == max(sc.swap_masses)
+    cfg = OnlineConfig(sample_period=sc.sample_period)
+    m = sc.reference.sample(np.arange(6000) * sc.sample_period)
+    np.testing.assert_array_equal(
+        task_row_weights(sc.arm, cfg, sc), first_pass_row_weights(sc.arm, cfg, m, mass=5.0)
+    )
 
 
 def test_the_first_pass_weights_are_the_errors_the_estimator_sees():
@@ -100,9 +129,8 @@ def test_a_joint_that_never_moves_gets_its_torque_limits_weight_on_the_others_sc
 
 def test_a_scenario_gives_adaptive_ct_the_first_pass_weights():
     """The exact UR5 (payload mode): the reference's first pass over the largest; given weights are
-    kept; the drawn UR5 (mode "arm" from the stated uncertainty) keeps the torque limits'
-    (``row_weights`` left None); the same given an identified prior (``arm_prior_cov``): the first
-    pass on the noise's scale."""
+    kept; the drawn UR5 (mode "arm" from the stated uncertainty) and the same given an identified
+    prior (``arm_prior_cov``): the first pass on the noise's scale."""
     sc = load_scenario(SCENARIOS / "ur5_tool_swap_exact.toml")
     ctrl = scenario_controller(sc, "adaptive_ct")[1]
     assert ctrl.online.mode == "payload"
@@ -115,7 +143,8 @@ def test_a_scenario_gives_adaptive_ct_the_first_pass_weights():
     assert tuple(scenario_controller(mine, "adaptive_ct")[1].online.row_weights) == given
     drawn = load_scenario(SCENARIOS / "ur5_tool_swap.toml")
     stated = scenario_controller(drawn, "adaptive_ct")[1]
-    assert stated.online.mode == "arm" and stated.online.row_weights is None
+    assert stated.online.mode == "arm"
+    np.testing.assert_array_equal(stated.online.row_weights, expect)
     prior = (1e-4 * np.eye(sc.arm.base.count)).tolist()
     identified = with_settings(drawn, "adaptive_ct", {"estimator": {"arm_prior_cov": prior}})
     ctrl = scenario_controller(identified, "adaptive_ct")[1]
@@ -134,7 +163,8 @@ def test_the_first_pass_kept_with_the_arm_is_the_one_of_these_settings():
         OnlineConfig(sample_period=sc.sample_period, selection=(0.2, 6.0)),
     ):
         np.testing.assert_array_equal(
-            task_row_weights(sc.arm, cfg, sc), first_pass_row_weights(sc.arm, cfg, motion)
+            task_row_weights(sc.arm, cfg, sc),
+            first_pass_row_weights(sc.arm, cfg, motion, mass=pass_mass(sc.arm, sc)),
         )
 
 

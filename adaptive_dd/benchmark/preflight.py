@@ -171,12 +171,13 @@ def derived_estimator_settings(scenario) -> list[str]:
     """``adaptive_ct``'s estimator settings on an arm from a URDF that the scenario need not state,
     as the run derives them, each with its rule: the mode (``"arm"`` when the model's stated
     uncertainty, ``[model] uncertainty`` or the ``[plant.uncertainty]`` levels, is not exact), the
-    row weights (each equation's error in a first pass over the reference, over the largest in
-    payload mode, on its own scale after an identification; the torque limits in mode "arm" from a
-    stated uncertainty) and the payload mass re-opened at an alarm (``[arm] payload_capacity``, 10
+    row weights (each equation's error in a first pass over the reference with the payload
+    capacity, over the largest in payload mode, on its own scale in mode "arm") and the payload mass
+    re-opened at an alarm (``[arm] payload_capacity``, 10
     kg when it is not stated)."""
     from adaptive_dd.controllers.registry import scenario_controller
     from adaptive_dd.identification.online import REOPEN_CAPACITY, derived_row_weights, reopen_mass_std
+    from adaptive_dd.identification.row_weights import pass_mass
 
     online = getattr(scenario_controller(scenario, "adaptive_ct")[1], "online", None)
     if online is None or not hasattr(online, "mode"):
@@ -188,14 +189,14 @@ def derived_estimator_settings(scenario) -> list[str]:
         why = "default: no [model] uncertainty or [plant.uncertainty], the arm taken as exact"
     out = [f"{pre}.mode = {online.mode!r}   ({why})"]
     w = online.row_weights if online.row_weights is not None else derived_row_weights(arm)
+    carried = f"{pass_mass(arm, scenario):g} kg"
     if "row_weights" in est:
         why = "given"
     elif online.mode == "payload":
-        why = "derived: each equation's RMS error on the unloaded arm along the reference / the largest"
-    elif online.arm_prior_cov is not None:
-        why = "derived: each equation's RMS error [N m] along the reference x sqrt(tau_f / T)"
+        why = f"derived: each equation's RMS error along the reference carrying {carried} / the largest"
     else:
-        why = "derived: torque limit / largest torque limit"
+        why = f"derived: each equation's RMS error [N m] along the reference carrying {carried}"
+        why += " x sqrt(tau_f / T)"
     out.append(f"{pre}.row_weights = {[float(f'{x:.4g}') for x in w]}   ({why})")
     if online.detector is not None:
         cap = arm.payload_capacity

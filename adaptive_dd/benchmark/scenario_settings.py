@@ -8,7 +8,7 @@ from a URDF the estimator's mode follows from the model's stated uncertainty (``
 uncertainty``, by default the ``[plant.uncertainty]`` levels:
 :func:`~adaptive_dd.closed_loop.controllers.with_stated_uncertainty`), its prior from ``[model]
 from`` (:mod:`adaptive_dd.closed_loop.model_prior`), its row weights from each equation's error
-along the reference (the arm's sensors and D/A steps) or ``[arm] torque_limit`` and the payload
+along the reference carrying ``[arm] payload_capacity`` (the arm's sensors and D/A steps) and the payload
 mass it re-opens at an alarm from ``[arm] payload_capacity``
 (:func:`~adaptive_dd.benchmark.preflight.derived_estimator_settings`, what ``adaptive-dd
 validate`` prints); every other field is the estimator's and the detector's default, the same in
@@ -29,8 +29,8 @@ __all__ = ["DERIVED", "controller_setting_errors", "derived_setting_errors", "wi
 
 _FROM_THE_SCENARIO = (
     "its mode from [model] uncertainty (else the [plant.uncertainty] levels), its prior from "
-    "[model] from, its row weights from each equation's error along the reference or [arm] "
-    "torque_limit, its re-opening at an alarm from [arm] payload_capacity; every other field is "
+    "[model] from, its row weights from each equation's error along the reference with "
+    "[arm] payload_capacity, its re-opening at an alarm from [arm] payload_capacity; every other field is "
     "the default"
 )
 DERIVED: dict[str, dict[str, str]] = {

@@ -439,17 +439,15 @@ class AdaptiveCT(Law):
         """Take the task from ``scenario``: its torque room
         (:func:`~adaptive_dd.closed_loop.boost.task_room`), from which with the sensors' noise the
         boost's bandwidth per joint follows (:meth:`boost_bandwidths`), and, unless given, the
-        estimator's row weights from a first pass over its reference
-        (:func:`~adaptive_dd.identification.row_weights.task_row_weights`): each row's noise after
-        an identification (``arm_prior_cov``), over the largest in payload mode; in mode "arm"
-        from a stated uncertainty the torque limits'."""
+        estimator's row weights from a first pass over its reference with the payload capacity
+        (:func:`~adaptive_dd.identification.row_weights.task_row_weights`): each row's noise in
+        mode "arm", over the largest in payload mode."""
         from adaptive_dd.closed_loop.boost import task_room
 
         self.task = task_room(scenario)
         o = self.online
-        # on the noise's scale after an identification; payload mode over the largest; mode "arm"
-        # from a stated uncertainty keeps the torque limits' (row_weights module docstring)
-        if o.row_weights is None and (o.mode == "payload" or o.arm_prior_cov is not None):
+        # mode "arm" on the noise's scale, payload mode over the largest (row_weights module docstring)
+        if o.row_weights is None:
             from adaptive_dd.identification.row_weights import task_row_weights
 
             w = task_row_weights(self.arm, o, scenario, relative=o.mode == "payload")

@@ -3,37 +3,35 @@ each equation weighted by its own error, estimated (Gautier and Poignet 2001, "E
 filtering and weighted least squares dynamic identification of robot", Control Eng. Pract. 9(12):
 a first least-squares pass, each joint's residual standard deviation its weight).
 
-The first pass is a record of the unloaded arm following the task's reference for
-:data:`FIRST_PASS` seconds, with the sensor noise and the D/A steps the arm states, through the
-estimator's equations in payload mode at the payload the arm carries there (none): each row's
-momentum-form error ``G0 tau - G1 p - G0 wv`` (``p = M qd``, ``wv = g + f - C^T qd`` of the known
-arm at the measured ``q, qd``), on the samples the data selection keeps (the joint faster than
-its threshold). That is what each equation carries besides a payload: the measured velocity's
-noise through the momentum, the D/A step, and what the momentum form leaves on the arm's own
-motion (its discretisation, the friction's sign), which the sensors' noise alone does not predict
-(the UR5's wrist rows: about 0.002 N m on a noise-free record, against 3e-5 N m of velocity
-noise; weights from the noise alone learnt its payload's centre of mass twice as slowly).
+The first pass is a record of the arm following the task's reference for :data:`FIRST_PASS`
+seconds, carrying its payload capacity (:func:`pass_mass`), with the sensor noise and the D/A
+steps the arm states, through the estimator's equations at the payload the arm carries there
+(known): each row's momentum-form error ``G0 tau - G1 p - G0 wv`` (``p = M qd``, ``wv = g + f -
+C^T qd`` of the known arm at the measured ``q, qd``), on the samples the data selection keeps (the
+joint faster than its threshold). That is what each equation carries besides an unknown payload:
+the measured velocity's noise through the momentum, the D/A step, and what the momentum form
+leaves on the arm's own motion (its discretisation, the friction's sign), which the sensors' noise
+alone does not predict (the UR5's wrist rows: about 0.002 N m on a noise-free record, against
+3e-5 N m of velocity noise; weights from the noise alone learnt its payload's centre of mass
+twice as slowly). The velocity's noise enters through ``M qd``, which the payload enlarges: on
+the paper's arm the elbow row's error is 0.025 N m unloaded and 0.075 N m at its 5 kg capacity.
+The pass carries the capacity so that no segment's data count for more than they know.
 
 Each row's weight is its RMS error [N m] over the pass's last two thirds (after the reference's
 ramp) times ``sqrt(tau_f / T)``: the recursive least squares take each weighted equation as one
 independent unit of noise, and the filtered equations share the filters' memory, ``tau_f / T``
 samples. The rows are then in the units of their own noise, and the covariance ``P`` on the scale
-of the estimate's error. ``adaptive_ct`` uses them so in mode "arm" after an identification
-(``[run] excite``, ``[model] from``), whose covariance, the arm's prior, is in the parameters' own
-units: neither the data nor the prior then counts many times what it knows. With the rows on the
-torque limits' scale (the largest 1), a drawn palletizer whose shoulder equation carries 0.6 N m
-of noise takes its data for 13 times what they know, and its payload's centre of mass runs 0.2 m
-off in the first second after a pick-up; on the noise's scale fifty drawn arms identified from a
-20 s excitation phase, 10 seeds each, meet every target in every segment (docs/leaderboard.md).
+of the estimate's error. ``adaptive_ct`` uses them so in mode "arm", whose prior on the arm (a
+stated uncertainty, or an identification's covariance: ``[run] excite``, ``[model] from``) is in
+the parameters' own units: neither the data nor the prior then counts many times what it knows.
+With the rows on the torque limits' scale (the largest 1), a drawn palletizer whose shoulder
+equation carries 0.6 N m of noise takes its data for 13 times what they know, and its payload's
+centre of mass runs 0.2 m off in the first second after a pick-up.
 
-Elsewhere the scale stays where it was measured best. Payload mode takes the weights over the
-largest: its priors on the model control uses (the centred first moments, a payload's presence)
-are weighed against ``P`` on that scale (on the noise's scale the paper's arm's 3 kg segment is
-1.503 its floor against 1.423, 20 seeds). Mode "arm" from a stated uncertainty (no identification)
-keeps the torque limits' weights: there the rows' error is the model's while the arm is learnt,
-not the first pass's noise (on the noise's scale the paper's arm drawn around its URDF has trials
-at 6.1x its floor in the 3 kg segment against 1.95x, and the Panda a false alarm; 50 seeds). The
-changelog has the figures.
+Payload mode takes the weights over the largest: its priors on the model control uses (the
+centred first moments, a payload's presence) are weighed against ``P`` on that scale (on the
+noise's scale the paper's arm's 3 kg segment is 1.503 its floor against 1.423, 20 seeds). The
+changelog has the figures of both choices.
 """
 
 from __future__ import annotations
@@ -41,7 +39,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["FIRST_PASS", "first_pass_row_weights", "momentum_form_error", "task_row_weights"]
+__all__ = ["FIRST_PASS", "first_pass_row_weights", "momentum_form_error", "pass_mass", "task_row_weights"]
 
 MDOT_STEP = 1e-6
 """[s] The central difference of ``M(q + h qd) qd`` in ``h`` that gives ``Mdot qd``."""
@@ -51,9 +49,11 @@ FIRST_PASS = 6.0
 its ramp."""
 
 
-def first_pass_row_weights(arm, cfg, motion, seed: int = 0, relative: bool = False) -> NDArray[np.float64]:
-    """Row weights ``(n,)`` [N m]: each equation's RMS momentum-form error on a noisy record of the
-    unloaded ``arm`` along ``motion``, times ``sqrt(tau_f / T)`` (module docstring).
+def first_pass_row_weights(
+    arm, cfg, motion, seed: int = 0, relative: bool = False, mass: float = 0.0
+) -> NDArray[np.float64]:
+    """Row weights ``(n,)`` [N m]: each equation's RMS momentum-form error on a noisy record of
+    ``arm`` along ``motion`` carrying ``mass``, times ``sqrt(tau_f / T)`` (module docstring).
 
     Parameters
     ----------
@@ -68,6 +68,9 @@ def first_pass_row_weights(arm, cfg, motion, seed: int = 0, relative: bool = Fal
         Seed of the record's sensor noise.
     relative : bool
         Each row's error over the largest instead (payload mode's scale).
+    mass : float
+        [kg] on the payload frame (a disk of the arm's ``payload_radius``), known to the
+        equations: 0 the unloaded arm; :func:`task_row_weights` passes the payload capacity.
 
     Returns
     -------
@@ -92,19 +95,23 @@ def first_pass_row_weights(arm, cfg, motion, seed: int = 0, relative: bool = Fal
     >>> w.shape, bool(np.all(w > 0))
     ((3,), True)
     """
-    return _scaled(arm, cfg, _row_noise(arm, cfg, motion, seed), relative)
+    return _scaled(arm, cfg, _row_noise(arm, cfg, motion, seed, mass), relative)
 
 
-def _row_noise(arm, cfg, motion, seed: int) -> NDArray[np.float64] | None:
-    """Each row's RMS momentum-form error [N m] in the first pass (NaN: no kept sample), or None
-    when no row has a finite, positive one."""
+def _row_noise(arm, cfg, motion, seed: int, mass: float = 0.0) -> NDArray[np.float64] | None:
+    """Each row's RMS momentum-form error [N m] in the first pass with ``mass`` [kg] on the payload
+    frame (NaN: no kept sample), or None when no row has a finite, positive one."""
+    from adaptive_dd.plant.arm import payload_parameters
     from adaptive_dd.plant.prescribed import prescribed_record
 
     q, qd, qdd = (np.asarray(x, dtype=float) for x in motion)
     t = np.arange(q.shape[0]) * cfg.sample_period
-    rec = prescribed_record(arm, t, (q, qd, qdd), [np.zeros(10)], rng=np.random.default_rng(seed))
+    loaded = mass > 0.0
+    pay = payload_parameters(mass, None, radius=arm.payload_radius) if loaded else np.zeros(10)
+    rec = prescribed_record(arm, t, (q, qd, qdd), [pay], rng=np.random.default_rng(seed))
     qm, vm = rec.q_meas, rec.qd_meas
-    err = momentum_form_error(arm, cfg.bank, qm, vm, rec.tau)[q.shape[0] // 3 :]
+    sigma = arm.sigma_with_payload(mass) if loaded else None
+    err = momentum_form_error(arm, cfg.bank, qm, vm, rec.tau, sigma)[q.shape[0] // 3 :]
     kept = _selected(cfg, vm)[q.shape[0] // 3 :]
     sd = np.full(err.shape[1], np.nan)
     for j in range(err.shape[1]):
@@ -141,8 +148,9 @@ def _selected(cfg, qd) -> NDArray[np.bool_]:
     return recent == 0
 
 
-def momentum_form_error(arm, bank, q, qd, tau) -> NDArray[np.float64]:
-    """``G0 tau - G1 p - G0 wv`` ``(N, n)`` of the known ``arm`` over a record ``q, qd, tau (N, n)``:
+def momentum_form_error(arm, bank, q, qd, tau, sigma=None) -> NDArray[np.float64]:
+    """``G0 tau - G1 p - G0 wv`` ``(N, n)`` of the known ``arm`` (with base parameters ``sigma``,
+    default its own) over a record ``q, qd, tau (N, n)``:
     the momentum form's equation error with no payload (``p = M(q) qd``, ``wv = g + f - C^T qd``,
     ``C^T qd = Mdot qd - C qd`` from a central difference of ``M(q + h qd) qd``), each filter
     started in the steady state of its input's first sample. On an exact record it is the
@@ -155,11 +163,11 @@ def momentum_form_error(arm, bank, q, qd, tau) -> NDArray[np.float64]:
     zero = np.zeros_like(q)
 
     def momentum(x):  # M(x) qd: the torque of the acceleration qd without velocity or gravity
-        return arm.inverse_dynamics(x, zero, qd) - arm.inverse_dynamics(x, zero, zero)
+        return arm.inverse_dynamics(x, zero, qd, sigma) - arm.inverse_dynamics(x, zero, zero, sigma)
 
     p = momentum(q)
     mdot_qd = (momentum(q + MDOT_STEP * qd) - momentum(q - MDOT_STEP * qd)) / (2.0 * MDOT_STEP)
-    wv = arm.inverse_dynamics(q, qd, zero) - mdot_qd  # g + f + C qd - (C + C^T) qd
+    wv = arm.inverse_dynamics(q, qd, zero, sigma) - mdot_qd  # g + f + C qd - (C + C^T) qd
 
     def filtered(u, k):  # one piece, from the steady state of its first sample
         return filter_pieces(bank, u, None, 0, k)
@@ -167,11 +175,19 @@ def momentum_form_error(arm, bank, q, qd, tau) -> NDArray[np.float64]:
     return filtered(tau, 0) - filtered(p, 1) - filtered(wv, 0)
 
 
+def pass_mass(arm, scenario) -> float:
+    """[kg] The payload the first pass carries: the arm's stated ``payload_capacity``, else the
+    heaviest of ``scenario``'s payloads (0 with none)."""
+    if arm.payload_capacity is not None:
+        return float(arm.payload_capacity)
+    return float(max((*scenario.swap_masses, 0.0)))
+
+
 def task_row_weights(arm, cfg, scenario, relative: bool = False) -> NDArray[np.float64]:
     """:func:`first_pass_row_weights` over ``scenario``'s reference, its first :data:`FIRST_PASS`
-    seconds at its sample period; the pass is kept with ``arm`` (a scenario's controllers are built
-    more than once: ``validate``, the runner, ``--controllers``), named by the filter, the data
-    selection and the motion's bytes."""
+    seconds at its sample period, the arm carrying :func:`pass_mass`; the pass is kept with ``arm``
+    (a scenario's controllers are built more than once: ``validate``, the runner,
+    ``--controllers``), named by the filter, the data selection, the mass and the motion's bytes."""
     import dataclasses
     import hashlib
 
@@ -180,6 +196,7 @@ def task_row_weights(arm, cfg, scenario, relative: bool = False) -> NDArray[np.f
     first = dataclasses.replace(cfg, sample_period=T)
     motion = tuple(np.ascontiguousarray(x, dtype=float) for x in scenario.reference.sample(t))
     digest = hashlib.sha1(b"".join(x.tobytes() for x in motion)).hexdigest()
-    key = f"first_pass_row_noise:{first.tau_f!r}:{T!r}:{first.selection!r}:{digest}"
-    sd = arm._cached(key, lambda: _row_noise(arm, first, motion, 0))
+    mass = pass_mass(arm, scenario)
+    key = f"first_pass_row_noise:{first.tau_f!r}:{T!r}:{first.selection!r}:{mass!r}:{digest}"
+    sd = arm._cached(key, lambda: _row_noise(arm, first, motion, 0, mass))
     return _scaled(arm, first, sd, relative)  # the kept pass is read, never written
