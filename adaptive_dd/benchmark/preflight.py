@@ -176,7 +176,7 @@ def derived_estimator_settings(scenario) -> list[str]:
     re-opened at an alarm (``[arm] payload_capacity``, 10
     kg when it is not stated)."""
     from adaptive_dd.controllers.registry import scenario_controller
-    from adaptive_dd.identification.online import REOPEN_CAPACITY, derived_row_weights, reopen_mass_std
+    from adaptive_dd.identification.online import REOPEN_CAPACITY, reopen_mass_std
     from adaptive_dd.identification.row_weights import pass_mass
 
     online = getattr(scenario_controller(scenario, "adaptive_ct")[1], "online", None)
@@ -188,7 +188,7 @@ def derived_estimator_settings(scenario) -> list[str]:
     if why != "given" and online.mode != "arm":
         why = "default: no [model] uncertainty or [plant.uncertainty], the arm taken as exact"
     out = [f"{pre}.mode = {online.mode!r}   ({why})"]
-    w = online.row_weights if online.row_weights is not None else derived_row_weights(arm)
+    w = online.row_weights  # set by AdaptiveCT.state_task in every mode unless given
     carried = f"{pass_mass(arm, scenario):g} kg"
     if "row_weights" in est:
         why = "given"

@@ -106,11 +106,10 @@ def _row_noise(arm, cfg, motion, seed: int, mass: float = 0.0) -> NDArray[np.flo
 
     q, qd, qdd = (np.asarray(x, dtype=float) for x in motion)
     t = np.arange(q.shape[0]) * cfg.sample_period
-    loaded = mass > 0.0
-    pay = payload_parameters(mass, None, radius=arm.payload_radius) if loaded else np.zeros(10)
+    pay = payload_parameters(mass, None, radius=arm.payload_radius)  # zeros at 0 kg
     rec = prescribed_record(arm, t, (q, qd, qdd), [pay], rng=np.random.default_rng(seed))
     qm, vm = rec.q_meas, rec.qd_meas
-    sigma = arm.sigma_with_payload(mass) if loaded else None
+    sigma = arm.sigma_with_payload(mass)  # the equations know the payload the record carries
     err = momentum_form_error(arm, cfg.bank, qm, vm, rec.tau, sigma)[q.shape[0] // 3 :]
     kept = _selected(cfg, vm)[q.shape[0] // 3 :]
     sd = np.full(err.shape[1], np.nan)
@@ -150,8 +149,8 @@ def _selected(cfg, qd) -> NDArray[np.bool_]:
 
 def momentum_form_error(arm, bank, q, qd, tau, sigma=None) -> NDArray[np.float64]:
     """``G0 tau - G1 p - G0 wv`` ``(N, n)`` of the known ``arm`` (with base parameters ``sigma``,
-    default its own) over a record ``q, qd, tau (N, n)``:
-    the momentum form's equation error with no payload (``p = M(q) qd``, ``wv = g + f - C^T qd``,
+    default its own) over a record ``q, qd, tau (N, n)``: the momentum form's equation error with
+    no payload beyond ``sigma``'s (``p = M(q) qd``, ``wv = g + f - C^T qd``,
     ``C^T qd = Mdot qd - C qd`` from a central difference of ``M(q + h qd) qd``), each filter
     started in the steady state of its input's first sample. On an exact record it is the
     filters' discretisation only.
