@@ -11,8 +11,9 @@ kernels) once per variant, changing only the N-joint estimator's packed configur
 
 ``today``
     The shipped settings: the payload's ten parameters re-opened at an alarm with mass standard
-    deviation ``s`` (``Detector.reopen_mass_std``, derived), first moments ``s r`` and inertias
-    ``s r^2`` (``OnlineConfig.payload_size`` r); the control model's first moments combined with
+    deviation ``s`` along the arm's stated payload shape (a disk of ``[arm] payload_radius``),
+    first moments ``s r`` and inertias ``s r^2`` of their own (``[arm] payload_offset`` r); the
+    control model's first moments combined with
     ``m c ~ 0 +- r sqrt(E[m^2])`` (the centred prior) and its payload scaled by
     :func:`~adaptive_dd.identification.online_kernel.presence_weight` of the mass's variance.
 ``no presence``
@@ -29,7 +30,7 @@ kernels) once per variant, changing only the N-joint estimator's packed configur
 ``paper prior, no presence``
     Both.
 ``size R`` (one per ``--sizes R``)
-    Today's settings with the prior's length scale ``OnlineConfig.payload_size`` = R [m] (first
+    Today's settings with the prior's length scale ``[arm] payload_offset`` = R [m] (first
     moments ``s R``, inertias ``s R^2``, at the start and at every re-opening).
 
 ``--only LABEL ...`` runs only the variants of those labels (e.g. ``--only today "size 0.05"``).
@@ -46,7 +47,6 @@ configuration is data).
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import time
 from pathlib import Path
 
@@ -81,7 +81,7 @@ def _patched_pack(paper: bool, no_presence: bool, size: float | None = None, cen
 
     def _pack(cfg, arm):
         if size is not None:
-            cfg = dataclasses.replace(cfg, payload_size=size)
+            arm = arm.with_(payload_offset=size)
         c, P0 = pack(cfg, arm)
         if cfg.mode != "payload":
             raise SystemExit("general_payload_prior: the scenario's adaptive_ct must be in payload mode")
@@ -145,7 +145,7 @@ def main() -> None:
     ap.add_argument("scenario", nargs="?", default=str(ROOT / "benchmarks/scenarios/sice_general.toml"))
     ap.add_argument("--seeds", type=int, default=20)
     ap.add_argument("--first", type=int, default=0)
-    ap.add_argument("--sizes", type=float, nargs="*", default=[], help="payload_size variants [m]")
+    ap.add_argument("--sizes", type=float, nargs="*", default=[], help="[arm] payload_offset variants [m]")
     ap.add_argument("--only", nargs="*", default=None, help="run only the variants of these labels")
     ap.add_argument("--arms", type=int, default=0, help="run the template SCENARIO over N drawn arms")
     ap.add_argument("--first-arm", type=int, default=0)

@@ -19,7 +19,7 @@ from adaptive_dd.identification.online_control_model import centred_prior
 from adaptive_dd.plant.arm import Arm
 
 D = 0.2  # the payload frame's distance from the payload joint's axis on the paper's arm [m]
-R = 0.1  # OnlineConfig.payload_size
+R = 0.1  # Arm.payload_offset
 
 
 def _ridge(m_true, prior_m, mass_var=9.0, com_var=0.09, pinned=1e-8):
@@ -82,7 +82,7 @@ def test_no_size_no_prior():
 
 def test_the_estimator_packs_the_prior_size_in_payload_mode_only():
     arm = Arm.sice()
-    c, _ = est_init(OnlineConfig(payload_size=0.07), arm, 1)
+    c, _ = est_init(OnlineConfig(), arm.with_(payload_offset=0.07), 1)
     assert c.floats[K.F_COM_SIZE] == 0.07
     c, _ = est_init(OnlineConfig(mode="arm"), arm, 1)
     assert c.floats[K.F_COM_SIZE] == 0.0
@@ -91,7 +91,7 @@ def test_the_estimator_packs_the_prior_size_in_payload_mode_only():
 def _control_mass(level, centred=True):
     """The control model's payload mass (no projection) of a state on the ridge after a 1 kg swap
     from 3 kg, every row having learnt the noise level ``level``."""
-    c, s = est_init(OnlineConfig(project=False, payload_size=R), Arm.sice(), 1)
+    c, s = est_init(OnlineConfig(project=False), Arm.sice().with_(payload_offset=R), 1)
     if not centred:
         c.floats[K.F_COM_SIZE] = 0.0
     x, P = _ridge(1.0, 3.0)

@@ -40,7 +40,7 @@ def _control_payload(**kw):
     s.theta[0, pb:] = WILD
     s.P[0] = 0.0
     s.P[0][:pb, :pb] = 1e-8 * np.eye(pb)
-    s.P[0][pb:, pb:] = payload_prior(3.0, cfg.payload_size)  # a re-opened payload block
+    s.P[0][pb:, pb:] = payload_prior(3.0, arm.payload_offset)  # a re-opened payload block
     pay = np.empty(10)
     est_payload_trial(c, s, 0, pay)
     return cfg, pay

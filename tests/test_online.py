@@ -67,7 +67,6 @@ def _com(p):
         ({"tau_f": 1e-4}, "tau_f = 0.0001"),
         ({"lam0": 1.5}, "lam0.*1.5"),
         ({"mu": -0.1}, "mu.*-0.1"),
-        ({"payload_size": 0.0}, "payload_size.*0.0"),
         ({"selection": (0.05,)}, "selection"),
         ({"row_weights": (1.0, -1.0)}, "row_weights"),
         ({"detector": "yes"}, "detector.*str"),

@@ -12,7 +12,7 @@ from dataclasses import dataclass, field
 from functools import lru_cache
 
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
 from adaptive_dd.errors import ParameterError
 from adaptive_dd.identification.arm_prior import ArmUncertainty
@@ -221,11 +221,6 @@ class OnlineConfig:
         Forgetting factor lambda(0) in (0, 1] and its rate towards 1, mu in [0, 1] (eq. 14).
     payload_mass_std : float
         Start-up standard deviation [kg] of the payload mass (shapes P0 along the payload).
-    payload_size : float
-        Length scale r [m] of the payload prior: first moments ``m c`` have standard
-        deviation ``payload_mass_std r``, inertias ``payload_mass_std r^2``. In payload mode
-        also the centred prior on the model control uses, ``m c ~ 0 +- r sqrt(E[m^2])``
-        (:func:`~adaptive_dd.identification.online_control_model.centred_prior`).
     p0_arm : float
         Mode ``"arm"``: start-up variance of every base parameter added to the prior (isotropic
         part of P0), >= 0. The hand-off of an identification sets it to 0
@@ -309,7 +304,6 @@ class OnlineConfig:
     lam0: float = 0.99995
     mu: float = 0.0
     payload_mass_std: float = 5.0
-    payload_size: float = 0.1
     p0_arm: float = 1e-6
     max_trace: float | None = None
     align: bool = True
@@ -372,7 +366,6 @@ class OnlineConfig:
         _num(o, "lam0", self.lam0, 0.0, 1.0)
         _num(o, "mu", self.mu, 0.0, 1.0, strict=False)
         _num(o, "payload_mass_std", self.payload_mass_std, 0.0, strict=False)
-        _num(o, "payload_size", self.payload_size, 0.0)
         _num(o, "p0_arm", self.p0_arm, 0.0, strict=False)
         if self.max_trace is not None:
             _num(o, "max_trace", self.max_trace, 0.0)
@@ -498,11 +491,25 @@ def _bank(tau_f: float, sample_period: float) -> FilterBank:
     return design_filter_bank("M2", tau_f, sample_period)
 
 
-def payload_prior(mass_std: float, size: float) -> Array:
-    """Covariance (10, 10) of a payload prior: ``diag(s^2, (s r)^2 x3, (s r^2)^2 x6)``.
+def payload_prior(mass_std: float, size: float, shape: ArrayLike | None = None) -> Array:
+    """Covariance (10, 10) of a payload prior: ``s^2 d d^T + diag(0, (s r)^2 x3, (s r^2)^2 x6)``.
 
-    ``s`` = ``mass_std`` [kg], ``r`` = ``size`` [m]: a body of up to about ``s`` kg within
-    ``r`` of the payload frame.
+    A body of up to about ``s`` = ``mass_std`` [kg] shaped as ``shape`` (``d``: its ten
+    parameters per kg about the payload frame, :func:`~adaptive_dd.plant.payload.payload_parameters`
+    order; default a point mass at the frame's origin), its centre of mass within about ``r`` =
+    ``size`` [m] of that origin: the inertias move with the mass as the shape's do, and the first
+    moments and inertias have an uncertainty ``s r`` and ``s r^2`` of their own.
+
+    Examples
+    --------
+    >>> from adaptive_dd.identification.online_config import payload_prior
+    >>> from adaptive_dd.plant.payload import payload_parameters
+    >>> d = payload_parameters(1.0, radius=0.05)  # a disk of 5 cm per kg: Izz = 0.00125 kg m^2
+    >>> P = payload_prior(3.0, 0.0, d)  # up to about 3 kg, centred on the frame
+    >>> float(P[0, 0]), float(P[0, 9]), float(P[1, 1])  # mass, mass with Izz, a first moment
+    (9.0, 0.01125, 0.0)
     """
     s, r = float(mass_std), float(size)
-    return np.diag([s**2] + [(s * r) ** 2] * 3 + [(s * r * r) ** 2] * 6)
+    d = np.zeros(10) if shape is None else np.array(shape, dtype=float).reshape(10)
+    d[0] = 1.0
+    return s**2 * np.outer(d, d) + np.diag([0.0] + [(s * r) ** 2] * 3 + [(s * r * r) ** 2] * 6)

@@ -26,6 +26,7 @@ from adaptive_dd.identification.online_config import (
 )
 from adaptive_dd.identification.online_slots import EstCfg, EstState
 from adaptive_dd.plant.arm import Arm
+from adaptive_dd.plant.payload import payload_parameters
 
 
 def _detector_velocity_variance(arm: Arm) -> Array:
@@ -42,9 +43,12 @@ def _pack(cfg: OnlineConfig, arm: Arm) -> tuple[EstCfg, Array]:
     pi0 = np.ascontiguousarray(arm.pi, dtype=float)
     pmap = np.ascontiguousarray(arm.payload_map)
     jp = arm.payload_joint
-    S0 = payload_prior(cfg.payload_mass_std, cfg.payload_size)
+    # a payload of unknown mass shaped as the arm states (a disk of payload_radius), its centre
+    # within payload_offset of the payload frame
+    shape = payload_parameters(1.0, radius=arm.payload_radius)
+    S0 = payload_prior(cfg.payload_mass_std, arm.payload_offset, shape)
     det = cfg.detector
-    S1 = payload_prior(reopen_mass_std(det, arm) if det else 0.0, cfg.payload_size)
+    S1 = payload_prior(reopen_mass_std(det, arm) if det else 0.0, arm.payload_offset, shape)
     if cfg.mode == "payload":
         p = 10
         indep = np.arange(10, dtype=np.int64)
@@ -105,7 +109,7 @@ def _pack(cfg: OnlineConfig, arm: Arm) -> tuple[EstCfg, Array]:
     if cfg.mode == "payload":  # a carried payload's mass: the re-opened prior's (sized by the capacity)
         fl[K.F_PRESENT2] = (reopen_mass_std(det, arm) if det else cfg.payload_mass_std) ** 2
     if cfg.payload_priors:
-        fl[K.F_COM_SIZE] = cfg.payload_size  # the centred prior on the model's first moments
+        fl[K.F_COM_SIZE] = arm.payload_offset  # the centred prior on the model's first moments
     if det is not None:
         ints[K.I_DETECT] = 1
         warm = det.warmup if det.warmup is not None else (WARMUP_ARM if cfg.mode == "arm" else WARMUP)

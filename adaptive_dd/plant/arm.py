@@ -94,7 +94,13 @@ class Arm:
     sensor : SensorConfig
         Encoders and noise.
     payload_radius : float
-        Default disk radius [m] of a payload given by mass alone.
+        Default disk radius [m] of a payload given by mass alone; the shape the estimator's payload
+        prior gives a payload of unknown mass (its inertia a disk's of this radius per kg).
+    payload_offset : float
+        How far [m] a payload's centre of mass may lie from the payload frame's origin (a data
+        sheet's centre-of-gravity offset; ``[arm] payload_offset``): the length scale of the
+        estimator's payload prior (:func:`~adaptive_dd.identification.online_config.payload_prior`).
+        0 states a payload centred on the frame, as the paper's disk at the tip is (eq. 9).
     friction, friction_velocity, stribeck_ratio, stribeck_velocity
         The simulated plant's friction law, as on :class:`adaptive_dd.plant.two_link.ClosedFormTwoLink`.
     lugre_stiffness, lugre_damping
@@ -145,6 +151,7 @@ class Arm:
     stribeck_velocity: float = 0.1
     repair_inertia: bool = False
     payload_capacity: float | None = None
+    payload_offset: float = 0.1
     general: bool = False
     lugre_stiffness: tuple[float, float] = (1e5, 1e5)
     lugre_damping: tuple[float, float] | None = None
@@ -185,6 +192,8 @@ class Arm:
             )
         if not (math.isfinite(self.payload_radius) and 0 <= self.payload_radius <= 10):
             raise ParameterError(f"Arm.payload_radius must be in [0, 10] m, got {self.payload_radius!r}")
+        if not (math.isfinite(self.payload_offset) and 0 <= self.payload_offset <= 10):
+            raise ParameterError(f"Arm.payload_offset must be in [0, 10] m, got {self.payload_offset!r}")
         cap = self.payload_capacity
         if cap is not None and not (_is_num(cap) and 0 < cap <= 1e4):
             raise ParameterError(f"Arm.payload_capacity must be in (0, 1e4] kg or None, got {cap!r}")
@@ -548,6 +557,7 @@ class Arm:
             "sigma_names": list(self.sigma_names),
             "payload_radius": self.payload_radius,
             "payload_capacity": self.payload_capacity,
+            "payload_offset": self.payload_offset,
             "friction": self.friction,
             "friction_velocity": self.friction_velocity,
             "stribeck_ratio": self.stribeck_ratio,
@@ -578,6 +588,7 @@ class Arm:
             self.friction,
             self.friction_params,
             self.payload_capacity,
+            self.payload_offset,
             self.repair_inertia,
             self.general,
             tuple(self.lugre_stiffness),

@@ -242,6 +242,7 @@ URDF_ARM_KEYS = (
     "dac_bits",
     "payload_radius",
     "payload_capacity",
+    "payload_offset",
     "general",
     "repair_inertia",
 )
@@ -257,8 +258,9 @@ def urdf_arm_from_table(src: str, table: dict, plant_kw: dict):
     ``encoder_counts``, and ``dac_bits``, ``payload_radius``, ``repair_inertia`` (repair a
     chain link's inertia that is not a rigid body's, reported: :func:`adaptive_dd.plant.urdf.read_urdf`),
     ``payload_capacity`` (the rated payload [kg]: the size of the estimator's re-opening,
-    :mod:`adaptive_dd.identification.online`); ``general`` is read by
-    :func:`arm_from_tables` (``general = true``: no closed-form fast path,
+    :mod:`adaptive_dd.identification.online`), ``payload_offset`` (how far [m] a payload's centre
+    of mass may lie from the payload frame: the length scale of the estimator's payload prior);
+    ``general`` is read by :func:`arm_from_tables` (``general = true``: no closed-form fast path,
     :func:`~adaptive_dd.plant.two_link.closed_form_view`, on an arm of the paper's geometry).
     ``plant_kw``: the
     ``[plant]`` settings of the general model (LuGre's are the two-link arm's: not here).
@@ -375,6 +377,14 @@ def _arm_overrides(src: str, table: dict, arm, plant_kw: dict) -> dict:
                 f"{src}: key 'arm.payload_capacity' must be the rated payload in (0, 1e4] kg, got {cap!r}"
             )
         kw["payload_capacity"] = float(cap)
+    if "payload_offset" in table:
+        off = table["payload_offset"]
+        if not _is_num(off) or not 0 <= off <= 1:
+            raise ScenarioError(
+                f"{src}: key 'arm.payload_offset' must be how far [m] a payload's centre of mass may lie "
+                f"from the payload frame, in [0, 1] m, got {off!r}"
+            )
+        kw["payload_offset"] = float(off)
     return kw
 
 

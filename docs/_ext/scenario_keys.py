@@ -131,6 +131,9 @@ ARRIVING = {
     "(each repair is reported).",
     "arm.payload_capacity": "Rated payload [kg]; sizes the estimator's re-opening on a change alarm "
     "(default: the detector's generic size).",
+    "arm.payload_offset": "How far a payload's centre of mass may lie from the payload frame [m] (a data "
+    "sheet's centre-of-gravity offset; 0: centred on the frame); the length scale of the estimator's "
+    "payload prior.",
 }
 
 TWO_LINK_SCENARIO = "[[payload]]\nat = 1.0\nmass = 1.0\n"
