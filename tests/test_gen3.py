@@ -92,12 +92,15 @@ def test_validate_says_what_the_estimator_derives_and_from_what(drawn):
 
     lines = derived_estimator_settings(drawn)
     printed = resolved_settings(drawn)
-    assert lines == [line for line in printed if ".estimator." in line or ".detector." in line]
+    keys = (".estimator.", ".detector.", "arm.payload_offset")
+    assert lines == [line for line in printed if any(k in line for k in keys)]
     assert "estimator.mode = 'arm'   (derived: the model's stated uncertainty" in lines[0]
     w = task_row_weights(drawn.arm, OnlineConfig(sample_period=drawn.sample_period), drawn)  # noise's scale
     assert f"row_weights = {[float(f'{x:.4g}') for x in w]}   (derived: each equation's RMS error" in lines[1]
     assert "carrying 4 kg x sqrt(tau_f / T)" in lines[1]
     assert "reopen_mass_std = 2.4 kg   (derived: 0.6 x arm.payload_capacity 4 kg)" in lines[2]
+    assert lines[3].startswith("arm.payload_offset = 0.1 m, arm.payload_radius = 0.05 m   (the estimator's")
+    assert "the offset the default: state how far" in lines[3]
     exact = derived_estimator_settings(load_scenario(SCENARIOS / "gen3_exact.toml"))
     assert "estimator.mode = 'payload'   (default: no [model] uncertainty or [plant.uncertainty]" in exact[0]
     data = tomllib.loads((SCENARIOS / "gen3_drawn.toml").read_text())

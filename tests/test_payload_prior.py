@@ -76,3 +76,17 @@ def test_a_bad_offset_in_a_scenario_is_named(value):
     d["arm"]["payload_offset"] = value
     with pytest.raises(ScenarioError, match=r"ur5.toml: key 'arm.payload_offset' must be .* got"):
         parse_scenario(d, "ur5.toml")
+
+
+def test_validate_prints_the_prior_the_arm_states():
+    from adaptive_dd.benchmark.preflight import derived_estimator_settings
+
+    root = Path(__file__).resolve().parents[1]
+    stated = derived_estimator_settings(
+        parse_scenario(read_toml(root / "benchmarks/scenarios/sice_general.toml"), "s.toml")
+    )
+    line = [x for x in stated if x.startswith("arm.payload_offset")]
+    assert line == [
+        "arm.payload_offset = 0 m, arm.payload_radius = 0.05 m   (the estimator's payload prior: a disk of "
+        "that radius per kg, its centre of mass within that offset of 'tip')"
+    ]

@@ -15,6 +15,8 @@ and the time, or the controller and the reason.
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 
 __all__ = [
@@ -208,6 +210,14 @@ def derived_estimator_settings(scenario) -> list[str]:
             why = f"derived: {REOPEN_CAPACITY:g} x arm.payload_capacity {cap:g} kg"
         std = reopen_mass_std(online.detector, arm)
         out.append(f"controllers.adaptive_ct.detector.reopen_mass_std = {std:.4g} kg   ({why})")
+    default = {f.name: f.default for f in dataclasses.fields(arm)}["payload_offset"]
+    frame = arm.payload_frame
+    why = "the estimator's payload prior: a disk of that radius per kg, its centre of mass within"
+    why += f" that offset of {frame!r}"
+    if arm.payload_offset == default:
+        why += "; the offset the default: state how far your payloads' centres of mass may lie from it"
+    off, rad = arm.payload_offset, arm.payload_radius
+    out.append(f"arm.payload_offset = {off:g} m, arm.payload_radius = {rad:g} m   ({why})")
     return out
 
 
