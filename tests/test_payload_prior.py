@@ -90,3 +90,13 @@ def test_validate_prints_the_prior_the_arm_states():
         "arm.payload_offset = 0 m, arm.payload_radius = 0.05 m   (the estimator's payload prior: a disk of "
         "that radius per kg, its centre of mass within that offset of 'tip')"
     ]
+
+
+def test_the_closed_forms_refuse_an_offset_they_would_not_read():
+    data = {"arm": {"robot": "sice_arm", "payload_offset": 0.0}, "payload": [{"at": 1.0, "mass": 1.0}]}
+    with pytest.raises(
+        ScenarioError, match=r"p.toml: arm.payload_offset: the paper's closed forms .*`general = true`"
+    ):
+        parse_scenario(data, "p.toml")
+    data["arm"]["general"] = True
+    assert parse_scenario(data, "p.toml").arm.payload_offset == 0.0

@@ -133,7 +133,8 @@ ARRIVING = {
     "(default: the detector's generic size).",
     "arm.payload_offset": "How far a payload's centre of mass may lie from the payload frame [m] (a data "
     "sheet's centre-of-gravity offset; 0: centred on the frame); the length scale of the estimator's "
-    "payload prior.",
+    "payload prior on the general kernels (the paper's closed forms refuse it: their payload is a disk "
+    "centred on the tip).",
 }
 
 TWO_LINK_SCENARIO = "[[payload]]\nat = 1.0\nmass = 1.0\n"
