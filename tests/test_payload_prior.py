@@ -92,11 +92,13 @@ def test_validate_prints_the_prior_the_arm_states():
     ]
 
 
-def test_the_closed_forms_refuse_an_offset_they_would_not_read():
-    data = {"arm": {"robot": "sice_arm", "payload_offset": 0.0}, "payload": [{"at": 1.0, "mass": 1.0}]}
-    with pytest.raises(
-        ScenarioError, match=r"p.toml: arm.payload_offset: the paper's closed forms .*`general = true`"
-    ):
+@pytest.mark.parametrize(
+    "stated", [{"payload_offset": 0.0}, {"payload_capacity": 5.0, "payload_offset": 0.0}]
+)
+def test_the_closed_forms_refuse_what_they_would_not_read(stated):
+    data = {"arm": {"robot": "sice_arm", **stated}, "payload": [{"at": 1.0, "mass": 1.0}]}
+    keys = ", ".join(f"arm.{k}" for k in sorted(stated))
+    with pytest.raises(ScenarioError, match=rf"p.toml: {keys}: the paper's closed forms .*`general = true`"):
         parse_scenario(data, "p.toml")
     data["arm"]["general"] = True
     assert parse_scenario(data, "p.toml").arm.payload_offset == 0.0

@@ -130,7 +130,7 @@ ARRIVING = {
     "arm.repair_inertia": "`true`: repair chain links whose URDF inertia is not a rigid body's "
     "(each repair is reported).",
     "arm.payload_capacity": "Rated payload [kg]; sizes the estimator's re-opening on a change alarm "
-    "(default: the detector's generic size).",
+    "(default: the detector's generic size); general kernels only (the paper's closed forms refuse it).",
     "arm.payload_offset": "How far a payload's centre of mass may lie from the payload frame [m] (a data "
     "sheet's centre-of-gravity offset; 0: centred on the frame); the length scale of the estimator's "
     "payload prior on the general kernels (the paper's closed forms refuse it: their payload is a disk "
