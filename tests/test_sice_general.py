@@ -16,7 +16,7 @@ import numpy as np
 from adaptive_dd import load_scenario
 
 ROOT = Path(__file__).resolve().parents[1]
-OWN = {"arm", "closed_forms", "controllers", "name", "seeds", "source"}  # what it may differ in
+OWN = {"arm", "closed_forms", "controllers", "name", "seeds", "source", "defaulted"}  # what it may differ in
 
 
 def _same(a, b) -> bool:
@@ -69,3 +69,31 @@ def test_the_general_estimator_tracks_the_papers_arm_as_the_closed_forms_do():
     ratio = frame[frame.controller == "adaptive_ct"].groupby("segment").ratio_to_floor.max()
     assert ratio[2] < 1.1, ratio  # 10-15 s, 1 kg
     assert ratio[1] < 1.45, ratio  # 5-10 s, 3 kg (closed forms 1.28 on average)
+
+
+def test_the_general_sweep_is_the_shipped_sweep_on_the_general_kernels():
+    """``benchmarks/sweeps/short_swap_general.toml`` is ``short_swap.toml`` with the paper's arm on
+    the general kernels (as ``sice_general.toml`` states it), and its sweep the same grid."""
+    import tomllib
+
+    sweeps = ROOT / "benchmarks" / "sweeps"
+    closed, general = (load_scenario(sweeps / f) for f in ("short_swap.toml", "short_swap_general.toml"))
+    assert closed.closed_forms is not None and general.closed_forms is None
+    sice = load_scenario(ROOT / "benchmarks" / "scenarios" / "sice_general.toml").arm
+    assert general.arm == sice.with_(sensor=general.arm.sensor)  # the sweep's noise is its own
+    differ = [
+        f.name
+        for f in dataclasses.fields(closed)
+        if f.name not in OWN and not _same(getattr(closed, f.name), getattr(general, f.name))
+    ]
+    assert differ == []
+    spec = {
+        f: tomllib.loads((sweeps / f).read_text())
+        for f in ("payload_mass_swap_time.toml", "payload_mass_swap_time_general.toml")
+    }
+    a, b = spec.values()
+    assert (
+        b["sweep"].pop("scenario") == "short_swap_general.toml"
+        and a["sweep"].pop("scenario") == "short_swap.toml"
+    )
+    assert a == b
