@@ -15,8 +15,6 @@ and the time, or the controller and the reason.
 
 from __future__ import annotations
 
-import dataclasses
-
 import numpy as np
 
 __all__ = [
@@ -180,6 +178,7 @@ def derived_estimator_settings(scenario) -> list[str]:
     from adaptive_dd.controllers.registry import scenario_controller
     from adaptive_dd.identification.online import REOPEN_CAPACITY, reopen_mass_std
     from adaptive_dd.identification.row_weights import pass_mass
+    from adaptive_dd.plant.arm import DEFAULT_PAYLOAD_OFFSET
 
     online = getattr(scenario_controller(scenario, "adaptive_ct")[1], "online", None)
     if online is None or not hasattr(online, "mode"):
@@ -210,11 +209,10 @@ def derived_estimator_settings(scenario) -> list[str]:
             why = f"derived: {REOPEN_CAPACITY:g} x arm.payload_capacity {cap:g} kg"
         std = reopen_mass_std(online.detector, arm)
         out.append(f"controllers.adaptive_ct.detector.reopen_mass_std = {std:.4g} kg   ({why})")
-    default = {f.name: f.default for f in dataclasses.fields(arm)}["payload_offset"]
     frame = arm.payload_frame
     why = "the estimator's payload prior: a disk of that radius per kg, its centre of mass within"
     why += f" that offset of {frame!r}"
-    if arm.payload_offset == default:
+    if arm.payload_offset == DEFAULT_PAYLOAD_OFFSET:
         why += "; the offset the default: state how far your payloads' centres of mass may lie from it"
     off, rad = arm.payload_offset, arm.payload_radius
     out.append(f"arm.payload_offset = {off:g} m, arm.payload_radius = {rad:g} m   ({why})")

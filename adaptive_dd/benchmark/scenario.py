@@ -451,15 +451,16 @@ def parse_scenario(data: dict, src: str = "<memory>", name: str = "scenario") ->
     try:
         arm = arm_from_tables(table.get("arm"), law_table, src)
         arm, plant = model_and_plant(src, arm, plant_table, table.get("model"))
+        closed = closed_form_view(arm) is not None
         unread = [k for k in ("payload_capacity", "payload_offset") if k in (table.get("arm") or {})]
-        if closed_form_view(arm) is not None and unread:
+        if closed and unread:
             raise ScenarioError(
                 f"{src}: {', '.join(f'arm.{k}' for k in unread)}: the paper's closed forms take every "
                 "payload as a disk centred on the tip (eq. 9) with their own prior and do not read it; "
                 "remove it, or add `general = true` to [arm] to run the arm on the general kernels, "
                 "whose estimator it sizes"
             )
-        if closed_form_view(arm) is None:  # the model's stated uncertainty (URDF arms)
+        if not closed:  # the model's stated uncertainty (URDF arms)
             stated = model_uncertainty(src, table.get("model"), plant)
     except ScenarioError as exc:
         errors.append(str(exc).removeprefix(f"{src}: "))

@@ -510,6 +510,5 @@ def payload_prior(mass_std: float, size: float, shape: ArrayLike | None = None) 
     (9.0, 0.01125, 0.0)
     """
     s, r = float(mass_std), float(size)
-    d = np.zeros(10) if shape is None else np.array(shape, dtype=float).reshape(10)
-    d[0] = 1.0
+    d = np.eye(10)[0] if shape is None else np.asarray(shape, dtype=float).reshape(10)
     return s**2 * np.outer(d, d) + np.diag([0.0] + [(s * r) ** 2] * 3 + [(s * r * r) ** 2] * 6)

@@ -101,7 +101,7 @@ def first_pass_row_weights(
 def _row_noise(arm, cfg, motion, seed: int, mass: float = 0.0) -> NDArray[np.float64] | None:
     """Each row's RMS momentum-form error [N m] in the first pass with ``mass`` [kg] on the payload
     frame (NaN: no kept sample), or None when no row has a finite, positive one."""
-    from adaptive_dd.plant.arm import payload_parameters
+    from adaptive_dd.plant.payload import payload_parameters
     from adaptive_dd.plant.prescribed import prescribed_record
 
     q, qd, qdd = (np.asarray(x, dtype=float) for x in motion)

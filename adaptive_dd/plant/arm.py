@@ -54,6 +54,9 @@ DEFAULT_VELOCITY_VARIANCE = 5e-5
 """(rad/s)^2, as the SICE arm's joint 1 (Table 4 of the paper)."""
 DEFAULT_DAC_BITS = 16
 """D/A resolution of a URDF arm's torque command unless given."""
+DEFAULT_PAYLOAD_OFFSET = 0.1
+"""[m] How far a payload's centre of mass may lie from the payload frame when the arm states
+nothing (``Arm.payload_offset``): a tool off the flange."""
 _FRICTION_LAWS = ("stick-slip", "tanh", "stribeck", "lugre")
 """Plant friction laws of an arm (the index is the integrator's code); ``"lugre"`` only on an arm with
 the paper's closed forms (:func:`~adaptive_dd.plant.two_link.closed_form_view`), whose plant runs it."""
@@ -151,7 +154,7 @@ class Arm:
     stribeck_velocity: float = 0.1
     repair_inertia: bool = False
     payload_capacity: float | None = None
-    payload_offset: float = 0.1
+    payload_offset: float = DEFAULT_PAYLOAD_OFFSET
     general: bool = False
     lugre_stiffness: tuple[float, float] = (1e5, 1e5)
     lugre_damping: tuple[float, float] | None = None
