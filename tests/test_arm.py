@@ -42,12 +42,37 @@ def test_base_regressor_times_sigma_is_pinocchio_inverse_dynamics_with_friction(
     ref = _pin_torque(arm, arm.model, q, qd, qdd)
     np.testing.assert_allclose(arm.inverse_dynamics(q, qd, qdd), ref, atol=1e-10)
     np.testing.assert_allclose(arm.standard_regressor(q, qd, qdd) @ arm.pi, ref, atol=1e-10)
+    np.testing.assert_allclose(arm.regressor(q, qd, qdd) @ arm.sigma, ref, atol=1e-10)
     M = arm.mass_matrix(q)
     data = arm.model.createData()
     for i in range(len(q)):
         Mp = pin.crba(arm.model, data, arm.pin_configuration(q[i]))
         Mp = np.triu(Mp) + np.triu(Mp, 1).T + np.diag(arm.armature)
         np.testing.assert_allclose(M[i], Mp, atol=1e-10)
+
+
+@pytest.mark.parametrize("name", list(ROBOTS))
+def test_inverse_dynamics_and_mass_matrix_of_any_base_parameters_are_the_regressors(arms, name):
+    """At base parameters that are no arm's (each scaled by 0.5-1.5, a batch of them too), the
+    compiled RNEA and CRBA on the standard vector that :meth:`Arm._standard_of` builds give the
+    base regressor's torques and their columns at unit accelerations; a batch of sigmas goes
+    through the regressor."""
+    arm, rng = arms[name], np.random.default_rng(4)
+    n = arm.n_joints
+    q, qd, qdd = _states(arm, rng)
+    qd[0, 0] = 0.0  # sign(0): the Coulomb column's
+    sigma = arm.sigma * rng.uniform(0.5, 1.5, arm.sigma.size)
+    Y = arm.regressor(q, qd, qdd)
+    np.testing.assert_allclose(arm.inverse_dynamics(q, qd, qdd, sigma), Y @ sigma, rtol=1e-12, atol=1e-10)
+    batch = arm.sigma * rng.uniform(0.5, 1.5, (len(q), arm.sigma.size))
+    np.testing.assert_allclose(
+        arm.inverse_dynamics(q, qd, qdd, batch), np.einsum("sij,sj->si", Y, batch), atol=1e-10
+    )
+    zero = np.zeros_like(q)
+    g = arm.regressor(q, zero, zero) @ sigma
+    cols = [arm.regressor(q, zero, np.broadcast_to(np.eye(n)[k], q.shape)) @ sigma - g for k in range(n)]
+    np.testing.assert_allclose(arm.mass_matrix(q, sigma), np.stack(cols, -1), rtol=1e-12, atol=1e-10)
+    np.testing.assert_allclose(arm.mass_matrix(q, batch)[1], arm.mass_matrix(q[1], batch[1]), atol=1e-10)
 
 
 @pytest.mark.parametrize("name", list(ROBOTS))

@@ -267,3 +267,49 @@ def test_figures_in_the_formats_asked_for(tiny, tmp_path):
     assert main(argv) == 0
     assert {p.suffix for p in out.glob("tracking_error.*")} == {".svg", ".pdf"}
     assert not list(out.glob("*.png"))
+
+
+def _command(*args, **kw):
+    """``python -m adaptive_dd.cli ARGS`` (the console entry, :func:`adaptive_dd.cli.console`) in a
+    child process."""
+    import subprocess
+    import sys
+
+    return subprocess.run([sys.executable, "-m", "adaptive_dd.cli", *args], text=True, check=False, **kw)
+
+
+def test_the_command_ends_with_every_output_whole_and_its_exit_code(tmp_path, tiny):
+    """The console entry ends the process without the interpreter's teardown: what the run wrote is
+    complete (the JSON parses, the CSV has its rows, the figure is a whole PNG), the report reached
+    stdout, and the exit code is the command's."""
+    import json
+
+    out = tmp_path / "out"
+    p = _command("benchmark", str(tiny), "--out", str(out), "--no-progress", capture_output=True)
+    assert p.returncode == 0, p.stderr
+    assert "wrote " in p.stdout.splitlines()[-1]
+    assert json.loads((out / "metrics.json").read_text())
+    assert len((out / "per_seed.csv").read_text().splitlines()) > 1
+    png = (out / "tracking_error.png").read_bytes()
+    assert png.startswith(b"\x89PNG") and png.endswith(b"IEND\xaeB`\x82")
+    bad = _command("benchmark", str(tmp_path / "missing.toml"), "--out", str(out), capture_output=True)
+    assert bad.returncode == 2 and "no such scenario file" in bad.stderr
+
+
+def test_a_reader_that_stops_early_ends_the_command_quietly(tmp_path):
+    """``adaptive-dd validate | head -1``: the pipe closed under the command is not reported as an
+    error of the user's; exit 141, as a command killed by SIGPIPE (here the reader is gone before
+    the command's first write)."""
+    import subprocess
+    import sys
+
+    from adaptive_dd.cli import EXIT_PIPE
+
+    p = subprocess.Popen(
+        [sys.executable, "-m", "adaptive_dd.cli", "validate"],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+    )  # fmt: skip
+    p.stdout.close()  # before the command writes: its every write, or its last flush, finds no reader
+    err = p.stderr.read()
+    assert p.wait() == EXIT_PIPE, err
+    assert "error" not in err

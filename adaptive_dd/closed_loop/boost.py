@@ -42,8 +42,7 @@ def task_room(scenario) -> tuple[Array, Array]:
     step = max(1, round(ROOM_STEP / scenario.sample_period))
     t = np.arange(0, scenario.n_samples, step) * scenario.sample_period
     q, qd, qdd = scenario.reference.sample(t)
-    Y = arm.regressor(q, qd, qdd)  # (K, n, p)
-    tau = np.abs(np.einsum("knp,sp->skn", Y, scenario.segment_sigmas())).max(axis=0)
+    tau = np.max([np.abs(arm.inverse_dynamics(q, qd, qdd, s)) for s in scenario.segment_sigmas()], axis=0)
     limit = np.asarray(arm.actuator.torque_limit, dtype=float)
     return np.asarray(q, dtype=float), limit[None, :] - tau
 

@@ -26,7 +26,7 @@ squares on the identifiable part.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field, fields, replace
 from pathlib import Path
 from typing import ClassVar
 
@@ -58,8 +58,7 @@ DEFAULT_PAYLOAD_OFFSET = 0.1
 """[m] How far a payload's centre of mass may lie from the payload frame when the arm states
 nothing (``Arm.payload_offset``): a tool off the flange."""
 _FRICTION_LAWS = ("stick-slip", "tanh", "stribeck", "lugre")
-"""Plant friction laws of an arm (the index is the integrator's code); ``"lugre"`` only on an arm with
-the paper's closed forms (:func:`~adaptive_dd.plant.two_link.closed_form_view`), whose plant runs it."""
+"""Plant friction laws (the index is the integrator's code); ``"lugre"`` on the paper's closed forms only."""
 
 
 def _vec(name: str, v, n: int, lo: float = 0.0) -> Array:
@@ -101,21 +100,18 @@ class Arm:
         prior gives a payload of unknown mass (its inertia a disk's of this radius per kg).
     payload_offset : float
         How far [m] a payload's centre of mass may lie from the payload frame's origin (a data
-        sheet's centre-of-gravity offset; ``[arm] payload_offset``): the length scale of the
-        estimator's payload prior (:func:`~adaptive_dd.identification.online_config.payload_prior`).
-        0 states a payload centred on the frame, as the paper's disk at the tip is (eq. 9).
+        sheet's; ``[arm] payload_offset``): the length scale of the estimator's payload prior
+        (:func:`~adaptive_dd.identification.online_config.payload_prior`); 0: centred (eq. 9).
     friction, friction_velocity, stribeck_ratio, stribeck_velocity
         The simulated plant's friction law, as on :class:`adaptive_dd.plant.two_link.ClosedFormTwoLink`.
     lugre_stiffness, lugre_damping
-        The LuGre law's bristle stiffness and damping per joint (``friction = "lugre"``: a two-joint
-        arm of the paper's geometry only, whose closed-form plant runs it); as on
-        :class:`~adaptive_dd.plant.two_link.ClosedFormTwoLink`.
+        The LuGre law's bristle stiffness and damping per joint (``friction = "lugre"``: the
+        paper's geometry only, on its closed forms), as on ``ClosedFormTwoLink``.
     payload_capacity : float or None
         Rated payload [kg] (``[arm] payload_capacity``); sizes the estimator's re-opening on a
         change alarm (None: the detector's generic size).
     repair_inertia : bool
-        Repair chain links whose URDF inertia is not a rigid body's
-        (:func:`adaptive_dd.plant.urdf.read_urdf`); see :attr:`urdf_notes`.
+        Repair links whose URDF inertia is not a rigid body's (:func:`~adaptive_dd.plant.urdf.read_urdf`).
     general : bool
         Keep the general kernels even where the paper's closed forms apply (the arm's geometry is
         the paper's: :func:`~adaptive_dd.plant.two_link.closed_form_view`); ``[arm] general = true``.
@@ -276,9 +272,7 @@ class Arm:
 
     # ------------------------------------------------------------ derived, cached
     def _cached(self, key: str, make):
-        if key not in self._cache:
-            self._cache[key] = make()
-        return self._cache[key]
+        return self._cache[key] if key in self._cache else self._cache.setdefault(key, make())
 
     def __getstate__(self) -> dict:
         state = self.__dict__.copy()
@@ -289,9 +283,7 @@ class Arm:
     def __setstate__(self, state: dict) -> None:
         self.__dict__.update(state)
 
-    @property
-    def n_joints(self) -> int:
-        return len(self.joint_names)
+    n_joints = property(lambda self: len(self.joint_names))
 
     @property
     def model(self):
@@ -432,22 +424,42 @@ class Arm:
         """Base regressor ``(..., n, p)``: ``regressor @ sigma`` is the joint torque."""
         return self.standard_regressor(q, qd, qdd)[..., self.base.independent]
 
-    def inverse_dynamics(self, q, qd, qdd, sigma: ArrayLike | None = None) -> Array:
-        """Joint torques ``(..., n)`` (friction and armature included)."""
+    def _standard_of(self, sigma: ArrayLike | None) -> Array | None:
+        """A standard vector ``(13 n,)`` whose base image is ``sigma (p,)``: ``sigma`` on the
+        independent columns, 0 elsewhere (``W @ it == regressor @ sigma``); None for a batch."""
         s = self.sigma if sigma is None else np.asarray(sigma, dtype=float)
-        return np.einsum("...ij,...j->...i", self.regressor(q, qd, qdd), s)
+        if s.ndim != 1:
+            return None
+        if s.shape != self.sigma.shape:
+            raise ParameterError(f"sigma has {s.size} base parameters, this arm has {self.sigma.size}")
+        pe = np.zeros(13 * self.n_joints)
+        pe[self.base.independent] = s
+        return pe
+
+    def inverse_dynamics(self, q, qd, qdd, sigma: ArrayLike | None = None) -> Array:
+        """Joint torques ``(..., n)`` (friction and armature included): ``regressor @ sigma``, by
+        the compiled RNEA on the standard vector of :meth:`_standard_of` (linear in it)."""
+        from adaptive_dd.plant.chain import rnea_batch
+
+        pe = self._standard_of(sigma)
+        q, qd, qdd = (np.asarray(x, dtype=float) for x in (q, qd, qdd))
+        n = self.n_joints
+        shape = np.broadcast_shapes(q.shape, qd.shape, qdd.shape)
+        if pe is None or shape[-1:] != (n,):  # a batch of sigmas; the shape error
+            return np.einsum("...ij,...j->...i", self.regressor(q, qd, qdd), np.asarray(sigma, dtype=float))
+        fv, fc, ia = pe[10 * n : 11 * n], pe[11 * n : 12 * n], pe[12 * n :]
+        return rnea_batch(self.chain, pe[: 10 * n], q, qd, qdd) + fv * qd + fc * np.sign(qd) + ia * qdd
 
     def mass_matrix(self, q: ArrayLike, sigma: ArrayLike | None = None) -> Array:
-        """M(q) with armature, ``(..., n, n)``, from base parameters (default :attr:`sigma`)."""
-        q = np.asarray(q, dtype=float)
-        n = self.n_joints
-        zero = np.zeros_like(q)
-        s = self.sigma if sigma is None else np.asarray(sigma, dtype=float)
-        g = self.inverse_dynamics(q, zero, zero, s)
-        cols = [
-            self.inverse_dynamics(q, zero, np.broadcast_to(np.eye(n)[k], q.shape), s) - g for k in range(n)
-        ]
-        return np.stack(cols, axis=-1)
+        """M(q) with armature, ``(..., n, n)``, from base parameters ``(..., p)`` (default :attr:`sigma`)."""
+        from adaptive_dd.plant.chain import mass_matrix_batch
+
+        pe, q, n = self._standard_of(sigma), np.asarray(q, dtype=float), self.n_joints
+        if pe is not None:
+            return mass_matrix_batch(self.chain, pe[: 10 * n], q) + np.diag(pe[12 * n :])
+        z, s, e = np.zeros_like(q), np.asarray(sigma, dtype=float), np.eye(n)  # a batch: by the columns
+        cols = [self.inverse_dynamics(q, z, np.broadcast_to(e[k], q.shape), s) for k in range(n)]
+        return np.stack(cols, -1) - self.inverse_dynamics(q, z, z, s)[..., None]
 
     def nominal_inertia(self) -> Array:
         """Diagonal of M at the middle of the position limits (0 for unbounded joints), ``(n,)``."""
@@ -516,8 +528,7 @@ class Arm:
         return self._cached("payload_ident", make)
 
     def payload_mass_from_sigma(self, sigma_hat: ArrayLike) -> Array:
-        """Payload mass [kg] implied by base parameters ``(..., p)``, shape ``(...)``."""
-        return self.payload_from_sigma(sigma_hat).mass
+        return self.payload_from_sigma(sigma_hat).mass  # [kg] (...) of base parameters (..., p)
 
     @property
     def payload_rank(self) -> int:
@@ -575,28 +586,12 @@ class Arm:
         }
 
     def _key(self) -> tuple:
-        return (
-            str(self.urdf),
-            self.payload_frame,
-            self.joint_names,
-            tuple(self.gravity),
-            tuple(self.viscous),
-            tuple(self.coulomb),
-            tuple(self.armature),
-            tuple(map(tuple, self.position_limits)),
-            tuple(self.velocity_limits),
-            self.actuator,
-            self.sensor,
-            self.payload_radius,
-            self.friction,
-            self.friction_params,
-            self.payload_capacity,
-            self.payload_offset,
-            self.repair_inertia,
-            self.general,
-            tuple(self.lugre_stiffness),
-            None if self.lugre_damping is None else tuple(self.lugre_damping),
-        )
+        """Every compared field, arrays as (nested) tuples: equal arms describe the same arm."""
+
+        def plain(v):
+            return tuple(map(plain, v)) if isinstance(v, (np.ndarray, list, tuple)) else v
+
+        return tuple(plain(getattr(self, f.name)) for f in fields(self) if f.compare)
 
     def __eq__(self, other: object) -> bool:
         return isinstance(other, Arm) and self._key() == other._key()

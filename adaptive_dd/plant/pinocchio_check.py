@@ -112,7 +112,7 @@ def _comparisons(arm: Arm, sigma, q, qd, qdd, ref: dict, mine: dict) -> list[tup
     return [
         (
             "regressor @ sigma vs pin.rnea + friction + armature",
-            arm.inverse_dynamics(q, qd, qdd, sigma),
+            np.einsum("sij,j->si", arm.regressor(q, qd, qdd), sigma),
             ref["rnea"] + fric + ia * qdd,
         ),
         ("mass_matrix(sigma) vs pin.crba + armature", arm.mass_matrix(q, sigma), ref["crba"] + np.diag(ia)),

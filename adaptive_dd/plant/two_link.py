@@ -382,6 +382,10 @@ class ClosedFormTwoLink:
         """Inertia matrix M(q) of eq. (3), ``(..., 2, 2)``; ``sigma`` defaults to :attr:`sigma`."""
         return dynamics.mass_matrix(q, self.sigma if sigma is None else sigma)
 
+    def inverse_dynamics(self, q, qd, qdd, sigma: ArrayLike | None = None) -> Array:
+        """Joint torques ``Phi @ sigma`` of eq. (7), ``(..., 2)``; ``sigma`` defaults to :attr:`sigma`."""
+        return dynamics.inverse_dynamics(q, qd, qdd, self.sigma if sigma is None else sigma)
+
     def regressor(self, q: ArrayLike, qd: ArrayLike, qdd: ArrayLike) -> Array:
         """Regressor Phi(q, qd, qdd) of eq. (8), ``(..., 2, 7)``: ``Phi @ sigma`` is the torque."""
         return dynamics.regressor(q, qd, qdd)
