@@ -14,7 +14,7 @@ from adaptive_dd.benchmark.scenario import parse_scenario, read_toml
 from adaptive_dd.errors import ParameterError, ScenarioError
 from adaptive_dd.identification.online import OnlineConfig, est_init
 from adaptive_dd.identification.online_config import payload_prior
-from adaptive_dd.plant.arm import Arm
+from adaptive_dd.plant.arm import DEFAULT_PAYLOAD_OFFSET, Arm
 from adaptive_dd.plant.payload import payload_parameters
 
 IZZ = 9  # index of Izz in the payload's ten parameters (Pinocchio's order)
@@ -51,7 +51,11 @@ def test_the_estimator_reopens_along_the_arms_stated_payload():
 
 
 def test_the_default_offset_is_a_tool_off_the_flange():
-    assert Arm.sice().payload_offset == 0.1
+    """A URDF arm whose data sheet states none: 0.1 m; the paper's arm states its disks centred (eq. 9)."""
+    from adaptive_dd.robots import robot_urdf
+
+    assert Arm.from_urdf(robot_urdf("ur5"), "tool0").payload_offset == DEFAULT_PAYLOAD_OFFSET == 0.1
+    assert Arm.sice().payload_offset == 0.0
 
 
 @pytest.mark.parametrize("value", [-0.01, float("nan"), 11.0])

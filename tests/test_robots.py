@@ -144,6 +144,32 @@ def test_sice_friction_limits_and_no_gravity():
     np.testing.assert_allclose(g, 0.0, atol=1e-12)
 
 
+def test_a_shipped_robot_brings_its_data_sheet_and_a_scenario_overrides_it():
+    """``robot = "sice_arm"`` is the paper's arm whichever runtime runs it: its data sheet (the
+    encoders and noise of Tables 2 and 4, the 12-bit D/A, payloads centred on the tip) as
+    ``Arm.sice()`` and the closed forms' record have it; a scenario's ``[arm]`` and ``[noise]`` keys
+    still override each of them, and a robot whose sheet states nothing keeps a URDF arm's defaults."""
+    from adaptive_dd.benchmark.scenario import parse_scenario
+    from adaptive_dd.plant import Arm
+
+    closed = ClosedFormTwoLink.sice()
+    for general in (False, True):
+        arm = parse_scenario({"arm": {"robot": "sice_arm", "general": general}}).arm
+        assert arm.sensor == closed.sensor == Arm.sice().sensor
+        assert arm.actuator.dac_bits == closed.actuator.dac_bits == 12
+        assert arm.payload_offset == Arm.sice().payload_offset == 0.0
+    table = {"robot": "sice_arm", "general": True, "encoder_counts": [4096, 4096], "dac_bits": 16}
+    sc = parse_scenario(
+        {"arm": {**table, "payload_offset": 0.02}, "noise": {"velocity_variance": [1e-6, 1e-6]}}
+    )
+    assert sc.arm.sensor.encoder_counts == (4096, 4096) and sc.arm.actuator.dac_bits == 16
+    assert sc.arm.payload_offset == 0.02
+    assert tuple(sc.arm.sensor.velocity_variance) == (1e-6, 1e-6)
+    assert tuple(sc.arm.sensor.position_variance) == closed.sensor.position_variance
+    ur5 = Arm.from_urdf(robot_urdf("ur5"), "tool0")
+    assert ROBOTS["ur5"].stated(ur5) == {}
+
+
 def test_sice_tip_frame():
     model = _load("sice_arm")
     np.testing.assert_allclose(_frame(model, np.zeros(2), "tip").translation, [L1 + L2, 0, 0], atol=1e-15)

@@ -303,3 +303,15 @@ def test_fuzzer_small_configuration_finds_no_crash_and_no_meaningless_scenario()
     assert counts["crash"] == 0 and counts["meaningless accepted"] == 0, out.stdout
     assert counts["error not naming the file"] == 0
     assert counts["precise error"] > 100 and counts["valid accepted"] > 20
+
+
+def test_closed_form_parameters_of_no_physical_arm_are_a_scenario_error():
+    """Each of sigma, l1, l2 within its bounds, together an arm whose link 1 weighs 1.6e7 kg: the
+    equivalent arm's URDF (written to the cache) is refused, and the error names the scenario and
+    the keys, not the cache's file (the fuzzer found it as a crash)."""
+    table = {"arm": {"sigma": [10.0, 0.5, 0.5, 1.0, 1.0, 1.0, 1.0], "l1": 1e-3, "l2": 0.3}}
+    with pytest.raises(
+        ScenarioError, match=r"^mine.toml: \[arm\]: the two-link arm that sigma, l1 and l2"
+    ) as e:
+        parse_scenario(table, "mine.toml")
+    assert "cache" not in str(e.value) and "above 10000 kg" in str(e.value)

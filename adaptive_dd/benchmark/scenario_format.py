@@ -42,6 +42,8 @@ def format_scenario(sc: Scenario) -> str:
     for name in (*order, "velocity_variance", "dropout", "excite"):
         key = _FIELD_KEY[name]
         mark = "   (default)" if key in sc.defaulted else ""
+        if mark and name.endswith("_variance"):  # a URDF arm's, or a shipped robot's data sheet's
+            mark = "   (default: the arm's sensors)"
         lines.append(f"{key} = {_show(getattr(sc, name))}{mark}")
     ref = sc.reference
     mark = "   (default)" if "reference" in sc.defaulted else ""

@@ -36,7 +36,7 @@ from numpy.typing import ArrayLike, NDArray
 from adaptive_dd.errors import ParameterError
 from adaptive_dd.errors import is_finite_number as _is_num
 from adaptive_dd.plant.base_parameters import BaseParameters, base_parameters, standard_names
-from adaptive_dd.plant.devices import SICE_SENSOR, ActuatorConfig, SensorConfig
+from adaptive_dd.plant.devices import ActuatorConfig, SensorConfig
 from adaptive_dd.plant.payload import PayloadEstimate, payload_parameters
 from adaptive_dd.plant.urdf import read_urdf
 
@@ -216,9 +216,9 @@ class Arm:
     # ----------------------------------------------------------------- factories
     @classmethod
     def sice(cls, **overrides) -> Arm:
-        """The paper's SICE two-link arm (the shipped ``sice_arm.urdf``, payload at ``tip``; the
-        paper's 12-bit D/A, (70, 15) N m and encoders and noise of its Tables 2 and 4, as
-        :meth:`ClosedFormTwoLink.sice() <adaptive_dd.plant.two_link.ClosedFormTwoLink.sice>`).
+        """The paper's SICE two-link arm: the shipped ``sice_arm.urdf`` (payload at ``tip``) with its
+        data sheet (``ROBOTS["sice_arm"]``: the 12-bit D/A, encoders and noise of Tables 2 and 4,
+        payloads centred on the tip, eq. 9), as :class:`~adaptive_dd.plant.two_link.ClosedFormTwoLink`.
 
         Its closed forms (eqs. 3-9) are its fast path:
         :func:`~adaptive_dd.plant.two_link.closed_form_view` of it is
@@ -227,11 +227,11 @@ class Arm:
         :class:`~adaptive_dd.benchmark.scenario.Scenario` of it; ``general=True`` keeps the general
         kernels. :func:`~adaptive_dd.plant.two_link_view.paper_sigma` maps its base parameters onto the
         paper's ``[J1 J2 r b1 b2 d1 d2]``."""
-        from adaptive_dd.robots import robot_urdf
+        from adaptive_dd.robots import ROBOTS, robot_urdf
 
-        arm = cls.from_urdf(robot_urdf("sice_arm"), "tip")
-        kw = {"actuator": ActuatorConfig(arm.actuator.torque_limit, dac_bits=12), "sensor": SICE_SENSOR}
-        return replace(arm, **{**kw, **overrides})
+        info = ROBOTS["sice_arm"]
+        arm = cls.from_urdf(robot_urdf("sice_arm"), info.payload_frame)
+        return replace(arm, **{**info.stated(arm), **overrides})
 
     @classmethod
     def from_urdf(

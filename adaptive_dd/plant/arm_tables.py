@@ -196,6 +196,11 @@ def arm_from_tables(arm_table: dict | None, plant_table: dict | None, src: str =
     kw.update(plant_kw)
     try:
         return ClosedFormTwoLink(**kw).to_arm()  # an Arm whose closed forms are exactly these
+    except UrdfError as exc:  # the equivalent arm's URDF (written to the cache) refused: not the user's file
+        reason = str(exc).split(": ", 1)[-1]
+        raise ScenarioError(
+            f"{src}: [arm]: the two-link arm that sigma, l1 and l2 describe: {reason}; check them together"
+        ) from None
     except (ParameterError, ArithmeticError) as exc:
         raise ScenarioError(f"{src}: [arm]/[plant]: {type(exc).__name__}: {exc}") from None
 
@@ -252,7 +257,8 @@ URDF_ARM_KEYS = (
 def urdf_arm_from_table(src: str, table: dict, plant_kw: dict):
     """The arm of an ``[arm]`` table with ``urdf`` (a path relative to the scenario file) or ``robot``.
 
-    ``robot`` names a shipped robot (:data:`adaptive_dd.robots.ROBOTS`). Optional:
+    ``robot`` names a shipped robot (:data:`adaptive_dd.robots.ROBOTS`), with what its data sheet
+    states beyond the URDF (:meth:`~adaptive_dd.robots.RobotInfo.stated`). Optional:
     ``payload_frame`` (a link), ``gravity = [x, y, z]`` (default ``[0, 0, -9.81]``),
     per-joint lists ``viscous``, ``coulomb``, ``armature``, ``torque_limit``,
     ``encoder_counts``, and ``dac_bits``, ``payload_radius``, ``repair_inertia`` (repair a
@@ -272,6 +278,11 @@ def urdf_arm_from_table(src: str, table: dict, plant_kw: dict):
     """
     path, frame = _urdf_source(src, table)
     arm = _load_urdf_arm(src, table, path, frame)
+    if "robot" in table:  # a shipped robot's data sheet, beyond its URDF (RobotInfo.stated)
+        from adaptive_dd.robots import ROBOTS
+
+        info = ROBOTS.get(table["robot"])
+        arm = replace(arm, **info.stated(arm)) if info is not None else arm
     kw = _arm_overrides(src, table, arm, plant_kw)
     try:
         arm = replace(arm, **kw)

@@ -12,9 +12,10 @@ The files are the output of ``tools/make_robot_urdfs.py`` (``--check`` compares)
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
+from adaptive_dd.plant.devices import SICE_SENSOR, SensorConfig
 from adaptive_dd.robots.random_arm import RandomArm, random_arm
 
 __all__ = ["ROBOTS", "RandomArm", "RobotInfo", "UnknownRobotError", "random_arm", "robot_urdf"]
@@ -34,6 +35,11 @@ class RobotInfo:
         Name of the frame where a payload is attached (a fixed frame at the flange or tip).
     description : str
         One line: what it is and where its numbers come from.
+    sensor, dac_bits, payload_offset
+        What its data sheet states that a URDF has no place for (:meth:`stated`): the encoders'
+        counts and the sensors' noise variances, the D/A's bits, the payload's centre-of-mass
+        offset [m]; None: not stated (a URDF arm's defaults). A scenario's ``[arm]`` and
+        ``[noise]`` keys override them.
 
     Examples
     --------
@@ -47,6 +53,22 @@ class RobotInfo:
     file: str
     payload_frame: str
     description: str
+    sensor: SensorConfig | None = None
+    dac_bits: int | None = None
+    payload_offset: float | None = None
+
+    def stated(self, arm) -> dict:
+        """What the robot's data sheet states beyond its URDF, as :func:`dataclasses.replace`'s
+        keywords for an :class:`~adaptive_dd.plant.arm.Arm` read from it: the encoders and sensor
+        noise (``sensor``), the D/A's bits (``dac_bits``) and how far a payload's centre of mass
+        lies from the payload frame (``payload_offset``); the ones not stated keep the URDF arm's
+        defaults."""
+        kw: dict = {} if self.sensor is None else {"sensor": self.sensor}
+        if self.dac_bits is not None:
+            kw["actuator"] = replace(arm.actuator, dac_bits=self.dac_bits)
+        if self.payload_offset is not None:
+            kw["payload_offset"] = self.payload_offset
+        return kw
 
 
 ROBOTS: dict[str, RobotInfo] = {
@@ -55,6 +77,9 @@ ROBOTS: dict[str, RobotInfo] = {
         "tip",
         "SICE SR-402DD two-link direct-drive arm, horizontal (Arm.sice()); Table 1 of 'Recursive "
         "simultaneous estimation of a two-link direct drive manipulator with great variation of payload'",
+        sensor=SICE_SENSOR,  # its encoders and noise (Tables 2 and 4)
+        dac_bits=12,  # its D/A
+        payload_offset=0.0,  # its payloads: disks centred on the tip (eq. 9)
     ),
     "vertical3": RobotInfo(
         "vertical3.urdf",
