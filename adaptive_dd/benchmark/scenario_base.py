@@ -56,17 +56,19 @@ KEYS = {
 
 # Kept per trial and sample by the runner: the error norm as float32 (metrics stream; full
 # trajectories only for the first few seeds); wall time per sample and controller (the
-# per-block overhead) and per trial-sample on the compiled path, fitted to the paper's default
-# scenario's warm `adaptive-dd benchmark --seeds 1` and `--seeds 100`, 5.8 s and 12.4 s wall
-# at load 2-3 (`python benchmarks/estimate_check.py adaptive_dd/scenarios/payload_swap.toml --cli
-# --seeds 1 10 50 100`; _SETUP_SECONDS below is the rest).
+# per-block overhead) and per trial-sample on the compiled path. Fitted to warm runs of
+# `python benchmarks/estimate_check.py SCENARIO --cli --seeds 1 10` (and 100 for the paper's, 50
+# for the UR5) on a quiet 2-core machine (load 1-2; a busy one stretches the wall time): the
+# paper's default scenario 2.8, 3.8 and 11.6 s wall (7 controllers, 20 s).
 _BYTES_PER_SAMPLE_TRIAL = 5
 _SECONDS_PER_SAMPLE_CONTROLLER = 9e-6
-_SECONDS_PER_SAMPLE_TRIAL = 4.8e-7
-# N-joint (URDF) arms: per trial-sample, times n_joints^2, fitted to the UR5 scenario's warm
-# `adaptive-dd benchmark --seeds 1 10 50` (its 7 controllers, adaptive_dd.closed_loop: 9.8-13.6 s,
-# 22.2-39.9 s and 97.6 s wall at load 2-3, the same command on ur5_tool_swap.toml).
-_SECONDS_PER_SAMPLE_TRIAL_JOINT2 = 3.0e-7
+_SECONDS_PER_SAMPLE_TRIAL = 6.3e-7
+# N-joint (URDF) arms: per trial-sample a + b n_joints^2 (the estimator's fixed part, and its
+# rows times its parameters), fitted to the same runs of vertical3_payload (3 joints: 5.5 and
+# 9.7 s), ur5_tool_swap (6: 8.7, 18.6 and 57.0 s with 50 seeds) and panda_payload (7: 9.3 and
+# 20.5 s), each with its 7 controllers.
+_SECONDS_PER_SAMPLE_TRIAL_GENERAL = 2.6e-6
+_SECONDS_PER_SAMPLE_TRIAL_JOINT2 = 1.7e-7
 # The excitation phase ([run] excite, adaptive_dd.closed_loop.excitation_phase): its closed loop at
 # the rates above (one controller, every seed), plus the excitation's design (once) and one
 # identification per seed, per sample of the record times n_joints^2; measured on
@@ -77,13 +79,12 @@ _SECONDS_PER_SAMPLE_TRIAL_JOINT2 = 3.0e-7
 _EXCITE_DESIGN_SECONDS = 33.0
 _IDENTIFY_SECONDS_PER_SAMPLE_JOINT2 = 1.3e-5
 # What a warm `adaptive-dd benchmark` spends around the closed loop, once per run: imports,
-# loading the cached kernels, the arm, the report and its figures. The paper's default scenario,
-# warm: 5.3 CPU s in all with --seeds 1 against 1.1 for the closed loop alone, 6.8 against 2.1
-# with --seeds 10; the UR5's (the general kernels) 13.9 against 3.2 with --seeds 1
-# (`python benchmarks/estimate_check.py --cli --seeds 1 10 SCENARIO` and the same without `--cli`
-# at `--duration 20`, CPU seconds, the machine at load 7-14).
-_SETUP_SECONDS = 4.5
-_SETUP_SECONDS_GENERAL = 10.5
+# loading the cached kernels, the arm, the report and its figures; the runs above less their
+# closed loops: the paper's arm on its closed forms 1.45 s, an N-joint arm s0 + s1 n_joints^2
+# (sice_general, 2 joints, 3.3 s; vertical3 4.0; the UR5 6.2; the Panda 7.05).
+_SETUP_SECONDS = 1.45
+_SETUP_SECONDS_GENERAL = 2.97
+_SETUP_SECONDS_JOINT2 = 0.083
 
 
 @dataclass(frozen=True)
@@ -194,7 +195,7 @@ def run_estimate(
     compile_seconds : float
         One-time compilation [s] added to the time (as is what a run spends around the closed
         loop: imports, loading the kernels, the report; ``_SETUP_SECONDS``, on the general
-        kernels ``_SETUP_SECONDS_GENERAL``).
+        kernels ``_SETUP_SECONDS_GENERAL`` plus ``_SETUP_SECONDS_JOINT2`` per joint squared).
     excite_samples : int
         The samples of an excitation phase (``[run] excite`` / T, an N-joint arm's): its closed
         loop (one controller, every seed) at the task's rates, the design once and an
@@ -218,14 +219,19 @@ def run_estimate(
     """
     trials = n_seeds * n_controllers
     nbytes = float(n_samples) * trials * _BYTES_PER_SAMPLE_TRIAL
-    per = _SECONDS_PER_SAMPLE_TRIAL if n_joints is None else _SECONDS_PER_SAMPLE_TRIAL_JOINT2 * n_joints**2
+    n2 = 0 if n_joints is None else n_joints**2
+    per = (
+        _SECONDS_PER_SAMPLE_TRIAL
+        if n_joints is None
+        else _SECONDS_PER_SAMPLE_TRIAL_GENERAL + _SECONDS_PER_SAMPLE_TRIAL_JOINT2 * n2
+    )
     secs = float(n_samples) * (n_controllers * _SECONDS_PER_SAMPLE_CONTROLLER + trials * per)
     excite = 0.0
     if excite_samples > 0:
-        n2 = (n_joints or 2) ** 2
+        nj2 = (n_joints or 2) ** 2
         loop = float(excite_samples) * (_SECONDS_PER_SAMPLE_CONTROLLER + n_seeds * per)
-        ident = n_seeds * float(excite_samples) * n2 * _IDENTIFY_SECONDS_PER_SAMPLE_JOINT2
+        ident = n_seeds * float(excite_samples) * nj2 * _IDENTIFY_SECONDS_PER_SAMPLE_JOINT2
         excite = loop + _EXCITE_DESIGN_SECONDS + ident
-    setup = _SETUP_SECONDS if n_joints is None else _SETUP_SECONDS_GENERAL
+    setup = _SETUP_SECONDS if n_joints is None else _SETUP_SECONDS_GENERAL + _SETUP_SECONDS_JOINT2 * n2
     total = setup + secs + excite + compile_seconds
     return RunEstimate(int(n_samples), int(trials), nbytes, total, float(compile_seconds), excite)
