@@ -11,7 +11,14 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 import numpy as np
 
-from adaptive_dd.plot_style import _mark_alarms, _mark_swaps, _step, controller_style, save_figure
+from adaptive_dd.plot_style import (
+    _mark_alarms,
+    _mark_swaps,
+    _step,
+    controller_style,
+    save_figure,
+    set_margins,
+)
 
 __all__ = [
     "plot_benchmark_estimates",
@@ -88,10 +95,11 @@ def plot_tracking_errors(res, path: str | Path | None = None, window: float = 0.
         f"Tracking error of every controller on {res.scenario.name}: {window * 1e3:.0f} ms moving RMS "
         "[mrad] against time [s], mean over seeds, payload [kg] above each segment",
         fontsize=8,
-        y=1.0,
+        y=0.985,
     )
+    set_margins(fig, left=0.85, right=0.15, bottom=0.55, top=0.6)
     if path is not None:
-        save_figure(fig, path, formats)
+        save_figure(fig, path, formats, tight=False)
     return fig
 
 
@@ -235,8 +243,9 @@ def _finish_estimates(fig, axes, res, title: str, path, formats):
         f"{title} (mean over the seeds with kept trajectories; ticks: change alarms of the first seed)",
         fontsize=9,
     )
+    set_margins(fig, left=0.9, right=0.15, bottom=0.65, top=0.45, wspace=0.25, hspace=0.08)
     if path is not None:
-        save_figure(fig, path, formats)
+        save_figure(fig, path, formats, tight=False)
     return fig
 
 

@@ -66,3 +66,20 @@ def pytest_unconfigure(config):
             else:  # pragma: no cover - Windows: no process groups
                 p.terminate()
         p.wait()
+
+
+@pytest.fixture
+def assert_on_the_page():
+    """A check that nothing drawn falls off a figure's page (a tick label, an axis label, the
+    title): the benchmark's figures have fixed margins and no cropping pass."""
+
+    def check(fig) -> None:
+        from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+        canvas = FigureCanvasAgg(fig)
+        canvas.draw()
+        drawn = fig.get_tightbbox(canvas.get_renderer())  # [in]
+        w, h = fig.get_size_inches()
+        assert drawn.x0 >= 0 and drawn.y0 >= 0 and drawn.x1 <= w and drawn.y1 <= h, (drawn, w, h)
+
+    return check

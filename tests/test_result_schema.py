@@ -135,6 +135,28 @@ def test_the_long_table_and_the_csv_have_one_schema_on_every_arm(results, tmp_pa
     assert {"rms_error_rad", "rms_torque_Nm", "mass_kg", "failed_at_s"} <= set(two.columns)
 
 
+def test_the_cli_per_seed_csv_is_the_frame_pandas_writes(results, tmp_path):
+    """``adaptive-dd benchmark`` writes ``per_seed.csv`` without pandas: byte for byte the text of
+    ``to_frame().to_csv`` on both arms, with a failed trial (its reason, its blanks empty),
+    estimates missing on one arm and whole-number columns holding NaN (``false_alarms_per_seed``)."""
+    from adaptive_dd.benchmark.results import write_per_seed_csv
+
+    for arm, (res, _) in results.items():
+        want, got = tmp_path / f"{arm}_pandas.csv", tmp_path / f"{arm}.csv"
+        res.to_frame().to_csv(want, index=False)
+        write_per_seed_csv(res, got)
+        assert "non-finite torque" in want.read_text() and ".0," in want.read_text(), arm
+        assert got.read_text() == want.read_text(), arm
+
+
+def test_the_benchmark_figures_fit_their_page_on_every_arm(results, assert_on_the_page):
+    from adaptive_dd.plotting import plot_benchmark_estimates, plot_tracking_errors
+
+    for res, _ in results.values():  # the paper's estimates on one, the payload's on the other
+        assert_on_the_page(plot_tracking_errors(res))
+        assert_on_the_page(plot_benchmark_estimates(res))
+
+
 def test_a_diverged_trial_is_failed_blanked_and_explained_the_same_on_every_arm(results):
     """A NaN torque at 1.3 s on trial 1: failed there, its segments that end after 1.3 s blanked
     (the first kept), the same seed, time and reason on both arms, in the JSON and the table."""

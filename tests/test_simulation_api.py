@@ -81,7 +81,7 @@ def test_results_as_a_long_table_and_a_summary(short):
     assert prov["version"] and prov["seed_indices"] == [0, 1] and prov["scenario"]["swap_masses"] == [3.0]
 
 
-def test_figures_are_returned_with_one_style_per_controller(short, tmp_path):
+def test_figures_are_returned_with_one_style_per_controller(short, tmp_path, assert_on_the_page):
     from adaptive_dd.benchmark.runner import run_benchmark
     from adaptive_dd.plotting import controller_style, plot_benchmark_estimates, plot_tracking_errors
 
@@ -97,6 +97,8 @@ def test_figures_are_returned_with_one_style_per_controller(short, tmp_path):
     fig2 = plot_benchmark_estimates(res, tmp_path / "est.png", formats=("png", "svg"))
     assert (tmp_path / "est.png").is_file() and (tmp_path / "est.svg").is_file()
     assert fig2.axes[0].get_lines()[1].get_color() == controller_style("adaptive_ct")["color"]
+    for f in (fig, fig2):
+        assert_on_the_page(f)
 
 
 def test_no_module_constant_outside_the_default_factory():

@@ -97,11 +97,60 @@ def to_frame(res):
     """
     import pandas as pd
 
+    return pd.DataFrame(_rows(res), columns=frame_columns(res.scenario.n_joints))
+
+
+def write_per_seed_csv(res, path) -> None:
+    """Write :func:`to_frame`'s table as ``per_seed.csv`` without importing pandas (a quarter of
+    a second of a short run): the same text as ``to_frame(res).to_csv(path, index=False)``.
+
+    A column that holds whole numbers and a missing value is written as floats (``3.0``), as
+    pandas writes it; a missing value (NaN, None) is an empty field.
+    """
+    import csv
+    import math
+    from numbers import Integral
+
+    columns = frame_columns(res.scenario.n_joints)
+    rows = _rows(res)
+
+    def missing(v) -> bool:
+        return v is None or (isinstance(v, float) and math.isnan(v))
+
+    def whole(v) -> bool:
+        return isinstance(v, Integral) and not isinstance(v, (bool, np.bool_))
+
+    as_float = {
+        c
+        for c in columns
+        if any(missing(r.get(c)) for r in rows)
+        and any(whole(r.get(c)) for r in rows)
+        and all(missing(r.get(c)) or whole(r.get(c)) or isinstance(r.get(c), float) for r in rows)
+    }
+
+    def text(c: str, v) -> str:
+        if missing(v):
+            return ""
+        if c in as_float or isinstance(v, (float, np.floating)):
+            return repr(float(v))
+        if isinstance(v, (bool, np.bool_)):
+            return str(bool(v))
+        return str(v)
+
+    with open(path, "w", newline="") as f:
+        w = csv.writer(f, lineterminator="\n")
+        w.writerow(columns)
+        for r in rows:
+            w.writerow([text(c, r.get(c)) for c in columns])
+
+
+def _rows(res) -> list[dict]:
+    """Every controller's rows of :func:`to_frame`, keyed by column."""
     per = {name: per_seed_segment_metrics(res, run) for name, run in res.runs.items()}
     rows = []
     for name, run in res.runs.items():
         rows += _controller_rows(res, name, run, per)
-    return pd.DataFrame(rows, columns=frame_columns(res.scenario.n_joints))
+    return rows
 
 
 def _controller_rows(res, name: str, run, per: dict) -> list[dict]:

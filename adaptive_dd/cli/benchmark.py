@@ -101,8 +101,9 @@ def _benchmark(args: argparse.Namespace, sc, outputs) -> list[Path]:
     write_json(metrics, outputs.extra(args.json) if args.json else outputs.path("metrics.json"))
     written = [out / "metrics.csv", Path(args.json or out / "metrics.json")]
     written += _figures(res, sc, outputs, out, tuple(args.figure_formats))
-    frame = res.to_frame()
-    frame.to_csv(outputs.path("per_seed.csv"), index=False)
+    from adaptive_dd.benchmark.results import write_per_seed_csv
+
+    write_per_seed_csv(res, outputs.path("per_seed.csv"))
     written.append(out / "per_seed.csv")
     if res.plant is not None:  # the plant is not the model: each seed's drawn plant
         from adaptive_dd.benchmark.results import plant_frame
