@@ -211,19 +211,14 @@ def _lock_compilations() -> None:
 
 
 # ------------------------------------------------------------ telling the user about compilation
-COMPILE_SECONDS = {"two-link": 62.0, "serial": 140.0}
-"""One-time compilation of a benchmark's kernels with a cold cache, on 2 cores: a guide for the
-message and ``validate``'s estimate, not a promise. Numba's compilation runs on one core, so its
-CPU seconds are about what it takes on an idle machine (a busy one stretches the wall time: the
-figures below took 468 s and 942 s at load 8-14). The two-link default scenario: 53.8 CPU s for
-the closed loop (``python benchmarks/estimate_check.py --seeds 1 --duration 2
-adaptive_dd/scenarios/payload_swap.toml`` with a fresh ``NUMBA_CACHE_DIR``) and about 9 more for
-the report's kernels on the first ``adaptive-dd benchmark`` (its ``--cli`` form after that: 14.0
-CPU s against 5.3 warm). An N-joint arm (any compiles the same kernels) compiles in two processes
-at once (:class:`Compiling`): 166.5 CPU s of both for the UR5 (the same command on
-``ur5_tool_swap.toml``); a user's cold UR5 run on a quiet 2-core machine printed ``compiled the
-kernels in 157 s`` (issue 41). ``benchmarks/compile_phases.py`` gives the phases in CPU seconds.
-The history of these figures: ``docs/guide/first_run.md``."""
+COMPILE_SECONDS = {"two-link": 48.0, "serial": 85.0}
+"""One-time compilation of a benchmark's kernels with a cold cache, on 2 idle cores: a guide for
+the message and ``validate``'s estimate, not a promise (a busy machine stretches it; numba
+compiles each kernel on one core). Measured with an empty cache (``XDG_CACHE_HOME`` a fresh
+folder), ``adaptive-dd benchmark --seeds 1`` printed ``compiled the kernels in 45 s`` on the
+paper's arm and 83 s on ``ur5_tool_swap.toml``, where an N-joint arm (any compiles the same
+kernels) compiles in two processes at once (:class:`Compiling`; 149 CPU s of both).
+``benchmarks/compile_phases.py`` gives the phases in CPU seconds; earlier figures are in the changelog."""
 
 
 def _closed_loop_kernel(serial: bool):
