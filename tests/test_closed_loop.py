@@ -263,6 +263,7 @@ def test_a_diverging_trial_is_contained_and_a_raising_controller_fails_only_its_
     # trial 1 of the sabotaged controller is untouched: the same as ct_nominal's trial 1
     np.testing.assert_allclose(bad.acc.sum_e2[1], good.acc.sum_e2[1], rtol=1e-12)
     assert boom.failed.all() and "RuntimeError in command" in boom.error and "boom" in boom.error
+    assert set(boom.failed_why.values()) == {boom.error}  # each trial's reason: the exception
     assert not good.failed.any()
     # the benchmark's one failure rule: left out of the segments that end after its failure
     from adaptive_dd.benchmark.metrics import per_seed_segment_metrics
@@ -472,3 +473,23 @@ def test_in_threads_runs_the_two_link_prange_kernel_once_over_every_trial(monkey
     assert sorted(calls) == [(0, 0, ("a",)), (0, 2, ("a",)), (2, 5, ("a",))]
     assert glue.closed_loop_block.targetoptions["parallel"] is True
     assert glue.chain_loop_block.targetoptions["parallel"] is not True
+
+
+def test_run_benchmark_on_an_n_joint_arm_calls_on_run_and_checks_its_seeds():
+    """``on_run`` after each controller, as on the two-link arm (the CLI frees each controller's
+    error norm through it: the metrics are the same); seed indices checked before any work."""
+    from adaptive_dd.benchmark.metrics import compute_metrics, release_error_norm
+    from adaptive_dd.benchmark.runner import run_benchmark
+    from adaptive_dd.errors import ParameterError
+
+    sc = _short("vertical3_payload_exact", 0.6, (0.3,), seeds=2, controllers=["ct_oracle", "ct_nominal"])
+    seen = []
+    res = run_benchmark(sc, progress=False, on_run=lambda r, run: seen.append(run.name))
+    assert seen == ["ct_oracle", "ct_nominal"]
+    freed = run_benchmark(sc, progress=False, on_run=release_error_norm)
+    assert freed.runs["ct_nominal"].e_norm.shape[0] == 0  # freed, its figures derived first
+    a, b = compute_metrics(res)["controllers"], compute_metrics(freed)["controllers"]
+    assert a["ct_nominal"]["segments"] == b["ct_nominal"]["segments"]
+    for bad in ([], [-1]):
+        with pytest.raises(ParameterError, match="seed_indices"):
+            run_benchmark(sc, progress=False, seed_indices=bad)

@@ -117,6 +117,9 @@ def test_a_failing_controller_fails_only_its_own_trials(swap_scenario, where):
     assert not res.runs["ct_oracle"].failed.any()
     m = compute_metrics(res)["controllers"]
     assert m["bad"]["failed_trials"] == sc.seeds and m["bad"]["error"]
+    # each trial's reason is the controller's own failure, not the NaN it left in its place
+    whys = {f["why"] for f in m["bad"]["failures"]} | set(res.to_frame().query("controller == 'bad'").failure)
+    assert whys == {bad.error}, whys
     assert m["ct_oracle"]["segments"][0]["rms_error"] < 1e-3
 
 

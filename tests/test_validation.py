@@ -315,3 +315,25 @@ def test_closed_form_parameters_of_no_physical_arm_are_a_scenario_error():
     ) as e:
         parse_scenario(table, "mine.toml")
     assert "cache" not in str(e.value) and "above 10000 kg" in str(e.value)
+
+
+def test_a_scenario_built_in_code_checks_its_payloads_centres_and_inertias():
+    """``swap_com`` and ``swap_inertia`` follow ``swap_times``: a Scenario changed in code with
+    another number of swaps, or a centre that is not three numbers, is refused when built."""
+    import dataclasses
+
+    from adaptive_dd.benchmark.scenario import load_scenario
+    from adaptive_dd.errors import ScenarioError
+
+    sc = load_scenario("adaptive_dd/scenarios/ur5_tool_swap.toml")
+    assert len(sc.swap_com) == 3
+    with pytest.raises(ScenarioError, match=r"swap_com: one entry per payload change \(4"):
+        dataclasses.replace(sc, swap_times=(4, 10, 16, 18), swap_masses=(2, 5, 0, 1))
+    with pytest.raises(ScenarioError, match=r"swap_com\[0\]: must be None or 3 finite numbers"):
+        dataclasses.replace(sc, swap_com=((0, 0, "x"), None, None))
+    with pytest.raises(ScenarioError, match=r"swap_inertia\[1\]"):
+        dataclasses.replace(sc, swap_inertia=(None, (1.0, 0.0), None))
+    one = dataclasses.replace(
+        sc, swap_times=(4.0,), swap_masses=(2.0,), swap_com=sc.swap_com[:1], swap_inertia=sc.swap_inertia[:1]
+    )
+    assert one.payload_of(0)["com"] == sc.swap_com[0]

@@ -128,7 +128,7 @@ def run_benchmark(
 
             res = run_closed_loop(
                 scenario, controllers, seed_indices=seed_indices, keep_trajectories=keep_trajectories,
-                engine=engine, bar=clock, scale_check=scale_check,
+                engine=engine, bar=clock, scale_check=scale_check, on_run=on_run,
             )  # fmt: skip
         else:  # the paper's closed forms
             res = _run_two_link(scenario, clock, controllers, engine, keep_trajectories, seed_indices, on_run)

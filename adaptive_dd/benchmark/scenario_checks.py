@@ -230,6 +230,28 @@ def _check_controllers(e: list, c: Any, arm: Any = None) -> bool:
     return ok
 
 
+def _check_payload_bodies(e: list, v: dict, n_swaps: int) -> None:
+    """``swap_com`` and ``swap_inertia`` as a Scenario built in code holds them: empty, or one
+    entry per payload change (None: the default), each that many finite numbers."""
+    for key, size in (("swap_com", 3), ("swap_inertia", 6)):
+        x = v.get(key, ())
+        if not isinstance(x, tuple | list) or (len(x) and len(x) != n_swaps):
+            e.append(
+                f"{key}: one entry per payload change ({n_swaps}, or none), got {_short(x)}; "
+                "change it with swap_times and swap_masses"
+            )
+            continue
+        for i, c in enumerate(x):
+            ok = c is None or (
+                isinstance(c, tuple | list)
+                and len(c) == size
+                and all(isinstance(y, int | float) and not isinstance(y, bool) for y in c)
+                and all(math.isfinite(y) for y in c)
+            )
+            if not ok:
+                e.append(f"{key}[{i}]: must be None or {size} finite numbers, got {_short(c)}")
+
+
 def _check_payload(e: list, v: dict, timing_ok: bool) -> None:
     L = LIMITS
 
@@ -240,6 +262,7 @@ def _check_payload(e: list, v: dict, timing_ok: bool) -> None:
     if len(times) > L["max_swaps"]:
         e.append(f"payload: {len(times)} payload changes; at most {L['max_swaps']}")
         return
+    _check_payload_bodies(e, v, len(times))
     d = v["duration"] if timing_ok else math.inf
     ok = True
     for i, (t, m) in enumerate(zip(times, masses, strict=True)):

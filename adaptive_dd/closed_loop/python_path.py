@@ -136,7 +136,7 @@ def _sample(ctrl, glue, rc: RunConstants, run: ControllerRun, k: int, noise, los
             error = f"{type(exc).__name__} in command at t = {k * T:.3f} s: {exc}"
     before = run.failed.copy()
     tau, s = glue.apply(k, cmd)
-    _say_why(run, before, cmd, k * T)
+    _say_why(run, before, cmd, k * T, error)
     estimated = False
     if not error:
         try:
@@ -150,11 +150,14 @@ def _sample(ctrl, glue, rc: RunConstants, run: ControllerRun, k: int, noise, los
     return error, estimated
 
 
-def _say_why(run: ControllerRun, before, cmd: Array, t: float) -> None:
-    """Name a non-finite command as the reason of the trials that failed on it at time t."""
+def _say_why(run: ControllerRun, before, cmd: Array, t: float, error: str = "") -> None:
+    """Name the reason of the trials that failed at time t: the controller's own ``error`` (its
+    exception, after which it commands nothing), else the non-finite command it returned."""
     for i in np.flatnonzero(run.failed & ~before):
         bad = np.flatnonzero(~np.isfinite(cmd[i]))
-        if bad.size:
+        if error:
+            run.failed_why[int(i)] = error
+        elif bad.size:
             j = int(bad[0])
             why = f"non-finite torque command (joint {j + 1}: {cmd[i, j]}) at t = {t:.3f} s"
             run.failed_why[int(i)] = why

@@ -103,6 +103,7 @@ def run_closed_loop(
     engine: str = "auto",
     bar=None,
     scale_check: bool = True,
+    on_run=None,
 ) -> BenchmarkResult:
     """Run every controller of ``scenario`` (an N-joint arm) over its seeds.
 
@@ -124,10 +125,15 @@ def run_closed_loop(
         With an excitation phase (``[run] excite``), compute its report's ``estimator_scale`` (a
         check, reported and not applied:
         :func:`~adaptive_dd.closed_loop.excitation_phase.identify_excitation`).
+    on_run : callable, optional
+        ``on_run(result, run)`` after each controller's trials
+        (:func:`~adaptive_dd.benchmark.runner.run_benchmark`'s).
     """
     from adaptive_dd.errors import ParameterError
 
     idx = tuple(range(scenario.seeds)) if seed_indices is None else tuple(int(i) for i in seed_indices)
+    if not idx or min(idx) < 0:
+        raise ParameterError(f"seed_indices must be a non-empty list of indices >= 0, got {seed_indices}")
     if scenario.excite > 0:  # identification first, then each seed's identified model
         if controllers is not None:
             raise ParameterError(
@@ -136,9 +142,12 @@ def run_closed_loop(
             )
         from adaptive_dd.closed_loop.excitation_phase import run_with_excitation
 
-        return run_with_excitation(
+        res = run_with_excitation(
             scenario, idx, run_closed_loop, keep_trajectories, engine, bar=bar, scale_check=scale_check
         )
+        for run in res.runs.values() if on_run is not None else ():  # the seeds' runs joined
+            on_run(res, run)
+        return res
     ctrls = make_controllers(scenario) if controllers is None else controllers
     rc, io, pl = run_constants(scenario), io_of(scenario), plant_of(scenario, idx)
     _, sigma_true, mass = true_parameters(scenario)
@@ -163,6 +172,8 @@ def run_closed_loop(
             if not (builtin or isinstance(ctrl, PythonForm)):  # a plain-Python one: say once why it is slow
                 print(slow_path_note(name, ctrl), file=sys.stderr, flush=True)
         res.runs[name] = runner(name, ctrl, scenario, idx, rc, io, pl, keep_trajectories, bar, noise)
+        if on_run is not None:
+            on_run(res, res.runs[name])
     return res
 
 
