@@ -52,9 +52,6 @@ def plot_torque_fit(
     >>> [ax.get_ylabel() for ax in fig.axes]
     ['shoulder [N m]', 'elbow [N m]']
     """
-    import matplotlib
-
-    matplotlib.use("Agg", force=False)
     import matplotlib.pyplot as plt
 
     n = measured.shape[1]

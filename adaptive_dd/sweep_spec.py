@@ -281,7 +281,33 @@ def _apply(src: str, base: Scenario, swap: int, coords: dict[str, float]) -> Sce
             raise SweepError(f"{src}: key 'grid.noise_scale' must be >= 0, got {s}")
         changes["position_variance"] = tuple(s * v for v in base.position_variance)
         changes["velocity_variance"] = tuple(s * v for v in base.velocity_variance)
-    return dataclasses.replace(base, swap_times=tuple(times), swap_masses=tuple(masses), **changes)
+    try:
+        return dataclasses.replace(base, swap_times=tuple(times), swap_masses=tuple(masses), **changes)
+    except ScenarioError as exc:  # the grid point's values, not the base scenario's file, are wrong
+        keys = ", ".join(f"'grid.{k}'" for k in coords)
+        why = str(exc).replace(f"{base.source}: ", "")
+        raise SweepError(f"{src}: key {keys} (at {where}): {why}") from None
+
+
+def _check_settings(src: str, points: list) -> None:
+    """Each grid point's controller settings checked as a scenario's ``[controllers.NAME]`` table
+    is (an unknown key, a value out of range): an error of the sweep file, not of every task."""
+    from adaptive_dd.benchmark.scenario_settings import controller_setting_errors
+    from adaptive_dd.sweep import _cell_scenario
+
+    seen = set()
+    for p in points:
+        for name, kv in p.settings:
+            sc = _cell_scenario(p.scenario, name, dict(kv))
+            key = (name, kv, sc.duration, sc.sample_period, sc.bandwidth, sc.damping)
+            if key in seen:
+                continue
+            seen.add(key)
+            fields = {f.name: getattr(sc, f.name) for f in dataclasses.fields(sc) if f.init}
+            errors = controller_setting_errors(fields)
+            if errors:
+                where = ", ".join(f"{a} = {v}" for a, v in p.values)
+                raise SweepError(f"{src}: key 'grid.controller.{name}' (at {where}): {'; '.join(errors)}")
 
 
 def _heatmap(src: str, hm: Any, axes, ctrls, swap: int, n_segments: int) -> dict[str, Any] | None:
@@ -383,5 +409,6 @@ def parse_sweep(data: dict, src: str = "<memory>", base_dir: str | Path = ".") -
                 settings.setdefault(name, []).append((key, v))
         sc = _apply(src, base, swap, coords)
         points.append(GridPoint(i, values, sc, tuple((n, tuple(kv)) for n, kv in settings.items())))
+    _check_settings(src, points)
     hm = _heatmap(src, data.get("heatmap", {}), axes, ctrls, swap, len(base.swap_times) + 1)
     return Sweep(src, base, seeds, min(block, seeds), ctrls, axes, tuple(points), hm)

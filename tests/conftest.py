@@ -7,6 +7,7 @@ import os
 # with one). Set before numpy is imported here; a value the caller set is kept.
 for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_var, "1")
+os.environ.setdefault("MPLBACKEND", "Agg")  # figures to files, on a machine with a display too
 
 import numpy as np  # noqa: E402
 import pytest  # noqa: E402

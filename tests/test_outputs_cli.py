@@ -14,7 +14,7 @@ TINY = """
 duration = 0.3
 sample_period = 0.001
 seeds = 1
-controllers = ["pd"]
+controllers = ["pd", "ct_oracle"]
 [[payload]]
 at = 0.15
 mass = 1.0
@@ -255,7 +255,7 @@ def test_large_run_prints_its_estimate_first(tiny, tmp_path, monkeypatch, capsys
     monkeypatch.setitem(LIMITS, "large_seconds", 0.0)
     monkeypatch.setattr(runner, "run_benchmark", interrupt)
     assert main(["benchmark", str(tiny), "--out", str(tmp_path / "o")]) == EXIT_INTERRUPTED
-    assert "estimate: 300 samples x 1 trials: about" in capsys.readouterr().err
+    assert "estimate: 300 samples x 2 trials: about" in capsys.readouterr().err
     assert list((tmp_path / "o").iterdir()) == []  # the staging folder is gone
 
 
@@ -313,3 +313,22 @@ def test_a_reader_that_stops_early_ends_the_command_quietly(tmp_path):
     err = p.stderr.read()
     assert p.wait() == EXIT_PIPE, err
     assert "error" not in err
+
+
+def test_a_controller_without_its_floor_gets_it_in_the_cli_and_a_warning_in_the_library(tmp_path, capsys):
+    """A scenario listing ``adaptive_ct`` alone: the command adds ``ct_oracle`` and says so (its
+    ratios and limits need it); ``run_benchmark`` given the same scenario warns instead."""
+    import json
+
+    from adaptive_dd.benchmark.runner import run_benchmark
+    from adaptive_dd.benchmark.scenario import load_scenario
+
+    p = tmp_path / "alone.toml"
+    p.write_text(TINY.replace('controllers = ["pd", "ct_oracle"]', 'controllers = ["adaptive_ct"]'))
+    assert 'controllers = ["adaptive_ct"]' in p.read_text()
+    assert main(["benchmark", str(p), "--out", str(tmp_path / "o"), "--no-progress"]) == 0
+    assert "run.controllers: ct_oracle added (the floor of adaptive_ct" in capsys.readouterr().err
+    m = json.loads((tmp_path / "o" / "metrics.json").read_text())
+    assert set(m["controllers"]) == {"adaptive_ct", "ct_oracle"}
+    with pytest.warns(UserWarning, match="adaptive_ct's floor ct_oracle did not run"):
+        run_benchmark(load_scenario(p), progress=False)

@@ -241,6 +241,14 @@ def test_cli_arms_usage_errors(capsys):
     assert "--arms needs a template scenario FILE" in capsys.readouterr().err
     assert main(["benchmark", "--draw-swaps"]) == 2
     assert "give --arms N too" in capsys.readouterr().err
+    assert main(["benchmark", "--first-arm", "5"]) == 2  # an option of the drawn arms, not ignored
+    assert "--first-arm: applies to the drawn arms of --arms N" in capsys.readouterr().err
+    pop = ROOT / "benchmarks" / "scenarios" / "population.toml"
+    assert main(["benchmark", str(pop), "--arms", "2", "--figure-formats", "pdf"]) == 2
+    assert "--figure-formats: a run over --arms writes tables, no figures" in capsys.readouterr().err
+    for opt in (["--template", str(pop)], ["--first-arm", "3"]):
+        assert main(["leaderboard", *opt]) == 2
+        assert f"{opt[0]}: applies to the drawn arms of --arms N" in capsys.readouterr().err
     two_link = ROOT / "benchmarks" / "scenarios" / "other_arm.toml"
     assert main(["benchmark", str(two_link), "--arms", "2"]) == 2
     assert "two-link" in capsys.readouterr().err

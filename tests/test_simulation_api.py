@@ -199,3 +199,18 @@ def test_the_two_link_final_measurement_is_not_nan(short):
     np.testing.assert_allclose(meas.q, sim.q_true, atol=2e-3)  # sensor noise std 3e-4 rad
     q_end = short.reference.sample(np.array([short.duration]))[0][0]
     np.testing.assert_allclose(meas.q_d, q_end)
+
+
+def test_importing_the_figures_keeps_the_users_matplotlib_backend():
+    """A notebook's backend stays its own: the library draws on whatever backend is chosen (the
+    command line chooses Agg for itself)."""
+    import subprocess
+    import sys
+
+    code = (
+        "import matplotlib; matplotlib.use('svg'); "
+        "import adaptive_dd.plotting, adaptive_dd.identification_plots; print(matplotlib.get_backend())"
+    )
+    env = {k: v for k, v in __import__("os").environ.items() if k != "MPLBACKEND"}
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env, check=True)
+    assert out.stdout.strip() == "svg", out.stdout + out.stderr

@@ -14,8 +14,10 @@ import numpy as np
 import pandas as pd
 import pytest
 
+import adaptive_dd.sweep as sweep_mod
 from adaptive_dd.benchmark.runner import run_benchmark
 from adaptive_dd.benchmark.scenario import load_scenario
+from adaptive_dd.errors import ParameterError
 from adaptive_dd.sweep import plan_tasks, ratio_medians, run_cell, run_sweep
 from adaptive_dd.sweep_spec import SweepError, load_sweep, parse_sweep
 
@@ -68,7 +70,7 @@ def client():
 
 def test_grid_expansion_applies_each_axis(tmp_path):
     text = SWEEP.replace("0.12]", "0.12]\nbandwidth = [30.0, 50.0]\nnoise_scale = [4.0]")
-    text += "[grid.controller.adaptive_ct]\ntau_f = [0.006, 0.02]\n"
+    text += "[grid.controller.adaptive_ct]\nboost_bandwidth = [150.0, 300.0]\n"
     sw = load_sweep(_write(tmp_path, text))
     base = load_scenario(tmp_path / "base.toml")
     assert len(sw.points) == 2 * 2 * 2 * 1 * 2
@@ -77,7 +79,7 @@ def test_grid_expansion_applies_each_axis(tmp_path):
         "swap_time",
         "bandwidth",
         "noise_scale",
-        "adaptive_ct.tau_f",
+        "adaptive_ct.boost_bandwidth",
     ]
     p = sw.points[-1]  # last axis fastest: the last value of every axis
     assert dict(p.values) == {
@@ -85,16 +87,16 @@ def test_grid_expansion_applies_each_axis(tmp_path):
         "swap_time": 0.12,
         "bandwidth": 50.0,
         "noise_scale": 4.0,
-        "adaptive_ct.tau_f": 0.02,
+        "adaptive_ct.boost_bandwidth": 300.0,
     }
     sc = p.scenario
     assert sc.swap_masses == (6.0, 0.0) and sc.swap_times == (0.12, 0.2)  # only payload 0 changes
     assert sc.bandwidth == 50.0
     np.testing.assert_allclose(sc.position_variance, 4 * np.asarray(base.position_variance))
     np.testing.assert_allclose(sc.velocity_variance, 4 * np.asarray(base.velocity_variance))
-    assert p.settings_for("adaptive_ct") == {"tau_f": 0.02} and p.settings_for("ct_oracle") == {}
-    assert sw.points[0].settings_for("adaptive_ct") == {"tau_f": 0.006}
-    assert sw.points[1].settings_for("adaptive_ct") == {"tau_f": 0.02}
+    assert p.settings_for("adaptive_ct") == {"boost_bandwidth": 300.0} and p.settings_for("ct_oracle") == {}
+    assert sw.points[0].settings_for("adaptive_ct") == {"boost_bandwidth": 150.0}
+    assert sw.points[1].settings_for("adaptive_ct") == {"boost_bandwidth": 300.0}
     assert sw.seed_blocks() == [(0,), (1,)]
 
 
@@ -106,12 +108,12 @@ def test_swap_index_selects_the_payload(tmp_path):
 
 
 def test_identical_tasks_run_once(tmp_path):
-    # ct_oracle takes no settings: its task is the same at both tau_f values
+    # ct_oracle takes no settings: its task is the same at both boost bandwidths
     text = SWEEP.replace("[1.0, 6.0]", "[1.0]").replace("[0.08, 0.12]", "[0.08]")
-    text += "[grid.controller.adaptive_ct]\ntau_f = [0.006, 0.02]\n"
+    text += "[grid.controller.adaptive_ct]\nboost_bandwidth = [150.0, 300.0]\n"
     tasks, cells = plan_tasks(load_sweep(_write(tmp_path, text)))
     assert len(cells) == 2 * 2 * 2  # points x controllers x blocks
-    assert len(tasks) == 2 + 2 * 2  # ct_oracle once per block, adaptive_ct per tau_f and block
+    assert len(tasks) == 2 + 2 * 2  # ct_oracle once per block, adaptive_ct per boost bandwidth and block
 
 
 @pytest.mark.parametrize(
@@ -276,8 +278,21 @@ def test_csv_cells_without_pyarrow(tmp_path, client, monkeypatch):
     assert (again.table["error"] == "").all()
 
 
-def test_failing_task_is_recorded_and_the_sweep_completes(tmp_path, client):
-    text = SWEEP + "[grid.controller.adaptive_ct]\nbogus = [1, 2]\n"
+def _planted_failure(monkeypatch, controllers=("adaptive_ct",)):
+    """Tasks of ``controllers`` raise when they run (a worker's failure; every setting is checked
+    when the sweep file is read, so no bad setting reaches a task)."""
+
+    def planted(scenario, controller, seeds, settings):
+        if controller in controllers:
+            raise ParameterError(f"planted bogus failure of {controller}")
+        return run_cell(scenario, controller, seeds, settings)  # the module's own
+
+    monkeypatch.setattr(sweep_mod, "run_cell", planted)
+
+
+def test_failing_task_is_recorded_and_the_sweep_completes(tmp_path, client, monkeypatch):
+    _planted_failure(monkeypatch)
+    text = SWEEP + "[grid.controller.adaptive_ct]\nboost_bandwidth = [150.0, 300.0]\n"
     sw = load_sweep(_write(tmp_path, text))
     res = run_sweep(sw, tmp_path / "out", client=client, progress=False)
     t = res.table
@@ -482,7 +497,7 @@ def test_cli_a_sweep_whose_rows_all_fail_exits_1_without_a_heat_map(tmp_path, ca
     monkeypatch.setattr(sweep_mod, "_client", local)
     text = SWEEP.replace("payload_mass = [1.0, 6.0]", "payload_mass = [1.0]").replace("0.08, 0.12", "0.12")
     text = text.replace("seeds = 2", "seeds = 1")
-    text += "[grid.controller.adaptive_ct]\nbogus = [1]\n[grid.controller.ct_oracle]\nbogus = [2]\n"
+    _planted_failure(monkeypatch, ("adaptive_ct", "ct_oracle"))
     out = tmp_path / "out"
     assert main(["sweep", str(_write(tmp_path, text)), "--out", str(out), "--no-progress"]) == 1
     cap = capsys.readouterr()
@@ -490,7 +505,7 @@ def test_cli_a_sweep_whose_rows_all_fail_exits_1_without_a_heat_map(tmp_path, ca
     assert "no heat map drawn" in cap.err and not list(out.glob("heatmap*"))
     assert not list((out / "cells").iterdir())  # failed tasks are not cached: a rerun tries again
     # partly failed: exit 0, and how many failed and why
-    text = text.replace("[grid.controller.ct_oracle]\nbogus = [2]\n", "")
+    _planted_failure(monkeypatch, ("adaptive_ct",))
     assert main(["sweep", str(_write(tmp_path, text)), "--out", str(out), "--no-progress"]) == 0
     cap = capsys.readouterr()
     assert "warning: 3 of 6 rows failed (in 1 task(s)); why:" in cap.err and "bogus" in cap.err
@@ -558,3 +573,36 @@ def test_the_ratios_csv_and_the_cli_count_the_marked_cells(tmp_path, capsys):
     out = capsys.readouterr().out
     assert "1 of 2 cells marked" in out
     assert "marked: median ratio per cell 0.0" in out and "not marked: median ratio per cell 2 .. 2" in out
+
+
+def test_the_docs_sweep_file_parses_and_a_bad_grid_setting_names_the_sweep_file(tmp_path):
+    """The sweep file shown in docs/sweeps.md is a valid sweep (on the shipped short scenario),
+    and a grid of controller settings is checked when the file is read, naming the grid key and
+    the point: an unknown setting, a value out of range, a bandwidth the sample period cannot carry."""
+    import re
+    from pathlib import Path
+
+    from adaptive_dd.sweep_spec import SweepError, load_sweep
+
+    root = Path(__file__).resolve().parents[1]
+    text = (root / "docs" / "sweeps.md").read_text()
+    block = re.search(r"### The sweep file\n\n```toml\n(.*?)```", text, re.S).group(1)
+    short = (root / "benchmarks" / "sweeps" / "short_swap.toml").as_posix()
+    doc = tmp_path / "doc.toml"
+    doc.write_text(block.replace('"short_swap.toml"', f'"{short}"'))
+    sw = load_sweep(doc)
+    assert len(sw.points) == 5 * 5 * 2 * 2 * 2
+    assert sw.points[1].settings_for("adaptive_ct") == {"boost_bandwidth": 300.0}
+    head = f'[sweep]\nscenario = "{short}"\nseeds = 1\ncontrollers = ["ct_oracle", "adaptive_ct"]\n'
+    bad = {
+        "[grid.controller.adaptive_ct]\ntau_f = [0.006]\n": r"key 'grid.controller.adaptive_ct' \(at "
+        r"adaptive_ct.tau_f = 0.006\): controllers.adaptive_ct: unknown setting",
+        "[grid.controller.adaptive_ct]\nboost_duration = [0.5, 50.0]\n": r"boost_duration = 50.0\): "
+        r"controllers.adaptive_ct.boost_duration: must be in \[0, 5\]",
+        "[grid]\nbandwidth = [40.0, 400.0]\n": r"key 'grid.bandwidth' \(at bandwidth = 400.0\)",
+    }
+    for grid, match in bad.items():
+        f = tmp_path / "bad.toml"
+        f.write_text(head + grid)
+        with pytest.raises(SweepError, match=match):
+            load_sweep(f)

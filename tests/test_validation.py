@@ -337,3 +337,36 @@ def test_a_scenario_built_in_code_checks_its_payloads_centres_and_inertias():
         sc, swap_times=(4.0,), swap_masses=(2.0,), swap_com=sc.swap_com[:1], swap_inertia=sc.swap_inertia[:1]
     )
     assert one.payload_of(0)["com"] == sc.swap_com[0]
+
+
+@pytest.mark.parametrize("kind", ["two_link", "chain"])
+def test_stating_a_builtin_controllers_default_settings_is_valid(kind):
+    """Every built-in's settings table written out at its defaults passes the file's checks on its
+    kind of arm (a default refused by a bound, as a boost of 300 rad/s by the control bandwidth's
+    0.2 / T once was, would make the documented value unusable)."""
+    from adaptive_dd.benchmark.scenario import parse_scenario
+    from adaptive_dd.controllers.builtins import ABSENT, CONTROLLERS
+
+    arm = {} if kind == "two_link" else {"arm": {"robot": "vertical3", "payload_capacity": 1.5}}
+    ref = {
+        f"joint{j}": {"offset": o, "amplitude": [0.3], "frequency": [0.3]}
+        for j, o in ((1, 0.3), (2, -0.6), (3, 0.4))
+    }
+    checked = 0
+    for name, b in CONTROLLERS.items():
+        if not b.applies_to(kind):
+            continue
+        table = {
+            k: s.default(kind)
+            for k, s in b.settings.items()
+            if s.default(kind) is not None and s.default(kind) is not ABSENT
+        }
+        if not table:
+            continue
+        data = {**arm, "run": {"duration": 2.0, "seeds": 1, "controllers": [name]}}
+        data["controllers"] = {name: table}
+        if kind == "chain":
+            data["reference"] = ref
+        parse_scenario(data, f"{name}.toml")
+        checked += 1
+    assert checked >= 2, checked

@@ -22,6 +22,7 @@ of the benchmark goes on.
 from __future__ import annotations
 
 import time
+import warnings
 from collections.abc import Sequence
 
 import numpy as np
@@ -134,6 +135,14 @@ def run_benchmark(
             res = _run_two_link(scenario, clock, controllers, engine, keep_trajectories, seed_indices, on_run)
     res.compile_time = clock.compile_seconds
     res.wall_time = time.perf_counter() - t0 - res.compile_time
+    for name, run in res.runs.items():
+        if run.floor is not None and run.floor not in res.runs:
+            warnings.warn(
+                f"run_benchmark: {name}'s floor {run.floor} did not run: its ratios to the floor are "
+                f"NaN and its limits are judged on another reference; add {run.floor!r} to the "
+                "scenario's controllers",
+                stacklevel=2,
+            )
     return res
 
 

@@ -24,6 +24,9 @@ LIMITS = {
     "seed_bound": 2**63,
     "max_substeps": 100,
     "max_bandwidth_T": 0.2,  # bandwidth [rad/s] * T [s]
+    # a boost's bandwidth * T: half the limit of a sampled, critically damped PD on a double
+    # integrator (held command: stable up to bandwidth * T = 1); the built-in 300 rad/s at 1 ms is 0.3
+    "max_boost_bandwidth_T": 0.5,
     "max_damping": 10.0,
     "max_mass": 50.0,  # kg
     "max_radius": 0.5,  # m

@@ -113,16 +113,15 @@ def controller_setting_errors(v: dict) -> list[str]:
         if name not in CONTROLLERS or name not in opts:
             continue
         o, n0 = opts[name], len(errs)
-        for bw in ("bandwidth", "boost_bandwidth"):
+        for bw, limit in (("bandwidth", "max_bandwidth_T"), ("boost_bandwidth", "max_boost_bandwidth_T")):
             key = f"controllers.{name}.{bw}"
             if (
                 bw in o
                 and check_number(errs, key, o[bw], 0, 1e5, lo_open=True)
-                and o[bw] * T > LIMITS["max_bandwidth_T"]
+                and o[bw] * T > LIMITS[limit]
             ):
                 errs.append(
-                    f"{key}: {o[bw]} rad/s at T = {T} s gives "
-                    f"bandwidth * T = {o[bw] * T:.3g} > {LIMITS['max_bandwidth_T']}"
+                    f"{key}: {o[bw]} rad/s at T = {T} s gives {bw} * T = {o[bw] * T:.3g} > {LIMITS[limit]}"
                 )
         if "boost_duration" in o:
             check_number(errs, f"controllers.{name}.boost_duration", o["boost_duration"], 0, v["duration"])

@@ -85,6 +85,9 @@ def _user_message(exc: BaseException) -> str:
 def main(argv: list[str] | None = None) -> int:
     """Run the CLI; returns the exit code (0 ok, 1 failed check, 2 user error, 3 internal error,
     141 its output's reader stopped early, as a command killed by SIGPIPE)."""
+    import os
+
+    os.environ.setdefault("MPLBACKEND", "Agg")  # the command writes its figures to files; no window
     parser = build_parser()
     argv = sys.argv[1:] if argv is None else list(argv)
     args = parser.parse_args(argv)

@@ -56,21 +56,27 @@ def run(args: argparse.Namespace) -> int:
     import dataclasses
 
     from adaptive_dd.benchmark.scenario import load_scenario
+    from adaptive_dd.errors import ParameterError
     from adaptive_dd.outputs import OutputSet
 
     if args.arms is not None:
+        if "--figure-formats" in getattr(args, "given", ()):
+            raise ParameterError(
+                "--figure-formats: a run over --arms writes tables, no figures (per_seed.csv, "
+                "arms.csv, population.json); leave it out, or run one arm without --arms for its figures"
+            )
         from adaptive_dd.cli._population import run_arms
 
         return run_arms(args, only_controllers)
-    if args.draw_swaps:
-        from adaptive_dd.errors import ParameterError
-
-        raise ParameterError("--draw-swaps: draws the swap times of --arms' arms; give --arms N too")
+    for opt in ("--draw-swaps", "--first-arm"):
+        if opt in getattr(args, "given", ()):
+            raise ParameterError(f"{opt}: applies to the drawn arms of --arms N; give --arms N too")
     sc = load_scenario(args.scenario)
     if args.seeds is not None:
         sc = dataclasses.replace(sc, seeds=args.seeds)
     if args.controllers:
         sc = sc.with_controllers(only_controllers(sc, args.controllers))
+    sc = with_floors(sc)
     if sc.estimate().large:
         print(f"estimate: {sc.estimate()}", file=sys.stderr)
     for line in limit_warnings(sc):
@@ -142,6 +148,27 @@ def limit_warnings(sc) -> list[str]:
     from adaptive_dd.benchmark.preflight import reference_problems
 
     return [f"warning: {sc.source or 'scenario'}: {p}" for p in reference_problems(sc)]
+
+
+def with_floors(sc):
+    """``sc`` with the floor of each of its controllers that lacks its own (``adaptive_ct``'s
+    ``ct_oracle``) added, and said: without it a controller has no ratio to its floor, and the
+    information and detection limits are judged on another reference."""
+    import dataclasses
+
+    from adaptive_dd.controllers.registry import scenario_controller
+
+    names = list(sc.controllers)
+    for n in sc.controllers:
+        floor = getattr(scenario_controller(sc, n)[1], "floor", None)
+        if floor is not None and floor not in names:
+            names.append(floor)
+            print(
+                f"{sc.source or 'scenario'}: run.controllers: {floor} added (the floor of {n}; "
+                "list it to keep this quiet)",
+                file=sys.stderr,
+            )
+    return sc if len(names) == len(sc.controllers) else dataclasses.replace(sc, controllers=tuple(names))
 
 
 def only_controllers(sc, names: list[str]) -> tuple[str, ...]:

@@ -82,6 +82,9 @@ def run(args: argparse.Namespace) -> int:
     from adaptive_dd.arena.leaderboard import COLUMNS, DEFAULT_CONTROLLERS, leaderboard
     from adaptive_dd.outputs import check_output_dir
 
+    for opt in ("--template", "--first-arm"):
+        if opt in getattr(args, "given", ()) and not args.arms:
+            raise ParameterError(f"{opt}: applies to the drawn arms of --arms N; give --arms N too")
     scenarios = [*args.scenarios, *(args.scenario_list or [])] or None
     if args.no_scenarios:
         if scenarios or not args.arms:
