@@ -19,7 +19,6 @@ message. Neither stops the sweep. A task whose every row failed is not kept in
 
 from __future__ import annotations
 
-import dataclasses
 import hashlib
 import json
 import os
@@ -33,7 +32,7 @@ import numpy as np
 import pandas as pd
 
 from adaptive_dd.benchmark.scenario import Scenario
-from adaptive_dd.sweep_spec import Sweep
+from adaptive_dd.sweep_spec import Sweep, cell_scenario
 
 __all__ = [
     "CELL_VERSION",
@@ -75,16 +74,6 @@ ROW_COLUMNS = {
 """The columns of a task's rows and their dtypes."""
 
 
-def _cell_scenario(scenario: Scenario, controller: str, settings: Mapping[str, Any] | None) -> Scenario:
-    """The scenario running ``controller`` alone, with its own ``[controllers.NAME]`` settings and
-    the grid point's over them: the benchmark then builds it as for any arm (two-link or URDF)."""
-    from adaptive_dd.benchmark.scenario_checks import freeze
-
-    opts = {**scenario.options(controller), **dict(settings or {})}
-    table = ((controller, freeze(opts)),) if opts else ()
-    return dataclasses.replace(scenario, controllers=(controller,), controller_options=table)
-
-
 def run_cell(
     scenario: Scenario,
     controller: str,
@@ -118,7 +107,7 @@ def run_cell(
     from adaptive_dd.benchmark.metrics import per_seed_segment_metrics
     from adaptive_dd.benchmark.runner import run_benchmark
 
-    scenario = _cell_scenario(scenario, controller, settings)
+    scenario = cell_scenario(scenario, controller, settings)
     res = run_benchmark(scenario, progress=False, seed_indices=seed_indices)
     (run,) = res.runs.values()
     per = per_seed_segment_metrics(res, run, recovery=False)  # NaN: the benchmark's failure rule
@@ -374,8 +363,8 @@ def run_sweep(
     ...                      "grid": {"payload_mass": [1.0, 3.0]}})
     >>> with distributed.Client(processes=False, n_workers=1, dashboard_address=None) as client:
     ...     res = run_sweep(sweep, tempfile.mkdtemp(), client=client, progress=False)
-    sweep <memory>: 2 grid points x 2 controllers x 1 seeds = 4 cells in 4 distinct tasks;
-    0 reused from ..., 4 to run
+    sweep <memory>: 2 grid points x 2 controllers x 1 blocks of seeds (1 seeds, 1 per block) = 4
+    cells in 4 distinct tasks; 0 reused from ..., 4 to run
     >>> len(res.table), res.ran  # grid points x controllers x seeds x 4 segments; tasks run
     (16, 4)
     """
@@ -389,7 +378,8 @@ def run_sweep(
     reused = len(tasks) - len(todo)
     print(
         f"sweep {sweep.source}: {len(sweep.points)} grid points x {len(sweep.controllers)} controllers x "
-        f"{sweep.seeds} seeds = {len(cells)} cells in {len(tasks)} distinct tasks; "
+        f"{len(sweep.seed_blocks())} blocks of seeds ({sweep.seeds} seeds, {sweep.block} per block) = "
+        f"{len(cells)} cells in {len(tasks)} distinct tasks; "
         f"{reused} reused from {cells_dir}, {len(todo)} to run"
     )
     lost = _run_on_dask(todo, cells_dir, ext, scheduler, workers, client, progress) if todo else {}

@@ -37,6 +37,7 @@ from __future__ import annotations
 
 import dataclasses
 import itertools
+from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -46,7 +47,7 @@ from adaptive_dd.controllers import CONTROLLERS, controllers_for
 from adaptive_dd.errors import ScenarioError
 from adaptive_dd.io import read_toml
 
-__all__ = ["SCENARIO_AXES", "GridPoint", "Sweep", "SweepError", "load_sweep", "parse_sweep"]
+__all__ = ["SCENARIO_AXES", "GridPoint", "Sweep", "SweepError", "cell_scenario", "load_sweep", "parse_sweep"]
 
 SCENARIO_AXES = ("payload_mass", "swap_time", "bandwidth", "noise_scale")
 """Scenario fields a grid may vary."""
@@ -289,16 +290,25 @@ def _apply(src: str, base: Scenario, swap: int, coords: dict[str, float]) -> Sce
         raise SweepError(f"{src}: key {keys} (at {where}): {why}") from None
 
 
+def cell_scenario(scenario: Scenario, controller: str, settings: Mapping[str, Any] | None) -> Scenario:
+    """The scenario running ``controller`` alone, with its own ``[controllers.NAME]`` settings and
+    the grid point's over them: the benchmark then builds it as for any arm (two-link or URDF)."""
+    from adaptive_dd.benchmark.scenario_checks import freeze
+
+    opts = {**scenario.options(controller), **dict(settings or {})}
+    table = ((controller, freeze(opts)),) if opts else ()
+    return dataclasses.replace(scenario, controllers=(controller,), controller_options=table)
+
+
 def _check_settings(src: str, points: list) -> None:
     """Each grid point's controller settings checked as a scenario's ``[controllers.NAME]`` table
     is (an unknown key, a value out of range): an error of the sweep file, not of every task."""
     from adaptive_dd.benchmark.scenario_settings import controller_setting_errors
-    from adaptive_dd.sweep import _cell_scenario
 
     seen = set()
     for p in points:
         for name, kv in p.settings:
-            sc = _cell_scenario(p.scenario, name, dict(kv))
+            sc = cell_scenario(p.scenario, name, dict(kv))
             key = (name, kv, sc.duration, sc.sample_period, sc.bandwidth, sc.damping)
             if key in seen:
                 continue

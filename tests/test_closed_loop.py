@@ -434,15 +434,17 @@ def test_cli_benchmark_of_an_n_joint_scenario_writes_every_output(tmp_path, caps
     )
     out = tmp_path / "out"
     assert main(["benchmark", str(src), "--out", str(out), "--no-progress"]) == 0
-    text = capsys.readouterr().out
+    cap = capsys.readouterr()
+    text = cap.out
     assert "payload centre of mass estimated" in text and "ct_nominal / ct_oracle" in text
+    assert "slotine_li_oracle added (the floor of slotine_li" in cap.err
     m = json.loads((out / "metrics.json").read_text(encoding="utf-8"))
     seg = m["controllers"]["slotine_li"]["segments"][1]
     assert len(seg["rms_error_joint"]) == 3 and seg["com_true"] == [0.03, 0.0, 0.0]
     assert m["controllers"]["ct_oracle"]["segments"][1]["ratio_to_floor"] is None
     assert m["provenance"]["scenario"]["arm"]["joints"] == ["joint1", "joint2", "joint3"]
     frame = pd.read_csv(out / "per_seed.csv")
-    assert {"rms_error_joint3_rad", "com_estimate_x_m"} <= set(frame.columns) and len(frame) == 3 * 2 * 2
+    assert {"rms_error_joint3_rad", "com_estimate_x_m"} <= set(frame.columns) and len(frame) == 4 * 2 * 2
     for f in ("tracking_error.png", "joint_errors.png", "estimates.png", "metrics.csv"):
         assert (out / f).stat().st_size > 0
 

@@ -93,6 +93,8 @@ def test_scenario_errors_name_file_and_key(tmp_path, edit, match):
 def test_missing_scenario_file(tmp_path):
     with pytest.raises(ScenarioError, match="no such scenario file"):
         load_scenario(tmp_path / "none.toml")
+    with pytest.raises(ScenarioError, match="is a folder, not a scenario file"):
+        load_scenario(tmp_path)
 
 
 def test_a_urdf_arm_s_sensors_carry_the_scenario_s_noise():

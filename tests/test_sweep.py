@@ -470,11 +470,11 @@ def test_a_cell_runs_on_a_urdf_arm_with_the_scenario_settings(tmp_path):
         [r["rms_error"] for r in rows], res.to_frame()["rms_error_rad"].to_numpy(), rtol=1e-12
     )
     # the scenario's [controllers.adaptive_ct] table applies, the grid's settings over it
-    from adaptive_dd.sweep import _cell_scenario
+    from adaptive_dd.sweep_spec import cell_scenario
 
-    cell = _cell_scenario(sc, "adaptive_ct", {"tau_f": 0.01})
+    cell = cell_scenario(sc, "adaptive_ct", {"boost_bandwidth": 150.0})
     assert cell.controllers == ("adaptive_ct",)
-    assert cell.options("adaptive_ct") == {"boost_duration": 0.3, "tau_f": 0.01}
+    assert cell.options("adaptive_ct") == {"boost_duration": 0.3, "boost_bandwidth": 150.0}
 
 
 def test_a_two_link_only_controller_is_refused_on_a_urdf_arm(tmp_path):

@@ -103,7 +103,11 @@ def _payload_tables(ctrls: dict, head: str) -> list[str]:
     lines = []
     rows = [(n, c) for n, c in ctrls.items() if any(s.get("com_estimate") for s in c["segments"])]
     if rows:
-        lines += ["payload centre of mass estimated at the end of the segment [mm] (x, y, z)", head]
+        lines += [
+            "payload centre of mass estimated at the end of the segment [mm] (x, y, z; -: an axis the "
+            "data do not determine)",
+            head,
+        ]
         first = rows[0][1]["segments"]
         truth = "".join(
             f"{'none':>16}" if s.get("com_true") is None else f"{_xyz(s['com_true']):>16}" for s in first
@@ -127,9 +131,11 @@ def _payload_tables(ctrls: dict, head: str) -> list[str]:
 
 
 def _xyz(v) -> str:
-    if v is None or any(x is None for x in v):
+    """A centre of mass [m] as ``x,y,z`` in mm; a component the data do not determine (None: a
+    planar arm's axis along its joints) as ``-``; the whole ``—`` when there is none."""
+    if v is None or all(x is None for x in v):
         return "—"
-    return ",".join(f"{1e3 * x:.0f}" for x in v)
+    return ",".join("-" if x is None else f"{1e3 * x:.0f}" for x in v)
 
 
 def _seed_tables(ctrls: dict, head: str) -> list[str]:

@@ -376,11 +376,12 @@ def load_scenario(path: str | Path | None = None) -> Scenario:
     >>> load_scenario("no_such_file.toml")
     Traceback (most recent call last):
     ...
-    adaptive_dd.errors.ScenarioError: no_such_file.toml: no such scenario file
+    adaptive_dd.errors.ScenarioError: no_such_file.toml: no such scenario file (give a scenario's .toml file)
     """
     path = Path(path) if path is not None else default_scenario_path()
     if not path.is_file():
-        raise ScenarioError(f"{path}: no such scenario file")
+        what = "is a folder, not a scenario file" if path.is_dir() else "no such scenario file"
+        raise ScenarioError(f"{path}: {what} (give a scenario's .toml file)")
     data = read_toml(path)
     if not data:
         raise ScenarioError(

@@ -152,7 +152,7 @@ class RunEstimate:
 
     def __str__(self) -> str:
         return (
-            f"{self.n_samples} samples x {self.trials} trials: about {self.bytes / 2**20:.3g} MiB "
+            f"{self.n_samples} samples x {self.trials} trials: about {_size(self.bytes)} "
             f"and {_duration(self.seconds)}"
             + (
                 f" (of which about {_duration(self.compile_seconds)} compiling the kernels, once: "
@@ -167,6 +167,14 @@ class RunEstimate:
                 else ""
             )
         )
+
+
+def _size(n_bytes: float) -> str:
+    """Bytes in the largest binary unit up to TiB that keeps the figure below 1024 (3 digits)."""
+    for unit, scale in (("TiB", 2**40), ("GiB", 2**30)):
+        if n_bytes >= scale:
+            return f"{n_bytes / scale:.3g} {unit}"
+    return f"{n_bytes / 2**20:.3g} MiB"
 
 
 def _duration(s: float) -> str:

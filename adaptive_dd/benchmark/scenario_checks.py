@@ -105,7 +105,12 @@ def scenario_errors(v: dict[str, Any]) -> list[str]:
         _check_reference(e, v["reference"], v["sample_period"] if T_ok else None, n_joints)
     _check_options(e, v["controller_options"], v["controllers"] if c_ok else ())
     if d_ok and T_ok and s_ok and c_ok:
-        est = run_estimate(round(v["duration"] / v["sample_period"]), v["seeds"], len(v["controllers"]))
+        est = run_estimate(
+            round(v["duration"] / v["sample_period"]),
+            v["seeds"],
+            len(v["controllers"]),
+            n_joints=n_joints if _serial(v) else None,
+        )
         if est.bytes > L["max_bytes"] or est.seconds > L["max_seconds"]:
             e.append(
                 f"run: too large: {est}; the limits are {L['max_bytes'] / 2**30:g} GiB and "

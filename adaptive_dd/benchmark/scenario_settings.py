@@ -115,11 +115,7 @@ def controller_setting_errors(v: dict) -> list[str]:
         o, n0 = opts[name], len(errs)
         for bw, limit in (("bandwidth", "max_bandwidth_T"), ("boost_bandwidth", "max_boost_bandwidth_T")):
             key = f"controllers.{name}.{bw}"
-            if (
-                bw in o
-                and check_number(errs, key, o[bw], 0, 1e5, lo_open=True)
-                and o[bw] * T > LIMITS[limit]
-            ):
+            if bw in o and check_number(errs, key, o[bw], 0, 1e5, lo_open=True) and o[bw] * T > LIMITS[limit]:
                 errs.append(
                     f"{key}: {o[bw]} rad/s at T = {T} s gives {bw} * T = {o[bw] * T:.3g} > {LIMITS[limit]}"
                 )

@@ -105,7 +105,8 @@ def load_arm(path: str | None, repair_inertia: bool = False, *, general: str | N
             return Arm.sice()
         return ClosedFormTwoLink.sice().to_arm()
     if not Path(path).is_file():
-        raise ScenarioError(f"{path}: no such scenario file")
+        what = "is a folder, not a scenario file" if Path(path).is_dir() else "no such scenario file"
+        raise ScenarioError(f"{path}: {what} (give a scenario's .toml file)")
     data = read_toml(Path(path))
     table = data.get("arm")
     if general:

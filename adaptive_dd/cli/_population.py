@@ -37,11 +37,20 @@ def run_arms(args: argparse.Namespace, only_controllers) -> int:
         )
     path = Path(args.scenario)
     if not path.is_file():
-        raise ScenarioError(f"{path}: no such scenario file")
+        what = "is a folder, not a scenario file" if path.is_dir() else "no such scenario file"
+        raise ScenarioError(f"{path}: {what} (give a scenario's .toml file)")
     data, src = read_toml(path), str(path)
     seeds = range(args.first_arm, args.first_arm + args.arms)
     first = population_scenario(data, src, seeds[0], draw_swaps=args.draw_swaps)  # checks the template
     names = only_controllers(first, args.controllers) if args.controllers else None
+    arm = data.get("arm", {}) if isinstance(data.get("arm"), dict) else {}
+    own = arm.get("robot") or arm.get("urdf")
+    if own:
+        print(
+            f"population: {src}'s own arm ({own!r}) is replaced by the drawn arms; run it without "
+            "--arms for its own figures",
+            file=sys.stderr,
+        )
     n_seeds = args.seeds if args.seeds is not None else first.seeds
     print(
         f"population: {args.arms} arms (random:{seeds[0]} .. random:{seeds[-1]}) x {n_seeds} seeds of {src}",

@@ -51,7 +51,9 @@ def run(args: argparse.Namespace) -> int:
     )
     print(
         f"{len(res.table)} rows ({res.failed_rows} failed), {res.ran} tasks run, {res.reused} reused; "
-        f"wrote {res.table_path}" + "".join(f", {p}" for p in res.heatmaps)
+        f"wrote {res.table_path}"
+        + (f", {res.table_path.parent / 'ratios.csv'}" if res.ratios is not None else "")
+        + "".join(f", {p}" for p in res.heatmaps)
     )
     if res.failed_rows:
         _print_failures(res)
