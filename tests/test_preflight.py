@@ -202,3 +202,35 @@ def test_validate_checks_the_paper_arm_against_its_limits_too(tmp_path, capsys):
     assert main(["validate", str(bad)]) == 1
     err = capsys.readouterr().err
     assert "reference.joint1: q = " in err and "above the joint's upper limit 3.142 rad" in err, err
+
+
+def test_a_joint_whose_friction_dwarfs_its_inertia_is_warned_of(tmp_path, capsys):
+    """The UR5 from its URDF alone (no armature): wrists 2 and 3 carry 1 N m of Coulomb friction
+    against 3.8e-3 and 1.3e-4 kg m^2; ``validate`` and ``benchmark`` warn, naming the joint, the
+    figures and what to state. The shipped UR5 scenario (armature stated) is quiet."""
+    from adaptive_dd.benchmark.preflight import inertia_problems
+
+    p = tmp_path / "ur5_alone.toml"
+    p.write_text(
+        '[arm]\nrobot = "ur5"\n[run]\nduration = 0.3\nseeds = 1\ncontrollers = ["ct_oracle"]\n'
+        "[reference]\nramp = 0.1\n"
+        + "".join(
+            f"{j} = {{ offset = {o}, amplitude = [0.1], frequency = [0.3] }}\n"
+            for j, o in (
+                ("shoulder_pan_joint", 0.0),
+                ("shoulder_lift_joint", -1.3),
+                ("elbow_joint", 1.5),
+                ("wrist_1_joint", -1.8),
+                ("wrist_2_joint", -1.57),
+                ("wrist_3_joint", 0.0),
+            )
+        )
+    )
+    assert main(["validate", str(p)]) == 0
+    err = capsys.readouterr().err
+    assert err.count("warning: arm: joint") == 2 and "'wrist_3_joint': Coulomb friction 1 N m" in err
+    assert "state [arm] armature" in err
+    assert main(["benchmark", str(p), "--out", str(tmp_path / "o"), "--no-progress"]) == 0
+    assert "warning: " in capsys.readouterr().err
+    shipped = load_scenario(str(resources.files("adaptive_dd.scenarios") / "ur5_tool_swap.toml"))
+    assert inertia_problems(shipped) == []
