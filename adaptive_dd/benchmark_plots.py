@@ -26,6 +26,17 @@ __all__ = [
 ]
 
 
+def _check_window(window, res) -> None:
+    """A moving RMS's window [s]: positive and finite, at most the run."""
+    from adaptive_dd.errors import ParameterError
+
+    ok = isinstance(window, int | float) and np.isfinite(window) and 0 < window <= res.scenario.duration
+    if not ok:
+        raise ParameterError(
+            f"window must be a time in (0, {res.scenario.duration:g}] s (the run), got {window!r}"
+        )
+
+
 def plot_tracking_errors(res, path: str | Path | None = None, window: float = 0.05, formats=("png",)):
     """50 ms moving RMS of ``|e|`` (mean over seeds) for every controller, swaps marked, log scale.
 
@@ -74,6 +85,7 @@ def plot_tracking_errors(res, path: str | Path | None = None, window: float = 0.
     """
     from adaptive_dd.benchmark.metrics import error_trace
 
+    _check_window(window, res)
     fig, ax = plt.subplots(figsize=(10, 5))
     k = _step(res.t.size)
     for name, run in res.runs.items():
@@ -292,6 +304,7 @@ def plot_joint_errors(res, path: str | Path | None = None, window: float = 0.05,
     """
     from adaptive_dd.benchmark.metrics import moving_rms
 
+    _check_window(window, res)
     n = res.scenario.n_joints
     T = res.scenario.sample_period
     cols = 2 if n <= 4 else 3

@@ -209,3 +209,13 @@ def test_vector_env_trials_are_the_single_envs(arm):
     assert not trunc.any() and list(info["seed_index"]) == [8, 9, 10]
     o, _ = env.reset(seed=8)
     np.testing.assert_array_equal(vo[0], o)
+
+
+def test_an_unknown_registered_id_lists_the_registered_ones():
+    from adaptive_dd.errors import ScenarioError
+    from adaptive_dd.gym import make_env
+
+    with pytest.raises(
+        ScenarioError, match="not a registered id; registered: adaptive_dd/PayloadSwap-SICE-v0"
+    ):
+        make_env("adaptive_dd/PayloadSwap-Nope-v0")

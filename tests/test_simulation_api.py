@@ -214,3 +214,31 @@ def test_importing_the_figures_keeps_the_users_matplotlib_backend():
     env = {k: v for k, v in __import__("os").environ.items() if k != "MPLBACKEND"}
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env, check=True)
     assert out.stdout.strip() == "svg", out.stdout + out.stderr
+
+
+def test_the_library_names_a_misused_argument_and_what_to_pass():
+    """A file path, a list of controllers, a negative number of kept trajectories, a negative or
+    NaN payload mass, a window that is no time: each refused naming the argument and the fix."""
+    import dataclasses
+
+    from adaptive_dd.benchmark.runner import run_benchmark
+    from adaptive_dd.benchmark.scenario import load_scenario
+    from adaptive_dd.errors import ParameterError
+    from adaptive_dd.plant import Arm
+
+    sc = dataclasses.replace(load_scenario(), seeds=1, duration=0.2, swap_times=(0.1,), swap_masses=(1.0,))
+    with pytest.raises(ParameterError, match=r"scenario must be a Scenario.*load_scenario"):
+        run_benchmark("payload_swap.toml", progress=False)
+    with pytest.raises(ParameterError, match=r"controllers must be a dict.*with_controllers"):
+        run_benchmark(sc, progress=False, controllers=["ct_oracle"])
+    with pytest.raises(ParameterError, match="keep_trajectories must be an integer >= 0"):
+        run_benchmark(sc, progress=False, keep_trajectories=-1)
+    arm = Arm.sice()
+    for bad in (-1.0, float("nan")):
+        with pytest.raises(ParameterError, match="mass must be finite and >= 0 kg"):
+            arm.sigma_with_payload(bad)
+    from adaptive_dd.plotting import plot_tracking_errors
+
+    res = run_benchmark(sc, progress=False)
+    with pytest.raises(ParameterError, match=r"window must be a time in \(0, 0.2\] s"):
+        plot_tracking_errors(res, window=-1)

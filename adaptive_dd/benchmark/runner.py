@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import time
 import warnings
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 
 import numpy as np
 
@@ -121,6 +121,19 @@ def run_benchmark(
     """
     if engine not in ENGINES:
         raise ParameterError(f"engine must be one of {ENGINES}, got {engine!r}")
+    if not isinstance(scenario, Scenario):
+        raise ParameterError(
+            f"run_benchmark: scenario must be a Scenario, got {type(scenario).__name__} {scenario!r:.80}; "
+            "load a file with adaptive_dd.benchmark.scenario.load_scenario(path)"
+        )
+    if controllers is not None and not isinstance(controllers, Mapping):
+        raise ParameterError(
+            f"run_benchmark: controllers must be a dict {{name: controller object}}, got "
+            f"{type(controllers).__name__}; to run some of the scenario's by name, pass "
+            "scenario.with_controllers([...])"
+        )
+    if not (isinstance(keep_trajectories, int | np.integer) and keep_trajectories >= 0):
+        raise ParameterError(f"keep_trajectories must be an integer >= 0, got {keep_trajectories!r}")
     t0 = time.perf_counter()
     total = scenario.n_samples * len(controllers or scenario.controllers)
     with RunClock(total, f"benchmark {scenario.name}", show=progress) as clock:

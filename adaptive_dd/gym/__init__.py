@@ -91,6 +91,13 @@ def make_env(scenario=None, floor: str | None = "ct_oracle") -> PayloadSwapEnv:
     """
     if isinstance(scenario, str) and scenario in SCENARIO_IDS:
         scenario = _SCENARIOS / SCENARIO_IDS[scenario]
+    elif isinstance(scenario, str) and scenario.startswith("adaptive_dd/"):
+        from adaptive_dd.errors import ScenarioError
+
+        raise ScenarioError(
+            f"make_env: {scenario!r} is not a registered id; registered: {', '.join(SCENARIO_IDS)} "
+            "(or give a scenario file or a Scenario)"
+        )
     return PayloadSwapEnv(scenario, floor=floor)
 
 

@@ -477,14 +477,14 @@ class Arm:
         radius: float | None = None,
         sigma0: ArrayLike | None = None,
     ) -> Array:
-        """Base parameters with a rigid body on the payload frame, ``(..., p)``.
-
-        ``mass`` may be an array (one disk per entry, the same com and inertia);
-        ``radius`` (default :attr:`payload_radius`) is used when ``inertia`` is not given.
-        """
+        """Base parameters with a rigid body on the payload frame, ``(..., p)``: ``mass`` [kg] may
+        be an array (one disk per entry, the same com and inertia); ``radius`` (default
+        :attr:`payload_radius`) when ``inertia`` is not given. A mass < 0 or not finite is refused."""
         base = self.sigma if sigma0 is None else np.asarray(sigma0, dtype=float)
         rad = self.payload_radius if radius is None else radius
         m = np.asarray(mass, dtype=float)
+        if not np.all(np.isfinite(m) & (m >= 0)):
+            raise ParameterError(f"sigma_with_payload: mass must be finite and >= 0 kg, got {mass!r}")
         if inertia is None:  # a disk: every parameter scales with the mass
             pp = m[..., None] * payload_parameters(1.0, com, radius=rad)
         else:
