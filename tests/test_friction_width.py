@@ -189,3 +189,34 @@ def test_an_estimated_width_widens_its_coulomb_levels_std():
     fc = list(coulomb_index(model).values())
     np.testing.assert_array_equal(free.sigma, fixed.sigma)
     assert np.all(free.std[fc] > 1.05 * fixed.std[fc]), (free.std[fc], fixed.std[fc])
+
+
+def test_simulate_then_identify_fits_the_law_the_record_was_made_with(tmp_path, capsys):
+    """``simulate --arm`` writes ``trajectory.json`` (its plant's ``fc tanh(qd / v_f)``) beside the
+    record; ``identify --arm`` on that record fits the same width by default. Without the file it
+    falls back on the record's velocity noise (0.007 rad/s here, against the plant's 0.02: the
+    output error's normalised residual was 2.1 and an armature came out negative)."""
+    import json
+
+    from adaptive_dd.cli import main
+
+    scen = tmp_path / "v3.toml"
+    scen.write_text(
+        '[arm]\nrobot = "vertical3"\n[reference]\nramp = 0.5\n'
+        "joint1 = { offset = 0.3, amplitude = [0.4, 0.1], frequency = [0.3, 0.9] }\n"
+        "joint2 = { offset = -0.6, amplitude = [0.5, 0.15], frequency = [0.4, 1.1] }\n"
+        "joint3 = { offset = 0.4, amplitude = [0.6, 0.2], frequency = [0.5, 1.3] }\n"
+    )
+    sim = tmp_path / "s"
+    assert main(["simulate", "--arm", str(scen), "--duration", "2", "--out", str(sim)]) == 0
+    made = json.loads((sim / "trajectory.json").read_text())
+    assert made == {"plant": "model", "coulomb_law": "tanh", "friction_velocity": 0.02}
+    capsys.readouterr()
+    argv = ["identify", "--arm", str(scen), str(sim / "trajectory.csv"), "--output-error", "off"]
+    assert main([*argv, "--out", str(tmp_path / "a")]) == 0
+    out = capsys.readouterr().out
+    assert "v = 0.02 rad/s: the width the record was simulated with" in out, out
+    assert json.loads((tmp_path / "a" / "model.json").read_text())["friction_velocity"] == 0.02
+    (sim / "trajectory.json").unlink()  # a record without it: the noise's width, as before
+    assert main([*argv, "--out", str(tmp_path / "b")]) == 0
+    assert "the width of the record's velocity noise" in capsys.readouterr().out

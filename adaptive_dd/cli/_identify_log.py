@@ -354,10 +354,14 @@ def _coulomb_width(args, arm, model, rec, K, tau_f: float, torque_held: bool, of
     ``K`` None (``--payload-only``: no least squares to profile) refuses ``profile``."""
     import dataclasses
 
-    from adaptive_dd.identification.friction_width import profile_coulomb_width
+    from adaptive_dd.identification.friction_width import profile_coulomb_width, simulated_width
 
     choice = args.coulomb_width
     head = "Coulomb friction fitted as fc tanh(qd / v)"
+    made = simulated_width(rec.source) if choice == "auto" and rec.simulator_format else None
+    if made is not None:  # a record of adaptive-dd simulate: the law it was made with
+        print(f"{head}, v = {made[0]:.3g} rad/s: the width the record was simulated with ({made[1]})")
+        return dataclasses.replace(model, friction_velocity=made[0]), None
     if choice == "auto":  # profile on a real log (measured to predict better on the TIAGo's)
         choice = "profile" if not rec.simulator_format and K is not None else "noise"
     if choice == "noise":

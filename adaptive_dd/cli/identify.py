@@ -129,7 +129,8 @@ def _add_arm_options(i: argparse.ArgumentParser) -> None:
         default="auto",
         metavar="auto|noise|profile|V",
         help="with --arm: the width v of the Coulomb law fc tanh(qd / v) [rad/s]. auto (default): profile "
-        "for a record read through a [record] table, noise for the simulator's records; noise: the "
+        "for a record read through a [record] table, the width a record of `simulate` was simulated with "
+        "(its trajectory.json), else noise; noise: the "
         "record's velocity noise (the arm's friction_velocity if its law is tanh); profile: per fitted "
         "joint, the width of the record's profile likelihood over a grid (printed with its 95 %% interval; "
         "docs/real_log.md); V > 0: that width for every joint",

@@ -245,6 +245,7 @@ def simulate_arm(args: argparse.Namespace, scenario_path: str, outputs) -> int:
         plant=getattr(args, "plant", "model"),
     )
     write_recording(outputs.path("trajectory.csv"), rec.t, rec.q[0], rec.qd[0], rec.tau[0])
+    _write_made_by(outputs.path("trajectory.json"), arm, getattr(args, "plant", "model"))
     np.savez_compressed(
         outputs.path("trajectory.npz"),
         t=rec.t,
@@ -339,6 +340,21 @@ def _drawn_plant(args: argparse.Namespace, sc, scenario_path: str, outputs):
     return drawn
 
 
+def _write_made_by(path, arm, plant: str) -> None:
+    """``trajectory.json`` beside the record: how its plant's friction was simulated, which
+    ``adaptive-dd identify`` reads to fit the same Coulomb law (``--coulomb-width auto``)."""
+    import json
+
+    model = plant != "benchmark"  # the identification model's RK4: fc tanh(qd / v_f)
+    made = {
+        "plant": "model" if model else "benchmark",
+        "coulomb_law": "tanh" if model else arm.friction,
+        "friction_velocity": float(arm.friction_velocity) if model or arm.friction == "tanh" else None,
+    }
+    with open(path, "w", encoding="utf-8") as f:
+        json.dump(made, f, indent=2)
+
+
 def _print_record(args: argparse.Namespace, arm, sc, rec, where: str) -> None:
     plant = getattr(args, "plant", "model")
     print(
@@ -360,6 +376,7 @@ def _print_record(args: argparse.Namespace, arm, sc, rec, where: str) -> None:
     print(f"  saturated fraction    : {rec.saturated.max(axis=0).round(4)}")
     out = Path(args.out)
     print(
-        f"wrote {out / 'trajectory.csv'} (trial 0, measured), {out / 'trajectory.npz'} (all trials and "
+        f"wrote {out / 'trajectory.csv'} (trial 0, measured), {out / 'trajectory.json'} (how it was "
+        f"simulated), {out / 'trajectory.npz'} (all trials and "
         "the truth)"
     )

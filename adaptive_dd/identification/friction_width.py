@@ -39,6 +39,7 @@ __all__ = [
     "coulomb_width",
     "identification_model",
     "profile_coulomb_width",
+    "simulated_width",
     "velocity_noise_std",
 ]
 
@@ -70,6 +71,21 @@ def coulomb_width(qd: Array, friction: str = "stick-slip", friction_velocity: fl
     if friction == "tanh":
         return float(friction_velocity)
     return max(velocity_noise_std(qd), MIN_WIDTH)
+
+
+def simulated_width(source: str):
+    """``(v, path)`` of a record ``adaptive-dd simulate`` wrote with its plant's ``fc tanh(qd / v)``
+    (the ``trajectory.json`` beside the CSV), else None (no such file, another law, unreadable)."""
+    import json
+    from pathlib import Path
+
+    path = Path(str(source)).with_suffix(".json")
+    try:
+        made = json.loads(path.read_text(encoding="utf-8"))
+        v = made.get("friction_velocity") if made.get("coulomb_law") == "tanh" else None
+    except (OSError, ValueError, AttributeError):
+        return None
+    return (float(v), str(path)) if isinstance(v, int | float) and v > 0 else None
 
 
 def identification_model(arm, qd: Array):
