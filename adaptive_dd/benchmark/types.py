@@ -112,9 +112,10 @@ class ControllerRun:
             if e > max_error:
                 self.failed_why[i] = f"tracking error |e| = {e:.3g} rad, beyond max_error = {max_error:g} rad"
             else:
+                at = f"|e| = {e:.3g} rad, within max_error" if np.isfinite(e) else "|e| not finite"
                 self.failed_why[i] = (
-                    f"runaway: the arm's state became non-finite or a joint exceeded {max_speed:g} rad/s "
-                    f"(|e| = {e:.3g} rad)"
+                    f"runaway: the arm's state became non-finite or a joint exceeded {max_speed:g} rad/s, "
+                    f"or the command was not finite ({at})"
                 )
 
     def failures(self, sample_period: float, seed_indices=None) -> list[dict]:
