@@ -154,7 +154,7 @@ class Law:
             payload_joint=int(self.arm.payload_joint), payload_map=np.ascontiguousarray(self.arm.payload_map),
             T=float(T), observer=False, obs_a=0.0, obs_stages=2, obs_kappa=OBSERVER_THRESHOLD,
             obs_alpha=1.0,
-            obs_warmup=0, obs_speed=z.copy(),
+            obs_warmup=0,
         )  # fmt: skip
         base.update(kw)
         return LawConfig(**base)
@@ -352,22 +352,6 @@ stages' pole at ``exp(-0.4)``, half a step passed after about four samples. One 
 arm, measured at 0.1 / 0.2 / 0.4 / 0.8 on vertical3 and the iiwa (docs/change_detection.md, "The
 residual observer")."""
 OBSERVER_THRESHOLD = 3.0
-OBSERVER_SPEED_NOISE = 3.0
-"""The residual observer's speed gate on a friction-dominated joint, in its velocity noise's std."""
-FRICTION_ACCELERATION = 100.0
-"""[rad/s^2] A joint whose Coulomb friction over its inertia about its axis (armature included) is
-beyond this is friction-dominated: 11.5 at most on the shipped scenarios, 15.7 on 100 drawn arms,
-7700 on the UR5's URDF alone (wrist 3, no armature). ``validate`` warns of it
-(:func:`~adaptive_dd.benchmark.preflight.inertia_problems`) and the observer gates it."""
-
-
-def friction_dominated(arm, q) -> np.ndarray:
-    """Per joint, whether the Coulomb friction over the smallest inertia about its axis at the
-    positions ``q (K, n)`` exceeds :data:`FRICTION_ACCELERATION`, ``(n,)`` bool."""
-    inertia = np.diagonal(arm.mass_matrix(np.atleast_2d(q)), axis1=-2, axis2=-1).min(axis=0)
-    return np.asarray(arm.coulomb, dtype=float) > FRICTION_ACCELERATION * inertia
-
-
 """The observer's output is soft-thresholded at this many times its own learnt RMS level."""
 OBSERVER_LEVEL_WINDOW = 1.0
 """[s] window of the observer's learnt level (the detector's long window)."""
@@ -494,18 +478,8 @@ class AdaptiveCT(Law):
             boost_samples=round(self.boost_duration / sample_period),
             boost_ramp=round(self.boost_ramp / sample_period), observer=self.observer,
             obs_a=float(np.exp(-beta * T)), obs_alpha=min(1.0, T / OBSERVER_LEVEL_WINDOW),
-            obs_warmup=round(OBSERVER_WARMUP / T), obs_speed=self.observer_speeds(),
+            obs_warmup=round(OBSERVER_WARMUP / T),
         )  # fmt: skip
-
-    def observer_speeds(self) -> Array:
-        """[rad/s] The residual observer's speed gate per joint: 3 times the velocity noise's std on
-        a friction-dominated joint (:func:`friction_dominated`, over the task's positions, else at
-        zero), 0 elsewhere (no gate)."""
-        q = self.task[0] if self.task is not None else np.zeros((1, self.arm.n_joints))
-        var = np.broadcast_to(
-            np.asarray(self.arm.sensor.velocity_variance, dtype=float), (self.arm.n_joints,)
-        )
-        return np.where(friction_dominated(self.arm, q), OBSERVER_SPEED_NOISE * np.sqrt(var), 0.0)
 
     def compiled_form(self, n_trials, sample_period):
         cfg = self.law_config(sample_period)

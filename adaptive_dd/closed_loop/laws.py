@@ -168,9 +168,6 @@ class LawConfig(NamedTuple):
         [s] Integral concurrent learning's integration window.
     nat_gain : float
         The natural law's scalar gain ``gamma``.
-    obs_speed : ndarray (n,)
-        [rad/s] Per joint, the residual observer's speed gate (0 or shorter than n: none;
-        :mod:`~adaptive_dd.closed_loop.residual_observer`).
     """
 
     kind: int
@@ -208,7 +205,6 @@ class LawConfig(NamedTuple):
     adapt_kind: int = 0
     icl_window: float = 0.0
     nat_gain: float = 0.0
-    obs_speed: Array = np.zeros(1)
 
 
 class LawState(NamedTuple):

@@ -10,11 +10,7 @@ noise rolls off instead of passing it at the gain beta up to the Nyquist frequen
 soft-thresholded at ``obs_kappa`` times its own learnt RMS level is added to the command. Noise
 stays below the threshold; a payload's torque passes from the samples after the swap, before the
 change is detected, and fades as the estimate learns it (``r`` is the residual of the current
-model). On a friction-dominated joint (``obs_speed`` set: its Coulomb friction over its inertia
-beyond :data:`~adaptive_dd.closed_loop.controllers.FRICTION_ACCELERATION`, a URDF without the
-drives' armature) the model's ``fc sgn(qd)`` takes the measured speed's noise's sign near rest, a
-flip of ``2 fc`` each sample: while the joint is slower than ``obs_speed`` its residual restarts
-from zero and feeds nothing.
+model).
 
 The settings are the fields ``obs_*`` of
 :class:`~adaptive_dd.closed_loop.laws.LawConfig`, the state the rows ``O_*`` of
@@ -94,11 +90,7 @@ def _observe(ch, cfg, pi, q, qd, obs, work, out):  # pragma: no cover - compiled
         _momentum(ch, pi, obs[O_Q], obs[O_QD], work, pw[0], pw[1])
         _momentum(ch, pi, q, qd, work, pw[2], pw[3])
         am = cfg.obs_a**m
-        gate = cfg.obs_speed
         for j in range(n):
-            if gate.shape[0] > j and min(abs(qd[j]), abs(obs[O_QD, j])) < gate[j]:
-                obs[O_R1, j] = obs[O_R, j] = 0.0  # the Coulomb sign is the noise's: restart, feed nothing
-                continue
             rho = obs[O_TAU, j] / m - 0.5 * (pw[1, j] + pw[3, j]) - (pw[2, j] - pw[0, j]) / (m * cfg.T)
             if not np.isfinite(rho):
                 continue

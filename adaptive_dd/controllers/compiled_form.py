@@ -81,8 +81,6 @@ class TwoLinkGains(NamedTuple):
     T : float
         Sample period [s].
     obs_a, obs_stages, obs_kappa, obs_alpha, obs_warmup : float, int, float, float, int
-    obs_speed : ndarray
-        The observer's speed gate (empty: none; the paper's arm is not friction-dominated).
         ``exp(-beta T)``; stages; soft threshold in RMS levels; a sample's weight in the level;
         updates before the observer feeds the command.
     """
@@ -109,7 +107,6 @@ class TwoLinkGains(NamedTuple):
     obs_kappa: float
     obs_alpha: float
     obs_warmup: int
-    obs_speed: Array
 
 
 class CompiledSpec(NamedTuple):
@@ -137,7 +134,7 @@ def two_link_gains(law: int, sigma=None, **gains) -> TwoLinkGains:
         boost_samples=0.0, boost_lim=np.full(2, np.inf),
         sigma=z7 if sigma is None else np.array(sigma, dtype=float),
         gamma=z7, lo=z7, hi=z7, projection=np.zeros(3), observer=False, T=0.0, obs_a=0.0, obs_stages=2,
-        obs_kappa=0.0, obs_alpha=0.0, obs_warmup=0, obs_speed=np.zeros(0),
+        obs_kappa=0.0, obs_alpha=0.0, obs_warmup=0,
     )  # fmt: skip
     fields.update(gains)
     return TwoLinkGains(**fields)
