@@ -370,3 +370,32 @@ def test_stating_a_builtin_controllers_default_settings_is_valid(kind):
         parse_scenario(data, f"{name}.toml")
         checked += 1
     assert checked >= 2, checked
+
+
+def test_a_too_large_n_joint_run_is_refused_with_its_own_estimate():
+    """The refusal's estimate is the N-joint arm's (its rate per joint), not the two-link arm's."""
+    from adaptive_dd.benchmark.scenario import parse_scenario
+    from adaptive_dd.benchmark.scenario_base import run_estimate
+    from adaptive_dd.errors import ScenarioError
+
+    ref = {
+        f"joint{j}": {"offset": o, "amplitude": [0.3], "frequency": [0.3]}
+        for j, o in ((1, 0.3), (2, -0.6), (3, 0.4))
+    }
+    data = {
+        "arm": {"robot": "vertical3"},
+        "run": {"duration": 20000.0, "seeds": 1000, "controllers": ["ct_oracle", "pd"]},
+        "reference": ref,
+    }
+    with pytest.raises(ScenarioError, match="run: too large") as e:
+        parse_scenario(data, "big.toml")
+    assert str(run_estimate(20_000_000, 1000, 2, n_joints=3)) in str(e.value)
+    assert str(run_estimate(20_000_000, 1000, 2)) not in str(e.value)
+
+
+def test_the_reports_centre_of_mass_shows_each_axis_the_data_determine():
+    from adaptive_dd.benchmark.report import _xyz
+
+    assert _xyz((0.03, None, 0.0)) == "30,-,0"  # a planar arm: y is not determined
+    assert _xyz((None, None, None)) == "—" and _xyz(None) == "—"
+    assert _xyz((0.001, 0.002, 0.003)) == "1,2,3"
