@@ -344,6 +344,12 @@ def read_toml(path: Path) -> dict:
     return _read(path, ScenarioError)
 
 
+def no_scenario_file(path: str | Path) -> ScenarioError:
+    """The error for a scenario path that is no file: a folder, or nothing there."""
+    what = "is a folder, not a scenario file" if Path(path).is_dir() else "no such scenario file"
+    return ScenarioError(f"{path}: {what} (give a scenario's .toml file)")
+
+
 def load_scenario(path: str | Path | None = None) -> Scenario:
     """Read and check a scenario file (default: the shipped ``payload_swap``).
 
@@ -380,8 +386,7 @@ def load_scenario(path: str | Path | None = None) -> Scenario:
     """
     path = Path(path) if path is not None else default_scenario_path()
     if not path.is_file():
-        what = "is a folder, not a scenario file" if path.is_dir() else "no such scenario file"
-        raise ScenarioError(f"{path}: {what} (give a scenario's .toml file)")
+        raise no_scenario_file(path)
     data = read_toml(path)
     if not data:
         raise ScenarioError(

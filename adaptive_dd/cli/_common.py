@@ -105,8 +105,9 @@ def load_arm(path: str | None, repair_inertia: bool = False, *, general: str | N
             return Arm.sice()
         return ClosedFormTwoLink.sice().to_arm()
     if not Path(path).is_file():
-        what = "is a folder, not a scenario file" if Path(path).is_dir() else "no such scenario file"
-        raise ScenarioError(f"{path}: {what} (give a scenario's .toml file)")
+        from adaptive_dd.benchmark.scenario import no_scenario_file
+
+        raise no_scenario_file(path)
     data = read_toml(Path(path))
     table = data.get("arm")
     if general:

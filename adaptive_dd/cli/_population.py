@@ -37,8 +37,9 @@ def run_arms(args: argparse.Namespace, only_controllers) -> int:
         )
     path = Path(args.scenario)
     if not path.is_file():
-        what = "is a folder, not a scenario file" if path.is_dir() else "no such scenario file"
-        raise ScenarioError(f"{path}: {what} (give a scenario's .toml file)")
+        from adaptive_dd.benchmark.scenario import no_scenario_file
+
+        raise no_scenario_file(path)
     data, src = read_toml(path), str(path)
     seeds = range(args.first_arm, args.first_arm + args.arms)
     first = population_scenario(data, src, seeds[0], draw_swaps=args.draw_swaps)  # checks the template

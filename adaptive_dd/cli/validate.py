@@ -66,11 +66,11 @@ def _print_torque_peaks(sc) -> None:
 
 
 def _preflight(sc) -> int:
-    from adaptive_dd.benchmark.preflight import inertia_problems, preflight
+    from adaptive_dd.benchmark import preflight as pf
 
-    problems, warnings = preflight(sc)
-    torque_warned = len(warnings) > len(inertia_problems(sc))
-    for w in warnings:
+    problems = pf.reference_problems(sc) + pf.controller_problems(sc)
+    torque = pf.torque_problems(sc)
+    for w in torque + pf.inertia_problems(sc):
         print(f"adaptive-dd validate: warning: {w}", file=sys.stderr)
     if problems:
         print(f"adaptive-dd validate: {len(problems)} problem(s) the run would meet:", file=sys.stderr)
@@ -79,7 +79,7 @@ def _preflight(sc) -> int:
         return 1
     print(
         f"# checked: the reference within the arm's position and velocity limits (torque: "
-        f"{'see the warning' if torque_warned else 'within'}); {len(sc.controllers)} controller(s) built"
+        f"{'see the warning' if torque else 'within'}); {len(sc.controllers)} controller(s) built"
     )
     return 0
 
