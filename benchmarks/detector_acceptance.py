@@ -5,8 +5,8 @@ on every shipped scenario (``adaptive_dd/scenarios/payload_swap.toml``,
 ``benchmarks/scenarios/*.toml``), each with its own plant and with the plant's friction
 replaced by stick-slip, tanh (v = 0.02 and 0.1 rad/s: the second creeps about 0.1 rad/s at
 80 % of d, as the soft-constraint engine of issue 19 does), stribeck and LuGre (the
-detector's settings are the same everywhere). A plant an arm cannot take (LuGre on an arm that
-is not the paper's kind of two-link arm) is skipped and said so; a run that fails is printed as
+detector's settings are the same everywhere). A plant an arm cannot take is skipped and said
+so; a run that fails is printed as
 failed and the others go on (the exit status is then non-zero). Per scenario and plant it prints, per segment,
 the per-seed ratio adaptive_ct / ct_oracle (mean, p90, max and worst seed), the trials with a
 false alarm, the swaps missed (no alarm within 0.3 s after the swap), the median detection
@@ -129,7 +129,7 @@ def main() -> None:
             name = f"{os.path.relpath(path)} [plant {label}]"
             try:
                 arm = sc.arm if spec is None else dataclasses.replace(sc.arm, **spec)
-            except ParameterError as exc:  # e.g. LuGre on an arm that is not the paper's kind
+            except ParameterError as exc:  # a law's parameters the arm refuses
                 print(f"{name}: skipped, the arm cannot take this plant ({exc})", flush=True)
                 tot["skipped"] += 1
                 continue

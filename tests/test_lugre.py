@@ -1,5 +1,5 @@
 """The LuGre plant: pre-sliding below breakaway, sliding above, the implicit integrator's
-convergence, and both closed-loop paths on it."""
+convergence, both closed-loop paths on it, and the same law on any arm (the general kernels)."""
 
 from __future__ import annotations
 
@@ -12,11 +12,13 @@ import pytest
 from adaptive_dd.benchmark.runner import run_benchmark
 from adaptive_dd.benchmark.scenario import load_scenario
 from adaptive_dd.errors import ParameterError, ScenarioError
-from adaptive_dd.plant import TABLE1_SIGMA, ClosedFormTwoLink
+from adaptive_dd.plant import TABLE1_SIGMA, Arm, ClosedFormTwoLink
 from adaptive_dd.plant.arm_tables import arm_from_tables
+from adaptive_dd.plant.integrator import plant_params, plant_step
 from adaptive_dd.plant.simulator import ArmSimulator
 from adaptive_dd.plant.two_link import closed_form_view
 from adaptive_dd.plant.two_link_integrator import lugre_step, two_link_plant_step
+from adaptive_dd.robots import robot_urdf
 
 ARM = ClosedFormTwoLink.sice(friction="lugre")
 FP = ARM.friction_params
@@ -136,3 +138,88 @@ def test_compiled_and_python_closed_loops_agree_on_the_lugre_plant():
 def _acc(run):
     """A run's streamed sums (``StreamedSums`` but the error norm) as one flat array."""
     return np.concatenate([np.ravel(x) for x in run.acc[:-1]])
+
+
+def _lugre_params(arm):
+    n, pi = arm.n_joints, np.asarray(arm.pi, dtype=float)
+    return plant_params(
+        arm.chain, pi[: 10 * n], pi[10 * n : 11 * n], pi[11 * n : 12 * n], pi[12 * n :], law="lugre",
+        friction_velocity=arm.friction_velocity, stribeck_ratio=arm.stribeck_ratio,
+        stribeck_velocity=arm.stribeck_velocity, lugre_stiffness=arm.lugre_stiffness,
+        lugre_damping=arm.lugre_sigma1,
+    )  # fmt: skip
+
+
+def test_the_general_lugre_step_is_the_two_link_step_on_the_papers_arm():
+    arm = dataclasses.replace(Arm.sice(), friction="lugre", general=True)
+    two = closed_form_view(dataclasses.replace(arm, general=False))
+    assert arm.friction_params == pytest.approx(two.friction_params, rel=1e-14)
+    pp = _lugre_params(arm)
+    q, qd, stuck = np.zeros(2), np.zeros(2), np.zeros(2, dtype=bool)
+    q2, qd2, z2 = np.zeros(2), np.zeros(2), np.zeros(2)
+    k = np.arange(800)[:, None] * 1e-3
+    taus = 12.0 * np.sin(k * np.array([4.0, 6.0])) + np.array([0.5, -0.3])  # reversals, sticking
+    for tau in taus:
+        assert plant_step(arm.chain, pp, q, qd, np.ascontiguousarray(tau), 1e-3, 2, stuck)
+        q2, qd2, z2 = lugre_step(q2, qd2, z2, tau, np.asarray(two.sigma), 1e-3, two.friction_params)
+        np.testing.assert_allclose(q, q2, rtol=0, atol=1e-11)
+        np.testing.assert_allclose(pp.law.z, z2, rtol=0, atol=1e-13)
+    assert np.abs(qd).max() > 0.1 and not stuck.any()  # it slid, and LuGre holds no joint stuck
+
+
+def test_a_six_joint_arm_pre_slides_below_breakaway_by_each_joints_own_stiffness():
+    """Gravity held by the command, joint j pushed by 0.7 of its Coulomb level: it comes to rest
+    with its bristles carrying the push (``sigma0_j z_j``, its own stiffness), having moved by at
+    least that deflection and not much more (pre-sliding, no breakaway); the other joints' bristles
+    carry next to nothing."""
+    ur5 = dataclasses.replace(
+        Arm.from_urdf(robot_urdf("ur5")), friction="lugre", lugre_stiffness=(1e5, 2e5, 1e5, 3e4, 2e4, 1e4)
+    )
+    q0 = np.array([0.0, -1.2, 1.4, -1.6, -1.5, 0.3])
+    hold = ur5.inverse_dynamics(q0, np.zeros(6), np.zeros(6))
+    for j in (1, 5):
+        pp = _lugre_params(ur5)
+        q, qd, stuck = q0.copy(), np.zeros(6), np.zeros(6, dtype=bool)
+        push = hold.copy()
+        push[j] += 0.7 * ur5.coulomb[j]
+        for _ in range(400):
+            assert plant_step(ur5.chain, pp, q, qd, push, 1e-3, 2, stuck)
+        z, deflection = pp.law.z, 0.7 * ur5.coulomb[j] / ur5.lugre_stiffness[j]
+        assert np.abs(qd).max() < 1e-6
+        assert z[j] == pytest.approx(deflection, rel=0.02)
+        assert deflection < q[j] - q0[j] < 3 * deflection
+        assert np.delete(np.abs(z), j).max() < 0.02 * deflection
+
+
+def test_lugre_on_any_arm_from_a_scenario_table_and_its_errors():
+    ur5 = arm_from_tables({"robot": "ur5"}, {"friction": "lugre", "lugre_stiffness": 2e5})
+    assert ur5.friction == "lugre" and ur5.lugre_stiffness == (2e5,) * 6
+    m0 = np.diag(ur5.mass_matrix(np.zeros(6)))
+    np.testing.assert_allclose(ur5.lugre_sigma1, np.sqrt(2e5 * m0))
+    assert len(ur5.friction_params) == 3 + 12
+    with pytest.raises(ScenarioError, match=r"plant\.lugre_stiffness' must be one number or a list of 6"):
+        arm_from_tables({"robot": "ur5"}, {"friction": "lugre", "lugre_stiffness": [1e5, 1e5]})
+    with pytest.raises(ParameterError, match=r"Arm\.lugre_damping must be one value or 6"):
+        dataclasses.replace(ur5, lugre_damping=(1.0, 2.0))
+    with pytest.raises(ParameterError, match="LuGre needs its bristle state"):
+        from adaptive_dd.plant.integrator import friction_law
+
+        friction_law(3)
+
+
+@pytest.mark.slow
+def test_every_controller_meets_the_n_joint_lugre_plant_with_its_bristles_at_rest():
+    """The run's plant record carries the bristles: each controller's trials start them at rest (a
+    law run after another gives what it gives alone), and both paths agree on the general kernels."""
+    sc = load_scenario(Path(__file__).parents[1] / "benchmarks" / "scenarios" / "sice_general.toml")
+    sc = dataclasses.replace(
+        sc, arm=dataclasses.replace(sc.arm, friction="lugre"), seeds=2, duration=1.0, swap_times=(0.5,),
+        swap_masses=(2.0,), controllers=("ct_oracle", "pd"),
+    )  # fmt: skip
+    both = run_benchmark(sc, progress=False, engine="compiled")
+    with pytest.warns(UserWarning, match="floor ct_oracle did not run"):
+        alone = run_benchmark(dataclasses.replace(sc, controllers=("pd",)), progress=False, engine="compiled")
+    np.testing.assert_array_equal(both.runs["pd"].q, alone.runs["pd"].q)
+    python = run_benchmark(sc, progress=False, engine="python")
+    for name in sc.controllers:
+        np.testing.assert_allclose(both.runs[name].q, python.runs[name].q, rtol=0, atol=1e-12)

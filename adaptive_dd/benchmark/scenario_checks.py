@@ -174,12 +174,6 @@ def table_name(name: str) -> str:
 def _check_plant(e: list, v: dict) -> None:
     """A plant (:class:`~adaptive_dd.plant.uncertainty.PlantSpec`) only on an N-joint arm, sized for it."""
     p = v.get("plant")
-    if getattr(v.get("arm"), "friction", None) == "lugre" and _serial(v):
-        e.append(
-            "plant.friction: LuGre friction is the paper's closed forms' plant law; this run takes the "
-            "general kernels (another geometry, general = true, or a plant apart from the arm), whose "
-            "plant has stick-slip, tanh and stribeck friction"
-        )
     if p is None:
         return
     if not _serial(v):

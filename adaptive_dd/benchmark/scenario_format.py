@@ -67,10 +67,28 @@ def format_scenario(sc: Scenario) -> str:
 
 def _plant_lines(sc: Scenario) -> list[str]:
     """What the plant is when it is not the model (``[plant]``, ``[model]``), for ``validate``."""
-    p, u = sc.plant, sc.model_uncertainty
+    p, u, arm = sc.plant, sc.model_uncertainty, sc.arm
     stated = [] if u is None else [f"model.uncertainty = {dataclasses.asdict(u)!r}"]
+    if arm.friction != "stick-slip" and sc.closed_forms is None:  # the plant's friction law
+        strib = (
+            f"stribeck_ratio = {arm.stribeck_ratio:g}, stribeck_velocity = {arm.stribeck_velocity:g} rad/s"
+        )
+        law = {
+            "tanh": f"friction_velocity = {arm.friction_velocity:g}",
+            "stribeck": strib,
+            "lugre": (
+                f"{strib}, lugre_stiffness = {_brief_list(arm.lugre_stiffness)}, "
+                f"lugre_damping = {_brief_list(arm.lugre_sigma1)}"
+            ),
+        }[arm.friction]
+        model = "the controllers' model: viscous + Coulomb"
+        stated.append(f"plant.friction = {arm.friction!r}   ({law}; {model})")
     if p is None:
-        return ["# plant: the [arm] itself (no [plant] table)", *stated] if sc.closed_forms is None else []
+        return (
+            ["# plant: the [arm] itself (no plant apart from the model)", *stated]
+            if sc.closed_forms is None
+            else []
+        )
     out = [f"model.urdf = {str(sc.arm.urdf)!r}   (what every non-oracle controller is given)", *stated]
     out.append(f"plant.urdf = {p.urdf!r}" if p.urdf else "# plant links: the [arm]'s URDF")
     for key in ("viscous", "coulomb", "armature"):
@@ -98,6 +116,11 @@ def _brief(v: Any, most: int = 12) -> Any:
     if isinstance(v, list | tuple) and len(v) > most:
         return _Summary(f"<{len(v)} numbers>")
     return v
+
+
+def _brief_list(v) -> str:
+    """Numbers to 4 significant digits, one value when all are equal."""
+    return f"{v[0]:.4g}" if len(set(v)) == 1 else "[" + ", ".join(f"{x:.4g}" for x in v) + "]"
 
 
 def _show(v: Any) -> str:

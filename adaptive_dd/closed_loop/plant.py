@@ -1,15 +1,15 @@
 """The plant step the closed loop calls: one trial, one sample, zero-order hold, in place.
 
-:func:`adaptive_dd.plant.integrator.plant_step` (RK4 substeps; stick-slip,
-tanh or Stribeck friction) on trial i's plant (its link parameters in the current payload
-segment, its friction).
+:func:`adaptive_dd.plant.integrator.plant_step` (RK4 substeps; stick-slip, tanh or Stribeck
+friction; LuGre's implicit micro-steps on trial i's bristles) on trial i's plant (its link
+parameters in the current payload segment, its friction).
 """
 
 from __future__ import annotations
 
 from numba import njit
 
-from adaptive_dd.plant.integrator import PlantParams, plant_scratch, plant_step_in
+from adaptive_dd.plant.integrator import PlantParams, plant_scratch, plant_step_in, trial_law
 
 __all__ = ["plant_scratch", "plant_step"]
 
@@ -24,5 +24,6 @@ def plant_step(pl, i, seg, q, qd, tau, T, stuck, sc):  # pragma: no cover - comp
     (a mass matrix not positive definite, a non-finite state); the loop's runaway rule catches
     the state.
     """
-    pp = PlantParams(pl.pi_seg[i, seg], pl.fv[i], pl.fc[i], pl.armature[i], pl.friction_law, pl.fparams)
+    law = trial_law(pl.friction_law, i)
+    pp = PlantParams(pl.pi_seg[i, seg], pl.fv[i], pl.fc[i], pl.armature[i], law, pl.fparams)
     return plant_step_in(pl.chain, pp, q, qd, tau, T, pl.substeps, stuck, sc)

@@ -51,6 +51,7 @@ from adaptive_dd.closed_loop.types import (
     io_of,
     plant_of,
     plant_record,
+    reset_plant,
     run_constants,
     true_models,
 )
@@ -185,6 +186,7 @@ def _records(
     (trial state at the reference's start, streamed sums, the recording of the first ``keep``)."""
     N, n = rc.q_d.shape
     G, p = pl.pi_seg.shape[1], scenario.arm.base.B.shape[0]
+    reset_plant(pl)
     K = min(keep, S)
     q = np.broadcast_to(rc.q_d[0], (S, n)).copy()
     qd = np.broadcast_to(rc.qd_d[0], (S, n)).copy()

@@ -16,7 +16,7 @@ from numpy.typing import NDArray
 from adaptive_dd.plant.sampling import first_sample
 
 if TYPE_CHECKING:
-    from adaptive_dd.plant.integrator import SmoothLaw, StickSlipLaw
+    from adaptive_dd.plant.integrator import LugreLaw, SmoothLaw, StickSlipLaw
 
 __all__ = [
     "MAX_ERROR",
@@ -32,6 +32,7 @@ __all__ = [
     "pi_with_payload",
     "plant_of",
     "plant_record",
+    "reset_plant",
     "run_constants",
     "sample_bounds",
     "segment_starts",
@@ -107,11 +108,14 @@ class Plant(NamedTuple):
         Standard link parameters of trial i's plant with each segment's payload.
     fv, fc, armature : ndarray (S, n)
         Viscous [N m s], Coulomb [N m] friction and armature [kg m^2] of trial i's plant.
-    friction_law : StickSlipLaw or SmoothLaw
+    friction_law : StickSlipLaw or SmoothLaw or LugreLaw
         :func:`~adaptive_dd.plant.integrator.friction_law` of :attr:`Arm.friction_code` (0 stick-slip,
-        1 tanh, 2 Stribeck): the law's family a compile-time choice.
-    fparams : ndarray (3,)
-        Friction velocity, Stribeck ratio, Stribeck velocity.
+        1 tanh, 2 Stribeck, 3 LuGre): the law's family a compile-time choice; LuGre's record holds
+        every trial's bristle state ``z (S, n)``, which each controller's run starts at rest
+        (:func:`reset_plant`).
+    fparams : ndarray (3,) or (3 + 2 n,)
+        Friction velocity, Stribeck ratio, Stribeck velocity (:attr:`Arm.friction_params`: LuGre's
+        bristle stiffness and damping per joint after them).
     substeps : int
         RK4 substeps per sample.
     chain : Chain
@@ -122,7 +126,7 @@ class Plant(NamedTuple):
     fv: Array
     fc: Array
     armature: Array
-    friction_law: StickSlipLaw | SmoothLaw
+    friction_law: StickSlipLaw | SmoothLaw | LugreLaw
     fparams: Array
     substeps: int
     chain: Any
@@ -292,11 +296,19 @@ def plant_of(scenario, seed_indices=(0,)) -> Plant:
         c([d.viscous for d in draws], dtype=float),
         c([d.coulomb for d in draws], dtype=float),
         c([d.armature for d in draws], dtype=float),
-        friction_law(arm.friction_code),
+        friction_law(arm.friction_code, np.zeros((len(draws), arm.n_joints))),
         np.array(arm.friction_params, dtype=float),
         int(scenario.substeps),
         arm.chain,
     )
+
+
+def reset_plant(pl: Plant) -> None:
+    """The plant's own state at rest before a controller's trials: LuGre's bristles (the other laws
+    keep none; their modes are in :class:`TrialState`)."""
+    z = getattr(pl.friction_law, "z", None)
+    if z is not None:
+        z[...] = 0.0
 
 
 def true_models(pl: Plant) -> np.ndarray:

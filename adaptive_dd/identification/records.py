@@ -277,22 +277,30 @@ def _stepper(arm, model: Model, pi: Array, S: int, T: float, substeps: int):
     from adaptive_dd.plant.integrator import plant_params, plant_step
 
     n = model.n
-    pp = plant_params(
-        model.chain,
-        pi[: 10 * n],
-        pi[10 * n : 11 * n],
-        pi[11 * n : 12 * n],
-        pi[12 * n :],
-        law=arm.friction,
-        friction_velocity=arm.friction_velocity,
-        stribeck_ratio=arm.stribeck_ratio,
-        stribeck_velocity=arm.stribeck_velocity,
-    )
+    lugre = arm.friction == "lugre"
+    # one record per trial under LuGre: each carries its trial's bristles
+    pps = [
+        plant_params(
+            model.chain,
+            pi[: 10 * n],
+            pi[10 * n : 11 * n],
+            pi[11 * n : 12 * n],
+            pi[12 * n :],
+            law=arm.friction,
+            friction_velocity=arm.friction_velocity,
+            stribeck_ratio=arm.stribeck_ratio,
+            stribeck_velocity=arm.stribeck_velocity,
+            lugre_stiffness=arm.lugre_stiffness if lugre else None,
+            lugre_damping=arm.lugre_sigma1 if lugre else None,
+        )
+        for _ in range(S if lugre else 1)
+    ]
     stuck = np.zeros((S, n), dtype=np.bool_)
 
     def step(q, qd, tau):
         q, qd = np.ascontiguousarray(q).copy(), np.ascontiguousarray(qd).copy()
         for s in range(S):
+            pp = pps[s if lugre else 0]
             if not plant_step(
                 model.chain, pp, q[s], qd[s], np.ascontiguousarray(tau[s]), T, substeps, stuck[s]
             ):

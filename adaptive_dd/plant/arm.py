@@ -58,7 +58,7 @@ DEFAULT_PAYLOAD_OFFSET = 0.1
 """[m] How far a payload's centre of mass may lie from the payload frame when the arm states
 nothing (``Arm.payload_offset``): a tool off the flange."""
 _FRICTION_LAWS = ("stick-slip", "tanh", "stribeck", "lugre")
-"""Plant friction laws (the index is the integrator's code); ``"lugre"`` on the paper's closed forms only."""
+"""Plant friction laws (the index is the integrator's code)."""
 
 
 def _vec(name: str, v, n: int, lo: float = 0.0) -> Array:
@@ -105,8 +105,9 @@ class Arm:
     friction, friction_velocity, stribeck_ratio, stribeck_velocity
         The simulated plant's friction law, as on :class:`adaptive_dd.plant.two_link.ClosedFormTwoLink`.
     lugre_stiffness, lugre_damping
-        The LuGre law's bristle stiffness and damping per joint (``friction = "lugre"``: the
-        paper's geometry only, on its closed forms), as on ``ClosedFormTwoLink``.
+        The LuGre law's bristle stiffness ``sigma0`` [N m/rad] and damping ``sigma1`` [N m s/rad]
+        (``friction = "lugre"``), one value for every joint or one per joint; the damping's default
+        (None) is ``sqrt(sigma0_i M_ii(0))`` (:attr:`lugre_sigma1`), as on ``ClosedFormTwoLink``.
     payload_capacity : float or None
         Rated payload [kg] (``[arm] payload_capacity``); sizes the estimator's re-opening on a
         change alarm (None: the detector's generic size).
@@ -152,8 +153,8 @@ class Arm:
     payload_capacity: float | None = None
     payload_offset: float = DEFAULT_PAYLOAD_OFFSET
     general: bool = False
-    lugre_stiffness: tuple[float, float] = (1e5, 1e5)
-    lugre_damping: tuple[float, float] | None = None
+    lugre_stiffness: float | tuple[float, ...] = 1e5
+    lugre_damping: float | tuple[float, ...] | None = None
     _cache: dict = field(default_factory=dict, repr=False, compare=False)
     closed_form: ClassVar[bool] = False
     """False: an :class:`Arm` (True on the closed forms' record,
@@ -204,11 +205,16 @@ class Arm:
                 raise ParameterError(f"Arm.{name} must be > 0, got {v!r}")
         if not isinstance(self.general, bool):
             raise ParameterError(f"Arm.general must be True or False, got {self.general!r}")
-        if self.friction == "lugre" and n != 2:
-            raise ParameterError(
-                f"Arm.friction = 'lugre' is the paper's two-link plant law (its closed forms); this arm has "
-                f"{n} joints: use stick-slip, tanh or stribeck"
-            )
+        for name, low in (("lugre_stiffness", 0.0), ("lugre_damping", -1.0)):
+            v = getattr(self, name)
+            if v is None and name == "lugre_damping":
+                continue
+            a = np.array(v, dtype=float)
+            a = np.broadcast_to(a, (n,)) if a.ndim == 0 else a
+            if a.shape != (n,) or not (np.all(np.isfinite(a)) and np.all(a > low)):
+                bound = "> 0" if low == 0.0 else ">= 0"
+                raise ParameterError(f"Arm.{name} must be one value or {n}, finite and {bound}, got {v!r}")
+            object.__setattr__(self, name, tuple(float(x) for x in a))
         if not (math.isfinite(self.stribeck_ratio) and self.stribeck_ratio >= 1):
             raise ParameterError(f"Arm.stribeck_ratio must be >= 1, got {self.stribeck_ratio!r}")
         object.__setattr__(self, "_cache", {})
@@ -542,8 +548,20 @@ class Arm:
         return _FRICTION_LAWS.index(self.friction)
 
     @property
-    def friction_params(self) -> tuple[float, float, float]:
-        return (self.friction_velocity, self.stribeck_ratio, self.stribeck_velocity)
+    def friction_params(self) -> tuple[float, ...]:
+        """What the plant's friction law reads: ``friction_velocity, stribeck_ratio,
+        stribeck_velocity``, then under LuGre :attr:`lugre_stiffness` and :attr:`lugre_sigma1`."""
+        base = (self.friction_velocity, self.stribeck_ratio, self.stribeck_velocity)
+        return (*base, *self.lugre_stiffness, *self.lugre_sigma1) if self.friction == "lugre" else base
+
+    @property
+    def lugre_sigma1(self) -> tuple[float, ...]:
+        """LuGre bristle damping per joint [N m s/rad]: :attr:`lugre_damping` or
+        ``sqrt(sigma0_i M_ii(0))`` (``M`` with the armature, at q = 0)."""
+        if self.lugre_damping is not None:
+            return self.lugre_damping
+        m = np.diag(self.mass_matrix(np.zeros(self.n_joints)))
+        return tuple(float(np.sqrt(s0 * mi)) for s0, mi in zip(self.lugre_stiffness, m, strict=True))
 
     def with_(self, **changes) -> Arm:
         """:func:`dataclasses.replace`, keeping nothing cached that depends on what changed (a new
@@ -579,7 +597,7 @@ class Arm:
             "repair_inertia": self.repair_inertia,
             "general": self.general,
             **(
-                {"lugre_stiffness": list(self.lugre_stiffness), "lugre_damping": self.lugre_damping}
+                {"lugre_stiffness": list(self.lugre_stiffness), "lugre_damping": list(self.lugre_sigma1)}
                 if self.friction == "lugre"
                 else {}
             ),

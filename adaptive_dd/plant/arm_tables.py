@@ -159,9 +159,13 @@ def _plant_kwargs(src: str, plant: dict) -> dict:
         kw["stribeck_ratio"] = _table_number(
             src, "plant.stribeck_ratio", plant["stribeck_ratio"], lower=1.0, strict=False
         )
-    for key in ("lugre_stiffness", "lugre_damping"):
-        if key in plant:
-            kw[key] = _table_list(src, f"plant.{key}", plant[key], 2, lower=0.0, strict=True)
+    for key, strict in (("lugre_stiffness", True), ("lugre_damping", False)):
+        if key in plant:  # one value for every joint, or one per joint (the arm checks how many)
+            v = plant[key]
+            if isinstance(v, list):
+                kw[key] = _table_list(src, f"plant.{key}", v, len(v), lower=0.0, strict=strict)
+            else:
+                kw[key] = _table_number(src, f"plant.{key}", v, lower=0.0, strict=strict)
     return kw
 
 
@@ -180,7 +184,8 @@ def arm_from_tables(arm_table: dict | None, plant_table: dict | None, src: str =
     accept ``payload_radius`` [m] and ``torque_limit = [tau1, tau2]`` [N m]. Mixing
     the forms is an error. ``[plant]`` gives ``friction`` ("stick-slip", "tanh",
     "stribeck", "lugre"), ``friction_velocity``, ``stribeck_ratio``, ``stribeck_velocity``,
-    ``lugre_stiffness = [s0_1, s0_2]``, ``lugre_damping = [s1_1, s1_2]``.
+    ``lugre_stiffness`` [N m/rad] and ``lugre_damping`` [N m s/rad] (one number for every joint,
+    or a list of one per joint).
     A missing table means the SICE arm's values (:meth:`ClosedFormTwoLink.sice`, stick-slip).
 
     Raises
@@ -193,7 +198,7 @@ def arm_from_tables(arm_table: dict | None, plant_table: dict | None, src: str =
     if isinstance(arm_table, dict) and ("urdf" in arm_table or "robot" in arm_table):
         return _urdf_arm(src, arm_table, plant_kw)
     kw = ClosedFormTwoLink.sice().__dict__.copy() if arm_table is None else _arm_kwargs(src, arm_table)
-    kw.update(plant_kw)
+    kw.update(_per_joint(src, plant_kw, 2))
     try:
         return ClosedFormTwoLink(**kw).to_arm()  # an Arm whose closed forms are exactly these
     except UrdfError as exc:  # the equivalent arm's URDF (written to the cache) refused: not the user's file
@@ -208,8 +213,8 @@ def arm_from_tables(arm_table: dict | None, plant_table: dict | None, src: str =
 def _urdf_arm(src: str, table: dict, plant_kw: dict):
     """The :class:`~adaptive_dd.plant.arm.Arm` of an ``[arm]`` table naming a URDF
     (:func:`urdf_arm_from_table`); ``general = true`` keeps the general kernels where the closed forms
-    would apply (:func:`closed_form_view`). LuGre friction is the closed forms' plant law: set once
-    the arm is known to have them."""
+    would apply (:func:`closed_form_view`). LuGre's bristles are checked against the arm's joints
+    once the arm is read."""
     kw = dict(plant_kw)
     lugre = {k: kw.pop(k) for k in ("lugre_stiffness", "lugre_damping") if k in kw}
     if kw.get("friction") == "lugre":
@@ -219,18 +224,28 @@ def _urdf_arm(src: str, table: dict, plant_kw: dict):
         raise ScenarioError(f"{src}: key 'arm.general' must be true or false, got {general!r}")
     arm = replace(urdf_arm_from_table(src, table, kw), general=general)
     try:
-        two = closed_form_view(arm)
+        closed_form_view(arm)
     except (ParameterError, ArithmeticError) as exc:  # the paper's geometry, parameters it cannot hold
         raise ScenarioError(
             f"{src}: [arm] urdf {arm.urdf}: as the paper's two-link arm: {exc} (`general = true` in [arm] "
             "runs it on the N-joint path)"
         ) from None
-    if two is None and lugre:
-        raise ScenarioError(
-            f"{src}: [plant] LuGre friction is implemented for the two-link arm only; the plant of "
-            f"this {arm.n_joints}-joint arm has stick-slip, tanh and stribeck friction"
-        )
-    return replace(arm, **lugre) if lugre else arm
+    return replace(arm, **_per_joint(src, lugre, arm.n_joints)) if lugre else arm
+
+
+def _per_joint(src: str, kw: dict, n: int) -> dict:
+    """``kw`` with LuGre's bristle stiffness and damping as ``n`` values each: one number given is
+    every joint's; a list must have one per joint."""
+    out = dict(kw)
+    for key in ("lugre_stiffness", "lugre_damping"):
+        v = out.get(key)
+        if isinstance(v, tuple) and len(v) != n:
+            raise ScenarioError(
+                f"{src}: key 'plant.{key}' must be one number or a list of {n} (one per joint), got {list(v)}"
+            )
+        if v is not None and not isinstance(v, tuple):
+            out[key] = (v,) * n
+    return out
 
 
 # ------------------------------------------------------------ any arm from a URDF

@@ -4,8 +4,9 @@ The N-joint generalisation of :mod:`adaptive_dd.plant.two_link_integrator` (two 
 torque is held over one sample ``T`` (zero-order hold) and the state is advanced by
 ``substeps`` classical RK4 steps; the rigid-body terms come from
 :func:`adaptive_dd.plant.chain_dynamics.bias_and_mass`. Joint friction is viscous ``fv_i qd_i``
-plus a Coulomb term of level ``fc_i`` under one of three laws
-(:data:`adaptive_dd.plant.two_link_integrator.FRICTION_CODES`).
+plus a Coulomb term of level ``fc_i`` under one of four laws
+(:data:`adaptive_dd.plant.two_link_integrator.FRICTION_CODES`): stick-slip, tanh, Stribeck, or
+LuGre, whose bristle state the law's record carries (:class:`LugreLaw`).
 
 The modes of resting joints under the stick-slip law (an active set), the crossings of zero
 velocity within a substep and the step splitting of the smooth laws are described, and
@@ -23,10 +24,11 @@ from numpy.typing import NDArray
 
 from adaptive_dd.errors import ParameterError
 from adaptive_dd.plant.chain import Chain
-from adaptive_dd.plant.chain_rk4 import _scratch, _smooth, _stick_slip
+from adaptive_dd.plant.chain_rk4 import _lugre, _scratch, _smooth, _stick_slip
 from adaptive_dd.plant.two_link_integrator import FRICTION_CODES
 
 __all__ = [
+    "LugreLaw",
     "PlantParams",
     "SmoothLaw",
     "StickSlipLaw",
@@ -34,6 +36,7 @@ __all__ = [
     "plant_params",
     "plant_run",
     "plant_step",
+    "trial_law",
 ]
 
 
@@ -51,19 +54,21 @@ class PlantParams(NamedTuple):
         Coulomb friction level [N m] (N).
     armature : ndarray, shape (n,)
         Rotor inertia added to M's diagonal [kg m^2] (kg).
-    law : int or StickSlipLaw or SmoothLaw
+    law : int or StickSlipLaw or SmoothLaw or LugreLaw
         0 stick-slip, 1 tanh, 2 stribeck (:data:`adaptive_dd.plant.two_link_integrator.FRICTION_CODES`);
         as a code, the step compiles the integrators of both families and chooses at run time; as a
-        :func:`friction_law` record, only its family's.
-    fparams : ndarray, shape (3,)
-        ``friction_velocity, stribeck_ratio, stribeck_velocity`` of the smooth laws.
+        :func:`friction_law` record, only its family's. LuGre (3) only as its record, which carries
+        the bristle state.
+    fparams : ndarray, shape (3,) or (3 + 2 n,)
+        ``friction_velocity, stribeck_ratio, stribeck_velocity`` of the smooth laws; LuGre's
+        bristle stiffness ``sigma0`` [N m/rad] and damping ``sigma1`` [N m s/rad] per joint after them.
     """
 
     pi: NDArray[np.float64]
     fv: NDArray[np.float64]
     fc: NDArray[np.float64]
     armature: NDArray[np.float64]
-    law: int | StickSlipLaw | SmoothLaw
+    law: int | StickSlipLaw | SmoothLaw | LugreLaw
     fparams: NDArray[np.float64]
 
 
@@ -79,16 +84,30 @@ class SmoothLaw(NamedTuple):
     code: int
 
 
-def friction_law(code: int) -> StickSlipLaw | SmoothLaw:
-    """Friction law ``code`` with its family (stick-slip or smooth) a compile-time choice.
+class LugreLaw(NamedTuple):
+    """The LuGre law (``code`` 3) and its bristle deflections ``z`` [rad], updated in place by each
+    step: ``(n,)`` for one arm, or ``(S, n)`` for a run's trials (the closed loop steps trial i
+    with row ``z[i]``)."""
+
+    code: int
+    z: NDArray[np.float64]
+
+
+def friction_law(code: int, z: NDArray | None = None) -> StickSlipLaw | SmoothLaw | LugreLaw:
+    """Friction law ``code`` with its family (stick-slip, smooth or LuGre) a compile-time choice.
 
     numba compiles a kernel per argument type: a plant step given this record instead of the
     integer code compiles only its family's integrator (a closed loop on a stick-slip arm does not
-    compile the smooth laws' RK4 and step splitting, about a fifth of its compilation).
+    compile the smooth laws' RK4 and step splitting, about a fifth of its compilation). LuGre
+    (code 3) needs the bristle state ``z`` (zeros: the bristles at rest), which it keeps.
     """
     code = int(code)
-    if code not in (0, 1, 2):
-        raise ParameterError(f"friction law code of a serial arm must be 0, 1 or 2, got {code!r}")
+    if code not in (0, 1, 2, 3):
+        raise ParameterError(f"friction law code of a serial arm must be 0, 1, 2 or 3, got {code!r}")
+    if code == 3:
+        if z is None:
+            raise ParameterError("friction_law(3): LuGre needs its bristle state z, e.g. np.zeros(n)")
+        return LugreLaw(3, np.ascontiguousarray(z, dtype=np.float64))
     return StickSlipLaw(code) if code == 0 else SmoothLaw(code)
 
 
@@ -102,11 +121,14 @@ def plant_params(
     friction_velocity: float = 0.02,
     stribeck_ratio: float = 1.5,
     stribeck_velocity: float = 0.1,
+    lugre_stiffness=None,
+    lugre_damping=None,
 ) -> PlantParams:
     """Checked :class:`PlantParams` of chain ``ch`` (shapes, finite, friction >= 0, law known).
 
     ``law`` is a name or code of :data:`adaptive_dd.plant.two_link_integrator.FRICTION_CODES`;
-    ``armature`` defaults to zeros.
+    ``armature`` defaults to zeros. LuGre takes ``lugre_stiffness`` and ``lugre_damping`` (n
+    values each, > 0 and >= 0) and starts its bristles at rest (:class:`LugreLaw`).
 
     Raises
     ------
@@ -132,7 +154,19 @@ def plant_params(
             "friction_velocity and stribeck_velocity must be > 0 and stribeck_ratio >= 1, got "
             f"{friction_velocity!r}, {stribeck_velocity!r}, {stribeck_ratio!r}"
         )
-    return PlantParams(out["pi"], out["fv"], out["fc"], out["armature"], int(code), fparams)
+    if code != 3:
+        return PlantParams(out["pi"], out["fv"], out["fc"], out["armature"], int(code), fparams)
+    bristles = []
+    bounds = (("lugre_stiffness", lugre_stiffness, 0.0), ("lugre_damping", lugre_damping, -1.0))
+    for name, value, low in bounds:
+        a = np.array([np.nan] if value is None else value, dtype=np.float64).reshape(-1)
+        if a.shape != (n,) or not (np.all(np.isfinite(a)) and np.all(a > low)):
+            bound = "> 0" if low == 0.0 else ">= 0"
+            raise ParameterError(f"LuGre plant: {name} must be {n} finite values {bound}, got {value!r}")
+        bristles.append(a)
+    fp = np.concatenate((fparams, *bristles))
+    law_rec = friction_law(3, np.zeros(n))
+    return PlantParams(out["pi"], out["fv"], out["fc"], out["armature"], law_rec, fp)
 
 
 def _by_law(ch, pi, fv, fc, arm, law, fp, q, qd, tau, T, substeps, stuck, sc):  # pragma: no cover
@@ -150,6 +184,12 @@ def _by_law_typed(ch, pi, fv, fc, arm, law, fp, q, qd, tau, T, substeps, stuck, 
             return _stick_slip(ch, pi, fv, fc, arm, fp, q, qd, tau, T, substeps, stuck, sc)
 
         return stick_slip
+    if family is LugreLaw:
+
+        def lugre(ch, pi, fv, fc, arm, law, fp, q, qd, tau, T, substeps, stuck, sc):
+            return _lugre(ch, pi, fv, fc, arm, fp, q, qd, tau, T, substeps, law.z, stuck, sc)
+
+        return lugre
     if family is SmoothLaw:
 
         def smooth(ch, pi, fv, fc, arm, law, fp, q, qd, tau, T, substeps, stuck, sc):
@@ -174,10 +214,34 @@ def compile_family(ch, pp: PlantParams, q, qd, tau, T: float, substeps: int, stu
     compilation inlines the step; numba does not cache :func:`_by_law`'s choice)."""
     law = pp.law
     args = (ch, pp.pi, pp.fv, pp.fc, pp.armature)
+    if isinstance(law, LugreLaw):  # a run's record: trial 0's row, as the closed loop passes it
+        z = law.z[0] if law.z.ndim == 2 else law.z
+        _lugre(*args, pp.fparams, q, qd, tau, T, substeps, z, stuck, sc)
+        return
     if not isinstance(law, SmoothLaw):  # the stick-slip record, or a code: both compiled then
         _stick_slip(*args, pp.fparams, q, qd, tau, T, substeps, stuck, sc)
     if not isinstance(law, StickSlipLaw):
         _smooth(*args, int(getattr(law, "code", law)), pp.fparams, q, qd, tau, T, substeps, stuck, sc)
+
+
+def trial_law(law, i):  # pragma: no cover - compiled
+    """The law of trial ``i`` of a run's record: the record itself, or LuGre's with row ``z[i]``."""
+    raise NotImplementedError("compiled only")
+
+
+@overload(trial_law)
+def _trial_law_typed(law, i):
+    if getattr(law, "instance_class", None) is LugreLaw:
+
+        def row(law, i):
+            return LugreLaw(law.code, law.z[i])
+
+        return row
+
+    def same(law, i):
+        return law
+
+    return same
 
 
 @njit(cache=True, inline="always")

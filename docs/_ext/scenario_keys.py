@@ -79,8 +79,8 @@ MEANING = {
     "plant.friction_velocity": "Velocity scale v of `tanh` friction, `d tanh(qd / v)` [rad/s].",
     "plant.stribeck_ratio": "Static over Coulomb friction of the Stribeck and LuGre laws.",
     "plant.stribeck_velocity": "Velocity over which the Stribeck excess fades [rad/s].",
-    "plant.lugre_stiffness": "LuGre bristle stiffness sigma0 per joint [N m/rad].",
-    "plant.lugre_damping": "LuGre bristle damping sigma1 per joint [N m s/rad] (default sqrt(sigma0 M_ii)).",
+    "plant.lugre_stiffness": "LuGre bristle stiffness sigma0 [N m/rad], one or per joint (default 1e5).",
+    "plant.lugre_damping": "LuGre bristle damping sigma1 [N m s/rad], one or per joint (sqrt(s0 M_ii(0))).",
     # [controllers.NAME]
     "setting.bandwidth": "This controller's bandwidth instead of `[control]`'s [rad/s].",
     "setting.damping": "This controller's damping instead of `[control]`'s.",
