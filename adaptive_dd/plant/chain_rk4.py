@@ -68,7 +68,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from adaptive_dd.plant.chain_dynamics import bias_and_mass, workspace
+from adaptive_dd.plant.chain_dynamics import _cholesky_solve, bias_and_mass, workspace
 from adaptive_dd.plant.two_link_integrator import LUGRE_DT_MAX
 
 __all__: list[str] = []  # compiled internals of adaptive_dd.plant.integrator
@@ -398,8 +398,8 @@ def _lugre(ch, pi, fv, fc, arm, fp, q, qd, tau, T, substeps, z, stuck, sc):  # p
     steps = max(substeps, int(np.ceil(T / LUGRE_DT_MAX - 1e-9)))
     h = T / steps
     ratio, vs = fp[1], fp[2]
-    m, lf, rows = sc[1], sc[2], sc[3]
-    bias, rhs, den, diag = rows[0], rows[1], rows[12], rows[19]
+    m, rows = sc[1], sc[3]
+    bias, rhs, den = rows[0], rows[1], rows[12]
     for i in range(n):
         stuck[i] = False
     for _ in range(steps):
@@ -419,31 +419,8 @@ def _lugre(ch, pi, fv, fc, arm, fp, q, qd, tau, T, substeps, z, stuck, sc):  # p
                 x += m[i, j] * qd[j]
             rhs[i] = x
             m[i, i] += h * k  # row i's right-hand side is formed: only row i reads m[i, i]
-        # (M + h diag(K)) v+ = rhs: Cholesky, reciprocal diagonal kept
-        for j in range(n):
-            dj = m[j, j]
-            for kk in range(j):
-                dj -= lf[j, kk] * lf[j, kk]
-            if not dj > 0.0:
-                return False
-            dj = np.sqrt(dj)
-            lf[j, j] = dj
-            diag[j] = 1.0 / dj
-            for i in range(j + 1, n):
-                x = m[i, j]
-                for kk in range(j):
-                    x -= lf[i, kk] * lf[j, kk]
-                lf[i, j] = x * diag[j]
-        for i in range(n):
-            x = rhs[i]
-            for kk in range(i):
-                x -= lf[i, kk] * rhs[kk]
-            rhs[i] = x * diag[i]
-        for i in range(n - 1, -1, -1):
-            x = rhs[i]
-            for kk in range(i + 1, n):
-                x -= lf[kk, i] * rhs[kk]
-            rhs[i] = x * diag[i]
+        if not _cholesky_solve(m, rhs):  # (M + h diag(K)) v+ = rhs, m its factor after
+            return False
         for i in range(n):
             qd[i] = rhs[i]
             z[i] = (z[i] + h * qd[i]) / den[i] if fc[i] > 0.0 else 0.0
