@@ -217,8 +217,6 @@ def _urdf_arm(src: str, table: dict, plant_kw: dict):
     once the arm is read."""
     kw = dict(plant_kw)
     lugre = {k: kw.pop(k) for k in ("lugre_stiffness", "lugre_damping") if k in kw}
-    if kw.get("friction") == "lugre":
-        lugre["friction"] = kw.pop("friction")
     general = table.get("general", False)
     if not isinstance(general, bool):
         raise ScenarioError(f"{src}: key 'arm.general' must be true or false, got {general!r}")
