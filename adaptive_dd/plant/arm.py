@@ -25,7 +25,6 @@ squares on the identifiable part.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field, fields, replace
 from pathlib import Path
 from typing import ClassVar
@@ -34,7 +33,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from adaptive_dd.errors import ParameterError
-from adaptive_dd.errors import is_finite_number as _is_num
+from adaptive_dd.plant.arm_fields import FRICTION_LAWS, check_fields
 from adaptive_dd.plant.base_parameters import BaseParameters, base_parameters, standard_names
 from adaptive_dd.plant.devices import ActuatorConfig, SensorConfig
 from adaptive_dd.plant.payload import PayloadEstimate, payload_parameters
@@ -57,16 +56,6 @@ DEFAULT_DAC_BITS = 16
 DEFAULT_PAYLOAD_OFFSET = 0.1
 """[m] How far a payload's centre of mass may lie from the payload frame when the arm states
 nothing (``Arm.payload_offset``): a tool off the flange."""
-_FRICTION_LAWS = ("stick-slip", "tanh", "stribeck", "lugre")
-"""Plant friction laws (the index is the integrator's code)."""
-
-
-def _vec(name: str, v, n: int, lo: float = 0.0) -> Array:
-    a = np.array(v, dtype=float).reshape(-1)
-    if a.shape != (n,) or not np.all(np.isfinite(a)) or np.any(a < lo):
-        raise ParameterError(f"Arm.{name} must be {n} finite values >= {lo:g}, got {v!r}")
-    a.setflags(write=False)
-    return a
 
 
 @dataclass(frozen=True, eq=False)
@@ -162,62 +151,7 @@ class Arm:
     :func:`~adaptive_dd.plant.two_link.closed_form_view`'s to say."""
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "urdf", Path(self.urdf))
-        n = len(self.joint_names)
-        if n < 1:
-            raise ParameterError("Arm needs at least one joint")
-        g = np.array(self.gravity, dtype=float)
-        if g.shape != (3,) or not np.all(np.isfinite(g)) or np.linalg.norm(g) > 100:
-            raise ParameterError(
-                f"Arm.gravity must be 3 finite numbers of norm <= 100 m/s^2, got {self.gravity!r}"
-            )
-        g.setflags(write=False)
-        object.__setattr__(self, "gravity", g)
-        for name in ("viscous", "coulomb", "armature"):
-            object.__setattr__(self, name, _vec(name, getattr(self, name), n))
-        lim = np.array(self.position_limits, dtype=float)
-        if lim.shape != (n, 2) or np.any(np.isnan(lim)) or np.any(lim[:, 0] >= lim[:, 1]):
-            raise ParameterError(f"Arm.position_limits must be (n, 2) with lower < upper, got {lim!r}")
-        lim.setflags(write=False)
-        object.__setattr__(self, "position_limits", lim)
-        vel = np.array(self.velocity_limits, dtype=float)
-        if vel.shape != (n,) or np.any(np.isnan(vel)) or np.any(vel <= 0):
-            raise ParameterError(f"Arm.velocity_limits must be {n} values > 0, got {vel!r}")
-        vel.setflags(write=False)
-        object.__setattr__(self, "velocity_limits", vel)
-        if len(self.actuator.torque_limit) != n or len(self.sensor.encoder_counts) != n:
-            raise ParameterError(
-                f"Arm: actuator and sensor must have {n} joints, got "
-                f"{len(self.actuator.torque_limit)} and {len(self.sensor.encoder_counts)}"
-            )
-        if not (math.isfinite(self.payload_radius) and 0 <= self.payload_radius <= 10):
-            raise ParameterError(f"Arm.payload_radius must be in [0, 10] m, got {self.payload_radius!r}")
-        if not (math.isfinite(self.payload_offset) and 0 <= self.payload_offset <= 10):
-            raise ParameterError(f"Arm.payload_offset must be in [0, 10] m, got {self.payload_offset!r}")
-        cap = self.payload_capacity
-        if cap is not None and not (_is_num(cap) and 0 < cap <= 1e4):
-            raise ParameterError(f"Arm.payload_capacity must be in (0, 1e4] kg or None, got {cap!r}")
-        if self.friction not in _FRICTION_LAWS:
-            raise ParameterError(f"Arm.friction must be one of {_FRICTION_LAWS}, got {self.friction!r}")
-        for name in ("friction_velocity", "stribeck_velocity"):
-            v = getattr(self, name)
-            if not (math.isfinite(v) and v > 0):
-                raise ParameterError(f"Arm.{name} must be > 0, got {v!r}")
-        if not isinstance(self.general, bool):
-            raise ParameterError(f"Arm.general must be True or False, got {self.general!r}")
-        for name, low in (("lugre_stiffness", 0.0), ("lugre_damping", -1.0)):
-            v = getattr(self, name)
-            if v is None and name == "lugre_damping":
-                continue
-            a = np.array(v, dtype=float)
-            a = np.broadcast_to(a, (n,)) if a.ndim == 0 else a
-            if a.shape != (n,) or not (np.all(np.isfinite(a)) and np.all(a > low)):
-                bound = "> 0" if low == 0.0 else ">= 0"
-                raise ParameterError(f"Arm.{name} must be one value or {n}, finite and {bound}, got {v!r}")
-            object.__setattr__(self, name, tuple(float(x) for x in a))
-        if not (math.isfinite(self.stribeck_ratio) and self.stribeck_ratio >= 1):
-            raise ParameterError(f"Arm.stribeck_ratio must be >= 1, got {self.stribeck_ratio!r}")
-        object.__setattr__(self, "_cache", {})
+        check_fields(self)
 
     # ----------------------------------------------------------------- factories
     @classmethod
@@ -545,7 +479,7 @@ class Arm:
     # -------------------------------------------------------------------- misc
     @property
     def friction_code(self) -> int:
-        return _FRICTION_LAWS.index(self.friction)
+        return FRICTION_LAWS.index(self.friction)
 
     @property
     def friction_params(self) -> tuple[float, ...]:
