@@ -221,9 +221,12 @@ def test_pooled_figures_and_worst_arm():
     assert p[1]["max"] == 3.5 and p[1]["worst"] == (7, 1)
     np.testing.assert_allclose(p[1]["capacity_share"], 0.5)
     text = format_population(pop)
-    assert "segment 2 (0.50 x capacity), 4 trials" in text and "NOT met" in text
+    assert "segment 1 (0.50 x capacity), 4 trials" in text and "NOT met" in text
     assert "trials with a false alarm: 1 of 4 (25.0 %)" in text
     assert text.split("worst arms: ")[1].startswith("random:7")
+    assert "note:" not in text
+    pop.floor_caveat = "the plant's friction law (lugre) is not the controllers' model's"
+    assert "  note: the plant's friction law (lugre)" in format_population(pop)
 
 
 def test_pooled_leaves_out_saturated_floor_segments():

@@ -75,8 +75,9 @@ def test_segment_failed_rule():
     assert bad.tolist() == [[False, False], [False, True], [True, True], [True, True]]
 
 
-def _fake_result(seed_indices=(10, 11, 12, 13), sat_oracle=(0.0, 0.0)):
-    """Two controllers x 4 seeds x 2 segments (swap to 1 kg at 1 s) with hand-set streamed sums."""
+def _fake_result(seed_indices=(10, 11, 12, 13), sat_oracle=(0.0, 0.0), friction=None):
+    """Two controllers x 4 seeds x 2 segments (swap to 1 kg at 1 s) with hand-set streamed sums;
+    ``friction``: the plant's friction law (default the scenario's, stick-slip)."""
     sc = dataclasses.replace(
         load_scenario(),
         seeds=len(seed_indices),
@@ -85,6 +86,8 @@ def _fake_result(seed_indices=(10, 11, 12, 13), sat_oracle=(0.0, 0.0)):
         swap_masses=(1.0,),
         controllers=("ct_oracle", "adaptive_ct"),
     )
+    if friction is not None:
+        sc = dataclasses.replace(sc, arm=dataclasses.replace(sc.arm, friction=friction))
     N = sc.n_samples
     start, end, settled = segment_bounds(sc.segments(), T, 0.5)
     n = (end - start).astype(float)
@@ -172,6 +175,21 @@ def test_a_saturated_floor_gets_no_verdict():
     assert "no verdict, ct_oracle saturates 2.90 % of samples" in text
     assert "ct_oracle saturated fraction (max over segments): 2.900 %" in text
     assert "NOT met: the saturated segments have no verdict" in text
+
+
+def test_a_floor_on_a_plant_friction_outside_the_model_is_called_a_reference():
+    plain = compute_metrics(_fake_result()[0])
+    assert plain["floor_caveat"] is None
+    assert "note:" not in format_report(plain, _fake_result()[0])
+    for law in ("tanh", "stribeck", "lugre"):
+        res, _ = _fake_result(friction=law)
+        m = compute_metrics(res)
+        assert f"friction law ({law}) is not the controllers' model's" in m["floor_caveat"]
+        text = format_report(m, res)
+        # in the per-seed tables and above the targets' verdicts
+        assert text.count(f"  note: the plant's friction law ({law})") == 2
+        # the ratios themselves are still there
+        assert m["controllers"]["adaptive_ct"]["segments"][1]["ratio_to_floor"]["max"] == pytest.approx(3.0)
 
 
 def test_a_failed_trial_is_left_out_after_its_failure_only():

@@ -75,7 +75,11 @@ COLUMNS: dict[str, tuple[str, str]] = {
     "kind": ("-", "scenario (shipped or given), arm (one drawn arm), population (pooled over the arms)"),
     "controller": ("-", "the controller ranked"),
     "floor": ("-", "the controller it is divided by, seed by seed (the same law with the true robot)"),
-    "floor_note": ("-", "empty, or why the row has no ratio"),
+    "floor_note": (
+        "-",
+        "empty, or why the row has no ratio or why its floor is no floor "
+        "(a plant friction law outside the controllers' model)",
+    ),
     "segment": ("-", "payload segment, 0-based"),
     "payload_kg": ("kg", "the payload carried in the segment (population: the mean over the arms)"),
     "seeds": ("-", "seeds whose trial did not fail before the segment's end"),
@@ -576,7 +580,14 @@ def _run_cells(sc, kind: str, controllers, seeds, progress, times=None) -> list[
     per = _per_seed(res, list(res.runs))
     segs = sc.segments()
     masses, t0 = [m for (_, _, m) in segs], [a for (a, _, _) in segs]
-    return _cells(sc.name, kind, per, floors, missing, masses, sc.sample_period, res.seed_indices, t0)
+    from adaptive_dd.benchmark.metrics import floor_caveat
+
+    cells = _cells(sc.name, kind, per, floors, missing, masses, sc.sample_period, res.seed_indices, t0)
+    caveat = floor_caveat(sc)
+    for c in cells:
+        if caveat and c["floor"] and not c["floor_note"]:
+            c["floor_note"] = caveat
+    return cells
 
 
 def _template(template) -> tuple[dict, str]:

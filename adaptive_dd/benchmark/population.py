@@ -95,6 +95,9 @@ class PopulationResult:
         Per arm: ``arm_seed``, ``joints``, ``kind``, ``capacity_kg``, ``segments`` (per segment
         ``mean``, ``p90``, ``max`` of adaptive_ct / its floor over the seeds), ``false_alarm_trials``,
         ``trials``, ``missed_swaps``, ``swaps``.
+    floor_caveat : str or None
+        Why ct_oracle is no floor on these arms' plants
+        (:func:`~adaptive_dd.benchmark.metrics.floor_caveat`; the same for every arm of a template).
     frame : pandas.DataFrame
         The per-seed tables of every arm (:func:`~adaptive_dd.benchmark.results.to_frame`),
         ``arm_seed`` as their first column.
@@ -102,6 +105,7 @@ class PopulationResult:
 
     arms: list[dict] = field(default_factory=list)
     frame: object = None
+    floor_caveat: str | None = None
 
 
 def run_population(data: dict, src: str, arm_seeds, *, seeds=None, controllers=None, progress=False,
@@ -145,6 +149,7 @@ def run_population(data: dict, src: str, arm_seeds, *, seeds=None, controllers=N
             sc = sc.with_controllers(controllers(sc))
         res = run_benchmark(sc, progress=progress, on_run=release_error_norm)
         metrics = compute_metrics(res)
+        out.floor_caveat = metrics["floor_caveat"]
         drawn = random_arm(int(arm_seed))
         summary = arm_summary(metrics, int(arm_seed), drawn, sc)
         out.arms.append(summary)
@@ -237,11 +242,13 @@ def format_population(pop: PopulationResult, worst: int = 3) -> str:
             f"(max {mx:.2f}); false alarms in {a['false_alarm_trials']} of {a['trials']} trials; "
             f"missed swaps {a['missed_swaps']} of {a['swaps']}"
         )
-    lines.append(f"pooled over {len(pop.arms)} arms:")
+    lines.append(f"pooled over {len(pop.arms)} arms (segments numbered from 0, as in per_seed.csv):")
+    if pop.floor_caveat:
+        lines.append(f"  note: {pop.floor_caveat}")
     for p in pooled(pop):
         ok = p["mean"] <= TARGET_RATIO_MEAN and p["p90"] <= TARGET_RATIO_P90 and p["max"] <= TARGET_RATIO_MAX
         lines.append(
-            f"  segment {p['segment'] + 1} ({p['capacity_share']:.2f} x capacity), {p['n']} trials: mean "
+            f"  segment {p['segment']} ({p['capacity_share']:.2f} x capacity), {p['n']} trials: mean "
             f"{p['mean']:.3f}, p90 {p['p90']:.3f}, max {p['max']:.2f} (random:{p['worst'][0]} seed "
             f"{p['worst'][1]}) (target mean <= {TARGET_RATIO_MEAN}, p90 <= {TARGET_RATIO_P90}, max <= "
             f"{TARGET_RATIO_MAX}: {'met' if ok else 'NOT met'})"

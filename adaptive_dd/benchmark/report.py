@@ -59,7 +59,7 @@ def format_report(metrics: dict, res: BenchmarkResult) -> str:
             lines.append(f"{name:18s}{cells}")
         lines.append("")
     lines += _payload_tables(ctrls, head)
-    lines += _seed_tables(ctrls, head)
+    lines += _seed_tables(ctrls, head, metrics.get("floor_caveat"))
     lines += _failure_lines(ctrls)
     phase = f", after an excitation phase of {sc.excite:g} s ([run] excite)" if sc.excite else ""
     lines += ["", f"Targets{phase} (measured, not asserted):"]
@@ -138,14 +138,17 @@ def _xyz(v) -> str:
     return ",".join("-" if x is None else f"{1e3 * x:.0f}" for x in v)
 
 
-def _seed_tables(ctrls: dict, head: str) -> list[str]:
-    """Per-seed ratio to each controller's floor: mean [95 % CI], median, p90, max and worst seed."""
+def _seed_tables(ctrls: dict, head: str, caveat: str | None = None) -> list[str]:
+    """Per-seed ratio to each controller's floor: mean [95 % CI], median, p90, max and worst seed;
+    ``caveat``: why the floor is no floor here (:func:`~adaptive_dd.benchmark.metrics.floor_caveat`)."""
     rows = [(n, c) for n, c in ctrls.items() if c.get("floor")]
     if not rows:
         return []
     lines = [
         "Per-seed RMS error ratio to the floor (the same law with the true model; common random numbers)"
     ]
+    if caveat:
+        lines.append(f"  note: {caveat}")
     for label, key in (("mean", "mean"), ("median", "median"), ("p90", "p90"), ("max", "max")):
         lines += [f"  {label}", head]
         for name, c in rows:
@@ -299,7 +302,9 @@ def detection_limit_lines(c: dict) -> list[str]:
 def _targets(metrics: dict, res: BenchmarkResult) -> list[str]:
     """The report's target lines: each measured figure beside its target, met or not."""
     c = metrics["controllers"]
-    out = _adaptive_ct_targets(c["adaptive_ct"]) if "adaptive_ct" in c else []
+    caveat = metrics.get("floor_caveat")
+    out = [f"  note: {caveat}"] if caveat and "adaptive_ct" in c else []
+    out += _adaptive_ct_targets(c["adaptive_ct"]) if "adaptive_ct" in c else []
     out += _information_lines(c, all_unknown=res.scenario.closed_forms is not None)
     out += detection_limit_lines(c)
     out += _nominal_target(c) + _mass_targets(c)

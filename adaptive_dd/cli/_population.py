@@ -88,7 +88,7 @@ def run_arms(args: argparse.Namespace, only_controllers) -> int:
     with outputs:
         pop.frame.to_csv(outputs.path("per_seed.csv"), index=False)
         arms_frame(pop).to_csv(outputs.path("arms.csv"), index=False)
-        summary = {"template": src, "arms": pop.arms, "pooled": pooled(pop)}
+        summary = {"template": src, "floor_caveat": pop.floor_caveat, "arms": pop.arms, "pooled": pooled(pop)}
         target = outputs.extra(args.json) if args.json else outputs.path("population.json")
         target.write_text(json.dumps(summary, indent=1, default=float))
     written = [out / "per_seed.csv", out / "arms.csv", Path(args.json or out / "population.json")]
