@@ -34,6 +34,7 @@ from adaptive_dd.closed_loop.glue import (
     estimator_sample,
     estimator_work,
     law_command,
+    law_delay,
     law_estimate,
     law_work_of,
     plant_advance,
@@ -157,6 +158,12 @@ def _law_command(law, ls, pl, i, s, T, q, qd, q_d, qd_d, qdd_d, lw, out):
             boost_command(law, since_alarm, q, qd, q_d, qd_d, out)  # adaptive_ct's, within the limits
 
         return impl
+
+
+@overload(law_delay, inline="always")
+def _law_delay(law):
+    if _is(law, TwoLinkGains):
+        return lambda law: law.model_delay
 
 
 @overload(law_estimate)

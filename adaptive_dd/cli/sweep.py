@@ -88,16 +88,30 @@ def _print_heatmap(res, sweep) -> None:
         )
     elif hm:
         r = res.ratios
+        # the other grid axes with more than one value: one table per combination, as the heat maps
+        other = [c for c in r.columns if c not in _NOT_AXES and c not in (hm["x"], hm["y"])]
+        other = [c for c in other if r[c].nunique() > 1]
         print(
             f"median over seeds of rms {hm['adaptive']} / rms {hm['floor']}, segment {hm['segment']}"
-            f" (rows {hm['y']}, columns {hm['x']}; median over any other axes; * marked):"
+            f" (rows {hm['y']}, columns {hm['x']}"
+            + (f"; one table per {', '.join(other)}" if other else "")
+            + "; * marked):"
         )
-        table = r.pivot_table(index=hm["y"], columns=hm["x"], values="ratio", aggfunc="median").round(3)
-        marks = r.assign(is_marked=r["marked"] != "").pivot_table(
-            index=hm["y"], columns=hm["x"], values="is_marked", aggfunc="any"
-        )
-        print(table.astype(str) + marks.reindex_like(table).replace({True: " *", False: ""}).fillna(""))
+        for key, part in r.groupby(other, sort=True) if other else [((), r)]:
+            if other:
+                values = key if isinstance(key, tuple) else (key,)
+                print(", ".join(f"{a} = {v:g}" for a, v in zip(other, values, strict=True)) + ":")
+            table = part.pivot_table(index=hm["y"], columns=hm["x"], values="ratio", aggfunc="median")
+            marks = part.assign(is_marked=part["marked"] != "").pivot_table(
+                index=hm["y"], columns=hm["x"], values="is_marked", aggfunc="any"
+            )
+            stars = marks.reindex_like(table).replace({True: " *", False: ""}).fillna("")
+            print(table.round(3).astype(str) + stars)
         _print_marks(r, hm)
+
+
+_NOT_AXES = ("point", "ratio", "n_seeds", "floor_rms", "floor_nominal_rms", "floor_saturation", "marked")
+"""The columns of ``ratios.csv`` that are not grid axes (:func:`~adaptive_dd.sweep.ratio_medians`)."""
 
 
 def _print_marks(r, hm) -> None:

@@ -23,6 +23,7 @@ from adaptive_dd.closed_loop.choices import (
     estimator_sample,
     estimator_work,
     law_command,
+    law_delay,
     law_estimate,
     law_work_of,
     plant_advance,
@@ -114,6 +115,11 @@ def _chain_law_command(law, ls, pl, i, s, T, q, qd, q_d, qd_d, qdd_d, lw, out): 
 
 
 @njit(cache=True, inline="always")
+def _chain_law_delay(law):  # pragma: no cover - compiled
+    return law.cfg.model_delay
+
+
+@njit(cache=True, inline="always")
 def _chain_law_estimate(law, ls, i, lw, out):  # pragma: no cover - compiled
     _sigma_of(law.B, law.cols, law.count, ls.pi_model[i], out)
     return out
@@ -161,6 +167,12 @@ def _law_work_of(law, n):
 def _law_command(law, ls, pl, i, s, T, q, qd, q_d, qd_d, qdd_d, lw, out):
     if _is(law, ChainLaw):
         return _chain_law_command.py_func
+
+
+@overload(law_delay, inline="always")
+def _law_delay(law):
+    if _is(law, ChainLaw):
+        return _chain_law_delay.py_func
 
 
 @overload(law_estimate)

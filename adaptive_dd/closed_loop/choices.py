@@ -14,6 +14,7 @@ __all__ = [
     "estimator_sample",
     "estimator_work",
     "law_command",
+    "law_delay",
     "law_estimate",
     "law_work_of",
     "plant_advance",
@@ -48,6 +49,12 @@ def law_command(law, ls, pl, i, s, T, q, qd, q_d, qd_d, qdd_d, lw, out):  # prag
     """Trial i's command ``out (n,)`` [N m] from its measured ``q, qd (n,)`` and the reference at
     this sample; ``ls`` the law's per-trial state (updated in place when the law adapts), ``pl``
     the plant (the oracles' true model of segment s)."""
+    raise NotImplementedError("compiled only")
+
+
+def law_delay(law):  # pragma: no cover - replaced by the overloads
+    """Samples after each swap before the law's true model (an oracle's) switches to the new
+    segment's: 0 but for ``ct_oracle_late``, the floor told of each swap late."""
     raise NotImplementedError("compiled only")
 
 

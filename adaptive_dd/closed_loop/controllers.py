@@ -33,6 +33,7 @@ from adaptive_dd.closed_loop.laws import (
     LawState,
     law_batch,
 )
+from adaptive_dd.controllers.base import DEFAULT_MODEL_DELAY, model_delay
 from adaptive_dd.errors import ParameterError
 from adaptive_dd.errors import is_finite_number as _is_number
 
@@ -41,6 +42,7 @@ __all__ = [
     "AdaptiveCT",
     "CTNominal",
     "CTOracle",
+    "CTOracleLate",
     "CTOracleTextbook",
     "CompiledForm",
     "JointGains",
@@ -265,6 +267,24 @@ class CTOracle(Law):
 
     def law_config(self, sample_period):
         return self._config(sample_period, KIND_CT, MODEL_TRUE)
+
+
+class CTOracleLate(CTOracle):
+    """:class:`CTOracle` told of each swap ``delay`` [s] late: its true model switches that long
+    after the swap (the floor of a law that knows each payload that late; measured against
+    ``ct_oracle``)."""
+
+    name = "ct_oracle_late"
+    floor = "ct_oracle"
+    SETTINGS = frozenset({"delay"})
+
+    def __init__(self, arm, bandwidth=40.0, damping: float = 1.0, **settings) -> None:
+        super().__init__(arm, bandwidth, damping, **settings)
+        self.model_delay = model_delay(self.settings.get("delay", DEFAULT_MODEL_DELAY), self.name)
+
+    def law_config(self, sample_period):
+        late = round(self.model_delay / sample_period)
+        return self._config(sample_period, KIND_CT, MODEL_TRUE, model_delay=late)
 
 
 class CTOracleTextbook(CTOracle):
@@ -527,6 +547,7 @@ ARM_CONTROLLERS: dict[str, type[Law]] = {
     "ct_nominal": CTNominal,
     "ct_oracle": CTOracle,
     "ct_oracle_textbook": CTOracleTextbook,
+    "ct_oracle_late": CTOracleLate,
     "adaptive_ct": AdaptiveCT,
     "slotine_li": SlotineLi,
     "slotine_li_oracle": SlotineLiOracle,

@@ -47,6 +47,7 @@ from adaptive_dd.closed_loop.chain_choices import (
     _chain_estimator_sample,
     _chain_estimator_work,
     _chain_law_command,
+    _chain_law_delay,
     _chain_law_estimate,
     _chain_law_work,
     _chain_plant_advance,
@@ -61,6 +62,7 @@ from adaptive_dd.closed_loop.choices import (
     estimator_sample,
     estimator_work,
     law_command,
+    law_delay,
     law_estimate,
     law_work_of,
     plant_advance,
@@ -91,6 +93,7 @@ __all__ = [
     "estimator_work",
     "in_threads",
     "law_command",
+    "law_delay",
     "law_estimate",
     "law_work_of",
     "measure_batch",
@@ -322,14 +325,16 @@ def trial_samples(
     tw, tr = np.zeros((max(ee_index.shape[0], 1), 12)), np.zeros(9)
     pw, lw, ew = plant_work(pl, n), law_work_of(law, n), estimator_work(ec, es)
     has_drop = drop.shape[1] > 0
+    late = law_delay(law)  # an oracle told of each swap late: its true model's segment lags
     for k in range(k0, k1):
         s = _segment(seg_start, k)
+        s_law = s if late == 0 else _segment(seg_start, max(k - late, 0))
         lost = has_drop and drop[i, k - k0]
         measure_sample(
             q, qd, held_q, held_qd, n_dropped, res, std, quantize_encoder, i, noise[i, k - k0], lost,
             qm, qdm, qm_obs, qdm_obs,
         )  # fmt: skip
-        law_command(law, ls, pl, i, s, T, qm, qdm, q_d[k], qd_d[k], qdd_d[k], lw, cmd)
+        law_command(law, ls, pl, i, s_law, T, qm, qdm, q_d[k], qd_d[k], qdd_d[k], lw, cmd)
         mask = apply_sample(
             T, max_error, max_speed, q_d, lim, lsb, saturate, quantize_dac, pl, pw,
             q, qd, stuck, failed, failed_at, q_rec, qd_rec, tau_rec, sat_rec, i, k, cmd, tau, e, prev, s,
@@ -376,6 +381,7 @@ _chain_trial_samples = njit(inline="always")(
         law_work_of=_chain_law_work,
         estimator_work=_chain_estimator_work,
         law_command=_chain_law_command,
+        law_delay=_chain_law_delay,
         estimator_sample=_chain_estimator_sample,
         law_estimate=_chain_law_estimate,
     )

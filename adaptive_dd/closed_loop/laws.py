@@ -168,6 +168,9 @@ class LawConfig(NamedTuple):
         [s] Integral concurrent learning's integration window.
     nat_gain : float
         The natural law's scalar gain ``gamma``.
+    model_delay : int
+        Samples after each swap before an oracle's true model (``MODEL_TRUE``) switches to the new
+        segment's (``ct_oracle_late``; 0: at the swap).
     """
 
     kind: int
@@ -205,6 +208,7 @@ class LawConfig(NamedTuple):
     adapt_kind: int = 0
     icl_window: float = 0.0
     nat_gain: float = 0.0
+    model_delay: int = 0
 
 
 class LawState(NamedTuple):

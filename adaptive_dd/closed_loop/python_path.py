@@ -177,10 +177,12 @@ def _command(ctrl, glue: PythonGlue, rc: RunConstants, k: int, qm: Array, qdm: A
     :class:`~adaptive_dd.errors.SignalError` if it has another shape."""
     kw = {}
     if truth:
-        sg = np.asarray(glue.sigma_true(k))
+        # an oracle told of each swap late (ct_oracle_late) gets the truth of a sample back
+        kt = max(k - round(getattr(ctrl, "model_delay", 0.0) / rc.T), 0)
+        sg = np.asarray(glue.sigma_true(kt))
         kw["sigma_true"] = np.broadcast_to(sg, (qm.shape[0], sg.shape[-1])).copy()
         if glue.pi_true is not None and getattr(ctrl, "takes_pi_true", False):
-            kw["pi_true"] = glue.pi_true(k)
+            kw["pi_true"] = glue.pi_true(kt)
     out = np.asarray(ctrl.command(qm, qdm, rc.q_d[k], rc.qd_d[k], rc.qdd_d[k], **kw), dtype=float)
     if out.shape != qm.shape:
         raise SignalError(f"command returned shape {out.shape}, expected ({qm.shape[0]}, {qm.shape[1]})")

@@ -18,7 +18,32 @@ from numpy.typing import NDArray
 from adaptive_dd.errors import ParameterError
 from adaptive_dd.plant.dynamics import _mass_entries
 
-__all__ = ["DECLARED", "DEFAULT_GAINS", "Controller", "Gains", "declared"]
+__all__ = [
+    "DECLARED",
+    "DEFAULT_GAINS",
+    "DEFAULT_MODEL_DELAY",
+    "Controller",
+    "Gains",
+    "declared",
+    "model_delay",
+]
+
+DEFAULT_MODEL_DELAY = 0.01
+"""[s] ``ct_oracle_late``'s default ``delay``: how long after each swap its true model switches."""
+
+
+def model_delay(value, name: str = "ct_oracle_late") -> float:
+    """``ct_oracle_late``'s ``delay`` [s] checked: a finite number >= 0 (else a
+    :class:`~adaptive_dd.errors.ParameterError` naming the setting and the value)."""
+    from adaptive_dd.errors import is_finite_number
+
+    if not (is_finite_number(value) and value >= 0):
+        raise ParameterError(
+            f"controllers.{name}.delay: how long after each swap the true model switches, a number "
+            f">= 0 s; got {value!r}"
+        )
+    return float(value)
+
 
 Array = NDArray[np.float64]
 

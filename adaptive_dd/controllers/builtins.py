@@ -17,6 +17,8 @@ Built-in settings:
     ``gamma`` (seven adaptation gains).
 ``ct_nominal``, ``pd``
     ``sigma`` (the fixed model, seven base parameters).
+``ct_oracle_late``
+    ``delay`` [s]: how long after each swap its true model switches.
 ``sliding_mode`` (N-joint arms)
     ``uncertainty`` (the levels of ``[plant.uncertainty]``, by default the scenario's), ``max_mass``,
     ``com_radius`` (the payload's bound).
@@ -35,7 +37,7 @@ from typing import Any
 import numpy as np
 
 from adaptive_dd.controllers.adaptive import ADAPTIVE_ONLINE, BOOST_RULE, AdaptiveCT
-from adaptive_dd.controllers.base import Controller, Gains
+from adaptive_dd.controllers.base import DEFAULT_MODEL_DELAY, Controller, Gains
 from adaptive_dd.controllers.feedback import PD, ComputedTorque
 from adaptive_dd.controllers.plugins import unknown_settings as _unknown
 from adaptive_dd.controllers.slotine_li import COM_RADIUS, DEFAULT_GAMMA, MAX_MASS, SlotineLi, default_bounds
@@ -170,6 +172,12 @@ _SIGMA = Setting(
     two_link=None,
     chain=ABSENT,
     rule="on an N-joint arm the controllers' model is the scenario's [model] table (docs/plant_and_model.md)",
+)
+_DELAY = Setting(
+    "how long after each swap the true model switches [s] (a law that learns each payload that late at best)",
+    two_link=DEFAULT_MODEL_DELAY,
+    chain=DEFAULT_MODEL_DELAY,
+    unit="s",
 )
 _OBSERVER_RULE = (
     "one observer on every arm (the N-joint code, on the two-link arm with the paper's closed-form "
@@ -314,6 +322,14 @@ CONTROLLERS: dict[str, Builtin] = {
         "the textbook computed torque: Coriolis and friction at the measured velocity",
         lambda g, o, arm: ComputedTorque(g, arm.sigma, oracle=True, reference_velocity=False),
         "ct_oracle_textbook",
+    ),
+    "ct_oracle_late": Builtin(
+        "true model, told of each swap late",
+        "ct_oracle whose true model switches delay after each swap: what knowing each payload that "
+        "late costs the law (against ct_oracle)",
+        lambda g, o, arm: ComputedTorque(g, arm.sigma, oracle=True, model_delay=o["delay"]),
+        "ct_oracle_late",
+        {"delay": _DELAY},
     ),
     "adaptive_ct_paper": Builtin(
         "estimator (the paper's)",

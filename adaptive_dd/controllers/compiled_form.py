@@ -83,6 +83,8 @@ class TwoLinkGains(NamedTuple):
     obs_a, obs_stages, obs_kappa, obs_alpha, obs_warmup : float, int, float, float, int
         ``exp(-beta T)``; stages; soft threshold in RMS levels; a sample's weight in the level;
         updates before the observer feeds the command.
+    model_delay : int
+        Samples after each swap before an oracle's true model switches (``ct_oracle_late``; 0).
     """
 
     law: int
@@ -107,6 +109,7 @@ class TwoLinkGains(NamedTuple):
     obs_kappa: float
     obs_alpha: float
     obs_warmup: int
+    model_delay: int
 
 
 class CompiledSpec(NamedTuple):
@@ -134,7 +137,7 @@ def two_link_gains(law: int, sigma=None, **gains) -> TwoLinkGains:
         boost_samples=0.0, boost_lim=np.full(2, np.inf),
         sigma=z7 if sigma is None else np.array(sigma, dtype=float),
         gamma=z7, lo=z7, hi=z7, projection=np.zeros(3), observer=False, T=0.0, obs_a=0.0, obs_stages=2,
-        obs_kappa=0.0, obs_alpha=0.0, obs_warmup=0,
+        obs_kappa=0.0, obs_alpha=0.0, obs_warmup=0, model_delay=0,
     )  # fmt: skip
     fields.update(gains)
     return TwoLinkGains(**fields)

@@ -6,6 +6,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from adaptive_dd.controllers.base import DEFAULT_GAINS, Controller, Gains
+from adaptive_dd.controllers.base import model_delay as _model_delay
 from adaptive_dd.controllers.compiled_form import LAW_CT, LAW_CT_ORACLE, LAW_PD, CompiledSpec, two_link_gains
 from adaptive_dd.controllers.laws import ct_batch, pd_batch
 from adaptive_dd.plant.parameters import validate_sigma
@@ -103,6 +104,9 @@ class ComputedTorque(Controller):
     reference_velocity : bool
         Velocity terms at ``qd_r = qd_d + lam e`` (default) or the textbook law
         (see :func:`computed_torque_law`).
+    model_delay : float, optional
+        [s] With ``oracle``: the true model switches this long after each swap (``ct_oracle_late``,
+        measured against ``ct_oracle``: what knowing each payload that late costs the law).
 
     Examples
     --------
@@ -123,6 +127,7 @@ class ComputedTorque(Controller):
         sigma: ArrayLike | None = None,
         oracle: bool = False,
         reference_velocity: bool = True,
+        model_delay: float | None = None,
     ) -> None:
         self.gains, self.oracle, self.reference = gains, oracle, reference_velocity
         self.needs_true_model = oracle
@@ -130,6 +135,12 @@ class ComputedTorque(Controller):
         self.sigma = validate_sigma(_sice_sigma() if sigma is None else sigma)
         base = "ct_oracle" if oracle else "ct_nominal"
         self.name = base if reference_velocity else base + "_textbook"
+        self.model_delay = 0.0
+        if model_delay is not None:
+            if not (oracle and reference_velocity):
+                raise ValueError("model_delay is ct_oracle_late's: an oracle at the reference velocity")
+            self.model_delay = _model_delay(model_delay)
+            self.name, self.floor = "ct_oracle_late", "ct_oracle"
 
     def command(self, q, qd, q_d, qd_d, qdd_d, sigma_true=None):
         if self.oracle and sigma_true is None:
@@ -145,4 +156,6 @@ class ComputedTorque(Controller):
         g = self.gains
         lam = float(g.lam) if self.reference else -1.0
         law = LAW_CT_ORACLE if self.oracle else LAW_CT
-        return CompiledSpec(two_link_gains(law, self.sigma, kp=float(g.kp), kd=float(g.kd), lam=lam), None)
+        late = round(self.model_delay / sample_period)
+        gains = two_link_gains(law, self.sigma, kp=float(g.kp), kd=float(g.kd), lam=lam, model_delay=late)
+        return CompiledSpec(gains, None)

@@ -260,6 +260,8 @@ def _builtin(spec: str, gains, options: dict, arm) -> Controller:
     try:
         return entry.make(g, {**filled, **o}, arm)
     except (TypeError, ValueError) as exc:
+        if str(exc).startswith(f"controllers.{spec}"):  # it names the setting already
+            raise ParameterError(str(exc)) from None
         raise ParameterError(f"controllers.{spec}: {exc}") from None
 
 

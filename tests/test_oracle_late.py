@@ -1,0 +1,87 @@
+"""``ct_oracle_late``: ``ct_oracle`` whose true model switches ``delay`` after each swap.
+
+Held exactly to the laws it lies between, on both runtimes and both paths: with no delay it is
+``ct_oracle`` sample for sample; on an exact arm whose first segment carries no payload it is
+``ct_nominal`` (the model without payload) until ``delay`` after the swap, to the sample, and
+``ct_oracle``'s later law after. A delay the kernels ignored, or applied one sample off, fails here.
+"""
+
+import dataclasses
+import tomllib
+from importlib import resources
+
+import numpy as np
+import pytest
+
+from adaptive_dd.benchmark.runner import run_benchmark
+from adaptive_dd.benchmark.scenario import load_scenario, parse_scenario
+from adaptive_dd.benchmark.scenario_settings import with_settings
+from adaptive_dd.controllers import make_controller
+from adaptive_dd.errors import ParameterError, ScenarioError
+
+SWAP = 0.3
+DURATION = 0.6
+
+
+def _two_link(controllers, delay):
+    sc = dataclasses.replace(
+        load_scenario(),
+        seeds=2,
+        duration=DURATION,
+        swap_times=(SWAP,),
+        swap_masses=(3.0,),
+        controllers=tuple(controllers),
+    )
+    return with_settings(sc, "ct_oracle_late", {"delay": delay})
+
+
+def _vertical3(controllers, delay):
+    src = resources.files("adaptive_dd.scenarios").joinpath("vertical3_payload.toml")
+    data = tomllib.loads(src.read_text(encoding="utf-8"))
+    data.pop("plant", None)  # the exact arm: its first segment's true model is the nominal one
+    data["run"] = {**data["run"], "duration": DURATION, "seeds": 2, "controllers": list(controllers)}
+    data["run"].pop("excite", None)
+    data["payload"] = [{**data["payload"][0], "at": SWAP}]
+    data["controllers"] = {"ct_oracle_late": {"delay": delay}}
+    return parse_scenario(data, "test.toml", name="vertical3_exact")
+
+
+def _e(res, name):
+    return np.asarray(res.runs[name].e_norm, dtype=float)
+
+
+@pytest.mark.parametrize("make", [_two_link, _vertical3], ids=["two_link", "n_joint"])
+def test_no_delay_is_ct_oracle(make):
+    res = run_benchmark(make(["ct_oracle", "ct_oracle_late"], 0.0), progress=False)
+    np.testing.assert_array_equal(_e(res, "ct_oracle_late"), _e(res, "ct_oracle"))
+    assert res.runs["ct_oracle_late"].floor == "ct_oracle"
+
+
+@pytest.mark.parametrize("engine", ["compiled", "python"])
+@pytest.mark.parametrize("make", [_two_link, _vertical3], ids=["two_link", "n_joint"])
+def test_told_late_is_the_nominal_law_until_the_delay_to_the_sample(make, engine):
+    d = 0.02
+    sc = make(["ct_nominal", "ct_oracle", "ct_oracle_late"], d)
+    res = run_benchmark(sc, progress=False, engine=engine)
+    late, nominal, oracle = _e(res, "ct_oracle_late"), _e(res, "ct_nominal"), _e(res, "ct_oracle")
+    k = round(SWAP / sc.sample_period) + round(d / sc.sample_period)  # the first sample on the new model
+    # the command at sample k is the first on the new model: its error shows at k + 1
+    np.testing.assert_array_equal(late[:, : k + 1], nominal[:, : k + 1])
+    assert np.all(late[:, k + 1] != nominal[:, k + 1])
+    assert not np.array_equal(nominal[:, k + 1 :], oracle[:, k + 1 :])
+    # it pays for the delay: worse than the oracle after the swap, better than never knowing
+    seg = slice(round(SWAP / sc.sample_period), None)
+    rms = {n: np.sqrt(np.mean(x[:, seg] ** 2)) for n, x in (("l", late), ("n", nominal), ("o", oracle))}
+    assert rms["o"] < rms["l"] < rms["n"]
+
+
+def test_a_delay_beyond_the_run_is_ct_nominal():
+    res = run_benchmark(_two_link(["ct_nominal", "ct_oracle", "ct_oracle_late"], 10.0), progress=False)
+    np.testing.assert_array_equal(_e(res, "ct_oracle_late"), _e(res, "ct_nominal"))
+
+
+def test_bad_delay_is_named():
+    with pytest.raises(ParameterError, match=r"controllers\.ct_oracle_late\.delay: .*got -0\.1"):
+        make_controller("ct_oracle_late", options={"delay": -0.1})
+    with pytest.raises(ScenarioError, match=r"test\.toml: controllers\.ct_oracle_late\.delay: .*nan"):
+        _vertical3(["ct_oracle", "ct_oracle_late"], float("nan"))
