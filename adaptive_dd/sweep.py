@@ -292,10 +292,17 @@ def _client(scheduler: str | None, workers: int | None):
 
     if scheduler:
         return Client(scheduler), None
+    from adaptive_dd.arena.pool import environment
+
     n = workers or os.cpu_count() or 1
-    cluster = LocalCluster(
-        n_workers=n, threads_per_worker=1, processes=True, env=dict(WORKER_ENV), dashboard_address=":0"
-    )
+    # in the environment the workers start with, not only Dask's ``env`` (applied after a worker has
+    # imported numba: its config then read 2 threads while the environment said 1, and a kernel
+    # compiled in the worker reloaded it, so that numba refused to run: "Cannot set
+    # NUMBA_NUM_THREADS to a different value once the threads have been launched")
+    with environment(WORKER_ENV):
+        cluster = LocalCluster(
+            n_workers=n, threads_per_worker=1, processes=True, env=dict(WORKER_ENV), dashboard_address=":0"
+        )
     return Client(cluster), cluster
 
 

@@ -434,6 +434,38 @@ def test_local_cluster_workers_are_single_threaded():
         cluster.close()
 
 
+_NUMBA_IN_MAIN = """
+import numba  # the main module imports numba, as the adaptive-dd command does: a spawned worker
+from adaptive_dd.sweep import _client  # re-imports it before Dask sets the worker's environment
+
+
+def threads():
+    import numba
+
+    return numba.config.NUMBA_NUM_THREADS
+
+
+if __name__ == "__main__":
+    client, cluster = _client(None, 1)
+    print(list(client.run(threads).values()))
+    client.close()
+    cluster.close()
+"""
+
+
+@pytest.mark.slow
+def test_workers_numba_reads_one_thread_when_the_main_module_imported_numba(tmp_path):
+    # numba reads its thread count when imported; a worker that read 2 while its environment said 1
+    # refused to run a kernel it compiled ("Cannot set NUMBA_NUM_THREADS to a different value once
+    # the threads have been launched"): every adaptive_ct row of the general sweep failed
+    script = tmp_path / "main.py"
+    script.write_text(_NUMBA_IN_MAIN)
+    env = {**os.environ, "NUMBA_NUM_THREADS": "2"}  # the user's shell, on a 2-core machine
+    out = subprocess.run([sys.executable, str(script)], capture_output=True, text=True, env=env, timeout=300)
+    assert out.returncode == 0, out.stderr[-2000:]
+    assert out.stdout.strip().splitlines()[-1] == "[1]"
+
+
 # ---- any arm; failures said ---------------------------------------------------------------
 
 URDF_BASE = """

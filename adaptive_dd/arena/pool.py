@@ -25,13 +25,13 @@ import os
 import pickle
 from contextlib import contextmanager
 
-__all__ = ["largest_first", "reused_memory", "run_units"]
+__all__ = ["environment", "largest_first", "reused_memory", "run_units"]
 
 _ONE_THREAD = {"NUMBA_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "OMP_NUM_THREADS": "1"}
 
 
 @contextmanager
-def _environment(values: dict[str, str]):
+def environment(values: dict[str, str]):
     """``os.environ`` with ``values`` set for the block (the worker processes it spawns inherit it)."""
     old = {k: os.environ.get(k) for k in values}
     os.environ.update(values)
@@ -139,7 +139,7 @@ def run_units(
     here = [i for i, u in enumerate(units) if not _picklable(u)]
     sent = [i for i in largest_first(costs or [0.0] * len(units)) if i not in here]
     ctx = multiprocessing.get_context("spawn")
-    with _environment(_ONE_THREAD), ProcessPoolExecutor(min(workers, len(sent)), mp_context=ctx) as pool:
+    with environment(_ONE_THREAD), ProcessPoolExecutor(min(workers, len(sent)), mp_context=ctx) as pool:
 
         def submit(i, d=None):
             return pool.submit(_run_reused, run_unit, units[i], controllers, seeds, False, d)
