@@ -224,6 +224,13 @@ def _typed(df: pd.DataFrame) -> pd.DataFrame:
     return df
 
 
+def _umask() -> int:
+    """The process's umask (read by setting it, then set back)."""
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return mask
+
+
 def _write_atomic(df: pd.DataFrame, path: Path) -> Path:
     """Write a table to ``path`` through a temporary file and ``os.replace``."""
     fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.stem}.", suffix=".tmp")
@@ -231,8 +238,9 @@ def _write_atomic(df: pd.DataFrame, path: Path) -> Path:
     try:
         if path.suffix == ".parquet":
             df.to_parquet(tmp, index=False)
-        else:
-            df.to_csv(tmp, index=False, float_format="%.17g")
+        else:  # pandas writes each float's shortest exact form (0.005, not 0.0050000000000000001)
+            df.to_csv(tmp, index=False)
+        os.chmod(tmp, 0o666 & ~_umask())  # a file made by open() would have these (mkstemp: 0600)
         os.replace(tmp, path)
     finally:
         if os.path.exists(tmp):

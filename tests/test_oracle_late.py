@@ -83,5 +83,13 @@ def test_a_delay_beyond_the_run_is_ct_nominal():
 def test_bad_delay_is_named():
     with pytest.raises(ParameterError, match=r"controllers\.ct_oracle_late\.delay: .*got -0\.1"):
         make_controller("ct_oracle_late", options={"delay": -0.1})
+    hint = r"allowed: \['bandwidth', 'damping', 'label'\]; 'delay' is a setting of ct_oracle_late"
+    with pytest.raises(ParameterError, match=hint):
+        make_controller("ct_oracle", options={"delay": 0.01})
+    whole = r"delay: 0\.0004 s is 0\.4 samples at T = 0\.001 s; give a whole number of samples"
+    with pytest.raises(ScenarioError, match=r"test\.toml: controllers\.ct_oracle_late\." + whole):
+        _vertical3(["ct_oracle", "ct_oracle_late"], 0.0004)
+    with pytest.raises(ParameterError, match=r"0\.0025 s is 2\.5 samples"):
+        make_controller("ct_oracle_late", options={"delay": 0.0025}).compiled_spec(1e-3)
     with pytest.raises(ScenarioError, match=r"test\.toml: controllers\.ct_oracle_late\.delay: .*nan"):
         _vertical3(["ct_oracle", "ct_oracle_late"], float("nan"))

@@ -215,3 +215,18 @@ def test_one_conversion_of_seconds_to_samples():
     sc = dataclasses.replace(load_scenario(), seeds=1, duration=5.0, swap_times=(2.5005,), swap_masses=(1.0,))
     _, mass = true_sigma(sc, np.arange(sc.n_samples) * T)
     assert mass[2500] == 0.0 and mass[2501] == 1.0
+
+
+def test_validate_names_the_plant_friction_law_on_both_runtimes():
+    from pathlib import Path
+
+    from adaptive_dd.benchmark.scenario import load_scenario
+    from adaptive_dd.benchmark.scenario_format import format_scenario
+
+    two_link = load_scenario(
+        str(Path(__file__).resolve().parents[1] / "benchmarks/scenarios/lugre_friction.toml")
+    )
+    assert two_link.closed_forms is not None
+    text = format_scenario(two_link)
+    assert "plant.friction = 'lugre'" in text and "each floor is a reference, not a floor" in text
+    assert "plant.friction" not in format_scenario(load_scenario())  # stick-slip: the model's own law

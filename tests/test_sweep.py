@@ -274,8 +274,12 @@ def test_csv_cells_without_pyarrow(tmp_path, client, monkeypatch):
     assert {p.suffix for p in (tmp_path / "out" / "cells").iterdir()} == {".csv"}
     again = run_sweep(sw, tmp_path / "out", client=client, progress=False)
     assert again.reused == 16
-    pd.testing.assert_frame_equal(again.table, first.table)
+    pd.testing.assert_frame_equal(again.table, first.table)  # the CSV gives every float back exactly
     assert (again.table["error"] == "").all()
+    umask = os.umask(0o022)
+    os.umask(umask)
+    for f in (first.table_path, *(tmp_path / "out" / "cells").iterdir()):  # as open() makes them
+        assert f.stat().st_mode & 0o777 == 0o666 & ~umask, f
 
 
 def _planted_failure(monkeypatch, controllers=("adaptive_ct",)):
@@ -638,3 +642,38 @@ def test_the_docs_sweep_file_parses_and_a_bad_grid_setting_names_the_sweep_file(
         f.write_text(head + grid)
         with pytest.raises(SweepError, match=match):
             load_sweep(f)
+
+
+@pytest.mark.parametrize("friction", ["stick-slip", "lugre"])
+def test_the_cli_table_per_other_axis_names_its_heat_map_and_a_plant_friction_caveat(
+    tmp_path, capsys, friction
+):
+    from types import SimpleNamespace
+
+    from adaptive_dd.cli.sweep import _print_heatmap
+
+    base = BASE + f'[plant]\nfriction = "{friction}"\n'
+    sweep = SWEEP + "[grid.controller.adaptive_ct]\nboost_bandwidth = [150.0, 300.0]\n"
+    sw = load_sweep(_write(tmp_path, sweep, base))
+    rows = [
+        {"point": i, "payload_mass": m, "swap_time": t, "adaptive_ct.boost_bandwidth": b, "ratio": r}
+        for i, (m, t, b, r) in enumerate(
+            (m, t, b, 1.0 + 0.1 * k)
+            for k, (b, m, t) in enumerate(
+                (b, m, t) for b in (150.0, 300.0) for m in (1.0, 6.0) for t in (0.08, 0.12)
+            )
+        )
+    ]
+    ratios = pd.DataFrame(rows).assign(
+        n_seeds=2, floor_rms=1e-4, floor_nominal_rms=1e-4, floor_saturation=0.0
+    )
+    ratios["marked"] = ""
+    _print_heatmap(SimpleNamespace(ratios=ratios, heatmaps=["h0", "h1"]), sw)
+    out = capsys.readouterr().out
+    assert "one table per adaptive_ct.boost_bandwidth" in out
+    # the tables in the heat maps' order (plot_ratio_heatmaps: grid order), each naming its file
+    assert out.index("adaptive_ct.boost_bandwidth = 150 (heatmap_0.png):") < out.index(
+        "adaptive_ct.boost_bandwidth = 300 (heatmap_1.png):"
+    )
+    assert out.split("(heatmap_1.png):")[1].split("\n")[4].split()[-1] == "1.7"  # 6 kg at 0.12 s, 300 rad/s
+    assert ("note: the plant's friction law (lugre)" in out) == (friction == "lugre")

@@ -150,10 +150,14 @@ def run_benchmark(
     res.wall_time = time.perf_counter() - t0 - res.compile_time
     for name, run in res.runs.items():
         if run.floor is not None and run.floor not in res.runs:
+            fix = (
+                f"add {run.floor!r} to the scenario's controllers"
+                if controllers is None
+                else f"put a {run.floor!r} controller in controllers= too (its dict is what runs)"
+            )
             warnings.warn(
                 f"run_benchmark: {name}'s floor {run.floor} did not run: its ratios to the floor are "
-                f"NaN and its limits are judged on another reference; add {run.floor!r} to the "
-                "scenario's controllers",
+                f"NaN and its limits are judged on another reference; {fix}",
                 stacklevel=2,
             )
     return res

@@ -69,7 +69,7 @@ def _plant_lines(sc: Scenario) -> list[str]:
     """What the plant is when it is not the model (``[plant]``, ``[model]``), for ``validate``."""
     p, u, arm = sc.plant, sc.model_uncertainty, sc.arm
     stated = [] if u is None else [f"model.uncertainty = {dataclasses.asdict(u)!r}"]
-    if arm.friction != "stick-slip" and sc.closed_forms is None:  # the plant's friction law
+    if arm.friction != "stick-slip":  # the plant's friction law, on every arm
         strib = (
             f"stribeck_ratio = {arm.stribeck_ratio:g}, stribeck_velocity = {arm.stribeck_velocity:g} rad/s"
         )
@@ -81,13 +81,13 @@ def _plant_lines(sc: Scenario) -> list[str]:
                 f"lugre_damping = {_brief_list(arm.lugre_sigma1)}"
             ),
         }[arm.friction]
-        model = "the controllers' model: viscous + Coulomb"
+        model = "the controllers' model: viscous + Coulomb, so each floor is a reference, not a floor"
         stated.append(f"plant.friction = {arm.friction!r}   ({law}; {model})")
     if p is None:
         return (
             ["# plant: the [arm] itself (no plant apart from the model)", *stated]
             if sc.closed_forms is None
-            else []
+            else stated
         )
     out = [f"model.urdf = {str(sc.arm.urdf)!r}   (what every non-oracle controller is given)", *stated]
     out.append(f"plant.urdf = {p.urdf!r}" if p.urdf else "# plant links: the [arm]'s URDF")

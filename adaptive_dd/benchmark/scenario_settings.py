@@ -121,6 +121,16 @@ def controller_setting_errors(v: dict) -> list[str]:
                 )
         if "boost_duration" in o:
             check_number(errs, f"controllers.{name}.boost_duration", o["boost_duration"], 0, v["duration"])
+        if "delay" in o and check_number(
+            errs, f"controllers.{name}.delay", o["delay"], 0, LIMITS["max_setting"]
+        ):
+            from adaptive_dd.controllers.base import delay_samples
+            from adaptive_dd.errors import ParameterError
+
+            try:
+                delay_samples(float(o["delay"]), T, name)
+            except ParameterError as exc:
+                errs.append(str(exc))
         if "damping" in o:
             check_number(
                 errs, f"controllers.{name}.damping", o["damping"], 0, LIMITS["max_damping"], lo_open=True

@@ -88,19 +88,20 @@ def _print_heatmap(res, sweep) -> None:
         )
     elif hm:
         r = res.ratios
-        # the other grid axes with more than one value: one table per combination, as the heat maps
-        other = [c for c in r.columns if c not in _NOT_AXES and c not in (hm["x"], hm["y"])]
-        other = [c for c in other if r[c].nunique() > 1]
+        # the other grid axes: one table per combination of their values, in the heat maps' order
+        other = [a for a, _ in sweep.axes if a not in (hm["x"], hm["y"])]
+        groups = list(r.groupby(other, sort=False)) if other else [((), r)]
         print(
             f"median over seeds of rms {hm['adaptive']} / rms {hm['floor']}, segment {hm['segment']}"
             f" (rows {hm['y']}, columns {hm['x']}"
-            + (f"; one table per {', '.join(other)}" if other else "")
+            + (f"; one table per {', '.join(other)}" if len(groups) > 1 else "")
             + "; * marked):"
         )
-        for key, part in r.groupby(other, sort=True) if other else [((), r)]:
-            if other:
+        for i, (key, part) in enumerate(groups):
+            if len(groups) > 1:
                 values = key if isinstance(key, tuple) else (key,)
-                print(", ".join(f"{a} = {v:g}" for a, v in zip(other, values, strict=True)) + ":")
+                where = ", ".join(f"{a} = {_value(v)}" for a, v in zip(other, values, strict=True))
+                print(f"{where} (heatmap_{i}.png):")
             table = part.pivot_table(index=hm["y"], columns=hm["x"], values="ratio", aggfunc="median")
             marks = part.assign(is_marked=part["marked"] != "").pivot_table(
                 index=hm["y"], columns=hm["x"], values="is_marked", aggfunc="any"
@@ -108,10 +109,16 @@ def _print_heatmap(res, sweep) -> None:
             stars = marks.reindex_like(table).replace({True: " *", False: ""}).fillna("")
             print(table.round(3).astype(str) + stars)
         _print_marks(r, hm)
+        from adaptive_dd.benchmark.metrics import floor_caveat
+
+        caveat = floor_caveat(sweep.base)
+        if caveat:
+            print(f"note: {caveat}")
 
 
-_NOT_AXES = ("point", "ratio", "n_seeds", "floor_rms", "floor_nominal_rms", "floor_saturation", "marked")
-"""The columns of ``ratios.csv`` that are not grid axes (:func:`~adaptive_dd.sweep.ratio_medians`)."""
+def _value(v) -> str:
+    """A grid value as the sweep file would write it (0.005, not 0.0050000000000000001)."""
+    return f"{v:g}" if isinstance(v, float) else str(v)
 
 
 def _print_marks(r, hm) -> None:

@@ -33,7 +33,7 @@ from adaptive_dd.closed_loop.laws import (
     LawState,
     law_batch,
 )
-from adaptive_dd.controllers.base import DEFAULT_MODEL_DELAY, model_delay
+from adaptive_dd.controllers.base import DEFAULT_MODEL_DELAY, delay_samples, model_delay
 from adaptive_dd.errors import ParameterError
 from adaptive_dd.errors import is_finite_number as _is_number
 
@@ -283,7 +283,7 @@ class CTOracleLate(CTOracle):
         self.model_delay = model_delay(self.settings.get("delay", DEFAULT_MODEL_DELAY), self.name)
 
     def law_config(self, sample_period):
-        late = round(self.model_delay / sample_period)
+        late = delay_samples(self.model_delay, sample_period, self.name)
         return self._config(sample_period, KIND_CT, MODEL_TRUE, model_delay=late)
 
 

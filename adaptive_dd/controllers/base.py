@@ -10,6 +10,7 @@ All arrays carry the trial axis first: ``q.shape == (n_trials, 2)``.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -25,6 +26,7 @@ __all__ = [
     "Controller",
     "Gains",
     "declared",
+    "delay_samples",
     "model_delay",
 ]
 
@@ -43,6 +45,20 @@ def model_delay(value, name: str = "ct_oracle_late") -> float:
             f">= 0 s; got {value!r}"
         )
     return float(value)
+
+
+def delay_samples(delay: float, sample_period: float, name: str = "ct_oracle_late") -> int:
+    """``delay`` [s] in samples of ``sample_period`` [s]; a
+    :class:`~adaptive_dd.errors.ParameterError` unless it is a whole number of them (a law acts
+    once per sample: 0.4 ms at 1 kHz would silently be no delay at all)."""
+    n = delay / sample_period
+    if abs(n - round(n)) > 1e-6 * max(1.0, n):
+        lo, hi = math.floor(n) * sample_period, math.ceil(n) * sample_period
+        raise ParameterError(
+            f"controllers.{name}.delay: {delay:g} s is {n:g} samples at T = {sample_period:g} s; give a "
+            f"whole number of samples (e.g. {lo:g} or {hi:g} s)"
+        )
+    return round(n)
 
 
 Array = NDArray[np.float64]

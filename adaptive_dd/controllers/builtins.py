@@ -174,7 +174,8 @@ _SIGMA = Setting(
     rule="on an N-joint arm the controllers' model is the scenario's [model] table (docs/plant_and_model.md)",
 )
 _DELAY = Setting(
-    "how long after each swap the true model switches [s] (a law that learns each payload that late at best)",
+    "how long after each swap the true model switches [s], a whole number of samples (a law that "
+    "learns each payload that late at best)",
     two_link=DEFAULT_MODEL_DELAY,
     chain=DEFAULT_MODEL_DELAY,
     unit="s",

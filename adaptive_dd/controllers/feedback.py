@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from adaptive_dd.controllers.base import DEFAULT_GAINS, Controller, Gains
+from adaptive_dd.controllers.base import DEFAULT_GAINS, Controller, Gains, delay_samples
 from adaptive_dd.controllers.base import model_delay as _model_delay
 from adaptive_dd.controllers.compiled_form import LAW_CT, LAW_CT_ORACLE, LAW_PD, CompiledSpec, two_link_gains
 from adaptive_dd.controllers.laws import ct_batch, pd_batch
@@ -156,6 +156,6 @@ class ComputedTorque(Controller):
         g = self.gains
         lam = float(g.lam) if self.reference else -1.0
         law = LAW_CT_ORACLE if self.oracle else LAW_CT
-        late = round(self.model_delay / sample_period)
+        late = delay_samples(self.model_delay, sample_period)
         gains = two_link_gains(law, self.sigma, kp=float(g.kp), kd=float(g.kd), lam=lam, model_delay=late)
         return CompiledSpec(gains, None)

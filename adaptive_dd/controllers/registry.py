@@ -38,7 +38,6 @@ from adaptive_dd.controllers.plugins import (
     load_controller_class,
     plugin_controller,
 )
-from adaptive_dd.controllers.plugins import unknown_settings as _unknown
 from adaptive_dd.errors import ParameterError
 from adaptive_dd.plant.kind import arm_kind
 from adaptive_dd.plant.two_link import ClosedFormTwoLink, closed_form_view
@@ -195,7 +194,13 @@ def _check_settings(spec: str, o: dict, entry: Builtin, kind: str, arm) -> None:
         raise ParameterError(
             f"controllers.{spec}.{k}: not a setting on {_arm_words(arm)}: {entry.settings[k].rule}"
         )
-    _unknown(spec, o, set(here))
+    bad = sorted(set(o) - set(here))
+    if bad:
+        takes = [name for name, e in CONTROLLERS.items() if bad[0] in e.settings and name != spec]
+        hint = f"; '{bad[0]}' is a setting of {', '.join(takes)}" if takes else ""
+        raise ParameterError(
+            f"controllers.{spec}: unknown setting(s) {bad}; allowed: {sorted(set(here) | COMMON)}{hint}"
+        )
 
 
 def _detector_at_the_top(spec: str, o: dict) -> dict:

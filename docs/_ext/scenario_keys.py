@@ -94,8 +94,8 @@ MEANING = {
     " (two-link, 0.1), its centre of mass from the flange (N-joint, 0.3).",
     "setting.uncertainty": "`sliding_mode` (N-joint arms): the arm's error levels that bound its model "
     "error (the keys of `[plant.uncertainty]`; default: the scenario's).",
-    "setting.delay": "`ct_oracle_late`: how long after each swap its true model switches [s] "
-    "(default 0.01).",
+    "setting.delay": "`ct_oracle_late`: how long after each swap its true model switches [s], a "
+    "whole number of samples (default 0.01).",
     "setting.boost_bandwidth": "Bandwidth of the feedback boost after a change alarm [rad/s].",
     "setting.boost_duration": "How long the boost lasts after an alarm [s].",
     "setting.boost_ramp": "`adaptive_ct` (N-joint arms): after `boost_duration`, the boost's added "
