@@ -601,7 +601,9 @@ def test_the_ratios_csv_and_the_cli_count_the_marked_cells(tmp_path, capsys):
 
     t = _marks_table(0.3, 4.2e-2).assign(failed=False)
     hm = {"x": "m", "y": "w", "adaptive": "adaptive_ct", "floor": "ct_oracle", "segment": 1}
-    sw = types.SimpleNamespace(heatmap=hm, axes=[("m", [1.0, 10.0]), ("w", [0.0])])
+    from adaptive_dd.benchmark.scenario import load_scenario
+
+    sw = types.SimpleNamespace(heatmap=hm, axes=[("m", [1.0, 10.0]), ("w", [0.0])], base=load_scenario())
     ratios, maps = _heatmaps(sw, t, tmp_path)
     on_disk = pd.read_csv(tmp_path / "ratios.csv", keep_default_na=False)
     assert list(on_disk["marked"] != "") == [False, True] and len(maps) == 1
