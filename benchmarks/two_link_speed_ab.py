@@ -25,7 +25,7 @@ from adaptive_dd.benchmark.scenario import default_scenario_path
 def main() -> None:
     # each controller alone, its floor not run: the run's warning about its missing ratios, once per
     # run, is not news here
-    warnings.filterwarnings("ignore", message=r".*floor ct_oracle did not run")
+    warnings.filterwarnings("ignore", message=r".*floor \w+ did not run")
     sc = load_scenario(default_scenario_path())
     out = []
     for name in ("pd", "ct_nominal", "slotine_li", "adaptive_ct"):
