@@ -230,3 +230,19 @@ def test_validate_names_the_plant_friction_law_on_both_runtimes():
     text = format_scenario(two_link)
     assert "plant.friction = 'lugre'" in text and "each floor is a reference, not a floor" in text
     assert "plant.friction" not in format_scenario(load_scenario())  # stick-slip: the model's own law
+
+
+def test_recovery_time_in_a_short_segment_is_not_set_by_its_own_transient():
+    from adaptive_dd.benchmark.metrics import _recovery_times
+
+    T = 1e-3
+    e = np.full((1, 1800), 1e-4)
+    e[0, 1000:1100] = 3e-3  # 100 ms off after the swap at 1 s, in a 0.8 s segment
+    t = _recovery_times(e, [0, 1000], [1000, 1800], T)
+    assert np.isnan(t[0, 0])  # the first segment has none
+    # the 50 ms moving RMS leaves the spike 50 ms after it ends: about 0.15 s after the swap
+    assert 0.14 <= t[0, 1] <= 0.16
+    # a 2 s segment, as before: the band from its last second
+    e2 = np.full((1, 3000), 1e-4)
+    e2[0, 1000:1100] = 3e-3
+    assert 0.14 <= _recovery_times(e2, [0, 1000], [1000, 3000], T)[0, 1] <= 0.16
