@@ -93,3 +93,35 @@ def test_bad_delay_is_named():
         make_controller("ct_oracle_late", options={"delay": 0.0025}).compiled_spec(1e-3)
     with pytest.raises(ScenarioError, match=r"test\.toml: controllers\.ct_oracle_late\.delay: .*nan"):
         _vertical3(["ct_oracle", "ct_oracle_late"], float("nan"))
+
+
+def test_a_law_at_other_gains_than_its_floor_is_warned():
+    from adaptive_dd.benchmark.preflight import floor_problems
+
+    data = {
+        "run": {"duration": 1.0, "seeds": 2, "controllers": ["ct_oracle", "ct_oracle_late", "adaptive_ct"]},
+        "controllers": {"ct_oracle_late": {"delay": 0.005, "bandwidth": 30.0}},
+        "payload": [{"at": 0.5, "mass": 3.0}],
+    }
+    (msg,) = floor_problems(parse_scenario(data, "gains.toml"))
+    assert msg.startswith("controllers.ct_oracle_late.bandwidth = 30.0 but its floor ct_oracle runs at 40.0")
+    data["controllers"]["ct_oracle"] = {"bandwidth": 30.0}  # both at 30: adaptive_ct's floor now differs
+    (msg,) = floor_problems(parse_scenario(data, "gains.toml"))
+    assert msg.startswith("controllers.adaptive_ct.bandwidth = 40.0 but its floor ct_oracle runs at 30.0")
+    data["controllers"]["adaptive_ct"] = {"bandwidth": 30.0}
+    assert floor_problems(parse_scenario(data, "gains.toml")) == []
+
+
+def test_validate_says_which_floors_the_benchmark_adds(tmp_path, capsys):
+    from adaptive_dd.cli import main
+
+    path = tmp_path / "only.toml"
+    path.write_text(
+        '[run]\nduration = 1.0\nseeds = 2\ncontrollers = ["ct_oracle_late", "adaptive_ct"]\n'
+        "[controllers.ct_oracle_late]\ndelay = 0.005\nbandwidth = 30.0\n"
+        "[[payload]]\nat = 0.5\nmass = 3.0\n"
+    )
+    assert main(["validate", str(path)]) == 0
+    out = capsys.readouterr()
+    assert "# the benchmark adds ct_oracle: the floor of ct_oracle_late, adaptive_ct" in out.out
+    assert "warning: controllers.ct_oracle_late.bandwidth = 30.0 but its floor ct_oracle runs at 40.0" in out.err

@@ -9,7 +9,9 @@
 * :func:`controller_problems`: every controller of the scenario built as the run builds it
   (built-ins with their settings, plug-ins imported from their path with theirs);
 * :func:`inertia_problems`: a joint whose Coulomb friction dwarfs its inertia about its axis (a
-  drive's rotor, the armature, missing from the URDF; a warning).
+  drive's rotor, the armature, missing from the URDF; a warning);
+* :func:`floor_problems`: a controller whose ``bandwidth`` or ``damping`` differs from its floor's
+  (its ratio to the floor then compares two gains as well as two laws; a warning).
 
 Each returns a list of one-line problems (empty: none), naming the joint, the value, the limit
 and the time, or the controller and the reason.
@@ -21,6 +23,7 @@ import numpy as np
 
 __all__ = [
     "controller_problems",
+    "floor_problems",
     "inertia_problems",
     "preflight",
     "reference_problems",
@@ -253,9 +256,38 @@ def inertia_problems(scenario) -> list[str]:
     return out
 
 
+def floor_problems(scenario) -> list[str]:
+    """Controllers whose ``[controllers.NAME]`` ``bandwidth`` or ``damping`` differs from their
+    floor's (the floor's own table, else ``[control]``): the ratio to the floor then measures the
+    gains as well as the law. A controller that cannot be built is
+    :func:`controller_problems`' to report."""
+    from adaptive_dd.controllers.registry import scenario_controller
+
+    out = []
+    for name in scenario.controllers:
+        try:
+            floor = getattr(scenario_controller(scenario, name)[1], "floor", None)
+        except Exception:  # a controller that cannot be built: controller_problems reports it
+            continue
+        if floor is None:
+            continue
+        mine, theirs = (
+            scenario.options(name),
+            scenario.options(floor) if floor in scenario.controllers else {},
+        )
+        for key, default in (("bandwidth", scenario.bandwidth), ("damping", scenario.damping)):
+            a, b = mine.get(key, default), theirs.get(key, default)
+            if np.any(np.asarray(a, dtype=float) != np.asarray(b, dtype=float)):
+                out.append(
+                    f"controllers.{name}.{key} = {a} but its floor {floor} runs at {b}: its ratio to the "
+                    f"floor compares two {key}s as well as two laws; give [controllers.{floor}] the same"
+                )
+    return out
+
+
 def preflight(scenario) -> tuple[list[str], list[str]]:
     """``(problems, warnings)``: :func:`reference_problems` and :func:`controller_problems` (the
-    run would be meaningless or fail), :func:`torque_problems` (it will saturate) and
-    :func:`inertia_problems` (an armature the URDF leaves out)."""
+    run would be meaningless or fail), :func:`torque_problems` (it will saturate),
+    :func:`inertia_problems` (an armature the URDF leaves out) and :func:`floor_problems`."""
     problems = reference_problems(scenario) + controller_problems(scenario)
-    return problems, torque_problems(scenario) + inertia_problems(scenario)
+    return problems, torque_problems(scenario) + inertia_problems(scenario) + floor_problems(scenario)

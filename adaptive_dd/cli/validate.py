@@ -47,8 +47,25 @@ def run(args: argparse.Namespace) -> int:
         print(describe_arm(sc.arm))
     for line in resolved_settings(sc):
         print(line)
+    _print_added_floors(sc)
     _print_torque_peaks(sc)
     return _preflight(sc)
+
+
+def _print_added_floors(sc) -> None:
+    """The floors ``adaptive-dd benchmark`` adds to the run (``cli.benchmark.with_floors``)."""
+    from adaptive_dd.controllers.registry import scenario_controller
+
+    added: dict[str, list[str]] = {}
+    for name in sc.controllers:
+        try:
+            floor = getattr(scenario_controller(sc, name)[1], "floor", None)
+        except Exception:  # a controller that cannot be built is a problem reported below
+            continue
+        if floor is not None and floor not in sc.controllers:
+            added.setdefault(floor, []).append(name)
+    for floor, of in added.items():
+        print(f"# the benchmark adds {floor}: the floor of {', '.join(of)} (list it in run.controllers)")
 
 
 def _print_torque_peaks(sc) -> None:
@@ -70,7 +87,7 @@ def _preflight(sc) -> int:
 
     problems = pf.reference_problems(sc) + pf.controller_problems(sc)
     torque = pf.torque_problems(sc)
-    for w in torque + pf.inertia_problems(sc):
+    for w in torque + pf.inertia_problems(sc) + pf.floor_problems(sc):
         print(f"adaptive-dd validate: warning: {w}", file=sys.stderr)
     if problems:
         print(f"adaptive-dd validate: {len(problems)} problem(s) the run would meet:", file=sys.stderr)
