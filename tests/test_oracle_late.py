@@ -126,3 +126,22 @@ def test_validate_says_which_floors_the_benchmark_adds(tmp_path, capsys):
     assert "# the benchmark adds ct_oracle: the floor of ct_oracle_late, adaptive_ct" in out.out
     warned = "warning: controllers.ct_oracle_late.bandwidth = 30.0 but its floor ct_oracle runs at 40.0"
     assert warned in out.err
+
+
+def test_the_leaderboard_ranks_no_law_told_the_true_model():
+    import pandas as pd
+
+    from adaptive_dd.arena.leaderboard import contenders, rms_rank
+
+    df = pd.DataFrame(
+        {
+            "scenario": ["s"] * 3,
+            "segment": [1] * 3,
+            "controller": ["ct_oracle", "ct_oracle_late", "adaptive_ct"],
+            "floor": ["", "ct_oracle", "ct_oracle"],
+            "rms_error_mrad": [0.08, 0.09, 0.10],  # the late oracle tracks better: still not ranked
+            "failures": [0, 0, 0],
+        }
+    )
+    assert contenders(df).tolist() == [False, False, True]
+    assert rms_rank(df).tolist()[2] == 1.0 and np.isnan(rms_rank(df).tolist()[1])

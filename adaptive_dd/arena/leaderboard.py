@@ -42,6 +42,7 @@ __all__ = [
     "COLUMNS",
     "DEFAULT_CONTROLLERS",
     "POPULATION_TEMPLATE",
+    "contenders",
     "leaderboard",
     "ratio_columns",
     "rms_rank",
@@ -100,7 +101,7 @@ COLUMNS: dict[str, tuple[str, str]] = {
     "rms_rank": (
         "-",
         "rank of rms_error_mrad in the scenario's segment among the laws with a floor (1: lowest; "
-        "a law with a failed trial after those without; empty: an oracle)",
+        "a law with a failed trial after those without; empty: an oracle, or a law told the true model)",
     ),
     "rms_torque_Nm": ("N m", "mean over seeds of the RMS applied torque (norm over joints)"),
     "saturation_pct": ("%", "mean over seeds of the samples with a joint's command beyond its limit"),
@@ -493,6 +494,16 @@ def leaderboard(
     return df
 
 
+def contenders(df):
+    """Boolean mask of the rows whose laws are ranked against each other: those with a floor, less
+    the laws told the true model (``ct_oracle_late``: a measuring stick with a floor, not a law that
+    learns the robot)."""
+    from adaptive_dd.controllers.builtins import CONTROLLERS
+
+    told = df["controller"].map(lambda c: c in CONTROLLERS and CONTROLLERS[c].knows.startswith("true model"))
+    return (df["floor"] != "") & ~told.astype(bool)
+
+
 def rms_rank(df):
     """The ``rms_rank`` column of ``df`` (:data:`COLUMNS`): per scenario and segment, the rank of
     the mean RMS error among the rows with a floor, those with a failed trial after the others;
@@ -501,7 +512,7 @@ def rms_rank(df):
     import pandas as pd
 
     out = pd.Series(np.nan, index=df.index, dtype=float)
-    ranked = df[df["floor"] != ""]
+    ranked = df[contenders(df)]
     for _, g in ranked.groupby(["scenario", "segment"], sort=False):
         key = g["rms_error_mrad"].where(np.isfinite(g["rms_error_mrad"]), np.inf)
         order = sorted(g.index, key=lambda i: (g.at[i, "failures"] > 0, key[i]))

@@ -20,6 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
+from adaptive_dd.arena.leaderboard import contenders
 from adaptive_dd.errors import ParameterError
 
 __all__ = [
@@ -100,7 +101,7 @@ def command_of(df) -> str:
         parts.append("--no-scenarios")
     elif given != shipped:
         parts += [f"{s}.toml" for s in given]
-    ranked = list(dict.fromkeys(df.loc[df["floor"] != "", "controller"]))
+    ranked = list(dict.fromkeys(df.loc[contenders(df), "controller"]))
     if set(ranked) != set(DEFAULT_CONTROLLERS):
         parts += ["--controllers", *ranked]
     if arms:
@@ -143,7 +144,7 @@ def _head(df, sc: str, seg: int) -> str:
 def _table_block(df) -> str:
     """The ratio of every law to its floor, mean over seeds (p90), a column per segment."""
     cols = _columns(df)
-    ranked = df[df["floor"] != ""]
+    ranked = df[contenders(df)]
     lines = [
         f"`{command_of(df)}`, `ratio_mean` (`ratio_p90`) of each law's per-seed RMS error over its "
         "floor's; the given scenarios' heaviest segment, and every segment of the drawn arms pooled "
@@ -169,7 +170,7 @@ def _table_block(df) -> str:
 def _winners(df) -> list[dict]:
     """Per scenario segment: the law ranked first by RMS error, the runner-up, and ours."""
     out = []
-    for (sc, seg), g in df[df["floor"] != ""].groupby(["scenario", "segment"], sort=False):
+    for (sc, seg), g in df[contenders(df)].groupby(["scenario", "segment"], sort=False):
         g = g.sort_values("rms_rank")
         mine = g[g["controller"] == OURS]
         out.append(
@@ -204,7 +205,7 @@ def _winners_block(df) -> str:
         )
         if ours is not None and ours["rms_rank"] > 1:
             ahead = df[
-                (df["scenario"] == w["scenario"]) & (df["segment"] == w["segment"]) & (df["floor"] != "")
+                (df["scenario"] == w["scenario"]) & (df["segment"] == w["segment"]) & contenders(df)
                 & (df["rms_rank"] < ours["rms_rank"])
             ]  # fmt: skip
             names = ", ".join(
@@ -317,7 +318,7 @@ def plot_ratios(df):
     Returns the ``matplotlib.figure.Figure``."""
     from matplotlib.figure import Figure
 
-    pooled = df[(df["kind"] == "population") & (df["floor"] != "")]
+    pooled = df[(df["kind"] == "population") & contenders(df)]
     if pooled.empty:
         raise ParameterError(
             "leaderboard figure: the table has no drawn arms (run the leaderboard with --arms N)"

@@ -6,6 +6,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from adaptive_dd.arena.leaderboard import contenders
+
 __all__ = ["FLOOR_SATURATED_PCT", "plot_leaderboard"]
 
 FLOOR_SATURATED_PCT = 1.0
@@ -20,7 +22,7 @@ def plot_leaderboard(df):
     from matplotlib.colors import LogNorm
     from matplotlib.figure import Figure
 
-    ranked = df[df["floor"] != ""]
+    ranked = df[contenders(df)]
     cols = list(dict.fromkeys(zip(ranked["scenario"], ranked["segment"], ranked["payload_kg"], strict=True)))
     rows = list(dict.fromkeys(ranked["controller"]))
     z = np.full((len(rows), len(cols)), np.nan)

@@ -137,7 +137,9 @@ def _print(df) -> None:
 def _print_winners(df) -> None:
     """Per scenario segment, the law with the lowest mean RMS error among those with a floor (the
     oracles left out), and the runner-up."""
-    ranked = df[(df["floor"] != "") & (df["failures"] == 0)]
+    from adaptive_dd.arena.leaderboard import contenders
+
+    ranked = df[contenders(df) & (df["failures"] == 0)]
     print("lowest RMS error per segment (oracles left out; laws with a failed trial left out):")
     for (sc, seg), g in ranked.groupby(["scenario", "segment"], sort=False):
         g = g.sort_values("rms_error_mrad")
