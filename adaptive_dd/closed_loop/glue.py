@@ -5,7 +5,8 @@ One sample of one trial is:
 1. :func:`measure_sample`: encoder and noise (drawn in blocks by the runner), a lost
    measurement replaced by the last good one for the law and by NaN for the estimator;
 2. the command: the compiled law (:func:`law_command`) or a Python controller's ``command``
-   for the whole batch;
+   for the whole batch; an oracle is given the true model of the sample's payload segment, or of
+   the segment :func:`law_delay` samples back (``ct_oracle_late``, told of each swap late);
 3. :func:`apply_sample` and :func:`accumulate_sample`: the divergence rule (a non-finite
    command or an error beyond ``max_error`` zeroes the command and fails the trial),
    saturation and D/A, the plant step (:func:`plant_advance`), the runaway rule (non-finite
