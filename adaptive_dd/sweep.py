@@ -300,14 +300,19 @@ def _client(scheduler: str | None, workers: int | None):
 
     if scheduler:
         return Client(scheduler), None
+    import dask
+
     from adaptive_dd.arena.pool import environment
 
     n = workers or os.cpu_count() or 1
-    # in the environment the workers start with, not only Dask's ``env`` (applied after a worker has
-    # imported numba: its config then read 2 threads while the environment said 1, and a kernel
-    # compiled in the worker reloaded it, so that numba refused to run: "Cannot set
-    # NUMBA_NUM_THREADS to a different value once the threads have been launched")
-    with environment(WORKER_ENV):
+    # in the environment each worker process starts with, not only Dask's ``env`` (applied after the
+    # worker has imported numba: its config then read 2 threads while the environment said 1, and a
+    # kernel compiled in the worker reloaded it, so that numba refused to run: "Cannot set
+    # NUMBA_NUM_THREADS to a different value once the threads have been launched"). The nannies take
+    # their pre-spawn environment when made (from the process's environment, over Dask's config) and
+    # set it before every start of their worker, a restart's too.
+    pre = {**dask.config.get("distributed.nanny.pre-spawn-environ"), **WORKER_ENV}
+    with environment(WORKER_ENV), dask.config.set({"distributed.nanny.pre-spawn-environ": pre}):
         cluster = LocalCluster(
             n_workers=n, threads_per_worker=1, processes=True, env=dict(WORKER_ENV), dashboard_address=":0"
         )

@@ -145,3 +145,22 @@ def test_the_leaderboard_ranks_no_law_told_the_true_model():
     )
     assert contenders(df).tolist() == [False, False, True]
     assert rms_rank(df).tolist()[2] == 1.0 and np.isnan(rms_rank(df).tolist()[1])
+
+
+def test_the_default_delay_is_checked_against_the_sample_period_and_only_where_it_is_a_setting():
+    base = {"run": {"duration": 1.2, "seeds": 2}, "payload": [{"at": 0.6, "mass": 3.0}]}
+    at_3ms = {
+        **base,
+        "run": {**base["run"], "sample_period": 0.003, "controllers": ["ct_oracle", "ct_oracle_late"]},
+    }
+    with pytest.raises(
+        ScenarioError, match=r"ct_oracle_late\.delay: 0\.01 s is 3\.33333 samples at T = 0\.003 s"
+    ):
+        parse_scenario(at_3ms, "t3ms.toml")  # the default, no table given
+    wrong = {
+        **base,
+        "run": {**base["run"], "controllers": ["ct_oracle", "adaptive_ct"]},
+        "controllers": {"adaptive_ct": {"delay": 0.0004}},
+    }
+    with pytest.raises(ScenarioError, match=r"controllers\.adaptive_ct: unknown setting\(s\) \['delay'\]"):
+        parse_scenario(wrong, "wrong.toml")

@@ -246,3 +246,12 @@ def test_recovery_time_in_a_short_segment_is_not_set_by_its_own_transient():
     e2 = np.full((1, 3000), 1e-4)
     e2[0, 1000:1100] = 3e-3
     assert 0.14 <= _recovery_times(e2, [0, 1000], [1000, 3000], T)[0, 1] <= 0.16
+
+
+def test_recovery_time_after_a_short_segment_is_not_set_by_that_segment_s_transient():
+    from adaptive_dd.benchmark.metrics import _recovery_times
+
+    e = np.full((1, 3700), 1e-4)
+    e[0, 1000:1100] = e[0, 1700:1800] = 3e-3  # swaps at 1.0 s and 1.7 s, each 100 ms off
+    t = _recovery_times(e, [0, 1000, 1700], [1000, 1700, 3700], 1e-3)
+    assert 0.14 <= t[0, 1] <= 0.16 and 0.14 <= t[0, 2] <= 0.16  # the 1.7 s swap's read 0 before

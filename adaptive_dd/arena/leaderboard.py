@@ -506,9 +506,10 @@ def contenders(df):
 
 def rms_rank(df):
     """The ``rms_rank`` column of ``df`` (:data:`COLUMNS`): per scenario and segment, the rank of
-    the mean RMS error among the rows with a floor, those with a failed trial after the others;
-    NaN for an oracle's row. Every controller of a scenario's seed meets the same robot, noise and
-    swaps, so the RMS errors of one segment compare where the ratios (different floors) do not."""
+    the mean RMS error among the :func:`contenders`' rows, those with a failed trial after the
+    others; NaN for an oracle's row and a law told the true model. Every controller of a
+    scenario's seed meets the same robot, noise and swaps, so the RMS errors of one segment compare
+    where the ratios (different floors) do not."""
     import pandas as pd
 
     out = pd.Series(np.nan, index=df.index, dtype=float)

@@ -101,7 +101,7 @@ def command_of(df) -> str:
         parts.append("--no-scenarios")
     elif given != shipped:
         parts += [f"{s}.toml" for s in given]
-    ranked = list(dict.fromkeys(df.loc[contenders(df), "controller"]))
+    ranked = list(dict.fromkeys(df.loc[df["floor"] != "", "controller"]))  # every law asked for
     if set(ranked) != set(DEFAULT_CONTROLLERS):
         parts += ["--controllers", *ranked]
     if arms:

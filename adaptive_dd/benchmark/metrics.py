@@ -25,8 +25,8 @@ recovery_time [s]
     After a swap at ``t_s``: the time until the 50 ms moving RMS of ``|e|`` enters
     a band and stays inside it for ``RECOVERY_DWELL`` (0.5 s). The band is ``RECOVERY_BAND`` times
     the peak of that moving RMS over the second before the swap or over the last
-    second of the segment (at most its second half: in a segment shorter than 2 s the swap's own
-    transient would otherwise set the band), whichever is larger (the settled level can differ with
+    second of the segment (each at most its segment's second half: in a segment shorter than 2 s a
+    swap's own transient would otherwise set the band), whichever is larger (the settled level can differ with
     the payload; friction at reversals makes the steady error spiky, so the band
     is set by its peaks), with a floor ``RECOVERY_FLOOR``. ``None`` for the first segment, and for a trial
     that never does so within the segment.
@@ -283,7 +283,8 @@ def _recovery_times(e_norm: np.ndarray, start, end, T: float) -> np.ndarray:
         for s, (a, b) in enumerate(zip(start, end, strict=True)):
             if a == 0:
                 continue
-            pre = smooth[:, max(0, a - n1) : a].max(axis=1)
+            a0 = start[s - 1] if s > 0 else 0  # the segment before: at most its second half either
+            pre = smooth[:, max(a0 + (a - a0) // 2, a - n1) : a].max(axis=1)
             post = smooth[:, max(a + (b - a) // 2, b - n1) : b].max(axis=1)  # the settled tail
             band = np.maximum(RECOVERY_BAND * np.maximum(pre, post), RECOVERY_FLOOR)
             settle = _settling_time(smooth[:, a:b] > band[:, None], round(RECOVERY_DWELL / T))

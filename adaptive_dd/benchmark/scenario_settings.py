@@ -98,6 +98,19 @@ def _numbers(x: Any, key: str):
         yield key, float(x)
 
 
+def _check_delay(errs: list[str], name: str, delay, T: float) -> None:
+    """``ct_oracle_late``'s ``delay`` (given, or the default): a number >= 0 and a whole number of
+    samples at ``T`` (:func:`~adaptive_dd.controllers.base.delay_samples`)."""
+    from adaptive_dd.controllers.base import delay_samples
+    from adaptive_dd.errors import ParameterError
+
+    if check_number(errs, f"controllers.{name}.delay", delay, 0, LIMITS["max_setting"]):
+        try:
+            delay_samples(float(delay), T, name)
+        except ParameterError as exc:
+            errs.append(str(exc))
+
+
 def controller_setting_errors(v: dict) -> list[str]:
     """Each built-in controller with a ``[controllers.NAME]`` table built once, so a bad setting
     (a negative gain, a bandwidth the sample period cannot carry, an unknown key) is an error of
@@ -110,6 +123,9 @@ def controller_setting_errors(v: dict) -> list[str]:
     opts = {n: thaw(o) for n, o in v["controller_options"]}
     T = v["sample_period"]
     for name in v["controllers"]:
+        if name in CONTROLLERS and "delay" in CONTROLLERS[name].settings:  # its default too
+            default = CONTROLLERS[name].settings["delay"].chain  # the same on every arm
+            _check_delay(errs, name, opts.get(name, {}).get("delay", default), T)
         if name not in CONTROLLERS or name not in opts:
             continue
         o, n0 = opts[name], len(errs)
@@ -121,16 +137,6 @@ def controller_setting_errors(v: dict) -> list[str]:
                 )
         if "boost_duration" in o:
             check_number(errs, f"controllers.{name}.boost_duration", o["boost_duration"], 0, v["duration"])
-        if "delay" in o and check_number(
-            errs, f"controllers.{name}.delay", o["delay"], 0, LIMITS["max_setting"]
-        ):
-            from adaptive_dd.controllers.base import delay_samples
-            from adaptive_dd.errors import ParameterError
-
-            try:
-                delay_samples(float(o["delay"]), T, name)
-            except ParameterError as exc:
-                errs.append(str(exc))
         if "damping" in o:
             check_number(
                 errs, f"controllers.{name}.damping", o["damping"], 0, LIMITS["max_damping"], lo_open=True

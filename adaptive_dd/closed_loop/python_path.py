@@ -177,8 +177,13 @@ def _command(ctrl, glue: PythonGlue, rc: RunConstants, k: int, qm: Array, qdm: A
     :class:`~adaptive_dd.errors.SignalError` if it has another shape."""
     kw = {}
     if truth:
-        # an oracle told of each swap late (ct_oracle_late) gets the truth of a sample back
-        kt = max(k - round(getattr(ctrl, "model_delay", 0.0) / rc.T), 0)
+        # an oracle told of each swap late (ct_oracle_late) gets the truth of model_delay back, in
+        # whole samples as on the compiled path (delay_samples: a fraction of one is an error)
+        kt = k
+        if getattr(ctrl, "model_delay", 0.0):
+            from adaptive_dd.controllers.base import delay_samples
+
+            kt = max(k - delay_samples(ctrl.model_delay, rc.T, ctrl.name), 0)
         sg = np.asarray(glue.sigma_true(kt))
         kw["sigma_true"] = np.broadcast_to(sg, (qm.shape[0], sg.shape[-1])).copy()
         if glue.pi_true is not None and getattr(ctrl, "takes_pi_true", False):
