@@ -676,8 +676,8 @@ def test_the_cli_table_per_other_axis_names_its_heat_map_and_a_plant_friction_ca
     out = capsys.readouterr().out
     assert "one table per adaptive_ct.boost_bandwidth" in out
     # the tables in the heat maps' order (plot_ratio_heatmaps: grid order), each naming its file
-    assert out.index("adaptive_ct.boost_bandwidth = 150 (heatmap_0.png):") < out.index(
-        "adaptive_ct.boost_bandwidth = 300 (heatmap_1.png):"
+    assert out.index("adaptive_ct.boost_bandwidth = 150.0 (heatmap_0.png):") < out.index(
+        "adaptive_ct.boost_bandwidth = 300.0 (heatmap_1.png):"
     )
     assert out.split("(heatmap_1.png):")[1].split("\n")[4].split()[-1] == "1.7"  # 6 kg at 0.12 s, 300 rad/s
     assert ("note: the plant's friction law (lugre)" in out) == (friction == "lugre")

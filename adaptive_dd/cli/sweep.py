@@ -117,8 +117,9 @@ def _print_heatmap(res, sweep) -> None:
 
 
 def _value(v) -> str:
-    """A grid value as the sweep file would write it (0.005, not 0.0050000000000000001)."""
-    return f"{v:g}" if isinstance(v, float) else str(v)
+    """A grid value as the sweep file would write it: a float's shortest exact form (0.005, not
+    0.0050000000000000001; 1.0000001, not 1)."""
+    return str(v)
 
 
 def _print_marks(r, hm) -> None:

@@ -172,6 +172,15 @@ def _estimate(est, S: int, p: int) -> Array:
     return np.ascontiguousarray(np.broadcast_to(a, (S, p)))
 
 
+def _told_late(ctrl) -> bool:
+    """``ct_oracle_late`` (the built-in on either arm) with a delay: a plug-in's attribute of the same
+    name is not read, on this path as on the compiled one."""
+    from adaptive_dd.closed_loop.controllers import CTOracleLate
+    from adaptive_dd.controllers.feedback import ComputedTorque
+
+    return isinstance(ctrl, (ComputedTorque, CTOracleLate)) and ctrl.model_delay > 0
+
+
 def _command(ctrl, glue: PythonGlue, rc: RunConstants, k: int, qm: Array, qdm: Array, truth: bool) -> Array:
     """The controller's command ``(S, n)`` at sample k (the true model passed to an oracle);
     :class:`~adaptive_dd.errors.SignalError` if it has another shape."""
@@ -180,7 +189,7 @@ def _command(ctrl, glue: PythonGlue, rc: RunConstants, k: int, qm: Array, qdm: A
         # an oracle told of each swap late (ct_oracle_late) gets the truth of model_delay back, in
         # whole samples as on the compiled path (delay_samples: a fraction of one is an error)
         kt = k
-        if getattr(ctrl, "model_delay", 0.0):
+        if _told_late(ctrl):
             from adaptive_dd.controllers.base import delay_samples
 
             kt = max(k - delay_samples(ctrl.model_delay, rc.T, ctrl.name), 0)
