@@ -283,7 +283,7 @@ def _recovery_times(e_norm: np.ndarray, start, end, T: float) -> np.ndarray:
         for s, (a, b) in enumerate(zip(start, end, strict=True)):
             if a == 0:
                 continue
-            a0 = start[s - 1] if s > 0 else 0  # the segment before: at most its second half either
+            a0 = start[s - 1]  # the segment before (a > 0: not the first): at most its second half too
             pre = smooth[:, max(a0 + (a - a0) // 2, a - n1) : a].max(axis=1)
             post = smooth[:, max(a + (b - a) // 2, b - n1) : b].max(axis=1)  # the settled tail
             band = np.maximum(RECOVERY_BAND * np.maximum(pre, post), RECOVERY_FLOOR)

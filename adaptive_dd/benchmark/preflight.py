@@ -28,6 +28,7 @@ __all__ = [
     "preflight",
     "reference_problems",
     "resolved_settings",
+    "scenario_floors",
     "torque_peaks",
     "torque_problems",
 ]
@@ -256,21 +257,28 @@ def inertia_problems(scenario) -> list[str]:
     return out
 
 
-def floor_problems(scenario) -> list[str]:
-    """Controllers whose ``[controllers.NAME]`` ``bandwidth`` or ``damping`` differs from their
-    floor's (the floor's own table, else ``[control]``): the ratio to the floor then measures the
-    gains as well as the law. A controller that cannot be built is
-    :func:`controller_problems`' to report."""
+def scenario_floors(scenario) -> dict[str, str]:
+    """``{controller: its floor}`` for the scenario's controllers that have one, in their order (a
+    controller that cannot be built is left out: :func:`controller_problems` reports it)."""
     from adaptive_dd.controllers.registry import scenario_controller
 
-    out = []
+    out = {}
     for name in scenario.controllers:
         try:
             floor = getattr(scenario_controller(scenario, name)[1], "floor", None)
         except Exception:  # a controller that cannot be built: controller_problems reports it
             continue
-        if floor is None:
-            continue
+        if floor is not None:
+            out[name] = floor
+    return out
+
+
+def floor_problems(scenario) -> list[str]:
+    """Controllers whose ``[controllers.NAME]`` ``bandwidth`` or ``damping`` differs from their
+    floor's (the floor's own table, else ``[control]``): the ratio to the floor then measures the
+    gains as well as the law."""
+    out = []
+    for name, floor in scenario_floors(scenario).items():
         mine, theirs = (
             scenario.options(name),
             scenario.options(floor) if floor in scenario.controllers else {},

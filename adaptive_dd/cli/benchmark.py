@@ -157,12 +157,11 @@ def with_floors(sc):
     information and detection limits are judged on another reference."""
     import dataclasses
 
-    from adaptive_dd.controllers.registry import scenario_controller
+    from adaptive_dd.benchmark.preflight import scenario_floors
 
     names = list(sc.controllers)
-    for n in sc.controllers:
-        floor = getattr(scenario_controller(sc, n)[1], "floor", None)
-        if floor is not None and floor not in names:
+    for n, floor in scenario_floors(sc).items():
+        if floor not in names:
             names.append(floor)
             print(
                 f"{sc.source or 'scenario'}: run.controllers: {floor} added (the floor of {n}; "
@@ -176,7 +175,7 @@ def only_controllers(sc, names: list[str]) -> tuple[str, ...]:
     """The scenario's controllers among ``names``, with the floor of each (``adaptive_ct`` brings
     ``ct_oracle``), in the scenario's order; a name the scenario does not list is an error naming
     the scenario's list."""
-    from adaptive_dd.controllers.registry import scenario_controller
+    from adaptive_dd.benchmark.preflight import scenario_floors
     from adaptive_dd.errors import ParameterError
 
     unknown = [n for n in names if n not in sc.controllers]
@@ -185,9 +184,9 @@ def only_controllers(sc, names: list[str]) -> tuple[str, ...]:
             f"--controllers: {', '.join(unknown)} not among {sc.source}'s controllers "
             f"{list(sc.controllers)}; name some of those"
         )
-    keep = set(names)
+    keep, floors = set(names), scenario_floors(sc)
     for n in names:
-        floor = getattr(scenario_controller(sc, n)[1], "floor", None)
+        floor = floors.get(n)
         if floor is not None and floor not in keep and floor in sc.controllers:
             keep.add(floor)
             print(f"--controllers: {floor} added (the floor of {n})", file=sys.stderr)

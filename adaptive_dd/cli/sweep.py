@@ -100,7 +100,8 @@ def _print_heatmap(res, sweep) -> None:
         for i, (key, part) in enumerate(groups):
             if len(groups) > 1:
                 values = key if isinstance(key, tuple) else (key,)
-                where = ", ".join(f"{a} = {_value(v)}" for a, v in zip(other, values, strict=True))
+                # str: a float's shortest exact form (0.005, not 0.0050000000000000001)
+                where = ", ".join(f"{a} = {v}" for a, v in zip(other, values, strict=True))
                 print(f"{where} (heatmap_{i}.png):")
             table = part.pivot_table(index=hm["y"], columns=hm["x"], values="ratio", aggfunc="median")
             marks = part.assign(is_marked=part["marked"] != "").pivot_table(
@@ -114,12 +115,6 @@ def _print_heatmap(res, sweep) -> None:
         caveat = floor_caveat(sweep.base)
         if caveat:
             print(f"note: {caveat}")
-
-
-def _value(v) -> str:
-    """A grid value as the sweep file would write it: a float's shortest exact form (0.005, not
-    0.0050000000000000001; 1.0000001, not 1)."""
-    return str(v)
 
 
 def _print_marks(r, hm) -> None:

@@ -54,15 +54,11 @@ def run(args: argparse.Namespace) -> int:
 
 def _print_added_floors(sc) -> None:
     """The floors ``adaptive-dd benchmark`` adds to the run (``cli.benchmark.with_floors``)."""
-    from adaptive_dd.controllers.registry import scenario_controller
+    from adaptive_dd.benchmark.preflight import scenario_floors
 
     added: dict[str, list[str]] = {}
-    for name in sc.controllers:
-        try:
-            floor = getattr(scenario_controller(sc, name)[1], "floor", None)
-        except Exception:  # a controller that cannot be built is a problem reported below
-            continue
-        if floor is not None and floor not in sc.controllers:
+    for name, floor in scenario_floors(sc).items():
+        if floor not in sc.controllers:
             added.setdefault(floor, []).append(name)
     for floor, of in added.items():
         print(f"# the benchmark adds {floor}: the floor of {', '.join(of)} (list it in run.controllers)")

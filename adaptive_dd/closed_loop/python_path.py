@@ -92,20 +92,21 @@ def run_python_batch(
     """
     S, N, T = draws.n_trials, rc.q_d.shape[0], rc.T
     error = ""
+    lag = None  # samples back that an oracle's true model is taken (None: not an oracle)
     try:
         ctrl.reset(S, T)
+        lag = _truth_lag(ctrl, T) if declared(ctrl, "needs_true_model") else None
     except Exception as exc:  # contain any controller failure to its own trials
         error = f"{type(exc).__name__} in reset: {exc}"
     # the estimate's records always: a sigma_hat may appear after reset (then the samples before
     # it are NaN); dropped at the end if it never does
     run, glue = records(True)
     estimated = False
-    truth = bool(declared(ctrl, "needs_true_model"))
     no_drop = np.zeros(S, dtype=np.bool_)
     for k0, k1, noise, drop in draws.blocks(N):
         for k in range(k0, k1):
             lost = drop[:, k - k0] if drop.shape[1] else no_drop
-            error, est = _sample(ctrl, glue, rc, run, k, noise[:, k - k0], lost, truth, error)
+            error, est = _sample(ctrl, glue, rc, run, k, noise[:, k - k0], lost, lag, error)
             estimated = estimated or est
             if bar is not None and k % 1000 == 999:
                 bar.update(1000)
@@ -122,7 +123,7 @@ def run_python_batch(
     return run
 
 
-def _sample(ctrl, glue, rc: RunConstants, run: ControllerRun, k: int, noise, lost, truth: bool, error: str):
+def _sample(ctrl, glue, rc: RunConstants, run: ControllerRun, k: int, noise, lost, lag, error: str):
     """Sample k of every trial on the Python path (the steps of :mod:`adaptive_dd.closed_loop.glue`
     around the controller's ``command`` and ``observe``); ``(error, estimated)``: the controller's
     first failure (its trials then run on with no command) and whether it reported an estimate."""
@@ -131,7 +132,7 @@ def _sample(ctrl, glue, rc: RunConstants, run: ControllerRun, k: int, noise, los
     cmd = np.full((S, n), np.nan)
     if not error:
         try:
-            cmd = _command(ctrl, glue, rc, k, qm, qdm, truth)
+            cmd = _command(ctrl, glue, rc, k, qm, qdm, lag)
         except Exception as exc:  # contain any controller failure to its own trials
             error = f"{type(exc).__name__} in command at t = {k * T:.3f} s: {exc}"
     before = run.failed.copy()
@@ -172,27 +173,26 @@ def _estimate(est, S: int, p: int) -> Array:
     return np.ascontiguousarray(np.broadcast_to(a, (S, p)))
 
 
-def _told_late(ctrl) -> bool:
-    """``ct_oracle_late`` (the built-in on either arm) with a delay: a plug-in's attribute of the same
-    name is not read, on this path as on the compiled one."""
+def _truth_lag(ctrl, T: float) -> int:
+    """Samples back that an oracle's truth is taken: ``ct_oracle_late``'s delay (the built-in on
+    either arm, in whole samples as on the compiled path: a fraction of one is an error), else 0 (a
+    plug-in's attribute of the same name is not read, on this path as on the compiled one)."""
     from adaptive_dd.closed_loop.controllers import CTOracleLate
+    from adaptive_dd.controllers.base import delay_samples
     from adaptive_dd.controllers.feedback import ComputedTorque
 
-    return isinstance(ctrl, (ComputedTorque, CTOracleLate)) and ctrl.model_delay > 0
+    if isinstance(ctrl, (ComputedTorque, CTOracleLate)) and ctrl.model_delay > 0:
+        return delay_samples(ctrl.model_delay, T, ctrl.name)
+    return 0
 
 
-def _command(ctrl, glue: PythonGlue, rc: RunConstants, k: int, qm: Array, qdm: Array, truth: bool) -> Array:
-    """The controller's command ``(S, n)`` at sample k (the true model passed to an oracle);
-    :class:`~adaptive_dd.errors.SignalError` if it has another shape."""
+def _command(ctrl, glue: PythonGlue, rc: RunConstants, k: int, qm: Array, qdm: Array, lag) -> Array:
+    """The controller's command ``(S, n)`` at sample k (an oracle, ``lag`` not None, given the true
+    model of ``lag`` samples back: :func:`_truth_lag`); :class:`~adaptive_dd.errors.SignalError`
+    if it has another shape."""
     kw = {}
-    if truth:
-        # an oracle told of each swap late (ct_oracle_late) gets the truth of model_delay back, in
-        # whole samples as on the compiled path (delay_samples: a fraction of one is an error)
-        kt = k
-        if _told_late(ctrl):
-            from adaptive_dd.controllers.base import delay_samples
-
-            kt = max(k - delay_samples(ctrl.model_delay, rc.T, ctrl.name), 0)
+    if lag is not None:
+        kt = max(k - lag, 0)
         sg = np.asarray(glue.sigma_true(kt))
         kw["sigma_true"] = np.broadcast_to(sg, (qm.shape[0], sg.shape[-1])).copy()
         if glue.pi_true is not None and getattr(ctrl, "takes_pi_true", False):
