@@ -34,6 +34,7 @@ from pathlib import Path
 
 import numpy as np
 
+from adaptive_dd.arena.columns import COLUMNS
 from adaptive_dd.benchmark.end_effector import EE_KEYS
 from adaptive_dd.errors import ParameterError
 
@@ -70,61 +71,6 @@ DEFAULT_CONTROLLERS = (
 
 BOOTSTRAP_RESAMPLES = 2000
 """Resamples of the seeds for the 95 % interval of the mean ratio (percentile bootstrap)."""
-
-COLUMNS: dict[str, tuple[str, str]] = {
-    "scenario": ("-", "the scenario's name (a drawn arm: TEMPLATE_armSEED; pooled: population(N arms))"),
-    "kind": ("-", "scenario (shipped or given), arm (one drawn arm), population (pooled over the arms)"),
-    "controller": ("-", "the controller ranked"),
-    "floor": ("-", "the controller it is divided by, seed by seed (the same law with the true robot)"),
-    "floor_note": (
-        "-",
-        "empty, or why the row has no ratio or why its floor is no floor "
-        "(a plant friction law outside the controllers' model)",
-    ),
-    "segment": ("-", "payload segment, 0-based"),
-    "payload_kg": ("kg", "the payload carried in the segment (population: the mean over the arms)"),
-    "seeds": ("-", "seeds whose trial did not fail before the segment's end"),
-    "ratio_mean": ("-", "mean over seeds of RMS error / the floor's RMS error (same seed, same segment)"),
-    "ratio_ci95_low": ("-", "percentile-bootstrap 95 % interval of ratio_mean, low end"),
-    "ratio_ci95_high": ("-", "percentile-bootstrap 95 % interval of ratio_mean, high end"),
-    "ratio_p90": ("-", "90th percentile of the per-seed ratio (linear interpolation)"),
-    "ratio_cvar10": ("-", "CVaR of the worst 10 %: mean of the ceil(0.1 n) largest per-seed ratios"),
-    "ratio_max": ("-", "largest per-seed ratio"),
-    "failures": ("-", "trials that failed (diverged, ran away or raised) before the segment's end"),
-    "saturated_seeds": ("-", "seeds whose command saturated on more than 1 % of the segment's samples"),
-    "lost_seeds": (
-        "-",
-        "seeds whose tracking error |q_d - q| exceeded 0.2 rad in the segment",
-    ),
-    "rms_error_mrad": ("mrad", "mean over seeds of the joint-space RMS tracking error |q_d - q|"),
-    "floor_rms_error_mrad": ("mrad", "the same of the floor"),
-    "rms_rank": (
-        "-",
-        "rank of rms_error_mrad in the scenario's segment among the laws with a floor (1: lowest; "
-        "a law with a failed trial after those without; empty: an oracle, or a law told the true model)",
-    ),
-    "rms_torque_Nm": ("N m", "mean over seeds of the RMS applied torque (norm over joints)"),
-    "saturation_pct": ("%", "mean over seeds of the samples with a joint's command beyond its limit"),
-    "floor_saturation_pct": ("%", "the same of the floor (a saturated floor makes the ratio optimistic)"),
-    "false_alarm_seeds": (
-        "-",
-        "seeds whose change detector alarmed in the segment with no swap in the 0.3 s before "
-        "(empty: a law without a detector)",
-    ),
-    "missed_swaps": (
-        "-",
-        "seeds whose change detector did not alarm within 0.3 s after the swap that starts the "
-        "segment (0 in the first segment; empty: a law without a detector)",
-    ),
-    "recovery_median_s": ("s", "median over seeds of the recovery time (a never counts as the latest)"),
-    "recovery_p90_s": ("s", "90th percentile of the recovery time (inf: reaches a never)"),
-    "recovery_never": ("-", "seeds still above 1.2x the floor's moving RMS error at the segment's end"),
-    "ee_position_rms_mm": ("mm", "mean over seeds of the tool frame's RMS position error |p_d - p|"),
-    "ee_position_peak_mm": ("mm", "mean over seeds of the tool frame's peak position error"),
-    "ee_position_peak_max_mm": ("mm", "largest over seeds of the tool frame's peak position error"),
-    "ee_orientation_rms_deg": ("deg", "mean over seeds of the tool frame's RMS orientation error"),
-}
-"""Every column of the table: ``name -> (unit, meaning)``."""
 
 
 POPULATION_TEMPLATE = "benchmarks/scenarios/population.toml"
