@@ -367,11 +367,24 @@ def test_continuous_joint_configuration():
         C.pin_configuration(model, np.zeros(3))
 
 
-@pytest.mark.parametrize("name", ["ur5", "panda"])
+ERD_ARMS = [  # example-robot-data's URDFs (the robots and test extras)
+    "ur_description/urdf/ur5_robot.urdf",
+    "panda_description/urdf/panda.urdf",
+    "z1_description/urdf/z1.urdf",
+]
+
+
+@pytest.mark.parametrize("name", ERD_ARMS)
 def test_example_robot_data_arms(name):
-    erd = pytest.importorskip("example_robot_data")
-    model = erd.load(name).model
-    if name == "panda":  # the fingers are a branch: keep the 7 arm joints
+    from adaptive_dd.errors import ParameterError
+    from adaptive_dd.robots.example_robot_data import urdf_path
+
+    try:
+        path = urdf_path(f"example-robot-data:{name}")
+    except ParameterError as exc:  # the optional package (the robots and test extras)
+        pytest.skip(str(exc))
+    model = pin.buildModelFromUrdf(str(path))
+    if name.startswith("panda"):  # the fingers are a branch: keep the 7 arm joints
         model = pin.buildReducedModel(
             model, [model.getJointId(f"panda_finger_joint{i}") for i in (1, 2)], pin.neutral(model)
         )

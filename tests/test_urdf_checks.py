@@ -171,3 +171,24 @@ def test_fuzzer_regressions():
         text = robot_urdf("ur5").read_text()
         got = fuzz_urdf.load(text, Path(tmp) / "ur5.urdf", "tool0", 6)
         assert fuzz_urdf.meaningless(got) is None
+
+
+MASSLESS = (
+    '<link name="tool0"><inertial><origin xyz="0 0 0"/><mass value="0.0"/>'
+    '<inertia ixx="0" ixy="0" ixz="0" iyy="0" iyz="0" izz="{izz}"/></inertial></link>'
+)
+
+
+def test_a_vendors_massless_frame_is_kept_with_a_note(tmp_path):
+    """The ROS-Industrial UR descriptions write their tool frames as mass 0 with zero inertia."""
+    path = _mutant(tmp_path, '<link name="tool0"/>', MASSLESS.format(izz="0"))
+    robot = read_urdf(path, "tool0")
+    assert any("'tool0'" in n and "massless frame" in n for n in robot.notes), robot.notes
+    ref = read_urdf(robot_urdf("ur5"), "tool0")
+    np.testing.assert_array_equal(robot.model().inertias[-1].mass, ref.model().inertias[-1].mass)
+
+
+def test_mass_zero_with_inertia_is_an_error(tmp_path):
+    path = _mutant(tmp_path, '<link name="tool0"/>', MASSLESS.format(izz="0.001"))
+    with pytest.raises(UrdfError, match=r"link 'tool0' <inertial> <mass>: value = '0.0'.*must be > 0"):
+        read_urdf(path, "tool0")

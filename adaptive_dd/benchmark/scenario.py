@@ -495,9 +495,10 @@ def parse_scenario(data: dict, src: str = "<memory>", name: str = "scenario") ->
     if isinstance(model_file, str) and model_file.lower().endswith(".json") and not sc.excite:
         # adaptive_ct's arm prior: what the file's identification knows (an excitation phase re-identifies)
         from adaptive_dd.closed_loop.model_prior import model_file_prior
-        from adaptive_dd.plant.uncertainty import _scenario_path
+        from adaptive_dd.plant.arm_tables import scenario_file
 
-        sc = dataclasses.replace(sc, controller_options=model_file_prior(sc, _scenario_path(src, model_file)))
+        prior = model_file_prior(sc, scenario_file(src, "model.from", model_file))
+        sc = dataclasses.replace(sc, controller_options=prior)
     return sc
 
 

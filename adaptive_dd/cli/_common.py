@@ -126,8 +126,9 @@ def load_arm(path: str | None, repair_inertia: bool = False, *, general: str | N
 
 
 def describe_arm(arm) -> str:
-    """What ``validate`` prints of a URDF arm: joints, base parameters, payload subspace."""
+    """What ``validate`` prints of a URDF arm: its URDF's notes, joints, base parameters, payload subspace."""
     lines = [f"# arm: {arm.urdf} ({arm.n_joints} joints, payload frame '{arm.payload_frame}')"]
+    lines += [f"# note: {note}" for note in arm.urdf_notes]  # what the URDF had that is unusual, kept
     lim = arm.position_limits
     for j, name in enumerate(arm.joint_names):
         lines.append(

@@ -133,8 +133,6 @@ def validate_identification(path) -> int:
         f"# identification scenario {path}: [arm] and [record] (no [reference]: identify and predict "
         "read a log)"
     )
-    for note in arm.urdf_notes:
-        print(f"# note: {note}")
     _print_record_spec(spec, arm.joint_names)
     print(describe_arm(arm))
     return 0

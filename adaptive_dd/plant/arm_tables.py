@@ -340,10 +340,24 @@ def _urdf_source(src: str, table: dict) -> tuple[Path, str | None]:
         return robot_urdf(name), frame or ROBOTS[name].payload_frame
     if not isinstance(table["urdf"], str) or not table["urdf"]:
         raise ScenarioError(f"{src}: key 'arm.urdf' must be a file path, got {table['urdf']!r}")
-    path = Path(table["urdf"])
+    return scenario_file(src, "arm.urdf", table["urdf"]), frame
+
+
+def scenario_file(src: str, key: str, value: str) -> Path:
+    """The file a scenario's ``key = value`` names: relative to the scenario file's folder (or the
+    working folder), or ``"example-robot-data:PATH"`` (a URDF of that package:
+    :mod:`adaptive_dd.robots.example_robot_data`)."""
+    from adaptive_dd.robots.example_robot_data import is_example_robot_data, urdf_path
+
+    if is_example_robot_data(value):
+        try:
+            return urdf_path(value)
+        except ParameterError as exc:
+            raise ScenarioError(f"{src}: key '{key}': {exc}") from None
+    path = Path(value)
     if not path.is_absolute():
         path = (Path(src).parent if Path(src).is_file() else Path.cwd()) / path
-    return path, frame
+    return path
 
 
 def _load_urdf_arm(src: str, table: dict, path: Path, frame: str | None):

@@ -336,7 +336,7 @@ def parse_plant(src: str, table: dict | None, arm, model_from: bool = False) -> 
         Naming ``src``, the key and the value: a URDF with other joints or frames, a list of the
         wrong length, a negative or too large level, an unknown key of ``[plant.uncertainty]``.
     """
-    from adaptive_dd.plant.arm_tables import URDF_TABLE_BOUNDS, _table_vector
+    from adaptive_dd.plant.arm_tables import URDF_TABLE_BOUNDS, _table_vector, scenario_file
 
     table = {} if table is None else {k: v for k, v in table.items() if k in PLANT_TRUTH_KEYS}
     if not table and not model_from:
@@ -348,7 +348,7 @@ def parse_plant(src: str, table: dict | None, arm, model_from: bool = False) -> 
         u = table["urdf"]
         if not isinstance(u, str) or not u:
             raise ScenarioError(f"{src}: key 'plant.urdf' must be a file path, got {u!r}")
-        path = _scenario_path(src, u)
+        path = scenario_file(src, "plant.urdf", u)
         other = _same_arm_urdf(
             src, "plant.urdf", u, path, arm, "the plant's URDF must have the same joints and frames as the "
             "[arm] (other inertial values only)"
@@ -439,7 +439,9 @@ def parse_model(src: str, table, arm):
     u = table["from"]
     if not isinstance(u, str) or not u:
         raise ScenarioError(f"{src}: key 'model.from' must be a file path, got {u!r}")
-    path = _scenario_path(src, u)
+    from adaptive_dd.plant.arm_tables import scenario_file
+
+    path = scenario_file(src, "model.from", u)
     rule = "the model must have the same joints and frames as the [arm]"
     if path.suffix.lower() == ".json":
         return _identified_arm(src, u, path, arm, rule)
@@ -481,14 +483,6 @@ def _identified_arm(src: str, u: str, path: Path, arm, rule: str):
         coulomb=np.asarray(m.coulomb, dtype=float),
         armature=np.asarray(m.armature, dtype=float),
     )
-
-
-def _scenario_path(src: str, u: str) -> Path:
-    """``u`` as given, relative to the scenario file's folder (or the working folder)."""
-    path = Path(u)
-    if not path.is_absolute():
-        path = (Path(src).parent if Path(src).is_file() else Path.cwd()) / path
-    return path
 
 
 def _same_arm_urdf(src: str, key: str, u: str, path: Path, arm, rule: str):

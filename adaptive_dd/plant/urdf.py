@@ -178,14 +178,17 @@ def _inertia_of(path, link):
         return None
     where = f"link '{name}' <inertial>"
     mass = _num(path, f"{where} <mass>", inertial.find("mass"), "value")
-    if mass <= 0:
-        raise UrdfError(
-            f"{path}: {where}: mass {mass} kg must be > 0 (leave <inertial> out for a massless frame)"
-        )
     el = inertial.find("inertia")
     if el is None:
         raise UrdfError(f"{path}: {where}: <inertia> is missing")
     v = {k: _num(path, f"{where} <inertia>", el, k, 0.0) for k in ("ixx", "ixy", "ixz", "iyy", "iyz", "izz")}
+    if mass == 0 and not any(v.values()):  # a massless frame (urdf_checks notes it)
+        return None
+    if mass <= 0:
+        raise UrdfError(
+            f"{path}: {where}: mass {mass} kg must be > 0 (a massless frame: leave <inertial> out, or "
+            "give it zero inertia)"
+        )
     inertia = np.array(
         [[v["ixx"], v["ixy"], v["ixz"]], [v["ixy"], v["iyy"], v["iyz"]], [v["ixz"], v["iyz"], v["izz"]]]
     )

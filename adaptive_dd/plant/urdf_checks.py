@@ -2,16 +2,17 @@
 
 :func:`check_values` walks a parsed ``<robot>`` and refuses what no robot has, with an
 :class:`~adaptive_dd.errors.UrdfError` naming the file, the element (link or joint name), the
-attribute and the value: a number that does not parse or is not finite, a link of mass <= 0 or
-above :data:`MAX_LINK_MASS`, an inertia with a moment larger than its mass at
+attribute and the value: a number that does not parse or is not finite, a link of mass < 0, of
+mass 0 with inertia, or above :data:`MAX_LINK_MASS`, an inertia with a moment larger than its mass at
 :data:`MAX_OFFSET` from its centre could give, an origin or a centre of mass farther than
 :data:`MAX_OFFSET` from its frame, a joint axis of zero length, an effort limit <= 0 or above
 :data:`MAX_EFFORT`, a velocity limit <= 0 or above :data:`MAX_VELOCITY`, position limits with
 lower >= upper or beyond :data:`MAX_POSITION`, negative or absurd damping or friction.
 Where a vendor's file is merely unusual it is accepted with a note (:attr:`UrdfRobot.notes
-<adaptive_dd.plant.urdf.UrdfRobot.notes>`, printed by ``adaptive-dd validate`` and raised as a
-:class:`UrdfWarning`): an axis that is not of unit length (normalised), a link below
-:data:`TINY_MASS`.
+<adaptive_dd.plant.urdf.UrdfRobot.notes>`, printed by ``adaptive-dd validate``): an axis that is
+not of unit length (normalised, and raised as a :class:`UrdfWarning`), a link below
+:data:`TINY_MASS`, a link of mass 0 and zero inertia (a massless frame, as the ROS-Industrial
+UR descriptions write their tool frames).
 
 Joints and links off the arm's chain (a gripper's fingers, a mobile base's sensors) are held to
 the same finiteness and size checks, since Pinocchio reads them too; their limits are not
@@ -149,10 +150,14 @@ def _check_link(path: Path, link: ET.Element, notes: list[str]) -> None:
     raw = inertial.find("mass").get("value") if mass is not None else None
     if mass is None:
         raise UrdfError(f"{path}: {where} <mass>: attribute 'value' is missing")
+    el = inertial.find("inertia")
+    if mass == 0 and _zero_inertia(path, where, el):  # a vendor's way of writing a massless frame
+        notes.append(f"link '{name}': mass 0 kg and no inertia: a massless frame (kept)")
+        return
     if mass <= 0:
         raise UrdfError(
             f"{path}: {where} <mass>: value = {raw!r}: mass {mass} kg must be > 0 "
-            "(leave <inertial> out for a massless frame)"
+            "(a massless frame: leave <inertial> out, or give it zero inertia)"
         )
     if mass > MAX_LINK_MASS:
         raise UrdfError(
@@ -161,7 +166,6 @@ def _check_link(path: Path, link: ET.Element, notes: list[str]) -> None:
         )
     if mass < TINY_MASS:
         notes.append(f"link '{name}': mass {raw!r} kg is below {TINY_MASS:g} kg (kept)")
-    el = inertial.find("inertia")
     if el is None:
         return  # read_urdf names it
     moments = {
@@ -175,6 +179,16 @@ def _check_link(path: Path, link: ET.Element, notes: list[str]) -> None:
             f"{MAX_OFFSET:g} m could give (radius of gyration {math.sqrt(biggest / mass):.3g} m): "
             "a unit error?"
         )
+
+
+def _zero_inertia(path: Path, where: str, el: ET.Element | None) -> bool:
+    """Whether an ``<inertia>`` is absent or all its moments are 0 (each checked to be a number)."""
+    if el is None:
+        return True
+    return all(
+        scalar(path, f"{where} <inertia>", el, k) in (None, 0.0)
+        for k in ("ixx", "iyy", "izz", "ixy", "ixz", "iyz")
+    )
 
 
 def _check_axis(path: Path, where: str, joint: ET.Element, notes: list[str]) -> bool:
