@@ -144,3 +144,12 @@ def test_a_removed_option_in_a_scenario_is_an_error_naming_file_and_key(setting,
     with pytest.raises(ScenarioError, match=named) as err:
         scenario_controller(parse_scenario(data, str(src)), "adaptive_ct")
     assert str(err.value).startswith(f"{src}: controllers.adaptive_ct"), err.value
+
+
+def test_an_arm_without_a_reference_is_told_what_one_looks_like(tmp_path):
+    path = tmp_path / "s.toml"
+    path.write_text('[arm]\nrobot = "ur5"\n')
+    with pytest.raises(
+        ScenarioError, match=r"joint1 \.\. joint6, each as joint1 = \{ offset = 0\.0, amplitude"
+    ):
+        load_scenario(str(path))

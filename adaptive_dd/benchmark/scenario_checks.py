@@ -524,7 +524,10 @@ def _reference_field(
             e.append(
                 "reference: the default scenario must define [reference]"
                 if is_default
-                else f"reference: an arm of {n} joints needs a [reference] table with joint1 .. joint{n}"
+                else f"reference: an arm of {n} joints needs a [reference] table with joint1 .. joint{n}, "
+                "each as joint1 = { offset = 0.0, amplitude = [0.3, 0.1], frequency = [0.3, 0.8] } "
+                "[rad, rad, Hz] within the joint's limits (`adaptive-dd validate` checks positions, "
+                "speeds and the torque along it)"
             )
             return Reference((0.0,) * n, ((),) * n, ((),) * n, ((),) * n)
         defaulted.add("reference")
