@@ -304,7 +304,11 @@ def test_scenario_with_a_shipped_robot():
     [
         ({"last": ""}, r"reference.joint6: missing"),
         ({"last": "joint7 = { amplitude = [0.1], frequency = [0.1] }"}, r"reference.joint7: not a joint"),
-        ({"arm_extra": "viscous = [1, 1]"}, r"arm.viscous' must be a list of 6"),
+        (
+            {"arm_extra": "viscous = [1, 1]"},
+            r"arm.viscous' has 2 numbers; the arm has 6 joints, from the root to the payload frame "
+            r"'tool0': shoulder_pan_joint, ",
+        ),
         ({"arm_extra": 'payload_frame = "nowhere"'}, r"payload_frame 'nowhere' is not a link"),
         ({"arm_extra": "gravity = [0, 0]"}, r"arm.gravity"),
         ({"arm_extra": "torque_limit = [1, 1, 1, 1, 1, -1]"}, r"arm.torque_limit' must be > 0"),

@@ -33,10 +33,14 @@ def test_a_name_resolves_to_the_packages_file(robots):
 @pytest.mark.parametrize(
     ("name", "listed", "not_listed"),
     [
-        ("xarm_description/urdf/xarm8.urdf", "xarm_description/urdf/xarm7.urdf", "z1.urdf"),
-        ("nope/x.urdf", "z1_description/urdf/z1.urdf", None),  # every arm's URDF
-        ("../../../../etc/passwd", "z1_description/urdf/z1.urdf", None),  # not out of the folder
+        (
+            "xarm_description/urdf/xarm8.urdf",
+            "the URDFs of xarm_description: xarm_description/urdf/xarm7.urdf",
+            "z1",
+        ),
+        ("nope/x.urdf", "its description folders: ", "z1_description/urdf/z1.urdf"),  # the folders
         ("xarm_description/urdf", "xarm7.urdf", None),  # a folder is no file
+        ("", "its description folders: ", None),
     ],
 )
 def test_an_unknown_name_lists_what_there_is(robots, name, listed, not_listed):
@@ -45,6 +49,16 @@ def test_an_unknown_name_lists_what_there_is(robots, name, listed, not_listed):
     assert repr(f"example-robot-data:{name}") in str(exc.value) and listed in str(exc.value)
     if not_listed:
         assert not_listed not in str(exc.value)
+    if "folders" in listed:  # every folder with a URDF, e.g. kinova's (its URDFs under robots/)
+        assert "z1_description" in str(exc.value) and "kinova_description" in str(exc.value)
+
+
+@pytest.mark.parametrize("name", ["../package.xml", "/etc/hostname", "C:/x.urdf", "..\\package.xml"])
+def test_a_name_never_leaves_the_robots_folder(robots, name):
+    """Each of these is an existing file (or a drive) outside the folder if joined as it is."""
+    assert (robots.parent / "package.xml").is_file()
+    with pytest.raises(ParameterError, match="no such URDF in example-robot-data"):
+        E.urdf_path(f"example-robot-data:{name}")
 
 
 def test_without_the_package_the_error_says_how_to_install_it(monkeypatch):
@@ -133,3 +147,32 @@ def test_validate_prints_what_the_vendors_file_had_that_is_unusual(robots, capsy
     out = capsys.readouterr().out
     assert "# note: link 'tool0': mass 0 kg and no inertia: a massless frame (kept)" in out
     assert f"# arm: {robots / 'ur_description' / 'urdf' / 'ur3_robot.urdf'} (6 joints" in out
+
+
+@pytest.mark.parametrize(
+    "value", ["example_robot_data:z1_description/urdf/z1.urdf", "example-robot-data/z1.urdf"]
+)
+def test_a_misspelt_prefix_is_told_the_right_one(value):
+    with pytest.raises(
+        ScenarioError, match=r"s\.toml: key 'arm\.urdf' = .*no such file; .*\"example-robot-data:PATH\""
+    ):
+        parse_scenario({"arm": {"urdf": value}}, "s.toml")
+
+
+def test_plant_and_model_take_the_prefix_too(robots):
+    """[plant] urdf and [model] from name example-robot-data's files as [arm] urdf does (here the arm's
+    own URDF: the same joints and frames); a wrong one is an error naming its key."""
+    ur3 = "example-robot-data:ur_description/urdf/ur3_robot.urdf"
+    data = read_toml(FOLDER / "ur3.toml")
+    data["plant"] = {"urdf": ur3}
+    data["model"] = {"from": ur3}
+    sc = parse_scenario(data, "s.toml")
+    assert sc.n_joints == 6
+    data["model"] = {"from": "example-robot-data:ur_description/urdf/ur3.json"}
+    with pytest.raises(
+        ScenarioError, match=r"s\.toml: key 'model\.from': .*ur3\.json.*the URDFs of ur_description"
+    ):
+        parse_scenario(data, "s.toml")
+    data["model"] = {"from": "example-robot-data:ur_description/urdf/ur10_robot.urdf"}
+    with pytest.raises(ScenarioError, match=r"s\.toml: key 'model\.from'.*same joints and frames"):
+        parse_scenario(data, "s.toml")

@@ -192,3 +192,20 @@ def test_mass_zero_with_inertia_is_an_error(tmp_path):
     path = _mutant(tmp_path, '<link name="tool0"/>', MASSLESS.format(izz="0.001"))
     with pytest.raises(UrdfError, match=r"link 'tool0' <inertial> <mass>: value = '0.0'.*must be > 0"):
         read_urdf(path, "tool0")
+
+
+def test_a_point_mass_on_the_chain_is_kept_with_a_note(tmp_path):
+    """The SO-101's gripper_frame_link: mass 1e-9 kg, zero inertia (it was refused as 'not positive
+    definite', and its 'repair' changed nothing)."""
+    text = MASSLESS.format(izz="0").replace('<mass value="0.0"/>', '<mass value="1e-9"/>')
+    robot = read_urdf(_mutant(tmp_path, '<link name="tool0"/>', text), "tool0")
+    assert any("'tool0': a point mass (1e-09 kg, no rotational inertia), kept" in n for n in robot.notes)
+    assert robot.model().inertias[-1].mass > 0
+
+
+def test_a_massless_frame_without_inertia_is_kept_too(tmp_path):
+    """Mass 0 and no <inertia> element: the checks noted it, then reading it failed ("<inertia> is
+    missing")."""
+    text = '<link name="tool0"><inertial><origin xyz="0 0 0"/><mass value="0"/></inertial></link>'
+    robot = read_urdf(_mutant(tmp_path, '<link name="tool0"/>', text), "tool0")
+    assert any("'tool0': mass 0 kg and no inertia: a massless frame" in n for n in robot.notes)

@@ -74,13 +74,13 @@ _SECONDS_PER_SAMPLE_TRIAL_GENERAL = 2.6e-6
 _SECONDS_PER_SAMPLE_TRIAL_JOINT2 = 1.7e-7
 # The excitation phase ([run] excite, adaptive_dd.closed_loop.excitation_phase): its closed loop at
 # the rates above (one controller, every seed), plus the excitation's design (once) and one
-# identification per seed, per sample of the record times n_joints^2; measured on
-# gen3_excite.toml (7 joints, 20 s at 1 ms, one seed) on the development machine
-# (`python studies/excite_cost.py benchmarks/scenarios/gen3_excite.toml`, that script of
-# commit d41702f: design 33.1 s, identification 13.2 s = 1.34e-5 s per sample per joint^2;
-# 37 s in a run under load).
-_EXCITE_DESIGN_SECONDS = 33.0
-_IDENTIFY_SECONDS_PER_SAMPLE_JOINT2 = 1.3e-5
+# identification per seed, both per n_joints^2 (the identification also per sample of the record);
+# fitted to `identify_excitation` timed in a warm process on 1 and 4 seeds of
+# benchmarks/scenarios/example_robot_data/z1_drawn.toml (6 joints: 7.0 and 14.6 s, its design
+# 2.4 s) and benchmarks/scenarios/gen3_excite.toml (7 joints: 11.5 and 25.6 s, design 5.5 s), 20 s
+# at 1 ms; `python benchmarks/estimate_check.py --cli --seeds 1 4 10 SCENARIO` compares the whole.
+_EXCITE_DESIGN_SECONDS_JOINT2 = 0.09
+_IDENTIFY_SECONDS_PER_SAMPLE_JOINT2 = 4.2e-6
 # What a warm `adaptive-dd benchmark` spends around the closed loop, once per run: imports,
 # loading the cached kernels, the arm, the report and its figures; the runs above less their
 # closed loops: the paper's arm on its closed forms 1.45 s, an N-joint arm s0 + s1 n_joints^2
@@ -209,8 +209,9 @@ def run_estimate(
         kernels ``_SETUP_SECONDS_GENERAL`` plus ``_SETUP_SECONDS_JOINT2`` per joint squared).
     excite_samples : int
         The samples of an excitation phase (``[run] excite`` / T, an N-joint arm's): its closed
-        loop (one controller, every seed) at the task's rates, the design once and an
-        identification per seed (``_IDENTIFY_SECONDS_PER_SAMPLE_JOINT2`` x samples x n_joints^2)
+        loop (one controller, every seed) at the task's rates, the design once
+        (``_EXCITE_DESIGN_SECONDS_JOINT2`` x n_joints^2) and an identification per seed
+        (``_IDENTIFY_SECONDS_PER_SAMPLE_JOINT2`` x samples x n_joints^2)
         are added to the time (``excite_seconds`` of it); the memory is the task's (the
         excitation's records are freed before the task runs).
 
@@ -242,7 +243,7 @@ def run_estimate(
         nj2 = (n_joints or 2) ** 2
         loop = float(excite_samples) * (_SECONDS_PER_SAMPLE_CONTROLLER + n_seeds * per)
         ident = n_seeds * float(excite_samples) * nj2 * _IDENTIFY_SECONDS_PER_SAMPLE_JOINT2
-        excite = loop + _EXCITE_DESIGN_SECONDS + ident
+        excite = loop + _EXCITE_DESIGN_SECONDS_JOINT2 * nj2 + ident
     setup = _SETUP_SECONDS if n_joints is None else _SETUP_SECONDS_GENERAL + _SETUP_SECONDS_JOINT2 * n2
     total = setup + secs + excite + compile_seconds
     return RunEstimate(int(n_samples), int(trials), nbytes, total, float(compile_seconds), excite)

@@ -27,7 +27,7 @@ from adaptive_dd.plant.two_link import FRICTION_LAWS, ClosedFormTwoLink, closed_
 if TYPE_CHECKING:
     from adaptive_dd.plant.arm import Arm  # imports Pinocchio: on first use only
 
-__all__ = ["ARM_BOUNDS", "URDF_ARM_KEYS", "arm_from_tables", "urdf_arm_from_table"]
+__all__ = ["ARM_BOUNDS", "URDF_ARM_KEYS", "arm_from_tables", "scenario_file", "urdf_arm_from_table"]
 
 Array = NDArray[np.float64]
 
@@ -357,6 +357,13 @@ def scenario_file(src: str, key: str, value: str) -> Path:
     path = Path(value)
     if not path.is_absolute():
         path = (Path(src).parent if Path(src).is_file() else Path.cwd()) / path
+    head = value.split(":")[0].split("/")[0].lower().replace("_", "-")
+    if head == "example-robot-data" and not path.exists():
+        raise ScenarioError(
+            f"{src}: key '{key}' = {value!r}: no such file; a URDF of the example-robot-data package is "
+            f'named "example-robot-data:PATH" (a hyphenated name and a colon), e.g. '
+            f'"example-robot-data:ur_description/urdf/ur5_robot.urdf"'
+        )
     return path
 
 
@@ -383,6 +390,13 @@ def _arm_overrides(src: str, table: dict, arm, plant_kw: dict) -> dict:
     """The ``[plant]`` settings plus the table's overrides of the URDF arm (friction, armature,
     actuator, sensor, payload radius and capacity), checked: keyword arguments of ``replace``."""
     n = arm.n_joints
+    for key in ("viscous", "coulomb", "armature", "torque_limit", "encoder_counts"):
+        v = table.get(key)
+        if isinstance(v, list) and len(v) != n:  # name the joints: a payload frame sets the chain
+            raise ScenarioError(
+                f"{src}: key 'arm.{key}' has {len(v)} numbers; the arm has {n} joints, from the root to "
+                f"the payload frame '{arm.payload_frame}': {', '.join(arm.joint_names)}"
+            )
     kw: dict = dict(plant_kw)
     for key in ("viscous", "coulomb", "armature"):
         if key in table:

@@ -51,7 +51,7 @@ from pathlib import Path
 import numpy as np
 
 from adaptive_dd.errors import UrdfError
-from adaptive_dd.plant.urdf_checks import check_values, scalar
+from adaptive_dd.plant.urdf_checks import check_values, massless_frame, scalar
 
 __all__ = ["JointInfo", "UrdfRobot", "read_urdf", "repair_inertia"]
 
@@ -177,13 +177,13 @@ def _inertia_of(path, link):
     if inertial is None:
         return None
     where = f"link '{name}' <inertial>"
+    if massless_frame(path, where, inertial):  # a vendor's massless frame (urdf_checks notes it)
+        return None
     mass = _num(path, f"{where} <mass>", inertial.find("mass"), "value")
     el = inertial.find("inertia")
     if el is None:
         raise UrdfError(f"{path}: {where}: <inertia> is missing")
     v = {k: _num(path, f"{where} <inertia>", el, k, 0.0) for k in ("ixx", "ixy", "ixz", "iyy", "iyz", "izz")}
-    if mass == 0 and not any(v.values()):  # a massless frame (urdf_checks notes it)
-        return None
     if mass <= 0:
         raise UrdfError(
             f"{path}: {where}: mass {mass} kg must be > 0 (a massless frame: leave <inertial> out, or "
@@ -396,6 +396,9 @@ def _check_inertias(path, links: dict, chain_links: list, parent_of: dict, repai
     notes, off = [], []
     for name, el in links.items():
         got = _inertia_of(path, el)
+        if got is not None and not np.any(got[1]):  # a point mass: a rigid body, at the limit
+            notes.append(f"link '{name}': a point mass ({got[0]:g} kg, no rotational inertia), kept")
+            continue
         fault = None if got is None else _inertia_fault(got[1])
         if fault is None:
             continue

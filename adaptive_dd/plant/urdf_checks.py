@@ -44,6 +44,7 @@ __all__ = [
     "TINY_MASS",
     "UrdfWarning",
     "check_values",
+    "massless_frame",
     "scalar",
 ]
 
@@ -150,8 +151,7 @@ def _check_link(path: Path, link: ET.Element, notes: list[str]) -> None:
     raw = inertial.find("mass").get("value") if mass is not None else None
     if mass is None:
         raise UrdfError(f"{path}: {where} <mass>: attribute 'value' is missing")
-    el = inertial.find("inertia")
-    if mass == 0 and _zero_inertia(path, where, el):  # a vendor's way of writing a massless frame
+    if massless_frame(path, where, inertial):
         notes.append(f"link '{name}': mass 0 kg and no inertia: a massless frame (kept)")
         return
     if mass <= 0:
@@ -166,6 +166,7 @@ def _check_link(path: Path, link: ET.Element, notes: list[str]) -> None:
         )
     if mass < TINY_MASS:
         notes.append(f"link '{name}': mass {raw!r} kg is below {TINY_MASS:g} kg (kept)")
+    el = inertial.find("inertia")
     if el is None:
         return  # read_urdf names it
     moments = {
@@ -181,14 +182,14 @@ def _check_link(path: Path, link: ET.Element, notes: list[str]) -> None:
         )
 
 
-def _zero_inertia(path: Path, where: str, el: ET.Element | None) -> bool:
-    """Whether an ``<inertia>`` is absent or all its moments are 0 (each checked to be a number)."""
-    if el is None:
-        return True
-    return all(
-        scalar(path, f"{where} <inertia>", el, k) in (None, 0.0)
-        for k in ("ixx", "iyy", "izz", "ixy", "ixz", "iyz")
-    )
+def massless_frame(path: Path, where: str, inertial: ET.Element) -> bool:
+    """Whether an ``<inertial>`` is a vendor's massless frame: mass 0 and its ``<inertia>`` absent or
+    all 0 (each number checked); :mod:`adaptive_dd.plant.urdf` then reads the link as having none."""
+    if scalar(path, f"{where} <mass>", inertial.find("mass"), "value") != 0.0:
+        return False
+    el = inertial.find("inertia")
+    keys = ("ixx", "iyy", "izz", "ixy", "ixz", "iyz")
+    return el is None or all(scalar(path, f"{where} <inertia>", el, k) in (None, 0.0) for k in keys)
 
 
 def _check_axis(path: Path, where: str, joint: ET.Element, notes: list[str]) -> bool:

@@ -1,12 +1,13 @@
 """URDFs of `example-robot-data <https://github.com/Gepetto/example-robot-data>`_, named in a scenario.
 
-Real arms' descriptions nobody here tuned for: ``[arm] urdf`` (and ``[plant] urdf``) take
-``"example-robot-data:PATH"``, ``PATH`` a file below the package's ``robots`` folder, e.g.
+Real arms' descriptions nobody here tuned for: ``[arm] urdf``, ``[plant] urdf`` and ``[model] from``
+take ``"example-robot-data:PATH"``, ``PATH`` a file below the package's ``robots`` folder, e.g.
 ``"example-robot-data:xarm_description/urdf/xarm7.urdf"``. The package is an optional dependency
-(``pip install "adaptive-dd[robots]"``, or ``pip install example-robot-data``); its URDFs carry
-kinematics, limits and inertials (the meshes they name are not read). State the rest as for any
-URDF: the payload frame (a link; the chain stops there, so a gripper's joints beyond it are left
-out), the rated payload (``payload_capacity``) and the drives' armature, from the data sheet.
+(``pip install example-robot-data``; in a checkout of this repository ``pip install -e ".[robots]"``);
+its URDFs carry kinematics, limits and inertials (the meshes they name are not read). State the
+rest as for any URDF: the payload frame (a link; the chain stops there, so a gripper's joints
+beyond it are left out), the rated payload (``payload_capacity``) and the drives' armature, from
+the data sheet.
 
 Examples
 --------
@@ -19,7 +20,7 @@ Examples
 
 from __future__ import annotations
 
-from pathlib import Path
+from pathlib import Path, PurePosixPath
 
 from adaptive_dd.errors import ParameterError
 
@@ -28,7 +29,7 @@ __all__ = ["PREFIX", "is_example_robot_data", "robots_folder", "urdf_path"]
 PREFIX = "example-robot-data:"
 """What starts a URDF path inside the example-robot-data package."""
 
-_INSTALL = 'pip install "adaptive-dd[robots]" (or pip install example-robot-data)'
+_INSTALL = 'pip install example-robot-data (in a checkout of adaptive_dd: pip install -e ".[robots]")'
 
 
 def is_example_robot_data(text) -> bool:
@@ -69,23 +70,28 @@ def robots_folder() -> Path:
 
 
 def urdf_path(text: str) -> Path:
-    """The file ``"example-robot-data:PATH"`` names (``PATH`` below :func:`robots_folder`).
+    """The file ``"example-robot-data:PATH"`` names (``PATH``, with ``/`` between its parts, below
+    :func:`robots_folder`; never outside it).
 
     Raises
     ------
     ParameterError
-        Not such a name, the package missing, or no such file: the message lists the package's URDFs
-        in the folder named (or every one, when the folder is not there either).
+        Not such a name, the package missing, or no such file: the message lists the URDFs in the
+        description folder named (``PATH``'s first part), or the folders when that one is not there.
     """
     if not is_example_robot_data(text):
         raise ParameterError(f"{text!r} does not start with {PREFIX!r}")
-    rel = text[len(PREFIX) :].strip("/")
+    rel = PurePosixPath(text[len(PREFIX) :].replace("\\", "/"))
     root = robots_folder()
-    path = root / rel
-    if rel and ".." not in Path(rel).parts and path.is_file():
+    inside = bool(rel.parts) and not rel.is_absolute() and ".." not in rel.parts and ":" not in rel.parts[0]
+    path = root.joinpath(*rel.parts)
+    if inside and path.is_file() and path.resolve().is_relative_to(root.resolve()):
         return path
-    top = Path(rel).parts[0] if rel else ""
-    near = top and (root / top).is_dir()
-    pool = sorted(root.glob(f"{top}/**/*.urdf") if near else root.glob("*/urdf/*.urdf"))
-    names = ", ".join(str(p.relative_to(root)) for p in pool)
-    raise ParameterError(f"{text!r}: no such URDF in example-robot-data ({root}); its URDFs: {names}")
+    top = rel.parts[0] if inside else ""
+    if top and (root / top).is_dir():
+        names = sorted(p.relative_to(root).as_posix() for p in (root / top).rglob("*.urdf"))
+        what = f"the URDFs of {top}: {', '.join(names)}"
+    else:
+        folders = sorted(p.name for p in root.iterdir() if p.is_dir() and any(p.rglob("*.urdf")))
+        what = f"its description folders: {', '.join(folders)}"
+    raise ParameterError(f"{text!r}: no such URDF in example-robot-data ({root}); {what}")

@@ -63,8 +63,10 @@ MEANING = {
     "arm.payload_radius": "Radius of the payload disk [m] (two-link) or the compact-payload prior (URDF).",
     "arm.torque_limit": "Per joint torque limit [N m] (the D/A saturates there).",
     # [arm], any arm from a URDF
-    "arm.urdf": "A URDF file, relative to the scenario file.",
-    "arm.robot": "A shipped robot instead of a file: `sice`, `vertical3`, `ur5`, `panda`.",
+    "arm.urdf": 'A URDF file, relative to the scenario file; or `"example-robot-data:PATH"`, a URDF of '
+    "that package (the `[robots]` extra; {doc}`../random_arms`).",
+    "arm.robot": "A shipped robot instead of a file: `sice_arm`, `vertical3`, `ur5`, `panda`, `iiwa14`, "
+    "`gen3`; or `random:SEED`, a drawn arm.",
     "arm.payload_frame": "The link the payload is fixed to (default: the last link).",
     "arm.gravity": "Gravity vector in the base frame [m/s^2], 3 numbers.",
     "arm.viscous": "Per joint viscous friction [N m s/rad] (the URDF's `damping` otherwise).",
@@ -112,7 +114,8 @@ ARRIVING = {
     "run.excite": "Seconds of designed excitation run on the plant before the task, the controllers' "
     "model identified from it (URDF arms; 0: none).",
     "plant.urdf": "URDF arms: the simulated robot when it is not the `[arm]` (other inertials, the "
-    "same joints and frames); the `[arm]` is then the controllers' model.",
+    'same joints and frames; a file or `"example-robot-data:PATH"`); the `[arm]` is then the '
+    "controllers' model.",
     "plant.viscous": "Per joint, the plant's own viscous friction [N m s/rad].",
     "plant.coulomb": "Per joint, the plant's own Coulomb friction [N m].",
     "plant.armature": "Per joint, the plant's own armature [kg m^2].",
@@ -124,7 +127,8 @@ ARRIVING = {
     "plant.uncertainty.coulomb": "Relative spread of each joint's Coulomb friction.",
     "plant.uncertainty.armature": "Relative spread of each joint's armature.",
     "plant.uncertainty.distribution": "`uniform` or `normal`.",
-    "model.from": "The controllers' model: a URDF whose link inertials replace the `[arm]`'s.",
+    "model.from": "The controllers' model: a URDF whose link inertials replace the `[arm]`'s (a file or "
+    "`\"example-robot-data:PATH\"`), or the `model.json` that `adaptive-dd identify --out DIR` writes.",
     "model.uncertainty": "How far the controllers' model may be from the robot: a table of the keys "
     "of `[plant.uncertainty]` (a level left out is 0; `{}`: exact); adaptive_ct learns the arm from it. "
     "Default: the `[plant.uncertainty]` levels, else exact.",
