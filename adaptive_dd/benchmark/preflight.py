@@ -184,6 +184,7 @@ def derived_estimator_settings(scenario) -> list[str]:
     kg when it is not stated)."""
     from adaptive_dd.controllers.registry import scenario_controller
     from adaptive_dd.identification.online import REOPEN_CAPACITY, reopen_mass_std
+    from adaptive_dd.identification.online_config import FLOOR_MAX
     from adaptive_dd.identification.row_weights import pass_mass
     from adaptive_dd.plant.arm import DEFAULT_PAYLOAD_OFFSET
 
@@ -216,6 +217,15 @@ def derived_estimator_settings(scenario) -> list[str]:
             why = f"derived: {REOPEN_CAPACITY:g} x arm.payload_capacity {cap:g} kg"
         std = reopen_mass_std(online.detector, arm)
         out.append(f"controllers.adaptive_ct.detector.reopen_mass_std = {std:.4g} kg   ({why})")
+        if "floor" in scenario.options("adaptive_ct").get("detector", {}):
+            why = "given"
+        else:
+            why = (
+                f"derived: the heaviest row's noise in the first pass over the threshold "
+                f"{online.detector.threshold:g}, at most {FLOOR_MAX:g} N m"
+            )
+        floor = online.detector.floor  # set by AdaptiveCT.state_task unless given
+        out.append(f"controllers.adaptive_ct.detector.floor = {floor:.3g} N m   ({why})")
     frame = arm.payload_frame
     why = "the estimator's payload prior: a disk of that radius per kg, its centre of mass within"
     why += f" that offset of {frame!r}"

@@ -461,17 +461,29 @@ class AdaptiveCT(Law):
         boost's bandwidth per joint follows (:meth:`boost_bandwidths`), and, unless given, the
         estimator's row weights from a first pass over its reference with the payload capacity
         (:func:`~adaptive_dd.identification.row_weights.task_row_weights`): each row's noise in
-        mode "arm", over the largest in payload mode."""
+        mode "arm", over the largest in payload mode; and, unless given, the change detector's
+        level floor from the same pass (:func:`~adaptive_dd.identification.online_config.detector_floor`)."""
         from adaptive_dd.closed_loop.boost import task_room
 
         self.task = task_room(scenario)
         o = self.online
-        # mode "arm" on the noise's scale, payload mode over the largest (row_weights module docstring)
-        if o.row_weights is None:
+        derive_floor = o.detector is not None and o.detector.floor is None
+        if o.row_weights is None or derive_floor:
+            from adaptive_dd.identification.online_config import detector_floor
             from adaptive_dd.identification.row_weights import task_row_weights
 
-            w = task_row_weights(self.arm, o, scenario, relative=o.mode == "payload")
-            self.online = dataclasses.replace(o, row_weights=tuple(float(x) for x in w))
+            # mode "arm" on the noise's scale, payload mode over the largest (row_weights module
+            # docstring); the pass is made once and kept with the arm
+            if o.row_weights is None:
+                rows = task_row_weights(self.arm, o, scenario, relative=o.mode == "payload")
+                o = dataclasses.replace(o, row_weights=tuple(float(x) for x in rows))
+            if derive_floor:  # at most the heaviest row's own noise [N m] over the threshold
+                w = task_row_weights(self.arm, o, scenario)  # sqrt(tau_f / T) x each row's noise
+                noise = float(w.max()) / np.sqrt(o.tau_f / float(scenario.sample_period))
+                o = dataclasses.replace(
+                    o, detector=dataclasses.replace(o.detector, floor=detector_floor(o.detector, noise))
+                )
+            self.online = o
 
     def boost_bandwidths(self) -> Array:
         """The boost's bandwidth per joint [rad/s]: ``boost_bandwidth`` on every joint without a

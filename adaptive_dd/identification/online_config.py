@@ -88,9 +88,14 @@ class Detector:
         payload parameters scale with it, see :func:`payload_prior`). None (default): derived,
         :data:`REOPEN_CAPACITY` times the arm's rated payload (``arm.payload_capacity``), or
         :data:`REOPEN_GENERIC` kg when the arm does not state one.
-    floor : float
+    floor : float or None
         Floor [N m, RMS] of the long-run level on the row of the largest weight, the other rows'
-        in proportion to their weights: an error below ``threshold * floor`` never alarms.
+        in proportion to their weights: an error below ``threshold * floor`` never alarms. None
+        (default): derived where the run knows its task (``AdaptiveCT.state_task``): the heaviest
+        row's noise in the estimator's first pass over the reference (the row weights' pass,
+        :func:`~adaptive_dd.identification.row_weights.task_row_weights`) over ``threshold``, at most
+        :data:`FLOOR_MAX`, so that an error within that row's own noise cannot alarm on a light arm
+        either; :data:`FLOOR_MAX` without a task.
     fast_window : float or None
         Time constant [s] of a second, faster average of the squared errors, which alarms
         above ``fast_threshold`` (the same rows and levels): a large change is
@@ -153,7 +158,7 @@ class Detector:
     gate_after: int = 20
     reopen_again: bool = True
     reopen_mass_std: float | None = None
-    floor: float = 0.05
+    floor: float | None = None
     fast_window: float | None = 0.001
     fast_threshold: float = 7.0
     speed: float = 0.25
@@ -178,7 +183,8 @@ class Detector:
             _num(o, name, getattr(self, name), 0.0, strict=False)
         if self.reopen_mass_std is not None:
             _num(o, "reopen_mass_std", self.reopen_mass_std, 0.0)
-        _num(o, "floor", self.floor, 0.0, strict=False)
+        if self.floor is not None:
+            _num(o, "floor", self.floor, 0.0, strict=False)
         _int(o, "min_learned", self.min_learned, 1)
         _int(o, "gate_after", self.gate_after, 1)
         if self.fast_window == 0 and not isinstance(self.fast_window, bool):
@@ -464,6 +470,22 @@ rated payload lies 1.7 standard deviations out (hand-tuned on the shipped arms: 
 Panda 2 of 3, vertical3 1)."""
 REOPEN_GENERIC = 10.0
 """[kg] The re-opened payload mass standard deviation of an arm without a stated capacity."""
+FLOOR_MAX = 0.05
+"""[N m] The change detector's level floor on the heaviest row, at most (``Detector.floor`` None):
+the constant it was for every arm, measured on the shipped arms and the drawn population (whose
+heaviest rows carry 0.1-1.2 N m of noise); on an arm lighter than that the heaviest row's own
+noise over the threshold (the SO-101 of example-robot-data: 0.005 N m)."""
+
+
+def detector_floor(det: Detector, heaviest_noise: float | None = None) -> float:
+    """The level floor [N m] on the row of the largest weight: ``det.floor`` when given, else
+    :data:`FLOOR_MAX`, at most ``heaviest_noise / det.threshold`` when the heaviest row's noise
+    [N m, RMS] is known (the estimator's first pass over the task)."""
+    if det.floor is not None:
+        return float(det.floor)
+    if heaviest_noise is None or not np.isfinite(heaviest_noise) or heaviest_noise <= 0:
+        return FLOOR_MAX
+    return float(min(FLOOR_MAX, heaviest_noise / det.threshold))
 
 
 def reopen_mass_std(det: Detector, arm: Arm) -> float:

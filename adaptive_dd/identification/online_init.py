@@ -21,6 +21,7 @@ from adaptive_dd.identification.online_config import (
     Array,
     OnlineConfig,
     derived_row_weights,
+    detector_floor,
     payload_prior,
     reopen_mass_std,
 )
@@ -126,7 +127,7 @@ def _pack(cfg: OnlineConfig, arm: Arm) -> tuple[EstCfg, Array]:
         fl[K.F_THRESHOLD2] = det.threshold**2
         fl[K.F_SLOW2] = det.slow_factor**2
         fl[K.F_GATE2] = det.gate**2
-        fl[K.F_FLOOR2] = (det.floor / w.max()) ** 2  # [N m] on the row of the largest weight
+        fl[K.F_FLOOR2] = (detector_floor(det) / w.max()) ** 2  # [N m] on the row of the largest weight
         if det.fast_window is not None:
             ints[K.I_FAST] = 1
             fl[K.F_ALPHA_FAST] = min(1.0, T / det.fast_window)
