@@ -128,7 +128,7 @@ ARRIVING = {
     "plant.uncertainty.armature": "Relative spread of each joint's armature.",
     "plant.uncertainty.distribution": "`uniform` or `normal`.",
     "model.from": "The controllers' model: a URDF whose link inertials replace the `[arm]`'s (a file or "
-    "`\"example-robot-data:PATH\"`), or the `model.json` that `adaptive-dd identify --out DIR` writes.",
+    '`"example-robot-data:PATH"`), or the `model.json` that `adaptive-dd identify --out DIR` writes.',
     "model.uncertainty": "How far the controllers' model may be from the robot: a table of the keys "
     "of `[plant.uncertainty]` (a level left out is 0; `{}`: exact); adaptive_ct learns the arm from it. "
     "Default: the `[plant.uncertainty]` levels, else exact.",
