@@ -86,8 +86,8 @@ def test_a_short_two_seed_run_finds_the_pick_up_with_no_false_alarm():
 
 def test_validate_says_what_the_estimator_derives_and_from_what(drawn):
     """A scenario with no estimator table: ``validate`` prints the settings the run derives for
-    adaptive_ct (mode, row weights, re-opened payload mass) with the rule each comes from, and says
-    when the rated payload is missing."""
+    adaptive_ct (mode, row weights, re-opened payload mass, the detector's floor) with the rule each
+    comes from, and says when the rated payload is missing."""
     from adaptive_dd.benchmark.preflight import derived_estimator_settings, resolved_settings
 
     lines = derived_estimator_settings(drawn)
@@ -99,8 +99,13 @@ def test_validate_says_what_the_estimator_derives_and_from_what(drawn):
     assert f"row_weights = {[float(f'{x:.4g}') for x in w]}   (derived: each equation's RMS error" in lines[1]
     assert "carrying 4 kg x sqrt(tau_f / T)" in lines[1]
     assert "reopen_mass_std = 2.4 kg   (derived: 0.6 x arm.payload_capacity 4 kg)" in lines[2]
-    assert lines[3].startswith("arm.payload_offset = 0.1 m, arm.payload_radius = 0.05 m   (the estimator's")
-    assert "the offset the default: state how far" in lines[3]
+    noise = w.max() / np.sqrt(OnlineConfig().tau_f / drawn.sample_period)  # the heaviest row's [N m]
+    assert lines[3] == (
+        f"controllers.adaptive_ct.detector.floor = {min(0.05, noise / 4):.3g} N m   (derived: the heaviest "
+        "row's noise in the first pass over the threshold 4, at most 0.05 N m)"
+    )
+    assert lines[4].startswith("arm.payload_offset = 0.1 m, arm.payload_radius = 0.05 m   (the estimator's")
+    assert "the offset the default: state how far" in lines[4]
     exact = derived_estimator_settings(load_scenario(SCENARIOS / "gen3_exact.toml"))
     assert "estimator.mode = 'payload'   (default: no [model] uncertainty or [plant.uncertainty]" in exact[0]
     data = tomllib.loads((SCENARIOS / "gen3_drawn.toml").read_text())
