@@ -390,20 +390,17 @@ def _arm_overrides(src: str, table: dict, arm, plant_kw: dict) -> dict:
     """The ``[plant]`` settings plus the table's overrides of the URDF arm (friction, armature,
     actuator, sensor, payload radius and capacity), checked: keyword arguments of ``replace``."""
     n = arm.n_joints
-    for key in ("viscous", "coulomb", "armature", "torque_limit", "encoder_counts"):
-        v = table.get(key)
-        if isinstance(v, list) and len(v) != n:  # name the joints: a payload frame sets the chain
-            raise ScenarioError(
-                f"{src}: key 'arm.{key}' has {len(v)} numbers; the arm has {n} joints, from the root to "
-                f"the payload frame '{arm.payload_frame}': {', '.join(arm.joint_names)}"
-            )
+    joints = chain_joints(arm)
     kw: dict = dict(plant_kw)
     for key in ("viscous", "coulomb", "armature"):
         if key in table:
-            kw[key] = _table_vector(src, key, table[key], n, 0.0, strict=False, hi=URDF_TABLE_BOUNDS[key])
+            hi = URDF_TABLE_BOUNDS[key]
+            kw[key] = _table_vector(src, key, table[key], n, 0.0, strict=False, hi=hi, joints=joints)
     if "torque_limit" in table:
         hi = URDF_TABLE_BOUNDS["torque_limit"]
-        lim = _table_vector(src, "torque_limit", table["torque_limit"], n, 0.0, strict=True, hi=hi)
+        lim = _table_vector(
+            src, "torque_limit", table["torque_limit"], n, 0.0, strict=True, hi=hi, joints=joints
+        )
         kw["actuator"] = replace(arm.actuator, torque_limit=tuple(lim))
     if "dac_bits" in table:
         bits = table["dac_bits"]
@@ -411,7 +408,9 @@ def _arm_overrides(src: str, table: dict, arm, plant_kw: dict) -> dict:
             raise ScenarioError(f"{src}: key 'arm.dac_bits' must be an integer in [1, 32], got {bits!r}")
         kw["actuator"] = replace(kw.get("actuator", arm.actuator), dac_bits=bits)
     if "encoder_counts" in table:
-        counts = _table_vector(src, "encoder_counts", table["encoder_counts"], n, 0.0, strict=True)
+        counts = _table_vector(
+            src, "encoder_counts", table["encoder_counts"], n, 0.0, strict=True, joints=joints
+        )
         if np.any(counts != np.round(counts)) or np.any(counts > 2**40):
             raise ScenarioError(
                 f"{src}: key 'arm.encoder_counts' must be integers in [1, 2^40], got {counts}"
@@ -445,7 +444,19 @@ URDF_TABLE_BOUNDS = {"viscous": 1e4, "coulomb": 1e4, "armature": 1e3, "torque_li
 them no actuator of an arm is meant."""
 
 
-def _table_vector(src: str, key: str, v, n: int, lo: float, strict: bool, hi: float = math.inf) -> Array:
+def chain_joints(arm) -> str:
+    """What a per-joint list's wrong length is told: the arm's joints, which its payload frame sets."""
+    names, frame = ", ".join(arm.joint_names), arm.payload_frame
+    return f"the arm has {arm.n_joints} joints, from the root to the payload frame '{frame}': {names}"
+
+
+def _table_vector(
+    src: str, key: str, v, n: int, lo: float, strict: bool, hi: float = math.inf, joints: str = ""
+) -> Array:
+    """``v`` as n finite numbers within ``lo`` (``strict``: above it) and ``hi``; ``joints``
+    (:func:`chain_joints`) names the arm's joints when the length is wrong."""
+    if joints and isinstance(v, list) and len(v) != n:
+        raise ScenarioError(f"{src}: key 'arm.{key}' has {len(v)} numbers; {joints}")
     if not isinstance(v, list) or len(v) != n or not all(_is_num(x) for x in v):
         raise ScenarioError(
             f"{src}: key 'arm.{key}' must be a list of {n} finite numbers (one per joint), got {v!r}"
