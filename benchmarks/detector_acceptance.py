@@ -44,7 +44,7 @@ PLANTS = {
 
 
 def scenario_paths() -> list[Path]:
-    return [default_scenario_path(), *sorted((ROOT / "scenarios").glob("*.toml"))]
+    return [default_scenario_path(), *sorted((ROOT / "scenarios").rglob("*.toml"))]
 
 
 def detector_settings(pairs: list[str]) -> dict:

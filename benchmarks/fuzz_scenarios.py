@@ -53,7 +53,7 @@ NUMBER = re.compile(r"(?<![\w.])(\d+\.?\d*(?:e[-+]?\d+)?)")
 
 
 def sources() -> list[Path]:
-    return [default_scenario_path(), *sorted((ROOT / "scenarios").glob("*.toml"))]
+    return [default_scenario_path(), *sorted((ROOT / "scenarios").rglob("*.toml"))]
 
 
 def _value_lines(text: str) -> list[int]:

@@ -113,6 +113,7 @@ def drop_rows(scenario: str, at: float, rows: int) -> str:
     import pandas as pd
 
     from adaptive_dd.io import read_toml
+    from adaptive_dd.robots.example_robot_data import is_example_robot_data
 
     src = Path(scenario)
     dst = Path(tempfile.mkdtemp(prefix="real_log_gap_"))
@@ -121,7 +122,10 @@ def drop_rows(scenario: str, at: float, rows: int) -> str:
         frame = pd.read_csv(src.parent / f)
         i = int(np.searchsorted(frame[table["record"].get("time", "t")].to_numpy(), at))
         frame.drop(index=range(i, i + rows)).to_csv(dst / f, index=False)
-    shutil.copy(src.parent / table["arm"]["urdf"], dst)
+    urdf = table.get("arm", {}).get("urdf")
+    if isinstance(urdf, str) and not is_example_robot_data(urdf) and not Path(urdf).is_absolute():
+        (dst / urdf).parent.mkdir(parents=True, exist_ok=True)  # a relative URDF, where the copy finds it
+        shutil.copy(src.parent / urdf, dst / urdf)
     shutil.copy(src, dst)
     print(f"{rows} rows dropped at {at} s from every file of the record (copies in {dst})")
     return str(dst / src.name)

@@ -528,3 +528,30 @@ def test_payload_pair_bounds_hold_with_an_estimated_covariance():
     blind[rows, :] = blind[:, rows] = 0.0
     with pytest.raises(ParameterError, match=r"does not determine the payload's .*m"):
         pair_difference(P, d, blind, "diagonal")
+
+
+def _drop_rows():
+    import sys
+
+    sys.path.insert(0, str(ROOT / "benchmarks"))
+    try:
+        import real_log
+    finally:
+        sys.path.pop(0)
+    return real_log.drop_rows
+
+
+@pytest.mark.parametrize("urdf", ["sub/arm.urdf", "example-robot-data:ur_description/urdf/ur5_robot.urdf"])
+def test_real_log_gap_copy_keeps_the_urdf_reachable(tmp_path, urdf):
+    """``benchmarks/real_log.py --drop``'s copy of a scenario: a relative URDF is copied where the copy
+    looks for it (a subfolder kept), an example-robot-data one is left to the package (it tried to
+    copy ``example-robot-data:...`` as a file)."""
+    (tmp_path / "sub").mkdir()
+    (tmp_path / "sub" / "arm.urdf").write_text("<robot name='a'/>")
+    (tmp_path / "log.csv").write_text("t,a\n" + "".join(f"{0.01 * i},{i}\n" for i in range(50)))
+    scenario = tmp_path / "s.toml"
+    scenario.write_text(f'[arm]\nurdf = "{urdf}"\n\n[record]\nfiles = ["log.csv"]\ntime = "t"\n')
+    copy = Path(_drop_rows()(str(scenario), 0.2, 5))
+    assert copy.parent != tmp_path and copy.read_text() == scenario.read_text()
+    assert len((copy.parent / "log.csv").read_text().splitlines()) == 46
+    assert (copy.parent / "sub" / "arm.urdf").exists() == (not urdf.startswith("example-robot-data:"))
