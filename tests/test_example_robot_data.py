@@ -176,3 +176,20 @@ def test_plant_and_model_take_the_prefix_too(robots):
     data["model"] = {"from": "example-robot-data:ur_description/urdf/ur10_robot.urdf"}
     with pytest.raises(ScenarioError, match=r"s\.toml: key 'model\.from'.*same joints and frames"):
         parse_scenario(data, "s.toml")
+
+
+@pytest.mark.parametrize("table", ["plant", "model"])
+def test_validate_prints_the_plants_urdf_notes_too(robots, table):
+    """The plant's URDF is read and checked like the [arm]'s, and what it had that is unusual is said:
+    a [plant] urdf, or the [arm]'s own file when [model] from gives the controllers another (the [arm]
+    then is the plant). A plant from the [arm] itself adds nothing (its notes are the arm's)."""
+    from adaptive_dd.benchmark.scenario import format_scenario
+
+    ur3 = "example-robot-data:ur_description/urdf/ur3_robot.urdf"
+    data = read_toml(FOLDER / "ur3.toml")
+    data.pop("plant", None)
+    plain = format_scenario(parse_scenario(data, "s.toml"))
+    data["plant" if table == "plant" else "model"] = {"urdf": ur3} if table == "plant" else {"from": ur3}
+    text = format_scenario(parse_scenario(data, "s.toml"))
+    assert "# plant note: link 'tool0': mass 0 kg and no inertia: a massless frame (kept)" in text
+    assert "# plant note:" not in plain

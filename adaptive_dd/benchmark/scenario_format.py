@@ -91,6 +91,7 @@ def _plant_lines(sc: Scenario) -> list[str]:
         )
     out = [f"model.urdf = {str(sc.arm.urdf)!r}   (what every non-oracle controller is given)", *stated]
     out.append(f"plant.urdf = {p.urdf!r}" if p.urdf else "# plant links: the [arm]'s URDF")
+    out += [f"# plant note: {note}" for note in p.notes]  # what the plant's URDF had that is unusual, kept
     for key in ("viscous", "coulomb", "armature"):
         out.append(f"plant.{key} = {_show(getattr(p, key))}")
     if p.uncertainty is not None:

@@ -39,7 +39,7 @@ every controller of the run (common random numbers).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import NamedTuple
 
@@ -133,6 +133,10 @@ class PlantSpec:
         None: every seed meets this plant exactly.
     urdf : str or None
         The ``[plant] urdf`` file the links come from (None: the ``[arm]``'s).
+    notes : tuple of str
+        What reading the plant's URDF noted (a massless frame, a repaired inertia, ...:
+        :attr:`~adaptive_dd.plant.arm.Arm.urdf_notes`) when it is not the controllers' model's URDF
+        (``[plant] urdf``, or the ``[arm]``'s under ``[model] from``); printed by ``validate``.
     """
 
     pi_links: tuple[float, ...]
@@ -141,6 +145,7 @@ class PlantSpec:
     armature: tuple[float, ...]
     uncertainty: Uncertainty | None = None
     urdf: str | None = None
+    notes: tuple[str, ...] = field(default=(), compare=False)
 
     def nominal(self) -> PlantDraw:
         """The plant without a draw."""
@@ -344,6 +349,7 @@ def parse_plant(src: str, table: dict | None, arm, model_from: bool = False) -> 
     spec = exact_plant(arm)
     n = arm.n_joints
     urdf = None
+    notes = tuple(arm.urdf_notes) if model_from and arm.urdf is not None else ()  # the model is another file
     if "urdf" in table:
         u = table["urdf"]
         if not isinstance(u, str) or not u:
@@ -353,7 +359,7 @@ def parse_plant(src: str, table: dict | None, arm, model_from: bool = False) -> 
             src, "plant.urdf", u, path, arm, "the plant's URDF must have the same joints and frames as the "
             "[arm] (other inertial values only)"
         )  # fmt: skip
-        urdf = str(path)
+        urdf, notes = str(path), tuple(other.urdf_notes)
         spec = PlantSpec(tuple(float(x) for x in other.pi_links), spec.viscous, spec.coulomb, spec.armature)
     vals = {}
     for key in ("viscous", "coulomb", "armature"):
@@ -371,6 +377,7 @@ def parse_plant(src: str, table: dict | None, arm, model_from: bool = False) -> 
         vals.get("armature", spec.armature),
         unc,
         urdf,
+        notes,
     )
 
 
