@@ -27,7 +27,7 @@ from numpy.typing import ArrayLike, NDArray
 from adaptive_dd.benchmark.runner import run_benchmark
 from adaptive_dd.benchmark.scenario import Scenario, load_scenario
 from adaptive_dd.benchmark.trials import payload_schedule, sensor_of, trial_rngs
-from adaptive_dd.errors import SignalError
+from adaptive_dd.errors import ParameterError, SignalError
 from adaptive_dd.plant.simulator import ArmSimulator
 
 __all__ = ["Measurement", "Simulation", "run_trial"]
@@ -198,6 +198,10 @@ class Simulation:
 
     def __init__(self, scenario: Scenario | None = None, seed_index: int = 0) -> None:
         self.scenario = scenario or load_scenario()
+        if isinstance(seed_index, bool) or not isinstance(seed_index, int | np.integer) or seed_index < 0:
+            raise ParameterError(
+                f"Simulation: seed_index must be an integer >= 0 (a benchmark trial), got {seed_index!r}"
+            )
         self.seed_index = int(seed_index)
         sc = self.scenario
         t = np.arange(sc.n_samples + 1) * sc.sample_period  # the final state's time too
@@ -235,7 +239,13 @@ class Simulation:
         return Measurement(k, k * self.scenario.sample_period, qm, qdm, *(r[k] for r in self._ref))
 
     def step(self, tau: ArrayLike) -> Measurement:
-        """Apply the torque command ``tau (n,)`` [N m] for one sample; return the next measurement."""
+        """Apply the torque command ``tau (n,)`` [N m] for one sample; return the next measurement.
+
+        The benchmark's failure rule holds here too: a non-finite command, a position error beyond
+        the run's divergence bound or a runaway speed fails the trial. The arm is then stopped
+        where it was (zero torque from then on) and :attr:`failed` is True; the steps go on (so
+        that a Gymnasium episode can end on it) and nothing is raised: check ``sim.failed``.
+        """
         if self._trial is None:
             raise SignalError("call reset() before step()")
         if self.done:
@@ -328,6 +338,21 @@ def run_trial(controller, scenario: Scenario | None = None, seed_index: int = 0,
     >>> res.runs["ct_oracle"].e_norm.shape  # one trial x 1000 samples
     (1, 1000)
     """
+    import warnings
+
     sc = scenario or load_scenario()
     label = name or getattr(controller, "name", type(controller).__name__)
-    return run_benchmark(sc, progress=False, controllers={label: controller}, seed_indices=[seed_index])
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        res = run_benchmark(sc, progress=False, controllers={label: controller}, seed_indices=[seed_index])
+    for w in caught:  # the floor's warning speaks of run_benchmark's controllers=: say what run_trial can do
+        text = str(w.message)
+        if "did not run" in text and "controllers=" in text:
+            floor = res.runs[label].floor
+            text = (
+                f"run_trial: {label}'s floor {floor} is not run by run_trial (one controller): its ratio to "
+                f"the floor is NaN; run_benchmark(scenario, controllers={{{label!r}: ..., {floor!r}: "
+                f"make_controller({floor!r})}}, seed_indices=[{seed_index}]) runs both"
+            )
+        warnings.warn(text, w.category, stacklevel=2)
+    return res

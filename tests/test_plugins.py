@@ -258,3 +258,26 @@ def test_controllers_picked_on_the_command_line_drop_the_others_tables(tmp_path)
     argv = ["benchmark", str(EXAMPLES / "plugin.toml"), "--controllers", "ct_oracle", "--seeds", "1"]
     assert main([*argv, "--out", str(out), "--no-progress"]) == 0
     assert (out / "per_seed.csv").exists()
+
+
+def test_a_plugins_table_is_named_by_its_class_and_its_messages_say_so():
+    """A plug-in's unknown setting names the table the user writes (``controllers.Class``, not the
+    import path) and lists every setting it takes, the common ones included; a table named by the
+    label is told the class name."""
+    from adaptive_dd.benchmark.scenario import parse_scenario
+    from adaptive_dd.errors import ScenarioError
+
+    with pytest.raises(
+        ParameterError,
+        match=r"^controllers\.ComputedTorque: unknown setting\(s\) \['scael'\]; allowed: \[.*'bandwidth', "
+        r"'damping', .*'label'.*\]",
+    ):
+        make_controller("adaptive_dd.controllers:ComputedTorque", options={"scael": 1})
+    data = {
+        "run": {"duration": 1.0, "controllers": ["ct_oracle", "adaptive_dd.controllers:ComputedTorque"]},
+        "controllers": {"mine": {"label": "mine"}},
+    }
+    with pytest.raises(
+        ScenarioError, match=r"controllers\.mine: .*named by its class \(\[controllers\.ComputedTorque\]\)"
+    ):
+        parse_scenario(data, "s.toml")

@@ -5,7 +5,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from adaptive_dd.benchmark.scenario import default_scenario_path, load_scenario
+from adaptive_dd.benchmark.scenario import default_scenario_path, load_scenario, parse_scenario
 from adaptive_dd.errors import ScenarioError
 
 GOOD = """
@@ -69,7 +69,7 @@ def test_good_file(tmp_path):
         (("[run]", "[runs]\n[run]"), "\\[runs\\]: unknown table"),
         (('"adaptive_ct"]', '"adaptive_cta"]'), "unknown controller 'adaptive_cta'"),
         (("mass = 1.0", "mass = -1.0"), "payload\\[0\\].mass: must be in \\[0, 50\\]"),
-        (("at = 2.0", "at = 5.0"), "payload\\[0\\].at: must be in \\(0, 4\\]"),
+        (("at = 2.0", "at = 5.0"), "payload\\[0\\].at: must be in \\(0, 3.999\\]"),
         (
             ("at = 2.0\nmass = 1.0", "at = 2.0\nmass = 1.0\n[[payload]]\nat = 1.0\nmass = 3.0"),
             "must increase",
@@ -153,3 +153,22 @@ def test_an_arm_without_a_reference_is_told_what_one_looks_like(tmp_path):
         ScenarioError, match=r"joint1 \.\. joint6, each as joint1 = \{ offset = 0\.0, amplitude"
     ):
         load_scenario(str(path))
+
+
+@pytest.mark.parametrize("data", [None, [1, 2], "run.duration = 2"])
+def test_a_scenario_that_is_not_a_dict_of_tables_is_named(data):
+    from adaptive_dd.errors import ScenarioError
+
+    with pytest.raises(ScenarioError, match=r"s\.toml: a scenario is a dict of tables"):
+        parse_scenario(data, "s.toml")
+
+
+def test_a_payload_change_is_told_its_real_range():
+    """A change must leave its last segment a sample: the range printed is (0, duration - T]."""
+    from adaptive_dd.errors import ScenarioError
+
+    with pytest.raises(ScenarioError, match=r"payload\[0\]\.at: must be in \(0, 1\.999\], got 2\.0"):
+        parse_scenario({"run": {"duration": 2.0}, "payload": [{"at": 2.0, "mass": 1.0}]}, "s.toml")
+    assert parse_scenario({"run": {"duration": 2.0}, "payload": [{"at": 1.999, "mass": 1.0}]}).swap_times == (
+        1.999,
+    )

@@ -242,3 +242,89 @@ def test_the_library_names_a_misused_argument_and_what_to_pass():
     res = run_benchmark(sc, progress=False)
     with pytest.raises(ParameterError, match=r"window must be a time in \(0, 0.2\] s"):
         plot_tracking_errors(res, window=-1)
+
+
+def test_a_controllers_dict_holds_controller_objects():
+    """run_benchmark(controllers=) checks what it is given before any trial runs: a name, a class, an
+    object without the protocol's methods (each failed every trial in silence, the reason only in
+    to_frame's failure column)."""
+    from adaptive_dd import make_controller
+    from adaptive_dd.benchmark.runner import run_benchmark
+    from adaptive_dd.errors import ParameterError
+
+    sc = dataclasses.replace(load_scenario(), seeds=1, duration=0.2, swap_times=(0.1,), swap_masses=(1.0,))
+    oracle = make_controller("ct_oracle")
+
+    class NoObserve:
+        def reset(self, n, T):
+            pass
+
+        def command(self, q, qd, q_d, qd_d, qdd_d, sigma_true=None):
+            return 0 * q
+
+    for bad, what in [
+        ("adaptive_ct", r"controllers\['a'\] is the name 'adaptive_ct'.*make_controller\('adaptive_ct'\)"),
+        (NoObserve, r"controllers\['a'\] is the class NoObserve.*an instance"),
+        (NoObserve(), r"controllers\['a'\] \(NoObserve\) is not a controller.*missing \['observe'\]"),
+    ]:
+        with pytest.raises(ParameterError, match=what):
+            run_benchmark(sc, progress=False, controllers={"ct_oracle": oracle, "a": bad})
+
+
+def test_the_summary_counts_a_failed_trial_before_its_failure(short):
+    """summary() keeps a failed trial's segments that ended before it failed (as metrics() and the
+    report do), and a controller whose every trial failed at once keeps its rows with n 0."""
+    from adaptive_dd import make_controller
+    from adaptive_dd.benchmark.runner import run_benchmark
+    from adaptive_dd.controllers import Controller
+
+    class NanLate(Controller):  # seed 1 fails at 0.7 s, in the second segment (the swap at 0.6 s)
+        name = "nan_late"
+
+        def reset(self, n, T):
+            super().reset(n, T)
+            self.k, self.n = 0, n
+
+        def command(self, q, qd, q_d, qd_d, qdd_d, sigma_true=None):
+            self.k += 1
+            tau = 100 * (q_d - q) + 20 * (qd_d - qd)
+            if self.k > 700:
+                tau[1, 1] = np.nan  # trial 1's joint 2
+            return tau
+
+    class NanNow(Controller):
+        name = "nan_now"
+
+        def command(self, q, qd, q_d, qd_d, qdd_d, sigma_true=None):
+            return np.full_like(q, np.nan)
+
+    res = run_benchmark(
+        short, progress=False,
+        controllers={"ct_oracle": make_controller("ct_oracle"), "late": NanLate(), "now": NanNow()},
+    )  # fmt: skip
+    frame = res.to_frame().set_index(["controller", "seed", "segment"])
+    assert frame.loc[("late", 1, 0), "failed"] and np.isfinite(frame.loc[("late", 1, 0), "rms_error_rad"])
+    assert np.isnan(frame.loc[("late", 1, 1), "rms_error_rad"])
+    summary = res.summary().set_index(["controller", "segment"])
+    assert list(summary.loc["late", "n"]) == [2, 1]
+    m = res.metrics()["controllers"]["late"]["segments"]
+    assert summary.loc[("late", 0), "ratio_mean"] == pytest.approx(m[0]["ratio_to_floor"]["mean"])
+    assert list(summary.loc["now", "n"]) == [0, 0]
+
+
+def test_a_bad_seed_index_is_named_where_it_is_given():
+    from adaptive_dd.errors import ParameterError
+
+    for bad in (-1, 1.5, True):
+        with pytest.raises(ParameterError, match=r"Simulation: seed_index must be an integer >= 0"):
+            Simulation(seed_index=bad)
+
+
+def test_run_trial_says_how_to_run_the_floor_beside_it(short):
+    """run_trial runs one controller: a floor it lacks is said in run_trial's terms (it has no
+    controllers= to put the floor in), pointing at the caller's line."""
+    from adaptive_dd import make_controller
+
+    with pytest.warns(UserWarning, match=r"run_trial: adaptive_ct's floor ct_oracle.*run_benchmark\(") as w:
+        run_trial(make_controller("adaptive_ct"), short, seed_index=0)
+    assert all(Path(x.filename).name == "test_simulation_api.py" for x in w)

@@ -191,11 +191,12 @@ def _controller_rows(res, name: str, run, per: dict) -> list[dict]:
 
 def summary_frame(res):
     """Per controller and segment: mean, median, p90 and max of the per-seed RMS error and
-    ratio to the floor, and the worst seed (failed trials left out). Columns ``controller,
-    segment, mass_kg, rms_error_mean_rad, rms_error_median_rad, ratio_mean, ratio_median,
-    ratio_p90, ratio_max, n, worst_seed``."""
-    df = to_frame(res)
-    df = df[~df["failed"]]
+    ratio to the floor, and the worst seed. Columns ``controller, segment, mass_kg,
+    rms_error_mean_rad, rms_error_median_rad, ratio_mean, ratio_median, ratio_p90, ratio_max, n,
+    worst_seed``. A failed trial counts in the segments that ended before its failure, as in
+    :meth:`~adaptive_dd.benchmark.types.BenchmarkResult.metrics` and the report (``n``: the trials
+    counted); a controller whose every trial failed at once keeps its rows, ``n`` 0."""
+    df = to_frame(res)  # a failed trial's metrics are NaN in the segments that end after its failure
 
     def p90(x):
         return float(np.nanpercentile(x, 90)) if x.notna().any() else np.nan
@@ -208,7 +209,7 @@ def summary_frame(res):
         ratio_median=("ratio_to_floor", "median"),
         ratio_p90=("ratio_to_floor", p90),
         ratio_max=("ratio_to_floor", "max"),
-        n=("seed", "size"),
+        n=("rms_error_rad", "count"),
     )
 
     def worst(x):

@@ -40,6 +40,7 @@ from adaptive_dd.benchmark.types import (
 )
 from adaptive_dd.controllers import Controller
 from adaptive_dd.controllers.compiled_form import compiled_spec
+from adaptive_dd.controllers.plugins import check_controller_object
 from adaptive_dd.errors import ParameterError
 
 __all__ = [
@@ -132,6 +133,8 @@ def run_benchmark(
             f"{type(controllers).__name__}; to run some of the scenario's by name, pass "
             "scenario.with_controllers([...])"
         )
+    for key, obj in (controllers or {}).items():
+        check_controller_object("run_benchmark", key, obj)
     if not (isinstance(keep_trajectories, int | np.integer) and keep_trajectories >= 0):
         raise ParameterError(f"keep_trajectories must be an integer >= 0, got {keep_trajectories!r}")
     t0 = time.perf_counter()

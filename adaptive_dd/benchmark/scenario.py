@@ -76,6 +76,7 @@ from __future__ import annotations
 
 import dataclasses
 import itertools
+from collections.abc import Mapping
 from dataclasses import dataclass, field, fields
 from importlib import resources
 from pathlib import Path
@@ -446,8 +447,13 @@ def parse_scenario(data: dict, src: str = "<memory>", name: str = "scenario") ->
     """
     from adaptive_dd.robots.random_arm import with_random_arm
 
+    if not isinstance(data, Mapping):
+        raise ScenarioError(
+            f"{src}: a scenario is a dict of tables ({{'run': {{...}}, 'arm': {{...}}, ...}}, as a TOML file "
+            f"reads), got {type(data).__name__} {data!r:.60}"
+        )
     arm, errors, plant, stated = None, [], None, None
-    data = with_random_arm(data, src)  # robot = "random:SEED": its capacity, armature, reference
+    data = with_random_arm(dict(data), src)  # robot = "random:SEED": its capacity, armature, reference
     errors += derived_setting_errors(data)  # adaptive_ct's estimator and detector: from the scenario
     table = data if isinstance(data, dict) else {}
     plant_table = table.get("plant")

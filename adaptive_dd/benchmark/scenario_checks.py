@@ -265,7 +265,8 @@ def _check_payload(e: list, v: dict, timing_ok: bool) -> None:
     d = v["duration"] if timing_ok else math.inf
     ok = True
     for i, (t, m) in enumerate(zip(times, masses, strict=True)):
-        ok &= check_number(e, f"payload[{i}].at", t, 0, d, lo_open=True)
+        last = d - v["sample_period"] * (1 - 1e-9) if timing_ok else d  # the last segment holds a sample
+        ok &= check_number(e, f"payload[{i}].at", t, 0, last, lo_open=True)
         check_number(e, f"payload[{i}].mass", m, 0, L["max_mass"])
         if ok and i and t <= times[i - 1]:
             e.append(f"payload[{i}].at: {t} s: swap times must increase (previous {times[i - 1]} s)")
@@ -362,7 +363,9 @@ def _check_options(e: list, opts: Any, ctrls: tuple) -> None:
             continue
         name, table = item
         if ctrls and name not in names:
-            e.append(f"controllers.{name}: not a controller of run.controllers ({', '.join(ctrls)})")
+            plugins = [f"[controllers.{table_name(c)}]" for c in ctrls if ":" in c]
+            hint = f"; a plug-in's table is named by its class ({', '.join(plugins)})" if plugins else ""
+            e.append(f"controllers.{name}: not a controller of run.controllers ({', '.join(ctrls)}){hint}")
         _plain(e, f"controllers.{name}", table)
 
 
