@@ -495,3 +495,18 @@ def test_run_benchmark_on_an_n_joint_arm_calls_on_run_and_checks_its_seeds():
     for bad in ([], [-1]):
         with pytest.raises(ParameterError, match="seed_indices"):
             run_benchmark(sc, progress=False, seed_indices=bad)
+
+
+def test_with_settings_checks_the_table_it_sets():
+    """with_settings refuses an unknown or bad setting at once, as a file's table is refused when it
+    is read (it was accepted, and failed when the run built the controller)."""
+    sc = load_scenario(_shipped("vertical3_payload_exact"))
+    with pytest.raises(
+        ScenarioError, match=r"with_settings\('adaptive_ct'.*unknown setting\(s\) \['boost_bandwith'\]"
+    ):
+        with_settings(sc, "adaptive_ct", {"boost_bandwith": 100.0})
+    with pytest.raises(ScenarioError, match=r"controllers\.adaptive_ct\.damping"):
+        with_settings(sc, "adaptive_ct", {"damping": -1.0})
+    assert with_settings(sc, "adaptive_ct", {"boost_duration": 0.1}).options("adaptive_ct") == {
+        "boost_duration": 0.1
+    }

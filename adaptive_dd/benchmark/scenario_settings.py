@@ -64,7 +64,15 @@ def with_settings(scenario, name: str, settings: dict):
     from adaptive_dd.benchmark.scenario_checks import freeze
 
     kept = tuple(o for o in scenario.controller_options if o[0] != name)
-    return dataclasses.replace(scenario, controller_options=(*kept, (name, freeze(dict(settings)))))
+    out = dataclasses.replace(scenario, controller_options=(*kept, (name, freeze(dict(settings)))))
+    errs = controller_setting_errors(
+        {f.name: getattr(out, f.name) for f in dataclasses.fields(out) if f.init}
+    )
+    if errs:  # checked here, as a file's table is when it is read, not when the run starts
+        from adaptive_dd.errors import ScenarioError
+
+        raise ScenarioError(f"with_settings({name!r}, ...): " + "; ".join(errs))
+    return out
 
 
 def derived_setting_errors(data: Any) -> list[str]:
