@@ -219,3 +219,17 @@ def test_an_unknown_registered_id_lists_the_registered_ones():
         ScenarioError, match="not a registered id; registered: adaptive_dd/PayloadSwap-SICE-v0"
     ):
         make_env("adaptive_dd/PayloadSwap-Nope-v0")
+
+
+def test_a_scenario_file_under_adaptive_dd_is_a_file_not_an_id(monkeypatch):
+    """The README names the shipped scenarios ``adaptive_dd/scenarios/*.toml``: from the repository's
+    root that path is a file (it was refused as an unknown registered id); a missing one says so."""
+    from adaptive_dd.errors import ScenarioError
+    from adaptive_dd.gym import make_env
+
+    monkeypatch.chdir(Path(__file__).resolve().parents[1])
+    env = make_env("adaptive_dd/scenarios/vertical3_payload_exact.toml")
+    assert env.unwrapped.scenario.n_joints == 3
+    with pytest.raises(ScenarioError, match="nosuch.toml") as exc:
+        make_env("adaptive_dd/scenarios/nosuch.toml")
+    assert "registered id" not in str(exc.value)

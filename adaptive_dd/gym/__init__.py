@@ -91,7 +91,8 @@ def make_env(scenario=None, floor: str | None = "ct_oracle") -> PayloadSwapEnv:
     """
     if isinstance(scenario, str) and scenario in SCENARIO_IDS:
         scenario = _SCENARIOS / SCENARIO_IDS[scenario]
-    elif isinstance(scenario, str) and scenario.startswith("adaptive_dd/"):
+    elif isinstance(scenario, str) and scenario.startswith("adaptive_dd/") and not scenario.endswith(".toml"):
+        # an id's shape (adaptive_dd/Name-v0), not a file's (the README's adaptive_dd/scenarios/*.toml)
         from adaptive_dd.errors import ScenarioError
 
         raise ScenarioError(
