@@ -136,6 +136,10 @@ def _read_csv(path: Path):
         raise DataError(f"{path}: no such file")
     try:
         frame = pd.read_csv(path, skipinitialspace=False)
+        head = str(frame.columns[0]) if frame.shape[1] == 1 else ""
+        sep = next((c for c in (";", "\t") if c in head), None)
+        if sep is not None:  # one column whose name holds the separator: a semicolon or tab file
+            frame = pd.read_csv(path, sep=sep, skipinitialspace=False)
     except (ValueError, pd.errors.ParserError) as exc:
         raise DataError(f"{path}: not a readable CSV file: {exc}") from None
     frame.columns = [str(c).strip() for c in frame.columns]
@@ -169,8 +173,10 @@ def _numeric(path: Path, frame, col: str, rows: slice) -> Array:
         breaks = np.flatnonzero(np.diff(bad) != 1)
         run = bad[breaks[0]] if breaks.size else bad[-1]
         kind = "not a number" if isinstance(raw[i], str) else "non-finite value"
+        cell = raw[i].item() if isinstance(raw[i], np.generic) else raw[i]  # nan, not np.float64(nan)
+        lines = f"line {i + 2}" if run == i else f"lines {i + 2}-{int(run) + 2}"
         raise DataError(
-            f"{path}: lines {i + 2}-{int(run) + 2}, column {col!r}: {kind} ({raw[i]!r}; {bad.size} such "
+            f"{path}: {lines}, column {col!r}: {kind} ({cell!r}; {bad.size} such "
             "row(s) in the window): cut the window to avoid them ([record] window or --window) or repair "
             "the file"
         )
@@ -189,7 +195,8 @@ def _times(path: Path, frame, col: str) -> Array:
         i = int(bad[0])
         what = "repeats" if dt[i] == 0 else "goes back from"
         raise DataError(
-            f"{path}: line {i + 3}, column {col!r}: time {t[i + 1]!r} {what} line {i + 2}'s {t[i]!r} "
+            f"{path}: line {i + 3}, column {col!r}: time {float(t[i + 1])!r} {what} line {i + 2}'s "
+            f"{float(t[i])!r} "
             f"({bad.size} such step(s)): a duplicated or reordered sample; remove or reorder those rows"
         )
     return t
@@ -200,8 +207,8 @@ def _window_rows(path: Path, t: Array, window) -> slice:
     i0, i1 = int(np.searchsorted(t, lo)), int(np.searchsorted(t, hi, side="right"))
     if i1 - i0 < 20:
         raise DataError(
-            f"{path}: the window [{lo:g}, {hi:g}] s holds {max(i1 - i0, 0)} samples (the log spans "
-            f"{t[0]:g}-{t[-1]:g} s): need at least 20"
+            f"{path}: the window [{lo:.10g}, {hi:.10g}] s holds {max(i1 - i0, 0)} samples (the log spans "
+            f"{t[0]:.10g}-{t[-1]:.10g} s): need at least 20"
         )
     return slice(i0, i1)
 
@@ -255,7 +262,7 @@ def read_log(spec: RecordSpec, window: tuple[float, float] | None = None, arm=No
         velocity = None  # the simulator's format: velocity columns optional
     cols = [*spec.position, *spec.torque, *([] if velocity is None else velocity)]
     where = _locate(frames, spec, cols)
-    clocks = {p: _times(p, f, spec.time) for p, f in frames.items()}
+    clocks = {p: _times(p, f, spec.time) * spec.time_scale for p, f in frames.items()}
     rows = {p: _window_rows(p, clocks[p], window) for p in frames}
     t0, T = _first_clock(spec, clocks, rows)
     lo = max(clocks[p][rows[p]][0] for p in frames)
@@ -308,6 +315,11 @@ def read_log(spec: RecordSpec, window: tuple[float, float] | None = None, arm=No
     )
 
 
+MAX_LOG_STEP = 1.0
+"""[s] The largest median time step a log is read with when ``[record] sample_period`` is not
+given: a coarser one is a time column in another unit (``[record] time_unit``)."""
+
+
 def _first_clock(spec: RecordSpec, clocks: dict, rows: dict) -> tuple[Array, float]:
     """The first file's times in the window and the sample period: given, else the mean step
     between its gaps (:func:`~adaptive_dd.record_pieces.find_gaps`; jitter averages out)."""
@@ -317,6 +329,13 @@ def _first_clock(spec: RecordSpec, clocks: dict, rows: dict) -> tuple[Array, flo
     gaps, _ = find_gaps(t0)
     ok = np.ones(steps.size, dtype=bool)
     ok[gaps] = False
+    median = float(np.median(steps)) if steps.size else 0.0
+    if spec.sample_period is None and median > MAX_LOG_STEP:
+        raise DataError(
+            f"{first}: the time column {spec.time!r} steps by {median:.6g} per sample (median), read as "
+            f"s: a robot's log samples faster than every {MAX_LOG_STEP:g} s. If its time is in ms, us or "
+            'ns (ROS stamps often are), say so: [record] time_unit = "ms" (or "us", "ns")'
+        )
     return t0, spec.sample_period or float(np.mean(steps[ok]))
 
 

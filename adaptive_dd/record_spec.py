@@ -22,6 +22,7 @@ Array = NDArray[np.float64]
 RECORD_KEYS = (
     "files",
     "time",
+    "time_unit",
     "position",
     "velocity",
     "torque",
@@ -38,6 +39,9 @@ RECORD_KEYS = (
     "sample_period",
 )
 UNITS = {"rad": 1.0, "deg": math.pi / 180.0, "m": 1.0, "mm": 1e-3}
+TIME_UNITS = {"s": 1.0, "ms": 1e-3, "us": 1e-6, "ns": 1e-9}
+"""``[record] time_unit``: the time column's unit (ROS stamps are often ns); the window and the
+sample period are in s of the log's clock either way."""
 
 
 @dataclass(frozen=True)
@@ -90,6 +94,8 @@ class RecordSpec:
     joint_names: tuple[str, ...]
     source: str
     simulator_format: bool = False
+    time_scale: float = 1.0
+    """Multiplies the time column into s (``[record] time_unit``)."""
 
 
 def _err(src: str, key: str, why: str) -> ScenarioError:
@@ -177,6 +183,13 @@ def record_spec(table: dict | None, joint_names, kinds, src: str, files=None) ->
     gain, offset = _torque_conversion(src, t, n)
     used, weight = _channels(src, t, names)
     window, T = _window_period(src, t)
+    unit = t.get("time_unit", "s")
+    if unit not in TIME_UNITS:
+        raise _err(
+            src,
+            "time_unit",
+            f"must be one of {', '.join(map(repr, TIME_UNITS))} (the time column's unit), got {unit!r}",
+        )
     held = t.get("torque_held", True)
     if not isinstance(held, bool):
         raise _err(src, "torque_held", f"must be true or false, got {held!r}")
@@ -198,6 +211,7 @@ def record_spec(table: dict | None, joint_names, kinds, src: str, files=None) ->
         joint_names=names,
         source=src,
         simulator_format=default,
+        time_scale=TIME_UNITS[unit],
     )
 
 

@@ -250,3 +250,14 @@ def test_the_units_reuse_freed_memory_and_the_defaults_come_back():
 
     assert pool.run_units(unit, ["a", "b"], ("pd",), 2, False, 1) == [(["a"], 0.0, 0.0), (["b"], 0.0, 0.0)]
     assert seen == [("a", ("pd",), 2, False, 0), ("b", ("pd",), 2, False, 0)]
+
+
+def test_nothing_is_lost_after_a_trial_failed():
+    """A failed trial's arm is stopped while the reference runs on: its error past the failure is the
+    failure's, not a loss of tracking (a plug-in failed at 0 s was flagged lost at 0.519, 4, 8 and 12 s,
+    another kind of failure not at all)."""
+    T = 0.01
+    e = np.array([[0.0, 0.3, 0.3, 0.3], [0.0, 0.3, 0.3, 0.3]])
+    t = lost_times([e, e], [0.0, 1.0], T, 2, until=np.array([np.inf, 0.02]))
+    np.testing.assert_allclose(t[0], [0.01, 1.01])
+    assert t[1, 0] == 0.01 and np.isnan(t[1, 1])  # lost before its failure at 0.02 s; nothing after

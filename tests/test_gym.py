@@ -230,6 +230,6 @@ def test_a_scenario_file_under_adaptive_dd_is_a_file_not_an_id(monkeypatch):
     monkeypatch.chdir(Path(__file__).resolve().parents[1])
     env = make_env("adaptive_dd/scenarios/vertical3_payload_exact.toml")
     assert env.unwrapped.scenario.n_joints == 3
-    with pytest.raises(ScenarioError, match="nosuch.toml") as exc:
+    with pytest.raises(ScenarioError, match=r"nosuch\.toml") as exc:
         make_env("adaptive_dd/scenarios/nosuch.toml")
     assert "registered id" not in str(exc.value)

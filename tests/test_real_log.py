@@ -555,3 +555,55 @@ def test_real_log_gap_copy_keeps_the_urdf_reachable(tmp_path, urdf):
     assert copy.parent != tmp_path and copy.read_text() == scenario.read_text()
     assert len((copy.parent / "log.csv").read_text().splitlines()) == 46
     assert (copy.parent / "sub" / "arm.urdf").exists() == (not urdf.startswith("example-robot-data:"))
+
+
+@pytest.mark.parametrize(("unit", "factor"), [("ms", 1e3), ("ns", 1e9)])
+def test_a_time_column_in_ms_or_ns_is_said_and_read_with_time_unit(tmp_path, unit, factor):
+    """A log stamped in ms or ns (ROS stamps) was read as s: in ms a 10 s sample period and a silently
+    wrong fit, in ns an internal error in the filters. Without ``time_unit`` it is refused naming the
+    key; with it the record is the one stamped in s (the window in s either way)."""
+    p1, p2, *_ = _write_log(tmp_path, np.random.default_rng(1))
+    ref = read_log(record_spec(_table(p1, p2, exclude=["j_c"]), NAMES, KINDS, "s.toml"))
+    for p in (p1, p2):
+        lines = p.read_text().splitlines()
+        p.write_text(
+            "\n".join(
+                [lines[0]]
+                + [f"{float(x.split(',')[0]) * factor:.17g}," + x.split(",", 1)[1] for x in lines[1:]]
+            )
+            + "\n"
+        )
+    with pytest.raises(DataError, match=r"steps by .* read as s.*time_unit = \"ms\""):
+        read_log(record_spec(_table(p1, p2, exclude=["j_c"]), NAMES, KINDS, "s.toml"))
+    rec = read_log(record_spec(_table(p1, p2, exclude=["j_c"], time_unit=unit), NAMES, KINDS, "s.toml"))
+    assert rec.sample_period == pytest.approx(ref.sample_period, rel=1e-9)
+    np.testing.assert_allclose(rec.q, ref.q, atol=1e-9)
+    np.testing.assert_allclose(rec.tau, ref.tau, atol=1e-9)
+    with pytest.raises(ScenarioError, match=r"record\.time_unit' must be one of 's', 'ms', 'us', 'ns'"):
+        record_spec(_table(p1, p2, time_unit="sec"), NAMES, KINDS, "s.toml")
+
+
+@pytest.mark.parametrize("sep", [";", "\t"])
+def test_a_semicolon_or_tab_separated_log_reads_as_a_comma_one(tmp_path, sep):
+    p1, p2, *_ = _write_log(tmp_path, np.random.default_rng(2))
+    ref = read_log(record_spec(_table(p1, p2, exclude=["j_c"]), NAMES, KINDS, "s.toml"))
+    for p in (p1, p2):
+        p.write_text(p.read_text().replace(",", sep))
+    rec = read_log(record_spec(_table(p1, p2, exclude=["j_c"]), NAMES, KINDS, "s.toml"))
+    np.testing.assert_array_equal(rec.q, ref.q)
+
+
+def test_a_bad_cell_is_quoted_as_written(tmp_path):
+    """The message quotes the cell (nan, a time), not numpy's repr (np.float64(nan)); one line is a line."""
+    p1, p2, *_ = _write_log(tmp_path, np.random.default_rng(4))
+    _rewrite(
+        p1,
+        lambda lines: lines.__setitem__(
+            100, ",".join([*lines[100].split(",")[:2], "nan", *lines[100].split(",")[3:]])
+        ),
+    )
+    with pytest.raises(
+        DataError, match=r"pos.csv: line 101, column 'j_b/pos': non-finite value \(nan;"
+    ) as exc:
+        read_log(record_spec(_table(p1, p2, exclude=["j_c"]), NAMES, KINDS, "s"))
+    assert "np.float64" not in str(exc.value)

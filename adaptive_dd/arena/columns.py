@@ -34,8 +34,9 @@ COLUMNS: dict[str, tuple[str, str]] = {
     "floor_rms_error_mrad": ("mrad", "the same of the floor"),
     "rms_rank": (
         "-",
-        "rank of rms_error_mrad in the scenario's segment among the laws with a floor (1: lowest; "
-        "a law with a failed trial after those without; empty: an oracle, or a law told the true model)",
+        "rank of rms_error_mrad in the scenario's segment among the laws not told the true model (1: "
+        "lowest; a law with a failed trial after those without; empty: an oracle, or a law told the true "
+        "model; a law whose floor could not run is ranked too: the rank compares errors, not ratios)",
     ),
     "rms_torque_Nm": ("N m", "mean over seeds of the RMS applied torque (norm over joints)"),
     "saturation_pct": ("%", "mean over seeds of the samples with a joint's command beyond its limit"),

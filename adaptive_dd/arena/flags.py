@@ -28,15 +28,20 @@ LOST_ERROR = 0.2
 of magnitude above the floors' 0.1 mrad; no task tolerates it)."""
 
 
-def lost_times(e_segments: list, t0: list[float], T: float, n_seeds: int) -> np.ndarray:
+def lost_times(e_segments: list, t0: list[float], T: float, n_seeds: int, until=None) -> np.ndarray:
     """``(n_seeds, n_segments)``: per seed and segment the time [s] of the first sample whose error
     norm exceeds :data:`LOST_ERROR` (NaN: none); ``e_segments`` the error norm per segment
-    (``(n_seeds, samples)`` or None), ``t0`` each segment's start [s]."""
+    (``(n_seeds, samples)`` or None), ``t0`` each segment's start [s]; ``until (n_seeds,)`` [s]:
+    each trial's failure (inf: none), after which nothing is flagged (the failure is the flag: the
+    arm is stopped and the reference runs away from it)."""
     out = np.full((n_seeds, len(e_segments)), np.nan)
     for i, e in enumerate(e_segments):
         if e is None or e.shape[1] == 0:
             continue
         over = e > LOST_ERROR
+        if until is not None:
+            times = t0[i] + T * np.arange(e.shape[1])
+            over &= times[None, :] < np.asarray(until, float)[:, None] - 0.5 * T
         hit = over.any(axis=1)
         out[hit, i] = t0[i] + T * np.argmax(over[hit], axis=1)
     return out

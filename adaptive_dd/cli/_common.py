@@ -54,7 +54,7 @@ def add_window_option(p: argparse.ArgumentParser) -> None:
     """``--window START END`` of the commands that read a log through a scenario's ``[record]``."""
     p.add_argument(
         "--window",
-        type=number(float, -1e9, 1e9),
+        type=number(float, -1e11, 1e11),  # an epoch clock's seconds (about 1.7e9) included
         nargs=2,
         metavar=("START", "END"),
         help="with --arm: the part of the log to use [s of its clock] (replaces record.window)",

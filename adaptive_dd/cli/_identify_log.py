@@ -344,7 +344,7 @@ def _print_offset(args, fit, names) -> None:
         return
     why = "--torque-offset on" if args.torque_offset == "on" else "auto: a record read through [record]"
     each = [f"{names[j]} {fit.offset[j]:.3g} +- {fit.offset_std[j]:.2g}" for j in np.flatnonzero(fit.used)]
-    head = f"torque offset per channel, fitted with the parameters ({why}; added by predict) [N m]"
+    head = f"torque offset per channel, fitted with the parameters ({why}; added by predict) [N m, +- 1 std]"
     print(f"{head}: {', '.join(each)}")
 
 

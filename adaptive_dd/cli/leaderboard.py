@@ -33,7 +33,10 @@ def add_parser(sub) -> None:
         "--scenarios", dest="scenario_list", nargs="+", metavar="SCENARIO", help="the same, as an option"
     )
     p.add_argument(
-        "--controllers", nargs="+", metavar="NAME", help="built-in names (default: the arena's list)"
+        "--controllers",
+        nargs="+",
+        metavar="NAME",
+        help="built-in names or plug-ins' MODULE:CLASS (default: the arena's list)",
     )
     p.add_argument(
         "--plugin",
@@ -90,6 +93,17 @@ def run(args: argparse.Namespace) -> int:
         if scenarios or not args.arms:
             raise ParameterError("--no-scenarios: runs the drawn arms alone; give --arms N and no SCENARIO")
         scenarios = []
+    from adaptive_dd.controllers import CONTROLLERS
+
+    for name in args.controllers or ():  # named by the option, not by the scenario it would fail on
+        if ":" not in name and name not in CONTROLLERS:
+            raise ParameterError(
+                f"--controllers: unknown controller {name!r}; built-ins: {', '.join(CONTROLLERS)}, or a "
+                "plug-in's 'package.module:Class' (or --plugin)"
+            )
+    for name in args.plugin:
+        if ":" not in name:
+            raise ParameterError(f"--plugin {name}: expects MODULE:CLASS (e.g. my_laws:MyLaw)")
     controllers = [*(args.controllers or DEFAULT_CONTROLLERS), *args.plugin]
     out = check_output_dir(Path(args.out))
     df = leaderboard(
