@@ -474,6 +474,11 @@ def test_validate_an_identification_scenario(tmp_path, capsys):
     assert main(["validate", str(scen)]) == 0
     out = capsys.readouterr().out
     assert "no [reference]" in out and "record.joint3 = { joint = 'joint3'" in out and "excluded" in out
+    # the files themselves are read, as identify reads them (validate read only the scenario before)
+    assert "# the log as identify reads it: 200 samples at T = 0.01 s (0-1.99 s of its clock)" in out
+    (tmp_path / "log.csv").write_text((tmp_path / "log.csv").read_text().replace("tau2", "tau_2"))
+    assert main(["validate", str(scen)]) == 2
+    assert "log.csv: no column 'tau2'" in capsys.readouterr().err
     scen.write_text(scen.read_text() + "\n[run]\nduration = 2.0\n")
     assert main(["validate", str(scen)]) == 2
     assert "[run]: an identification scenario" in capsys.readouterr().err

@@ -135,6 +135,16 @@ def validate_identification(path) -> int:
     )
     _print_record_spec(spec, arm.joint_names)
     print(describe_arm(arm))
+    from adaptive_dd.record import read_log
+
+    log = read_log(spec, arm=arm)  # the files themselves: columns, cells, times, units, gaps
+    pieces = len(log.pieces) or 1
+    print(
+        f"# the log as identify reads it: {log.t.size} samples at T = {log.sample_period:.6g} s "
+        f"({log.t[0]:.10g}-{log.t[-1]:.10g} s of its clock), {pieces} continuous piece(s)"
+    )
+    for note in log.notes:
+        print(f"# {note}")
     return 0
 
 
