@@ -216,7 +216,8 @@ def trim_gap_edges(pieces, qd_measured: bool, T: float, short, derivative_window
         out.append((at, at + max(0, hi - lo)))
         at += max(0, hi - lo)
     notes = [
-        f"split at the gaps into {len(pieces)} continuous pieces, each resampled and differentiated on its "
+        f"split at the gaps into {len(pieces)} continuous piece{'s' if len(pieces) > 1 else ''}, each "
+        "resampled and differentiated on its "
         f"own; left out: {h} samples ({h * T:.3g} s, half the derivative's window) beside each gap"
     ]
     notes += [

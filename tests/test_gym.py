@@ -163,6 +163,10 @@ def test_residual_zero_is_the_base_controller():
     np.testing.assert_allclose(ev.rms_error, ref, rtol=1e-9)
     kick = evaluate(lambda obs: np.full(6, 5.0), env, [2])
     assert np.all(kick.rms_error[:, 0] > 1.01 * ref[:, 0])  # the residual is applied
+    from adaptive_dd.errors import SignalError
+
+    with pytest.raises(SignalError, match=r"the policy's action at seed 2, sample 0 \(t = 0 s\): .*shape"):
+        evaluate(lambda obs: np.zeros(5), env, [2])  # the wrong shape: whose and where, not only what
     with pytest.raises(ParameterError, match="oracle"):
         ResidualTorque(make_env(sc, floor=None), base="ct_oracle")
 

@@ -21,7 +21,7 @@ import gymnasium
 import numpy as np
 
 from adaptive_dd.benchmark.scenario import Scenario
-from adaptive_dd.errors import ParameterError
+from adaptive_dd.errors import ParameterError, SignalError
 
 __all__ = ["Evaluation", "evaluate", "run_episode"]
 
@@ -120,7 +120,13 @@ def run_episode(policy: Callable, env: gymnasium.Env, seed: int) -> tuple[np.nda
     q = np.full((sc.n_samples, sc.n_joints), np.nan)
     for k in range(sc.n_samples):
         q[k] = info["q_true"]
-        obs, _, terminated, truncated, info = env.step(policy(obs))
+        action = policy(obs)
+        try:
+            obs, _, terminated, truncated, info = env.step(action)
+        except SignalError as exc:  # the action's shape: say whose, where
+            raise SignalError(
+                f"the policy's action at seed {seed}, sample {k} (t = {k * sc.sample_period:.6g} s): {exc}"
+            ) from None
         if terminated:
             return q, True, k
         if truncated:

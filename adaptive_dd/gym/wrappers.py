@@ -20,7 +20,7 @@ import gymnasium
 import numpy as np
 from gymnasium import spaces
 
-from adaptive_dd.errors import ParameterError
+from adaptive_dd.errors import ParameterError, SignalError
 
 __all__ = ["ResidualTorque"]
 
@@ -71,7 +71,12 @@ class ResidualTorque(gymnasium.Wrapper):
         if self._obs is None:
             raise ParameterError("ResidualTorque: call reset() before step()")
         n = self._n
-        tau = self._base_tau + np.asarray(action, dtype=float)
+        action = np.asarray(action, dtype=float)
+        if action.shape != (n,):
+            raise SignalError(
+                f"ResidualTorque: the residual must have shape ({n},) (per joint), got {action.shape}"
+            )
+        tau = self._base_tau + action
         obs, reward, terminated, truncated, info = self.env.step(tau)
         q, qd = self._obs[:n], self._obs[n : 2 * n]
         self.base.observe(q[None], qd[None], info["applied_torque"][None])
