@@ -252,6 +252,15 @@ def _axes(src: str, grid: Any, ctrls: tuple[str, ...]) -> tuple[tuple[str, tuple
     return tuple(axes)
 
 
+_AXIS_WORDS = {
+    "payload_mass": ("].mass",),
+    "swap_time": ("].at",),
+    "bandwidth": ("bandwidth",),
+    "noise_scale": ("noise.", "_variance"),
+}
+"""What a scenario's error names when a grid axis made it (the axes blamed in a grid point's error)."""
+
+
 def _apply(src: str, base: Scenario, swap: int, coords: dict[str, float]) -> Scenario:
     """The base scenario with the scenario axes of one grid point applied."""
     times, masses = list(base.swap_times), list(base.swap_masses)
@@ -285,8 +294,9 @@ def _apply(src: str, base: Scenario, swap: int, coords: dict[str, float]) -> Sce
     try:
         return dataclasses.replace(base, swap_times=tuple(times), swap_masses=tuple(masses), **changes)
     except ScenarioError as exc:  # the grid point's values, not the base scenario's file, are wrong
-        keys = ", ".join(f"'grid.{k}'" for k in coords)
         why = str(exc).replace(f"{base.source}: ", "")
+        blamed = [k for k in coords if any(w in why for w in _AXIS_WORDS.get(k, ()))] or list(coords)
+        keys = ", ".join(f"'grid.{k}'" for k in blamed)
         raise SweepError(f"{src}: key {keys} (at {where}): {why}") from None
 
 

@@ -640,6 +640,9 @@ def test_the_docs_sweep_file_parses_and_a_bad_grid_setting_names_the_sweep_file(
         "[grid.controller.adaptive_ct]\nboost_duration = [0.5, 50.0]\n": r"boost_duration = 50.0\): "
         r"controllers.adaptive_ct.boost_duration: must be in \[0, 5\]",
         "[grid]\nbandwidth = [40.0, 400.0]\n": r"key 'grid.bandwidth' \(at bandwidth = 400.0\)",
+        # the axis at fault alone, not every axis of the point
+        "[grid]\npayload_mass = [1.0, 80.0]\nswap_time = [2.0]\n": r"key 'grid.payload_mass' \(at "
+        r"payload_mass = 80.0, swap_time = 2.0\): payload\[0\].mass",
     }
     for grid, match in bad.items():
         f = tmp_path / "bad.toml"
