@@ -162,10 +162,15 @@ def _locate(frames: dict, spec: RecordSpec, wanted: list[str]) -> dict:
     return where
 
 
-def _numeric(path: Path, frame, col: str, rows: slice) -> Array:
+def _coerced(frame, col: str) -> Array:
+    """A column as floats, NaN where a cell is not a number."""
     import pandas as pd
 
-    v = pd.to_numeric(frame[col], errors="coerce").to_numpy(dtype=float)
+    return pd.to_numeric(frame[col], errors="coerce").to_numpy(dtype=float)
+
+
+def _numeric(path: Path, frame, col: str, rows: slice) -> Array:
+    v = _coerced(frame, col)
     raw = frame[col].to_numpy()
     bad = np.flatnonzero(~np.isfinite(v[rows])) + (rows.start or 0)
     if bad.size:
@@ -273,7 +278,23 @@ def read_log(spec: RecordSpec, window: tuple[float, float] | None = None, arm=No
     grids = [g for g in grids if g.size >= MIN_PIECE_SAMPLES]
     if not grids:
         raise DataError(f"{spec.files[0]}: no piece between the log's gaps holds {MIN_PIECE_SAMPLES} samples")
-    column = resampler(frames, where, clocks, rows, grids, _numeric)
+    excluded = {spec.torque[j] for j in range(len(spec.torque)) if not spec.used[j]}
+    lenient: list[str] = []
+
+    def numeric(
+        path, frame, col, r
+    ):  # an excluded torque channel is not fitted: its bad cells are not errors
+        if col not in excluded:
+            return _numeric(path, frame, col, r)
+        v = _coerced(frame, col)
+        bad = int(np.sum(~np.isfinite(v[r])))
+        if bad:
+            lenient.append(
+                f"{path}: column {col!r} (excluded, not fitted): {bad} non-finite cell(s) read as 0"
+            )
+        return np.where(np.isfinite(v), v, 0.0)
+
+    column = resampler(frames, where, clocks, rows, grids, numeric)
     q = np.column_stack([column(c, True) for c in spec.position])
     raw_tau = np.column_stack([column(c, False) for c in spec.torque])
     _check_stuck(spec, where, raw_tau)
@@ -293,7 +314,7 @@ def read_log(spec: RecordSpec, window: tuple[float, float] | None = None, arm=No
         if qd_measured:
             qd = logged
     grid = np.concatenate(grids)
-    notes = (_resampling_note(t0, T, qd_measured), *lag_note, *gap_lines)
+    notes = (_resampling_note(t0, T, qd_measured), *lag_note, *gap_lines, *lenient)
     if len(pieces) > 1 or short:
         keep, pieces, more = trim_gap_edges(pieces, qd_measured, T, short)
         grid, q, qd, tau = grid[keep], q[keep], qd[keep], tau[keep]

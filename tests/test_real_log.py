@@ -612,3 +612,27 @@ def test_a_bad_cell_is_quoted_as_written(tmp_path):
     ) as exc:
         read_log(record_spec(_table(p1, p2, exclude=["j_c"]), NAMES, KINDS, "s"))
     assert "np.float64" not in str(exc.value)
+
+
+def test_a_bad_cell_in_an_excluded_channel_is_not_an_error(tmp_path):
+    """An excluded torque channel is left out of the fit (docs/real_log.md): a NaN in it refused the
+    whole record; it is read as 0 and said in the notes, while one in a fitted channel is refused."""
+    p1, p2, *_ = _write_log(tmp_path, np.random.default_rng(4))
+
+    def nan_in(col):
+        def edit(lines):
+            cells = lines[100].split(",")
+            cells[col] = "nan"
+            lines[100] = ",".join(cells)
+
+        return edit
+
+    _rewrite(p2, nan_in(3))  # j_c/eff
+    rec = read_log(record_spec(_table(p1, p2, exclude=["j_c"]), NAMES, KINDS, "s"))
+    assert np.all(np.isfinite(rec.tau))
+    assert any(
+        "column 'j_c/eff' (excluded, not fitted): 1 non-finite cell(s) read as 0" in n for n in rec.notes
+    )
+    _rewrite(p2, nan_in(2))  # j_b/eff, fitted
+    with pytest.raises(DataError, match=r"eff.csv: line 101, column 'j_b/eff': non-finite"):
+        read_log(record_spec(_table(p1, p2, exclude=["j_c"]), NAMES, KINDS, "s"))
