@@ -313,6 +313,13 @@ def test_cli_identify_and_predict_on_the_tiago_record(tmp_path, capsys):
     extra = np.asarray(m.record["model_error_var"])  # for adaptive_ct's prior ([model] from)
     assert extra.shape == (66,) and np.all(extra >= 0) and np.all(extra[~np.asarray(m.identified)] == 0)
     assert np.any(extra > 0)
+    # the 95 % bound is rebuilt from the files: the quantile (not 1.96) and each half-width
+    c = m.record["quantile_95"]
+    assert 1.96 < c < 3.0 and 0 < m.record["bandwidth_fraction"] < 1
+    import pandas as pd
+
+    est = pd.read_csv(out / "estimates.csv")
+    np.testing.assert_allclose(est["half_width_95"], c * est["std"], rtol=2e-3, atol=1e-12)
     pred = tmp_path / "pred"
     args = ["predict", "--arm", str(SCENARIO), "--model", str(out / "model.json"), "--window", "48", "58"]
     assert main([*args, "--out", str(pred)]) == 0

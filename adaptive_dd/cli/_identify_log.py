@@ -424,10 +424,13 @@ def _write_estimates(path, model, fit) -> None:
     from adaptive_dd.outputs import atomic_write
 
     with atomic_write(path) as fh:
-        fh.write("name,estimate,std,identified,urdf\n")
+        # half_width_95: estimate +- it is the 95 % bound (quantile x std: the std's quantile is not 1.96)
+        fh.write("name,estimate,std,half_width_95,identified,urdf\n")
         for k, name in enumerate(model.names):
+            half = fit.quantile * fit.std[k]
             fh.write(
-                f'"{name}",{fit.sigma[k]:.10g},{fit.std[k]:.4g},{int(fit.identified[k])},{model.sigma_ref[k]:.10g}\n'
+                f'"{name}",{fit.sigma[k]:.10g},{fit.std[k]:.4g},{half:.4g},{int(fit.identified[k])},'
+                f"{model.sigma_ref[k]:.10g}\n"
             )
 
 
@@ -483,6 +486,9 @@ def _write_model(outputs, arm, model, rec, fit, cf, spec, profile=None, momentum
             "sample_period": rec.sample_period,
             "tau_f": fit.tau_f,
             "newey_west_lag": fit.lag,
+            # sigma +- quantile_95 std is the 95 % bound (the fixed-b quantile at bandwidth_fraction)
+            "quantile_95": float(fit.quantile),
+            "bandwidth_fraction": float(fit.bandwidth),
             # what adaptive_ct's prior adds for model error ([model] from = "model.json")
             "model_error_var": model_error_variance(
                 model, fit, rec.q, rec.qd, rec.tau, spec.torque_held, momentum
