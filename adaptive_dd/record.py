@@ -314,7 +314,13 @@ def read_log(spec: RecordSpec, window: tuple[float, float] | None = None, arm=No
         if qd_measured:
             qd = logged
     grid = np.concatenate(grids)
-    notes = (_resampling_note(t0, T, qd_measured), *lag_note, *gap_lines, *lenient)
+    notes = (
+        _resampling_note(t0, T, qd_measured),
+        *lag_note,
+        *gap_lines,
+        *lenient,
+        *_rate_notes(clocks, rows, T),
+    )
     if len(pieces) > 1 or short:
         keep, pieces, more = trim_gap_edges(pieces, qd_measured, T, short)
         grid, q, qd, tau = grid[keep], q[keep], qd[keep], tau[keep]
@@ -334,6 +340,25 @@ def read_log(spec: RecordSpec, window: tuple[float, float] | None = None, arm=No
         spec.simulator_format,
         pieces=tuple(pieces) if len(pieces) > 1 else (),
     )
+
+
+def _rate_notes(clocks: dict, rows: dict, T: float) -> list[str]:
+    """A file logged at another rate than the grid's: said (the grid follows the first file or
+    ``sample_period``; a finer file is decimated by interpolation, with no anti-alias filter)."""
+    out = []
+    for p, t in clocks.items():
+        steps = np.diff(t[rows[p]])
+        if steps.size == 0:
+            continue
+        m = float(np.median(steps))
+        if m < T / 1.2:
+            out.append(
+                f"{p}: logged every {m * 1e3:.4g} ms (median), read at T = {T:.6g} s by interpolation: "
+                "decimated, with no anti-alias filter (content above the grid's Nyquist frequency folds in)"
+            )
+        elif m > 1.2 * T:
+            out.append(f"{p}: logged every {m * 1e3:.4g} ms (median), interpolated onto T = {T:.6g} s")
+    return out
 
 
 MAX_LOG_STEP = 1.0

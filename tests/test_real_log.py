@@ -643,3 +643,14 @@ def test_a_bad_cell_in_an_excluded_channel_is_not_an_error(tmp_path):
     _rewrite(p2, nan_in(2))  # j_b/eff, fitted
     with pytest.raises(DataError, match=r"eff.csv: line 101, column 'j_b/eff': non-finite"):
         read_log(record_spec(_table(p1, p2, exclude=["j_c"]), NAMES, KINDS, "s"))
+
+
+def test_a_file_logged_at_another_rate_than_the_grid_is_said(tmp_path):
+    """The grid follows the first file (or sample_period); a file read at a coarser grid is decimated
+    by interpolation without an anti-alias filter, and that was silent."""
+    p1, p2, *_ = _write_log(tmp_path, np.random.default_rng(3))
+    same = read_log(record_spec(_table(p1, p2, exclude=["j_c"]), NAMES, KINDS, "s"))
+    assert not any("logged every" in n for n in same.notes)
+    coarse = read_log(record_spec(_table(p1, p2, exclude=["j_c"], sample_period=0.02), NAMES, KINDS, "s"))
+    said = [n for n in coarse.notes if "logged every" in n]
+    assert len(said) == 2 and all("decimated, with no anti-alias filter" in n for n in said)
