@@ -299,7 +299,15 @@ def _client(scheduler: str | None, workers: int | None):
     from distributed import Client, LocalCluster
 
     if scheduler:
-        return Client(scheduler), None
+        try:
+            return Client(scheduler), None
+        except (OSError, TimeoutError) as exc:  # name the option, not only the address
+            from adaptive_dd.errors import ParameterError
+
+            raise ParameterError(
+                f"--scheduler {scheduler}: cannot connect to the Dask scheduler ({exc}); start one "
+                "(dask scheduler) and its workers, or leave --scheduler out to run on this machine"
+            ) from None
     import dask
 
     from adaptive_dd.arena.pool import environment

@@ -684,3 +684,14 @@ def test_the_cli_table_per_other_axis_names_its_heat_map_and_a_plant_friction_ca
     )
     assert out.split("(heatmap_1.png):")[1].split("\n")[4].split()[-1] == "1.7"  # 6 kg at 0.12 s, 300 rad/s
     assert ("note: the plant's friction law (lugre)" in out) == (friction == "lugre")
+
+
+def test_an_unreachable_scheduler_is_named_by_the_option():
+    import dask
+
+    from adaptive_dd.errors import ParameterError
+    from adaptive_dd.sweep import _client
+
+    with dask.config.set({"distributed.comm.timeouts.connect": "0.5s"}):
+        with pytest.raises(ParameterError, match=r"--scheduler tcp://127.0.0.1:1: cannot connect"):
+            _client("tcp://127.0.0.1:1", None)
