@@ -310,3 +310,17 @@ def test_the_alarm_columns_agree_with_the_benchmark_reports_counts():
     np.testing.assert_array_equal(fa.max(axis=1) > 0, np.asarray(false_alarm_counts(times, swaps)) > 0)
     np.testing.assert_array_equal(missed.sum(axis=1), missed_swap_counts(times, swaps, np.zeros(600, bool)))
     assert 0 < fa.sum() < fa.size and 0 < missed.sum() < missed.size  # both kinds were drawn
+
+
+def test_the_printed_winners_say_when_there_is_no_law_to_rank(capsys):
+    """``--controllers ct_oracle`` alone printed the winners' header with nothing under it."""
+    from adaptive_dd.cli.leaderboard import _print_winners
+
+    df = pd.DataFrame(
+        {"scenario": ["s"], "segment": [0], "controller": ["ct_oracle"], "floor": [""], "failures": [0],
+         "rms_error_mrad": [0.1], "payload_kg": [0.0]}
+    )  # fmt: skip
+    _print_winners(df)
+    assert "no law to rank" in capsys.readouterr().out
+    _print_winners(df.assign(controller="pd", floor="pd_gravity_oracle"))
+    assert "s:0 (0 kg): pd 0.1 mrad" in capsys.readouterr().out

@@ -149,11 +149,14 @@ def _print(df) -> None:
 
 
 def _print_winners(df) -> None:
-    """Per scenario segment, the law with the lowest mean RMS error among those with a floor (the
-    oracles left out), and the runner-up."""
+    """Per scenario segment, the law with the lowest mean RMS error among the contenders (the
+    oracles and laws told the true model left out), and the runner-up."""
     from adaptive_dd.arena.leaderboard import contenders
 
     ranked = df[contenders(df) & (df["failures"] == 0)]
+    if ranked.empty:  # only oracles asked for, or every law failed a trial: nothing to list
+        print("lowest RMS error per segment: no law to rank (oracles and laws with a failed trial left out)")
+        return
     print("lowest RMS error per segment (oracles left out; laws with a failed trial left out):")
     for (sc, seg), g in ranked.groupby(["scenario", "segment"], sort=False):
         g = g.sort_values("rms_error_mrad")
