@@ -237,3 +237,20 @@ def test_a_scenario_file_under_adaptive_dd_is_a_file_not_an_id(monkeypatch):
     with pytest.raises(ScenarioError, match=r"nosuch\.toml") as exc:
         make_env("adaptive_dd/scenarios/nosuch.toml")
     assert "registered id" not in str(exc.value)
+
+
+def test_a_policy_is_set_beside_the_floor_asked_for():
+    """evaluate(floor=): a PD-type policy against pd_gravity_oracle, as the arena ranks pd_gravity (it
+    was always ct_oracle); a floor that is no law told the true model is refused by name."""
+    from adaptive_dd.errors import ParameterError
+
+    sc = _short("ur5")
+    ctrls = dict(scenario_controller(sc, name) for name in ("pd", "pd_gravity_oracle"))
+    res = run_benchmark(sc, progress=False, controllers=ctrls, seed_indices=[1])
+    pd_rms = per_seed_segment_metrics(res, res.runs["pd"], recovery=False)["rms_error"]
+    floor = per_seed_segment_metrics(res, res.runs["pd_gravity_oracle"], recovery=False)["rms_error"]
+    ev = evaluate(LawPolicy(sc, "pd"), sc, [1], name="pd_policy", floor="pd_gravity_oracle")
+    np.testing.assert_allclose(ev.ratio_to_floor, pd_rms / floor, rtol=1e-9)
+    assert set(ev.to_frame()["floor"]) == {"pd_gravity_oracle"}
+    with pytest.raises(ParameterError, match=r"evaluate: floor 'pd' is no built-in told the true model"):
+        evaluate(LawPolicy(sc, "pd"), sc, [1], floor="pd")

@@ -44,6 +44,8 @@ class Evaluation:
     ee_position_rms, ee_position_max, ee_orientation_rms : ndarray (n_seeds, n_segments)
         The tool frame's error [mm, mm, deg] of the policy's trials.
     failed : ndarray of bool (n_seeds,)
+    floor : str
+        The law the ratios divide by (``evaluate``'s ``floor``).
     """
 
     name: str
@@ -55,6 +57,7 @@ class Evaluation:
     ee_position_max: np.ndarray
     ee_orientation_rms: np.ndarray
     failed: np.ndarray
+    floor: str = FLOOR
 
     @property
     def ratio_to_floor(self) -> np.ndarray:
@@ -91,7 +94,7 @@ class Evaluation:
             for s, (a, b, m) in enumerate(self.segments):
                 rows.append({
                     "controller": self.name, "seed": seed, "segment": s, "start_s": a, "end_s": b,
-                    "mass_kg": m, "rms_error_rad": self.rms_error[i, s], "floor": FLOOR,
+                    "mass_kg": m, "rms_error_rad": self.rms_error[i, s], "floor": self.floor,
                     "ratio_to_floor": r[i, s], "failed": bool(self.failed[i]),
                     "ee_position_rms_mm": self.ee_position_rms[i, s],
                     "ee_position_max_mm": self.ee_position_max[i, s],
@@ -139,6 +142,7 @@ def evaluate(
     scenario: Scenario | str | Path | gymnasium.Env,
     seeds: Sequence[int] | int = 5,
     name: str = "policy",
+    floor: str = FLOOR,
 ) -> Evaluation:
     """Run ``policy`` on trials ``seeds`` of ``scenario`` and set it beside the floor, seed by seed.
 
@@ -154,6 +158,10 @@ def evaluate(
         The trials' seed indices (an int ``m``: ``0 .. m - 1``).
     name : str
         The policy's name in the tables.
+    floor : str
+        The built-in law told the true model whose trials the policy's are divided by: ``ct_oracle``
+        (computed torque), or the floor of the law the policy is closest to (``pd_gravity_oracle`` for
+        a PD plus gravity, ``slotine_li_oracle``: the arena's floors).
 
     Returns
     -------
@@ -184,6 +192,11 @@ def evaluate(
 
     env = scenario if isinstance(scenario, gymnasium.Env) else PayloadSwapEnv(scenario, floor=None)
     sc = env.unwrapped.scenario
+    from adaptive_dd.controllers.builtins import CONTROLLERS
+
+    if floor not in CONTROLLERS or not CONTROLLERS[floor].knows.startswith("true model"):
+        told = [n for n, e in CONTROLLERS.items() if e.knows.startswith("true model")]
+        raise ParameterError(f"evaluate: floor {floor!r} is no built-in told the true model: one of {told}")
     idx = tuple(range(seeds)) if isinstance(seeds, (int, np.integer)) else tuple(int(s) for s in seeds)
     if not idx or min(idx) < 0:
         raise ParameterError(f"evaluate: seeds must be a count >= 1 or seed indices >= 0, got {seeds!r}")
@@ -201,12 +214,13 @@ def evaluate(
             if not failed[i] or end[s] <= at:  # the benchmark's rule: segments ending after it
                 rms[i, s] = np.sqrt(np.sum(e2[start[s] : end[s]]) / (end[s] - start[s]))
     ee = end_effector_errors(sc.arm, qs, rc.q_d, start, end)
-    floor = run_benchmark(
-        sc, progress=False, controllers=dict([scenario_controller(sc, FLOOR)]), seed_indices=idx,
+    runs = run_benchmark(
+        sc, progress=False, controllers=dict([scenario_controller(sc, floor)]), seed_indices=idx,
         keep_trajectories=0,
     )  # fmt: skip
-    floor_rms = per_seed_segment_metrics(floor, floor.runs[FLOOR], recovery=False)["rms_error"]
+    label = next(iter(runs.runs))
+    floor_rms = per_seed_segment_metrics(runs, runs.runs[label], recovery=False)["rms_error"]
     return Evaluation(
         name, idx, list(sc.segments()), rms, floor_rms, ee["ee_position_rms"], ee["ee_position_max"],
-        ee["ee_orientation_rms"], failed,
+        ee["ee_orientation_rms"], failed, floor,
     )  # fmt: skip
