@@ -135,13 +135,11 @@ def _read_csv(path: Path):
     if not path.is_file():
         raise DataError(f"{path}: no such file")
     try:
-        frame = pd.read_csv(path, skipinitialspace=False, skip_blank_lines=False)
+        frame = pd.read_csv(path, skipinitialspace=False)
         head = str(frame.columns[0]) if frame.shape[1] == 1 else ""
         sep = next((c for c in (";", "\t") if c in head), None)
         if sep is not None:  # one column whose name holds the separator: a semicolon or tab file
-            frame = pd.read_csv(path, sep=sep, skipinitialspace=False, skip_blank_lines=False)
-        # a blank line holds no sample: dropped, each row keeping its index (its line in the file - 2)
-        frame = frame[~frame.isna().all(axis=1)]
+            frame = pd.read_csv(path, sep=sep, skipinitialspace=False)
     except (ValueError, pd.errors.ParserError) as exc:
         raise DataError(f"{path}: not a readable CSV file: {exc}") from None
     frame.columns = [str(c).strip() for c in frame.columns]
@@ -164,11 +162,6 @@ def _locate(frames: dict, spec: RecordSpec, wanted: list[str]) -> dict:
     return where
 
 
-def _line(frame, row: int) -> int:
-    """The file's line number of ``frame``'s row ``row`` (the header is line 1; blank lines counted)."""
-    return int(frame.index[row]) + 2
-
-
 def _coerced(frame, col: str) -> Array:
     """A column as floats, NaN where a cell is not a number."""
     import pandas as pd
@@ -186,8 +179,7 @@ def _numeric(path: Path, frame, col: str, rows: slice) -> Array:
         run = bad[breaks[0]] if breaks.size else bad[-1]
         kind = "not a number" if isinstance(raw[i], str) else "non-finite value"
         cell = raw[i].item() if isinstance(raw[i], np.generic) else raw[i]  # nan, not np.float64(nan)
-        first, last = _line(frame, i), _line(frame, int(run))
-        lines = f"line {first}" if run == i else f"lines {first}-{last}"
+        lines = f"line {i + 2}" if run == i else f"lines {i + 2}-{int(run) + 2}"
         raise DataError(
             f"{path}: {lines}, column {col!r}: {kind} ({cell!r}; {bad.size} such "
             "row(s) in the window): cut the window to avoid them ([record] window or --window) or repair "
@@ -208,8 +200,7 @@ def _times(path: Path, frame, col: str) -> Array:
         i = int(bad[0])
         what = "repeats" if dt[i] == 0 else "goes back from"
         raise DataError(
-            f"{path}: line {_line(frame, i + 1)}, column {col!r}: time {float(t[i + 1])!r} {what} line "
-            f"{_line(frame, i)}'s "
+            f"{path}: line {i + 3}, column {col!r}: time {float(t[i + 1])!r} {what} line {i + 2}'s "
             f"{float(t[i])!r} "
             f"({bad.size} such step(s)): a duplicated or reordered sample; remove or reorder those rows"
         )

@@ -654,18 +654,3 @@ def test_a_file_logged_at_another_rate_than_the_grid_is_said(tmp_path):
     coarse = read_log(record_spec(_table(p1, p2, exclude=["j_c"], sample_period=0.02), NAMES, KINDS, "s"))
     said = [n for n in coarse.notes if "logged every" in n]
     assert len(said) == 2 and all("decimated, with no anti-alias filter" in n for n in said)
-
-
-def test_line_numbers_count_blank_lines(tmp_path):
-    """A blank line (skipped: it holds no sample) shifted every later line number by one."""
-    p1, p2, *_ = _write_log(tmp_path, np.random.default_rng(4))
-
-    def edit(lines):
-        cells = lines[1000].split(",")
-        cells[2] = "x"
-        lines[1000] = ",".join(cells)  # line 1001 of the file
-        lines.insert(500, "")  # a blank line 501: the bad cell is now on line 1002
-
-    _rewrite(p1, edit)
-    with pytest.raises(DataError, match=r"pos.csv: line 1002, column 'j_b/pos': not a number \('x'"):
-        read_log(record_spec(_table(p1, p2, exclude=["j_c"]), NAMES, KINDS, "s"))
