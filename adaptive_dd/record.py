@@ -362,8 +362,8 @@ def _rate_notes(clocks: dict, rows: dict, T: float) -> list[str]:
 
 
 MAX_LOG_STEP = 1.0
-"""[s] The largest median time step a log is read with when ``[record] sample_period`` is not
-given: a coarser one is a time column in another unit (``[record] time_unit``)."""
+"""[s] The largest median time step a log is read with: a coarser one is a time column in another
+unit (``[record] time_unit``)."""
 
 
 def _first_clock(spec: RecordSpec, clocks: dict, rows: dict) -> tuple[Array, float]:
@@ -376,7 +376,7 @@ def _first_clock(spec: RecordSpec, clocks: dict, rows: dict) -> tuple[Array, flo
     ok = np.ones(steps.size, dtype=bool)
     ok[gaps] = False
     median = float(np.median(steps)) if steps.size else 0.0
-    if spec.sample_period is None and median > MAX_LOG_STEP:
+    if median > MAX_LOG_STEP:  # with sample_period given too: the grid is in s, the stamps are not
         raise DataError(
             f"{first}: the time column {spec.time!r} steps by {median:.6g} per sample (median), read as "
             f"s: a robot's log samples faster than every {MAX_LOG_STEP:g} s. If its time is in ms, us or "

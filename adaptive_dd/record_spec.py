@@ -184,7 +184,7 @@ def record_spec(table: dict | None, joint_names, kinds, src: str, files=None) ->
     used, weight = _channels(src, t, names)
     window, T = _window_period(src, t)
     unit = t.get("time_unit", "s")
-    if unit not in TIME_UNITS:
+    if not isinstance(unit, str) or unit not in TIME_UNITS:
         raise _err(
             src,
             "time_unit",

@@ -340,19 +340,20 @@ def run_trial(controller, scenario: Scenario | None = None, seed_index: int = 0,
     """
     import warnings
 
+    from adaptive_dd.controllers.plugins import check_controller_object
+
+    check_controller_object("run_trial", "controller", controller)
     sc = scenario or load_scenario()
     label = name or getattr(controller, "name", type(controller).__name__)
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always")
+    with warnings.catch_warnings():  # the floor's warning speaks of run_benchmark's controllers=: said below
+        warnings.filterwarnings("ignore", message=r"run_benchmark: .*'s floor .* did not run")
         res = run_benchmark(sc, progress=False, controllers={label: controller}, seed_indices=[seed_index])
-    for w in caught:  # the floor's warning speaks of run_benchmark's controllers=: say what run_trial can do
-        text = str(w.message)
-        if "did not run" in text and "controllers=" in text:
-            floor = res.runs[label].floor
-            text = (
-                f"run_trial: {label}'s floor {floor} is not run by run_trial (one controller): its ratio to "
-                f"the floor is NaN; run_benchmark(scenario, controllers={{{label!r}: ..., {floor!r}: "
-                f"make_controller({floor!r})}}, seed_indices=[{seed_index}]) runs both"
-            )
-        warnings.warn(text, w.category, stacklevel=2)
+    floor = res.runs[label].floor
+    if floor is not None and floor not in res.runs:
+        warnings.warn(
+            f"run_trial: {label}'s floor {floor} is not run by run_trial (one controller): its ratio to "
+            f"the floor is NaN; run_benchmark(scenario, controllers={{{label!r}: ..., {floor!r}: "
+            f"make_controller({floor!r})}}, seed_indices=[{seed_index}]) runs both",
+            stacklevel=2,
+        )
     return res

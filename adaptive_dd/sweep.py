@@ -301,7 +301,7 @@ def _client(scheduler: str | None, workers: int | None):
     if scheduler:
         try:
             return Client(scheduler), None
-        except (OSError, TimeoutError) as exc:  # name the option, not only the address
+        except (OSError, TimeoutError, ValueError) as exc:  # name the option, not only the address
             from adaptive_dd.errors import ParameterError
 
             raise ParameterError(

@@ -510,3 +510,6 @@ def test_with_settings_checks_the_table_it_sets():
     assert with_settings(sc, "adaptive_ct", {"boost_duration": 0.1}).options("adaptive_ct") == {
         "boost_duration": 0.1
     }
+    # research settings beyond a file's bound of 1e6 are what with_settings is for
+    big = {"estimator": {"payload_mass_std": 2e6}}
+    assert with_settings(sc, "adaptive_ct", big).options("adaptive_ct") == big

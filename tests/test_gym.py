@@ -252,5 +252,8 @@ def test_a_policy_is_set_beside_the_floor_asked_for():
     ev = evaluate(LawPolicy(sc, "pd"), sc, [1], name="pd_policy", floor="pd_gravity_oracle")
     np.testing.assert_allclose(ev.ratio_to_floor, pd_rms / floor, rtol=1e-9)
     assert set(ev.to_frame()["floor"]) == {"pd_gravity_oracle"}
-    with pytest.raises(ParameterError, match=r"evaluate: floor 'pd' is no built-in told the true model"):
-        evaluate(LawPolicy(sc, "pd"), sc, [1], floor="pd")
+    for bad in ("pd", "ct_oracle_late"):  # a law, and a measuring stick with a floor of its own
+        with pytest.raises(
+            ParameterError, match=rf"evaluate: floor '{bad}' is no built-in told the true model"
+        ):
+            evaluate(LawPolicy(sc, "pd"), sc, [1], floor=bad)

@@ -51,6 +51,12 @@ def test_builtin_settings_reach_the_controller():
         ("adaptive_ct", {"tauf": 0.02}, "unknown setting"),
         ("adaptive_ct", {"estimator": {"tau": 1}}, "unknown setting"),
         ("adaptive_ct", {"detector": {"slow_factor": 1.5}}, r"unknown setting\(s\) \['slow_factor'\]"),
+        # a built-in's sub-table takes no common setting, and is named as such
+        (
+            "adaptive_ct",
+            {"estimator": {"label": "x"}},
+            r"controllers\.adaptive_ct\.estimator: unknown setting",
+        ),
         ("adaptive_ct", {"detector": {"threshold": 0.5}}, "threshold"),
         ("slotine_li", {"gamma": [1.0, 2.0]}, "gamma"),
         ("ct_oracle", {"bandwidth": -1.0}, "bandwidth"),

@@ -262,6 +262,8 @@ def test_a_controllers_dict_holds_controller_objects():
         def command(self, q, qd, q_d, qd_d, qdd_d, sigma_true=None):
             return 0 * q
 
+    with pytest.raises(ParameterError, match=r"^run_trial: controller is the name 'adaptive_ct'"):
+        run_trial("adaptive_ct", sc)
     for bad, what in [
         ("adaptive_ct", r"controllers\['a'\] is the name 'adaptive_ct'.*make_controller\('adaptive_ct'\)"),
         (NoObserve, r"controllers\['a'\] is the class NoObserve.*an instance"),

@@ -695,3 +695,5 @@ def test_an_unreachable_scheduler_is_named_by_the_option():
     with dask.config.set({"distributed.comm.timeouts.connect": "0.5s"}):
         with pytest.raises(ParameterError, match=r"--scheduler tcp://127.0.0.1:1: cannot connect"):
             _client("tcp://127.0.0.1:1", None)
+    with pytest.raises(ParameterError, match=r"--scheduler foo://x: cannot connect"):
+        _client("foo://x", None)  # an address distributed cannot parse (a ValueError inside it)

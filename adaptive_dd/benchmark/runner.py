@@ -134,7 +134,7 @@ def run_benchmark(
             "scenario.with_controllers([...])"
         )
     for key, obj in (controllers or {}).items():
-        check_controller_object("run_benchmark", key, obj)
+        check_controller_object("run_benchmark", f"controllers[{key!r}]", obj)
     if not (isinstance(keep_trajectories, int | np.integer) and keep_trajectories >= 0):
         raise ParameterError(f"keep_trajectories must be an integer >= 0, got {keep_trajectories!r}")
     t0 = time.perf_counter()

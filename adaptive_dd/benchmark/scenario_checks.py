@@ -59,7 +59,7 @@ def check_number(errs: list, key: str, v: Any, lo: float, hi: float, *, integer=
         errs.append(f"{key}: must be finite, got {v!r}")
         return False
     if (v <= lo if lo_open else v < lo) or v > hi:
-        errs.append(f"{key}: must be in {'(' if lo_open else '['}{lo:g}, {hi:g}], got {_short(v)}")
+        errs.append(f"{key}: must be in {'(' if lo_open else '['}{lo:.10g}, {hi:.10g}], got {_short(v)}")
         return False
     return True
 

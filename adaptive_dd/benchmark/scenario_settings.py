@@ -65,10 +65,10 @@ def with_settings(scenario, name: str, settings: dict):
 
     kept = tuple(o for o in scenario.controller_options if o[0] != name)
     out = dataclasses.replace(scenario, controller_options=(*kept, (name, freeze(dict(settings)))))
-    errs = controller_setting_errors(
-        {f.name: getattr(out, f.name) for f in dataclasses.fields(out) if f.init}
-    )
-    if errs:  # checked here, as a file's table is when it is read, not when the run starts
+    values = {f.name: getattr(out, f.name) for f in dataclasses.fields(out) if f.init}
+    # a built-in's table checked here, as a file's is when it is read (a plug-in's when the run builds it)
+    errs = controller_setting_errors(values, only=name, file_limits=False)
+    if errs:
         from adaptive_dd.errors import ScenarioError
 
         raise ScenarioError(f"with_settings({name!r}, ...): " + "; ".join(errs))
@@ -119,18 +119,19 @@ def _check_delay(errs: list[str], name: str, delay, T: float) -> None:
             errs.append(str(exc))
 
 
-def controller_setting_errors(v: dict) -> list[str]:
+def controller_setting_errors(v: dict, only: str | None = None, file_limits: bool = True) -> list[str]:
     """Each built-in controller with a ``[controllers.NAME]`` table built once, so a bad setting
     (a negative gain, a bandwidth the sample period cannot carry, an unknown key) is an error of
     the file, not of the run. ``bandwidth``, ``boost_bandwidth`` and ``damping`` have the bounds
     of ``[control]``; ``boost_duration`` is at most the run; every number is finite and within
-    ``LIMITS["max_setting"]``."""
+    ``LIMITS["max_setting"]`` (``file_limits``: a file's bound; research code setting the estimator
+    through :func:`with_settings` is not held to it). ``only``: that controller's table alone."""
     from adaptive_dd.controllers import CONTROLLERS, gains_for, make_controller
 
     errs: list[str] = []
     opts = {n: thaw(o) for n, o in v["controller_options"]}
     T = v["sample_period"]
-    for name in v["controllers"]:
+    for name in v["controllers"] if only is None else [c for c in v["controllers"] if c == only]:
         if name in CONTROLLERS and "delay" in CONTROLLERS[name].settings:  # its default too
             default = CONTROLLERS[name].settings["delay"].chain  # the same on every arm
             _check_delay(errs, name, opts.get(name, {}).get("delay", default), T)
@@ -150,7 +151,7 @@ def controller_setting_errors(v: dict) -> list[str]:
                 errs, f"controllers.{name}.damping", o["damping"], 0, LIMITS["max_damping"], lo_open=True
             )
         for key, x in _numbers(o, f"controllers.{name}"):
-            if not math.isfinite(x) or abs(x) > LIMITS["max_setting"]:
+            if not math.isfinite(x) or (file_limits and abs(x) > LIMITS["max_setting"]):
                 errs.append(f"{key}: must be finite and within +-{LIMITS['max_setting']:g}, got {x!r}")
         if len(errs) > n0:
             continue

@@ -135,9 +135,15 @@ def validate_identification(path) -> int:
     )
     _print_record_spec(spec, arm.joint_names)
     print(describe_arm(arm))
+    from adaptive_dd.errors import DataError
     from adaptive_dd.record import read_log
 
-    log = read_log(spec, arm=arm)  # the files themselves: columns, cells, times, units, gaps
+    try:
+        log = read_log(spec, arm=arm)  # the files themselves: columns, cells, times, units, gaps
+    except DataError as exc:  # identify would meet it too, unless --window cuts the part it is in
+        print(f"# the log as identify reads it: {exc}")
+        print("#   (identify and predict take --window START END: a part of the log without it reads)")
+        return 1
     pieces = len(log.pieces) or 1
     print(
         f"# the log as identify reads it: {log.t.size} samples at T = {log.sample_period:.6g} s "

@@ -77,35 +77,38 @@ def load_controller_class(path: str, search: tuple = ()) -> type:
     return obj
 
 
-def check_controller_object(where: str, key: str, obj) -> None:
+def check_controller_object(where: str, what: str, obj) -> None:
     """A :class:`ParameterError` unless ``obj`` is a controller object (an instance with callable
-    ``reset``, ``command`` and ``observe``), naming ``where`` (the function) and the dict's ``key``."""
+    ``reset``, ``command`` and ``observe``), naming ``where`` (the function) and ``what`` (the
+    argument: ``controllers['a']``, ``controller``)."""
     if isinstance(obj, str):
         raise ParameterError(
-            f"{where}: controllers[{key!r}] is the name {obj!r}, not a controller object; build a built-in "
-            f"with adaptive_dd.make_controller({obj!r}), or run the scenario's own by name with "
-            "scenario.with_controllers([...]) and no controllers="
+            f"{where}: {what} is the name {obj!r}, not a controller object; build a built-in with "
+            f"adaptive_dd.make_controller({obj!r}), or run the scenario's own by name with "
+            "scenario.with_controllers([...]) and run_benchmark"
         )
     if inspect.isclass(obj):
         raise ParameterError(
-            f"{where}: controllers[{key!r}] is the class {obj.__name__}, not a controller object; pass an "
-            f"instance ({obj.__name__}(...))"
+            f"{where}: {what} is the class {obj.__name__}, not a controller object; pass an instance "
+            f"({obj.__name__}(...))"
         )
     missing = [m for m in ("reset", "command", "observe") if not callable(getattr(obj, m, None))]
     if missing:
         raise ParameterError(
-            f"{where}: controllers[{key!r}] ({type(obj).__name__}) is not a controller: it needs reset, "
-            f"command and observe; missing {missing} (docs: controllers, 'Your own controller: the protocol')"
+            f"{where}: {what} ({type(obj).__name__}) is not a controller: it needs reset, command and "
+            f"observe; missing {missing} (docs: controllers, 'Your own controller: the protocol')"
         )
 
 
 def unknown_settings(spec: str, options: dict, allowed: set) -> None:
     """A :class:`ParameterError` naming the controller, the settings not in ``allowed`` and those allowed."""
-    bad = sorted(set(options) - allowed - COMMON)
+    plugin = ":" in spec  # a plug-in (its COMMON settings taken before): its table is its class name
+    common = COMMON if plugin else set()  # a built-in's sub-table (adaptive_ct.estimator) takes none
+    bad = sorted(set(options) - allowed - common)
     if bad:
-        table = spec.rsplit(":", 1)[-1].rsplit(".", 1)[-1]  # a plug-in's table: its class name
+        table = spec.rsplit(":", 1)[-1].rsplit(".", 1)[-1] if plugin else spec
         raise ParameterError(
-            f"controllers.{table}: unknown setting(s) {bad}; allowed: {sorted(allowed | COMMON)}"
+            f"controllers.{table}: unknown setting(s) {bad}; allowed: {sorted(allowed | common)}"
         )
 
 
