@@ -143,7 +143,17 @@ def _read_csv(path: Path):
     except (ValueError, pd.errors.ParserError) as exc:
         raise DataError(f"{path}: not a readable CSV file: {exc}") from None
     frame.columns = [str(c).strip() for c in frame.columns]
+    repeats = frame.duplicated(keep="first")  # a row repeated whole: a logger's repeat, no new sample
+    if repeats.any():
+        frame = frame[~repeats]  # each row keeps its index: its line in the file (_line)
+        frame.attrs["repeats"] = int(repeats.sum())
     return frame
+
+
+def _line(frame, row: int) -> int:
+    """The file's line number of ``frame``'s row ``row`` (the header is line 1; repeated rows that
+    were dropped counted)."""
+    return int(frame.index[row]) + 2
 
 
 def _locate(frames: dict, spec: RecordSpec, wanted: list[str]) -> dict:
@@ -179,7 +189,8 @@ def _numeric(path: Path, frame, col: str, rows: slice) -> Array:
         run = bad[breaks[0]] if breaks.size else bad[-1]
         kind = "not a number" if isinstance(raw[i], str) else "non-finite value"
         cell = raw[i].item() if isinstance(raw[i], np.generic) else raw[i]  # nan, not np.float64(nan)
-        lines = f"line {i + 2}" if run == i else f"lines {i + 2}-{int(run) + 2}"
+        first, last = _line(frame, i), _line(frame, int(run))
+        lines = f"line {first}" if run == i else f"lines {first}-{last}"
         raise DataError(
             f"{path}: {lines}, column {col!r}: {kind} ({cell!r}; {bad.size} such "
             "row(s) in the window): cut the window to avoid them ([record] window or --window) or repair "
@@ -200,7 +211,8 @@ def _times(path: Path, frame, col: str) -> Array:
         i = int(bad[0])
         what = "repeats" if dt[i] == 0 else "goes back from"
         raise DataError(
-            f"{path}: line {i + 3}, column {col!r}: time {float(t[i + 1])!r} {what} line {i + 2}'s "
+            f"{path}: line {_line(frame, i + 1)}, column {col!r}: time {float(t[i + 1])!r} {what} line "
+            f"{_line(frame, i)}'s "
             f"{float(t[i])!r} "
             f"({bad.size} such step(s)): a duplicated or reordered sample; remove or reorder those rows"
         )
@@ -320,6 +332,11 @@ def read_log(spec: RecordSpec, window: tuple[float, float] | None = None, arm=No
         *gap_lines,
         *lenient,
         *_rate_notes(clocks, rows, T),
+        *(
+            f"{p}: {f.attrs['repeats']} row(s) repeated whole (a logger's repeats) read once"
+            for p, f in frames.items()
+            if f.attrs.get("repeats")
+        ),
     )
     if len(pieces) > 1 or short:
         keep, pieces, more = trim_gap_edges(pieces, qd_measured, T, short)

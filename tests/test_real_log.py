@@ -131,10 +131,19 @@ def test_bad_logs_name_file_line_column_and_remedy(tmp_path):
     assert read_log(record_spec(table, NAMES, KINDS, "s"), window=(5.0, 12.0)).t.size > 600
     p1, p2, *_ = _write_log(tmp_path, np.random.default_rng(4))
 
-    def duplicate(lines):
+    def repeat(lines):  # a row repeated whole: a logger's repeat, read once and said
         lines.insert(300, lines[299])
 
-    _rewrite(p2, duplicate)
+    _rewrite(p2, repeat)
+    once = read_log(record_spec(table, NAMES, KINDS, "s"))
+    assert any("eff.csv: 1 row(s) repeated whole (a logger's repeats) read once" in n for n in once.notes)
+
+    def conflict(lines):  # the same stamp with other values: which one is the sample? refused
+        cells = lines[299].split(",")
+        cells[1] = "0.123"
+        lines.insert(300, ",".join(cells))
+
+    _rewrite(p2, conflict)  # line 301 now; the whole repeat, line 302, is dropped and still counted
     with pytest.raises(DataError, match=r"eff.csv: line 301, column 'stamp': time .* repeats line 300"):
         read_log(record_spec(table, NAMES, KINDS, "s"))
     p1, p2, *_ = _write_log(tmp_path, np.random.default_rng(4))
@@ -658,3 +667,17 @@ def test_a_file_logged_at_another_rate_than_the_grid_is_said(tmp_path):
     coarse = read_log(record_spec(_table(p1, p2, exclude=["j_c"], sample_period=0.02), NAMES, KINDS, "s"))
     said = [n for n in coarse.notes if "logged every" in n]
     assert len(said) == 2 and all("decimated, with no anti-alias filter" in n for n in said)
+
+
+def test_line_numbers_count_a_repeated_row_that_was_dropped(tmp_path):
+    p1, p2, *_ = _write_log(tmp_path, np.random.default_rng(4))
+
+    def edit(lines):
+        cells = lines[1000].split(",")
+        cells[2] = "x"
+        lines[1000] = ",".join(cells)  # file line 1001
+        lines.insert(300, lines[299])  # a whole repeat at line 301: the bad cell is on line 1002
+
+    _rewrite(p1, edit)
+    with pytest.raises(DataError, match=r"pos.csv: line 1002, column 'j_b/pos': not a number \('x'"):
+        read_log(record_spec(_table(p1, p2, exclude=["j_c"]), NAMES, KINDS, "s"))
