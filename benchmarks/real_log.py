@@ -123,10 +123,14 @@ def drop_rows(scenario: str, at: float, rows: int) -> str:
         i = int(np.searchsorted(frame[table["record"].get("time", "t")].to_numpy(), at))
         frame.drop(index=range(i, i + rows)).to_csv(dst / f, index=False)
     urdf = table.get("arm", {}).get("urdf")
+    text = src.read_text(encoding="utf-8")
     if isinstance(urdf, str) and not is_example_robot_data(urdf) and not Path(urdf).is_absolute():
-        (dst / urdf).parent.mkdir(parents=True, exist_ok=True)  # a relative URDF, where the copy finds it
-        shutil.copy(src.parent / urdf, dst / urdf)
-    shutil.copy(src, dst)
+        if ".." in Path(urdf).parts:  # above the scenario's folder: named absolute in the copy
+            text = text.replace(f'"{urdf}"', f'"{(src.parent / urdf).resolve().as_posix()}"')
+        else:  # a relative URDF, where the copy finds it
+            (dst / urdf).parent.mkdir(parents=True, exist_ok=True)
+            shutil.copy(src.parent / urdf, dst / urdf)
+    (dst / src.name).write_text(text, encoding="utf-8")
     print(f"{rows} rows dropped at {at} s from every file of the record (copies in {dst})")
     return str(dst / src.name)
 

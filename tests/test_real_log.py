@@ -563,20 +563,28 @@ def _drop_rows():
     return real_log.drop_rows
 
 
-@pytest.mark.parametrize("urdf", ["sub/arm.urdf", "example-robot-data:ur_description/urdf/ur5_robot.urdf"])
+@pytest.mark.parametrize(
+    "urdf", ["sub/arm.urdf", "example-robot-data:ur_description/urdf/ur5_robot.urdf", "../up/arm.urdf"]
+)
 def test_real_log_gap_copy_keeps_the_urdf_reachable(tmp_path, urdf):
     """``benchmarks/real_log.py --drop``'s copy of a scenario: a relative URDF is copied where the copy
     looks for it (a subfolder kept), an example-robot-data one is left to the package (it tried to
     copy ``example-robot-data:...`` as a file)."""
-    (tmp_path / "sub").mkdir()
-    (tmp_path / "sub" / "arm.urdf").write_text("<robot name='a'/>")
-    (tmp_path / "log.csv").write_text("t,a\n" + "".join(f"{0.01 * i},{i}\n" for i in range(50)))
-    scenario = tmp_path / "s.toml"
+    home = tmp_path / "home"
+    for d in (home / "sub", tmp_path / "up"):
+        d.mkdir(parents=True)
+        (d / "arm.urdf").write_text("<robot name='a'/>")
+    (home / "log.csv").write_text("t,a\n" + "".join(f"{0.01 * i},{i}\n" for i in range(50)))
+    scenario = home / "s.toml"
     scenario.write_text(f'[arm]\nurdf = "{urdf}"\n\n[record]\nfiles = ["log.csv"]\ntime = "t"\n')
     copy = Path(_drop_rows()(str(scenario), 0.2, 5))
-    assert copy.parent != tmp_path and copy.read_text() == scenario.read_text()
-    assert len((copy.parent / "log.csv").read_text().splitlines()) == 46
-    assert (copy.parent / "sub" / "arm.urdf").exists() == (not urdf.startswith("example-robot-data:"))
+    assert copy.parent != home and len((copy.parent / "log.csv").read_text().splitlines()) == 46
+    assert (copy.parent / "sub" / "arm.urdf").exists() == (urdf == "sub/arm.urdf")
+    if urdf.startswith(".."):  # above the scenario: named by its absolute path, nothing written outside
+        assert f'urdf = "{(tmp_path / "up" / "arm.urdf").resolve().as_posix()}"' in copy.read_text()
+        assert not (copy.parent.parent / "up").exists()
+    else:
+        assert copy.read_text() == scenario.read_text()
 
 
 @pytest.mark.parametrize(("unit", "factor"), [("ms", 1e3), ("ns", 1e9)])
