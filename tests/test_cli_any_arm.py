@@ -254,3 +254,30 @@ def test_benchmark_warns_of_a_reference_beyond_the_joint_limits(tmp_path, capsys
     assert f"warning: {bad}: reference.joint2: q = -3.542 rad" in err, err
     assert "below the joint's lower limit -3.142 rad" in err
     assert len(ran) == 2  # warned, and ran
+
+
+@pytest.mark.parametrize("opt", [["--method", "M1"], ["--split", "15"], ["--estimator", "paper"]])
+def test_online_refuses_the_batch_estimators_options(tmp_path, capsys, opt):
+    """``identify REC --online`` runs adaptive_ct's online estimator with its own settings: a batch
+    estimator's option given beside it was silently ignored."""
+    err = _error(capsys, ["identify", "rec.csv", "--online", *opt, "--out", str(tmp_path / "out")])
+    assert f"error: {opt[0]}: options of the batch estimators; --online runs" in err, err
+
+
+@pytest.mark.parametrize("command", [["check", "--arm"], ["simulate", "--duration", "0.2", "--arm"]])
+def test_an_unknown_table_of_an_arm_file_is_refused(tmp_path, capsys, command):
+    """``[arms]`` (a typo of ``[arm]``) was read as no ``[arm]``: check and simulate ran the SICE arm
+    under the file's name."""
+    f = tmp_path / "r5.toml"
+    f.write_text('[arms]\nrobot = "ur5"\n')
+    err = _error(
+        capsys, [*command, str(f), *(["--out", str(tmp_path / "o")] if command[0] == "simulate" else [])]
+    )
+    assert "r5.toml: [arms]: unknown table" in err, err
+
+
+def test_reproduce_needs_two_seeds_for_its_std(capsys):
+    """``reproduce --seeds 1`` printed numpy's warnings and wrote NaN stds into its JSON."""
+    with pytest.raises(SystemExit) as exc:  # argparse's usage error
+        main(["reproduce", "--seeds", "1"])
+    assert exc.value.code == 2 and "argument --seeds: 1 is outside [2, 10000]" in capsys.readouterr().err

@@ -105,3 +105,15 @@ def test_cli_identify_reports_bad_data(tmp_path, capsys):
     assert main(["identify", str(p)]) == 2  # M2 without qd columns
     assert "qd1, qd2" in capsys.readouterr().err
     assert main(["identify", str(tmp_path / "missing.csv")]) == 2
+
+
+def test_check_arm_with_payload_zero_checks_no_payload(capsys):
+    """``check --arm S --payload 0``: one check without payload (the 0 was replaced by 2 kg)."""
+    from importlib import resources
+
+    sc = str(resources.files("adaptive_dd.scenarios").joinpath("vertical3_payload_exact.toml"))
+    assert main(["check", "--arm", sc, "--payload", "0", "--states", "5"]) == 0
+    out = capsys.readouterr().out
+    assert "no payload" in out and "payload 2.0 kg" not in out
+    assert main(["check", "--arm", sc, "--states", "5"]) == 0
+    assert "payload 2.0 kg" in capsys.readouterr().out

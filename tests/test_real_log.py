@@ -689,3 +689,15 @@ def test_line_numbers_count_a_repeated_row_that_was_dropped(tmp_path):
     _rewrite(p1, edit)
     with pytest.raises(DataError, match=r"pos.csv: line 1002, column 'j_b/pos': not a number \('x'"):
         read_log(record_spec(_table(p1, p2, exclude=["j_c"]), NAMES, KINDS, "s"))
+
+
+def test_predict_checks_its_output_folder_before_any_work(tmp_path, capsys):
+    """``predict --out FILE`` ran the whole prediction and printed it before failing on the folder."""
+    from adaptive_dd.cli import main
+
+    afile = tmp_path / "afile"
+    afile.write_text("")
+    argv = ["predict", "--arm", str(SCENARIO), "--model", str(tmp_path / "none.json"), "--out", str(afile)]
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert "afile is a file" in err and "none.json" not in err  # the folder first, the model not read

@@ -109,6 +109,12 @@ def load_arm(path: str | None, repair_inertia: bool = False, *, general: str | N
 
         raise no_scenario_file(path)
     data = read_toml(Path(path))
+    from adaptive_dd.benchmark.scenario_base import KEYS
+
+    known = {*KEYS, "record"}  # a benchmark scenario's tables, or an identification's [record]
+    unknown = [t for t in data if t not in known]
+    if unknown:  # as validate and the benchmark refuse it: [arms] is no [arm] with a typo read as none
+        raise ScenarioError(f"{path}: [{unknown[0]}]: unknown table; allowed: {', '.join(sorted(known))}")
     table = data.get("arm")
     if general:
         if not (isinstance(table, dict) and ("urdf" in table or "robot" in table)):

@@ -19,13 +19,20 @@ __all__ = ["add_parser", "run"]
 def add_parser(sub) -> None:
     """The options of ``check``."""
     c = add_command(sub, "check", help="cross-check the dynamics against Pinocchio")
-    c.add_argument("--payload", type=MASS, default=0.0, metavar="KG", help="tip disk mass [kg]")
+    c.add_argument(
+        "--payload",
+        type=MASS,
+        default=None,
+        metavar="KG",
+        help="tip disk mass [kg] (default 0; with --arm the arm is checked without payload and with "
+        "this one, default 2 kg)",
+    )
     c.add_argument("--radius", type=RADIUS, help="tip disk radius [m] (default: the arm's)")
     c.add_argument(
         "--arm", metavar="SCENARIO", help="check the [arm] of a scenario TOML, with and without payload"
     )
     c.add_argument("--states", type=number(int, 1, 100_000), default=200, help="number of random states")
-    c.add_argument("--seed", type=SEED, default=0)
+    c.add_argument("--seed", type=SEED, default=0, help="seed of the random states (default 0)")
     c.set_defaults(func=run)
 
 
@@ -34,7 +41,10 @@ def run(args: argparse.Namespace) -> int:
     arm = load_arm(args.arm)
     radius = arm.payload_radius if args.radius is None else args.radius
     # with --arm: the arm without payload and with one (--payload, or 2 kg)
-    masses = [0.0, args.payload or 2.0] if args.arm else [args.payload]
+    if args.arm:  # an explicit --payload 0 is one check, without payload (it was replaced by 2 kg)
+        masses = [0.0] if args.payload == 0.0 else [0.0, 2.0 if args.payload is None else args.payload]
+    else:
+        masses = [args.payload or 0.0]
     failed = 0
     for mass in masses:
         label = f"payload {mass} kg, radius {radius} m" if mass else "no payload"

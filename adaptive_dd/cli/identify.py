@@ -208,6 +208,14 @@ def run(args: argparse.Namespace) -> int:
             "takes a URDF of the paper's kind to the general path)"
         )
         refuse(args, ARM_OPTIONS, why, DataError)
+        if args.online:  # the online estimator of adaptive_ct runs with its own settings
+            refuse(
+                args,
+                ("--estimator", "--method", "--split", "--position-variance", "--velocity-variance"),
+                "options of the batch estimators; --online runs adaptive_ct's online estimator with its own "
+                "settings (drop --online to use them)",
+                DataError,
+            )
         return identify_two_link(args, two)
     from adaptive_dd.cli._identify_log import identify_log
     from adaptive_dd.outputs import OutputSet
@@ -219,5 +227,14 @@ def run(args: argparse.Namespace) -> int:
         "weighted least squares (docs/real_log.md)",
         DataError,
     )
+    if args.payload_only:  # prints the payload fitted on the known arm: no baseline, no files
+        refuse(
+            args,
+            ("--baseline", "--out"),
+            "--payload-only fits the payload of one record on the known arm and prints it (no file); "
+            "--baseline fits a loaded and an unloaded record instead (without --payload-only)",
+            DataError,
+        )
+        return identify_log(args, arm, None)  # no output folder made
     with OutputSet(args.out) as outputs:
         return identify_log(args, arm, outputs)

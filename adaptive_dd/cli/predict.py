@@ -54,7 +54,9 @@ def run(args: argparse.Namespace) -> int:
     from adaptive_dd.cli._common import load_arm
     from adaptive_dd.cli._records import read_records
     from adaptive_dd.identification.identified_model import load_identified_model
+    from adaptive_dd.outputs import check_output_dir
 
+    check_output_dir(args.out)  # before any work, as every command does
     m = load_identified_model(args.model, need_urdf=False)
     arm = load_arm(args.arm, m.repair_inertia)
     model = same_arm(m, arm, args.model, args.arm)
