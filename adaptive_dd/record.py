@@ -53,6 +53,7 @@ from __future__ import annotations
 import difflib
 import itertools
 import math
+import re
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -278,6 +279,17 @@ def read_log(spec: RecordSpec, window: tuple[float, float] | None = None, arm=No
     if spec.simulator_format and velocity and not any(velocity[0] in f.columns for f in frames.values()):
         velocity = None  # the simulator's format: velocity columns optional
     cols = [*spec.position, *spec.torque, *([] if velocity is None else velocity)]
+    if spec.simulator_format:  # t, q1.., qd1.., tau1..: a joint beyond the arm's is another arm's record
+        n = len(spec.position)
+        extra = [
+            c for f in frames.values() for c in f.columns
+            if (m := re.fullmatch(r"(?:q|qd|tau)(\d+)", str(c))) and int(m.group(1)) > n
+        ]  # fmt: skip
+        if extra:
+            raise DataError(
+                f"{', '.join(str(p) for p in frames)}: columns {extra[:6]} do not fit the {n}-joint arm of "
+                f"{spec.source}: a record of another arm (identify the arm it was recorded on)"
+            )
     where = _locate(frames, spec, cols)
     clocks = {p: _times(p, f, spec.time) * spec.time_scale for p, f in frames.items()}
     rows = {p: _window_rows(p, clocks[p], window) for p in frames}

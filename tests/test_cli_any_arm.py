@@ -281,3 +281,17 @@ def test_reproduce_needs_two_seeds_for_its_std(capsys):
     with pytest.raises(SystemExit) as exc:  # argparse's usage error
         main(["reproduce", "--seeds", "1"])
     assert exc.value.code == 2 and "argument --seeds: 1 is outside [2, 10000]" in capsys.readouterr().err
+
+
+def test_a_record_of_another_arm_is_refused_not_cut(tmp_path, capsys):
+    """A 4-joint record given to a 3-joint arm: its extra joints' columns were dropped in silence and
+    the fit and prediction ran (one joint's torque error 308 %)."""
+    t = np.arange(300) * 0.01
+    cols = {"t": t}
+    for i in range(1, 5):
+        cols |= {f"q{i}": np.sin(t * i), f"tau{i}": np.cos(t * i)}
+    path = tmp_path / "four.csv"
+    np.savetxt(path, np.column_stack(list(cols.values())), delimiter=",", header=",".join(cols), comments="")
+    v3 = str(resources.files("adaptive_dd.scenarios").joinpath("vertical3_payload_exact.toml"))
+    err = _error(capsys, ["identify", "--arm", v3, str(path), "--out", str(tmp_path / "o")])
+    assert "columns ['q4', 'tau4'] do not fit the 3-joint arm" in err, err
