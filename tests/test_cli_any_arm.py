@@ -295,3 +295,11 @@ def test_a_record_of_another_arm_is_refused_not_cut(tmp_path, capsys):
     v3 = str(resources.files("adaptive_dd.scenarios").joinpath("vertical3_payload_exact.toml"))
     err = _error(capsys, ["identify", "--arm", v3, str(path), "--out", str(tmp_path / "o")])
     assert "columns ['q4', 'tau4'] do not fit the 3-joint arm" in err, err
+
+
+def test_excite_refuses_frequencies_its_scenario_could_not_hold(tmp_path, capsys):
+    """``excite --f0 200`` designed (SLSQP failing), wrote a scenario and exited 0; validate then refused
+    the scenario's 1000 Hz: refused before the design now."""
+    err = _error(capsys, ["excite", "--arm", UR5, "--f0", "200", "--out", str(tmp_path / "x.toml")])
+    assert "--f0 200 Hz x --harmonics 5: 1000 Hz is above 0.1 / T = 100 Hz" in err
+    assert not (tmp_path / "x.toml").exists()

@@ -23,6 +23,7 @@ from adaptive_dd.cli._common import (
     number,
     short,
 )
+from adaptive_dd.errors import ParameterError
 
 __all__ = ["add_parser", "excitation_bounds", "ramp_within_limits", "run"]
 
@@ -54,7 +55,17 @@ def run(args: argparse.Namespace) -> int:
     )
     from adaptive_dd.outputs import atomic_write, check_output_file
 
-    arm = load_scenario(args.arm).arm
+    sc = load_scenario(args.arm)
+    arm = sc.arm
+    from adaptive_dd.benchmark.scenario_base import LIMITS
+
+    top, most = args.harmonics * args.f0, LIMITS["nyquist_fraction"] / sc.sample_period
+    if top > most:  # refused before the design: the scenario written would be refused by validate
+        raise ParameterError(
+            f"--f0 {args.f0:g} Hz x --harmonics {args.harmonics}: {top:g} Hz is above "
+            f"{LIMITS['nyquist_fraction']:g} / T = {most:g} Hz at the scenario's T = {sc.sample_period:g} s "
+            "(what a scenario's reference may hold); lower --f0 or --harmonics"
+        )
     if closed_form_view(arm) is not None:  # the paper's kind of arm: its general model
         arm = load_arm(args.arm, general="excite")
     out = check_output_file(args.out)  # before the design, not after it
