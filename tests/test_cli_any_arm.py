@@ -303,3 +303,8 @@ def test_excite_refuses_frequencies_its_scenario_could_not_hold(tmp_path, capsys
     err = _error(capsys, ["excite", "--arm", UR5, "--f0", "200", "--out", str(tmp_path / "x.toml")])
     assert "--f0 200 Hz x --harmonics 5: 1000 Hz is above 0.1 / T = 100 Hz" in err
     assert not (tmp_path / "x.toml").exists()
+
+
+def test_a_zero_noise_variance_is_refused_by_the_option():
+    with pytest.raises(SystemExit):  # argparse's usage error, before any work
+        main(["identify", "rec.csv", "--position-variance", "0", "0"])

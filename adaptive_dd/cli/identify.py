@@ -76,7 +76,7 @@ def _add_two_link_options(i: argparse.ArgumentParser) -> None:
     ):
         i.add_argument(
             option,
-            type=number(float, 0.0, 1.0),
+            type=number(float, 0.0, 1.0, lo_open=True),  # a variance of 0 makes no bound
             nargs=2,
             default=list(TABLE2[default]),
             metavar="V",
