@@ -213,8 +213,7 @@ def _times(path: Path, frame, col: str) -> Array:
         what = "repeats" if dt[i] == 0 else "goes back from"
         raise DataError(
             f"{path}: line {_line(frame, i + 1)}, column {col!r}: time {float(t[i + 1])!r} {what} line "
-            f"{_line(frame, i)}'s "
-            f"{float(t[i])!r} "
+            f"{_line(frame, i)}'s {float(t[i])!r} "
             f"({bad.size} such step(s)): a duplicated or reordered sample; remove or reorder those rows"
         )
     return t
@@ -305,9 +304,8 @@ def read_log(spec: RecordSpec, window: tuple[float, float] | None = None, arm=No
     excluded = {spec.torque[j] for j in range(len(spec.torque)) if not spec.used[j]}
     lenient: list[str] = []
 
-    def numeric(
-        path, frame, col, r
-    ):  # an excluded torque channel is not fitted: its bad cells are not errors
+    # an excluded torque channel is not fitted: its bad cells are read as 0 and said, not errors
+    def numeric(path, frame, col, r):
         if col not in excluded:
             return _numeric(path, frame, col, r)
         v = _coerced(frame, col)

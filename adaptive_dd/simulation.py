@@ -24,7 +24,7 @@ from typing import NamedTuple
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from adaptive_dd.benchmark.runner import run_benchmark
+from adaptive_dd.benchmark.runner import FLOOR_NOT_RUN, run_benchmark
 from adaptive_dd.benchmark.scenario import Scenario, load_scenario
 from adaptive_dd.benchmark.trials import payload_schedule, sensor_of, trial_rngs
 from adaptive_dd.errors import ParameterError, SignalError
@@ -346,7 +346,7 @@ def run_trial(controller, scenario: Scenario | None = None, seed_index: int = 0,
     sc = scenario or load_scenario()
     label = name or getattr(controller, "name", type(controller).__name__)
     with warnings.catch_warnings():  # the floor's warning speaks of run_benchmark's controllers=: said below
-        warnings.filterwarnings("ignore", message=r"run_benchmark: .*'s floor .* did not run")
+        warnings.filterwarnings("ignore", message=FLOOR_NOT_RUN)
         res = run_benchmark(sc, progress=False, controllers={label: controller}, seed_indices=[seed_index])
     floor = res.runs[label].floor
     if floor is not None and floor not in res.runs:

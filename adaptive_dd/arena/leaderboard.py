@@ -526,13 +526,13 @@ def run_unit(
 def _run_cells(sc, kind: str, controllers, seeds, progress, times=None) -> list[dict]:
     """Run one scenario's controllers and floors; its cells (:func:`_cells`). ``times``: a dict
     whose ``compile`` and ``run`` [s] the run's compile and other wall time are added to."""
-    from adaptive_dd.benchmark.runner import run_benchmark
+    from adaptive_dd.benchmark.runner import FLOOR_NOT_RUN, run_benchmark
 
     if seeds is not None:
         sc = dataclasses.replace(sc, seeds=seeds)
     names, floors, missing = _with_floors(sc, controllers)
     with warnings.catch_warnings():  # a floor that cannot run is the row's floor_note (missing), said once
-        warnings.filterwarnings("ignore", message=r"run_benchmark: .*'s floor .* did not run")
+        warnings.filterwarnings("ignore", message=FLOOR_NOT_RUN)
         # no trajectories kept and no excitation report's scale check: the table reads neither
         res = run_benchmark(
             sc.with_controllers(names), progress=progress, keep_trajectories=0, scale_check=False

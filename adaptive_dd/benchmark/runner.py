@@ -43,8 +43,13 @@ from adaptive_dd.controllers.compiled_form import compiled_spec
 from adaptive_dd.controllers.plugins import check_controller_object
 from adaptive_dd.errors import ParameterError
 
+FLOOR_NOT_RUN = r"run_benchmark: .*'s floor .* did not run"
+"""The message of :func:`run_benchmark`'s warning that a controller's floor did not run, for the
+callers that say it in their own terms (``warnings.filterwarnings(..., message=FLOOR_NOT_RUN)``)."""
+
 __all__ = [
     "ENGINES",
+    "FLOOR_NOT_RUN",
     "MAX_ERROR",
     "SETTLE",
     "BenchmarkResult",

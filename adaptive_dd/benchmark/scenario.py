@@ -455,7 +455,7 @@ def parse_scenario(data: dict, src: str = "<memory>", name: str = "scenario") ->
     arm, errors, plant, stated = None, [], None, None
     data = with_random_arm(dict(data), src)  # robot = "random:SEED": its capacity, armature, reference
     errors += derived_setting_errors(data)  # adaptive_ct's estimator and detector: from the scenario
-    table = data if isinstance(data, dict) else {}
+    table = data
     plant_table = table.get("plant")
     law_table = plant_table
     if isinstance(plant_table, dict):

@@ -13,6 +13,7 @@ import numpy as np
 
 from adaptive_dd.benchmark.scenario_base import KEYS, LIMITS, Reference, run_estimate
 from adaptive_dd.controllers import CONTROLLERS
+from adaptive_dd.controllers.plugins import table_name
 from adaptive_dd.plant.parameters import PAYLOAD_RADIUS
 from adaptive_dd.plant.sampling import first_sample
 
@@ -163,12 +164,6 @@ def _check_control(e: list, v: dict, T_ok: bool) -> None:
 def _n_joints(v: dict) -> int:
     arm = v.get("arm")
     return arm.n_joints if arm is not None else 2
-
-
-def table_name(name: str) -> str:
-    """The ``[controllers.NAME]`` a controller's settings table is named by: a built-in's name, a
-    plug-in's class name (``"package.module:Class"`` -> ``"Class"``)."""
-    return name.rsplit(":", 1)[-1].rsplit(".", 1)[-1] if ":" in name else name
 
 
 def _check_plant(e: list, v: dict) -> None:

@@ -27,12 +27,14 @@ __all__ = [
     "PLUGIN_GIVEN",
     "PluginForm",
     "PythonForm",
+    "check_controller_object",
     "compiled_form",
     "controller_label",
     "is_compiled",
     "load_controller_class",
     "plugin_controller",
     "slow_path_note",
+    "table_name",
     "unknown_settings",
 ]
 
@@ -100,15 +102,20 @@ def check_controller_object(where: str, what: str, obj) -> None:
         )
 
 
+def table_name(name: str) -> str:
+    """The ``[controllers.NAME]`` a controller's settings table is named by: a built-in's name, a
+    plug-in's class name (``"package.module:Class"`` -> ``"Class"``)."""
+    return name.rsplit(":", 1)[-1].rsplit(".", 1)[-1] if ":" in name else name
+
+
 def unknown_settings(spec: str, options: dict, allowed: set) -> None:
     """A :class:`ParameterError` naming the controller, the settings not in ``allowed`` and those allowed."""
-    plugin = ":" in spec  # a plug-in (its COMMON settings taken before): its table is its class name
-    common = COMMON if plugin else set()  # a built-in's sub-table (adaptive_ct.estimator) takes none
+    # a plug-in takes the COMMON settings (taken out before); a built-in's sub-table (its estimator) none
+    common = COMMON if ":" in spec else set()
     bad = sorted(set(options) - allowed - common)
     if bad:
-        table = spec.rsplit(":", 1)[-1].rsplit(".", 1)[-1] if plugin else spec
         raise ParameterError(
-            f"controllers.{table}: unknown setting(s) {bad}; allowed: {sorted(allowed | common)}"
+            f"controllers.{table_name(spec)}: unknown setting(s) {bad}; allowed: {sorted(allowed | common)}"
         )
 
 
