@@ -150,6 +150,42 @@ def test_sensitivities_match_finite_differences(arm3):
         np.testing.assert_allclose(Z[0, -1, :, col], fd, rtol=1e-2, atol=1e-2 * np.abs(fd).max())
 
 
+def test_sample_exponential_holds_on_stiff_steps():
+    """exp(T F) and int_0^T exp(sF) ds against scipy's expm of the augmented matrix, on a mild step
+    and on a stiff one (T F = -16 on a velocity: a light joint's Coulomb slope at a standstill),
+    where the plain fourth-order series gives 2161 for exp(-16)."""
+    from scipy.linalg import expm
+
+    from adaptive_dd.identification.output_error import _expm_terms
+
+    rng = np.random.default_rng(3)
+    for scale in (0.3, 16.0):
+        F = rng.normal(size=(2, 4, 4))
+        F[:, 3, 3] = -scale / 1e-3
+        phi, gam = _expm_terms(F, 1e-3)
+        for b in range(2):
+            aug = np.zeros((8, 8))
+            aug[:4, :4], aug[:4, 4:] = F[b], np.eye(4)
+            ex = expm(1e-3 * aug)
+            np.testing.assert_allclose(phi[b], ex[:4, :4], atol=1e-4)
+            np.testing.assert_allclose(gam[b], ex[:4, 4:], atol=1e-7)
+
+
+def test_sensitivities_stay_bounded_from_a_standstill(arm3):
+    """A segment that starts at rest under a steep smooth Coulomb law (v_f = 2 mrad/s): the
+    sensitivities stay of the order of the motion's. The unscaled series grew them to 1e12 on
+    the SICE URDF and the Cramér-Rao bound it fed was 1e-15 of the parameters."""
+    arm3 = arm3.with_(friction_velocity=0.002)
+    model3 = arm_model(arm3)
+    rec = simulate_record(arm3, REF3, 0.4, [np.random.default_rng(0)], noise=False, quantize=False)
+    pi = pi_from_sigma(model3, rec.sigma_true)
+    x0 = np.concatenate([rec.q_true[0, :1], rec.qd_true[0, :1]], axis=1)
+    tau = rec.tau[:, :200]
+    xs = simulate_segments(model3, pi, x0, tau, 1e-3)
+    Z = segment_sensitivities(model3, pi, xs, tau, 1e-3)
+    assert np.all(np.isfinite(Z)) and np.abs(Z).max() < 1e3
+
+
 @pytest.mark.slow  # 10 s in a cold run
 def test_output_error_is_held_to_the_bound(arm3, model3):
     """Three seeds of a 2.5 s record: every parameter's error within 4 bounds; the bound's scale is right
