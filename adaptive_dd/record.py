@@ -136,11 +136,14 @@ def _read_csv(path: Path):
     if not path.is_file():
         raise DataError(f"{path}: no such file")
     try:
-        frame = pd.read_csv(path, skipinitialspace=False)
-        head = str(frame.columns[0]) if frame.shape[1] == 1 else ""
+        header = pd.read_csv(path, nrows=0).columns
+        head = str(header[0]) if len(header) == 1 else ""
         sep = next((c for c in (";", "\t") if c in head), None)
+        frame = pd.read_csv(path, sep=sep or ",", skipinitialspace=False)
         if sep is not None:  # one column whose name holds the separator: a semicolon or tab file
-            frame = pd.read_csv(path, sep=sep, skipinitialspace=False)
+            if _decimal_commas(frame):  # 1,5 for 1.5, as spreadsheets of many locales write it
+                frame = pd.read_csv(path, sep=sep, skipinitialspace=False, decimal=",")
+                frame.attrs["decimal_comma"] = True
     except (ValueError, pd.errors.ParserError) as exc:
         raise DataError(f"{path}: not a readable CSV file: {exc}") from None
     frame.columns = [str(c).strip() for c in frame.columns]
@@ -149,6 +152,19 @@ def _read_csv(path: Path):
         frame = frame[~repeats]  # each row keeps its index: its line in the file (_line)
         frame.attrs["repeats"] = int(repeats.sum())
     return frame
+
+
+_DECIMAL_COMMA = re.compile(r"[+-]?(\d+,\d*|,\d+)([eE][+-]?\d+)?")
+
+
+def _decimal_commas(frame) -> bool:
+    """True when a text column of a semicolon or tab file holds numbers written with a decimal comma
+    (every cell of it, and no cell of any column with a decimal point)."""
+    texts = [
+        frame[c].dropna().astype(str).str.strip() for c in frame.columns if frame[c].dtype.kind not in "biuf"
+    ]
+    comma = [v for v in texts if v.size and v.str.fullmatch(_DECIMAL_COMMA.pattern).all()]
+    return bool(comma) and not any(v.str.contains(".", regex=False).any() for v in texts)
 
 
 def _line(frame, row: int) -> int:
@@ -346,6 +362,11 @@ def read_log(spec: RecordSpec, window: tuple[float, float] | None = None, arm=No
             f"{p}: {f.attrs['repeats']} row(s) repeated whole (a logger's repeats) read once"
             for p, f in frames.items()
             if f.attrs.get("repeats")
+        ),
+        *(
+            f"{p}: numbers written with a decimal comma, read as such"
+            for p, f in frames.items()
+            if f.attrs.get("decimal_comma")
         ),
     )
     if len(pieces) > 1 or short:

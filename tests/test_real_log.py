@@ -626,6 +626,19 @@ def test_a_semicolon_or_tab_separated_log_reads_as_a_comma_one(tmp_path, sep):
     np.testing.assert_array_equal(rec.q, ref.q)
 
 
+@pytest.mark.parametrize("sep", [";", "\t"])
+def test_decimal_commas_of_a_semicolon_or_tab_log_are_read_and_said(tmp_path, sep):
+    """A spreadsheet of a comma-decimal locale writes 0,5;1,25: read as numbers (they were text, then
+    refused cell by cell), and said; a comma file is never read so."""
+    p1, p2, *_ = _write_log(tmp_path, np.random.default_rng(2))
+    ref = read_log(record_spec(_table(p1, p2, exclude=["j_c"]), NAMES, KINDS, "s.toml"))
+    for p in (p1, p2):
+        p.write_text(p.read_text().replace(",", sep).replace(".", ","))
+    rec = read_log(record_spec(_table(p1, p2, exclude=["j_c"]), NAMES, KINDS, "s.toml"))
+    np.testing.assert_array_equal(rec.q, ref.q)
+    assert sum("decimal comma" in nt for nt in rec.notes) == 2
+
+
 def test_a_bad_cell_is_quoted_as_written(tmp_path):
     """The message quotes the cell (nan, a time), not numpy's repr (np.float64(nan)); one line is a line."""
     p1, p2, *_ = _write_log(tmp_path, np.random.default_rng(4))
