@@ -146,3 +146,31 @@ def test_unknown_initial_state_costs_information(table2_bound):
     assert unk.crb_std[6] > 1.5 * table2_bound.crb_std[6]
     with pytest.raises(ParameterError, match="initial_state"):
         fisher_information(TABLE1_SIGMA, tau, initial_state="guessed")
+
+
+def test_a_zero_parameter_keeps_its_bound_and_an_uninformed_one_is_infinite():
+    """Coulomb friction of 0 (allowed): its bound is sqrt((F^-1)_ii), the others unchanged by it (it
+    was 0 and moved b1's 11x); a record with no motion informs nothing: infinite bounds, not 0 %;
+    finite differences step a zero parameter on the others' scale (they divided 0 by 0)."""
+    tau = table2_torque(1, 1500)[0]
+    sg = TABLE1_SIGMA.copy()
+    sg[5:] = 0.0
+    r = fisher_information(sg, tau, qd0=(0.01, 0.01))
+    np.testing.assert_allclose(r.crb_std, np.sqrt(np.diag(np.linalg.inv(r.information))), rtol=1e-6)
+    assert np.all(np.isnan(r.crb_std_pct[5:])) and np.all(np.isfinite(r.crb_std_pct[:5]))
+    rest = fisher_information(TABLE1_SIGMA, np.tile([0.5, 0.2], (1000, 1)))  # below breakaway
+    assert np.all(np.isinf(rest.crb_std)) and np.all(np.isinf(rest.crb_std_pct))
+    one = crb_from_fisher(np.diag([4.0, 1.0, 0, 0, 0, 0, 0]), TABLE1_SIGMA, "sensitivity", 10)
+    np.testing.assert_allclose(one.crb_std[:2], [0.5, 1.0])
+    assert np.all(np.isinf(one.crb_std[2:]))
+    fd = fisher_information(sg, tau, qd0=(0.01, 0.01), method="finite_difference")
+    assert np.all(np.isfinite(fd.crb_std))
+
+
+def test_velocities_alone_with_an_unknown_start_are_bounded():
+    """q1 never enters the dynamics: with velocities alone measured the start's block is singular
+    (it raised numpy's LinAlgError); the bound is the Schur complement over the seen states."""
+    tau = table2_torque(1, 1500)[0]
+    unk = fisher_information(TABLE1_SIGMA, tau, measured=("qd",), initial_state="unknown")
+    known = fisher_information(TABLE1_SIGMA, tau, measured=("qd",))
+    assert np.all(np.isfinite(unk.crb_std)) and np.all(unk.crb_std >= known.crb_std * (1 - 1e-9))

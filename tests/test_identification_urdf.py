@@ -4,6 +4,7 @@ consistency, excitation, records and CLI errors. Most on the shipped three-joint
 from __future__ import annotations
 
 import dataclasses
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -25,6 +26,7 @@ from adaptive_dd.identification.excitation import (
     design_excitation,
     multisine,
     reference_toml,
+    relative_bounds,
 )
 from adaptive_dd.identification.model import (
     arm_model,
@@ -39,7 +41,7 @@ from adaptive_dd.identification.output_error import (
     segment_sensitivities,
     simulate_segments,
 )
-from adaptive_dd.identification.payload_pair import payload_from_pair
+from adaptive_dd.identification.payload_pair import payload_from_pair, payload_from_record
 from adaptive_dd.identification.records import simulate_record
 from adaptive_dd.identification.regression import (
     check_excitation,
@@ -184,6 +186,20 @@ def test_sensitivities_stay_bounded_from_a_standstill(arm3):
     xs = simulate_segments(model3, pi, x0, tau, 1e-3)
     Z = segment_sensitivities(model3, pi, xs, tau, 1e-3)
     assert np.all(np.isfinite(Z)) and np.abs(Z).max() < 1e3
+
+
+def test_model_records_hold_on_a_stiff_friction_law():
+    """The SICE arm's light second link under its smooth Coulomb law (h rho = 5 at 2 substeps,
+    past RK4's 2.79): the record with the default substeps is the one with 16 (h rho 0.6). Unsplit, joint 2
+    ran backwards from rest and the error to the fine record reached 0.39 rad/s."""
+    from adaptive_dd.benchmark.scenario import load_scenario
+
+    sc = load_scenario(Path(__file__).resolve().parents[1] / "benchmarks" / "scenarios" / "sice_urdf.toml")
+    rec = {
+        s: simulate_record(sc.arm, sc.reference, 0.3, [np.random.default_rng(0)], substeps=s, noise=False)
+        for s in (2, 16)
+    }
+    np.testing.assert_allclose(rec[2].qd_true, rec[16].qd_true, atol=1e-5)
 
 
 @pytest.mark.slow  # 10 s in a cold run
@@ -351,3 +367,21 @@ def test_benchmark_plant_with_smooth_friction_is_the_model(arm3):
     np.testing.assert_array_equal(c.q_true, a.q_true)
     with pytest.raises(ParameterError, match="plant must be 'model' or 'benchmark'"):
         simulate_record(arm3, REF3, 0.5, [np.random.default_rng(0)], plant="rk4")
+
+
+def test_relative_bounds_leave_out_a_kind_that_is_zero(arm3, model3):
+    """An arm whose URDF gives no friction (UR3, UR10 of example-robot-data): its friction bounds
+    have no magnitude to be relative to; they were divided by 1e-300 (1e297 relative), now NaN."""
+    sigma = model3.sigma_ref.copy()
+    fric = np.array([n.startswith(("fv", "fc")) for n in model3.names])
+    sigma[fric] = 0.0
+    rb = relative_bounds(np.full(model3.p, 1e-3), sigma, model3.names)
+    assert np.all(np.isnan(rb[fric])) and np.all(np.isfinite(rb[~fric])) and np.nanmax(rb) < 1e3
+
+
+def test_payload_from_one_record_refuses_a_planar_arm_naming_what_it_cannot_see(arm3, model3, clean3):
+    """vertical3's base parameters determine 4 of the payload's 10: the fit's normal equations were
+    singular and the command said the record could not be simulated; now the parameters are named,
+    as for a pair."""
+    with pytest.raises(ParameterError, match=r"determine only 4 of the payload's 10 parameters \(not: \['my"):
+        payload_from_record(arm3, model3, clean3.q[0], clean3.qd[0], clean3.tau[0], measurement_std(arm3))

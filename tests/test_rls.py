@@ -124,3 +124,19 @@ def test_covariance_stays_spd_and_bounded_at_rest(rng):
 def test_bad_rls_config(kw, match):
     with pytest.raises(ParameterError, match=match):
         RLSConfig(**kw)
+
+
+def test_kalman_fading_memory_does_not_wind_up_unexcited():
+    """RLS's trace cap on the Kalman form: 20 s of zero regressor (an arm at rest) under
+    alpha = 1/sqrt(0.99) grew P as 0.99^-k to 1e87 (NaN after 75 s); capped, it stays at n p0 and
+    the next excitation is used."""
+    kf = KalmanParameterEstimator(7, 2, alpha=1 / np.sqrt(0.99))
+    phi = np.random.default_rng(0).standard_normal((2, 7))
+    theta = np.arange(1, 8.0)
+    for _ in range(200):
+        kf.update(phi, phi @ theta)
+    for _ in range(20000):
+        kf.update(np.zeros((2, 7)), np.zeros(2))
+    assert np.trace(kf.P) <= 7 * 100.0 * (1 + 1e-12)
+    kf.update(phi, phi @ theta)
+    assert np.all(np.isfinite(kf.theta)) and np.all(np.isfinite(kf.P))

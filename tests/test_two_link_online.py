@@ -208,3 +208,17 @@ def test_identify_online_on_a_recorded_csv(tmp_path, swap_record):
     assert len(alarms) == 1 and 4.0 < alarms[0] < 4.15
     assert abs(float(rows[-1]["payload_mass"]) - 3.0) < 0.15
     assert (tmp_path / "o" / "online.png").stat().st_size > 10_000
+
+
+def test_a_small_min_learned_does_not_divide_by_zero():
+    """``min_learned`` below 8 (validated from 1) made the relearning weight 0 / 0 at no learned
+    sample (a ZeroDivisionError in the compiled kernel) while one joint stood still."""
+    from adaptive_dd.plant import ClosedFormTwoLink
+
+    t = np.arange(1500) * 1e-3
+    drive = np.stack([0 * t, 1.5 * np.cos(6 * np.pi * t)], axis=-1)[None]  # joint 1 held by friction
+    sim = simulate_open_loop(drive, np.random.default_rng(0))
+    for ml in (200, 5):
+        cfg = TwoLinkOnlineConfig(sample_period=1e-3, detector=ChangeDetector(min_learned=ml))
+        rec = run_two_link_online(sim.q_meas, sim.qd_meas, sim.tau, cfg, ClosedFormTwoLink.sice().sigma)
+        assert rec.alarm_times() == [[]] and np.all(np.isfinite(rec.theta))

@@ -179,7 +179,14 @@ def excitation_bounds(arm, trajectories: dict, duration: float) -> dict:
     for label, tr in trajectories.items():
         rec = simulate_record(arm, tr.reference(ramp=0.5), duration, [np.random.default_rng(0)], noise=False)
         crb, _ = cramer_rao_bound(model, rec.sigma_true, rec.q_true[0], rec.qd_true[0], rec.tau[0], std)
-        rb = relative_bounds(crb, model.sigma_ref, model.names)
-        k = int(np.argmax(rb))
-        out[label] = (float(rb[k]), model.names[k], float(np.median(rb)))
+        rb = relative_bounds(crb, model.sigma_ref, model.names)  # NaN: a kind that is 0 (no friction)
+        k = int(np.nanargmax(rb))
+        out[label] = (float(rb[k]), model.names[k], float(np.nanmedian(rb)))
+    if np.isnan(rb).any():
+        left = [short(model.names[i]) for i in np.flatnonzero(np.isnan(rb))]
+        print(
+            f"note: {', '.join(left)} left out of the worst and median bounds: the URDF gives every "
+            "parameter of their kind 0 (no magnitude to compare a bound with)",
+            file=sys.stderr,
+        )
     return out

@@ -452,7 +452,8 @@ def coverage(
 
 
 def relative_bounds(crb: Array, sigma: Array, names: tuple[str, ...]) -> Array:
-    """``crb_i / max(|sigma_i|, 1 % of the largest |sigma| of its kind)`` (module docstring)."""
+    """``crb_i / max(|sigma_i|, 1 % of the largest |sigma| of its kind)`` (module docstring); NaN
+    for a kind whose every parameter is 0 (an arm without friction: no magnitude to compare with)."""
     kinds = []
     for nm in names:
         lead = nm.split(" ")[0].split("*")[-1]
@@ -468,8 +469,8 @@ def relative_bounds(crb: Array, sigma: Array, names: tuple[str, ...]) -> Array:
     scale = np.abs(np.asarray(sigma, float)).copy()
     for kd in set(kinds):
         sel = kinds == kd
-        scale[sel] = np.maximum(scale[sel], 0.01 * scale[sel].max())
-    return np.asarray(crb, float) / np.maximum(scale, 1e-300)
+        scale[sel] = np.maximum(scale[sel], 0.01 * scale[sel].max()) if scale[sel].max() > 0 else np.nan
+    return np.asarray(crb, float) / scale
 
 
 def reference_toml(ref: Reference, comment: str = "") -> str:

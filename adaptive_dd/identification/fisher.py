@@ -212,15 +212,31 @@ def innovation_fisher(a: Array, g: Array, p: Array, variances: Array, torque_var
 
 
 def crb_from_fisher(information: ArrayLike, sigma: ArrayLike, method: str, n_samples: int) -> FisherResult:
-    """Bounds and condition number from a Fisher information matrix (7, 7)."""
+    """Bounds and condition number from a Fisher information matrix (7, 7).
+
+    The bound of parameter i is ``sqrt((F^-1)_ii)``, F inverted on its own scale (``D^-1 F D^-1``,
+    ``D = sqrt(diag F)``), so that a parameter that is 0 (friction may be) keeps its bound; a
+    parameter the record does not inform (in a direction of F's null space) has an infinite bound,
+    not 0. The percentage is of ``|sigma_i|`` (NaN where it is 0); the condition number is that of
+    the information relative to sigma, ``diag(sigma) F diag(sigma)`` (infinite where a parameter is
+    0 or not informed)."""
     f = np.asarray(information, dtype=float)
     sg = validate_sigma(sigma)
-    scaled = sg[:, None] * f * sg[None, :]
-    rel_std = np.sqrt(np.abs(np.diag(np.linalg.pinv(scaled, hermitian=True))))  # of sigma_i / |sigma_i|
-    std = rel_std * np.abs(sg)
-    eig = np.linalg.eigvalsh(scaled)
+    std = np.full(sg.shape, np.inf)
+    d = np.sqrt(np.clip(np.diag(f), 0.0, None))
+    ok = d > 0
+    if ok.any():
+        w, V = np.linalg.eigh(f[np.ix_(ok, ok)] / np.outer(d[ok], d[ok]))
+        keep = w > 1e-12 * max(float(w[-1]), 0.0)
+        Vk = V[:, keep]
+        rel = np.sqrt(np.einsum("ik,k,ik->i", Vk, 1.0 / w[keep], Vk)) / d[ok]
+        blind = np.linalg.norm(V[:, ~keep], axis=1) > 1e-6  # a component in F's null space
+        std[ok] = np.where(blind, np.inf, rel)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        pct = np.where(sg != 0, 100.0 * std / np.abs(sg), np.nan)
+    eig = np.linalg.eigvalsh(sg[:, None] * f * sg[None, :])
     cond = float(eig[-1] / eig[0]) if eig[0] > 0 else float("inf")
-    return FisherResult(f, std, 100.0 * std / np.abs(sg), cond, sg, method, int(n_samples))
+    return FisherResult(f, std, pct, cond, sg, method, int(n_samples))
 
 
 def fisher_information(
@@ -307,7 +323,9 @@ def _sensitivity_information(a, g, p, var, torque_variance, initial_state: str) 
     if initial_state == "unknown":
         s0 = np.concatenate((np.eye(4), np.zeros((4, 7))), axis=-1)
         full = fisher_from_sensitivities(chain_sensitivities(a, np.concatenate((0 * a, p), -1), s0), var)
-        return full[4:, 4:] - full[4:, :4] @ np.linalg.solve(full[:4, :4], full[:4, 4:])
+        # pinv: a state the outputs never see (q1 with velocities alone measured) leaves the state
+        # block singular; F being positive semidefinite, its cross block lies in that block's range
+        return full[4:, 4:] - full[4:, :4] @ np.linalg.pinv(full[:4, :4], hermitian=True) @ full[:4, 4:]
     return fisher_from_sensitivities(chain_sensitivities(a, p), var)
 
 

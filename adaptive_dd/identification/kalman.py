@@ -4,8 +4,10 @@ The parameters are the state of a random walk, ``sigma(t+1) = sigma(t) + w``,
 ``w ~ N(0, Q)``, observed through ``y = Phi(t) sigma + v``, ``v ~ N(0, R)``:
 ``F = I``, ``H = Phi(t)`` (changing every sample). With ``Q = 0``, ``R = 1`` and
 filterpy's fading memory ``alpha = 1/sqrt(lambda)`` this is exactly RLS with
-forgetting factor lambda (the tests check it); ``Q > 0`` lets the estimate
-track slowly changing parameters without forgetting everything.
+forgetting factor lambda (the tests check it), the trace of ``P`` capped as
+:func:`~adaptive_dd.identification.rls.rls_step` caps it (at its start, ``n p0``:
+unexcited, fading memory alone grew it to 1e265 and then NaN); ``Q > 0`` lets the
+estimate track slowly changing parameters without forgetting everything.
 """
 
 from __future__ import annotations
@@ -65,6 +67,7 @@ class KalmanParameterEstimator:
         kf.x = np.zeros(n_params) if theta0 is None else np.asarray(theta0, dtype=float).copy()
         kf.alpha = alpha
         self.kf = kf
+        self.max_trace = p0 * n_params
         self.n_skipped = 0
 
     @property
@@ -84,6 +87,9 @@ class KalmanParameterEstimator:
             return self.theta
         self.kf.predict()
         self.kf.update(y, H=phi)  # x is kept 1-D, so z is 1-D too
+        tr = float(np.trace(self.kf.P))
+        if tr > self.max_trace:  # fading memory without excitation winds P up (as in rls_step)
+            self.kf.P = self.kf.P * (self.max_trace / tr)
         return self.theta
 
     def run(self, phi: ArrayLike, y: ArrayLike) -> NDArray[np.float64]:

@@ -168,19 +168,25 @@ def payload_from_pair(
         If the base parameters do not determine all ten payload parameters on this arm.
     """
     P = arm.payload_basis
-    if arm.payload_rank < 10:
-        names = ("m", "mx", "my", "mz", "Ixx", "Ixy", "Iyy", "Ixz", "Iyz", "Izz")
-        missing = [nm for nm, ok in zip(names, arm.payload_identifiable, strict=True) if not ok]
-        raise ParameterError(
-            f"on this arm the base parameters determine only {arm.payload_rank} of the payload's 10 "
-            f"parameters (not: {missing}); a pair of records cannot give them"
-        )
+    _all_ten_seen(arm, "a pair of records")
     d = np.asarray(sigma_loaded, float) - np.asarray(sigma_unloaded, float)
     C = np.asarray(cov_loaded, float) + np.asarray(cov_unloaded, float)
     if not (np.all(np.isfinite(d)) and np.all(np.isfinite(C))):
         raise ParameterError("the loaded or unloaded estimate or its covariance is not finite")
     pi, cov = pair_difference(P, d, C, weighting)
     return payload_from_params(pi, cov)
+
+
+def _all_ten_seen(arm, what: str) -> None:
+    """Refuse, naming them, the payload parameters the arm's base parameters do not determine (a
+    planar arm's out-of-plane ones): ``what`` cannot give them."""
+    if arm.payload_rank < 10:
+        names = ("m", "mx", "my", "mz", "Ixx", "Ixy", "Iyy", "Ixz", "Iyz", "Izz")
+        missing = [nm for nm, ok in zip(names, arm.payload_identifiable, strict=True) if not ok]
+        raise ParameterError(
+            f"on this arm the base parameters determine only {arm.payload_rank} of the payload's 10 "
+            f"parameters (not: {missing}); {what} cannot give them"
+        )
 
 
 def pair_difference(P: ArrayLike, d: ArrayLike, C: ArrayLike, weighting: str = "gls") -> tuple[Array, Array]:
@@ -229,9 +235,16 @@ def payload_from_record(
     sigma_arm: ArrayLike | None = None,
     **oe_kw,
 ) -> PayloadResult:
-    """The payload from one loaded record with the arm known (``sigma_arm``, default the URDF's)."""
+    """The payload from one loaded record with the arm known (``sigma_arm``, default the URDF's).
+
+    Raises
+    ------
+    ParameterError
+        The arm's base parameters do not determine all ten payload parameters (named).
+    """
     from adaptive_dd.identification.output_error import fit_output_error
 
+    _all_ten_seen(arm, "one loaded record")
     s0 = model.sigma_ref if sigma_arm is None else np.asarray(sigma_arm, float)
     fit = fit_output_error(model, q, qd, tau, s0, std, E=arm.payload_basis, **oe_kw)
     return payload_from_params(fit.theta, np.linalg.inv(fit.information))

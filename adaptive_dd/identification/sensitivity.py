@@ -299,7 +299,8 @@ def finite_difference_sensitivities(
     sigma : array_like (7,)
     tau : array_like (N, 2)
     rel_step : float
-        ``h_j = rel_step * |sigma_j|`` (module docstring: why 1e-6).
+        ``h_j = rel_step * |sigma_j|`` (module docstring: why 1e-6); a ``sigma_j`` of 0 steps on
+        ``1e-3 max |sigma|``.
     direction : array_like (m, 7), optional
         Differentiate along these directions of sigma instead of its 7 axes (per unit
         of each direction; step ``rel_step * ||sigma|| / ||direction||``).
@@ -315,7 +316,8 @@ def finite_difference_sensitivities(
     if not rel_step > 0:
         raise ParameterError(f"rel_step must be > 0, got {rel_step}")
     if direction is None:
-        dirs, eps = np.eye(7), rel_step * np.abs(sg)
+        # a parameter that is 0 (friction may be) steps on a thousandth of the largest's scale
+        dirs, eps = np.eye(7), rel_step * np.maximum(np.abs(sg), 1e-3 * np.abs(sg).max())
     else:
         dirs = np.atleast_2d(np.asarray(direction, dtype=float))
         eps = rel_step * np.linalg.norm(sg) / np.linalg.norm(dirs, axis=-1)

@@ -173,7 +173,7 @@ def _detect(i, eps, act, phi_d, u, th, short, long, cnt, ci, cf, A, B, C, D, d):
         n_l = cnt[i, C_LEARNED1 + j]
         if n_l >= ci[I_MIN_LEARNED]:
             sh[S_LREF + j] = long[i, j] / (1.0 - (1.0 - a_l) ** n_l)
-        elif n_l >= ci[I_MIN_LEARNED] // 8:  # relearning: the weight may only fall meanwhile
+        elif n_l >= max(1, ci[I_MIN_LEARNED] // 8):  # relearning: the weight may only fall meanwhile
             sh[S_LREF + j] = max(sh[S_LREF + j], long[i, j] / (1.0 - (1.0 - a_l) ** n_l))
         w[j] = 1.0 / sh[S_LREF + j] if sh[S_LREF + j] > 0.0 else 0.0
         if np.isfinite(phi_d[j]):
