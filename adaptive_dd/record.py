@@ -409,9 +409,10 @@ def _rate_notes(clocks: dict, rows: dict, T: float) -> list[str]:
     return out
 
 
-MAX_LOG_STEP = 1.0
-"""[s] The largest median time step a log is read with: a coarser one is a time column in another
-unit (``[record] time_unit``)."""
+MAX_LOG_STEP = 0.1
+"""[s] The largest median time step a log is read with (10 Hz: coarser, the derivatives' 7-sample
+window spans most of a second); a coarser one is a time column in another unit (``[record]
+time_unit``): a 1 kHz log stamped in ms steps by exactly 1."""
 
 
 def _first_clock(spec: RecordSpec, clocks: dict, rows: dict) -> tuple[Array, float]:

@@ -348,6 +348,25 @@ def test_cli_simulate_and_identify_end_to_end(tmp_path, capsys):
         main(["identify", "--arm", str(scen), str(csv), "--baseline", str(csv), "--out", str(tmp_path / "x")])
         == 2
     )
+    capsys.readouterr()
+    # torque offsets fitted by WLS come off the torques output error simulates (it ignored them:
+    # normalised residual 28, estimates thousands of bounds off, "converged")
+    off = tmp_path / "off.csv"
+    rows = [r.split(",") for r in lines]
+    j = rows[0].index("tau1")
+    off.write_text(
+        "\n".join([lines[0], *(",".join([*r[:j], repr(float(r[j]) - 0.8), *r[j + 1 :]]) for r in rows[1:])])
+        + "\n"
+    )
+    args = ["identify", "--arm", str(scen), str(off), "--out", str(tmp_path / "off")]
+    assert main([*args, "--torque-offset", "on"]) == 0
+    out = capsys.readouterr().out
+    res = float(out.split("normalised residual ")[1].split()[0])
+    assert (
+        res < 1.5 and "torque offsets fitted by WLS taken off" in out and "warning: the normalised" not in out
+    )
+    assert main([*args, "--torque-offset", "off"]) == 0  # the offset left in: said, not "converged" alone
+    assert "warning: the normalised residual is" in capsys.readouterr().out
 
 
 @pytest.mark.slow  # a kernel no other default test compiles (about 20-60 CPU-s cold)
@@ -385,3 +404,88 @@ def test_payload_from_one_record_refuses_a_planar_arm_naming_what_it_cannot_see(
     as for a pair."""
     with pytest.raises(ParameterError, match=r"determine only 4 of the payload's 10 parameters \(not: \['my"):
         payload_from_record(arm3, model3, clean3.q[0], clean3.qd[0], clean3.tau[0], measurement_std(arm3))
+
+
+def test_two_link_output_error_refuses_a_smooth_law_record(tmp_path, capsys):
+    """A record simulate made on the general model (tanh Coulomb, said in its trajectory.json): the
+    closed forms' output error fitted it as stick-slip and landed 60-340 bounds off, silently."""
+    from adaptive_dd.cli import main
+
+    out = tmp_path / "sim"
+    assert main(["simulate", "--experiment", "reference", "--duration", "3", "--out", str(out)]) == 0
+    csv = str(out / "trajectory.csv")
+    capsys.readouterr()
+    args = ["identify", csv, "--out", str(tmp_path / "id")]
+    assert main([*args, "--estimator", "output_error"]) == 2
+    assert 'robot = "sice_arm" and general = true' in capsys.readouterr().err
+    assert main(args) == 0
+    assert "the Cramér-Rao bound below is that of the stick-slip plant" in capsys.readouterr().out
+
+
+def test_several_simulated_records_keep_the_width_they_were_made_with(tmp_path, capsys):
+    """Two records of simulate --arm: their trajectory.json files give the Coulomb width (one record
+    did; two looked for 'a; b.json' and took the velocity noise's width, 0.0073 for 0.02 rad/s)."""
+    from adaptive_dd.cli import main
+    from adaptive_dd.identification.excitation import reference_toml
+
+    scen = tmp_path / "v3.toml"
+    scen.write_text('[arm]\nrobot = "vertical3"\n\n' + reference_toml(REF3))
+    csvs = []
+    for seed in (1, 2):
+        out = tmp_path / f"sim{seed}"
+        assert (
+            main(
+                ["simulate", "--arm", str(scen), "--duration", "2.5", "--seed", str(seed), "--out", str(out)]
+            )
+            == 0
+        )
+        csvs.append(str(out / "trajectory.csv"))
+    capsys.readouterr()
+    assert (
+        main(["identify", "--arm", str(scen), *csvs, "--output-error", "off", "--out", str(tmp_path / "id")])
+        == 0
+    )
+    assert "v = 0.02 rad/s: the width the record was simulated with" in capsys.readouterr().out
+
+
+def test_excite_writes_a_scenario_whose_paths_and_reference_still_read(tmp_path):
+    """Written to another folder (results/excite/ by default), the scenario's relative URDF named
+    nothing; a [reference] of sub-tables was kept beside the new one (invalid TOML)."""
+    import shutil
+
+    from adaptive_dd.benchmark.scenario import load_scenario
+    from adaptive_dd.cli import main
+
+    shutil.copy(robot_urdf("vertical3"), tmp_path / "my_arm.urdf")
+    scen = tmp_path / "my_arm.toml"
+    joints = "\n".join(
+        f"[reference.joint{j + 1}]\noffset = {o}\namplitude = [0.3]\nfrequency = [0.4]\n"
+        for j, o in enumerate((0.2, -0.5, 0.3))
+    )
+    scen.write_text(f'[arm]\nurdf = "my_arm.urdf"\n\n[reference]\nramp = 0.5\n\n{joints}')
+    load_scenario(scen)
+    out = tmp_path / "results" / "excite" / "scenario.toml"
+    assert main(["excite", "--arm", str(scen), "--maxiter", "2", "--harmonics", "2", "--out", str(out)]) == 0
+    text = out.read_text()
+    assert 'urdf = "../../my_arm.urdf"' in text and "[reference.joint1]" not in text
+    sc = load_scenario(out)
+    assert sc.arm.n_joints == 3 and len(sc.reference.amplitude[0]) == 2
+
+
+@pytest.mark.slow  # the UR5's kernels (about 20 s cold)
+def test_payload_only_says_whether_its_fit_converged(tmp_path, capsys):
+    """--payload-only printed a mass 168 of its std off the truth after 2 iterations with no word that
+    the fit had stopped; its +- now says 1 std."""
+    from adaptive_dd.cli import main
+
+    scen = str(Path(__file__).resolve().parents[1] / "benchmarks" / "scenarios" / "ident_ur5.toml")
+    out = tmp_path / "loaded"
+    assert main(["simulate", "--arm", scen, "--duration", "4", "--payload", "2", "--out", str(out)]) == 0
+    capsys.readouterr()
+    assert (
+        main(["identify", "--arm", scen, str(out / "trajectory.csv"), "--payload-only", "--max-iter", "1"])
+        == 0
+    )
+    text = capsys.readouterr().out
+    assert "NOT converged" in text and "warning: output error stopped at --max-iter 1" in text
+    assert "payload (one record, arm known) [+- 1 std]: mass" in text

@@ -616,6 +616,18 @@ def test_a_time_column_in_ms_or_ns_is_said_and_read_with_time_unit(tmp_path, uni
         read_log(record_spec(_table(p1, p2, exclude=["j_c"], sample_period=0.01), NAMES, KINDS, "s.toml"))
 
 
+def test_a_log_stepping_by_one_read_as_s_is_refused(tmp_path):
+    """A 1 kHz log stamped in ms steps by exactly 1: it passed the old 1 s limit and was read as a
+    1 Hz log (T = 1 s, tau_f = 2 s, a garbage fit with exit 0)."""
+    p1, p2, *_ = _write_log(tmp_path, np.random.default_rng(2))
+    for p in (p1, p2):
+        lines = p.read_text().splitlines()
+        body = [f"{float(x.split(',')[0]) * 100:.17g}," + x.split(",", 1)[1] for x in lines[1:]]
+        p.write_text("\n".join([lines[0], *body]) + "\n")
+    with pytest.raises(DataError, match=r"steps by 0.99\d* per sample .* read as s.*time_unit = \"ms\""):
+        read_log(record_spec(_table(p1, p2, exclude=["j_c"]), NAMES, KINDS, "s.toml"))
+
+
 @pytest.mark.parametrize("sep", [";", "\t"])
 def test_a_semicolon_or_tab_separated_log_reads_as_a_comma_one(tmp_path, sep):
     p1, p2, *_ = _write_log(tmp_path, np.random.default_rng(2))

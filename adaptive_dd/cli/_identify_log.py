@@ -122,7 +122,7 @@ def _print_payload(label: str, pr) -> None:
         else "centre of mass undefined (the payload fitted has no mass: none seen, or one too light for "
         "these records to tell from none)"
     )
-    print(f"{label}: mass {pr.mass:.5g} +- {pr.mass_std:.2g} kg; {com}")
+    print(f"{label} [+- 1 std]: mass {pr.mass:.5g} +- {pr.mass_std:.2g} kg; {com}")
     ic = pr.inertia_com
     print(
         f"  inertia about the centre of mass [kg m^2]: Ixx {ic[0, 0]:.4g}, Iyy {ic[1, 1]:.4g}, Izz "
@@ -177,12 +177,14 @@ def _output_error(args, arm, model, rec, fit) -> None:
         flush=True,
     )
     E = _free_directions(fit)
+    # the channels read tau + b: the offsets fitted with the parameters come off the applied torque
+    tau = rec.tau if fit.offset is None else rec.tau - np.where(fit.used, fit.offset, 0.0)[None, :]
     try:
         oe = fit_output_error(
             model,
             rec.q,
             rec.qd,
-            rec.tau,
+            tau,
             fit.sigma,
             std,
             sample_period=rec.sample_period,
@@ -193,10 +195,18 @@ def _output_error(args, arm, model, rec, fit) -> None:
     except (SignalError, ParameterError, np.linalg.LinAlgError) as exc:
         print(f"output error: skipped, the record cannot be simulated from the WLS estimate ({exc})")
         return
+    residual = 2 * oe.cost / oe.n_residuals
     print(
         f"output error: {oe.iterations} iterations, {'converged' if oe.converged else 'NOT converged'}, "
-        f"normalised residual {2 * oe.cost / oe.n_residuals:.3f} (1 = the noise model)"
+        f"normalised residual {residual:.3f} (1 = the noise model)"
+        + ("; torque offsets fitted by WLS taken off the torques" if fit.offset is not None else "")
     )
+    if residual > RESIDUAL_LIMIT:
+        print(
+            f"warning: the normalised residual is {residual:.3g}, not about 1: the model does not explain "
+            "the record to its sensors' noise (another friction law, a torque scale or offset, a wrong "
+            "sensor noise), so the output error's estimate and its Cramér-Rao bounds below do not hold"
+        )
     print(
         f"{'base parameter':<{NAME_WIDTH}} {'WLS':>11} {'output err':>11} {'CRB std':>9} {'|WLS-OE|/CRB':>12}"
     )
@@ -220,6 +230,12 @@ def _output_error(args, arm, model, rec, fit) -> None:
         "CRB: Cramér-Rao std at the estimate for this record, q and qd measured with the arm's sensor "
         f"noise, torque known, segments of {oe.segment_length} samples with unknown initial states"
     )
+
+
+RESIDUAL_LIMIT = 2.0
+"""The output error's normalised residual above which ``identify`` warns that its model does not
+explain the record (about 1 when the model and the noise are right; 28 with a torque offset not
+taken off, 1.06 with a width profiled)."""
 
 
 def _free_directions(fit):
@@ -359,7 +375,11 @@ def _coulomb_width(args, arm, model, rec, K, tau_f: float, torque_held: bool, of
 
     choice = args.coulomb_width
     head = "Coulomb friction fitted as fc tanh(qd / v)"
-    made = simulated_width(rec.source) if choice == "auto" and rec.simulator_format else None
+    made = None
+    if choice == "auto" and rec.simulator_format:  # each record's own file (several: one width for all)
+        each = [simulated_width(src) for src in (rec.record_names or (rec.source,))]
+        if all(m is not None for m in each) and len({m[0] for m in each}) == 1:
+            made = (each[0][0], ", ".join(m[1] for m in each))
     if made is not None:  # a record of adaptive-dd simulate: the law it was made with
         print(f"{head}, v = {made[0]:.3g} rad/s: the width the record was simulated with ({made[1]})")
         return dataclasses.replace(model, friction_velocity=made[0]), None
@@ -448,6 +468,21 @@ def _payload_only(args, arm, model, rec, tau_f) -> int:
     print(
         f"{rec.source}: the arm known (its URDF), the payload's 10 parameters fitted (tau_f unused: {tau_f})"
     )
+    oe, residual = pr.fit, 2 * pr.fit.cost / pr.fit.n_residuals
+    print(
+        f"output error: {oe.iterations} iterations, {'converged' if oe.converged else 'NOT converged'}, "
+        f"normalised residual {residual:.3f} (1 = the noise model)"
+    )
+    if not oe.converged:
+        print(
+            f"warning: output error stopped at --max-iter {args.max_iter} before converging: the payload "
+            "below is not its optimum (raise --max-iter)"
+        )
+    if residual > RESIDUAL_LIMIT:
+        print(
+            f"warning: the normalised residual is {residual:.3g}, not about 1: the model does not explain "
+            "the record to its sensors' noise, so the payload and its Cramér-Rao std below do not hold"
+        )
     _print_payload("payload (one record, arm known)", pr)
     return 0
 

@@ -30,11 +30,37 @@ def identify_two_link(args: argparse.Namespace, arm) -> int:
     if args.method == "M2" and rec.qd is None:
         raise DataError(f"{args.data}: method M2 needs columns qd1, qd2 (use --method M1 for position only)")
     check_identifiable(rec, args.tau_f)
+    _smooth_law_record(args)
     outputs = OutputSet(args.out)
     with outputs:
         if args.online:
             return _identify_online(args, arm, rec, outputs)
         return _identify(args, rec, outputs, estimate, MIN_EQUATIONS)
+
+
+GENERAL_REMEDY = (
+    'identify it on the general model: --arm a scenario whose [arm] has robot = "sice_arm" and general = true'
+)
+
+
+def _smooth_law_record(args) -> None:
+    """A record ``simulate`` made on the general model with the smooth Coulomb law (its
+    ``trajectory.json`` says so): the closed forms' output error and Cramér-Rao bound simulate
+    stick-slip friction, so output error is refused (on such a 10 s record it landed 60-340 of its
+    bounds off the truth) and the bound's caveat said."""
+    from adaptive_dd.errors import DataError
+    from adaptive_dd.identification.friction_width import simulated_width
+
+    made = simulated_width(args.data) if not args.online else None
+    if made is None:
+        return
+    why = (
+        f"{args.data} was simulated on the general model with the smooth Coulomb law fc tanh(qd / "
+        f"{made[0]:g}) ({made[1]}), and the paper's closed forms simulate stick-slip friction"
+    )
+    if args.estimator == "output_error":
+        raise DataError(f"{why}: their output error would fit the wrong plant; {GENERAL_REMEDY}")
+    print(f"note: {why}: the Cramér-Rao bound below is that of the stick-slip plant; {GENERAL_REMEDY}")
 
 
 def _identify(args, rec, outputs, estimate, min_equations: int) -> int:

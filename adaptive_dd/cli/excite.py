@@ -8,6 +8,7 @@ the paper's tables alone (no URDF) is refused.
 from __future__ import annotations
 
 import argparse
+import re
 import sys
 from pathlib import Path
 
@@ -98,7 +99,7 @@ def run(args: argparse.Namespace) -> int:
         )
     text = reference_toml(best.reference(ramp=ramp), f"designed by adaptive-dd excite --arm {args.arm}")
     with atomic_write(out) as fh:
-        fh.write(_replace_reference(Path(args.arm).read_text(), text))
+        fh.write(_replace_reference(Path(args.arm).read_text(), text, Path(args.arm), Path(out)))
     print(f"wrote {out} (the scenario with the designed [reference])")
     return 0
 
@@ -154,16 +155,37 @@ def _print_bounds(args: argparse.Namespace, arm, res, rows: dict) -> None:
         )
 
 
-def _replace_reference(src: str, table: str) -> str:
-    """The scenario text with its ``[reference]`` table (if any) replaced by ``table``."""
-    out, skip = [], False
+_PATH_KEYS = re.compile(r'\b(urdf|from|files)(\s*=\s*)(\[[^\]]*\]|"[^"]*")')
+
+
+def _replace_reference(src: str, table: str, source: Path | None = None, out: Path | None = None) -> str:
+    """The scenario text with its ``[reference]`` table and sub-tables (``[reference.joint1]``) replaced
+    by ``table``; with ``source`` and ``out`` (the files read and written) the relative paths of its
+    ``urdf``, ``from`` and ``files`` that name files beside ``source`` rewritten relative to ``out``'s
+    folder (written elsewhere, ``results/excite/`` by default, they named nothing)."""
+    lines, skip = [], False
     for line in src.splitlines():
         head = line.strip()
         if head.startswith("["):
-            skip = head.startswith("[reference]")
+            name = head.strip("[]").split("]")[0].strip()
+            skip = name == "reference" or name.startswith("reference.")
         if not skip:
-            out.append(line)
-    return "\n".join(out).rstrip() + "\n\n" + table
+            lines.append(line if source is None or out is None else _rebased(line, source.parent, out.parent))
+    return "\n".join(lines).rstrip() + "\n\n" + table
+
+
+def _rebased(line: str, src_dir: Path, out_dir: Path) -> str:
+    """``line`` with each quoted path of a path key that names a file or folder relative to
+    ``src_dir`` rewritten relative to ``out_dir`` (absolute paths and other values kept)."""
+    import os
+
+    def one(m: re.Match) -> str:
+        p = m.group(1)
+        if os.path.isabs(p) or not (src_dir / p).exists():
+            return m.group(0)
+        return '"' + Path(os.path.relpath((src_dir / p).resolve(), out_dir.resolve())).as_posix() + '"'
+
+    return _PATH_KEYS.sub(lambda k: k.group(1) + k.group(2) + re.sub(r'"([^"]*)"', one, k.group(3)), line)
 
 
 def excitation_bounds(arm, trajectories: dict, duration: float) -> dict:

@@ -19,7 +19,9 @@ payload frame) and inertia about the centre of mass with first-order standard de
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -61,7 +63,7 @@ class PayloadResult:
     --------
     Made by :func:`payload_from_pair` (whose example makes one) and
     :func:`payload_from_record`; ``mass``, ``com`` and their standard deviations are what
-    ``adaptive-dd identify --payload`` prints.
+    ``adaptive-dd identify --payload-only`` and ``--baseline`` print.
 
     >>> from adaptive_dd.identification.payload_pair import PayloadResult
     >>> {"mass", "com", "mass_std", "com_std"} <= set(PayloadResult.__dataclass_fields__)
@@ -79,6 +81,9 @@ class PayloadResult:
     com_defined: bool = True
     """False when the constrained fit's mass is not positive: ``com`` and ``com_std`` are then NaN, and
     ``identify`` prints the centre of mass as undefined."""
+    fit: Any = None
+    """:func:`payload_from_record`'s output-error fit (its ``converged``, ``iterations``, ``cost``,
+    ``n_residuals``); None from a pair."""
 
 
 def _inertia_about_com(p: Array) -> Array:
@@ -247,4 +252,4 @@ def payload_from_record(
     _all_ten_seen(arm, "one loaded record")
     s0 = model.sigma_ref if sigma_arm is None else np.asarray(sigma_arm, float)
     fit = fit_output_error(model, q, qd, tau, s0, std, E=arm.payload_basis, **oe_kw)
-    return payload_from_params(fit.theta, np.linalg.inv(fit.information))
+    return dataclasses.replace(payload_from_params(fit.theta, np.linalg.inv(fit.information)), fit=fit)
