@@ -308,3 +308,39 @@ def test_excite_refuses_frequencies_its_scenario_could_not_hold(tmp_path, capsys
 def test_a_zero_noise_variance_is_refused_by_the_option():
     with pytest.raises(SystemExit):  # argparse's usage error, before any work
         main(["identify", "rec.csv", "--position-variance", "0", "0"])
+
+
+@pytest.mark.parametrize(
+    "argv, named",
+    [
+        (["identify", "rec.csv", "--arm", UR5, "--output-error", "off", "--max-iter", "5"], "--max-iter"),
+        (
+            ["identify", "rec.csv", "--arm", UR5, "--output-error", "off", "--segment-length", "50"],
+            "--segment-length",
+        ),
+        (["identify", "rec.csv", "--arm", UR5, "--payload-only", "--output-error", "off"], "--output-error"),
+        (["identify", "rec.csv", "--arm", UR5, "--payload-only", "--hold-unseen", "off"], "--hold-unseen"),
+    ],
+)
+def test_an_option_without_effect_is_an_error_naming_it(capsys, argv, named):
+    """Accepted and ignored before: output error's settings with it off, --payload-only (always output
+    error, nothing held) with --output-error or --hold-unseen."""
+    assert f"error: {named}" in _error(capsys, argv)
+
+
+def test_table2_says_it_leaves_the_scenarios_reference_unused(tmp_path, capsys):
+    """simulate --arm of a designed sice_urdf scenario ran Table 2 by default and passed over the
+    designed [reference] without a word."""
+    assert main(["simulate", "--arm", SICE_URDF, "--duration", "0.5", "--out", str(tmp_path / "o")]) == 0
+    assert "[reference] is not used" in capsys.readouterr().out
+
+
+def test_a_pair_on_a_planar_arm_is_refused_before_any_fit(tmp_path, capsys):
+    """vertical3's base parameters determine 4 of the payload's 10: the pair ran the loaded fit and
+    output error first, then failed; now refused at once, naming the parameters and --baseline."""
+    scen = str(resources.files("adaptive_dd.scenarios").joinpath("vertical3_payload.toml"))
+    err = _error(
+        capsys, ["identify", "--arm", scen, "no.csv", "--baseline", "no.csv", "--out", str(tmp_path / "o")]
+    )
+    assert "determine only 4 of the payload's 10" in err and "--baseline" in err
+    assert not (tmp_path / "o").exists()

@@ -29,7 +29,7 @@ def _print_fit(model, fit, names: tuple[str, ...]) -> None:
         f"weighted least squares on the exact filtered regression (tau_f = {fit.tau_f:.3g} s), "
         f"torque channels {', '.join(used)}; {int(fit.identified.sum())} of {model.p} base parameters "
         "identified, "
-        f"{int((~fit.identified).sum())} held at the URDF's values (the fitted channels do not see them)"
+        f"{int((~fit.identified).sum())} not seen by the fitted channels, kept at the URDF's values"
     )
     pieces = "" if fit.regression.pieces is None else f", within each of {len(fit.regression.pieces)} pieces"
     print(
@@ -62,7 +62,10 @@ def _print_fit(model, fit, names: tuple[str, ...]) -> None:
             )
     fixed = [model.names[k] for k in np.flatnonzero(~fit.identified)]
     if fixed:
-        print(f"held at the URDF's values: {', '.join(short(f) for f in fixed)}")
+        print(
+            "not seen by the fitted channels, kept at the URDF's values: "
+            + ", ".join(short(f) for f in fixed)
+        )
     _print_held(model, fit)
     print(
         "per channel [N m rms], filtered: residual "
@@ -91,7 +94,7 @@ def _print_held(model, fit) -> None:
     held = fit.held
     if held is not None and held.conflict:
         print(
-            f"nothing held at the URDF's values: along the directions the record sees best the URDF is "
+            f"no direction held by the URDF's prior: along the directions the record sees best the URDF is "
             f"{np.sqrt(held.scale2):.3g}x further from the estimate than the stated uncertainty allows (a "
             "prior the record contradicts: adaptive_dd.identification.held_directions.prior_conflict), so "
             "every direction is estimated; state the URDF's uncertainty ([plant.uncertainty]) to hold"
@@ -229,6 +232,10 @@ def _output_error(args, arm, model, rec, fit) -> None:
     print(
         "CRB: Cramér-Rao std at the estimate for this record, q and qd measured with the arm's sensor "
         f"noise, torque known, segments of {oe.segment_length} samples with unknown initial states"
+    )
+    print(
+        "the model written (model.json, estimates.csv; what predict and [model] from read) is the WLS "
+        "estimate, with its std; output error's column is printed beside it, not written"
     )
 
 

@@ -147,7 +147,8 @@ def _add_arm_options(i: argparse.ArgumentParser) -> None:
         "--output-error",
         choices=("auto", "on", "off"),
         default="auto",
-        help="with --arm: refine by output error (auto: for records in the simulator's format only)",
+        help="with --arm: output error beside the WLS estimate, printed for comparison (the model written "
+        "is the WLS one; auto: for records in the simulator's format only)",
     )
 
 
@@ -227,6 +228,13 @@ def run(args: argparse.Namespace) -> int:
         "weighted least squares (docs/real_log.md)",
         DataError,
     )
+    if args.output_error == "off":
+        refuse(
+            args,
+            ("--segment-length", "--max-iter"),
+            "options of the output error, which --output-error off skips",
+            DataError,
+        )
     if args.payload_only:  # prints the payload fitted on the known arm: no baseline, no files
         refuse(
             args,
@@ -235,6 +243,17 @@ def run(args: argparse.Namespace) -> int:
             "--baseline fits a loaded and an unloaded record instead (without --payload-only)",
             DataError,
         )
+        refuse(
+            args,
+            ("--output-error", "--hold-unseen"),
+            "--payload-only fits the payload by output error alone, the arm held at its URDF's values (no "
+            "least squares, nothing held or skipped)",
+            DataError,
+        )
         return identify_log(args, arm, None)  # no output folder made
+    if args.baseline:  # before the loaded record's fit, not after it
+        from adaptive_dd.identification.payload_pair import require_payload_seen
+
+        require_payload_seen(arm, "a loaded and an unloaded record (--baseline)")
     with OutputSet(args.out) as outputs:
         return identify_log(args, arm, outputs)

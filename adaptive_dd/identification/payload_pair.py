@@ -35,6 +35,7 @@ __all__ = [
     "payload_from_pair",
     "payload_from_params",
     "payload_from_record",
+    "require_payload_seen",
 ]
 
 Array = NDArray[np.float64]
@@ -173,7 +174,7 @@ def payload_from_pair(
         If the base parameters do not determine all ten payload parameters on this arm.
     """
     P = arm.payload_basis
-    _all_ten_seen(arm, "a pair of records")
+    require_payload_seen(arm, "a pair of records")
     d = np.asarray(sigma_loaded, float) - np.asarray(sigma_unloaded, float)
     C = np.asarray(cov_loaded, float) + np.asarray(cov_unloaded, float)
     if not (np.all(np.isfinite(d)) and np.all(np.isfinite(C))):
@@ -182,7 +183,7 @@ def payload_from_pair(
     return payload_from_params(pi, cov)
 
 
-def _all_ten_seen(arm, what: str) -> None:
+def require_payload_seen(arm, what: str) -> None:
     """Refuse, naming them, the payload parameters the arm's base parameters do not determine (a
     planar arm's out-of-plane ones): ``what`` cannot give them."""
     if arm.payload_rank < 10:
@@ -249,7 +250,7 @@ def payload_from_record(
     """
     from adaptive_dd.identification.output_error import fit_output_error
 
-    _all_ten_seen(arm, "one loaded record")
+    require_payload_seen(arm, "one loaded record")
     s0 = model.sigma_ref if sigma_arm is None else np.asarray(sigma_arm, float)
     fit = fit_output_error(model, q, qd, tau, s0, std, E=arm.payload_basis, **oe_kw)
     return dataclasses.replace(payload_from_params(fit.theta, np.linalg.inv(fit.information)), fit=fit)
