@@ -181,9 +181,19 @@ def _locate(frames: dict, spec: RecordSpec, wanted: list[str]) -> dict:
         if not hits:
             every = [c for f in frames.values() for c in f.columns]
             near = difflib.get_close_matches(col.strip(), every, n=3)
+            n = len(spec.position)
+            whence = (
+                f"the simulator's format of the {n}-joint arm of {spec.source} (t, q1..q{n}, qd1..qd{n}, "
+                f"tau1..tau{n}; a log of another shape is described by a [record] table)"
+                if spec.simulator_format
+                else f"from [record] of {spec.source}"
+            )
+            listed = ", ".join(map(repr, every[:12])) + (
+                f", ... ({len(every)} in all)" if len(every) > 12 else ""
+            )
             raise DataError(
-                f"{', '.join(str(p) for p in frames)}: no column {col!r} (from [record] of {spec.source})"
-                + (f"; near matches: {near}" if near else f"; columns: {every[:12]}")
+                f"{', '.join(str(p) for p in frames)}: no column {col!r} ({whence})"
+                + (f"; near matches: {near}" if near else f"; columns: {listed}")
             )
         where[col] = hits[0]
     return where

@@ -726,3 +726,20 @@ def test_predict_checks_its_output_folder_before_any_work(tmp_path, capsys):
     assert main(argv) == 2
     err = capsys.readouterr().err
     assert "afile is a file" in err and "none.json" not in err  # the folder first, the model not read
+
+
+def test_a_simulator_format_log_missing_a_column_says_which_format(tmp_path):
+    """A record of a 6-joint arm read for a 7-joint one: the message named a [record] table the
+    scenario does not have and cut the columns at twelve without saying so."""
+    cols = np.zeros((20, 19))
+    cols[:, 0] = np.arange(20) * 0.01
+    head = "t," + ",".join(f"{k}{j}" for k in ("q", "qd", "tau") for j in range(1, 7))
+    np.savetxt(tmp_path / "r.csv", cols, delimiter=",", header=head, comments="")
+    spec = record_spec(
+        None, [f"j{j}" for j in range(7)], ("revolute",) * 7, "arm7.toml", files=[str(tmp_path / "r.csv")]
+    )
+    with pytest.raises(
+        DataError, match=r"no column 'q7' \(the simulator's format of the 7-joint arm of arm7.toml"
+    ) as e:
+        read_log(spec)
+    assert "(19 in all)" in str(e.value) and "[record] of" not in str(e.value)

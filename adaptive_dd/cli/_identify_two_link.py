@@ -145,7 +145,7 @@ def _write_online(args, rec, outputs, model, mass, alarm, alarms) -> None:
     print(f"{'param':>6} {'final':>12}")
     for k, name in enumerate(SIGMA_NAMES):
         print(f"{name:>6} {model[-1, k]:12.5g}")
-    print(f"payload mass implied at the end: {mass[-1]:.3f} kg")
+    print(f"payload mass implied at the end: {round(float(mass[-1]), 3) + 0.0:.3f} kg")
     with atomic_write(outputs.path("online.csv")) as fh:
         fh.write("t," + ",".join(SIGMA_NAMES) + ",payload_mass,alarm\n")
         for k in range(rec.t.size):
