@@ -196,7 +196,7 @@ def test_model_records_hold_on_a_stiff_friction_law():
 
     sc = load_scenario(Path(__file__).resolve().parents[1] / "benchmarks" / "scenarios" / "sice_urdf.toml")
     rec = {
-        s: simulate_record(sc.arm, sc.reference, 0.3, [np.random.default_rng(0)], substeps=s, noise=False)
+        s: simulate_record(sc.arm, sc.reference, 0.2, [np.random.default_rng(0)], substeps=s, noise=False)
         for s in (2, 16)
     }
     np.testing.assert_allclose(rec[2].qd_true, rec[16].qd_true, atol=1e-5)
@@ -465,7 +465,24 @@ def test_excite_writes_a_scenario_whose_paths_and_reference_still_read(tmp_path)
     scen.write_text(f'[arm]\nurdf = "my_arm.urdf"\n\n[reference]\nramp = 0.5\n\n{joints}')
     load_scenario(scen)
     out = tmp_path / "results" / "excite" / "scenario.toml"
-    assert main(["excite", "--arm", str(scen), "--maxiter", "2", "--harmonics", "2", "--out", str(out)]) == 0
+    assert (
+        main(
+            [
+                "excite",
+                "--arm",
+                str(scen),
+                "--maxiter",
+                "2",
+                "--harmonics",
+                "2",
+                "--duration",
+                "1",
+                "--out",
+                str(out),
+            ]
+        )
+        == 0
+    )
     text = out.read_text()
     assert 'urdf = "../../my_arm.urdf"' in text and "[reference.joint1]" not in text
     sc = load_scenario(out)
