@@ -190,14 +190,15 @@ def run_robot(
             )
         )
     if design:
-        from adaptive_dd.cli.excite import excitation_bounds
+        from adaptive_dd.cli.excite import excitation_bounds, ramp_within_limits
         from adaptive_dd.identification.excitation import ExcitationLimits, design_excitation, multisine
 
         t0 = time.time()
         lim = ExcitationLimits.of_arm(arm)
         plain = multisine(arm, lim)
         best, _ = design_excitation(arm, lim, rng=np.random.default_rng(0))
-        b = excitation_bounds(arm, {"plain": plain, "designed": best}, 10.0)
+        ramp = ramp_within_limits(best.reference(ramp=0.5), arm, 1.0 / best.f0)  # as excite writes it
+        b = excitation_bounds(arm, {"plain": plain, "designed": best}, 10.0, ramp)
         ratio = b["plain"][0] / b["designed"][0]
         print(
             f"  excitation: worst relative bound plain multi-sine {100 * b['plain'][0]:.3g} % "

@@ -89,12 +89,13 @@ def run(args: argparse.Namespace) -> int:
         f"bounding the designed and a plain multi-sine trajectory: each tracked for {args.duration:g} s "
         "and the Cramér-Rao bound of its record ..."
     )
-    rows = excitation_bounds(arm, {"plain multi-sine": plain, "designed": best}, args.duration)
-    _print_bounds(args, arm, res, rows)
     ramp = ramp_within_limits(best.reference(ramp=args.ramp), arm, 1.0 / args.f0)
+    rows = excitation_bounds(arm, {"plain multi-sine": plain, "designed": best}, args.duration, ramp)
+    _print_bounds(args, arm, res, rows)
     if ramp != args.ramp:
         print(
-            f"--ramp {args.ramp:g} s lengthened to {ramp:g} s: the ramp into the designed trajectory "
+            f"--ramp {args.ramp:g} s lengthened to {ramp:g} s (the bounds above with it): the ramp into the "
+            "designed trajectory "
             "took a joint beyond its velocity limit (the design keeps to the limits once under way)"
         )
     text = reference_toml(best.reference(ramp=ramp), f"designed by adaptive-dd excite --arm {args.arm}")
@@ -188,8 +189,9 @@ def _rebased(line: str, src_dir: Path, out_dir: Path) -> str:
     return _PATH_KEYS.sub(lambda k: k.group(1) + k.group(2) + re.sub(r'"([^"]*)"', one, k.group(3)), line)
 
 
-def excitation_bounds(arm, trajectories: dict, duration: float) -> dict:
-    """``{label: (worst relative bound, its parameter's name, median)}`` of each trajectory's record."""
+def excitation_bounds(arm, trajectories: dict, duration: float, ramp: float = 0.5) -> dict:
+    """``{label: (worst relative bound, its parameter's name, median)}`` of each trajectory's record,
+    each tracked from rest through a ``ramp`` [s] (the one the written scenario holds)."""
     from adaptive_dd.identification.excitation import relative_bounds
     from adaptive_dd.identification.model import arm_model
     from adaptive_dd.identification.output_error import cramer_rao_bound, measurement_std
@@ -199,7 +201,7 @@ def excitation_bounds(arm, trajectories: dict, duration: float) -> dict:
     std = measurement_std(arm)
     out = {}
     for label, tr in trajectories.items():
-        rec = simulate_record(arm, tr.reference(ramp=0.5), duration, [np.random.default_rng(0)], noise=False)
+        rec = simulate_record(arm, tr.reference(ramp=ramp), duration, [np.random.default_rng(0)], noise=False)
         crb, _ = cramer_rao_bound(model, rec.sigma_true, rec.q_true[0], rec.qd_true[0], rec.tau[0], std)
         rb = relative_bounds(crb, model.sigma_ref, model.names)  # NaN: a kind that is 0 (no friction)
         k = int(np.nanargmax(rb))
