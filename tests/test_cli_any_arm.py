@@ -344,3 +344,10 @@ def test_a_pair_on_a_planar_arm_is_refused_before_any_fit(tmp_path, capsys):
     )
     assert "determine only 4 of the payload's 10" in err and "--baseline" in err
     assert not (tmp_path / "o").exists()
+
+
+@pytest.mark.parametrize("extra", [["--com", "0.1", "0", "0"], ["--radius", "0.2"]])
+def test_a_payloads_place_without_a_payload_is_refused(tmp_path, capsys, extra):
+    """simulate --com or --radius with no --payload (0 kg) placed nothing, in silence."""
+    err = _error(capsys, ["simulate", "--arm", UR5, *extra, "--out", str(tmp_path / "o")])
+    assert f"error: {extra[0]}" in err and "--payload" in err

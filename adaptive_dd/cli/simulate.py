@@ -141,6 +141,7 @@ def run(args: argparse.Namespace) -> int:
     two = closed_form_view(arm)  # the paper's closed forms, or None
     experiment = args.experiment or ("table2" if two is not None else "reference")
     if experiment == "reference":
+        _no_payload_place(args)
         with OutputSet(args.out) as outputs:
             return simulate_arm(args, args.arm, outputs)
     if two is None:
@@ -158,6 +159,7 @@ def run(args: argparse.Namespace) -> int:
     )
     from adaptive_dd.benchmark.scenario import read_toml
 
+    _no_payload_place(args)
     if args.arm and args.experiment is None and "reference" in read_toml(args.arm):
         print(  # a designed trajectory (excite's) is not what table2 runs: said, not silently passed over
             f"note: {args.arm}'s [reference] is not used: the paper's arm runs the Table 2 experiment by "
@@ -165,6 +167,13 @@ def run(args: argparse.Namespace) -> int:
         )
     with OutputSet(args.out) as outputs:
         return _table2(args, two, n, outputs)
+
+
+def _no_payload_place(args: argparse.Namespace) -> None:
+    """``--com`` and ``--radius`` place a payload: without ``--payload`` (0 kg) refused, not ignored."""
+    if not args.payload:
+        why = "where and how large the payload is; without --payload KG (0 kg) there is none"
+        refuse(args, ("--com", "--radius"), why)
 
 
 def _table2(args: argparse.Namespace, arm, n: int, outputs) -> int:
@@ -367,7 +376,9 @@ def _print_record(args: argparse.Namespace, arm, sc, rec, where: str) -> None:
     print(
         f"{where}: the scenario's reference tracked by computed torque "
         f"(the plant's own model, 40 rad/s), {args.duration} s at T = {args.sample_period} s, payload "
-        f"{args.payload} kg, {args.seeds} trial(s), "
+        f"{args.payload} kg"
+        + (f" at [{', '.join(f'{c:g}' for c in args.com)}] m" if args.payload and args.com else "")
+        + f", {args.seeds} trial(s), "
         + (
             f"the benchmark's plant, friction {arm.friction}"
             if plant == "benchmark"
