@@ -191,3 +191,31 @@ def test_a_runaway_is_failed_and_explained_the_same_on_every_arm():
         blank = [s["rms_error_per_seed"][1] is None for s in m["segments"]]
         assert blank == [end > f["t"] for _, end, _ in sc.segments()], (arm, f, blank)
         assert all(s["rms_error_per_seed"][0] is not None for s in m["segments"])
+
+
+class NanWithAlarms(NanAt):
+    """NanAt that declares alarms: at 0.6 s (the 0.5 s swap found), 1.0 s (a false alarm) and, on the
+    trial that fails at ``T_FAIL``, one at 1.8 s, after its failure."""
+
+    @property
+    def alarm_times(self):
+        return [[0.6, 1.0], [0.6, 1.0, 1.8]]
+
+
+def test_a_failed_trials_detector_figures_are_blank_everywhere():
+    """per_seed.csv gave a failed trial's false alarms and delays (metrics.json None), and the report's
+    detection line counted it as a miss beside the missed-swaps line that did not."""
+    from adaptive_dd.benchmark.report import detection_limit_lines
+    from adaptive_dd.benchmark.results import to_frame
+
+    sc = dataclasses.replace(_short("two_link"), controllers=("ct_oracle",))
+    res = run_benchmark(sc, progress=False, controllers={"alarmy": NanWithAlarms()})
+    m = res.metrics()["controllers"]["alarmy"]
+    assert m["false_alarms_per_seed"] == [1, None] and m["missed_swaps"] == 1
+    df = to_frame(res)
+    rows = df[df["controller"] == "alarmy"]
+    failed = rows[rows["seed"] == 1]
+    assert failed["false_alarms"].isna().all() and failed["detection_delay_s"].isna().all()
+    assert (rows[rows["seed"] == 0]["false_alarms"] == 1).all()
+    line = next(x for x in detection_limit_lines({"alarmy": m}) if "swap at 1.5 s" in x)
+    assert "missed in all 1 trials" in line, line

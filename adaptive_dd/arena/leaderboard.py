@@ -176,9 +176,10 @@ def _per_seed(res, names) -> dict[str, dict[str, np.ndarray]]:
 
 def _alarms(run, sc, t0: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """``(n_seeds, n_segments)`` each, 1.0 or 0.0: a false alarm in the segment (an alarm that
-    follows no swap by less than ``FALSE_ALARM_WINDOW``, counted in the segment it falls in) and
-    the segment's swap missed (no alarm within that window after it; 0 in the first segment and
-    for a trial that failed before the window's end). NaN for a law without a detector. The
+    follows no swap by less than ``FALSE_ALARM_WINDOW``, counted in the segment it falls in; NaN for
+    a failed trial, whose alarms the benchmark does not count either) and the segment's swap missed
+    (no alarm within that window after it; 0 in the first segment, for a trial that failed before
+    the window's end and for a swap the run ends within the window of). NaN for a law without a detector. The
     benchmark report's rules (:func:`~adaptive_dd.benchmark.metrics.false_alarm_counts`,
     :func:`~adaptive_dd.benchmark.metrics.missed_swap_counts`), segment by segment."""
     from adaptive_dd.benchmark.metrics import FALSE_ALARM_WINDOW, false_alarm_counts, missed_swap_counts
@@ -187,15 +188,17 @@ def _alarms(run, sc, t0: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     if run.alarm_times is None:
         return np.full((n, n_seg), np.nan), np.full((n, n_seg), np.nan)
     ends = [*t0[1:], np.inf]
+    failed_at = np.where(run.failed, np.asarray(run.failed_at) * sc.sample_period, np.inf)
     fa = np.array(
         [false_alarm_counts([[x for x in tr if a <= x < b] for tr in run.alarm_times], sc.swap_times)
          for a, b in zip(t0, ends, strict=True)]
     ).T > 0  # fmt: skip
-    failed_at = np.where(run.failed, np.asarray(run.failed_at) * sc.sample_period, np.inf)
+    fa = np.where(np.asarray(run.failed)[:, None], np.nan, fa.astype(float))  # as the benchmark: none
     missed = np.zeros((n, n_seg))
     for i in range(1, n_seg):
-        missed[:, i] = missed_swap_counts(run.alarm_times, [t0[i]], failed_at < t0[i] + FALSE_ALARM_WINDOW)
-    return fa.astype(float), missed
+        gone = failed_at < t0[i] + FALSE_ALARM_WINDOW
+        missed[:, i] = missed_swap_counts(run.alarm_times, [t0[i]], gone, sc.duration)
+    return fa, missed
 
 
 def _first_saturated(run, T: float) -> np.ndarray:
@@ -306,7 +309,7 @@ def alarm_totals(rows) -> tuple[int, int, int, int] | None:
     fa = rows["false_alarm_seeds"].sum(min_count=1)  # NaN when no row has a count
     if not np.isfinite(fa):
         return None
-    trials = int(rows["seeds"].iloc[0] + rows["failures"].iloc[0])
+    trials = int(rows["seeds"].iloc[-1])  # those that did not fail (a failed one's alarms are not counted)
     return int(fa), trials, int(rows["missed_swaps"].sum()), trials * (len(rows) - 1)
 
 

@@ -326,19 +326,33 @@ def release_error_norm(res: BenchmarkResult, run, keep: int = 0) -> None:
     run.acc = run.acc._replace(e_norm=run.e_norm)  # the streamed sums held the same array
 
 
+_TIE = 1e-9
+"""[s] Alarm and swap times are sample times in float seconds: an alarm ``FALSE_ALARM_WINDOW``
+after a swap to the sample is outside the window whatever the rounding (it was inside for some swap
+times and outside for others)."""
+
+
+def _after(x: float, s: float) -> bool:
+    """Alarm ``x`` [s] within ``FALSE_ALARM_WINDOW`` after swap ``s`` [s], ties decided as above."""
+    return -_TIE <= x - s < FALSE_ALARM_WINDOW - _TIE
+
+
+def judged(swap: float, duration: float) -> bool:
+    """A swap the run lasts ``FALSE_ALARM_WINDOW`` beyond: only then can it be called missed."""
+    return swap + FALSE_ALARM_WINDOW <= duration + _TIE
+
+
 def false_alarm_counts(alarm_times, swaps) -> list[int]:
     """Per trial: alarms [s] that follow no swap [s] by less than ``FALSE_ALARM_WINDOW``."""
-    return [
-        sum(1 for x in tr if not any(0 <= x - s < FALSE_ALARM_WINDOW for s in swaps)) for tr in alarm_times
-    ]
+    return [sum(1 for x in tr if not any(_after(x, s) for s in swaps)) for tr in alarm_times]
 
 
-def missed_swap_counts(alarm_times, swaps, failed) -> np.ndarray:
+def missed_swap_counts(alarm_times, swaps, failed, duration: float = np.inf) -> np.ndarray:
     """Per trial, the swaps [s] with no alarm within ``FALSE_ALARM_WINDOW`` after them (0 for a
-    failed trial)."""
+    failed trial; a swap the run ends within that window of is not judged: :func:`judged`)."""
     return np.array(
         [
-            sum(1 for s in swaps if not any(0 <= x - s < FALSE_ALARM_WINDOW for x in tr)) if not f else 0
+            sum(1 for s in swaps if judged(s, duration) and not any(_after(x, s) for x in tr)) if not f else 0
             for tr, f in zip(alarm_times, failed, strict=True)
         ]
     )
@@ -347,9 +361,7 @@ def missed_swap_counts(alarm_times, swaps, failed) -> np.ndarray:
 def detection_delays(alarm_times, swap: float) -> list[float | None]:
     """Per trial: the first alarm within ``FALSE_ALARM_WINDOW`` after ``swap``, less the swap [s]
     (None: missed)."""
-    return [
-        min((x - swap for x in tr if 0 <= x - swap < FALSE_ALARM_WINDOW), default=None) for tr in alarm_times
-    ]
+    return [min((x - swap for x in tr if _after(x, swap)), default=None) for tr in alarm_times]
 
 
 MODEL_FRICTION = "stick-slip"
@@ -551,7 +563,9 @@ def _add_detector_statistics(res: BenchmarkResult, out: dict) -> None:
             seg["detection_delay"] = float(np.mean(hit)) if hit else None
             seg["detection_delay_median"] = float(np.median(hit)) if hit else None
             seg["detected"] = len(hit)
-            seg["missed"] = int(ok.sum()) - len(hit)
-            missed += np.array([d is None for d in first], dtype=int)
+            seen = judged(s, sc.duration)  # the run lasts the window beyond the swap: else not missed
+            seg["missed"] = int(ok.sum()) - len(hit) if seen else 0
+            if seen:
+                missed += np.array([d is None for d in first], dtype=int)
         out[name]["missed_swaps_per_seed"] = [int(n) if g else None for n, g in zip(missed, ok, strict=True)]
         out[name]["missed_swaps"] = int(missed[ok].sum())

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
-from adaptive_dd.benchmark.metrics import SATURATION_LIMIT
+from adaptive_dd.benchmark.metrics import SATURATION_LIMIT, judged
 from adaptive_dd.benchmark.types import BenchmarkResult
 from adaptive_dd.outputs import atomic_write
 
@@ -174,8 +174,14 @@ def _seed_tables(ctrls: dict, head: str, caveat: str | None = None) -> list[str]
             f"{name}: false alarms (not within 0.3 s after a swap) in {c['trials_with_false_alarms']} of "
             f"{n_ok} trials, {total} in all"
         )
-        n_swaps = n_ok * (len(c["segments"]) - 1)
-        per_swap = ", ".join(f"{s['start']:g} s: {s['missed']}" for s in c["segments"][1:])
+        end = c["segments"][-1]["end"]  # the run's duration
+        seen = [s for s in c["segments"][1:] if judged(s["start"], end)]
+        n_swaps = n_ok * len(seen)
+        per_swap = ", ".join(
+            f"{s['start']:g} s: "
+            + (f"{s['missed']}" if s in seen else "not judged (the run ends within 0.3 s)")
+            for s in c["segments"][1:]
+        )
         lines.append(
             f"{name}: missed swaps (no alarm within 0.3 s after the swap) {c['missed_swaps']} of {n_swaps}"
             + (f" ({per_swap})" if per_swap else "")
@@ -268,7 +274,9 @@ def detection_limit_lines(c: dict) -> list[str]:
             if per is None:
                 continue
             d = np.array([v for v in per if v is not None])
-            n_miss = sum(1 for v in per if v is None)
+            n_miss = (
+                x["segments"][i].get("missed") or 0
+            )  # failed trials and a swap at the run's end not counted
             if d.size:
                 med = float(np.median(d))
                 parts.append(
@@ -277,8 +285,10 @@ def detection_limit_lines(c: dict) -> list[str]:
                 )
                 if lim is not None and lim > 0:
                     ok = med <= TARGET_DETECTION_RATIO * lim if ok is None else ok and med <= 2 * lim
-            else:
+            elif n_miss:
                 parts.append(f"{name} missed in all {n_miss} trials")
+            else:
+                parts.append(f"{name}: no trial to judge (failed before it, or the run ends within 0.3 s)")
         if not parts:
             continue
         if "detection_limit" not in seg:  # a result written before the limit was computed

@@ -170,7 +170,8 @@ def _controller_rows(res, name: str, run, per: dict) -> list[dict]:
     for i, seed in enumerate(res.seed_indices):
         fail = why.get(int(seed))
         for s, (a, b, mass) in enumerate(segs):
-            delay = delays[s][i] if s in delays and delays[s][i] is not None else np.nan
+            failed = bool(run.failed[i]) or bool(run.error)  # the detector's figures blank, as metrics()'s
+            delay = delays[s][i] if s in delays and delays[s][i] is not None and not failed else np.nan
             row = {"controller": name, "seed": seed, "segment": s, "start": a, "end": b, "mass": mass}
             row.update(dict.fromkeys(_ESTIMATES, np.nan))
             row.update({k: float(v[i, s]) for k, v in m.items()})
@@ -180,7 +181,7 @@ def _controller_rows(res, name: str, run, per: dict) -> list[dict]:
             )
             row["time_to_floor"] = ttf[i] if s == 0 else np.nan
             row["detection_delay"] = delay
-            row["false_alarms"] = np.nan if false is None else false[i]
+            row["false_alarms"] = np.nan if false is None or failed else false[i]
             row["failed"] = bool(run.failed[i])
             row["failed_at"] = np.nan if fail is None or fail["t"] is None else fail["t"]
             row["failure"] = "" if fail is None else fail["why"]

@@ -120,8 +120,17 @@ class Alarms(NamedTuple):
 
 
 def alarm_lists(alarms: Alarms) -> list[list[float]]:
-    """Per trial, the alarm times [s] that were kept (at most the capacity)."""
+    """Per trial, the alarm times [s] that were kept (at most the capacity); a trial that raised more
+    is warned of (its false alarms, missed swaps and delays are counted on the first ones only)."""
     cap = alarms.times.shape[1]
+    over = np.flatnonzero(np.asarray(alarms.count) > cap)
+    if over.size:
+        warnings.warn(
+            f"trial(s) {over[:8].tolist()} raised up to {int(np.max(alarms.count))} change alarms; the "
+            f"first {cap} of each are kept, so their false alarms, missed swaps and detection delays "
+            "count those only (a detector that alarms this often is not detecting changes)",
+            stacklevel=2,
+        )
     return [list(alarms.times[i, : min(c, cap)]) for i, c in enumerate(alarms.count)]
 
 
