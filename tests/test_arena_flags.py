@@ -60,6 +60,33 @@ def test_a_saturation_flag_is_dated_to_its_first_saturated_sample_not_the_segmen
     assert "from t = 5.250 s" in flags[0]["reasons"][0]
 
 
+def test_a_trial_saturated_into_its_failure_is_flagged_saturated():
+    """Saturated and failed in one segment: its saturation_fraction is blanked (NaN), so it read
+    only 'failed'; the flags take the saturation over the samples it ran (``sat_flag``)."""
+    cell = _cell(0, 0.0, [np.nan, 0.0], [np.nan, np.nan], (1.3, np.nan), ("runaway", ""), sat_t=[0.2, np.nan])
+    cell["sat_flag"] = np.array([0.4, 0.0])
+    (flag,) = trial_flags([cell])
+    assert (flag["seed"], flag["flag"], flag["t_s"]) == (0, "saturated", 0.2) and "40.0 %" in flag["reasons"][
+        0
+    ]
+
+
+def test_the_flags_saturation_counts_a_failed_trials_samples():
+    """From a run: a trial that runs away and saturates before it fails has a finite ``sat_flag``
+    over the samples it ran, where its blanked saturation_fraction is NaN."""
+    import dataclasses
+
+    from adaptive_dd.arena.leaderboard import _per_seed
+    from adaptive_dd.benchmark.runner import run_benchmark
+    from tests.test_result_schema import Unstable, _short
+
+    sc = dataclasses.replace(_short("two_link", duration=3.0), controllers=("ct_oracle",))
+    res = run_benchmark(sc, progress=False, controllers={"unstable": Unstable()})
+    m = _per_seed(res, ["unstable"])["unstable"]
+    seg = int(np.flatnonzero(np.isnan(m["saturation_fraction"][1]))[0])  # the segment it failed in
+    assert np.isnan(m["saturation_fraction"][1, seg]) and m["sat_flag"][1, seg] > 0.01
+
+
 def test_a_clean_trial_has_no_flag():
     assert trial_flags([_cell(0, 0.0, [0.0, 0.01], [np.nan, np.nan])]) == []
 

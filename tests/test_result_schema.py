@@ -219,3 +219,13 @@ def test_a_failed_trials_detector_figures_are_blank_everywhere():
     assert (rows[rows["seed"] == 0]["false_alarms"] == 1).all()
     line = next(x for x in detection_limit_lines({"alarmy": m}) if "swap at 1.5 s" in x)
     assert "missed in all 1 trials" in line, line
+
+
+def test_a_segment_too_short_to_settle_has_no_settled_rms():
+    """A 0.1 s segment (swaps at 0.5 and 0.6 s) has no sample after its first 0.5 s: its settled
+    RMS was the error of one sample, clamped there; it is None, on both arms."""
+    for arm in ARMS:
+        sc = dataclasses.replace(_short(arm), swap_times=(0.5, 0.6), controllers=("ct_oracle",))
+        res = run_benchmark(sc, progress=False)
+        seg = res.metrics()["controllers"]["ct_oracle"]["segments"]
+        assert seg[1]["rms_error_settled"] is None and seg[2]["rms_error_settled"] is not None, arm

@@ -57,14 +57,15 @@ def trial_flags(cells: list[dict]) -> list[dict]:
     for c in cells:
         for j, seed in enumerate(c["seed"]):
             ev = events.setdefault((c["scenario"], c["controller"], int(seed)), [])
-            if c["sat"][j] > SATURATION_LIMIT:
+            sat = c["sat_flag"][j] if "sat_flag" in c else c["sat"][j]  # a failed trial's too
+            if sat > SATURATION_LIMIT:
                 known = np.isfinite(c["sat_t"][j])  # not when the sums were built by hand
                 t = float(c["sat_t"][j]) if known else c["t0"]
                 when = (
                     "its first saturated sample" if known else "the segment's start: no sample time streamed"
                 )
                 ev.append(
-                    (t, "saturated", f"command saturated on {100 * c['sat'][j]:.1f} % of segment "
+                    (t, "saturated", f"command saturated on {100 * sat:.1f} % of segment "
                      f"{c['segment']}'s samples (from t = {t:.3f} s, {when})")
                 )  # fmt: skip
             if np.isfinite(c["lost_t"][j]):

@@ -168,6 +168,14 @@ def _per_seed(res, names) -> dict[str, dict[str, np.ndarray]]:
             until = np.where(run.failed, keep["fail_t"], np.inf)
             keep["lost_t"] = lost_times(keep["e_norm"], list(seg_start * T), T, len(run.failed), until)
             keep["sat_t"] = _first_saturated(run, T)
+            # the flags' saturation: over the samples each trial ran in the segment, a failed trial's
+            # too (its saturation_fraction is blanked, and a trial saturated into its failure read
+            # only "failed")
+            ran = (
+                np.minimum(seg_end[None, :], np.where(run.failed, run.failed_at, np.inf)[:, None]) - seg_start
+            )
+            n_sat = np.asarray(run.acc.n_saturated, float)
+            keep["sat_flag"] = np.where(ran > 0, n_sat / np.maximum(ran, 1), np.nan)
             keep["why"] = [run.failed_why.get(i, run.error or "") for i in range(len(run.failed))]
             keep["fa"], keep["missed"] = _alarms(run, res.scenario, starts)
             out[n] = keep
@@ -241,6 +249,7 @@ def _cells(name, kind, per, floors, missing, masses, T, seeds, t0) -> list[dict]
                     "recovery": _recovery(m, fm, i, T) if fm else np.full(e.shape, np.nan),
                     **{k: m[k][:, i] for k in _EE}, "lost_t": m["lost_t"][:, i], "sat_t": m["sat_t"][:, i],
                     "fail_t": m["fail_t"], "fa": m["fa"][:, i], "missed": m["missed"][:, i],
+                    "sat_flag": m["sat_flag"][:, i],
                     "why": m["why"], "seed": seeds, "t0": float(t0[i]),
                 }
             )  # fmt: skip
@@ -249,7 +258,20 @@ def _cells(name, kind, per, floors, missing, masses, T, seeds, t0) -> list[dict]
 
 _KEYS = ("scenario", "kind", "controller", "floor", "floor_note", "segment", "payload_kg")
 _EE = EE_KEYS  # the tool frame's per-seed figures [mm], [mm], [deg] (per_seed.csv's ee_* columns)
-_ARRAYS = ("e", "ratio", "fe", "torque", "sat", "fsat", "recovery", "lost_t", "fa", "missed", *_EE)
+_ARRAYS = (
+    "e",
+    "ratio",
+    "fe",
+    "torque",
+    "sat",
+    "sat_flag",
+    "fsat",
+    "recovery",
+    "lost_t",
+    "fa",
+    "missed",
+    *_EE,
+)
 
 
 def _row(c: dict, rng: np.random.Generator) -> dict:

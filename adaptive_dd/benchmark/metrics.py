@@ -195,6 +195,15 @@ def segment_rms(sums: np.ndarray, n) -> np.ndarray:
     return np.sqrt(np.asarray(sums, float) / n)
 
 
+def _no_settled_window(out: dict, sc) -> dict:
+    """``rms_error_settled`` NaN in a segment no longer than ``SETTLE`` (it has no sample after its
+    first ``SETTLE``: the bounds' clamp to one sample printed that sample's error as the RMS)."""
+    short = [b - a <= SETTLE + 1e-9 for a, b, _ in sc.segments()]
+    if any(short):
+        out["rms_error_settled"] = np.where(np.asarray(short)[None, :], np.nan, out["rms_error_settled"])
+    return out
+
+
 def per_seed_segment_metrics(res: BenchmarkResult, run, recovery: bool = True) -> dict[str, np.ndarray]:
     """Per seed and segment, ``(n_seeds, n_segments)`` arrays from the streamed sums.
 
@@ -211,7 +220,7 @@ def per_seed_segment_metrics(res: BenchmarkResult, run, recovery: bool = True) -
     if sc.closed_forms is None:  # the general kernels' run (adaptive_dd.closed_loop)
         from adaptive_dd.closed_loop.metrics import segment_metrics
 
-        out = segment_metrics(res, run)
+        out = _no_settled_window(segment_metrics(res, run), sc)
         start, end = _bounds(sc)
         out.update(_end_effector(res, run, start, end))
         if recovery:
@@ -229,6 +238,7 @@ def per_seed_segment_metrics(res: BenchmarkResult, run, recovery: bool = True) -
         "saturation_fraction": acc.n_saturated / n,
         "rms_error_settled": segment_rms(acc.sum_e2_settled, n_set),
     }
+    out = _no_settled_window(out, sc)
     out.update(_end_effector(res, run, start, end))
     if recovery:
         out["recovery_time"] = _recovery_times(run.e_norm, start, end, T)
