@@ -32,8 +32,10 @@ never absent. Every segment after a swap carries:
 ``mass_learning_time``, ``com_learning_time`` [s]
     Median over a controller's kept, unfailed trajectories of the first time after which its
     estimated mass stays within 5 % of the payload that changed, its centre of mass within 1 cm
-    (N-joint arms only: None on the two-link arm); None for a controller without an estimate or
-    when it never does. ``learning_seeds``: the trajectories those medians are over (0: none).
+    (N-joint arms only: None on the two-link arm), a trajectory that never does counting as later
+    than any (as the limits count one not reached: it was left out, and the median was over the
+    seeds that learned while the report said over all); None for a controller without an estimate
+    or when the median never does. ``learning_seeds``: the trajectories those medians are over (0: none).
 
 The first segment (no swap) has every one of these keys, ``None`` (``learning_seeds`` 0).
 """
@@ -110,13 +112,6 @@ def com_learning_time(
     return np.where(last < n - 1, (last + 1) * T, np.nan)
 
 
-def _median(x) -> float | None:
-    """Median of the finite entries (None: none is): a learning time over the trials that learn."""
-    v = np.asarray([np.nan if y is None else y for y in x], float)
-    v = v[np.isfinite(v)]
-    return float(np.median(v)) if v.size else None
-
-
 def _median_limit(x) -> float | None:
     """Median of limits over trajectories, one not reached (None, inf) counting as later than any;
     None when the median is not reached."""
@@ -176,11 +171,13 @@ def _learning(sc, forms, run, i: int, k0: int, k1: int) -> dict:
     kept = ~run.failed[: run.sigma_hat.shape[0]]
     m_hat, com_hat = forms.payload(sc, run.sigma_hat[kept, k0:k1])
     out["learning_seeds"] = int(kept.sum())
-    out["mass_learning_time"] = _median(mass_learning_time(m_hat, mass, removed, sc.sample_period))
+    never = np.inf  # a trajectory that never learns (NaN) counts as later than any
+    tm = mass_learning_time(m_hat, mass, removed, sc.sample_period)
+    out["mass_learning_time"] = _median_limit(np.where(np.isnan(tm), never, tm))
     if com_hat is not None and mass > 0:  # a payload on: where is its centre of mass
         com = sc.payload_of(i - 1).get("com", np.zeros(3))
         tc = com_learning_time(com_hat, com, sc.sample_period, axes=sc.arm.payload_identifiable[1:4])
-        out["com_learning_time"] = _median(tc)
+        out["com_learning_time"] = _median_limit(np.where(np.isnan(tc), never, tc))
     return out
 
 
