@@ -27,6 +27,8 @@ def test_ratio_columns_by_hand():
     twenty = ratio_columns(np.arange(1.0, 21.0), np.random.default_rng(1))
     assert twenty["ratio_cvar10"] == pytest.approx(19.5)  # the two worst of twenty
     assert np.isnan(ratio_columns(np.full(3, np.nan), np.random.default_rng(1))["ratio_mean"])
+    one = ratio_columns(np.array([1.7, np.nan]), np.random.default_rng(1))  # one seed: no interval
+    assert one["ratio_mean"] == 1.7 and np.isnan(one["ratio_ci95_low"]) and np.isnan(one["ratio_ci95_high"])
 
 
 def test_the_two_link_closed_form_runtime_is_refused_with_the_route_that_works():

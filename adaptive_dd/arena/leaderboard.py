@@ -100,7 +100,8 @@ def ratio_columns(ratio: np.ndarray, rng: np.random.Generator) -> dict[str, floa
         return dict.fromkeys(keys, np.nan)
     boot = r[rng.integers(0, r.size, (BOOTSTRAP_RESAMPLES, r.size))].mean(axis=1)
     worst = np.sort(r)[::-1][: max(1, int(np.ceil(0.1 * r.size)))]
-    vals = (r.mean(), *np.percentile(boot, [2.5, 97.5]), np.percentile(r, 90), worst.mean(), r.max())
+    ci = np.percentile(boot, [2.5, 97.5]) if r.size > 1 else (np.nan, np.nan)  # one seed: no interval
+    vals = (r.mean(), *ci, np.percentile(r, 90), worst.mean(), r.max())
     return {k: float(v) for k, v in zip(keys, vals, strict=True)}
 
 
