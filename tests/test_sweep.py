@@ -697,3 +697,14 @@ def test_an_unreachable_scheduler_is_named_by_the_option():
             _client("tcp://127.0.0.1:1", None)
     with pytest.raises(ParameterError, match=r"--scheduler foo://x: cannot connect"):
         _client("foo://x", None)  # an address distributed cannot parse (a ValueError inside it)
+
+
+def test_a_cell_is_marked_on_the_floors_mean_saturation_as_the_report():
+    """One seed in three saturated 30 %: the benchmark's rule (the segment's mean over seeds, 10 %)
+    marks the floor; a median over seeds (0) let it pass."""
+    df = _marks_table(0.0, 1e-4)
+    pick = (df["point"] == 1) & (df["controller"] == "ct_oracle") & (df["segment"] == 1) & (df["seed"] == 0)
+    df.loc[pick, "saturation_fraction"] = 0.3
+    hm = {"x": "m", "y": "w", "adaptive": "adaptive_ct", "floor": "ct_oracle", "segment": 1}
+    r = ratio_medians(df, hm, ["m", "w"])
+    assert r.loc[1, "floor_saturation"] == pytest.approx(0.1) and "saturated in 10 %" in r.loc[1, "marked"]
