@@ -482,8 +482,8 @@ def ratio_medians(table: pd.DataFrame, heatmap: Mapping[str, Any], axes: Sequenc
     median is taken over the seeds where both trials finished the segment. A cell is marked
     (``marked`` says why; empty when not) when its floor saturates (its saturation fraction in
     the segment, the mean over seeds, beyond :data:`~adaptive_dd.benchmark.metrics.SATURATION_LIMIT`:
-    the benchmark's rule; a median let one seed in five saturated 30 % pass) or is far from its own nominal error (its median RMS error more than
-    :data:`FLOOR_FAR` times its median in the first segment, before any swap).
+    the benchmark's rule) or is far from its own nominal error (its median RMS error more than :data:`FLOOR_FAR` times its median in the first
+    segment, before any swap).
 
     Parameters
     ----------
@@ -499,8 +499,9 @@ def ratio_medians(table: pd.DataFrame, heatmap: Mapping[str, Any], axes: Sequenc
     DataFrame
         One row per grid point: ``point``, the axes, ``ratio`` (NaN if no seed
         finished), ``n_seeds`` (seeds in the median), the floor's median ``floor_rms`` [rad] in
-        the segment, ``floor_nominal_rms`` [rad] in the first segment, ``floor_saturation`` (the mean over seeds)
-        [fraction of samples] in the segment (NaN where the table has none) and ``marked``.
+        the segment, ``floor_nominal_rms`` [rad] in the first segment, ``floor_saturation``
+        [fraction of samples, the mean over seeds] in the segment (NaN where the table has none)
+        and ``marked``.
 
     Examples
     --------
