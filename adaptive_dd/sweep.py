@@ -482,8 +482,8 @@ def ratio_medians(table: pd.DataFrame, heatmap: Mapping[str, Any], axes: Sequenc
     median is taken over the seeds where both trials finished the segment. A cell is marked
     (``marked`` says why; empty when not) when its floor saturates (its saturation fraction in
     the segment, the mean over seeds, beyond :data:`~adaptive_dd.benchmark.metrics.SATURATION_LIMIT`:
-    the benchmark's rule) or is far from its own nominal error (its median RMS error more than :data:`FLOOR_FAR` times its median in the first
-    segment, before any swap).
+    the benchmark's rule) or is far from its own nominal error (its median RMS error more than
+    :data:`FLOOR_FAR` times its median in the first segment, before any swap).
 
     Parameters
     ----------
