@@ -229,3 +229,21 @@ def test_a_segment_too_short_to_settle_has_no_settled_rms():
         res = run_benchmark(sc, progress=False)
         seg = res.metrics()["controllers"]["ct_oracle"]["segments"]
         assert seg[1]["rms_error_settled"] is None and seg[2]["rms_error_settled"] is not None, arm
+
+
+def test_the_information_line_names_a_law_that_never_learns_and_judges_only_estimators():
+    """A law whose median trajectory never learned the mass was left off the line; with no law
+    estimating the payload the line printed the target 'NOT met'."""
+    from adaptive_dd.benchmark.report import _information_lines
+
+    info = {"known": 0.04, "unknown": 0.3, "seeds": 3, "reference": "ct_oracle"}
+
+    def ctrl(t, seeds):
+        segs = [{}, {"start": 5.0, "mass": 3.0, "information_time": info, "mass_learning_time": t,
+                     "learning_seeds": seeds}]  # fmt: skip
+        return {"segments": segs}
+
+    (line,) = _information_lines({"a": ctrl(0.07, 3), "b": ctrl(None, 3), "pd": ctrl(None, 0)}, True)
+    assert "a 70 ms, b never (median over 3 seed(s)" in line and "pd" not in line and ": met)" in line
+    (line,) = _information_lines({"pd": ctrl(None, 0)}, True)
+    assert "no controller here estimates the payload" in line and "NOT met" not in line

@@ -218,7 +218,9 @@ def _information_lines(c: dict, all_unknown: bool) -> list[str]:
         info = seg.get("information_time") or {}
         if info.get("known") is None:
             continue
-        took = {n: x["segments"][i]["mass_learning_time"] for n, x in c.items()}
+        estimators = [n for n, x in c.items() if x["segments"][i].get("learning_seeds", 0) > 0]
+        took = {n: c[n]["segments"][i]["mass_learning_time"] for n in estimators}
+        never = [n for n, t in took.items() if t is None]  # their median trajectory never learns it
         took = {n: t for n, t in took.items() if t is not None}
         n_learn = {x["segments"][i].get("learning_seeds", 0) for n, x in c.items() if n in took}
         best = min(took.values()) if took else None
@@ -231,10 +233,14 @@ def _information_lines(c: dict, all_unknown: bool) -> list[str]:
             f"information limit {1e3 * info['known']:.0f} ms (other parameters known){unk_s} "
             f"(median over {info.get('seeds', 1)} seed(s) of {info.get('reference', 'the oracle')}'s "
             "trajectory); "
-            + ", ".join(f"{n} {1e3 * t:.0f} ms" for n, t in took.items())
+            + ", ".join(f"{n} never" if n in never else f"{n} {1e3 * took[n]:.0f} ms" for n in estimators)
             + (f" (median over {max(n_learn)} seed(s) with kept trajectories)" if n_learn else "")
-            + f" (target best <= {TARGET_INFO_RATIO:g}x the known-parameters limit: "
-            + ("met)" if ok else "NOT met)")
+            + (
+                f" (target best <= {TARGET_INFO_RATIO:g}x the known-parameters limit: "
+                + ("met)" if ok else "NOT met)")
+                if estimators
+                else " (no controller here estimates the payload: no target to judge)"
+            )
         )
         if info.get("com_axes") is not None:
             out.append(_com_information_line(c, i, seg, info, took, n_learn))
