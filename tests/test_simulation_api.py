@@ -311,6 +311,7 @@ def test_the_summary_counts_a_failed_trial_before_its_failure(short):
     assert list(summary.loc["late", "n"]) == [2, 1]
     m = res.metrics()["controllers"]["late"]["segments"]
     assert summary.loc[("late", 0), "ratio_mean"] == pytest.approx(m[0]["ratio_to_floor"]["mean"])
+    assert list(summary.loc["late", "ratio_n"]) == [s["ratio_to_floor"]["n"] for s in m]  # the JSON's n
     assert list(summary.loc["now", "n"]) == [0, 0]
 
 

@@ -194,9 +194,11 @@ def summary_frame(res):
     """Per controller and segment: mean, median, p90 and max of the per-seed RMS error and
     ratio to the floor, and the worst seed. Columns ``controller, segment, mass_kg,
     rms_error_mean_rad, rms_error_median_rad, ratio_mean, ratio_median, ratio_p90, ratio_max, n,
-    worst_seed``. A failed trial counts in the segments that ended before its failure, as in
+    ratio_n, worst_seed``. A failed trial counts in the segments that ended before its failure, as in
     :meth:`~adaptive_dd.benchmark.types.BenchmarkResult.metrics` and the report (``n``: the trials
-    counted); a controller whose every trial failed at once keeps its rows, ``n`` 0."""
+    counted; ``ratio_n``: the seeds the ratio statistics are over, those whose floor finished the
+    segment too, the JSON's ``ratio_to_floor.n``); a controller whose every trial failed at once
+    keeps its rows, ``n`` 0."""
     df = to_frame(res)  # a failed trial's metrics are NaN in the segments that end after its failure
 
     def p90(x):
@@ -211,6 +213,7 @@ def summary_frame(res):
         ratio_p90=("ratio_to_floor", p90),
         ratio_max=("ratio_to_floor", "max"),
         n=("rms_error_rad", "count"),
+        ratio_n=("ratio_to_floor", "count"),
     )
 
     def worst(x):
