@@ -159,11 +159,19 @@ _DECIMAL_COMMA = re.compile(r"[+-]?(\d+,\d*|,\d+)([eE][+-]?\d+)?")
 
 def _decimal_commas(frame) -> bool:
     """True when a text column of a semicolon or tab file holds numbers written with a decimal comma
-    (every cell of it, and no cell of any column with a decimal point)."""
+    (every cell of it such a number or a whole one, at least one with a comma, and no cell of any
+    column with a decimal point)."""
     texts = [
         frame[c].dropna().astype(str).str.strip() for c in frame.columns if frame[c].dtype.kind not in "biuf"
     ]
-    comma = [v for v in texts if v.size and v.str.fullmatch(_DECIMAL_COMMA.pattern).all()]
+    whole = r"[+-]?\d+"  # a spreadsheet writes 0 as 0: whole numbers beside the comma decimals
+    comma = [
+        v
+        for v in texts
+        if v.size
+        and v.str.fullmatch(_DECIMAL_COMMA.pattern).any()
+        and (v.str.fullmatch(_DECIMAL_COMMA.pattern) | v.str.fullmatch(whole)).all()
+    ]
     return bool(comma) and not any(v.str.contains(".", regex=False).any() for v in texts)
 
 
@@ -439,7 +447,9 @@ def _first_clock(spec: RecordSpec, clocks: dict, rows: dict) -> tuple[Array, flo
         raise DataError(
             f"{first}: the time column {spec.time!r} steps by {median:.6g} per sample (median), read as "
             f"s: a robot's log samples faster than every {MAX_LOG_STEP:g} s. If its time is in ms, us or "
-            'ns (ROS stamps often are), say so: [record] time_unit = "ms" (or "us", "ns")'
+            'ns (ROS stamps often are), say so: [record] time_unit = "ms" (or "us", "ns"); a log truly '
+            f"slower than {1 / MAX_LOG_STEP:g} Hz is too coarse for the accelerations this identification "
+            "derives"
         )
     return t0, spec.sample_period or float(np.mean(steps[ok]))
 

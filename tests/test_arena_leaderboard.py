@@ -291,9 +291,13 @@ def test_the_alarm_columns_by_hand():
     run = _run_with_alarms([[0.05, 1.02, 2.5], [1.29, 3.1], [1.01, 2.5]], failed_at=[-1, -1, 2000])
     fa, missed = _alarms(run, sc, t0)
     np.testing.assert_array_equal(fa, [[1, 1, 0], [0, 0, 0], [np.nan] * 3])
-    np.testing.assert_array_equal(missed, [[0, 0, 1], [0, 0, 0], [0, 0, 0]])
+    np.testing.assert_array_equal(missed, [[0, 0, 1], [0, 0, 0], [np.nan] * 3])
     _, missed = _alarms(run, SimpleNamespace(swap_times=(1.0, 3.0), sample_period=1e-3, duration=3.2), t0)
-    np.testing.assert_array_equal(missed, [[0, 0, 0], [0, 0, 0], [0, 0, 0]])  # 3 s: not judged
+    np.testing.assert_array_equal(missed, [[0, 0, 0], [0, 0, 0], [np.nan] * 3])  # 3 s: not judged
+    # two trials failing late with no alarm: their misses are not counted against the survivors
+    late = _run_with_alarms([[1.01, 3.02], [], []], failed_at=[-1, 3900, 3900])
+    _, missed = _alarms(late, SimpleNamespace(swap_times=(1.0, 3.0), sample_period=1e-3, duration=4.0), t0)
+    assert np.nansum(missed) == 0 and np.all(np.isnan(missed[1:]))
     fa, missed = _alarms(SimpleNamespace(alarm_times=None, failed=np.zeros(2, bool)), sc, t0)
     assert fa.shape == missed.shape == (2, 3) and np.all(np.isnan(fa)) and np.all(np.isnan(missed))
 

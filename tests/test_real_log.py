@@ -743,3 +743,16 @@ def test_a_simulator_format_log_missing_a_column_says_which_format(tmp_path):
     ) as e:
         read_log(spec)
     assert "(19 in all)" in str(e.value) and "[record] of" not in str(e.value)
+
+
+def test_decimal_commas_are_read_beside_whole_numbers(tmp_path):
+    """A spreadsheet writes 0 as 0: a first row of an arm at rest (0;0;0;0) made every column mixed
+    and the decimal commas were not recognised (each cell then refused as not a number)."""
+    p1, p2, *_ = _write_log(tmp_path, np.random.default_rng(2))
+    ref = read_log(record_spec(_table(p1, p2, exclude=["j_c"]), NAMES, KINDS, "s.toml"))
+    for p in (p1, p2):
+        lines = p.read_text().splitlines()
+        lines[1] = ",".join("0" for _ in lines[1].split(","))  # the arm at rest, written 0
+        p.write_text("\n".join(lines).replace(",", ";").replace(".", ",") + "\n")
+    rec = read_log(record_spec(_table(p1, p2, exclude=["j_c"]), NAMES, KINDS, "s.toml"))
+    assert rec.q.shape == ref.q.shape and sum("decimal comma" in nt for nt in rec.notes) == 2

@@ -140,3 +140,17 @@ def test_kalman_fading_memory_does_not_wind_up_unexcited():
     assert np.trace(kf.P) <= 7 * 100.0 * (1 + 1e-12)
     kf.update(phi, phi @ theta)
     assert np.all(np.isfinite(kf.theta)) and np.all(np.isfinite(kf.P))
+
+
+def test_kalman_random_walk_is_filterpys_without_fading_memory():
+    """The trace cap applies to fading memory only: with Q > 0 and alpha 1 the random-walk filter's
+    covariance is filterpy's own (capped, trace 3.0 where filterpy's was 21.4)."""
+    kf = KalmanParameterEstimator(3, 1, q=5.0, p0=1.0)
+    ref = KalmanFilter(dim_x=3, dim_z=1)
+    ref.F, ref.Q, ref.R, ref.P, ref.x = np.eye(3), 5.0 * np.eye(3), np.eye(1), np.eye(3), np.zeros(3)
+    phi = np.random.default_rng(1).standard_normal((50, 1, 3))
+    for k in range(50):
+        kf.update(phi[k], np.zeros(1))
+        ref.predict()
+        ref.update(np.zeros(1), H=phi[k])
+    np.testing.assert_allclose(kf.P, ref.P, rtol=1e-10)

@@ -187,17 +187,16 @@ def _alarms(run, sc, t0: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """``(n_seeds, n_segments)`` each, 1.0 or 0.0: a false alarm in the segment (an alarm that
     follows no swap by less than ``FALSE_ALARM_WINDOW``, counted in the segment it falls in; NaN for
     a failed trial, whose alarms the benchmark does not count either) and the segment's swap missed
-    (no alarm within that window after it; 0 in the first segment, for a trial that failed before
-    the window's end and for a swap the run ends within the window of). NaN for a law without a detector. The
+    (no alarm within that window after it; 0 in the first segment and for a swap the run ends
+    within the window of; NaN for a failed trial, as its false alarms). NaN for a law without a detector. The
     benchmark report's rules (:func:`~adaptive_dd.benchmark.metrics.false_alarm_counts`,
     :func:`~adaptive_dd.benchmark.metrics.missed_swap_counts`), segment by segment."""
-    from adaptive_dd.benchmark.metrics import FALSE_ALARM_WINDOW, false_alarm_counts, missed_swap_counts
+    from adaptive_dd.benchmark.metrics import false_alarm_counts, missed_swap_counts
 
     n, n_seg = len(run.failed), len(t0)
     if run.alarm_times is None:
         return np.full((n, n_seg), np.nan), np.full((n, n_seg), np.nan)
     ends = [*t0[1:], np.inf]
-    failed_at = np.where(run.failed, np.asarray(run.failed_at) * sc.sample_period, np.inf)
     fa = np.array(
         [false_alarm_counts([[x for x in tr if a <= x < b] for tr in run.alarm_times], sc.swap_times)
          for a, b in zip(t0, ends, strict=True)]
@@ -205,8 +204,8 @@ def _alarms(run, sc, t0: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     fa = np.where(np.asarray(run.failed)[:, None], np.nan, fa.astype(float))  # as the benchmark: none
     missed = np.zeros((n, n_seg))
     for i in range(1, n_seg):
-        gone = failed_at < t0[i] + FALSE_ALARM_WINDOW
-        missed[:, i] = missed_swap_counts(run.alarm_times, [t0[i]], gone, sc.duration)
+        missed[:, i] = missed_swap_counts(run.alarm_times, [t0[i]], np.zeros(n, bool), sc.duration)
+    missed = np.where(np.asarray(run.failed)[:, None], np.nan, missed)  # as the false alarms
     return fa, missed
 
 

@@ -14,13 +14,14 @@ rms_error [rad]
     ``sqrt(mean |e|^2)`` over the segment (``rms_error_joint``: per joint, a list of n_joints).
 rms_error_settled [rad]
     ``sqrt(mean |e|^2)`` over the segment less its first ``SETTLE`` (0.5 s): the
-    tracking once a swap's transient is over.
+    tracking once a swap's transient is over; None in a segment no longer than ``SETTLE``.
 max_error [rad]
     ``max |e|`` over the segment.
 detection_delay [s]
     Controllers with a change detector: time from the swap to the first alarm within
     ``FALSE_ALARM_WINDOW`` after it, mean over the seeds that raised one (``detected`` of them;
-    ``missed``: kept seeds that raised none), None otherwise or for the first segment.
+    ``missed``: kept seeds that raised none, 0 for a swap the run ends within that window of),
+    None otherwise or for the first segment.
 recovery_time [s]
     After a swap at ``t_s``: the time until the 50 ms moving RMS of ``|e|`` enters
     a band and stays inside it for ``RECOVERY_DWELL`` (0.5 s). The band is ``RECOVERY_BAND`` times
@@ -338,8 +339,7 @@ def release_error_norm(res: BenchmarkResult, run, keep: int = 0) -> None:
 
 _TIE = 1e-9
 """[s] Alarm and swap times are sample times in float seconds: an alarm ``FALSE_ALARM_WINDOW``
-after a swap to the sample is outside the window whatever the rounding (it was inside for some swap
-times and outside for others)."""
+after a swap to the sample is outside the window whatever the rounding of the two times."""
 
 
 def _after(x: float, s: float) -> bool:

@@ -174,13 +174,11 @@ def _seed_tables(ctrls: dict, head: str, caveat: str | None = None) -> list[str]
             f"{name}: false alarms (not within 0.3 s after a swap) in {c['trials_with_false_alarms']} of "
             f"{n_ok} trials, {total} in all"
         )
-        end = c["segments"][-1]["end"]  # the run's duration
-        seen = [s for s in c["segments"][1:] if judged(s["start"], end)]
-        n_swaps = n_ok * len(seen)
+        seen = judged_swaps(c)
+        n_swaps = n_ok * sum(seen)
         per_swap = ", ".join(
-            f"{s['start']:g} s: "
-            + (f"{s['missed']}" if s in seen else "not judged (the run ends within 0.3 s)")
-            for s in c["segments"][1:]
+            f"{s['start']:g} s: " + (f"{s['missed']}" if ok else "not judged (the run ends within 0.3 s)")
+            for s, ok in zip(c["segments"][1:], seen, strict=True)
         )
         lines.append(
             f"{name}: missed swaps (no alarm within 0.3 s after the swap) {c['missed_swaps']} of {n_swaps}"
@@ -261,6 +259,13 @@ def _com_information_line(c: dict, i: int, seg: dict, info: dict, took: dict, n_
         + ", ".join(took_s)
         + (f" (median over {max(n_learn)} seed(s))" if n_learn else "")
     )
+
+
+def judged_swaps(c: dict) -> list[bool]:
+    """Per swap of a controller's metrics, whether the run lasts the detection window beyond it
+    (:func:`~adaptive_dd.benchmark.metrics.judged`): only then can it be counted missed."""
+    end = c["segments"][-1]["end"]  # the run's duration
+    return [judged(s["start"], end) for s in c["segments"][1:]]
 
 
 TARGET_DETECTION_RATIO = 2.0
@@ -370,7 +375,7 @@ def _adaptive_ct_targets(a: dict) -> list[str]:
         out.append("  " + time_to_floor_line("adaptive_ct", a) + " (printed, no target)")
     if a.get("missed_swaps") is not None:
         n_ok = sum(1 for x in a["missed_swaps_per_seed"] if x is not None)
-        n_sw = n_ok * (len(a["segments"]) - 1)
+        n_sw = n_ok * sum(judged_swaps(a))
         out.append(
             f"  adaptive_ct missed swaps: {a['missed_swaps']} of {n_sw} "
             f"(target 0: {'met' if a['missed_swaps'] == 0 else 'NOT met'})"

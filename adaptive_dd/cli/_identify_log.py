@@ -158,11 +158,15 @@ def _output_error(args, arm, model, rec, fit) -> None:
 
     mode = args.output_error
     if mode == "off" or (mode == "auto" and not rec.simulator_format):
+        unused = [o for o in ("--max-iter", "--segment-length") if o in getattr(args, "given", ())]
         print(
-            "output error: skipped (a real log: the open-loop simulation of a position-controlled arm "
-            "drifts; --output-error on to try it)"
-            if mode == "auto"
-            else "output error: skipped (--output-error off)"
+            (
+                "output error: skipped (a real log: the open-loop simulation of a position-controlled arm "
+                "drifts; --output-error on to try it)"
+                if mode == "auto"
+                else "output error: skipped (--output-error off)"
+            )
+            + (f"; {', '.join(unused)} not used" if unused else "")
         )
         return
     if not rec.used.all():

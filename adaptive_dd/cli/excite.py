@@ -199,15 +199,16 @@ def excitation_bounds(arm, trajectories: dict, duration: float, ramp: float = 0.
 
     model = arm_model(arm)
     std = measurement_std(arm)
+    zero = np.isnan(relative_bounds(np.ones(model.p), model.sigma_ref, model.names))  # no magnitude
     out = {}
     for label, tr in trajectories.items():
         rec = simulate_record(arm, tr.reference(ramp=ramp), duration, [np.random.default_rng(0)], noise=False)
         crb, _ = cramer_rao_bound(model, rec.sigma_true, rec.q_true[0], rec.qd_true[0], rec.tau[0], std)
-        rb = relative_bounds(crb, model.sigma_ref, model.names)  # NaN: a kind that is 0 (no friction)
-        k = int(np.nanargmax(rb))
-        out[label] = (float(rb[k]), model.names[k], float(np.nanmedian(rb)))
-    if np.isnan(rb).any():
-        left = [short(model.names[i]) for i in np.flatnonzero(np.isnan(rb))]
+        rb = relative_bounds(crb, model.sigma_ref, model.names)[~zero]  # a kind that is 0 left out
+        k = int(np.argmax(rb))  # a NaN of the bound itself (diverged sensitivities) stays NaN
+        out[label] = (float(rb[k]), model.names[np.flatnonzero(~zero)[k]], float(np.median(rb)))
+    if zero.any():
+        left = [short(model.names[i]) for i in np.flatnonzero(zero)]
         print(
             f"note: {', '.join(left)} left out of the worst and median bounds: the URDF gives every "
             "parameter of their kind 0 (no magnitude to compare a bound with)",

@@ -33,9 +33,8 @@ never absent. Every segment after a swap carries:
     Median over a controller's kept, unfailed trajectories of the first time after which its
     estimated mass stays within 5 % of the payload that changed, its centre of mass within 1 cm
     (N-joint arms only: None on the two-link arm), a trajectory that never does counting as later
-    than any (as the limits count one not reached: it was left out, and the median was over the
-    seeds that learned while the report said over all); None for a controller without an estimate
-    or when the median never does. ``learning_seeds``: the trajectories those medians are over (0: none).
+    than any (as the limits count one not reached); None for a controller without an estimate or
+    when the median never does. ``learning_seeds``: the trajectories those medians are over (0: none).
 
 The first segment (no swap) has every one of these keys, ``None`` (``learning_seeds`` 0).
 """

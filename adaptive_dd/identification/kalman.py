@@ -5,9 +5,9 @@ The parameters are the state of a random walk, ``sigma(t+1) = sigma(t) + w``,
 ``F = I``, ``H = Phi(t)`` (changing every sample). With ``Q = 0``, ``R = 1`` and
 filterpy's fading memory ``alpha = 1/sqrt(lambda)`` this is exactly RLS with
 forgetting factor lambda (the tests check it), the trace of ``P`` capped as
-:func:`~adaptive_dd.identification.rls.rls_step` caps it (at its start, ``n p0``:
-unexcited, fading memory alone grew it to 1e265 and then NaN); ``Q > 0`` lets the
-estimate track slowly changing parameters without forgetting everything.
+:func:`~adaptive_dd.identification.rls.rls_step` caps it (at its start, ``n p0``; with
+fading memory only: unexcited, it grows without bound); ``Q > 0`` lets the estimate
+track slowly changing parameters without forgetting everything.
 """
 
 from __future__ import annotations
@@ -88,7 +88,7 @@ class KalmanParameterEstimator:
         self.kf.predict()
         self.kf.update(y, H=phi)  # x is kept 1-D, so z is 1-D too
         tr = float(np.trace(self.kf.P))
-        if tr > self.max_trace:  # fading memory without excitation winds P up (as in rls_step)
+        if self.kf.alpha > 1.0 and tr > self.max_trace:  # fading memory unexcited winds P up (rls_step)
             self.kf.P = self.kf.P * (self.max_trace / tr)
         return self.theta
 

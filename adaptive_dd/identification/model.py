@@ -24,6 +24,7 @@ A plant with stick-slip friction differs from it only within ``v_f`` of zero vel
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
@@ -170,15 +171,19 @@ def mass_matrix(model: Model, pi: ArrayLike, q: ArrayLike) -> Array:
     return mass_matrix_batch(model.chain, links, q) + np.diag(ia)
 
 
+MAX_SPLIT = 1024
+"""The most RK4 steps :func:`rk4_step` splits a substep into (``h rho`` up to 2048)."""
+
+
 def rk4_step(
     model: Model, pi: Array, q: Array, qd: Array, tau: Array, T: float, substeps: int = 2
 ) -> tuple[Array, Array]:
     """One sample under torque held over ``T`` [s]: RK4 with ``substeps`` steps, batch ``(..., n)``,
     each split so that ``h rho <= 2``: ``rho = sum_i (fv_i + fc_i / v_f) ((M + Ia)^-1)_ii`` at the
     sample's start (the steepest friction slope over the inertia, as the benchmark's plant splits
-    its steps, :mod:`adaptive_dd.plant.chain_rk4`), the most over the batch. Unsplit, RK4 is unstable
-    past ``h rho`` = 2.79: on the SICE arm (``h rho`` = 5.1 at T = 1 ms and 2 substeps) a joint at a
-    standstill ran backwards and a record tracked its reference at 24 mrad instead of 0.17."""
+    its steps, :mod:`adaptive_dd.plant.chain_rk4`), the most over the batch: RK4 is unstable past
+    ``h rho`` = 2.79 (the SICE arm's is 5.1 at T = 1 ms and 2 substeps). More than 8 steps per
+    substep (a URDF without armature) is warned of, more than :data:`MAX_SPLIT` refused."""
     _, fv, fc, _ = _split(model, np.asarray(pi, dtype=float))
     slope = fv + fc / model.friction_velocity
     try:
@@ -187,7 +192,20 @@ def rk4_step(
         dinv = np.zeros(1)
     rho = float(np.max(np.sum(slope * dinv, axis=-1)))
     if np.isfinite(rho) and rho > 0:
-        substeps *= max(1, int(np.ceil(T / substeps * rho / 2.0)))
+        split = max(1, int(np.ceil(T / substeps * rho / 2.0)))
+        if split > MAX_SPLIT:
+            raise SignalError(
+                f"rk4_step: the smooth friction is stiff at T = {T:g} s (h rho = {T / substeps * rho:.3g}: "
+                f"{split} RK4 steps per substep, more than {MAX_SPLIT}); state the joints' armature in "
+                "[arm] or a wider friction_velocity"
+            )
+        if split > 8:
+            warnings.warn(
+                f"rk4_step: the smooth friction is stiff at T = {T:g} s: {split} RK4 steps per substep "
+                "(slow); the joints' armature in [arm], if the arm has any, makes it cheaper",
+                stacklevel=2,
+            )
+        substeps *= split
     h = T / substeps
     for _ in range(substeps):
         a1 = forward_dynamics(model, pi, q, qd, tau)

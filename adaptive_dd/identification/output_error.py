@@ -110,10 +110,12 @@ def _expm_terms(F: Array, T: float) -> tuple[Array, Array]:
     over ``T / 2^s``, then ``s`` doublings (``exp(2hF) = exp(hF)^2``, ``int_0^2h = (I + exp(hF))
     int_0^h``), ``s`` the fewest that bring ``|T F| / 2^s`` (the largest row sum over the batch)
     to 0.5. Unscaled, the series of a stiff step diverges: at ``T F = -16`` (a light joint's smooth
-    Coulomb slope at a standstill) it gives 2161 for ``exp(-16)``, and the bound it fed was 1e-15."""
+    Coulomb slope at a standstill) it gives 2161 for ``exp(-16)``."""
     m = F.shape[-1]
     eye = np.broadcast_to(np.eye(m), F.shape)
     norm = float(np.abs(T * F).sum(axis=-1).max()) if F.size else 0.0
+    if not np.isfinite(norm):
+        raise SignalError("the output error's sensitivities: the state's Jacobian is not finite")
     s = int(np.ceil(np.log2(norm / 0.5))) if norm > 0.5 else 0
     h = T / 2.0**s
     TF = h * F
