@@ -126,17 +126,22 @@ def test_schur_bound_equals_least_squares_monte_carlo():
     np.testing.assert_allclose(est.std(axis=0), bound, rtol=0.08)
 
 
+def _first_segment(arm, duration: float, samples: int):
+    """``(model, record, pi, x0, tau, xs, Z)``: a clean record of ``arm`` tracking REF3 from rest, and
+    the simulated states and sensitivities of one segment of its first ``samples`` from its start."""
+    model = arm_model(arm)
+    rec = simulate_record(arm, REF3, duration, [np.random.default_rng(0)], noise=False, quantize=False)
+    pi = pi_from_sigma(model, rec.sigma_true)
+    x0 = np.concatenate([rec.q_true[0, :1], rec.qd_true[0, :1]], axis=1)
+    tau = rec.tau[:, :samples]
+    xs = simulate_segments(model, pi, x0, tau, 1e-3)
+    return model, rec, pi, x0, tau, xs, segment_sensitivities(model, pi, xs, tau, 1e-3)
+
+
 def test_sensitivities_match_finite_differences(arm3):
     """Against finite differences through the RK4 model, where the Coulomb law is not steep
     (v_f = 0.2 rad/s: the Jacobians frozen over a sample are then accurate; see the module docstring)."""
-    arm = arm3.with_(friction_velocity=0.2)
-    model3 = arm_model(arm)
-    clean3 = simulate_record(arm, REF3, 0.5, [np.random.default_rng(0)], noise=False, quantize=False)
-    pi = pi_from_sigma(model3, clean3.sigma_true)
-    x0 = np.concatenate([clean3.q_true[0, :1], clean3.qd_true[0, :1]], axis=1)
-    tau = clean3.tau[:, :300]
-    xs = simulate_segments(model3, pi, x0, tau, 1e-3)
-    Z = segment_sensitivities(model3, pi, xs, tau, 1e-3)
+    model3, clean3, pi, x0, tau, xs, Z = _first_segment(arm3.with_(friction_velocity=0.2), 0.5, 300)
     for col in (1, 4, 6 + 0, 6 + 5, 6 + 11):  # two states, three parameters
         h = 1e-6
         if col < 6:
@@ -177,14 +182,7 @@ def test_sensitivities_stay_bounded_from_a_standstill(arm3):
     """A segment that starts at rest under a steep smooth Coulomb law (v_f = 2 mrad/s): the
     sensitivities stay of the order of the motion's. The unscaled series grew them to 1e12 on
     the SICE URDF and the Cramér-Rao bound it fed was 1e-15 of the parameters."""
-    arm3 = arm3.with_(friction_velocity=0.002)
-    model3 = arm_model(arm3)
-    rec = simulate_record(arm3, REF3, 0.4, [np.random.default_rng(0)], noise=False, quantize=False)
-    pi = pi_from_sigma(model3, rec.sigma_true)
-    x0 = np.concatenate([rec.q_true[0, :1], rec.qd_true[0, :1]], axis=1)
-    tau = rec.tau[:, :200]
-    xs = simulate_segments(model3, pi, x0, tau, 1e-3)
-    Z = segment_sensitivities(model3, pi, xs, tau, 1e-3)
+    *_, Z = _first_segment(arm3.with_(friction_velocity=0.002), 0.4, 200)
     assert np.all(np.isfinite(Z)) and np.abs(Z).max() < 1e3
 
 

@@ -285,9 +285,8 @@ def detection_limit_lines(c: dict) -> list[str]:
             if per is None:
                 continue
             d = np.array([v for v in per if v is not None])
-            n_miss = (
-                x["segments"][i].get("missed") or 0
-            )  # failed trials and a swap at the run's end not counted
+            # the segment's own count: failed trials and a swap at the run's end are not in it
+            n_miss = x["segments"][i].get("missed") or 0
             if d.size:
                 med = float(np.median(d))
                 parts.append(

@@ -169,8 +169,8 @@ def _controller_rows(res, name: str, run, per: dict) -> list[dict]:
     rows = []
     for i, seed in enumerate(res.seed_indices):
         fail = why.get(int(seed))
+        failed = bool(run.failed[i]) or bool(run.error)  # the detector's figures blank, as metrics()'s
         for s, (a, b, mass) in enumerate(segs):
-            failed = bool(run.failed[i]) or bool(run.error)  # the detector's figures blank, as metrics()'s
             delay = delays[s][i] if s in delays and delays[s][i] is not None and not failed else np.nan
             row = {"controller": name, "seed": seed, "segment": s, "start": a, "end": b, "mass": mass}
             row.update(dict.fromkeys(_ESTIMATES, np.nan))

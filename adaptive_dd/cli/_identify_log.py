@@ -202,18 +202,12 @@ def _output_error(args, arm, model, rec, fit) -> None:
     except (SignalError, ParameterError, np.linalg.LinAlgError) as exc:
         print(f"output error: skipped, the record cannot be simulated from the WLS estimate ({exc})")
         return
-    residual = 2 * oe.cost / oe.n_residuals
-    print(
-        f"output error: {oe.iterations} iterations, {'converged' if oe.converged else 'NOT converged'}, "
-        f"normalised residual {residual:.3f} (1 = the noise model)"
-        + ("; torque offsets fitted by WLS taken off the torques" if fit.offset is not None else "")
+    _print_output_error_fit(
+        oe,
+        "; torque offsets fitted by WLS taken off the torques" if fit.offset is not None else "",
+        " (another friction law, a torque scale or offset, a wrong sensor noise), so the output error's "
+        "estimate and its Cramér-Rao bounds below do not hold",
     )
-    if residual > RESIDUAL_LIMIT:
-        print(
-            f"warning: the normalised residual is {residual:.3g}, not about 1: the model does not explain "
-            "the record to its sensors' noise (another friction law, a torque scale or offset, a wrong "
-            "sensor noise), so the output error's estimate and its Cramér-Rao bounds below do not hold"
-        )
     print(
         f"{'base parameter':<{NAME_WIDTH}} {'WLS':>11} {'output err':>11} {'CRB std':>9} {'|WLS-OE|/CRB':>12}"
     )
@@ -247,6 +241,21 @@ RESIDUAL_LIMIT = 2.0
 """The output error's normalised residual above which ``identify`` warns that its model does not
 explain the record (about 1 when the model and the noise are right; 28 with a torque offset not
 taken off, 1.06 with a width profiled)."""
+
+
+def _print_output_error_fit(oe, said: str, consequence: str) -> None:
+    """Output error's iterations, convergence and normalised residual (``said`` appended), and a
+    warning with ``consequence`` when the residual is above :data:`RESIDUAL_LIMIT`."""
+    residual = 2 * oe.cost / oe.n_residuals
+    print(
+        f"output error: {oe.iterations} iterations, {'converged' if oe.converged else 'NOT converged'}, "
+        f"normalised residual {residual:.3f} (1 = the noise model){said}"
+    )
+    if residual > RESIDUAL_LIMIT:
+        print(
+            f"warning: the normalised residual is {residual:.3g}, not about 1: the model does not explain "
+            f"the record to its sensors' noise{consequence}"
+        )
 
 
 def _free_directions(fit):
@@ -479,20 +488,11 @@ def _payload_only(args, arm, model, rec, tau_f) -> int:
     print(
         f"{rec.source}: the arm known (its URDF), the payload's 10 parameters fitted (tau_f unused: {tau_f})"
     )
-    oe, residual = pr.fit, 2 * pr.fit.cost / pr.fit.n_residuals
-    print(
-        f"output error: {oe.iterations} iterations, {'converged' if oe.converged else 'NOT converged'}, "
-        f"normalised residual {residual:.3f} (1 = the noise model)"
-    )
-    if not oe.converged:
+    _print_output_error_fit(pr.fit, "", ", so the payload and its Cramér-Rao std below do not hold")
+    if not pr.fit.converged:
         print(
             f"warning: output error stopped at --max-iter {args.max_iter} before converging: the payload "
             "below is not its optimum (raise --max-iter)"
-        )
-    if residual > RESIDUAL_LIMIT:
-        print(
-            f"warning: the normalised residual is {residual:.3g}, not about 1: the model does not explain "
-            "the record to its sensors' noise, so the payload and its Cramér-Rao std below do not hold"
         )
     _print_payload("payload (one record, arm known)", pr)
     return 0
