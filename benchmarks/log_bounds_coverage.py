@@ -15,6 +15,8 @@ Run from the repository root::
     python benchmarks/log_bounds_coverage.py --cases records --same-motion 3 --seeds 60
     # each seed's std against the exact std of its motion (300 noise draws each):
     python benchmarks/log_bounds_coverage.py --cases gaps,records --seeds 40 --exact 300
+    # closed-loop records of the simulator, its sensors' noise in the measured velocity:
+    python benchmarks/log_bounds_coverage.py --cases simulated --seeds 40
 
 Each seed makes records of the arm by inverse dynamics of the identification's own model
 (:func:`adaptive_dd.identification.records.synthetic_log`: a multi-sine, the torque noise 2 % of
@@ -25,6 +27,13 @@ model is exact and the truth known, and identifies them as ``identify --arm`` do
 - ``gaps``: one 24 s record at 200 Hz with four gaps (12, 60, 2 and 17 samples) fitted as its
   five pieces;
 - ``records``: two 12 s records fitted together;
+- ``simulated``: one 10 s closed-loop record of vertical3 tracking its benchmark scenario's
+  reference, simulated as ``adaptive-dd simulate --arm`` does
+  (:func:`adaptive_dd.identification.records.simulate_record`: the sensors' noise and
+  quantisation, so the measured velocity in the regressor is noisy too), the same motion for
+  every seed and only the noise drawn again, identified as ``identify --arm`` does on a simulator's
+  record (the URDF's prior holding what the record barely sees, no torque offsets, ``tau_f``
+  0.02 s at 1 kHz);
 - ``pair`` (``--pair``): two loaded and two unloaded 12 s records of the UR5 (a 2 kg payload,
   its centre of mass 3 / -2 / 5 cm from the flange), each side fitted jointly, the payload from
   the pair (:func:`adaptive_dd.identification.payload_pair.payload_from_pair`, as ``identify
@@ -67,13 +76,15 @@ import numpy as np
 from adaptive_dd.identification.filters import design_filter_bank
 from adaptive_dd.identification.log_fit import fit_log
 from adaptive_dd.identification.model import arm_model, base_regressor
-from adaptive_dd.identification.records import synthetic_log
+from adaptive_dd.identification.records import simulate_record, synthetic_log
 from adaptive_dd.identification.regression import filter_pieces
 from adaptive_dd.plant.arm import Arm
 from adaptive_dd.robots import robot_urdf
 
 T = 0.005
 HOLES = [(900, 912), (1900, 1960), (2900, 2902), (3900, 3917)]
+SIMULATED = "vertical3_payload.toml"
+"""The ``simulated`` case's scenario (the shipped vertical3 benchmark): its reference, 10 s."""
 
 
 OFFSET = {"on": False}
@@ -208,7 +219,7 @@ def main() -> None:
     ap.add_argument("--seeds", type=int, default=20)
     ap.add_argument("--first", type=int, default=0, help="first seed (to split a long run)")
     ap.add_argument("--pair", action="store_true", help="also a loaded/unloaded pair of the UR5")
-    ap.add_argument("--cases", default="gaps,records", help="comma-separated: gaps, records, pair")
+    ap.add_argument("--cases", default="gaps,records", help="comma-separated: gaps, records, simulated, pair")
     ap.add_argument(
         "--torque-offset",
         choices=("on", "off"),
@@ -244,7 +255,7 @@ def main() -> None:
     )
     if args.load:
         out, names = _load(args.load)
-        for c in ("gaps", "records", "pair"):
+        for c in ("gaps", "records", "simulated", "pair"):
             if f"{c}_z" in out:
                 summary(c, out[f"{c}_z"], out[f"{c}_est"], out[f"{c}_std"], names.get(c), out.get(f"{c}_q"))
             if f"{c}_xstd" in out:
@@ -269,6 +280,7 @@ def main() -> None:
     names = {
         "gaps": list(model.names),
         "records": list(model.names),
+        "simulated": list(model.names),
         "pair": ["mass", "com x", "com y", "com z"],
     }
     out = {k: ([], [], [], []) for k in cases}
@@ -298,6 +310,12 @@ def main() -> None:
                 exact[c][1].append(f.lag)
                 exact[c][2].append(f.bandwidth)
                 exact[c][3].append(f.regression.y.shape[0])
+        if "simulated" in out:
+            f, truth = _simulated(arm, np.random.default_rng([45, s, 4]))
+            for lst, v in zip(
+                out["simulated"], ((f.sigma - truth) / f.std, f.sigma, f.std, f.quantile), strict=True
+            ):
+                lst.append(v)
         if "pair" in out:
             _pair(np.random.default_rng([45, s, 1]), out["pair"])
         # saved after every seed, so that a long run can be read while it goes on
@@ -326,6 +344,29 @@ def main() -> None:
             xstd, lag, b, rows = exact[c]
             exact_summary(c, z, std, np.array(xstd), lag, names[c], args.exact, b, rows)
     print(f"({args.seeds} seeds from {args.first}, {time.perf_counter() - t0:.0f} s)")
+
+
+def _simulated(arm, rng):
+    """The ``simulated`` case of one seed: ``(fit, truth)`` (module docstring)."""
+    from importlib import resources
+
+    from adaptive_dd.benchmark.scenario import load_scenario
+
+    sc = load_scenario(str(resources.files("adaptive_dd.scenarios").joinpath(SIMULATED)))
+    rec = simulate_record(arm, sc.reference, 10.0, [rng])
+    model = arm_model(arm)
+    n = model.n
+    f = fit_log(
+        model,
+        rec.q[0],
+        rec.qd[0],
+        rec.tau[0],
+        np.ones(n, bool),
+        np.ones(model.p, bool),
+        tau_f=0.02,
+        sample_period=rec.sample_period,
+    )
+    return f, rec.sigma_true
 
 
 def _load(files):

@@ -32,9 +32,13 @@ def _print_fit(model, fit, names: tuple[str, ...]) -> None:
         f"{int((~fit.identified).sum())} not seen by the fitted channels, kept at the URDF's values"
     )
     pieces = "" if fit.regression.pieces is None else f", within each of {len(fit.regression.pieces)} pieces"
+    from adaptive_dd.identification.log_covariance import filter_lag
+
+    floor = filter_lag(fit.tau_f, fit.sample_period)
+    span = "the filters' own correlation" if fit.lag <= floor else "the residual's correlation"
     print(
-        "std: Newey-West sandwich on the residual (model error included, correlated over "
-        f"{fit.lag} samples = {fit.lag * fit.sample_period:.3g} s{pieces}), its variance times "
+        "std: Newey-West sandwich on the residual (model error included), lag "
+        f"{fit.lag} samples = {fit.lag * fit.sample_period:.3g} s ({span}{pieces}), its variance times "
         f"{fit.kernel_factor:.3g} for what the Bartlett sum leaves out (its weights, the lags beyond) "
         f"and {fit.dof_factor:.3g} for the "
         f"{fit.columns} columns fitted ({_columns(fit)}) to about {fit.n_eff:.0f} independent samples "

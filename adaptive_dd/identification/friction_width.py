@@ -28,7 +28,12 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from adaptive_dd.identification.log_covariance import long_run_factor, newey_west_lag, pooled_autocorrelation
+from adaptive_dd.identification.log_covariance import (
+    filter_lag,
+    long_run_factor,
+    newey_west_lag,
+    pooled_autocorrelation,
+)
 from adaptive_dd.identification.log_fit import coulomb_index
 
 __all__ = [
@@ -212,7 +217,8 @@ def profile_coulomb_width(
     cw = np.ones(n) if channel_weight is None else np.asarray(channel_weight, dtype=float)
     _, res, w, _ = _reweighted_fit(phi, y, cw[used])
     u = (res * w).sum(axis=1)  # the Bartlett factor at newey_west's lag
-    n_eff = y.shape[0] / long_run_factor(u, newey_west_lag(pooled_autocorrelation(u, u.size - 1), u.size))
+    lag = newey_west_lag(pooled_autocorrelation(u, u.size - 1), u.size, filter_lag(tau_f, sample_period))
+    n_eff = y.shape[0] / long_run_factor(u, lag)
     col = np.cumsum(K) - 1  # base column -> column of phi
     kept = np.flatnonzero(used)
     joints = {  # joint -> (its channel among the kept, its Coulomb column in phi)

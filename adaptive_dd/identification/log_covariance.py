@@ -7,8 +7,20 @@ Standard deviations
     ``A^-1 S A^-1`` with ``A = sum_k Phi_k^T W Phi_k`` and ``S`` the Newey-West (Bartlett)
     estimate of the long-run covariance of the scores ``g_k = Phi_k^T W r_k``, lag ``L`` the
     residual's correlation time (the first lag at which the autocorrelation of the weighted
-    residual, pooled over channels, falls below 0.05, times 3), the autocovariances summed
-    within each continuous piece of the record (between a log's gaps, several records). Scaled
+    residual, pooled over channels, falls below 0.05, times 3) and at least ``16 tau_f / T``
+    (:data:`FILTER_LAGS`, :func:`filter_lag`), the autocovariances summed within each continuous
+    piece of the record (between a log's gaps, several records). The least lag is for the noise
+    of a measured velocity: differentiated by the filters (``G1 = s G0``) it reaches the residual
+    correlated as ``(1 - x) exp(-x)``, ``x = m T / tau_f``, a positive core to ``x = 1`` and a
+    negative lobe beyond that cancels it (all but 0.5 % by ``x = 8``), so it adds little to the
+    estimate's variance. The 0.05 crossing lands in the core (about ``0.8 tau_f``); a Bartlett sum
+    three times as long counts the core and little of the lobe: on closed-loop records of the
+    simulator (``benchmarks/log_bounds_coverage.py --cases simulated``, 40 seeds) it stated each
+    std 2.4 times the estimates' spread (median over the parameters), 1.25 times at the least lag.
+    Over ``16 tau_f`` the Bartlett weights leave about ``2 tau_f / L`` = 1/8 of the core
+    uncancelled; a window flat over the lobe (a flat-top kernel) would leave none, but its
+    estimate is not positive definite, and clipped it held several directions at zero variance
+    on the same records. Scaled
     by what the Bartlett sum lacks of the long-run variance (:func:`_kernel_bias`: its weights'
     shrinkage and the lags beyond ``L``, from the residual's autocorrelation over the lags where
     it is well estimated, run out beyond them as a geometric tail) and by the degrees-of-freedom
@@ -60,10 +72,12 @@ import scipy.signal
 from numpy.typing import NDArray
 
 __all__ = [
+    "FILTER_LAGS",
     "MAX_DOF_FACTOR",
     "NORMAL_975",
     "TAIL_RATIO",
     "bandwidth_fraction",
+    "filter_lag",
     "fixed_b_quantile",
     "long_run_factor",
     "newey_west",
@@ -77,6 +91,8 @@ MAX_DOF_FACTOR = 2.0
 """The degrees-of-freedom factor's cap, reached at ``k = n_eff / 2``: beyond it a record holds too few
 independent samples for its parameters for a first-order correction (the TIAGo's 20 s windows:
 ``n_eff`` 64-91 for 53 parameters)."""
+FILTER_LAGS = 16.0
+"""The Bartlett lag is at least this many filter time constants ``tau_f`` (module docstring)."""
 TAIL_RATIO = 0.99
 """The geometric tail's ratio's cap in :func:`_kernel_bias` (a tail at most 99 times its first term)."""
 NORMAL_975 = 1.959963984540054
@@ -115,11 +131,18 @@ def pooled_autocorrelation(u: Array, upto: int, bounds=None) -> Array:
     return ac / max(ac[0], 1e-300)
 
 
-def newey_west_lag(ac: Array, longest: int) -> int:
+def newey_west_lag(ac: Array, longest: int, floor: int = 0) -> int:
     """The Bartlett lag of an autocorrelation ``ac``: three times its first lag below 0.05 (all of
-    ``longest``, the longest piece, if it never falls below), at most ``longest / 4``."""
+    ``longest``, the longest piece, if it never falls below), at least ``floor`` (:func:`filter_lag`),
+    at most ``longest / 4``."""
     below = np.flatnonzero(ac < 0.05)
-    return int(min(3 * (below[0] if below.size else longest), longest // 4))
+    return int(min(max(3 * (below[0] if below.size else longest), floor), longest // 4))
+
+
+def filter_lag(tau_f: float, sample_period: float) -> int:
+    """The least Bartlett lag [samples] of a record filtered at ``tau_f`` (module docstring):
+    ``FILTER_LAGS tau_f / T``."""
+    return int(np.ceil(FILTER_LAGS * tau_f / sample_period))
 
 
 def long_run_factor(u: Array, lag: int, bounds=None) -> float:
@@ -134,8 +157,9 @@ def _kernel_bias(u: Array, lag: int, bounds) -> float:
     """What the Bartlett sum at ``lag`` lacks of the long-run variance of ``u (N,)``, undone:
     ``F / F_L``, ``F_L`` the Bartlett long-run factor (:func:`long_run_factor`) and
     ``F = 1 + 2 sum_{m <= m0} rho_m + 2 rho_m0 r / (1 - r)`` the whole one, ``rho`` the
-    autocorrelation pooled over the pieces ``bounds``: summed over the lags before it falls below
-    0.05 (``m0 = lag / 3``, :func:`newey_west`'s rule), where it is well estimated, and run out
+    autocorrelation pooled over the pieces ``bounds``: summed over the lags to ``m0 = lag / 3`` (its
+    0.05 crossing by :func:`newey_west`'s rule, where it is well estimated; further where the lag is
+    the filters' least, :func:`filter_lag`, so that a lobe that cancels the core is summed too), and run out
     beyond ``m0`` as a geometric tail of ratio ``r`` (its decay from ``m0 - h`` to ``m0``,
     ``h = m0 / 2``; at most :data:`TAIL_RATIO`): the estimated autocorrelation of a fit's residual
     beyond ``m0`` is biased low and noisy, and an autoregressive correlation decays geometrically.
@@ -197,18 +221,22 @@ def _bartlett_sum(g: Array, lag: int, bounds) -> Array:
     return h.T @ g
 
 
-def newey_west(phi: Array, res: Array, w: Array, scale: Array, bounds=None) -> tuple[Array, int]:
+def newey_west(
+    phi: Array, res: Array, w: Array, scale: Array, bounds=None, floor: int = 0
+) -> tuple[Array, int]:
     """Sandwich covariance ``(r, r)`` of the weighted fit and the lag used (module docstring).
 
     ``bounds``: the rows ``[(r0, r1), ...]`` of each continuous piece (a log's pieces between its
     gaps, or several records): the scores' autocovariances are summed within each piece only (the
     pieces are taken as independent of each other), the lag from their autocorrelation pooled
-    over the pieces; default one piece."""
-    cov, lag, _ = newey_west_parts(phi, res, w, scale, bounds)
+    over the pieces; default one piece. ``floor``: the least lag (:func:`filter_lag`)."""
+    cov, lag, _ = newey_west_parts(phi, res, w, scale, bounds, floor)
     return cov, lag
 
 
-def newey_west_parts(phi: Array, res: Array, w: Array, scale: Array, bounds=None) -> tuple[Array, int, Array]:
+def newey_west_parts(
+    phi: Array, res: Array, w: Array, scale: Array, bounds=None, floor: int = 0
+) -> tuple[Array, int, Array]:
     """:func:`newey_west`'s covariance and lag, and the estimate's influence series ``(N, r)``: row
     ``k`` is what row ``k``'s score adds to the estimate, ``A^-1 g_k`` (in ``phi``'s units), the
     series whose Bartlett sum is each parameter's variance (:func:`bandwidth_fraction`)."""
@@ -219,7 +247,7 @@ def newey_west_parts(phi: Array, res: Array, w: Array, scale: Array, bounds=None
     A = np.einsum("kjr,kjs,j->rs", P, P, w**2)
     u = (res * w).sum(axis=1)
     longest = max(b - a for a, b in bounds)
-    lag = newey_west_lag(pooled_autocorrelation(u, longest - 1, bounds), longest)
+    lag = newey_west_lag(pooled_autocorrelation(u, longest - 1, bounds), longest, floor)
     S = _bartlett_sum(g, lag, bounds)
     # A^-1 S A^-1 in A's eigenbasis, symmetric by construction: on a record that barely sees a
     # direction (the Gen3's rounded angles: A's condition number 1e10) the product of a

@@ -58,6 +58,7 @@ from adaptive_dd.identification.log_covariance import (  # noqa: F401  (re-expor
     _dof_factor,
     _kernel_bias,
     bandwidth_fraction,
+    filter_lag,
     fixed_b_quantile,
     long_run_factor,
     newey_west,
@@ -384,14 +385,15 @@ def fit_log(
             _width_columns(model, qd, reg, sample_period, used, K, x, np.asarray(width_estimated, dtype=bool))
         )
     r = phi.shape[2]
+    floor = filter_lag(tau_f, sample_period)  # the filters' own correlation summed (log_covariance)
     if extra:  # the sandwich of the fit with the offsets and widths free too; sigma's block
         aug = np.concatenate([phi, *extra], axis=2)
         scale_aug = np.linalg.norm((aug * w[None, :, None]).reshape(-1, aug.shape[2]), axis=0)
         scale_aug = np.where(scale_aug > 0, scale_aug, 1.0)
-        cov_aug, lag, influence = newey_west_parts(aug, res, w, scale_aug, bounds)
+        cov_aug, lag, influence = newey_west_parts(aug, res, w, scale_aug, bounds, floor)
         k = aug.shape[2]
     else:
-        cov_aug, lag, influence = newey_west_parts(phi, res, w, scale, bounds)
+        cov_aug, lag, influence = newey_west_parts(phi, res, w, scale, bounds, floor)
         k = r
     u = (res * w).sum(axis=1)  # the weighted residual pooled over the channels
     b_frac = bandwidth_fraction(influence[:, :r], u, lag, bounds)
