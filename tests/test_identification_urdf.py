@@ -487,6 +487,30 @@ def test_excite_writes_a_scenario_whose_paths_and_reference_still_read(tmp_path)
     assert sc.arm.n_joints == 3 and len(sc.reference.amplitude[0]) == 2
 
 
+def test_excite_rebases_the_paths_of_an_array_over_several_lines(tmp_path):
+    """A ``files = [...]`` written over several lines kept its relative paths as they were (the
+    rewrite went line by line and the array's lines carry no key): the written scenario named
+    nothing. Comments in the array (a bracket, a lone quote), a key that only ends in ``from``, an
+    empty string and a nested array's line in the [reference] left out (taken for a table's header:
+    invalid TOML) are read as what they are."""
+    import tomllib
+
+    from adaptive_dd.cli.excite import _replace_reference
+
+    for name in ("a.csv", "b.csv", "m.json"):
+        (tmp_path / name).write_text("")
+    src = (
+        '[model]\nfrom = "m.json"\nplatform-from = "m.json"\n[record]\nfiles = [ # see [record]\n'
+        '  "a.csv", # 5" rows\n  "b.csv",\n]\nempty = ""\n\n'
+        "[reference]\namplitude = [\n  [0.1, 0.2],\n  [0.3, 0.4]\n]\n[run]\nseeds = 2\n"
+    )
+    out = _replace_reference(src, "[reference]\n", tmp_path / "s.toml", tmp_path / "x" / "y" / "s.toml")
+    data = tomllib.loads(out)
+    assert data["record"]["files"] == ["../../a.csv", "../../b.csv"], out
+    assert data["model"] == {"from": "../../m.json", "platform-from": "m.json"}, out
+    assert data["record"]["empty"] == "" and data["run"] == {"seeds": 2} and data["reference"] == {}
+
+
 @pytest.mark.slow  # the UR5's kernels (about 20 s cold)
 def test_payload_only_says_whether_its_fit_converged(tmp_path, capsys):
     """--payload-only printed a mass 168 of its std off the truth after 2 iterations with no word that

@@ -413,6 +413,26 @@ def test_fit_log_takes_the_filters_least_lag_and_the_residual_s_longer_one(verti
     assert _fit(model, log.q, log.qd, log.tau).lag > 64
 
 
+def test_identify_says_what_set_the_lag(vertical3, capsys):
+    """The status line named the filters' least lag where a short record's cap (a quarter of its
+    longest piece) had set a shorter one; it names what did: the cap (and the least it fell short
+    of), the least, or the residual's own correlation."""
+    from adaptive_dd.cli._identify_log import _print_fit
+
+    arm, model = vertical3
+    names = tuple(f"j{k}" for k in range(model.n))
+    short = synthetic_log(arm, 1.2, T, np.random.default_rng(4))
+    _print_fit(model, _fit(model, short.q, short.qd, short.tau), names)
+    assert (
+        "lag 50 samples = 0.25 s (capped at a quarter of the longest piece, 200 rows; the filters' least"
+        in (capsys.readouterr().out)
+    )
+    clean = synthetic_log(arm, 12.0, T, np.random.default_rng(4), noise=0.0)
+    tau = clean.tau + 0.02 * clean.tau.std(axis=0) * np.random.default_rng(5).standard_normal(clean.tau.shape)
+    _print_fit(model, _fit(model, clean.q, clean.qd, tau), names)
+    assert "lag 64 samples = 0.32 s (the filters' least: 16 tau_f" in capsys.readouterr().out
+
+
 def test_fixed_b_quantile_is_the_studentised_mean_s_under_a_bartlett_std():
     """The mean of white noise studentised by its Bartlett (Newey-West) std of bandwidth b T: the 95th
     percentile of |t| over many draws is Kiefer and Vogelsang's cubic (2.26 at b = 0.1, not the

@@ -232,8 +232,8 @@ def test_a_segment_too_short_to_settle_has_no_settled_rms():
 
 
 def test_the_information_line_names_a_law_that_never_learns_and_judges_only_estimators():
-    """A law whose median trajectory never learned the mass was left off the line; with no law
-    estimating the payload the line printed the target 'NOT met'."""
+    """A law whose median trajectory never learned the mass was left off the line, and off the
+    centre of mass's; with no law estimating the payload the line printed the target 'NOT met'."""
     from adaptive_dd.benchmark.report import _information_lines
 
     info = {"known": 0.04, "unknown": 0.3, "seeds": 3, "reference": "ct_oracle"}
@@ -247,3 +247,13 @@ def test_the_information_line_names_a_law_that_never_learns_and_judges_only_esti
     assert "a 70 ms, b never (median over 3 seed(s)" in line and "pd" not in line and ": met)" in line
     (line,) = _information_lines({"pd": ctrl(None, 0)}, True)
     assert "no controller here estimates the payload" in line and "NOT met" not in line
+    # the centre of mass's line names the same laws: one that never learns the mass is on it too
+    com = {**info, "com_axes": "xyz", "com_known": 0.05}
+
+    def with_com(t, t_com, seeds):
+        x = ctrl(t, seeds)
+        x["segments"][1].update(information_time=com, com_learning_time=t_com)
+        return x
+
+    _, line = _information_lines({"a": with_com(0.07, 0.09, 3), "b": with_com(None, 0.2, 3)}, True)
+    assert "a 90 ms, b 200 ms (median over 3 seed(s))" in line, line

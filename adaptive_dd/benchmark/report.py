@@ -220,7 +220,7 @@ def _information_lines(c: dict, all_unknown: bool) -> list[str]:
         took = {n: c[n]["segments"][i]["mass_learning_time"] for n in estimators}
         never = [n for n, t in took.items() if t is None]  # their median trajectory never learns it
         took = {n: t for n, t in took.items() if t is not None}
-        n_learn = {x["segments"][i].get("learning_seeds", 0) for n, x in c.items() if n in took}
+        n_learn = {c[n]["segments"][i].get("learning_seeds", 0) for n in (took or estimators)}
         best = min(took.values()) if took else None
         ok = best is not None and best <= TARGET_INFO_RATIO * info["known"]
         unk = info.get("unknown")
@@ -241,16 +241,19 @@ def _information_lines(c: dict, all_unknown: bool) -> list[str]:
             )
         )
         if info.get("com_axes") is not None:
-            out.append(_com_information_line(c, i, seg, info, took, n_learn))
+            out.append(_com_information_line(c, i, seg, info, estimators, n_learn))
     return out
 
 
-def _com_information_line(c: dict, i: int, seg: dict, info: dict, took: dict, n_learn: set) -> str:
-    """The centre of mass's information limit after swap i, beside each controller's time."""
+def _com_information_line(c: dict, i: int, seg: dict, info: dict, estimators: list, n_learn: set) -> str:
+    """The centre of mass's information limit after swap i, beside the time of each controller that
+    estimates the payload (``estimators``; "never" where its median trajectory never learns it)."""
     com = {n: x["segments"][i].get("com_learning_time") for n, x in c.items()}
     lim = info["com_known"]
     lim_s = f"{1e3 * lim:.0f} ms" if lim is not None else "beyond the window"
-    took_s = [f"{n} {'never' if t is None else f'{1e3 * t:.0f} ms'}" for n, t in com.items() if n in took]
+    took_s = [
+        f"{n} {'never' if t is None else f'{1e3 * t:.0f} ms'}" for n, t in com.items() if n in estimators
+    ]
     partial = info["com_axes"] != "xyz"
     return (
         f"  payload centre of mass within 1 cm after the swap at {seg['start']:g} s"

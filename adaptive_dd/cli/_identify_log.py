@@ -35,7 +35,14 @@ def _print_fit(model, fit, names: tuple[str, ...]) -> None:
     from adaptive_dd.identification.log_covariance import filter_lag
 
     floor = filter_lag(fit.tau_f, fit.sample_period)
-    span = "the filters' own correlation" if fit.lag <= floor else "the residual's correlation"
+    longest = max(b - a for a, b in fit.regression.row_bounds())
+    if fit.lag >= longest // 4:  # newey_west_lag's cap
+        span = f"capped at a quarter of the longest piece, {longest} rows"
+        span += "" if fit.lag >= floor else f"; the filters' least, 16 tau_f, is {floor}"
+    elif fit.lag == floor:
+        span = "the filters' least: 16 tau_f"
+    else:
+        span = "three times the residual's correlation time"
     print(
         "std: Newey-West sandwich on the residual (model error included), lag "
         f"{fit.lag} samples = {fit.lag * fit.sample_period:.3g} s ({span}{pieces}), its variance times "

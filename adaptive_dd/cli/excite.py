@@ -156,7 +156,9 @@ def _print_bounds(args: argparse.Namespace, arm, res, rows: dict) -> None:
         )
 
 
-_PATH_KEYS = re.compile(r'\b(urdf|from|files)(\s*=\s*)(\[[^\]]*\]|"[^"]*")')
+_PATH_KEY = re.compile(r"(?m)^[ \t]*(urdf|from|files)[ \t]*=[ \t]*")
+_HEADER = re.compile(r"^\s*\[\[?\s*[A-Za-z_\"']")
+"""A table header's line: ``[name]`` or ``[[name]]`` (an array's nested line, ``[0.1, 0.2],``, is not)."""
 
 
 def _replace_reference(src: str, table: str, source: Path | None = None, out: Path | None = None) -> str:
@@ -166,27 +168,54 @@ def _replace_reference(src: str, table: str, source: Path | None = None, out: Pa
     folder (written elsewhere, ``results/excite/`` by default, they named nothing)."""
     lines, skip = [], False
     for line in src.splitlines():
-        head = line.strip()
-        if head.startswith("["):
-            name = head.strip("[]").split("]")[0].strip()
+        if _HEADER.match(line):
+            name = line.strip().strip("[]").split("]")[0].strip()
             skip = name == "reference" or name.startswith("reference.")
         if not skip:
-            lines.append(line if source is None or out is None else _rebased(line, source.parent, out.parent))
-    return "\n".join(lines).rstrip() + "\n\n" + table
+            lines.append(line)
+    kept = "\n".join(lines).rstrip()
+    kept = kept if source is None or out is None else _rebased(kept, source.parent, out.parent)
+    return kept + "\n\n" + table
 
 
-def _rebased(line: str, src_dir: Path, out_dir: Path) -> str:
-    """``line`` with each quoted path of a path key that names a file or folder relative to
-    ``src_dir`` rewritten relative to ``out_dir`` (absolute paths and other values kept)."""
+def _rebased(text: str, src_dir: Path, out_dir: Path) -> str:
+    """``text`` with each quoted path of a path key (a key at a line's start; a string, or an array of
+    them over one line or several, comments included) that names a file or folder relative to
+    ``src_dir`` rewritten relative to ``out_dir`` (absolute paths, empty strings and other values
+    kept)."""
     import os
 
-    def one(m: re.Match) -> str:
-        p = m.group(1)
-        if os.path.isabs(p) or not (src_dir / p).exists():
-            return m.group(0)
-        return '"' + Path(os.path.relpath((src_dir / p).resolve(), out_dir.resolve())).as_posix() + '"'
+    def moved(p: str) -> str:
+        if not p or os.path.isabs(p) or not (src_dir / p).exists():
+            return p
+        return Path(os.path.relpath((src_dir / p).resolve(), out_dir.resolve())).as_posix()
 
-    return _PATH_KEYS.sub(lambda k: k.group(1) + k.group(2) + re.sub(r'"([^"]*)"', one, k.group(3)), line)
+    out, at = [], 0
+    for m in _PATH_KEY.finditer(text):
+        if m.start() < at:  # inside the value of the key before
+            continue
+        out.append(text[at : m.end()])
+        k, depth = m.end(), 0
+        while k < len(text):  # one value: its strings rewritten, its comments kept as they are
+            c = text[k]
+            if c == '"':
+                end = text.index('"', k + 1) if '"' in text[k + 1 :] else len(text)
+                out.append('"' + moved(text[k + 1 : end]) + '"')
+                k = end + 1
+            else:
+                if c == "#":
+                    end = text.find("\n", k)
+                    end = len(text) if end < 0 else end
+                    out.append(text[k:end])
+                    k = end
+                    continue
+                out.append(c)
+                k += 1
+                depth += {"[": 1, "]": -1}.get(c, 0)
+            if depth == 0 and (c in '"]' or c == "\n"):
+                break
+        at = k
+    return "".join(out) + text[at:]
 
 
 def excitation_bounds(arm, trajectories: dict, duration: float, ramp: float = 0.5) -> dict:

@@ -216,9 +216,12 @@ def profile_coulomb_width(
         phi, y = phi - phi.mean(axis=0), y - y.mean(axis=0)
     cw = np.ones(n) if channel_weight is None else np.asarray(channel_weight, dtype=float)
     _, res, w, _ = _reweighted_fit(phi, y, cw[used])
-    u = (res * w).sum(axis=1)  # the Bartlett factor at newey_west's lag
-    lag = newey_west_lag(pooled_autocorrelation(u, u.size - 1), u.size, filter_lag(tau_f, sample_period))
-    n_eff = y.shape[0] / long_run_factor(u, lag)
+    u = (res * w).sum(axis=1)  # the Bartlett factor at fit_log's lag, within the pieces as it takes it
+    bounds = reg.row_bounds()
+    longest = max(b - a for a, b in bounds)
+    ac = pooled_autocorrelation(u, longest - 1, bounds)
+    lag = newey_west_lag(ac, longest, filter_lag(tau_f, sample_period))
+    n_eff = y.shape[0] / long_run_factor(u, lag, bounds)
     col = np.cumsum(K) - 1  # base column -> column of phi
     kept = np.flatnonzero(used)
     joints = {  # joint -> (its channel among the kept, its Coulomb column in phi)

@@ -17,10 +17,11 @@ Standard deviations
     three times as long counts the core and little of the lobe: on closed-loop records of the
     simulator (``benchmarks/log_bounds_coverage.py --cases simulated``, 40 seeds) it stated each
     std 2.4 times the estimates' spread (median over the parameters), 1.25 times at the least lag.
-    Over ``16 tau_f`` the Bartlett weights leave about ``2 tau_f / L`` = 1/8 of the core
-    uncancelled; a window flat over the lobe (a flat-top kernel) would leave none, but its
-    estimate is not positive definite, and clipped it held several directions at zero variance
-    on the same records. Scaled
+    At ``L = 16 tau_f / T`` the Bartlett weights leave ``e tau_f / (L T)`` = e / 16, about a sixth,
+    of the core uncancelled (the core sums to ``2 tau_f / (e T)``, the weights take
+    ``2 (tau_f / T)^2 / L`` from the lobe); a window flat over the lobe (a flat-top kernel)
+    would leave none, but its estimate is not positive definite, and clipped it held several
+    directions at zero variance on the same records. Scaled
     by what the Bartlett sum lacks of the long-run variance (:func:`_kernel_bias`: its weights'
     shrinkage and the lags beyond ``L``, from the residual's autocorrelation over the lags where
     it is well estimated, run out beyond them as a geometric tail) and by the degrees-of-freedom
