@@ -220,3 +220,24 @@ def test_simulate_then_identify_fits_the_law_the_record_was_made_with(tmp_path, 
     (sim / "trajectory.json").unlink()  # a record without it: the noise's width, as before
     assert main([*argv, "--out", str(tmp_path / "b")]) == 0
     assert "the width of the record's velocity noise" in capsys.readouterr().out
+
+
+def test_the_interval_s_ends_are_where_the_criterion_crosses_not_grid_points():
+    """The interval was the grid's widths within the threshold, so its ends moved in the grid's steps
+    (1.26x here; a narrow profile printed '0.0199-0.0199'): each end is where the criterion crosses
+    3.84, interpolated in log(width). A planted parabola in log(width): the ends within 2 % of the
+    exact ones; a crossing beyond the grid keeps the grid's end."""
+    from adaptive_dd.identification.friction_width import CHI2_95, _interval
+
+    grid = np.logspace(-4, np.log10(0.5), 38)
+    v0, a = 0.0123, 60.0
+    crit = a * np.log(grid / v0) ** 2
+    crit -= crit.min()
+    half = np.sqrt(CHI2_95 / a)
+    lo, hi = _interval(grid, crit, int(np.argmin(crit)))
+    assert lo == pytest.approx(v0 * np.exp(-half), rel=0.02) and hi == pytest.approx(
+        v0 * np.exp(half), rel=0.02
+    )
+    assert lo not in grid and hi not in grid
+    flat = np.zeros(grid.size)
+    assert _interval(grid, flat, 5) == [grid[0], grid[-1]]

@@ -125,7 +125,9 @@ class WidthProfile:
         ``N_eff sum_j log(rms_j^2)`` relative to its minimum, each joint's width moved along the grid
         with the others at theirs (NaN: not profiled): the profile's ``-2 log`` likelihood ratio.
     interval : ndarray (n, 2)
-        [rad/s] The grid's widths with ``criterion <= 3.84`` (an approximate 95 % interval).
+        [rad/s] The widths about the best where the criterion stays within 3.84, each end
+        interpolated in ``log(width)`` between the grid's points where it crosses (an approximate
+        95 % interval).
     n_eff : float
         Samples after the residual's correlation is discounted (``N`` over its long-run factor).
     """
@@ -254,11 +256,30 @@ def profile_coulomb_width(
             break
     for j in joints:
         width[j] = grid[at[j]]
-    inside = np.where(np.isfinite(crit), crit <= CHI2_95, False)
-    interval = np.array([[grid[m].min(), grid[m].max()] if m.any() else [np.nan, np.nan] for m in inside])
+    interval = np.array(
+        [_interval(grid, crit[j], at[j]) if j in joints else [np.nan, np.nan] for j in range(n)]
+    )
     profiled = np.zeros(n, dtype=bool)
     profiled[list(joints)] = True
     return WidthProfile(width, profiled, grid, crit, interval, float(n_eff))
+
+
+def _interval(grid: Array, crit: Array, best: int) -> list[float]:
+    """The widths about ``grid[best]`` where the criterion ``crit (G,)`` stays within
+    :data:`CHI2_95`: each end where it crosses the threshold, linearly in ``log(width)`` between the
+    last grid point inside and the first outside (the grid's end where it does not cross)."""
+    lg = np.log(grid)
+    ends = []
+    for step in (-1, 1):
+        k = best
+        while 0 <= k + step < grid.size and crit[k + step] <= CHI2_95:
+            k += step
+        if not 0 <= k + step < grid.size or not np.isfinite(crit[k + step]):
+            ends.append(float(grid[k]))
+            continue
+        f = (CHI2_95 - crit[k]) / (crit[k + step] - crit[k])  # crit[k] <= threshold < crit[k + step]
+        ends.append(float(np.exp(lg[k] + f * (lg[k + step] - lg[k]))))
+    return ends
 
 
 def _profile(phi: Array, y: Array, w: Array, r: int, c: int, columns: Array) -> Array:
