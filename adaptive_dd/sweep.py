@@ -113,7 +113,7 @@ def run_cell(
         warnings.filterwarnings("ignore", message=r"run_benchmark: .*'s floor .* did not run")
         res = run_benchmark(scenario, progress=False, seed_indices=seed_indices)
     (run,) = res.runs.values()
-    per = per_seed_segment_metrics(res, run, recovery=False)  # NaN: the benchmark's failure rule
+    per = per_seed_segment_metrics(res, run, settling=False)  # NaN: the benchmark's failure rule
     T = scenario.sample_period
     rows = []
     for i, seed in enumerate(seed_indices):

@@ -51,7 +51,7 @@ def main() -> None:
         ctrls = dict(scenario_controller(sc, c) for c in CONTROLLERS)
         res = run_benchmark(sc, progress=False, controllers=ctrls, keep_trajectories=0)
         for c in CONTROLLERS:
-            m = per_seed_segment_metrics(res, res.runs[c], recovery=False)
+            m = per_seed_segment_metrics(res, res.runs[c], settling=False)
             n = np.isfinite(m["ee_position_rms"]).sum(axis=0)
             seeds = f"{n.min()}" if n.min() == n.max() else f"{n.min()}-{n.max()}"
             print(

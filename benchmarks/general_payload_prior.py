@@ -101,8 +101,8 @@ def _row(sc, res) -> str:
     seeds = list(res.seed_indices)
     ad, orc = res.runs["adaptive_ct"], res.runs["ct_oracle"]
     r = (
-        per_seed_segment_metrics(res, ad, recovery=False)["rms_error"]
-        / per_seed_segment_metrics(res, orc, recovery=False)["rms_error"]
+        per_seed_segment_metrics(res, ad, settling=False)["rms_error"]
+        / per_seed_segment_metrics(res, orc, settling=False)["rms_error"]
     )
     cells = []
     for i in range(r.shape[1]):

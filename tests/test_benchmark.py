@@ -40,7 +40,7 @@ def test_metrics_layout_and_content(small_run):
                 "mass",
                 "rms_error",
                 "max_error",
-                "recovery_time",
+                "settling_time",
                 "rms_torque",
                 "saturation_fraction",
                 "mass_estimate",
@@ -50,8 +50,8 @@ def test_metrics_layout_and_content(small_run):
     assert seg[1]["rms_error"] < seg[2]["rms_error"] < seg[0]["rms_error"]
     assert seg[0]["mass_estimate"] is None
     assert seg[2]["mass_estimate"] == pytest.approx(3.0, rel=0.1)
-    assert c["ct_oracle"]["segments"][0]["recovery_time"] is None
-    assert seg[2]["recovery_time"] < 1.0
+    assert c["ct_oracle"]["segments"][0]["settling_time"] is None
+    assert seg[2]["settling_time"] < 1.0
     # the change detector of adaptive_ct fires within 0.2 s of the swap; fixed models have none
     assert 0.0 < seg[2]["detection_delay"] < 0.2 and seg[1]["detection_delay"] is None
     # once the transient is over, adaptive_ct tracks about like the oracle
@@ -157,7 +157,7 @@ def test_releasing_the_error_norm_as_the_run_goes_changes_no_figure(small_run):
         for sa, sb in zip(a[name]["segments"], b[name]["segments"], strict=True):
             for key in (
                 "rms_error",
-                "recovery_time",
+                "settling_time",
                 "max_error",
                 "ratio_to_floor",
                 "detection_delay",

@@ -166,7 +166,7 @@ def test_streamed_figures_equal_a_kept_trajectorys(arm, engine):
     for name in ctrls:
         run = kept.runs[name]
         ref = end_effector_errors(sc.arm, run.q, kept.q_d, rc.seg_start, rc.seg_end)
-        got = per_seed_segment_metrics(streamed, streamed.runs[name], recovery=False)
+        got = per_seed_segment_metrics(streamed, streamed.runs[name], settling=False)
         for k in ref:
             assert np.all(np.isfinite(got[k])), (name, k)
             np.testing.assert_allclose(got[k], ref[k], rtol=1e-9, atol=1e-12, err_msg=f"{name} {k}")

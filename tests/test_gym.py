@@ -124,7 +124,7 @@ def test_info_holds_the_truth_swaps_and_floor():
     res = run_benchmark(
         sc, progress=False, controllers=dict([scenario_controller(sc, "ct_oracle")]), seed_indices=[1]
     )
-    ref = per_seed_segment_metrics(res, res.runs["ct_oracle"], recovery=False)["rms_error"][0]
+    ref = per_seed_segment_metrics(res, res.runs["ct_oracle"], settling=False)["rms_error"][0]
     e2 = np.sum(
         (env.unwrapped.scenario.reference.sample(np.arange(sc.n_samples) * sc.sample_period)[0] - q) ** 2, 1
     )
@@ -142,10 +142,10 @@ def test_pd_as_a_policy_reproduces_the_benchmark(arm):
     seeds = [0, 3]
     ctrls = dict(scenario_controller(sc, name) for name in ("pd", "ct_oracle"))
     res = run_benchmark(sc, progress=False, controllers=ctrls, seed_indices=seeds)
-    ref = per_seed_segment_metrics(res, res.runs["pd"], recovery=False)
+    ref = per_seed_segment_metrics(res, res.runs["pd"], settling=False)
     ev = evaluate(LawPolicy(sc, "pd"), sc, seeds, name="pd_policy")
     np.testing.assert_allclose(ev.rms_error, ref["rms_error"], rtol=1e-9, atol=0)
-    floor = per_seed_segment_metrics(res, res.runs["ct_oracle"], recovery=False)["rms_error"]
+    floor = per_seed_segment_metrics(res, res.runs["ct_oracle"], settling=False)["rms_error"]
     np.testing.assert_allclose(ev.ratio_to_floor, ref["rms_error"] / floor, rtol=1e-9)
     # the tool frame's error of the benchmark's recorded trials, recomputed on the policy's
     np.testing.assert_allclose(ev.ee_position_rms, ref["ee_position_rms"], rtol=1e-7)
@@ -157,7 +157,7 @@ def test_residual_zero_is_the_base_controller():
     sc = _short("ur5")
     pd = dict([scenario_controller(sc, "pd")])
     res = run_benchmark(sc, progress=False, controllers=pd, seed_indices=[2])
-    ref = per_seed_segment_metrics(res, res.runs["pd"], recovery=False)["rms_error"]
+    ref = per_seed_segment_metrics(res, res.runs["pd"], settling=False)["rms_error"]
     env = ResidualTorque(make_env(sc, floor=None), base="pd")
     ev = evaluate(lambda obs: np.zeros(6), env, [2])
     np.testing.assert_allclose(ev.rms_error, ref, rtol=1e-9)
@@ -247,8 +247,8 @@ def test_a_policy_is_set_beside_the_floor_asked_for():
     sc = _short("ur5")
     ctrls = dict(scenario_controller(sc, name) for name in ("pd", "pd_gravity_oracle"))
     res = run_benchmark(sc, progress=False, controllers=ctrls, seed_indices=[1])
-    pd_rms = per_seed_segment_metrics(res, res.runs["pd"], recovery=False)["rms_error"]
-    floor = per_seed_segment_metrics(res, res.runs["pd_gravity_oracle"], recovery=False)["rms_error"]
+    pd_rms = per_seed_segment_metrics(res, res.runs["pd"], settling=False)["rms_error"]
+    floor = per_seed_segment_metrics(res, res.runs["pd_gravity_oracle"], settling=False)["rms_error"]
     ev = evaluate(LawPolicy(sc, "pd"), sc, [1], name="pd_policy", floor="pd_gravity_oracle")
     np.testing.assert_allclose(ev.ratio_to_floor, pd_rms / floor, rtol=1e-9)
     assert set(ev.to_frame()["floor"]) == {"pd_gravity_oracle"}

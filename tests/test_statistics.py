@@ -232,26 +232,26 @@ def test_validate_names_the_plant_friction_law_on_both_runtimes():
     assert "plant.friction" not in format_scenario(load_scenario())  # stick-slip: the model's own law
 
 
-def test_recovery_time_in_a_short_segment_is_not_set_by_its_own_transient():
-    from adaptive_dd.benchmark.metrics import _recovery_times
+def test_settling_time_in_a_short_segment_is_not_set_by_its_own_transient():
+    from adaptive_dd.benchmark.metrics import _settling_times
 
     T = 1e-3
     e = np.full((1, 1800), 1e-4)
     e[0, 1000:1100] = 3e-3  # 100 ms off after the swap at 1 s, in a 0.8 s segment
-    t = _recovery_times(e, [0, 1000], [1000, 1800], T)
+    t = _settling_times(e, [0, 1000], [1000, 1800], T)
     assert np.isnan(t[0, 0])  # the first segment has none
     # the 50 ms moving RMS leaves the spike 50 ms after it ends: about 0.15 s after the swap
     assert 0.14 <= t[0, 1] <= 0.16
     # a 2 s segment, as before: the band from its last second
     e2 = np.full((1, 3000), 1e-4)
     e2[0, 1000:1100] = 3e-3
-    assert 0.14 <= _recovery_times(e2, [0, 1000], [1000, 3000], T)[0, 1] <= 0.16
+    assert 0.14 <= _settling_times(e2, [0, 1000], [1000, 3000], T)[0, 1] <= 0.16
 
 
-def test_recovery_time_after_a_short_segment_is_not_set_by_that_segment_s_transient():
-    from adaptive_dd.benchmark.metrics import _recovery_times
+def test_settling_time_after_a_short_segment_is_not_set_by_that_segment_s_transient():
+    from adaptive_dd.benchmark.metrics import _settling_times
 
     e = np.full((1, 3700), 1e-4)
     e[0, 1000:1100] = e[0, 1700:1800] = 3e-3  # swaps at 1.0 s and 1.7 s, each 100 ms off
-    t = _recovery_times(e, [0, 1000, 1700], [1000, 1700, 3700], 1e-3)
+    t = _settling_times(e, [0, 1000, 1700], [1000, 1700, 3700], 1e-3)
     assert 0.14 <= t[0, 1] <= 0.16 and 0.14 <= t[0, 2] <= 0.16  # the 1.7 s swap's read 0 before

@@ -159,7 +159,7 @@ def _per_seed(res, names) -> dict[str, dict[str, np.ndarray]]:
     with np.errstate(invalid="ignore", divide="ignore"):  # failed trials' NaN, estimates of no payload
         for n in names:
             run = res.runs[n]
-            m = per_seed_segment_metrics(res, run, recovery=False)
+            m = per_seed_segment_metrics(res, run, settling=False)
             keep = {k: m[k] for k in ("rms_error", "rms_torque", "saturation_fraction", *_EE)}
             e = np.asarray(run.e_norm, float) if run.e_norm is not None else None
             bounds = zip(seg_start, seg_end, strict=True)

@@ -22,15 +22,18 @@ detection_delay [s]
     ``FALSE_ALARM_WINDOW`` after it, mean over the seeds that raised one (``detected`` of them;
     ``missed``: kept seeds that raised none, 0 for a swap the run ends within that window of),
     None otherwise or for the first segment.
-recovery_time [s]
+settling_time [s]
     After a swap at ``t_s``: the time until the 50 ms moving RMS of ``|e|`` enters
-    a band and stays inside it for ``RECOVERY_DWELL`` (0.5 s). The band is ``RECOVERY_BAND`` times
-    the peak of that moving RMS over the second before the swap or over the last
-    second of the segment (each at most its segment's second half: in a segment shorter than 2 s a
-    swap's own transient would otherwise set the band), whichever is larger (the settled level can differ with
-    the payload; friction at reversals makes the steady error spiky, so the band
-    is set by its peaks), with a floor ``RECOVERY_FLOOR``. ``None`` for the first segment, and for a trial
-    that never does so within the segment.
+    a band about the controller's own error and stays inside it for ``SETTLING_DWELL`` (0.5 s):
+    how long its transient lasts, not how close it comes to its floor (a law whose error stays
+    far above the floor's settles at once; the time to come within 1.2x the floor is
+    ``time_to_floor`` in the first segment and the leaderboard's ``recovery`` after a swap).
+    The band is ``SETTLING_BAND`` times the peak of that moving RMS over the second before the
+    swap or over the last second of the segment (each at most its segment's second half: in a
+    segment shorter than 2 s a swap's own transient would otherwise set the band), whichever is
+    larger (the settled level can differ with the payload; friction at reversals makes the steady
+    error spiky, so the band is set by its peaks), with a floor ``SETTLING_FLOOR``. ``None`` for
+    the first segment, and for a trial that never does so within the segment.
 rms_torque [N m]
     ``sqrt(mean |tau|^2)`` of the applied torque.
 saturation_fraction
@@ -122,11 +125,11 @@ __all__ = [
     "CONTROLLER_KEYS",
     "FALSE_ALARM_WINDOW",
     "MODEL_FRICTION",
-    "RECOVERY_BAND",
-    "RECOVERY_DWELL",
-    "RECOVERY_FLOOR",
     "SATURATION_LIMIT",
     "SEGMENT_KEYS",
+    "SETTLING_BAND",
+    "SETTLING_DWELL",
+    "SETTLING_FLOOR",
     "TOP_KEYS",
     "compute_metrics",
     "detection_delays",
@@ -142,9 +145,9 @@ __all__ = [
     "segment_rms",
 ]
 
-RECOVERY_BAND = 1.5
-RECOVERY_FLOOR = 5e-5  # rad
-RECOVERY_DWELL = 0.5  # s
+SETTLING_BAND = 1.5
+SETTLING_FLOOR = 5e-5  # rad
+SETTLING_DWELL = 0.5  # s
 WINDOW = 0.05  # s
 FALSE_ALARM_WINDOW = 0.3  # s: an alarm later than this after every swap is a false alarm
 SATURATION_LIMIT = 0.01  # fraction of samples: a floor saturated more than this is no floor
@@ -162,7 +165,7 @@ CONTROLLER_KEYS = (
 """The keys of each controller's entry, on every arm (module docstring)."""
 SEGMENT_KEYS = (
     "start", "end", "mass", "rms_error", "rms_error_settled", "rms_error_joint", "max_error",
-    "recovery_time", "rms_torque", "saturation_fraction", "mass_estimate", "com_estimate", "com_true",
+    "settling_time", "rms_torque", "saturation_fraction", "mass_estimate", "com_estimate", "com_true",
     "sigma_true", "rms_error_per_seed", "ratio_to_floor", "floor_saturation", "floor_saturated",
     "detection_delay", "detection_delay_per_seed", "detection_delay_median", "detected", "missed",
     "time_to_floor", "information_time", "detection_limit", "mass_learning_time", "com_learning_time",
@@ -205,14 +208,14 @@ def _no_settled_window(out: dict, sc) -> dict:
     return out
 
 
-def per_seed_segment_metrics(res: BenchmarkResult, run, recovery: bool = True) -> dict[str, np.ndarray]:
+def per_seed_segment_metrics(res: BenchmarkResult, run, settling: bool = True) -> dict[str, np.ndarray]:
     """Per seed and segment, ``(n_seeds, n_segments)`` arrays from the streamed sums.
 
     NaN where the trial failed before the segment's end (:func:`segment_failed`). Computed once
     per run and kept in ``res.cache`` (the JSON, the report and the per-seed table share it);
-    ``recovery=False`` leaves out the recovery times (they need the per-sample error norm).
+    ``settling=False`` leaves out the settling times (they need the per-sample error norm).
     """
-    key = ("per_seed", run.name, recovery)
+    key = ("per_seed", run.name, settling)
     if key in res.cache:
         return res.cache[key]
     sc = res.scenario
@@ -224,8 +227,8 @@ def per_seed_segment_metrics(res: BenchmarkResult, run, recovery: bool = True) -
         out = _no_settled_window(segment_metrics(res, run), sc)
         start, end = _bounds(sc)
         out.update(_end_effector(res, run, start, end))
-        if recovery:
-            out["recovery_time"] = _recovery_times(run.e_norm, start, end, T)
+        if settling:
+            out["settling_time"] = _settling_times(run.e_norm, start, end, T)
         return _blank_failed(res, run, out, end, key)
     start, end, settled = segment_bounds(sc.segments(), T, SETTLE)
     n, n_set = (end - start).astype(float), (end - settled).astype(float)
@@ -241,8 +244,8 @@ def per_seed_segment_metrics(res: BenchmarkResult, run, recovery: bool = True) -
     }
     out = _no_settled_window(out, sc)
     out.update(_end_effector(res, run, start, end))
-    if recovery:
-        out["recovery_time"] = _recovery_times(run.e_norm, start, end, T)
+    if settling:
+        out["settling_time"] = _settling_times(run.e_norm, start, end, T)
     if run.sigma_end is not None:
         out["mass_estimate"] = sc.closed_forms.payload_mass_from_sigma(run.sigma_end)
     return _blank_failed(res, run, out, end, key)
@@ -283,7 +286,7 @@ def _bounds(sc):
     return sample_bounds(sc)[:2]
 
 
-def _recovery_times(e_norm: np.ndarray, start, end, T: float) -> np.ndarray:
+def _settling_times(e_norm: np.ndarray, start, end, T: float) -> np.ndarray:
     """Recovery time after each swap (see the module docstring), ``(n_seeds, n_segments)``; NaN if none.
 
     Computed ``SEED_CHUNK`` seeds at a time, so the float64 work arrays stay small at 1000 seeds."""
@@ -297,8 +300,8 @@ def _recovery_times(e_norm: np.ndarray, start, end, T: float) -> np.ndarray:
             a0 = start[s - 1]  # the segment before (a > 0: not the first): at most its second half too
             pre = smooth[:, max(a0 + (a - a0) // 2, a - n1) : a].max(axis=1)
             post = smooth[:, max(a + (b - a) // 2, b - n1) : b].max(axis=1)  # the settled tail
-            band = np.maximum(RECOVERY_BAND * np.maximum(pre, post), RECOVERY_FLOOR)
-            settle = _settling_time(smooth[:, a:b] > band[:, None], round(RECOVERY_DWELL / T))
+            band = np.maximum(SETTLING_BAND * np.maximum(pre, post), SETTLING_FLOOR)
+            settle = _settling_time(smooth[:, a:b] > band[:, None], round(SETTLING_DWELL / T))
             out[c : c + SEED_CHUNK, s] = settle * T
     return out
 
@@ -318,7 +321,7 @@ def error_trace(res: BenchmarkResult, run, window: float = WINDOW) -> np.ndarray
 
 
 def release_error_norm(res: BenchmarkResult, run, keep: int = 0) -> None:
-    """Derive everything that needs a run's per-sample error norm (per-seed metrics with recovery
+    """Derive everything that needs a run's per-sample error norm (per-seed metrics with settling
     times, the figure's error trace), then keep only its first ``keep`` seeds' norm.
 
     Passed as ``run_benchmark(..., on_run=release_error_norm)`` by the CLI: memory then holds one
@@ -458,7 +461,7 @@ def _segment_entry(sc, m: dict, i: int, sigma_true: np.ndarray) -> dict:
         rms_error_settled=_mean(m["rms_error_settled"][:, i]),
         rms_error_joint=[_mean(m[f"rms_error_joint{j}"][:, i]) for j in range(1, sc.n_joints + 1)],
         max_error=_mean(m["max_error"][:, i]),
-        recovery_time=_mean(m["recovery_time"][:, i]) if i > 0 else None,
+        settling_time=_mean(m["settling_time"][:, i]) if i > 0 else None,
         rms_torque=_mean(m["rms_torque"][:, i]),
         saturation_fraction=_mean(m["saturation_fraction"][:, i]),
         mass_estimate=_mean(m["mass_estimate"][:, i]) if "mass_estimate" in m else None,

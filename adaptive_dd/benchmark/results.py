@@ -22,7 +22,7 @@ __all__ = [
 
 UNITS = {
     "start": "s", "end": "s", "mass": "kg", "rms_error": "rad", "rms_error_settled": "rad",
-    "max_error": "rad", "rms_torque": "Nm", "saturation_fraction": "", "recovery_time": "s",
+    "max_error": "rad", "rms_torque": "Nm", "saturation_fraction": "", "settling_time": "s",
     "mass_estimate": "kg", "com_estimate_x": "m", "com_estimate_y": "m", "com_estimate_z": "m",
     "time_to_floor": "s", "detection_delay": "s", "failed_at": "s", "ee_position_rms": "mm",
     "ee_position_max": "mm", "ee_orientation_rms": "deg",
@@ -67,7 +67,7 @@ def frame_columns(n_joints: int) -> list[str]:
     names = [
         "controller", "seed", "segment", "start", "end", "mass", "rms_error",
         *(f"rms_error_joint{j}" for j in range(1, n_joints + 1)),
-        "max_error", "rms_torque", "saturation_fraction", "rms_error_settled", "recovery_time",
+        "max_error", "rms_torque", "saturation_fraction", "rms_error_settled", "settling_time",
         *_ESTIMATES, "floor", "ratio_to_floor", "time_to_floor", "detection_delay", "false_alarms",
         "failed", "failed_at", "failure", "engine", "ee_position_rms", "ee_position_max",
         "ee_orientation_rms",
@@ -81,7 +81,7 @@ def to_frame(res):
 
     Columns: ``controller, seed, segment, start_s, end_s, mass_kg, rms_error_rad,
     rms_error_joint1_rad .. rms_error_jointN_rad, max_error_rad, rms_torque_Nm,
-    saturation_fraction, rms_error_settled_rad, recovery_time_s, mass_estimate_kg,
+    saturation_fraction, rms_error_settled_rad, settling_time_s, mass_estimate_kg,
     com_estimate_x_m, com_estimate_y_m, com_estimate_z_m, floor, ratio_to_floor,
     time_to_floor_s, detection_delay_s, false_alarms, failed, failed_at_s, failure, engine,
     ee_position_rms_mm, ee_position_max_mm, ee_orientation_rms_deg`` (the tool frame's error,

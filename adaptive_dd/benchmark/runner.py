@@ -8,7 +8,7 @@ the Python path (one vectorised batch per controller, a Python call per sample).
 paths (:mod:`adaptive_dd.benchmark.drivers`) call the same compiled per-sample glue and agree
 to rounding (a test holds them to 1e-12).
 
-Memory does not grow with seeds x samples beyond the error norm (float32, for recovery
+Memory does not grow with seeds x samples beyond the error norm (float32, for settling
 times): metrics are accumulated per trial and segment as the run goes
 (:mod:`~adaptive_dd.benchmark.streaming`), sensor noise is drawn in blocks, and full
 trajectories are kept for the first ``keep_trajectories`` seeds only (for the figures).

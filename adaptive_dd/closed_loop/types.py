@@ -168,7 +168,7 @@ class StreamedSums(NamedTuple):
     sum_e2_settled : (S, G)
         Sum of ``|e|^2`` from ``seg_settled`` on.
     e_norm : float32 (S, N)
-        ``|e|`` at every sample (recovery times).
+        ``|e|`` at every sample (settling times).
     ee_sum_p2 : (S, G)
         Sum of the tool frame's squared position error ``|p(q_d) - p(q)|^2`` [m^2]
         (:mod:`~adaptive_dd.closed_loop.tool_frame`).

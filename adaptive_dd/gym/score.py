@@ -226,7 +226,7 @@ def evaluate(
         keep_trajectories=0,
     )  # fmt: skip
     label = next(iter(runs.runs))
-    floor_rms = per_seed_segment_metrics(runs, runs.runs[label], recovery=False)["rms_error"]
+    floor_rms = per_seed_segment_metrics(runs, runs.runs[label], settling=False)["rms_error"]
     return Evaluation(
         name, idx, list(sc.segments()), rms, floor_rms, ee["ee_position_rms"], ee["ee_position_max"],
         ee["ee_orientation_rms"], failed, floor,
