@@ -7,7 +7,7 @@ Usage::
 Every number (ratios, RMS, alarms, delays, masses, ...) must agree to ``rtol`` relative
 (``atol = rtol`` near zero); NaN/None must match; keys must match. The provenance block
 (commit, command line, wall time, engines), wall-time fields and the scenario's file path are
-left out. Prints the
+left out; keys renamed since a file was written (:data:`RENAMED`) are read under their new names. Prints the
 count of numbers compared and each difference; exits 1 on any difference.
 """
 
@@ -19,6 +19,17 @@ import math
 import sys
 
 SKIP = {"provenance", "wall_time", "wall_time_s", "wall time"}
+RENAMED = {"recovery_time": "settling_time"}
+"""Keys renamed since (old: new): a file written before is read with the new names."""
+
+
+def renamed(x):
+    """``x`` (parsed JSON) with the keys of :data:`RENAMED` under their new names."""
+    if isinstance(x, dict):
+        return {RENAMED.get(k, k): renamed(v) for k, v in x.items()}
+    if isinstance(x, list):
+        return [renamed(v) for v in x]
+    return x
 
 
 def walk(a, b, path, out, stats):
@@ -61,7 +72,7 @@ def main() -> int:
         b = json.load(f)
     out: list[str] = []
     stats = {"numbers": 0, "other": 0, "rtol": args.rtol}
-    walk(a, b, "", out, stats)
+    walk(renamed(a), renamed(b), "", out, stats)
     print(f"compared {stats['numbers']} numbers and {stats['other']} other values at rtol {args.rtol:g}")
     for line in out[:50]:
         print("DIFF", line)

@@ -34,8 +34,8 @@ model is exact and the truth known, and identifies them as ``identify --arm`` do
   quantisation, so the measured velocity in the regressor is noisy too), the same motion for
   every seed and only the noise drawn again, identified as ``identify --arm`` does on a simulator's
   record (the URDF's prior holding what the record barely sees, no torque offsets, ``tau_f``
-  0.02 s at 1 kHz); the parameters the first seed's fit holds at the URDF's values (more than
-  half their information from the prior) are left out of the figures;
+  0.02 s at 1 kHz); the parameters seed 0's fit holds at the URDF's values (more than half their
+  information from the prior) are left out of the figures, whatever ``--first``;
 - ``pair`` (``--pair``): two loaded and two unloaded 12 s records of the UR5 (a 2 kg payload,
   its centre of mass 3 / -2 / 5 cm from the flange), each side fitted jointly, the payload from
   the pair (:func:`adaptive_dd.identification.payload_pair.payload_from_pair`, as ``identify
@@ -290,9 +290,16 @@ def main() -> None:
         "pair": ["mass", "com x", "com y", "com z"],
     }
     kept = {}
+    if args.scenario and "simulated" not in cases:
+        ap.error(f"--scenario {args.scenario}: it sets the simulated case's arm; add --cases simulated")
     if "simulated" in cases:
         sim = _simulated_scenario(args.scenario)
-        sim_names = list(arm_model(sim.arm).names)
+        # the parameters left out: those seed 0's fit holds, whatever --first (parts saved apart merge)
+        f0 = _simulated(sim, np.random.default_rng([45, 0, 4]))[0]
+        kept["simulated"] = np.ones(f0.sigma.size, bool) if f0.held is None else f0.held.share <= 0.5
+        names["simulated"] = [
+            x for x, k in zip(arm_model(sim.arm).names, kept["simulated"], strict=True) if k
+        ]
     out = {k: ([], [], [], []) for k in cases}
     exact = {k: ([], [], [], []) for k in cases}  # --exact: each seed's exact std, the fit's lag, b, rows
     for s in range(args.first, args.first + args.seeds):
@@ -322,9 +329,6 @@ def main() -> None:
                 exact[c][3].append(f.regression.y.shape[0])
         if "simulated" in out:
             f, truth = _simulated(sim, np.random.default_rng([45, s, 4]))
-            if "simulated" not in kept:  # the parameters the first seed's fit does not hold
-                kept["simulated"] = np.ones(f.sigma.size, bool) if f.held is None else f.held.share <= 0.5
-                names["simulated"] = [x for x, k in zip(sim_names, kept["simulated"], strict=True) if k]
             f, truth = _Kept(f, kept["simulated"]), truth[kept["simulated"]]
             for lst, v in zip(
                 out["simulated"], ((f.sigma - truth) / f.std, f.sigma, f.std, f.quantile), strict=True

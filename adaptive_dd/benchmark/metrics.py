@@ -287,7 +287,7 @@ def _bounds(sc):
 
 
 def _settling_times(e_norm: np.ndarray, start, end, T: float) -> np.ndarray:
-    """Recovery time after each swap (see the module docstring), ``(n_seeds, n_segments)``; NaN if none.
+    """Settling time after each swap (see the module docstring), ``(n_seeds, n_segments)``; NaN if none.
 
     Computed ``SEED_CHUNK`` seeds at a time, so the float64 work arrays stay small at 1000 seeds."""
     out = np.full((e_norm.shape[0], len(start)), np.nan)

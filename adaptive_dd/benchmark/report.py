@@ -29,7 +29,7 @@ TABLES = (
     ("RMS tracking error after the first 0.5 s of the segment [mrad]", "rms_error_settled", 1e3, "{:16.3f}"),
     ("max tracking error |e| [mrad]", "max_error", 1e3, "{:16.2f}"),
     (
-        "settling time after the swap [s] (to within 1.5x its own error, not its floor's)",
+        "settling time after the swap [s] (to within 1.5x its own settled peak error, not its floor's)",
         "settling_time",
         1.0,
         "{:16.3f}",

@@ -268,6 +268,8 @@ def _interval(grid: Array, crit: Array, best: int) -> list[float]:
     """The widths about ``grid[best]`` where the criterion ``crit (G,)`` stays within
     :data:`CHI2_95`: each end where it crosses the threshold, linearly in ``log(width)`` between the
     last grid point inside and the first outside (the grid's end where it does not cross)."""
+    if not np.isfinite(crit[best]):  # no profile to read an interval from
+        return [np.nan, np.nan]
     lg = np.log(grid)
     ends = []
     for step in (-1, 1):
