@@ -165,13 +165,8 @@ def _decimal_commas(frame) -> bool:
         frame[c].dropna().astype(str).str.strip() for c in frame.columns if frame[c].dtype.kind not in "biuf"
     ]
     whole = r"[+-]?\d+"  # a spreadsheet writes 0 as 0: whole numbers beside the comma decimals
-    comma = [
-        v
-        for v in texts
-        if v.size
-        and v.str.fullmatch(_DECIMAL_COMMA.pattern).any()
-        and (v.str.fullmatch(_DECIMAL_COMMA.pattern) | v.str.fullmatch(whole)).all()
-    ]
+    marked = [(v, v.str.fullmatch(_DECIMAL_COMMA.pattern)) for v in texts if v.size]
+    comma = [v for v, dec in marked if dec.any() and (dec | v.str.fullmatch(whole)).all()]
     return bool(comma) and not any(v.str.contains(".", regex=False).any() for v in texts)
 
 

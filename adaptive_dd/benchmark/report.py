@@ -223,8 +223,9 @@ def _information_lines(c: dict, all_unknown: bool) -> list[str]:
             continue
         estimators = [n for n, x in c.items() if x["segments"][i].get("learning_seeds", 0) > 0]
         took = {n: c[n]["segments"][i]["mass_learning_time"] for n in estimators}
-        never = [n for n, t in took.items() if t is None]  # their median trajectory never learns it
-        took = {n: t for n, t in took.items() if t is not None}
+        took = {
+            n: t for n, t in took.items() if t is not None
+        }  # the others' median trajectory never learns it
         n_learn = {c[n]["segments"][i].get("learning_seeds", 0) for n in (took or estimators)}
         best = min(took.values()) if took else None
         ok = best is not None and best <= TARGET_INFO_RATIO * info["known"]
@@ -236,7 +237,7 @@ def _information_lines(c: dict, all_unknown: bool) -> list[str]:
             f"information limit {1e3 * info['known']:.0f} ms (other parameters known){unk_s} "
             f"(median over {info.get('seeds', 1)} seed(s) of {info.get('reference', 'the oracle')}'s "
             "trajectory); "
-            + ", ".join(f"{n} never" if n in never else f"{n} {1e3 * took[n]:.0f} ms" for n in estimators)
+            + ", ".join(f"{n} {1e3 * took[n]:.0f} ms" if n in took else f"{n} never" for n in estimators)
             + (f" (median over {max(n_learn)} seed(s) with kept trajectories)" if n_learn else "")
             + (
                 f" (target best <= {TARGET_INFO_RATIO:g}x the known-parameters limit: "

@@ -32,17 +32,9 @@ def _print_fit(model, fit, names: tuple[str, ...]) -> None:
         f"{int((~fit.identified).sum())} not seen by the fitted channels, kept at the URDF's values"
     )
     pieces = "" if fit.regression.pieces is None else f", within each of {len(fit.regression.pieces)} pieces"
-    from adaptive_dd.identification.log_covariance import filter_lag
+    from adaptive_dd.identification.log_covariance import filter_lag, lag_source
 
-    floor = filter_lag(fit.tau_f, fit.sample_period)
-    longest = max(b - a for a, b in fit.regression.row_bounds())
-    if fit.lag >= longest // 4:  # newey_west_lag's cap
-        span = f"capped at a quarter of the longest piece, {longest} rows"
-        span += "" if fit.lag >= floor else f"; the filters' least, 16 tau_f, is {floor}"
-    elif fit.lag == floor:
-        span = "the filters' least: 16 tau_f"
-    else:
-        span = "three times the residual's correlation time"
+    span = lag_source(fit.lag, fit.regression.row_bounds(), filter_lag(fit.tau_f, fit.sample_period))
     print(
         "std: Newey-West sandwich on the residual (model error included), lag "
         f"{fit.lag} samples = {fit.lag * fit.sample_period:.3g} s ({span}{pieces}), its variance times "

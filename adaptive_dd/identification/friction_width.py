@@ -28,12 +28,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from adaptive_dd.identification.log_covariance import (
-    filter_lag,
-    long_run_factor,
-    newey_west_lag,
-    pooled_autocorrelation,
-)
+from adaptive_dd.identification.log_covariance import filter_lag, long_run_factor, residual_lag
 from adaptive_dd.identification.log_fit import coulomb_index
 
 __all__ = [
@@ -220,10 +215,7 @@ def profile_coulomb_width(
     _, res, w, _ = _reweighted_fit(phi, y, cw[used])
     u = (res * w).sum(axis=1)  # the Bartlett factor at fit_log's lag, within the pieces as it takes it
     bounds = reg.row_bounds()
-    longest = max(b - a for a, b in bounds)
-    ac = pooled_autocorrelation(u, longest - 1, bounds)
-    lag = newey_west_lag(ac, longest, filter_lag(tau_f, sample_period))
-    n_eff = y.shape[0] / long_run_factor(u, lag, bounds)
+    n_eff = y.shape[0] / long_run_factor(u, residual_lag(u, bounds, filter_lag(tau_f, sample_period)), bounds)
     col = np.cumsum(K) - 1  # base column -> column of phi
     kept = np.flatnonzero(used)
     joints = {  # joint -> (its channel among the kept, its Coulomb column in phi)

@@ -80,11 +80,13 @@ __all__ = [
     "bandwidth_fraction",
     "filter_lag",
     "fixed_b_quantile",
+    "lag_source",
     "long_run_factor",
     "newey_west",
     "newey_west_lag",
     "newey_west_parts",
     "pooled_autocorrelation",
+    "residual_lag",
 ]
 
 Array = NDArray[np.float64]
@@ -138,6 +140,27 @@ def newey_west_lag(ac: Array, longest: int, floor: int = 0) -> int:
     at most ``longest / 4``."""
     below = np.flatnonzero(ac < 0.05)
     return int(min(max(3 * (below[0] if below.size else longest), floor), longest // 4))
+
+
+def residual_lag(u: Array, bounds, floor: int = 0) -> int:
+    """:func:`newey_west_lag` of the weighted residual ``u (N,)`` pooled over the pieces ``bounds``
+    (``[(r0, r1), ...]``), at least ``floor`` (:func:`filter_lag`), at most a quarter of the longest
+    piece."""
+    longest = max(b - a for a, b in bounds)
+    return newey_west_lag(pooled_autocorrelation(u, longest - 1, bounds), longest, floor)
+
+
+def lag_source(lag: int, bounds, floor: int) -> str:
+    """What set a :func:`residual_lag` ``lag`` on the pieces ``bounds``, in words: the cap at a quarter
+    of the longest piece (and the least lag ``floor`` it fell short of), the filters' least lag, or
+    the residual's correlation."""
+    longest = max(b - a for a, b in bounds)
+    if lag >= longest // 4:
+        said = f"capped at a quarter of the longest piece, {longest} rows"
+        return said if lag >= floor else f"{said}; the filters' least, {FILTER_LAGS:g} tau_f, is {floor}"
+    if lag == floor:
+        return f"the filters' least: {FILTER_LAGS:g} tau_f"
+    return "three times the residual's correlation time"
 
 
 def filter_lag(tau_f: float, sample_period: float) -> int:
@@ -247,8 +270,7 @@ def newey_west_parts(
     g = np.einsum("kjr,kj->kr", P, (w**2) * res)  # scores (N, r)
     A = np.einsum("kjr,kjs,j->rs", P, P, w**2)
     u = (res * w).sum(axis=1)
-    longest = max(b - a for a, b in bounds)
-    lag = newey_west_lag(pooled_autocorrelation(u, longest - 1, bounds), longest, floor)
+    lag = residual_lag(u, bounds, floor)
     S = _bartlett_sum(g, lag, bounds)
     # A^-1 S A^-1 in A's eigenbasis, symmetric by construction: on a record that barely sees a
     # direction (the Gen3's rounded angles: A's condition number 1e10) the product of a
