@@ -13,15 +13,14 @@ Standard deviations
     of a measured velocity: differentiated by the filters (``G1 = s G0``) it reaches the residual
     correlated as ``(1 - x) exp(-x)``, ``x = m T / tau_f``, a positive core to ``x = 1`` and a
     negative lobe beyond that cancels it (all but 0.5 % by ``x = 8``), so it adds little to the
-    estimate's variance. The 0.05 crossing lands in the core (about ``0.8 tau_f``); a Bartlett sum
-    three times as long counts the core and little of the lobe: on closed-loop records of the
-    simulator (``benchmarks/log_bounds_coverage.py --cases simulated``, 40 seeds) it stated each
-    std 2.4 times the estimates' spread (median over the parameters), 1.25 times at the least lag.
-    At ``L = 16 tau_f / T`` the Bartlett weights leave ``e tau_f / (L T)`` = e / 16, about a sixth,
-    of the core uncancelled (the core sums to ``2 tau_f / (e T)``, the weights take
-    ``2 (tau_f / T)^2 / L`` from the lobe); a window flat over the lobe (a flat-top kernel)
-    would leave none, but its estimate is not positive definite, and clipped it held several
-    directions at zero variance on the same records. Scaled
+    estimate's variance. The 0.05 crossing lands in the core (about ``0.8 tau_f``), and a Bartlett
+    sum three times as long counts the core and little of the lobe. At ``L = 16 tau_f / T`` the
+    Bartlett weights leave ``e tau_f / (L T)`` = e / 16, about a sixth, of the core uncancelled (the
+    core sums to ``2 tau_f / (e T)``, the weights take ``2 (tau_f / T)^2 / L`` from the lobe): on
+    closed-loop records of the simulator (``benchmarks/log_bounds_coverage.py --cases simulated``,
+    40 seeds) each std is 1.25 times the estimates' spread (median over the parameters). A window
+    flat over the lobe (a flat-top kernel) would leave none, but its estimate is not positive
+    definite, and clipped it holds some directions at zero variance. Scaled
     by what the Bartlett sum lacks of the long-run variance (:func:`_kernel_bias`: its weights'
     shrinkage and the lags beyond ``L``, from the residual's autocorrelation over the lags where
     it is well estimated, run out beyond them as a geometric tail) and by the degrees-of-freedom
