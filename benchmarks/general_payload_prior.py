@@ -17,10 +17,10 @@ kernels) once per variant, changing only the N-joint estimator's packed configur
     ``m c ~ 0 +- r sqrt(E[m^2])`` (the centred prior) and its payload scaled by
     :func:`~adaptive_dd.identification.online_kernel.presence_weight` of the mass's variance.
 ``no presence``
-    The same without the presence weight (``floats[F_PRESENT2] = 0``).
+    The same without the presence weight (``EstCfg.present2 = 0``).
 ``no centred``
     The same without the centred prior on the control model's first moments given the mass
-    (``floats[F_COM_SIZE] = 0``; :func:`~adaptive_dd.identification.online_control_model.centred_prior`).
+    (``EstCfg.com_size = 0``; :func:`~adaptive_dd.identification.online_control_model.centred_prior`).
 ``paper prior``
     The closed forms' prior in payload coordinates: the mass (variance 25 kg^2 at the start, 100
     at a re-opening: ``TwoLinkOnlineConfig.p0_payload``, ``ChangeDetector.p_mass``) and the
@@ -56,7 +56,6 @@ from adaptive_dd.benchmark import load_scenario, run_benchmark
 from adaptive_dd.benchmark.metrics import per_seed_segment_metrics, ratio_statistics
 from adaptive_dd.closed_loop.runner import make_controller_of
 from adaptive_dd.identification import online_init
-from adaptive_dd.identification import online_kernel as K
 
 ROOT = Path(__file__).resolve().parents[1]
 PINNED = 1e-8
@@ -66,7 +65,7 @@ VARIANTS = {  # (paper prior, no presence weight)
     "paper prior": (True, False),
     "paper prior, no presence": (True, True),
 }
-NO_CENTRED = "no centred"  # today's settings without the centred prior (F_COM_SIZE = 0)
+NO_CENTRED = "no centred"  # today's settings without the centred prior (com_size = 0)
 
 
 def _paper_prior(mass_var: float, izz_var: float) -> np.ndarray:
@@ -86,9 +85,9 @@ def _patched_pack(paper: bool, no_presence: bool, size: float | None = None, cen
         if cfg.mode != "payload":
             raise SystemExit("general_payload_prior: the scenario's adaptive_ct must be in payload mode")
         if no_presence:
-            c.floats[K.F_PRESENT2] = 0.0
+            c = c._replace(present2=0.0)
         if not centred:
-            c.floats[K.F_COM_SIZE] = 0.0
+            c = c._replace(com_size=0.0)
         if paper:
             c.P_reopen[:] = _paper_prior(100.0, 1e-3)
             P0 = _paper_prior(25.0, 1e-4)

@@ -60,14 +60,12 @@ def _presence_weight_off() -> None:
     :func:`~adaptive_dd.identification.online_control_model.presence_weight` (its carried-payload
     variance set to 0, which the compiled model reads as "no weighting")."""
     from adaptive_dd.identification import online
-    from adaptive_dd.identification.online_slots import F_PRESENT2
 
     est_init = online.est_init
 
     def without(cfg, arm, n_trials):
         c, st = est_init(cfg, arm, n_trials)
-        c.floats[F_PRESENT2] = 0.0
-        return c, st
+        return c._replace(present2=0.0), st
 
     online.est_init = without
 

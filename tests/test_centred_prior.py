@@ -13,7 +13,6 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from adaptive_dd.identification import online_kernel as K
 from adaptive_dd.identification.online import OnlineConfig, est_init, est_payload_trial
 from adaptive_dd.identification.online_control_model import centred_prior
 from adaptive_dd.plant.arm import Arm
@@ -83,9 +82,9 @@ def test_no_size_no_prior():
 def test_the_estimator_packs_the_prior_size_in_payload_mode_only():
     arm = Arm.sice()
     c, _ = est_init(OnlineConfig(), arm.with_(payload_offset=0.07), 1)
-    assert c.floats[K.F_COM_SIZE] == 0.07
+    assert c.com_size == 0.07
     c, _ = est_init(OnlineConfig(mode="arm"), arm, 1)
-    assert c.floats[K.F_COM_SIZE] == 0.0
+    assert c.com_size == 0.0
 
 
 def _control_mass(level, centred=True):
@@ -93,7 +92,7 @@ def _control_mass(level, centred=True):
     from 3 kg, every row having learnt the noise level ``level``."""
     c, s = est_init(OnlineConfig(project=False), Arm.sice().with_(payload_offset=R), 1)
     if not centred:
-        c.floats[K.F_COM_SIZE] = 0.0
+        c = c._replace(com_size=0.0)
     x, P = _ridge(1.0, 3.0)
     s.theta[0] = 0.0
     s.theta[0, :4] = x

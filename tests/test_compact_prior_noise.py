@@ -11,7 +11,6 @@ import numpy as np
 import pytest
 
 from adaptive_dd.errors import ParameterError
-from adaptive_dd.identification import online_kernel as K
 from adaptive_dd.identification.online import (
     OnlineConfig,
     est_init,
@@ -40,7 +39,7 @@ def _control_payload(arm, prior_noise, level):
     (what the recursive least squares claim after a few hundred samples) while every row has
     learned the noise level ``level`` (None: no level learned yet)."""
     c, s = est_init(OnlineConfig(prior_noise=prior_noise, project=False, prior_radius=RHO), arm, 1)
-    c.floats[K.F_COM_SIZE] = 0.0  # the compact prior alone (the centred one: tests/test_centred_prior.py)
+    c = c._replace(com_size=0.0)  # the compact prior alone (the centred one: tests/test_centred_prior.py)
     raw = payload_parameters(2.5, [0.03, 0.0, 0.08], radius=0.05)
     raw[4:] = [0.05, 0.01, -0.03, 0.005, 0.02, 0.04]  # an inertia no compact 2.5 kg body has
     s.theta[0] = raw

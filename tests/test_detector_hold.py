@@ -39,7 +39,7 @@ def _replay(arm, det: Detector, added, alarm_at=None, seed=0):
     rng = np.random.default_rng(seed)
     eps = rng.standard_normal((added.shape[0], n))
     eps[:, 0] += added
-    a_l, floor2 = c.floats[K.F_ALPHA_LONG], c.floats[K.F_FLOOR2]
+    a_l, floor2 = c.alpha_long, c.floor2
     alarms, ratio, learned = [], np.zeros(added.shape[0]), np.zeros(added.shape[0], dtype=int)
     for k in range(added.shape[0]):
         if est_detect_trial(c, s, 0, eps[k], act):
@@ -66,10 +66,10 @@ def test_the_hold_time_is_derived_from_the_filters_and_the_short_window(ur5):
     assert OnlineConfig(detector=hold).rise_samples == 94
     assert OnlineConfig(sample_period=2e-3, detector=hold).rise_samples == 47
     assert 94 < OnlineConfig(tau_f=0.02, detector=hold).rise_samples < 2 * 94
-    assert est_init(OnlineConfig(detector=hold), ur5, 1)[0].ints[K.I_HOLD] == 94
+    assert est_init(OnlineConfig(detector=hold), ur5, 1)[0].hold == 94
     stated = Detector(hold_above=0.5, hold_time=0.03)
-    assert est_init(OnlineConfig(detector=stated), ur5, 1)[0].ints[K.I_HOLD] == 30
-    assert est_init(OnlineConfig(detector=Detector(hold_above=0.0)), ur5, 1)[0].ints[K.I_HOLD] == 0
+    assert est_init(OnlineConfig(detector=stated), ur5, 1)[0].hold == 30
+    assert est_init(OnlineConfig(detector=Detector(hold_above=0.0)), ur5, 1)[0].hold == 0
     for kw, name in (({"hold_above": -0.5}, "hold_above"), ({"hold_time": 0.0}, "hold_time")):
         with pytest.raises(ParameterError, match=name):
             Detector(**kw)
@@ -96,15 +96,15 @@ def test_a_relearning_level_is_not_held(ur5):
     raised a false one)."""
     n, alarm_at = 3_000, 1_200
     c, _ = est_init(OnlineConfig(detector=UNHELD), ur5, 1)
-    learn_from = alarm_at + 1 + c.ints[K.I_RESUME]
+    learn_from = alarm_at + 1 + c.resume
     added = _ramp(n, learn_from + 150, 20, 6.0)
     for det in (UNHELD, Detector(hold_above=0.5)):
         alarms, ratio, learned = _replay(ur5, det, added, alarm_at=alarm_at)
         assert alarms == [], det
     # the record tests it: row 0 rose above half the threshold (RMS) over a level not established
-    relearning = (learned >= c.ints[K.I_GATE_AFTER]) & (learned < c.ints[K.I_MIN_LEARNED])
+    relearning = (learned >= c.gate_after) & (learned < c.min_learned)
     relearning[: alarm_at + 1] = False
-    assert np.max(ratio[relearning]) > 0.25 * c.floats[K.F_THRESHOLD2], np.max(ratio[relearning])
+    assert np.max(ratio[relearning]) > 0.25 * c.threshold2, np.max(ratio[relearning])
 
 
 def test_a_hold_runs_out(ur5):

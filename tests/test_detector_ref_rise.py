@@ -54,9 +54,8 @@ def test_the_rise_is_the_payloads_noise_through_the_inertia_and_only_in_the_wind
     n, p = ur5.n_joints, s.theta.shape[1]
     w = K.est_work(n, p)
     _holding(c, s, PAY)
-    ints = c.ints
     s.ref[0] = 1.0
-    s.cnt[0, K.C_SINCE_ALARM] = ints[K.I_HOLDOFF] + 50
+    s.cnt[0, K.C_SINCE_ALARM] = c.holdoff + 50
     K._ref_rise(c, s, 0, POSTURE, w)
     held = np.empty(10)
     K.est_payload_trial(c, s, 0, held)  # the payload as control uses it (compact prior, projected)
@@ -64,7 +63,7 @@ def test_the_rise_is_the_payloads_noise_through_the_inertia_and_only_in_the_wind
     expect = _expected_rise(ur5, POSTURE, held)
     assert expect.max() > 25.0  # the wrist's rows: the test's payload does raise them
     assert np.allclose(s.ref_rise[0], expect, rtol=1e-6)
-    for since, ref in ((ints[K.I_RESUME] + ints[K.I_MIN_LEARNED], 1.0), (ints[K.I_HOLDOFF] + 50, 0.0)):
+    for since, ref in ((c.resume + c.min_learned, 1.0), (c.holdoff + 50, 0.0)):
         s.ref[0] = ref
         s.cnt[0, K.C_SINCE_ALARM] = since
         K._ref_rise(c, s, 0, POSTURE, w)
@@ -97,10 +96,9 @@ def test_a_pick_ups_noise_rise_raises_no_second_alarm_and_a_change_is_still_foun
     c, s = est_init(cfg, ur5, 1)
     n, p = ur5.n_joints, s.theta.shape[1]
     w = K.est_work(n, p)
-    ints = c.ints
-    window = ints[K.I_RESUME] + ints[K.I_MIN_LEARNED]
+    window = c.resume + c.min_learned
     scale = np.sqrt(_expected_rise(ur5, POSTURE, PAY))
-    assert scale.max() * 1.3 > np.sqrt(c.floats[K.F_THRESHOLD2] * c.floats[K.F_SLOW2])
+    assert scale.max() * 1.3 > np.sqrt(c.threshold2 * c.slow2)
     rng = np.random.default_rng(seed)
     k_alarm = 3_000
     noise = rng.standard_normal((k_alarm + window + 100, n))
@@ -156,5 +154,5 @@ def test_the_step_computes_the_rise_after_a_pick_up(ur5):
     assert abs(held[0] - PAY[0]) < 0.2 * PAY[0], held[0]
     assert np.allclose(rise[k], _expected_rise(ur5, r.q_meas[k], held), rtol=1e-2)
     assert np.all(rise[k, -2:] > 4.0), rise[k]
-    bound = c.ints[K.I_RESUME] + c.ints[K.I_MIN_LEARNED]
+    bound = c.resume + c.min_learned
     assert np.all(rise[alarms[0] + bound + 1 :] == 1.0)

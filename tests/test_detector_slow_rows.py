@@ -49,7 +49,7 @@ def _drive(c, s, noise, k0, k1, slow_row=None, slow_error=0.0):
 def _flip(c, j, n):
     """What the model's Coulomb friction turned over, and what it lacks near rest, can err by on
     row j (weighted units)."""
-    return (2.0 + c.floats[K.F_CREEP_MARGIN]) * c.pi0[11 * n + j] / c.w[j]
+    return (2.0 + c.creep_margin) * c.pi0[11 * n + j] / c.w[j]
 
 
 @pytest.mark.parametrize("seed", [0, 1])
@@ -64,7 +64,7 @@ def test_a_change_on_a_row_out_of_use_is_found_while_it_is_out(ur5, seed):
     noise = rng.standard_normal((LEARN + 300, n))
     assert _drive(c, s, noise, 0, LEARN) == []
     j = 1
-    thr = np.sqrt(c.floats[K.F_THRESHOLD2] * c.floats[K.F_SLOW2])
+    thr = np.sqrt(c.threshold2 * c.slow2)
     hits = _drive(c, s, noise, LEARN, LEARN + 300, slow_row=j, slow_error=_flip(c, j, n) + 8.0 * thr)
     assert hits and hits[0] < LEARN + 20, hits
 

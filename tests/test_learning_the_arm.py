@@ -278,9 +278,8 @@ def test_a_scenario_without_estimator_settings_runs_as_the_tuned_one():
 
 
 def test_the_warm_up_is_longer_while_the_arm_is_learnt(arm):
-    from adaptive_dd.identification import online_kernel as K
 
     c_pay, _ = est_init(OnlineConfig(), arm, 1)
     c_arm, _ = est_init(OnlineConfig(mode="arm"), arm, 1)
     c_set, _ = est_init(OnlineConfig(mode="arm", detector=Detector(warmup=0.2)), arm, 1)
-    assert (c_pay.ints[K.I_WARMUP], c_arm.ints[K.I_WARMUP], c_set.ints[K.I_WARMUP]) == (500, 1000, 200)
+    assert (c_pay.warmup, c_arm.warmup, c_set.warmup) == (500, 1000, 200)

@@ -569,7 +569,6 @@ def test_projection_onto_a_ball_leaves_a_body_within_it_unchanged_and_empties_a_
 
 
 def test_the_control_model_is_projected_but_the_state_is_not(ur5):
-    from adaptive_dd.identification import online_kernel as K
 
     c, s = est_init(OnlineConfig(), ur5, 1)
     s.theta[0] = PAY_A
@@ -579,7 +578,7 @@ def test_the_control_model_is_projected_but_the_state_is_not(ur5):
     assert s.theta[0, 0] == -2.0
     assert pay[0] >= 0 and np.linalg.eigvalsh(_pseudo_inertia(pay)).min() >= -1e-12
     c2, s2 = est_init(OnlineConfig(project=False, prior_radius=None), ur5, 1)
-    c2.floats[K.F_COM_SIZE] = 0.0  # and no centred prior (tests/test_centred_prior.py)
+    c2 = c2._replace(com_size=0.0)  # and no centred prior (tests/test_centred_prior.py)
     s2.theta[0] = s.theta[0]
     est_payload_trial(c2, s2, 0, pay)
     assert np.array_equal(pay, s.theta[0])
@@ -614,14 +613,13 @@ def test_the_prior_is_on_the_control_model_only_and_off_when_asked(ur5, swap_rec
     """150 ms after the swap the prior brings the control model's inertia nearer the truth; the
     estimator's state does not depend on it, and before the projection neither do the mass and
     first moments."""
-    from adaptive_dd.identification import online_kernel as K
 
     r = swap_record
     runs = {}
     for rho in (0.05, None):
         for project in (True, False):
             c, s = est_init(OnlineConfig(prior_radius=rho, project=project), ur5, 1)
-            c.floats[K.F_COM_SIZE] = 0.0  # the compact prior alone (tests/test_centred_prior.py)
+            c = c._replace(com_size=0.0)  # the compact prior alone (tests/test_centred_prior.py)
             for k in range(10_150):
                 est_step(c, s, r.q_meas[k : k + 1], r.qd_meas[k : k + 1], r.tau[k : k + 1])
             pay = np.empty(10)

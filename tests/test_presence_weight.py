@@ -55,7 +55,7 @@ def test_the_weight_limits():
 
 def _state(arm, pay, mass_std, cfg=None):
     c, s = est_init(cfg or OnlineConfig(), arm, 1)
-    c.floats[K.F_COM_SIZE] = 0.0  # the weight alone (the centred prior: tests/test_centred_prior.py)
+    c = c._replace(com_size=0.0)  # the weight alone (the centred prior: tests/test_centred_prior.py)
     s.theta[0] = pay
     s.P[0] *= (mass_std / s.P[0, 0, 0] ** 0.5) ** 2  # the estimate's covariance, mass std as given
     return c, s
@@ -66,7 +66,7 @@ def _control(arm, raw, mass_std, present=True):
     ``mass_std``, with the presence weight (``present``) or without it."""
     c, s = _state(arm, raw, mass_std)
     if not present:
-        c.floats[K.F_PRESENT2] = 0.0
+        c = c._replace(present2=0.0)
     pay = np.empty(10)
     est_payload_trial(c, s, 0, pay)
     return pay
@@ -120,7 +120,7 @@ def _control_mass(arm, rec, present):
     """The control model's payload mass along a record, with (present) or without the weight."""
     c, s = est_init(OnlineConfig(), arm, 1)
     if not present:
-        c.floats[K.F_PRESENT2] = 0.0
+        c = c._replace(present2=0.0)
     N, n = rec.q_meas.shape
     theta, payload, eps = np.empty((N, s.theta.shape[1])), np.empty((N, 10)), np.empty((N, n))
     alarm, lam = np.zeros(N, dtype=np.int64), np.empty(N)

@@ -43,11 +43,8 @@ def _run(arm, rec, n, hold=True):
     model's link, minus the arm's), the estimate's mass and the alarm count, per sample."""
     c, s = est_init(OnlineConfig(), arm, 1)
     if not hold:  # the planted fault: control follows the estimate from the first sample
-        ints = c.ints.copy()
-        ints[K.I_KEEP_START] = 0
-        fl = c.floats.copy()  # and without the centred prior, which alone keeps most of the wander out
-        fl[K.F_COM_SIZE] = 0.0
-        c = c._replace(ints=ints, floats=fl)
+        # and without the centred prior, which alone keeps most of the wander out
+        c = c._replace(keep_start=False, com_size=0.0)
     j = 10 * arm.payload_joint
     model = np.empty((n, 13 * arm.n_joints))
     est = np.empty(n)
@@ -87,7 +84,7 @@ def test_a_payload_carried_from_the_start_is_taken_up_after_the_warm_up(ur5):
     n = 2_000
     rec = _record(ur5, 5, n, [PAY])
     _, mass, est, alarms, (c, s) = _run(ur5, rec, n)
-    warm = c.ints[K.I_WARMUP]
+    warm = c.warmup
     assert alarms[-1] == 0  # no change to detect: the mass's move alone releases the model
     assert np.all(mass[:warm] == 0.0)
     assert abs(est[warm] - PAY[0]) < 0.1 * PAY[0]
@@ -115,6 +112,6 @@ def test_a_forced_alarm_releases_the_model_at_once(ur5):
 
 def test_without_a_detector_the_model_follows_from_the_start(ur5):
     c, _ = est_init(OnlineConfig(detector=None), ur5, 1)
-    assert c.ints[K.I_KEEP_START] == 0
+    assert c.keep_start == 0
     c_arm, _ = est_init(OnlineConfig(mode="arm"), ur5, 1)
-    assert c_arm.ints[K.I_KEEP_START] == 0
+    assert c_arm.keep_start == 0

@@ -15,18 +15,6 @@ from numba import njit
 from adaptive_dd.identification.online_slots import (
     C_FOLLOWS,
     C_K,
-    F_ALPHA_LONG,
-    F_COM_SIZE,
-    F_EIG_MIN,
-    F_PRESENT2,
-    F_PRIOR_NOISE,
-    F_PRIOR_RADIUS,
-    F_RADIUS,
-    F_THRESHOLD2,
-    I_KEEP_START,
-    I_MIN_LEARNED,
-    I_PROJECT,
-    I_WARMUP,
     MODE_PAYLOAD,
     est_work,
 )
@@ -36,7 +24,7 @@ from adaptive_dd.identification.pseudo_inertia import project_payload_in
 @njit(cache=True, inline="always")
 def _keeps_start(c, s, i):  # pragma: no cover - compiled
     """Whether the model control uses still holds the starting payload (``s.start_pay[i]``)."""
-    return c.ints[I_KEEP_START] == 1 and s.cnt[i, C_FOLLOWS] == 0
+    return c.keep_start and s.cnt[i, C_FOLLOWS] == 0
 
 
 @njit(cache=True, inline="always")
@@ -51,12 +39,12 @@ def _keep_start(c, s, i):  # pragma: no cover - compiled
     segment's adaptive_ct / ct_oracle up to 3.5x; docs/changelog.md). A payload carried from the
     start, or one the detector misses, still moves the mass beyond the bound."""
     cnt = s.cnt[i]
-    if c.ints[I_KEEP_START] != 1 or cnt[C_FOLLOWS] == 1 or cnt[C_K] < c.ints[I_WARMUP]:
+    if not c.keep_start or cnt[C_FOLLOWS] == 1 or cnt[C_K] < c.warmup:
         return
     a = s.theta.shape[1] - 10  # the payload's mass (the payload block's first parameter)
     var = s.P[i, a, a]
     dm = s.theta[i, a] - s.start_mass[i]
-    if not (dm * dm <= c.floats[F_THRESHOLD2] * var):  # (a non-finite estimate follows too)
+    if not (dm * dm <= c.threshold2 * var):  # (a non-finite estimate follows too)
         cnt[C_FOLLOWS] = 1
 
 
@@ -170,11 +158,11 @@ def _noise_level(c, s, i):  # pragma: no cover - compiled
     learned since the last alarm, bias-corrected, once ``min_learned`` samples; before that the
     level established before the alarm, ``ref``): what one weighted equation's error variance is
     in fact, where the recursive least squares take it as 1. 1 where no row has a level."""
-    a_l = c.floats[F_ALPHA_LONG]
+    a_l = c.alpha_long
     acc, cnt = 0.0, 0
     for j in range(s.learned.shape[1]):
         nl = s.learned[i, j]
-        if nl >= c.ints[I_MIN_LEARNED] and a_l > 0.0:
+        if nl >= c.min_learned and a_l > 0.0:
             acc += s.long[i, j] / (1.0 - (1.0 - a_l) ** nl)
             cnt += 1
         elif s.ref[i, j] > 0.0:
@@ -253,28 +241,28 @@ def _control_payload_in(c, s, i, raw, pay, Pc, g, row, mean):  # pragma: no cove
     arm."""
     m_raw = raw[0]
     var_m = s.P[i][0, 0]
-    if c.floats[F_COM_SIZE] > 0.0:
+    if c.com_size > 0.0:
         P = s.P[i]
         o = P.shape[0] - 10  # the payload block (mode "arm": after the arm's base parameters)
         for a in range(4):
             for b in range(4):
                 Pc[a, b] = P[o + a, o + b]
-        centred_prior_in(raw, Pc, c.floats[F_COM_SIZE], g, row)
+        centred_prior_in(raw, Pc, c.com_size, g, row)
         m_raw = raw[0]
         var_m = Pc[0, 0]
-    rho = c.floats[F_PRIOR_RADIUS]
+    rho = c.prior_radius
     if rho > 0.0:
         _inertia_cov(c, s.P[i], Pc)
-        if c.floats[F_PRIOR_NOISE] > 0.0:  # P in the units of the equations' actual noise
-            kappa = c.floats[F_PRIOR_NOISE] * _noise_level(c, s, i)
+        if c.prior_noise > 0.0:  # P in the units of the equations' actual noise
+            kappa = c.prior_noise * _noise_level(c, s, i)
             for a in range(4, 10):
                 for b in range(4, 10):
                     Pc[a, b] *= kappa
         compact_prior_in(raw, Pc, rho, mean, g, row)
-    if c.ints[I_PROJECT] == 1:
-        project_payload_in(raw, pay, c.floats[F_EIG_MIN], c.floats[F_RADIUS], Pc)  # Pc read no more
-        if c.mode == MODE_PAYLOAD and c.floats[F_PRESENT2] > 0.0:
-            wp = presence_weight(m_raw, var_m, c.floats[F_PRESENT2])
+    if c.project:
+        project_payload_in(raw, pay, c.eig_min, c.bound_radius, Pc)  # Pc read no more
+        if c.mode == MODE_PAYLOAD and c.present2 > 0.0:
+            wp = presence_weight(m_raw, var_m, c.present2)
             for k in range(10):
                 pay[k] *= wp
     else:

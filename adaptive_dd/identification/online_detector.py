@@ -27,29 +27,6 @@ from adaptive_dd.identification.online_slots import (
     C_REOPEN_AT,
     C_RESTART,
     C_SINCE_ALARM,
-    F_ALPHA_FAST,
-    F_ALPHA_LONG,
-    F_ALPHA_SHORT,
-    F_CREEP_MARGIN,
-    F_FAST2,
-    F_FLOOR2,
-    F_GATE2,
-    F_HOLD_ABOVE2,
-    F_SLOW2,
-    F_THRESHOLD2,
-    I_FAST,
-    I_FAST_LEARNED,
-    I_FREEZE,
-    I_GATE_AFTER,
-    I_HOLD,
-    I_HOLDOFF,
-    I_MIN_LEARNED,
-    I_N_ROWS,
-    I_REOPEN_AGAIN,
-    I_RESUME,
-    I_SEL_MEMORY,
-    I_SELECT,
-    I_WARMUP,
 )
 from adaptive_dd.plant.chain import (
     mass_matrix_in,
@@ -103,9 +80,8 @@ def _ref_rise(c, s, i, q, w):  # pragma: no cover - compiled
     Computed only in that window (two inertia matrices a sample).
     """
     n = q.shape[0]
-    ints = c.ints
     k = s.cnt[i, C_SINCE_ALARM]
-    live = ints[I_HOLDOFF] <= k < ints[I_RESUME] + ints[I_MIN_LEARNED]
+    live = c.holdoff <= k < c.resume + c.min_learned
     if live:
         live = False
         for j in range(n):
@@ -216,15 +192,14 @@ def _detect(c, s, i, eps, act):  # pragma: no cover - compiled
     rows (random:111's swap to 30 % at 8 s: 57 ms to the alarm while they were not read, 15 ms).
     """
     n = eps.shape[0]
-    ints, fl = c.ints, c.floats
-    a_s, a_l = fl[F_ALPHA_SHORT], fl[F_ALPHA_LONG]
+    a_s, a_l = c.alpha_short, c.alpha_long
     cnt = s.cnt[i]
-    learn = cnt[C_SINCE_ALARM] >= ints[I_RESUME]
-    rise2 = fl[F_HOLD_ABOVE2] * fl[F_THRESHOLD2]
+    learn = cnt[C_SINCE_ALARM] >= c.resume
+    rise2 = c.hold_above2 * c.threshold2
     for j in range(n):
         if s.hold[i, j] > 0.0:  # a hold runs out I_HOLD samples after the rise, in use or not
             s.held[i, j] += 1
-            if s.held[i, j] > ints[I_HOLD]:
+            if s.held[i, j] > c.hold:
                 s.hold[i, j] = -1.0
         e = eps[j]
         if not act[j] and np.isfinite(s.eout[i, j]):
@@ -234,29 +209,29 @@ def _detect(c, s, i, eps, act):  # pragma: no cover - compiled
                 # at its level; one without would carry the reversal's errors into use)
                 e = s.eout[i, j]
                 s.short[i, j] += a_s * (e * e - s.short[i, j])
-                s.fast[i, j] += fl[F_ALPHA_FAST] * (e * e - s.fast[i, j])
+                s.fast[i, j] += c.alpha_fast * (e * e - s.fast[i, j])
                 s.pshort[i, j] += a_s * (s.pvar[i, j] - s.pshort[i, j])
-                s.pfast[i, j] += fl[F_ALPHA_FAST] * (s.pvar[i, j] - s.pfast[i, j])
+                s.pfast[i, j] += c.alpha_fast * (s.pvar[i, j] - s.pfast[i, j])
             continue
         if not (act[j] and np.isfinite(e)):
             continue
         e2 = e * e
         s.short[i, j] += a_s * (e2 - s.short[i, j])
-        s.fast[i, j] += fl[F_ALPHA_FAST] * (e2 - s.fast[i, j])
+        s.fast[i, j] += c.alpha_fast * (e2 - s.fast[i, j])
         s.pshort[i, j] += a_s * (s.pvar[i, j] - s.pshort[i, j])
-        s.pfast[i, j] += fl[F_ALPHA_FAST] * (s.pvar[i, j] - s.pfast[i, j])
+        s.pfast[i, j] += c.alpha_fast * (s.pvar[i, j] - s.pfast[i, j])
         if learn:
             s.seen[i, j] += 1
             nl = s.learned[i, j]
             # a level learned over min_learned samples since the last alarm is established
-            est = nl >= ints[I_MIN_LEARNED]
-            level = fl[F_FLOOR2]
+            est = nl >= c.min_learned
+            level = c.floor2
             if nl >= 1:
-                level = max(s.long[i, j] / (1.0 - (1.0 - a_l) ** nl), fl[F_FLOOR2])
+                level = max(s.long[i, j] / (1.0 - (1.0 - a_l) ** nl), c.floor2)
             ok = True
-            if nl >= ints[I_GATE_AFTER]:
-                ok = e2 <= fl[F_GATE2] * level
-            if ints[I_HOLD] > 0 and est:
+            if nl >= c.gate_after:
+                ok = e2 <= c.gate2 * level
+            if c.hold > 0 and est:
                 # a row whose short average rises is judged against the level it had then, for
                 # I_HOLD samples (a change's rise); the level itself learns on
                 if s.hold[i, j] == 0.0:
@@ -269,7 +244,7 @@ def _detect(c, s, i, eps, act):  # pragma: no cover - compiled
                 s.long[i, j] += a_l * (e2 - s.long[i, j])
                 s.plong[i, j] += a_l * (s.pvar[i, j] - s.plong[i, j])
                 s.learned[i, j] = nl + 1
-    if cnt[C_K] < ints[I_WARMUP] or cnt[C_SINCE_ALARM] <= ints[I_HOLDOFF]:
+    if cnt[C_K] < c.warmup or cnt[C_SINCE_ALARM] <= c.holdoff:
         return False
     n_act = 0
     for j in range(n):
@@ -282,50 +257,50 @@ def _detect(c, s, i, eps, act):  # pragma: no cover - compiled
         if not (act[j] or slow):
             continue
         nl = s.learned[i, j]
-        thr = fl[F_THRESHOLD2] if n_act == ints[I_N_ROWS] else fl[F_THRESHOLD2] * fl[F_SLOW2]
-        own = s.seen[i, j] >= ints[I_MIN_LEARNED] and nl >= 1
+        thr = c.threshold2 if n_act == c.n_rows else c.threshold2 * c.slow2
+        own = s.seen[i, j] >= c.min_learned and nl >= 1
         den = 1.0 - (1.0 - a_l) ** nl  # the long averages' bias correction after nl samples
         # the share of the level that is the estimate's uncertainty (learnt with it)
         plev = s.plong[i, j] / den if nl >= 1 else 0.0
         if own:
-            level = max(s.long[i, j] / den, fl[F_FLOOR2])
+            level = max(s.long[i, j] / den, c.floor2)
             if s.hold[i, j] > 0.0:  # risen within the hold: the level it had before
                 level = s.hold[i, j]
         elif slow:  # out of use: only against a level it learnt itself since the last alarm
             continue
-        elif s.ref[i, j] > 0.0 and cnt[C_SINCE_ALARM] < ints[I_RESUME] + ints[I_MIN_LEARNED]:
+        elif s.ref[i, j] > 0.0 and cnt[C_SINCE_ALARM] < c.resume + c.min_learned:
             # still re-learning, within the re-arm bound: the level established before the last
             # alarm, raised by what the new payload adds to the row's noise (_ref_rise), with the
             # stricter threshold (the estimate may still converge)
-            level = max(s.ref[i, j] * s.ref_rise[i, j], fl[F_FLOOR2])
+            level = max(s.ref[i, j] * s.ref_rise[i, j], c.floor2)
             plev = s.pref[i, j]
-            thr = fl[F_THRESHOLD2] * fl[F_SLOW2]
-        elif s.ref[i, j] > 0.0 and nl >= ints[I_GATE_AFTER]:
+            thr = c.threshold2 * c.slow2
+        elif s.ref[i, j] > 0.0 and nl >= c.gate_after:
             # past the bound, not yet seen enough: what it learned since (trusted as for the gate)
-            level = max(s.long[i, j] / den, fl[F_FLOOR2])
-            thr = fl[F_THRESHOLD2] * fl[F_SLOW2]
+            level = max(s.long[i, j] / den, c.floor2)
+            thr = c.threshold2 * c.slow2
         else:
             continue
         # a joint at most the detector's speed within the selection memory creeps: friction the
         # model lacks errs there (Stribeck, soft friction), by less than the joint's Coulomb
         # friction; its row raises an alarm only beyond that (in the weighted equation's units)
         creep2 = 0.0
-        if ints[I_SELECT] == 1 and s.since_crawl[i, j] <= ints[I_SEL_MEMORY]:
-            creep2 = (fl[F_CREEP_MARGIN] * c.pi0[11 * n + j] / c.w[j]) ** 2
+        if c.select and s.since_crawl[i, j] <= c.sel_memory:
+            creep2 = (c.creep_margin * c.pi0[11 * n + j] / c.w[j]) ** 2
         # the level plus what the estimate's uncertainty along the row (the innovation's predicted
         # variance, averaged as the squared errors are) exceeds the share the level learnt of it
         # a row out of use errs, besides its level, by the model's Coulomb friction turned over
         # (the measured speed's sign near zero: 2 fc) and what the model lacks near rest
         flip2 = 0.0
         if slow:
-            flip2 = ((2.0 + fl[F_CREEP_MARGIN]) * c.pi0[11 * n + j] / c.w[j]) ** 2
+            flip2 = ((2.0 + c.creep_margin) * c.pi0[11 * n + j] / c.w[j]) ** 2
         more = max(s.pshort[i, j] - plev, 0.0)
         if s.short[i, j] > thr * (level + more) + flip2 + 1e-300 and s.short[i, j] > creep2:
             alarm = True
-        if ints[I_FAST] == 1 and own and nl >= ints[I_FAST_LEARNED]:
+        if c.fast and own and nl >= c.fast_learned:
             # only against a level the row has learned itself over the long window: not the
             # level of before an alarm, nor one still learning a new payload or the arm
-            thf = fl[F_FAST2] * thr / fl[F_THRESHOLD2]  # the same slow-row and re-learning factors
+            thf = c.fast2 * thr / c.threshold2  # the same slow-row and re-learning factors
             more = max(s.pfast[i, j] - plev, 0.0)
             if s.fast[i, j] > thf * (level + more) + flip2 + 1e-300 and s.fast[i, j] > creep2:
                 fast = True
@@ -335,7 +310,6 @@ def _detect(c, s, i, eps, act):  # pragma: no cover - compiled
 @njit(cache=True)
 def _alarm(c, s, i, k):  # pragma: no cover - compiled
     """What an alarm at sample k does: re-open P, count, restart the level (keeping it as ``ref``)."""
-    ints, fl = c.ints, c.floats
     cnt = s.cnt[i]
     # the payload the model holds now, with which the levels kept as ref were learnt
     raw = np.empty(10)
@@ -349,14 +323,14 @@ def _alarm(c, s, i, k):  # pragma: no cover - compiled
     cnt[C_ALARMS] += 1
     cnt[C_SINCE_ALARM] = 0
     cnt[C_LAST_ALARM] = k
-    a_l = fl[F_ALPHA_LONG]
+    a_l = c.alpha_long
     for j in range(s.seen.shape[1]):
         nl = s.learned[i, j]
         # the level this row had established (0: none) serves until it re-learns; kept without
         # the floor (applied where it serves), so that a noise rise scales what was learnt
         s.ref[i, j] = 0.0
         s.pref[i, j] = 0.0
-        if s.seen[i, j] >= ints[I_MIN_LEARNED] and nl >= 1:
+        if s.seen[i, j] >= c.min_learned and nl >= 1:
             den = 1.0 - (1.0 - a_l) ** nl  # the long averages' bias correction
             s.ref[i, j] = max(s.long[i, j] / den, 1e-300)
             s.pref[i, j] = s.plong[i, j] / den
@@ -366,8 +340,8 @@ def _alarm(c, s, i, k):  # pragma: no cover - compiled
         s.plong[i, j] = 0.0
         s.hold[i, j] = 0.0
         s.held[i, j] = 0
-    if ints[I_REOPEN_AGAIN] == 1:
-        cnt[C_REOPEN_AT] = k + ints[I_FREEZE]
+    if c.reopen_again:
+        cnt[C_REOPEN_AT] = k + c.freeze
     cnt[C_RESTART] = 1
 
 

@@ -92,56 +92,29 @@ def _pack(cfg: OnlineConfig, arm: Arm) -> tuple[EstCfg, Array]:
     if w.shape != (n,):
         raise ParameterError(f"OnlineConfig.row_weights must have {n} values (joints), got {w.shape[0]}")
     b = cfg.bank
-    ints = np.zeros(K.N_I, dtype=np.int64)
-    fl = np.zeros(K.N_F)
-    T = cfg.sample_period
-    ints[K.I_ALIGN] = int(cfg.align)
-    ints[K.I_SELECT] = int(cfg.selection is not None)
-    ints[K.I_SEL_MEMORY] = 0 if cfg.selection is None else cfg.samples(cfg.selection[1])
-    ints[K.I_TAINT] = cfg.samples(cfg.taint)
-    ints[K.I_PROJECT] = int(cfg.project)
-    ints[K.I_N_ROWS] = n_rows
-    fl[K.F_LAM0], fl[K.F_MU], fl[K.F_CAP] = cfg.lam0, cfg.mu, cap
-    fl[K.F_SEL_THRESHOLD] = 0.0 if cfg.selection is None else cfg.selection[0]
-    fl[K.F_EIG_MIN] = cfg.eig_min
-    fl[K.F_RADIUS] = 0.0 if cfg.bound_radius is None else cfg.bound_radius
-    fl[K.F_PRIOR_RADIUS] = 0.0 if cfg.prior_radius is None else cfg.prior_radius
-    fl[K.F_PRIOR_NOISE] = cfg.prior_noise
+    sel_threshold = 0.0 if cfg.selection is None else float(cfg.selection[0])
+    scalars = dict(
+        align=bool(cfg.align),
+        project=bool(cfg.project),
+        select=cfg.selection is not None,
+        sel_threshold=sel_threshold,
+        sel_memory=0 if cfg.selection is None else cfg.samples(cfg.selection[1]),
+        taint=cfg.samples(cfg.taint),
+        n_rows=int(n_rows),
+        lam0=float(cfg.lam0),
+        mu=float(cfg.mu),
+        max_trace=float(cap),
+        eig_min=float(cfg.eig_min),
+        bound_radius=0.0 if cfg.bound_radius is None else float(cfg.bound_radius),
+        prior_radius=0.0 if cfg.prior_radius is None else float(cfg.prior_radius),
+        prior_noise=float(cfg.prior_noise),
+        # the centred prior on the model's first moments
+        com_size=float(arm.payload_offset) if cfg.payload_priors else 0.0,
+        present2=0.0,
+    )
     if cfg.mode == "payload":  # a carried payload's mass: the re-opened prior's (sized by the capacity)
-        fl[K.F_PRESENT2] = (reopen_mass_std(det, arm) if det else cfg.payload_mass_std) ** 2
-    if cfg.payload_priors:
-        fl[K.F_COM_SIZE] = arm.payload_offset  # the centred prior on the model's first moments
-    if det is not None:
-        ints[K.I_DETECT] = 1
-        warm = det.warmup if det.warmup is not None else (WARMUP_ARM if cfg.mode == "arm" else WARMUP)
-        ints[K.I_WARMUP] = cfg.seconds(warm)
-        ints[K.I_MIN_LEARNED] = det.min_learned
-        ints[K.I_HOLDOFF] = cfg.seconds(det.holdoff)
-        ints[K.I_FREEZE] = cfg.samples(det.freeze)
-        ints[K.I_RESUME] = int(np.ceil(ints[K.I_FREEZE] * det.resume))
-        # the momentum form restarts its filters on an alarm: no memory to wait for
-        ints[K.I_REOPEN_AGAIN] = int(det.reopen_again)
-        ints[K.I_GATE_AFTER] = det.gate_after
-        fl[K.F_ALPHA_SHORT] = min(1.0, T / det.short_window)
-        fl[K.F_ALPHA_LONG] = min(1.0, T / det.long_window)
-        fl[K.F_THRESHOLD2] = det.threshold**2
-        fl[K.F_SLOW2] = det.slow_factor**2
-        fl[K.F_GATE2] = det.gate**2
-        fl[K.F_FLOOR2] = (detector_floor(det) / w.max()) ** 2  # [N m] on the row of the largest weight
-        if det.fast_window is not None:
-            ints[K.I_FAST] = 1
-            fl[K.F_ALPHA_FAST] = min(1.0, T / det.fast_window)
-            fl[K.F_FAST2] = det.fast_threshold**2
-            ints[K.I_FAST_LEARNED] = cfg.seconds(det.long_window)
-        fl[K.F_DET_SPEED] = max(det.speed, fl[K.F_SEL_THRESHOLD])
-        fl[K.F_CREEP_MARGIN] = det.creep_margin
-        if det.hold_above > 0.0:
-            fl[K.F_HOLD_ABOVE2] = det.hold_above**2
-            hold = cfg.rise_samples if det.hold_time is None else cfg.seconds(det.hold_time)
-            ints[K.I_HOLD] = max(hold, 1)
-        # payload mode: control keeps the starting payload until the first alarm (the kernel's
-        # _keep_start); in mode "arm" the payload block also takes up the arm's error meanwhile
-        ints[K.I_KEEP_START] = int(cfg.mode == "payload")
+        scalars["present2"] = float((reopen_mass_std(det, arm) if det else cfg.payload_mass_std) ** 2)
+    scalars.update(_detector_scalars(cfg, arm, w, sel_threshold))
     Am, Bm, Cm, Dm = summing_realisation(b)
     xm1 = np.linalg.solve(np.eye(b.order) - Am, Bm[:, 1])
     c = np.ascontiguousarray
@@ -164,10 +137,53 @@ def _pack(cfg: OnlineConfig, arm: Arm) -> tuple[EstCfg, Array]:
         Dm=Dm,
         xm1=xm1,
         w=c(w),
-        ints=ints,
-        floats=fl,
         vdet=c(_detector_velocity_variance(arm)),
+        **scalars,
     ), P0
+
+
+def _detector_scalars(cfg: OnlineConfig, arm: Arm, w: Array, sel_threshold: float) -> dict:
+    """:class:`~adaptive_dd.identification.online_slots.EstCfg`'s detector settings (zeros and
+    false without a detector)."""
+    det, T = cfg.detector, cfg.sample_period
+    if det is None:
+        ints = ("warmup", "min_learned", "holdoff", "resume", "freeze", "gate_after", "fast_learned", "hold")
+        flags = ("detect", "reopen_again", "fast", "keep_start")
+        floats = ("alpha_short", "alpha_long", "alpha_fast", "threshold2", "slow2", "gate2", "fast2")
+        floats += ("hold_above2", "floor2", "det_speed", "creep_margin")
+        return {**dict.fromkeys(ints, 0), **dict.fromkeys(flags, False), **dict.fromkeys(floats, 0.0)}
+    warm = det.warmup if det.warmup is not None else (WARMUP_ARM if cfg.mode == "arm" else WARMUP)
+    freeze = cfg.samples(det.freeze)
+    fast = det.fast_window is not None
+    held = det.hold_above > 0.0
+    hold = (cfg.rise_samples if det.hold_time is None else cfg.seconds(det.hold_time)) if held else 0
+    return dict(
+        detect=True,
+        warmup=cfg.seconds(warm),
+        min_learned=int(det.min_learned),
+        holdoff=cfg.seconds(det.holdoff),
+        freeze=freeze,
+        resume=int(np.ceil(freeze * det.resume)),
+        reopen_again=bool(det.reopen_again),
+        gate_after=int(det.gate_after),
+        alpha_short=float(min(1.0, T / det.short_window)),
+        alpha_long=float(min(1.0, T / det.long_window)),
+        threshold2=float(det.threshold**2),
+        slow2=float(det.slow_factor**2),
+        gate2=float(det.gate**2),
+        floor2=float((detector_floor(det) / w.max()) ** 2),  # [N m] on the row of the largest weight
+        fast=fast,
+        alpha_fast=float(min(1.0, T / det.fast_window) if fast else 0.0),
+        fast2=float(det.fast_threshold**2 if fast else 0.0),
+        fast_learned=cfg.seconds(det.long_window) if fast else 0,
+        det_speed=float(max(det.speed, sel_threshold)),
+        creep_margin=float(det.creep_margin),
+        hold_above2=float(det.hold_above**2 if held else 0.0),
+        hold=max(hold, 1) if held else 0,
+        # payload mode: control keeps the starting payload until the first alarm (the kernel's
+        # _keep_start); in mode "arm" the payload block also takes up the arm's error meanwhile
+        keep_start=cfg.mode == "payload",
+    )
 
 
 def _channels(cfg: OnlineConfig, n: int) -> int:

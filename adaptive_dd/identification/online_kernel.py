@@ -76,51 +76,10 @@ from adaptive_dd.identification.online_slots import (  # noqa: F401 (re-exported
     C_SINCE_BAD,
     C_SKIPPED,
     C_STARTED,
-    F_ALPHA_FAST,
-    F_ALPHA_LONG,
-    F_ALPHA_SHORT,
-    F_CAP,
-    F_COM_SIZE,
-    F_CREEP_MARGIN,
-    F_DET_SPEED,
-    F_EIG_MIN,
-    F_FAST2,
-    F_FLOOR2,
-    F_GATE2,
-    F_HOLD_ABOVE2,
-    F_LAM0,
-    F_MU,
-    F_PRESENT2,
-    F_PRIOR_NOISE,
-    F_PRIOR_RADIUS,
-    F_RADIUS,
-    F_SEL_THRESHOLD,
-    F_SLOW2,
-    F_THRESHOLD2,
-    I_ALIGN,
-    I_DETECT,
-    I_FAST,
-    I_FAST_LEARNED,
-    I_FREEZE,
-    I_GATE_AFTER,
-    I_HOLD,
-    I_HOLDOFF,
-    I_KEEP_START,
-    I_MIN_LEARNED,
-    I_N_ROWS,
-    I_PROJECT,
-    I_REOPEN_AGAIN,
-    I_RESUME,
-    I_SEL_MEMORY,
-    I_SELECT,
-    I_TAINT,
-    I_WARMUP,
     MODE_ARM,
     MODE_PAYLOAD,
     MOMENTUM_CHANNELS,
     N_CNT,
-    N_F,
-    N_I,
     EstCfg,
     EstState,
     EstWork,
@@ -181,26 +140,25 @@ def est_step_trial_in(c, s, i, q, qd, tau, w):  # pragma: no cover - compiled
     """
     n = q.shape[0]
     p = s.theta.shape[1]
-    ints, fl = c.ints, c.floats
     cnt = s.cnt[i]
     usable = _filtered_signals(c, s, i, q, qd, tau, w)
     act = w.act
-    n_rows = ints[I_N_ROWS]
+    n_rows = c.n_rows
     for j in range(n):
-        if ints[I_SELECT] == 1:
-            if np.isfinite(qd[j]) and abs(qd[j]) <= fl[F_SEL_THRESHOLD]:
+        if c.select:
+            if np.isfinite(qd[j]) and abs(qd[j]) <= c.sel_threshold:
                 s.since_slow[i, j] = 0
             else:
                 s.since_slow[i, j] = min(s.since_slow[i, j] + 1, BIG)
-            act[j] = s.since_slow[i, j] > ints[I_SEL_MEMORY]
-            if np.isfinite(qd[j]) and abs(qd[j]) <= fl[F_DET_SPEED]:
+            act[j] = s.since_slow[i, j] > c.sel_memory
+            if np.isfinite(qd[j]) and abs(qd[j]) <= c.det_speed:
                 s.since_crawl[i, j] = 0
             else:
                 s.since_crawl[i, j] = min(s.since_crawl[i, j] + 1, BIG)
-            if s.since_slow[i, j] == ints[I_SEL_MEMORY] + 1 and s.learned[i, j] > 0:
+            if s.since_slow[i, j] == c.sel_memory + 1 and s.learned[i, j] > 0:
                 # back in use after a slow phase: the short average restarts at the level
                 nl = s.learned[i, j]
-                s.short[i, j] = s.long[i, j] / (1.0 - (1.0 - fl[F_ALPHA_LONG]) ** nl)
+                s.short[i, j] = s.long[i, j] / (1.0 - (1.0 - c.alpha_long) ** nl)
                 s.fast[i, j] = s.short[i, j]
                 s.pshort[i, j] = 0.0  # the level holds what the estimate's uncertainty adds in use
                 s.pfast[i, j] = 0.0
@@ -221,7 +179,7 @@ def est_step_trial_in(c, s, i, q, qd, tau, w):  # pragma: no cover - compiled
             if not act[j]:
                 continue
             if first:
-                s.lam[i] = (1.0 - fl[F_MU]) * s.lam[i] + fl[F_MU]
+                s.lam[i] = (1.0 - c.mu) * s.lam[i] + c.mu
             lam_eff = s.lam[i] if first else 1.0
             first = False
             wj = c.w[j]
@@ -229,19 +187,19 @@ def est_step_trial_in(c, s, i, q, qd, tau, w):  # pragma: no cover - compiled
                 row[k] = phi[j, k] / wj
             s.eps[i, j] = _rls_row(th, Pi, row, y[j] / wj, lam_eff, pphi, nz)
             s.pvar[i, j] = _prior_variance(row, pphi, lam_eff) if np.isfinite(s.eps[i, j]) else 0.0
-        if not first and fl[F_CAP] > 0.0:
+        if not first and c.max_trace > 0.0:
             tr = 0.0
             for k in range(p):
                 tr += Pi[k, k]
-            if tr > fl[F_CAP]:
-                scale = fl[F_CAP] / tr
+            if tr > c.max_trace:
+                scale = c.max_trace / tr
                 for a in range(p):
                     for b in range(p):
                         Pi[a, b] *= scale
-        if ints[I_SELECT] == 1 and ints[I_DETECT] == 1:
+        if c.select and c.detect:
             _slow_rows(c, s, i, act, th, Pi, phi, y, row)
     alarm = 0
-    if ints[I_DETECT] == 1:
+    if c.detect:
         if cnt[C_REOPEN_AT] == cnt[C_K]:
             _reopen(c, Pi)
         _ref_rise(c, s, i, q, w)
@@ -259,8 +217,8 @@ def _slow_rows(c, s, i, act, th, P, phi, y, row):  # pragma: no cover - compiled
     (:func:`_detect`: a payload swapped while the joints carrying it reverse shows first in
     their rows)."""
     p = th.shape[0]
-    for j in range(c.ints[I_N_ROWS]):
-        if act[j] or s.since_slow[i, j] > c.ints[I_SEL_MEMORY]:
+    for j in range(c.n_rows):
+        if act[j] or s.since_slow[i, j] > c.sel_memory:
             continue
         wj = c.w[j]
         e = y[j] / wj

@@ -17,8 +17,6 @@ from adaptive_dd.identification.online_slots import (
     C_SINCE_BAD,
     C_SKIPPED,
     C_STARTED,
-    I_ALIGN,
-    I_TAINT,
     MODE_ARM,
     MOMENTUM_CHANNELS,
 )
@@ -42,7 +40,7 @@ def _filtered_signals(c, s, i, q, qd, tau, w):  # pragma: no cover - compiled
     u = w.u
     for j in range(n):
         t = tau[j]
-        if c.ints[I_ALIGN] == 1:
+        if c.align:
             prev = tau[j] if cnt[C_STARTED] == 0 else s.tau_prev[i, j]
             t = 0.5 * (tau[j] + prev)
         u[j] = q[j]
@@ -53,7 +51,7 @@ def _filtered_signals(c, s, i, q, qd, tau, w):  # pragma: no cover - compiled
     for k in range(4 * n):
         if not np.isfinite(u[k]):
             bad = True
-    if c.ints[I_ALIGN] == 1:
+    if c.align:
         for j in range(n):
             if np.isfinite(tau[j]):
                 s.tau_prev[i, j] = tau[j]
@@ -76,7 +74,7 @@ def _filtered_signals(c, s, i, q, qd, tau, w):  # pragma: no cover - compiled
     else:
         _momentum_channels(c, s, i, start or cnt[C_RESTART] == 1, w)
     cnt[C_RESTART] = 0
-    return cnt[C_SINCE_BAD] > c.ints[I_TAINT]
+    return cnt[C_SINCE_BAD] > c.taint
 
 
 @njit(cache=True)

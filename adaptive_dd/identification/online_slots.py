@@ -1,7 +1,6 @@
 """Layout of the N-joint online estimator's compiled configuration and state.
 
-The slot constants that index :class:`EstCfg`'s ``ints`` (``I_*``) and ``floats`` (``F_*``) and
-the per-trial counters ``EstState.cnt`` (``C_*``), the NamedTuples :class:`EstCfg` (read-only
+The columns of the per-trial counters ``EstState.cnt`` (``C_*``), the NamedTuples :class:`EstCfg` (read-only
 configuration, built by :func:`~adaptive_dd.identification.online.est_init`), :class:`EstState`
 (per-trial state, stepped in place) and :class:`EstWork` (a trial's scratch, :func:`est_work`).
 The step itself is :mod:`~adaptive_dd.identification.online_kernel`.
@@ -39,7 +38,10 @@ MODE_ARM = 1
 
 
 class EstCfg(NamedTuple):
-    """Everything the compiled step needs (built by ``est_init``; read-only).
+    """Everything the compiled step needs (built by ``est_init``; read-only): arrays, then the scalar
+    settings of :class:`~adaptive_dd.identification.online_config.OnlineConfig` and its
+    :class:`~adaptive_dd.identification.online_config.Detector` (in samples where those are in
+    seconds, squared where the kernels compare squares).
 
     Attributes
     ----------
@@ -78,11 +80,54 @@ class EstCfg(NamedTuple):
     w : (n,)
         Row weights: equation j is divided by ``w[j]`` (the rows' updates and the detector's
         prior errors).
-    ints : (N_I,) int64, floats : (N_F,) float64
-        Scalar settings, slots ``I_*`` and ``F_*`` of this module.
     vdet : (n,)
         The sensor's velocity noise variance per joint [(rad/s)^2] (the detector's
         :func:`_ref_rise`: how much a payload raises each row's noise).
+    align, project : bool
+        Align the torque with the measurement (:attr:`OnlineConfig.align`); project the payload
+        the model control uses onto consistent bodies (:attr:`OnlineConfig.project`).
+    select : bool
+        Data selection on (:attr:`OnlineConfig.selection`): a row is used once its joint has been
+        faster than ``sel_threshold`` [rad/s] for ``sel_memory`` samples.
+    taint : int
+        Samples after a non-finite input during which the filtered equations are not used.
+    n_rows : int
+        Rows (joints ``0 .. n_rows - 1``) that carry information (payload mode: the payload's
+        link and those before it).
+    lam0, mu : float
+        The forgetting factor's start and its rate towards 1 per sample.
+    max_trace : float
+        Cap on the trace of P (<= 0: none).
+    eig_min, bound_radius : float
+        The projection's smallest eigenvalue of the pseudo-inertia and the radius [m] of the ball
+        about the payload frame the projected payload lies in (0: none).
+    prior_radius, prior_noise, com_size, present2 : float
+        The model's compact prior's radius [m] (0: none) and its weight against P scaled by the
+        rows' learned noise (0: unscaled); the centred prior's length [m] on the first moments
+        (0: none); payload mode's variance [kg^2] of a carried payload's mass (0: no presence
+        weight) (:mod:`~adaptive_dd.identification.online_control_model`).
+    detect : bool
+        The change detector runs; the settings below are its (:class:`Detector`), 0 without it.
+    warmup, min_learned, holdoff, resume, freeze, gate_after, fast_learned, hold : int
+        Samples: no alarm before ``warmup``; a row's own level once learned over
+        ``min_learned``; no alarm ``holdoff`` after one; the level learns again ``resume`` after
+        an alarm; the covariance re-opened once more ``freeze`` after one (if ``reopen_again``);
+        the learning gate after ``gate_after`` learned samples; the fast average may alarm once
+        the row has learned ``fast_learned``; a risen row is held against its level for ``hold``
+        (0: no hold).
+    reopen_again, fast, keep_start : bool
+        Re-open once more after the filters' memory; the fast average may alarm; control keeps the
+        starting payload until the payload changes (payload mode, :func:`_keep_start`).
+    alpha_short, alpha_long, alpha_fast : float
+        The averages' weights of a sample.
+    threshold2, slow2, gate2, fast2, hold_above2 : float
+        Squared: the alarm's RMS ratio, its factor while another row is out of use, the learning
+        gate's ratio, the fast average's threshold, the ratio at which a row rises.
+    floor2 : float
+        Floor of the detector's level (squared weighted error).
+    det_speed, creep_margin : float
+        A joint no faster than ``det_speed`` [rad/s] within the selection memory creeps; its row
+        alarms only beyond ``creep_margin`` times its Coulomb friction.
     """
 
     ch: Chain
@@ -103,56 +148,46 @@ class EstCfg(NamedTuple):
     Dm: np.ndarray
     xm1: np.ndarray
     w: np.ndarray
-    ints: np.ndarray
-    floats: np.ndarray
     vdet: np.ndarray
-
-
-# integer slots of EstCfg.ints
-I_ALIGN = 0
-I_SELECT = 1
-I_SEL_MEMORY = 2  # samples
-I_TAINT = 3  # samples
-I_DETECT = 4
-I_WARMUP = 5  # samples
-I_MIN_LEARNED = 6
-I_HOLDOFF = 7
-I_RESUME = 8
-I_FREEZE = 9
-I_REOPEN_AGAIN = 10
-I_PROJECT = 11
-I_GATE_AFTER = 12  # learned samples before the learning gate applies
-I_N_ROWS = 13  # rows (joints 0 .. n_rows-1) that carry information
-# 14: unused
-I_FAST = 15  # 1: the fast average may also raise an alarm
-I_FAST_LEARNED = 16  # samples a row's own level must have learned before its fast average may alarm
-I_HOLD = 17  # samples a risen row is judged against the level it had when it rose (0: no hold)
-I_KEEP_START = 18  # 1: control keeps the starting payload until the first alarm (_keep_start)
-N_I = 19
-
-# float slots of EstCfg.floats
-F_LAM0 = 0
-F_MU = 1
-F_CAP = 2  # trace cap of P (<= 0: none)
-F_SEL_THRESHOLD = 3
-F_ALPHA_SHORT = 4
-F_ALPHA_LONG = 5
-F_THRESHOLD2 = 6
-F_SLOW2 = 7
-F_GATE2 = 8
-F_EIG_MIN = 9  # smallest eigenvalue kept in the projected pseudo-inertia
-F_FLOOR2 = 10  # floor of the detector's level (squared weighted error)
-F_RADIUS = 11  # radius [m] of the ball about the payload frame the projected payload lies in (0: none)
-F_PRIOR_RADIUS = 12  # radius [m] of the compact-payload prior on the model control uses (0: none)
-F_ALPHA_FAST = 13  # the fast average's weight of a sample
-F_FAST2 = 14  # the fast average's threshold (squared RMS ratio)
-F_DET_SPEED = 15  # [rad/s] a joint no faster within the selection memory creeps
-F_CREEP_MARGIN = 16  # a creeping joint's row alarms only beyond this times its Coulomb friction
-F_HOLD_ABOVE2 = 17  # a row rises when its short average exceeds this x the threshold x its level
-F_PRESENT2 = 18  # payload mode: the variance [kg^2] of a payload's mass when one is carried (0: no weight)
-F_PRIOR_NOISE = 19  # > 0: the compact prior weighed against P scaled by this x the rows' learned noise level
-F_COM_SIZE = 20  # payload priors: r [m] of the model's first moments' prior m c ~ 0 +- r sqrt(E[m^2])
-N_F = 21
+    align: bool
+    project: bool
+    select: bool
+    sel_threshold: float
+    sel_memory: int
+    taint: int
+    n_rows: int
+    lam0: float
+    mu: float
+    max_trace: float
+    eig_min: float
+    bound_radius: float
+    prior_radius: float
+    prior_noise: float
+    com_size: float
+    present2: float
+    detect: bool
+    warmup: int
+    min_learned: int
+    holdoff: int
+    resume: int
+    freeze: int
+    gate_after: int
+    fast_learned: int
+    hold: int
+    reopen_again: bool
+    fast: bool
+    keep_start: bool
+    alpha_short: float
+    alpha_long: float
+    alpha_fast: float
+    threshold2: float
+    slow2: float
+    gate2: float
+    fast2: float
+    hold_above2: float
+    floor2: float
+    det_speed: float
+    creep_margin: float
 
 
 class EstState(NamedTuple):
