@@ -308,10 +308,11 @@ def est_model_trial_in(c, s, i, pi_out, w):  # pragma: no cover - compiled
         raw_est = w.raw_est
         for k in range(10):
             raw_est[k] = raw[k]
-    _control_payload_in(c, s, i, raw, pay, w.Pc, w.pphi, w.row, w.d)  # (the RLS's scratch is free)
-    if _keeps_start(c, s, i):
+    if _keeps_start(c, s, i):  # (the priors and the projection would be thrown away)
         for k in range(10):
             pay[k] = s.start_pay[i, k]
+    else:
+        _control_payload_in(c, s, i, raw, pay, w.Pc, w.pphi, w.row, w.d)  # (the RLS's scratch is free)
     if c.mode == MODE_PAYLOAD:
         base = 10 * c.jp
         for a in range(10):
