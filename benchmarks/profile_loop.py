@@ -98,24 +98,9 @@ def _trial(scenario_path: str, name: str):
     return lambda: run_closed_loop(one)
 
 
-def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("scenario", nargs="?", default=None, help="scenario file (default: the UR5 tool swap)")
-    ap.add_argument("--controller", default="adaptive_ct")
-    ap.add_argument("--top", type=int, default=15, help="functions printed")
-    args = ap.parse_args()
-    if shutil.which("perf") is None:
-        sys.exit("profile_loop: needs Linux perf (apt install linux-perf); not found on PATH")
-    if os.environ.get(_FRESH) != "1":  # compile afresh in a child process, the cache removed after
-        with tempfile.TemporaryDirectory() as tmp:
-            env = {**os.environ, "NUMBA_CACHE_DIR": tmp, _FRESH: "1"}
-            sys.exit(subprocess.call([sys.executable, *sys.argv], env=env))
-    path = args.scenario or str(resources.files("adaptive_dd.scenarios").joinpath("ur5_tool_swap_exact.toml"))
-    print(f"compiling {args.controller} on {path} afresh (a minute or three) ...", flush=True)
-    run = _trial(path, args.controller)
-    run()
-    pmap = f"/tmp/perf-{os.getpid()}.map"
-    n = write_perf_map(compiled_symbols(), pmap)
+def _record(run) -> tuple[str, float]:
+    """``perf report``'s text of three runs of ``run`` recorded on this process, and one run's wall
+    time [s]."""
     with tempfile.TemporaryDirectory() as tmp:
         data = os.path.join(tmp, "perf.data")
         rec = subprocess.Popen(
@@ -136,8 +121,35 @@ def main() -> None:
             text=True,
             check=False,
         )
-    os.remove(pmap)
-    rows = [ln for ln in rep.stdout.splitlines() if ln.strip() and not ln.startswith("#")]
+    return rep.stdout, wall
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("scenario", nargs="?", default=None, help="scenario file (default: the UR5 tool swap)")
+    ap.add_argument("--controller", default="adaptive_ct")
+    ap.add_argument("--top", type=int, default=15, help="functions printed")
+    args = ap.parse_args()
+    if shutil.which("perf") is None:
+        sys.exit("profile_loop: needs Linux perf (apt install linux-perf); not found on PATH")
+    if os.environ.get(_FRESH) != "1":  # compile afresh in a child process, the cache removed after
+        with tempfile.TemporaryDirectory() as tmp:
+            env = {**os.environ, "NUMBA_CACHE_DIR": tmp, _FRESH: "1"}
+            sys.exit(subprocess.call([sys.executable, *sys.argv], env=env))
+    path = args.scenario or str(resources.files("adaptive_dd.scenarios").joinpath("ur5_tool_swap_exact.toml"))
+    print(f"compiling {args.controller} on {path} afresh (a minute or three) ...", flush=True)
+    run = _trial(path, args.controller)
+    run()
+    symbols = compiled_symbols()
+    if not symbols:
+        sys.exit("profile_loop: no compiled function to map (is NUMBA_DISABLE_JIT set?)")
+    pmap = f"/tmp/perf-{os.getpid()}.map"
+    n = write_perf_map(symbols, pmap)
+    try:
+        rep, wall = _record(run)
+    finally:
+        os.remove(pmap)
+    rows = [ln for ln in rep.splitlines() if ln.strip() and not ln.startswith("#")]
     print(f"{n} compiled functions mapped; one trial {wall:.3f} s wall; self time by function:")
     nrt = 0.0
     for ln in rows:

@@ -143,20 +143,16 @@ def _pack(cfg: OnlineConfig, arm: Arm) -> tuple[EstCfg, Array]:
 
 
 def _detector_scalars(cfg: OnlineConfig, arm: Arm, w: Array, sel_threshold: float) -> dict:
-    """:class:`~adaptive_dd.identification.online_slots.EstCfg`'s detector settings (zeros and
-    false without a detector)."""
+    """:class:`~adaptive_dd.identification.online_slots.EstCfg`'s detector settings (none without a
+    detector: the fields' defaults, zero and false)."""
     det, T = cfg.detector, cfg.sample_period
     if det is None:
-        ints = ("warmup", "min_learned", "holdoff", "resume", "freeze", "gate_after", "fast_learned", "hold")
-        flags = ("detect", "reopen_again", "fast", "keep_start")
-        floats = ("alpha_short", "alpha_long", "alpha_fast", "threshold2", "slow2", "gate2", "fast2")
-        floats += ("hold_above2", "floor2", "det_speed", "creep_margin")
-        return {**dict.fromkeys(ints, 0), **dict.fromkeys(flags, False), **dict.fromkeys(floats, 0.0)}
+        return {}
     warm = det.warmup if det.warmup is not None else (WARMUP_ARM if cfg.mode == "arm" else WARMUP)
     freeze = cfg.samples(det.freeze)
     fast = det.fast_window is not None
     held = det.hold_above > 0.0
-    hold = (cfg.rise_samples if det.hold_time is None else cfg.seconds(det.hold_time)) if held else 0
+    hold = cfg.rise_samples if det.hold_time is None else cfg.seconds(det.hold_time)
     return dict(
         detect=True,
         warmup=cfg.seconds(warm),

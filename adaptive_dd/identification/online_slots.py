@@ -107,7 +107,8 @@ class EstCfg(NamedTuple):
         (0: none); payload mode's variance [kg^2] of a carried payload's mass (0: no presence
         weight) (:mod:`~adaptive_dd.identification.online_control_model`).
     detect : bool
-        The change detector runs; the settings below are its (:class:`Detector`), 0 without it.
+        The change detector runs; the settings below are its (:class:`Detector`), 0 and false
+        without it (their defaults).
     warmup, min_learned, holdoff, resume, freeze, gate_after, fast_learned, hold : int
         Samples: no alarm before ``warmup``; a row's own level once learned over
         ``min_learned``; no alarm ``holdoff`` after one; the level learns again ``resume`` after
@@ -165,29 +166,30 @@ class EstCfg(NamedTuple):
     prior_noise: float
     com_size: float
     present2: float
-    detect: bool
-    warmup: int
-    min_learned: int
-    holdoff: int
-    resume: int
-    freeze: int
-    gate_after: int
-    fast_learned: int
-    hold: int
-    reopen_again: bool
-    fast: bool
-    keep_start: bool
-    alpha_short: float
-    alpha_long: float
-    alpha_fast: float
-    threshold2: float
-    slow2: float
-    gate2: float
-    fast2: float
-    hold_above2: float
-    floor2: float
-    det_speed: float
-    creep_margin: float
+    # the detector's: zero and false without one
+    detect: bool = False
+    warmup: int = 0
+    min_learned: int = 0
+    holdoff: int = 0
+    resume: int = 0
+    freeze: int = 0
+    gate_after: int = 0
+    fast_learned: int = 0
+    hold: int = 0
+    reopen_again: bool = False
+    fast: bool = False
+    keep_start: bool = False
+    alpha_short: float = 0.0
+    alpha_long: float = 0.0
+    alpha_fast: float = 0.0
+    threshold2: float = 0.0
+    slow2: float = 0.0
+    gate2: float = 0.0
+    fast2: float = 0.0
+    hold_above2: float = 0.0
+    floor2: float = 0.0
+    det_speed: float = 0.0
+    creep_margin: float = 0.0
 
 
 class EstState(NamedTuple):
