@@ -126,9 +126,13 @@ def test_the_results_block_counts_the_detectors_false_alarms_over_the_trials():
     assert "| 0 | 3 | 0 |" not in text and "| 1 | 3 | 0 |" in text and "| 1 | 1 | 1 |" in text
     assert "False alarms in at most 4 of the 199 trials (2.0 %" in text
     assert "missed swaps 1 of 199 (target 0)" in text
+    df.loc[ours, "false_alarm_seeds"] = 0.0
+    text = render_blocks(df)["results-arena"]
+    assert "No false alarm in the 199 trials (target <= 1 %), missed swaps 1 of 199" in text
+    assert "at most 0" not in text
     df.loc[ours, ["false_alarm_seeds", "missed_swaps"]] = np.nan
     text = render_blocks(df)["results-arena"]
-    assert "| - | - |" in text and "False alarms" not in text
+    assert "| - | - |" in text and "False alarms" not in text and "No false alarm" not in text
 
 
 def test_the_command_is_read_back_from_the_rows():

@@ -30,13 +30,15 @@ def _record(arm, seed, n, payloads, swaps=()):
     return prescribed_record(arm, t, exciting_motion(arm, t, rng, speed=0.5), payloads, swaps, rng=rng)
 
 
-def test_a_planted_payload_is_detected_within_four_samples_of_the_limit(arm):
+def test_a_planted_payload_is_detected_within_five_samples_of_the_limit(arm):
     """1 kg picked up at 4 s of a 6 s record (four records): the detector alarms once, within
-    4 samples of the detection limit computed on the same record (the optimal test's time: 1-4
-    ms on these). With the 4 ms fast average of before it took 8 ms against a 3 ms limit on one
-    of them (the fault this test catches: a fast test slower than the one-sample one). On a
-    fifth record (seed 1, limit 8 ms) neither the one-sample test at 7x nor the 4 ms average
-    fires and the 20 ms test alarms after 26 ms (``docs/change_detection.md``)."""
+    5 samples of the detection limit computed on the same record (the optimal test's time: 1-4
+    ms on these). The level raised by the noise the posture adds (``_posture_noise``) costs seed
+    3's record one sample (7 -> 8 ms against a 3 ms limit; the other 19 of seeds 2-21 unchanged);
+    a fast test slower than the one-sample one, the 4 ms average of before, took as long there
+    and is caught by the next test. On a fifth record (seed 1, limit 8 ms) neither the one-sample
+    test at 7x nor the 4 ms average fires and the 20 ms test alarms after 26 ms
+    (``docs/change_detection.md``)."""
     ks = 4_000
     for seed in (2, 3, 4, 5):
         r = _record(arm, seed, 6_000, [NONE, ONE_KG], [ks])
@@ -45,7 +47,7 @@ def test_a_planted_payload_is_detected_within_four_samples_of_the_limit(arm):
         rec = run_online(arm, OnlineConfig(), r.q_meas, r.qd_meas, r.tau)
         (alarms,) = np.nonzero(rec.alarm[0])
         assert len(alarms) == 1, (seed, alarms)  # one alarm: the swap's
-        assert 0 <= alarms[0] - ks <= round(limit / T) + 4, (seed, alarms[0] - ks, limit)
+        assert 0 <= alarms[0] - ks <= round(limit / T) + 5, (seed, alarms[0] - ks, limit)
 
 
 def test_the_one_sample_test_is_faster_than_the_averages(arm):

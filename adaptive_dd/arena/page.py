@@ -254,11 +254,13 @@ def _results_block(df) -> str:
     totals = alarm_totals(pooled)
     if totals is not None:
         fa, trials, missed, swaps = totals
-        lines += [
-            "",
-            f"False alarms in at most {fa} of the {trials} trials ({100 * fa / trials:.1f} %; target "
-            f"<= 1 %: a trial with two counts twice), missed swaps {missed} of {swaps} (target 0).",
-        ]
+        alarms = (
+            f"No false alarm in the {trials} trials (target <= 1 %)"
+            if fa == 0
+            else f"False alarms in at most {fa} of the {trials} trials ({100 * fa / trials:.1f} %; target "
+            f"<= 1 %: a trial with two counts twice)"
+        )
+        lines += ["", f"{alarms}, missed swaps {missed} of {swaps} (target 0)."]
     return "\n".join(lines)
 
 

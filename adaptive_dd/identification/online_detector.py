@@ -116,6 +116,42 @@ def _ref_rise(c, s, i, q, w):  # pragma: no cover - compiled
             s.ref_rise[i, j] = v1 / v0
 
 
+@njit(cache=True)
+def _posture_noise(c, s, i, q, w):  # pragma: no cover - compiled
+    """``s.nvar[i]``: per row, the variance the measured velocity's noise gives the weighted row's
+    error at the measured posture, ``vrow_j (M diag(vdet) M^T)_jj``, ``M`` the known arm's inertia
+    (armature included) at ``q``, ``vrow_j`` the filter's noise gain over the row's weight squared.
+
+    The rows' noise is the measured velocity's through the inertia (``G1 (M qd)``), and the inertia
+    a row carries changes with the posture: a base joint's with the arm's reach, squared. A level
+    learnt over the last second is too low where the arm reaches further than it did then; the
+    detector adds to it what the posture adds to the row's noise over the postures it was learnt
+    at (:func:`_detect`). On drawn arms the base row's posture noise had risen 3.1-3.5x over its
+    level's mean within 20 ms at each of the population's five false alarms (random:4, 27, 32;
+    ``docs/change_detection.md``, "The level follows the posture").
+    """
+    n = q.shape[0]
+    M = w.Mr
+    mass_matrix_in(c.ch, c.pi0, q, w.chain, M)
+    for j in range(n):
+        M[j, j] += c.pi0[12 * n + j]
+    for j in range(n):
+        v = 0.0
+        for k in range(n):
+            v += M[j, k] * M[j, k] * c.vdet[k]
+        v *= c.vrow[j]
+        s.nvar[i, j] = v if np.isfinite(v) else 0.0
+
+
+@njit(cache=True, inline="always")
+def _excess(now, total, nl, a_l):  # pragma: no cover - compiled
+    """``max(now - mean, 0)``: what ``now`` exceeds the mean ``total / (1 - (1 - a_l)^nl)`` of an
+    average learnt over ``nl`` samples by; 0 without one."""
+    if nl < 1 or not total > 0.0:
+        return 0.0
+    return max(now - total / (1.0 - (1.0 - a_l) ** nl), 0.0)
+
+
 @njit(cache=True, inline="always")
 def _prior_variance(phi, g, lam):  # pragma: no cover - compiled
     """``phi^T P phi`` of the covariance ``P`` before :func:`_rls_row`'s update, from what that
@@ -173,6 +209,11 @@ def _detect(c, s, i, eps, act):  # pragma: no cover - compiled
     threshold is ``slow^2`` times higher while another row is out of use (a joint that
     is slow or reversing disturbs the others).
 
+    The averages are also judged against the level plus what the posture adds to the row's noise
+    over the postures the level was learnt at (:func:`_posture_noise`: ``nshort``, for the single
+    sample ``nvar``, over the mean of ``nlong``; for the level kept as ``ref``, over ``nref``; only
+    a rise counts): a base joint's noise grows with the arm's reach.
+
     The averages are judged against the level plus what the same average of the variance the
     estimate's covariance predicts for the row's prior error (``s.pvar``, ``phi_j^T P phi_j``:
     ``s.pshort``, ``s.pfast``) exceeds the share of it the level learnt (``s.plong``, kept with
@@ -210,6 +251,7 @@ def _detect(c, s, i, eps, act):  # pragma: no cover - compiled
                 e = s.eout[i, j]
                 s.short[i, j] += a_s * (e * e - s.short[i, j])
                 s.fast[i, j] += c.alpha_fast * (e * e - s.fast[i, j])
+                s.nshort[i, j] += a_s * (s.nvar[i, j] - s.nshort[i, j])
                 s.pshort[i, j] += a_s * (s.pvar[i, j] - s.pshort[i, j])
                 s.pfast[i, j] += c.alpha_fast * (s.pvar[i, j] - s.pfast[i, j])
             continue
@@ -218,6 +260,7 @@ def _detect(c, s, i, eps, act):  # pragma: no cover - compiled
         e2 = e * e
         s.short[i, j] += a_s * (e2 - s.short[i, j])
         s.fast[i, j] += c.alpha_fast * (e2 - s.fast[i, j])
+        s.nshort[i, j] += a_s * (s.nvar[i, j] - s.nshort[i, j])
         s.pshort[i, j] += a_s * (s.pvar[i, j] - s.pshort[i, j])
         s.pfast[i, j] += c.alpha_fast * (s.pvar[i, j] - s.pfast[i, j])
         if learn:
@@ -235,7 +278,7 @@ def _detect(c, s, i, eps, act):  # pragma: no cover - compiled
                 # a row whose short average rises is judged against the level it had then, for
                 # I_HOLD samples (a change's rise); the level itself learns on
                 if s.hold[i, j] == 0.0:
-                    if s.short[i, j] > rise2 * level:
+                    if s.short[i, j] > rise2 * (level + _excess(s.nshort[i, j], s.nlong[i, j], nl, a_l)):
                         s.hold[i, j] = level
                         s.held[i, j] = 0
                 elif s.short[i, j] <= rise2 * (s.hold[i, j] if s.hold[i, j] > 0.0 else level):
@@ -243,6 +286,7 @@ def _detect(c, s, i, eps, act):  # pragma: no cover - compiled
             if ok:
                 s.long[i, j] += a_l * (e2 - s.long[i, j])
                 s.plong[i, j] += a_l * (s.pvar[i, j] - s.plong[i, j])
+                s.nlong[i, j] += a_l * (s.nvar[i, j] - s.nlong[i, j])
                 s.learned[i, j] = nl + 1
     if cnt[C_K] < c.warmup or cnt[C_SINCE_ALARM] <= c.holdoff:
         return False
@@ -262,6 +306,9 @@ def _detect(c, s, i, eps, act):  # pragma: no cover - compiled
         den = 1.0 - (1.0 - a_l) ** nl  # the long averages' bias correction after nl samples
         # the share of the level that is the estimate's uncertainty (learnt with it)
         plev = s.plong[i, j] / den if nl >= 1 else 0.0
+        # the posture's rise of the row's noise over the postures its level was learnt at
+        rise = _excess(s.nshort[i, j], s.nlong[i, j], nl, a_l)
+        rise_fast = _excess(s.nvar[i, j], s.nlong[i, j], nl, a_l)
         if own:
             level = max(s.long[i, j] / den, c.floor2)
             if s.hold[i, j] > 0.0:  # risen within the hold: the level it had before
@@ -274,6 +321,8 @@ def _detect(c, s, i, eps, act):  # pragma: no cover - compiled
             # stricter threshold (the estimate may still converge)
             level = max(s.ref[i, j] * s.ref_rise[i, j], c.floor2)
             plev = s.pref[i, j]
+            rise = _excess(s.nshort[i, j], s.nref[i, j], 1, 1.0)
+            rise_fast = _excess(s.nvar[i, j], s.nref[i, j], 1, 1.0)
             thr = c.threshold2 * c.slow2
         elif s.ref[i, j] > 0.0 and nl >= c.gate_after:
             # past the bound, not yet seen enough: what it learned since (trusted as for the gate)
@@ -295,14 +344,14 @@ def _detect(c, s, i, eps, act):  # pragma: no cover - compiled
         if slow:
             flip2 = ((2.0 + c.creep_margin) * c.pi0[11 * n + j] / c.w[j]) ** 2
         more = max(s.pshort[i, j] - plev, 0.0)
-        if s.short[i, j] > thr * (level + more) + flip2 + 1e-300 and s.short[i, j] > creep2:
+        if s.short[i, j] > thr * (level + rise + more) + flip2 + 1e-300 and s.short[i, j] > creep2:
             alarm = True
         if c.fast and own and nl >= c.fast_learned:
             # only against a level the row has learned itself over the long window: not the
             # level of before an alarm, nor one still learning a new payload or the arm
             thf = c.fast2 * thr / c.threshold2  # the same slow-row and re-learning factors
             more = max(s.pfast[i, j] - plev, 0.0)
-            if s.fast[i, j] > thf * (level + more) + flip2 + 1e-300 and s.fast[i, j] > creep2:
+            if s.fast[i, j] > thf * (level + rise_fast + more) + flip2 + 1e-300 and s.fast[i, j] > creep2:
                 fast = True
     return alarm or fast
 
@@ -334,10 +383,12 @@ def _alarm(c, s, i, k):  # pragma: no cover - compiled
             den = 1.0 - (1.0 - a_l) ** nl  # the long averages' bias correction
             s.ref[i, j] = max(s.long[i, j] / den, 1e-300)
             s.pref[i, j] = s.plong[i, j] / den
+        s.nref[i, j] = s.nlong[i, j] / (1.0 - (1.0 - a_l) ** nl) if nl >= 1 else 0.0
         s.seen[i, j] = 0
         s.learned[i, j] = 0
         s.long[i, j] = 0.0
         s.plong[i, j] = 0.0
+        s.nlong[i, j] = 0.0
         s.hold[i, j] = 0.0
         s.held[i, j] = 0
     if c.reopen_again:

@@ -138,8 +138,24 @@ def _pack(cfg: OnlineConfig, arm: Arm) -> tuple[EstCfg, Array]:
         xm1=xm1,
         w=c(w),
         vdet=c(_detector_velocity_variance(arm)),
+        vrow=c(_noise_gain(Am, Bm, Cm, Dm) / w**2),
         **scalars,
     ), P0
+
+
+def _noise_gain(Am: Array, Bm: Array, Cm: Array, Dm: Array) -> float:
+    """``sum_k h_k^2`` of the impulse response ``h`` of the summing realisation's ``G1`` input:
+    the variance ``G1`` gives white noise of variance 1 (the measured velocity's noise enters each
+    row's momentum as ``G1 (M v)``)."""
+    x = np.asarray(Bm[:, 1], dtype=float).copy()
+    total = float(Dm[1]) ** 2
+    for _ in range(100_000):  # the bank is stable: its response decays geometrically
+        h = float(Cm @ x)
+        total += h * h
+        x = Am @ x
+        if h * h <= 1e-16 * total and float(x @ x) <= 1e-16 * total:
+            break
+    return total
 
 
 def _detector_scalars(cfg: OnlineConfig, arm: Arm, w: Array, sel_threshold: float) -> dict:
@@ -260,6 +276,10 @@ def est_init(
         plong=np.zeros((m, n)),
         pref=np.zeros((m, n)),
         eout=np.full((m, n), np.nan),
+        nvar=np.zeros((m, n)),
+        nshort=np.zeros((m, n)),
+        nlong=np.zeros((m, n)),
+        nref=np.zeros((m, n)),
     )
     for i in range(m):  # the payload the model control uses at the start
         K.est_payload_trial(c, state, i, state.start_pay[i])

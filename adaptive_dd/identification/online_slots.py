@@ -83,6 +83,9 @@ class EstCfg(NamedTuple):
     vdet : (n,)
         The sensor's velocity noise variance per joint [(rad/s)^2] (the detector's
         :func:`_ref_rise`: how much a payload raises each row's noise).
+    vrow : (n,)
+        The variance of weighted row j's error per unit of ``(M diag(vdet) M^T)_jj``: the noise
+        gain of the filter ``G1`` over ``w[j]^2`` (the detector's :func:`_posture_noise`).
     align, project : bool
         Align the torque with the measurement (:attr:`OnlineConfig.align`); project the payload
         the model control uses onto consistent bodies (:attr:`OnlineConfig.project`).
@@ -150,6 +153,7 @@ class EstCfg(NamedTuple):
     xm1: np.ndarray
     w: np.ndarray
     vdet: np.ndarray
+    vrow: np.ndarray
     align: bool
     project: bool
     select: bool
@@ -260,6 +264,17 @@ class EstState(NamedTuple):
     eout : (m, n)
         Detector: the prior error at the last sample of each row out of use because its joint is
         slow (a reversal), at the estimate it does not update; NaN for the others.
+    nvar : (m, n)
+        Detector: the variance the measured velocity's noise gives weighted row j's error at the
+        measured posture, ``vrow_j (M(q) diag(vdet) M(q)^T)_jj`` (the known arm's inertia, armature
+        included), at the last sample
+        (:func:`~adaptive_dd.identification.online_detector._posture_noise`).
+    nshort, nlong : (m, n)
+        Detector: ``nvar`` averaged as the short average and the level are (the level's at the
+        samples it learns): what ``nshort`` exceeds ``nlong``'s mean by is what the posture adds
+        to the row's noise over the postures the level was learnt at.
+    nref : (m, n)
+        Detector: ``nlong``'s mean for the level kept as ``ref`` at the last alarm.
     """
 
     xf: np.ndarray
@@ -290,6 +305,10 @@ class EstState(NamedTuple):
     plong: np.ndarray
     pref: np.ndarray
     eout: np.ndarray
+    nvar: np.ndarray
+    nshort: np.ndarray
+    nlong: np.ndarray
+    nref: np.ndarray
 
 
 class EstWork(NamedTuple):
