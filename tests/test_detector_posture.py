@@ -14,7 +14,7 @@ from detector_steps import detector_sample
 from scipy.signal import lfilter
 
 from adaptive_dd.identification import online_kernel as K
-from adaptive_dd.identification.online import OnlineConfig, est_init
+from adaptive_dd.identification.online import OnlineConfig, est_init, est_step
 from adaptive_dd.plant.arm import Arm
 from adaptive_dd.robots import ROBOTS, robot_urdf
 
@@ -26,27 +26,32 @@ def ur5():
     return Arm.from_urdf(robot_urdf("ur5"), ROBOTS["ur5"].payload_frame)
 
 
-def test_the_posture_noise_is_the_velocity_noise_through_the_inertia_and_the_filter(ur5):
-    """``nvar_j = gain (M V M^T)_jj / w_j^2``: ``M`` the arm's own mass matrix (armature included),
-    ``V`` the sensor's velocity noise, ``gain`` the sum of the squared impulse response of the
-    bank's ``G1`` (here from its transfer function, not the realisation the kernel runs), ``w`` the
-    row weights. An outstretched arm's base row carries more than a folded one's."""
-    cfg = OnlineConfig()
+@pytest.mark.parametrize("mode", ["payload", "arm"])
+def test_the_posture_noise_is_the_velocity_noise_through_the_inertia_and_the_filter(ur5, mode):
+    """``nvar_j = gain (M V M^T)_jj / w_j^2`` after a step of the estimator at ``q``: ``M`` the arm's
+    own mass matrix (armature included; the step builds it from what its momentum form left in its
+    scratch, in either mode), ``V`` the sensor's velocity noise, ``gain`` the sum of the squared
+    impulse response of the bank's ``G1`` (here from its transfer function, not the realisation the
+    kernel runs), ``w`` the row weights. An outstretched arm's base row carries more than a folded
+    one's."""
+    cfg = OnlineConfig(mode=mode)
     c, s = est_init(cfg, ur5, 1)
-    w = K.est_work(ur5.n_joints, s.theta.shape[1])
+    n = ur5.n_joints
     bank = cfg.bank
     impulse = np.zeros(20_000)
     impulse[0] = 1.0
     gain = float(np.sum(lfilter(bank.num[1], bank.den[1], impulse) ** 2))
     V = np.asarray(ur5.sensor.velocity_variance, dtype=float)
-    for q in (POSTURE, np.array([0.0, 0.0, 0.0, -1.5, -1.5, 0.0])):
-        K._posture_noise(c, s, 0, q, w)
+    qd, tau = np.full((1, n), 0.3), np.zeros((1, n))
+    outstretched = np.array([0.0, 0.0, 0.0, -1.5, -1.5, 0.0])
+    for q in (POSTURE, outstretched):
+        est_step(c, s, q[None], qd, tau)
         M = ur5.mass_matrix(q)
         expect = gain * np.diag((M * V) @ M.T) / c.w**2
         assert np.allclose(s.nvar[0], expect, rtol=1e-6), (s.nvar[0], expect)
-    K._posture_noise(c, s, 0, POSTURE, w)
+    est_step(c, s, POSTURE[None], qd, tau)
     folded = s.nvar[0, 0]
-    K._posture_noise(c, s, 0, np.array([0.0, 0.0, 0.0, -1.5, -1.5, 0.0]), w)
+    est_step(c, s, outstretched[None], qd, tau)
     assert s.nvar[0, 0] > 2.0 * folded
 
 

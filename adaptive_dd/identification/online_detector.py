@@ -31,6 +31,7 @@ from adaptive_dd.identification.online_slots import (
 from adaptive_dd.plant.chain import (
     mass_matrix_in,
 )
+from adaptive_dd.plant.chain_dynamics import _composite_mass
 
 
 @njit(cache=True)
@@ -117,10 +118,15 @@ def _ref_rise(c, s, i, q, w):  # pragma: no cover - compiled
 
 
 @njit(cache=True)
-def _posture_noise(c, s, i, q, w):  # pragma: no cover - compiled
+def _posture_noise(c, s, i, w):  # pragma: no cover - compiled
     """``s.nvar[i]``: per row, the variance the measured velocity's noise gives the weighted row's
-    error at the measured posture, ``vrow_j (M diag(vdet) M^T)_jj``, ``M`` the known arm's inertia
-    (armature included) at ``q``, ``vrow_j`` the filter's noise gain over the row's weight squared.
+    error at the sample's posture, ``vrow_j (M diag(vdet) M^T)_jj``, ``M`` the known arm's inertia
+    (armature included), ``vrow_j`` the filter's noise gain over the row's weight squared.
+
+    ``M`` is built from the joint axes and world inertias that this sample's momentum form left in
+    ``w.chain`` (:func:`~adaptive_dd.plant.chain_regressor.momentum_form_in` of the known arm at the
+    held ``q``): call it after the filters and before anything else writes ``w.chain``
+    (:func:`_ref_rise`'s inertia with a payload).
 
     The rows' noise is the measured velocity's through the inertia (``G1 (M qd)``), and the inertia
     a row carries changes with the posture: a base joint's with the arm's reach, squared. A level
@@ -130,9 +136,9 @@ def _posture_noise(c, s, i, q, w):  # pragma: no cover - compiled
     level's mean within 20 ms at each of the population's five false alarms (random:4, 27, 32;
     ``docs/change_detection.md``, "The level follows the posture").
     """
-    n = q.shape[0]
-    M = w.Mr
-    mass_matrix_in(c.ch, c.pi0, q, w.chain, M)
+    n = s.nvar.shape[1]
+    M, ch = w.Mr, w.chain
+    _composite_mass(ch[2], ch[4], M, ch[9][n : n + 10], ch[8][0])
     for j in range(n):
         M[j, j] += c.pi0[12 * n + j]
     for j in range(n):
@@ -144,12 +150,9 @@ def _posture_noise(c, s, i, q, w):  # pragma: no cover - compiled
 
 
 @njit(cache=True, inline="always")
-def _excess(now, total, nl, a_l):  # pragma: no cover - compiled
-    """``max(now - mean, 0)``: what ``now`` exceeds the mean ``total / (1 - (1 - a_l)^nl)`` of an
-    average learnt over ``nl`` samples by; 0 without one."""
-    if nl < 1 or not total > 0.0:
-        return 0.0
-    return max(now - total / (1.0 - (1.0 - a_l) ** nl), 0.0)
+def _excess(now, mean):  # pragma: no cover - compiled
+    """``max(now - mean, 0)``, 0 without a mean (``mean`` 0: nothing learnt)."""
+    return max(now - mean, 0.0) if mean > 0.0 else 0.0
 
 
 @njit(cache=True, inline="always")
@@ -269,8 +272,11 @@ def _detect(c, s, i, eps, act):  # pragma: no cover - compiled
             # a level learned over min_learned samples since the last alarm is established
             est = nl >= c.min_learned
             level = c.floor2
+            nmean = 0.0
             if nl >= 1:
-                level = max(s.long[i, j] / (1.0 - (1.0 - a_l) ** nl), c.floor2)
+                den = 1.0 - (1.0 - a_l) ** nl
+                level = max(s.long[i, j] / den, c.floor2)
+                nmean = s.nlong[i, j] / den
             ok = True
             if nl >= c.gate_after:
                 ok = e2 <= c.gate2 * level
@@ -278,7 +284,7 @@ def _detect(c, s, i, eps, act):  # pragma: no cover - compiled
                 # a row whose short average rises is judged against the level it had then, for
                 # I_HOLD samples (a change's rise); the level itself learns on
                 if s.hold[i, j] == 0.0:
-                    if s.short[i, j] > rise2 * (level + _excess(s.nshort[i, j], s.nlong[i, j], nl, a_l)):
+                    if s.short[i, j] > rise2 * (level + _excess(s.nshort[i, j], nmean)):
                         s.hold[i, j] = level
                         s.held[i, j] = 0
                 elif s.short[i, j] <= rise2 * (s.hold[i, j] if s.hold[i, j] > 0.0 else level):
@@ -307,8 +313,9 @@ def _detect(c, s, i, eps, act):  # pragma: no cover - compiled
         # the share of the level that is the estimate's uncertainty (learnt with it)
         plev = s.plong[i, j] / den if nl >= 1 else 0.0
         # the posture's rise of the row's noise over the postures its level was learnt at
-        rise = _excess(s.nshort[i, j], s.nlong[i, j], nl, a_l)
-        rise_fast = _excess(s.nvar[i, j], s.nlong[i, j], nl, a_l)
+        nmean = s.nlong[i, j] / den if nl >= 1 else 0.0
+        rise = _excess(s.nshort[i, j], nmean)
+        rise_fast = _excess(s.nvar[i, j], nmean)
         if own:
             level = max(s.long[i, j] / den, c.floor2)
             if s.hold[i, j] > 0.0:  # risen within the hold: the level it had before
@@ -321,8 +328,8 @@ def _detect(c, s, i, eps, act):  # pragma: no cover - compiled
             # stricter threshold (the estimate may still converge)
             level = max(s.ref[i, j] * s.ref_rise[i, j], c.floor2)
             plev = s.pref[i, j]
-            rise = _excess(s.nshort[i, j], s.nref[i, j], 1, 1.0)
-            rise_fast = _excess(s.nvar[i, j], s.nref[i, j], 1, 1.0)
+            rise = _excess(s.nshort[i, j], s.nref[i, j])
+            rise_fast = _excess(s.nvar[i, j], s.nref[i, j])
             thr = c.threshold2 * c.slow2
         elif s.ref[i, j] > 0.0 and nl >= c.gate_after:
             # past the bound, not yet seen enough: what it learned since (trusted as for the gate)

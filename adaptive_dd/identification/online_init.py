@@ -26,6 +26,7 @@ from adaptive_dd.identification.online_config import (
     reopen_mass_std,
 )
 from adaptive_dd.identification.online_slots import EstCfg, EstState
+from adaptive_dd.identification.payload_information import filter_noise_gram
 from adaptive_dd.plant.arm import Arm
 from adaptive_dd.plant.payload import payload_parameters
 
@@ -138,24 +139,9 @@ def _pack(cfg: OnlineConfig, arm: Arm) -> tuple[EstCfg, Array]:
         xm1=xm1,
         w=c(w),
         vdet=c(_detector_velocity_variance(arm)),
-        vrow=c(_noise_gain(Am, Bm, Cm, Dm) / w**2),
+        vrow=c(filter_noise_gram(cfg.tau_f, cfg.sample_period)[1, 1] / w**2),  # G1's noise gain
         **scalars,
     ), P0
-
-
-def _noise_gain(Am: Array, Bm: Array, Cm: Array, Dm: Array) -> float:
-    """``sum_k h_k^2`` of the impulse response ``h`` of the summing realisation's ``G1`` input:
-    the variance ``G1`` gives white noise of variance 1 (the measured velocity's noise enters each
-    row's momentum as ``G1 (M v)``)."""
-    x = np.asarray(Bm[:, 1], dtype=float).copy()
-    total = float(Dm[1]) ** 2
-    for _ in range(100_000):  # the bank is stable: its response decays geometrically
-        h = float(Cm @ x)
-        total += h * h
-        x = Am @ x
-        if h * h <= 1e-16 * total and float(x @ x) <= 1e-16 * total:
-            break
-    return total
 
 
 def _detector_scalars(cfg: OnlineConfig, arm: Arm, w: Array, sel_threshold: float) -> dict:

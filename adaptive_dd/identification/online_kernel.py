@@ -218,8 +218,8 @@ def est_step_trial_in(c, s, i, q, qd, tau, w):  # pragma: no cover - compiled
     if c.detect:
         if cnt[C_REOPEN_AT] == cnt[C_K]:
             _reopen(c, Pi)
+        _posture_noise(c, s, i, w)  # reads what the filters' momentum form left in w.chain
         _ref_rise(c, s, i, q, w)
-        _posture_noise(c, s, i, q, w)
         alarm = _detect_step(c, s, i, s.eps[i], act)
         _keep_start(c, s, i)
     cnt[C_K] += 1
