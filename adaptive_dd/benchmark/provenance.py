@@ -75,6 +75,7 @@ def provenance(res) -> dict:
         "git_commit": commit,
         "command_line": list(sys.argv),
         "python": sys.version.split()[0],
+        "runtime": "closed_forms" if res.scenario.closed_forms is not None else "general",
         "seed": res.scenario.seed,
         "seed_indices": list(res.seed_indices),
         "wall_time_s": res.wall_time,

@@ -9,6 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from adaptive_dd.benchmark.metrics import SATURATION_LIMIT, judged
+from adaptive_dd.benchmark.scenario import runtime_line
 from adaptive_dd.benchmark.types import BenchmarkResult
 from adaptive_dd.outputs import atomic_write
 
@@ -53,6 +54,7 @@ def format_report(metrics: dict, res: BenchmarkResult) -> str:
     lines = [
         f"Scenario {sc.source}: {sc.seeds} seeds, {sc.duration} s at T = {sc.sample_period} s, bandwidth "
         f"{sc.bandwidth} rad/s; means over seeds (a failed trial left out of the segments after its failure)",
+        runtime_line(sc),
         "",
     ]
     for title, key, scale, fmt in TABLES:

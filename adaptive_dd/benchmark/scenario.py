@@ -98,7 +98,7 @@ from adaptive_dd.errors import ScenarioError
 from adaptive_dd.plant.arm import Arm
 from adaptive_dd.plant.arm_tables import arm_from_tables
 from adaptive_dd.plant.parameters import PAYLOAD_RADIUS
-from adaptive_dd.plant.two_link import ClosedFormTwoLink, as_arm, closed_form_view
+from adaptive_dd.plant.two_link import ClosedFormTwoLink, as_arm, as_two_link_cached, closed_form_view
 from adaptive_dd.plant.uncertainty import (
     PLANT_TRUTH_KEYS,
     PlantSpec,
@@ -311,6 +311,25 @@ def scenario_closed_forms(arm, plant: PlantSpec | None = None) -> ClosedFormTwoL
     or None: the general kernels. A ``plant`` apart from the arm runs the general kernels; so does
     ``arm`` None (a scenario whose ``[arm]`` was wrong, while its other tables are checked)."""
     return None if arm is None or plant is not None else closed_form_view(arm)
+
+
+def runtime_line(sc: Scenario) -> str:
+    """Which kernels the run takes, and why, in one line for the report and ``validate``: the
+    paper's closed forms of an arm of its geometry (the choice is automatic:
+    :func:`scenario_closed_forms`), or the general N-joint kernels."""
+    if sc.closed_forms is not None:
+        return (
+            "runtime: the paper's two-link closed forms (eqs. 3-9): the arm has the paper's geometry "
+            'and no plant of its own; `general = true` in [arm] (the paper\'s arm: `robot = "sice_arm"`) '
+            "runs it on the general N-joint kernels"
+        )
+    if as_two_link_cached(sc.arm) is None:
+        why = "the arm is not of the paper's geometry"
+    elif sc.plant is not None:
+        why = "the plant is not the arm: [plant]"
+    else:
+        why = "[arm] general = true"
+    return f"runtime: the general N-joint kernels ({sc.arm.n_joints} joints; {why})"
 
 
 def _scenario_error(src: str, errors: list[str]) -> ScenarioError:

@@ -36,13 +36,14 @@ def add_parser(sub) -> None:
 def run(args: argparse.Namespace) -> int:
     """Print the scenario resolved; 1 if the run would meet a problem."""
     from adaptive_dd.benchmark.preflight import resolved_settings
-    from adaptive_dd.benchmark.scenario import format_scenario, load_scenario
+    from adaptive_dd.benchmark.scenario import format_scenario, load_scenario, runtime_line
 
     if args.scenario and Path(args.scenario).is_file():
         if is_identification_scenario(args.scenario):  # [arm] and [record]: no benchmark tables needed
             return validate_identification(args.scenario)
     sc = load_scenario(args.scenario)
     print(format_scenario(sc))
+    print(f"# {runtime_line(sc)}")
     if sc.closed_forms is None:
         print(describe_arm(sc.arm))
     for line in resolved_settings(sc):
