@@ -15,7 +15,11 @@ seeds:
   arm's payload map or the paper's eq. 9), median over the seeds, 20 ms to 4.9 s after the swap;
 - the squared tracking error in windows after the swap (0-0.1, 0.1-0.3, 0.3-1, 1-2, 2-5 s, cut
   at the segment's end) as a share of ``ct_oracle``'s over the whole segment, ``adaptive_ct`` /
-  ``ct_oracle``, mean over the seeds: where the segment's ratio comes from.
+  ``ct_oracle``, mean over the seeds: where the segment's ratio comes from;
+- what the swap changed in the torque each trajectory asks, from the swap to ``adaptive_ct``'s
+  alarm (30 ms without one), RMS per joint [N m], median over the seeds, on ``adaptive_ct``'s
+  trajectory (the evidence its detector had) and on ``ct_oracle``'s; on the general kernels, the
+  detector's margins for friction the model may get wrong near rest, per joint, beside it.
 
 The ``--show`` worst seeds of each swap (by the segment's RMS ratio) are printed one by one, with
 the model's base parameters minus the plant's (``sigma_hat - sigma_true``, in the order of
@@ -48,6 +52,18 @@ def _mass(sc, sigma_hat: np.ndarray) -> np.ndarray:
         return sc.arm.payload_from_sigma(sigma_hat).mass
 
 
+def _payload_torque(sc, res, run, k: int, i0: int, i1: int) -> np.ndarray:
+    """RMS per joint [N m] over samples ``i0 .. i1 - 1`` of what the swap at ``i0`` changed in the
+    torque trial k's trajectory asks: the regressor at the recorded ``q, qd`` (``qdd`` their
+    central difference) times the plant's base parameters after the swap minus before."""
+    arm = sc.closed_forms if sc.closed_forms is not None else sc.arm
+    q, qd = np.asarray(run.q[k], float), np.asarray(run.qd[k], float)
+    qdd = np.gradient(qd, sc.sample_period, axis=0)
+    d_sigma = res.sigma_true[i0] - res.sigma_true[i0 - 1]
+    tau = arm.regressor(q[i0:i1], qd[i0:i1], qdd[i0:i1]) @ d_sigma
+    return np.sqrt(np.mean(tau**2, axis=0))
+
+
 def _swap_rows(sc, res, k: int, ts: float, end: float) -> dict:
     """Trial k's figures for the swap at ``ts`` [s], its segment ending at ``end`` [s]."""
     T, ad, orc = sc.sample_period, res.runs["adaptive_ct"], res.runs["ct_oracle"]
@@ -61,9 +77,11 @@ def _swap_rows(sc, res, k: int, ts: float, end: float) -> dict:
     m = _mass(sc, ad.sigma_hat[k])
     al = np.asarray(ad.alarm_times[k] if ad.alarm_times else [], float)
     hit = al[(al >= ts) & (al < ts + 0.3)]
+    until = i0 + max(round((hit[0] - ts) / T) if hit.size else round(0.03 / T), 1)
     return {
         "ratio": float(np.sqrt(np.sum(ea[i0:i1] ** 2) / floor)),
         "delay": 1e3 * (hit[0] - ts) if hit.size else np.nan,
+        "torque": [_payload_torque(sc, res, r, k, i0, until) for r in (ad, orc)],
         "mass": [float(m[min(i0 + round(d / T), sc.n_samples - 1)]) for d in DELAYS],
         "windows": win,
         "sigma_error": [
@@ -71,6 +89,24 @@ def _swap_rows(sc, res, k: int, ts: float, end: float) -> dict:
             for j in (min(i0 + round(d / T), sc.n_samples - 1) for d in SIGMA_AT)
         ],
     }
+
+
+def _nm(x) -> str:
+    return " ".join(f"{v:.3g}" for v in x)
+
+
+def _friction_margin(sc) -> str | None:
+    """The N-joint detector's margins for friction the model may get wrong near rest [N m per
+    joint]: a creeping row's ``creep_margin fc``, a row out of use's ``(2 + creep_margin) fc``
+    (``docs/change_detection.md``, "Creeping joints"); None on the closed forms (their own
+    detector)."""
+    if sc.closed_forms is not None:
+        return None
+    from adaptive_dd.identification.online_config import Detector
+
+    n, cm = sc.arm.n_joints, Detector().creep_margin
+    fc = np.asarray(sc.arm.pi, float)[11 * n : 12 * n]
+    return f"creeping {_nm(cm * fc)}; out of use (reversing) {_nm((2 + cm) * fc)}"
 
 
 def main() -> None:
@@ -88,6 +124,9 @@ def main() -> None:
     res = run_benchmark(sc, progress=False, controllers=ctrls, seed_indices=seeds, keep_trajectories=keep)
     print(f"{a.scenario}, seeds {seeds[0]}-{seeds[-1]} ({'closed forms' if sc.closed_forms else 'general'})")
     print(f"mass at {', '.join(f'{d:g}' for d in DELAYS)} s after the swap; windows [s] {list(WINDOWS)}")
+    margin = _friction_margin(sc)
+    if margin:
+        print(f"the detector's margin for friction near rest [N m per joint]: {margin}")
     ends = (*sc.swap_times[1:], sc.duration)
     for ts, end in zip(sc.swap_times, ends, strict=True):
         rows = [_swap_rows(sc, res, k, ts, end) for k in range(len(seeds))]
@@ -101,6 +140,10 @@ def main() -> None:
         )
         print(f"  model's mass (median) [kg]: {' '.join(f'{x:.2f}' for x in mass)}")
         print(f"  error share adaptive/oracle: {'  '.join(f'{x:.3f}/{y:.3f}' for x, y in win)}")
+        for who, t in zip(
+            ("adaptive_ct", "ct_oracle"), np.median([r["torque"] for r in rows], axis=0), strict=True
+        ):
+            print(f"  the swap's torque until the alarm, on {who}'s trajectory [N m RMS per joint]: {_nm(t)}")
         for k in np.argsort(-ratio)[: a.show]:
             r = rows[k]
             print(
