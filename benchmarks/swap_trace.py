@@ -134,10 +134,14 @@ def main() -> None:
         delay = np.array([r["delay"] for r in rows])
         mass = np.median([r["mass"] for r in rows], axis=0)
         win = np.mean([r["windows"] for r in rows], axis=0)
-        print(
-            f"swap at {ts:g} s: segment ratio mean {ratio.mean():.3f} max {ratio.max():.3f}; "
-            f"delay median {np.nanmedian(delay):.0f} max {np.nanmax(delay):.0f} ms"
+        found = delay[np.isfinite(delay)]
+        when = (
+            f"delay median {np.median(found):.0f} max {found.max():.0f} ms"
+            + (f", no alarm within 0.3 s in {delay.size - found.size}" if found.size < delay.size else "")
+            if found.size
+            else "no alarm within 0.3 s in any trial"
         )
+        print(f"swap at {ts:g} s: segment ratio mean {ratio.mean():.3f} max {ratio.max():.3f}; {when}")
         print(f"  model's mass (median) [kg]: {' '.join(f'{x:.2f}' for x in mass)}")
         print(f"  error share adaptive/oracle: {'  '.join(f'{x:.3f}/{y:.3f}' for x, y in win)}")
         for who, t in zip(
