@@ -56,12 +56,17 @@ def detector_settings(pairs: list[str]) -> dict:
         if not sep or key not in fields:
             raise SystemExit(f"--detector: expected KEY=VALUE with KEY one of {sorted(fields)}, got {pair!r}")
         default = getattr(Detector(), key)
-        if isinstance(default, bool):
-            out[key] = value.lower() == "true"
-        elif default is None or isinstance(default, float):
-            out[key] = float(value)
-        else:
-            out[key] = type(default)(value)
+        try:
+            if isinstance(default, bool):
+                if value.lower() not in ("true", "false"):
+                    raise ValueError("expected true or false")
+                out[key] = value.lower() == "true"
+            elif default is None or isinstance(default, float):
+                out[key] = float(value)
+            else:
+                out[key] = type(default)(value)
+        except ValueError as exc:
+            raise SystemExit(f"--detector {pair}: {key} takes a {type(default).__name__}: {exc}") from None
     Detector(**out)
     return out
 

@@ -37,6 +37,7 @@ import numpy as np
 
 from adaptive_dd.benchmark import load_scenario, run_benchmark
 from adaptive_dd.closed_loop.runner import make_controller_of
+from adaptive_dd.plant.sampling import first_sample
 
 ROOT = Path(__file__).resolve().parents[1]
 DELAYS = (0.02, 0.05, 0.1, 0.2, 0.5, 1.0, 2.0, 4.9)
@@ -53,9 +54,10 @@ def _mass(sc, sigma_hat: np.ndarray) -> np.ndarray:
 
 
 def _payload_torque(sc, res, run, k: int, i0: int, i1: int) -> np.ndarray:
-    """RMS per joint [N m] over samples ``i0 .. i1 - 1`` of what the swap at ``i0`` changed in the
-    torque trial k's trajectory asks: the regressor at the recorded ``q, qd`` (``qdd`` their
-    central difference) times the plant's base parameters after the swap minus before."""
+    """RMS per joint [N m] over samples ``i0 .. i1 - 1`` of what the swap changed in the torque
+    trial k's trajectory asks, ``i0`` the swap's first sample (:func:`first_sample`): the regressor
+    at the recorded ``q, qd`` (``qdd`` their central difference) times the plant's base parameters
+    at ``i0`` minus those of the sample before."""
     arm = sc.closed_forms if sc.closed_forms is not None else sc.arm
     q, qd = np.asarray(run.q[k], float), np.asarray(run.qd[k], float)
     qdd = np.gradient(qd, sc.sample_period, axis=0)
@@ -67,7 +69,7 @@ def _payload_torque(sc, res, run, k: int, i0: int, i1: int) -> np.ndarray:
 def _swap_rows(sc, res, k: int, ts: float, end: float) -> dict:
     """Trial k's figures for the swap at ``ts`` [s], its segment ending at ``end`` [s]."""
     T, ad, orc = sc.sample_period, res.runs["adaptive_ct"], res.runs["ct_oracle"]
-    i0, i1 = round(ts / T), min(round(end / T), sc.n_samples)
+    i0, i1 = first_sample(ts, T), min(first_sample(end, T), sc.n_samples)
     ea, eo = np.asarray(ad.e_norm[k], float), np.asarray(orc.e_norm[k], float)
     floor = np.sum(eo[i0:i1] ** 2)
     win = []
@@ -137,7 +139,12 @@ def main() -> None:
         found = delay[np.isfinite(delay)]
         when = (
             f"delay median {np.median(found):.0f} max {found.max():.0f} ms"
-            + (f", no alarm within 0.3 s in {delay.size - found.size}" if found.size < delay.size else "")
+            + (
+                f" ({found.size} trials with an alarm; none within 0.3 s in {delay.size - found.size} of "
+                f"{delay.size})"
+                if found.size < delay.size
+                else ""
+            )
             if found.size
             else "no alarm within 0.3 s in any trial"
         )
@@ -151,7 +158,9 @@ def main() -> None:
         for k in np.argsort(-ratio)[: a.show]:
             r = rows[k]
             print(
-                f"    seed {seeds[k]}: ratio {r['ratio']:.3f}, delay {r['delay']:.0f} ms, mass "
+                f"    seed {seeds[k]}: ratio {r['ratio']:.3f}, "
+                + (f"delay {r['delay']:.0f} ms" if np.isfinite(r["delay"]) else "no alarm within 0.3 s")
+                + ", mass "
                 f"{' '.join(f'{x:.2f}' for x in r['mass'])}, windows "
                 f"{'  '.join(f'{x:.3f}/{y:.3f}' for x, y in r['windows'])}"
             )

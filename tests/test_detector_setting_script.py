@@ -34,6 +34,10 @@ def test_pairs_are_typed_and_checked():
     }
     with pytest.raises(SystemExit, match="bogus"):
         mod.detector_settings(["bogus=1"])
+    with pytest.raises(SystemExit, match="reopen_again"):
+        mod.detector_settings(["reopen_again=1"])  # not silently false
+    with pytest.raises(SystemExit, match="min_learned"):
+        mod.detector_settings(["min_learned=many"])
     with pytest.raises(Exception, match="fast_threshold"):
         mod.detector_settings(["fast_threshold=0.5"])  # must be > 1
 

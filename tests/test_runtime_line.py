@@ -24,8 +24,18 @@ SCENARIOS = ROOT / "benchmarks" / "scenarios"
         (None, "the paper's two-link closed forms"),
         (SCENARIOS / "sice_urdf.toml", "the paper's two-link closed forms"),
         (SCENARIOS / "sice_general.toml", "general N-joint kernels (2 joints; [arm] general = true)"),
-        (SCENARIOS / "sice_drawn.toml", "general N-joint kernels (2 joints; the plant is not the arm"),
-        (ROOT / "adaptive_dd" / "scenarios" / "ur5_tool_swap_exact.toml", "(6 joints; the arm is not of"),
+        (
+            SCENARIOS / "sice_drawn.toml",
+            "general N-joint kernels (2 joints; [arm] general = true; a plant apart from the arm ([plant]))",
+        ),
+        (
+            ROOT / "adaptive_dd" / "scenarios" / "ur5_tool_swap_exact.toml",
+            "(6 joints; the arm is not of the paper's geometry)",
+        ),
+        (
+            SCENARIOS / "cad_error" / "ur5_cad_error.toml",
+            "(6 joints; the arm is not of the paper's geometry; a plant apart from the arm ([plant]))",
+        ),
     ],
 )
 def test_the_line_names_the_kernels_and_why(path, expected):
@@ -39,7 +49,7 @@ def test_the_line_names_the_kernels_and_why(path, expected):
 def test_validate_prints_it(capsys):
     assert main(["validate", str(SCENARIOS / "sice_urdf.toml")]) == 0
     out = capsys.readouterr().out
-    assert "# runtime: the paper's two-link closed forms" in out and "general = true" in out
+    assert "# runtime: the paper's two-link closed forms" in out and 'add `robot = "sice_arm"`' in out
 
 
 def test_the_provenance_records_it():

@@ -316,20 +316,23 @@ def scenario_closed_forms(arm, plant: PlantSpec | None = None) -> ClosedFormTwoL
 def runtime_line(sc: Scenario) -> str:
     """Which kernels the run takes, and why, in one line for the report and ``validate``: the
     paper's closed forms of an arm of its geometry (the choice is automatic:
-    :func:`scenario_closed_forms`), or the general N-joint kernels."""
+    :func:`scenario_closed_forms`), or the general N-joint kernels with every reason that applies."""
     if sc.closed_forms is not None:
         return (
             "runtime: the paper's two-link closed forms (eqs. 3-9): the arm has the paper's geometry "
-            'and no plant of its own; `general = true` in [arm] (the paper\'s arm: `robot = "sice_arm"`) '
-            "runs it on the general N-joint kernels"
+            'and no plant of its own; add `robot = "sice_arm"` and `general = true` to [arm] to run it '
+            "on the general N-joint kernels"
         )
+    if sc.arm is None:
+        return "runtime: the general N-joint kernels (no arm given)"
+    why = []
     if as_two_link_cached(sc.arm) is None:
-        why = "the arm is not of the paper's geometry"
-    elif sc.plant is not None:
-        why = "the plant is not the arm: [plant]"
-    else:
-        why = "[arm] general = true"
-    return f"runtime: the general N-joint kernels ({sc.arm.n_joints} joints; {why})"
+        why.append("the arm is not of the paper's geometry")
+    elif sc.arm.general:
+        why.append("[arm] general = true")
+    if sc.plant is not None:
+        why.append("a plant apart from the arm ([plant])")
+    return f"runtime: the general N-joint kernels ({sc.arm.n_joints} joints; {'; '.join(why)})"
 
 
 def _scenario_error(src: str, errors: list[str]) -> ScenarioError:
