@@ -195,6 +195,12 @@ def main() -> None:
 
     path = sys.argv[1] if len(sys.argv) > 1 else None
     sc = _scenario(path)
+    if sc.closed_forms is not None:
+        raise SystemExit(
+            f"{path}: runs on the paper's two-link closed forms, and this script times the general "
+            "N-joint kernels; time the closed forms with benchmarks/two_link_speed_ab.py, or add "
+            '`robot = "sice_arm"` and `general = true` to [arm] (benchmarks/scenarios/sice_general.toml)'
+        )
     N, n = sc.n_samples, sc.n_joints
     rc, pl, io = run_constants(sc), plant_of(sc), io_of(sc)
     print(f"{path or 'UR5 tool swap'}, {N} samples of one trial; CPU microseconds per sample (best of 3)")
