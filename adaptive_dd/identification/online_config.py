@@ -110,7 +110,7 @@ class Detector:
         RMS ratio fast / level that raises an alarm, > 1. Default 7: one constant for every
         arm, the lowest at which the one-sample test raised no more false alarms than the 4 ms
         average did (Panda, drawn plant, 50 seeds: 4 trials at 6x, 1 at 7x and at 8x, 1 before).
-        Measured again with the level following the posture: 6.5 detects a little sooner
+        With the level following the posture, 6.5 detects a little sooner
         (vertical3 exact, 1 kg segment 2.197 -> 2.087, 50 seeds; no false alarm on 100 drawn arms
         x 10 seeds) but the drawn Panda alarms falsely in 3 of 200 trials against 1 at 7.
     speed : float
