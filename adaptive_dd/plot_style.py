@@ -28,19 +28,32 @@ STYLES = {
     "slotine_li": ("darkgreen", "--", 1.0, 2),
     "ct_nominal": ("tab:red", "--", 1.0, 2),
     "pd": ("tab:purple", ":", 1.0, 2),
+    "ct_oracle_late": ("0.3", "--", 1.6, 1),
+    "pd_gravity": ("goldenrod", "-", 1.0, 3),
+    "pd_gravity_oracle": ("goldenrod", "-", 2.4, 1),
+    "sliding_mode": ("tab:pink", "-", 1.0, 3),
+    "composite": ("tab:brown", "-", 1.0, 3),
+    "craig_hsu_sastry": ("navy", "-", 1.0, 3),
+    "icl": ("tab:olive", "-", 1.0, 3),
+    "natural_adaptive": ("tab:cyan", "-", 1.0, 3),
+    "momentum_observer_ct": ("teal", "--", 1.0, 3),
 }
-"""(colour, line style, width, z-order) of each built-in controller, the same in every figure;
-oracles are drawn wide and underneath, so the adaptive curve stays visible on top of them."""
-_EXTRA = ("tab:brown", "tab:pink", "tab:olive", "tab:cyan", "tab:gray", "gold", "teal", "navy")
+"""(colour, line style, width, z-order) of each built-in controller, the same in every figure, no
+two alike; oracles are drawn wide and underneath (a law's oracle in the law's colour), so the
+adaptive curve stays visible on top of them."""
+_EXTRA = ("tab:gray", "gold", "lightcoral", "darkviolet", "olivedrab", "sienna", "steelblue", "crimson")
 
 
 def controller_style(name: str) -> dict:
     """Line properties of a controller: :data:`STYLES`, or a colour fixed by its name."""
+    import zlib
+
     if name in STYLES:
         c, ls, lw, z = STYLES[name]
+    elif name.endswith("_oracle"):  # a plug-in's floor: its law's colour, wide and underneath
+        c = controller_style(name.removesuffix("_oracle"))["color"]
+        ls, lw, z = "-", 2.4, 1
     else:
-        import zlib
-
         c, ls, lw, z = _EXTRA[zlib.crc32(name.encode()) % len(_EXTRA)], "-", 1.0, 3
     return {"color": c, "ls": ls, "lw": lw, "zorder": z}
 

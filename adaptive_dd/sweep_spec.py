@@ -205,6 +205,12 @@ def _controllers(src: str, sw: dict, base: Scenario) -> tuple[str, ...]:
     for c in ctrls:
         if c not in known:
             kind = "the two-link arm" if base.closed_forms is not None else f"this {base.n_joints}-joint arm"
+            if ":" in c:
+                raise SweepError(
+                    f"{src}: key 'sweep.controllers': {c!r} is a plug-in; a sweep runs built-in controllers "
+                    f"only ({known}): run a plug-in over arms and seeds with `adaptive-dd leaderboard "
+                    "--plugin`, or over one scenario with `adaptive-dd benchmark` (docs/sweeps.md)"
+                )
             if c not in CONTROLLERS:
                 raise SweepError(f"{src}: key 'sweep.controllers': unknown controller {c!r}; known: {known}")
             raise SweepError(

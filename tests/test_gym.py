@@ -171,6 +171,21 @@ def test_residual_zero_is_the_base_controller():
         ResidualTorque(make_env(sc, floor=None), base="ct_oracle")
 
 
+def test_residual_zero_on_a_compiled_plugin_is_the_plugin(monkeypatch):
+    """A compiled plug-in as the base (the shipped example): its njit functions are called per
+    sample (they took the plain-Python signatures before: a TypeError at reset), and a zero
+    residual is the benchmark's compiled loop of the same plug-in."""
+    monkeypatch.syspath_prepend(str(ROOT / "examples" / "plugins"))
+    sc = _short("ur5")
+    spec = "pd_gravity_plugin:PDGravityPlugin"
+    name, ctrl = scenario_controller(sc, spec)
+    res = run_benchmark(sc, progress=False, controllers={name: ctrl}, seed_indices=[1])
+    assert res.runs[name].engine == "compiled"
+    ref = per_seed_segment_metrics(res, res.runs[name], settling=False)["rms_error"]
+    ev = evaluate(lambda obs: np.zeros(6), ResidualTorque(make_env(sc, floor=None), base=spec), [1])
+    np.testing.assert_allclose(ev.rms_error, ref, rtol=1e-9)
+
+
 @pytest.mark.parametrize("arm", list(ARMS))
 def test_vector_env_trials_are_the_single_envs(arm):
     """Trial i of the vector environment is ``reset(seed=i)`` of the single one: the same

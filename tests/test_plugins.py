@@ -72,6 +72,22 @@ def test_bad_controller_specs_and_settings_are_named(spec, options, match):
         make_controller(spec, options=options)
 
 
+def test_an_unknown_setting_lists_what_a_scenario_may_set():
+    """The settings a scenario may not set (derived: adaptive_ct's estimator and detector) are not
+    listed as allowed; the message says where they are set."""
+    with pytest.raises(ParameterError) as e:
+        make_controller("adaptive_ct", options={"boost_bandwith": 200.0})
+    msg = str(e.value)
+    allowed = msg.split("allowed: ")[1].split("]")[0]
+    assert "'boost_bandwidth'" in allowed and "detector" not in allowed and "estimator" not in allowed
+    assert "['detector', 'estimator']: derived from the scenario, set in code only" in msg
+    from adaptive_dd.benchmark.scenario_settings import DERIVED
+    from adaptive_dd.controllers.registry import CONTROLLERS
+
+    code_only = {n: {k for k, x in e.settings.items() if not x.scenario_key} for n, e in CONTROLLERS.items()}
+    assert {n: set(d) for n, d in DERIVED.items()} == {n: k for n, k in code_only.items() if k}
+
+
 def test_a_plugin_written_against_the_old_interface_still_works():
     """reset / command(q, qd, q_d, qd_d, qdd_d, sigma_true=None) / observe, no new attributes."""
     from adaptive_dd.controllers import Controller
@@ -175,11 +191,29 @@ class LateEstimate(Controller):
         return self.est
 
 
+class AssignedEstimate(Controller):
+    """The same estimate set as a plain attribute, as docs/controllers.md's table describes it
+    (the base class's ``sigma_hat`` was a read-only property: every trial failed in ``reset``)."""
+
+    name = "late"
+    command = LateEstimate.command
+
+    def reset(self, n_trials, sample_period):
+        super().reset(n_trials, sample_period)
+        self.seen, self.sigma_hat = 0, None
+
+    def observe(self, q, qd, tau):
+        self.seen += 1
+        if self.seen == 3:
+            self.sigma_hat = np.full(self.p, 1.5)
+
+
+@pytest.mark.parametrize("cls", [LateEstimate, AssignedEstimate])
 @pytest.mark.parametrize("arm_kind", ["two_link", "urdf"])
-def test_an_estimate_set_after_the_first_sample_is_reported(arm_kind):
+def test_an_estimate_set_after_the_first_sample_is_reported(arm_kind, cls):
     sc = load_scenario() if arm_kind == "two_link" else load_scenario(EXAMPLES / "plugin_urdf.toml")
     sc = dataclasses.replace(sc, seeds=2, duration=0.2, swap_times=(0.1,), swap_masses=(1.0,), swap_com=())
-    ctrl = LateEstimate()
+    ctrl = cls()
     ctrl.p = (sc.closed_forms or sc.arm).sigma.shape[0]  # the run's parameters: the paper's sigma on its arm
     run = run_benchmark(sc, progress=False, controllers={"late": ctrl}).runs["late"]
     assert not run.error and run.sigma_end is not None

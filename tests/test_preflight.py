@@ -42,7 +42,23 @@ def test_validate_warns_of_a_torque_beyond_the_limit_along_the_reference(capsys)
     assert main(["validate", str(path)]) == 0  # the benchmark runs through saturation and says so
     err = capsys.readouterr().err
     assert "warning: reference.joint2: inverse dynamics along the reference with the 3 kg payload" in err
+    assert "(carried from 7.5 to 12 s; each is checked along the whole reference)" in err
     assert "torque limit 15 N m" in err and "joint1" not in err
+
+
+def test_a_torque_beyond_the_limit_without_payload_blames_the_arm_not_a_payload(tmp_path, capsys):
+    """An arm that cannot follow its reference unloaded (a link's mass in g, an effort limit too
+    small) is named as such: the warning said "with the 2 kg payload" at a time it was not carried."""
+    text = (ROOT / "adaptive_dd" / "scenarios" / "ur5_tool_swap_exact.toml").read_text()
+    limits = 'robot = "ur5"\ntorque_limit = [150.0, 20.0, 150.0, 28.0, 28.0, 28.0]'
+    text = text.replace('robot = "ur5"', limits)
+    path = tmp_path / "weak.toml"
+    path.write_text(text)
+    assert main(["validate", str(path)]) == 0
+    err = capsys.readouterr().err
+    assert "reference.joint2: inverse dynamics along the reference with the arm alone (no payload)" in err
+    assert "torque limit 20 N m" in err and "check the URDF's masses and the joint's effort limit" in err
+    assert "joint1:" not in err
 
 
 @pytest.mark.parametrize(
@@ -108,6 +124,51 @@ def test_a_compiled_failure_is_explained_from_the_error_norm():
     assert run.failed_why[1].startswith("runaway: the arm's state became non-finite or a joint exceeded 200")
     assert 2 not in run.failed_why
     assert run.failures(0.01, (7, 8, 9))[1] == {"seed": 8, "t": 0.06, "why": run.failed_why[1]}
+
+
+def test_a_payload_above_the_rated_one_is_a_warning(tmp_path, capsys):
+    text = (ROOT / "adaptive_dd" / "scenarios" / "ur5_tool_swap_exact.toml").read_text()
+    path = tmp_path / "rated.toml"
+    path.write_text(text.replace("payload_capacity = 5.0", "payload_capacity = 3.0"))
+    assert main(["validate", str(path)]) == 0
+    err = capsys.readouterr().err
+    assert "warning: payload[1].mass = 5 kg is above [arm] payload_capacity = 3 kg" in err
+    assert "payload[0]" not in err  # 2 kg is within it
+    assert main(["validate", str(ROOT / "adaptive_dd" / "scenarios" / "ur5_tool_swap_exact.toml")]) == 0
+    assert "payload_capacity" not in capsys.readouterr().err.replace("arm.payload_capacity", "")
+
+
+def test_a_compiled_non_finite_command_names_its_joint():
+    run = ControllerRun(
+        "x", None, np.zeros((2, 10), np.float32), None, np.array([True, True]), np.array([4, 6]),
+        engine="compiled", failed_cmd=np.array([2, -1]),
+    )  # fmt: skip
+    run.explain_failures(max_error=0.5, max_speed=200.0)
+    assert run.failed_why[0] == "non-finite torque command (joint 3)"
+    assert run.failed_why[1].startswith("runaway")
+
+
+def test_the_reports_failure_lines_group_a_shared_reason_and_cut_a_long_one():
+    """A controller that raised fails every trial with one reason: one line for its seeds, not one
+    per seed with the reason also in the summary; numba's page of typing errors cut to its gist."""
+    from adaptive_dd.benchmark.report import _failure_lines
+
+    typing = (
+        "TypingError in the compiled plug-in: Failed in nopython mode\nnon-precise\n\n- argument 18: dict"
+    )
+    nan = "non-finite torque command (joint 1)"
+    raised = [{"seed": s, "t": None, "why": typing} for s in (0, 1, 2)]
+    ctrls = {
+        "a": {"failed_trials": 3, "error": typing, "failures": raised},
+        "b": {"failed_trials": 1, "error": "", "failures": [{"seed": 4, "t": 1.3, "why": nan}]},
+    }  # fmt: skip
+    lines = _failure_lines(ctrls)
+    assert lines[0] == "failed trials: a: 3, b: 1"
+    assert lines[1] == (
+        "  a, seeds 0, 1, 2, before the first sample: TypingError in the compiled plug-in: Failed in "
+        "nopython mode ... - argument 18: dict (the whole message: metrics.json, failures)"
+    )
+    assert lines[2] == "  b, seed 4, t = 1.300 s: non-finite torque command (joint 1)" and len(lines) == 3
 
 
 def test_unwritable_outputs_are_reported_before_the_run(tmp_path, capsys):

@@ -81,6 +81,18 @@ def test_results_as_a_long_table_and_a_summary(short):
     assert prov["version"] and prov["seed_indices"] == [0, 1] and prov["scenario"]["swap_masses"] == [3.0]
 
 
+def test_no_two_built_in_controllers_are_drawn_alike():
+    """Each built-in has its own line (pd_gravity and its oracle shared a colour and a width: a
+    figure could not tell them apart); a plug-in's ``*_oracle`` takes its law's colour, wide."""
+    from adaptive_dd.controllers.registry import CONTROLLERS
+    from adaptive_dd.plotting import controller_style
+
+    looks = {n: tuple(controller_style(n)[k] for k in ("color", "ls", "lw")) for n in CONTROLLERS}
+    assert len(set(looks.values())) == len(looks)
+    mine, floor = controller_style("mine"), controller_style("mine_oracle")
+    assert floor["color"] == mine["color"] and floor["lw"] > mine["lw"] and floor["zorder"] < mine["zorder"]
+
+
 def test_figures_are_returned_with_one_style_per_controller(short, tmp_path, assert_on_the_page):
     from adaptive_dd.benchmark.runner import run_benchmark
     from adaptive_dd.plotting import controller_style, plot_benchmark_estimates, plot_tracking_errors

@@ -127,6 +127,7 @@ def test_identical_tasks_run_once(tmp_path):
         (("[1.0, 6.0]", "[1.0, 1.0]"), "key 'grid.payload_mass' lists a value twice"),
         (("[1.0, 6.0]", '["heavy"]'), "key 'grid.payload_mass': values must be numbers"),
         (('"ct_oracle", "adaptive_ct"]', '"ct_oracle", "mpc"]'), "unknown controller 'mpc'"),
+        (('"ct_oracle", "adaptive_ct"]', '"ct_oracle", "my_laws:PD"]'), "'my_laws:PD' is a plug-in; a sweep"),
         (('"base.toml"', '"nope.toml"'), "key 'sweep.scenario': no such scenario file"),
         (("block = 1", "block = 1\nswap = 2"), "key 'sweep.swap' = 2"),
         (("block = 1", "block = 1\nduration = 0.15"), "key 'sweep.duration' = 0.15 s ends before"),

@@ -107,6 +107,21 @@ def test_format_marks_defaults():
     assert "run.seeds = 2\n" in text
     assert "run.substeps = 2   (default)" in text and "control.bandwidth = 40.0   (default)" in text
     assert "1000 samples" in text  # two segments of 1 s at 1 kHz
+    assert "payload.com" not in text  # the two-link arm's payload is a disk at the tip
+
+
+def test_format_shows_each_payloads_centre_and_inertia_on_a_urdf_arm():
+    """validate prints every field: on a URDF arm each payload's centre of mass and inertia too,
+    the defaults said (a payload without them was invisible)."""
+    text = format_scenario(load_scenario("adaptive_dd/scenarios/ur5_tool_swap.toml"))
+    assert (
+        "payload.com = [(0.04, 0.0, 0.06), (0.0, 0.03, 0.08), None]   (None: the payload frame's origin)"
+        in text
+    )
+    assert (
+        "payload.inertia = [(0.004, 0.004, 0.003, 0.0, 0.0, 0.0), (0.015, 0.015, 0.01, 0.0, 0.0, 0.0), None]"
+        in text
+    )
 
 
 # --- property tests ------------------------------------------------------------------
@@ -337,6 +352,25 @@ def test_a_scenario_built_in_code_checks_its_payloads_centres_and_inertias():
         sc, swap_times=(4.0,), swap_masses=(2.0,), swap_com=sc.swap_com[:1], swap_inertia=sc.swap_inertia[:1]
     )
     assert one.payload_of(0)["com"] == sc.swap_com[0]
+
+
+@pytest.mark.parametrize(
+    ("com", "match"),
+    [
+        ([40.0, 0.0, 0.0], r"payload\[0\]\.com: \[40\.0, 0\.0, 0\.0\] is 40 m from the payload frame, "
+         r"beyond 2 m: give it in metres"),
+        ([0.04, 0.0], r"payload\[0\]\.com: must be a list of 3 finite numbers"),
+    ],
+)  # fmt: skip
+def test_a_payloads_centre_in_the_wrong_unit_or_shape_is_one_error_naming_it(com, match):
+    """A centre of mass in mm (40 m from the flange) is refused, not warned about as a torque the
+    reference cannot give; a malformed one is one error, not a second about the Scenario's field."""
+    with open("adaptive_dd/scenarios/ur5_tool_swap.toml", "rb") as f:
+        table = tomllib.load(f)
+    table["payload"][0]["com"] = com
+    with pytest.raises(ScenarioError, match=match) as e:
+        parse_scenario(table, "mine.toml")
+    assert str(e.value).startswith("mine.toml: payload[0].com") and "swap_com" not in str(e.value)
 
 
 @pytest.mark.parametrize("kind", ["two_link", "chain"])

@@ -84,7 +84,9 @@ def _records(
         sigma_seg, int(scenario.substeps), int(arm.friction_code), friction_vector(arm.friction_params),
         np.ones((S, 2)), np.zeros((S, 2)),
     )  # fmt: skip
-    ts = TrialState(q, qd, qd == 0.0, run.failed, run.failed_at, q.copy(), qd.copy(), run.dropped)
+    ts = TrialState(
+        q, qd, qd == 0.0, run.failed, run.failed_at, q.copy(), qd.copy(), run.dropped, run.failed_cmd
+    )
     rec = Recording(
         run.q, run.qd, run.tau, run.saturated, run.sigma_hat if estimates else np.zeros((0, N, 7)),
         run.sigma_end if estimates else np.zeros((S, len(rc.seg_start), 7)),

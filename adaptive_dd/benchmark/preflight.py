@@ -11,7 +11,8 @@
 * :func:`inertia_problems`: a joint whose Coulomb friction dwarfs its inertia about its axis (a
   drive's rotor, the armature, missing from the URDF; a warning);
 * :func:`floor_problems`: a controller whose ``bandwidth`` or ``damping`` differs from its floor's
-  (its ratio to the floor then compares two gains as well as two laws; a warning).
+  (its ratio to the floor then compares two gains as well as two laws; a warning);
+* :func:`capacity_problems`: a payload heavier than the arm's stated rated payload (a warning).
 
 Each returns a list of one-line problems (empty: none), naming the joint, the value, the limit
 and the time, or the controller and the reason.
@@ -22,6 +23,7 @@ from __future__ import annotations
 import numpy as np
 
 __all__ = [
+    "capacity_problems",
     "controller_problems",
     "floor_problems",
     "inertia_problems",
@@ -101,13 +103,29 @@ def torque_problems(scenario) -> list[str]:
     t = np.arange(scenario.n_samples) * scenario.sample_period
     out = []
     peak, at, seg = torque_peaks(scenario)
-    masses = [m for _, _, m in scenario.segments()]
+    segments = scenario.segments()
     limit = np.asarray(scenario.arm.actuator.torque_limit, dtype=float)
+    model = scenario.closed_forms or scenario.arm
+    q, qd, qdd = scenario.reference.sample(t)
+    bare = np.abs(model.regressor(q, qd, qdd) @ np.asarray(model.sigma, dtype=float))  # (N, n): no payload
     for j in np.flatnonzero(peak > limit * (1 + TOL)):
+        k0 = int(np.argmax(bare[:, j]))
+        if bare[k0, j] > limit[j] * (1 + TOL):
+            what, k, tau = "the arm alone (no payload)", k0, bare[k0, j]
+            why = "check the URDF's masses and the joint's effort limit"
+        else:
+            start, end, mass = segments[seg[j]]
+            carried = f"carried from {start:g} to {end:g} s" if mass > 0 else "none"
+            what, k, tau = (
+                f"the {mass:g} kg payload ({carried}; each is checked along the whole reference)",
+                at[j],
+                peak[j],
+            )
+            why = "the actuator will saturate"
         out.append(
-            f"reference.joint{j + 1}: inverse dynamics along the reference with the {masses[seg[j]]:g} kg "
-            f"payload needs |tau| = {peak[j]:.4g} N m at t = {t[at[j]]:.3f} s, beyond the joint's torque "
-            f"limit {limit[j]:.4g} N m ({peak[j] / limit[j]:.2f} times): the actuator will saturate"
+            f"reference.joint{j + 1}: inverse dynamics along the reference with {what} needs |tau| = "
+            f"{tau:.4g} N m at t = {t[k]:.3f} s, beyond the joint's torque limit {limit[j]:.4g} N m "
+            f"({tau / limit[j]:.2f} times): {why}"
         )
     return out
 
@@ -303,9 +321,25 @@ def floor_problems(scenario) -> list[str]:
     return out
 
 
+def capacity_problems(scenario) -> list[str]:
+    """Payloads heavier than the arm's stated rated payload (``[arm] payload_capacity``): the
+    estimator's re-opening at an alarm is sized from it, and a data sheet's arm would not carry them."""
+    cap = getattr(scenario.arm, "payload_capacity", None)
+    if cap is None or scenario.closed_forms is not None:
+        return []
+    return [
+        f"payload[{i}].mass = {m:g} kg is above [arm] payload_capacity = {cap:g} kg (the rated payload, "
+        "which sizes adaptive_ct's re-opening at an alarm): state the arm's rating, or a payload within it"
+        for i, m in enumerate(scenario.swap_masses)
+        if m > cap * (1 + TOL)
+    ]
+
+
 def preflight(scenario) -> tuple[list[str], list[str]]:
     """``(problems, warnings)``: :func:`reference_problems` and :func:`controller_problems` (the
     run would be meaningless or fail), :func:`torque_problems` (it will saturate),
-    :func:`inertia_problems` (an armature the URDF leaves out) and :func:`floor_problems`."""
+    :func:`inertia_problems` (an armature the URDF leaves out), :func:`floor_problems` and
+    :func:`capacity_problems` (a payload above the rated one)."""
     problems = reference_problems(scenario) + controller_problems(scenario)
-    return problems, torque_problems(scenario) + inertia_problems(scenario) + floor_problems(scenario)
+    warnings = torque_problems(scenario) + inertia_problems(scenario) + floor_problems(scenario)
+    return problems, warnings + capacity_problems(scenario)

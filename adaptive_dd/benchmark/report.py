@@ -76,18 +76,18 @@ def format_report(metrics: dict, res: BenchmarkResult) -> str:
 
 def _failure_lines(ctrls: dict) -> list[str]:
     """Failed trials per controller, the first three with seed, time and reason; lost measurements."""
-    fails = [
-        f"{n}: {c['failed_trials']}" + (f" ({c['error']})" if c["error"] else "")
-        for n, c in ctrls.items()
-        if c["failed_trials"]
-    ]
+    fails = [f"{n}: {c['failed_trials']}" for n, c in ctrls.items() if c["failed_trials"]]
     lines = ["failed trials: " + (", ".join(fails) if fails else "none")]
     for n, c in ctrls.items():
-        for f in c.get("failures", [])[:3]:
-            at = f"t = {f['t']:.3f} s" if f["t"] is not None else "before the first sample"
-            lines.append(f"  {n}, seed {f['seed']}, {at}: {f['why']}")
-        if len(c.get("failures", [])) > 3:
-            lines.append(f"  {n}: {len(c['failures']) - 3} more in metrics.json")
+        groups: dict = {}  # the same reason at the same time (a controller that raised): one line
+        for f in c.get("failures", []):
+            groups.setdefault((f["t"], f["why"]), []).append(f["seed"])
+        for (t, why), seeds in list(groups.items())[:3]:
+            at = f"t = {t:.3f} s" if t is not None else "before the first sample"
+            who = f"seed {seeds[0]}" if len(seeds) == 1 else f"seeds {_seed_list(seeds)}"
+            lines.append(f"  {n}, {who}, {at}: {_brief_reason(why)}")
+        if len(groups) > 3:
+            lines.append(f"  {n}: {len(groups) - 3} more reasons in metrics.json (failures)")
     drops = [f"{n}: {c['dropped_samples']}" for n, c in ctrls.items() if c.get("dropped_samples")]
     if drops:
         skips = [
@@ -102,6 +102,22 @@ def _failure_lines(ctrls: dict) -> list[str]:
             "samples the estimators skipped (NaN, the filters' memory after each loss): " + ", ".join(skips)
         )
     return lines
+
+
+def _seed_list(seeds: list) -> str:
+    """``0, 1, 2`` (at most five, then how many more)."""
+    shown = ", ".join(str(s) for s in seeds[:5])
+    return shown + (f" and {len(seeds) - 5} more" if len(seeds) > 5 else "")
+
+
+def _brief_reason(why: str) -> str:
+    """A failure's reason on one line: a long, multi-line one (numba's typing errors) cut to its
+    first line and numba's hint on the argument (``- argument ...``); the whole in metrics.json."""
+    lines = [x.strip() for x in why.splitlines() if x.strip()]
+    if len(lines) <= 1:
+        return why
+    hints = [x for x in lines if x.startswith("- argument")]
+    return " ... ".join([lines[0], *hints]) + " (the whole message: metrics.json, failures)"
 
 
 def _payload_tables(ctrls: dict, head: str) -> list[str]:
@@ -232,20 +248,21 @@ def _information_lines(c: dict, all_unknown: bool) -> list[str]:
         best = min(took.values()) if took else None
         ok = best is not None and best <= TARGET_INFO_RATIO * info["known"]
         unk = info.get("unknown")
-        unk_s = f"{1e3 * unk:.0f} ms" if unk is not None else "beyond the window"
+        unk_s = f"{1e3 * unk:.0f} ms" if unk is not None else "not within the segment"
         unk_s = f", {unk_s} (all unknown)" if all_unknown else " (arm known, payload mode)"
         out.append(
             f"  payload mass within 5 % after the swap at {seg['start']:g} s ({seg['mass']:g} kg): "
             f"information limit {1e3 * info['known']:.0f} ms (other parameters known){unk_s} "
             f"(median over {info.get('seeds', 1)} seed(s) of {info.get('reference', 'the oracle')}'s "
-            "trajectory); "
-            + ", ".join(f"{n} {1e3 * took[n]:.0f} ms" if n in took else f"{n} never" for n in estimators)
-            + (f" (median over {max(n_learn)} seed(s) with kept trajectories)" if n_learn else "")
+            "trajectory)"
             + (
-                f" (target best <= {TARGET_INFO_RATIO:g}x the known-parameters limit: "
+                "; "
+                + ", ".join(f"{n} {1e3 * took[n]:.0f} ms" if n in took else f"{n} never" for n in estimators)
+                + (f" (median over {max(n_learn)} seed(s) with kept trajectories)" if n_learn else "")
+                + f" (target best <= {TARGET_INFO_RATIO:g}x the known-parameters limit: "
                 + ("met)" if ok else "NOT met)")
                 if estimators
-                else " (no controller here estimates the payload: no target to judge)"
+                else ": no controller here estimates the payload, no target to judge"
             )
         )
         if info.get("com_axes") is not None:
@@ -258,7 +275,7 @@ def _com_information_line(c: dict, i: int, seg: dict, info: dict, estimators: li
     estimates the payload (``estimators``; "never" where its median trajectory never learns it)."""
     com = {n: x["segments"][i].get("com_learning_time") for n, x in c.items()}
     lim = info["com_known"]
-    lim_s = f"{1e3 * lim:.0f} ms" if lim is not None else "beyond the window"
+    lim_s = f"{1e3 * lim:.0f} ms" if lim is not None else "not within the segment"
     took_s = [
         f"{n} {'never' if t is None else f'{1e3 * t:.0f} ms'}" for n, t in com.items() if n in estimators
     ]

@@ -30,6 +30,7 @@ LIMITS = {
     "max_damping": 10.0,
     "max_mass": 50.0,  # kg
     "max_radius": 0.5,  # m
+    "max_com": 2.0,  # m, a payload's centre of mass from its frame (as far as the longest link)
     "max_angle": 10.0,  # rad, |offset| + sum |amplitude|
     "max_phase": 100.0,  # rad
     "max_terms": 50,

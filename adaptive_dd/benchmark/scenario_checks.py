@@ -347,14 +347,20 @@ def _plain(e: list, key: str, x: Any) -> None:
         e.append(f"{key}: must be a plain value (number, string, boolean, list, table), got {_short(x)}")
 
 
+_WITH = (
+    "; set a controller's table with adaptive_dd.benchmark.scenario_settings.with_settings(scenario, "
+    "name, {...})"
+)
+
+
 def _check_options(e: list, opts: Any, ctrls: tuple) -> None:
     if not isinstance(opts, tuple):
-        e.append(f"controllers: options must be a tuple of (name, settings), got {_short(opts)}")
+        e.append(f"controllers: options must be a tuple of (name, settings), got {_short(opts)}" + _WITH)
         return
     names = set(ctrls) | {table_name(c) for c in ctrls}
     for item in opts:
         if not (isinstance(item, tuple) and len(item) == 2 and isinstance(item[1], _Table)):
-            e.append(f"controllers: each entry must be (name, frozen table), got {_short(item)}")
+            e.append(f"controllers: each entry must be (name, frozen table), got {_short(item)}" + _WITH)
             continue
         name, table = item
         if ctrls and name not in names:
@@ -464,6 +470,7 @@ def _payload_fields(e: list, items: list, v: dict, defaulted: set, arm: Any = No
                 (coms if key == "com" else inertias).append(None)
                 continue
             x = p[key]
+            ok = False  # an entry refused here is not checked again as the Scenario's swap_com/inertia
             if arm is not None and not _general(arm):
                 e.append(
                     f"payload[{i}].{key}: the two-link arm's payload is a disk at the tip (mass, radius); "
@@ -481,7 +488,14 @@ def _payload_fields(e: list, items: list, v: dict, defaulted: set, arm: Any = No
                 )
             ):
                 e.append(f"payload[{i}].{key}: must be a list of {size} finite numbers, got {_short(x)}")
-            (coms if key == "com" else inertias).append(freeze(x))
+            elif key == "com" and math.hypot(*x) > LIMITS["max_com"]:
+                e.append(
+                    f"payload[{i}].com: {_short(x)} is {math.hypot(*x):.4g} m from the payload frame, beyond "
+                    f"{LIMITS['max_com']:g} m: give it in metres (40 mm is 0.04)"
+                )
+            else:
+                ok = True
+            (coms if key == "com" else inertias).append(freeze(x) if ok else None)
         if inertias[-1] is not None and isinstance(inertias[-1], tuple) and len(inertias[-1]) == 6:
             try:
                 payload_parameters(1.0, None, inertias[-1])

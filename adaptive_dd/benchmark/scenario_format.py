@@ -45,6 +45,8 @@ def format_scenario(sc: Scenario) -> str:
         if mark and name.endswith("_variance"):  # a URDF arm's, or a shipped robot's data sheet's
             mark = "   (default: the arm's sensors)"
         lines.append(f"{key} = {_show(getattr(sc, name))}{mark}")
+        if name == "payload_radius" and sc.closed_forms is None and sc.swap_times:
+            lines += _payload_bodies(sc)
     ref = sc.reference
     mark = "   (default)" if "reference" in sc.defaulted else ""
     lines.append(f"reference.ramp = {ref.ramp!r}{mark}")
@@ -63,6 +65,18 @@ def format_scenario(sc: Scenario) -> str:
     )
     lines.append(f"# segments: {segs}")
     return "\n".join(lines)
+
+
+def _payload_bodies(sc: Scenario) -> list[str]:
+    """Each payload's centre of mass and inertia on a URDF arm (None where the default holds)."""
+    n = len(sc.swap_times)
+    com = [None if c is None else tuple(c) for c in (sc.swap_com or (None,) * n)]
+    inertia = [None if c is None else tuple(c) for c in (sc.swap_inertia or (None,) * n)]
+    return [
+        f"payload.com = {com!r}   (None: the payload frame's origin) [m]",
+        f"payload.inertia = {inertia!r}   (None: a disk of payload.radius about the payload frame's z "
+        "axis) [kg m^2]",
+    ]
 
 
 def _plant_lines(sc: Scenario) -> list[str]:

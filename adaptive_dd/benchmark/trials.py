@@ -68,6 +68,7 @@ def new_run(
         sigma_end=np.full((S, n_seg, 7), np.nan) if adaptive else None,
         failed=np.zeros(S, dtype=bool),
         failed_at=np.full(S, -1),
+        failed_cmd=np.full(S, -1),
         floor=declared(ctrl, "floor"),
         q=np.zeros((K, N, 2)),
         qd=np.zeros((K, N, 2)),

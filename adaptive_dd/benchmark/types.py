@@ -49,6 +49,8 @@ class ControllerRun:
     sigma_end : ndarray (n_seeds, n_segments, 7) or None
         Estimate at the last sample of each segment (controllers with an estimate).
     failed : bool (n_seeds,); failed_at : sample index or -1
+    failed_cmd : int (n_seeds,) or None
+        The joint (from 0) whose command was not finite at the failed sample, or -1.
     error : message if the controller raised, else ""
     alarm_times : per trial, the times [s] a change detector fired (or None)
     floor : name of the controller this one is measured against (or None)
@@ -95,11 +97,13 @@ class ControllerRun:
     dropped: NDArray[np.int_] | None = None
     skipped: NDArray[np.int_] | None = None
     failed_why: dict = field(default_factory=dict)
+    failed_cmd: NDArray[np.int_] | None = None
 
     def explain_failures(self, max_error: float, max_speed: float) -> None:
         """Say why every failed trial without a reason yet failed: the controller's error, else
         from the error norm at the failed sample (the divergence rule's tracking error), else the
-        runaway rule. The Python path names a non-finite command itself, as it happens."""
+        runaway rule. A non-finite command is named with its joint (the Python path names it,
+        with its value, as it happens)."""
         for i in np.flatnonzero(self.failed):
             i = int(i)
             if i in self.failed_why:
@@ -109,13 +113,16 @@ class ControllerRun:
                 self.failed_why[i] = self.error or "the controller failed"
                 continue
             e = float(self.e_norm[i, k]) if k < self.e_norm.shape[1] else float("nan")
-            if e > max_error:
+            joint = -1 if self.failed_cmd is None else int(self.failed_cmd[i])
+            if joint >= 0:
+                self.failed_why[i] = f"non-finite torque command (joint {joint + 1})"
+            elif e > max_error:
                 self.failed_why[i] = f"tracking error |e| = {e:.3g} rad, beyond max_error = {max_error:g} rad"
             else:
                 at = f"|e| = {e:.3g} rad, within max_error" if np.isfinite(e) else "|e| not finite"
                 self.failed_why[i] = (
-                    f"runaway: the arm's state became non-finite or a joint exceeded {max_speed:g} rad/s, "
-                    f"or the command was not finite ({at})"
+                    "runaway: the arm's state became non-finite or a joint exceeded "
+                    f"{max_speed:g} rad/s ({at})"
                 )
 
     def failures(self, sample_period: float, seed_indices=None) -> list[dict]:

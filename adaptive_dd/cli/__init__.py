@@ -116,6 +116,18 @@ def main(argv: list[str] | None = None) -> int:
         return EXIT_INTERNAL
 
 
+def _show_warning(message, category, filename, lineno, file=None, line=None) -> None:
+    """The command's own warnings (a category of this package: a URDF's unusual value) on one line,
+    ``adaptive-dd: warning: ...``, without Python's source line; any other as Python shows it."""
+    if category.__module__.startswith("adaptive_dd"):
+        print(f"adaptive-dd: warning: {message}", file=sys.stderr if file is None else file)
+    else:
+        _SHOW_WARNING(message, category, filename, lineno, file, line)
+
+
+_SHOW_WARNING = __import__("warnings").showwarning
+
+
 def console() -> None:
     """The ``adaptive-dd`` command: :func:`main`, then the process ends without tearing down
     its modules.
@@ -129,7 +141,9 @@ def console() -> None:
     import atexit
     import os
     import threading
+    import warnings
 
+    warnings.showwarning = _show_warning
     code = main()
     for t in threading.enumerate():
         if t is not threading.main_thread() and not t.daemon:

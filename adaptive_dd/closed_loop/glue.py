@@ -226,7 +226,7 @@ def accumulate_sample(
 @njit(cache=True, inline="always")
 def apply_sample(
     T, max_error, max_speed, q_d, lim, lsb, saturate, quantize_dac, pl, pw,
-    q, qd, stuck, failed, failed_at, q_rec, qd_rec, tau_rec, sat_rec, i, k, cmd, tau, e, prev, s,
+    q, qd, stuck, failed, failed_at, failed_cmd, q_rec, qd_rec, tau_rec, sat_rec, i, k, cmd, tau, e, prev, s,
 ):  # pragma: no cover - compiled  # fmt: skip
     """Step 3 of the module docstring for trial i at sample k (segment s): ``cmd (n,)`` [N m]
     (zeroed in place when the divergence rule applies), the applied torque into ``tau (n,)``.
@@ -245,9 +245,14 @@ def apply_sample(
     """
     n = cmd.shape[0]
     bad = False
+    non_finite = -1  # the first joint whose command is not finite
     for j in range(n):
         e[j] = q_d[k, j] - q[i, j]
-        if not np.isfinite(cmd[j]) or abs(e[j]) > max_error:
+        if not np.isfinite(cmd[j]):
+            bad = True
+            if non_finite < 0:
+                non_finite = j
+        elif abs(e[j]) > max_error:
             bad = True
     if bad:
         for j in range(n):
@@ -270,6 +275,7 @@ def apply_sample(
     if bad or not ok or failed[i]:
         if not failed[i]:
             failed_at[i] = k
+            failed_cmd[i] = non_finite
         failed[i] = True
         for j in range(n):
             q[i, j] = prev[j] if np.isfinite(prev[j]) else 0.0
@@ -319,7 +325,7 @@ def trial_samples(
     lim, lsb, saturate, quantize_dac = io.lim, io.lsb, io.saturate, io.quantize_dac
     res, std, quantize_encoder = io.res, io.std, io.quantize_encoder
     q, qd, stuck, failed, failed_at = ts.q, ts.qd, ts.stuck, ts.failed, ts.failed_at
-    held_q, held_qd, n_dropped = ts.held_q, ts.held_qd, ts.n_dropped
+    held_q, held_qd, n_dropped, failed_cmd = ts.held_q, ts.held_qd, ts.n_dropped, ts.failed_cmd
     sum_e2, sum_e2_joint, max_e, sum_tau2 = acc.sum_e2, acc.sum_e2_joint, acc.max_e, acc.sum_tau2
     n_saturated, sum_e2_settled, e_norm = acc.n_saturated, acc.sum_e2_settled, acc.e_norm
     first_saturated = acc.first_saturated
@@ -347,7 +353,8 @@ def trial_samples(
         law_command(law, ls, pl, i, s_law, T, qm, qdm, q_d[k], qd_d[k], qdd_d[k], lw, cmd)
         mask = apply_sample(
             T, max_error, max_speed, q_d, lim, lsb, saturate, quantize_dac, pl, pw,
-            q, qd, stuck, failed, failed_at, q_rec, qd_rec, tau_rec, sat_rec, i, k, cmd, tau, e, prev, s,
+            q, qd, stuck, failed, failed_at, failed_cmd, q_rec, qd_rec, tau_rec, sat_rec, i, k, cmd, tau, e,
+            prev, s,
         )  # fmt: skip
         accumulate_sample(
             sum_e2, sum_e2_joint, max_e, sum_tau2, n_saturated, first_saturated, sum_e2_settled, e_norm,
@@ -496,8 +503,8 @@ def _apply_loop(rc, io, pl, ts, acc, rec, k, cmd, tau):  # pragma: no cover - co
     for i in range(cmd.shape[0]):
         mask = apply_sample(
             rc.T, rc.max_error, rc.max_speed, rc.q_d, io.lim, io.lsb, io.saturate,
-            io.quantize_dac, pl, pw, ts.q, ts.qd, ts.stuck, ts.failed, ts.failed_at, rec.q, rec.qd,
-            rec.tau, rec.saturated, i, k, cmd[i], tau[i], e, prev, s,
+            io.quantize_dac, pl, pw, ts.q, ts.qd, ts.stuck, ts.failed, ts.failed_at, ts.failed_cmd, rec.q,
+            rec.qd, rec.tau, rec.saturated, i, k, cmd[i], tau[i], e, prev, s,
         )  # fmt: skip
         accumulate_sample(
             acc.sum_e2, acc.sum_e2_joint, acc.max_e, acc.sum_tau2, acc.n_saturated, acc.first_saturated,

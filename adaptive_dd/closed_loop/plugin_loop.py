@@ -114,7 +114,7 @@ def _plugin_trial(
     lim, lsb, saturate, quantize_dac = io.lim, io.lsb, io.saturate, io.quantize_dac
     res, std, quantize_encoder = io.res, io.std, io.quantize_encoder
     q, qd, stuck, failed, failed_at = ts.q, ts.qd, ts.stuck, ts.failed, ts.failed_at
-    held_q, held_qd, n_dropped = ts.held_q, ts.held_qd, ts.n_dropped
+    held_q, held_qd, n_dropped, failed_cmd = ts.held_q, ts.held_qd, ts.n_dropped, ts.failed_cmd
     sum_e2, sum_e2_joint, max_e, sum_tau2 = acc.sum_e2, acc.sum_e2_joint, acc.max_e, acc.sum_tau2
     n_saturated, sum_e2_settled, e_norm = acc.n_saturated, acc.sum_e2_settled, acc.e_norm
     first_saturated = acc.first_saturated
@@ -149,7 +149,8 @@ def _plugin_trial(
         command(p, xi, qm, qdm, q_d[k], qd_d[k], qdd_d[k], (g, m, c, with_model(kin, pi)), cmd)
         mask = _apply_chain(
             T, max_error, max_speed, q_d, lim, lsb, saturate, quantize_dac, pl, pw,
-            q, qd, stuck, failed, failed_at, q_rec, qd_rec, tau_rec, sat_rec, i, k, cmd, tau, e, prev, s,
+            q, qd, stuck, failed, failed_at, failed_cmd, q_rec, qd_rec, tau_rec, sat_rec, i, k, cmd, tau, e,
+            prev, s,
         )  # fmt: skip
         accumulate_sample(
             sum_e2, sum_e2_joint, max_e, sum_tau2, n_saturated, first_saturated, sum_e2_settled, e_norm,

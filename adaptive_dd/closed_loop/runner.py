@@ -56,7 +56,13 @@ from adaptive_dd.closed_loop.types import (
     true_models,
 )
 from adaptive_dd.controllers.base import declared
-from adaptive_dd.controllers.plugins import PythonForm, compiled_form, is_compiled, slow_path_note
+from adaptive_dd.controllers.plugins import (
+    BOUNDS_HINT,
+    PythonForm,
+    compiled_form,
+    is_compiled,
+    slow_path_note,
+)
 
 __all__ = [
     "CHUNK",
@@ -171,11 +177,20 @@ def run_closed_loop(
         else:
             runner = _run_python
             if not (builtin or isinstance(ctrl, PythonForm)):  # a plain-Python one: say once why it is slow
-                print(slow_path_note(name, ctrl), file=sys.stderr, flush=True)
+                _say(bar, slow_path_note(name, ctrl))
         res.runs[name] = runner(name, ctrl, scenario, idx, rc, io, pl, keep_trajectories, bar, noise)
         if on_run is not None:
             on_run(res, res.runs[name])
     return res
+
+
+def _say(bar, line: str) -> None:
+    """Print ``line`` on stderr on a line of its own, the progress bar (if any) cleared first."""
+    if bar is not None:
+        bar.clear()
+    print(line, file=sys.stderr, flush=True)
+    if bar is not None:
+        bar.refresh()
 
 
 # ------------------------------------------------------------------------ shared set-up
@@ -191,7 +206,7 @@ def _records(
     q = np.broadcast_to(rc.q_d[0], (S, n)).copy()
     qd = np.broadcast_to(rc.qd_d[0], (S, n)).copy()
     z = np.zeros(S, dtype=np.int64)
-    ts = TrialState(q, qd, qd == 0.0, np.zeros(S, np.bool_), z - 1, q.copy(), qd.copy(), z.copy())
+    ts = TrialState(q, qd, qd == 0.0, np.zeros(S, np.bool_), z - 1, q.copy(), qd.copy(), z.copy(), z - 1)
     acc = StreamedSums.zeros(S, G, n, N)
     rec = Recording(
         np.zeros((K, N, n)), np.zeros((K, N, n)), np.zeros((K, N, n)), np.zeros((K, N, n), np.bool_),
@@ -199,9 +214,9 @@ def _records(
     )  # fmt: skip
     run = ControllerRun(
         name=name, acc=acc, e_norm=acc.e_norm, sigma_end=rec.sigma_end if estimates else None,
-        failed=ts.failed, failed_at=ts.failed_at, floor=declared(ctrl, "floor"), q=rec.q, qd=rec.qd,
-        tau=rec.tau, saturated=rec.saturated, sigma_hat=rec.sigma if estimates and K else None,
-        engine=engine, dropped=ts.n_dropped,
+        failed=ts.failed, failed_at=ts.failed_at, failed_cmd=ts.failed_cmd, floor=declared(ctrl, "floor"),
+        q=rec.q, qd=rec.qd, tau=rec.tau, saturated=rec.saturated,
+        sigma_hat=rec.sigma if estimates and K else None, engine=engine, dropped=ts.n_dropped,
     )  # fmt: skip
     return run, ts, acc, rec
 
@@ -275,18 +290,19 @@ def _run_plugin(name, ctrl, scenario, idx, rc, io, pl, keep, bar, noise=None) ->
                 if bar is not None:  # no progress bar (nor its estimate) while it compiles
                     bar.clear()
                 in_threads(plugin_block, 0, args)
-                if bar is not None:
-                    bar.refresh()
-                if len(plugin_block.overloads) > known:
+                if len(plugin_block.overloads) > known:  # said before the bar comes back, not inside it
                     spent = time.perf_counter() - t0
                     print(
                         f"{name}: compiled the plug-in into the closed loop in {spent:.1f} s", file=sys.stderr
                     )
+                if bar is not None:
+                    bar.refresh()
             in_threads(plugin_block, S, args)
             if bar is not None:
                 bar.update(k1 - k0)
     except Exception as exc:  # contain any plug-in failure to its own trials
-        run.error = f"{type(exc).__name__} in the compiled plug-in: {exc}"
+        hint = f" ({BOUNDS_HINT})" if isinstance(exc, IndexError) else ""
+        run.error = f"{type(exc).__name__} in the compiled plug-in: {exc}{hint}"
         run.failed[:] = True
     if getattr(ctrl, "has_detector", False):
         run.alarm_times = alarm_lists(alarms)

@@ -137,7 +137,8 @@ class TrialState(NamedTuple):
 
     ``q, qd (S, n)`` true state; ``stuck (S, n)`` stick-slip flags; ``failed (S,)``,
     ``failed_at (S,)`` (sample or -1); ``held_q, held_qd (S, n)`` last good measurement
-    (dropouts); ``n_dropped (S,)``.
+    (dropouts); ``n_dropped (S,)``; ``failed_cmd (S,)`` the joint (from 0) whose command was not
+    finite at the failed sample, or -1 (the failure had another cause, or none yet).
     """
 
     q: Array
@@ -148,6 +149,7 @@ class TrialState(NamedTuple):
     held_q: Array
     held_qd: Array
     n_dropped: NDArray[np.int64]
+    failed_cmd: NDArray[np.int64]
 
 
 class StreamedSums(NamedTuple):

@@ -177,29 +177,25 @@ class Controller:
     def command(
         self, q: Array, qd: Array, q_d: Array, qd_d: Array, qdd_d: Array, sigma_true: Array | None = None
     ) -> Array:
-        """Torque command ``(n_trials, 2)`` [N m] at this sample.
+        """Torque command ``(n_trials, n)`` [N m] at this sample, ``n`` the arm's joints.
 
-        ``sigma_true (n_trials, 7)`` is the true model; only the oracle may use it.
+        ``sigma_true (n_trials, p)`` is the true model's ``p`` base parameters (``arm.sigma``'s
+        order); only an oracle (``needs_true_model``) is given it.
         """
         raise NotImplementedError
 
     def observe(self, q: Array, qd: Array, tau: Array) -> None:
         """The measured state and the torque applied over this sample (after saturation)."""
 
-    @property
-    def sigma_hat(self) -> Array | None:
-        """Current estimate of sigma ``(n_trials, 7)``, or None for fixed-model controllers."""
-        return None
-
-    @property
-    def skipped_samples(self):
-        """Per trial, samples its estimator skipped as non-finite (sensor dropouts); None if none."""
-        return None
-
-    @property
-    def alarm_times(self) -> list[list[float]] | None:
-        """Per trial, the times [s] a change detector raised an alarm; None without a detector."""
-        return None
+    # Plain attributes, not read-only properties: a subclass sets them (``self.sigma_hat = ...``
+    # in ``reset`` or ``observe``) or defines a property of its own over them.
+    sigma_hat: Array | None = None
+    """Current estimate of the base parameters ``(n_trials, p)`` (``arm.sigma``'s order), or None
+    for a fixed-model controller."""
+    skipped_samples = None
+    """Per trial, samples its estimator skipped as non-finite (sensor dropouts); None if none."""
+    alarm_times: list[list[float]] | None = None
+    """Per trial, the times [s] a change detector raised an alarm; None without a detector."""
 
     @property
     def adaptive(self) -> bool:

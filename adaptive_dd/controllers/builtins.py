@@ -91,13 +91,15 @@ class Setting:
     :class:`~adaptive_dd.plant.arm.Arm`: a value (filled in when the table leaves the key out), None
     (the value is derived, as ``meaning`` says), or :data:`ABSENT` (not a setting on that arm:
     giving it is an error quoting ``rule``). ``rule`` says why the defaults differ, or why one
-    arm lacks the setting."""
+    arm lacks the setting. ``scenario_key`` False: derived from the scenario, set in code only
+    (:data:`adaptive_dd.benchmark.scenario_settings.DERIVED` says from what)."""
 
     meaning: str
     two_link: Any = None
     chain: Any = None
     rule: str = ""
     unit: str = ""
+    scenario_key: bool = True
 
     def default(self, kind: str) -> Any:
         return self.two_link if kind == "two_link" else self.chain
@@ -229,6 +231,7 @@ _BOOST = {
         "not a scenario key (derived from the arm and the scenario: "
         "adaptive_dd.benchmark.scenario_settings), an option of make_controller",
         rule="two estimators: the paper's sigma with its splits; the payload's ten parameters",
+        scenario_key=False,
     ),
     "detector": Setting(
         "the change detector's settings (ChangeDetector on the two-link arm, Detector on an N-joint "
@@ -236,6 +239,7 @@ _BOOST = {
         "not a scenario key (derived from the arm and the scenario: "
         "adaptive_dd.benchmark.scenario_settings), an option of make_controller",
         rule="two detectors: GLR with persistence on sigma; a gate with a fast window on the payload",
+        scenario_key=False,
     ),
 }
 _GAMMA_RULE = (

@@ -23,6 +23,7 @@ from adaptive_dd.controllers.base import Controller, Gains
 from adaptive_dd.errors import ParameterError
 
 __all__ = [
+    "BOUNDS_HINT",
     "COMMON",
     "PLUGIN_GIVEN",
     "PluginForm",
@@ -139,7 +140,7 @@ def plugin_controller(spec: str, gains, options: dict, arm, scenario=None, searc
     try:
         g = Gains(options.get("bandwidth", gains.bandwidth), options.get("damping", gains.damping))
     except ParameterError as exc:
-        raise ParameterError(f"controllers.{spec}: {exc}") from None
+        raise ParameterError(f"controllers.{table_name(spec)}: {exc}") from None
     given = {"sigma_nominal": arm.sigma, "arm": arm, "scenario": scenario}
     return _plugin(spec, g, options, given, search)
 
@@ -154,7 +155,8 @@ def _plugin(spec: str, g: Gains, options: dict, given: dict, search: tuple) -> C
     clash = sorted(set(kw) & set(PLUGIN_GIVEN))
     if clash:
         raise ParameterError(
-            f"controllers.{spec}: {clash} are given by the runner, not settings (remove them from the table)"
+            f"controllers.{table_name(spec)}: {clash} are given by the runner, not settings (remove them "
+            "from the table)"
         )
     if not takes_any:
         unknown_settings(spec, kw, set(params) - set(PLUGIN_GIVEN))
@@ -164,7 +166,7 @@ def _plugin(spec: str, g: Gains, options: dict, given: dict, search: tuple) -> C
     try:
         ctrl = cls(**kw)
     except (TypeError, ValueError) as exc:
-        raise ParameterError(f"controllers.{spec}: {type(exc).__name__}: {exc}") from None
+        raise ParameterError(f"controllers.{table_name(spec)}: {type(exc).__name__}: {exc}") from None
     if not getattr(ctrl, "name", None) or ctrl.name == Controller.name:  # none declared: the class name
         ctrl.name = controller_label(spec)
     if given.get("arm") is not None and is_compiled(ctrl):
@@ -231,6 +233,7 @@ def compiled_form(name: str, ctrl, n_trials: int, sample_period: float) -> Plugi
         An unknown need, a ``state_size`` that is not an integer >= 0, an ``estimate`` that is
         not compiled, ``parameters`` that raise.
     """
+    from numba import typeof
     from numba.core.dispatcher import Dispatcher
 
     from adaptive_dd.closed_loop.plugin_loop import NEEDS, no_estimate
@@ -258,14 +261,51 @@ def compiled_form(name: str, ctrl, n_trials: int, sample_period: float) -> Plugi
         raise ParameterError(
             f"{where}: parameters({sample_period}) raised {type(exc).__name__}: {exc}"
         ) from None
+    try:
+        typeof(params)
+    except (ValueError, TypeError) as exc:  # numba would fail every trial with a page of typing errors
+        raise ParameterError(
+            f"{where}: parameters({sample_period}) returned a {type(params).__name__}, which numba "
+            f"cannot compile ({exc}); return a tuple of arrays and numbers (docs/controllers.md, "
+            "'Compiled plug-ins')"
+        ) from None
     need = 0
     for x in needs:
         need |= NEEDS[x]
     state = np.zeros((int(n_trials), max(int(size), 1)))
-    functions = (ctrl.reset, ctrl.command, ctrl.observe, est if est is not None else no_estimate)
+    checked = tuple(_bounds_checked(f) for f in (ctrl.reset, ctrl.command, ctrl.observe))
+    functions = (*checked, _bounds_checked(est) if est is not None else no_estimate)
     return PluginForm(
         params, need, state, functions, est is not None, bool(getattr(ctrl, "needs_true_model", False))
     )
+
+
+BOUNDS_HINT = (
+    "an index beyond an array the loop hands the plug-in: its state x has state_size floats per trial "
+    "(declare state_size as large as reset, command and observe use), q, qd, tau and the reference n, "
+    "sigma p (docs/controllers.md, 'Compiled plug-ins')"
+)
+"""What an ``IndexError`` inside a compiled plug-in's functions most likely means (the run's message)."""
+
+
+def _bounds_checked(f):
+    """A plug-in's ``njit`` function compiled again with numba's bounds checking on (its other
+    options kept, its cache off): numba checks no index by default, so a plug-in that writes past
+    its state (a ``state_size`` too small) would write into the next trial's state, and its
+    results would change from run to run without an error. Checked, such an index raises an
+    ``IndexError``, which fails the plug-in's trials with :data:`BOUNDS_HINT`. A function that
+    already checks its bounds is kept as it is; the checked one is made once per function and kept
+    on it (the loop compiled for it is found again: numba keys it by the function object)."""
+    from numba import njit
+
+    options = {k: v for k, v in f.targetoptions.items() if k not in ("cache", "nopython")}
+    if options.get("boundscheck"):
+        return f
+    checked = getattr(f, "_adaptive_dd_bounds_checked", None)
+    if checked is None:
+        checked = njit(**{**options, "boundscheck": True})(f.py_func)
+        f._adaptive_dd_bounds_checked = checked
+    return checked
 
 
 def slow_path_note(name: str, ctrl) -> str:

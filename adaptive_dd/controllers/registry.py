@@ -198,9 +198,11 @@ def _check_settings(spec: str, o: dict, entry: Builtin, kind: str, arm) -> None:
     if bad:
         takes = [name for name, e in CONTROLLERS.items() if bad[0] in e.settings and name != spec]
         hint = f"; '{bad[0]}' is a setting of {', '.join(takes)}" if takes else ""
-        raise ParameterError(
-            f"controllers.{spec}: unknown setting(s) {bad}; allowed: {sorted(set(here) | COMMON)}{hint}"
-        )
+        derived = sorted(k for k in here if not entry.settings[k].scenario_key)
+        allowed = sorted((set(here) | COMMON) - set(derived))
+        if derived:  # settings of make_controller that a scenario file may not set
+            hint += f" ({derived}: derived from the scenario, set in code only: make_controller's options)"
+        raise ParameterError(f"controllers.{spec}: unknown setting(s) {bad}; allowed: {allowed}{hint}")
 
 
 def _detector_at_the_top(spec: str, o: dict) -> dict:

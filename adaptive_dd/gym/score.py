@@ -66,20 +66,21 @@ class Evaluation:
             return self.rms_error / self.floor_rms_error
 
     def summary(self) -> list[dict]:
-        """Per segment: ``start, end, mass``, the mean RMS error [rad], the tool frame's mean
-        errors (None where every trial failed) and the ratio's statistics
-        (:func:`~adaptive_dd.benchmark.metrics.ratio_statistics`: mean, median, p90, max, ci95,
-        worst_seed, n)."""
+        """Per segment: ``start_s, end_s, mass_kg``, the mean RMS error ``rms_error_rad``, the tool
+        frame's mean errors ``ee_position_rms_mm``, ``ee_orientation_rms_deg`` (None where every
+        trial failed; the units in the names, as :meth:`to_frame`'s columns) and the ratio's
+        statistics ``ratio_to_floor`` (:func:`~adaptive_dd.benchmark.metrics.ratio_statistics`:
+        mean, median, p90, max, ci95, worst_seed, n)."""
         from adaptive_dd.benchmark.metrics import ratio_statistics
 
         out = []
         r = self.ratio_to_floor
         for s, (a, b, m) in enumerate(self.segments):
             out.append({
-                "start": a, "end": b, "mass": m,
-                "rms_error": _mean(self.rms_error[:, s]),
-                "ee_position_rms": _mean(self.ee_position_rms[:, s]),
-                "ee_orientation_rms": _mean(self.ee_orientation_rms[:, s]),
+                "start_s": a, "end_s": b, "mass_kg": m,
+                "rms_error_rad": _mean(self.rms_error[:, s]),
+                "ee_position_rms_mm": _mean(self.ee_position_rms[:, s]),
+                "ee_orientation_rms_deg": _mean(self.ee_orientation_rms[:, s]),
                 "ratio_to_floor": ratio_statistics(r[:, s], self.seeds),
             })  # fmt: skip
         return out

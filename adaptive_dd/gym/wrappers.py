@@ -39,10 +39,13 @@ class ResidualTorque(gymnasium.Wrapper):
     def __init__(self, env: gymnasium.Env, base: str = "adaptive_ct") -> None:
         super().__init__(env)
         from adaptive_dd.controllers.base import declared
+        from adaptive_dd.controllers.plugins import PythonForm, is_compiled
         from adaptive_dd.controllers.registry import scenario_controller
 
         sc = env.unwrapped.scenario
         self.base_name, self.base = scenario_controller(sc, base)
+        if is_compiled(self.base):  # its njit functions called per sample, as engine="python" runs it
+            self.base = PythonForm(self.base_name, self.base, sc.arm, "the base of a ResidualTorque wrapper")
         if declared(self.base, "needs_true_model"):
             raise ParameterError(
                 f"ResidualTorque: base {base!r} is given the true model (an oracle); the observation "

@@ -40,7 +40,8 @@ MEANING = {
     "`adaptive_dd.benchmark.cartesian_reference`.",
     "payload.at": "Time of the swap [s] (one `[[payload]]` table per swap).",
     "payload.mass": "Payload mass carried from then on [kg].",
-    "payload.radius": "Two-link arm: radius of the tip disk [m] (its inertia).",
+    "payload.radius": "Radius of the payload disk [m]: its inertia where `inertia` is not given (a disk "
+    "about the payload frame's z axis; on the two-link arm at the tip).",
     "payload.com": "URDF arm: payload centre of mass in the payload frame [m], 3 numbers.",
     "payload.inertia": "URDF arm: payload inertia about its centre of mass, `[Ixx,"
     " Iyy, Izz, Ixy, Ixz, Iyz]` or a 3 x 3 matrix [kg m^2] (a rigid body's: principal moments"

@@ -66,8 +66,8 @@ for j, (name, ev) in enumerate(runs.items()):
     ax2.bar(x, np.nanmean(ev.ee_position_rms, axis=0), width, label=name)
     for s, row in enumerate(ev.summary()):
         print(
-            f"{name:24s} segment {s} ({row['mass']:g} kg): ratio to the floor "
-            f"{row['ratio_to_floor']['mean']:.3f}, tool frame {row['ee_position_rms']:.3f} mm RMS"
+            f"{name:24s} segment {s} ({row['mass_kg']:g} kg): ratio to the floor "
+            f"{row['ratio_to_floor']['mean']:.3f}, tool frame {row['ee_position_rms_mm']:.3f} mm RMS"
         )
 labels = [f"{a:g}-{b:g} s\n{m:g} kg" for a, b, m in sc.segments()]
 for ax, title in ((ax1, "RMS error / floor's"), (ax2, "tool frame RMS error [mm]")):
