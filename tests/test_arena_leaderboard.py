@@ -105,6 +105,11 @@ def test_leaderboard_command_writes_the_table_the_json_and_the_figure(tmp_path, 
     doc = json.loads((out / "leaderboard.json").read_text(encoding="utf-8"))
     assert doc["columns"]["rms_torque_Nm"]["unit"] == "N m" and len(doc["rows"]) == len(df)
     assert (out / "leaderboard.png").stat().st_size > 1000
+    from adaptive_dd.arena.latex import latex_table
+    from adaptive_dd.arena.page import read_table
+
+    tex = (out / "leaderboard.tex").read_text(encoding="utf-8")  # the paper's table, of the CSV's figures
+    assert tex == latex_table(read_table(out / "leaderboard.csv")) and "\\texttt{sliding\\_mode}" in tex
     assert "pd_gravity_oracle" in capsys.readouterr().out
 
 

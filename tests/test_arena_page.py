@@ -170,3 +170,32 @@ def test_the_nominal_inertia_of_an_arm_with_an_unbounded_joint_warns_nothing():
     bounded = dataclasses.replace(arm, position_limits=np.where(unbounded[:, None], [-1.0, 3.0], lim))
     mid[unbounded] = 1.0  # the middle of (-1, 3)
     np.testing.assert_allclose(bounded.nominal_inertia(), np.diag(arm.mass_matrix(mid)), rtol=1e-9)
+
+
+def test_the_committed_latex_table_is_what_the_committed_table_renders():
+    """docs/leaderboard/leaderboard.tex, the table for a paper: rerun `python tools/leaderboard_page.py`."""
+    from adaptive_dd.arena.latex import latex_table
+
+    tex = (ROOT / CSV).with_suffix(".tex").read_text(encoding="utf-8")
+    assert tex == latex_table(read_table(ROOT / CSV))
+
+
+def test_the_latex_table_holds_the_tables_cells_the_best_in_bold_and_names_escaped():
+    """Each row's cells are the table's mean (p90) of its columns; the lowest RMS error of a column
+    in bold (not the lowest ratio: the floors differ); failures counted; underscores escaped."""
+    from adaptive_dd.arena.latex import latex_table
+
+    df = _table({"ct_oracle": 0.1, "adaptive_ct": 0.12, "sliding_mode": 0.09, "icl": 0.05}, {"icl": 2})
+    df.loc[df["controller"] == "sliding_mode", "floor"] = "slotine_li_oracle"  # a lower ratio, not bold
+    df.loc[df["controller"] == "sliding_mode", "ratio_mean"] = 0.5
+    lines = latex_table(df).splitlines()
+    assert lines[0] == f"% {command_of(df)}"
+    rows = {ln.split(" & ")[0]: ln for ln in lines if ln.startswith("\\texttt")}
+    assert set(rows) == {"\\texttt{adaptive\\_ct}", "\\texttt{sliding\\_mode}", "\\texttt{icl}"}
+    ours = "\\texttt{adaptive\\_ct} & \\texttt{ct\\_oracle} & 1.200 (1.100) \\\\"
+    assert rows["\\texttt{adaptive\\_ct}"] == ours
+    assert rows["\\texttt{sliding\\_mode}"].endswith("& \\textbf{0.500} (1.100) \\\\")  # rms_rank 1
+    assert rows["\\texttt{icl}"].endswith("& 0.500 (1.100) $\\times 2$ \\\\")  # lowest RMS, but failed
+    header = next(ln for ln in lines if ln.startswith("controller & floor"))
+    assert header == "controller & floor & population(1 arms):0 (1.5 kg) \\\\"
+    assert "\\begin{tabular}{llr}" in lines and lines[-1] == "\\end{table}"

@@ -109,8 +109,11 @@ def test_a_non_finite_command_fails_its_trials_not_the_run(example):
     run = run_closed_loop(sc, {"faulty": ctrl}).runs["faulty"]
     assert run.failed.all() and (run.failed_at == 0).all() and not run.error
     assert np.all(np.isfinite(run.acc.sum_e2))  # the trial froze at rest: no NaN in the metrics
-    run.explain_failures(1.0, 100.0)  # the reason names the command and its joint
-    assert set(run.failed_why.values()) == {"non-finite torque command (joint 1)"}
+    run.explain_failures(1.0, 100.0)  # the reason names the command, its joint, the terms not declared
+    assert set(run.failed_why.values()) == {
+        "non-finite torque command (joint 1) (a term it reads without declaring it in needs is NaN: "
+        "mass_matrix, bias)"
+    }
 
 
 def test_the_plain_python_plugin_runs_on_the_slow_path_and_says_so_once(capsys):

@@ -50,7 +50,10 @@ def render(root: Path = ROOT) -> list[Path]:
             path.write_text(new, encoding="utf-8")
             written.append(path)
     plot_ratios(df).savefig(root / FIGURE, dpi=110, metadata={"Software": None})
-    return [*written, root / FIGURE]
+    from adaptive_dd.arena.latex import write_latex
+
+    tex = write_latex(df, (root / CSV).with_suffix(".tex"))
+    return [*written, root / FIGURE, tex]
 
 
 def main(argv: list[str] | None = None) -> int:

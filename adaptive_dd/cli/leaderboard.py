@@ -1,8 +1,9 @@
 """``adaptive-dd leaderboard``: controllers on scenarios, each ranked per seed against its floor.
 
 Writes ``leaderboard.csv`` (one row per scenario, controller and segment), ``leaderboard.json``
-(the rows and every column's unit and meaning) and ``leaderboard.png`` (the mean ratio to the
-floor per controller and scenario segment; the population pooled, not each arm) into ``--out``
+(the rows and every column's unit and meaning), ``leaderboard.png`` (the mean ratio to the
+floor per controller and scenario segment; the population pooled, not each arm) and
+``leaderboard.tex`` (the table for a paper, :mod:`adaptive_dd.arena.latex`) into ``--out``
 (:func:`adaptive_dd.arena.leaderboard`), and prints per scenario segment the controller with the
 lowest RMS error (every controller of a seed meets the same robot and noise), and the seconds
 its runs spent compiling (numba, cold cache) apart from those spent running.
@@ -79,7 +80,7 @@ def add_parser(sub) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    """Run the leaderboard and write its three files."""
+    """Run the leaderboard and write its four files."""
     import numpy as np
 
     from adaptive_dd.arena.leaderboard import COLUMNS, DEFAULT_CONTROLLERS, leaderboard
@@ -125,11 +126,15 @@ def run(args: argparse.Namespace) -> int:
     from adaptive_dd.arena.plot import plot_leaderboard
 
     plot_leaderboard(df[df["kind"] != "arm"]).savefig(png, dpi=120)
+    from adaptive_dd.arena.latex import write_latex
+    from adaptive_dd.arena.page import read_table
+
+    tex = write_latex(read_table(csv), out / "leaderboard.tex")  # the CSV's figures, as the docs render it
     _print(df[df["kind"] != "arm"])
     _print_winners(df[df["kind"] != "arm"])
     _print_alarms(df[df["kind"] != "arm"])
     _print_flags(df.attrs.get("flags", []))
-    for p in (csv, js, png):
+    for p in (csv, js, png, tex):
         print(f"wrote {p}")
     print(
         f"time: {df.attrs['compile_seconds']:.1f} s compiling (numba; the built-ins' cached, 0 when "

@@ -268,7 +268,7 @@ def _run_plugin(name, ctrl, scenario, idx, rc, io, pl, keep, bar, noise=None) ->
     :func:`_run_compiled`. The loop is compiled on its first call (timed and printed apart from
     the run); an exception raised inside it fails the plug-in's trials with the message in
     ``run.error``, as on the Python path; ``noise`` as :func:`_run_compiled`'s."""
-    from adaptive_dd.closed_loop.plugin_loop import plugin_block
+    from adaptive_dd.closed_loop.plugin_loop import NEEDS, plugin_block
 
     S, N, n = len(idx), scenario.n_samples, scenario.n_joints
     form = compiled_form(name, ctrl, S, rc.T)
@@ -307,6 +307,12 @@ def _run_plugin(name, ctrl, scenario, idx, rc, io, pl, keep, bar, noise=None) ->
     if getattr(ctrl, "has_detector", False):
         run.alarm_times = alarm_lists(alarms)
     run.explain_failures(rc.max_error, rc.max_speed)
+    undeclared = [k for k, bit in NEEDS.items() if bit <= 4 and not form.need & bit]
+    if undeclared:  # a term it reads without declaring it is NaN: the likeliest cause of a NaN command
+        hint = f" (a term it reads without declaring it in needs is NaN: {', '.join(undeclared)})"
+        for i, why in run.failed_why.items():
+            if why.startswith("non-finite torque command"):
+                run.failed_why[i] = why + hint
     return run
 
 
