@@ -344,7 +344,8 @@ def plot_joint_errors(res, path: str | Path | None = None, window: float = 0.05,
 
 
 def plot_ratios(frame, path: str | Path | None = None, formats=("png",)):
-    """Per controller and segment: the mean per-seed ratio to the floor with its 95 % interval.
+    """Per controller and segment: the mean per-seed ratio to the floor with its 95 % interval
+    (Student t, the report's ``ci95``).
 
     The benchmark's leaderboard as a figure: one group of markers per payload segment, one marker
     per controller (its colour of :data:`STYLES`), the ratio of its RMS tracking error to its
@@ -381,6 +382,7 @@ def plot_ratios(frame, path: str | Path | None = None, formats=("png",)):
     'RMS error / floor RMS error, per seed [-]'
     """
     import pandas as pd
+    from scipy.special import stdtrit  # Student t's quantile, as ratio_statistics takes it
 
     df = pd.DataFrame(frame)
     df = df[np.isfinite(pd.to_numeric(df["ratio_to_floor"], errors="coerce"))]
@@ -393,7 +395,9 @@ def plot_ratios(frame, path: str | Path | None = None, formats=("png",)):
         stats = sub.groupby("segment")["ratio_to_floor"].agg(["mean", "std", "count"])
         x = np.arange(len(segments)) + (i - (len(names) - 1) / 2) * width
         mean = stats["mean"].reindex(segments["segment"]).to_numpy(dtype=float)
-        half = 1.96 * (stats["std"] / np.sqrt(stats["count"])).reindex(segments["segment"])
+        # the report's interval (ratio_statistics' ci95): Student t, not 1.96, with few seeds
+        t95 = stdtrit(np.maximum(stats["count"] - 1, 1), 0.975).where(stats["count"] > 1)
+        half = (t95 * stats["std"] / np.sqrt(stats["count"])).reindex(segments["segment"])
         half = np.nan_to_num(half.to_numpy(dtype=float))
         style = controller_style(name)
         ax.errorbar(x, mean, yerr=half, fmt="o", ms=4, capsize=3, color=style["color"], label=name)

@@ -45,14 +45,17 @@ What is refused, with the file, line or column and the remedy: a missing column,
 non-numeric or non-finite value (a NaN run: its lines), a time that does not increase (a
 duplicated stamp), a torque channel
 stuck at one value on more than half the window (exclude it), a revolute position whose
-range does not fit the URDF's limits in radians but does in degrees (set ``position_unit``).
+range does not fit the URDF's limits in radians but does in degrees (set ``position_unit``), a
+measured velocity the fit uses whose gain on its position's derivative is outside
+:data:`~adaptive_dd.record_checks.VELOCITY_GAIN` (another unit), a fitted torque beyond
+:data:`~adaptive_dd.record_checks.TORQUE_LIMIT_FACTOR` times the URDF's effort limit (mN m, a gain
+missing): :mod:`adaptive_dd.record_checks`.
 """
 
 from __future__ import annotations
 
 import difflib
 import itertools
-import math
 import re
 from dataclasses import dataclass
 from pathlib import Path
@@ -61,6 +64,12 @@ import numpy as np
 from numpy.typing import NDArray
 
 from adaptive_dd.errors import DataError
+from adaptive_dd.record_checks import (
+    _check_stuck,
+    _check_torque_scale,
+    _check_units,
+    _check_velocity_scale,
+)
 from adaptive_dd.record_pieces import MIN_PIECE_SAMPLES, find_gaps, piece_spans, resampler, trim_gap_edges
 from adaptive_dd.record_spec import RecordSpec, record_spec
 
@@ -68,8 +77,6 @@ __all__ = ["LogRecord", "RecordSpec", "derivatives", "read_log", "record_spec"]
 
 Array = NDArray[np.float64]
 
-STUCK_FRACTION = 0.5
-"""A torque channel holding one value on more than this fraction of the window is refused."""
 DERIVATIVE_WINDOW = 0.1
 """Savitzky-Golay window [s] of derived velocities and accelerations."""
 
@@ -252,9 +259,16 @@ def _window_rows(path: Path, t: Array, window) -> slice:
     lo, hi = (t[0], t[-1]) if window is None else window
     i0, i1 = int(np.searchsorted(t, lo)), int(np.searchsorted(t, hi, side="right"))
     if i1 - i0 < 20:
+        step = float(np.median(np.diff(t))) if t.size > 1 else 0.0
+        unit = (
+            f"; its stamps step by {step:.6g} per sample (median), read as s: if they are in ms, us "
+            'or ns, say so ([record] time_unit = "ms"; the window stays in s)'
+            if step > MAX_LOG_STEP
+            else ""
+        )
         raise DataError(
             f"{path}: the window [{lo:.10g}, {hi:.10g}] s holds {max(i1 - i0, 0)} samples (the log spans "
-            f"{t[0]:.10g}-{t[-1]:.10g} s): need at least 20"
+            f"{t[0]:.10g}-{t[-1]:.10g} s): need at least 20{unit}"
         )
     return slice(i0, i1)
 
@@ -353,6 +367,8 @@ def read_log(spec: RecordSpec, window: tuple[float, float] | None = None, arm=No
         _check_units(spec, where, q, arm)
     q = q * spec.position_scale
     tau = spec.torque_gain * raw_tau + spec.torque_offset
+    if arm is not None:
+        _check_torque_scale(spec, where, tau, arm)
     qd_measured = velocity is not None and not spec.derive_velocity
     bounds = np.cumsum([0] + [g.size for g in grids])
     pieces = list(itertools.pairwise(bounds.tolist()))
@@ -363,6 +379,7 @@ def read_log(spec: RecordSpec, window: tuple[float, float] | None = None, arm=No
         a, b = max(pieces, key=lambda ab: ab[1] - ab[0])
         lag_note = (_velocity_lag(logged[a:b], qd[a:b], T, spec.joint_names, qd_measured),)
         if qd_measured:
+            _check_velocity_scale(spec, where, velocity, logged[a:b], qd[a:b])
             qd = logged
     grid = np.concatenate(grids)
     notes = (
@@ -478,42 +495,6 @@ def _velocity_lag(logged: Array, derived: Array, T: float, names, used: bool) ->
     if used and k > 2:
         text += ': it is filtered; velocity_source = "derived" avoids the lag'
     return text
-
-
-def _check_stuck(spec: RecordSpec, where: dict, raw: Array) -> None:
-    for j in np.flatnonzero(spec.used):
-        col = raw[:, j]
-        vals, counts = np.unique(col, return_counts=True)
-        frac = counts.max() / col.size
-        if frac > STUCK_FRACTION:
-            raise DataError(
-                f"{where[spec.torque[j]]}: column {spec.torque[j]!r} (joint '{spec.joint_names[j]}') holds "
-                f"{vals[np.argmax(counts)]:g} on {100 * frac:.0f}% of the window: a channel that carries no "
-                f'torque; leave it out of the fit (exclude = ["{spec.joint_names[j]}"] in [record])'
-            )
-
-
-def _check_units(spec: RecordSpec, where: dict, q_raw: Array, arm) -> None:
-    lim = arm.position_limits
-    for j in range(q_raw.shape[1]):
-        lo, hi = lim[j]
-        if not (np.isfinite(lo) and np.isfinite(hi)):
-            continue
-        qj = q_raw[:, j] * spec.position_scale[j]
-        slack = 0.1 * (hi - lo) + 0.05
-        if qj.min() >= lo - slack and qj.max() <= hi + slack:
-            continue
-        deg = qj * math.pi / 180.0
-        hint = (
-            '; in degrees it would fit: set position_unit = "deg" in [record]'
-            if deg.min() >= lo - slack and deg.max() <= hi + slack
-            else ""
-        )
-        raise DataError(
-            f"{where[spec.position[j]]}: column {spec.position[j]!r} (joint '{spec.joint_names[j]}') spans "
-            f"[{qj.min():.4g}, {qj.max():.4g}], outside the URDF's limits [{lo:.4g}, {hi:.4g}]{hint}"
-            + ("" if hint else ": check the unit, gear ratio and column of this joint")
-        )
 
 
 def derivatives(q: Array, T: float, window: float = DERIVATIVE_WINDOW) -> tuple[Array, Array]:

@@ -153,6 +153,19 @@ class _ChainTrial:
         return q, qd, self.sigmas[k].copy(), float(self.masses[k]), failed
 
 
+def _scenario_of(who: str, scenario) -> Scenario:
+    """``scenario``, the default one for None; anything else that is not a Scenario (a path) is a
+    :class:`ParameterError` saying how to load one."""
+    if scenario is None:
+        return load_scenario()
+    if not isinstance(scenario, Scenario):
+        raise ParameterError(
+            f"{who}: scenario must be a Scenario, got {type(scenario).__name__} {scenario!r:.80}; load a "
+            "file with adaptive_dd.load_scenario(path)"
+        )
+    return scenario
+
+
 class Simulation:
     """One arm of a scenario (the two-link arm or any arm from a URDF), stepped by the caller
     at the sample rate.
@@ -197,7 +210,7 @@ class Simulation:
     """
 
     def __init__(self, scenario: Scenario | None = None, seed_index: int = 0) -> None:
-        self.scenario = scenario or load_scenario()
+        self.scenario = _scenario_of("Simulation", scenario)
         if isinstance(seed_index, bool) or not isinstance(seed_index, int | np.integer) or seed_index < 0:
             raise ParameterError(
                 f"Simulation: seed_index must be an integer >= 0 (a benchmark trial), got {seed_index!r}"
@@ -343,7 +356,7 @@ def run_trial(controller, scenario: Scenario | None = None, seed_index: int = 0,
     from adaptive_dd.controllers.plugins import check_controller_object
 
     check_controller_object("run_trial", "controller", controller)
-    sc = scenario or load_scenario()
+    sc = _scenario_of("run_trial", scenario)
     label = name or getattr(controller, "name", type(controller).__name__)
     with warnings.catch_warnings():  # the floor's warning speaks of run_benchmark's controllers=: said below
         warnings.filterwarnings("ignore", message=FLOOR_NOT_RUN)

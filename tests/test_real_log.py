@@ -166,6 +166,52 @@ def test_degrees_column_is_named_against_the_urdf_limits(tmp_path):
     assert read_log(spec, arm=arm).q.shape[1] == 3
 
 
+def _qd(t):
+    return np.column_stack([0.39 * np.cos(1.3 * t), -0.35 * np.sin(0.7 * t), 0.105 * np.cos(2.1 * t)])
+
+
+@pytest.mark.parametrize(("logged", "refused"), [("rad/s", True), ("deg/s", False)])
+def test_a_measured_velocity_in_another_unit_than_its_position_is_refused(tmp_path, logged, refused):
+    """Positions in degrees scale the velocity column too: a velocity logged in rad/s beside them
+    was read 57x too small and fitted a friction 50x too large, with a note only."""
+    p1, p2, t, *_ = _write_log(tmp_path, np.random.default_rng(6), deg=True)
+    qd = _qd(t) * (np.array([180 / math.pi, 180 / math.pi, 1.0]) if logged == "deg/s" else 1.0)
+    p3 = tmp_path / "vel.csv"
+    head = "stamp," + ",".join(f"{j}/vel" for j in NAMES)
+    np.savetxt(p3, np.column_stack([t, qd]), delimiter=",", header=head, comments="", fmt="%.12g")
+    table = _table(p1, p2, exclude=["j_c"], position_unit="deg", velocity="{joint}/vel")
+    table["files"].append(str(p3))
+    spec = record_spec(table, NAMES, KINDS, "s")
+    if not refused:
+        assert read_log(spec).qd.shape[1] == 3
+        return
+    with pytest.raises(
+        DataError, match=r"vel.csv: column 'j_a/vel' \(joint 'j_a'\) is 0.0175x the derivative"
+    ):
+        read_log(spec)
+    table["velocity_source"] = "derived"  # the remedy it names
+    assert read_log(record_spec(table, NAMES, KINDS, "s")).qd.shape[1] == 3
+
+
+def test_a_torque_far_beyond_the_urdfs_effort_limit_is_refused_as_a_unit_error(tmp_path):
+    """Torques logged in mN m without a gain were fitted: every parameter held at the URDF's and
+    explained as directions the record cannot see."""
+    p1, p2, *_ = _write_log(tmp_path, np.random.default_rng(7))
+    limits = np.array([[-1.0, 1.0], [-1.5, 1.5], [0.0, 0.4]])
+    spec = record_spec(_table(p1, p2, exclude=["j_c"]), NAMES, KINDS, "s")
+    weak = types.SimpleNamespace(
+        position_limits=limits, actuator=types.SimpleNamespace(torque_limit=[0.05, 5, 5])
+    )
+    with pytest.raises(
+        DataError, match=r"eff.csv: column 'j_a/eff' \(joint 'j_a'\) reaches \|tau\| = 1 N m .* 20x"
+    ):
+        read_log(spec, arm=weak)
+    fine = types.SimpleNamespace(
+        position_limits=limits, actuator=types.SimpleNamespace(torque_limit=[0.5, 5, 0.01])
+    )
+    assert read_log(spec, arm=fine).tau.shape[1] == 3  # within 10x; the excluded channel not judged
+
+
 # ----------------------------------------------------------------------------- vendor URDFs
 def test_vendor_urdf_checks_only_the_chain_and_repairs_on_request():
     from adaptive_dd.plant.urdf import read_urdf, repair_inertia
@@ -614,6 +660,10 @@ def test_a_time_column_in_ms_or_ns_is_said_and_read_with_time_unit(tmp_path, uni
             record_spec(_table(p1, p2, time_unit=bad), NAMES, KINDS, "s.toml")
     with pytest.raises(DataError, match=r"time_unit"):  # a grid in s does not make the stamps s
         read_log(record_spec(_table(p1, p2, exclude=["j_c"], sample_period=0.01), NAMES, KINDS, "s.toml"))
+    with pytest.raises(
+        DataError, match=r"holds \d samples .* need at least 20; its stamps step by .*time_unit"
+    ):
+        read_log(record_spec(_table(p1, p2, exclude=["j_c"]), NAMES, KINDS, "s.toml"), window=(4.1, 12.0))
 
 
 def test_a_log_stepping_by_one_read_as_s_is_refused(tmp_path):

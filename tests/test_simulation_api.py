@@ -343,3 +343,47 @@ def test_run_trial_says_how_to_run_the_floor_beside_it(short):
     with pytest.warns(UserWarning, match=r"run_trial: adaptive_ct's floor ct_oracle.*run_benchmark\(") as w:
         run_trial(make_controller("adaptive_ct"), short, seed_index=0)
     assert all(Path(x.filename).name == "test_simulation_api.py" for x in w)
+
+
+def test_the_ratio_figures_interval_is_the_reports():
+    """plot_ratios drew mean +- 1.96 sd / sqrt(n), 2.2x too narrow at 3 seeds beside the report's
+    Student-t ci95 of the same seeds; now it draws the report's."""
+    import pandas as pd
+
+    from adaptive_dd.benchmark.metrics import ratio_statistics
+    from adaptive_dd.plotting import plot_ratios
+
+    r = np.random.default_rng(0).lognormal(0.0, 0.2, 3)
+    rows = [
+        {
+            "controller": "a",
+            "seed": k,
+            "segment": 0,
+            "start_s": 0.0,
+            "end_s": 1.0,
+            "mass_kg": 0.0,
+            "ratio_to_floor": x,
+        }
+        for k, x in enumerate(r)
+    ]
+    bar = plot_ratios(pd.DataFrame(rows)).axes[0].collections[0].get_segments()[0][:, 1]
+    np.testing.assert_allclose(bar, ratio_statistics(r, [0, 1, 2])["ci95"], rtol=1e-12)
+
+
+def test_a_path_a_string_or_a_number_where_a_list_or_a_scenario_goes_is_named():
+    """A user's API slips (a walk-through's): each says what to pass instead, not an AttributeError
+    deep inside or a controller named 'a'."""
+    from adaptive_dd.arena.leaderboard import leaderboard
+    from adaptive_dd.benchmark.runner import run_benchmark
+    from adaptive_dd.errors import ParameterError
+
+    with pytest.raises(
+        ParameterError, match=r"Simulation: scenario must be a Scenario, got str .*load_scenario"
+    ):
+        Simulation("adaptive_dd/scenarios/ur5_tool_swap.toml")
+    with pytest.raises(ParameterError, match=r"run_trial: scenario must be a Scenario"):
+        run_trial(ComputedTorque(), "payload_swap")
+    with pytest.raises(ParameterError, match=r"seed_indices is a list of seed indices, got 3: pass \[3\]"):
+        run_benchmark(load_scenario(), seed_indices=3)
+    with pytest.raises(ParameterError, match=r"controllers is a list, got the one 'adaptive_ct'"):
+        leaderboard([], controllers="adaptive_ct", arms=1)

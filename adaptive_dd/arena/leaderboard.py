@@ -424,6 +424,9 @@ def leaderboard(
     """
     import pandas as pd
 
+    for name, value in (("controllers", controllers), ("scenarios", scenarios)):
+        if isinstance(value, str | Path):  # a string would be iterated letter by letter
+            raise ParameterError(f"leaderboard: {name} is a list, got the one {value!r}: pass [{value!r}]")
     controllers = list(dict.fromkeys(controllers))
     if not controllers:
         raise ParameterError("leaderboard: controllers: name at least one controller")

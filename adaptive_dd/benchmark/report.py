@@ -52,8 +52,9 @@ def format_report(metrics: dict, res: BenchmarkResult) -> str:
     sc = res.scenario
     head = f"{'controller':18s}" + "".join(f"{f'{a:g}-{b:g}s {m:g}kg':>16s}" for a, b, m in sc.segments())
     lines = [
-        f"Scenario {sc.source}: {sc.seeds} seeds, {sc.duration} s at T = {sc.sample_period} s, bandwidth "
-        f"{sc.bandwidth} rad/s; means over seeds (a failed trial left out of the segments after its failure)",
+        f"Scenario {_scenario_title(sc)}: {sc.seeds} seeds, {sc.duration} s at T = {sc.sample_period} s, "
+        f"bandwidth {sc.bandwidth} rad/s; means over seeds (a failed trial left out of the segments after "
+        "its failure)",
         runtime_line(sc),
         "",
     ]
@@ -72,6 +73,16 @@ def format_report(metrics: dict, res: BenchmarkResult) -> str:
     lines += ["", f"Targets{phase} (measured, not asserted):"]
     lines += _targets(metrics, res)
     return "\n".join(lines)
+
+
+def _scenario_title(sc) -> str:
+    """The scenario's file, and its name when it is not the file's (renamed in code: what the run
+    ran may differ from the file; ``metrics.json``'s ``provenance.scenario`` holds every value)."""
+    from pathlib import Path
+
+    if not sc.source or Path(str(sc.source)).stem == sc.name:
+        return str(sc.source or sc.name)
+    return f"{sc.name} (from {sc.source}, as changed in code)"
 
 
 def _failure_lines(ctrls: dict) -> list[str]:

@@ -142,6 +142,13 @@ def run_benchmark(
         check_controller_object("run_benchmark", f"controllers[{key!r}]", obj)
     if not (isinstance(keep_trajectories, int | np.integer) and keep_trajectories >= 0):
         raise ParameterError(f"keep_trajectories must be an integer >= 0, got {keep_trajectories!r}")
+    if seed_indices is not None and not (
+        isinstance(seed_indices, Sequence | np.ndarray) and not isinstance(seed_indices, str)
+    ):
+        raise ParameterError(
+            f"run_benchmark: seed_indices is a list of seed indices, got {seed_indices!r}: pass "
+            f"[{seed_indices!r}] for that one seed, or range(n)"
+        )
     t0 = time.perf_counter()
     total = scenario.n_samples * len(controllers or scenario.controllers)
     with RunClock(total, f"benchmark {scenario.name}", show=progress) as clock:

@@ -367,10 +367,17 @@ def read_toml(path: Path) -> dict:
     return _read(path, ScenarioError)
 
 
+def shipped_scenarios() -> dict[str, Path]:
+    """The scenarios shipped inside the package, by name (``ur5_tool_swap``, ...)."""
+    folder = Path(str(resources.files("adaptive_dd.scenarios")))
+    return {p.stem: p for p in sorted(folder.glob("*.toml"))}
+
+
 def no_scenario_file(path: str | Path) -> ScenarioError:
     """The error for a scenario path that is no file: a folder, or nothing there."""
     what = "is a folder, not a scenario file" if Path(path).is_dir() else "no such scenario file"
-    return ScenarioError(f"{path}: {what} (give a scenario's .toml file)")
+    names = ", ".join(shipped_scenarios())
+    return ScenarioError(f"{path}: {what} (give a scenario's .toml file, or a shipped one's name: {names})")
 
 
 def load_scenario(path: str | Path | None = None) -> Scenario:
@@ -379,8 +386,9 @@ def load_scenario(path: str | Path | None = None) -> Scenario:
     Parameters
     ----------
     path : str or Path, optional
-        A scenario TOML file (every key: the guide's *Scenario keys*); None: the shipped
-        default, the paper's arm with payloads 0 -> 3 -> 1 -> 0 kg.
+        A scenario TOML file (every key: the guide's *Scenario keys*), or the name of one shipped
+        with the package (``"ur5_tool_swap"``: :func:`shipped_scenarios`, found from any folder);
+        None: the shipped default, the paper's arm with payloads 0 -> 3 -> 1 -> 0 kg.
 
     Returns
     -------
@@ -402,12 +410,16 @@ def load_scenario(path: str | Path | None = None) -> Scenario:
     ('payload_swap', 2, 10)
     >>> sc.segments()  # (start [s], end [s], payload [kg])
     [(0.0, 5.0, 0.0), (5.0, 10.0, 3.0), (10.0, 15.0, 1.0), (15.0, 20.0, 0.0)]
-    >>> load_scenario("no_such_file.toml")
+    >>> load_scenario("ur5_tool_swap").n_joints  # a shipped scenario by name
+    6
+    >>> load_scenario("no_such_file.toml")  # doctest: +ELLIPSIS
     Traceback (most recent call last):
     ...
-    adaptive_dd.errors.ScenarioError: no_such_file.toml: no such scenario file (give a scenario's .toml file)
+    adaptive_dd.errors.ScenarioError: no_such_file.toml: no such scenario file (give a scenario's ...)
     """
     path = Path(path) if path is not None else default_scenario_path()
+    if not path.exists() and path.name == str(path) and path.stem in shipped_scenarios():
+        path = shipped_scenarios()[path.stem]  # a bare name (or name.toml) not in this folder
     if not path.is_file():
         raise no_scenario_file(path)
     data = read_toml(path)

@@ -159,7 +159,11 @@ def _print_record_spec(spec, joint_names) -> None:
     print(f"record.files = {[str(f) for f in spec.files]}")
     print(f"record.time = {spec.time!r}")
     for j, name in enumerate(joint_names):
-        vel = "derived" if spec.derive_velocity or spec.velocity is None else repr(spec.velocity[j])
+        vel = (
+            "derived"
+            if spec.derive_velocity or spec.velocity is None
+            else f"{spec.velocity[j]!r} (x {spec.position_scale[j]:.6g})"
+        )
         print(
             f"record.joint{j + 1} = {{ joint = {name!r}, position = {spec.position[j]!r} "
             f"(x {spec.position_scale[j]:.6g}), "

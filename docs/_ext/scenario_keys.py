@@ -215,8 +215,10 @@ def page() -> str:
         "This page is generated when the documentation is built, from the tables the scenario",
         "checks use (`adaptive_dd/benchmark/scenario_base.py`'s `KEYS`, the `[arm]` and `[plant]`",
         "key lists of `adaptive_dd/plant/arm_tables.py`, the controllers' settings), so",
-        "it lists exactly what `adaptive-dd validate` accepts. Defaults are what `validate` prints",
-        "for a scenario that leaves the key out. Any other key is an error naming file and key.",
+        "it lists exactly what `adaptive-dd validate` accepts in a benchmark scenario (an",
+        "identification scenario's `[record]` table, for a robot's log, is on {doc}`../real_log`).",
+        "Defaults are what `validate` prints for a scenario that leaves the key out. Any other key",
+        "is an error naming file and key.",
         "```",
         "",
     ]

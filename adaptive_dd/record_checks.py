@@ -1,0 +1,121 @@
+"""The checks :func:`adaptive_dd.record.read_log` makes of a log's values against its ``[record]``
+table and the arm: a torque channel stuck at one value, positions in another unit than the
+table says (degrees read as radians), a measured velocity in another unit than its position, a
+torque far beyond the URDF's effort limit. Each raises a :class:`~adaptive_dd.errors.DataError`
+naming the file, the column, the joint and the remedy."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numpy.typing import NDArray
+
+from adaptive_dd.errors import DataError
+from adaptive_dd.record_spec import RecordSpec
+
+__all__ = ["STUCK_FRACTION", "TORQUE_LIMIT_FACTOR", "VELOCITY_GAIN"]
+
+Array = NDArray[np.float64]
+
+STUCK_FRACTION = 0.5
+"""A fitted torque channel holding one value on more than this share of the window is refused."""
+
+VELOCITY_GAIN = (0.5, 2.0)
+"""The range of a measured velocity's gain on the positions' derivative (least squares over the
+longest piece) that is read as the same unit: a filtered or lagging velocity stays within it, a
+unit error (rad/s logged beside degrees, rpm, a gear ratio) does not."""
+
+TORQUE_LIMIT_FACTOR = 10.0
+"""A fitted torque channel beyond this many times the URDF's effort limit is refused as a unit
+error (mN m, a missing ``torque_gain``): a drive's peak torque is a few times its rated one."""
+
+
+def _check_velocity_scale(spec: RecordSpec, where: dict, columns, logged: Array, derived: Array) -> None:
+    """A measured velocity used by the fit whose gain on the positions' derivative is outside
+    :data:`VELOCITY_GAIN`, on a joint that moves: a :class:`DataError` naming the column (a velocity
+    in another unit than its position, which scales both, fits the wrong friction without it)."""
+    lo, hi = VELOCITY_GAIN
+    for j in range(derived.shape[1]):
+        a, b = derived[:, j] - derived[:, j].mean(), logged[:, j] - logged[:, j].mean()
+        if np.dot(a, a) <= 1e-12 * a.size:  # a joint that does not move: nothing to compare
+            continue
+        gain = float(np.dot(a, b) / np.dot(a, a))
+        if lo <= gain <= hi:
+            continue
+        unit = spec.position_scale[j]
+        raise DataError(
+            f"{where[columns[j]]}: column {columns[j]!r} (joint '{spec.joint_names[j]}') is {gain:.3g}x the "
+            f"derivative of its position column {spec.position[j]!r}: not the same unit (the position's "
+            f"unit, x {unit:.6g}, scales the velocity too); log both in one unit, or set "
+            'velocity_source = "derived" in [record]'
+        )
+
+
+def _check_torque_scale(spec: RecordSpec, where: dict, tau: Array, arm) -> None:
+    """A fitted torque channel beyond :data:`TORQUE_LIMIT_FACTOR` times the URDF's effort limit: a
+    :class:`DataError` naming the column, its peak and the limit (the fit would hold every
+    parameter at the URDF's value and say the record cannot see them)."""
+    act = getattr(arm, "actuator", None)
+    if act is None:  # an arm without effort limits (a stand-in with position limits only)
+        return
+    limit = np.asarray(act.torque_limit, dtype=float)
+    for j in np.flatnonzero(spec.used):
+        peak = float(np.max(np.abs(tau[:, j])))
+        if np.isfinite(limit[j]) and limit[j] > 0 and peak > TORQUE_LIMIT_FACTOR * limit[j]:
+            raise DataError(
+                f"{where[spec.torque[j]]}: column {spec.torque[j]!r} (joint '{spec.joint_names[j]}') "
+                f"reaches |tau| = {peak:.4g} N m after torque_gain {spec.torque_gain[j]:g}, "
+                f"{peak / limit[j]:.0f}x the URDF's effort limit {limit[j]:.4g} N m: a unit error (mN m?) "
+                "or a torque_gain missing in [record]"
+            )
+
+
+def _check_stuck(spec: RecordSpec, where: dict, raw: Array) -> None:
+    for j in np.flatnonzero(spec.used):
+        col = raw[:, j]
+        vals, counts = np.unique(col, return_counts=True)
+        frac = counts.max() / col.size
+        if frac > STUCK_FRACTION:
+            raise DataError(
+                f"{where[spec.torque[j]]}: column {spec.torque[j]!r} (joint '{spec.joint_names[j]}') holds "
+                f"{vals[np.argmax(counts)]:g} on {100 * frac:.0f}% of the window: a channel that carries no "
+                f'torque; leave it out of the fit (exclude = ["{spec.joint_names[j]}"] in [record])'
+            )
+
+
+def _check_units(spec: RecordSpec, where: dict, q_raw: Array, arm) -> None:
+    lim = arm.position_limits
+    for j in range(q_raw.shape[1]):
+        lo, hi = lim[j]
+        if not (np.isfinite(lo) and np.isfinite(hi)):
+            continue
+        qj = q_raw[:, j] * spec.position_scale[j]
+        slack = 0.1 * (hi - lo) + 0.05
+        if qj.min() >= lo - slack and qj.max() <= hi + slack:
+            continue
+        deg = qj * math.pi / 180.0
+        hint = (
+            f"; in degrees it would fit: set {_degrees_hint(spec, j)} in [record]"
+            if deg.min() >= lo - slack and deg.max() <= hi + slack
+            else ""
+        )
+        raise DataError(
+            f"{where[spec.position[j]]}: column {spec.position[j]!r} (joint '{spec.joint_names[j]}') spans "
+            f"[{qj.min():.4g}, {qj.max():.4g}], outside the URDF's limits [{lo:.4g}, {hi:.4g}]{hint}"
+            + ("" if hint else ": check the unit, gear ratio and column of this joint")
+        )
+
+
+def _degrees_hint(spec: RecordSpec, j: int) -> str:
+    """``position_unit = "deg"`` for a one-joint log, else the per-joint list with joint ``j`` in
+    degrees and the others as they are read (a global "deg" would turn the joints logged in
+    radians into degrees too)."""
+    n = len(spec.position)
+    if n == 1:
+        return 'position_unit = "deg"'
+    names = {1.0: "rad", math.pi / 180.0: "deg", 1e-3: "mm"}
+    units = [names.get(float(s), "rad") for s in spec.position_scale]
+    units[j] = "deg"
+    listed = ", ".join(f'"{u}"' for u in units)
+    return f'position_unit = [{listed}] (one per joint; a prismatic one\'s "m" or "mm")'
