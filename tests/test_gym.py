@@ -171,6 +171,7 @@ def test_residual_zero_is_the_base_controller():
         ResidualTorque(make_env(sc, floor=None), base="ct_oracle")
 
 
+@pytest.mark.slow  # compiles the plug-in's loop (numba does not cache it across processes)
 def test_residual_zero_on_a_compiled_plugin_is_the_plugin(monkeypatch):
     """A compiled plug-in as the base (the shipped example): its njit functions are called per
     sample (they took the plain-Python signatures before: a TypeError at reset), and a zero
