@@ -427,6 +427,15 @@ def _run_on_dask(todo, cells_dir: Path, ext: str, scheduler, workers, client, pr
     cluster = None
     if made:
         client, cluster = _client(scheduler, workers)
+    where = (
+        f"the Dask scheduler {scheduler}"
+        if scheduler
+        else "a local Dask cluster"
+        if made
+        else "the given client"
+    )
+    n = len(client.scheduler_info().get("workers", {}))
+    print(f"running {len(todo)} task(s) on {where}, {n} worker(s)", flush=True)
     try:
         return _run_tasks(todo, cells_dir, ext, client, progress)
     finally:

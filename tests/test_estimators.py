@@ -112,6 +112,9 @@ def test_reproduce_rows_and_noise_switch(tmp_path):
     assert clean.errors[("M2", "full", "exact")].max() < 0.5
     assert noisy.errors[("M2", "full", "exact")].max() > clean.errors[("M2", "full", "exact")].max()
     assert "( 9.3)" in format_table(noisy, "M2", "15", "paper", with_paper=True)
+    # the table's std is the rows' (ddof 1): the printed tables said ddof 0 beside a JSON in ddof 1
+    cell = f"{paper[0]['mean_pct']:5.1f}±{paper[0]['std_pct']:<4.1f}"
+    assert cell in format_table(noisy, "M2", "15", "paper", with_paper=True).splitlines()[1]
 
 
 def test_model_responses_reproduce_the_arm_only_with_the_true_sigma():

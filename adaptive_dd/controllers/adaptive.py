@@ -17,9 +17,10 @@ detection, re-opening, projection) with :func:`~adaptive_dd.controllers.feedback
     the current model leaves unexplained beyond three times its own noise, the N-joint
     ``adaptive_ct``'s observer itself (:mod:`~adaptive_dd.controllers.two_link_observer`).
 ``adaptive_ct_paper``
-    The paper's online M2 estimator as the paper has it (construction of eq. 19,
-    split (15), RLS of eq. 14 with the variable forgetting factor), started from the
-    nominal model with the same prior covariance as ``adaptive_ct``; no detector.
+    The paper's online M2 estimator (construction of eq. 19, split (15), RLS of eq. 14 with
+    the variable forgetting factor), started from the nominal model with the same prior
+    covariance as ``adaptive_ct``; no detector. The paper proposes no controller and gives no
+    lambda(0), mu or P(0): those, the prior, the trace cap and the projection are ours.
 """
 
 from __future__ import annotations
@@ -242,7 +243,9 @@ def adaptive_ct(
 
 
 def adaptive_ct_paper(gains: Gains = DEFAULT_GAINS, sigma_nominal: ArrayLike | None = None) -> AdaptiveCT:
-    """Computed torque on the paper's online M2 estimator, as the paper has it."""
+    """Computed torque on the paper's online M2 estimator (eqs. 14, 15, 19); the settings the paper
+    leaves open (lambda(0), mu, the prior, a trace cap, the projection) are ours
+    (:data:`PAPER_ONLINE`): the paper proposes no controller."""
     return AdaptiveCT(
         PAPER_ONLINE, gains, sigma_nominal, boost_bandwidth=None, name="adaptive_ct_paper", observer=False
     )

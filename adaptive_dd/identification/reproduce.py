@@ -97,8 +97,9 @@ class ReproduceResult:
         against the bound: crb_std_pct, bias_pct, est_std_pct (std of the signed estimate
         over seeds, ddof 1), std_over_crb.
 
-        ``mean_pct`` and ``std_pct`` are the mean and std of ``|error|`` (as in the paper's
-        tables); the estimate's own spread, comparable with the bound, is ``est_std_pct``.
+        ``mean_pct`` and ``std_pct`` are the mean and std (ddof 1, as every std here) of ``|error|``
+        (as in the paper's tables); the estimate's own spread, comparable with the bound, is
+        ``est_std_pct``.
         """
         out = []
         for (method, split, est), err in self.errors.items():
@@ -115,7 +116,7 @@ class ReproduceResult:
                         "tau_f": float(tf),
                         "param": name,
                         "mean_pct": float(np.mean(e)),
-                        "std_pct": float(np.std(e)),
+                        "std_pct": float(np.std(e, ddof=1)) if e.size > 1 else float("nan"),
                         "paper_pct": paper,
                     }
                     out.append(row | self._against_bound(self.signed[(method, split, est)][i, :, k], k))
@@ -190,7 +191,7 @@ def run_reproduce(
     >>> res.errors[("M2", "15", "paper")].shape  # tau_f x seeds x the 7 base parameters [%]
     (1, 2, 7)
     >>> row = res.rows()[0]
-    >>> row["param"], row["paper_pct"]  # the paper's Table 3 figure beside it
+    >>> row["param"], row["paper_pct"]  # the paper's figure beside it (M2: Table 5)
     ('J1', 7.9)
     """
     _check_configurations(seeds, tau_f, estimators, extra_estimators)
@@ -342,14 +343,16 @@ def format_comparison(res: ReproduceResult, method: str) -> str:
 
 
 def format_table(res: ReproduceResult, method: str, split: str, estimator: str, with_paper: bool) -> str:
-    """The paper's table layout: rows tau_f, columns J1..d2, cells ``mean±std`` (and paper)."""
+    """The paper's table layout: rows tau_f, columns J1..d2, cells ``mean±std`` (and paper); the
+    std over the seeds with ddof 1, as :meth:`ReproduceResult.rows` and the JSON have it."""
     err = res.errors[(method, split, estimator)]
     head = f"{'tau_f':>6} " + " ".join(f"{n:>17s}" for n in SIGMA_NAMES)
     lines = [head]
     for i, tf in enumerate(res.tau_f):
         cells = []
         for k in range(7):
-            c = f"{err[i, :, k].mean():5.1f}±{err[i, :, k].std():<4.1f}"
+            e = err[i, :, k]
+            c = f"{e.mean():5.1f}±{e.std(ddof=1) if e.size > 1 else float('nan'):<4.1f}"
             if with_paper and tf in TAU_F_GRID:
                 c += f"({PAPER_TABLES[method][TAU_F_GRID.index(tf), k]:4.1f})"
             cells.append(f"{c:>17s}")
