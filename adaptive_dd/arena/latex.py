@@ -20,7 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from adaptive_dd.arena.leaderboard import contenders
-from adaptive_dd.arena.page import _columns, command_of
+from adaptive_dd.arena.page import _columns, command_of, table_rows
 
 __all__ = ["latex_table", "write_latex"]
 
@@ -79,20 +79,17 @@ def latex_table(df, caption: str | None = None) -> str:
         "controller & floor & " + " & ".join(heads) + " \\\\",
         "\\midrule",
     ]
-    for ctrl, g in ranked.groupby("controller", sort=False):
+    for ctrl, floor, rows in table_rows(ranked, cols):
         cells = []
-        for sc, seg in cols:
-            r = g[(g["scenario"] == sc) & (g["segment"] == seg)]
-            if r.empty:
+        for r in rows:
+            if r is None:
                 cells.append("--")
                 continue
-            r = r.iloc[0]
             mean = _num(r["ratio_mean"])
             mean = f"\\textbf{{{mean}}}" if r.get("rms_rank") == 1 else mean
             fail = f" $\\times {int(r['failures'])}$" if r["failures"] else ""
             cells.append(f"{mean} ({_num(r['ratio_p90'])}){fail}")
-        floor = _tex(g["floor"].iloc[0])
-        lines.append(f"\\texttt{{{_tex(ctrl)}}} & \\texttt{{{floor}}} & " + " & ".join(cells) + " \\\\")
+        lines.append(f"\\texttt{{{_tex(ctrl)}}} & \\texttt{{{_tex(floor)}}} & " + " & ".join(cells) + " \\\\")
     lines += ["\\bottomrule", "\\end{tabular}", "\\end{table}", ""]
     return "\n".join(lines)
 

@@ -33,6 +33,7 @@ __all__ = [
     "render_blocks",
     "replace_blocks",
     "stale_blocks",
+    "table_rows",
 ]
 
 CSV = "docs/leaderboard/leaderboard.csv"
@@ -141,6 +142,17 @@ def _head(df, sc: str, seg: int) -> str:
     return f"{sc}:{seg} ({g['payload_kg'].iloc[0]:.3g} kg)"
 
 
+def table_rows(ranked, cols):
+    """Per law of ``ranked`` (in its order): ``(controller, floor, [row or None per column])``, the
+    table's row (a pandas Series) of each column ``(scenario, segment)`` of :func:`_columns`."""
+    for ctrl, g in ranked.groupby("controller", sort=False):
+        rows = []
+        for s, seg in cols:
+            r = g[(g["scenario"] == s) & (g["segment"] == seg)]
+            rows.append(None if r.empty else r.iloc[0])
+        yield ctrl, g["floor"].iloc[0], rows
+
+
 def _table_block(df) -> str:
     """The ratio of every law to its floor, mean over seeds (p90), a column per segment."""
     cols = _columns(df)
@@ -153,17 +165,15 @@ def _table_block(df) -> str:
         "| controller | floor | " + " | ".join(_head(df, s, g) for s, g in cols) + " |",
         "|---|---|" + "---|" * len(cols),
     ]
-    for ctrl, g in ranked.groupby("controller", sort=False):
+    for ctrl, floor, rows in table_rows(ranked, cols):
         cells = []
-        for s, seg in cols:
-            r = g[(g["scenario"] == s) & (g["segment"] == seg)]
-            if r.empty:
+        for r in rows:
+            if r is None:
                 cells.append("-")
                 continue
-            r = r.iloc[0]
             fail = f" x{int(r['failures'])}" if r["failures"] else ""
             cells.append(f"{_r(r['ratio_mean'])} ({_r(r['ratio_p90'])}){fail}")
-        lines.append(f"| `{ctrl}` | `{g['floor'].iloc[0]}` | " + " | ".join(cells) + " |")
+        lines.append(f"| `{ctrl}` | `{floor}` | " + " | ".join(cells) + " |")
     return "\n".join(lines)
 
 
