@@ -69,6 +69,7 @@ from adaptive_dd.record_checks import (
     _check_torque_scale,
     _check_units,
     _check_velocity_scale,
+    velocity_gains,
 )
 from adaptive_dd.record_pieces import MIN_PIECE_SAMPLES, find_gaps, piece_spans, resampler, trim_gap_edges
 from adaptive_dd.record_spec import RecordSpec, record_spec
@@ -377,9 +378,10 @@ def read_log(spec: RecordSpec, window: tuple[float, float] | None = None, arm=No
     if velocity is not None:
         logged = np.column_stack([column(c, False) for c in velocity]) * spec.position_scale
         a, b = max(pieces, key=lambda ab: ab[1] - ab[0])
-        lag_note = (_velocity_lag(logged[a:b], qd[a:b], T, spec.joint_names, qd_measured),)
+        gains = velocity_gains(logged[a:b], qd[a:b])
+        lag_note = (_velocity_lag(logged[a:b], qd[a:b], gains, T, spec.joint_names, qd_measured),)
         if qd_measured:
-            _check_velocity_scale(spec, where, velocity, logged[a:b], qd[a:b])
+            _check_velocity_scale(spec, where, velocity, gains)
             qd = logged
     grid = np.concatenate(grids)
     notes = (
@@ -478,16 +480,16 @@ def _resampling_note(t0: Array, T: float, qd_measured: bool) -> str:
     )
 
 
-def _velocity_lag(logged: Array, derived: Array, T: float, names, used: bool) -> str:
+def _velocity_lag(logged: Array, derived: Array, gains: Array, T: float, names, used: bool) -> str:
     """How far the logged velocity lags the positions' derivative (cross-correlation, the joint that
-    moves most) and its gain, as a note."""
+    moves most) and its gain (``gains``: :func:`~adaptive_dd.record_checks.velocity_gains`), as a note."""
     j = int(np.argmax(np.std(derived, axis=0)))
     a, b = derived[:, j] - derived[:, j].mean(), logged[:, j] - logged[:, j].mean()
     m = min(a.size // 4, round(1.0 / T))
     lags = np.arange(-m, m + 1)
     c = [np.dot(a[max(0, -k) : a.size - max(0, k)], b[max(0, k) : b.size - max(0, -k)]) for k in lags]
     k = int(lags[int(np.argmax(c))])
-    gain = np.dot(a, b) / max(np.dot(a, a), 1e-300)
+    gain = gains[j]
     text = (
         f"the logged velocity lags the positions' derivative by {k * T * 1e3:.0f} ms (joint "
         f"'{names[j]}', gain {gain:.2f})"

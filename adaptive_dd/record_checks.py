@@ -12,9 +12,9 @@ import numpy as np
 from numpy.typing import NDArray
 
 from adaptive_dd.errors import DataError
-from adaptive_dd.record_spec import RecordSpec
+from adaptive_dd.record_spec import UNITS, RecordSpec
 
-__all__ = ["STUCK_FRACTION", "TORQUE_LIMIT_FACTOR", "VELOCITY_GAIN"]
+__all__ = ["STUCK_FRACTION", "TORQUE_LIMIT_FACTOR", "VELOCITY_GAIN", "velocity_gains"]
 
 Array = NDArray[np.float64]
 
@@ -31,17 +31,23 @@ TORQUE_LIMIT_FACTOR = 10.0
 error (mN m, a missing ``torque_gain``): a drive's peak torque is a few times its rated one."""
 
 
-def _check_velocity_scale(spec: RecordSpec, where: dict, columns, logged: Array, derived: Array) -> None:
-    """A measured velocity used by the fit whose gain on the positions' derivative is outside
-    :data:`VELOCITY_GAIN`, on a joint that moves: a :class:`DataError` naming the column (a velocity
-    in another unit than its position, which scales both, fits the wrong friction without it)."""
+def velocity_gains(logged: Array, derived: Array) -> Array:
+    """Per joint, the least-squares gain of the logged velocity on the positions' derivative
+    (both ``(N, n)``, their means removed); NaN for a joint that does not move."""
+    a, b = derived - derived.mean(axis=0), logged - logged.mean(axis=0)
+    aa = np.einsum("kj,kj->j", a, a)
+    moves = aa > 1e-12 * a.shape[0]
+    return np.where(moves, np.einsum("kj,kj->j", a, b) / np.where(moves, aa, 1.0), np.nan)
+
+
+def _check_velocity_scale(spec: RecordSpec, where: dict, columns, gains: Array) -> None:
+    """A measured velocity used by the fit whose gain on the positions' derivative
+    (:func:`velocity_gains`) is outside :data:`VELOCITY_GAIN`, on a joint that moves: a
+    :class:`DataError` naming the column (a velocity in another unit than its position, which
+    scales both, fits the wrong friction without it)."""
     lo, hi = VELOCITY_GAIN
-    for j in range(derived.shape[1]):
-        a, b = derived[:, j] - derived[:, j].mean(), logged[:, j] - logged[:, j].mean()
-        if np.dot(a, a) <= 1e-12 * a.size:  # a joint that does not move: nothing to compare
-            continue
-        gain = float(np.dot(a, b) / np.dot(a, a))
-        if lo <= gain <= hi:
+    for j, gain in enumerate(gains):
+        if not np.isfinite(gain) or lo <= gain <= hi:
             continue
         unit = spec.position_scale[j]
         raise DataError(
@@ -114,7 +120,7 @@ def _degrees_hint(spec: RecordSpec, j: int) -> str:
     n = len(spec.position)
     if n == 1:
         return 'position_unit = "deg"'
-    names = {1.0: "rad", math.pi / 180.0: "deg", 1e-3: "mm"}
+    names = {scale: u for u, scale in UNITS.items() if u != "m"}  # a scale of 1 read as radians
     units = [names.get(float(s), "rad") for s in spec.position_scale]
     units[j] = "deg"
     listed = ", ".join(f'"{u}"' for u in units)

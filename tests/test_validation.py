@@ -438,10 +438,10 @@ def test_the_reports_centre_of_mass_shows_each_axis_the_data_determine():
 def test_a_shipped_scenario_loads_by_its_name_from_any_folder(tmp_path, monkeypatch):
     """load_scenario("ur5_tool_swap") (and the CLI's FILE) found the file only from the repository's
     root by its path; a file of that name in the working folder still wins."""
-    from adaptive_dd.benchmark.scenario import shipped_scenarios
+    from adaptive_dd.benchmark.scenario import packaged_scenarios
 
     monkeypatch.chdir(tmp_path)
-    assert load_scenario("ur5_tool_swap").source == str(shipped_scenarios()["ur5_tool_swap"])
+    assert load_scenario("ur5_tool_swap").source == str(packaged_scenarios()["ur5_tool_swap"])
     assert load_scenario("panda_payload.toml").n_joints == 7
     (tmp_path / "ur5_tool_swap.toml").write_text("[run]\nduration = 2.0\n")
     assert load_scenario("ur5_tool_swap.toml").duration == 2.0  # the user's own file first

@@ -30,13 +30,13 @@ from __future__ import annotations
 import dataclasses
 import warnings
 from collections.abc import Sequence
-from importlib import resources
 from pathlib import Path
 
 import numpy as np
 
 from adaptive_dd.arena.columns import COLUMNS
 from adaptive_dd.benchmark.end_effector import EE_KEYS
+from adaptive_dd.benchmark.scenario import packaged_scenarios
 from adaptive_dd.errors import ParameterError
 
 __all__ = [
@@ -83,9 +83,8 @@ def shipped_scenarios() -> list[Path]:
     """The shipped arms' scenarios with a drawn plant: ur5, panda, iiwa14, vertical3
     (``adaptive_dd/scenarios``), and the Kinova Gen3 and the paper's arm from its URDF
     (``benchmarks/scenarios``: ``gen3_drawn``, ``sice_drawn``; when the source tree is at hand)."""
-    pkg = resources.files("adaptive_dd.scenarios")
-    names = ("ur5_tool_swap", "panda_payload", "iiwa14_payload", "vertical3_payload")
-    out = [Path(str(pkg.joinpath(f"{n}.toml"))) for n in names]
+    pkg = packaged_scenarios()
+    out = [pkg[n] for n in ("ur5_tool_swap", "panda_payload", "iiwa14_payload", "vertical3_payload")]
     bench = Path(__file__).resolve().parents[2] / "benchmarks" / "scenarios"
     return out + [p for p in (bench / "gen3_drawn.toml", bench / "sice_drawn.toml") if p.is_file()]
 

@@ -39,13 +39,21 @@ TOL = 1e-9
 """Relative tolerance on a limit (a reference that touches it is within it)."""
 
 
-def torque_peaks(scenario) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Per joint, the largest ``|tau|`` [N m] of inverse dynamics along the reference over every
-    payload segment's parameters, the sample where it occurs and the segment, each ``(n,)``."""
+def _segment_torques(scenario) -> np.ndarray:
+    """``|tau|`` [N m] of inverse dynamics along the reference with each payload segment's
+    parameters, ``(segments, N, n)``; segment 0 carries no payload."""
     T, N = scenario.sample_period, scenario.n_samples
     q, qd, qdd = scenario.reference.sample(np.arange(N) * T)
     Y = (scenario.closed_forms or scenario.arm).regressor(q, qd, qdd)  # (N, n, p): segment_sigmas' p
-    tau = np.abs(np.einsum("knp,sp->skn", Y, scenario.segment_sigmas()))  # (segments, N, n)
+    return np.abs(np.einsum("knp,sp->skn", Y, scenario.segment_sigmas()))
+
+
+def torque_peaks(scenario, tau: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Per joint, the largest ``|tau|`` [N m] of inverse dynamics along the reference over every
+    payload segment's parameters, the sample where it occurs and the segment, each ``(n,)``
+    (``tau``: :func:`_segment_torques`, computed here when not given)."""
+    tau = _segment_torques(scenario) if tau is None else tau
+    N = tau.shape[1]
     flat = tau.reshape(-1, tau.shape[2])
     at = np.argmax(flat, axis=0)
     cols = np.arange(flat.shape[1])
@@ -102,22 +110,21 @@ def torque_problems(scenario) -> list[str]:
     runs through it and reports the saturation; a warning, not an error)."""
     t = np.arange(scenario.n_samples) * scenario.sample_period
     out = []
-    peak, at, seg = torque_peaks(scenario)
+    tau_seg = _segment_torques(scenario)
+    peak, at, seg = torque_peaks(scenario, tau_seg)
+    bare = tau_seg[0]  # (N, n): segment 0, no payload
     segments = scenario.segments()
     limit = np.asarray(scenario.arm.actuator.torque_limit, dtype=float)
-    model = scenario.closed_forms or scenario.arm
-    q, qd, qdd = scenario.reference.sample(t)
-    bare = np.abs(model.regressor(q, qd, qdd) @ np.asarray(model.sigma, dtype=float))  # (N, n): no payload
     for j in np.flatnonzero(peak > limit * (1 + TOL)):
         k0 = int(np.argmax(bare[:, j]))
         if bare[k0, j] > limit[j] * (1 + TOL):
             what, k, tau = "the arm alone (no payload)", k0, bare[k0, j]
             why = "check the URDF's masses and the joint's effort limit"
         else:
-            start, end, mass = segments[seg[j]]
-            carried = f"carried from {start:g} to {end:g} s" if mass > 0 else "none"
+            start, end, mass = segments[seg[j]]  # a loaded one: the bare arm is within its limit
             what, k, tau = (
-                f"the {mass:g} kg payload ({carried}; each is checked along the whole reference)",
+                f"the {mass:g} kg payload (carried from {start:g} to {end:g} s; each is checked along the "
+                "whole reference)",
                 at[j],
                 peak[j],
             )

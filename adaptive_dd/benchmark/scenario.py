@@ -356,7 +356,7 @@ def default_scenario_path() -> Path:
     >>> default_scenario_path().name
     'payload_swap.toml'
     """
-    return Path(str(resources.files("adaptive_dd.scenarios").joinpath("payload_swap.toml")))
+    return packaged_scenarios()["payload_swap"]
 
 
 def read_toml(path: Path) -> dict:
@@ -367,8 +367,9 @@ def read_toml(path: Path) -> dict:
     return _read(path, ScenarioError)
 
 
-def shipped_scenarios() -> dict[str, Path]:
-    """The scenarios shipped inside the package, by name (``ur5_tool_swap``, ...)."""
+def packaged_scenarios() -> dict[str, Path]:
+    """The scenario files inside the package, by name (``ur5_tool_swap``, ...; the arena's choice of
+    them: :func:`adaptive_dd.arena.leaderboard.shipped_scenarios`)."""
     folder = Path(str(resources.files("adaptive_dd.scenarios")))
     return {p.stem: p for p in sorted(folder.glob("*.toml"))}
 
@@ -376,7 +377,7 @@ def shipped_scenarios() -> dict[str, Path]:
 def no_scenario_file(path: str | Path) -> ScenarioError:
     """The error for a scenario path that is no file: a folder, or nothing there."""
     what = "is a folder, not a scenario file" if Path(path).is_dir() else "no such scenario file"
-    names = ", ".join(shipped_scenarios())
+    names = ", ".join(packaged_scenarios())
     return ScenarioError(f"{path}: {what} (give a scenario's .toml file, or a shipped one's name: {names})")
 
 
@@ -387,7 +388,7 @@ def load_scenario(path: str | Path | None = None) -> Scenario:
     ----------
     path : str or Path, optional
         A scenario TOML file (every key: the guide's *Scenario keys*), or the name of one shipped
-        with the package (``"ur5_tool_swap"``: :func:`shipped_scenarios`, found from any folder);
+        with the package (``"ur5_tool_swap"``: :func:`packaged_scenarios`, found from any folder);
         None: the shipped default, the paper's arm with payloads 0 -> 3 -> 1 -> 0 kg.
 
     Returns
@@ -418,8 +419,8 @@ def load_scenario(path: str | Path | None = None) -> Scenario:
     adaptive_dd.errors.ScenarioError: no_such_file.toml: no such scenario file (give a scenario's ...)
     """
     path = Path(path) if path is not None else default_scenario_path()
-    if not path.exists() and path.name == str(path) and path.stem in shipped_scenarios():
-        path = shipped_scenarios()[path.stem]  # a bare name (or name.toml) not in this folder
+    if not path.exists() and path.name == str(path):  # a bare name (or name.toml) not in this folder
+        path = packaged_scenarios().get(path.stem, path)
     if not path.is_file():
         raise no_scenario_file(path)
     data = read_toml(path)

@@ -307,7 +307,7 @@ def _run_plugin(name, ctrl, scenario, idx, rc, io, pl, keep, bar, noise=None) ->
     if getattr(ctrl, "has_detector", False):
         run.alarm_times = alarm_lists(alarms)
     run.explain_failures(rc.max_error, rc.max_speed)
-    undeclared = [k for k, bit in NEEDS.items() if bit <= 4 and not form.need & bit]
+    undeclared = [k for k in ("gravity", "mass_matrix", "bias") if not form.need & NEEDS[k]]  # NaN terms
     if undeclared:  # a term it reads without declaring it is NaN: the likeliest cause of a NaN command
         hint = f" (a term it reads without declaring it in needs is NaN: {', '.join(undeclared)})"
         for i, why in run.failed_why.items():
