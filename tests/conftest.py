@@ -2,9 +2,10 @@ import os
 
 # One BLAS thread in every process of the run (the workers, the precompile helper, the CLI and the
 # scripts the tests start inherit it), as the leaderboard and ``benchmark --arms`` run: the suite's
-# three workers on 2 cores leave OpenBLAS's second thread no core, and its threads spin waiting for
-# each other (an arm's base parameters, a 360 x 78 QR: 0.48 CPU s with two threads at load 8, 0.003
-# with one). Set before numpy is imported here; a value the caller set is kept.
+# two workers and the precompile helper on 2 cores leave OpenBLAS's second thread no core, and its
+# threads spin waiting for each other (an arm's base parameters, a 360 x 78 QR: 0.48 CPU s with two
+# threads at load 8, 0.003 with one). Set before numpy is imported here; a value the caller set is
+# kept.
 for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_var, "1")
 os.environ.setdefault("MPLBACKEND", "Agg")  # figures to files, on a machine with a display too

@@ -4,7 +4,7 @@
 once per source state by whichever process asks first (``adaptive_dd/_numba_cache.py``'s lock)
 and a process that asks meanwhile waits for it. On a cold cache the N-joint closed loop (about
 160 CPU s with its callees, in one process) is asked for by a test in every worker within the
-first minute or two: two of the three workers waited while the third compiled it, one core idle.
+first minute or two: the other workers waited while one compiled it, a core idle.
 Here it is compiled from the run's start in processes that wait for nothing, in two of them as
 the command line compiles it (:class:`~adaptive_dd._numba_cache.Compiling`: the estimator's step
 in one, the plant's step, the law's pieces and the report's kernels in the other, then the loop

@@ -230,8 +230,8 @@ def _boost_loop(q, qd, q_d, qd_d, sg0, dkp, dkd, kp, kd, lim, on, out):  # pragm
 def _flat(*arrays, width=(2, 2, 2, 2, 2, 7)):
     """Broadcast ``(..., width)`` arrays to one batch shape; return it and C-contiguous (n, width) copies."""
     shape = np.broadcast_shapes(*(np.shape(a)[:-1] for a in arrays))
-    flat = [
-        np.ascontiguousarray(np.broadcast_to(np.asarray(a, dtype=float), (*shape, w)).reshape(-1, w))
+    flat = [  # copies, writable whether or not a broadcast copied: one compiled type per kernel
+        np.array(np.broadcast_to(np.asarray(a, dtype=float), (*shape, w)).reshape(-1, w), order="C")
         for a, w in zip(arrays, width, strict=False)
     ]
     return shape, flat
@@ -258,7 +258,7 @@ def boost_batch(tau, q, qd, q_d, qd_d, sigma0, dkp: float, dkd: float, on, kp=1.
     ``(n, 2)``; ``kp, kd`` the law's gains, ``lim (2,)`` the torque limits (None: none, the whole boost)."""
     shape, (a, b, c, d, t) = _flat(q, qd, q_d, qd_d, tau)
     out = t.copy()
-    on = np.ascontiguousarray(np.broadcast_to(np.asarray(on, dtype=np.bool_), (a.shape[0],)))
+    on = np.array(np.broadcast_to(np.asarray(on, dtype=np.bool_), (a.shape[0],)), order="C")
     lim = np.full(2, np.inf) if lim is None else np.asarray(lim, dtype=float)
     sg0 = np.asarray(sigma0, dtype=float)
     _boost_loop(a, b, c, d, sg0, float(dkp), float(dkd), float(kp), float(kd), lim, on, out)

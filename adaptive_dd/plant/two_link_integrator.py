@@ -423,8 +423,8 @@ def two_link_plant_step(
     qd_ = np.ascontiguousarray(np.broadcast_to(qd, shape), dtype=float).reshape(flat).copy()
     st_ = np.ascontiguousarray(np.broadcast_to(stuck, shape), dtype=np.bool_).reshape(flat).copy()
     sl_ = np.ascontiguousarray(np.broadcast_to(slip, shape), dtype=float).reshape(flat).copy()
-    tau_ = np.ascontiguousarray(np.broadcast_to(tau, shape), dtype=float).reshape(flat)
-    sig_ = np.ascontiguousarray(np.broadcast_to(sigma, (*shape[:-1], 7)), dtype=float).reshape(-1, 7)
+    tau_ = np.array(np.broadcast_to(tau, shape), dtype=float, order="C").reshape(flat)  # writable: one type
+    sig_ = np.array(np.broadcast_to(sigma, (*shape[:-1], 7)), dtype=float, order="C").reshape(-1, 7)
     if friction_code not in FRICTION_CODES.values():
         raise ParameterError(f"friction_code must be one of {FRICTION_CODES}, got {friction_code!r}")
     if friction_code == FRICTION_CODES["lugre"]:
@@ -473,8 +473,8 @@ def lugre_step(
     q_, qd_, z_ = (
         np.ascontiguousarray(np.broadcast_to(x, shape), dtype=float).reshape(flat).copy() for x in (q, qd, z)
     )
-    tau_ = np.ascontiguousarray(np.broadcast_to(tau, shape), dtype=float).reshape(flat)
-    sig_ = np.ascontiguousarray(np.broadcast_to(sigma, (*shape[:-1], 7)), dtype=float).reshape(-1, 7)
+    tau_ = np.array(np.broadcast_to(tau, shape), dtype=float, order="C").reshape(flat)  # writable: one type
+    sig_ = np.array(np.broadcast_to(sigma, (*shape[:-1], 7)), dtype=float, order="C").reshape(-1, 7)
     stuck = np.zeros(q_.shape, dtype=np.bool_)
     slip = np.ones(q_.shape)
     step_trials(q_, qd_, stuck, slip, z_, tau_, sig_, float(T), int(substeps), 3, fp)
