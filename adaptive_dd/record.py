@@ -41,8 +41,14 @@ logger's flushes, dropped packets) is split at them into continuous pieces, each
 differentiated on its own (:mod:`adaptive_dd.record_pieces`: how a gap is told from jitter, what
 is left out beside it).
 
-What is refused, with the file, line or column and the remedy: a missing column, a
-non-numeric or non-finite value (a NaN run: its lines), a time that does not increase (a
+A row with an empty, non-numeric or non-finite cell in a column the fit reads (the time, a
+position, a fitted torque, a velocity) is a sample the logger missed: it is left out, and the
+gaps' rules then bridge it or split the log there, as they do a missing row; the notes name the
+file, the count and the first lines. More than :data:`MAX_BAD_ROWS` of a file's rows in the window
+is not a logger's missed samples but a column of another kind, or a broken export: refused.
+
+What is refused, with the file, line or column and the remedy: a missing column, non-numeric or
+non-finite values in more than :data:`MAX_BAD_ROWS` of the rows, a time that does not increase (a
 duplicated stamp), a torque channel
 stuck at one value on more than half the window (exclude it), a revolute position whose
 range does not fit the URDF's limits in radians but does in degrees (set ``position_unit``), a
@@ -230,11 +236,48 @@ def _numeric(path: Path, frame, col: str, rows: slice) -> Array:
         first, last = _line(frame, i), _line(frame, int(run))
         lines = f"line {first}" if run == i else f"lines {first}-{last}"
         raise DataError(
-            f"{path}: {lines}, column {col!r}: {kind} ({cell!r}; {bad.size} such "
-            "row(s) in the window): cut the window to avoid them ([record] window or --window) or repair "
-            "the file"
+            f"{path}: {lines}, column {col!r}: {kind} ({cell!r}; {bad.size} such row(s) in the window, "
+            f"more than the {MAX_BAD_ROWS:.0%} of its rows left out as missed samples): is the column the "
+            "one meant? Else cut the window to avoid them ([record] window or --window) or repair the file"
         )
     return v
+
+
+def _leave_out_bad_rows(frames: dict, where: dict, spec: RecordSpec, fitted: list[str], window):
+    """``frames`` without the rows whose time or fitted column (``fitted``, in ``where``'s file) is not
+    a finite number, where those are at most :data:`MAX_BAD_ROWS` of a file's rows in the window
+    (rows outside it are left out only for a bad time, which places them nowhere); and the notes.
+    A file with more is returned whole: :func:`_numeric` then refuses it, naming the first cell."""
+    out, notes = {}, []
+    for p, f in frames.items():
+        if spec.time not in f.columns:
+            out[p] = f  # _times names it
+            continue
+        t = _coerced(f, spec.time) * spec.time_scale
+        finite_t = np.isfinite(t)
+        bad = ~finite_t
+        for c in fitted:
+            if where[c] == p:
+                bad |= ~np.isfinite(_coerced(f, c))
+        lo, hi = (-np.inf, np.inf) if window is None else window
+        inside = np.flatnonzero(finite_t & (t >= lo) & (t <= hi))
+        in_window = np.zeros(len(f), dtype=bool)
+        if inside.size:
+            in_window[inside[0] : inside[-1] + 1] = True  # a row of no time between two in the window too
+        drop = bad & in_window | ~finite_t
+        n_in = int(np.sum(bad & in_window))
+        if not drop.any() or n_in > MAX_BAD_ROWS * max(int(in_window.sum()), 1):
+            out[p] = f
+            continue
+        lines = [_line(f, int(i)) for i in np.flatnonzero(drop)[:5]]
+        more = ", ..." if drop.sum() > 5 else ""
+        out[p] = f[~drop]  # each row keeps its index: its line in the file (_line)
+        out[p].attrs.update(f.attrs)
+        notes.append(
+            f"{p}: {int(drop.sum())} row(s) with an empty, non-numeric or non-finite cell in a column the "
+            f"fit reads left out as samples the logger missed (line(s) {', '.join(map(str, lines))}{more})"
+        )
+    return out, notes
 
 
 def _times(path: Path, frame, col: str) -> Array:
@@ -334,6 +377,8 @@ def read_log(spec: RecordSpec, window: tuple[float, float] | None = None, arm=No
                 f"{spec.source}: a record of another arm (identify the arm it was recorded on)"
             )
     where = _locate(frames, spec, cols)
+    excluded = {spec.torque[j] for j in range(len(spec.torque)) if not spec.used[j]}
+    frames, missed = _leave_out_bad_rows(frames, where, spec, [c for c in cols if c not in excluded], window)
     clocks = {p: _times(p, f, spec.time) * spec.time_scale for p, f in frames.items()}
     rows = {p: _window_rows(p, clocks[p], window) for p in frames}
     t0, T = _first_clock(spec, clocks, rows)
@@ -345,7 +390,6 @@ def read_log(spec: RecordSpec, window: tuple[float, float] | None = None, arm=No
     grids = [g for g in grids if g.size >= MIN_PIECE_SAMPLES]
     if not grids:
         raise DataError(f"{spec.files[0]}: no piece between the log's gaps holds {MIN_PIECE_SAMPLES} samples")
-    excluded = {spec.torque[j] for j in range(len(spec.torque)) if not spec.used[j]}
     lenient: list[str] = []
 
     # an excluded torque channel is not fitted: its bad cells are read as 0 and said, not errors
@@ -387,6 +431,7 @@ def read_log(spec: RecordSpec, window: tuple[float, float] | None = None, arm=No
     notes = (
         _resampling_note(t0, T, qd_measured),
         *lag_note,
+        *missed,
         *gap_lines,
         *lenient,
         *_rate_notes(clocks, rows, T),
@@ -440,6 +485,12 @@ def _rate_notes(clocks: dict, rows: dict, T: float) -> list[str]:
             out.append(f"{p}: logged every {m * 1e3:.4g} ms (median), interpolated onto T = {T:.6g} s")
     return out
 
+
+MAX_BAD_ROWS = 0.05
+"""The largest share of a file's rows in the window with a bad cell (empty, non-numeric or
+non-finite) in a column the fit reads that is left out as samples the logger missed: a logger
+misses a few; a column that is mostly or wholly not numbers is another column than the table
+meant (a mistyped name matched, an export's broken column), and is refused."""
 
 MAX_LOG_STEP = 0.1
 """[s] The largest median time step a log is read with (10 Hz: coarser, the derivatives' 7-sample

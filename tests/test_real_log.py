@@ -116,15 +116,18 @@ def test_bad_logs_name_file_line_column_and_remedy(tmp_path):
     p1, p2, *_ = _write_log(tmp_path, np.random.default_rng(4))
     table = _table(p1, p2, exclude=["j_c"])
 
-    def nan_run(lines):
-        for i in range(200, 204):
+    def nan_run(lines, rows=range(200, 290)):
+        for i in rows:
             cells = lines[i].split(",")
             cells[2] = "nan"
             lines[i] = ",".join(cells)
 
-    _rewrite(p1, nan_run)
+    _rewrite(p1, nan_run)  # 90 of 1500 rows: more than a logger's missed samples
     with pytest.raises(
-        DataError, match=r"pos.csv: lines 201-204, column 'j_b/pos': non-finite.*cut the window"
+        DataError,
+        match=r"pos.csv: lines 201-290, column 'j_b/pos': non-finite.*90 such row\(s\) in the window, more "
+        r"than the 5% of its rows left out as missed samples\): is the column the one meant\? Else cut the "
+        r"window",
     ):
         read_log(record_spec(table, NAMES, KINDS, "s"))
     # the NaN run outside the window is no problem
@@ -704,17 +707,79 @@ def test_decimal_commas_of_a_semicolon_or_tab_log_are_read_and_said(tmp_path, se
 def test_a_bad_cell_is_quoted_as_written(tmp_path):
     """The message quotes the cell (nan, a time), not numpy's repr (np.float64(nan)); one line is a line."""
     p1, p2, *_ = _write_log(tmp_path, np.random.default_rng(4))
-    _rewrite(
-        p1,
-        lambda lines: lines.__setitem__(
-            100, ",".join([*lines[100].split(",")[:2], "nan", *lines[100].split(",")[3:]])
-        ),
-    )
+
+    def edit(lines):
+        lines[100] = ",".join([*lines[100].split(",")[:2], "nan", *lines[100].split(",")[3:]])
+        for i in range(400, 1500, 10):  # and enough others, apart, to be refused (7 %)
+            lines[i] = ",".join([*lines[i].split(",")[:2], "", *lines[i].split(",")[3:]])
+
+    _rewrite(p1, edit)
     with pytest.raises(
-        DataError, match=r"pos.csv: line 101, column 'j_b/pos': non-finite value \(nan;"
+        DataError, match=r"pos.csv: line 101, column 'j_b/pos': non-finite value \(nan; 111 such"
     ) as exc:
         read_log(record_spec(_table(p1, p2, exclude=["j_c"]), NAMES, KINDS, "s"))
     assert "np.float64" not in str(exc.value)
+
+
+def _without_line(path, line: int):
+    """A copy of ``path`` without its file line ``line`` (the header is line 1)."""
+    lines = path.read_text().splitlines()
+    out = path.with_name("cut_" + path.name)
+    out.write_text("\n".join(lines[: line - 1] + lines[line:]) + "\n")
+    return out
+
+
+@pytest.mark.parametrize(("file", "cell"), [(0, "nan"), (0, ""), (1, "n/a"), (0, "inf")])
+def test_a_lone_bad_cell_is_a_sample_the_logger_missed(tmp_path, file, cell):
+    """A logger's empty or NaN cell in a fitted column refused the whole log. The row is left out, and
+    the record is then the one read from the file without that row (bridged as a missed sample), the
+    notes naming file, count and line."""
+    p1, p2, *_ = _write_log(tmp_path, np.random.default_rng(4))
+    paths = [p1, p2]
+    col = 2 if file == 0 else 1  # j_b/pos, or j_a/eff (fitted)
+
+    def edit(lines):
+        cells = lines[700].split(",")
+        cells[col] = cell
+        lines[700] = ",".join(cells)
+
+    _rewrite(paths[file], edit)  # file line 701
+    rec = read_log(record_spec(_table(p1, p2, exclude=["j_c"]), NAMES, KINDS, "s"))
+    cut = list(paths)
+    cut[file] = _without_line(paths[file], 701)
+    ref = read_log(record_spec(_table(*cut, exclude=["j_c"]), NAMES, KINDS, "s"))
+    np.testing.assert_array_equal(rec.q, ref.q)
+    np.testing.assert_array_equal(rec.tau, ref.tau)
+    name = paths[file].name
+    said = [n for n in rec.notes if "left out as samples the logger missed" in n]
+    assert len(said) == 1 and said[0].startswith(str(paths[file])) and f"{name}: 1 row(s)" in said[0]
+    assert "(line(s) 701)" in said[0]
+    assert any("bridged 1 gap(s) of one missed sample" in n for n in rec.notes)
+
+
+def test_a_run_of_bad_cells_is_a_gap_and_a_bad_time_places_its_row_nowhere(tmp_path):
+    """Thirty rows of NaN in one column are a gap of the log, split at (its pieces); a row whose time is
+    not a number is left out wherever it is, window or not."""
+    p1, p2, *_ = _write_log(tmp_path, np.random.default_rng(4))
+
+    def edit(lines):
+        for i in range(600, 630):
+            cells = lines[i].split(",")
+            cells[3] = "nan"  # j_c/pos: fitted (only j_c's torque is excluded)
+            lines[i] = ",".join(cells)
+        cells = lines[1300].split(",")
+        cells[0] = "ERR"
+        lines[1300] = ",".join(cells)
+
+    _rewrite(p1, edit)
+    rec = read_log(record_spec(_table(p1, p2, exclude=["j_c"]), NAMES, KINDS, "s"))
+    assert len(rec.spans) == 2
+    assert any("pos.csv: 31 row(s)" in n and "(line(s) 601, 602, 603, 604, 605, ...)" in n for n in rec.notes)
+    assert any(n.startswith("a gap of") and "pos.csv" in n for n in rec.notes)
+    np.testing.assert_allclose(rec.q, _q(rec.t), atol=1e-5)  # no spline across the gap
+    # within a window that leaves the NaN run out, the bad time still is (it places its row nowhere)
+    part = read_log(record_spec(_table(p1, p2, exclude=["j_c"]), NAMES, KINDS, "s"), window=(0.5, 5.0))
+    assert len(part.spans) == 1 and any("pos.csv: 1 row(s)" in n and "1301" in n for n in part.notes)
 
 
 def test_a_bad_cell_in_an_excluded_channel_is_not_an_error(tmp_path):
@@ -736,9 +801,9 @@ def test_a_bad_cell_in_an_excluded_channel_is_not_an_error(tmp_path):
     assert any(
         "column 'j_c/eff' (excluded, not fitted): 1 non-finite cell(s) read as 0" in n for n in rec.notes
     )
-    _rewrite(p2, nan_in(2))  # j_b/eff, fitted
-    with pytest.raises(DataError, match=r"eff.csv: line 101, column 'j_b/eff': non-finite"):
-        read_log(record_spec(_table(p1, p2, exclude=["j_c"]), NAMES, KINDS, "s"))
+    _rewrite(p2, nan_in(2))  # j_b/eff, fitted: the row is a missed sample
+    rec = read_log(record_spec(_table(p1, p2, exclude=["j_c"]), NAMES, KINDS, "s"))
+    assert any("eff.csv: 1 row(s)" in n and "(line(s) 101)" in n for n in rec.notes)
 
 
 def test_a_file_logged_at_another_rate_than_the_grid_is_said(tmp_path):
@@ -762,6 +827,16 @@ def test_line_numbers_count_a_repeated_row_that_was_dropped(tmp_path):
         lines.insert(300, lines[299])  # a whole repeat at line 301: the bad cell is on line 1002
 
     _rewrite(p1, edit)
+    rec = read_log(record_spec(_table(p1, p2, exclude=["j_c"]), NAMES, KINDS, "s"))
+    assert any("pos.csv: 1 row(s)" in n and "(line(s) 1002)" in n for n in rec.notes)
+
+    def more(lines):  # and a text column from line 1101 on: refused at the first cell
+        for i in range(1101, len(lines)):
+            cells = lines[i].split(",")
+            cells[2] = "x"
+            lines[i] = ",".join(cells)
+
+    _rewrite(p1, more)
     with pytest.raises(DataError, match=r"pos.csv: line 1002, column 'j_b/pos': not a number \('x'"):
         read_log(record_spec(_table(p1, p2, exclude=["j_c"]), NAMES, KINDS, "s"))
 
