@@ -1,6 +1,7 @@
 """Plant faults in the headline statistics, one at a time, and check that the tests catch each.
 
-Copies the package and the tests to a temporary folder, applies one fault to the copy of
+Copies the package, the tests and the scenarios they read (``benchmarks/``, ``examples/``) to a
+temporary folder (stops, exit 2, if the tests fail there before any fault), applies one fault to the copy of
 ``adaptive_dd/benchmark/metrics.py`` (the three of the issue, the review's six, and two more:
 missed swaps and detection delays), runs ``tests/test_statistics.py`` there and prints how many
 tests failed. A fault that no test catches is printed as ``NOT caught``. The working tree is
@@ -42,8 +43,8 @@ FAULTS = {
         '"median": float(np.mean(r)),',
     ),
     "95 % interval with z = 1.96 and the population std": (
-        "half = float(stats.t.ppf(0.975, r.size - 1) * r.std(ddof=1) / np.sqrt(r.size))",
-        "half = float(1.96 * r.std() / np.sqrt(r.size))",
+        "half = float(stdtrit(r.size - 1, 0.975) * r.std(ddof=1) / np.sqrt(r.size)) if r.size > 1 else np.nan",
+        "half = float(1.96 * r.std() / np.sqrt(r.size)) if r.size > 1 else np.nan",
     ),
     "missed swaps not counted": (
         "missed += np.array([d is None for d in first], dtype=int)",
@@ -83,8 +84,13 @@ def main() -> int:
         shutil.copytree(
             ROOT / "adaptive_dd", tmp / "adaptive_dd", ignore=shutil.ignore_patterns("__pycache__")
         )
-        shutil.copytree(ROOT / "tests", tmp / "tests", ignore=shutil.ignore_patterns("__pycache__"))
-        print(f"clean copy: {run_one(tmp, '', '')}")
+        for folder in ("tests", "benchmarks", "examples"):  # the tests read scenarios of the other two
+            shutil.copytree(ROOT / folder, tmp / folder, ignore=shutil.ignore_patterns("__pycache__"))
+        clean = run_one(tmp, "", "")
+        print(f"clean copy: {clean}")
+        if " failed" in clean or " passed" not in clean:
+            print("the tests fail on the clean copy: no fault's verdict would mean anything")
+            return 2
         for name, (old, new) in FAULTS.items():
             line = run_one(tmp, old, new)
             caught = " failed" in line

@@ -105,8 +105,9 @@ def piecewise(rec, f):
 
 
 def drop_rows(scenario: str, at: float, rows: int) -> str:
-    """A copy of the scenario and its record in a temporary folder, ``rows`` rows dropped from every
-    file at ``at`` s (a logger's gap); returns the copy's scenario."""
+    """A copy of the scenario and its record in a temporary folder (removed at exit), ``rows`` rows
+    dropped from every file at ``at`` s (a logger's gap); returns the copy's scenario."""
+    import atexit
     import shutil
     import tempfile
 
@@ -117,6 +118,7 @@ def drop_rows(scenario: str, at: float, rows: int) -> str:
 
     src = Path(scenario)
     dst = Path(tempfile.mkdtemp(prefix="real_log_gap_"))
+    atexit.register(shutil.rmtree, dst, True)  # the copies go when the script ends
     table = read_toml(src)
     for f in table["record"]["files"]:
         frame = pd.read_csv(src.parent / f)
@@ -131,7 +133,7 @@ def drop_rows(scenario: str, at: float, rows: int) -> str:
             (dst / urdf).parent.mkdir(parents=True, exist_ok=True)
             shutil.copy(src.parent / urdf, dst / urdf)
     (dst / src.name).write_text(text, encoding="utf-8")
-    print(f"{rows} rows dropped at {at} s from every file of the record (copies in {dst})")
+    print(f"{rows} rows dropped at {at} s from every file of the record (copies in {dst}, removed at exit)")
     return str(dst / src.name)
 
 

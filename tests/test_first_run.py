@@ -8,6 +8,7 @@ from pathlib import Path
 from types import SimpleNamespace
 
 import numba
+import pytest
 from numba.core import event
 
 from adaptive_dd import _numba_cache
@@ -57,12 +58,39 @@ def test_compile_time_is_the_wall_time_inside_any_compilation():
     assert _numba_cache._compile_seconds([]) == 0.0
 
 
-def test_the_compile_time_is_printed_after_a_compilation(monkeypatch, capsys):
+def test_compilations_of_uncached_functions_are_counted_apart():
+    """A plug-in's loop is compiled with cache=False: every run compiles it again, and the run said
+    "cached: later runs skip this" of it too."""
+    from numba.core.caching import NullCache
+
+    def ev(kind, cached=True):
+        d = type("D", (), {"_cache": object() if cached else NullCache()})()
+        return event.Event("numba:compile", kind, data={"dispatcher": d})
+
+    start, end = event.EventStatus.START, event.EventStatus.END
+    # a cached kernel 0-10 s (a callee 2-5 s inside), an uncached loop 20-23 s calling a cached one
+    buffer = [(0.0, ev(start)), (2.0, ev(start)), (5.0, ev(end)), (10.0, ev(end)), (20.0, ev(start, False)),
+              (21.0, ev(start)), (22.0, ev(end)), (23.0, ev(end, False))]  # fmt: skip
+    assert _numba_cache._compile_split(buffer) == (13.0, 3.0)
+    assert _numba_cache._compile_split(buffer[:4]) == (10.0, 0.0)
+
+
+@pytest.mark.parametrize(
+    ("split", "said"),
+    [
+        ((42.4, 0.0), "compiled the kernels in 42 s (cached: later runs skip this)"),
+        ((42.4, 12.0), "compiled the kernels in 42 s (12 s of it the plug-ins' loops, compiled again by "
+         "every run; the rest cached: later runs skip it)"),
+        ((12.4, 12.0), "compiled the kernels in 12 s (the plug-ins' loops: not cached, every run compiles "
+         "them again)"),
+    ],
+)  # fmt: skip
+def test_the_compile_time_is_printed_after_a_compilation(monkeypatch, capsys, split, said):
     monkeypatch.setattr(_numba_cache, "compile_estimate", lambda arm: 0.0)
-    monkeypatch.setattr(_numba_cache, "_compile_seconds", lambda buffer: 42.4)
+    monkeypatch.setattr(_numba_cache, "_compile_split", lambda buffer: split)
     with _numba_cache.announce_compilation(ClosedFormTwoLink.sice()):
         pass
-    assert capsys.readouterr().err == "compiled the kernels in 42 s (cached: later runs skip this)\n"
+    assert capsys.readouterr().err == said + "\n"
 
 
 def test_run_estimate_adds_compilation():

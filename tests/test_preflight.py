@@ -66,6 +66,7 @@ def test_a_torque_beyond_the_limit_without_payload_blames_the_arm_not_a_payload(
     [
         ("payload_gradient:PayloadGradient", "[controllers.PayloadGradient]\nbogus = 1\n", "['bogus']"),
         ("no_such_module_xyz:Ctrl", "", "cannot import module 'no_such_module_xyz'"),
+        ("no_such_module_xyz:Ctrl", "", "put no_such_module_xyz.py beside the scenario file"),
         ("payload_gradient:NoSuchClass", "", "has no 'NoSuchClass'"),
         ("payload_gradient:PayloadGradient", "[controllers.PayloadGradient]\ngamma = -1\n", "gamma must be"),
     ],

@@ -255,3 +255,18 @@ def test_settling_time_after_a_short_segment_is_not_set_by_that_segment_s_transi
     e[0, 1000:1100] = e[0, 1700:1800] = 3e-3  # swaps at 1.0 s and 1.7 s, each 100 ms off
     t = _settling_times(e, [0, 1000, 1700], [1000, 1700, 3700], 1e-3)
     assert 0.14 <= t[0, 1] <= 0.16 and 0.14 <= t[0, 2] <= 0.16  # the 1.7 s swap's read 0 before
+
+
+def test_every_planted_fault_of_the_benchmark_script_still_applies():
+    """``benchmarks/planted_faults.py`` plants each fault by replacing a line of metrics.py: a line that
+    changed made it print "fault not applicable" and count that fault as not caught, unnoticed."""
+    import importlib.util
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[1]
+    spec = importlib.util.spec_from_file_location("planted_faults", root / "benchmarks" / "planted_faults.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    text = (root / mod.METRICS).read_text()
+    stale = [name for name, (old, _new) in mod.FAULTS.items() if text.count(old) != 1]
+    assert not stale, f"faults whose line is not in {mod.METRICS} once: {stale}"

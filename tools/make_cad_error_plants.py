@@ -4,7 +4,7 @@ vendor's URDF leaves them, the robot off by CAD-level errors, given as a URDF of
 Run from the repository root::
 
     python tools/make_cad_error_plants.py          # rewrite the files
-    python tools/make_cad_error_plants.py --check  # exit 1 if a written file differs
+    python tools/make_cad_error_plants.py --check  # exit 1 if a written file differs (numbers to 1e-12)
 
 For each arm, one draw of :func:`~adaptive_dd.identification.arm_prior.draw_parameters` at the
 default levels (:class:`~adaptive_dd.identification.arm_prior.ArmUncertainty`: per link the mass
@@ -21,6 +21,7 @@ is given the vendor's URDF and told how far it may be from the robot.
 from __future__ import annotations
 
 import argparse
+import re
 import sys
 from pathlib import Path
 
@@ -89,6 +90,19 @@ def plant_files(name: str, k: int) -> dict[str, str]:
     }
 
 
+_NUMBER = re.compile(r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?")
+
+
+def same_text(a: str, b: str, rtol: float = 1e-12) -> bool:
+    """``a`` and ``b`` equal but for their numbers' last digits (within ``rtol``): a draw's inertia is
+    a product of floats whose last bit differs between machines' libraries."""
+    if _NUMBER.sub("#", a) != _NUMBER.sub("#", b):
+        return False
+    x = [float(v) for v in _NUMBER.findall(a)]
+    y = [float(v) for v in _NUMBER.findall(b)]
+    return all(abs(u - v) <= rtol * max(abs(u), abs(v)) for u, v in zip(x, y, strict=True))
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--check", action="store_true", help="exit 1 if a written file differs")
@@ -99,7 +113,7 @@ def main() -> int:
         for fname, text in plant_files(name, k).items():
             target = OUT / fname
             if a.check:
-                if not target.is_file() or target.read_text(encoding="utf-8") != text:
+                if not target.is_file() or not same_text(target.read_text(encoding="utf-8"), text):
                     stale.append(str(target))
             else:
                 target.write_text(text, encoding="utf-8")

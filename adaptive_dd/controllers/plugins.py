@@ -64,7 +64,14 @@ def load_controller_class(path: str, search: tuple = ()) -> type:
     try:
         obj = importlib.import_module(mod_name)
     except ImportError as exc:
-        raise ParameterError(f"controller {path!r}: cannot import module {mod_name!r}: {exc}") from None
+        looked = ", ".join(str(p) for p in search) if search else "none"
+        hint = (
+            f" (looked on the Python path and in: {looked}); put {mod_name.replace('.', '/')}.py beside the "
+            "scenario file or in the working directory, or add its folder to PYTHONPATH"
+            if isinstance(exc, ModuleNotFoundError) and exc.name == mod_name.split(".")[0]
+            else ""
+        )
+        raise ParameterError(f"controller {path!r}: cannot import module {mod_name!r}: {exc}{hint}") from None
     finally:
         for p in extra:
             sys.path.remove(p)
