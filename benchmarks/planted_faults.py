@@ -43,8 +43,8 @@ FAULTS = {
         '"median": float(np.mean(r)),',
     ),
     "95 % interval with z = 1.96 and the population std": (
-        "half = float(stdtrit(r.size - 1, 0.975) * r.std(ddof=1) / np.sqrt(r.size)) if r.size > 1 else np.nan",
-        "half = float(1.96 * r.std() / np.sqrt(r.size)) if r.size > 1 else np.nan",
+        "half = float(stdtrit(r.size - 1, 0.975) * r.std(ddof=1) / np.sqrt(r.size))",
+        "half = float(1.96 * r.std() / np.sqrt(r.size))",
     ),
     "missed swaps not counted": (
         "missed += np.array([d is None for d in first], dtype=int)",
