@@ -164,7 +164,14 @@ def test_version_and_no_abbreviations(capsys):
     assert e.value.code == 0 and f"adaptive-dd {adaptive_dd.__version__}" in capsys.readouterr().out
     with pytest.raises(SystemExit) as e:
         main(["benchmark", "--seed", "2"])
-    assert e.value.code == 2 and "unrecognized arguments: --seed" in capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert e.value.code == 2 and "unrecognized arguments: --seed" in err
+    # the command's own usage and the option meant
+    assert "usage: adaptive-dd benchmark" in err and "(--seed: did you mean --seeds?)" in err
+    with pytest.raises(SystemExit) as e:
+        main(["validate", "--zzzz"])
+    err = capsys.readouterr().err
+    assert e.value.code == 2 and "unrecognized arguments: --zzzz" in err and "did you mean" not in err
 
 
 @pytest.mark.parametrize(

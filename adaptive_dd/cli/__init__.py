@@ -61,6 +61,22 @@ def build_parser() -> argparse.ArgumentParser:
     return p
 
 
+def _unknown_options(parser: argparse.ArgumentParser, command: str, unknown: list[str]) -> None:
+    """Exit 2 naming the unknown arguments with the command's usage and, for a mistyped option, the
+    command's options nearest to it (``--seed``: did you mean ``--seeds``)."""
+    import difflib
+
+    sub = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction)).choices[command]
+    options = [o for a in sub._actions for o in a.option_strings if o.startswith("--")]
+    near = {
+        u: difflib.get_close_matches(u.split("=", 1)[0], options, n=2, cutoff=0.6)
+        for u in unknown
+        if u.startswith("-")
+    }
+    hints = "; ".join(f"{u}: did you mean {' or '.join(m)}?" for u, m in near.items() if m)
+    sub.error(f"unrecognized arguments: {' '.join(unknown)}" + (f" ({hints})" if hints else ""))
+
+
 def _is_user_error(exc: BaseException) -> bool:
     """Our errors, file-system errors, and plain ValueErrors raised by adaptive_dd's own code."""
     from adaptive_dd.errors import DataError, ScenarioError, SignalError, UrdfError
@@ -90,7 +106,9 @@ def main(argv: list[str] | None = None) -> int:
     os.environ.setdefault("MPLBACKEND", "Agg")  # the command writes its figures to files; no window
     parser = build_parser()
     argv = sys.argv[1:] if argv is None else list(argv)
-    args = parser.parse_args(argv)
+    args, unknown = parser.parse_known_args(argv)
+    if unknown:  # the command's own usage, and the option meant (no abbreviations are taken)
+        _unknown_options(parser, args.command, unknown)
     args.given = frozenset(a.split("=", 1)[0] for a in argv if a.startswith("--"))
     try:
         return int(args.func(args))
