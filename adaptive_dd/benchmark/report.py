@@ -405,7 +405,7 @@ def _adaptive_ct_targets(a: dict) -> list[str]:
         )
         out.append(
             where
-            + f"mean {st['mean']:.3f}, p90 {st['p90']:.3f}, max {st['max']:.2f} (seed {st['worst_seed']}) "
+            + f"mean {st['mean']:.3f}, p90 {st['p90']:.3f}, max {st['max']:.3f} (seed {st['worst_seed']}) "
             f"(target mean <= {TARGET_RATIO_MEAN}, p90 <= {TARGET_RATIO_P90}, max <= {TARGET_RATIO_MAX}: "
             f"{'met' if ok else 'NOT met'})"
         )
