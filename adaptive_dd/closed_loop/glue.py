@@ -546,7 +546,7 @@ def _sigma_loop(rc, rec, k, s, sigma):  # pragma: no cover - compiled
 
 def sigma_batch(rc, rec, k: int, s: int, sigma) -> None:
     """Record every trial's estimate ``sigma (S, p)`` (see :func:`record_estimate`)."""
-    _sigma_loop(rc, rec, k, s, np.ascontiguousarray(sigma, dtype=float))
+    _sigma_loop(rc, rec, k, s, np.array(sigma, dtype=float, order="C"))  # writable: one compiled type
 
 
 @njit(cache=True)

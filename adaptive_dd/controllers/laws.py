@@ -204,6 +204,7 @@ def slotine_li_batch(q, qd, q_d, qd_d, qdd_d, theta, sg0, lam, kd, T, gamma, lo,
     """:func:`slotine_li_trial` over a batch ``(n, 2)``; ``theta (n, 7)`` updated in place."""
     shape, (a, b, c, d, e) = _flat(q, qd, q_d, qd_d, qdd_d)
     out = np.empty((a.shape[0], 2))
+    sg0 = np.array(sg0, dtype=float)  # writable: one compiled type whatever the caller holds
     _slotine_loop(a, b, c, d, e, theta, sg0, float(lam), float(kd), float(T), gamma, lo, hi, pj, out)
     return out.reshape(*shape, 2)
 
@@ -260,6 +261,6 @@ def boost_batch(tau, q, qd, q_d, qd_d, sigma0, dkp: float, dkd: float, on, kp=1.
     out = t.copy()
     on = np.array(np.broadcast_to(np.asarray(on, dtype=np.bool_), (a.shape[0],)), order="C")
     lim = np.full(2, np.inf) if lim is None else np.asarray(lim, dtype=float)
-    sg0 = np.asarray(sigma0, dtype=float)
+    sg0 = np.array(sigma0, dtype=float)  # a copy: writable even when the arm's sigma is not
     _boost_loop(a, b, c, d, sg0, float(dkp), float(dkd), float(kp), float(kd), lim, on, out)
     return out.reshape(*shape, 2)

@@ -77,8 +77,11 @@ def observe_batch(g, sigma_model, q, qd, obs, tau):
     compiled loop does per trial); ``obs (S, OBS_ROWS, 2)`` updated in place. ``g`` a
     :class:`~adaptive_dd.controllers.compiled_form.TwoLinkGains`."""
     out = np.array(tau, dtype=float, order="C", copy=True)
-    c = np.ascontiguousarray
-    _observe_loop(g, c(sigma_model, dtype=float), c(q, dtype=float), c(qd, dtype=float), obs, out)
+
+    def c(x):  # a writable C copy: one compiled type, whether the caller's array is read-only or not
+        return np.array(x, dtype=float, order="C")
+
+    _observe_loop(g, c(sigma_model), c(q), c(qd), obs, out)
     return out
 
 

@@ -262,7 +262,7 @@ def _track(arm, model: Model, pi_true: Array, ref, rngs, step, bandwidth: float,
         cmd = inverse_dynamics_pi(model, pi_true, qm, qdm, a)
         tau = np.empty_like(cmd)
         sat = np.empty(cmd.shape, dtype=np.bool_)
-        actuate_batch(np.ascontiguousarray(cmd), lim, lsb, act.saturate, quantize, tau, sat)
+        actuate_batch(np.array(cmd, order="C"), lim, lsb, act.saturate, quantize, tau, sat)  # writable
         sat_count += sat
         for key, v in (("q", qm), ("qd", qdm), ("tau", tau), ("q_true", q), ("qd_true", qd)):
             out[key][:, k] = v

@@ -62,7 +62,7 @@ class ActuatorConfig:
 
         The compiled :func:`adaptive_dd.plant.sampling.actuate_trial` does the work (the
         compiled closed loop calls the same function)."""
-        cmd = np.ascontiguousarray(tau_cmd, dtype=float).reshape(-1, len(self.torque_limit))
+        cmd = np.array(tau_cmd, dtype=float, order="C").reshape(-1, len(self.torque_limit))  # writable
         tau = np.empty_like(cmd)
         sat = np.empty(cmd.shape, dtype=np.bool_)
         actuate_batch(cmd, self._lim, self._lsb, self.saturate, self.quantize, tau, sat)
