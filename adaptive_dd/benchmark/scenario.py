@@ -319,8 +319,10 @@ def runtime_line(sc: Scenario) -> str:
     :func:`scenario_closed_forms`), or the general N-joint kernels with every reason that applies."""
     if sc.closed_forms is not None:
         return (
-            "runtime: the paper's two-link closed forms (eqs. 3-9): the arm has the paper's geometry "
-            'and no plant of its own; add `robot = "sice_arm"` and `general = true` to [arm] to run it '
+            "runtime: the paper's two-link closed forms (eqs. 3-9): the arm has the paper's geometry and "
+            "the simulated robot's parameters are the arm's (no [plant] urdf, viscous, coulomb, armature or "
+            "uncertainty); "
+            'add `robot = "sice_arm"` and `general = true` to [arm] to run it '
             "on the general N-joint kernels"
         )
     if sc.arm is None:
