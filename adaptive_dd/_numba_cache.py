@@ -260,13 +260,9 @@ def compile_estimate(arm) -> float:
     return COMPILE_SECONDS["serial" if serial else "two-link"]
 
 
-def _compile_seconds(buffer) -> float:
-    """Wall time inside at least one numba compilation, from a recorder's ``(time, event)`` pairs."""
-    return _compile_split(buffer)[0]
-
-
 def _compile_split(buffer) -> tuple[float, float]:
-    """``(total, uncached)``: the wall time inside at least one numba compilation, and the part of it
+    """``(total, uncached)`` from a recorder's ``(time, event)`` pairs: the wall time inside at least
+    one numba compilation, and the part of it
     in compilations started from Python of functions numba does not cache (``cache=False``: a
     plug-in's loop, :mod:`adaptive_dd.closed_loop.plugin_loop`), which every run compiles again."""
     total, uncached, depth, start, cached = 0.0, 0.0, 0, 0.0, True

@@ -1,8 +1,8 @@
 """Plant faults in the headline statistics, one at a time, and check that the tests catch each.
 
 Copies the package, the tests and the scenarios they read (``benchmarks/``, ``examples/``) to a
-temporary folder (stops, exit 2, if the tests fail there before any fault), applies one fault to the copy of
-``adaptive_dd/benchmark/metrics.py`` (the three of the issue, the review's six, and two more:
+temporary folder (stops, exit 2, if the tests fail there before any fault), applies one fault to
+the copy of ``adaptive_dd/benchmark/metrics.py`` (the three of the issue, the review's six, and two more:
 missed swaps and detection delays), runs ``tests/test_statistics.py`` there and prints how many
 tests failed. A fault that no test catches is printed as ``NOT caught``. The working tree is
 never touched.

@@ -78,10 +78,9 @@ def observe_batch(g, sigma_model, q, qd, obs, tau):
     :class:`~adaptive_dd.controllers.compiled_form.TwoLinkGains`."""
     out = np.array(tau, dtype=float, order="C", copy=True)
 
-    def c(x):  # a writable C copy: one compiled type, whether the caller's array is read-only or not
-        return np.array(x, dtype=float, order="C")
-
-    _observe_loop(g, c(sigma_model), c(q), c(qd), obs, out)
+    # writable C copies: one compiled type, whether the caller's arrays are read-only or not
+    sg, q, qd = (np.array(x, dtype=float, order="C") for x in (sigma_model, q, qd))
+    _observe_loop(g, sg, q, qd, obs, out)
     return out
 
 
