@@ -109,7 +109,8 @@ class _TwoLinkTrial:
 
 class _ChainTrial:
     """One trial of an N-joint arm: the closed loop's per-sample glue
-    (:func:`~adaptive_dd.closed_loop.glue.measure_batch`, :func:`~adaptive_dd.closed_loop.glue.apply_batch`),
+    (:func:`~adaptive_dd.closed_loop.batches.measure_batch`,
+    :func:`~adaptive_dd.closed_loop.batches.apply_batch`),
     the benchmark's Python path for one trial."""
 
     def __init__(self, sc: Scenario, seed_index: int) -> None:
@@ -129,7 +130,7 @@ class _ChainTrial:
 
     def measure(self) -> tuple[Array, Array]:
         from adaptive_dd.benchmark.types import CHUNK
-        from adaptive_dd.closed_loop.glue import measure_batch
+        from adaptive_dd.closed_loop.batches import measure_batch
 
         if self._buf is None or self._at >= self._buf[0].shape[1]:
             self._buf, self._at = self.noise.block(CHUNK), 0
@@ -140,7 +141,7 @@ class _ChainTrial:
         return qm[0], qdm[0]
 
     def step(self, tau: Array) -> tuple[Array, NDArray[np.bool_]]:
-        from adaptive_dd.closed_loop.glue import apply_batch
+        from adaptive_dd.closed_loop.batches import apply_batch
 
         applied, _ = apply_batch(self.rc, self.io, self.pl, self.ts, self.acc, self.rec, self.k, tau[None])
         sat = self.rec.saturated[0, self.k].copy()

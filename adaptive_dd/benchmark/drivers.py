@@ -6,9 +6,9 @@ as its compile-time choices (:mod:`adaptive_dd.benchmark.compiled`); :func:`run_
 any controller object (``reset / command / observe``) on the closed loop's one Python path
 (:func:`~adaptive_dd.closed_loop.python_path.run_python_batch`, shared with the N-joint arm)
 around the batch wrappers of the same per-trial functions
-(:func:`~adaptive_dd.closed_loop.glue.measure_batch`,
-:func:`~adaptive_dd.closed_loop.glue.apply_batch`,
-:func:`~adaptive_dd.closed_loop.glue.sigma_batch`): the measurement with its dropouts,
+(:func:`~adaptive_dd.closed_loop.batches.measure_batch`,
+:func:`~adaptive_dd.closed_loop.batches.apply_batch`,
+:func:`~adaptive_dd.closed_loop.batches.sigma_batch`): the measurement with its dropouts,
 the divergence rule, actuator, plant step, failure freeze, streamed sums and recordings are
 written once (:mod:`adaptive_dd.closed_loop.glue`), so the two paths agree to rounding.
 """
@@ -23,15 +23,13 @@ from adaptive_dd.benchmark.compiled import OnlineKernelConfig, TwoLinkPlant
 from adaptive_dd.benchmark.streaming import segment_bounds
 from adaptive_dd.benchmark.trials import new_run, sensor_of, true_sigma
 from adaptive_dd.benchmark.types import MAX_ALARMS, MAX_ERROR, SETTLE, ControllerRun
+from adaptive_dd.closed_loop.batches import apply_batch, measure_batch, sigma_batch
 from adaptive_dd.closed_loop.glue import (
     Alarms,
     alarm_lists,
-    apply_batch,
     closed_loop_block,
     in_threads,
-    measure_batch,
     segment_of,
-    sigma_batch,
 )
 from adaptive_dd.closed_loop.noise import NoiseBlocks
 from adaptive_dd.closed_loop.python_path import PythonGlue, run_python_batch

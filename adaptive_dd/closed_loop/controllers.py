@@ -20,7 +20,7 @@ from typing import Any, NamedTuple
 import numpy as np
 from numpy.typing import NDArray
 
-from adaptive_dd.closed_loop.glue import estimator_batch
+from adaptive_dd.closed_loop.batches import estimator_batch
 from adaptive_dd.closed_loop.laws import (
     KIND_CT,
     KIND_PD,

@@ -26,8 +26,9 @@ type of their record (:mod:`adaptive_dd.closed_loop.choices`). The choices of an
 paper's two-link arm (its closed-form plant, its laws and its estimator). The public names of
 ``choices`` and ``chain_choices`` are importable from here. The compiled path runs all four inside
 :func:`closed_loop_block` (a range of trials, the GIL released so that threads run ranges
-in parallel: :func:`in_threads`); the Python path calls the batch wrappers (``*_batch``)
-around the Python controller, so both paths do the same arithmetic in the same order.
+in parallel: :func:`in_threads`); the Python path calls the batch wrappers
+(:mod:`adaptive_dd.closed_loop.batches`) around the Python controller, so both paths do the same
+arithmetic in the same order.
 """
 
 from __future__ import annotations
@@ -42,6 +43,7 @@ from numba import njit, prange
 from numba.core.errors import NumbaPerformanceWarning
 from numpy.typing import NDArray
 
+from adaptive_dd.closed_loop.borrow import borrowed, keep_alive
 from adaptive_dd.closed_loop.chain_choices import (
     ChainEstimator,
     ChainLaw,
@@ -71,8 +73,6 @@ from adaptive_dd.closed_loop.choices import (
     plant_work,
 )
 from adaptive_dd.closed_loop.tool_frame import accumulate_tool
-from adaptive_dd.closed_loop.types import Plant
-from adaptive_dd.identification.online_kernel import EstCfg
 from adaptive_dd.plant.sampling import actuate_trial, measure_trial
 
 __all__ = [
@@ -82,14 +82,12 @@ __all__ = [
     "ChainLaw",
     "accumulate_sample",
     "alarm_lists",
-    "apply_batch",
     "apply_sample",
     "chain_estimator",
     "chain_law",
     "chain_loop_block",
     "closed_loop_block",
     "compile_estimator",
-    "estimator_batch",
     "estimator_sample",
     "estimator_work",
     "in_threads",
@@ -97,7 +95,6 @@ __all__ = [
     "law_delay",
     "law_estimate",
     "law_work_of",
-    "measure_batch",
     "measure_sample",
     "online_sample",
     "plant_advance",
@@ -105,7 +102,6 @@ __all__ = [
     "plant_work",
     "record_estimate",
     "segment_of",
-    "sigma_batch",
     "trial_samples",
 ]
 
@@ -301,6 +297,19 @@ def record_estimate(seg_end, sigma_end, sigma_rec, i, k, s, sigma):  # pragma: n
             sigma_rec[i, k, c] = sigma[c]
 
 
+@njit(cache=True, inline="always")
+def _as_is(x):  # pragma: no cover - compiled
+    """``x`` itself: the two-link loop's :func:`borrowed` (its ``prange`` hands it arrays without
+    reference counts already)."""
+    return x
+
+
+@njit(cache=True, inline="always")
+def _nothing(x):  # pragma: no cover - compiled
+    """The two-link loop's :func:`keep_alive`: nothing to keep."""
+    return None
+
+
 @njit(cache=True, parallel=COPY_PROPAGATE_ONLY)
 def trial_samples(
     i, k0, k1, noise, drop, rc, io, pl, ts, acc, rec, alarms, law, ls, ec, es, estimates
@@ -317,9 +326,25 @@ def trial_samples(
     The records' fields are read out once, before the sample loop, and the per-sample pieces,
     inlined into it (``inline="always"``), take them as plain arrays; compiled with
     :data:`COPY_PROPAGATE_ONLY` so that the inlined calls' argument copies cost no
-    reference-count update per sample. A compiled kernel longer than 60 lines would be split
-    here only at a cost in speed; this one is not.
+    reference-count update per sample (the two-link arm's; the N-joint loop's records and scratch
+    are borrowed instead: :data:`_chain_trial_samples`). A compiled kernel longer than 60 lines
+    would be split here only at a cost in speed; this one is not.
     """
+    # one value a call: numba's array analysis (the two-link loop's copy propagation) misreads the
+    # shapes of records unpacked from one tuple of them
+    rc = records_view(rc)
+    io = records_view(io)
+    pl = records_view(pl)
+    ts = records_view(ts)
+    acc = records_view(acc)
+    rec = records_view(rec)
+    alarms = records_view(alarms)
+    law = records_view(law)
+    ls = records_view(ls)
+    ec = records_view(ec)
+    es = records_view(es)
+    noise = records_view(noise)
+    drop = records_view(drop)
     T, max_error, max_speed, q_d, qd_d, qdd_d = rc.T, rc.max_error, rc.max_speed, rc.q_d, rc.qd_d, rc.qdd_d
     seg_start, seg_end, seg_settled = rc.seg_start, rc.seg_end, rc.seg_settled
     lim, lsb, saturate, quantize_dac = io.lim, io.lsb, io.saturate, io.quantize_dac
@@ -335,11 +360,18 @@ def trial_samples(
     sigma_rec, sigma_end = rec.sigma, rec.sigma_end
     alarm_t, n_alarms = alarms.times, alarms.count
     n = plant_joints(pl, q)
-    qm, qdm, qm_obs, qdm_obs = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
-    cmd, tau, e, prev = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
-    sig = np.empty(sigma_end.shape[2])
-    tw, tr = np.zeros((max(ee_index.shape[0], 1), 12)), np.zeros(9)
-    pw, lw, ew = plant_work(pl, n), law_work_of(law, n), estimator_work(ec, es)
+    rows_own, sig_own = np.empty((8, n)), np.empty(sigma_end.shape[2])
+    tw_own, tr_own = np.zeros((max(ee_index.shape[0], 1), 12)), np.zeros(9)
+    pw_own, lw_own, ew_own = plant_work(pl, n), law_work_of(law, n), estimator_work(ec, es)
+    rows = records_view(rows_own)
+    sig = records_view(sig_own)
+    tw = records_view(tw_own)
+    tr = records_view(tr_own)
+    pw = records_view(pw_own)
+    lw = records_view(lw_own)
+    ew = records_view(ew_own)
+    qm, qdm, qm_obs, qdm_obs = rows[0], rows[1], rows[2], rows[3]
+    cmd, tau, e, prev = rows[4], rows[5], rows[6], rows[7]
     has_drop = drop.shape[1] > 0
     late = law_delay(law)  # an oracle told of each swap late: its true model's segment lags
     for k in range(k0, k1):
@@ -367,6 +399,20 @@ def trial_samples(
             n_alarms[i] += 1
         if estimates and (k == seg_end[s] - 1 or i < sigma_rec.shape[0]):
             record_estimate(seg_end, sigma_end, sigma_rec, i, k, s, law_estimate(law, ls, i, lw, sig))
+    kept_to_here(rows_own)
+    kept_to_here(sig_own)
+    kept_to_here(tw_own)
+    kept_to_here(tr_own)
+    kept_to_here(pw_own)
+    kept_to_here(lw_own)
+    kept_to_here(ew_own)
+
+
+records_view, kept_to_here = _as_is, _nothing
+"""What :func:`trial_samples` calls to view its records and scratch, and to keep the scratch alive
+to the end of its loop: on the two-link arm the values as they are (:func:`_as_is`); the N-joint
+loop binds :func:`~adaptive_dd.closed_loop.borrow.borrowed` and
+:func:`~adaptive_dd.closed_loop.borrow.keep_alive` (:data:`_chain_trial_samples`)."""
 
 
 def _bound(f, **names):
@@ -401,13 +447,23 @@ _chain_trial_samples = njit(inline="always")(
         law_delay=_chain_law_delay,
         estimator_sample=_chain_estimator_sample,
         law_estimate=_chain_law_estimate,
+        records_view=borrowed,
+        kept_to_here=keep_alive,
     )
 )
 """:func:`trial_samples` for N-joint arms: the same code, its choices (:func:`plant_advance`,
 :func:`law_command`, ...) the N-joint arm's functions called by name (``_chain_*``), inlined into
 :func:`chain_loop_block` (numba optimises each compiled function again with everything it
-calls: one compiled function less), which is compiled with :data:`COPY_PROPAGATE_ONLY` as
-:func:`trial_samples` is (without it the UR5's laws ran 8-13 % slower per sample).
+calls: one compiled function less). Its records and scratch are
+:func:`~adaptive_dd.closed_loop.borrow.borrowed` (``records_view``, kept alive by
+``kept_to_here``): without it each array passed along (each call's arguments, each view such as
+``q[i]``) cost an atomic reference-count update, and a quarter of a UR5 trial's time was
+billed to them (``perf``). Borrowed, with the detector's per-sample pieces inlined
+(:func:`~adaptive_dd.identification.online_detector._ref_rise`), the UR5's ``adaptive_ct`` trial
+ran 2.22-2.32x -> 2.47-2.58x the Pinocchio loop and ``ct_oracle`` 5.86-6.25x -> 6.46-6.72x
+(``benchmarks/speed_arm.py``, three runs of each tree alternated); either alone, no faster. The
+two-link loop keeps its own way (a ``prange``, :func:`closed_loop_block`): borrowed, its
+``adaptive_ct`` ran 3-10 % slower.
 
 By name, not by type: numba compiles an ``@overload``'s implementation in full (with everything
 it calls) to type it, even one inlined where it is called, and then throws that compiled form
@@ -441,7 +497,7 @@ def closed_loop_block(
         )  # fmt: skip
 
 
-@njit(cache=True, nogil=True, parallel=COPY_PROPAGATE_ONLY)
+@njit(cache=True, nogil=True)
 def chain_loop_block(
     i0, i1, k0, k1, noise, drop, rc, io, pl, ts, acc, rec, alarms, law, ls, ec, es, estimates
 ):  # pragma: no cover - compiled
@@ -474,111 +530,3 @@ def in_threads(kernel, S: int, args: tuple) -> None:
     with ThreadPoolExecutor(m) as pool:
         for f in [pool.submit(kernel, int(a), int(b), *args) for a, b in itertools.pairwise(edges)]:
             f.result()
-
-
-# ----------------------------------------------------------------------- Python path
-@njit(cache=True)
-def _measure_loop(io, ts, noise, lost, qm, qdm, qm_obs, qdm_obs):  # pragma: no cover - compiled
-    for i in range(qm.shape[0]):
-        measure_sample(
-            ts.q, ts.qd, ts.held_q, ts.held_qd, ts.n_dropped, io.res, io.std, io.quantize_encoder, i,
-            noise[i], lost[i], qm[i], qdm[i], qm_obs[i], qdm_obs[i],
-        )  # fmt: skip
-
-
-def measure_batch(io, ts, noise, lost) -> tuple:
-    """Step 1 for every trial: ``noise (S, 2 n)``, ``lost (S,)`` -> ``qm, qdm, qm_obs, qdm_obs (S, n)``."""
-    S, n = ts.q.shape
-    qm, qdm, qm_obs, qdm_obs = (np.empty((S, n)) for _ in range(4))
-    _measure_loop(io, ts, np.ascontiguousarray(noise), np.ascontiguousarray(lost), qm, qdm, qm_obs, qdm_obs)
-    return qm, qdm, qm_obs, qdm_obs
-
-
-@njit(cache=True)
-def _apply_loop(rc, io, pl, ts, acc, rec, k, cmd, tau):  # pragma: no cover - compiled
-    s = segment_of(rc, k)
-    n = cmd.shape[1]
-    pw, e, prev = plant_work(pl, n), np.empty(n), np.empty(n)  # one per call: trials one after another
-    tw, tr = np.zeros((max(rc.ee_index.shape[0], 1), 12)), np.zeros(9)
-    for i in range(cmd.shape[0]):
-        mask = apply_sample(
-            rc.T, rc.max_error, rc.max_speed, rc.q_d, io.lim, io.lsb, io.saturate,
-            io.quantize_dac, pl, pw, ts.q, ts.qd, ts.stuck, ts.failed, ts.failed_at, ts.failed_cmd, rec.q,
-            rec.qd, rec.tau, rec.saturated, i, k, cmd[i], tau[i], e, prev, s,
-        )  # fmt: skip
-        accumulate_sample(
-            acc.sum_e2, acc.sum_e2_joint, acc.max_e, acc.sum_tau2, acc.n_saturated, acc.first_saturated,
-            acc.sum_e2_settled, acc.e_norm, rc.seg_settled, i, s, k, e, tau[i], mask,
-        )  # fmt: skip
-        accumulate_tool(
-            rc.ee_index, rc.ee_links, rc.ee_ref, acc.ee_sum_p2, acc.ee_max_p, acc.ee_sum_th2, i, s, k, prev,
-            tw, tr,
-        )  # fmt: skip
-    return s
-
-
-_chain_apply_loop = njit(cache=True)(
-    _named(
-        _bound(_apply_loop.py_func, apply_sample=_chain_apply_sample, plant_work=_chain_plant_work),
-        "_chain_apply_loop",
-    )
-)
-""":func:`_apply_loop` of an N-joint arm (:class:`~adaptive_dd.closed_loop.types.Plant`), its choices
-called by name as in :data:`_chain_trial_samples`: through the overloads, numba compiled the plant
-step's choice in full to type it and threw it away (about 4.6 CPU s on the UR5)."""
-
-
-def apply_batch(rc, io, pl, ts, acc, rec, k: int, cmd) -> tuple[NDArray[np.float64], int]:
-    """Step 3 for every trial; ``cmd (S, n)`` (copied); returns the applied torque ``(S, n)`` and
-    the segment of sample k."""
-    cmd = np.array(cmd, dtype=float, order="C")
-    tau = np.empty_like(cmd)
-    loop = _chain_apply_loop if isinstance(pl, Plant) else _apply_loop
-    s = loop(rc, io, pl, ts, acc, rec, k, cmd, tau)
-    return tau, int(s)
-
-
-@njit(cache=True)
-def _sigma_loop(rc, rec, k, s, sigma):  # pragma: no cover - compiled
-    for i in range(sigma.shape[0]):
-        record_estimate(rc.seg_end, rec.sigma_end, rec.sigma, i, k, s, sigma[i])
-
-
-def sigma_batch(rc, rec, k: int, s: int, sigma) -> None:
-    """Record every trial's estimate ``sigma (S, p)`` (see :func:`record_estimate`)."""
-    _sigma_loop(rc, rec, k, s, np.array(sigma, dtype=float, order="C"))  # writable: one compiled type
-
-
-@njit(cache=True)
-def _estimator_loop(ec, es, ls, qm_obs, qdm_obs, tau, alarm):  # pragma: no cover - compiled
-    ew = estimator_work(ec, es)  # one per call: trials run one after the other here
-    for i in range(tau.shape[0]):
-        alarm[i] = estimator_sample(ec, es, ls, i, qm_obs[i], qdm_obs[i], tau[i], ew)
-
-
-_chain_estimator_loop = njit(cache=True)(
-    _named(
-        _bound(
-            _estimator_loop.py_func,
-            estimator_work=_chain_estimator_work,
-            estimator_sample=_chain_estimator_sample,
-        ),
-        "_chain_estimator_loop",
-    )
-)
-""":func:`_estimator_loop` of an N-joint arm's estimator (a :class:`ChainEstimator`), its choices
-called by name: through the overloads, numba compiled the estimator's choice in full to type it
-(linking the estimator's step) and threw it away (about 6.6 CPU s on the UR5)."""
-
-
-def estimator_batch(ec, es, ls, qm_obs, qdm_obs, tau) -> NDArray[np.int64]:
-    """:func:`estimator_sample` for every trial ``(S, n)``; returns the alarms ``(S,)`` (1: alarm)."""
-    alarm = np.zeros(tau.shape[0], dtype=np.int64)
-    c = np.ascontiguousarray
-    loop = _estimator_loop
-    if isinstance(ec, EstCfg):
-        ec, loop = ChainEstimator(ec, True), _chain_estimator_loop
-    elif isinstance(ec, ChainEstimator):
-        loop = _chain_estimator_loop
-    loop(ec, es, ls, c(qm_obs), c(qdm_obs), c(tau), alarm)
-    return alarm

@@ -33,9 +33,9 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from adaptive_dd.closed_loop.borrow import borrowed, keep_alive
 from adaptive_dd.closed_loop.chain_choices import _chain_plant_advance
 from adaptive_dd.closed_loop.glue import (
-    COPY_PROPAGATE_ONLY,
     _bound,
     _segment,
     accumulate_sample,
@@ -108,7 +108,10 @@ def _plugin_trial(
     with the plug-in's ``command``, ``observe`` and ``estimate`` in place of the built-in law and
     estimator; ``reset`` of trial i's state row ``x[i]`` at sample 0. ``pis (S or 1, G or 1,
     13 n)`` the model whose terms ``need`` asks for (``ch`` its kinematics, ``pj`` the payload's
-    link, ``pmap (10, 10)`` its payload map), ``p`` the plug-in's parameters."""
+    link, ``pmap (10, 10)`` its payload map), ``p`` the plug-in's parameters. The run's records
+    and the loop's scratch are borrowed as the built-ins' are
+    (:func:`~adaptive_dd.closed_loop.borrow.borrowed`); the plug-in's own ``p`` and ``x`` are not."""
+    rc, io, pl, ts, acc, rec, alarms, noise, drop = borrowed((rc, io, pl, ts, acc, rec, alarms, noise, drop))
     T, max_error, max_speed, q_d, qd_d, qdd_d = rc.T, rc.max_error, rc.max_speed, rc.q_d, rc.qd_d, rc.qdd_d
     seg_start, seg_end, seg_settled = rc.seg_start, rc.seg_end, rc.seg_settled
     lim, lsb, saturate, quantize_dac = io.lim, io.lsb, io.saturate, io.quantize_dac
@@ -124,12 +127,14 @@ def _plugin_trial(
     sigma_rec, sigma_end = rec.sigma, rec.sigma_end
     alarm_t, n_alarms = alarms.times, alarms.count
     n = q.shape[1]
-    qm, qdm, qm_obs, qdm_obs = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
-    cmd, tau, e, prev = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
-    sig = np.full(sigma_end.shape[2], np.nan)
-    pw, w, zero = plant_scratch(n), workspace(n), np.zeros(n)
-    tw, tr = np.zeros((max(ee_index.shape[0], 1), 12)), np.zeros(9)
-    g, m, c = np.full(n, np.nan), np.full((n, n), np.nan), np.full(n, np.nan)  # NaN unless declared
+    owned = (
+        np.empty((8, n)), np.full(sigma_end.shape[2], np.nan), plant_scratch(n), workspace(n), np.zeros(n),
+        np.zeros((max(ee_index.shape[0], 1), 12)), np.zeros(9),
+        np.full(n, np.nan), np.full((n, n), np.nan), np.full(n, np.nan),  # g, m, c: NaN unless declared
+    )  # fmt: skip
+    rows, sig, pw, w, zero, tw, tr, g, m, c = borrowed(owned)
+    qm, qdm, qm_obs, qdm_obs = rows[0], rows[1], rows[2], rows[3]
+    cmd, tau, e, prev = rows[4], rows[5], rows[6], rows[7]
     xi = x[i]
     ip = i if pis.shape[0] > 1 else 0
     kin = arm_kernels(ch, pis[ip, 0], pj, pmap)  # its scratch: once per trial
@@ -164,6 +169,7 @@ def _plugin_trial(
         if estimates and (k == seg_end[s] - 1 or i < sigma_rec.shape[0]):
             estimate(p, xi, sig)
             record_estimate(seg_end, sigma_end, sigma_rec, i, k, s, sig)
+    keep_alive(owned)
 
 
 _plugin_trial_c = njit(inline="always")(_plugin_trial)
@@ -181,8 +187,7 @@ def _plugin_block(
         )  # fmt: skip
 
 
-plugin_block = njit(nogil=True, parallel=COPY_PROPAGATE_ONLY)(_plugin_block)
+plugin_block = njit(nogil=True)(_plugin_block)
 """A block of samples of a range of trials of a compiled plug-in (:func:`_plugin_trial`); called
 as :func:`~adaptive_dd.closed_loop.glue.chain_loop_block` is
-(:func:`~adaptive_dd.closed_loop.glue.in_threads`), compiled with the same options
-(:data:`~adaptive_dd.closed_loop.glue.COPY_PROPAGATE_ONLY`), once per plug-in and process."""
+(:func:`~adaptive_dd.closed_loop.glue.in_threads`), compiled once per plug-in and process."""

@@ -27,18 +27,16 @@ from functools import partial
 import numpy as np
 
 from adaptive_dd.benchmark.types import CHUNK, MAX_ALARMS, BenchmarkResult, ControllerRun
+from adaptive_dd.closed_loop.batches import apply_batch, measure_batch, sigma_batch
 from adaptive_dd.closed_loop.controllers import Law
 from adaptive_dd.closed_loop.glue import (
     Alarms,
     alarm_lists,
-    apply_batch,
     chain_estimator,
     chain_law,
     chain_loop_block,
     in_threads,
-    measure_batch,
     segment_of,
-    sigma_batch,
 )
 from adaptive_dd.closed_loop.noise import RunNoise
 from adaptive_dd.closed_loop.python_path import PythonGlue, run_python_batch

@@ -10,7 +10,7 @@
 
 Each sub-environment is one trial, as :class:`~adaptive_dd.gym.env.PayloadSwapEnv` (the same
 observation, action and reward); the trials are stepped together by the closed loop's batch glue
-(:func:`~adaptive_dd.closed_loop.glue.measure_batch`, :func:`~adaptive_dd.closed_loop.glue.apply_batch`:
+(:func:`~adaptive_dd.closed_loop.batches.measure_batch`, :func:`~adaptive_dd.closed_loop.batches.apply_batch`:
 one compiled call over every trial per sample) on an arm from a URDF, or by the closed-form
 plant's batch simulator (:class:`~adaptive_dd.plant.simulator.ArmSimulator`) on the paper's arm.
 
@@ -58,7 +58,7 @@ class _ChainBatch:
 
     def measure(self):
         from adaptive_dd.benchmark.types import CHUNK
-        from adaptive_dd.closed_loop.glue import measure_batch
+        from adaptive_dd.closed_loop.batches import measure_batch
 
         if self._buf is None or self._at >= self._buf[0].shape[1]:
             self._buf, self._at = self.noise.block(CHUNK), 0
@@ -69,7 +69,7 @@ class _ChainBatch:
         return qm, qdm
 
     def step(self, tau):
-        from adaptive_dd.closed_loop.glue import apply_batch
+        from adaptive_dd.closed_loop.batches import apply_batch
 
         apply_batch(self.rc, self.io, self.pl, self.ts, self.acc, self.rec, self.k, tau)
         self.k += 1

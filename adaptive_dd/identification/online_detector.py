@@ -65,8 +65,23 @@ def _reopen(c, P):  # pragma: no cover - compiled
             P[a, b] = acc + c.P_reopen[a, b]
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _ref_rise(c, s, i, q, w):  # pragma: no cover - compiled
+    """``s.ref_rise[i]`` (:func:`_ref_rise_window`): 1 outside the re-learning window after an
+    alarm, at every sample; the inertias inside it. Inlined where it is called, so that the
+    samples outside the window cost no call: a compiled call handing over the estimator's
+    records, about a hundred arrays, cost more than the loop it makes (UR5: the estimator's step
+    8.3 -> 7.2 us per sample with :func:`_posture_noise` inlined as well)."""
+    k = s.cnt[i, C_SINCE_ALARM]
+    if c.holdoff <= k < c.resume + c.min_learned:
+        _ref_rise_window(c, s, i, q, w)
+    else:
+        for j in range(q.shape[0]):
+            s.ref_rise[i, j] = 1.0
+
+
+@njit(cache=True)
+def _ref_rise_window(c, s, i, q, w):  # pragma: no cover - compiled
     """``s.ref_rise[i]``: per row, how much the payload the estimate now holds raises the row's
     noise variance over the payload it held at the last alarm (``s.ref_pay[i]``), at least 1;
     1 outside the window in which a row is judged against its level of before that alarm.
@@ -78,15 +93,12 @@ def _ref_rise(c, s, i, q, w):  # pragma: no cover - compiled
     the level kept from before the pick-up (``ref``) is then too low for the re-learning window:
     the Kinova Gen3 with 2 kg, the wrist rows' noise 5x, a second alarm 0.3-0.45 s after the
     pick-up in 5 of 50 trials (``docs/change_detection.md``, "The level kept over a pick-up").
-    Computed only in that window (two inertia matrices a sample).
+    Called only in that window (two inertia matrices a sample).
     """
     n = q.shape[0]
-    k = s.cnt[i, C_SINCE_ALARM]
-    live = c.holdoff <= k < c.resume + c.min_learned
-    if live:
-        live = False
-        for j in range(n):
-            live = live or s.ref[i, j] > 0.0
+    live = False
+    for j in range(n):
+        live = live or s.ref[i, j] > 0.0
     for j in range(n):
         s.ref_rise[i, j] = 1.0
     if not live:
@@ -117,7 +129,7 @@ def _ref_rise(c, s, i, q, w):  # pragma: no cover - compiled
             s.ref_rise[i, j] = v1 / v0
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _posture_noise(c, s, i, w):  # pragma: no cover - compiled
     """``s.nvar[i]``: per row, the variance the measured velocity's noise gives the weighted row's
     error at the sample's posture, ``vrow_j (M diag(vdet) M^T)_jj``, ``M`` the known arm's inertia
@@ -135,6 +147,7 @@ def _posture_noise(c, s, i, w):  # pragma: no cover - compiled
     at (:func:`_detect`). On drawn arms the base row's posture noise had risen 3.1-3.5x over its
     level's mean within 20 ms at each of the population's five false alarms (random:4, 27, 32;
     ``docs/change_detection.md``, "The level follows the posture").
+    Inlined where it is called, as :func:`_ref_rise` is (a call costs more than it computes).
     """
     n = s.nvar.shape[1]
     M, ch = w.Mr, w.chain
