@@ -457,13 +457,9 @@ _chain_trial_samples = njit(inline="always")(
 calls: one compiled function less). Its records and scratch are
 :func:`~adaptive_dd.closed_loop.borrow.borrowed` (``records_view``, kept alive by
 ``kept_to_here``): without it each array passed along (each call's arguments, each view such as
-``q[i]``) cost an atomic reference-count update, and a quarter of a UR5 trial's time was
-billed to them (``perf``). Borrowed, with the detector's per-sample pieces inlined
-(:func:`~adaptive_dd.identification.online_detector._ref_rise`), the UR5's ``adaptive_ct`` trial
-ran 2.22-2.32x -> 2.47-2.58x the Pinocchio loop and ``ct_oracle`` 5.86-6.25x -> 6.46-6.72x
-(``benchmarks/speed_arm.py``, three runs of each tree alternated); either alone, no faster. The
-two-link loop keeps its own way (a ``prange``, :func:`closed_loop_block`): borrowed, its
-``adaptive_ct`` ran 3-10 % slower.
+``q[i]``) costs an atomic reference-count update. The two-link loop gets its arrays without
+reference counts from its ``prange`` (:func:`closed_loop_block`) and keeps its scratch as it is:
+borrowed, it ran slower (the changelog has the measurements).
 
 By name, not by type: numba compiles an ``@overload``'s implementation in full (with everything
 it calls) to type it, even one inlined where it is called, and then throws that compiled form

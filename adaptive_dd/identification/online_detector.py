@@ -70,8 +70,7 @@ def _ref_rise(c, s, i, q, w):  # pragma: no cover - compiled
     """``s.ref_rise[i]`` (:func:`_ref_rise_window`): 1 outside the re-learning window after an
     alarm, at every sample; the inertias inside it. Inlined where it is called, so that the
     samples outside the window cost no call: a compiled call handing over the estimator's
-    records, about a hundred arrays, cost more than the loop it makes (UR5: the estimator's step
-    8.3 -> 7.2 us per sample with :func:`_posture_noise` inlined as well)."""
+    records, about a hundred arrays, costs more than the loop it makes."""
     k = s.cnt[i, C_SINCE_ALARM]
     if c.holdoff <= k < c.resume + c.min_learned:
         _ref_rise_window(c, s, i, q, w)
