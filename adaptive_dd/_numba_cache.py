@@ -16,6 +16,7 @@ shared across edits would otherwise serve stale kernels); the 8 newest are kept.
 
 from __future__ import annotations
 
+import contextvars
 import hashlib
 import os
 import re
@@ -97,6 +98,7 @@ def source_hash(package: Path) -> str:
 def configure() -> str | None:
     """Point numba's cache at the folder of this source state; returns it (None if left alone: the
     folder cannot be written)."""
+    _inline_fresh_ir_in_place()
     package = Path(__file__).resolve().parent
     if os.environ.get("NUMBA_CACHE_DIR"):  # the user's folder, keyed inside it
         base = Path(os.environ["NUMBA_CACHE_DIR"]) / "adaptive_dd"
@@ -210,14 +212,72 @@ def _lock_compilations() -> None:
     Dispatcher.compile = locked_compile
 
 
+_FRESH_IR = contextvars.ContextVar("adaptive_dd_fresh_inline_ir", default=False)
+
+
+def _inline_fresh_ir_in_place() -> bool:
+    """Let numba inline a function compiled with ``inline="always"`` without deep-copying its IR.
+
+    numba's ``InlineWorker.inline_function`` runs the untyped pipeline on the callee for each
+    call site, which gives IR nothing else holds, then ``inline_ir`` deep-copies it twice, block by
+    block (each block's copy copies the function's whole variable scope again), to protect a
+    caller's IR it was never shared with (numba issue 8989; numba-cuda issue 688 and
+    numba-cuda-mlir issue 196 measure the same cost). With our kernels those copies were about a
+    fifth of a cold compilation: the UR5 closed loop's 153 CPU s became 125, the compiled code
+    and its results the same to the last bit (``benchmarks/cold_compile.py``;
+    ``tests/test_numba_cache.py``). Here the copies are skipped inside ``inline_function`` only;
+    ``inline_ir`` called with IR that is kept (numba's ``overload(inline="always")``: the
+    template's cached IR) copies it as before. Applied only where numba's inliner has the shape
+    this was written against (its module's ``copy.deepcopy`` of each block inside
+    ``inline_function``'s call of ``inline_ir``); returns whether it is in place."""
+    import copy
+    import inspect
+    import types
+
+    from numba.core import inline_closurecall as icc
+
+    worker = icc.InlineWorker
+    if getattr(worker.inline_function, "_adaptive_dd_fresh", False):
+        return True
+    try:
+        ir_source = inspect.getsource(worker.inline_ir)
+        fn_source = inspect.getsource(worker.inline_function)
+    except (OSError, TypeError):  # pragma: no cover - numba installed without sources
+        return False
+    if (
+        getattr(icc, "copy", None) is not copy
+        or "copy.deepcopy(the_ir.blocks[block_label])" not in ir_source
+        or "self.run_untyped_passes(function)" not in fn_source
+        or "self.inline_ir(" not in fn_source
+    ):
+        return False  # another numba: its inliner is left as it is
+    inline_function = worker.inline_function
+
+    def deepcopy(x, memo=None):
+        return x if _FRESH_IR.get() else copy.deepcopy(x, memo)
+
+    def fresh_inline_function(self, *args, **kwargs):
+        token = _FRESH_IR.set(True)
+        try:
+            return inline_function(self, *args, **kwargs)
+        finally:
+            _FRESH_IR.reset(token)
+
+    fresh_inline_function._adaptive_dd_fresh = True
+    icc.copy = types.SimpleNamespace(deepcopy=deepcopy)
+    worker.inline_function = fresh_inline_function
+    return True
+
+
 # ------------------------------------------------------------ telling the user about compilation
-COMPILE_SECONDS = {"two-link": 48.0, "serial": 85.0}
+COMPILE_SECONDS = {"two-link": 48.0, "serial": 73.0}
 """One-time compilation of a benchmark's kernels with a cold cache, on 2 idle cores: a guide for
 the message and ``validate``'s estimate, not a promise (a busy machine stretches it; numba
 compiles each kernel on one core). Measured with an empty cache (``XDG_CACHE_HOME`` a fresh
-folder), ``adaptive-dd benchmark --seeds 1`` printed ``compiled the kernels in 45 s`` on the
-paper's arm and 83 s on ``ur5_tool_swap.toml``, where an N-joint arm (any compiles the same
-kernels) compiles in two processes at once (:class:`Compiling`; 149 CPU s of both).
+folder), ``adaptive-dd benchmark --seeds 1`` printed ``compiled the kernels in 47 s`` on the
+paper's arm and 73 s on ``ur5_tool_swap.toml``, where an N-joint arm (any compiles the same
+kernels) compiles in two processes at once (:class:`Compiling`; 133 CPU s of both, the run
+included).
 ``benchmarks/compile_phases.py`` gives the phases in CPU seconds; earlier figures are in the changelog."""
 
 

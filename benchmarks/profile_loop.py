@@ -57,7 +57,10 @@ def compiled_symbols() -> list[tuple[int, str]]:
 
     seen, out = set(), set()
     for obj in gc.get_objects():
-        if not isinstance(obj, Dispatcher):
+        try:
+            if not isinstance(obj, Dispatcher):
+                continue
+        except ReferenceError:  # a weak proxy whose object is gone
             continue
         for cres in obj.overloads.values():
             lib = cres.library

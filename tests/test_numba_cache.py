@@ -184,3 +184,68 @@ def test_two_processes_asking_for_one_kernel_compile_it_once(tmp_path):
     misses = sorted(int(p.communicate(timeout=300)[0].split()[-1]) for p in procs)
     assert [p.returncode for p in procs] == [0, 0]
     assert misses == [0, 1], f"cache misses per process {misses}: the kernel was compiled twice"
+
+
+# ------------------------------------------------------------ inlining without copies of fresh IR
+@numba.njit(inline="always")
+def _leaf(a, k):
+    s = 0.0
+    for i in range(a.size):
+        s += a[i] * k if a[i] > k else -a[i]
+    return s
+
+
+@numba.njit(inline="always")
+def _mid(a, k):
+    return _leaf(a, k) + 2.0 * _leaf(a, k + 1.0)
+
+
+def _over(a, k):
+    """Python's meaning of the overload below."""
+    return sum(x if x < k else -k for x in a)
+
+
+@numba.extending.overload(_over, inline="always")
+def _over_impl(a, k):
+    def impl(a, k):
+        t = 0.0
+        for i in range(a.size):
+            t += a[i] if a[i] < k else -k
+        return t
+
+    return impl
+
+
+def _py_mid(a, k):
+    leaf = lambda k: sum(x * k if x > k else -x for x in a)  # noqa: E731
+    return leaf(k) + 2.0 * leaf(k + 1.0)
+
+
+def test_inlining_copies_no_fresh_ir_and_still_copies_the_ir_an_overload_keeps(monkeypatch):
+    """Functions compiled with ``inline="always"`` are inlined at each call site (two sites, each
+    inlining two more) without a deep copy of their IR, with the same results as Python's; an
+    ``overload(inline="always")``, whose template keeps one IR for every site, is still copied
+    at each (skipping those copies too breaks its second site: numba fails on the mutated IR)."""
+    import copy
+
+    import numpy as np
+    import pytest
+
+    if not _numba_cache._inline_fresh_ir_in_place():
+        pytest.skip(f"numba {numba.__version__}'s inliner is not the shape the shortcut was written for")
+    blocks = []
+    deepcopy = copy.deepcopy
+
+    def counting(x, memo=None):
+        if type(x).__name__ == "Block":
+            blocks.append(x)
+        return deepcopy(x, memo)
+
+    monkeypatch.setattr(copy, "deepcopy", counting)
+    top = numba.njit(lambda a: _mid(a, 0.5) + 3.0 * _mid(a, -0.25))
+    over = numba.njit(lambda a: _over(a, 0.5) + 3.0 * _over(a, -0.25))
+    a = np.linspace(-1.0, 2.0, 17)
+    assert top(a) == _py_mid(a, 0.5) + 3.0 * _py_mid(a, -0.25)
+    assert blocks == []  # six inlined sites, no block copied
+    assert over(a) == _over(a, 0.5) + 3.0 * _over(a, -0.25)
+    assert len(blocks) >= 4  # two sites, each copy of the kept IR (and numba's second copy)
