@@ -270,14 +270,14 @@ def _inline_fresh_ir_in_place() -> bool:
 
 
 # ------------------------------------------------------------ telling the user about compilation
-COMPILE_SECONDS = {"two-link": 48.0, "serial": 73.0}
+COMPILE_SECONDS = {"two-link": 32.0, "serial": 73.0}
 """One-time compilation of a benchmark's kernels with a cold cache, on 2 idle cores: a guide for
 the message and ``validate``'s estimate, not a promise (a busy machine stretches it; numba
 compiles each kernel on one core). Measured with an empty cache (``XDG_CACHE_HOME`` a fresh
-folder), ``adaptive-dd benchmark --seeds 1`` printed ``compiled the kernels in 47 s`` on the
-paper's arm and 73 s on ``ur5_tool_swap.toml``, where an N-joint arm (any compiles the same
-kernels) compiles in two processes at once (:class:`Compiling`; 133 CPU s of both, the run
-included).
+folder), ``adaptive-dd benchmark --seeds 1`` printed ``compiled the kernels in 32 s`` on the
+paper's arm (47 CPU s of both processes, the run included; 47 s in one process) and 73 s on
+``ur5_tool_swap.toml`` (133 CPU s of both), where an N-joint arm (any compiles the same
+kernels) compiles in two processes at once (:class:`Compiling`).
 ``benchmarks/compile_phases.py`` gives the phases in CPU seconds; earlier figures are in the changelog."""
 
 
@@ -385,12 +385,17 @@ READY = "ready"
 
 
 class Compiling:
-    """Two processes compiling at once on a cold cache (an N-joint arm read from a scenario file):
-    this one compiles the estimator's step (:func:`~adaptive_dd.closed_loop.chain_choices.compile_estimator`)
-    while a second (:func:`adaptive_dd.closed_loop.precompile.second_process`) compiles the plant's
-    step and the law's pieces; this one then compiles the closed loop, loading those from the
-    cache, while the second compiles the report's kernels. numba's cache is shared by processes
-    (each index write locked: :func:`_lock_index_writes`). ``ADAPTIVE_DD_COMPILE_HELPER=0``: one process."""
+    """Two processes compiling at once on a cold cache (an arm read from a scenario file). On an
+    N-joint arm this one compiles the estimator's step
+    (:func:`~adaptive_dd.closed_loop.chain_choices.compile_estimator`) while a second
+    (:func:`adaptive_dd.closed_loop.precompile.second_process`) compiles the plant's step and the
+    law's pieces; this one then compiles the closed loop, loading those from the cache, while the
+    second compiles the report's kernels. On the paper's arm (its closed forms) this one compiles
+    the closed loop at once while the second
+    (:func:`~adaptive_dd.closed_loop.precompile.second_process_two_link`) compiles the estimator's
+    step it calls and the report's regressor: this one loads the step when it reaches it, or waits
+    for it (:func:`_lock_compilations`). numba's cache is shared by processes (each index write
+    locked: :func:`_lock_index_writes`). ``ADAPTIVE_DD_COMPILE_HELPER=0``: one process."""
 
     def __init__(self, stream, helper=None, errors=None) -> None:
         self.stream, self.helper, self.start = stream, helper, time.perf_counter()
@@ -403,13 +408,15 @@ class Compiling:
         import sys
         import tempfile
 
-        from adaptive_dd.plant.kind import is_chain
+        from adaptive_dd.plant.kind import is_chain, is_two_link
 
-        ok = source and os.path.isfile(str(source)) and is_chain(arm)
+        chain = is_chain(arm)
+        ok = source and os.path.isfile(str(source)) and (chain or is_two_link(arm))
         if not ok or os.environ.get("ADAPTIVE_DD_COMPILE_HELPER", "1") == "0":
             return cls(stream)
+        helper_name = "second_process" if chain else "second_process_two_link"
         code = (
-            "import sys; from adaptive_dd.closed_loop.precompile import second_process as f; f(sys.argv[1])"
+            f"import sys; from adaptive_dd.closed_loop.precompile import {helper_name} as f; f(sys.argv[1])"
         )
         here = str(Path(__file__).resolve().parents[1])  # this copy of the package, not another
         path = os.pathsep.join(p for p in (here, os.environ.get("PYTHONPATH")) if p)
@@ -422,17 +429,18 @@ class Compiling:
         except OSError:
             errors.close()
             return cls(stream)
-        print(
-            f"  a second process (pid {helper.pid}) compiles the plant's step, the law's pieces and "
-            "the report's kernels meanwhile",
-            file=stream,
-            flush=True,
+        what = (
+            "the plant's step, the law's pieces and the report's kernels"
+            if chain
+            else "the estimator's step and the report's regressor"
         )
+        print(f"  a second process (pid {helper.pid}) compiles {what} meanwhile", file=stream, flush=True)
         self = cls(stream, helper, errors)
-        from adaptive_dd.closed_loop.glue import compile_estimator
+        if chain:  # the estimator's step here, then the loop once the plant and the law are cached
+            from adaptive_dd.closed_loop.glue import compile_estimator
 
-        compile_estimator(arm)
-        self._wait_ready()
+            compile_estimator(arm)
+            self._wait_ready()
         return self
 
     def _wait_ready(self, timeout: float = 600.0) -> None:
@@ -489,8 +497,8 @@ def announce_compilation(arm, stream=None, source=None):
     Prints to ``stream`` (default ``sys.stderr``) a line before, when :func:`compile_estimate`
     finds the cache cold, a line per kernel compiled from Python that took over a second
     (:class:`_Progress`) and a line after whenever compilation took more than a second. On a cold
-    cache with an N-joint arm read from the scenario file ``source``, two processes compile at
-    once (:class:`Compiling`, yielded: its ``join`` waits for the second before the report).
+    cache with an arm read from the scenario file ``source``, two processes compile at once
+    (:class:`Compiling`, yielded: its ``join`` waits for the second before the report).
     """
     import sys
 

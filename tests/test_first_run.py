@@ -177,14 +177,14 @@ def test_each_kernel_compiled_from_python_is_named_as_it_ends(monkeypatch):
 
 
 def test_the_second_process_is_started_only_where_it_helps(monkeypatch, tmp_path):
-    """No second process for the two-link arm, a scenario not read from a file, or when turned off."""
+    """No second process for a scenario not read from a file (either arm), or when turned off."""
     import io
 
     from adaptive_dd.benchmark.scenario import load_scenario as load
 
     ur5 = load(str(ROOT / "adaptive_dd" / "scenarios" / "ur5_tool_swap.toml"))
     out = io.StringIO()
-    assert _numba_cache.Compiling.begin(ClosedFormTwoLink.sice(), str(ROOT / "README.md"), out).helper is None
+    assert _numba_cache.Compiling.begin(ClosedFormTwoLink.sice(), "<memory>", out).helper is None
     assert _numba_cache.Compiling.begin(ur5.arm, "<memory>", out).helper is None
     monkeypatch.setenv("ADAPTIVE_DD_COMPILE_HELPER", "0")
     assert _numba_cache.Compiling.begin(ur5.arm, ur5.source, out).helper is None
@@ -223,6 +223,42 @@ def test_the_second_process_is_waited_for_and_its_end_told(capsys):
         assert f"the second process {end}" in err
         assert (error in err) if error else ("its error" not in err)
         assert c.helper is None and c.errors is None
+
+
+@pytest.mark.slow
+def test_the_second_process_compiles_the_estimator_step_the_two_link_loop_calls(tmp_path):
+    """On the paper's arm the second process compiles the estimator's step with the argument types
+    the closed loop calls it with. In a fresh cache: the second process's work, then (another
+    process) a closed-loop run, which loads the step from the cache and compiles no specialisation
+    of it (a second process that compiled another, say with a 32-bit trial index, fails here: the
+    loop compiles its own). About 50 CPU s: the loop compiles from nothing."""
+    import os
+    import subprocess
+    import sys
+
+    source = str(ROOT / "adaptive_dd" / "scenarios" / "payload_swap.toml")
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path), "PYTHONPATH": str(ROOT)}
+    helper = (
+        "import sys; from adaptive_dd.closed_loop.precompile import second_process_two_link as f; "
+        "f(sys.argv[1])"
+    )
+    out = subprocess.run([sys.executable, "-c", helper, source], env=env, capture_output=True, text=True)
+    assert out.returncode == 0 and out.stdout.splitlines()[0] == _numba_cache.READY, out.stderr
+    run = (
+        "import dataclasses, sys\n"
+        "from adaptive_dd.benchmark.runner import run_benchmark\n"
+        "from adaptive_dd.benchmark.scenario import load_scenario\n"
+        "from adaptive_dd.identification.two_link_online_kernel import online_step_trial\n"
+        "sc = load_scenario(sys.argv[1])\n"
+        "sc = dataclasses.replace(sc, seeds=1, controllers=('ct_oracle', 'adaptive_ct'))\n"
+        "run_benchmark(sc, progress=False)\n"
+        "s = online_step_trial.stats\n"
+        "print(sum(s.cache_hits.values()), sum(s.cache_misses.values()))\n"
+    )
+    out = subprocess.run([sys.executable, "-c", run, source], env=env, capture_output=True, text=True)
+    assert out.returncode == 0, out.stderr
+    hits, misses = (int(x) for x in out.stdout.split()[-2:])
+    assert (hits, misses) == (1, 0)
 
 
 def test_the_second_process_compiles_what_the_closed_loop_calls(capsys):

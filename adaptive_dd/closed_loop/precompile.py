@@ -1,6 +1,8 @@
-"""The second process of a cold-cache benchmark on an N-joint arm
-(:class:`adaptive_dd._numba_cache.Compiling`): it compiles into numba's cache the kernels the
-closed loop and the report call while the first process compiles the estimator's step. Apart
+"""The second process of a cold-cache benchmark (:class:`adaptive_dd._numba_cache.Compiling`): it
+compiles into numba's cache kernels the closed loop and the report call while the first process
+compiles the rest: on an N-joint arm the plant's step, the law's pieces and the report's kernels
+while the first compiles the estimator's step; on the paper's arm (its closed forms) the
+estimator's step and the report's regressor while the first compiles the closed loop. Apart
 from :mod:`adaptive_dd._numba_cache` so that the cache module does not import the scenario loader
 (which imports it: no import circle)."""
 
@@ -8,7 +10,7 @@ from __future__ import annotations
 
 from adaptive_dd._numba_cache import READY
 
-__all__ = ["plant_kernels", "second_process"]
+__all__ = ["plant_kernels", "second_process", "second_process_two_link"]
 
 
 def second_process(source: str) -> None:
@@ -62,3 +64,37 @@ def plant_kernels(sc) -> None:
     pp = PlantParams(pl.pi_seg[0, 0], pl.fv[0], pl.fc[0], pl.armature[0], pl.friction_law, pl.fparams)
     q, qd, tau, stuck = np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n, bool)
     compile_family(pl.chain, pp, q, qd, tau, sc.sample_period, pl.substeps, stuck, plant_scratch(n))
+
+
+def second_process_two_link(source: str) -> None:
+    """The second process of a cold-cache benchmark on the paper's arm (its closed forms) of
+    scenario file ``source``: it compiles into the cache the estimator's step that the closed loop
+    calls (:func:`~adaptive_dd.identification.two_link_online_kernel.online_step_trial`, with the
+    records ``adaptive_ct``'s run builds, so with the same argument types), prints ``READY``,
+    then the arm's regressor that the report's base parameters call
+    (:meth:`~adaptive_dd.plant.arm.Arm.standard_regressor`). The first process compiles the
+    closed loop meanwhile and, reaching the estimator's step, loads it from the cache (or waits
+    for it: :func:`adaptive_dd._numba_cache._lock_compilations`)."""
+    import numpy as np
+
+    from adaptive_dd.benchmark.compiled import OnlineKernelConfig
+    from adaptive_dd.benchmark.scenario import load_scenario
+    from adaptive_dd.controllers.compiled_form import compiled_spec
+    from adaptive_dd.controllers.registry import scenario_controller
+    from adaptive_dd.identification.two_link_online import online_init
+    from adaptive_dd.identification.two_link_online_kernel import online_step_trial
+
+    sc = load_scenario(source)
+    T = sc.sample_period
+    spec = compiled_spec(scenario_controller(sc, "adaptive_ct")[1], T)
+    es = online_init(spec.online, 1, spec.sigma)
+    ec = OnlineKernelConfig(*spec.online.packed, True)
+    q, qd, tau = np.zeros(2), np.zeros(2), np.zeros(2)
+    online_step_trial(
+        0, es.xf, es.u_last, es.cnt, es.tau_prev, es.theta, es.P, es.lam, es.short, es.long,
+        es.sigma_model, q, qd, tau, ec.ci, ec.cf, ec.A, ec.B, ec.C, ec.D, ec.d, ec.group,
+        ec.split_rows, np.empty(2),
+    )  # fmt: skip
+    print(READY, flush=True)
+    if sc.arm is not None:
+        sc.arm.standard_regressor(q, qd, tau)
