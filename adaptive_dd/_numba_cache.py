@@ -221,11 +221,11 @@ def _inline_fresh_ir_in_place() -> bool:
     numba's ``InlineWorker.inline_function`` runs the untyped pipeline on the callee for each
     call site, which gives IR nothing else holds, then ``inline_ir`` deep-copies it twice, block by
     block (each block's copy copies the function's whole variable scope again), to protect a
-    caller's IR it was never shared with (numba issue 8989; numba-cuda issue 688 and
-    numba-cuda-mlir issue 196 measure the same cost). With our kernels those copies were about a
-    fifth of a cold compilation: the UR5 closed loop's 153 CPU s became 125, the compiled code
-    and its results the same to the last bit (``benchmarks/cold_compile.py``;
-    ``tests/test_numba_cache.py``). Here the copies are skipped inside ``inline_function`` only;
+    caller's IR it was never shared with (numba/numba#8989; NVIDIA/numba-cuda#688 and
+    NVIDIA/numba-cuda-mlir#196 measure the same cost). With our kernels those copies were about
+    a fifth of a cold compilation, and skipping them leaves the compiled code the same
+    (``benchmarks/cold_compile.py`` prints the same error; ``tests/test_numba_cache.py``; the
+    figures in the changelog). Here the copies are skipped inside ``inline_function`` only;
     ``inline_ir`` called with IR that is kept (numba's ``overload(inline="always")``: the
     template's cached IR) copies it as before. Applied only where numba's inliner has the shape
     this was written against (its module's ``copy.deepcopy`` of each block inside
