@@ -401,6 +401,7 @@ class Compiling:
         self.stream, self.helper, self.start = stream, helper, time.perf_counter()
         self.errors = errors  # the second process's stderr (a temporary file), told if it fails
         self.waited = 0.0  # seconds this process waited for the second (counted as compiling)
+        self.done = "compiled the report's kernels"  # what the second process's end is told as
 
     @classmethod
     def begin(cls, arm, source, stream) -> Compiling:
@@ -436,6 +437,7 @@ class Compiling:
         )
         print(f"  a second process (pid {helper.pid}) compiles {what} meanwhile", file=stream, flush=True)
         self = cls(stream, helper, errors)
+        self.done = "compiled the report's kernels" if chain else f"compiled {what}"
         if chain:  # the estimator's step here, then the loop once the plant and the law are cached
             from adaptive_dd.closed_loop.glue import compile_estimator
 
@@ -464,9 +466,7 @@ class Compiling:
         rc, self.helper = self.helper.wait(), None
         self.waited += time.perf_counter() - t0
         spent = time.perf_counter() - self.start
-        what = (
-            "compiled the report's kernels" if rc == 0 else f"failed (exit {rc}): what it left compiles here"
-        )
+        what = self.done if rc == 0 else f"failed (exit {rc}): what it left compiles here"
         print(f"  the second process {what} ({spent:.0f} s after the start)", file=self.stream, flush=True)
         if rc != 0 and self.errors is not None:
             self.errors.seek(0)
