@@ -69,32 +69,24 @@ def plant_kernels(sc) -> None:
 def second_process_two_link(source: str) -> None:
     """The second process of a cold-cache benchmark on the paper's arm (its closed forms) of
     scenario file ``source``: it compiles into the cache the estimator's step that the closed loop
-    calls (:func:`~adaptive_dd.identification.two_link_online_kernel.online_step_trial`, with the
-    records ``adaptive_ct``'s run builds, so with the same argument types), prints ``READY``,
+    calls (:func:`~adaptive_dd.identification.two_link_online_kernel.online_step_trial`, reached
+    through :func:`~adaptive_dd.identification.two_link_online.online_step` with the state and
+    settings ``adaptive_ct``'s run builds, so with the loop's argument types), prints ``READY``,
     then the arm's regressor that the report's base parameters call
     (:meth:`~adaptive_dd.plant.arm.Arm.standard_regressor`). The first process compiles the
     closed loop meanwhile and, reaching the estimator's step, loads it from the cache (or waits
     for it: :func:`adaptive_dd._numba_cache._lock_compilations`)."""
     import numpy as np
 
-    from adaptive_dd.benchmark.compiled import OnlineKernelConfig
     from adaptive_dd.benchmark.scenario import load_scenario
     from adaptive_dd.controllers.compiled_form import compiled_spec
     from adaptive_dd.controllers.registry import scenario_controller
-    from adaptive_dd.identification.two_link_online import online_init
-    from adaptive_dd.identification.two_link_online_kernel import online_step_trial
+    from adaptive_dd.identification.two_link_online import online_init, online_step
 
     sc = load_scenario(source)
-    T = sc.sample_period
-    spec = compiled_spec(scenario_controller(sc, "adaptive_ct")[1], T)
-    es = online_init(spec.online, 1, spec.sigma)
-    ec = OnlineKernelConfig(*spec.online.packed, True)
-    q, qd, tau = np.zeros(2), np.zeros(2), np.zeros(2)
-    online_step_trial(
-        0, es.xf, es.u_last, es.cnt, es.tau_prev, es.theta, es.P, es.lam, es.short, es.long,
-        es.sigma_model, q, qd, tau, ec.ci, ec.cf, ec.A, ec.B, ec.C, ec.D, ec.d, ec.group,
-        ec.split_rows, np.empty(2),
-    )  # fmt: skip
+    spec = compiled_spec(scenario_controller(sc, "adaptive_ct")[1], sc.sample_period)
+    z = np.zeros((1, 2))
+    online_step(online_init(spec.online, 1, spec.sigma), z, z, z, spec.online)
     print(READY, flush=True)
     if sc.arm is not None:
-        sc.arm.standard_regressor(q, qd, tau)
+        sc.arm.standard_regressor(z[0], z[0], z[0])
