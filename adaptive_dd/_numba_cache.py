@@ -323,8 +323,9 @@ def compile_estimate(arm) -> float:
 def _compile_split(buffer) -> tuple[float, float]:
     """``(total, uncached)`` from a recorder's ``(time, event)`` pairs: the wall time inside at least
     one numba compilation, and the part of it
-    in compilations started from Python of functions numba does not cache (``cache=False``: a
-    plug-in's loop, :mod:`adaptive_dd.closed_loop.plugin_loop`), which every run compiles again."""
+    in compilations started from Python of functions numba does not cache (``cache=False``: the
+    loop of a plug-in whose functions cannot be keyed,
+    :func:`adaptive_dd.closed_loop.plugin_loop.plugin_key`), which every run compiles again."""
     total, uncached, depth, start, cached = 0.0, 0.0, 0, 0.0, True
     for t, ev in sorted(buffer, key=lambda x: x[0]):
         if ev.is_start:
@@ -350,10 +351,12 @@ def _arm_label(arm) -> str:
 
 def _kernel_label(dispatcher, args) -> str:
     """What a kernel compiled from Python is, for the user: ``the N-joint closed loop``, ``the
-    two-link closed loop``, else ``module.function``."""
+    two-link closed loop``, ``a plug-in's closed loop``, else ``module.function``."""
     f = dispatcher.py_func
     if f.__name__ == "chain_loop_block":
         return "the N-joint closed loop"
+    if f.__module__.startswith("adaptive_dd_plugin_loop_"):  # closed_loop.plugin_loop.plugin_loop
+        return "a plug-in's closed loop"
     if f.__name__ != "closed_loop_block":
         return f"{f.__module__.split('.')[-1]}.{f.__name__}"
     return "the two-link closed loop"
@@ -536,11 +539,11 @@ def announce_compilation(arm, stream=None, source=None):
         )
         if uncached > 1.0 and spent - uncached > 1.0:
             said = (
-                f"{uncached:.0f} s of it the plug-ins' loops, compiled again by every run; the rest "
-                f"cached: later runs skip it{waited}"
+                f"{uncached:.0f} s of it plug-ins' loops that cannot be cached, compiled again by every "
+                f"run; the rest cached: later runs skip it{waited}"
             )
         elif uncached > 1.0:
-            said = f"the plug-ins' loops: not cached, every run compiles them again{waited}"
+            said = f"plug-ins' loops that cannot be cached: every run compiles them again{waited}"
         else:
             said = f"cached: later runs skip this{waited}"
         print(f"compiled the kernels in {spent:.0f} s ({said})", file=stream, flush=True)

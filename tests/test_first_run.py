@@ -59,8 +59,8 @@ def test_compile_time_is_the_wall_time_inside_any_compilation():
 
 
 def test_compilations_of_uncached_functions_are_counted_apart():
-    """A plug-in's loop is compiled with cache=False: every run compiles it again, and the run said
-    "cached: later runs skip this" of it too."""
+    """The loop of a plug-in whose functions cannot be keyed is compiled with cache=False: every
+    run compiles it again, and the run said "cached: later runs skip this" of it too."""
     from numba.core.caching import NullCache
 
     def ev(kind, cached=True):
@@ -79,10 +79,10 @@ def test_compilations_of_uncached_functions_are_counted_apart():
     ("split", "said"),
     [
         ((42.4, 0.0), "compiled the kernels in 42 s (cached: later runs skip this)"),
-        ((42.4, 12.0), "compiled the kernels in 42 s (12 s of it the plug-ins' loops, compiled again by "
-         "every run; the rest cached: later runs skip it)"),
-        ((12.4, 12.0), "compiled the kernels in 12 s (the plug-ins' loops: not cached, every run compiles "
-         "them again)"),
+        ((42.4, 12.0), "compiled the kernels in 42 s (12 s of it plug-ins' loops that cannot be cached, "
+         "compiled again by every run; the rest cached: later runs skip it)"),
+        ((12.4, 12.0), "compiled the kernels in 12 s (plug-ins' loops that cannot be cached: every run "
+         "compiles them again)"),
     ],
 )  # fmt: skip
 def test_the_compile_time_is_printed_after_a_compilation(monkeypatch, capsys, split, said):

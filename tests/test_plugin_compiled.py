@@ -4,8 +4,8 @@ The shipped example ``examples/plugins/pd_gravity_plugin.py`` (PD plus gravity c
 written against the public protocol only) against the built-in ``pd_gravity`` on the same
 scenario and seeds; faults planted through its parameters (one compiled specialisation serves
 them all); the declarations' errors; the slow path's note for a plain-Python plug-in. The tests
-that run the compiled loop are slow: the loop is compiled for the plug-in in every process
-(numba does not cache a specialisation on a function argument).
+that run the compiled loop are slow: a fresh cache compiles the loop for each plug-in (its
+caching: ``tests/test_plugin_cache.py``).
 """
 
 import sys

@@ -1,8 +1,8 @@
 """A compiled plug-in that needs the arm's regressor: Slotine-Li written against the public API
 (``examples/plugins/slotine_li_plugin.py``, over :mod:`adaptive_dd.controllers.kernels`) held to
 the built-in ``slotine_li`` per seed, a planted sign error caught; the need refused where the arm
-has no kernels. The tests that run the compiled loop are slow: it is compiled for the plug-in in
-every process."""
+has no kernels. The tests that run the compiled loop are slow: a fresh cache compiles it for
+each plug-in (a few seconds to a few tens)."""
 
 import sys
 import tomllib

@@ -138,7 +138,7 @@ def run(args: argparse.Namespace) -> int:
         print(f"wrote {p}")
     print(
         f"time: {df.attrs['compile_seconds']:.1f} s compiling (numba; the built-ins' cached, 0 when "
-        f"warm{'; a compiled plug-in is compiled in every run' if args.plugin else ''}), "
+        f"warm{'; a compiled plug-in: its loop compiled once, then cached' if args.plugin else ''}), "
         f"{df.attrs['run_seconds']:.1f} s running"
     )
     return 0

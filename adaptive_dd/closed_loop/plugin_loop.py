@@ -21,17 +21,30 @@ segment (the model of the built-in oracles), and hands it the arm's kernels of t
 (:data:`NEED_REGRESSOR`: :mod:`adaptive_dd.controllers.kernels`, which the plug-in calls at the
 reference velocity and acceleration of its law).
 
-Nothing in this module is cached: numba keys a function-typed argument by the function object, so
-a cached specialisation would never be found again in a new process (each run compiles the loop
-for its plug-in; the plant's integrator and the arm's dynamics it calls come from the cache). The
-module is therefore not one of the cache's kernel sources (:func:`adaptive_dd._numba_cache.kernel_sources`
-finds those by their decorators: the functions here are compiled by calls, not decorators).
+Each plug-in's loop is compiled once and cached like the built-ins' kernels (:func:`plugin_loop`):
+numba keys a function-typed argument by the function object, so a loop taking the plug-in's
+functions as arguments would never be found again in a new process. The loop of a plug-in is
+instead a small module written into the cache folder, whose ``plugin_block`` calls the
+plug-in's functions as globals; its name is a hash of this file and of the plug-in's functions
+as numba compiles them, with the ``njit`` functions and the values they reach
+(:func:`plugin_key`), so an edit of any of them gives a new module and one compilation, and the
+cache folder is keyed by the package's kernels (:mod:`adaptive_dd._numba_cache`).
 """
 
 from __future__ import annotations
 
+import hashlib
+import importlib.util
+import inspect
+import itertools
+import os
+import sys
+import types
+from pathlib import Path
+
 import numpy as np
 from numba import njit
+from numba.core.dispatcher import Dispatcher
 
 from adaptive_dd.closed_loop.borrow import borrowed, keep_alive
 from adaptive_dd.closed_loop.chain_choices import _chain_plant_advance
@@ -55,7 +68,8 @@ __all__ = [
     "NEED_MASS_MATRIX",
     "NEED_REGRESSOR",
     "no_estimate",
-    "plugin_block",
+    "plugin_key",
+    "plugin_loop",
 ]
 
 NEED_GRAVITY, NEED_MASS_MATRIX, NEED_BIAS, NEED_REGRESSOR = 1, 2, 4, 8
@@ -175,11 +189,20 @@ def _plugin_trial(
 _plugin_trial_c = njit(inline="always")(_plugin_trial)
 
 
+_LOOP_SOURCE = '''"""The compiled closed loop of one compiled plug-in, written by
+adaptive_dd.closed_loop.plugin_loop.plugin_loop (key {key}): its reset, command, observe and
+estimate are this module's globals, set before the first call."""
+
+from numba import njit
+
+from adaptive_dd.closed_loop.plugin_loop import _plugin_trial_c
+
+reset = command = observe = estimate = None
+
+
 def _plugin_block(
-    i0, i1, k0, k1, noise, drop, rc, io, pl, ts, acc, rec, alarms, ch, pis, pj, pmap, need, p, x,
-    reset, command, observe, estimate, estimates,
-):  # pragma: no cover - compiled  # fmt: skip
-    """Samples ``k0`` to ``k1 - 1`` of trials ``i0`` to ``i1 - 1`` (:func:`_plugin_trial`)."""
+    i0, i1, k0, k1, noise, drop, rc, io, pl, ts, acc, rec, alarms, ch, pis, pj, pmap, need, p, x, estimates,
+):  # fmt: skip
     for i in range(i0, i1):
         _plugin_trial_c(
             i, k0, k1, noise, drop, rc, io, pl, ts, acc, rec, alarms, ch, pis, pj, pmap, need, p, x,
@@ -187,7 +210,156 @@ def _plugin_block(
         )  # fmt: skip
 
 
-plugin_block = njit(nogil=True)(_plugin_block)
-"""A block of samples of a range of trials of a compiled plug-in (:func:`_plugin_trial`); called
-as :func:`~adaptive_dd.closed_loop.glue.chain_loop_block` is
-(:func:`~adaptive_dd.closed_loop.glue.in_threads`), compiled once per plug-in and process."""
+plugin_block = njit(nogil=True, cache={cache})(_plugin_block)
+'''
+"""The module of one plug-in's loop: :func:`_plugin_trial` over a range of trials, the plug-in's
+functions read from the module's globals (numba compiles calls to them in, as to any global
+``njit`` function)."""
+
+_SAFE = frozenset({"adaptive_dd", "numba", "numpy", "math", "cmath", "builtins", "operator"})
+"""Packages whose functions a plug-in may call without them being keyed: the cache folder is keyed
+by this package's kernels, and numba's cache by numba's version."""
+_LOOPS: dict = {}
+_UNKEYED = itertools.count()
+
+
+class _Unkeyable(Exception):
+    """A plug-in's function reads something its key cannot follow."""
+
+
+def _root(obj) -> str:
+    return (getattr(obj, "__module__", None) or "").split(".")[0]
+
+
+def _value(h, v) -> None:
+    """Hash a value numba compiles in as a constant (a global, a default, a code constant)."""
+    if v is None or v is Ellipsis or isinstance(v, bool | int | float | complex | str | bytes | np.generic):
+        h.update(repr((type(v).__name__, v)).encode())
+    elif isinstance(v, np.ndarray):
+        h.update(f"array{v.dtype}{v.shape}".encode())
+        h.update(np.ascontiguousarray(v).tobytes())
+    elif isinstance(v, tuple | frozenset):
+        h.update(type(v).__name__.encode())
+        for x in v if isinstance(v, tuple) else sorted(v, key=repr):
+            _value(h, x)
+    elif inspect.iscode(v):
+        _code(h, v)
+    else:
+        raise _Unkeyable(repr(v))
+
+
+def _code(h, code) -> None:
+    """Hash a code object: its bytecode, names, constants and place (not its file's other text)."""
+    h.update(f"{code.co_qualname}@{code.co_filename}:{code.co_firstlineno}".encode())
+    h.update(code.co_code)
+    for names in (code.co_names, code.co_varnames, code.co_freevars, code.co_cellvars):
+        h.update(repr(names).encode())
+    _value(h, code.co_consts)
+
+
+def _names(code) -> set:
+    """The global and attribute names a code object and the code nested in it read."""
+    names = set(code.co_names)
+    for c in code.co_consts:
+        if inspect.iscode(c):
+            names |= _names(c)
+    return names
+
+
+def _function(h, f, seen: set) -> None:
+    """Hash an ``njit`` function and what it reaches from its globals (:func:`_globals`)."""
+    py = getattr(f, "py_func", f)
+    if id(py) in seen:
+        return
+    seen.add(id(py))
+    if not inspect.isfunction(py) or py.__closure__ or py.__kwdefaults__:
+        raise _Unkeyable(f"{py!r} is built at run time or takes keyword-only defaults")
+    h.update(repr(sorted(getattr(f, "targetoptions", {}).items())).encode())
+    _code(h, py.__code__)
+    _value(h, py.__defaults__)
+    _globals(h, py.__globals__, _names(py.__code__), seen)
+
+
+def _globals(h, space: dict, names: set, seen: set) -> None:
+    """Hash what ``names`` find in a module's ``space``: ``njit`` functions outside :data:`_SAFE`
+    (recursively), a user's module's attributes of those names, plain values (numba compiles
+    them in as constants); a function or module of :data:`_SAFE` needs no key. Anything else
+    (a class, a plain function numba would compile through an overload) is :class:`_Unkeyable`."""
+    for name in sorted(names & space.keys()):
+        v = space[name]
+        h.update(name.encode())
+        if isinstance(v, Dispatcher):
+            if _root(v.py_func) not in _SAFE:
+                _function(h, v, seen)
+        elif isinstance(v, types.ModuleType):
+            if v.__name__.split(".")[0] not in _SAFE and id(v) not in seen:
+                seen.add(id(v))
+                _globals(h, vars(v), names, seen)
+        elif not (callable(v) and _root(v) in _SAFE):
+            _value(h, v)
+
+
+def plugin_key(functions) -> str | None:
+    """The key of the loop of a plug-in's ``functions`` (``reset, command, observe, estimate``,
+    ``njit`` functions): a hash of this module's file and of each function as numba compiles it
+    (its bytecode, constants, options and defaults), of the ``njit`` functions it calls and of the
+    plain values it reads from globals, recursively (:func:`_globals`). The same functions give
+    the same key in any process; an edit of any of them, or of a value they read, another. None
+    when one of them reads what the key cannot follow (a closure's cells, a class, a plain
+    function compiled through an overload): its loop is then compiled in every process."""
+    h = hashlib.sha1(Path(__file__).read_bytes())
+    seen: set = set()
+    try:
+        for f in functions:
+            h.update(f"{f.py_func.__module__}.{f.py_func.__qualname__}".encode())
+            _function(h, f, seen)
+    except _Unkeyable:
+        return None
+    return h.hexdigest()[:16]
+
+
+def plugin_loop(functions):
+    """The compiled loop (``plugin_block``) of a plug-in's ``functions`` (``reset, command,
+    observe, estimate``): called as :func:`~adaptive_dd.closed_loop.glue.chain_loop_block` is
+    (:func:`~adaptive_dd.closed_loop.glue.in_threads`), with the block's records, the model, the
+    plug-in's ``need``, ``p``, ``x`` and ``estimates``. Its module (:data:`_LOOP_SOURCE`) is
+    written into numba's cache folder under :func:`plugin_key` and cached: a later run, in any
+    process, loads the loop instead of compiling it (a few seconds for a small law). A plug-in
+    whose functions cannot be keyed, or a cache folder that cannot be written, gives a module of
+    this process only, compiled again by every run."""
+    import numba
+
+    memo = tuple(id(f) for f in functions)
+    if memo in _LOOPS:
+        return _LOOPS[memo][0]
+    key = plugin_key(functions)
+    folder = Path(numba.config.CACHE_DIR) / "plugin_loops" if numba.config.CACHE_DIR and key else None
+    unkeyed = f"adaptive_dd_plugin_loop_p{os.getpid()}_{next(_UNKEYED)}"
+    name = f"adaptive_dd_plugin_loop_{key}" if folder else unkeyed
+    source = _LOOP_SOURCE.format(key=key, cache=folder is not None)
+    path = None
+    if folder is not None:
+        path = folder / f"loop_{key}.py"
+        try:
+            if not path.exists():  # written once: numba's cache is keyed by the file's time stamp
+                folder.mkdir(parents=True, exist_ok=True)
+                tmp = path.with_suffix(f".{os.getpid()}.tmp")
+                tmp.write_text(source)
+                os.replace(tmp, path)
+        except OSError:
+            path, name = None, unkeyed
+            source = _LOOP_SOURCE.format(key=key, cache=False)
+    if name in sys.modules:
+        module = sys.modules[name]
+    elif path is not None:
+        spec = importlib.util.spec_from_file_location(name, path)
+        module = importlib.util.module_from_spec(spec)
+        sys.modules[name] = module  # numba finds a cached loop's globals by the module's name
+        spec.loader.exec_module(module)
+    else:
+        module = types.ModuleType(name)
+        sys.modules[name] = module
+        exec(compile(source, f"<{name}>", "exec"), module.__dict__)
+    module.reset, module.command, module.observe, module.estimate = functions
+    _LOOPS[memo] = (module.plugin_block, functions)  # the functions kept: their ids stay theirs
+    return module.plugin_block

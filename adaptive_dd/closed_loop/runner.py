@@ -9,8 +9,8 @@ when they fit in :data:`~adaptive_dd.closed_loop.noise.SHARED_BYTES`
 (:func:`~adaptive_dd.closed_loop.glue.chain_loop_block`, a block of samples of a range of
 trials in one call, ranges in parallel threads); a compiled plug-in (``reset / command /
 observe`` as ``numba.njit`` functions: :func:`~adaptive_dd.controllers.plugins.is_compiled`) runs
-the same way in its own specialisation of the loop
-(:func:`~adaptive_dd.closed_loop.plugin_loop.plugin_block`); any other controller object (a
+the same way in its own specialisation of the loop, cached like the built-ins'
+(:func:`~adaptive_dd.closed_loop.plugin_loop.plugin_loop`); any other controller object (a
 plain-Python plug-in) runs on the Python path
 (:func:`~adaptive_dd.closed_loop.python_path.run_python_batch`, shared with the two-link arm),
 one ``command`` per sample for the whole batch, and the run says so once. All three call the same
@@ -262,11 +262,12 @@ def _run_compiled(name, ctrl: Law, scenario, idx, rc, io, pl, keep, bar, noise=N
 
 def _run_plugin(name, ctrl, scenario, idx, rc, io, pl, keep, bar, noise=None) -> ControllerRun:
     """A compiled plug-in's trials in its specialisation of the compiled loop
-    (:func:`~adaptive_dd.closed_loop.plugin_loop.plugin_block`), blocks and threads as
-    :func:`_run_compiled`. The loop is compiled on its first call (timed and printed apart from
-    the run); an exception raised inside it fails the plug-in's trials with the message in
-    ``run.error``, as on the Python path; ``noise`` as :func:`_run_compiled`'s."""
-    from adaptive_dd.closed_loop.plugin_loop import NEEDS, plugin_block
+    (:func:`~adaptive_dd.closed_loop.plugin_loop.plugin_loop`), blocks and threads as
+    :func:`_run_compiled`. The loop is compiled on its first call when the cache does not hold it
+    (timed and printed apart from the run); an exception raised inside it fails the plug-in's
+    trials with the message in ``run.error``, as on the Python path; ``noise`` as
+    :func:`_run_compiled`'s."""
+    from adaptive_dd.closed_loop.plugin_loop import NEEDS, plugin_loop
 
     S, N, n = len(idx), scenario.n_samples, scenario.n_joints
     form = compiled_form(name, ctrl, S, rc.T)
@@ -275,23 +276,30 @@ def _run_plugin(name, ctrl, scenario, idx, rc, io, pl, keep, bar, noise=None) ->
     pis = (
         true_models(pl) if form.true_model else np.ascontiguousarray(scenario.arm.pi, dtype=float)[None, None]
     )
-    fns = (form.reset, form.command, form.observe, form.estimate)
     arm = scenario.arm
     kin = (int(arm.payload_joint), np.ascontiguousarray(arm.payload_map, dtype=float))
-    tail = (pl.chain, pis, *kin, form.need, form.params, form.state, *fns, form.estimates)
+    tail = (pl.chain, pis, *kin, form.need, form.params, form.state, form.estimates)
     try:
+        plugin_block = plugin_loop((form.reset, form.command, form.observe, form.estimate))
         draws = RunNoise(scenario, idx, 2 * n, N) if noise is None else noise
         for k0, k1, block, drop in draws.blocks():
             args = (k0, k1, block, drop, rc, io, pl, ts, acc, rec, alarms, *tail)
             if k0 == 0:  # compile (or find) this plug-in's loop first: no trial, timed apart
-                t0, known = time.perf_counter(), len(plugin_block.overloads)
+                t0, missed = time.perf_counter(), sum(plugin_block.stats.cache_misses.values())
+                known = len(plugin_block.overloads)
                 if bar is not None:  # no progress bar (nor its estimate) while it compiles
                     bar.clear()
                 in_threads(plugin_block, 0, args)
-                if len(plugin_block.overloads) > known:  # said before the bar comes back, not inside it
+                cached = type(plugin_block._cache).__name__ != "NullCache"
+                compiled = len(plugin_block.overloads) > known and (
+                    sum(plugin_block.stats.cache_misses.values()) > missed or not cached
+                )
+                if compiled:  # said before the bar comes back, not inside it; a loop loaded: nothing
                     spent = time.perf_counter() - t0
+                    again = "later runs load it" if cached else "compiled again by every run"
                     print(
-                        f"{name}: compiled the plug-in into the closed loop in {spent:.1f} s", file=sys.stderr
+                        f"{name}: compiled the plug-in into the closed loop in {spent:.1f} s ({again})",
+                        file=sys.stderr,
                     )
                 if bar is not None:
                     bar.refresh()

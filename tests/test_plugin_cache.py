@@ -1,0 +1,249 @@
+"""A compiled plug-in's loop is cached like the built-ins' kernels, keyed by what it compiles.
+
+:func:`~adaptive_dd.closed_loop.plugin_loop.plugin_key` must give the same key to the same
+functions in any process and a new key after any edit the compiled loop would see (the plug-in's
+file, a helper in another file, a value read from a global); what it cannot follow (a closure)
+gives no key, and the loop is compiled in every process. The loop itself is written into the
+cache folder and a later process loads it: a second module over the same file, whose plug-in
+functions are left unset (compiling it would fail), finds the loop in numba's cache.
+"""
+
+import importlib.util
+import subprocess
+import sys
+import textwrap
+import tomllib
+from pathlib import Path
+
+import numba
+import numpy as np
+import pytest
+from numba import njit
+
+from adaptive_dd.closed_loop import plugin_loop
+from adaptive_dd.closed_loop.plugin_loop import no_estimate, plugin_key
+
+SCENARIO = Path(__file__).resolve().parent.parent / "examples" / "plugins" / "pd_gravity.toml"
+
+HELPER = """
+from numba import njit
+
+@njit
+def helper(a):
+    return {body}
+"""
+
+LAW = """
+import numpy as np
+from numba import njit
+
+import {helper}
+
+GAIN = 2.0
+
+
+class Law:
+    needs = ()
+
+    @staticmethod
+    @njit
+    def reset(p, x):
+        pass
+
+    @staticmethod
+    @njit
+    def command(p, x, q, qd, q_d, qd_d, qdd_d, terms, tau):
+        for j in range(q.shape[0]):
+            tau[j] = GAIN * {helper}.helper(q_d[j] - q[j])
+
+    @staticmethod
+    @njit
+    def observe(p, x, q, qd, tau):
+        return 0
+"""
+
+
+def _load(path: Path, name: str):
+    spec = importlib.util.spec_from_file_location(name, path)
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[name] = module
+    spec.loader.exec_module(module)
+    return module
+
+
+def _functions(module):
+    law = module.Law
+    return (law.reset, law.command, law.observe, no_estimate)
+
+
+@pytest.fixture
+def law(tmp_path, monkeypatch):
+    """Write a law and its helper (another file) and load them afresh, as often as asked."""
+    monkeypatch.syspath_prepend(str(tmp_path))
+    helper = f"helper_{tmp_path.name}"
+
+    def make(body="2.0 * a", law_text=LAW):
+        (tmp_path / f"{helper}.py").write_text(HELPER.format(body=body))
+        (tmp_path / "law.py").write_text(law_text.format(helper=helper))
+        _load(tmp_path / f"{helper}.py", helper)
+        return _load(tmp_path / "law.py", "law_under_test")
+
+    yield make
+    for name in [n for n in sys.modules if n.startswith(("helper_", "law_under_test"))]:
+        del sys.modules[name]
+
+
+def test_the_key_is_the_same_in_another_process(law, tmp_path):
+    key = plugin_key(_functions(law()))
+    assert key is not None and len(key) == 16
+    script = textwrap.dedent(f"""
+        import importlib.util, sys
+        sys.path.insert(0, {str(tmp_path)!r})
+        import helper_{tmp_path.name}
+        spec = importlib.util.spec_from_file_location("law_under_test", {str(tmp_path / "law.py")!r})
+        m = importlib.util.module_from_spec(spec)
+        sys.modules["law_under_test"] = m
+        spec.loader.exec_module(m)
+        from adaptive_dd.closed_loop.plugin_loop import no_estimate, plugin_key
+        print(plugin_key((m.Law.reset, m.Law.command, m.Law.observe, no_estimate)))
+    """)
+    out = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == key
+
+
+def test_the_key_follows_every_edit_the_loop_would_compile(law):
+    module = law()
+    key = plugin_key(_functions(module))
+    assert plugin_key(_functions(law())) == key  # the same text again: the same key
+    assert plugin_key(_functions(law(body="3.0 * a"))) != key  # the helper, in another file
+    edited = LAW.replace("tau[j] = GAIN", "tau[j] = -GAIN")
+    assert plugin_key(_functions(law(law_text=edited))) != key  # the law's own text
+    module = law()
+    module.GAIN = 2.5  # a global changed at run time: numba compiles its value in
+    assert plugin_key(_functions(module)) != key
+    checked = tuple(njit(boundscheck=True)(f.py_func) for f in _functions(module)[:3])
+    assert plugin_key((*checked, no_estimate)) != plugin_key(_functions(module))  # the options
+
+
+def test_what_the_key_cannot_follow_gives_no_key():
+    def make(gain):
+        @njit
+        def command(p, x, q, qd, q_d, qd_d, qdd_d, terms, tau):
+            tau[:] = gain * (q_d - q)
+
+        return command
+
+    noop = njit(lambda p, x: None)
+    assert plugin_key((noop, make(1.0), noop, no_estimate)) is None  # a closure's cell: not in the code
+    assert plugin_key((noop, noop, noop, no_estimate)) is not None
+
+
+def _scenario(duration, seeds):
+    """The plug-in example's arm and reference (its three-joint vertical arm), no payload."""
+    from adaptive_dd.benchmark.scenario import parse_scenario
+
+    data = tomllib.loads(SCENARIO.read_text())
+    data["run"].update(controllers=["ct_nominal"], seeds=seeds, duration=duration)
+    for table in ("controllers", "payload"):
+        data.pop(table)
+    return parse_scenario(data, str(SCENARIO), name="plugin_cache_test")
+
+
+@pytest.fixture
+def cache_folder(tmp_path, monkeypatch):
+    """A cache folder of this test's for the plug-ins' loops: numba fixes a kernel's cache folder
+    when it is decorated, so ``plugin_loop`` makes its module with numba's folder set to this one;
+    the package's kernels keep theirs."""
+    folder, make = tmp_path / "cache", plugin_loop.plugin_loop
+
+    def in_folder(functions):
+        with monkeypatch.context() as m:
+            m.setattr(numba.config, "CACHE_DIR", str(folder))
+            return make(functions)
+
+    monkeypatch.setattr(plugin_loop, "plugin_loop", in_folder)
+    monkeypatch.setattr(plugin_loop, "_LOOPS", {})
+    return folder
+
+
+def test_a_plugins_loop_is_written_once_and_loaded_by_a_later_process(cache_folder, capsys, monkeypatch):
+    from adaptive_dd.closed_loop.runner import run_closed_loop
+
+    class Proportional:
+        needs = ("gravity",)
+
+        def __init__(self, gain):
+            self.gain = gain
+
+        def parameters(self, sample_period):
+            return (self.gain,)
+
+        @staticmethod
+        @njit
+        def reset(p, x):
+            pass
+
+        @staticmethod
+        @njit
+        def command(p, x, q, qd, q_d, qd_d, qdd_d, terms, tau):
+            for j in range(q.shape[0]):
+                tau[j] = p[0] * (q_d[j] - q[j]) + terms[0][j]
+
+        @staticmethod
+        @njit
+        def observe(p, x, q, qd, tau):
+            return 0
+
+    sc = _scenario(0.05, 2)
+    runs = run_closed_loop(sc, {"p": Proportional(200.0)}).runs
+    assert runs["p"].engine == "compiled" and not runs["p"].failed.any()
+    assert "p: compiled the plug-in into the closed loop" in capsys.readouterr().err
+    (written,) = (cache_folder / "plugin_loops").glob("loop_*.py")
+    key = written.stem.removeprefix("loop_")
+    loop = sys.modules[f"adaptive_dd_plugin_loop_{key}"].plugin_block
+    assert len(loop.signatures) == 1 and sum(loop.stats.cache_misses.values()) == 1
+    stamp = written.stat().st_mtime_ns
+
+    # a later run in a new process: no loop in memory; the same functions, other parameters
+    monkeypatch.setattr(plugin_loop, "_LOOPS", {})
+    monkeypatch.delitem(sys.modules, f"adaptive_dd_plugin_loop_{key}")
+    again = run_closed_loop(sc, {"p": Proportional(100.0)}).runs["p"]
+    assert "compiled the plug-in" not in capsys.readouterr().err and not again.failed.any()
+    reloaded = sys.modules[f"adaptive_dd_plugin_loop_{key}"].plugin_block
+    assert reloaded is not loop and sum(reloaded.stats.cache_hits.values()) == 1
+    assert written.stat().st_mtime_ns == stamp and list(written.parent.glob("loop_*.py")) == [written]
+    assert np.abs(again.tau).max() < np.abs(runs["p"].tau).max()  # its own parameters, not the first's
+
+    # a later process: a second module over the same file, its plug-in functions unset (None)
+    with pytest.MonkeyPatch.context() as m:
+        m.setattr(numba.config, "CACHE_DIR", str(cache_folder))
+        later = _load(written, f"later_{key}")
+    try:
+        assert later.command is None
+        later.plugin_block.compile(loop.signatures[0])  # would fail to type a call of None
+        assert sum(later.plugin_block.stats.cache_hits.values()) == 1
+        assert not later.plugin_block.stats.cache_misses
+    finally:
+        del sys.modules[f"later_{key}"]
+
+
+def test_a_closure_plugin_still_runs_and_says_it_is_compiled_every_run(cache_folder, capsys):
+    from adaptive_dd.closed_loop.runner import run_closed_loop
+
+    gain = np.float64(150.0)
+
+    @njit
+    def command(p, x, q, qd, q_d, qd_d, qdd_d, terms, tau):
+        for j in range(q.shape[0]):
+            tau[j] = gain * (q_d[j] - q[j]) + terms[0][j]
+
+    class Closure:
+        needs = ("gravity",)
+        reset = staticmethod(njit(lambda p, x: None))
+        observe = staticmethod(njit(lambda p, x, q, qd, tau: 0))
+
+    Closure.command = staticmethod(command)
+    runs = run_closed_loop(_scenario(0.02, 1), {"c": Closure()}).runs
+    assert runs["c"].engine == "compiled" and not runs["c"].failed.any()
+    assert "compiled again by every run" in capsys.readouterr().err
+    assert not (cache_folder / "plugin_loops").exists()
