@@ -227,6 +227,7 @@ def test_a_plugins_loop_is_written_once_and_loaded_by_a_later_process(cache_fold
         del sys.modules[f"later_{key}"]
 
 
+@pytest.mark.slow  # compiles a loop (about 9 s) that no cache holds
 def test_a_closure_plugin_still_runs_and_says_it_is_compiled_every_run(cache_folder, capsys):
     from adaptive_dd.closed_loop.runner import run_closed_loop
 

@@ -41,12 +41,13 @@ from adaptive_dd.plant.sampling import first_sample
 from adaptive_dd.plant.simulator import MAX_SPEED
 from adaptive_dd.plant.two_link_integrator import friction_vector
 
-__all__ = ["run_compiled", "run_python"]
+__all__ = ["run_compiled", "run_constants", "run_python"]
 
 
-def _constants(scenario, reference) -> tuple[RunConstants, Io, np.ndarray]:
-    """``(rc, io, sigma_seg)``: what every trial of every controller shares; ``reference`` is
-    ``(q_d, qd_d, qdd_d)``; ``sigma_seg (G, 7)`` the true base parameters of each segment."""
+def run_constants(scenario, reference) -> tuple[RunConstants, Io, np.ndarray]:
+    """``(rc, io, sigma_seg)``: what every trial of every controller shares, made once per run
+    (the tool frame's placements along the reference among it); ``reference`` is ``(q_d, qd_d,
+    qdd_d)``; ``sigma_seg (G, 7)`` the true base parameters of each segment."""
     N, T = scenario.n_samples, scenario.sample_period
     seg_start, seg_end, seg_settled = segment_bounds(scenario.segments(), T, SETTLE)
     c = np.ascontiguousarray
@@ -92,16 +93,16 @@ def _records(
     return run, pl, ts, rec
 
 
-def run_compiled(name, ctrl, spec: CompiledSpec, scenario, idx, reference, keep: int, bar) -> ControllerRun:
+def run_compiled(name, ctrl, spec: CompiledSpec, scenario, idx, constants, keep: int, bar) -> ControllerRun:
     """One built-in controller's trials on the compiled path; the same result as :func:`run_python`.
 
     ``spec`` its :func:`~adaptive_dd.controllers.compiled_form.compiled_spec`; ``idx`` the seed indices;
-    ``reference`` ``(q_d, qd_d, qdd_d)``, each ``(n_samples, 2)``; ``keep`` trials recorded;
-    ``bar`` a progress bar (samples) or None."""
+    ``constants`` the run's :func:`run_constants`; ``keep`` trials recorded; ``bar`` a progress
+    bar (samples) or None."""
     S, N, T = len(idx), scenario.n_samples, scenario.sample_period
     adaptive = spec.law == LAW_ADAPTIVE
     estimates = adaptive or spec.law == LAW_SLOTINE
-    rc, io, sigma_seg = _constants(scenario, reference)
+    rc, io, sigma_seg = constants
     run, pl, ts, rec = _records(name, ctrl, scenario, rc, sigma_seg, S, keep, estimates, "compiled")
     cfg = spec.online if adaptive else TwoLinkOnlineConfig(sample_period=T, tau_f=max(0.01, T))  # unused
     es = online_init(cfg, S, spec.sigma)
@@ -120,12 +121,12 @@ def run_compiled(name, ctrl, spec: CompiledSpec, scenario, idx, reference, keep:
     return run
 
 
-def run_python(name, ctrl, scenario, idx, reference, keep: int, bar) -> ControllerRun:
+def run_python(name, ctrl, scenario, idx, constants, keep: int, bar) -> ControllerRun:
     """One controller object's trials on the Python path
     (:func:`~adaptive_dd.closed_loop.python_path.run_python_batch`): a vectorised batch, one
     ``command`` and one ``observe`` per sample; a controller that raises fails its own trials
     (``run.error``). Arguments as :func:`run_compiled`'s."""
-    rc, io, sigma_seg = _constants(scenario, reference)
+    rc, io, sigma_seg = constants
 
     def records(estimates: bool):
         run, pl, ts, rec = _records(name, ctrl, scenario, rc, sigma_seg, len(idx), keep, estimates, "python")

@@ -27,7 +27,7 @@ from collections.abc import Mapping, Sequence
 
 import numpy as np
 
-from adaptive_dd.benchmark.drivers import run_compiled, run_python
+from adaptive_dd.benchmark.drivers import run_compiled, run_constants, run_python
 from adaptive_dd.benchmark.progress import RunClock
 from adaptive_dd.benchmark.scenario import Scenario
 from adaptive_dd.benchmark.trials import true_sigma
@@ -203,11 +203,12 @@ def _run_two_link(
         names = [n for n, s in specs.items() if s is None]
         raise ParameterError(f"engine='compiled': no compiled path for {names}; use engine='auto'")
     bar.total = len(ctrls) * N
+    constants = run_constants(scenario, ref)
     for name, ctrl in ctrls.items():
         if specs[name] is not None:
-            run = run_compiled(name, ctrl, specs[name], scenario, idx, ref, keep, bar)
+            run = run_compiled(name, ctrl, specs[name], scenario, idx, constants, keep, bar)
         else:
-            run = run_python(name, ctrl, scenario, idx, ref, keep, bar)
+            run = run_python(name, ctrl, scenario, idx, constants, keep, bar)
         res.runs[name] = run
         if on_run is not None:
             on_run(res, run)
