@@ -125,6 +125,65 @@ def test_the_key_follows_every_edit_the_loop_would_compile(law):
     assert plugin_key((*checked, no_estimate)) != plugin_key(_functions(module))  # the options
 
 
+HELPERS = """
+from numba import njit
+
+INIT = 0.0
+K = {k}
+
+
+@njit
+def term(e):
+    return {body}
+"""
+
+THROUGH_MODULE = """
+from numba import njit
+
+import {helper}
+
+
+class Law:
+    @staticmethod
+    @njit
+    def reset(p, x):
+        x[0] = {helper}.INIT
+
+    @staticmethod
+    @njit
+    def command(p, x, q, qd, q_d, qd_d, qdd_d, terms, tau):
+        for j in range(q.shape[0]):
+            tau[j] = {helper}.K * {helper}.term(q_d[j] - q[j])
+
+    @staticmethod
+    @njit
+    def observe(p, x, q, qd, tau):
+        return 0
+"""
+
+
+def test_a_module_read_by_several_functions_is_keyed_by_what_each_reads(tmp_path, monkeypatch):
+    """``import helpers`` then ``helpers.K``: every function's attributes of the module enter the
+    key, not only those of the first function that reaches it (``reset`` reads ``INIT`` alone)."""
+    monkeypatch.syspath_prepend(str(tmp_path))
+    helper = f"helpers_{tmp_path.name}"
+
+    def key(k="1.0", body="2.0 * e"):
+        (tmp_path / f"{helper}.py").write_text(HELPERS.format(k=k, body=body))
+        (tmp_path / "law_m.py").write_text(THROUGH_MODULE.format(helper=helper))
+        _load(tmp_path / f"{helper}.py", helper)
+        return plugin_key(_functions(_load(tmp_path / "law_m.py", "law_m_under_test")))
+
+    try:
+        first = key()
+        assert key() == first
+        assert key(k="1.1") != first  # read by command only
+        assert key(body="3.0 * e") != first  # called by command only
+    finally:
+        for name in (helper, "law_m_under_test"):
+            sys.modules.pop(name, None)
+
+
 def test_what_the_key_cannot_follow_gives_no_key():
     def make(gain):
         @njit

@@ -291,9 +291,10 @@ def _globals(h, space: dict, names: set, seen: set) -> None:
         if isinstance(v, Dispatcher):
             if _root(v.py_func) not in _SAFE:
                 _function(h, v, seen)
-        elif isinstance(v, types.ModuleType):
-            if v.__name__.split(".")[0] not in _SAFE and id(v) not in seen:
-                seen.add(id(v))
+        elif isinstance(v, types.ModuleType):  # each function's names walked in it: each reads its own
+            walk = (id(v), frozenset(names))
+            if v.__name__.split(".")[0] not in _SAFE and walk not in seen:
+                seen.add(walk)
                 _globals(h, vars(v), names, seen)
         elif not (callable(v) and _root(v) in _SAFE):
             _value(h, v)

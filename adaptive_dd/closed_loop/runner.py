@@ -296,7 +296,12 @@ def _run_plugin(name, ctrl, scenario, idx, rc, io, pl, keep, bar, noise=None) ->
                 )
                 if compiled:  # said before the bar comes back, not inside it; a loop loaded: nothing
                     spent = time.perf_counter() - t0
-                    again = "later runs load it" if cached else "compiled again by every run"
+                    again = (
+                        "later runs load it"
+                        if cached
+                        else "compiled again by every run: a function of it reads what the cache cannot "
+                        "key, such as a closure's value; pass such values through parameters()"
+                    )
                     print(
                         f"{name}: compiled the plug-in into the closed loop in {spent:.1f} s ({again})",
                         file=sys.stderr,
