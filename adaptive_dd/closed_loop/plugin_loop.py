@@ -346,7 +346,12 @@ def plugin_loop(functions):
                 folder.mkdir(parents=True, exist_ok=True)
                 tmp = path.with_suffix(f".{os.getpid()}.tmp")
                 tmp.write_text(source)
-                os.replace(tmp, path)
+                try:  # the first of processes writing at once wins; the others keep its file
+                    os.link(tmp, path)
+                except FileExistsError:
+                    pass
+                finally:
+                    tmp.unlink()
         except OSError:
             path, name = None, unkeyed
             source = _LOOP_SOURCE.format(key=key, cache=False)
