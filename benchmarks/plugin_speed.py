@@ -12,6 +12,10 @@ or, with ``--law slotine_li``, ``examples/plugins/slotine_li.toml`` (the same ar
 with the built-in ``slotine_li`` and ``slotine_li_plugin:SlotineLiPlugin`` (the adaptive law as a
 compiled plug-in over the arm's regressor, :mod:`adaptive_dd.controllers.kernels`),
 
+or, with ``--law paper``, the default scenario (the paper's arm on its closed forms, payload swaps
+at 5, 10 and 15 s) with the built-in ``pd`` and the same two plug-ins (PD plus gravity is ``pd``
+there: the arm moves in a horizontal plane), the compiled one in the two-link compiled loop,
+
 alone, one after the other, ``--repeat`` times each in rotation, and prints for each the best
 CPU time per trial-sample [us] over the calls (process CPU time, one numba thread: less
 sensitive to other work on the machine than wall time) and its ratio to the built-in: of the
@@ -23,7 +27,8 @@ within 1.5x of the built-in.
 
 Usage::
 
-    python benchmarks/plugin_speed.py [--law pd_gravity|slotine_li] [--seeds N] [--duration S] [--repeat N]
+    python benchmarks/plugin_speed.py [--law pd_gravity|slotine_li|paper] [--seeds N]
+                                       [--duration S] [--repeat N]
 
 Asserts nothing; speed is never asserted in tests.
 """
@@ -33,8 +38,10 @@ from __future__ import annotations
 import argparse
 import contextlib
 import io
+import sys
 import time
 import tomllib
+import warnings
 from pathlib import Path
 
 from numba.core import event
@@ -50,6 +57,11 @@ LAWS = {
         "built-in slotine_li": "slotine_li",
         "compiled plug-in": "slotine_li_plugin:SlotineLiPlugin",
     },
+    "paper": {
+        "built-in pd": "pd",
+        "compiled plug-in": "pd_gravity_plugin:PDGravityPlugin",
+        "plain-Python plug-in": "pd_gravity_python:PDGravityPython",
+    },
 }
 """Per law: the controllers timed (the built-in first), by the name the table prints."""
 
@@ -57,9 +69,15 @@ LAWS = {
 def _scenario(law: str, spec: str, seeds: int, duration: float):
     from adaptive_dd.benchmark.scenario import parse_scenario
 
-    scenario = ROOT / "examples" / "plugins" / f"{law}.toml"
+    if law == "paper":  # the default scenario; the plug-ins found on the Python path
+        scenario = ROOT / "adaptive_dd" / "scenarios" / "payload_swap.toml"
+        if str(ROOT / "examples" / "plugins") not in sys.path:
+            sys.path.insert(0, str(ROOT / "examples" / "plugins"))
+    else:
+        scenario = ROOT / "examples" / "plugins" / f"{law}.toml"
     data = tomllib.loads(scenario.read_text())
     data["run"].update(controllers=[spec], seeds=seeds, duration=duration)
+    data["payload"] = [p for p in data.get("payload", []) if p["at"] < duration]  # swaps within the run
     data.pop("controllers", None)  # the plug-in's label table: not needed here
     return parse_scenario(data, str(scenario), name="plugin_speed")
 
@@ -87,6 +105,7 @@ _IN_LOOP = [0.0]  # CPU seconds inside the compiled loop's calls (runner.in_thre
 
 def _timed_in_threads():
     """The runner's :func:`in_threads`, counting the CPU time of its calls into :data:`_IN_LOOP`."""
+    from adaptive_dd.benchmark import drivers
     from adaptive_dd.closed_loop import runner
 
     inner = runner.in_threads
@@ -96,18 +115,19 @@ def _timed_in_threads():
         inner(kernel, S, args)
         _IN_LOOP[0] += time.process_time() - c0
 
-    runner.in_threads = timed
+    runner.in_threads = drivers.in_threads = timed
 
 
 def _cpu_per_sample(sc) -> tuple[float, float, float]:
     """``(run_us, loop_us, wall_s)``: CPU time per trial-sample of one run of ``sc``, of its
     compiled loop's calls alone (0 on the Python path), and the run's wall time."""
-    from adaptive_dd.closed_loop.runner import run_closed_loop
+    from adaptive_dd.benchmark.runner import FLOOR_NOT_RUN, run_benchmark
 
     _IN_LOOP[0] = 0.0
     w0, c0 = time.perf_counter(), time.process_time()
-    with contextlib.redirect_stderr(io.StringIO()):  # the slow-path note, once per run
-        run_closed_loop(sc, keep_trajectories=0)
+    with contextlib.redirect_stderr(io.StringIO()), warnings.catch_warnings():  # the slow-path note
+        warnings.filterwarnings("ignore", message=FLOOR_NOT_RUN)  # each runs alone, without its floor
+        run_benchmark(sc, progress=False, keep_trajectories=0)
     c1, w1 = time.process_time(), time.perf_counter()
     per = 1e6 / (sc.seeds * sc.n_samples)
     return (c1 - c0) * per, _IN_LOOP[0] * per, w1 - w0

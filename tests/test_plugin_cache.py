@@ -215,10 +215,10 @@ def cache_folder(tmp_path, monkeypatch):
     the package's kernels keep theirs."""
     folder, make = tmp_path / "cache", plugin_loop.plugin_loop
 
-    def in_folder(functions):
+    def in_folder(functions, runtime="chain"):
         with monkeypatch.context() as m:
             m.setattr(numba.config, "CACHE_DIR", str(folder))
-            return make(functions)
+            return make(functions, runtime)
 
     monkeypatch.setattr(plugin_loop, "plugin_loop", in_folder)
     monkeypatch.setattr(plugin_loop, "_LOOPS", {})

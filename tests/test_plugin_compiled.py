@@ -279,8 +279,9 @@ def test_the_compiled_plugin_on_the_python_path_agrees_with_the_compiled_loop(ex
 
 @pytest.mark.slow
 def test_the_compiled_plugin_runs_on_the_papers_closed_forms(example):
-    """The paper's two-link runtime has no compiled loop for plug-ins: the same class runs there on
-    the Python path (its gravity from the paper's regressor, eq. 8)."""
+    """On the paper's two-link runtime the same class runs in the two-link compiled loop, and with
+    engine='python' on the Python path (its gravity from the paper's regressor, eq. 8): the same
+    law (tests/test_plugin_two_link.py holds every term equal)."""
     from adaptive_dd.benchmark.scenario import load_scenario
 
     data = tomllib.loads(Path(load_scenario().source).read_text())
@@ -290,5 +291,7 @@ def test_the_compiled_plugin_runs_on_the_papers_closed_forms(example):
     sc = parse_scenario(data, str(SCENARIO), name="two_link_plugin")
     assert sc.closed_forms is not None
     run = run_benchmark(sc, progress=False).runs["pd_gravity_plugin"]
-    assert run.engine == "python" and not run.error and not run.failed.any()
+    assert run.engine == "compiled" and not run.error and not run.failed.any()
     assert np.all(_rms(run) < 0.05)  # PD with gravity tracks the paper's arm within 50 mrad
+    slow = run_benchmark(sc, progress=False, engine="python").runs["pd_gravity_plugin"]
+    assert slow.engine == "python" and np.max(np.abs(_rms(run) - _rms(slow))) < 1e-12

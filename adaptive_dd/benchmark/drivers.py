@@ -41,7 +41,7 @@ from adaptive_dd.plant.sampling import first_sample
 from adaptive_dd.plant.simulator import MAX_SPEED
 from adaptive_dd.plant.two_link_integrator import friction_vector
 
-__all__ = ["run_compiled", "run_constants", "run_python"]
+__all__ = ["run_compiled", "run_constants", "run_plugin", "run_python"]
 
 
 def run_constants(scenario, reference) -> tuple[RunConstants, Io, np.ndarray]:
@@ -119,6 +119,31 @@ def run_compiled(name, ctrl, spec: CompiledSpec, scenario, idx, constants, keep:
         run.alarm_times = alarm_lists(alarms)
     run.explain_failures(rc.max_error, rc.max_speed)
     return run
+
+
+def run_plugin(name, ctrl, scenario, idx, constants, keep: int, bar) -> ControllerRun:
+    """A compiled plug-in's trials in its two-link compiled loop
+    (:func:`~adaptive_dd.closed_loop.plugin_loop.plugin_loop` with ``"two-link"``, driven as on
+    any arm: :func:`~adaptive_dd.closed_loop.runner.drive_plugin`); its model terms of the closed
+    forms' sigma (each segment's true one for a plug-in with ``needs_true_model``). Arguments as
+    :func:`run_compiled`'s."""
+    from adaptive_dd.closed_loop.runner import drive_plugin
+    from adaptive_dd.controllers.plugins import compiled_form
+
+    S, N, T = len(idx), scenario.n_samples, scenario.sample_period
+    rc, io, sigma_seg = constants
+    form = compiled_form(name, ctrl, S, T)
+    run, pl, ts, rec = _records(name, ctrl, scenario, rc, sigma_seg, S, keep, form.estimates, "compiled")
+    alarms = Alarms(np.zeros((S, MAX_ALARMS)), np.zeros(S, dtype=np.int64))
+    sigma = np.ascontiguousarray(scenario.closed_forms.sigma, dtype=float)
+    pis = np.ascontiguousarray(sigma_seg[None] if form.true_model else sigma[None, None])
+    tail = (None, pis, 0, np.zeros((0, 0)), form.need, form.params, form.state, form.estimates)
+
+    def blocks():
+        for k0, k1, noise, drop in NoiseBlocks(scenario, idx, 4).blocks(N):
+            yield k0, k1, (k0, k1, noise, drop, rc, io, pl, ts, run.acc, rec, alarms, *tail)
+
+    return drive_plugin(name, ctrl, form, "two-link", run, blocks, alarms, rc, bar)
 
 
 def run_python(name, ctrl, scenario, idx, constants, keep: int, bar) -> ControllerRun:

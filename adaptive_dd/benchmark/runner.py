@@ -27,7 +27,7 @@ from collections.abc import Mapping, Sequence
 
 import numpy as np
 
-from adaptive_dd.benchmark.drivers import run_compiled, run_constants, run_python
+from adaptive_dd.benchmark.drivers import run_compiled, run_constants, run_plugin, run_python
 from adaptive_dd.benchmark.progress import RunClock
 from adaptive_dd.benchmark.scenario import Scenario
 from adaptive_dd.benchmark.trials import true_sigma
@@ -199,20 +199,38 @@ def _run_two_link(
     sigma_true, mass = true_sigma(scenario, t)
     res = BenchmarkResult(scenario, t, ref[0], sigma_true, mass, seed_indices=idx)
     specs = {n: (compiled_spec(c, T) if engine != "python" else None) for n, c in ctrls.items()}
-    if engine == "compiled" and any(s is None for s in specs.values()):
-        names = [n for n, s in specs.items() if s is None]
+    plugins = {n: _two_link_plugin(c) if engine != "python" else None for n, c in ctrls.items()}
+    names = [n for n, s in specs.items() if s is None and plugins[n] is None]
+    if engine == "compiled" and names:
         raise ParameterError(f"engine='compiled': no compiled path for {names}; use engine='auto'")
     bar.total = len(ctrls) * N
     constants = run_constants(scenario, ref)
     for name, ctrl in ctrls.items():
         if specs[name] is not None:
             run = run_compiled(name, ctrl, specs[name], scenario, idx, constants, keep, bar)
+        elif plugins[name] is not None:
+            run = run_plugin(name, plugins[name], scenario, idx, constants, keep, bar)
         else:
             run = run_python(name, ctrl, scenario, idx, constants, keep, bar)
         res.runs[name] = run
         if on_run is not None:
             on_run(res, run)
     return res
+
+
+def _two_link_plugin(ctrl):
+    """The compiled plug-in that the paper's arm runs in its compiled loop, or None: ``ctrl``
+    itself, or the plug-in a :class:`~adaptive_dd.controllers.plugins.PythonForm` wraps on the
+    closed forms (:data:`~adaptive_dd.controllers.plugins.CLOSED_FORMS`), unless it needs the
+    arm's kernels, which the closed forms do not have (its Python path says so)."""
+    from adaptive_dd.controllers.plugins import CLOSED_FORMS, PythonForm, is_compiled
+
+    if isinstance(ctrl, PythonForm):
+        inner = ctrl.ctrl if ctrl.why == CLOSED_FORMS else None
+    else:
+        inner = ctrl if is_compiled(ctrl) else None
+    needs = getattr(inner, "needs", ())
+    return None if inner is None or "regressor" in ((needs,) if isinstance(needs, str) else needs) else inner
 
 
 def scenario_controller(scenario: Scenario, spec: str) -> tuple[str, Controller]:

@@ -67,6 +67,7 @@ __all__ = [
     "NEED_GRAVITY",
     "NEED_MASS_MATRIX",
     "NEED_REGRESSOR",
+    "TRIALS",
     "no_estimate",
     "plugin_key",
     "plugin_loop",
@@ -189,13 +190,73 @@ def _plugin_trial(
 _plugin_trial_c = njit(inline="always")(_plugin_trial)
 
 
+def _two_link_terms(ch, pi, need, q, qd, zero, w, g, m, c):  # pragma: no cover - compiled
+    """:func:`_model_terms` of the paper's arm's closed forms, base parameters ``pi (7,)`` =
+    ``[J1 J2 r b1 b2 d1 d2]`` (eqs. 3-8): M(q), C(q, qd) qd + B qd + D sgn(qd), and no gravity
+    (the arm moves in a horizontal plane)."""
+    if need & 1:
+        g[0] = 0.0
+        g[1] = 0.0
+    if need & 2:
+        rc = pi[2] * np.cos(q[1])
+        m[0, 0] = pi[0] + pi[1] + 2.0 * rc
+        m[0, 1] = pi[1] + rc
+        m[1, 0] = pi[1] + rc
+        m[1, 1] = pi[1]
+    if need & 4:
+        rs = pi[2] * np.sin(q[1])
+        c[0] = -rs * qd[1] * (2.0 * qd[0] + qd[1]) + pi[3] * qd[0] + pi[5] * np.sign(qd[0])
+        c[1] = rs * qd[0] * qd[0] + pi[4] * qd[1] + pi[6] * np.sign(qd[1])
+
+
+def _no_kernels(ch, pi, pj, pmap):  # pragma: no cover - compiled
+    """The arm's kernels on the closed forms: none (a plug-in that needs them is refused)."""
+    return None
+
+
+def _no_model(kin, pi):  # pragma: no cover - compiled
+    """:func:`~adaptive_dd.controllers.kernels.with_model` of no kernels: none."""
+    return None
+
+
+def _empty(n):  # pragma: no cover - compiled
+    """The closed forms' plant step and model terms need no scratch."""
+    return np.empty(0)
+
+
+def _two_link_trial():
+    """:func:`_plugin_trial` of the paper's arm on its closed forms (``plugin_loop(...,
+    "two-link")``): its plant's step (:func:`~adaptive_dd.closed_loop.glue.apply_sample`, the
+    plant's step chosen by type), the model terms of :func:`_two_link_terms` and no arm kernels;
+    its records borrowed as on any arm (as they are, as the built-ins' two-link loop has them, it
+    ran 1.4x slower per sample)."""
+    import adaptive_dd.benchmark.compiled  # noqa: F401 - the two-link plant's step, by type
+    from adaptive_dd.closed_loop.glue import _bound, apply_sample
+
+    trial = _bound(
+        _plugin_trial, _apply_chain=apply_sample,
+        _model_terms_c=njit(inline="always")(_two_link_terms), arm_kernels=njit(inline="always")(_no_kernels),
+        with_model=njit(inline="always")(_no_model), workspace=njit(inline="always")(_empty),
+        plant_scratch=njit(inline="always")(_empty),
+    )  # fmt: skip
+    return njit(inline="always")(trial)
+
+
+def __getattr__(name: str):
+    """``_plugin_trial_two_link_c``, made when a two-link loop first asks for it."""
+    if name == "_plugin_trial_two_link_c":
+        globals()[name] = _two_link_trial()
+        return globals()[name]
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
 _LOOP_SOURCE = '''"""The compiled closed loop of one compiled plug-in, written by
 adaptive_dd.closed_loop.plugin_loop.plugin_loop (key {key}): its reset, command, observe and
 estimate are this module's globals, set before the first call."""
 
 from numba import njit
 
-from adaptive_dd.closed_loop.plugin_loop import _plugin_trial_c
+from adaptive_dd.closed_loop.plugin_loop import {trial} as _trial
 
 reset = command = observe = estimate = None
 
@@ -204,7 +265,7 @@ def _plugin_block(
     i0, i1, k0, k1, noise, drop, rc, io, pl, ts, acc, rec, alarms, ch, pis, pj, pmap, need, p, x, estimates,
 ):  # fmt: skip
     for i in range(i0, i1):
-        _plugin_trial_c(
+        _trial(
             i, k0, k1, noise, drop, rc, io, pl, ts, acc, rec, alarms, ch, pis, pj, pmap, need, p, x,
             reset, command, observe, estimate, estimates,
         )  # fmt: skip
@@ -300,7 +361,12 @@ def _globals(h, space: dict, names: set, seen: set) -> None:
             _value(h, v)
 
 
-def plugin_key(functions) -> str | None:
+TRIALS = {"chain": "_plugin_trial_c", "two-link": "_plugin_trial_two_link_c"}
+"""The trial a plug-in's loop runs, per runtime: an arm's general kernels (any arm from a URDF)
+or the paper's arm on its closed forms."""
+
+
+def plugin_key(functions, runtime: str = "chain") -> str | None:
     """The key of the loop of a plug-in's ``functions`` (``reset, command, observe, estimate``,
     ``njit`` functions): a hash of this module's file and of each function as numba compiles it
     (its bytecode, constants, options and defaults), of the ``njit`` functions it calls and of the
@@ -309,6 +375,7 @@ def plugin_key(functions) -> str | None:
     when one of them reads what the key cannot follow (a closure's cells, a class, a plain
     function compiled through an overload): its loop is then compiled in every process."""
     h = hashlib.sha1(Path(__file__).read_bytes())
+    h.update(TRIALS[runtime].encode())
     seen: set = set()
     try:
         for f in functions:
@@ -319,25 +386,27 @@ def plugin_key(functions) -> str | None:
     return h.hexdigest()[:16]
 
 
-def plugin_loop(functions):
+def plugin_loop(functions, runtime: str = "chain"):
     """The compiled loop (``plugin_block``) of a plug-in's ``functions`` (``reset, command,
     observe, estimate``): called as :func:`~adaptive_dd.closed_loop.glue.chain_loop_block` is
     (:func:`~adaptive_dd.closed_loop.glue.in_threads`), with the block's records, the model, the
-    plug-in's ``need``, ``p``, ``x`` and ``estimates``. Its module (:data:`_LOOP_SOURCE`) is
+    plug-in's ``need``, ``p``, ``x`` and ``estimates``; ``runtime`` a key of :data:`TRIALS` (the
+    two-link records and plant, the closed forms' sigma as the model ``pis (S or 1, G or 1, 7)``,
+    ``ch`` None). Its module (:data:`_LOOP_SOURCE`) is
     written into numba's cache folder under :func:`plugin_key` and cached: a later run, in any
     process, loads the loop instead of compiling it (a few seconds for a small law). A plug-in
     whose functions cannot be keyed, or a cache folder that cannot be written, gives a module of
     this process only, compiled again by every run."""
     import numba
 
-    memo = tuple(id(f) for f in functions)
+    memo = (runtime, *(id(f) for f in functions))
     if memo in _LOOPS:
         return _LOOPS[memo][0]
-    key = plugin_key(functions)
+    key = plugin_key(functions, runtime)
     folder = Path(numba.config.CACHE_DIR) / "plugin_loops" if numba.config.CACHE_DIR and key else None
     unkeyed = f"adaptive_dd_plugin_loop_p{os.getpid()}_{next(_UNKEYED)}"
     name = f"adaptive_dd_plugin_loop_{key}" if folder else unkeyed
-    source = _LOOP_SOURCE.format(key=key, cache=folder is not None)
+    source = _LOOP_SOURCE.format(key=key, cache=folder is not None, trial=TRIALS[runtime])
     path = None
     if folder is not None:
         path = folder / f"loop_{key}.py"
@@ -354,7 +423,7 @@ def plugin_loop(functions):
                     tmp.unlink()
         except OSError:
             path, name = None, unkeyed
-            source = _LOOP_SOURCE.format(key=key, cache=False)
+            source = _LOOP_SOURCE.format(key=key, cache=False, trial=TRIALS[runtime])
     if name in sys.modules:
         module = sys.modules[name]
     elif path is not None:

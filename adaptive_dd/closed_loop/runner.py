@@ -262,13 +262,8 @@ def _run_compiled(name, ctrl: Law, scenario, idx, rc, io, pl, keep, bar, noise=N
 
 def _run_plugin(name, ctrl, scenario, idx, rc, io, pl, keep, bar, noise=None) -> ControllerRun:
     """A compiled plug-in's trials in its specialisation of the compiled loop
-    (:func:`~adaptive_dd.closed_loop.plugin_loop.plugin_loop`), blocks and threads as
-    :func:`_run_compiled`. The loop is compiled on its first call when the cache does not hold it
-    (timed and printed apart from the run); an exception raised inside it fails the plug-in's
-    trials with the message in ``run.error``, as on the Python path; ``noise`` as
-    :func:`_run_compiled`'s."""
-    from adaptive_dd.closed_loop.plugin_loop import NEEDS, plugin_loop
-
+    (:func:`~adaptive_dd.closed_loop.plugin_loop.plugin_loop`, driven by :func:`drive_plugin`),
+    blocks and threads as :func:`_run_compiled`; ``noise`` as :func:`_run_compiled`'s."""
     S, N, n = len(idx), scenario.n_samples, scenario.n_joints
     form = compiled_form(name, ctrl, S, rc.T)
     run, ts, acc, rec = _records(name, ctrl, scenario, rc, pl, S, keep, form.estimates, "compiled")
@@ -279,36 +274,32 @@ def _run_plugin(name, ctrl, scenario, idx, rc, io, pl, keep, bar, noise=None) ->
     arm = scenario.arm
     kin = (int(arm.payload_joint), np.ascontiguousarray(arm.payload_map, dtype=float))
     tail = (pl.chain, pis, *kin, form.need, form.params, form.state, form.estimates)
-    try:
-        plugin_block = plugin_loop((form.reset, form.command, form.observe, form.estimate))
+
+    def blocks():
         draws = RunNoise(scenario, idx, 2 * n, N) if noise is None else noise
         for k0, k1, block, drop in draws.blocks():
-            args = (k0, k1, block, drop, rc, io, pl, ts, acc, rec, alarms, *tail)
+            yield k0, k1, (k0, k1, block, drop, rc, io, pl, ts, acc, rec, alarms, *tail)
+
+    return drive_plugin(name, ctrl, form, "chain", run, blocks, alarms, rc, bar)
+
+
+def drive_plugin(name, ctrl, form, runtime: str, run, blocks, alarms, rc, bar) -> ControllerRun:
+    """Run a compiled plug-in's loop (:func:`~adaptive_dd.closed_loop.plugin_loop.plugin_loop` of
+    ``form``'s functions and ``runtime``) over ``blocks()``, which yields ``(k0, k1, args)`` per
+    block of samples, into ``run``. The loop is compiled (or loaded) on its first call, with no
+    trial, timed and printed apart from the run; an exception raised inside it fails the
+    plug-in's trials with the message in ``run.error``, as on the Python path; then the alarms
+    (``alarms``, a plug-in with ``has_detector``) and the failures' reasons, a non-finite command
+    naming the terms it did not declare (NaN)."""
+    from adaptive_dd.closed_loop.plugin_loop import NEEDS, plugin_loop
+
+    S = run.failed.shape[0]
+    try:
+        loop = plugin_loop((form.reset, form.command, form.observe, form.estimate), runtime)
+        for k0, k1, args in blocks():
             if k0 == 0:  # compile (or find) this plug-in's loop first: no trial, timed apart
-                t0, missed = time.perf_counter(), sum(plugin_block.stats.cache_misses.values())
-                known = len(plugin_block.overloads)
-                if bar is not None:  # no progress bar (nor its estimate) while it compiles
-                    bar.clear()
-                in_threads(plugin_block, 0, args)
-                cached = type(plugin_block._cache).__name__ != "NullCache"
-                compiled = len(plugin_block.overloads) > known and (
-                    sum(plugin_block.stats.cache_misses.values()) > missed or not cached
-                )
-                if compiled:  # said before the bar comes back, not inside it; a loop loaded: nothing
-                    spent = time.perf_counter() - t0
-                    again = (
-                        "later runs load it"
-                        if cached
-                        else "compiled again by every run: a function of it reads what the cache cannot "
-                        "key, such as a closure's value; pass such values through parameters()"
-                    )
-                    print(
-                        f"{name}: compiled the plug-in into the closed loop in {spent:.1f} s ({again})",
-                        file=sys.stderr,
-                    )
-                if bar is not None:
-                    bar.refresh()
-            in_threads(plugin_block, S, args)
+                _first_call(name, loop, args, bar)
+            in_threads(loop, S, args)
             if bar is not None:
                 bar.update(k1 - k0)
     except Exception as exc:  # contain any plug-in failure to its own trials
@@ -325,6 +316,29 @@ def _run_plugin(name, ctrl, scenario, idx, rc, io, pl, keep, bar, noise=None) ->
             if why.startswith("non-finite torque command"):
                 run.failed_why[i] = why + hint
     return run
+
+
+def _first_call(name, loop, args, bar) -> None:
+    """The loop's first call, with no trial: compiled when the cache does not hold it, and then
+    said (before the progress bar comes back, not inside it); loaded, nothing is said."""
+    t0, missed = time.perf_counter(), sum(loop.stats.cache_misses.values())
+    known = len(loop.overloads)
+    if bar is not None:  # no progress bar (nor its estimate) while it compiles
+        bar.clear()
+    in_threads(loop, 0, args)
+    cached = type(loop._cache).__name__ != "NullCache"
+    if len(loop.overloads) > known and (sum(loop.stats.cache_misses.values()) > missed or not cached):
+        again = (
+            "later runs load it"
+            if cached
+            else "compiled again by every run: a function of it reads what the cache cannot key, such "
+            "as a closure's value; pass such values through parameters()"
+        )
+        spent = time.perf_counter() - t0
+        said = f"{name}: compiled the plug-in into the closed loop in {spent:.1f} s ({again})"
+        print(said, file=sys.stderr)
+    if bar is not None:
+        bar.refresh()
 
 
 def _run_python(name, ctrl, scenario, idx, rc, io, pl, keep, bar, noise=None) -> ControllerRun:

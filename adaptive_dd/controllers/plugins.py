@@ -6,9 +6,10 @@ The protocol (``reset``, ``command``, ``observe``) and a worked example on each 
 :func:`plugin_controller` for any name with a ``:``.
 
 A plug-in whose ``reset``, ``command`` and ``observe`` are ``numba.njit`` functions is a compiled
-plug-in (:func:`is_compiled`): on an N-joint arm it runs inside the compiled closed loop
-(:mod:`adaptive_dd.closed_loop.plugin_loop`; what the loop hands it: :func:`compiled_form`). Any
-other runs on the Python path, and the run says so once (:func:`slow_path_note`).
+plug-in (:func:`is_compiled`): it runs inside the compiled closed loop
+(:mod:`adaptive_dd.closed_loop.plugin_loop`; what the loop hands it: :func:`compiled_form`), on
+an N-joint arm and, through ``run_benchmark``, on the paper's arm's closed forms. Any other runs
+on the Python path, and the run says so once (:func:`slow_path_note`).
 """
 
 from __future__ import annotations
@@ -178,9 +179,15 @@ def _plugin(spec: str, g: Gains, options: dict, given: dict, search: tuple) -> C
         ctrl.name = controller_label(spec)
     if given.get("arm") is not None and is_compiled(ctrl):
         if getattr(given["arm"], "chain", None) is None:  # the closed forms' record: no compiled loop for it
-            return PythonForm(ctrl.name, ctrl, given["arm"], "the paper's closed-form two-link runtime")
+            return PythonForm(ctrl.name, ctrl, given["arm"], CLOSED_FORMS)
     return ctrl
 
+
+CLOSED_FORMS = "the paper's closed-form two-link runtime"
+"""Why a compiled plug-in on the paper's arm's closed forms is wrapped in a :class:`PythonForm`:
+other users of the closed forms (the stepping API, the Gymnasium face) call it trial by trial;
+``run_benchmark`` unwraps it into the two-link compiled loop
+(:func:`adaptive_dd.benchmark.drivers.run_plugin`)."""
 
 # ------------------------------------------------------------------ the compiled protocol
 _PER_SAMPLE = ("reset", "command", "observe")
@@ -325,8 +332,9 @@ def slow_path_note(name: str, ctrl) -> str:
 
 
 class PythonForm:
-    """A compiled plug-in on the Python path (``engine="python"``, or the paper's closed-form
-    two-link runtime, which has no compiled loop for plug-ins): its ``njit`` functions called
+    """A compiled plug-in on the Python path (``engine="python"``; one built on the paper's
+    closed forms, :data:`CLOSED_FORMS`, for their users other than ``run_benchmark``, which runs
+    it in the two-link compiled loop unless it needs the arm's kernels): its ``njit`` functions called
     trial by trial, the model terms it declares from the arm's regressor and mass matrix (of the
     true model given to an oracle, ``sigma_true``). Says once per run that it is on the slow path.
 
