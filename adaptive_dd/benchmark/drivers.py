@@ -1,8 +1,10 @@
-"""The two paths of a two-link run, on the same set-up and the closed loop's one per-sample glue.
+"""The paths of a two-link run, on the same set-up and the closed loop's one per-sample glue.
 
 :func:`run_compiled` drives :func:`~adaptive_dd.closed_loop.glue.closed_loop_block` over a run,
 block by block, with the two-link plant, a built-in controller's law and the paper's estimator
-as its compile-time choices (:mod:`adaptive_dd.benchmark.compiled`); :func:`run_python` runs
+as its compile-time choices (:mod:`adaptive_dd.benchmark.compiled`); :func:`run_plugin` drives a
+compiled plug-in's two-link loop (:func:`~adaptive_dd.closed_loop.plugin_loop.plugin_loop`, the
+same per-sample glue with the plug-in's functions); :func:`run_python` runs
 any controller object (``reset / command / observe``) on the closed loop's one Python path
 (:func:`~adaptive_dd.closed_loop.python_path.run_python_batch`, shared with the N-joint arm)
 around the batch wrappers of the same per-trial functions
