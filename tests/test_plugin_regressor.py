@@ -51,7 +51,7 @@ def test_the_regressor_need_is_declared_and_refused_where_the_arm_has_no_kernels
     form = compiled_form("slotine_li_plugin", ctrl, 2, 1e-3)
     assert form.need == NEED_MASS_MATRIX | NEED_REGRESSOR and form.state.shape == (2, 10)
     closed = ClosedFormTwoLink.sice()
-    with pytest.raises(ParameterError, match=r"controllers\.sl: needs 'regressor'.*sice_drawn\.toml"):
+    with pytest.raises(ParameterError, match=r"controllers\.sl: needs 'regressor'.*sice_general\.toml"):
         PythonForm("sl", ctrl, closed, "the paper's closed-form two-link runtime").reset(2, 1e-3)
 
 

@@ -3,7 +3,7 @@
 Held to the Python path (the plug-in's functions called trial by trial, the model terms from the
 closed forms' regressor and mass matrix: :class:`~adaptive_dd.controllers.plugins.PythonForm`)
 on the same scenario and seeds: trajectories, torques, estimates and alarms equal. A plug-in that
-needs the arm's kernels still runs on the Python path there, which says why.
+needs the arm's kernels is refused there before the run, naming the route that has them.
 """
 
 import tomllib
@@ -16,6 +16,7 @@ from numba import njit
 from adaptive_dd.benchmark.runner import run_benchmark
 from adaptive_dd.benchmark.scenario import parse_scenario
 from adaptive_dd.controllers.plugins import CLOSED_FORMS, PythonForm
+from adaptive_dd.errors import ParameterError
 
 ROOT = Path(__file__).resolve().parent.parent
 SCENARIO = ROOT / "adaptive_dd" / "scenarios" / "payload_swap.toml"
@@ -109,11 +110,25 @@ def test_the_example_in_a_scenario_on_the_papers_arm_runs_compiled(monkeypatch):
     np.testing.assert_allclose(run.q, ref.runs["pd_gravity_plugin"].q, rtol=0, atol=1e-12)
 
 
-def test_a_plugin_that_needs_the_arms_kernels_stays_on_the_python_path_and_says_why():
+def test_a_bare_plugin_with_engine_python_runs_on_the_python_path_as_its_own():
+    """A compiled plug-in passed as it is (``controllers=``) with ``engine="python"``: its functions
+    called trial by trial (not as a plain-Python controller's), the compiled run's results."""
+    sc = _scenario(seeds=1, duration=0.3)
+    ctrl = EveryTerm(np.array([1600.0, 1600.0]), np.array([80.0, 80.0]))
+    fast = run_benchmark(sc, controllers={"e": ctrl}, progress=False, keep_trajectories=1).runs["e"]
+    slow = run_benchmark(sc, controllers={"e": ctrl}, progress=False, keep_trajectories=1, engine="python")
+    slow = slow.runs["e"]
+    assert fast.engine == "compiled" and slow.engine == "python" and not slow.failed.any()
+    np.testing.assert_allclose(slow.q, fast.q, rtol=0, atol=1e-12)
+
+
+@pytest.mark.parametrize("wrapped", [True, False])
+def test_a_plugin_that_needs_the_arms_kernels_is_refused_before_the_run(wrapped):
     class NeedsKernels(EveryTerm):
         needs = ("regressor",)
 
     sc = _scenario(seeds=1, duration=0.05)
-    ctrl = PythonForm("k", NeedsKernels(np.ones(2), np.ones(2)), sc.closed_forms, CLOSED_FORMS)
-    run = run_benchmark(sc, controllers={"k": ctrl}, progress=False).runs["k"]
-    assert run.engine == "python" and run.failed.all() and "run the paper's arm from its URDF" in run.error
+    ctrl = NeedsKernels(np.ones(2), np.ones(2))
+    ctrl = PythonForm("k", ctrl, sc.closed_forms, CLOSED_FORMS) if wrapped else ctrl
+    with pytest.raises(ParameterError, match=r"controllers\.k: needs 'regressor'.*sice_general\.toml"):
+        run_benchmark(sc, controllers={"k": ctrl}, progress=False)

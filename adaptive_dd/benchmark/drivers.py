@@ -137,8 +137,8 @@ def run_plugin(name, ctrl, scenario, idx, constants, keep: int, bar) -> Controll
     form = compiled_form(name, ctrl, S, T)
     run, pl, ts, rec = _records(name, ctrl, scenario, rc, sigma_seg, S, keep, form.estimates, "compiled")
     alarms = Alarms(np.zeros((S, MAX_ALARMS)), np.zeros(S, dtype=np.int64))
-    sigma = np.ascontiguousarray(scenario.closed_forms.sigma, dtype=float)
-    pis = np.ascontiguousarray(sigma_seg[None] if form.true_model else sigma[None, None])
+    sigma = scenario.closed_forms.sigma  # read-only: copied, so that the model and the true ones
+    pis = np.array(sigma_seg[None] if form.true_model else sigma[None, None], dtype=float)  # share a type
     tail = (None, pis, 0, np.zeros((0, 0)), form.need, form.params, form.state, form.estimates)
 
     def blocks():

@@ -81,8 +81,10 @@ def run_benchmark(
         Controller objects by name, in place of ``make_controller(name)`` (for custom
         gains or your own controller classes).
     engine : {"auto", "python", "compiled"}
-        ``auto``: built-in controllers compiled, others in Python; ``python``: all in
-        Python; ``compiled``: an error if a controller cannot be compiled.
+        ``auto``: built-in controllers and compiled plug-ins (``njit`` ``reset``, ``command``,
+        ``observe``) compiled, others in Python; ``python``: all in Python (a compiled
+        plug-in's functions called trial by trial); ``compiled``: an error if a controller
+        cannot be compiled.
     keep_trajectories : int
         Seeds (the first ones) whose full trajectories are kept.
     seed_indices : sequence of int, optional
@@ -199,8 +201,8 @@ def _run_two_link(
     sigma_true, mass = true_sigma(scenario, t)
     res = BenchmarkResult(scenario, t, ref[0], sigma_true, mass, seed_indices=idx)
     specs = {n: (compiled_spec(c, T) if engine != "python" else None) for n, c in ctrls.items()}
-    plugins = {n: _two_link_plugin(c) if engine != "python" else None for n, c in ctrls.items()}
-    names = [n for n, s in specs.items() if s is None and plugins[n] is None]
+    plugins = {n: _two_link_plugin(n, c, scenario, engine) for n, c in ctrls.items()}
+    names = [n for n, s in specs.items() if s is None and plugins[n][0] is None]
     if engine == "compiled" and names:
         raise ParameterError(f"engine='compiled': no compiled path for {names}; use engine='auto'")
     bar.total = len(ctrls) * N
@@ -208,29 +210,41 @@ def _run_two_link(
     for name, ctrl in ctrls.items():
         if specs[name] is not None:
             run = run_compiled(name, ctrl, specs[name], scenario, idx, constants, keep, bar)
-        elif plugins[name] is not None:
-            run = run_plugin(name, plugins[name], scenario, idx, constants, keep, bar)
+        elif plugins[name][0] is not None:
+            run = run_plugin(name, plugins[name][0], scenario, idx, constants, keep, bar)
         else:
-            run = run_python(name, ctrl, scenario, idx, constants, keep, bar)
+            run = run_python(name, plugins[name][1], scenario, idx, constants, keep, bar)
         res.runs[name] = run
         if on_run is not None:
             on_run(res, run)
     return res
 
 
-def _two_link_plugin(ctrl):
-    """The compiled plug-in that the paper's arm runs in its compiled loop, or None: ``ctrl``
-    itself, or the plug-in a :class:`~adaptive_dd.controllers.plugins.PythonForm` wraps on the
-    closed forms (:data:`~adaptive_dd.controllers.plugins.CLOSED_FORMS`), unless it needs the
-    arm's kernels, which the closed forms do not have (its Python path says so)."""
+def _two_link_plugin(name: str, ctrl, scenario, engine: str):
+    """``(plugin, ctrl)``: the compiled plug-in that the paper's arm runs in its compiled loop (or
+    None), and ``ctrl`` as the Python path takes it. A compiled plug-in comes bare (``controllers=``)
+    or wrapped in a :class:`~adaptive_dd.controllers.plugins.PythonForm` for the closed forms'
+    other users (:data:`~adaptive_dd.controllers.plugins.CLOSED_FORMS`); with ``engine="python"``
+    it runs wrapped, saying so. One that needs the arm's kernels, which the closed forms do not
+    have, is refused before the run."""
     from adaptive_dd.controllers.plugins import CLOSED_FORMS, PythonForm, is_compiled
 
     if isinstance(ctrl, PythonForm):
         inner = ctrl.ctrl if ctrl.why == CLOSED_FORMS else None
     else:
         inner = ctrl if is_compiled(ctrl) else None
+    if inner is None:
+        return None, ctrl
     needs = getattr(inner, "needs", ())
-    return None if inner is None or "regressor" in ((needs,) if isinstance(needs, str) else needs) else inner
+    if "regressor" in ((needs,) if isinstance(needs, str) else needs):
+        raise ParameterError(
+            f"controllers.{name}: needs 'regressor', the kernels of an arm from a URDF; {CLOSED_FORMS} "
+            "has none: run the paper's arm on the general kernels (its URDF with general = true: "
+            "benchmarks/scenarios/sice_general.toml)"
+        )
+    if engine == "python":
+        return None, PythonForm(name, inner, scenario.closed_forms, "engine='python'")
+    return inner, ctrl
 
 
 def scenario_controller(scenario: Scenario, spec: str) -> tuple[str, Controller]:

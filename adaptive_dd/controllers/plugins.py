@@ -372,8 +372,8 @@ class PythonForm:
         elif f.need & NEED_REGRESSOR:
             raise ParameterError(
                 f"controllers.{self.name}: needs 'regressor', the kernels of an arm from a URDF; "
-                f"{self.why} has none: run the paper's arm from its URDF "
-                "(benchmarks/scenarios/sice_drawn.toml)"
+                f"{self.why} has none: run the paper's arm on the general kernels (its URDF with "
+                "general = true: benchmarks/scenarios/sice_general.toml)"
             )
         print(
             f"{self.name}: a compiled plug-in on the slow Python path ({self.why}): its functions are "
