@@ -396,6 +396,7 @@ def run_sweep(
     ...     res = run_sweep(sweep, tempfile.mkdtemp(), client=client, progress=False)
     sweep <memory>: 2 grid points x 2 controllers x 1 blocks of seeds (1 seeds, 1 per block) = 4
     cells in 4 distinct tasks; 0 reused from ..., 4 to run
+    running 4 task(s) on the given client, 1 worker(s)
     >>> len(res.table), res.ran  # grid points x controllers x seeds x 4 segments; tasks run
     (16, 4)
     """

@@ -77,22 +77,22 @@ def test_the_default_is_the_filters_memory_and_a_bad_value_is_refused():
 
 
 @pytest.mark.slow
-def test_a_yaw_first_arm_loaded_segment_within_twice_its_floor_and_not_without():
-    """random:19 (a palletizer whose first joint is a yaw joint), seed 2 of the population
-    template: with the prior off the 80 % segment is 4.4x its floor (the population's worst
-    trial), with the default within 2x."""
+def test_a_drawn_arms_loaded_segment_near_its_floor_and_not_without():
+    """random:14 (5 joints), seed 2 of the population template, its 30 % segment (2.24 kg): with
+    the compact prior off it is 1.85x its floor, with the default 1.12x. (The trial this test first
+    held, random:19 seed 2, no longer needs the prior since the centred prior: 1.04x either way.)"""
     from adaptive_dd.benchmark.population import population_scenario
     from adaptive_dd.benchmark.runner import run_benchmark
     from adaptive_dd.benchmark.scenario import read_toml
     from adaptive_dd.benchmark.scenario_settings import with_settings
 
     tpl = ROOT / "benchmarks" / "scenarios" / "population.toml"
-    sc = population_scenario(read_toml(tpl), str(tpl), 19)
+    sc = population_scenario(read_toml(tpl), str(tpl), 14)
     sc = dataclasses.replace(sc, seeds=3, controllers=("ct_oracle", "adaptive_ct"))
     ratio = {}
     for noise in ("auto", 0.0):
         s = with_settings(sc, "adaptive_ct", {"estimator": {"prior_noise": noise}})
         f = run_benchmark(s, progress=False, seed_indices=[2], keep_trajectories=0).to_frame()
-        row = f[(f.controller == "adaptive_ct") & (f.segment == 1)]
+        row = f[(f.controller == "adaptive_ct") & (f.segment == 2)]
         ratio[noise] = float(row.ratio_to_floor.iloc[0])
-    assert ratio["auto"] < 2.0 < 3.0 < ratio[0.0], ratio
+    assert ratio["auto"] < 1.3 < 1.6 < ratio[0.0], ratio
