@@ -9,6 +9,7 @@ functions are left unset (compiling it would fail), finds the loop in numba's ca
 """
 
 import importlib.util
+import os
 import subprocess
 import sys
 import textwrap
@@ -93,9 +94,8 @@ def law(tmp_path, monkeypatch):
         del sys.modules[name]
 
 
-def test_the_key_is_the_same_in_another_process(law, tmp_path):
-    key = plugin_key(_functions(law()))
-    assert key is not None and len(key) == 16
+def _key_in_a_new_process(tmp_path, seed: int = 0) -> str:
+    """The key of ``law.py``'s Law (the ``law`` fixture's files) in a fresh Python process."""
     script = textwrap.dedent(f"""
         import importlib.util, sys
         sys.path.insert(0, {str(tmp_path)!r})
@@ -107,8 +107,18 @@ def test_the_key_is_the_same_in_another_process(law, tmp_path):
         from adaptive_dd.closed_loop.plugin_loop import no_estimate, plugin_key
         print(plugin_key((m.Law.reset, m.Law.command, m.Law.observe, no_estimate)))
     """)
-    out = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, check=True)
-    assert out.stdout.strip() == key
+    env = {**os.environ, "PYTHONHASHSEED": str(seed)}
+    return subprocess.run(
+        [sys.executable, "-c", script], capture_output=True, text=True, check=True, env=env
+    ).stdout.strip()
+
+
+def test_the_key_is_the_same_in_another_process(law, tmp_path):
+    """Two new processes, as two runs of the command line: the same key. (This process may hold
+    numba extensions other tests defined, which enter its keys.)"""
+    law()
+    key = _key_in_a_new_process(tmp_path, 1)
+    assert len(key) == 16 and key != "None" and _key_in_a_new_process(tmp_path, 2) == key
 
 
 def test_the_key_follows_every_edit_the_loop_would_compile(law):
@@ -307,3 +317,160 @@ def test_a_closure_plugin_still_runs_and_says_it_is_compiled_every_run(cache_fol
     assert runs["c"].engine == "compiled" and not runs["c"].failed.any()
     assert "compiled again by every run" in capsys.readouterr().err
     assert not (cache_folder / "plugin_loops").exists()
+
+
+VARIANT = """
+import collections
+import math
+
+import numba
+import numpy as np
+from numba import njit
+
+{head}
+
+
+class Law:
+    @staticmethod
+    @njit
+    def reset(p, x):
+        pass
+
+    @staticmethod
+    @njit
+    def command(p, x, q, qd, q_d, qd_d, qdd_d, terms, tau):
+        for j in range(q.shape[0]):
+            tau[j] = {body}
+
+    @staticmethod
+    @njit
+    def observe(p, x, q, qd, tau):
+        return 0
+"""
+
+EXTENSION = """
+from numba.core import types
+from numba.extending import overload_method
+
+
+@overload_method(types.Array, "gain_{tag}")
+def _gain(a):
+    def impl(a):
+        return {k} * a[0]
+
+    return impl
+"""
+
+
+@pytest.mark.parametrize(
+    ("head", "body", "edited"),
+    [
+        ("from math import sin as f", "f(q[j])", "from math import cos as f"),
+        ("SAT = np.tanh", "SAT(q[j])", "SAT = np.arctan"),
+        ("DT = np.float64", "DT(q[j])", "DT = np.float32"),
+        (
+            "@njit(locals={'e': numba.float64})\ndef h(a):\n    e = a * 1.5\n    return e",
+            "h(q[j])",
+            "@njit(locals={'e': numba.int64})\ndef h(a):\n    e = a * 1.5\n    return e",
+        ),
+        (
+            "@njit('float64(float64)')\ndef h(a):\n    return a / 3",
+            "h(q[j])",
+            "@njit('float32(float32)')\ndef h(a):\n    return a / 3",
+        ),
+        (
+            "@njit\ndef h(a):\n    return len(a)",
+            "h((q[j], 1.0))",
+            "@njit\ndef h(*a):\n    return len(a)",  # the same bytecode and names: its flags
+        ),
+        (
+            "G = collections.namedtuple('G', 'kp kd')(2.0, 3.0)",
+            "G.kp * q[j]",
+            "G = collections.namedtuple('G', 'kd kp')(2.0, 3.0)",
+        ),
+    ],
+)  # fmt: skip
+def test_the_key_follows_what_numba_freezes(tmp_path, monkeypatch, head, body, edited):
+    """A global naming another numpy or math function or type, a helper's locals, signature or
+    argument counts, a named tuple's fields: each changes the compiled loop, so its key."""
+    monkeypatch.syspath_prepend(str(tmp_path))
+
+    def key(head):
+        (tmp_path / "law_variant.py").write_text(VARIANT.format(head=head, body=body))
+        return plugin_key(_functions(_load(tmp_path / "law_variant.py", "law_variant")))
+
+    try:
+        first = key(head)
+        assert first is not None and key(head) == first
+        assert key(edited) != first
+    finally:
+        sys.modules.pop("law_variant", None)
+
+
+def test_the_key_follows_a_numba_extension_reached_by_an_attribute(tmp_path, monkeypatch):
+    """``a.gain_x()`` reaches an ``@overload_method`` by its name alone: the key holds every
+    extension defined outside numba, numpy and the package."""
+    monkeypatch.syspath_prepend(str(tmp_path))
+    tag = tmp_path.name.replace("-", "_")  # numba keeps every registered method: one name per test
+
+    def key(k):
+        (tmp_path / "ext_variant.py").write_text(EXTENSION.format(tag=tag, k=k))
+        _load(tmp_path / "ext_variant.py", "ext_variant")
+        (tmp_path / "law_variant.py").write_text(VARIANT.format(head="", body=f"q.gain_{tag}()"))
+        return plugin_key(_functions(_load(tmp_path / "law_variant.py", "law_variant")))
+
+    try:
+        assert key("2.0") != key("3.0")
+    finally:
+        for name in ("law_variant", "ext_variant"):
+            sys.modules.pop(name, None)
+
+
+def test_the_key_is_the_same_whatever_the_hash_seed(law, tmp_path):
+    """Options holding a set (``fastmath={...}``) print in hash-seed order: keyed sorted."""
+    law(
+        law_text=LAW.replace(
+            "    @staticmethod\n    @njit\n    def command",
+            "    @staticmethod\n    @njit(fastmath={{'nnan', 'ninf', 'nsz', 'arcp'}})\n    def command",
+        )
+    )
+    keys = {_key_in_a_new_process(tmp_path, seed) for seed in (1, 2, 3)}
+    assert len(keys) == 1 and "None" not in keys
+
+
+def test_a_module_serving_attributes_through_getattr_gives_no_key(tmp_path, monkeypatch):
+    monkeypatch.syspath_prepend(str(tmp_path))
+    (tmp_path / "lazy_helpers.py").write_text(
+        "from numba import njit\n\n\ndef __getattr__(name):\n    return njit(lambda a: 2.0 * a)\n"
+    )
+    try:
+        _load(tmp_path / "lazy_helpers.py", "lazy_helpers")
+        (tmp_path / "law_variant.py").write_text(
+            VARIANT.format(head="import lazy_helpers", body="lazy_helpers.h(q[j])")
+        )
+        assert plugin_key(_functions(_load(tmp_path / "law_variant.py", "law_variant"))) is None
+    finally:
+        for name in ("law_variant", "lazy_helpers"):
+            sys.modules.pop(name, None)
+
+
+def test_a_loop_that_cannot_be_written_says_why_not_a_closure(cache_folder, monkeypatch):
+    def no_links(src, dst):
+        raise PermissionError(1, "Operation not permitted")
+
+    noop = njit(lambda p, x: None)
+    with monkeypatch.context() as m:
+        m.setattr(plugin_loop.os, "link", no_links)
+        why = plugin_loop.plugin_loop((noop, noop, noop, no_estimate)).adaptive_dd_uncached
+    assert "could not be written" in why and "Operation not permitted" in why
+    assert not list((cache_folder / "plugin_loops").glob("*"))  # its temporary file removed
+    closure = (noop, _closure_command(2.0), noop, no_estimate)
+    assert "closure" in plugin_loop.plugin_loop(closure).adaptive_dd_uncached
+
+
+def _closure_command(gain):
+    @njit
+    def command(p, x, q, qd, q_d, qd_d, qdd_d, terms, tau):
+        tau[:] = gain * (q_d - q)
+
+    return command

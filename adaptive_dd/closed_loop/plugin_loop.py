@@ -33,18 +33,16 @@ cache folder is keyed by the package's kernels (:mod:`adaptive_dd._numba_cache`)
 
 from __future__ import annotations
 
-import hashlib
 import importlib.util
-import inspect
 import itertools
 import os
 import sys
+import threading
 import types
 from pathlib import Path
 
 import numpy as np
 from numba import njit
-from numba.core.dispatcher import Dispatcher
 
 from adaptive_dd.closed_loop.borrow import borrowed, keep_alive
 from adaptive_dd.closed_loop.chain_choices import _chain_plant_advance
@@ -56,6 +54,7 @@ from adaptive_dd.closed_loop.glue import (
     measure_sample,
     record_estimate,
 )
+from adaptive_dd.closed_loop.plugin_key import function_key
 from adaptive_dd.closed_loop.tool_frame import accumulate_tool
 from adaptive_dd.controllers.kernels import arm_kernels, with_model
 from adaptive_dd.plant.chain_dynamics import mass_matrix_in, rnea_ref_in, workspace
@@ -277,89 +276,9 @@ plugin_block = njit(nogil=True, cache={cache})(_plugin_block)
 functions read from the module's globals (numba compiles calls to them in, as to any global
 ``njit`` function)."""
 
-_SAFE = frozenset({"adaptive_dd", "numba", "numpy", "math", "cmath", "builtins", "operator"})
-"""Packages whose functions a plug-in may call without them being keyed: the cache folder is keyed
-by this package's kernels, and numba's cache by numba's version."""
 _LOOPS: dict = {}
 _UNKEYED = itertools.count()
-
-
-class _Unkeyable(Exception):
-    """A plug-in's function reads something its key cannot follow."""
-
-
-def _root(obj) -> str:
-    return (getattr(obj, "__module__", None) or "").split(".")[0]
-
-
-def _value(h, v) -> None:
-    """Hash a value numba compiles in as a constant (a global, a default, a code constant)."""
-    if v is None or v is Ellipsis or isinstance(v, bool | int | float | complex | str | bytes | np.generic):
-        h.update(repr((type(v).__name__, v)).encode())
-    elif isinstance(v, np.ndarray):
-        h.update(f"array{v.dtype}{v.shape}".encode())
-        h.update(np.ascontiguousarray(v).tobytes())
-    elif isinstance(v, tuple | frozenset):
-        h.update(type(v).__name__.encode())
-        for x in v if isinstance(v, tuple) else sorted(v, key=repr):
-            _value(h, x)
-    elif inspect.iscode(v):
-        _code(h, v)
-    else:
-        raise _Unkeyable(repr(v))
-
-
-def _code(h, code) -> None:
-    """Hash a code object: its bytecode, names, constants and place (not its file's other text)."""
-    h.update(f"{code.co_qualname}@{code.co_filename}:{code.co_firstlineno}".encode())
-    h.update(code.co_code)
-    for names in (code.co_names, code.co_varnames, code.co_freevars, code.co_cellvars):
-        h.update(repr(names).encode())
-    _value(h, code.co_consts)
-
-
-def _names(code) -> set:
-    """The global and attribute names a code object and the code nested in it read."""
-    names = set(code.co_names)
-    for c in code.co_consts:
-        if inspect.iscode(c):
-            names |= _names(c)
-    return names
-
-
-def _function(h, f, seen: set) -> None:
-    """Hash an ``njit`` function and what it reaches from its globals (:func:`_globals`)."""
-    py = getattr(f, "py_func", f)
-    if id(py) in seen:
-        return
-    seen.add(id(py))
-    if not inspect.isfunction(py) or py.__closure__ or py.__kwdefaults__:
-        raise _Unkeyable(f"{py!r} is built at run time or takes keyword-only defaults")
-    h.update(repr(sorted(getattr(f, "targetoptions", {}).items())).encode())
-    _code(h, py.__code__)
-    _value(h, py.__defaults__)
-    _globals(h, py.__globals__, _names(py.__code__), seen)
-
-
-def _globals(h, space: dict, names: set, seen: set) -> None:
-    """Hash what ``names`` find in a module's ``space``: ``njit`` functions outside :data:`_SAFE`
-    (recursively), a user's module's attributes of those names, plain values (numba compiles
-    them in as constants); a function or module of :data:`_SAFE` needs no key. Anything else
-    (a class, a plain function numba would compile through an overload) is :class:`_Unkeyable`."""
-    for name in sorted(names & space.keys()):
-        v = space[name]
-        h.update(name.encode())
-        if isinstance(v, Dispatcher):
-            if _root(v.py_func) not in _SAFE:
-                _function(h, v, seen)
-        elif isinstance(v, types.ModuleType):  # each function's names walked in it: each reads its own
-            walk = (id(v), frozenset(names))
-            if v.__name__.split(".")[0] not in _SAFE and walk not in seen:
-                seen.add(walk)
-                _globals(h, vars(v), names, seen)
-        elif not (callable(v) and _root(v) in _SAFE):
-            _value(h, v)
-
+_LOCK = threading.Lock()
 
 TRIALS = {"chain": "_plugin_trial_c", "two-link": "_plugin_trial_two_link_c"}
 """The trial a plug-in's loop runs, per runtime: an arm's general kernels (any arm from a URDF)
@@ -367,23 +286,11 @@ or the paper's arm on its closed forms."""
 
 
 def plugin_key(functions, runtime: str = "chain") -> str | None:
-    """The key of the loop of a plug-in's ``functions`` (``reset, command, observe, estimate``,
-    ``njit`` functions): a hash of this module's file and of each function as numba compiles it
-    (its bytecode, constants, options and defaults), of the ``njit`` functions it calls and of the
-    plain values it reads from globals, recursively (:func:`_globals`). The same functions give
-    the same key in any process; an edit of any of them, or of a value they read, another. None
-    when one of them reads what the key cannot follow (a closure's cells, a class, a plain
-    function compiled through an overload): its loop is then compiled in every process."""
-    h = hashlib.sha1(Path(__file__).read_bytes())
-    h.update(TRIALS[runtime].encode())
-    seen: set = set()
-    try:
-        for f in functions:
-            h.update(f"{f.py_func.__module__}.{f.py_func.__qualname__}".encode())
-            _function(h, f, seen)
-    except _Unkeyable:
-        return None
-    return h.hexdigest()[:16]
+    """The key of a plug-in's loop: :func:`~adaptive_dd.closed_loop.plugin_key.function_key` of its
+    ``functions``, salted with this module's file (the loop's code) and the runtime's trial. The
+    same functions give the same key in any process; an edit numba would compile gives another;
+    None when a function reads what the key cannot follow."""
+    return function_key(functions, Path(__file__).read_bytes() + TRIALS[runtime].encode())
 
 
 def plugin_loop(functions, runtime: str = "chain"):
@@ -392,38 +299,46 @@ def plugin_loop(functions, runtime: str = "chain"):
     (:func:`~adaptive_dd.closed_loop.glue.in_threads`), with the block's records, the model, the
     plug-in's ``need``, ``p``, ``x`` and ``estimates``; ``runtime`` a key of :data:`TRIALS` (the
     two-link records and plant, the closed forms' sigma as the model ``pis (S or 1, G or 1, 7)``,
-    ``ch`` None). Its module (:data:`_LOOP_SOURCE`) is
-    written into numba's cache folder under :func:`plugin_key` and cached: a later run, in any
-    process, loads the loop instead of compiling it (a few seconds for a small law). A plug-in
-    whose functions cannot be keyed, or a cache folder that cannot be written, gives a module of
-    this process only, compiled again by every run."""
+    ``ch`` None). Its module (:data:`_LOOP_SOURCE`) is written into numba's cache folder under
+    :func:`plugin_key` and cached: a later run, in any process, loads the loop instead of
+    compiling it (a few seconds for a small law). A plug-in whose functions cannot be keyed, or a
+    cache folder that cannot be written, gives a module of this process only, compiled again by
+    every run; why is the loop's ``adaptive_dd_uncached`` (None when cached). One thread at a
+    time: a module is in ``sys.modules`` before it has run."""
+    with _LOCK:
+        memo = (runtime, *(id(f) for f in functions))
+        if memo not in _LOOPS:
+            _LOOPS[memo] = (_make_loop(functions, runtime), functions)  # the functions kept: ids stay theirs
+        return _LOOPS[memo][0]
+
+
+def _make_loop(functions, runtime: str):
+    """:func:`plugin_loop`'s module, made or found, its plug-in functions set."""
     import numba
 
-    memo = (runtime, *(id(f) for f in functions))
-    if memo in _LOOPS:
-        return _LOOPS[memo][0]
     key = plugin_key(functions, runtime)
-    folder = Path(numba.config.CACHE_DIR) / "plugin_loops" if numba.config.CACHE_DIR and key else None
+    why = None if key else "a function of it reads what the cache cannot key, such as a closure's value"
+    if key and not numba.config.CACHE_DIR:
+        why = "numba's cache folder is not set"
+    folder = Path(numba.config.CACHE_DIR) / "plugin_loops" if why is None else None
     unkeyed = f"adaptive_dd_plugin_loop_p{os.getpid()}_{next(_UNKEYED)}"
     name = f"adaptive_dd_plugin_loop_{key}" if folder else unkeyed
-    source = _LOOP_SOURCE.format(key=key, cache=folder is not None, trial=TRIALS[runtime])
     path = None
     if folder is not None:
         path = folder / f"loop_{key}.py"
         try:
             if not path.exists():  # written once: numba's cache is keyed by the file's time stamp
                 folder.mkdir(parents=True, exist_ok=True)
-                tmp = path.with_suffix(f".{os.getpid()}.tmp")
-                tmp.write_text(source)
+                tmp = path.with_suffix(f".{os.getpid()}.{threading.get_ident()}.tmp")
+                tmp.write_text(_LOOP_SOURCE.format(key=key, cache=True, trial=TRIALS[runtime]))
                 try:  # the first of processes writing at once wins; the others keep its file
                     os.link(tmp, path)
                 except FileExistsError:
                     pass
                 finally:
                     tmp.unlink()
-        except OSError:
-            path, name = None, unkeyed
-            source = _LOOP_SOURCE.format(key=key, cache=False, trial=TRIALS[runtime])
+        except OSError as exc:
+            path, name, why = None, unkeyed, f"its module could not be written in {folder} ({exc.strerror})"
     if name in sys.modules:
         module = sys.modules[name]
     elif path is not None:
@@ -434,7 +349,8 @@ def plugin_loop(functions, runtime: str = "chain"):
     else:
         module = types.ModuleType(name)
         sys.modules[name] = module
+        source = _LOOP_SOURCE.format(key=key, cache=False, trial=TRIALS[runtime])
         exec(compile(source, f"<{name}>", "exec"), module.__dict__)
     module.reset, module.command, module.observe, module.estimate = functions
-    _LOOPS[memo] = (module.plugin_block, functions)  # the functions kept: their ids stay theirs
+    module.plugin_block.adaptive_dd_uncached = why
     return module.plugin_block

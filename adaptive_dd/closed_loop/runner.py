@@ -326,14 +326,11 @@ def _first_call(name, loop, args, bar) -> None:
     if bar is not None:  # no progress bar (nor its estimate) while it compiles
         bar.clear()
     in_threads(loop, 0, args)
-    cached = type(loop._cache).__name__ != "NullCache"
-    if len(loop.overloads) > known and (sum(loop.stats.cache_misses.values()) > missed or not cached):
-        again = (
-            "later runs load it"
-            if cached
-            else "compiled again by every run: a function of it reads what the cache cannot key, such "
-            "as a closure's value; pass such values through parameters()"
-        )
+    why = getattr(loop, "adaptive_dd_uncached", None)
+    if len(loop.overloads) > known and (sum(loop.stats.cache_misses.values()) > missed or why):
+        again = "later runs load it" if not why else f"compiled again by every run: {why}"
+        if why and why.startswith("a function of it"):
+            again += "; pass such values through parameters() (docs/controllers.md)"
         spent = time.perf_counter() - t0
         said = f"{name}: compiled the plug-in into the closed loop in {spent:.1f} s ({again})"
         print(said, file=sys.stderr)

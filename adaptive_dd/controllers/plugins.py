@@ -317,7 +317,7 @@ def _bounds_checked(f):
         return f
     checked = getattr(f, "_adaptive_dd_bounds_checked", None)
     if checked is None:
-        checked = njit(**{**options, "boundscheck": True})(f.py_func)
+        checked = njit(**{**options, "boundscheck": True}, locals=dict(f.locals))(f.py_func)
         f._adaptive_dd_bounds_checked = checked
     return checked
 
