@@ -132,3 +132,17 @@ def test_a_plugin_that_needs_the_arms_kernels_is_refused_before_the_run(wrapped)
     ctrl = PythonForm("k", ctrl, sc.closed_forms, CLOSED_FORMS) if wrapped else ctrl
     with pytest.raises(ParameterError, match=r"controllers\.k: needs 'regressor'.*sice_general\.toml"):
         run_benchmark(sc, controllers={"k": ctrl}, progress=False)
+
+
+def test_a_plugin_whose_init_fails_on_the_closed_forms_is_named_with_what_they_offer(monkeypatch):
+    """The Slotine-Li example reads the payload's basis of an arm from a URDF: on the paper's
+    closed forms its constructor fails, said as the plug-in's error (not an internal one), with
+    what the closed forms' record offers and where the rest is."""
+    from adaptive_dd.controllers.registry import scenario_controller
+
+    monkeypatch.syspath_prepend(str(PLUGINS))
+    sc = _scenario(seeds=1, duration=0.05)
+    with pytest.raises(
+        ParameterError, match=r"controllers\.SlotineLiPlugin: AttributeError: .*sice_general\.toml"
+    ):
+        scenario_controller(sc, "slotine_li_plugin:SlotineLiPlugin")

@@ -173,8 +173,16 @@ def _plugin(spec: str, g: Gains, options: dict, given: dict, search: tuple) -> C
     kw.update({k: v for k, v in given.items() if k in params})
     try:
         ctrl = cls(**kw)
-    except (TypeError, ValueError) as exc:
-        raise ParameterError(f"controllers.{table_name(spec)}: {type(exc).__name__}: {exc}") from None
+    except Exception as exc:  # the user's code: its error, named by its table, not an internal one
+        hint = ""
+        arm = given.get("arm")
+        if isinstance(exc, AttributeError) and arm is not None and getattr(arm, "chain", None) is None:
+            hint = (
+                f" (on the paper's arm a plug-in is handed {CLOSED_FORMS}'s record: sigma, regressor, "
+                "mass_matrix, nominal_inertia; an arm from a URDF has the rest: "
+                "benchmarks/scenarios/sice_general.toml)"
+            )
+        raise ParameterError(f"controllers.{table_name(spec)}: {type(exc).__name__}: {exc}{hint}") from None
     if not getattr(ctrl, "name", None) or ctrl.name == Controller.name:  # none declared: the class name
         ctrl.name = controller_label(spec)
     if given.get("arm") is not None and is_compiled(ctrl):
