@@ -34,18 +34,18 @@ def helper(a):
     return {body}
 """
 
-LAW = """
+VARIANT = """
+import collections
+import math
+
+import numba
 import numpy as np
 from numba import njit
 
-import {helper}
-
-GAIN = 2.0
+{head}
 
 
 class Law:
-    needs = ()
-
     @staticmethod
     @njit
     def reset(p, x):
@@ -55,13 +55,17 @@ class Law:
     @njit
     def command(p, x, q, qd, q_d, qd_d, qdd_d, terms, tau):
         for j in range(q.shape[0]):
-            tau[j] = GAIN * {helper}.helper(q_d[j] - q[j])
+            tau[j] = {body}
 
     @staticmethod
     @njit
     def observe(p, x, q, qd, tau):
         return 0
 """
+"""A compiled plug-in's module: ``{head}`` its imports and globals, ``{body}`` its torque."""
+
+LAW = VARIANT.format(head="import {helper}\n\nGAIN = 2.0", body="GAIN * {helper}.helper(q_d[j] - q[j])")
+"""A law whose command calls a helper in another module (``{helper}``, filled per test)."""
 
 
 def _load(path: Path, name: str):
@@ -318,35 +322,6 @@ def test_a_closure_plugin_still_runs_and_says_it_is_compiled_every_run(cache_fol
     assert "compiled again by every run" in capsys.readouterr().err
     assert not (cache_folder / "plugin_loops").exists()
 
-
-VARIANT = """
-import collections
-import math
-
-import numba
-import numpy as np
-from numba import njit
-
-{head}
-
-
-class Law:
-    @staticmethod
-    @njit
-    def reset(p, x):
-        pass
-
-    @staticmethod
-    @njit
-    def command(p, x, q, qd, q_d, qd_d, qdd_d, terms, tau):
-        for j in range(q.shape[0]):
-            tau[j] = {body}
-
-    @staticmethod
-    @njit
-    def observe(p, x, q, qd, tau):
-        return 0
-"""
 
 EXTENSION = """
 from numba.core import types

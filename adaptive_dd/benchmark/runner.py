@@ -227,7 +227,13 @@ def _two_link_plugin(name: str, ctrl, scenario, engine: str):
     other users (:data:`~adaptive_dd.controllers.plugins.CLOSED_FORMS`); with ``engine="python"``
     it runs wrapped, saying so. One that needs the arm's kernels, which the closed forms do not
     have, is refused before the run."""
-    from adaptive_dd.controllers.plugins import CLOSED_FORMS, PythonForm, is_compiled
+    from adaptive_dd.controllers.plugins import (
+        CLOSED_FORMS,
+        PythonForm,
+        declared_needs,
+        is_compiled,
+        no_kernels,
+    )
 
     if isinstance(ctrl, PythonForm):
         inner = ctrl.ctrl if ctrl.why == CLOSED_FORMS else None
@@ -235,13 +241,8 @@ def _two_link_plugin(name: str, ctrl, scenario, engine: str):
         inner = ctrl if is_compiled(ctrl) else None
     if inner is None:
         return None, ctrl
-    needs = getattr(inner, "needs", ())
-    if "regressor" in ((needs,) if isinstance(needs, str) else needs):
-        raise ParameterError(
-            f"controllers.{name}: needs 'regressor', the kernels of an arm from a URDF; {CLOSED_FORMS} "
-            "has none: run the paper's arm on the general kernels (its URDF with general = true: "
-            "benchmarks/scenarios/sice_general.toml)"
-        )
+    if "regressor" in declared_needs(inner):
+        raise no_kernels(name, CLOSED_FORMS)
     if engine == "python":
         return None, PythonForm(name, inner, scenario.closed_forms, "engine='python'")
     return inner, ctrl

@@ -317,7 +317,12 @@ def _make_loop(functions, runtime: str):
     import numba
 
     key = plugin_key(functions, runtime)
-    why = None if key else "a function of it reads what the cache cannot key, such as a closure's value"
+    why = None
+    if not key:
+        why = (
+            "a function of it reads what the cache cannot key, such as a closure's value; pass such "
+            "values through parameters() (docs/controllers.md)"
+        )
     if key and not numba.config.CACHE_DIR:
         why = "numba's cache folder is not set"
     folder = Path(numba.config.CACHE_DIR) / "plugin_loops" if why is None else None

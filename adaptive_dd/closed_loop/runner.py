@@ -329,8 +329,6 @@ def _first_call(name, loop, args, bar) -> None:
     why = getattr(loop, "adaptive_dd_uncached", None)
     if len(loop.overloads) > known and (sum(loop.stats.cache_misses.values()) > missed or why):
         again = "later runs load it" if not why else f"compiled again by every run: {why}"
-        if why and why.startswith("a function of it"):
-            again += "; pass such values through parameters() (docs/controllers.md)"
         spent = time.perf_counter() - t0
         said = f"{name}: compiled the plug-in into the closed loop in {spent:.1f} s ({again})"
         print(said, file=sys.stderr)

@@ -261,8 +261,7 @@ def compiled_form(name: str, ctrl, n_trials: int, sample_period: float) -> Plugi
     from adaptive_dd.closed_loop.plugin_loop import NEEDS, no_estimate
 
     where = f"controllers.{name}"
-    needs = getattr(ctrl, "needs", ())
-    needs = (needs,) if isinstance(needs, str) else tuple(needs)
+    needs = declared_needs(ctrl)
     bad = [x for x in needs if x not in NEEDS]
     if bad:
         raise ParameterError(
@@ -299,6 +298,21 @@ def compiled_form(name: str, ctrl, n_trials: int, sample_period: float) -> Plugi
     functions = (*checked, _bounds_checked(est) if est is not None else no_estimate)
     return PluginForm(
         params, need, state, functions, est is not None, bool(getattr(ctrl, "needs_true_model", False))
+    )
+
+
+def declared_needs(ctrl) -> tuple:
+    """A compiled plug-in's ``needs`` as a tuple of names (one name alone allowed)."""
+    needs = getattr(ctrl, "needs", ())
+    return (needs,) if isinstance(needs, str) else tuple(needs)
+
+
+def no_kernels(name: str, where: str) -> ParameterError:
+    """The error of plug-in ``name`` that needs ``regressor`` where (``where``) no arm kernels are."""
+    return ParameterError(
+        f"controllers.{name}: needs 'regressor', the kernels of an arm from a URDF; {where} has none: "
+        "run the paper's arm on the general kernels (its URDF with general = true: "
+        "benchmarks/scenarios/sice_general.toml)"
     )
 
 
@@ -378,11 +392,7 @@ class PythonForm:
             pj, pmap = int(self.arm.payload_joint), np.ascontiguousarray(self.arm.payload_map, dtype=float)
             self.kin = arm_kernels(self.arm.chain, np.ascontiguousarray(self.arm.pi, dtype=float), pj, pmap)
         elif f.need & NEED_REGRESSOR:
-            raise ParameterError(
-                f"controllers.{self.name}: needs 'regressor', the kernels of an arm from a URDF; "
-                f"{self.why} has none: run the paper's arm on the general kernels (its URDF with "
-                "general = true: benchmarks/scenarios/sice_general.toml)"
-            )
+            raise no_kernels(self.name, self.why)
         print(
             f"{self.name}: a compiled plug-in on the slow Python path ({self.why}): its functions are "
             "called trial by trial, sample by sample",
