@@ -270,15 +270,15 @@ def _inline_fresh_ir_in_place() -> bool:
 
 
 # ------------------------------------------------------------ telling the user about compilation
-COMPILE_SECONDS = {"two-link": 32.0, "serial": 73.0}
+COMPILE_SECONDS = {"two-link": 28.0, "serial": 60.0}
 """One-time compilation of a benchmark's kernels with a cold cache, on 2 idle cores: a guide for
 the message and ``validate``'s estimate, not a promise (a busy machine stretches it; numba
-compiles each kernel on one core). Measured with an empty cache (``XDG_CACHE_HOME`` a fresh
-folder), ``adaptive-dd benchmark --seeds 1`` printed ``compiled the kernels in 32 s`` on the
-paper's arm (47 CPU s of both processes, the run included; 47 s in one process) and 73 s on
-``ur5_tool_swap.toml`` (133 CPU s of both), where an N-joint arm (any compiles the same
-kernels) compiles in two processes at once (:class:`Compiling`).
-``benchmarks/compile_phases.py`` gives the phases in CPU seconds; earlier figures are in the changelog."""
+compiles each kernel on one core). Measured from a fresh clone with an empty cache
+(``XDG_CACHE_HOME`` a fresh folder): ``adaptive-dd benchmark --seeds 1`` printed ``compiled the
+kernels in 26 s`` on the paper's arm and 54-59 s on ``ur5_tool_swap.toml`` (about 110 CPU s of
+both processes), where an N-joint arm (any compiles the same kernels) compiles in two processes at
+once (:class:`Compiling`). ``benchmarks/compile_profile.py`` gives each kernel's CPU seconds;
+earlier figures are in the changelog."""
 
 
 def _closed_loop_kernel(serial: bool):
