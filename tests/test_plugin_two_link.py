@@ -16,7 +16,7 @@ from numba import njit
 from adaptive_dd.benchmark.runner import run_benchmark
 from adaptive_dd.benchmark.scenario import parse_scenario
 from adaptive_dd.controllers.plugins import CLOSED_FORMS, PythonForm
-from adaptive_dd.errors import ParameterError
+from adaptive_dd.errors import ParameterError, ScenarioError
 
 ROOT = Path(__file__).resolve().parent.parent
 SCENARIO = ROOT / "adaptive_dd" / "scenarios" / "payload_swap.toml"
@@ -146,3 +146,36 @@ def test_a_plugin_whose_init_fails_on_the_closed_forms_is_named_with_what_they_o
         ParameterError, match=r"controllers\.SlotineLiPlugin: AttributeError: .*sice_general\.toml"
     ):
         scenario_controller(sc, "slotine_li_plugin:SlotineLiPlugin")
+
+
+def _with_floor(floor, controllers=("pd", "pd_gravity_plugin:PDGravityPlugin")):
+    data = tomllib.loads(SCENARIO.read_text())
+    data["run"].update(seeds=1, duration=2.0, controllers=list(controllers))
+    data["payload"] = [{"at": 1.0, "mass": 3.0}]
+    data["controllers"] = {"PDGravityPlugin": {"floor": floor}}
+    return parse_scenario(data, str(SCENARIO), name="plugin_floor")
+
+
+def test_a_scenario_sets_a_plugins_floor_on_the_papers_arm(monkeypatch):
+    """``[controllers.NAME] floor`` replaces the class's own (the example's ``pd_gravity_oracle``
+    runs on N-joint arms only): the wrapped plug-in's run carries it, and with no gravity in the
+    paper's horizontal plane PD plus gravity is ``pd`` to the bit."""
+    monkeypatch.syspath_prepend(str(PLUGINS))
+    res = run_benchmark(_with_floor("pd"), progress=False, keep_trajectories=1)
+    run = res.runs["pd_gravity_plugin"]
+    assert run.engine == "compiled" and run.floor == "pd"
+    np.testing.assert_array_equal(run.q, res.runs["pd"].q)
+
+
+@pytest.mark.parametrize(
+    ("floor", "words"),
+    [
+        ("pdx", "'pdx' is not one of the run's controllers (pd, PDGravityPlugin, pd_gravity_plugin)"),
+        (3, "or false for none; got 3"),
+    ],
+)
+def test_a_floor_that_names_no_controller_of_the_run_is_an_error_of_the_file(monkeypatch, floor, words):
+    monkeypatch.syspath_prepend(str(PLUGINS))
+    with pytest.raises(ScenarioError, match=r"controllers\.PDGravityPlugin\.floor") as info:
+        _with_floor(floor)
+    assert words in str(info.value)

@@ -119,6 +119,50 @@ def _check_delay(errs: list[str], name: str, delay, T: float) -> None:
             errs.append(str(exc))
 
 
+def _floor_errors(v: dict, opts: dict, only: str | None) -> list[str]:
+    """Each ``[controllers.NAME] floor`` names one of the run's controllers (by a name its results
+    may carry: a ``label``, a built-in's name, a plug-in's table name or declared ``name``), or is
+    ``false``."""
+    from pathlib import Path
+
+    from adaptive_dd.controllers.plugins import (
+        controller_label,
+        floor_setting,
+        load_controller_class,
+        table_name,
+    )
+    from adaptive_dd.errors import ParameterError
+
+    src = Path(str(v.get("source", "")))
+    search = (src.parent, Path.cwd()) if src.is_file() else (Path.cwd(),)
+    names: list[str] = []
+    for c in v["controllers"]:
+        names.append(controller_label(c, opts.get(table_name(c))))
+        if ":" in c and "label" not in opts.get(table_name(c), {}):
+            try:  # the name the plug-in declares, which its results carry
+                declared = getattr(load_controller_class(c, search), "name", None)
+            except ParameterError:  # named by the run's own check
+                declared = None
+            if isinstance(declared, str) and declared not in names:
+                names.append(declared)
+    errs = []
+    for c in v["controllers"]:
+        table = table_name(c)
+        if (only is not None and c != only) or "floor" not in opts.get(table, {}):
+            continue
+        try:
+            floor = floor_setting(table, opts[table]["floor"])
+        except ParameterError as exc:
+            errs.append(str(exc))
+            continue
+        if floor is not None and floor not in names:
+            errs.append(
+                f"controllers.{table}.floor: {floor!r} is not one of the run's controllers "
+                f"({', '.join(names)}); add it to run.controllers, or name one of them"
+            )
+    return errs
+
+
 def controller_setting_errors(v: dict, only: str | None = None, file_limits: bool = True) -> list[str]:
     """Each built-in controller with a ``[controllers.NAME]`` table built once, so a bad setting
     (a negative gain, a bandwidth the sample period cannot carry, an unknown key) is an error of
@@ -131,6 +175,7 @@ def controller_setting_errors(v: dict, only: str | None = None, file_limits: boo
     errs: list[str] = []
     opts = {n: thaw(o) for n, o in v["controller_options"]}
     T = v["sample_period"]
+    errs += _floor_errors(v, opts, only)
     for name in v["controllers"] if only is None else [c for c in v["controllers"] if c == only]:
         if name in CONTROLLERS and "delay" in CONTROLLERS[name].settings:  # its default too
             default = CONTROLLERS[name].settings["delay"].chain  # the same on every arm

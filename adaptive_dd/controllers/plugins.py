@@ -32,6 +32,7 @@ __all__ = [
     "check_controller_object",
     "compiled_form",
     "controller_label",
+    "floor_setting",
     "is_compiled",
     "load_controller_class",
     "plugin_controller",
@@ -40,8 +41,21 @@ __all__ = [
     "unknown_settings",
 ]
 
-COMMON = {"bandwidth", "damping", "label"}
+COMMON = {"bandwidth", "damping", "label", "floor"}
 """Settings every controller takes, built-in or plug-in (``docs/controllers.md``)."""
+
+
+def floor_setting(table: str, value) -> str | None:
+    """A ``floor`` setting checked: the name of the controller the report divides this one's error
+    by (one of the run's), or ``false`` for none; a :class:`ParameterError` naming the table else."""
+    if value is False:
+        return None
+    if not isinstance(value, str) or not value.strip():
+        raise ParameterError(
+            f"controllers.{table}.floor: the name of one of the run's controllers (its error divides "
+            f"this one's in the report), or false for none; got {value!r}"
+        )
+    return value
 
 
 def controller_label(spec: str, options: dict | None = None) -> str:

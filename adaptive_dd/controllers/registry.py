@@ -34,9 +34,12 @@ from adaptive_dd.controllers.builtins import (
 )
 from adaptive_dd.controllers.plugins import (
     COMMON,
+    PythonForm,
     controller_label,
+    floor_setting,
     load_controller_class,
     plugin_controller,
+    table_name,
 )
 from adaptive_dd.errors import ParameterError
 from adaptive_dd.plant.kind import arm_kind
@@ -349,4 +352,9 @@ def make_controller(
         )
     if "label" in options:
         ctrl.name = str(options["label"])
+    if "floor" in options:  # the scenario's choice over the class's own (a wrapped plug-in's too)
+        floor = floor_setting(table_name(spec), options["floor"])
+        for c in (ctrl, ctrl.ctrl if isinstance(ctrl, PythonForm) else None):
+            if c is not None:
+                c.floor = floor
     return ctrl

@@ -88,6 +88,7 @@ MEANING = {
     "setting.bandwidth": "This controller's bandwidth instead of `[control]`'s [rad/s].",
     "setting.damping": "This controller's damping instead of `[control]`'s.",
     "setting.label": "The name the controller's results carry.",
+    "setting.floor": "The run's controller this one is measured against, per seed; false for none.",
     "setting.sigma": "The fixed model's base parameters (seven, two-link arm).",
     "setting.gamma": "Adaptation gains of Slotine-Li.",
     "setting.gain": "`natural_adaptive` (N-joint arms): the natural law's one gain; default derived "
