@@ -257,6 +257,25 @@ def test_cli_arms_usage_errors(capsys):
     assert "two-link" in capsys.readouterr().err
 
 
+def test_cli_arms_without_adaptive_ct_is_refused_before_any_arm_runs(capsys, monkeypatch, tmp_path):
+    """The per-arm report is adaptive_ct's against its floor: without it ``--arms`` ran every arm,
+    printed a raw warning per missing floor and failed after; each missing floor is added, as in a
+    run of one arm."""
+    from adaptive_dd.benchmark import population
+    from adaptive_dd.cli import main
+
+    ran = []
+    monkeypatch.setattr(population, "run_population", lambda *a, **k: ran.append(1))
+    text = (ROOT / "benchmarks" / "scenarios" / "population.toml").read_text()
+    pop = tmp_path / "pop.toml"
+    pop.write_text(text.replace('controllers = ["ct_oracle", "adaptive_ct"]', 'controllers = ["pd_gravity"]'))
+    assert main(["benchmark", str(pop), "--arms", "2"]) == 2
+    err = capsys.readouterr().err
+    assert "pd_gravity_oracle added (the floor of pd_gravity" in err
+    assert "--arms reports adaptive_ct against its floor" in err and "['pd_gravity', 'pd_gravity_oracle']" in err
+    assert not ran
+
+
 @pytest.mark.slow
 def test_population_run_end_to_end():
     """Two arms, one seed each, a short schedule: the per-seed table carries each arm's seed and the

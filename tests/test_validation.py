@@ -447,3 +447,14 @@ def test_a_shipped_scenario_loads_by_its_name_from_any_folder(tmp_path, monkeypa
     assert load_scenario("ur5_tool_swap.toml").duration == 2.0  # the user's own file first
     with pytest.raises(ScenarioError, match=r"no such scenario file .*a shipped one's name: .*ur5_tool_swap"):
         load_scenario("ur5_tool_swp")
+
+
+def test_simulate_and_identify_take_a_shipped_scenarios_name_as_benchmark_does(tmp_path, monkeypatch):
+    """``--arm NAME`` (``simulate``, ``identify``: ``cli._common.load_arm``) and ``benchmark NAME
+    --arms`` refused a shipped scenario's name that their own error listed."""
+    from adaptive_dd.cli._common import load_arm
+
+    monkeypatch.chdir(tmp_path)
+    assert load_arm("vertical3_payload_exact").n_joints == 3
+    with pytest.raises(ScenarioError, match=r"no such scenario file .*vertical3_payload_exact"):
+        load_arm("vertical3_payload_exac")

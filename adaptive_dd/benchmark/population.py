@@ -242,7 +242,8 @@ def format_population(pop: PopulationResult, worst: int = 3) -> str:
             f"(max {mx:.2f}); false alarms in {a['false_alarm_trials']} of {a['trials']} trials; "
             f"missed swaps {a['missed_swaps']} of {a['swaps']}"
         )
-    lines.append(f"pooled over {len(pop.arms)} arms (segments numbered from 0, as in per_seed.csv):")
+    arms = f"{len(pop.arms)} arm{'s' if len(pop.arms) != 1 else ''}"
+    lines.append(f"pooled over {arms} (segments numbered from 0, as in per_seed.csv):")
     if pop.floor_caveat:
         lines.append(f"  note: {pop.floor_caveat}")
     for p in pooled(pop):

@@ -383,6 +383,18 @@ def no_scenario_file(path: str | Path) -> ScenarioError:
     return ScenarioError(f"{path}: {what} (give a scenario's .toml file, or a shipped one's name: {names})")
 
 
+def scenario_file(path: str | Path) -> Path:
+    """``path`` as a file: itself, or a shipped scenario's file when ``path`` is a bare name (or
+    ``name.toml``) that is not a file in this folder (:func:`packaged_scenarios`); a
+    :class:`ScenarioError` (:func:`no_scenario_file`) when neither is a file."""
+    path = Path(path)
+    if not path.exists() and path.name == str(path):
+        path = packaged_scenarios().get(path.stem, path)
+    if not path.is_file():
+        raise no_scenario_file(path)
+    return path
+
+
 def load_scenario(path: str | Path | None = None) -> Scenario:
     """Read and check a scenario file (default: the shipped ``payload_swap``).
 
@@ -420,11 +432,7 @@ def load_scenario(path: str | Path | None = None) -> Scenario:
     ...
     adaptive_dd.errors.ScenarioError: no_such_file.toml: no such scenario file (give a scenario's ...)
     """
-    path = Path(path) if path is not None else default_scenario_path()
-    if not path.exists() and path.name == str(path):  # a bare name (or name.toml) not in this folder
-        path = packaged_scenarios().get(path.stem, path)
-    if not path.is_file():
-        raise no_scenario_file(path)
+    path = scenario_file(path) if path is not None else default_scenario_path()
     data = read_toml(path)
     if not data:
         raise ScenarioError(

@@ -104,10 +104,9 @@ def load_arm(path: str | None, repair_inertia: bool = False, *, general: str | N
 
             return Arm.sice()
         return ClosedFormTwoLink.sice().to_arm()
-    if not Path(path).is_file():
-        from adaptive_dd.benchmark.scenario import no_scenario_file
+    from adaptive_dd.benchmark.scenario import scenario_file
 
-        raise no_scenario_file(path)
+    path = str(scenario_file(path))  # a shipped scenario's name too
     data = read_toml(Path(path))
     from adaptive_dd.benchmark.scenario_base import KEYS
 

@@ -35,15 +35,19 @@ def run_arms(args: argparse.Namespace, only_controllers) -> int:
             "--arms needs a template scenario FILE (its payload schedule, run and controllers), e.g. "
             "benchmarks/scenarios/population.toml"
         )
-    path = Path(args.scenario)
-    if not path.is_file():
-        from adaptive_dd.benchmark.scenario import no_scenario_file
+    from adaptive_dd.benchmark.scenario import scenario_file
 
-        raise no_scenario_file(path)
+    path = scenario_file(args.scenario)  # a shipped scenario's name too
     data, src = read_toml(path), str(path)
     seeds = range(args.first_arm, args.first_arm + args.arms)
     first = population_scenario(data, src, seeds[0], draw_swaps=args.draw_swaps)  # checks the template
-    names = only_controllers(first, args.controllers) if args.controllers else None
+    names = only_controllers(first, args.controllers) if args.controllers else first.controllers
+    names = _with_floors(first.with_controllers(names), src)
+    if "adaptive_ct" not in names:  # before any arm runs: the report is adaptive_ct's against its floor
+        raise ScenarioError(
+            f"{src}: --arms reports adaptive_ct against its floor per arm and pooled: list adaptive_ct in "
+            f"run.controllers (or --controllers), beside {list(names)}"
+        )
     arm = data.get("arm", {}) if isinstance(data.get("arm"), dict) else {}
     own = arm.get("robot") or arm.get("urdf")
     if own:
@@ -59,7 +63,7 @@ def run_arms(args: argparse.Namespace, only_controllers) -> int:
     )
 
     def controllers(sc):
-        return tuple(c for c in sc.controllers if names is None or c in names)
+        return names
 
     def on_arm(a: dict) -> None:
         means = " / ".join(f"{s['mean']:.3f}" for s in a["segments"])
@@ -94,3 +98,20 @@ def run_arms(args: argparse.Namespace, only_controllers) -> int:
     written = [out / "per_seed.csv", out / "arms.csv", Path(args.json or out / "population.json")]
     print("wrote " + ", ".join(str(w) for w in written))
     return 0
+
+
+def _with_floors(sc, src: str) -> tuple[str, ...]:
+    """``sc``'s controllers with each one's floor that is missing added, and said once (as a run of
+    one arm adds them: :func:`adaptive_dd.cli.benchmark.with_floors`); judged on the first arm, as
+    a controller's floor is its class's choice or its table's, not the arm's."""
+    from adaptive_dd.benchmark.preflight import scenario_floors
+
+    names = list(sc.controllers)
+    for n, floor in scenario_floors(sc).items():
+        if floor not in names:
+            names.append(floor)
+            print(
+                f"{src}: run.controllers: {floor} added (the floor of {n}; list it to keep this quiet)",
+                file=sys.stderr,
+            )
+    return tuple(names)
