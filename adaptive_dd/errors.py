@@ -12,6 +12,7 @@ __all__ = [
     "DataError",
     "OutputError",
     "ParameterError",
+    "RunWarning",
     "ScenarioError",
     "SignalError",
     "UrdfError",
@@ -103,3 +104,9 @@ class UrdfError(ValueError):
     ...
     adaptive_dd.errors.UrdfError: nope.urdf: no such URDF file
     """
+
+
+class RunWarning(UserWarning):
+    """Something a run did that its results need read with: a controller's floor that did not run
+    (its ratios NaN), a trial's divergence, ... The command line prints it on one line
+    (``adaptive-dd: warning: ...``); from Python it is a ``UserWarning``."""

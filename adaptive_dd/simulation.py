@@ -27,7 +27,7 @@ from numpy.typing import ArrayLike, NDArray
 from adaptive_dd.benchmark.runner import FLOOR_NOT_RUN, run_benchmark
 from adaptive_dd.benchmark.scenario import Scenario, load_scenario
 from adaptive_dd.benchmark.trials import payload_schedule, sensor_of, trial_rngs
-from adaptive_dd.errors import ParameterError, SignalError
+from adaptive_dd.errors import ParameterError, RunWarning, SignalError
 from adaptive_dd.plant.simulator import ArmSimulator
 
 __all__ = ["Measurement", "Simulation", "run_trial"]
@@ -368,6 +368,7 @@ def run_trial(controller, scenario: Scenario | None = None, seed_index: int = 0,
             f"run_trial: {label}'s floor {floor} is not run by run_trial (one controller): its ratio to "
             f"the floor is NaN; run_benchmark(scenario, controllers={{{label!r}: ..., {floor!r}: "
             f"make_controller({floor!r})}}, seed_indices=[{seed_index}]) runs both",
+            RunWarning,
             stacklevel=2,
         )
     return res

@@ -179,3 +179,18 @@ def test_a_floor_that_names_no_controller_of_the_run_is_an_error_of_the_file(mon
     with pytest.raises(ScenarioError, match=r"controllers\.PDGravityPlugin\.floor") as info:
         _with_floor(floor)
     assert words in str(info.value)
+
+
+def test_a_floor_that_cannot_run_on_the_papers_arm_is_left_out_and_said(monkeypatch, capsys):
+    """The command line adds each missing floor; one built for N-joint arms only (the example's
+    ``pd_gravity_oracle``) aborted a run on the paper's arm naming a controller nobody listed. It is
+    left out, and the note names the setting that gives the plug-in a floor."""
+    from adaptive_dd.cli.benchmark import with_floors
+
+    monkeypatch.syspath_prepend(str(PLUGINS))
+    sc = _scenario(controllers=("pd", "pd_gravity_plugin:PDGravityPlugin"))
+    out = with_floors(sc)
+    assert out.controllers == ("pd", "pd_gravity_plugin:PDGravityPlugin", "ct_oracle")
+    err = capsys.readouterr().err
+    assert "pd_gravity_oracle, the floor of pd_gravity_plugin:PDGravityPlugin, does not run on this arm" in err
+    assert "set [controllers.PDGravityPlugin] floor" in err and "ct_oracle added (the floor of pd" in err

@@ -41,7 +41,7 @@ from adaptive_dd.benchmark.types import (
 from adaptive_dd.controllers import Controller
 from adaptive_dd.controllers.compiled_form import compiled_spec
 from adaptive_dd.controllers.plugins import check_controller_object
-from adaptive_dd.errors import ParameterError
+from adaptive_dd.errors import ParameterError, RunWarning
 
 FLOOR_NOT_RUN = r"run_benchmark: .*'s floor .* did not run"
 """The message of :func:`run_benchmark`'s warning that a controller's floor did not run, for the
@@ -175,6 +175,7 @@ def run_benchmark(
             warnings.warn(
                 f"run_benchmark: {name}'s floor {run.floor} did not run: its ratios to the floor are "
                 f"NaN and its limits are judged on another reference; {fix}",
+                RunWarning,
                 stacklevel=2,
             )
     return res

@@ -162,16 +162,28 @@ def with_floors(sc):
     import dataclasses
 
     from adaptive_dd.benchmark.preflight import scenario_floors
+    from adaptive_dd.controllers import CONTROLLERS
+    from adaptive_dd.controllers.plugins import table_name
 
     names = list(sc.controllers)
+    kind = "two_link" if sc.closed_forms is not None else "chain"
     for n, floor in scenario_floors(sc).items():
-        if floor not in names:
-            names.append(floor)
+        if floor in names:
+            continue
+        if floor in CONTROLLERS and not CONTROLLERS[floor].applies_to(kind):  # it cannot run here
             print(
-                f"{sc.source or 'scenario'}: run.controllers: {floor} added (the floor of {n}; "
-                "list it to keep this quiet)",
+                f"{sc.source or 'scenario'}: {floor}, the floor of {n}, does not run on this arm (N-joint "
+                f"arms only): {n} is reported with no ratio to a floor; set [controllers.{table_name(n)}] "
+                "floor to one of the run's controllers to measure it against that one",
                 file=sys.stderr,
             )
+            continue
+        names.append(floor)
+        print(
+            f"{sc.source or 'scenario'}: run.controllers: {floor} added (the floor of {n}; "
+            "list it to keep this quiet)",
+            file=sys.stderr,
+        )
     return sc if len(names) == len(sc.controllers) else dataclasses.replace(sc, controllers=tuple(names))
 
 

@@ -73,6 +73,7 @@ from adaptive_dd.closed_loop.choices import (
     plant_work,
 )
 from adaptive_dd.closed_loop.tool_frame import accumulate_tool
+from adaptive_dd.errors import RunWarning
 from adaptive_dd.plant.sampling import actuate_trial, measure_trial
 
 __all__ = [
@@ -125,6 +126,7 @@ def alarm_lists(alarms: Alarms) -> list[list[float]]:
             f"trial(s) {over[:8].tolist()} raised up to {int(np.max(alarms.count))} change alarms; the "
             f"first {cap} of each are kept, so their false alarms, missed swaps and detection delays "
             "count those only (a detector that alarms this often is not detecting changes)",
+            RunWarning,
             stacklevel=2,
         )
     return [list(alarms.times[i, : min(c, cap)]) for i, c in enumerate(alarms.count)]

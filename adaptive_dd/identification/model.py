@@ -30,7 +30,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from adaptive_dd.errors import ParameterError, SignalError
+from adaptive_dd.errors import ParameterError, RunWarning, SignalError
 from adaptive_dd.plant.chain import Chain, forward_dynamics_batch, mass_matrix_batch, regressor_batch
 
 __all__ = [
@@ -203,6 +203,7 @@ def rk4_step(
             warnings.warn(
                 f"rk4_step: the smooth friction is stiff at T = {T:g} s: {split} RK4 steps per substep "
                 "(slow); the joints' armature in [arm], if the arm has any, makes it cheaper",
+                RunWarning,
                 stacklevel=2,
             )
         substeps *= split
