@@ -233,3 +233,29 @@ def test_a_prior_the_record_contradicts_holds_nothing():
     assert np.array_equal(out, x) and np.array_equal(C, cov)
     assert held_directions.prior_conflict(np.full(3, 0.01), np.ones(3)) is False
     assert held_directions.prior_conflict(np.full(3, 0.01), np.full(3, 5.0)) is True
+
+
+def test_a_window_too_short_for_the_model_error_fails_before_the_fit_is_printed(
+    still_joint, tmp_path, capsys, monkeypatch
+):
+    """The model error's fit at twice tau_f keeps fewer samples of a short window than the fit:
+    it failed after the whole estimate table was printed (a fit the command then refused)."""
+    from adaptive_dd.cli import main
+    from adaptive_dd.errors import DataError
+    from adaptive_dd.identification import model_error
+    from adaptive_dd.io import write_recording
+
+    _sc, _model, _sigma, q, qd, tau = still_joint
+    path = write_recording(tmp_path / "r.csv", 0.001 * np.arange(len(q)), q, qd, tau)
+    scen = tmp_path / "v3.toml"
+    scen.write_text('[arm]\nrobot = "vertical3"\n')
+
+    def short(*a, **k):
+        raise DataError("10 samples of 3 channels for 17 parameters: a longer window is needed")
+
+    monkeypatch.setattr(model_error, "model_error_variance", short)
+    argv = ["identify", "--arm", str(scen), str(path), "--out", str(tmp_path / "o"), "--output-error", "off"]
+    assert main(argv) == 2
+    out, err = capsys.readouterr()
+    assert "estimate       std" not in out and "r.csv: 10 samples of 3 channels" in err
+    assert "the model error's estimate at 2 tau_f" in err

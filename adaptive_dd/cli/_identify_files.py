@@ -31,13 +31,15 @@ def _write_estimates(path, model, fit) -> None:
             )
 
 
-def _write_model(outputs, arm, model, rec, fit, cf, spec, profile=None, momentum=None) -> list:
+def _write_model(outputs, arm, model, rec, fit, cf, spec, profile, model_error_var) -> list:
+    """``model.json`` (and ``model.urdf`` with a consistent arm ``cf``) of the fit; ``model_error_var``
+    its :func:`~adaptive_dd.identification.model_error.model_error_variance`, computed before the fit
+    is printed (it fails on a window too short for its slower filter)."""
     from adaptive_dd.identification.identified_model import (
         IdentifiedModel,
         arm_identity,
         save_identified_model,
     )
-    from adaptive_dd.identification.model_error import model_error_variance
     from adaptive_dd.plant.urdf_write import write_fitted_urdf
 
     n = arm.n_joints
@@ -87,9 +89,7 @@ def _write_model(outputs, arm, model, rec, fit, cf, spec, profile=None, momentum
             "quantile_95": float(fit.quantile),
             "bandwidth_fraction": float(fit.bandwidth),
             # what adaptive_ct's prior adds for model error ([model] from = "model.json")
-            "model_error_var": model_error_variance(
-                model, fit, rec.q, rec.qd, rec.tau, spec.torque_held, momentum
-            ).tolist(),
+            "model_error_var": np.asarray(model_error_var, dtype=float).tolist(),
             "velocity": "measured" if rec.qd_measured else "derived",
             # the directions the record could not see, held at the URDF's values (held_directions)
             "held_directions": [] if fit.held is None else fit.held.describe(model.names),

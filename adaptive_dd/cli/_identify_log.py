@@ -315,6 +315,8 @@ def identify_log(args: argparse.Namespace, arm, outputs) -> int:
     # the momentum regressors once, for the fit and the model error's other filters (_write_model)
     mom = momentum_regressors(model, rec.q, rec.qd)
     fit = _fit_record(model, rec, K, tau_f, spec.torque_held, prior_std, free, offset, mom)
+    # before anything is printed: at twice tau_f its filters leave the fewest samples of the window
+    me_var = _model_error(model, fit, rec, spec.torque_held, mom)
     _print_fit(model, fit, names)
     _print_offset(args, fit, names)
     _output_error(args, arm, model, rec, fit)
@@ -332,12 +334,26 @@ def identify_log(args: argparse.Namespace, arm, outputs) -> int:
     )
     _write_estimates(outputs.path("estimates.csv"), model, fit)
     written = [outputs.path("estimates.csv"), outputs.path("torque_fit.png")]
-    written += _write_model(outputs, arm, model, rec, fit, cf, spec, profile, mom)
+    written += _write_model(outputs, arm, model, rec, fit, cf, spec, profile, me_var)
     del mom
     if args.baseline:
         _payload_pair(args, arm, model, fit, tau_f, K, offset)
     print("wrote " + ", ".join(str(Path(args.out) / Path(p).name) for p in written))
     return 0
+
+
+def _model_error(model, fit, rec, torque_held: bool, momentum):
+    """The fit's :func:`~adaptive_dd.identification.model_error.model_error_variance`, its error
+    naming the record."""
+    from adaptive_dd.identification.model_error import FILTER_FACTORS, model_error_variance
+
+    try:
+        return model_error_variance(model, fit, rec.q, rec.qd, rec.tau, torque_held, momentum)
+    except DataError as exc:
+        raise DataError(
+            f"{rec.source}: {exc} (the model error's estimate at {max(FILTER_FACTORS):g} tau_f = "
+            f"{max(FILTER_FACTORS) * fit.tau_f:g} s starts later in each piece)"
+        ) from None
 
 
 def _read(args, arm, files):
