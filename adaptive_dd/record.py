@@ -301,6 +301,8 @@ def _times(path: Path, frame, col: str) -> Array:
 
 def _window_rows(path: Path, t: Array, window) -> slice:
     lo, hi = (t[0], t[-1]) if window is None else window
+    if not lo < hi:
+        raise DataError(f"{path}: the window [{lo:.10g}, {hi:.10g}] s: its start must be before its end")
     i0, i1 = int(np.searchsorted(t, lo)), int(np.searchsorted(t, hi, side="right"))
     if i1 - i0 < 20:
         step = float(np.median(np.diff(t))) if t.size > 1 else 0.0

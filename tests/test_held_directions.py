@@ -259,3 +259,19 @@ def test_a_window_too_short_for_the_model_error_fails_before_the_fit_is_printed(
     out, err = capsys.readouterr()
     assert "estimate       std" not in out and "r.csv: 10 samples of 3 channels" in err
     assert "the model error's estimate at 2 tau_f" in err
+
+
+def test_a_filter_faster_than_the_samples_is_refused(still_joint, tmp_path, capsys):
+    """``--tau-f`` below the sample period was accepted (its transient rounded to one sample)."""
+    from adaptive_dd.cli import main
+    from adaptive_dd.io import write_recording
+
+    _sc, _model, _sigma, q, qd, tau = still_joint
+    path = write_recording(tmp_path / "r.csv", 0.001 * np.arange(len(q)), q, qd, tau)
+    scen = tmp_path / "v3.toml"
+    scen.write_text('[arm]\nrobot = "vertical3"\n')
+    assert (
+        main(["identify", "--arm", str(scen), str(path), "--tau-f", "0.0005", "--out", str(tmp_path / "o")])
+        == 2
+    )
+    assert "--tau-f: 0.0005 s is shorter than the record's sample period (0.001 s)" in capsys.readouterr().err

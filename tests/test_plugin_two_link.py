@@ -192,5 +192,7 @@ def test_a_floor_that_cannot_run_on_the_papers_arm_is_left_out_and_said(monkeypa
     out = with_floors(sc)
     assert out.controllers == ("pd", "pd_gravity_plugin:PDGravityPlugin", "ct_oracle")
     err = capsys.readouterr().err
-    assert "pd_gravity_oracle, the floor of pd_gravity_plugin:PDGravityPlugin, does not run on this arm" in err
+    assert (
+        "pd_gravity_oracle, the floor of pd_gravity_plugin:PDGravityPlugin, does not run on this arm" in err
+    )
     assert "set [controllers.PDGravityPlugin] floor" in err and "ct_oracle added (the floor of pd" in err

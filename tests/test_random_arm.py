@@ -272,7 +272,9 @@ def test_cli_arms_without_adaptive_ct_is_refused_before_any_arm_runs(capsys, mon
     assert main(["benchmark", str(pop), "--arms", "2"]) == 2
     err = capsys.readouterr().err
     assert "pd_gravity_oracle added (the floor of pd_gravity" in err
-    assert "--arms reports adaptive_ct against its floor" in err and "['pd_gravity', 'pd_gravity_oracle']" in err
+    assert (
+        "--arms reports adaptive_ct against its floor" in err and "['pd_gravity', 'pd_gravity_oracle']" in err
+    )
     assert not ran
 
 

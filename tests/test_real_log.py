@@ -881,3 +881,11 @@ def test_decimal_commas_are_read_beside_whole_numbers(tmp_path):
         p.write_text("\n".join(lines).replace(",", ";").replace(".", ",") + "\n")
     rec = read_log(record_spec(_table(p1, p2, exclude=["j_c"]), NAMES, KINDS, "s.toml"))
     assert rec.q.shape == ref.q.shape and sum("decimal comma" in nt for nt in rec.notes) == 2
+
+
+def test_a_reversed_window_is_named_as_reversed(tmp_path):
+    """``--window 15 10`` said the window held 0 samples."""
+    p1, p2, *_ = _write_log(tmp_path, np.random.default_rng(8))
+    spec = record_spec(_table(p1, p2), NAMES, KINDS, "s.toml")
+    with pytest.raises(DataError, match=r"the window \[10, 5\] s: its start must be before its end"):
+        read_log(spec, window=(10.0, 5.0))

@@ -365,6 +365,12 @@ def _read(args, arm, files):
 
     spec, rec, recs = read_records(args.arm, arm, files, args.window)
     tau_f = args.tau_f or filter_time_constant(rec.sample_period)
+    if tau_f < rec.sample_period:
+        raise DataError(
+            f"--tau-f: {tau_f:g} s is shorter than the record's sample period ({rec.sample_period:.6g} s): a "
+            "filter faster than the samples passes the noise the derivative makes; give at least one "
+            "sample period (the default: two, at least 0.02 s)"
+        )
     print(
         f"{rec.source}: {rec.t.size} samples at T = {rec.sample_period:.6g} s "
         f"({rec.t[0]:.4g}-{rec.t[-1]:.4g} s), {arm.n_joints} joints, {len(arm.sigma)} base parameters; "
