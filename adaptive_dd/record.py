@@ -256,9 +256,11 @@ def _leave_out_bad_rows(frames: dict, where: dict, spec: RecordSpec, fitted: lis
         t = _coerced(f, spec.time) * spec.time_scale
         finite_t = np.isfinite(t)
         bad = ~finite_t
+        bad_of = {}  # per fitted column of this file: its bad rows
         for c in fitted:
             if where[c] == p:
-                bad |= ~np.isfinite(_coerced(f, c))
+                bad_of[c] = ~np.isfinite(_coerced(f, c))
+                bad |= bad_of[c]
         lo, hi = (-np.inf, np.inf) if window is None else window
         inside = np.flatnonzero(finite_t & (t >= lo) & (t <= hi))
         in_window = np.zeros(len(f), dtype=bool)
@@ -266,7 +268,9 @@ def _leave_out_bad_rows(frames: dict, where: dict, spec: RecordSpec, fitted: lis
             in_window[inside[0] : inside[-1] + 1] = True  # a row of no time between two in the window too
         drop = bad & in_window | ~finite_t
         n_in = int(np.sum(bad & in_window))
-        if not drop.any() or n_in > MAX_BAD_ROWS * max(int(in_window.sum()), 1):
+        if n_in > MAX_BAD_ROWS * max(int(in_window.sum()), 1):
+            raise _too_many_bad_rows(p, f, {c: b & in_window for c, b in bad_of.items()}, n_in, in_window)
+        if not drop.any():
             out[p] = f
             continue
         lines = [_line(f, int(i)) for i in np.flatnonzero(drop)[:5]]
@@ -278,6 +282,22 @@ def _leave_out_bad_rows(frames: dict, where: dict, spec: RecordSpec, fitted: lis
             f"fit reads left out as samples the logger missed (line(s) {', '.join(map(str, lines))}{more})"
         )
     return out, notes
+
+
+def _too_many_bad_rows(path, frame, bad_of: dict, n_in: int, in_window) -> DataError:
+    """The error for a file whose rows in the window with a bad cell in a fitted column are more
+    than :data:`MAX_BAD_ROWS` of them: each such column, most first, with its count and first line."""
+    counts = sorted(((int(b.sum()), c) for c, b in bad_of.items() if b.any()), reverse=True)
+    cols = "; ".join(
+        f"column {c!r}: {k} (first at line {_line(frame, int(np.flatnonzero(bad_of[c])[0]))})"
+        for k, c in counts[:4]
+    ) + (f"; {len(counts) - 4} more column(s)" if len(counts) > 4 else "")
+    return DataError(
+        f"{path}: {n_in} of the window's {int(in_window.sum())} rows have an empty, non-numeric or "
+        f"non-finite cell in a column the fit reads, more than the {MAX_BAD_ROWS:.0%} left out as missed "
+        f"samples ({cols}): is each column the one meant? Else cut the window to avoid them ([record] "
+        "window or --window) or repair the file"
+    )
 
 
 def _times(path: Path, frame, col: str) -> Array:

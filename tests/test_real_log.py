@@ -122,12 +122,19 @@ def test_bad_logs_name_file_line_column_and_remedy(tmp_path):
             cells[2] = "nan"
             lines[i] = ",".join(cells)
 
+    def one_nan(lines):  # and one elsewhere, in another column: not the one to blame
+        cells = lines[900].split(",")
+        cells[1] = "nan"
+        lines[900] = ",".join(cells)
+
     _rewrite(p1, nan_run)  # 90 of 1500 rows: more than a logger's missed samples
+    _rewrite(p1, one_nan)
     with pytest.raises(
         DataError,
-        match=r"pos.csv: lines 201-290, column 'j_b/pos': non-finite.*90 such row\(s\) in the window, more "
-        r"than the 5% of its rows left out as missed samples\): is the column the one meant\? Else cut the "
-        r"window",
+        match=r"pos.csv: 91 of the window's 1500 rows have an empty, non-numeric or non-finite cell in a "
+        r"column the fit reads, more than the 5% left out as missed samples \(column 'j_b/pos': 90 \(first "
+        r"at line 201\); column 'j_a/pos': 1 \(first at line 901\)\): is each column the one meant\? Else "
+        r"cut the window",
     ):
         read_log(record_spec(table, NAMES, KINDS, "s"))
     # the NaN run outside the window is no problem
