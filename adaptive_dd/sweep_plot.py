@@ -51,7 +51,13 @@ def axis_label(field: str) -> str:
     return AXIS_UNITS.get(field, field.replace("_", " "))
 
 
-def _grid(ratios: pd.DataFrame, x: str, y: str) -> tuple[list, list, np.ndarray, np.ndarray, np.ndarray]:
+def _grid(
+    ratios: pd.DataFrame, x: str, y: str | None
+) -> tuple[list, list, np.ndarray, np.ndarray, np.ndarray]:
+    """x values, y values (``[None]``: one row, a sweep of one varied axis), ratios, seeds, marks."""
+    if y is None:
+        ratios = ratios.assign(_row=None)
+        y = "_row"
     xs = list(dict.fromkeys(ratios[x]))
     ys = list(dict.fromkeys(ratios[y]))
     z = np.full((len(ys), len(xs)), np.nan)
@@ -101,9 +107,12 @@ def _figure(ratios: pd.DataFrame, heatmap: Mapping[str, Any], title: str):
             "or far from its own error before the swap"
         )
     ax.set_xticks(range(len(xs)), [f"{v:g}" if isinstance(v, float) else str(v) for v in xs])
-    ax.set_yticks(range(len(ys)), [f"{v:g}" if isinstance(v, float) else str(v) for v in ys])
     ax.set_xlabel(axis_label(x))
-    ax.set_ylabel(axis_label(y))
+    if y is None:  # one varied axis: one row
+        ax.set_yticks([])
+    else:
+        ax.set_yticks(range(len(ys)), [f"{v:g}" if isinstance(v, float) else str(v) for v in ys])
+        ax.set_ylabel(axis_label(y))
     fig.colorbar(im, ax=ax, label=f"median RMS error ratio {heatmap['adaptive']} / {heatmap['floor']} [-]")
     ax.set_title(title, fontsize=9)
     return fig

@@ -22,8 +22,8 @@ A sweep file is TOML::
     tau_f = [0.006, 0.01]
 
     [heatmap]                      # optional; defaults shown
-    x = "payload_mass"             # grid axes (default: the first two with > 1 value)
-    y = "swap_time"
+    x = "payload_mass"             # grid axes (default: the first two with > 1 value;
+    y = "swap_time"                #   one varied axis: x alone, a map of one row)
     adaptive = "adaptive_ct"
     floor = "ct_oracle"
     segment = 1                    # segment index (default: the one starting at payload `swap`)
@@ -353,6 +353,8 @@ def _heatmap(src: str, hm: Any, axes, ctrls, swap: int, n_segments: int) -> dict
     }
     explicit = bool(hm)
     for key in ("x", "y"):
+        if key == "y" and out["y"] is None and "y" not in hm:  # one axis varied: a one-row map
+            continue
         if out[key] is None or out[key] not in names:
             if not explicit:
                 return None

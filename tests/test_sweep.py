@@ -151,7 +151,7 @@ def test_sweep_error_is_a_value_error():
         parse_sweep({"grids": {}}, "x.toml")
 
 
-def test_default_heatmap_axes_and_none_without_two_axes(tmp_path):
+def test_default_heatmap_axes_and_one_row_with_one_axis(tmp_path):
     assert load_sweep(_write(tmp_path)).heatmap == {
         "x": "payload_mass",
         "y": "swap_time",
@@ -160,7 +160,16 @@ def test_default_heatmap_axes_and_none_without_two_axes(tmp_path):
         "segment": 1,
     }
     one_axis = SWEEP.replace("swap_time = [0.08, 0.12]\n", "")
-    assert load_sweep(_write(tmp_path, one_axis)).heatmap is None
+    # one varied axis: a map of one row (the sweep wrote no ratios.csv, no table and no figure at all)
+    assert load_sweep(_write(tmp_path, one_axis)).heatmap == {
+        "x": "payload_mass",
+        "y": None,
+        "adaptive": "adaptive_ct",
+        "floor": "ct_oracle",
+        "segment": 1,
+    }
+    with pytest.raises(SweepError, match=r"key 'heatmap.y' = 'swap_time' must name a grid axis"):
+        load_sweep(_write(tmp_path, one_axis + '\n[heatmap]\nx = "payload_mass"\ny = "swap_time"\n'))
 
 
 # ---- seeds, cells and the table ---------------------------------------------------------------
@@ -418,6 +427,17 @@ def test_one_heatmap_per_combination_of_the_other_axes(tmp_path):
     assert [p.name for p in plot_ratio_heatmaps(ratios[ratios.bw == 30.0], hm, ["m", "t"], tmp_path)] == [
         "heatmap.png"
     ]
+
+
+def test_a_sweep_of_one_axis_draws_one_row(tmp_path):
+    from adaptive_dd.sweep_plot import _figure, plot_ratio_heatmaps
+
+    ratios = pd.DataFrame({"m": [1.0, 3.0], "ratio": [1.1, 1.3], "n_seeds": [2, 2], "marked": ["", "x"]})
+    hm = {"x": "m", "y": None, "adaptive": "adaptive_ct", "floor": "ct_oracle", "segment": 1}
+    assert [p.name for p in plot_ratio_heatmaps(ratios, hm, ["m"], tmp_path)] == ["heatmap.png"]
+    ax = _figure(ratios, hm, "t").axes[0]
+    assert ax.images[0].get_array().shape == (1, 2) and list(ax.get_yticks()) == []
+    assert [c.get_gid() for c in ax.patches] == ["marked"]
 
 
 def _thread_env() -> dict:

@@ -91,9 +91,12 @@ def _print_heatmap(res, sweep) -> None:
         # the other grid axes: one table per combination of their values, in the heat maps' order
         other = [a for a, _ in sweep.axes if a not in (hm["x"], hm["y"])]
         groups = list(r.groupby(other, sort=False)) if other else [((), r)]
+        rows = hm["y"] or "_row"  # one varied axis: one row
+        if hm["y"] is None:
+            groups = [(k, part.assign(_row="ratio")) for k, part in groups]
         print(
             f"median over seeds of rms {hm['adaptive']} / rms {hm['floor']}, segment {hm['segment']}"
-            f" (rows {hm['y']}, columns {hm['x']}"
+            f" ({f'rows {rows}, ' if hm['y'] else ''}columns {hm['x']}"
             + (f"; one table per {', '.join(other)}" if len(groups) > 1 else "")
             + "; * marked):"
         )
@@ -103,11 +106,13 @@ def _print_heatmap(res, sweep) -> None:
                 # str: a float's shortest exact form (0.005, not 0.0050000000000000001)
                 where = ", ".join(f"{a} = {v}" for a, v in zip(other, values, strict=True))
                 print(f"{where} (heatmap_{i}.png):")
-            table = part.pivot_table(index=hm["y"], columns=hm["x"], values="ratio", aggfunc="median")
+            table = part.pivot_table(index=rows, columns=hm["x"], values="ratio", aggfunc="median")
             marks = part.assign(is_marked=part["marked"] != "").pivot_table(
-                index=hm["y"], columns=hm["x"], values="is_marked", aggfunc="any"
+                index=rows, columns=hm["x"], values="is_marked", aggfunc="any"
             )
             stars = marks.reindex_like(table).replace({True: " *", False: ""}).fillna("")
+            if hm["y"] is None:
+                table.index.name = stars.index.name = None
             print(table.round(3).astype(str) + stars)
         _print_marks(r, hm)
         from adaptive_dd.benchmark.metrics import floor_caveat
