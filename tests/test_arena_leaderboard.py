@@ -105,11 +105,19 @@ def test_leaderboard_command_writes_the_table_the_json_and_the_figure(tmp_path, 
     doc = json.loads((out / "leaderboard.json").read_text(encoding="utf-8"))
     assert doc["columns"]["rms_torque_Nm"]["unit"] == "N m" and len(doc["rows"]) == len(df)
     assert (out / "leaderboard.png").stat().st_size > 1000
+    # the command as typed, and what it ran (it recorded a command rebuilt from the rows: a template's
+    # folder, a plug-in's --plugin and the scenarios' paths were lost)
+    import shlex
+
     from adaptive_dd.arena.latex import latex_table
     from adaptive_dd.arena.page import read_table
 
+    assert doc["command"] == shlex.join(["adaptive-dd", *argv]) and doc["scenarios"] == [str(sc)]
+    assert doc["controllers"] == ["pd_gravity", "sliding_mode", "floorless:FloorlessPD"]
+    assert doc["bootstrap_seed"] == 0 and doc["template"] is None
     tex = (out / "leaderboard.tex").read_text(encoding="utf-8")  # the paper's table, of the CSV's figures
-    assert tex == latex_table(read_table(out / "leaderboard.csv")) and "\\texttt{sliding\\_mode}" in tex
+    assert tex == latex_table(read_table(out / "leaderboard.csv"), command=doc["command"])
+    assert tex.startswith(f"% {doc['command']}\n") and "\\texttt{sliding\\_mode}" in tex
     assert "pd_gravity_oracle" in capsys.readouterr().out
 
 
@@ -365,3 +373,31 @@ def test_capped_alarm_lists_are_warned_of():
     with pytest.warns(UserWarning, match=r"trial\(s\) \[1\] raised up to 9 change alarms; the first 4"):
         out = alarm_lists(a)
     assert [len(x) for x in out] == [3, 4]
+
+
+def test_a_law_told_the_model_is_shown_in_the_table_and_figure_as_a_reference():
+    """``ct_oracle_late`` (a floor, told the true model) was dropped from the figure and the LaTeX
+    table without a word, while the CSV and the printed table held it; it is shown, marked, and
+    ranked with none (no bold). The figure's colours are one scale for every leaderboard."""
+    from adaptive_dd.arena.latex import latex_table
+    from adaptive_dd.arena.plot import RATIO_SCALE, plot_leaderboard
+
+    rows = [
+        dict(scenario="s", kind="scenario", controller=c, floor=f, segment=1, payload_kg=3.0, seeds=4,
+             ratio_mean=m, ratio_p90=m, failures=0, rms_error_mrad=e, rms_rank=r, floor_saturation_pct=0.0)
+        for c, f, m, e, r in [("adaptive_ct", "ct_oracle", 1.03, 0.2, 1.0),
+                              ("ct_oracle_late", "ct_oracle", 2.4, 0.5, np.nan),
+                              ("ct_oracle", "", np.nan, 0.19, np.nan)]
+    ]  # fmt: skip
+    df = pd.DataFrame(rows)
+    tex = latex_table(df, command="adaptive-dd leaderboard x")
+    late = next(line for line in tex.splitlines() if "oracle\\_late" in line)
+    assert late.startswith("\\texttt{ct\\_oracle\\_late}$^\\dagger$") and "textbf" not in late
+    assert "$\\dagger$: told the true model" in tex and "\\textbf{1.030}" in tex
+    fig = plot_leaderboard(df)
+    labels = [t.get_text() for t in fig.axes[0].get_yticklabels()]
+    assert labels == ["adaptive_ct / ct_oracle", "ct_oracle_late / ct_oracle (told the model; a reference)"]
+    norm = fig.axes[0].images[0].norm
+    assert (norm.vmin, norm.vmax) == RATIO_SCALE  # 1.03 is not drawn red because it is the largest here
+    no_late = latex_table(df[df["controller"] != "ct_oracle_late"])
+    assert "dagger" not in no_late  # an oracle (told, no floor) is no row and no mark

@@ -19,7 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
-from adaptive_dd.arena.leaderboard import contenders
+from adaptive_dd.arena.leaderboard import contenders, told_the_model
 from adaptive_dd.arena.page import _columns, command_of, table_rows
 
 __all__ = ["latex_table", "write_latex"]
@@ -41,10 +41,12 @@ def _num(x: float) -> str:
     return f"{x:.3f}" if abs(x) < 10 else f"{x:.3g}" if abs(x) < 1000 else f"{x:.0f}"
 
 
-def latex_table(df, caption: str | None = None) -> str:
+def latex_table(df, caption: str | None = None, command: str | None = None) -> str:
     """The leaderboard ``df`` (:func:`~adaptive_dd.arena.leaderboard.leaderboard`, or
     :func:`~adaptive_dd.arena.page.read_table` of its CSV) as a ``booktabs`` LaTeX table
-    (module docstring). ``caption``: the table's caption (default: what the cells are).
+    (module docstring). ``caption``: the table's caption (default: what the cells are);
+    ``command``: the command that made it, in the first line's comment (default: the one
+    :func:`~adaptive_dd.arena.page.command_of` reads back from the rows).
 
     Examples
     --------
@@ -59,17 +61,19 @@ def latex_table(df, caption: str | None = None) -> str:
     \\texttt{adaptive\\_ct} & \\texttt{ct\\_oracle} & \\textbf{1.013} (1.070) \\\\
     """
     cols = _columns(df)
-    ranked = df[contenders(df)]
+    told = told_the_model(df) & (df["floor"] != "")  # a law told the model, with a floor: shown, not ranked
+    ranked = df[contenders(df) | told]
     caption = caption or (
         "Ratio of each law's RMS tracking error to its floor's (the same law given the true model), "
-        "mean over seeds (p90); bold: the lowest RMS error of the column; $\\times N$: N trials failed."
+        "mean over seeds (p90); bold: the lowest RMS error of the column; $\\times N$: N trials failed"
+        + ("; $\\dagger$: told the true model, a reference, not ranked." if told.any() else ".")
     )
     heads = []
     for sc, seg in cols:
         g = df[(df["scenario"] == sc) & (df["segment"] == seg)]
         heads.append(f"{_tex(sc)}:{seg} ({g['payload_kg'].iloc[0]:.3g} kg)")
     lines = [
-        f"% {command_of(df)}",
+        f"% {command or command_of(df)}",
         "% written by adaptive_dd (adaptive_dd.arena.latex); needs \\usepackage{booktabs}",
         "\\begin{table}",
         "\\centering",
@@ -89,13 +93,16 @@ def latex_table(df, caption: str | None = None) -> str:
             mean = f"\\textbf{{{mean}}}" if r.get("rms_rank") == 1 else mean
             fail = f" $\\times {int(r['failures'])}$" if r["failures"] else ""
             cells.append(f"{mean} ({_num(r['ratio_p90'])}){fail}")
-        lines.append(f"\\texttt{{{_tex(ctrl)}}} & \\texttt{{{_tex(floor)}}} & " + " & ".join(cells) + " \\\\")
+        mark = "$^\\dagger$" if told[ranked.index[ranked["controller"] == ctrl]].any() else ""
+        lines.append(
+            f"\\texttt{{{_tex(ctrl)}}}{mark} & \\texttt{{{_tex(floor)}}} & " + " & ".join(cells) + " \\\\"
+        )
     lines += ["\\bottomrule", "\\end{tabular}", "\\end{table}", ""]
     return "\n".join(lines)
 
 
-def write_latex(df, path) -> Path:
-    """Write :func:`latex_table` of ``df`` to ``path`` (``.tex``); returns the path."""
+def write_latex(df, path, command: str | None = None) -> Path:
+    """Write :func:`latex_table` of ``df`` (made by ``command``) to ``path`` (``.tex``); returns the path."""
     path = Path(path)
-    path.write_text(latex_table(df), encoding="utf-8")
+    path.write_text(latex_table(df, command=command), encoding="utf-8")
     return path

@@ -50,6 +50,7 @@ __all__ = [
     "rms_rank",
     "run_unit",
     "shipped_scenarios",
+    "told_the_model",
     "unit_costs",
     "unit_design",
 ]
@@ -301,14 +302,14 @@ def _pooled(cells: list[dict], n_arms: int) -> list[dict]:
     groups: dict = {}
     for c in cells:
         groups.setdefault((c["controller"], c["segment"]), []).append(c)
-    out = []
+    out, name = [], f"population({n_arms} arm{'s' if n_arms != 1 else ''})"
     for (_, seg), cs in groups.items():
         first = cs[0]
         pooled = {k: np.concatenate([c[k] for c in cs]) for k in _ARRAYS}
         notes = sorted({c["floor_note"] for c in cs if c["floor_note"]})
         out.append(
             {
-                **first, **pooled, "scenario": f"population({n_arms} arms)", "kind": "population",
+                **first, **pooled, "scenario": name, "kind": "population",
                 "floor_note": "; ".join(notes[:1]), "segment": seg,
                 "payload_kg": float(np.mean([c["payload_kg"] for c in cs])),
             }
@@ -473,10 +474,16 @@ def contenders(df):
     """Boolean mask of the rows whose laws are ranked against each other: those with a floor, less
     the laws told the true model (``ct_oracle_late``: a measuring stick with a floor, not a law that
     learns the robot)."""
+    return (df["floor"] != "") & ~told_the_model(df)
+
+
+def told_the_model(df):
+    """Boolean mask of the rows of laws told the true model (``ct_oracle_late``): shown beside the
+    contenders, with their floor, and ranked with none."""
     from adaptive_dd.controllers.builtins import CONTROLLERS
 
     told = df["controller"].map(lambda c: c in CONTROLLERS and CONTROLLERS[c].knows.startswith("true model"))
-    return (df["floor"] != "") & ~told.astype(bool)
+    return told.astype(bool)
 
 
 def rms_rank(df):

@@ -6,23 +6,31 @@ from __future__ import annotations
 
 import numpy as np
 
-from adaptive_dd.arena.leaderboard import contenders
+from adaptive_dd.arena.leaderboard import contenders, told_the_model
 
-__all__ = ["FLOOR_SATURATED_PCT", "plot_leaderboard"]
+__all__ = ["FLOOR_SATURATED_PCT", "RATIO_SCALE", "plot_leaderboard"]
 
 FLOOR_SATURATED_PCT = 1.0
 """[%] A cell whose floor saturates more often than this is marked (its ratio flatters the law)."""
 
 
+RATIO_SCALE = (0.5, 10.0)
+"""The colour scale's range of the mean ratio (log; widened to the figure's own extremes): one
+colour means one ratio in every leaderboard's figure."""
+
+
 def plot_leaderboard(df):
-    """A heat map of ``ratio_mean`` (log colour scale): rows the controllers with a floor, columns
-    each scenario's segments (``name:segment (kg)``); each cell prints the mean and, below it, the
-    seeds' p90; ``x`` marks failures, ``*`` a floor saturated beyond :data:`FLOOR_SATURATED_PCT`.
-    Returns the ``matplotlib.figure.Figure``."""
+    """A heat map of ``ratio_mean`` (log colour scale over at least :data:`RATIO_SCALE`): rows the
+    controllers with a floor (a law told the true model, as ``ct_oracle_late``, marked as a
+    reference), columns each scenario's segments (``name:segment (kg)``); each cell prints the mean
+    and, below it, the seeds' p90; ``x`` marks failures, ``*`` a floor saturated beyond
+    :data:`FLOOR_SATURATED_PCT`. Returns the ``matplotlib.figure.Figure``."""
     from matplotlib.colors import LogNorm
     from matplotlib.figure import Figure
+    from matplotlib.ticker import FixedLocator, FuncFormatter, NullLocator
 
-    ranked = df[contenders(df)]
+    told = told_the_model(df) & (df["floor"] != "")  # a law told the model, with a floor: a reference
+    ranked = df[contenders(df) | told]
     cols = list(dict.fromkeys(zip(ranked["scenario"], ranked["segment"], ranked["payload_kg"], strict=True)))
     rows = list(dict.fromkeys(ranked["controller"]))
     z = np.full((len(rows), len(cols)), np.nan)
@@ -38,13 +46,23 @@ def plot_leaderboard(df):
             text += "*"
         ax.text(j, i, text, ha="center", va="center", fontsize=6)
     finite = z[np.isfinite(z)]
-    norm = LogNorm(max(finite.min(), 1e-3), max(finite.max(), 1.01)) if finite.size else None
-    im = ax.imshow(z, cmap="RdYlGn_r", norm=norm, aspect="auto")
+    lo, hi = RATIO_SCALE
+    if finite.size:
+        lo, hi = min(lo, max(finite.min(), 1e-3)), max(hi, finite.max())
+    im = ax.imshow(z, cmap="RdYlGn_r", norm=LogNorm(lo, hi), aspect="auto")
     ax.set_xticks(range(len(cols)), [f"{s}:{g} ({m:g} kg)" for s, g, m in cols], rotation=60, ha="right")
+    reference = set(ranked.loc[told[ranked.index], "controller"])
     ax.set_yticks(
         range(len(rows)),
-        [f"{c} / {f}" for c, f in dict.fromkeys(zip(ranked["controller"], ranked["floor"], strict=True))],
+        [
+            f"{c} / {f}" + (" (told the model; a reference)" if c in reference else "")
+            for c, f in dict.fromkeys(zip(ranked["controller"], ranked["floor"], strict=True))
+        ],
     )
     ax.set_title("RMS error / floor's, per seed: mean (p90 below); x failures, * floor saturated", fontsize=8)
-    fig.colorbar(im, ax=ax, label="mean ratio to the floor [-]")
+    bar = fig.colorbar(im, ax=ax, label="mean ratio to floor")
+    ticks = [x for x in (0.5, 1, 2, 5, 10, 20, 50, 100, 200, 500, 1000) if lo <= x <= hi]
+    bar.ax.yaxis.set_major_locator(FixedLocator(ticks))
+    bar.ax.yaxis.set_minor_locator(NullLocator())
+    bar.ax.yaxis.set_major_formatter(FuncFormatter(lambda x, _: f"{x:g}"))
     return fig

@@ -110,6 +110,7 @@ def main(argv: list[str] | None = None) -> int:
     if unknown:  # the command's own usage, and the option meant (no abbreviations are taken)
         _unknown_options(parser, args.command, unknown)
     args.given = frozenset(a.split("=", 1)[0] for a in argv if a.startswith("--"))
+    args.argv = tuple(argv)  # the command as typed, for the outputs that record it
     try:
         return int(args.func(args))
     except KeyboardInterrupt:

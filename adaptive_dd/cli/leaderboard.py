@@ -83,7 +83,7 @@ def run(args: argparse.Namespace) -> int:
     """Run the leaderboard and write its four files."""
     import numpy as np
 
-    from adaptive_dd.arena.leaderboard import COLUMNS, DEFAULT_CONTROLLERS, leaderboard
+    from adaptive_dd.arena.leaderboard import COLUMNS, DEFAULT_CONTROLLERS, leaderboard, shipped_scenarios
     from adaptive_dd.outputs import check_output_dir
 
     for opt in ("--template", "--first-arm"):
@@ -114,7 +114,15 @@ def run(args: argparse.Namespace) -> int:
     )  # fmt: skip
     csv, js, png = out / "leaderboard.csv", out / "leaderboard.json", out / "leaderboard.png"
     df.to_csv(csv, index=False, float_format="%.6g")
+    import shlex
+
+    command = shlex.join(["adaptive-dd", *getattr(args, "argv", ("leaderboard",))])
     doc = {
+        "command": command,  # as typed: run it from the same folder to reproduce the table
+        "scenarios": scenarios if scenarios is not None else [str(p) for p in shipped_scenarios()],
+        "controllers": controllers,
+        "template": args.template,
+        "bootstrap_seed": args.bootstrap_seed,
         "columns": {k: {"unit": u, "meaning": m} for k, (u, m) in COLUMNS.items()},
         "seeds": args.seeds,
         "arms": args.arms,
@@ -129,7 +137,7 @@ def run(args: argparse.Namespace) -> int:
     from adaptive_dd.arena.latex import write_latex
     from adaptive_dd.arena.page import read_table
 
-    tex = write_latex(read_table(csv), out / "leaderboard.tex")  # the CSV's figures, as the docs render it
+    tex = write_latex(read_table(csv), out / "leaderboard.tex", command)  # the CSV's figures, as the docs
     _print(df[df["kind"] != "arm"])
     _print_winners(df[df["kind"] != "arm"])
     _print_alarms(df[df["kind"] != "arm"])
