@@ -268,6 +268,11 @@ class Simulation:
         n = self.scenario.n_joints
         if tau.shape != (n,):
             raise SignalError(f"tau must have shape ({n},) (one torque per joint), got {tau.shape}")
+        if isinstance(self._trial, _TwoLinkTrial):  # the N-joint glue applies the error bound itself
+            from adaptive_dd.closed_loop.types import MAX_ERROR
+
+            if np.any(np.abs(self._ref[0][self._trial.k] - self._trial.truth()[0]) > MAX_ERROR):
+                tau = np.full(n, np.nan)  # the plant's rule for a bad command: failed, stopped there
         self.applied_torque, self.saturated = self._trial.step(tau)
         return self._measure()
 

@@ -273,3 +273,28 @@ def test_a_policy_is_set_beside_the_floor_asked_for():
             ParameterError, match=rf"evaluate: floor '{bad}' is no built-in told the true model"
         ):
             evaluate(LawPolicy(sc, "pd"), sc, [1], floor=bad)
+
+
+def test_evaluate_names_bad_seeds_and_says_when_a_trial_failed():
+    """``seeds=1.5`` was a raw TypeError; a trial stopped by its divergence left the summary's
+    means None without saying which seed failed, or when. On the paper's arm the stepping API did
+    not apply the benchmark's error bound (3 rad): a policy that spun the arm never failed."""
+    sc = _short("sice", duration=1.0)
+    for bad in (1.5, True, "3", [0, 1.0]):
+        with pytest.raises(ParameterError, match=r"evaluate: seeds must be a count >= 1 or seed indices"):
+            evaluate(lambda obs: np.zeros(2), sc, bad)
+    ev = evaluate(lambda obs: np.array([1e4, -1e4]), sc, [0, 1], name="wild")  # saturated: spins the arm
+    assert ev.failed.all() and np.all((ev.failed_at > 0.1) & (ev.failed_at < 0.6))
+    seg = ev.summary()[-1]
+    assert [f["seed"] for f in seg["failed"]] == [0, 1] and seg["failed"][0]["at_s"] == ev.failed_at[0]
+    frame = ev.to_frame()  # a row per seed and segment
+    np.testing.assert_array_equal(frame.groupby("seed")["failed_at_s"].first(), ev.failed_at)
+
+
+def test_the_arenas_bootstrap_takes_a_seed_and_names_a_bad_generator():
+    from adaptive_dd.arena.leaderboard import leaderboard
+
+    with pytest.raises(
+        ParameterError, match=r"rng must be a numpy.random.Generator or a seed \(int\), got 'x'"
+    ):
+        leaderboard([], ["adaptive_ct"], rng="x", arms=1)

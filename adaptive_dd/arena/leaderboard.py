@@ -373,8 +373,8 @@ def leaderboard(
         attribute) runs beside it and is ranked too.
     seeds : int or None
         Seeds per scenario and per arm (None: each scenario's own).
-    rng : numpy.random.Generator, optional
-        For the bootstrap intervals (default ``numpy.random.default_rng(0)``); the trials' noise
+    rng : numpy.random.Generator or int, optional
+        For the bootstrap intervals, or its seed (default ``numpy.random.default_rng(0)``); the trials' noise
         and plants come from each scenario's own seeds (common random numbers: every controller of
         a seed meets the same robot and noise).
     progress : bool
@@ -436,7 +436,11 @@ def leaderboard(
         raise ParameterError(f"leaderboard: arms must be an integer >= 0, got {arms!r}")
     if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
         raise ParameterError(f"leaderboard: workers must be an integer >= 1, got {workers!r}")
-    rng = np.random.default_rng(0) if rng is None else rng
+    if isinstance(rng, bool) or not (rng is None or isinstance(rng, np.random.Generator | int | np.integer)):
+        raise ParameterError(
+            f"leaderboard: rng must be a numpy.random.Generator or a seed (int), got {rng!r}"
+        )
+    rng = np.random.default_rng(0 if rng is None else rng)  # a seed, or the generator itself
     specs = shipped_scenarios() if scenarios is None else scenarios
     units = [("scenario", _scenario(spec)) for spec in specs]
     if arms:

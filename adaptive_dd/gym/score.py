@@ -46,6 +46,9 @@ class Evaluation:
     failed : ndarray of bool (n_seeds,)
     floor : str
         The law the ratios divide by (``evaluate``'s ``floor``).
+    failed_at : ndarray (n_seeds,)
+        [s] When each failed trial was stopped (its state diverged or left the arm's limits), NaN
+        for a trial that did not fail.
     """
 
     name: str
@@ -58,6 +61,7 @@ class Evaluation:
     ee_orientation_rms: np.ndarray
     failed: np.ndarray
     floor: str = FLOOR
+    failed_at: np.ndarray | None = None
 
     @property
     def ratio_to_floor(self) -> np.ndarray:
@@ -70,7 +74,8 @@ class Evaluation:
         frame's mean errors ``ee_position_rms_mm``, ``ee_orientation_rms_deg`` (None where every
         trial failed; the units in the names, as :meth:`to_frame`'s columns) and the ratio's
         statistics ``ratio_to_floor`` (:func:`~adaptive_dd.benchmark.metrics.ratio_statistics`:
-        mean, median, p90, max, ci95, worst_seed, n)."""
+        mean, median, p90, max, ci95, worst_seed, n), and ``failed``: per trial stopped by the
+        segment's end, its seed and time [s] (``{"seed": 3, "at_s": 1.234}``)."""
         from adaptive_dd.benchmark.metrics import ratio_statistics
 
         out = []
@@ -82,8 +87,18 @@ class Evaluation:
                 "ee_position_rms_mm": _mean(self.ee_position_rms[:, s]),
                 "ee_orientation_rms_deg": _mean(self.ee_orientation_rms[:, s]),
                 "ratio_to_floor": ratio_statistics(r[:, s], self.seeds),
+                "failed": [
+                    {"seed": int(seed), "at_s": float(t)}
+                    for seed, t in zip(self.seeds, self._failed_at(), strict=True)
+                    if np.isfinite(t) and t < b
+                ],
             })  # fmt: skip
         return out
+
+    def _failed_at(self) -> np.ndarray:
+        if self.failed_at is not None:
+            return np.asarray(self.failed_at, float)
+        return np.full(len(self.failed), np.nan)  # built without the times: not known
 
     def to_frame(self):
         """One row per seed x segment (pandas DataFrame), the benchmark's column names."""
@@ -97,6 +112,7 @@ class Evaluation:
                     "controller": self.name, "seed": seed, "segment": s, "start_s": a, "end_s": b,
                     "mass_kg": m, "rms_error_rad": self.rms_error[i, s], "floor": self.floor,
                     "ratio_to_floor": r[i, s], "failed": bool(self.failed[i]),
+                    "failed_at_s": float(self._failed_at()[i]),
                     "ee_position_rms_mm": self.ee_position_rms[i, s],
                     "ee_position_max_mm": self.ee_position_max[i, s],
                     "ee_orientation_rms_deg": self.ee_orientation_rms[i, s],
@@ -201,7 +217,12 @@ def evaluate(
     ]
     if floor not in told:
         raise ParameterError(f"evaluate: floor {floor!r} is no built-in told the true model: one of {told}")
-    idx = tuple(range(seeds)) if isinstance(seeds, (int, np.integer)) else tuple(int(s) for s in seeds)
+    ints = (int, np.integer)
+    whole = isinstance(seeds, ints) and not isinstance(seeds, bool)
+    many = isinstance(seeds, Sequence | np.ndarray) and not isinstance(seeds, str)
+    if not (whole or (many and all(isinstance(s, ints) and not isinstance(s, bool) for s in seeds))):
+        raise ParameterError(f"evaluate: seeds must be a count >= 1 or seed indices >= 0, got {seeds!r}")
+    idx = tuple(range(seeds)) if whole else tuple(int(s) for s in seeds)
     if not idx or min(idx) < 0:
         raise ParameterError(f"evaluate: seeds must be a count >= 1 or seed indices >= 0, got {seeds!r}")
     try:
@@ -213,9 +234,12 @@ def evaluate(
     G = start.size
     rms = np.full((len(idx), G), np.nan)
     failed = np.zeros(len(idx), dtype=bool)
+    failed_at = np.full(len(idx), np.nan)
     qs = np.full((len(idx), sc.n_samples, sc.n_joints), np.nan)
     for i, seed in enumerate(idx):
         q, failed[i], at = run_episode(policy, env, seed)
+        if failed[i]:
+            failed_at[i] = at * sc.sample_period
         qs[i] = q
         e2 = np.sum((rc.q_d - q) ** 2, axis=1)
         for s in range(G):
@@ -230,5 +254,5 @@ def evaluate(
     floor_rms = per_seed_segment_metrics(runs, runs.runs[label], settling=False)["rms_error"]
     return Evaluation(
         name, idx, list(sc.segments()), rms, floor_rms, ee["ee_position_rms"], ee["ee_position_max"],
-        ee["ee_orientation_rms"], failed, floor,
+        ee["ee_orientation_rms"], failed, floor, failed_at,
     )  # fmt: skip
