@@ -202,19 +202,26 @@ def _controllers(src: str, sw: dict, base: Scenario) -> tuple[str, ...]:
     if not isinstance(ctrls, list) or not ctrls or not all(isinstance(c, str) for c in ctrls):
         raise SweepError(f"{src}: key 'sweep.controllers' must be a non-empty list of names, got {ctrls!r}")
     known = controllers_for(base.closed_forms or base.arm)
+    # the list the sweep reads: its own, else the scenario's run.controllers (named as such)
+    where = (
+        "key 'sweep.controllers'"
+        if "controllers" in sw
+        else f"{base.source}'s run.controllers (the sweep gives no sweep.controllers)"
+    )
     for c in ctrls:
         if c not in known:
             kind = "the two-link arm" if base.closed_forms is not None else f"this {base.n_joints}-joint arm"
             if ":" in c:
                 raise SweepError(
-                    f"{src}: key 'sweep.controllers': {c!r} is a plug-in; a sweep runs built-in controllers "
-                    f"only ({known}): run a plug-in over arms and seeds with `adaptive-dd leaderboard "
-                    "--plugin`, or over one scenario with `adaptive-dd benchmark` (docs/sweeps.md)"
+                    f"{src}: {where}: {c!r} is a plug-in; a sweep runs built-in controllers only "
+                    f"({known}): set sweep.controllers to some of those, run a plug-in over arms and seeds "
+                    "with `adaptive-dd leaderboard --plugin`, or over one scenario with `adaptive-dd "
+                    "benchmark` (docs/sweeps.md)"
                 )
             if c not in CONTROLLERS:
-                raise SweepError(f"{src}: key 'sweep.controllers': unknown controller {c!r}; known: {known}")
+                raise SweepError(f"{src}: {where}: unknown controller {c!r}; known: {known}")
             raise SweepError(
-                f"{src}: key 'sweep.controllers': controller {c!r} is not for {kind} "
+                f"{src}: {where}: controller {c!r} is not for {kind} "
                 f"({CONTROLLERS[c].only}); known for it: {known}"
             )
     if len(set(ctrls)) != len(ctrls):

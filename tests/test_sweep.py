@@ -146,6 +146,22 @@ def test_validation_names_file_key_and_reason(tmp_path, edit, needle):
     assert needle in str(info.value)
 
 
+def test_a_plug_in_in_the_scenarios_list_is_named_there_not_in_the_sweeps(tmp_path):
+    """With no sweep.controllers the sweep reads the scenario's run.controllers; a plug-in there was
+    blamed on 'sweep.controllers', a key the file does not have."""
+    sweep = SWEEP.replace('controllers = ["ct_oracle", "adaptive_ct"]\n', "")
+    base = BASE.replace(
+        'controllers = ["ct_oracle", "adaptive_ct"]', 'controllers = ["ct_oracle", "my_laws:PD"]'
+    )
+    with pytest.raises(SweepError) as info:
+        load_sweep(_write(tmp_path, sweep, base))
+    msg = str(info.value)
+    assert (
+        "base.toml's run.controllers (the sweep gives no sweep.controllers): 'my_laws:PD' is a plug-in" in msg
+    )
+    assert "set sweep.controllers to some of those" in msg and "key 'sweep.controllers'" not in msg
+
+
 def test_sweep_error_is_a_value_error():
     with pytest.raises(ValueError, match="unknown table"):
         parse_sweep({"grids": {}}, "x.toml")
