@@ -298,3 +298,22 @@ def test_the_arenas_bootstrap_takes_a_seed_and_names_a_bad_generator():
         ParameterError, match=r"rng must be a numpy.random.Generator or a seed \(int\), got 'x'"
     ):
         leaderboard([], ["adaptive_ct"], rng="x", arms=1)
+
+
+def test_a_step_after_termination_and_a_seed_beyond_the_scenarios_are_named():
+    """A terminated episode stepped on without a word (t 0.866 -> 0.867); a seed of 2**64, beyond
+    what a scenario takes, was accepted."""
+    from adaptive_dd.errors import SignalError
+
+    env = make_env(_short("sice", duration=1.0), floor=None)
+    with pytest.raises(ParameterError, match=r"must be an int in \[0, 2\*\*63\), got 18446744073709551616"):
+        env.reset(seed=2**64)
+    env.reset(seed=0)
+    terminated = False
+    while not terminated:
+        _, _, terminated, truncated, _ = env.step(np.array([1e4, -1e4]))
+        assert not truncated
+    with pytest.raises(SignalError, match=r"the episode terminated \(trial 0 failed\); call reset\(\)"):
+        env.step(np.zeros(2))
+    env.reset(seed=1)  # and a reset starts again
+    env.step(np.zeros(2))

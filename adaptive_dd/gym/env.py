@@ -137,9 +137,10 @@ class PayloadSwapEnv(gymnasium.Env):
         idx = opts.get("seed_index", seed)
         if idx is None:
             idx = int(self.np_random.integers(0, MAX_SEED))
-        if not isinstance(idx, (int, np.integer)) or idx < 0:
+        if isinstance(idx, bool) or not isinstance(idx, (int, np.integer)) or not 0 <= idx < 2**63:
             raise ParameterError(
-                f"PayloadSwapEnv.reset: the seed (a trial's seed index) must be an int >= 0, got {idx!r}"
+                "PayloadSwapEnv.reset: the seed (a trial's seed index) must be an int in [0, 2**63), "
+                f"got {idx!r}"
             )
         self.seed_index = int(idx)
         self.sim = Simulation(self.scenario, self.seed_index)
@@ -153,6 +154,11 @@ class PayloadSwapEnv(gymnasium.Env):
         """Apply ``action`` (the torques ``(n,)`` [N m]) for one sample."""
         if self.sim is None:
             raise SignalError("PayloadSwapEnv: call reset() before step()")
+        if self.sim.failed:  # Gymnasium leaves a step after termination undefined: say so
+            raise SignalError(
+                f"PayloadSwapEnv: the episode terminated (trial {self.seed_index} failed); call reset() "
+                "before step()"
+            )
         sim, m = self.sim, self._m
         error = m.q_d - sim.q_true  # the benchmark's e at this sample (the state before the step)
         self._m = m = sim.step(np.asarray(action, dtype=np.float64))
