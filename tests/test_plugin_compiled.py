@@ -111,8 +111,8 @@ def test_a_non_finite_command_fails_its_trials_not_the_run(example):
     assert np.all(np.isfinite(run.acc.sum_e2))  # the trial froze at rest: no NaN in the metrics
     run.explain_failures(1.0, 100.0)  # the reason names the command, its joint, the terms not declared
     assert set(run.failed_why.values()) == {
-        "non-finite torque command (joint 1) (a term it reads without declaring it in needs is NaN: "
-        "mass_matrix, bias)"
+        "non-finite torque command (joint 1) (if it reads mass_matrix, bias, which it does not declare in "
+        "needs: those terms are NaN in its loop; declare what it reads)"
     }
 
 

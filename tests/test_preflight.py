@@ -170,7 +170,7 @@ def test_the_reports_failure_lines_group_a_shared_reason_and_cut_a_long_one():
     lines = _failure_lines(ctrls)
     assert lines[0] == "failed trials: a: 3, b: 1"
     assert lines[1] == (
-        "  a, seeds 0, 1, 2, before the first sample: TypingError in the compiled plug-in: Failed in "
+        "  a, seeds 0, 1, 2, time not recorded: TypingError in the compiled plug-in: Failed in "
         "nopython mode ... - argument 18: dict (the whole message: metrics.json, failures)"
     )
     assert lines[2] == "  b, seed 4, t = 1.300 s: non-finite torque command (joint 1)" and len(lines) == 3

@@ -94,7 +94,7 @@ def _failure_lines(ctrls: dict) -> list[str]:
         for f in c.get("failures", []):
             groups.setdefault((f["t"], f["why"]), []).append(f["seed"])
         for (t, why), seeds in list(groups.items())[:3]:
-            at = f"t = {t:.3f} s" if t is not None else "before the first sample"
+            at = f"t = {t:.3f} s" if t is not None else "time not recorded"  # e.g. raised in compiled code
             who = f"seed {seeds[0]}" if len(seeds) == 1 else f"seeds {_seed_list(seeds)}"
             lines.append(f"  {n}, {who}, {at}: {_brief_reason(why)}")
         if len(groups) > 3:

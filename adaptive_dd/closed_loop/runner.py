@@ -311,7 +311,10 @@ def drive_plugin(name, ctrl, form, runtime: str, run, blocks, alarms, rc, bar) -
     run.explain_failures(rc.max_error, rc.max_speed)
     undeclared = [k for k in ("gravity", "mass_matrix", "bias") if not form.need & NEEDS[k]]  # NaN terms
     if undeclared:  # a term it reads without declaring it is NaN: the likeliest cause of a NaN command
-        hint = f" (a term it reads without declaring it in needs is NaN: {', '.join(undeclared)})"
+        hint = (
+            f" (if it reads {', '.join(undeclared)}, which it does not declare in needs: those terms are "
+            "NaN in its loop; declare what it reads)"
+        )
         for i, why in run.failed_why.items():
             if why.startswith("non-finite torque command"):
                 run.failed_why[i] = why + hint
