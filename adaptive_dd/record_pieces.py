@@ -236,10 +236,14 @@ def trim_gap_edges(pieces, qd_measured: bool, T: float, short, derivative_window
         keep.append(np.arange(lo, max(lo, hi)))
         out.append((at, at + max(0, hi - lo)))
         at += max(0, hi - lo)
+    each = (
+        f"resampled and differentiated on its own; left out: {h} samples ({h * T:.3g} s, half the "
+        "derivative's window) beside each gap"
+        if h
+        else "resampled on its own"  # velocities measured: nothing differentiated, nothing left out
+    )
     notes = [
-        f"split at the gaps into {len(pieces)} continuous piece{'s' if len(pieces) > 1 else ''}, each "
-        "resampled and differentiated on its "
-        f"own; left out: {h} samples ({h * T:.3g} s, half the derivative's window) beside each gap"
+        f"split at the gaps into {len(pieces)} continuous piece{'s' if len(pieces) > 1 else ''}, each {each}"
     ]
     notes += [
         f"the piece {a:.6g}-{b:.6g} s is too short to use (under {MIN_PIECE_SAMPLES} samples): left out"

@@ -100,6 +100,8 @@ def test_read_log_splits_at_gaps_and_names_what_it_left_out(tmp_path, vertical3)
     # measured velocities: nothing cut beside the gaps; every sample kept is a logged one
     assert rec.t.size == log.t.size - len(drop)
     np.testing.assert_allclose(rec.q, np.delete(log.q, drop, axis=0), atol=1e-9)
+    split = next(nt for nt in rec.notes if nt.startswith("split at the gaps"))
+    assert split.endswith("each resampled on its own") and "left out" not in split  # not "0 samples (0 s"
     # velocities derived from the positions: half the derivative's window cut beside each gap
     spec_d = record_spec(
         {"files": [str(path)], "velocity_source": "derived"}, arm.joint_names, arm.joint_kinds, "s.toml"

@@ -60,9 +60,17 @@ def check_number(errs: list, key: str, v: Any, lo: float, hi: float, *, integer=
         errs.append(f"{key}: must be finite, got {v!r}")
         return False
     if (v <= lo if lo_open else v < lo) or v > hi:
-        errs.append(f"{key}: must be in {'(' if lo_open else '['}{lo:.10g}, {hi:.10g}], got {_short(v)}")
+        errs.append(
+            f"{key}: must be in {'(' if lo_open else '['}{_bound(lo)}, {_bound(hi)}], got {_short(v)}"
+        )
         return False
     return True
+
+
+def _bound(x) -> str:
+    """A range's bound as a reader gives it: an integer in full (a seed's 9223372036854775807, not
+    9.22337e+18), a float in its shortest exact form up to 10 digits."""
+    return str(x) if isinstance(x, int | np.integer) else f"{x:.10g}"
 
 
 def _nums(errs: list, key: str, v: Any, lo: float, hi: float, *, n: int | None = None, **kw) -> bool:
