@@ -300,3 +300,17 @@ def test_a_joint_whose_friction_dwarfs_its_inertia_is_warned_of(tmp_path, capsys
     assert "warning: " in capsys.readouterr().err
     shipped = load_scenario(str(resources.files("adaptive_dd.scenarios") / "ur5_tool_swap.toml"))
     assert inertia_problems(shipped) == []
+
+
+def test_the_centre_of_mass_line_says_when_no_law_estimates_the_payload():
+    """It ended in 'information limit 8 ms; ' and nothing else."""
+    from adaptive_dd.benchmark.report import _com_information_line
+
+    seg = {"start": 2.0}
+    info = {"com_known": 0.008, "com_axes": "xyz"}
+    c = {"pd": {"segments": [{}, {"com_learning_time": None}]}}
+    line = _com_information_line(c, 1, seg, info, [], set())
+    assert line.endswith("information limit 8 ms (no controller of the run estimates the payload)")
+    c["adaptive_ct"] = {"segments": [{}, {"com_learning_time": 0.02}]}
+    line = _com_information_line(c, 1, seg, info, ["adaptive_ct"], {3})
+    assert line.endswith("information limit 8 ms; adaptive_ct 20 ms (median over 3 seed(s))")

@@ -294,9 +294,9 @@ def _com_information_line(c: dict, i: int, seg: dict, info: dict, estimators: li
     return (
         f"  payload centre of mass within 1 cm after the swap at {seg['start']:g} s"
         + (f" ({info['com_axes']} only: the rest is not identifiable)" if partial else "")
-        + f": information limit {lim_s}; "
-        + ", ".join(took_s)
-        + (f" (median over {max(n_learn)} seed(s))" if n_learn else "")
+        + f": information limit {lim_s}"
+        + (f"; {', '.join(took_s)}" if took_s else " (no controller of the run estimates the payload)")
+        + (f" (median over {max(n_learn)} seed(s))" if n_learn and took_s else "")
     )
 
 
