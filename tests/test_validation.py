@@ -458,3 +458,17 @@ def test_simulate_and_identify_take_a_shipped_scenarios_name_as_benchmark_does(t
     assert load_arm("vertical3_payload_exact").n_joints == 3
     with pytest.raises(ScenarioError, match=r"no such scenario file .*vertical3_payload_exact"):
         load_arm("vertical3_payload_exac")
+
+
+def test_a_bandwidth_per_joint_on_the_closed_forms_says_where_it_runs():
+    """It said 'must be a number, got (40, 40)', not that one per joint needs the general kernels."""
+    from adaptive_dd.benchmark.scenario import parse_scenario
+
+    with pytest.raises(
+        ScenarioError, match=r"control.bandwidth: one number on the paper's two-link closed forms"
+    ):
+        parse_scenario({"control": {"bandwidth": [40.0, 40.0]}})
+    sc = parse_scenario(
+        {"control": {"bandwidth": [40.0, 30.0]}, "arm": {"robot": "sice_arm", "general": True}}
+    )
+    assert sc.closed_forms is None and tuple(sc.bandwidth) == (40.0, 30.0)

@@ -159,6 +159,12 @@ def _check_control(e: list, v: dict, T_ok: bool) -> None:
     if isinstance(bw, tuple) and _serial(v):  # one per joint, N-joint arms only
         bw_ok = _nums(e, "control.bandwidth", bw, 0, 1e5, n=_n_joints(v), lo_open=True)
         bw = max(bw) if bw_ok else bw
+    elif isinstance(bw, tuple):  # one per joint on the paper's closed forms: they take one bandwidth
+        e.append(
+            f"control.bandwidth: one number on the paper's two-link closed forms, got {_short(list(bw))} "
+            '(one per joint runs on the general kernels: `robot = "sice_arm"` and `general = true` in [arm])'
+        )
+        bw_ok = False
     else:
         bw_ok = check_number(e, "control.bandwidth", bw, 0, 1e5, lo_open=True)
     if bw_ok and T_ok and bw * v["sample_period"] > L["max_bandwidth_T"]:
