@@ -196,3 +196,17 @@ def test_a_floor_that_cannot_run_on_the_papers_arm_is_left_out_and_said(monkeypa
         "pd_gravity_oracle, the floor of pd_gravity_plugin:PDGravityPlugin, does not run on this arm" in err
     )
     assert "set [controllers.PDGravityPlugin] floor" in err and "ct_oracle added (the floor of pd" in err
+
+
+def test_a_plugins_bad_setting_names_the_scenario_file(monkeypatch, tmp_path):
+    """A plug-in's table is checked when the run builds it; its error named the table, not the file."""
+    from adaptive_dd.benchmark.scenario import load_scenario
+    from adaptive_dd.controllers.registry import scenario_controller
+
+    monkeypatch.syspath_prepend(str(PLUGINS))
+    path = tmp_path / "mine.toml"
+    text = (ROOT / "examples" / "plugins" / "slotine_li.toml").read_text()
+    path.write_text(text + "\n[controllers.SlotineLiPlugin]\nnope = 1\n")
+    sc = load_scenario(path)
+    with pytest.raises(ParameterError, match=rf"^{path}: controllers.SlotineLiPlugin: unknown setting"):
+        scenario_controller(sc, "slotine_li_plugin:SlotineLiPlugin")

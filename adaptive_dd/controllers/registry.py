@@ -130,7 +130,12 @@ def scenario_controller(scenario, spec: str) -> tuple[str, Controller]:
         opts = with_stated_uncertainty(spec, opts, scenario)
         g = gains_for(scenario.closed_forms or scenario.arm, scenario.bandwidth, scenario.damping)
     arm = scenario.closed_forms or scenario.arm  # the arm the run simulates: its closed forms or its own
-    ctrl = make_controller(spec, g, opts, arm=arm, search=search, scenario=scenario)
+    try:
+        ctrl = make_controller(spec, g, opts, arm=arm, search=search, scenario=scenario)
+    except ParameterError as exc:  # a plug-in's table is checked here, not when the file is read: name it
+        if ":" not in spec or src.name == "" or str(exc).startswith(str(src)) or not src.is_file():
+            raise
+        raise ParameterError(f"{src}: {exc}") from None
     if scenario.closed_forms is None and hasattr(ctrl, "state_task"):  # adaptive_ct's boost: the task's room
         ctrl.state_task(scenario)
     if ":" in spec and "label" not in opts:
