@@ -401,3 +401,16 @@ def test_a_law_told_the_model_is_shown_in_the_table_and_figure_as_a_reference():
     assert (norm.vmin, norm.vmax) == RATIO_SCALE  # 1.03 is not drawn red because it is the largest here
     no_late = latex_table(df[df["controller"] != "ct_oracle_late"])
     assert "dagger" not in no_late  # an oracle (told, no floor) is no row and no mark
+
+
+def test_a_scenarios_own_table_is_said_not_to_reach_the_drawn_arms(tmp_path, capsys):
+    """A plug-in labelled in the given scenario ran under its class name on the drawn arms (two
+    half-empty rows) and its settings did not reach them, without a word."""
+    from adaptive_dd.cli.leaderboard import _say_tables_not_on_the_arms
+
+    sc = _short_vertical3(tmp_path)
+    sc.write_text(sc.read_text(encoding="utf-8") + '\n[controllers.pd]\nlabel = "my_pd"\n', encoding="utf-8")
+    _say_tables_not_on_the_arms([str(sc)], ["pd", "adaptive_ct"], None)
+    err = capsys.readouterr().err
+    assert "[controllers.pd] (label) sets pd for that scenario only" in err
+    assert "population.toml's tables" in err and "adaptive_ct" not in err

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import sys
 from pathlib import Path
 
 from adaptive_dd.cli._common import SEED, SEEDS, add_command, number
@@ -107,6 +108,8 @@ def run(args: argparse.Namespace) -> int:
             raise ParameterError(f"--plugin {name}: expects MODULE:CLASS (e.g. my_laws:MyLaw)")
     controllers = [*(args.controllers or DEFAULT_CONTROLLERS), *args.plugin]
     out = check_output_dir(Path(args.out))
+    if args.arms and scenarios:
+        _say_tables_not_on_the_arms(scenarios, controllers, args.template)
     df = leaderboard(
         scenarios, controllers, seeds=args.seeds, rng=np.random.default_rng(args.bootstrap_seed),
         progress=not args.no_progress, arms=args.arms, template=args.template, first_arm=args.first_arm,
@@ -150,6 +153,29 @@ def run(args: argparse.Namespace) -> int:
         f"{df.attrs['run_seconds']:.1f} s running"
     )
     return 0
+
+
+def _say_tables_not_on_the_arms(scenarios, controllers, template) -> None:
+    """A note per given scenario whose ``[controllers.NAME]`` table of a ranked controller is not the
+    template's: the drawn arms run the template's tables, so the law runs there with other settings
+    (and under another name, with a ``label``): two rows, not one."""
+    from adaptive_dd.arena.leaderboard import _template
+    from adaptive_dd.benchmark.scenario import load_scenario
+    from adaptive_dd.controllers.plugins import table_name
+
+    data, src = _template(template)
+    theirs = data.get("controllers") or {}
+    for path in scenarios:
+        sc = load_scenario(path)
+        for c in controllers:
+            mine = sc.options(table_name(c))
+            if mine and mine != theirs.get(table_name(c), {}):
+                print(
+                    f"note: {sc.source}'s [controllers.{table_name(c)}] ({', '.join(sorted(mine))}) sets "
+                    f"{c} for that scenario only; the drawn arms run {src}'s tables (give the template the "
+                    "same table to run one law: one row)",
+                    file=sys.stderr,
+                )
 
 
 def _print(df) -> None:
