@@ -286,12 +286,19 @@ def _leave_out_bad_rows(frames: dict, where: dict, spec: RecordSpec, fitted: lis
 
 def _too_many_bad_rows(path, frame, bad_of: dict, n_in: int, in_window) -> DataError:
     """The error for a file whose rows in the window with a bad cell in a fitted column are more
-    than :data:`MAX_BAD_ROWS` of them: each such column, most first, with its count and first line."""
+    than :data:`MAX_BAD_ROWS` of them: each such column, most first, with its count and its first
+    bad cell (line, and the cell as written)."""
+
+    def first(c: str) -> str:
+        i = int(np.flatnonzero(bad_of[c])[0])
+        raw = frame[c].to_numpy()[i]
+        kind = "not a number" if isinstance(raw, str) else "non-finite value"
+        cell = raw.item() if isinstance(raw, np.generic) else raw  # nan, not np.float64(nan)
+        return f"line {_line(frame, i)}: {kind} ({cell!r})"
+
     counts = sorted(((int(b.sum()), c) for c, b in bad_of.items() if b.any()), reverse=True)
-    cols = "; ".join(
-        f"column {c!r}: {k} (first at line {_line(frame, int(np.flatnonzero(bad_of[c])[0]))})"
-        for k, c in counts[:4]
-    ) + (f"; {len(counts) - 4} more column(s)" if len(counts) > 4 else "")
+    cols = "; ".join(f"column {c!r}: {k}, the first at {first(c)}" for k, c in counts[:4])
+    cols += f"; {len(counts) - 4} more column(s)" if len(counts) > 4 else ""
     return DataError(
         f"{path}: {n_in} of the window's {int(in_window.sum())} rows have an empty, non-numeric or "
         f"non-finite cell in a column the fit reads, more than the {MAX_BAD_ROWS:.0%} left out as missed "
@@ -400,6 +407,12 @@ def read_log(spec: RecordSpec, window: tuple[float, float] | None = None, arm=No
             )
     where = _locate(frames, spec, cols)
     excluded = {spec.torque[j] for j in range(len(spec.torque)) if not spec.used[j]}
+    for p, f in frames.items():  # a repeat in what is read (a cell elsewhere differs): the same sample
+        read = [c for c in (spec.time, *(c for c in cols if where[c] == p and c not in excluded)) if c in f]
+        again = f.duplicated(subset=read, keep="first")
+        if again.any():
+            frames[p] = f[~again]  # each row keeps its index: its line in the file (_line)
+            frames[p].attrs.update(f.attrs, repeats=f.attrs.get("repeats", 0) + int(again.sum()))
     frames, missed = _leave_out_bad_rows(frames, where, spec, [c for c in cols if c not in excluded], window)
     clocks = {p: _times(p, f, spec.time) * spec.time_scale for p, f in frames.items()}
     rows = {p: _window_rows(p, clocks[p], window) for p in frames}
@@ -458,7 +471,8 @@ def read_log(spec: RecordSpec, window: tuple[float, float] | None = None, arm=No
         *lenient,
         *_rate_notes(clocks, rows, T),
         *(
-            f"{p}: {f.attrs['repeats']} row(s) repeated whole (a logger's repeats) read once"
+            f"{p}: {f.attrs['repeats']} row(s) repeated (a logger's repeats: the same values in every "
+            "column read) read once"
             for p, f in frames.items()
             if f.attrs.get("repeats")
         ),

@@ -132,9 +132,9 @@ def test_bad_logs_name_file_line_column_and_remedy(tmp_path):
     with pytest.raises(
         DataError,
         match=r"pos.csv: 91 of the window's 1500 rows have an empty, non-numeric or non-finite cell in a "
-        r"column the fit reads, more than the 5% left out as missed samples \(column 'j_b/pos': 90 \(first "
-        r"at line 201\); column 'j_a/pos': 1 \(first at line 901\)\): is each column the one meant\? Else "
-        r"cut the window",
+        r"column the fit reads, more than the 5% left out as missed samples \(column 'j_b/pos': 90, the "
+        r"first at line 201: non-finite value \(nan\); column 'j_a/pos': 1, the first at line 901: "
+        r"non-finite value \(nan\)\): is each column the one meant\? Else cut the window",
     ):
         read_log(record_spec(table, NAMES, KINDS, "s"))
     # the NaN run outside the window is no problem
@@ -146,7 +146,17 @@ def test_bad_logs_name_file_line_column_and_remedy(tmp_path):
 
     _rewrite(p2, repeat)
     once = read_log(record_spec(table, NAMES, KINDS, "s"))
-    assert any("eff.csv: 1 row(s) repeated whole (a logger's repeats) read once" in n for n in once.notes)
+    said = "eff.csv: 1 row(s) repeated (a logger's repeats: the same values in every column read) read once"
+    assert any(said in n for n in once.notes)
+
+    def unread(lines):  # repeated, one cell differing in a column not read (j_c's effort, excluded)
+        cells = lines[599].split(",")
+        cells[3] = "nan"
+        lines.insert(600, ",".join(cells))
+
+    _rewrite(p2, unread)  # the same sample: read once (it was a "duplicated or reordered sample")
+    twice = read_log(record_spec(table, NAMES, KINDS, "s"))
+    assert any("eff.csv: 2 row(s) repeated" in n for n in twice.notes) and twice.t.size == once.t.size
 
     def conflict(lines):  # the same stamp with other values: which one is the sample? refused
         cells = lines[299].split(",")
@@ -722,7 +732,8 @@ def test_a_bad_cell_is_quoted_as_written(tmp_path):
 
     _rewrite(p1, edit)
     with pytest.raises(
-        DataError, match=r"pos.csv: line 101, column 'j_b/pos': non-finite value \(nan; 111 such"
+        DataError,
+        match=r"pos.csv: 111 of .*\(column 'j_b/pos': 111, the first at line 101: non-finite value \(nan\)\)",
     ) as exc:
         read_log(record_spec(_table(p1, p2, exclude=["j_c"]), NAMES, KINDS, "s"))
     assert "np.float64" not in str(exc.value)
@@ -844,7 +855,9 @@ def test_line_numbers_count_a_repeated_row_that_was_dropped(tmp_path):
             lines[i] = ",".join(cells)
 
     _rewrite(p1, more)
-    with pytest.raises(DataError, match=r"pos.csv: line 1002, column 'j_b/pos': not a number \('x'"):
+    with pytest.raises(
+        DataError, match=r"column 'j_b/pos': \d+, the first at line 1002: not a number \('x'\)"
+    ):
         read_log(record_spec(_table(p1, p2, exclude=["j_c"]), NAMES, KINDS, "s"))
 
 
