@@ -75,6 +75,8 @@ from adaptive_dd.record_checks import (
     _check_torque_scale,
     _check_units,
     _check_velocity_scale,
+    _line,
+    _too_many_bad_rows,
     velocity_gains,
 )
 from adaptive_dd.record_pieces import MIN_PIECE_SAMPLES, find_gaps, piece_spans, resampler, trim_gap_edges
@@ -184,12 +186,6 @@ def _decimal_commas(frame) -> bool:
     return bool(comma) and not any(v.str.contains(".", regex=False).any() for v in texts)
 
 
-def _line(frame, row: int) -> int:
-    """The file's line number of ``frame``'s row ``row`` (the header is line 1; repeated rows that
-    were dropped counted)."""
-    return int(frame.index[row]) + 2
-
-
 def _locate(frames: dict, spec: RecordSpec, wanted: list[str]) -> dict:
     """``{column: file}`` for every wanted column; a missing one is named with near matches."""
     where = {}
@@ -269,7 +265,9 @@ def _leave_out_bad_rows(frames: dict, where: dict, spec: RecordSpec, fitted: lis
         drop = bad & in_window | ~finite_t
         n_in = int(np.sum(bad & in_window))
         if n_in > MAX_BAD_ROWS * max(int(in_window.sum()), 1):
-            raise _too_many_bad_rows(p, f, {c: b & in_window for c, b in bad_of.items()}, n_in, in_window)
+            raise _too_many_bad_rows(
+                p, f, {c: b & in_window for c, b in bad_of.items()}, n_in, in_window, MAX_BAD_ROWS
+            )
         if not drop.any():
             out[p] = f
             continue
@@ -282,29 +280,6 @@ def _leave_out_bad_rows(frames: dict, where: dict, spec: RecordSpec, fitted: lis
             f"fit reads left out as samples the logger missed (line(s) {', '.join(map(str, lines))}{more})"
         )
     return out, notes
-
-
-def _too_many_bad_rows(path, frame, bad_of: dict, n_in: int, in_window) -> DataError:
-    """The error for a file whose rows in the window with a bad cell in a fitted column are more
-    than :data:`MAX_BAD_ROWS` of them: each such column, most first, with its count and its first
-    bad cell (line, and the cell as written)."""
-
-    def first(c: str) -> str:
-        i = int(np.flatnonzero(bad_of[c])[0])
-        raw = frame[c].to_numpy()[i]
-        kind = "not a number" if isinstance(raw, str) else "non-finite value"
-        cell = raw.item() if isinstance(raw, np.generic) else raw  # nan, not np.float64(nan)
-        return f"line {_line(frame, i)}: {kind} ({cell!r})"
-
-    counts = sorted(((int(b.sum()), c) for c, b in bad_of.items() if b.any()), reverse=True)
-    cols = "; ".join(f"column {c!r}: {k}, the first at {first(c)}" for k, c in counts[:4])
-    cols += f"; {len(counts) - 4} more column(s)" if len(counts) > 4 else ""
-    return DataError(
-        f"{path}: {n_in} of the window's {int(in_window.sum())} rows have an empty, non-numeric or "
-        f"non-finite cell in a column the fit reads, more than the {MAX_BAD_ROWS:.0%} left out as missed "
-        f"samples ({cols}): is each column the one meant? Else cut the window to avoid them ([record] "
-        "window or --window) or repair the file"
-    )
 
 
 def _times(path: Path, frame, col: str) -> Array:

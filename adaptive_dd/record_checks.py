@@ -125,3 +125,32 @@ def _degrees_hint(spec: RecordSpec, j: int) -> str:
     units[j] = "deg"
     listed = ", ".join(f'"{u}"' for u in units)
     return f'position_unit = [{listed}] (one per joint; a prismatic one\'s "m" or "mm")'
+
+
+def _line(frame, row: int) -> int:
+    """The file's line number of ``frame``'s row ``row`` (the header is line 1; repeated rows that
+    were dropped counted)."""
+    return int(frame.index[row]) + 2
+
+
+def _too_many_bad_rows(path, frame, bad_of: dict, n_in: int, in_window, limit: float) -> DataError:
+    """The error for a file whose rows in the window with a bad cell in a fitted column are more
+    than ``limit`` of them (:data:`adaptive_dd.record.MAX_BAD_ROWS`): each such column, most first,
+    with its count and its first bad cell (line, and the cell as written)."""
+
+    def first(c: str) -> str:
+        i = int(np.flatnonzero(bad_of[c])[0])
+        raw = frame[c].to_numpy()[i]
+        kind = "not a number" if isinstance(raw, str) else "non-finite value"
+        cell = raw.item() if isinstance(raw, np.generic) else raw  # nan, not np.float64(nan)
+        return f"line {_line(frame, i)}: {kind} ({cell!r})"
+
+    counts = sorted(((int(b.sum()), c) for c, b in bad_of.items() if b.any()), reverse=True)
+    cols = "; ".join(f"column {c!r}: {k}, the first at {first(c)}" for k, c in counts[:4])
+    cols += f"; {len(counts) - 4} more column(s)" if len(counts) > 4 else ""
+    return DataError(
+        f"{path}: {n_in} of the window's {int(in_window.sum())} rows have an empty, non-numeric or "
+        f"non-finite cell in a column the fit reads, more than the {limit:.0%} left out as missed "
+        f"samples ({cols}): is each column the one meant? Else cut the window to avoid them ([record] "
+        "window or --window) or repair the file"
+    )

@@ -83,7 +83,7 @@ def test_a_delay_beyond_the_run_is_ct_nominal():
 def test_bad_delay_is_named():
     with pytest.raises(ParameterError, match=r"controllers\.ct_oracle_late\.delay: .*got -0\.1"):
         make_controller("ct_oracle_late", options={"delay": -0.1})
-    hint = r"allowed: \['bandwidth', 'damping', 'label'\]; 'delay' is a setting of ct_oracle_late"
+    hint = r"allowed: \['bandwidth', 'damping', 'floor', 'label'\]; 'delay' is a setting of ct_oracle_late"
     with pytest.raises(ParameterError, match=hint):
         make_controller("ct_oracle", options={"delay": 0.01})
     whole = r"delay: 0\.0004 s is 0\.4 samples at T = 0\.001 s; give a whole number of samples"

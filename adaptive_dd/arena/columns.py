@@ -1,9 +1,10 @@
 """The leaderboard's columns (:func:`~adaptive_dd.arena.leaderboard.leaderboard`): each one's unit and
-meaning, as its CSV and JSON and the docs' table give them."""
+meaning, as its CSV and JSON and the docs' table give them; and which rows rank
+(:func:`contenders`)."""
 
 from __future__ import annotations
 
-__all__ = ["COLUMNS"]
+__all__ = ["COLUMNS", "contenders", "told_the_model"]
 
 COLUMNS: dict[str, tuple[str, str]] = {
     "scenario": ("-", "the scenario's name (a drawn arm: TEMPLATE_armSEED; pooled: population(N arms))"),
@@ -60,3 +61,19 @@ COLUMNS: dict[str, tuple[str, str]] = {
     "ee_orientation_rms_deg": ("deg", "mean over seeds of the tool frame's RMS orientation error"),
 }
 """Every column of the table: ``name -> (unit, meaning)``."""
+
+
+def contenders(df):
+    """Boolean mask of the rows whose laws are ranked against each other: those with a floor, less
+    the laws told the true model (``ct_oracle_late``: a measuring stick with a floor, not a law that
+    learns the robot)."""
+    return (df["floor"] != "") & ~told_the_model(df)
+
+
+def told_the_model(df):
+    """Boolean mask of the rows of laws told the true model (``ct_oracle_late``): shown beside the
+    contenders, with their floor, and ranked with none."""
+    from adaptive_dd.controllers.builtins import CONTROLLERS
+
+    told = df["controller"].map(lambda c: c in CONTROLLERS and CONTROLLERS[c].knows.startswith("true model"))
+    return told.astype(bool)

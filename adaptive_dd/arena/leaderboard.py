@@ -34,7 +34,7 @@ from pathlib import Path
 
 import numpy as np
 
-from adaptive_dd.arena.columns import COLUMNS
+from adaptive_dd.arena.columns import COLUMNS, contenders, told_the_model
 from adaptive_dd.benchmark.end_effector import EE_KEYS
 from adaptive_dd.benchmark.scenario import packaged_scenarios
 from adaptive_dd.errors import ParameterError
@@ -472,22 +472,6 @@ def leaderboard(
     df.attrs["compile_seconds"] = sum(d[1] for d in done)
     df.attrs["run_seconds"] = sum(d[2] for d in done)
     return df
-
-
-def contenders(df):
-    """Boolean mask of the rows whose laws are ranked against each other: those with a floor, less
-    the laws told the true model (``ct_oracle_late``: a measuring stick with a floor, not a law that
-    learns the robot)."""
-    return (df["floor"] != "") & ~told_the_model(df)
-
-
-def told_the_model(df):
-    """Boolean mask of the rows of laws told the true model (``ct_oracle_late``): shown beside the
-    contenders, with their floor, and ranked with none."""
-    from adaptive_dd.controllers.builtins import CONTROLLERS
-
-    told = df["controller"].map(lambda c: c in CONTROLLERS and CONTROLLERS[c].knows.startswith("true model"))
-    return told.astype(bool)
 
 
 def rms_rank(df):
