@@ -337,7 +337,7 @@ def _check_settings(src: str, points: list) -> None:
                 continue
             seen.add(key)
             fields = {f.name: getattr(sc, f.name) for f in dataclasses.fields(sc) if f.init}
-            errors = controller_setting_errors(fields)
+            errors = controller_setting_errors(fields, floors=False)  # its floor: judged on the list
             if errors:
                 where = ", ".join(f"{a} = {v}" for a, v in p.values)
                 raise SweepError(f"{src}: key 'grid.controller.{name}' (at {where}): {'; '.join(errors)}")

@@ -165,6 +165,9 @@ def run_benchmark(
             res = _run_two_link(scenario, clock, controllers, engine, keep_trajectories, seed_indices, on_run)
     res.compile_time = clock.compile_seconds
     res.wall_time = time.perf_counter() - t0 - res.compile_time
+    from adaptive_dd.controllers import CONTROLLERS
+
+    kind = "two_link" if scenario.closed_forms is not None else "chain"
     for name, run in res.runs.items():
         if run.floor is not None and run.floor not in res.runs:
             fix = (
@@ -172,6 +175,8 @@ def run_benchmark(
                 if controllers is None
                 else f"put a {run.floor!r} controller in controllers= too (its dict is what runs)"
             )
+            if run.floor in CONTROLLERS and not CONTROLLERS[run.floor].applies_to(kind):
+                fix = f"{run.floor} does not run on this arm: give {name} another floor (its table's floor)"
             warnings.warn(
                 f"run_benchmark: {name}'s floor {run.floor} did not run: its ratios to the floor are "
                 f"NaN and its limits are judged on another reference; {fix}",

@@ -119,51 +119,67 @@ def _check_delay(errs: list[str], name: str, delay, T: float) -> None:
             errs.append(str(exc))
 
 
-def _floor_errors(v: dict, opts: dict, only: str | None) -> list[str]:
-    """Each ``[controllers.NAME] floor`` names one of the run's controllers (by a name its results
-    may carry: a ``label``, a built-in's name, a plug-in's table name or declared ``name``), or is
-    ``false``."""
+def result_names(controllers, opts: dict, search=None) -> dict[str, str]:
+    """``{entry of run.controllers: the name its results carry}``: a ``label``, a built-in's name,
+    else a plug-in's declared ``name`` (its class name when it declares none or does not import)."""
     from pathlib import Path
 
-    from adaptive_dd.controllers.plugins import (
-        controller_label,
-        floor_setting,
-        load_controller_class,
-        table_name,
-    )
-    from adaptive_dd.errors import ParameterError
+    from adaptive_dd.controllers.plugins import controller_label, load_controller_class, table_name
 
-    src = Path(str(v.get("source", "")))
-    search = (src.parent, Path.cwd()) if src.is_file() else (Path.cwd(),)
-    names: list[str] = []
-    for c in v["controllers"]:
-        names.append(controller_label(c, opts.get(table_name(c))))
+    out = {}
+    for c in controllers:
+        out[c] = controller_label(c, opts.get(table_name(c)))
         if ":" in c and "label" not in opts.get(table_name(c), {}):
             try:  # the name the plug-in declares, which its results carry
-                declared = getattr(load_controller_class(c, search), "name", None)
-            except ParameterError:  # named by the run's own check
+                declared = getattr(load_controller_class(c, search or (Path.cwd(),)), "name", None)
+            except Exception:  # a plug-in that does not import: the run's own check names it
                 declared = None
-            if isinstance(declared, str) and declared not in names:
-                names.append(declared)
+            if isinstance(declared, str) and declared:
+                out[c] = declared
+    return out
+
+
+def _floor_errors(v: dict, opts: dict, only: str | None) -> list[str]:
+    """Each ``[controllers.NAME] floor`` names one of the run's controllers by the name its results
+    carry (:func:`result_names`), or is ``false``. Plug-ins are imported only when a floor is set."""
+    from pathlib import Path
+
+    from adaptive_dd.controllers.plugins import floor_setting, table_name
+    from adaptive_dd.errors import ParameterError
+
+    asked = [
+        c for c in v["controllers"] if (only is None or c == only) and "floor" in opts.get(table_name(c), {})
+    ]
+    if not asked:
+        return []
+    src = Path(str(v.get("source", "")))
+    names = result_names(v["controllers"], opts, (src.parent, Path.cwd()) if src.is_file() else None)
     errs = []
-    for c in v["controllers"]:
+    for c in asked:
         table = table_name(c)
-        if (only is not None and c != only) or "floor" not in opts.get(table, {}):
-            continue
         try:
             floor = floor_setting(table, opts[table]["floor"])
         except ParameterError as exc:
             errs.append(str(exc))
             continue
-        if floor is not None and floor not in names:
+        if floor is None or floor in names.values():
+            continue
+        if floor in names:  # an entry of run.controllers, by its spec: results carry another name
             errs.append(
-                f"controllers.{table}.floor: {floor!r} is not one of the run's controllers "
-                f"({', '.join(names)}); add it to run.controllers, or name one of them"
+                f"controllers.{table}.floor: name {floor!r} by the name its results carry, {names[floor]!r}"
+            )
+        else:
+            errs.append(
+                f"controllers.{table}.floor: {floor!r} is not one of the run's controllers (by the names "
+                f"their results carry: {', '.join(names.values())}); add it to run.controllers, or name one "
+                "of them"
             )
     return errs
 
 
-def controller_setting_errors(v: dict, only: str | None = None, file_limits: bool = True) -> list[str]:
+def controller_setting_errors(
+    v: dict, only: str | None = None, file_limits: bool = True, floors: bool = True
+) -> list[str]:
     """Each built-in controller with a ``[controllers.NAME]`` table built once, so a bad setting
     (a negative gain, a bandwidth the sample period cannot carry, an unknown key) is an error of
     the file, not of the run. ``bandwidth``, ``boost_bandwidth`` and ``damping`` have the bounds
@@ -175,7 +191,8 @@ def controller_setting_errors(v: dict, only: str | None = None, file_limits: boo
     errs: list[str] = []
     opts = {n: thaw(o) for n, o in v["controller_options"]}
     T = v["sample_period"]
-    errs += _floor_errors(v, opts, only)
+    if floors:  # (a sweep's cell runs one controller of the list: its floor is judged on the list)
+        errs += _floor_errors(v, opts, only)
     for name in v["controllers"] if only is None else [c for c in v["controllers"] if c == only]:
         if name in CONTROLLERS and "delay" in CONTROLLERS[name].settings:  # its default too
             default = CONTROLLERS[name].settings["delay"].chain  # the same on every arm
@@ -201,6 +218,7 @@ def controller_setting_errors(v: dict, only: str | None = None, file_limits: boo
         if len(errs) > n0:
             continue
         try:
+            o = {k: x for k, x in o.items() if k != "floor"}  # judged once, above (_floor_errors)
             make_controller(name, gains_for(v["arm"], v["bandwidth"], v["damping"]), o, arm=v["arm"])
         except (ValueError, TypeError, ArithmeticError) as exc:
             msg = str(exc)

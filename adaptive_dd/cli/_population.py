@@ -12,10 +12,10 @@ from pathlib import Path
 __all__ = ["run_arms"]
 
 
-def run_arms(args: argparse.Namespace, only_controllers) -> int:
+def run_arms(args: argparse.Namespace, only_controllers, with_floors) -> int:
     """Run the population, print per arm and pooled, write ``per_seed.csv`` (an ``arm_seed``
-    column first), ``arms.csv`` and ``population.json``. ``only_controllers(scenario, names)``:
-    ``benchmark``'s ``--controllers`` rule (the floors added)."""
+    column first), ``arms.csv`` and ``population.json``. ``only_controllers(scenario, names)`` and
+    ``with_floors(scenario)``: ``benchmark``'s ``--controllers`` rule and its floors added."""
     import json
 
     from adaptive_dd._numba_cache import announce_compilation
@@ -42,7 +42,7 @@ def run_arms(args: argparse.Namespace, only_controllers) -> int:
     seeds = range(args.first_arm, args.first_arm + args.arms)
     first = population_scenario(data, src, seeds[0], draw_swaps=args.draw_swaps)  # checks the template
     names = only_controllers(first, args.controllers) if args.controllers else first.controllers
-    names = _with_floors(first.with_controllers(names), src)
+    names = with_floors(first.with_controllers(names)).controllers  # each missing floor added, and said
     if "adaptive_ct" not in names:  # before any arm runs: the report is adaptive_ct's against its floor
         raise ScenarioError(
             f"{src}: --arms reports adaptive_ct against its floor per arm and pooled: list adaptive_ct in "
@@ -98,20 +98,3 @@ def run_arms(args: argparse.Namespace, only_controllers) -> int:
     written = [out / "per_seed.csv", out / "arms.csv", Path(args.json or out / "population.json")]
     print("wrote " + ", ".join(str(w) for w in written))
     return 0
-
-
-def _with_floors(sc, src: str) -> tuple[str, ...]:
-    """``sc``'s controllers with each one's floor that is missing added, and said once (as a run of
-    one arm adds them: :func:`adaptive_dd.cli.benchmark.with_floors`); judged on the first arm, as
-    a controller's floor is its class's choice or its table's, not the arm's."""
-    from adaptive_dd.benchmark.preflight import scenario_floors
-
-    names = list(sc.controllers)
-    for n, floor in scenario_floors(sc).items():
-        if floor not in names:
-            names.append(floor)
-            print(
-                f"{src}: run.controllers: {floor} added (the floor of {n}; list it to keep this quiet)",
-                file=sys.stderr,
-            )
-    return tuple(names)

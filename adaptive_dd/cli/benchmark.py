@@ -69,7 +69,7 @@ def run(args: argparse.Namespace) -> int:
             )
         from adaptive_dd.cli._population import run_arms
 
-        return run_arms(args, only_controllers)
+        return run_arms(args, only_controllers, with_floors)
     for opt in ("--draw-swaps", "--first-arm"):
         if opt in getattr(args, "given", ()):
             raise ParameterError(f"{opt}: applies to the drawn arms of --arms N; give --arms N too")
@@ -157,34 +157,29 @@ def limit_warnings(sc) -> list[str]:
 
 def with_floors(sc):
     """``sc`` with the floor of each of its controllers that lacks its own (``adaptive_ct``'s
-    ``ct_oracle``) added, and said: without it a controller has no ratio to its floor, and the
-    information and detection limits are judged on another reference."""
+    ``ct_oracle``) added, and said (:func:`~adaptive_dd.benchmark.preflight.missing_floors`): without
+    it a controller has no ratio to its floor, and the information and detection limits are judged
+    on another reference. A floor that cannot run on the arm is said, not added."""
     import dataclasses
 
-    from adaptive_dd.benchmark.preflight import scenario_floors
-    from adaptive_dd.controllers import CONTROLLERS
+    from adaptive_dd.benchmark.preflight import missing_floors
     from adaptive_dd.controllers.plugins import table_name
 
-    names = list(sc.controllers)
-    kind = "two_link" if sc.closed_forms is not None else "chain"
-    for n, floor in scenario_floors(sc).items():
-        if floor in names:
-            continue
-        if floor in CONTROLLERS and not CONTROLLERS[floor].applies_to(kind):  # it cannot run here
-            print(
-                f"{sc.source or 'scenario'}: {floor}, the floor of {n}, does not run on this arm (N-joint "
-                f"arms only): {n} is reported with no ratio to a floor; set [controllers.{table_name(n)}] "
-                "floor to one of the run's controllers to measure it against that one",
-                file=sys.stderr,
-            )
-            continue
-        names.append(floor)
+    add, cannot = missing_floors(sc)
+    where = sc.source or "scenario"
+    for floor, n in cannot:
         print(
-            f"{sc.source or 'scenario'}: run.controllers: {floor} added (the floor of {n}; "
-            "list it to keep this quiet)",
+            f"{where}: {floor}, the floor of {n}, does not run on this arm (N-joint arms only): {n} is "
+            f"reported with no ratio to a floor; set [controllers.{table_name(n)}] floor to one of the "
+            "run's controllers to measure it against that one",
             file=sys.stderr,
         )
-    return sc if len(names) == len(sc.controllers) else dataclasses.replace(sc, controllers=tuple(names))
+    for floor, n in add:
+        print(
+            f"{where}: run.controllers: {floor} added (the floor of {n}; list it to keep this quiet)",
+            file=sys.stderr,
+        )
+    return dataclasses.replace(sc, controllers=(*sc.controllers, *(f for f, _ in add))) if add else sc
 
 
 def only_controllers(sc, names: list[str]) -> tuple[str, ...]:
@@ -200,9 +195,13 @@ def only_controllers(sc, names: list[str]) -> tuple[str, ...]:
             f"--controllers: {', '.join(unknown)} not among {sc.source}'s controllers "
             f"{list(sc.controllers)}; name some of those"
         )
+    from adaptive_dd.benchmark.scenario_settings import result_names
+
     keep, floors = set(names), scenario_floors(sc)
+    carried = result_names(sc.controllers, {n: sc.options(n) for n, _ in sc.controller_options})
+    spec_of = {name: spec for spec, name in carried.items()}  # a floor named by its label: its entry
     for n in names:
-        floor = floors.get(n)
+        floor = spec_of.get(floors.get(n), floors.get(n))
         if floor is not None and floor not in keep and floor in sc.controllers:
             keep.add(floor)
             print(f"--controllers: {floor} added (the floor of {n})", file=sys.stderr)

@@ -54,15 +54,15 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _print_added_floors(sc) -> None:
-    """The floors ``adaptive-dd benchmark`` adds to the run (``cli.benchmark.with_floors``)."""
-    from adaptive_dd.benchmark.preflight import scenario_floors
+    """The floors ``adaptive-dd benchmark`` adds to the run (``cli.benchmark.with_floors``), and those
+    it cannot (built for the other kind of arm)."""
+    from adaptive_dd.benchmark.preflight import missing_floors
 
-    added: dict[str, list[str]] = {}
-    for name, floor in scenario_floors(sc).items():
-        if floor not in sc.controllers:
-            added.setdefault(floor, []).append(name)
-    for floor, of in added.items():
-        print(f"# the benchmark adds {floor}: the floor of {', '.join(of)} (list it in run.controllers)")
+    add, cannot = missing_floors(sc)
+    for floor, of in add:
+        print(f"# the benchmark adds {floor}: the floor of {of} (list it in run.controllers)")
+    for floor, of in cannot:
+        print(f"# {floor}, the floor of {of}, does not run on this arm: set its table's floor")
 
 
 def _print_torque_peaks(sc) -> None:
