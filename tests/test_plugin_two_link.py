@@ -172,7 +172,8 @@ def test_a_scenario_sets_a_plugins_floor_on_the_papers_arm(monkeypatch):
     [
         (
             "pdx",
-            "'pdx' is not one of the run's controllers (by the names their results carry: pd, pd_gravity_plugin)",
+            "'pdx' is not one of the run's controllers (by the names their results carry: pd, "
+            "pd_gravity_plugin)",
         ),
         (3, "or false for none; got 3"),
     ],
