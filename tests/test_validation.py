@@ -454,10 +454,14 @@ def test_simulate_and_identify_take_a_shipped_scenarios_name_as_benchmark_does(t
     --arms`` refused a shipped scenario's name that their own error listed."""
     from adaptive_dd.cli._common import load_arm
 
+    from adaptive_dd.cli import main
+
     monkeypatch.chdir(tmp_path)
     assert load_arm("vertical3_payload_exact").n_joints == 3
     with pytest.raises(ScenarioError, match=r"no such scenario file .*vertical3_payload_exact"):
         load_arm("vertical3_payload_exac")
+    # through the command: it read the name as a file again after the arm (`payload_swap: no such file`)
+    assert main(["simulate", "--arm", "payload_swap", "--duration", "0.5", "--out", str(tmp_path / "s")]) == 0
 
 
 def test_a_bandwidth_per_joint_on_the_closed_forms_says_where_it_runs():

@@ -82,6 +82,15 @@ def arm_label(args_arm: str | None, arm) -> str:
     return f"{kind} arm of {args_arm}"
 
 
+def arm_file(args) -> None:
+    """``args.arm`` as a file's path: a shipped scenario's name (``ur5_tool_swap``) resolved once,
+    for every later read of it (:func:`~adaptive_dd.benchmark.scenario.scenario_file`)."""
+    if getattr(args, "arm", None):
+        from adaptive_dd.benchmark.scenario import scenario_file
+
+        args.arm = str(scenario_file(args.arm))
+
+
 def load_arm(path: str | None, repair_inertia: bool = False, *, general: str | None = None):
     """The arm of a scenario file's ``[arm]`` and ``[plant]`` tables (SICE arm if ``path`` is None):
     the model its controllers are given (``[model] from`` when there is one); ``repair_inertia``

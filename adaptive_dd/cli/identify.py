@@ -15,6 +15,7 @@ from adaptive_dd.cli._common import (
     POS,
     add_command,
     add_window_option,
+    arm_file,
     arm_label,
     closed_form_view,
     load_arm,
@@ -198,6 +199,7 @@ def run(args: argparse.Namespace) -> int:
     """Refuse the other path's options, then identify on the arm's path."""
     from adaptive_dd.errors import DataError
 
+    arm_file(args)
     arm = load_arm(args.arm, args.repair_inertia)
     two = closed_form_view(arm)  # the paper's closed forms, or None
     if two is not None:

@@ -51,13 +51,14 @@ def add_parser(sub) -> None:
 def run(args: argparse.Namespace) -> int:
     """Predict each record's torque; print the error per joint, unfiltered and low-passed, per record
     when several and pooled; write both."""
-    from adaptive_dd.cli._common import load_arm
+    from adaptive_dd.cli._common import arm_file, load_arm
     from adaptive_dd.cli._records import read_records
     from adaptive_dd.identification.identified_model import load_identified_model
     from adaptive_dd.outputs import check_output_dir
 
     check_output_dir(args.out)  # before any work, as every command does
     m = load_identified_model(args.model, need_urdf=False)
+    arm_file(args)
     arm = load_arm(args.arm, m.repair_inertia)
     model = same_arm(m, arm, args.model, args.arm)
     _, rec, recs = read_records(args.arm, arm, args.data, args.window)

@@ -36,6 +36,7 @@ from adaptive_dd.cli._common import (
     SEEDS,
     SUBSTEPS,
     add_command,
+    arm_file,
     arm_label,
     closed_form_view,
     load_arm,
@@ -137,6 +138,7 @@ def run(args: argparse.Namespace) -> int:
         raise ParameterError(f"run too large: {est}; reduce --duration or --seeds")
     if est.large:
         print(f"estimate: {est}", file=sys.stderr)
+    arm_file(args)
     arm = load_arm(args.arm)
     two = closed_form_view(arm)  # the paper's closed forms, or None
     experiment = args.experiment or ("table2" if two is not None else "reference")
