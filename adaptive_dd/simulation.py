@@ -71,6 +71,18 @@ class Measurement(NamedTuple):
     qdd_d: Array
 
 
+def error_bound(tau: Array, q_d: Array, q: Array) -> Array:
+    """``tau (S, n)`` with NaN in the rows of the trials whose true joint angles ``q (S, n)`` are
+    beyond the benchmark's error bound of the reference ``q_d (n,)``
+    (:data:`~adaptive_dd.closed_loop.types.MAX_ERROR`): the paper's arm's plant fails a trial on a
+    NaN command and stops it there, as the compiled loop fails it. The stepping paths of the paper's
+    arm (:class:`Simulation`, the Gymnasium vector environment) apply it before each step."""
+    from adaptive_dd.closed_loop.types import MAX_ERROR
+
+    bad = np.any(np.abs(q_d - q) > MAX_ERROR, axis=-1)
+    return np.where(bad[:, None], np.nan, tau) if bad.any() else tau
+
+
 class _TwoLinkTrial:
     """One trial of the two-link arm: :class:`~adaptive_dd.plant.simulator.ArmSimulator`."""
 
@@ -269,10 +281,7 @@ class Simulation:
         if tau.shape != (n,):
             raise SignalError(f"tau must have shape ({n},) (one torque per joint), got {tau.shape}")
         if isinstance(self._trial, _TwoLinkTrial):  # the N-joint glue applies the error bound itself
-            from adaptive_dd.closed_loop.types import MAX_ERROR
-
-            if np.any(np.abs(self._ref[0][self._trial.k] - self._trial.truth()[0]) > MAX_ERROR):
-                tau = np.full(n, np.nan)  # the plant's rule for a bad command: failed, stopped there
+            tau = error_bound(tau[None], self._ref[0][self._trial.k], self._trial.truth()[0][None])[0]
         self.applied_torque, self.saturated = self._trial.step(tau)
         return self._measure()
 

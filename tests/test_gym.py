@@ -317,3 +317,23 @@ def test_a_step_after_termination_and_a_seed_beyond_the_scenarios_are_named():
         env.step(np.zeros(2))
     env.reset(seed=1)  # and a reset starts again
     env.step(np.zeros(2))
+
+
+def test_the_vector_environment_fails_a_spinning_trial_as_the_single_one_does():
+    """On the paper's arm the vector environment did not apply the benchmark's error bound: a policy
+    that spun the arm ran 10 rad off its reference while the single environment stopped it."""
+    from adaptive_dd.gym.vector import PayloadSwapVectorEnv
+
+    sc = _short("sice", duration=1.0)
+    single = make_env(sc, floor=None)
+    single.reset(seed=0)
+    k, terminated = 0, False
+    while not terminated:
+        terminated = single.step(np.array([1e4, -1e4]))[2]
+        k += 1
+    envs = PayloadSwapVectorEnv(sc, num_envs=2)
+    envs.reset(seed=0)
+    for j in range(k):
+        terminated = envs.step(np.tile([1e4, -1e4], (2, 1)))[2]
+        assert not terminated.any() or j == k - 1
+    assert terminated.all()

@@ -68,7 +68,7 @@ class _ChainBatch:
         self._at += 1
         return qm, qdm
 
-    def step(self, tau):
+    def step(self, tau, q_d=None):  # (the N-joint glue applies the error bound itself)
         from adaptive_dd.closed_loop.batches import apply_batch
 
         apply_batch(self.rc, self.io, self.pl, self.ts, self.acc, self.rec, self.k, tau)
@@ -106,8 +106,10 @@ class _TwoLinkBatch:
     def measure(self):
         return self.sim.measure()
 
-    def step(self, tau) -> None:
-        self.sim.step(np.asarray(tau, dtype=float))
+    def step(self, tau, q_d) -> None:
+        from adaptive_dd.simulation import error_bound
+
+        self.sim.step(error_bound(np.asarray(tau, dtype=float), q_d, self.sim.q))
 
     @property
     def q(self):
@@ -209,7 +211,7 @@ class PayloadSwapVectorEnv(gymnasium.vector.VectorEnv):
             )
         b = self._batch
         was_failed = b.failed.copy()
-        b.step(a)
+        b.step(a, self._ref[0][b.k])
         obs = self._observe()
         e = self._ref[0][b.k] - b.q
         reward = np.where(was_failed, 0.0, -np.sum(e * e, axis=1))
