@@ -252,7 +252,7 @@ def _leave_out_bad_rows(frames: dict, where: dict, spec: RecordSpec, fitted: lis
         t = _coerced(f, spec.time) * spec.time_scale
         finite_t = np.isfinite(t)
         bad = ~finite_t
-        bad_of = {}  # per fitted column of this file: its bad rows
+        bad_of = {spec.time: ~finite_t}  # per column read of this file: its bad rows (the time's first)
         for c in fitted:
             if where[c] == p:
                 bad_of[c] = ~np.isfinite(_coerced(f, c))
@@ -303,7 +303,7 @@ def _times(path: Path, frame, col: str) -> Array:
 
 def _window_rows(path: Path, t: Array, window) -> slice:
     lo, hi = (t[0], t[-1]) if window is None else window
-    if not lo < hi:
+    if window is not None and not lo < hi:
         raise DataError(f"{path}: the window [{lo:.10g}, {hi:.10g}] s: its start must be before its end")
     i0, i1 = int(np.searchsorted(t, lo)), int(np.searchsorted(t, hi, side="right"))
     if i1 - i0 < 20:

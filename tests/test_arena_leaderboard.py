@@ -414,3 +414,23 @@ def test_a_scenarios_own_table_is_said_not_to_reach_the_drawn_arms(tmp_path, cap
     err = capsys.readouterr().err
     assert "[controllers.pd] (label) sets pd for that scenario only" in err
     assert "population.toml's tables" in err and "adaptive_ct" not in err
+
+
+def test_a_law_with_another_floor_in_another_scenario_is_two_rows():
+    """A scenario's floor setting can give a law another floor in one scenario: the figure crashed
+    (its rows keyed by the law, its labels by law and floor) and the table named one floor for both."""
+    from adaptive_dd.arena.latex import latex_table
+    from adaptive_dd.arena.plot import plot_leaderboard
+
+    rows = [
+        dict(scenario=s, kind="scenario", controller="pd", floor=f, segment=1, payload_kg=1.0, seeds=2,
+             ratio_mean=m, ratio_p90=m, failures=0, rms_error_mrad=1.0, rms_rank=1.0,
+             floor_saturation_pct=0.0)
+        for s, f, m in [("a", "ct_nominal", 0.9), ("b", "ct_oracle", 40.0)]
+    ]  # fmt: skip
+    df = pd.DataFrame(rows)
+    labels = [t.get_text() for t in plot_leaderboard(df).axes[0].get_yticklabels()]
+    assert labels == ["pd / ct_nominal", "pd / ct_oracle"]
+    tex = latex_table(df, command="x")
+    assert "\\texttt{pd} & \\texttt{ct\\_nominal} & \\textbf{0.900} (0.900) & -- \\\\" in tex
+    assert "\\texttt{pd} & \\texttt{ct\\_oracle} & -- & \\textbf{40} (40) \\\\" in tex

@@ -295,7 +295,7 @@ def test_the_arenas_bootstrap_takes_a_seed_and_names_a_bad_generator():
     from adaptive_dd.arena.leaderboard import leaderboard
 
     with pytest.raises(
-        ParameterError, match=r"rng must be a numpy.random.Generator or a seed \(int\), got 'x'"
+        ParameterError, match=r"rng must be a numpy.random.Generator or a seed \(int >= 0\), got 'x'"
     ):
         leaderboard([], ["adaptive_ct"], rng="x", arms=1)
 

@@ -909,3 +909,25 @@ def test_a_reversed_window_is_named_as_reversed(tmp_path):
     spec = record_spec(_table(p1, p2), NAMES, KINDS, "s.toml")
     with pytest.raises(DataError, match=r"the window \[10, 5\] s: its start must be before its end"):
         read_log(spec, window=(10.0, 5.0))
+
+
+def test_bad_times_are_named_in_the_bad_cells_error_and_a_short_log_is_not_a_reversed_window(tmp_path):
+    """Empty stamps counted in the rows but listed under no column ('(): is each column the one
+    meant?'); a one-row log was told its window [0, 0] was reversed, a window nobody gave."""
+    p1, p2, *_ = _write_log(tmp_path, np.random.default_rng(9))
+
+    def no_time(lines):
+        for i in range(200, 300):
+            lines[i] = "," + lines[i].split(",", 1)[1]
+
+    _rewrite(p1, no_time)
+    with pytest.raises(
+        DataError, match=r"\(column 'stamp': 100, the first at line 201: non-finite value \(nan\)"
+    ):
+        read_log(record_spec(_table(p1, p2, exclude=["j_c"]), NAMES, KINDS, "s"))
+    one = tmp_path / "one.csv"
+    one.write_text("stamp,j_a/pos,j_b/pos,j_c/pos\n0.0,0.1,0.2,0.3\n")
+    eff = tmp_path / "one_eff.csv"
+    eff.write_text("stamp,j_a/eff,j_b/eff,j_c/eff\n0.0,0.1,0.2,0.3\n")
+    with pytest.raises(DataError, match=r"holds 1 samples .*need at least 20"):
+        read_log(record_spec(_table(one, eff, exclude=["j_c"]), NAMES, KINDS, "s"))

@@ -452,9 +452,8 @@ def test_a_shipped_scenario_loads_by_its_name_from_any_folder(tmp_path, monkeypa
 def test_simulate_and_identify_take_a_shipped_scenarios_name_as_benchmark_does(tmp_path, monkeypatch):
     """``--arm NAME`` (``simulate``, ``identify``: ``cli._common.load_arm``) and ``benchmark NAME
     --arms`` refused a shipped scenario's name that their own error listed."""
-    from adaptive_dd.cli._common import load_arm
-
     from adaptive_dd.cli import main
+    from adaptive_dd.cli._common import load_arm
 
     monkeypatch.chdir(tmp_path)
     assert load_arm("vertical3_payload_exact").n_joints == 3
@@ -476,3 +475,11 @@ def test_a_bandwidth_per_joint_on_the_closed_forms_says_where_it_runs():
         {"control": {"bandwidth": [40.0, 30.0]}, "arm": {"robot": "sice_arm", "general": True}}
     )
     assert sc.closed_forms is None and tuple(sc.bandwidth) == (40.0, 30.0)
+
+
+def test_a_bandwidth_per_joint_beside_a_wrong_arm_leaves_the_arm_to_its_own_error():
+    from adaptive_dd.benchmark.scenario import parse_scenario
+
+    with pytest.raises(ScenarioError) as info:
+        parse_scenario({"arm": {"robot": "ur5x"}, "control": {"bandwidth": [40.0] * 6}})
+    assert "'ur5x' is not a shipped robot" in str(info.value) and "closed forms" not in str(info.value)

@@ -4,7 +4,7 @@ meaning, as its CSV and JSON and the docs' table give them; and which rows rank
 
 from __future__ import annotations
 
-__all__ = ["COLUMNS", "contenders", "told_the_model"]
+__all__ = ["COLUMNS", "contenders", "references", "told_the_model"]
 
 COLUMNS: dict[str, tuple[str, str]] = {
     "scenario": ("-", "the scenario's name (a drawn arm: TEMPLATE_armSEED; pooled: population(N arms))"),
@@ -77,3 +77,9 @@ def told_the_model(df):
 
     told = df["controller"].map(lambda c: c in CONTROLLERS and CONTROLLERS[c].knows.startswith("true model"))
     return told.astype(bool)
+
+
+def references(df):
+    """Boolean mask of the rows of laws told the true model that have a floor (``ct_oracle_late``):
+    the tables and the figure show them beside the :func:`contenders`, marked, ranked with none."""
+    return told_the_model(df) & (df["floor"] != "")

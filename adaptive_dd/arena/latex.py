@@ -19,7 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
-from adaptive_dd.arena.leaderboard import contenders, told_the_model
+from adaptive_dd.arena.columns import contenders, references
 from adaptive_dd.arena.page import _columns, command_of, table_rows
 
 __all__ = ["latex_table", "write_latex"]
@@ -61,7 +61,7 @@ def latex_table(df, caption: str | None = None, command: str | None = None) -> s
     \\texttt{adaptive\\_ct} & \\texttt{ct\\_oracle} & \\textbf{1.013} (1.070) \\\\
     """
     cols = _columns(df)
-    told = told_the_model(df) & (df["floor"] != "")  # a law told the model, with a floor: shown, not ranked
+    told = references(df)  # shown, not ranked
     ranked = df[contenders(df) | told]
     caption = caption or (
         "Ratio of each law's RMS tracking error to its floor's (the same law given the true model), "

@@ -129,8 +129,9 @@ def _with_floors(sc, names: Sequence[str]) -> tuple[tuple[str, ...], dict, dict]
     for name in names:
         try:
             label, ctrl = scenario_controller(sc, name)  # results carry the label (a plug-in's class)
-        except ParameterError as exc:
-            raise ParameterError(f"leaderboard: {sc.source}: {exc}") from None
+        except ParameterError as exc:  # named by its file once (a plug-in's table names it already)
+            where = "" if str(exc).startswith(str(sc.source)) else f"{sc.source}: "
+            raise ParameterError(f"leaderboard: {where}{exc}") from None
         floor = floors[label] = getattr(ctrl, "floor", "ct_oracle")
         if floor is not None and floor not in run and floor not in missing:
             try:
@@ -436,9 +437,10 @@ def leaderboard(
         raise ParameterError(f"leaderboard: arms must be an integer >= 0, got {arms!r}")
     if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
         raise ParameterError(f"leaderboard: workers must be an integer >= 1, got {workers!r}")
-    if isinstance(rng, bool) or not (rng is None or isinstance(rng, np.random.Generator | int | np.integer)):
+    seed_ok = isinstance(rng, int | np.integer) and not isinstance(rng, bool) and rng >= 0
+    if not (rng is None or isinstance(rng, np.random.Generator) or seed_ok):
         raise ParameterError(
-            f"leaderboard: rng must be a numpy.random.Generator or a seed (int), got {rng!r}"
+            f"leaderboard: rng must be a numpy.random.Generator or a seed (int >= 0), got {rng!r}"
         )
     rng = np.random.default_rng(0 if rng is None else rng)  # a seed, or the generator itself
     specs = shipped_scenarios() if scenarios is None else scenarios

@@ -145,12 +145,12 @@ def _head(df, sc: str, seg: int) -> str:
 def table_rows(ranked, cols):
     """Per law of ``ranked`` (in its order): ``(controller, floor, [row or None per column])``, the
     table's row (a pandas Series) of each column ``(scenario, segment)`` of :func:`_columns`."""
-    for ctrl, g in ranked.groupby("controller", sort=False):
+    for (ctrl, floor), g in ranked.groupby(["controller", "floor"], sort=False):  # a law per floor
         rows = []
         for s, seg in cols:
             r = g[(g["scenario"] == s) & (g["segment"] == seg)]
             rows.append(None if r.empty else r.iloc[0])
-        yield ctrl, g["floor"].iloc[0], rows
+        yield ctrl, floor, rows
 
 
 def _table_block(df) -> str:

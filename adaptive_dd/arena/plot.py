@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from adaptive_dd.arena.leaderboard import contenders, told_the_model
+from adaptive_dd.arena.columns import contenders, references
 
 __all__ = ["FLOOR_SATURATED_PCT", "RATIO_SCALE", "plot_leaderboard"]
 
@@ -29,15 +29,16 @@ def plot_leaderboard(df):
     from matplotlib.figure import Figure
     from matplotlib.ticker import FixedLocator, FuncFormatter, NullLocator
 
-    told = told_the_model(df) & (df["floor"] != "")  # a law told the model, with a floor: a reference
+    told = references(df)
     ranked = df[contenders(df) | told]
     cols = list(dict.fromkeys(zip(ranked["scenario"], ranked["segment"], ranked["payload_kg"], strict=True)))
-    rows = list(dict.fromkeys(ranked["controller"]))
+    rows = list(dict.fromkeys(zip(ranked["controller"], ranked["floor"], strict=True)))  # a law per floor
     z = np.full((len(rows), len(cols)), np.nan)
     fig = Figure(figsize=(1.0 * len(cols) + 3.5, 0.55 * len(rows) + 2.5), layout="constrained")
     ax = fig.subplots()
     for _, r in ranked.iterrows():
-        i, j = rows.index(r["controller"]), cols.index((r["scenario"], r["segment"], r["payload_kg"]))
+        i = rows.index((r["controller"], r["floor"]))
+        j = cols.index((r["scenario"], r["segment"], r["payload_kg"]))
         z[i, j] = r["ratio_mean"]
         text = "" if not np.isfinite(r["ratio_mean"]) else f"{r['ratio_mean']:.2f}\n{r['ratio_p90']:.2f}"
         if r["failures"]:
@@ -54,10 +55,7 @@ def plot_leaderboard(df):
     reference = set(ranked.loc[told[ranked.index], "controller"])
     ax.set_yticks(
         range(len(rows)),
-        [
-            f"{c} / {f}" + (" (told the model; a reference)" if c in reference else "")
-            for c, f in dict.fromkeys(zip(ranked["controller"], ranked["floor"], strict=True))
-        ],
+        [f"{c} / {f}" + (" (told the model; a reference)" if c in reference else "") for c, f in rows],
     )
     ax.set_title("RMS error / floor's, per seed: mean (p90 below); x failures, * floor saturated", fontsize=8)
     bar = fig.colorbar(im, ax=ax, label="mean ratio to floor")

@@ -128,6 +128,8 @@ def _check_control(e: list, v: dict, T_ok: bool) -> None:
     if isinstance(bw, tuple) and _serial(v):  # one per joint, N-joint arms only
         bw_ok = _nums(e, "control.bandwidth", bw, 0, 1e5, n=_n_joints(v), lo_open=True)
         bw = max(bw) if bw_ok else bw
+    elif isinstance(bw, tuple) and v.get("arm") is None:  # the arm is wrong, and said: not judged here
+        bw_ok = False
     elif isinstance(bw, tuple):  # one per joint on the paper's closed forms: they take one bandwidth
         e.append(
             f"control.bandwidth: one number on the paper's two-link closed forms, got {_short(list(bw))} "

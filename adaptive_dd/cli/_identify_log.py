@@ -350,10 +350,13 @@ def _model_error(model, fit, rec, torque_held: bool, momentum):
     try:
         return model_error_variance(model, fit, rec.q, rec.qd, rec.tau, torque_held, momentum)
     except DataError as exc:
-        raise DataError(
-            f"{rec.source}: {exc} (the model error's estimate at {max(FILTER_FACTORS):g} tau_f = "
+        why = (
+            f" (the model error's estimate at {max(FILTER_FACTORS):g} tau_f = "
             f"{max(FILTER_FACTORS) * fit.tau_f:g} s starts later in each piece)"
-        ) from None
+            if "a longer window is needed" in str(exc)
+            else ""
+        )
+        raise DataError(f"{rec.source}: {exc}{why}") from None
 
 
 def _read(args, arm, files):

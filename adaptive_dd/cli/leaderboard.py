@@ -84,7 +84,13 @@ def run(args: argparse.Namespace) -> int:
     """Run the leaderboard and write its four files."""
     import numpy as np
 
-    from adaptive_dd.arena.leaderboard import COLUMNS, DEFAULT_CONTROLLERS, leaderboard, shipped_scenarios
+    from adaptive_dd.arena.leaderboard import (
+        COLUMNS,
+        DEFAULT_CONTROLLERS,
+        _template,
+        leaderboard,
+        shipped_scenarios,
+    )
     from adaptive_dd.outputs import check_output_dir
 
     for opt in ("--template", "--first-arm"):
@@ -124,7 +130,7 @@ def run(args: argparse.Namespace) -> int:
         "command": command,  # as typed: run it from the same folder to reproduce the table
         "scenarios": scenarios if scenarios is not None else [str(p) for p in shipped_scenarios()],
         "controllers": controllers,
-        "template": args.template,
+        "template": _template(args.template)[1] if args.arms else None,  # the one the arms were drawn on
         "bootstrap_seed": args.bootstrap_seed,
         "columns": {k: {"unit": u, "meaning": m} for k, (u, m) in COLUMNS.items()},
         "seeds": args.seeds,

@@ -121,6 +121,7 @@ def scenario_controller(scenario, spec: str) -> tuple[str, Controller]:
     src = Path(scenario.source)
     search = (src.parent, Path.cwd()) if src.is_file() else (Path.cwd(),)
     opts = scenario.options(controller_label(spec)) or scenario.options(spec)
+    in_file = bool(opts)  # the plug-in's table is the file's (not settings handed in code)
     label = controller_label(spec, opts)
     if ":" in spec:
         bw = opts.get("bandwidth", scenario.bandwidth)
@@ -133,7 +134,7 @@ def scenario_controller(scenario, spec: str) -> tuple[str, Controller]:
     try:
         ctrl = make_controller(spec, g, opts, arm=arm, search=search, scenario=scenario)
     except ParameterError as exc:  # a plug-in's table is checked here, not when the file is read: name it
-        if ":" not in spec or src.name == "" or str(exc).startswith(str(src)) or not src.is_file():
+        if ":" not in spec or not in_file or str(exc).startswith(str(src)) or not src.is_file():
             raise
         raise ParameterError(f"{src}: {exc}") from None
     if scenario.closed_forms is None and hasattr(ctrl, "state_task"):  # adaptive_ct's boost: the task's room
