@@ -308,10 +308,10 @@ def scenario_floors(scenario) -> dict[str, str]:
     return out
 
 
-def missing_floors(scenario) -> tuple[list[tuple[str, str]], list[tuple[str, str]]]:
+def missing_floors(scenario) -> tuple[dict[str, list[str]], dict[str, list[str]]]:
     """The floors the scenario's controllers name that its run lacks, by the names results carry:
-    ``(add, cannot)``, each a list of ``(floor, controller)``; ``add`` the built-ins a benchmark
-    adds to the run, ``cannot`` those built for the other kind of arm (the controller is then
+    ``(add, cannot)``, each ``{floor: [the controllers it is the floor of]}``; ``add`` the built-ins
+    a benchmark adds to the run, ``cannot`` those built for the other kind of arm (the controller is then
     reported with no ratio). A floor no controller of the run carries and no built-in has is in
     neither: the run says its ratios are NaN."""
     from adaptive_dd.benchmark.scenario_settings import result_names
@@ -320,11 +320,11 @@ def missing_floors(scenario) -> tuple[list[tuple[str, str]], list[tuple[str, str
     opts = {n: scenario.options(n) for n, _ in scenario.controller_options}
     carried = set(result_names(scenario.controllers, opts).values())
     kind = "two_link" if scenario.closed_forms is not None else "chain"
-    add, cannot = [], []
+    add: dict[str, list[str]] = {}
+    cannot: dict[str, list[str]] = {}
     for name, floor in scenario_floors(scenario).items():
-        if floor in carried or floor not in CONTROLLERS or any(f == floor for f, _ in add):
-            continue
-        (add if CONTROLLERS[floor].applies_to(kind) else cannot).append((floor, name))
+        if floor not in carried and floor in CONTROLLERS:
+            (add if CONTROLLERS[floor].applies_to(kind) else cannot).setdefault(floor, []).append(name)
     return add, cannot
 
 

@@ -167,19 +167,21 @@ def with_floors(sc):
 
     add, cannot = missing_floors(sc)
     where = sc.source or "scenario"
-    for floor, n in cannot:
+    for floor, of in cannot.items():
+        tables = ", ".join(f"[controllers.{table_name(n)}]" for n in of)
         print(
-            f"{where}: {floor}, the floor of {n}, does not run on this arm (N-joint arms only): {n} is "
-            f"reported with no ratio to a floor; set [controllers.{table_name(n)}] floor to one of the "
-            "run's controllers to measure it against that one",
+            f"{where}: {floor}, the floor of {', '.join(of)}, does not run on this arm (N-joint arms "
+            f"only): reported with no ratio to a floor; set the floor of {tables} to one of the run's "
+            "controllers to measure against that one",
             file=sys.stderr,
         )
-    for floor, n in add:
+    for floor, of in add.items():
         print(
-            f"{where}: run.controllers: {floor} added (the floor of {n}; list it to keep this quiet)",
+            f"{where}: run.controllers: {floor} added (the floor of {', '.join(of)}; list it to keep "
+            "this quiet)",
             file=sys.stderr,
         )
-    return dataclasses.replace(sc, controllers=(*sc.controllers, *(f for f, _ in add))) if add else sc
+    return dataclasses.replace(sc, controllers=(*sc.controllers, *add)) if add else sc
 
 
 def only_controllers(sc, names: list[str]) -> tuple[str, ...]:

@@ -59,10 +59,10 @@ def _print_added_floors(sc) -> None:
     from adaptive_dd.benchmark.preflight import missing_floors
 
     add, cannot = missing_floors(sc)
-    for floor, of in add:
-        print(f"# the benchmark adds {floor}: the floor of {of} (list it in run.controllers)")
-    for floor, of in cannot:
-        print(f"# {floor}, the floor of {of}, does not run on this arm: set its table's floor")
+    for floor, of in add.items():
+        print(f"# the benchmark adds {floor}: the floor of {', '.join(of)} (list it in run.controllers)")
+    for floor, of in cannot.items():
+        print(f"# {floor}, the floor of {', '.join(of)}, does not run on this arm: set their tables' floor")
 
 
 def _print_torque_peaks(sc) -> None:
