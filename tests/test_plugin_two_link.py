@@ -199,7 +199,9 @@ def test_a_floor_that_cannot_run_on_the_papers_arm_is_left_out_and_said(monkeypa
     assert (
         "pd_gravity_oracle, the floor of pd_gravity_plugin:PDGravityPlugin, does not run on this arm" in err
     )
-    assert "set the floor of [controllers.PDGravityPlugin]" in err and "ct_oracle added (the floor of pd" in err
+    assert (
+        "set the floor of [controllers.PDGravityPlugin]" in err and "ct_oracle added (the floor of pd" in err
+    )
 
 
 def test_a_plugins_bad_setting_names_the_scenario_file(monkeypatch, tmp_path):
