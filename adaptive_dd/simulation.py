@@ -349,7 +349,12 @@ def run_trial(controller, scenario: Scenario | None = None, seed_index: int = 0,
     Returns
     -------
     BenchmarkResult
-        A benchmark result of one controller and one trial.
+        A benchmark result of one controller and one trial (a trial that diverged is a result).
+
+    Raises
+    ------
+    SignalError
+        The controller raised (its error, with where: a two-link class on an N-joint arm, say).
 
     Examples
     --------
@@ -376,6 +381,8 @@ def run_trial(controller, scenario: Scenario | None = None, seed_index: int = 0,
     with warnings.catch_warnings():  # the floor's warning speaks of run_benchmark's controllers=: said below
         warnings.filterwarnings("ignore", message=FLOOR_NOT_RUN)
         res = run_benchmark(sc, progress=False, controllers={label: controller}, seed_indices=[seed_index])
+    if res.runs[label].error:  # the controller raised: one trial asked for, no result to hand back
+        raise SignalError(f"run_trial: {label} on trial {seed_index}: {res.runs[label].error}")
     floor = res.runs[label].floor
     if floor is not None and floor not in res.runs:
         warnings.warn(

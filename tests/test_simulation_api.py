@@ -387,3 +387,24 @@ def test_a_path_a_string_or_a_number_where_a_list_or_a_scenario_goes_is_named():
         run_benchmark(load_scenario(), seed_indices=3)
     with pytest.raises(ParameterError, match=r"controllers is a list, got the one 'adaptive_ct'"):
         leaderboard([], controllers="adaptive_ct", arms=1)
+
+
+def test_run_trial_raises_what_the_controller_raised():
+    """A two-link class on an N-joint arm failed at t = 0 and run_trial handed back a result of NaN
+    without a word (the library page's own example on a user's arm)."""
+    import dataclasses
+
+    from adaptive_dd import load_scenario, make_controller, run_trial
+    from adaptive_dd.controllers import ComputedTorque
+    from adaptive_dd.errors import SignalError
+
+    sc = load_scenario("vertical3_payload_exact")
+    sc = dataclasses.replace(
+        sc, duration=0.5, swap_times=(0.25,), swap_masses=(1.0,), swap_com=(), swap_inertia=()
+    )
+    with pytest.raises(
+        SignalError, match=r"run_trial: ct_oracle on trial 1: ValueError in command at t = 0.000 s"
+    ):
+        run_trial(ComputedTorque(oracle=True), sc, seed_index=1)
+    res = run_trial(make_controller("ct_oracle", arm=sc.arm), sc, seed_index=1)  # the page's way
+    assert not res.runs["ct_oracle"].failed.any()
