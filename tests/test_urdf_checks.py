@@ -209,3 +209,14 @@ def test_a_massless_frame_without_inertia_is_kept_too(tmp_path):
     text = '<link name="tool0"><inertial><origin xyz="0 0 0"/><mass value="0"/></inertial></link>'
     robot = read_urdf(_mutant(tmp_path, '<link name="tool0"/>', text), "tool0")
     assert any("'tool0': mass 0 kg and no inertia: a massless frame" in n for n in robot.notes)
+
+
+def test_a_limit_without_stops_and_a_very_heavy_link_are_kept_with_a_note(tmp_path):
+    """A revolute joint's <limit> without lower and upper was read as unlimited without a word (the
+    URDF format's default is 0, as Pinocchio reads it); a 2500 kg link passed without a note, which
+    the errors page promised."""
+    old = '<limit lower="-6.283185307179586" upper="6.283185307179586" effort="150.0"'
+    robot = read_urdf(_mutant(tmp_path, old, '<limit effort="150.0"'), "tool0")
+    assert any("<limit> without lower and upper: read as no position limits" in n for n in robot.notes)
+    heavy = read_urdf(_mutant(tmp_path, '<mass value="3.7"/>', '<mass value="2500"/>'), "tool0")
+    assert any("mass '2500' kg is above 500 kg: a heavy base, or a unit error?" in n for n in heavy.notes)

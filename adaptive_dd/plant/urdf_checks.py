@@ -41,6 +41,7 @@ __all__ = [
     "MAX_OFFSET",
     "MAX_POSITION",
     "MAX_VELOCITY",
+    "HEAVY_LINK_MASS",
     "TINY_MASS",
     "UrdfWarning",
     "check_values",
@@ -50,6 +51,7 @@ __all__ = [
 
 MAX_LINK_MASS = 1e4  # kg: ten tonnes, beyond the heaviest industrial robot's heaviest link
 TINY_MASS = 1e-6  # kg: a milligram, below any real link (a massless frame leaves <inertial> out)
+HEAVY_LINK_MASS = 500.0  # kg: above an arm's links ([arm] bounds), a vendor's heavy base: a note
 MAX_OFFSET = 10.0  # m: a joint origin, a centre of mass, a radius of gyration
 MAX_EFFORT = 1e5  # N m or N: as a scenario's [arm] torque_limit
 MAX_VELOCITY = 1e3  # rad/s or m/s: about 10 000 rpm at the joint
@@ -166,6 +168,11 @@ def _check_link(path: Path, link: ET.Element, notes: list[str]) -> None:
         )
     if mass < TINY_MASS:
         notes.append(f"link '{name}': mass {raw!r} kg is below {TINY_MASS:g} kg (kept)")
+    elif mass > HEAVY_LINK_MASS:
+        notes.append(
+            f"link '{name}': mass {raw!r} kg is above {HEAVY_LINK_MASS:g} kg: a heavy base, or a unit error? "
+            "(kept)"
+        )
     el = inertial.find("inertia")
     if el is None:
         return  # read_urdf names it
@@ -256,7 +263,12 @@ def _check_joint(path: Path, joint: ET.Element, on_chain: bool, notes: list[str]
     if vel is not None and not 0 < vel <= MAX_VELOCITY:
         raise UrdfError(
             f"{path}: {where} <limit>: velocity = {lim.get('velocity')!r} must be in (0, {MAX_VELOCITY:g}] "
-            "(rad/s or m/s; leave the attribute out when the data sheet gives none)"
+            "(rad/s or m/s: the data sheet's joint speed)"
+        )
+    if kind == "revolute" and lim is not None and values["lower"] is None and values["upper"] is None:
+        notes.append(  # the URDF's default is 0 (Pinocchio reads [0, 0]); a joint without stops is continuous
+            f"joint '{name}': <limit> without lower and upper: read as no position limits (the URDF format's "
+            "default is 0 for both); give the stops, or make the joint continuous"
         )
     for k in ("lower", "upper"):
         v = values[k]

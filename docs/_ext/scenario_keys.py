@@ -44,7 +44,7 @@ MEANING = {
     "about the payload frame's z axis; on the two-link arm at the tip).",
     "payload.com": "URDF arm: payload centre of mass in the payload frame [m], 3 numbers.",
     "payload.inertia": "URDF arm: payload inertia about its centre of mass, `[Ixx,"
-    " Iyy, Izz, Ixy, Ixz, Iyz]` or a 3 x 3 matrix [kg m^2] (a rigid body's: principal moments"
+    " Iyy, Izz, Ixy, Ixz, Iyz]` [kg m^2] (a rigid body's: principal moments"
     " >= 0, each at most the sum of the other two).",
     "noise.position_variance": "Per joint, variance of the measured position's noise [rad^2].",
     "noise.velocity_variance": "Per joint, variance of the measured velocity's noise [(rad/s)^2].",
