@@ -35,13 +35,13 @@ import numpy as np
 from adaptive_dd.errors import UrdfError
 
 __all__ = [
+    "HEAVY_LINK_MASS",
     "MAX_EFFORT",
     "MAX_FRICTION",
     "MAX_LINK_MASS",
     "MAX_OFFSET",
     "MAX_POSITION",
     "MAX_VELOCITY",
-    "HEAVY_LINK_MASS",
     "TINY_MASS",
     "UrdfWarning",
     "check_values",
