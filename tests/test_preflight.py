@@ -314,3 +314,16 @@ def test_the_centre_of_mass_line_says_when_no_law_estimates_the_payload():
     c["adaptive_ct"] = {"segments": [{}, {"com_learning_time": 0.02}]}
     line = _com_information_line(c, 1, seg, info, ["adaptive_ct"], {3})
     assert line.endswith("information limit 8 ms; adaptive_ct 20 ms (median over 3 seed(s))")
+
+
+def test_a_ratio_below_one_of_adaptive_ct_is_said_to_be_its_boost():
+    """A user's arm read adaptive_ct at 0.85x its floor, 'met', without a word that its law differs
+    from its floor's by a gain boost after each alarm."""
+    from adaptive_dd.benchmark.report import _seed_tables
+
+    st = {"mean": 0.85, "median": 0.85, "p90": 0.9, "max": 0.95, "ci95": (0.8, 0.9), "worst_seed": 1}
+    ctrls = {"adaptive_ct": {"floor": "ct_oracle", "segments": [{"ratio_to_floor": st}]}}
+    lines = _seed_tables(ctrls, "head")
+    assert any("a ratio below 1 is that boost, not a model better than the true one" in x for x in lines)
+    st["mean"] = 1.02
+    assert not any("boost" in x for x in _seed_tables(ctrls, "head"))
