@@ -156,6 +156,7 @@ def _with_floor(floor, controllers=("pd", "pd_gravity_plugin:PDGravityPlugin")):
     return parse_scenario(data, str(SCENARIO), name="plugin_floor")
 
 
+@pytest.mark.slow  # a run of the plug-in's two-link loop (the CLI's floor test runs in the default set)
 def test_a_scenario_sets_a_plugins_floor_on_the_papers_arm(monkeypatch):
     """``[controllers.NAME] floor`` replaces the class's own (the example's ``pd_gravity_oracle``
     runs on N-joint arms only): the wrapped plug-in's run carries it, and with no gravity in the
