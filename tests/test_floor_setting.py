@@ -24,6 +24,7 @@ mass = 1.0
 """
 
 
+@pytest.mark.slow  # a cold compile of its own path; the rest of the file covers the check
 def test_a_floor_named_by_its_label_runs_from_the_command_line(tmp_path, capsys):
     """The command line compared the floor with run.controllers' entries: it added 'oracle' as a
     controller to run, then failed on it as unknown."""

@@ -389,6 +389,7 @@ def test_a_path_a_string_or_a_number_where_a_list_or_a_scenario_goes_is_named():
         leaderboard([], controllers="adaptive_ct", arms=1)
 
 
+@pytest.mark.slow  # a cold compile of its own path; the rest of the file covers the check
 def test_run_trial_raises_what_the_controller_raised():
     """A two-link class on an N-joint arm failed at t = 0 and run_trial handed back a result of NaN
     without a word (the library page's own example on a user's arm)."""

@@ -449,6 +449,7 @@ def test_a_shipped_scenario_loads_by_its_name_from_any_folder(tmp_path, monkeypa
         load_scenario("ur5_tool_swp")
 
 
+@pytest.mark.slow  # a cold compile of its own path; the rest of the file covers the check
 def test_simulate_and_identify_take_a_shipped_scenarios_name_as_benchmark_does(tmp_path, monkeypatch):
     """``--arm NAME`` (``simulate``, ``identify``: ``cli._common.load_arm``) and ``benchmark NAME
     --arms`` refused a shipped scenario's name that their own error listed."""
