@@ -63,6 +63,7 @@ def latex_table(df, caption: str | None = None, command: str | None = None) -> s
     cols = _columns(df)
     told = references(df)  # shown, not ranked
     ranked = df[contenders(df) | told]
+    reference = set(df.loc[told, "controller"])
     caption = caption or (
         "Ratio of each law's RMS tracking error to its floor's (the same law given the true model), "
         "mean over seeds (p90); bold: the lowest RMS error of the column; $\\times N$: N trials failed"
@@ -93,7 +94,7 @@ def latex_table(df, caption: str | None = None, command: str | None = None) -> s
             mean = f"\\textbf{{{mean}}}" if r.get("rms_rank") == 1 else mean
             fail = f" $\\times {int(r['failures'])}$" if r["failures"] else ""
             cells.append(f"{mean} ({_num(r['ratio_p90'])}){fail}")
-        mark = "$^\\dagger$" if told[ranked.index[ranked["controller"] == ctrl]].any() else ""
+        mark = "$^\\dagger$" if ctrl in reference else ""
         lines.append(
             f"\\texttt{{{_tex(ctrl)}}}{mark} & \\texttt{{{_tex(floor)}}} & " + " & ".join(cells) + " \\\\"
         )

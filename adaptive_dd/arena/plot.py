@@ -52,7 +52,7 @@ def plot_leaderboard(df):
         lo, hi = min(lo, max(finite.min(), 1e-3)), max(hi, finite.max())
     im = ax.imshow(z, cmap="RdYlGn_r", norm=LogNorm(lo, hi), aspect="auto")
     ax.set_xticks(range(len(cols)), [f"{s}:{g} ({m:g} kg)" for s, g, m in cols], rotation=60, ha="right")
-    reference = set(ranked.loc[told[ranked.index], "controller"])
+    reference = set(df.loc[told, "controller"])
     ax.set_yticks(
         range(len(rows)),
         [f"{c} / {f}" + (" (told the model; a reference)" if c in reference else "") for c, f in rows],

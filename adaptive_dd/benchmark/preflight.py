@@ -316,10 +316,11 @@ def missing_floors(scenario) -> tuple[dict[str, list[str]], dict[str, list[str]]
     neither: the run says its ratios are NaN."""
     from adaptive_dd.benchmark.scenario_settings import result_names
     from adaptive_dd.controllers import CONTROLLERS
+    from adaptive_dd.plant.kind import run_kind
 
     opts = {n: scenario.options(n) for n, _ in scenario.controller_options}
     carried = set(result_names(scenario.controllers, opts).values())
-    kind = "two_link" if scenario.closed_forms is not None else "chain"
+    kind = run_kind(scenario)
     add: dict[str, list[str]] = {}
     cannot: dict[str, list[str]] = {}
     for name, floor in scenario_floors(scenario).items():

@@ -183,15 +183,11 @@ def _seed_tables(ctrls: dict, head: str, caveat: str | None = None) -> list[str]
     ]
     if caveat:
         lines.append(f"  note: {caveat}")
-    means = [
-        (s.get("ratio_to_floor") or {}).get("mean", 1.0)
-        for n, c in rows
-        if n == "adaptive_ct"
-        for s in c["segments"]
-    ]
-    if any(
-        m < 1.0 for m in means
-    ):  # its law differs from its floor's by the boost: below 1 is not a better model
+    ours = ctrls.get("adaptive_ct") or {}
+    if ours.get("floor") and any(
+        (s.get("ratio_to_floor") or {}).get("mean", 1.0) < 1.0 for s in ours["segments"]
+    ):
+        # its law differs from its floor's by the boost: below 1 is not a better model
         lines.append(
             "  note: adaptive_ct raises its feedback gains after each alarm (boost_duration) and its floor "
             "does not: a ratio below 1 is that boost, not a model better than the true one"

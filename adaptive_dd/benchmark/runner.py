@@ -166,8 +166,9 @@ def run_benchmark(
     res.compile_time = clock.compile_seconds
     res.wall_time = time.perf_counter() - t0 - res.compile_time
     from adaptive_dd.controllers import CONTROLLERS
+    from adaptive_dd.plant.kind import run_kind
 
-    kind = "two_link" if scenario.closed_forms is not None else "chain"
+    kind = run_kind(scenario)
     for name, run in res.runs.items():
         if run.floor is not None and run.floor not in res.runs:
             fix = (
