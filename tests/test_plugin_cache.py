@@ -239,6 +239,7 @@ def cache_folder(tmp_path, monkeypatch):
     return folder
 
 
+@pytest.mark.slow  # two processes compiling a plug-in loop: 10 s of the default run
 def test_a_plugins_loop_is_written_once_and_loaded_by_a_later_process(cache_folder, capsys, monkeypatch):
     from adaptive_dd.closed_loop.runner import run_closed_loop
 
