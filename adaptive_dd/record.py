@@ -561,6 +561,11 @@ def _velocity_lag(logged: Array, derived: Array, gains: Array, T: float, names, 
     return text
 
 
+def derivative_samples(T: float, n: int, window: float = DERIVATIVE_WINDOW) -> int:
+    """The odd number of samples of :func:`derivatives`' window on ``n`` samples at ``T``."""
+    return min(max(7, 2 * round(window / T / 2) + 1), n - (1 - n % 2))
+
+
 def derivatives(q: Array, T: float, window: float = DERIVATIVE_WINDOW) -> tuple[Array, Array]:
     """Velocity and acceleration ``(N, n)`` of uniformly sampled positions (Savitzky-Golay, cubic).
 
@@ -569,8 +574,7 @@ def derivatives(q: Array, T: float, window: float = DERIVATIVE_WINDOW) -> tuple[
     """
     from scipy.signal import savgol_filter
 
-    m = max(7, 2 * round(window / T / 2) + 1)
-    m = min(m, q.shape[0] - (1 - q.shape[0] % 2))
+    m = derivative_samples(T, q.shape[0], window)
     qd = savgol_filter(q, m, 3, deriv=1, delta=T, axis=0, mode="interp")
     qdd = savgol_filter(q, m, 3, deriv=2, delta=T, axis=0, mode="interp")
     return qd, qdd

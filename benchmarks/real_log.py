@@ -69,6 +69,12 @@ def plain_least_squares(arm, q, qd, qdd, tau, used):
     return lambda q, qd, qdd: regressor(q, qd, qdd) @ theta
 
 
+def noise_model(arm, rec):
+    """identify's model of ``rec``: the Coulomb width of its velocities' noise (derived velocities':
+    the positions' noise through the derivative)."""
+    return identification_model(arm, rec.qd, None if rec.qd_measured else rec.q, rec.sample_period)
+
+
 def with_width(model, rec, K, choice, torque_held: bool, offset: bool = False):
     """``model`` with the Coulomb width ``identify --coulomb-width choice`` gives on ``rec``, and the
     joints whose width was estimated (None: none)."""
@@ -197,7 +203,7 @@ def main() -> None:
         args.scenario = drop_rows(args.scenario, args.drop[0], int(args.drop[1]))
     arm = load_arm(args.scenario)
     _, tr = read_arm_log(args.scenario, arm, window=args.train)
-    model = identification_model(arm, tr.qd)  # as identify: the Coulomb width from the record's noise
+    model = noise_model(arm, tr)  # as identify: the Coulomb width from the record's noise
     _, te = read_arm_log(args.scenario, arm, window=args.test)
     used = tr.used
     names = [arm.joint_names[j] for j in np.flatnonzero(used)]
@@ -264,7 +270,7 @@ def main() -> None:
     est, std, shares, widths = [], [], [], []
     for a, b in itertools.pairwise(edges):
         _, w = read_arm_log(args.scenario, arm, window=(a, b))
-        wm, wfree = with_width(identification_model(arm, w.qd), w, K, args.coulomb_width, held, offset)
+        wm, wfree = with_width(noise_model(arm, w), w, K, args.coulomb_width, held, offset)
         f = fit_log(
             wm,
             w.q,

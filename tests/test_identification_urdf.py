@@ -4,6 +4,7 @@ consistency, excitation, records and CLI errors. Most on the shipped three-joint
 from __future__ import annotations
 
 import dataclasses
+import json
 from pathlib import Path
 
 import numpy as np
@@ -247,6 +248,23 @@ def test_payload_from_pair_recovers_a_linear_case():
     assert pr.consistent.was_physical
 
 
+def test_payload_json_is_a_scenario_payload_entry():
+    """``identify``'s payload.json: its ``scenario_payload``, pasted as a [[payload]] entry, is the
+    payload identified (the same ten parameters), through the scenario's own checks."""
+    from adaptive_dd.benchmark.scenario import parse_scenario, read_toml
+    from adaptive_dd.identification.payload_pair import payload_from_params, payload_record
+
+    pp = payload_parameters(2.0, [0.01, -0.02, 0.06], [0.004, 0.005, 0.003, 0.0002, -0.0001, 0.0003])
+    rec = json.loads(json.dumps(payload_record(payload_from_params(pp, np.eye(10) * 1e-12), "r.csv")))
+    entry = rec["scenario_payload"]
+    assert rec["mass_kg"] == pytest.approx(2.0) and rec["com_m"] == pytest.approx([0.01, -0.02, 0.06])
+    data = read_toml(Path(__file__).resolve().parents[1] / "adaptive_dd" / "scenarios" / "ur5_tool_swap.toml")
+    data["payload"][0] = {"at": data["payload"][0]["at"], **entry}
+    sc = parse_scenario(data, "u.toml")
+    got = payload_parameters(sc.swap_masses[0], sc.swap_com[0], sc.swap_inertia[0])
+    np.testing.assert_allclose(got, pp, atol=1e-6)
+
+
 def test_payload_pair_refused_where_the_arm_cannot_see_it(arm3):
     with pytest.raises(ParameterError, match="determine only"):
         payload_from_pair(arm3, arm3.sigma, np.eye(17), arm3.sigma, np.eye(17))
@@ -340,7 +358,11 @@ def test_cli_simulate_and_identify_end_to_end(tmp_path, capsys):
     nq = tmp_path / "noqd.csv"
     nq.write_text("\n".join(",".join(r.split(",")[i] for i in keep) for r in lines) + "\n")
     assert main(["identify", "--arm", str(scen), str(nq), "--out", str(tmp_path / "id2")]) == 0
-    assert "derived from the positions" in capsys.readouterr().out
+    out = capsys.readouterr().out
+    assert "derived from the positions" in out
+    # no trajectory.json beside it: the law is not stated, so its width is estimated (the noise's
+    # width of the derived velocities was 23x the plant's 0.02 rad/s too narrow: output error stalled)
+    assert "v per joint from the record's profile likelihood" in out
     # the payload of a planar arm is not fully identifiable from base parameters: a clear error
     assert (
         main(["identify", "--arm", str(scen), str(csv), "--baseline", str(csv), "--out", str(tmp_path / "x")])
@@ -528,3 +550,8 @@ def test_payload_only_says_whether_its_fit_converged(tmp_path, capsys):
     text = capsys.readouterr().out
     assert "NOT converged" in text and "warning: output error stopped at --max-iter 1" in text
     assert "payload (one record, arm known) [+- 1 std]: mass" in text
+    assert not (tmp_path / "fit").exists()  # printed only, without --out
+    argv = ["identify", "--arm", scen, str(out / "trajectory.csv"), "--payload-only", "--max-iter", "1"]
+    assert main([*argv, "--out", str(tmp_path / "fit")]) == 0
+    written = json.loads((tmp_path / "fit" / "payload.json").read_text())
+    assert written["output_error"]["converged"] is False and written["scenario_payload"]["mass"] >= 0

@@ -199,6 +199,7 @@ def _fake_population() -> PopulationResult:
         arms.append(
             {
                 "arm_seed": arm_seed,
+                "floor": "ct_oracle",
                 "joints": 4,
                 "kind": "palletizer",
                 "capacity_kg": 2.0,
@@ -235,6 +236,14 @@ def test_pooled_leaves_out_saturated_floor_segments():
     p = pooled(pop)
     assert p[1]["n"] == 2 and p[1]["max"] == 1.1
     assert "1 arm segment(s) where ct_oracle saturates" in format_population(pop)
+
+
+def test_population_header_names_the_floor_the_scenario_set():
+    pop = _fake_population()
+    for a in pop.arms:
+        a["floor"] = "pd"
+    text = format_population(pop)
+    assert text.startswith("adaptive_ct / pd per seed") and "ct_oracle" not in text
 
 
 def test_cli_arms_usage_errors(capsys):

@@ -90,6 +90,37 @@ def test_scenario_errors_name_file_and_key(tmp_path, edit, match):
     assert str(p) in str(e.value)
 
 
+def test_a_payload_key_misspelt_is_one_error_with_its_index(tmp_path):
+    """A typo in one [[payload]] entry is named with the entry's index and the key meant, and
+    its com/inertia do not go on to misalign every other payload's (the entry is not a change)."""
+    from adaptive_dd.benchmark.scenario import parse_scenario, read_toml
+
+    data = read_toml(default_scenario_path().parent / "ur5_tool_swap.toml")
+    data["payload"][1]["mas"] = data["payload"][1].pop("mass")
+    with pytest.raises(ScenarioError) as e:
+        parse_scenario(data, "u.toml")
+    msg = str(e.value)
+    assert "payload[1].mas: unknown key (did you mean 'mass'?)" in msg
+    assert "payload[1].mass: missing" in msg
+    assert "swap_com" not in msg and "swap_inertia" not in msg and "2 errors" in msg
+
+
+@pytest.mark.parametrize("first", ["joint1", "shoulder_pan_joint"])
+def test_a_joint_given_by_number_and_by_name_is_named_once(first):
+    """Either order: the error names the pair, not 'not a joint of this arm'."""
+    from adaptive_dd.benchmark.scenario import parse_scenario, read_toml
+
+    data = read_toml(default_scenario_path().parent / "ur5_tool_swap.toml")
+    spec = data["reference"].pop("joint1")
+    other = "shoulder_pan_joint" if first == "joint1" else "joint1"
+    data["reference"] = {first: spec, other: dict(spec), **data["reference"]}
+    with pytest.raises(ScenarioError) as e:
+        parse_scenario(data, "u.toml")
+    msg = str(e.value)
+    assert "reference.shoulder_pan_joint: the same joint as reference.joint1" in msg
+    assert "not a joint" not in msg
+
+
 def test_missing_scenario_file(tmp_path):
     with pytest.raises(ScenarioError, match="no such scenario file"):
         load_scenario(tmp_path / "none.toml")

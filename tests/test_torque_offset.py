@@ -134,9 +134,7 @@ def test_cli_fits_offsets_on_a_record_table_and_predict_adds_them(tmp_path, caps
     # output error has no offsets: asked for with --payload-only, a message, not an ignored option
     assert main(["identify", "--arm", real, files[0], "--payload-only", *forced[2:]]) == 2
     assert "--torque-offset on: --payload-only fits by output error" in capsys.readouterr().err
-    # --payload-only prints the payload and writes no file: --out and --baseline refused, not ignored
-    assert main(["identify", "--arm", real, files[0], "--out", str(out2), "--payload-only"]) == 2
-    assert "--out: --payload-only fits the payload of one record" in capsys.readouterr().err
+    # --payload-only with --baseline: refused, not ignored
     assert main(["identify", "--arm", real, files[0], "--baseline", files[0], "--payload-only"]) == 2
     assert "--baseline: --payload-only" in capsys.readouterr().err
     saved["torque_offset"] = [0.0, float("nan")]

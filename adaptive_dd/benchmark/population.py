@@ -93,10 +93,11 @@ class PopulationResult:
     ----------
     arms : list of dict
         Per arm: ``arm_seed``, ``joints``, ``kind``, ``capacity_kg``, ``segments`` (per segment
-        ``mean``, ``p90``, ``max`` of adaptive_ct / its floor over the seeds), ``false_alarm_trials``,
+        ``mean``, ``p90``, ``max`` of adaptive_ct / its floor over the seeds), ``floor`` (that floor's
+        name), ``false_alarm_trials``,
         ``trials``, ``missed_swaps``, ``swaps``.
     floor_caveat : str or None
-        Why ct_oracle is no floor on these arms' plants
+        Why the floor is no floor on these arms' plants
         (:func:`~adaptive_dd.benchmark.metrics.floor_caveat`; the same for every arm of a template).
     frame : pandas.DataFrame
         The per-seed tables of every arm (:func:`~adaptive_dd.benchmark.results.to_frame`),
@@ -185,6 +186,7 @@ def arm_summary(metrics: dict, arm_seed: int, drawn, sc) -> dict:
     ms = [x for x in a.get("missed_swaps_per_seed") or [] if x is not None]
     return {
         "arm_seed": arm_seed,
+        "floor": a.get("floor"),
         "joints": drawn.n_joints,
         "kind": drawn.kind,
         "capacity_kg": drawn.payload_capacity,
@@ -233,7 +235,9 @@ def format_population(pop: PopulationResult, worst: int = 3) -> str:
         TARGET_RATIO_P90,
     )
 
-    lines = ["adaptive_ct / ct_oracle per seed, per arm (mean per segment; max over segments):"]
+    floors = sorted({a.get("floor") or "its floor" for a in pop.arms}) or ["its floor"]
+    floor = " or ".join(floors)
+    lines = [f"adaptive_ct / {floor} per seed, per arm (mean per segment; max over segments):"]
     for a in pop.arms:
         means = " / ".join(f"{s['mean']:.3f}" for s in a["segments"])
         mx = max((s["max"] for s in a["segments"] if not math.isnan(s["max"])), default=math.nan)
@@ -266,7 +270,7 @@ def format_population(pop: PopulationResult, worst: int = 3) -> str:
     lines.append(f"  missed swaps: {n_ms} of {n_sw} (target 0: {'met' if n_ms == 0 else 'NOT met'})")
     sat = sum(s["floor_saturated"] for a in pop.arms for s in a["segments"])
     if sat:
-        lines.append(f"  {sat} arm segment(s) where ct_oracle saturates: no verdict there (left out above)")
+        lines.append(f"  {sat} arm segment(s) where {floor} saturates: no verdict there (left out above)")
     ranked = sorted(pop.arms, key=_badness, reverse=True)[:worst]
     lines.append(
         "  worst arms: "

@@ -6,6 +6,7 @@ scenario is reported at once; the bounds are ``scenario.LIMITS``.
 
 from __future__ import annotations
 
+import difflib
 import math
 from typing import Any
 
@@ -374,10 +375,14 @@ def _known_tables(e: list, data: dict) -> dict[str, Any]:
     for t, allowed in KEYS.items():
         if allowed is None:
             continue
-        for item in tables.get(t, []) if t == "payload" else [tables.get(t, {})]:
+        items = tables.get(t, []) if t == "payload" else [tables.get(t, {})]
+        for i, item in enumerate(items):
+            where = f"{t}[{i}]" if t == "payload" else t
             for k in item:
                 if k not in allowed:
-                    e.append(f"{t}.{k}: unknown key; allowed: {', '.join(sorted(allowed))}")
+                    near = difflib.get_close_matches(str(k), sorted(allowed), n=1)
+                    hint = f" (did you mean {near[0]!r}?)" if near else ""
+                    e.append(f"{where}.{k}: unknown key{hint}; allowed: {', '.join(sorted(allowed))}")
     return tables
 
 
@@ -450,9 +455,9 @@ def _payload_fields(e: list, items: list, v: dict, defaulted: set, arm: Any = No
     times, masses, radii = [], [], []
     coms, inertias = [], []
     for i, p in enumerate(items):
+        body = {"com": None, "inertia": None}  # kept only for an entry that is a payload change
         for key, size in (("com", 3), ("inertia", 6)):
             if key not in p:
-                (coms if key == "com" else inertias).append(None)
                 continue
             x = p[key]
             ok = False  # an entry refused here is not checked again as the Scenario's swap_com/inertia
@@ -480,10 +485,10 @@ def _payload_fields(e: list, items: list, v: dict, defaulted: set, arm: Any = No
                 )
             else:
                 ok = True
-            (coms if key == "com" else inertias).append(freeze(x) if ok else None)
-        if inertias[-1] is not None and isinstance(inertias[-1], tuple) and len(inertias[-1]) == 6:
+            body[key] = freeze(x) if ok else None
+        if isinstance(body["inertia"], tuple) and len(body["inertia"]) == 6:
             try:
-                payload_parameters(1.0, None, inertias[-1])
+                payload_parameters(1.0, None, body["inertia"])
             except ValueError as exc:
                 e.append(f"payload[{i}].inertia: {exc}")
         missing = [k for k in ("at", "mass") if k not in p]
@@ -492,6 +497,8 @@ def _payload_fields(e: list, items: list, v: dict, defaulted: set, arm: Any = No
         if not missing:
             times.append(freeze(p["at"]))
             masses.append(freeze(p["mass"]))
+            coms.append(body["com"])
+            inertias.append(body["inertia"])
         if "radius" in p:
             radii.append(freeze(p["radius"]))
     if len({repr(r) for r in radii}) > 1:
@@ -541,11 +548,18 @@ def _reference_field(
         out = parse_cartesian(e, ref["cartesian"], arm, freeze(ref.get("ramp", 0.0)), sample_period)
         return out if out is not None else Reference((0.0,) * n, ((),) * n, ((),) * n, ((),) * n)
     keys = [f"joint{j + 1}" for j in range(n)]
+    numbered = list(keys)
     for k in ref:
-        if k == "ramp" or k in keys:
+        if k == "ramp" or k in numbered:
             continue
         if k in names:
-            keys[names.index(k)] = k
+            j = names.index(k)
+            keys[j] = k
+            if numbered[j] in ref:
+                e.append(
+                    f"reference.{k}: the same joint as reference.{numbered[j]} (its URDF name); "
+                    "give each joint once, by number or by name"
+                )
         else:
             e.append(
                 f"reference.{k}: not a joint of this {n}-joint arm; use joint1 .. joint{n}"

@@ -18,6 +18,7 @@ from numpy.typing import NDArray
 
 from adaptive_dd.cli._common import NAME_WIDTH, short
 from adaptive_dd.cli._identify_files import _write_estimates, _write_model
+from adaptive_dd.cli._identify_width import choose_coulomb_width
 from adaptive_dd.errors import DataError, ParameterError, SignalError
 
 Array = NDArray[np.float64]
@@ -297,7 +298,8 @@ def identify_log(args: argparse.Namespace, arm, outputs) -> int:
         print(f"note: {note}")
     spec, rec, tau_f = _read(args, arm, args.data)
     offset = _offset_choice(args, rec)
-    model = identification_model(arm, rec.qd)  # the Coulomb law's width from the record's noise
+    derived = None if rec.qd_measured else rec.q  # the width of a derived velocity's noise
+    model = identification_model(arm, rec.qd, derived, rec.sample_period)  # the width from the record's noise
     names = arm.joint_names
     if args.payload_only:
         if args.torque_offset == "on":
@@ -305,11 +307,11 @@ def identify_log(args: argparse.Namespace, arm, outputs) -> int:
                 "--torque-offset on: --payload-only fits by output error, which has no offsets; leave it "
                 "out, or identify a loaded and an unloaded record instead (--baseline)"
             )
-        model, _ = _coulomb_width(args, arm, model, rec, None, tau_f, spec.torque_held)
-        return _payload_only(args, arm, model, rec, tau_f)
+        model, _ = choose_coulomb_width(args, arm, model, rec, None, tau_f, spec.torque_held)
+        return _payload_only(args, arm, model, rec, tau_f, outputs)
     lim = arm.position_limits
     K = identifiable_subset(model, rec.used, lim[:, 0], lim[:, 1], np.random.default_rng(0))
-    model, profile = _coulomb_width(args, arm, model, rec, K, tau_f, spec.torque_held, offset)
+    model, profile = choose_coulomb_width(args, arm, model, rec, K, tau_f, spec.torque_held, offset)
     prior_std = _prior_std(args.arm, model) if args.hold_unseen == "on" else None
     free = None if profile is None else profile.profiled
     # the momentum regressors once, for the fit and the model error's other filters (_write_model)
@@ -337,7 +339,7 @@ def identify_log(args: argparse.Namespace, arm, outputs) -> int:
     written += _write_model(outputs, arm, model, rec, fit, cf, spec, profile, me_var)
     del mom
     if args.baseline:
-        _payload_pair(args, arm, model, fit, tau_f, K, offset)
+        written.append(_payload_pair(args, arm, model, fit, tau_f, K, outputs, offset))
     print("wrote " + ", ".join(str(Path(args.out) / Path(p).name) for p in written))
     return 0
 
@@ -413,75 +415,7 @@ def _print_offset(args, fit, names) -> None:
     print(f"{head}: {', '.join(each)}")
 
 
-def _coulomb_width(args, arm, model, rec, K, tau_f: float, torque_held: bool, offset: bool = False):
-    """The identification model with the Coulomb width ``--coulomb-width`` asks for, printed, and the
-    :class:`~adaptive_dd.identification.friction_width.WidthProfile` when profiled (else None);
-    ``K`` None (``--payload-only``: no least squares to profile) refuses ``profile``."""
-    import dataclasses
-
-    from adaptive_dd.identification.friction_width import profile_coulomb_width, simulated_width
-
-    choice = args.coulomb_width
-    head = "Coulomb friction fitted as fc tanh(qd / v)"
-    made = None
-    if choice == "auto" and rec.simulator_format:  # each record's own file (several: one width for all)
-        each = [simulated_width(src) for src in (rec.record_names or (rec.source,))]
-        if all(m is not None for m in each) and len({m[0] for m in each}) == 1:
-            made = (each[0][0], ", ".join(m[1] for m in each))
-    if made is not None:  # a record of adaptive-dd simulate: the law it was made with
-        print(f"{head}, v = {made[0]:.3g} rad/s: the width the record was simulated with ({made[1]})")
-        return dataclasses.replace(model, friction_velocity=made[0]), None
-    if choice == "auto":  # profile on a real log (measured to predict better on the TIAGo's)
-        choice = "profile" if not rec.simulator_format and K is not None else "noise"
-    if choice == "noise":
-        why = (
-            "the arm's friction_velocity (its law is tanh)"
-            if getattr(arm, "friction", "") == "tanh"
-            else "the width of the record's velocity noise (adaptive_dd.identification.friction_width)"
-        )
-        print(f"{head}, v = {model.friction_velocity:.3g} rad/s: {why}; --coulomb-width profile estimates it")
-        return model, None
-    if choice != "profile":
-        print(f"{head}, v = {choice:.3g} rad/s (--coulomb-width)")
-        return dataclasses.replace(model, friction_velocity=float(choice)), None
-    if K is None:
-        raise DataError(
-            "--coulomb-width profile: with --payload-only there is no least squares to profile; give a "
-            "width (--coulomb-width V) or leave the default (noise)"
-        )
-    try:
-        pr = profile_coulomb_width(
-            model,
-            rec.q,
-            rec.qd,
-            rec.tau,
-            rec.used,
-            K,
-            tau_f=tau_f,
-            sample_period=rec.sample_period,
-            channel_weight=rec.weight,
-            torque_held=torque_held,
-            pieces=rec.pieces or None,
-            offset=offset,
-        )
-    except DataError as exc:
-        raise DataError(f"{rec.source}: {exc}") from None
-    names = arm.joint_names
-    print(
-        f"{head}, v per joint from the record's profile likelihood over {pr.grid.size} widths "
-        f"{pr.grid[0]:.2g}-{pr.grid[-1]:.2g} rad/s (95 % interval, N_eff {pr.n_eff:.0f}): "
-        + ", ".join(pr.describe(names))
-    )
-    rest = [names[j] for j in np.flatnonzero(~pr.profiled)]
-    if rest:
-        print(
-            f"  not profiled (Coulomb not fitted on their channel): {', '.join(rest)} at the record's "
-            f"velocity noise, {model.friction_velocity:.3g} rad/s"
-        )
-    return dataclasses.replace(model, friction_velocity=pr.width), pr
-
-
-def _payload_only(args, arm, model, rec, tau_f) -> int:
+def _payload_only(args, arm, model, rec, tau_f, outputs=None) -> int:
     from adaptive_dd.identification.output_error import measurement_std
     from adaptive_dd.identification.payload_pair import payload_from_record
 
@@ -523,7 +457,22 @@ def _payload_only(args, arm, model, rec, tau_f) -> int:
             "below is not its optimum (raise --max-iter)"
         )
     _print_payload("payload (one record, arm known)", pr)
+    if outputs is not None:
+        _write_payload(outputs, pr, rec.source)
+        print(f"wrote {Path(args.out) / 'payload.json'} (its scenario_payload is a [[payload]] entry)")
     return 0
+
+
+def _write_payload(outputs, pr, source: str):
+    """``payload.json`` (:func:`~adaptive_dd.identification.payload_pair.payload_record`); its path."""
+    import json
+
+    from adaptive_dd.identification.payload_pair import payload_record
+
+    path = outputs.path("payload.json")
+    with open(path, "w") as f:
+        json.dump(payload_record(pr, source), f, indent=1)
+    return path
 
 
 def _prior_std(scenario: str, model):
@@ -565,7 +514,7 @@ def _fit_record(
         ) from None
 
 
-def _payload_pair(args, arm, model, fit, tau_f, K, offset=False) -> None:
+def _payload_pair(args, arm, model, fit, tau_f, K, outputs, offset=False):
     from adaptive_dd.identification.payload_pair import payload_from_pair
 
     print("unloaded record(s):")
@@ -580,3 +529,4 @@ def _payload_pair(args, arm, model, fit, tau_f, K, offset=False) -> None:
         "Newey-West covariance; the base parameters weighted by their own variance, the covariance a "
         "sandwich); +- 2 std holds the payload about 95 % of the time. Not the choice of model"
     )
+    return _write_payload(outputs, pr, f"{loaded} - {', '.join(args.baseline)}")

@@ -97,10 +97,13 @@ def _add_arm_options(i: argparse.ArgumentParser) -> None:
         nargs="+",
         metavar="CSV",
         help="with --arm: the unloaded record(s)' file(s), read through the same [record] (several records "
-        "fitted jointly); prints the payload",
+        "fitted jointly); prints the payload and writes OUT/payload.json",
     )
     i.add_argument(
-        "--payload-only", action="store_true", help="with --arm: the arm known (URDF), fit the payload alone"
+        "--payload-only",
+        action="store_true",
+        help="with --arm: the arm known (URDF), fit the payload alone; printed, and written to "
+        "OUT/payload.json when --out is given",
     )
     i.add_argument(
         "--segment-length",
@@ -129,10 +132,11 @@ def _add_arm_options(i: argparse.ArgumentParser) -> None:
         type=coulomb_width_option,
         default="auto",
         metavar="auto|noise|profile|V",
-        help="with --arm: the width v of the Coulomb law fc tanh(qd / v) [rad/s]. auto (default): profile "
-        "for a record read through a [record] table, the width a record of `simulate` was simulated with "
-        "(its trajectory.json), else noise; noise: the "
-        "record's velocity noise (the arm's friction_velocity if its law is tanh); profile: per fitted "
+        help="with --arm: the width v of the Coulomb law fc tanh(qd / v) [rad/s]. auto (default): on a "
+        "record of `simulate` with its trajectory.json, the width it was simulated with (noise for a law "
+        "with a sign); else profile (noise with --payload-only); noise: the record's velocity noise (of "
+        "velocities derived from the positions: the positions' noise through the derivative; the arm's "
+        "friction_velocity if its law is tanh); profile: per fitted "
         "joint, the width of the record's profile likelihood over a grid (printed with its 95 %% interval; "
         "docs/real_log.md); V > 0: that width for every joint",
     )
@@ -237,12 +241,12 @@ def run(args: argparse.Namespace) -> int:
             "options of the output error, which --output-error off skips",
             DataError,
         )
-    if args.payload_only:  # prints the payload fitted on the known arm: no baseline, no files
+    if args.payload_only:  # prints the payload fitted on the known arm; payload.json with --out
         refuse(
             args,
-            ("--baseline", "--out"),
-            "--payload-only fits the payload of one record on the known arm and prints it (no file); "
-            "--baseline fits a loaded and an unloaded record instead (without --payload-only)",
+            ("--baseline",),
+            "--payload-only fits the payload of one record on the known arm; --baseline fits a loaded "
+            "and an unloaded record instead (without --payload-only)",
             DataError,
         )
         refuse(
@@ -252,7 +256,10 @@ def run(args: argparse.Namespace) -> int:
             "least squares, nothing held or skipped)",
             DataError,
         )
-        return identify_log(args, arm, None)  # no output folder made
+        if "--out" not in getattr(args, "given", ()):
+            return identify_log(args, arm, None)  # printed only: no output folder made
+        with OutputSet(args.out) as outputs:
+            return identify_log(args, arm, outputs)
     if args.baseline:  # before the loaded record's fit, not after it
         from adaptive_dd.identification.payload_pair import require_payload_seen
 

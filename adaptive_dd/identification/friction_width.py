@@ -37,8 +37,10 @@ __all__ = [
     "coulomb_columns",
     "coulomb_index",
     "coulomb_width",
+    "derived_velocity_noise_std",
     "identification_model",
     "profile_coulomb_width",
+    "simulated_law",
     "simulated_width",
     "velocity_noise_std",
 ]
@@ -64,36 +66,79 @@ def velocity_noise_std(qd: Array) -> float:
     return float(np.sqrt(np.mean(s**2)))
 
 
-def coulomb_width(qd: Array, friction: str = "stick-slip", friction_velocity: float = 0.02) -> float:
+def derived_velocity_noise_std(q: Array, sample_period: float) -> float:
+    """[rad/s] The noise std of velocities derived from the positions ``q (N, n)`` by
+    :func:`~adaptive_dd.record.derivatives`, rms over the joints: each joint's position noise
+    (its third difference's robust spread over ``sqrt(20)``) times the Savitzky-Golay
+    differentiator's gain on white noise (the norm of its coefficients). The derived velocity's
+    own differences cannot tell it: its error is smooth over the window, so
+    :func:`velocity_noise_std` of it reads a width two orders of magnitude too small."""
+    from scipy.signal import savgol_coeffs
+
+    from adaptive_dd.record import derivative_samples
+
+    q = np.asarray(q, dtype=float)
+    if q.ndim != 2 or q.shape[0] < 7:
+        raise ValueError(f"derived_velocity_noise_std: expected a record (N >= 7, n), got shape {q.shape}")
+    d3 = np.diff(q, 3, axis=0)
+    s = 1.4826 * np.median(np.abs(d3 - np.median(d3, axis=0)), axis=0) / np.sqrt(20.0)
+    gain = np.linalg.norm(savgol_coeffs(derivative_samples(sample_period, q.shape[0]), 3, deriv=1,
+                                        delta=sample_period))  # fmt: skip
+    return float(np.sqrt(np.mean(s**2)) * gain)
+
+
+def coulomb_width(
+    qd: Array,
+    friction: str = "stick-slip",
+    friction_velocity: float = 0.02,
+    q: Array | None = None,
+    sample_period: float | None = None,
+) -> float:
     """[rad/s] The width ``v`` of the identification's ``fc tanh(qd / v)`` on the record of
     velocities ``qd (N, n)``: ``friction_velocity`` when the arm's law is ``"tanh"``, else the
-    record's velocity noise (:func:`velocity_noise_std`, at least :data:`MIN_WIDTH`)."""
+    record's velocity noise (at least :data:`MIN_WIDTH`): :func:`velocity_noise_std` of measured
+    velocities, :func:`derived_velocity_noise_std` of the positions ``q`` at ``sample_period`` when
+    the velocities were derived from them (``q`` given)."""
     if friction == "tanh":
         return float(friction_velocity)
+    if q is not None:
+        return max(derived_velocity_noise_std(q, sample_period), MIN_WIDTH)
     return max(velocity_noise_std(qd), MIN_WIDTH)
 
 
-def simulated_width(source: str):
-    """``(v, path)`` of a record ``adaptive-dd simulate`` wrote with its plant's ``fc tanh(qd / v)``
-    (the ``trajectory.json`` beside the CSV), else None (no such file, another law, unreadable)."""
+def simulated_law(source: str):
+    """``(law, v, path)`` of a record ``adaptive-dd simulate`` wrote (the ``trajectory.json`` beside
+    the CSV): its plant's Coulomb law, ``v`` the width of ``fc tanh(qd / v)`` (None for another
+    law); None when there is no such file or it does not say."""
     import json
     from pathlib import Path
 
     path = Path(str(source)).with_suffix(".json")
     try:
         made = json.loads(path.read_text(encoding="utf-8"))
-        v = made.get("friction_velocity") if made.get("coulomb_law") == "tanh" else None
+        law = made.get("coulomb_law")
+        v = made.get("friction_velocity") if law == "tanh" else None
     except (OSError, ValueError, AttributeError):
         return None
-    return (float(v), str(path)) if isinstance(v, int | float) and v > 0 else None
+    if not isinstance(law, str) or (law == "tanh" and not (isinstance(v, int | float) and v > 0)):
+        return None
+    return law, (float(v) if v is not None else None), str(path)
 
 
-def identification_model(arm, qd: Array):
+def simulated_width(source: str):
+    """``(v, path)`` of a record ``adaptive-dd simulate`` wrote with its plant's ``fc tanh(qd / v)``
+    (:func:`simulated_law`), else None (no such file, another law, unreadable)."""
+    made = simulated_law(source)
+    return (made[1], made[2]) if made is not None and made[1] is not None else None
+
+
+def identification_model(arm, qd: Array, q: Array | None = None, sample_period: float | None = None):
     """The :class:`~adaptive_dd.identification.model.Model` a record with velocities ``qd (N, n)``
-    of ``arm`` is identified with: the arm's, its Coulomb law's width :func:`coulomb_width`."""
+    of ``arm`` is identified with: the arm's, its Coulomb law's width :func:`coulomb_width` (``q``
+    and ``sample_period`` given when the velocities were derived from the positions ``q``)."""
     from adaptive_dd.identification.model import arm_model
 
-    v = coulomb_width(qd, getattr(arm, "friction", "stick-slip"), arm.friction_velocity)
+    v = coulomb_width(qd, getattr(arm, "friction", "stick-slip"), arm.friction_velocity, q, sample_period)
     return dataclasses.replace(arm_model(arm), friction_velocity=v)
 
 

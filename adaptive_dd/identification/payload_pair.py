@@ -35,6 +35,7 @@ __all__ = [
     "payload_from_pair",
     "payload_from_params",
     "payload_from_record",
+    "payload_record",
     "require_payload_seen",
 ]
 
@@ -85,6 +86,35 @@ class PayloadResult:
     fit: Any = None
     """:func:`payload_from_record`'s output-error fit (its ``converged``, ``iterations``, ``cost``,
     ``n_residuals``); None from a pair."""
+
+
+def payload_record(pr: PayloadResult, source: str) -> dict:
+    """``pr`` as JSON-ready data (``identify``'s ``payload.json``): the fit as printed, its ten
+    parameters and covariance, and ``scenario_payload``, a ``[[payload]]`` entry's ``mass``, ``com``
+    and ``inertia`` (about the centre of mass, ``[ixx, iyy, izz, ixy, ixz, iyz]``) to paste into a
+    scenario (``com`` and ``inertia`` left out when the mass is not positive)."""
+    ic = pr.inertia_com
+    inertia = [ic[0, 0], ic[1, 1], ic[2, 2], ic[0, 1], ic[0, 2], ic[1, 2]]
+    entry = {"mass": round(max(pr.mass, 0.0), 6)}
+    if pr.com_defined:
+        entry |= {"com": [round(float(x), 6) for x in pr.com], "inertia": [float(x) for x in inertia]}
+    fit = pr.fit
+    return {
+        "source": source,
+        "mass_kg": pr.mass,
+        "mass_std_kg": pr.mass_std,
+        "com_m": pr.com.tolist() if pr.com_defined else None,
+        "com_std_m": pr.com_std.tolist() if pr.com_defined else None,
+        "inertia_com_kg_m2": [float(x) for x in inertia],
+        "physical_as_estimated": bool(pr.consistent.was_physical),
+        "params": pr.params.tolist(),
+        "params_order": "m, m cx, m cy, m cz, Ixx, Ixy, Iyy, Ixz, Iyz, Izz (about the payload frame)",
+        "cov": pr.cov.tolist(),
+        "output_error": None
+        if fit is None
+        else {"converged": bool(fit.converged), "iterations": int(fit.iterations)},
+        "scenario_payload": entry,
+    }
 
 
 def _inertia_about_com(p: Array) -> Array:
