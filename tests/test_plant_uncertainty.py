@@ -648,3 +648,20 @@ def test_the_excitation_phase_shows_no_bars_when_the_runs_bar_is_hidden(monkeypa
         with pytest.raises(Stop):
             ep.run_with_excitation(None, (0,), run_closed_loop, bar=bar)
     assert seen == [False, True, True]
+
+
+def test_the_report_says_a_drawn_plant_s_link_is_in_the_payload_estimated():
+    """On a drawn plant the payload estimated holds the payload frame's link's own error: the
+    report's mass line says so, with the link's spread; on the exact arm, no note."""
+    from adaptive_dd.benchmark.report import _mass_targets
+
+    c = {"adaptive_ct": {"segments": [{"mass": 0.0, "mass_estimate": 0.07}]}}
+    drawn = parse_scenario(_uncertain(), "u.toml")
+    j = drawn.arm.payload_joint
+    spread = 0.1 * drawn.arm.pi_links[10 * j]
+    lines = _mass_targets(c, drawn)
+    assert "0 kg -> 0.070 (off)" in lines[0]
+    assert lines[-1].startswith("  note: the plant is drawn around the URDF")
+    assert f"+- {spread:.3g} kg" in lines[-1] and repr(drawn.arm.joint_names[j]) in lines[-1]
+    exact = {k: v for k, v in _uncertain().items() if k != "plant"}
+    assert len(_mass_targets(c, parse_scenario(exact, "e.toml"))) == 1

@@ -375,7 +375,7 @@ def _targets(metrics: dict, res: BenchmarkResult) -> list[str]:
     out += _adaptive_ct_targets(c["adaptive_ct"]) if "adaptive_ct" in c else []
     out += _information_lines(c, all_unknown=res.scenario.closed_forms is not None)
     out += detection_limit_lines(c)
-    out += _nominal_target(c) + _mass_targets(c)
+    out += _nominal_target(c) + _mass_targets(c, res.scenario)
     if "ct_oracle" in c:
         sat = max((s["saturation_fraction"] or 0.0) for s in c["ct_oracle"]["segments"])
         verdict = "met" if sat <= SATURATION_LIMIT else "NOT met: the saturated segments have no verdict"
@@ -458,8 +458,9 @@ def _nominal_target(c: dict) -> list[str]:
     return []
 
 
-def _mass_targets(c: dict) -> list[str]:
-    """Each estimating controller's payload mass at the end of each segment against the truth."""
+def _mass_targets(c: dict, sc=None) -> list[str]:
+    """Each estimating controller's payload mass at the end of each segment against the truth; on
+    a plant that is not the URDF, a note on what the estimate also holds (:func:`_drawn_link_note`)."""
     out = []
     for name in ("adaptive_ct", "adaptive_ct_paper", "slotine_li"):
         if name not in c:
@@ -475,7 +476,34 @@ def _mass_targets(c: dict) -> list[str]:
             f"  payload mass by {name} (target within {TARGET_MASS_PCT:g} %, or "
             f"{TARGET_MASS_ABS} kg at 0 kg): " + ", ".join(parts)
         )
-    return out
+    return out + (_drawn_link_note(sc) if out and sc is not None else [])
+
+
+def _drawn_link_note(sc) -> list[str]:
+    """On an N-joint arm whose plant is not its URDF (drawn around it, or a URDF of its own), the
+    payload estimated is the difference of the payload frame's body from the URDF's: the link's
+    own error is in it, a payload that is not there at 0 kg."""
+    plant, arm = getattr(sc, "plant", None), sc.arm
+    if sc.closed_forms is not None or plant is None:
+        return []
+    j = arm.payload_joint
+    link = f"the link of joint {arm.joint_names[j]!r}"
+    unc = getattr(plant, "uncertainty", None)
+    if getattr(plant, "urdf", None) is not None:
+        how = "the plant is a URDF of its own"
+    elif unc is not None and (unc.mass > 0 or unc.com > 0 or unc.inertia > 0):
+        m = float(arm.pi_links[10 * j])
+        spread = (
+            f": its {m:.3g} kg within {100 * unc.mass:g} %, +- {unc.mass * m:.3g} kg" if unc.mass > 0 else ""
+        )
+        how = f"the plant is drawn around the URDF ({link}{spread})"
+    else:
+        return []
+    return [
+        f"  note: {how}: the payload estimated is the payload frame's body less the URDF's link, "
+        "so it also holds that link's own error (a mass at 0 kg, a shift of the centre of mass) as "
+        "the estimator sees it"
+    ]
 
 
 def write_json(metrics: dict, path: str | Path) -> Path:
