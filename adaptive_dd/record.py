@@ -239,6 +239,20 @@ def _numeric(path: Path, frame, col: str, rows: slice) -> Array:
     return v
 
 
+def _no_time_stamps(path: Path, frame, col: str) -> DataError:
+    """The error of a file none of whose rows has a numeric time stamp (or that has no rows)."""
+    if len(frame) == 0:
+        return DataError(f"{path}: no data rows (a header alone): is it the file meant?")
+    cell = frame[col].to_numpy()[0]
+    return DataError(
+        f"{path}: column {col!r}: no numeric time stamp in {'any of its' if len(frame) > 1 else 'its'} "
+        f"{len(frame)} row{'s' if len(frame) > 1 else ''} (line "
+        f"{_line(frame, 0)}: {cell!r}): the time column must be numbers, seconds or [record] time_unit's "
+        "unit (convert a date-time text to seconds first, e.g. pandas.to_datetime(...).astype('int64') "
+        'with time_unit = "ns")'
+    )
+
+
 def _leave_out_bad_rows(frames: dict, where: dict, spec: RecordSpec, fitted: list[str], window):
     """``frames`` without the rows whose time or fitted column (``fitted``, in ``where``'s file) is not
     a finite number, where those are at most :data:`MAX_BAD_ROWS` of a file's rows in the window
@@ -251,6 +265,8 @@ def _leave_out_bad_rows(frames: dict, where: dict, spec: RecordSpec, fitted: lis
             continue
         t = _coerced(f, spec.time) * spec.time_scale
         finite_t = np.isfinite(t)
+        if not finite_t.any():  # nothing to place in time: say why, not an empty record later
+            raise _no_time_stamps(p, f, spec.time)
         bad = ~finite_t
         bad_of = {spec.time: ~finite_t}  # per column read of this file: its bad rows (the time's first)
         for c in fitted:

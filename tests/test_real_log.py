@@ -560,8 +560,13 @@ def test_validate_an_identification_scenario(tmp_path, capsys):
     assert "# the log as identify reads it: 200 samples at T = 0.01 s (0-1.99 s of its clock)" in out
     (tmp_path / "log.csv").write_text((tmp_path / "log.csv").read_text().replace("tau2", "tau_2"))
     assert main(["validate", str(scen)]) == 1  # a problem identify would meet, said with the way out
-    out = capsys.readouterr().out
-    assert "log.csv: no column 'tau2'" in out and "--window START END" in out
+    err = capsys.readouterr().err  # where every problem validate finds is said
+    assert "log.csv: no column 'tau2'" in err and "--window START END" in err
+    iso = "".join(f"2023-11-14T22:13:{k:02d},0,0,0,0,0,0\n" for k in range(30))
+    for body, said in (("", "no data rows"), (iso, "no numeric time stamp in any of its 30 rows")):
+        (tmp_path / "log.csv").write_text("t,q1,q2,q3,tau1,tau2,tau3\n" + body)  # said, not a crash
+        assert main(["validate", str(scen)]) == 1
+        assert said in capsys.readouterr().err
     scen.write_text(scen.read_text() + "\n[run]\nduration = 2.0\n")
     assert main(["validate", str(scen)]) == 2
     assert "[run]: an identification scenario" in capsys.readouterr().err

@@ -142,8 +142,15 @@ def validate_identification(path) -> int:
     try:
         log = read_log(spec, arm=arm)  # the files themselves: columns, cells, times, units, gaps
     except DataError as exc:  # identify would meet it too, unless --window cuts the part it is in
-        print(f"# the log as identify reads it: {exc}")
-        print("#   (identify and predict take --window START END: a part of the log without it reads)")
+        print(
+            "adaptive-dd validate: 1 problem identify and predict would meet reading the log:",
+            file=sys.stderr,
+        )
+        print(f"  {exc}", file=sys.stderr)
+        print(
+            "  (identify and predict take --window START END: a part of the log without it reads)",
+            file=sys.stderr,
+        )
         return 1
     pieces = len(log.pieces) or 1
     print(
