@@ -936,3 +936,20 @@ def test_bad_times_are_named_in_the_bad_cells_error_and_a_short_log_is_not_a_rev
     eff.write_text("stamp,j_a/eff,j_b/eff,j_c/eff\n0.0,0.1,0.2,0.3\n")
     with pytest.raises(DataError, match=r"holds 1 samples .*need at least 20"):
         read_log(record_spec(_table(one, eff, exclude=["j_c"]), NAMES, KINDS, "s"))
+
+
+def test_predict_writes_an_epoch_clock_s_times_in_full(tmp_path):
+    """prediction.csv wrote every time with 8 digits: a log stamped in ns since 1970 read 1.7e+09 on
+    every row. Its steps are kept now."""
+    import argparse
+    from types import SimpleNamespace
+
+    from adaptive_dd.cli.predict import _write
+
+    t = 1.7e9 + 0.002 * np.arange(50)
+    tau = np.sin(t - t[0])[:, None] * np.ones((1, 2))
+    rec = SimpleNamespace(t=t, tau=tau)
+    args = argparse.Namespace(out=str(tmp_path / "p"))
+    _write(args, rec, tau, ("all", tau, tau), ("j1", "j2"), np.ones(2, bool))
+    back = np.loadtxt(tmp_path / "p" / "prediction.csv", delimiter=",", skiprows=1)
+    np.testing.assert_allclose(np.diff(back[:, 0]), 0.002, atol=1e-6)  # float64 at 1.7e9: 2.4e-7 s
