@@ -79,7 +79,14 @@ from adaptive_dd.record_checks import (
     _too_many_bad_rows,
     velocity_gains,
 )
-from adaptive_dd.record_pieces import MIN_PIECE_SAMPLES, find_gaps, piece_spans, resampler, trim_gap_edges
+from adaptive_dd.record_pieces import (
+    MIN_PIECE_SAMPLES,
+    clock,
+    find_gaps,
+    piece_spans,
+    resampler,
+    trim_gap_edges,
+)
 from adaptive_dd.record_spec import RecordSpec, record_spec
 
 __all__ = ["LogRecord", "RecordSpec", "derivatives", "read_log", "record_spec"]
@@ -320,19 +327,20 @@ def _times(path: Path, frame, col: str) -> Array:
 def _window_rows(path: Path, t: Array, window) -> slice:
     lo, hi = (t[0], t[-1]) if window is None else window
     if window is not None and not lo < hi:
-        raise DataError(f"{path}: the window [{lo:.10g}, {hi:.10g}] s: its start must be before its end")
+        raise DataError(f"{path}: the window [{clock(lo)}, {clock(hi)}] s: its start must be before its end")
     i0, i1 = int(np.searchsorted(t, lo)), int(np.searchsorted(t, hi, side="right"))
     if i1 - i0 < 20:
         step = float(np.median(np.diff(t))) if t.size > 1 else 0.0
         unit = (
-            f"; its stamps step by {step:.6g} per sample (median), read as s: if they are in ms, us "
-            'or ns, say so ([record] time_unit = "ms"; the window stays in s)'
+            f"; its stamps step by {step:.6g} per sample (median), read as s: if they are in "
+            f'{_likely_unit(step)}, say so ([record] time_unit = "{_likely_unit(step)}"; the window stays '
+            "in s)"
             if step > MAX_LOG_STEP
             else ""
         )
         raise DataError(
-            f"{path}: the window [{lo:.10g}, {hi:.10g}] s holds {max(i1 - i0, 0)} samples (the log spans "
-            f"{t[0]:.10g}-{t[-1]:.10g} s): need at least 20{unit}"
+            f"{path}: the window [{clock(lo)}, {clock(hi)}] s holds {max(i1 - i0, 0)} samples (the log spans "
+            f"{clock(t[0])}-{clock(t[-1])} s): need at least 20{unit}"
         )
     return slice(i0, i1)
 
@@ -525,6 +533,16 @@ window spans most of a second); a coarser one is a time column in another unit (
 time_unit``): a 1 kHz log stamped in ms steps by exactly 1."""
 
 
+def _likely_unit(step: float, as_period: bool = False) -> str:
+    """The time unit (ms, us or ns) that makes a median stamp step of ``step`` a robot's sample
+    period (the first within :data:`MAX_LOG_STEP`, from ms down; ns when none is); ``as_period``: that
+    period in s, as text."""
+    from adaptive_dd.record_spec import TIME_UNITS
+
+    unit = next((u for u in ("ms", "us", "ns") if step * TIME_UNITS[u] <= MAX_LOG_STEP), "ns")
+    return f"{step * TIME_UNITS[unit]:.4g} s" if as_period else unit
+
+
 def _first_clock(spec: RecordSpec, clocks: dict, rows: dict) -> tuple[Array, float]:
     """The first file's times in the window and the sample period: given, else the mean step
     between its gaps (:func:`~adaptive_dd.record_pieces.find_gaps`; jitter averages out)."""
@@ -538,9 +556,10 @@ def _first_clock(spec: RecordSpec, clocks: dict, rows: dict) -> tuple[Array, flo
     if median > MAX_LOG_STEP:  # with sample_period given too: the grid is in s, the stamps are not
         raise DataError(
             f"{first}: the time column {spec.time!r} steps by {median:.6g} per sample (median), read as "
-            f"s: a robot's log samples faster than every {MAX_LOG_STEP:g} s. If its time is in ms, us or "
-            'ns (ROS stamps often are), say so: [record] time_unit = "ms" (or "us", "ns"); a log truly '
-            f"slower than {1 / MAX_LOG_STEP:g} Hz is too coarse for the accelerations this identification "
+            f"s: a robot's log samples faster than every {MAX_LOG_STEP:g} s. If its time is in "
+            f"{_likely_unit(median)} (a step of {_likely_unit(median, True)}), say so: [record] time_unit = "
+            f'"{_likely_unit(median)}"; a log truly slower than {1 / MAX_LOG_STEP:g} Hz is too coarse for '
+            "the accelerations this identification "
             "derives"
         )
     return t0, spec.sample_period or float(np.mean(steps[ok]))
@@ -549,7 +568,7 @@ def _first_clock(spec: RecordSpec, clocks: dict, rows: dict) -> tuple[Array, flo
 def _resampling_note(t0: Array, T: float, qd_measured: bool) -> str:
     steps = np.diff(t0)
     return (
-        f"{t0.size} logged samples over {t0[0]:.4g}-{t0[-1]:.4g} s, steps {steps.min() * 1e3:.3g}-"
+        f"{t0.size} logged samples over {clock(t0[0])}-{clock(t0[-1])} s, steps {steps.min() * 1e3:.3g}-"
         f"{steps.max() * 1e3:.3g} ms (median {np.median(steps) * 1e3:.4g}); resampled to T = {T:.6g} s: "
         "positions by cubic spline, torques"
         + (" and velocities" if qd_measured else "")

@@ -45,6 +45,7 @@ from numpy.typing import NDArray
 from adaptive_dd.errors import DataError
 
 __all__ = [
+    "clock",
     "drop_short",
     "find_gaps",
     "gap_threshold",
@@ -64,6 +65,13 @@ BRIDGE_STEPS = 2.5
 is bridged by the interpolation, not split."""
 MIN_PIECE_SAMPLES = 7
 """Fewest samples a piece needs on its grid (the shortest Savitzky-Golay window)."""
+
+
+def clock(t: float) -> str:
+    """A time stamp [s] as messages print it: 6 significant digits, or to the microsecond on a clock
+    far from zero (seconds since 1970 read 1.7e+09 at every stamp of a log)."""
+    t = float(t)
+    return f"{t:.6g}" if abs(t) < 1e5 else f"{t:.6f}".rstrip("0").rstrip(".")
 
 
 def gap_threshold(steps: Array) -> float:
@@ -98,7 +106,7 @@ def piece_spans(clocks: dict, lo: float, hi: float) -> tuple[list[tuple[float, f
             continue
         gaps.append((a, b))
         lines.append(
-            f"a gap of {b - a:.4g} s at {a:.6g}-{b:.6g} s ({(b - a) / med:.3g} median steps) in "
+            f"a gap of {b - a:.4g} s at {clock(a)}-{clock(b)} s ({(b - a) / med:.3g} median steps) in "
             f"{', '.join(files)} (a gap: a step above {limit:.4g} s, max(Q3 + 3 IQR, 1.5 median) of the "
             "log's steps)"
         )
@@ -198,8 +206,8 @@ def drop_short(rec, settle: int):
             keep.append(i)
             continue
         lines.append(
-            f"{rec.piece_label(i)}: the piece {rec.t[a]:.6g}-{rec.t[b - 1]:.6g} s ({b - a} samples) is too "
-            f"short to use: the filters settle over its first {settle} samples "
+            f"{rec.piece_label(i)}: the piece {clock(rec.t[a])}-{clock(rec.t[b - 1])} s ({b - a} samples) "
+            f"is too short to use: the filters settle over its first {settle} samples "
             f"({settle * rec.sample_period:.3g} s = 10 tau_f): left out"
         )
     if not keep:
@@ -246,7 +254,7 @@ def trim_gap_edges(pieces, qd_measured: bool, T: float, short, derivative_window
         f"split at the gaps into {len(pieces)} continuous piece{'s' if len(pieces) > 1 else ''}, each {each}"
     ]
     notes += [
-        f"the piece {a:.6g}-{b:.6g} s is too short to use (under {MIN_PIECE_SAMPLES} samples): left out"
+        f"the piece {clock(a)}-{clock(b)} s is too short to use (under {MIN_PIECE_SAMPLES} samples): left out"
         for a, b in short
     ]
     return np.concatenate(keep), tuple((a, b) for a, b in out if b > a), tuple(notes)

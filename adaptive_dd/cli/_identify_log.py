@@ -366,7 +366,7 @@ def _read(args, arm, files):
     short to use left out, what was read printed; ``(spec, record, tau_f)``."""
     from adaptive_dd.cli._records import read_records
     from adaptive_dd.identification.log_fit import filter_time_constant
-    from adaptive_dd.record_pieces import drop_short
+    from adaptive_dd.record_pieces import clock, drop_short
 
     spec, rec, recs = read_records(args.arm, arm, files, args.window)
     tau_f = args.tau_f or filter_time_constant(rec.sample_period)
@@ -378,7 +378,7 @@ def _read(args, arm, files):
         )
     print(
         f"{rec.source}: {rec.t.size} samples at T = {rec.sample_period:.6g} s "
-        f"({rec.t[0]:.4g}-{rec.t[-1]:.4g} s), {arm.n_joints} joints, {len(arm.sigma)} base parameters; "
+        f"({clock(rec.t[0])}-{clock(rec.t[-1])} s), {arm.n_joints} joints, {len(arm.sigma)} base parameters; "
         f"velocities {'measured' if rec.qd_measured else 'derived from the positions'}"
     )
     if len(recs) > 1:

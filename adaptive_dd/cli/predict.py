@@ -55,6 +55,7 @@ def run(args: argparse.Namespace) -> int:
     from adaptive_dd.cli._records import read_records
     from adaptive_dd.identification.identified_model import load_identified_model
     from adaptive_dd.outputs import check_output_dir
+    from adaptive_dd.record_pieces import clock
 
     check_output_dir(args.out)  # before any work, as every command does
     m = load_identified_model(args.model, need_urdf=False)
@@ -66,7 +67,7 @@ def run(args: argparse.Namespace) -> int:
     parts = [_predict(r, m, model, args.lowpass) for r in recs]
     print(
         f"{rec.source}: {rec.t.size} samples at T = {rec.sample_period:.6g} s "
-        f"({rec.t[0]:.4g}-{rec.t[-1]:.4g} s); model {args.model}; accelerations by Savitzky-Golay "
+        f"({clock(rec.t[0])}-{clock(rec.t[-1])} s); model {args.model}; accelerations by Savitzky-Golay "
         "(cubic, ~0.1 s)"
         + (
             f"; {len(rec.spans)} continuous pieces, each differentiated and low-passed on its own"
