@@ -83,7 +83,8 @@ def to_frame(res):
     rms_error_joint1_rad .. rms_error_jointN_rad, max_error_rad, rms_torque_Nm,
     saturation_fraction, rms_error_settled_rad, settling_time_s, mass_estimate_kg,
     com_estimate_x_m, com_estimate_y_m, com_estimate_z_m, floor, ratio_to_floor,
-    time_to_floor_s, detection_delay_s, false_alarms, failed, failed_at_s, failure, engine,
+    time_to_floor_s, detection_delay_s, false_alarms (the segment's alarms no swap explains), failed,
+    failed_at_s, failure, engine,
     ee_position_rms_mm, ee_position_max_mm, ee_orientation_rms_deg`` (the tool frame's error,
     :mod:`~adaptive_dd.benchmark.end_effector`, streamed for every seed; metrics:
     :mod:`~adaptive_dd.benchmark.metrics`). NaN where a figure does not apply: the
@@ -162,8 +163,11 @@ def _controller_rows(res, name: str, run, per: dict) -> list[dict]:
     ttf = per_seed_time_to_floor(res, run)
     ttf = np.full(len(res.seed_indices), np.nan) if ttf is None else ttf
     false, delays = None, {}
-    if run.alarm_times is not None:
-        false = false_alarm_counts(run.alarm_times, sc.swap_times)
+    if run.alarm_times is not None:  # per segment: the alarms in it that no swap explains
+        false = np.array(
+            [false_alarm_counts([[x for x in tr if a <= x < b] for tr in run.alarm_times], sc.swap_times)
+             for a, b, _ in segs]
+        ).T  # fmt: skip
         delays = {s: detection_delays(run.alarm_times, a) for s, (a, _, _) in enumerate(segs) if s > 0}
     why = {f["seed"]: f for f in run.failures(sc.sample_period, res.seed_indices or None)}
     rows = []
@@ -181,7 +185,7 @@ def _controller_rows(res, name: str, run, per: dict) -> list[dict]:
             )
             row["time_to_floor"] = ttf[i] if s == 0 else np.nan
             row["detection_delay"] = delay
-            row["false_alarms"] = np.nan if false is None or failed else false[i]
+            row["false_alarms"] = np.nan if false is None or failed else false[i, s]
             row["failed"] = bool(run.failed[i])
             row["failed_at"] = np.nan if fail is None or fail["t"] is None else fail["t"]
             row["failure"] = "" if fail is None else fail["why"]
