@@ -555,3 +555,23 @@ def test_payload_only_says_whether_its_fit_converged(tmp_path, capsys):
     assert main([*argv, "--out", str(tmp_path / "fit")]) == 0
     written = json.loads((tmp_path / "fit" / "payload.json").read_text())
     assert written["output_error"]["converged"] is False and written["scenario_payload"]["mass"] >= 0
+
+
+def test_identify_warns_where_output_error_leaves_the_wls_bound(capsys):
+    """On a simulated Kinova record the WLS bounds missed 13 of 35 parameters that output error,
+    converged with its noise model, put on the truth; nothing said so. A warning names how many and
+    the farthest; none when they agree, when output error did not converge or its residual is off."""
+    from types import SimpleNamespace
+
+    from adaptive_dd.cli._identify_log import _disagreement
+
+    model = SimpleNamespace(names=("a", "b", "c"))
+    fit = SimpleNamespace(sigma=np.array([1.0, 2.0, 3.0]), std=np.array([0.1, 0.1, 0.1]), quantile=2.1)
+    share = np.array([0.0, 0.0, 0.9])  # c held at the URDF's value: not judged
+    oe = SimpleNamespace(sigma=np.array([1.5, 2.05, 9.0]), converged=True, cost=50.0, n_residuals=100)
+    _disagreement(model, fit, oe, share)
+    out = capsys.readouterr().out
+    assert "outside the WLS estimate's 95 % bound on 1 of 2 parameters (the farthest a: 5.0" in out
+    for other in ({"converged": False}, {"cost": 500.0}, {"sigma": np.array([1.1, 2.0, 9.0])}):
+        _disagreement(model, fit, SimpleNamespace(**{**vars(oe), **other}), share)
+        assert capsys.readouterr().out == ""

@@ -22,12 +22,14 @@ def _write_estimates(path, model, fit) -> None:
 
     with atomic_write(path) as fh:
         # half_width_95: estimate +- it is the 95 % bound (quantile x std: the std's quantile is not 1.96)
-        fh.write("name,estimate,std,half_width_95,identified,urdf\n")
+        # held: the estimate is mostly the prior's (the URDF's value), as the printed table marks it
+        fh.write("name,estimate,std,half_width_95,identified,held,urdf\n")
+        share = fit.held.share if fit.held is not None else np.zeros(model.p)
         for k, name in enumerate(model.names):
             half = fit.quantile * fit.std[k]
             fh.write(
                 f'"{name}",{fit.sigma[k]:.10g},{fit.std[k]:.4g},{half:.4g},{int(fit.identified[k])},'
-                f"{model.sigma_ref[k]:.10g}\n"
+                f"{int(share[k] > 0.5)},{model.sigma_ref[k]:.10g}\n"
             )
 
 
