@@ -94,7 +94,17 @@ def test_validate_says_what_the_estimator_derives_and_from_what(drawn):
     printed = resolved_settings(drawn)
     keys = (".estimator.", ".detector.", "arm.payload_offset")
     assert lines == [line for line in printed if any(k in line for k in keys)]
-    assert "estimator.mode = 'arm'   (derived: the model's stated uncertainty" in lines[0]
+    assert (
+        "estimator.mode = 'arm'   (derived: the [plant.uncertainty] levels, [model] uncertainty not"
+        in lines[0]
+    )
+    from adaptive_dd.benchmark.scenario import parse_scenario, read_toml
+
+    data = read_toml(SCENARIOS / "gen3_drawn.toml")
+    data["model"] = {"uncertainty": {"mass": 0.05}}  # stated: said as such, not as the plant's draw
+    data["arm"] = {**{k: v for k, v in data["arm"].items() if k != "urdf"}, "robot": "gen3"}
+    stated = derived_estimator_settings(parse_scenario(data, "g.toml"))
+    assert "(derived: the model's stated uncertainty ([model] uncertainty))" in stated[0]
     w = task_row_weights(drawn.arm, OnlineConfig(sample_period=drawn.sample_period), drawn)  # noise's scale
     assert f"row_weights = {[float(f'{x:.4g}') for x in w]}   (derived: each equation's RMS error" in lines[1]
     assert "carrying 4 kg x sqrt(tau_f / T)" in lines[1]

@@ -218,7 +218,15 @@ def derived_estimator_settings(scenario) -> list[str]:
         return []
     est = scenario.options("adaptive_ct").get("estimator", {})
     arm, pre = scenario.arm, "controllers.adaptive_ct.estimator"
-    why = "given" if "mode" in est else "derived: the model's stated uncertainty ([model] uncertainty)"
+    drawn = getattr(getattr(scenario, "plant", None), "uncertainty", None)
+    if "mode" in est:
+        why = "given"
+    elif "arm_prior_cov" in est:
+        why = "derived: [model] from, the identified model's covariance"
+    elif drawn is not None and getattr(scenario, "model_uncertainty", None) is drawn:
+        why = "derived: the [plant.uncertainty] levels, [model] uncertainty not stated"
+    else:
+        why = "derived: the model's stated uncertainty ([model] uncertainty)"
     if why != "given" and online.mode != "arm":
         why = "default: no [model] uncertainty or [plant.uncertainty], the arm taken as exact"
     out = [f"{pre}.mode = {online.mode!r}   ({why})"]
