@@ -206,7 +206,8 @@ def _seed_tables(ctrls: dict, head: str, caveat: str | None = None) -> list[str]
         for s in c["segments"]:
             st = s.get("ratio_to_floor")
             ci = st and st["ci95"]
-            cells += f"{ci[0]:7.2f}-{ci[1]:.2f} #{st['worst_seed']:<4d}" if ci else f"{'—':>16}"
+            text = f"[{_ci_end(ci[0])}, {_ci_end(ci[1])}]" if ci else ""  # brackets: -2.09-8.27 read as one
+            cells += " " + f"{text + ' #' + str(st['worst_seed']):>15}" if ci else f"{'—':>16}"
         lines.append(f"{name:18s}{cells}")
     lines += [time_to_floor_line(n, c) for n, c in rows if c["segments"][0].get("time_to_floor")]
     fa = [(n, c) for n, c in ctrls.items() if c.get("false_alarms_per_seed") is not None]
@@ -228,6 +229,11 @@ def _seed_tables(ctrls: dict, head: str, caveat: str | None = None) -> list[str]
             + (f" ({per_swap})" if per_swap else "")
         )
     return [*lines, ""]
+
+
+def _ci_end(x: float) -> str:
+    """An end of a ratio's confidence interval: two decimals below 10, one below 100, none above."""
+    return f"{x:.2f}" if abs(x) < 10 else f"{x:.1f}" if abs(x) < 100 else f"{x:.0f}"
 
 
 def _seconds(t) -> str:
