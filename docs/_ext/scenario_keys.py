@@ -433,6 +433,12 @@ def setup(app):
 
 
 if __name__ == "__main__":
+    import sys
+
+    if "--write" in sys.argv[1:]:  # the committed page (tests/test_first_run.py holds it to page())
+        target = Path(__file__).resolve().parents[1] / "guide" / "scenario_keys.md"
+        target.write_text(page())
+        print(f"wrote {target}")
     keys = every_key()
     for where, names in keys.items():
         print(f"{where} ({len(names)}): {', '.join(names)}")
