@@ -132,7 +132,7 @@ def test_the_scenario_keys_page_lists_every_key_and_stops_on_drift(monkeypatch):
     # the page is in the repository (its links work in a clone, not only in the built site), as
     # the generator writes it: `python docs/_ext/scenario_keys.py --write` after a key changes
     committed = (ROOT / "docs" / "guide" / "scenario_keys.md").read_text()
-    assert committed == page, "docs/guide/scenario_keys.md is stale: python docs/_ext/scenario_keys.py --write"
+    assert committed == page, "stale: python docs/_ext/scenario_keys.py --write"
     for table, keys in KEYS.items():
         assert f"`[{table}]`" in page or f"`[[{table}]]`" in page or f"`[{table}.NAME]`" in page
         for k in keys or ():
