@@ -79,7 +79,8 @@ def _print_fit(model, fit, names: tuple[str, ...]) -> None:
         print(
             f"warning: {names[j]}: the residual is {ratio:.0f}x the sensor noise ({fit.noise_rms[j]:.2g} N m "
             "after the filter): the model explains this channel far worse than the sensor allows (friction "
-            "law, unmodelled dynamics, conversion constants); the std above account for it"
+            "law, unmodelled dynamics, conversion constants, a clock offset between the log's files); "
+            "the std above account for it"
         )
 
 
