@@ -296,6 +296,10 @@ def _leave_out_bad_rows(frames: dict, where: dict, spec: RecordSpec, fitted: lis
             continue
         lines = [_line(f, int(i)) for i in np.flatnonzero(drop)[:5]]
         more = ", ..." if drop.sum() > 5 else ""
+        if drop[-1] and bool(f.iloc[-1].isna().any()):  # cells missing at the end: not a missed sample
+            more += (
+                f"; line {_line(f, len(f) - 1)}, the file's last, is cut short (a file copied while written)"
+            )
         out[p] = f[~drop]  # each row keeps its index: its line in the file (_line)
         out[p].attrs.update(f.attrs)
         notes.append(
