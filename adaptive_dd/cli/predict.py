@@ -75,6 +75,10 @@ def run(args: argparse.Namespace) -> int:
             else ""
         )
     )
+    for (
+        note
+    ) in rec.notes:  # what reading left out or repaired (gaps, missed samples, repeats), as identify says
+        print(f"  {note}")
     labels = ["unfiltered"] + ([f"low-passed {args.lowpass:g} Hz"] * bool(args.lowpass))
     if len(recs) > 1:
         for r, (tau, th, lp) in zip(recs, parts, strict=True):
