@@ -76,9 +76,11 @@ from adaptive_dd.record_checks import (
     _check_units,
     _check_velocity_scale,
     _line,
+    _no_time_stamps,
     _too_many_bad_rows,
     velocity_gains,
 )
+from adaptive_dd.record_derivatives import derivatives
 from adaptive_dd.record_pieces import (
     MIN_PIECE_SAMPLES,
     clock,
@@ -92,9 +94,6 @@ from adaptive_dd.record_spec import RecordSpec, record_spec
 __all__ = ["LogRecord", "RecordSpec", "derivatives", "read_log", "record_spec"]
 
 Array = NDArray[np.float64]
-
-DERIVATIVE_WINDOW = 0.1
-"""Savitzky-Golay window [s] of derived velocities and accelerations."""
 
 
 @dataclass(frozen=True)
@@ -244,20 +243,6 @@ def _numeric(path: Path, frame, col: str, rows: slice) -> Array:
             "one meant? Else cut the window to avoid them ([record] window or --window) or repair the file"
         )
     return v
-
-
-def _no_time_stamps(path: Path, frame, col: str) -> DataError:
-    """The error of a file none of whose rows has a numeric time stamp (or that has no rows)."""
-    if len(frame) == 0:
-        return DataError(f"{path}: no data rows (a header alone): is it the file meant?")
-    cell = frame[col].to_numpy()[0]
-    return DataError(
-        f"{path}: column {col!r}: no numeric time stamp in {'any of its' if len(frame) > 1 else 'its'} "
-        f"{len(frame)} row{'s' if len(frame) > 1 else ''} (line "
-        f"{_line(frame, 0)}: {cell!r}): the time column must be numbers, seconds or [record] time_unit's "
-        "unit (convert a date-time text to seconds first, e.g. pandas.to_datetime(...).astype('int64') "
-        'with time_unit = "ns")'
-    )
 
 
 def _leave_out_bad_rows(frames: dict, where: dict, spec: RecordSpec, fitted: list[str], window):
@@ -598,22 +583,3 @@ def _velocity_lag(logged: Array, derived: Array, gains: Array, T: float, names, 
     if used and k > 2:
         text += ': it is filtered; velocity_source = "derived" avoids the lag'
     return text
-
-
-def derivative_samples(T: float, n: int, window: float = DERIVATIVE_WINDOW) -> int:
-    """The odd number of samples of :func:`derivatives`' window on ``n`` samples at ``T``."""
-    return min(max(7, 2 * round(window / T / 2) + 1), n - (1 - n % 2))
-
-
-def derivatives(q: Array, T: float, window: float = DERIVATIVE_WINDOW) -> tuple[Array, Array]:
-    """Velocity and acceleration ``(N, n)`` of uniformly sampled positions (Savitzky-Golay, cubic).
-
-    The window is ``window`` seconds rounded to an odd number of samples (at least 7): a
-    zero-phase smoothing differentiator whose gain falls off above about ``1 / window`` Hz.
-    """
-    from scipy.signal import savgol_filter
-
-    m = derivative_samples(T, q.shape[0], window)
-    qd = savgol_filter(q, m, 3, deriv=1, delta=T, axis=0, mode="interp")
-    qdd = savgol_filter(q, m, 3, deriv=2, delta=T, axis=0, mode="interp")
-    return qd, qdd

@@ -154,3 +154,17 @@ def _too_many_bad_rows(path, frame, bad_of: dict, n_in: int, in_window, limit: f
         f"samples ({cols}): is each column the one meant? Else cut the window to avoid them ([record] "
         "window or --window) or repair the file"
     )
+
+
+def _no_time_stamps(path, frame, col: str) -> DataError:
+    """The error of a file none of whose rows has a numeric time stamp (or that has no rows)."""
+    if len(frame) == 0:
+        return DataError(f"{path}: no data rows (a header alone): is it the file meant?")
+    cell = frame[col].to_numpy()[0]
+    return DataError(
+        f"{path}: column {col!r}: no numeric time stamp in {'any of its' if len(frame) > 1 else 'its'} "
+        f"{len(frame)} row{'s' if len(frame) > 1 else ''} (line "
+        f"{_line(frame, 0)}: {cell!r}): the time column must be numbers, seconds or [record] time_unit's "
+        "unit (convert a date-time text to seconds first, e.g. pandas.to_datetime(...).astype('int64') "
+        'with time_unit = "ns")'
+    )

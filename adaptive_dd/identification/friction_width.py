@@ -75,7 +75,7 @@ def derived_velocity_noise_std(q: Array, sample_period: float) -> float:
     :func:`velocity_noise_std` of it reads a width two orders of magnitude too small."""
     from scipy.signal import savgol_coeffs
 
-    from adaptive_dd.record import derivative_samples
+    from adaptive_dd.record_derivatives import derivative_samples
 
     q = np.asarray(q, dtype=float)
     if q.ndim != 2 or q.shape[0] < 7:
