@@ -208,6 +208,7 @@ def test_two_workers_give_the_same_table_and_flags_as_one(tmp_path):
     assert any(f["scenario"] == paths[1].name for f in one.attrs["flags"])
 
 
+@pytest.mark.slow  # a recording loop of its own compiled for it: about 55 s of a fresh clone's default run
 def test_the_loop_streams_each_segments_first_saturated_sample():
     """Per trial and segment, ``first_saturated`` is the first sample whose command saturated (as
     the recording has it), on the compiled and the Python path alike; NaN in a segment with none."""

@@ -121,6 +121,7 @@ def test_lugre_parameters_from_a_scenario_table_and_their_errors():
         arm_from_tables(None, {"friction": "lugre", "lugre_damping": [300, -1]})
 
 
+@pytest.mark.slow  # the LuGre plant's closed loop compiled for it alone: about 40 s of a fresh run
 def test_compiled_and_python_closed_loops_agree_on_the_lugre_plant():
     sc = load_scenario(Path(__file__).parents[1] / "benchmarks" / "scenarios" / "lugre_friction.toml")
     sc = dataclasses.replace(sc, seeds=2, duration=3.0, swap_times=(1.5,), swap_masses=(3.0,))
