@@ -281,7 +281,8 @@ def _leave_out_bad_rows(frames: dict, where: dict, spec: RecordSpec, fitted: lis
             continue
         lines = [_line(f, int(i)) for i in np.flatnonzero(drop)[:5]]
         more = ", ..." if drop.sum() > 5 else ""
-        if drop[-1] and bool(f.iloc[-1].isna().any()):  # cells missing at the end: not a missed sample
+        gone = f.iloc[-1].isna().to_numpy()  # the last row's empty cells: cut short when they run to its end
+        if drop[-1] and gone[-1] and gone[int(np.argmax(gone)) :].all():
             more += (
                 f"; line {_line(f, len(f) - 1)}, the file's last, is cut short (a file copied while written)"
             )
@@ -313,17 +314,17 @@ def _times(path: Path, frame, col: str) -> Array:
     return t
 
 
-def _window_rows(path: Path, t: Array, window) -> slice:
+def _window_rows(path: Path, t: Array, window, time_scale: float = 1.0) -> slice:
     lo, hi = (t[0], t[-1]) if window is None else window
     if window is not None and not lo < hi:
         raise DataError(f"{path}: the window [{clock(lo)}, {clock(hi)}] s: its start must be before its end")
     i0, i1 = int(np.searchsorted(t, lo)), int(np.searchsorted(t, hi, side="right"))
     if i1 - i0 < 20:
         step = float(np.median(np.diff(t))) if t.size > 1 else 0.0
+        likely = _likely_unit(step / time_scale)  # from the column's own numbers
         unit = (
-            f"; its stamps step by {step:.6g} per sample (median), read as s: if they are in "
-            f'{_likely_unit(step)}, say so ([record] time_unit = "{_likely_unit(step)}"; the window stays '
-            "in s)"
+            f"; its stamps step by {step:.6g} s per sample (median): if they are in {likely}, say so "
+            f'([record] time_unit = "{likely}"; the window stays in s)'
             if step > MAX_LOG_STEP
             else ""
         )
@@ -403,7 +404,7 @@ def read_log(spec: RecordSpec, window: tuple[float, float] | None = None, arm=No
             frames[p].attrs.update(f.attrs, repeats=f.attrs.get("repeats", 0) + int(again.sum()))
     frames, missed = _leave_out_bad_rows(frames, where, spec, [c for c in cols if c not in excluded], window)
     clocks = {p: _times(p, f, spec.time) * spec.time_scale for p, f in frames.items()}
-    rows = {p: _window_rows(p, clocks[p], window) for p in frames}
+    rows = {p: _window_rows(p, clocks[p], window, spec.time_scale) for p in frames}
     t0, T = _first_clock(spec, clocks, rows)
     lo = max(clocks[p][rows[p]][0] for p in frames)
     hi = min(clocks[p][rows[p]][-1] for p in frames)
@@ -523,12 +524,13 @@ time_unit``): a 1 kHz log stamped in ms steps by exactly 1."""
 
 
 def _likely_unit(step: float, as_period: bool = False) -> str:
-    """The time unit (ms, us or ns) that makes a median stamp step of ``step`` a robot's sample
-    period (the first within :data:`MAX_LOG_STEP`, from ms down; ns when none is); ``as_period``: that
-    period in s, as text."""
+    """The time unit (ms, us or ns) that makes a median stamp step of ``step`` (in the column's own
+    numbers) a robot's sample period: of those within :data:`MAX_LOG_STEP`, the nearest 1 ms (ns
+    when none is); ``as_period``: that period in s, as text."""
     from adaptive_dd.record_spec import TIME_UNITS
 
-    unit = next((u for u in ("ms", "us", "ns") if step * TIME_UNITS[u] <= MAX_LOG_STEP), "ns")
+    fit = [u for u in ("ms", "us", "ns") if step * TIME_UNITS[u] <= MAX_LOG_STEP]
+    unit = min(fit, key=lambda u: abs(np.log10(max(step * TIME_UNITS[u], 1e-300) / 1e-3)), default="ns")
     return f"{step * TIME_UNITS[unit]:.4g} s" if as_period else unit
 
 
@@ -542,12 +544,13 @@ def _first_clock(spec: RecordSpec, clocks: dict, rows: dict) -> tuple[Array, flo
     ok = np.ones(steps.size, dtype=bool)
     ok[gaps] = False
     median = float(np.median(steps)) if steps.size else 0.0
+    raw = median / spec.time_scale  # the step in the column's own numbers (time_unit undone)
     if median > MAX_LOG_STEP:  # with sample_period given too: the grid is in s, the stamps are not
         raise DataError(
             f"{first}: the time column {spec.time!r} steps by {median:.6g} per sample (median), read as "
             f"s: a robot's log samples faster than every {MAX_LOG_STEP:g} s. If its time is in "
-            f"{_likely_unit(median)} (a step of {_likely_unit(median, True)}), say so: [record] time_unit = "
-            f'"{_likely_unit(median)}"; a log truly slower than {1 / MAX_LOG_STEP:g} Hz is too coarse for '
+            f"{_likely_unit(raw)} (a step of {_likely_unit(raw, True)}), say so: [record] time_unit = "
+            f'"{_likely_unit(raw)}"; a log truly slower than {1 / MAX_LOG_STEP:g} Hz is too coarse for '
             "the accelerations this identification "
             "derives"
         )

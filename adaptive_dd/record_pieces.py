@@ -68,10 +68,10 @@ MIN_PIECE_SAMPLES = 7
 
 
 def clock(t: float) -> str:
-    """A time stamp [s] as messages print it: 6 significant digits, or to the microsecond on a clock
-    far from zero (seconds since 1970 read 1.7e+09 at every stamp of a log)."""
+    """A time stamp [s] as messages print it: 6 significant digits below 1000 s, to the microsecond
+    beyond (an uptime or an epoch clock: seconds since 1970 read 1.7e+09 at every stamp of a log)."""
     t = float(t)
-    return f"{t:.6g}" if abs(t) < 1e5 else f"{t:.6f}".rstrip("0").rstrip(".")
+    return f"{t:.6g}" if abs(t) < 1e3 else f"{t:.6f}".rstrip("0").rstrip(".")
 
 
 def gap_threshold(steps: Array) -> float:

@@ -180,3 +180,15 @@ def test_bad_payload_is_rejected():
         Payload(-1.0)
     with pytest.raises(ParameterError, match="radius"):
         payload_sigma_delta(1.0, -0.1)
+
+
+def test_the_positive_definiteness_check_passes_a_definite_matrix_only():
+    """It printed a negative "max error" against a tolerance of 0 and passed a singular matrix; it
+    prints the smallest eigenvalue over the largest, which must be above 0."""
+    from adaptive_dd.plant.pinocchio_model import positive_definite_check
+
+    good = positive_definite_check(np.diag([2.0, 0.5]))
+    assert good.passed and "smallest eigenvalue / largest  2.50e-01  (must be > 0)" in str(good)
+    assert float(str(good).split("largest")[1].split()[0]) == 0.25
+    assert not positive_definite_check(np.diag([1.0, 0.0])).passed
+    assert not positive_definite_check(np.diag([1.0, -0.1])).passed

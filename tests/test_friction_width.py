@@ -193,9 +193,10 @@ def test_an_estimated_width_widens_its_coulomb_levels_std():
 
 def test_simulate_then_identify_fits_the_law_the_record_was_made_with(tmp_path, capsys):
     """``simulate --arm`` writes ``trajectory.json`` (its plant's ``fc tanh(qd / v_f)``) beside the
-    record; ``identify --arm`` on that record fits the same width by default. Without the file it
-    falls back on the record's velocity noise (0.007 rad/s here, against the plant's 0.02: the
-    output error's normalised residual was 2.1 and an armature came out negative)."""
+    record; ``identify --arm`` on that record fits the same width by default. Without the file the
+    law is not stated and the width is estimated (profile: within 0.01-0.04 of the plant's 0.02; the
+    record's velocity noise, 0.007 rad/s, gave an output error residual of 2.1 and a negative
+    armature); with a file stating a law with a sign, the noise's width."""
     import json
 
     from adaptive_dd.cli import main

@@ -132,6 +132,10 @@ def test_identify_cli_reports_the_held_direction_and_hands_on_the_prior(still_jo
     assert "the record's std" in line
     row = next(x for x in text.splitlines() if x.startswith("fv3 "))
     assert row.split()[3] == "held"
+    import pandas as pd
+
+    est = pd.read_csv(out / "estimates.csv")  # the file marks it as the table does
+    assert est.set_index("name").loc["fv3", "held"] == 1 and est["held"].sum() < len(est)
     m = json.loads((out / "model.json").read_text())
     k = m["names"].index("fv3")
     s0 = base_prior_std(arm_model(sc.arm))

@@ -378,7 +378,17 @@ def test_cli_simulate_and_identify_end_to_end(tmp_path, capsys):
         "\n".join([lines[0], *(",".join([*r[:j], repr(float(r[j]) - 0.8), *r[j + 1 :]]) for r in rows[1:])])
         + "\n"
     )
-    args = ["identify", "--arm", str(scen), str(off), "--out", str(tmp_path / "off")]
+    # the law the record was simulated with, as its trajectory.json would state it
+    args = [
+        "identify",
+        "--arm",
+        str(scen),
+        str(off),
+        "--out",
+        str(tmp_path / "off"),
+        "--coulomb-width",
+        "0.02",
+    ]
     assert main([*args, "--torque-offset", "on"]) == 0
     out = capsys.readouterr().out
     res = float(out.split("normalised residual ")[1].split()[0])

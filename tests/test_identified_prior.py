@@ -290,7 +290,8 @@ def test_identify_and_the_excitation_phase_fit_one_friction_on_one_record(tmp_pa
     scen = tmp_path / "v3.toml"
     scen.write_text('[arm]\nrobot = "vertical3"\n')
     out = tmp_path / "id"
-    # the record's law (a sign) stated: without it identify estimates the width (profile)
+    # the width the excitation phase takes (it knows its plant's law); identify's default on a
+    # record whose law is not stated estimates it (profile)
     argv = ["identify", "--arm", str(scen), str(path), "--out", str(out), "--output-error", "off"]
     assert main([*argv, "--coulomb-width", "noise"]) == 0
     m = json.loads((out / "model.json").read_text())

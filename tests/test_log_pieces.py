@@ -457,3 +457,13 @@ def test_fixed_b_quantile_is_the_studentised_mean_s_under_a_bartlett_std():
     assert fixed_b_quantile(0.0) == pytest.approx(1.96, abs=1e-3)
     with pytest.raises(ValueError, match=r"b = 1\.5"):
         fixed_b_quantile(1.5)
+
+
+def test_times_are_printed_to_the_microsecond_on_a_clock_far_from_zero():
+    """An epoch clock read 1.7e+09 at every stamp, an uptime clock 20001 at 20001.05 and 20001.02:
+    a window's ends and a gap's could not be told apart."""
+    from adaptive_dd.record_pieces import clock
+
+    assert clock(9.999) == "9.999" and clock(0) == "0" and clock(-3.25) == "-3.25"
+    assert clock(20001.05) == "20001.05" and clock(1700000011.000034) == "1700000011.000034"
+    assert clock(1700000011.02) != clock(1700000011.03)

@@ -970,3 +970,8 @@ def test_a_log_s_last_line_cut_short_is_said_so(tmp_path, capsys):
     assert main(["validate", str(scen)]) == 0
     out = capsys.readouterr().out
     assert "line 202, the file's last, is cut short" in out and "200 samples" in out
+    text = (tmp_path / "log.csv").read_text().rsplit("\n", 1)[0]  # a whole last line, a middle cell empty
+    (tmp_path / "log.csv").write_text(text + "\n2.00,0.9,,0.1,0.2,0.3,0.4\n")
+    assert main(["validate", str(scen)]) == 0
+    out = capsys.readouterr().out
+    assert "(line(s) 202)" in out and "cut short" not in out

@@ -499,9 +499,9 @@ def _drawn_link_note(sc) -> list[str]:
         how = "the plant is a URDF of its own"
     elif unc is not None and (unc.mass > 0 or unc.com > 0 or unc.inertia > 0):
         m = float(arm.pi_links[10 * j])
-        spread = (
-            f": its {m:.3g} kg within {100 * unc.mass:g} %, +- {unc.mass * m:.3g} kg" if unc.mass > 0 else ""
-        )
+        normal = getattr(unc, "distribution", "uniform") == "normal"
+        level = f"std {100 * unc.mass:g} % (drawn up to 3 std)" if normal else f"within {100 * unc.mass:g} %"
+        spread = f": its {m:.3g} kg {level}, +- {unc.mass * m:.3g} kg" if unc.mass > 0 else ""
         how = f"the plant is drawn around the URDF ({link}{spread})"
     else:
         return []

@@ -42,7 +42,8 @@ def choose_coulomb_width(args, arm, model, rec, K, tau_f: float, torque_held: bo
             else "the width of the noise of the velocities derived from the positions (the positions' "
             "noise through the derivative's filter; adaptive_dd.identification.friction_width)"
         )
-        print(f"{head}, v = {model.friction_velocity:.3g} rad/s: {why}; --coulomb-width profile estimates it")
+        hint = "; --coulomb-width profile estimates it" if K is not None else "; --coulomb-width V sets it"
+        print(f"{head}, v = {model.friction_velocity:.3g} rad/s: {why}{hint}")
         return model, None
     if choice != "profile":
         print(f"{head}, v = {choice:.3g} rad/s (--coulomb-width)")
@@ -50,7 +51,7 @@ def choose_coulomb_width(args, arm, model, rec, K, tau_f: float, torque_held: bo
     if K is None:
         raise DataError(
             "--coulomb-width profile: with --payload-only there is no least squares to profile; give a "
-            "width (--coulomb-width V) or leave the default (noise)"
+            "width (--coulomb-width V) or leave the default (auto: the noise's width here)"
         )
     try:
         pr = profile_coulomb_width(

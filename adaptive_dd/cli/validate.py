@@ -138,6 +138,7 @@ def validate_identification(path) -> int:
     print(describe_arm(arm))
     from adaptive_dd.errors import DataError
     from adaptive_dd.record import read_log
+    from adaptive_dd.record_pieces import clock
 
     try:
         log = read_log(spec, arm=arm)  # the files themselves: columns, cells, times, units, gaps
@@ -155,7 +156,7 @@ def validate_identification(path) -> int:
     pieces = len(log.pieces) or 1
     print(
         f"# the log as identify reads it: {log.t.size} samples at T = {log.sample_period:.6g} s "
-        f"({log.t[0]:.10g}-{log.t[-1]:.10g} s of its clock), {pieces} continuous piece(s)"
+        f"({clock(log.t[0])}-{clock(log.t[-1])} s of its clock), {pieces} continuous piece(s)"
     )
     for note in log.notes:
         print(f"# {note}")

@@ -69,7 +69,8 @@ def velocity_noise_std(qd: Array) -> float:
 def derived_velocity_noise_std(q: Array, sample_period: float) -> float:
     """[rad/s] The noise std of velocities derived from the positions ``q (N, n)`` by
     :func:`~adaptive_dd.record.derivatives`, rms over the joints: each joint's position noise
-    (its third difference's robust spread over ``sqrt(20)``) times the Savitzky-Golay
+    (its fifth difference's robust spread over ``sqrt(252)``: the motion's share is ``T^5 d^5 q /
+    dt^5``, where the third difference's read a 1 Hz motion at 100 Hz as noise) times the Savitzky-Golay
     differentiator's gain on white noise (the norm of its coefficients). The derived velocity's
     own differences cannot tell it: its error is smooth over the window, so
     :func:`velocity_noise_std` of it reads a width two orders of magnitude too small."""
@@ -80,8 +81,8 @@ def derived_velocity_noise_std(q: Array, sample_period: float) -> float:
     q = np.asarray(q, dtype=float)
     if q.ndim != 2 or q.shape[0] < 7:
         raise ValueError(f"derived_velocity_noise_std: expected a record (N >= 7, n), got shape {q.shape}")
-    d3 = np.diff(q, 3, axis=0)
-    s = 1.4826 * np.median(np.abs(d3 - np.median(d3, axis=0)), axis=0) / np.sqrt(20.0)
+    d5 = np.diff(q, 5, axis=0)  # the motion's share T^5 q^(5): 1e-6 rad for 1 rad at 1 Hz and 100 Hz
+    s = 1.4826 * np.median(np.abs(d5 - np.median(d5, axis=0)), axis=0) / np.sqrt(252.0)
     gain = np.linalg.norm(savgol_coeffs(derivative_samples(sample_period, q.shape[0]), 3, deriv=1,
                                         delta=sample_period))  # fmt: skip
     return float(np.sqrt(np.mean(s**2)) * gain)
@@ -102,6 +103,8 @@ def coulomb_width(
     if friction == "tanh":
         return float(friction_velocity)
     if q is not None:
+        if sample_period is None:
+            raise ValueError("coulomb_width: velocities derived from q need the sample_period they were at")
         return max(derived_velocity_noise_std(q, sample_period), MIN_WIDTH)
     return max(velocity_noise_std(qd), MIN_WIDTH)
 

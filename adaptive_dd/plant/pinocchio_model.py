@@ -151,7 +151,7 @@ def positive_definite_check(M: NDArray) -> CheckResult:
     eig = np.linalg.eigvalsh(M)
     ratio = float(eig.min() / eig.max())
     shown = f"smallest eigenvalue / largest {ratio:9.2e}  (must be > 0)"
-    return CheckResult("M positive definite", -ratio, 0.0, shown)
+    return CheckResult("M positive definite", -ratio, -np.finfo(float).tiny, shown)  # 0: singular, fails
 
 
 def _two_link_sigma(arm, params: PhysicalParameters, payload: Payload | None) -> NDArray[np.float64]:
