@@ -328,6 +328,11 @@ def _window_rows(path: Path, t: Array, window, time_scale: float = 1.0) -> slice
             if step > MAX_LOG_STEP
             else ""
         )
+        if window is not None and t.size and hi < t[0] and abs(t[0]) >= 1e3:  # a window from the log's start
+            unit += (
+                f"; the window is in the log's own clock, which starts at {clock(t[0])} s: the same window "
+                f"from its start is --window {clock(t[0] + lo)} {clock(t[0] + hi)}"
+            )
         raise DataError(
             f"{path}: the window [{clock(lo)}, {clock(hi)}] s holds {max(i1 - i0, 0)} samples (the log spans "
             f"{clock(t[0])}-{clock(t[-1])} s): need at least 20{unit}"

@@ -975,3 +975,21 @@ def test_a_log_s_last_line_cut_short_is_said_so(tmp_path, capsys):
     assert main(["validate", str(scen)]) == 0
     out = capsys.readouterr().out
     assert "(line(s) 202)" in out and "cut short" not in out
+
+
+def test_a_window_from_the_log_s_start_on_an_epoch_clock_is_given_in_its_clock(tmp_path, capsys):
+    """On a log stamped in seconds since 1970, --window 0 5 held no sample and said only so; the
+    error now gives the same window in the log's clock."""
+    from adaptive_dd.cli import main
+
+    t = 1.7e9 + np.arange(200) * 0.01
+    cols = np.column_stack([t, np.sin(t - t[0]), np.cos(t - t[0]), 0.1 * (t - t[0]), np.sin(t), np.cos(t), t])
+    np.savetxt(
+        tmp_path / "log.csv", cols, delimiter=",", header="t,q1,q2,q3,tau1,tau2,tau3", comments="", fmt="%.15g"
+    )
+    scen = tmp_path / "id.toml"
+    scen.write_text('[arm]\nrobot = "vertical3"\n\n[record]\nfiles = ["log.csv"]\nexclude = ["joint3"]\n')
+    argv = ["identify", "--arm", str(scen), "--window", "0", "1.5", "--out", str(tmp_path / "o")]
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert "starts at 1700000000 s: the same window from its start is --window 1700000000 1700000001.5" in err
