@@ -984,9 +984,8 @@ def test_a_window_from_the_log_s_start_on_an_epoch_clock_is_given_in_its_clock(t
 
     t = 1.7e9 + np.arange(200) * 0.01
     cols = np.column_stack([t, np.sin(t - t[0]), np.cos(t - t[0]), 0.1 * (t - t[0]), np.sin(t), np.cos(t), t])
-    np.savetxt(
-        tmp_path / "log.csv", cols, delimiter=",", header="t,q1,q2,q3,tau1,tau2,tau3", comments="", fmt="%.15g"
-    )
+    head = "t,q1,q2,q3,tau1,tau2,tau3"
+    np.savetxt(tmp_path / "log.csv", cols, delimiter=",", header=head, comments="", fmt="%.15g")
     scen = tmp_path / "id.toml"
     scen.write_text('[arm]\nrobot = "vertical3"\n\n[record]\nfiles = ["log.csv"]\nexclude = ["joint3"]\n')
     argv = ["identify", "--arm", str(scen), "--window", "0", "1.5", "--out", str(tmp_path / "o")]
