@@ -37,9 +37,9 @@ from adaptive_dd.cli._common import load_arm, read_arm_log
 from adaptive_dd.cli.identify import coulomb_width_option
 from adaptive_dd.cli.predict import lowpass
 from adaptive_dd.identification.friction_width import (
+    auto_coulomb_width,
     identification_model,
     profile_coulomb_width,
-    simulated_law,
 )
 from adaptive_dd.identification.log_fit import (
     filter_time_constant,
@@ -82,11 +82,8 @@ def noise_model(arm, rec):
 def with_width(model, rec, K, choice, torque_held: bool, offset: bool = False):
     """``model`` with the Coulomb width ``identify --coulomb-width choice`` gives on ``rec``, and the
     joints whose width was estimated (None: none)."""
-    if choice == "auto":  # as identify: a law stated by simulate's trajectory.json, else estimated
-        made = simulated_law(rec.source) if rec.simulator_format else None
-        if made is not None and made[1] is not None:
-            return dataclasses.replace(model, friction_velocity=made[1]), None
-        choice = "noise" if made is not None else "profile"
+    if choice == "auto":  # identify's rule
+        choice, _ = auto_coulomb_width(rec)
     if choice == "noise":
         return model, None
     if choice != "profile":

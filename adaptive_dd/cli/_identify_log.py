@@ -247,7 +247,7 @@ def _disagreement(model, fit, oe, share) -> None:
     """A warning when output error, converged with its noise model, lies outside the WLS estimate's
     95 % bound on some parameters: there the least squares is biased and its bound does not hold the
     truth (on a simulated Kinova record, 13 of 35 parameters outside it; output error on them)."""
-    residual = 2 * oe.cost / oe.n_residuals
+    residual = _normalised_residual(oe)
     if not oe.converged or residual > RESIDUAL_LIMIT:
         return
     free = (share <= 0.5) & (fit.std > 0)
@@ -271,10 +271,15 @@ explain the record (about 1 when the model and the noise are right; 28 with a to
 taken off, 1.06 with a width profiled)."""
 
 
+def _normalised_residual(oe) -> float:
+    """Output error's ``2 cost / residuals``: about 1 when the model and the noise are right."""
+    return 2 * oe.cost / oe.n_residuals
+
+
 def _print_output_error_fit(oe, said: str, consequence: str) -> None:
     """Output error's iterations, convergence and normalised residual (``said`` appended), and a
     warning with ``consequence`` when the residual is above :data:`RESIDUAL_LIMIT`."""
-    residual = 2 * oe.cost / oe.n_residuals
+    residual = _normalised_residual(oe)
     print(
         f"output error: {oe.iterations} iterations, {'converged' if oe.converged else 'NOT converged'}, "
         f"normalised residual {residual:.3f} (1 = the noise model){said}"

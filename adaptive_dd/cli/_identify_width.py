@@ -16,23 +16,16 @@ def choose_coulomb_width(args, arm, model, rec, K, tau_f: float, torque_held: bo
     ``K`` None (``--payload-only``: no least squares to profile) refuses ``profile``."""
     import dataclasses
 
-    from adaptive_dd.identification.friction_width import profile_coulomb_width, simulated_law
+    from adaptive_dd.identification.friction_width import auto_coulomb_width, profile_coulomb_width
 
     choice = args.coulomb_width
     head = "Coulomb friction fitted as fc tanh(qd / v)"
-    laws = []
-    if choice == "auto" and rec.simulator_format:  # each record's own file (several: one law for all)
-        laws = [simulated_law(src) for src in (rec.record_names or (rec.source,))]
-        laws = laws if all(m is not None for m in laws) and len({m[:2] for m in laws}) == 1 else []
-    if laws and laws[0][1] is not None:  # a record of adaptive-dd simulate: the tanh it was made with
-        v = laws[0][1]
-        files = ", ".join(m[2] for m in laws)
-        print(f"{head}, v = {v:.3g} rad/s: the width the record was simulated with ({files})")
-        return dataclasses.replace(model, friction_velocity=v), None
-    if choice == "auto":  # a law with a sign: the noise's width; a law not stated: estimated
-        # (profile: on the TIAGo's log it predicts better; on a simulated tanh record without its
-        # JSON it finds the width, where the noise's missed it 23-165x and output error stalled)
-        choice = "noise" if laws or K is None else "profile"
+    if choice == "auto":  # profile where the law is not stated: on a simulated tanh record without
+        # its JSON it finds the width the noise's missed 23-165x (output error stalled)
+        choice, files = auto_coulomb_width(rec, profiled=K is not None)
+        if files is not None:  # a record of adaptive-dd simulate: the tanh it was made with
+            print(f"{head}, v = {choice:.3g} rad/s: the width the record was simulated with ({files})")
+            return dataclasses.replace(model, friction_velocity=choice), None
     if choice == "noise":
         why = (
             "the arm's friction_velocity (its law is tanh)"

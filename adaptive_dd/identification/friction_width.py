@@ -34,6 +34,7 @@ from adaptive_dd.identification.log_fit import coulomb_index
 __all__ = [
     "MIN_WIDTH",
     "WidthProfile",
+    "auto_coulomb_width",
     "coulomb_columns",
     "coulomb_index",
     "coulomb_width",
@@ -126,6 +127,21 @@ def simulated_law(source: str):
     if not isinstance(law, str) or (law == "tanh" and not (isinstance(v, int | float) and v > 0)):
         return None
     return law, (float(v) if v is not None else None), str(path)
+
+
+def auto_coulomb_width(rec, profiled: bool = True):
+    """``--coulomb-width auto``'s choice on the read record ``rec`` (``identify`` and
+    ``benchmarks/real_log.py`` alike): ``(v, files)`` where every record's ``trajectory.json`` (of
+    ``adaptive-dd simulate``) states one ``tanh`` law of width ``v``; ``("noise", None)`` where they
+    state one law with a sign, or where nothing can be profiled (``profiled`` False); else
+    ``("profile", None)``: a law not stated is estimated."""
+    laws = []
+    if rec.simulator_format:  # each record's own file (several: one law for all)
+        laws = [simulated_law(src) for src in (rec.record_names or (rec.source,))]
+        laws = laws if all(m is not None for m in laws) and len({m[:2] for m in laws}) == 1 else []
+    if laws and laws[0][1] is not None:
+        return laws[0][1], ", ".join(m[2] for m in laws)
+    return ("noise" if laws or not profiled else "profile"), None
 
 
 def simulated_width(source: str):
