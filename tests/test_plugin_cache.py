@@ -450,3 +450,32 @@ def _closure_command(gain):
         tau[:] = gain * (q_d - q)
 
     return command
+
+
+def test_old_plugin_loops_are_pruned_with_their_compiled_code(tmp_path):
+    """Each edit of a plug-in is a new loop in the cache: beyond the KEEP_LOOPS last used, the loops
+    not used for a day go, with numba's files of them; the recent ones stay, however many."""
+    folder = tmp_path / "plugin_loops"
+    compiled = tmp_path / "plugin_loops_0123abcd"
+    folder.mkdir()
+    compiled.mkdir()
+    now = 1_000_000.0
+    day = plugin_loop.KEEP_AGE
+    for i in range(20):  # loop 0 used last; 19 first; 18 and 19 used long ago, 16 and 17 an hour ago
+        stem = f"loop_{i:016x}"
+        (folder / f"{stem}.py").write_text("")
+        (compiled / f"{stem}._plugin_block-12.py311.nbi").write_text("")
+        (compiled / f"{stem}._plugin_block-12.py311.1.nbc").write_text("")
+        when = now - (2 * day if i >= 18 else 3600.0 * i)
+        (folder / f"{stem}.used").touch()
+        os.utime(folder / f"{stem}.used", (when, when))
+    other = compiled / "unrelated.nbi"
+    other.write_text("")
+    gone = plugin_loop.prune_loops(folder, keep=16, now=now)
+    assert sorted(gone) == [f"{18:016x}", f"{19:016x}"]
+    left = sorted(p.name for p in folder.glob("*.py"))
+    assert len(left) == 18 and "loop_0000000000000012.py" not in left
+    assert not list(compiled.glob("loop_0000000000000013.*"))
+    assert len(list(compiled.glob("loop_0000000000000011.*"))) == 2
+    assert other.exists()
+    assert plugin_loop.prune_loops(folder, keep=16, now=now) == []  # nothing more to prune

@@ -278,6 +278,54 @@ functions read from the module's globals (numba compiles calls to them in, as to
 
 _LOOPS: dict = {}
 _UNKEYED = itertools.count()
+
+KEEP_LOOPS = 16
+"""How many plug-in loops the cache folder keeps: each edit of a plug-in numba would compile
+is a new loop (about 0.3 MB compiled); beyond the :data:`KEEP_LOOPS` last used, a loop not used
+for :data:`KEEP_AGE` seconds is removed with its compiled code when another loop is made."""
+
+KEEP_AGE = 86400.0
+"""[s] A loop used this recently is kept however many there are (another process may be running it)."""
+
+
+def _mark_used(path: Path) -> None:
+    """Stamp ``path``'s loop as used now (a ``.used`` file beside it: the module's own time stamp
+    keys numba's cache and stays), then prune the folder (:data:`KEEP_LOOPS`)."""
+    try:
+        path.with_suffix(".used").touch()
+        prune_loops(path.parent)
+    except OSError:  # a cache folder that cannot be written is not this run's problem
+        pass
+
+
+def prune_loops(
+    folder: Path, keep: int = KEEP_LOOPS, age: float = KEEP_AGE, now: float | None = None
+) -> list[str]:
+    """Remove the loops of ``folder`` beyond the ``keep`` last used that were not used for ``age``
+    seconds: each one's module, its ``.used`` stamp and numba's files of it (in the cache's
+    ``plugin_loops_*`` folders beside ``folder``). Returns the keys removed."""
+    import time
+
+    now = time.time() if now is None else now
+
+    def used(p: Path) -> float:
+        stamp = p.with_suffix(".used")
+        return stamp.stat().st_mtime if stamp.exists() else p.stat().st_mtime
+
+    loops = sorted(folder.glob("loop_*.py"), key=used, reverse=True)
+    gone = []
+    for p in loops[keep:]:
+        if now - used(p) < age:
+            continue
+        stem = p.stem
+        for q in (p, p.with_suffix(".used"), *(
+            f for d in folder.parent.glob(f"{folder.name}_*") for f in d.glob(f"{stem}.*")
+        )):  # fmt: skip
+            q.unlink(missing_ok=True)
+        gone.append(stem.removeprefix("loop_"))
+    return gone
+
+
 _LOCK = threading.Lock()
 
 TRIALS = {"chain": "_plugin_trial_c", "two-link": "_plugin_trial_two_link_c"}
@@ -344,6 +392,8 @@ def _make_loop(functions, runtime: str):
                     tmp.unlink()
         except OSError as exc:
             path, name, why = None, unkeyed, f"its module could not be written in {folder} ({exc.strerror})"
+    if path is not None:
+        _mark_used(path)
     if name in sys.modules:
         module = sys.modules[name]
     elif path is not None:
