@@ -119,7 +119,7 @@ def test_info_holds_the_truth_swaps_and_floor():
             masses.append(info["payload_mass"])
         if term or trunc:
             break
-    assert trunc and not term and "floor_torque" not in info  # the last sample: nothing to command
+    assert trunc and not term and np.isnan(info["floor_torque"]).all()  # the last sample: nothing to command
     assert swaps == pytest.approx([0.3, 0.7]) and masses == [1.0, 0.0]
     res = run_benchmark(
         sc, progress=False, controllers=dict([scenario_controller(sc, "ct_oracle")]), seed_indices=[1]
@@ -150,6 +150,13 @@ def test_pd_as_a_policy_reproduces_the_benchmark(arm):
     # the tool frame's error of the benchmark's recorded trials, recomputed on the policy's
     np.testing.assert_allclose(ev.ee_position_rms, ref["ee_position_rms"], rtol=1e-7)
     assert ev.summary()[1]["ratio_to_floor"]["n"] == 2
+    # the benchmark's other per-seed columns: to_frame had only the errors (a bang-bang policy's
+    # torque and saturation could not be set beside the laws')
+    for ours, theirs in (("max_error", "max_error"), ("rms_torque", "rms_torque")):
+        np.testing.assert_allclose(getattr(ev, ours), ref[theirs], rtol=1e-9)
+    np.testing.assert_array_equal(ev.saturation_fraction, ref["saturation_fraction"])
+    frame = ev.to_frame()
+    assert {"max_error_rad", "rms_torque_Nm", "saturation_fraction"} <= set(frame.columns)
 
 
 def test_residual_zero_is_the_base_controller():
@@ -321,19 +328,130 @@ def test_a_step_after_termination_and_a_seed_beyond_the_scenarios_are_named():
 
 def test_the_vector_environment_fails_a_spinning_trial_as_the_single_one_does():
     """On the paper's arm the vector environment did not apply the benchmark's error bound: a policy
-    that spun the arm ran 10 rad off its reference while the single environment stopped it."""
+    that spun the arm ran 10 rad off its reference while the single environment stopped it. A failed
+    trial is charged the failure's cost per sample left in both, so their returns are equal; the
+    vector environment's failed trial is absorbing (it reported ``terminated`` on every later step,
+    which next-step autoreset reads as an episode per step)."""
+    from gymnasium.wrappers.vector import RecordEpisodeStatistics
+
+    from adaptive_dd.gym.env import failure_cost
     from adaptive_dd.gym.vector import PayloadSwapVectorEnv
 
     sc = _short("sice", duration=1.0)
     single = make_env(sc, floor=None)
     single.reset(seed=0)
-    k, terminated = 0, False
+    k, terminated, ret = 0, False, 0.0
     while not terminated:
-        terminated = single.step(np.array([1e4, -1e4]))[2]
+        _, r, terminated, _, _ = single.step(np.array([1e4, -1e4]))
+        ret += r
         k += 1
-    envs = PayloadSwapVectorEnv(sc, num_envs=2)
+    assert r == -failure_cost(2) * (sc.n_samples - k + 1)
+    envs = RecordEpisodeStatistics(PayloadSwapVectorEnv(sc, num_envs=2))
     envs.reset(seed=0)
-    for j in range(k):
-        terminated = envs.step(np.tile([1e4, -1e4], (2, 1)))[2]
-        assert not terminated.any() or j == k - 1
-    assert terminated.all()
+    vret = np.zeros(2)
+    for j in range(sc.n_samples):
+        action = np.array([[1e4, -1e4], [0.0, 0.0]])  # trial 0 spins, trial 1 is left alone
+        _, r, terminated, truncated, info = envs.step(action)
+        vret += r
+        assert not terminated.any()
+        assert info["failed"][0] == (j >= k - 1) and not info["failed"][1] and info["_failed"].all()
+    assert truncated.all() and vret[0] == pytest.approx(ret, rel=1e-12)
+    assert vret[0] < vret[1] < 0  # failing costs more than tracking with no torque
+    assert envs.episode_count == 2 and list(envs.return_queue) == pytest.approx(list(vret), rel=1e-12)
+
+
+def test_a_failure_never_returns_more_than_tracking_on():
+    """A NaN action ended the episode at once with a reward of -1.8e-17: the best return there was,
+    so a learner was paid to fail. The failing step is charged n max_error^2 per sample left."""
+    from adaptive_dd.gym.env import failure_cost
+
+    sc = _short("sice", duration=0.5)
+    env = make_env(sc, floor=None)
+    env.reset(seed=0)
+    _, r, terminated, truncated, _ = env.step(np.full(2, np.nan))
+    assert terminated and not truncated and r == -failure_cost(2) * sc.n_samples == -18.0 * 500
+    env.reset(seed=0)
+    ret, done = 0.0, False
+    while not done:  # no torque at all: far off, but on
+        _, rr, term, trunc, _ = env.step(np.zeros(2))
+        ret += rr
+        done = term or trunc
+    assert not term and r < ret < 0
+
+
+def test_evaluate_refuses_an_episode_cut_short_and_takes_a_registered_id():
+    """gymnasium.make(id, max_episode_steps=...) ended each episode early and evaluate scored all-NaN
+    trials as "no failure"; a registered id was "no such scenario file"."""
+    env = gymnasium.make("adaptive_dd/PayloadSwap-SICE-v0", max_episode_steps=30)
+    with pytest.raises(ParameterError, match=r"ended seed 0's episode at sample 30 of the scenario's 20000"):
+        evaluate(lambda o: np.zeros(2), env, seeds=[0])
+    from adaptive_dd.errors import ScenarioError
+
+    with pytest.raises(
+        ScenarioError, match="evaluate: 'adaptive_dd/PayloadSwap-Nope-v0' is not a registered"
+    ):
+        evaluate(lambda o: np.zeros(2), "adaptive_dd/PayloadSwap-Nope-v0", seeds=[0])
+
+
+def test_make_env_takes_only_a_floor_told_the_true_model_and_no_render_mode():
+    """make_env(floor="adaptive_ct") was accepted: a law that adapts, never shown its torques, whose
+    command is no floor; render_mode="rgb_array" was a TypeError, render() a bare NotImplementedError."""
+    sc = _short("sice", duration=0.2)
+    for bad in ("adaptive_ct", "pd", "ct_nominal"):
+        with pytest.raises(ParameterError, match=rf"floor '{bad}' is no built-in told the true model"):
+            make_env(sc, floor=bad)
+    make_env(sc, floor="slotine_li_oracle")
+    from adaptive_dd.gym.env import PayloadSwapEnv
+
+    with pytest.raises(ParameterError, match="render_mode 'rgb_array': the environment draws nothing"):
+        PayloadSwapEnv(sc, render_mode="rgb_array")
+    with pytest.raises(NotImplementedError, match="draws nothing"):
+        PayloadSwapEnv(sc, floor=None).render()
+
+
+def test_the_vector_environment_takes_a_list_of_seeds_and_gymnasiums_make_vec():
+    """reset(seed=[...]) was refused (Gymnasium allows one seed per sub-environment); make_vec had no
+    vector entry point and built a SyncVectorEnv of single environments."""
+    from adaptive_dd.gym.vector import PayloadSwapVectorEnv
+
+    sc = _short("sice", duration=0.2)
+    envs = PayloadSwapVectorEnv(sc, num_envs=2)
+    obs, info = envs.reset(seed=[7, 3])
+    assert list(info["seed_index"]) == [7, 3] and info["_seed_index"].all()
+    single = make_env(sc, floor=None)
+    np.testing.assert_array_equal(obs[1], single.reset(seed=3)[0])
+    with pytest.raises(ParameterError, match=r"a list of seeds must hold num_envs = 2 ints"):
+        envs.reset(seed=[1, 2, 3])
+    vec = gymnasium.make_vec(
+        "adaptive_dd/PayloadSwap-SICE-v0", num_envs=2, vectorization_mode="vector_entry_point"
+    )
+    assert isinstance(vec.unwrapped, PayloadSwapVectorEnv) and vec.num_envs == 2
+
+
+def test_a_policy_enters_the_benchmarks_table_as_a_plugin():
+    """A policy wrapped as a plain-Python plug-in (examples/plugins/policy_plugin.py) runs in the
+    benchmark beside the built-in laws, and its per-seed errors are evaluate's for the same policy:
+    the route by which a learned policy's row enters the table (there was none documented)."""
+    import sys
+
+    from adaptive_dd.benchmark.scenario import parse_scenario
+
+    plugins = ROOT / "examples" / "plugins"
+    sys.path.insert(0, str(plugins))
+    try:
+        import tomllib
+
+        import policy_plugin
+
+        data = tomllib.loads((plugins / "pd_gravity.toml").read_text())  # vertical3, gravity on each joint
+        data.pop("controllers", None)
+        data["run"].update(duration=0.4, seeds=2, controllers=["policy_plugin:LinearPolicy", "ct_oracle"])
+        data["payload"] = [{"at": 0.2, "mass": 0.5}]
+        sc = parse_scenario(data, str(plugins / "pd_gravity.toml"), name="policy_test")
+        res = run_benchmark(sc, progress=False, seed_indices=[0, 1])
+        bench = per_seed_segment_metrics(res, res.runs["linear_policy"], settling=False)["rms_error"]
+        plugin = policy_plugin.LinearPolicy(sc.arm, scenario_controller(sc, "ct_oracle")[1].gains)
+        ev = evaluate(plugin.policy, sc, [0, 1], name="linear_policy")
+        np.testing.assert_allclose(ev.rms_error, bench, rtol=1e-9)
+    finally:
+        sys.path.remove(str(plugins))

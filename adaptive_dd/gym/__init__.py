@@ -69,8 +69,8 @@ def make_env(scenario=None, floor: str | None = "ct_oracle") -> PayloadSwapEnv:
     scenario : Scenario, str, Path or None
         The scenario, its file, a registered id (:data:`SCENARIO_IDS`), or None.
     floor : str or None
-        The controller whose command ``info["floor_torque"]`` holds (default ``ct_oracle``);
-        None leaves it out.
+        The law told the true model whose command ``info["floor_torque"]`` holds (default
+        ``ct_oracle``; one of :func:`~adaptive_dd.gym.env.floor_laws`); None leaves it out.
 
     Returns
     -------
@@ -89,17 +89,23 @@ def make_env(scenario=None, floor: str | None = "ct_oracle") -> PayloadSwapEnv:
     >>> terminated, truncated, info["k"]
     (False, False, 1)
     """
+    return PayloadSwapEnv(scenario_file(scenario, "make_env"), floor=floor)
+
+
+def scenario_file(scenario, who: str = "make_env"):
+    """A registered id's scenario file (:data:`SCENARIO_IDS`); anything else as given. A string of
+    an id's shape (``adaptive_dd/Name-v0``) that is not registered is an error naming ``who``."""
     if isinstance(scenario, str) and scenario in SCENARIO_IDS:
-        scenario = _SCENARIOS / SCENARIO_IDS[scenario]
-    elif isinstance(scenario, str) and scenario.startswith("adaptive_dd/") and not scenario.endswith(".toml"):
+        return _SCENARIOS / SCENARIO_IDS[scenario]
+    if isinstance(scenario, str) and scenario.startswith("adaptive_dd/") and not scenario.endswith(".toml"):
         # an id's shape (adaptive_dd/Name-v0), not a file's (the README's adaptive_dd/scenarios/*.toml)
         from adaptive_dd.errors import ScenarioError
 
         raise ScenarioError(
-            f"make_env: {scenario!r} is not a registered id; registered: {', '.join(SCENARIO_IDS)} "
+            f"{who}: {scenario!r} is not a registered id; registered: {', '.join(SCENARIO_IDS)} "
             "(or give a scenario file or a Scenario)"
         )
-    return PayloadSwapEnv(scenario, floor=floor)
+    return scenario
 
 
 def _register() -> None:
@@ -108,6 +114,7 @@ def _register() -> None:
             gymnasium.register(
                 id=env_id,
                 entry_point="adaptive_dd.gym.env:PayloadSwapEnv",
+                vector_entry_point="adaptive_dd.gym.vector:PayloadSwapVectorEnv",
                 kwargs={"scenario": str(_SCENARIOS / file)},
                 disable_env_checker=False,
             )

@@ -18,11 +18,14 @@ payload's ``payload_mass`` [kg] and ``segment``, ``swap`` (a payload change take
 sample), the torque ``applied_torque`` [N m] and ``saturated`` of the last step, the tracking error
 ``error`` (``q_d - q_true`` of the sample the last action was applied on, the benchmark's ``e``) and
 ``floor_torque``: what the scenario's floor (``ct_oracle``, the law with the true model) would
-command on this observation.
+command on this observation (NaN on the last sample, where nothing is commanded).
 
 Reward: ``-|q_d - q_true|^2`` [rad^2] of the state the action leads to. ``terminated``: the trial
-diverged (the benchmark's rule: a non-finite command or state, a runaway speed or an error beyond
-``max_error``); ``truncated``: the scenario's samples are done.
+failed (the benchmark's rule: a non-finite command or state, a runaway speed or a joint's error
+beyond ``max_error``, 3 rad); the failing step's reward is :func:`failure_cost` per sample the
+episode had left, that one included: as if every joint stayed at the largest error the benchmark
+lets a trial survive until the end, so that no failure returns more than tracking on would.
+``truncated``: the scenario's samples are done.
 """
 
 from __future__ import annotations
@@ -39,11 +42,31 @@ from adaptive_dd.benchmark.scenario import Scenario, load_scenario
 from adaptive_dd.errors import ParameterError, SignalError
 from adaptive_dd.simulation import Measurement, Simulation
 
-__all__ = ["PayloadSwapEnv", "floor_command", "observation_of", "scenario_of"]
+__all__ = ["PayloadSwapEnv", "failure_cost", "floor_command", "floor_laws", "observation_of", "scenario_of"]
 
 Array = NDArray[np.float64]
 
 MAX_SEED = 2**31 - 1
+
+
+def failure_cost(n_joints: int) -> float:
+    """[rad^2] What a failed trial's reward charges per sample it had left: ``n max_error^2``, every
+    joint at the error beyond which the benchmark fails a trial
+    (:data:`~adaptive_dd.closed_loop.types.MAX_ERROR`, 3 rad), so more than any sample of a trial
+    that goes on."""
+    from adaptive_dd.closed_loop.types import MAX_ERROR
+
+    return float(n_joints) * MAX_ERROR**2
+
+
+def floor_laws() -> list[str]:
+    """The built-in laws a score may divide by: those told the true model at once (``ct_oracle``,
+    ``slotine_li_oracle``, ...; ``ct_oracle_late``, told late, is measured against one)."""
+    from adaptive_dd.controllers.builtins import CONTROLLERS
+
+    return [
+        n for n, e in CONTROLLERS.items() if e.knows.startswith("true model") and "delay" not in e.settings
+    ]
 
 
 def scenario_of(scenario: Scenario | str | Path | None) -> Scenario:
@@ -82,8 +105,12 @@ class PayloadSwapEnv(gymnasium.Env):
         The scenario (any arm: the shipped ones, or a user's URDF scenario); None: the shipped
         payload swap of the paper's arm.
     floor : str or None
-        The controller whose command on each observation ``info["floor_torque"]`` holds (default
-        ``ct_oracle``, the floor of ``adaptive_ct``); None leaves it out (faster steps).
+        The law told the true model whose command on each observation ``info["floor_torque"]``
+        holds (default ``ct_oracle``, the floor of ``adaptive_ct``; one of :func:`floor_laws`);
+        None leaves it out (faster steps).
+    render_mode : None
+        Gymnasium's keyword; the environment draws nothing (plot ``info["q_true"]`` against the
+        reference, or run the benchmark for its figures).
 
     Examples
     --------
@@ -101,10 +128,25 @@ class PayloadSwapEnv(gymnasium.Env):
     metadata: ClassVar[dict] = {"render_modes": []}
 
     def __init__(
-        self, scenario: Scenario | str | Path | None = None, floor: str | None = "ct_oracle"
+        self,
+        scenario: Scenario | str | Path | None = None,
+        floor: str | None = "ct_oracle",
+        render_mode: str | None = None,
     ) -> None:
         from adaptive_dd.closed_loop.types import io_of
 
+        if render_mode is not None:
+            raise ParameterError(
+                f"PayloadSwapEnv: render_mode {render_mode!r}: the environment draws nothing (render_mode "
+                "None); plot info['q_true'] against the reference, or run `adaptive-dd benchmark` for figures"
+            )
+        self.render_mode = None
+        if floor is not None and floor not in floor_laws():
+            raise ParameterError(
+                f"PayloadSwapEnv: floor {floor!r} is no built-in told the true model (its command would "
+                f"not be a floor: a law that adapts is never shown its torques here); one of {floor_laws()}, "
+                "or None"
+            )
         self.scenario = sc = scenario_of(scenario)
         n = sc.n_joints
         lim = np.asarray(io_of(sc).lim, dtype=np.float64)
@@ -161,10 +203,19 @@ class PayloadSwapEnv(gymnasium.Env):
             )
         sim, m = self.sim, self._m
         error = m.q_d - sim.q_true  # the benchmark's e at this sample (the state before the step)
+        left = self.scenario.n_samples - m.k  # samples the episode has left, this one included
         self._m = m = sim.step(np.asarray(action, dtype=np.float64))
         e_next = m.q_d - sim.q_true
-        reward = -float(e_next @ e_next)
-        return observation_of(m), reward, bool(sim.failed), bool(sim.done), self._info(error)
+        failed = bool(sim.failed)
+        reward = -failure_cost(self.scenario.n_joints) * left if failed else -float(e_next @ e_next)
+        return observation_of(m), reward, failed, bool(sim.done), self._info(error)
+
+    def render(self):
+        """No rendering (``render_mode`` None): raises, saying what to do instead."""
+        raise NotImplementedError(
+            "PayloadSwapEnv draws nothing: plot info['q_true'] against the reference (observation "
+            "[2n:3n]), or run `adaptive-dd benchmark` for the figures"
+        )
 
     # --------------------------------------------------------------------- the truth
     def _info(self, error: Array | None) -> dict:
@@ -185,6 +236,9 @@ class PayloadSwapEnv(gymnasium.Env):
             "error": np.full(sc.n_joints, np.nan) if error is None else error,
         }
         self._segment = seg
-        if self._floor is not None and not sim.done:
-            info["floor_torque"] = floor_command(self._floor, sim, m)
+        if self._floor is not None:  # NaN at the last sample: nothing is commanded there
+            done = sim.done
+            info["floor_torque"] = (
+                np.full(sc.n_joints, np.nan) if done else floor_command(self._floor, sim, m)
+            )
         return info

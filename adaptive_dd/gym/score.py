@@ -49,6 +49,9 @@ class Evaluation:
     failed_at : ndarray (n_seeds,)
         [s] When each failed trial was stopped (its state diverged or left the arm's limits), NaN
         for a trial that did not fail.
+    max_error, rms_torque, saturation_fraction : ndarray (n_seeds, n_segments) or None
+        The benchmark's: ``max |e|`` [rad], ``sqrt(mean |tau|^2)`` of the applied torque [N m] and
+        the fraction of samples with a joint's command beyond its limit (NaN as ``rms_error``).
     """
 
     name: str
@@ -62,6 +65,9 @@ class Evaluation:
     failed: np.ndarray
     floor: str = FLOOR
     failed_at: np.ndarray | None = None
+    max_error: np.ndarray | None = None
+    rms_torque: np.ndarray | None = None
+    saturation_fraction: np.ndarray | None = None
 
     @property
     def ratio_to_floor(self) -> np.ndarray:
@@ -106,6 +112,12 @@ class Evaluation:
 
         rows = []
         r = self.ratio_to_floor
+        nan = np.full(r.shape, np.nan)
+        extra = {
+            "max_error_rad": self.max_error, "rms_torque_Nm": self.rms_torque,
+            "saturation_fraction": self.saturation_fraction,
+        }  # fmt: skip
+        extra = {k: nan if v is None else v for k, v in extra.items()}
         for i, seed in enumerate(self.seeds):
             for s, (a, b, m) in enumerate(self.segments):
                 rows.append({
@@ -116,6 +128,7 @@ class Evaluation:
                     "ee_position_rms_mm": self.ee_position_rms[i, s],
                     "ee_position_max_mm": self.ee_position_max[i, s],
                     "ee_orientation_rms_deg": self.ee_orientation_rms[i, s],
+                    **{k: v[i, s] for k, v in extra.items()},
                 })  # fmt: skip
         return pd.DataFrame(rows)
 
@@ -132,13 +145,24 @@ def run_episode(policy: Callable, env: gymnasium.Env, seed: int) -> tuple[np.nda
 
     Returns the true joint angles ``(N, n)`` at the samples the policy commanded (the state each
     action was applied to; NaN after a failure), whether the trial failed, and the sample it
-    failed at (-1: none). ``policy.reset()`` is called first if the policy has one."""
+    failed at (-1: none). ``policy.reset()`` is called first if the policy has one. An episode the
+    environment cuts short (a ``TimeLimit``: ``gymnasium.make(..., max_episode_steps=...)``) is an
+    error: the score is over the scenario's whole trial."""
+    q, _, _, failed, k = _episode(policy, env, seed)
+    return q, failed, k
+
+
+def _episode(policy: Callable, env: gymnasium.Env, seed: int):
+    """:func:`run_episode` with the applied torque ``(N, n)`` and the saturation ``(N, n)`` of each
+    sample (NaN / False after a failure): ``q, tau, saturated, failed, k``."""
     sc = env.unwrapped.scenario
     if hasattr(policy, "reset"):
         policy.reset()
     obs, info = env.reset(seed=int(seed))
-    q = np.full((sc.n_samples, sc.n_joints), np.nan)
-    for k in range(sc.n_samples):
+    N, n = sc.n_samples, sc.n_joints
+    q, tau = np.full((N, n), np.nan), np.full((N, n), np.nan)
+    sat = np.zeros((N, n), dtype=bool)
+    for k in range(N):
         q[k] = info["q_true"]
         action = policy(obs)
         try:
@@ -147,11 +171,18 @@ def run_episode(policy: Callable, env: gymnasium.Env, seed: int) -> tuple[np.nda
             raise SignalError(
                 f"the policy's action at seed {seed}, sample {k} (t = {k * sc.sample_period:.6g} s): {exc}"
             ) from None
+        tau[k], sat[k] = info["applied_torque"], info["saturated"]
         if terminated:
-            return q, True, k
+            return q, tau, sat, True, k
         if truncated:
+            if k < N - 1:
+                raise ParameterError(
+                    f"the environment ended seed {seed}'s episode at sample {k + 1} of the scenario's {N} "
+                    "(a TimeLimit wrapper: gymnasium.make(..., max_episode_steps=...)?); the score is over "
+                    "the whole trial: give evaluate the scenario, or an environment without the limit"
+                )
             break
-    return q, False, -1
+    return q, tau, sat, False, -1
 
 
 def evaluate(
@@ -205,16 +236,14 @@ def evaluate(
     from adaptive_dd.benchmark.metrics import per_seed_segment_metrics
     from adaptive_dd.benchmark.runner import run_benchmark, scenario_controller
     from adaptive_dd.closed_loop.types import run_constants
-    from adaptive_dd.gym.env import PayloadSwapEnv
+    from adaptive_dd.gym import scenario_file
+    from adaptive_dd.gym.env import PayloadSwapEnv, floor_laws
 
-    env = scenario if isinstance(scenario, gymnasium.Env) else PayloadSwapEnv(scenario, floor=None)
+    if not isinstance(scenario, gymnasium.Env):
+        scenario = PayloadSwapEnv(scenario_file(scenario, "evaluate"), floor=None)
+    env = scenario
     sc = env.unwrapped.scenario
-    from adaptive_dd.controllers.builtins import CONTROLLERS
-
-    # a floor: a law told the true model at once (ct_oracle_late, told late, is measured against one)
-    told = [
-        n for n, e in CONTROLLERS.items() if e.knows.startswith("true model") and "delay" not in e.settings
-    ]
+    told = floor_laws()
     if floor not in told:
         raise ParameterError(f"evaluate: floor {floor!r} is no built-in told the true model: one of {told}")
     ints = (int, np.integer)
@@ -233,18 +262,24 @@ def evaluate(
     start, end = rc.seg_start, rc.seg_end
     G = start.size
     rms = np.full((len(idx), G), np.nan)
+    max_e, rms_tau, sat_frac = (np.full((len(idx), G), np.nan) for _ in range(3))
     failed = np.zeros(len(idx), dtype=bool)
     failed_at = np.full(len(idx), np.nan)
     qs = np.full((len(idx), sc.n_samples, sc.n_joints), np.nan)
     for i, seed in enumerate(idx):
-        q, failed[i], at = run_episode(policy, env, seed)
+        q, tau, sat, failed[i], at = _episode(policy, env, seed)
         if failed[i]:
             failed_at[i] = at * sc.sample_period
         qs[i] = q
         e2 = np.sum((rc.q_d - q) ** 2, axis=1)
+        t2 = np.sum(tau**2, axis=1)
         for s in range(G):
             if not failed[i] or end[s] <= at:  # the benchmark's rule: segments ending after it
-                rms[i, s] = np.sqrt(np.sum(e2[start[s] : end[s]]) / (end[s] - start[s]))
+                a, b = start[s], end[s]
+                rms[i, s] = np.sqrt(np.sum(e2[a:b]) / (b - a))
+                max_e[i, s] = np.sqrt(np.max(e2[a:b]))
+                rms_tau[i, s] = np.sqrt(np.sum(t2[a:b]) / (b - a))
+                sat_frac[i, s] = np.mean(np.any(sat[a:b], axis=1))
     ee = end_effector_errors(sc.arm, qs, rc.q_d, start, end)
     runs = run_benchmark(
         sc, progress=False, controllers=floor_law, seed_indices=idx,
@@ -254,5 +289,5 @@ def evaluate(
     floor_rms = per_seed_segment_metrics(runs, runs.runs[label], settling=False)["rms_error"]
     return Evaluation(
         name, idx, list(sc.segments()), rms, floor_rms, ee["ee_position_rms"], ee["ee_position_max"],
-        ee["ee_orientation_rms"], failed, floor, failed_at,
+        ee["ee_orientation_rms"], failed, floor, failed_at, max_e, rms_tau, sat_frac,
     )  # fmt: skip

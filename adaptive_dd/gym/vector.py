@@ -16,9 +16,13 @@ plant's batch simulator (:class:`~adaptive_dd.plant.simulator.ArmSimulator`) on 
 
 The trials share one clock: every episode has the scenario's length, all end together
 (``truncated``) and the next :meth:`step` starts the next ``num_envs`` trials (next-step
-autoreset: its actions are ignored). A trial that diverges is stopped at rest (the benchmark's
-rule); it reports ``terminated`` from then on, with zero reward, until the batch's episode ends.
-``info`` holds ``q_true``, ``payload_mass`` and ``seed_index`` per trial (no floor torque).
+autoreset: its actions are ignored). A trial that fails (the benchmark's rule) is stopped at rest
+and stays there, an absorbing state: each of its steps from the failing one on is rewarded
+``-failure_cost(n)`` (:func:`~adaptive_dd.gym.env.failure_cost`), so its return is the single
+environment's, which ends the episode there with that cost for every sample left; it is never
+``terminated`` (a sub-environment cannot restart before the others), ``info["failed"]`` says which
+trials failed. ``info`` holds ``q_true``, ``payload_mass``, ``seed_index`` and ``failed`` per trial,
+each with Gymnasium's ``_key`` mask (no floor torque).
 """
 
 from __future__ import annotations
@@ -34,7 +38,7 @@ from gymnasium.vector.utils import batch_space
 
 from adaptive_dd.benchmark.scenario import Scenario
 from adaptive_dd.errors import ParameterError, SignalError
-from adaptive_dd.gym.env import MAX_SEED, scenario_of
+from adaptive_dd.gym.env import MAX_SEED, failure_cost, scenario_of
 
 __all__ = ["PayloadSwapVectorEnv"]
 
@@ -154,26 +158,42 @@ class PayloadSwapVectorEnv(gymnasium.vector.VectorEnv):
         self._next = 0
         self._done = False
 
-    def _start(self, first: int):
+    def _start(self, first: int | tuple):
         sc = self.scenario
-        idx = tuple(range(first, first + self.num_envs))
+        idx = first if isinstance(first, tuple) else tuple(range(first, first + self.num_envs))
         self.seed_indices = idx
         if sc.closed_forms is not None:
             self._batch = _TwoLinkBatch(sc, idx, self._ref[0][0], self._ref[1][0])
         else:
             self._batch = _ChainBatch(sc, idx)
-        self._next = first + self.num_envs
+        self._next = max(idx) + 1
         self._done = False
         return self._observe(), self._info()
 
-    def reset(self, *, seed: int | None = None, options: dict | None = None):
-        """Start trials ``seed .. seed + num_envs - 1`` of the benchmark (without a seed: from a
-        seed index drawn from the generator)."""
+    def reset(self, *, seed: int | list[int] | None = None, options: dict | None = None):
+        """Start trials ``seed .. seed + num_envs - 1`` of the benchmark, or the trials of a list of
+        ``num_envs`` seed indices (without a seed: from a seed index drawn from the generator); the
+        next batch goes on after the largest."""
         if options:
             raise ParameterError(f"PayloadSwapVectorEnv.reset: no options are taken, got {sorted(options)}")
-        if seed is not None:
-            if not isinstance(seed, (int, np.integer)) or seed < 0:
-                raise ParameterError(f"PayloadSwapVectorEnv.reset: seed must be an int >= 0, got {seed!r}")
+        ints = (int, np.integer)
+        if isinstance(seed, list | tuple | np.ndarray):
+            ok = len(seed) == self.num_envs and all(
+                isinstance(x, ints) and not isinstance(x, bool) and 0 <= x < 2**63 for x in seed
+            )
+            if not ok:
+                raise ParameterError(
+                    f"PayloadSwapVectorEnv.reset: a list of seeds must hold num_envs = {self.num_envs} ints "
+                    f"in [0, 2**63) (one trial's seed index each), got {list(seed)!r}"
+                )
+            self._np_random, self._np_random_seed = seeding.np_random(int(seed[0]))
+            first = tuple(int(x) for x in seed)
+        elif seed is not None:
+            if isinstance(seed, bool) or not isinstance(seed, ints) or not 0 <= seed < 2**63 - self.num_envs:
+                raise ParameterError(
+                    "PayloadSwapVectorEnv.reset: seed must be an int >= 0 (the first trial's seed index) or "
+                    f"a list of num_envs of them, got {seed!r}"
+                )
             self._np_random, self._np_random_seed = seeding.np_random(int(seed))
             first = int(seed)
         else:
@@ -189,11 +209,14 @@ class PayloadSwapVectorEnv(gymnasium.vector.VectorEnv):
 
     def _info(self) -> dict:
         b = self._batch
-        return {
+        info = {
             "q_true": b.q.copy(),
             "payload_mass": np.full(self.num_envs, b.mass()),
             "seed_index": np.asarray(self.seed_indices),
+            "failed": np.asarray(b.failed, dtype=bool).copy(),
         }
+        every = np.ones(self.num_envs, dtype=bool)
+        return {**info, **{f"_{k}": every.copy() for k in info}}
 
     def step(self, actions):
         """Apply ``actions (num_envs, n)`` [N m] for one sample of every trial."""
@@ -210,11 +233,12 @@ class PayloadSwapVectorEnv(gymnasium.vector.VectorEnv):
                 f"PayloadSwapVectorEnv.step: actions must be {self.action_space.shape}, got {a.shape}"
             )
         b = self._batch
-        was_failed = b.failed.copy()
         b.step(a, self._ref[0][b.k])
         obs = self._observe()
         e = self._ref[0][b.k] - b.q
-        reward = np.where(was_failed, 0.0, -np.sum(e * e, axis=1))
+        failed = np.asarray(b.failed, dtype=bool)
+        with np.errstate(invalid="ignore", over="ignore"):
+            reward = np.where(failed, -failure_cost(self.scenario.n_joints), -np.sum(e * e, axis=1))
         self._done = b.k >= self.scenario.n_samples
         truncated = np.full(S, self._done)
-        return obs, reward, b.failed.copy(), truncated, self._info()
+        return obs, reward, np.zeros(S, dtype=bool), truncated, self._info()
