@@ -121,6 +121,7 @@ def _with_floors(sc, names: Sequence[str]) -> tuple[tuple[str, ...], dict, dict]
     """The names to run (each asked-for one and its floor), each one's floor by the label its
     results carry, and why a floor that does not build is missing (its row then has no ratio and
     says so)."""
+    from adaptive_dd.controllers.plugins import DEFAULT_FLOOR
     from adaptive_dd.controllers.registry import scenario_controller
 
     floors: dict[str, str | None] = {}
@@ -132,7 +133,7 @@ def _with_floors(sc, names: Sequence[str]) -> tuple[tuple[str, ...], dict, dict]
         except ParameterError as exc:  # named by its file once (a plug-in's table names it already)
             where = "" if str(exc).startswith(str(sc.source)) else f"{sc.source}: "
             raise ParameterError(f"leaderboard: {where}{exc}") from None
-        floor = floors[label] = getattr(ctrl, "floor", "ct_oracle")
+        floor = floors[label] = getattr(ctrl, "floor", DEFAULT_FLOOR)
         if floor is not None and floor not in run and floor not in missing:
             try:
                 scenario_controller(sc, floor)

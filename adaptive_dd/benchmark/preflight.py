@@ -303,12 +303,13 @@ def inertia_problems(scenario) -> list[str]:
 def scenario_floors(scenario) -> dict[str, str]:
     """``{controller: its floor}`` for the scenario's controllers that have one, in their order (a
     controller that cannot be built is left out: :func:`controller_problems` reports it)."""
+    from adaptive_dd.controllers.plugins import DEFAULT_FLOOR
     from adaptive_dd.controllers.registry import scenario_controller
 
     out = {}
     for name in scenario.controllers:
-        try:
-            floor = getattr(scenario_controller(scenario, name)[1], "floor", None)
+        try:  # a plug-in that declares no floor is measured against ct_oracle, as the run does
+            floor = getattr(scenario_controller(scenario, name)[1], "floor", DEFAULT_FLOOR)
         except Exception:  # a controller that cannot be built: controller_problems reports it
             continue
         if floor is not None:

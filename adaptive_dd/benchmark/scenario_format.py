@@ -37,7 +37,8 @@ _FIELD_KEY = {
 def format_scenario(sc: Scenario) -> str:
     """Every field of a scenario as ``key = value``, defaults marked ``(default)``."""
     lines = [
-        f"# {sc.source}: its keys and values are valid (what the run would meet is checked below); {sc.estimate()}"
+        f"# {sc.source}: its keys and values are valid (what the run would meet is checked below); "
+        f"{sc.estimate()}"
     ]
     order = ("duration", "sample_period", "seeds", "seed", "substeps", "controllers", "bandwidth")
     order += ("damping", "swap_times", "swap_masses", "payload_radius", "position_variance")

@@ -41,6 +41,9 @@ __all__ = [
     "unknown_settings",
 ]
 
+DEFAULT_FLOOR = "ct_oracle"
+"""The floor of a plug-in that declares none (a ``floor`` class attribute or setting)."""
+
 COMMON = {"bandwidth", "damping", "label", "floor"}
 """Settings every controller takes, built-in or plug-in (``docs/controllers.md``)."""
 
@@ -388,7 +391,7 @@ class PythonForm:
 
     def __init__(self, name: str, ctrl, arm, why: str) -> None:
         self.name, self.ctrl, self.arm, self.why = name, ctrl, arm, why
-        self.floor = getattr(ctrl, "floor", "ct_oracle")
+        self.floor = getattr(ctrl, "floor", DEFAULT_FLOOR)
         self.needs_true_model = bool(getattr(ctrl, "needs_true_model", False))
         self.form: PluginForm | None = None
 

@@ -1,0 +1,49 @@
+"""A plug-in's floor is added to the run as a built-in's is: the documented default (``ct_oracle``)
+for a plug-in that declares none, and a built-in floor named in its table though the run does not
+list it. Both were left out by ``adaptive-dd benchmark`` (the plug-in vanished from every ratio
+table with a warning) or refused by the scenario's checks."""
+
+from pathlib import Path
+
+import pytest
+
+from adaptive_dd.benchmark.preflight import missing_floors
+from adaptive_dd.benchmark.scenario import load_scenario
+from adaptive_dd.errors import ScenarioError
+
+PLUGINS = Path(__file__).resolve().parent.parent / "examples" / "plugins"
+
+
+@pytest.fixture
+def folder(tmp_path):
+    """A folder with a copy of examples/plugins' compiled plug-in whose class declares no floor."""
+    lines = (PLUGINS / "pd_gravity_plugin.py").read_text().splitlines(keepends=True)
+    kept = [x for x in lines if not x.startswith('    floor = "pd_gravity_oracle"')]
+    assert len(kept) == len(lines) - 1
+    (tmp_path / "nofloor_plugin.py").write_text("".join(kept))
+    return tmp_path
+
+
+def _scenario(folder, table: str = ""):
+    """examples/plugins/pd_gravity.toml (vertical3) with the plug-in alone, written beside it."""
+    text = (PLUGINS / "pd_gravity.toml").read_text()
+    start = text.index("controllers = [")
+    end = text.index("\n", start)
+    text = text[:start] + 'controllers = ["nofloor_plugin:PDGravityPlugin"]' + text[end:]
+    text = text.replace("[controllers.PDGravityPlugin]\n", f"[controllers.PDGravityPlugin]\n{table}\n")
+    path = folder / "scenario.toml"
+    path.write_text(text)
+    return load_scenario(str(path))
+
+
+def test_a_plugin_without_a_floor_gets_ct_oracle_added(folder):
+    sc = _scenario(folder)
+    add, cannot = missing_floors(sc)
+    assert add == {"ct_oracle": ["nofloor_plugin:PDGravityPlugin"]} and not cannot
+
+
+def test_a_builtin_floor_in_the_table_is_added_not_refused(folder):
+    sc = _scenario(folder, 'floor = "pd_gravity_oracle"')
+    assert missing_floors(sc)[0] == {"pd_gravity_oracle": ["nofloor_plugin:PDGravityPlugin"]}
+    with pytest.raises(ScenarioError, match=r"floor: 'nosuch' is not one of the run's controllers"):
+        _scenario(folder, 'floor = "nosuch"')
