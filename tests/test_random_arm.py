@@ -266,25 +266,47 @@ def test_cli_arms_usage_errors(capsys):
     assert "two-link" in capsys.readouterr().err
 
 
-def test_cli_arms_without_adaptive_ct_is_refused_before_any_arm_runs(capsys, monkeypatch, tmp_path):
-    """The per-arm report is adaptive_ct's against its floor: without it ``--arms`` ran every arm,
-    printed a raw warning per missing floor and failed after; each missing floor is added, as in a
-    run of one arm."""
-    from adaptive_dd.benchmark import population
+def test_cli_arms_reports_every_law_against_its_floor(capsys, tmp_path):
+    """``--arms`` ran every listed law but reported adaptive_ct alone (a template without it was
+    refused): a researcher's own law got no answer on the population. Each law measured against a
+    floor now has its per-arm rows in arms.csv and its pooled line; the per-arm table is the first
+    law's when adaptive_ct does not run."""
+    import json
+
+    import pandas as pd
+
     from adaptive_dd.cli import main
 
-    ran = []
-    monkeypatch.setattr(population, "run_population", lambda *a, **k: ran.append(1))
     text = (ROOT / "benchmarks" / "scenarios" / "population.toml").read_text()
-    pop = tmp_path / "pop.toml"
-    pop.write_text(text.replace('controllers = ["ct_oracle", "adaptive_ct"]', 'controllers = ["pd_gravity"]'))
-    assert main(["benchmark", str(pop), "--arms", "2"]) == 2
-    err = capsys.readouterr().err
-    assert "pd_gravity_oracle added (the floor of pd_gravity" in err
-    assert (
-        "--arms reports adaptive_ct against its floor" in err and "['pd_gravity', 'pd_gravity_oracle']" in err
+    text = text.replace(
+        'controllers = ["ct_oracle", "adaptive_ct"]', 'controllers = ["pd_gravity", "slotine_li"]'
     )
-    assert not ran
+    text = text.replace("duration = 16.0", "duration = 1.5")
+    for old, at in (("at = 4.0", "at = 0.5"), ("at = 8.0", "at = 1.0"), ("at = 12.0", "at = 1.25")):
+        text = text.replace(old, at)
+    pop = tmp_path / "pop.toml"
+    pop.write_text(text)
+    out = tmp_path / "out"
+    assert (
+        main(["benchmark", str(pop), "--arms", "2", "--seeds", "1", "--out", str(out), "--no-progress"]) == 0
+    )
+    printed = capsys.readouterr()
+    assert "pd_gravity_oracle added (the floor of pd_gravity" in printed.err
+    assert printed.out.startswith("pd_gravity / pd_gravity_oracle per seed, per arm")
+    assert "target" not in printed.out.split("every law")[0]  # adaptive_ct's targets are not pd_gravity's
+    every = printed.out.split("every law against its floor, pooled over 2 arms")[1].splitlines()
+    assert every[1].startswith("  pd_gravity / pd_gravity_oracle: mean ")
+    assert every[2].startswith("  slotine_li / slotine_li_oracle: mean ")
+    frame = pd.read_csv(out / "per_seed.csv")
+    for law in ("pd_gravity", "slotine_li"):
+        rows = frame[frame["controller"] == law]
+        mean = rows.groupby("segment")["ratio_to_floor"].mean().round(3).tolist()
+        line = next(x for x in every if x.startswith(f"  {law} /"))
+        assert line.split("mean ")[1].split(";")[0] == " / ".join(f"{m:.3f}" for m in mean)
+    arms = pd.read_csv(out / "arms.csv")
+    assert set(arms["controller"]) == {"pd_gravity", "slotine_li"} and len(arms) == 2 * 2 * 4
+    summary = json.loads((out / "population.json").read_text())
+    assert summary["lead"] == "pd_gravity" and set(summary["laws"]) == {"pd_gravity", "slotine_li"}
 
 
 @pytest.mark.slow

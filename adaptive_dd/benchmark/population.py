@@ -102,11 +102,19 @@ class PopulationResult:
     frame : pandas.DataFrame
         The per-seed tables of every arm (:func:`~adaptive_dd.benchmark.results.to_frame`),
         ``arm_seed`` as their first column.
+    laws : dict
+        ``{controller: its arms' summaries, as arms}`` for every controller of the run measured
+        against a floor (``arms`` is ``laws[lead]``).
+    lead : str
+        The controller ``arms`` and the per-arm table are of: ``adaptive_ct`` when it runs, else the
+        first controller with a floor.
     """
 
     arms: list[dict] = field(default_factory=list)
     frame: object = None
     floor_caveat: str | None = None
+    laws: dict = field(default_factory=dict)
+    lead: str = "adaptive_ct"
 
 
 def run_population(data: dict, src: str, arm_seeds, *, seeds=None, controllers=None, progress=False,
@@ -152,7 +160,16 @@ def run_population(data: dict, src: str, arm_seeds, *, seeds=None, controllers=N
         metrics = compute_metrics(res)
         out.floor_caveat = metrics["floor_caveat"]
         drawn = random_arm(int(arm_seed))
-        summary = arm_summary(metrics, int(arm_seed), drawn, sc)
+        measured = [n for n, c in metrics["controllers"].items() if c.get("floor")]
+        if not measured:
+            raise ScenarioError(
+                f"{src}: --arms reports each law against its floor: none of {list(metrics['controllers'])} "
+                "has one that ran (list a law that adapts or a plug-in beside the oracles)"
+            )
+        out.lead = "adaptive_ct" if "adaptive_ct" in measured else measured[0]
+        for name in measured:
+            out.laws.setdefault(name, []).append(arm_summary(metrics, int(arm_seed), drawn, sc, name))
+        summary = out.laws[out.lead][-1]
         out.arms.append(summary)
         frame = res.to_frame()
         frame.insert(0, "arm_seed", int(arm_seed))
@@ -163,11 +180,11 @@ def run_population(data: dict, src: str, arm_seeds, *, seeds=None, controllers=N
     return out
 
 
-def arm_summary(metrics: dict, arm_seed: int, drawn, sc) -> dict:
-    """One arm's adaptive_ct figures from its metrics (:func:`compute_metrics`)."""
-    a = metrics["controllers"].get("adaptive_ct")
+def arm_summary(metrics: dict, arm_seed: int, drawn, sc, name: str = "adaptive_ct") -> dict:
+    """One arm's figures of controller ``name`` from its metrics (:func:`compute_metrics`)."""
+    a = metrics["controllers"].get(name)
     if a is None:
-        raise ScenarioError(f"{sc.source}: --arms reports adaptive_ct against its floor: list adaptive_ct")
+        raise ScenarioError(f"{sc.source}: --arms reports {name} against its floor: list {name}")
     segs = []
     for s in a["segments"]:
         st = s.get("ratio_to_floor") or {}
@@ -186,6 +203,7 @@ def arm_summary(metrics: dict, arm_seed: int, drawn, sc) -> dict:
     ms = [x for x in a.get("missed_swaps_per_seed") or [] if x is not None]
     return {
         "arm_seed": arm_seed,
+        "controller": name,
         "floor": a.get("floor"),
         "joints": drawn.n_joints,
         "kind": drawn.kind,
@@ -198,15 +216,18 @@ def arm_summary(metrics: dict, arm_seed: int, drawn, sc) -> dict:
     }
 
 
-def pooled(pop: PopulationResult) -> list[dict]:
-    """Per segment index: ``mean``, ``p90``, ``max`` of adaptive_ct / its floor over every arm and
-    seed (trials that failed or whose floor saturated left out), the worst ``(arm_seed, seed)``."""
+def pooled(pop: PopulationResult, name: str | None = None) -> list[dict]:
+    """Per segment index: ``mean``, ``p90``, ``max`` of controller ``name`` (default the lead's,
+    ``adaptive_ct``) / its floor over every arm and seed (trials that failed or whose floor saturated
+    left out), the worst ``(arm_seed, seed)``."""
+    name = name or pop.lead
     f = pop.frame
+    arms = pop.laws.get(name, pop.arms if name == pop.lead else [])
     saturated = {
-        (a["arm_seed"], i) for a in pop.arms for i, s in enumerate(a["segments"]) if s["floor_saturated"]
+        (a["arm_seed"], i) for a in arms for i, s in enumerate(a["segments"]) if s["floor_saturated"]
     }
     keep = [(a, s) not in saturated for a, s in zip(f["arm_seed"], f["segment"], strict=True)]
-    rows = f[(f["controller"] == "adaptive_ct") & f["ratio_to_floor"].notna() & np.array(keep, bool)]
+    rows = f[(f["controller"] == name) & f["ratio_to_floor"].notna() & np.array(keep, bool)]
     out = []
     for s, g in rows.groupby("segment", sort=True):
         r = g["ratio_to_floor"].to_numpy(float)
@@ -237,7 +258,9 @@ def format_population(pop: PopulationResult, worst: int = 3) -> str:
 
     floors = sorted({a.get("floor") or "its floor" for a in pop.arms}) or ["its floor"]
     floor = " or ".join(floors)
-    lines = [f"adaptive_ct / {floor} per seed, per arm (mean per segment; max over segments):"]
+    lead = pop.lead
+    targets = lead == "adaptive_ct"  # the issue's targets are adaptive_ct's
+    lines = [f"{lead} / {floor} per seed, per arm (mean per segment; max over segments):"]
     for a in pop.arms:
         means = " / ".join(f"{s['mean']:.3f}" for s in a["segments"])
         mx = max((s["max"] for s in a["segments"] if not math.isnan(s["max"])), default=math.nan)
@@ -252,22 +275,30 @@ def format_population(pop: PopulationResult, worst: int = 3) -> str:
         lines.append(f"  note: {pop.floor_caveat}")
     for p in pooled(pop):
         ok = p["mean"] <= TARGET_RATIO_MEAN and p["p90"] <= TARGET_RATIO_P90 and p["max"] <= TARGET_RATIO_MAX
+        verdict = (
+            f" (target mean <= {TARGET_RATIO_MEAN}, p90 <= {TARGET_RATIO_P90}, max <= {TARGET_RATIO_MAX}: "
+            f"{'met' if ok else 'NOT met'})"
+            if targets
+            else ""
+        )
         lines.append(
             f"  segment {p['segment']} ({p['capacity_share']:.2f} x capacity), {p['n']} trials: mean "
             f"{p['mean']:.3f}, p90 {p['p90']:.3f}, max {p['max']:.2f} (random:{p['worst'][0]} seed "
-            f"{p['worst'][1]}) (target mean <= {TARGET_RATIO_MEAN}, p90 <= {TARGET_RATIO_P90}, max <= "
-            f"{TARGET_RATIO_MAX}: {'met' if ok else 'NOT met'})"
+            f"{p['worst'][1]}){verdict}"
         )
     n_fa = sum(a["false_alarm_trials"] for a in pop.arms)
     n_tr = sum(a["trials"] for a in pop.arms)
-    pct = 100.0 * n_fa / max(n_tr, 1)
-    lines.append(
-        f"  trials with a false alarm: {n_fa} of {n_tr} ({pct:.1f} %) "
-        f"(target <= {TARGET_FALSE_ALARM_PCT:g} %: {'met' if pct <= TARGET_FALSE_ALARM_PCT else 'NOT met'})"
-    )
     n_ms = sum(a["missed_swaps"] for a in pop.arms)
     n_sw = sum(a["swaps"] for a in pop.arms)
-    lines.append(f"  missed swaps: {n_ms} of {n_sw} (target 0: {'met' if n_ms == 0 else 'NOT met'})")
+    if n_tr:  # a law with a change detector
+        pct = 100.0 * n_fa / n_tr
+        fa_ok, ms_ok = pct <= TARGET_FALSE_ALARM_PCT, n_ms == 0
+        fa_t = (
+            f" (target <= {TARGET_FALSE_ALARM_PCT:g} %: {'met' if fa_ok else 'NOT met'})" if targets else ""
+        )
+        ms_t = f" (target 0: {'met' if ms_ok else 'NOT met'})" if targets else ""
+        lines.append(f"  trials with a false alarm: {n_fa} of {n_tr} ({pct:.1f} %){fa_t}")
+        lines.append(f"  missed swaps: {n_ms} of {n_sw}{ms_t}")
     sat = sum(s["floor_saturated"] for a in pop.arms for s in a["segments"])
     if sat:
         lines.append(f"  {sat} arm segment(s) where {floor} saturates: no verdict there (left out above)")
@@ -280,7 +311,24 @@ def format_population(pop: PopulationResult, worst: int = 3) -> str:
             for a in ranked
         )
     )
+    others = [n for n in pop.laws if n != lead]
+    if others:
+        lines.append(
+            f"every law against its floor, pooled over {arms} (per segment from 0: mean; p90; max and its "
+            "arm and seed):"
+        )
+        for name in (lead, *others):
+            p = pooled(pop, name)
+            fl = sorted({a.get("floor") or "?" for a in pop.laws[name]})
+            worst_one = max(p, key=lambda x: x["max"], default=None)
+            where = f" (random:{worst_one['worst'][0]} seed {worst_one['worst'][1]})" if worst_one else ""
+            mean, p90, mx = (" / ".join(format(x[k], f) for x in p) for k, f in KEYS_FORMATS)
+            lines.append(f"  {name} / {' or '.join(fl)}: mean {mean}; p90 {p90}; max {mx}{where}")
     return "\n".join(lines)
+
+
+KEYS_FORMATS = (("mean", ".3f"), ("p90", ".3f"), ("max", ".2f"))
+"""The pooled statistics the every-law lines print, with their formats."""
 
 
 def _badness(a: dict) -> tuple:
@@ -290,14 +338,17 @@ def _badness(a: dict) -> tuple:
 
 
 def arms_frame(pop: PopulationResult):
-    """One row per arm and segment: the per-arm table as a DataFrame (``arms.csv``)."""
+    """One row per controller, arm and segment: the per-arm table of every law measured against a
+    floor, as a DataFrame (``arms.csv``)."""
     import pandas as pd
 
     rows = []
-    for a in pop.arms:
+    for a in (a for arms in (pop.laws or {pop.lead: pop.arms}).values() for a in arms):
         for i, s in enumerate(a["segments"]):
             rows.append(
                 {
+                    "controller": a.get("controller", pop.lead),
+                    "floor": a.get("floor"),
                     "arm_seed": a["arm_seed"],
                     "joints": a["joints"],
                     "kind": a["kind"],

@@ -43,11 +43,6 @@ def run_arms(args: argparse.Namespace, only_controllers, with_floors) -> int:
     first = population_scenario(data, src, seeds[0], draw_swaps=args.draw_swaps)  # checks the template
     names = only_controllers(first, args.controllers) if args.controllers else first.controllers
     names = with_floors(first.with_controllers(names)).controllers  # each missing floor added, and said
-    if "adaptive_ct" not in names:  # before any arm runs: the report is adaptive_ct's against its floor
-        raise ScenarioError(
-            f"{src}: --arms reports adaptive_ct against its floor per arm and pooled: list adaptive_ct in "
-            f"run.controllers (or --controllers), beside {list(names)}"
-        )
     arm = data.get("arm", {}) if isinstance(data.get("arm"), dict) else {}
     own = arm.get("robot") or arm.get("urdf")
     if own:
@@ -67,7 +62,11 @@ def run_arms(args: argparse.Namespace, only_controllers, with_floors) -> int:
 
     def on_arm(a: dict) -> None:
         means = " / ".join(f"{s['mean']:.3f}" for s in a["segments"])
-        print(f"  random:{a['arm_seed']} ({a['joints']} joints): {means}", file=sys.stderr, flush=True)
+        print(
+            f"  random:{a['arm_seed']} ({a['joints']} joints): {a['controller']} {means}",
+            file=sys.stderr,
+            flush=True,
+        )
 
     from threadpoolctl import threadpool_limits
 
@@ -92,7 +91,10 @@ def run_arms(args: argparse.Namespace, only_controllers, with_floors) -> int:
     with outputs:
         pop.frame.to_csv(outputs.path("per_seed.csv"), index=False)
         arms_frame(pop).to_csv(outputs.path("arms.csv"), index=False)
-        summary = {"template": src, "floor_caveat": pop.floor_caveat, "arms": pop.arms, "pooled": pooled(pop)}
+        summary = {
+            "template": src, "floor_caveat": pop.floor_caveat, "lead": pop.lead, "arms": pop.arms,
+            "pooled": pooled(pop), "laws": {n: pooled(pop, n) for n in pop.laws},
+        }  # fmt: skip
         target = outputs.extra(args.json) if args.json else outputs.path("population.json")
         target.write_text(json.dumps(summary, indent=1, default=float))
     written = [out / "per_seed.csv", out / "arms.csv", Path(args.json or out / "population.json")]
