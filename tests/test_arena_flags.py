@@ -91,6 +91,16 @@ def test_a_clean_trial_has_no_flag():
     assert trial_flags([_cell(0, 0.0, [0.0, 0.01], [np.nan, np.nan])]) == []
 
 
+def test_a_failure_of_no_recorded_time_is_not_dated_to_zero():
+    """A compiled plug-in that raised at 1.5 s was flagged "failed at t = 0.000 s" with t_s 0.0 in
+    leaderboard.json (its failure time is not recorded: benchmark said so)."""
+    cell = _cell(0, 0.0, [0.0, 0.0], [np.nan, np.nan], why=("ValueError in the compiled plug-in", ""))
+    cell["failed_trial"] = np.array([True, False])
+    (flag,) = trial_flags([cell])
+    assert flag["seed"] == 0 and flag["t_s"] is None and flag["flag"] == "failed"
+    assert flag["reasons"] == ["failed (time not recorded): ValueError in the compiled plug-in"]
+
+
 def test_the_leaderboard_runs_its_units_with_blas_on_one_thread(monkeypatch):
     """The leaderboard's units run under one BLAS thread (threadpoolctl), and the count is restored."""
     import importlib

@@ -71,16 +71,18 @@ def trial_flags(cells: list[dict]) -> list[dict]:
             if np.isfinite(c["lost_t"][j]):
                 ev.append((float(c["lost_t"][j]), "lost tracking", f"|q_d - q| beyond {LOST_ERROR:g} rad "
                            f"at t = {c['lost_t'][j]:.3f} s (segment {c['segment']})"))  # fmt: skip
-            if c["segment"] == 0 and np.isfinite(c["fail_t"][j]):
-                ev.append(
-                    (float(c["fail_t"][j]), "failed", f"failed at t = {c['fail_t'][j]:.3f} s: {c['why'][j]}")
-                )
+            failed = c.get("failed_trial", np.isfinite(c["fail_t"]))[j]
+            if c["segment"] == 0 and failed:
+                t = float(c["fail_t"][j])  # NaN: not recorded (a plug-in that raised in compiled code)
+                at = f"at t = {t:.3f} s" if np.isfinite(t) else "(time not recorded)"
+                ev.append((t, "failed", f"failed {at}: {c['why'][j]}"))
     out = []
     for (sc, ctrl, seed), ev in events.items():
         if ev:
-            ev.sort(key=lambda x: x[0])
+            ev.sort(key=lambda x: (np.isnan(x[0]), x[0]))  # an event of no recorded time last
+            t = None if np.isnan(ev[0][0]) else round(ev[0][0], 6)
             out.append(
-                {"scenario": sc, "controller": ctrl, "seed": seed, "t_s": round(ev[0][0], 6),
+                {"scenario": sc, "controller": ctrl, "seed": seed, "t_s": t,
                  "flag": ev[0][1], "reasons": [r for _, _, r in ev]}
             )  # fmt: skip
     return out

@@ -167,8 +167,10 @@ def _per_seed(res, names) -> dict[str, dict[str, np.ndarray]]:
             bounds = zip(seg_start, seg_end, strict=True)
             keep["e_norm"] = [None if e is None else e[:, a:b] for a, b in bounds]
             keep["failed"] = ~np.isfinite(m["rms_error"])
-            keep["fail_t"] = np.where(run.failed, np.maximum(run.failed_at, 0) * T, np.nan)
-            until = np.where(run.failed, keep["fail_t"], np.inf)
+            # a trial that raised in compiled code has no failure time (failed_at < 0): NaN, not 0 s
+            keep["failed_trial"] = np.asarray(run.failed, bool)
+            keep["fail_t"] = np.where(run.failed & (run.failed_at >= 0), run.failed_at * T, np.nan)
+            until = np.where(run.failed, np.nan_to_num(keep["fail_t"], nan=0.0), np.inf)
             keep["lost_t"] = lost_times(keep["e_norm"], list(seg_start * T), T, len(run.failed), until)
             keep["sat_t"] = _first_saturated(run, T)
             # the flags' saturation: over the samples each trial ran in the segment, a failed trial's
@@ -250,7 +252,8 @@ def _cells(name, kind, per, floors, missing, masses, T, seeds, t0) -> list[dict]
                     "fsat": fm["saturation_fraction"][:, i] if fm else np.full(e.shape, np.nan),
                     "recovery": _recovery(m, fm, i, T) if fm else np.full(e.shape, np.nan),
                     **{k: m[k][:, i] for k in _EE}, "lost_t": m["lost_t"][:, i], "sat_t": m["sat_t"][:, i],
-                    "fail_t": m["fail_t"], "fa": m["fa"][:, i], "missed": m["missed"][:, i],
+                    "fail_t": m["fail_t"], "failed_trial": m["failed_trial"], "fa": m["fa"][:, i],
+                    "missed": m["missed"][:, i],
                     "sat_flag": m["sat_flag"][:, i],
                     "why": m["why"], "seed": seeds, "t0": float(t0[i]),
                 }
