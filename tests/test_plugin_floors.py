@@ -47,3 +47,17 @@ def test_a_builtin_floor_in_the_table_is_added_not_refused(folder):
     assert missing_floors(sc)[0] == {"pd_gravity_oracle": ["nofloor_plugin:PDGravityPlugin"]}
     with pytest.raises(ScenarioError, match=r"floor: 'nosuch' is not one of the run's controllers"):
         _scenario(folder, 'floor = "nosuch"')
+
+
+def test_a_plugin_file_shadowed_by_an_installed_module_is_named(tmp_path):
+    """control.py beside a scenario naming "control:GlobLaw" read "module 'control' has no 'GlobLaw'":
+    python-control, a dependency, is found first, and the message did not say which file it read."""
+    from adaptive_dd.controllers.plugins import load_controller_class
+    from adaptive_dd.errors import ParameterError
+
+    (tmp_path / "control.py").write_text("class GlobLaw:\n    pass\n")
+    with pytest.raises(ParameterError) as exc:
+        load_controller_class("control:GlobLaw", (tmp_path,))
+    text = str(exc.value)
+    assert "site-packages" in text and "has no 'GlobLaw'" in text
+    assert f"before your {tmp_path / 'control.py'}" in text and "rename your file, e.g. my_control.py" in text

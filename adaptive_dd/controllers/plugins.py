@@ -93,9 +93,11 @@ def load_controller_class(path: str, search: tuple = ()) -> type:
     finally:
         for p in extra:
             sys.path.remove(p)
+    module = obj
     for part in attr.split("."):
         if not hasattr(obj, part):
-            raise ParameterError(f"controller {path!r}: module {mod_name!r} has no {attr!r}")
+            named, hint = _module_named(module, mod_name, search)
+            raise ParameterError(f"controller {path!r}: {named} has no {attr!r}{hint}")
         obj = getattr(obj, part)
     missing = [m for m in ("reset", "command", "observe") if not callable(getattr(obj, m, None))]
     if not inspect.isclass(obj) or missing:
@@ -103,6 +105,24 @@ def load_controller_class(path: str, search: tuple = ()) -> type:
             f"controller {path!r}: not a controller class (needs reset, command, observe; missing {missing})"
         )
     return obj
+
+
+def _module_named(module, mod_name: str, search: tuple) -> tuple[str, str]:
+    """``("module 'NAME' (its file)", hint)``, the hint naming the file of ``search`` the module
+    shadows: a plug-in's file named as an installed package or a standard module (``control.py``,
+    ``glob.py``) is found after them on the Python path."""
+    from pathlib import Path
+
+    where = getattr(module, "__file__", None)
+    text = f"module {mod_name!r}" + (f" ({where})" if where else "")
+    rel = mod_name.replace(".", "/") + ".py"
+    mine = [(Path(p) / rel).resolve() for p in search if (Path(p) / rel).is_file()]
+    if mine and (where is None or Path(where).resolve() != mine[0]):
+        return text, (
+            f"; that module is found on the Python path before your {mine[0]} (an installed package or "
+            f"a standard module of the same name): rename your file, e.g. my_{mod_name.rsplit('.', 1)[-1]}.py"
+        )
+    return text, ""
 
 
 def check_controller_object(where: str, what: str, obj) -> None:
