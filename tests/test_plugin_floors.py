@@ -61,3 +61,20 @@ def test_a_plugin_file_shadowed_by_an_installed_module_is_named(tmp_path):
     text = str(exc.value)
     assert "site-packages" in text and "has no 'GlobLaw'" in text
     assert f"before your {tmp_path / 'control.py'}" in text and "rename your file, e.g. my_control.py" in text
+
+
+def test_validate_reads_a_compiled_plugins_parameters_as_the_run_does(tmp_path):
+    """A compiled plug-in whose parameters() returns a dict passed validate ("valid", exit 0) and was
+    refused by benchmark (exit 2): validate builds each controller as the run does, its declarations too."""
+    from adaptive_dd.benchmark.preflight import controller_problems
+
+    src = (PLUGINS / "pd_gravity_plugin.py").read_text()
+    assert "    def parameters(self, sample_period):\n" in src
+    bad = src.replace(
+        "    def parameters(self, sample_period):\n",
+        "    def parameters(self, sample_period):\n        return {'kp': 1.0}\n\n"
+        "    def _old(self, sample_period):\n",
+    )
+    (tmp_path / "nofloor_plugin.py").write_text(bad)
+    (problem,) = controller_problems(_scenario(tmp_path))
+    assert "parameters(0.001) returned a dict, which numba cannot compile" in problem

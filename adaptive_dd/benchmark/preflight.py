@@ -140,11 +140,14 @@ def torque_problems(scenario) -> list[str]:
 def controller_problems(scenario) -> list[str]:
     """Every controller built as the run builds it; one line per controller that cannot be."""
     from adaptive_dd.benchmark.runner import scenario_controller
+    from adaptive_dd.controllers.plugins import compiled_form, is_compiled
 
     out = []
     for spec in scenario.controllers:
         try:
-            scenario_controller(scenario, spec)
+            label, ctrl = scenario_controller(scenario, spec)
+            if is_compiled(ctrl):  # its declarations and parameters() read as the run reads them
+                compiled_form(label, ctrl, 1, scenario.sample_period)
         except Exception as exc:  # a plug-in may raise anything: reported, not a traceback
             msg = str(exc)
             if not msg.startswith(("controller", "unknown controller")):
