@@ -203,3 +203,12 @@ def test_a_payload_change_is_told_its_real_range():
     assert parse_scenario({"run": {"duration": 2.0}, "payload": [{"at": 1.999, "mass": 1.0}]}).swap_times == (
         1.999,
     )
+
+
+def test_a_misspelt_key_names_every_key_as_near():
+    """``seedz`` was "did you mean 'seed'?": the base seed, whose change alters the noise silently,
+    not the count of seeds meant."""
+    from adaptive_dd.benchmark.scenario import parse_scenario
+
+    with pytest.raises(ScenarioError, match=r"run\.seedz: unknown key \(did you mean 'seed' or 'seeds'\?\)"):
+        parse_scenario({"run": {"seedz": 3}}, "s.toml")

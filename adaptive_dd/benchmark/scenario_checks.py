@@ -380,10 +380,18 @@ def _known_tables(e: list, data: dict) -> dict[str, Any]:
             where = f"{t}[{i}]" if t == "payload" else t
             for k in item:
                 if k not in allowed:
-                    near = difflib.get_close_matches(str(k), sorted(allowed), n=1)
-                    hint = f" (did you mean {near[0]!r}?)" if near else ""
+                    near = _nearest(str(k), allowed)
+                    hint = f" (did you mean {' or '.join(repr(x) for x in near)}?)" if near else ""
                     e.append(f"{where}.{k}: unknown key{hint}; allowed: {', '.join(sorted(allowed))}")
     return tables
+
+
+def _nearest(key: str, allowed) -> list[str]:
+    """The allowed keys nearest ``key``, all as near as the nearest (``seedz``: ``seed`` and
+    ``seeds``, the count, which the nearest alone left out)."""
+    scored = sorted(((difflib.SequenceMatcher(None, key, a).ratio(), a) for a in allowed), reverse=True)
+    best = scored[0][0] if scored else 0.0
+    return [a for r, a in scored if r >= 0.6 and r >= best - 0.1][:3]
 
 
 def scenario_fields(
