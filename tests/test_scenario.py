@@ -212,3 +212,16 @@ def test_a_misspelt_key_names_every_key_as_near():
 
     with pytest.raises(ScenarioError, match=r"run\.seedz: unknown key \(did you mean 'seed' or 'seeds'\?\)"):
         parse_scenario({"run": {"seedz": 3}}, "s.toml")
+
+
+def test_two_entries_sharing_a_name_or_a_settings_table_are_named():
+    """Two plug-ins of one class name from two files were "a controller (or label) is listed twice:
+    [every controller]", naming neither the entries nor what they share."""
+    from adaptive_dd.benchmark.scenario import parse_scenario
+
+    ctrls = ["pd", "a_mod:MyLaw", "b_mod:MyLaw", "pd"]
+    with pytest.raises(ScenarioError) as e:
+        parse_scenario({"run": {"controllers": ctrls}}, "s.toml")
+    msg = str(e.value)
+    assert "'pd' twice" in msg
+    assert "'a_mod:MyLaw' and 'b_mod:MyLaw' share the settings table [controllers.MyLaw]" in msg

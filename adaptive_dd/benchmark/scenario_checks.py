@@ -205,7 +205,21 @@ def _check_controllers(e: list, c: Any, arm: Any = None) -> bool:
                 )
                 ok = False
     if len(set(c)) != len(c) or len({table_name(x) for x in c}) != len(c):
-        e.append(f"run.controllers: a controller (or label) is listed twice: {list(c)}")
+        from collections import Counter
+
+        twice = [x for x, k in Counter(c).items() if k > 1]
+        tables = Counter(table_name(x) for x in c)
+        same = {
+            t: [x for x in c if table_name(x) == t] for t, k in tables.items() if k > 1 and t not in twice
+        }
+        said = [f"{x!r} twice" for x in twice] + [
+            f"{' and '.join(repr(x) for x in xs)} share the settings table [controllers.{t}]"
+            for t, xs in same.items()
+        ]
+        e.append(
+            f"run.controllers: {'; '.join(said)}: each needs its own name and table (two settings of one "
+            "law: a subclass per setting, each with its own class name)"
+        )
         ok = False
     return ok
 

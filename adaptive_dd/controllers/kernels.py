@@ -14,8 +14,8 @@ current segment); treat it as opaque and pass it to
   payload's ten parameters about the payload frame (``m``, ``m c``, ``I``): what the built-in
   ``slotine_li`` adapts.
 
-Both are ``numba.njit`` functions, compiled with the plug-in's loop (which is never cached:
-:mod:`adaptive_dd.closed_loop.plugin_loop`), over the cached dynamics kernels of
+Both are ``numba.njit`` functions, compiled with the plug-in's loop (cached under its key: a later
+run loads it; :mod:`adaptive_dd.closed_loop.plugin_loop`), over the cached dynamics kernels of
 :mod:`adaptive_dd.plant.chain`. ``examples/plugins/slotine_li_plugin.py`` writes Slotine-Li with
 them (``docs/own_controller.md``).
 """

@@ -39,7 +39,7 @@ class PDGravityPlugin:
     @njit
     def command(p, x, q, qd, q_d, qd_d, qdd_d, terms, tau):
         """Write the torque command into ``tau (n,)`` from the measured ``q, qd (n,)`` and the
-        reference; ``terms = (g, M, bias)``: only ``g`` is computed, as declared."""
+        reference; ``terms = (g, M, bias, arm)``: only ``g`` is computed, as declared."""
         kp, kd = p
         g = terms[0]
         for j in range(q.shape[0]):
