@@ -421,6 +421,10 @@ def run_sweep(
     return SweepResult(table, path, maps, reused, len(todo), int(table["failed"].sum()), ratios)
 
 
+WORKER_WAIT = 60.0
+"""[s] How long a sweep waits for a scheduler with no worker to get one before it stops."""
+
+
 def _run_on_dask(todo, cells_dir: Path, ext: str, scheduler, workers, client, progress: bool) -> dict:
     """Run the ``todo`` tasks on ``client`` (or a cluster made here and closed after); the lost
     tasks' errors (:func:`_run_tasks`)."""
@@ -435,9 +439,22 @@ def _run_on_dask(todo, cells_dir: Path, ext: str, scheduler, workers, client, pr
         if made
         else "the given client"
     )
-    n = len(client.scheduler_info().get("workers", {}))
-    print(f"running {len(todo)} task(s) on {where}, {n} worker(s)", flush=True)
     try:
+        n = len(client.scheduler_info().get("workers", {}))
+        if n == 0:  # the tasks would wait forever at 0 %
+            print(f"{where} has no worker yet; waiting up to {WORKER_WAIT:g} s for one", flush=True)
+            try:
+                client.wait_for_workers(1, timeout=WORKER_WAIT)
+            except (TimeoutError, OSError) as exc:
+                from adaptive_dd.errors import ParameterError
+
+                address = scheduler or "<the scheduler's address>"
+                raise ParameterError(
+                    f"{where} has no worker after {WORKER_WAIT:g} s ({type(exc).__name__}); start one "
+                    f"(`dask worker {address}`) or run without --scheduler (a local cluster)"
+                ) from None
+            n = len(client.scheduler_info().get("workers", {}))
+        print(f"running {len(todo)} task(s) on {where}, {n} worker(s)", flush=True)
         return _run_tasks(todo, cells_dir, ext, client, progress)
     finally:
         if made:

@@ -745,3 +745,18 @@ def test_a_cell_is_marked_on_the_floors_mean_saturation_as_the_report():
     hm = {"x": "m", "y": "w", "adaptive": "adaptive_ct", "floor": "ct_oracle", "segment": 1}
     r = ratio_medians(df, hm, ["m", "w"])
     assert r.loc[1, "floor_saturation"] == pytest.approx(0.1) and "saturated in 10 %" in r.loc[1, "marked"]
+
+
+def test_a_scheduler_with_no_worker_stops_with_a_message(tmp_path, monkeypatch, capsys):
+    """A scheduler with no worker left the sweep at 0 % for ever, with no word."""
+    from adaptive_dd import sweep as sweep_module
+    from adaptive_dd.errors import ParameterError
+
+    monkeypatch.setattr(sweep_module, "WORKER_WAIT", 0.5)
+    with (
+        distributed.LocalCluster(n_workers=0, processes=False, dashboard_address=":0") as cluster,
+        distributed.Client(cluster) as c,
+    ):
+        with pytest.raises(ParameterError, match=r"has no worker after 0.5 s .*start one \(`dask worker"):
+            sweep_module._run_on_dask(["task"], tmp_path, "csv", cluster.scheduler_address, None, c, False)
+    assert "has no worker yet; waiting up to 0.5 s" in capsys.readouterr().out
