@@ -104,6 +104,11 @@ def test_leaderboard_command_writes_the_table_the_json_and_the_figure(tmp_path, 
     assert np.all(np.isnan(mine["ratio_mean"])) and np.all(mine["rms_error_mrad"] > 0)
     doc = json.loads((out / "leaderboard.json").read_text(encoding="utf-8"))
     assert doc["columns"]["rms_torque_Nm"]["unit"] == "N m" and len(doc["rows"]) == len(df)
+    from adaptive_dd import __version__
+
+    assert (
+        doc["provenance"]["version"] == __version__ and "git_commit" in doc["provenance"]
+    )  # as metrics.json
     assert (out / "leaderboard.png").stat().st_size > 1000
     # the command as typed, and what it ran (it recorded a command rebuilt from the rows: a template's
     # folder, a plug-in's --plugin and the scenarios' paths were lost)

@@ -48,6 +48,20 @@ def _jsonable(v):
 
 def provenance(res) -> dict:
     """What a figure in a paper needs to be traced back: version, commit, command, seeds, time."""
+    return {
+        **code_provenance(),
+        "runtime": "closed_forms" if res.scenario.closed_forms is not None else "general",
+        "seed": res.scenario.seed,
+        "seed_indices": list(res.seed_indices),
+        "wall_time_s": res.wall_time,
+        "engines": {n: r.engine for n, r in res.runs.items()},
+        "scenario": scenario_dict(res.scenario),
+    }
+
+
+def code_provenance() -> dict:
+    """The code a result came from: package, version, git commit (``+dirty`` with local edits),
+    the command line and Python's version."""
     from adaptive_dd import __version__
 
     commit = None
@@ -75,10 +89,4 @@ def provenance(res) -> dict:
         "git_commit": commit,
         "command_line": list(sys.argv),
         "python": sys.version.split()[0],
-        "runtime": "closed_forms" if res.scenario.closed_forms is not None else "general",
-        "seed": res.scenario.seed,
-        "seed_indices": list(res.seed_indices),
-        "wall_time_s": res.wall_time,
-        "engines": {n: r.engine for n, r in res.runs.items()},
-        "scenario": scenario_dict(res.scenario),
     }

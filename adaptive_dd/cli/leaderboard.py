@@ -126,8 +126,11 @@ def run(args: argparse.Namespace) -> int:
     import shlex
 
     command = shlex.join(["adaptive-dd", *getattr(args, "argv", ("leaderboard",))])
+    from adaptive_dd.benchmark.provenance import code_provenance
+
     doc = {
         "command": command,  # as typed: run it from the same folder to reproduce the table
+        "provenance": code_provenance(),  # version, git commit: the code the table came from
         "scenarios": scenarios if scenarios is not None else [str(p) for p in shipped_scenarios()],
         "controllers": controllers,
         "template": _template(args.template)[1] if args.arms else None,  # the one the arms were drawn on
@@ -156,7 +159,7 @@ def run(args: argparse.Namespace) -> int:
     print(
         f"time: {df.attrs['compile_seconds']:.1f} s compiling (numba; the built-ins' cached, 0 when "
         f"warm{'; a compiled plug-in: its loop compiled once, then cached' if args.plugin else ''}), "
-        f"{df.attrs['run_seconds']:.1f} s running"
+        f"{df.attrs['run_seconds']:.1f} s running (each summed over the workers' runs)"
     )
     return 0
 
