@@ -47,7 +47,7 @@ FAULTS = {
         "half = float(1.96 * r.std() / np.sqrt(r.size))",
     ),
     "missed swaps not counted": (
-        "missed += np.array([d is None for d in first], dtype=int)",
+        "missed += np.array(lost, dtype=int)",
         "pass",
     ),
     "detection delay averaged over all seeds (a miss as 0)": (

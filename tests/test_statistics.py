@@ -270,3 +270,15 @@ def test_every_planted_fault_of_the_benchmark_script_still_applies():
     text = (root / mod.METRICS).read_text()
     stale = [name for name, (old, _new) in mod.FAULTS.items() if text.count(old) != 1]
     assert not stale, f"faults whose line is not in {mod.METRICS} once: {stale}"
+
+
+def test_a_trial_whose_alarm_record_filled_before_the_swap_is_not_called_missed():
+    """A detector alarming at every sample filled its record (MAX_ALARMS) before the swap and read
+    "missed swaps 3 of 3": whether it saw the swap is not known, so it is not counted missed."""
+    from adaptive_dd.benchmark.types import MAX_ALARMS
+
+    res, _ = _fake_result()
+    run = res.runs["adaptive_ct"]
+    run.alarm_times[3] = [0.001 * k for k in range(MAX_ALARMS)]  # seed 3 full before the swap
+    a = compute_metrics(res)["controllers"]["adaptive_ct"]
+    assert a["missed_swaps_per_seed"] == [0, 0, 1, 0] and a["segments"][1]["missed"] == 1

@@ -117,6 +117,7 @@ import numpy as np
 from adaptive_dd.benchmark.provenance import provenance
 from adaptive_dd.benchmark.segments import moving_rms, segment_failed
 from adaptive_dd.benchmark.streaming import SETTLE, segment_bounds
+from adaptive_dd.benchmark.types import MAX_ALARMS
 
 if TYPE_CHECKING:  # annotations only: types imports this module for BenchmarkResult.metrics()
     from adaptive_dd.benchmark.types import BenchmarkResult
@@ -577,8 +578,11 @@ def _add_detector_statistics(res: BenchmarkResult, out: dict) -> None:
             seg["detection_delay_median"] = float(np.median(hit)) if hit else None
             seg["detected"] = len(hit)
             seen = judged(s, sc.duration)  # the run lasts the window beyond the swap: else not missed
-            seg["missed"] = int(ok.sum()) - len(hit) if seen else 0
+            # a trial whose alarm record filled up before the swap cannot tell: neither hit nor missed
+            known = np.array([len(tr) < MAX_ALARMS or (len(tr) and tr[-1] >= s) for tr in run.alarm_times])
+            lost = [d is None and g and k for d, g, k in zip(first, ok, known, strict=True)]
+            seg["missed"] = int(sum(lost)) if seen else 0
             if seen:
-                missed += np.array([d is None for d in first], dtype=int)
+                missed += np.array(lost, dtype=int)
         out[name]["missed_swaps_per_seed"] = [int(n) if g else None for n, g in zip(missed, ok, strict=True)]
         out[name]["missed_swaps"] = int(missed[ok].sum())
