@@ -235,6 +235,10 @@ class Simulation:
         self._trial: _TwoLinkTrial | _ChainTrial | None = None
         self.applied_torque = np.zeros(sc.n_joints)
         self.saturated = np.zeros(sc.n_joints, dtype=bool)
+        self.failed_at: float | None = None
+        """[s] The sample whose command or state failed the trial (None: it has not failed)."""
+        self.failure: str | None = None
+        """Why the trial failed, in the benchmark's words (None: it has not failed)."""
 
     @property
     def arm(self):
@@ -256,6 +260,7 @@ class Simulation:
             self._trial = _ChainTrial(sc, self.seed_index)
         self.applied_torque = np.zeros(sc.n_joints)
         self.saturated = np.zeros(sc.n_joints, dtype=bool)
+        self.failed_at, self.failure = None, None
         return self._measure()
 
     def _measure(self) -> Measurement:
@@ -270,7 +275,8 @@ class Simulation:
         The benchmark's failure rule holds here too: a non-finite command, a position error beyond
         the run's divergence bound or a runaway speed fails the trial. The arm is then stopped
         where it was (zero torque from then on) and :attr:`failed` is True; the steps go on (so
-        that a Gymnasium episode can end on it) and nothing is raised: check ``sim.failed``.
+        that a Gymnasium episode can end on it) and nothing is raised: check ``sim.failed``;
+        ``sim.failed_at`` [s] and ``sim.failure`` say when and why.
         """
         if self._trial is None:
             raise SignalError("call reset() before step()")
@@ -280,10 +286,27 @@ class Simulation:
         n = self.scenario.n_joints
         if tau.shape != (n,):
             raise SignalError(f"tau must have shape ({n},) (one torque per joint), got {tau.shape}")
+        k, was = self._trial.k, self.failed
+        raw = tau
         if isinstance(self._trial, _TwoLinkTrial):  # the N-joint glue applies the error bound itself
             tau = error_bound(tau[None], self._ref[0][self._trial.k], self._trial.truth()[0][None])[0]
         self.applied_torque, self.saturated = self._trial.step(tau)
+        if self.failed and not was:
+            self.failed_at, self.failure = k * self.scenario.sample_period, self._why(raw, k)
         return self._measure()
+
+    def _why(self, tau: Array, k: int) -> str:
+        """Why the trial failed at sample ``k`` under command ``tau``: the benchmark's rules' words."""
+        from adaptive_dd.closed_loop.types import MAX_ERROR, MAX_SPEED
+
+        bad = np.flatnonzero(~np.isfinite(tau))
+        if bad.size:
+            return f"non-finite torque command (joint {int(bad[0]) + 1})"
+        e = np.abs(self._ref[0][k] - self._trial.truth()[0])
+        if np.all(np.isfinite(e)) and e.max() > MAX_ERROR:
+            j = int(np.argmax(e))
+            return f"tracking error of joint {j + 1} {e[j]:.3g} rad, beyond max_error = {MAX_ERROR:g} rad"
+        return f"runaway: the arm's state became non-finite or a joint exceeded {MAX_SPEED:g} rad/s"
 
     def _truth(self):
         if self._trial is None:

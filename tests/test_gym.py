@@ -368,8 +368,10 @@ def test_a_failure_never_returns_more_than_tracking_on():
     sc = _short("sice", duration=0.5)
     env = make_env(sc, floor=None)
     env.reset(seed=0)
-    _, r, terminated, truncated, _ = env.step(np.full(2, np.nan))
+    _, r, terminated, truncated, info = env.step(np.full(2, np.nan))
     assert terminated and not truncated and r == -failure_cost(2) * sc.n_samples == -18.0 * 500
+    assert info["failure"] == "non-finite torque command (joint 1)"
+    assert env.unwrapped.sim.failed_at == 0.0
     env.reset(seed=0)
     ret, done = 0.0, False
     while not done:  # no torque at all: far off, but on

@@ -409,3 +409,24 @@ def test_run_trial_raises_what_the_controller_raised():
         run_trial(ComputedTorque(oracle=True), sc, seed_index=1)
     res = run_trial(make_controller("ct_oracle", arm=sc.arm), sc, seed_index=1)  # the page's way
     assert not res.runs["ct_oracle"].failed.any()
+
+
+@pytest.mark.parametrize("arm", ["two_link", "ur5"])
+def test_a_failed_trial_says_when_and_why(arm, short, ur5_short):
+    """A NaN command failed the trial and set ``failed``; the loop went on with no word of when or why."""
+    from adaptive_dd import Simulation
+
+    sc = short if arm == "two_link" else ur5_short
+    n = sc.n_joints
+    sim = Simulation(sc, 0)
+    sim.reset()
+    assert sim.failed_at is None and sim.failure is None
+    for k in range(5):
+        tau = np.zeros(n)
+        if k == 3:
+            tau[n - 1] = np.nan
+        sim.step(tau)
+    assert sim.failed and sim.failed_at == pytest.approx(3 * sc.sample_period)
+    assert sim.failure == f"non-finite torque command (joint {n})"
+    sim.reset()  # and a new trial starts clean
+    assert sim.failed_at is None and sim.failure is None

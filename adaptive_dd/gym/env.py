@@ -15,7 +15,8 @@ benchmark's controllers see, never the truth: the measured ``q`` [rad] and ``qd`
 noise, quantisation, dropouts as the scenario says) and the reference ``q_d, qd_d, qdd_d`` at the
 same sample. ``info`` carries the truth, for evaluation only: the true ``q_true, qd_true``, the
 payload's ``payload_mass`` [kg] and ``segment``, ``swap`` (a payload change takes effect at this
-sample), the torque ``applied_torque`` [N m] and ``saturated`` of the last step, the tracking error
+sample), the torque ``applied_torque`` [N m] and ``saturated`` of the last step, ``failure`` (why
+the trial failed, "" while it has not), the tracking error
 ``error`` (``q_d - q_true`` of the sample the last action was applied on, the benchmark's ``e``) and
 ``floor_torque``: what the scenario's floor (``ct_oracle``, the law with the true model) would
 command on this observation (NaN on the last sample, where nothing is commanded).
@@ -234,6 +235,7 @@ class PayloadSwapEnv(gymnasium.Env):
             "applied_torque": sim.applied_torque.copy(),
             "saturated": np.asarray(sim.saturated, dtype=bool).copy(),
             "error": np.full(sc.n_joints, np.nan) if error is None else error,
+            "failure": sim.failure or "",  # why the trial failed, in the benchmark's words ("" if not)
         }
         self._segment = seg
         if self._floor is not None:  # NaN at the last sample: nothing is commanded there
