@@ -343,6 +343,19 @@ def plot_joint_errors(res, path: str | Path | None = None, window: float = 0.05,
     return fig
 
 
+def _segment_label(rows) -> str:
+    """A segment's tick label: its times and mass, or their ranges where the rows differ (a population's
+    arms carry their own payloads: the first row's alone named one arm's)."""
+
+    def span(col: str, unit: str) -> str:
+        lo, hi = float(rows[col].min()), float(rows[col].max())
+        return f"{lo:g}{unit}" if np.isclose(lo, hi) else f"{lo:.3g}-{hi:.3g}{unit}"
+
+    a, b = span("start_s", ""), span("end_s", "")
+    times = f"{a}-{b} s" if "-" not in a + b else f"{a} to {b} s"
+    return f"{times}\n{span('mass_kg', ' kg')}"
+
+
 def plot_ratios(frame, path: str | Path | None = None, formats=("png",)):
     """Per controller and segment: the mean per-seed ratio to the floor with its 95 % interval
     (Student t, the report's ``ci95``).
@@ -403,7 +416,7 @@ def plot_ratios(frame, path: str | Path | None = None, formats=("png",)):
         ax.errorbar(x, mean, yerr=half, fmt="o", ms=4, capsize=3, color=style["color"], label=name)
     ax.axhline(1.0, color="k", lw=0.8)
     ax.set_yscale("log")
-    labels = [f"{a:g}-{b:g} s\n{m:g} kg" for a, b, m in segments[["start_s", "end_s", "mass_kg"]].to_numpy()]
+    labels = [_segment_label(df[df["segment"] == g]) for g in segments["segment"]]
     ax.set_xticks(np.arange(len(segments)), labels)
     ax.set_xlabel("payload segment [s, kg]")
     ax.set_ylabel("RMS error / floor RMS error, per seed [-]")

@@ -256,8 +256,6 @@ def test_cli_arms_usage_errors(capsys):
     assert main(["benchmark", "--first-arm", "5"]) == 2  # an option of the drawn arms, not ignored
     assert "--first-arm: applies to the drawn arms of --arms N" in capsys.readouterr().err
     pop = ROOT / "benchmarks" / "scenarios" / "population.toml"
-    assert main(["benchmark", str(pop), "--arms", "2", "--figure-formats", "pdf"]) == 2
-    assert "--figure-formats: a run over --arms writes tables, no figures" in capsys.readouterr().err
     for opt in (["--template", str(pop)], ["--first-arm", "3"]):
         assert main(["leaderboard", *opt]) == 2
         assert f"{opt[0]}: applies to the drawn arms of --arms N" in capsys.readouterr().err
@@ -287,9 +285,8 @@ def test_cli_arms_reports_every_law_against_its_floor(capsys, tmp_path):
     pop = tmp_path / "pop.toml"
     pop.write_text(text)
     out = tmp_path / "out"
-    assert (
-        main(["benchmark", str(pop), "--arms", "2", "--seeds", "1", "--out", str(out), "--no-progress"]) == 0
-    )
+    argv = ["benchmark", str(pop), "--arms", "2", "--seeds", "1", "--out", str(out), "--no-progress"]
+    assert main([*argv, "--figure-formats", "png", "svg"]) == 0
     printed = capsys.readouterr()
     assert "pd_gravity_oracle added (the floor of pd_gravity" in printed.err
     assert printed.out.startswith("pd_gravity / pd_gravity_oracle per seed, per arm")
@@ -307,6 +304,8 @@ def test_cli_arms_reports_every_law_against_its_floor(capsys, tmp_path):
     assert set(arms["controller"]) == {"pd_gravity", "slotine_li"} and len(arms) == 2 * 2 * 4
     summary = json.loads((out / "population.json").read_text())
     assert summary["lead"] == "pd_gravity" and set(summary["laws"]) == {"pd_gravity", "slotine_li"}
+    assert (out / "ratios.png").stat().st_size > 1000 and (out / "ratios.svg").is_file()  # no figure before
+    assert "ratios.png" in printed.out.splitlines()[-1]
 
 
 @pytest.mark.slow

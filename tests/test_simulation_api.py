@@ -430,3 +430,20 @@ def test_a_failed_trial_says_when_and_why(arm, short, ur5_short):
     assert sim.failure == f"non-finite torque command (joint {n})"
     sim.reset()  # and a new trial starts clean
     assert sim.failed_at is None and sim.failure is None
+
+
+def test_the_ratio_figure_labels_a_populations_segments_by_their_range():
+    """A population's per_seed.csv: each arm carries its own payload; the tick read the first row's
+    (2-4 s / 0.848 kg on arms of 0.848, 2.056 and 3.024 kg)."""
+    import pandas as pd
+
+    from adaptive_dd.plotting import plot_ratios
+
+    rows = [
+        {"controller": "adaptive_ct", "arm_seed": a, "seed": 0, "segment": s, "start_s": 2.0 * s,
+         "end_s": 2.0 * s + 2, "mass_kg": m * s, "ratio_to_floor": 1.0}
+        for a, m in enumerate((0.848, 2.056, 3.024)) for s in (0, 1)
+    ]  # fmt: skip
+    fig = plot_ratios(pd.DataFrame(rows))
+    labels = [t.get_text() for t in fig.axes[0].get_xticklabels()]
+    assert labels == ["0-2 s\n0 kg", "2-4 s\n0.848-3.02 kg"]

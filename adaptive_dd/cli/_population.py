@@ -97,6 +97,13 @@ def run_arms(args: argparse.Namespace, only_controllers, with_floors) -> int:
         }  # fmt: skip
         target = outputs.extra(args.json) if args.json else outputs.path("population.json")
         target.write_text(json.dumps(summary, indent=1, default=float))
+        fmts = tuple(args.figure_formats or ())
+        if fmts:  # each law's ratio to its floor per segment, every arm and seed pooled
+            from adaptive_dd.plotting import plot_ratios
+
+            staged = [outputs.path(f"ratios.{f}") for f in fmts]
+            plot_ratios(pop.frame, staged[0], formats=fmts)
     written = [out / "per_seed.csv", out / "arms.csv", Path(args.json or out / "population.json")]
+    written += [out / f"ratios.{f}" for f in fmts]
     print("wrote " + ", ".join(str(w) for w in written))
     return 0

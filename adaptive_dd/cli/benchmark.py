@@ -62,11 +62,6 @@ def run(args: argparse.Namespace) -> int:
     from adaptive_dd.outputs import OutputSet
 
     if args.arms is not None:
-        if "--figure-formats" in getattr(args, "given", ()):
-            raise ParameterError(
-                "--figure-formats: a run over --arms writes tables, no figures (per_seed.csv, "
-                "arms.csv, population.json); leave it out, or run one arm without --arms for its figures"
-            )
         from adaptive_dd.cli._population import run_arms
 
         return run_arms(args, only_controllers, with_floors)
