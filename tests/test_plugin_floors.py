@@ -16,12 +16,17 @@ PLUGINS = Path(__file__).resolve().parent.parent / "examples" / "plugins"
 
 @pytest.fixture
 def folder(tmp_path):
-    """A folder with a copy of examples/plugins' compiled plug-in whose class declares no floor."""
+    """A folder with a copy of examples/plugins' compiled plug-in whose class declares no floor (the
+    module forgotten before and after: each test imports its own file)."""
+    import sys
+
     lines = (PLUGINS / "pd_gravity_plugin.py").read_text().splitlines(keepends=True)
     kept = [x for x in lines if not x.startswith('    floor = "pd_gravity_oracle"')]
     assert len(kept) == len(lines) - 1
     (tmp_path / "nofloor_plugin.py").write_text("".join(kept))
-    return tmp_path
+    sys.modules.pop("nofloor_plugin", None)
+    yield tmp_path
+    sys.modules.pop("nofloor_plugin", None)
 
 
 def _scenario(folder, table: str = ""):
@@ -63,7 +68,7 @@ def test_a_plugin_file_shadowed_by_an_installed_module_is_named(tmp_path):
     assert f"before your {tmp_path / 'control.py'}" in text and "rename your file, e.g. my_control.py" in text
 
 
-def test_validate_reads_a_compiled_plugins_parameters_as_the_run_does(tmp_path):
+def test_validate_reads_a_compiled_plugins_parameters_as_the_run_does(folder):
     """A compiled plug-in whose parameters() returns a dict passed validate ("valid", exit 0) and was
     refused by benchmark (exit 2): validate builds each controller as the run does, its declarations too."""
     from adaptive_dd.benchmark.preflight import controller_problems
@@ -75,6 +80,6 @@ def test_validate_reads_a_compiled_plugins_parameters_as_the_run_does(tmp_path):
         "    def parameters(self, sample_period):\n        return {'kp': 1.0}\n\n"
         "    def _old(self, sample_period):\n",
     )
-    (tmp_path / "nofloor_plugin.py").write_text(bad)
-    (problem,) = controller_problems(_scenario(tmp_path))
+    (folder / "nofloor_plugin.py").write_text(bad)
+    (problem,) = controller_problems(_scenario(folder))
     assert "parameters(0.001) returned a dict, which numba cannot compile" in problem

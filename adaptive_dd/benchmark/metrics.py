@@ -116,8 +116,7 @@ import numpy as np
 
 from adaptive_dd.benchmark.provenance import provenance
 from adaptive_dd.benchmark.segments import moving_rms, segment_failed
-from adaptive_dd.benchmark.streaming import SETTLE, segment_bounds
-from adaptive_dd.benchmark.types import MAX_ALARMS
+from adaptive_dd.benchmark.streaming import MAX_ALARMS, SETTLE, segment_bounds
 
 if TYPE_CHECKING:  # annotations only: types imports this module for BenchmarkResult.metrics()
     from adaptive_dd.benchmark.types import BenchmarkResult

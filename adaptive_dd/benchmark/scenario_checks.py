@@ -6,10 +6,10 @@ scenario is reported at once; the bounds are ``scenario.LIMITS``.
 
 from __future__ import annotations
 
-import difflib
 import math
 from typing import Any
 
+from adaptive_dd.benchmark.key_hints import nearest_keys, repeated_entries
 from adaptive_dd.benchmark.number_checks import _nums, _short, check_number
 from adaptive_dd.benchmark.scenario_base import KEYS, LIMITS, Reference, run_estimate
 from adaptive_dd.controllers import CONTROLLERS
@@ -205,20 +205,9 @@ def _check_controllers(e: list, c: Any, arm: Any = None) -> bool:
                 )
                 ok = False
     if len(set(c)) != len(c) or len({table_name(x) for x in c}) != len(c):
-        from collections import Counter
-
-        twice = [x for x, k in Counter(c).items() if k > 1]
-        tables = Counter(table_name(x) for x in c)
-        same = {
-            t: [x for x in c if table_name(x) == t] for t, k in tables.items() if k > 1 and t not in twice
-        }
-        said = [f"{x!r} twice" for x in twice] + [
-            f"{' and '.join(repr(x) for x in xs)} share the settings table [controllers.{t}]"
-            for t, xs in same.items()
-        ]
         e.append(
-            f"run.controllers: {'; '.join(said)}: each needs its own name and table (two settings of one "
-            "law: a subclass per setting, each with its own class name)"
+            f"run.controllers: {repeated_entries(c, table_name)}: each needs its own name and table (two "
+            "settings of one law: a subclass per setting, each with its own class name)"
         )
         ok = False
     return ok
@@ -394,18 +383,10 @@ def _known_tables(e: list, data: dict) -> dict[str, Any]:
             where = f"{t}[{i}]" if t == "payload" else t
             for k in item:
                 if k not in allowed:
-                    near = _nearest(str(k), allowed)
+                    near = nearest_keys(str(k), allowed)
                     hint = f" (did you mean {' or '.join(repr(x) for x in near)}?)" if near else ""
                     e.append(f"{where}.{k}: unknown key{hint}; allowed: {', '.join(sorted(allowed))}")
     return tables
-
-
-def _nearest(key: str, allowed) -> list[str]:
-    """The allowed keys nearest ``key``, all as near as the nearest (``seedz``: ``seed`` and
-    ``seeds``, the count, which the nearest alone left out)."""
-    scored = sorted(((difflib.SequenceMatcher(None, key, a).ratio(), a) for a in allowed), reverse=True)
-    best = scored[0][0] if scored else 0.0
-    return [a for r, a in scored if r >= 0.6 and r >= best - 0.1][:3]
 
 
 def scenario_fields(

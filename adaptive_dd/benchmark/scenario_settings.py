@@ -166,12 +166,12 @@ def _floor_errors(v: dict, opts: dict, only: str | None) -> list[str]:
             continue
         from adaptive_dd.controllers import CONTROLLERS
 
-        if floor in CONTROLLERS:  # a built-in: the benchmark adds it to the run (said, or why not)
-            continue
         if floor in names:  # an entry of run.controllers, by its spec: results carry another name
             errs.append(
                 f"controllers.{table}.floor: name {floor!r} by the name its results carry, {names[floor]!r}"
             )
+        elif floor in CONTROLLERS:  # a built-in the run lacks: the benchmark adds it (said, or why not)
+            continue
         else:
             errs.append(
                 f"controllers.{table}.floor: {floor!r} is not one of the run's controllers (by the names "

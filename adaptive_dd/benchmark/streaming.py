@@ -10,6 +10,9 @@ import numpy as np
 
 from adaptive_dd.plant.sampling import first_sample
 
+MAX_ALARMS = 256
+"""Alarm times kept per trial on the compiled path (the count goes on)."""
+
 SETTLE = 0.5
 """[s] left out at the start of each segment for ``rms_error_settled``."""
 

@@ -15,7 +15,10 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import NDArray
 
-from adaptive_dd.benchmark.streaming import SETTLE  # a leaf: metrics needs it without this module
+from adaptive_dd.benchmark.streaming import (
+    MAX_ALARMS,
+    SETTLE,
+)  # a leaf: metrics needs them without this module
 
 if TYPE_CHECKING:
     from adaptive_dd.benchmark.scenario import Scenario
@@ -29,8 +32,6 @@ MAX_ERROR = 3.0
 ENGINES = ("auto", "python", "compiled")
 CHUNK = 1024
 """Samples per block of drawn noise (and per call of the compiled loop)."""
-MAX_ALARMS = 256
-"""Alarm times kept per trial on the compiled path (the count goes on)."""
 
 
 @dataclass
