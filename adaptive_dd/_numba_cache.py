@@ -378,9 +378,14 @@ class _Progress(event.Listener):
         self.depth = max(0, self.depth - 1)
         if self.depth == 0 and (spent := time.perf_counter() - self.start) > 1.0:
             label = _kernel_label(ev.data["dispatcher"], ev.data["args"])
-            tty = getattr(self.stream, "isatty", lambda: False)()
-            clear = "\r\x1b[K" if tty else ""  # over a progress bar's line, which redraws below
-            print(f"{clear}  {label}: {spent:.0f} s", file=self.stream, flush=True)
+            _say(self.stream, f"  {label}: {spent:.0f} s")
+
+
+def _say(stream, msg: str) -> None:
+    """Print ``msg`` on its own line: on a terminal over a progress bar's line first (the bar
+    redraws below), so that a compilation's message does not break into it."""
+    tty = getattr(stream, "isatty", lambda: False)()
+    print(("\r\x1b[K" if tty else "") + msg, file=stream, flush=True)
 
 
 READY = "ready"
@@ -458,8 +463,10 @@ class Compiling:
         if ready:
             if self.helper.stdout.readline().strip() == READY:
                 spent = time.perf_counter() - self.start
-                msg = f"  the second process compiled the plant's step and the law's pieces ({spent:.0f} s)"
-                print(msg, file=self.stream, flush=True)
+                _say(
+                    self.stream,
+                    f"  the second process compiled the plant's step and the law's pieces ({spent:.0f} s)",
+                )
 
     def join(self) -> None:
         """Wait for the second process (the report's kernels are then in the cache), say how it ended."""
@@ -470,12 +477,12 @@ class Compiling:
         self.waited += time.perf_counter() - t0
         spent = time.perf_counter() - self.start
         what = self.done if rc == 0 else f"failed (exit {rc}): what it left compiles here"
-        print(f"  the second process {what} ({spent:.0f} s after the start)", file=self.stream, flush=True)
+        _say(self.stream, f"  the second process {what} ({spent:.0f} s after the start)")
         if rc != 0 and self.errors is not None:
             self.errors.seek(0)
             last = [line for line in self.errors.read().splitlines() if line.strip()][-1:]
             if last:
-                print(f"  its error: {last[0].strip()}", file=self.stream, flush=True)
+                _say(self.stream, f"  its error: {last[0].strip()}")
         self._close_errors()
 
     def _close_errors(self) -> None:
@@ -546,4 +553,4 @@ def announce_compilation(arm, stream=None, source=None):
             said = f"plug-ins' loops that cannot be cached: every run compiles them again{waited}"
         else:
             said = f"cached: later runs skip this{waited}"
-        print(f"compiled the kernels in {spent:.0f} s ({said})", file=stream, flush=True)
+        _say(stream, f"compiled the kernels in {spent:.0f} s ({said})")

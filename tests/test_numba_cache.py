@@ -249,3 +249,20 @@ def test_inlining_copies_no_fresh_ir_and_still_copies_the_ir_an_overload_keeps(m
     assert blocks == []  # six inlined sites, no block copied
     assert over(a) == _over(a, 0.5) + 3.0 * _over(a, -0.25)
     assert len(blocks) >= 4  # two sites, each copy of the kept IR (and numba's second copy)
+
+
+def test_compilation_messages_clear_a_progress_bars_line_on_a_terminal():
+    """The second process's lines broke into the progress bar (only the per-kernel line cleared it)."""
+    import io
+
+    from adaptive_dd._numba_cache import _say
+
+    class Tty(io.StringIO):
+        def isatty(self):
+            return True
+
+    tty, pipe = Tty(), io.StringIO()
+    _say(tty, "  the second process compiled the plant's step (41 s)")
+    _say(pipe, "compiled the kernels in 9 s")
+    assert tty.getvalue() == "\r\x1b[K  the second process compiled the plant's step (41 s)\n"
+    assert pipe.getvalue() == "compiled the kernels in 9 s\n"  # a log file gets no escape codes
