@@ -80,6 +80,7 @@ from adaptive_dd.record_checks import (
     _too_many_bad_rows,
     velocity_gains,
 )
+from adaptive_dd.record_csv import read_csv
 from adaptive_dd.record_derivatives import derivatives
 from adaptive_dd.record_pieces import (
     MIN_PIECE_SAMPLES,
@@ -150,46 +151,6 @@ class LogRecord:
     def piece_label(self, i: int) -> str:
         """The record piece ``i`` comes from (its files)."""
         return self.record_names[self.piece_record[i]] if self.piece_record else self.source
-
-
-def _read_csv(path: Path):
-    import pandas as pd
-
-    if not path.is_file():
-        raise DataError(f"{path}: no such file")
-    try:
-        header = pd.read_csv(path, nrows=0).columns
-        head = str(header[0]) if len(header) == 1 else ""
-        sep = next((c for c in (";", "\t") if c in head), None)
-        frame = pd.read_csv(path, sep=sep or ",", skipinitialspace=False)
-        if sep is not None:  # one column whose name holds the separator: a semicolon or tab file
-            if _decimal_commas(frame):  # 1,5 for 1.5, as spreadsheets of many locales write it
-                frame = pd.read_csv(path, sep=sep, skipinitialspace=False, decimal=",")
-                frame.attrs["decimal_comma"] = True
-    except (ValueError, pd.errors.ParserError) as exc:
-        raise DataError(f"{path}: not a readable CSV file: {exc}") from None
-    frame.columns = [str(c).strip() for c in frame.columns]
-    repeats = frame.duplicated(keep="first")  # a row repeated whole: a logger's repeat, no new sample
-    if repeats.any():
-        frame = frame[~repeats]  # each row keeps its index: its line in the file (_line)
-        frame.attrs["repeats"] = int(repeats.sum())
-    return frame
-
-
-_DECIMAL_COMMA = re.compile(r"[+-]?(\d+,\d*|,\d+)([eE][+-]?\d+)?")
-
-
-def _decimal_commas(frame) -> bool:
-    """True when a text column of a semicolon or tab file holds numbers written with a decimal comma
-    (every cell of it such a number or a whole one, at least one with a comma, and no cell of any
-    column with a decimal point)."""
-    texts = [
-        frame[c].dropna().astype(str).str.strip() for c in frame.columns if frame[c].dtype.kind not in "biuf"
-    ]
-    whole = r"[+-]?\d+"  # a spreadsheet writes 0 as 0: whole numbers beside the comma decimals
-    marked = [(v, v.str.fullmatch(_DECIMAL_COMMA.pattern)) for v in texts if v.size]
-    comma = [v for v, dec in marked if dec.any() and (dec | v.str.fullmatch(whole)).all()]
-    return bool(comma) and not any(v.str.contains(".", regex=False).any() for v in texts)
 
 
 def _locate(frames: dict, spec: RecordSpec, wanted: list[str]) -> dict:
@@ -383,11 +344,35 @@ def read_log(spec: RecordSpec, window: tuple[float, float] | None = None, arm=No
         Naming the file, line or column and the remedy.
     """
     window = window if window is not None else spec.window
-    frames = {p: _read_csv(p) for p in spec.files}
+    frames = {p: read_csv(p) for p in spec.files}
     velocity = spec.velocity
-    if spec.simulator_format and velocity and not any(velocity[0] in f.columns for f in frames.values()):
+
+    def present(c: str) -> bool:
+        return any(c in f.columns for f in frames.values())
+
+    skipped = []  # columns named but not needed and absent: said, not an error
+    if spec.simulator_format and velocity and not present(velocity[0]):
         velocity = None  # the simulator's format: velocity columns optional
-    cols = [*spec.position, *spec.torque, *([] if velocity is None else velocity)]
+    elif velocity and spec.derive_velocity and not all(map(present, velocity)):
+        skipped.append(  # derived from the positions: the logged ones only compared, when all there
+            f"velocity columns {[c for c in velocity if not present(c)]} are not in the files: the "
+            "velocities are derived from the positions (velocity_source = 'derived'), with no logged ones to "
+            "compare"
+        )
+        velocity = None
+    absent = {
+        spec.torque[j] for j in range(len(spec.torque)) if not spec.used[j] and not present(spec.torque[j])
+    }
+    if absent:
+        skipped.append(
+            f"torque column(s) {sorted(absent)} of excluded joint(s) are not in the files: those channels "
+            "are read as 0 (not fitted)"
+        )
+    cols = [
+        *spec.position,
+        *(c for c in spec.torque if c not in absent),
+        *([] if velocity is None else velocity),
+    ]
     if spec.simulator_format:  # t, q1.., qd1.., tau1..: a joint beyond the arm's is another arm's record
         n = len(spec.position)
         extra = [
@@ -435,7 +420,8 @@ def read_log(spec: RecordSpec, window: tuple[float, float] | None = None, arm=No
 
     column = resampler(frames, where, clocks, rows, grids, numeric)
     q = np.column_stack([column(c, True) for c in spec.position])
-    raw_tau = np.column_stack([column(c, False) for c in spec.torque])
+    n_grid = sum(g.size for g in grids)
+    raw_tau = np.column_stack([np.zeros(n_grid) if c in absent else column(c, False) for c in spec.torque])
     _check_stuck(spec, where, raw_tau)
     if arm is not None:
         _check_units(spec, where, q, arm)
@@ -458,6 +444,7 @@ def read_log(spec: RecordSpec, window: tuple[float, float] | None = None, arm=No
             qd = logged
     grid = np.concatenate(grids)
     notes = (
+        *skipped,
         _resampling_note(t0, T, qd_measured),
         *lag_note,
         *missed,

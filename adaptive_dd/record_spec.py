@@ -38,7 +38,7 @@ RECORD_KEYS = (
     "window",
     "sample_period",
 )
-UNITS = {"rad": 1.0, "deg": math.pi / 180.0, "m": 1.0, "mm": 1e-3}
+UNITS = {"rad": 1.0, "mrad": 1e-3, "deg": math.pi / 180.0, "m": 1.0, "mm": 1e-3}
 TIME_UNITS = {"s": 1.0, "ms": 1e-3, "us": 1e-6, "ns": 1e-9}
 """``[record] time_unit``: the time column's unit (ROS stamps are often ns); the window and the
 sample period are in s of the log's clock either way."""
@@ -107,9 +107,11 @@ def _columns(src: str, key: str, v, names: tuple[str, ...]) -> tuple[str, ...]:
     if isinstance(v, str):
         if "{joint}" not in v and "{i}" not in v:
             raise _err(src, key, f"= {v!r} must contain {{joint}} or {{i}}, or be a list of {n} names")
-        return tuple(v.replace("{joint}", nm).replace("{i}", str(j + 1)) for j, nm in enumerate(names))
-    if isinstance(v, list) and len(v) == n and all(isinstance(x, str) and x for x in v):
-        return tuple(v)
+        return tuple(
+            v.replace("{joint}", nm).replace("{i}", str(j + 1)).strip() for j, nm in enumerate(names)
+        )
+    if isinstance(v, list) and len(v) == n and all(isinstance(x, str) and x.strip() for x in v):
+        return tuple(x.strip() for x in v)  # as the files' headers are read: stripped
     raise _err(src, key, f"must be a column-name pattern or a list of {n} names (one per joint), got {v!r}")
 
 
@@ -230,8 +232,9 @@ def _signal_columns(src: str, t: dict, names: tuple[str, ...], default: bool):
     """The time column, the position, torque and velocity (or None) column names per joint, and
     the velocity's source (``measured`` or ``derived``); the simulator's names by default."""
     time = t.get("time", "t")
-    if not isinstance(time, str) or not time:
+    if not isinstance(time, str) or not time.strip():
         raise _err(src, "time", f"must be a column name, got {time!r}")
+    time = time.strip()  # as the files' headers are read (" stamp" in "t, stamp": a header with spaces)
     position = _columns(src, "position", t.get("position", "q{i}"), names)
     torque = _columns(src, "torque", t.get("torque", "tau{i}"), names)
     vel = t.get("velocity", "qd{i}" if default else None)

@@ -992,3 +992,37 @@ def test_a_window_from_the_log_s_start_on_an_epoch_clock_is_given_in_its_clock(t
     assert main(argv) == 2
     err = capsys.readouterr().err
     assert "starts at 1700000000 s: the same window from its start is --window 1700000000 1700000001.5" in err
+
+
+def test_logs_as_a_walk_through_met_them(tmp_path):
+    """A header with spaces ("stamp, j_a/pos") named as written crashed identify (internal KeyError);
+    an excluded joint's torque column absent from the files, or a derived velocity's logged column
+    absent, was required though never read; milliradians had no unit."""
+    p1, p2, *_ = _write_log(tmp_path, np.random.default_rng(1))
+    ref = read_log(record_spec(_table(p1, p2, exclude=["j_c"]), NAMES, KINDS, "s.toml"))
+    for p in (p1, p2):  # a header with a space after each comma, named with its spaces
+        lines = p.read_text().splitlines()
+        p.write_text("\n".join([lines[0].replace(",", ", "), *lines[1:]]) + "\n")
+    spaced = _table(p1, p2, exclude=["j_c"], time=" stamp", position=" {joint}/pos", torque=" {joint}/eff")
+    rec = read_log(record_spec(spaced, NAMES, KINDS, "s.toml"))
+    np.testing.assert_array_equal(rec.q, ref.q)
+    lines = p2.read_text().splitlines()  # the excluded joint's effort column gone
+    p2.write_text(
+        "\n".join([", ".join(lines[0].split(", ")[:3]), *(",".join(x.split(",")[:3]) for x in lines[1:])])
+        + "\n"
+    )
+    rec = read_log(record_spec(spaced, NAMES, KINDS, "s.toml"))
+    np.testing.assert_array_equal(rec.tau[:, :2], ref.tau[:, :2])
+    assert np.all(rec.tau[:, 2] == 0.0) and any("['j_c/eff'] of excluded joint(s)" in n for n in rec.notes)
+    with pytest.raises(DataError, match=r"j_c/eff"):  # fitted: still required
+        read_log(record_spec({**spaced, "exclude": []}, NAMES, KINDS, "s.toml"))
+    derived = {**spaced, "velocity": "{joint}/vel", "velocity_source": "derived"}
+    rec = read_log(record_spec(derived, NAMES, KINDS, "s.toml"))
+    np.testing.assert_array_equal(rec.q, ref.q)
+    assert any("are derived from the positions" in n for n in rec.notes)
+    lines = p1.read_text().splitlines()  # positions in mrad, the prismatic joint in m
+    rows = [np.array(x.split(","), float) for x in lines[1:]]
+    body = [",".join(f"{v:.12g}" for v in (r[0], 1e3 * r[1], 1e3 * r[2], r[3])) for r in rows]
+    p1.write_text("\n".join([lines[0], *body]) + "\n")
+    rec = read_log(record_spec({**spaced, "position_unit": ["mrad", "mrad", "m"]}, NAMES, KINDS, "s.toml"))
+    np.testing.assert_allclose(rec.q, ref.q, atol=1e-12)

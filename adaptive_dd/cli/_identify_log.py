@@ -477,7 +477,8 @@ def _payload_only(args, arm, model, rec, tau_f, outputs=None) -> int:
             "and an unloaded record instead (--baseline)"
         ) from None
     print(
-        f"{rec.source}: the arm known (its URDF), the payload's 10 parameters fitted (tau_f unused: {tau_f})"
+        f"{rec.source}: the arm known (its URDF), the payload's 10 parameters fitted by output error (no "
+        f"filtered regression: its time constant, {tau_f:g} s, does not apply)"
     )
     _print_output_error_fit(pr.fit, "", ", so the payload and its Cramér-Rao std below do not hold")
     if not pr.fit.converged:
@@ -556,6 +557,6 @@ def _payload_pair(args, arm, model, fit, tau_f, K, outputs, offset=False):
     print(
         "  +- is one std: the spread of this payload over pairs of records like these (each side's "
         "Newey-West covariance; the base parameters weighted by their own variance, the covariance a "
-        "sandwich); +- 2 std holds the payload about 95 % of the time. Not the choice of model"
+        "sandwich); +- 1.96 std holds the payload about 95 % of the time. Not the choice of model"
     )
     return _write_payload(outputs, pr, f"{loaded} - {', '.join(args.baseline)}")
