@@ -585,3 +585,38 @@ def test_identify_warns_where_output_error_leaves_the_wls_bound(capsys):
     for other in ({"converged": False}, {"cost": 500.0}, {"sigma": np.array([1.1, 2.0, 9.0])}):
         _disagreement(model, fit, SimpleNamespace(**{**vars(oe), **other}), share)
         assert capsys.readouterr().out == ""
+
+
+def test_identify_writes_output_errors_estimate_when_it_converged(tmp_path, capsys):
+    """The warning said to prefer output error's column, and nothing could read it: model.json and
+    estimates.csv held the least squares' estimate always. Where output error converged with its noise
+    model they hold its estimate with its Cramér-Rao std (95 % bound +- 1.96 std); the pair
+    (--baseline) still differences two WLS fits."""
+    import json
+
+    import pandas as pd
+
+    from adaptive_dd.cli import main
+
+    scen = Path(__file__).resolve().parents[1] / "benchmarks" / "scenarios" / "ident_vertical3.toml"
+    sim = tmp_path / "sim"
+    assert main(["simulate", "--arm", str(scen), "--seed", "3", "--duration", "6", "--out", str(sim)]) == 0
+    out = tmp_path / "id"
+    assert main(["identify", "--arm", str(scen), str(sim / "trajectory.csv"), "--out", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert "converged, normalised residual" in text and "the model written (model.json" in text
+    assert "is output error's, with its Cramér-Rao std" in text
+    table = text.split("|WLS-OE|/CRB\n")[1].split("CRB: ")[0].strip().splitlines()
+    oe = {
+        line.split()[0]: (float(line.split()[-3]), float(line.split()[-2]))
+        for line in table
+        if "held" not in line
+    }
+    m = json.loads((out / "model.json").read_text())
+    est = pd.read_csv(out / "estimates.csv").set_index("name")
+    for name, (value, crb) in oe.items():
+        k = m["names"].index(next(n for n in m["names"] if n.split()[0] == name))
+        assert m["sigma"][k] == pytest.approx(value, rel=1e-4, abs=1e-9)  # as printed (5 digits)
+        assert m["std"][k] == pytest.approx(crb, rel=0.05)
+    assert m["record"]["quantile_95"] == 1.96
+    np.testing.assert_allclose(est["half_width_95"], 1.96 * est["std"], rtol=2e-3)  # as written (4 digits)

@@ -10,6 +10,7 @@ functions are left unset (compiling it would fail), finds the loop in numba's ca
 
 import importlib.util
 import os
+import shutil
 import subprocess
 import sys
 import textwrap
@@ -68,7 +69,17 @@ LAW = VARIANT.format(head="import {helper}\n\nGAIN = 2.0", body="GAIN * {helper}
 """A law whose command calls a helper in another module (``{helper}``, filled per test)."""
 
 
+@pytest.fixture(autouse=True)
+def _no_stale_bytecode(monkeypatch):
+    """These tests rewrite a module file and load it again within a second: a rewrite of the same
+    size would load the bytecode Python cached of the file before it (a .pyc is checked against
+    the source's whole-second time stamp and its size). No bytecode is written here, and
+    :func:`_load` drops any a new process wrote."""
+    monkeypatch.setattr(sys, "dont_write_bytecode", True)
+
+
 def _load(path: Path, name: str):
+    shutil.rmtree(path.parent / "__pycache__", ignore_errors=True)
     spec = importlib.util.spec_from_file_location(name, path)
     module = importlib.util.module_from_spec(spec)
     sys.modules[name] = module

@@ -157,8 +157,10 @@ def _information(model, fit) -> Array:
     return F
 
 
-def _output_error(args, arm, model, rec, fit) -> None:
-    """Output error from the WLS estimate where the record can be simulated, else a message."""
+def _output_error(args, arm, model, rec, fit):
+    """Output error from the WLS estimate where the record can be simulated, else a message; the fit
+    to write: output error's (:func:`_with_output_error`) when it converged with its noise model,
+    else ``fit``."""
     from adaptive_dd.identification.output_error import fit_output_error, measurement_std
 
     mode = args.output_error
@@ -173,13 +175,13 @@ def _output_error(args, arm, model, rec, fit) -> None:
             )
             + (f"; {', '.join(unused)} not used" if unused else "")
         )
-        return
+        return fit
     if not rec.used.all():
         print("output error: skipped (it simulates every joint; the record leaves torque channels out)")
-        return
+        return fit
     if len(rec.spans) > 1:
         print("output error: skipped (it simulates one continuous record; this one has several pieces)")
-        return
+        return fit
     std = measurement_std(arm).copy()
     if not rec.qd_measured:
         std[arm.n_joints :] = np.inf
@@ -206,7 +208,7 @@ def _output_error(args, arm, model, rec, fit) -> None:
         )
     except (SignalError, ParameterError, np.linalg.LinAlgError) as exc:
         print(f"output error: skipped, the record cannot be simulated from the WLS estimate ({exc})")
-        return
+        return fit
     _print_output_error_fit(
         oe,
         "; torque offsets fitted by WLS taken off the torques" if fit.offset is not None else "",
@@ -236,11 +238,36 @@ def _output_error(args, arm, model, rec, fit) -> None:
         "CRB: Cramér-Rao std at the estimate for this record, q and qd measured with the arm's sensor "
         f"noise, torque known, segments of {oe.segment_length} samples with unknown initial states"
     )
-    print(
-        "the model written (model.json, estimates.csv; what predict and [model] from read) is the WLS "
-        "estimate, with its std; output error's column is printed beside it, not written"
-    )
+    if not oe.converged or _normalised_residual(oe) > RESIDUAL_LIMIT:
+        print(
+            "the model written (model.json, estimates.csv; what predict and [model] from read) is the WLS "
+            "estimate, with its std: output error did not converge with its noise model"
+        )
+        return fit
     _disagreement(model, fit, oe, share)
+    print(
+        "the model written (model.json, estimates.csv; what predict and [model] from read) is output "
+        "error's, with its Cramér-Rao std (95 % bound +- 1.96 std; the held directions keep the WLS "
+        "prior's): it converged with its noise model, the maximum-likelihood estimate of this record"
+    )
+    return _with_output_error(fit, oe, E)
+
+
+def _with_output_error(fit, oe, E):
+    """``fit`` with output error's estimate and Cramér-Rao covariance in the directions ``E`` it
+    moved (the held ones keep the WLS fit's prior covariance), the 95 % bound +- 1.96 std.
+
+    On simulated vertical3 records (12 seeds, 17 parameters) output error's error was 0.046 times the
+    least squares' (rms over parameters and seeds), its +- 1.96 CRB bound held the truth as often
+    (92 % both; rms of (estimate - truth) / std 1.06 against 1.09)."""
+    import dataclasses
+
+    free = E @ np.linalg.pinv(E.T @ oe.information @ E, hermitian=True) @ E.T
+    held = np.eye(E.shape[0]) - E @ E.T
+    cov = free + held @ fit.cov @ held
+    return dataclasses.replace(
+        fit, sigma=np.asarray(oe.sigma, float), cov=cov, std=np.sqrt(np.abs(np.diag(cov))), quantile=1.96
+    )
 
 
 def _disagreement(model, fit, oe, share) -> None:
@@ -261,7 +288,7 @@ def _disagreement(model, fit, oe, share) -> None:
         f"{int(free.sum())} parameters (the farthest {short(model.names[k])}: {z[k]:.1f} of its WLS std); "
         "output error converged with its noise model (the sensors' noise, which the least squares "
         "leaves out of its regressor), so there the least squares is biased and its bound does not "
-        "hold the truth (docs/real_log.md): prefer output error's column for those parameters"
+        "hold the truth (docs/real_log.md); the model written is output error's"
     )
 
 
@@ -350,7 +377,7 @@ def identify_log(args: argparse.Namespace, arm, outputs) -> int:
     me_var = _model_error(model, fit, rec, spec.torque_held, mom)
     _print_fit(model, fit, names)
     _print_offset(args, fit, names)
-    _output_error(args, arm, model, rec, fit)
+    wls, fit = fit, _output_error(args, arm, model, rec, fit)  # output error's, when it converged
     cf = _consistent(model, fit)
     reg = fit.regression
     pred = reg.phi @ fit.sigma
@@ -368,7 +395,7 @@ def identify_log(args: argparse.Namespace, arm, outputs) -> int:
     written += _write_model(outputs, arm, model, rec, fit, cf, spec, profile, me_var)
     del mom
     if args.baseline:
-        written.append(_payload_pair(args, arm, model, fit, tau_f, K, outputs, offset))
+        written.append(_payload_pair(args, arm, model, wls, tau_f, K, outputs, offset))  # WLS both sides
     print("wrote " + ", ".join(str(Path(args.out) / Path(p).name) for p in written))
     return 0
 
