@@ -31,9 +31,21 @@ def public_modules() -> list[str]:
 
 
 def _summary(module: str) -> str:
+    """The module docstring's first paragraph, its cross-references as literals (an internal's
+    target may have no page: ``:func:`~a.b.c``` reads ``c``; a role's backticks were turned into
+    quotes, which the page printed curly around the role's name)."""
+    import re
+
     doc = importlib.import_module(module).__doc__ or ""
     first = doc.strip().split("\n\n")[0].replace("\n", " ").strip()
-    return first.replace("`", "'") or "(no docstring)"
+
+    def literal(m: re.Match) -> str:
+        target = m.group(2)
+        return f"``{target.rsplit('.', 1)[-1] if m.group(1) else target}``"
+
+    first = re.sub(r":[a-z]+:`(~?)([^`]+)`", lambda m: literal(m) if m.group(1) else f"``{m.group(2)}``", first)
+    first = re.sub(r"(?<!`)`([^`<]+)`(?![`_])", r"``\1``", first)  # a name in `...`: a literal (not a link)
+    return first or "(no docstring)"
 
 
 def index_page() -> str:
