@@ -50,7 +50,7 @@ source_suffix = {".rst": "restructuredtext", ".md": "markdown"}
 root_doc = "index"
 exclude_patterns = ["_build", "Thumbs.db", ".DS_Store", "auto_examples/*.ipynb", "auto_examples/*.py"]
 templates_path = ["_templates"]
-suppress_warnings = ["myst.header"]  # the older guide pages start at "##"
+suppress_warnings = ["myst.header"]  # the changelog quotes old rounds' notes with their own heading levels
 
 myst_enable_extensions = ["dollarmath", "colon_fence"]
 myst_heading_anchors = 3

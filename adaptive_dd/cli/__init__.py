@@ -52,7 +52,7 @@ def build_parser() -> argparse.ArgumentParser:
     """The ``adaptive-dd`` parser (no abbreviations of options; checked numeric options)."""
     from adaptive_dd import __version__
 
-    p = argparse.ArgumentParser(prog="adaptive-dd", description=__doc__, allow_abbrev=False)
+    p = argparse.ArgumentParser(prog="adaptive-dd", description=__doc__.replace("``", ""), allow_abbrev=False)
     p.add_argument("--version", action="version", version=f"adaptive-dd {__version__}")
     p.add_argument("--debug", action="store_true", help="show the traceback of an internal error")
     sub = p.add_subparsers(dest="command", required=True)
