@@ -457,3 +457,18 @@ def test_a_policy_enters_the_benchmarks_table_as_a_plugin():
         np.testing.assert_allclose(ev.rms_error, bench, rtol=1e-9)
     finally:
         sys.path.remove(str(plugins))
+
+
+def test_a_cold_cache_is_said_before_the_first_reset_compiles(tmp_path):
+    """The first reset and step compiled the arm's step for about a minute, silently (it looked like
+    a hang): on an empty cache the environment says so when it is made."""
+    import os
+    import subprocess
+    import sys
+
+    env = {k: v for k, v in os.environ.items() if k != "NUMBA_CACHE_DIR"}
+    env["XDG_CACHE_HOME"] = str(tmp_path)
+    code = "from adaptive_dd.gym import make_env; make_env('adaptive_dd/PayloadSwap-Vertical3Exact-v0', floor=None)"
+    p = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, timeout=300)
+    assert p.returncode == 0, p.stderr
+    assert "numba's cache lacks this arm's step: the first reset() and step() compile it" in p.stderr

@@ -97,6 +97,33 @@ def floor_command(floor, sim: Simulation, m: Measurement) -> Array:
     return np.asarray(tau, dtype=float)[0]
 
 
+def _say_if_cold(sc) -> None:
+    """A ``RunWarning`` when the first ``reset`` and ``step`` will compile the arm's step (numba's
+    cache lacks it): about a minute on 2 cores, silent otherwise, it looked like a hang."""
+    import os
+    import warnings
+
+    from adaptive_dd._numba_cache import compile_estimate
+    from adaptive_dd.errors import RunWarning
+
+    if sc.closed_forms is not None:
+        cold = compile_estimate(sc.closed_forms) > 0
+    else:
+        from adaptive_dd.closed_loop.batches import _chain_apply_loop
+
+        index = getattr(
+            getattr(getattr(_chain_apply_loop, "_cache", None), "_cache_file", None), "_index_path", None
+        )
+        cold = index is not None and not os.path.exists(index)
+    if cold:
+        warnings.warn(
+            "adaptive_dd.gym: numba's cache lacks this arm's step: the first reset() and step() compile it "
+            "(about a minute on 2 cores; once: later processes load it)",
+            RunWarning,
+            stacklevel=3,
+        )
+
+
 class PayloadSwapEnv(gymnasium.Env):
     """One trial of a scenario as a ``gymnasium.Env`` (module docstring).
 
@@ -149,6 +176,7 @@ class PayloadSwapEnv(gymnasium.Env):
                 "or None"
             )
         self.scenario = sc = scenario_of(scenario)
+        _say_if_cold(sc)
         n = sc.n_joints
         lim = np.asarray(io_of(sc).lim, dtype=np.float64)
         self.action_space = spaces.Box(-lim, lim, dtype=np.float64)
