@@ -468,7 +468,7 @@ def test_a_cold_cache_is_said_before_the_first_reset_compiles(tmp_path):
 
     env = {k: v for k, v in os.environ.items() if k != "NUMBA_CACHE_DIR"}
     env["XDG_CACHE_HOME"] = str(tmp_path)
-    code = "from adaptive_dd.gym import make_env; make_env('adaptive_dd/PayloadSwap-Vertical3Exact-v0', floor=None)"
+    code = "from adaptive_dd.gym import make_env; make_env('adaptive_dd/PayloadSwap-Vertical3Exact-v0', None)"
     p = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, timeout=300)
     assert p.returncode == 0, p.stderr
     assert "numba's cache lacks this arm's step: the first reset() and step() compile it" in p.stderr
