@@ -620,3 +620,42 @@ def test_identify_writes_output_errors_estimate_when_it_converged(tmp_path, caps
         assert m["std"][k] == pytest.approx(crb, rel=0.05)
     assert m["record"]["quantile_95"] == 1.96
     np.testing.assert_allclose(est["half_width_95"], 1.96 * est["std"], rtol=2e-3)  # as written (4 digits)
+
+
+def test_output_errors_model_with_a_held_direction(tmp_path, capsys):
+    """A record too weak for a direction (held at the URDF's values): writing output error's model
+    multiplied its (r, r) information by E as if it were (p, p) and failed every such record (exit 2,
+    nothing written); the held directions keep the least squares' prior through the fit's own
+    (oblique) projector."""
+    import json
+
+    import pandas as pd
+
+    from adaptive_dd.cli import main
+
+    text = (
+        '[arm]\nrobot = "vertical3"\n[reference]\nramp = 1.0\n'
+        "joint1 = { offset = 0.3, amplitude = [0.05], frequency = [0.3] }\n"
+        "joint2 = { offset = -0.6, amplitude = [0.05], frequency = [0.4] }\n"
+        "joint3 = { offset = 0.4, amplitude = [0.05], frequency = [0.5] }\n"
+    )
+    scen = tmp_path / "weak.toml"
+    scen.write_text(text)
+    sim = tmp_path / "sim"
+    assert main(["simulate", "--arm", str(scen), "--seed", "3", "--out", str(sim)]) == 0
+    outs = {}
+    for how, extra in (("written", []), ("wls", ["--output-error", "off"])):
+        out = tmp_path / how
+        assert (
+            main(["identify", "--arm", str(scen), str(sim / "trajectory.csv"), "--out", str(out), *extra])
+            == 0
+        )
+        outs[how] = (json.loads((out / "model.json").read_text()), pd.read_csv(out / "estimates.csv"))
+    text = capsys.readouterr().out
+    assert "held at the URDF's values" in text
+    m, est = outs["written"]
+    assert m["record"]["estimator"] == "output_error" and outs["wls"][0]["record"]["estimator"] == "wls"
+    held = est["held"].to_numpy(bool)
+    assert held.any() and np.all(np.isfinite(m["std"])) and min(m["std"]) > 0
+    ratio = est["std"][held].to_numpy() / outs["wls"][1]["std"][held].to_numpy()
+    assert np.all((ratio > 0.3) & (ratio < 3.0)), ratio  # the prior's scale, not the CRB's

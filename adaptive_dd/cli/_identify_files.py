@@ -33,7 +33,7 @@ def _write_estimates(path, model, fit) -> None:
             )
 
 
-def _write_model(outputs, arm, model, rec, fit, cf, spec, profile, model_error_var) -> list:
+def _write_model(outputs, arm, model, rec, fit, cf, spec, profile, model_error_var, estimator="wls") -> list:
     """``model.json`` (and ``model.urdf`` with a consistent arm ``cf``) of the fit; ``model_error_var``
     its :func:`~adaptive_dd.identification.model_error.model_error_variance`, computed before the fit
     is printed (it fails on a window too short for its slower filter)."""
@@ -86,8 +86,12 @@ def _write_model(outputs, arm, model, rec, fit, cf, spec, profile, model_error_v
             "records": list(rec.record_names) or [rec.source],
             "sample_period": rec.sample_period,
             "tau_f": fit.tau_f,
+            # the estimate written: "wls", or "output_error" (its Cramér-Rao covariance; the lag, the
+            # bandwidth and model_error_var below are then the least squares' fit's, printed beside it)
+            "estimator": estimator,
             "newey_west_lag": fit.lag,
-            # sigma +- quantile_95 std is the 95 % bound (the fixed-b quantile at bandwidth_fraction)
+            # sigma +- quantile_95 std is the 95 % bound (WLS: the fixed-b quantile at
+            # bandwidth_fraction; output error: 1.96)
             "quantile_95": float(fit.quantile),
             "bandwidth_fraction": float(fit.bandwidth),
             # what adaptive_ct's prior adds for model error ([model] from = "model.json")

@@ -262,9 +262,13 @@ def _with_output_error(fit, oe, E):
     honest (the truth inside 94.6 % against 95.6 %; rms of (estimate - truth) / std 1.06 both)."""
     import dataclasses
 
-    free = E @ np.linalg.pinv(E.T @ oe.information @ E, hermitian=True) @ E.T
-    held = np.eye(E.shape[0]) - E @ E.T
-    cov = free + held @ fit.cov @ held
+    # oe.information is (r, r) in the coordinates of E; the held directions are the null space of the
+    # fit's oblique projector (the prior's scales), not E's orthogonal complement
+    free = E @ np.linalg.pinv(oe.information, hermitian=True) @ E.T
+    cov = free
+    if fit.held is not None and fit.held.count:
+        held = np.eye(E.shape[0]) - fit.held.projector
+        cov = free + held @ fit.cov @ held.T
     return dataclasses.replace(
         fit, sigma=np.asarray(oe.sigma, float), cov=cov, std=np.sqrt(np.abs(np.diag(cov))), quantile=1.96
     )
@@ -392,7 +396,8 @@ def identify_log(args: argparse.Namespace, arm, outputs) -> int:
     )
     _write_estimates(outputs.path("estimates.csv"), model, fit)
     written = [outputs.path("estimates.csv"), outputs.path("torque_fit.png")]
-    written += _write_model(outputs, arm, model, rec, fit, cf, spec, profile, me_var)
+    estimator = "wls" if fit is wls else "output_error"
+    written += _write_model(outputs, arm, model, rec, fit, cf, spec, profile, me_var, estimator)
     del mom
     if args.baseline:
         written.append(_payload_pair(args, arm, model, wls, tau_f, K, outputs, offset))  # WLS both sides
