@@ -663,7 +663,7 @@ def test_the_docs_sweep_file_parses_and_a_bad_grid_setting_names_the_sweep_file(
 
     root = Path(__file__).resolve().parents[1]
     text = (root / "docs" / "sweeps.md").read_text()
-    block = re.search(r"### The sweep file\n\n```toml\n(.*?)```", text, re.S).group(1)
+    block = re.search(r"#+ The sweep file\n\n```toml\n(.*?)```", text, re.S).group(1)
     short = (root / "benchmarks" / "sweeps" / "short_swap.toml").as_posix()
     doc = tmp_path / "doc.toml"
     doc.write_text(block.replace('"short_swap.toml"', f'"{short}"'))
