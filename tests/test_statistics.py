@@ -275,10 +275,22 @@ def test_every_planted_fault_of_the_benchmark_script_still_applies():
 def test_a_trial_whose_alarm_record_filled_before_the_swap_is_not_called_missed():
     """A detector alarming at every sample filled its record (MAX_ALARMS) before the swap and read
     "missed swaps 3 of 3": whether it saw the swap is not known, so it is not counted missed."""
+    from adaptive_dd.benchmark.metrics import missed_swap_counts
     from adaptive_dd.benchmark.types import MAX_ALARMS
+    from adaptive_dd.closed_loop.glue import AlarmTimes
 
     res, _ = _fake_result()
     run = res.runs["adaptive_ct"]
-    run.alarm_times[3] = [0.001 * k for k in range(MAX_ALARMS)]  # seed 3 full before the swap
+    run.alarm_times[3] = AlarmTimes([0.001 * k for k in range(MAX_ALARMS)], truncated=True)  # full before
     a = compute_metrics(res)["controllers"]["adaptive_ct"]
     assert a["missed_swaps_per_seed"] == [0, 0, 1, 0] and a["segments"][1]["missed"] == 1
+    # the leaderboard's count is the same rule
+    args = (res.scenario.swap_times, run.failed, res.scenario.duration)
+    assert missed_swap_counts(run.alarm_times, *args).tolist() == [0, 0, 1, 0]
+    # a record that kept every alarm (the Python path keeps them all; exactly MAX_ALARMS raised on the
+    # compiled one) still says the swap was missed
+    for times in ([0.001 * k for k in range(300)], AlarmTimes([0.001 * k for k in range(MAX_ALARMS)])):
+        run.alarm_times[3] = times
+        a = compute_metrics(res)["controllers"]["adaptive_ct"]
+        assert a["missed_swaps_per_seed"] == [0, 0, 1, 1]
+        assert missed_swap_counts(run.alarm_times, *args).tolist() == [0, 0, 1, 1]

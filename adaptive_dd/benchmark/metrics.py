@@ -116,7 +116,7 @@ import numpy as np
 
 from adaptive_dd.benchmark.provenance import provenance
 from adaptive_dd.benchmark.segments import moving_rms, segment_failed
-from adaptive_dd.benchmark.streaming import MAX_ALARMS, SETTLE, segment_bounds
+from adaptive_dd.benchmark.streaming import SETTLE, segment_bounds
 
 if TYPE_CHECKING:  # annotations only: types imports this module for BenchmarkResult.metrics()
     from adaptive_dd.benchmark.types import BenchmarkResult
@@ -362,13 +362,27 @@ def false_alarm_counts(alarm_times, swaps) -> list[int]:
 
 def missed_swap_counts(alarm_times, swaps, failed, duration: float = np.inf) -> np.ndarray:
     """Per trial, the swaps [s] with no alarm within ``FALSE_ALARM_WINDOW`` after them (0 for a
-    failed trial; a swap the run ends within that window of is not judged: :func:`judged`)."""
+    failed trial; a swap the run ends within that window of is not judged: :func:`judged`, nor one
+    after the last alarm a truncated record kept: :func:`seen_swap`)."""
     return np.array(
         [
-            sum(1 for s in swaps if judged(s, duration) and not any(_after(x, s) for x in tr)) if not f else 0
+            sum(
+                1
+                for s in swaps
+                if judged(s, duration) and seen_swap(tr, s) and not any(_after(x, s) for x in tr)
+            )
+            if not f
+            else 0
             for tr, f in zip(alarm_times, failed, strict=True)
         ]
     )
+
+
+def seen_swap(times, swap: float) -> bool:
+    """Whether one trial's alarm record can tell if ``swap`` [s] was detected: not when the record
+    was truncated (``AlarmTimes.truncated``: more alarms than kept) before the swap (a kept alarm at
+    or after it is either the detection or beyond its window)."""
+    return not getattr(times, "truncated", False) or (len(times) > 0 and times[-1] >= swap)
 
 
 def detection_delays(alarm_times, swap: float) -> list[float | None]:
@@ -577,8 +591,8 @@ def _add_detector_statistics(res: BenchmarkResult, out: dict) -> None:
             seg["detection_delay_median"] = float(np.median(hit)) if hit else None
             seg["detected"] = len(hit)
             seen = judged(s, sc.duration)  # the run lasts the window beyond the swap: else not missed
-            # a trial whose alarm record filled up before the swap cannot tell: neither hit nor missed
-            known = np.array([len(tr) < MAX_ALARMS or (len(tr) and tr[-1] >= s) for tr in run.alarm_times])
+            # a trial whose alarm record was truncated before the swap cannot tell: neither hit nor missed
+            known = np.array([seen_swap(tr, s) for tr in run.alarm_times])
             lost = [d is None and g and k for d, g, k in zip(first, ok, known, strict=True)]
             seg["missed"] = int(sum(lost)) if seen else 0
             if seen:

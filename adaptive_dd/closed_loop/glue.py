@@ -129,7 +129,17 @@ def alarm_lists(alarms: Alarms) -> list[list[float]]:
             RunWarning,
             stacklevel=2,
         )
-    return [list(alarms.times[i, : min(c, cap)]) for i, c in enumerate(alarms.count)]
+    return [AlarmTimes(alarms.times[i, : min(c, cap)], c > cap) for i, c in enumerate(alarms.count)]
+
+
+class AlarmTimes(list):
+    """One trial's kept alarm times [s], a list; ``truncated``: the trial raised more than were kept
+    (the compiled path keeps the first ``MAX_ALARMS``), so a swap after the last kept one is not known
+    to have been detected or missed."""
+
+    def __init__(self, times=(), truncated: bool = False) -> None:
+        super().__init__(float(t) for t in times)
+        self.truncated = bool(truncated)
 
 
 COPY_PROPAGATE_ONLY = {
