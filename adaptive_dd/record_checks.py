@@ -92,6 +92,7 @@ def _check_stuck(spec: RecordSpec, where: dict, raw: Array) -> None:
 
 def _check_units(spec: RecordSpec, where: dict, q_raw: Array, arm) -> None:
     lim = arm.position_limits
+    kinds = getattr(arm, "joint_kinds", None)
     for j in range(q_raw.shape[1]):
         lo, hi = lim[j]
         if not (np.isfinite(lo) and np.isfinite(hi)):
@@ -102,7 +103,7 @@ def _check_units(spec: RecordSpec, where: dict, q_raw: Array, arm) -> None:
             continue
         deg = qj * math.pi / 180.0
         hint = (
-            f"; in degrees it would fit: set {_degrees_hint(spec, j)} in [record]"
+            f"; in degrees it would fit: set {_degrees_hint(spec, j, kinds)} in [record]"
             if deg.min() >= lo - slack and deg.max() <= hi + slack
             else ""
         )
@@ -113,15 +114,20 @@ def _check_units(spec: RecordSpec, where: dict, q_raw: Array, arm) -> None:
         )
 
 
-def _degrees_hint(spec: RecordSpec, j: int) -> str:
+def _degrees_hint(spec: RecordSpec, j: int, kinds=None) -> str:
     """``position_unit = "deg"`` for a one-joint log, else the per-joint list with joint ``j`` in
     degrees and the others as they are read (a global "deg" would turn the joints logged in
     radians into degrees too)."""
     n = len(spec.position)
     if n == 1:
         return 'position_unit = "deg"'
-    names = {scale: u for u, scale in UNITS.items() if u != "m"}  # a scale of 1 read as radians
-    units = [names.get(float(s), "rad") for s in spec.position_scale]
+    angles = {UNITS["rad"]: "rad", UNITS["mrad"]: "mrad", UNITS["deg"]: "deg"}  # a revolute joint's
+    lengths = {UNITS["m"]: "m", UNITS["mm"]: "mm"}  # a prismatic joint's (its scale read back)
+    kinds = tuple(kinds) if kinds is not None else ("revolute",) * n
+    units = [
+        (lengths if k == "prismatic" else angles).get(float(s), "rad" if k != "prismatic" else "m")
+        for s, k in zip(spec.position_scale, kinds, strict=True)
+    ]
     units[j] = "deg"
     listed = ", ".join(f'"{u}"' for u in units)
     return f'position_unit = [{listed}] (one per joint; a prismatic one\'s "m" or "mm")'

@@ -305,7 +305,7 @@ class Simulation:
         e = np.abs(self._ref[0][k] - self._trial.truth()[0])
         if np.all(np.isfinite(e)) and e.max() > MAX_ERROR:
             j = int(np.argmax(e))
-            return f"tracking error of joint {j + 1} {e[j]:.3g} rad, beyond max_error = {MAX_ERROR:g} rad"
+            return f"tracking error of joint {j + 1} {e[j]:.6g} rad, above max_error = {MAX_ERROR:g} rad"
         return f"runaway: the arm's state became non-finite or a joint exceeded {MAX_SPEED:g} rad/s"
 
     def _truth(self):

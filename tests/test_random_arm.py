@@ -411,3 +411,25 @@ def test_the_joints_alone_are_the_drawn_arms_joints():
     assert set(got) == {3, 4, 5, 6, 7}
     with pytest.raises(ParameterError, match="seed must be an integer >= 0, got -1"):
         random_arm_joints(-1)
+
+
+def test_every_laws_line_keeps_each_segment_in_its_place():
+    """A law whose floor saturates in a segment on every arm has no pooled row there: its line put
+    the next segment's figures in that segment's place."""
+    import copy
+
+    pop = _fake_population()
+    other = copy.deepcopy(pop.arms)
+    for a in other:
+        a["controller"], a["floor"] = "x", "x_oracle"
+        a["segments"][0]["floor_saturated"] = True
+    rows = pop.frame[pop.frame["controller"] == "adaptive_ct"].copy()
+    rows["controller"] = "x"
+    pop.frame = pd.concat([pop.frame, rows], ignore_index=True)
+    pop.laws = {"adaptive_ct": pop.arms, "x": other}
+    line = next(x for x in format_population(pop).splitlines() if x.startswith("  x / x_oracle"))
+    p = pooled(pop, "x")
+    assert [q["segment"] for q in p] == [1]
+    assert line.startswith(
+        f"  x / x_oracle: mean - / {p[0]['mean']:.3f}; p90 - / {p[0]['p90']:.3f}; max - / "
+    )

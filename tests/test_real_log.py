@@ -1026,3 +1026,13 @@ def test_logs_as_a_walk_through_met_them(tmp_path):
     p1.write_text("\n".join([lines[0], *body]) + "\n")
     rec = read_log(record_spec({**spaced, "position_unit": ["mrad", "mrad", "m"]}, NAMES, KINDS, "s.toml"))
     np.testing.assert_allclose(rec.q, ref.q, atol=1e-12)
+
+
+def test_the_degrees_hint_names_milliradians_and_millimetres_by_the_joints_kind():
+    """The reverse map of units read 1e-3 as "mm" for a revolute joint logged in mrad: the hint then
+    proposed a unit the check refuses."""
+    from adaptive_dd.record_checks import _degrees_hint
+
+    units = ["mrad", "deg", "mm"]
+    spec = record_spec(_table(Path("a.csv"), Path("b.csv"), position_unit=units), NAMES, KINDS, "s.toml")
+    assert _degrees_hint(spec, 1, KINDS).startswith('position_unit = ["mrad", "deg", "mm"]')

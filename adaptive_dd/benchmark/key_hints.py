@@ -22,20 +22,17 @@ def nearest_keys(key: str, allowed: Iterable[str]) -> list[str]:
 
 
 def repeated_entries(entries: Iterable[str], table_name: Callable[[str], str]) -> str:
-    """What a list repeats: each entry given twice, and the entries that share a settings table
-    (``table_name(entry)``: two plug-ins of one class name from two files).
+    """What a list repeats: each entry given twice, and the distinct entries that share a settings
+    table (``table_name(entry)``: two plug-ins of one class name from two files).
 
     >>> repeated_entries(["pd", "a:Law", "b:Law", "pd"], lambda x: x.rsplit(":", 1)[-1])
     "'pd' twice; 'a:Law' and 'b:Law' share the settings table [controllers.Law]"
     """
     entries = list(entries)
-    twice = [x for x, k in Counter(entries).items() if k > 1]
-    tables = Counter(table_name(x) for x in entries)
-    same = {
-        t: [x for x in entries if table_name(x) == t] for t, k in tables.items() if k > 1 and t not in twice
-    }
-    said = [f"{x!r} twice" for x in twice]
-    said += [
-        f"{' and '.join(map(repr, xs))} share the settings table [controllers.{t}]" for t, xs in same.items()
-    ]
+    said = [f"{x!r} twice" for x, k in Counter(entries).items() if k > 1]
+    distinct = list(dict.fromkeys(entries))
+    for t, k in Counter(table_name(x) for x in distinct).items():
+        if k > 1:
+            xs = " and ".join(repr(x) for x in distinct if table_name(x) == t)
+            said.append(f"{xs} share the settings table [controllers.{t}]")
     return "; ".join(said)

@@ -322,7 +322,12 @@ def format_population(pop: PopulationResult, worst: int = 3) -> str:
             fl = sorted({a.get("floor") or "?" for a in pop.laws[name]})
             worst_one = max(p, key=lambda x: x["max"], default=None)
             where = f" (random:{worst_one['worst'][0]} seed {worst_one['worst'][1]})" if worst_one else ""
-            mean, p90, mx = (" / ".join(format(x[k], f) for x in p) for k, f in KEYS_FORMATS)
+            by_seg = {x["segment"]: x for x in p}  # a segment with no row left (floor saturated): "-"
+            segs = range(max((len(a["segments"]) for a in pop.laws[name]), default=0))
+            mean, p90, mx = (
+                " / ".join(format(by_seg[i][k], f) if i in by_seg else "-" for i in segs)
+                for k, f in KEYS_FORMATS
+            )
             lines.append(f"  {name} / {' or '.join(fl)}: mean {mean}; p90 {p90}; max {mx}{where}")
     return "\n".join(lines)
 
