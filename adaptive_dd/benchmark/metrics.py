@@ -364,17 +364,12 @@ def missed_swap_counts(alarm_times, swaps, failed, duration: float = np.inf) -> 
     """Per trial, the swaps [s] with no alarm within ``FALSE_ALARM_WINDOW`` after them (0 for a
     failed trial; a swap the run ends within that window of is not judged: :func:`judged`, nor one
     after the last alarm a truncated record kept: :func:`seen_swap`)."""
+
+    def missed(tr, s) -> bool:
+        return judged(s, duration) and seen_swap(tr, s) and not any(_after(x, s) for x in tr)
+
     return np.array(
-        [
-            sum(
-                1
-                for s in swaps
-                if judged(s, duration) and seen_swap(tr, s) and not any(_after(x, s) for x in tr)
-            )
-            if not f
-            else 0
-            for tr, f in zip(alarm_times, failed, strict=True)
-        ]
+        [0 if f else sum(missed(tr, s) for s in swaps) for tr, f in zip(alarm_times, failed, strict=True)]
     )
 
 
