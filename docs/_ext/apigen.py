@@ -43,7 +43,9 @@ def _summary(module: str) -> str:
         target = m.group(2)
         return f"``{target.rsplit('.', 1)[-1] if m.group(1) else target}``"
 
-    first = re.sub(r":[a-z]+:`(~?)([^`]+)`", lambda m: literal(m) if m.group(1) else f"``{m.group(2)}``", first)
+    first = re.sub(
+        r":[a-z]+:`(~?)([^`]+)`", lambda m: literal(m) if m.group(1) else f"``{m.group(2)}``", first
+    )
     first = re.sub(r"(?<!`)`([^`<]+)`(?![`_])", r"``\1``", first)  # a name in `...`: a literal (not a link)
     return first or "(no docstring)"
 
