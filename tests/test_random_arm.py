@@ -433,3 +433,18 @@ def test_every_laws_line_keeps_each_segment_in_its_place():
     assert line.startswith(
         f"  x / x_oracle: mean - / {p[0]['mean']:.3f}; p90 - / {p[0]['p90']:.3f}; max - / "
     )
+
+
+def test_the_ratio_figure_leaves_out_what_the_pooled_lines_leave_out():
+    """--arms's ratios.png plotted every row, a floor-saturated segment's too, while the pooled lines
+    (and population.json) leave those out: the figure and the printed means differed."""
+    from adaptive_dd.benchmark.population import judged_rows
+
+    pop = _fake_population()
+    pop.arms[0]["segments"][1]["floor_saturated"] = True
+    rows = judged_rows(pop)
+    ours = rows[(rows["controller"] == "adaptive_ct") & rows["ratio_to_floor"].notna()]
+    by_seg = ours.groupby("segment")["ratio_to_floor"].mean()
+    for p in pooled(pop):
+        assert by_seg[p["segment"]] == pytest.approx(p["mean"])
+    assert len(rows) < len(pop.frame)

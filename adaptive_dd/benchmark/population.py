@@ -216,6 +216,24 @@ def arm_summary(metrics: dict, arm_seed: int, drawn, sc, name: str = "adaptive_c
     }
 
 
+def judged_rows(pop: PopulationResult):
+    """``pop.frame`` without the rows of a segment whose floor saturated on that arm (per law: no
+    verdict there), as :func:`pooled` leaves them out: what the ratio figure plots."""
+    f = pop.frame
+    saturated = {
+        (a.get("controller", pop.lead), a["arm_seed"], i)
+        for arms in (pop.laws or {pop.lead: pop.arms}).values()
+        for a in arms
+        for i, s in enumerate(a["segments"])
+        if s["floor_saturated"]
+    }
+    keep = [
+        (c, a, s) not in saturated
+        for c, a, s in zip(f["controller"], f["arm_seed"], f["segment"], strict=True)
+    ]
+    return f[np.array(keep, bool)]
+
+
 def pooled(pop: PopulationResult, name: str | None = None) -> list[dict]:
     """Per segment index: ``mean``, ``p90``, ``max`` of controller ``name`` (default the lead's,
     ``adaptive_ct``) / its floor over every arm and seed (trials that failed or whose floor saturated

@@ -22,6 +22,7 @@ def run_arms(args: argparse.Namespace, only_controllers, with_floors) -> int:
     from adaptive_dd.benchmark.population import (
         arms_frame,
         format_population,
+        judged_rows,
         pooled,
         population_scenario,
         run_population,
@@ -102,7 +103,7 @@ def run_arms(args: argparse.Namespace, only_controllers, with_floors) -> int:
             from adaptive_dd.plotting import plot_ratios
 
             staged = [outputs.path(f"ratios.{f}") for f in fmts]
-            plot_ratios(pop.frame, staged[0], formats=fmts)
+            plot_ratios(judged_rows(pop), staged[0], formats=fmts)  # as the pooled lines: no saturated floor
     written = [out / "per_seed.csv", out / "arms.csv", Path(args.json or out / "population.json")]
     written += [out / f"ratios.{f}" for f in fmts]
     print("wrote " + ", ".join(str(w) for w in written))
