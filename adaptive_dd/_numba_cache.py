@@ -303,6 +303,12 @@ def _holds(cache, serial: bool) -> bool:
     return any(("TwoLinkPlant" in str(key)) != serial for key in keys)
 
 
+def cache_index(dispatcher) -> str | None:
+    """The path of a ``cache=True`` kernel's index in numba's cache (it exists once the kernel has
+    been compiled and saved for this state of the source), or None for a kernel numba does not cache."""
+    return getattr(getattr(getattr(dispatcher, "_cache", None), "_cache_file", None), "_index_path", None)
+
+
 def compile_estimate(arm) -> float:
     """Seconds of one-time compilation a benchmark on ``arm`` would spend now (0 when cached).
 
@@ -313,9 +319,9 @@ def compile_estimate(arm) -> float:
     from adaptive_dd.plant.kind import is_chain
 
     serial = is_chain(arm)
-    cache = getattr(_closed_loop_kernel(serial), "_cache", None)
-    index = getattr(getattr(cache, "_cache_file", None), "_index_path", None)
-    if index is None or (os.path.exists(index) and _holds(cache, serial)):
+    kernel = _closed_loop_kernel(serial)
+    index = cache_index(kernel)
+    if index is None or (os.path.exists(index) and _holds(kernel._cache, serial)):
         return 0.0
     return COMPILE_SECONDS["serial" if serial else "two-link"]
 

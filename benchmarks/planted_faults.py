@@ -47,7 +47,7 @@ FAULTS = {
         "half = float(1.96 * r.std() / np.sqrt(r.size))",
     ),
     "missed swaps not counted": (
-        "missed += np.array(lost, dtype=int)",
+        "missed += lost",
         "pass",
     ),
     "detection delay averaged over all seeds (a miss as 0)": (

@@ -585,12 +585,9 @@ def _add_detector_statistics(res: BenchmarkResult, out: dict) -> None:
             seg["detection_delay"] = float(np.mean(hit)) if hit else None
             seg["detection_delay_median"] = float(np.median(hit)) if hit else None
             seg["detected"] = len(hit)
-            seen = judged(s, sc.duration)  # the run lasts the window beyond the swap: else not missed
-            # a trial whose alarm record was truncated before the swap cannot tell: neither hit nor missed
-            known = np.array([seen_swap(tr, s) for tr in run.alarm_times])
-            lost = [d is None and g and k for d, g, k in zip(first, ok, known, strict=True)]
-            seg["missed"] = int(sum(lost)) if seen else 0
-            if seen:
-                missed += np.array(lost, dtype=int)
+            # the leaderboard's rule: judged swaps only, none after a truncated record's last alarm
+            lost = missed_swap_counts(run.alarm_times, (s,), ~ok, sc.duration)
+            seg["missed"] = int(lost.sum())
+            missed += lost
         out[name]["missed_swaps_per_seed"] = [int(n) if g else None for n, g in zip(missed, ok, strict=True)]
         out[name]["missed_swaps"] = int(missed[ok].sum())

@@ -239,13 +239,8 @@ def pooled(pop: PopulationResult, name: str | None = None) -> list[dict]:
     ``adaptive_ct``) / its floor over every arm and seed (trials that failed or whose floor saturated
     left out), the worst ``(arm_seed, seed)``."""
     name = name or pop.lead
-    f = pop.frame
-    arms = pop.laws.get(name, pop.arms if name == pop.lead else [])
-    saturated = {
-        (a["arm_seed"], i) for a in arms for i, s in enumerate(a["segments"]) if s["floor_saturated"]
-    }
-    keep = [(a, s) not in saturated for a, s in zip(f["arm_seed"], f["segment"], strict=True)]
-    rows = f[(f["controller"] == name) & f["ratio_to_floor"].notna() & np.array(keep, bool)]
+    f = judged_rows(pop)
+    rows = f[(f["controller"] == name) & f["ratio_to_floor"].notna()]
     out = []
     for s, g in rows.groupby("segment", sort=True):
         r = g["ratio_to_floor"].to_numpy(float)

@@ -103,16 +103,15 @@ def _say_if_cold(sc) -> None:
     import os
     import warnings
 
+    from adaptive_dd._numba_cache import cache_index
     from adaptive_dd.errors import RunWarning
 
     if sc.closed_forms is not None:  # the closed forms' plant step
         from adaptive_dd.plant.two_link_integrator import step_trials as step
     else:  # the N-joint glue's step over the trials
         from adaptive_dd.closed_loop.batches import _chain_apply_loop as step
-    cache_file = getattr(getattr(step, "_cache", None), "_cache_file", None)
-    index = getattr(cache_file, "_index_path", None)
-    cold = index is not None and not os.path.exists(index)
-    if cold:
+    index = cache_index(step)
+    if index is not None and not os.path.exists(index):
         warnings.warn(
             "adaptive_dd.gym: numba's cache lacks this arm's step: the first reset() and step() compile it "
             "(about a minute on 2 cores; once: later processes load it)",
