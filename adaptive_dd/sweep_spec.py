@@ -44,6 +44,7 @@ from typing import Any
 
 from adaptive_dd.benchmark.scenario import Scenario, default_scenario_path, load_scenario
 from adaptive_dd.controllers import CONTROLLERS, controllers_for
+from adaptive_dd.controllers.registry import law_of
 from adaptive_dd.errors import ScenarioError
 from adaptive_dd.io import read_toml
 
@@ -209,7 +210,7 @@ def _controllers(src: str, sw: dict, base: Scenario) -> tuple[str, ...]:
         else f"{base.source}'s run.controllers (the sweep gives no sweep.controllers)"
     )
     for c in ctrls:
-        if c not in known:
+        if c not in known and not (c in base.controllers and law_of(c, base.options(c)) in known):
             kind = "the two-link arm" if base.closed_forms is not None else f"this {base.n_joints}-joint arm"
             if ":" in c:
                 raise SweepError(

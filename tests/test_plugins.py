@@ -224,6 +224,43 @@ def test_an_estimate_set_after_the_first_sample_is_reported(arm_kind, cls):
     assert run.sigma_end is None and run.sigma_hat is None
 
 
+class NaNEstimate(LateEstimate):
+    """A PD whose estimator breaks in seed 1 after 0.15 s: its estimate turns NaN, its torque stays
+    finite (the trial does not fail)."""
+
+    name = "nan_est"
+
+    def observe(self, q, qd, tau):
+        self.seen += 1
+        self.est = np.full((len(q), self.p), 1.5) if np.ndim(q) > 1 else np.full(self.p, 1.5)
+        if self.seen > 150 and self.est.ndim > 1:
+            self.est[1] = np.nan
+
+
+def test_a_nan_estimate_is_said_not_read_as_no_estimate():
+    """A plug-in's estimate that is NaN at a segment's end in a trial that did not fail was left out of
+    the mass column in silence (it read as no estimate): metrics.json lists each (seed, segment),
+    the report says it."""
+    from adaptive_dd.benchmark.report import format_report
+
+    sc = dataclasses.replace(load_scenario(), seeds=3, duration=0.2, swap_times=(0.1,), swap_masses=(1.0,))
+    ctrl = NaNEstimate()
+    ctrl.p = sc.closed_forms.sigma.shape[0]
+    res = run_benchmark(
+        sc,
+        progress=False,
+        controllers={"ct_oracle": make_controller("ct_oracle"), "nan_est": ctrl, "bare": BarePD()},
+    )
+    m = res.metrics()["controllers"]
+    assert not res.runs["nan_est"].failed.any()
+    assert m["nan_est"]["nonfinite_estimates"] == [[1, 1]] and m["bare"]["nonfinite_estimates"] is None
+    text = format_report(res.metrics(), res)
+    assert (
+        "nan_est: its estimate is not finite at the end of 1 segment(s) of trials that did not fail (seeds 1)"
+        in text
+    )
+
+
 # ---- a plug-in's name; settings tables of controllers left out by --controllers --------------
 
 NAMED_PD = (

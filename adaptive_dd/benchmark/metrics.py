@@ -68,7 +68,9 @@ before it count); a controller that raised is left out everywhere
 Per controller: ``rms_error`` [rad] over the whole run, ``failed_trials``, ``error`` (the
 controller's exception, or None), ``engine``, ``dropped_samples`` (lost measurements of the kept
 trials), ``skipped_samples_per_seed`` (samples the estimator skipped; None without one),
-``failures`` (``[{"seed", "t" [s], "why"}]`` of every failed trial; ``[]`` when none failed).
+``failures`` (``[{"seed", "t" [s], "why"}]`` of every failed trial; ``[]`` when none failed),
+``nonfinite_estimates`` (``[[seed, segment], ...]`` where a kept trial's estimate ends the segment
+not finite; None without an estimate).
 
 Per seed (trial i uses the noise of seed ``(scenario.seed, i)`` for every controller,
 so ratios are taken seed by seed: common random numbers):
@@ -115,7 +117,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from adaptive_dd.benchmark.provenance import provenance
-from adaptive_dd.benchmark.segments import moving_rms, segment_failed
+from adaptive_dd.benchmark.segments import moving_rms, nonfinite_estimates, segment_failed
 from adaptive_dd.benchmark.streaming import SETTLE, segment_bounds
 
 if TYPE_CHECKING:  # annotations only: types imports this module for BenchmarkResult.metrics()
@@ -160,7 +162,7 @@ TOP_KEYS = (
 CONTROLLER_KEYS = (
     "rms_error", "failed_trials", "error", "engine", "dropped_samples", "skipped_samples_per_seed",
     "failures", "floor", "false_alarms_per_seed", "trials_with_false_alarms", "missed_swaps_per_seed",
-    "missed_swaps", "segments",
+    "missed_swaps", "nonfinite_estimates", "segments",
 )  # fmt: skip
 """The keys of each controller's entry, on every arm (module docstring)."""
 SEGMENT_KEYS = (
@@ -454,6 +456,9 @@ def _controller_entry(res: BenchmarkResult, run, m: dict, seg_sigma: np.ndarray)
         "trials_with_false_alarms": None,
         "missed_swaps_per_seed": None,
         "missed_swaps": None,
+        "nonfinite_estimates": nonfinite_estimates(
+            run.sigma_end, run.failed, bool(run.error), res.seed_indices or range(sc.seeds)
+        ),
         "segments": [_segment_entry(sc, m, i, seg_sigma[i]) for i in range(len(sc.segments()))],
     }
 

@@ -8,6 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
+from adaptive_dd.benchmark.controller_entries import variants_line
 from adaptive_dd.benchmark.metrics import SATURATION_LIMIT, judged
 from adaptive_dd.benchmark.scenario import runtime_line
 from adaptive_dd.benchmark.types import BenchmarkResult
@@ -56,6 +57,7 @@ def format_report(metrics: dict, res: BenchmarkResult) -> str:
         f"bandwidth {sc.bandwidth} rad/s; means over seeds (a failed trial left out of the segments after "
         "its failure)",
         runtime_line(sc),
+        *([variants_line(sc)] if variants_line(sc) else []),
         "",
     ]
     for title, key, scale, fmt in TABLES:
@@ -112,6 +114,14 @@ def _failure_lines(ctrls: dict) -> list[str]:
         lines.append(
             "samples the estimators skipped (NaN, the filters' memory after each loss): " + ", ".join(skips)
         )
+    for n, c in ctrls.items():
+        bad = c.get("nonfinite_estimates") or []
+        if bad:
+            seeds = sorted({s for s, _ in bad})
+            lines.append(
+                f"{n}: its estimate is not finite at the end of {len(bad)} segment(s) of trials that did not "
+                f"fail (seeds {_seed_list(seeds)}): left out of the payload mass and centre of mass columns"
+            )
     return lines
 
 

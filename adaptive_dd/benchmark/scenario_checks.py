@@ -9,7 +9,9 @@ from __future__ import annotations
 import math
 from typing import Any
 
-from adaptive_dd.benchmark.key_hints import nearest_keys, repeated_entries
+from adaptive_dd.benchmark.controller_entries import _check_controllers, _check_options
+from adaptive_dd.benchmark.frozen import _Table, freeze, thaw
+from adaptive_dd.benchmark.key_hints import nearest_keys
 from adaptive_dd.benchmark.number_checks import _nums, _short, check_number
 from adaptive_dd.benchmark.scenario_base import KEYS, LIMITS, Reference, run_estimate
 from adaptive_dd.controllers import CONTROLLERS
@@ -26,30 +28,6 @@ __all__ = [
     "table_name",
     "thaw",
 ]
-
-
-class _Table(tuple):
-    """A TOML table frozen as a tuple of ``(key, value)`` pairs (hashable)."""
-
-    __slots__ = ()
-
-
-def freeze(value: Any) -> Any:
-    """Lists -> tuples and tables -> sorted ``(key, value)`` tuples, recursively (hashable)."""
-    if isinstance(value, dict):
-        return _Table(sorted((str(k), freeze(v)) for k, v in value.items()))
-    if isinstance(value, list | tuple):
-        return tuple(freeze(v) for v in value)
-    return value
-
-
-def thaw(value: Any) -> Any:
-    """The inverse of :func:`freeze`: plain dicts and lists again."""
-    if isinstance(value, _Table):
-        return {k: thaw(v) for k, v in value}
-    if isinstance(value, tuple):
-        return [thaw(v) for v in value]
-    return value
 
 
 def scenario_errors(v: dict[str, Any]) -> list[str]:
@@ -70,7 +48,9 @@ def scenario_errors(v: dict[str, Any]) -> list[str]:
                 f"run.excite: {v['excite']} s: the excitation phase needs an N-joint arm from a URDF "
                 '([arm] robot = ... or urdf = ...; the paper\'s arm: robot = "sice_arm", general = true)'
             )
-    c_ok = _check_controllers(e, v["controllers"], v.get("arm") if _serial(v) else None)
+    c_ok = _check_controllers(
+        e, v["controllers"], v.get("arm") if _serial(v) else None, v["controller_options"]
+    )
     _check_control(e, v, T_ok)
     check_number(e, "payload.radius", v["payload_radius"], 0, L["max_radius"])
     n_joints = _n_joints(v)
@@ -178,39 +158,6 @@ def _general(arm: Any) -> bool:
     from adaptive_dd.plant.two_link import closed_form_view
 
     return arm is not None and closed_form_view(arm) is None
-
-
-def _check_controllers(e: list, c: Any, arm: Any = None) -> bool:
-    import re
-
-    path = re.compile(r"^[A-Za-z_]\w*(\.[A-Za-z_]\w*)*:[A-Za-z_]\w*(\.[A-Za-z_]\w*)*$")
-    if not isinstance(c, tuple) or not c or not all(isinstance(x, str) for x in c):
-        e.append(f"run.controllers: must be a non-empty list of names, got {_short(c)}")
-        return False
-    ok = True
-    for x in c:
-        if x not in CONTROLLERS and not path.match(x):
-            e.append(
-                f"run.controllers: unknown controller {x!r}; known: {', '.join(CONTROLLERS)}, "
-                "or an import path 'package.module:Class'"
-            )
-            ok = False
-
-    if arm is not None:  # the general kernels' run
-        for x in c:
-            if x in CONTROLLERS and not CONTROLLERS[x].applies_to("chain"):
-                e.append(
-                    f"run.controllers: {x!r} is for the two-link arm only, not for this "
-                    f"{arm.n_joints}-joint arm: {CONTROLLERS[x].only}"
-                )
-                ok = False
-    if len(set(c)) != len(c) or len({table_name(x) for x in c}) != len(c):
-        e.append(
-            f"run.controllers: {repeated_entries(c, table_name)}: each needs its own name and table (two "
-            "settings of one law: a subclass per setting, each with its own class name)"
-        )
-        ok = False
-    return ok
 
 
 def _check_payload_bodies(e: list, v: dict, n_swaps: int) -> None:
@@ -321,42 +268,6 @@ def _check_reference(e: list, ref: Any, T: float | None, n: int = 2) -> None:
                     f"{key}.frequency: {x} Hz is above {fmax:g} Hz = {L['nyquist_fraction']} / T "
                     f"(at least 10 samples per period; the Nyquist limit is {0.5 / T:g} Hz)"
                 )
-
-
-def _plain(e: list, key: str, x: Any) -> None:
-    if isinstance(x, _Table):
-        for k, y in x:
-            _plain(e, f"{key}.{k}", y)
-    elif isinstance(x, tuple):
-        for y in x:
-            _plain(e, key, y)
-    elif isinstance(x, float) and not math.isfinite(x):
-        e.append(f"{key}: must be finite, got {x!r}")
-    elif not isinstance(x, str | int | float | bool):
-        e.append(f"{key}: must be a plain value (number, string, boolean, list, table), got {_short(x)}")
-
-
-_WITH = (
-    "; set a controller's table with adaptive_dd.benchmark.scenario_settings.with_settings(scenario, "
-    "name, {...})"
-)
-
-
-def _check_options(e: list, opts: Any, ctrls: tuple) -> None:
-    if not isinstance(opts, tuple):
-        e.append(f"controllers: options must be a tuple of (name, settings), got {_short(opts)}" + _WITH)
-        return
-    names = set(ctrls) | {table_name(c) for c in ctrls}
-    for item in opts:
-        if not (isinstance(item, tuple) and len(item) == 2 and isinstance(item[1], _Table)):
-            e.append(f"controllers: each entry must be (name, frozen table), got {_short(item)}" + _WITH)
-            continue
-        name, table = item
-        if ctrls and name not in names:
-            plugins = [f"[controllers.{table_name(c)}]" for c in ctrls if ":" in c]
-            hint = f"; a plug-in's table is named by its class ({', '.join(plugins)})" if plugins else ""
-            e.append(f"controllers.{name}: not a controller of run.controllers ({', '.join(ctrls)}){hint}")
-        _plain(e, f"controllers.{name}", table)
 
 
 def _known_tables(e: list, data: dict) -> dict[str, Any]:

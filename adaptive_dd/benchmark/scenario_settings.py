@@ -191,6 +191,7 @@ def controller_setting_errors(
     ``LIMITS["max_setting"]`` (``file_limits``: a file's bound; research code setting the estimator
     through :func:`with_settings` is not held to it). ``only``: that controller's table alone."""
     from adaptive_dd.controllers import CONTROLLERS, gains_for, make_controller
+    from adaptive_dd.controllers.registry import law_of
 
     errs: list[str] = []
     opts = {n: thaw(o) for n, o in v["controller_options"]}
@@ -198,10 +199,14 @@ def controller_setting_errors(
     if floors:  # (a sweep's cell runs one controller of the list: its floor is judged on the list)
         errs += _floor_errors(v, opts, only)
     for name in v["controllers"] if only is None else [c for c in v["controllers"] if c == only]:
-        if name in CONTROLLERS and "delay" in CONTROLLERS[name].settings:  # its default too
-            default = CONTROLLERS[name].settings["delay"].chain  # the same on every arm
+        try:
+            law = law_of(name, opts.get(name))  # a variant's law (judged by the list's check)
+        except ValueError:
+            continue
+        if law in CONTROLLERS and "delay" in CONTROLLERS[law].settings:  # its default too
+            default = CONTROLLERS[law].settings["delay"].chain  # the same on every arm
             _check_delay(errs, name, opts.get(name, {}).get("delay", default), T)
-        if name not in CONTROLLERS or name not in opts:
+        if law not in CONTROLLERS or name not in opts:
             continue
         o, n0 = opts[name], len(errs)
         for bw, limit in (("bandwidth", "max_bandwidth_T"), ("boost_bandwidth", "max_boost_bandwidth_T")):

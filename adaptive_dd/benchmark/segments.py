@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["moving_rms", "segment_failed"]
+__all__ = ["moving_rms", "nonfinite_estimates", "segment_failed"]
 
 
 def moving_rms(x: np.ndarray, n: int, axis: int = -1) -> np.ndarray:
@@ -30,3 +30,13 @@ def segment_failed(failed: np.ndarray, failed_at: np.ndarray, end: np.ndarray) -
     failed = np.asarray(failed, bool)[:, None]
     at = np.asarray(failed_at)[:, None]
     return failed & ((at < 0) | (at < np.asarray(end)[None, :]))
+
+
+def nonfinite_estimates(sigma_end: np.ndarray | None, failed: np.ndarray, error: bool, seeds) -> list | None:
+    """``[[seed, segment], ...]`` where a trial that did not fail ends a segment with an estimate
+    that is not finite (a NaN from the controller's own estimator, left out of the mass and centre
+    of mass columns: said, not dropped in silence); None for a controller without an estimate."""
+    if sigma_end is None:
+        return None
+    bad = ~np.isfinite(sigma_end).all(axis=-1) & ~(failed | error)[:, None]
+    return [[int(seeds[i]), int(g)] for i, g in zip(*np.nonzero(bad), strict=True)]

@@ -57,6 +57,10 @@ def run_arms(args: argparse.Namespace, only_controllers, with_floors) -> int:
         f"population: {args.arms} arms (random:{seeds[0]} .. random:{seeds[-1]}) x {n_seeds} seeds of {src}",
         file=sys.stderr,
     )
+    from adaptive_dd.benchmark.controller_entries import variants_line
+
+    if variants_line(first.with_controllers(names)):
+        print(f"population: {variants_line(first.with_controllers(names))}", file=sys.stderr)
 
     def controllers(sc):
         return names

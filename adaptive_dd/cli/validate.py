@@ -35,6 +35,7 @@ def add_parser(sub) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Print the scenario resolved; 1 if the run would meet a problem."""
+    from adaptive_dd.benchmark.controller_entries import variants_line
     from adaptive_dd.benchmark.preflight import resolved_settings
     from adaptive_dd.benchmark.scenario import format_scenario, load_scenario, runtime_line
 
@@ -44,6 +45,8 @@ def run(args: argparse.Namespace) -> int:
     sc = load_scenario(args.scenario)
     print(format_scenario(sc))
     print(f"# {runtime_line(sc)}")
+    if variants_line(sc):
+        print(f"# {variants_line(sc)}")
     if sc.closed_forms is None:
         print(describe_arm(sc.arm))
     for line in resolved_settings(sc):

@@ -7,6 +7,9 @@ of your own classes (the protocol: ``docs/controllers.md``). Settings every cont
     Override the scenario's ``[control]`` gains for this controller.
 ``label``
     The name the controller's results carry (default: the built-in name, or the class name).
+``law``
+    On an entry of a new name only: the built-in or import path it runs, with its own table's
+    settings (one law twice with two settings, an ablation: :func:`law_of`).
 
 A plug-in class is called with its table's settings as keyword arguments, plus ``gains``
 (:class:`Gains`), ``sigma_nominal`` (the arm's base parameters), ``arm`` (the arm, two-link
@@ -56,12 +59,64 @@ __all__ = [
     "controllers_for",
     "gains_for",
     "inventory",
+    "law_of",
     "load_controller_class",
     "make_controller",
     "scenario_controller",
     "scenario_controllers",
     "slotine_bounds",
 ]
+
+
+def law_of(entry: str, table: dict | None = None) -> str:
+    """The law an entry of ``run.controllers`` runs: the entry itself (a built-in name or an import
+    path), or the ``law`` its ``[controllers.NAME]`` table names: a variant, one law run a second
+    time under a name of its own with its own settings (an ablation).
+
+    Raises
+    ------
+    ParameterError
+        A ``law`` on an entry that is a law already, or a ``law`` that is neither a built-in name nor
+        an import path, naming the table and the value.
+
+    Examples
+    --------
+    >>> from adaptive_dd.controllers.registry import law_of
+    >>> law_of("no_observer", {"law": "adaptive_ct", "observer": False})
+    'adaptive_ct'
+    >>> law_of("adaptive_ct", {"observer": False})
+    'adaptive_ct'
+    """
+    law = (table or {}).get("law")
+    if law is None:
+        return entry
+    if entry in CONTROLLERS or ":" in entry:
+        raise ParameterError(
+            f"controllers.{table_name(entry)}.law: {entry!r} is a law already; `law` gives a new entry "
+            f'of run.controllers its law (e.g. run.controllers = [..., "{table_name(entry)}_b"] and '
+            f'[controllers.{table_name(entry)}_b] law = "{entry}")'
+        )
+    if not isinstance(law, str) or not (law in CONTROLLERS or ":" in law):
+        raise ParameterError(
+            f"controllers.{entry}.law: must be a built-in name ({', '.join(CONTROLLERS)}) or an import "
+            f"path 'package.module:Class', got {law!r}"
+        )
+    return law
+
+
+def _variant(spec: str, gains, options: dict, arm, search: tuple, scenario) -> Controller:
+    """The entry ``spec`` whose table names its ``law`` (:func:`law_of`): that law built with the
+    rest of the table, its results carrying ``spec`` (or the table's ``label``); errors name
+    ``spec``'s table, where the setting is."""
+    law = law_of(spec, options)
+    rest = {k: v for k, v in options.items() if k != "law"}
+    rest.setdefault("label", spec)
+    try:
+        return make_controller(law, gains, rest, arm, search, scenario)
+    except ParameterError as exc:
+        msg = str(exc).replace(f"controllers.{table_name(law)}", f"controllers.{spec}")
+        msg = msg.replace(f"controller {law!r}", f"controller {spec!r} (law {law!r})")
+        raise ParameterError(msg) from None
 
 
 def gains_for(arm, bandwidth=40.0, damping: float = 1.0):
@@ -123,18 +178,19 @@ def scenario_controller(scenario, spec: str) -> tuple[str, Controller]:
     opts = scenario.options(controller_label(spec)) or scenario.options(spec)
     in_file = bool(opts)  # the plug-in's table is the file's (not settings handed in code)
     label = controller_label(spec, opts)
-    if ":" in spec:
+    law = law_of(spec, opts)  # a variant's law: what it is built as
+    if ":" in law:
         bw = opts.get("bandwidth", scenario.bandwidth)
         g = Gains(float(np.max(bw)), opts.get("damping", scenario.damping))
         opts = {**opts, "bandwidth": g.bandwidth}
     else:
-        opts = with_stated_uncertainty(spec, opts, scenario)
+        opts = with_stated_uncertainty(law, opts, scenario)
         g = gains_for(scenario.closed_forms or scenario.arm, scenario.bandwidth, scenario.damping)
     arm = scenario.closed_forms or scenario.arm  # the arm the run simulates: its closed forms or its own
     try:
         ctrl = make_controller(spec, g, opts, arm=arm, search=search, scenario=scenario)
     except ParameterError as exc:  # a plug-in's table is checked here, not when the file is read: name it
-        if ":" not in spec or not in_file or str(exc).startswith(str(src)) or not src.is_file():
+        if ":" not in law or not in_file or str(exc).startswith(str(src)) or not src.is_file():
             raise
         raise ParameterError(f"{src}: {exc}") from None
     if scenario.closed_forms is None and hasattr(ctrl, "state_task"):  # adaptive_ct's boost: the task's room
@@ -347,6 +403,8 @@ def make_controller(
     options = dict(options or {})
     arm = ClosedFormTwoLink.sice() if arm is None else (closed_form_view(arm) or arm)
     base = gains or DEFAULT_GAINS
+    if "law" in options:
+        return _variant(spec, base, options, arm, search, scenario)
     if spec in CONTROLLERS:
         ctrl = _builtin(spec, base, options, arm)
     elif ":" in spec:
@@ -354,7 +412,7 @@ def make_controller(
     else:
         raise ParameterError(
             f"unknown controller {spec!r}; built-ins for {_arm_words(arm)}: {controllers_for(arm)}, "
-            "or 'package.module:Class'"
+            "or 'package.module:Class', or a name of your own with a law (options={'law': 'adaptive_ct'})"
         )
     if "label" in options:
         ctrl.name = str(options["label"])

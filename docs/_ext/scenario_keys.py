@@ -88,6 +88,8 @@ MEANING = {
     "setting.bandwidth": "This controller's bandwidth instead of `[control]`'s [rad/s].",
     "setting.damping": "This controller's damping instead of `[control]`'s.",
     "setting.label": "The name the controller's results carry.",
+    "setting.law": "On an entry of a name of your own only: the built-in or import path it runs, with "
+    "its table's settings (a variant).",
     "setting.floor": "The run's controller this one is measured against, per seed; false for none.",
     "setting.sigma": "The fixed model's base parameters (seven, two-link arm).",
     "setting.gamma": "Adaptation gains of Slotine-Li.",
@@ -358,7 +360,13 @@ def page() -> str:
 
         rows.append((f"`{name}`", cell(two_set, "N-joint"), cell(serial_set, "two-link")))
     lines += table(rows, heads=("controller", "two-link arm", "URDF arm"))
-    lines += [f"Every controller also takes {', '.join(f'`{k}`' for k in common)}.", ""]
+    lines += [
+        f"Every controller also takes {', '.join(f'`{k}`' for k in common)}. An entry of",
+        "`run.controllers` of a name of your own takes `law` too: a variant, the law it names run with",
+        "its table's settings beside the law itself (an ablation; {doc}`../controllers`).",
+        "",
+    ]
+    used.add("setting.law")
     lines += table(
         [
             (f"`{k}`", _meaning(f"setting.{k}"))
@@ -412,7 +420,7 @@ def every_key() -> dict[str, tuple[str, ...]]:
     if uncertainty is not None:
         out["plant.uncertainty"] = tuple(uncertainty.UNCERTAINTY_KEYS)
         out["model"] = tuple(uncertainty.MODEL_KEYS)
-    settings = set(registry.COMMON)
+    settings = set(registry.COMMON) | {"law"}  # law: a variant's (an entry of a name of its own)
     for name, entry in registry.CONTROLLERS.items():
         settings |= set(entry.settings) - set(DERIVED.get(name, ()))
     out["controllers.NAME"] = tuple(sorted(settings))

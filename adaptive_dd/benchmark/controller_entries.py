@@ -1,0 +1,110 @@
+"""Checks of a scenario's ``run.controllers`` and ``[controllers.NAME]`` tables: each entry a built-in
+name, an import path, or a name of the user's own whose table names its law (a variant); each
+table a listed controller's, of plain values."""
+
+from __future__ import annotations
+
+import json
+import math
+from typing import Any
+
+from adaptive_dd.benchmark.frozen import _Table, thaw
+from adaptive_dd.benchmark.key_hints import repeated_entries
+from adaptive_dd.benchmark.number_checks import _short
+from adaptive_dd.controllers import CONTROLLERS
+from adaptive_dd.controllers.plugins import table_name
+
+
+def _check_controllers(e: list, c: Any, arm: Any = None, opts: Any = ()) -> bool:
+    import re
+
+    from adaptive_dd.controllers.registry import law_of
+
+    path = re.compile(r"^[A-Za-z_]\w*(\.[A-Za-z_]\w*)*:[A-Za-z_]\w*(\.[A-Za-z_]\w*)*$")
+    if not isinstance(c, tuple) or not c or not all(isinstance(x, str) for x in c):
+        e.append(f"run.controllers: must be a non-empty list of names, got {_short(c)}")
+        return False
+    ok, laws = True, {}
+    tables = {n: t for n, t in opts if isinstance(n, str)} if isinstance(opts, tuple) else {}
+    for x in c:
+        try:  # a variant's law (its table's `law`), else the entry itself
+            t = thaw(tables.get(x))
+            laws[x] = law_of(x, t if isinstance(t, dict) else None)
+        except ValueError as exc:
+            e.append(str(exc))
+            ok = False
+            continue
+        if laws[x] not in CONTROLLERS and not path.match(laws[x]):
+            e.append(
+                f"run.controllers: unknown controller {x!r}; known: {', '.join(CONTROLLERS)}, "
+                "an import path 'package.module:Class', or a name of your own whose [controllers.NAME] "
+                'table names its law (law = "adaptive_ct")'
+            )
+            ok = False
+
+    if arm is not None:  # the general kernels' run
+        for x in c:
+            x = laws.get(x, x)
+            if x in CONTROLLERS and not CONTROLLERS[x].applies_to("chain"):
+                e.append(
+                    f"run.controllers: {x!r} is for the two-link arm only, not for this "
+                    f"{arm.n_joints}-joint arm: {CONTROLLERS[x].only}"
+                )
+                ok = False
+    if len(set(c)) != len(c) or len({table_name(x) for x in c}) != len(c):
+        e.append(
+            f"run.controllers: {repeated_entries(c, table_name)}: each needs its own name and table (two "
+            'settings of one law: a new name per setting, its table naming the law, law = "adaptive_ct")'
+        )
+        ok = False
+    return ok
+
+
+def _plain(e: list, key: str, x: Any) -> None:
+    if isinstance(x, _Table):
+        for k, y in x:
+            _plain(e, f"{key}.{k}", y)
+    elif isinstance(x, tuple):
+        for y in x:
+            _plain(e, key, y)
+    elif isinstance(x, float) and not math.isfinite(x):
+        e.append(f"{key}: must be finite, got {x!r}")
+    elif not isinstance(x, str | int | float | bool):
+        e.append(f"{key}: must be a plain value (number, string, boolean, list, table), got {_short(x)}")
+
+
+_WITH = (
+    "; set a controller's table with adaptive_dd.benchmark.scenario_settings.with_settings(scenario, "
+    "name, {...})"
+)
+
+
+def _check_options(e: list, opts: Any, ctrls: tuple) -> None:
+    if not isinstance(opts, tuple):
+        e.append(f"controllers: options must be a tuple of (name, settings), got {_short(opts)}" + _WITH)
+        return
+    names = set(ctrls) | {table_name(c) for c in ctrls}
+    for item in opts:
+        if not (isinstance(item, tuple) and len(item) == 2 and isinstance(item[1], _Table)):
+            e.append(f"controllers: each entry must be (name, frozen table), got {_short(item)}" + _WITH)
+            continue
+        name, table = item
+        if ctrls and name not in names:
+            plugins = [f"[controllers.{table_name(c)}]" for c in ctrls if ":" in c]
+            hint = f"; a plug-in's table is named by its class ({', '.join(plugins)})" if plugins else ""
+            e.append(f"controllers.{name}: not a controller of run.controllers ({', '.join(ctrls)}){hint}")
+        _plain(e, f"controllers.{name}", table)
+
+
+def variants_line(sc) -> str | None:
+    """One line naming each variant of the scenario ``sc`` (an entry whose table names its ``law``)
+    with the settings it changes, for the report and ``validate``; None when there is none."""
+    out = []
+    for name in sc.controllers:
+        table = sc.options(name)
+        if "law" not in table:
+            continue
+        rest = {k: v for k, v in table.items() if k != "law"}
+        said = ", ".join(f"{k} = {json.dumps(v)}" for k, v in sorted(rest.items()))  # as TOML reads
+        out.append(f"{name} = {table['law']}" + (f" with {said}" if said else " (its defaults)"))
+    return "variants: " + "; ".join(out) if out else None

@@ -1,0 +1,106 @@
+"""One law twice with two settings (an ablation): an entry of ``run.controllers`` of the user's own
+name whose ``[controllers.NAME]`` table names its ``law``. Its results carry its name, its floor is
+its law's, and a variant that changes nothing gives its law's numbers bit for bit."""
+
+import numpy as np
+import pytest
+
+from adaptive_dd.benchmark.report import format_report
+from adaptive_dd.benchmark.scenario import load_scenario, parse_scenario
+from adaptive_dd.controllers import make_controller
+from adaptive_dd.controllers.registry import law_of
+from adaptive_dd.errors import ParameterError, ScenarioError
+from adaptive_dd.sweep_spec import load_sweep
+
+ABLATION = """
+[run]
+duration = 2.0
+seeds = 2
+controllers = ["ct_oracle", "adaptive_ct", "no_observer", "as_is"]
+
+[[payload]]
+at = 1.0
+mass = 2.0
+
+[controllers.no_observer]
+law = "adaptive_ct"
+observer = false
+
+[controllers.as_is]
+law = "adaptive_ct"
+"""
+
+
+def _write(tmp_path, text, name="s.toml"):
+    p = tmp_path / name
+    p.write_text(text)
+    return p
+
+
+def test_law_of_reads_the_table_and_refuses_a_law_on_a_law():
+    assert law_of("x", {"law": "pd", "bandwidth": 30.0}) == "pd"
+    assert law_of("pd", None) == "pd" and law_of("m:C", {}) == "m:C"
+    with pytest.raises(ParameterError, match=r"adaptive_ct\.law: 'adaptive_ct' is a law already"):
+        law_of("adaptive_ct", {"law": "pd"})
+    with pytest.raises(ParameterError, match=r"controllers\.x\.law: .* got 'nope'"):
+        law_of("x", {"law": "nope"})
+
+
+def test_make_controller_builds_the_law_under_the_variants_name():
+    c = make_controller("no_obs", options={"law": "adaptive_ct", "observer": False})
+    base = make_controller("adaptive_ct")
+    assert type(c) is type(base) and c.name == "no_obs" and c.floor == base.floor == "ct_oracle"
+    labelled = make_controller("no_obs", options={"law": "adaptive_ct", "label": "AC-noobs"})
+    assert labelled.name == "AC-noobs"
+    with pytest.raises(ParameterError, match=r"controllers\.no_obs: unknown setting"):  # its table named
+        make_controller("no_obs", options={"law": "adaptive_ct", "observr": False})
+
+
+@pytest.mark.parametrize(
+    ("table", "says"),
+    [
+        ("", "a name of your own whose [controllers.NAME] table names its law"),
+        ('[controllers.x]\nlaw = "nope"\n', "controllers.x.law: must be a built-in name"),
+        ('[controllers.x]\nlaw = "adaptive_ct"\nbandwidth = -3.0\n', "controllers.x.bandwidth"),
+        ('[controllers.ct_oracle]\nlaw = "pd"\n', "controllers.ct_oracle.law: 'ct_oracle' is a law already"),
+    ],
+)
+def test_a_wrong_variant_is_an_error_of_the_file_naming_its_table(tmp_path, table, says):
+    text = '[run]\nduration = 2.0\nseeds = 1\ncontrollers = ["ct_oracle", "x"]\n' + table
+    with pytest.raises(ScenarioError) as err:
+        load_scenario(str(_write(tmp_path, text)))
+    assert says in str(err.value)
+
+
+def test_a_variant_runs_beside_its_law_and_one_that_changes_nothing_gives_its_numbers(tmp_path):
+    from adaptive_dd import run_benchmark
+
+    sc = load_scenario(str(_write(tmp_path, ABLATION)))
+    res = run_benchmark(sc, progress=False)
+    df = res.to_frame()
+    df = df.sort_values(["seed", "segment"])
+    per = {c: g["rms_error_rad"].to_numpy() for c, g in df.groupby("controller")}
+    assert set(per) == {"ct_oracle", "adaptive_ct", "no_observer", "as_is"}
+    np.testing.assert_array_equal(per["as_is"], per["adaptive_ct"])  # the same law, the same settings
+    assert not np.array_equal(per["no_observer"], per["adaptive_ct"])  # its setting reached the law
+    assert set(df.loc[df["controller"] == "no_observer", "floor"]) == {"ct_oracle"}
+    text = format_report(res.metrics(), res)
+    said = "variants: no_observer = adaptive_ct with observer = false; as_is = adaptive_ct (its defaults)"
+    assert said in text
+
+
+def test_a_sweep_runs_a_variant_of_its_scenario(tmp_path):
+    _write(tmp_path, ABLATION, "base.toml")
+    sweep = _write(
+        tmp_path,
+        '[sweep]\nscenario = "base.toml"\nseeds = 1\ncontrollers = ["ct_oracle", "no_observer"]\n'
+        "[grid]\npayload_mass = [1.0, 2.0]\n",
+        "sweep.toml",
+    )
+    spec = load_sweep(str(sweep))
+    assert "no_observer" in spec.controllers
+
+
+def test_a_variant_is_not_a_law_outside_a_scenario_that_names_it():
+    with pytest.raises(ScenarioError, match="unknown controller 'no_observer'"):
+        parse_scenario({"run": {"duration": 1.0, "controllers": ["ct_oracle", "no_observer"]}})
