@@ -210,20 +210,25 @@ def _controllers(src: str, sw: dict, base: Scenario) -> tuple[str, ...]:
         else f"{base.source}'s run.controllers (the sweep gives no sweep.controllers)"
     )
     for c in ctrls:
-        if c not in known and not (c in base.controllers and law_of(c, base.options(c)) in known):
+        law = law_of(c, base.options(c)) if c in base.controllers else c  # a variant's law
+        if law not in known:
             kind = "the two-link arm" if base.closed_forms is not None else f"this {base.n_joints}-joint arm"
-            if ":" in c:
+            if ":" in law:
                 raise SweepError(
-                    f"{src}: {where}: {c!r} is a plug-in; a sweep runs built-in controllers only "
+                    f"{src}: {where}: {c!r} is a plug-in{'' if c == law else f' ({law})'}; a sweep runs "
+                    "built-in controllers and their variants only "
                     f"({known}): set sweep.controllers to some of those, run a plug-in over arms and seeds "
                     "with `adaptive-dd leaderboard --plugin`, or over one scenario with `adaptive-dd "
                     "benchmark` (docs/sweeps.md)"
                 )
-            if c not in CONTROLLERS:
-                raise SweepError(f"{src}: {where}: unknown controller {c!r}; known: {known}")
+            if law not in CONTROLLERS:
+                raise SweepError(
+                    f"{src}: {where}: unknown controller {c!r}; known: {known}, or a variant of one of them "
+                    f"that the base scenario {base.source} lists, its [controllers.NAME] table naming its law"
+                )
             raise SweepError(
                 f"{src}: {where}: controller {c!r} is not for {kind} "
-                f"({CONTROLLERS[c].only}); known for it: {known}"
+                f"({CONTROLLERS[law].only}); known for it: {known}"
             )
     if len(set(ctrls)) != len(ctrls):
         raise SweepError(f"{src}: key 'sweep.controllers' lists a controller twice: {ctrls}")

@@ -63,7 +63,7 @@ def detector_settings(pairs: list[str]) -> dict:
 
 def evaluate(sc, plant: dict | None, seeds: int, detector: dict | None = None) -> tuple[list[str], dict]:
     arm = sc.arm if plant is None else dataclasses.replace(sc.arm, **plant)
-    sc = dataclasses.replace(sc, arm=arm, seeds=seeds, controllers=("ct_oracle", "adaptive_ct"))
+    sc = dataclasses.replace(sc.with_controllers(("ct_oracle", "adaptive_ct")), arm=arm, seeds=seeds)
     if detector:
         sc = dataclasses.replace(sc, controller_options=(("adaptive_ct", freeze({"detector": detector})),))
     res = run_benchmark(sc, progress=False, keep_trajectories=1)
@@ -123,6 +123,14 @@ def main() -> None:
     seen: dict = {}
     for path in paths:
         sc = load_scenario(path)
+        if detector and sc.closed_forms is None:  # the settings are the two-link detector's
+            print(
+                f"{os.path.relpath(path)}: skipped, --detector sets the two-link detector and this "
+                "scenario runs the general N-joint kernels",
+                flush=True,
+            )
+            tot["skipped"] += 1
+            continue
         for plant in args.plants:
             spec = PLANTS[plant]
             label = sc.arm.friction if spec is None else plant

@@ -296,11 +296,15 @@ def test_a_plugins_declared_name_is_the_name_its_results_carry(tmp_path):
     assert scenario_controller(labelled, "named_mod:NamedPD")[0] == "mine"
     unnamed = _named_scenario(tmp_path, controllers='"named_mod:Unnamed"')
     assert scenario_controller(unnamed, "named_mod:Unnamed")[0] == "Unnamed"
-    clash = _named_scenario(tmp_path, '[controllers.NamedPD]\nlabel = "ct_oracle"\n',
-                            '"named_mod:NamedPD", "ct_oracle"')  # fmt: skip
-    with pytest.raises(
-        ParameterError, match="'named_mod:NamedPD' and 'ct_oracle' both carry the name 'ct_oracle'"
+    with pytest.raises(  # a label's clash: an error of the file, when it is read
+        ValueError, match="'named_mod:NamedPD' and 'ct_oracle' would both carry the name 'ct_oracle'"
     ):
+        _named_scenario(tmp_path, '[controllers.NamedPD]\nlabel = "ct_oracle"\n',
+                        '"named_mod:NamedPD", "ct_oracle"')  # fmt: skip
+    # a plug-in's declared name: when the run builds it (the file does not import it)
+    (tmp_path / "twin_mod.py").write_text("from named_mod import NamedPD\nclass Twin(NamedPD):\n    pass\n")
+    clash = _named_scenario(tmp_path, controllers='"named_mod:NamedPD", "twin_mod:Twin"')
+    with pytest.raises(ParameterError, match="both carry the name 'gravity_pd'"):
         scenario_controllers(clash)
 
 

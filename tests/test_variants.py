@@ -63,6 +63,24 @@ def test_make_controller_builds_the_law_under_the_variants_name():
         ('[controllers.x]\nlaw = "nope"\n', "controllers.x.law: must be a built-in name"),
         ('[controllers.x]\nlaw = "adaptive_ct"\nbandwidth = -3.0\n', "controllers.x.bandwidth"),
         ('[controllers.ct_oracle]\nlaw = "pd"\n', "controllers.ct_oracle.law: 'ct_oracle' is a law already"),
+        ('[controllers.x]\nlaw = "foo:"\n', "controllers.x.law: must be a built-in name"),
+        ('[controllers.x]\nlaw = "Adaptive_CT"\n', "did you mean 'adaptive_ct'?"),
+        (
+            '[controllers.x]\nlaw = "adaptive_ct"\ndetector = { threshold = 7.0 }\n',
+            "x.detector: not a scenario key",
+        ),
+        (
+            '[controllers.x]\nlaw = "adaptive_ct"\nlabel = "ct_oracle"\n',
+            "would both carry the name 'ct_oracle'",
+        ),
+        (
+            '[controllers.x]\nlaw = "adaptive_ct"\nlabel = 5\n',
+            "controllers.x.label: the name its results carry",
+        ),
+        (
+            '[controllers.x]\nlaw = "adaptive_ct"\nfloor = "x"\n',
+            "controllers.x.floor: 'x' is this controller itself",
+        ),
     ],
 )
 def test_a_wrong_variant_is_an_error_of_the_file_naming_its_table(tmp_path, table, says):
@@ -104,3 +122,50 @@ def test_a_sweep_runs_a_variant_of_its_scenario(tmp_path):
 def test_a_variant_is_not_a_law_outside_a_scenario_that_names_it():
     with pytest.raises(ScenarioError, match="unknown controller 'no_observer'"):
         parse_scenario({"run": {"duration": 1.0, "controllers": ["ct_oracle", "no_observer"]}})
+
+
+def test_law_on_a_plugins_own_table_is_an_error_of_the_file(tmp_path):
+    text = (
+        '[run]\nduration = 2.0\nseeds = 1\ncontrollers = ["ct_oracle", "my_laws:MyPD"]\n'
+        '[controllers.MyPD]\nlaw = "adaptive_ct"\n'
+    )
+    with pytest.raises(ScenarioError, match=r"controllers\.MyPD\.law: 'my_laws:MyPD' is a law already"):
+        load_scenario(str(_write(tmp_path, text)))
+
+
+def test_a_sweep_names_a_plugins_variant_as_a_plugin(tmp_path):
+    plugin = (
+        "class P:\n    def reset(self, n, T): pass\n    def command(self, q, qd, a, b, c): return 0 * q\n"
+    )
+    plugin += "    def observe(self, q, qd, tau): pass\n"
+    (tmp_path / "p_mod.py").write_text(plugin)
+    base = '[run]\nduration = 2.0\nseeds = 1\ncontrollers = ["ct_oracle", "pv"]\n'
+    base += '[controllers.pv]\nlaw = "p_mod:P"\n'
+    _write(tmp_path, base, "base.toml")
+    sweep = _write(tmp_path, '[sweep]\nscenario = "base.toml"\n[grid]\npayload_mass = [1.0]\n', "sweep.toml")
+    with pytest.raises(ScenarioError, match=r"'pv' is a plug-in \(p_mod:P\); a sweep runs built-in"):
+        load_sweep(str(sweep))
+
+
+def test_with_settings_adds_a_variant_and_judges_its_law():
+    from adaptive_dd.benchmark.scenario_settings import with_settings
+
+    sc = parse_scenario({"run": {"duration": 1.0, "controllers": ["ct_oracle", "adaptive_ct"]}})
+    out = with_settings(sc, "no_boost", {"law": "adaptive_ct", "boost_duration": 0.0})
+    assert out.controllers == ("ct_oracle", "adaptive_ct", "no_boost")
+    assert out.options("no_boost") == {"law": "adaptive_ct", "boost_duration": 0.0}
+    with pytest.raises(ScenarioError, match=r"controllers\.nb\.law: .*got 'nope'"):
+        with_settings(sc, "nb", {"law": "nope"})
+
+
+def test_the_leaderboard_ranks_a_variant_every_scenario_defines_and_says_one_it_does_not(tmp_path, capsys):
+    from adaptive_dd.cli import main
+
+    path = _write(tmp_path, ABLATION)
+    # a variant no given scenario defines: refused before any run
+    assert (
+        main(["leaderboard", str(path), "--controllers", "adaptive_ct", "nope", "--out", str(tmp_path)]) == 2
+    )
+    err = capsys.readouterr().err
+    assert "--controllers: unknown controller 'nope'" in err
+    assert "define(s) the variant 'no_observer', not ranked" in err

@@ -16,11 +16,8 @@ from adaptive_dd.controllers.plugins import table_name
 
 
 def _check_controllers(e: list, c: Any, arm: Any = None, opts: Any = ()) -> bool:
-    import re
+    from adaptive_dd.controllers.registry import IMPORT_PATH, law_of
 
-    from adaptive_dd.controllers.registry import law_of
-
-    path = re.compile(r"^[A-Za-z_]\w*(\.[A-Za-z_]\w*)*:[A-Za-z_]\w*(\.[A-Za-z_]\w*)*$")
     if not isinstance(c, tuple) or not c or not all(isinstance(x, str) for x in c):
         e.append(f"run.controllers: must be a non-empty list of names, got {_short(c)}")
         return False
@@ -28,13 +25,13 @@ def _check_controllers(e: list, c: Any, arm: Any = None, opts: Any = ()) -> bool
     tables = {n: t for n, t in opts if isinstance(n, str)} if isinstance(opts, tuple) else {}
     for x in c:
         try:  # a variant's law (its table's `law`), else the entry itself
-            t = thaw(tables.get(x))
+            t = thaw(tables.get(table_name(x)))
             laws[x] = law_of(x, t if isinstance(t, dict) else None)
         except ValueError as exc:
             e.append(str(exc))
             ok = False
             continue
-        if laws[x] not in CONTROLLERS and not path.match(laws[x]):
+        if laws[x] not in CONTROLLERS and not IMPORT_PATH.match(laws[x]):
             e.append(
                 f"run.controllers: unknown controller {x!r}; known: {', '.join(CONTROLLERS)}, "
                 "an import path 'package.module:Class', or a name of your own whose [controllers.NAME] "
@@ -44,11 +41,12 @@ def _check_controllers(e: list, c: Any, arm: Any = None, opts: Any = ()) -> bool
 
     if arm is not None:  # the general kernels' run
         for x in c:
-            x = laws.get(x, x)
-            if x in CONTROLLERS and not CONTROLLERS[x].applies_to("chain"):
+            law = laws.get(x, x)
+            if law in CONTROLLERS and not CONTROLLERS[law].applies_to("chain"):
+                named = repr(x) if law == x else f"{x!r} (law {law!r})"
                 e.append(
-                    f"run.controllers: {x!r} is for the two-link arm only, not for this "
-                    f"{arm.n_joints}-joint arm: {CONTROLLERS[x].only}"
+                    f"run.controllers: {named} is for the two-link arm only, not for this "
+                    f"{arm.n_joints}-joint arm: {CONTROLLERS[law].only}"
                 )
                 ok = False
     if len(set(c)) != len(c) or len({table_name(x) for x in c}) != len(c):
@@ -56,7 +54,20 @@ def _check_controllers(e: list, c: Any, arm: Any = None, opts: Any = ()) -> bool
             f"run.controllers: {repeated_entries(c, table_name)}: each needs its own name and table (two "
             'settings of one law: a new name per setting, its table naming the law, law = "adaptive_ct")'
         )
-        ok = False
+        return False
+    carried: dict = {}  # the name each entry's results carry (a plug-in's declared one: when it is built)
+    for x in c:
+        t = thaw(tables.get(table_name(x)))
+        label = t.get("label") if isinstance(t, dict) else None
+        if isinstance(label, str) or ":" not in x:
+            carried.setdefault(label if isinstance(label, str) else x, []).append(x)
+    for name, xs in carried.items():
+        if len(xs) > 1:
+            e.append(
+                f"run.controllers: {' and '.join(map(repr, xs))} would both carry the name {name!r} in the "
+                "results (a label equal to another entry's name or label); give each its own label"
+            )
+            ok = False
     return ok
 
 

@@ -141,6 +141,7 @@ def controller_problems(scenario) -> list[str]:
     """Every controller built as the run builds it; one line per controller that cannot be."""
     from adaptive_dd.benchmark.runner import scenario_controller
     from adaptive_dd.controllers.plugins import compiled_form, is_compiled
+    from adaptive_dd.errors import ParameterError
 
     out = []
     for spec in scenario.controllers:
@@ -150,7 +151,7 @@ def controller_problems(scenario) -> list[str]:
                 compiled_form(label, ctrl, 1, scenario.sample_period)
         except Exception as exc:  # a plug-in may raise anything: reported, not a traceback
             msg = str(exc)
-            if not msg.startswith(("controller", "unknown controller")):
+            if not (isinstance(exc, ParameterError) or msg.startswith(("controller", "unknown controller"))):
                 msg = f"controller {spec!r}: {type(exc).__name__}: {msg}"
             out.append(msg)
     return out
@@ -167,10 +168,10 @@ def resolved_settings(scenario) -> list[str]:
     kind = run_kind(scenario)
     out = []
     for spec in scenario.controllers:
-        entry = CONTROLLERS.get(spec)
+        given = scenario.options(spec)
+        entry = CONTROLLERS.get(given.get("law", spec))  # a variant: its law's settings
         if entry is None or not entry.applies_to(kind):  # plug-ins; reported by controller_problems
             continue
-        given = scenario.options(spec)
         label = controller_label(spec, given)
         for key, st in entry.settings.items():
             default = st.default(kind)

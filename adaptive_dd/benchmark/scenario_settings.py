@@ -50,7 +50,8 @@ is derived from}}``. A scenario file that sets one is refused (:func:`derived_se
 def with_settings(scenario, name: str, settings: dict):
     """``scenario`` with controller ``name``'s settings table replaced by ``settings`` (the other
     controllers' kept): the way to give ``adaptive_ct`` estimator or detector settings, which no
-    scenario file sets (:data:`DERIVED`), in research code and measurements.
+    scenario file sets (:data:`DERIVED`), in research code and measurements. A ``name`` the scenario
+    does not list whose ``settings`` name a ``law`` is added to its controllers: a variant.
 
     Examples
     --------
@@ -58,13 +59,27 @@ def with_settings(scenario, name: str, settings: dict):
     >>> sc = with_settings(load_scenario(), "adaptive_ct", {"detector": {"threshold": 7.0}})
     >>> sc.options("adaptive_ct")
     {'detector': {'threshold': 7.0}}
+    >>> with_settings(sc, "no_boost", {"law": "adaptive_ct", "boost_duration": 0.0}).controllers[-1]
+    'no_boost'
     """
     import dataclasses
 
     from adaptive_dd.benchmark.scenario_checks import freeze
+    from adaptive_dd.controllers.registry import law_of
 
+    try:
+        law_of(name, dict(settings))  # a variant's law, judged before it is added
+    except ValueError as exc:
+        from adaptive_dd.errors import ScenarioError
+
+        raise ScenarioError(f"with_settings({name!r}, ...): {exc}") from None
     kept = tuple(o for o in scenario.controller_options if o[0] != name)
-    out = dataclasses.replace(scenario, controller_options=(*kept, (name, freeze(dict(settings)))))
+    added = () if name in scenario.controllers or "law" not in settings else (name,)
+    out = dataclasses.replace(
+        scenario,
+        controllers=(*scenario.controllers, *added),
+        controller_options=(*kept, (name, freeze(dict(settings)))),
+    )
     values = {f.name: getattr(out, f.name) for f in dataclasses.fields(out) if f.init}
     # a built-in's table checked here, as a file's is when it is read (a plug-in's when the run builds it)
     errs = controller_setting_errors(values, only=name, file_limits=False)
@@ -82,10 +97,11 @@ def derived_setting_errors(data: Any) -> list[str]:
     if not isinstance(tables, dict):
         return []
     errs = []
-    for name, derived in DERIVED.items():
-        table = tables.get(name)
+    for name, table in tables.items():
         if not isinstance(table, dict):
             continue
+        law = table.get("law", name)  # a variant's table is its law's (controller_entries judges the law)
+        derived = DERIVED.get(law if isinstance(law, str) else name, {})
         for key in sorted(derived.keys() & table.keys()):
             errs.append(
                 f"controllers.{name}.{key}: not a scenario key: {derived[key]}; remove it "
@@ -161,6 +177,12 @@ def _floor_errors(v: dict, opts: dict, only: str | None) -> list[str]:
             floor = floor_setting(table, opts[table]["floor"])
         except ParameterError as exc:
             errs.append(str(exc))
+            continue
+        if floor is not None and floor == names[c]:
+            errs.append(
+                f"controllers.{table}.floor: {floor!r} is this controller itself (a ratio of 1 by "
+                "construction); name another of the run's controllers, or false for none"
+            )
             continue
         if floor is None or floor in names.values():
             continue

@@ -103,11 +103,21 @@ def run(args: argparse.Namespace) -> int:
         scenarios = []
     from adaptive_dd.controllers import CONTROLLERS
 
+    variants = _variants(scenarios)  # {name: files defining it}: a scenario's own law with settings
+    for name, files in variants.items():
+        if name not in (args.controllers or ()):
+            print(
+                f"note: {', '.join(files)} define(s) the variant {name!r}, not ranked: the leaderboard "
+                f"ranks --controllers and --plugin (add --controllers ... {name} to rank it)",
+                file=sys.stderr,
+            )
     for name in args.controllers or ():  # named by the option, not by the scenario it would fail on
-        if ":" not in name and name not in CONTROLLERS:
+        everywhere = len(variants.get(name, ())) == len(scenarios or [0])
+        if ":" not in name and name not in CONTROLLERS and not everywhere:
             raise ParameterError(
-                f"--controllers: unknown controller {name!r}; built-ins: {', '.join(CONTROLLERS)}, or a "
-                "plug-in's 'package.module:Class' (or --plugin)"
+                f"--controllers: unknown controller {name!r}; built-ins: {', '.join(CONTROLLERS)}, a "
+                "plug-in's 'package.module:Class' (or --plugin), or a variant every given scenario defines "
+                '([controllers.NAME] law = "...")'
             )
     for name in args.plugin:
         if ":" not in name:
@@ -162,6 +172,19 @@ def run(args: argparse.Namespace) -> int:
         f"{df.attrs['run_seconds']:.1f} s running (each summed over the workers' runs)"
     )
     return 0
+
+
+def _variants(scenarios) -> dict[str, list[str]]:
+    """The variants (entries whose table names a ``law``) the given scenario files list, by name."""
+    from adaptive_dd.benchmark.scenario import load_scenario
+
+    out: dict[str, list[str]] = {}
+    for path in scenarios or ():
+        sc = load_scenario(path)
+        for c in sc.controllers:
+            if "law" in sc.options(c):
+                out.setdefault(c, []).append(str(sc.source))
+    return out
 
 
 def _say_tables_not_on_the_arms(scenarios, controllers, template) -> None:

@@ -21,6 +21,7 @@ The table of built-in names and their settings: :mod:`adaptive_dd.controllers.bu
 
 from __future__ import annotations
 
+import re
 import warnings
 
 import numpy as np
@@ -68,6 +69,10 @@ __all__ = [
 ]
 
 
+IMPORT_PATH = re.compile(r"^[A-Za-z_]\w*(\.[A-Za-z_]\w*)*:[A-Za-z_]\w*(\.[A-Za-z_]\w*)*$")
+"""The shape of a plug-in's import path, ``package.module:Class``."""
+
+
 def law_of(entry: str, table: dict | None = None) -> str:
     """The law an entry of ``run.controllers`` runs: the entry itself (a built-in name or an import
     path), or the ``law`` its ``[controllers.NAME]`` table names: a variant, one law run a second
@@ -87,19 +92,23 @@ def law_of(entry: str, table: dict | None = None) -> str:
     >>> law_of("adaptive_ct", {"observer": False})
     'adaptive_ct'
     """
-    law = (table or {}).get("law")
-    if law is None:
+    if "law" not in (table or {}):
         return entry
+    law = table["law"]
     if entry in CONTROLLERS or ":" in entry:
         raise ParameterError(
             f"controllers.{table_name(entry)}.law: {entry!r} is a law already; `law` gives a new entry "
             f'of run.controllers its law (e.g. run.controllers = [..., "{table_name(entry)}_b"] and '
             f'[controllers.{table_name(entry)}_b] law = "{entry}")'
         )
-    if not isinstance(law, str) or not (law in CONTROLLERS or ":" in law):
+    if not isinstance(law, str) or not (law in CONTROLLERS or IMPORT_PATH.match(law)):
+        import difflib
+
+        near = difflib.get_close_matches(str(law).strip().lower(), list(CONTROLLERS), n=1)
+        hint = f"; did you mean {near[0]!r}?" if near else ""
         raise ParameterError(
             f"controllers.{entry}.law: must be a built-in name ({', '.join(CONTROLLERS)}) or an import "
-            f"path 'package.module:Class', got {law!r}"
+            f"path 'package.module:Class' (not another variant), got {law!r}{hint}"
         )
     return law
 
@@ -415,7 +424,12 @@ def make_controller(
             "or 'package.module:Class', or a name of your own with a law (options={'law': 'adaptive_ct'})"
         )
     if "label" in options:
-        ctrl.name = str(options["label"])
+        if not isinstance(options["label"], str) or not options["label"].strip():
+            raise ParameterError(
+                f"controllers.{table_name(spec)}.label: the name its results carry, a non-empty string; "
+                f"got {options['label']!r}"
+            )
+        ctrl.name = options["label"]
     if "floor" in options:  # the scenario's choice over the class's own (a wrapped plug-in's too)
         floor = floor_setting(table_name(spec), options["floor"])
         for c in (ctrl, ctrl.ctrl if isinstance(ctrl, PythonForm) else None):
