@@ -42,7 +42,7 @@ from adaptive_dd.identification.output_error import (
     segment_sensitivities,
     simulate_segments,
 )
-from adaptive_dd.identification.payload_pair import payload_from_pair, payload_from_record
+from adaptive_dd.identification.payload_pair import payload_from_pair
 from adaptive_dd.identification.records import simulate_record
 from adaptive_dd.identification.regression import (
     check_excitation,
@@ -265,9 +265,60 @@ def test_payload_json_is_a_scenario_payload_entry():
     np.testing.assert_allclose(got, pp, atol=1e-6)
 
 
-def test_payload_pair_refused_where_the_arm_cannot_see_it(arm3):
-    with pytest.raises(ParameterError, match="determine only"):
-        payload_from_pair(arm3, arm3.sigma, np.eye(17), arm3.sigma, np.eye(17))
+def test_a_pair_on_a_planar_arm_gives_what_the_arm_determines_and_says_the_rest(arm3):
+    """vertical3's base parameters determine 4 of the payload's 10 (m, mx, mz, Iyy): the pair gives
+    those (the pair was refused), the others NaN, no consistent fit; a full arm's result is as it was."""
+    pp = payload_parameters(2.0, [0.03, 0.01, 0.05], [0.004, 0.005, 0.003, 0.0, 0.0, 0.0])
+    cov = 1e-12 * np.eye(arm3.base.count)
+    pr = payload_from_pair(arm3, arm3.sigma + arm3.payload_basis @ pp, cov, arm3.sigma, cov)
+    assert pr.determined.tolist() == [True, True, False, True, False, False, True, False, False, False]
+    assert pr.mass == pytest.approx(2.0) and pr.consistent is None
+    np.testing.assert_allclose(pr.com[[0, 2]], [0.03, 0.05], atol=1e-9)
+    assert np.isnan(pr.com[1]) and np.isnan(pr.com_std[1]) and np.isfinite(pr.com_std[[0, 2]]).all()
+    # Iyy about the centre of mass from the determined ones alone (the out-of-plane cy not needed)
+    assert pr.inertia_com[1, 1] == pytest.approx(0.005, abs=1e-9)
+    assert np.isnan(pr.inertia_com[[0, 2], [0, 2]]).all() and np.isnan(pr.inertia_com[0, 1])
+
+
+def test_a_planar_payload_writes_a_scenario_entry_the_arm_takes(arm3):
+    """payload.json of a partly determined payload: nulls where not determined, the list of those
+    determined, and a [[payload]] entry filled to a valid body that a scenario of the arm accepts."""
+    from adaptive_dd.benchmark.scenario import parse_scenario
+    from adaptive_dd.identification.payload_pair import payload_record
+
+    pp = payload_parameters(1.0, [0.02, 0.0, 0.04], [0.002, 0.003, 0.001, 0.0, 0.0, 0.0])
+    cov = 1e-12 * np.eye(arm3.base.count)
+    pr = payload_from_pair(arm3, arm3.sigma + arm3.payload_basis @ pp, cov, arm3.sigma, cov)
+    rec = json.loads(json.dumps(payload_record(pr, "r.csv")))  # strict JSON: no NaN
+    assert rec["determined"] == ["m", "mx", "mz", "Iyy"] and rec["com_m"][1] is None
+    assert rec["physical_as_estimated"] is None and rec["params"][2] is None
+    entry = rec["scenario_payload"]
+    assert entry["com"][1] == 0.0 and entry["inertia"][1] == pytest.approx(0.003, abs=1e-9)
+    assert entry["inertia"][0] == entry["inertia"][2] == entry["inertia"][1]  # filled: a valid body
+    from adaptive_dd.io import read_toml
+
+    data = read_toml(
+        Path(__file__).resolve().parents[1] / "adaptive_dd" / "scenarios" / "vertical3_payload.toml"
+    )
+    data["payload"] = [{"at": data["payload"][0]["at"], **entry}]
+    sc = parse_scenario(data, "v.toml")
+    assert sc.swap_masses[0] == pytest.approx(1.0)
+
+
+def test_payload_seen_refuses_directions_that_mix_parameters():
+    """An arm whose base parameters see a payload combination of a determined and an undetermined
+    parameter cannot give them one by one: refused, naming them."""
+    from types import SimpleNamespace
+
+    from adaptive_dd.identification.payload_pair import payload_seen
+
+    P = np.zeros((3, 10))
+    P[0, 0] = 1.0  # the mass alone
+    P[1, 1] = P[1, 4] = 1.0  # mx and Ixx only together
+    fake = SimpleNamespace(payload_basis=P, payload_rank=2)
+    fake.payload_identifiable = np.array([True] + [False] * 9)
+    with pytest.raises(ParameterError, match=r"2 combinations .* mix \['mx', 'my'"):
+        payload_seen(fake, "a pair of records")
 
 
 def test_fourier_reference_roundtrip(arm3):
@@ -426,14 +477,6 @@ def test_relative_bounds_leave_out_a_kind_that_is_zero(arm3, model3):
     sigma[fric] = 0.0
     rb = relative_bounds(np.full(model3.p, 1e-3), sigma, model3.names)
     assert np.all(np.isnan(rb[fric])) and np.all(np.isfinite(rb[~fric])) and np.nanmax(rb) < 1e3
-
-
-def test_payload_from_one_record_refuses_a_planar_arm_naming_what_it_cannot_see(arm3, model3, clean3):
-    """vertical3's base parameters determine 4 of the payload's 10: the fit's normal equations were
-    singular and the command said the record could not be simulated; now the parameters are named,
-    as for a pair."""
-    with pytest.raises(ParameterError, match=r"determine only 4 of the payload's 10 parameters \(not: \['my"):
-        payload_from_record(arm3, model3, clean3.q[0], clean3.qd[0], clean3.tau[0], measurement_std(arm3))
 
 
 def test_two_link_output_error_refuses_a_smooth_law_record(tmp_path, capsys):

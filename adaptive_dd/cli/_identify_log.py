@@ -18,6 +18,7 @@ from numpy.typing import NDArray
 
 from adaptive_dd.cli._common import NAME_WIDTH, short
 from adaptive_dd.cli._identify_files import _write_estimates, _write_model
+from adaptive_dd.cli._identify_payload import _print_payload, _write_payload
 from adaptive_dd.cli._identify_width import choose_coulomb_width
 from adaptive_dd.errors import DataError, ParameterError, SignalError
 
@@ -119,32 +120,6 @@ def _print_held(model, fit) -> None:
         )
     for line in held.describe(model.names, short):
         print(f"  {line}")
-
-
-def _print_payload(label: str, pr) -> None:
-    c = pr.consistent
-    com = (  # a massless body has none
-        f"centre of mass [{', '.join(f'{x * 1e3:.2f}' for x in pr.com)}] +- "
-        f"[{', '.join(f'{x * 1e3:.2g}' for x in pr.com_std)}] mm in the payload frame"
-        if pr.com_defined
-        else "centre of mass undefined (the payload fitted has no mass: none seen, or one too light for "
-        "these records to tell from none)"
-    )
-    print(f"{label} [+- 1 std]: mass {pr.mass:.5g} +- {pr.mass_std:.2g} kg; {com}")
-    ic = pr.inertia_com
-    print(
-        f"  inertia about the centre of mass [kg m^2]: Ixx {ic[0, 0]:.4g}, Iyy {ic[1, 1]:.4g}, Izz "
-        f"{ic[2, 2]:.4g}, "
-        f"Ixy {ic[0, 1]:.3g}, Ixz {ic[0, 2]:.3g}, Iyz {ic[1, 2]:.3g}"
-    )
-    if c.was_physical:
-        print(f"  physically consistent as estimated (pseudo-inertia min eigenvalue {c.min_eigenvalue:.3g})")
-    else:
-        print(
-            "  the unconstrained estimate is not a rigid body (pseudo-inertia eigenvalue "
-            f"{c.min_eigenvalue:.3g}); "
-            f"constrained fit {c.distance:.2f} std away: values above are the constrained ones"
-        )
 
 
 def _information(model, fit) -> Array:
@@ -508,9 +483,11 @@ def _payload_only(args, arm, model, rec, tau_f, outputs=None) -> int:
             f"{rec.source}: --payload-only cannot simulate this record open loop ({exc}); identify a loaded "
             "and an unloaded record instead (--baseline)"
         ) from None
+    n_fitted = 10 if pr.determined is None else int(sum(pr.determined))
     print(
-        f"{rec.source}: the arm known (its URDF), the payload's 10 parameters fitted by output error (no "
-        f"filtered regression: its time constant, {tau_f:g} s, does not apply)"
+        f"{rec.source}: the arm known (its URDF), the {n_fitted} "
+        f"of the payload's 10 parameters this arm determines fitted by output error (no filtered "
+        f"regression: its time constant, {tau_f:g} s, does not apply)"
     )
     _print_output_error_fit(pr.fit, "", ", so the payload and its Cramér-Rao std below do not hold")
     if not pr.fit.converged:
@@ -523,18 +500,6 @@ def _payload_only(args, arm, model, rec, tau_f, outputs=None) -> int:
         _write_payload(outputs, pr, rec.source)
         print(f"wrote {Path(args.out) / 'payload.json'} (its scenario_payload is a [[payload]] entry)")
     return 0
-
-
-def _write_payload(outputs, pr, source: str):
-    """``payload.json`` (:func:`~adaptive_dd.identification.payload_pair.payload_record`); its path."""
-    import json
-
-    from adaptive_dd.identification.payload_pair import payload_record
-
-    path = outputs.path("payload.json")
-    with open(path, "w") as f:
-        json.dump(payload_record(pr, source), f, indent=1)
-    return path
 
 
 def _prior_std(scenario: str, model):

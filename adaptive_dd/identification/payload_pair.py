@@ -15,6 +15,13 @@ A rigid body on the payload frame moves the base parameters along
 Either way the result carries the constrained (physically consistent) fit of
 :mod:`adaptive_dd.identification.consistency`, and mass, centre of mass [m] (in the
 payload frame) and inertia about the centre of mass with first-order standard deviations.
+
+On an arm whose base parameters determine only some of the ten (a planar arm: the mass, the
+in-plane centre of mass and the inertia about the joints' axis, :attr:`Arm.payload_identifiable`),
+those are fitted alone and the others, which do not act on the arm, are reported as not determined
+(NaN) and held at 0 in the fit; no consistent fit is taken then (it needs the whole body).
+:func:`payload_seen` refuses an arm whose determined directions mix parameters it cannot name one
+by one.
 """
 
 from __future__ import annotations
@@ -36,7 +43,7 @@ __all__ = [
     "payload_from_params",
     "payload_from_record",
     "payload_record",
-    "require_payload_seen",
+    "payload_seen",
 ]
 
 Array = NDArray[np.float64]
@@ -84,6 +91,9 @@ class PayloadResult:
     """False when the constrained fit's mass is not positive: ``com`` and ``com_std`` are then NaN, and
     ``identify`` prints the centre of mass as undefined."""
     fit: Any = None
+    determined: Any = None
+    """``(10,)`` bool: the parameters the records determine (None: all ten); the others are NaN in
+    ``params``, ``cov``, ``com`` and ``inertia_com`` where they enter, and ``consistent`` is None."""
     """:func:`payload_from_record`'s output-error fit (its ``converged``, ``iterations``, ``cost``,
     ``n_residuals``); None from a pair."""
 
@@ -97,24 +107,48 @@ def payload_record(pr: PayloadResult, source: str) -> dict:
     inertia = [ic[0, 0], ic[1, 1], ic[2, 2], ic[0, 1], ic[0, 2], ic[1, 2]]
     entry = {"mass": round(max(pr.mass, 0.0), 6)}
     if pr.com_defined:
-        entry |= {"com": [round(float(x), 6) for x in pr.com], "inertia": [float(x) for x in inertia]}
+        entry |= {"com": [round(float(x), 6) for x in np.nan_to_num(pr.com)], "inertia": _filled(inertia)}
     fit = pr.fit
-    return {
+
+    def plain(x):  # NaN (not determined) -> null
+        return [None if not np.isfinite(v) else float(v) for v in np.ravel(x)]
+
+    out = {
         "source": source,
         "mass_kg": pr.mass,
         "mass_std_kg": pr.mass_std,
-        "com_m": pr.com.tolist() if pr.com_defined else None,
-        "com_std_m": pr.com_std.tolist() if pr.com_defined else None,
-        "inertia_com_kg_m2": [float(x) for x in inertia],
-        "physical_as_estimated": bool(pr.consistent.was_physical),
-        "params": pr.params.tolist(),
+        "com_m": plain(pr.com) if pr.com_defined else None,
+        "com_std_m": plain(pr.com_std) if pr.com_defined else None,
+        "inertia_com_kg_m2": plain(inertia),
+        "physical_as_estimated": None if pr.consistent is None else bool(pr.consistent.was_physical),
+        "params": plain(pr.params),
         "params_order": "m, m cx, m cy, m cz, Ixx, Ixy, Iyy, Ixz, Iyz, Izz (about the payload frame)",
-        "cov": pr.cov.tolist(),
+        "cov": [plain(r) for r in pr.cov],
         "output_error": None
         if fit is None
         else {"converged": bool(fit.converged), "iterations": int(fit.iterations)},
         "scenario_payload": entry,
     }
+    if pr.determined is not None:
+        out["determined"] = [n for n, ok in zip(PARAM_NAMES, pr.determined, strict=True) if ok]
+        out["scenario_payload_note"] = (
+            "the parameters this arm does not determine do not act on it: scenario_payload holds 0 for "
+            "their centre of mass, the largest determined principal inertia for their diagonal inertia "
+            "and 0 off the diagonal (a valid body with the same effect on this arm)"
+        )
+    return out
+
+
+def _filled(inertia: list) -> list[float]:
+    """``[ixx, iyy, izz, ixy, ixz, iyz]`` with its undetermined (NaN) entries filled so that the
+    whole is a body (:func:`payload_record`'s note): diagonal ones by the largest determined one, off
+    the diagonal by 0."""
+    v = np.asarray(inertia, float)
+    diag = v[:3]
+    fill = float(np.nanmax(diag)) if np.isfinite(diag).any() else 0.0
+    v[:3] = np.where(np.isfinite(diag), diag, fill)
+    v[3:] = np.nan_to_num(v[3:])
+    return [float(x) for x in v]
 
 
 def _inertia_about_com(p: Array) -> Array:
@@ -124,10 +158,47 @@ def _inertia_about_com(p: Array) -> Array:
     return Io - m * (c @ c * np.eye(3) - np.outer(c, c))
 
 
-def payload_from_params(params: ArrayLike, cov: ArrayLike) -> PayloadResult:
-    """Mass, com and inertia (with stds and the consistent fit) from ten parameters and their covariance."""
+PARAM_NAMES = ("m", "mx", "my", "mz", "Ixx", "Ixy", "Iyy", "Ixz", "Iyz", "Izz")
+"""The payload's ten parameters in :attr:`Arm.payload_basis`'s order (first moments ``m c``,
+inertia about the payload frame)."""
+
+
+def payload_seen(arm, what: str) -> NDArray[np.bool_]:
+    """The payload parameters the arm's base parameters determine, ``(10,)`` bool; a
+    :class:`ParameterError` naming ``what`` when they are not a set of whole parameters (a direction
+    that mixes one the arm determines with one it does not)."""
+    P = arm.payload_basis
+    seen = np.asarray(arm.payload_identifiable, bool)
+    if np.linalg.matrix_rank(P[:, seen], tol=1e-9 * np.abs(P).max()) != arm.payload_rank:
+        missing = [nm for nm, ok in zip(PARAM_NAMES, seen, strict=True) if not ok]
+        raise ParameterError(
+            f"on this arm the base parameters determine {arm.payload_rank} combinations of the payload's "
+            f"10 parameters that mix {missing} with the others; {what} cannot give them one by one"
+        )
+    return seen
+
+
+def _about_com(q: Array) -> Array:
+    """Inertia about the centre of mass, entry by entry, NaN where an undetermined parameter enters."""
+    m, c = q[0], q[1:4] / q[0]
+    Io = np.array([[q[4], q[5], q[7]], [q[5], q[6], q[8]], [q[7], q[8], q[9]]])
+    shift = np.empty((3, 3))
+    for i in range(3):
+        for j in range(3):
+            shift[i, j] = sum(c[k] ** 2 for k in range(3) if k != i) if i == j else -c[i] * c[j]
+    return Io - m * shift
+
+
+def payload_from_params(
+    params: ArrayLike, cov: ArrayLike, determined: ArrayLike | None = None
+) -> PayloadResult:
+    """Mass, com and inertia (with stds and the consistent fit) from ten parameters and their
+    covariance; ``determined`` ``(10,)`` bool: the ones the records determine (default all), the
+    others reported NaN with no consistent fit (module docstring)."""
     p = np.asarray(params, dtype=float)
     C = np.asarray(cov, dtype=float)
+    if determined is not None and not np.all(determined):
+        return _partial(p, C, np.asarray(determined, bool))
     fit = consistent_fit(p, np.linalg.pinv(C, rcond=1e-12, hermitian=True))
     q = fit.params
     m = q[0]
@@ -143,6 +214,31 @@ def payload_from_params(params: ArrayLike, cov: ArrayLike) -> PayloadResult:
     return PayloadResult(
         p, C, float(m), float(np.sqrt(C[0, 0])), com, com_std, _inertia_about_com(q), fit, com_defined=defined
     )
+
+
+def _partial(p: Array, C: Array, seen: NDArray[np.bool_]) -> PayloadResult:
+    """:func:`payload_from_params` for the parameters ``seen`` alone (the others NaN)."""
+    if not seen[0]:
+        raise ParameterError("the records do not determine the payload's mass")
+    q = np.where(seen, p, np.nan)
+    cov = np.where(np.outer(seen, seen), C, np.nan)
+    m = q[0]
+    defined = bool(m > 0)
+    com, com_std = np.full(3, np.nan), np.full(3, np.nan)
+    inertia = np.full((3, 3), np.nan)
+    if defined:
+        com = q[1:4] / m
+        for k in range(3):
+            if seen[1 + k]:
+                g = np.zeros(10)
+                g[0], g[1 + k] = -q[1 + k] / m**2, 1.0 / m
+                k2 = np.flatnonzero(g)
+                com_std[k] = np.sqrt(max(g[k2] @ C[np.ix_(k2, k2)] @ g[k2], 0.0))
+        inertia = _about_com(q)
+    return PayloadResult(
+        q, cov, float(m), float(np.sqrt(C[0, 0])), com, com_std, inertia, None, com_defined=defined,
+        determined=seen,
+    )  # fmt: skip
 
 
 def payload_from_pair(
@@ -201,31 +297,32 @@ def payload_from_pair(
     Raises
     ------
     ParameterError
-        If the base parameters do not determine all ten payload parameters on this arm.
+        If the base parameters determine combinations of the payload parameters that mix
+        determined and undetermined ones (:func:`payload_seen`).
     """
-    P = arm.payload_basis
-    require_payload_seen(arm, "a pair of records")
+    seen = payload_seen(arm, "a pair of records")
+    P = arm.payload_basis[:, seen]
     d = np.asarray(sigma_loaded, float) - np.asarray(sigma_unloaded, float)
     C = np.asarray(cov_loaded, float) + np.asarray(cov_unloaded, float)
     if not (np.all(np.isfinite(d)) and np.all(np.isfinite(C))):
         raise ParameterError("the loaded or unloaded estimate or its covariance is not finite")
-    pi, cov = pair_difference(P, d, C, weighting)
-    return payload_from_params(pi, cov)
+    pi, cov = pair_difference(
+        P, d, C, weighting, names=[n for n, ok in zip(PARAM_NAMES, seen, strict=True) if ok]
+    )
+    return payload_from_params(*_whole(pi, cov, seen), None if seen.all() else seen)
 
 
-def require_payload_seen(arm, what: str) -> None:
-    """Refuse, naming them, the payload parameters the arm's base parameters do not determine (a
-    planar arm's out-of-plane ones): ``what`` cannot give them."""
-    if arm.payload_rank < 10:
-        names = ("m", "mx", "my", "mz", "Ixx", "Ixy", "Iyy", "Ixz", "Iyz", "Izz")
-        missing = [nm for nm, ok in zip(names, arm.payload_identifiable, strict=True) if not ok]
-        raise ParameterError(
-            f"on this arm the base parameters determine only {arm.payload_rank} of the payload's 10 "
-            f"parameters (not: {missing}); {what} cannot give them"
-        )
+def _whole(pi: Array, cov: Array, seen: NDArray[np.bool_]) -> tuple[Array, Array]:
+    """The ten parameters and their covariance from those ``seen`` (0 elsewhere: not determined)."""
+    p, C = np.zeros(10), np.zeros((10, 10))
+    p[seen] = pi
+    C[np.ix_(seen, seen)] = cov
+    return p, C
 
 
-def pair_difference(P: ArrayLike, d: ArrayLike, C: ArrayLike, weighting: str = "gls") -> tuple[Array, Array]:
+def pair_difference(
+    P: ArrayLike, d: ArrayLike, C: ArrayLike, weighting: str = "gls", names=PARAM_NAMES
+) -> tuple[Array, Array]:
     """The ten payload parameters ``(10,)`` and their covariance ``(10, 10)`` from the difference
     ``d (p,)`` of a loaded and an unloaded estimate with covariance ``C (p, p)``, ``d = P pi + e``
     (:func:`payload_from_pair`'s linear step; ``weighting`` as there).
@@ -248,7 +345,6 @@ def pair_difference(P: ArrayLike, d: ArrayLike, C: ArrayLike, weighting: str = "
     weak = lam <= 1e-10 * max(lam.max(), 1e-300)
     if weak.any():  # directions of the payload the two estimates do not see (their covariances are 0
         # or infinite there: channels left out, parameters held at the URDF's values)
-        names = ("m", "mx", "my", "mz", "Ixx", "Ixy", "Iyy", "Ixz", "Iyz", "Izz")
         v = V[:, np.flatnonzero(weak)]
         missing = [names[k] for k in np.flatnonzero(np.linalg.norm(v, axis=1) > 0.3)]
         raise ParameterError(
@@ -276,11 +372,12 @@ def payload_from_record(
     Raises
     ------
     ParameterError
-        The arm's base parameters do not determine all ten payload parameters (named).
+        The arm's base parameters determine combinations that mix parameters (:func:`payload_seen`).
     """
     from adaptive_dd.identification.output_error import fit_output_error
 
-    require_payload_seen(arm, "one loaded record")
+    seen = payload_seen(arm, "one loaded record")
     s0 = model.sigma_ref if sigma_arm is None else np.asarray(sigma_arm, float)
-    fit = fit_output_error(model, q, qd, tau, s0, std, E=arm.payload_basis, **oe_kw)
-    return dataclasses.replace(payload_from_params(fit.theta, np.linalg.inv(fit.information)), fit=fit)
+    fit = fit_output_error(model, q, qd, tau, s0, std, E=arm.payload_basis[:, seen], **oe_kw)
+    pi, cov = _whole(fit.theta, np.linalg.inv(fit.information), seen)
+    return dataclasses.replace(payload_from_params(pi, cov, None if seen.all() else seen), fit=fit)
