@@ -19,6 +19,7 @@ message. Neither stops the sweep. A task whose every row failed is not kept in
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import json
 import os
@@ -49,7 +50,8 @@ __all__ = [
 ]
 
 CELL_VERSION = 2
-"""Part of every task key: bump it when the rows a task returns change meaning (2: the
+"""Part of every task key, with the code's version and commit (:func:`_code_id`: cells written by
+other code are run again): bump it when the rows a task returns change meaning (2: the
 ``saturation_fraction`` column)."""
 
 WORKER_ENV = {
@@ -156,8 +158,19 @@ def _task_key(scenario: Scenario, controller: str, settings, seeds) -> str:
     for k in ("name", "source", "seeds", "controllers", "defaulted"):
         sc.pop(k, None)
     blob = {"v": CELL_VERSION, "scenario": sc, "controller": controller, "settings": settings, "seeds": seeds}
+    blob["code"] = _code_id()  # a cell of other code (a default changed) is run again, not reused
     text = json.dumps(blob, sort_keys=True, default=repr)
     return hashlib.sha256(text.encode()).hexdigest()[:20]
+
+
+@functools.lru_cache(maxsize=1)
+def _code_id() -> str:
+    """The package's version and git commit (:func:`~adaptive_dd.benchmark.provenance.code_provenance`):
+    part of every task key."""
+    from adaptive_dd.benchmark.provenance import code_provenance
+
+    p = code_provenance()
+    return f"{p.get('version')}:{p.get('commit')}"
 
 
 def plan_tasks(sweep: Sweep) -> tuple[dict[str, Task], list[tuple[int, str, str]]]:

@@ -263,6 +263,11 @@ def _axes(src: str, grid: Any, ctrls: tuple[str, ...]) -> tuple[tuple[str, tuple
                     raise SweepError(f"{src}: key 'grid.controller.{name}' must be a table of settings lists")
                 for k, vals in table.items():
                     full = f"grid.controller.{name}.{k}"
+                    if k == "law":  # a law is an entry of the list, not a value of a grid
+                        raise SweepError(
+                            f"{src}: key '{full}': a law is not a grid axis; give each law its entry in "
+                            'sweep.controllers (a variant: its [controllers.NAME] table with law = "...")'
+                        )
                     axes.append((f"{name}.{k}", _values(src, full, vals, numeric=False)))
         elif key in SCENARIO_AXES:
             axes.append((key, _values(src, f"grid.{key}", v, numeric=True)))

@@ -2,6 +2,8 @@
 name whose ``[controllers.NAME]`` table names its ``law``. Its results carry its name, its floor is
 its law's, and a variant that changes nothing gives its law's numbers bit for bit."""
 
+import json
+
 import numpy as np
 import pytest
 
@@ -81,6 +83,10 @@ def test_make_controller_builds_the_law_under_the_variants_name():
             '[controllers.x]\nlaw = "adaptive_ct"\nfloor = "x"\n',
             "controllers.x.floor: 'x' is this controller itself",
         ),
+        (
+            '[controllers.x]\nlaw = "adaptive_ct"\nlabel = "pd"\n',
+            "controllers.x.label: 'pd' is a built-in's name",
+        ),
     ],
 )
 def test_a_wrong_variant_is_an_error_of_the_file_naming_its_table(tmp_path, table, says):
@@ -117,6 +123,22 @@ def test_a_sweep_runs_a_variant_of_its_scenario(tmp_path):
     )
     spec = load_sweep(str(sweep))
     assert "no_observer" in spec.controllers
+    from adaptive_dd.sweep import run_cell
+
+    point = spec.points[0]  # 1 kg: the cell runs the variant, its table's setting applied
+    rows = run_cell(point.scenario, "no_observer", [0], point.settings_for("no_observer"))
+    same = run_cell(point.scenario, "adaptive_ct", [0], {"observer": False})
+    base = run_cell(point.scenario, "adaptive_ct", [0])
+    assert [r["rms_error"] for r in rows] == [r["rms_error"] for r in same]
+    assert [r["rms_error"] for r in rows] != [r["rms_error"] for r in base]
+    grid_law = _write(
+        tmp_path,
+        '[sweep]\nscenario = "base.toml"\n[grid]\npayload_mass = [1.0]\n[grid.controller.adaptive_ct]\n'
+        'law = ["pd"]\n',
+        "law.toml",
+    )
+    with pytest.raises(ScenarioError, match=r"grid\.controller\.adaptive_ct\.law': a law is not a grid axis"):
+        load_sweep(str(grid_law))
 
 
 def test_a_variant_is_not_a_law_outside_a_scenario_that_names_it():
@@ -169,3 +191,68 @@ def test_the_leaderboard_ranks_a_variant_every_scenario_defines_and_says_one_it_
     err = capsys.readouterr().err
     assert "--controllers: unknown controller 'nope'" in err
     assert "define(s) the variant 'no_observer', not ranked" in err
+
+
+def _short_vertical3_with_a_variant(tmp_path):
+    from importlib import resources
+
+    text = resources.files("adaptive_dd.scenarios").joinpath("vertical3_payload_exact.toml").read_text()
+    text = text.replace("duration = 16.0", "duration = 1.6").replace("ramp = 1.0", "ramp = 0.2")
+    head, _, _ = text.partition("[[payload]]")
+    body = (
+        '[[payload]]\nat = 0.8\nmass = 1.0\n\n[controllers.no_obs]\nlaw = "adaptive_ct"\nobserver = false\n'
+    )
+    import re
+
+    head = re.sub(r"(?m)^controllers = \[.*\]$", 'controllers = ["ct_oracle", "adaptive_ct", "no_obs"]', head)
+    path = tmp_path / "v3.toml"
+    path.write_text(head + body)
+    return path
+
+
+def test_the_leaderboard_ranks_a_variant_its_scenario_defines(tmp_path, capsys):
+    from adaptive_dd.cli import main
+
+    path = _short_vertical3_with_a_variant(tmp_path)
+    out = tmp_path / "lb"
+    argv = ["leaderboard", str(path), "--seeds", "1", "--workers", "1", "--no-progress", "--out", str(out)]
+    assert main([*argv, "--controllers", "adaptive_ct", "no_obs"]) == 0
+    rows = json.loads((out / "leaderboard.json").read_text())["rows"]
+    ranked = {(r["controller"], r["floor"]) for r in rows}
+    assert ("no_obs", "ct_oracle") in ranked and ("adaptive_ct", "ct_oracle") in ranked
+    capsys.readouterr()
+    # with --arms the drawn arms run the template's tables, which do not define it: refused at once
+    assert main([*argv, "--controllers", "no_obs", "--arms", "1"]) == 2
+    assert "unknown controller 'no_obs'" in capsys.readouterr().err
+
+
+def test_a_variant_of_a_law_told_the_true_model_is_a_reference_not_a_contender():
+    """ct_oracle_late told 5 ms late as a variant: its row has a floor, and it is told the true model
+    by its law (the leaderboard's ``law`` column), so it is shown beside the contenders, not ranked."""
+    import pandas as pd
+
+    from adaptive_dd.arena.columns import contenders, told_the_model
+
+    df = pd.DataFrame(
+        {
+            "controller": ["ct_oracle_late", "late_5ms", "no_boost"],
+            "law": ["ct_oracle_late", "ct_oracle_late", "adaptive_ct"],
+            "floor": ["ct_oracle", "ct_oracle", "ct_oracle"],
+        }
+    )
+    assert told_the_model(df).tolist() == [True, True, False]
+    assert contenders(df).tolist() == [False, False, True]
+    assert told_the_model(df.drop(columns="law")).tolist() == [True, False, False]  # by name alone
+
+
+def test_an_identified_prior_reaches_every_variant_of_adaptive_ct(tmp_path):
+    """After an excitation phase or [model] from, the identified prior went to the entry named
+    adaptive_ct alone: a variant that changes nothing then ran with another prior."""
+    from adaptive_dd.closed_loop.model_prior import identified_prior
+
+    sc = load_scenario(str(_short_vertical3_with_a_variant(tmp_path)))
+    opts = dict(identified_prior(sc, 1e-6 * np.eye(sc.arm.base.count)))
+    for name in ("adaptive_ct", "no_obs"):
+        est = dict(dict(opts[name])["estimator"])
+        assert {"arm_prior_cov", "p0_arm", "payload_mass_std"} <= set(est), name
+    assert "ct_oracle" not in opts

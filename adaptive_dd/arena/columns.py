@@ -10,6 +10,7 @@ COLUMNS: dict[str, tuple[str, str]] = {
     "scenario": ("-", "the scenario's name (a drawn arm: TEMPLATE_armSEED; pooled: population(N arms))"),
     "kind": ("-", "scenario (shipped or given), arm (one drawn arm), population (pooled over the arms)"),
     "controller": ("-", "the controller ranked"),
+    "law": ("-", "the built-in or import path it runs: its own name, or a variant's law"),
     "floor": ("-", "the controller it is divided by, seed by seed (the same law with the true robot)"),
     "floor_note": (
         "-",
@@ -71,11 +72,14 @@ def contenders(df):
 
 
 def told_the_model(df):
-    """Boolean mask of the rows of laws told the true model (``ct_oracle_late``): shown beside the
-    contenders, with their floor, and ranked with none."""
+    """Boolean mask of the rows of laws told the true model (``ct_oracle_late`` and its variants, by
+    the ``law`` column): shown beside the contenders, with their floor, and ranked with none."""
     from adaptive_dd.controllers.builtins import CONTROLLERS
 
-    told = df["controller"].map(lambda c: c in CONTROLLERS and CONTROLLERS[c].knows.startswith("true model"))
+    law = df["controller"]  # a variant's law where the table says it (an older table: the name)
+    if "law" in df:
+        law = df["law"].where(df["law"].notna() & (df["law"].astype(str) != ""), df["controller"])
+    told = law.map(lambda c: c in CONTROLLERS and CONTROLLERS[c].knows.startswith("true model"))
     return told.astype(bool)
 
 

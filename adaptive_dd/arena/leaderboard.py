@@ -35,6 +35,7 @@ from pathlib import Path
 import numpy as np
 
 from adaptive_dd.arena.columns import COLUMNS, contenders, told_the_model
+from adaptive_dd.arena.entries import _laws, _with_floors
 from adaptive_dd.benchmark.end_effector import EE_KEYS
 from adaptive_dd.benchmark.scenario import packaged_scenarios
 from adaptive_dd.errors import ParameterError
@@ -115,34 +116,6 @@ def _scenario(spec):
             "the arena's laws do not run; use the arm from its URDF (benchmarks/scenarios/sice_drawn.toml)"
         )
     return sc
-
-
-def _with_floors(sc, names: Sequence[str]) -> tuple[tuple[str, ...], dict, dict]:
-    """The names to run (each asked-for one and its floor), each one's floor by the label its
-    results carry, and why a floor that does not build is missing (its row then has no ratio and
-    says so)."""
-    from adaptive_dd.controllers.plugins import DEFAULT_FLOOR
-    from adaptive_dd.controllers.registry import scenario_controller
-
-    floors: dict[str, str | None] = {}
-    missing: dict[str, str] = {}
-    run: list[str] = []
-    for name in names:
-        try:
-            label, ctrl = scenario_controller(sc, name)  # results carry the label (a plug-in's class)
-        except ParameterError as exc:  # named by its file once (a plug-in's table names it already)
-            where = "" if str(exc).startswith(str(sc.source)) else f"{sc.source}: "
-            raise ParameterError(f"leaderboard: {where}{exc}") from None
-        floor = floors[label] = getattr(ctrl, "floor", DEFAULT_FLOOR)
-        if floor is not None and floor not in run and floor not in missing:
-            try:
-                scenario_controller(sc, floor)
-            except ParameterError as exc:
-                missing[floor] = f"its floor {floor} cannot run here: {exc}"
-        for n in (name, floor):
-            if n is not None and n not in run and n not in missing:
-                run.append(n)
-    return tuple(run), floors, missing
 
 
 def _per_seed(res, names) -> dict[str, dict[str, np.ndarray]]:
@@ -261,7 +234,7 @@ def _cells(name, kind, per, floors, missing, masses, T, seeds, t0) -> list[dict]
     return cells
 
 
-_KEYS = ("scenario", "kind", "controller", "floor", "floor_note", "segment", "payload_kg")
+_KEYS = ("scenario", "kind", "controller", "law", "floor", "floor_note", "segment", "payload_kg")
 _EE = EE_KEYS  # the tool frame's per-seed figures [mm], [mm], [deg] (per_seed.csv's ee_* columns)
 _ARRAYS = (
     "e",
@@ -576,7 +549,9 @@ def _run_cells(sc, kind: str, controllers, seeds, progress, times=None) -> list[
 
     cells = _cells(sc.name, kind, per, floors, missing, masses, sc.sample_period, res.seed_indices, t0)
     caveat = floor_caveat(sc)
+    laws = _laws(sc, names)
     for c in cells:
+        c["law"] = laws.get(c["controller"], c["controller"])
         if caveat and c["floor"] and not c["floor_note"]:
             c["floor_note"] = caveat
     return cells

@@ -80,10 +80,12 @@ def read_table(path) -> object:
             f"{path}: no leaderboard table; write it with `python tools/leaderboard_page.py --run`"
         )
     df = pd.read_csv(path)
+    if "law" not in df.columns and "controller" in df.columns:  # a table from before variants:
+        df.insert(list(df.columns).index("controller") + 1, "law", df["controller"])
     missing = [c for c in COLUMNS if c not in df.columns]
     if missing:
         raise ParameterError(f"{path}: columns {missing} missing; rerun the leaderboard (`{_RENDER} --run`)")
-    for c in ("scenario", "kind", "controller", "floor", "floor_note"):
+    for c in ("scenario", "kind", "controller", "law", "floor", "floor_note"):
         df[c] = df[c].fillna("").astype(str)
     return df
 

@@ -22,7 +22,8 @@ def _check_controllers(e: list, c: Any, arm: Any = None, opts: Any = ()) -> bool
         e.append(f"run.controllers: must be a non-empty list of names, got {_short(c)}")
         return False
     ok, laws = True, {}
-    tables = {n: t for n, t in opts if isinstance(n, str)} if isinstance(opts, tuple) else {}
+    pairs = [o for o in opts if isinstance(o, tuple) and len(o) == 2] if isinstance(opts, tuple) else []
+    tables = {n: t for n, t in pairs if isinstance(n, str)}  # a malformed entry: _check_options names it
     for x in c:
         try:  # a variant's law (its table's `law`), else the entry itself
             t = thaw(tables.get(table_name(x)))
@@ -61,6 +62,12 @@ def _check_controllers(e: list, c: Any, arm: Any = None, opts: Any = ()) -> bool
         label = t.get("label") if isinstance(t, dict) else None
         if isinstance(label, str) or ":" not in x:
             carried.setdefault(label if isinstance(label, str) else x, []).append(x)
+        if isinstance(label, str) and label in CONTROLLERS and label != x:
+            e.append(
+                f"controllers.{table_name(x)}.label: {label!r} is a built-in's name: results under it read "
+                "as that law with its defaults (the report's targets judge it so); choose another label"
+            )
+            ok = False
     for name, xs in carried.items():
         if len(xs) > 1:
             e.append(

@@ -162,7 +162,8 @@ def resolved_settings(scenario) -> list[str]:
     :data:`~adaptive_dd.controllers.CONTROLLERS` (``adaptive_ct``'s boost, ``slotine_li``'s gains
     and box), ``(default)`` marked: what the run will use on this arm, said before it runs
     (several differ between the arms, by the rule the table states)."""
-    from adaptive_dd.controllers.registry import ABSENT, CONTROLLERS, controller_label
+    from adaptive_dd.controllers.plugins import table_name
+    from adaptive_dd.controllers.registry import ABSENT, CONTROLLERS
     from adaptive_dd.plant.kind import run_kind
 
     kind = run_kind(scenario)
@@ -172,7 +173,7 @@ def resolved_settings(scenario) -> list[str]:
         entry = CONTROLLERS.get(given.get("law", spec))  # a variant: its law's settings
         if entry is None or not entry.applies_to(kind):  # plug-ins; reported by controller_problems
             continue
-        label = controller_label(spec, given)
+        table = table_name(spec)  # where the setting is written (a label names the results only)
         for key, st in entry.settings.items():
             default = st.default(kind)
             if default is None or default is ABSENT:
@@ -181,29 +182,32 @@ def resolved_settings(scenario) -> list[str]:
             if isinstance(v, tuple | list):
                 v = list(v)
             mark = "" if key in given else "   (default)"
-            out.append(f"controllers.{label}.{key} = {v!r}{' ' + st.unit if st.unit else ''}{mark}")
-    if "adaptive_ct" in scenario.controllers and scenario.closed_forms is None:
-        out += derived_estimator_settings(scenario) + derived_boost(scenario)
+            out.append(f"controllers.{table}.{key} = {v!r}{' ' + st.unit if st.unit else ''}{mark}")
+    if scenario.closed_forms is None:  # adaptive_ct's and each variant's derived settings
+        from adaptive_dd.closed_loop.model_prior import adaptive_entries
+
+        for name in adaptive_entries(scenario):
+            out += derived_estimator_settings(scenario, name) + derived_boost(scenario, name)
     return out
 
 
-def derived_boost(scenario) -> list[str]:
+def derived_boost(scenario, name: str = "adaptive_ct") -> list[str]:
     """``adaptive_ct``'s boost bandwidth per joint on an N-joint arm, as the run derives it from the
     task's torque room and the sensors' noise (:mod:`adaptive_dd.closed_loop.boost`)."""
     from adaptive_dd.controllers.registry import scenario_controller
 
-    law = scenario_controller(scenario, "adaptive_ct")[1]
+    law = scenario_controller(scenario, name)[1]
     if not hasattr(law, "boost_bandwidths"):
         return []
     wb = [round(float(x), 1) for x in law.boost_bandwidths()]
     return [
-        f"controllers.adaptive_ct boost bandwidth per joint = {wb} rad/s   (derived: at most "
+        f"controllers.{name} boost bandwidth per joint = {wb} rad/s   (derived: at most "
         "boost_bandwidth, its noise torque 3 std inside the room the torque limit leaves beside the "
         "reference's)"
     ]
 
 
-def derived_estimator_settings(scenario) -> list[str]:
+def derived_estimator_settings(scenario, name: str = "adaptive_ct") -> list[str]:
     """``adaptive_ct``'s estimator settings on an arm from a URDF that the scenario need not state,
     as the run derives them, each with its rule: the mode (``"arm"`` when the model's stated
     uncertainty, ``[model] uncertainty`` or the ``[plant.uncertainty]`` levels, is not exact), the
@@ -217,11 +221,11 @@ def derived_estimator_settings(scenario) -> list[str]:
     from adaptive_dd.identification.row_weights import pass_mass
     from adaptive_dd.plant.arm import DEFAULT_PAYLOAD_OFFSET
 
-    online = getattr(scenario_controller(scenario, "adaptive_ct")[1], "online", None)
+    online = getattr(scenario_controller(scenario, name)[1], "online", None)
     if online is None or not hasattr(online, "mode"):
         return []
-    est = scenario.options("adaptive_ct").get("estimator", {})
-    arm, pre = scenario.arm, "controllers.adaptive_ct.estimator"
+    est = scenario.options(name).get("estimator", {})
+    arm, pre = scenario.arm, f"controllers.{name}.estimator"
     drawn = getattr(getattr(scenario, "plant", None), "uncertainty", None)
     if "mode" in est:
         why = "given"
@@ -246,15 +250,15 @@ def derived_estimator_settings(scenario) -> list[str]:
     out.append(f"{pre}.row_weights = {[float(f'{x:.4g}') for x in w]}   ({why})")
     if online.detector is not None:
         cap = arm.payload_capacity
-        if "reopen_mass_std" in scenario.options("adaptive_ct").get("detector", {}):
+        if "reopen_mass_std" in scenario.options(name).get("detector", {}):
             why = "given"
         elif cap is None:
             why = "default: no [arm] payload_capacity stated; state the rated payload [kg] to size it"
         else:
             why = f"derived: {REOPEN_CAPACITY:g} x arm.payload_capacity {cap:g} kg"
         std = reopen_mass_std(online.detector, arm)
-        out.append(f"controllers.adaptive_ct.detector.reopen_mass_std = {std:.4g} kg   ({why})")
-        if "floor" in scenario.options("adaptive_ct").get("detector", {}):
+        out.append(f"controllers.{name}.detector.reopen_mass_std = {std:.4g} kg   ({why})")
+        if "floor" in scenario.options(name).get("detector", {}):
             why = "given"
         else:
             why = (
@@ -262,7 +266,7 @@ def derived_estimator_settings(scenario) -> list[str]:
                 f"{online.detector.threshold:g}, at most {FLOOR_MAX:g} N m"
             )
         floor = online.detector.floor  # set by AdaptiveCT.state_task unless given
-        out.append(f"controllers.adaptive_ct.detector.floor = {floor:.3g} N m   ({why})")
+        out.append(f"controllers.{name}.detector.floor = {floor:.3g} N m   ({why})")
     frame = arm.payload_frame
     why = "the estimator's payload prior: a disk of that radius per kg, its centre of mass within"
     why += f" that offset of {frame!r}"

@@ -103,7 +103,8 @@ def run(args: argparse.Namespace) -> int:
         scenarios = []
     from adaptive_dd.controllers import CONTROLLERS
 
-    variants = _variants(scenarios)  # {name: files defining it}: a scenario's own law with settings
+    sources = _variant_sources(scenarios, args)  # the files whose tables the ranked runs read
+    variants = _variants(sources)  # {name: files defining it}: a scenario's own law with settings
     for name, files in variants.items():
         if name not in (args.controllers or ()):
             print(
@@ -112,12 +113,12 @@ def run(args: argparse.Namespace) -> int:
                 file=sys.stderr,
             )
     for name in args.controllers or ():  # named by the option, not by the scenario it would fail on
-        everywhere = len(variants.get(name, ())) == len(scenarios or [0])
+        everywhere = bool(sources) and len(variants.get(name, ())) == len(sources)
         if ":" not in name and name not in CONTROLLERS and not everywhere:
             raise ParameterError(
                 f"--controllers: unknown controller {name!r}; built-ins: {', '.join(CONTROLLERS)}, a "
-                "plug-in's 'package.module:Class' (or --plugin), or a variant every given scenario defines "
-                '([controllers.NAME] law = "...")'
+                "plug-in's 'package.module:Class' (or --plugin), or a variant every given scenario (and "
+                'with --arms the template) defines ([controllers.NAME] law = "...")'
             )
     for name in args.plugin:
         if ":" not in name:
@@ -174,16 +175,30 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def _variants(scenarios) -> dict[str, list[str]]:
-    """The variants (entries whose table names a ``law``) the given scenario files list, by name."""
-    from adaptive_dd.benchmark.scenario import load_scenario
+def _variant_sources(scenarios, args) -> list:
+    """The scenario files a ranked run reads its tables from: the given scenarios (none: the shipped
+    ones, which define no variant), and with ``--arms`` the drawn arms' template."""
+    from adaptive_dd.arena.leaderboard import _template
+
+    out = [(None, str(p)) for p in scenarios or ()]
+    if args.arms:
+        out.append(_template(args.template))
+    return out
+
+
+def _variants(sources) -> dict[str, list[str]]:
+    """The variants (entries whose table names a ``law``) of the given ``(data or None, path)``
+    scenario files, by name: the files that define each."""
+    from adaptive_dd.benchmark.scenario import read_toml, scenario_file
 
     out: dict[str, list[str]] = {}
-    for path in scenarios or ():
-        sc = load_scenario(path)
-        for c in sc.controllers:
-            if "law" in sc.options(c):
-                out.setdefault(c, []).append(str(sc.source))
+    for data, path in sources:
+        data = read_toml(scenario_file(path)) if data is None else data
+        listed = (data.get("run") or {}).get("controllers") or []
+        tables = data.get("controllers") or {}
+        for c in listed:
+            if isinstance(c, str) and isinstance(tables.get(c), dict) and "law" in tables[c]:
+                out.setdefault(c, []).append(path)
     return out
 
 

@@ -427,14 +427,17 @@ def _estimator_config(scenario):
     """adaptive_ct's estimator settings in the scenario (None: it does not run one in mode "arm",
     or its table states its own arm prior, so nothing is handed on)."""
     from adaptive_dd.benchmark.scenario_checks import thaw
+    from adaptive_dd.closed_loop.model_prior import adaptive_entries
     from adaptive_dd.controllers.registry import scenario_controller
 
-    if "adaptive_ct" not in scenario.controllers:
+    entries = adaptive_entries(scenario)
+    if not entries:
         return None
-    est = (thaw(dict(scenario.controller_options).get("adaptive_ct")) or {}).get("estimator", {})
+    name = entries[0]  # adaptive_ct itself when it runs, else its first variant
+    est = (thaw(dict(scenario.controller_options).get(name)) or {}).get("estimator", {})
     if isinstance(est, dict) and {"mode", "arm_uncertainty", "arm_prior_cov"} & est.keys():
         return None
-    return getattr(scenario_controller(scenario, "adaptive_ct")[1], "online", None)
+    return getattr(scenario_controller(scenario, name)[1], "online", None)
 
 
 def run_with_excitation(

@@ -43,8 +43,8 @@ def identified_prior(scenario, prior: Array) -> tuple:
     from adaptive_dd.benchmark.scenario_checks import freeze, thaw
 
     opts = {n: thaw(o) for n, o in scenario.controller_options}
-    if "adaptive_ct" in scenario.controllers:
-        ac = opts.setdefault("adaptive_ct", {})
+    for name in adaptive_entries(scenario):  # adaptive_ct and each variant of it
+        ac = opts.setdefault(name, {})
         est = ac.get("estimator", {})
         keys = {"mode", "arm_uncertainty", "arm_prior_cov"}
         if isinstance(est, dict) and not keys & est.keys():
@@ -55,6 +55,14 @@ def identified_prior(scenario, prior: Array) -> tuple:
             if "payload_mass_std" not in est:
                 ac["estimator"]["payload_mass_std"] = known_payload_mass_std(scenario.arm, P)
     return tuple((n, freeze(o)) for n, o in opts.items())
+
+
+def adaptive_entries(scenario) -> list[str]:
+    """The entries of the scenario's controllers that run ``adaptive_ct``: itself and its variants
+    (:func:`~adaptive_dd.controllers.registry.law_of`)."""
+    from adaptive_dd.controllers.registry import law_of
+
+    return [n for n in scenario.controllers if law_of(n, scenario.options(n)) == "adaptive_ct"]
 
 
 def known_payload_mass_std(arm, prior: Array) -> float:
@@ -190,7 +198,7 @@ def model_file_prior(scenario, path) -> tuple:
     from adaptive_dd.identification.arm_prior import identified_prior_cov
     from adaptive_dd.identification.identified_model import load_identified_model
 
-    if "adaptive_ct" not in scenario.controllers:
+    if not adaptive_entries(scenario):
         return scenario.controller_options
     where = f"{scenario.source}: key 'model.from' = {str(path)!r}"
     try:
