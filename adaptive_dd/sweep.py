@@ -19,9 +19,6 @@ message. Neither stops the sweep. A task whose every row failed is not kept in
 
 from __future__ import annotations
 
-import functools
-import hashlib
-import json
 import os
 import tempfile
 import warnings
@@ -34,10 +31,10 @@ import numpy as np
 import pandas as pd
 
 from adaptive_dd.benchmark.scenario import Scenario
+from adaptive_dd.sweep_keys import _task_key
 from adaptive_dd.sweep_spec import Sweep, cell_scenario
 
 __all__ = [
-    "CELL_VERSION",
     "WORKER_ENV",
     "SweepResult",
     "Task",
@@ -48,11 +45,6 @@ __all__ = [
     "run_cell",
     "run_sweep",
 ]
-
-CELL_VERSION = 2
-"""Part of every task key, with the code's version and commit (:func:`_code_id`: cells written by
-other code are run again): bump it when the rows a task returns change meaning (2: the
-``saturation_fraction`` column)."""
 
 WORKER_ENV = {
     "NUMBA_NUM_THREADS": "1",
@@ -149,28 +141,6 @@ class Task:
     controller: str
     settings: tuple[tuple[str, Any], ...]
     seeds: tuple[int, ...]
-
-
-def _task_key(scenario: Scenario, controller: str, settings, seeds) -> str:
-    from adaptive_dd.benchmark.provenance import scenario_dict
-
-    sc = scenario_dict(scenario)  # every field, the arm by its own description (Arm.to_dict)
-    for k in ("name", "source", "seeds", "controllers", "defaulted"):
-        sc.pop(k, None)
-    blob = {"v": CELL_VERSION, "scenario": sc, "controller": controller, "settings": settings, "seeds": seeds}
-    blob["code"] = _code_id()  # a cell of other code (a default changed) is run again, not reused
-    text = json.dumps(blob, sort_keys=True, default=repr)
-    return hashlib.sha256(text.encode()).hexdigest()[:20]
-
-
-@functools.lru_cache(maxsize=1)
-def _code_id() -> str:
-    """The package's version and git commit (:func:`~adaptive_dd.benchmark.provenance.code_provenance`):
-    part of every task key."""
-    from adaptive_dd.benchmark.provenance import code_provenance
-
-    p = code_provenance()
-    return f"{p.get('version')}:{p.get('commit')}"
 
 
 def plan_tasks(sweep: Sweep) -> tuple[dict[str, Task], list[tuple[int, str, str]]]:

@@ -352,7 +352,10 @@ def test_payload_only_on_a_planar_arm_fits_the_four_it_determines(tmp_path, caps
     assert (
         abs(mass - 1.5) < 0.01 and abs(float(cx) - 30.0) < 1.0 and cy == "-" and abs(float(cz) - 50.0) < 1.0
     )
-    assert "not determined on this arm (its motion does not depend on my, Ixx, Ixy, Ixz, Iyz, Izz)" in out
+    assert (
+        "not determined on this arm (its motion does not depend on the payload-frame parameters my, Ixx"
+        in out
+    )
 
 
 @pytest.mark.parametrize("extra", [["--com", "0.1", "0", "0"], ["--radius", "0.2"]])

@@ -702,3 +702,41 @@ def test_output_errors_model_with_a_held_direction(tmp_path, capsys):
     assert held.any() and np.all(np.isfinite(m["std"])) and min(m["std"]) > 0
     ratio = est["std"][held].to_numpy() / outs["wls"][1]["std"][held].to_numpy()
     assert np.all((ratio > 0.3) & (ratio < 3.0)), ratio  # the prior's scale, not the CRB's
+
+
+def test_a_planar_payload_within_its_noise_has_no_centre_of_mass_and_a_valid_entry(arm3):
+    """A payload whose mass is within its noise (none, or a tiny one): the centre of mass is
+    undefined (it printed a meaningless one); an inertia below 0 (noise) is 0 in the entry, which a
+    scenario of the arm accepts (it was refused)."""
+    from adaptive_dd.identification.payload_pair import payload_from_params, payload_record
+
+    seen = np.array([True, True, False, True, False, False, True, False, False, False])
+    cov = np.diag(np.where(seen, 1e-6, 0.0))
+    none = payload_from_params(np.array([1e-4, 1e-4, 0, 1e-4, 0, 0, -1e-5, 0, 0, 0]), cov, seen)
+    assert not none.com_defined and np.isnan(none.inertia_com).all()
+    small = payload_from_params(np.array([0.05, 0.0015, 0, 0.0025, 0, 0, -0.0003, 0, 0, 0]), cov, seen)
+    assert small.com_defined and small.inertia_com[1, 1] < 0
+    assert np.isfinite(small.inertia_com_std[1, 1]) and np.isnan(small.inertia_com_std[0, 0])
+    entry = payload_record(small, "r.csv")["scenario_payload"]
+    assert entry["inertia"][:3] == [0.0, 0.0, 0.0]
+    from adaptive_dd.benchmark.scenario import parse_scenario
+    from adaptive_dd.io import read_toml
+
+    data = read_toml(Path(__file__).resolve().parents[1] / "adaptive_dd/scenarios/vertical3_payload.toml")
+    data["payload"] = [{"at": data["payload"][0]["at"], **entry}]
+    assert parse_scenario(data, "v.toml").swap_masses[0] == pytest.approx(0.05)
+
+
+def test_the_inertia_about_the_centre_of_mass_has_its_first_order_std(arm3):
+    """The inertia's std (the docs promised one; none was given): from the parameters' covariance,
+    checked against the spread of the inertia over draws of the parameters."""
+    from adaptive_dd.identification.payload_pair import _about_com, payload_from_params
+
+    seen = np.array([True, True, False, True, False, False, True, False, False, False])
+    pp = payload_parameters(1.0, [0.02, 0.0, 0.04], [0.002, 0.003, 0.001, 0.0, 0.0, 0.0])
+    C = np.diag(np.where(seen, [1e-6, 1e-8, 0, 1e-8, 0, 0, 1e-9, 0, 0, 0], 0.0))
+    pr = payload_from_params(pp, C, seen)
+    rng = np.random.default_rng(0)
+    draws = rng.multivariate_normal(pp, C, 4000)
+    spread = np.std([_about_com(np.where(seen, d, np.nan))[1, 1] for d in draws])
+    assert pr.inertia_com_std[1, 1] == pytest.approx(spread, rel=0.05)

@@ -116,6 +116,18 @@ def test_identical_tasks_run_once(tmp_path):
     assert len(tasks) == 2 + 2 * 2  # ct_oracle once per block, adaptive_ct per boost bandwidth and block
 
 
+def test_a_task_key_holds_the_code_so_other_code_runs_its_cells_again(tmp_path, monkeypatch):
+    """Cells written by other code (a changed default) were reused by the same sweep command: the task
+    key holds a hash of the package's sources (``_code_id``), so another one gives other keys."""
+    import adaptive_dd.sweep_keys as keys_mod
+
+    sw = load_sweep(_write(tmp_path))
+    before = set(plan_tasks(sw)[0])
+    assert set(plan_tasks(sw)[0]) == before  # the same code: the same keys (resume)
+    monkeypatch.setattr(keys_mod, "_code_id", lambda: "other code")
+    assert not set(plan_tasks(sw)[0]) & before
+
+
 @pytest.mark.parametrize(
     ("edit", "needle"),
     [
@@ -291,7 +303,6 @@ def test_resume_reads_cells_and_gives_the_same_table(tmp_path, client):
 
 
 def test_csv_cells_without_pyarrow(tmp_path, client, monkeypatch):
-    import adaptive_dd.sweep as sweep_mod
 
     sw = load_sweep(_write(tmp_path))
     monkeypatch.setattr(sweep_mod, "_have_parquet", lambda: False)
@@ -560,7 +571,6 @@ def test_a_two_link_only_controller_is_refused_on_a_urdf_arm(tmp_path):
 
 def test_cli_a_sweep_whose_rows_all_fail_exits_1_without_a_heat_map(tmp_path, capsys, monkeypatch):
     """Issue 27: '72 rows (72 failed)' and exit code 0 with an empty heat map."""
-    import adaptive_dd.sweep as sweep_mod
     from adaptive_dd.cli import main
 
     def local(scheduler, workers):

@@ -3,6 +3,7 @@ name whose ``[controllers.NAME]`` table names its ``law``. Its results carry its
 its law's, and a variant that changes nothing gives its law's numbers bit for bit."""
 
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -256,3 +257,48 @@ def test_an_identified_prior_reaches_every_variant_of_adaptive_ct(tmp_path):
         est = dict(dict(opts[name])["estimator"])
         assert {"arm_prior_cov", "p0_arm", "payload_mass_std"} <= set(est), name
     assert "ct_oracle" not in opts
+
+
+def test_the_variants_line_names_what_differs_from_the_law_as_it_runs_here(tmp_path):
+    from adaptive_dd.benchmark.controller_entries import variants_line
+
+    text = (
+        '[run]\nduration = 2.0\nseeds = 1\ncontrollers = ["ct_oracle", "adaptive_ct", "nb", "same", "bare"]\n'
+        "[controllers.adaptive_ct]\nobserver = false\n"
+        '[controllers.nb]\nlaw = "adaptive_ct"\nobserver = false\nboost_duration = 0.0\n'
+        '[controllers.same]\nlaw = "adaptive_ct"\nobserver = false\n'
+        '[controllers.bare]\nlaw = "adaptive_ct"\n'
+    )
+    line = variants_line(load_scenario(str(_write(tmp_path, text))))
+    assert "nb = adaptive_ct with boost_duration = 0.0;" in line
+    assert "same = adaptive_ct (as adaptive_ct runs here)" in line
+    assert "bare = adaptive_ct with observer = its default" in line
+
+
+def test_the_leaderboard_refuses_a_variant_the_shipped_scenarios_lack(tmp_path, capsys):
+    """No scenario given: the shipped ones run, which define no variant; one only the template
+    defines is refused before any run (it failed on the first shipped scenario)."""
+    from adaptive_dd.cli import main
+
+    root = Path(__file__).resolve().parents[1]
+    text = (root / "benchmarks" / "scenarios" / "population.toml").read_text()
+    text = text.replace(
+        'controllers = ["ct_oracle", "adaptive_ct"]', 'controllers = ["ct_oracle", "adaptive_ct", "nob"]'
+    )
+    tmpl = _write(tmp_path, text + '\n[controllers.nob]\nlaw = "adaptive_ct"\n', "tmpl.toml")
+    argv = [
+        "leaderboard",
+        "--arms",
+        "1",
+        "--template",
+        str(tmpl),
+        "--seeds",
+        "1",
+        "--out",
+        str(tmp_path / "o"),
+    ]
+    assert main([*argv, "--controllers", "nob"]) == 2
+    assert "--controllers: unknown controller 'nob'" in capsys.readouterr().err
+    bad = _write(tmp_path, "run = 5\n", "bad.toml")  # a malformed scenario: its own error, not a crash
+    assert main(["leaderboard", str(bad), "--out", str(tmp_path / "o2")]) == 2
+    assert "run: must be a table" in capsys.readouterr().err

@@ -122,7 +122,16 @@ def variants_line(sc) -> str | None:
         table = sc.options(name)
         if "law" not in table:
             continue
-        rest = {k: v for k, v in table.items() if k != "law"}
-        said = ", ".join(f"{k} = {json.dumps(v)}" for k, v in sorted(rest.items()))  # as TOML reads
-        out.append(f"{name} = {table['law']}" + (f" with {said}" if said else " (its defaults)"))
+        law = table["law"]
+        base = sc.options(law) if law in sc.controllers else {}  # what the law itself is given
+        rest = {k: v for k, v in table.items() if k not in ("law", "label") and base.get(k) != v}
+        rest |= {k: "its default" for k in base if k not in table and k not in ("label", "floor")}
+
+        def shown(v):  # as TOML reads it; a long value (a matrix) by its size
+            text = v if v == "its default" else json.dumps(v)
+            return text if len(text) <= 60 else f"({len(text)} characters)"
+
+        said = ", ".join(f"{k} = {shown(v)}" for k, v in sorted(rest.items()))
+        same = f" (as {law} runs here)" if base else " (its defaults)"
+        out.append(f"{name} = {law}" + (f" with {said}" if said else same))
     return "variants: " + "; ".join(out) if out else None

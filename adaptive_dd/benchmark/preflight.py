@@ -187,7 +187,8 @@ def resolved_settings(scenario) -> list[str]:
         from adaptive_dd.closed_loop.model_prior import adaptive_entries
 
         for name in adaptive_entries(scenario):
-            out += derived_estimator_settings(scenario, name) + derived_boost(scenario, name)
+            lines = derived_estimator_settings(scenario, name) + derived_boost(scenario, name)
+            out += [x for x in lines if x not in out]  # the arm's own lines once
     return out
 
 

@@ -483,10 +483,13 @@ def _payload_only(args, arm, model, rec, tau_f, outputs=None) -> int:
             f"{rec.source}: --payload-only cannot simulate this record open loop ({exc}); identify a loaded "
             "and an unloaded record instead (--baseline)"
         ) from None
-    n_fitted = 10 if pr.determined is None else int(sum(pr.determined))
+    which = (
+        "the payload's 10 parameters"
+        if pr.determined is None
+        else f"the {int(sum(pr.determined))} of the payload's 10 parameters this arm determines"
+    )
     print(
-        f"{rec.source}: the arm known (its URDF), the {n_fitted} "
-        f"of the payload's 10 parameters this arm determines fitted by output error (no filtered "
+        f"{rec.source}: the arm known (its URDF), {which} fitted by output error (no filtered "
         f"regression: its time constant, {tau_f:g} s, does not apply)"
     )
     _print_output_error_fit(pr.fit, "", ", so the payload and its Cramér-Rao std below do not hold")

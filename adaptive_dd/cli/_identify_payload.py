@@ -20,19 +20,34 @@ def _print_payload(label: str, pr) -> None:
         "these records to tell from none)"
     )
     print(f"{label} [+- 1 std]: mass {pr.mass:.5g} +- {pr.mass_std:.2g} kg; {com}")
-    ic = pr.inertia_com
-    print(
-        f"  inertia about the centre of mass [kg m^2]: Ixx {f(ic[0, 0], '.4g')}, Iyy {f(ic[1, 1], '.4g')}, "
-        f"Izz {f(ic[2, 2], '.4g')}, Ixy {f(ic[0, 1], '.3g')}, Ixz {f(ic[0, 2], '.3g')}, "
-        f"Iyz {f(ic[1, 2], '.3g')}"
-    )
+    ic, sd = pr.inertia_com, pr.inertia_com_std
+    names = (("Ixx", 0, 0), ("Iyy", 1, 1), ("Izz", 2, 2), ("Ixy", 0, 1), ("Ixz", 0, 2), ("Iyz", 1, 2))
+
+    def entry(i, j):
+        v = f(ic[i, j], ".4g")
+        if v == "-" or sd is None or not np.isfinite(sd[i, j]):
+            return v
+        return f"{v} +- {sd[i, j]:.2g}"
+
+    if pr.com_defined:
+        cells = ", ".join(f"{n} {entry(i, j)}" for n, i, j in names)
+        print(f"  inertia about the centre of mass [kg m^2]: {cells}")
+        low = [n for n, i, j in names[:3] if np.isfinite(ic[i, j]) and ic[i, j] < 0]
+        if low and c is None:
+            print(
+                f"  {', '.join(low)} below 0: no rigid body's (noise about a small inertia); payload.json's "
+                "scenario_payload holds 0 there"
+            )
+    else:
+        print("  inertia about the centre of mass undefined (no centre of mass)")
     if c is None:  # some parameters not determined
         from adaptive_dd.identification.payload_pair import PARAM_NAMES
 
         gone = [n for n, ok in zip(PARAM_NAMES, pr.determined, strict=True) if not ok]
         print(
-            f"  '-': not determined on this arm (its motion does not depend on {', '.join(gone)}); "
-            "physical consistency not judged (it needs the whole body)"
+            f"  '-': not determined on this arm (its motion does not depend on the payload-frame "
+            f"parameters {', '.join(gone)}, nor on what they enter); physical consistency not judged (it "
+            "needs the whole body)"
         )
     elif c.was_physical:
         print(f"  physically consistent as estimated (pseudo-inertia min eigenvalue {c.min_eigenvalue:.3g})")

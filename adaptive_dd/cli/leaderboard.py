@@ -178,9 +178,9 @@ def run(args: argparse.Namespace) -> int:
 def _variant_sources(scenarios, args) -> list:
     """The scenario files a ranked run reads its tables from: the given scenarios (none: the shipped
     ones, which define no variant), and with ``--arms`` the drawn arms' template."""
-    from adaptive_dd.arena.leaderboard import _template
+    from adaptive_dd.arena.leaderboard import _template, shipped_scenarios
 
-    out = [(None, str(p)) for p in scenarios or ()]
+    out = [(None, str(p)) for p in (shipped_scenarios() if scenarios is None else scenarios)]
     if args.arms:
         out.append(_template(args.template))
     return out
@@ -194,9 +194,10 @@ def _variants(sources) -> dict[str, list[str]]:
     out: dict[str, list[str]] = {}
     for data, path in sources:
         data = read_toml(scenario_file(path)) if data is None else data
-        listed = (data.get("run") or {}).get("controllers") or []
-        tables = data.get("controllers") or {}
-        for c in listed:
+        run = data.get("run") if isinstance(data.get("run"), dict) else {}
+        listed = run.get("controllers") if isinstance(run.get("controllers"), list) else []
+        tables = data.get("controllers") if isinstance(data.get("controllers"), dict) else {}
+        for c in listed:  # (a malformed file: none here; its own check names it when it is loaded)
             if isinstance(c, str) and isinstance(tables.get(c), dict) and "law" in tables[c]:
                 out.setdefault(c, []).append(path)
     return out

@@ -91,11 +91,14 @@ class PayloadResult:
     """False when the constrained fit's mass is not positive: ``com`` and ``com_std`` are then NaN, and
     ``identify`` prints the centre of mass as undefined."""
     fit: Any = None
+    """:func:`payload_from_record`'s output-error fit (its ``converged``, ``iterations``, ``cost``,
+    ``n_residuals``); None from a pair."""
     determined: Any = None
     """``(10,)`` bool: the parameters the records determine (None: all ten); the others are NaN in
     ``params``, ``cov``, ``com`` and ``inertia_com`` where they enter, and ``consistent`` is None."""
-    """:func:`payload_from_record`'s output-error fit (its ``converged``, ``iterations``, ``cost``,
-    ``n_residuals``); None from a pair."""
+    inertia_com_std: Any = None
+    """``(3, 3)``: first-order standard deviation of ``inertia_com`` (from ``cov``; NaN where not
+    determined)."""
 
 
 def payload_record(pr: PayloadResult, source: str) -> dict:
@@ -120,6 +123,9 @@ def payload_record(pr: PayloadResult, source: str) -> dict:
         "com_m": plain(pr.com) if pr.com_defined else None,
         "com_std_m": plain(pr.com_std) if pr.com_defined else None,
         "inertia_com_kg_m2": plain(inertia),
+        "inertia_com_std_kg_m2": None
+        if pr.inertia_com_std is None
+        else plain([pr.inertia_com_std[i, j] for i, j in ((0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2))]),
         "physical_as_estimated": None if pr.consistent is None else bool(pr.consistent.was_physical),
         "params": plain(pr.params),
         "params_order": "m, m cx, m cy, m cz, Ixx, Ixy, Iyy, Ixz, Iyz, Izz (about the payload frame)",
@@ -133,8 +139,8 @@ def payload_record(pr: PayloadResult, source: str) -> dict:
         out["determined"] = [n for n, ok in zip(PARAM_NAMES, pr.determined, strict=True) if ok]
         out["scenario_payload_note"] = (
             "the parameters this arm does not determine do not act on it: scenario_payload holds 0 for "
-            "their centre of mass, the largest determined principal inertia for their diagonal inertia "
-            "and 0 off the diagonal (a valid body with the same effect on this arm)"
+            "their centre of mass, the determined diagonal inertia (at least 0) for the others on the "
+            "diagonal and 0 off it (a valid body with the same effect on this arm)"
         )
     return out
 
@@ -144,7 +150,7 @@ def _filled(inertia: list) -> list[float]:
     whole is a body (:func:`payload_record`'s note): diagonal ones by the largest determined one, off
     the diagonal by 0."""
     v = np.asarray(inertia, float)
-    diag = v[:3]
+    diag = np.where(np.isfinite(v[:3]), np.maximum(v[:3], 0.0), np.nan)  # noise about a small one: 0
     fill = float(np.nanmax(diag)) if np.isfinite(diag).any() else 0.0
     v[:3] = np.where(np.isfinite(diag), diag, fill)
     v[3:] = np.nan_to_num(v[3:])
@@ -189,6 +195,21 @@ def _about_com(q: Array) -> Array:
     return Io - m * shift
 
 
+def _inertia_std(q: Array, C: Array, seen: NDArray[np.bool_]) -> Array:
+    """First-order std of :func:`_about_com` at ``q`` from ``C`` over the parameters ``seen`` (central
+    differences; NaN where an entry depends on one not seen)."""
+    k = np.flatnonzero(seen)
+    J = np.empty((9, k.size))
+    for c, i in enumerate(k):
+        h = 1e-6 * max(abs(q[i]), 1e-3)
+        up, dn = q.copy(), q.copy()
+        up[i] += h
+        dn[i] -= h
+        J[:, c] = ((_about_com(up) - _about_com(dn)) / (2 * h)).ravel()
+    var = np.einsum("ij,jk,ik->i", J, C[np.ix_(k, k)], J)
+    return np.where(np.isfinite(_about_com(q)), np.sqrt(np.maximum(var, 0.0)).reshape(3, 3), np.nan)
+
+
 def payload_from_params(
     params: ArrayLike, cov: ArrayLike, determined: ArrayLike | None = None
 ) -> PayloadResult:
@@ -211,9 +232,11 @@ def payload_from_params(
             g = np.zeros(10)
             g[0], g[1 + k] = -q[1 + k] / m**2, 1.0 / m
             com_std[k] = np.sqrt(max(g @ C @ g, 0.0))
+    inertia_std = _inertia_std(q, C, np.ones(10, bool)) if defined else np.full((3, 3), np.nan)
     return PayloadResult(
-        p, C, float(m), float(np.sqrt(C[0, 0])), com, com_std, _inertia_about_com(q), fit, com_defined=defined
-    )
+        p, C, float(m), float(np.sqrt(C[0, 0])), com, com_std, _inertia_about_com(q), fit,
+        com_defined=defined, inertia_com_std=inertia_std,
+    )  # fmt: skip
 
 
 def _partial(p: Array, C: Array, seen: NDArray[np.bool_]) -> PayloadResult:
@@ -223,9 +246,10 @@ def _partial(p: Array, C: Array, seen: NDArray[np.bool_]) -> PayloadResult:
     q = np.where(seen, p, np.nan)
     cov = np.where(np.outer(seen, seen), C, np.nan)
     m = q[0]
-    defined = bool(m > 0)
+    # no consistent fit to say whether there is a body: the mass must stand out of its own noise
+    defined = bool(m > 1.96 * np.sqrt(max(C[0, 0], 0.0)))
     com, com_std = np.full(3, np.nan), np.full(3, np.nan)
-    inertia = np.full((3, 3), np.nan)
+    inertia, inertia_std = np.full((3, 3), np.nan), np.full((3, 3), np.nan)
     if defined:
         com = q[1:4] / m
         for k in range(3):
@@ -235,9 +259,10 @@ def _partial(p: Array, C: Array, seen: NDArray[np.bool_]) -> PayloadResult:
                 k2 = np.flatnonzero(g)
                 com_std[k] = np.sqrt(max(g[k2] @ C[np.ix_(k2, k2)] @ g[k2], 0.0))
         inertia = _about_com(q)
+        inertia_std = _inertia_std(q, C, seen)
     return PayloadResult(
         q, cov, float(m), float(np.sqrt(C[0, 0])), com, com_std, inertia, None, com_defined=defined,
-        determined=seen,
+        determined=seen, inertia_com_std=inertia_std,
     )  # fmt: skip
 
 
@@ -302,6 +327,13 @@ def payload_from_pair(
     """
     seen = payload_seen(arm, "a pair of records")
     P = arm.payload_basis[:, seen]
+    n = P.shape[0]
+    shapes = [np.shape(x) for x in (sigma_loaded, cov_loaded, sigma_unloaded, cov_unloaded)]
+    if shapes != [(n,), (n, n), (n,), (n, n)]:
+        raise ParameterError(
+            f"payload_from_pair: the estimates must have the arm's {n} base parameters and their "
+            f"covariances {n} x {n}; got shapes {shapes} (loaded, its covariance, unloaded, its covariance)"
+        )
     d = np.asarray(sigma_loaded, float) - np.asarray(sigma_unloaded, float)
     C = np.asarray(cov_loaded, float) + np.asarray(cov_unloaded, float)
     if not (np.all(np.isfinite(d)) and np.all(np.isfinite(C))):

@@ -1,0 +1,47 @@
+"""A sweep task's key: what the cell's rows depend on (the scenario's fields, the controller, its
+settings, the seeds, the rows' format and the package's own code), hashed; a cell whose key is on
+disk is read back, not run (:mod:`adaptive_dd.sweep`)."""
+
+from __future__ import annotations
+
+import functools
+import hashlib
+import json
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from adaptive_dd.benchmark.scenario import Scenario
+
+__all__ = ["CELL_VERSION"]
+
+CELL_VERSION = 2
+"""Part of every task key, with a hash of the package's sources (:func:`_code_id`: cells written by
+other code are run again): bump it when the rows a task returns change meaning (2: the
+``saturation_fraction`` column)."""
+
+
+def _task_key(scenario: Scenario, controller: str, settings, seeds) -> str:
+    from adaptive_dd.benchmark.provenance import scenario_dict
+
+    sc = scenario_dict(scenario)  # every field, the arm by its own description (Arm.to_dict)
+    for k in ("name", "source", "seeds", "controllers", "defaulted"):
+        sc.pop(k, None)
+    blob = {"v": CELL_VERSION, "scenario": sc, "controller": controller, "settings": settings, "seeds": seeds}
+    blob["code"] = _code_id()  # a cell of other code (a default changed) is run again, not reused
+    text = json.dumps(blob, sort_keys=True, default=repr)
+    return hashlib.sha256(text.encode()).hexdigest()[:20]
+
+
+@functools.lru_cache(maxsize=1)
+def _code_id() -> str:
+    """A hash of the package's own source files (every ``.py`` under ``adaptive_dd``, by path and
+    content): part of every task key, so that a cell written by other code is run again. Exact
+    whether or not the code is a git checkout, and blind to the docs."""
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parent
+    h = hashlib.sha256()
+    for f in sorted(root.rglob("*.py")):
+        h.update(str(f.relative_to(root)).encode())
+        h.update(f.read_bytes())
+    return h.hexdigest()[:16]
