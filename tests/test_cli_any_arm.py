@@ -5,6 +5,7 @@ arm's kind is an error naming it, the options both kinds share mean the same on 
 
 from __future__ import annotations
 
+import json
 from importlib import resources
 from pathlib import Path
 
@@ -342,7 +343,10 @@ def test_payload_only_on_a_planar_arm_fits_the_four_it_determines(tmp_path, caps
     rec = tmp_path / "rec"
     sim = ["simulate", "--arm", arm, "--duration", "3", "--payload", "1.5", "--com", "0.03", "0", "0.05"]
     assert main([*sim, "--out", str(rec)]) == 0
-    capsys.readouterr()
+    truth = json.loads((rec / "trajectory.json").read_text())["payload"]  # what was simulated, said
+    assert truth["mass_kg"] == 1.5 and truth["com_m"] == pytest.approx([0.03, 0.0, 0.05])
+    assert truth["inertia_com_kg_m2"][1] == pytest.approx(1.5 * 0.05**2 / 4)  # the default disk's
+    assert "inertia about its centre of mass [ixx, iyy, izz]" in capsys.readouterr().out
     assert main(["identify", "--arm", arm, str(rec / "trajectory.csv"), "--payload-only"]) == 0
     out = capsys.readouterr().out
     assert "the 4 of the payload's 10 parameters this arm determines fitted" in out

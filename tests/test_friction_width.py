@@ -211,7 +211,7 @@ def test_simulate_then_identify_fits_the_law_the_record_was_made_with(tmp_path, 
     sim = tmp_path / "s"
     assert main(["simulate", "--arm", str(scen), "--duration", "2", "--out", str(sim)]) == 0
     made = json.loads((sim / "trajectory.json").read_text())
-    assert made == {"plant": "model", "coulomb_law": "tanh", "friction_velocity": 0.02}
+    assert made == {"plant": "model", "coulomb_law": "tanh", "friction_velocity": 0.02, "payload": None}
     capsys.readouterr()
     argv = ["identify", "--arm", str(scen), str(sim / "trajectory.csv"), "--output-error", "off"]
     assert main([*argv, "--out", str(tmp_path / "a")]) == 0

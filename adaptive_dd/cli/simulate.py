@@ -263,7 +263,7 @@ def simulate_arm(args: argparse.Namespace, scenario_path: str, outputs) -> int:
         plant=getattr(args, "plant", "model"),
     )
     write_recording(outputs.path("trajectory.csv"), rec.t, rec.q[0], rec.qd[0], rec.tau[0])
-    _write_made_by(outputs.path("trajectory.json"), arm, getattr(args, "plant", "model"))
+    _write_made_by(outputs.path("trajectory.json"), arm, getattr(args, "plant", "model"), payload)
     np.savez_compressed(
         outputs.path("trajectory.npz"),
         t=rec.t,
@@ -276,7 +276,7 @@ def simulate_arm(args: argparse.Namespace, scenario_path: str, outputs) -> int:
         pi_true=rec.pi_true,
         payload=rec.payload,
     )
-    _print_record(args, arm, sc, rec, where)
+    _print_record(args, arm, sc, rec, where, payload)
     return 0
 
 
@@ -358,9 +358,11 @@ def _drawn_plant(args: argparse.Namespace, sc, scenario_path: str, outputs):
     return drawn
 
 
-def _write_made_by(path, arm, plant: str) -> None:
+def _write_made_by(path, arm, plant: str, payload=None) -> None:
     """``trajectory.json`` beside the record: how its plant's friction was simulated, which
-    ``adaptive-dd identify`` reads to fit the same Coulomb law (``--coulomb-width auto``)."""
+    ``adaptive-dd identify`` reads to fit the same Coulomb law (``--coulomb-width auto``), and the
+    payload simulated (None: none): its mass, centre of mass and inertia about it, the truth an
+    identified payload is checked against."""
     import json
 
     model = plant != "benchmark"  # the identification model's RK4: fc tanh(qd / v_f)
@@ -368,18 +370,40 @@ def _write_made_by(path, arm, plant: str) -> None:
         "plant": "model" if model else "benchmark",
         "coulomb_law": "tanh" if model else arm.friction,
         "friction_velocity": float(arm.friction_velocity) if model or arm.friction == "tanh" else None,
+        "payload": None if payload is None else _payload_truth(payload),
     }
     with open(path, "w", encoding="utf-8") as f:
         json.dump(made, f, indent=2)
 
 
-def _print_record(args: argparse.Namespace, arm, sc, rec, where: str) -> None:
+def _payload_truth(p) -> dict:
+    """The payload of ten parameters ``p`` (about the payload frame) as mass, centre of mass and
+    inertia about it (``[ixx, iyy, izz, ixy, ixz, iyz]``), as ``identify`` prints and writes them."""
+    from adaptive_dd.identification.payload_pair import _about_com
+
+    p = np.asarray(p, float)
+    ic = _about_com(p)
+    return {
+        "mass_kg": float(p[0]),
+        "com_m": [float(x) for x in p[1:4] / p[0]],
+        "inertia_com_kg_m2": [float(ic[i, j]) for i, j in ((0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2))],
+        "params": [float(x) for x in p],
+    }
+
+
+def _print_record(args: argparse.Namespace, arm, sc, rec, where: str, payload=None) -> None:
     plant = getattr(args, "plant", "model")
     print(
         f"{where}: the scenario's reference tracked by computed torque "
         f"(the plant's own model, 40 rad/s), {args.duration} s at T = {args.sample_period} s, payload "
         f"{args.payload} kg"
         + (f" at [{', '.join(f'{c:g}' for c in args.com)}] m" if args.payload and args.com else "")
+        + (
+            " (inertia about its centre of mass [ixx, iyy, izz] "
+            f"{[float(f'{x:.4g}') for x in _payload_truth(payload)['inertia_com_kg_m2'][:3]]} kg m^2)"
+            if payload is not None
+            else ""
+        )
         + f", {args.seeds} trial(s), "
         + (
             f"the benchmark's plant, friction {arm.friction}"
