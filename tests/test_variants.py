@@ -302,3 +302,11 @@ def test_the_leaderboard_refuses_a_variant_the_shipped_scenarios_lack(tmp_path, 
     bad = _write(tmp_path, "run = 5\n", "bad.toml")  # a malformed scenario: its own error, not a crash
     assert main(["leaderboard", str(bad), "--out", str(tmp_path / "o2")]) == 2
     assert "run: must be a table" in capsys.readouterr().err
+
+
+def test_the_docs_variants_snippet_is_a_scenario_that_loads(tmp_path):
+    """docs/controllers.md's TOML of "One law twice: variants" (it listed a variant without its table)."""
+    text = (Path(__file__).resolve().parents[1] / "docs" / "controllers.md").read_text()
+    start = text.index("```toml", text.index("## One law twice: variants")) + len("```toml")
+    sc = load_scenario(str(_write(tmp_path, text[start : text.index("```", start)])))
+    assert sc.controllers[-3:] == ("no_observer", "no_boost", "long_boost")

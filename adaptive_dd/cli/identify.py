@@ -152,8 +152,9 @@ def _add_arm_options(i: argparse.ArgumentParser) -> None:
         "--output-error",
         choices=("auto", "on", "off"),
         default="auto",
-        help="with --arm: output error beside the WLS estimate, printed for comparison (the model written "
-        "is the WLS one; auto: for records in the simulator's format only)",
+        help="with --arm: output error beside the WLS estimate (the model written is output error's where "
+        "it converged with its noise model, normalised residual <= 2, else the WLS one; auto: for records "
+        "in the simulator's format only)",
     )
 
 

@@ -38,7 +38,8 @@ def add_parser(sub) -> None:
         "--controllers",
         nargs="+",
         metavar="NAME",
-        help="built-in names or plug-ins' MODULE:CLASS (default: the arena's list)",
+        help="built-in names, plug-ins' MODULE:CLASS, or variants every given scenario (and with --arms "
+        "the template) defines (default: the arena's list)",
     )
     p.add_argument(
         "--plugin",

@@ -46,10 +46,10 @@ Array = NDArray[np.float64]
 BOOST_RULE = (
     "one rule on every arm: the boost lasts while the estimator learns the payload it models, "
     "at least its slowest learning time after a swap on the arm's shipped scenario: the paper's sigma "
-    "models the payload's mass only (at the tip, eq. 9), known within 5 % 0.05-0.14 s after a swap "
+    "models the payload's mass only (at the tip, eq. 9), known within 5 % 0.05-0.15 s after a swap "
     "(payload_swap); an N-joint estimate also holds the payload's centre of mass, within 1 cm "
-    "0.11-0.98 s after a swap (ur5_tool_swap); each arm's figures are worse with the other's "
-    "default (docs/controllers.md)"
+    "0.11-0.98 s after a swap (ur5_tool_swap); each arm's loaded segments are worse with the "
+    "other's default (docs/controllers.md)"
 )
 """Why ``adaptive_ct``'s ``boost_duration`` defaults to 0.2 s on the two-link arm and 1 s on an
 N-joint arm: one rule, two estimators (``docs/controllers.md``, the measurement)."""

@@ -363,7 +363,7 @@ def page() -> str:
     lines += [
         f"Every controller also takes {', '.join(f'`{k}`' for k in common)}. An entry of",
         "`run.controllers` of a name of your own takes `law` too: a variant, the law it names run with",
-        "its table's settings beside the law itself (an ablation; {doc}`../controllers`).",
+        "its table's settings (an ablation; {doc}`../controllers`).",
         "",
     ]
     used.add("setting.law")
