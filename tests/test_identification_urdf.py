@@ -730,7 +730,7 @@ def test_a_planar_payload_within_its_noise_has_no_centre_of_mass_and_a_valid_ent
 def test_the_inertia_about_the_centre_of_mass_has_its_first_order_std(arm3):
     """The inertia's std (the docs promised one; none was given): from the parameters' covariance,
     checked against the spread of the inertia over draws of the parameters."""
-    from adaptive_dd.identification.payload_pair import _about_com, payload_from_params
+    from adaptive_dd.identification.payload_pair import _inertia_about_com, payload_from_params
 
     seen = np.array([True, True, False, True, False, False, True, False, False, False])
     pp = payload_parameters(1.0, [0.02, 0.0, 0.04], [0.002, 0.003, 0.001, 0.0, 0.0, 0.0])
@@ -738,5 +738,5 @@ def test_the_inertia_about_the_centre_of_mass_has_its_first_order_std(arm3):
     pr = payload_from_params(pp, C, seen)
     rng = np.random.default_rng(0)
     draws = rng.multivariate_normal(pp, C, 4000)
-    spread = np.std([_about_com(np.where(seen, d, np.nan))[1, 1] for d in draws])
+    spread = np.std([_inertia_about_com(np.where(seen, d, np.nan))[1, 1] for d in draws])
     assert pr.inertia_com_std[1, 1] == pytest.approx(spread, rel=0.05)

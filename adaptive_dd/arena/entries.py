@@ -4,19 +4,19 @@ the law each runs (a variant's, or its own name)."""
 from __future__ import annotations
 
 from collections.abc import Sequence
-from pathlib import Path
 
 from adaptive_dd.errors import ParameterError
 
 
-def _with_floors(sc, names: Sequence[str]) -> tuple[tuple[str, ...], dict, dict]:
+def _with_floors(sc, names: Sequence[str]) -> tuple[tuple[str, ...], dict, dict, dict]:
     """The names to run (each asked-for one and its floor), each one's floor by the label its
-    results carry, and why a floor that does not build is missing (its row then has no ratio and
-    says so)."""
-    from adaptive_dd.controllers.plugins import DEFAULT_FLOOR
-    from adaptive_dd.controllers.registry import scenario_controller
+    results carry, why a floor that does not build is missing (its row then has no ratio and says
+    so), and the law each asked-for one runs by its label (a variant's ``law``, else its own name)."""
+    from adaptive_dd.controllers.plugins import DEFAULT_FLOOR, table_name
+    from adaptive_dd.controllers.registry import law_of, scenario_controller
 
     floors: dict[str, str | None] = {}
+    laws: dict[str, str] = {}
     missing: dict[str, str] = {}
     run: list[str] = []
     for name in names:
@@ -26,6 +26,7 @@ def _with_floors(sc, names: Sequence[str]) -> tuple[tuple[str, ...], dict, dict]
             where = "" if str(exc).startswith(str(sc.source)) else f"{sc.source}: "
             raise ParameterError(f"leaderboard: {where}{exc}") from None
         floor = floors[label] = getattr(ctrl, "floor", DEFAULT_FLOOR)
+        laws[label] = law_of(name, sc.options(table_name(name)))
         if floor is not None and floor not in run and floor not in missing:
             try:
                 scenario_controller(sc, floor)
@@ -34,17 +35,4 @@ def _with_floors(sc, names: Sequence[str]) -> tuple[tuple[str, ...], dict, dict]
         for n in (name, floor):
             if n is not None and n not in run and n not in missing:
                 run.append(n)
-    return tuple(run), floors, missing
-
-
-def _laws(sc, names) -> dict[str, str]:
-    """``{the name a controller's results carry: the law it runs}`` (a variant's ``law``, else the
-    entry itself: a built-in name or an import path)."""
-    from adaptive_dd.benchmark.scenario_settings import result_names
-    from adaptive_dd.controllers.plugins import table_name
-    from adaptive_dd.controllers.registry import law_of
-
-    src = Path(str(sc.source))
-    opts = {n: sc.options(n) for n in (*names, *map(table_name, names))}
-    labels = result_names(names, opts, (src.parent, Path.cwd()) if src.is_file() else None)
-    return {labels[n]: law_of(n, sc.options(table_name(n))) for n in names}
+    return tuple(run), floors, missing, laws

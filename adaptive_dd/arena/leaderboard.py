@@ -35,7 +35,7 @@ from pathlib import Path
 import numpy as np
 
 from adaptive_dd.arena.columns import COLUMNS, contenders, told_the_model
-from adaptive_dd.arena.entries import _laws, _with_floors
+from adaptive_dd.arena.entries import _with_floors
 from adaptive_dd.benchmark.end_effector import EE_KEYS
 from adaptive_dd.benchmark.scenario import packaged_scenarios
 from adaptive_dd.errors import ParameterError
@@ -531,7 +531,7 @@ def _run_cells(sc, kind: str, controllers, seeds, progress, times=None) -> list[
 
     if seeds is not None:
         sc = dataclasses.replace(sc, seeds=seeds)
-    names, floors, missing = _with_floors(sc, controllers)
+    names, floors, missing, laws = _with_floors(sc, controllers)
     with warnings.catch_warnings():  # a floor that cannot run is the row's floor_note (missing), said once
         warnings.filterwarnings("ignore", message=FLOOR_NOT_RUN)
         # no trajectories kept and no excitation report's scale check: the table reads neither
@@ -549,7 +549,6 @@ def _run_cells(sc, kind: str, controllers, seeds, progress, times=None) -> list[
 
     cells = _cells(sc.name, kind, per, floors, missing, masses, sc.sample_period, res.seed_indices, t0)
     caveat = floor_caveat(sc)
-    laws = _laws(sc, names)
     for c in cells:
         c["law"] = laws.get(c["controller"], c["controller"])
         if caveat and c["floor"] and not c["floor_note"]:

@@ -114,6 +114,12 @@ def _check_options(e: list, opts: Any, ctrls: tuple) -> None:
         _plain(e, f"controllers.{name}", table)
 
 
+def _shown(v) -> str:
+    """A setting's value as TOML reads it; a long one (a matrix) by its size."""
+    text = v if v == "its default" else json.dumps(v)
+    return text if len(text) <= 60 else f"({len(text)} characters)"
+
+
 def variants_line(sc) -> str | None:
     """One line naming each variant of the scenario ``sc`` (an entry whose table names its ``law``)
     with the settings it changes, for the report and ``validate``; None when there is none."""
@@ -126,12 +132,7 @@ def variants_line(sc) -> str | None:
         base = sc.options(law) if law in sc.controllers else {}  # what the law itself is given
         rest = {k: v for k, v in table.items() if k not in ("law", "label") and base.get(k) != v}
         rest |= {k: "its default" for k in base if k not in table and k not in ("label", "floor")}
-
-        def shown(v):  # as TOML reads it; a long value (a matrix) by its size
-            text = v if v == "its default" else json.dumps(v)
-            return text if len(text) <= 60 else f"({len(text)} characters)"
-
-        said = ", ".join(f"{k} = {shown(v)}" for k, v in sorted(rest.items()))
+        said = ", ".join(f"{k} = {_shown(v)}" for k, v in sorted(rest.items()))
         same = f" (as {law} runs here)" if base else " (its defaults)"
         out.append(f"{name} = {law}" + (f" with {said}" if said else same))
     return "variants: " + "; ".join(out) if out else None

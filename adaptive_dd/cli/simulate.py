@@ -379,14 +379,14 @@ def _write_made_by(path, arm, plant: str, payload=None) -> None:
 def _payload_truth(p) -> dict:
     """The payload of ten parameters ``p`` (about the payload frame) as mass, centre of mass and
     inertia about it (``[ixx, iyy, izz, ixy, ixz, iyz]``), as ``identify`` prints and writes them."""
-    from adaptive_dd.identification.payload_pair import _about_com
+    from adaptive_dd.identification.payload_pair import _inertia_about_com, six
 
     p = np.asarray(p, float)
-    ic = _about_com(p)
+    ic = _inertia_about_com(p)
     return {
         "mass_kg": float(p[0]),
         "com_m": [float(x) for x in p[1:4] / p[0]],
-        "inertia_com_kg_m2": [float(ic[i, j]) for i, j in ((0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2))],
+        "inertia_com_kg_m2": six(ic),
         "params": [float(x) for x in p],
     }
 

@@ -107,7 +107,7 @@ def payload_record(pr: PayloadResult, source: str) -> dict:
     and ``inertia`` (about the centre of mass, ``[ixx, iyy, izz, ixy, ixz, iyz]``) to paste into a
     scenario (``com`` and ``inertia`` left out when the mass is not positive)."""
     ic = pr.inertia_com
-    inertia = [ic[0, 0], ic[1, 1], ic[2, 2], ic[0, 1], ic[0, 2], ic[1, 2]]
+    inertia = six(ic)
     entry = {"mass": round(max(pr.mass, 0.0), 6)}
     if pr.com_defined:
         entry |= {"com": [round(float(x), 6) for x in np.nan_to_num(pr.com)], "inertia": _filled(inertia)}
@@ -123,9 +123,7 @@ def payload_record(pr: PayloadResult, source: str) -> dict:
         "com_m": plain(pr.com) if pr.com_defined else None,
         "com_std_m": plain(pr.com_std) if pr.com_defined else None,
         "inertia_com_kg_m2": plain(inertia),
-        "inertia_com_std_kg_m2": None
-        if pr.inertia_com_std is None
-        else plain([pr.inertia_com_std[i, j] for i, j in ((0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2))]),
+        "inertia_com_std_kg_m2": None if pr.inertia_com_std is None else plain(six(pr.inertia_com_std)),
         "physical_as_estimated": None if pr.consistent is None else bool(pr.consistent.was_physical),
         "params": plain(pr.params),
         "params_order": "m, m cx, m cy, m cz, Ixx, Ixy, Iyy, Ixz, Iyz, Izz (about the payload frame)",
@@ -157,11 +155,28 @@ def _filled(inertia: list) -> list[float]:
     return [float(x) for x in v]
 
 
+INERTIA_ENTRIES = ((0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2))
+"""The six entries of an inertia matrix in a ``[[payload]]`` entry's order ``[ixx, iyy, izz, ixy,
+ixz, iyz]``."""
+
+
+def six(M: ArrayLike) -> list[float]:
+    """``[ixx, iyy, izz, ixy, ixz, iyz]`` of a ``(3, 3)`` inertia (:data:`INERTIA_ENTRIES`)."""
+    return [float(M[i][j]) for i, j in INERTIA_ENTRIES]
+
+
 def _inertia_about_com(p: Array) -> Array:
-    m, h = p[0], p[1:4]
+    """Inertia about the centre of mass from the ten parameters ``p``, entry by entry, so that an
+    undetermined parameter (NaN) makes NaN only the entries it enters; a body of no positive mass
+    taken at the payload frame's origin."""
+    m = p[0]
+    c = p[1:4] / m if m > 0 else np.zeros(3)
     Io = np.array([[p[4], p[5], p[7]], [p[5], p[6], p[8]], [p[7], p[8], p[9]]])
-    c = h / m if m > 0 else np.zeros(3)
-    return Io - m * (c @ c * np.eye(3) - np.outer(c, c))
+    shift = np.empty((3, 3))
+    for i in range(3):
+        for j in range(3):
+            shift[i, j] = sum(c[k] ** 2 for k in range(3) if k != i) if i == j else -c[i] * c[j]
+    return Io - m * shift
 
 
 PARAM_NAMES = ("m", "mx", "my", "mz", "Ixx", "Ixy", "Iyy", "Ixz", "Iyz", "Izz")
@@ -184,20 +199,9 @@ def payload_seen(arm, what: str) -> NDArray[np.bool_]:
     return seen
 
 
-def _about_com(q: Array) -> Array:
-    """Inertia about the centre of mass, entry by entry, NaN where an undetermined parameter enters."""
-    m, c = q[0], q[1:4] / q[0]
-    Io = np.array([[q[4], q[5], q[7]], [q[5], q[6], q[8]], [q[7], q[8], q[9]]])
-    shift = np.empty((3, 3))
-    for i in range(3):
-        for j in range(3):
-            shift[i, j] = sum(c[k] ** 2 for k in range(3) if k != i) if i == j else -c[i] * c[j]
-    return Io - m * shift
-
-
 def _inertia_std(q: Array, C: Array, seen: NDArray[np.bool_]) -> Array:
-    """First-order std of :func:`_about_com` at ``q`` from ``C`` over the parameters ``seen`` (central
-    differences; NaN where an entry depends on one not seen)."""
+    """First-order std of :func:`_inertia_about_com` at ``q`` from ``C`` over the parameters
+    ``seen`` (central differences; NaN where an entry depends on one not seen)."""
     k = np.flatnonzero(seen)
     J = np.empty((9, k.size))
     for c, i in enumerate(k):
@@ -205,9 +209,9 @@ def _inertia_std(q: Array, C: Array, seen: NDArray[np.bool_]) -> Array:
         up, dn = q.copy(), q.copy()
         up[i] += h
         dn[i] -= h
-        J[:, c] = ((_about_com(up) - _about_com(dn)) / (2 * h)).ravel()
+        J[:, c] = ((_inertia_about_com(up) - _inertia_about_com(dn)) / (2 * h)).ravel()
     var = np.einsum("ij,jk,ik->i", J, C[np.ix_(k, k)], J)
-    return np.where(np.isfinite(_about_com(q)), np.sqrt(np.maximum(var, 0.0)).reshape(3, 3), np.nan)
+    return np.where(np.isfinite(_inertia_about_com(q)), np.sqrt(np.maximum(var, 0.0)).reshape(3, 3), np.nan)
 
 
 def payload_from_params(
@@ -258,7 +262,7 @@ def _partial(p: Array, C: Array, seen: NDArray[np.bool_]) -> PayloadResult:
                 g[0], g[1 + k] = -q[1 + k] / m**2, 1.0 / m
                 k2 = np.flatnonzero(g)
                 com_std[k] = np.sqrt(max(g[k2] @ C[np.ix_(k2, k2)] @ g[k2], 0.0))
-        inertia = _about_com(q)
+        inertia = _inertia_about_com(q)
         inertia_std = _inertia_std(q, C, seen)
     return PayloadResult(
         q, cov, float(m), float(np.sqrt(C[0, 0])), com, com_std, inertia, None, com_defined=defined,
