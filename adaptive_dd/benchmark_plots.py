@@ -358,7 +358,8 @@ def _segment_label(rows) -> str:
 
 def plot_ratios(frame, path: str | Path | None = None, formats=("png",)):
     """Per controller and segment: the mean per-seed ratio to the floor with its 95 % interval
-    (Student t, the report's ``ci95``).
+    (percentile bootstrap, the report's ``ci95``:
+    :func:`~adaptive_dd.benchmark.intervals.mean_interval`).
 
     The benchmark's leaderboard as a figure: one group of markers per payload segment, one marker
     per controller (its colour of :data:`STYLES`), the ratio of its RMS tracking error to its
@@ -395,7 +396,8 @@ def plot_ratios(frame, path: str | Path | None = None, formats=("png",)):
     'RMS error / floor RMS error, per seed [-]'
     """
     import pandas as pd
-    from scipy.special import stdtrit  # Student t's quantile, as ratio_statistics takes it
+
+    from adaptive_dd.benchmark.intervals import mean_interval
 
     df = pd.DataFrame(frame)
     df = df[np.isfinite(pd.to_numeric(df["ratio_to_floor"], errors="coerce"))]
@@ -405,15 +407,19 @@ def plot_ratios(frame, path: str | Path | None = None, formats=("png",)):
     width = 0.8 / max(len(names), 1)
     for i, name in enumerate(names):
         sub = df[df["controller"] == name]
-        stats = sub.groupby("segment")["ratio_to_floor"].agg(["mean", "std", "count"])
         x = np.arange(len(segments)) + (i - (len(names) - 1) / 2) * width
-        mean = stats["mean"].reindex(segments["segment"]).to_numpy(dtype=float)
-        # the report's interval (ratio_statistics' ci95): Student t, not 1.96, with few seeds
-        t95 = stdtrit(np.maximum(stats["count"] - 1, 1), 0.975).where(stats["count"] > 1)
-        half = (t95 * stats["std"] / np.sqrt(stats["count"])).reindex(segments["segment"])
-        half = np.nan_to_num(half.to_numpy(dtype=float))
+        mean, err = np.full(len(segments), np.nan), np.zeros((2, len(segments)))
+        for k, seg in enumerate(segments["segment"]):
+            rows = sub.loc[sub["segment"] == seg]
+            rows = rows.sort_values("seed") if "seed" in rows else rows  # the report's order
+            r = rows["ratio_to_floor"].to_numpy(dtype=float)
+            if r.size:
+                mean[k] = r.mean()
+                ci = mean_interval(r)  # the report's interval (ratio_statistics' ci95), seed order
+                if ci is not None:
+                    err[:, k] = mean[k] - ci[0], ci[1] - mean[k]
         style = controller_style(name)
-        ax.errorbar(x, mean, yerr=half, fmt="o", ms=4, capsize=3, color=style["color"], label=name)
+        ax.errorbar(x, mean, yerr=err, fmt="o", ms=4, capsize=3, color=style["color"], label=name)
     ax.axhline(1.0, color="k", lw=0.8)
     ax.set_yscale("log")
     labels = [_segment_label(df[df["segment"] == g]) for g in segments["segment"]]

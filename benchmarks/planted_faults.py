@@ -42,9 +42,9 @@ FAULTS = {
         '"median": float(np.median(r)),',
         '"median": float(np.mean(r)),',
     ),
-    "95 % interval with z = 1.96 and the population std": (
-        "half = float(stdtrit(r.size - 1, 0.975) * r.std(ddof=1) / np.sqrt(r.size))",
-        "half = float(1.96 * r.std() / np.sqrt(r.size))",
+    "95 % interval drawn from an unseeded generator (not reproducible)": (
+        "ci = mean_interval(r)",
+        "ci = mean_interval(r, np.random.default_rng())",
     ),
     "missed swaps not counted": (
         "missed += lost",

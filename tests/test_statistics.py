@@ -11,6 +11,7 @@ import dataclasses
 import numpy as np
 import pytest
 
+from adaptive_dd.benchmark.intervals import BOOTSTRAP_RESAMPLES, mean_interval
 from adaptive_dd.benchmark.metrics import (
     FALSE_ALARM_WINDOW,
     compute_metrics,
@@ -37,9 +38,26 @@ def test_ratio_statistics_by_hand():
     assert st["p90"] == pytest.approx(9.1)  # 9 + 0.1 (10 - 9): linear interpolation
     assert st["max"] == 10.0
     assert st["worst_seed"] == 100 and st["n"] == 10
-    # sample std of 1..10 = sqrt(110 / 12); t(0.975, 9) = 2.2621571628
-    half = 2.2621571628 * np.sqrt(110 / 12) / np.sqrt(10)
-    np.testing.assert_allclose(st["ci95"], [5.5 - half, 5.5 + half], rtol=1e-9)
+    # the percentile bootstrap of the mean, drawn by hand from the seeded generator, over the
+    # ratios in the order given (the report's seed order)
+    x = r[::-1]
+    draws = np.random.default_rng(0).integers(0, 10, (BOOTSTRAP_RESAMPLES, 10))
+    np.testing.assert_allclose(st["ci95"], np.percentile(x[draws].mean(axis=1), [2.5, 97.5]), rtol=1e-12)
+    # about the normal interval of the mean: sd of 1..10 = sqrt(110 / 12) (ddof 1), x sqrt(9 / 10)
+    half = 1.96 * np.sqrt(110 / 12) * np.sqrt(0.9) / np.sqrt(10)
+    np.testing.assert_allclose(st["ci95"], [5.5 - half, 5.5 + half], rtol=0.05)
+
+
+def test_one_interval_for_the_report_and_the_leaderboard():
+    """The report's ci95 and the leaderboard's columns were two methods (Student t and the
+    bootstrap) for one statistic; now both are ``intervals.mean_interval``."""
+    from adaptive_dd.arena.leaderboard import ratio_columns
+
+    r = np.random.default_rng(3).lognormal(0.1, 0.3, 12)
+    c = ratio_columns(r, np.random.default_rng(0))
+    assert ratio_statistics(r)["ci95"] == [c["ratio_ci95_low"], c["ratio_ci95_high"]]
+    assert mean_interval(r) == mean_interval(r)  # seeded: the same ratios, the same interval
+    assert mean_interval(r, np.random.default_rng(1)) != mean_interval(r)
 
 
 def test_ratio_statistics_skips_nan_and_names_the_seed_not_the_position():

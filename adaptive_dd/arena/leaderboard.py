@@ -37,11 +37,11 @@ import numpy as np
 from adaptive_dd.arena.columns import COLUMNS, contenders, told_the_model
 from adaptive_dd.arena.entries import _with_floors
 from adaptive_dd.benchmark.end_effector import EE_KEYS
+from adaptive_dd.benchmark.intervals import mean_interval
 from adaptive_dd.benchmark.scenario import packaged_scenarios
 from adaptive_dd.errors import ParameterError
 
 __all__ = [
-    "BOOTSTRAP_RESAMPLES",
     "COLUMNS",
     "DEFAULT_CONTROLLERS",
     "POPULATION_TEMPLATE",
@@ -72,10 +72,6 @@ DEFAULT_CONTROLLERS = (
 """The controllers ranked by default (their floors are added: ``ct_oracle``, ``ct_oracle_textbook``,
 ``pd_gravity_oracle``, ``slotine_li_oracle``)."""
 
-BOOTSTRAP_RESAMPLES = 2000
-"""Resamples of the seeds for the 95 % interval of the mean ratio (percentile bootstrap)."""
-
-
 POPULATION_TEMPLATE = "benchmarks/scenarios/population.toml"
 """The default template of ``arms``: a pick-up of 80 % of each arm's capacity, a swap to 30 %, a
 put-down (relative to the source tree)."""
@@ -99,9 +95,8 @@ def ratio_columns(ratio: np.ndarray, rng: np.random.Generator) -> dict[str, floa
     keys = ("ratio_mean", "ratio_ci95_low", "ratio_ci95_high", "ratio_p90", "ratio_cvar10", "ratio_max")
     if r.size == 0:
         return dict.fromkeys(keys, np.nan)
-    boot = r[rng.integers(0, r.size, (BOOTSTRAP_RESAMPLES, r.size))].mean(axis=1)
+    ci = mean_interval(r, rng) if r.size > 1 else (np.nan, np.nan)  # one seed: no interval (no draws)
     worst = np.sort(r)[::-1][: max(1, int(np.ceil(0.1 * r.size)))]
-    ci = np.percentile(boot, [2.5, 97.5]) if r.size > 1 else (np.nan, np.nan)  # one seed: no interval
     vals = (r.mean(), *ci, np.percentile(r, 90), worst.mean(), r.max())
     return {k: float(v) for k, v in zip(keys, vals, strict=True)}
 

@@ -81,7 +81,7 @@ ratio_to_floor
     Statistics of ``rms_error / rms_error of the floor`` per seed, where the floor (``floor``: its
     name, None without) is the same law with the true model (``Controller.floor``; e.g.
     ``ct_oracle`` for ``adaptive_ct``): ``mean``, ``median``, ``p90``, ``max``, ``ci95``
-    (t-interval of the mean), ``worst_seed`` (the seed index of the largest ratio), ``n``. None
+    (bootstrap interval of the mean), ``worst_seed`` (the seed index of the largest ratio), ``n``. None
     when the floor is not in the run.
 detection_delay_per_seed [s]
     Segments after a swap: the first alarm within ``FALSE_ALARM_WINDOW`` after the swap,
@@ -116,6 +116,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from adaptive_dd.benchmark.intervals import mean_interval
 from adaptive_dd.benchmark.provenance import provenance
 from adaptive_dd.benchmark.segments import moving_rms, nonfinite_estimates, segment_failed
 from adaptive_dd.benchmark.streaming import SETTLE, segment_bounds
@@ -516,7 +517,7 @@ def _seed_list(x: np.ndarray) -> list:
 
 
 def ratio_statistics(ratio: np.ndarray, seeds=None) -> dict | None:
-    """Mean, median, p90, max, 95 % t-interval of the mean and worst seed of per-seed ratios.
+    """Mean, median, p90, max, 95 % interval of the mean and worst seed of per-seed ratios.
 
     Parameters
     ----------
@@ -529,11 +530,10 @@ def ratio_statistics(ratio: np.ndarray, seeds=None) -> dict | None:
     -------
     dict or None
         ``mean``, ``median``, ``p90`` (linear interpolation between order statistics, numpy's
-        default), ``max``, ``ci95`` (Student-t interval of the mean; None for one seed),
+        default), ``max``, ``ci95`` (percentile-bootstrap interval of the mean,
+        :func:`~adaptive_dd.benchmark.intervals.mean_interval`; None for one seed),
         ``worst_seed`` and ``n`` (seeds counted); None when no entry is finite.
     """
-    from scipy.special import stdtrit  # Student t's quantile (scipy.stats.t.ppf's), without importing stats
-
     ratio = np.asarray(ratio, float)
     seeds = np.arange(ratio.size) if seeds is None else np.asarray(seeds)
     idx = np.flatnonzero(np.isfinite(ratio))
@@ -541,13 +541,13 @@ def ratio_statistics(ratio: np.ndarray, seeds=None) -> dict | None:
         return None
     r = ratio[idx]
     mean = float(r.mean())
-    half = float(stdtrit(r.size - 1, 0.975) * r.std(ddof=1) / np.sqrt(r.size)) if r.size > 1 else np.nan
+    ci = mean_interval(r)
     return {
         "mean": mean,
         "median": float(np.median(r)),
         "p90": float(np.percentile(r, 90)),
         "max": float(r.max()),
-        "ci95": [mean - half, mean + half] if np.isfinite(half) else None,
+        "ci95": list(ci) if ci is not None else None,
         "worst_seed": int(seeds[idx[np.argmax(r)]]),
         "n": int(r.size),
     }
