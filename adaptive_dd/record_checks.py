@@ -93,18 +93,23 @@ def _check_stuck(spec: RecordSpec, where: dict, raw: Array) -> None:
 def _check_units(spec: RecordSpec, where: dict, q_raw: Array, arm) -> None:
     lim = arm.position_limits
     kinds = getattr(arm, "joint_kinds", None)
-    for j in range(q_raw.shape[1]):
+
+    def fits(j: int, q: Array) -> bool | None:  # None: the joint has no finite limits
         lo, hi = lim[j]
         if not (np.isfinite(lo) and np.isfinite(hi)):
-            continue
-        qj = q_raw[:, j] * spec.position_scale[j]
+            return None
         slack = 0.1 * (hi - lo) + 0.05
-        if qj.min() >= lo - slack and qj.max() <= hi + slack:
-            continue
-        deg = qj * math.pi / 180.0
+        return bool(q.min() >= lo - slack and q.max() <= hi + slack)
+
+    scaled = [q_raw[:, j] * spec.position_scale[j] for j in range(q_raw.shape[1])]
+    outside = [j for j, q in enumerate(scaled) if fits(j, q) is False]
+    in_degrees = [j for j in outside if fits(j, scaled[j] * math.pi / 180.0)]  # every such joint at once
+    for j in outside:
+        lo, hi = lim[j]
+        qj = scaled[j]
         hint = (
-            f"; in degrees it would fit: set {_degrees_hint(spec, j, kinds)} in [record]"
-            if deg.min() >= lo - slack and deg.max() <= hi + slack
+            f"; in degrees it would fit: set {_degrees_hint(spec, in_degrees, kinds)} in [record]"
+            if j in in_degrees
             else ""
         )
         raise DataError(
@@ -114,21 +119,24 @@ def _check_units(spec: RecordSpec, where: dict, q_raw: Array, arm) -> None:
         )
 
 
-def _degrees_hint(spec: RecordSpec, j: int, kinds=None) -> str:
-    """``position_unit = "deg"`` for a one-joint log, else the per-joint list with joint ``j`` in
-    degrees and the others as they are read (a global "deg" would turn the joints logged in
-    radians into degrees too)."""
+def _degrees_hint(spec: RecordSpec, joints, kinds=None) -> str:
+    """``position_unit = "deg"`` when every joint is revolute and in ``joints`` (the joints whose
+    logged range fits their limits in degrees, all named at once), else the per-joint list with
+    those in degrees and the others as they are read (a global "deg" would turn the joints logged
+    in radians into degrees too)."""
     n = len(spec.position)
-    if n == 1:
+    joints = [joints] if isinstance(joints, int | np.integer) else list(joints)
+    kinds = tuple(kinds) if kinds is not None else ("revolute",) * n
+    if len(joints) == n and all(k != "prismatic" for k in kinds):
         return 'position_unit = "deg"'
     angles = {UNITS["rad"]: "rad", UNITS["mrad"]: "mrad", UNITS["deg"]: "deg"}  # a revolute joint's
     lengths = {UNITS["m"]: "m", UNITS["mm"]: "mm"}  # a prismatic joint's (its scale read back)
-    kinds = tuple(kinds) if kinds is not None else ("revolute",) * n
     units = [
         (lengths if k == "prismatic" else angles).get(float(s), "rad" if k != "prismatic" else "m")
         for s, k in zip(spec.position_scale, kinds, strict=True)
     ]
-    units[j] = "deg"
+    for j in joints:
+        units[j] = "deg"
     listed = ", ".join(f'"{u}"' for u in units)
     return f'position_unit = [{listed}] (one per joint; a prismatic one\'s "m" or "mm")'
 

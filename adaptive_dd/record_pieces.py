@@ -16,7 +16,9 @@ missed) is bridged, not split: the positions' cubic spline and the torques' line
 run across it, as they run between any two samples of a jittered clock, and the line says how
 many were bridged. Splitting there would cost more than the sample: each piece restarts the
 derivative's window and the filters' settling (at 1 % single drops on a 200 Hz log with derived
-velocities, a fifth of the samples).
+velocities, a fifth of the samples). The interpolated torque of a missed sample is not the one
+applied where the torque changes from sample to sample (a closed loop's feedback noise): there the
+estimate moves by a few tenths of its std (``benchmarks/log_drops.py``, ``docs/real_log.md``).
 
 The log is split at its other gaps (those of every file of the record) into its continuous pieces;
 each is resampled onto its own uniform grid (the same period for all), and its velocities and

@@ -2,14 +2,21 @@
 
 Usage::
 
-    python benchmarks/log_drops.py [--rate 0.01] [--seeds 5] [--velocity derived|measured]
+    python benchmarks/log_drops.py [--rate 0.01] [--seeds 5] [--velocity derived|measured] [--period 0.005]
+    python benchmarks/log_drops.py --closed-loop --velocity measured   # the record `simulate --arm` writes
 
-Per seed, a 24 s record of the ``vertical3`` arm at 200 Hz
+Per seed, a 24 s record of the ``vertical3`` arm at 200 Hz (``--period`` [s])
 (:func:`adaptive_dd.identification.records.synthetic_log`) is written whole and with each row
 dropped with probability ``--rate``, read back (:func:`adaptive_dd.record.read_log`: gaps of one
 missed sample bridged, longer ones split) and fitted (:func:`adaptive_dd.identification.log_fit.fit_log`).
 Prints the samples kept, the median std of the fit with drops over the whole log's, and the RMS
 over the parameters of (with drops - whole) / std. Asserts nothing.
+
+With ``--closed-loop`` the record is instead the one ``adaptive-dd simulate --arm
+benchmarks/scenarios/ident_vertical3.toml --duration 24 --seed SEED`` writes (computed torque
+tracking the scenario's reference, sensor noise and quantisation; ``--period`` its sample period):
+its torque carries the feedback's noise from one sample to the next, so the torque of a missed
+sample, which the bridge interpolates, is not the one applied.
 """
 
 from __future__ import annotations
@@ -31,17 +38,33 @@ from adaptive_dd.robots import robot_urdf
 T = 0.005
 
 
+def _closed_loop(arm, seed: int, period: float):
+    """The record ``simulate --arm ident_vertical3.toml --duration 24 --seed SEED`` writes."""
+    from types import SimpleNamespace
+
+    from adaptive_dd.benchmark.scenario import load_scenario
+    from adaptive_dd.experiments import trial_rngs
+    from adaptive_dd.identification.records import simulate_record
+
+    sc = load_scenario(Path(__file__).parent / "scenarios" / "ident_vertical3.toml")
+    rec = simulate_record(arm, sc.reference, 24.0, trial_rngs(seed, 1), sample_period=period)
+    return SimpleNamespace(t=rec.t, q=rec.q[0], qd=rec.qd[0], tau=rec.tau[0])
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--rate", type=float, default=0.01, help="probability that a row is dropped")
     ap.add_argument("--seeds", type=int, default=5)
     ap.add_argument("--velocity", choices=("derived", "measured"), default="derived")
+    ap.add_argument("--period", type=float, default=T, help="sample period of the log [s]")
+    ap.add_argument("--closed-loop", action="store_true", help="the record `simulate --arm` writes")
     args = ap.parse_args()
     arm = Arm.from_urdf(robot_urdf("vertical3"))
     model = arm_model(arm)
     folder = Path(tempfile.mkdtemp())
     for seed in range(args.seeds):
-        log = synthetic_log(arm, 24.0, T, np.random.default_rng(seed))
+        log = _closed_loop(arm, seed, args.period) if args.closed_loop else None
+        log = log or synthetic_log(arm, 24.0, args.period, np.random.default_rng(seed))
         drop = np.flatnonzero(np.random.default_rng(100 + seed).random(log.t.size) < args.rate)
         drop = drop[(drop > 0) & (drop < log.t.size - 1)]
         out = {}
@@ -51,7 +74,8 @@ def main() -> None:
                 folder / f"{label}{seed}.csv", log.t[keep], log.q[keep], log.qd[keep], log.tau[keep]
             )
             spec = record_spec(
-                {"files": [str(path)], "velocity_source": args.velocity},
+                {"files": [str(path)], "velocity_source": args.velocity}
+                | ({"velocity": "qd{i}"} if args.velocity == "measured" else {}),
                 arm.joint_names,
                 arm.joint_kinds,
                 str(folder / "s.toml"),

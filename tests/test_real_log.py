@@ -175,13 +175,21 @@ def test_bad_logs_name_file_line_column_and_remedy(tmp_path):
 
 
 def test_degrees_column_is_named_against_the_urdf_limits(tmp_path):
+    from adaptive_dd.record_checks import _degrees_hint
+
     p1, p2, *_ = _write_log(tmp_path, np.random.default_rng(5), deg=True)
     arm = types.SimpleNamespace(position_limits=np.array([[-1.0, 1.0], [-1.5, 1.5], [0.0, 0.4]]))
     spec = record_spec(_table(p1, p2, exclude=["j_c"]), NAMES, KINDS, "s")
+    # both joints logged in degrees are named in the one hint (it named the first only, so a user
+    # fixed one joint per run)
     with pytest.raises(
-        DataError, match=r"pos.csv: column 'j_a/pos' .* in degrees it would fit: set position_unit"
+        DataError,
+        match=r"pos.csv: column 'j_a/pos' .* in degrees it would fit: set position_unit = "
+        r'\["deg", "deg", "rad"\]',
     ):
         read_log(spec, arm=arm)
+    # every joint revolute and in degrees: the one unit for all
+    assert _degrees_hint(spec, [0, 1, 2], ("revolute",) * 3) == 'position_unit = "deg"'
     spec = record_spec(_table(p1, p2, exclude=["j_c"], position_unit="deg"), NAMES, KINDS, "s")
     assert read_log(spec, arm=arm).q.shape[1] == 3
 
