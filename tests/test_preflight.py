@@ -327,3 +327,29 @@ def test_a_ratio_below_one_of_adaptive_ct_is_said_to_be_its_boost():
     assert any("a ratio below 1 is that boost, not a model better than the true one" in x for x in lines)
     st["mean"] = 1.02
     assert not any("boost" in x for x in _seed_tables(ctrls, "head"))
+
+
+@pytest.mark.parametrize("name", ["alternating.toml", "weak"])
+def test_the_torque_maxima_read_in_chunks_are_the_whole_references(tmp_path, monkeypatch, name):
+    """``validate`` built the regressor of the whole reference at once (a run of 8000 s, a typo of
+    ms for s, took 24 GB and was killed); it is read in chunks now. Chunks of 7 samples (a swap
+    and every peak inside some chunk's interior or at its edge) give the one-chunk figures, and
+    the warnings' text is the same."""
+    from adaptive_dd.benchmark import preflight
+
+    if name == "weak":  # the unloaded arm beyond its limit: the bare segment's peak and time
+        text = (ROOT / "adaptive_dd" / "scenarios" / "ur5_tool_swap_exact.toml").read_text()
+        text = text.replace(
+            'robot = "ur5"', 'robot = "ur5"\ntorque_limit = [150.0, 20.0, 150.0, 28.0, 28.0, 28.0]'
+        )
+        path = tmp_path / "weak.toml"
+        path.write_text(text)
+    else:
+        path = ROOT / "benchmarks" / "scenarios" / name
+    sc = load_scenario(path)
+    monkeypatch.setattr(preflight, "CHUNK", 10**9)
+    whole, problems = preflight._torque_maxima(sc), preflight.torque_problems(sc)
+    monkeypatch.setattr(preflight, "CHUNK", 7)
+    for a, b in zip(preflight._torque_maxima(sc), whole, strict=True):
+        np.testing.assert_array_equal(a, b)
+    assert preflight.torque_problems(sc) == problems and problems

@@ -220,3 +220,36 @@ def test_a_limit_without_stops_and_a_very_heavy_link_are_kept_with_a_note(tmp_pa
     assert any("<limit> without lower and upper: read as no position limits" in n for n in robot.notes)
     heavy = read_urdf(_mutant(tmp_path, '<mass value="3.7"/>', '<mass value="2500"/>'), "tool0")
     assert any("mass '2500' kg is above 500 kg: a heavy base, or a unit error?" in n for n in heavy.notes)
+
+
+def test_a_joint_named_as_a_link_loads(tmp_path):
+    """The SO-100 of example-robot-data names an off-chain joint as its parent link (``gripper``):
+    Pinocchio's reduction then stopped at "Several frames match the filter", printed bare. The
+    locked joint is renamed for Pinocchio only, and a chain joint named as its child link leaves
+    the link's frame the payload frame."""
+    from adaptive_dd.plant.arm import Arm
+    from adaptive_dd.robots import robot_urdf
+
+    text = Path(robot_urdf("vertical3")).read_text()
+    jaw = (
+        '<link name="grip"><inertial><mass value="0.1"/><inertia ixx="1e-4" iyy="1e-4" izz="1e-4" '
+        'ixy="0" ixz="0" iyz="0"/></inertial></link>'
+        '<joint name="grip_fix" type="fixed"><parent link="tool"/><child link="grip"/></joint>'
+        '<link name="jaw"><inertial><mass value="0.05"/><inertia ixx="1e-5" iyy="1e-5" izz="1e-5" '
+        'ixy="0" ixz="0" iyz="0"/></inertial></link>'
+        '<joint name="grip" type="revolute"><parent link="grip"/><child link="jaw"/><axis xyz="0 0 1"/>'
+        '<limit lower="-1" upper="1" effort="1" velocity="1"/></joint>'
+    )
+    path = tmp_path / "gripper.urdf"
+    path.write_text(text.replace("</robot>", jaw + "</robot>"))
+    arm = Arm.from_urdf(path, payload_frame="grip")
+    assert arm.joint_names == ("joint1", "joint2", "joint3")
+    q = np.array([0.3, -0.2, 0.5])
+    plain = Arm.from_urdf(robot_urdf("vertical3"), payload_frame="tool")
+    np.testing.assert_allclose(arm.mass_matrix(q)[:2, :2] > plain.mass_matrix(q)[:2, :2], True)
+    # a chain joint named as its child link: the payload frame is the link's
+    named = tmp_path / "named.urdf"
+    named.write_text(text.replace('"joint3"', '"link3"'))
+    arm3 = Arm.from_urdf(named, payload_frame="link3")
+    ref = Arm.from_urdf(robot_urdf("vertical3"), payload_frame="link3")
+    assert arm3.payload_joint == ref.payload_joint

@@ -132,7 +132,9 @@ def solve_path(arm, path: CartesianPath) -> tuple[Array, Array, Array]:
     from adaptive_dd.benchmark.end_effector import frame_placements
 
     model, data = arm.model, arm.model.createData()
-    fid = model.getFrameId(arm.payload_frame)
+    from adaptive_dd.plant.urdf import frame_id
+
+    fid = frame_id(model, arm.payload_frame)
     n = arm.n_joints
     full = n >= 6
     q0 = np.asarray(path.q0, dtype=float)

@@ -100,7 +100,9 @@ def frame_placements(arm, q: ArrayLike, frame: str | None = None) -> tuple[Array
         else:
             rot.append(r0)
             pos.append(p0 + (r0 @ axis) * qi[..., None])
-    f = model.frames[model.getFrameId(name)]
+    from adaptive_dd.plant.urdf import frame_id
+
+    f = model.frames[frame_id(model, name)]
     j = f.parentJoint
     return pos[j] + rot[j] @ f.placement.translation, rot[j] @ f.placement.rotation
 

@@ -39,25 +39,47 @@ TOL = 1e-9
 """Relative tolerance on a limit (a reference that touches it is within it)."""
 
 
-def _segment_torques(scenario) -> np.ndarray:
-    """``|tau|`` [N m] of inverse dynamics along the reference with each payload segment's
-    parameters, ``(segments, N, n)``; segment 0 carries no payload."""
+CHUNK = 20_000
+"""Samples of the reference taken at once by :func:`_torque_maxima` (the regressor of a chunk is
+``CHUNK x n x p`` numbers: a run of hours at 1 kHz is read in bounded memory)."""
+
+
+def _torque_maxima(scenario) -> tuple[np.ndarray, ...]:
+    """Per joint, of ``|tau|`` [N m] of inverse dynamics along the reference with each payload
+    segment's parameters (segment 0 carries no payload): the largest over every segment, the
+    sample where it occurs and the segment, and the largest with segment 0's parameters and its
+    sample; each ``(n,)``. The reference is read :data:`CHUNK` samples at a time."""
     T, N = scenario.sample_period, scenario.n_samples
-    q, qd, qdd = scenario.reference.sample(np.arange(N) * T)
-    Y = (scenario.closed_forms or scenario.arm).regressor(q, qd, qdd)  # (N, n, p): segment_sigmas' p
-    return np.abs(np.einsum("knp,sp->skn", Y, scenario.segment_sigmas()))
+    sig = scenario.segment_sigmas()  # (S, p)
+    model = scenario.closed_forms or scenario.arm
+    peak = bare = None
+    for k0 in range(0, N, CHUNK):
+        k = np.arange(k0, min(N, k0 + CHUNK))
+        Y = model.regressor(*scenario.reference.sample(k * T))  # (K, n, p)
+        tau = np.abs(np.einsum("knp,sp->skn", Y, sig))  # (S, K, n)
+        flat = tau.reshape(-1, tau.shape[2])
+        i = np.argmax(flat, axis=0)
+        cols = np.arange(flat.shape[1])
+        cand = (flat[i, cols], k[i % k.size], i // k.size)
+        peak = _larger(peak, cand)
+        j = np.argmax(tau[0], axis=0)
+        bare = _larger(bare, (tau[0][j, cols], k[j]))
+    return (*peak, *bare)
 
 
-def torque_peaks(scenario, tau: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def _larger(best, cand):
+    """Per joint, the candidate's ``(value, where...)`` where its value is above the best's (the
+    first such on a tie: the earlier sample, as ``argmax`` over the whole reference)."""
+    if best is None:
+        return cand
+    win = cand[0] > best[0]
+    return tuple(np.where(win, c, b) for c, b in zip(cand, best, strict=True))
+
+
+def torque_peaks(scenario) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Per joint, the largest ``|tau|`` [N m] of inverse dynamics along the reference over every
-    payload segment's parameters, the sample where it occurs and the segment, each ``(n,)``
-    (``tau``: :func:`_segment_torques`, computed here when not given)."""
-    tau = _segment_torques(scenario) if tau is None else tau
-    N = tau.shape[1]
-    flat = tau.reshape(-1, tau.shape[2])
-    at = np.argmax(flat, axis=0)
-    cols = np.arange(flat.shape[1])
-    return flat[at, cols], at % N, at // N
+    payload segment's parameters, the sample where it occurs and the segment, each ``(n,)``."""
+    return _torque_maxima(scenario)[:3]
 
 
 def reference_problems(scenario) -> list[str]:
@@ -110,15 +132,12 @@ def torque_problems(scenario) -> list[str]:
     runs through it and reports the saturation; a warning, not an error)."""
     t = np.arange(scenario.n_samples) * scenario.sample_period
     out = []
-    tau_seg = _segment_torques(scenario)
-    peak, at, seg = torque_peaks(scenario, tau_seg)
-    bare = tau_seg[0]  # (N, n): segment 0, no payload
+    peak, at, seg, bare, bare_at = _torque_maxima(scenario)  # bare: segment 0's, no payload
     segments = scenario.segments()
     limit = np.asarray(scenario.arm.actuator.torque_limit, dtype=float)
     for j in np.flatnonzero(peak > limit * (1 + TOL)):
-        k0 = int(np.argmax(bare[:, j]))
-        if bare[k0, j] > limit[j] * (1 + TOL):
-            what, k, tau = "the arm alone (no payload)", k0, bare[k0, j]
+        if bare[j] > limit[j] * (1 + TOL):
+            what, k, tau = "the arm alone (no payload)", int(bare_at[j]), bare[j]
             why = "check the URDF's masses and the joint's effort limit"
         else:
             start, end, mass = segments[seg[j]]  # a loaded one: the bare arm is within its limit

@@ -84,7 +84,9 @@ def tool_tables(arm, q_d: NDArray[np.float64]) -> ToolTables:
         place = model.jointPlacements[r]
         index[r] = (model.parents[r], REVOLUTE if kind == "R" else PRISMATIC, model.joints[r].idx_v)
         links[r] = np.concatenate((place.rotation.ravel(), place.translation, axis))
-    f = model.frames[model.getFrameId(arm.payload_frame)]
+    from adaptive_dd.plant.urdf import frame_id
+
+    f = model.frames[frame_id(model, arm.payload_frame)]
     index[J] = (f.parentJoint, FIXED, 0)
     links[J, :12] = np.concatenate((f.placement.rotation.ravel(), f.placement.translation))
     p_d, r_d = frame_placements(arm, q_d)

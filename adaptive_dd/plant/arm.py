@@ -303,7 +303,9 @@ class Arm:
             m = self.model
             if not m.existFrame(self.payload_frame):
                 raise ParameterError(f"{self.urdf}: payload frame {self.payload_frame!r} not in the model")
-            f = m.frames[m.getFrameId(self.payload_frame)]
+            from adaptive_dd.plant.urdf import frame_id
+
+            f = m.frames[frame_id(m, self.payload_frame)]
             return int(f.parentJoint) - 1, f.placement
 
         return self._cached("payload_frame", make)

@@ -120,17 +120,23 @@ class UrdfRobot:
         """The Pinocchio model of the chain (off-chain joints locked), gravity set if given."""
         import pinocchio as pin
 
+        xml, locked = _locked_apart(self.path, self.xml, self.locked)
         try:
             with _quiet():
-                if self.xml is None:
+                if xml is None:
                     full = pin.buildModelFromUrdf(str(self.path))
                 else:
-                    full = pin.buildModelFromXML(self.xml)
+                    full = pin.buildModelFromXML(xml)
         except Exception as exc:  # pragma: no cover - the XML checks catch what we know of
             raise UrdfError(f"{self.path}: Pinocchio cannot read it: {exc}") from None
-        if self.locked:
-            ids = [full.getJointId(n) for n in self.locked]
-            full = pin.buildReducedModel(full, ids, pin.neutral(full))
+        if locked:
+            ids = [full.getJointId(n) for n in locked]
+            try:
+                full = pin.buildReducedModel(full, ids, pin.neutral(full))
+            except Exception as exc:  # pragma: no cover - a clash of names is renamed above
+                raise UrdfError(
+                    f"{self.path}: Pinocchio cannot lock the joints off the chain {list(self.locked)}: {exc}"
+                ) from None
         names = [full.names[i] for i in range(1, full.njoints)]
         if tuple(names) != self.joint_names:
             raise UrdfError(  # pragma: no cover - a guard against Pinocchio reordering joints
@@ -139,6 +145,42 @@ class UrdfRobot:
         if gravity is not None:
             full.gravity.linear = np.asarray(gravity, dtype=float)
         return full
+
+
+LOCKED_SUFFIX = "__locked"
+"""Appended to the name of an off-chain joint that a link also carries, for Pinocchio only."""
+
+
+def _locked_apart(path: Path, xml: str | None, locked: tuple[str, ...]) -> tuple[str | None, tuple[str, ...]]:
+    """The URDF text and the locked joints' names to build the model from: an off-chain joint named
+    as a link (the SO-100 of example-robot-data: joint and link ``gripper``) renamed with
+    :data:`LOCKED_SUFFIX`, since Pinocchio's reduction looks the joint's frame up by name alone and
+    stops at two frames of one name. The chain's joints and every link keep their names."""
+    if not locked:
+        return xml, locked
+    root = ET.fromstring(xml) if xml is not None else ET.parse(path).getroot()
+    links = {el.get("name") for el in root.findall("link")}
+    clash = set(locked) & links
+    if not clash:
+        return xml, locked
+    for el in root.findall("joint"):  # the robot's joints (a transmission's <joint> is not one)
+        if el.get("name") in clash:
+            el.set("name", el.get("name") + LOCKED_SUFFIX)
+    return ET.tostring(root, encoding="unicode"), tuple(
+        n + LOCKED_SUFFIX if n in clash else n for n in locked
+    )
+
+
+def frame_id(model, name: str) -> int:
+    """The index of the frame ``name`` in a Pinocchio ``model``: the link's (a body frame) where a
+    joint carries the same name too (Pinocchio's ``getFrameId(name)`` stops at two frames of one
+    name), else the one frame of that name."""
+    import pinocchio as pin
+
+    for kind in (pin.FrameType.BODY, pin.FrameType.FIXED_JOINT, pin.FrameType.OP_FRAME, pin.FrameType.JOINT):
+        if model.existFrame(name, kind):
+            return int(model.getFrameId(name, kind))
+    return int(model.getFrameId(name))  # (absent: Pinocchio's own error, after existFrame's check)
 
 
 @contextlib.contextmanager
