@@ -90,7 +90,7 @@ from adaptive_dd.record_pieces import (
     resampler,
     trim_gap_edges,
 )
-from adaptive_dd.record_spec import RecordSpec, record_spec
+from adaptive_dd.record_spec import RecordSpec, record_spec, zero_based_hint
 
 __all__ = ["LogRecord", "RecordSpec", "derivatives", "read_log", "record_spec"]
 
@@ -174,6 +174,7 @@ def _locate(frames: dict, spec: RecordSpec, wanted: list[str]) -> dict:
             raise DataError(
                 f"{', '.join(str(p) for p in frames)}: no column {col!r} ({whence})"
                 + (f"; near matches: {near}" if near else f"; columns: {listed}")
+                + zero_based_hint(spec, col.strip(), every)
             )
         where[col] = hits[0]
     return where
@@ -235,7 +236,7 @@ def _leave_out_bad_rows(frames: dict, where: dict, spec: RecordSpec, fitted: lis
         n_in = int(np.sum(bad & in_window))
         if n_in > MAX_BAD_ROWS * max(int(in_window.sum()), 1):
             raise _too_many_bad_rows(
-                p, f, {c: b & in_window for c, b in bad_of.items()}, n_in, in_window, MAX_BAD_ROWS
+                p, f, {c: b & in_window for c, b in bad_of.items()}, n_in, in_window, MAX_BAD_ROWS, spec
             )
         if not drop.any():
             out[p] = f

@@ -147,10 +147,13 @@ def _line(frame, row: int) -> int:
     return int(frame.index[row]) + 2
 
 
-def _too_many_bad_rows(path, frame, bad_of: dict, n_in: int, in_window, limit: float) -> DataError:
+def _too_many_bad_rows(
+    path, frame, bad_of: dict, n_in: int, in_window, limit: float, spec: RecordSpec | None = None
+) -> DataError:
     """The error for a file whose rows in the window with a bad cell in a fitted column are more
     than ``limit`` of them (:data:`adaptive_dd.record.MAX_BAD_ROWS`): each such column, most first,
-    with its count and its first bad cell (line, and the cell as written)."""
+    with its count and its first bad cell (line, and the cell as written); where they are all
+    ``spec``'s velocity columns, the remedy of deriving the velocities from the positions."""
 
     def first(c: str) -> str:
         i = int(np.flatnonzero(bad_of[c])[0])
@@ -162,11 +165,26 @@ def _too_many_bad_rows(path, frame, bad_of: dict, n_in: int, in_window, limit: f
     counts = sorted(((int(b.sum()), c) for c, b in bad_of.items() if b.any()), reverse=True)
     cols = "; ".join(f"column {c!r}: {k}, the first at {first(c)}" for k, c in counts[:4])
     cols += f"; {len(counts) - 4} more column(s)" if len(counts) > 4 else ""
+    velocity = set(spec.velocity or ()) if spec is not None else set()
+    derive = ""
+    if velocity and all(c in velocity for _, c in counts):  # the positions are whole: derive from them
+        src = spec.source
+        derive = (
+            f"drop the velocity key of [record] in {src} (the velocities are derived from the positions "
+            "already; without it the logged ones, only compared, are not read)"
+            if spec.derive_velocity
+            else f'add [record] with velocity_source = "derived" to {src} (the velocities derived from the '
+            "positions, the logged ones not read)"
+            if spec.simulator_format
+            else f'set velocity_source = "derived" in [record] of {src} and drop its velocity key (the '
+            "velocities derived from the positions, the logged ones not read)"
+        )
+        derive = f"only velocity columns, which the fit can do without: {derive}; or "
     return DataError(
         f"{path}: {n_in} of the window's {int(in_window.sum())} rows have an empty, non-numeric or "
         f"non-finite cell in a column the fit reads, more than the {limit:.0%} left out as missed "
-        f"samples ({cols}): is each column the one meant? Else cut the window to avoid them ([record] "
-        "window or --window) or repair the file"
+        f"samples ({cols}): {derive or 'is each column the one meant? Else '}cut the window to avoid "
+        "them ([record] window or --window) or repair the file"
     )
 
 

@@ -15,7 +15,7 @@ from numpy.typing import NDArray
 
 from adaptive_dd.errors import ScenarioError
 
-__all__ = ["RECORD_KEYS", "UNITS", "RecordSpec", "record_spec"]
+__all__ = ["RECORD_KEYS", "UNITS", "RecordSpec", "record_spec", "zero_based_hint"]
 
 Array = NDArray[np.float64]
 
@@ -96,6 +96,8 @@ class RecordSpec:
     simulator_format: bool = False
     time_scale: float = 1.0
     """Multiplies the time column into s (``[record] time_unit``)."""
+    patterns: tuple[tuple[str, str], ...] = ()
+    """``(key, pattern)`` of the column keys given as a pattern with ``{i}`` (errors name them)."""
 
 
 def _err(src: str, key: str, why: str) -> ScenarioError:
@@ -214,6 +216,33 @@ def record_spec(table: dict | None, joint_names, kinds, src: str, files=None) ->
         source=src,
         simulator_format=default,
         time_scale=TIME_UNITS[unit],
+        patterns=tuple(
+            (k, v)
+            for k in ("position", "torque", "velocity")
+            if isinstance(v := t.get(k), str) and "{i}" in v
+        ),
+    )
+
+
+def zero_based_hint(spec: RecordSpec, col: str, columns) -> str:
+    """Where the missing column ``col`` comes from a pattern with ``{i}`` (which counts the joints
+    from 1) and the files hold its columns counted from 0 (a ROS export's ``field.position0``): the
+    lists of names to give instead (every such key's at once); else ''."""
+    import json
+
+    hit, keys, lists = False, [], []
+    for key, v in spec.patterns:
+        names = [v.replace("{joint}", nm).strip() for nm in spec.joint_names]
+        zeros = [nm.replace("{i}", str(j)) for j, nm in enumerate(names)]
+        if set(zeros) <= set(columns):
+            hit = hit or col in [nm.replace("{i}", str(j + 1)) for j, nm in enumerate(names)]
+            keys.append(f"record.{key} = {v!r}")
+            lists.append(f"{key} = {json.dumps(zeros)}")
+    if not hit:
+        return ""
+    return (
+        f"; {{i}} counts the joints from 1 ({', '.join(keys)}) and the files number them from 0: list the "
+        f"names instead, {'; '.join(lists)}"
     )
 
 

@@ -367,3 +367,13 @@ def test_a_payloads_place_without_a_payload_is_refused(tmp_path, capsys, extra):
     """simulate --com or --radius with no --payload (0 kg) placed nothing, in silence."""
     err = _error(capsys, ["simulate", "--arm", UR5, *extra, "--out", str(tmp_path / "o")])
     assert f"error: {extra[0]}" in err and "--payload" in err
+
+
+def test_predict_help_says_record_is_optional(capsys):
+    """predict reads the simulator's CSV through a scenario without [record]
+    (tests/test_log_pieces.py runs it): its help says [record] is optional and what it is for."""
+    with pytest.raises(SystemExit):
+        main(["predict", "--help"])
+    text = " ".join(capsys.readouterr().out.split())
+    assert "scenario TOML with [arm] and an optional [record]: how a real log's files are read" in text
+    assert "without it the record is the simulator's CSV t, q1..qN, [qd1..qdN,] tau1..tauN" in text

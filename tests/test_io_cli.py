@@ -1,11 +1,15 @@
 """Recorded-data reader and the command line."""
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
 from adaptive_dd.cli import main
 from adaptive_dd.errors import DataError
 from adaptive_dd.io import read_recording, write_recording
+
+ROOT = Path(__file__).resolve().parent.parent
 
 
 def write(tmp_path, text, name="rec.csv"):
@@ -105,6 +109,42 @@ def test_cli_identify_reports_bad_data(tmp_path, capsys):
     assert main(["identify", str(p)]) == 2  # M2 without qd columns
     assert "qd1, qd2" in capsys.readouterr().err
     assert main(["identify", str(tmp_path / "missing.csv")]) == 2
+
+
+def test_identify_without_arm_names_the_arm_path_for_a_gap_or_a_missing_value(tmp_path, capsys):
+    """The paper's estimators refuse a gap or an empty cell; the error names the --arm path, which
+    reads the log as it comes (a scenario with robot = "sice_arm", general = true), and that runs."""
+    sim = tmp_path / "sim"
+    assert main(["simulate", "--duration", "3", "--out", str(sim)]) == 0
+    lines = (sim / "trajectory.csv").read_text().splitlines()
+    gap = write(tmp_path, "\n".join(lines[:1001] + lines[1201:]) + "\n", "gap.csv")
+    cells = lines[500].split(",")
+    cells[5] = ""
+    empty = write(tmp_path, "\n".join([*lines[:500], ",".join(cells), *lines[501:]]) + "\n", "empty.csv")
+    scenario = write(tmp_path, '[arm]\nrobot = "sice_arm"\ngeneral = true\n', "sice_log.toml")
+    capsys.readouterr()
+    for path, what in ((gap, "line 1002, column 't': non-uniform sampling"), (empty, "column 'tau1': not a")):
+        assert main(["identify", str(path), "--out", str(tmp_path / "id")]) == 2
+        err = capsys.readouterr().err
+        assert what in err and f"identify {path} --arm SCENARIO" in err, err
+        assert 'robot = "sice_arm" and general = true' in err and "sice_general.toml" in err
+        assert "--window START END" in err
+    assert (ROOT / "benchmarks" / "scenarios" / "sice_general.toml").is_file()
+    argv = [
+        "identify",
+        str(gap),
+        "--arm",
+        str(scenario),
+        "--output-error",
+        "off",
+        "--out",
+        str(tmp_path / "a"),
+    ]
+    assert main(argv) == 0
+    assert "split at the gaps into 2 continuous pieces" in capsys.readouterr().out
+    argv[1] = str(empty)
+    assert main(argv) == 0
+    assert "1 row(s) with an empty, non-numeric or non-finite cell" in capsys.readouterr().out
 
 
 def test_check_arm_with_payload_zero_checks_no_payload(capsys):

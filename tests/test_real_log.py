@@ -106,6 +106,71 @@ def test_record_table_errors_name_the_key(tmp_path):
         read_log(record_spec(_table(p1, p2, torque="{joint}/effort"), NAMES, KINDS, "s.toml"))
 
 
+def test_columns_numbered_from_0_name_the_list_to_give(tmp_path):
+    """A ROS export numbers its joints from 0 (field.position0..2) where {i} counts from 1: the
+    error says so and gives the lists of names, which then read the log."""
+    t = np.arange(300) * 0.01
+    head = "time," + ",".join(f"field.position{j}" for j in range(3)) + ","
+    head += ",".join(f"field.effort{j}" for j in range(3))
+    path = tmp_path / "ros.csv"
+    data = np.column_stack([t, _q(t), np.sin(t), np.cos(t), 0 * t + 5])
+    np.savetxt(path, data, delimiter=",", header=head, comments="", fmt="%.12g")
+    table = {"files": [str(path)], "time": "time", "position": "field.position{i}", "exclude": ["j_c"]}
+    table["torque"] = "field.effort{i}"
+    with pytest.raises(
+        DataError,
+        match=r"ros.csv: no column 'field.position3' .*near matches: .*; \{i\} counts the joints from 1 "
+        r"\(record.position = 'field.position\{i\}', record.torque = 'field.effort\{i\}'\) and the files "
+        r'number them from 0: list the names instead, position = \["field.position0", "field.position1", '
+        r'"field.position2"\]; torque = \["field.effort0", "field.effort1", "field.effort2"\]',
+    ):
+        read_log(record_spec(table, NAMES, KINDS, "s.toml"))
+    table["position"] = [f"field.position{j}" for j in range(3)]
+    table["torque"] = [f"field.effort{j}" for j in range(3)]
+    np.testing.assert_allclose(read_log(record_spec(table, NAMES, KINDS, "s.toml")).q[:, 0], _q(t)[:, 0])
+    table["position"] = "field.pos{i}"  # numbered from 1 or not: no hint where the columns are not there
+    with pytest.raises(DataError, match=r"no column 'field.pos1'") as e:
+        read_log(record_spec(table, NAMES, KINDS, "s.toml"))
+    assert "counts the joints from 1" not in str(e.value)
+
+
+def test_missing_values_in_velocity_columns_only_name_velocity_source_derived(tmp_path):
+    """Only the optional velocity columns have missing values: derive the velocities from the
+    positions (velocity_source = "derived"), which then reads the log."""
+    p1, p2, t, *_ = _write_log(tmp_path, np.random.default_rng(5), jitter=0.0)
+    p3 = tmp_path / "vel.csv"
+    qd = np.column_stack([0.39 * np.cos(1.3 * t), -0.35 * np.sin(0.7 * t), 0.105 * np.cos(2.1 * t)])
+    qd[200:300, 1] = np.nan
+    head = "stamp," + ",".join(f"{j}/vel" for j in NAMES)
+    np.savetxt(p3, np.column_stack([t, qd]), delimiter=",", header=head, comments="", fmt="%.12g")
+    table = _table(p1, p2, exclude=["j_c"], velocity="{joint}/vel")
+    table["files"].append(str(p3))
+    with pytest.raises(
+        DataError,
+        match=r"vel.csv: 100 of the window's 1500 rows .*\(column 'j_b/vel': 100, .*\): only velocity "
+        r'columns, which the fit can do without: set velocity_source = "derived" in \[record\] of s.toml '
+        r"and drop its velocity key .*; or cut the window",
+    ):
+        read_log(record_spec(table, NAMES, KINDS, "s.toml"))
+    table["velocity_source"] = "derived"  # the logged velocities still read (compared): drop them
+    with pytest.raises(DataError, match=r"drop the velocity key of \[record\] in s.toml"):
+        read_log(record_spec(table, NAMES, KINDS, "s.toml"))
+    del table["velocity"]
+    rec = read_log(record_spec(table, NAMES, KINDS, "s.toml"))
+    assert not rec.qd_measured and np.isfinite(rec.qd).all() and rec.t.size == 1500
+    # the simulator's format (no [record]): add one
+    sim = tmp_path / "sim.csv"
+    head = "t," + ",".join(f"{c}{j + 1}" for c in ("q", "qd", "tau") for j in range(3))
+    data = np.column_stack([t, _q(t), qd, np.sin(t), np.cos(t), np.sin(2 * t)])
+    np.savetxt(sim, data, delimiter=",", header=head, comments="", fmt="%.12g")
+    with pytest.raises(
+        DataError, match=r"\(column 'qd2': 100, .*add \[record\] with velocity_source = \"derived\" to s.toml"
+    ):
+        read_log(record_spec(None, NAMES, KINDS, "s.toml", files=[str(sim)]))
+    rec = read_log(record_spec({"velocity_source": "derived"}, NAMES, KINDS, "s.toml", files=[str(sim)]))
+    assert not rec.qd_measured and np.isfinite(rec.qd).all()
+
+
 def _rewrite(path, edit):
     lines = path.read_text().splitlines()
     edit(lines)

@@ -24,7 +24,12 @@ def identify_two_link(args: argparse.Namespace, arm) -> int:
         which = f"of the two-link arm of {args.arm}" if args.arm else "without --arm"
         raise DataError(f"identify {which} reads one CSV file, got {len(args.data)}: {args.data}")
     args.data = args.data[0]
-    rec = read_recording(args.data)
+    try:
+        rec = read_recording(args.data)
+    except DataError as e:  # a gap or a missing value: the --arm path reads the log as it comes
+        if not any(w in str(e) for w in ("non-uniform sampling", "not a number", "non-finite value")):
+            raise
+        raise DataError(f"{e}; {LOG_REMEDY.format(file=args.data)}") from None
     if args.tau_f is None:  # sized to the sample rate, as on any arm: 0.02 s up to T = 10 ms
         args.tau_f = filter_time_constant(rec.sample_period)
     if args.method == "M2" and rec.qd is None:
@@ -38,6 +43,13 @@ def identify_two_link(args: argparse.Namespace, arm) -> int:
         return _identify(args, rec, outputs, estimate, MIN_EQUATIONS)
 
 
+LOG_REMEDY = (
+    "the paper's estimators read a uniformly sampled record with every cell a number; --arm reads a "
+    "log as it comes (gaps bridged or split into pieces, rows with missing values left out): identify "
+    '{file} --arm SCENARIO, where SCENARIO\'s [arm] has robot = "sice_arm" and general = true for the '
+    "paper's arm (benchmarks/scenarios/sice_general.toml in the repository has them), with --window START "
+    "END to use part of the log; or cut the file to a stretch without them"
+)
 GENERAL_REMEDY = (
     'identify it on the general model: --arm a scenario whose [arm] has robot = "sice_arm" and general = true'
 )

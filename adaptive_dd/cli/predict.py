@@ -2,7 +2,8 @@
 an identified model on another record.
 
 Any arm that ``identify --arm`` wrote a model for: the arm is the model's own
-(``model.json``), the record is read through the scenario's ``[record]``.
+(``model.json``), the record is read through the scenario's ``[record]`` (without one: the
+simulator's CSV ``t, q1..qN, [qd1..qdN,] tau1..tauN``).
 """
 
 from __future__ import annotations
@@ -32,7 +33,14 @@ def add_parser(sub) -> None:
         "identify: "
         "each as many files as record.files names, or a TOML with its own [record]",
     )
-    r.add_argument("--arm", required=True, metavar="SCENARIO", help="scenario TOML with [arm] and [record]")
+    r.add_argument(
+        "--arm",
+        required=True,
+        metavar="SCENARIO",
+        help="scenario TOML with [arm] and an optional [record]: how a real log's files are read (column "
+        "names, units, gains; docs/real_log.md); without it the record is the simulator's CSV t, q1..qN, "
+        "[qd1..qdN,] tau1..tauN",
+    )
     r.add_argument(
         "--model", required=True, metavar="JSON", help="model.json written by identify --arm --out"
     )
