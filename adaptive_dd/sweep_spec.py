@@ -272,7 +272,13 @@ def _axes(src: str, grid: Any, ctrls: tuple[str, ...]) -> tuple[tuple[str, tuple
         elif key in SCENARIO_AXES:
             axes.append((key, _values(src, f"grid.{key}", v, numeric=True)))
         else:
-            raise SweepError(f"{src}: unknown key 'grid.{key}'; allowed: {[*SCENARIO_AXES, 'controller']}")
+            from adaptive_dd.benchmark.key_hints import nearest_keys
+
+            near = nearest_keys(str(key), [*SCENARIO_AXES, "controller"])
+            hint = f" (did you mean {' or '.join(repr(f'grid.{k}') for k in near)}?)" if near else ""
+            raise SweepError(
+                f"{src}: unknown key 'grid.{key}'{hint}; allowed: {[*SCENARIO_AXES, 'controller']}"
+            )
     return tuple(axes)
 
 

@@ -222,6 +222,8 @@ def test_benchmark_controllers_option_keeps_the_floor(scenario, capsys):
     assert main([*args, "--controllers", "adaptive_ct", "no_such_law", "--no-progress"]) == 2
     err = capsys.readouterr().err
     assert "no_such_law not among" in err and "adaptive_ct" in err
+    assert main([*args, "--controllers", "adaptive_ct", "ct_orcale", "--no-progress"]) == 2
+    assert "ct_orcale (did you mean 'ct_oracle'?) not among" in capsys.readouterr().err
 
 
 def test_plant_serial_is_read_as_benchmark_with_a_warning(capsys):

@@ -200,7 +200,12 @@ def test_reopening_follows_the_payload_capacity(arm):
 
 @pytest.mark.parametrize(
     "value, match",
-    [(0.0, "arm.payload_capacity"), (-1.0, "arm.payload_capacity"), ("5", "arm.payload_capacity")],
+    [
+        (0.0, "arm.payload_capacity"),
+        (-1.0, "arm.payload_capacity"),
+        ("5", "arm.payload_capacity"),
+        (500.0, r"arm.payload_capacity.*\(0, 50\] kg.*a capacity in g\? give it in kg"),  # g typed as kg
+    ],
 )
 def test_a_bad_payload_capacity_is_named(value, match):
     from importlib import resources

@@ -132,6 +132,10 @@ def test_a_task_key_holds_the_code_so_other_code_runs_its_cells_again(tmp_path, 
     ("edit", "needle"),
     [
         (("[grid]", "[grid]\nspeed = [1.0]"), "unknown key 'grid.speed'"),
+        (
+            ("[grid]", "[grid]\npayload_mas = [1.0]"),
+            "'grid.payload_mas' (did you mean 'grid.payload_mass'?)",
+        ),
         (("block = 1", "block = 0"), "key 'sweep.block' must be an integer >= 1"),
         (("seeds = 2", "seeds = 2.5"), "key 'sweep.seeds' must be an integer"),
         (("[0.08, 0.12]", "[0.08, 0.25]"), "key 'grid.swap_time' = 0.25 s"),

@@ -224,7 +224,11 @@ def test_the_leaderboard_ranks_a_variant_its_scenario_defines(tmp_path, capsys):
     capsys.readouterr()
     # with --arms the drawn arms run the template's tables, which do not define it: refused at once
     assert main([*argv, "--controllers", "no_obs", "--arms", "1"]) == 2
-    assert "unknown controller 'no_obs'" in capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert "unknown controller 'no_obs'" in err  # and which file lacks it, with the remedy
+    assert "population.toml do(es) not define it; the drawn arms' template is --template FILE" in err
+    assert main([*argv, "--controllers", "adaptive_cd"]) == 2  # a typo: the nearest name
+    assert "unknown controller 'adaptive_cd' (did you mean 'adaptive_ct'?)" in capsys.readouterr().err
 
 
 def test_a_variant_of_a_law_told_the_true_model_is_a_reference_not_a_contender():

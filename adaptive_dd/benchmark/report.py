@@ -287,7 +287,8 @@ def _information_lines(c: dict, all_unknown: bool) -> list[str]:
         unk_s = f"{1e3 * unk:.0f} ms" if unk is not None else "not within the segment"
         unk_s = f", {unk_s} (all unknown)" if all_unknown else " (arm known, payload mode)"
         out.append(
-            f"  payload mass within 5 % after the swap at {seg['start']:g} s ({seg['mass']:g} kg): "
+            f"  payload mass within 5 % of the change after the swap at {seg['start']:g} s "
+            f"({seg['mass']:g} kg): "
             f"information limit {1e3 * info['known']:.0f} ms (other parameters known){unk_s} "
             f"(median over {info.get('seeds', 1)} seed(s) of {info.get('reference', 'the oracle')}'s "
             "trajectory)"
@@ -400,9 +401,12 @@ def _targets(metrics: dict, res: BenchmarkResult) -> list[str]:
             f"(target <= {100 * SATURATION_LIMIT:g} %: {verdict})"
         )
     w = metrics["wall_time_s"]
+    from adaptive_dd.benchmark.scenario import default_scenario_path
+
+    default = str(getattr(res.scenario, "source", "")) == str(default_scenario_path())
     out.append(
-        f"  wall time: {w:.1f} s for {len(c)} controllers x {res.scenario.seeds} seeds "
-        f"(target < {TARGET_WALL_S:g} s for the default scenario)"
+        f"  wall time: {w:.1f} s for {len(c)} controllers x {res.scenario.seeds} seeds"
+        + (f" (target < {TARGET_WALL_S:g} s for the default scenario)" if default else "")
     )
     return out
 

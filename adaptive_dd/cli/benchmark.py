@@ -188,9 +188,16 @@ def only_controllers(sc, names: list[str]) -> tuple[str, ...]:
 
     unknown = [n for n in names if n not in sc.controllers]
     if unknown:
+        from adaptive_dd.benchmark.key_hints import nearest_keys
+
+        near = {n: nearest_keys(n, sc.controllers) for n in unknown}
+        said = ", ".join(
+            f"{n} (did you mean {' or '.join(map(repr, near[n]))}?)" if near[n] else n for n in unknown
+        )
         raise ParameterError(
-            f"--controllers: {', '.join(unknown)} not among {sc.source}'s controllers "
-            f"{list(sc.controllers)}; name some of those"
+            f"--controllers: {said} not among {sc.source}'s controllers "
+            f"{list(sc.controllers)}; name some of those (--controllers picks from the scenario's "
+            "run.controllers; add another law there)"
         )
     from adaptive_dd.benchmark.scenario_settings import result_names
 

@@ -116,10 +116,22 @@ def run(args: argparse.Namespace) -> int:
     for name in args.controllers or ():  # named by the option, not by the scenario it would fail on
         everywhere = bool(sources) and len(variants.get(name, ())) == len(sources)
         if ":" not in name and name not in CONTROLLERS and not everywhere:
+            lacking = [str(path) for _, path in sources if path not in variants.get(name, ())]
+            where = (
+                f": {', '.join(lacking)} do(es) not define it"
+                + ("; the drawn arms' template is --template FILE" if args.arms else "")
+                if name in variants
+                else ""
+            )
+            import difflib
+
+            near = difflib.get_close_matches(name, [*CONTROLLERS, *variants], n=1)
             raise ParameterError(
-                f"--controllers: unknown controller {name!r}; built-ins: {', '.join(CONTROLLERS)}, a "
-                "plug-in's 'package.module:Class' (or --plugin), or a variant every given scenario (and "
-                'with --arms the template) defines ([controllers.NAME] law = "...")'
+                f"--controllers: unknown controller {name!r}"
+                + (f" (did you mean {near[0]!r}?)" if near and name not in variants else "")
+                + f"{where}; built-ins: {', '.join(CONTROLLERS)}, a plug-in's 'package.module:Class' (or "
+                "--plugin), or a variant every given scenario (and with --arms the template) defines "
+                '([controllers.NAME] law = "...")'
             )
     for name in args.plugin:
         if ":" not in name:

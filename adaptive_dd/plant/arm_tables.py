@@ -75,6 +75,10 @@ ARM_BOUNDS = {
 direct-drive arm, and far enough below overflow that every derived quantity (``m l^2``, the
 mass matrix, its determinant) stays finite."""
 
+MAX_CAPACITY = 50.0
+"""[kg] the largest ``arm.payload_capacity``: the largest payload mass a scenario takes
+(``benchmark.scenario_base.LIMITS["max_mass"]``)."""
+
 
 def _table_number(src: str, key: str, v, *, lower: float | None = None, strict: bool = True) -> float:
     if isinstance(v, bool) or not isinstance(v, int | float):
@@ -423,9 +427,11 @@ def _arm_overrides(src: str, table: dict, arm, plant_kw: dict) -> dict:
         kw["payload_radius"] = float(r)
     if "payload_capacity" in table:
         cap = table["payload_capacity"]
-        if not _is_num(cap) or not 0 < cap <= 1e4:
+        if not _is_num(cap) or not 0 < cap <= MAX_CAPACITY:
             raise ScenarioError(
-                f"{src}: key 'arm.payload_capacity' must be the rated payload in (0, 1e4] kg, got {cap!r}"
+                f"{src}: key 'arm.payload_capacity' must be the rated payload in (0, {MAX_CAPACITY:g}] kg "
+                f"(a payload's mass is at most that too), got {cap!r}"
+                + (": a capacity in g? give it in kg" if _is_num(cap) and cap > MAX_CAPACITY else "")
             )
         kw["payload_capacity"] = float(cap)
     if "payload_offset" in table:
