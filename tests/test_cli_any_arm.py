@@ -364,6 +364,24 @@ def test_payload_only_on_a_planar_arm_fits_the_four_it_determines(tmp_path, caps
     )
 
 
+def test_the_loaded_record_of_a_pair_is_not_blamed_for_the_payload(tmp_path, capsys):
+    """identify --baseline printed, for the loaded record, that the URDF's prior is "a prior the record
+    contradicts" and to state its uncertainty: the payload the URDF lacks is why, not the data."""
+    arm = str(ROOT / "benchmarks" / "scenarios" / "ident_vertical3.toml")
+    sim = ["simulate", "--arm", arm, "--duration", "4"]
+    assert main([*sim, "--payload", "1.5", "--com", "0.03", "0", "0.05", "--out", str(tmp_path / "l")]) == 0
+    assert main([*sim, "--seed", "7", "--out", str(tmp_path / "u")]) == 0
+    capsys.readouterr()
+    loaded, bare = str(tmp_path / "l" / "trajectory.csv"), str(tmp_path / "u" / "trajectory.csv")
+    argv = ["identify", "--arm", arm, loaded, "--output-error", "off", "--out", str(tmp_path / "o")]
+    assert main(argv) == 0  # alone: the prior the record contradicts, said so
+    assert "a prior the record contradicts" in capsys.readouterr().out
+    assert main([*argv, "--baseline", bare]) == 0
+    out = capsys.readouterr().out
+    assert "as the payload this loaded record carries (and the URDF lacks) makes it" in out
+    assert "a prior the record contradicts" not in out
+
+
 @pytest.mark.parametrize("extra", [["--com", "0.1", "0", "0"], ["--radius", "0.2"]])
 def test_a_payloads_place_without_a_payload_is_refused(tmp_path, capsys, extra):
     """simulate --com or --radius with no --payload (0 kg) placed nothing, in silence."""

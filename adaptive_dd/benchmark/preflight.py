@@ -303,13 +303,26 @@ included) may be before :func:`inertia_problems` warns: 11.5 at most on the ship
 100 drawn arms, 7700 on the UR5's URDF alone (wrist 3: 1 N m against 1.3e-4 kg m^2)."""
 
 
+DAC_NOISE_SIGMAS = 3.0
+"""Position sensor's standard deviations beyond which :func:`inertia_problems` warns of a joint's
+D/A rounding."""
+
+
 def inertia_problems(scenario) -> list[str]:
     """Joints of a URDF arm whose Coulomb friction over their inertia about their axis, at the
     reference's start and armature included, exceeds :data:`FRICTION_ACCELERATION`: a real drive's
     rotor adds far more inertia (a vendor's URDF leaves it out), and without it the friction's
     sign, which a noisy measured speed cannot tell near rest, jerks the joint (``adaptive_ct`` on
-    the UR5's URDF alone is 2.4 times its floor unloaded; with the shipped armature 1.0). A warning:
-    the arm is simulated as stated."""
+    the UR5's URDF alone is 2.4 times its floor unloaded; with the shipped armature 1.0). And
+    joints whose D/A rounding (a step ``2 limit / 2^dac_bits``, std ``step / sqrt(12)``) held
+    against the law's stiffness, ``step / (sqrt(12) I w^2)`` at its bandwidth ``w``, is beyond
+    :data:`DAC_NOISE_SIGMAS` times the position sensor's noise. That figure is what a command
+    below the step gives (the rounding then holds one value for long): the SO-100 of
+    example-robot-data's wrist roll, 6.5e-5 kg m^2 with a 35 N m limit, 3.0 mrad, and its floor
+    is 3.0 mrad where the arm loaded is at 0.16; where the command spans many steps the rounding
+    is whiter and moves the joint less (vertical3's wrist with a 5000 N m limit: 0.87 stated, the
+    floor 0.057 -> 0.177 mrad). The shipped arms are at most 0.1 of the noise. A warning: the arm
+    is simulated as stated."""
     if scenario.closed_forms is not None:  # the paper's arm: its Tables 2 and 4
         return []
     arm = scenario.arm
@@ -318,13 +331,31 @@ def inertia_problems(scenario) -> list[str]:
     fc = np.asarray(arm.coulomb, dtype=float)
     names = arm.joint_names
     out = []
+    rotor = (
+        "a drive's rotor adds inertia the URDF leaves out: state [arm] armature (kg m^2 per "
+        "joint, from the data sheet: the rotor's inertia times the gear ratio squared)"
+    )
     for j in np.flatnonzero(fc > FRICTION_ACCELERATION * inertia):
         out.append(
             f"arm: joint {names[j]!r}: Coulomb friction {fc[j]:.3g} N m against {inertia[j]:.3g} kg m^2 "
             f"about its axis (armature {arm.armature[j]:.3g} included): {fc[j] / inertia[j]:.3g} rad/s^2; "
-            "a drive's rotor adds inertia the URDF leaves out: state [arm] armature (kg m^2 per "
-            "joint, from the data sheet: the rotor's inertia times the gear ratio squared)"
+            + rotor
         )
+    act = arm.actuator
+    if act.quantize:  # the D/A's rounding held against the law's stiffness (docstring)
+        w = float(scenario.bandwidth)
+        lsb = 2.0 * np.asarray(act.torque_limit, dtype=float) / 2**act.dac_bits
+        err = lsb / np.sqrt(12.0) / inertia / w**2  # [rad]: its acceleration over the loop's w^2
+        noise = np.sqrt(np.broadcast_to(arm.sensor.position_variance, err.shape))
+        for j in np.flatnonzero(err > DAC_NOISE_SIGMAS * noise):
+            out.append(
+                f"arm: joint {names[j]!r}: the D/A's step {lsb[j]:.3g} N m (2 x torque limit "
+                f"{act.torque_limit[j]:.3g} N m / 2^{act.dac_bits}) against {inertia[j]:.3g} kg m^2 about "
+                f"its axis (armature {arm.armature[j]:.3g} included) is {lsb[j] / inertia[j]:.3g} rad/s^2: "
+                f"its rounding may move the joint by up to about {1e3 * err[j]:.2g} mrad at {w:g} rad/s, "
+                f"beyond {DAC_NOISE_SIGMAS:g} times the position sensor's noise ({1e3 * noise[j]:.2g} mrad), "
+                "and every law's floor with it; " + rotor + ", or the drive's own torque limit"
+            )
     return out
 
 

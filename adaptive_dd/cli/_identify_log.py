@@ -25,7 +25,7 @@ from adaptive_dd.errors import DataError, ParameterError, SignalError
 Array = NDArray[np.float64]
 
 
-def _print_fit(model, fit, names: tuple[str, ...]) -> None:
+def _print_fit(model, fit, names: tuple[str, ...], loaded: bool = False) -> None:
     used = [names[j] for j in np.flatnonzero(fit.used)]
     print(
         f"weighted least squares on the exact filtered regression (tau_f = {fit.tau_f:.3g} s), "
@@ -71,7 +71,7 @@ def _print_fit(model, fit, names: tuple[str, ...]) -> None:
             "not seen by the fitted channels, kept at the URDF's values: "
             + ", ".join(short(f) for f in fixed)
         )
-    _print_held(model, fit)
+    _print_held(model, fit, loaded)
     print(
         "per channel [N m rms], filtered: residual "
         + ", ".join(f"{names[j]} {fit.residual_rms[j]:.3g}" for j in np.flatnonzero(fit.used))
@@ -95,15 +95,24 @@ def _columns(fit) -> str:
     return ", ".join(parts)
 
 
-def _print_held(model, fit) -> None:
-    """The directions the record cannot see, held at the URDF's values, and why."""
+def _print_held(model, fit, loaded: bool = False) -> None:
+    """The directions the record cannot see, held at the URDF's values, and why (``loaded``: the
+    record is the loaded one of ``--baseline``'s pair, which the URDF's prior is not about)."""
     held = fit.held
     if held is not None and held.conflict:
+        far = f"{np.sqrt(held.scale2):.3g}x further from the estimate than the stated uncertainty allows"
+        if loaded:  # the payload the URDF lacks puts it there: expected, not a fault of the data
+            print(
+                f"no direction held by the URDF's prior: the URDF is {far}, as the payload this loaded "
+                "record carries (and the URDF lacks) makes it; every direction is estimated, and the pair's "
+                "difference below is the payload"
+            )
+            return
         print(
             f"no direction held by the URDF's prior: along the directions the record sees best the URDF is "
-            f"{np.sqrt(held.scale2):.3g}x further from the estimate than the stated uncertainty allows (a "
-            "prior the record contradicts: adaptive_dd.identification.held_directions.prior_conflict), so "
-            "every direction is estimated; state the URDF's uncertainty ([plant.uncertainty]) to hold"
+            f"{far} (a prior the record contradicts: "
+            "adaptive_dd.identification.held_directions.prior_conflict), so every direction is estimated; "
+            "state the URDF's uncertainty ([plant.uncertainty]) to hold"
         )
         return
     if held is None or held.count == 0:
@@ -354,7 +363,7 @@ def identify_log(args: argparse.Namespace, arm, outputs) -> int:
     fit = _fit_record(model, rec, K, tau_f, spec.torque_held, prior_std, free, offset, mom)
     # before anything is printed: at twice tau_f its filters leave the fewest samples of the window
     me_var = _model_error(model, fit, rec, spec.torque_held, mom)
-    _print_fit(model, fit, names)
+    _print_fit(model, fit, names, loaded=bool(args.baseline))
     _print_offset(args, fit, names)
     wls, fit = fit, _output_error(args, arm, model, rec, fit)  # output error's, when it converged
     cf = _consistent(model, fit)
