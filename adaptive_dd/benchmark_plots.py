@@ -410,12 +410,10 @@ def plot_ratios(frame, path: str | Path | None = None, formats=("png",)):
         x = np.arange(len(segments)) + (i - (len(names) - 1) / 2) * width
         mean, err = np.full(len(segments), np.nan), np.zeros((2, len(segments)))
         for k, seg in enumerate(segments["segment"]):
-            rows = sub.loc[sub["segment"] == seg]
-            rows = rows.sort_values("seed") if "seed" in rows else rows  # the report's order
-            r = rows["ratio_to_floor"].to_numpy(dtype=float)
+            r = sub.loc[sub["segment"] == seg, "ratio_to_floor"].to_numpy(dtype=float)
             if r.size:
                 mean[k] = r.mean()
-                ci = mean_interval(r)  # the report's interval (ratio_statistics' ci95), seed order
+                ci = mean_interval(r)  # the report's interval (ratio_statistics' ci95)
                 if ci is not None:
                     err[:, k] = mean[k] - ci[0], ci[1] - mean[k]
         style = controller_style(name)

@@ -87,15 +87,16 @@ def shipped_scenarios() -> list[Path]:
     return out + [p for p in (bench / "gen3_drawn.toml", bench / "sice_drawn.toml") if p.is_file()]
 
 
-def ratio_columns(ratio: np.ndarray, rng: np.random.Generator) -> dict[str, float]:
+def ratio_columns(ratio: np.ndarray, seed: int = 0) -> dict[str, float]:
     """The ratio columns of :data:`COLUMNS` from per-seed ratios ``(n,)`` (NaN: left out); the
-    bootstrap draws from ``rng``. All NaN when no ratio is finite."""
+    interval is :func:`~adaptive_dd.benchmark.intervals.mean_interval`'s with ``seed`` (the
+    report's at 0). All NaN when no ratio is finite."""
     r = np.asarray(ratio, float)
     r = r[np.isfinite(r)]
     keys = ("ratio_mean", "ratio_ci95_low", "ratio_ci95_high", "ratio_p90", "ratio_cvar10", "ratio_max")
     if r.size == 0:
         return dict.fromkeys(keys, np.nan)
-    ci = mean_interval(r, rng) if r.size > 1 else (np.nan, np.nan)  # one seed: no interval (no draws)
+    ci = mean_interval(r, seed) or (np.nan, np.nan)  # one seed: no interval
     worst = np.sort(r)[::-1][: max(1, int(np.ceil(0.1 * r.size)))]
     vals = (r.mean(), *ci, np.percentile(r, 90), worst.mean(), r.max())
     return {k: float(v) for k, v in zip(keys, vals, strict=True)}
@@ -247,7 +248,7 @@ _ARRAYS = (
 )
 
 
-def _row(c: dict, rng: np.random.Generator) -> dict:
+def _row(c: dict, seed: int) -> dict:
     """A table row (:data:`COLUMNS`) from a cell's per-seed arrays."""
     from adaptive_dd.benchmark.metrics import SATURATION_LIMIT
     from adaptive_dd.benchmark.time_to_floor import quantile_never
@@ -255,7 +256,7 @@ def _row(c: dict, rng: np.random.Generator) -> dict:
     e, rec = c["e"], c["recovery"]
     return {
         **{k: c[k] for k in _KEYS},
-        "seeds": int(np.sum(np.isfinite(e))), **ratio_columns(c["ratio"], rng),
+        "seeds": int(np.sum(np.isfinite(e))), **ratio_columns(c["ratio"], seed),
         "failures": int(np.sum(~np.isfinite(e))),
         "saturated_seeds": int(np.sum(c["sat"] > SATURATION_LIMIT)),
         "lost_seeds": int(np.sum(np.isfinite(c["lost_t"]))), "rms_error_mrad": 1e3 * _mean(e),
@@ -347,7 +348,9 @@ def leaderboard(
     seeds : int or None
         Seeds per scenario and per arm (None: each scenario's own).
     rng : numpy.random.Generator or int, optional
-        For the bootstrap intervals, or its seed (default ``numpy.random.default_rng(0)``); the trials' noise
+        The bootstrap intervals' seed (default 0; a generator: one seed drawn from it), every row's
+        interval drawn from it alone (:func:`~adaptive_dd.benchmark.intervals.mean_interval`: at 0
+        the report's interval of the same ratios); the trials' noise
         and plants come from each scenario's own seeds (common random numbers: every controller of
         a seed meets the same robot and noise).
     progress : bool
@@ -414,7 +417,8 @@ def leaderboard(
         raise ParameterError(
             f"leaderboard: rng must be a numpy.random.Generator or a seed (int >= 0), got {rng!r}"
         )
-    rng = np.random.default_rng(0 if rng is None else rng)  # a seed, or the generator itself
+    # every row's interval from the one seed: a seed given, or one drawn from the generator given
+    seed = int(rng.integers(2**63)) if isinstance(rng, np.random.Generator) else int(rng or 0)
     specs = shipped_scenarios() if scenarios is None else scenarios
     units = [("scenario", _scenario(spec)) for spec in specs]
     if arms:
@@ -434,12 +438,12 @@ def leaderboard(
     arm_cells: list[dict] = []
     flags: list[dict] = []
     for (kind, _), (cells, _, _) in zip(units, done, strict=True):
-        rows += [_row(c, rng) for c in cells]
+        rows += [_row(c, seed) for c in cells]
         flags += trial_flags(cells)
         if kind == "arm":
             arm_cells += cells
     if arms:
-        rows += [_row(c, rng) for c in _pooled(arm_cells, arms)]
+        rows += [_row(c, seed) for c in _pooled(arm_cells, arms)]
     df = pd.DataFrame(rows, columns=list(COLUMNS))
     df["rms_rank"] = rms_rank(df)
     df.attrs["flags"] = flags
