@@ -380,6 +380,7 @@ def test_the_loaded_record_of_a_pair_is_not_blamed_for_the_payload(tmp_path, cap
     out = capsys.readouterr().out
     assert "as the payload this loaded record carries (and the URDF lacks) makes it" in out
     assert "a prior the record contradicts" not in out
+    assert "the unloaded record contradicts the URDF's prior too" not in out  # the URDF is right
 
 
 @pytest.mark.parametrize("extra", [["--com", "0.1", "0", "0"], ["--radius", "0.2"]])

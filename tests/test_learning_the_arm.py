@@ -204,7 +204,8 @@ def test_reopening_follows_the_payload_capacity(arm):
         (0.0, "arm.payload_capacity"),
         (-1.0, "arm.payload_capacity"),
         ("5", "arm.payload_capacity"),
-        (500.0, r"arm.payload_capacity.*\(0, 50\] kg.*a capacity in g\? give it in kg"),  # g typed as kg
+        (500.0, r"arm.payload_capacity.*\(0, 50\] kg.*got 500.0$"),  # beyond: refused
+        (1500.0, r"arm.payload_capacity.*\(0, 50\] kg.*a capacity in g\? give it in kg"),  # g typed as kg
     ],
 )
 def test_a_bad_payload_capacity_is_named(value, match):

@@ -385,3 +385,9 @@ def test_a_joint_whose_da_rounding_sets_its_floor_is_warned_of():
             stated = float(said[0].split("up to about ")[1].split(" mrad")[0]) * 1e-3
     assert errors[5000.0] > 2.0 * errors[None]  # the rounding shows in the floor
     assert errors[5000.0] < stated  # and the warning's figure bounds it
+    # a bandwidth per joint (it stopped validate: float() of a tuple) and noise-free sensors (every
+    # joint warned of nanoradians) give no warning on the shipped UR5
+    d = read_toml(ROOT / "adaptive_dd" / "scenarios" / "ur5_tool_swap_exact.toml")
+    d["control"]["bandwidth"] = [40.0, 40.0, 40.0, 30.0, 30.0, 30.0]
+    d.setdefault("noise", {})["position_variance"] = [0.0] * 6
+    assert inertia_problems(parse_scenario(d, "ur5.toml")) == []

@@ -68,11 +68,12 @@ def _torque_maxima(scenario) -> tuple[np.ndarray, ...]:
 
 
 def _larger(best, cand):
-    """Per joint, the candidate's ``(value, where...)`` where its value is above the best's (the
-    first such on a tie: the earlier sample, as ``argmax`` over the whole reference)."""
+    """Per joint, the candidate's ``(value, where...)`` where its value is above the best's, or is
+    NaN where the best's is not (as ``argmax`` takes a NaN); on an exact tie the best's, the
+    earlier chunk's (the whole reference's ``argmax`` would take the lower segment first)."""
     if best is None:
         return cand
-    win = cand[0] > best[0]
+    win = (cand[0] > best[0]) | (np.isnan(cand[0]) & ~np.isnan(best[0]))
     return tuple(np.where(win, c, b) for c, b in zip(cand, best, strict=True))
 
 
@@ -307,6 +308,11 @@ DAC_NOISE_SIGMAS = 3.0
 """Position sensor's standard deviations beyond which :func:`inertia_problems` warns of a joint's
 D/A rounding."""
 
+DAC_ERROR_FLOOR = 1e-5
+"""[rad] (m on a prismatic joint) :func:`inertia_problems` says nothing of a D/A rounding below
+this, whatever the sensors: with noise-free sensors every quantised joint's rounding is above
+their noise, and a hundredth of a milliradian is below any floor the benchmark reads."""
+
 
 def inertia_problems(scenario) -> list[str]:
     """Joints of a URDF arm whose Coulomb friction over their inertia about their axis, at the
@@ -319,8 +325,8 @@ def inertia_problems(scenario) -> list[str]:
     :data:`DAC_NOISE_SIGMAS` times the position sensor's noise. That figure is what a command
     below the step gives (the rounding then holds one value for long): the SO-100 of
     example-robot-data's wrist roll, 6.5e-5 kg m^2 with a 35 N m limit, 3.0 mrad, and its floor
-    is 3.0 mrad where the arm loaded is at 0.16; where the command spans many steps the rounding
-    is whiter and moves the joint less (vertical3's wrist with a 5000 N m limit: 0.87 stated, the
+    is 3.0 mrad where with 0.3 kg it is 0.19 (``benchmarks/scenarios/so100.toml``); where the
+    command spans many steps the rounding is whiter and moves the joint less (vertical3's wrist with a 5000 N m limit: 0.87 stated, the
     floor 0.057 -> 0.177 mrad). The shipped arms are at most 0.1 of the noise. A warning: the arm
     is simulated as stated."""
     if scenario.closed_forms is not None:  # the paper's arm: its Tables 2 and 4
@@ -343,17 +349,24 @@ def inertia_problems(scenario) -> list[str]:
         )
     act = arm.actuator
     if act.quantize:  # the D/A's rounding held against the law's stiffness (docstring)
-        w = float(scenario.bandwidth)
+        w = np.broadcast_to(np.asarray(scenario.bandwidth, dtype=float), inertia.shape)  # one per joint
         lsb = 2.0 * np.asarray(act.torque_limit, dtype=float) / 2**act.dac_bits
         err = lsb / np.sqrt(12.0) / inertia / w**2  # [rad]: its acceleration over the loop's w^2
-        noise = np.sqrt(np.broadcast_to(arm.sensor.position_variance, err.shape))
-        for j in np.flatnonzero(err > DAC_NOISE_SIGMAS * noise):
+        sensor = arm.sensor
+        noise = np.sqrt(np.broadcast_to(sensor.position_variance, err.shape).astype(float))
+        if sensor.quantize:  # the encoder's own rounding
+            noise = np.hypot(noise, np.asarray(sensor.resolution, dtype=float) / np.sqrt(12.0))
+        floor = np.maximum(DAC_NOISE_SIGMAS * noise, DAC_ERROR_FLOOR)
+        kinds = getattr(arm, "joint_kinds", ("revolute",) * err.size)
+        for j in np.flatnonzero(err > floor):
+            lin = kinds[j] == "prismatic"  # N, kg, m/s^2 and mm on a prismatic joint
+            f, m, a, e = ("N", "kg", "m/s^2", "mm") if lin else ("N m", "kg m^2", "rad/s^2", "mrad")
             out.append(
-                f"arm: joint {names[j]!r}: the D/A's step {lsb[j]:.3g} N m (2 x torque limit "
-                f"{act.torque_limit[j]:.3g} N m / 2^{act.dac_bits}) against {inertia[j]:.3g} kg m^2 about "
-                f"its axis (armature {arm.armature[j]:.3g} included) is {lsb[j] / inertia[j]:.3g} rad/s^2: "
-                f"its rounding may move the joint by up to about {1e3 * err[j]:.2g} mrad at {w:g} rad/s, "
-                f"beyond {DAC_NOISE_SIGMAS:g} times the position sensor's noise ({1e3 * noise[j]:.2g} mrad), "
+                f"arm: joint {names[j]!r}: the D/A's step {lsb[j]:.3g} {f} (2 x torque limit "
+                f"{act.torque_limit[j]:.3g} {f} / 2^{act.dac_bits}) against {inertia[j]:.3g} {m} about "
+                f"its axis (armature {arm.armature[j]:.3g} included) is {lsb[j] / inertia[j]:.3g} {a}: "
+                f"its rounding may move the joint by up to about {1e3 * err[j]:.2g} {e} at {w[j]:g} rad/s, "
+                f"beyond {DAC_NOISE_SIGMAS:g} times the position sensor's noise ({1e3 * noise[j]:.2g} {e}), "
                 "and every law's floor with it; " + rotor + ", or the drive's own torque limit"
             )
     return out

@@ -403,7 +403,8 @@ def _targets(metrics: dict, res: BenchmarkResult) -> list[str]:
     w = metrics["wall_time_s"]
     from adaptive_dd.benchmark.scenario import default_scenario_path
 
-    default = str(getattr(res.scenario, "source", "")) == str(default_scenario_path())
+    source = getattr(res.scenario, "source", None)
+    default = source is not None and Path(str(source)).resolve() == Path(default_scenario_path()).resolve()
     out.append(
         f"  wall time: {w:.1f} s for {len(c)} controllers x {res.scenario.seeds} seeds"
         + (f" (target < {TARGET_WALL_S:g} s for the default scenario)" if default else "")

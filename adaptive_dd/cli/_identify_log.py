@@ -105,7 +105,7 @@ def _print_held(model, fit, loaded: bool = False) -> None:
             print(
                 f"no direction held by the URDF's prior: the URDF is {far}, as the payload this loaded "
                 "record carries (and the URDF lacks) makes it; every direction is estimated, and the pair's "
-                "difference below is the payload"
+                "difference below is the payload (the unloaded record is held to the URDF below)"
             )
             return
         print(
@@ -560,6 +560,13 @@ def _payload_pair(args, arm, model, fit, tau_f, K, outputs, offset=False):
     spec, base, _ = _read(args, arm, args.baseline)
     prior_std = _prior_std(args.arm, model) if args.hold_unseen == "on" else None
     other = _fit_record(model, base, K, tau_f, spec.torque_held, prior_std, offset=offset)
+    if other.held is not None and other.held.conflict:  # no payload there: the URDF itself is off
+        print(
+            "the unloaded record contradicts the URDF's prior too: the URDF is "
+            f"{np.sqrt(other.held.scale2):.3g}x further from its estimate than the stated uncertainty "
+            "allows, so the URDF itself is off, not only by the payload; state the URDF's uncertainty "
+            "([plant.uncertainty])"
+        )
     pr = payload_from_pair(arm, fit.sigma, fit.cov, other.sigma, other.cov, weighting="diagonal")
     loaded = ", ".join(args.data) if args.data else "the scenario's record"
     _print_payload(f"payload (loaded {loaded} - unloaded {', '.join(args.baseline)})", pr)

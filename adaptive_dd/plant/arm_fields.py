@@ -12,6 +12,10 @@ from numpy.typing import NDArray
 from adaptive_dd.errors import ParameterError
 from adaptive_dd.errors import is_finite_number as _is_num
 
+MAX_CAPACITY = 50.0
+"""[kg] the largest ``payload_capacity`` of an arm: the largest payload mass a scenario takes
+(``benchmark.scenario_base.LIMITS["max_mass"]``)."""
+
 FRICTION_LAWS = ("stick-slip", "tanh", "stribeck", "lugre")
 """Plant friction laws (the index is the integrator's code)."""
 
@@ -60,8 +64,8 @@ def check_fields(arm) -> None:
     if not (math.isfinite(arm.payload_offset) and 0 <= arm.payload_offset <= 10):
         raise ParameterError(f"Arm.payload_offset must be in [0, 10] m, got {arm.payload_offset!r}")
     cap = arm.payload_capacity
-    if cap is not None and not (_is_num(cap) and 0 < cap <= 1e4):
-        raise ParameterError(f"Arm.payload_capacity must be in (0, 1e4] kg or None, got {cap!r}")
+    if cap is not None and not (_is_num(cap) and 0 < cap <= MAX_CAPACITY):
+        raise ParameterError(f"Arm.payload_capacity must be in (0, {MAX_CAPACITY:g}] kg or None, got {cap!r}")
     if arm.friction not in FRICTION_LAWS:
         raise ParameterError(f"Arm.friction must be one of {FRICTION_LAWS}, got {arm.friction!r}")
     for name in ("friction_velocity", "stribeck_velocity"):

@@ -21,6 +21,7 @@ from numpy.typing import NDArray
 
 from adaptive_dd.errors import ParameterError, ScenarioError, UrdfError
 from adaptive_dd.errors import is_finite_number as _is_num
+from adaptive_dd.plant.arm_fields import MAX_CAPACITY
 from adaptive_dd.plant.parameters import PhysicalParameters
 from adaptive_dd.plant.two_link import FRICTION_LAWS, ClosedFormTwoLink, closed_form_view
 
@@ -74,10 +75,6 @@ ARM_BOUNDS = {
 """Upper bounds of the ``[arm]`` and ``[plant]`` numbers: physically plausible for a two-link
 direct-drive arm, and far enough below overflow that every derived quantity (``m l^2``, the
 mass matrix, its determinant) stays finite."""
-
-MAX_CAPACITY = 50.0
-"""[kg] the largest ``arm.payload_capacity``: the largest payload mass a scenario takes
-(``benchmark.scenario_base.LIMITS["max_mass"]``)."""
 
 
 def _table_number(src: str, key: str, v, *, lower: float | None = None, strict: bool = True) -> float:
@@ -431,7 +428,7 @@ def _arm_overrides(src: str, table: dict, arm, plant_kw: dict) -> dict:
             raise ScenarioError(
                 f"{src}: key 'arm.payload_capacity' must be the rated payload in (0, {MAX_CAPACITY:g}] kg "
                 f"(a payload's mass is at most that too), got {cap!r}"
-                + (": a capacity in g? give it in kg" if _is_num(cap) and cap > MAX_CAPACITY else "")
+                + (": a capacity in g? give it in kg" if _is_num(cap) and cap >= 1000 else "")
             )
         kw["payload_capacity"] = float(cap)
     if "payload_offset" in table:
