@@ -326,9 +326,9 @@ def inertia_problems(scenario) -> list[str]:
     below the step gives (the rounding then holds one value for long): the SO-100 of
     example-robot-data's wrist roll, 6.5e-5 kg m^2 with a 35 N m limit, 3.0 mrad, and its floor
     is 3.0 mrad where with 0.3 kg it is 0.19 (``benchmarks/scenarios/so100.toml``); where the
-    command spans many steps the rounding is whiter and moves the joint less (vertical3's wrist with a 5000 N m limit: 0.87 stated, the
-    floor 0.057 -> 0.177 mrad). The shipped arms are at most 0.1 of the noise. A warning: the arm
-    is simulated as stated."""
+    command spans many steps the rounding is whiter and moves the joint less (vertical3's wrist
+    with a 5000 N m limit: 0.87 stated, the floor 0.057 -> 0.177 mrad). The shipped arms are at
+    most 0.1 of the noise. A warning: the arm is simulated as stated."""
     if scenario.closed_forms is not None:  # the paper's arm: its Tables 2 and 4
         return []
     arm = scenario.arm
