@@ -461,6 +461,15 @@ def _heatmaps(sweep: Sweep, table: pd.DataFrame, out: Path) -> tuple[pd.DataFram
     return ratios, plot_ratio_heatmaps(ratios, sweep.heatmap, [a for a, _ in sweep.axes], out)
 
 
+def _cell_value(value):
+    """A grid axis's value as the tables hold it: a list (a vector setting, e.g. ``slotine_li``'s
+    seven gains) as its text ``"[0.05, 0.05, ...]"``, one value a table cell and a heat map's
+    tick can carry; a number as it is."""
+    if isinstance(value, list | tuple):
+        return "[" + ", ".join(f"{x:g}" if isinstance(x, int | float) else str(x) for x in value) + "]"
+    return value
+
+
 def _assemble(sweep: Sweep, cells, cells_dir: Path, ext: str, lost: dict) -> pd.DataFrame:
     """The tidy table: grid coordinates + controller + task rows, in grid order."""
     cache: dict[str, pd.DataFrame] = {}
@@ -471,7 +480,7 @@ def _assemble(sweep: Sweep, cells, cells_dir: Path, ext: str, lost: dict) -> pd.
         df = cache[key].copy()
         df.insert(0, "controller", controller)
         for pos, (axis, value) in enumerate(sweep.points[index].values):
-            df.insert(pos, axis, [value] * len(df))
+            df.insert(pos, axis, [_cell_value(value)] * len(df))
         df.insert(0, "point", index)
         df["task"] = key
         parts.append(df)

@@ -174,7 +174,7 @@ def _int(src: str, key: str, v: Any, minimum: int) -> int:
     return v
 
 
-def _base_scenario(src: str, sw: dict, base_dir: Path) -> Scenario:
+def _base_scenario(src: str, sw: dict, base_dir: Path) -> tuple[Scenario, float | None]:
     name = sw.get("scenario", "default")
     if not isinstance(name, str):
         raise SweepError(f"{src}: key 'sweep.scenario' must be a path or \"default\", got {name!r}")
@@ -185,17 +185,12 @@ def _base_scenario(src: str, sw: dict, base_dir: Path) -> Scenario:
         sc = load_scenario(path)
     except ScenarioError as exc:
         raise SweepError(f"{src}: key 'sweep.scenario': {exc}") from None
-    if "duration" in sw:
-        d = sw["duration"]
-        if isinstance(d, bool) or not isinstance(d, int | float) or not d > 0:
-            raise SweepError(f"{src}: key 'sweep.duration' must be a number > 0 s, got {d!r}")
-        late = [t for t in sc.swap_times if t >= d]
-        if late:
-            raise SweepError(
-                f"{src}: key 'sweep.duration' = {d} s ends before the scenario's swap at {late[0]} s"
-            )
-        sc = dataclasses.replace(sc, duration=float(d))
-    return sc
+    if "duration" not in sw:
+        return sc, None
+    d = sw["duration"]
+    if isinstance(d, bool) or not isinstance(d, int | float) or not d > 0:
+        raise SweepError(f"{src}: key 'sweep.duration' must be a number > 0 s, got {d!r}")
+    return sc, float(d)  # applied per grid point, after the grid's swap time (_apply)
 
 
 def _controllers(src: str, sw: dict, base: Scenario) -> tuple[str, ...]:
@@ -291,10 +286,13 @@ _AXIS_WORDS = {
 """What a scenario's error names when a grid axis made it (the axes blamed in a grid point's error)."""
 
 
-def _apply(src: str, base: Scenario, swap: int, coords: dict[str, float]) -> Scenario:
-    """The base scenario with the scenario axes of one grid point applied."""
+def _apply(
+    src: str, base: Scenario, swap: int, coords: dict[str, float], duration: float | None = None
+) -> Scenario:
+    """The base scenario with the scenario axes of one grid point applied, and ``sweep.duration``
+    (checked against the grid point's swaps: a swap the grid moves before it is no error)."""
     times, masses = list(base.swap_times), list(base.swap_masses)
-    changes: dict[str, Any] = {}
+    changes: dict[str, Any] = {} if duration is None else {"duration": duration}
     where = ", ".join(f"{k} = {v}" for k, v in coords.items())
     if "payload_mass" in coords:
         if coords["payload_mass"] < 0:
@@ -304,13 +302,19 @@ def _apply(src: str, base: Scenario, swap: int, coords: dict[str, float]) -> Sce
     if "swap_time" in coords:
         t = coords["swap_time"]
         lo = times[swap - 1] if swap > 0 else 0.0
-        hi = times[swap + 1] if swap + 1 < len(times) else base.duration
+        hi = times[swap + 1] if swap + 1 < len(times) else changes.get("duration", base.duration)
         if not lo < t < hi:
             raise SweepError(
                 f"{src}: key 'grid.swap_time' = {t} s (at {where}): payload {swap} must swap "
                 f"strictly between {lo} s and {hi} s (the neighbouring swaps or the run's end)"
             )
         times[swap] = t
+    late = [t for t in times if duration is not None and t >= duration]
+    if late:
+        raise SweepError(
+            f"{src}: key 'sweep.duration' = {duration:g} s ends before the scenario's swap at {late[0]:g} s"
+            + (f" (at {where})" if where else "")
+        )
     if "bandwidth" in coords:
         if not coords["bandwidth"] > 0:
             raise SweepError(f"{src}: key 'grid.bandwidth' must be > 0 rad/s, got {coords['bandwidth']}")
@@ -343,13 +347,14 @@ def cell_scenario(scenario: Scenario, controller: str, settings: Mapping[str, An
 def _check_settings(src: str, points: list) -> None:
     """Each grid point's controller settings checked as a scenario's ``[controllers.NAME]`` table
     is (an unknown key, a value out of range): an error of the sweep file, not of every task."""
+    from adaptive_dd.benchmark.scenario_checks import freeze
     from adaptive_dd.benchmark.scenario_settings import controller_setting_errors
 
     seen = set()
     for p in points:
         for name, kv in p.settings:
             sc = cell_scenario(p.scenario, name, dict(kv))
-            key = (name, kv, sc.duration, sc.sample_period, sc.bandwidth, sc.damping)
+            key = (name, freeze(dict(kv)), sc.duration, sc.sample_period, sc.bandwidth, sc.damping)
             if key in seen:
                 continue
             seen.add(key)
@@ -437,7 +442,7 @@ def parse_sweep(data: dict, src: str = "<memory>", base_dir: str | Path = ".") -
     for key in sw:
         if key not in _SWEEP_KEYS:
             raise SweepError(f"{src}: unknown key 'sweep.{key}'; allowed: {sorted(_SWEEP_KEYS)}")
-    base = _base_scenario(src, sw, Path(base_dir))
+    base, duration = _base_scenario(src, sw, Path(base_dir))
     if "seed" in sw:
         base = dataclasses.replace(base, seed=_int(src, "sweep.seed", sw["seed"], 0))
     seeds = _int(src, "sweep.seeds", sw.get("seeds", base.seeds), 1)
@@ -459,7 +464,7 @@ def parse_sweep(data: dict, src: str = "<memory>", base_dir: str | Path = ".") -
             if a not in SCENARIO_AXES:
                 name, key = a.split(".", 1)
                 settings.setdefault(name, []).append((key, v))
-        sc = _apply(src, base, swap, coords)
+        sc = _apply(src, base, swap, coords, duration)
         points.append(GridPoint(i, values, sc, tuple((n, tuple(kv)) for n, kv in settings.items())))
     _check_settings(src, points)
     hm = _heatmap(src, data.get("heatmap", {}), axes, ctrls, swap, len(base.swap_times) + 1)

@@ -774,3 +774,39 @@ def test_a_scheduler_with_no_worker_stops_with_a_message(tmp_path, monkeypatch, 
         with pytest.raises(ParameterError, match=r"has no worker after 0.5 s .*start one \(`dask worker"):
             sweep_module._run_on_dask(["task"], tmp_path, "csv", cluster.scheduler_address, None, c, False)
     assert "has no worker yet; waiting up to 0.5 s" in capsys.readouterr().out
+
+
+def test_a_vector_setting_is_a_grid_axis(tmp_path, client):
+    """``slotine_li``'s seven gains as a grid axis stopped the sweep (exit 3, "unhashable type:
+    'list'") at its check, then at its heat map; each value runs, and the tables and the heat map
+    carry it as text."""
+    gains = [[0.05, 0.05, 0.05, 0.5, 0.1, 0.5, 0.1], [0.1, 0.1, 0.1, 1.0, 0.2, 1.0, 0.2]]
+    sweep = (
+        '[sweep]\nscenario = "base.toml"\nseeds = 1\ncontrollers = ["slotine_li_oracle", "slotine_li"]\n'
+        f"[grid]\npayload_mass = [1.0]\n[grid.controller.slotine_li]\ngamma = {gains}\n"
+        '[heatmap]\nadaptive = "slotine_li"\nfloor = "slotine_li_oracle"\n'
+    )
+    base = BASE.replace('["ct_oracle", "adaptive_ct"]', '["slotine_li_oracle", "slotine_li"]')
+    res = run_sweep(
+        load_sweep(_write(tmp_path, sweep, base)), tmp_path / "out", client=client, progress=False
+    )
+    axis = res.table.loc[res.table.controller == "slotine_li", "slotine_li.gamma"]
+    assert sorted(set(axis)) == ["[0.05, 0.05, 0.05, 0.5, 0.1, 0.5, 0.1]", "[0.1, 0.1, 0.1, 1, 0.2, 1, 0.2]"]
+    assert res.failed_rows == 0 and res.heatmaps and res.heatmaps[0].stat().st_size > 0
+
+
+def test_the_duration_is_checked_against_the_grids_swap_time(tmp_path):
+    """``sweep.duration`` was checked against the base scenario's swap (2.0 s) although the grid
+    moved it (to 1.0 s): the file was refused. The grid point's swap is what must lie before it."""
+    base = BASE.replace(
+        "at = 0.1\nmass = 3.0\n[[payload]]\nat = 0.2\nmass = 0.0\n", "at = 0.25\nmass = 3.0\n"
+    )
+    sweep = SWEEP.replace("swap_time = [0.08, 0.12]", "swap_time = [0.05, 0.1]").replace(
+        "block = 1", "block = 1\nduration = 0.2"
+    )
+    sw = load_sweep(_write(tmp_path, sweep, base))
+    assert {p.scenario.duration for p in sw.points} == {0.2}
+    assert sorted({p.scenario.swap_times for p in sw.points}) == [(0.05,), (0.1,)]
+    bad = sweep.replace("swap_time = [0.05, 0.1]", "swap_time = [0.05, 0.2]")
+    with pytest.raises(SweepError, match=r"swap_time' = 0.2 s .*strictly between 0.0 s and 0.2 s"):
+        load_sweep(_write(tmp_path, bad, base))
