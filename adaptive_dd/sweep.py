@@ -19,6 +19,7 @@ message. Neither stops the sweep. A task whose every row failed is not kept in
 
 from __future__ import annotations
 
+import logging
 import os
 import tempfile
 import warnings
@@ -304,9 +305,12 @@ def _client(scheduler: str | None, workers: int | None):
     # set it before every start of their worker, a restart's too.
     pre = {**dask.config.get("distributed.nanny.pre-spawn-environ"), **WORKER_ENV}
     with environment(WORKER_ENV), dask.config.set({"distributed.nanny.pre-spawn-environ": pre}):
+        # the workers' own logs silenced: a task's error comes back through its future, and their
+        # shutdown (a heartbeat to a scheduler closing first) printed tracebacks after a finished run
         cluster = LocalCluster(
-            n_workers=n, threads_per_worker=1, processes=True, env=dict(WORKER_ENV), dashboard_address=":0"
-        )
+            n_workers=n, threads_per_worker=1, processes=True, env=dict(WORKER_ENV), dashboard_address=":0",
+            silence_logs=logging.CRITICAL, preload=["adaptive_dd.sweep_worker"],
+        )  # fmt: skip
     return Client(cluster), cluster
 
 
@@ -440,10 +444,18 @@ def _run_on_dask(todo, cells_dir: Path, ext: str, scheduler, workers, client, pr
         print(f"running {len(todo)} task(s) on {where}, {n} worker(s)", flush=True)
         return _run_tasks(todo, cells_dir, ext, client, progress)
     finally:
-        if made:
-            client.close()
-        if cluster is not None:
-            cluster.close()
+        # the scheduler's warnings about the workers it loses as they stop (on Ctrl-C: a hundred task
+        # ids per worker) are the shutdown's, not the sweep's
+        quiet = logging.getLogger("distributed")
+        level = quiet.level
+        quiet.setLevel(logging.CRITICAL)
+        try:
+            if made:
+                client.close()
+            if cluster is not None:
+                cluster.close()
+        finally:
+            quiet.setLevel(level)
 
 
 def _heatmaps(sweep: Sweep, table: pd.DataFrame, out: Path) -> tuple[pd.DataFrame | None, list]:

@@ -398,3 +398,15 @@ def test_predict_help_says_record_is_optional(capsys):
     text = " ".join(capsys.readouterr().out.split())
     assert "scenario TOML with [arm] and an optional [record]: how a real log's files are read" in text
     assert "without it the record is the simulator's CSV t, q1..qN, [qd1..qdN,] tau1..tauN" in text
+
+
+def test_benchmark_takes_the_base_seed(tmp_path, capsys):
+    """A user changing the base seed had to copy the scenario to add run.seed; --seed does it, and
+    metrics.json records it (per_seed.csv's seed column is the index)."""
+    run = ["benchmark", "--seeds", "1", "--controllers", "pd", "--no-progress"]
+    for out, extra in (("a", ["--seed", "7"]), ("b", ["--seed", "7"]), ("c", [])):
+        assert main([*run, *extra, "--out", str(tmp_path / out)]) == 0
+    capsys.readouterr()
+    text = {k: (tmp_path / k / "per_seed.csv").read_text() for k in "abc"}
+    assert text["a"] == text["b"] != text["c"]
+    assert json.loads((tmp_path / "a" / "metrics.json").read_text())["provenance"]["seed"] == 7

@@ -810,3 +810,23 @@ def test_the_duration_is_checked_against_the_grids_swap_time(tmp_path):
     bad = sweep.replace("swap_time = [0.05, 0.1]", "swap_time = [0.05, 0.2]")
     with pytest.raises(SweepError, match=r"swap_time' = 0.2 s .*strictly between 0.0 s and 0.2 s"):
         load_sweep(_write(tmp_path, bad, base))
+
+
+def test_the_local_clusters_workers_ignore_ctrl_c():
+    """Ctrl-C reached the workers too, each printing a traceback before the sweep's own line; the
+    local cluster preloads a hook that makes a worker ignore SIGINT (the parent closes them)."""
+    import signal
+
+    from adaptive_dd.sweep_worker import dask_setup
+
+    before = signal.getsignal(signal.SIGINT)
+    try:
+        dask_setup(None)
+        assert signal.getsignal(signal.SIGINT) is signal.SIG_IGN
+    finally:
+        signal.signal(signal.SIGINT, before)
+    import inspect
+
+    from adaptive_dd import sweep
+
+    assert 'preload=["adaptive_dd.sweep_worker"]' in inspect.getsource(sweep._client)

@@ -282,6 +282,14 @@ def test_builtin_controller_settings_are_checked_on_reading(table, match):
         parse(BASE + table + "\n")
 
 
+def test_a_setting_beyond_its_own_bound_is_refused_once():
+    """1e7 rad/s of boost_bandwidth was refused twice in one line, by its bound ((0, 1e5]) and by
+    the generic one (+-1e6), two limits that read as a contradiction."""
+    with pytest.raises(ScenarioError) as exc:
+        parse(BASE + "[controllers.adaptive_ct]\nboost_bandwidth = 1e7\n")
+    assert str(exc.value).count("boost_bandwidth") == 1 and "must be in (0, 100000]" in str(exc.value)
+
+
 def test_sweep_and_arm_files_read_toml_like_scenarios(tmp_path):
     """One TOML reader: a BOM is accepted everywhere, errors name the file."""
     from adaptive_dd.cli._common import closed_form_view as _closed_form_view

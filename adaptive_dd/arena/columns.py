@@ -21,8 +21,14 @@ COLUMNS: dict[str, tuple[str, str]] = {
     "payload_kg": ("kg", "the payload carried in the segment (population: the mean over the arms)"),
     "seeds": ("-", "seeds whose trial did not fail before the segment's end"),
     "ratio_mean": ("-", "mean over seeds of RMS error / the floor's RMS error (same seed, same segment)"),
-    "ratio_ci95_low": ("-", "percentile-bootstrap 95 % interval of ratio_mean, low end"),
-    "ratio_ci95_high": ("-", "percentile-bootstrap 95 % interval of ratio_mean, high end"),
+    "ratio_ci95_low": (
+        "-",
+        "percentile-bootstrap 95 % interval of ratio_mean, low end (too narrow below ~10 seeds)",
+    ),
+    "ratio_ci95_high": (
+        "-",
+        "percentile-bootstrap 95 % interval of ratio_mean, high end (too narrow below ~10 seeds)",
+    ),
     "ratio_p90": ("-", "90th percentile of the per-seed ratio (linear interpolation)"),
     "ratio_cvar10": ("-", "CVaR of the worst 10 %: mean of the ceil(0.1 n) largest per-seed ratios"),
     "ratio_max": ("-", "largest per-seed ratio"),

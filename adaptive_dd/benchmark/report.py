@@ -210,7 +210,16 @@ def _seed_tables(ctrls: dict, head: str, caveat: str | None = None) -> list[str]
                 for s in c["segments"]
             )
             lines.append(f"{name:18s}" + cells + f"   (floor: {c['floor']})")
-    lines += ["  95 % confidence interval of the mean, and the worst seed", head]
+    n = max(
+        (s["ratio_to_floor"]["n"] for _, c in rows for s in c["segments"] if s.get("ratio_to_floor")),
+        default=0,
+    )
+    few = 1 < n < FEW_SEEDS  # the bootstrap resamples only the seeds there are
+    lines += [
+        "  95 % confidence interval of the mean, and the worst seed"
+        + (f" (a bootstrap over {n} seeds: too narrow below about {FEW_SEEDS})" if few else ""),
+        head,
+    ]
     for name, c in rows:
         cells = ""
         for s in c["segments"]:
@@ -261,6 +270,10 @@ def time_to_floor_line(name: str, c: dict) -> str:
         f"({tf['segment_length']:g} s) in {tf['never']} of {tf['n']} trials"
     )
 
+
+FEW_SEEDS = 10
+"""Below this many seeds the report says its 95 % interval is too narrow (a percentile bootstrap
+resamples only the seeds there are: on four about half a Student-t interval's width)."""
 
 TARGET_INFO_RATIO = 3.0
 

@@ -243,7 +243,10 @@ def controller_setting_errors(
             check_number(
                 errs, f"controllers.{name}.damping", o["damping"], 0, LIMITS["max_damping"], lo_open=True
             )
+        said = {e.split(":", 1)[0] for e in errs[n0:]}  # a key its own bound refused: said once
         for key, x in _numbers(o, f"controllers.{name}"):
+            if key in said:
+                continue
             if not math.isfinite(x) or (file_limits and abs(x) > LIMITS["max_setting"]):
                 errs.append(f"{key}: must be finite and within +-{LIMITS['max_setting']:g}, got {x!r}")
         if len(errs) > n0:

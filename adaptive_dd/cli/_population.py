@@ -40,6 +40,11 @@ def run_arms(args: argparse.Namespace, only_controllers, with_floors) -> int:
 
     path = scenario_file(args.scenario)  # a shipped scenario's name too
     data, src = read_toml(path), str(path)
+    if getattr(args, "seed", None) is not None:  # every arm's trials from this base seed
+        data = {
+            **data,
+            "run": {**(data.get("run") if isinstance(data.get("run"), dict) else {}), "seed": args.seed},
+        }
     seeds = range(args.first_arm, args.first_arm + args.arms)
     first = population_scenario(data, src, seeds[0], draw_swaps=args.draw_swaps)  # checks the template
     names = only_controllers(first, args.controllers) if args.controllers else first.controllers

@@ -13,7 +13,7 @@ import sys
 import threading
 from pathlib import Path
 
-from adaptive_dd.cli._common import SEEDS, add_command, number
+from adaptive_dd.cli._common import SEED, SEEDS, add_command, number
 
 __all__ = ["add_parser", "run"]
 
@@ -25,6 +25,12 @@ def add_parser(sub) -> None:
     b.add_argument("--out", default="results/benchmark", help="folder for CSV, JSON and figures")
     b.add_argument("--json", metavar="PATH", help="where to write the JSON (default OUT/metrics.json)")
     b.add_argument("--seeds", type=SEEDS, help="override the scenario's number of seeds")
+    b.add_argument(
+        "--seed",
+        type=SEED,
+        help="override the scenario's base seed (run.seed): trial i's noise is seeded by (seed, i); "
+        "per_seed.csv's seed column is the index i, metrics.json's provenance.seed the base",
+    )
     b.add_argument(
         "--controllers",
         nargs="+",
@@ -71,6 +77,8 @@ def run(args: argparse.Namespace) -> int:
     sc = load_scenario(args.scenario)
     if args.seeds is not None:
         sc = dataclasses.replace(sc, seeds=args.seeds)
+    if args.seed is not None:
+        sc = dataclasses.replace(sc, seed=args.seed)
     if args.controllers:
         sc = sc.with_controllers(only_controllers(sc, args.controllers))
     sc = with_floors(sc)
