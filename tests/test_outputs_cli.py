@@ -163,11 +163,11 @@ def test_version_and_no_abbreviations(capsys):
         main(["--version"])
     assert e.value.code == 0 and f"adaptive-dd {adaptive_dd.__version__}" in capsys.readouterr().out
     with pytest.raises(SystemExit) as e:
-        main(["benchmark", "--seed", "2"])
+        main(["benchmark", "--controller", "pd"])  # a prefix of --controllers: no abbreviation
     err = capsys.readouterr().err
-    assert e.value.code == 2 and "unrecognized arguments: --seed" in err
+    assert e.value.code == 2 and "unrecognized arguments: --controller" in err
     # the command's own usage and the option meant
-    assert "usage: adaptive-dd benchmark" in err and "(--seed: did you mean --seeds?)" in err
+    assert "usage: adaptive-dd benchmark" in err and "(--controller: did you mean --controllers?)" in err
     with pytest.raises(SystemExit) as e:
         main(["validate", "--zzzz"])
     err = capsys.readouterr().err
