@@ -211,7 +211,7 @@ def _seed_tables(ctrls: dict, head: str, caveat: str | None = None) -> list[str]
             )
             lines.append(f"{name:18s}" + cells + f"   (floor: {c['floor']})")
     n = max(
-        (s["ratio_to_floor"]["n"] for _, c in rows for s in c["segments"] if s.get("ratio_to_floor")),
+        (s["ratio_to_floor"].get("n", 0) for _, c in rows for s in c["segments"] if s.get("ratio_to_floor")),
         default=0,
     )
     few = 1 < n < FEW_SEEDS  # the bootstrap resamples only the seeds there are
