@@ -305,13 +305,16 @@ def _client(scheduler: str | None, workers: int | None):
     # set it before every start of their worker, a restart's too.
     pre = {**dask.config.get("distributed.nanny.pre-spawn-environ"), **WORKER_ENV}
     with environment(WORKER_ENV), dask.config.set({"distributed.nanny.pre-spawn-environ": pre}):
-        # the workers' own logs silenced: a task's error comes back through its future, and their
-        # shutdown (a heartbeat to a scheduler closing first) printed tracebacks after a finished run
         cluster = LocalCluster(
             n_workers=n, threads_per_worker=1, processes=True, env=dict(WORKER_ENV), dashboard_address=":0",
-            silence_logs=logging.CRITICAL, preload=["adaptive_dd.sweep_worker"],
+            preload=["adaptive_dd.sweep_worker"],
         )  # fmt: skip
     return Client(cluster), cluster
+
+
+def _quiet_logs() -> None:
+    """Run on each worker of the local cluster as it is closed: its Dask logs silenced."""
+    logging.getLogger("distributed").setLevel(logging.CRITICAL)
 
 
 def _run_tasks(todo: list[Task], cells_dir: Path, ext: str, client, progress: bool) -> dict[str, list]:
@@ -449,6 +452,11 @@ def _run_on_dask(todo, cells_dir: Path, ext: str, scheduler, workers, client, pr
         quiet = logging.getLogger("distributed")
         level = quiet.level
         quiet.setLevel(logging.CRITICAL)
+        if cluster is not None:  # and the workers' (a heartbeat to a scheduler that closed first):
+            try:  # their warnings while the tasks ran (memory, restarts) were printed
+                client.run(_quiet_logs)
+            except Exception:  # a worker already gone has nothing to say
+                pass
         try:
             if made:
                 client.close()
@@ -478,7 +486,7 @@ def _cell_value(value):
     seven gains) as its text ``"[0.05, 0.05, ...]"``, one value a table cell and a heat map's
     tick can carry; a number as it is."""
     if isinstance(value, list | tuple):
-        return "[" + ", ".join(f"{x:g}" if isinstance(x, int | float) else str(x) for x in value) + "]"
+        return "[" + ", ".join(str(x) for x in value) + "]"  # each number to its last digit
     return value
 
 

@@ -309,11 +309,12 @@ def _apply(
                 f"strictly between {lo} s and {hi} s (the neighbouring swaps or the run's end)"
             )
         times[swap] = t
-    late = [t for t in times if duration is not None and t >= duration]
-    if late:
+    late = [i for i, t in enumerate(times) if duration is not None and t >= duration]
+    if late:  # the grid point named only where it moved that swap
+        moved = "swap_time" in coords and late[0] == swap
         raise SweepError(
-            f"{src}: key 'sweep.duration' = {duration:g} s ends before the scenario's swap at {late[0]:g} s"
-            + (f" (at {where})" if where else "")
+            f"{src}: key 'sweep.duration' = {duration:g} s ends before the scenario's swap at "
+            f"{times[late[0]]:g} s" + (f" (at {where})" if moved else "")
         )
     if "bandwidth" in coords:
         if not coords["bandwidth"] > 0:

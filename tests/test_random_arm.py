@@ -286,7 +286,7 @@ def test_cli_arms_reports_every_law_against_its_floor(capsys, tmp_path):
     pop.write_text(text)
     out = tmp_path / "out"
     argv = ["benchmark", str(pop), "--arms", "2", "--seeds", "1", "--out", str(out), "--no-progress"]
-    assert main([*argv, "--figure-formats", "png", "svg"]) == 0
+    assert main([*argv, "--figure-formats", "png", "svg", "--seed", "5"]) == 0
     printed = capsys.readouterr()
     assert "pd_gravity_oracle added (the floor of pd_gravity" in printed.err
     assert printed.out.startswith("pd_gravity / pd_gravity_oracle per seed, per arm")
@@ -304,6 +304,7 @@ def test_cli_arms_reports_every_law_against_its_floor(capsys, tmp_path):
     assert set(arms["controller"]) == {"pd_gravity", "slotine_li"} and len(arms) == 2 * 2 * 4
     summary = json.loads((out / "population.json").read_text())
     assert summary["lead"] == "pd_gravity" and set(summary["laws"]) == {"pd_gravity", "slotine_li"}
+    assert summary["seed"] == 5  # --seed reaches every arm, and is recorded
     assert (out / "ratios.png").stat().st_size > 1000 and (out / "ratios.svg").is_file()  # no figure before
     assert "ratios.png" in printed.out.splitlines()[-1]
 

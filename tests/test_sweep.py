@@ -146,7 +146,7 @@ def test_a_task_key_holds_the_code_so_other_code_runs_its_cells_again(tmp_path, 
         (('"ct_oracle", "adaptive_ct"]', '"ct_oracle", "my_laws:PD"]'), "'my_laws:PD' is a plug-in; a sweep"),
         (('"base.toml"', '"nope.toml"'), "key 'sweep.scenario': no such scenario file"),
         (("block = 1", "block = 1\nswap = 2"), "key 'sweep.swap' = 2"),
-        (("block = 1", "block = 1\nduration = 0.15"), "key 'sweep.duration' = 0.15 s ends before"),
+        (("block = 1", "block = 1\nduration = 0.15"), "= 0.15 s ends before the scenario's swap at 0.2 s"),
         (("[grid]", "[heatmap]\nx = 'mass'\n[grid]"), "key 'heatmap.x' = 'mass' must name a grid axis"),
         (("[grid]", "[heatmap]\nfloor = 'pd'\n[grid]"), "key 'heatmap.floor' = 'pd' is not in"),
         (("[grid]", "[heatmap]\nsegment = 3\n[grid]"), "key 'heatmap.segment' = 3"),
@@ -791,7 +791,10 @@ def test_a_vector_setting_is_a_grid_axis(tmp_path, client):
         load_sweep(_write(tmp_path, sweep, base)), tmp_path / "out", client=client, progress=False
     )
     axis = res.table.loc[res.table.controller == "slotine_li", "slotine_li.gamma"]
-    assert sorted(set(axis)) == ["[0.05, 0.05, 0.05, 0.5, 0.1, 0.5, 0.1]", "[0.1, 0.1, 0.1, 1, 0.2, 1, 0.2]"]
+    assert sorted(set(axis)) == [
+        "[0.05, 0.05, 0.05, 0.5, 0.1, 0.5, 0.1]",
+        "[0.1, 0.1, 0.1, 1.0, 0.2, 1.0, 0.2]",
+    ]
     assert res.failed_rows == 0 and res.heatmaps and res.heatmaps[0].stat().st_size > 0
 
 
@@ -807,6 +810,15 @@ def test_the_duration_is_checked_against_the_grids_swap_time(tmp_path):
     sw = load_sweep(_write(tmp_path, sweep, base))
     assert {p.scenario.duration for p in sw.points} == {0.2}
     assert sorted({p.scenario.swap_times for p in sw.points}) == [(0.05,), (0.1,)]
+    # a swap the grid does not move, beyond the duration: no grid point named
+    two = base.replace(
+        "at = 0.25\nmass = 3.0\n", "at = 0.05\nmass = 3.0\n[[payload]]\nat = 0.25\nmass = 0.0\n"
+    )
+    with pytest.raises(SweepError) as info:
+        load_sweep(
+            _write(tmp_path, sweep.replace("swap_time = [0.05, 0.1]", "swap_time = [0.02, 0.03]"), two)
+        )
+    assert str(info.value).endswith("ends before the scenario's swap at 0.25 s")
     bad = sweep.replace("swap_time = [0.05, 0.1]", "swap_time = [0.05, 0.2]")
     with pytest.raises(SweepError, match=r"swap_time' = 0.2 s .*strictly between 0.0 s and 0.2 s"):
         load_sweep(_write(tmp_path, bad, base))

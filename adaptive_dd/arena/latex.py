@@ -64,14 +64,20 @@ def latex_table(df, caption: str | None = None, command: str | None = None) -> s
     told = references(df)  # shown, not ranked
     ranked = df[contenders(df) | told]
     reference = set(df.loc[told, "controller"])
-    own = df[df["kind"] == "scenario"] if "kind" in df else df.iloc[:0]  # a scenario's own seeds
-    n = int(np.nanmax(own["seeds"].to_numpy(dtype=float))) if len(own) and "seeds" in own else 0
-    seeds_said = f"{n} " if n else ""
+    # the trials per scenario and per drawn arm (failed ones too), as command_of reads them back
+    trials = df.loc[df["kind"] != "population", ["seeds", "failures"]].sum(axis=1, min_count=1)
+    n = int(trials.max()) if trials.notna().any() else 0
+    pooled = bool((df["kind"] == "population").any())
     caption = caption or (
         "Ratio of each law's RMS tracking error to its floor's (the same law given the true model), "
-        f"mean over {seeds_said}seeds (p90), in each scenario's heaviest "
-        "payload segment and every segment of the drawn arms pooled; bold: the lowest RMS error of "
-        "the column; $\\times N$: N trials failed"
+        + (
+            f"mean over {n} seeds per scenario" + (" and per drawn arm" if pooled else "")
+            if n
+            else "mean over the seeds"
+        )
+        + " (p90), in each scenario's heaviest payload segment"
+        + (" and every segment of the drawn arms, pooled over them" if pooled else "")
+        + "; bold: the lowest RMS error of the column; $\\times N$: N trials failed"
         + ("; $\\dagger$: told the true model, a reference, not ranked." if told.any() else ".")
     )
     heads = []

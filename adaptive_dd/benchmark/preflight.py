@@ -367,7 +367,9 @@ def inertia_problems(scenario) -> list[str]:
                 f"its axis (armature {arm.armature[j]:.3g} included) is {lsb[j] / inertia[j]:.3g} {a}: "
                 f"its rounding may move the joint by up to about {1e3 * err[j]:.2g} {e} at {w[j]:g} rad/s, "
                 f"beyond {DAC_NOISE_SIGMAS:g} times the position sensor's noise ({1e3 * noise[j]:.2g} {e}), "
-                "and every law's floor with it; " + rotor + ", or the drive's own torque limit"
+                "and every law's floor with it; "
+                + (rotor if not lin else "a drive adds mass the URDF leaves out: state [arm] armature [kg]")
+                + ", or the drive's own torque limit"
             )
     return out
 

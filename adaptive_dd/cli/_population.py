@@ -102,7 +102,8 @@ def run_arms(args: argparse.Namespace, only_controllers, with_floors) -> int:
         pop.frame.to_csv(outputs.path("per_seed.csv"), index=False)
         arms_frame(pop).to_csv(outputs.path("arms.csv"), index=False)
         summary = {
-            "template": src, "floor_caveat": pop.floor_caveat, "lead": pop.lead, "arms": pop.arms,
+            "template": src, "seed": first.seed, "floor_caveat": pop.floor_caveat, "lead": pop.lead,
+            "arms": pop.arms,
             "pooled": pooled(pop), "laws": {n: pooled(pop, n) for n in pop.laws},
         }  # fmt: skip
         target = outputs.extra(args.json) if args.json else outputs.path("population.json")

@@ -29,7 +29,8 @@ def add_parser(sub) -> None:
         "--seed",
         type=SEED,
         help="override the scenario's base seed (run.seed): trial i's noise is seeded by (seed, i); "
-        "per_seed.csv's seed column is the index i, metrics.json's provenance.seed the base",
+        "per_seed.csv's seed column is the index i, metrics.json's provenance.seed the base "
+        "(population.json's seed with --arms)",
     )
     b.add_argument(
         "--controllers",
