@@ -309,7 +309,7 @@ def _apply(
                 f"strictly between {lo} s and {hi} s (the neighbouring swaps or the run's end)"
             )
         times[swap] = t
-    late = [i for i, t in enumerate(times) if duration is not None and t >= duration]
+    late = [] if duration is None else [i for i, t in enumerate(times) if t >= duration]
     if late:  # the grid point named only where it moved that swap
         moved = "swap_time" in coords and late[0] == swap
         raise SweepError(

@@ -350,16 +350,15 @@ def inertia_problems(scenario) -> list[str]:
     act = arm.actuator
     if act.quantize:  # the D/A's rounding held against the law's stiffness (docstring)
         w = np.broadcast_to(np.asarray(scenario.bandwidth, dtype=float), inertia.shape)  # one per joint
-        lsb = 2.0 * np.asarray(act.torque_limit, dtype=float) / 2**act.dac_bits
+        lsb = act._lsb  # the step the loop's actuator rounds to
         err = lsb / np.sqrt(12.0) / inertia / w**2  # [rad]: its acceleration over the loop's w^2
         sensor = arm.sensor
         noise = np.sqrt(np.broadcast_to(sensor.position_variance, err.shape).astype(float))
         if sensor.quantize:  # the encoder's own rounding
             noise = np.hypot(noise, np.asarray(sensor.resolution, dtype=float) / np.sqrt(12.0))
         floor = np.maximum(DAC_NOISE_SIGMAS * noise, DAC_ERROR_FLOOR)
-        kinds = getattr(arm, "joint_kinds", ("revolute",) * err.size)
         for j in np.flatnonzero(err > floor):
-            lin = kinds[j] == "prismatic"  # N, kg, m/s^2 and mm on a prismatic joint
+            lin = arm.joint_kinds[j] == "prismatic"  # N, kg, m/s^2 and mm on a prismatic joint
             f, m, a, e = ("N", "kg", "m/s^2", "mm") if lin else ("N m", "kg m^2", "rad/s^2", "mrad")
             out.append(
                 f"arm: joint {names[j]!r}: the D/A's step {lsb[j]:.3g} {f} (2 x torque limit "

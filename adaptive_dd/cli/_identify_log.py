@@ -95,12 +95,17 @@ def _columns(fit) -> str:
     return ", ".join(parts)
 
 
+def _far(held) -> str:
+    """How far the URDF is from a record's estimate, against its stated uncertainty (a conflict's)."""
+    return f"{np.sqrt(held.scale2):.3g}x further from the estimate than the stated uncertainty allows"
+
+
 def _print_held(model, fit, loaded: bool = False) -> None:
     """The directions the record cannot see, held at the URDF's values, and why (``loaded``: the
     record is the loaded one of ``--baseline``'s pair, which the URDF's prior is not about)."""
     held = fit.held
     if held is not None and held.conflict:
-        far = f"{np.sqrt(held.scale2):.3g}x further from the estimate than the stated uncertainty allows"
+        far = _far(held)
         if loaded:  # the payload the URDF lacks puts it there: expected, not a fault of the data
             print(
                 f"no direction held by the URDF's prior: the URDF is {far}, as the payload this loaded "
@@ -562,9 +567,8 @@ def _payload_pair(args, arm, model, fit, tau_f, K, outputs, offset=False):
     other = _fit_record(model, base, K, tau_f, spec.torque_held, prior_std, offset=offset)
     if other.held is not None and other.held.conflict:  # no payload there: the URDF itself is off
         print(
-            "the unloaded record contradicts the URDF's prior too: the URDF is "
-            f"{np.sqrt(other.held.scale2):.3g}x further from its estimate than the stated uncertainty "
-            "allows, so the URDF itself is off, not only by the payload; state the URDF's uncertainty "
+            f"the unloaded record contradicts the URDF's prior too: the URDF is {_far(other.held)}, so "
+            "the URDF itself is off, not only by the payload; state the URDF's uncertainty "
             "([plant.uncertainty])"
         )
     pr = payload_from_pair(arm, fit.sigma, fit.cov, other.sigma, other.cov, weighting="diagonal")

@@ -123,12 +123,12 @@ def run(args: argparse.Namespace) -> int:
                 if name in variants
                 else ""
             )
-            import difflib
+            from adaptive_dd.benchmark.key_hints import nearest_keys
 
-            near = difflib.get_close_matches(name, [*CONTROLLERS, *variants], n=1)
+            near = " or ".join(map(repr, nearest_keys(name, [*CONTROLLERS, *variants])))
             raise ParameterError(
                 f"--controllers: unknown controller {name!r}"
-                + (f" (did you mean {near[0]!r}?)" if near and name not in variants else "")
+                + (f" (did you mean {near}?)" if near and name not in variants else "")
                 + f"{where}; built-ins: {', '.join(CONTROLLERS)}, a plug-in's 'package.module:Class' (or "
                 "--plugin), or a variant every given scenario (and with --arms the template) defines "
                 '([controllers.NAME] law = "...")'
