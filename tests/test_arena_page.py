@@ -3,6 +3,8 @@ committed table renders, and the rendering's parts on hand-made tables."""
 
 from __future__ import annotations
 
+import shutil
+import subprocess
 from pathlib import Path
 
 import numpy as np
@@ -197,5 +199,72 @@ def test_the_latex_table_holds_the_tables_cells_the_best_in_bold_and_names_escap
     assert rows["\\texttt{sliding\\_mode}"].endswith("& \\textbf{0.500} (1.100) \\\\")  # rms_rank 1
     assert rows["\\texttt{icl}"].endswith("& 0.500 (1.100) $\\times 2$ \\\\")  # lowest RMS, but failed
     header = next(ln for ln in lines if ln.startswith("controller & floor"))
-    assert header == "controller & floor & population(1 arms):0 (1.5 kg) \\\\"
-    assert "\\begin{tabular}{llr}" in lines and lines[-1] == "\\end{table}"
+    assert header == "controller & floor & seg.~0: 1.5~kg \\\\"
+    assert " & & \\multicolumn{1}{c}{1 drawn arm, pooled} \\\\" in lines
+    assert "\\begin{tabular}{llr}" in lines and lines[-1] == "\\end{table*}"
+
+
+def _wide(n_scenarios: int, n_segments: int) -> pd.DataFrame:
+    """A leaderboard of ``n_scenarios`` given scenarios (their heaviest segment, 1) and drawn arms
+    pooled over ``n_segments`` segments, two laws with long names, p90s of four digits."""
+    rows = []
+    cases = [(f"scenario_number_{k}", "scenario", 1) for k in range(n_scenarios)]
+    cases += [("population(50 arms)", "population", g) for g in range(n_segments)]
+    for sc, kind, seg in cases:
+        for ctrl, floor, m in [
+            ("momentum_observer_ct", "ct_oracle_textbook", 1.2345),
+            ("ct_oracle", "", 1.0),
+        ]:
+            row = dict.fromkeys(COLUMNS, np.nan)
+            row.update(
+                scenario=sc, kind=kind, controller=ctrl, floor=floor, floor_note="", segment=seg,
+                payload_kg=2.68, seeds=10, failures=3 if floor else 0, rms_error_mrad=m,
+                ratio_mean=m if floor else np.nan, ratio_p90=1234.0 if floor else np.nan,
+            )  # fmt: skip
+            rows.append(row)
+    df = pd.DataFrame(rows, columns=list(COLUMNS))
+    df["rms_rank"] = rms_rank(df)
+    return df
+
+
+@pytest.mark.parametrize(
+    ("n_scenarios", "n_segments", "widths"), [(6, 4, [3, 3, 2, 2]), (5, 1, [2, 3, 1]), (2, 0, [2])]
+)
+def test_the_latex_table_sets_its_columns_in_panels_that_fit_the_page(n_scenarios, n_segments, widths):
+    """A row of ten columns was 1460 pt wide (a page's text is 470): the columns go in as few panels
+    as fit, the given scenarios split evenly, the drawn arms' segments apart, every law in every
+    panel with its floor, each column once and in order (the long names and the failures here
+    leave room for three columns; the committed table's panels hold three and four)."""
+    from adaptive_dd.arena.latex import latex_table
+
+    tex = latex_table(_wide(n_scenarios, n_segments), command="x")
+    specs = [ln for ln in tex.splitlines() if ln.startswith("\\begin{tabular}")]
+    assert [s[len("\\begin{tabular}") :].count("r") for s in specs] == widths
+    laws = [ln for ln in tex.splitlines() if ln.startswith("\\texttt{momentum")]
+    assert len(laws) == len(widths) and all("ct\\_oracle\\_textbook" in ln for ln in laws)
+    heads = " ".join(ln for ln in tex.splitlines() if ln.startswith(" & & "))
+    assert [f"scenario\\_number\\_{k}" in heads for k in range(n_scenarios)] == [True] * n_scenarios
+    assert heads.find("scenario\\_number\\_0") < heads.find(f"scenario\\_number\\_{n_scenarios - 1}")
+    assert ("50 drawn arms, pooled" in heads) == bool(n_segments)
+    assert tex.count("{1.234} (1234) $\\times 3$") == n_scenarios + n_segments
+
+
+@pytest.mark.skipif(shutil.which("pdflatex") is None, reason="pdflatex is not installed")
+def test_the_committed_latex_table_fits_a_page_when_typeset(tmp_path):
+    """The committed table and a wider one typeset in a 1-inch-margin article (6.5 in of text)
+    without an overfull line: the panels' width is a claim of the module's, checked by LaTeX."""
+    from adaptive_dd.arena.latex import latex_table
+
+    doc = "\\documentclass{article}\\usepackage[margin=1in]{geometry}\\usepackage{booktabs}"
+    committed = (ROOT / CSV).with_suffix(".tex").read_text(encoding="utf-8")
+    for name, tex in [("committed", committed), ("wide", latex_table(_wide(7, 6), command="x"))]:
+        (tmp_path / f"{name}.tex").write_text(
+            doc + "\\begin{document}\n" + tex + "\n\\end{document}\n", encoding="utf-8"
+        )
+        run = subprocess.run(
+            ["pdflatex", "-interaction=nonstopmode", "-halt-on-error", f"{name}.tex"],
+            cwd=tmp_path, capture_output=True, text=True, timeout=120,
+        )  # fmt: skip
+        log = (tmp_path / f"{name}.log").read_text(encoding="utf-8", errors="replace")
+        assert run.returncode == 0, log[-2000:]
+        assert "Overfull \\hbox" not in log, [ln for ln in log.splitlines() if "Overfull" in ln]
