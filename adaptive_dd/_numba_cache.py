@@ -270,14 +270,16 @@ def _inline_fresh_ir_in_place() -> bool:
 
 
 # ------------------------------------------------------------ telling the user about compilation
-COMPILE_SECONDS = {"two-link": 28.0, "serial": 60.0}
+COMPILE_SECONDS = {"two-link": 28.0, "serial": 60.0, "plug-in": 9.0}
 """One-time compilation of a benchmark's kernels with a cold cache, on 2 idle cores: a guide for
 the message and ``validate``'s estimate, not a promise (a busy machine stretches it; numba
 compiles each kernel on one core). Measured from a fresh clone with an empty cache
 (``XDG_CACHE_HOME`` a fresh folder): ``adaptive-dd benchmark --seeds 1`` printed ``compiled the
 kernels in 26 s`` on the paper's arm and 54-59 s on ``ur5_tool_swap.toml`` (about 110 CPU s of
 both processes), where an N-joint arm (any compiles the same kernels) compiles in two processes at
-once (:class:`Compiling`). ``benchmarks/compile_profile.py`` gives each kernel's CPU seconds;
+once (:class:`Compiling`); a compiled plug-in's loop, each, after them: ``pd_gravity_plugin:
+PDGravityPlugin`` of ``examples/plugins/pd_gravity.toml`` printed ``compiled the plug-in into the
+closed loop in 8.7 s``. ``benchmarks/compile_profile.py`` gives each kernel's CPU seconds;
 earlier figures are in the changelog."""
 
 
@@ -309,21 +311,26 @@ def cache_index(dispatcher) -> str | None:
     return getattr(getattr(getattr(dispatcher, "_cache", None), "_cache_file", None), "_index_path", None)
 
 
-def compile_estimate(arm) -> float:
-    """Seconds of one-time compilation a benchmark on ``arm`` would spend now (0 when cached).
+def compile_estimate(arm, plugins=()) -> float:
+    """Seconds of one-time compilation a benchmark on ``arm`` would spend now (0 when cached),
+    with each compiled plug-in's loop of ``plugins`` (their ``(reset, command, observe,
+    estimate)``) numba's cache does not hold.
 
     Cold means numba's cache holds no compiled form of the closed-loop kernel for this state of
     the source (:func:`configure`); a cached kernel with a new specialisation (another law)
     still compiles, and the message after the run says so.
     """
+    from adaptive_dd.closed_loop.plugin_loop import loop_cached
     from adaptive_dd.plant.kind import is_chain
 
     serial = is_chain(arm)
+    runtime = "chain" if serial else "two-link"
+    own = sum(COMPILE_SECONDS["plug-in"] for f in plugins if not loop_cached(f, runtime))
     kernel = _closed_loop_kernel(serial)
     index = cache_index(kernel)
     if index is None or (os.path.exists(index) and _holds(kernel._cache, serial)):
-        return 0.0
-    return COMPILE_SECONDS["serial" if serial else "two-link"]
+        return own
+    return COMPILE_SECONDS["serial" if serial else "two-link"] + own
 
 
 def _compile_split(buffer) -> tuple[float, float]:

@@ -253,6 +253,7 @@ def cache_folder(tmp_path, monkeypatch):
 @pytest.mark.slow  # two processes compiling a plug-in loop: 10 s of the default run
 def test_a_plugins_loop_is_written_once_and_loaded_by_a_later_process(cache_folder, capsys, monkeypatch):
     from adaptive_dd.closed_loop.runner import run_closed_loop
+    from adaptive_dd.controllers.plugins import compiled_form
 
     class Proportional:
         needs = ("gravity",)
@@ -280,8 +281,17 @@ def test_a_plugins_loop_is_written_once_and_loaded_by_a_later_process(cache_fold
             return 0
 
     sc = _scenario(0.05, 2)
+    form = compiled_form("p", Proportional(200.0), 1, sc.sample_period)  # as the run builds it
+    functions = (form.reset, form.command, form.observe, form.estimate)
+    with monkeypatch.context() as m:  # validate's estimate: this loop is to be compiled
+        m.setattr(numba.config, "CACHE_DIR", str(cache_folder))
+        assert not plugin_loop.loop_cached(functions)
     runs = run_closed_loop(sc, {"p": Proportional(200.0)}).runs
     assert runs["p"].engine == "compiled" and not runs["p"].failed.any()
+    with monkeypatch.context() as m:  # and now it is found
+        m.setattr(numba.config, "CACHE_DIR", str(cache_folder))
+        assert plugin_loop.loop_cached(functions)
+        assert not plugin_loop.loop_cached(functions, "two-link")  # another runtime's loop
     assert "p: compiled the plug-in into the closed loop" in capsys.readouterr().err
     (written,) = (cache_folder / "plugin_loops").glob("loop_*.py")
     key = written.stem.removeprefix("loop_")
@@ -490,3 +500,25 @@ def test_old_plugin_loops_are_pruned_with_their_compiled_code(tmp_path):
     assert len(list(compiled.glob("loop_0000000000000011.*"))) == 2
     assert other.exists()
     assert plugin_loop.prune_loops(folder, keep=16, now=now) == []  # nothing more to prune
+
+
+def test_validates_estimate_counts_each_plug_in_loop_the_cache_lacks(monkeypatch):
+    """``validate``'s estimate left out a compiled plug-in's loop (about 9 s a plug-in): it counts
+    each one numba's cache does not hold, and none it holds (the example's compiled PD plus gravity;
+    its plain-Python twin compiles nothing of its own)."""
+    from adaptive_dd import _numba_cache as cache
+    from adaptive_dd.benchmark.preflight import plugin_functions
+    from adaptive_dd.benchmark.scenario import load_scenario
+
+    sc = load_scenario(Path(__file__).parents[1] / "examples" / "plugins" / "pd_gravity.toml")
+    (functions,) = plugin_functions(sc)  # pd_gravity_plugin:PDGravityPlugin only
+    assert functions[1].__name__ == "command" and all(
+        isinstance(f, numba.core.dispatcher.Dispatcher) for f in functions
+    )
+    held = set()
+    monkeypatch.setattr(plugin_loop, "loop_cached", lambda f, runtime="chain": (f, runtime) in held)
+    monkeypatch.setattr(cache, "cache_index", lambda kernel: None)  # the built-in kernels cached
+    assert cache.compile_estimate(sc.arm, [functions]) == cache.COMPILE_SECONDS["plug-in"]
+    held.add((functions, "chain"))
+    assert cache.compile_estimate(sc.arm, [functions]) == 0.0
+    assert sc.estimate().compile_seconds == 0.0

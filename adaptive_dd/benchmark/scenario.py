@@ -280,11 +280,12 @@ class Scenario:
         """Memory and time estimate of this run (:func:`run_estimate`), one-time compilation included
         when numba's cache is cold, the excitation phase (``[run] excite``) when it has one."""
         from adaptive_dd._numba_cache import compile_estimate
+        from adaptive_dd.benchmark.preflight import plugin_functions
 
         general = self.closed_forms is None
         return run_estimate(
             self.n_samples, self.seeds, len(self.controllers), self.n_joints if general else None,
-            compile_seconds=compile_estimate(self.closed_forms or self.arm),
+            compile_seconds=compile_estimate(self.closed_forms or self.arm, plugin_functions(self)),
             excite_samples=round(self.excite / self.sample_period),
         )  # fmt: skip
 

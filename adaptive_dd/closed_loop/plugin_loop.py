@@ -341,6 +341,18 @@ def plugin_key(functions, runtime: str = "chain") -> str | None:
     return function_key(functions, Path(__file__).read_bytes() + TRIALS[runtime].encode())
 
 
+def loop_cached(functions, runtime: str = "chain") -> bool:
+    """Whether :func:`plugin_loop` of these ``functions`` would load its loop from numba's cache
+    (numba's index of the loop's module, which numba keys by the module's text, is in the cache
+    folder), not compile it: ``validate``'s estimate of a run's compilation."""
+    import numba
+
+    key = plugin_key(functions, runtime)
+    if not key or not numba.config.CACHE_DIR:
+        return False
+    return any(Path(numba.config.CACHE_DIR).glob(f"plugin_loops*/loop_{key}._plugin_block-*.nbi"))
+
+
 def plugin_loop(functions, runtime: str = "chain"):
     """The compiled loop (``plugin_block``) of a plug-in's ``functions`` (``reset, command,
     observe, estimate``): called as :func:`~adaptive_dd.closed_loop.glue.chain_loop_block` is
