@@ -328,6 +328,13 @@ def test_controllers_picked_on_the_command_line_drop_the_others_tables(tmp_path)
     assert kept.controller_options == (("adaptive_ct", freeze({"boost_duration": 0.2})),)
     plug = sc.with_controllers(("payload_gradient:PayloadGradient",))
     assert plug.options("PayloadGradient") == {"gamma": 200.0, "label": "payload_gradient"}
+    # named by its label, as its results are (it was refused: not among the controllers)
+    assert only_controllers(sc, ["payload_gradient"]) == only_controllers(
+        sc, ["payload_gradient:PayloadGradient"]
+    )
+    assert "payload_gradient:PayloadGradient" in only_controllers(sc, ["payload_gradient"])
+    with pytest.raises(ParameterError, match=r"payload_gradiant \(did you mean 'payload_gradient'\?\)"):
+        only_controllers(sc, ["payload_gradiant"])
     text = (EXAMPLES / "plugin.toml").read_text().replace('"payload_gradient:PayloadGradient", ', "")
     (tmp_path / "unlisted.toml").write_text(text)
     with pytest.raises(

@@ -36,7 +36,8 @@ def add_parser(sub) -> None:
         "--controllers",
         nargs="+",
         metavar="NAME",
-        help="run only these of the scenario's controllers (each one's floor is added: ratios need it)",
+        help="run only these of the scenario's controllers, as run.controllers or the results name them "
+        "(a plug-in by its label); each one's floor is added: ratios need it",
     )
     b.add_argument(
         "--figure-formats",
@@ -190,16 +191,20 @@ def with_floors(sc):
 
 def only_controllers(sc, names: list[str]) -> tuple[str, ...]:
     """The scenario's controllers among ``names``, with the floor of each (``adaptive_ct`` brings
-    ``ct_oracle``), in the scenario's order; a name the scenario does not list is an error naming
-    the scenario's list."""
+    ``ct_oracle``), in the scenario's order; a plug-in may be named by its label, as its results
+    are; a name the scenario does not list is an error naming the scenario's list."""
     from adaptive_dd.benchmark.preflight import scenario_floors
+    from adaptive_dd.benchmark.scenario_settings import result_names
     from adaptive_dd.errors import ParameterError
 
+    carried = result_names(sc.controllers, {n: sc.options(n) for n, _ in sc.controller_options})
+    spec_of = {name: spec for spec, name in carried.items()}  # a result's name (a label): its entry
+    names = [spec_of.get(n, n) for n in names]
     unknown = [n for n in names if n not in sc.controllers]
     if unknown:
         from adaptive_dd.benchmark.key_hints import nearest_keys
 
-        near = {n: nearest_keys(n, sc.controllers) for n in unknown}
+        near = {n: nearest_keys(n, dict.fromkeys([*sc.controllers, *spec_of])) for n in unknown}
         said = ", ".join(
             f"{n} (did you mean {' or '.join(map(repr, near[n]))}?)" if near[n] else n for n in unknown
         )
@@ -208,11 +213,7 @@ def only_controllers(sc, names: list[str]) -> tuple[str, ...]:
             f"{list(sc.controllers)}; name some of those (--controllers picks from the scenario's "
             "run.controllers; add another law there)"
         )
-    from adaptive_dd.benchmark.scenario_settings import result_names
-
     keep, floors = set(names), scenario_floors(sc)
-    carried = result_names(sc.controllers, {n: sc.options(n) for n, _ in sc.controller_options})
-    spec_of = {name: spec for spec, name in carried.items()}  # a floor named by its label: its entry
     for n in names:
         floor = spec_of.get(floors.get(n), floors.get(n))
         if floor is not None and floor not in keep and floor in sc.controllers:
