@@ -148,9 +148,12 @@ def test_the_command_is_read_back_from_the_rows():
 def test_the_figure_draws_a_point_and_interval_per_law_and_segment():
     df = _table({"ct_oracle": 0.1, "adaptive_ct": 0.12, "sliding_mode": 0.09})
     ax = plot_ratios(df).axes[0]
-    assert ax.get_yscale() == "log" and "[-]" in ax.get_ylabel()
-    labels = [t.get_text() for t in ax.get_xticklabels()]
+    assert ax.get_xscale() == "log" and "[-]" in ax.get_xlabel()
+    labels = [t.get_text() for t in ax.get_yticklabels()]
     assert labels == ["adaptive_ct / ct_oracle", "sliding_mode / ct_oracle"]
+    ticks = ax.get_yticks()
+    assert ticks[0] > ticks[1]  # the first law on top, as in the table
+    assert min(t.get_fontsize() for t in ax.get_yticklabels()) >= 9 and ax.figure.get_figwidth() <= 6.5
     with pytest.raises(ParameterError, match="--arms"):
         plot_ratios(df[df["kind"] != "population"])
 
