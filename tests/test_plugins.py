@@ -369,3 +369,36 @@ def test_a_plugins_table_is_named_by_its_class_and_its_messages_say_so():
         ScenarioError, match=r"controllers\.mine: .*named by its class \(\[controllers\.ComputedTorque\]\)"
     ):
         parse_scenario(data, "s.toml")
+
+
+def test_the_scenarios_own_plug_in_is_taken_before_the_working_directorys(tmp_path, monkeypatch):
+    """A plug-in file in the working directory silently replaced the one beside the scenario (the
+    results' names were read with the working directory alone, which imported its module first);
+    the scenario's folder comes first everywhere, and a module of the same name imported earlier
+    from elsewhere is an error naming both files, not a silent swap."""
+    import importlib
+    import sys
+    import uuid
+
+    from adaptive_dd.benchmark.scenario_settings import result_names
+    from adaptive_dd.controllers.registry import scenario_controller
+
+    mod = f"shadow_{uuid.uuid4().hex[:8]}"
+    (tmp_path / "sub").mkdir()
+    for where, name in ((tmp_path, "from_cwd"), (tmp_path / "sub", "from_sub")):
+        (where / f"{mod}.py").write_text(NAMED_PD.replace("'gravity_pd'", repr(name)))
+    path = tmp_path / "sub" / "s.toml"
+    path.write_text(f'[run]\nduration = 0.4\nseeds = 1\ncontrollers = ["{mod}:NamedPD", "ct_oracle"]\n')
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.delitem(sys.modules, mod, raising=False)
+    sc = load_scenario(path)
+    assert result_names(sc.controllers, {}, sc.source)[f"{mod}:NamedPD"] == "from_sub"
+    assert scenario_controller(sc, f"{mod}:NamedPD")[0] == "from_sub"
+    monkeypatch.delitem(sys.modules, mod)
+    monkeypatch.syspath_prepend(str(tmp_path))  # the working directory's module found first
+    importlib.import_module(mod)
+    with pytest.raises(
+        ParameterError, match=rf"module '{mod}' is {tmp_path / mod}\.py, but the scenario's plug-in is"
+    ):
+        scenario_controller(sc, f"{mod}:NamedPD")
+    monkeypatch.delitem(sys.modules, mod)

@@ -135,19 +135,26 @@ def _check_delay(errs: list[str], name: str, delay, T: float) -> None:
             errs.append(str(exc))
 
 
-def result_names(controllers, opts: dict, search=None) -> dict[str, str]:
+def result_names(controllers, opts: dict, source) -> dict[str, str]:
     """``{entry of run.controllers: the name its results carry}``: a ``label``, a built-in's name,
-    else a plug-in's declared ``name`` (its class name when it declares none or does not import)."""
-    from pathlib import Path
+    else a plug-in's declared ``name`` (its class name when it declares none or does not import),
+    the plug-ins looked up as the run looks them up for the scenario file ``source``
+    (:func:`~adaptive_dd.controllers.plugins.plugin_search`)."""
+    from adaptive_dd.controllers.plugins import (
+        controller_label,
+        load_controller_class,
+        plugin_search,
+        table_name,
+    )
 
-    from adaptive_dd.controllers.plugins import controller_label, load_controller_class, table_name
+    search = plugin_search(source)
 
     out = {}
     for c in controllers:
         out[c] = controller_label(c, opts.get(table_name(c)))
         if ":" in c and "label" not in opts.get(table_name(c), {}):
             try:  # the name the plug-in declares, which its results carry
-                declared = getattr(load_controller_class(c, search or (Path.cwd(),)), "name", None)
+                declared = getattr(load_controller_class(c, search), "name", None)
             except Exception:  # a plug-in that does not import: the run's own check names it
                 declared = None
             if isinstance(declared, str) and declared:
@@ -158,7 +165,6 @@ def result_names(controllers, opts: dict, search=None) -> dict[str, str]:
 def _floor_errors(v: dict, opts: dict, only: str | None) -> list[str]:
     """Each ``[controllers.NAME] floor`` names one of the run's controllers by the name its results
     carry (:func:`result_names`), or is ``false``. Plug-ins are imported only when a floor is set."""
-    from pathlib import Path
 
     from adaptive_dd.controllers.plugins import floor_setting, table_name
     from adaptive_dd.errors import ParameterError
@@ -168,8 +174,7 @@ def _floor_errors(v: dict, opts: dict, only: str | None) -> list[str]:
     ]
     if not asked:
         return []
-    src = Path(str(v.get("source", "")))
-    names = result_names(v["controllers"], opts, (src.parent, Path.cwd()) if src.is_file() else None)
+    names = result_names(v["controllers"], opts, v.get("source", ""))
     errs = []
     for c in asked:
         table = table_name(c)

@@ -68,6 +68,15 @@ def controller_label(spec: str, options: dict | None = None) -> str:
     return spec.rsplit(":", 1)[-1].rsplit(".", 1)[-1] if ":" in spec else spec
 
 
+def plugin_search(source) -> tuple:
+    """The folders a scenario's plug-ins are looked up in after the Python path: the folder of the
+    scenario file ``source`` (when it is a file), then the working directory."""
+    from pathlib import Path
+
+    src = Path(str(source))
+    return (src.parent, Path.cwd()) if src.is_file() else (Path.cwd(),)
+
+
 def load_controller_class(path: str, search: tuple = ()) -> type:
     """Import ``"package.module:Class"``; clear errors for a missing module, class or protocol.
 
@@ -94,6 +103,7 @@ def load_controller_class(path: str, search: tuple = ()) -> type:
         for p in extra:
             sys.path.remove(p)
     module = obj
+    _check_not_shadowed(path, module, mod_name, search)
     for part in attr.split("."):
         if not hasattr(obj, part):
             named, hint = _module_named(module, mod_name, search)
@@ -105,6 +115,29 @@ def load_controller_class(path: str, search: tuple = ()) -> type:
             f"controller {path!r}: not a controller class (needs reset, command, observe; missing {missing})"
         )
     return obj
+
+
+def _check_not_shadowed(path: str, module, mod_name: str, search: tuple) -> None:
+    """A :class:`ParameterError` when ``module``, imported earlier in this process or found first,
+    is another file than the first of ``search`` that holds it (the scenario's folder before the
+    working directory): two plug-in files of one name, and the run would take the wrong one
+    without a word."""
+    from pathlib import Path
+
+    where = getattr(module, "__file__", None)
+    rel = mod_name.replace(".", "/")
+    mine = [
+        f.resolve()
+        for d in search
+        for f in (Path(d) / f"{rel}.py", Path(d) / rel / "__init__.py")
+        if f.is_file()
+    ]
+    if mine and where is not None and Path(where).resolve() != mine[0]:
+        raise ParameterError(
+            f"controller {path!r}: module {mod_name!r} is {where}, but the scenario's plug-in is {mine[0]} "
+            "(a module of the same name found first on the Python path or imported earlier in this "
+            "process); rename one of the two files"
+        )
 
 
 def _module_named(module, mod_name: str, search: tuple) -> tuple[str, str]:

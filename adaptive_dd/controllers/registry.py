@@ -43,6 +43,7 @@ from adaptive_dd.controllers.plugins import (
     floor_setting,
     load_controller_class,
     plugin_controller,
+    plugin_search,
     table_name,
 )
 from adaptive_dd.errors import ParameterError
@@ -183,7 +184,7 @@ def scenario_controller(scenario, spec: str) -> tuple[str, Controller]:
     from adaptive_dd.closed_loop.controllers import with_stated_uncertainty
 
     src = Path(scenario.source)
-    search = (src.parent, Path.cwd()) if src.is_file() else (Path.cwd(),)
+    search = plugin_search(src)
     opts = scenario.options(controller_label(spec)) or scenario.options(spec)
     in_file = bool(opts)  # the plug-in's table is the file's (not settings handed in code)
     label = controller_label(spec, opts)
