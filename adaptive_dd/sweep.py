@@ -33,7 +33,7 @@ import pandas as pd
 
 from adaptive_dd.benchmark.scenario import Scenario
 from adaptive_dd.sweep_keys import _task_key
-from adaptive_dd.sweep_spec import Sweep, cell_scenario
+from adaptive_dd.sweep_spec import Sweep, cell_scenario, mark_gains_apart
 
 __all__ = [
     "WORKER_ENV",
@@ -400,7 +400,7 @@ def run_sweep(
     reused = len(tasks) - len(todo)
     print(
         f"sweep {sweep.source}: {len(sweep.points)} grid points x {len(sweep.controllers)} controllers x "
-        f"{len(sweep.seed_blocks())} blocks of seeds ({sweep.seeds} seeds, {sweep.block} per block) = "
+        f"{len(sweep.seed_blocks())} block(s) of seeds ({sweep.seeds} seeds, {sweep.block} per block) = "
         f"{len(cells)} cells in {len(tasks)} distinct tasks; "
         f"{reused} reused from {cells_dir}, {len(todo)} to run"
     )
@@ -474,7 +474,7 @@ def _heatmaps(sweep: Sweep, table: pd.DataFrame, out: Path) -> tuple[pd.DataFram
         return None, []
     from adaptive_dd.sweep_plot import plot_ratio_heatmaps
 
-    ratios = ratio_medians(table, sweep.heatmap, [a for a, _ in sweep.axes])
+    ratios = mark_gains_apart(ratio_medians(table, sweep.heatmap, [a for a, _ in sweep.axes]), sweep)
     _write_atomic(ratios, out / "ratios.csv")
     if not np.isfinite(ratios["ratio"]).any():
         return ratios, []

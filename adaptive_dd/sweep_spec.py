@@ -42,6 +42,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from adaptive_dd.benchmark.scenario import Scenario, default_scenario_path, load_scenario
 from adaptive_dd.controllers import CONTROLLERS, controllers_for
 from adaptive_dd.controllers.registry import law_of
@@ -470,3 +472,32 @@ def parse_sweep(data: dict, src: str = "<memory>", base_dir: str | Path = ".") -
     _check_settings(src, points)
     hm = _heatmap(src, data.get("heatmap", {}), axes, ctrls, swap, len(base.swap_times) + 1)
     return Sweep(src, base, seeds, min(block, seeds), ctrls, axes, tuple(points), hm)
+
+
+def gains_apart(sweep: Sweep) -> dict[int, str]:
+    """``{grid point: why}`` where the heat map's law runs at another ``bandwidth`` or ``damping``
+    than its floor (the grid or the scenario's tables set one and not the other): the cell's ratio
+    then compares two gains as well as two laws. :func:`~adaptive_dd.sweep.run_sweep` marks those
+    cells and the command says so before it runs (the benchmark's warning,
+    :func:`~adaptive_dd.benchmark.preflight.floor_problems`)."""
+    hm = sweep.heatmap
+    out: dict[int, str] = {}
+    for p in sweep.points if hm else ():
+        sc, why = p.scenario, []
+        law, floor = ({**sc.options(c), **p.settings_for(c)} for c in (hm["adaptive"], hm["floor"]))
+        for key, default in (("bandwidth", sc.bandwidth), ("damping", sc.damping)):
+            a, b = law.get(key, default), floor.get(key, default)
+            if np.any(np.asarray(a, dtype=float) != np.asarray(b, dtype=float)):
+                why.append(f"{hm['adaptive']}.{key} = {a} but its floor {hm['floor']}'s is {b}")
+        if why:
+            out[p.index] = "; ".join(why) + ": a ratio of two gains as well as two laws"
+    return out
+
+
+def mark_gains_apart(ratios, sweep: Sweep):
+    """``ratios`` (:func:`~adaptive_dd.sweep.ratio_medians`) with the cells of
+    :func:`gains_apart` marked, their other marks kept."""
+    for i, why in gains_apart(sweep).items():
+        at = ratios["point"] == i
+        ratios.loc[at, "marked"] = ["; ".join(filter(None, (m, why))) for m in ratios.loc[at, "marked"]]
+    return ratios

@@ -439,3 +439,49 @@ def test_a_law_with_another_floor_in_another_scenario_is_two_rows():
     tex = latex_table(df, command="x")
     assert "\\texttt{pd} & \\texttt{ct\\_nominal} & \\textbf{0.900} (0.900) & -- \\\\" in tex
     assert "\\texttt{pd} & \\texttt{ct\\_oracle} & -- & \\textbf{40} (40) \\\\" in tex
+
+
+def test_a_law_at_another_bandwidth_than_its_floor_is_noted_not_ranked_silently(tmp_path, capsys):
+    """``[controllers.pd_gravity] bandwidth = 20`` against a floor at 40: benchmark and validate
+    warned, the leaderboard ranked its ratio (3.6 on an exact arm, unloaded) without a word. Its
+    rows' floor_note says so, and the command prints it. A plug-in's own table is read too (its
+    class name: the check looked its entry up and found nothing)."""
+    from adaptive_dd.arena.leaderboard import _run_cells
+    from adaptive_dd.benchmark.preflight import floor_mismatches
+    from adaptive_dd.benchmark.scenario import load_scenario
+
+    sc = _short_vertical3(tmp_path)
+    text = sc.read_text(encoding="utf-8").replace(
+        'controllers = ["pd",', 'controllers = ["pd_gravity", "pd",'
+    )
+    sc.write_text(text + "\n[controllers.pd_gravity]\nbandwidth = 20.0\n", encoding="utf-8")
+    cells = _run_cells(load_scenario(sc), "scenario", ["pd_gravity"], 1, False)
+    notes = {c["floor_note"] for c in cells if c["controller"] == "pd_gravity"}
+    assert (
+        len(notes) == 1
+        and "pd_gravity.bandwidth = 20.0 but its floor pd_gravity_oracle runs at 40" in notes.pop()
+    )
+    assert not any(
+        "but its floor" in c["floor_note"] for c in cells if c["controller"] == "pd_gravity_oracle"
+    )
+    assert main(["leaderboard", str(sc), "--seeds", "1", "--controllers", "pd_gravity", "--no-progress",
+                 "--out", str(tmp_path / "out")]) == 0  # fmt: skip
+    err = capsys.readouterr().err
+    assert err.count("warning: v3short: pd_gravity: controllers.pd_gravity.bandwidth = 20.0") == 1
+
+    plug = resources.files("adaptive_dd").parent / "examples" / "plugins" / "pd_gravity.toml"
+    text = plug.read_text(encoding="utf-8").replace(
+        'label = "pd_gravity_plugin"', 'label = "pd_gravity_plugin"\nbandwidth = 20.0'
+    )
+    (tmp_path / "plug.toml").write_text(text, encoding="utf-8")
+    (tmp_path / "pd_gravity_plugin.py").write_text(
+        (plug.parent / "pd_gravity_plugin.py").read_text(), encoding="utf-8"
+    )
+    (tmp_path / "pd_gravity_python.py").write_text(
+        (plug.parent / "pd_gravity_python.py").read_text(), encoding="utf-8"
+    )
+    differ = floor_mismatches(load_scenario(tmp_path / "plug.toml"))
+    assert list(differ) == ["pd_gravity_plugin:PDGravityPlugin"]
+    assert differ["pd_gravity_plugin:PDGravityPlugin"][0].startswith(
+        "controllers.PDGravityPlugin.bandwidth = 20.0 but"
+    )

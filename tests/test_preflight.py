@@ -4,6 +4,7 @@ checked before a run (issue 27)."""
 from __future__ import annotations
 
 import dataclasses
+import sys
 from importlib import resources
 from pathlib import Path
 
@@ -71,8 +72,10 @@ def test_a_torque_beyond_the_limit_without_payload_blames_the_arm_not_a_payload(
         ("payload_gradient:PayloadGradient", "[controllers.PayloadGradient]\ngamma = -1\n", "gamma must be"),
     ],
 )
-def test_validate_builds_plugins_with_their_settings(tmp_path, capsys, spec, table, needle):
-    """Issue 27: a plug-in's unknown setting or bad import path passed validate."""
+def test_validate_builds_plugins_with_their_settings(tmp_path, capsys, monkeypatch, spec, table, needle):
+    """Issue 27: a plug-in's unknown setting or bad import path passed validate. (Each case's module
+    is its own file: the one imported by an earlier case, from another folder, is forgotten.)"""
+    monkeypatch.delitem(sys.modules, "payload_gradient", raising=False)
     (tmp_path / "payload_gradient.py").write_text((ROOT / "examples" / "payload_gradient.py").read_text())
     path = tmp_path / "s.toml"
     path.write_text(f'[run]\nduration = 1.0\ncontrollers = ["ct_oracle", "{spec}"]\n{table}')

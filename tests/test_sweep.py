@@ -656,7 +656,9 @@ def test_the_ratios_csv_and_the_cli_count_the_marked_cells(tmp_path, capsys):
     hm = {"x": "m", "y": "w", "adaptive": "adaptive_ct", "floor": "ct_oracle", "segment": 1}
     from adaptive_dd.benchmark.scenario import load_scenario
 
-    sw = types.SimpleNamespace(heatmap=hm, axes=[("m", [1.0, 10.0]), ("w", [0.0])], base=load_scenario())
+    sw = types.SimpleNamespace(
+        heatmap=hm, axes=[("m", [1.0, 10.0]), ("w", [0.0])], base=load_scenario(), points=()
+    )
     ratios, maps = _heatmaps(sw, t, tmp_path)
     on_disk = pd.read_csv(tmp_path / "ratios.csv", keep_default_na=False)
     assert list(on_disk["marked"] != "") == [False, True] and len(maps) == 1
@@ -842,3 +844,48 @@ def test_the_local_clusters_workers_ignore_ctrl_c():
     from adaptive_dd import sweep
 
     assert 'preload=["adaptive_dd.sweep_worker"]' in inspect.getsource(sweep._client)
+
+
+def test_a_cell_whose_law_and_floor_run_at_two_bandwidths_is_marked_and_said(tmp_path, capsys):
+    """``[grid.controller.pd_gravity] bandwidth = [20, 40]`` against a floor at 40: the sweep
+    ranked 8.0 and 2.3 as ratios to the floor and marked no cell; the cell at 20 rad/s is marked
+    (a ratio of two gains), the one at 40 is not, and the command says which before it runs. A
+    grid axis of the scenario's own bandwidth moves both: no mark."""
+    import pandas as pd
+
+    from adaptive_dd.cli import main
+    from adaptive_dd.sweep_spec import gains_apart, mark_gains_apart
+
+    text = SWEEP.replace(
+        'controllers = ["ct_oracle", "adaptive_ct"]', 'controllers = ["ct_oracle", "ct_nominal"]'
+    )
+    text += "[grid.controller.ct_nominal]\nbandwidth = [20.0, 40.0]\n"
+    text += '[heatmap]\nx = "payload_mass"\ny = "swap_time"\nadaptive = "ct_nominal"\nfloor = "ct_oracle"\n'
+    base = BASE.replace('"adaptive_ct"]', '"ct_nominal"]') + "[control]\nbandwidth = 40.0\n"
+    sw = load_sweep(_write(tmp_path, text, base))
+    apart = gains_apart(sw)
+    at_20 = [p.index for p in sw.points if dict(p.values)["ct_nominal.bandwidth"] == 20.0]
+    assert sorted(apart) == at_20 and len(at_20) == len(sw.points) // 2
+    assert apart[at_20[0]].startswith("ct_nominal.bandwidth = 20.0 but its floor ct_oracle's is 40.0")
+    ratios = pd.DataFrame(
+        {"point": [p.index for p in sw.points], "marked": ["", "saturated"] * (len(sw.points) // 2)}
+    )
+    marked = mark_gains_apart(ratios.copy(), sw).set_index("point")["marked"]
+    for p in sw.points:
+        own = ratios.set_index("point")["marked"][p.index]
+        assert marked[p.index] == (
+            "; ".join(filter(None, (own, apart[p.index]))) if p.index in apart else own
+        )
+    both = text.replace("[grid.controller.ct_nominal]\nbandwidth = [20.0, 40.0]\n", "").replace(
+        "[grid]\n", "[grid]\nbandwidth = [20.0, 40.0]\n"
+    )
+    assert gains_apart(load_sweep(_write(tmp_path, both, base))) == {}
+    sweep_file = _write(tmp_path, text, base)
+    assert (
+        main(["sweep", str(sweep_file), "--out", str(tmp_path / "out"), "--no-progress", "--workers", "1"])
+        == 0
+    )
+    err = capsys.readouterr().err
+    assert err.count("warning: grid point") == len(at_20) and "ct_nominal.bandwidth = 20.0" in err
+    table = pd.read_csv(tmp_path / "out" / "ratios.csv")
+    assert table["marked"].fillna("").str.contains("two gains").sum() == len(at_20)

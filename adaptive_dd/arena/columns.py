@@ -15,7 +15,8 @@ COLUMNS: dict[str, tuple[str, str]] = {
     "floor_note": (
         "-",
         "empty, or why the row has no ratio or why its floor is no floor "
-        "(a plant friction law outside the controllers' model)",
+        "(a plant friction law outside the controllers' model; the law's bandwidth or damping not "
+        "its floor's)",
     ),
     "segment": ("-", "payload segment, 0-based"),
     "payload_kg": ("kg", "the payload carried in the segment (population: the mean over the arms)"),

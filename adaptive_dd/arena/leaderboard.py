@@ -547,12 +547,29 @@ def _run_cells(sc, kind: str, controllers, seeds, progress, times=None) -> list[
     from adaptive_dd.benchmark.metrics import floor_caveat
 
     cells = _cells(sc.name, kind, per, floors, missing, masses, sc.sample_period, res.seed_indices, t0)
-    caveat = floor_caveat(sc)
+    caveat, gains = floor_caveat(sc), _gains_apart(sc.with_controllers(names))
     for c in cells:
         c["law"] = laws.get(c["controller"], c["controller"])
         if caveat and c["floor"] and not c["floor_note"]:
             c["floor_note"] = caveat
+        if c["controller"] in gains and c["floor"]:
+            c["floor_note"] = "; ".join(filter(None, (c["floor_note"], gains[c["controller"]])))
     return cells
+
+
+def _gains_apart(sc) -> dict[str, str]:
+    """``{name results carry: what of its gains differs from its floor's}`` in ``sc`` (a scenario's
+    table set another bandwidth or damping for the law than for its floor,
+    :func:`~adaptive_dd.benchmark.preflight.floor_mismatches`): the row's ratio measures the gains
+    as well as the law, which its ``floor_note`` says (ranked before without a word)."""
+    from adaptive_dd.benchmark.preflight import floor_mismatches
+    from adaptive_dd.benchmark.scenario_settings import result_names
+
+    differ = floor_mismatches(sc)
+    if not differ:
+        return {}
+    named = result_names(sc.controllers, {n: sc.options(n) for n, _ in sc.controller_options}, sc.source)
+    return {named[k]: "; ".join(v) for k, v in differ.items()}
 
 
 def _template(template) -> tuple[dict, str]:

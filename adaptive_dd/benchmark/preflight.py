@@ -432,19 +432,30 @@ def missing_floors(scenario) -> tuple[dict[str, list[str]], dict[str, list[str]]
 def floor_problems(scenario) -> list[str]:
     """Controllers whose ``[controllers.NAME]`` ``bandwidth`` or ``damping`` differs from their
     floor's (the floor's own table, else ``[control]``): the ratio to the floor then measures the
-    gains as well as the law."""
-    out = []
+    gains as well as the law (:func:`floor_mismatches`, one line each)."""
+    return [msg for msgs in floor_mismatches(scenario).values() for msg in msgs]
+
+
+def floor_mismatches(scenario) -> dict[str, list[str]]:
+    """``{controller (its run.controllers entry): [what differs from its floor's gains]}`` for the
+    controllers of :func:`floor_problems`; a plug-in's settings are its table's (its class name or
+    label), as the run reads them."""
+    from adaptive_dd.controllers.plugins import table_name
+
+    def options(name: str) -> dict:
+        return scenario.options(table_name(name))
+
+    out: dict[str, list[str]] = {}
     for name, floor in scenario_floors(scenario).items():
-        mine, theirs = (
-            scenario.options(name),
-            scenario.options(floor) if floor in scenario.controllers else {},
-        )
+        mine = options(name)
+        theirs = options(floor) if floor in scenario.controllers else {}
         for key, default in (("bandwidth", scenario.bandwidth), ("damping", scenario.damping)):
             a, b = mine.get(key, default), theirs.get(key, default)
             if np.any(np.asarray(a, dtype=float) != np.asarray(b, dtype=float)):
-                out.append(
-                    f"controllers.{name}.{key} = {a} but its floor {floor} runs at {b}: its ratio to the "
-                    f"floor compares two {key}s as well as two laws; give [controllers.{floor}] the same"
+                out.setdefault(name, []).append(
+                    f"controllers.{table_name(name)}.{key} = {a} but its floor {floor} runs at {b}: its "
+                    f"ratio to the floor compares two {key}s as well as two laws; give "
+                    f"[controllers.{floor}] the same"
                 )
     return out
 

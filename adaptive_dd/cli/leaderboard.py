@@ -147,6 +147,9 @@ def run(args: argparse.Namespace) -> int:
     )  # fmt: skip
     csv, js, png = out / "leaderboard.csv", out / "leaderboard.json", out / "leaderboard.png"
     df.to_csv(csv, index=False, float_format="%.6g")
+    gains = df[df["floor_note"].str.contains("but its floor", na=False) & (df["kind"] != "population")]
+    for (sc, c), g in gains.groupby(["scenario", "controller"], sort=False):  # (said in floor_note too)
+        print(f"warning: {sc}: {c}: {g['floor_note'].iloc[0]}", file=sys.stderr)
     import shlex
 
     command = shlex.join(["adaptive-dd", *getattr(args, "argv", ("leaderboard",))])

@@ -35,7 +35,7 @@ def run(args: argparse.Namespace) -> int:
     import dataclasses
 
     from adaptive_dd.sweep import run_sweep
-    from adaptive_dd.sweep_spec import load_sweep
+    from adaptive_dd.sweep_spec import gains_apart, load_sweep
 
     if args.scheduler:
         refuse(
@@ -44,6 +44,8 @@ def run(args: argparse.Namespace) -> int:
             "sizes the local cluster; with --scheduler the running scheduler's own workers run the tasks",
         )
     sweep = load_sweep(args.sweep)
+    for i, why in gains_apart(sweep).items():  # (its cells marked in ratios.csv and the heat map)
+        print(f"warning: grid point {dict(sweep.points[i].values)}: {why}", file=sys.stderr)
     if args.block is not None:
         sweep = dataclasses.replace(sweep, block=min(args.block, sweep.seeds))
     res = run_sweep(
