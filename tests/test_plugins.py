@@ -1,6 +1,7 @@
 """Controllers by import path with their settings, the worked example plug-in, the registry's errors."""
 
 import dataclasses
+import re
 from pathlib import Path
 
 import numpy as np
@@ -402,3 +403,22 @@ def test_the_scenarios_own_plug_in_is_taken_before_the_working_directorys(tmp_pa
     ):
         scenario_controller(sc, f"{mod}:NamedPD")
     monkeypatch.delitem(sys.modules, mod)
+
+
+@pytest.mark.parametrize(
+    ("table", "needle"),
+    [
+        (
+            "bandwidth = 4000.0",
+            "controllers.NamedPD.bandwidth: 4000.0 rad/s at T = 0.001 s gives bandwidth * T = 4 > 0.2",
+        ),
+        ("damping = -1.0", "controllers.NamedPD.damping"),
+    ],
+)
+def test_a_plug_ins_gains_have_the_bounds_of_a_built_ins(tmp_path, table, needle):
+    """``[controllers.PIDGravity] bandwidth = 4000`` passed validate and failed every trial
+    (a built-in's is refused when the file is read): a plug-in's table is held to the same bounds."""
+    from adaptive_dd.errors import ScenarioError
+
+    with pytest.raises(ScenarioError, match=re.escape(needle)):
+        _named_scenario(tmp_path, f"[controllers.NamedPD]\n{table}\n")

@@ -162,6 +162,19 @@ def result_names(controllers, opts: dict, source) -> dict[str, str]:
     return out
 
 
+def _check_gains(errs: list, where: str, o: dict, T: float) -> None:
+    """A controller's table ``o`` (``where``: ``controllers.NAME``): its ``bandwidth`` and
+    ``boost_bandwidth`` within what the sample period ``T`` carries, its ``damping`` within bounds."""
+    for bw, limit in (("bandwidth", "max_bandwidth_T"), ("boost_bandwidth", "max_boost_bandwidth_T")):
+        key = f"{where}.{bw}"
+        if bw in o and check_number(errs, key, o[bw], 0, 1e5, lo_open=True) and o[bw] * T > LIMITS[limit]:
+            errs.append(
+                f"{key}: {o[bw]} rad/s at T = {T} s gives {bw} * T = {o[bw] * T:.3g} > {LIMITS[limit]}"
+            )
+    if "damping" in o:
+        check_number(errs, f"{where}.damping", o["damping"], 0, LIMITS["max_damping"], lo_open=True)
+
+
 def _floor_errors(v: dict, opts: dict, only: str | None) -> list[str]:
     """Each ``[controllers.NAME] floor`` names one of the run's controllers by the name its results
     carry (:func:`result_names`), or is ``false``. Plug-ins are imported only when a floor is set."""
@@ -218,6 +231,7 @@ def controller_setting_errors(
     ``LIMITS["max_setting"]`` (``file_limits``: a file's bound; research code setting the estimator
     through :func:`with_settings` is not held to it). ``only``: that controller's table alone."""
     from adaptive_dd.controllers import CONTROLLERS, gains_for, make_controller
+    from adaptive_dd.controllers.plugins import table_name
     from adaptive_dd.controllers.registry import law_of
 
     errs: list[str] = []
@@ -233,21 +247,14 @@ def controller_setting_errors(
         if law in CONTROLLERS and "delay" in CONTROLLERS[law].settings:  # its default too
             default = CONTROLLERS[law].settings["delay"].chain  # the same on every arm
             _check_delay(errs, name, opts.get(name, {}).get("delay", default), T)
+        if ":" in law and table_name(name) in opts:  # a plug-in's gains: its table, as a built-in's
+            _check_gains(errs, f"controllers.{table_name(name)}", opts[table_name(name)], T)
         if law not in CONTROLLERS or name not in opts:
             continue
         o, n0 = opts[name], len(errs)
-        for bw, limit in (("bandwidth", "max_bandwidth_T"), ("boost_bandwidth", "max_boost_bandwidth_T")):
-            key = f"controllers.{name}.{bw}"
-            if bw in o and check_number(errs, key, o[bw], 0, 1e5, lo_open=True) and o[bw] * T > LIMITS[limit]:
-                errs.append(
-                    f"{key}: {o[bw]} rad/s at T = {T} s gives {bw} * T = {o[bw] * T:.3g} > {LIMITS[limit]}"
-                )
+        _check_gains(errs, f"controllers.{name}", o, T)
         if "boost_duration" in o:
             check_number(errs, f"controllers.{name}.boost_duration", o["boost_duration"], 0, v["duration"])
-        if "damping" in o:
-            check_number(
-                errs, f"controllers.{name}.damping", o["damping"], 0, LIMITS["max_damping"], lo_open=True
-            )
         said = {e.split(":", 1)[0] for e in errs[n0:]}  # a key its own bound refused: said once
         for key, x in _numbers(o, f"controllers.{name}"):
             if key in said:
