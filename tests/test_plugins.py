@@ -370,6 +370,16 @@ def test_a_plugins_table_is_named_by_its_class_and_its_messages_say_so():
         ScenarioError, match=r"controllers\.mine: .*named by its class \(\[controllers\.ComputedTorque\]\)"
     ):
         parse_scenario(data, "s.toml")
+    # a class misspelt in run.controllers (or the table): either may be wrong, both are named
+    data["run"]["controllers"][1] = "adaptive_dd.controllers:ComputedTorqueX"
+    data["controllers"] = {"ComputedTorque": {"label": "mine"}}
+    with pytest.raises(
+        ScenarioError,
+        match=r"controllers\.ComputedTorque: not a controller .*; run\.controllers lists "
+        r"'adaptive_dd\.controllers:ComputedTorqueX': if its class is ComputedTorque, correct that entry, "
+        r"else name the table \[controllers\.ComputedTorqueX\]",
+    ):
+        parse_scenario(data, "s.toml")
 
 
 def test_the_scenarios_own_plug_in_is_taken_before_the_working_directorys(tmp_path, monkeypatch):

@@ -69,6 +69,11 @@ def test_a_torque_beyond_the_limit_without_payload_blames_the_arm_not_a_payload(
         ("no_such_module_xyz:Ctrl", "", "cannot import module 'no_such_module_xyz'"),
         ("no_such_module_xyz:Ctrl", "", "put no_such_module_xyz.py beside the scenario file"),
         ("payload_gradient:NoSuchClass", "", "has no 'NoSuchClass'"),
+        (
+            "payload_gradient:PayloadGradiant",
+            "",
+            "has no 'PayloadGradiant' (did you mean 'PayloadGradient'?)",
+        ),
         ("payload_gradient:PayloadGradient", "[controllers.PayloadGradient]\ngamma = -1\n", "gamma must be"),
     ],
 )

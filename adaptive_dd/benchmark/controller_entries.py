@@ -108,10 +108,31 @@ def _check_options(e: list, opts: Any, ctrls: tuple) -> None:
             continue
         name, table = item
         if ctrls and name not in names:
-            plugins = [f"[controllers.{table_name(c)}]" for c in ctrls if ":" in c]
-            hint = f"; a plug-in's table is named by its class ({', '.join(plugins)})" if plugins else ""
-            e.append(f"controllers.{name}: not a controller of run.controllers ({', '.join(ctrls)}){hint}")
+            e.append(
+                f"controllers.{name}: not a controller of run.controllers ({', '.join(ctrls)})"
+                + _hint(name, ctrls)
+            )
         _plain(e, f"controllers.{name}", table)
+
+
+def _hint(name: str, ctrls: tuple) -> str:
+    """What a table ``[controllers.NAME]`` no entry of ``ctrls`` owns most likely means: a plug-in
+    entry whose class is spelt near ``name`` (either the entry or the table is misspelt), else how
+    a plug-in's table is named."""
+    from adaptive_dd.benchmark.key_hints import nearest_keys
+
+    plugins = {table_name(c): c for c in ctrls if ":" in c}
+    near = nearest_keys(name, plugins)
+    if near:
+        return (
+            f"; run.controllers lists {plugins[near[0]]!r}: if its class is {name}, correct that entry, "
+            f"else name the table [controllers.{near[0]}] (a plug-in's table is named by its class)"
+        )
+    return (
+        f"; a plug-in's table is named by its class ({', '.join(f'[controllers.{t}]' for t in plugins)})"
+        if plugins
+        else ""
+    )
 
 
 def _shown(v) -> str:
