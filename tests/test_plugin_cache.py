@@ -507,8 +507,8 @@ def test_validates_estimate_counts_each_plug_in_loop_the_cache_lacks(monkeypatch
     each one numba's cache does not hold, and none it holds (the example's compiled PD plus gravity;
     its plain-Python twin compiles nothing of its own)."""
     from adaptive_dd import _numba_cache as cache
-    from adaptive_dd.benchmark.preflight import plugin_functions
     from adaptive_dd.benchmark.scenario import load_scenario
+    from adaptive_dd.controllers.registry import plugin_functions
 
     sc = load_scenario(Path(__file__).parents[1] / "examples" / "plugins" / "pd_gravity.toml")
     (functions,) = plugin_functions(sc)  # pd_gravity_plugin:PDGravityPlugin only

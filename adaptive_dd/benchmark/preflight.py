@@ -157,42 +157,19 @@ def torque_problems(scenario) -> list[str]:
     return out
 
 
-def _built(scenario):
-    """Per controller of ``scenario``, built as the run builds it: ``(spec, form, exception)``, the
-    :func:`~adaptive_dd.controllers.plugins.compiled_form` of a compiled plug-in (else None; its
-    declarations and parameters() read as the run reads them), or what building it raised."""
-    from adaptive_dd.benchmark.runner import scenario_controller
-    from adaptive_dd.controllers.plugins import compiled_form, is_compiled
-
-    for spec in scenario.controllers:
-        try:
-            label, ctrl = scenario_controller(scenario, spec)
-            form = compiled_form(label, ctrl, 1, scenario.sample_period) if is_compiled(ctrl) else None
-        except Exception as exc:  # a plug-in may raise anything: reported, not a traceback
-            yield spec, None, exc
-        else:
-            yield spec, form, None
-
-
 def controller_problems(scenario) -> list[str]:
     """Every controller built as the run builds it; one line per controller that cannot be."""
+    from adaptive_dd.controllers.registry import built_controllers
     from adaptive_dd.errors import ParameterError
 
     out = []
-    for spec, _, exc in _built(scenario):
+    for spec, _, exc in built_controllers(scenario):
         if exc is not None:
             msg = str(exc)
             if not (isinstance(exc, ParameterError) or msg.startswith(("controller", "unknown controller"))):
                 msg = f"controller {spec!r}: {type(exc).__name__}: {msg}"
             out.append(msg)
     return out
-
-
-def plugin_functions(scenario) -> list[tuple]:
-    """The per-sample functions ``(reset, command, observe, estimate)`` of each compiled plug-in
-    of ``scenario`` that can be built (:func:`controller_problems` says why another cannot): what
-    the run compiles into a loop of its own (``validate``'s estimate of the compilation)."""
-    return [(f.reset, f.command, f.observe, f.estimate) for _, f, _ in _built(scenario) if f is not None]
 
 
 def resolved_settings(scenario) -> list[str]:

@@ -280,7 +280,7 @@ class Scenario:
         """Memory and time estimate of this run (:func:`run_estimate`), one-time compilation included
         when numba's cache is cold, the excitation phase (``[run] excite``) when it has one."""
         from adaptive_dd._numba_cache import compile_estimate
-        from adaptive_dd.benchmark.preflight import plugin_functions
+        from adaptive_dd.controllers.registry import plugin_functions
 
         general = self.closed_forms is None
         return run_estimate(

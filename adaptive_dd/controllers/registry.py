@@ -437,3 +437,30 @@ def make_controller(
             if c is not None:
                 c.floor = floor
     return ctrl
+
+
+def built_controllers(scenario):
+    """Per controller of ``scenario``, built as the run builds it: ``(spec, form, exception)``, the
+    :func:`~adaptive_dd.controllers.plugins.compiled_form` of a compiled plug-in (else None; its
+    declarations and parameters() read as the run reads them), or what building it raised."""
+    from adaptive_dd.controllers.plugins import compiled_form, is_compiled
+
+    for spec in scenario.controllers:
+        try:
+            label, ctrl = scenario_controller(scenario, spec)
+            form = compiled_form(label, ctrl, 1, scenario.sample_period) if is_compiled(ctrl) else None
+        except Exception as exc:  # a plug-in may raise anything: reported, not a traceback
+            yield spec, None, exc
+        else:
+            yield spec, form, None
+
+
+def plugin_functions(scenario) -> list[tuple]:
+    """The per-sample functions ``(reset, command, observe, estimate)`` of each compiled plug-in
+    of ``scenario`` that can be built (``validate`` says why another cannot): what the run compiles
+    into a loop of its own (``validate``'s estimate of the compilation)."""
+    return [
+        (f.reset, f.command, f.observe, f.estimate)
+        for _, f, _ in built_controllers(scenario)
+        if f is not None
+    ]
