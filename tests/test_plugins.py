@@ -409,7 +409,8 @@ def test_the_scenarios_own_plug_in_is_taken_before_the_working_directorys(tmp_pa
     monkeypatch.syspath_prepend(str(tmp_path))  # the working directory's module found first
     importlib.import_module(mod)
     with pytest.raises(
-        ParameterError, match=rf"module '{mod}' is {tmp_path / mod}\.py, but the scenario's plug-in is"
+        ParameterError,
+        match=rf"module '{mod}' \({tmp_path / mod}\.py\) is found before your {tmp_path / 'sub' / mod}\.py",
     ):
         scenario_controller(sc, f"{mod}:NamedPD")
     monkeypatch.delitem(sys.modules, mod)

@@ -139,7 +139,7 @@ def torque_problems(scenario) -> list[str]:
     for j in np.flatnonzero(peak > limit * (1 + TOL)):
         if bare[j] > limit[j] * (1 + TOL):
             what, k, tau = "the arm alone (no payload)", int(bare_at[j]), bare[j]
-            why = "check the URDF's masses and the joint's effort limit"
+            why = _bare_why(scenario, t[k], j)
         else:
             start, end, mass = segments[seg[j]]  # a loaded one: the bare arm is within its limit
             what, k, tau = (
@@ -155,6 +155,22 @@ def torque_problems(scenario) -> list[str]:
             f"({tau / limit[j]:.2f} times): {why}"
         )
     return out
+
+
+def _bare_why(scenario, t: float, j: int) -> str:
+    """What to check when the arm alone needs joint ``j`` beyond its limit at time ``t``: the
+    reference when the motion's share (the torque less the part that holds the arm still at that
+    posture) is the larger, else the arm's masses and limits."""
+    q, qd, qdd = (x[0] for x in scenario.reference.sample(np.array([t])))
+    arm = scenario.arm
+    tau = arm.inverse_dynamics(q, qd, qdd)[j]
+    still = arm.inverse_dynamics(q, np.zeros_like(qd), np.zeros_like(qdd))[j]
+    if abs(tau - still) > abs(still):
+        return (
+            f"the reference's motion needs {abs(tau - still):.4g} N m of it (the posture alone "
+            f"{abs(still):.4g}): lower its amplitudes or frequencies ([reference] frequency is in Hz)"
+        )
+    return "check the URDF's masses and the joint's effort limit"
 
 
 def controller_problems(scenario) -> list[str]:
@@ -323,7 +339,10 @@ def inertia_problems(scenario) -> list[str]:
     is 3.0 mrad where with 0.3 kg it is 0.19 (``benchmarks/scenarios/so100.toml``); where the
     command spans many steps the rounding is whiter and moves the joint less (vertical3's wrist
     with a 5000 N m limit: 0.87 stated, the floor 0.057 -> 0.177 mrad). The shipped arms are at
-    most 0.1 of the noise. A warning: the arm is simulated as stated."""
+    most 0.1 of the noise. And an arm with no armature at all (a light arm: the warning's figures).
+    A warning: the arm is simulated as stated."""
+    from adaptive_dd.plant.two_link import as_two_link_cached
+
     if scenario.closed_forms is not None:  # the paper's arm: its Tables 2 and 4
         return []
     arm = scenario.arm
@@ -336,6 +355,17 @@ def inertia_problems(scenario) -> list[str]:
         "a drive's rotor adds inertia the URDF leaves out: state [arm] armature (kg m^2 per "
         "joint, from the data sheet: the rotor's inertia times the gear ratio squared)"
     )
+    direct = as_two_link_cached(arm) is not None  # the paper's direct-drive arm, on the general kernels
+    if not direct and not np.any(np.asarray(arm.armature, dtype=float)):
+        out.append(
+            "arm: no joint has an armature (the URDF states none and [arm] armature is not set): a "
+            "geared drive's rotor adds inertia the URDF leaves out (the rotor's inertia times the gear "
+            "ratio squared: state [arm] armature, kg m^2 per joint, from the data sheet; a direct-drive "
+            "arm has little). A light arm is the hard case of adaptive_ct against its floor: exact, 10 "
+            "seeds, benchmarks/scenarios/jaco2.toml 1.64 unloaded, 1.00 with "
+            "armature [0.05, 0.05, 0.05, 0.02, 0.02, 0.02]; vertical3_payload_exact.toml 2.245 in its "
+            "1 kg segment, 1.262 with [0.05, 0.05, 0.02]"
+        )
     for j in np.flatnonzero(fc > FRICTION_ACCELERATION * inertia):
         out.append(
             f"arm: joint {names[j]!r}: Coulomb friction {fc[j]:.3g} N m against {inertia[j]:.3g} kg m^2 "

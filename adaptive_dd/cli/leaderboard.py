@@ -236,8 +236,9 @@ def _say_tables_not_on_the_arms(scenarios, controllers, template) -> None:
             if mine and mine != theirs.get(table_name(c), {}):
                 print(
                     f"note: {sc.source}'s [controllers.{table_name(c)}] ({', '.join(sorted(mine))}) sets "
-                    f"{c} for that scenario only; the drawn arms run {src}'s tables (give the template the "
-                    "same table to run one law: one row)",
+                    f"{c} for that scenario only; the drawn arms run {src}'s tables: two rows (for one, "
+                    f"copy the template, add the same table and {c!r} to its run.controllers, and pass "
+                    "the copy as --template)",
                     file=sys.stderr,
                 )
 

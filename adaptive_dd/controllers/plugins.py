@@ -122,10 +122,10 @@ def load_controller_class(path: str, search: tuple = ()) -> type:
 
 
 def _check_not_shadowed(path: str, module, mod_name: str, search: tuple) -> None:
-    """A :class:`ParameterError` when ``module``, imported earlier in this process or found first,
-    is another file than the first of ``search`` that holds it (the scenario's folder before the
-    working directory): two plug-in files of one name, and the run would take the wrong one
-    without a word."""
+    """A :class:`ParameterError` when ``module``, found first on the Python path (an installed
+    package or a standard module of that name) or imported earlier in this process from another
+    folder, is another file than the first of ``search`` that holds it (the scenario's folder
+    before the working directory): the run would take the wrong one without a word."""
     from pathlib import Path
 
     where = getattr(module, "__file__", None)
@@ -138,9 +138,9 @@ def _check_not_shadowed(path: str, module, mod_name: str, search: tuple) -> None
     ]
     if mine and where is not None and Path(where).resolve() != mine[0]:
         raise ParameterError(
-            f"controller {path!r}: module {mod_name!r} is {where}, but the scenario's plug-in is {mine[0]} "
-            "(a module of the same name found first on the Python path or imported earlier in this "
-            "process); rename one of the two files"
+            f"controller {path!r}: module {mod_name!r} ({where}) is found before your {mine[0]} (an "
+            "installed package or a standard module of the same name, or a file of that name imported "
+            f"earlier in this process): rename your file, e.g. my_{mod_name.rsplit('.', 1)[-1]}.py"
         )
 
 
