@@ -491,6 +491,35 @@ def test_cli_identify_and_predict_on_the_tiago_record(tmp_path, capsys):
     assert "in degrees it would fit" in capsys.readouterr().err
 
 
+def test_a_window_too_short_for_its_columns_is_refused_not_fitted(tmp_path, capsys):
+    """2.8 s of the TIAGo log (about 42 independent samples for 61 columns) gave exit 0, "held"
+    estimates 1360 std from the URDF and a model predicting 1400 % errors: refused, with the window
+    that would do, and nothing written; fit_log itself warns."""
+    from adaptive_dd.cli import main
+
+    out = tmp_path / "short"
+    assert main(["identify", "--arm", str(SCENARIO), "--window", "9.21", "12", "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert "independent samples for 61 columns fitted: too few to tell them apart" in err
+    need = float(err.split("a window of at least about ")[1].split(" s")[0])
+    assert 5.0 < need < 12.0 and not (out / "model.json").exists()
+    assert (
+        main(
+            [
+                "identify",
+                "--arm",
+                str(SCENARIO),
+                "--window",
+                "9.21",
+                str(9.21 + 1.2 * need),
+                "--out",
+                str(out),
+            ]
+        )
+        == 0
+    )
+
+
 # ----------------------------------------------------------------------------- model files, pairs, validate
 def test_fitted_urdf_carries_the_standard_parameters(tmp_path):
     """write_fitted_urdf: the arm read back from model.urdf has the written links and friction."""

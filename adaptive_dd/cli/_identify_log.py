@@ -339,7 +339,7 @@ def _consistent(model, fit):
 def identify_log(args: argparse.Namespace, arm, outputs) -> int:
     """``adaptive-dd identify --arm SCENARIO [FILES]`` for an arm from a URDF."""
     from adaptive_dd.identification.friction_width import identification_model
-    from adaptive_dd.identification.log_fit import identifiable_subset
+    from adaptive_dd.identification.log_fit import MAX_DOF_FACTOR, identifiable_subset, too_few_samples
     from adaptive_dd.identification.regression import momentum_regressors
     from adaptive_dd.identification_plots import plot_torque_fit
 
@@ -365,7 +365,14 @@ def identify_log(args: argparse.Namespace, arm, outputs) -> int:
     free = None if profile is None else profile.profiled
     # the momentum regressors once, for the fit and the model error's other filters (_write_model)
     mom = momentum_regressors(model, rec.q, rec.qd)
-    fit = _fit_record(model, rec, K, tau_f, spec.torque_held, prior_std, free, offset, mom)
+    with __import__("warnings").catch_warnings():  # fit_log's warning of too few samples: said here
+        __import__("warnings").filterwarnings("ignore", message=r"about .* independent samples for")
+        fit = _fit_record(model, rec, K, tau_f, spec.torque_held, prior_std, free, offset, mom)
+    if fit.n_eff < MAX_DOF_FACTOR * fit.columns:  # fewer than one a column: refused, nothing written
+        few = too_few_samples(fit.n_eff, fit.columns, fit.regression.y.shape[0] * fit.sample_period)
+        if fit.n_eff < fit.columns:
+            raise DataError(f"{rec.source}: {few} ({_columns(fit)})")
+        print(f"warning: {few}", file=__import__("sys").stderr)
     # before anything is printed: at twice tau_f its filters leave the fewest samples of the window
     me_var = _model_error(model, fit, rec, spec.torque_held, mom)
     _print_fit(model, fit, names, loaded=bool(args.baseline))

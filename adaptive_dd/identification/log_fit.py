@@ -261,6 +261,28 @@ def _noise_rms(tau: Array, tau_f: float, T: float, pieces=None) -> Array:
     return s * np.sqrt(np.sum(h**2))
 
 
+def too_few_samples(n_eff: float, k: int, duration: float) -> str:
+    """What a fit of ``k`` columns to about ``n_eff`` independent samples over ``duration`` [s] is
+    worth when they are fewer than :data:`MAX_DOF_FACTOR` a column, and the window that would give
+    that many (the independent samples grow with it at the record's own rate): fewer than one a
+    column, the columns cannot be told apart (``identify`` refuses); fewer than two, the std's
+    small-sample factor ``n_eff / (n_eff - k)`` is beyond its first-order reach and capped (the std
+    too small)."""
+    need = duration * MAX_DOF_FACTOR * k / max(n_eff, 1.0)
+    short = np.sqrt(n_eff / max(n_eff - k, 1e-9) / MAX_DOF_FACTOR)  # how much too small the std is
+    what = (
+        "too few to tell them apart (the estimates and their std are not to be trusted, even along the "
+        "directions held at the prior)"
+        if n_eff < k
+        else f"the std's small-sample factor is capped at {MAX_DOF_FACTOR:g} where n_eff / (n_eff - k) is "
+        f"{n_eff / (n_eff - k):.3g}: the std is too small by about {short:.2g}x"
+    )
+    return (
+        f"about {n_eff:.0f} independent samples for {k} columns fitted: {what}; give a window of at least "
+        f"about {need:.3g} s, or fit fewer columns"
+    )
+
+
 def fit_log(
     model: Model,
     q: Array,
@@ -399,6 +421,12 @@ def fit_log(
     b_frac = bandwidth_fraction(influence[:, :r], u, lag, bounds)
     kernel = _kernel_bias(u, lag, bounds)
     n_eff, dof = _dof_factor(res, w, lag, bounds, k)
+    if n_eff < MAX_DOF_FACTOR * k:  # said; below one a column, refused by identify
+        import warnings
+
+        from adaptive_dd.errors import RunWarning
+
+        warnings.warn(too_few_samples(n_eff, k, reg.y.shape[0] * sample_period), RunWarning, 2)
     cov_aug = kernel * dof * cov_aug
     cov_k = cov_aug[:r, :r]
     sigma, cov, residual, weights = _in_full(model, K, used, x, cov_k, res, w)
