@@ -243,11 +243,6 @@ def _leave_out_bad_rows(frames: dict, where: dict, spec: RecordSpec, fitted: lis
             continue
         lines = [_line(f, int(i)) for i in np.flatnonzero(drop)[:5]]
         more = ", ..." if drop.sum() > 5 else ""
-        gone = f.iloc[-1].isna().to_numpy()  # the last row's empty cells: cut short when they run to its end
-        if drop[-1] and gone[-1] and gone[int(np.argmax(gone)) :].all():
-            more += (
-                f"; line {_line(f, len(f) - 1)}, the file's last, is cut short (a file copied while written)"
-            )
         out[p] = f[~drop]  # each row keeps its index: its line in the file (_line)
         out[p].attrs.update(f.attrs)
         notes.append(
@@ -447,6 +442,7 @@ def read_log(spec: RecordSpec, window: tuple[float, float] | None = None, arm=No
     notes = (
         *skipped,
         _resampling_note(t0, T, qd_measured),
+        *_cut_notes({p: clocks[p][rows[p]] for p in frames}, lo, hi, T),
         *lag_note,
         *missed,
         *gap_lines,
@@ -458,11 +454,7 @@ def read_log(spec: RecordSpec, window: tuple[float, float] | None = None, arm=No
             for p, f in frames.items()
             if f.attrs.get("repeats")
         ),
-        *(
-            f"{p}: numbers written with a decimal comma, read as such"
-            for p, f in frames.items()
-            if f.attrs.get("decimal_comma")
-        ),
+        *(n for f in frames.values() for n in f.attrs.get("notes", ())),
     )
     if len(pieces) > 1 or short:
         keep, pieces, more = trim_gap_edges(pieces, qd_measured, T, short)
@@ -548,6 +540,21 @@ def _first_clock(spec: RecordSpec, clocks: dict, rows: dict) -> tuple[Array, flo
             "derives"
         )
     return t0, spec.sample_period or float(np.mean(steps[ok]))
+
+
+def _cut_notes(clocks: dict, lo: float, hi: float, T: float) -> list[str]:
+    """A note for a file that starts later or ends earlier than another by more than two samples:
+    the record holds only the span every file covers (``lo``-``hi``), the rest of the others lost."""
+    out = []
+    for k, word, edge in ((0, "starts", lo), (-1, "ends", hi)):
+        by, far = (min(clocks, key=lambda p, s=s: s * abs(clocks[p][k] - edge)) for s in (1, -1))
+        if abs(clocks[far][k] - edge) > 2 * T:
+            out.append(
+                f"{by} {word} at {clock(edge)} s, {far} at {clock(clocks[far][k])} s: the record holds only"
+                f" what every file covers, {clock(lo)}-{clock(hi)} s ({abs(clocks[far][k] - edge):.4g} s of "
+                f"{far} left out)"
+            )
+    return out
 
 
 def _resampling_note(t0: Array, T: float, qd_measured: bool) -> str:

@@ -14,12 +14,13 @@ __all__ = ["read_csv"]
 
 def read_csv(path: Path):
     """``path`` as a pandas DataFrame: each row keeps its index (its line in the file), the count of
-    whole rows repeated in ``attrs["repeats"]``, ``attrs["decimal_comma"]`` when the numbers were
-    written with decimal commas."""
+    whole rows repeated in ``attrs["repeats"]``, and ``attrs["notes"]``: what was read otherwise than
+    written (numbers with decimal commas; a last line cut short, left out)."""
     import pandas as pd
 
     if not path.is_file():
         raise DataError(f"{path}: no such file")
+    notes: list[str] = []
     try:
         header = pd.read_csv(path, nrows=0).columns
         head = str(header[0]) if len(header) == 1 else ""
@@ -28,15 +29,38 @@ def read_csv(path: Path):
         if sep is not None:  # one column whose name holds the separator: a semicolon or tab file
             if _decimal_commas(frame):  # 1,5 for 1.5, as spreadsheets of many locales write it
                 frame = pd.read_csv(path, sep=sep, skipinitialspace=False, decimal=",")
-                frame.attrs["decimal_comma"] = True
+                notes.append(f"{path}: numbers written with a decimal comma, read as such")
     except (ValueError, pd.errors.ParserError) as exc:
         raise DataError(f"{path}: not a readable CSV file: {exc}") from None
+    if len(frame) and _cut_short(path):  # a logger stopped mid-row: its last number may be cut too
+        notes.append(
+            f"{path}: line {len(frame) + 1}, the last, has no line end (a logger stopped in the middle of "
+            "writing it): left out"
+        )
+        frame = frame.iloc[:-1]
     frame.columns = [str(c).strip() for c in frame.columns]
     repeats = frame.duplicated(keep="first")  # a row repeated whole: a logger's repeat, no new sample
     if repeats.any():
         frame = frame[~repeats]  # each row keeps its index: its line in the file (_line)
         frame.attrs["repeats"] = int(repeats.sum())
+    frame.attrs["notes"] = notes
     return frame
+
+
+def _cut_short(path: Path) -> bool:
+    """Whether the file (gzip-compressed when it is named ``.gz``) does not end with a line end."""
+    if path.suffix == ".gz":
+        import gzip
+
+        with gzip.open(path, "rb") as fh:
+            data = fh.read()
+        return bool(data) and not data.endswith((b"\n", b"\r"))
+    with path.open("rb") as fh:
+        fh.seek(0, 2)
+        if fh.tell() == 0:
+            return False
+        fh.seek(-1, 2)
+        return fh.read(1) not in (b"\n", b"\r")
 
 
 _DECIMAL_COMMA = re.compile(r"[+-]?(\d+,\d*|,\d+)([eE][+-]?\d+)?")

@@ -426,7 +426,10 @@ def test_identify_says_what_set_the_lag(vertical3, capsys):
     short = synthetic_log(arm, 1.2, T, np.random.default_rng(4))
     from adaptive_dd.errors import RunWarning
 
-    with pytest.warns(RunWarning, match=r"about \d+ independent samples for 17 columns fitted: the std's small-sample factor is capped"):
+    with pytest.warns(
+        RunWarning,
+        match=r"about \d+ independent samples for 17 columns fitted: the std's small-sample factor is capped",
+    ):
         fit = _fit(model, short.q, short.qd, short.tau)  # (a record this short is refused by identify)
     _print_fit(model, fit, names)
     assert (

@@ -83,6 +83,45 @@ def test_record_resamples_jittered_log_and_converts(tmp_path):
     assert part.t[0] >= 3.0 and part.t[-1] <= 8.0 and part.t.size == pytest.approx(500, abs=2)
 
 
+def test_a_file_that_ends_early_is_named_with_what_the_record_loses(tmp_path):
+    """The effort file cut at 10 s of 15 silently cut the record to 10 s (its first line still gave
+    the positions' span): a note names the file that ends first, where, and what the others lose."""
+    p1, p2, *_ = _write_log(tmp_path, np.random.default_rng(1))
+    spec = record_spec(_table(p1, p2, exclude=["j_c"]), NAMES, KINDS, "s.toml")
+    whole = read_log(spec)
+    assert not [n for n in whole.notes if "what every file covers" in n]
+    lines = p2.read_text().splitlines()
+    p2.write_text("\n".join(lines[:1001]) + "\n")  # 1000 rows: to about 10 s
+    cut = read_log(spec)
+    (note,) = [n for n in cut.notes if "what every file covers" in n]
+    assert note.startswith(f"{p2} ends at 9.9") and f", {p1} at 14.9" in note and "s of " in note
+    assert cut.t[-1] < 10.0 < whole.t[-1]
+
+
+@pytest.mark.parametrize("gz", [False, True])
+def test_a_last_line_cut_short_is_left_out_and_said(tmp_path, gz):
+    """A logger that stopped mid-row: the cut number (0.51 written as 0) was read as a sample, its
+    missing cells as 0 in excluded columns, without a word. A last line without a line end is left
+    out and named; a file that ends with one keeps every row."""
+    p1, p2, *_ = _write_log(tmp_path, np.random.default_rng(1))
+    spec = record_spec(_table(p1, p2, exclude=["j_c"]), NAMES, KINDS, "s.toml")
+    whole = read_log(spec)
+    text = p2.read_text()
+    cut = text.rstrip("\n")[:-7]  # the last number cut, no line end
+    if gz:
+        with gzip.open(p2.with_suffix(".csv.gz"), "wt") as fh:
+            fh.write(cut)
+        p2.unlink()
+        p2 = p2.with_suffix(".csv.gz")
+        spec = record_spec(_table(p1, p2, exclude=["j_c"]), NAMES, KINDS, "s.toml")
+    else:
+        p2.write_text(cut)
+    rec = read_log(spec)
+    (note,) = [n for n in rec.notes if "has no line end" in n]
+    assert note.startswith(f"{p2}: line 1501, the last, has no line end") and note.endswith("left out")
+    assert rec.t[-1] < whole.t[-1] and not [n for n in whole.notes if "line end" in n]
+
+
 def test_record_degrees_and_gear_ratio(tmp_path):
     p1, p2, *_ = _write_log(tmp_path, np.random.default_rng(2), deg=True)
     spec = record_spec(_table(p1, p2, position_unit="deg", exclude=["j_c"]), NAMES, KINDS, "s.toml")
@@ -1059,7 +1098,7 @@ def test_predict_writes_an_epoch_clock_s_times_in_full(tmp_path):
 
 def test_a_log_s_last_line_cut_short_is_said_so(tmp_path, capsys):
     """A file copied while its logger wrote it ends in a partial line: it was called a sample the
-    logger missed. It is left out as before, and named as cut short."""
+    logger missed. It is left out as before, and named as cut short (no line end)."""
     from adaptive_dd.cli import main
 
     t = np.arange(200) * 0.01
@@ -1071,12 +1110,12 @@ def test_a_log_s_last_line_cut_short_is_said_so(tmp_path, capsys):
     scen.write_text('[arm]\nrobot = "vertical3"\n\n[record]\nfiles = ["log.csv"]\nexclude = ["joint3"]\n')
     assert main(["validate", str(scen)]) == 0
     out = capsys.readouterr().out
-    assert "line 202, the file's last, is cut short" in out and "200 samples" in out
+    assert "line 202, the last, has no line end" in out and "200 samples" in out
     text = (tmp_path / "log.csv").read_text().rsplit("\n", 1)[0]  # a whole last line, a middle cell empty
     (tmp_path / "log.csv").write_text(text + "\n2.00,0.9,,0.1,0.2,0.3,0.4\n")
     assert main(["validate", str(scen)]) == 0
     out = capsys.readouterr().out
-    assert "(line(s) 202)" in out and "cut short" not in out
+    assert "(line(s) 202)" in out and "no line end" not in out
 
 
 def test_a_window_from_the_log_s_start_on_an_epoch_clock_is_given_in_its_clock(tmp_path, capsys):
