@@ -160,7 +160,8 @@ def _locate(frames: dict, spec: RecordSpec, wanted: list[str]) -> dict:
         hits = [p for p, f in frames.items() if col.strip() in f.columns]
         if not hits:
             every = [c for f in frames.values() for c in f.columns]
-            near = difflib.get_close_matches(col.strip(), every, n=3)
+            named = {c.strip() for c in wanted}  # columns the description gives another use: no match
+            near = difflib.get_close_matches(col.strip(), [c for c in every if c not in named], n=3)
             n = len(spec.position)
             whence = (
                 f"the simulator's format of the {n}-joint arm of {spec.source} (t, q1..q{n}, qd1..qd{n}, "
@@ -245,9 +246,11 @@ def _leave_out_bad_rows(frames: dict, where: dict, spec: RecordSpec, fitted: lis
         more = ", ..." if drop.sum() > 5 else ""
         out[p] = f[~drop]  # each row keeps its index: its line in the file (_line)
         out[p].attrs.update(f.attrs)
+        cols = [repr(c) for c, b in bad_of.items() if (b & drop).any()]
         notes.append(
             f"{p}: {int(drop.sum())} row(s) with an empty, non-numeric or non-finite cell in a column the "
-            f"fit reads left out as samples the logger missed (line(s) {', '.join(map(str, lines))}{more})"
+            f"fit reads ({', '.join(cols)}) left out as samples the logger missed (line(s) "
+            f"{', '.join(map(str, lines))}{more})"
         )
     return out, notes
 
@@ -442,7 +445,7 @@ def read_log(spec: RecordSpec, window: tuple[float, float] | None = None, arm=No
     notes = (
         *skipped,
         _resampling_note(t0, T, qd_measured),
-        *_cut_notes({p: clocks[p][rows[p]] for p in frames}, lo, hi, T),
+        *_cut_notes({p: clocks[p][rows[p]] for p in frames}, lo, hi, T, window),
         *lag_note,
         *missed,
         *gap_lines,
@@ -542,10 +545,14 @@ def _first_clock(spec: RecordSpec, clocks: dict, rows: dict) -> tuple[Array, flo
     return t0, spec.sample_period or float(np.mean(steps[ok]))
 
 
-def _cut_notes(clocks: dict, lo: float, hi: float, T: float) -> list[str]:
+def _cut_notes(clocks: dict, lo: float, hi: float, T: float, window=None) -> list[str]:
     """A note for a file that starts later or ends earlier than another by more than two samples:
-    the record holds only the span every file covers (``lo``-``hi``), the rest of the others lost."""
-    out = []
+    the record holds only the span every file covers (``lo``-``hi``), the rest of the others lost;
+    and for a ``window`` reaching beyond it."""
+    a, b = window or (lo, hi)
+    out = [f"the window {a:g}-{b:g} s reaches beyond the log: read {clock(lo)}-{clock(hi)} s"] * bool(
+        a < lo - 2 * T or b > hi + 2 * T
+    )
     for k, word, edge in ((0, "starts", lo), (-1, "ends", hi)):
         by, far = (min(clocks, key=lambda p, s=s: s * abs(clocks[p][k] - edge)) for s in (1, -1))
         if abs(clocks[far][k] - edge) > 2 * T:

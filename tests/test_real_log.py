@@ -81,6 +81,10 @@ def test_record_resamples_jittered_log_and_converts(tmp_path):
     # a window in the log's clock
     part = read_log(spec, window=(3.0, 8.0))
     assert part.t[0] >= 3.0 and part.t[-1] <= 8.0 and part.t.size == pytest.approx(500, abs=2)
+    assert not [n for n in part.notes if "reaches beyond" in n]
+    beyond = read_log(spec, window=(3.0, 30.0))  # the log ends at 15 s: read to there, and said
+    (note,) = [n for n in beyond.notes if "reaches beyond" in n]
+    assert note.startswith("the window 3-30 s reaches beyond the log: read 3") and beyond.t[-1] < 15.0
 
 
 def test_a_file_that_ends_early_is_named_with_what_the_record_loses(tmp_path):
@@ -143,6 +147,10 @@ def test_record_table_errors_name_the_key(tmp_path):
         record_spec(_table(p1, p2, speed=1), NAMES, KINDS, "s.toml")
     with pytest.raises(DataError, match=r"no column 'j_a/effort'.*near matches: \['j_a/eff'"):
         read_log(record_spec(_table(p1, p2, torque="{joint}/effort"), NAMES, KINDS, "s.toml"))
+    # one column renamed: the near matches leave out the columns the others already take
+    p1.write_text(p1.read_text().replace("j_b/pos", "j_b/position", 1))
+    with pytest.raises(DataError, match=r"no column 'j_b/pos'.*near matches: \['j_b/position'\]"):
+        read_log(record_spec(_table(p1, p2), NAMES, KINDS, "s.toml"))
 
 
 def test_columns_numbered_from_0_name_the_list_to_give(tmp_path):
@@ -917,7 +925,7 @@ def test_a_lone_bad_cell_is_a_sample_the_logger_missed(tmp_path, file, cell):
     name = paths[file].name
     said = [n for n in rec.notes if "left out as samples the logger missed" in n]
     assert len(said) == 1 and said[0].startswith(str(paths[file])) and f"{name}: 1 row(s)" in said[0]
-    assert "(line(s) 701)" in said[0]
+    assert "(line(s) 701)" in said[0] and f"reads ('{'j_b/pos' if file == 0 else 'j_a/eff'}')" in said[0]
     assert any("bridged 1 gap(s) of one missed sample" in n for n in rec.notes)
 
 
