@@ -113,7 +113,8 @@ def _figure(ratios: pd.DataFrame, heatmap: Mapping[str, Any], title: str):
     else:
         ax.set_yticks(range(len(ys)), [f"{v:g}" if isinstance(v, float) else str(v) for v in ys])
         ax.set_ylabel(axis_label(y))
-    fig.colorbar(im, ax=ax, label=f"median RMS error ratio {heatmap['adaptive']} / {heatmap['floor']} [-]")
+    label = f"median RMS error ratio\n{heatmap['adaptive']} / {heatmap['floor']} [-]"  # a short bar
+    fig.colorbar(im, ax=ax, label=label)
     ax.set_title(title, fontsize=9)
     return fig
 

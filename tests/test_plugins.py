@@ -66,6 +66,11 @@ def test_builtin_settings_reach_the_controller():
         ("adaptive_dd.controllers:NoSuchClass", {}, "has no"),
         ("adaptive_dd.plant:TABLE1_SIGMA", {}, "not a controller class"),
         ("adaptive_dd.controllers:ComputedTorque", {"unknown_key": 1}, "unknown setting"),
+        (
+            "adaptive_dd.controllers:ComputedTorque",
+            {"dampng": 1.0},
+            r"unknown setting\(s\) \['dampng'\] \('dampng': did you mean 'damping'\?\)",
+        ),
     ],
 )
 def test_bad_controller_specs_and_settings_are_named(spec, options, match):
@@ -358,7 +363,7 @@ def test_a_plugins_table_is_named_by_its_class_and_its_messages_say_so():
 
     with pytest.raises(
         ParameterError,
-        match=r"^controllers\.ComputedTorque: unknown setting\(s\) \['scael'\]; allowed: \[.*'bandwidth', "
+        match=r"^controllers\.ComputedTorque: unknown setting\(s\) \['scael'\].*; allowed: \[.*'bandwidth', "
         r"'damping', .*'label'.*\]",
     ):
         make_controller("adaptive_dd.controllers:ComputedTorque", options={"scael": 1})

@@ -492,3 +492,20 @@ def test_a_bandwidth_per_joint_beside_a_wrong_arm_leaves_the_arm_to_its_own_erro
     with pytest.raises(ScenarioError) as info:
         parse_scenario({"arm": {"robot": "ur5x"}, "control": {"bandwidth": [40.0] * 6}})
     assert "'ur5x' is not a shipped robot" in str(info.value) and "closed forms" not in str(info.value)
+
+
+def test_a_misspelt_uncertainty_key_and_a_percentage_level_are_named_with_the_remedy(tmp_path):
+    """``[plant.uncertainty] intertia`` listed the allowed keys without the one meant; ``mass = 10``
+    (10 %) said its range without saying the level is a fraction; a payload of 1000 (g) likewise."""
+    from adaptive_dd.benchmark.scenario import parse_scenario
+    from adaptive_dd.errors import ScenarioError
+
+    base = {"arm": {"robot": "vertical3"}, "run": {"duration": 2.0}}
+    with pytest.raises(ScenarioError, match=r"'plant\.uncertainty\.intertia' \(did you mean 'inertia'\?\)"):
+        parse_scenario({**base, "plant": {"uncertainty": {"intertia": 0.2}}}, "s.toml")
+    with pytest.raises(ScenarioError, match=r"must be in \[0, 1\), got 10 \(a fraction: 0\.1 for 10 %\)"):
+        parse_scenario({**base, "plant": {"uncertainty": {"mass": 10}}}, "s.toml")
+    with pytest.raises(
+        ScenarioError, match=r"payload\[0\]\.mass: must be in \[0, .*\], got 1500: a mass in g\?"
+    ):
+        parse_scenario({**base, "payload": [{"at": 1.0, "mass": 1500}]}, "s.toml")

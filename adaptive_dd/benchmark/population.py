@@ -277,10 +277,15 @@ def format_population(pop: PopulationResult, worst: int = 3) -> str:
     for a in pop.arms:
         means = " / ".join(f"{s['mean']:.3f}" for s in a["segments"])
         mx = max((s["max"] for s in a["segments"] if not math.isnan(s["max"])), default=math.nan)
+        alarms = (
+            f"; false alarms in {a['false_alarm_trials']} of {a['trials']} trials; missed swaps "
+            f"{a['missed_swaps']} of {a['swaps']}"
+            if a["trials"]  # (a law with no detector has no alarm to count)
+            else ""
+        )
         lines.append(
             f"  random:{a['arm_seed']} ({a['joints']} joints, {a['kind']}, {a['capacity_kg']:g} kg): {means} "
-            f"(max {mx:.2f}); false alarms in {a['false_alarm_trials']} of {a['trials']} trials; "
-            f"missed swaps {a['missed_swaps']} of {a['swaps']}"
+            f"(max {mx:.2f}){alarms}"
         )
     arms = f"{len(pop.arms)} arm{'s' if len(pop.arms) != 1 else ''}"
     lines.append(f"pooled over {arms} (segments numbered from 0, as in per_seed.csv):")

@@ -198,7 +198,9 @@ def _check_payload(e: list, v: dict, timing_ok: bool) -> None:
     for i, (t, m) in enumerate(zip(times, masses, strict=True)):
         last = d - v["sample_period"] * (1 - 1e-9) if timing_ok else d  # the last segment holds a sample
         ok &= check_number(e, f"payload[{i}].at", t, 0, last, lo_open=True)
-        check_number(e, f"payload[{i}].mass", m, 0, L["max_mass"])
+        grams = isinstance(m, int | float) and not isinstance(m, bool) and m >= 1000  # (a mass in g)
+        if not check_number(e, f"payload[{i}].mass", m, 0, L["max_mass"]) and grams:
+            e[-1] += ": a mass in g? give it in kg"
         if ok and i and t <= times[i - 1]:
             e.append(f"payload[{i}].at: {t} s: swap times must increase (previous {times[i - 1]} s)")
             ok = False

@@ -197,8 +197,14 @@ def unknown_settings(spec: str, options: dict, allowed: set) -> None:
     common = COMMON if ":" in spec else set()
     bad = sorted(set(options) - allowed - common)
     if bad:
+        from adaptive_dd.benchmark.key_hints import nearest_keys
+
+        near = {b: nearest_keys(b, allowed | common) for b in bad}
+        hint = "; ".join(f"{b!r}: did you mean {' or '.join(map(repr, n))}?" for b, n in near.items() if n)
         raise ParameterError(
-            f"controllers.{table_name(spec)}: unknown setting(s) {bad}; allowed: {sorted(allowed | common)}"
+            f"controllers.{table_name(spec)}: unknown setting(s) {bad}"
+            + (f" ({hint})" if hint else "")
+            + f"; allowed: {sorted(allowed | common)}"
         )
 
 
@@ -393,7 +399,8 @@ def no_kernels(name: str, where: str) -> ParameterError:
 BOUNDS_HINT = (
     "an index beyond an array the loop hands the plug-in: its state x has state_size floats per trial "
     "(declare state_size as large as reset, command and observe use), q, qd, tau and the reference n, "
-    "sigma p (docs/controllers.md, 'Compiled plug-ins')"
+    "sigma p, and p is what parameters() returns (an index or an unpacking beyond its items) "
+    "(docs/controllers.md, 'Compiled plug-ins')"
 )
 """What an ``IndexError`` inside a compiled plug-in's functions most likely means (the run's message)."""
 

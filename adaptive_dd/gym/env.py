@@ -99,7 +99,7 @@ def floor_command(floor, sim: Simulation, m: Measurement) -> Array:
 
 def _say_if_cold(sc) -> None:
     """A ``RunWarning`` when the first ``reset`` and ``step`` will compile the arm's step (numba's
-    cache lacks it): about a minute on 2 cores, silent otherwise, it looked like a hang."""
+    cache lacks it): up to about a minute on 2 cores, silent otherwise, it looked like a hang."""
     import os
     import warnings
 
@@ -114,7 +114,8 @@ def _say_if_cold(sc) -> None:
     if index is not None and not os.path.exists(index):
         warnings.warn(
             "adaptive_dd.gym: numba's cache lacks this arm's step: the first reset() and step() compile it "
-            "(about a minute on 2 cores; once: later processes load it)",
+            "(from seconds to about a minute on 2 cores, by what the cache holds; once: later processes "
+            "load it)",
             RunWarning,
             stacklevel=3,
         )

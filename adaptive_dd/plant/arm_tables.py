@@ -101,7 +101,11 @@ def _check_keys(src: str, table: str, data: dict, allowed: tuple[str, ...]) -> N
         raise ScenarioError(f"{src}: [{table}] must be a table, got {data!r}")
     for key in data:
         if key not in allowed:
-            raise ScenarioError(f"{src}: unknown key '{table}.{key}'; allowed: {sorted(allowed)}")
+            from adaptive_dd.benchmark.key_hints import nearest_keys
+
+            near = nearest_keys(key, allowed)
+            hint = f" (did you mean {' or '.join(map(repr, near))}?)" if near else ""
+            raise ScenarioError(f"{src}: unknown key '{table}.{key}'{hint}; allowed: {sorted(allowed)}")
 
 
 def _arm_kwargs(src: str, arm: dict) -> dict:

@@ -293,12 +293,15 @@ def kinematics_mismatch(model_arm, other) -> str | None:
     return None
 
 
-def _number(src: str, key: str, v, lo: float, hi: float, hi_open: bool = False) -> float:
+def _number(src: str, key: str, v, lo: float, hi: float, hi_open: bool = False, what: str = "") -> float:
+    """``v`` as a float in ``[lo, hi]`` (``hi`` open), else an error naming ``key`` (and ``what``
+    the number is, after a value beyond the range)."""
     if isinstance(v, bool) or not isinstance(v, int | float) or not math.isfinite(v):
         raise ScenarioError(f"{src}: key '{key}' must be a finite number, got {v!r}")
     if v < lo or (v >= hi if hi_open else v > hi):
         raise ScenarioError(
             f"{src}: key '{key}' must be in [{lo:g}, {hi:.3g}{')' if hi_open else ']'}, got {v!r}"
+            + (f" ({what})" if what and v > hi else "")
         )
     return float(v)
 
@@ -312,7 +315,11 @@ def _uncertainty(src: str, table, at: str = "plant.uncertainty") -> Uncertainty:
         )
     for key in table:
         if key not in UNCERTAINTY_KEYS:
-            raise ScenarioError(f"{src}: unknown key '{at}.{key}'; allowed: {sorted(UNCERTAINTY_KEYS)}")
+            from adaptive_dd.benchmark.key_hints import nearest_keys
+
+            near = nearest_keys(key, UNCERTAINTY_KEYS)
+            hint = f" (did you mean {' or '.join(map(repr, near))}?)" if near else ""
+            raise ScenarioError(f"{src}: unknown key '{at}.{key}'{hint}; allowed: {sorted(UNCERTAINTY_KEYS)}")
     dist = table.get("distribution", "uniform")
     if dist not in DISTRIBUTIONS:
         raise ScenarioError(
@@ -322,7 +329,9 @@ def _uncertainty(src: str, table, at: str = "plant.uncertainty") -> Uncertainty:
     kw = {"distribution": dist}
     for key in _RELATIVE:
         if key in table:
-            kw[key] = _number(src, f"{at}.{key}", table[key], 0.0, top, hi_open=True)
+            kw[key] = _number(
+                src, f"{at}.{key}", table[key], 0.0, top, hi_open=True, what="a fraction: 0.1 for 10 %"
+            )
     if "com" in table:
         kw["com"] = _number(src, f"{at}.com", table["com"], 0.0, _MAX_COM)
     return Uncertainty(**kw)
