@@ -173,14 +173,16 @@ def format_bound_table(
     kinds = kinds or {}
     rows = bound_rows(crb, estimates, kinds=kinds)
     w = max(22, *(len(n) + 1 for n in estimates))
-    head = f"{'':{w}s}" + "".join(f"{n:>21s}" for n in SIGMA_NAMES)
-    lines = [head, f"{'CRB std [%]':{w}s}" + "".join(f"{v:21.4f}" for v in crb.crb_std_pct)]
-    for name in estimates:
+    table = [list(SIGMA_NAMES), [f"{v:.4f}" for v in crb.crb_std_pct]]
+    for name in estimates:  # each cell its own text; every column as wide as its widest, 2 apart
         r = [x for x in rows if x["estimator"] == name]
-        cells = "".join(
-            f"{x['bias_pct']:+8.4f}±{x['est_std_pct']:<6.4f}({x['std_over_crb']:5.1f})" for x in r
-        )
-        lines.append(f"{name:{w}s}" + cells)
+        table.append([f"{x['bias_pct']:+.4f}±{x['est_std_pct']:.4f} ({x['std_over_crb']:.1f})" for x in r])
+    cw = [max(len(row[j]) for row in table) + 2 for j in range(len(SIGMA_NAMES))]
+    names = ["", "CRB std [%]", *estimates]
+    lines = [
+        f"{n:{w}s}" + "".join(f"{c:>{cw[j]}s}" for j, c in enumerate(row))
+        for n, row in zip(names, table, strict=True)
+    ]
     lines.append("cells: bias ± std of the estimate over seeds [%] (std / bound)")
     lines.append("")
     lines.append(
