@@ -55,7 +55,10 @@ def _stated_prior(arm, levels: dict) -> np.ndarray:
     ("model", "match"),
     [
         ({"uncertainty": 0.1}, r"u\.toml: \[model\.uncertainty\] must be a table of levels .*got 0\.1"),
-        ({"uncertainty": {"masss": 0.1}}, r"u\.toml: unknown key 'model\.uncertainty\.masss' \(did you mean 'mass'\?\); allowed"),
+        (
+            {"uncertainty": {"masss": 0.1}},
+            r"u\.toml: unknown key 'model\.uncertainty\.masss' \(did you mean 'mass'\?\); allowed",
+        ),
         (
             {"uncertainty": {"mass": 1.0}},
             r"u\.toml: key 'model\.uncertainty\.mass' must be in \[0, 1\), got 1",

@@ -2,6 +2,7 @@
 
 import dataclasses
 import re
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -438,3 +439,25 @@ def test_a_plug_ins_gains_have_the_bounds_of_a_built_ins(tmp_path, table, needle
 
     with pytest.raises(ScenarioError, match=re.escape(needle)):
         _named_scenario(tmp_path, f"[controllers.NamedPD]\n{table}\n")
+
+
+def test_a_scenario_read_by_a_relative_path_finds_its_plug_in_from_another_folder(tmp_path, monkeypatch):
+    """Read as "myplug.toml" from its folder, then run from another: the plug-in beside it was looked
+    for in the new working directory ("looked ... in: /"); the file's folder is kept as it was read."""
+    import uuid
+
+    from adaptive_dd.controllers.registry import scenario_controller
+
+    mod = f"rel_{uuid.uuid4().hex[:8]}"
+    (tmp_path / "sub").mkdir()
+    (tmp_path / "sub" / f"{mod}.py").write_text(NAMED_PD)
+    (tmp_path / "sub" / "s.toml").write_text(
+        f'[run]\nduration = 0.4\ncontrollers = ["{mod}:NamedPD", "ct_oracle"]\n'
+    )
+    monkeypatch.chdir(tmp_path / "sub")
+    sc = load_scenario("s.toml")
+    assert sc.source == "s.toml" and sc.origin == str(tmp_path / "sub")
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.delitem(sys.modules, mod, raising=False)
+    assert scenario_controller(sc, f"{mod}:NamedPD")[0] == "gravity_pd"
+    monkeypatch.delitem(sys.modules, mod)

@@ -16,7 +16,7 @@ import numpy as np
 from adaptive_dd import load_scenario
 
 ROOT = Path(__file__).resolve().parents[1]
-OWN = {"arm", "closed_forms", "controllers", "name", "seeds", "source", "defaulted"}  # what it may differ in
+OWN = {"arm", "closed_forms", "controllers", "name", "seeds", "source", "origin", "defaulted"}  # may differ
 
 
 def _same(a, b) -> bool:

@@ -568,7 +568,9 @@ def _gains_apart(sc) -> dict[str, str]:
     differ = floor_mismatches(sc)
     if not differ:
         return {}
-    named = result_names(sc.controllers, {n: sc.options(n) for n, _ in sc.controller_options}, sc.source)
+    named = result_names(
+        sc.controllers, {n: sc.options(n) for n, _ in sc.controller_options}, sc.source, sc.origin
+    )
     return {named[k]: "; ".join(v) for k, v in differ.items()}
 
 

@@ -427,7 +427,7 @@ def missing_floors(scenario) -> tuple[dict[str, list[str]], dict[str, list[str]]
     from adaptive_dd.plant.kind import run_kind
 
     opts = {n: scenario.options(n) for n, _ in scenario.controller_options}
-    carried = set(result_names(scenario.controllers, opts, scenario.source).values())
+    carried = set(result_names(scenario.controllers, opts, scenario.source, scenario.origin).values())
     kind = run_kind(scenario)
     add: dict[str, list[str]] = {}
     cannot: dict[str, list[str]] = {}

@@ -17,6 +17,8 @@ def scenario_dict(sc) -> dict:
     """The resolved scenario as JSON-ready data (every field, defaults filled in)."""
     out = {}
     for f in dataclasses.fields(sc):
+        if f.name == "origin":  # where the file was: the machine's, not the scenario's (source says it)
+            continue
         v = getattr(sc, f.name)
         if f.name == "defaulted":
             v = sorted(v)

@@ -212,6 +212,9 @@ class Scenario:
     """How far ``arm`` may be from the robot (``[model] uncertainty``, by default the plant's draw
     levels: :func:`~adaptive_dd.plant.uncertainty.model_uncertainty`); the controllers' settings
     follow from it. None: the plant's draw levels, the model exact without a draw."""
+    origin: str | None = field(default=None, repr=False, compare=False)
+    """The scenario file's folder, absolute, when it was read from a file: its plug-ins are looked
+    up there whatever the working directory is when it runs (``source`` is the path as given)."""
     closed_forms: ClosedFormTwoLink | None = field(init=False, default=None, repr=False, compare=False)
     """The paper's closed forms of ``arm`` (eqs. 3-9) when the run takes that fast path: the arm is
     of the paper's geometry and ``plant`` is None (:func:`scenario_closed_forms`); None: the general
@@ -528,7 +531,9 @@ def parse_scenario(data: dict, src: str = "<memory>", name: str = "scenario") ->
     if errors:  # the arm is wrong: the number of joints, hence per-joint lists, cannot be judged
         more = [e for e in more if not e.startswith(("reference.", "noise.position", "noise.velocity"))]
     errors += more
-    values.update(name=name, source=src)
+    values.update(
+        name=name, source=src, origin=str(Path(src).resolve().parent) if Path(src).is_file() else None
+    )
     if arm is not None:
         values["arm"] = arm
         values["plant"] = plant

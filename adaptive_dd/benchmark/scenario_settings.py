@@ -135,7 +135,7 @@ def _check_delay(errs: list[str], name: str, delay, T: float) -> None:
             errs.append(str(exc))
 
 
-def result_names(controllers, opts: dict, source) -> dict[str, str]:
+def result_names(controllers, opts: dict, source, origin: str | None = None) -> dict[str, str]:
     """``{entry of run.controllers: the name its results carry}``: a ``label``, a built-in's name,
     else a plug-in's declared ``name`` (its class name when it declares none or does not import),
     the plug-ins looked up as the run looks them up for the scenario file ``source``
@@ -147,7 +147,7 @@ def result_names(controllers, opts: dict, source) -> dict[str, str]:
         table_name,
     )
 
-    search = plugin_search(source)
+    search = plugin_search(source, origin)
 
     out = {}
     for c in controllers:
@@ -187,7 +187,7 @@ def _floor_errors(v: dict, opts: dict, only: str | None) -> list[str]:
     ]
     if not asked:
         return []
-    names = result_names(v["controllers"], opts, v.get("source", ""))
+    names = result_names(v["controllers"], opts, v.get("source", ""), v.get("origin"))
     errs = []
     for c in asked:
         table = table_name(c)

@@ -197,7 +197,9 @@ def only_controllers(sc, names: list[str]) -> tuple[str, ...]:
     from adaptive_dd.benchmark.scenario_settings import result_names
     from adaptive_dd.errors import ParameterError
 
-    carried = result_names(sc.controllers, {n: sc.options(n) for n, _ in sc.controller_options}, sc.source)
+    carried = result_names(
+        sc.controllers, {n: sc.options(n) for n, _ in sc.controller_options}, sc.source, sc.origin
+    )
     spec_of = {name: spec for spec, name in carried.items()}  # a result's name (a label): its entry
     names = [spec_of.get(n, n) for n in names]
     unknown = [n for n in names if n not in sc.controllers]

@@ -68,12 +68,15 @@ def controller_label(spec: str, options: dict | None = None) -> str:
     return spec.rsplit(":", 1)[-1].rsplit(".", 1)[-1] if ":" in spec else spec
 
 
-def plugin_search(source) -> tuple:
+def plugin_search(source, origin: str | None = None) -> tuple:
     """The folders a scenario's plug-ins are looked up in after the Python path: the folder of the
-    scenario file ``source`` (when it is a file), then the working directory."""
+    scenario file (``origin``, absolute, as it was read; else ``source``'s when it is a file from
+    here), then the working directory."""
     from pathlib import Path
 
     src = Path(str(source))
+    if origin is not None:
+        return (Path(origin), Path.cwd())
     return (src.parent, Path.cwd()) if src.is_file() else (Path.cwd(),)
 
 

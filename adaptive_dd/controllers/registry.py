@@ -181,10 +181,8 @@ def scenario_controller(scenario, spec: str) -> tuple[str, Controller]:
     """
     from pathlib import Path
 
-    from adaptive_dd.closed_loop.controllers import with_stated_uncertainty
-
     src = Path(scenario.source)
-    search = plugin_search(src)
+    search = plugin_search(src, getattr(scenario, "origin", None))
     opts = scenario.options(controller_label(spec)) or scenario.options(spec)
     in_file = bool(opts)  # the plug-in's table is the file's (not settings handed in code)
     label = controller_label(spec, opts)
@@ -194,7 +192,6 @@ def scenario_controller(scenario, spec: str) -> tuple[str, Controller]:
         g = Gains(float(np.max(bw)), opts.get("damping", scenario.damping))
         opts = {**opts, "bandwidth": g.bandwidth}
     else:
-        opts = with_stated_uncertainty(law, opts, scenario)
         g = gains_for(scenario.closed_forms or scenario.arm, scenario.bandwidth, scenario.damping)
     arm = scenario.closed_forms or scenario.arm  # the arm the run simulates: its closed forms or its own
     try:
@@ -203,8 +200,6 @@ def scenario_controller(scenario, spec: str) -> tuple[str, Controller]:
         if ":" not in law or not in_file or str(exc).startswith(str(src)) or not src.is_file():
             raise
         raise ParameterError(f"{src}: {exc}") from None
-    if scenario.closed_forms is None and hasattr(ctrl, "state_task"):  # adaptive_ct's boost: the task's room
-        ctrl.state_task(scenario)
     if ":" in spec and "label" not in opts:
         label = str(ctrl.name)  # what the plug-in declares (its class name if nothing)
     return label, ctrl
@@ -381,7 +376,11 @@ def make_controller(
     search : tuple
         Folders to import a plug-in from.
     scenario : Scenario, optional
-        Handed to a plug-in that asks for it (see :func:`_plugin`).
+        The scenario it runs in: a built-in is then built as the scenario runs it (on its arm
+        unless ``arm`` is another, its ``[control]`` gains unless ``gains`` are given,
+        ``adaptive_ct`` told the model's stated uncertainty and the task's room: what
+        :func:`scenario_controller` builds from the scenario's own table); handed to a plug-in
+        that asks for it (see :func:`_plugin`).
 
     Returns
     -------
@@ -411,6 +410,13 @@ def make_controller(
     adaptive_dd.errors.ParameterError: unknown controller 'nope'; ...
     """
     options = dict(options or {})
+    own = scenario is not None and (arm is None or arm is scenario.arm)  # the scenario's own arm
+    if own and ":" not in law_of(spec, options):  # a built-in as the scenario runs it (the gains too)
+        from adaptive_dd.closed_loop.controllers import with_stated_uncertainty
+
+        arm = scenario.closed_forms or scenario.arm
+        gains = gains if gains is not None else gains_for(arm, scenario.bandwidth, scenario.damping)
+        options = with_stated_uncertainty(law_of(spec, options), options, scenario)
     arm = ClosedFormTwoLink.sice() if arm is None else (closed_form_view(arm) or arm)
     base = gains or DEFAULT_GAINS
     if "law" in options:
@@ -436,6 +442,8 @@ def make_controller(
         for c in (ctrl, ctrl.ctrl if isinstance(ctrl, PythonForm) else None):
             if c is not None:
                 c.floor = floor
+    if own and scenario.closed_forms is None and hasattr(ctrl, "state_task"):  # adaptive_ct: the task's room
+        ctrl.state_task(scenario)
     return ctrl
 
 
