@@ -7,6 +7,7 @@ message names the offending parameter, key, file or line and the value.
 from __future__ import annotations
 
 import math
+import numbers
 
 __all__ = [
     "DataError",
@@ -21,8 +22,14 @@ __all__ = [
 
 
 def is_finite_number(x) -> bool:
-    """True for a finite ``int`` or ``float`` read from a file (a ``bool`` is not a number)."""
-    return not isinstance(x, bool) and isinstance(x, int | float) and math.isfinite(x)
+    """True for a finite ``int`` or ``float`` read from a file, or a NumPy scalar given in code (a
+    ``bool`` is not a number)."""
+    return (
+        not isinstance(x, bool)
+        and type(x).__name__ != "bool_"
+        and isinstance(x, numbers.Real)
+        and math.isfinite(x)
+    )
 
 
 class ParameterError(ValueError):

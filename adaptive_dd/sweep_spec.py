@@ -331,7 +331,8 @@ def _apply(
     try:
         return dataclasses.replace(base, swap_times=tuple(times), swap_masses=tuple(masses), **changes)
     except ScenarioError as exc:  # the grid point's values, not the base scenario's file, are wrong
-        why = str(exc).replace(f"{base.source}: ", "")
+        why = str(exc).replace(f"Scenario from {base.source}, as changed in code: ", "")
+        why = why.replace(f"{base.source}: ", "")
         blamed = [k for k in coords if any(w in why for w in _AXIS_WORDS.get(k, ()))] or list(coords)
         keys = ", ".join(f"'grid.{k}'" for k in blamed)
         raise SweepError(f"{src}: key {keys} (at {where}): {why}") from None

@@ -428,7 +428,7 @@ def compute_metrics(res: BenchmarkResult) -> dict:
     add_time_to_floor(res, out)
     return {
         "scenario": sc.source,
-        "seeds": sc.seeds,
+        "seeds": len(res.seed_indices) or sc.seeds,  # the trials run (seed_indices: some of the scenario's)
         "wall_time_s": res.wall_time,
         "provenance": provenance(res),
         "plant": res.plant,  # the plant is not the model: what each seed's plant was (None: the arm)

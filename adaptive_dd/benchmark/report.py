@@ -51,9 +51,10 @@ def format_report(metrics: dict, res: BenchmarkResult) -> str:
     """Tables per metric (rows: controllers; columns: payload segments) and the targets."""
     ctrls = metrics["controllers"]
     sc = res.scenario
+    n_run = len(res.seed_indices) or sc.seeds  # the seeds run (seed_indices may be some of them)
     head = f"{'controller':18s}" + "".join(f"{f'{a:g}-{b:g}s {m:g}kg':>16s}" for a, b, m in sc.segments())
     lines = [
-        f"Scenario {_scenario_title(sc)}: {sc.seeds} seeds, {sc.duration} s at T = {sc.sample_period} s, "
+        f"Scenario {_scenario_title(sc)}: {n_run} seeds, {sc.duration} s at T = {sc.sample_period} s, "
         f"bandwidth {sc.bandwidth} rad/s; means over seeds (a failed trial left out of the segments after "
         "its failure)",
         runtime_line(sc),
@@ -419,8 +420,8 @@ def _targets(metrics: dict, res: BenchmarkResult) -> list[str]:
     source = getattr(res.scenario, "source", None)
     default = source is not None and Path(str(source)).resolve() == Path(default_scenario_path()).resolve()
     out.append(
-        f"  wall time: {w:.1f} s for {len(c)} controllers x {res.scenario.seeds} seeds"
-        + (f" (target < {TARGET_WALL_S:g} s for the default scenario)" if default else "")
+        f"  wall time: {w:.1f} s for {len(c)} controllers x {len(res.seed_indices) or res.scenario.seeds} "
+        "seeds" + (f" (target < {TARGET_WALL_S:g} s for the default scenario)" if default else "")
     )
     return out
 

@@ -151,6 +151,15 @@ def run_benchmark(
             f"run_benchmark: seed_indices is a list of seed indices, got {seed_indices!r}: pass "
             f"[{seed_indices!r}] for that one seed, or range(n)"
         )
+    if seed_indices is not None:
+        bad = [i for i in seed_indices if isinstance(i, bool) or not isinstance(i, int | np.integer) or i < 0]
+        twice = sorted({int(i) for i in seed_indices if list(seed_indices).count(i) > 1} - set(bad))
+        if bad or twice or not len(seed_indices):
+            raise ParameterError(
+                "run_benchmark: seed_indices must be distinct integers >= 0 (a seed run twice would "
+                "count twice in every mean), got "
+                + (f"{bad!r} among them" if bad else f"{twice} twice" if twice else "an empty list")
+            )
     t0 = time.perf_counter()
     total = scenario.n_samples * len(controllers or scenario.controllers)
     with RunClock(total, f"benchmark {scenario.name}", show=progress) as clock:

@@ -224,8 +224,13 @@ class Scenario:
         object.__setattr__(self, "arm", as_arm(self.arm))  # a closed-form record: the arm it is of
         object.__setattr__(self, "closed_forms", scenario_closed_forms(self.arm, self.plant))
         errors = scenario_errors({f.name: getattr(self, f.name) for f in fields(self) if f.init})
-        if errors:
-            raise _scenario_error(str(self.source), errors)
+        if errors:  # (a file's errors are raised by parse_scenario, before: these are the code's)
+            where = (
+                "Scenario"
+                if self.source == "<memory>"
+                else f"Scenario from {self.source}, as changed in code"
+            )
+            raise _scenario_error(where, errors)
 
     @property
     def n_joints(self) -> int:
@@ -304,6 +309,10 @@ class Scenario:
         tables of the others dropped with them: a table for a controller left out of a selection
         made after the scenario was written (``benchmark --controllers``, a sweep's
         ``controllers``) is not an error, as one for a controller never listed is."""
+        if isinstance(names, str):  # a string is a sequence of letters: 'a', 'd', ... as controllers
+            raise ScenarioError(
+                f"with_controllers: a list of names, got the string {names!r}: pass [{names!r}]"
+            )
         names = tuple(names)
         keep = set(names) | {table_name(n) for n in names}
         opts = tuple(o for o in self.controller_options if o[0] in keep)

@@ -56,9 +56,9 @@ def with_settings(scenario, name: str, settings: dict):
     Examples
     --------
     >>> from adaptive_dd import load_scenario
-    >>> sc = with_settings(load_scenario(), "adaptive_ct", {"detector": {"threshold": 7.0}})
+    >>> sc = with_settings(load_scenario(), "adaptive_ct", {"detector": {"glr_threshold": 200.0}})
     >>> sc.options("adaptive_ct")
-    {'detector': {'threshold': 7.0}}
+    {'detector': {'glr_threshold': 200.0}}
     >>> with_settings(sc, "no_boost", {"law": "adaptive_ct", "boost_duration": 0.0}).controllers[-1]
     'no_boost'
     """

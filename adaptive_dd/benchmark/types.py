@@ -195,11 +195,11 @@ class BenchmarkResult:
     compile_time: float = 0.0
     seed_indices: tuple = ()
     plant: dict | None = None
+    """The plants the trials met when the plant is not the model
+    (:func:`~adaptive_dd.closed_loop.runner.plant_record`); None: the plant is the arm."""
     excitation: dict | None = None
     """The excitation phase's identification (``[run] excite``,
     :meth:`~adaptive_dd.closed_loop.excitation_phase.ExcitationReport.to_dict`); None without."""
-    """The plants the trials met when the plant is not the model
-    (:func:`~adaptive_dd.closed_loop.runner.plant_record`); None: the plant is the arm."""
     cache: dict = field(default_factory=dict, repr=False, compare=False)
     """Derived per-seed arrays, computed once (``metrics.per_seed_segment_metrics``)."""
 

@@ -141,3 +141,23 @@ def estimator_batch(ec, es, ls, qm_obs, qdm_obs, tau) -> NDArray[np.int64]:
         loop = _chain_estimator_loop
     loop(ec, es, ls, c(qm_obs), c(qdm_obs), c(tau), alarm)
     return alarm
+
+
+def shaped_inputs(n: int, S: int, q, qd, q_d, qd_d, qdd_d) -> tuple:
+    """The Python form's inputs as the compiled law takes them: ``q, qd (S, n)`` (or the first
+    trials' rows) and the reference
+    ``(n,)`` (one row of a batch, ``(1, n)``, as the two-link classes take it, too); else a
+    :class:`~adaptive_dd.errors.SignalError` naming the shapes (numba's typing error said nothing)."""
+    from adaptive_dd.errors import SignalError
+
+    q, qd = (np.ascontiguousarray(x, dtype=float) for x in (q, qd))
+    refs = [np.asarray(x, dtype=float) for x in (q_d, qd_d, qdd_d)]
+    refs = [np.ascontiguousarray(r[0] if r.shape == (1, n) else r) for r in refs]
+    rows_ok = q.ndim == 2 and 1 <= q.shape[0] <= S and q.shape[1] == n and qd.shape == q.shape
+    if not rows_ok or any(r.shape != (n,) for r in refs):
+        raise SignalError(
+            f"command: q and qd must be (n_trials, n) = ({S}, {n}) (the first trials: fewer rows) and "
+            f"q_d, qd_d, qdd_d the reference ({n},) (or (1, {n})), got {q.shape}, {qd.shape}, "
+            + ", ".join(str(r.shape) for r in refs)
+        )
+    return q, qd, *refs

@@ -20,7 +20,7 @@ from typing import Any, NamedTuple
 import numpy as np
 from numpy.typing import NDArray
 
-from adaptive_dd.closed_loop.batches import estimator_batch
+from adaptive_dd.closed_loop.batches import estimator_batch, shaped_inputs
 from adaptive_dd.closed_loop.laws import (
     KIND_CT,
     KIND_PD,
@@ -189,6 +189,7 @@ class Law:
             if sigma_true is None:
                 raise ValueError(f"{self.name} needs the true model at every sample")
             pi_true = self.pi_from_sigma(sigma_true)
+        q, qd, q_d, qd_d, qdd_d = shaped_inputs(self.arm.n_joints, self.n_trials, q, qd, q_d, qd_d, qdd_d)
         return law_batch(self.ch, f.cfg, f.state, q, qd, q_d, qd_d, qdd_d, pi_true)
 
     def observe(self, q, qd, tau) -> None:

@@ -58,7 +58,12 @@ class ArmUncertainty:
         for name in _FIELDS:
             v = getattr(self, name)
             hi = np.inf if name == "com" else 1.0
-            ok = isinstance(v, int | float) and not isinstance(v, bool) and np.isfinite(v) and 0 <= v < hi
+            ok = (
+                isinstance(v, int | float | np.integer | np.floating)
+                and not isinstance(v, bool)
+                and np.isfinite(v)
+                and 0 <= v < hi
+            )
             if not ok:
                 bound = ">= 0" if name == "com" else "in [0, 1)"
                 raise ParameterError(f"ArmUncertainty.{name} must be a finite number {bound}, got {v!r}")

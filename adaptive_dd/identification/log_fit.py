@@ -351,6 +351,11 @@ def fit_log(
         The estimate, its sandwich covariance, the per-channel residual and weights, and the held
         directions.
 
+    Raises
+    ------
+    DataError
+        The log does not excite some base parameter (named; with ``hold``, only a parameter whose
+        column is zero: the directions it barely sees are held), or is too short.
 
     Examples
     --------
@@ -372,12 +377,6 @@ def fit_log(
     ...               tau_f=0.01, sample_period=T)
     >>> bool(np.allclose(fit.sigma, arm.sigma, atol=0.05)), fit.sigma.shape
     (True, (17,))
-
-    Raises
-    ------
-    DataError
-        The log does not excite some base parameter (named; with ``hold``, only a parameter whose
-        column is zero: the directions it barely sees are held), or is too short.
     """
     used = np.asarray(used, dtype=bool)
     K = np.asarray(identified, dtype=bool)

@@ -28,7 +28,7 @@ MODES = ("payload", "arm")
 
 
 def _num(owner: str, name: str, v, lo=None, hi=None, strict=True) -> None:
-    ok = isinstance(v, int | float) and not isinstance(v, bool) and np.isfinite(v)
+    ok = isinstance(v, int | float | np.integer | np.floating) and not isinstance(v, bool) and np.isfinite(v)
     if ok and lo is not None:
         ok = v > lo if strict else v >= lo
     if ok and hi is not None:

@@ -372,10 +372,23 @@ def fit_output_error(
     q, qd, tau = (np.asarray(a, dtype=float) for a in (q, qd, tau))
     if not (q.shape == qd.shape == tau.shape and q.ndim == 2 and q.shape[1] == model.n):
         raise SignalError(f"q, qd, tau must be (N, {model.n}), got {q.shape}, {qd.shape}, {tau.shape}")
+    for name, a in (("q", q), ("qd", qd), ("tau", tau)):
+        if not np.all(np.isfinite(a)):
+            r, c = np.argwhere(~np.isfinite(a))[0]
+            raise SignalError(
+                f"{name} must be finite: {a[r, c]} at sample {r}, joint {c + 1} (leave such samples out of "
+                "the record, or bridge them, before the fit)"
+            )
     if segment_length < 2:
         raise ParameterError(f"segment_length must be >= 2, got {segment_length}")
+    if np.shape(sigma0) != (model.p,):
+        raise ParameterError(f"sigma0 must be ({model.p},) base parameters, got shape {np.shape(sigma0)}")
     s0, E, theta = _parametrisation(model, sigma0, E)
     w = 1.0 / np.asarray(std, dtype=float)
+    if w.shape not in ((), (2 * model.n,)):
+        raise ParameterError(
+            f"std must be one number or ({2 * model.n},): q's then qd's per joint, got shape {w.shape}"
+        )
     T, L = float(sample_period), int(segment_length)
     y, nseg = _segments(np.concatenate([q, qd], axis=1), L)
     tau_s, _ = _segments(tau, L)
@@ -448,7 +461,7 @@ def _levenberg_marquardt(
     for it in range(1, max_iter + 1):  # noqa: B007 - the count is reported
         A, C = jacobians(pi, xs)
         d_th, d_x, trial, new_cost, lam = _damped_step(residuals, A, C, r, theta, nodes, cost, lam)
-        if new_cost > cost:
+        if trial is None or not np.isfinite(new_cost) or new_cost > cost:
             converged = True  # no step lowers the cost: a minimum to machine precision
             break
         decrease = (cost - new_cost) / max(cost, 1e-300)

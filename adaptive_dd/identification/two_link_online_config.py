@@ -44,7 +44,7 @@ SPLIT_STAGES = {
 
 
 def _finite(name: str, v: float, lo: float | None = None, hi: float | None = None, strict=True) -> None:
-    ok = isinstance(v, int | float) and not isinstance(v, bool) and np.isfinite(v)
+    ok = isinstance(v, int | float | np.integer | np.floating) and not isinstance(v, bool) and np.isfinite(v)
     if ok and lo is not None:
         ok = v > lo if strict else v >= lo
     if ok and hi is not None:
