@@ -114,3 +114,24 @@ def test_an_error_of_a_scenario_changed_in_code_does_not_blame_its_file():
         ScenarioError, match=r"^Scenario from .*payload_swap\.toml, as changed in code: run\.seeds"
     ):
         dataclasses.replace(load_scenario(), seeds=2.0)
+
+
+def test_identification_inputs_given_in_code_are_named_when_wrong():
+    """simulate_record(..., rngs=one Generator) raised "has no len()", rngs=[] "need at least one
+    array to stack", payload=2.0 "cannot reshape"; fit_log with a wrong-length used, an IndexError.
+    One Generator is one record; the rest are named."""
+    from adaptive_dd.identification.log_fit import fit_log
+    from adaptive_dd.identification.model import arm_model
+    from adaptive_dd.identification.records import simulate_record
+
+    sc = load_scenario("vertical3_payload_exact")
+    one = simulate_record(sc.arm, sc.reference, 0.05, np.random.default_rng(0))
+    assert one.q.shape == (1, 50, 3)
+    with pytest.raises(ParameterError, match=r"rngs is a list of numpy Generators, one per record, got \[\]"):
+        simulate_record(sc.arm, sc.reference, 0.05, [])
+    with pytest.raises(ParameterError, match=r"payload is its 10 inertial parameters .*got 2\.0"):
+        simulate_record(sc.arm, sc.reference, 0.05, [np.random.default_rng(0)], payload=2.0)
+    model = arm_model(sc.arm)
+    with pytest.raises(ParameterError, match=r"used is one flag per joint \(3,\).*got \(2,\)"):
+        fit_log(model, one.q[0].tolist(), one.qd[0], one.tau[0], [True, True], np.ones(model.p, bool),
+                tau_f=0.01, sample_period=1e-3)  # fmt: skip

@@ -48,7 +48,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from adaptive_dd.errors import DataError
+from adaptive_dd.errors import DataError, ParameterError
 from adaptive_dd.identification.filters import design_filter_bank, filter_record
 from adaptive_dd.identification.held_directions import Held, base_prior_std, hold_unseen
 from adaptive_dd.identification.log_covariance import (  # noqa: F401  (re-exported: tests import them here)
@@ -378,8 +378,14 @@ def fit_log(
     >>> bool(np.allclose(fit.sigma, arm.sigma, atol=0.05)), fit.sigma.shape
     (True, (17,))
     """
+    q, qd, tau = (np.asarray(x, dtype=float) for x in (q, qd, tau))
     used = np.asarray(used, dtype=bool)
     K = np.asarray(identified, dtype=bool)
+    if used.shape != (model.n,) or K.shape != (model.p,):
+        raise ParameterError(
+            f"fit_log: used is one flag per joint ({model.n},) and identified one per base parameter "
+            f"({model.p},), got {used.shape} and {K.shape}"
+        )
     reg = filtered_regression(
         model,
         q,

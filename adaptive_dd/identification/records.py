@@ -131,7 +131,7 @@ def simulate_record(
     duration : float
         [s].
     rngs : list of numpy.random.Generator
-        One per trial (the sensor noise).
+        One per trial (the sensor noise); a single Generator: one record.
     sample_period : float
         T [s].
     payload : array_like (10,), optional
@@ -179,9 +179,22 @@ def simulate_record(
     True
     """
     _check_timing(duration, sample_period, bandwidth)
+    if isinstance(rngs, np.random.Generator):  # one record: its generator alone
+        rngs = [rngs]
+    if not len(rngs) or not all(isinstance(r, np.random.Generator) for r in rngs):
+        raise ParameterError(
+            f"simulate_record: rngs is a list of numpy Generators, one per record, got {rngs!r}: e.g. "
+            "[np.random.default_rng(0)]"
+        )
     t, ref = _reference_samples(reference, duration, sample_period, arm.n_joints)
     model = arm_model(arm)
-    pp = np.zeros(10) if payload is None else np.asarray(payload, dtype=float).reshape(10)
+    pp = np.zeros(10) if payload is None else np.asarray(payload, dtype=float)
+    if pp.size != 10:
+        raise ParameterError(
+            f"simulate_record: payload is its 10 inertial parameters about the payload frame "
+            f"(adaptive_dd.plant.payload_parameters(mass, com, inertia)), got {payload!r}"
+        )
+    pp = pp.reshape(10)
     pi_true = pi_with_payload(arm, model.pi_ref, pp)
     step = _plant_step(plant, arm, model, pi_true, len(rngs), sample_period, substeps)
     out, sat_count = _track(arm, model, pi_true, ref, rngs, step, bandwidth, noise, quantize)
