@@ -76,6 +76,7 @@ def test_excite_works_on_the_two_link_urdf_arm(tmp_path, capsys):
     assert main([*argv, "--out", str(out)]) == 0
     printed = capsys.readouterr()
     assert "2-joint arm of" in printed.out
+    assert "scenario's reference" in printed.out and "against the scenario's own reference" in printed.out
     # what it is doing goes to stderr as it goes (minutes on a 7-joint arm), not to the result
     assert "designing the excitation of the 2-joint arm" in printed.err
     assert "bounding the designed" in printed.err
