@@ -271,3 +271,20 @@ def test_the_committed_latex_table_fits_a_page_when_typeset(tmp_path):
         log = (tmp_path / f"{name}.log").read_text(encoding="utf-8", errors="replace")
         assert run.returncode == 0, log[-2000:]
         assert "Overfull \\hbox" not in log, [ln for ln in log.splitlines() if "Overfull" in ln]
+
+
+def test_a_cell_of_a_law_at_other_gains_than_its_floor_is_marked_in_the_latex_table():
+    """Its floor_note says the law ran at another bandwidth than its floor: the ratio compares gains
+    too, which the paper's table should say (a double dagger, explained in the caption)."""
+    from adaptive_dd.arena.latex import latex_table
+
+    df = _table({"ct_oracle": 0.1, "adaptive_ct": 0.12})
+    plain = latex_table(df)
+    assert "ddagger" not in plain
+    ours = df["controller"] == "adaptive_ct"
+    df.loc[ours, "floor_note"] = (
+        "controllers.adaptive_ct.bandwidth = 20.0 but its floor ct_oracle runs at 40.0: ..."
+    )
+    tex = latex_table(df)
+    row = next(ln for ln in tex.splitlines() if ln.startswith("\\texttt{adaptive\\_ct}"))
+    assert "$^\\ddagger$ (" in row and "$\\ddagger$: the law ran at another bandwidth" in tex

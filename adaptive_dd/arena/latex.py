@@ -163,7 +163,13 @@ def latex_table(df, caption: str | None = None, command: str | None = None) -> s
         + " (p90), in each scenario's heaviest payload segment"
         + (" and every segment of the drawn arms, pooled over them" if pooled else "")
         + "; bold: the lowest RMS error of the column; $\\times N$: N trials failed"
-        + ("; $\\dagger$: told the true model, a reference, not ranked." if told.any() else ".")
+        + ("; $\\dagger$: told the true model, a reference, not ranked" if told.any() else "")
+        + (
+            "; $\\ddagger$: the law ran at another bandwidth or damping than its floor (floor\\_note)"
+            if "floor_note" in df and df["floor_note"].astype(str).str.contains(_GAINS).any()
+            else ""
+        )
+        + "."
     )
     lines = [
         f"% {command or command_of(df)}",
@@ -205,7 +211,13 @@ def _cell(r) -> str:
     mean = _num(r["ratio_mean"])
     mean = f"\\textbf{{{mean}}}" if r.get("rms_rank") == 1 else mean
     fail = f" $\\times {int(r['failures'])}$" if r["failures"] else ""
-    return f"{mean} ({_num(r['ratio_p90'])}){fail}"
+    gains = "$^\\ddagger$" if _GAINS in str(r.get("floor_note") or "") else ""
+    return f"{mean}{gains} ({_num(r['ratio_p90'])}){fail}"
+
+
+_GAINS = "but its floor"
+"""What a row's ``floor_note`` says when its law ran at other gains than its floor
+(:func:`~adaptive_dd.benchmark.preflight.floor_mismatches`): the cell is marked."""
 
 
 def write_latex(df, path, command: str | None = None) -> Path:
