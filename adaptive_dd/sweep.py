@@ -384,7 +384,7 @@ def run_sweep(
     ...                      "grid": {"payload_mass": [1.0, 3.0]}})
     >>> with distributed.Client(processes=False, n_workers=1, dashboard_address=None) as client:
     ...     res = run_sweep(sweep, tempfile.mkdtemp(), client=client, progress=False)
-    sweep <memory>: 2 grid points x 2 controllers x 1 blocks of seeds (1 seeds, 1 per block) = 4
+    sweep <memory>: 2 grid points x 2 controllers x 1 block(s) of seeds (1 seeds, 1 per block) = 4
     cells in 4 distinct tasks; 0 reused from ..., 4 to run
     running 4 task(s) on the given client, 1 worker(s)
     >>> len(res.table), res.ran  # grid points x controllers x seeds x 4 segments; tasks run
