@@ -135,3 +135,21 @@ def test_identification_inputs_given_in_code_are_named_when_wrong():
     with pytest.raises(ParameterError, match=r"used is one flag per joint \(3,\).*got \(2,\)"):
         fit_log(model, one.q[0].tolist(), one.qd[0], one.tau[0], [True, True], np.ones(model.p, bool),
                 tau_f=0.01, sample_period=1e-3)  # fmt: skip
+
+
+def test_a_detector_threshold_the_estimator_does_not_read_is_refused():
+    """detector.threshold (the paper's construction's energy test) on the default exact estimator
+    was accepted and changed nothing (1.5, 4 and 1e6 gave bit-identical runs): refused, naming the
+    setting that does; the paper's construction still takes it."""
+    from adaptive_dd.controllers import make_controller
+    from adaptive_dd.identification.two_link_online_config import ChangeDetector, TwoLinkOnlineConfig
+
+    with pytest.raises(
+        ParameterError, match=r"threshold = 7\.0: the energy test of the paper's construction.*glr_threshold"
+    ):
+        make_controller("adaptive_ct", options={"detector": {"threshold": 7.0}})
+    assert (
+        make_controller("adaptive_ct", options={"detector": {"glr_threshold": 200.0}}).name == "adaptive_ct"
+    )
+    cfg = TwoLinkOnlineConfig(construction="paper", detector=ChangeDetector(threshold=7.0))
+    assert cfg.detector.threshold == 7.0

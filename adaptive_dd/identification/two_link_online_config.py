@@ -286,6 +286,13 @@ class TwoLinkOnlineConfig:
             raise ParameterError(
                 f"TwoLinkOnlineConfig.construction must be 'exact' or 'paper', got {self.construction!r}"
             )
+        det = self.detector
+        if self.construction == "exact" and det is not None and det.threshold != ChangeDetector.threshold:
+            raise ParameterError(  # (it was accepted and changed nothing: one meaning per name)
+                f"ChangeDetector.threshold = {det.threshold}: the energy test of the paper's construction "
+                "(construction = 'paper'), which the exact construction's detector does not read: its "
+                "alarm is a GLR test, set ChangeDetector.glr_threshold"
+            )
         if self.split not in SPLIT_STAGES:
             raise ParameterError(
                 f"TwoLinkOnlineConfig.split must be one of {list(SPLIT_STAGES)}, got {self.split!r}"
