@@ -24,12 +24,7 @@ __all__ = [
 def is_finite_number(x) -> bool:
     """True for a finite ``int`` or ``float`` read from a file, or a NumPy scalar given in code (a
     ``bool`` is not a number)."""
-    return (
-        not isinstance(x, bool)
-        and type(x).__name__ != "bool_"
-        and isinstance(x, numbers.Real)
-        and math.isfinite(x)
-    )
+    return not isinstance(x, bool) and isinstance(x, numbers.Real) and math.isfinite(x)
 
 
 class ParameterError(ValueError):

@@ -550,9 +550,9 @@ def _cut_notes(clocks: dict, lo: float, hi: float, T: float, window=None) -> lis
     the record holds only the span every file covers (``lo``-``hi``), the rest of the others lost;
     and for a ``window`` reaching beyond it."""
     a, b = window or (lo, hi)
-    out = [f"the window {a:g}-{b:g} s reaches beyond the log: read {clock(lo)}-{clock(hi)} s"] * bool(
-        a < lo - 2 * T or b > hi + 2 * T
-    )
+    out = []
+    if a < lo - 2 * T or b > hi + 2 * T:
+        out.append(f"the window {a:g}-{b:g} s reaches beyond the log: read {clock(lo)}-{clock(hi)} s")
     for k, word, edge in ((0, "starts", lo), (-1, "ends", hi)):
         by, far = (min(clocks, key=lambda p, s=s: s * abs(clocks[p][k] - edge)) for s in (1, -1))
         if abs(clocks[far][k] - edge) > 2 * T:

@@ -49,12 +49,14 @@ def read_csv(path: Path):
 
 def _cut_short(path: Path) -> bool:
     """Whether the file (gzip-compressed when it is named ``.gz``) does not end with a line end."""
-    if path.suffix == ".gz":
+    if path.suffix == ".gz":  # no seeking into a stream: read through it, a block at a time
         import gzip
 
+        last = b""
         with gzip.open(path, "rb") as fh:
-            data = fh.read()
-        return bool(data) and not data.endswith((b"\n", b"\r"))
+            while block := fh.read(1 << 20):
+                last = block[-1:]
+        return bool(last) and last not in (b"\n", b"\r")
     with path.open("rb") as fh:
         fh.seek(0, 2)
         if fh.tell() == 0:

@@ -42,8 +42,6 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
 from adaptive_dd.benchmark.scenario import Scenario, default_scenario_path, load_scenario
 from adaptive_dd.controllers import CONTROLLERS, controllers_for
 from adaptive_dd.controllers.registry import law_of
@@ -269,10 +267,9 @@ def _axes(src: str, grid: Any, ctrls: tuple[str, ...]) -> tuple[tuple[str, tuple
         elif key in SCENARIO_AXES:
             axes.append((key, _values(src, f"grid.{key}", v, numeric=True)))
         else:
-            from adaptive_dd.benchmark.key_hints import nearest_keys
+            from adaptive_dd.benchmark.key_hints import did_you_mean
 
-            near = nearest_keys(str(key), [*SCENARIO_AXES, "controller"])
-            hint = f" (did you mean {' or '.join(repr(f'grid.{k}') for k in near)}?)" if near else ""
+            hint = did_you_mean(str(key), [*SCENARIO_AXES, "controller"], lambda k: repr(f"grid.{k}"))
             raise SweepError(
                 f"{src}: unknown key 'grid.{key}'{hint}; allowed: {[*SCENARIO_AXES, 'controller']}"
             )
@@ -481,15 +478,17 @@ def gains_apart(sweep: Sweep) -> dict[int, str]:
     then compares two gains as well as two laws. :func:`~adaptive_dd.sweep.run_sweep` marks those
     cells and the command says so before it runs (the benchmark's warning,
     :func:`~adaptive_dd.benchmark.preflight.floor_problems`)."""
+    from adaptive_dd.benchmark.preflight import gains_apart as differ
+
     hm = sweep.heatmap
     out: dict[int, str] = {}
     for p in sweep.points if hm else ():
-        sc, why = p.scenario, []
+        sc = p.scenario
         law, floor = ({**sc.options(c), **p.settings_for(c)} for c in (hm["adaptive"], hm["floor"]))
-        for key, default in (("bandwidth", sc.bandwidth), ("damping", sc.damping)):
-            a, b = law.get(key, default), floor.get(key, default)
-            if np.any(np.asarray(a, dtype=float) != np.asarray(b, dtype=float)):
-                why.append(f"{hm['adaptive']}.{key} = {a} but its floor {hm['floor']}'s is {b}")
+        why = [
+            f"{hm['adaptive']}.{k} = {a} but its floor {hm['floor']}'s is {b}"
+            for k, a, b in differ(law, floor, sc)
+        ]
         if why:
             out[p.index] = "; ".join(why) + ": a ratio of two gains as well as two laws"
     return out

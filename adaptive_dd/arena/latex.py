@@ -27,6 +27,9 @@ import numpy as np
 
 from adaptive_dd.arena.columns import contenders, references
 from adaptive_dd.arena.page import _columns, command_of, table_rows
+from adaptive_dd.benchmark.preflight import (
+    GAINS_APART as _GAINS,
+)  # a floor_note's words: its law at other gains
 
 __all__ = ["TEXT_WIDTH_PT", "latex_table", "write_latex"]
 
@@ -78,13 +81,12 @@ _GLYPH = {k: 9.3 * v for k, v in _EM.items()} | dict.fromkeys("0123456789", 4.7)
 _GLYPH |= {".": 2.6, ",": 2.6, " ": 3.1, "(": 3.7, ")": 3.7, "-": 3.1, ":": 2.6, "x": 7.2, "_": 4.7}
 
 
-def _panels(cells: dict, pooled: set[str]) -> list[list[tuple[str, int]]]:
+def _panels(cells: dict, names: list[str], pooled: set[str]) -> list[list[tuple[str, int]]]:
     """The columns (``cells``: per column its heading and cells, as set) in panels that fit
-    :data:`TEXT_WIDTH_PT` beside the laws' and floors' names: the given scenarios' columns split
-    as evenly as fits, then the drawn arms' segments (scenarios in ``pooled``) likewise; never one
-    panel across both, their headings differ."""
-    names, floors, *_ = cells.pop(None)
-    fixed = max(map(lambda t: _width(t, tt=True), names)) + max(map(lambda t: _width(t, tt=True), floors))
+    :data:`TEXT_WIDTH_PT` beside ``names`` (the laws' and the floors' columns, as set): the given
+    scenarios' columns split as evenly as fits, then the drawn arms' segments (scenarios in
+    ``pooled``) likewise; never one panel across both, their headings differ."""
+    fixed = sum(max(_width(t, tt=True) for t in col) for col in names)
     col = {c: max(map(_width, ts)) for c, ts in cells.items()}
     groups: dict[bool, list] = {False: [], True: []}
     for sc, seg in cells:
@@ -188,8 +190,8 @@ def latex_table(df, caption: str | None = None, command: str | None = None) -> s
         for c, f, rs in table_rows(ranked, cols)
     ]
     set_as = {c: [*_heads(df, *c, names), *(r[2][k] for r in rows)] for k, c in enumerate(cols)}
-    set_as[None] = ([r[0] for r in rows] or ["controller"], [r[1] for r in rows] or ["floor"])
-    for k, panel in enumerate(_panels(set_as, names)):
+    laws = ([r[0] for r in rows] or ["controller"], [r[1] for r in rows] or ["floor"])
+    for k, panel in enumerate(_panels(set_as, laws, names)):
         idx = [cols.index(c) for c in panel]
         lines += ["\\medskip"] if k else []
         lines += ["\\begin{tabular}{ll" + "r" * len(panel) + "}", "\\toprule", *_heading(df, panel, names)]
@@ -213,11 +215,6 @@ def _cell(r) -> str:
     fail = f" $\\times {int(r['failures'])}$" if r["failures"] else ""
     gains = "$^\\ddagger$" if _GAINS in str(r.get("floor_note") or "") else ""
     return f"{mean}{gains} ({_num(r['ratio_p90'])}){fail}"
-
-
-_GAINS = "but its floor"
-"""What a row's ``floor_note`` says when its law ran at other gains than its floor
-(:func:`~adaptive_dd.benchmark.preflight.floor_mismatches`): the cell is marked."""
 
 
 def write_latex(df, path, command: str | None = None) -> Path:

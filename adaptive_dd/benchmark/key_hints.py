@@ -6,7 +6,7 @@ import difflib
 from collections import Counter
 from collections.abc import Callable, Iterable
 
-__all__ = ["nearest_keys", "repeated_entries"]
+__all__ = ["did_you_mean", "nearest_keys", "repeated_entries"]
 
 
 def nearest_keys(key: str, allowed: Iterable[str]) -> list[str]:
@@ -19,6 +19,17 @@ def nearest_keys(key: str, allowed: Iterable[str]) -> list[str]:
     scored = sorted(((difflib.SequenceMatcher(None, key, a).ratio(), a) for a in allowed), reverse=True)
     best = scored[0][0] if scored else 0.0
     return [a for r, a in scored if r >= 0.6 and r >= best - 0.1][:3]
+
+
+def did_you_mean(key: str, allowed: Iterable[str], show=repr) -> str:
+    """`` (did you mean 'a' or 'b'?)`` of :func:`nearest_keys`, each shown by ``show``; empty when
+    none is near.
+
+    >>> did_you_mean("seedz", ["duration", "seed", "seeds"])
+    " (did you mean 'seed' or 'seeds'?)"
+    """
+    near = nearest_keys(key, allowed)
+    return f" (did you mean {' or '.join(map(show, near))}?)" if near else ""
 
 
 def repeated_entries(entries: Iterable[str], table_name: Callable[[str], str]) -> str:

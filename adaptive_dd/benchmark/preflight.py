@@ -20,6 +20,8 @@ and the time, or the controller and the reason.
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
 __all__ = [
@@ -444,27 +446,37 @@ def floor_problems(scenario) -> list[str]:
     return [msg for msgs in floor_mismatches(scenario).values() for msg in msgs]
 
 
+GAINS_APART = "but its floor"
+"""The words of a :func:`floor_mismatches` message (a row's ``floor_note``) the leaderboard's
+table and command look for."""
+
+
+def gains_apart(mine: dict, theirs: dict, scenario) -> list[tuple[str, Any, Any]]:
+    """``[(key, law's, floor's)]`` of ``bandwidth`` and ``damping`` where a law's settings ``mine``
+    and its floor's ``theirs`` differ, each defaulting to the scenario's ``[control]``."""
+    out = []
+    for key, default in (("bandwidth", scenario.bandwidth), ("damping", scenario.damping)):
+        a, b = mine.get(key, default), theirs.get(key, default)
+        if np.any(np.asarray(a, dtype=float) != np.asarray(b, dtype=float)):
+            out.append((key, a, b))
+    return out
+
+
 def floor_mismatches(scenario) -> dict[str, list[str]]:
     """``{controller (its run.controllers entry): [what differs from its floor's gains]}`` for the
-    controllers of :func:`floor_problems`; a plug-in's settings are its table's (its class name or
-    label), as the run reads them."""
+    controllers of :func:`floor_problems`; a plug-in's settings are its table's (its class name),
+    as the run reads them."""
     from adaptive_dd.controllers.plugins import table_name
-
-    def options(name: str) -> dict:
-        return scenario.options(table_name(name))
 
     out: dict[str, list[str]] = {}
     for name, floor in scenario_floors(scenario).items():
-        mine = options(name)
-        theirs = options(floor) if floor in scenario.controllers else {}
-        for key, default in (("bandwidth", scenario.bandwidth), ("damping", scenario.damping)):
-            a, b = mine.get(key, default), theirs.get(key, default)
-            if np.any(np.asarray(a, dtype=float) != np.asarray(b, dtype=float)):
-                out.setdefault(name, []).append(
-                    f"controllers.{table_name(name)}.{key} = {a} but its floor {floor} runs at {b}: its "
-                    f"ratio to the floor compares two {key}s as well as two laws; give "
-                    f"[controllers.{floor}] the same"
-                )
+        theirs = scenario.options(table_name(floor)) if floor in scenario.controllers else {}
+        for key, a, b in gains_apart(scenario.options(table_name(name)), theirs, scenario):
+            out.setdefault(name, []).append(
+                f"controllers.{table_name(name)}.{key} = {a} {GAINS_APART} {floor} runs at {b}: its "
+                f"ratio to the floor compares two {key}s as well as two laws; give "
+                f"[controllers.{floor}] the same"
+            )
     return out
 
 

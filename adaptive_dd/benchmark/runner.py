@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import time
 import warnings
+from collections import Counter
 from collections.abc import Mapping, Sequence
 
 import numpy as np
@@ -153,7 +154,7 @@ def run_benchmark(
         )
     if seed_indices is not None:
         bad = [i for i in seed_indices if isinstance(i, bool) or not isinstance(i, int | np.integer) or i < 0]
-        twice = sorted({int(i) for i in seed_indices if list(seed_indices).count(i) > 1} - set(bad))
+        twice = [] if bad else sorted(i for i, k in Counter(map(int, seed_indices)).items() if k > 1)
         if bad or twice or not len(seed_indices):
             raise ParameterError(
                 "run_benchmark: seed_indices must be distinct integers >= 0 (a seed run twice would "

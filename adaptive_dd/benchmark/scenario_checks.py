@@ -11,11 +11,12 @@ from typing import Any
 
 from adaptive_dd.benchmark.controller_entries import _check_controllers, _check_options
 from adaptive_dd.benchmark.frozen import _Table, freeze, thaw
-from adaptive_dd.benchmark.key_hints import nearest_keys
+from adaptive_dd.benchmark.key_hints import did_you_mean
 from adaptive_dd.benchmark.number_checks import _nums, _short, check_number
 from adaptive_dd.benchmark.scenario_base import KEYS, LIMITS, Reference, run_estimate
 from adaptive_dd.controllers import CONTROLLERS
 from adaptive_dd.controllers.plugins import table_name
+from adaptive_dd.errors import is_finite_number
 from adaptive_dd.plant.parameters import PAYLOAD_RADIUS
 from adaptive_dd.plant.sampling import first_sample
 
@@ -198,7 +199,7 @@ def _check_payload(e: list, v: dict, timing_ok: bool) -> None:
     for i, (t, m) in enumerate(zip(times, masses, strict=True)):
         last = d - v["sample_period"] * (1 - 1e-9) if timing_ok else d  # the last segment holds a sample
         ok &= check_number(e, f"payload[{i}].at", t, 0, last, lo_open=True)
-        grams = isinstance(m, int | float) and not isinstance(m, bool) and m >= 1000  # (a mass in g)
+        grams = is_finite_number(m) and m >= 1000  # (a mass in g)
         if not check_number(e, f"payload[{i}].mass", m, 0, L["max_mass"]) and grams:
             e[-1] += ": a mass in g? give it in kg"
         if ok and i and t <= times[i - 1]:
@@ -296,8 +297,7 @@ def _known_tables(e: list, data: dict) -> dict[str, Any]:
             where = f"{t}[{i}]" if t == "payload" else t
             for k in item:
                 if k not in allowed:
-                    near = nearest_keys(str(k), allowed)
-                    hint = f" (did you mean {' or '.join(repr(x) for x in near)}?)" if near else ""
+                    hint = did_you_mean(str(k), allowed)
                     e.append(f"{where}.{k}: unknown key{hint}; allowed: {', '.join(sorted(allowed))}")
     return tables
 

@@ -11,6 +11,8 @@ where it can simulate the record, refined by output error; the model goes to ``O
 from __future__ import annotations
 
 import argparse
+import sys
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -365,14 +367,14 @@ def identify_log(args: argparse.Namespace, arm, outputs) -> int:
     free = None if profile is None else profile.profiled
     # the momentum regressors once, for the fit and the model error's other filters (_write_model)
     mom = momentum_regressors(model, rec.q, rec.qd)
-    with __import__("warnings").catch_warnings():  # fit_log's warning of too few samples: said here
-        __import__("warnings").filterwarnings("ignore", message=r"about .* independent samples for")
+    with warnings.catch_warnings():  # fit_log's warning of too few samples: said here
+        warnings.filterwarnings("ignore", message=r"about .* independent samples for")
         fit = _fit_record(model, rec, K, tau_f, spec.torque_held, prior_std, free, offset, mom)
     if fit.n_eff < MAX_DOF_FACTOR * fit.columns:  # fewer than one a column: refused, nothing written
         few = too_few_samples(fit.n_eff, fit.columns, fit.regression.y.shape[0] * fit.sample_period)
         if fit.n_eff < fit.columns:
             raise DataError(f"{rec.source}: {few} ({_columns(fit)})")
-        print(f"warning: {few}", file=__import__("sys").stderr)
+        print(f"warning: {few}", file=sys.stderr)
     # before anything is printed: at twice tau_f its filters leave the fewest samples of the window
     me_var = _model_error(model, fit, rec, spec.torque_held, mom)
     _print_fit(model, fit, names, loaded=bool(args.baseline))

@@ -84,8 +84,9 @@ def run(args: argparse.Namespace) -> int:
     if args.controllers:
         sc = sc.with_controllers(only_controllers(sc, args.controllers))
     sc = with_floors(sc)
-    if sc.estimate().large:
-        print(f"estimate: {sc.estimate()}", file=sys.stderr)
+    estimate = sc.estimate()
+    if estimate.large:
+        print(f"estimate: {estimate}", file=sys.stderr)
     for line in limit_warnings(sc):
         print(line, file=sys.stderr)
     outputs = OutputSet(args.out, extras=(args.json,) if args.json else ())
@@ -204,12 +205,10 @@ def only_controllers(sc, names: list[str]) -> tuple[str, ...]:
     names = [spec_of.get(n, n) for n in names]
     unknown = [n for n in names if n not in sc.controllers]
     if unknown:
-        from adaptive_dd.benchmark.key_hints import nearest_keys
+        from adaptive_dd.benchmark.key_hints import did_you_mean
 
-        near = {n: nearest_keys(n, dict.fromkeys([*sc.controllers, *spec_of])) for n in unknown}
-        said = ", ".join(
-            f"{n} (did you mean {' or '.join(map(repr, near[n]))}?)" if near[n] else n for n in unknown
-        )
+        known = dict.fromkeys([*sc.controllers, *spec_of])
+        said = ", ".join(n + did_you_mean(n, known) for n in unknown)
         raise ParameterError(
             f"--controllers: {said} not among {sc.source}'s controllers "
             f"{list(sc.controllers)}; name some of those (--controllers picks from the scenario's "

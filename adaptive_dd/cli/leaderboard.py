@@ -123,12 +123,11 @@ def run(args: argparse.Namespace) -> int:
                 if name in variants
                 else ""
             )
-            from adaptive_dd.benchmark.key_hints import nearest_keys
+            from adaptive_dd.benchmark.key_hints import did_you_mean
 
-            near = " or ".join(map(repr, nearest_keys(name, [*CONTROLLERS, *variants])))
             raise ParameterError(
                 f"--controllers: unknown controller {name!r}"
-                + (f" (did you mean {near}?)" if near and name not in variants else "")
+                + ("" if name in variants else did_you_mean(name, [*CONTROLLERS, *variants]))
                 + f"{where}; built-ins: {', '.join(CONTROLLERS)}, a plug-in's 'package.module:Class' (or "
                 "--plugin), or a variant every given scenario (and with --arms the template) defines "
                 '([controllers.NAME] law = "...")'
@@ -147,7 +146,9 @@ def run(args: argparse.Namespace) -> int:
     )  # fmt: skip
     csv, js, png = out / "leaderboard.csv", out / "leaderboard.json", out / "leaderboard.png"
     df.to_csv(csv, index=False, float_format="%.6g")
-    gains = df[df["floor_note"].str.contains("but its floor", na=False) & (df["kind"] != "population")]
+    from adaptive_dd.benchmark.preflight import GAINS_APART
+
+    gains = df[df["floor_note"].str.contains(GAINS_APART, na=False) & (df["kind"] != "population")]
     for (sc, c), g in gains.groupby(["scenario", "controller"], sort=False):  # (said in floor_note too)
         print(f"warning: {sc}: {c}: {g['floor_note'].iloc[0]}", file=sys.stderr)
     import shlex

@@ -109,11 +109,10 @@ def load_controller_class(path: str, search: tuple = ()) -> type:
     _check_not_shadowed(path, module, mod_name, search)
     for part in attr.split("."):
         if not hasattr(obj, part):
-            from adaptive_dd.benchmark.key_hints import nearest_keys
+            from adaptive_dd.benchmark.key_hints import did_you_mean
 
             named, hint = _module_named(module, mod_name, search)
-            near = nearest_keys(part, [n for n in dir(obj) if not n.startswith("_")])
-            hint = f" (did you mean {' or '.join(map(repr, near))}?)" if near and not hint else hint
+            hint = hint or did_you_mean(part, [n for n in dir(obj) if not n.startswith("_")])
             raise ParameterError(f"controller {path!r}: {named} has no {attr!r}{hint}")
         obj = getattr(obj, part)
     missing = [m for m in ("reset", "command", "observe") if not callable(getattr(obj, m, None))]

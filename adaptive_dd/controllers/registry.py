@@ -411,12 +411,13 @@ def make_controller(
     """
     options = dict(options or {})
     own = scenario is not None and (arm is None or arm is scenario.arm)  # the scenario's own arm
-    if own and ":" not in law_of(spec, options):  # a built-in as the scenario runs it (the gains too)
+    law = law_of(spec, options)
+    if own and ":" not in law:  # a built-in as the scenario runs it (the gains too)
         from adaptive_dd.closed_loop.controllers import with_stated_uncertainty
 
         arm = scenario.closed_forms or scenario.arm
         gains = gains if gains is not None else gains_for(arm, scenario.bandwidth, scenario.damping)
-        options = with_stated_uncertainty(law_of(spec, options), options, scenario)
+        options = with_stated_uncertainty(law, options, scenario)
     arm = ClosedFormTwoLink.sice() if arm is None else (closed_form_view(arm) or arm)
     base = gains or DEFAULT_GAINS
     if "law" in options:
@@ -447,13 +448,14 @@ def make_controller(
     return ctrl
 
 
-def built_controllers(scenario):
-    """Per controller of ``scenario``, built as the run builds it: ``(spec, form, exception)``, the
-    :func:`~adaptive_dd.controllers.plugins.compiled_form` of a compiled plug-in (else None; its
-    declarations and parameters() read as the run reads them), or what building it raised."""
+def built_controllers(scenario, specs=None):
+    """Per controller of ``scenario`` (or of ``specs``, some of them), built as the run builds it:
+    ``(spec, form, exception)``, the :func:`~adaptive_dd.controllers.plugins.compiled_form` of a
+    compiled plug-in (else None; its declarations and parameters() read as the run reads them), or
+    what building it raised."""
     from adaptive_dd.controllers.plugins import compiled_form, is_compiled
 
-    for spec in scenario.controllers:
+    for spec in scenario.controllers if specs is None else specs:
         try:
             label, ctrl = scenario_controller(scenario, spec)
             form = compiled_form(label, ctrl, 1, scenario.sample_period) if is_compiled(ctrl) else None
@@ -466,9 +468,11 @@ def built_controllers(scenario):
 def plugin_functions(scenario) -> list[tuple]:
     """The per-sample functions ``(reset, command, observe, estimate)`` of each compiled plug-in
     of ``scenario`` that can be built (``validate`` says why another cannot): what the run compiles
-    into a loop of its own (``validate``'s estimate of the compilation)."""
+    into a loop of its own (``validate``'s estimate of the compilation). Only the plug-ins are built:
+    the built-ins compile no loop of their own."""
+    plugins = [s for s in scenario.controllers if ":" in law_of(s, scenario.options(s))]
     return [
         (f.reset, f.command, f.observe, f.estimate)
-        for _, f, _ in built_controllers(scenario)
+        for _, f, _ in built_controllers(scenario, plugins)
         if f is not None
     ]

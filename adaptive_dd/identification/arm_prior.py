@@ -25,7 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from adaptive_dd.errors import ParameterError
+from adaptive_dd.errors import ParameterError, is_finite_number
 
 __all__ = [
     "ArmUncertainty",
@@ -58,12 +58,7 @@ class ArmUncertainty:
         for name in _FIELDS:
             v = getattr(self, name)
             hi = np.inf if name == "com" else 1.0
-            ok = (
-                isinstance(v, int | float | np.integer | np.floating)
-                and not isinstance(v, bool)
-                and np.isfinite(v)
-                and 0 <= v < hi
-            )
+            ok = is_finite_number(v) and 0 <= v < hi
             if not ok:
                 bound = ">= 0" if name == "com" else "in [0, 1)"
                 raise ParameterError(f"ArmUncertainty.{name} must be a finite number {bound}, got {v!r}")

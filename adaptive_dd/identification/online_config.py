@@ -14,7 +14,7 @@ from functools import lru_cache
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from adaptive_dd.errors import ParameterError
+from adaptive_dd.errors import ParameterError, is_finite_number
 from adaptive_dd.identification.arm_prior import ArmUncertainty
 from adaptive_dd.identification.filters import (
     FilterBank,
@@ -28,7 +28,7 @@ MODES = ("payload", "arm")
 
 
 def _num(owner: str, name: str, v, lo=None, hi=None, strict=True) -> None:
-    ok = isinstance(v, int | float | np.integer | np.floating) and not isinstance(v, bool) and np.isfinite(v)
+    ok = is_finite_number(v)
     if ok and lo is not None:
         ok = v > lo if strict else v >= lo
     if ok and hi is not None:

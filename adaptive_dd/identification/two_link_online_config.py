@@ -18,7 +18,7 @@ import numpy as np
 import scipy.linalg.lapack
 from numpy.typing import NDArray
 
-from adaptive_dd.errors import ParameterError
+from adaptive_dd.errors import ParameterError, is_finite_number
 from adaptive_dd.identification import two_link_online_kernel as K
 from adaptive_dd.identification.estimators import SPLITS
 from adaptive_dd.identification.filters import FilterBank, design_filter_bank
@@ -44,7 +44,7 @@ SPLIT_STAGES = {
 
 
 def _finite(name: str, v: float, lo: float | None = None, hi: float | None = None, strict=True) -> None:
-    ok = isinstance(v, int | float | np.integer | np.floating) and not isinstance(v, bool) and np.isfinite(v)
+    ok = is_finite_number(v)
     if ok and lo is not None:
         ok = v > lo if strict else v >= lo
     if ok and hi is not None:

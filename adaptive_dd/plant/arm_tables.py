@@ -101,10 +101,9 @@ def _check_keys(src: str, table: str, data: dict, allowed: tuple[str, ...]) -> N
         raise ScenarioError(f"{src}: [{table}] must be a table, got {data!r}")
     for key in data:
         if key not in allowed:
-            from adaptive_dd.benchmark.key_hints import nearest_keys
+            from adaptive_dd.benchmark.key_hints import did_you_mean
 
-            near = nearest_keys(key, allowed)
-            hint = f" (did you mean {' or '.join(map(repr, near))}?)" if near else ""
+            hint = did_you_mean(key, allowed)
             raise ScenarioError(f"{src}: unknown key '{table}.{key}'{hint}; allowed: {sorted(allowed)}")
 
 

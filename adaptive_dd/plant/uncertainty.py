@@ -315,10 +315,9 @@ def _uncertainty(src: str, table, at: str = "plant.uncertainty") -> Uncertainty:
         )
     for key in table:
         if key not in UNCERTAINTY_KEYS:
-            from adaptive_dd.benchmark.key_hints import nearest_keys
+            from adaptive_dd.benchmark.key_hints import did_you_mean
 
-            near = nearest_keys(key, UNCERTAINTY_KEYS)
-            hint = f" (did you mean {' or '.join(map(repr, near))}?)" if near else ""
+            hint = did_you_mean(key, UNCERTAINTY_KEYS)
             raise ScenarioError(f"{src}: unknown key '{at}.{key}'{hint}; allowed: {sorted(UNCERTAINTY_KEYS)}")
     dist = table.get("distribution", "uniform")
     if dist not in DISTRIBUTIONS:
