@@ -56,10 +56,14 @@ def test_a_torque_beyond_the_limit_without_payload_blames_the_arm_not_a_payload(
     path = tmp_path / "weak.toml"
     path.write_text(text)
     assert main(["validate", str(path)]) == 0
-    err = capsys.readouterr().err
+    out, err = capsys.readouterr()
     assert "reference.joint2: inverse dynamics along the reference with the arm alone (no payload)" in err
     assert "torque limit 20 N m" in err and "check the URDF's masses and the joint's effort limit" in err
+    assert "; with the payloads it needs up to 100.2 N m" in err  # the peak line's figure, said too
     assert "joint1:" not in err
+    # the boost off on every joint, and why (it was [40.0 x 6] without a word)
+    assert "boost bandwidth per joint = [40.0, 40.0, 40.0, 40.0, 40.0, 40.0]" in out
+    assert "no room on joint(s) 2: the reference alone needs their whole torque limit" in out
     # a reference too fast (its frequencies as if in rad/s, 30 and 90 Hz): the motion is named
     fast = tmp_path / "fast.toml"
     text = (ROOT / "adaptive_dd" / "scenarios" / "vertical3_payload_exact.toml").read_text()
@@ -449,3 +453,39 @@ def test_the_no_armature_warnings_figure_holds_on_vertical3():
         rms = {c: np.sqrt(np.mean((ref - r.q)[:, seg] ** 2, axis=(1, 2))) for c, r in e.items()}
         means[bool(armature)] = float(np.mean(rms["adaptive_ct"] / rms["ct_oracle"]))
     assert means[False] > 1.8 and means[True] < 1.4, means
+
+
+def test_a_prismatic_joints_limits_and_effort_are_in_metres_and_newtons(tmp_path):
+    """A prismatic joint's reference and torque warnings were in rad, rad/s and N m."""
+    from adaptive_dd.benchmark import preflight
+    from adaptive_dd.benchmark.scenario import parse_scenario
+
+    urdf = tmp_path / "slide.urdf"
+    urdf.write_text(
+        '<robot name="slide"><link name="base"/>'
+        '<joint name="j1" type="revolute"><parent link="base"/><child link="l1"/><axis xyz="0 0 1"/>'
+        '<limit effort="20" velocity="3" lower="-3" upper="3"/></joint>'
+        '<link name="l1"><inertial><mass value="1"/><origin xyz="0.1 0 0"/>'
+        '<inertia ixx="0.01" iyy="0.01" izz="0.01" ixy="0" ixz="0" iyz="0"/></inertial></link>'
+        '<joint name="j2" type="prismatic"><parent link="l1"/><child link="tool"/><origin xyz="0.2 0 0"/>'
+        '<axis xyz="1 0 0"/><limit effort="1" velocity="0.1" lower="-0.05" upper="0.05"/></joint>'
+        '<link name="tool"><inertial><mass value="0.5"/><origin xyz="0.02 0 0"/>'
+        '<inertia ixx="0.001" iyy="0.001" izz="0.001" ixy="0" ixz="0" iyz="0"/></inertial></link></robot>'
+    )
+    data = {
+        "arm": {"urdf": str(urdf), "payload_frame": "tool", "gravity": [0.0, 0.0, 0.0]},
+        "reference": {
+            "joint1": {"offset": 0.0, "amplitude": [0.2], "frequency": [0.5]},
+            "joint2": {"offset": 0.0, "amplitude": [0.08], "frequency": [2.0]},
+        },
+        "payload": [{"at": 1.0, "mass": 0.5}],
+        "run": {"duration": 2.0},
+    }
+    sc = parse_scenario(data, str(tmp_path / "s.toml"))
+    assert preflight.joint_units(sc.arm) == [("rad", "rad/s", "N m"), ("m", "m/s", "N")]
+    ref = preflight.reference_problems(sc)
+    above = "upper limit 0.05 m (by 0.03 m)"
+    assert any("reference.joint2: q = 0.08 m" in p and above in p for p in ref), ref
+    assert any("reference.joint2: |qd| = " in p and "velocity limit 0.1 m/s" in p for p in ref), ref
+    torque = preflight.torque_problems(sc)
+    assert torque and all(" N at t = " in p and "torque limit 1 N " in p for p in torque), torque

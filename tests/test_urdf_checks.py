@@ -253,3 +253,73 @@ def test_a_joint_named_as_a_link_loads(tmp_path):
     arm3 = Arm.from_urdf(named, payload_frame="link3")
     ref = Arm.from_urdf(robot_urdf("vertical3"), payload_frame="link3")
     assert arm3.payload_joint == ref.payload_joint
+
+
+V3 = Path(robot_urdf("vertical3")).read_text()
+LINK3_INERTIAL = re.search(r'(?s)(<link name="link3">\s*)(<inertial>.*?</inertial>)', V3).group(2)
+
+
+def test_a_mimic_joint_on_the_chain_is_refused_naming_it(tmp_path):
+    """A joint coupled to another by <mimic> was read as a joint of its own (simulated and
+    controlled independently) without a word."""
+    old = '<dynamics damping="0.2" friction="0.3"/>\n  </joint>\n  <link name="link3">'
+    new = old.replace("<dynamics", '<mimic joint="joint2" multiplier="1.0" offset="0"/><dynamics')
+    with pytest.raises(UrdfError, match=r"joint 'joint3' <mimic joint='joint2'>: a joint coupled"):
+        read_urdf(_mutant(tmp_path, old, new, V3), "tool")
+
+
+def test_names_twice_and_an_off_chain_joint_without_limit_are_named(tmp_path):
+    """Pinocchio refused both files with 'does not contain a valid URDF model', naming nothing."""
+    twice = _mutant(tmp_path, '<joint name="joint3"', '<joint name="joint2"', V3)
+    with pytest.raises(UrdfError, match=r"two <joint> elements named 'joint2'"):
+        read_urdf(twice, "tool")
+    finger = (
+        '<link name="tool"/><link name="finger"/><joint name="finger_joint" type="revolute">'
+        '<parent link="tool"/><child link="finger"/><axis xyz="0 0 1"/></joint>'
+    )
+    path = _mutant(tmp_path, '<link name="tool"/>', finger, V3)
+    missing = r"joint 'finger_joint' \(revolute\): <limit> is missing.*off the arm"
+    with pytest.raises(UrdfError, match=missing):
+        read_urdf(path, "tool")
+
+
+def test_a_chain_link_with_a_shape_and_no_inertial_and_a_huge_gyration_are_noted(tmp_path):
+    robot = read_urdf(_mutant(tmp_path, LINK3_INERTIAL, "", V3), "tool")
+    assert any("link 'link3' has a shape but no <inertial>: read as massless" in n for n in robot.notes)
+    moments = r'ixx="[^"]*" ixy="0" ixz="0" iyy="[^"]*" iyz="0" izz="[^"]*"'
+    huge = re.sub(moments, 'ixx="3" ixy="0" ixz="0" iyy="6" iyz="0" izz="6"', LINK3_INERTIAL)
+    assert huge != LINK3_INERTIAL
+    robot = read_urdf(_mutant(tmp_path, LINK3_INERTIAL, huge, V3), "tool")
+    note = "link 'link3': a moment of 6 kg m^2 for 1.5 kg is a radius of gyration of 2 m"
+    assert any(note in n for n in robot.notes), robot.notes
+
+
+def test_negative_damping_and_friction_are_both_named(tmp_path):
+    path = _mutant(tmp_path, 'damping="0.2" friction="0.3"', 'damping="-1" friction="-2"', V3)
+    with pytest.raises(UrdfError, match=r"damping = '-1' and friction = '-2' must be in \[0"):
+        read_urdf(path, "tool")
+
+
+def _vertical3_scenario(urdf: Path, **arm) -> dict:
+    return {
+        "arm": {"urdf": str(urdf), "payload_frame": "tool", **arm},
+        "reference": {
+            f"joint{j + 1}": {"offset": 0.0, "amplitude": [0.2], "frequency": [0.5]} for j in range(3)
+        },
+        "payload": [{"at": 1.0, "mass": 0.5}],
+        "run": {"duration": 2.0},
+    }
+
+
+def test_a_joint_that_moves_no_inertia_is_refused_unless_armature_is_stated(tmp_path):
+    """vertical3 without link3's <inertial>: joint3 moves nothing (the tool frame is massless), so
+    the mass matrix is singular; validate passed it with divide-by-zero warnings and every trial
+    then failed, differently from run to run."""
+    from adaptive_dd.benchmark.scenario import parse_scenario
+
+    path = _mutant(tmp_path, LINK3_INERTIAL, "", V3)
+    refused = r"joint 'joint3' moves no inertia about its axis.*\[arm\] armature"
+    with pytest.raises(ScenarioError, match=refused):
+        parse_scenario(_vertical3_scenario(path), "s.toml")
+    sc = parse_scenario(_vertical3_scenario(path, armature=[0.05, 0.05, 0.02]), "s.toml")
+    assert sc.arm.n_joints == 3

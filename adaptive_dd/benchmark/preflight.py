@@ -29,6 +29,7 @@ __all__ = [
     "controller_problems",
     "floor_problems",
     "inertia_problems",
+    "joint_units",
     "preflight",
     "reference_problems",
     "resolved_settings",
@@ -69,6 +70,17 @@ def _torque_maxima(scenario) -> tuple[np.ndarray, ...]:
     return (*peak, *bare)
 
 
+def joint_units(arm) -> list[tuple[str, str, str]]:
+    """Per joint, the units of its position, velocity and effort: ``("m", "m/s", "N")`` on a
+    prismatic joint, else ``("rad", "rad/s", "N m")``."""
+    kinds = getattr(arm, "joint_kinds", ())
+    n = len(np.atleast_1d(arm.actuator.torque_limit))
+    return [
+        ("m", "m/s", "N") if j < len(kinds) and kinds[j] == "prismatic" else ("rad", "rad/s", "N m")
+        for j in range(n)
+    ]
+
+
 def _larger(best, cand):
     """Per joint, the candidate's ``(value, where...)`` where its value is above the best's, or is
     NaN where the best's is not (as ``argmax`` takes a NaN); on an exact tie the best's, the
@@ -100,30 +112,32 @@ def reference_problems(scenario) -> list[str]:
         name = f"{names[j]!r} (joint{j + 1})" if len(names) > j else f"joint{j + 1}"
         return f"reference.cartesian: at {path.where(t[k])}, joint {name}"
 
+    units = joint_units(arm)
     lim = getattr(arm, "position_limits", None)  # an arm from a URDF
     if lim is not None:
         for j in range(q.shape[1]):
             lo, hi = lim[j]
+            u = units[j][0]
             k_lo, k_hi = int(np.argmin(q[:, j])), int(np.argmax(q[:, j]))
             if q[k_lo, j] < lo - TOL * max(1.0, abs(lo)):
                 out.append(
-                    f"{key(j, k_lo)}: q = {q[k_lo, j]:.4g} rad at t = {t[k_lo]:.3f} s is below the "
-                    f"joint's lower limit {lo:.4g} rad (by {lo - q[k_lo, j]:.3g} rad)"
+                    f"{key(j, k_lo)}: q = {q[k_lo, j]:.4g} {u} at t = {t[k_lo]:.3f} s is below the "
+                    f"joint's lower limit {lo:.4g} {u} (by {lo - q[k_lo, j]:.3g} {u})"
                 )
             if q[k_hi, j] > hi + TOL * max(1.0, abs(hi)):
                 out.append(
-                    f"{key(j, k_hi)}: q = {q[k_hi, j]:.4g} rad at t = {t[k_hi]:.3f} s is above the "
-                    f"joint's upper limit {hi:.4g} rad (by {q[k_hi, j] - hi:.3g} rad)"
+                    f"{key(j, k_hi)}: q = {q[k_hi, j]:.4g} {u} at t = {t[k_hi]:.3f} s is above the "
+                    f"joint's upper limit {hi:.4g} {u} (by {q[k_hi, j] - hi:.3g} {u})"
                 )
     vlim = getattr(arm, "velocity_limits", None)
     if vlim is not None:
         for j in range(qd.shape[1]):
             k = int(np.argmax(np.abs(qd[:, j])))
-            v = abs(qd[k, j])
+            v, u = abs(qd[k, j]), units[j][1]
             if np.isfinite(vlim[j]) and vlim[j] > 0 and v > vlim[j] * (1 + TOL):
                 out.append(
-                    f"{key(j, k)}: |qd| = {v:.4g} rad/s at t = {t[k]:.3f} s is beyond the joint's "
-                    f"velocity limit {vlim[j]:.4g} rad/s ({v / vlim[j]:.2f} times)"
+                    f"{key(j, k)}: |qd| = {v:.4g} {u} at t = {t[k]:.3f} s is beyond the joint's "
+                    f"velocity limit {vlim[j]:.4g} {u} ({v / vlim[j]:.2f} times)"
                     + (": slow the path (a longer period)" if path is not None else "")
                 )
     return out
@@ -138,10 +152,14 @@ def torque_problems(scenario) -> list[str]:
     peak, at, seg, bare, bare_at = _torque_maxima(scenario)  # bare: segment 0's, no payload
     segments = scenario.segments()
     limit = np.asarray(scenario.arm.actuator.torque_limit, dtype=float)
+    units = joint_units(scenario.arm)
     for j in np.flatnonzero(peak > limit * (1 + TOL)):
+        u = units[j][2]
         if bare[j] > limit[j] * (1 + TOL):
             what, k, tau = "the arm alone (no payload)", int(bare_at[j]), bare[j]
-            why = _bare_why(scenario, t[k], j)
+            why = _bare_why(scenario, t[k], j, u)
+            if peak[j] > bare[j] * (1 + TOL):
+                why += f"; with the payloads it needs up to {peak[j]:.4g} {u}"
         else:
             start, end, mass = segments[seg[j]]  # a loaded one: the bare arm is within its limit
             what, k, tau = (
@@ -153,13 +171,13 @@ def torque_problems(scenario) -> list[str]:
             why = "the actuator will saturate"
         out.append(
             f"reference.joint{j + 1}: inverse dynamics along the reference with {what} needs |tau| = "
-            f"{tau:.4g} N m at t = {t[k]:.3f} s, beyond the joint's torque limit {limit[j]:.4g} N m "
+            f"{tau:.4g} {u} at t = {t[k]:.3f} s, beyond the joint's torque limit {limit[j]:.4g} {u} "
             f"({tau / limit[j]:.2f} times): {why}"
         )
     return out
 
 
-def _bare_why(scenario, t: float, j: int) -> str:
+def _bare_why(scenario, t: float, j: int, u: str = "N m") -> str:
     """What to check when the arm alone needs joint ``j`` beyond its limit at time ``t``: the
     reference when the motion's share (the torque less the part that holds the arm still at that
     posture) is the larger, else the arm's masses and limits."""
@@ -169,7 +187,7 @@ def _bare_why(scenario, t: float, j: int) -> str:
     still = arm.inverse_dynamics(q, np.zeros_like(qd), np.zeros_like(qdd))[j]
     if abs(tau - still) > abs(still):
         return (
-            f"the reference's motion needs {abs(tau - still):.4g} N m of it (the posture alone "
+            f"the reference's motion needs {abs(tau - still):.4g} {u} of it (the posture alone "
             f"{abs(still):.4g}): lower its amplitudes or frequencies ([reference] frequency is in Hz)"
         )
     return "check the URDF's masses and the joint's effort limit"
@@ -234,11 +252,22 @@ def derived_boost(scenario, name: str = "adaptive_ct") -> list[str]:
     if not hasattr(law, "boost_bandwidths"):
         return []
     wb = [round(float(x), 1) for x in law.boost_bandwidths()]
-    return [
+    out = [
         f"controllers.{name} boost bandwidth per joint = {wb} rad/s   (derived: at most "
         "boost_bandwidth, its noise torque 3 std inside the room the torque limit leaves beside the "
         "reference's)"
     ]
+    from adaptive_dd.closed_loop.boost import task_room
+
+    room = task_room(scenario)[1].min(axis=0)
+    full = [j for j in range(room.size) if room[j] <= 0.0]
+    if full:  # the columns feeding such a row get no boost (closed_loop.boost.boost_bandwidths)
+        out.append(
+            f"  no room on joint(s) {', '.join(str(j + 1) for j in full)}: the reference alone needs "
+            "their whole torque limit (the torque warning), so the joints whose boost would add noise "
+            "there keep the law's own bandwidth; a reference within the limits leaves room"
+        )
+    return out
 
 
 def derived_estimator_settings(scenario, name: str = "adaptive_ct") -> list[str]:
@@ -404,13 +433,13 @@ def inertia_problems(scenario) -> list[str]:
 def scenario_floors(scenario) -> dict[str, str]:
     """``{controller: its floor}`` for the scenario's controllers that have one, in their order (a
     controller that cannot be built is left out: :func:`controller_problems` reports it)."""
-    from adaptive_dd.controllers.plugins import DEFAULT_FLOOR
+    from adaptive_dd.controllers.plugins import floor_of
     from adaptive_dd.controllers.registry import scenario_controller
 
     out = {}
     for name in scenario.controllers:
         try:  # a plug-in that declares no floor is measured against ct_oracle, as the run does
-            floor = getattr(scenario_controller(scenario, name)[1], "floor", DEFAULT_FLOOR)
+            floor = floor_of(scenario_controller(scenario, name)[1])
         except Exception:  # a controller that cannot be built: controller_problems reports it
             continue
         if floor is not None:

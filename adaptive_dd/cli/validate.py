@@ -69,14 +69,15 @@ def _print_added_floors(sc) -> None:
 
 
 def _print_torque_peaks(sc) -> None:
-    from adaptive_dd.benchmark.preflight import torque_peaks
+    from adaptive_dd.benchmark.preflight import joint_units, torque_peaks
 
     peak, _, _ = torque_peaks(sc)
     limit = sc.arm.actuator.torque_limit
+    units = joint_units(sc.arm)
     print(
         "# peak |tau| along the reference (inverse dynamics, every payload): "
         + ", ".join(
-            f"joint{j + 1} {peak[j]:.4g} N m ({peak[j] / limit[j]:.0%} of its limit)"
+            f"joint{j + 1} {peak[j]:.4g} {units[j][2]} ({peak[j] / limit[j]:.0%} of its limit)"
             for j in range(peak.size)
         )
     )

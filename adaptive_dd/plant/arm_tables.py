@@ -306,7 +306,24 @@ def urdf_arm_from_table(src: str, table: dict, plant_kw: dict):
         _ = arm.sigma  # base parameters now, so that a singular model is reported here
     except (ParameterError, UrdfError) as exc:
         raise ScenarioError(f"{src}: [arm]/[plant]: {exc}") from None
+    _refuse_inertialess_joints(src, arm)
     return arm
+
+
+def _refuse_inertialess_joints(src: str, arm) -> None:
+    """A joint that moves no inertia about its axis at any of three postures (the links beyond it
+    without ``<inertial>``, or point masses on its axis, and no armature): the mass matrix is
+    singular and no controller or plant can run the arm."""
+    lim = np.clip(np.asarray(arm.position_limits, dtype=float), -np.pi, np.pi)
+    postures = [np.zeros(arm.n_joints)] + [lim[:, 0] + f * (lim[:, 1] - lim[:, 0]) for f in (0.3, 0.7)]
+    diag = np.max([np.diag(arm.mass_matrix(q)) for q in postures], axis=0)
+    for j in np.flatnonzero(~(diag > 1e-12 * max(1.0, float(np.nanmax(diag))))):
+        raise ScenarioError(
+            f"{src}: [arm] urdf: {arm.urdf}: joint {arm.joint_names[j]!r} moves no inertia about its axis "
+            f"(mass matrix diagonal {diag[j]:.3g}: the links beyond it have no <inertial>, or point masses "
+            "on its axis): the arm cannot be simulated or controlled. Give those links their <inertial>, "
+            "or state the drive's rotor inertia in [arm] armature"
+        )
 
 
 def _urdf_source(src: str, table: dict) -> tuple[Path, str | None]:

@@ -110,7 +110,7 @@ def _solve(
     float rows, factor and integer rows (:func:`_scratch`), read by index, no view taken (each view
     is a reference-count update). Friction: law 0 ``fc sgn(v)`` (``sdir`` at v == 0), else the
     smooth law. Returns False if ``M + diag(armature)`` restricted to the free joints is not
-    positive definite.
+    positive definite (the accelerations and holding torques then NaN).
     """
     n = v.shape[0]
     vc, ratio, vs = fp[0], fp[1], fp[2]
@@ -136,7 +136,10 @@ def _solve(
         d = m[j, j]
         for kk in range(jj):
             d -= lf[jj, kk] * lf[jj, kk]
-        if not d > 0.0:
+        if not d > 0.0:  # the step's state becomes NaN, caught by the callers' rules (no stale scratch)
+            for i in range(n):
+                rows[ia, i] = np.nan
+                rows[ih, i] = np.nan
             return False
         d = np.sqrt(d)
         lf[jj, jj] = d

@@ -326,6 +326,7 @@ def read_urdf(path: str | Path, payload_frame: str | None = None, repair: bool =
     """
     path = Path(path)
     root = _parse_robot(path)
+    _unique_names(path, root)
     links = {el.get("name"): el for el in root.findall("link")}
     if not links:
         raise UrdfError(f"{path}: no <link> element")
@@ -338,6 +339,14 @@ def read_urdf(path: str | Path, payload_frame: str | None = None, repair: bool =
         name = j.find("parent").get("link")
     chain.reverse()
     on_chain = {j.get("name") for j in chain}
+    for j in chain:
+        mimic = j.find("mimic")
+        if j.get("type") in _MOVABLE and mimic is not None:
+            raise UrdfError(
+                f"{path}: joint '{j.get('name')}' <mimic joint={mimic.get('joint')!r}>: a joint coupled to "
+                "another is not supported between the root and the payload frame (it would be simulated "
+                "and controlled as a joint of its own): make it fixed, or name another payload_frame"
+            )
     value_notes, changed = check_values(path, root, on_chain)  # every number's physical sense
     joints = tuple(_joint_info(path, j) for j in chain if j.get("type") in _MOVABLE)
     if not joints:
@@ -345,6 +354,12 @@ def read_urdf(path: str | Path, payload_frame: str | None = None, repair: bool =
     first = next(i for i, j in enumerate(chain) if j.get("type") in _MOVABLE)
     chain_links = [j.find("child").get("link") for j in chain[first:]]
     notes = value_notes + _check_inertias(path, links, chain_links, parent_of, repair)
+    notes += tuple(
+        f"link '{name}' has a shape but no <inertial>: read as massless (a forgotten <inertial>?)"
+        for name in chain_links
+        if links[name].find("inertial") is None
+        and (links[name].find("visual") is not None or links[name].find("collision") is not None)
+    )
     locked = tuple(
         j.get("name")
         for j in root.findall("joint")
@@ -353,6 +368,19 @@ def read_urdf(path: str | Path, payload_frame: str | None = None, repair: bool =
     changed = changed or any(n.startswith("repaired") for n in notes)
     xml = ET.tostring(root, encoding="unicode") if changed else None
     return UrdfRobot(path, joints, payload_frame, locked, notes, xml)
+
+
+def _unique_names(path: Path, root: ET.Element) -> None:
+    """Every link and joint named, each name once (Pinocchio refuses the file without saying why)."""
+    for tag in ("link", "joint"):
+        seen: set[str] = set()
+        for el in root.findall(tag):
+            name = el.get("name")
+            if not name:
+                raise UrdfError(f"{path}: a <{tag}> without a name: give it one (attribute 'name')")
+            if name in seen:
+                raise UrdfError(f"{path}: two <{tag}> elements named '{name}': a {tag}'s name must be unique")
+            seen.add(name)
 
 
 def _parse_robot(path: Path) -> ET.Element:

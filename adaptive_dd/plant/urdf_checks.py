@@ -35,6 +35,7 @@ import numpy as np
 from adaptive_dd.errors import UrdfError
 
 __all__ = [
+    "GYRATION_NOTE",
     "HEAVY_LINK_MASS",
     "MAX_EFFORT",
     "MAX_FRICTION",
@@ -53,6 +54,7 @@ MAX_LINK_MASS = 1e4  # kg: ten tonnes, beyond the heaviest industrial robot's he
 TINY_MASS = 1e-6  # kg: a milligram, below any real link (a massless frame leaves <inertial> out)
 HEAVY_LINK_MASS = 500.0  # kg: above an arm's links ([arm] bounds), a vendor's heavy base: a note
 MAX_OFFSET = 10.0  # m: a joint origin, a centre of mass, a radius of gyration
+GYRATION_NOTE = 1.0  # m: a link's radius of gyration beyond this is noted (an arm's links: < 0.5 m)
 MAX_EFFORT = 1e5  # N m or N: as a scenario's [arm] torque_limit
 MAX_VELOCITY = 1e3  # rad/s or m/s: about 10 000 rpm at the joint
 MAX_POSITION = 1e3  # rad or m: a joint limit beyond this is no limit
@@ -180,6 +182,11 @@ def _check_link(path: Path, link: ET.Element, notes: list[str]) -> None:
         k: scalar(path, f"{where} <inertia>", el, k) for k in ("ixx", "iyy", "izz", "ixy", "ixz", "iyz")
     }
     biggest = max(abs(v) for v in moments.values() if v is not None) if any(moments.values()) else 0.0
+    if mass * GYRATION_NOTE**2 < biggest <= mass * MAX_OFFSET**2:
+        notes.append(
+            f"link '{name}': a moment of {biggest:.4g} kg m^2 for {mass:g} kg is a radius of gyration of "
+            f"{math.sqrt(biggest / mass):.3g} m, beyond {GYRATION_NOTE:g} m: a unit error? (kept)"
+        )
     if biggest > mass * MAX_OFFSET**2:
         key = max((k for k in moments if moments[k] is not None), key=lambda k: abs(moments[k]))
         raise UrdfError(
@@ -238,13 +245,19 @@ def _check_joint(path: Path, joint: ET.Element, on_chain: bool, notes: list[str]
     lim, dyn = joint.find("limit"), joint.find("dynamics")
     values = {k: scalar(path, f"{where} <limit>", lim, k) for k in ("effort", "velocity", "lower", "upper")}
     values |= {k: scalar(path, f"{where} <dynamics>", dyn, k) for k in ("damping", "friction")}
-    for k in ("damping", "friction"):
-        v = values[k]
-        if v is not None and not 0 <= v <= MAX_FRICTION:
-            raise UrdfError(
-                f"{path}: {where} <dynamics>: {k} = {dyn.get(k)!r} must be in [0, {MAX_FRICTION:g}] "
-                f"({'N m s/rad' if k == 'damping' else 'N m'})"
-            )
+    bad = [k for k in ("damping", "friction") if values[k] is not None and not 0 <= values[k] <= MAX_FRICTION]
+    if bad:
+        units = {"damping": "N m s/rad", "friction": "N m"}
+        raise UrdfError(
+            f"{path}: {where} <dynamics>: "
+            + " and ".join(f"{k} = {dyn.get(k)!r}" for k in bad)
+            + f" must be in [0, {MAX_FRICTION:g}] ({', '.join(units[k] for k in bad)})"
+        )
+    if lim is None and kind in ("revolute", "prismatic"):  # Pinocchio refuses the file without a word
+        raise UrdfError(
+            f"{path}: {where}: <limit> is missing (URDF requires it on a {kind} joint: effort, velocity, "
+            "lower, upper)" + ("" if on_chain else "; the joint is off the arm's chain, locked at 0")
+        )
     if lim is not None and kind in ("revolute", "prismatic"):
         for k in ("effort", "velocity"):  # urdfdom refuses a limit without them
             if values[k] is None:
