@@ -99,7 +99,10 @@ def plot_tracking_errors(res, path: str | Path | None = None, window: float = 0.
     ax.set_xlabel("t [s]")
     ax.set_ylabel(f"tracking error |q_d - q|, {window * 1e3:.0f} ms RMS [mrad]")
     ax.grid(alpha=0.3, which="both")
-    ax.legend(fontsize=8, ncol=3)
+    if ax.get_legend_handles_labels()[1]:
+        ax.legend(fontsize=8, ncol=3)
+    else:  # every trial of every controller failed (the report says why)
+        ax.text(0.5, 0.5, "every trial failed", transform=ax.transAxes, ha="center", va="center")
     fig.suptitle(
         f"Tracking error of every controller on {res.scenario.name}: {window * 1e3:.0f} ms moving RMS "
         "[mrad] against time [s], mean over seeds, payload [kg] above each segment",
@@ -245,7 +248,8 @@ def _finish_estimates(fig, axes, res, title: str, path, formats):
     for ax in axes.flat:
         ax.grid(alpha=0.3)
         _mark_swaps(ax, res.t, res.mass)
-    axes.flat[0].legend(fontsize=8)
+    if axes.flat[0].get_legend_handles_labels()[1]:
+        axes.flat[0].legend(fontsize=8)
     for ax in axes[-1]:
         ax.set_xlabel("t [s]")
     fig.suptitle(
@@ -335,7 +339,10 @@ def plot_joint_errors(res, path: str | Path | None = None, window: float = 0.05,
             axes.flat[last].set_xlabel("t [s]")
             axes.flat[last].xaxis.set_tick_params(labelbottom=True)
     handles, labels = axes.flat[0].get_legend_handles_labels()
-    fig.legend(handles, labels, loc="lower center", ncol=min(len(labels), 4), fontsize=8)
+    if labels:
+        fig.legend(handles, labels, loc="lower center", ncol=min(len(labels), 4), fontsize=8)
+    else:  # every controller's first trial failed: nothing to draw (the report says why)
+        fig.text(0.5, 0.5, "every controller's trial failed on this seed", ha="center", va="center")
     fig.suptitle(f"Tracking error per joint (seed {res.seed_indices[0]})")
     fig.tight_layout(rect=(0, 0.06, 1, 0.97))
     if path is not None:

@@ -8,6 +8,7 @@ from __future__ import annotations
 import json
 from importlib import resources
 from pathlib import Path
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -247,7 +248,8 @@ def test_benchmark_warns_of_a_reference_beyond_the_joint_limits(tmp_path, capsys
     import adaptive_dd.cli.benchmark as cli_benchmark
 
     ran = []
-    monkeypatch.setattr(cli_benchmark, "_benchmark", lambda args, sc, outputs: ran.append(sc) or [])
+    no_run = SimpleNamespace(runs={})
+    monkeypatch.setattr(cli_benchmark, "_benchmark", lambda args, sc, outputs: (ran.append(sc) or [], no_run))
     assert main(["benchmark", UR5, "--out", str(tmp_path / "ok"), "--no-progress"]) == 0
     assert "warning:" not in capsys.readouterr().err  # a shipped scenario: within its limits
     text = (ROOT / "adaptive_dd" / "scenarios" / "vertical3_payload_exact.toml").read_text()

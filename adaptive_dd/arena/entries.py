@@ -12,7 +12,7 @@ def _with_floors(sc, names: Sequence[str]) -> tuple[tuple[str, ...], dict, dict,
     """The names to run (each asked-for one and its floor), each one's floor by the label its
     results carry, why a floor that does not build is missing (its row then has no ratio and says
     so), and the law each asked-for one runs by its label (a variant's ``law``, else its own name)."""
-    from adaptive_dd.controllers.plugins import DEFAULT_FLOOR, table_name
+    from adaptive_dd.controllers.plugins import floor_of, table_name
     from adaptive_dd.controllers.registry import law_of, scenario_controller
 
     floors: dict[str, str | None] = {}
@@ -25,7 +25,7 @@ def _with_floors(sc, names: Sequence[str]) -> tuple[tuple[str, ...], dict, dict,
         except ParameterError as exc:  # named by its file once (a plug-in's table names it already)
             where = "" if str(exc).startswith(str(sc.source)) else f"{sc.source}: "
             raise ParameterError(f"leaderboard: {where}{exc}") from None
-        floor = floors[label] = getattr(ctrl, "floor", DEFAULT_FLOOR)
+        floor = floors[label] = floor_of(ctrl)
         laws[label] = law_of(name, sc.options(table_name(name)))
         if floor is not None and floor not in run and floor not in missing:
             try:

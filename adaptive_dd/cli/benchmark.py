@@ -91,12 +91,19 @@ def run(args: argparse.Namespace) -> int:
         print(line, file=sys.stderr)
     outputs = OutputSet(args.out, extras=(args.json,) if args.json else ())
     with outputs:
-        written = _benchmark(args, sc, outputs)
+        written, res = _benchmark(args, sc, outputs)
     print("wrote " + ", ".join(str(w) for w in written))
+    if res.runs and all(run.error or all(run.failed) for run in res.runs.values()):
+        print(
+            "adaptive-dd benchmark: every trial of every controller failed (the report's failed trials "
+            "say why and when): no result to compare",
+            file=sys.stderr,
+        )
+        return 1
     return 0
 
 
-def _benchmark(args: argparse.Namespace, sc, outputs) -> list[Path]:
+def _benchmark(args: argparse.Namespace, sc, outputs) -> tuple[list[Path], object]:
     from adaptive_dd._numba_cache import announce_compilation
     from adaptive_dd.benchmark.metrics import compute_metrics, release_error_norm
     from adaptive_dd.benchmark.report import format_report, write_csv, write_json
@@ -126,7 +133,7 @@ def _benchmark(args: argparse.Namespace, sc, outputs) -> list[Path]:
 
         plant_frame(res).to_csv(outputs.path("plant.csv"), index=False)
         written.append(out / "plant.csv")
-    return written
+    return written, res
 
 
 def _figures(res, sc, outputs, out: Path, fmts: tuple) -> list[Path]:

@@ -266,7 +266,8 @@ def apply_sample(
         for j in range(n):
             cmd[j] = 0.0
     mask = actuate_trial(cmd, lim, lsb, saturate, quantize_dac, tau)
-    if failed[i]:
+    if failed[i]:  # stopped at rest: nothing applied, nothing saturated (the flags' fractions)
+        mask = 0
         for j in range(n):
             tau[j] = 0.0
     keep = i < q_rec.shape[0]

@@ -223,4 +223,5 @@ def declared(ctrl, attr: str):
     if attr == "adaptive":
         return declared(ctrl, "sigma_hat") is not None
     default = type(ctrl).__name__ if attr == "name" else DECLARED[attr]
-    return getattr(ctrl, attr, default)
+    value = getattr(ctrl, attr, default)
+    return None if attr == "floor" and value is False else value  # floor = False: none, as in a table

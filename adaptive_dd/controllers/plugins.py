@@ -32,6 +32,7 @@ __all__ = [
     "check_controller_object",
     "compiled_form",
     "controller_label",
+    "floor_of",
     "floor_setting",
     "is_compiled",
     "load_controller_class",
@@ -61,6 +62,21 @@ def floor_setting(table: str, value) -> str | None:
     return value
 
 
+def floor_of(ctrl) -> str | None:
+    """The floor a controller object declares: its ``floor`` (a class attribute or the table's
+    setting), :data:`DEFAULT_FLOOR` when it has none, None for ``None`` or ``False``; anything else
+    is a :class:`ParameterError` naming the class."""
+    value = getattr(ctrl, "floor", DEFAULT_FLOOR)
+    if value is None or value is False:
+        return None
+    if not isinstance(value, str) or not value.strip():
+        raise ParameterError(
+            f"{type(ctrl).__name__}.floor = {value!r}: the name of one of the run's controllers (its "
+            "error divides this one's in the report), or None (False) for none"
+        )
+    return value
+
+
 def controller_label(spec: str, options: dict | None = None) -> str:
     """The name results carry: the ``label`` setting, the built-in name, or the class name."""
     if options and "label" in options:
@@ -75,9 +91,10 @@ def plugin_search(source, origin: str | None = None) -> tuple:
     from pathlib import Path
 
     src = Path(str(source))
-    if origin is not None:
-        return (Path(origin), Path.cwd())
-    return (src.parent, Path.cwd()) if src.is_file() else (Path.cwd(),)
+    first = Path(origin) if origin is not None else src.parent if src.is_file() else None
+    if first is None or first.resolve() == Path.cwd().resolve():  # the same folder named once
+        return (Path.cwd(),)
+    return (first, Path.cwd())
 
 
 def load_controller_class(path: str, search: tuple = ()) -> type:
@@ -185,6 +202,10 @@ def check_controller_object(where: str, what: str, obj) -> None:
             f"{where}: {what} ({type(obj).__name__}) is not a controller: it needs reset, command and "
             f"observe; missing {missing} (docs: controllers, 'Your own controller: the protocol')"
         )
+    try:
+        floor_of(obj)
+    except ParameterError as exc:
+        raise ParameterError(f"{where}: {what}: {exc}") from None
 
 
 def table_name(name: str) -> str:
@@ -250,6 +271,7 @@ def _plugin(spec: str, g: Gains, options: dict, given: dict, search: tuple) -> C
         )
     if not takes_any:
         unknown_settings(spec, kw, set(params) - set(PLUGIN_GIVEN))
+    _check_setting_types(spec, params, kw)
     if "gains" in params or takes_any:
         kw["gains"] = g
     kw.update({k: v for k, v in given.items() if k in params})
@@ -267,10 +289,43 @@ def _plugin(spec: str, g: Gains, options: dict, given: dict, search: tuple) -> C
         raise ParameterError(f"controllers.{table_name(spec)}: {type(exc).__name__}: {exc}{hint}") from None
     if not getattr(ctrl, "name", None) or ctrl.name == Controller.name:  # none declared: the class name
         ctrl.name = controller_label(spec)
+    try:
+        floor_of(ctrl)
+    except ParameterError as exc:
+        raise ParameterError(f"controllers.{table_name(spec)}: {exc}") from None
     if given.get("arm") is not None and is_compiled(ctrl):
         if getattr(given["arm"], "chain", None) is None:  # the closed forms' record: no compiled loop for it
             return PythonForm(ctrl.name, ctrl, given["arm"], CLOSED_FORMS)
     return ctrl
+
+
+def _check_setting_types(spec: str, params, kw: dict) -> None:
+    """A setting of another kind than its ``__init__`` default (a number given as text or as
+    true/false, true/false as a number): a :class:`ParameterError` naming the table, the key, the value
+    and the default (the class's own error named neither, and ``kp = true`` ran as 1.0)."""
+    for key, value in kw.items():
+        p = params.get(key)
+        if p is None or p.default is inspect.Parameter.empty or p.default is None:
+            continue
+        d = p.default
+        number = isinstance(d, int | float | np.number) and not isinstance(d, bool | np.bool_)
+        wrong = (number and (isinstance(value, bool | str) or not _is_number_like(value))) or (
+            isinstance(d, bool) and not isinstance(value, bool)
+        )
+        if wrong:
+            kind = "true or false" if isinstance(d, bool) else "a number (or a list of numbers)"
+            raise ParameterError(
+                f"controllers.{table_name(spec)}.{key} = {value!r}: {kind} (the class's default is {d!r})"
+            )
+
+
+def _is_number_like(value) -> bool:
+    """A number, or a (nested) list of numbers (a per-joint setting)."""
+    if isinstance(value, bool | str):
+        return False
+    if isinstance(value, list | tuple):
+        return all(_is_number_like(v) for v in value)
+    return isinstance(value, int | float | np.number)
 
 
 CLOSED_FORMS = "the paper's closed-form two-link runtime"
@@ -457,7 +512,7 @@ class PythonForm:
 
     def __init__(self, name: str, ctrl, arm, why: str) -> None:
         self.name, self.ctrl, self.arm, self.why = name, ctrl, arm, why
-        self.floor = getattr(ctrl, "floor", DEFAULT_FLOOR)
+        self.floor = floor_of(ctrl)
         self.needs_true_model = bool(getattr(ctrl, "needs_true_model", False))
         self.form: PluginForm | None = None
 
