@@ -32,10 +32,13 @@ import numpy as np
 import pandas as pd
 
 from adaptive_dd.benchmark.scenario import Scenario
-from adaptive_dd.sweep_keys import _task_key
+from adaptive_dd.sweep_keys import _code_id, _task_key
+from adaptive_dd.sweep_ratios import FLOOR_FAR, SEEDS_FAILED, ratio_medians
 from adaptive_dd.sweep_spec import Sweep, cell_scenario, mark_gains_apart
 
 __all__ = [
+    "FLOOR_FAR",
+    "SEEDS_FAILED",
     "WORKER_ENV",
     "SweepResult",
     "Task",
@@ -142,6 +145,7 @@ class Task:
     controller: str
     settings: tuple[tuple[str, Any], ...]
     seeds: tuple[int, ...]
+    code: str = ""  # the planning process's _code_id (part of ``key``); a worker on other code refuses
 
 
 def plan_tasks(sweep: Sweep) -> tuple[dict[str, Task], list[tuple[int, str, str]]]:
@@ -161,7 +165,7 @@ def plan_tasks(sweep: Sweep) -> tuple[dict[str, Task], list[tuple[int, str, str]
             settings = tuple(sorted(p.settings_for(c).items()))
             for block in sweep.seed_blocks():
                 key = _task_key(p.scenario, c, settings, block)
-                tasks.setdefault(key, Task(key, p.scenario, c, settings, block))
+                tasks.setdefault(key, Task(key, p.scenario, c, settings, block, _code_id()))
                 cells.append((p.index, c, key))
     return tasks, cells
 
@@ -186,8 +190,18 @@ def failed_rows(task: Task, message: str) -> list[dict]:
     ]
 
 
+_LOADED_CODE = _code_id()
+"""The package's sources as this process imported them (a long-lived worker keeps its modules)."""
+
+
 def execute_task(task: Task) -> list[dict]:
     """Run a task on a worker; an exception becomes failed rows with its message."""
+    if task.code and task.code != _LOADED_CODE:  # its rows would be cached under the other code's key
+        return failed_rows(
+            task,
+            f"worker runs other adaptive_dd code ({_LOADED_CODE}) than the sweep's ({task.code}): "
+            "restart the Dask workers so that they import the same version",
+        )
     try:
         return run_cell(task.scenario, task.controller, task.seeds, dict(task.settings))
     except Exception as exc:  # recorded in the table, never kills the sweep
@@ -444,7 +458,7 @@ def _run_on_dask(todo, cells_dir: Path, ext: str, scheduler, workers, client, pr
                     f"(`dask worker {address}`) or run without --scheduler (a local cluster)"
                 ) from None
             n = len(client.scheduler_info().get("workers", {}))
-        print(f"running {len(todo)} task(s) on {where}, {n} worker(s)", flush=True)
+        print(f"running {len(todo)} task(s) on {where}, {n} worker(s); {_estimate(todo, n)}", flush=True)
         return _run_tasks(todo, cells_dir, ext, client, progress)
     finally:
         # the scheduler's warnings about the workers it loses as they stop (on Ctrl-C: a hundred task
@@ -464,6 +478,29 @@ def _run_on_dask(todo, cells_dir: Path, ext: str, scheduler, workers, client, pr
                 cluster.close()
         finally:
             quiet.setLevel(level)
+
+
+def _estimate(todo: list[Task], n_workers: int) -> str:
+    """A rough wall time of the tasks on ``n_workers``: the benchmark's estimate of each distinct
+    kind of task, its set-up and a cold cache's compilation once per worker (a guide, not a
+    promise)."""
+    import dataclasses
+
+    from adaptive_dd.benchmark.scenario_base import _duration
+
+    seen: dict[tuple, tuple[float, float]] = {}
+    run = once = 0.0
+    for t in todo:
+        sc = t.scenario
+        kind = (sc.n_samples, len(t.seeds), sc.n_joints, sc.closed_forms is None)
+        key = (t.controller, repr(t.settings), *kind)  # repr: a vector setting is a list
+        if key not in seen:
+            cell = dataclasses.replace(cell_scenario(sc, t.controller, dict(t.settings)), seeds=len(t.seeds))
+            e = cell.estimate()
+            seen[key] = (e.seconds - e.compile_seconds - e.setup_seconds, e.compile_seconds + e.setup_seconds)
+        run += seen[key][0]
+        once = max(once, seen[key][1])
+    return f"estimate: about {_duration(run / max(n_workers, 1) + once)} (a guide, not a promise)"
 
 
 def _heatmaps(sweep: Sweep, table: pd.DataFrame, out: Path) -> tuple[pd.DataFrame | None, list]:
@@ -505,94 +542,3 @@ def _assemble(sweep: Sweep, cells, cells_dir: Path, ext: str, lost: dict) -> pd.
         df["task"] = key
         parts.append(df)
     return pd.concat(parts, ignore_index=True)
-
-
-FLOOR_FAR = 5.0
-"""A cell whose floor's median RMS error in the heat map's segment exceeds this many times its own
-in the first segment (before any swap, the same grid point and seeds) is marked: the floor is
-not tracking as the law with the true model does, and a ratio to it says little."""
-
-
-def ratio_medians(table: pd.DataFrame, heatmap: Mapping[str, Any], axes: Sequence[str]) -> pd.DataFrame:
-    """Per grid point: the median over seeds of ``rms(adaptive) / rms(floor)`` in one segment,
-    and whether the floor there is a floor.
-
-    The ratio is formed per seed (both controllers ran on that seed's noise), then the
-    median is taken over the seeds where both trials finished the segment. A cell is marked
-    (``marked`` says why; empty when not) when its floor saturates (its saturation fraction in
-    the segment, the mean over seeds, beyond :data:`~adaptive_dd.benchmark.metrics.SATURATION_LIMIT`:
-    the benchmark's rule) or is far from its own nominal error (its median RMS error more than
-    :data:`FLOOR_FAR` times its median in the first segment, before any swap).
-
-    Parameters
-    ----------
-    table : DataFrame
-        The sweep's table (:func:`run_sweep`).
-    heatmap : mapping
-        ``adaptive``, ``floor`` (controller names) and ``segment`` (index).
-    axes : sequence of str
-        The grid axes (columns of the table).
-
-    Returns
-    -------
-    DataFrame
-        One row per grid point: ``point``, the axes, ``ratio`` (NaN if no seed
-        finished), ``n_seeds`` (seeds in the median), the floor's median ``floor_rms`` [rad] in
-        the segment, ``floor_nominal_rms`` [rad] in the first segment, ``floor_saturation``
-        [fraction of samples, the mean over seeds] in the segment (NaN where the table has none)
-        and ``marked``.
-
-    Examples
-    --------
-    >>> import pandas as pd
-    >>> from adaptive_dd.sweep import ratio_medians
-    >>> table = pd.DataFrame({
-    ...     "point": [0] * 6, "payload_mass": [3.0] * 6, "segment": [1, 1, 1, 1, 0, 0],
-    ...     "seed": [0, 0, 1, 1, 0, 1], "controller": ["adaptive_ct", "ct_oracle"] * 2 + ["ct_oracle"] * 2,
-    ...     "rms_error": [1.2e-4, 1e-4, 1.1e-4, 1e-4, 1e-4, 1e-4]})
-    >>> heatmap = {"adaptive": "adaptive_ct", "floor": "ct_oracle", "segment": 1}
-    >>> ratio_medians(table, heatmap, ["payload_mass"])[["payload_mass", "ratio", "n_seeds", "marked"]]
-       payload_mass  ratio  n_seeds marked
-    0           3.0   1.15        2
-    """
-    from adaptive_dd.benchmark.metrics import SATURATION_LIMIT
-
-    seg = table[table["segment"] == heatmap["segment"]]
-    cols = ["point", "seed"]
-    a = seg[seg["controller"] == heatmap["adaptive"]].set_index(cols)["rms_error"]
-    f = seg[seg["controller"] == heatmap["floor"]].set_index(cols)["rms_error"]
-    per_seed = (a / f).rename("ratio").reset_index()
-    per_seed = per_seed[np.isfinite(per_seed["ratio"])]
-    med = per_seed.groupby("point")["ratio"].agg(["median", "count"])
-    points = table.drop_duplicates("point").set_index("point")[list(axes)]
-    out = points.join(med).rename(columns={"median": "ratio", "count": "n_seeds"})
-    out["n_seeds"] = out["n_seeds"].fillna(0).astype(int)
-    floor = table[table["controller"] == heatmap["floor"]]
-    here = floor[floor["segment"] == heatmap["segment"]].groupby("point")
-    out["floor_rms"] = here["rms_error"].median()
-    out["floor_nominal_rms"] = floor[floor["segment"] == 0].groupby("point")["rms_error"].median()
-    if "saturation_fraction" in floor:
-        out["floor_saturation"] = here["saturation_fraction"].mean()  # the report's: a mean over seeds
-    else:
-        out["floor_saturation"] = np.nan
-    out["marked"] = [
-        _mark(r, heatmap["floor"], heatmap["segment"], SATURATION_LIMIT) for _, r in out.iterrows()
-    ]
-    return out.reset_index()
-
-
-def _mark(r, floor: str, segment: int, sat_limit: float) -> str:
-    """Why a cell's ratio is not against a floor (:func:`ratio_medians`); empty when it is."""
-    why = []
-    if r["floor_saturation"] > sat_limit:
-        why.append(
-            f"{floor} saturated in {100 * r['floor_saturation']:.3g} % of the segment's samples "
-            f"(limit {100 * sat_limit:g} %)"
-        )
-    far = r["floor_rms"] / r["floor_nominal_rms"]
-    if segment != 0 and far > FLOOR_FAR:
-        why.append(
-            f"{floor} at {1e3 * r['floor_rms']:.3g} mrad, {far:.3g} x its {1e3 * r['floor_nominal_rms']:.3g} "
-            f"mrad before the swap (limit {FLOOR_FAR:g} x)"
-        )
-    return "; ".join(why)

@@ -18,8 +18,8 @@ A sweep file is TOML::
     bandwidth = [30.0, 40.0]               # rad/s (control.bandwidth)
     noise_scale = [1.0, 4.0]               # multiplies both noise variances
 
-    [grid.controller.adaptive_ct]  # controller settings, passed on as an opaque dict
-    tau_f = [0.006, 0.01]
+    [grid.controller.adaptive_ct]  # controller settings, each checked as in a scenario's table
+    boost_bandwidth = [150.0, 300.0]
 
     [heatmap]                      # optional; defaults shown
     x = "payload_mass"             # grid axes (default: the first two with > 1 value;
@@ -28,7 +28,8 @@ A sweep file is TOML::
     floor = "ct_oracle"
     segment = 1                    # segment index (default: the one starting at payload `swap`)
 
-Axis names of controller settings are ``"<controller>.<key>"`` (e.g. ``"adaptive_ct.tau_f"``).
+Axis names of controller settings are ``"<controller>.<key>"`` (e.g.
+``"adaptive_ct.boost_bandwidth"``).
 Every grid point is checked when the file is read (swap times increasing and before the
 end, masses >= 0, ...): errors name the file, the key and the reason.
 """
@@ -236,7 +237,8 @@ def _values(src: str, key: str, v: Any, *, numeric: bool) -> tuple[Any, ...]:
     for x in v:
         if numeric and (isinstance(x, bool) or not isinstance(x, int | float)):
             raise SweepError(f"{src}: key '{key}': values must be numbers, got {x!r}")
-    if len(set(map(repr, v))) != len(v):
+    same = [float(x) if isinstance(x, int | float) and not isinstance(x, bool) else x for x in v]  # 1 == 1.0
+    if len(set(map(repr, same))) != len(v):
         raise SweepError(f"{src}: key '{key}' lists a value twice: {v!r}")
     return tuple(float(x) for x in v) if numeric else tuple(v)
 
@@ -442,14 +444,21 @@ def parse_sweep(data: dict, src: str = "<memory>", base_dir: str | Path = ".") -
         raise SweepError(f"{src}: [sweep] must be a table")
     for key in sw:
         if key not in _SWEEP_KEYS:
-            raise SweepError(f"{src}: unknown key 'sweep.{key}'; allowed: {sorted(_SWEEP_KEYS)}")
+            from adaptive_dd.benchmark.key_hints import did_you_mean
+
+            raise SweepError(
+                f"{src}: unknown key 'sweep.{key}'{did_you_mean(key, _SWEEP_KEYS)}; allowed: "
+                f"{sorted(_SWEEP_KEYS)}"
+            )
     base, duration = _base_scenario(src, sw, Path(base_dir))
-    if "seed" in sw:
-        base = dataclasses.replace(base, seed=_int(src, "sweep.seed", sw["seed"], 0))
     seeds = _int(src, "sweep.seeds", sw.get("seeds", base.seeds), 1)
     block = _int(src, "sweep.block", sw.get("block", seeds), 1)
     ctrls = _controllers(src, sw, base)
-    base = dataclasses.replace(base.with_controllers(ctrls), seeds=seeds)
+    seed = _int(src, "sweep.seed", sw["seed"], 0) if "seed" in sw else base.seed
+    try:  # the scenario's own bounds on them, named as the sweep's keys
+        base = dataclasses.replace(base.with_controllers(ctrls), seeds=seeds, seed=seed)
+    except ScenarioError as exc:
+        raise SweepError(f"{src}: key 'sweep.seeds' = {seeds} or 'sweep.seed' = {seed}: {exc}") from None
     axes = _axes(src, data.get("grid", {}), ctrls)
     swap = _int(src, "sweep.swap", sw.get("swap", 0), 0)
     if any(a in ("payload_mass", "swap_time") for a, _ in axes) and swap >= len(base.swap_times):

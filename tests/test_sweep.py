@@ -889,3 +889,57 @@ def test_a_cell_whose_law_and_floor_run_at_two_bandwidths_is_marked_and_said(tmp
     assert err.count("warning: grid point") == len(at_20) and "ct_nominal.bandwidth = 20.0" in err
     table = pd.read_csv(tmp_path / "out" / "ratios.csv")
     assert table["marked"].fillna("").str.contains("two gains").sum() == len(at_20)
+
+
+# ---- a large study's walk-through -------------------------------------------------------------
+
+
+def test_a_cell_where_some_seeds_failed_is_marked_not_a_ratio_of_the_survivors():
+    """A cell where the law failed on half its seeds printed the survivors' median unmarked."""
+    rows = []
+    for seed, (a, f) in enumerate([(1.2, 1.0), (np.nan, 1.0)]):  # seed 1: the law's trial failed
+        for c, v in (("adaptive_ct", a), ("ct_oracle", f)):
+            rows.append({"point": 0, "m": 1.0, "controller": c, "seed": seed, "segment": 1, "rms_error": v})
+            rows.append({"point": 0, "m": 1.0, "controller": c, "seed": seed, "segment": 0, "rms_error": 1.0})
+    r = ratio_medians(
+        pd.DataFrame(rows), {"adaptive": "adaptive_ct", "floor": "ct_oracle", "segment": 1}, ["m"]
+    )
+    assert r["ratio"].item() == pytest.approx(1.2) and r["n_seeds"].item() == 1
+    assert (
+        r["marked"].item()
+        == "1 of 2 seeds' trials failed (or their floor's did): the median is over the others"
+    )
+
+
+def test_a_worker_on_other_code_refuses_its_task():
+    """Long-lived Dask workers that imported other code ran the task and its rows were cached under
+    the new code's key."""
+    task = sweep_mod.Task("k", load_scenario(), "ct_oracle", (), (0,), code="other")
+    rows = sweep_mod.execute_task(task)
+    assert rows and all(r["failed"] for r in rows)
+    assert (
+        "worker runs other adaptive_dd code" in rows[0]["error"]
+        and "restart the Dask workers" in rows[0]["error"]
+    )
+
+
+def test_a_value_given_twice_as_int_and_float_and_the_seeds_bound_are_named(tmp_path):
+    with pytest.raises(SweepError, match=r"lists a value twice: \[1, 1.0\]"):
+        load_sweep(_write(tmp_path, SWEEP.replace("[1.0, 6.0]", "[1, 1.0]")))
+    with pytest.raises(SweepError, match=r"key 'sweep.seeds' = 100000000 .*must be in \[1, 10000\]"):
+        load_sweep(_write(tmp_path, SWEEP.replace("seeds = 2", "seeds = 100000000")))
+    with pytest.raises(SweepError, match=r"unknown key 'sweep.seedz' \(did you mean 'seed' or 'seeds'"):
+        load_sweep(_write(tmp_path, SWEEP.replace("seeds = 2", "seedz = 2")))
+
+
+def test_the_sweep_prints_an_estimate_and_every_column(tmp_path, capsys):
+    import re
+
+    from adaptive_dd.cli import main
+
+    text = SWEEP.replace("[1.0, 6.0]", "[" + ", ".join(f"{0.25 * k:.2f}" for k in range(1, 15)) + "]")
+    text = text.replace("swap_time = [0.08, 0.12]", "swap_time = [0.08]").replace("seeds = 2", "seeds = 1")
+    assert main(["sweep", str(_write(tmp_path, text)), "--out", str(tmp_path / "out"), "--workers", "1"]) == 0
+    out = capsys.readouterr().out
+    assert re.search(r"running \d+ task\(s\) on .*worker\(s\); estimate: about [\d.]+ (s|min)", out), out
+    assert "..." not in out and "3.50" in out and "0.25" in out  # all 14 columns, none elided

@@ -145,6 +145,8 @@ class RunEstimate:
     seconds: float
     compile_seconds: float = 0.0
     excite_seconds: float = 0.0
+    setup_seconds: float = 0.0
+    """Of ``seconds``, what a run spends once around its trials (imports, loading the kernels)."""
 
     @property
     def large(self) -> bool:
@@ -247,4 +249,4 @@ def run_estimate(
         excite = loop + _EXCITE_DESIGN_SECONDS_JOINT2 * nj2 + ident
     setup = _SETUP_SECONDS if n_joints is None else _SETUP_SECONDS_GENERAL + _SETUP_SECONDS_JOINT2 * n2
     total = setup + secs + excite + compile_seconds
-    return RunEstimate(int(n_samples), int(trials), nbytes, total, float(compile_seconds), excite)
+    return RunEstimate(int(n_samples), int(trials), nbytes, total, float(compile_seconds), excite, setup)

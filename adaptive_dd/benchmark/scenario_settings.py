@@ -261,6 +261,7 @@ def controller_setting_errors(
                 continue
             if not math.isfinite(x) or (file_limits and abs(x) > LIMITS["max_setting"]):
                 errs.append(f"{key}: must be finite and within +-{LIMITS['max_setting']:g}, got {x!r}")
+                said.add(key)  # a list's elements: its first bad one, once
         if len(errs) > n0:
             continue
         try:

@@ -114,7 +114,12 @@ def main(argv: list[str] | None = None) -> int:
     try:
         return int(args.func(args))
     except KeyboardInterrupt:
-        print(f"adaptive-dd {args.command}: interrupted; outputs left as before", file=sys.stderr)
+        kept = (
+            "; the finished cells are kept in OUT/cells: the same command resumes from them"
+            if args.command == "sweep"
+            else ""
+        )
+        print(f"adaptive-dd {args.command}: interrupted; outputs left as before{kept}", file=sys.stderr)
         return EXIT_INTERRUPTED
     except BrokenPipeError:  # the reader stopped early (| head): quiet, as a tool killed by SIGPIPE
         import os

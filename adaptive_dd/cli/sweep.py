@@ -108,14 +108,16 @@ def _print_heatmap(res, sweep) -> None:
                 # str: a float's shortest exact form (0.005, not 0.0050000000000000001)
                 where = ", ".join(f"{a} = {v}" for a, v in zip(other, values, strict=True))
                 print(f"{where} (heatmap_{i}.png):")
-            table = part.pivot_table(index=rows, columns=hm["x"], values="ratio", aggfunc="median")
+            table = part.pivot_table(
+                index=rows, columns=hm["x"], values="ratio", aggfunc="median", dropna=False
+            )
             marks = part.assign(is_marked=part["marked"] != "").pivot_table(
-                index=rows, columns=hm["x"], values="is_marked", aggfunc="any"
+                index=rows, columns=hm["x"], values="is_marked", aggfunc="any", dropna=False
             )
             stars = marks.reindex_like(table).replace({True: " *", False: ""}).fillna("")
             if hm["y"] is None:
                 table.index.name = stars.index.name = None
-            print(table.round(3).astype(str) + stars)
+            print((table.round(3).astype(str) + stars).to_string())  # every column, whatever the terminal
         _print_marks(r, hm)
         from adaptive_dd.benchmark.metrics import floor_caveat
 
@@ -129,10 +131,17 @@ def _print_marks(r, hm) -> None:
     m = r["marked"] != ""
     print(
         f"{int(m.sum())} of {len(r)} cells marked ({hm['floor']} saturated or far from its own error "
-        f"before the swap: its ratio is not against a floor; the why per cell in ratios.csv)"
+        f"before the swap, at other gains, or seeds failed: the ratio is not against a floor over "
+        f"every seed; the why per cell in ratios.csv)"
     )
     from adaptive_dd.benchmark.metrics import SATURATION_LIMIT
-    from adaptive_dd.sweep import FLOOR_FAR
+    from adaptive_dd.benchmark.preflight import GAINS_APART
+    from adaptive_dd.sweep import FLOOR_FAR, SEEDS_FAILED
+
+    for what, needle in ((f"at other gains than {hm['floor']}", GAINS_APART), ("seeds failed", SEEDS_FAILED)):
+        k = int(r["marked"].str.contains(needle, regex=False).sum())
+        if k:
+            print(f"  {k} cells: {what} (ratios.csv's marked column says how)")
 
     sat = r.loc[m & (r["floor_saturation"] > SATURATION_LIMIT), "floor_saturation"] * 100
     if len(sat):
