@@ -489,3 +489,18 @@ def test_a_prismatic_joints_limits_and_effort_are_in_metres_and_newtons(tmp_path
     assert any("reference.joint2: |qd| = " in p and "velocity limit 0.1 m/s" in p for p in ref), ref
     torque = preflight.torque_problems(sc)
     assert torque and all(" N at t = " in p and "torque limit 1 N " in p for p in torque), torque
+
+
+def test_a_ratio_not_met_on_an_arm_without_armature_points_back_to_the_warning():
+    """On Baxter (no armature) the report's NOT met lines did not point back to the warning that
+    explained them (with an armature the loaded segment went 1.229 -> 1.108)."""
+    from adaptive_dd.benchmark.report import _no_armature_note
+
+    path = resources.files("adaptive_dd.scenarios").joinpath("vertical3_payload_exact.toml")
+    sc = load_scenario(str(path))
+    assert not np.any(sc.arm.armature)
+    (note,) = _no_armature_note(sc, ["  adaptive_ct / ct_oracle per seed, ...: NOT met)"])
+    assert "no joint of this arm has an armature (the warning before the run)" in note
+    assert _no_armature_note(sc, ["  adaptive_ct / ct_oracle per seed, ...: met)"]) == []
+    geared = dataclasses.replace(sc, arm=sc.arm.with_(armature=[0.05, 0.05, 0.02]))
+    assert _no_armature_note(geared, ["  ...: NOT met)"]) == []

@@ -403,7 +403,8 @@ def _targets(metrics: dict, res: BenchmarkResult) -> list[str]:
     c = metrics["controllers"]
     caveat = metrics.get("floor_caveat")
     out = [f"  note: {caveat}"] if caveat and "adaptive_ct" in c else []
-    out += _adaptive_ct_targets(c["adaptive_ct"]) if "adaptive_ct" in c else []
+    ratios = _adaptive_ct_targets(c["adaptive_ct"]) if "adaptive_ct" in c else []
+    out += ratios + _no_armature_note(res.scenario, ratios)
     out += _information_lines(c, all_unknown=res.scenario.closed_forms is not None)
     out += detection_limit_lines(c)
     out += _nominal_target(c) + _mass_targets(c, res.scenario)
@@ -424,6 +425,21 @@ def _targets(metrics: dict, res: BenchmarkResult) -> list[str]:
         "seeds" + (f" (target < {TARGET_WALL_S:g} s for the default scenario)" if default else "")
     )
     return out
+
+
+def _no_armature_note(sc, ratio_lines: list[str]) -> list[str]:
+    """A line pointing back to the warning before the run when a ratio target is not met on an arm
+    with no armature (the hard case of adaptive_ct against its floor: a light arm)."""
+    if sc.closed_forms is not None or not any("NOT met" in x for x in ratio_lines):
+        return []
+    from adaptive_dd.benchmark.preflight import inertia_problems
+
+    if not any(p.startswith("arm: no joint has an armature") for p in inertia_problems(sc)):
+        return []
+    return [
+        "  note: no joint of this arm has an armature (the warning before the run): a geared drive's "
+        "rotor inertia, [arm] armature from the data sheet, brings a light arm's ratio towards 1"
+    ]
 
 
 def _adaptive_ct_targets(a: dict) -> list[str]:
