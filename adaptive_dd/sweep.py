@@ -32,7 +32,7 @@ import numpy as np
 import pandas as pd
 
 from adaptive_dd.benchmark.scenario import Scenario
-from adaptive_dd.sweep_keys import _code_id, _task_key
+from adaptive_dd.sweep_keys import _cell_text, _code_id, _seeds_key
 from adaptive_dd.sweep_ratios import FLOOR_FAR, SEEDS_FAILED, ratio_medians
 from adaptive_dd.sweep_spec import Sweep, cell_scenario, mark_gains_apart
 
@@ -160,12 +160,14 @@ def plan_tasks(sweep: Sweep) -> tuple[dict[str, Task], list[tuple[int, str, str]
     """
     tasks: dict[str, Task] = {}
     cells = []
+    code = _code_id()
     for p in sweep.points:
         for c in sweep.controllers:
             settings = tuple(sorted(p.settings_for(c).items()))
+            text = _cell_text(p.scenario, c, settings)  # once per cell: a block's key adds its seeds
             for block in sweep.seed_blocks():
-                key = _task_key(p.scenario, c, settings, block)
-                tasks.setdefault(key, Task(key, p.scenario, c, settings, block, _code_id()))
+                key = _seeds_key(text, block)
+                tasks.setdefault(key, Task(key, p.scenario, c, settings, block, code))
                 cells.append((p.index, c, key))
     return tasks, cells
 

@@ -21,14 +21,27 @@ other code are run again): bump it when the rows a task returns change meaning (
 
 
 def _task_key(scenario: Scenario, controller: str, settings, seeds) -> str:
-    from adaptive_dd.benchmark.provenance import scenario_dict
+    return _seeds_key(_cell_text(scenario, controller, settings), seeds)
 
-    sc = scenario_dict(scenario)  # every field, the arm by its own description (Arm.to_dict)
+
+def _cell_text(scenario: Scenario, controller: str, settings) -> str:
+    """What a cell's rows depend on but its seeds, as text: the scenario's fields with the
+    controller's own ``[controllers.NAME]`` table alone (another controller's setting changed does
+    not run this one's cells again), the controller, the grid's settings, the code."""
+    from adaptive_dd.benchmark.provenance import scenario_dict
+    from adaptive_dd.sweep_spec import cell_scenario
+
+    sc = scenario_dict(cell_scenario(scenario, controller, None))  # every field, the arm by Arm.to_dict
     for k in ("name", "source", "seeds", "controllers", "defaulted"):
         sc.pop(k, None)
-    blob = {"v": CELL_VERSION, "scenario": sc, "controller": controller, "settings": settings, "seeds": seeds}
+    blob = {"v": CELL_VERSION, "scenario": sc, "controller": controller, "settings": settings}
     blob["code"] = _code_id()  # a cell of other code (a default changed) is run again, not reused
-    text = json.dumps(blob, sort_keys=True, default=repr)
+    return json.dumps(blob, sort_keys=True, default=repr)
+
+
+def _seeds_key(cell_text: str, seeds) -> str:
+    """The task's key: :func:`_cell_text` with its block of seeds, hashed."""
+    text = cell_text + json.dumps({"seeds": list(seeds)})
     return hashlib.sha256(text.encode()).hexdigest()[:20]
 
 

@@ -943,3 +943,13 @@ def test_the_sweep_prints_an_estimate_and_every_column(tmp_path, capsys):
     out = capsys.readouterr().out
     assert re.search(r"running \d+ task\(s\) on .*worker\(s\); estimate: about [\d.]+ (s|min)", out), out
     assert "..." not in out and "3.50" in out and "0.25" in out  # all 14 columns, none elided
+
+
+def test_another_controllers_setting_keeps_the_floors_cells(tmp_path):
+    """A setting of adaptive_ct's added to the base scenario ran ct_oracle's cells again."""
+    sw = load_sweep(_write(tmp_path))
+    before = {(c, k) for _, c, k in plan_tasks(sw)[1]}
+    sw2 = load_sweep(_write(tmp_path, base=BASE + "\n[controllers.adaptive_ct]\nboost_duration = 0.1\n"))
+    after = {(c, k) for _, c, k in plan_tasks(sw2)[1]}
+    assert {k for c, k in before if c == "ct_oracle"} == {k for c, k in after if c == "ct_oracle"}
+    assert not {k for c, k in before if c == "adaptive_ct"} & {k for c, k in after if c == "adaptive_ct"}
