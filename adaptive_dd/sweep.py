@@ -490,8 +490,8 @@ def _estimate(todo: list[Task], n_workers: int) -> str:
 
     from adaptive_dd.benchmark.scenario_base import _duration
 
-    seen: dict[tuple, tuple[float, float]] = {}
-    run = once = 0.0
+    seen: dict[tuple, tuple[float, float, float]] = {}
+    run = setup = compiling = 0.0
     for t in todo:
         sc = t.scenario
         kind = (sc.n_samples, len(t.seeds), sc.n_joints, sc.closed_forms is None)
@@ -499,10 +499,17 @@ def _estimate(todo: list[Task], n_workers: int) -> str:
         if key not in seen:
             cell = dataclasses.replace(cell_scenario(sc, t.controller, dict(t.settings)), seeds=len(t.seeds))
             e = cell.estimate()
-            seen[key] = (e.seconds - e.compile_seconds - e.setup_seconds, e.compile_seconds + e.setup_seconds)
+            seen[key] = (e.seconds - e.compile_seconds - e.setup_seconds, e.setup_seconds, e.compile_seconds)
         run += seen[key][0]
-        once = max(once, seen[key][1])
-    return f"estimate: about {_duration(run / max(n_workers, 1) + once)} (a guide, not a promise)"
+        setup, compiling = max(setup, seen[key][1]), max(compiling, seen[key][2])
+    cold = (
+        f", of which about {_duration(compiling)} compiling the kernels (a cold cache; each worker "
+        "loads them once compiled, the progress bar waits meanwhile)"
+        if compiling
+        else ""
+    )
+    total = run / max(n_workers, 1) + setup + compiling
+    return f"estimate: about {_duration(total)}{cold} (a guide, not a promise)"
 
 
 def _heatmaps(sweep: Sweep, table: pd.DataFrame, out: Path) -> tuple[pd.DataFrame | None, list]:
