@@ -89,7 +89,7 @@ def ratio_medians(table: pd.DataFrame, heatmap: Mapping[str, Any], axes: Sequenc
     out["marked"] = [
         "; ".join(filter(None, (
             _mark(r, heatmap["floor"], heatmap["segment"], SATURATION_LIMIT),
-            f"{k} of {n} {SEEDS_FAILED} (or their floor's did): the median is over the others" if k else "",
+            _failed_seeds(k, n),
         )))
         for (_, r), k, n in zip(out.iterrows(), lost, total, strict=True)
     ]  # fmt: skip
@@ -111,3 +111,11 @@ def _mark(r, floor: str, segment: int, sat_limit: float) -> str:
             f"mrad before the swap (limit {FLOOR_FAR:g} x)"
         )
     return "; ".join(why)
+
+
+def _failed_seeds(k: int, n: int) -> str:
+    """A cell's mark when ``k`` of its ``n`` seeds have no ratio; empty when none lacks one."""
+    if not k:
+        return ""
+    rest = "no ratio" if k >= n else "the median is over the others"
+    return f"{k} of {n} {SEEDS_FAILED} (or their floor's did): {rest}"

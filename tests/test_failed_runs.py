@@ -18,7 +18,7 @@ import numpy as np
 class NaNLaw:
     floor = False  # as a table's floor = false: no floor
 
-    def __init__(self, kp=10.0, adapt=True):
+    def __init__(self, kp=10.0, adapt=True, kd=np.array([1.0, 1.0, 1.0])):
         self.kp, self.adapt = kp, adapt
 
     def reset(self, n, T):
@@ -125,6 +125,7 @@ def test_floor_false_on_the_class_is_no_floor_and_another_value_is_named(folder)
         ),
         ("kp = true", "controllers.NaNLaw.kp = True: a number"),
         ("adapt = 1", "controllers.NaNLaw.adapt = 1: true or false (the class's default is True)"),
+        ("kd = true", "controllers.NaNLaw.kd = True: a number (or a list of numbers)"),  # a per-joint default
     ],
 )
 def test_a_setting_of_the_wrong_kind_names_its_key(folder, table, needle):

@@ -323,3 +323,30 @@ def test_a_joint_that_moves_no_inertia_is_refused_unless_armature_is_stated(tmp_
         parse_scenario(_vertical3_scenario(path), "s.toml")
     sc = parse_scenario(_vertical3_scenario(path, armature=[0.05, 0.05, 0.02]), "s.toml")
     assert sc.arm.n_joints == 3
+
+
+def test_a_plant_urdf_whose_joint_moves_no_inertia_is_refused_too(tmp_path):
+    """The [arm] URDF was checked, a [plant] urdf not: every trial then failed at t = 0."""
+    from adaptive_dd.benchmark.scenario import parse_scenario
+
+    plant = _mutant(tmp_path, LINK3_INERTIAL, "", V3)
+    data = _vertical3_scenario(Path(robot_urdf("vertical3")))
+    data["plant"] = {"urdf": str(plant)}
+    with pytest.raises(
+        ScenarioError, match=r"\[plant\]: joint 'joint3' of the plant moves no inertia.*plant.armature"
+    ):
+        parse_scenario(data, str(tmp_path / "s.toml"))
+    data["plant"]["armature"] = [0.05, 0.05, 0.02]
+    assert parse_scenario(data, str(tmp_path / "s.toml")).plant is not None
+
+
+def test_a_dummy_links_gyration_is_not_noted(tmp_path):
+    """iCub's root link (1e-6 kg, 1.3e-6 kg m^2) was noted as a unit error on every load."""
+    tiny = re.sub(r'<mass value="[^"]*"/>', '<mass value="1e-6"/>', LINK3_INERTIAL)
+    tiny = re.sub(
+        r'(i[xyz]{2})="[^"]*"',
+        lambda m: f'{m.group(1)}="1.3e-6"' if m.group(1)[1] == m.group(1)[2] else f'{m.group(1)}="0"',
+        tiny,
+    )
+    robot = read_urdf(_mutant(tmp_path, LINK3_INERTIAL, tiny, V3), "tool")
+    assert not any("radius of gyration" in n for n in robot.notes), robot.notes

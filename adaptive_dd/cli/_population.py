@@ -117,4 +117,12 @@ def run_arms(args: argparse.Namespace, only_controllers, with_floors) -> int:
     written = [out / "per_seed.csv", out / "arms.csv", Path(args.json or out / "population.json")]
     written += [out / f"ratios.{f}" for f in fmts]
     print("wrote " + ", ".join(str(w) for w in written))
+    frame = pop.frame
+    if frame is not None and len(frame) and frame["failed"].astype(bool).all():
+        print(
+            "adaptive-dd benchmark: every trial of every controller on every arm failed (per_seed.csv's "
+            "failure column says why): no result to compare",
+            file=sys.stderr,
+        )
+        return 1
     return 0

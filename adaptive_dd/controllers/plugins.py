@@ -308,12 +308,12 @@ def _check_setting_types(spec: str, params, kw: dict) -> None:
         if p is None or p.default is inspect.Parameter.empty or p.default is None:
             continue
         d = p.default
-        number = isinstance(d, int | float | np.number) and not isinstance(d, bool | np.bool_)
-        wrong = (number and (isinstance(value, bool | str) or not _is_number_like(value))) or (
-            isinstance(d, bool) and not isinstance(value, bool)
-        )
+        flag = isinstance(d, bool | np.bool_)
+        listed = isinstance(d, list | tuple | np.ndarray) and np.size(d) > 0  # a per-joint default
+        number = not flag and (isinstance(d, int | float | np.number) or (listed and _is_number_like(d)))
+        wrong = (number and not _is_number_like(value)) or (flag and not isinstance(value, bool | np.bool_))
         if wrong:
-            kind = "true or false" if isinstance(d, bool) else "a number (or a list of numbers)"
+            kind = "true or false" if flag else "a number (or a list of numbers)"
             raise ParameterError(
                 f"controllers.{table_name(spec)}.{key} = {value!r}: {kind} (the class's default is {d!r})"
             )
@@ -321,10 +321,10 @@ def _check_setting_types(spec: str, params, kw: dict) -> None:
 
 def _is_number_like(value) -> bool:
     """A number, or a (nested) list of numbers (a per-joint setting)."""
-    if isinstance(value, bool | str):
+    if isinstance(value, bool | np.bool_ | str):
         return False
-    if isinstance(value, list | tuple):
-        return all(_is_number_like(v) for v in value)
+    if isinstance(value, list | tuple | np.ndarray):
+        return all(_is_number_like(v) for v in np.ravel(np.asarray(value, dtype=object)))
     return isinstance(value, int | float | np.number)
 
 

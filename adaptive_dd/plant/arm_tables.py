@@ -311,19 +311,30 @@ def urdf_arm_from_table(src: str, table: dict, plant_kw: dict):
 
 
 def _refuse_inertialess_joints(src: str, arm) -> None:
-    """A joint that moves no inertia about its axis at any of three postures (the links beyond it
-    without ``<inertial>``, or point masses on its axis, and no armature): the mass matrix is
+    """A joint of the arm that moves no inertia (:func:`inertialess_joints`): the mass matrix is
     singular and no controller or plant can run the arm."""
-    lim = np.clip(np.asarray(arm.position_limits, dtype=float), -np.pi, np.pi)
-    postures = [np.zeros(arm.n_joints)] + [lim[:, 0] + f * (lim[:, 1] - lim[:, 0]) for f in (0.3, 0.7)]
-    diag = np.max([np.diag(arm.mass_matrix(q)) for q in postures], axis=0)
-    for j in np.flatnonzero(~(diag > 1e-12 * max(1.0, float(np.nanmax(diag))))):
+    for j, d in inertialess_joints(arm, arm.pi_links, arm.armature):
         raise ScenarioError(
             f"{src}: [arm] urdf: {arm.urdf}: joint {arm.joint_names[j]!r} moves no inertia about its axis "
-            f"(mass matrix diagonal {diag[j]:.3g}: the links beyond it have no <inertial>, or point masses "
+            f"(mass matrix diagonal {d:.3g}: the links beyond it have no <inertial>, or point masses "
             "on its axis): the arm cannot be simulated or controlled. Give those links their <inertial>, "
             "or state the drive's rotor inertia in [arm] armature"
         )
+
+
+def inertialess_joints(arm, pi_links, armature) -> list[tuple[int, float]]:
+    """``(joint, largest diagonal)`` of the joints whose mass-matrix diagonal (links ``pi_links``,
+    ``armature`` added) is 0 at three postures within the limits (0, 30 % and 70 % of the range,
+    an unbounded joint's taken as +-pi): the links beyond them without ``<inertial>`` or point
+    masses on their axis, and no armature."""
+    from adaptive_dd.plant.chain import mass_matrix_batch
+
+    lim = np.clip(np.asarray(arm.position_limits, dtype=float), -np.pi, np.pi)
+    q = np.stack([np.zeros(arm.n_joints)] + [lim[:, 0] + f * (lim[:, 1] - lim[:, 0]) for f in (0.3, 0.7)])
+    m = mass_matrix_batch(arm.chain, np.asarray(pi_links, dtype=float), q)
+    diag = np.diagonal(m, axis1=-2, axis2=-1).max(axis=0) + np.asarray(armature, dtype=float)
+    top = max(1.0, float(np.nanmax(diag)))
+    return [(int(j), float(diag[j])) for j in np.flatnonzero(~(diag > 1e-12 * top))]
 
 
 def _urdf_source(src: str, table: dict) -> tuple[Path, str | None]:

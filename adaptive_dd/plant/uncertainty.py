@@ -349,7 +349,12 @@ def parse_plant(src: str, table: dict | None, arm, model_from: bool = False) -> 
         Naming ``src``, the key and the value: a URDF with other joints or frames, a list of the
         wrong length, a negative or too large level, an unknown key of ``[plant.uncertainty]``.
     """
-    from adaptive_dd.plant.arm_tables import URDF_TABLE_BOUNDS, _table_vector, scenario_file
+    from adaptive_dd.plant.arm_tables import (
+        URDF_TABLE_BOUNDS,
+        _table_vector,
+        inertialess_joints,
+        scenario_file,
+    )
 
     table = {} if table is None else {k: v for k, v in table.items() if k in PLANT_TRUTH_KEYS}
     if not table and not model_from:
@@ -378,11 +383,19 @@ def parse_plant(src: str, table: dict | None, arm, model_from: bool = False) -> 
                 raise ScenarioError(str(exc).replace(f"'arm.{key}'", f"'plant.{key}'")) from None
             vals[key] = tuple(float(x) for x in v)
     unc = _uncertainty(src, table["uncertainty"]) if "uncertainty" in table else None
+    armature = vals.get("armature", spec.armature)
+    for j, d in inertialess_joints(arm, spec.pi_links, armature):  # the arm's were checked
+        raise ScenarioError(
+            f"{src}: [plant]: joint {arm.joint_names[j]!r} of the plant moves no inertia about its axis "
+            f"(mass matrix diagonal {d:.3g}: in {urdf or 'the [arm] URDF'} the links beyond it have no "
+            "<inertial>, or point masses on its axis): the plant cannot be simulated. Give those links "
+            "their <inertial> in plant.urdf, or state the drive's rotor inertia in plant.armature"
+        )
     return PlantSpec(
         spec.pi_links,
         vals.get("viscous", spec.viscous),
         vals.get("coulomb", spec.coulomb),
-        vals.get("armature", spec.armature),
+        armature,
         unc,
         urdf,
         notes,

@@ -182,7 +182,7 @@ def _check_link(path: Path, link: ET.Element, notes: list[str]) -> None:
         k: scalar(path, f"{where} <inertia>", el, k) for k in ("ixx", "iyy", "izz", "ixy", "ixz", "iyz")
     }
     biggest = max(abs(v) for v in moments.values() if v is not None) if any(moments.values()) else 0.0
-    if mass * GYRATION_NOTE**2 < biggest <= mass * MAX_OFFSET**2:
+    if mass >= 1e-3 and mass * GYRATION_NOTE**2 < biggest <= mass * MAX_OFFSET**2:  # a gram: no dummy link
         notes.append(
             f"link '{name}': a moment of {biggest:.4g} kg m^2 for {mass:g} kg is a radius of gyration of "
             f"{math.sqrt(biggest / mass):.3g} m, beyond {GYRATION_NOTE:g} m: a unit error? (kept)"
@@ -247,7 +247,11 @@ def _check_joint(path: Path, joint: ET.Element, on_chain: bool, notes: list[str]
     values |= {k: scalar(path, f"{where} <dynamics>", dyn, k) for k in ("damping", "friction")}
     bad = [k for k in ("damping", "friction") if values[k] is not None and not 0 <= values[k] <= MAX_FRICTION]
     if bad:
-        units = {"damping": "N m s/rad", "friction": "N m"}
+        units = (
+            {"damping": "N s/m", "friction": "N"}
+            if kind == "prismatic"
+            else {"damping": "N m s/rad", "friction": "N m"}
+        )
         raise UrdfError(
             f"{path}: {where} <dynamics>: "
             + " and ".join(f"{k} = {dyn.get(k)!r}" for k in bad)
