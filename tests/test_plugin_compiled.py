@@ -124,6 +124,29 @@ def test_the_plain_python_plugin_runs_on_the_slow_path_and_says_so_once(capsys):
     assert out.count("slow Python path") == 1 and "pd_gravity_python" in out and "numba.njit" in out
 
 
+def test_a_plain_python_law_on_the_papers_arm_says_so_too(capsys):
+    """The closed forms' runner ran a plain-Python law without the note the docs promise."""
+    import dataclasses
+
+    from adaptive_dd.benchmark.runner import run_benchmark
+    from adaptive_dd.benchmark.scenario import load_scenario
+
+    class PlainPD:
+        def reset(self, n, T):
+            pass
+
+        def command(self, q, qd, q_d, qd_d, qdd_d):
+            return 100.0 * (q_d - q) + 10.0 * (qd_d - qd)
+
+        def observe(self, q, qd, tau):
+            pass
+
+    sc = dataclasses.replace(load_scenario(), seeds=1, duration=0.2, swap_times=(0.1,), swap_masses=(1.0,))
+    run_benchmark(sc, progress=False, controllers={"plain": PlainPD()})
+    err = capsys.readouterr().err
+    assert err.count("slow Python path") == 1 and "plain: a plain-Python controller" in err
+
+
 class _Declares:
     """A compiled plug-in's shape with its declarations set per test."""
 

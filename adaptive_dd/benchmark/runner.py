@@ -230,7 +230,13 @@ def _run_two_link(
         elif plugins[name][0] is not None:
             run = run_plugin(name, plugins[name][0], scenario, idx, constants, keep, bar)
         else:
-            run = run_python(name, plugins[name][1], scenario, idx, constants, keep, bar)
+            py = plugins[name][1]
+            if not type(py).__module__.startswith("adaptive_dd."):  # a user's plain-Python law: say why slow
+                from adaptive_dd.closed_loop.runner import _say
+                from adaptive_dd.controllers.plugins import slow_path_note
+
+                _say(bar, slow_path_note(name, py))
+            run = run_python(name, py, scenario, idx, constants, keep, bar)
         res.runs[name] = run
         if on_run is not None:
             on_run(res, run)

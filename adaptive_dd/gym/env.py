@@ -71,7 +71,11 @@ def floor_laws() -> list[str]:
 
 
 def scenario_of(scenario: Scenario | str | Path | None) -> Scenario:
-    """A :class:`Scenario` from itself, a scenario file, or None (the shipped payload swap)."""
+    """A :class:`Scenario` from itself, a scenario file, a registered id
+    (``adaptive_dd/PayloadSwap-UR5-v0``), or None (the shipped payload swap)."""
+    from adaptive_dd.gym import scenario_file
+
+    scenario = scenario_file(scenario, "PayloadSwapEnv")
     if scenario is None or isinstance(scenario, (str, Path)):
         return load_scenario(scenario)
     if isinstance(scenario, Scenario):

@@ -7,6 +7,8 @@ The observation is the Gymnasium environment's (``adaptive_dd.gym.env``): measur
 the reference ``q_d, qd_d, qdd_d``, ``(5 n,)``. Replace :meth:`LinearPolicy.policy` with your
 trained network's forward pass (load its weights in ``__init__``)."""
 
+import copy
+
 import numpy as np
 
 
@@ -23,11 +25,21 @@ class PolicyPlugin:
         raise NotImplementedError("a subclass gives the policy")
 
     def reset(self, n_trials, sample_period):
-        pass
+        """One copy of the policy per trial of the batch, each reset as ``evaluate`` resets it before
+        an episode: a policy with state (an integral, a recurrent network's memory, a sample count)
+        keeps one per trial."""
+        proto = copy.copy(self)
+        proto.__dict__.pop("_trials", None)
+        self._trials = [copy.deepcopy(proto) for _ in range(n_trials)]
+        for p in self._trials:
+            p.reset_policy()
+
+    def reset_policy(self):
+        """Clear the policy's state before a trial (``evaluate`` calls a policy's ``reset()``)."""
 
     def command(self, q, qd, q_d, qd_d, qdd_d):
         ref = np.concatenate((q_d, qd_d, qdd_d))  # the same for every trial of the batch
-        return np.stack([self.policy(np.concatenate((q[i], qd[i], ref))) for i in range(q.shape[0])])
+        return np.stack([p.policy(np.concatenate((q[i], qd[i], ref))) for i, p in enumerate(self._trials)])
 
     def observe(self, q, qd, tau):
         pass
