@@ -78,14 +78,18 @@ from adaptive_dd.record_checks import (
     _line,
     _no_time_stamps,
     _too_many_bad_rows,
+    stale_notes,
     velocity_gains,
 )
 from adaptive_dd.record_csv import read_csv
 from adaptive_dd.record_derivatives import derivatives
 from adaptive_dd.record_pieces import (
+    MAX_LOG_STEP,
     MIN_PIECE_SAMPLES,
+    check_overlap,
     clock,
-    find_gaps,
+    first_clock,
+    likely_unit,
     piece_spans,
     resampler,
     trim_gap_edges,
@@ -281,7 +285,7 @@ def _window_rows(path: Path, t: Array, window, time_scale: float = 1.0) -> slice
     i0, i1 = int(np.searchsorted(t, lo)), int(np.searchsorted(t, hi, side="right"))
     if i1 - i0 < 20:
         step = float(np.median(np.diff(t))) if t.size > 1 else 0.0
-        likely = _likely_unit(step / time_scale)  # from the column's own numbers
+        likely = likely_unit(step / time_scale)  # from the column's own numbers
         unit = (
             f"; its stamps step by {step:.6g} s per sample (median): if they are in {likely}, say so "
             f'([record] time_unit = "{likely}"; the window stays in s)'
@@ -394,9 +398,10 @@ def read_log(spec: RecordSpec, window: tuple[float, float] | None = None, arm=No
     frames, missed = _leave_out_bad_rows(frames, where, spec, [c for c in cols if c not in excluded], window)
     clocks = {p: _times(p, f, spec.time) * spec.time_scale for p, f in frames.items()}
     rows = {p: _window_rows(p, clocks[p], window, spec.time_scale) for p in frames}
-    t0, T = _first_clock(spec, clocks, rows)
+    t0, T = first_clock(spec, clocks, rows)
     lo = max(clocks[p][rows[p]][0] for p in frames)
     hi = min(clocks[p][rows[p]][-1] for p in frames)
+    check_overlap({p: clocks[p][rows[p]] for p in frames}, lo, hi, T)
     spans, gap_lines = piece_spans({p: clocks[p][rows[p]] for p in frames}, lo, hi)
     grids = [a + T * np.arange(int(np.floor((b - a) / T + 1e-9)) + 1) for a, b in spans]
     short = [(a, b) for (a, b), g in zip(spans, grids, strict=True) if g.size < MIN_PIECE_SAMPLES]
@@ -447,6 +452,7 @@ def read_log(spec: RecordSpec, window: tuple[float, float] | None = None, arm=No
         _resampling_note(t0, T, qd_measured),
         *_cut_notes({p: clocks[p][rows[p]] for p in frames}, lo, hi, T, window),
         *lag_note,
+        *stale_notes(spec, where, q),
         *missed,
         *gap_lines,
         *lenient,
@@ -505,45 +511,6 @@ non-finite) in a column the fit reads that is left out as samples the logger mis
 misses a few; a column that is mostly or wholly not numbers is another column than the table
 meant (a mistyped name matched, an export's broken column), and is refused."""
 
-MAX_LOG_STEP = 0.1
-"""[s] The largest median time step a log is read with (10 Hz: coarser, the derivatives' 7-sample
-window spans most of a second); a coarser one is a time column in another unit (``[record]
-time_unit``): a 1 kHz log stamped in ms steps by exactly 1."""
-
-
-def _likely_unit(step: float, as_period: bool = False) -> str:
-    """The time unit (ms, us or ns) that makes a median stamp step of ``step`` (in the column's own
-    numbers) a robot's sample period: of those within :data:`MAX_LOG_STEP`, the nearest 1 ms (ns
-    when none is); ``as_period``: that period in s, as text."""
-    from adaptive_dd.record_spec import TIME_UNITS
-
-    fit = [u for u in ("ms", "us", "ns") if step * TIME_UNITS[u] <= MAX_LOG_STEP]
-    unit = min(fit, key=lambda u: abs(np.log10(max(step * TIME_UNITS[u], 1e-300) / 1e-3)), default="ns")
-    return f"{step * TIME_UNITS[unit]:.4g} s" if as_period else unit
-
-
-def _first_clock(spec: RecordSpec, clocks: dict, rows: dict) -> tuple[Array, float]:
-    """The first file's times in the window and the sample period: given, else the mean step
-    between its gaps (:func:`~adaptive_dd.record_pieces.find_gaps`; jitter averages out)."""
-    first = spec.files[0]
-    t0 = clocks[first][rows[first]]
-    steps = np.diff(t0)
-    gaps, _ = find_gaps(t0)
-    ok = np.ones(steps.size, dtype=bool)
-    ok[gaps] = False
-    median = float(np.median(steps)) if steps.size else 0.0
-    raw = median / spec.time_scale  # the step in the column's own numbers (time_unit undone)
-    if median > MAX_LOG_STEP:  # with sample_period given too: the grid is in s, the stamps are not
-        raise DataError(
-            f"{first}: the time column {spec.time!r} steps by {median:.6g} per sample (median), read as "
-            f"s: a robot's log samples faster than every {MAX_LOG_STEP:g} s. If its time is in "
-            f"{_likely_unit(raw)} (a step of {_likely_unit(raw, True)}), say so: [record] time_unit = "
-            f'"{_likely_unit(raw)}"; a log truly slower than {1 / MAX_LOG_STEP:g} Hz is too coarse for '
-            "the accelerations this identification "
-            "derives"
-        )
-    return t0, spec.sample_period or float(np.mean(steps[ok]))
-
 
 def _cut_notes(clocks: dict, lo: float, hi: float, T: float, window=None) -> list[str]:
     """A note for a file that starts later or ends earlier than another by more than two samples:
@@ -591,5 +558,8 @@ def _velocity_lag(logged: Array, derived: Array, gains: Array, T: float, names, 
         f"'{names[j]}', gain {gain:.2f})"
     )
     if used and k > 2:
-        text += ': it is filtered; velocity_source = "derived" avoids the lag'
+        text += (
+            ': it is filtered, or its file stamped late (a clock offset); velocity_source = "derived" '
+            "avoids the lag"
+        )
     return text

@@ -29,6 +29,11 @@ def read_csv(path: Path):
         if sep is not None:  # one column whose name holds the separator: a semicolon or tab file
             if _decimal_commas(frame):  # 1,5 for 1.5, as spreadsheets of many locales write it
                 frame = pd.read_csv(path, sep=sep, skipinitialspace=False, decimal=",")
+                for c in frame.columns:  # a column with a bad cell (ERR) stays text: its numbers too
+                    if frame[c].dtype.kind == "O":
+                        v = frame[c].astype(str).str.strip()
+                        dec = v.str.fullmatch(_DECIMAL_COMMA.pattern)
+                        frame[c] = frame[c].where(~dec, v.str.replace(",", ".", regex=False))
                 notes.append(f"{path}: numbers written with a decimal comma, read as such")
     except (ValueError, pd.errors.ParserError) as exc:
         raise DataError(f"{path}: not a readable CSV file: {exc}") from None
@@ -77,5 +82,6 @@ def _decimal_commas(frame) -> bool:
     ]
     whole = r"[+-]?\d+"  # a spreadsheet writes 0 as 0: whole numbers beside the comma decimals
     marked = [(v, v.str.fullmatch(_DECIMAL_COMMA.pattern)) for v in texts if v.size]
-    comma = [v for v, dec in marked if dec.any() and (dec | v.str.fullmatch(whole)).all()]
-    return bool(comma) and not any(v.str.contains(".", regex=False).any() for v in texts)
+    comma = [v for v, dec in marked if dec.any() and (dec | v.str.fullmatch(whole)).mean() >= 0.95]
+    numeric = [v for v in texts if v.str.fullmatch(r"[+-]?[\d.,]+([eE][+-]?\d+)?").mean() >= 0.95]
+    return bool(comma) and not any(v.str.contains(".", regex=False).any() for v in numeric)

@@ -40,17 +40,25 @@ piece only.
 from __future__ import annotations
 
 import dataclasses
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
 
 from adaptive_dd.errors import DataError
 
+if TYPE_CHECKING:
+    from adaptive_dd.record_spec import RecordSpec
+
 __all__ = [
+    "MAX_LOG_STEP",
+    "check_overlap",
     "clock",
     "drop_short",
     "find_gaps",
+    "first_clock",
     "gap_threshold",
+    "likely_unit",
     "merge_records",
     "piece_spans",
     "resampler",
@@ -87,6 +95,18 @@ def find_gaps(t: Array) -> tuple[NDArray[np.int64], float]:
     steps = np.diff(t)
     limit = gap_threshold(steps)
     return np.flatnonzero(steps > limit), limit
+
+
+def check_overlap(clocks: dict, lo: float, hi: float, T: float) -> None:
+    """A :class:`~adaptive_dd.errors.DataError` when the files' clocks (``{file: times}``, the
+    rows read) share less than :data:`MIN_PIECE_SAMPLES` samples: two clocks, or two units (one
+    relative, one an epoch; one in s, one in ms), named with each file's span."""
+    if len(clocks) > 1 and hi - lo < MIN_PIECE_SAMPLES * T:
+        each = "; ".join(f"{p} {clock(t[0])}-{clock(t[-1])} s" for p, t in clocks.items())
+        raise DataError(
+            f"the files' time spans do not overlap ({each}): are their clocks the same one, in the same "
+            "unit (one relative, one an epoch; one in s, one in ms)? Shift or convert one file's time column"
+        )
 
 
 def piece_spans(clocks: dict, lo: float, hi: float) -> tuple[list[tuple[float, float]], list[str]]:
@@ -281,3 +301,50 @@ def resampler(frames: dict, where: dict, clocks: dict, rows: dict, grids: list, 
         return np.concatenate(out)
 
     return column
+
+
+MAX_LOG_STEP = 0.1
+"""[s] The largest median time step a log is read with (10 Hz: coarser, the derivatives' 7-sample
+window spans most of a second); a coarser one is a time column in another unit (``[record]
+time_unit``): a 1 kHz log stamped in ms steps by exactly 1."""
+
+
+def likely_unit(step: float, as_period: bool = False) -> str:
+    """The time unit (ms, us or ns) that makes a median stamp step of ``step`` (in the column's own
+    numbers) a robot's sample period: of those within :data:`MAX_LOG_STEP`, the nearest 1 ms (ns
+    when none is); ``as_period``: that period in s, as text."""
+    from adaptive_dd.record_spec import TIME_UNITS
+
+    fit = [u for u in ("ms", "us", "ns") if step * TIME_UNITS[u] <= MAX_LOG_STEP]
+    unit = min(fit, key=lambda u: abs(np.log10(max(step * TIME_UNITS[u], 1e-300) / 1e-3)), default="ns")
+    return f"{step * TIME_UNITS[unit]:.4g} s" if as_period else unit
+
+
+def first_clock(spec: RecordSpec, clocks: dict, rows: dict) -> tuple[Array, float]:
+    """The first file's times in the window and the sample period: given, else the mean step
+    between its gaps (:func:`~adaptive_dd.record_pieces.find_gaps`; jitter averages out)."""
+    first = spec.files[0]
+    t0 = clocks[first][rows[first]]
+    steps = np.diff(t0)
+    gaps, _ = find_gaps(t0)
+    ok = np.ones(steps.size, dtype=bool)
+    ok[gaps] = False
+    for p in (first, *(f for f in clocks if f != first)):  # every file: one may be stamped in ms
+        d = np.diff(clocks[p][rows[p]])
+        median = float(np.median(d)) if d.size else 0.0
+        if median > MAX_LOG_STEP:
+            break
+    raw = median / spec.time_scale  # the step in the column's own numbers (time_unit undone)
+    if median > MAX_LOG_STEP:  # with sample_period given too: the grid is in s, the stamps are not
+        unit = (
+            f'say so: [record] time_unit = "{likely_unit(raw)}"'
+            if p == first
+            else ("convert its time column to the first file's unit ([record] time_unit is every file's)")
+        )
+        raise DataError(
+            f"{p}: the time column {spec.time!r} steps by {median:.6g} per sample (median), read as "
+            f"s: a robot's log samples faster than every {MAX_LOG_STEP:g} s. If its time is in "
+            f"{likely_unit(raw)} (a step of {likely_unit(raw, True)}), {unit}; a log truly slower "
+            f"than {1 / MAX_LOG_STEP:g} Hz is too coarse for the accelerations this identification derives"
+        )
+    return t0, spec.sample_period or float(np.mean(steps[ok]))

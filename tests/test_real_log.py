@@ -1185,3 +1185,66 @@ def test_the_degrees_hint_names_milliradians_and_millimetres_by_the_joints_kind(
     units = ["mrad", "deg", "mm"]
     spec = record_spec(_table(Path("a.csv"), Path("b.csv"), position_unit=units), NAMES, KINDS, "s.toml")
     assert _degrees_hint(spec, 1, KINDS).startswith('position_unit = ["mrad", "deg", "mm"]')
+
+
+def test_a_decimal_comma_log_with_a_bad_cell_keeps_its_column(tmp_path):
+    """One ERR cell in a decimal-comma file made its whole column text, every cell refused."""
+    p1, p2, *_ = _write_log(tmp_path, np.random.default_rng(2))
+    ref = read_log(record_spec(_table(p1, p2, exclude=["j_c"]), NAMES, KINDS, "s.toml"))
+
+    def edit(lines):
+        cells = lines[700].split(",")
+        lines[700] = ",".join([*cells[:2], "ERR", *cells[3:]])
+
+    _rewrite(p1, edit)
+    for p in (p1, p2):
+        p.write_text(p.read_text().replace(",", ";").replace(".", ","))
+    rec = read_log(record_spec(_table(p1, p2, exclude=["j_c"]), NAMES, KINDS, "s.toml"))
+    assert rec.q.shape == ref.q.shape  # the ERR row is a missed sample, interpolated over
+    np.testing.assert_allclose(rec.q, ref.q, atol=1e-3)
+    assert any("decimal comma" in nt for nt in rec.notes)
+
+
+def test_files_in_two_time_units_or_two_clocks_are_named(tmp_path):
+    """A second file stamped in ms was interpolated as a 5 s log ('about 5 independent samples');
+    clocks that do not overlap read 'no piece between the log's gaps holds 7 samples'."""
+    p1, p2, *_ = _write_log(tmp_path, np.random.default_rng(3))
+
+    def scale(k):
+        def edit(lines):
+            for i in range(1, len(lines)):
+                cells = lines[i].split(",")
+                lines[i] = ",".join(
+                    [repr(float(cells[0]) * k if k != "epoch" else float(cells[0]) + 1.7e9), *cells[1:]]
+                )
+
+        return edit
+
+    _rewrite(p2, scale(1000.0))
+    with pytest.raises(
+        DataError, match=r"eff.csv: the time column 'stamp' steps by .*convert its time column"
+    ):
+        read_log(record_spec(_table(p1, p2, exclude=["j_c"]), NAMES, KINDS, "s.toml"))
+    p1, p2, *_ = _write_log(tmp_path, np.random.default_rng(3))
+    _rewrite(p2, scale("epoch"))
+    with pytest.raises(
+        DataError, match=r"the files' time spans do not overlap \(.*pos.csv 0-.*eff.csv 1700000000"
+    ):
+        read_log(record_spec(_table(p1, p2, exclude=["j_c"]), NAMES, KINDS, "s.toml"))
+
+
+def test_positions_repeated_while_the_arm_moves_are_said(tmp_path):
+    """A stale position sensor (every second row repeating the last) biased a viscous friction beyond
+    its 95 % bound on every seed, without a word."""
+    p1, p2, *_ = _write_log(tmp_path, np.random.default_rng(5), jitter=0.0)
+
+    def stale(lines):
+        for i in range(3, len(lines), 2):
+            lines[i] = ",".join([lines[i].split(",")[0], *lines[i - 1].split(",")[1:]])
+
+    _rewrite(p1, stale)
+    rec = read_log(record_spec(_table(p1, p2, exclude=["j_c"]), NAMES, KINDS, "s.toml"))
+    assert any("samples while the arm moves repeat the previous sample's positions" in nt for nt in rec.notes)
+    p1, p2, *_ = _write_log(tmp_path, np.random.default_rng(5), jitter=0.0)
+    rec = read_log(record_spec(_table(p1, p2, exclude=["j_c"]), NAMES, KINDS, "s.toml"))
+    assert not any("repeat the previous sample's positions" in nt for nt in rec.notes)

@@ -83,7 +83,8 @@ def _print_fit(model, fit, names: tuple[str, ...], loaded: bool = False) -> None
             f"warning: {names[j]}: the residual is {ratio:.0f}x the sensor noise ({fit.noise_rms[j]:.2g} N m "
             "after the filter): the model explains this channel far worse than the sensor allows (friction "
             "law, unmodelled dynamics, conversion constants, a clock offset between the log's files); "
-            "the std above account for it"
+            "the std above take its size into account, not a bias it leaves (a wrong conversion constant "
+            "or clock offset biases the estimates beyond them: fix those first)"
         )
 
 
