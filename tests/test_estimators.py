@@ -172,3 +172,20 @@ def test_table3_reproduced_where_the_reading_is_certain():
         assert 0.8 <= r["ratio"] <= 1.25, r
     assert r["ratio"] == pytest.approx(r["ours_pct"] / r["paper_pct"])
     assert "/32.2=" in format_comparison(res, "M1")  # d2 at tau_f = 0.02: the paper beside ours
+
+
+def test_the_exact_estimators_std_holds_the_truth_at_its_rate():
+    """One residual variance pooled over both joints' equations (12 times apart) and one averaged
+    colouring made J1, J2, r, b1 and d1's std 2-3.7 times too small (rms z 2.07 2.04 2.06 3.46 0.90
+    3.75 0.88 over 48 seeds): the std is now the Newey-West sandwich's. 12 seeds of the paper's
+    experiment (Tables 2 and 4)."""
+    from adaptive_dd.plant.two_link import ClosedFormTwoLink
+
+    arm = ClosedFormTwoLink.sice()
+    sim = simulate_open_loop(table2_torque(12), trial_rngs(100, 12), arm=arm, sensor=arm.sensor)
+    ex = estimate(sim.q_meas, sim.tau, sim.qd_meas, estimator="exact", tau_f=0.02)
+    z = (ex.final - arm.sigma) / ex.std
+    rms = np.sqrt(np.mean(z**2, axis=0))
+    assert np.all(rms[[0, 1, 2]] < 1.5), rms  # 2.0-2.1 with the pooled std
+    assert np.all(rms < 2.0), rms  # b1 and d1: 3.5-3.8 pooled; a bias the velocity noise leaves
+    assert np.all(rms > 0.5), rms  # not inflated either

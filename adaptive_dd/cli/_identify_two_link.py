@@ -192,6 +192,12 @@ def _print_with_bound(final, std, crb, rec, args: argparse.Namespace) -> None:
         "estimate; "
         f"condition number {crb.condition_number:.3g}"
     )
+    if getattr(args, "estimator", None) == "paper":
+        print(
+            "note: the paper's estimator's std is its forgetting-factor RLS's P on the scalar splits, not "
+            "a confidence interval: it leaves out the construction's bias (docs/paper_reading.md), which "
+            "can be many of these std; --estimator exact or output_error for bounds that hold the truth"
+        )
 
 
 def _identify_output_error(rec, sigma0, args: argparse.Namespace):

@@ -83,8 +83,6 @@ def add_parser(sub) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Run the leaderboard and write its four files."""
-    import numpy as np
-
     from adaptive_dd.arena.leaderboard import (
         COLUMNS,
         DEFAULT_CONTROLLERS,
@@ -140,7 +138,7 @@ def run(args: argparse.Namespace) -> int:
     if args.arms and scenarios:
         _say_tables_not_on_the_arms(scenarios, controllers, args.template)
     df = leaderboard(
-        scenarios, controllers, seeds=args.seeds, rng=np.random.default_rng(args.bootstrap_seed),
+        scenarios, controllers, seeds=args.seeds, rng=args.bootstrap_seed,
         progress=not args.no_progress, arms=args.arms, template=args.template, first_arm=args.first_arm,
         workers=args.workers,
     )  # fmt: skip

@@ -324,7 +324,23 @@ def solve_regression(
     s2 = (resid**2).sum(axis=(-2, -1)) / np.maximum(n_used - 7, 1)
     s2 = s2 * _autocorrelation_inflation(resid, max_lag)
     std = np.sqrt(np.abs(np.diagonal(pmat, axis1=-2, axis2=-1)) * s2[..., None])
+    if estimator in ("exact", "exact_batch_ls", "batch_ls") and max_lag > 0:
+        std = _newey_west_std(phi, resid, used, max_lag)  # rows differ in noise and are coloured
     return theta, pmat, std
+
+
+def _newey_west_std(phi: Array, resid: Array, used: NDArray[np.bool_], max_lag: int) -> Array:
+    """Sandwich ``A^-1 B A^-1`` (Bartlett weights up to ``max_lag``): each joint's own residual
+    level and the filters' colouring, where one pooled ``s^2`` understates joint 1's parameters."""
+    a = np.where(used[..., None], phi, 0.0)
+    A = np.einsum("...nri,...nrj->...ij", a, a)
+    g = np.einsum("...nri,...nr->...ni", a, resid)
+    B = np.einsum("...ni,...nj->...ij", g, g)
+    for k in range(1, int(max_lag) + 1):
+        c = np.einsum("...ni,...nj->...ij", g[..., k:, :], g[..., :-k, :])
+        B = B + (1.0 - k / (max_lag + 1.0)) * (c + np.swapaxes(c, -1, -2))
+    ai = np.linalg.inv(A)
+    return np.sqrt(np.abs(np.diagonal(ai @ B @ ai, axis1=-2, axis2=-1)))
 
 
 def _autocorrelation_inflation(resid: Array, max_lag: int) -> Array:
