@@ -104,6 +104,12 @@ def read_toml(path: str | Path, error: type[ValueError] = DataError) -> dict:
         raise error(f"{path}: not valid TOML: {exc}") from None
 
 
+MAX_SAMPLE_PERIOD = 0.1
+"""[s] a record sampled more slowly than this is another unit's time column (ms read as s)."""
+MAX_VALUE = 1e6
+"""A position [rad], velocity [rad/s] or torque [N m] beyond this is a corrupt cell, not data."""
+
+
 def check_identifiable(rec: Recording, tau_f: float) -> None:
     """Refuse, before any work, a record that cannot be identified or would take too long.
 
@@ -116,6 +122,17 @@ def check_identifiable(rec: Recording, tau_f: float) -> None:
     T, n = rec.sample_period, rec.t.size
     if not (np.isfinite(tau_f) and tau_f > 0):
         raise DataError(f"{rec.source}: --tau-f must be a positive number of seconds, got {tau_f}")
+    if tau_f < T:  # the filters' bilinear transform is only the derivative filter above a sample
+        raise DataError(
+            f"{rec.source}: --tau-f {tau_f:g} s is below the sample period T = {T:.6g} s: the derivative "
+            f"filters then pass noise at the Nyquist frequency; give --tau-f of at least a few samples "
+            "(the default sizes it to T: 0.02 s up to T = 10 ms)"
+        )
+    if T > MAX_SAMPLE_PERIOD:
+        raise DataError(
+            f"{rec.source}: samples {T:.6g} s apart (the time column read in s): a robot's record samples "
+            f"faster than every {MAX_SAMPLE_PERIOD:g} s; a time column in ms or ns: convert it to s"
+        )
     if tau_f / T > MAX_FILTER_SAMPLES:
         raise DataError(
             f"{rec.source}: tau_f / T = {tau_f / T:.3g} samples (tau_f = {tau_f} s, T = {T:.3g} s) "
@@ -132,6 +149,23 @@ def check_identifiable(rec: Recording, tau_f: float) -> None:
         raise DataError(
             f"{rec.source}: the arm does not move (position range {span.round(6)} rad, below "
             f"{MIN_MOTION} rad): nothing to identify"
+        )
+    tau_span = np.ptp(rec.tau, axis=0)
+    if np.any(tau_span == 0.0):
+        j = int(np.flatnonzero(tau_span == 0.0)[0])
+        raise DataError(
+            f"{rec.source}: column tau{j + 1} holds {rec.tau[0, j]:g} on every sample: a channel that "
+            "carries no torque; nothing to identify from it"
+        )
+    big = (
+        np.abs(np.concatenate([rec.q, rec.tau] + ([rec.qd] if rec.qd is not None else []), axis=1))
+        > MAX_VALUE
+    )
+    if big.any():
+        k, c = (int(x) for x in np.argwhere(big)[0])
+        raise DataError(
+            f"{rec.source}: a value beyond {MAX_VALUE:g} at row {k + 1} (column {c + 1} of q, tau, qd): "
+            "not a position, a velocity or a torque of an arm; a corrupt cell: remove or fix that row"
         )
 
 

@@ -211,7 +211,7 @@ def test_validate_prints_defaults_or_all_errors(tmp_path, capsys):
 
 def write_csv(path, q):
     t = np.arange(len(q)) * 1e-3
-    tau = np.zeros_like(q)
+    tau = q + 0.1 * t[:, None]  # a torque that varies (a constant channel is refused first)
     from adaptive_dd.io import write_recording
 
     return write_recording(path, t, q, q * 0, tau)
@@ -339,3 +339,60 @@ def test_a_controller_without_its_floor_gets_it_in_the_cli_and_a_warning_in_the_
     assert set(m["controllers"]) == {"adaptive_ct", "ct_oracle"}
     with pytest.warns(UserWarning, match="adaptive_ct's floor ct_oracle did not run"):
         run_benchmark(load_scenario(p), progress=False)
+
+
+def test_sigterm_stops_a_run_as_ctrl_c_does(tmp_path, tiny, monkeypatch, capsys):
+    """SIGTERM (timeout, CI, systemd) exited 143 and left an empty .partial-PID folder behind; it now
+    stops the run as Ctrl-C does: the old set intact, no staging folder, and the handler restored."""
+    import signal
+
+    import adaptive_dd.plotting as plotting
+
+    out = tmp_path / "out"
+    old_set(out)
+    before = signal.getsignal(signal.SIGTERM)
+
+    def terminate(*a, **k):
+        os.kill(os.getpid(), signal.SIGTERM)  # delivered to this (the main) thread: the handler raises
+
+    monkeypatch.setattr(plotting, "plot_tracking_errors", terminate)
+    assert main(["benchmark", str(tiny), "--out", str(out), "--no-progress"]) == EXIT_INTERRUPTED
+    assert_old_set_intact(out)
+    assert "interrupted; outputs left as before" in capsys.readouterr().err
+    assert signal.getsignal(signal.SIGTERM) is before
+
+
+def test_identify_without_arm_refuses_what_the_arm_path_refuses(tmp_path, capsys):
+    """The paper's-arm path (no --arm) accepted a record whose torques are all zero (every estimate 0,
+    CRB inf, exit 0), a corrupt 1e300 cell (J1 0.452 -> 0.785, exit 0), a time column in ms (T read as
+    1 s), --tau-f below a sample (a negative viscous friction) and --split beside another estimator."""
+    from adaptive_dd.io import write_recording
+
+    t = np.arange(3000) * 1e-3
+    q = np.column_stack([np.sin(2 * t), np.cos(3 * t)])
+    tau = np.column_stack([np.sin(5 * t), np.cos(7 * t)])
+    cases = {
+        "zero torque": (write_recording(tmp_path / "z.csv", t, q, q * 0, 0 * tau), "column tau1 holds 0"),
+        "a corrupt cell": (
+            write_recording(tmp_path / "b.csv", t, np.where(t[:, None] == t[100], 1e300, q), q * 0, tau),
+            "a value beyond 1e+06 at row 101",
+        ),
+        "ms": (write_recording(tmp_path / "ms.csv", t * 1e3, q, q * 0, tau), "a time column in ms or ns"),
+    }
+    for what, (path, needle) in cases.items():
+        assert main(["identify", str(path), "--out", str(tmp_path / "id")]) == 2, what
+        assert needle in capsys.readouterr().err, what
+    good = write_recording(tmp_path / "g.csv", t, q, q * 0, tau)
+    assert main(["identify", str(good), "--tau-f", "1e-5", "--out", str(tmp_path / "id")]) == 2
+    assert "--tau-f 1e-05 s is below the sample period" in capsys.readouterr().err
+    assert main(["identify", str(good), "--split", "16", "--out", str(tmp_path / "id")]) == 2
+    assert "--split: a split of the paper's estimator; --estimator exact" in capsys.readouterr().err
+
+
+def test_excite_refuses_a_ramp_as_long_as_the_record(tmp_path, capsys):
+    """--ramp 100 --duration 1 ran the whole design, then ended in an internal error (a singular
+    information matrix of a record inside the ramp)."""
+    arm = os.path.join(os.path.dirname(adaptive_dd.__file__), "..", "benchmarks", "scenarios", "sice_general.toml")
+    out = str(tmp_path / "x.toml")
+    assert main(["excite", "--arm", arm, "--ramp", "100", "--duration", "1", "--out", out]) == 2
+    assert "--ramp 100 s is not shorter than --duration 1 s" in capsys.readouterr().err

@@ -111,6 +111,12 @@ def main(argv: list[str] | None = None) -> int:
         _unknown_options(parser, args.command, unknown)
     args.given = frozenset(a.split("=", 1)[0] for a in argv if a.startswith("--"))
     args.argv = tuple(argv)  # the command as typed, for the outputs that record it
+    import signal
+    import threading
+
+    term = None
+    if threading.current_thread() is threading.main_thread():  # SIGTERM (timeout, CI, systemd) as Ctrl-C:
+        term = signal.signal(signal.SIGTERM, _terminated)  # the partial outputs removed, not left behind
     try:
         return int(args.func(args))
     except KeyboardInterrupt:
@@ -138,6 +144,14 @@ def main(argv: list[str] | None = None) -> int:
             file=sys.stderr,
         )
         return EXIT_INTERNAL
+    finally:
+        if term is not None:
+            signal.signal(signal.SIGTERM, term)
+
+
+def _terminated(signum, frame) -> None:
+    """SIGTERM raised as Ctrl-C's KeyboardInterrupt: the run stops the same way (outputs as before)."""
+    raise KeyboardInterrupt
 
 
 def _show_warning(message, category, filename, lineno, file=None, line=None) -> None:

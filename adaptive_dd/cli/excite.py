@@ -70,6 +70,11 @@ def run(args: argparse.Namespace) -> int:
         )
     if closed_form_view(arm) is not None:  # the paper's kind of arm: its general model
         arm = load_arm(args.arm, general="excite")
+    if args.ramp >= args.duration:  # a record inside the ramp: its bound's information matrix is singular
+        raise ParameterError(
+            f"--ramp {args.ramp:g} s is not shorter than --duration {args.duration:g} s: the record for the "
+            "bounds would hold the ramp alone; lengthen --duration or shorten --ramp"
+        )
     out = check_output_file(args.out)  # before the design, not after it
     lim = ExcitationLimits.of_arm(arm, acceleration=args.acceleration, margin=args.margin)
     plain = multisine(arm, lim, args.harmonics, args.f0)
@@ -94,6 +99,11 @@ def run(args: argparse.Namespace) -> int:
     trajectories = {"plain multi-sine": plain, "designed": best}
     if "reference" in read_toml(Path(args.arm)):  # the file's own motion, beside: what it already gives
         trajectories = {"scenario's reference": _AsIs(sc.reference), **trajectories}
+    if ramp >= args.duration:
+        raise ParameterError(
+            f"--ramp {args.ramp:g} s was lengthened to {ramp:g} s (the ramp took a joint beyond its velocity "
+            f"limit), not shorter than --duration {args.duration:g} s; lengthen --duration"
+        )
     rows = excitation_bounds(arm, trajectories, args.duration, ramp)
     _print_bounds(args, arm, res, rows)
     if ramp != args.ramp:

@@ -224,6 +224,9 @@ def run(args: argparse.Namespace) -> int:
                 "settings (drop --online to use them)",
                 DataError,
             )
+        if args.estimator != "paper":  # the splits are the paper's estimator's: the others fit all seven
+            refuse(args, ("--split",), f"a split of the paper's estimator; --estimator {args.estimator} "
+                   "fits the seven parameters at once (add --estimator paper)", DataError)  # fmt: skip
         return identify_two_link(args, two)
     from adaptive_dd.cli._identify_log import identify_log
     from adaptive_dd.outputs import OutputSet

@@ -31,7 +31,7 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
-from adaptive_dd.errors import DataError
+from adaptive_dd.errors import DataError, is_finite_number
 
 __all__ = [
     "FORMAT",
@@ -384,6 +384,10 @@ def load_identified_model(path, need_urdf: bool = True) -> IdentifiedModel:
     for k in ("sigma", "sigma_urdf", "std", "identified"):
         if len(kw[k]) != p:
             raise DataError(f"{path}: key '{k}' has {len(kw[k])} entries, 'names' {p}")
+    for k in ("sigma", "sigma_urdf", "viscous", "coulomb", "armature"):
+        bad = [v for v in kw[k] if not (is_finite_number(v) and abs(v) < 1e12)]
+        if bad:
+            raise DataError(f"{path}: key '{k}' must hold finite numbers (|x| < 1e12), got {bad[0]!r}")
     if np.shape(kw["covariance"]) != (p, p):
         raise DataError(f"{path}: key 'covariance' must be {p} x {p}")
     width = kw.get("coulomb_width")
