@@ -392,7 +392,8 @@ def test_identify_without_arm_refuses_what_the_arm_path_refuses(tmp_path, capsys
 def test_excite_refuses_a_ramp_as_long_as_the_record(tmp_path, capsys):
     """--ramp 100 --duration 1 ran the whole design, then ended in an internal error (a singular
     information matrix of a record inside the ramp)."""
-    arm = os.path.join(os.path.dirname(adaptive_dd.__file__), "..", "benchmarks", "scenarios", "sice_general.toml")
+    root = os.path.dirname(os.path.dirname(adaptive_dd.__file__))
+    arm = os.path.join(root, "benchmarks", "scenarios", "sice_general.toml")
     out = str(tmp_path / "x.toml")
     assert main(["excite", "--arm", arm, "--ramp", "100", "--duration", "1", "--out", out]) == 2
     assert "--ramp 100 s is not shorter than --duration 1 s" in capsys.readouterr().err
