@@ -75,6 +75,11 @@ def run(args: argparse.Namespace) -> int:
             f"--ramp {args.ramp:g} s is not shorter than --duration {args.duration:g} s: the record for the "
             "bounds would hold the ramp alone; lengthen --duration or shorten --ramp"
         )
+    from adaptive_dd.benchmark.scenario_base import run_estimate
+
+    est = run_estimate(round(args.duration / sc.sample_period), 1, 3, arm.n_joints)  # three tracked records
+    if est.bytes > LIMITS["max_bytes"] or est.seconds > LIMITS["max_seconds"]:
+        raise ParameterError(f"--duration {args.duration:g} s: records too large ({est}); reduce --duration")
     out = check_output_file(args.out)  # before the design, not after it
     lim = ExcitationLimits.of_arm(arm, acceleration=args.acceleration, margin=args.margin)
     plain = multisine(arm, lim, args.harmonics, args.f0)
