@@ -396,4 +396,4 @@ def test_excite_refuses_a_ramp_as_long_as_the_record(tmp_path, capsys):
     arm = os.path.join(root, "benchmarks", "scenarios", "sice_general.toml")
     out = str(tmp_path / "x.toml")
     assert main(["excite", "--arm", arm, "--ramp", "100", "--duration", "1", "--out", out]) == 2
-    assert "--ramp 100 s is not shorter than --duration 1 s" in capsys.readouterr().err
+    assert "--ramp 100 s is longer than --duration 1 s" in capsys.readouterr().err

@@ -70,9 +70,9 @@ def run(args: argparse.Namespace) -> int:
         )
     if closed_form_view(arm) is not None:  # the paper's kind of arm: its general model
         arm = load_arm(args.arm, general="excite")
-    if args.ramp >= args.duration:  # a record inside the ramp: its bound's information matrix is singular
+    if args.ramp > args.duration:  # a record inside the ramp: its bound's information matrix is singular
         raise ParameterError(
-            f"--ramp {args.ramp:g} s is not shorter than --duration {args.duration:g} s: the record for the "
+            f"--ramp {args.ramp:g} s is longer than --duration {args.duration:g} s: the record for the "
             "bounds would hold the ramp alone; lengthen --duration or shorten --ramp"
         )
     from adaptive_dd.benchmark.scenario_base import run_estimate
@@ -104,10 +104,10 @@ def run(args: argparse.Namespace) -> int:
     trajectories = {"plain multi-sine": plain, "designed": best}
     if "reference" in read_toml(Path(args.arm)):  # the file's own motion, beside: what it already gives
         trajectories = {"scenario's reference": _AsIs(sc.reference), **trajectories}
-    if ramp >= args.duration:
+    if ramp > args.duration:
         raise ParameterError(
             f"--ramp {args.ramp:g} s was lengthened to {ramp:g} s (the ramp took a joint beyond its velocity "
-            f"limit), not shorter than --duration {args.duration:g} s; lengthen --duration"
+            f"limit), longer than --duration {args.duration:g} s; lengthen --duration"
         )
     rows = excitation_bounds(arm, trajectories, args.duration, ramp)
     _print_bounds(args, arm, res, rows)
