@@ -137,7 +137,8 @@ def _two_link_record(path, T: float, n: int):
 
     t = np.arange(n) * T
     q = np.sin(t[:, None] * np.array([1.0, 1.3]))
-    return write_recording(path, t, q, np.cos(t[:, None] * np.array([1.0, 1.3])), np.zeros_like(q))
+    tau = np.sin(2.0 * t[:, None] * np.array([1.0, 1.3]))  # a varying torque (a constant one is refused)
+    return write_recording(path, t, q, np.cos(t[:, None] * np.array([1.0, 1.3])), tau)
 
 
 def test_identify_online_starts_from_the_scenario_arm(tmp_path, capsys, monkeypatch):

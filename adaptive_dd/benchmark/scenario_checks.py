@@ -279,7 +279,15 @@ def _known_tables(e: list, data: dict) -> dict[str, Any]:
     tables: dict[str, Any] = {}
     for t, val in data.items():
         if t not in KEYS:
-            e.append(f"[{t}]: unknown table; allowed: {', '.join(sorted(KEYS))}")
+            homes = [h for h, allowed in KEYS.items() if allowed is not None and t in allowed]
+            where = f"[{t}]" if isinstance(val, dict | list) else f"{t} (a key outside any table)"
+            hint = (
+                f" (did you mean {' or '.join(f'[{h}] {t}' for h in homes)}?)"
+                if homes
+                else did_you_mean(t, KEYS)
+            )
+            e.append(f"{where}: unknown{' table' if where.startswith('[') else ''}{hint}; allowed tables: "
+                     f"{', '.join(sorted(KEYS))}")  # fmt: skip
         elif t == "payload":
             if not isinstance(val, list) or not all(isinstance(x, dict) for x in val):
                 e.append("payload: must be an array of tables [[payload]]")
