@@ -18,6 +18,10 @@ with ``Lambda = 30 I``, ``Gamma^-1 = 1e-4 I`` (Euclidean, every link's ten param
 ``gamma^-1 = 1`` (natural, ``P_i+ = P_i^1/2 expm(dt/gamma P_i^1/2 B_i P_i^1/2) P_i^1/2`` per link,
 the draft's eq. for the discrete update). The draft's figures (joint RMS error, mean of 5 runs,
 round 1 -> round 5): no adaptation 9.9 -> 8.9, Euclidean 2.9 -> 1.9, natural 2.0 -> 0.32 deg.
+They are the means of the repository's ``matlab_code_MTtest/Varied_Noise40_*.txt``, which its
+``main.m`` writes from the "varied" experiment (the amplitude changing each round, no load), not
+from the loaded, repeated one the text describes and this script runs: the ordering and the fall
+of each law's error are what compare, not the values.
 
 Here, on the library's own kernels: the torque is :func:`~adaptive_dd.closed_loop.laws.model_torque`
 (``Y(q, qd, qd_r, a) pi_hat``, the ``slotine_li`` law's model term) plus ``K_D s`` with
