@@ -397,3 +397,13 @@ def test_excite_refuses_a_ramp_as_long_as_the_record(tmp_path, capsys):
     out = str(tmp_path / "x.toml")
     assert main(["excite", "--arm", arm, "--ramp", "100", "--duration", "1", "--out", out]) == 2
     assert "--ramp 100 s is longer than --duration 1 s" in capsys.readouterr().err
+
+
+EMPTY = [["benchmark", "--out", ""], ["benchmark", "--json="], ["simulate", "--out", ""]]
+
+
+@pytest.mark.parametrize("argv", EMPTY)
+def test_an_empty_path_is_refused_not_read_as_not_given(argv, capsys):
+    """--out "" wrote the results into the working folder; --json "" wrote OUT/metrics.json."""
+    assert main(argv) == 2
+    assert ": an empty value; give one" in capsys.readouterr().err

@@ -111,6 +111,11 @@ def main(argv: list[str] | None = None) -> int:
         _unknown_options(parser, args.command, unknown)
     args.given = frozenset(a.split("=", 1)[0] for a in argv if a.startswith("--"))
     args.argv = tuple(argv)  # the command as typed, for the outputs that record it
+    empty = [o for o in sorted(args.given) if getattr(args, o[2:].replace("-", "_"), None) == ""]
+    if empty:  # an empty path or address: never read as "not given" (--out "" wrote into the working folder)
+        print(f"adaptive-dd {args.command}: error: {', '.join(empty)}: an empty value; give one, or leave "
+              "the option out for its default", file=sys.stderr)  # fmt: skip
+        return EXIT_USAGE
     import signal
     import threading
 
