@@ -96,7 +96,10 @@ def test_validate_builds_plugins_with_their_settings(tmp_path, capsys, monkeypat
     (tmp_path / "payload_gradient.py").write_text((ROOT / "examples" / "payload_gradient.py").read_text())
     path = tmp_path / "s.toml"
     path.write_text(f'[run]\nduration = 1.0\ncontrollers = ["ct_oracle", "{spec}"]\n{table}')
-    assert main(["validate", str(path)]) == 1
+    try:
+        assert main(["validate", str(path)]) == 1
+    finally:  # this folder's module forgotten: a later test imports the examples' own
+        sys.modules.pop("payload_gradient", None)
     err = capsys.readouterr().err
     assert "1 problem(s)" in err and needle in err, err
 

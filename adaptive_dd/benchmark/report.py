@@ -430,11 +430,9 @@ def _targets(metrics: dict, res: BenchmarkResult) -> list[str]:
 def _no_armature_note(sc, ratio_lines: list[str]) -> list[str]:
     """A line pointing back to the warning before the run when a ratio target is not met on an arm
     with no armature (the hard case of adaptive_ct against its floor: a light arm)."""
-    if sc.closed_forms is not None or not any("NOT met" in x for x in ratio_lines):
-        return []
-    from adaptive_dd.benchmark.preflight import inertia_problems
+    from adaptive_dd.benchmark.preflight import lacks_armature
 
-    if not any(p.startswith("arm: no joint has an armature") for p in inertia_problems(sc)):
+    if not any("NOT met" in x for x in ratio_lines) or not lacks_armature(sc):
         return []
     return [
         "  note: no joint of this arm has an armature (the warning before the run): a geared drive's "

@@ -20,7 +20,7 @@ import sys
 
 import numpy as np
 
-from adaptive_dd.controllers.base import Controller, Gains
+from adaptive_dd.controllers.base import Controller, Gains, declared
 from adaptive_dd.errors import ParameterError
 
 __all__ = [
@@ -42,9 +42,6 @@ __all__ = [
     "unknown_settings",
 ]
 
-DEFAULT_FLOOR = "ct_oracle"
-"""The floor of a plug-in that declares none (a ``floor`` class attribute or setting)."""
-
 COMMON = {"bandwidth", "damping", "label", "floor"}
 """Settings every controller takes, built-in or plug-in (``docs/controllers.md``)."""
 
@@ -64,10 +61,10 @@ def floor_setting(table: str, value) -> str | None:
 
 def floor_of(ctrl) -> str | None:
     """The floor a controller object declares: its ``floor`` (a class attribute or the table's
-    setting), :data:`DEFAULT_FLOOR` when it has none, None for ``None`` or ``False``; anything else
-    is a :class:`ParameterError` naming the class."""
-    value = getattr(ctrl, "floor", DEFAULT_FLOOR)
-    if value is None or value is False:
+    setting), the documented default (``base.DECLARED``: ``ct_oracle``) when it has none, None for
+    ``None`` or ``False``; anything else is a :class:`ParameterError` naming the class."""
+    value = declared(ctrl, "floor")  # the documented default; False read as None there
+    if value is None:
         return None
     if not isinstance(value, str) or not value.strip():
         raise ParameterError(

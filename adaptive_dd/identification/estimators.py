@@ -320,27 +320,28 @@ def solve_regression(
     resid = np.where(
         used, y - np.einsum("...nij,...j->...ni", np.where(used[..., None], phi, 0.0), final), 0.0
     )
+    if estimator in ("exact", "exact_batch_ls", "batch_ls") and max_lag > 0:
+        return theta, pmat, _newey_west_std(phi, resid, used, max_lag)  # rows differ in noise, coloured
     n_used = used.sum(axis=(-2, -1))
     s2 = (resid**2).sum(axis=(-2, -1)) / np.maximum(n_used - 7, 1)
     s2 = s2 * _autocorrelation_inflation(resid, max_lag)
     std = np.sqrt(np.abs(np.diagonal(pmat, axis1=-2, axis2=-1)) * s2[..., None])
-    if estimator in ("exact", "exact_batch_ls", "batch_ls") and max_lag > 0:
-        std = _newey_west_std(phi, resid, used, max_lag)  # rows differ in noise and are coloured
     return theta, pmat, std
 
 
 def _newey_west_std(phi: Array, resid: Array, used: NDArray[np.bool_], max_lag: int) -> Array:
-    """Sandwich ``A^-1 B A^-1`` (Bartlett weights up to ``max_lag``): each joint's own residual
+    """Sandwich ``A^-1 S A^-1`` per record (``S`` the scores' Bartlett sum up to ``max_lag``,
+    :func:`~adaptive_dd.identification.log_covariance._bartlett_sum`): each joint's own residual
     level and the filters' colouring, where one pooled ``s^2`` understates joint 1's parameters."""
+    from adaptive_dd.identification.log_covariance import _bartlett_sum
+
     a = np.where(used[..., None], phi, 0.0)
     A = np.einsum("...nri,...nrj->...ij", a, a)
-    g = np.einsum("...nri,...nr->...ni", a, resid)
-    B = np.einsum("...ni,...nj->...ij", g, g)
-    for k in range(1, int(max_lag) + 1):
-        c = np.einsum("...ni,...nj->...ij", g[..., k:, :], g[..., :-k, :])
-        B = B + (1.0 - k / (max_lag + 1.0)) * (c + np.swapaxes(c, -1, -2))
+    g = np.einsum("...nri,...nr->...ni", a, resid)  # each sample's score (..., N, 7)
+    flat = g.reshape(-1, *g.shape[-2:])
+    S = np.stack([_bartlett_sum(x, int(max_lag), [(0, x.shape[0])]) for x in flat]).reshape(A.shape)
     ai = np.linalg.inv(A)
-    return np.sqrt(np.abs(np.diagonal(ai @ B @ ai, axis1=-2, axis2=-1)))
+    return np.sqrt(np.abs(np.diagonal(ai @ S @ ai, axis1=-2, axis2=-1)))
 
 
 def _autocorrelation_inflation(resid: Array, max_lag: int) -> Array:
