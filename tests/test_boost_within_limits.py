@@ -2,6 +2,7 @@
 read apart from the RLS's data selection."""
 
 import dataclasses
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -79,3 +80,34 @@ def test_the_detector_reads_an_equation_the_rls_skips():
 
 if __name__ == "__main__":  # pragma: no cover
     pytest.main([__file__, "-q"])
+
+
+def test_the_boosts_room_is_sized_on_the_rated_payload_not_the_schedule():
+    """``adaptive_ct``'s boost was sized on the scheduled payloads (and a ``[plant]``'s own
+    parameters), which no other law is told: with ``[arm] payload_capacity`` stated, the room is
+    the same whatever the schedule carries, and it is the model's with the rated payload."""
+    from adaptive_dd.benchmark.scenario import parse_scenario, read_toml
+    from adaptive_dd.closed_loop.boost import task_room
+
+    d = read_toml(
+        Path(__file__).resolve().parents[1] / "adaptive_dd" / "scenarios" / "vertical3_payload_exact.toml"
+    )
+    d["run"].update(seeds=1)
+    rooms = []
+    for masses in ((1.0, 0.5, 0.0), (0.2, 0.1, 0.0), (1.4, 1.4, 0.0)):
+        for p, m in zip(d["payload"], masses, strict=True):
+            p["mass"] = m
+        sc = parse_scenario(d, "v3.toml")
+        rooms.append(task_room(sc)[1])
+    assert np.array_equal(rooms[0], rooms[1]) and np.array_equal(rooms[0], rooms[2])
+    sc = parse_scenario(d, "v3.toml")
+    arm = sc.arm
+    t = np.arange(0, sc.n_samples, 10) * sc.sample_period
+    q, qd, qdd = sc.reference.sample(t)
+    rated = arm.sigma_with_payload(1.5, radius=sc.payload_radius)
+    tau = np.maximum(
+        np.abs(arm.inverse_dynamics(q, qd, qdd, arm.sigma)), np.abs(arm.inverse_dynamics(q, qd, qdd, rated))
+    )
+    assert np.allclose(rooms[0], np.asarray(arm.actuator.torque_limit) - tau)
+    lighter = task_room(sc, arm.with_(payload_capacity=0.5))[1]  # a smaller rating leaves more room
+    assert np.all(lighter >= rooms[0] - 1e-9) and np.any(lighter > rooms[0] + 1e-3)

@@ -157,3 +157,17 @@ def test_check_arm_with_payload_zero_checks_no_payload(capsys):
     assert "no payload" in out and "payload 2.0 kg" not in out
     assert main(["check", "--arm", sc, "--states", "5"]) == 0
     assert "payload 2.0 kg" in capsys.readouterr().out
+
+
+def test_identify_says_why_no_bound_where_the_model_at_the_estimate_blows_up(tmp_path, capsys):
+    """The paper's estimator with split 16 on a 0.5 s record gives J1 < 0: the Cramér-Rao bound at
+    that estimate simulates the record's torque through it and ended in "q has a non-finite value
+    nan at index (np.int64(35), ...)", exit 2, the estimate unprinted."""
+    sim = tmp_path / "sim"
+    assert main(["simulate", "--duration", "0.5", "--out", str(sim)]) == 0
+    capsys.readouterr()
+    argv = ["identify", str(sim / "trajectory.csv"), "--estimator", "paper", "--split", "16"]
+    assert main([*argv, "--out", str(tmp_path / "id")]) == 0
+    out, err = capsys.readouterr()
+    assert "CRB: not computed" in err and "non-finite" in err and "--estimator exact" in err
+    assert "    J1 " in out and "CRB std" not in out

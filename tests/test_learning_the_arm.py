@@ -289,3 +289,23 @@ def test_the_warm_up_is_longer_while_the_arm_is_learnt(arm):
     c_arm, _ = est_init(OnlineConfig(mode="arm"), arm, 1)
     c_set, _ = est_init(OnlineConfig(mode="arm", detector=Detector(warmup=0.2)), arm, 1)
     assert (c_pay.warmup, c_arm.warmup, c_set.warmup) == (500, 1000, 200)
+
+
+def test_sliding_modes_bound_is_the_models_stated_uncertainty_not_the_plants_draw():
+    """``sliding_mode`` read its bound from ``[plant.uncertainty]`` only: with the plant a URDF of its
+    own and ``[model] uncertainty`` stated it was told the model was exact, and with a drawn plant
+    and a model stated otherwise it was told the draw's levels."""
+    from types import SimpleNamespace
+
+    from adaptive_dd.closed_loop.controllers import with_stated_uncertainty
+
+    stated = SimpleNamespace(mass=0.1, com=0.01, inertia=0.2, viscous=0.5, coulomb=0.5, armature=0.3)
+    cad = SimpleNamespace(plant=SimpleNamespace(uncertainty=None), model_uncertainty=stated)
+    assert with_stated_uncertainty("sliding_mode", {}, cad)["uncertainty"] == vars(stated)
+    drawn = SimpleNamespace(mass=0.3, com=0.03, inertia=0.6, viscous=1.0, coulomb=1.0, armature=0.9)
+    other = SimpleNamespace(plant=SimpleNamespace(uncertainty=drawn), model_uncertainty=stated)
+    assert with_stated_uncertainty("sliding_mode", {}, other)["uncertainty"] == vars(stated)
+    only_draw = SimpleNamespace(plant=SimpleNamespace(uncertainty=drawn))
+    assert with_stated_uncertainty("sliding_mode", {}, only_draw)["uncertainty"] == vars(drawn)
+    mine = {"uncertainty": {"mass": 0.05}}
+    assert with_stated_uncertainty("sliding_mode", mine, other) == mine

@@ -407,3 +407,20 @@ def test_an_empty_path_is_refused_not_read_as_not_given(argv, capsys):
     """--out "" wrote the results into the working folder; --json "" wrote OUT/metrics.json."""
     assert main(argv) == 2
     assert ": an empty value; give one" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize(
+    ("argv", "says"),
+    [
+        (["benchmark", "--seeds", "5", "--seeds", "10"], "--seeds given 2 times"),
+        (["benchmark", "--seeds=5", "--seeds", "10"], "--seeds given 2 times"),
+        (["benchmark", "--controllers", "pd", "--controllers", "adaptive_ct"], "--controllers given 2 times"),
+        (["sweep", "x.toml", "--no-progress", "--no-progress"], "--no-progress given 2 times"),
+    ],
+)
+def test_an_option_given_twice_is_refused_not_the_last_taken(capsys, argv, says):
+    """``--seeds 5 --seeds 10`` ran 10 seeds without a word."""
+    with pytest.raises(SystemExit) as e:
+        main(argv)
+    err = capsys.readouterr().err
+    assert e.value.code == 2 and says in err and f"usage: adaptive-dd {argv[0]}" in err

@@ -351,6 +351,12 @@ def test_a_ratio_below_one_of_adaptive_ct_is_said_to_be_its_boost():
     assert any("a ratio below 1 is that boost, not a model better than the true one" in x for x in lines)
     st["mean"] = 1.02
     assert not any("boost" in x for x in _seed_tables(ctrls, "head"))
+    # sliding_mode's boundary layer is a feedback its floor (slotine_li_oracle) has not either
+    st["mean"] = 0.89
+    sliding = {"sliding_mode": {"floor": "slotine_li_oracle", "segments": [{"ratio_to_floor": st}]}}
+    assert any(
+        "sliding_mode adds a robust term" in x and "is that term" in x for x in _seed_tables(sliding, "head")
+    )
 
 
 @pytest.mark.parametrize("name", ["alternating.toml", "weak"])
@@ -428,7 +434,7 @@ def test_an_arm_with_no_armature_is_warned_of_and_is_the_hard_case_it_says():
     assert (
         len(said) == 1
         and "state [arm] armature" in said[0]
-        and "vertical3_payload_exact.toml 2.245" in said[0]
+        and "vertical3_payload_exact.toml 2.687" in said[0]
     )
     d["arm"]["armature"] = [0.05, 0.05, 0.02]
     assert not [x for x in inertia_problems(parse_scenario(d, "v3.toml")) if "armature" in x]
@@ -438,7 +444,7 @@ def test_an_arm_with_no_armature_is_warned_of_and_is_the_hard_case_it_says():
 
 def test_the_no_armature_warnings_figure_holds_on_vertical3():
     """The warning's figure: on vertical3 (exact) adaptive_ct is far further from its floor in the
-    1 kg segment without armature (2.245, 10 seeds) than with [0.05, 0.05, 0.02] (1.262)."""
+    1 kg segment without armature (2.687, 10 seeds) than with [0.05, 0.05, 0.02] (1.731)."""
     from adaptive_dd.benchmark.scenario import parse_scenario, read_toml
 
     means = {}
@@ -455,7 +461,7 @@ def test_the_no_armature_warnings_figure_holds_on_vertical3():
         seg = (t >= 3.0) & (t < 8.0)
         rms = {c: np.sqrt(np.mean((ref - r.q)[:, seg] ** 2, axis=(1, 2))) for c, r in e.items()}
         means[bool(armature)] = float(np.mean(rms["adaptive_ct"] / rms["ct_oracle"]))
-    assert means[False] > 1.8 and means[True] < 1.4, means
+    assert means[False] > 2.2 and means[True] < 2.0 and means[False] > 1.4 * means[True], means
 
 
 def test_a_prismatic_joints_limits_and_effort_are_in_metres_and_newtons(tmp_path):

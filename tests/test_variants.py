@@ -97,6 +97,17 @@ def test_a_wrong_variant_is_an_error_of_the_file_naming_its_table(tmp_path, tabl
     assert says in str(err.value)
 
 
+def test_a_variant_run_controllers_does_not_list_is_said_to_be_one(tmp_path):
+    """A variant's table beside a run.controllers without it read "not a controller of
+    run.controllers", as a misspelt table does: it says how to run it."""
+    text = (
+        '[run]\nduration = 2.0\nseeds = 1\ncontrollers = ["ct_oracle", "adaptive_ct"]\n'
+        '[controllers.fast]\nlaw = "adaptive_ct"\nboost_bandwidth = 200.0\n'
+    )
+    with pytest.raises(ScenarioError, match=r"controllers\.fast: a variant of 'adaptive_ct'.*add 'fast'"):
+        load_scenario(str(_write(tmp_path, text)))
+
+
 def test_a_variant_runs_beside_its_law_and_one_that_changes_nothing_gives_its_numbers(tmp_path):
     from adaptive_dd import run_benchmark
 

@@ -108,8 +108,13 @@ def _check_options(e: list, opts: Any, ctrls: tuple) -> None:
             continue
         name, table = item
         if ctrls and name not in names:
+            law = dict(table).get("law")
             e.append(
-                f"controllers.{name}: not a controller of run.controllers ({', '.join(ctrls)})"
+                f"controllers.{name}: a variant of {law!r} that run.controllers ({', '.join(ctrls)}) does "
+                f"not list: add {name!r} to run.controllers to run it (--controllers picks among those), "
+                "or remove the table"
+                if isinstance(law, str)
+                else f"controllers.{name}: not a controller of run.controllers ({', '.join(ctrls)})"
                 + _hint(name, ctrls)
             )
         _plain(e, f"controllers.{name}", table)

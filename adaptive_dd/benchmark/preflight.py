@@ -227,6 +227,8 @@ def resolved_settings(scenario) -> list[str]:
         table = table_name(spec)  # where the setting is written (a label names the results only)
         for key, st in entry.settings.items():
             default = st.default(kind)
+            if default is None and key in ("gamma", "gain") and key not in given and kind != "two_link":
+                out.append(derived_gain(scenario, spec, table, key))
             if default is None or default is ABSENT:
                 continue
             v = given.get(key, default)
@@ -243,10 +245,28 @@ def resolved_settings(scenario) -> list[str]:
     return out
 
 
+def derived_gain(scenario, spec: str, table: str, key: str) -> str:
+    """A gradient law's adaptation gains (``gamma``) or ``natural_adaptive``'s ``gain`` as the run
+    derives them from the arm and the reference (:mod:`adaptive_dd.closed_loop.adaptation_gain`)."""
+    from adaptive_dd.controllers.registry import scenario_controller
+
+    law = scenario_controller(scenario, spec)[1]
+    value = getattr(law, key)
+    shown = [float(f"{x:.4g}") for x in np.ravel(value)] if key == "gamma" else float(f"{value:.4g}")
+    if getattr(law, "name", "") == "craig_hsu_sastry":
+        why = "default: the constant (its adaptation reads the acceleration; docs/controllers.md)"
+    elif key == "gain":
+        why = "derived: slotine_li's derived mass gain / (link mass + payload capacity / 2)^2"
+    else:
+        why = "derived: each payload parameter at one rate, the fastest at half the feedback's lambda"
+    return f"controllers.{table}.{key} = {shown}   ({why})"
+
+
 def derived_boost(scenario, name: str = "adaptive_ct") -> list[str]:
     """``adaptive_ct``'s boost bandwidth per joint on an N-joint arm, as the run derives it from the
     task's torque room and the sensors' noise (:mod:`adaptive_dd.closed_loop.boost`)."""
     from adaptive_dd.controllers.registry import scenario_controller
+    from adaptive_dd.identification.row_weights import pass_mass
 
     law = scenario_controller(scenario, name)[1]
     if not hasattr(law, "boost_bandwidths"):
@@ -255,7 +275,12 @@ def derived_boost(scenario, name: str = "adaptive_ct") -> list[str]:
     out = [
         f"controllers.{name} boost bandwidth per joint = {wb} rad/s   (derived: at most "
         "boost_bandwidth, its noise torque 3 std inside the room the torque limit leaves beside the "
-        "reference's)"
+        f"reference's on the model carrying {pass_mass(scenario.arm, scenario):g} kg, "
+        + (
+            "[arm] payload_capacity)"
+            if scenario.arm.payload_capacity is not None
+            else "the heaviest payload)"
+        )
     ]
     room = law.task[1].min(axis=0) if law.task is not None else np.ones(len(wb))  # the room it sized on
     full = [j for j in range(room.size) if room[j] <= 0.0]
@@ -403,8 +428,8 @@ def inertia_problems(scenario) -> list[str]:
             "arm has little). A light arm is the hard case of adaptive_ct against its floor (the "
             "milliseconds before it detects a swap move a light arm further): exact, 10 "
             "seeds, benchmarks/scenarios/jaco2.toml 1.64 unloaded, 1.00 with "
-            "armature [0.05, 0.05, 0.05, 0.02, 0.02, 0.02]; vertical3_payload_exact.toml 2.245 in its "
-            "1 kg segment, 1.262 with [0.05, 0.05, 0.02]"
+            "armature [0.05, 0.05, 0.05, 0.02, 0.02, 0.02]; vertical3_payload_exact.toml 2.687 in its "
+            "1 kg segment, 1.731 with [0.05, 0.05, 0.02]"
         )
     for j in np.flatnonzero(fc > FRICTION_ACCELERATION * inertia):
         out.append(

@@ -77,6 +77,23 @@ def _unknown_options(parser: argparse.ArgumentParser, command: str, unknown: lis
     sub.error(f"unrecognized arguments: {' '.join(unknown)}" + (f" ({hints})" if hints else ""))
 
 
+def _repeated_options(parser: argparse.ArgumentParser, command: str, argv: list[str]) -> None:
+    """Exit 2 naming an option given twice that takes one value (``--seeds 5 --seeds 10`` ran 10
+    seeds without a word); options meant to repeat (append, count) may."""
+    sub = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction)).choices[command]
+    action_of = {o: a for a in sub._actions for o in a.option_strings}
+    seen: dict = {}
+    for token in argv[: argv.index("--")] if "--" in argv else argv:
+        action = action_of.get(token.split("=", 1)[0]) if token.startswith("-") else None
+        if action is None or isinstance(action, argparse._AppendAction | argparse._CountAction):
+            continue
+        seen.setdefault(action.dest, []).append(token.split("=", 1)[0])
+    twice = [names for names in seen.values() if len(names) > 1]
+    if twice:
+        said = "; ".join(f"{' and '.join(dict.fromkeys(n))} given {len(n)} times" for n in twice)
+        sub.error(f"{said}: give each option once (the last would silently win)")
+
+
 def _is_user_error(exc: BaseException) -> bool:
     """Our errors, file-system errors, and plain ValueErrors raised by adaptive_dd's own code."""
     from adaptive_dd.errors import DataError, ScenarioError, SignalError, UrdfError
@@ -109,6 +126,7 @@ def main(argv: list[str] | None = None) -> int:
     args, unknown = parser.parse_known_args(argv)
     if unknown:  # the command's own usage, and the option meant (no abbreviations are taken)
         _unknown_options(parser, args.command, unknown)
+    _repeated_options(parser, args.command, argv)
     args.given = frozenset(a.split("=", 1)[0] for a in argv if a.startswith("--"))
     args.argv = tuple(argv)  # the command as typed, for the outputs that record it
     empty = [o for o in sorted(args.given) if getattr(args, o[2:].replace("-", "_"), None) == ""]

@@ -179,6 +179,11 @@ def _write_online(args, rec, outputs, model, mass, alarm, alarms) -> None:
 def _print_with_bound(final, std, crb, rec, args: argparse.Namespace) -> None:
     from adaptive_dd.plant.parameters import SIGMA_NAMES
 
+    if crb is None:  # said on stderr by _identify_bound
+        print(f"{'param':>6} {'estimate':>12} {'std':>10}")
+        for k, name in enumerate(SIGMA_NAMES):
+            print(f"{name:>6} {final[k]:12.5g} {std[k]:10.2g}")
+        return
     print(f"{'param':>6} {'estimate':>12} {'std':>10} {'CRB std':>10} {'CRB [%]':>9} {'std/CRB':>8}")
     for k, name in enumerate(SIGMA_NAMES):
         print(
@@ -219,7 +224,9 @@ def _identify_output_error(rec, sigma0, args: argparse.Namespace):
 
 
 def _identify_bound(rec, sigma, args: argparse.Namespace):
-    """Cramér-Rao bound at the estimate for the record's torque, the initial state estimated too."""
+    """Cramér-Rao bound at the estimate for the record's torque, the initial state estimated too;
+    None (said) when the model at the estimate, driven by the record's torque, does not stay finite."""
+    from adaptive_dd.errors import SignalError
     from adaptive_dd.identification.fisher import fisher_information
     from adaptive_dd.plant.parameters import project_sigma
 
@@ -227,14 +234,23 @@ def _identify_bound(rec, sigma, args: argparse.Namespace):
     if rec.qd is not None:  # a measured velocity within 3 noise std of zero: at rest (stuck)
         at_rest = np.abs(rec.qd[0]) <= 3 * np.sqrt(np.asarray(args.velocity_variance))
         qd0 = np.where(at_rest, 0.0, rec.qd[0])
-    return fisher_information(
-        project_sigma(sigma),
-        rec.tau,
-        rec.sample_period,
-        args.position_variance,
-        args.velocity_variance,
-        measured=("q", "qd") if rec.qd is not None else ("q",),
-        q0=rec.q[0],
-        qd0=qd0,
-        initial_state="unknown",
-    )
+    try:
+        return fisher_information(
+            project_sigma(sigma),
+            rec.tau,
+            rec.sample_period,
+            args.position_variance,
+            args.velocity_variance,
+            measured=("q", "qd") if rec.qd is not None else ("q",),
+            q0=rec.q[0],
+            qd0=qd0,
+            initial_state="unknown",
+        )
+    except SignalError as exc:
+        print(
+            f"CRB: not computed: the record's torque drives the model at this estimate to a non-finite "
+            f"state ({exc}): the estimate is far from the arm that made the record (a short or little "
+            "exciting record); a longer record, or --estimator exact / output_error",
+            file=sys.stderr,
+        )
+        return None

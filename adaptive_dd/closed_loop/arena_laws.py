@@ -12,6 +12,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from adaptive_dd.closed_loop.adaptation import ADAPT_CHS, ADAPT_ICL, ADAPT_NATURAL
+from adaptive_dd.closed_loop.adaptation_gain import payload_gains
 from adaptive_dd.closed_loop.controllers import (
     ARM_CONTROLLERS,
     DEFAULT_PAYLOAD_GAMMA,
@@ -236,6 +237,14 @@ class CraigHsuSastry(SlotineLi):
     name = "craig_hsu_sastry"
     floor = "ct_oracle_textbook"
 
+    def state_task(self, scenario) -> None:
+        """Nothing: its gain stays :data:`DEFAULT_PAYLOAD_GAMMA` times the inertia's mean. The
+        gains ``slotine_li`` derives from the task assume the sliding variable's feedback, which this
+        law has not (its adaptation reads the measured acceleration through ``M_hat^-1``): with them
+        it was 1.8-42x its floor in the unloaded first segment of the exact UR5 and Panda and of
+        six drawn arms, and 578x and 1630x in the last segment of two of those arms
+        (``benchmarks/adaptation_gains.py``)."""
+
     def law_config(self, sample_period):
         box = super().law_config(sample_period)
         m0 = np.maximum(self.arm.nominal_inertia(), 1e-9)  # armature included
@@ -304,11 +313,20 @@ class NaturalAdaptive(Law):
         self.max_mass = self.settings.get("max_mass", cap if cap is not None else NATURAL_MAX_MASS)
         if not (_is_number(self.max_mass) and self.max_mass > 0):
             raise ParameterError(f"{where}.max_mass: a number > 0 [kg], got {self.max_mass!r}")
-        m_j = float(arm.pi[10 * int(arm.payload_joint)])
-        derived = DEFAULT_PAYLOAD_GAMMA[0] / (m_j + 0.5 * float(self.max_mass)) ** 2
-        self.gain = self.settings.get("gain", derived)
+        self.gain = self.settings.get("gain", self._gain(DEFAULT_PAYLOAD_GAMMA[0]))
         if not (_is_number(self.gain) and self.gain > 0):
             raise ParameterError(f"{where}.gain: a number > 0, got {self.gain!r}")
+
+    def _gain(self, mass_gain: float) -> float:
+        m_j = float(self.arm.pi[10 * int(self.arm.payload_joint)])
+        return mass_gain / (m_j + 0.5 * float(self.max_mass)) ** 2
+
+    def state_task(self, scenario) -> None:
+        """Unless ``gain`` is given, the mass gain ``gamma_m`` of ``slotine_li``'s gains derived for
+        ``scenario`` (:func:`~adaptive_dd.closed_loop.adaptation_gain.payload_gains`)."""
+        if "gain" not in self.settings:
+            lam, k = self.gains.roots()
+            self.gain = self._gain(float(payload_gains(self.arm, scenario, k, lam)[0]))
 
     def law_config(self, sample_period):
         lam, k = self.gains.roots()

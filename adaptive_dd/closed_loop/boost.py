@@ -11,8 +11,8 @@ is a few N m on a drawn arm's shoulder, as large as the torque its limit leaves 
 reference's, and the command saturated on a few per cent of each loaded segment after its alarm.
 The bandwidth of each joint is therefore the largest, up to ``boost_bandwidth``, for which that
 noise stays :data:`NOISE_SIGMAS` standard deviations inside the room the torque limit leaves
-beside the reference's own torque (inverse dynamics with each segment's payload) at every
-instant of the reference: ``NOISE_SIGMAS std_j(t) <= limit_j - |tau_ref,j(t)|``. A joint
+beside the reference's own torque (the model's inverse dynamics, unloaded and with the rated
+payload) at every instant of the reference: ``NOISE_SIGMAS std_j(t) <= limit_j - |tau_ref,j(t)|``. A joint
 with no room keeps the law's own bandwidth (no boost). Without a task (a controller built with
 no scenario) the boost is ``boost_bandwidth`` on every joint.
 """
@@ -34,15 +34,22 @@ ROOM_STEP = 0.01
 """[s] between the reference's instants at which the room is taken."""
 
 
-def task_room(scenario) -> tuple[Array, Array]:
+def task_room(scenario, arm=None) -> tuple[Array, Array]:
     """``(q (K, n), room (K, n))``: the reference's positions every :data:`ROOM_STEP` and the
-    torque each joint's limit leaves beside the reference's inverse dynamics there, the largest
-    over the scenario's payload segments (``limit - max |tau|``, negative where none is left)."""
-    arm = scenario.arm
+    torque each joint's limit leaves beside the reference's inverse dynamics there on the model
+    ``arm`` (default ``scenario.arm``), the largest of the arm unloaded and carrying its rated
+    payload (:func:`~adaptive_dd.identification.row_weights.pass_mass`: ``[arm] payload_capacity``,
+    else the heaviest payload the scenario names) at the payload frame (``limit - max |tau|``,
+    negative where none is left). Neither the plant's parameters nor the schedule's payloads enter
+    when a capacity is stated: no other law is told them."""
+    from adaptive_dd.identification.row_weights import pass_mass
+
+    arm = scenario.arm if arm is None else arm
     step = max(1, round(ROOM_STEP / scenario.sample_period))
     t = np.arange(0, scenario.n_samples, step) * scenario.sample_period
     q, qd, qdd = scenario.reference.sample(t)
-    tau = np.max([np.abs(arm.inverse_dynamics(q, qd, qdd, s)) for s in scenario.segment_sigmas()], axis=0)
+    rated = arm.sigma_with_payload(pass_mass(arm, scenario), radius=scenario.payload_radius)
+    tau = np.max([np.abs(arm.inverse_dynamics(q, qd, qdd, s)) for s in (arm.sigma, rated)], axis=0)
     limit = np.asarray(arm.actuator.torque_limit, dtype=float)
     return np.asarray(q, dtype=float), limit[None, :] - tau
 

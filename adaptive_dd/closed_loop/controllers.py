@@ -20,6 +20,7 @@ from typing import Any, NamedTuple
 import numpy as np
 from numpy.typing import NDArray
 
+from adaptive_dd.closed_loop.adaptation_gain import DEFAULT_PAYLOAD_GAMMA, given_gains, payload_gains
 from adaptive_dd.closed_loop.batches import estimator_batch, shaped_inputs
 from adaptive_dd.closed_loop.laws import (
     KIND_CT,
@@ -297,10 +298,6 @@ class CTOracleTextbook(CTOracle):
         return self._config(sample_period, KIND_CT, MODEL_TRUE, reference_velocity=False)
 
 
-DEFAULT_PAYLOAD_GAMMA = (2.0, 0.2, 0.2, 0.2, 0.02, 0.02, 0.02, 0.02, 0.02, 0.02)
-"""Slotine-Li adaptation gains of the payload's ten parameters (m, m c, I about the frame)."""
-
-
 class SlotineLiOracle(Law):
     """Slotine-Li with the true model and no adaptation (the floor of ``slotine_li``)."""
 
@@ -325,21 +322,23 @@ class SlotineLi(Law):
     def __init__(self, arm, bandwidth=40.0, damping: float = 1.0, **settings) -> None:
         super().__init__(arm, bandwidth, damping, **settings)
         where = f"controllers.{self.name}"
-        gamma = self.settings.get("gamma", DEFAULT_PAYLOAD_GAMMA)
-        if isinstance(gamma, np.ndarray):
-            gamma = gamma.tolist()
-        ok = isinstance(gamma, list | tuple) and all(_is_number(g) for g in gamma)
-        if not ok or len(gamma) != 10 or not all(g > 0 for g in gamma):
-            raise ParameterError(
-                f"{where}.gamma: 10 positive adaptation gains (the payload's m, m c, I), got {gamma!r}"
-            )
-        self.gamma = np.array(gamma, dtype=float)
+        self.gamma = given_gains(where, self.settings.get("gamma", DEFAULT_PAYLOAD_GAMMA))
         for key, default in (("max_mass", 20.0), ("com_radius", 0.3)):
             v = self.settings.get(key, default)
             if not (_is_number(v) and v > 0):
                 raise ParameterError(f"{where}.{key}: a number > 0, got {v!r}")
         self.max_mass = float(self.settings.get("max_mass", 20.0))
         self.com_radius = float(self.settings.get("com_radius", 0.3))
+
+    def state_task(self, scenario) -> None:
+        """Unless ``gamma`` is given, the adaptation gains derived from the arm and ``scenario``'s
+        reference (:func:`~adaptive_dd.closed_loop.adaptation_gain.payload_gains`: each parameter
+        adapted at the same rate, the fastest mode at half the feedback's ``lambda``); without a
+        task, :data:`DEFAULT_PAYLOAD_GAMMA`."""
+        if "gamma" in self.settings:
+            return
+        lam, k = self.gains.roots()
+        self.gamma = payload_gains(self.arm, scenario, k, lam)
 
     def law_config(self, sample_period):
         lam, k = self.gains.roots()
@@ -466,7 +465,7 @@ class AdaptiveCT(Law):
         level floor from the same pass (:func:`~adaptive_dd.identification.online_config.detector_floor`)."""
         from adaptive_dd.closed_loop.boost import task_room
 
-        self.task = task_room(scenario)
+        self.task = task_room(scenario, self.arm)
         o = self.online
         derive_floor = o.detector is not None and o.detector.floor is None
         if o.row_weights is None or derive_floor:
@@ -579,15 +578,14 @@ def with_stated_uncertainty(name: str, options: dict, scenario) -> dict:
     learns the arm, whatever the plant is (``docs/learning_the_arm.md``). Normal levels (clipped
     at 3) are given the uniform levels of the same variance (``level * sqrt(3)``). Other
     controllers' options, and a model stated exact, are returned as they are, but for
-    ``sliding_mode``'s, given the levels of ``[plant.uncertainty]`` as its ``uncertainty`` (the
-    bound of its model error)."""
+    ``sliding_mode``'s, given the same stated levels as its ``uncertainty`` (the bound of its model
+    error) unless its own table gives one."""
     from adaptive_dd.plant.uncertainty import stated_uncertainty
 
-    drawn = getattr(getattr(scenario, "plant", None), "uncertainty", None)
-    if name == "sliding_mode" and drawn is not None and "uncertainty" not in (options or {}):
-        keys = ("mass", "com", "inertia", "viscous", "coulomb", "armature", "distribution")
-        return {**(options or {}), "uncertainty": {k: getattr(drawn, k) for k in keys if hasattr(drawn, k)}}
     unc = stated_uncertainty(scenario)
+    if name == "sliding_mode" and unc is not None and "uncertainty" not in (options or {}):
+        keys = ("mass", "com", "inertia", "viscous", "coulomb", "armature", "distribution")
+        return {**(options or {}), "uncertainty": {k: getattr(unc, k) for k in keys if hasattr(unc, k)}}
     est = (options or {}).get("estimator", {})
     if name != "adaptive_ct" or unc is None or not isinstance(est, dict):
         return options

@@ -20,7 +20,7 @@ Built-in settings:
 ``ct_oracle_late``
     ``delay`` [s]: how long after each swap its true model switches.
 ``sliding_mode`` (N-joint arms)
-    ``uncertainty`` (the levels of ``[plant.uncertainty]``, by default the scenario's), ``max_mass``,
+    ``uncertainty`` (the levels of ``[plant.uncertainty]``, by default the model's stated ones), ``max_mass``,
     ``com_radius`` (the payload's bound).
 ``composite``, ``icl``, ``craig_hsu_sastry`` (N-joint arms)
     ``slotine_li``'s ``gamma``, ``max_mass``, ``com_radius``.
@@ -252,9 +252,11 @@ _BOX_RULE = (
 )
 _SLOTINE = {
     "gamma": Setting(
-        "adaptation gains",
+        "adaptation gains; default on an N-joint arm: derived from the arm and the reference, each "
+        "parameter adapted at one rate, the fastest at half the feedback's lambda "
+        "(adaptive_dd.closed_loop.adaptation_gain)",
         tuple(float(x) for x in DEFAULT_GAMMA),
-        (2.0, 0.2, 0.2, 0.2, 0.02, 0.02, 0.02, 0.02, 0.02, 0.02),
+        None,
         rule=_GAMMA_RULE,
     ),
     "max_mass": Setting("the heaviest payload the a-priori box admits [kg]", 5.0, 20.0, _BOX_RULE, "kg"),
@@ -268,7 +270,8 @@ _NOT_TWO_LINK = "N-joint arms only: " + _N_JOINT_ONLY
 _SLIDING = {
     "uncertainty": Setting(
         "the arm's parameter error levels bounding the model error (the keys of [plant.uncertainty]); "
-        "default: the scenario's [plant.uncertainty], none when it states none",
+        "default: the model's stated uncertainty ([model] uncertainty, else [plant.uncertainty]), "
+        "none when it states none",
         ABSENT,
         None,
         rule=_NOT_TWO_LINK,

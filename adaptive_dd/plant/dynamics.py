@@ -35,7 +35,9 @@ def as_joint_array(x: ArrayLike, name: str) -> Array:
         raise SignalError(f"{name} must have shape (..., 2), got {a.shape}")
     if not np.all(np.isfinite(a)):
         bad = np.argwhere(~np.isfinite(a))[0]
-        raise SignalError(f"{name} has a non-finite value {a[tuple(bad)]} at index {tuple(bad)}")
+        raise SignalError(
+            f"{name} has a non-finite value {a[tuple(bad)]} at index {tuple(int(i) for i in bad)}"
+        )
     return a
 
 

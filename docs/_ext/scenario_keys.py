@@ -92,14 +92,15 @@ MEANING = {
     "its table's settings (a variant).",
     "setting.floor": "The run's controller this one is measured against, per seed; false for none.",
     "setting.sigma": "The fixed model's base parameters (seven, two-link arm).",
-    "setting.gamma": "Adaptation gains of Slotine-Li.",
+    "setting.gamma": "Adaptation gains of Slotine-Li (N-joint arms: derived from the arm and the "
+    "reference unless given; `adaptive-dd validate` prints them).",
     "setting.gain": "`natural_adaptive` (N-joint arms): the natural law's one gain; default derived "
     "from Slotine-Li's mass gain, the payload link's mass and `max_mass`.",
     "setting.max_mass": "Largest payload mass Slotine-Li's box admits [kg] (5 two-link, 20 N-joint).",
     "setting.com_radius": "The payload's size in Slotine-Li's box [m]: the disk's radius at the tip"
     " (two-link, 0.1), its centre of mass from the flange (N-joint, 0.3).",
     "setting.uncertainty": "`sliding_mode` (N-joint arms): the arm's error levels that bound its model "
-    "error (the keys of `[plant.uncertainty]`; default: the scenario's).",
+    "error (the keys of `[plant.uncertainty]`; default: the model's stated uncertainty).",
     "setting.delay": "`ct_oracle_late`: how long after each swap its true model switches [s], a "
     "whole number of samples (default 0.01).",
     "setting.boost_bandwidth": "Bandwidth of the feedback boost after a change alarm [rad/s].",
