@@ -10,9 +10,9 @@ not within 0.3 s after a swap; a swap with none).
 Run: ``PYTHONPATH=. python benchmarks/boost_saturation.py --first-arm 100 --arms 30 --seeds 3``
 (``--template FILE`` another population template, e.g. ``population_drawn.toml``;
 ``--scenario FILE --seeds 50`` a scenario's own arm instead of drawn ones);
-``--cap`` runs the boost at ``boost_bandwidth`` on every joint (no task room:
-``adaptive_dd.closed_loop.boost``); ``--no-boost`` runs adaptive_ct without it (``boost_duration``
-and ``boost_ramp`` 0).
+``--cap`` runs the boost capped at ``boost_bandwidth`` on every joint (no noise criterion:
+``adaptive_dd.closed_loop.boost``; the per-sample limit on the command stays); ``--no-boost`` runs
+adaptive_ct without it (``boost_duration`` and ``boost_ramp`` 0).
 """
 
 from __future__ import annotations

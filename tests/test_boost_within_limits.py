@@ -82,10 +82,9 @@ if __name__ == "__main__":  # pragma: no cover
     pytest.main([__file__, "-q"])
 
 
-def test_the_boosts_room_is_sized_on_the_rated_payload_not_the_schedule():
-    """``adaptive_ct``'s boost was sized on the scheduled payloads (and a ``[plant]``'s own
-    parameters), which no other law is told: with ``[arm] payload_capacity`` stated, the room is
-    the same whatever the schedule carries, and it is the model's with the rated payload."""
+def test_the_boosts_caps_read_no_payload_the_scheduled_nor_the_rated():
+    """``adaptive_ct``'s boost was sized on the torque room beside the scheduled payloads, which no
+    other law is told: its caps now read the bare torque limits, whatever the schedule or the rating."""
     from adaptive_dd.benchmark.scenario import parse_scenario, read_toml
     from adaptive_dd.closed_loop.boost import task_room
 
@@ -99,15 +98,57 @@ def test_the_boosts_room_is_sized_on_the_rated_payload_not_the_schedule():
             p["mass"] = m
         sc = parse_scenario(d, "v3.toml")
         rooms.append(task_room(sc)[1])
-    assert np.array_equal(rooms[0], rooms[1]) and np.array_equal(rooms[0], rooms[2])
-    sc = parse_scenario(d, "v3.toml")
-    arm = sc.arm
-    t = np.arange(0, sc.n_samples, 10) * sc.sample_period
-    q, qd, qdd = sc.reference.sample(t)
-    rated = arm.sigma_with_payload(1.5, radius=sc.payload_radius)
-    tau = np.maximum(
-        np.abs(arm.inverse_dynamics(q, qd, qdd, arm.sigma)), np.abs(arm.inverse_dynamics(q, qd, qdd, rated))
+        rooms.append(task_room(sc, sc.arm.with_(payload_capacity=0.2))[1])
+    limit = np.asarray(sc.arm.actuator.torque_limit, dtype=float)
+    assert all(np.array_equal(r, np.broadcast_to(limit, r.shape)) for r in rooms)
+
+
+def test_the_n_joint_boost_keeps_the_command_within_the_limits_and_is_whole_where_it_fits(rng):
+    """At each sample the boost's added bandwidth is scaled by the largest common factor whose
+    command stays within the limits (as the two-link law's): a grid of the factor finds none
+    larger, a command already beyond a limit is not pushed further, and with room to spare the
+    whole boost is added."""
+    from adaptive_dd.benchmark.scenario import load_scenario
+    from adaptive_dd.closed_loop.laws import LawState, law_batch
+
+    sc = load_scenario(
+        str(
+            Path(__file__).resolve().parents[1] / "adaptive_dd" / "scenarios" / "vertical3_payload_exact.toml"
+        )
     )
-    assert np.allclose(rooms[0], np.asarray(arm.actuator.torque_limit) - tau)
-    lighter = task_room(sc, arm.with_(payload_capacity=0.5))[1]  # a smaller rating leaves more room
-    assert np.all(lighter >= rooms[0] - 1e-9) and np.any(lighter > rooms[0] + 1e-3)
+    arm, n, T = sc.arm, sc.arm.n_joints, sc.sample_period
+    cfg = make_controller("adaptive_ct", arm=arm).law_config(T)._replace(observer=False)
+    lim = np.asarray(cfg.torque_limit)
+    assert np.array_equal(lim, arm.actuator.torque_limit)
+    K = 200
+    q_d, qd_d, qdd_d = np.array([0.3, -0.6, 0.4]), np.array([0.2, -0.1, 0.3]), np.zeros(n)
+    scale = np.logspace(-3.0, 0.0, K)[:, None]  # errors from far inside the limits to far beyond
+    q = q_d + scale * rng.normal(0.0, 0.02, (K, n))
+    qd = qd_d + scale * rng.normal(0.0, 0.5, (K, n))
+    boosted, off = LawState.start(cfg, K), LawState.start(cfg, K)  # an alarm now; none
+    boosted.since_alarm[:] = 0
+    out = law_batch(arm.chain, cfg, boosted, q, qd, q_d, qd_d, qdd_d)
+    base = law_batch(arm.chain, cfg, off, q, qd, q_d, qd_d, qdd_d)
+    whole = law_batch(
+        arm.chain, cfg._replace(torque_limit=np.full(n, np.inf)), boosted, q, qd, q_d, qd_d, qdd_d
+    )
+    room = np.maximum(lim, np.abs(base))
+    assert np.all(np.abs(out) <= room + 1e-9)
+    fits = np.all(np.abs(whole) <= room, axis=1)
+    assert fits.any() and (~fits).any()
+    np.testing.assert_allclose(out[fits], whole[fits], rtol=0, atol=1e-9)
+    # where it does not fit: the largest factor on a grid whose command is within the limits
+    M0 = arm.mass_matrix(q)
+    w = np.sqrt(cfg.kp)
+    X = cfg.boost_kd * w / cfg.kd  # the added bandwidth
+    z = 0.5 * cfg.kd / w
+    e, ed = q_d - q, qd_d - qd
+    A = np.einsum("kij,kj->ki", M0, X**2 * e)
+    B = np.einsum("kij,kj->ki", M0, X * (2 * w * e + 2 * z * ed))
+    s = np.linspace(0.0, 1.0, 2001)
+    for k in np.flatnonzero(~fits)[:20]:
+        cmd = base[k] + s[:, None] ** 2 * A[k] + s[:, None] * B[k]
+        ok = np.all(np.abs(cmd) <= room[k] + 1e-9, axis=1)
+        best = s[ok].max()
+        grid = base[k] + best**2 * A[k] + best * B[k]
+        np.testing.assert_allclose(out[k], grid, atol=0.02 * np.abs(B[k]).max() + 1e-6)

@@ -61,9 +61,9 @@ def test_a_torque_beyond_the_limit_without_payload_blames_the_arm_not_a_payload(
     assert "torque limit 20 N m" in err and "check the URDF's masses and the joint's effort limit" in err
     assert "; with the payloads it needs up to 100.2 N m" in err  # the peak line's figure, said too
     assert "joint1:" not in err
-    # the boost off on every joint, and why (it was [40.0 x 6] without a word)
-    assert "boost bandwidth per joint = [40.0, 40.0, 40.0, 40.0, 40.0, 40.0]" in out
-    assert "no room on joint(s) 2: the reference alone needs their whole torque limit" in out
+    # the boost is held within the limits at each sample: its caps leave no room for the
+    # reference's torque, so a joint the reference saturates does not turn it off
+    assert "boost bandwidth per joint = [" in out and "no room on joint(s)" not in out
     # a reference too fast (its frequencies as if in rad/s, 30 and 90 Hz): the motion is named
     fast = tmp_path / "fast.toml"
     text = (ROOT / "adaptive_dd" / "scenarios" / "vertical3_payload_exact.toml").read_text()
@@ -434,7 +434,7 @@ def test_an_arm_with_no_armature_is_warned_of_and_is_the_hard_case_it_says():
     assert (
         len(said) == 1
         and "state [arm] armature" in said[0]
-        and "vertical3_payload_exact.toml 2.687" in said[0]
+        and "vertical3_payload_exact.toml 1.674" in said[0]
     )
     d["arm"]["armature"] = [0.05, 0.05, 0.02]
     assert not [x for x in inertia_problems(parse_scenario(d, "v3.toml")) if "armature" in x]
@@ -444,7 +444,7 @@ def test_an_arm_with_no_armature_is_warned_of_and_is_the_hard_case_it_says():
 
 def test_the_no_armature_warnings_figure_holds_on_vertical3():
     """The warning's figure: on vertical3 (exact) adaptive_ct is far further from its floor in the
-    1 kg segment without armature (2.687, 10 seeds) than with [0.05, 0.05, 0.02] (1.731)."""
+    1 kg segment without armature (1.674, 10 seeds) than with [0.05, 0.05, 0.02] (1.185)."""
     from adaptive_dd.benchmark.scenario import parse_scenario, read_toml
 
     means = {}
@@ -461,7 +461,7 @@ def test_the_no_armature_warnings_figure_holds_on_vertical3():
         seg = (t >= 3.0) & (t < 8.0)
         rms = {c: np.sqrt(np.mean((ref - r.q)[:, seg] ** 2, axis=(1, 2))) for c, r in e.items()}
         means[bool(armature)] = float(np.mean(rms["adaptive_ct"] / rms["ct_oracle"]))
-    assert means[False] > 2.2 and means[True] < 2.0 and means[False] > 1.4 * means[True], means
+    assert means[False] > 1.5 and means[True] < 2.0 and means[False] > 1.3 * means[True], means
 
 
 def test_a_prismatic_joints_limits_and_effort_are_in_metres_and_newtons(tmp_path):

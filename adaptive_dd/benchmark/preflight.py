@@ -264,33 +264,18 @@ def derived_gain(scenario, spec: str, table: str, key: str) -> str:
 
 def derived_boost(scenario, name: str = "adaptive_ct") -> list[str]:
     """``adaptive_ct``'s boost bandwidth per joint on an N-joint arm, as the run derives it from the
-    task's torque room and the sensors' noise (:mod:`adaptive_dd.closed_loop.boost`)."""
+    torque limits and the sensors' noise (:mod:`adaptive_dd.closed_loop.boost`)."""
     from adaptive_dd.controllers.registry import scenario_controller
-    from adaptive_dd.identification.row_weights import pass_mass
 
     law = scenario_controller(scenario, name)[1]
     if not hasattr(law, "boost_bandwidths"):
         return []
     wb = [round(float(x), 1) for x in law.boost_bandwidths()]
-    out = [
+    return [
         f"controllers.{name} boost bandwidth per joint = {wb} rad/s   (derived: at most "
-        "boost_bandwidth, its noise torque 3 std inside the room the torque limit leaves beside the "
-        f"reference's on the model carrying {pass_mass(scenario.arm, scenario):g} kg, "
-        + (
-            "[arm] payload_capacity)"
-            if scenario.arm.payload_capacity is not None
-            else "the heaviest payload)"
-        )
+        "boost_bandwidth, its noise torque 3 std inside the torque limit; at each sample scaled down "
+        "as far as the command's torque limits need)"
     ]
-    room = law.task[1].min(axis=0) if law.task is not None else np.ones(len(wb))  # the room it sized on
-    full = [j for j in range(room.size) if room[j] <= 0.0]
-    if full:  # the columns feeding such a row get no boost (closed_loop.boost.boost_bandwidths)
-        out.append(
-            f"  no room on joint(s) {', '.join(str(j + 1) for j in full)}: the reference alone needs "
-            "their whole torque limit (the torque warning), so the joints whose boost would add noise "
-            "there keep the law's own bandwidth; a reference within the limits leaves room"
-        )
-    return out
 
 
 def derived_estimator_settings(scenario, name: str = "adaptive_ct") -> list[str]:
@@ -428,8 +413,8 @@ def inertia_problems(scenario) -> list[str]:
             "arm has little). A light arm is the hard case of adaptive_ct against its floor (the "
             "milliseconds before it detects a swap move a light arm further): exact, 10 "
             "seeds, benchmarks/scenarios/jaco2.toml 1.64 unloaded, 1.00 with "
-            "armature [0.05, 0.05, 0.05, 0.02, 0.02, 0.02]; vertical3_payload_exact.toml 2.687 in its "
-            "1 kg segment, 1.731 with [0.05, 0.05, 0.02]"
+            "armature [0.05, 0.05, 0.05, 0.02, 0.02, 0.02]; vertical3_payload_exact.toml 1.674 in its "
+            "1 kg segment, 1.185 with [0.05, 0.05, 0.02]"
         )
     for j in np.flatnonzero(fc > FRICTION_ACCELERATION * inertia):
         out.append(

@@ -1,20 +1,23 @@
-"""``adaptive_ct``'s boost bandwidth per joint, from the torque the task leaves and the sensors' noise.
+"""``adaptive_ct``'s boost bandwidth per joint, from the torque limits and the sensors' noise.
 
 After an alarm the N-joint ``adaptive_ct`` adds ``M0(q) (dkp e + dkd e')`` to its command
-(``dkp = wb^2 - w^2``, ``dkd = 2 zeta (wb - w)``; :mod:`adaptive_dd.closed_loop.laws`). The
-measured ``e`` and ``e'`` carry the sensors' noise, so the added torque carries
+(``dkp = wb^2 - w^2``, ``dkd = 2 zeta (wb - w)``; :mod:`adaptive_dd.closed_loop.laws`). At each
+sample the added bandwidth ``wb - w`` of every joint is scaled by the largest common factor in
+``[0, 1]`` whose command stays within the torque limits (``laws._boost_within_limits``, as the
+two-link law's ``boost_within_trial``): the boost takes the room the limits leave at that
+instant, whatever the payload, and never pushes the command beyond a limit.
+
+What is fixed before the run is each joint's cap ``wb``. The measured ``e`` and ``e'`` carry the
+sensors' noise, so the added torque carries
 
     std_j(t) = sqrt( sum_l M0_jl(q(t))^2 (dkp_l^2 var_q,l + dkd_l^2 var_qd,l) )
 
-of it on joint ``j``, which grows as ``wb^2``: at 300 rad/s and the benchmark's default noise it
-is a few N m on a drawn arm's shoulder, as large as the torque its limit leaves beside the
-reference's, and the command saturated on a few per cent of each loaded segment after its alarm.
-The bandwidth of each joint is therefore the largest, up to ``boost_bandwidth``, for which that
-noise stays :data:`NOISE_SIGMAS` standard deviations inside the room the torque limit leaves
-beside the reference's own torque (the model's inverse dynamics, unloaded and with the rated
-payload) at every instant of the reference: ``NOISE_SIGMAS std_j(t) <= limit_j - |tau_ref,j(t)|``. A joint
-with no room keeps the law's own bandwidth (no boost). Without a task (a controller built with
-no scenario) the boost is ``boost_bandwidth`` on every joint.
+of it on joint ``j``, which grows as ``wb^2``. The cap of each joint is the largest, up to
+``boost_bandwidth``, for which that noise stays :data:`NOISE_SIGMAS` standard deviations inside
+the torque limit at every posture of the reference: ``NOISE_SIGMAS std_j(t) <= limit_j``. Neither
+the scenario's payloads nor the rated payload enter: no other law is told them, and the
+per-sample scaling takes care of the torque the task itself needs. Without a task (a controller
+built with no scenario) the cap is ``boost_bandwidth`` on every joint.
 """
 
 from __future__ import annotations
@@ -35,23 +38,16 @@ ROOM_STEP = 0.01
 
 
 def task_room(scenario, arm=None) -> tuple[Array, Array]:
-    """``(q (K, n), room (K, n))``: the reference's positions every :data:`ROOM_STEP` and the
-    torque each joint's limit leaves beside the reference's inverse dynamics there on the model
-    ``arm`` (default ``scenario.arm``), the largest of the arm unloaded and carrying its rated
-    payload (:func:`~adaptive_dd.identification.row_weights.pass_mass`: ``[arm] payload_capacity``,
-    else the heaviest payload the scenario names) at the payload frame (``limit - max |tau|``,
-    negative where none is left). Neither the plant's parameters nor the schedule's payloads enter
-    when a capacity is stated: no other law is told them."""
-    from adaptive_dd.identification.row_weights import pass_mass
+    """``(q (K, n), room (K, n))``: the reference's positions every :data:`ROOM_STEP` and the room
+    the boost's noise may take there, each joint's torque limit on the model ``arm`` (default
+    ``scenario.arm``; inf where the actuator does not saturate)."""
+    from adaptive_dd.closed_loop.laws import actuator_limits
 
     arm = scenario.arm if arm is None else arm
     step = max(1, round(ROOM_STEP / scenario.sample_period))
     t = np.arange(0, scenario.n_samples, step) * scenario.sample_period
-    q, qd, qdd = scenario.reference.sample(t)
-    rated = arm.sigma_with_payload(pass_mass(arm, scenario), radius=scenario.payload_radius)
-    tau = np.max([np.abs(arm.inverse_dynamics(q, qd, qdd, s)) for s in (arm.sigma, rated)], axis=0)
-    limit = np.asarray(arm.actuator.torque_limit, dtype=float)
-    return np.asarray(q, dtype=float), limit[None, :] - tau
+    q = np.asarray(scenario.reference.sample(t)[0], dtype=float)
+    return q, np.broadcast_to(actuator_limits(arm), q.shape).copy()
 
 
 def boost_bandwidths(
@@ -65,7 +61,7 @@ def boost_bandwidths(
 ) -> Array:
     """Per joint, the boost's bandwidth [rad/s] (module docstring): at most ``cap``, at least the
     law's ``bandwidth (n,)``; ``inertia (K, n, n)`` the nominal ``M0`` at the task's instants and
-    ``room (K, n)`` the torque left there [N m]; the sensors' variances ``(n,)``.
+    ``room (K, n)`` the torque the noise may take there [N m]; the sensors' variances ``(n,)``.
 
     Columns that feed a row whose noise is beyond its room are lowered together, 2 % of their
     added bandwidth a step, until every row is inside; a column feeding a row with no room at all

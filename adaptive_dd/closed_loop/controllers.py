@@ -32,6 +32,7 @@ from adaptive_dd.closed_loop.laws import (
     MODEL_TRUE,
     LawConfig,
     LawState,
+    actuator_limits,
     law_batch,
 )
 from adaptive_dd.controllers.base import DEFAULT_MODEL_DELAY, delay_samples, model_delay
@@ -387,9 +388,10 @@ def observer_bandwidth(sample_period: float) -> float:
 class AdaptiveCT(Law):
     """Computed torque on the N-joint online estimator's projected model
     (:mod:`adaptive_dd.identification.online`), the feedback raised to ``boost_bandwidth``
-    (300 rad/s at most; per joint the largest whose noise torque stays inside the room the torque
-    limit leaves beside the reference's: :mod:`~adaptive_dd.closed_loop.boost`, once a scenario
-    states the task, :meth:`state_task`) through the nominal inertia for ``boost_duration`` (1 s)
+    (300 rad/s at most; per joint the largest whose noise torque stays inside the torque limit,
+    once a scenario states the task, :meth:`state_task`; at each sample scaled down as far as the
+    command's limits need: :mod:`~adaptive_dd.closed_loop.boost`) through the nominal inertia for
+    ``boost_duration`` (1 s)
     after an alarm, plus the residual observer's torque (``observer``, on by default; bandwidth
     ``observer_bandwidth``, default ``0.4 / T``): the torque the current model leaves
     unexplained, beyond three times its own noise level (:mod:`adaptive_dd.closed_loop.laws`).
@@ -456,7 +458,7 @@ class AdaptiveCT(Law):
         self.task: tuple[Array, Array] | None = None
 
     def state_task(self, scenario) -> None:
-        """Take the task from ``scenario``: its torque room
+        """Take the task from ``scenario``: its postures and torque limits
         (:func:`~adaptive_dd.closed_loop.boost.task_room`), from which with the sensors' noise the
         boost's bandwidth per joint follows (:meth:`boost_bandwidths`), and, unless given, the
         estimator's row weights from a first pass over its reference with the payload capacity
@@ -487,8 +489,8 @@ class AdaptiveCT(Law):
 
     def boost_bandwidths(self) -> Array:
         """The boost's bandwidth per joint [rad/s]: ``boost_bandwidth`` on every joint without a
-        task; with one, the largest up to it whose noise torque stays inside the room the torque
-        limit leaves beside the reference's (:mod:`adaptive_dd.closed_loop.boost`)."""
+        task; with one, the largest up to it whose noise torque stays inside the torque limit at
+        every posture of the reference (:mod:`adaptive_dd.closed_loop.boost`)."""
         w = np.asarray(self.gains.bandwidth, dtype=float)
         if self.task is None:
             return np.maximum(self.boost_bandwidth, w)
@@ -510,7 +512,7 @@ class AdaptiveCT(Law):
             boost_samples=round(self.boost_duration / sample_period),
             boost_ramp=round(self.boost_ramp / sample_period), observer=self.observer,
             obs_a=float(np.exp(-beta * T)), obs_alpha=min(1.0, T / OBSERVER_LEVEL_WINDOW),
-            obs_warmup=round(OBSERVER_WARMUP / T),
+            obs_warmup=round(OBSERVER_WARMUP / T), torque_limit=actuator_limits(self.arm),
         )  # fmt: skip
 
     def compiled_form(self, n_trials, sample_period):

@@ -26,8 +26,9 @@ with ``e = q_d - q``, ``e' = qd_d - qd`` and, per :class:`LawConfig`:
 The model ``pi_model`` (13 n standard parameters ``[links, fv, fc, Ia]``) is the fixed one
 of the configuration (``MODEL_FIXED``), the true one of the current segment
 (``MODEL_TRUE``), or the trial's own (``MODEL_TRIAL``: the estimator's projected model, or
-the nominal model plus the adapted payload). After an alarm, for ``boost_samples`` samples,
-``M0(q) (dkp e + dkd e')`` is added (adaptive_ct's bandwidth boost).
+the nominal model plus the adapted payload). After an alarm, for ``boost_samples`` samples and
+its ramp, ``M0(q) (dkp e + dkd e')`` is added (adaptive_ct's bandwidth boost), its added bandwidth
+scaled down at each sample as far as the torque limits need (``torque_limit``).
 
 The residual observer (``observer``, adaptive_ct's; :mod:`adaptive_dd.closed_loop.residual_observer`)
 adds to the command the torque the trial's model leaves unexplained, soft-thresholded at its own
@@ -171,6 +172,9 @@ class LawConfig(NamedTuple):
     model_delay : int
         Samples after each swap before an oracle's true model (``MODEL_TRUE``) switches to the new
         segment's (``ct_oracle_late``; 0: at the swap).
+    torque_limit : ndarray (n,)
+        [N m] the actuators' limits, which the boost keeps the command within at each sample
+        (:func:`_boost_within_limits`; inf: none).
     """
 
     kind: int
@@ -209,6 +213,7 @@ class LawConfig(NamedTuple):
     icl_window: float = 0.0
     nat_gain: float = 0.0
     model_delay: int = 0
+    torque_limit: Array = np.full(1, np.inf)
 
 
 class LawState(NamedTuple):
@@ -353,21 +358,106 @@ def law_trial(
     )
 
 
-@njit(cache=True, inline="always")
-def _boost_feedback(cfg, since_alarm, e, ed, v):  # pragma: no cover - compiled
-    """The boost's added feedback ``v = dkp e + dkd e'`` (n,) ``since_alarm`` samples after an
-    alarm (the law adds ``M0(q) v``): the boost's gains for ``boost_samples``, then its added
-    bandwidth ramped down to none over ``boost_ramp`` samples (:class:`LawConfig`)."""
+def actuator_limits(arm) -> Array:
+    """``(n,)`` [N m] the torque limits the command is held within (inf where the arm's actuator
+    does not saturate): :class:`LawConfig`'s ``torque_limit``."""
+    act = arm.actuator  # a writable copy: a read-only array is another type to numba (a second compile)
+    lim = np.broadcast_to(np.asarray(act.torque_limit, dtype=float), (arm.n_joints,))
+    return np.array(lim if act.saturate else np.full(arm.n_joints, np.inf), dtype=float)
+
+
+@njit(cache=True)
+def _boost_roots(a, b, c, xs, k):  # pragma: no cover - compiled
+    """Append to ``xs`` (from ``k``) the roots of ``a s^2 + b s = c`` in ``(0, 1)``; the new count."""
+    if a == 0.0:
+        if b != 0.0 and 0.0 < c / b < 1.0:
+            xs[k] = c / b
+            k += 1
+        return k
+    disc = b * b + 4.0 * a * c
+    if disc < 0.0:
+        return k
+    h = -0.5 * (b + np.copysign(np.sqrt(disc), b))  # roots h / a and -c / h, stably
+    if h == 0.0:
+        return k
+    for x in (h / a, -c / h):
+        if 0.0 < x < 1.0:
+            xs[k] = x
+            k += 1
+    return k
+
+
+@njit(cache=True)
+def _boost_within_limits(ch, cfg, since_alarm, q, e, ed, work, out):  # pragma: no cover - compiled
+    """Add the boost ``M0(q) (dkp e + dkd e')`` ``since_alarm`` samples after an alarm (its gains
+    for ``boost_samples``, then its added bandwidth ramped down to none over ``boost_ramp``
+    samples: :class:`LawConfig`), its added bandwidth ``x_j = s X_j`` scaled by the largest ``s`` in
+    ``[0, 1]`` whose command ``out`` stays within ``cfg.torque_limit`` (a command already beyond
+    its limit: not further; ``s = 0`` always is).
+
+    ``kp + dkp = (w + s X)^2`` and ``kd + dkd = 2 zeta (w + s X)``: the added torque is
+    ``s^2 M0 (X^2 e) + s M0 (X (2 w e + 2 zeta e'))``, quadratic in ``s`` per joint; the
+    candidates are 1 and the crossings of each joint's limits. Every joint keeps the double pole
+    at ``-(w_j + s X_j)``, as the two-link ``boost_within_trial``.
+    """
+    n = q.shape[0]
     f = 1.0
     if since_alarm >= cfg.boost_samples:  # the ramped end: f from 1 to 0
         f = 1.0 - (since_alarm - cfg.boost_samples + 1) / (cfg.boost_ramp + 1)
-    for j in range(e.shape[0]):
-        dkp, dkd = cfg.boost_kp[j], cfg.boost_kd[j]
-        if f < 1.0:  # the added bandwidth f (wb - w): kp = w^2, kd = 2 z w, boost_kd = 2 z (wb - w)
-            w0 = np.sqrt(max(cfg.kp[j], 0.0))
-            dw = f * dkd * w0 / cfg.kd[j] if cfg.kd[j] > 0.0 else 0.0
-            dkp, dkd = dw * (2.0 * w0 + dw), f * dkd
-        v[j] = dkp * e[j] + dkd * ed[j]
+    rows = work[1]
+    va, vb = rows[4], rows[5]
+    for j in range(n):
+        w0 = np.sqrt(max(cfg.kp[j], 0.0))
+        x = f * cfg.boost_kd[j] * w0 / cfg.kd[j] if cfg.kd[j] > 0.0 else 0.0  # f (wb - w)
+        z = 0.5 * cfg.kd[j] / w0 if w0 > 0.0 else 0.0
+        va[j] = x * x * e[j]
+        vb[j] = x * (2.0 * w0 * e[j] + 2.0 * z * ed[j])
+    m = work[2]
+    mass_matrix_in(ch, cfg.pi_fixed[: 10 * n], q, work[0], m)
+    t = work[7]
+    A, B, hi, lo = t[0], t[1], t[2], t[3]
+    for r in range(n):
+        ar = cfg.pi_fixed[12 * n + r] * va[r]
+        br = cfg.pi_fixed[12 * n + r] * vb[r]
+        for c in range(n):
+            ar += m[r, c] * va[c]
+            br += m[r, c] * vb[c]
+        A[r], B[r] = ar, br
+        lim = cfg.torque_limit[r]
+        if np.isfinite(lim):
+            room = max(lim, abs(out[r]))
+            hi[r], lo[r] = room - out[r], -room - out[r]
+        else:
+            hi[r], lo[r] = np.inf, -np.inf
+    xs = np.empty(4 * n + 1)
+    xs[0] = 1.0
+    k = 1
+    for r in range(n):
+        if np.isfinite(hi[r]):
+            k = _boost_roots(A[r], B[r], hi[r], xs, k)
+            k = _boost_roots(A[r], B[r], lo[r], xs, k)
+    best = 0.0
+    for i in range(k):  # the largest candidate within every joint's limits
+        s = xs[i]
+        if s <= best:
+            continue
+        ok = True
+        for r in range(n):
+            if np.isfinite(hi[r]):
+                g = A[r] * s * s + B[r] * s
+                tol = 1e-9 * (1.0 + hi[r] - lo[r])
+                if g > hi[r] + tol or g < lo[r] - tol:
+                    ok = False
+                    break
+        if ok:
+            best = s
+    if best > 0.0:
+        for r in range(n):
+            o = out[r] + A[r] * best * best + B[r] * best
+            if np.isfinite(hi[r]):  # a crossing's rounding kept at the limit, not past it
+                room = max(cfg.torque_limit[r], abs(out[r]))
+                o = min(max(o, -room), room)
+            out[r] = o
 
 
 @njit(cache=True, inline="always")
@@ -430,12 +520,11 @@ def law_trial_in(
                 _adapt_payload(ch, cfg, q, qd, qdr, a, s, theta, pi_model, work)
     elif cfg.adapt and cfg.adapt_kind == ADAPT_CHS:
         chs_step(ch, cfg, q, qd, e, ed, theta, pi_model, obs, work)
-    boosting = cfg.boost_samples > 0 and since_alarm < cfg.boost_samples + cfg.boost_ramp
-    if boosting:
-        _boost_feedback(cfg, since_alarm, e, ed, v)
-        _add_nominal_inertia(ch, cfg, q, v, work, out)
     if cfg.observer:
         _observe(ch, cfg, pi_model, q, qd, obs, work, out)
+    boosting = cfg.boost_samples > 0 and since_alarm < cfg.boost_samples + cfg.boost_ramp
+    if boosting:  # last: the limit applies to everything else the law adds
+        _boost_within_limits(ch, cfg, since_alarm, q, e, ed, work, out)
 
 
 @njit(cache=True)

@@ -193,8 +193,8 @@ _BOOST = {
         300.0,
         unit="rad/s",
         rule="on an N-joint arm in a scenario the most per joint: each joint's is the largest whose sensor "
-        "noise torque (3 std) stays inside the room its torque limit leaves beside the reference's "
-        "(adaptive_dd.closed_loop.boost)",
+        "noise torque (3 std) stays inside its torque limit; at each sample it is scaled down as far as the "
+        "command's limits need (adaptive_dd.closed_loop.boost)",
     ),
     "boost_duration": Setting(
         "how long the boost lasts after an alarm [s]",
