@@ -429,7 +429,7 @@ def _boost_within_limits(ch, cfg, since_alarm, q, e, ed, work, out):  # pragma: 
             hi[r], lo[r] = room - out[r], -room - out[r]
         else:
             hi[r], lo[r] = np.inf, -np.inf
-    xs = np.empty(4 * n + 1)
+    xs = work[8].reshape(work[8].size)  # 20 n >= 4 n + 1 candidates; scratch, no allocation per sample
     xs[0] = 1.0
     k = 1
     for r in range(n):
