@@ -67,6 +67,7 @@ from adaptive_dd.closed_loop.composite import ICL_ROWS, composite_term
 from adaptive_dd.closed_loop.residual_observer import OBS_ROWS as O_ROWS
 from adaptive_dd.closed_loop.residual_observer import _observe, observe_applied
 from adaptive_dd.plant.chain import body_slotine_li_regressor_in, mass_matrix_in, rnea_ref_in, workspace
+from adaptive_dd.plant.sampling import limit_crossings
 
 __all__ = [
     "KIND_CT",
@@ -367,27 +368,6 @@ def actuator_limits(arm) -> Array:
 
 
 @njit(cache=True)
-def _boost_roots(a, b, c, xs, k):  # pragma: no cover - compiled
-    """Append to ``xs`` (from ``k``) the roots of ``a s^2 + b s = c`` in ``(0, 1)``; the new count."""
-    if a == 0.0:
-        if b != 0.0 and 0.0 < c / b < 1.0:
-            xs[k] = c / b
-            k += 1
-        return k
-    disc = b * b + 4.0 * a * c
-    if disc < 0.0:
-        return k
-    h = -0.5 * (b + np.copysign(np.sqrt(disc), b))  # roots h / a and -c / h, stably
-    if h == 0.0:
-        return k
-    for x in (h / a, -c / h):
-        if 0.0 < x < 1.0:
-            xs[k] = x
-            k += 1
-    return k
-
-
-@njit(cache=True)
 def _boost_within_limits(ch, cfg, since_alarm, q, e, ed, work, out):  # pragma: no cover - compiled
     """Add the boost ``M0(q) (dkp e + dkd e')`` ``since_alarm`` samples after an alarm (its gains
     for ``boost_samples``, then its added bandwidth ramped down to none over ``boost_ramp``
@@ -434,8 +414,8 @@ def _boost_within_limits(ch, cfg, since_alarm, q, e, ed, work, out):  # pragma: 
     k = 1
     for r in range(n):
         if np.isfinite(hi[r]):
-            k = _boost_roots(A[r], B[r], hi[r], xs, k)
-            k = _boost_roots(A[r], B[r], lo[r], xs, k)
+            k = limit_crossings(A[r], B[r], hi[r], 1.0, xs, k)
+            k = limit_crossings(A[r], B[r], lo[r], 1.0, xs, k)
     best = 0.0
     for i in range(k):  # the largest candidate within every joint's limits
         s = xs[i]

@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from adaptive_dd.plant.sampling import project_trial
+from adaptive_dd.plant.sampling import limit_crossings, project_trial
 
 __all__ = [
     "boost_batch",
@@ -73,28 +73,6 @@ def boost_trial(q, qd, q_d, qd_d, sg0, dkp, dkd, out):  # pragma: no cover - com
 
 
 @njit(cache=True)
-def _roots(a, b, c, x_max, xs, n):  # pragma: no cover - compiled
-    """Append to ``xs`` (from index ``n``) the roots of ``a x^2 + b x = c`` in ``(0, x_max)``;
-    return the new count."""
-    if a == 0.0:
-        if b != 0.0 and 0.0 < c / b < x_max:
-            xs[n] = c / b
-            n += 1
-        return n
-    disc = b * b + 4.0 * a * c
-    if disc < 0.0:
-        return n
-    h = -0.5 * (b + np.copysign(np.sqrt(disc), b))  # the roots h / a and -c / h, stably
-    if h == 0.0:
-        return n
-    for x in (h / a, -c / h):
-        if 0.0 < x < x_max:
-            xs[n] = x
-            n += 1
-    return n
-
-
-@njit(cache=True)
 def boost_within_trial(q, qd, q_d, qd_d, sg0, dkp, dkd, kp, kd, lim, out):  # pragma: no cover
     """Add the boost of :func:`boost_trial` at the largest bandwidth that keeps ``out (2,)`` within
     the torque limits ``lim (2,)`` [N m] (a command already beyond its limit: not further).
@@ -124,8 +102,8 @@ def boost_within_trial(q, qd, q_d, qd_d, sg0, dkp, dkd, kp, kd, lim, out):  # pr
     n = 1
     for j in range(2):
         if np.isfinite(hi[j]):
-            n = _roots(a[j], b[j], hi[j], x_max, xs, n)
-            n = _roots(a[j], b[j], lo[j], x_max, xs, n)
+            n = limit_crossings(a[j], b[j], hi[j], x_max, xs, n)
+            n = limit_crossings(a[j], b[j], lo[j], x_max, xs, n)
     best = 0.0
     for k in range(n):  # the largest candidate (x_max or a crossing) within both limits
         x = xs[k]

@@ -80,3 +80,26 @@ def project_trial(src, dst, j_min, margin, r_min):  # pragma: no cover - compile
         dst[j] = max(dst[j], 0.0)
     r_max = np.sqrt((1.0 - margin) * dst[0] * dst[1])
     dst[2] = min(max(dst[2], r_min), r_max)
+
+
+@njit(cache=True)
+def limit_crossings(a, b, c, x_max, xs, n):  # pragma: no cover - compiled
+    """Append to ``xs`` (from index ``n``) the roots of ``a x^2 + b x = c`` in ``(0, x_max)``;
+    return the new count: where a command plus a boost growing as ``a x^2 + b x`` meets a torque
+    limit ``c`` away (both runtimes' boost within the limits)."""
+    if a == 0.0:
+        if b != 0.0 and 0.0 < c / b < x_max:
+            xs[n] = c / b
+            n += 1
+        return n
+    disc = b * b + 4.0 * a * c
+    if disc < 0.0:
+        return n
+    h = -0.5 * (b + np.copysign(np.sqrt(disc), b))  # the roots h / a and -c / h, stably
+    if h == 0.0:
+        return n
+    for x in (h / a, -c / h):
+        if 0.0 < x < x_max:
+            xs[n] = x
+            n += 1
+    return n
