@@ -21,6 +21,7 @@ from numba import njit
 
 from adaptive_dd.closed_loop.glue import _bound
 from adaptive_dd.closed_loop.residual_observer import _observe, observe_applied
+from adaptive_dd.identification.two_link_momentum_test import momentum_two_link
 
 __all__ = [
     "momentum_two_link",
@@ -29,24 +30,6 @@ __all__ = [
     "observe_trial",
     "observer_work",
 ]
-
-
-@njit(cache=True, inline="always")
-def momentum_two_link(ch, sg, q, qd, work, p, wv):  # pragma: no cover - compiled
-    """``p = M(q) qd`` and ``wv = -dT/dq + B qd + D sgn(qd)`` of the paper's sigma ``sg (7,)``
-    (``J1 J2 r b1 b2 d1 d2``; ``M = [[J1 + J2 + 2 r c2, J2 + r c2], [J2 + r c2, J2]]``, no
-    gravity: the arm is horizontal), into ``p, wv (2,)``: ``dp/dt = tau - wv`` on the model.
-
-    The chain's ``_momentum`` signature (``ch`` and ``work`` unused): the kinetic energy
-    ``T = qd^T M qd / 2`` depends on ``q2`` only, ``dT/dq2 = -r s2 qd1 (qd1 + qd2)``.
-    """
-    c2, s2 = np.cos(q[1]), np.sin(q[1])
-    j2, r = sg[1], sg[2]
-    rc = r * c2
-    p[0] = (sg[0] + j2 + 2.0 * rc) * qd[0] + (j2 + rc) * qd[1]
-    p[1] = (j2 + rc) * qd[0] + j2 * qd[1]
-    wv[0] = sg[3] * qd[0] + sg[5] * np.sign(qd[0])
-    wv[1] = r * s2 * qd[0] * (qd[0] + qd[1]) + sg[4] * qd[1] + sg[6] * np.sign(qd[1])
 
 
 observe_trial = njit(inline="always")(_bound(_observe.py_func, _momentum=momentum_two_link))

@@ -17,6 +17,7 @@ from adaptive_dd.identification.two_link_online_slots import (
     F_ALPHA_SHORT,
     F_GLR_THRESHOLD,
     F_HETERO,
+    F_MG_THRESHOLD,
     F_MIN_EXPLAINED,
     F_MIN_MASS,
     F_REMOVAL,
@@ -42,6 +43,8 @@ from adaptive_dd.identification.two_link_online_slots import (
     S_GLR,
     S_LREF,
     S_M0,
+    S_MG_DM,
+    S_MG_SCORE,
     S_PER,
     S_PER_N,
 )
@@ -191,6 +194,15 @@ def _detect(i, eps, act, phi_d, u, th, short, long, cnt, ci, cf, A, B, C, D, d):
         return False
     if sh[S_PER_N] >= ci[I_PERSIST_MIN] and _explained(sh, S_PER, cf):
         return True
+    settled = cnt[i, C_SINCE_ALARM] * a_l >= 1.0  # a long window since the last alarm
+    if settled and cf[F_MG_THRESHOLD] > 0.0 and sh[S_MG_SCORE] >= cf[F_MG_THRESHOLD]:
+        # the momentum test (two_link_momentum_test), under the GLR's gates on the mass it claims;
+        # not while the estimate learns the last change: its residual holds what is left to learn
+        dm = sh[S_MG_DM]
+        dd = d[0] * d[0] + d[1] * d[1] + d[2] * d[2]
+        m_hat = (d[0] * th[0] + d[1] * th[1] + d[2] * th[2]) / dd - sh[S_M0]
+        if abs(dm) >= cf[F_MIN_MASS] and dm >= -(cf[F_REMOVAL] * max(m_hat, 0.0) + cf[F_MIN_MASS]):
+            return True
     if ci[I_CONSTRUCTION] == 1:  # the GLR on the payload direction
         gate = abs(ga) >= cf[F_MIN_MASS] * gb and ga * ga >= cf[F_MIN_EXPLAINED] * gb * ge
         dd = d[0] * d[0] + d[1] * d[1] + d[2] * d[2]

@@ -132,6 +132,16 @@ class ChangeDetector:
         a stick event of one joint disturbs the other joint's equation like a payload change of
         either sign, and at no payload only added mass can be a swap. The persistence test is
         not gated (a start estimate that carries a payload is still corrected by it).
+    momentum_threshold : float
+        Threshold of the momentum test's GLR score ``A^2 / B``
+        (:mod:`~adaptive_dd.identification.two_link_momentum_test`: the whitened GLR of a tip-mass
+        change on the generalised momentum, beside the filtered equations' GLR, with the exact
+        construction). The score is chi-square(1) on the model: its largest value over a 20 s
+        trial is 50-70 on the default scenario's stick-slip, tanh, Stribeck and LuGre plants;
+        at 100 a creeping plant (tanh, v = 0.1 rad/s) raised false alarms in 6 of 200 trials of
+        ``swap_at_reversal.toml``, none at 150 (``benchmarks/detector_acceptance.py``). It waits a
+        long window (``long_window``) after any alarm: meanwhile its residual holds what the
+        estimate has yet to learn of the last change.
 
     Notes
     -----
@@ -165,6 +175,7 @@ class ChangeDetector:
     speed: float = 0.25
     speed_memory: float = 2.0
     removal: float = 2.0
+    momentum_threshold: float = 150.0
 
     def __post_init__(self) -> None:
         _finite("ChangeDetector.short_window", self.short_window, 0.0)
@@ -187,6 +198,7 @@ class ChangeDetector:
             "hetero",
             "speed",
             "removal",
+            "momentum_threshold",
         ):
             _finite(f"ChangeDetector.{name}", getattr(self, name), 0.0)
         _finite("ChangeDetector.min_explained", self.min_explained, 0.0, 1.0)
@@ -379,6 +391,8 @@ class TwoLinkOnlineConfig:
             cf[K.F_DET_SPEED] = det.speed
             ci[K.I_SPEED_MEMORY] = self.samples(det.speed_memory)
             cf[K.F_REMOVAL] = det.removal
+            cf[K.F_T] = T
+            cf[K.F_MG_THRESHOLD] = det.momentum_threshold if self.construction == "exact" else 0.0
         b = self.bank
         d = np.asarray(self.payload_direction, dtype=float)
         rows = np.array(SPLIT_STAGES[self.split][0], dtype=np.int64)

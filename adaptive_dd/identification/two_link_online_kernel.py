@@ -21,6 +21,7 @@ import numpy as np
 from numba import njit
 
 from adaptive_dd.identification.two_link_detector_kernel import _detect
+from adaptive_dd.identification.two_link_momentum_test import momentum_test, momentum_torque
 from adaptive_dd.identification.two_link_online_slots import (  # noqa: F401 (read as K.NAME by the estimator)
     BIG,
     C_ALARMS,
@@ -47,6 +48,7 @@ from adaptive_dd.identification.two_link_online_slots import (  # noqa: F401 (re
     F_J_MIN,
     F_LAM0,
     F_MARGIN,
+    F_MG_THRESHOLD,
     F_MIN_EXPLAINED,
     F_MIN_MASS,
     F_MU,
@@ -55,6 +57,7 @@ from adaptive_dd.identification.two_link_online_slots import (  # noqa: F401 (re
     F_R_MIN,
     F_REMOVAL,
     F_SEL_THRESHOLD,
+    F_T,
     F_THRESHOLD2,
     F_XS0,
     G_A,
@@ -393,6 +396,9 @@ def online_step_trial(
     if ci[I_DETECT] == 1:
         if cnt[i, C_REOPEN_AT] == cnt[i, C_K]:
             _reopen(Pi, group, d, cf)
+        if cf[F_MG_THRESHOLD] > 0.0:
+            momentum_test(short[i], cnt, i, th, d, q, qd, ci, cf)
+            momentum_torque(short[i], tau)
         phi_d = np.zeros(2)
         for r in range(2):
             for j in range(7):

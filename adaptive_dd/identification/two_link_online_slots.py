@@ -40,7 +40,7 @@ F_J_MIN = 9
 F_MARGIN = 10
 F_R_MIN = 11
 F_CAP1 = 12
-# 13: unused
+F_T = 13  # [s] the sample period (the momentum test's increments)
 F_ALPHA_DIR = 14  # EWMA weight of the payload-direction test (short window)
 F_ALPHA_PERSIST = 15  # EWMA weight of the persistence test
 F_MIN_MASS = 16  # [kg] smallest payload change an alarm may claim
@@ -49,7 +49,8 @@ F_GLR_THRESHOLD = 18  # threshold on A^2 / B of a GLR candidate
 F_HETERO = 19  # a candidate's score is A^2 / B - heterogeneity / F_HETERO
 F_DET_SPEED = 20  # [rad/s] an equation feeds the payload tests only while its joint is faster
 F_REMOVAL = 21  # a GLR alarm may claim removing at most this many times the mass carried (+ min_mass)
-N_CF = 22
+F_MG_THRESHOLD = 22  # threshold on the momentum test's A^2 / B (0: no momentum test)
+N_CF = 23
 F_XS0 = N_CF  # cf[F_XS0:]: the filters' state under a unit constant input, (I - A)^-1 B (order,)
 
 # columns of the detector statistics `short` (n, N_SHORT)
@@ -68,7 +69,30 @@ G_A = 14  # per equation j: sum of w_j psi_j e_j (G_A + j), w_j psi_j^2 (G_A + 2
 G_E = 18  # sum of w_j e_j^2 over both equations
 G_AGE = 19
 GLR_STRIDE = 20
-N_SHORT = S_GLR + GLR_CANDIDATES * GLR_STRIDE
+# the momentum test (two_link_momentum_test): the last sample, the learnt velocity noise, the
+# best candidate's score and mass, then MG_CANDIDATES candidates of MG_STRIDE columns
+S_MG_PREV = S_GLR + GLR_CANDIDATES * GLR_STRIDE  # q (2), qd (2), the torque applied over it (2), fresh
+S_MG_SV = S_MG_PREV + 7  # Sigma_v: 00, 01, 11 (EWMA, not bias-corrected)
+S_MG_N = S_MG_SV + 3  # samples in Sigma_v
+S_MG_SCORE = S_MG_N + 1  # the best candidate's A^2 / B at this sample
+S_MG_DM = S_MG_SCORE + 1  # its A / B [kg]
+S_MGC = S_MG_DM + 1
+MG_CANDIDATES = 16
+MG_MIN_AGE = 2  # samples a candidate sums before it may alarm
+MG_R = 0  # R (2): the residual summed from the onset
+MG_S = 2  # S (2): the payload direction's increment summed
+MG_W = 4  # sum Q_m^-1 (00, 01, 11)
+MG_WS = 7  # sum Q_m^-1 S_m (2)
+MG_WR = 9  # sum Q_m^-1 R_m (2)
+MG_A = 11  # sum S_m^T Q_m^-1 R_m
+MG_B = 12  # sum S_m^T Q_m^-1 S_m
+MG_K = 13  # increments summed
+MG_Q0 = 14  # Q at the onset (00, 01, 11)
+MG_TAINT = 17  # per joint: 1 once the joint was slow (or a sample lost) since the onset
+MG_ACTIVE = 19
+MG_TH = 20  # the estimate at the onset (7)
+MG_STRIDE = 27
+N_SHORT = S_MGC + MG_CANDIDATES * MG_STRIDE
 
 # columns of the per-trial integer state `cnt`
 C_STARTED = 0
