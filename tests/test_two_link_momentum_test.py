@@ -94,6 +94,17 @@ def test_no_momentum_alarm_while_the_last_change_is_learnt(tmp_path):
         assert all(t < 3.5 + 0.3 for t in times), times
 
 
+def test_an_estimate_without_a_mass_matrix_raises_nothing(record):
+    """A start estimate whose inertia matrix is singular (J1 = r = 0: det M = J1 J2 - r^2 c2^2 = 0
+    at every posture) or not positive definite (J2 < 0): the test skips those samples and the
+    estimator runs on, its state finite (dividing by det M stopped the run)."""
+    for theta0 in ([0.0, 0.1, 0.0, *TABLE1_SIGMA[3:]], [0.4, -0.01, 0.1, *TABLE1_SIGMA[3:]]):
+        est = OnlineEstimator(TwoLinkOnlineConfig(), 2, np.asarray(theta0, dtype=float))
+        for k in range(1500):
+            est.update(record.q_meas[:, k], record.qd_meas[:, k], record.tau[:, k])
+        assert np.all(np.isfinite(est.state.short)), theta0
+
+
 def test_the_threshold_is_checked():
     with pytest.raises(ParameterError, match="momentum_threshold"):
         ChangeDetector(momentum_threshold=0.0)

@@ -141,11 +141,14 @@ def momentum_test(sh, cnt, i, th, d, q, qd, ci, cf):  # pragma: no cover - compi
                 g[j] -= Y[j, a] * th[a]
                 h[j] += Y[j, a] * d[a]  # dm d added to the plant: + dm h in the residual
         fresh = np.isfinite(g[0]) and np.isfinite(g[1])
+    m00 = m01 = m11 = 0.0
     if fresh:
         c2 = np.cos(q[1])
         m00 = th[0] + th[1] + 2.0 * th[2] * c2
         m01 = th[1] + th[2] * c2
         m11 = th[1]
+        fresh = m11 > 0.0 and m00 * m11 > m01 * m01  # the estimate's inertia positive definite
+    if fresh:
         det = m00 * m11 - m01 * m01
         v0 = (m11 * g[0] - m01 * g[1]) / det
         v1 = (m00 * g[1] - m01 * g[0]) / det
