@@ -95,23 +95,32 @@ def momentum_two_link(ch, sg, q, qd, work, p, wv):  # pragma: no cover - compile
 
 
 @njit(cache=True, inline="always")
-def _partials(q, qd, out):  # pragma: no cover - compiled
-    """``d p / d sigma`` into ``out[0:2]`` and ``d wv / d sigma`` into ``out[2:4]`` (each 2 x 7) at
-    ``q, qd``: :func:`momentum_two_link` is linear in sigma."""
-    c2, s2 = np.cos(q[1]), np.sin(q[1])
-    for r in range(4):
-        for a in range(7):
-            out[r, a] = 0.0
-    out[0, 0] = qd[0]
-    out[0, 1] = qd[0] + qd[1]
-    out[0, 2] = c2 * (2.0 * qd[0] + qd[1])
-    out[1, 1] = qd[0] + qd[1]
-    out[1, 2] = c2 * qd[0]
-    out[2, 3] = qd[0]
-    out[2, 5] = np.sign(qd[0])
-    out[3, 2] = s2 * qd[0] * (qd[0] + qd[1])
-    out[3, 4] = qd[1]
-    out[3, 6] = np.sign(qd[1])
+def _regressor(qa, qda, qb, qdb, T):  # pragma: no cover - compiled
+    """The increment's regressor ``Y`` from the sample ``a`` to ``b``: ``T tau_a - Y sigma`` is the
+    residual of :func:`momentum_two_link`'s identity on the model sigma (linear in sigma). Its
+    nine entries that are not zero, row 0 at J1, J2, r, b1, d1 and row 1 at J2, r, b2, d2:
+    ``p_b - p_a`` (J1, J2, r) and ``T (wv_b + wv_a) / 2`` (r, b, d)."""
+    c2a, c2b = np.cos(qa[1]), np.cos(qb[1])
+    s2a, s2b = np.sin(qa[1]), np.sin(qb[1])
+    y00 = qdb[0] - qda[0]
+    y01 = qdb[0] + qdb[1] - qda[0] - qda[1]
+    y02 = c2b * (2.0 * qdb[0] + qdb[1]) - c2a * (2.0 * qda[0] + qda[1])
+    y03 = 0.5 * T * (qdb[0] + qda[0])
+    y05 = 0.5 * T * (np.sign(qdb[0]) + np.sign(qda[0]))
+    y12 = c2b * qdb[0] - c2a * qda[0]
+    y12 += 0.5 * T * (s2b * qdb[0] * (qdb[0] + qdb[1]) + s2a * qda[0] * (qda[0] + qda[1]))
+    y14 = 0.5 * T * (qdb[1] + qda[1])
+    y16 = 0.5 * T * (np.sign(qdb[1]) + np.sign(qda[1]))
+    return y00, y01, y02, y03, y05, y12, y14, y16
+
+
+@njit(cache=True, inline="always")
+def _times(y, p, o):  # pragma: no cover - compiled
+    """``Y sigma`` (2,) of :func:`_regressor`'s ``y`` and the sigma ``p[o : o + 7]``."""
+    y00, y01, y02, y03, y05, y12, y14, y16 = y
+    r0 = y00 * p[o] + y01 * p[o + 1] + y02 * p[o + 2] + y03 * p[o + 3] + y05 * p[o + 5]
+    r1 = y01 * p[o + 1] + y12 * p[o + 2] + y14 * p[o + 4] + y16 * p[o + 6]
+    return r0, r1
 
 
 @njit(cache=True)
@@ -126,21 +135,16 @@ def momentum_test(sh, cnt, i, th, d, q, qd, ci, cf):  # pragma: no cover - compi
     sh[S_MG_DM] = 0.0
     finite = np.isfinite(q[0]) and np.isfinite(q[1]) and np.isfinite(qd[0]) and np.isfinite(qd[1])
     fresh = finite and sh[S_MG_PREV + 6] == 1.0
-    g, h, tt = np.empty(2), np.empty(2), np.empty(2)
-    Y = np.empty((2, 7))  # the increment's regressor: T tau - Y sigma = 0 on the model sigma
+    g0 = g1 = h0 = h1 = tt0 = tt1 = 0.0
+    y = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
     q00 = q01 = q11 = 0.0  # Q_k
     if fresh:
-        d0, d1 = np.empty((4, 7)), np.empty((4, 7))
-        _partials(sh[S_MG_PREV : S_MG_PREV + 2], sh[S_MG_PREV + 2 : S_MG_PREV + 4], d0)
-        _partials(q, qd, d1)
-        for j in range(2):
-            tt[j] = T * sh[S_MG_PREV + 4 + j]
-            g[j], h[j] = tt[j], 0.0
-            for a in range(7):
-                Y[j, a] = d1[j, a] - d0[j, a] + 0.5 * T * (d1[2 + j, a] + d0[2 + j, a])
-                g[j] -= Y[j, a] * th[a]
-                h[j] += Y[j, a] * d[a]  # dm d added to the plant: + dm h in the residual
-        fresh = np.isfinite(g[0]) and np.isfinite(g[1])
+        y = _regressor(sh[S_MG_PREV : S_MG_PREV + 2], sh[S_MG_PREV + 2 : S_MG_PREV + 4], q, qd, T)
+        tt0, tt1 = T * sh[S_MG_PREV + 4], T * sh[S_MG_PREV + 5]
+        r0, r1 = _times(y, th, 0)
+        g0, g1 = tt0 - r0, tt1 - r1
+        h0, h1 = _times(y, d, 0)  # dm d added to the plant: + dm h in the residual
+        fresh = np.isfinite(g0) and np.isfinite(g1)
     m00 = m01 = m11 = 0.0
     if fresh:
         c2 = np.cos(q[1])
@@ -150,8 +154,8 @@ def momentum_test(sh, cnt, i, th, d, q, qd, ci, cf):  # pragma: no cover - compi
         fresh = m11 > 0.0 and m00 * m11 > m01 * m01  # the estimate's inertia positive definite
     if fresh:
         det = m00 * m11 - m01 * m01
-        v0 = (m11 * g[0] - m01 * g[1]) / det
-        v1 = (m00 * g[1] - m01 * g[0]) / det
+        v0 = (m11 * g0 - m01 * g1) / det
+        v1 = (m00 * g1 - m01 * g0) / det
         # Sigma_v learnt from v v^T / 2, winsorised at 9 times its level once it has one
         n = sh[S_MG_N]
         a = cf[F_ALPHA_LONG]
@@ -203,12 +207,12 @@ def momentum_test(sh, cnt, i, th, d, q, qd, ci, cf):  # pragma: no cover - compi
             b0 = S_MGC + c * MG_STRIDE
             if sh[b0 + MG_ACTIVE] != 1.0 or b0 == c0:
                 continue
+            r0, r1 = _times(y, sh, b0 + MG_TH)  # the residual with the onset's estimate
+            sh[b0 + MG_R] += tt0 - r0
+            sh[b0 + MG_R + 1] += tt1 - r1
+            sh[b0 + MG_S] += h0
+            sh[b0 + MG_S + 1] += h1
             for j in range(2):
-                gc = tt[j]
-                for a in range(7):
-                    gc -= Y[j, a] * sh[b0 + MG_TH + a]
-                sh[b0 + MG_R + j] += gc
-                sh[b0 + MG_S + j] += h[j]
                 if abs(qd[j]) <= cf[F_DET_SPEED]:
                     sh[b0 + MG_TAINT + j] = 1.0
             sh[b0 + MG_K] += 1.0
