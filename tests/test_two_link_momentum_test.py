@@ -57,7 +57,7 @@ def test_the_score_is_chi_square_on_the_model(record):
 
 
 def test_the_momentum_test_alarms_before_the_filtered_glr(record):
-    """The same swap: the momentum test alone alarms within 10 ms (7 ms here), the filtered
+    """The same swap: the momentum test alone alarms within 10 ms (8 ms here), the filtered
     equations' GLR alone later (12-13 ms); together at the earlier one, once per trial."""
     momentum, _ = _run(record, glr_threshold=OFF)
     glr, _ = _run(record, momentum_threshold=OFF)
