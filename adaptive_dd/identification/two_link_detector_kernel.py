@@ -68,6 +68,21 @@ def _explained(sh, k, cf):  # pragma: no cover - compiled
     return abs(a) >= cf[F_MIN_MASS] * b and a * a >= cf[F_MIN_EXPLAINED] * b * e
 
 
+@njit(cache=True, inline="always")
+def _mass_gates(a, b, th, d, sh, cf):  # pragma: no cover - compiled
+    """The gates on the mass change ``dm = a / b`` (``b > 0``) a test claims: ``|dm| >= min_mass``,
+    and the payload left after it must be able to exist, ``dm >= -(removal m_hat + min_mass)``
+    with ``m_hat = d . theta / (d . d)`` over the start estimate's (written as products by ``b``,
+    so that ``b = 0`` divides nothing)."""
+    if not abs(a) >= cf[F_MIN_MASS] * b:
+        return False
+    dd = d[0] * d[0] + d[1] * d[1] + d[2] * d[2]
+    if not dd > 0.0:
+        return True
+    m_hat = (d[0] * th[0] + d[1] * th[1] + d[2] * th[2]) / dd - sh[S_M0]
+    return a >= -(cf[F_REMOVAL] * max(m_hat, 0.0) + cf[F_MIN_MASS]) * b
+
+
 @njit(cache=True)
 def _glr_update(sh, u, k, eps, act, w, ci, cf, A, B, C, D, d):  # pragma: no cover - compiled
     """Advance every GLR candidate by one sample; return ``(best A^2 / B, its A, B, E)``.
@@ -198,17 +213,10 @@ def _detect(i, eps, act, phi_d, u, th, short, long, cnt, ci, cf, A, B, C, D, d):
     if settled and cf[F_MG_THRESHOLD] > 0.0 and sh[S_MG_SCORE] >= cf[F_MG_THRESHOLD]:
         # the momentum test (two_link_momentum_test), under the GLR's gates on the mass it claims;
         # not while the estimate learns the last change: its residual holds what is left to learn
-        dm = sh[S_MG_DM]
-        dd = d[0] * d[0] + d[1] * d[1] + d[2] * d[2]
-        m_hat = (d[0] * th[0] + d[1] * th[1] + d[2] * th[2]) / dd - sh[S_M0]
-        if abs(dm) >= cf[F_MIN_MASS] and dm >= -(cf[F_REMOVAL] * max(m_hat, 0.0) + cf[F_MIN_MASS]):
+        if _mass_gates(sh[S_MG_DM], 1.0, th, d, sh, cf):
             return True
     if ci[I_CONSTRUCTION] == 1:  # the GLR on the payload direction
-        gate = abs(ga) >= cf[F_MIN_MASS] * gb and ga * ga >= cf[F_MIN_EXPLAINED] * gb * ge
-        dd = d[0] * d[0] + d[1] * d[1] + d[2] * d[2]
-        if gate and dd > 0.0:  # the payload left after the change must be able to exist
-            m_hat = (d[0] * th[0] + d[1] * th[1] + d[2] * th[2]) / dd - sh[S_M0]
-            gate = ga >= -(cf[F_REMOVAL] * max(m_hat, 0.0) + cf[F_MIN_MASS]) * gb
+        gate = ga * ga >= cf[F_MIN_EXPLAINED] * gb * ge and _mass_gates(ga, gb, th, d, sh, cf)
         return glr >= cf[F_GLR_THRESHOLD] and gate
     # the paper's construction has no GLR: the energy test, gated over the direction window
     energy = False

@@ -124,11 +124,12 @@ def _times(y, p, o):  # pragma: no cover - compiled
 
 
 @njit(cache=True)
-def momentum_test(sh, cnt, i, th, d, q, qd, ci, cf):  # pragma: no cover - compiled
+def momentum_test(sh, cnt, i, th, d, q, qd, tau, ci, cf):  # pragma: no cover - compiled
     """Advance trial i's momentum test by the sample ``q, qd`` (the torque applied over the last
-    sample is in the state); the best candidate's ``A^2 / B`` and ``A / B`` into
-    ``sh[S_MG_SCORE]``, ``sh[S_MG_DM]`` (0 while none may alarm). ``sh`` is the trial's row of
-    the detector statistics, ``th`` the estimate both momenta are formed with."""
+    sample is in the state; ``tau``, applied over this one, is kept for the next); the best
+    candidate's ``A^2 / B`` and ``A / B`` into ``sh[S_MG_SCORE]``, ``sh[S_MG_DM]`` (0 while none
+    may alarm). ``sh`` is the trial's row of the detector statistics, ``th`` the estimate both
+    momenta are formed with."""
     T = cf[F_T]
     k = cnt[i, C_K]
     sh[S_MG_SCORE] = 0.0
@@ -203,6 +204,7 @@ def momentum_test(sh, cnt, i, th, d, q, qd, ci, cf):  # pragma: no cover - compi
         det_q = q00 * q11 - q01 * q01
         i00, i01, i11 = q11 / det_q, -q01 / det_q, q00 / det_q  # Q_k^-1
         best, best_dm = 0.0, 0.0
+        slow0, slow1 = abs(qd[0]) <= cf[F_DET_SPEED], abs(qd[1]) <= cf[F_DET_SPEED]
         for c in range(MG_CANDIDATES):
             b0 = S_MGC + c * MG_STRIDE
             if sh[b0 + MG_ACTIVE] != 1.0 or b0 == c0:
@@ -212,9 +214,10 @@ def momentum_test(sh, cnt, i, th, d, q, qd, ci, cf):  # pragma: no cover - compi
             sh[b0 + MG_R + 1] += tt1 - r1
             sh[b0 + MG_S] += h0
             sh[b0 + MG_S + 1] += h1
-            for j in range(2):
-                if abs(qd[j]) <= cf[F_DET_SPEED]:
-                    sh[b0 + MG_TAINT + j] = 1.0
+            if slow0:
+                sh[b0 + MG_TAINT] = 1.0
+            if slow1:
+                sh[b0 + MG_TAINT + 1] = 1.0
             sh[b0 + MG_K] += 1.0
             keep0, keep1 = sh[b0 + MG_TAINT] == 0.0, sh[b0 + MG_TAINT + 1] == 0.0
             if keep0 and keep1:
@@ -266,14 +269,6 @@ def momentum_test(sh, cnt, i, th, d, q, qd, ci, cf):  # pragma: no cover - compi
         for j in range(2):
             sh[S_MG_PREV + j] = q[j]
             sh[S_MG_PREV + 2 + j] = qd[j]
-    sh[S_MG_PREV + 6] = 1.0 if finite else 0.0
-
-
-@njit(cache=True, inline="always")
-def momentum_torque(sh, tau):  # pragma: no cover - compiled
-    """The torque applied over this sample, for the next sample's increment (non-finite: the
-    next increment is not formed)."""
-    for j in range(2):
+    for j in range(2):  # the torque applied over this sample, for the next sample's increment
         sh[S_MG_PREV + 4 + j] = tau[j]
-    if not (np.isfinite(tau[0]) and np.isfinite(tau[1])):
-        sh[S_MG_PREV + 6] = 0.0
+    sh[S_MG_PREV + 6] = 1.0 if finite and np.isfinite(tau[0]) and np.isfinite(tau[1]) else 0.0

@@ -21,7 +21,7 @@ import numpy as np
 from numba import njit
 
 from adaptive_dd.identification.two_link_detector_kernel import _detect
-from adaptive_dd.identification.two_link_momentum_test import momentum_test, momentum_torque
+from adaptive_dd.identification.two_link_momentum_test import momentum_test
 from adaptive_dd.identification.two_link_online_slots import (  # noqa: F401 (read as K.NAME by the estimator)
     BIG,
     C_ALARMS,
@@ -397,8 +397,7 @@ def online_step_trial(
         if cnt[i, C_REOPEN_AT] == cnt[i, C_K]:
             _reopen(Pi, group, d, cf)
         if cf[F_MG_THRESHOLD] > 0.0:
-            momentum_test(short[i], cnt, i, th, d, q, qd, ci, cf)
-            momentum_torque(short[i], tau)
+            momentum_test(short[i], cnt, i, th, d, q, qd, tau, ci, cf)
         phi_d = np.zeros(2)
         for r in range(2):
             for j in range(7):
