@@ -98,7 +98,7 @@ def test_a_pick_ups_noise_rise_raises_no_second_alarm_and_a_change_is_still_foun
     w = K.est_work(n, p)
     window = c.resume + c.min_learned
     scale = np.sqrt(_expected_rise(ur5, POSTURE, PAY))
-    assert scale.max() * 1.3 > np.sqrt(c.threshold2 * c.slow2)
+    assert scale.max() * 1.3 > np.sqrt(c.threshold2)
     rng = np.random.default_rng(seed)
     k_alarm = 3_000
     noise = rng.standard_normal((k_alarm + window + 100, n))

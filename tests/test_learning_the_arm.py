@@ -266,7 +266,7 @@ def test_a_scenario_without_estimator_settings_runs_as_the_tuned_one():
     base["payload"] = base["payload"][:1]
     tuned = {  # [controllers.adaptive_ct]: the estimator's table and the detector's
         "estimator": {"row_weights": [1.0, 1.0, 1.0, 1.0, 0.14, 0.14, 0.14]},
-        "detector": {"reopen_mass_std": 2.0, "slow_factor": 1.5},  # (the fast test: the defaults)
+        "detector": {"reopen_mass_std": 2.0},  # (the fast test: the defaults)
     }
     out = {}
     for name, est in (("derived", None), ("tuned", tuned)):

@@ -62,8 +62,6 @@ class Detector:
         Time constants [s] of the short average and the long-run level (short < long).
     threshold : float
         RMS ratio short / level that raises an alarm, > 1.
-    slow_factor : float
-        The threshold is this many times higher while another row is out of use.
     warmup : float or None
         No alarm before this time [s]. None (default): :data:`WARMUP` in payload mode,
         :data:`WARMUP_ARM` in mode ``"arm"``, whose residual while the arm's error is learnt is
@@ -144,14 +142,13 @@ class Detector:
     --------
     >>> from adaptive_dd.identification.online import Detector
     >>> d = Detector()
-    >>> d.short_window, d.fast_window, d.fast_threshold, d.slow_factor  # [s], [s], x, x
-    (0.02, 0.001, 7.0, 1.5)
+    >>> d.short_window, d.fast_window, d.fast_threshold  # [s], [s], x
+    (0.02, 0.001, 7.0)
     """
 
     short_window: float = 0.02
     long_window: float = 1.0
     threshold: float = 4.0
-    slow_factor: float = 1.5
     warmup: float | None = None
     min_learned: int = 200
     holdoff: float = 0.2
@@ -178,7 +175,6 @@ class Detector:
                 f"{o} needs short_window < long_window, got {self.short_window}, {self.long_window}"
             )
         _num(o, "threshold", self.threshold, 1.0)
-        _num(o, "slow_factor", self.slow_factor, 1.0, strict=False)
         _num(o, "gate", self.gate, 1.0)
         if self.warmup is not None:
             _num(o, "warmup", self.warmup, 0.0, strict=False)

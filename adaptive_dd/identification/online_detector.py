@@ -204,13 +204,11 @@ def _detect(c, s, i, eps, act):  # pragma: no cover - compiled
     samples after the alarm (the re-arm bound of a row in use throughout), a row that had
     established its level
     before the last alarm is compared with that level (``ref``, raised by the noise the
-    estimate's new payload adds to the row, :func:`_ref_rise`, with the threshold
-    times ``slow``, as the estimate may still be converging): a change that
+    estimate's new payload adds to the row, :func:`_ref_rise`): a change that
     follows a false alarm within the re-learning time is detected after the hold-off.
     Past that bound such a row, not yet seen ``min_learned`` times (it was out of use), is
     compared with what it has learned since, once that is ``gate_after`` samples (the count
-    after which the level is trusted to gate its own learning), with the same stricter
-    threshold.
+    after which the level is trusted to gate its own learning).
     ``ref`` is set only from an established level, so this adds at most one alarm
     (a swap that raises the noise level cannot chain alarms through it). Its time is bounded
     because a swap changes the noise level itself (the measured velocity's noise enters the
@@ -220,9 +218,11 @@ def _detect(c, s, i, eps, act):  # pragma: no cover - compiled
     0.09 -> 0.5 RMS, 0.03 of it without sensor noise; 17 of 50 trials with a false alarm 0.5-0.8 s
     after the swap before the bound, 1 of 50 after it, ``docs/learning_the_arm.md``). The level is at
     least ``floor^2``: a row that is nearly noise-free (a wrist joint) would otherwise
-    alarm on the regression's own modelling error, which varies with the motion. The
-    threshold is ``slow^2`` times higher while another row is out of use (a joint that
-    is slow or reversing disturbs the others).
+    alarm on the regression's own modelling error, which varies with the motion. One threshold
+    serves every row, whether or not another row is out of use: a joint's friction enters its own
+    equation only, so a slow or reversing joint does not disturb the others' (a threshold 1.5
+    times higher while another row was out of use, or while re-learning, delayed the swaps that
+    come at a reversal: ``docs/changelog.md``).
 
     The averages are also judged against the level plus what the posture adds to the row's noise
     over the postures the level was learnt at (:func:`_posture_noise`: ``nshort``, for the single
@@ -242,10 +242,11 @@ def _detect(c, s, i, eps, act):  # pragma: no cover - compiled
     A row out of use because its joint is slow (``s.eout[i, j]`` finite: its prior error at the
     estimate it does not update, :func:`~adaptive_dd.identification.online_kernel._slow_rows`)
     feeds its short and fast averages but not its level, and alarms only against a level it learnt
-    itself since the last alarm, plus ``((2 + creep_margin) fc_j / w_j)^2``: the model's Coulomb
-    friction turned over by the measured speed's sign near a reversal, and friction the model
-    lacks near rest. A payload swapped while the joints carrying it reverse shows first in their
-    rows (random:111's swap to 30 % at 8 s: 57 ms to the alarm while they were not read, 15 ms).
+    itself since the last alarm, its RMS bound plus ``(2 + creep_margin) fc_j / w_j`` (the bound's
+    square is ``(sqrt(threshold^2 level) + flip)^2``): the model's Coulomb friction turned over
+    by the measured speed's sign near a reversal, and friction the model lacks near rest. A
+    payload swapped while the joints carrying it reverse shows first in their rows (random:111's
+    swap to 30 % at 8 s: 57 ms to the alarm while they were not read, 15 ms).
     """
     n = eps.shape[0]
     a_s, a_l = c.alpha_short, c.alpha_long
@@ -308,10 +309,6 @@ def _detect(c, s, i, eps, act):  # pragma: no cover - compiled
                 s.learned[i, j] = nl + 1
     if cnt[C_K] < c.warmup or cnt[C_SINCE_ALARM] <= c.holdoff:
         return False
-    n_act = 0
-    for j in range(n):
-        if act[j]:
-            n_act += 1
     alarm = False
     fast = False
     for j in range(n):
@@ -319,7 +316,6 @@ def _detect(c, s, i, eps, act):  # pragma: no cover - compiled
         if not (act[j] or slow):
             continue
         nl = s.learned[i, j]
-        thr = c.threshold2 if n_act == c.n_rows else c.threshold2 * c.slow2
         own = s.seen[i, j] >= c.min_learned and nl >= 1
         den = 1.0 - (1.0 - a_l) ** nl  # the long averages' bias correction after nl samples
         # the share of the level that is the estimate's uncertainty (learnt with it)
@@ -336,17 +332,14 @@ def _detect(c, s, i, eps, act):  # pragma: no cover - compiled
             continue
         elif s.ref[i, j] > 0.0 and cnt[C_SINCE_ALARM] < c.resume + c.min_learned:
             # still re-learning, within the re-arm bound: the level established before the last
-            # alarm, raised by what the new payload adds to the row's noise (_ref_rise), with the
-            # stricter threshold (the estimate may still converge)
+            # alarm, raised by what the new payload adds to the row's noise (_ref_rise)
             level = max(s.ref[i, j] * s.ref_rise[i, j], c.floor2)
             plev = s.pref[i, j]
             rise = _excess(s.nshort[i, j], s.nref[i, j])
             rise_fast = _excess(s.nvar[i, j], s.nref[i, j])
-            thr = c.threshold2 * c.slow2
         elif s.ref[i, j] > 0.0 and nl >= c.gate_after:
             # past the bound, not yet seen enough: what it learned since (trusted as for the gate)
             level = max(s.long[i, j] / den, c.floor2)
-            thr = c.threshold2 * c.slow2
         else:
             continue
         # a joint at most the detector's speed within the selection memory creeps: friction the
@@ -356,21 +349,24 @@ def _detect(c, s, i, eps, act):  # pragma: no cover - compiled
         if c.select and s.since_crawl[i, j] <= c.sel_memory:
             creep2 = (c.creep_margin * c.pi0[11 * n + j] / c.w[j]) ** 2
         # the level plus what the estimate's uncertainty along the row (the innovation's predicted
-        # variance, averaged as the squared errors are) exceeds the share the level learnt of it
-        # a row out of use errs, besides its level, by the model's Coulomb friction turned over
-        # (the measured speed's sign near zero: 2 fc) and what the model lacks near rest
-        flip2 = 0.0
+        # variance, averaged as the squared errors are) exceeds the share the level learnt of it;
+        # a row out of use errs, besides that, by the model's Coulomb friction turned over (the
+        # measured speed's sign near zero: 2 fc) and what the model lacks near rest: a bound on
+        # the error's RMS, added to the noise's RMS bound (the triangle inequality: the two are
+        # not independent, so their mean squares do not add)
+        flip = 0.0
         if slow:
-            flip2 = ((2.0 + c.creep_margin) * c.pi0[11 * n + j] / c.w[j]) ** 2
+            flip = (2.0 + c.creep_margin) * c.pi0[11 * n + j] / c.w[j]
         more = max(s.pshort[i, j] - plev, 0.0)
-        if s.short[i, j] > thr * (level + rise + more) + flip2 + 1e-300 and s.short[i, j] > creep2:
+        bound = (np.sqrt(c.threshold2 * (level + rise + more)) + flip) ** 2
+        if s.short[i, j] > bound + 1e-300 and s.short[i, j] > creep2:
             alarm = True
         if c.fast and own and nl >= c.fast_learned:
             # only against a level the row has learned itself over the long window: not the
             # level of before an alarm, nor one still learning a new payload or the arm
-            thf = c.fast2 * thr / c.threshold2  # the same slow-row and re-learning factors
             more = max(s.pfast[i, j] - plev, 0.0)
-            if s.fast[i, j] > thf * (level + rise_fast + more) + flip2 + 1e-300 and s.fast[i, j] > creep2:
+            bound = (np.sqrt(c.fast2 * (level + rise_fast + more)) + flip) ** 2
+            if s.fast[i, j] > bound + 1e-300 and s.fast[i, j] > creep2:
                 fast = True
     return alarm or fast
 
