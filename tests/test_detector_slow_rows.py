@@ -110,7 +110,7 @@ def test_a_change_on_a_row_in_use_is_found_at_the_same_threshold_while_another_i
     within its friction allowance) while the base's row, in use, steps to 1.2 times the threshold
     in RMS: an alarm within 60 samples. A joint's friction enters its own equation only, so a slow
     joint does not raise the others' threshold (with it 1.5 times higher, as it once was, none
-    within 300 samples: random:29's pick-up at a reversal was found 15 ms after it)."""
+    within 300 samples)."""
     c, s = est_init(OnlineConfig(), ur5, 1)
     n = ur5.n_joints
     rng = np.random.default_rng(seed)
