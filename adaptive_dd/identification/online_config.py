@@ -62,6 +62,12 @@ class Detector:
         Time constants [s] of the short average and the long-run level (short < long).
     threshold : float
         RMS ratio short / level that raises an alarm, > 1.
+    relearn_factor : float
+        The threshold is this many times higher, >= 1, for a row judged against a level it has not
+        established since the last alarm: the level kept from before that alarm, while the
+        estimate may still be converging, or one learnt since over fewer samples than
+        ``min_learned`` (a row out of use through the alarm). Not while another row is out of use:
+        a joint's friction enters its own equation only.
     warmup : float or None
         No alarm before this time [s]. None (default): :data:`WARMUP` in payload mode,
         :data:`WARMUP_ARM` in mode ``"arm"``, whose residual while the arm's error is learnt is
@@ -149,6 +155,7 @@ class Detector:
     short_window: float = 0.02
     long_window: float = 1.0
     threshold: float = 4.0
+    relearn_factor: float = 1.5
     warmup: float | None = None
     min_learned: int = 200
     holdoff: float = 0.2
@@ -175,6 +182,7 @@ class Detector:
                 f"{o} needs short_window < long_window, got {self.short_window}, {self.long_window}"
             )
         _num(o, "threshold", self.threshold, 1.0)
+        _num(o, "relearn_factor", self.relearn_factor, 1.0, strict=False)
         _num(o, "gate", self.gate, 1.0)
         if self.warmup is not None:
             _num(o, "warmup", self.warmup, 0.0, strict=False)

@@ -204,11 +204,14 @@ def _detect(c, s, i, eps, act):  # pragma: no cover - compiled
     samples after the alarm (the re-arm bound of a row in use throughout), a row that had
     established its level
     before the last alarm is compared with that level (``ref``, raised by the noise the
-    estimate's new payload adds to the row, :func:`_ref_rise`): a change that
+    estimate's new payload adds to the row, :func:`_ref_rise`, with the threshold times
+    ``relearn``, as the estimate may still be converging): a change that
     follows a false alarm within the re-learning time is detected after the hold-off.
     Past that bound such a row, not yet seen ``min_learned`` times (it was out of use), is
     compared with what it has learned since, once that is ``gate_after`` samples (the count
-    after which the level is trusted to gate its own learning).
+    after which the level is trusted to gate its own learning), with the same stricter
+    threshold (a level learnt over few samples is uncertain; without it, random:14 alarmed
+    again 0.43 s after a put-down).
     ``ref`` is set only from an established level, so this adds at most one alarm
     (a swap that raises the noise level cannot chain alarms through it). Its time is bounded
     because a swap changes the noise level itself (the measured velocity's noise enters the
@@ -218,11 +221,10 @@ def _detect(c, s, i, eps, act):  # pragma: no cover - compiled
     0.09 -> 0.5 RMS, 0.03 of it without sensor noise; 17 of 50 trials with a false alarm 0.5-0.8 s
     after the swap before the bound, 1 of 50 after it, ``docs/learning_the_arm.md``). The level is at
     least ``floor^2``: a row that is nearly noise-free (a wrist joint) would otherwise
-    alarm on the regression's own modelling error, which varies with the motion. One threshold
-    serves every row, whether or not another row is out of use: a joint's friction enters its own
+    alarm on the regression's own modelling error, which varies with the motion. The threshold
+    is the same whether or not another row is out of use: a joint's friction enters its own
     equation only, so a slow or reversing joint does not disturb the others' (a threshold 1.5
-    times higher while another row was out of use, or while re-learning, delayed the swaps that
-    come at a reversal: ``docs/changelog.md``).
+    times higher while another row was out of use delayed the alarms: ``docs/changelog.md``).
 
     The averages are also judged against the level plus what the posture adds to the row's noise
     over the postures the level was learnt at (:func:`_posture_noise`: ``nshort``, for the single
@@ -316,6 +318,7 @@ def _detect(c, s, i, eps, act):  # pragma: no cover - compiled
         if not (act[j] or slow):
             continue
         nl = s.learned[i, j]
+        thr = c.threshold2
         own = s.seen[i, j] >= c.min_learned and nl >= 1
         den = 1.0 - (1.0 - a_l) ** nl  # the long averages' bias correction after nl samples
         # the share of the level that is the estimate's uncertainty (learnt with it)
@@ -332,14 +335,18 @@ def _detect(c, s, i, eps, act):  # pragma: no cover - compiled
             continue
         elif s.ref[i, j] > 0.0 and cnt[C_SINCE_ALARM] < c.resume + c.min_learned:
             # still re-learning, within the re-arm bound: the level established before the last
-            # alarm, raised by what the new payload adds to the row's noise (_ref_rise)
+            # alarm, raised by what the new payload adds to the row's noise (_ref_rise), with the
+            # stricter threshold (the estimate may still converge)
             level = max(s.ref[i, j] * s.ref_rise[i, j], c.floor2)
             plev = s.pref[i, j]
             rise = _excess(s.nshort[i, j], s.nref[i, j])
             rise_fast = _excess(s.nvar[i, j], s.nref[i, j])
+            thr = c.threshold2 * c.relearn2
         elif s.ref[i, j] > 0.0 and nl >= c.gate_after:
-            # past the bound, not yet seen enough: what it learned since (trusted as for the gate)
+            # past the bound, not yet seen enough: what it learned since (trusted as for the gate),
+            # with the stricter threshold (a level learnt over few samples)
             level = max(s.long[i, j] / den, c.floor2)
+            thr = c.threshold2 * c.relearn2
         else:
             continue
         # a joint at most the detector's speed within the selection memory creeps: friction the
@@ -358,7 +365,7 @@ def _detect(c, s, i, eps, act):  # pragma: no cover - compiled
         if slow:
             flip = (2.0 + c.creep_margin) * c.pi0[11 * n + j] / c.w[j]
         more = max(s.pshort[i, j] - plev, 0.0)
-        bound = (np.sqrt(c.threshold2 * (level + rise + more)) + flip) ** 2
+        bound = (np.sqrt(thr * (level + rise + more)) + flip) ** 2
         if s.short[i, j] > bound + 1e-300 and s.short[i, j] > creep2:
             alarm = True
         if c.fast and own and nl >= c.fast_learned:

@@ -167,6 +167,7 @@ def _detector_scalars(cfg: OnlineConfig, arm: Arm, w: Array, sel_threshold: floa
         alpha_short=float(min(1.0, T / det.short_window)),
         alpha_long=float(min(1.0, T / det.long_window)),
         threshold2=float(det.threshold**2),
+        relearn2=float(det.relearn_factor**2),
         gate2=float(det.gate**2),
         floor2=float((detector_floor(det) / w.max()) ** 2),  # [N m] on the row of the largest weight
         fast=fast,

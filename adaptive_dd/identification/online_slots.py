@@ -124,9 +124,10 @@ class EstCfg(NamedTuple):
         starting payload until the payload changes (payload mode, :func:`_keep_start`).
     alpha_short, alpha_long, alpha_fast : float
         The averages' weights of a sample.
-    threshold2, gate2, fast2, hold_above2 : float
-        Squared: the alarm's RMS ratio, the learning gate's ratio, the fast average's threshold,
-        the ratio at which a row rises.
+    threshold2, relearn2, gate2, fast2, hold_above2 : float
+        Squared: the alarm's RMS ratio, its factor against a level not established since the last
+        alarm, the learning gate's ratio, the fast average's threshold, the ratio at which a row
+        rises.
     floor2 : float
         Floor of the detector's level (squared weighted error).
     det_speed, creep_margin : float
@@ -187,6 +188,7 @@ class EstCfg(NamedTuple):
     alpha_long: float = 0.0
     alpha_fast: float = 0.0
     threshold2: float = 0.0
+    relearn2: float = 0.0
     gate2: float = 0.0
     fast2: float = 0.0
     hold_above2: float = 0.0
