@@ -413,8 +413,8 @@ def inertia_problems(scenario) -> list[str]:
             "arm has little). A light arm is the hard case of adaptive_ct against its floor (the "
             "milliseconds before it detects a swap move a light arm further): exact, 10 "
             "seeds, benchmarks/scenarios/jaco2.toml 1.64 unloaded, 1.00 with "
-            "armature [0.05, 0.05, 0.05, 0.02, 0.02, 0.02]; vertical3_payload_exact.toml 1.674 in its "
-            "1 kg segment, 1.185 with [0.05, 0.05, 0.02]"
+            "armature [0.05, 0.05, 0.05, 0.02, 0.02, 0.02]; vertical3_payload_exact.toml 1.482 in its "
+            "1 kg segment, 1.119 with [0.05, 0.05, 0.02]"
         )
     for j in np.flatnonzero(fc > FRICTION_ACCELERATION * inertia):
         out.append(
