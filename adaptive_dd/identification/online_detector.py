@@ -248,7 +248,7 @@ def _detect(c, s, i, eps, act):  # pragma: no cover - compiled
     square is ``(sqrt(threshold^2 level) + flip)^2``): the model's Coulomb friction turned over
     by the measured speed's sign near a reversal, and friction the model lacks near rest. A
     payload swapped while the joints carrying it reverse shows first in their rows (random:111's
-    swap to 30 % at 8 s: 57 ms to the alarm while they were not read, 15 ms).
+    swap to 30 % at 8 s: 57 ms to the alarm while they were not read, 17 ms).
     """
     n = eps.shape[0]
     a_s, a_l = c.alpha_short, c.alpha_long
