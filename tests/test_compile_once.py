@@ -78,8 +78,8 @@ def test_the_chain_kernels_compile_once_for_every_caller(rng):
     C.rnea_body_regressor_in(ch, pi, 2, q[0].copy(), qd[0], qdd[0], w, a, np.empty(n), out)
     C.mass_matrix_in(ch, pi, q[0].copy(), w, np.empty((n, n)))
     for kernel in (
-        CD._torque, CD._body_force, CD._ref_motion, CR._local_regressor, CR._columns_from_motion,
-        CR._regressor_blocks, CR._regressor_blocks_in,
+        CD.rnea_in, CD.rnea_ref_in, CD.mass_matrix_in, CR._local_regressor, CR._columns_from_motion,
+        CR._regressor_blocks_in,
     ):  # fmt: skip
         assert len(_specialisations(kernel)) == 1, (kernel.__name__, _specialisations(kernel))
 

@@ -204,3 +204,9 @@ def test_streamed_kinematics_are_pinocchios(name, tmp_path):
         assert sums[0, 0, k] == pytest.approx(d2, rel=1e-9, abs=1e-18), (name, k)
         assert sums[1, 0, k] == pytest.approx(np.sqrt(d2), rel=1e-9, abs=1e-12)
         assert sums[2, 0, k] == pytest.approx(th**2, rel=1e-8, abs=1e-18), (name, k)
+    # the reference's placements come from the same compiled kinematics: on the reference itself
+    # the loop adds exactly nothing
+    at_ref = np.zeros((3, 1, 20))
+    for k in range(20):
+        accumulate_tool(*tab, at_ref[0], at_ref[1], at_ref[2], 0, k, k, q_d[k], w, r0)
+    assert not at_ref.any(), (name, at_ref)

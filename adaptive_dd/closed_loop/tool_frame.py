@@ -12,7 +12,7 @@ The kinematics are the tables :func:`tool_tables` reads from the arm's Pinocchio
 same product of joint placements and joint motions as
 :func:`~adaptive_dd.benchmark.end_effector.frame_placements`, which
 ``tests/test_end_effector.py`` holds to Pinocchio's ``framePlacement``); the reference's
-placements are computed once, before the run.
+placements are computed once, before the run, by the same compiled kinematics.
 """
 
 from __future__ import annotations
@@ -72,7 +72,7 @@ def tool_tables(arm, q_d: NDArray[np.float64]) -> ToolTables:
     -------
     ToolTables
     """
-    from adaptive_dd.benchmark.end_effector import _joint_motion, frame_placements
+    from adaptive_dd.benchmark.end_effector import _joint_motion
 
     model = arm.model
     J = model.njoints
@@ -89,22 +89,16 @@ def tool_tables(arm, q_d: NDArray[np.float64]) -> ToolTables:
     f = model.frames[frame_id(model, arm.payload_frame)]
     index[J] = (f.parentJoint, FIXED, 0)
     links[J, :12] = np.concatenate((f.placement.rotation.ravel(), f.placement.translation))
-    p_d, r_d = frame_placements(arm, q_d)
-    ref = np.concatenate((r_d.reshape(-1, 9), p_d), axis=1)
-    c = np.ascontiguousarray
-    return ToolTables(c(index), c(links), c(ref))
+    ref = np.empty((q_d.shape[0], 12))
+    _reference_placements(index, links, np.ascontiguousarray(q_d, dtype=float), ref)
+    return ToolTables(index, links, ref)
 
 
 @njit(cache=True, inline="always")
-def accumulate_tool(
-    index, links, ref, ee_sum_p2, ee_max_p, ee_sum_th2, i, s, k, q, w, r0
-):  # pragma: no cover - compiled
-    """Add sample k (segment s) of trial i, true joint positions ``q (n,)``, to the tool frame's
-    sums ``ee_sum_p2, ee_max_p, ee_sum_th2 (S, G)`` (module docstring); ``index, links, ref`` a
-    :class:`ToolTables`; ``w (max(R, 1), 12), r0 (9,)`` scratch."""
+def _placements(index, links, q, w, r0):  # pragma: no cover - compiled
+    """Each row's placement at the joint positions ``q (n,)`` into ``w (R, 12)`` (rotation
+    row-major, 9; position [m], 3): the tool frame's in the last row; ``r0 (9,)`` scratch."""
     rows = index.shape[0]
-    if rows == 0:
-        return
     for a in range(12):
         w[0, a] = links[0, a]
     for r in range(1, rows):
@@ -141,6 +135,31 @@ def accumulate_tool(
                 for a in range(3):
                     w[r, 9 + a] += (r0[3 * a] * links[r, 12] + r0[3 * a + 1] * links[r, 13]
                                     + r0[3 * a + 2] * links[r, 14]) * x  # fmt: skip
+
+
+@njit(cache=True)
+def _reference_placements(index, links, q_d, out):  # pragma: no cover - compiled
+    """The tool frame's placement at each sample of ``q_d (N, n)`` into ``out (N, 12)``
+    (:attr:`ToolTables.ref`), by the loop's own kinematics (:func:`_placements`)."""
+    rows = index.shape[0]
+    w, r0 = np.empty((rows, 12)), np.empty(9)
+    for k in range(q_d.shape[0]):
+        _placements(index, links, q_d[k], w, r0)
+        for a in range(12):
+            out[k, a] = w[rows - 1, a]
+
+
+@njit(cache=True, inline="always")
+def accumulate_tool(
+    index, links, ref, ee_sum_p2, ee_max_p, ee_sum_th2, i, s, k, q, w, r0
+):  # pragma: no cover - compiled
+    """Add sample k (segment s) of trial i, true joint positions ``q (n,)``, to the tool frame's
+    sums ``ee_sum_p2, ee_max_p, ee_sum_th2 (S, G)`` (module docstring); ``index, links, ref`` a
+    :class:`ToolTables`; ``w (max(R, 1), 12), r0 (9,)`` scratch."""
+    rows = index.shape[0]
+    if rows == 0:
+        return
+    _placements(index, links, q, w, r0)
     t = rows - 1
     d2 = 0.0
     for a in range(3):

@@ -16,8 +16,15 @@ from numba import njit
 from numpy.typing import NDArray
 
 from adaptive_dd.errors import ParameterError, SignalError
-from adaptive_dd.plant.chain_dynamics import coriolis_matrix, forward_dynamics, mass_matrix, rnea, rnea_ref
-from adaptive_dd.plant.chain_regressor import regressor, slotine_li_regressor
+from adaptive_dd.plant.chain_dynamics import (
+    coriolis_matrix,
+    forward_dynamics,
+    mass_matrix_in,
+    rnea_in,
+    rnea_ref_in,
+    workspace,
+)
+from adaptive_dd.plant.chain_regressor import _regressor_blocks_in
 
 if TYPE_CHECKING:
     from adaptive_dd.plant.chain import Chain
@@ -35,20 +42,23 @@ __all__ = [
 
 @njit(cache=True)
 def _rnea_loop(ch, pi, q, qd, qdd, out):  # pragma: no cover - compiled
+    w = workspace(q.shape[1])  # one scratch for the batch
     for b in range(q.shape[0]):
-        rnea(ch, pi, q[b], qd[b], qdd[b], out[b])
+        rnea_in(ch, pi, q[b], qd[b], qdd[b], w, out[b])
 
 
 @njit(cache=True)
 def _rnea_ref_loop(ch, pi, q, qd, qdr, qddr, out):  # pragma: no cover - compiled
+    w = workspace(q.shape[1])
     for b in range(q.shape[0]):
-        rnea_ref(ch, pi, q[b], qd[b], qdr[b], qddr[b], out[b])
+        rnea_ref_in(ch, pi, q[b], qd[b], qdr[b], qddr[b], w, out[b])
 
 
 @njit(cache=True)
 def _mass_loop(ch, pi, q, out):  # pragma: no cover - compiled
+    w = workspace(q.shape[1])
     for b in range(q.shape[0]):
-        mass_matrix(ch, pi, q[b], out[b])
+        mass_matrix_in(ch, pi, q[b], w, out[b])
 
 
 @njit(cache=True)
@@ -66,15 +76,13 @@ def _fd_loop(ch, pi, armature, q, qd, tau, out):  # pragma: no cover - compiled
 
 
 @njit(cache=True)
-def _regressor_loop(ch, q, qd, qdd, out):  # pragma: no cover - compiled
+def _regressor_loop(ch, q, qd, qdr, qddr, same, out):  # pragma: no cover - compiled
+    """:func:`~adaptive_dd.plant.chain_regressor.regressor` (``same``: ``qdr`` is ``qd``) or
+    :func:`~adaptive_dd.plant.chain_regressor.slotine_li_regressor` over the batch."""
+    n = q.shape[1]
+    w, a = workspace(n), np.empty((6, 10))
     for b in range(q.shape[0]):
-        regressor(ch, q[b], qd[b], qdd[b], out[b])
-
-
-@njit(cache=True)
-def _sl_regressor_loop(ch, q, qd, qdr, qddr, out):  # pragma: no cover - compiled
-    for b in range(q.shape[0]):
-        slotine_li_regressor(ch, q[b], qd[b], qdr[b], qddr[b], out[b])
+        _regressor_blocks_in(ch, q[b], qd[b], qdr[b], qddr[b], same, np.int64(0), n, w, a, out[b], 0)
 
 
 def _states(ch: Chain, *arrays: NDArray) -> tuple[tuple[int, ...], list[NDArray]]:
@@ -101,7 +109,8 @@ def _pi(ch: Chain, pi: NDArray) -> NDArray[np.float64]:
 
 
 def rnea_batch(ch: Chain, pi: NDArray, q: NDArray, qd: NDArray, qdd: NDArray) -> NDArray[np.float64]:
-    """:func:`rnea` over a batch: q, qd, qdd (..., n) -> torques (..., n)."""
+    """:func:`~adaptive_dd.plant.chain_dynamics.rnea` over a batch: q, qd, qdd (..., n) -> torques
+    (..., n)."""
     batch, (q, qd, qdd) = _states(ch, q, qd, qdd)
     out = np.empty_like(q)
     _rnea_loop(ch, _pi(ch, pi), q, qd, qdd, out)
@@ -111,7 +120,8 @@ def rnea_batch(ch: Chain, pi: NDArray, q: NDArray, qd: NDArray, qdd: NDArray) ->
 def rnea_ref_batch(
     ch: Chain, pi: NDArray, q: NDArray, qd: NDArray, qdr: NDArray, qddr: NDArray
 ) -> NDArray[np.float64]:
-    """:func:`rnea_ref` over a batch: (..., n) arrays -> torques (..., n)."""
+    """:func:`~adaptive_dd.plant.chain_dynamics.rnea_ref` over a batch: (..., n) arrays -> torques
+    (..., n)."""
     batch, (q, qd, qdr, qddr) = _states(ch, q, qd, qdr, qddr)
     out = np.empty_like(q)
     _rnea_ref_loop(ch, _pi(ch, pi), q, qd, qdr, qddr, out)
@@ -119,7 +129,7 @@ def rnea_ref_batch(
 
 
 def mass_matrix_batch(ch: Chain, pi: NDArray, q: NDArray) -> NDArray[np.float64]:
-    """:func:`mass_matrix` over a batch: q (..., n) -> M (..., n, n)."""
+    """:func:`~adaptive_dd.plant.chain_dynamics.mass_matrix` over a batch: q (..., n) -> M (..., n, n)."""
     batch, (q,) = _states(ch, q)
     n = q.shape[1]
     out = np.empty((q.shape[0], n, n))
@@ -158,20 +168,22 @@ def forward_dynamics_batch(
 
 
 def regressor_batch(ch: Chain, q: NDArray, qd: NDArray, qdd: NDArray) -> NDArray[np.float64]:
-    """:func:`regressor` over a batch: (..., n) arrays -> Y (..., n, 10 n)."""
+    """:func:`~adaptive_dd.plant.chain_regressor.regressor` over a batch: (..., n) arrays -> Y
+    (..., n, 10 n)."""
     batch, (q, qd, qdd) = _states(ch, q, qd, qdd)
     n = q.shape[1]
     out = np.empty((q.shape[0], n, 10 * n))
-    _regressor_loop(ch, q, qd, qdd, out)
+    _regressor_loop(ch, q, qd, qd, qdd, np.bool_(True), out)
     return out.reshape((*batch, n, 10 * n))
 
 
 def slotine_li_regressor_batch(
     ch: Chain, q: NDArray, qd: NDArray, qdr: NDArray, qddr: NDArray
 ) -> NDArray[np.float64]:
-    """:func:`slotine_li_regressor` over a batch: (..., n) arrays -> Y (..., n, 10 n)."""
+    """:func:`~adaptive_dd.plant.chain_regressor.slotine_li_regressor` over a batch: (..., n) arrays -> Y
+    (..., n, 10 n)."""
     batch, (q, qd, qdr, qddr) = _states(ch, q, qd, qdr, qddr)
     n = q.shape[1]
     out = np.empty((q.shape[0], n, 10 * n))
-    _sl_regressor_loop(ch, q, qd, qdr, qddr, out)
+    _regressor_loop(ch, q, qd, qdr, qddr, np.bool_(False), out)
     return out.reshape((*batch, n, 10 * n))

@@ -28,11 +28,14 @@ import numpy as np
 from numba import njit
 
 from adaptive_dd.plant.spatial import (
-    add_cross_force,
+    add_cross6,
     apply_inertia,
     cross3,
+    cross6,
+    inertia6,
     kinematics,
-    motion_cross,
+    row6,
+    row10,
     world_inertia,
 )
 
@@ -67,9 +70,10 @@ def workspace(n):  # pragma: no cover - compiled
     return rw, pw, s, v, iw, vr, ar, f, small, vec
 
 
-@njit(cache=True)
-def _ref_motion(ch, s, v, qdr, qddr, gscale, vr, ar, tmp):  # pragma: no cover - compiled
-    """Reference velocity vr_b = sum_{k<=b} S_k qdr_k, acceleration ar_b = -g + sum_{k<=b} dS_k."""
+@njit(cache=True, inline="always")
+def _ref_motion(ch, s, v, qdr, qddr, gscale, vr, ar):  # pragma: no cover - compiled
+    """Reference velocity vr_b = sum_{k<=b} S_k qdr_k, acceleration ar_b = -g + sum_{k<=b} dS_k,
+    rows read and written by index (no array view: each costs a reference count)."""
     # dS_k = S_k qddr_k + (v_k x S_k) qdr_k
     n = s.shape[0]
     for c in range(6):
@@ -82,45 +86,56 @@ def _ref_motion(ch, s, v, qdr, qddr, gscale, vr, ar, tmp):  # pragma: no cover -
             for c in range(6):
                 vr[b, c] = vr[b - 1, c]
                 ar[b, c] = ar[b - 1, c]
-        motion_cross(v[b], s[b], tmp)
+        x = cross6(row6(v, b), row6(s, b))
+        u, ud = qdr[b], qddr[b]
         for c in range(6):
-            vr[b, c] += s[b, c] * qdr[b]
-            ar[b, c] += s[b, c] * qddr[b] + tmp[c] * qdr[b]
+            vr[b, c] += s[b, c] * u
+        ar[b, 0] += s[b, 0] * ud + x[0] * u
+        ar[b, 1] += s[b, 1] * ud + x[1] * u
+        ar[b, 2] += s[b, 2] * ud + x[2] * u
+        ar[b, 3] += s[b, 3] * ud + x[3] * u
+        ar[b, 4] += s[b, 4] * ud + x[4] * u
+        ar[b, 5] += s[b, 5] * ud + x[5] * u
 
 
-@njit(cache=True)
-def _body_force(y, v, vr, ar, same, out, t1, t2):  # pragma: no cover - compiled
-    """out = I ar + 1/2 (v x* I vr - I (v x vr) + vr x* I v); with same (vr = v): I ar + v x* I v."""
+@njit(cache=True, inline="always")
+def _body_force(y, v, vr, ar, same):  # pragma: no cover - compiled
+    """The body force of the inertia ``y`` (10-tuple) at the motions ``v, vr, ar`` (6-tuples), as a
+    6-tuple: ``I ar + 1/2 (v x* I vr - I (v x vr) + vr x* I v)``; with same (vr = v): ``I ar + v
+    x* I v``."""
     if same:
-        apply_inertia(y, ar, out)
-        apply_inertia(y, v, t1)
-        add_cross_force(v, t1, out, 1.0)
-        return
-    motion_cross(v, vr, t1)
-    for c in range(6):
-        t1[c] = ar[c] - 0.5 * t1[c]
-    apply_inertia(y, t1, out)
-    apply_inertia(y, vr, t1)
-    add_cross_force(v, t1, out, 0.5)
-    apply_inertia(y, v, t2)
-    add_cross_force(vr, t2, out, 0.5)
+        return add_cross6(inertia6(y, ar), v, inertia6(y, v), 1.0)
+    x = cross6(v, vr)
+    t = (ar[0] - 0.5 * x[0], ar[1] - 0.5 * x[1], ar[2] - 0.5 * x[2],
+         ar[3] - 0.5 * x[3], ar[4] - 0.5 * x[4], ar[5] - 0.5 * x[5])  # fmt: skip
+    out = add_cross6(inertia6(y, t), v, inertia6(y, vr), 0.5)
+    return add_cross6(out, vr, inertia6(y, v), 0.5)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _torque(ch, pi, q, qd, qdr, qddr, gscale, same, w, out):  # pragma: no cover - compiled
     """out = M qddr + C(q, qd) qdr + gscale * g(q) (same: qdr is qd)."""
-    s, v, iw, vr, ar, f, small = w[2], w[3], w[4], w[5], w[6], w[7], w[8]
+    s, v, iw, vr, ar, f = w[2], w[3], w[4], w[5], w[6], w[7]
     n = q.shape[0]
-    _ref_motion(ch, s, v, qdr, qddr, gscale, vr, ar, small[0])
+    _ref_motion(ch, s, v, qdr, qddr, gscale, vr, ar)
     for b in range(n):
-        _body_force(iw[b], v[b], vr[b], ar[b], same, f[b], small[1], small[2])
-    for c in range(6):
-        small[3, c] = 0.0
+        fb = _body_force(row10(iw, b), row6(v, b), row6(vr, b), row6(ar, b), same)
+        f[b, 0], f[b, 1], f[b, 2], f[b, 3], f[b, 4], f[b, 5] = fb
+    h0 = h1 = h2 = h3 = h4 = h5 = 0.0
     for b in range(n - 1, -1, -1):
+        h0 += f[b, 0]
+        h1 += f[b, 1]
+        h2 += f[b, 2]
+        h3 += f[b, 3]
+        h4 += f[b, 4]
+        h5 += f[b, 5]
         acc = 0.0
-        for c in range(6):
-            small[3, c] += f[b, c]
-            acc += s[b, c] * small[3, c]
+        acc += s[b, 0] * h0
+        acc += s[b, 1] * h1
+        acc += s[b, 2] * h2
+        acc += s[b, 3] * h3
+        acc += s[b, 4] * h4
+        acc += s[b, 5] * h5
         out[b] = acc
 
 

@@ -16,7 +16,7 @@ import numpy as np
 from numba import njit
 
 from adaptive_dd.plant.chain_dynamics import _body_force, _ref_motion, _torque, workspace
-from adaptive_dd.plant.spatial import apply_inertia, cross3, kinematics, to_local, world_inertia
+from adaptive_dd.plant.spatial import apply_inertia, cross3, kinematics, row6, world_inertia
 
 __all__ = [
     "body_regressor",
@@ -32,17 +32,23 @@ __all__ = [
 ]
 
 
+@njit(cache=True, inline="always")
+def _unit10(k):  # pragma: no cover - compiled
+    """The unit standard parameter ``k`` (0 .. 9) as a 10-tuple."""
+    return (
+        1.0 if k == 0 else 0.0, 1.0 if k == 1 else 0.0, 1.0 if k == 2 else 0.0, 1.0 if k == 3 else 0.0,
+        1.0 if k == 4 else 0.0, 1.0 if k == 5 else 0.0, 1.0 if k == 6 else 0.0, 1.0 if k == 7 else 0.0,
+        1.0 if k == 8 else 0.0, 1.0 if k == 9 else 0.0,
+    )  # fmt: skip
+
+
 @njit(cache=True)
-def _local_regressor(v, vr, ar, same, a, y, f, t1, t2):  # pragma: no cover - compiled
-    """a (6, 10): the body force of :func:`_body_force` per unit standard parameter (local frame)."""
+def _local_regressor(v, vr, ar, same, a):  # pragma: no cover - compiled
+    """a (6, 10): the body force of :func:`_body_force` per unit standard parameter, at the motions
+    ``v, vr, ar`` (6-tuples, local frame)."""
     for k in range(10):
-        y[k] = 0.0
-    for k in range(10):
-        y[k] = 1.0
-        _body_force(y, v, vr, ar, same, f, t1, t2)
-        for c in range(6):
-            a[c, k] = f[c]
-        y[k] = 0.0
+        f = _body_force(_unit10(k), v, vr, ar, same)
+        a[0, k], a[1, k], a[2, k], a[3, k], a[4, k], a[5, k] = f
 
 
 @njit(cache=True)
@@ -56,9 +62,9 @@ def _regressor_blocks(ch, q, qd, qdr, qddr, same, j0, j1, out, col0):  # pragma:
 @njit(cache=True)
 def _regressor_blocks_in(ch, q, qd, qdr, qddr, same, j0, j1, w, a, out, col0):  # pragma: no cover
     """:func:`_regressor_blocks` with its scratch given: ``w = workspace(n)``, ``a (6, 10)``."""
-    rw, pw, s, v, _, vr, ar, _, small, _ = w
+    rw, pw, s, v, _, vr, ar = w[:7]
     kinematics(ch, q, qd, rw, pw, s, v)
-    _ref_motion(ch, s, v, qdr, qddr, 1.0, vr, ar, small[0])
+    _ref_motion(ch, s, v, qdr, qddr, 1.0, vr, ar)
     _columns_from_motion(same, j0, j1, w, a, out, col0)
 
 
@@ -66,23 +72,21 @@ def _regressor_blocks_in(ch, q, qd, qdr, qddr, same, j0, j1, w, a, out, col0):  
 def _columns_from_motion(same, j0, j1, w, a, out, col0):  # pragma: no cover - compiled
     """The per-link part of :func:`_regressor_blocks_in`, its kinematics and reference motion
     (``vr, ar``) already in the workspace ``w``."""
-    rw, pw, s, v, _, vr, ar, f, small, vec = w
+    rw, pw, s, v, _, vr, ar, _, small, _ = w
     n = s.shape[0]
-    y = vec[:10]
-    vl, vrl, arl = small[0], small[1], small[2]
     sl = small[3]
     for j in range(j0, j1):
-        to_local(rw[j], pw[j], v[j], vl)
-        to_local(rw[j], pw[j], vr[j], vrl)
-        to_local(rw[j], pw[j], ar[j], arl)
-        _local_regressor(vl, vrl, arl, same, a, y, f[0], small[4], small[5])
+        _local_row(rw, pw, j, v, j, small[0])  # small[0 .. 2]: v, vr, ar in link j's frame
+        _local_row(rw, pw, j, vr, j, small[1])
+        _local_row(rw, pw, j, ar, j, small[2])
+        _local_regressor(row6(small, 0), row6(small, 1), row6(small, 2), same, a)
         c0 = col0 + 10 * (j - j0)
         for i in range(n):
             if i > j:
                 for k in range(10):
                     out[i, c0 + k] = 0.0
                 continue
-            to_local(rw[j], pw[j], s[i], sl)
+            _local_row(rw, pw, j, s, i, sl)
             for k in range(10):
                 acc = 0.0
                 for c in range(6):
@@ -183,7 +187,7 @@ def _inertia_row(Y, yb, X, xb, out):  # pragma: no cover - compiled
 
 @njit(cache=True, inline="always")
 def _cross_row(V, vb, X, xb, out):  # pragma: no cover - compiled
-    """:func:`~adaptive_dd.plant.spatial.motion_cross` of rows ``V[vb]``, ``X[xb]`` read by index."""
+    """``V[vb] x X[xb]`` (:func:`~adaptive_dd.plant.spatial.cross6`) of rows read by index, into ``out``."""
     a0, a1, a2 = cross3(V[vb, 3], V[vb, 4], V[vb, 5], X[xb, 0], X[xb, 1], X[xb, 2])
     b0, b1, b2 = cross3(V[vb, 0], V[vb, 1], V[vb, 2], X[xb, 3], X[xb, 4], X[xb, 5])
     c0, c1, c2 = cross3(V[vb, 3], V[vb, 4], V[vb, 5], X[xb, 3], X[xb, 4], X[xb, 5])
@@ -193,8 +197,8 @@ def _cross_row(V, vb, X, xb, out):  # pragma: no cover - compiled
 
 @njit(cache=True, inline="always")
 def _local_row(R, Pw, j, X, xb, out):  # pragma: no cover - compiled
-    """:func:`~adaptive_dd.plant.spatial.to_local` in link j's frame (``R[j], Pw[j]``) of row
-    ``X[xb]``, read by index."""
+    """The world motion row ``X[xb]`` (at the world origin) in link j's frame (axes ``R[j]``, origin
+    ``Pw[j]``), ``(R^T (xl + xa x p), R^T xa)``, read by index, into ``out``."""
     c0, c1, c2 = cross3(X[xb, 3], X[xb, 4], X[xb, 5], Pw[j, 0], Pw[j, 1], Pw[j, 2])
     l0, l1, l2 = X[xb, 0] + c0, X[xb, 1] + c1, X[xb, 2] + c2
     for k in range(3):

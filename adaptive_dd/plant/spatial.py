@@ -13,12 +13,14 @@ import numpy as np
 from numba import njit
 
 __all__ = [
-    "add_cross_force",
+    "add_cross6",
     "apply_inertia",
     "cross3",
+    "cross6",
+    "inertia6",
     "kinematics",
-    "motion_cross",
-    "to_local",
+    "row6",
+    "row10",
     "world_inertia",
 ]
 
@@ -150,35 +152,59 @@ def apply_inertia(y, x, out):  # pragma: no cover - compiled
     out[5] = a2 + y[7] * x[3] + y[8] * x[4] + y[9] * x[5]
 
 
-@njit(cache=True, inline="always")
-def add_cross_force(v, f, out, scale):  # pragma: no cover - compiled
-    """out += scale * (v x* f) = scale * (w x fl, w x fa + vl x fl)."""
-    a0, a1, a2 = cross3(v[3], v[4], v[5], f[0], f[1], f[2])
-    b0, b1, b2 = cross3(v[3], v[4], v[5], f[3], f[4], f[5])
-    c0, c1, c2 = cross3(v[0], v[1], v[2], f[0], f[1], f[2])
-    out[0] += scale * a0
-    out[1] += scale * a1
-    out[2] += scale * a2
-    out[3] += scale * (b0 + c0)
-    out[4] += scale * (b1 + c1)
-    out[5] += scale * (b2 + c2)
+# Spatial operations on tuples of scalars (a motion or force a 6-tuple, an inertia a 10-tuple): a
+# kernel that reads its rows by index passes no array view, each of which costs a reference count.
 
 
 @njit(cache=True, inline="always")
-def motion_cross(v, x, out):  # pragma: no cover - compiled
-    """out = v x x = (w x xl + vl x xa, w x xa)."""
+def row6(x, b):  # pragma: no cover - compiled
+    """Row ``b`` of ``x (m, 6)`` as a 6-tuple."""
+    return x[b, 0], x[b, 1], x[b, 2], x[b, 3], x[b, 4], x[b, 5]
+
+
+@njit(cache=True, inline="always")
+def row10(y, b):  # pragma: no cover - compiled
+    """Row ``b`` of ``y (m, 10)`` (an inertia) as a 10-tuple."""
+    return y[b, 0], y[b, 1], y[b, 2], y[b, 3], y[b, 4], y[b, 5], y[b, 6], y[b, 7], y[b, 8], y[b, 9]
+
+
+@njit(cache=True, inline="always")
+def inertia6(y, x):  # pragma: no cover - compiled
+    """``I x`` of the inertia ``y`` (10-tuple) and the motion ``x`` (6-tuple): :func:`apply_inertia`'s
+    arithmetic."""
+    m, h0, h1, h2 = y[0], y[1], y[2], y[3]
+    l0, l1, l2 = cross3(x[3], x[4], x[5], h0, h1, h2)
+    a0, a1, a2 = cross3(h0, h1, h2, x[0], x[1], x[2])
+    return (
+        m * x[0] + l0,
+        m * x[1] + l1,
+        m * x[2] + l2,
+        a0 + y[4] * x[3] + y[5] * x[4] + y[7] * x[5],
+        a1 + y[5] * x[3] + y[6] * x[4] + y[8] * x[5],
+        a2 + y[7] * x[3] + y[8] * x[4] + y[9] * x[5],
+    )
+
+
+@njit(cache=True, inline="always")
+def cross6(v, x):  # pragma: no cover - compiled
+    """``v x x`` of two motions (6-tuples): ``(w x xl + vl x xa, w x xa)``."""
     a0, a1, a2 = cross3(v[3], v[4], v[5], x[0], x[1], x[2])
     b0, b1, b2 = cross3(v[0], v[1], v[2], x[3], x[4], x[5])
     c0, c1, c2 = cross3(v[3], v[4], v[5], x[3], x[4], x[5])
-    out[0], out[1], out[2] = a0 + b0, a1 + b1, a2 + b2
-    out[3], out[4], out[5] = c0, c1, c2
+    return a0 + b0, a1 + b1, a2 + b2, c0, c1, c2
 
 
 @njit(cache=True, inline="always")
-def to_local(r, p, x, out):  # pragma: no cover - compiled
-    """A world motion x (at the world origin) in a frame at p with axes r: (R^T (xl + xa x p), R^T xa)."""
-    c0, c1, c2 = cross3(x[3], x[4], x[5], p[0], p[1], p[2])
-    l0, l1, l2 = x[0] + c0, x[1] + c1, x[2] + c2
-    for k in range(3):
-        out[k] = r[0, k] * l0 + r[1, k] * l1 + r[2, k] * l2
-        out[3 + k] = r[0, k] * x[3] + r[1, k] * x[4] + r[2, k] * x[5]
+def add_cross6(out, v, f, scale):  # pragma: no cover - compiled
+    """``out + scale * (v x* f)`` of 6-tuples, ``v x* f = (w x fl, w x fa + vl x fl)``."""
+    a0, a1, a2 = cross3(v[3], v[4], v[5], f[0], f[1], f[2])
+    b0, b1, b2 = cross3(v[3], v[4], v[5], f[3], f[4], f[5])
+    c0, c1, c2 = cross3(v[0], v[1], v[2], f[0], f[1], f[2])
+    return (
+        out[0] + scale * a0,
+        out[1] + scale * a1,
+        out[2] + scale * a2,
+        out[3] + scale * (b0 + c0),
+        out[4] + scale * (b1 + c1),
+        out[5] + scale * (b2 + c2),
+    )
