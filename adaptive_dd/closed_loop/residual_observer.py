@@ -25,7 +25,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from adaptive_dd.plant.chain import momentum_form_in
+from adaptive_dd.plant.chain import momentum_in
 
 __all__ = [
     "OBS_ROWS",
@@ -49,10 +49,7 @@ OBS_ROWS = O_R1 + 1
 def _momentum(ch, pi, q, qd, work, p, wv):  # pragma: no cover - compiled
     """``p = M(q) qd + Ia qd`` and ``wv = g - C^T qd + fv qd + fc sgn(qd)`` of ``pi (13 n,)``."""
     n = q.shape[0]
-    pyw = work[8]
-    # link np.int64(0), not 0: the literal 0 is a type of its own, which compiled momentum_form_in
-    # once more (4.5 CPU s) beside the estimator's int64 one
-    momentum_form_in(ch, pi[: 10 * n], np.int64(0), q, qd, work[0], work[6], p, wv, pyw[0], pyw[1])
+    momentum_in(ch, pi[: 10 * n], q, qd, work[0], p, wv)
     for j in range(n):
         p[j] += pi[12 * n + j] * qd[j]
         wv[j] += pi[10 * n + j] * qd[j] + pi[11 * n + j] * np.sign(qd[j])

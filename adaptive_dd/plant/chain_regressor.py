@@ -16,7 +16,16 @@ import numpy as np
 from numba import njit
 
 from adaptive_dd.plant.chain_dynamics import _body_force, _ref_motion, _torque, workspace
-from adaptive_dd.plant.spatial import apply_inertia, cross3, kinematics, row6, world_inertia
+from adaptive_dd.plant.spatial import (
+    apply_inertia,
+    cross3,
+    cross6,
+    inertia6,
+    kinematics,
+    row6,
+    row10,
+    world_inertia,
+)
 
 __all__ = [
     "body_regressor",
@@ -26,6 +35,7 @@ __all__ = [
     "momentum_columns_in",
     "momentum_form",
     "momentum_form_in",
+    "momentum_in",
     "regressor",
     "rnea_body_regressor_in",
     "slotine_li_regressor",
@@ -171,21 +181,6 @@ def momentum_form(ch, pi, j, q, qd, p, wv, py, wy):  # pragma: no cover - compil
 
 
 @njit(cache=True, inline="always")
-def _inertia_row(Y, yb, X, xb, out):  # pragma: no cover - compiled
-    """:func:`~adaptive_dd.plant.spatial.apply_inertia` of rows ``Y[yb]``, ``X[xb]`` read by index
-    (the same arithmetic; no array view, each of which costs a reference count)."""
-    m, h0, h1, h2 = Y[yb, 0], Y[yb, 1], Y[yb, 2], Y[yb, 3]
-    l0, l1, l2 = cross3(X[xb, 3], X[xb, 4], X[xb, 5], h0, h1, h2)
-    a0, a1, a2 = cross3(h0, h1, h2, X[xb, 0], X[xb, 1], X[xb, 2])
-    out[0] = m * X[xb, 0] + l0
-    out[1] = m * X[xb, 1] + l1
-    out[2] = m * X[xb, 2] + l2
-    out[3] = a0 + Y[yb, 4] * X[xb, 3] + Y[yb, 5] * X[xb, 4] + Y[yb, 7] * X[xb, 5]
-    out[4] = a1 + Y[yb, 5] * X[xb, 3] + Y[yb, 6] * X[xb, 4] + Y[yb, 8] * X[xb, 5]
-    out[5] = a2 + Y[yb, 7] * X[xb, 3] + Y[yb, 8] * X[xb, 4] + Y[yb, 9] * X[xb, 5]
-
-
-@njit(cache=True, inline="always")
 def _cross_row(V, vb, X, xb, out):  # pragma: no cover - compiled
     """``V[vb] x X[xb]`` (:func:`~adaptive_dd.plant.spatial.cross6`) of rows read by index, into ``out``."""
     a0, a1, a2 = cross3(V[vb, 3], V[vb, 4], V[vb, 5], X[xb, 0], X[xb, 1], X[xb, 2])
@@ -209,39 +204,52 @@ def _local_row(R, Pw, j, X, xb, out):  # pragma: no cover - compiled
 @njit(cache=True)
 def momentum_form_in(ch, pi, j, q, qd, w, a, p, wv, py, wy):  # pragma: no cover - compiled
     """:func:`momentum_form` with its scratch given: ``w = workspace(n)``, ``a (2, 6, 10)``.
-    Rows of the workspace are read by index (:func:`_inertia_row`, :func:`_cross_row`,
+    Rows of the workspace are read by index (tuples of scalars, :func:`_cross_row`,
     :func:`_local_row`), not through views."""
     # world frame: S_i fixed in link i moves as dS_i/dt = v_i x S_i; the subtree momentum
     # H_i = sum_{k>=i} I_k v_k has dH_i/dt = sum of the subtree's forces, so
     # tau_i = S_i . (dH_i/dt + I_sub a_0) = d/dt (S_i . H_i) - (v_i x S_i) . H_i + S_i . I_sub a_0,
     # a_0 = [-g; 0] the base acceleration that stands for gravity.
+    momentum_in(ch, pi, q, qd, w, p, wv)
+    momentum_columns_in(j, w, a, py, wy)
+
+
+@njit(cache=True)
+def momentum_in(ch, pi, q, qd, w, p, wv):  # pragma: no cover - compiled
+    """The momentum ``p`` and ``wv`` of :func:`momentum_form_in` alone (no link's columns); it leaves
+    in ``w`` what :func:`momentum_columns_in` reads."""
     rw, pw, s, v, iw, _, _, _, small, _ = w
     n = q.shape[0]
     kinematics(ch, q, qd, rw, pw, s, v)
     world_inertia(pi, rw, pw, iw)
-    ag, hs, gs, t = small[0], small[1], small[2], small[3]
-    for c in range(6):
-        hs[c] = 0.0
-        gs[c] = 0.0
-        ag[c] = 0.0
-    for c in range(3):
-        ag[c] = -ch.gravity[c]
+    ag = (-ch.gravity[0], -ch.gravity[1], -ch.gravity[2], 0.0, 0.0, 0.0)
+    small[0, 0], small[0, 1], small[0, 2], small[0, 3], small[0, 4], small[0, 5] = ag  # for the columns
+    h0 = h1 = h2 = h3 = h4 = h5 = 0.0  # the subtree's momentum
+    g0 = g1 = g2 = g3 = g4 = g5 = 0.0  # its inertia times ag
     for b in range(n - 1, -1, -1):
-        _inertia_row(iw, b, v, b, t)
-        for c in range(6):
-            hs[c] += t[c]
-        _inertia_row(iw, b, small, 0, t)  # small[0]: ag
-        for c in range(6):
-            gs[c] += t[c]
-        _cross_row(v, b, s, b, t)
+        y = row10(iw, b)
+        t = inertia6(y, row6(v, b))
+        h0, h1, h2, h3, h4, h5 = h0 + t[0], h1 + t[1], h2 + t[2], h3 + t[3], h4 + t[4], h5 + t[5]
+        t = inertia6(y, ag)
+        g0, g1, g2, g3, g4, g5 = g0 + t[0], g1 + t[1], g2 + t[2], g3 + t[3], g4 + t[4], g5 + t[5]
+        x = cross6(row6(v, b), row6(s, b))
+        s0, s1, s2, s3, s4, s5 = row6(s, b)
         pb = 0.0
+        pb += s0 * h0
+        pb += s1 * h1
+        pb += s2 * h2
+        pb += s3 * h3
+        pb += s4 * h4
+        pb += s5 * h5
         wb = 0.0
-        for c in range(6):
-            pb += s[b, c] * hs[c]
-            wb += s[b, c] * gs[c] - t[c] * hs[c]
+        wb += s0 * g0 - x[0] * h0
+        wb += s1 * g1 - x[1] * h1
+        wb += s2 * g2 - x[2] * h2
+        wb += s3 * g3 - x[3] * h3
+        wb += s4 * g4 - x[4] * h4
+        wb += s5 * g5 - x[5] * h5
         p[b] = pb
         wv[b] = wb
-    momentum_columns_in(j, w, a, py, wy)
 
 
 @njit(cache=True, inline="always")
