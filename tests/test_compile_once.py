@@ -77,9 +77,16 @@ def test_the_chain_kernels_compile_once_for_every_caller(rng):
     C.body_slotine_li_regressor_in(ch, 2, q[0].copy(), qd[0], qd[0], qdd[0], w, a, out)
     C.rnea_body_regressor_in(ch, pi, 2, q[0].copy(), qd[0], qdd[0], w, a, np.empty(n), out)
     C.mass_matrix_in(ch, pi, q[0].copy(), w, np.empty((n, n)))
+    C.rnea_in(ch, pi, q[0].copy(), qd[0], qdd[0], w, np.empty(n))
+    C.rnea_ref_in(ch, pi, q[0].copy(), qd[0], qd[0], qdd[0], w, np.empty(n))
+    C.regressor(ch, q[0].copy(), qd[0], qdd[0], np.empty((n, 10 * n)))
+    C.body_regressor(ch, 2, q[0].copy(), qd[0], qdd[0], out)
+    p, wv, py, wy = np.empty(n), np.empty(n), np.empty((n, 10)), np.empty((n, 10))
+    C.momentum_form_in(ch, pi, 2, q[0].copy(), qd[0], w, np.empty((2, 6, 10)), p, wv, py, wy)
+    C.momentum_in(ch, pi, q[0].copy(), qd[0], w, p, wv)
     for kernel in (
         CD.rnea_in, CD.rnea_ref_in, CD.mass_matrix_in, CR._local_regressor, CR._columns_from_motion,
-        CR._regressor_blocks_in,
+        CR._regressor_blocks, CR._regressor_blocks_in, CR.momentum_in,
     ):  # fmt: skip
         assert len(_specialisations(kernel)) == 1, (kernel.__name__, _specialisations(kernel))
 

@@ -241,8 +241,9 @@ class LawState(NamedTuple):
 def law_work(n):  # pragma: no cover - compiled
     """Scratch of one trial's :func:`law_trial_in` (allocated once per trial, not per sample):
     the chain workspace, ``(6, n)`` rows (e, e', qd_r, a, s, v), ``M (n, n)``, ``Y (n, 10)``,
-    ``(6, 10)``, ``(10,)``; the observer's ``(2, 6, 10)``, ``(4, n)`` (p, wv at the last and this
-    measurement), ``(2, n, 10)``; the composite term ``(10,)``."""
+    ``(6, 10)``, ``(10,)``; ``(2, 6, 10)`` and ``(2, n, 10)`` (the composite term's and the boost's
+    scratch), the observer's ``(4, n)`` (p, wv at the last and this measurement); the composite
+    term ``(10,)``."""
     return (
         workspace(n),
         np.empty((6, n)),

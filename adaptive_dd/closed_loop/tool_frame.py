@@ -142,6 +142,8 @@ def _reference_placements(index, links, q_d, out):  # pragma: no cover - compile
     """The tool frame's placement at each sample of ``q_d (N, n)`` into ``out (N, 12)``
     (:attr:`ToolTables.ref`), by the loop's own kinematics (:func:`_placements`)."""
     rows = index.shape[0]
+    if rows == 0:  # no tool frame (:func:`no_tool`'s tables): nothing to place
+        return
     w, r0 = np.empty((rows, 12)), np.empty(9)
     for k in range(q_d.shape[0]):
         _placements(index, links, q_d[k], w, r0)
