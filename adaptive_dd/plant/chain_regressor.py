@@ -183,11 +183,7 @@ def momentum_form(ch, pi, j, q, qd, p, wv, py, wy):  # pragma: no cover - compil
 @njit(cache=True, inline="always")
 def _cross_row(V, vb, X, xb, out):  # pragma: no cover - compiled
     """``V[vb] x X[xb]`` (:func:`~adaptive_dd.plant.spatial.cross6`) of rows read by index, into ``out``."""
-    a0, a1, a2 = cross3(V[vb, 3], V[vb, 4], V[vb, 5], X[xb, 0], X[xb, 1], X[xb, 2])
-    b0, b1, b2 = cross3(V[vb, 0], V[vb, 1], V[vb, 2], X[xb, 3], X[xb, 4], X[xb, 5])
-    c0, c1, c2 = cross3(V[vb, 3], V[vb, 4], V[vb, 5], X[xb, 3], X[xb, 4], X[xb, 5])
-    out[0], out[1], out[2] = a0 + b0, a1 + b1, a2 + b2
-    out[3], out[4], out[5] = c0, c1, c2
+    out[0], out[1], out[2], out[3], out[4], out[5] = cross6(row6(V, vb), row6(X, xb))
 
 
 @njit(cache=True, inline="always")

@@ -140,16 +140,12 @@ def world_inertia(pi, rw, pw, iw):  # pragma: no cover - compiled
 
 @njit(cache=True, inline="always")
 def apply_inertia(y, x, out):  # pragma: no cover - compiled
-    """out = I x: lin = m xl + xa x h, ang = h x xl + I xa; y = (m, h, Ixx, Ixy, Iyy, Ixz, Iyz, Izz)."""
-    m, h0, h1, h2 = y[0], y[1], y[2], y[3]
-    l0, l1, l2 = cross3(x[3], x[4], x[5], h0, h1, h2)
-    a0, a1, a2 = cross3(h0, h1, h2, x[0], x[1], x[2])
-    out[0] = m * x[0] + l0
-    out[1] = m * x[1] + l1
-    out[2] = m * x[2] + l2
-    out[3] = a0 + y[4] * x[3] + y[5] * x[4] + y[7] * x[5]
-    out[4] = a1 + y[5] * x[3] + y[6] * x[4] + y[8] * x[5]
-    out[5] = a2 + y[7] * x[3] + y[8] * x[4] + y[9] * x[5]
+    """out = I x: lin = m xl + xa x h, ang = h x xl + I xa; y = (m, h, Ixx, Ixy, Iyy, Ixz, Iyz, Izz)
+    (:func:`inertia6` on arrays)."""
+    t = inertia6(
+        (y[0], y[1], y[2], y[3], y[4], y[5], y[6], y[7], y[8], y[9]), (x[0], x[1], x[2], x[3], x[4], x[5])
+    )
+    out[0], out[1], out[2], out[3], out[4], out[5] = t
 
 
 # Spatial operations on tuples of scalars (a motion or force a 6-tuple, an inertia a 10-tuple): a
@@ -170,8 +166,8 @@ def row10(y, b):  # pragma: no cover - compiled
 
 @njit(cache=True, inline="always")
 def inertia6(y, x):  # pragma: no cover - compiled
-    """``I x`` of the inertia ``y`` (10-tuple) and the motion ``x`` (6-tuple): :func:`apply_inertia`'s
-    arithmetic."""
+    """``I x`` of the inertia ``y`` (10-tuple) and the motion ``x`` (6-tuple): lin = m xl + xa x h,
+    ang = h x xl + I xa (:func:`apply_inertia` is its array form)."""
     m, h0, h1, h2 = y[0], y[1], y[2], y[3]
     l0, l1, l2 = cross3(x[3], x[4], x[5], h0, h1, h2)
     a0, a1, a2 = cross3(h0, h1, h2, x[0], x[1], x[2])
