@@ -67,6 +67,8 @@ ROW_COLUMNS = {
     "rms_error": "float64",
     "max_error": "float64",
     "saturation_fraction": "float64",
+    "detector": "bool",
+    "detection_delay": "float64",
     "failed": "bool",
     "error": "object",
 }
@@ -99,11 +101,15 @@ def run_cell(
     list of dict
         One row per seed and segment with :data:`ROW_COLUMNS`: ``rms_error`` and
         ``max_error`` of ``|q_d - q|`` [rad] over the segment, ``saturation_fraction`` the
-        fraction of its samples with a command beyond a torque limit; ``failed`` when the
+        fraction of its samples with a command beyond a torque limit; ``detector`` whether the
+        controller has a change detector, ``detection_delay`` [s] the time from the swap that
+        starts the segment to its first alarm within the benchmark's window
+        (:func:`~adaptive_dd.benchmark.metrics.detection_delays`; NaN in the first segment,
+        without a detector, for a missed swap or a failed trial); ``failed`` when the
         trial diverged (or its controller raised) before the segment's end, then the
         metrics are NaN and ``error`` says why.
     """
-    from adaptive_dd.benchmark.metrics import per_seed_segment_metrics
+    from adaptive_dd.benchmark.metrics import detection_delays, per_seed_segment_metrics
     from adaptive_dd.benchmark.runner import run_benchmark
 
     scenario = cell_scenario(scenario, controller, settings)
@@ -113,12 +119,18 @@ def run_cell(
     (run,) = res.runs.values()
     per = per_seed_segment_metrics(res, run, settling=False)  # NaN: the benchmark's failure rule
     T = scenario.sample_period
+    segments = scenario.segments()
+    detector = run.alarm_times is not None
+    delays = {
+        j: detection_delays(run.alarm_times, a) for j, (a, _, _) in enumerate(segments) if j > 0 and detector
+    }
     rows = []
     for i, seed in enumerate(seed_indices):
         at = int(run.failed_at[i]) if run.failed[i] else -1
         why = run.error or f"trial diverged at t = {at * T:.3f} s: {run.failed_why.get(i, '')}"
-        for j, (start, end, mass) in enumerate(scenario.segments()):
+        for j, (start, end, mass) in enumerate(segments):
             bad = bool(np.isnan(per["rms_error"][i, j]))
+            d = delays[j][i] if j in delays else None
             rows.append(
                 {
                     "seed": int(seed),
@@ -129,6 +141,8 @@ def run_cell(
                     "rms_error": float(per["rms_error"][i, j]),
                     "max_error": float(per["max_error"][i, j]),
                     "saturation_fraction": float(per["saturation_fraction"][i, j]),
+                    "detector": detector,
+                    "detection_delay": np.nan if d is None or run.failed[i] or run.error else float(d),
                     "failed": bad,
                     "error": why if bad else "",
                 }
@@ -184,6 +198,8 @@ def failed_rows(task: Task, message: str) -> list[dict]:
             "rms_error": np.nan,
             "max_error": np.nan,
             "saturation_fraction": np.nan,
+            "detector": False,  # not known: the controller did not run
+            "detection_delay": np.nan,
             "failed": True,
             "error": message,
         }
@@ -251,7 +267,7 @@ def _write_atomic(df: pd.DataFrame, path: Path) -> Path:
 def _read(path: Path) -> pd.DataFrame:
     df = pd.read_parquet(path) if path.suffix == ".parquet" else pd.read_csv(path, keep_default_na=False)
     if path.suffix == ".csv":
-        for col in ("rms_error", "max_error", "saturation_fraction"):
+        for col in ("rms_error", "max_error", "saturation_fraction", "detection_delay"):
             df[col] = pd.to_numeric(df[col].replace("", np.nan))
     return _typed(df)
 

@@ -14,10 +14,10 @@ if TYPE_CHECKING:
 
 __all__ = ["CELL_VERSION"]
 
-CELL_VERSION = 2
+CELL_VERSION = 3
 """Part of every task key, with a hash of the package's sources (:func:`_code_id`: cells written by
 other code are run again): bump it when the rows a task returns change meaning (2: the
-``saturation_fraction`` column)."""
+``saturation_fraction`` column; 3: ``detector`` and ``detection_delay``)."""
 
 
 def _task_key(scenario: Scenario, controller: str, settings, seeds) -> str:

@@ -48,8 +48,12 @@ def ratio_medians(table: pd.DataFrame, heatmap: Mapping[str, Any], axes: Sequenc
         One row per grid point: ``point``, the axes, ``ratio`` (NaN if no seed
         finished), ``n_seeds`` (seeds in the median), the floor's median ``floor_rms`` [rad] in
         the segment, ``floor_nominal_rms`` [rad] in the first segment, ``floor_saturation``
-        [fraction of samples, the mean over seeds] in the segment (NaN where the table has none)
-        and ``marked``.
+        [fraction of samples, the mean over seeds] in the segment (NaN where the table has none),
+        ``marked``, and for an adaptive controller with a change detector, over its seeds that
+        finished the segment: ``delay_median`` [s], the median delay from the swap that starts the
+        segment to the first alarm over the seeds that raised one, and ``missed``, the seeds that
+        raised none (both NA without a detector, in the first segment, or where the table has no
+        ``detection_delay``).
 
     Examples
     --------
@@ -93,7 +97,23 @@ def ratio_medians(table: pd.DataFrame, heatmap: Mapping[str, Any], axes: Sequenc
         )))
         for (_, r), k, n in zip(out.iterrows(), lost, total, strict=True)
     ]  # fmt: skip
+    out["delay_median"], out["missed"] = _delays(seg, heatmap["adaptive"], out.index)
     return out.reset_index()
+
+
+def _delays(seg: pd.DataFrame, adaptive: str, points) -> tuple[pd.Series, pd.Series]:
+    """Per grid point: the median detection delay [s] of ``adaptive`` in the segment's rows ``seg``
+    over its seeds with an alarm, and the count of its finished seeds without one (NA where it has
+    no detector: :func:`ratio_medians`)."""
+    a = seg[seg["controller"] == adaptive]
+    if "detection_delay" not in a or "detector" not in a or (a["segment"] == 0).any():
+        # a table of before the columns; or the first segment, which no swap starts
+        return pd.Series(np.nan, index=points), pd.Series(pd.NA, index=points, dtype="Int64")
+    a = a[a["detector"].astype(bool) & ~a["failed"].astype(bool)]
+    g = a.groupby("point")["detection_delay"]
+    median = g.median().reindex(points)
+    missed = g.apply(lambda d: int(d.isna().sum())).reindex(points).astype("Int64")
+    return median, missed
 
 
 def _mark(r, floor: str, segment: int, sat_limit: float) -> str:

@@ -233,6 +233,51 @@ def test_run_cell_rows_match_the_trajectory(tmp_path):
         assert not r["failed"] and r["error"] == ""
 
 
+def test_run_cell_detection_delays_are_the_benchmarks_per_seed_rows(tmp_path):
+    """Each segment's delay from its swap to the first alarm, as the benchmark's per-seed table has
+    it (``to_frame``: its own path from the alarm times); none in the first segment or without a
+    detector."""
+    from adaptive_dd.benchmark.results import to_frame
+
+    base = BASE.replace("duration = 0.3", "duration = 2.0").replace("at = 0.1", "at = 1.0")
+    base = base.replace("at = 0.2", "at = 1.5")  # late enough for the detector's warm-up
+    sc = dataclasses.replace(load_scenario(_write(tmp_path, base=base).parent / "base.toml"), seeds=2)
+    frame = to_frame(run_benchmark(sc, progress=False)).set_index(["controller", "seed", "segment"])
+    for name in ("adaptive_ct", "ct_oracle"):
+        rows = run_cell(sc, name, [0, 1])
+        assert {r["detector"] for r in rows} == {name == "adaptive_ct"}
+        for r in rows:
+            want = frame.loc[(name, r["seed"], r["segment"]), "detection_delay_s"]
+            if np.isnan(want):
+                assert np.isnan(r["detection_delay"]), (name, r)
+            else:
+                assert r["detection_delay"] == pytest.approx(want, abs=1e-12), (name, r)
+    delays = [r["detection_delay"] for r in run_cell(sc, "adaptive_ct", [0, 1]) if r["segment"] > 0]
+    assert np.isfinite(delays).all() and 0.0 <= min(delays) and max(delays) < 0.1  # the swaps are found
+
+
+def test_ratio_medians_give_the_adaptive_laws_median_delay_and_its_missed_swaps():
+    """Over the seeds that finished the segment: the median of the delays of those with an alarm,
+    and the count of those without; NA for a law with no detector."""
+    rows = []
+    for seed, (d, failed) in enumerate([(0.010, False), (0.030, False), (np.nan, False), (0.001, True)]):
+        for c in ("adaptive_ct", "ct_oracle"):
+            own = c == "adaptive_ct"
+            rows.append({
+                "point": 0, "m": 1.0, "controller": c, "seed": seed, "segment": 1, "rms_error": 1.0,
+                "detector": own, "detection_delay": d if own else np.nan, "failed": failed and own,
+            })  # fmt: skip
+    t = pd.DataFrame(rows)
+    r = ratio_medians(t, {"adaptive": "adaptive_ct", "floor": "ct_oracle", "segment": 1}, ["m"])
+    assert r["delay_median"].item() == pytest.approx(0.020)  # seeds 0 and 1; seed 3 failed
+    assert r["missed"].item() == 1  # seed 2
+    r = ratio_medians(t, {"adaptive": "ct_oracle", "floor": "adaptive_ct", "segment": 1}, ["m"])
+    assert np.isnan(r["delay_median"].item()) and pd.isna(r["missed"].item())
+    old = t.drop(columns=["detector", "detection_delay"])  # a table of before the columns
+    r = ratio_medians(old, {"adaptive": "adaptive_ct", "floor": "ct_oracle", "segment": 1}, ["m"])
+    assert np.isnan(r["delay_median"].item()) and pd.isna(r["missed"].item())
+
+
 def test_diverging_trial_fails_from_its_segment_on(tmp_path):
     wild = """
 [run]
@@ -270,6 +315,8 @@ def test_sweep_table_columns_and_order(tmp_path, client):
         "rms_error",
         "max_error",
         "saturation_fraction",
+        "detector",
+        "detection_delay",
         "failed",
         "error",
         "task",
@@ -615,6 +662,39 @@ def _marks_table(floor_sat: float, floor_seg1: float) -> pd.DataFrame:
                          "segment": seg, "rms_error": v, "saturation_fraction": s}
                     )  # fmt: skip
     return pd.DataFrame(rows)
+
+
+def test_the_cli_prints_each_cells_median_delay_and_missed_swaps(tmp_path, capsys):
+    """Below the ratios, the adaptive law's median delay to its first alarm per cell [ms] with the
+    seeds that raised none, in the heat map's rows and columns; nothing for a law with no detector."""
+    import types
+
+    from adaptive_dd.benchmark.scenario import load_scenario
+    from adaptive_dd.cli.sweep import _print_heatmap
+    from adaptive_dd.sweep import _heatmaps
+
+    t = _marks_table(0.0, 1e-4).assign(failed=False, detector=False, detection_delay=np.nan)
+    mine = (t.controller == "adaptive_ct") & (t.segment == 1)
+    t.loc[mine, "detector"] = True
+    # point 0 (m = 1): 12, 20, 31 ms; point 1 (m = 10): 7 ms and two seeds without an alarm
+    t.loc[mine, "detection_delay"] = [0.012, 0.031, 0.020, 0.007, np.nan, np.nan]
+    hm = {"x": "m", "y": "w", "adaptive": "adaptive_ct", "floor": "ct_oracle", "segment": 1}
+    sw = types.SimpleNamespace(
+        heatmap=hm, axes=[("m", [1.0, 10.0]), ("w", [0.0])], base=load_scenario(), points=()
+    )
+    ratios, maps = _heatmaps(sw, t, tmp_path)
+    _print_heatmap(types.SimpleNamespace(ratios=ratios, heatmaps=maps), sw)
+    out = capsys.readouterr().out
+    assert "median delay from the swap to adaptive_ct's first alarm [ms], segment 1" in out
+    row = out.split("first alarm [ms]")[1].splitlines()[3]  # title, columns, index name, w = 0.0
+    assert row.split() == ["0.0", "20", "7", "(2)"], out
+    on_disk = pd.read_csv(tmp_path / "ratios.csv")
+    assert on_disk["missed"].tolist() == [0, 2] and on_disk["delay_median"].tolist() == [0.020, 0.007]
+    hm_floor = dict(hm, adaptive="ct_oracle", floor="adaptive_ct")  # no detector: no delay table
+    sw = types.SimpleNamespace(heatmap=hm_floor, axes=sw.axes, base=sw.base, points=())
+    ratios, maps = _heatmaps(sw, t, tmp_path)
+    _print_heatmap(types.SimpleNamespace(ratios=ratios, heatmaps=maps), sw)
+    assert "first alarm" not in capsys.readouterr().out
 
 
 @pytest.mark.parametrize(

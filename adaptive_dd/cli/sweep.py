@@ -9,6 +9,8 @@ from __future__ import annotations
 import argparse
 import sys
 
+import numpy as np
+
 from adaptive_dd.cli._common import SEEDS, add_command, number, refuse
 
 __all__ = ["add_parser", "run"]
@@ -90,40 +92,62 @@ def _print_heatmap(res, sweep) -> None:
         )
     elif hm:
         r = res.ratios
-        # the other grid axes: one table per combination of their values, in the heat maps' order
-        other = [a for a, _ in sweep.axes if a not in (hm["x"], hm["y"])]
-        groups = list(r.groupby(other, sort=False)) if other else [((), r)]
-        rows = hm["y"] or "_row"  # one varied axis: one row
-        if hm["y"] is None:
-            groups = [(k, part.assign(_row="ratio")) for k, part in groups]
-        print(
-            f"median over seeds of rms {hm['adaptive']} / rms {hm['floor']}, segment {hm['segment']}"
-            f" ({f'rows {rows}, ' if hm['y'] else ''}columns {hm['x']}"
-            + (f"; one table per {', '.join(other)}" if len(groups) > 1 else "")
-            + "; * marked):"
-        )
-        for i, (key, part) in enumerate(groups):
-            if len(groups) > 1:
-                values = key if isinstance(key, tuple) else (key,)
-                # str: a float's shortest exact form (0.005, not 0.0050000000000000001)
-                where = ", ".join(f"{a} = {v}" for a, v in zip(other, values, strict=True))
-                print(f"{where} (heatmap_{i}.png):")
-            table = part.pivot_table(
-                index=rows, columns=hm["x"], values="ratio", aggfunc="median", dropna=False
-            )
-            marks = part.assign(is_marked=part["marked"] != "").pivot_table(
-                index=rows, columns=hm["x"], values="is_marked", aggfunc="any", dropna=False
-            )
-            stars = marks.reindex_like(table).replace({True: " *", False: ""}).fillna("")
-            if hm["y"] is None:
-                table.index.name = stars.index.name = None
-            print((table.round(3).astype(str) + stars).to_string())  # every column, whatever the terminal
+        marks = r.assign(cell=r["ratio"].round(3).astype(str) + np.where(r["marked"] != "", " *", ""))
+        title = f"median over seeds of rms {hm['adaptive']} / rms {hm['floor']}, segment {hm['segment']}"
+        _print_tables(marks, sweep, title, "; * marked")
         _print_marks(r, hm)
         from adaptive_dd.benchmark.metrics import floor_caveat
 
         caveat = floor_caveat(sweep.base)
         if caveat:
             print(f"note: {caveat}")
+        _print_delays(r, sweep)
+
+
+def _print_tables(r, sweep, title: str, tail: str, label: str = "ratio") -> None:
+    """The grid's ``cell`` column (text) as tables, rows ``y`` and columns ``x`` of the heat map,
+    one per combination of the other axes (the heat maps' order), under ``title``; with one axis
+    varied, one row named ``label``."""
+    hm = sweep.heatmap
+    # the other grid axes: one table per combination of their values, in the heat maps' order
+    other = [a for a, _ in sweep.axes if a not in (hm["x"], hm["y"])]
+    groups = list(r.groupby(other, sort=False)) if other else [((), r)]
+    rows = hm["y"] or "_row"  # one varied axis: one row
+    if hm["y"] is None:
+        groups = [(k, part.assign(_row=label)) for k, part in groups]
+    print(
+        f"{title} ({f'rows {rows}, ' if hm['y'] else ''}columns {hm['x']}"
+        + (f"; one table per {', '.join(other)}" if len(groups) > 1 else "")
+        + f"{tail}):"
+    )
+    for i, (key, part) in enumerate(groups):
+        if len(groups) > 1:
+            values = key if isinstance(key, tuple) else (key,)
+            # str: a float's shortest exact form (0.005, not 0.0050000000000000001)
+            where = ", ".join(f"{a} = {v}" for a, v in zip(other, values, strict=True))
+            print(f"{where} (heatmap_{i}.png):")
+        table = part.pivot_table(index=rows, columns=hm["x"], values="cell", aggfunc="first", dropna=False)
+        if hm["y"] is None:
+            table.index.name = None
+        print(table.fillna("").to_string())  # every column, whatever the terminal
+
+
+def _print_delays(r, sweep) -> None:
+    """The adaptive controller's median detection delay per cell [ms], with its missed swaps, when
+    it has a change detector (:func:`~adaptive_dd.sweep.ratio_medians`)."""
+    hm = sweep.heatmap
+    if "missed" not in r or r["missed"].isna().all():
+        return
+    ms = (1e3 * r["delay_median"]).round(0)
+    text = [
+        ("-" if np.isnan(d) else f"{d:.0f}") + (f" ({m})" if m else "")
+        for d, m in zip(ms, r["missed"].fillna(0), strict=True)
+    ]
+    _print_tables(
+        r.assign(cell=text), sweep,
+        f"median delay from the swap to {hm['adaptive']}'s first alarm [ms], segment {hm['segment']}",
+        "; (k): k seeds with no alarm", "delay",
+    )  # fmt: skip
 
 
 def _print_marks(r, hm) -> None:
