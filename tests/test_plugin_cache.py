@@ -303,7 +303,11 @@ def test_a_plugins_loop_is_written_once_and_loaded_by_a_later_process(cache_fold
     monkeypatch.setattr(plugin_loop, "_LOOPS", {})
     monkeypatch.delitem(sys.modules, f"adaptive_dd_plugin_loop_{key}")
     again = run_closed_loop(sc, {"p": Proportional(100.0)}).runs["p"]
-    assert "compiled the plug-in" not in capsys.readouterr().err and not again.failed.any()
+    err = capsys.readouterr().err
+    assert "compiled the plug-in" not in err and not again.failed.any()
+    assert "p: a compiled plug-in, in the compiled closed loop (compiled before)" in err
+    run_closed_loop(sc, {"p": Proportional(100.0)})
+    assert "compiled" not in capsys.readouterr().err  # said once in a process
     reloaded = sys.modules[f"adaptive_dd_plugin_loop_{key}"].plugin_block
     assert reloaded is not loop and sum(reloaded.stats.cache_hits.values()) == 1
     assert written.stat().st_mtime_ns == stamp and list(written.parent.glob("loop_*.py")) == [written]

@@ -194,6 +194,14 @@ def test_a_saturated_floor_gets_no_verdict():
     assert "no verdict, ct_oracle saturates 2.90 % of samples" in text
     assert "ct_oracle saturated fraction (max over segments): 2.900 %" in text
     assert "NOT met: the saturated segments have no verdict" in text
+    # the per-seed tables mark the saturated segment's ratio, for every law against that floor
+    assert "! the floor (ct_oracle) saturates in more than 1 % of the segment's samples: no verdict" in text
+    table = text.split("Per-seed RMS error ratio to the floor")[1]
+    mean_row = next(x for x in table.splitlines() if x.startswith("adaptive_ct"))
+    first, second = mean_row.split()[1:3]
+    assert not first.endswith("!") and second.endswith("!") and float(second[:-1]) > 0
+    plain = format_report(compute_metrics(_fake_result()[0]), res)
+    assert "! the floor" not in plain
 
 
 def test_a_floor_on_a_plant_friction_outside_the_model_is_called_a_reference():

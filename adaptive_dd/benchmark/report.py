@@ -208,13 +208,17 @@ def _seed_tables(ctrls: dict, head: str, caveat: str | None = None) -> list[str]
         ):
             lines.append(f"  note: {name} {why} and its floor does not: a ratio below 1 is that {what}, not "
                          "a model better than the true one")  # fmt: skip
+    sat = {c["floor"] for _, c in rows if any(s.get("floor_saturated") for s in c["segments"])}
+    if sat:
+        lines.append(
+            f"  ! the floor ({', '.join(sorted(sat))}) saturates in more than {100 * SATURATION_LIMIT:g} % "
+            "of the segment's samples: no verdict there (the ratio compares two laws held by the torque "
+            "limits; the table 'saturated fraction [%]' above)"
+        )
     for label, key in (("mean", "mean"), ("median", "median"), ("p90", "p90"), ("max", "max")):
         lines += [f"  {label}", head]
         for name, c in rows:
-            cells = "".join(
-                f"{s['ratio_to_floor'][key]:16.3f}" if s.get("ratio_to_floor") else f"{'—':>16}"
-                for s in c["segments"]
-            )
+            cells = "".join(_ratio_cell(s, key) for s in c["segments"])
             lines.append(f"{name:18s}" + cells + f"   (floor: {c['floor']})")
     n = max(
         (s["ratio_to_floor"].get("n", 0) for _, c in rows for s in c["segments"] if s.get("ratio_to_floor")),
@@ -254,6 +258,15 @@ def _seed_tables(ctrls: dict, head: str, caveat: str | None = None) -> list[str]
             + (f" ({per_swap})" if per_swap else "")
         )
     return [*lines, ""]
+
+
+def _ratio_cell(seg: dict, key: str) -> str:
+    """A segment's ratio statistic ``key`` in 16 characters, ``!`` after it where the floor
+    saturates (:data:`~adaptive_dd.benchmark.metrics.SATURATION_LIMIT`), a dash without one."""
+    st = seg.get("ratio_to_floor")
+    if not st:
+        return f"{'—':>16}"
+    return f"{st[key]:15.3f}!" if seg.get("floor_saturated") else f"{st[key]:16.3f}"
 
 
 def _ci_end(x: float) -> str:

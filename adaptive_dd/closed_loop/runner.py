@@ -321,9 +321,15 @@ def drive_plugin(name, ctrl, form, runtime: str, run, blocks, alarms, rc, bar) -
     return run
 
 
+_SAID: set = set()
+"""(name, loop) of the plug-ins whose loop :func:`_first_call` has said it runs in."""
+
+
 def _first_call(name, loop, args, bar) -> None:
     """The loop's first call, with no trial: compiled when the cache does not hold it, and then
-    said (before the progress bar comes back, not inside it); loaded, nothing is said."""
+    said with the time it took; loaded, the process's first run of it says it is in the compiled
+    loop (as a run says of a plain-Python controller that it is on the slow path). Printed before
+    the progress bar comes back, not inside it."""
     t0, missed = time.perf_counter(), sum(loop.stats.cache_misses.values())
     known = len(loop.overloads)
     if bar is not None:  # no progress bar (nor its estimate) while it compiles
@@ -334,7 +340,13 @@ def _first_call(name, loop, args, bar) -> None:
         again = "later runs load it" if not why else f"compiled again by every run: {why}"
         spent = time.perf_counter() - t0
         said = f"{name}: compiled the plug-in into the closed loop in {spent:.1f} s ({again})"
-        print(said, file=sys.stderr)
+    elif (name, loop) not in _SAID:
+        said = f"{name}: a compiled plug-in, in the compiled closed loop (compiled before)"
+    else:
+        said = None  # said once per process: a study of many arms runs the same loop again
+    _SAID.add((name, loop))
+    if said:
+        print(said, file=sys.stderr, flush=True)
     if bar is not None:
         bar.refresh()
 
