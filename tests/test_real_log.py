@@ -716,9 +716,19 @@ def test_validate_an_identification_scenario(tmp_path, capsys):
         (tmp_path / "log.csv").write_text("t,q1,q2,q3,tau1,tau2,tau3\n" + body)  # said, not a crash
         assert main(["validate", str(scen)]) == 1
         assert said in capsys.readouterr().err
+    np.savetxt(tmp_path / "log.csv", cols, delimiter=",", header="t,q1,q2,q3,tau1,tau2,tau3", comments="")
+    assert main(["identify", "--arm", str(scen), "--out", str(tmp_path / "m")]) == 0
+    model = tmp_path / "m" / "model.json"
     scen.write_text(scen.read_text() + "\n[run]\nduration = 2.0\n")
     assert main(["validate", str(scen)]) == 2
     assert "[run]: an identification scenario" in capsys.readouterr().err
+    # identify and predict read the same file by the same rule (they ignored the table before)
+    for args in (
+        ["identify", "--arm", str(scen), "--out", str(tmp_path / "o")],
+        ["predict", "--arm", str(scen), "--model", str(model), "--out", str(tmp_path / "p")],
+    ):
+        assert main(args) == 2, args
+        assert f"{scen}: [run]: an identification scenario (with [record]) holds only" in capsys.readouterr().err
 
 
 def test_identify_refuses_options_of_the_other_path(tmp_path, capsys):

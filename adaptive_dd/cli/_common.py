@@ -166,12 +166,39 @@ def describe_arm(arm) -> str:
     return "\n".join(lines)
 
 
+IDENTIFICATION_TABLES = ("arm", "plant", "record")
+"""The tables of an identification scenario (one with ``[record]``): what ``identify``, ``predict``
+and ``validate`` read of it."""
+
+
+def identification_tables(path, data: dict) -> None:
+    """Refuse an identification scenario (``data`` holds ``[record]``) with any other table than
+    :data:`IDENTIFICATION_TABLES`: a benchmark's ``[run]`` or ``[reference]`` there would be read
+    by nothing. Same rule in ``validate``, ``identify`` and ``predict``.
+
+    Raises
+    ------
+    ScenarioError
+        Naming the file and the first such table.
+    """
+    from adaptive_dd.errors import ScenarioError
+
+    extra = [k for k in data if k not in IDENTIFICATION_TABLES] if "record" in data else []
+    if extra:
+        raise ScenarioError(
+            f"{path}: [{extra[0]}]: an identification scenario (with [record]) holds only "
+            f"{', '.join(f'[{t}]' for t in IDENTIFICATION_TABLES)}; keep benchmark tables in another file"
+        )
+
+
 def read_arm_log(scenario: str, arm, files=None, window=None):
     """The scenario's :class:`~adaptive_dd.record.RecordSpec` and the log it describes, read."""
     from adaptive_dd.errors import ScenarioError
     from adaptive_dd.io import read_toml
     from adaptive_dd.record import read_log, record_spec
 
-    table = read_toml(Path(scenario), ScenarioError).get("record")
+    data = read_toml(Path(scenario), ScenarioError)
+    identification_tables(scenario, data)
+    table = data.get("record")
     spec = record_spec(table, arm.joint_names, arm.joint_kinds, str(scenario), files=files)
     return spec, read_log(spec, window=tuple(window) if window else None, arm=arm)

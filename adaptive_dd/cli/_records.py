@@ -55,7 +55,7 @@ def read_records(scenario: str, arm, files=None, window=None):
     """The scenario's :class:`~adaptive_dd.record.RecordSpec` and its records read, merged into one
     :class:`~adaptive_dd.record.LogRecord` whose pieces are the records' (and their gaps' pieces),
     every record on the first one's sample period; also the records one by one."""
-    from adaptive_dd.cli._common import read_arm_log
+    from adaptive_dd.cli._common import identification_tables, read_arm_log
     from adaptive_dd.record import read_log, record_spec
     from adaptive_dd.record_pieces import merge_records
 
@@ -66,7 +66,9 @@ def read_records(scenario: str, arm, files=None, window=None):
         else:
             from adaptive_dd.io import read_toml
 
-            table = read_toml(Path(desc), ScenarioError).get("record")
+            data = read_toml(Path(desc), ScenarioError)
+            identification_tables(desc, data)
+            table = data.get("record")
             if desc != scenario and table is None:
                 raise ScenarioError(f"{desc}: a record description needs a [record] table (docs/real_log.md)")
             spec = record_spec(table, arm.joint_names, arm.joint_kinds, desc, files=fs)

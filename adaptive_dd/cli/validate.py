@@ -14,11 +14,15 @@ import argparse
 import sys
 from pathlib import Path
 
-from adaptive_dd.cli._common import add_command, closed_form_view, describe_arm, load_arm
+from adaptive_dd.cli._common import (
+    add_command,
+    closed_form_view,
+    describe_arm,
+    identification_tables,
+    load_arm,
+)
 
 __all__ = ["add_parser", "is_identification_scenario", "run", "validate_identification"]
-
-IDENTIFICATION_TABLES = ("arm", "plant", "record")
 
 
 def add_parser(sub) -> None:
@@ -124,12 +128,7 @@ def validate_identification(path) -> int:
     from adaptive_dd.record import record_spec
 
     data = read_toml(Path(path), ScenarioError)
-    extra = [k for k in data if k not in IDENTIFICATION_TABLES]
-    if extra:
-        raise ScenarioError(
-            f"{path}: [{extra[0]}]: an identification scenario (with [record]) holds only "
-            f"{', '.join(f'[{t}]' for t in IDENTIFICATION_TABLES)}; keep benchmark tables in another file"
-        )
+    identification_tables(path, data)
     arm = load_arm(str(path))
     if closed_form_view(arm) is not None:
         raise ScenarioError(f"{path}: [record] needs an [arm] from a URDF (urdf = ... or robot = ...)")
