@@ -166,6 +166,25 @@ def test_a_payload_above_the_rated_one_is_a_warning(tmp_path, capsys):
     )
 
 
+def test_a_duration_that_reads_as_milliseconds_is_a_warning(tmp_path, capsys):
+    """12000 written for 12 s: accepted (a long run may be meant), said by validate and by the
+    benchmark before it runs; the shipped default says nothing."""
+    from adaptive_dd.benchmark.preflight import duration_problems
+    from adaptive_dd.cli.benchmark import limit_warnings
+
+    text = (ROOT / "adaptive_dd" / "scenarios" / "payload_swap.toml").read_text()
+    assert "duration = 20.0" in text
+    path = tmp_path / "ms.toml"
+    path.write_text(text.replace("duration = 20.0", "duration = 2000.0"))
+    assert main(["validate", str(path)]) == 0
+    said = "run.duration = 2000 s (0.56 h of simulated time per trial): a duration in ms?"
+    assert f"warning: {said}" in capsys.readouterr().err
+    assert any(said in w for w in limit_warnings(load_scenario(path)))
+    assert duration_problems(load_scenario(ROOT / "adaptive_dd" / "scenarios" / "payload_swap.toml")) == []
+    path.write_text(text.replace("duration = 20.0", "duration = 999.0"))
+    assert duration_problems(load_scenario(path)) == []
+
+
 def test_a_compiled_non_finite_command_names_its_joint():
     run = ControllerRun(
         "x", None, np.zeros((2, 10), np.float32), None, np.array([True, True]), np.array([4, 6]),

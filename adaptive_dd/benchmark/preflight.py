@@ -541,11 +541,28 @@ def capacity_problems(scenario) -> list[str]:
     ]
 
 
+LONG_DURATION = 1000.0
+"""[s] A trial at least this long is said before the run (:func:`duration_problems`): a duration
+written in milliseconds reads as one (the shipped scenarios run 2-30 s)."""
+
+
+def duration_problems(scenario) -> list[str]:
+    """A ``run.duration`` of :data:`LONG_DURATION` or more: a duration given in ms is accepted as
+    seconds (a warning: a long run may be meant; its estimate is printed too)."""
+    d = scenario.duration
+    if d < LONG_DURATION:
+        return []
+    return [
+        f"run.duration = {d:g} s ({d / 3600:.2g} h of simulated time per trial): a duration in ms? "
+        "[run] duration is in seconds"
+    ]
+
+
 def preflight(scenario) -> tuple[list[str], list[str]]:
     """``(problems, warnings)``: :func:`reference_problems` and :func:`controller_problems` (the
     run would be meaningless or fail), :func:`torque_problems` (it will saturate),
-    :func:`inertia_problems` (an armature the URDF leaves out), :func:`floor_problems` and
-    :func:`capacity_problems` (a payload above the rated one)."""
+    :func:`inertia_problems` (an armature the URDF leaves out), :func:`floor_problems`,
+    :func:`capacity_problems` (a payload above the rated one) and :func:`duration_problems`."""
     problems = reference_problems(scenario) + controller_problems(scenario)
     warnings = torque_problems(scenario) + inertia_problems(scenario) + floor_problems(scenario)
-    return problems, warnings + capacity_problems(scenario)
+    return problems, warnings + capacity_problems(scenario) + duration_problems(scenario)

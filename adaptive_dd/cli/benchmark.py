@@ -162,9 +162,14 @@ def limit_warnings(sc) -> list[str]:
     """One ``warning:`` line per place the reference leaves a joint's position or velocity limits
     (``adaptive-dd validate`` reports them as problems, exit 1; the benchmark runs them, as the
     simulated arm has no stops, but says so first rather than leave a user to find it later)."""
-    from adaptive_dd.benchmark.preflight import floor_problems, inertia_problems, reference_problems
+    from adaptive_dd.benchmark.preflight import (
+        duration_problems,
+        floor_problems,
+        inertia_problems,
+        reference_problems,
+    )
 
-    found = reference_problems(sc) + inertia_problems(sc) + floor_problems(sc)
+    found = reference_problems(sc) + inertia_problems(sc) + floor_problems(sc) + duration_problems(sc)
     return [f"warning: {sc.source or 'scenario'}: {p}" for p in found]
 
 

@@ -92,7 +92,8 @@ def _preflight(sc) -> int:
 
     problems = pf.reference_problems(sc) + pf.controller_problems(sc)
     torque = pf.torque_problems(sc)
-    for w in torque + pf.inertia_problems(sc) + pf.floor_problems(sc) + pf.capacity_problems(sc):
+    also = pf.inertia_problems(sc) + pf.floor_problems(sc) + pf.capacity_problems(sc)
+    for w in torque + also + pf.duration_problems(sc):
         print(f"adaptive-dd validate: warning: {w}", file=sys.stderr)
     if problems:
         print(f"adaptive-dd validate: {len(problems)} problem(s) the run would meet:", file=sys.stderr)
