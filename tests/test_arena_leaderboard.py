@@ -142,6 +142,12 @@ def test_an_unknown_controller_is_a_user_error_naming_it(tmp_path, capsys):
     assert "--controllers: unknown controller 'no_such_law'" in err and "v3short.toml" not in err
     assert main(["leaderboard", str(sc), "--plugin", "my_laws", "--out", str(tmp_path / "o")]) == 2
     assert "--plugin my_laws: expects MODULE:CLASS" in capsys.readouterr().err
+    # two values after one --plugin: the second is read as a SCENARIO, and said so
+    two = ["leaderboard", "--no-scenarios", "--arms", "2", "--plugin", "a:A", "b:B"]
+    assert main([*two, "--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err
+    assert "SCENARIO 'b:B': no such file, and it reads as a plug-in" in err
+    assert "--plugin a:A --plugin b:B" in err
 
 
 def test_a_scenario_with_a_table_for_a_controller_not_ranked_runs(tmp_path, monkeypatch):

@@ -728,7 +728,8 @@ def test_validate_an_identification_scenario(tmp_path, capsys):
         ["predict", "--arm", str(scen), "--model", str(model), "--out", str(tmp_path / "p")],
     ):
         assert main(args) == 2, args
-        assert f"{scen}: [run]: an identification scenario (with [record]) holds only" in capsys.readouterr().err
+        said = f"{scen}: [run]: an identification scenario (with [record]) holds only"
+        assert said in capsys.readouterr().err
 
 
 def test_identify_refuses_options_of_the_other_path(tmp_path, capsys):

@@ -96,6 +96,12 @@ def run(args: argparse.Namespace) -> int:
         if opt in getattr(args, "given", ()) and not args.arms:
             raise ParameterError(f"{opt}: applies to the drawn arms of --arms N; give --arms N too")
     scenarios = [*args.scenarios, *(args.scenario_list or [])] or None
+    for given in args.scenarios:  # --plugin a:A b:B reads b:B as a SCENARIO
+        if ":" in given and not given.endswith(".toml") and not Path(given).exists():
+            raise ParameterError(
+                f"SCENARIO {given!r}: no such file, and it reads as a plug-in (MODULE:CLASS): --plugin takes "
+                "one value; repeat it for each plug-in (--plugin a:A --plugin b:B)"
+            )
     if args.no_scenarios:
         if scenarios or not args.arms:
             raise ParameterError("--no-scenarios: runs the drawn arms alone; give --arms N and no SCENARIO")
