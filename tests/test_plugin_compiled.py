@@ -246,6 +246,21 @@ def test_a_compiled_plugins_functions_run_with_their_indices_checked():
     assert fine.observe(fine.params, fine.state[0], np.zeros(2), np.zeros(2), np.zeros(2)) == 0
 
 
+class _Stateless(_Counter):
+    """:class:`_Counter` that declares no state and still counts in ``x[0]``."""
+
+    state_size = 0
+
+
+def test_a_plugin_declaring_no_state_has_none_to_write():
+    """``state_size = 0``: each trial's state is empty, so ``x[0]`` is an IndexError like any index
+    past the declared size (it wrote into a float of padding before, unnoticed)."""
+    form = compiled_form("stateless", _Stateless(np.ones(2), np.ones(2)), 3, 1e-3)
+    assert form.state.shape == (3, 0)
+    with pytest.raises(IndexError):
+        form.observe(form.params, form.state[0], np.zeros(2), np.zeros(2), np.zeros(2))
+
+
 @pytest.mark.slow
 def test_an_index_past_the_state_fails_the_plugins_trials_and_names_state_size():
     sc = _scenario(["pd_gravity"], seeds=2, duration=0.5, keep_table=False)

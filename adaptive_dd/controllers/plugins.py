@@ -360,7 +360,7 @@ class PluginForm:
     need : int
         Bits of :data:`~adaptive_dd.closed_loop.plugin_loop.NEEDS`: the model terms the loop computes.
     state : ndarray (S, m)
-        Per-trial state, ``m = max(state_size, 1)``, zeros (``reset`` fills trial i's row).
+        Per-trial state, ``m = state_size`` (0: none), zeros (``reset`` fills trial i's row).
     reset, command, observe, estimate : numba dispatchers
         The per-sample functions (``estimate`` a no-op when the plug-in reports no estimate).
     estimates : bool
@@ -427,7 +427,7 @@ def compiled_form(name: str, ctrl, n_trials: int, sample_period: float) -> Plugi
     need = 0
     for x in needs:
         need |= NEEDS[x]
-    state = np.zeros((int(n_trials), max(int(size), 1)))
+    state = np.zeros((int(n_trials), int(size)))  # none with state_size 0: x[0] is an IndexError
     checked = tuple(_bounds_checked(f) for f in (ctrl.reset, ctrl.command, ctrl.observe))
     functions = (*checked, _bounds_checked(est) if est is not None else no_estimate)
     return PluginForm(
