@@ -54,6 +54,11 @@ def test_all_errors_at_once_each_naming_file_and_key():
         (("duration = 2.0", "duration = 1e9"), r"run: too large: .* GiB"),
         (("sample_period = 0.001", "sample_period = 1e-300"), r"run.sample_period: must be in"),
         (("amplitude = [0.3], frequency = [0.7]", "amplitude = [1e300], frequency = [0.7]"), "amplitude"),
+        (
+            ("amplitude = [0.3], frequency = [0.7]", "amplitude = [23.0], frequency = [0.7]"),
+            r"joint2.amplitude: must be in \[-10, 10\], got 23.0 \(radians: an angle in degrees\?\)",
+        ),
+        (("offset = 0.1", "offset = 45.0"), r"joint1.offset: must be in .* \(radians: an angle in degrees"),
         (("seeds = 2", "seeds = 2\nspeed = 1"), r"run.speed: unknown key"),
         (('"adaptive_ct"]', '"not a module:x"]'), r"unknown controller 'not a module:x'"),
         (("[[payload]]", "[controllers.slotine_li]\nx = 1\n[[payload]]"), r"controllers.slotine_li: not a"),

@@ -245,9 +245,13 @@ def _check_reference(e: list, ref: Any, T: float | None, n: int = 2) -> None:
         return
     for j in range(n):
         key = f"reference.joint{j + 1}"
+        n_e = len(e)
         off_ok = check_number(e, f"{key}.offset", ref.offset[j], -L["max_angle"], L["max_angle"])
         a, f, p = ref.amplitude[j], ref.frequency[j], ref.phase[j]
         a_ok = _nums(e, f"{key}.amplitude", a, -L["max_angle"], L["max_angle"])
+        for k in range(n_e, len(e)):  # an angle past the limit: most likely one in degrees
+            if "must be in" in e[k] and "inf" not in e[k] and "nan" not in e[k]:
+                e[k] += " (radians: an angle in degrees?)"
         f_ok = isinstance(f, tuple) and all(
             [check_number(e, f"{key}.frequency", x, 0, math.inf, lo_open=True) for x in f]
         )
