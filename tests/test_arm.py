@@ -313,7 +313,8 @@ def test_scenario_with_a_shipped_robot():
         ({"arm_extra": "gravity = [0, 0]"}, r"arm.gravity"),
         ({"arm_extra": "torque_limit = [1, 1, 1, 1, 1, -1]"}, r"arm.torque_limit' must be > 0"),
         ({"inertia": "inertia = [1, 1, 3, 0, 0, 0]"}, r"payload\[0\].inertia:.*rigid body"),
-        ({"arm_extra": "wheels = 4"}, r"unknown key 'arm.wheels'"),
+        ({"arm_extra": "wheels = 4"}, r"unknown key 'arm.wheels'; allowed with a URDF"),
+        ({"arm_extra": "payload_capacty = 4"}, r"'arm.payload_capacty' \(did you mean 'payload_capacity'"),
     ],
 )
 def test_bad_urdf_scenarios_name_the_key(kw, match):

@@ -342,8 +342,11 @@ def _urdf_source(src: str, table: dict) -> tuple[Path, str | None]:
     payload frame named in the table (a shipped robot's own when not named); checks the keys."""
     unknown = [k for k in table if k not in URDF_ARM_KEYS]
     if unknown:
+        from adaptive_dd.benchmark.key_hints import did_you_mean
+
+        hint = did_you_mean(unknown[0], URDF_ARM_KEYS)
         raise ScenarioError(
-            f"{src}: unknown key 'arm.{unknown[0]}'; allowed with a URDF: {sorted(URDF_ARM_KEYS)}"
+            f"{src}: unknown key 'arm.{unknown[0]}'{hint}; allowed with a URDF: {sorted(URDF_ARM_KEYS)}"
         )
     if ("urdf" in table) == ("robot" in table):
         raise ScenarioError(
