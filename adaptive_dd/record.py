@@ -535,7 +535,7 @@ def _resampling_note(t0: Array, T: float, qd_measured: bool) -> str:
     steps = np.diff(t0)
     return (
         f"{t0.size} logged samples over {clock(t0[0])}-{clock(t0[-1])} s, steps {steps.min() * 1e3:.3g}-"
-        f"{steps.max() * 1e3:.3g} ms (median {np.median(steps) * 1e3:.4g}); resampled to T = {T:.6g} s: "
+        f"{steps.max() * 1e3:.3g} ms (median {np.median(steps) * 1e3:.4g} ms); resampled to T = {T:.6g} s: "
         "positions by cubic spline, torques"
         + (" and velocities" if qd_measured else "")
         + " by linear interpolation"

@@ -474,3 +474,15 @@ def test_times_are_printed_to_the_microsecond_on_a_clock_far_from_zero():
     assert clock(9.999) == "9.999" and clock(0) == "0" and clock(-3.25) == "-3.25"
     assert clock(20001.05) == "20001.05" and clock(1700000011.000034) == "1700000011.000034"
     assert clock(1700000011.02) != clock(1700000011.03)
+
+
+def test_how_much_too_small_a_capped_std_is_reads_as_a_share_or_a_factor():
+    """``the std is too small by about 1x`` read as not at all: below a factor of 2 a share."""
+    from adaptive_dd.identification.log_covariance import MAX_DOF_FACTOR
+    from adaptive_dd.identification.log_fit import too_few_samples
+
+    k = 10
+    near = k / (1 - 1 / (1.5**2 * MAX_DOF_FACTOR))  # n_eff whose std should be 1.5x larger
+    far = k / (1 - 1 / (3.0**2 * MAX_DOF_FACTOR))  # 3x
+    assert "the std is about 33 % too small;" in too_few_samples(near, k, 1.0)
+    assert "the std is too small by about 3x;" in too_few_samples(far, k, 1.0)

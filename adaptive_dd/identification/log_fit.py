@@ -261,6 +261,14 @@ def _noise_rms(tau: Array, tau_f: float, T: float, pieces=None) -> Array:
     return s * np.sqrt(np.sum(h**2))
 
 
+def _too_small(factor: float) -> str:
+    """How much too small a std is that should be ``factor`` (> 1) times larger: a share below a
+    factor of 2 (``1x`` read as not at all), else the factor."""
+    if factor < 2:
+        return f"about {100 * (1 - 1 / factor):.0f} % too small"
+    return f"too small by about {factor:.2g}x"
+
+
 def too_few_samples(n_eff: float, k: int, duration: float) -> str:
     """What a fit of ``k`` columns to about ``n_eff`` independent samples over ``duration`` [s] is
     worth when they are fewer than :data:`MAX_DOF_FACTOR` a column, and the window that would give
@@ -275,7 +283,7 @@ def too_few_samples(n_eff: float, k: int, duration: float) -> str:
         "directions held at the prior)"
         if n_eff < k
         else f"the std's small-sample factor is capped at {MAX_DOF_FACTOR:g} where n_eff / (n_eff - k) is "
-        f"{n_eff / (n_eff - k):.3g}: the std is too small by about {short:.2g}x"
+        f"{n_eff / (n_eff - k):.3g}: the std is {_too_small(short)}"
     )
     return (
         f"about {n_eff:.0f} independent samples for {k} columns fitted: {what}; give a window of at least "
