@@ -424,3 +424,22 @@ def test_an_option_given_twice_is_refused_not_the_last_taken(capsys, argv, says)
         main(argv)
     err = capsys.readouterr().err
     assert e.value.code == 2 and says in err and f"usage: adaptive-dd {argv[0]}" in err
+
+
+def test_a_progress_bar_only_on_a_terminal(monkeypatch):
+    """stderr to a file (a log) gets no bar: its carriage returns ran into the messages beside it."""
+    import argparse
+    import io
+    import sys
+
+    from adaptive_dd.cli._common import show_progress
+
+    class Tty(io.StringIO):
+        def isatty(self):
+            return True
+
+    on, off = argparse.Namespace(no_progress=False), argparse.Namespace(no_progress=True)
+    monkeypatch.setattr(sys, "stderr", io.StringIO())
+    assert not show_progress(on)
+    monkeypatch.setattr(sys, "stderr", Tty())
+    assert show_progress(on) and not show_progress(off)

@@ -42,6 +42,18 @@ PERIOD = number(float, 1e-5, 0.1)
 SUBSTEPS = number(int, 1, 100)
 
 
+NO_PROGRESS_HELP = "no progress bar (there is none when stderr is not a terminal: a log file gets none)"
+
+
+def show_progress(args) -> bool:
+    """A progress bar unless ``--no-progress``, and only on a terminal: in a file stderr is a log,
+    where a bar's carriage returns run into the messages printed beside it."""
+    import sys
+
+    isatty = getattr(sys.stderr, "isatty", None)
+    return not args.no_progress and bool(isatty and isatty())
+
+
 def add_command(sub, name: str, **kw) -> argparse.ArgumentParser:
     """The sub-parser of command ``name`` (no abbreviations; ``--debug`` after the command too)."""
     sp = sub.add_parser(name, allow_abbrev=False, **kw)

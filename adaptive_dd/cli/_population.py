@@ -28,6 +28,7 @@ def run_arms(args: argparse.Namespace, only_controllers, with_floors) -> int:
         run_population,
     )
     from adaptive_dd.benchmark.scenario import read_toml
+    from adaptive_dd.cli._common import show_progress
     from adaptive_dd.errors import ScenarioError
     from adaptive_dd.outputs import OutputSet
 
@@ -90,7 +91,7 @@ def run_arms(args: argparse.Namespace, only_controllers, with_floors) -> int:
             seeds,
             seeds=args.seeds,
             controllers=controllers,
-            progress=not args.no_progress,
+            progress=show_progress(args),
             draw_swaps=args.draw_swaps,
             on_arm=on_arm,
         )

@@ -13,7 +13,7 @@ import sys
 import threading
 from pathlib import Path
 
-from adaptive_dd.cli._common import SEED, SEEDS, add_command, number
+from adaptive_dd.cli._common import NO_PROGRESS_HELP, SEED, SEEDS, add_command, number, show_progress
 
 __all__ = ["add_parser", "run"]
 
@@ -57,7 +57,7 @@ def add_parser(sub) -> None:
         "--first-arm", type=number(int, 0, 2**62), default=0, metavar="SEED", help="seed of the first arm"
     )
     b.add_argument("--draw-swaps", action="store_true", help="with --arms: draw each arm's swap times too")
-    b.add_argument("--no-progress", action="store_true")
+    b.add_argument("--no-progress", action="store_true", help=NO_PROGRESS_HELP)
     b.set_defaults(func=run)
 
 
@@ -113,7 +113,7 @@ def _benchmark(args: argparse.Namespace, sc, outputs) -> tuple[list[Path], objec
         threading.Thread(target=importlib.import_module, args=("matplotlib.pyplot",), daemon=True).start()
     # a cold cache compiles first (the kernels of the path the run takes: the closed forms' or the general)
     with announce_compilation(sc.closed_forms or sc.arm, source=sc.source) as compiling:
-        res = run_benchmark(sc, progress=not args.no_progress, on_run=release_error_norm)
+        res = run_benchmark(sc, progress=show_progress(args), on_run=release_error_norm)
         compiling.join()  # the report's kernels, compiled meanwhile by a second process
         metrics = compute_metrics(res)
     print(format_report(metrics, res))

@@ -16,7 +16,7 @@ import json
 import sys
 from pathlib import Path
 
-from adaptive_dd.cli._common import SEED, SEEDS, add_command, number
+from adaptive_dd.cli._common import NO_PROGRESS_HELP, SEED, SEEDS, add_command, number, show_progress
 from adaptive_dd.errors import ParameterError
 
 __all__ = ["add_parser", "run"]
@@ -77,7 +77,7 @@ def add_parser(sub) -> None:
     )
     p.add_argument("--bootstrap-seed", type=SEED, default=0, help="seed of the bootstrap intervals")
     p.add_argument("--out", default="results/leaderboard", help="folder for the CSV, JSON and figure")
-    p.add_argument("--no-progress", action="store_true")
+    p.add_argument("--no-progress", action="store_true", help=NO_PROGRESS_HELP)
     p.set_defaults(func=run)
 
 
@@ -145,7 +145,7 @@ def run(args: argparse.Namespace) -> int:
         _say_tables_not_on_the_arms(scenarios, controllers, args.template)
     df = leaderboard(
         scenarios, controllers, seeds=args.seeds, rng=args.bootstrap_seed,
-        progress=not args.no_progress, arms=args.arms, template=args.template, first_arm=args.first_arm,
+        progress=show_progress(args), arms=args.arms, template=args.template, first_arm=args.first_arm,
         workers=args.workers,
     )  # fmt: skip
     csv, js, png = out / "leaderboard.csv", out / "leaderboard.json", out / "leaderboard.png"

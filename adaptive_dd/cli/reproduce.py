@@ -11,7 +11,7 @@ from pathlib import Path
 
 import numpy as np
 
-from adaptive_dd.cli._common import SEED, add_command, number
+from adaptive_dd.cli._common import NO_PROGRESS_HELP, SEED, add_command, number, show_progress
 
 __all__ = ["add_parser", "run"]
 
@@ -55,7 +55,7 @@ def add_parser(sub) -> None:
     r.add_argument("--out", default="results/reproduce", help="folder for figures")
     r.add_argument("--json", metavar="PATH", help="write tidy rows as JSON")
     r.add_argument("--no-noise", action="store_true", help="noise-free sensors (modelling errors only)")
-    r.add_argument("--no-progress", action="store_true")
+    r.add_argument("--no-progress", action="store_true", help=NO_PROGRESS_HELP)
     r.set_defaults(func=run)
 
 
@@ -72,7 +72,7 @@ def run(args: argparse.Namespace) -> int:
             seed=args.seed,
             tau_f=tau_f,
             estimators=tuple(args.estimators),
-            progress=not args.no_progress,
+            progress=show_progress(args),
             keep_theta=(_FIG5, _OURS),
             noise=not args.no_noise,
             extra_estimators=tuple(args.extra_estimators),

@@ -11,7 +11,7 @@ import sys
 
 import numpy as np
 
-from adaptive_dd.cli._common import SEEDS, add_command, number, refuse
+from adaptive_dd.cli._common import NO_PROGRESS_HELP, SEEDS, add_command, number, refuse, show_progress
 
 __all__ = ["add_parser", "run"]
 
@@ -28,7 +28,7 @@ def add_parser(sub) -> None:
         help="local cluster worker processes (default: all cores; refused with --scheduler)",
     )
     w.add_argument("--block", type=SEEDS, metavar="SEEDS", help="seeds per task (overrides sweep.block)")
-    w.add_argument("--no-progress", action="store_true")
+    w.add_argument("--no-progress", action="store_true", help=NO_PROGRESS_HELP)
     w.set_defaults(func=run)
 
 
@@ -51,7 +51,7 @@ def run(args: argparse.Namespace) -> int:
     if args.block is not None:
         sweep = dataclasses.replace(sweep, block=min(args.block, sweep.seeds))
     res = run_sweep(
-        sweep, args.out, scheduler=args.scheduler, workers=args.workers, progress=not args.no_progress
+        sweep, args.out, scheduler=args.scheduler, workers=args.workers, progress=show_progress(args)
     )
     print(
         f"{len(res.table)} rows ({res.failed_rows} failed), {res.ran} tasks run, {res.reused} reused; "
