@@ -282,8 +282,10 @@ class SweepResult:
         One row per grid point x controller x seed x segment.
     table_path : Path
     heatmaps : list of Path
-        Empty when no grid point has a ratio (every row failed, or no seed where both the
-        adaptive controller and the floor finished the heat map's segment).
+        The ratios' heat maps (``heatmap*.png``), then, for an adaptive controller with a change
+        detector, its delays' (``delays*.png``). Empty when no grid point has a ratio (every row
+        failed, or no seed where both the adaptive controller and the floor finished the heat map's
+        segment).
     ratios : DataFrame or None
         Per grid point, the heat map's ratio and its marks (:func:`ratio_medians`), also written
         to ``OUT/ratios.csv``; None without a heat map.
@@ -534,13 +536,16 @@ def _heatmaps(sweep: Sweep, table: pd.DataFrame, out: Path) -> tuple[pd.DataFram
     map)."""
     if not sweep.heatmap or table["failed"].all():
         return None, []
-    from adaptive_dd.sweep_plot import plot_ratio_heatmaps
+    from adaptive_dd.sweep_plot import plot_delay_heatmaps, plot_ratio_heatmaps
 
     ratios = mark_gains_apart(ratio_medians(table, sweep.heatmap, [a for a, _ in sweep.axes]), sweep)
     _write_atomic(ratios, out / "ratios.csv")
     if not np.isfinite(ratios["ratio"]).any():
         return ratios, []
-    return ratios, plot_ratio_heatmaps(ratios, sweep.heatmap, [a for a, _ in sweep.axes], out)
+    axes = [a for a, _ in sweep.axes]
+    return ratios, plot_ratio_heatmaps(ratios, sweep.heatmap, axes, out) + plot_delay_heatmaps(
+        ratios, sweep.heatmap, axes, out
+    )
 
 
 def _cell_value(value):

@@ -1,4 +1,5 @@
-"""Heatmaps of a sweep: the adaptive/floor RMS ratio over two grid axes.
+"""Heatmaps of a sweep over two grid axes: the adaptive/floor RMS ratio, and the adaptive law's
+delay from the swap to its first alarm.
 
 Plotting only; the ratios come from :func:`adaptive_dd.sweep.ratio_medians`. Uses
 ``matplotlib.figure.Figure`` directly (no pyplot, no backend set at import).
@@ -14,7 +15,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-__all__ = ["AXIS_UNITS", "axis_label", "plot_ratio_heatmaps"]
+__all__ = ["AXIS_UNITS", "axis_label", "plot_delay_heatmaps", "plot_ratio_heatmaps"]
 
 
 AXIS_UNITS = {
@@ -52,9 +53,10 @@ def axis_label(field: str) -> str:
 
 
 def _grid(
-    ratios: pd.DataFrame, x: str, y: str | None
+    ratios: pd.DataFrame, x: str, y: str | None, value: str = "ratio", count: str = "n_seeds"
 ) -> tuple[list, list, np.ndarray, np.ndarray, np.ndarray]:
-    """x values, y values (``[None]``: one row, a sweep of one varied axis), ratios, seeds, marks."""
+    """x values, y values (``[None]``: one row, a sweep of one varied axis), the ``value`` column
+    (ratios), the ``count`` column (seeds; NA as 0), marks."""
     if y is None:
         ratios = ratios.assign(_row=None)
         y = "_row"
@@ -65,7 +67,7 @@ def _grid(
     marked = np.zeros((len(ys), len(xs)), dtype=bool)
     for _, r in ratios.iterrows():
         i, j = ys.index(r[y]), xs.index(r[x])
-        z[i, j], n[i, j] = r["ratio"], r["n_seeds"]
+        z[i, j], n[i, j] = r[value], 0 if pd.isna(r[count]) else r[count]
         marked[i, j] = bool(r.get("marked", ""))
     return xs, ys, z, n, marked
 
@@ -164,4 +166,79 @@ def plot_ratio_heatmaps(
         extra = ", ".join(f"{a} = {v}" for a, v in zip(others, vals, strict=True))
         name = "heatmap.png" if len(groups) == 1 else f"heatmap_{i}.png"
         paths.append(_plot_one(sub, heatmap, base + (f"\n{extra}" if extra else ""), out / name))
+    return paths
+
+
+def _delay_figure(ratios: pd.DataFrame, heatmap: Mapping[str, Any], title: str):
+    """The heat map of the adaptive law's median delay to its first alarm [ms] in one combination
+    of the other axes (a ``matplotlib.figure.Figure``); a cell whose seeds raised no alarm reads
+    ``none``, and each cell names its seeds without one."""
+    from matplotlib.figure import Figure
+
+    x, y = heatmap["x"], heatmap["y"]
+    xs, ys, z, missed, _ = _grid(ratios.assign(_ms=1e3 * ratios["delay_median"]), x, y, "_ms", "missed")
+    fig = Figure(figsize=(1.2 * len(xs) + 3, 0.8 * len(ys) + 2.5), layout="constrained")
+    ax = fig.subplots()
+    from matplotlib.colors import LogNorm
+
+    finite = z[np.isfinite(z)]
+    log = finite.size > 0 and finite.min() > 0 and finite.max() > 10 * finite.min()
+    norm = LogNorm(finite.min(), finite.max()) if log else None
+    im = ax.imshow(np.ma.masked_invalid(z), origin="lower", aspect="auto", cmap="magma_r", norm=norm)
+    ax.set_facecolor("0.85")
+    # white on the darker half of the scale
+    lo, hi = (finite.min(), finite.max()) if finite.size else (0.0, 0.0)
+    mid = np.sqrt(lo * hi) if log else 0.5 * (lo + hi)
+    for i, j in itertools.product(range(len(ys)), range(len(xs))):
+        ok = np.isfinite(z[i, j])
+        label = (f"{z[i, j]:.0f}" if ok else "none") + (f"\n({missed[i, j]} missed)" if missed[i, j] else "")
+        ax.text(j, i, label, ha="center", va="center", fontsize=8, color="w" if ok and z[i, j] > mid else "k")
+    ax.set_xticks(range(len(xs)), [f"{v:g}" if isinstance(v, float) else str(v) for v in xs])
+    ax.set_xlabel(axis_label(x))
+    if y is None:
+        ax.set_yticks([])
+    else:
+        ax.set_yticks(range(len(ys)), [f"{v:g}" if isinstance(v, float) else str(v) for v in ys])
+        ax.set_ylabel(axis_label(y))
+    fig.colorbar(im, ax=ax, label=f"median delay to\n{heatmap['adaptive']}'s first alarm [ms]")
+    ax.set_title(title, fontsize=9)
+    return fig
+
+
+def plot_delay_heatmaps(
+    ratios: pd.DataFrame, heatmap: Mapping[str, Any], axes: Sequence[str], out: str | Path
+) -> list[Path]:
+    """The adaptive law's median delay from the swap to its first alarm, one PNG per combination of
+    the grid axes other than x and y (as :func:`plot_ratio_heatmaps`); none when the law has no
+    change detector (``missed`` NA in every cell).
+
+    Parameters
+    ----------
+    ratios : DataFrame
+        From :func:`adaptive_dd.sweep.ratio_medians` (``delay_median`` [s], ``missed``).
+    heatmap : mapping
+        ``x``, ``y``, ``adaptive``, ``segment``.
+    axes : sequence of str
+        All grid axes.
+    out : path
+        Folder: writes ``delays.png`` (or ``delays_<i>.png``, one per combination).
+
+    Returns
+    -------
+    list of Path
+        The PNG files written (empty without a detector).
+    """
+    if "missed" not in ratios or ratios["missed"].isna().all():
+        return []
+    out = Path(out)
+    others = [a for a in axes if a not in (heatmap["x"], heatmap["y"])]
+    base = f"segment {heatmap['segment']}: delay from the swap to the first alarm, median over seeds"
+    groups = list(ratios.groupby(others, sort=False)) if others else [((), ratios)]
+    paths = []
+    for i, (vals, sub) in enumerate(groups):
+        vals = vals if isinstance(vals, tuple) else (vals,)
+        extra = ", ".join(f"{a} = {v}" for a, v in zip(others, vals, strict=True))
+        name = "delays.png" if len(groups) == 1 else f"delays_{i}.png"
+        _delay_figure(sub, heatmap, base + (f"\n{extra}" if extra else "")).savefig(out / name, dpi=110)
+        paths.append(out / name)
     return paths

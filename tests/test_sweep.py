@@ -331,7 +331,9 @@ def test_sweep_table_columns_and_order(tmp_path, client):
     on_disk = pd.read_parquet(res.table_path) if res.table_path.suffix == ".parquet" else None
     if on_disk is not None:
         pd.testing.assert_frame_equal(on_disk, t, check_dtype=False)
-    assert [p.name for p in res.heatmaps] == ["heatmap.png"] and res.heatmaps[0].stat().st_size > 0
+    # the ratios' heat map, then adaptive_ct's delays' (no alarm in these 0.3 s trials: "none")
+    assert [p.name for p in res.heatmaps] == ["heatmap.png", "delays.png"]
+    assert all(p.stat().st_size > 0 for p in res.heatmaps)
 
 
 def test_resume_reads_cells_and_gives_the_same_table(tmp_path, client):
@@ -690,11 +692,17 @@ def test_the_cli_prints_each_cells_median_delay_and_missed_swaps(tmp_path, capsy
     assert row.split() == ["0.0", "20", "7", "(2)"], out
     on_disk = pd.read_csv(tmp_path / "ratios.csv")
     assert on_disk["missed"].tolist() == [0, 2] and on_disk["delay_median"].tolist() == [0.020, 0.007]
+    assert [p.name for p in maps] == ["heatmap.png", "delays.png"]
+    from adaptive_dd.sweep_plot import _delay_figure
+
+    texts = [t.get_text() for t in _delay_figure(ratios, hm, "t").axes[0].texts]
+    assert texts == ["20", "7\n(2 missed)"]  # each cell's median [ms] and its seeds without an alarm
     hm_floor = dict(hm, adaptive="ct_oracle", floor="adaptive_ct")  # no detector: no delay table
     sw = types.SimpleNamespace(heatmap=hm_floor, axes=sw.axes, base=sw.base, points=())
     ratios, maps = _heatmaps(sw, t, tmp_path)
     _print_heatmap(types.SimpleNamespace(ratios=ratios, heatmaps=maps), sw)
     assert "first alarm" not in capsys.readouterr().out
+    assert [p.name for p in maps] == ["heatmap.png"]  # nor a delays' heat map
 
 
 @pytest.mark.parametrize(
