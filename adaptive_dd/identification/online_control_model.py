@@ -64,7 +64,7 @@ def _payload_raw(c, th, raw):  # pragma: no cover - compiled
 
 
 @njit(cache=True, inline="always")
-def _inertia_cov(c, P, out):  # pragma: no cover - compiled
+def _inertia_cov(c, P, out, tmp):  # pragma: no cover - compiled
     """The inertia block ``out[4:, 4:]`` of the payload parameters' covariance (the part
     :func:`compact_prior` reads; the rest of ``out (10, 10)`` is left as it is): P's own block in
     payload mode, else that block of ``pbasis_pinv P pbasis_pinv^T``."""
@@ -73,8 +73,7 @@ def _inertia_cov(c, P, out):  # pragma: no cover - compiled
             for b in range(4, 10):
                 out[a, b] = P[a, b]
         return
-    p = P.shape[0]
-    tmp = np.zeros((10, p))
+    p = P.shape[0]  # tmp (10, p) scratch: rows 4-9 written before they are read
     for a in range(4, 10):
         for b in range(p):
             acc = 0.0
@@ -220,11 +219,13 @@ def centred_prior_in(raw, Pc, r, g, row):  # pragma: no cover - compiled
 @njit(cache=True, inline="always")
 def _control_payload(c, s, i, raw, pay, Pc):  # pragma: no cover - compiled
     """:func:`_control_payload_in` with its scratch allocated for this call."""
-    _control_payload_in(c, s, i, raw, pay, Pc, np.empty(10), np.empty(10), np.empty(6))
+    _control_payload_in(
+        c, s, i, raw, pay, Pc, np.empty(10), np.empty(10), np.empty(6), np.empty((10, s.P.shape[1]))
+    )
 
 
 @njit(cache=True, inline="always")
-def _control_payload_in(c, s, i, raw, pay, Pc, g, row, mean):  # pragma: no cover - compiled
+def _control_payload_in(c, s, i, raw, pay, Pc, g, row, mean, cov):  # pragma: no cover - compiled
     """The payload the model control uses: ``raw`` with the centred prior (:func:`centred_prior`,
     if ``F_COM_SIZE`` is set: :attr:`~adaptive_dd.identification.online_config.OnlineConfig.payload_priors`,
     the payload block's own covariance) and the compact prior (if set); projected
@@ -252,7 +253,7 @@ def _control_payload_in(c, s, i, raw, pay, Pc, g, row, mean):  # pragma: no cove
         var_m = Pc[0, 0]
     rho = c.prior_radius
     if rho > 0.0:
-        _inertia_cov(c, s.P[i], Pc)
+        _inertia_cov(c, s.P[i], Pc, cov)
         if c.prior_noise > 0.0:  # P in the units of the equations' actual noise
             kappa = c.prior_noise * _noise_level(c, s, i)
             for a in range(4, 10):
@@ -312,7 +313,7 @@ def est_model_trial_in(c, s, i, pi_out, w):  # pragma: no cover - compiled
         for k in range(10):
             pay[k] = s.start_pay[i, k]
     else:
-        _control_payload_in(c, s, i, raw, pay, w.Pc, w.pphi, w.row, w.d)  # (the RLS's scratch is free)
+        _control_payload_in(c, s, i, raw, pay, w.Pc, w.pphi, w.row, w.d, w.cov)  # (the RLS's scratch is free)
     if c.mode == MODE_PAYLOAD:
         base = 10 * c.jp
         for a in range(10):

@@ -13,7 +13,6 @@ import numpy as np
 from numba import njit
 
 from adaptive_dd.identification.online_control_model import (
-    _control_payload,
     _control_payload_in,
     _keeps_start,
     _payload_raw,
@@ -27,6 +26,7 @@ from adaptive_dd.identification.online_slots import (
     C_REOPEN_AT,
     C_RESTART,
     C_SINCE_ALARM,
+    est_work,
 )
 from adaptive_dd.plant.chain import (
     mass_matrix_in,
@@ -36,18 +36,25 @@ from adaptive_dd.plant.chain_dynamics import _composite_mass
 
 @njit(cache=True)
 def _reopen(c, P):  # pragma: no cover - compiled
-    """``P <- (I - U U^T) P (I - U U^T) + P_reopen``: forget what was known along the payload subspace."""
+    """``P <- (I - U U^T) P (I - U U^T) + P_reopen``: forget what was known along the payload
+    subspace (:func:`_reopen_in` with its scratch made for this call)."""
+    p, r = c.U.shape
+    _reopen_in(c, P, np.zeros((p, r)), np.zeros((r, r)))
+
+
+@njit(cache=True)
+def _reopen_in(c, P, Q, S):  # pragma: no cover - compiled
+    """:func:`_reopen` with its scratch given, ``Q`` (at least p x r) and ``S`` (at least r x r),
+    ``r`` the payload subspace's columns: no allocation (the estimator's step calls it)."""
     U = c.U
     p, r = U.shape
     # Q = P U (p x r), S = U^T P U (r x r)
-    Q = np.zeros((p, r))
     for a in range(p):
         for k in range(r):
             acc = 0.0
             for b in range(p):
                 acc += P[a, b] * U[b, k]
             Q[a, k] = acc
-    S = np.zeros((r, r))
     for k in range(r):
         for m in range(r):
             acc = 0.0
@@ -104,7 +111,7 @@ def _ref_rise_window(c, s, i, q, w):  # pragma: no cover - compiled
         return
     raw, pay, pi = w.raw, w.pay, w.pir
     _payload_raw(c, s.theta[i], raw)
-    _control_payload_in(c, s, i, raw, pay, w.Pc, w.pphi, w.row, w.d)  # (the RLS's scratch is free)
+    _control_payload_in(c, s, i, raw, pay, w.Pc, w.pphi, w.row, w.d, w.cov)  # (the RLS's scratch is free)
     for t in range(2):
         M = w.Mr if t == 0 else w.Mr0
         src = pay if t == 0 else s.ref_pay[i]
@@ -380,17 +387,25 @@ def _detect(c, s, i, eps, act):  # pragma: no cover - compiled
 
 @njit(cache=True)
 def _alarm(c, s, i, k):  # pragma: no cover - compiled
-    """What an alarm at sample k does: re-open P, count, restart the level (keeping it as ``ref``)."""
+    """What an alarm at sample k does (:func:`_alarm_in` with its scratch made for this call)."""
+    _alarm_in(c, s, i, k, est_work(c.w.shape[0], s.theta.shape[1]))
+
+
+@njit(cache=True)
+def _alarm_in(c, s, i, k, w):  # pragma: no cover - compiled
+    """What an alarm at sample k does: re-open P, count, restart the level (keeping it as ``ref``);
+    ``w`` (:class:`~adaptive_dd.identification.online_slots.EstWork`) scratch, its model's part
+    free at this point of a sample (the model is made after the step)."""
     cnt = s.cnt[i]
     # the payload the model holds now, with which the levels kept as ref were learnt
-    raw = np.empty(10)
+    raw = w.raw
     _payload_raw(c, s.theta[i], raw)
-    _control_payload(c, s, i, raw, s.ref_pay[i], np.empty((10, 10)))
+    _control_payload_in(c, s, i, raw, s.ref_pay[i], w.Pc, w.pphi, w.row, w.d, w.cov)
     if _keeps_start(c, s, i):
         for a in range(10):
             s.ref_pay[i, a] = s.start_pay[i, a]
     cnt[C_FOLLOWS] = 1
-    _reopen(c, s.P[i])
+    _reopen_in(c, s.P[i], w.rq, w.rs)
     cnt[C_ALARMS] += 1
     cnt[C_SINCE_ALARM] = 0
     cnt[C_LAST_ALARM] = k
@@ -419,11 +434,11 @@ def _alarm(c, s, i, k):  # pragma: no cover - compiled
 
 
 @njit(cache=True, inline="always")
-def _detect_step(c, s, i, eps, act):  # pragma: no cover - compiled
+def _detect_step(c, s, i, eps, act, w):  # pragma: no cover - compiled
     """The detector's part of a sample: :func:`_detect`, then the alarm or the count since it."""
     cnt = s.cnt[i]
     if _detect(c, s, i, eps, act):
-        _alarm(c, s, i, cnt[C_K])
+        _alarm_in(c, s, i, cnt[C_K], w)
         return 1
     cnt[C_SINCE_ALARM] = min(cnt[C_SINCE_ALARM] + 1, BIG)
     return 0
@@ -434,7 +449,7 @@ def est_detect_trial(c, s, i, eps, act):  # pragma: no cover - compiled
     """One sample of trial i's detector alone on given weighted prior errors ``eps (n,)`` of the
     rows in use ``act (n,)`` (bool): 1 on an alarm, else 0. The estimate is not stepped (an alarm
     still re-opens its covariance). For tests and replays of the detector on synthetic errors."""
-    alarm = _detect_step(c, s, i, eps, act)
+    alarm = _detect_step(c, s, i, eps, act, est_work(c.w.shape[0], s.theta.shape[1]))
     s.cnt[i, C_K] += 1
     return alarm
 

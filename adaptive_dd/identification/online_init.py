@@ -25,7 +25,7 @@ from adaptive_dd.identification.online_config import (
     payload_prior,
     reopen_mass_std,
 )
-from adaptive_dd.identification.online_slots import EstCfg, EstState
+from adaptive_dd.identification.online_slots import MAX_FILTER_ORDER, EstCfg, EstState
 from adaptive_dd.identification.payload_information import filter_noise_gram
 from adaptive_dd.plant.arm import Arm
 from adaptive_dd.plant.payload import payload_parameters
@@ -117,6 +117,10 @@ def _pack(cfg: OnlineConfig, arm: Arm) -> tuple[EstCfg, Array]:
         scalars["present2"] = float((reopen_mass_std(det, arm) if det else cfg.payload_mass_std) ** 2)
     scalars.update(_detector_scalars(cfg, arm, w, sel_threshold))
     Am, Bm, Cm, Dm = summing_realisation(b)
+    if b.order > MAX_FILTER_ORDER:  # the step's scratch (EstWork.ftmp): it allocates nothing
+        raise ParameterError(
+            f"the estimator's filter bank is of order {b.order}; at most {MAX_FILTER_ORDER} (a lower order)"
+        )
     xm1 = np.linalg.solve(np.eye(b.order) - Am, Bm[:, 1])
     c = np.ascontiguousarray
     return EstCfg(

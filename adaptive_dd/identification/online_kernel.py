@@ -52,6 +52,7 @@ from adaptive_dd.identification.online_detector import (  # noqa: F401 (re-expor
     _prior_variance,
     _ref_rise,
     _reopen,
+    _reopen_in,
     est_detect_trial,
     est_force_alarm_trial,
 )
@@ -106,7 +107,7 @@ def est_step_trial_w(c, s, i, q, qd, tau, w):  # pragma: no cover - compiled
     return est_step_model(c, s, i, q, qd, tau, w, s.lam[:0])
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def est_step_model(c, s, i, q, qd, tau, w, pi_model):  # pragma: no cover - compiled
     """:func:`est_step_trial_in`, then the model control uses into ``pi_model (13 n,)``
     (:func:`est_model_trial_in`) unless ``pi_model`` is empty: the estimator's step compiled once,
@@ -217,10 +218,10 @@ def est_step_trial_in(c, s, i, q, qd, tau, w):  # pragma: no cover - compiled
     alarm = 0
     if c.detect:
         if cnt[C_REOPEN_AT] == cnt[C_K]:
-            _reopen(c, Pi)
+            _reopen_in(c, Pi, w.rq, w.rs)
         _posture_noise(c, s, i, w)  # reads what the filters' momentum form left in w.chain
         _ref_rise(c, s, i, q, w)
-        alarm = _detect_step(c, s, i, s.eps[i], act)
+        alarm = _detect_step(c, s, i, s.eps[i], act, w)
         _keep_start(c, s, i)
     cnt[C_K] += 1
     return alarm

@@ -78,10 +78,11 @@ def _filtered_signals(c, s, i, q, qd, tau, w):  # pragma: no cover - compiled
 
 
 @njit(cache=True)
-def _summed_channels(Am, Bm, Cm, Dm, xf, u1, u0, y):  # pragma: no cover - compiled
+def _summed_channels(Am, Bm, Cm, Dm, xf, u1, u0, y, tmp):  # pragma: no cover - compiled
     """One sample of the summing realisation (``Am, Bm, Cm, Dm``) on every channel of ``xf``:
     ``y = G1 u1 + G0 u0``, the states advanced in place (order 2 written out, its matrices in
-    scalars: a call per channel would cost more than its arithmetic)."""
+    scalars: a call per channel would cost more than its arithmetic); ``tmp`` (at least the
+    order,) scratch of the other orders."""
     order = Am.shape[0]
     if order == 2:
         a00, a01, a10, a11 = Am[0, 0], Am[0, 1], Am[1, 0], Am[1, 1]
@@ -93,7 +94,6 @@ def _summed_channels(Am, Bm, Cm, Dm, xf, u1, u0, y):  # pragma: no cover - compi
             xf[ch, 0] = a00 * z0 + a01 * z1 + b01 * v1 + b00 * v0
             xf[ch, 1] = a10 * z0 + a11 * z1 + b11 * v1 + b10 * v0
         return
-    tmp = np.empty(order)
     for ch in range(y.shape[0]):
         acc = Dm[1] * u1[ch] + Dm[0] * u0[ch]
         for m in range(order):
@@ -142,7 +142,7 @@ def _momentum_channels(c, s, i, restart, w):  # pragma: no cover - compiled
         for ch in range(nch):
             for m in range(c.xm1.shape[0]):
                 xf[ch, m] = u1[ch] * c.xm1[m]
-    _summed_channels(c.Am, c.Bm, c.Cm, c.Dm, xf, u1, u0, y)
+    _summed_channels(c.Am, c.Bm, c.Cm, c.Dm, xf, u1, u0, y, w.ftmp)
     for r in range(n):
         tf[r] = y[r]
         ym[r] = y[n + r]
@@ -169,11 +169,13 @@ def _arm_momentum_channels(c, s, i, restart, w):  # pragma: no cover - compiled
     u = w.u
     n = w.ym.shape[0]
     nch = 4 * n + 10 * n * n
-    u1 = np.zeros(nch)
-    u0 = np.zeros(nch)
-    y = np.empty(nch)
-    pm, wv = np.empty(n), np.empty(n)
-    py, wy = np.empty((n, 10)), np.empty((n, 10))
+    # views of the scratch w.arm, no allocation a sample (zeros when made: the entries of u1 and
+    # u0 not written below stay 0, as in arrays made afresh)
+    a = w.arm
+    u1, u0, y = a[:nch], a[nch : 2 * nch], a[2 * nch : 3 * nch]
+    o = 3 * nch
+    pm, wv = a[o : o + n], a[o + n : o + 2 * n]
+    py, wy = a[o + 2 * n : o + 12 * n].reshape((n, 10)), a[o + 12 * n : o + 22 * n].reshape((n, 10))
     q, qd = u[:n], u[n : 2 * n]
     for r in range(n):
         u0[r] = u[2 * n + r]
@@ -197,7 +199,7 @@ def _arm_momentum_channels(c, s, i, restart, w):  # pragma: no cover - compiled
         for ch in range(nch):
             for m in range(c.xm1.shape[0]):
                 xf[ch, m] = u1[ch] * c.xm1[m]
-    _summed_channels(c.Am, c.Bm, c.Cm, c.Dm, xf, u1, u0, y)
+    _summed_channels(c.Am, c.Bm, c.Cm, c.Dm, xf, u1, u0, y, w.ftmp)
     phi, yy = w.phi, w.y
     pb = c.indep.shape[0]
     p = phi.shape[1]

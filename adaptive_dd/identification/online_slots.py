@@ -32,6 +32,8 @@ C_FOLLOWS = 9  # 1: the model control uses follows the estimate (0: it keeps the
 N_CNT = 10
 
 BIG = 1 << 40
+MAX_FILTER_ORDER = 16
+"""The largest order of the estimator's filter bank (its step's scratch, ``EstWork.ftmp``)."""
 MOMENTUM_CHANNELS = 12  # per joint: G0 tau, G1 p + G0 wv and the payload link's G1 py + G0 wy (10)
 MODE_PAYLOAD = 0
 MODE_ARM = 1
@@ -340,6 +342,17 @@ class EstWork(NamedTuple):
         projection, after the step's own use of them).
     Mr, Mr0 : (n, n); pir : (10 n,)
         Scratch of the detector's :func:`_ref_rise`.
+    arm : (3 (4 n + 10 n^2) + 22 n,)
+        Mode "arm"'s momentum channels, zeros (``_arm_momentum_channels``: its inputs, outputs and
+        the momentum form's, as views; the inputs it never writes stay 0).
+    ftmp : (MAX_FILTER_ORDER,)
+        Scratch of a filter bank's step of an order other than 2 (``_summed_channels``).
+    cov : (10, p); rq : (p, 10); rs : (10, 10)
+        Scratch of the payload's inertia covariance in mode "arm" (``_inertia_cov``) and of an
+        alarm's re-opening (``_reopen_in``).
+
+    The step (``est_step_model``) is compiled without reference counting: nothing it calls may
+    allocate, so every scratch it needs is here.
     """
 
     chain: tuple
@@ -369,6 +382,11 @@ class EstWork(NamedTuple):
     Mr: np.ndarray
     Mr0: np.ndarray
     pir: np.ndarray
+    arm: np.ndarray
+    ftmp: np.ndarray
+    cov: np.ndarray
+    rq: np.ndarray
+    rs: np.ndarray
 
 
 @njit(cache=True)
@@ -384,4 +402,6 @@ def est_work(n, p):  # pragma: no cover - compiled
         u1[2 * n :].reshape((n, 10)), u0[2 * n :].reshape((n, 10)),
         np.empty(10), np.empty(10), np.empty(10), np.empty((10, 10)), np.empty(p),
         np.empty((n, n)), np.empty((n, n)), np.empty(10 * n),
+        np.zeros(3 * (4 * n + 10 * n * n) + 22 * n), np.empty(MAX_FILTER_ORDER), np.empty((10, p)),
+        np.empty((p, 10)), np.empty((10, 10)),
     )  # fmt: skip

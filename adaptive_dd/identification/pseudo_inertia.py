@@ -49,16 +49,24 @@ def parameters_of(J, phi):  # pragma: no cover - compiled
 @njit(cache=True)
 def _eigh4(J):  # pragma: no cover - compiled
     """Eigenvalues and eigenvectors (columns) of a symmetric 4 x 4 matrix (``J``'s leading block) by
-    cyclic Jacobi rotations.
+    cyclic Jacobi rotations: :func:`_eigh4_in` into new arrays, ``(lam, V)``."""
+    lam, V = np.empty(4), np.empty((4, 4))
+    _eigh4_in(J, np.empty((4, 4)), V, lam)
+    return lam, V
+
+
+@njit(cache=True)
+def _eigh4_in(J, A, V, lam):  # pragma: no cover - compiled
+    """:func:`_eigh4` into ``lam (4,)`` and ``V (4, 4)`` (columns), ``A (4, 4)`` scratch (none of
+    them overlapping ``J``'s leading block): no allocation (the estimator's step calls it).
 
     Cheaper than LAPACK through numba for this size; converges quadratically (a handful of
     sweeps to the last bits).
     """
-    A = np.empty((4, 4))  # J's leading 4 x 4 block (J may be a larger scratch)
-    for a in range(4):
+    for a in range(4):  # J's leading 4 x 4 block (J may be a larger scratch)
         for b in range(4):
             A[a, b] = J[a, b]
-    V = np.eye(4)
+            V[a, b] = 1.0 if a == b else 0.0
     for _ in range(30):
         off = 0.0
         scale = 0.0
@@ -88,10 +96,8 @@ def _eigh4(J):  # pragma: no cover - compiled
                     x, y = V[k, a], V[k, b]
                     V[k, a] = cs * x - sn * y
                     V[k, b] = sn * x + cs * y
-    lam = np.empty(4)
     for k in range(4):
         lam[k] = A[k, k]
-    return lam, V
 
 
 @njit(cache=True)
@@ -114,6 +120,12 @@ def _positive_definite(J, shift):  # pragma: no cover - compiled
 
 @njit(cache=True)
 def _bound_ball(dst, radius):  # pragma: no cover - compiled
+    """:func:`_bound_ball_in` with its scratch made for this call."""
+    _bound_ball_in(dst, radius, np.empty((3, 3)), np.empty(3))
+
+
+@njit(cache=True)
+def _bound_ball_in(dst, radius, S, h):  # pragma: no cover - compiled
     """Bound a consistent payload (10,) in place to a ball of ``radius`` [m] about its frame.
 
     With ``Sigma = tr(I)/2 1 - I`` (J's second-moment block) and ``h = m c``: if
@@ -133,12 +145,10 @@ def _bound_ball(dst, radius):  # pragma: no cover - compiled
     tr_sigma = 0.5 * (dst[4] + dst[6] + dst[9])
     if hh <= m * m * r2 and tr_sigma <= m * r2:
         return
-    S = np.empty((3, 3))
     S[0, 0], S[1, 1], S[2, 2] = tr_sigma - dst[4], tr_sigma - dst[6], tr_sigma - dst[9]
     S[0, 1] = S[1, 0] = -dst[5]
     S[0, 2] = S[2, 0] = -dst[7]
     S[1, 2] = S[2, 1] = -dst[8]
-    h = np.empty(3)
     for k in range(3):
         h[k] = dst[1 + k]
     if hh > m * m * r2:  # centre of mass beyond the ball: onto its surface
@@ -180,17 +190,17 @@ def project_payload(src, dst, eig_min, radius=0.0):  # pragma: no cover - compil
     the result is then bounded to a ball of that radius about the payload frame
     (:func:`_bound_ball`): ``|c| <= radius`` and ``tr(Sigma) <= m radius^2``.
     """
-    project_payload_in(src, dst, eig_min, radius, np.empty((8, 4)))
+    project_payload_in(src, dst, eig_min, radius, np.empty((10, 8)))
 
 
 @njit(cache=True)
 def project_payload_in(src, dst, eig_min, radius, J):  # pragma: no cover - compiled
-    """:func:`project_payload` with its scratch given, ``J`` (at least 8 x 4: the pseudo-inertia in
-    its first four rows, a Cholesky factor in the next four; no allocation in the common case, a
-    payload already consistent and within the ball: a per-sample step calls it)."""
+    """:func:`project_payload` with its scratch given, ``J`` (at least 10 x 8: the pseudo-inertia in
+    its first four rows, a Cholesky factor in the next four, the eigenvectors and eigenvalues and
+    the ball's bound in the rest; no allocation: the estimator's step calls it every sample)."""
     _project_psd(src, dst, eig_min, J)
     if radius > 0.0 and np.isfinite(dst[0]):
-        _bound_ball(dst, radius)
+        _bound_ball_in(dst, radius, J[4:7, 4:7], J[8, 4:7])  # (J's content is dead by then)
 
 
 @njit(cache=True)
@@ -211,7 +221,8 @@ def _project_psd(src, dst, eig_min, J):  # pragma: no cover - compiled
         for k in range(10):
             dst[k] = src[k]
         return
-    lam, V = _eigh4(J)
+    lam, V = J[8, 0:4], J[4:8, 4:8]
+    _eigh4_in(J, J[0:4, 4:8], V, lam)
     if lam.min() >= eig_min:
         for k in range(10):
             dst[k] = src[k]
