@@ -40,3 +40,24 @@ def test_the_map_holds_a_function_compiled_here_at_its_address(tmp_path):
     _, size, name = lines[addr]
     assert name.endswith("_profiled_kernel") and int(size, 16) > 0
     assert all(int(a, 16) > 0 for a, _, _ in lines.values())
+
+
+def test_instruction_shares_bin_samples_by_offset_and_mnemonic():
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
+    try:
+        from profile_loop import instruction_shares
+    finally:
+        sys.path.pop(0)
+    asm = """
+Disassembly of section .data:
+
+0000000000000000 <.data>:
+   0:	55                   	push   %rbp
+   1:	48 89 e5             	mov    %rsp,%rbp
+   4:	ff d3                	call   *%rbx
+   6:	ff d3                	call   *%rbx
+   8:	c3                   	ret
+"""
+    shares, hot = instruction_shares(asm, [4, 4, 6, 1, 99], top=2)
+    assert shares == [("call", 0.6), ("mov", 0.2)]  # of the 5 samples, one outside any instruction
+    assert hot == [(4, "call   *%rbx", 0.4), (1, "mov    %rsp,%rbp", 0.2)]
