@@ -72,27 +72,38 @@ def _grid(
     return xs, ys, z, n, marked
 
 
-def _plot_one(ratios: pd.DataFrame, heatmap: Mapping[str, Any], title: str, path: Path) -> Path:
-    _figure(ratios, heatmap, title).savefig(path, dpi=110)
-    return path
-
-
-def _figure(ratios: pd.DataFrame, heatmap: Mapping[str, Any], title: str):
-    """The heat map of one combination of the other axes (a ``matplotlib.figure.Figure``); the
-    marked cells carry a hatched patch whose ``gid`` is ``"marked"``."""
+def _image(z: np.ndarray, xs: list, ys: list, x: str, y: str | None, cmap: str):
+    """A heat map's figure of the cells ``z`` (rows ``ys``, columns ``xs``, grid axes ``x`` and
+    ``y``; NaN grey), on a log scale when the finite values span a decade: ``(fig, ax, image,
+    finite values, log)``."""
     from matplotlib.colors import LogNorm
     from matplotlib.figure import Figure
-    from matplotlib.patches import Rectangle
 
-    x, y = heatmap["x"], heatmap["y"]
-    xs, ys, z, n, marked = _grid(ratios, x, y)
     fig = Figure(figsize=(1.2 * len(xs) + 3, 0.8 * len(ys) + 2.5), layout="constrained")
     ax = fig.subplots()
     finite = z[np.isfinite(z)]
     log = finite.size > 0 and finite.min() > 0 and finite.max() > 10 * finite.min()
     norm = LogNorm(finite.min(), finite.max()) if log else None
-    im = ax.imshow(np.ma.masked_invalid(z), origin="lower", aspect="auto", cmap="viridis", norm=norm)
+    im = ax.imshow(np.ma.masked_invalid(z), origin="lower", aspect="auto", cmap=cmap, norm=norm)
     ax.set_facecolor("0.85")
+    ax.set_xticks(range(len(xs)), [f"{v:g}" if isinstance(v, float) else str(v) for v in xs])
+    ax.set_xlabel(axis_label(x))
+    if y is None:  # one varied axis: one row
+        ax.set_yticks([])
+    else:
+        ax.set_yticks(range(len(ys)), [f"{v:g}" if isinstance(v, float) else str(v) for v in ys])
+        ax.set_ylabel(axis_label(y))
+    return fig, ax, im, finite, log
+
+
+def _figure(ratios: pd.DataFrame, heatmap: Mapping[str, Any], title: str):
+    """The heat map of one combination of the other axes (a ``matplotlib.figure.Figure``); the
+    marked cells carry a hatched patch whose ``gid`` is ``"marked"``."""
+    from matplotlib.patches import Rectangle
+
+    x, y = heatmap["x"], heatmap["y"]
+    xs, ys, z, n, marked = _grid(ratios, x, y)
+    fig, ax, im, finite, log = _image(z, xs, ys, x, y, "viridis")
     mid = np.sqrt(finite.min() * finite.max()) if log else (np.mean(finite) if finite.size else 0.0)
     for i, j in itertools.product(range(len(ys)), range(len(xs))):
         ok = np.isfinite(z[i, j])
@@ -108,13 +119,6 @@ def _figure(ratios: pd.DataFrame, heatmap: Mapping[str, Any], title: str):
             f"\nhatched ({int(marked.sum())}): {heatmap['floor']} saturated "
             "or far from its own error before the swap"
         )
-    ax.set_xticks(range(len(xs)), [f"{v:g}" if isinstance(v, float) else str(v) for v in xs])
-    ax.set_xlabel(axis_label(x))
-    if y is None:  # one varied axis: one row
-        ax.set_yticks([])
-    else:
-        ax.set_yticks(range(len(ys)), [f"{v:g}" if isinstance(v, float) else str(v) for v in ys])
-        ax.set_ylabel(axis_label(y))
     label = f"median RMS error ratio\n{heatmap['adaptive']} / {heatmap['floor']} [-]"  # a short bar
     fig.colorbar(im, ax=ax, label=label)
     ax.set_title(title, fontsize=9)
@@ -156,16 +160,22 @@ def plot_ratio_heatmaps(
     ...                                      tempfile.mkdtemp())]
     ['heatmap.png']
     """
-    out = Path(out)
-    others = [a for a in axes if a not in (heatmap["x"], heatmap["y"])]
     base = f"segment {heatmap['segment']}, per-seed ratio, median over seeds (count)"
+    return _per_combination(ratios, heatmap, axes, Path(out), "heatmap", base, _figure)
+
+
+def _per_combination(ratios, heatmap, axes, out: Path, stem: str, base: str, figure) -> list[Path]:
+    """``figure(cells, heatmap, title)`` saved as ``OUT/<stem>.png``, or one ``<stem>_<i>.png`` per
+    combination of the grid axes other than x and y (the combination in the title)."""
+    others = [a for a in axes if a not in (heatmap["x"], heatmap["y"])]
     groups = list(ratios.groupby(others, sort=False)) if others else [((), ratios)]
     paths = []
     for i, (vals, sub) in enumerate(groups):
         vals = vals if isinstance(vals, tuple) else (vals,)
         extra = ", ".join(f"{a} = {v}" for a, v in zip(others, vals, strict=True))
-        name = "heatmap.png" if len(groups) == 1 else f"heatmap_{i}.png"
-        paths.append(_plot_one(sub, heatmap, base + (f"\n{extra}" if extra else ""), out / name))
+        path = out / (f"{stem}.png" if len(groups) == 1 else f"{stem}_{i}.png")
+        figure(sub, heatmap, base + (f"\n{extra}" if extra else "")).savefig(path, dpi=110)
+        paths.append(path)
     return paths
 
 
@@ -173,19 +183,9 @@ def _delay_figure(ratios: pd.DataFrame, heatmap: Mapping[str, Any], title: str):
     """The heat map of the adaptive law's median delay to its first alarm [ms] in one combination
     of the other axes (a ``matplotlib.figure.Figure``); a cell whose seeds raised no alarm reads
     ``none``, and each cell names its seeds without one."""
-    from matplotlib.figure import Figure
-
     x, y = heatmap["x"], heatmap["y"]
     xs, ys, z, missed, _ = _grid(ratios.assign(_ms=1e3 * ratios["delay_median"]), x, y, "_ms", "missed")
-    fig = Figure(figsize=(1.2 * len(xs) + 3, 0.8 * len(ys) + 2.5), layout="constrained")
-    ax = fig.subplots()
-    from matplotlib.colors import LogNorm
-
-    finite = z[np.isfinite(z)]
-    log = finite.size > 0 and finite.min() > 0 and finite.max() > 10 * finite.min()
-    norm = LogNorm(finite.min(), finite.max()) if log else None
-    im = ax.imshow(np.ma.masked_invalid(z), origin="lower", aspect="auto", cmap="magma_r", norm=norm)
-    ax.set_facecolor("0.85")
+    fig, ax, im, finite, log = _image(z, xs, ys, x, y, "magma_r")
     # white on the darker half of the scale
     lo, hi = (finite.min(), finite.max()) if finite.size else (0.0, 0.0)
     mid = np.sqrt(lo * hi) if log else 0.5 * (lo + hi)
@@ -193,13 +193,6 @@ def _delay_figure(ratios: pd.DataFrame, heatmap: Mapping[str, Any], title: str):
         ok = np.isfinite(z[i, j])
         label = (f"{z[i, j]:.0f}" if ok else "none") + (f"\n({missed[i, j]} missed)" if missed[i, j] else "")
         ax.text(j, i, label, ha="center", va="center", fontsize=8, color="w" if ok and z[i, j] > mid else "k")
-    ax.set_xticks(range(len(xs)), [f"{v:g}" if isinstance(v, float) else str(v) for v in xs])
-    ax.set_xlabel(axis_label(x))
-    if y is None:
-        ax.set_yticks([])
-    else:
-        ax.set_yticks(range(len(ys)), [f"{v:g}" if isinstance(v, float) else str(v) for v in ys])
-        ax.set_ylabel(axis_label(y))
     fig.colorbar(im, ax=ax, label=f"median delay to\n{heatmap['adaptive']}'s first alarm [ms]")
     ax.set_title(title, fontsize=9)
     return fig
@@ -230,15 +223,5 @@ def plot_delay_heatmaps(
     """
     if "missed" not in ratios or ratios["missed"].isna().all():
         return []
-    out = Path(out)
-    others = [a for a in axes if a not in (heatmap["x"], heatmap["y"])]
     base = f"segment {heatmap['segment']}: delay from the swap to the first alarm, median over seeds"
-    groups = list(ratios.groupby(others, sort=False)) if others else [((), ratios)]
-    paths = []
-    for i, (vals, sub) in enumerate(groups):
-        vals = vals if isinstance(vals, tuple) else (vals,)
-        extra = ", ".join(f"{a} = {v}" for a, v in zip(others, vals, strict=True))
-        name = "delays.png" if len(groups) == 1 else f"delays_{i}.png"
-        _delay_figure(sub, heatmap, base + (f"\n{extra}" if extra else "")).savefig(out / name, dpi=110)
-        paths.append(out / name)
-    return paths
+    return _per_combination(ratios, heatmap, axes, Path(out), "delays", base, _delay_figure)
