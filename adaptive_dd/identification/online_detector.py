@@ -434,11 +434,12 @@ def _alarm_in(c, s, i, k, w):  # pragma: no cover - compiled
 
 
 @njit(cache=True, inline="always")
-def _detect_step(c, s, i, eps, act, w):  # pragma: no cover - compiled
-    """The detector's part of a sample: :func:`_detect`, then the alarm or the count since it."""
+def _detect_step(c, s, i, eps, act):  # pragma: no cover - compiled
+    """The detector's part of a sample: :func:`_detect`; 1 on an alarm, which the caller then
+    raises (:func:`_alarm_in` with the step's scratch, or :func:`_alarm`), else the count since
+    the last one and 0."""
     cnt = s.cnt[i]
     if _detect(c, s, i, eps, act):
-        _alarm_in(c, s, i, cnt[C_K], w)
         return 1
     cnt[C_SINCE_ALARM] = min(cnt[C_SINCE_ALARM] + 1, BIG)
     return 0
@@ -449,7 +450,9 @@ def est_detect_trial(c, s, i, eps, act):  # pragma: no cover - compiled
     """One sample of trial i's detector alone on given weighted prior errors ``eps (n,)`` of the
     rows in use ``act (n,)`` (bool): 1 on an alarm, else 0. The estimate is not stepped (an alarm
     still re-opens its covariance). For tests and replays of the detector on synthetic errors."""
-    alarm = _detect_step(c, s, i, eps, act, est_work(c.w.shape[0], s.theta.shape[1]))
+    alarm = _detect_step(c, s, i, eps, act)
+    if alarm:  # its scratch made at an alarm only: a replay calls this every sample
+        _alarm(c, s, i, s.cnt[i, C_K])
     s.cnt[i, C_K] += 1
     return alarm
 

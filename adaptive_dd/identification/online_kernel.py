@@ -46,6 +46,7 @@ from adaptive_dd.identification.online_control_model import (  # noqa: F401 (re-
 )
 from adaptive_dd.identification.online_detector import (  # noqa: F401 (re-exported)
     _alarm,
+    _alarm_in,
     _detect,
     _detect_step,
     _posture_noise,
@@ -221,7 +222,9 @@ def est_step_trial_in(c, s, i, q, qd, tau, w):  # pragma: no cover - compiled
             _reopen_in(c, Pi, w.rq, w.rs)
         _posture_noise(c, s, i, w)  # reads what the filters' momentum form left in w.chain
         _ref_rise(c, s, i, q, w)
-        alarm = _detect_step(c, s, i, s.eps[i], act, w)
+        alarm = _detect_step(c, s, i, s.eps[i], act)
+        if alarm:
+            _alarm_in(c, s, i, cnt[C_K], w)
         _keep_start(c, s, i)
     cnt[C_K] += 1
     return alarm
