@@ -31,8 +31,10 @@ KEEP = 8
 
 _COMPILES = re.compile(
     r"@(?:numba\.)?(?:njit|jit|overload\w*|register_jitable|intrinsic|vectorize|guvectorize|jitclass)\b"
+    r"|\b(?:numba\.)?n?jit\("
 )
-"""Text of a module that defines compiled code."""
+"""Text of a module that defines compiled code: a decorator, or ``njit(...)`` called on a function
+(the plug-ins' kernels and loop are compiled so)."""
 _RECORDS = re.compile(r"\bNamedTuple\b|\bnamedtuple\(")
 """Text of a module that may define a record type compiled code receives (its fields are read by
 position in the compiled code)."""
