@@ -102,8 +102,15 @@ def project_payload(cfg, theta):  # pragma: no cover - compiled
     if mc > lim:
         f = lim / mc
         theta[1], theta[2], theta[3] = f * theta[1], f * theta[2], f * theta[3]
-    if cfg.adapt_kind != ADAPT_CHS:
-        return
+    if cfg.adapt_kind == ADAPT_CHS:
+        _physical_payload(theta)
+
+
+@njit(cache=True, _nrt=True)
+def _physical_payload(theta):  # pragma: no cover - compiled
+    """``theta (10,)`` with its pseudo-inertia's negative eigenvalues set to zero, in place. It
+    allocates, so it is compiled with reference counting whoever calls it (the gradient laws' step,
+    :func:`~adaptive_dd.closed_loop.laws._adapt_payload`, is compiled without)."""
     J = np.empty((4, 4))
     pseudo_inertia(theta, J)
     d, V = np.linalg.eigh(J)

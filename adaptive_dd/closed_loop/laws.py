@@ -268,7 +268,7 @@ def model_torque(ch, pi, q, qd, qdr, qc, a, out):  # pragma: no cover - compiled
     _model_torque(ch, pi, q, qd, qdr, qc, a, workspace(q.shape[0]), out)
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _model_torque(ch, pi, q, qd, qdr, qc, a, w, out):  # pragma: no cover - compiled
     n = q.shape[0]
     rnea_ref_in(ch, pi[: 10 * n], q, qd, qdr, a, w, out)
@@ -276,7 +276,7 @@ def _model_torque(ch, pi, q, qd, qdr, qc, a, w, out):  # pragma: no cover - comp
         out[j] += pi[10 * n + j] * qdr[j] + pi[11 * n + j] * np.sign(qc[j]) + pi[12 * n + j] * a[j]
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _add_nominal_inertia(ch, cfg, q, v, work, out):  # pragma: no cover - compiled
     """``out += M0(q) v`` with M0 the nominal mass matrix plus armature."""
     n = q.shape[0]
@@ -289,7 +289,7 @@ def _add_nominal_inertia(ch, cfg, q, v, work, out):  # pragma: no cover - compil
         out[r] += acc
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _adapt_payload(ch, cfg, q, qd, qdr, a, s, theta, pi_model, work):  # pragma: no cover - compiled
     """One gradient step of the payload parameters, projected; pi_model rebuilt from them (with
     ``cfg.composite`` or ICL the step adds ``work[9]``, the composite or ICL term)."""
@@ -298,7 +298,7 @@ def _adapt_payload(ch, cfg, q, qd, qdr, a, s, theta, pi_model, work):  # pragma:
     payload_gradient_step(cfg, work[3], s, work[5], work[9], extra, theta, pi_model)  # Y_p^T s = P^T Y_j^T s
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _sliding_term(ch, cfg, q, qd, qdr, a, s, work, out):  # pragma: no cover - compiled
     """``out += rho sat(s / phi)`` (module docstring): ``rho_r = sum_c |Y[r, c]| rho_pi[c]`` over
     the links' Slotine-Li regressor blocks, the payload's (``|Y_j P|``) and friction and armature
@@ -368,7 +368,7 @@ def actuator_limits(arm) -> Array:
     return np.array(lim if act.saturate else np.full(arm.n_joints, np.inf), dtype=float)
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _boost_within_limits(ch, cfg, since_alarm, q, e, ed, work, out):  # pragma: no cover - compiled
     """Add the boost ``M0(q) (dkp e + dkd e')`` ``since_alarm`` samples after an alarm (its gains
     for ``boost_samples``, then its added bandwidth ramped down to none over ``boost_ramp``

@@ -45,7 +45,7 @@ O_R1 = 6  # the first stage's output (two stages)
 OBS_ROWS = O_R1 + 1
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _momentum(ch, pi, q, qd, work, p, wv):  # pragma: no cover - compiled
     """``p = M(q) qd + Ia qd`` and ``wv = g - C^T qd + fv qd + fc sgn(qd)`` of ``pi (13 n,)``."""
     n = q.shape[0]
@@ -64,7 +64,7 @@ def observe_applied(obs, tau):  # pragma: no cover - compiled
     obs[O_COUNT, 1] += 1.0
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _observe(ch, cfg, pi, q, qd, obs, work, out):  # pragma: no cover - compiled
     """One sample of the residual observer (module docstring) at a fresh measurement ``q, qd``;
     its soft-thresholded output added to ``out``.

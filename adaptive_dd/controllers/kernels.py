@@ -69,5 +69,7 @@ def _payload_regressor(kin, q, qd, qd_r, qdd_r, out):  # pragma: no cover - comp
 
 arm_kernels = njit(_arm_kernels)
 with_model = njit(inline="always")(_with_model)
-reference_torque = njit(_reference_torque)
-payload_regressor = njit(_payload_regressor)
+# no reference counting (numba's ``_nrt=False``): the built-in laws' kernels are compiled so, and
+# with it a call of either costs the plug-in no update of the counts of the arrays it unpacks
+reference_torque = njit(_nrt=False)(_reference_torque)
+payload_regressor = njit(_nrt=False)(_payload_regressor)

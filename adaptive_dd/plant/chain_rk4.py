@@ -177,7 +177,7 @@ def _solve(
     return True
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _consistent(rest, stuck, acc, hold, sdir, fc):  # pragma: no cover - compiled
     """Stuck resting joints hold (|h_i| <= fc_i) and released ones accelerate in their slide direction."""
     for i in range(rest.shape[0]):
@@ -186,7 +186,7 @@ def _consistent(rest, stuck, acc, hold, sdir, fc):  # pragma: no cover - compile
     return True
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _resolve(ch, pi, fv, fc, arm, fp, q, v, tau, rest, stuck, sdir, sc):  # pragma: no cover - compiled
     """Active-set modes of the resting joints (module docstring); False if M is not positive definite."""
     n = q.shape[0]
@@ -226,7 +226,7 @@ def _resolve(ch, pi, fv, fc, arm, fp, q, v, tau, rest, stuck, sdir, sc):  # prag
 # ----------------------------------------------------------------------------- integration
 
 
-@njit(cache=True, fastmath={"contract", "reassoc"})
+@njit(cache=True, fastmath={"contract", "reassoc"}, _nrt=False)
 def _rk4(
     ch, pi, fv, fc, arm, law, fp, q, v, tau, dt, stuck, sdir, sc, reuse, qn, vn, cross
 ):  # pragma: no cover
@@ -275,7 +275,7 @@ def _rk4(
     return ok
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _decide(ch, pi, fv, fc, arm, fp, q, v, tau, stuck, sdir, sc):  # pragma: no cover - compiled
     """Modes at the current state: resting joints with Coulomb friction go through :func:`_resolve`.
 
@@ -292,7 +292,7 @@ def _decide(ch, pi, fv, fc, arm, fp, q, v, tau, stuck, sdir, sc):  # pragma: no 
     return _resolve(ch, pi, fv, fc, arm, fp, q, v, tau, rest, stuck, sdir, sc), True
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _stick_slip(ch, pi, fv, fc, arm, fp, q, qd, tau, T, substeps, stuck, sc):  # pragma: no cover
     """One sample under the stick-slip law (module docstring), q and qd in place."""
     n = q.shape[0]
@@ -352,7 +352,7 @@ def _stick_slip(ch, pi, fv, fc, arm, fp, q, qd, tau, T, substeps, stuck, sc):  #
     return ok
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _smooth(ch, pi, fv, fc, arm, law, fp, q, qd, tau, T, substeps, stuck, sc):  # pragma: no cover
     """One sample under a smooth law: RK4, each substep split so that h rho <= 2 (module docstring)."""
     n = q.shape[0]
@@ -392,7 +392,7 @@ def _smooth(ch, pi, fv, fc, arm, law, fp, q, qd, tau, T, substeps, stuck, sc):  
     return ok
 
 
-@njit(cache=True, fastmath={"contract", "reassoc"})
+@njit(cache=True, fastmath={"contract", "reassoc"}, _nrt=False)
 def _lugre(ch, pi, fv, fc, arm, fp, q, qd, tau, T, substeps, z, stuck, sc):  # pragma: no cover
     """One sample under the LuGre law (module docstring): linearly implicit micro-steps of at most
     ``LUGRE_DT_MAX`` in ``(v, z)``, the bristle state ``z (n,)`` updated in place. ``fp`` is
