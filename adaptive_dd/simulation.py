@@ -24,7 +24,7 @@ from typing import NamedTuple
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from adaptive_dd.benchmark.runner import FLOOR_NOT_RUN, run_benchmark
+from adaptive_dd.benchmark.runner import run_benchmark
 from adaptive_dd.benchmark.scenario import Scenario, load_scenario
 from adaptive_dd.benchmark.trials import payload_schedule, sensor_of, trial_rngs
 from adaptive_dd.errors import ParameterError, RunWarning, SignalError
@@ -401,9 +401,11 @@ def run_trial(controller, scenario: Scenario | None = None, seed_index: int = 0,
     check_controller_object("run_trial", "controller", controller)
     sc = _scenario_of("run_trial", scenario)
     label = name or getattr(controller, "name", type(controller).__name__)
-    with warnings.catch_warnings():  # the floor's warning speaks of run_benchmark's controllers=: said below
-        warnings.filterwarnings("ignore", message=FLOOR_NOT_RUN)
-        res = run_benchmark(sc, progress=False, controllers={label: controller}, seed_indices=[seed_index])
+    # the floor's warning would speak of run_benchmark's controllers=: said below
+    one = {label: controller}
+    res = run_benchmark(
+        sc, progress=False, controllers=one, seed_indices=[seed_index], warn_missing_floors=False
+    )
     if res.runs[label].error:  # the controller raised: one trial asked for, no result to hand back
         raise SignalError(f"run_trial: {label} on trial {seed_index}: {res.runs[label].error}")
     floor = res.runs[label].floor

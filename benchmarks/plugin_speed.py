@@ -41,7 +41,6 @@ import io
 import sys
 import time
 import tomllib
-import warnings
 from pathlib import Path
 
 from numba.core import event
@@ -121,13 +120,12 @@ def _timed_in_threads():
 def _cpu_per_sample(sc) -> tuple[float, float, float]:
     """``(run_us, loop_us, wall_s)``: CPU time per trial-sample of one run of ``sc``, of its
     compiled loop's calls alone (0 on the Python path), and the run's wall time."""
-    from adaptive_dd.benchmark.runner import FLOOR_NOT_RUN, run_benchmark
+    from adaptive_dd.benchmark.runner import run_benchmark
 
     _IN_LOOP[0] = 0.0
     w0, c0 = time.perf_counter(), time.process_time()
-    with contextlib.redirect_stderr(io.StringIO()), warnings.catch_warnings():  # the slow-path note
-        warnings.filterwarnings("ignore", message=FLOOR_NOT_RUN)  # each runs alone, without its floor
-        run_benchmark(sc, progress=False, keep_trajectories=0)
+    with contextlib.redirect_stderr(io.StringIO()):  # the slow-path note; each runs alone, without its floor
+        run_benchmark(sc, progress=False, keep_trajectories=0, warn_missing_floors=False)
     c1, w1 = time.process_time(), time.perf_counter()
     per = 1e6 / (sc.seeds * sc.n_samples)
     return (c1 - c0) * per, _IN_LOOP[0] * per, w1 - w0

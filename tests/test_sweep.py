@@ -220,6 +220,23 @@ def test_seed_block_equals_the_same_seeds_in_a_full_run(tmp_path):
     assert rows != [dict(r, seed=1) for r in both if r["seed"] == 0]  # the seeds differ
 
 
+def test_cells_in_threads_say_nothing_of_the_floor_they_leave_out(tmp_path):
+    """A cell runs one controller without its floor and says nothing of it, from any thread: the
+    run is told by a keyword (a warnings filter is process-wide state, not a thread's); a run
+    left to warn still warns."""
+    import warnings
+    from concurrent.futures import ThreadPoolExecutor
+
+    sc = load_scenario(_write(tmp_path).parent / "base.toml")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # any warning of the cells' runs fails the test
+        with ThreadPoolExecutor(2) as pool:
+            cells = list(pool.map(lambda s: run_cell(sc, "adaptive_ct", [s]), [0, 1]))
+    assert all(r["seed"] == s for s, rows in enumerate(cells) for r in rows)
+    with pytest.warns(UserWarning, match="adaptive_ct's floor ct_oracle did not run"):
+        run_benchmark(dataclasses.replace(sc, controllers=("adaptive_ct",), seeds=1), progress=False)
+
+
 def test_run_cell_rows_match_the_trajectory(tmp_path):
     sc = load_scenario(_write(tmp_path).parent / "base.toml")
     rows = run_cell(sc, "ct_oracle", [0])

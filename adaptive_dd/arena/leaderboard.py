@@ -28,7 +28,6 @@ aggregated over the seeds whose trial did not fail.
 from __future__ import annotations
 
 import dataclasses
-import warnings
 from collections.abc import Sequence
 from pathlib import Path
 
@@ -526,17 +525,17 @@ def run_unit(
 def _run_cells(sc, kind: str, controllers, seeds, progress, times=None) -> list[dict]:
     """Run one scenario's controllers and floors; its cells (:func:`_cells`). ``times``: a dict
     whose ``compile`` and ``run`` [s] the run's compile and other wall time are added to."""
-    from adaptive_dd.benchmark.runner import FLOOR_NOT_RUN, run_benchmark
+    from adaptive_dd.benchmark.runner import run_benchmark
 
     if seeds is not None:
         sc = dataclasses.replace(sc, seeds=seeds)
     names, floors, missing, laws = _with_floors(sc, controllers)
-    with warnings.catch_warnings():  # a floor that cannot run is the row's floor_note (missing), said once
-        warnings.filterwarnings("ignore", message=FLOOR_NOT_RUN)
-        # no trajectories kept and no excitation report's scale check: the table reads neither
-        res = run_benchmark(
-            sc.with_controllers(names), progress=progress, keep_trajectories=0, scale_check=False
-        )
+    # no trajectories kept and no excitation report's scale check: the table reads neither; a floor
+    # that cannot run is the row's floor_note (missing), said once
+    res = run_benchmark(
+        sc.with_controllers(names), progress=progress, keep_trajectories=0, scale_check=False,
+        warn_missing_floors=False,
+    )  # fmt: skip
     if times is not None:
         times["compile"] += float(res.compile_time or 0.0)
         times["run"] += float(res.wall_time or 0.0)

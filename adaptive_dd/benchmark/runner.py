@@ -44,13 +44,8 @@ from adaptive_dd.controllers.compiled_form import compiled_spec
 from adaptive_dd.controllers.plugins import check_controller_object
 from adaptive_dd.errors import ParameterError, RunWarning
 
-FLOOR_NOT_RUN = r"run_benchmark: .*'s floor .* did not run"
-"""The message of :func:`run_benchmark`'s warning that a controller's floor did not run, for the
-callers that say it in their own terms (``warnings.filterwarnings(..., message=FLOOR_NOT_RUN)``)."""
-
 __all__ = [
     "ENGINES",
-    "FLOOR_NOT_RUN",
     "MAX_ERROR",
     "SETTLE",
     "BenchmarkResult",
@@ -70,6 +65,7 @@ def run_benchmark(
     seed_indices: Sequence[int] | None = None,
     on_run=None,
     scale_check: bool = True,
+    warn_missing_floors: bool = True,
 ) -> BenchmarkResult:
     """Run every controller of the scenario over all seeds.
 
@@ -98,6 +94,11 @@ def run_benchmark(
     scale_check : bool
         With an excitation phase, compute its report's ``estimator_scale`` (a check, reported and
         not applied; the leaderboard, which reads no report, leaves it out).
+    warn_missing_floors : bool
+        Warn (:class:`RunWarning`) when a controller's floor is not among the controllers run: its
+        ratios are NaN. False for a caller that runs controllers without their floors on purpose
+        and says so itself (a sweep's cell, :func:`~adaptive_dd.simulation.run_trial`, the
+        leaderboard); a keyword, not a warnings filter, so that it holds in threads.
 
     Returns
     -------
@@ -180,7 +181,7 @@ def run_benchmark(
 
     kind = run_kind(scenario)
     for name, run in res.runs.items():
-        if run.floor is not None and run.floor not in res.runs:
+        if warn_missing_floors and run.floor is not None and run.floor not in res.runs:
             fix = (
                 f"add {run.floor!r} to the scenario's controllers"
                 if controllers is None
